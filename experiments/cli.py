@@ -1,0 +1,107 @@
+"""The ``beam-damage`` command line: parse, call, print.
+
+Each sub-command lives in its own module exposing ``add_parser(subparsers)``,
+which registers the parser and sets ``func`` to a callable ``run(args) -> dict``.
+``run`` returns a JSON-serialisable result and, for text output, may print a
+human-readable view itself (only when ``args.json`` is false). Errors derived
+from :class:`physics.errors.BeamDamageError` (and ``OSError`` on user files)
+become one line on stderr and exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import sys
+
+import numpy as np
+
+from physics.errors import BeamDamageError
+
+#: Modules registering one sub-command each, in the order ``--help`` lists them.
+COMMAND_MODULES = [
+    "experiments.validate",
+    "experiments.cmd_model",
+    "experiments.cmd_update",
+    "experiments.demo",
+]
+
+EXIT_USAGE = 2
+
+
+class _Parser(argparse.ArgumentParser):
+    """ArgumentParser whose usage errors are one line and exit code 2."""
+
+    def error(self, message):
+        sys.stderr.write(f"beam-damage: error: {message}\n")
+        raise SystemExit(EXIT_USAGE)
+
+
+def to_jsonable(obj):
+    """Convert numpy arrays/scalars and complex numbers into JSON-ready values.
+
+    Complex numbers become strings such as ``"-0.21962+135.31j"`` (the form of
+    the thesis fixtures), arrays become nested lists.
+    """
+    if isinstance(obj, dict):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return to_jsonable(obj.tolist())
+    if isinstance(obj, (complex, np.complexfloating)):
+        return format_complex(complex(obj))
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        v = float(obj)
+        return v if np.isfinite(v) else None
+    return obj
+
+
+def format_complex(z: complex) -> str:
+    """Complex number as ``"a+bj"`` with 17 significant digits (round-trips ``complex()``)."""
+    return f"{z.real:.17g}{z.imag:+.17g}j"
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="beam-damage",
+        description="Vibration-based model updating and damage detection of beams.",
+    )
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        ver = version("beam-damage")
+    except PackageNotFoundError:  # running from a source tree
+        ver = "unknown"
+    parser.add_argument("--version", action="version", version=f"beam-damage {ver}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+    for name in COMMAND_MODULES:
+        importlib.import_module(name).add_parser(sub)
+    return parser
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        result = args.func(args)
+    except BeamDamageError as exc:
+        sys.stderr.write(f"beam-damage {args.command}: error: {exc}\n")
+        return EXIT_USAGE
+    except OSError as exc:
+        sys.stderr.write(f"beam-damage {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}\n")
+        return EXIT_USAGE
+    if getattr(args, "json", False):
+        json.dump(to_jsonable(result), sys.stdout, indent=None, allow_nan=False)
+        sys.stdout.write("\n")
+    return int(result.get("exit_code", 0)) if isinstance(result, dict) else 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(main())
