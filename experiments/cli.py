@@ -18,6 +18,7 @@ import sys
 import numpy as np
 
 from physics.errors import BeamDamageError
+from physics.io import format_complex
 
 #: Modules registering one sub-command each, in the order ``--help`` lists them.
 COMMAND_MODULES = [
@@ -62,11 +63,6 @@ def to_jsonable(obj):
     return obj
 
 
-def format_complex(z: complex) -> str:
-    """Complex number as ``"a+bj"`` with 17 significant digits (round-trips ``complex()``)."""
-    return f"{z.real:.17g}{z.imag:+.17g}j"
-
-
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="beam-damage",
@@ -97,10 +93,11 @@ def main(argv=None) -> int:
     except OSError as exc:
         sys.stderr.write(f"beam-damage {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}\n")
         return EXIT_USAGE
+    exit_code = int(result.pop("exit_code", 0)) if isinstance(result, dict) else 0
     if getattr(args, "json", False):
         json.dump(to_jsonable(result), sys.stdout, indent=None, allow_nan=False)
         sys.stdout.write("\n")
-    return int(result.get("exit_code", 0)) if isinstance(result, dict) else 0
+    return exit_code
 
 
 if __name__ == "__main__":  # pragma: no cover
