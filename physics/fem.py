@@ -1,0 +1,295 @@
+"""Euler-Bernoulli beam finite elements: element matrices, assembly, boundary conditions.
+
+DOF bookkeeping
+---------------
+Nodes are numbered from 1 at ``x = 0`` (the clamped root of a cantilever, as in
+the thesis). Every node has a transverse translation ``"y"`` and a rotation
+``"rz"``; a DOF is named ``"<node>:<dir>"``, e.g. ``"3:y"``. Global matrices
+are ordered node by node, ``[1:y, 1:rz, 2:y, 2:rz, ...]``, and boundary
+conditions remove DOFs from that list. Choose masters and slaves by name with
+:meth:`FEModel.index`, never by index arithmetic.
+
+Batching
+--------
+Element properties may carry leading batch axes: ``EI`` and ``mass_per_length``
+as scalars or arrays of shape ``(..., n_elements)``. Assembly then returns
+matrices of shape ``(..., n_dof, n_dof)``, so one call builds a million models.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from physics.errors import BeamDamageError, ShapeError
+
+BOUNDARY_CONDITIONS = ("clamped-free", "free-free", "pinned-pinned", "clamped-clamped")
+
+
+# Element matrices as polynomials in the element length l: A0 + A1*l + A2*l**2.
+_M_COEF = np.array([
+    [[156, 0, 54, 0], [0, 0, 0, 0], [54, 0, 156, 0], [0, 0, 0, 0]],
+    [[0, 22, 0, -13], [22, 0, 13, 0], [0, 13, 0, -22], [-13, 0, -22, 0]],
+    [[0, 0, 0, 0], [0, 4, 0, -3], [0, 0, 0, 0], [0, -3, 0, 4]],
+], dtype=float)
+_K_COEF = np.array([
+    [[12, 0, -12, 0], [0, 0, 0, 0], [-12, 0, 12, 0], [0, 0, 0, 0]],
+    [[0, 6, 0, 6], [6, 0, -6, 0], [0, -6, 0, -6], [6, 0, -6, 0]],
+    [[0, 0, 0, 0], [0, 4, 0, 2], [0, 0, 0, 0], [0, 2, 0, 4]],
+], dtype=float)
+
+
+def _poly(coef, length):
+    l = np.asarray(length, dtype=float)[..., None, None]
+    return coef[0] + coef[1] * l + coef[2] * l**2
+
+
+def element_mass(m_per_length, length):
+    """Consistent mass matrix of a beam element (eq. 3.8).
+
+    Parameters
+    ----------
+    m_per_length : float or ndarray, shape (...)
+        Mass per unit length (kg/m).
+    length : float or ndarray, shape (...)
+        Element length (m).
+
+    Returns
+    -------
+    ndarray, shape (..., 4, 4)
+        DOF order ``[w1, theta1, w2, theta2]``.
+    """
+    m = np.asarray(m_per_length, dtype=float)[..., None, None]
+    l = np.asarray(length, dtype=float)[..., None, None]
+    return m * l / 420.0 * _poly(_M_COEF, length)
+
+
+def element_stiffness(EI, length):
+    """Stiffness matrix of a beam element (eq. 3.9).
+
+    Parameters
+    ----------
+    EI : float or ndarray, shape (...)
+        Flexural rigidity (N m^2).
+    length : float or ndarray, shape (...)
+        Element length (m).
+
+    Returns
+    -------
+    ndarray, shape (..., 4, 4)
+    """
+    ei = np.asarray(EI, dtype=float)[..., None, None]
+    l = np.asarray(length, dtype=float)[..., None, None]
+    return ei / l**3 * _poly(_K_COEF, length)
+
+
+@lru_cache(maxsize=32)
+def _scatter(n_elements: int) -> np.ndarray:
+    """Assembly operator ``A`` with ``vec(K_global) = A @ vec(K_elements)``.
+
+    Shape ``(n_nodes*2)**2 x (n_elements*16)``; a 0/1 matrix so assembly of any
+    batch is one matrix product (no loop over elements or samples).
+    """
+    n_dof = 2 * (n_elements + 1)
+    a = np.zeros((n_dof * n_dof, n_elements * 16))
+    for e in range(n_elements):
+        dofs = 2 * e + np.arange(4)
+        for i in range(4):
+            for j in range(4):
+                a[dofs[i] * n_dof + dofs[j], e * 16 + 4 * i + j] = 1.0
+    a.setflags(write=False)
+    return a
+
+
+def assemble(element_matrices):
+    """Assemble element matrices of a straight chain of beam elements.
+
+    Parameters
+    ----------
+    element_matrices : ndarray, shape (..., n_elements, 4, 4)
+
+    Returns
+    -------
+    ndarray, shape (..., 2*(n_elements+1), 2*(n_elements+1))
+        Global matrix over all node DOFs ``[1:y, 1:rz, 2:y, ...]``.
+    """
+    ke = np.asarray(element_matrices, dtype=float)
+    if ke.ndim < 3 or ke.shape[-2:] != (4, 4):
+        raise ShapeError(f"element matrices must have shape (..., n_elements, 4, 4), got {ke.shape}")
+    n_el = ke.shape[-3]
+    n_dof = 2 * (n_el + 1)
+    flat = ke.reshape(ke.shape[:-3] + (n_el * 16,))
+    return (flat @ _scatter(n_el).T).reshape(ke.shape[:-3] + (n_dof, n_dof))
+
+
+def dof_names(n_nodes: int) -> tuple[str, ...]:
+    """All DOF names of a beam with ``n_nodes`` nodes, in global order."""
+    return tuple(f"{n}:{d}" for n in range(1, n_nodes + 1) for d in ("y", "rz"))
+
+
+def constrained_dofs(bc: str, n_nodes: int, root_spring: bool = False) -> tuple[str, ...]:
+    """Names of the DOFs a boundary condition removes.
+
+    ``root_spring=True`` (clamped-free only) keeps the root rotation, which is
+    then held by a rotational spring instead of being clamped.
+    """
+    last = n_nodes
+    table = {
+        "clamped-free": ("1:y",) if root_spring else ("1:y", "1:rz"),
+        "free-free": (),
+        "pinned-pinned": ("1:y", f"{last}:y"),
+        "clamped-clamped": ("1:y", "1:rz", f"{last}:y", f"{last}:rz"),
+    }
+    if bc not in table:
+        raise BeamDamageError(f"boundary condition {bc!r} unknown; expected one of {BOUNDARY_CONDITIONS}")
+    if root_spring and bc != "clamped-free":
+        raise BeamDamageError("a root rotational spring is only defined for the clamped-free beam")
+    return table[bc]
+
+
+@dataclass(frozen=True)
+class FEModel:
+    """Assembled beam model after boundary conditions.
+
+    Attributes
+    ----------
+    M, K : ndarray, shape (..., n, n)
+        Mass (kg, kg m^2) and stiffness (N/m, N m/rad) matrices over ``dofs``.
+    C : ndarray, shape (..., n, n)
+        Viscous damping matrix (N s/m); zeros unless element damping was given.
+    dofs : tuple of str
+        Names of the remaining DOFs (``"node:dir"``).
+    node_x : ndarray, shape (n_nodes,)
+        Node positions along the beam (m), node 1 at ``x = 0``.
+    """
+
+    M: np.ndarray
+    K: np.ndarray
+    C: np.ndarray
+    dofs: tuple
+    node_x: np.ndarray
+
+    def index(self, names) -> np.ndarray:
+        """Indices of DOFs given by name (``"3:y"``); raises on unknown names."""
+        lookup = {d: i for i, d in enumerate(self.dofs)}
+        missing = [n for n in names if n not in lookup]
+        if missing:
+            raise BeamDamageError(f"unknown or constrained DOF(s) {missing}; model DOFs are {list(self.dofs)}")
+        return np.array([lookup[n] for n in names], dtype=int)
+
+    def translations(self) -> tuple[str, ...]:
+        """Names of the free translational DOFs (the measurable ones)."""
+        return tuple(d for d in self.dofs if d.endswith(":y"))
+
+
+def beam_model(
+    n_elements: int,
+    length: float,
+    EI,
+    m_per_length,
+    *,
+    ei_factors=None,
+    mass_factors=None,
+    damping_factors=None,
+    bc: str = "clamped-free",
+    root_spring=None,
+) -> FEModel:
+    """Uniform beam of equal elements with optional per-element factors.
+
+    Parameters
+    ----------
+    n_elements : int
+        Number of equal elements.
+    length : float
+        Beam (cantilever) length (m).
+    EI : float or ndarray, shape (...)
+        Nominal flexural rigidity (N m^2); leading axes are batch axes.
+    m_per_length : float or ndarray, shape (...)
+        Nominal mass per length (kg/m).
+    ei_factors, mass_factors : ndarray, shape (..., n_elements), optional
+        Multipliers of each element's ``EI`` and mass (damage, variability).
+    damping_factors : ndarray, shape (..., n_elements), optional
+        Stiffness-proportional damping coefficient of each element (s):
+        ``C = sum_e beta_e K_e``. Zeros give ``C = 0``.
+    bc : {"clamped-free", "free-free", "pinned-pinned", "clamped-clamped"}
+    root_spring : float or ndarray, shape (...), optional
+        Rotational stiffness at the root (N m/rad) replacing the clamp on the
+        root rotation (clamped-free only).
+
+    Returns
+    -------
+    FEModel
+    """
+    if int(n_elements) < 1:
+        raise BeamDamageError(f"n_elements must be >= 1, got {n_elements}")
+    if not np.isfinite(length) or length <= 0:
+        raise BeamDamageError(f"length must be a positive number of metres, got {length}")
+    n_el = int(n_elements)
+    ei = np.asarray(EI, dtype=float)[..., None] * (1.0 if ei_factors is None else np.asarray(ei_factors, float))
+    mpl = np.asarray(m_per_length, dtype=float)[..., None] * (
+        1.0 if mass_factors is None else np.asarray(mass_factors, float))
+    ei = np.broadcast_to(ei, ei.shape[:-1] + (n_el,)) if ei.shape[-1] == 1 else ei
+    mpl = np.broadcast_to(mpl, mpl.shape[:-1] + (n_el,)) if mpl.shape[-1] == 1 else mpl
+    for name, arr in (("EI", ei), ("m_per_length", mpl)):
+        if arr.shape[-1] != n_el:
+            raise ShapeError(f"{name} factors must have n_elements={n_el} entries on the last axis")
+        if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
+            raise BeamDamageError(f"{name} (times its factors) must be finite and positive")
+    le = length / n_el
+    ke = element_stiffness(ei, le)
+    me = element_mass(mpl, le)
+    K = assemble(ke)
+    M = assemble(me)
+    if damping_factors is not None:
+        beta = np.asarray(damping_factors, dtype=float)
+        if beta.shape[-1] != n_el or np.any(beta < 0) or not np.all(np.isfinite(beta)):
+            raise BeamDamageError("damping_factors must be finite, >= 0, one per element")
+        C = assemble(beta[..., None, None] * ke)
+    else:
+        C = np.zeros_like(K)
+    n_nodes = n_el + 1
+    names = dof_names(n_nodes)
+    removed = set(constrained_dofs(bc, n_nodes, root_spring is not None))
+    keep = np.array([i for i, d in enumerate(names) if d not in removed])
+    if root_spring is not None:
+        kr = np.asarray(root_spring, dtype=float)
+        if np.any(kr <= 0) or not np.all(np.isfinite(kr)):
+            raise BeamDamageError("root_spring must be a positive rotational stiffness (N m/rad)")
+        K = K.copy()
+        K[..., 1, 1] += kr
+    sel = np.ix_(keep, keep)
+    return FEModel(
+        M=M[(...,) + sel],
+        K=K[(...,) + sel],
+        C=C[(...,) + sel],
+        dofs=tuple(names[i] for i in keep),
+        node_x=np.linspace(0.0, length, n_nodes),
+    )
+
+
+def lumped_mass(m_per_length, element_length, n_masters: int = 4):
+    """The thesis's lumped-mass model over the translations (eq. 4.6).
+
+    It is the translation-translation partition of the consistent mass matrix of
+    a cantilever: ``m l / 420`` times 312 on the diagonal (156 at the free tip)
+    and 54 between neighbouring nodes.
+
+    Parameters
+    ----------
+    m_per_length : float or ndarray, shape (...)
+        Mass per length (kg/m).
+    element_length : float
+        Element length (m).
+    n_masters : int
+        Number of translational DOFs (free nodes).
+
+    Returns
+    -------
+    ndarray, shape (..., n_masters, n_masters)
+    """
+    pattern = 312.0 * np.eye(n_masters) + 54.0 * (np.eye(n_masters, k=1) + np.eye(n_masters, k=-1))
+    pattern[-1, -1] = 156.0
+    m = np.asarray(m_per_length, dtype=float)[..., None, None]
+    return m * element_length / 420.0 * pattern
