@@ -1,0 +1,213 @@
+"""Beam properties: the thesis's specimens, closed-form frequencies, equivalent EI.
+
+* Presets ``beam5``, ``beam6``, ``beam8`` from Table 4.1 and the geometry of
+  Chapter Four: mass per length = mass / 1.219 m (whole beam), cantilever
+  length 0.6095 m, 4 elements, masters = translations of nodes 2..5.
+* Closed-form cantilever natural frequencies (eq. 4.5).
+* Equivalent ``EI`` from a static load-deflection test (eqs. 4.2-4.4).
+* Flexural rigidity of a layered section (eq. 4.1) and its general,
+  unsymmetric form used for slits.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq
+
+from physics.errors import BeamDamageError, ShapeError
+
+#: ``beta_l`` of a clamped-free beam as printed in the thesis (Chapter Four).
+THESIS_BETA_L = (1.8751, 4.6941, 7.8547, 10.9955)
+
+
+@dataclass(frozen=True)
+class BeamPreset:
+    """A specimen of the thesis (Table 4.1 and the Chapter Four geometry).
+
+    Attributes
+    ----------
+    name : str
+    mass_kg : float
+        Mass of the whole beam (kg).
+    EI : float
+        Equivalent flexural rigidity (N m^2).
+    total_length : float
+        Length of the whole beam (m), used for the mass per length.
+    length : float
+        Cantilever (free) length (m).
+    width, thickness : float
+        Section (m).
+    n_elements : int
+        Elements of the thesis's FE model.
+    """
+
+    name: str
+    mass_kg: float
+    EI: float
+    total_length: float = 1.219
+    length: float = 0.6095
+    width: float = 0.051
+    thickness: float = 0.007264
+    n_elements: int = 4
+
+    @property
+    def m_per_length(self) -> float:
+        """Mass per unit length (kg/m): beam mass over the whole length."""
+        return self.mass_kg / self.total_length
+
+    @property
+    def masters(self) -> tuple[str, ...]:
+        """The measured DOFs: translations of nodes 2..n_elements+1."""
+        return tuple(f"{n}:y" for n in range(2, self.n_elements + 2))
+
+
+PRESETS = {
+    "beam5": BeamPreset("beam5", 0.15792, 22.674),
+    "beam6": BeamPreset("beam6", 0.15723, 22.671),
+    "beam8": BeamPreset("beam8", 0.15505, 22.059),
+}
+
+
+def beam_preset(name: str) -> BeamPreset:
+    """Look up a preset by name (``beam5``, ``beam6``, ``beam8``)."""
+    try:
+        return PRESETS[name]
+    except KeyError:
+        raise BeamDamageError(f"unknown beam preset {name!r}; expected one of {sorted(PRESETS)}") from None
+
+
+def cantilever_beta_l(n_modes: int = 4) -> np.ndarray:
+    """Roots of ``cos(bl) cosh(bl) = -1`` (clamped-free), to machine precision."""
+    f = lambda x: np.cos(x) * np.cosh(x) + 1.0  # noqa: E731
+    return np.array([brentq(f, (k + 0.5) * np.pi - 1.0, (k + 0.5) * np.pi + 1.0, xtol=1e-15)
+                     for k in range(n_modes)])
+
+
+def cantilever_frequencies_hz(EI, m_per_length, length, beta_l=THESIS_BETA_L):
+    """Closed-form natural frequencies of a uniform cantilever (eq. 4.5).
+
+    ``f_n = (beta l_n)^2 / (2 pi l^2) sqrt(EI / m)``
+
+    Parameters
+    ----------
+    EI : float
+        Flexural rigidity (N m^2).
+    m_per_length : float
+        Mass per unit length (kg/m).
+    length : float
+        Cantilever length (m).
+    beta_l : sequence of float
+        Mode constants; the thesis's 5-digit values by default, or
+        :func:`cantilever_beta_l` for exact ones.
+
+    Returns
+    -------
+    ndarray, shape (len(beta_l),)   (Hz)
+    """
+    bl = np.asarray(beta_l, dtype=float)
+    return bl**2 / (2 * np.pi * length**2) * np.sqrt(EI / m_per_length)
+
+
+@dataclass(frozen=True)
+class StaticTest:
+    """Result of :func:`equivalent_ei`.
+
+    Attributes
+    ----------
+    EI : float
+        Equivalent flexural rigidity (N m^2), eq. 4.3.
+    slope : float
+        Least-squares slope of load over deflection (N/m).
+    intercept : float
+        Least-squares intercept (N).
+    r_squared : float
+        Coefficient of determination, eq. 4.4.
+    """
+
+    EI: float
+    slope: float
+    intercept: float
+    r_squared: float
+
+
+def equivalent_ei(loads_n, deflections_m, x_m: float, a_m: float) -> StaticTest:
+    """Equivalent ``EI`` of a cantilever from a load-deflection test (eqs. 4.2-4.4).
+
+    A line ``P = m delta + b`` is fitted by least squares; then
+    ``EI = m x^2 (3a - x) / 6`` (eq. 4.3), where the load acts at ``a`` and the
+    deflection is measured at ``x`` from the clamp, and
+    ``R^2 = 1 - sum (Y - Y_hat)^2 / (sum Y^2 - (sum Y)^2 / n)`` (eq. 4.4).
+
+    Parameters
+    ----------
+    loads_n : array_like, shape (n,)
+        Applied loads (N).
+    deflections_m : array_like, shape (n,)
+        Measured deflections (m).
+    x_m, a_m : float
+        Measurement and load positions from the clamp (m), ``0 < x <= a``.
+    """
+    P = np.asarray(loads_n, dtype=float)
+    d = np.asarray(deflections_m, dtype=float)
+    if P.shape != d.shape or P.ndim != 1 or P.size < 2 or not (np.all(np.isfinite(P)) and np.all(np.isfinite(d))):
+        raise ShapeError("loads_n and deflections_m must be finite 1-D arrays of equal length >= 2")
+    if not 0 < x_m <= a_m:
+        raise BeamDamageError(f"need 0 < x_m <= a_m, got x_m={x_m}, a_m={a_m}")
+    slope, intercept = np.polyfit(d, P, 1)
+    fit = slope * d + intercept
+    r2 = 1.0 - np.sum((P - fit) ** 2) / (np.sum(P**2) - np.sum(P) ** 2 / P.size)
+    return StaticTest(slope * x_m**2 * (3 * a_m - x_m) / 6.0, float(slope), float(intercept), float(r2))
+
+
+def layered_ei(width, interfaces, moduli):
+    """Flexural rigidity of a section symmetric about its neutral axis (eq. 4.1).
+
+    ``EI = (2b/3) sum_k E_k (d_{k+1}^3 - d_k^3)``
+
+    Parameters
+    ----------
+    width : float
+        Section width ``b`` (m).
+    interfaces : array_like, shape (n_layers + 1,)
+        Distances ``d_k`` from the neutral axis to the layer interfaces (m),
+        ascending from 0 (the mid-plane) to half the thickness.
+    moduli : array_like, shape (n_layers,)
+        Young's modulus of each layer ``E_k`` (Pa), from the mid-plane out.
+    """
+    d = np.asarray(interfaces, dtype=float)
+    E = np.asarray(moduli, dtype=float)
+    if d.ndim != 1 or E.shape != (d.size - 1,) or np.any(np.diff(d) < 0):
+        raise ShapeError("interfaces must ascend and have one more entry than moduli")
+    return 2 * width / 3 * np.sum(E * (d[1:] ** 3 - d[:-1] ** 3))
+
+
+def section_ei(width, z_bottom, z_top, moduli):
+    """Flexural rigidity of a general (unsymmetric) layered section.
+
+    The neutral axis sits at the modulus-weighted centroid
+    ``z_na = sum E_k A_k z_k / sum E_k A_k``; then
+    ``EI = (b/3) sum_k E_k ((z_top_k - z_na)^3 - (z_bot_k - z_na)^3)``. For a
+    symmetric stack this equals :func:`layered_ei`. Broadcasts over leading
+    axes (e.g. a batch of slit depths that thin the top layer).
+
+    Parameters
+    ----------
+    width : float or ndarray
+        Section width (m).
+    z_bottom, z_top : ndarray, shape (..., n_layers)
+        Layer bounds (m) measured from the bottom face.
+    moduli : ndarray, shape (..., n_layers)
+        Young's moduli (Pa).
+
+    Returns
+    -------
+    ndarray, shape (...)   (N m^2)
+    """
+    zb = np.asarray(z_bottom, dtype=float)
+    zt = np.asarray(z_top, dtype=float)
+    E = np.asarray(moduli, dtype=float)
+    ea = E * (zt - zb)
+    z_na = np.sum(ea * 0.5 * (zt + zb), axis=-1, keepdims=True) / np.sum(ea, axis=-1, keepdims=True)
+    return np.asarray(width) / 3.0 * np.sum(E * ((zt - z_na) ** 3 - (zb - z_na) ** 3), axis=-1)
