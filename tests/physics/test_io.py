@@ -1,0 +1,223 @@
+"""Tests of measured-FRF I/O (UFF58 ASCII/binary, CSV, NPZ) and its validation."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+pyuff = pytest.importorskip("pyuff")
+
+from physics.errors import FileFormatError, ShapeError
+from physics.io import (MeasuredFRF, dof_label, parse_dof, read_frf, read_frf_csv, read_frf_npz,
+                        read_uff58, write_frf_csv, write_frf_npz, write_uff58)
+
+
+def sdof_frf(f_hz, fn=30.0, zeta=0.02, m=0.1):
+    w, wn = 2 * np.pi * f_hz, 2 * np.pi * fn
+    return 1.0 / (m * (wn**2 - w**2 + 2j * zeta * wn * w))
+
+
+@pytest.fixture
+def frf():
+    f = np.arange(1.0, 100.0, 0.5)
+    h = np.stack([np.stack([sdof_frf(f, 30 + 5 * i + j) for j in range(2)]) for i in range(3)])
+    return MeasuredFRF(f, h, ("1:+Y", "2:+Y", "3:-Z"), ("1:+Y", "2:+Y"), metadata={"test": 1})
+
+
+def _pyuff_record(f, h, rsp=(2, 2), ref=(1, 2), func_type=4, binary=0, ordinate=8, even=1):
+    return pyuff.prepare_58(binary=binary, func_type=func_type, rsp_node=rsp[0], rsp_dir=rsp[1],
+                            ref_node=ref[0], ref_dir=ref[1], data=h, x=f, abscissa_spacing=even,
+                            abscissa_spec_data_type=18, ordinate_spec_data_type=ordinate,
+                            orddenom_spec_data_type=13)
+
+
+def _write_pyuff(path, sets):
+    pyuff.UFF(str(path)).write_sets(sets, mode="add")
+
+
+def test_dof_labels_round_trip():
+    assert dof_label(2, 2) == "2:+Y" and dof_label(7, -6) == "7:-RZ"
+    assert parse_dof("2:+Y") == (2, 2) and parse_dof("3:y") == (3, 2) and parse_dof("5:-RZ") == (5, -6)
+    with pytest.raises(FileFormatError, match="NODE:"):
+        parse_dof("tip")
+
+
+def test_kind_conversion_is_i_omega_power(frf):
+    w = frf.omega_rad_s
+    mob = frf.to_kind("mobility")
+    acc = frf.to_kind("accelerance")
+    np.testing.assert_allclose(mob.frf, 1j * w * frf.frf, rtol=1e-14)
+    np.testing.assert_allclose(acc.frf, -(w**2) * frf.frf, rtol=1e-14)
+    np.testing.assert_allclose(acc.to_kind("receptance").frf, frf.frf, rtol=1e-13)
+    assert acc.units == "m/s^2/N" and mob.kind == "mobility"
+    with_zero = MeasuredFRF(np.r_[0.0, frf.frequency_hz], np.concatenate([frf.frf[..., :1], frf.frf], -1),
+                            frf.response_dofs, frf.reference_dofs, kind="mobility")
+    with pytest.raises(ShapeError, match="0 Hz"):
+        with_zero.to_kind("receptance")
+
+
+def test_measuredfrf_validation():
+    f = np.array([1.0, 2.0, 3.0])
+    with pytest.raises(ShapeError, match="expected"):
+        MeasuredFRF(f, np.ones((2, 1, 3)), ("1:+Y",), ("1:+Y",))
+    with pytest.raises(ShapeError, match="NaN"):
+        MeasuredFRF(f, np.array([[[1, np.nan, 1]]]), ("1:+Y",), ("1:+Y",))
+    with pytest.raises(ShapeError, match="increasing"):
+        MeasuredFRF(f[::-1], np.ones((1, 1, 3)), ("1:+Y",), ("1:+Y",))
+
+
+@pytest.mark.parametrize("binary", [False, True])
+def test_uff58_round_trip(tmp_path, frf, binary):
+    path = tmp_path / ("b.uff" if binary else "a.uff")
+    for kind in ("receptance", "accelerance"):
+        data = frf.to_kind(kind)
+        write_uff58(path, data, binary=binary)
+        back = read_frf(path)
+        assert back.kind == kind
+        assert back.response_dofs == frf.response_dofs and back.reference_dofs == frf.reference_dofs
+        np.testing.assert_allclose(back.frequency_hz, frf.frequency_hz, rtol=1e-12)
+        # ASCII keeps 12 significant digits (E20.11), binary is exact double
+        np.testing.assert_allclose(back.frf, data.frf, rtol=0 if binary else 1e-10,
+                                   atol=0 if binary else 1e-11 * np.abs(data.frf).max())
+        assert back.metadata["binary"] == binary
+
+
+def test_uff58_uneven_spacing_written_by_pyuff(tmp_path):
+    f = np.geomspace(5.0, 200.0, 57)
+    h = sdof_frf(f)
+    path = tmp_path / "uneven.unv"
+    _write_pyuff(path, [_pyuff_record(f, h, even=0)])
+    back = read_uff58(path)
+    np.testing.assert_allclose(back.frequency_hz, f, rtol=1e-5)  # E13.5 abscissa
+    np.testing.assert_allclose(back.frf[0, 0], h, rtol=1e-10)
+    assert back.response_dofs == ("2:+Y",) and back.reference_dofs == ("1:+Y",)
+
+
+def test_uff58_mixed_binary_ascii_and_velocity(tmp_path):
+    f = np.arange(1.0, 20.0, 0.25)
+    h = sdof_frf(f)
+    path = tmp_path / "mixed.uff"
+    _write_pyuff(path, [_pyuff_record(f, h, binary=1, ordinate=11),
+                        _pyuff_record(f, 2 * h, rsp=(3, 2), binary=0, ordinate=11)])
+    back = read_uff58(path)
+    assert back.kind == "mobility" and back.frf.shape == (2, 1, f.size)
+    np.testing.assert_allclose(back.frf[1, 0], 2 * h, rtol=1e-10)
+
+
+def test_uff58_skips_other_functions_and_rejects_no_frf(tmp_path):
+    f = np.arange(1.0, 20.0, 0.5)
+    h = sdof_frf(f)
+    only_coh = tmp_path / "coh.uff"
+    _write_pyuff(only_coh, [_pyuff_record(f, np.abs(h), func_type=6)])
+    with pytest.raises(FileFormatError, match=r"no FRF \(function type 4\).*6 \(coherence\)"):
+        read_uff58(only_coh)
+    mixed = tmp_path / "mixed.uff"
+    _write_pyuff(mixed, [_pyuff_record(f, np.abs(h), func_type=6), _pyuff_record(f, h)])
+    with pytest.warns(UserWarning, match="not FRFs"):
+        back = read_uff58(mixed)
+    assert back.frf.shape == (1, 1, f.size)
+    nodes = tmp_path / "nodes.uff"
+    pyuff.UFF(str(nodes)).write_sets([pyuff.prepare_15(node_nums=[1, 2], def_cs=[0, 0], disp_cs=[0, 0],
+                                                       color=[1, 1], x=[0.0, 1.0], y=[0.0, 0.0],
+                                                       z=[0.0, 0.0])], mode="add")
+    with pytest.raises(FileFormatError, match="no dataset 58.*15"):
+        read_uff58(nodes)
+
+
+def test_uff58_duplicates_unequal_axes_missing_reference_nan(tmp_path):
+    f = np.arange(1.0, 20.0, 0.5)
+    h = sdof_frf(f)
+    dup = tmp_path / "dup.uff"
+    _write_pyuff(dup, [_pyuff_record(f, h), _pyuff_record(f, h)])
+    with pytest.warns(UserWarning, match="duplicated record dropped"):
+        assert read_uff58(dup).frf.shape == (1, 1, f.size)
+    axes = tmp_path / "axes.uff"
+    _write_pyuff(axes, [_pyuff_record(f, h), _pyuff_record(f + 0.1, h, rsp=(3, 2))])
+    with pytest.raises(FileFormatError, match="record 2.*frequency axis.*differs"):
+        read_uff58(axes)
+    miss = tmp_path / "miss.uff"
+    _write_pyuff(miss, [_pyuff_record(f, h), _pyuff_record(f, h, rsp=(3, 2), ref=(4, 2))])
+    with pytest.raises(FileFormatError, match="no FRF for response .* and reference"):
+        read_uff58(miss)
+    bad = h.copy()
+    bad[3] = 123.25  # pyuff cannot write NaN: patch the text instead
+    nan = tmp_path / "nan.uff"
+    _write_pyuff(nan, [_pyuff_record(f, bad)])
+    text = nan.read_text()
+    assert text.count("1.23250000000e+02") == 1
+    nan.write_text(text.replace("1.23250000000e+02", "              NaN"))
+    with pytest.raises(FileFormatError, match="NaN or inf"):
+        read_uff58(nan)
+
+
+@pytest.mark.parametrize("binary", [False, True])
+def test_uff58_truncated_file_is_a_clear_error(tmp_path, frf, binary):
+    path = tmp_path / "full.uff"
+    write_uff58(path, frf, binary=binary)
+    raw = path.read_bytes()
+    for cut in (50, len(raw) // 2 + 11, len(raw) - 3):
+        (tmp_path / "cut.uff").write_bytes(raw[:cut])
+        with pytest.raises(FileFormatError, match="cut.uff: truncated universal file"):
+            read_frf(tmp_path / "cut.uff")
+    (tmp_path / "empty.uff").write_bytes(b"")
+    with pytest.raises(FileFormatError, match="empty"):
+        read_frf(tmp_path / "empty.uff")
+
+
+def test_csv_round_trip_and_layout(tmp_path, frf):
+    path = tmp_path / "frf.csv"
+    write_frf_csv(path, frf.to_kind("mobility"))
+    text = path.read_text().splitlines()
+    assert text[1] == "# kind: mobility"
+    assert text[3].startswith("frequency_hz,re(1:+Y/1:+Y),im(1:+Y/1:+Y),re(1:+Y/2:+Y)")
+    back = read_frf_csv(path)
+    np.testing.assert_array_equal(back.frf, frf.to_kind("mobility").frf)  # 17 digits: exact
+    assert back.kind == "mobility"
+
+
+def test_csv_hand_written_single_reference_and_errors(tmp_path):
+    path = tmp_path / "hand.csv"
+    path.write_text("frequency_hz,re(2:+Y),im(2:+Y)\n1.0,1.5,-2.0\n2.0,0.5,0.25\n")
+    back = read_frf(path)
+    np.testing.assert_array_equal(back.frf[0, 0], [1.5 - 2j, 0.5 + 0.25j])
+    assert back.reference_dofs == ("ref",) and back.kind == "receptance"
+    path.write_text("frequency_hz,re(2:+Y),im(2:+Y)\n1.0,1.5,-2.0\n2.0,0.5\n")
+    with pytest.raises(FileFormatError, match="line 3: 2 fields, expected 3"):
+        read_frf(path)
+    path.write_text("frequency_hz,re(2:+Y),im(3:+Y)\n1.0,1.5,-2.0\n")
+    with pytest.raises(FileFormatError, match="must be 're"):
+        read_frf(path)
+    path.write_text("frequency_hz,re(2:+Y),im(2:+Y)\n1.0,1.5,nan\n2.0,1,1\n")
+    with pytest.raises(FileFormatError, match="line 2: NaN"):
+        read_frf(path)
+
+
+def test_npz_round_trip_without_pickle(tmp_path, frf):
+    path = tmp_path / "frf.npz"
+    write_frf_npz(path, frf)
+    back = read_frf_npz(path)
+    np.testing.assert_array_equal(back.frf, frf.frf)
+    assert back.response_dofs == frf.response_dofs and back.metadata["test"] == 1
+    np.savez(tmp_path / "bad.npz", frf=frf.frf)
+    with pytest.raises(FileFormatError, match="missing array"):
+        read_frf(tmp_path / "bad.npz")
+    np.savez(tmp_path / "obj.npz", frequency_hz=np.array([object()]), frf=frf.frf,
+             response_dofs=np.array(["a"]), reference_dofs=np.array(["b"]))
+    with pytest.raises(FileFormatError, match="not a readable"):
+        read_frf(tmp_path / "obj.npz")
+
+
+def test_read_frf_sniffs_content_and_missing_file(tmp_path, frf):
+    write_uff58(tmp_path / "data.dat", frf)
+    assert read_frf(tmp_path / "data.dat").frf.shape == frf.frf.shape
+    write_frf_npz(tmp_path / "x.npz", frf)
+    (tmp_path / "x.npz").rename(tmp_path / "x.bin")
+    assert read_frf(tmp_path / "x.bin").frf.shape == frf.frf.shape
+    with pytest.raises(FileFormatError, match="not found"):
+        read_frf(tmp_path / "nope.uff")
+
+
+def test_writes_are_atomic_no_temp_left(tmp_path, frf):
+    for writer, name in ((write_uff58, "a.uff"), (write_frf_csv, "a.csv"), (write_frf_npz, "a.npz")):
+        writer(tmp_path / name, frf)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.csv", "a.npz", "a.uff"]
