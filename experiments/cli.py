@@ -95,8 +95,12 @@ def main(argv=None) -> int:
         return EXIT_USAGE
     exit_code = int(result.pop("exit_code", 0)) if isinstance(result, dict) else 0
     if getattr(args, "json", False):
-        json.dump(to_jsonable(result), sys.stdout, indent=None, allow_nan=False)
-        sys.stdout.write("\n")
+        try:
+            json.dump(to_jsonable(result), sys.stdout, indent=None, allow_nan=False)
+            sys.stdout.write("\n")
+            sys.stdout.flush()
+        except BrokenPipeError:  # e.g. piped into `head`
+            sys.stderr.close()
     return exit_code
 
 

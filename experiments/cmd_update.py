@@ -1,0 +1,70 @@
+"""``beam-damage update``: damping identification and stiffness updating from measured modes."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from physics import fem, modal, properties, reduction, updating
+from physics.errors import FileFormatError
+from physics.io import read_modal_json
+
+
+def reference_mass(beam: str, mass: str) -> np.ndarray:
+    """The trusted mass matrix over the masters: IIRS-reduced (eqs. 3.41-3.44) or lumped (eq. 4.6)."""
+    preset = properties.beam_preset(beam)
+    if mass == "lumped":
+        return fem.lumped_mass(preset.m_per_length, preset.length / preset.n_elements, len(preset.masters))
+    model = fem.beam_model(preset.n_elements, preset.length, preset.EI, preset.m_per_length)
+    return reduction.iirs(model.M, model.K, model.index(preset.masters)).M
+
+
+def update(beam: str, modal_file, mass: str = "reduced", tol: float = 1e-10, max_iter: int = 500) -> dict:
+    data = read_modal_json(modal_file)
+    M = reference_mass(beam, mass)
+    if data.eigenvectors is None:
+        raise FileFormatError(f"{modal_file}: field 'eigenvectors' is required for updating "
+                              f"({M.shape[0]} rows = measured DOFs, one column per mode)")
+    if data.eigenvectors.shape != M.shape:
+        raise FileFormatError(f"{modal_file}: 'eigenvectors' is {data.eigenvectors.shape[0]}x"
+                              f"{data.eigenvectors.shape[1]} but {beam} has {M.shape[0]} measured DOFs "
+                              f"({', '.join(properties.beam_preset(beam).masters)}): a complete set of "
+                              f"{M.shape[0]} modes is needed")
+    res = updating.pilkey(M, data.eigenvalues, data.eigenvectors, tol=tol, max_iter=max_iter)
+    cm = modal.complex_modes(M, res.C, res.K)
+    return {
+        "beam": beam, "mass": mass, "M": M, "C": res.C, "K": res.K,
+        "iterations": res.iterations, "converged": res.converged, "residual": res.residual,
+        "natural_frequencies_hz": cm.natural_frequencies_hz, "damping_ratios": cm.damping_ratios,
+        "measured_natural_frequencies_hz": data.natural_frequencies_hz,
+        "measured_damping_ratios": data.damping_ratios,
+    }
+
+
+def run(args) -> dict:
+    out = update(args.beam, args.modal, args.mass, args.tol, args.max_iter)
+    if not args.json:
+        np.set_printoptions(precision=5, linewidth=160)
+        print(f"{args.beam}, {args.mass} mass: Pilkey converged in {out['iterations']} iterations")
+        print("M =\n", out["M"], "\nC (N s/m) =\n", out["C"], "\nK (N/m) =\n", out["K"])
+        print("model frequencies (Hz):   ", np.array2string(out["natural_frequencies_hz"], precision=3))
+        print("measured frequencies (Hz):", np.array2string(out["measured_natural_frequencies_hz"], precision=3))
+        print("model damping ratios:     ", np.array2string(out["damping_ratios"], precision=5))
+    return out
+
+
+def add_parser(sub):
+    p = sub.add_parser("update", help="identify C and update K from measured complex modes (Lancaster/Pilkey)",
+                       description="Identify the damping matrix by Pilkey's iteration of Lancaster's formula "
+                                   "(eqs. 1.10, 1.11) and update the stiffness matrix (eq. 1.12) from measured "
+                                   "complex modes and the beam's reduced or lumped mass matrix.")
+    p.add_argument("--beam", default="beam5", choices=sorted(properties.PRESETS), help="preset (default beam5)")
+    p.add_argument("--modal", required=True, metavar="FILE",
+                   help="modal-data JSON: eigenvalues and eigenvectors as complex strings (rows = measured DOFs, "
+                        "columns = modes), as in beams.json")
+    p.add_argument("--mass", default="reduced", choices=("reduced", "lumped"),
+                   help="IIRS-reduced mass (default) or lumped mass of eq. 4.6")
+    p.add_argument("--tol", type=float, default=1e-10, help="relative change of C that counts as converged")
+    p.add_argument("--max-iter", type=int, default=500, help="iteration limit (non-convergence is an error)")
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object: M, C, K, iterations, converged, natural_frequencies_hz, damping_ratios")
+    p.set_defaults(func=run)
