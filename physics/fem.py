@@ -230,11 +230,14 @@ def beam_model(
     ei = np.asarray(EI, dtype=float)[..., None] * (1.0 if ei_factors is None else np.asarray(ei_factors, float))
     mpl = np.asarray(m_per_length, dtype=float)[..., None] * (
         1.0 if mass_factors is None else np.asarray(mass_factors, float))
-    ei = np.broadcast_to(ei, ei.shape[:-1] + (n_el,)) if ei.shape[-1] == 1 else ei
-    mpl = np.broadcast_to(mpl, mpl.shape[:-1] + (n_el,)) if mpl.shape[-1] == 1 else mpl
     for name, arr in (("EI", ei), ("m_per_length", mpl)):
-        if arr.shape[-1] != n_el:
+        if arr.shape[-1] not in (1, n_el):
             raise ShapeError(f"{name} factors must have n_elements={n_el} entries on the last axis")
+    # one batch shape for both matrices
+    batch = np.broadcast_shapes(ei.shape[:-1], mpl.shape[:-1])
+    ei = np.broadcast_to(ei, batch + (n_el,))
+    mpl = np.broadcast_to(mpl, batch + (n_el,))
+    for name, arr in (("EI", ei), ("m_per_length", mpl)):
         if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
             raise BeamDamageError(f"{name} (times its factors) must be finite and positive")
     le = length / n_el
