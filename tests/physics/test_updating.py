@@ -1,0 +1,96 @@
+import json
+from importlib import resources
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from physics import modal, updating
+from physics.errors import ConvergenceError, OverdampedError, ShapeError
+from systems import random_system
+
+
+def _fixture(name):
+    return json.loads(resources.files("experiments").joinpath(f"data/thesis/{name}.json").read_text())
+
+
+def _c(vals):
+    return np.array([[complex(v) for v in row] for row in vals]) if isinstance(vals[0], list) else \
+        np.array([complex(v) for v in vals])
+
+
+def test_example_1_iterates_to_the_printed_decimals():
+    ex = _fixture("example1_two_dof")
+    res = updating.pilkey(np.array(ex["M"], float), _c(ex["eigenvalues"]), _c(ex["eigenvectors"]),
+                          tol=1e-13, keep_history=True)
+    for k, printed in ex["C_iterates"].items():
+        np.testing.assert_array_equal(np.round(res.history[int(k)], 4) + 0.0, printed)
+    np.testing.assert_allclose(res.K, ex["K_identified"], atol=5e-5)
+    assert res.converged and res.history.shape == (res.iterations + 1, 2, 2)
+
+
+def test_example_2_iterates_within_a_thousandth():
+    ex = _fixture("example2_ortiz_beam")
+    M, C, K = (np.array(ex[k], float) for k in ("M", "C_reference", "K"))
+    cm = modal.complex_modes(M, C, K)
+    res = updating.pilkey(M, cm.eigenvalues, cm.eigenvectors, tol=1e-13, keep_history=True)
+    for k in ("1", "5", "15", "20"):  # C10 has a printed asymmetric entry, checked in validate
+        np.testing.assert_allclose(res.history[int(k)], ex["C_iterates"][k], atol=1e-3)
+    np.testing.assert_allclose(res.C, C, rtol=1e-8, atol=1e-10)  # exact modes -> exact C
+    np.testing.assert_allclose(res.K, ex["K_identified_iter20"], rtol=1e-3, atol=1.0)
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(2, 12), seed=st.integers(0, 2**31), zeta=st.floats(0.002, 0.05))
+def test_pilkey_recovers_random_non_proportional_systems(n, seed, zeta):
+    M, C, K = random_system(n, seed, damping=zeta)
+    cm = modal.complex_modes(M, C, K)
+    rng = np.random.default_rng(seed)
+    scaled = cm.eigenvectors * (rng.uniform(0.5, 2, n) * np.exp(1j * rng.uniform(0, 6, n)))  # any scaling
+    res = updating.pilkey(M, cm.eigenvalues, scaled, tol=1e-13, max_iter=5000)
+    assert np.linalg.norm(res.C - C) <= 1e-8 * np.linalg.norm(C)
+    assert np.linalg.norm(res.K - K) <= 1e-8 * np.linalg.norm(K)
+
+
+def test_lancaster_formulas_are_exact_with_the_true_normalisation():
+    M, C, K = random_system(5, seed=11)
+    cm = modal.complex_modes(M, C, K)
+    np.testing.assert_allclose(updating.lancaster_damping(M, cm.eigenvalues, cm.eigenvectors), C, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(updating.lancaster_stiffness(cm.eigenvalues, cm.eigenvectors), K, rtol=1e-9)
+
+
+def test_batched_pilkey_equals_single_and_flags_each_member():
+    systems = [random_system(4, seed=s) for s in range(3)]
+    M, C, K = (np.stack(x) for x in zip(*systems))
+    cm = modal.complex_modes(M, C, K)
+    res = updating.pilkey(M, cm.eigenvalues, cm.eigenvectors, tol=1e-12)
+    assert res.converged.shape == (3,) and res.converged.all()
+    for i in range(3):
+        one = updating.pilkey(M[i], cm.eigenvalues[i], cm.eigenvectors[i], tol=1e-12)
+        np.testing.assert_allclose(res.K[i], one.K, rtol=1e-9)
+
+
+def test_inputs_it_cannot_handle_are_rejected():
+    M, C, K = random_system(3, seed=0)
+    cm = modal.complex_modes(M, C, K)
+    lam, phi = cm.eigenvalues, cm.eigenvectors
+    with pytest.raises(OverdampedError, match="real eigenvalue"):
+        updating.pilkey(M, lam.real + 0j, phi)
+    with pytest.raises(OverdampedError, match="conjugate"):
+        updating.pilkey(M, np.array([lam[0], np.conj(lam[0]), lam[2]]), phi)
+    with pytest.raises(ShapeError, match="one eigenvalue per DOF"):
+        updating.pilkey(M, lam[:2], phi[:, :2])
+    with pytest.raises(ShapeError, match="eigenvectors must be 3x3"):
+        updating.pilkey(M, lam, phi[:2])
+    with pytest.raises(ShapeError, match="NaN"):
+        updating.pilkey(M, lam, np.where(np.eye(3, dtype=bool), np.nan, phi))
+
+
+def test_non_convergence_is_reported_not_hidden():
+    M, C, K = random_system(4, seed=5)
+    cm = modal.complex_modes(M, C, K)
+    with pytest.raises(ConvergenceError, match="did not converge after 3 iterations"):
+        updating.pilkey(M, cm.eigenvalues, cm.eigenvectors, max_iter=3)
+    res = updating.pilkey(M, cm.eigenvalues, cm.eigenvectors, max_iter=3, raise_on_failure=False)
+    assert res.converged is False and res.residual > 1e-10
