@@ -1,0 +1,116 @@
+"""The validate, model, update and demo commands, through ``cli.main`` as a user calls them."""
+
+import json
+
+import numpy as np
+import pytest
+
+from experiments import cli, validate
+
+
+def _run(capsys, *argv):
+    code = cli.main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_validate_passes_and_prints_the_documented_json(capsys):
+    code, out, _ = _run(capsys, "validate", "--json")
+    res = json.loads(out)
+    assert code == 0 and res["passed"] is True
+    assert len(res["checks"]) >= 30
+    for c in res["checks"]:
+        assert {"name", "thesis", "reproduced", "rel_error", "tolerance", "passed"} <= set(c)
+        assert c["passed"] and c["rel_error"] <= c["tolerance"]
+    names = " ".join(c["name"] for c in res["checks"])
+    for must in ("C16", "C20", "Table 4.1", "Table 4.2", "Table 6.1", "Table 6.2", "u3", "Program A/B"):
+        assert must in names
+    misprint = next(c for c in res["checks"] if c["name"] == "Example 2: damping iterate C10")
+    assert "C10[2,4] printed 0.0749" in misprint["note"]
+    finding = next(c for c in res["checks"] if "printed eigenvectors" in c["name"])
+    assert "modes 3, 4 do not" in finding["name"] and "exponent off by +2" in finding["note"]
+
+
+def test_validate_fails_when_a_thesis_value_is_perturbed(monkeypatch):
+    real = validate.thesis_fixture
+
+    def perturbed(name):
+        data = real(name)
+        if name == "example1_two_dof":
+            data["C_iterates"]["5"][0][0] += 0.001
+        return data
+
+    monkeypatch.setattr(validate, "thesis_fixture", perturbed)
+    checks = validate.run_checks()
+    failed = [c.name for c in checks if not c.passed]
+    assert failed == ["Example 1: damping iterate C5"]
+
+
+def test_validate_text_table(capsys):
+    code, out, _ = _run(capsys, "validate")
+    assert code == 0 and "checks passed" in out and "rel_error" in out
+
+
+def test_model_json_keys_and_iirs(capsys):
+    code, out, _ = _run(capsys, "model", "--beam", "beam5", "--reduction", "iirs", "--json")
+    res = json.loads(out)
+    assert code == 0
+    assert set(res) >= {"M", "K", "dofs", "natural_frequencies_hz", "closed_form_frequencies_hz", "iterations"}
+    assert res["dofs"] == ["2:y", "3:y", "4:y", "5:y"] and res["iterations"] > 0
+    assert np.array(res["M"]).shape == (4, 4)
+    # IIRS keeps the 4 lowest FE frequencies, close to the closed form
+    np.testing.assert_allclose(res["natural_frequencies_hz"][:2], res["closed_form_frequencies_hz"][:2], rtol=2e-3)
+
+
+def test_model_lumped_uses_eq_4_6(capsys):
+    code, out, _ = _run(capsys, "model", "--mass", "lumped", "--reduction", "guyan", "--json")
+    M = np.array(json.loads(out)["M"])
+    assert code == 0 and M[0, 2] == 0 and M[3, 3] == pytest.approx(M[0, 0] / 2)
+
+
+def test_update_reproduces_chapter_six(tmp_path, capsys):
+    b5 = validate.thesis_fixture("beams")["beams"]["5"]
+    f = tmp_path / "modal.json"
+    f.write_text(json.dumps(b5["undamaged"]))
+    code, out, _ = _run(capsys, "update", "--beam", "beam5", "--modal", str(f), "--json")
+    res = json.loads(out)
+    assert code == 0 and res["converged"] is True
+    assert set(res) >= {"M", "C", "K", "iterations", "natural_frequencies_hz", "damping_ratios"}
+    K = np.array(b5["identified_models"]["undamaged"]["reduced_mass"]["K"])
+    # our M is the unrounded IIRS mass, so K agrees to the printed M's rounding (<1%)
+    assert np.linalg.norm(np.array(res["K"]) - K) / np.linalg.norm(K) < 1e-2
+
+
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        (None, "file not found"),
+        ("{not json", "not valid JSON"),
+        ('{"eigenvalues": ["1+2j", "x"]}', "field 'eigenvalues'"),
+        ('{"damping_ratios": [0.1]}', "missing key 'eigenvalues'"),
+        ('{"eigenvalues": ["-1+20j"], "eigenvectors": [["1"], ["2"]]}', "complete set of 4 modes"),
+        ('{"eigenvalues": ["-1+20j", "-1+30j", "-1+40j", "-1+50j"]}', "'eigenvectors' is required"),
+    ],
+)
+def test_update_bad_files_give_one_line_and_exit_2(tmp_path, capsys, content, message):
+    f = tmp_path / "m.json"
+    if content is not None:
+        f.write_text(content)
+    code, out, err = _run(capsys, "update", "--modal", str(f))
+    assert code == 2 and out == ""
+    assert message in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_usage_errors_exit_2(capsys):
+    with pytest.raises(SystemExit) as e:
+        cli.main(["model", "--beam", "beam9"])
+    assert e.value.code == 2
+    assert capsys.readouterr().err.count("\n") == 1
+
+
+def test_demo_writes_its_report(tmp_path, capsys):
+    code, out, _ = _run(capsys, "demo", "--out", str(tmp_path / "d"), "--json")
+    res = json.loads(out)
+    assert code == 0 and res["validate_passed"]
+    assert {p.name for p in (tmp_path / "d").iterdir()} >= {"validate.json", "validate.txt", "beam5_frf.png"}
+    assert json.loads((tmp_path / "d" / "validate.json").read_text())["passed"] is True
