@@ -8,6 +8,8 @@ Complex modes follow the package's conjugate-pair convention (see
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from physics.errors import ShapeError
@@ -76,3 +78,755 @@ def complex_modes_from_driving_point(h_peak, zeta, drive_index=0):
     factor = zeta / (-zeta + 1j)
     psi_s = np.sqrt(factor * h_peak[drive_index])  # eq. 3.33
     return factor * h_peak / psi_s  # eq. 3.34 (gives psi_s again on the drive row)
+
+
+# ---------------------------------------------------------------------------
+# Shared helpers
+# ---------------------------------------------------------------------------
+
+def _frf3(frequency_hz, frf):
+    f = np.asarray(frequency_hz, dtype=np.float64)
+    h = np.asarray(frf, dtype=np.complex128)
+    if h.ndim == 1:
+        h = h[None, None, :]
+    elif h.ndim == 2:
+        h = h[:, None, :]
+    if f.ndim != 1 or h.ndim != 3 or h.shape[-1] != f.size or f.size < 4:
+        raise ShapeError("frf must be (n_resp, n_ref, n_lines) with n_lines = frequency_hz.size >= 4")
+    if not (np.all(np.isfinite(f)) and np.all(np.isfinite(h))) or np.any(np.diff(f) <= 0):
+        raise ShapeError("frequency_hz must be finite and strictly increasing and frf finite")
+    return f, h
+
+
+def _eigenvalues(f_hz, zeta):
+    w = 2 * np.pi * np.asarray(f_hz, dtype=float)
+    z = np.asarray(zeta, dtype=float)
+    return -z * w + 1j * w * np.sqrt(1 - z**2)
+
+
+def modal_phase_collinearity(shapes):
+    """Modal phase collinearity (MPC) of complex mode shapes.
+
+    ``MPC = |psi^T psi|^2 / (psi^H psi)^2``: 1 for a mode whose entries share
+    one phase (a real, normal mode up to a complex factor), smaller for complex
+    modes. Equal to the eigenvalue form of Pappa et al.
+
+    Parameters
+    ----------
+    shapes : array_like, complex, shape (n_dofs, n_modes)
+
+    Returns
+    -------
+    ndarray, shape (n_modes,), in [0, 1]
+    """
+    psi = np.asarray(shapes, dtype=complex)
+    return np.abs(np.sum(psi**2, axis=0)) ** 2 / np.sum(np.abs(psi) ** 2, axis=0) ** 2
+
+
+def shapes_from_residues(residues, drive=None):
+    """Complex mode shapes from residues with unit-modal-A scaling.
+
+    With ``H(w) = sum_j R_j/(i w - lambda_j) + conj(R_j)/(i w - conj(lambda_j))``
+    and ``R_j = psi_j psi_j^T`` (package convention, eq. 1.10), a driving point
+    ``(s, r)`` (response row ``s`` = reference DOF ``r``) gives
+    ``psi_j = R_j[:, r] / sqrt(R_j[s, r])``.
+
+    Parameters
+    ----------
+    residues : ndarray, complex, shape (n_resp, n_ref, n_modes)
+    drive : (int, int) or None
+        ``(response_row, reference_column)`` of the driving point. Without it the
+        first reference column is returned normalised to unit largest entry
+        (shape only, not scaled).
+
+    Returns
+    -------
+    ndarray, complex, shape (n_resp, n_modes)
+    """
+    R = np.asarray(residues, dtype=complex)
+    if drive is None:
+        col = R[:, 0, :]
+        k = np.argmax(np.abs(col), axis=0)
+        return col / col[k, np.arange(col.shape[1])]
+    s, r = drive
+    return R[:, r, :] / np.sqrt(R[s, r, :])
+
+
+def synthesise_frf(frequency_hz, eigenvalues, residues, lower_residual=None, upper_residual=None):
+    """Receptance of a modal model (pole-residue form with optional residuals).
+
+    ``H(w) = sum_j [R_j/(i w - lambda_j) + conj(R_j)/(i w - conj(lambda_j))] - LR/w^2 + UR``.
+
+    Parameters
+    ----------
+    frequency_hz : ndarray, shape (n_lines,)
+    eigenvalues : ndarray, complex, shape (n_modes,) (rad/s, Im > 0)
+    residues : ndarray, complex, shape (n_resp, n_ref, n_modes)
+    lower_residual, upper_residual : ndarray, shape (n_resp, n_ref), optional
+
+    Returns
+    -------
+    ndarray, complex, shape (n_resp, n_ref, n_lines)  (m/N)
+    """
+    iw = 2j * np.pi * np.asarray(frequency_hz, dtype=float)
+    lam = np.asarray(eigenvalues, dtype=complex)
+    R = np.asarray(residues, dtype=complex)
+    g = 1 / (iw[None, :] - lam[:, None])
+    gc = 1 / (iw[None, :] - np.conj(lam)[:, None])
+    H = np.einsum("srj,jk->srk", R, g) + np.einsum("srj,jk->srk", np.conj(R), gc)
+    if lower_residual is not None:
+        with np.errstate(divide="ignore"):
+            H = H + np.asarray(lower_residual)[..., None] / iw**2
+    if upper_residual is not None:
+        H = H + np.asarray(upper_residual)[..., None]
+    return H
+
+
+@dataclass(frozen=True)
+class ModalEstimate:
+    """Identified modes.
+
+    Attributes
+    ----------
+    natural_frequencies_hz, damping_ratios : ndarray, shape (n_modes,)
+    eigenvalues : ndarray, complex, shape (n_modes,)
+        ``lambda = -zeta w + i w sqrt(1 - zeta^2)`` (rad/s).
+    shapes : ndarray, complex, shape (n_resp, n_modes)
+        Complex mode shapes, unit-modal-A scaled when ``scaled`` is True.
+    residues : ndarray, complex, shape (n_resp, n_ref, n_modes)
+    frequency_std_hz, damping_std : ndarray, shape (n_modes,)
+        One-sigma uncertainty where the method gives one (NaN otherwise); see
+        each method for what it means.
+    mpc : ndarray, shape (n_modes,)
+    method : str
+    scaled : bool
+    lower_residual, upper_residual : ndarray, shape (n_resp, n_ref) or None
+    """
+
+    natural_frequencies_hz: np.ndarray
+    damping_ratios: np.ndarray
+    eigenvalues: np.ndarray
+    shapes: np.ndarray
+    residues: np.ndarray
+    frequency_std_hz: np.ndarray
+    damping_std: np.ndarray
+    mpc: np.ndarray
+    method: str
+    scaled: bool
+    lower_residual: np.ndarray | None = None
+    upper_residual: np.ndarray | None = None
+
+
+def _estimate(f_hz, zeta, residues, drive, method, f_std=None, z_std=None, lower=None, upper=None):
+    f_hz, zeta = np.asarray(f_hz, float), np.asarray(zeta, float)
+    order = np.argsort(f_hz)
+    nan = np.full(f_hz.size, np.nan)
+    f_std = nan if f_std is None else np.asarray(f_std, float)
+    z_std = nan if z_std is None else np.asarray(z_std, float)
+    residues = np.asarray(residues, complex)[..., order]
+    shapes = shapes_from_residues(residues, drive)
+    return ModalEstimate(f_hz[order], zeta[order], _eigenvalues(f_hz[order], zeta[order]), shapes, residues,
+                         f_std[order], z_std[order], modal_phase_collinearity(shapes), method,
+                         drive is not None, lower, upper)
+
+
+# ---------------------------------------------------------------------------
+# SDOF methods: peak picking with half-power damping, circle fit (eq. 3.13)
+# ---------------------------------------------------------------------------
+
+def mode_indicator(frf):
+    """Sum of squared FRF magnitudes over all responses and references, shape (n_lines,)."""
+    h = np.asarray(frf)
+    return np.sum(np.abs(h.reshape(-1, h.shape[-1])) ** 2, axis=0)
+
+
+def find_peaks_indicator(frequency_hz, frf, n_modes=None, prominence=0.01):
+    """Line indices of resonance peaks of :func:`mode_indicator`.
+
+    Parameters
+    ----------
+    frequency_hz : ndarray, shape (n_lines,)
+    frf : ndarray, complex, shape (n_resp, n_ref, n_lines)
+    n_modes : int, optional
+        Keep the ``n_modes`` most prominent peaks (in log magnitude).
+    prominence : float
+        Minimum prominence of a peak of ``log10`` of the indicator (decades).
+
+    Returns
+    -------
+    ndarray of int, ascending
+    """
+    from scipy.signal import find_peaks
+
+    f, h = _frf3(frequency_hz, frf)
+    mif = np.log10(mode_indicator(h) + np.finfo(float).tiny)
+    idx, props = find_peaks(mif, prominence=prominence)
+    if n_modes is not None:
+        keep = np.argsort(props["prominences"])[::-1][:n_modes]
+        idx = idx[keep]
+    return np.sort(idx)
+
+
+def peak_picking(frequency_hz, frf, n_modes=None, peaks=None, drive=None, prominence=0.01):
+    """Peak picking with half-power damping and SDOF complex shapes (eqs. 3.33/3.34).
+
+    The peak of :func:`mode_indicator` (sum of ``|H|^2``) is refined by a
+    parabola through the log-magnitudes of the three highest lines; the
+    half-power points are where the indicator falls to half the peak value
+    (linear interpolation between lines), giving
+    ``zeta = (f_b - f_a) / (2 f_n)``. FRF values at resonance are taken at the
+    nearest line and corrected to ``f_n`` with the single-mode factor
+    ``(i w_k - lambda)/(i w_n - lambda)``; eqs. 3.33/3.34 then give the
+    complex shapes, rescaled to the package's unit-modal-A convention
+    (``psi = sqrt(lambda) Psi``). Equivalent residues are ``R = psi psi[r]``.
+
+    Parameters
+    ----------
+    frequency_hz : ndarray, shape (n_lines,)
+    frf : ndarray, complex, shape (n_resp, n_ref, n_lines)
+        Receptances (m/N).
+    n_modes : int, optional
+    peaks : array of int, optional
+        Line indices of the peaks (else :func:`find_peaks_indicator`).
+    drive : (int, int), optional
+        Driving point ``(response_row, reference_column)``; default row 0,
+        column 0 (shapes then not unit-modal-A scaled).
+
+    Returns
+    -------
+    ModalEstimate
+        No uncertainty (NaN). Only the driving-point column is identified; its
+        residues are repeated for every reference.
+    """
+    f, h = _frf3(frequency_hz, frf)
+    idx = find_peaks_indicator(f, h, n_modes, prominence) if peaks is None else np.asarray(peaks, int)
+    idx = idx[(idx > 0) & (idx < f.size - 1)]
+    mif = mode_indicator(h)
+    y0, y1, y2 = np.log(mif[idx - 1]), np.log(mif[idx]), np.log(mif[idx + 1])
+    den = y0 - 2 * y1 + y2
+    delta = np.where(den < 0, 0.5 * (y0 - y2) / np.where(den < 0, den, -1), 0.0)
+    df_line = 0.5 * (f[idx + 1] - f[idx - 1])
+    fn = f[idx] + np.clip(delta, -0.5, 0.5) * df_line
+    peak_val = np.exp(y1 - 0.25 * (y0 - y2) * delta)
+    fa, fb = np.empty(idx.size), np.empty(idx.size)
+    for m, (k, half) in enumerate(zip(idx, peak_val / 2)):
+        lo = k
+        while lo > 0 and mif[lo] > half:
+            lo -= 1
+        hi = k
+        while hi < f.size - 1 and mif[hi] > half:
+            hi += 1
+        # linear interpolation of the crossing between the last line above and the first below
+        fa[m] = np.interp(half, [mif[lo], mif[lo + 1]], [f[lo], f[lo + 1]]) if mif[lo] <= half else f[lo]
+        fb[m] = np.interp(half, [mif[hi], mif[hi - 1]], [f[hi], f[hi - 1]]) if mif[hi] <= half else f[hi]
+    zeta = (fb - fa) / (2 * fn)
+    lam = _eigenvalues(fn, zeta)
+    s, r = (0, 0) if drive is None else drive
+    w_k = 2 * np.pi * f[idx]
+    corr = (1j * w_k - lam) / (1j * np.abs(lam) * np.sqrt(1 - zeta**2) - lam)
+    h_res = h[:, r, idx] * corr  # (n_resp, n_modes) at the damped natural frequency
+    Psi = complex_modes_from_driving_point(h_res, zeta, drive_index=s)  # eqs. 3.33/3.34
+    psi = np.sqrt(lam) * Psi  # eq. 3.27 scaling -> unit modal A
+    # only the driving-point column is identified; it is repeated for every reference
+    residues = np.repeat((psi * psi[s])[:, None, :], h.shape[1], axis=1)
+    return _estimate(fn, zeta, residues, drive, "peak")
+
+
+def _fit_circle(z):
+    """Algebraic (Kasa) least-squares circle through complex points; returns (centre, radius)."""
+    scale = np.max(np.abs(z))
+    x, y = z.real / scale, z.imag / scale
+    A = np.column_stack([x, y, np.ones_like(x)])
+    sol = np.linalg.lstsq(A, -(x**2 + y**2), rcond=None)[0]
+    c = -0.5 * (sol[0] + 1j * sol[1])
+    r = np.sqrt(max(abs(c) ** 2 - sol[2], 0.0))
+    return c * scale, r * scale
+
+
+def circle_fit_sdof(frequency_hz, mobility, fn_guess_hz, zeta_guess):
+    """Circle fit of one mode in one mobility FRF (Nyquist plot, eq. 3.13).
+
+    Fits a circle to the points, then the angle of each point about the
+    centre to the single-mode law ``phi = phi_r + 2 arctan((w_n^2 - w^2)/(2 zeta w_n w))``
+    for ``w_n`` (nonlinear least squares). Damping follows eq. 3.13 for every
+    pair of points a (below ``w_n``) and b (above):
+    ``zeta = (w_b^2 - w_a^2) / (2 w_n (w_a tan(theta_a/2) + w_b tan(theta_b/2)))``,
+    ``theta`` being the angle from the resonance point; the mean over pairs is
+    returned and their spread gives ``zeta_std``.
+
+    Parameters
+    ----------
+    frequency_hz : ndarray, shape (n_points,), at least 4 points around resonance
+    mobility : ndarray, complex, shape (n_points,)
+        Mobility ``i w H`` (its single-mode Nyquist plot is an exact circle).
+    fn_guess_hz, zeta_guess : float
+
+    Returns
+    -------
+    dict
+        ``fn_hz, fn_std_hz, zeta, zeta_std, modal_constant`` where the modal
+        constant ``A`` (complex) gives the receptance ``A / (w_n^2 - w^2 + 2 i zeta w_n w)``
+        near resonance; ``centre``, ``radius``.
+    """
+    from scipy.optimize import least_squares
+
+    w = 2 * np.pi * np.asarray(frequency_hz, float)
+    c, rad = _fit_circle(np.asarray(mobility))
+    phi = np.unwrap(np.angle(mobility - c))
+
+    def resid(p):
+        wn, z, phr = p
+        return phi - phr - 2 * np.arctan((wn**2 - w**2) / (2 * z * wn * w))
+
+    wn0 = 2 * np.pi * fn_guess_hz
+    k0 = np.argmin(np.abs(w - wn0))
+    sol = least_squares(resid, [wn0, max(zeta_guess, 1e-5), phi[k0]],
+                        bounds=([w[0], 1e-6, -np.inf], [w[-1], 0.5, np.inf]), x_scale=[wn0 * 1e-3, 1e-3, 1])
+    wn, z_fit, phr = sol.x
+    dof = max(w.size - 3, 1)
+    s2 = 2 * sol.cost / dof
+    try:
+        cov = np.linalg.inv(sol.jac.T @ sol.jac) * s2
+        wn_std = float(np.sqrt(max(cov[0, 0], 0)))
+    except np.linalg.LinAlgError:
+        wn_std = np.nan
+    theta = np.abs(phi - phr)
+    below, above = w < wn, w > wn
+    wa, wb = w[below][:, None], w[above][None, :]
+    ta, tb = theta[below][:, None], theta[above][None, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z_pairs = (wb**2 - wa**2) / (2 * wn * (wa * np.tan(ta / 2) + wb * np.tan(tb / 2)))  # eq. 3.13
+    z_pairs = z_pairs[np.isfinite(z_pairs) & (z_pairs > 0)]
+    if z_pairs.size:
+        zeta, zeta_std = float(np.mean(z_pairs)), float(np.std(z_pairs) / np.sqrt(z_pairs.size))
+    else:
+        zeta, zeta_std = float(z_fit), np.nan
+    A = 4 * rad * zeta * wn * np.exp(1j * phr)
+    return {"fn_hz": wn / (2 * np.pi), "fn_std_hz": wn_std / (2 * np.pi), "zeta": zeta,
+            "zeta_std": zeta_std, "modal_constant": A, "centre": c, "radius": rad}
+
+
+def circle_fit(frequency_hz, frf, n_modes=None, peaks=None, drive=None, bandwidths=3.0, min_points=5):
+    """Circle-fit identification (Nyquist plot, eq. 3.13) of every mode in every FRF.
+
+    Peaks come from :func:`peak_picking`; around each, the lines within
+    ``bandwidths`` half-power bandwidths (at least ``min_points``, never past
+    the midpoint to a neighbouring peak) are fitted by :func:`circle_fit_sdof`
+    on the mobility. The global natural frequency and damping of a mode are
+    means over FRFs weighted by circle diameter; their uncertainties are the
+    weighted scatter over FRFs (single FRF: the fit's own standard errors).
+    Residues ``R = A / (2 i w_d)`` follow from each FRF's modal constant.
+
+    Parameters
+    ----------
+    frequency_hz : ndarray, shape (n_lines,)
+    frf : ndarray, complex, shape (n_resp, n_ref, n_lines)
+        Receptances (m/N).
+    n_modes, peaks, drive : see :func:`peak_picking`
+    bandwidths : float
+    min_points : int
+
+    Returns
+    -------
+    ModalEstimate
+    """
+    f, h = _frf3(frequency_hz, frf)
+    pk = peak_picking(f, h, n_modes, peaks, drive)
+    idx = np.array([np.argmin(np.abs(f - x)) for x in pk.natural_frequencies_hz])
+    mob = 2j * np.pi * f * h
+    n_s, n_r, n_m = h.shape[0], h.shape[1], idx.size
+    fn = np.empty((n_s, n_r, n_m))
+    zz = np.empty_like(fn)
+    fsd = np.empty_like(fn)
+    zsd = np.empty_like(fn)
+    A = np.empty((n_s, n_r, n_m), complex)
+    edges = np.r_[0, (idx[1:] + idx[:-1]) // 2, f.size - 1]
+    for m in range(n_m):
+        fm, zm = pk.natural_frequencies_hz[m], pk.damping_ratios[m]
+        sel = np.nonzero(np.abs(f - fm) <= bandwidths * max(zm, 1e-4) * fm)[0]
+        lo, hi = (sel[0], sel[-1]) if sel.size else (idx[m], idx[m])
+        while hi - lo + 1 < min_points:
+            lo, hi = max(lo - 1, 0), min(hi + 1, f.size - 1)
+        lo, hi = max(lo, edges[m]), min(hi, edges[m + 1])
+        if hi - lo + 1 < 4:
+            raise ShapeError(f"circle fit: fewer than 4 lines around the peak at {fm:.4g} Hz; "
+                             "use finer lines or the lscf method")
+        for s in range(n_s):
+            for r in range(n_r):
+                out = circle_fit_sdof(f[lo:hi + 1], mob[s, r, lo:hi + 1], fm, zm)
+                fn[s, r, m], zz[s, r, m] = out["fn_hz"], out["zeta"]
+                fsd[s, r, m], zsd[s, r, m] = out["fn_std_hz"], out["zeta_std"]
+                A[s, r, m] = out["modal_constant"]
+    weight = np.abs(A).reshape(-1, n_m)  # strong circles count more
+    weight = weight / weight.sum(axis=0)
+    f_mode = np.sum(weight * fn.reshape(-1, n_m), axis=0)
+    z_mode = np.sum(weight * zz.reshape(-1, n_m), axis=0)
+    n_frf = n_s * n_r
+    if n_frf > 1:
+        f_std = np.sqrt(np.sum(weight * (fn.reshape(-1, n_m) - f_mode) ** 2, axis=0) / (n_frf - 1))
+        z_std = np.sqrt(np.sum(weight * (zz.reshape(-1, n_m) - z_mode) ** 2, axis=0) / (n_frf - 1))
+    else:
+        f_std, z_std = fsd[0, 0], zsd[0, 0]
+    wd = 2 * np.pi * f_mode * np.sqrt(1 - z_mode**2)
+    residues = A / (2j * wd)
+    return _estimate(f_mode, z_mode, residues, drive, "circle", f_std, z_std)
+
+
+# ---------------------------------------------------------------------------
+# MDOF: poly-reference least-squares complex frequency domain (LSCF) + LSFD
+# ---------------------------------------------------------------------------
+
+#: Stability codes of poles in a stabilisation diagram.
+STABILITY_CODES = {0: "new", 1: "stable frequency", 2: "stable frequency and damping",
+                   3: "stable frequency and vector", 4: "stable"}
+
+
+@dataclass(frozen=True)
+class StabilisationDiagram:
+    """Poles of LSCF models of increasing order (one row per pole).
+
+    Attributes
+    ----------
+    order : ndarray of int, shape (n_poles,)
+    eigenvalues : ndarray, complex, shape (n_poles,)  (rad/s, Im > 0)
+    natural_frequencies_hz, damping_ratios : ndarray, shape (n_poles,)
+    participation : ndarray, complex, shape (n_poles, n_ref)
+        Modal participation vectors (unit norm).
+    status : ndarray of int, shape (n_poles,)
+        See :data:`STABILITY_CODES`; compared with the previous order.
+    band_hz : (float, float)
+    """
+
+    order: np.ndarray
+    eigenvalues: np.ndarray
+    natural_frequencies_hz: np.ndarray
+    damping_ratios: np.ndarray
+    participation: np.ndarray
+    status: np.ndarray
+    band_hz: tuple
+
+
+def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_tol=0.05, mpf_tol=0.98,
+         max_damping=0.2):
+    """Poly-reference least-squares complex frequency-domain poles (pLSCF).
+
+    Right matrix-fraction model in the z-domain, ``H_o(w) = B_o(z) A(z)^-1`` with
+    ``z = exp(i w dt)``, ``dt = 1/(2 f_max)``, ``A(z) = sum_{k=0}^p z^k alpha_k``
+    (``n_ref x n_ref``, ``alpha_p = I``). The linear least-squares problem is
+    reduced to the normal equations of the denominator only
+    (``M = sum_o T_o - S_o^T R^-1 S_o``, formed as ``sum_o Y_o^T (I - Q Q^T) Y_o``
+    with a QR factor ``Q`` of the numerator basis, for conditioning). Poles are the roots of
+    ``det A(z)`` (block companion matrix), ``lambda = ln(z)/dt``; participation
+    vectors are the left null vectors of ``A(z)``. With one reference this is
+    the common-denominator LSCF.
+
+    Parameters
+    ----------
+    frequency_hz : ndarray, shape (n_lines,)
+        Band to fit (select it beforehand).
+    frf : ndarray, complex, shape (n_resp, n_ref, n_lines)
+    max_order, min_order : int
+        Model orders ``p`` (``p * n_ref`` poles each).
+    freq_tol, damping_tol : float
+        Relative change with respect to the nearest pole of the previous order
+        below which frequency / damping are called stable.
+    mpf_tol : float
+        MAC between participation vectors above which the vector is stable
+        (always stable with one reference).
+    max_damping : float
+        Poles with damping outside ``(0, max_damping)`` or outside the band are dropped.
+
+    Returns
+    -------
+    StabilisationDiagram
+    """
+    f, h = _frf3(frequency_hz, frf)
+    n_o, n_i, N = h.shape
+    if max_order < min_order or min_order < 1:
+        raise ShapeError("lscf needs 1 <= min_order <= max_order")
+    if N * n_o < (max_order + 1) * (n_i + 1):
+        raise ShapeError(f"lscf: {N} lines x {n_o} responses are too few for model order {max_order}")
+    w = 2 * np.pi * f
+    dt = 1.0 / (2.0 * f[-1])
+    P = max_order + 1
+    X = np.exp(1j * np.outer(w * dt, np.arange(P)))  # (N, P) polynomial basis
+    Hrow = np.transpose(h, (0, 2, 1))  # (n_o, N, n_i)
+    Y = -(X[None, :, :, None] * Hrow[:, :, None, :]).reshape(n_o, N, P * n_i)
+    # real-valued coefficients: stack real and imaginary parts
+    Xr = np.concatenate([X.real, X.imag], axis=0)  # (2N, P)
+    Yr = np.concatenate([Y.real, Y.imag], axis=1)  # (n_o, 2N, P n_i)
+    orders, lams, mpfs = [], [], []
+    for p in range(min_order, max_order + 1):
+        nb, na = p + 1, (p + 1) * n_i
+        # eliminate the numerators: project Y on the orthogonal complement of span(X)
+        # (QR, so the conditioning of X is not squared), then solve the denominator
+        # normal equations M alpha = 0 with alpha_p = I
+        Q, _ = np.linalg.qr(Xr[:, :nb])
+        Yp = Yr[:, :, :na]
+        Yperp = Yp - Q @ np.einsum("nk,onl->okl", Q, Yp)
+        Mp = np.einsum("onk,onl->kl", Yperp, Yperp)
+        m = p * n_i
+        try:
+            alpha = np.linalg.solve(Mp[:m, :m], -Mp[:m, m:])  # (m, n_i)
+        except np.linalg.LinAlgError:
+            continue
+        # companion matrix of sum_k z^k alpha_k^T (left null vectors of A(z))
+        coeffs = alpha.reshape(p, n_i, n_i).transpose(0, 2, 1)
+        comp = np.zeros((m, m))
+        comp[:m - n_i, n_i:] = np.eye(m - n_i)
+        comp[m - n_i:, :] = -np.concatenate(list(coeffs), axis=1)
+        z, V = np.linalg.eig(comp)
+        ok = np.abs(z) > 0
+        lam = np.log(z[ok].astype(complex)) / dt
+        L = V[:n_i, ok].T
+        fn = np.abs(lam) / (2 * np.pi)
+        zeta = -lam.real / np.abs(lam)
+        keep = (lam.imag > 0) & (zeta > 0) & (zeta < max_damping) & (fn >= f[0]) & (fn <= f[-1])
+        L = L[keep] / np.linalg.norm(L[keep], axis=1, keepdims=True)
+        orders.append(np.full(keep.sum(), p))
+        lams.append(lam[keep])
+        mpfs.append(L)
+    order = np.concatenate(orders)
+    lam = np.concatenate(lams)
+    mpf = np.concatenate(mpfs) if mpfs else np.zeros((0, n_i), complex)
+    fn = np.abs(lam) / (2 * np.pi)
+    zeta = -lam.real / np.abs(lam)
+    status = np.zeros(lam.size, int)
+    for p in np.unique(order)[1:]:
+        cur = np.nonzero(order == p)[0]
+        prev = np.nonzero(order == p - 1)[0]
+        if prev.size == 0 or cur.size == 0:
+            continue
+        d = np.abs(fn[cur][:, None] - fn[prev][None, :])
+        near = prev[np.argmin(d, axis=1)]
+        f_ok = np.abs(fn[cur] - fn[near]) <= freq_tol * fn[cur]
+        d_ok = np.abs(zeta[cur] - zeta[near]) <= damping_tol * zeta[cur]
+        v_ok = (np.abs(np.sum(mpf[cur].conj() * mpf[near], axis=1)) ** 2 >= mpf_tol) if n_i > 1 \
+            else np.ones(cur.size, bool)
+        status[cur] = np.where(f_ok, np.where(d_ok & v_ok, 4, np.where(v_ok, 3, np.where(d_ok, 2, 1))), 0)
+    return StabilisationDiagram(order, lam, fn, zeta, mpf, status, (float(f[0]), float(f[-1])))
+
+
+@dataclass(frozen=True)
+class SelectedPoles:
+    """Physical poles picked from a stabilisation diagram.
+
+    Attributes
+    ----------
+    eigenvalues : ndarray, complex, shape (n_modes,)
+    natural_frequencies_hz, damping_ratios : ndarray, shape (n_modes,)
+        Medians over the upper half (by model order) of the cluster of stable poles.
+    frequency_std_hz, damping_std : ndarray, shape (n_modes,)
+        Standard deviation over those poles (spread across model orders, a
+        measure of the estimate's sensitivity to model order, not a
+        statistical confidence interval).
+    count : ndarray of int, shape (n_modes,)
+        Orders (upper half of the cluster) in which the pole was found stable.
+    participation : ndarray, complex, shape (n_modes, n_ref)
+    """
+
+    eigenvalues: np.ndarray
+    natural_frequencies_hz: np.ndarray
+    damping_ratios: np.ndarray
+    frequency_std_hz: np.ndarray
+    damping_std: np.ndarray
+    count: np.ndarray
+    participation: np.ndarray
+
+
+def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq_tol=0.01,
+                 damping_tol=0.25, min_count=None, seed_orders=0.25):
+    """Automatic pole selection from a stabilisation diagram (no GUI; rules are parameters).
+
+    1. Candidate poles have ``status >= min_status`` (4 = stable in frequency,
+       damping and participation vector).
+    2. Seeds are the candidates of the highest ``seed_orders`` fraction of orders.
+       For each seed, every order contributes its candidate nearest in frequency
+       if within ``freq_tol`` (relative) and ``damping_tol`` (relative) of the seed.
+    3. Clusters are taken largest first; a seed already in a taken cluster is
+       skipped and poles already taken are removed from later clusters, which
+       are dropped below ``min_count`` members (default: a third of the orders
+       that hold any pole).
+    4. With ``n_modes``, the ``n_modes`` largest clusters are kept.
+
+    Parameters
+    ----------
+    diagram : StabilisationDiagram
+    n_modes : int, optional
+    min_status : int
+    freq_tol, damping_tol : float
+    min_count : int, optional
+    seed_orders : float in (0, 1]
+
+    Returns
+    -------
+    SelectedPoles
+        Sorted by frequency.
+
+    Raises
+    ------
+    ConvergenceError
+        If no pole is stable enough.
+    """
+    from physics.errors import ConvergenceError
+
+    d = diagram
+    cand = np.nonzero(d.status >= min_status)[0]
+    orders = np.unique(d.order)
+    if min_count is None:
+        min_count = max(2, int(np.ceil(orders.size / 3)))
+    top = orders[int(np.floor((1 - seed_orders) * (orders.size - 1))):] if orders.size else orders
+    seeds = cand[np.isin(d.order[cand], top)]
+    clusters = []
+    for sd in seeds:
+        members = []
+        for p in np.unique(d.order[cand]):
+            c = cand[d.order[cand] == p]
+            j = c[np.argmin(np.abs(d.natural_frequencies_hz[c] - d.natural_frequencies_hz[sd]))]
+            if abs(d.natural_frequencies_hz[j] - d.natural_frequencies_hz[sd]) <= \
+                    freq_tol * d.natural_frequencies_hz[sd] and \
+                    abs(d.damping_ratios[j] - d.damping_ratios[sd]) <= damping_tol * d.damping_ratios[sd]:
+                members.append(j)
+        clusters.append((sd, np.array(members, int)))
+    clusters.sort(key=lambda c: (-c[1].size, -d.order[c[0]]))
+    chosen, used = [], set()
+    for sd, mem in clusters:
+        if sd in used:
+            continue
+        mem = np.array([j for j in mem if j not in used], int)
+        if mem.size < min_count:
+            continue
+        chosen.append(mem)
+        used.update(mem.tolist())
+        used.add(sd)
+    if n_modes is not None:
+        chosen = chosen[:n_modes]
+    if not chosen:
+        raise ConvergenceError("no pole is stable over enough model orders: raise max_order, widen the "
+                               "band or relax the selection tolerances")
+    # low orders are biased (the z-domain model converges with order): summarise the
+    # upper half of each cluster's orders
+    chosen = [m[d.order[m] >= np.median(d.order[m])] for m in chosen]
+    fn = np.array([np.median(d.natural_frequencies_hz[m]) for m in chosen])
+    zeta = np.array([np.median(d.damping_ratios[m]) for m in chosen])
+    f_std = np.array([np.std(d.natural_frequencies_hz[m], ddof=1) for m in chosen])
+    z_std = np.array([np.std(d.damping_ratios[m], ddof=1) for m in chosen])
+    count = np.array([m.size for m in chosen])
+    mpf = np.array([d.participation[m[np.argmax(d.order[m])]] for m in chosen])
+    o = np.argsort(fn)
+    return SelectedPoles(_eigenvalues(fn[o], zeta[o]), fn[o], zeta[o], f_std[o], z_std[o], count[o], mpf[o])
+
+
+@dataclass(frozen=True)
+class LSFDResult:
+    """Residues of a pole-residue model fitted by least squares.
+
+    Attributes
+    ----------
+    residues : ndarray, complex, shape (n_resp, n_ref, n_modes)
+    residue_std : ndarray, shape (n_resp, n_ref, n_modes)
+        One-sigma standard error of ``|R|`` from the linear least-squares
+        covariance (white residual assumption).
+    lower_residual, upper_residual : ndarray, shape (n_resp, n_ref)
+        Real mass-like (``-LR/w^2``) and stiffness-like (``UR``) terms of
+        out-of-band modes (zero when not fitted).
+    synthesised : ndarray, complex, shape (n_resp, n_ref, n_lines)
+    """
+
+    residues: np.ndarray
+    residue_std: np.ndarray
+    lower_residual: np.ndarray
+    upper_residual: np.ndarray
+    synthesised: np.ndarray
+
+
+def lsfd(frequency_hz, frf, eigenvalues, lower_residual=True, upper_residual=True):
+    """Least-squares frequency-domain residues with lower and upper residuals.
+
+    Fits, for all FRFs at once (one design matrix, many right-hand sides),
+    ``H(w) = sum_j [R_j/(i w - lambda_j) + conj(R_j)/(i w - conj(lambda_j))] - LR/w^2 + UR``
+    with the poles fixed, complex ``R_j`` and real ``LR``, ``UR``. Real and
+    imaginary parts are stacked so conjugate symmetry holds exactly.
+
+    Parameters
+    ----------
+    frequency_hz : ndarray, shape (n_lines,), > 0 when ``lower_residual``
+    frf : ndarray, complex, shape (n_resp, n_ref, n_lines)
+        Receptances (m/N).
+    eigenvalues : ndarray, complex, shape (n_modes,)
+    lower_residual, upper_residual : bool
+
+    Returns
+    -------
+    LSFDResult
+    """
+    f, h = _frf3(frequency_hz, frf)
+    lam = np.asarray(eigenvalues, dtype=complex).ravel()
+    if lower_residual and f[0] <= 0:
+        raise ShapeError("lsfd with a lower residual needs frequencies > 0 Hz (drop the 0 Hz line)")
+    iw = 2j * np.pi * f
+    g = 1 / (iw[:, None] - lam[None, :])
+    gc = 1 / (iw[:, None] - np.conj(lam)[None, :])
+    cols = [g + gc, 1j * (g - gc)]  # basis of Re R and Im R
+    if lower_residual:
+        cols.append((1 / iw**2)[:, None])
+    if upper_residual:
+        cols.append(np.ones((f.size, 1)))
+    B = np.concatenate(cols, axis=1)  # complex (N, n_par)
+    A = np.concatenate([B.real, B.imag], axis=0)
+    rhs = h.reshape(-1, f.size).T
+    b = np.concatenate([rhs.real, rhs.imag], axis=0)
+    scale = np.linalg.norm(A, axis=0)
+    sol, *_ = np.linalg.lstsq(A / scale, b, rcond=None)
+    x = sol / scale[:, None]
+    n_m = lam.size
+    resid = b - A @ x
+    dof = max(A.shape[0] - A.shape[1], 1)
+    s2 = np.sum(resid**2, axis=0) / dof
+    cov_diag = np.diag(np.linalg.pinv((A / scale).T @ (A / scale))) / scale**2
+    var_re, var_im = cov_diag[:n_m], cov_diag[n_m:2 * n_m]
+    R = (x[:n_m] + 1j * x[n_m:2 * n_m]).T.reshape(h.shape[0], h.shape[1], n_m)
+    R_std = np.sqrt(np.outer(s2, var_re + var_im)).reshape(h.shape[0], h.shape[1], n_m)
+    k = 2 * n_m
+    zero = np.zeros(h.shape[:2])
+    LR = UR = zero
+    if lower_residual:
+        LR = x[k].reshape(h.shape[:2])
+        k += 1
+    if upper_residual:
+        UR = x[k].reshape(h.shape[:2])
+    synth = (B @ x).T.reshape(h.shape)
+    return LSFDResult(R, R_std, LR, UR, synth)
+
+
+def identify_lscf(frequency_hz, frf, n_modes=None, drive=None, max_order=40, select=None, **lscf_options):
+    """LSCF poles, automatic selection and LSFD residues/shapes in one call.
+
+    Parameters
+    ----------
+    frequency_hz : ndarray, shape (n_lines,), > 0
+    frf : ndarray, complex, shape (n_resp, n_ref, n_lines)
+        Receptances (m/N).
+    n_modes : int, optional
+    drive : (int, int), optional
+        Driving point for unit-modal-A scaling (see :func:`shapes_from_residues`).
+    max_order : int
+    select : dict, optional
+        Keyword arguments of :func:`select_poles`.
+    **lscf_options
+        Keyword arguments of :func:`lscf`.
+
+    Returns
+    -------
+    estimate : ModalEstimate
+        Uncertainties are the spread of the pole over model orders.
+    diagram : StabilisationDiagram
+    fit : LSFDResult
+    """
+    f, h = _frf3(frequency_hz, frf)
+    diagram = lscf(f, h, max_order=max_order, **lscf_options)
+    poles = select_poles(diagram, n_modes=n_modes, **(select or {}))
+    fit = lsfd(f, h, poles.eigenvalues)
+    est = _estimate(poles.natural_frequencies_hz, poles.damping_ratios, fit.residues, drive, "lscf",
+                    poles.frequency_std_hz, poles.damping_std, fit.lower_residual, fit.upper_residual)
+    return est, diagram, fit
