@@ -25,6 +25,7 @@ COMMAND_MODULES = [
     "experiments.validate",
     "experiments.cmd_model",
     "experiments.cmd_update",
+    "experiments.cmd_identify",
     "experiments.demo",
 ]
 

@@ -240,7 +240,7 @@ def mode_indicator(frf):
     return np.sum(np.abs(h.reshape(-1, h.shape[-1])) ** 2, axis=0)
 
 
-def find_peaks_indicator(frequency_hz, frf, n_modes=None, prominence=0.01):
+def find_peaks_indicator(frequency_hz, frf, n_modes=None, prominence=0.2):
     """Line indices of resonance peaks of :func:`mode_indicator`.
 
     Parameters
@@ -267,7 +267,7 @@ def find_peaks_indicator(frequency_hz, frf, n_modes=None, prominence=0.01):
     return np.sort(idx)
 
 
-def peak_picking(frequency_hz, frf, n_modes=None, peaks=None, drive=None, prominence=0.01):
+def peak_picking(frequency_hz, frf, n_modes=None, peaks=None, drive=None, prominence=0.2):
     """Peak picking with half-power damping and SDOF complex shapes (eqs. 3.33/3.34).
 
     The peak of :func:`mode_indicator` (sum of ``|H|^2``) is refined by a

@@ -1,0 +1,88 @@
+"""Tests of ``beam-damage identify`` (and ``update`` fed by an FRF file)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from experiments.bench_identification import simulate
+from experiments.cli import main
+from physics.io import MeasuredFRF, read_modal_json, write_frf_csv, write_frf_npz, write_uff58
+
+
+@pytest.fixture(scope="module")
+def beam5_files(tmp_path_factory):
+    d = tmp_path_factory.mktemp("frf")
+    frf, exact = simulate(noise=0.01, seed=3)
+    write_uff58(d / "beam5.uff", frf, binary=True)
+    write_frf_csv(d / "beam5.csv", frf.to_kind("accelerance"))
+    write_frf_npz(d / "beam5.npz", frf)
+    return d, exact
+
+
+def _run(capsys, argv):
+    code = main(argv)
+    cap = capsys.readouterr()
+    return code, cap.out, cap.err
+
+
+@pytest.mark.parametrize("name", ["beam5.uff", "beam5.csv", "beam5.npz"])
+def test_identify_json_recovers_exact_modes(capsys, beam5_files, name):
+    d, exact = beam5_files
+    code, out, err = _run(capsys, ["identify", str(d / name), "--modes", "4", "--json"])
+    assert code == 0, err
+    res = json.loads(out)
+    f = np.array([m["frequency_hz"] for m in res["modes"]])
+    z = np.array([m["damping_ratio"] for m in res["modes"]])
+    np.testing.assert_allclose(f, exact.natural_frequencies_hz, rtol=5e-4)
+    np.testing.assert_allclose(z, exact.damping_ratios, rtol=0.02)
+    shape = np.array([complex(s) for s in res["modes"][1]["shape"]])
+    psi = exact.eigenvectors[:, 1]
+    assert abs(np.vdot(shape, psi)) ** 2 / (np.vdot(shape, shape).real * np.vdot(psi, psi).real) > 0.999
+    assert np.linalg.norm(shape) == pytest.approx(np.linalg.norm(psi), rel=0.01)  # unit modal A
+    assert res["dofs"] == ["2:+Y", "3:+Y", "4:+Y", "5:+Y"] and res["scaling"] == "unit modal A"
+    assert all(0.99 < m["mpc"] <= 1.0 for m in res["modes"])
+
+
+@pytest.mark.parametrize("method", ["circle", "peak"])
+def test_identify_sdof_methods_and_band(capsys, beam5_files, method):
+    d, exact = beam5_files
+    code, out, err = _run(capsys, ["identify", str(d / "beam5.uff"), "--method", method, "--band", "80", "500",
+                                   "--json"])
+    assert code == 0, err
+    f = np.array([m["frequency_hz"] for m in json.loads(out)["modes"]])
+    np.testing.assert_allclose(f, exact.natural_frequencies_hz[1:3], rtol=2e-3)
+
+
+def test_identify_out_dir_feeds_update(capsys, beam5_files, tmp_path):
+    d, exact = beam5_files
+    code, out, err = _run(capsys, ["identify", str(d / "beam5.uff"), "--out", str(tmp_path / "id")])
+    assert code == 0, err
+    assert sorted(p.name for p in (tmp_path / "id").iterdir()) == ["modal.json", "overlay.png",
+                                                                   "stabilisation.png"]
+    assert (tmp_path / "id" / "overlay.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    modal = read_modal_json(tmp_path / "id" / "modal.json")
+    np.testing.assert_allclose(modal.natural_frequencies_hz, exact.natural_frequencies_hz, rtol=5e-4)
+    assert "4 modes by lscf" in out
+
+
+def test_identify_bad_files_one_line_exit_2(capsys, tmp_path, beam5_files):
+    d, _ = beam5_files
+    raw = (d / "beam5.uff").read_bytes()
+    (tmp_path / "cut.uff").write_bytes(raw[: len(raw) // 2 + 5])
+    code, out, err = _run(capsys, ["identify", str(tmp_path / "cut.uff")])
+    assert code == 2 and err.count("\n") == 1 and "truncated universal file" in err
+    code, out, err = _run(capsys, ["identify", str(tmp_path / "missing.csv")])
+    assert code == 2 and "not found" in err
+    code, out, err = _run(capsys, ["identify", str(d / "beam5.uff"), "--band", "500", "100"])
+    assert code == 2 and "FMIN" in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_identify_without_driving_point_warns_unscaled(capsys, tmp_path):
+    frf, _ = simulate(noise=0.0, seed=0)
+    other = MeasuredFRF(frf.frequency_hz, frf.frf[:3], frf.response_dofs[:3], frf.reference_dofs)
+    write_frf_npz(tmp_path / "x.npz", other)
+    code, out, err = _run(capsys, ["identify", str(tmp_path / "x.npz"), "--modes", "4", "--json"])
+    res = json.loads(out)
+    assert code == 0 and res["scaling"].startswith("unscaled") and "driving point" in res["warnings"][0]
