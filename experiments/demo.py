@@ -39,7 +39,7 @@ def beam5_frf_figure(path: Path) -> dict:
             h = frf.receptance(M, res.C, res.K, w, response=[3], reference=[0])[0, 0]
             label = f"{state}, {mass.replace('_', ' ')}"
             ax_m.plot(f_hz, frf.magnitude_db(h), ls, color=color, lw=1, label=label)
-            ax_p.plot(f_hz, frf.phase_deg(h), ls, color=color, lw=1)
+            ax_p.plot(f_hz, frf.phase_deg(h, unwrap=True), ls, color=color, lw=1)
             peaks[label] = modal.complex_modes(M, res.C, res.K).natural_frequencies_hz.tolist()
     for f in b5["undamaged"]["natural_frequencies_hz"]:
         ax_m.axvline(f, color="0.7", lw=0.6)
