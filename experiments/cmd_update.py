@@ -18,9 +18,18 @@ def reference_mass(beam: str, mass: str) -> np.ndarray:
     return reduction.iirs(model.M, model.K, model.index(preset.masters)).M
 
 
+def load_modal(modal_file, n_modes: int):
+    """Modal JSON as is; an FRF file (UFF58, CSV, NPZ) is identified first (LSCF + LSFD, ``n_modes`` modes)."""
+    if str(modal_file).lower().endswith(".json"):
+        return read_modal_json(modal_file)
+    from experiments.cmd_identify import identify_file
+
+    return identify_file(modal_file, n_modes=n_modes).modal_data
+
+
 def update(beam: str, modal_file, mass: str = "reduced", tol: float = 1e-10, max_iter: int = 500) -> dict:
-    data = read_modal_json(modal_file)
     M = reference_mass(beam, mass)
+    data = load_modal(modal_file, M.shape[0])
     if data.eigenvectors is None:
         raise FileFormatError(f"{modal_file}: field 'eigenvectors' is required for updating "
                               f"({M.shape[0]} rows = measured DOFs, one column per mode)")
@@ -60,7 +69,8 @@ def add_parser(sub):
     p.add_argument("--beam", default="beam5", choices=sorted(properties.PRESETS), help="preset (default beam5)")
     p.add_argument("--modal", required=True, metavar="FILE",
                    help="modal-data JSON: eigenvalues and eigenvectors as complex strings (rows = measured DOFs, "
-                        "columns = modes), as in beams.json")
+                        "columns = modes), as in beams.json; or an FRF file (.uff/.unv, .csv, .npz) with a "
+                        "driving point, identified first by 'identify --method lscf'")
     p.add_argument("--mass", default="reduced", choices=("reduced", "lumped"),
                    help="IIRS-reduced mass (default) or lumped mass of eq. 4.6")
     p.add_argument("--tol", type=float, default=1e-10, help="relative change of C that counts as converged")
