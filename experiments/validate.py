@@ -212,6 +212,17 @@ def beam5_checks():
                               f"{np.array2string(meas, precision=3, separator=', ')} Hz: the table differs from the "
                               "full-precision model because the printed K keeps 4-5 digits and the first mode is "
                               "sensitive to that rounding"))
+            z_full = modal.complex_modes(M, res.C, res.K).damping_ratios
+            z_printed = modal.complex_modes(M, np.array(ident[state][mass]["C"]),
+                                            np.array(ident[state][mass]["K"])).damping_ratios
+            unstable = np.flatnonzero(z_full < 0) + 1
+            out.append(_check(f"{tag}: damping ratios of the identified model", "beam5", z_printed, z_full,
+                              max_rel(z_full, z_printed), 0.05,
+                              "thesis column = damping ratios of the printed (rounded) M, C, K; measured "
+                              f"{np.array2string(np.array(b5[state]['damping_ratios']), precision=5, separator=', ')}; "
+                              f"identified C has eigenvalues {np.array2string(np.linalg.eigvalsh(res.C), precision=4, separator=', ')}"
+                              " (indefinite)" + (f"; mode(s) {', '.join(map(str, unstable))} have NEGATIVE damping: the "
+                                                 "identified model is unstable" if unstable.size else "")))
     # The thesis's FRF programs A/B (state space) against direct inversion and modal superposition.
     M = np.array(ident["undamaged"]["reduced_mass"]["M"])
     C = np.array(ident["undamaged"]["reduced_mass"]["C"])
