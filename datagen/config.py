@@ -1,0 +1,197 @@
+"""Generator configuration: defaults, TOML loading and validation of every key.
+
+A configuration is a nested mapping of sections; a TOML file overrides any
+subset of the defaults below. Unknown sections/keys and bad values raise
+:class:`physics.errors.ConfigError` naming the dotted key (``damage.depth_m``).
+
+Ranges ``[lo, hi]`` are sampled uniformly (``root_spring_relative`` log-uniformly);
+``lo == hi`` fixes the value. Bands ``b`` are relative: a factor uniform in
+``[1 - b, 1 + b]`` around the preset.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import tomllib
+from pathlib import Path
+
+from physics.errors import ConfigError
+
+#: Default configuration (SI units). See README "Generating datasets".
+DEFAULTS: dict = {
+    "preset": "beam5",
+    "mesh": {
+        "truth_elements": 20,          # multiple of 4 so nodes sit at the thesis's nodes 2..5
+    },
+    "section": {
+        "face_thickness_m": 0.0005,    # each carbon-fibre face sheet (two plies)
+        "core_modulus_pa": 1.0e8,      # foam-filled honeycomb core; face modulus is solved from Table 4.1's EI
+    },
+    "specimen": {
+        "ei_band": 0.05,
+        "mass_band": 0.03,
+        "damping_band": 0.2,
+        "root_spring_relative": [300.0, 3000.0],   # k_r L / EI, log-uniform; [] = rigid clamp
+        "damping_ratios": [0.001623, 0.002481, 0.003105, 0.00421],  # thesis beam 5, modes 1..4
+    },
+    "damage": {
+        "n_slits": [1, 1],
+        "position_fraction": [0.03, 0.97],   # x / L of the slit centre
+        "width_m": [0.002, 0.01],            # effective length of the reduced section
+        "depth_m": [0.0002, 0.0003],         # thesis: 0.2-0.3 mm into the top face sheet
+        "slit_damping_s": [0.0, 2.0e-5],     # extra stiffness-proportional damping of the slit region (s); loss factor beta*omega
+    },
+    "measurement": {
+        "frequency_noise": 0.0005,     # relative std of natural frequencies
+        "damping_noise": 0.02,         # relative std of damping ratios
+        "shape_noise": 0.002,          # complex std relative to the largest entry of each mode
+        "frf_noise": 0.005,            # complex std relative to |H| per line
+        "band_rad_s": [1.0, 5000.0],   # thesis Program A grid limits
+        "lines": 1024,
+    },
+    "updating": {
+        "mass_model": "iirs",          # "iirs" (4-element FE reduced to nodes 2..5) or "lumped" (eq. 4.6)
+        "tol": 1e-10,
+        "max_iter": 500,
+    },
+    "solver": {
+        "projection_modes": 8,         # undamped modes kept for the light-damping complex modes
+        "subspace_iterations": 3,
+        "damping_iterations": 3,
+    },
+    "output": {
+        "shard_size": 1000,
+        "frf_dtype": "complex64",
+    },
+}
+
+
+def _range(key, v, *, lo=None, hi=None, integer=False, allow_empty=False):
+    if allow_empty and isinstance(v, list) and len(v) == 0:
+        return []
+    if not (isinstance(v, list) and len(v) == 2 and all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                                                           for x in v)):
+        raise ConfigError(f"config key {key!r} must be a range [low, high] of two numbers, got {v!r}")
+    a, b = v
+    if integer and not all(float(x).is_integer() for x in v):
+        raise ConfigError(f"config key {key!r} must hold integers, got {v!r}")
+    if not (math.isfinite(a) and math.isfinite(b)) or a > b:
+        raise ConfigError(f"config key {key!r} must satisfy low <= high (finite), got {v!r}")
+    if lo is not None and a < lo or hi is not None and b > hi:
+        raise ConfigError(f"config key {key!r} must lie within [{lo}, {hi}], got {v!r}")
+    return [int(a), int(b)] if integer else [float(a), float(b)]
+
+
+def _num(key, v, *, lo=None, hi=None, integer=False, strict_lo=False):
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or (integer and not float(v).is_integer()):
+        raise ConfigError(f"config key {key!r} must be {'an integer' if integer else 'a number'}, got {v!r}")
+    if not math.isfinite(v):
+        raise ConfigError(f"config key {key!r} must be finite, got {v!r}")
+    if lo is not None and (v <= lo if strict_lo else v < lo) or hi is not None and v > hi:
+        raise ConfigError(f"config key {key!r} must lie in {'(' if strict_lo else '['}{lo}, {hi}], got {v!r}")
+    return int(v) if integer else float(v)
+
+
+def validate(cfg: dict) -> dict:
+    """Check every key of a full configuration; returns a normalised deep copy.
+
+    Raises
+    ------
+    ConfigError
+        Unknown key, missing key, wrong type or out-of-range value (names the key).
+    """
+    cfg = copy.deepcopy(cfg)
+    for sec in cfg:
+        if sec not in DEFAULTS:
+            raise ConfigError(f"unknown config key {sec!r}; expected one of {sorted(DEFAULTS)}")
+    for sec, d in DEFAULTS.items():
+        if sec not in cfg:
+            raise ConfigError(f"config key {sec!r} missing")
+        if isinstance(d, dict):
+            if not isinstance(cfg[sec], dict):
+                raise ConfigError(f"config key {sec!r} must be a table")
+            for k in cfg[sec]:
+                if k not in d:
+                    raise ConfigError(f"unknown config key '{sec}.{k}'; expected one of {sorted(d)}")
+            for k in d:
+                if k not in cfg[sec]:
+                    raise ConfigError(f"config key '{sec}.{k}' missing")
+    if not isinstance(cfg["preset"], str):
+        raise ConfigError("config key 'preset' must be a string such as 'beam5'")
+    m, s, dmg, meas, up, sol, out = (cfg[k] for k in ("mesh", "section", "specimen", "measurement",
+                                                       "updating", "solver", "output"))
+    m["truth_elements"] = _num("mesh.truth_elements", m["truth_elements"], lo=4, hi=400, integer=True)
+    if m["truth_elements"] % 4:
+        raise ConfigError(f"config key 'mesh.truth_elements' must be a multiple of 4 (the thesis's measured nodes "
+                          f"sit at quarter points), got {m['truth_elements']}")
+    s["face_thickness_m"] = _num("section.face_thickness_m", s["face_thickness_m"], lo=0, hi=0.003, strict_lo=True)
+    s["core_modulus_pa"] = _num("section.core_modulus_pa", s["core_modulus_pa"], lo=0)
+    for k in ("ei_band", "mass_band", "damping_band"):
+        dmg[k] = _num(f"specimen.{k}", dmg[k], lo=0, hi=0.5)
+    dmg["root_spring_relative"] = _range("specimen.root_spring_relative", dmg["root_spring_relative"], lo=1e-3,
+                                         allow_empty=True)
+    zr = dmg["damping_ratios"]
+    if not (isinstance(zr, list) and len(zr) >= 1 and all(isinstance(z, (int, float)) and 0 < z < 0.2 for z in zr)):
+        raise ConfigError(f"config key 'specimen.damping_ratios' must be a list of ratios in (0, 0.2), got {zr!r}")
+    dmg["damping_ratios"] = [float(z) for z in zr]
+    d = cfg["damage"]
+    d["n_slits"] = _range("damage.n_slits", d["n_slits"], lo=0, hi=8, integer=True)
+    d["position_fraction"] = _range("damage.position_fraction", d["position_fraction"], lo=0.0, hi=1.0)
+    d["width_m"] = _range("damage.width_m", d["width_m"], lo=1e-6, hi=0.1)
+    d["depth_m"] = _range("damage.depth_m", d["depth_m"], lo=0.0)
+    d["slit_damping_s"] = _range("damage.slit_damping_s", d["slit_damping_s"], lo=0.0, hi=1.0)
+    for k in ("frequency_noise", "damping_noise", "shape_noise", "frf_noise"):
+        meas[k] = _num(f"measurement.{k}", meas[k], lo=0, hi=0.5)
+    meas["band_rad_s"] = _range("measurement.band_rad_s", meas["band_rad_s"], lo=0.0)
+    if meas["band_rad_s"][0] >= meas["band_rad_s"][1]:
+        raise ConfigError("config key 'measurement.band_rad_s' must have low < high")
+    meas["lines"] = _num("measurement.lines", meas["lines"], lo=2, hi=200000, integer=True)
+    if up["mass_model"] not in ("iirs", "lumped"):
+        raise ConfigError(f"config key 'updating.mass_model' must be 'iirs' or 'lumped', got {up['mass_model']!r}")
+    up["tol"] = _num("updating.tol", up["tol"], lo=0, hi=1e-2, strict_lo=True)
+    up["max_iter"] = _num("updating.max_iter", up["max_iter"], lo=1, hi=100000, integer=True)
+    sol["projection_modes"] = _num("solver.projection_modes", sol["projection_modes"], lo=4, hi=64, integer=True)
+    if sol["projection_modes"] > 2 * m["truth_elements"]:
+        raise ConfigError("config key 'solver.projection_modes' exceeds the truth model's DOFs")
+    sol["subspace_iterations"] = _num("solver.subspace_iterations", sol["subspace_iterations"], lo=1, hi=50,
+                                      integer=True)
+    sol["damping_iterations"] = _num("solver.damping_iterations", sol["damping_iterations"], lo=1, hi=50,
+                                     integer=True)
+    out["shard_size"] = _num("output.shard_size", out["shard_size"], lo=1, hi=10**6, integer=True)
+    if out["frf_dtype"] not in ("complex64", "complex128"):
+        raise ConfigError(f"config key 'output.frf_dtype' must be 'complex64' or 'complex128', "
+                          f"got {out['frf_dtype']!r}")
+    return cfg
+
+
+def merge(overrides: dict | None = None, base: dict | None = None) -> dict:
+    """Defaults (or ``base``) updated section by section with ``overrides``; validated."""
+    cfg = copy.deepcopy(DEFAULTS if base is None else base)
+    for k, v in (overrides or {}).items():
+        if k not in DEFAULTS:
+            raise ConfigError(f"unknown config key {k!r}; expected one of {sorted(DEFAULTS)}")
+        if isinstance(DEFAULTS[k], dict):
+            if not isinstance(v, dict):
+                raise ConfigError(f"config key {k!r} must be a table")
+            for kk in v:
+                if kk not in DEFAULTS[k]:
+                    raise ConfigError(f"unknown config key '{k}.{kk}'; expected one of {sorted(DEFAULTS[k])}")
+            cfg[k].update(copy.deepcopy(v))
+        else:
+            cfg[k] = v
+    return validate(cfg)
+
+
+def load_config(path=None, *, preset: str | None = None) -> dict:
+    """Read a TOML file (optional) over the defaults; ``preset`` overrides the file's."""
+    over = {}
+    if path is not None:
+        p = Path(path)
+        try:
+            over = tomllib.loads(p.read_text(encoding="utf-8"))
+        except tomllib.TOMLDecodeError as exc:
+            raise ConfigError(f"{p}: not valid TOML: {exc}") from None
+    if preset is not None:
+        over["preset"] = preset
+    return merge(over)

@@ -1,0 +1,145 @@
+"""Slits as local losses of flexural rigidity on the truth mesh.
+
+A slit ``k`` has a centre ``x_k`` (m, ``0 < x < L``), an effective width
+``w_k`` (m) and a depth ``d_k`` (m) into the top face sheet. Over
+``[x_k - w_k/2, x_k + w_k/2]`` (clipped to the beam) the rigidity drops from
+``EI`` to ``EI_d = EI * r(d_k)`` (:func:`datagen.specimen.slit_section_ei`).
+
+Partial elements
+----------------
+The slit need not sit on element boundaries: the stiffness of every element it
+overlaps is corrected by the exact strain-energy integral over the overlap,
+
+    ``K_e = EI K_e^0 - (EI - EI_d) * G_e``,  ``G_e = int_overlap B(x)^T B(x) dx``,
+
+where ``B`` holds the second derivatives of the Hermite shape functions
+(linear in the local coordinate, so ``G_e`` is closed form). Over a whole
+element ``EI * G_e`` is the element stiffness (eq. 3.9). For a narrow slit the
+change of the squared natural frequency of a mass-normalised mode is
+``-(EI - EI_d) w kappa(x)^2`` (curvature squared at the slit). The slit's
+extra damping is stiffness-proportional over the same region:
+``Delta C_e = beta_k EI G_e``.
+
+Several slits simply add their corrections (they are assumed not to overlap).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def curvature_basis(element_length):
+    """``b0, b1`` with ``B(xi) = b0 + xi b1`` (second derivative of the Hermite shapes, 1/m^2 and 1/m).
+
+    DOF order ``[w1, theta1, w2, theta2]``, ``xi = s / l`` in ``[0, 1]``.
+    """
+    l = float(element_length)
+    b0 = np.array([-6 / l**2, -4 / l, 6 / l**2, -2 / l])
+    b1 = np.array([12 / l**2, 6 / l, -12 / l**2, 6 / l])
+    return b0, b1
+
+
+def overlap_energy(xi1, xi2, element_length):
+    """``G = int_{xi1}^{xi2} B^T B ds`` for local coordinates ``xi1 <= xi2`` (batched).
+
+    Parameters
+    ----------
+    xi1, xi2 : ndarray, shape (...)
+    element_length : float (m)
+
+    Returns
+    -------
+    ndarray, shape (..., 4, 4)   (1/m^3 ... units of stiffness / EI)
+    """
+    b0, b1 = curvature_basis(element_length)
+    a0 = np.outer(b0, b0)
+    a1 = np.outer(b0, b1) + np.outer(b1, b0)
+    a2 = np.outer(b1, b1)
+    x1 = np.asarray(xi1, float)[..., None, None]
+    x2 = np.asarray(xi2, float)[..., None, None]
+    return element_length * ((x2 - x1) * a0 + (x2**2 - x1**2) / 2 * a1 + (x2**3 - x1**3) / 3 * a2)
+
+
+def slit_element_weights(x_m, width_m, length_m, n_elements):
+    """Overlap of each slit with each element as local coordinates.
+
+    Parameters
+    ----------
+    x_m, width_m : ndarray, shape (..., S)
+        Slit centres and widths (m); ``width_m = 0`` disables a slit.
+    length_m : float
+    n_elements : int
+
+    Returns
+    -------
+    xi1, xi2 : ndarray, shape (..., S, n_elements)
+        Local overlap interval in each element (``xi1 == xi2`` where none).
+    """
+    le = length_m / n_elements
+    x = np.asarray(x_m, float)[..., None]
+    w = np.asarray(width_m, float)[..., None]
+    a = np.clip(x - w / 2, 0.0, length_m)
+    b = np.clip(x + w / 2, 0.0, length_m)
+    starts = np.arange(n_elements) * le
+    xi1 = np.clip((a - starts) / le, 0.0, 1.0)
+    xi2 = np.clip((b - starts) / le, 0.0, 1.0)
+    return xi1, np.maximum(xi1, xi2)
+
+
+def slit_corrections(x_m, width_m, ei_loss_Nm2, beta_s, ei_Nm2, length_m, n_elements):
+    """Element stiffness and damping corrections of all slits, summed.
+
+    Parameters
+    ----------
+    x_m, width_m : ndarray, shape (B, S)
+    ei_loss_Nm2 : ndarray, shape (B, S)
+        ``EI - EI_d`` of each slit (N m^2); 0 for absent slits.
+    beta_s : ndarray, shape (B, S)
+        Extra stiffness-proportional damping coefficient of each slit (s).
+    ei_Nm2 : ndarray, shape (B,)
+        Specimen rigidity (N m^2).
+
+    Returns
+    -------
+    dK, dC : ndarray, shape (B, n_elements, 4, 4)
+        To add to the element stiffness and damping matrices (``dK`` <= 0).
+    """
+    xi1, xi2 = slit_element_weights(x_m, width_m, length_m, n_elements)
+    G = overlap_energy(xi1, xi2, length_m / n_elements)  # (B, S, E, 4, 4)
+    dK = -np.einsum("bs,bseij->beij", np.asarray(ei_loss_Nm2, float), G)
+    dC = np.einsum("bs,bseij->beij", np.asarray(beta_s, float) * np.asarray(ei_Nm2, float)[:, None], G)
+    return dK, dC
+
+
+def element4_index(x_m, length_m):
+    """1-based element of the thesis's 4-element grid holding ``x`` (0 where ``x`` is NaN)."""
+    x = np.asarray(x_m, float)
+    idx = np.clip(np.floor(np.nan_to_num(x, nan=-1.0) / (length_m / 4)).astype(int) + 1, 1, 4)
+    return np.where(np.isfinite(x), idx, 0)
+
+
+def draw_slits(rng: np.random.Generator, n: int, cfg: dict, length_m: float) -> dict:
+    """Slit parameters of ``n`` samples, padded to the maximum slit count with NaN.
+
+    Returns
+    -------
+    dict of ndarray
+        ``n_slits`` (n,), ``x_m``, ``width_m``, ``depth_m``, ``beta_s`` (n, S_max);
+        absent slits are NaN.
+    """
+    d = cfg["damage"]
+    lo, hi = d["n_slits"]
+    smax = max(hi, 1)
+    k = rng.integers(lo, hi + 1, size=n)
+    u = rng.random((n, smax, 4))
+
+    def span(key, col):
+        a, b = d[key]
+        return a + (b - a) * u[:, :, col]
+
+    present = np.arange(smax)[None, :] < k[:, None]
+    out = {"n_slits": k}
+    for key, name, col, scale in (("position_fraction", "x_m", 0, length_m), ("width_m", "width_m", 1, 1.0),
+                                  ("depth_m", "depth_m", 2, 1.0), ("slit_damping_s", "beta_s", 3, 1.0)):
+        out[name] = np.where(present, span(key, col) * scale, np.nan)
+    return out

@@ -1,0 +1,151 @@
+"""Shard scheduling: in-process, a local process pool, or a Dask distributed cluster.
+
+Shard ``i`` holds samples ``[i*S, min((i+1)*S, N))`` (``S = output.shard_size``)
+and draws its random numbers from ``SeedSequence(seed, spawn_key=(i,))``, so
+its content depends only on (config, seed, i): never on the number of workers,
+the scheduler or the order in which shards finish. Workers compute; the
+calling process alone writes shards and the manifest.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from multiprocessing import get_context
+from pathlib import Path
+
+import numpy as np
+
+from datagen.config import validate
+from datagen.pipeline import get_setup, simulate_shard
+from datagen.store import FORMAT, ARRAYS, finalize, package_version, read_manifest, recover, sample_table, \
+    write_manifest, write_shard
+from physics.errors import BeamDamageError, ConfigError
+
+
+def shard_plan(n: int, shard_size: int) -> list[tuple[int, int, int]]:
+    """``(index, first_sample_id, n_samples)`` of every shard."""
+    return [(i, i * shard_size, min(shard_size, n - i * shard_size)) for i in range(math.ceil(n / shard_size))]
+
+
+def compute_shard(cfg_json: str, seed: int, index: int, first_id: int, n: int):
+    """Simulate one shard (pure function of its arguments; runs on any worker).
+
+    Returns
+    -------
+    table : pandas.DataFrame
+    arrays : dict of ndarray
+    """
+    from threadpoolctl import threadpool_limits
+
+    cfg = json.loads(cfg_json)
+    setup = get_setup(cfg)
+    with threadpool_limits(1):  # one BLAS thread per process: shards are the parallel unit
+        labels, out = simulate_shard(setup, np.random.SeedSequence(seed, spawn_key=(index,)), n)
+    table = sample_table(labels, out, index, first_id, setup.length_m)
+    return table, {k: out[k] for k in ARRAYS}
+
+
+def _init_worker():
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+
+def _schema() -> dict:
+    return {name: {"axes": axes, "description": desc} for name, (axes, desc) in ARRAYS.items()}
+
+
+def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
+    """Manifest of an existing compatible run (recovered) or of a new one."""
+    root = Path(root)
+    if (root / "manifest.json").exists():
+        m = read_manifest(root)
+        for key, want in (("config", cfg), ("seed", seed), ("n_requested", n)):
+            if m.get(key) != want:
+                raise ConfigError(f"{root} holds a dataset generated with a different {key}; resume needs the "
+                                  f"same config, seed and --n (or choose a new --out)")
+        return recover(root, m)
+    if root.exists() and any(root.iterdir()):
+        raise BeamDamageError(f"{root} exists, is not empty and has no manifest.json; choose a new --out")
+    root.mkdir(parents=True, exist_ok=True)
+    setup = get_setup(cfg)
+    np.save(root / "omega_rad_s.npy", setup.omega_rad_s, allow_pickle=False)
+    m = {"format": FORMAT, "package_version": package_version(), "config": cfg, "seed": seed, "n_requested": n,
+         "shard_size": cfg["output"]["shard_size"], "n_shards": len(shard_plan(n, cfg["output"]["shard_size"])),
+         "complete": False, "shards": [], "schema": {"arrays": _schema(), "states": ["reference", "damaged"],
+                                                     "measured_dofs": ["2:y", "3:y", "4:y", "5:y"],
+                                                     "frf_reference_dof": "2:y", "frf_kind": "receptance"},
+         "section_layout": vars(setup.layout), "preset": vars(setup.preset)}
+    write_manifest(root, m)
+    return m
+
+
+def generate(root, cfg: dict, *, n: int, seed: int = 0, workers: int = 1, scheduler: str | None = None,
+             progress: bool = True, max_new_shards: int | None = None) -> dict:
+    """Generate (or resume) a dataset; returns the manifest.
+
+    Parameters
+    ----------
+    root : path
+    cfg : dict          validated configuration (see :mod:`datagen.config`)
+    n : int             number of samples
+    seed : int
+    workers : int       local processes (1 = in this process)
+    scheduler : str     Dask scheduler address (``tcp://host:8786``); overrides ``workers``
+    progress : bool     tqdm progress bar on stderr
+    max_new_shards : int, optional
+        Stop after writing this many new shards (leaves a resumable, incomplete dataset).
+    """
+    if n < 1:
+        raise BeamDamageError(f"--n must be >= 1, got {n}")
+    if workers < 1:
+        raise BeamDamageError(f"--workers must be >= 1, got {workers}")
+    cfg = validate(cfg)
+    manifest = open_or_create(root, cfg, seed, n)
+    done = {e["index"] for e in manifest["shards"]}
+    todo = [s for s in shard_plan(n, cfg["output"]["shard_size"]) if s[0] not in done]
+    if max_new_shards is not None:
+        todo = todo[:max_new_shards]
+    cfg_json = json.dumps(cfg, sort_keys=True)
+    from tqdm import tqdm
+
+    bar = tqdm(total=n, initial=sum(e["n_samples"] for e in manifest["shards"]), unit="sample",
+               disable=not progress, file=None, desc="generate")
+
+    def record(index, table, arrays):
+        entry = write_shard(root, index, table, arrays)
+        manifest["shards"] = sorted(manifest["shards"] + [entry], key=lambda e: e["index"])
+        write_manifest(root, manifest)
+        bar.update(entry["n_samples"])
+
+    try:
+        if scheduler:
+            try:
+                from distributed import Client, as_completed as d_as_completed
+            except ImportError:
+                raise BeamDamageError("--scheduler needs the optional extra: pip install 'beam-damage[dask]'") \
+                    from None
+            client = Client(scheduler)
+            try:
+                futs = {client.submit(compute_shard, cfg_json, seed, i, f, k, pure=False): i for i, f, k in todo}
+                for fut in d_as_completed(futs):
+                    table, arrays = fut.result()
+                    record(futs[fut], table, arrays)
+                    fut.release()
+            finally:
+                client.close()
+        elif workers == 1 or len(todo) <= 1:
+            for i, f, k in todo:
+                record(i, *compute_shard(cfg_json, seed, i, f, k))
+        else:
+            with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"),
+                                     initializer=_init_worker) as pool:
+                futs = {pool.submit(compute_shard, cfg_json, seed, i, f, k): i for i, f, k in todo}
+                for fut in as_completed(futs):
+                    record(futs[fut], *fut.result())
+    finally:
+        bar.close()
+    if len(manifest["shards"]) == manifest["n_shards"]:
+        manifest = finalize(root, manifest)
+    return manifest
