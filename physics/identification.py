@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import warnings
+
 import numpy as np
 
 from physics.errors import ShapeError
@@ -320,6 +322,12 @@ def peak_picking(frequency_hz, frf, n_modes=None, peaks=None, drive=None, promin
         fa[m] = np.interp(half, [mif[lo], mif[lo + 1]], [f[lo], f[lo + 1]]) if mif[lo] <= half else f[lo]
         fb[m] = np.interp(half, [mif[hi], mif[hi - 1]], [f[hi], f[hi - 1]]) if mif[hi] <= half else f[hi]
     zeta = (fb - fa) / (2 * fn)
+    narrow = (fb - fa) < 2 * df_line
+    if np.any(narrow):
+        warnings.warn("peak picking: the half-power band of the mode(s) at "
+                      + ", ".join(f"{x:.4g} Hz" for x in fn[narrow])
+                      + " spans fewer than 2 frequency lines, so half-power and circle-fit damping are not "
+                      "resolved there (overestimated); use finer lines or the lscf method", stacklevel=2)
     lam = _eigenvalues(fn, zeta)
     s, r = (0, 0) if drive is None else drive
     w_k = 2 * np.pi * f[idx]

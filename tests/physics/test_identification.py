@@ -163,3 +163,18 @@ def test_select_poles_rules_and_errors():
         select_poles(d, min_count=10_000)
     with pytest.raises(ShapeError):
         lscf(f[:5], H[..., :5], max_order=30)
+
+
+def test_peak_picking_warns_when_the_half_power_band_is_below_the_line_spacing():
+    import warnings as _w
+
+    from experiments.bench_identification import simulate
+    from physics.identification import peak_picking
+
+    frf, exact = simulate(noise=0.0, damping="thesis")  # mode 1: zeta 0.26 %, band 0.1 Hz < 0.5 Hz lines
+    with pytest.warns(UserWarning, match="fewer than 2 frequency lines"):
+        peak_picking(frf.frequency_hz, frf.frf, 4, drive=(3, 0))
+    fine, _ = simulate(noise=0.0, damping="heavy")
+    with _w.catch_warnings():
+        _w.simplefilter("error")
+        peak_picking(fine.frequency_hz, fine.frf, 4, drive=(3, 0))
