@@ -273,6 +273,6 @@ def load_torch(root, arrays=("frf_updated",), columns=("slit1_x_m", "slit1_depth
         if np.iscomplexobj(a):
             a = np.stack([a.real, a.imag], axis=-1)
         out[name] = torch.as_tensor(np.ascontiguousarray(a)).to(dt)
-    out["labels"] = torch.as_tensor(table.loc[keep, list(columns)].to_numpy(dtype=float)).to(dt)
-    out["sample_id"] = torch.as_tensor(table.loc[keep, "sample_id"].to_numpy())
+    out["labels"] = torch.as_tensor(np.array(table.loc[keep, list(columns)].to_numpy(dtype=float))).to(dt)
+    out["sample_id"] = torch.as_tensor(np.array(table.loc[keep, "sample_id"].to_numpy()))
     return out
