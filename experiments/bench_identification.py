@@ -98,10 +98,14 @@ def run_sdypy(frf, approx_hz):
 def table(seeds=1, noise=0.01, damping="heavy"):
     """Rows of per-mode errors for each method, averaged (RMS) over ``seeds`` noise realisations."""
     rows = {}
+    notes = set()
     for seed in range(seeds):
         frf, exact = simulate(noise, seed, damping=damping)
         fe, ze, psi = exact.natural_frequencies_hz, exact.damping_ratios, exact.eigenvectors
-        ours = run_ours(frf)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            ours = run_ours(frf)
+        notes.update(str(w.message) for w in caught)
         results = {k: (v.natural_frequencies_hz, v.damping_ratios, v.shapes) for k, v in ours.items()}
         sd = run_sdypy(frf, ours["peak"].natural_frequencies_hz)
         if sd is not None:
@@ -115,7 +119,7 @@ def table(seeds=1, noise=0.01, damping="heavy"):
             r["fi"].append(fi)
             r["zi"].append(zi)
     out = {"exact_frequency_hz": fe.tolist(), "exact_damping_ratio": ze.tolist(), "seeds": seeds,
-           "noise": noise, "damping": damping, "methods": {}}
+           "noise": noise, "damping": damping, "warnings": sorted(notes), "methods": {}}
     for name, r in rows.items():
         out["methods"][name] = {
             "frequency_error_pct_rms": np.sqrt(np.mean(np.square(r["f"]), axis=0)).tolist(),
@@ -137,6 +141,7 @@ def format_table(out) -> str:
             lines.append(f"{name:<16}{j + 1:>5}{m['frequency_error_pct_rms'][j]:>11.4f}"
                          f"{m['damping_error_pct_rms'][j]:>11.3f}{m['mac_mean'][j]:>10.6f}"
                          f"{m['frequency_hz_seed0'][j]:>12.4f}{m['damping_ratio_seed0'][j]:>10.5f}")
+    lines += [f"warning: {w}" for w in out.get("warnings", [])]
     return "\n".join(lines)
 
 
