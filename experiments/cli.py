@@ -27,6 +27,8 @@ COMMAND_MODULES = [
     "experiments.cmd_update",
     "experiments.cmd_identify",
     "experiments.demo",
+    "experiments.cmd_generate",
+    "experiments.cmd_inspect",
 ]
 
 EXIT_USAGE = 2
