@@ -93,6 +93,9 @@ def main(argv=None) -> int:
     except BeamDamageError as exc:
         sys.stderr.write(f"beam-damage {args.command}: error: {exc}\n")
         return EXIT_USAGE
+    except BrokenPipeError:  # output piped into `head` and closed: not an error of the user's input
+        sys.stderr.close()
+        return 0
     except OSError as exc:
         sys.stderr.write(f"beam-damage {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}\n")
         return EXIT_USAGE

@@ -27,7 +27,8 @@ def load_modal(modal_file, n_modes: int):
     return identify_file(modal_file, n_modes=n_modes).modal_data
 
 
-def update(beam: str, modal_file, mass: str = "reduced", tol: float = 1e-10, max_iter: int = 500) -> dict:
+def update(beam: str, modal_file, mass: str = "reduced", tol: float = 1e-10, max_iter: int = 500,
+           method: str = "pilkey") -> dict:
     M = reference_mass(beam, mass)
     data = load_modal(modal_file, M.shape[0])
     if data.eigenvectors is None:
@@ -38,11 +39,15 @@ def update(beam: str, modal_file, mass: str = "reduced", tol: float = 1e-10, max
                               f"{data.eigenvectors.shape[1]} but {beam} has {M.shape[0]} measured DOFs "
                               f"({', '.join(properties.beam_preset(beam).masters)}): a complete set of "
                               f"{M.shape[0]} modes is needed")
-    res = updating.pilkey(M, data.eigenvalues, data.eigenvectors, tol=tol, max_iter=max_iter)
+    if method == "direct":
+        res = updating.lancaster_direct(M, data.eigenvalues, data.eigenvectors)
+    else:
+        res = updating.pilkey(M, data.eigenvalues, data.eigenvectors, tol=tol, max_iter=max_iter)
     cm = modal.complex_modes(M, res.C, res.K)
     return {
         "beam": beam, "mass": mass, "M": M, "C": res.C, "K": res.K,
-        "iterations": res.iterations, "converged": res.converged, "residual": res.residual,
+        "method": method, "iterations": res.iterations, "converged": res.converged, "residual": res.residual,
+        "orthogonality_misfit": updating.orthogonality_misfit(M, data.eigenvalues, res.eigenvectors),
         "natural_frequencies_hz": cm.natural_frequencies_hz, "damping_ratios": cm.damping_ratios,
         "measured_natural_frequencies_hz": data.natural_frequencies_hz,
         "measured_damping_ratios": data.damping_ratios,
@@ -50,10 +55,11 @@ def update(beam: str, modal_file, mass: str = "reduced", tol: float = 1e-10, max
 
 
 def run(args) -> dict:
-    out = update(args.beam, args.modal, args.mass, args.tol, args.max_iter)
+    out = update(args.beam, args.modal, args.mass, args.tol, args.max_iter, args.method)
     if not args.json:
         np.set_printoptions(precision=5, linewidth=160)
-        print(f"{args.beam}, {args.mass} mass: Pilkey converged in {out['iterations']} iterations")
+        print(f"{args.beam}, {args.mass} mass, {args.method}: {out['iterations']} iterations; "
+              f"orthogonality misfit of the modes {out['orthogonality_misfit']:.3g} (0 = consistent with M)")
         print("M =\n", out["M"], "\nC (N s/m) =\n", out["C"], "\nK (N/m) =\n", out["K"])
         print("model frequencies (Hz):   ", np.array2string(out["natural_frequencies_hz"], precision=3))
         print("measured frequencies (Hz):", np.array2string(out["measured_natural_frequencies_hz"], precision=3))
@@ -73,6 +79,9 @@ def add_parser(sub):
                         "driving point, identified first by 'identify --method lscf'")
     p.add_argument("--mass", default="reduced", choices=("reduced", "lumped"),
                    help="IIRS-reduced mass (default) or lumped mass of eq. 4.6")
+    p.add_argument("--method", default="pilkey", choices=("pilkey", "direct"),
+                   help="pilkey: the thesis's iteration (default); direct: non-iterative least-squares scaling "
+                        "by Lancaster's orthogonality relations (exact for consistent modes at any damping)")
     p.add_argument("--tol", type=float, default=1e-10, help="relative change of C that counts as converged")
     p.add_argument("--max-iter", type=int, default=500, help="iteration limit (non-convergence is an error)")
     p.add_argument("--json", action="store_true",

@@ -36,10 +36,11 @@ class UpdateResult:
         Updated stiffness matrix (N/m), eq. 1.12.
     eigenvectors : ndarray, complex, shape (..., n, n)
         Measured eigenvectors normalised with the final ``C`` (eq. 1.10).
-    iterations : int
-        Iterations performed (``C_1`` is the result of the first).
+    iterations : int or ndarray of int, shape (...)
+        Iterations performed (``C_1`` is the result of the first), per model when batched.
     converged : bool or ndarray of bool, shape (...)
-        Per model when batched.
+        Per model when batched. A model whose iterate became non-finite has
+        ``converged=False`` and NaN ``C`` and ``K``.
     residual : float or ndarray, shape (...)
         Last relative change ``||C_k - C_{k-1}||_F / ||C_k||_F``.
     history : ndarray, shape (iterations + 1, ..., n, n) or None
@@ -49,8 +50,8 @@ class UpdateResult:
     C: np.ndarray
     K: np.ndarray
     eigenvectors: np.ndarray
-    iterations: int
-    converged: np.ndarray
+    iterations: int | np.ndarray
+    converged: bool | np.ndarray
     residual: np.ndarray
     history: np.ndarray | None = None
 
@@ -127,6 +128,38 @@ def lancaster_stiffness(eigenvalues, eigenvectors):
     return 0.5 * (K + _t(K))
 
 
+def _orthogonality_system(M, lam, phi):
+    """Linear system ``A [Re a, Im a] = rhs`` of Lancaster's orthogonality relations.
+
+    With modes scaled as ``sqrt(a_j) psi_j``: ``sum_j 2 Re(a_j psi_j psi_j^T) = 0``
+    (weighted by the mean ``|lambda|``) and ``sum_j 2 Re(a_j lambda_j psi_j psi_j^T) = M^-1``,
+    upper triangles only. ``a = 1`` tests already-normalised modes.
+    """
+    n = M.shape[-1]
+    iu = np.triu_indices(n)
+    P = np.einsum("...ij,...kj->...jik", phi, phi)[..., iu[0], iu[1]]   # (..., mode, n(n+1)/2)
+    scale = np.mean(np.abs(lam), axis=-1)[..., None, None]
+    blocks = [P * scale, P * lam[..., :, None]]
+    A = _t(np.concatenate([np.concatenate([2 * b.real, -2 * b.imag], axis=-2) for b in blocks], axis=-1))
+    minv = np.linalg.inv(M)[..., iu[0], iu[1]]
+    return A, np.concatenate([np.zeros_like(minv), minv], axis=-1)
+
+
+def orthogonality_misfit(M, eigenvalues, eigenvectors):
+    """Relative misfit of Lancaster's orthogonality relations for eq.-1.10-normalised modes.
+
+    0 for the exact modes of some ``(M, C, K)``; measured modes give a
+    positive value that says how consistent they are with ``M``.
+
+    Returns
+    -------
+    float or ndarray, shape (...)
+    """
+    A, rhs = _orthogonality_system(np.asarray(M, float), np.asarray(eigenvalues), np.asarray(eigenvectors))
+    ones = np.concatenate([np.ones(A.shape[-1] // 2), np.zeros(A.shape[-1] // 2)])
+    return np.linalg.norm(A @ ones - rhs, axis=-1) / np.linalg.norm(rhs, axis=-1)
+
+
 def pilkey(M, eigenvalues, eigenvectors, C0=None, *, tol: float = 1e-10, max_iter: int = 500,
            keep_history: bool = False, raise_on_failure: bool = True) -> UpdateResult:
     """Iterative damping identification and stiffness updating (Pilkey; thesis Chapter Five).
@@ -160,38 +193,111 @@ def pilkey(M, eigenvalues, eigenvectors, C0=None, *, tol: float = 1e-10, max_ite
     UpdateResult
     """
     M, lam, phi = check_modal_input(M, eigenvalues, eigenvectors)
-    M = M.astype(float)
-    C = np.broadcast_to(np.eye(M.shape[-1]), M.shape).copy() if C0 is None else \
-        np.array(check_square("C0", C0, M.shape[-1]), dtype=float)
-    history = [C] if keep_history else None
-    residual = np.full(M.shape[:-2], np.inf)
-    done = np.zeros(M.shape[:-2], dtype=bool)
-    it = 0
+    batch, n = M.shape[:-2], M.shape[-1]
+    Mf = M.astype(float).reshape(-1, n, n)
+    lf, pf = lam.reshape(-1, n), phi.reshape(-1, n, n)
+    C = np.broadcast_to(np.eye(n) if C0 is None else np.asarray(check_square("C0", C0, n), dtype=float),
+                        Mf.shape).copy()
+    history = [C.copy()] if keep_history else None
+    residual = np.full(len(Mf), np.inf)
+    iterations = np.zeros(len(Mf), dtype=int)
+    converged = np.zeros(len(Mf), dtype=bool)
+    active = np.arange(len(Mf))  # members still iterating: each member's result is independent of the others
     for it in range(1, max_iter + 1):
-        C_new = lancaster_damping(M, lam, normalize_modes(lam, phi, M, C))
-        C_new = 0.5 * (C_new + _t(C_new))
-        norm = np.linalg.norm(C_new, axis=(-2, -1))
-        residual = np.linalg.norm(C_new - C, axis=(-2, -1)) / np.where(norm > 0, norm, 1.0)
-        # models that already converged keep their matrix (batch members are independent)
-        C = np.where(done[..., None, None], C, C_new)
+        a = active
+        with np.errstate(all="ignore"):
+            C_new = lancaster_damping(Mf[a], lf[a], normalize_modes(lf[a], pf[a], Mf[a], C[a]))  # eqs. 5.2, 5.3
+            C_new = 0.5 * (C_new + _t(C_new))
+            norm = np.linalg.norm(C_new, axis=(-2, -1))
+            res = np.linalg.norm(C_new - C[a], axis=(-2, -1)) / np.where(norm > 0, norm, 1.0)
+        C[a] = C_new
+        residual[a], iterations[a] = res, it
+        finite = np.isfinite(res)
+        converged[a[finite & (res <= tol)]] = True
+        active = a[finite & (res > tol)]
         if keep_history:
-            history.append(C)
-        done = done | (residual <= tol)
-        if np.all(done) or not np.all(np.isfinite(residual[~done])):
+            history.append(C.copy())
+        if active.size == 0:
             break
-    finite = np.isfinite(residual)
-    converged = done & finite
-    if raise_on_failure and not np.all(converged):
-        worst = float(np.max(np.where(finite, residual, np.inf)))
+    # Guard against a spurious fixed point: modal data consistent with M (the direct least-squares scaling
+    # fits Lancaster's orthogonality relations) but an iterate that does not satisfy them.
+    with np.errstate(all="ignore"):
+        misfit = orthogonality_misfit(Mf, lf, normalize_modes(lf, pf, Mf, C))
+    suspect = np.flatnonzero(converged & (misfit > 1e-6))
+    spurious = np.zeros(len(Mf), dtype=bool)
+    if suspect.size:
+        A, rhs = _orthogonality_system(Mf[suspect], lf[suspect], pf[suspect])
+        x = (np.linalg.pinv(A) @ rhs[..., None])[..., 0]
+        best = np.linalg.norm((A @ x[..., None])[..., 0] - rhs, axis=-1) / np.linalg.norm(rhs, axis=-1)
+        spurious[suspect[best < 1e-9]] = True
+        converged &= ~spurious
+    if raise_on_failure and spurious.any():
         raise ConvergenceError(
-            f"Pilkey damping iteration did not converge after {it} iterations (relative change {worst:.3g} > "
-            f"tol {tol:g}); the modal data may be inconsistent with M (check scaling, mode order and that "
-            "the set is complete)", iterations=it, residual=worst)
-    phi_n = normalize_modes(lam, phi, M, C)
-    K = lancaster_stiffness(lam, phi_n)
+            "Pilkey's iteration settled on a spurious fixed point: the modes are consistent with M, but the "
+            f"converged C violates Lancaster's orthogonality relations (misfit {float(misfit[spurious].max()):.2g}); "
+            "the true C is an unstable fixed point here (heavier or strongly non-proportional damping): use "
+            "lancaster_direct", iterations=int(iterations.max()), residual=float(misfit[spurious].max()))
+    if raise_on_failure and not converged.all():
+        worst = float(np.max(residual[~converged]))
+        raise ConvergenceError(
+            f"Pilkey damping iteration did not converge after {int(iterations.max())} iterations (relative change "
+            f"{worst:.3g} > tol {tol:g}); the modal data may be inconsistent with M (check scaling, mode order and "
+            "that the set is complete)", iterations=int(iterations.max()), residual=worst)
+    diverged = ~np.isfinite(C).all(axis=(-2, -1))
+    C[diverged] = np.nan
+    with np.errstate(all="ignore"):
+        phi_n = normalize_modes(lf, pf, Mf, C)
+        K = np.full_like(C, np.nan)
+        ok = np.flatnonzero(~diverged)
+        K[ok] = lancaster_stiffness(lf[ok], phi_n[ok])  # eq. 5.4
+
+    def shaped(x):
+        x = x.reshape(batch + x.shape[1:])
+        return x if batch else x.item()
+
     return UpdateResult(
-        C=C, K=K, eigenvectors=phi_n, iterations=it,
-        converged=converged if converged.ndim else bool(converged),
-        residual=residual if residual.ndim else float(residual),
-        history=np.stack(history) if keep_history else None,
+        C=C.reshape(batch + (n, n)), K=K.reshape(batch + (n, n)), eigenvectors=phi_n.reshape(batch + (n, n)),
+        iterations=shaped(iterations), converged=shaped(converged), residual=shaped(residual),
+        history=np.stack(history).reshape((-1,) + batch + (n, n)) if keep_history else None,
     )
+
+
+def lancaster_direct(M, eigenvalues, eigenvectors):
+    """Non-iterative identification: scale the modes by Lancaster's orthogonality relations.
+
+    Beyond the thesis. With eq.-1.10 scaling, a complete modal set satisfies
+    ``Phi Phi^T + c.c. = 0`` and ``Phi Lambda Phi^T + c.c. = M^-1``. Writing the
+    unknown scaling as ``psi_j -> sqrt(a_j) psi_j`` makes both relations linear
+    in the complex ``a_j``; they are solved in least squares (exactly for
+    consistent data), then ``C`` and ``K`` follow from eqs. 1.11 and 1.12.
+    Unlike :func:`pilkey` it needs no iteration and cannot settle on a spurious
+    fixed point (Pilkey's iteration can, for heavier or strongly
+    non-proportional damping: the true ``C`` may be an unstable fixed point).
+
+    Parameters
+    ----------
+    M : ndarray, shape (..., n, n)
+    eigenvalues : ndarray, complex, shape (..., n)
+    eigenvectors : ndarray, complex, shape (..., n, n)
+
+    Returns
+    -------
+    UpdateResult
+        ``iterations=0``, ``converged=True``; ``residual`` is the relative
+        least-squares misfit of the orthogonality relations (0 for modal data
+        consistent with ``M``).
+    """
+    M, lam, phi = check_modal_input(M, eigenvalues, eigenvectors)
+    M = M.astype(float)
+    n = M.shape[-1]
+    A, rhs = _orthogonality_system(M, lam, phi)
+    x = (np.linalg.pinv(A) @ rhs[..., None])[..., 0]
+    misfit = np.linalg.norm((A @ x[..., None])[..., 0] - rhs, axis=-1) / np.linalg.norm(rhs, axis=-1)
+    phi_n = phi * np.sqrt(x[..., :n] + 1j * x[..., n:])[..., None, :]
+    C = lancaster_damping(M, lam, phi_n)
+    C = 0.5 * (C + _t(C))
+    K = lancaster_stiffness(lam, phi_n)
+    batch = M.shape[:-2]
+    return UpdateResult(C=C, K=K, eigenvectors=phi_n, iterations=0,
+                        converged=np.ones(batch, bool) if batch else True,
+                        residual=misfit if batch else float(misfit))
