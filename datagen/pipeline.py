@@ -89,7 +89,7 @@ class Setup:
 
     @property
     def length_m(self) -> float:
-        return self.preset.length_m
+        return self.preset.length
 
     @property
     def p(self) -> int:
@@ -110,13 +110,13 @@ def build_setup(cfg: dict) -> Setup:
     """Precompute the nominal truth matrices, measured DOFs, start basis and FRF grid."""
     preset = beam_preset(cfg["preset"])
     sec = cfg["section"]
-    layout = SectionLayout.matching(preset.EI, preset.width_m, preset.thickness_m, sec["face_thickness_m"],
+    layout = SectionLayout.matching(preset.EI, preset.width, preset.thickness, sec["face_thickness_m"],
                                     sec["core_modulus_pa"])
-    if cfg["damage"]["depth_m"][1] >= preset.thickness_m / 2:
+    if cfg["damage"]["depth_m"][1] >= preset.thickness / 2:
         raise ConfigError(f"config key 'damage.depth_m' must stay below half the beam thickness "
-                          f"({preset.thickness_m / 2:g} m)")
+                          f"({preset.thickness / 2:g} m)")
     n_el = cfg["mesh"]["truth_elements"]
-    le = preset.length_m / n_el
+    le = preset.length / n_el
     spring = bool(cfg["specimen"]["root_spring_relative"])
     K_full = _assemble_loop(np.broadcast_to(element_stiffness(1.0, le), (n_el, 4, 4)))
     M_full = _assemble_loop(np.broadcast_to(element_mass(1.0, le), (n_el, 4, 4)))
@@ -130,7 +130,7 @@ def build_setup(cfg: dict) -> Setup:
     Kn = K0.copy()
     if spring:
         lo, hi = cfg["specimen"]["root_spring_relative"]
-        Kn[0, 0] += np.sqrt(lo * hi) / preset.length_m
+        Kn[0, 0] += np.sqrt(lo * hi) / preset.length
     w2, v = _gen_eigh(Kn, M0)
     zr = np.asarray(cfg["specimen"]["damping_ratios"], float)
     zeta = np.concatenate([zr, np.full(max(p - zr.size, 0), zr[-1])])[:p]
@@ -400,57 +400,6 @@ def full_complex_modes(M, C, K, m):
     return lam, normalize_modes(lam, vec[:n, order], M, C)
 
 
-def pilkey_batched(M, lam, phi, *, tol=1e-10, max_iter=500):
-    """Pilkey's iteration (as :func:`physics.updating.pilkey`) with an active set.
-
-    Converged or non-finite members leave the iteration, so a member's result
-    never depends on the rest of the batch and a few divergent samples do not
-    keep the whole batch iterating.
-
-    Returns
-    -------
-    C, K : ndarray, shape (B, n, n)      NaN where the iterate became non-finite
-    phi_n : ndarray, complex, shape (B, n, n)
-    converged : ndarray of bool, shape (B,)
-    iterations : ndarray of int, shape (B,)
-    residual : ndarray, shape (B,)
-    """
-    B, n = M.shape[0], M.shape[-1]
-    C = np.broadcast_to(np.eye(n), M.shape).copy()
-    conv = np.zeros(B, bool)
-    iters = np.zeros(B, int)
-    resid = np.full(B, np.inf)
-    active = np.arange(B)
-    for it in range(1, max_iter + 1):
-        if active.size == 0:
-            break
-        Ma, la, pa = M[active], lam[active], phi[active]
-        with np.errstate(all="ignore"):
-            Cn = lancaster_damping(Ma, la, normalize_modes(la, pa, Ma, C[active]))
-            Cn = 0.5 * (Cn + _t(Cn))
-            norm = np.linalg.norm(Cn, axis=(-2, -1))
-            r = np.linalg.norm(Cn - C[active], axis=(-2, -1)) / np.where(norm > 0, norm, 1.0)
-        C[active] = Cn
-        resid[active] = r
-        iters[active] = it
-        fin = np.isfinite(r)
-        done = fin & (r <= tol)
-        conv[active[done]] = True
-        active = active[fin & ~done]
-    good = np.isfinite(C).all(axis=(-2, -1))
-    phi_n = np.full(phi.shape, np.nan + 0j)
-    K = np.full(M.shape, np.nan)
-    if good.any():
-        with np.errstate(all="ignore"):
-            phi_n[good] = normalize_modes(lam[good], phi[good], M[good], C[good])
-            fin = np.isfinite(phi_n).all(axis=(-2, -1))
-            idx = np.flatnonzero(good)[fin[good]]
-            if idx.size:
-                K[idx] = lancaster_stiffness(lam[idx], phi_n[idx])
-    C[~good] = np.nan
-    return C, K, phi_n, conv & good, iters, resid
-
-
 def analyst_mass(setup: Setup, ei, mpl):
     """Mass matrix the updating trusts: IIRS of the 4-element clamped FE model, or eq. 4.6 (batched).
 
@@ -578,9 +527,10 @@ def _simulate_chunk(setup: Setup, inp: BatchInputs) -> dict:
     lam_m, psi_m = _measure(setup, inp, lam_true, psi_true)
     Ma = analyst_mass(setup, ei, mpl)
     Ma2 = np.repeat(Ma[:, None], 2, axis=1).reshape(2 * B, N_MEAS, N_MEAS)
-    up = pilkey_batched(Ma2, lam_m.reshape(2 * B, N_MEAS), psi_m.reshape(2 * B, N_MEAS, N_MEAS),
-                        tol=cfg["updating"]["tol"], max_iter=cfg["updating"]["max_iter"])
-    up = tuple(a.reshape((B, 2) + a.shape[1:]) for a in up)
+    res = pilkey(Ma2, lam_m.reshape(2 * B, N_MEAS), psi_m.reshape(2 * B, N_MEAS, N_MEAS),
+                 tol=cfg["updating"]["tol"], max_iter=cfg["updating"]["max_iter"], raise_on_failure=False)
+    up = tuple(a.reshape((B, 2) + a.shape[1:])
+               for a in (res.C, res.K, res.eigenvectors, res.converged, res.iterations, res.residual))
     out = _finish(setup, inp, lam_true, psi_true, lam_m, psi_m, H_meas, Ma, up)
     out["frf_updated"] = state_space_frf(Ma[:, None], up[0], up[1], setup.omega_rad_s,
                                          np.arange(N_MEAS), 0)

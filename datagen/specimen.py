@@ -20,80 +20,21 @@ symmetric, so its rigidity is computed about the shifted neutral axis
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
-from importlib import resources
 
 import numpy as np
 
-from physics.errors import ConfigError
-
-
-@dataclass(frozen=True)
-class BeamPreset:
-    """Nominal properties of one thesis beam (Table 4.1 and geometry).
-
-    Attributes
-    ----------
-    name : str
-    mass_kg : float          whole beam (1.219 m) mass
-    EI : float               N m^2
-    total_length_m, length_m : float   whole beam and cantilever (free) length
-    width_m, thickness_m : float
-    m_per_length : float     kg/m, ``mass_kg / total_length_m``
-    """
-
-    name: str
-    mass_kg: float
-    EI: float
-    total_length_m: float
-    length_m: float
-    width_m: float
-    thickness_m: float
-    m_per_length: float
+from physics.errors import BeamDamageError, ConfigError
+from physics.properties import BeamPreset, layered_ei, section_ei
+from physics.properties import beam_preset as _beam_preset
 
 
 def beam_preset(name: str = "beam5") -> BeamPreset:
-    """Preset ``"beam5"``, ``"beam6"`` or ``"beam8"`` from the packaged thesis fixture.
-
-    Uses ``physics.properties.beam_preset`` when the physics core provides it.
-    """
-    try:  # the lead's module, when present
-        from physics.properties import beam_preset as _bp  # type: ignore
-        p = _bp(name)
-        return BeamPreset(name, float(p.mass_kg), float(p.EI), float(p.total_length_m), float(p.length_m),
-                          float(p.width_m), float(p.thickness_m), float(p.m_per_length))
-    except Exception:  # noqa: BLE001 - fall back to the fixture below
-        pass
-    data = json.loads(resources.files("experiments").joinpath("data/thesis/beams.json").read_text())
-    key = str(name).lower().removeprefix("beam")
-    if key not in data["beams"]:
-        raise ConfigError(f"config key 'preset': unknown beam {name!r}; expected one of "
-                          f"{['beam' + k for k in data['beams']]}")
-    g, b = data["geometry"], data["beams"][key]
-    return BeamPreset(f"beam{key}", b["mass_kg"], b["EI_Nm2"], g["total_length_m"], g["cantilever_length_m"],
-                      g["width_m"], g["thickness_m"], b["mass_kg"] / g["total_length_m"])
-
-
-def layered_ei(moduli, interfaces, width):
-    """Eq. 4.1 for a section symmetric about its neutral axis.
-
-    Parameters
-    ----------
-    moduli : sequence of float, length K
-        ``E_k`` (Pa) of the layers from the neutral axis outwards (one half).
-    interfaces : sequence of float, length K + 1
-        ``d_k`` (m): distances from the neutral axis, ``d_0 = 0`` ... ``d_K = h/2``.
-    width : float
-        ``b`` (m).
-
-    Returns
-    -------
-    float
-        ``EI`` (N m^2).
-    """
-    d = np.asarray(interfaces, dtype=float)
-    return 2.0 * width / 3.0 * float(np.sum(np.asarray(moduli, float) * (d[1:] ** 3 - d[:-1] ** 3)))
+    """The preset of config key ``preset`` (``physics.properties.PRESETS``), as a config error if unknown."""
+    try:
+        return _beam_preset(name)
+    except BeamDamageError as exc:
+        raise ConfigError(f"config key 'preset': {exc}") from None
 
 
 @dataclass(frozen=True)
@@ -110,8 +51,8 @@ class SectionLayout:
     def EI(self) -> float:
         """Rigidity by eq. 4.1 (N m^2)."""
         h2 = self.thickness_m / 2
-        return layered_ei([self.core_modulus_pa, self.face_modulus_pa], [0.0, h2 - self.face_thickness_m, h2],
-                          self.width_m)
+        return float(layered_ei(self.width_m, [0.0, h2 - self.face_thickness_m, h2],
+                                [self.core_modulus_pa, self.face_modulus_pa]))
 
     @classmethod
     def matching(cls, EI, width_m, thickness_m, face_thickness_m, core_modulus_pa) -> "SectionLayout":
@@ -141,27 +82,13 @@ def slit_section_ei(layout: SectionLayout, depth_m):
     ndarray, shape (...)
         ``EI`` (N m^2); equals ``layout.EI`` for ``d = 0``.
     """
-    d = np.asarray(depth_m, dtype=float)
-    h, tf, b = layout.thickness_m, layout.face_thickness_m, layout.width_m
-    # layers bottom -> top: (y0, y1, E); the top is cut at h - d
-    top = h - d
-    bounds = [(0.0, tf, layout.face_modulus_pa), (tf, h - tf, layout.core_modulus_pa),
-              (h - tf, h, layout.face_modulus_pa)]
-    EA = np.zeros_like(d)
-    ES = np.zeros_like(d)
-    parts = []
-    for y0, y1, E in bounds:
-        y1c = np.minimum(y1, top)
-        t = np.clip(y1c - y0, 0.0, None)
-        yc = y0 + t / 2
-        parts.append((t, yc, E))
-        EA = EA + E * b * t
-        ES = ES + E * b * t * yc
-    yna = ES / EA
-    EI = np.zeros_like(d)
-    for t, yc, E in parts:
-        EI = EI + E * b * (t**3 / 12 + t * (yc - yna) ** 2)
-    return EI
+    d = np.asarray(depth_m, dtype=float)[..., None]
+    h, tf = layout.thickness_m, layout.face_thickness_m
+    top = h - d                                            # the section is cut at h - d
+    z_bot = np.minimum(np.array([0.0, tf, h - tf]), top)  # layers bottom face / core / top face
+    z_top = np.minimum(np.array([tf, h - tf, h]), top)
+    E = np.array([layout.face_modulus_pa, layout.core_modulus_pa, layout.face_modulus_pa])
+    return section_ei(layout.width_m, z_bot, z_top, E)
 
 
 def draw_specimens(rng: np.random.Generator, n: int, cfg: dict, preset: BeamPreset) -> dict:
@@ -180,7 +107,7 @@ def draw_specimens(rng: np.random.Generator, n: int, cfg: dict, preset: BeamPres
     dsc = 1 + sp["damping_band"] * (2 * u[:, 2] - 1)
     if sp["root_spring_relative"]:
         lo, hi = np.log(sp["root_spring_relative"])
-        kr = np.exp(lo + (hi - lo) * u[:, 3]) * ei / preset.length_m
+        kr = np.exp(lo + (hi - lo) * u[:, 3]) * ei / preset.length
     else:
         kr = np.full(n, np.inf)
     return {"EI": ei, "m_per_length": mpl, "damping_scale": dsc, "root_spring": kr}
