@@ -91,7 +91,7 @@ def normalize_modes(eigenvalues, eigenvectors, M, C):
     """
     lam = np.asarray(eigenvalues)
     phi = np.asarray(eigenvectors, dtype=complex)
-    h = 2 * lam * np.einsum("...ij,...ik,...kj->...j", phi, M, phi) + np.einsum("...ij,...ik,...kj->...j", phi, C, phi)
+    h = np.sum(phi * (2 * lam[..., None, :] * (M @ phi) + C @ phi), axis=-2)  # psi_j^T (2 lam_j M + C) psi_j
     return phi / np.sqrt(h)[..., None, :]
 
 

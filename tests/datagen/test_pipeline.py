@@ -97,3 +97,16 @@ def test_updated_model_with_consistent_data_reproduces_measured_modes(setup):
     assert r.converged[0]
     np.testing.assert_allclose(r.C[0], C, atol=1e-9 * np.abs(C).max())
     np.testing.assert_allclose(r.K[0], K, rtol=1e-8, atol=1e-8 * np.abs(K).max())
+
+
+def test_analyst_mass_scaling_equals_a_direct_iirs(setup):
+    from datagen.pipeline import analyst_mass
+    from physics.fem import beam_model
+    from physics.reduction import iirs
+
+    ei, mpl = np.array([18.0, 26.0]), np.array([0.11, 0.15])
+    Ma = analyst_mass(setup, ei, mpl)
+    for i in range(2):
+        model = beam_model(4, setup.length_m, ei[i], mpl[i])
+        direct = iirs(model.M, model.K, model.index(["2:y", "3:y", "4:y", "5:y"])).M
+        np.testing.assert_allclose(Ma[i], direct, rtol=1e-10)
