@@ -1,9 +1,10 @@
 """Compiled inner kernels of the dataset pipeline (numba).
 
-The two operations that touch every FRF value of every sample, FRF synthesis
+The operations that touch every FRF value of every sample, FRF synthesis
 from conjugate pole pairs and multiplicative measurement noise, dominate the
 batched pipeline when written as numpy array expressions (many passes over
-temporaries). Here each is one compiled pass, in float64, with no Python loop.
+temporaries). Here they are one fused compiled pass, in float64, with no
+Python loop, writing straight into the (complex64) dataset arrays.
 Results equal the numpy expressions to rounding (``tests/datagen``).
 """
 
@@ -14,15 +15,18 @@ from numba import njit
 
 
 @njit(cache=True)
-def pair_frf_kernel(lam, residues, omega_rad_s, out):  # pragma: no cover - compiled
-    """``out[i, s, f] = sum_j a_sj/(i w_f - lam_j) + conj(a_sj)/(i w_f - conj(lam_j))``.
+def pair_frf_kernel(lam, residues, omega_rad_s, uniforms, level, out):  # pragma: no cover - compiled
+    """``out[i, s, f] = sum_j a_sj/(i w_f - lam_j) + conj(a_sj)/(i w_f - conj(lam_j))``, optionally noisy.
 
     Each pair is ``(u + i w v) / (|lam|^2 - w^2 - 2 i w Re lam)`` with
     ``u = -2 Re(a conj(lam))`` and ``v = 2 Re a``. Sums are accumulated in
     float64 and written once, so ``out`` may be complex64 storage.
 
     lam (N, m) complex128; residues (N, S, m) complex128; omega_rad_s (F,)
-    float64; out (N, S, F) complex, overwritten.
+    float64; uniforms (N*S*F, 2) float32, or (0, 2) for no noise; level
+    float; out (N, S, F) complex, overwritten. With noise, each value is
+    multiplied by ``1 + level z`` (see :func:`box_muller`), fused here so the
+    noise-free FRF is never stored.
     """
     n_models, n_modes = lam.shape
     n_resp = residues.shape[1]
@@ -54,21 +58,18 @@ def pair_frf_kernel(lam, residues, omega_rad_s, out):  # pragma: no cover - comp
                 for j in range(n_modes):
                     re += u[j] * gr[j, f] - w * v[j] * gi[j, f]
                     im += u[j] * gi[j, f] + w * v[j] * gr[j, f]
+                if uniforms.shape[0]:
+                    zr, zi = box_muller(uniforms[(i * n_resp + s) * n_lines + f])
+                    re, im = re * (1.0 + level * zr) - im * level * zi, im * (1.0 + level * zr) + re * level * zi
                 out[i, s, f] = complex(re, im)
 
 
 @njit(cache=True, fastmath=True)
-def multiplicative_noise_kernel(H, uniforms, level, out):  # pragma: no cover - compiled
-    """``out = H (1 + level z)`` with ``z = sqrt(-ln(1-u1)) exp(2 pi i u2)`` (Box-Muller, ``E|z|^2 = 1``).
+def box_muller(u):  # pragma: no cover - compiled
+    """Unit-variance circular complex Gaussian ``z = sqrt(-ln(1-u1)) exp(2 pi i u2)`` (``E|z|^2 = 1``).
 
-    The noise draw ``z`` is evaluated in float32 (it is a random number, not
-    physics); the product with ``H`` in float64.
-
-    H (P,) complex128; uniforms (P, 2) float32 in [0, 1); out (P,) any complex dtype.
+    Evaluated in float32 (a random draw, not physics); returns ``(Re z, Im z)`` as float64.
     """
-    two_pi = np.float32(2.0 * np.pi)
-    one = np.float32(1.0)
-    for k in range(H.shape[0]):
-        r = np.sqrt(-np.log(one - uniforms[k, 0]))
-        a = two_pi * uniforms[k, 1]
-        out[k] = H[k] * complex(1.0 + level * np.float64(r * np.cos(a)), level * np.float64(r * np.sin(a)))
+    r = np.sqrt(-np.log(np.float32(1.0) - u[0]))
+    a = np.float32(2.0 * np.pi) * u[1]
+    return np.float64(r * np.cos(a)), np.float64(r * np.sin(a))

@@ -37,7 +37,7 @@ import json
 import numpy as np
 
 from datagen.damage import draw_slits, slit_corrections
-from datagen.kernels import multiplicative_noise_kernel, pair_frf_kernel
+from datagen.kernels import pair_frf_kernel
 from datagen.specimen import BeamPreset, SectionLayout, beam_preset, draw_specimens, slit_section_ei
 from physics.errors import ConfigError
 from physics.fem import element_mass, element_stiffness, beam_model, lumped_mass
@@ -300,7 +300,7 @@ def light_damping_modes(omega2, c, iterations):
     return lam, Z / np.sqrt(h)[..., None, :]
 
 
-def pair_frf(lam, residues, omega_rad_s, out=None):
+def pair_frf(lam, residues, omega_rad_s, out=None, noise=None):
     """Receptance from conjugate pairs: ``sum_j a_j/(i w - lam_j) + conj(a_j)/(i w - conj(lam_j))``.
 
     Each pair is one real-coefficient term
@@ -314,6 +314,10 @@ def pair_frf(lam, residues, omega_rad_s, out=None):
     omega_rad_s : ndarray, shape (F,)
     out : ndarray, complex, shape (..., S, F), optional
         C-contiguous storage to write into (e.g. complex64 dataset arrays).
+    noise : (uniforms, level), optional
+        Multiplicative measurement noise ``H (1 + level z)``, ``z`` circular
+        complex Gaussian from float32 uniforms of shape (..., S, F, 2) by the
+        Box-Muller transform (:func:`datagen.kernels.box_muller`).
 
     Returns
     -------
@@ -327,7 +331,9 @@ def pair_frf(lam, residues, omega_rad_s, out=None):
     res2 = np.ascontiguousarray(np.asarray(residues, complex).reshape(-1, S, m))
     if out is None:
         out = np.empty(batch + (S, w.size), complex)
-    pair_frf_kernel(lam2, res2, w, out.reshape(-1, S, w.size))
+    uniforms, level = (np.zeros((0, 2), np.float32), 0.0) if noise is None else noise
+    pair_frf_kernel(lam2, res2, w, np.ascontiguousarray(uniforms).reshape(-1, 2), float(level),
+                    out.reshape(-1, S, w.size))
     return out
 
 
@@ -440,14 +446,6 @@ def _measure(setup, inp, lam4, psi4):
     return lam_m, psi4 + mcfg["shape_noise"] * scale * noise
 
 
-def _frf_noise(setup, inp, H, out=None):
-    """``H (1 + s z)``, ``z = sqrt(-ln(1-u1)) exp(2 pi i u2)`` circular complex Gaussian with ``E|z|^2 = 1``."""
-    out = np.empty(H.shape, complex) if out is None else out
-    multiplicative_noise_kernel(np.ascontiguousarray(H).reshape(-1), inp.n_frf.reshape(-1, 2),
-                                float(setup.cfg["measurement"]["frf_noise"]), out.reshape(-1))
-    return out
-
-
 def _finish(setup, inp, lam_true, psi_true, lam_m, psi_m, H_meas, Ma, up):
     C, K, phi_n, conv, iters, resid = up
     return {
@@ -536,9 +534,9 @@ def _simulate_chunk(setup: Setup, inp: BatchInputs, frf_out=None) -> dict:
     lam, Z = light_damping_modes(w2, c, sol["damping_iterations"])
     psi_meas = phi[..., setup.meas, :] @ Z                       # (B,2,4,p)
     lam_true, psi_true = lam[..., :N_MEAS], psi_meas[..., :N_MEAS]
-    H = pair_frf(lam, psi_meas * psi_meas[..., :1, :], setup.omega_rad_s)
     frf_out = frf_out or {}
-    H_meas = _frf_noise(setup, inp, H, frf_out.get("frf_measured"))
+    H_meas = pair_frf(lam, psi_meas * psi_meas[..., :1, :], setup.omega_rad_s, frf_out.get("frf_measured"),
+                      (inp.n_frf, cfg["measurement"]["frf_noise"]))
     lam_m, psi_m = _measure(setup, inp, lam_true, psi_true)
     Ma = analyst_mass(setup, ei, mpl)
     Ma2 = np.repeat(Ma[:, None], 2, axis=1).reshape(2 * B, N_MEAS, N_MEAS)
@@ -602,7 +600,10 @@ def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
         else:
             raise ValueError(f"modes must be 'full' or 'projection', got {modes!r}")
         lam_true, psi_true = lam[..., :N_MEAS], psi[..., :N_MEAS]
-        H_meas = _frf_noise(setup, s, H)
+        u = s.n_frf  # the same Box-Muller noise, written as plain numpy
+        r = np.sqrt(-np.log(np.float32(1.0) - u[..., 0]))
+        a = np.float32(2 * np.pi) * u[..., 1]
+        H_meas = H * (1 + cfg["measurement"]["frf_noise"] * (r * np.cos(a) + 1j * (r * np.sin(a))).astype(complex))
         lam_m, psi_m = _measure(setup, s, lam_true, psi_true)
         Ma = analyst_mass(setup, s.EI, s.m_per_length)
         ups = [pilkey(Ma[0], lam_m[0, st], psi_m[0, st], tol=cfg["updating"]["tol"],
