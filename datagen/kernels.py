@@ -64,12 +64,41 @@ def pair_frf_kernel(lam, residues, omega_rad_s, uniforms, level, out):  # pragma
                 out[i, s, f] = complex(re, im)
 
 
-@njit(cache=True, fastmath=True)
+#: Tables for the Box-Muller transform: cos/sin of 2 pi u and sqrt(-ln(1-u)) on a uniform grid of u.
+#: Linear interpolation is accurate to a few 1e-6 absolute (float32-level); near u = 0 and u = 1, where
+#: the radius is not smooth, the exact formula is used. About 7x cheaper than log, cos and sin per value.
+_N_TAB = 16384
+_EDGE = 64
+_GRID = np.linspace(0.0, 1.0, _N_TAB + 1)
+_COS = np.cos(2 * np.pi * _GRID)
+_SIN = np.sin(2 * np.pi * _GRID)
+_RAD = np.sqrt(-np.log1p(-np.minimum(_GRID, 1 - 1e-12)))
+
+
+@njit(cache=True)
 def box_muller(u):  # pragma: no cover - compiled
     """Unit-variance circular complex Gaussian ``z = sqrt(-ln(1-u1)) exp(2 pi i u2)`` (``E|z|^2 = 1``).
 
-    Evaluated in float32 (a random draw, not physics); returns ``(Re z, Im z)`` as float64.
+    ``u`` is a pair of float32 uniforms in [0, 1). Returns ``(Re z, Im z)``.
     """
-    r = np.sqrt(-np.log(np.float32(1.0) - u[0]))
-    a = np.float32(2.0 * np.pi) * u[1]
-    return np.float64(r * np.cos(a)), np.float64(r * np.sin(a))
+    t = np.float64(u[1]) * _N_TAB
+    k = int(t)
+    f = t - k
+    c = _COS[k] + f * (_COS[k + 1] - _COS[k])
+    s = _SIN[k] + f * (_SIN[k + 1] - _SIN[k])
+    t = np.float64(u[0]) * _N_TAB
+    k = int(t)
+    if _EDGE <= k < _N_TAB - _EDGE:
+        f = t - k
+        r = _RAD[k] + f * (_RAD[k + 1] - _RAD[k])
+    else:
+        r = np.sqrt(-np.log1p(-np.float64(u[0])))
+    return r * c, r * s
+
+
+@njit(cache=True)
+def noise_kernel(H, uniforms, level, out):  # pragma: no cover - compiled
+    """``out = H (1 + level z)`` with ``z`` from :func:`box_muller`; H, out (P,), uniforms (P, 2)."""
+    for k in range(H.shape[0]):
+        zr, zi = box_muller(uniforms[k])
+        out[k] = H[k] * complex(1.0 + level * zr, level * zi)

@@ -37,7 +37,7 @@ import json
 import numpy as np
 
 from datagen.damage import draw_slits, slit_corrections
-from datagen.kernels import pair_frf_kernel
+from datagen.kernels import noise_kernel, pair_frf_kernel
 from datagen.specimen import BeamPreset, SectionLayout, beam_preset, draw_specimens, slit_section_ei
 from physics.errors import ConfigError
 from physics.fem import element_mass, element_stiffness, beam_model, lumped_mass
@@ -600,10 +600,9 @@ def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
         else:
             raise ValueError(f"modes must be 'full' or 'projection', got {modes!r}")
         lam_true, psi_true = lam[..., :N_MEAS], psi[..., :N_MEAS]
-        u = s.n_frf  # the same Box-Muller noise, written as plain numpy
-        r = np.sqrt(-np.log(np.float32(1.0) - u[..., 0]))
-        a = np.float32(2 * np.pi) * u[..., 1]
-        H_meas = H * (1 + cfg["measurement"]["frf_noise"] * (r * np.cos(a) + 1j * (r * np.sin(a))).astype(complex))
+        H_meas = np.empty(H.shape, complex)  # the same noise model, applied to this sample's FRFs
+        noise_kernel(np.ascontiguousarray(H).reshape(-1), s.n_frf.reshape(-1, 2), cfg["measurement"]["frf_noise"],
+                     H_meas.reshape(-1))
         lam_m, psi_m = _measure(setup, s, lam_true, psi_true)
         Ma = analyst_mass(setup, s.EI, s.m_per_length)
         ups = [pilkey(Ma[0], lam_m[0, st], psi_m[0, st], tol=cfg["updating"]["tol"],

@@ -110,3 +110,15 @@ def test_analyst_mass_scaling_equals_a_direct_iirs(setup):
         model = beam_model(4, setup.length_m, ei[i], mpl[i])
         direct = iirs(model.M, model.K, model.index(["2:y", "3:y", "4:y", "5:y"])).M
         np.testing.assert_allclose(Ma[i], direct, rtol=1e-10)
+
+
+def test_tabulated_box_muller_matches_the_exact_transform_and_is_gaussian():
+    from datagen.kernels import box_muller
+
+    u = np.random.default_rng(3).random((20000, 2), dtype=np.float32)
+    z = np.array([box_muller(x) for x in u])
+    r = np.sqrt(-np.log1p(-u[:, 0].astype(float)))
+    a = 2 * np.pi * u[:, 1].astype(float)
+    assert np.abs(z - np.c_[r * np.cos(a), r * np.sin(a)]).max() < 1e-5
+    assert abs(np.mean(z[:, 0] ** 2 + z[:, 1] ** 2) - 1.0) < 0.03  # E|z|^2 = 1
+    assert abs(np.mean(z[:, 0] * z[:, 1])) < 0.02
