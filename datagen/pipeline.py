@@ -37,7 +37,7 @@ import json
 import numpy as np
 
 from datagen.damage import draw_slits, slit_corrections
-from datagen.kernels import noise_kernel, pair_frf_kernel
+from datagen.kernels import band_cholesky, band_cholesky_solve, noise_kernel, pair_frf_kernel
 from datagen.specimen import BeamPreset, SectionLayout, beam_preset, draw_specimens, slit_section_ei
 from physics.errors import ConfigError
 from physics.fem import element_mass, element_stiffness, beam_model, lumped_mass
@@ -46,6 +46,7 @@ from physics.reduction import iirs
 from physics.updating import lancaster_damping, lancaster_stiffness, pilkey
 
 N_MEAS = 4          # measured translational DOFs (thesis nodes 2..5)
+BANDWIDTH = 3       # half-bandwidth of beam matrices with DOFs ordered node by node
 STATES = ("reference", "damaged")
 
 
@@ -246,6 +247,7 @@ def ritz_modes(K, M, start, iterations):
     Parameters
     ----------
     K : ndarray, shape (..., n, n)
+        Banded (half-bandwidth :data:`BANDWIDTH`), symmetric positive definite.
     M : ndarray, shape (n, n) or (..., n, n)
     start : ndarray, shape (n, p)
     iterations : int
@@ -256,8 +258,12 @@ def ritz_modes(K, M, start, iterations):
     phi : ndarray, shape (..., n, p)   ``phi^T M phi = I``
     """
     V = np.broadcast_to(start, K.shape[:-2] + start.shape)
+    n = K.shape[-1]
+    Kf = np.ascontiguousarray(K).reshape(-1, n, n)
+    L = band_cholesky(Kf, BANDWIDTH)  # factor once: beam stiffness is banded (2 DOFs per node)
     for _ in range(iterations):
-        X = np.linalg.solve(K, M @ V)
+        MV = np.broadcast_to(M @ V, K.shape[:-2] + V.shape[-2:])
+        X = band_cholesky_solve(L, np.ascontiguousarray(MV).reshape(-1, n, V.shape[-1])).reshape(MV.shape)
         Kr = _t(X) @ K @ X
         Mr = _t(X) @ M @ X
         w2, Q = _gen_eigh(0.5 * (Kr + _t(Kr)), 0.5 * (Mr + _t(Mr)))

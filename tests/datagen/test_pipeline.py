@@ -122,3 +122,16 @@ def test_tabulated_box_muller_matches_the_exact_transform_and_is_gaussian():
     assert np.abs(z - np.c_[r * np.cos(a), r * np.sin(a)]).max() < 1e-5
     assert abs(np.mean(z[:, 0] ** 2 + z[:, 1] ** 2) - 1.0) < 0.03  # E|z|^2 = 1
     assert abs(np.mean(z[:, 0] * z[:, 1])) < 0.02
+
+
+def test_band_cholesky_solve_equals_dense_solve(setup):
+    from datagen.kernels import band_cholesky, band_cholesky_solve
+
+    rng = np.random.default_rng(4)
+    K = np.stack([setup.K0 * f for f in (1.0, 2.5)])
+    K[:, 0, 0] += 50.0  # the root spring makes the free-rotation mesh definite
+    B = rng.standard_normal((2, K.shape[1], 5))
+    X = band_cholesky_solve(band_cholesky(K, 3), B)
+    np.testing.assert_allclose(X, np.linalg.solve(K, B), rtol=1e-9, atol=1e-12 * np.abs(X).max())
+    with pytest.raises(ValueError, match="positive definite"):
+        band_cholesky(-K, 3)
