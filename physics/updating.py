@@ -209,10 +209,13 @@ def pilkey(M, eigenvalues, eigenvectors, C0=None, *, tol: float = 1e-10, max_ite
     iterations = np.zeros(len(Mf), dtype=int)
     converged = np.zeros(len(Mf), dtype=bool)
     active = np.arange(len(Mf))  # members still iterating: each member's result is independent of the others
+    with np.errstate(all="ignore"):
+        m_term = 2 * lf * np.sum(pf * (Mf @ pf), axis=-2)  # 2 lambda_j psi_j^T M psi_j, fixed during the iteration
     for it in range(1, max_iter + 1):
         a = active
         with np.errstate(all="ignore"):
-            C_new = lancaster_damping(Mf[a], lf[a], normalize_modes(lf[a], pf[a], Mf[a], C[a]))  # eqs. 5.2, 5.3
+            h = m_term[a] + np.sum(pf[a] * (C[a] @ pf[a]), axis=-2)  # eq. 5.2: psi^T (2 lambda M + C_k) psi
+            C_new = lancaster_damping(Mf[a], lf[a], pf[a] / np.sqrt(h)[:, None, :])  # eq. 5.3
             C_new = 0.5 * (C_new + _t(C_new))
             norm = np.linalg.norm(C_new, axis=(-2, -1))
             res = np.linalg.norm(C_new - C[a], axis=(-2, -1)) / np.where(norm > 0, norm, 1.0)
