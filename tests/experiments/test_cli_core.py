@@ -109,8 +109,12 @@ def test_usage_errors_exit_2(capsys):
 
 
 def test_demo_writes_its_report(tmp_path, capsys):
-    code, out, _ = _run(capsys, "demo", "--out", str(tmp_path / "d"), "--json")
+    code, out, _ = _run(capsys, "demo", "--out", str(tmp_path / "d"), "--samples", "40", "--workers", "1", "--json")
     res = json.loads(out)
     assert code == 0 and res["validate_passed"]
-    assert {p.name for p in (tmp_path / "d").iterdir()} >= {"validate.json", "validate.txt", "beam5_frf.png"}
+    assert {p.name for p in (tmp_path / "d").iterdir()} >= {"validate.json", "validate.txt", "beam5_frf.png",
+                                                           "beam5_simulated.uff", "identify", "dataset", "inspect"}
+    m = res["measured_data"]
+    np.testing.assert_allclose(m["identified_frequencies_hz"], m["exact_frequencies_hz"], rtol=1e-3)
+    assert res["dataset"]["samples"] == 40
     assert json.loads((tmp_path / "d" / "validate.json").read_text())["passed"] is True
