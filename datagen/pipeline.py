@@ -40,8 +40,9 @@ from datagen.damage import draw_slits, slit_corrections
 from datagen.kernels import band_cholesky, band_cholesky_solve, noise_kernel, pair_frf_kernel
 from datagen.specimen import BeamPreset, SectionLayout, beam_preset, draw_specimens, slit_section_ei
 from physics.errors import ConfigError
-from physics.fem import element_mass, element_stiffness, beam_model, lumped_mass
-from physics.modal import complex_modes, eigenvalues_from_modal, modal_parameters, normalize_modes, state_matrix
+from physics.fem import assemble, beam_model, element_mass, element_stiffness, lumped_mass
+from physics.modal import (complex_modes, eigenvalues_from_modal, modal_parameters, normalize_modes, state_matrix,
+                           undamped_modes)
 from physics.reduction import iirs
 from physics.updating import lancaster_damping, lancaster_stiffness, pilkey
 
@@ -98,16 +99,6 @@ class Setup:
         return self.phi0.shape[-1]
 
 
-def _assemble_loop(ke):
-    """Assemble ``(..., E, 4, 4)`` element matrices (loop over elements, vectorised over the batch)."""
-    n_el = ke.shape[-3]
-    n = 2 * (n_el + 1)
-    K = np.zeros(ke.shape[:-3] + (n, n))
-    for e in range(n_el):
-        K[..., 2 * e:2 * e + 4, 2 * e:2 * e + 4] += ke[..., e, :, :]
-    return K
-
-
 def build_setup(cfg: dict) -> Setup:
     """Precompute the nominal truth matrices, measured DOFs, start basis and FRF grid."""
     preset = beam_preset(cfg["preset"])
@@ -120,8 +111,8 @@ def build_setup(cfg: dict) -> Setup:
     n_el = cfg["mesh"]["truth_elements"]
     le = preset.length / n_el
     spring = bool(cfg["specimen"]["root_spring_relative"])
-    K_full = _assemble_loop(np.broadcast_to(element_stiffness(1.0, le), (n_el, 4, 4)))
-    M_full = _assemble_loop(np.broadcast_to(element_mass(1.0, le), (n_el, 4, 4)))
+    K_full = assemble(np.broadcast_to(element_stiffness(1.0, le), (n_el, 4, 4)))
+    M_full = assemble(np.broadcast_to(element_mass(1.0, le), (n_el, 4, 4)))
     keep = np.arange(1 if spring else 2, 2 * (n_el + 1))
     names = tuple(f"{n}:{d}" for n in range(1, n_el + 2) for d in ("y", "rz"))
     names = tuple(names[i] for i in keep)
@@ -227,18 +218,15 @@ def truth_matrices(setup: Setup, inp: BatchInputs):
                                 np.where(ok, inp.ei_loss * ei[:, None], 0.0), np.where(ok, inp.beta_s, 0.0),
                                 ei, setup.length_m, setup.n_elements)
     sel = np.ix_(setup.keep, setup.keep)
-    dK = _assemble_loop(dKe)[(...,) + sel]
-    dC = _assemble_loop(dCe)[(...,) + sel]
+    dK = assemble(dKe)[(...,) + sel]
+    dC = assemble(dCe)[(...,) + sel]
     return np.stack([K, K + dK], axis=1), inp.m_per_length[:, None, None] * setup.M0, dC
 
 
 def _gen_eigh(K, M):
-    """Generalised symmetric eigenproblem ``K v = w M v`` (batched), ``v^T M v = I``, ascending."""
-    L = np.linalg.cholesky(M)
-    Li_K = np.linalg.solve(L, K)
-    A = np.linalg.solve(L, _t(Li_K))
-    w, v = np.linalg.eigh(0.5 * (A + _t(A)))
-    return w, np.linalg.solve(_t(L), v)
+    """``K v = w M v`` (batched), ``v^T M v = I``, ascending ``w`` (rad^2/s^2): :func:`physics.modal.undamped_modes`."""
+    omega, v = undamped_modes(M, K)
+    return omega**2, v
 
 
 def ritz_modes(K, M, start, iterations):

@@ -19,7 +19,6 @@ matrices of shape ``(..., n_dof, n_dof)``, so one call builds a million models.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
@@ -85,26 +84,12 @@ def element_stiffness(EI, length):
     return ei / l**3 * _poly(_K_COEF, length)
 
 
-@lru_cache(maxsize=32)
-def _scatter(n_elements: int) -> np.ndarray:
-    """Assembly operator ``A`` with ``vec(K_global) = A @ vec(K_elements)``.
-
-    Shape ``(n_nodes*2)**2 x (n_elements*16)``; a 0/1 matrix so assembly of any
-    batch is one matrix product (no loop over elements or samples).
-    """
-    n_dof = 2 * (n_elements + 1)
-    a = np.zeros((n_dof * n_dof, n_elements * 16))
-    for e in range(n_elements):
-        dofs = 2 * e + np.arange(4)
-        for i in range(4):
-            for j in range(4):
-                a[dofs[i] * n_dof + dofs[j], e * 16 + 4 * i + j] = 1.0
-    a.setflags(write=False)
-    return a
-
-
 def assemble(element_matrices):
     """Assemble element matrices of a straight chain of beam elements.
+
+    Element ``e`` joins nodes ``e+1`` and ``e+2``, so its 4x4 block adds onto
+    global DOFs ``2e .. 2e+3``. The loop runs over elements only; every add is
+    vectorised over the batch axes.
 
     Parameters
     ----------
@@ -120,8 +105,10 @@ def assemble(element_matrices):
         raise ShapeError(f"element matrices must have shape (..., n_elements, 4, 4), got {ke.shape}")
     n_el = ke.shape[-3]
     n_dof = 2 * (n_el + 1)
-    flat = ke.reshape(ke.shape[:-3] + (n_el * 16,))
-    return (flat @ _scatter(n_el).T).reshape(ke.shape[:-3] + (n_dof, n_dof))
+    out = np.zeros(ke.shape[:-3] + (n_dof, n_dof))
+    for e in range(n_el):
+        out[..., 2 * e:2 * e + 4, 2 * e:2 * e + 4] += ke[..., e, :, :]
+    return out
 
 
 def dof_names(n_nodes: int) -> tuple[str, ...]:
