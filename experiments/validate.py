@@ -38,15 +38,6 @@ def thesis_fixture(name: str) -> dict:
     return json.loads(resources.files("experiments").joinpath("data", "thesis", f"{name}.json").read_text())
 
 
-def cmatrix(rows) -> np.ndarray:
-    """Complex strings (``"0.7+15.0j"`` or ``"...i"``) to a complex array."""
-    return np.array([[complex(str(v).replace("i", "j")) for v in r] for r in rows])
-
-
-def cvector(vals) -> np.ndarray:
-    return np.array([complex(str(v).replace("i", "j")) for v in vals])
-
-
 def frob_rel(a, b) -> float:
     return float(np.linalg.norm(np.asarray(a) - np.asarray(b)) / np.linalg.norm(b))
 
@@ -90,7 +81,8 @@ def symmetry_misprints(printed, reproduced, unit):
 def example1_checks():
     ex = thesis_fixture("example1_two_dof")
     M = np.array(ex["M"], float)
-    lam, phi = cvector(ex["eigenvalues"]), cmatrix(ex["eigenvectors"])
+    data = modal_data_from_dict(ex, "example1_two_dof.json")
+    lam, phi = data.eigenvalues, data.eigenvectors
     res = updating.pilkey(M, lam, phi, C0=np.array(ex["C_initial"], float), tol=1e-13, keep_history=True)
     half = 0.5e-4  # half a unit of the 4th printed decimal
     out = []
@@ -110,7 +102,8 @@ def example2_checks():
     ex = thesis_fixture("example2_ortiz_beam")
     M, K, C = (np.array(ex[k], float) for k in ("M", "K", "C_reference"))
     model = modal.complex_modes(M, C, K)
-    lam_printed = cvector(ex["eigenvalues"])
+    printed_modes = modal_data_from_dict(ex, "example2_ortiz_beam.json")
+    lam_printed = printed_modes.eigenvalues
     out = [_check("Example 2: printed eigenvalues = eigenvalues of (M, C_reference, K)", "example2",
                   ex["eigenvalues"], model.eigenvalues, max_rel(model.eigenvalues, lam_printed), 5e-5,
                   "printed to 5 significant digits; modes 2 and 3 have Re(lambda) > 0: C_reference is "
@@ -130,7 +123,7 @@ def example2_checks():
                       ex["K_identified_iter20"], res.K, frob_rel(res.K, np.array(ex["K_identified_iter20"], float)),
                       1e-3, f"converged in {res.iterations} iterations; thesis M and K are rounded"))
     # Are the printed eigenvectors those of the model? Compare each with the model's (best complex scale).
-    printed = cmatrix(ex["eigenvectors"])
+    printed = printed_modes.eigenvectors
     macs = np.diag(modal.mac(printed, model.eigenvectors)).real
     findings = []
     for j in range(4):
