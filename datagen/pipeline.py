@@ -41,10 +41,9 @@ from datagen.kernels import band_cholesky, band_cholesky_solve, noise_kernel, pa
 from datagen.specimen import BeamPreset, SectionLayout, beam_preset, draw_specimens, slit_section_ei
 from physics.errors import ConfigError
 from physics.fem import assemble, beam_model, element_mass, element_stiffness, lumped_mass
-from physics.modal import (complex_modes, eigenvalues_from_modal, modal_parameters, normalize_modes, state_matrix,
-                           undamped_modes)
+from physics.modal import eigenvalues_from_modal, modal_parameters, normalize_modes, state_matrix, undamped_modes
 from physics.reduction import iirs
-from physics.updating import lancaster_damping, lancaster_stiffness, pilkey
+from physics.updating import pilkey
 
 N_MEAS = 4          # measured translational DOFs (thesis nodes 2..5)
 BANDWIDTH = 3       # half-bandwidth of beam matrices with DOFs ordered node by node
@@ -294,6 +293,38 @@ def light_damping_modes(omega2, c, iterations):
     return lam, Z / np.sqrt(h)[..., None, :]
 
 
+def projected_modes(setup: Setup, inp: BatchInputs, K, M, dC):
+    """Complex modes of both states by the light-damping shortcut (batched).
+
+    Undamped modes by :func:`ritz_modes` on the unit-EI, unit-mass problem,
+    the undamaged specimen's modal damping projected on both states' modes
+    plus the slit damping ``dC``, then :func:`light_damping_modes`.
+
+    Parameters
+    ----------
+    K : ndarray, shape (B, 2, n, n)   truth stiffness of reference and damaged state
+    M : ndarray, shape (B, n, n)
+    dC : ndarray, shape (B, n, n)     slit damping
+
+    Returns
+    -------
+    lam : ndarray, complex, shape (B, 2, p)
+    psi_meas : ndarray, complex, shape (B, 2, 4, p)   eq.-1.10 shapes at the measured DOFs
+    """
+    sol = setup.cfg["solver"]
+    ei, mpl = inp.EI, inp.m_per_length
+    w2s, V = ritz_modes(K / ei[:, None, None, None], setup.M0, setup.phi0, sol["subspace_iterations"])
+    w2 = w2s * (ei / mpl)[:, None, None]
+    phi = V / np.sqrt(mpl)[:, None, None, None]                  # (B,2,n,p), phi^T M phi = I
+    d = 2 * setup.zeta * np.sqrt(w2[:, 0]) * inp.damping_scale[:, None]     # (B,p)
+    X = _t(phi) @ (M[:, None] @ phi[:, :1])                      # (B,2,p,p) = Phi_s^T M Phi_ref
+    c = (X * d[:, None, None, :]) @ _t(X)
+    c[:, 1] += _t(phi[:, 1]) @ dC @ phi[:, 1]
+    c = 0.5 * (c + _t(c))
+    lam, Z = light_damping_modes(w2, c, sol["damping_iterations"])
+    return lam, phi[..., setup.meas, :] @ Z
+
+
 def pair_frf(lam, residues, omega_rad_s, out=None, noise=None):
     """Receptance from conjugate pairs: ``sum_j a_j/(i w - lam_j) + conj(a_j)/(i w - conj(lam_j))``.
 
@@ -512,27 +543,14 @@ def _simulate_chunk(setup: Setup, inp: BatchInputs, frf_out=None) -> dict:
     """
     cfg = setup.cfg
     B = len(inp)
-    sol = cfg["solver"]
     K, M, dC = truth_matrices(setup, inp)
-    ei, mpl = inp.EI, inp.m_per_length
-    # undamped modes on the unit-mass, unit-EI scaled problem (shared M0)
-    w2s, V = ritz_modes(K / ei[:, None, None, None], setup.M0, setup.phi0, sol["subspace_iterations"])
-    w2 = w2s * (ei / mpl)[:, None, None]
-    phi = V / np.sqrt(mpl)[:, None, None, None]                  # (B,2,n,p), phi^T M phi = I
-    # modal damping of the undamaged specimen, projected on both states' modes
-    d = 2 * setup.zeta * np.sqrt(w2[:, 0]) * inp.damping_scale[:, None]     # (B,p)
-    X = _t(phi) @ (M[:, None] @ phi[:, :1])                      # (B,2,p,p) = Phi_s^T M Phi_ref
-    c = (X * d[:, None, None, :]) @ _t(X)
-    c[:, 1] += _t(phi[:, 1]) @ dC @ phi[:, 1]
-    c = 0.5 * (c + _t(c))
-    lam, Z = light_damping_modes(w2, c, sol["damping_iterations"])
-    psi_meas = phi[..., setup.meas, :] @ Z                       # (B,2,4,p)
+    lam, psi_meas = projected_modes(setup, inp, K, M, dC)
     lam_true, psi_true = lam[..., :N_MEAS], psi_meas[..., :N_MEAS]
     frf_out = frf_out or {}
     H_meas = pair_frf(lam, psi_meas * psi_meas[..., :1, :], setup.omega_rad_s, frf_out.get("frf_measured"),
                       (inp.n_frf, cfg["measurement"]["frf_noise"]))
     lam_m, psi_m = _measure(setup, inp, lam_true, psi_true)
-    Ma = analyst_mass(setup, ei, mpl)
+    Ma = analyst_mass(setup, inp.EI, inp.m_per_length)
     Ma2 = np.repeat(Ma[:, None], 2, axis=1).reshape(2 * B, N_MEAS, N_MEAS)
     res = pilkey(Ma2, lam_m.reshape(2 * B, N_MEAS), psi_m.reshape(2 * B, N_MEAS, N_MEAS),
                  tol=cfg["updating"]["tol"], max_iter=cfg["updating"]["max_iter"], raise_on_failure=False,
@@ -558,12 +576,10 @@ def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
     from physics.frf import receptance, receptance_modal
 
     cfg = setup.cfg
-    sol = cfg["solver"]
     results = []
     for i in range(len(inp)):
         s = inp.take(slice(i, i + 1))
         K, M, dC = truth_matrices(setup, s)
-        ei, mpl = float(s.EI[0]), float(s.m_per_length[0])
         if modes == "full":
             w2r, phir = _gen_eigh(K[0, 0], M[0])
             p = setup.p
@@ -580,16 +596,7 @@ def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
             psi = np.stack(psi_l)[None]
             H = np.stack(H_l)[None]
         elif modes == "projection":
-            w2s, V = ritz_modes(K / ei, setup.M0, setup.phi0, sol["subspace_iterations"])
-            w2 = w2s * ei / mpl
-            phi = V / np.sqrt(mpl)
-            d = 2 * setup.zeta * np.sqrt(w2[:, 0]) * s.damping_scale[:, None]
-            X = _t(phi) @ (M[:, None] @ phi[:, :1])
-            c = (X * d[:, None, None, :]) @ _t(X)
-            c[:, 1] += _t(phi[:, 1]) @ dC @ phi[:, 1]
-            c = 0.5 * (c + _t(c))
-            lam, Z = light_damping_modes(w2, c, sol["damping_iterations"])
-            psi = phi[..., setup.meas, :] @ Z
+            lam, psi = projected_modes(setup, s, K, M, dC)
             H = receptance_modal(lam, psi, setup.omega_rad_s, np.arange(N_MEAS), [0])[..., 0, :]
         else:
             raise ValueError(f"modes must be 'full' or 'projection', got {modes!r}")

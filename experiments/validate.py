@@ -10,7 +10,7 @@ Printed values carry rounding, so tolerances derive from the printed digits.
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from importlib import resources
 
 import numpy as np
