@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from experiments import validate
+from experiments.cli import to_jsonable
 from physics import frf, modal, updating
 from physics.io import atomic_write_text, modal_data_from_dict
 
@@ -100,7 +101,7 @@ def run(args) -> dict:
     checks = validate.run_checks()
     summary = validate.summary(checks)
     table = validate.format_table(checks)
-    atomic_write_text(out / "validate.json", json.dumps(validate_json(summary), indent=1) + "\n")
+    atomic_write_text(out / "validate.json", json.dumps(to_jsonable(summary), indent=1) + "\n")
     atomic_write_text(out / "validate.txt", table + "\n")
     peaks = beam5_frf_figure(out / "beam5_frf.png")
     measured = measured_data_step(out)
@@ -134,12 +135,6 @@ def run(args) -> dict:
                 print(f"  {mode}: {c['slope']:.3f}, {c['r2']:.4f}")
     result["exit_code"] = 0 if summary["passed"] else 1
     return result
-
-
-def validate_json(summary: dict) -> dict:
-    from experiments.cli import to_jsonable
-
-    return to_jsonable(summary)
 
 
 def add_parser(sub):
