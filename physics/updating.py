@@ -145,6 +145,18 @@ def _orthogonality_system(M, lam, phi):
     return A, np.concatenate([np.zeros_like(minv), minv], axis=-1)
 
 
+def _least_squares_scaling(M, lam, phi):
+    """Complex scale factors ``a`` (``psi -> sqrt(a) psi``) that best satisfy the orthogonality relations.
+
+    Returns ``a`` (..., n) and the relative least-squares misfit (...).
+    """
+    n = M.shape[-1]
+    A, rhs = _orthogonality_system(M, lam, phi)
+    x = (np.linalg.pinv(A) @ rhs[..., None])[..., 0]
+    misfit = np.linalg.norm((A @ x[..., None])[..., 0] - rhs, axis=-1) / np.linalg.norm(rhs, axis=-1)
+    return x[..., :n] + 1j * x[..., n:], misfit
+
+
 def orthogonality_misfit(M, eigenvalues, eigenvectors):
     """Relative misfit of Lancaster's orthogonality relations for eq.-1.10-normalised modes.
 
@@ -237,9 +249,7 @@ def pilkey(M, eigenvalues, eigenvectors, C0=None, *, tol: float = 1e-10, max_ite
     suspect = np.flatnonzero(converged & (misfit > 1e-6)) if check_spurious else np.zeros(0, int)
     spurious = np.zeros(len(Mf), dtype=bool)
     if suspect.size:
-        A, rhs = _orthogonality_system(Mf[suspect], lf[suspect], pf[suspect])
-        x = (np.linalg.pinv(A) @ rhs[..., None])[..., 0]
-        best = np.linalg.norm((A @ x[..., None])[..., 0] - rhs, axis=-1) / np.linalg.norm(rhs, axis=-1)
+        _, best = _least_squares_scaling(Mf[suspect], lf[suspect], pf[suspect])
         spurious[suspect[best < 1e-9]] = True
         converged &= ~spurious
     if raise_on_failure and spurious.any():
@@ -300,11 +310,8 @@ def lancaster_direct(M, eigenvalues, eigenvectors):
     """
     M, lam, phi = check_modal_input(M, eigenvalues, eigenvectors)
     M = M.astype(float)
-    n = M.shape[-1]
-    A, rhs = _orthogonality_system(M, lam, phi)
-    x = (np.linalg.pinv(A) @ rhs[..., None])[..., 0]
-    misfit = np.linalg.norm((A @ x[..., None])[..., 0] - rhs, axis=-1) / np.linalg.norm(rhs, axis=-1)
-    phi_n = phi * np.sqrt(x[..., :n] + 1j * x[..., n:])[..., None, :]
+    scaling, misfit = _least_squares_scaling(M, lam, phi)
+    phi_n = phi * np.sqrt(scaling)[..., None, :]
     C = lancaster_damping(M, lam, phi_n)
     C = 0.5 * (C + _t(C))
     K = lancaster_stiffness(lam, phi_n)
