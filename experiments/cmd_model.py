@@ -20,7 +20,7 @@ def build(beam: str, elements: int, mass: str, method: str, bc: str = "clamped-f
     preset = properties.beam_preset(beam)
     if elements < 1:
         raise BeamDamageError(f"--elements must be >= 1, got {elements}")
-    model = fem.beam_model(elements, preset.length, preset.EI, preset.m_per_length, bc=bc)
+    model = fem.beam_model(elements, preset.length_m, preset.EI_Nm2, preset.mass_per_length_kg_m, bc=bc)
     M, K, dofs, iterations = model.M, model.K, model.dofs, 0
     if method != "none":
         masters = model.translations()
@@ -36,7 +36,7 @@ def build(beam: str, elements: int, mass: str, method: str, bc: str = "clamped-f
     closed = None
     if bc == "clamped-free":
         closed = properties.cantilever_frequencies_hz(
-            preset.EI, preset.m_per_length, preset.length, properties.cantilever_beta_l(min(len(dofs), 8)))
+            preset.EI_Nm2, preset.mass_per_length_kg_m, preset.length_m, properties.cantilever_beta_l(min(len(dofs), 8)))
     return {
         "beam": beam, "elements": elements, "mass": mass, "reduction": method, "bc": bc,
         "M": M, "K": K, "dofs": list(dofs),

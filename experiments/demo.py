@@ -19,7 +19,7 @@ import numpy as np
 
 from experiments import validate
 from experiments.cli import to_jsonable
-from physics import frf, modal, updating
+from physics import frf, modal, thesis, updating
 from physics.io import atomic_write_text, modal_data_from_dict
 
 
@@ -30,7 +30,7 @@ def beam5_frf_figure(path: Path) -> dict:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    b5 = validate.thesis_fixture("beams")["beams"]["5"]
+    b5 = thesis.load("beams")["beams"]["5"]
     ident = b5["identified_models"]
     w = np.linspace(1, 5000, 25000)  # the thesis's Program A grid (rad/s)
     f_hz = w / (2 * np.pi)

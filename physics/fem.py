@@ -19,6 +19,7 @@ matrices of shape ``(..., n_dof, n_dof)``, so one call builds a million models.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -136,6 +137,43 @@ def constrained_dofs(bc: str, n_nodes: int, root_spring: bool = False) -> tuple[
     return table[bc]
 
 
+class KeptDofs(NamedTuple):
+    """DOFs left after a boundary condition (result of :func:`kept_dofs`).
+
+    Attributes
+    ----------
+    indices : ndarray of int, shape (n,)
+        Positions in the global node-by-node order ``[1:y, 1:rz, 2:y, ...]``.
+    names : tuple of str
+        Their names (``"node:dir"``).
+    """
+
+    indices: np.ndarray
+    names: tuple
+
+
+def kept_dofs(n_nodes: int, bc: str = "clamped-free", root_spring: bool = False) -> KeptDofs:
+    """Global indices and names of the DOFs a boundary condition keeps (the one DOF bookkeeping).
+
+    Parameters
+    ----------
+    n_nodes : int
+        Nodes of the beam (elements + 1).
+    bc : {"clamped-free", "free-free", "pinned-pinned", "clamped-clamped"}
+    root_spring : bool
+        Keep the root rotation of a clamped-free beam (held by a rotational spring).
+
+    Returns
+    -------
+    KeptDofs
+        ``(indices, names)``; slice global matrices with ``np.ix_(indices, indices)``.
+    """
+    names = dof_names(n_nodes)
+    removed = set(constrained_dofs(bc, n_nodes, root_spring))
+    keep = [i for i, d in enumerate(names) if d not in removed]
+    return KeptDofs(np.array(keep, dtype=int), tuple(names[i] for i in keep))
+
+
 @dataclass(frozen=True)
 class FEModel:
     """Assembled beam model after boundary conditions.
@@ -240,9 +278,7 @@ def beam_model(
     else:
         C = np.zeros_like(K)
     n_nodes = n_el + 1
-    names = dof_names(n_nodes)
-    removed = set(constrained_dofs(bc, n_nodes, root_spring is not None))
-    keep = np.array([i for i, d in enumerate(names) if d not in removed])
+    keep, names = kept_dofs(n_nodes, bc, root_spring is not None)
     if root_spring is not None:
         kr = np.asarray(root_spring, dtype=float)
         if np.any(kr <= 0) or not np.all(np.isfinite(kr)):
@@ -254,7 +290,7 @@ def beam_model(
         M=M[(...,) + sel],
         K=K[(...,) + sel],
         C=C[(...,) + sel],
-        dofs=tuple(names[i] for i in keep),
+        dofs=names,
         node_x=np.linspace(0.0, length, n_nodes),
     )
 

@@ -3,7 +3,8 @@
 * Presets ``beam5``, ``beam6``, ``beam8`` from Table 4.1 and the geometry of
   Chapter Four: mass per length = mass / 1.219 m (whole beam), cantilever
   length 0.6095 m, 4 elements, masters = translations of nodes 2..5.
-* Closed-form cantilever natural frequencies (eq. 4.5).
+* Closed-form cantilever natural frequencies (eq. 4.5), ``beta l`` constants
+  and the mode curvature used by the first-order damage sensitivity.
 * Equivalent ``EI`` from a static load-deflection test (eqs. 4.2-4.4).
 * Flexural rigidity of a layered section (eq. 4.1) and its general,
   unsymmetric form used for slits.
@@ -26,18 +27,22 @@ THESIS_BETA_L = (1.8751, 4.6941, 7.8547, 10.9955)
 class BeamPreset:
     """A specimen of the thesis (Table 4.1 and the Chapter Four geometry).
 
+    Field names match :class:`physics.beam.Beam`; the old unit-less names
+    (``EI``, ``length``, ``total_length``, ``width``, ``thickness``,
+    ``m_per_length``) remain as read-only aliases.
+
     Attributes
     ----------
     name : str
     mass_kg : float
         Mass of the whole beam (kg).
-    EI : float
+    EI_Nm2 : float
         Equivalent flexural rigidity (N m^2).
-    total_length : float
+    total_length_m : float
         Length of the whole beam (m), used for the mass per length.
-    length : float
+    length_m : float
         Cantilever (free) length (m).
-    width, thickness : float
+    width_m, thickness_m : float
         Section (m).
     n_elements : int
         Elements of the thesis's FE model.
@@ -45,22 +50,30 @@ class BeamPreset:
 
     name: str
     mass_kg: float
-    EI: float
-    total_length: float = 1.219
-    length: float = 0.6095
-    width: float = 0.051
-    thickness: float = 0.007264
+    EI_Nm2: float
+    total_length_m: float = 1.219
+    length_m: float = 0.6095
+    width_m: float = 0.051
+    thickness_m: float = 0.007264
     n_elements: int = 4
 
     @property
-    def m_per_length(self) -> float:
+    def mass_per_length_kg_m(self) -> float:
         """Mass per unit length (kg/m): beam mass over the whole length."""
-        return self.mass_kg / self.total_length
+        return self.mass_kg / self.total_length_m
 
     @property
     def masters(self) -> tuple[str, ...]:
         """The measured DOFs: translations of nodes 2..n_elements+1."""
         return tuple(f"{n}:y" for n in range(2, self.n_elements + 2))
+
+    # old names (aliases)
+    EI = property(lambda self: self.EI_Nm2, doc="Alias of ``EI_Nm2``.")
+    length = property(lambda self: self.length_m, doc="Alias of ``length_m``.")
+    total_length = property(lambda self: self.total_length_m, doc="Alias of ``total_length_m``.")
+    width = property(lambda self: self.width_m, doc="Alias of ``width_m``.")
+    thickness = property(lambda self: self.thickness_m, doc="Alias of ``thickness_m``.")
+    m_per_length = property(lambda self: self.mass_per_length_kg_m, doc="Alias of ``mass_per_length_kg_m``.")
 
 
 PRESETS = {
@@ -83,6 +96,43 @@ def cantilever_beta_l(n_modes: int = 4) -> np.ndarray:
     f = lambda x: np.cos(x) * np.cosh(x) + 1.0  # noqa: E731
     return np.array([brentq(f, (k + 0.5) * np.pi - 1.0, (k + 0.5) * np.pi + 1.0, xtol=1e-15)
                      for k in range(n_modes)])
+
+
+#: ``beta_l`` of a clamped-free beam to machine precision (first four modes).
+CANTILEVER_BETA_L = tuple(float(x) for x in cantilever_beta_l(4))
+
+
+def cantilever_curvature_squared(x_m, length_m: float, mode: int):
+    """Normalised squared curvature ``phi_r''(x)^2 / int_0^L phi_r''^2 dx`` of a uniform cantilever (1/m).
+
+    ``phi_r(x) = cosh(bx) - cos(bx) - s (sinh(bx) - sin(bx))`` with
+    ``s = (cosh bl + cos bl)/(sinh bl + sin bl)`` and ``b = beta_l_r / L``. With
+    the clamped-free boundary conditions ``int phi''^2 = b^4 int phi^2 = b^4 L``
+    (integration by parts twice), so the normalisation is closed form. By
+    first-order perturbation, a loss ``dEI`` over a short length ``w`` at ``x``
+    shifts mode ``r`` by ``df_r/f_r = -(1/2) (dEI/EI) w`` times this value.
+
+    Parameters
+    ----------
+    x_m : float or ndarray
+        Positions from the clamp (m), ``0 <= x <= L``.
+    length_m : float
+        Cantilever length (m).
+    mode : int
+        Mode index from 0 (the first bending mode).
+
+    Returns
+    -------
+    ndarray, shape like ``x_m``   (1/m)
+    """
+    if int(mode) < 0:
+        raise BeamDamageError(f"mode must be >= 0 (0 = first bending mode), got {mode}")
+    bl = CANTILEVER_BETA_L[mode] if mode < len(CANTILEVER_BETA_L) else cantilever_beta_l(mode + 1)[mode]
+    b = bl / length_m
+    s = (np.cosh(bl) + np.cos(bl)) / (np.sinh(bl) + np.sin(bl))
+    bx = b * np.asarray(x_m, dtype=float)
+    curvature = b**2 * (np.cosh(bx) + np.cos(bx) - s * (np.sinh(bx) + np.sin(bx)))
+    return curvature**2 / (b**4 * length_m)
 
 
 def cantilever_frequencies_hz(EI, m_per_length, length, beta_l=THESIS_BETA_L):

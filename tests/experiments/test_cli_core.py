@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from experiments import cli, validate
+from physics import thesis
 
 
 def _run(capsys, *argv):
@@ -32,7 +33,7 @@ def test_validate_passes_and_prints_the_documented_json(capsys):
 
 
 def test_validate_fails_when_a_thesis_value_is_perturbed(monkeypatch):
-    real = validate.thesis_fixture
+    real = thesis.load
 
     def perturbed(name):
         data = real(name)
@@ -40,7 +41,7 @@ def test_validate_fails_when_a_thesis_value_is_perturbed(monkeypatch):
             data["C_iterates"]["5"][0][0] += 0.001
         return data
 
-    monkeypatch.setattr(validate, "thesis_fixture", perturbed)
+    monkeypatch.setattr(thesis, "load", perturbed)
     checks = validate.run_checks()
     failed = [c.name for c in checks if not c.passed]
     assert failed == ["Example 1: damping iterate C5"]
@@ -69,7 +70,7 @@ def test_model_lumped_uses_eq_4_6(capsys):
 
 
 def test_update_reproduces_chapter_six(tmp_path, capsys):
-    b5 = validate.thesis_fixture("beams")["beams"]["5"]
+    b5 = thesis.load("beams")["beams"]["5"]
     f = tmp_path / "modal.json"
     f.write_text(json.dumps(b5["undamaged"]))
     code, out, _ = _run(capsys, "update", "--beam", "beam5", "--modal", str(f), "--json")
