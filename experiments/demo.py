@@ -64,12 +64,11 @@ def beam5_frf_figure(path: Path) -> dict:
 
 def measured_data_step(out: Path) -> dict:
     """Simulated measurement -> UFF58 -> LSCF/LSFD identification -> Pilkey updating."""
-    from experiments.bench_identification import simulate
     from experiments.cmd_identify import identify_frf, write_outputs
     from experiments.cmd_update import update
     from physics.io import read_frf, write_uff58
 
-    frf, exact = simulate(noise=0.01, damping="thesis")
+    frf, exact = thesis.simulated_beam5_test(noise=0.01, damping="thesis")
     uff = out / "beam5_simulated.uff"
     write_uff58(uff, frf, binary=True)
     ident = identify_frf(read_frf(uff), n_modes=4)
