@@ -81,4 +81,4 @@ def add_parser(sub):
     p.add_argument("--max-iter", type=int, default=500, help="iteration limit (non-convergence is an error)")
     p.add_argument("--json", action="store_true",
                    help="print one JSON object: M, C, K, iterations, converged, natural_frequencies_hz, damping_ratios")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, flags={"mass": "--mass", "tol": "--tol", "max_iter": "--max-iter"})

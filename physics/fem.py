@@ -131,7 +131,8 @@ def constrained_dofs(bc: str, n_nodes: int, root_spring: bool = False) -> tuple[
         "clamped-clamped": ("1:y", "1:rz", f"{last}:y", f"{last}:rz"),
     }
     if bc not in table:
-        raise BeamDamageError(f"boundary condition {bc!r} unknown; expected one of {BOUNDARY_CONDITIONS}")
+        raise BeamDamageError(f"boundary condition {bc!r} unknown; expected one of {BOUNDARY_CONDITIONS}",
+                              parameter="bc")
     if root_spring and bc != "clamped-free":
         raise BeamDamageError("a root rotational spring is only defined for the clamped-free beam")
     return table[bc]
@@ -248,7 +249,7 @@ def beam_model(
     FEModel
     """
     if int(n_elements) < 1:
-        raise BeamDamageError(f"n_elements must be >= 1, got {n_elements}")
+        raise BeamDamageError(f"n_elements must be >= 1, got {n_elements}", parameter="n_elements")
     if not np.isfinite(length) or length <= 0:
         raise BeamDamageError(f"length must be a positive number of metres, got {length}")
     n_el = int(n_elements)

@@ -74,7 +74,7 @@ def mass_model_name(name: str, parameter: str = "mass_model") -> str:
     canonical = MASS_MODEL_ALIASES.get(name, name)
     if canonical not in MASS_MODELS:
         raise BeamDamageError(f"{parameter} {name!r} unknown; expected one of {', '.join(MASS_MODELS)} "
-                              f"(or the alias 'reduced' for 'iirs')")
+                              f"(or the alias 'reduced' for 'iirs')", parameter=parameter)
     return canonical
 
 
@@ -116,9 +116,9 @@ def analyst_mass(m_per_length_kg_m, length_m: float, mass_model: str = "iirs", n
     """
     model = mass_model_name(mass_model)
     if int(n_elements) < 1:
-        raise BeamDamageError(f"n_elements must be >= 1, got {n_elements}")
+        raise BeamDamageError(f"n_elements must be >= 1, got {n_elements}", parameter="n_elements")
     if not np.isfinite(length_m) or length_m <= 0:
-        raise BeamDamageError(f"length_m must be a positive number of metres, got {length_m}")
+        raise BeamDamageError(f"length_m must be a positive number of metres, got {length_m}", parameter="length_m")
     mpl = np.asarray(m_per_length_kg_m, dtype=float)
     if model == "lumped":
         return lumped_mass(mpl, length_m / n_elements, int(n_elements))

@@ -102,6 +102,20 @@ def test_update_bad_files_give_one_line_and_exit_2(tmp_path, capsys, content, me
     assert message in err and err.count("\n") == 1 and "Traceback" not in err
 
 
+def test_library_errors_name_the_parameter_and_the_cli_adds_the_flag(capsys):
+    code, out, err = _run(capsys, "model", "--elements", "0")
+    assert code == 2 and out == ""
+    assert err == "beam-damage model: error: --elements: n_elements must be >= 1, got 0\n"
+
+
+def test_update_accepts_the_old_mass_spelling(tmp_path, capsys):
+    f = tmp_path / "modal.json"
+    f.write_text(json.dumps(thesis.beam_state("undamaged")))
+    runs = [json.loads(_run(capsys, "update", "--modal", str(f), "--mass", m, "--json")[1]) for m in ("reduced", "iirs")]
+    assert runs[0]["mass"] == runs[1]["mass"] == "iirs"
+    np.testing.assert_array_equal(runs[0]["K"], runs[1]["K"])
+
+
 def test_usage_errors_exit_2(capsys):
     with pytest.raises(SystemExit) as e:
         cli.main(["model", "--beam", "beam9"])
