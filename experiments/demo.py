@@ -24,7 +24,7 @@ from physics.io import atomic_write_text, modal_data_from_dict
 
 
 def beam5_frf_figure(path: Path) -> dict:
-    """Figure of H_41 (drive DOF 1, response DOF 4) of beam 5's identified models; returns the peaks."""
+    """Figure of H_41 (reference DOF 1, response DOF 4) of beam 5's identified models; returns the peaks."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -51,7 +51,7 @@ def beam5_frf_figure(path: Path) -> dict:
     ax_m.set_ylabel("|H41| (dB re 1 m/N)")
     ax_p.set_ylabel("phase (deg)")
     ax_p.set_xlabel("frequency (Hz)")
-    ax_m.set_title("Beam 5: identified models (Lancaster/Pilkey), drive DOF 1, response DOF 4")
+    ax_m.set_title("Beam 5: identified models (Lancaster/Pilkey), reference DOF 1, response DOF 4")
     ax_m.legend(fontsize=8)
     ax_m.set_xlim(0, f_hz[-1])
     fig.tight_layout()

@@ -51,7 +51,7 @@ def receptance(M, C, K, omega_rad_s, response=None, reference=None):
     M, C, K : ndarray, shape (..., n, n)
     omega_rad_s : ndarray, shape (n_lines,)
     response, reference : sequence of int, optional
-        Response and drive DOF indices.
+        Response and reference (drive) DOF indices.
 
     Returns
     -------

@@ -88,7 +88,8 @@ def beam_preset(name: str) -> BeamPreset:
     try:
         return PRESETS[name]
     except KeyError:
-        raise BeamDamageError(f"unknown beam preset {name!r}; expected one of {sorted(PRESETS)}") from None
+        raise BeamDamageError(f"unknown beam preset {name!r}; expected one of {sorted(PRESETS)}",
+                              parameter="name") from None
 
 
 def cantilever_beta_l(n_modes: int = 4) -> np.ndarray:
@@ -135,18 +136,18 @@ def cantilever_curvature_squared(x_m, length_m: float, mode: int):
     return curvature**2 / (b**4 * length_m)
 
 
-def cantilever_frequencies_hz(EI, m_per_length, length, beta_l=THESIS_BETA_L):
+def cantilever_frequencies_hz(EI_Nm2, mass_per_length_kg_m, length_m, beta_l=THESIS_BETA_L):
     """Closed-form natural frequencies of a uniform cantilever (eq. 4.5).
 
     ``f_n = (beta l_n)^2 / (2 pi l^2) sqrt(EI / m)``
 
     Parameters
     ----------
-    EI : float
+    EI_Nm2 : float
         Flexural rigidity (N m^2).
-    m_per_length : float
+    mass_per_length_kg_m : float
         Mass per unit length (kg/m).
-    length : float
+    length_m : float
         Cantilever length (m).
     beta_l : sequence of float
         Mode constants; the thesis's 5-digit values by default, or
@@ -157,7 +158,7 @@ def cantilever_frequencies_hz(EI, m_per_length, length, beta_l=THESIS_BETA_L):
     ndarray, shape (len(beta_l),)   (Hz)
     """
     bl = np.asarray(beta_l, dtype=float)
-    return bl**2 / (2 * np.pi * length**2) * np.sqrt(EI / m_per_length)
+    return bl**2 / (2 * np.pi * length_m**2) * np.sqrt(EI_Nm2 / mass_per_length_kg_m)
 
 
 @dataclass(frozen=True)
@@ -166,20 +167,24 @@ class StaticTest:
 
     Attributes
     ----------
-    EI : float
-        Equivalent flexural rigidity (N m^2), eq. 4.3.
-    slope : float
-        Least-squares slope of load over deflection (N/m).
-    intercept : float
-        Least-squares intercept (N).
+    EI_Nm2 : float
+        Equivalent flexural rigidity (N m^2), eq. 4.3 (old name ``EI``).
+    slope_N_m : float
+        Least-squares slope of load over deflection (N/m) (old name ``slope``).
+    intercept_N : float
+        Least-squares intercept (N) (old name ``intercept``).
     r_squared : float
         Coefficient of determination, eq. 4.4.
     """
 
-    EI: float
-    slope: float
-    intercept: float
+    EI_Nm2: float
+    slope_N_m: float
+    intercept_N: float
     r_squared: float
+
+    EI = property(lambda self: self.EI_Nm2, doc="Alias of ``EI_Nm2``.")
+    slope = property(lambda self: self.slope_N_m, doc="Alias of ``slope_N_m``.")
+    intercept = property(lambda self: self.intercept_N, doc="Alias of ``intercept_N``.")
 
 
 def equivalent_ei(loads_n, deflections_m, x_m: float, a_m: float) -> StaticTest:
@@ -204,36 +209,40 @@ def equivalent_ei(loads_n, deflections_m, x_m: float, a_m: float) -> StaticTest:
     if P.shape != d.shape or P.ndim != 1 or P.size < 2 or not (np.all(np.isfinite(P)) and np.all(np.isfinite(d))):
         raise ShapeError("loads_n and deflections_m must be finite 1-D arrays of equal length >= 2")
     if not 0 < x_m <= a_m:
-        raise BeamDamageError(f"need 0 < x_m <= a_m, got x_m={x_m}, a_m={a_m}")
+        raise BeamDamageError(f"need 0 < x_m <= a_m, got x_m={x_m}, a_m={a_m}", parameter="x_m")
     slope, intercept = np.polyfit(d, P, 1)
     fit = slope * d + intercept
     r2 = 1.0 - np.sum((P - fit) ** 2) / (np.sum(P**2) - np.sum(P) ** 2 / P.size)
     return StaticTest(slope * x_m**2 * (3 * a_m - x_m) / 6.0, float(slope), float(intercept), float(r2))
 
 
-def layered_ei(width, interfaces, moduli):
+def layered_ei(width_m, interfaces_m, moduli_pa):
     """Flexural rigidity of a section symmetric about its neutral axis (eq. 4.1).
 
     ``EI = (2b/3) sum_k E_k (d_{k+1}^3 - d_k^3)``
 
     Parameters
     ----------
-    width : float
+    width_m : float
         Section width ``b`` (m).
-    interfaces : array_like, shape (n_layers + 1,)
+    interfaces_m : array_like, shape (n_layers + 1,)
         Distances ``d_k`` from the neutral axis to the layer interfaces (m),
         ascending from 0 (the mid-plane) to half the thickness.
-    moduli : array_like, shape (n_layers,)
+    moduli_pa : array_like, shape (n_layers,)
         Young's modulus of each layer ``E_k`` (Pa), from the mid-plane out.
+
+    Returns
+    -------
+    float   (N m^2)
     """
-    d = np.asarray(interfaces, dtype=float)
-    E = np.asarray(moduli, dtype=float)
+    d = np.asarray(interfaces_m, dtype=float)
+    E = np.asarray(moduli_pa, dtype=float)
     if d.ndim != 1 or E.shape != (d.size - 1,) or np.any(np.diff(d) < 0):
-        raise ShapeError("interfaces must ascend and have one more entry than moduli")
-    return 2 * width / 3 * np.sum(E * (d[1:] ** 3 - d[:-1] ** 3))
+        raise ShapeError("interfaces_m must ascend and have one more entry than moduli_pa", parameter="interfaces_m")
+    return 2 * width_m / 3 * np.sum(E * (d[1:] ** 3 - d[:-1] ** 3))
 
 
-def section_ei(width, z_bottom, z_top, moduli):
+def section_ei(width_m, z_bottom_m, z_top_m, moduli_pa):
     """Flexural rigidity of a general (unsymmetric) layered section.
 
     The neutral axis sits at the modulus-weighted centroid
@@ -244,20 +253,20 @@ def section_ei(width, z_bottom, z_top, moduli):
 
     Parameters
     ----------
-    width : float or ndarray
+    width_m : float or ndarray
         Section width (m).
-    z_bottom, z_top : ndarray, shape (..., n_layers)
+    z_bottom_m, z_top_m : ndarray, shape (..., n_layers)
         Layer bounds (m) measured from the bottom face.
-    moduli : ndarray, shape (..., n_layers)
+    moduli_pa : ndarray, shape (..., n_layers)
         Young's moduli (Pa).
 
     Returns
     -------
     ndarray, shape (...)   (N m^2)
     """
-    zb = np.asarray(z_bottom, dtype=float)
-    zt = np.asarray(z_top, dtype=float)
-    E = np.asarray(moduli, dtype=float)
+    zb = np.asarray(z_bottom_m, dtype=float)
+    zt = np.asarray(z_top_m, dtype=float)
+    E = np.asarray(moduli_pa, dtype=float)
     ea = E * (zt - zb)
     z_na = np.sum(ea * 0.5 * (zt + zb), axis=-1, keepdims=True) / np.sum(ea, axis=-1, keepdims=True)
-    return np.asarray(width) / 3.0 * np.sum(E * ((zt - z_na) ** 3 - (zb - z_na) ** 3), axis=-1)
+    return np.asarray(width_m) / 3.0 * np.sum(E * ((zt - z_na) ** 3 - (zb - z_na) ** 3), axis=-1)

@@ -26,7 +26,7 @@ def test_static_test_recovers_ei_and_r_squared():
     loads = np.linspace(0.5, 5.0, 10)
     defl = loads * x**2 * (3 * a - x) / (6 * EI)  # eq. 4.2
     res = properties.equivalent_ei(loads, defl, x, a)
-    assert res.EI == pytest.approx(EI, rel=1e-12)
+    assert res.EI_Nm2 == res.EI == pytest.approx(EI, rel=1e-12)
     assert res.r_squared == pytest.approx(1.0, abs=1e-12)
     noisy = properties.equivalent_ei(loads, defl * (1 + 0.02 * np.sin(np.arange(10))), x, a)
     assert 0.99 < noisy.r_squared < 1.0
