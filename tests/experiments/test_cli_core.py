@@ -19,7 +19,7 @@ def test_validate_passes_and_prints_the_documented_json(capsys):
     code, out, _ = _run(capsys, "validate", "--json")
     res = json.loads(out)
     assert code == 0 and res["passed"] is True
-    assert len(res["checks"]) >= 30
+    assert len(res["checks"]) == 38
     for c in res["checks"]:
         assert {"name", "thesis", "reproduced", "rel_error", "tolerance", "passed"} <= set(c)
         assert c["passed"] and c["rel_error"] <= c["tolerance"]
