@@ -226,6 +226,8 @@ def receptance_state_space(M, C, K, omega_rad_s, response=None, reference=None, 
     pairs = upper.sum(axis=-1) == n
     order = np.argsort(np.where(upper, mu.imag, np.inf), axis=-1)[:, :n]
     shape = batch + (o.size, r.size, w.size)
+    if out is not None and (out.shape != shape or not out.flags.c_contiguous or not np.iscomplexobj(out)):
+        raise ShapeError(f"out must be a C-contiguous complex array of shape {shape}, got {out.shape}")
     if pairs.all() and good.all():  # the usual case: straight into the output
         dest = None if out is None else out.reshape(-1, o.size * r.size, w.size)
         H = pole_residue(np.take_along_axis(mu, order, axis=-1), np.take_along_axis(res, order[:, None, :], axis=-1),

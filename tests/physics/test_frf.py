@@ -128,6 +128,8 @@ def test_state_space_handles_overdamped_and_nan_members_like_direct_inversion():
         out = frf.receptance_state_space(M, C, K, w, [0, 3], [1], out=store)
     assert out is store
     np.testing.assert_allclose(store[:2], H[:2, :, :1], rtol=1e-12)
+    with pytest.raises(BeamDamageError, match="C-contiguous"):  # a strided view would be written as a copy
+        frf.receptance_state_space(M, C, K, w, [0, 3], [1], out=np.empty((3, 2, 2, 200), complex)[:, :, :1])
 
 
 def test_kind_conversion_rejects_0_rad_s_towards_receptance_and_names_the_parameter():
