@@ -31,7 +31,8 @@ from physics.modal import (ComplexModes, complex_modes, eigenvalues_from_modal, 
 from physics.properties import (CANTILEVER_BETA_L, PRESETS, BeamPreset, beam_preset, cantilever_curvature_squared,
                                 cantilever_frequencies_hz)
 from physics.reduction import Reduction, guyan, iirs, irs
-from physics.updating import MASS_MODELS, UpdateResult, analyst_mass, lancaster_direct, mass_model_name, pilkey
+from physics.updating import (MASS_MODELS, UpdateResult, analyst_mass, lancaster_direct, mass_model_name, pilkey,
+                              reduced_mass)
 
 __all__ = [
     # modules
@@ -52,5 +53,5 @@ __all__ = [
     "FRF_KINDS", "FRF_UNITS", "PoleResidues", "convert_frf", "pole_residue", "poles_and_residues", "receptance",
     "receptance_modal", "receptance_state_space", "FRFEstimate", "estimate_frf",
     # updating
-    "MASS_MODELS", "UpdateResult", "analyst_mass", "lancaster_direct", "mass_model_name", "pilkey",
+    "MASS_MODELS", "UpdateResult", "analyst_mass", "lancaster_direct", "mass_model_name", "pilkey", "reduced_mass",
 ]
