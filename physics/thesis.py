@@ -1,6 +1,6 @@
 """The thesis's printed numbers as package data (``physics/data/thesis/*.json``).
 
-Fixtures (transcribed from /work/shared/thesis, see each file's ``source`` notes):
+Fixtures (transcribed from the thesis; the files carry ``source`` and ``note`` fields):
 
 * ``beams`` - geometry, Table 4.1 specimen data, beam 5's measured modes
   (Tables 4.5, 4.6), its IIRS-reduced matrices and identified models (Chapter Six);
