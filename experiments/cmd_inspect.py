@@ -57,7 +57,7 @@ def add_parser(subparsers):
         "inspect", help="summarise a generated dataset and plot labels, shift-vs-position and FRF overlays",
         description="Summary of a dataset directory (counts, convergence, label ranges), label histograms, the "
                     "frequency shift of each mode versus slit position against the mode's curvature squared "
-                    "(single-slit samples), and FRF overlays of damaged vs reference.")
+                    "(single-slit samples), and FRF overlays of the current state vs the baseline.")
     p.add_argument("dir", help="dataset directory")
     p.add_argument("--out", help="directory for figures and tables (default DIR/inspect)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
@@ -116,10 +116,10 @@ def run(args) -> dict:
     # FRF overlays
     if ds.shards:
         w = ds.omega_rad_s
-        fm, fu = ds.shard_arrays("frf_measured")[0], ds.shard_arrays("frf_updated")[0]
+        fm, fu = ds.frf("measured", rows=[0]), ds.frf("updated", rows=[0])
         fig, axs = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
         for ax, arr, name in ((axs[0], fm, "measured (truth + noise)"), (axs[1], fu, "updated model")):
-            for s, st in ((0, "reference"), (1, "damaged")):
+            for s, st in ((0, "baseline"), (1, "current")):
                 ax.semilogy(w / (2 * np.pi), np.abs(arr[0, s, 3]), label=f"{st}")
             ax.set_title(f"sample 0, {name}: response node 5 / drive node 2")
             ax.set_ylabel("|H| (m/N)")
