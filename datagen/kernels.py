@@ -42,7 +42,7 @@ def hashed_normal(seed, k):  # pragma: no cover - compiled
     return box_muller(u1, u2)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def pair_frf_kernel(lam, residues, omega_rad_s, seeds, level, floor, out):  # pragma: no cover - compiled
     """``out[i, s, f] = sum_j a_sj/(i w_f - lam_j) + conj(a_sj)/(i w_f - conj(lam_j))``, optionally noisy.
 

@@ -30,6 +30,8 @@ def frf_features(H, features: str = "complex") -> np.ndarray:
     ``"log_magnitude"``: ``log10 |H|`` (..., F) (log10 of m/N).
     """
     if features == "complex":
+        if H.dtype in (np.complex64, np.complex128) and H.flags.c_contiguous:  # (re, im) pairs in memory: a view
+            return H.view(np.float32 if H.dtype == np.complex64 else np.float64).reshape(H.shape + (2,))
         return np.stack([H.real, H.imag], axis=-1)
     if features == "log_magnitude":
         with np.errstate(divide="ignore"):
