@@ -356,7 +356,7 @@ def measure_modes(setup, inp, lam4, psi4):
     f_m = f * (1 + sig["frequency_noise"] * scale_by * inp.n_freq)
     z_m = z * (1 + sig["damping_noise"] * scale_by * inp.n_zeta)
     lam_m = eigenvalues_from_modal(f_m, z_m)
-    scale = np.max(np.abs(psi4), axis=-2, keepdims=True) * sig["shape_noise"] * scale_by
+    scale = np.max(np.abs(psi4), axis=-2, keepdims=True) * sig["shape_noise"] * np.expand_dims(scale_by, -1)
     noise = (inp.n_shape[..., 0] + 1j * inp.n_shape[..., 1]) / np.sqrt(2)
     return lam_m, psi4 + scale * noise
 

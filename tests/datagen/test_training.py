@@ -69,3 +69,23 @@ def test_slit_drop_label_ignores_day_to_day_changes():
     db = simulate_batch(b, ib)["slit_frequency_drop"]
     np.testing.assert_allclose(da, db, rtol=1e-4, atol=1e-8)
     assert (da > 0).all()
+
+
+def test_calibrated_modal_noise_scales_with_each_samples_frf_noise_level():
+    cfg = load_config("training")
+    cfg["measurement"].update(frequency_noise=[0.02, 0.01, 0.01, 0.01], damping_noise=[3.0, 2.0, 1.0, 1.0],
+                              shape_noise=[0.5, 0.5, 0.5, 0.5])
+    setup = get_setup(merge(cfg))
+    inp = draw_batch(np.random.default_rng(5), 4000, setup)
+    from datagen.pipeline import measure_modes
+
+    lam = -0.002 * np.full((4000, 2, 4), 100.0) + 100j
+    psi = np.ones((4000, 2, 4, 4), complex)
+    lam_m, psi_m = measure_modes(setup, inp, lam, psi)
+    level = inp.noise_level[:, None]
+    ef = (np.abs(lam_m) / np.abs(lam) - 1)[:, :, 0] / level          # mode 1: std 0.02 per unit level
+    ez = (-lam_m.real / np.abs(lam_m) / 0.002 - 1)[:, :, 2] / level  # mode 3: std 1.0 per unit level
+    es = (psi_m - psi)[:, :, :, 1] / level[..., None]                # mode 2 shapes: complex std 0.5
+    assert np.std(ef) == pytest.approx(0.02, rel=0.05)
+    assert np.std(ez) == pytest.approx(1.0, rel=0.05)
+    assert np.sqrt(np.mean(np.abs(es) ** 2)) == pytest.approx(0.5, rel=0.05)
