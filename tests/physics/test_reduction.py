@@ -1,23 +1,20 @@
-import json
-from importlib import resources
-
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from physics import fem, modal, properties, reduction
+from physics import fem, modal, properties, reduction, thesis
 from physics.errors import BeamDamageError, ConvergenceError
 
 
 def _beam5():
     p = properties.beam_preset("beam5")
-    model = fem.beam_model(4, p.length, p.EI, p.m_per_length)
+    model = fem.beam_model(4, p.length_m, p.EI_Nm2, p.mass_per_length_kg_m)
     return model, model.index(p.masters)
 
 
 def test_iirs_reproduces_table_4_1():
-    fixture = json.loads(resources.files("experiments").joinpath("data/thesis/beams.json").read_text())
+    fixture = thesis.load("beams")
     ref = fixture["beams"]["5"]["iirs_reduced"]
     model, masters = _beam5()
     red = reduction.iirs(model.M, model.K, masters)
