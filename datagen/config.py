@@ -16,7 +16,8 @@ import math
 import tomllib
 from pathlib import Path
 
-from physics.errors import ConfigError
+from physics.errors import BeamDamageError, ConfigError
+from physics.updating import mass_model_name
 
 #: Default configuration (SI units). See README "Generating datasets".
 DEFAULTS: dict = {
@@ -175,8 +176,10 @@ def validate(cfg: dict) -> dict:
     if meas["band_rad_s"][0] >= meas["band_rad_s"][1]:
         raise ConfigError("config key 'measurement.band_rad_s' must have low < high")
     meas["lines"] = _num("measurement.lines", meas["lines"], lo=2, hi=200000, integer=True)
-    if up["mass_model"] not in ("iirs", "lumped"):
-        raise ConfigError(f"config key 'updating.mass_model' must be 'iirs' or 'lumped', got {up['mass_model']!r}")
+    try:  # one mass-model name set (physics.updating.MASS_MODELS); "reduced" is accepted for "iirs"
+        up["mass_model"] = mass_model_name(up["mass_model"], parameter="updating.mass_model")
+    except BeamDamageError as exc:
+        raise ConfigError(f"config key 'updating.mass_model': {exc}") from None
     up["tol"] = _num("updating.tol", up["tol"], lo=0, hi=1e-2, strict_lo=True)
     up["max_iter"] = _num("updating.max_iter", up["max_iter"], lo=1, hi=100000, integer=True)
     sol["projection_modes"] = _num("solver.projection_modes", sol["projection_modes"], lo=4, hi=64, integer=True)

@@ -11,22 +11,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from datagen.kernels import noise_kernel
-from datagen.pipeline import N_MEAS, BatchInputs, Setup, analyst_mass, measure_modes, projected_modes, \
-    slit_frequency_drop, truth_matrices, update_models
-from datagen.solvers import full_complex_modes, gen_eigh, pole_residues, state_space_frf
-from datagen.synth import state_seeds
-
-
-def add_noise(H, noise_seed, noise_level, noise_floor):
-    """Measured FRFs (B,2,S,F) from noise-free ones with the noise model of :mod:`datagen.synth`."""
-    B = H.shape[0]
-    out = np.empty(H.shape, complex)
-    rep = lambda a: np.ascontiguousarray(np.repeat(np.asarray(a, float)[:, None], 2, 1).reshape(-1))  # noqa: E731
-    noise_kernel(np.ascontiguousarray(H, complex).reshape(2 * B, H.shape[-2], H.shape[-1]),
-                 state_seeds(noise_seed).reshape(-1), rep(noise_level), rep(noise_floor),
-                 out.reshape(2 * B, H.shape[-2], H.shape[-1]))
-    return out
+from datagen.pipeline import N_MEAS, BatchInputs, Setup, measure_modes, projected_modes, slit_frequency_drop, \
+    truth_matrices, update_models
+from datagen.solvers import pole_residues
+from datagen.synth import add_noise
+from physics.frf import receptance, receptance_modal, receptance_state_space
+from physics.modal import underdamped_modes, undamped_modes
+from physics.updating import analyst_mass
 
 
 def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
@@ -45,34 +36,32 @@ def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
     dict of ndarray: the keys of ``simulate_chunk`` plus ``frf_measured`` and
     ``frf_updated`` (B, 2, 4, F) complex128.
     """
-    from physics.frf import receptance, receptance_modal
-
     w = setup.omega_rad_s
     results = []
     for i in range(len(inp)):
         s = inp.take(slice(i, i + 1))
         M, K, dC, dK = truth_matrices(setup, s)
         if modes == "full":
-            w2r, phir = gen_eigh(M[0], K[0, 0])
+            wr, phir = undamped_modes(M[0], K[0, 0])
             p = setup.p
-            d = 2 * setup.zeta * np.sqrt(w2r[:p]) * s.damping_scale[0]
+            d = 2 * setup.zeta * wr[:p] * s.damping_scale[0]
             C0 = M[0] @ (phir[:, :p] * d) @ phir[:, :p].T @ M[0]
             lam_l, psi_l, H_l = [], [], []
             for st in range(2):
                 C = C0 + (dC[0] if st else 0.0)
-                lam_s, psi_s = full_complex_modes(M[0], C, K[0, st], setup.p)
-                lam_l.append(lam_s)
-                psi_l.append(psi_s[setup.meas])
-                H_l.append(state_space_frf(M[0], C, K[0, st], w, setup.meas, setup.meas[0]))
+                cm = underdamped_modes(M[0], C, K[0, st], setup.p)
+                lam_l.append(cm.eigenvalues)
+                psi_l.append(cm.eigenvectors[setup.meas])
+                H_l.append(receptance_state_space(M[0], C, K[0, st], w, setup.meas, [setup.meas[0]])[:, 0, :])
             lam, psi, H = np.stack(lam_l)[None], np.stack(psi_l)[None], np.stack(H_l)[None]
-            w2 = np.stack([gen_eigh(M[0], K[0, st])[0][:setup.p] for st in range(2)])[None]
+            w2 = np.stack([undamped_modes(M[0], K[0, st])[0][:setup.p] ** 2 for st in range(2)])[None]
         elif modes == "projection":
             lam, psi, w2 = projected_modes(setup, s, M, K, dC)
             H = receptance_modal(lam, psi, w, np.arange(N_MEAS), [0])[..., 0, :]
         else:
             raise ValueError(f"modes must be 'full' or 'projection', got {modes!r}")
         lam_m, psi_m = measure_modes(setup, s, lam[..., :N_MEAS], psi[..., :N_MEAS])
-        Ma = analyst_mass(setup, s.EI, s.m_per_length)
+        Ma = analyst_mass(s.m_per_length, setup.length_m, setup.cfg["updating"]["mass_model"])
         up = update_models(setup, Ma, lam_m, psi_m, batched=False)
         poles, res = pole_residues(Ma[:, None], up["C"], up["K"], np.arange(N_MEAS), 0)
         with np.errstate(all="ignore"):

@@ -42,13 +42,12 @@ import json
 import numpy as np
 
 from datagen.damage import draw_slits, slit_corrections
-from datagen.solvers import gen_eigh, light_damping_modes, pole_residues, ritz_modes
+from datagen.solvers import light_damping_modes, pole_residues, ritz_modes
 from datagen.specimen import BeamPreset, SectionLayout, beam_preset, draw_specimens, slit_section_ei
 from physics.errors import ConfigError
-from physics.fem import assemble, beam_model, element_mass, element_stiffness, lumped_mass
-from physics.modal import eigenvalues_from_modal, modal_parameters
-from physics.reduction import iirs
-from physics.updating import pilkey
+from physics.fem import assemble, element_mass, element_stiffness, kept_dofs
+from physics.modal import eigenvalues_from_modal, modal_parameters, undamped_modes
+from physics.updating import analyst_mass, pilkey
 
 N_MEAS = 4          # measured translational DOFs (thesis nodes 2..5); FRFs are driven at the first
 
@@ -92,7 +91,7 @@ class Setup:
 
     @property
     def length_m(self) -> float:
-        return self.preset.length
+        return self.preset.length_m
 
     @property
     def p(self) -> int:
@@ -109,29 +108,29 @@ def build_setup(cfg: dict) -> Setup:
     """Precompute the nominal truth matrices, measured DOFs, start basis and FRF grid."""
     preset = beam_preset(cfg["preset"])
     sec = cfg["section"]
-    layout = SectionLayout.matching(preset.EI, preset.width, preset.thickness, sec["face_thickness_m"],
+    layout = SectionLayout.matching(preset.EI_Nm2, preset.width_m, preset.thickness_m, sec["face_thickness_m"],
                                     sec["core_modulus_pa"])
-    if cfg["damage"]["depth_m"][1] >= preset.thickness - sec["face_thickness_m"]:
+    if cfg["damage"]["depth_m"][1] >= preset.thickness_m - sec["face_thickness_m"]:
         raise ConfigError(f"config key 'damage.depth_m' must stay below the thickness minus the bottom face "
-                          f"({preset.thickness - sec['face_thickness_m']:g} m)")
+                          f"({preset.thickness_m - sec['face_thickness_m']:g} m)")
     n_el = cfg["mesh"]["truth_elements"]
-    le = preset.length / n_el
+    le = preset.length_m / n_el
     spring = bool(cfg["specimen"]["root_spring_relative"])
     if not spring and any(cfg["specimen"]["root_spring_change"]):
         raise ConfigError("config key 'specimen.root_spring_change' needs a root spring "
                           "('specimen.root_spring_relative' is empty: rigid clamp)")
     K_full = assemble(np.broadcast_to(element_stiffness(1.0, le), (n_el, 4, 4)))
     M_full = assemble(np.broadcast_to(element_mass(1.0, le), (n_el, 4, 4)))
-    keep = np.arange(1 if spring else 2, 2 * (n_el + 1))   # clamped root: 1:y (and 1:rz unless sprung) removed
+    keep, names = kept_dofs(n_el + 1, "clamped-free", root_spring=spring)
     K0, M0 = K_full[np.ix_(keep, keep)], M_full[np.ix_(keep, keep)]
     step = n_el // 4
-    meas = np.searchsorted(keep, [2 * step * q for q in range(1, 5)])   # global index of node (1 + step q):y
+    meas = np.array([names.index(f"{1 + step * q}:y") for q in range(1, 5)])
     p = cfg["solver"]["projection_modes"]
     Kn = K0.copy()
     if spring:
         lo, hi = cfg["specimen"]["root_spring_relative"]
-        Kn[0, 0] += np.sqrt(lo * hi) / preset.length
-    _, v = gen_eigh(M0, Kn)
+        Kn[0, 0] += np.sqrt(lo * hi) / preset.length_m
+    _, v = undamped_modes(M0, Kn)
     zr = np.asarray(cfg["specimen"]["damping_ratios"], float)
     zeta = np.concatenate([zr, np.full(max(p - zr.size, 0), zr[-1])])[:p]
     lo, hi = cfg["measurement"]["band_rad_s"]
@@ -312,32 +311,6 @@ def slit_frequency_drop(setup: Setup, inp: BatchInputs, K, dK, omega2):
     return np.max(1.0 - np.sqrt(w2[:, 1, :N_MEAS] / w2[:, 0, :N_MEAS]), axis=-1)
 
 
-@lru_cache(maxsize=8)
-def _unit_iirs_mass(length_m: float) -> np.ndarray:
-    """IIRS-reduced mass of the 4-element clamped beam with ``EI = 1`` and ``m = 1``."""
-    model = beam_model(4, length_m, 1.0, 1.0)
-    red = iirs(model.M, model.K, model.index(["2:y", "3:y", "4:y", "5:y"]))
-    return 0.5 * (red.M + red.M.T)
-
-
-def analyst_mass(setup: Setup, ei, mpl):
-    """Mass matrix the updating trusts: IIRS of the 4-element clamped FE model, or eq. 4.6 (batched).
-
-    For a uniform beam ``K = EI K1`` and ``M = m M1``: the IIRS transformation
-    (eq. 3.42) only sees ``M_R^-1 K_R`` next to ``K_ss^-1 M_s.``, where the
-    factors ``EI`` and ``m`` cancel, so the reduced mass is exactly ``m`` times
-    the reduced unit mass (tested against a direct IIRS).
-
-    Returns
-    -------
-    ndarray, shape (B, 4, 4)   kg
-    """
-    L = setup.length_m
-    if setup.cfg["updating"]["mass_model"] == "lumped":
-        return lumped_mass(mpl, L / 4)
-    return np.asarray(mpl, float)[:, None, None] * _unit_iirs_mass(float(L))
-
-
 # --------------------------------------------------------------------------- measurement + updating
 def measure_modes(setup, inp, lam4, psi4):
     """Noisy modal data from noise-free poles (B,2,4) and shapes (B,2,4,4): the modal-noise shortcut.
@@ -429,7 +402,7 @@ def simulate_chunk(setup: Setup, inp: BatchInputs) -> dict:
     M, K, dC, dK = truth_matrices(setup, inp)
     lam, psi, w2 = projected_modes(setup, inp, M, K, dC)
     lam_m, psi_m = measure_modes(setup, inp, lam[..., :N_MEAS], psi[..., :N_MEAS])
-    Ma = analyst_mass(setup, inp.EI, inp.m_per_length)
+    Ma = analyst_mass(inp.m_per_length, setup.length_m, setup.cfg["updating"]["mass_model"])
     up = update_models(setup, Ma, lam_m, psi_m)
     poles, res = pole_residues(Ma[:, None], up["C"], up["K"], np.arange(N_MEAS), 0)
     return {"truth_poles": lam, "truth_shapes": psi, "eigenvalues_measured": lam_m, "eigenvectors_measured": psi_m,

@@ -120,12 +120,12 @@ def draw_specimens(rng: np.random.Generator, n: int, cfg: dict, preset: BeamPres
     """
     sp = cfg["specimen"]
     u = rng.random((n, 4))
-    ei = preset.EI * (1 + sp["ei_band"] * (2 * u[:, 0] - 1))
-    mpl = preset.m_per_length * (1 + sp["mass_band"] * (2 * u[:, 1] - 1))
+    ei = preset.EI_Nm2 * (1 + sp["ei_band"] * (2 * u[:, 0] - 1))
+    mpl = preset.mass_per_length_kg_m * (1 + sp["mass_band"] * (2 * u[:, 1] - 1))
     dsc = 1 + sp["damping_band"] * (2 * u[:, 2] - 1)
     if sp["root_spring_relative"]:
         lo, hi = np.log(sp["root_spring_relative"])
-        kr = np.exp(lo + (hi - lo) * u[:, 3]) * ei / preset.length
+        kr = np.exp(lo + (hi - lo) * u[:, 3]) * ei / preset.length_m
     else:
         kr = np.full(n, np.inf)
     return {"EI": ei, "m_per_length": mpl, "damping_scale": dsc, "root_spring": kr}

@@ -6,8 +6,9 @@ measured DOF, with measurement noise
 
     ``H_meas = H (1 + level z1) + floor max_f|H| z2``   (per response FRF),
 
-``z1, z2`` unit circular complex Gaussian numbers drawn from a counter-based
-stream (:func:`datagen.kernels.hashed_normal`) keyed by the sample's
+``H`` from :func:`physics.frf.pole_residue` (float64), ``z1, z2`` unit
+circular complex Gaussian numbers drawn from a counter-based stream
+(:func:`datagen.kernels.noise_kernel`) keyed by the sample's
 ``noise_seed`` and the state, so a sample's noise never depends on which
 other samples are read with it, on the worker or on the order.
 
@@ -20,7 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from datagen.solvers import pair_frf, state_space_frf
+from datagen.kernels import noise_kernel
+from physics.frf import pole_residue, receptance_state_space
 
 FRF_KINDS = ("measured", "updated")
 
@@ -38,26 +40,34 @@ def state_seeds(noise_seed):
         return np.stack([s, s + _STATE_KEY], axis=-1)
 
 
+def add_noise(H, noise_seed, noise_level, noise_floor, out=None):
+    """Measured FRFs from noise-free ones (n, 2, S, F), with the sample's (n,) noise seed, level and floor."""
+    n, _, S, F = H.shape
+    out = np.empty(H.shape, complex) if out is None else out
+    rep = lambda a: np.ascontiguousarray(np.repeat(np.asarray(a, float)[:, None], 2, 1).reshape(-1))  # noqa: E731
+    noise_kernel(np.ascontiguousarray(H, complex).reshape(2 * n, S, F), state_seeds(noise_seed).reshape(-1),
+                 rep(noise_level), rep(noise_floor), out.reshape(2 * n, S, F))
+    return out
+
+
 def measured_frf(a: dict, omega_rad_s, dtype=np.complex64):
     """Noisy measured receptances (m/N), complex, shape (n, 2, 4, F), from the arrays of :data:`SOURCES`."""
     lam, psi = a["truth_poles"], a["truth_shapes"]
-    out = np.empty(psi.shape[:-1] + (np.size(omega_rad_s),), dtype)
-    level = np.repeat(np.asarray(a["noise_level"], float)[:, None], 2, axis=1)
-    floor = np.repeat(np.asarray(a["noise_floor"], float)[:, None], 2, axis=1)
-    pair_frf(lam, psi * psi[..., :1, :], omega_rad_s, out, (state_seeds(a["noise_seed"]), level, floor))
-    return out
+    H = pole_residue(lam, psi * psi[..., :1, :], omega_rad_s)
+    return add_noise(H, a["noise_seed"], a["noise_level"], a["noise_floor"],
+                     np.empty(H.shape, dtype))
 
 
 def updated_frf(a: dict, omega_rad_s, dtype=np.complex64):
     """Receptances (m/N) of the updated models, complex, shape (n, 2, 4, F), from the arrays of :data:`SOURCES`."""
     lam, R = a["updated_poles"], a["updated_residues"]
     out = np.empty(R.shape[:-1] + (np.size(omega_rad_s),), dtype)
-    pair_frf(lam, R, omega_rad_s, out)
+    pole_residue(lam, R, omega_rad_s, out=out)
     bad = np.isnan(lam).any(axis=-1)
     if bad.any():  # real poles or a diverged update: the general route on the stored matrices
         M = np.broadcast_to(np.asarray(a["M_updated"])[:, None], a["C_updated"].shape)
-        out[bad] = state_space_frf(M[bad], a["C_updated"][bad], a["K_updated"][bad], omega_rad_s,
-                                   np.arange(R.shape[-2]), 0)
+        out[bad] = receptance_state_space(M[bad], a["C_updated"][bad], a["K_updated"][bad], omega_rad_s,
+                                          np.arange(R.shape[-2]), [0])[..., 0, :]
     return out
 
 

@@ -118,11 +118,11 @@ def test_frf_on_read_is_identical_to_store_frf_and_independent_of_row_selection(
 
 def test_measured_frf_noise_matches_its_level(reference):
     """The measured FRF deviates from the noise-free truth by the recorded relative level (0.5%)."""
-    from datagen.solvers import pair_frf
+    from physics.frf import pole_residue
 
     ds = Dataset(reference)
     lam, psi = ds.array("truth_poles"), ds.array("truth_shapes")
-    clean = pair_frf(lam, psi * psi[..., :1, :], ds.omega_rad_s)
+    clean = pole_residue(lam, psi * psi[..., :1, :], ds.omega_rad_s)
     rel = (ds.frf("measured").astype(complex) - clean) / clean
     level = ds.table(["noise_level"])["noise_level"].to_numpy()
     assert np.allclose(level, 0.005)
