@@ -73,5 +73,11 @@ def test_training_config_by_name_and_robustness_file_on_top(tmp_path, capsys):
     r = load_config(robust)
     assert r["damage"]["n_slits"] == [2, 3] and r["damage"]["intact_fraction"] == 0.25
     assert r["measurement"]["frf_noise"] == [0.03, 0.1] and r["measurement"]["frf_noise_floor"] == [1e-4, 1e-3]
+    from datagen.config import named_configs
+
+    assert {"training", "robust_slits", "robust_noise", "robust_environment"} <= set(named_configs())
+    assert load_config("robust_slits")["damage"]["n_slits"] == [2, 3]
+    assert load_config("robust_noise")["measurement"]["frf_noise"] == [0.03, 0.1]
+    assert load_config("robust_environment")["specimen"]["root_spring_change"] == [-0.25, 0.25]
     assert main(["generate", "--n", "3", "--out", str(tmp_path / "ds"), "--config", "trainin"]) == 2
     assert "trainin" in capsys.readouterr().err
