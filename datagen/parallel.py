@@ -12,7 +12,8 @@ from __future__ import annotations
 import json
 import math
 import os
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from collections import deque
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from multiprocessing import get_context
 from pathlib import Path
 
@@ -49,6 +50,40 @@ def compute_shard(cfg_json: str, seed: int, index: int, first_id: int, n: int):
 
 def _init_worker():
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+
+def _run_local_pool(todo, workers, record, cfg_json, seed):
+    """Compute shards in ``workers - 1`` spawned processes and in this one, which also writes them.
+
+    The calling process is warm (imports, compiled kernels) while a spawned
+    worker needs seconds to start, so it computes shards itself whenever no
+    worker result is waiting: no core idles during start-up, and writing
+    shards overlaps the workers' computation. Shard contents do not depend on
+    which process computed them.
+    """
+    pending = deque(todo)
+    with ProcessPoolExecutor(max_workers=workers - 1, mp_context=get_context("spawn"),
+                             initializer=_init_worker) as pool:
+        futs = {}
+
+        def top_up():
+            while pending and len(futs) < 2 * (workers - 1):
+                i, f, k = pending.popleft()
+                futs[pool.submit(compute_shard, cfg_json, seed, i, f, k)] = i
+
+        top_up()
+        while futs or pending:
+            ready = [fut for fut in futs if fut.done()]
+            for fut in ready:
+                record(futs.pop(fut), *fut.result())
+            top_up()
+            if ready:
+                continue
+            if pending:
+                i, f, k = pending.pop()  # from the end: the workers keep the front of the queue
+                record(i, *compute_shard(cfg_json, seed, i, f, k))
+            else:
+                wait(futs, return_when=FIRST_COMPLETED)
 
 
 def _schema() -> dict:
@@ -147,11 +182,7 @@ def generate(root, cfg: dict, *, n: int, seed: int = 0, workers: int = 1, schedu
             for i, f, k in todo:
                 record(i, *compute_shard(cfg_json, seed, i, f, k))
         else:
-            with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"),
-                                     initializer=_init_worker) as pool:
-                futs = {pool.submit(compute_shard, cfg_json, seed, i, f, k): i for i, f, k in todo}
-                for fut in as_completed(futs):
-                    record(futs[fut], *fut.result())
+            _run_local_pool(todo, workers, record, cfg_json, seed)
     finally:
         bar.close()
     if len(manifest["shards"]) == manifest["n_shards"]:
