@@ -15,7 +15,9 @@ state per sample):
   lines) through :func:`datagen.torchdata.make_loader` with ``--workers``
   worker processes, synthesised on read, for the updated and the measured FRFs.
 
-Prints samples/s, ratios measured in this run, bytes per sample on disk and
+Prints samples/s (wall clock) and samples per CPU second (user + system of
+this process and its workers, which a machine shared with other jobs
+distorts less), ratios measured in this run, bytes per sample on disk and
 peak memory. Targets (issue 10): <= 16 kB/sample, generate >= 50x naive,
 read >= 20,000 samples/s on 2 cores.
 """
@@ -31,6 +33,12 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+
+def _cpu_s() -> float:
+    """CPU seconds (user + system) of this process and its terminated children so far."""
+    a, b = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return a.ru_utime + a.ru_stime + b.ru_utime + b.ru_stime
 
 
 def _dir_bytes(root: Path) -> int:
@@ -61,9 +69,10 @@ def main(argv=None):
     inp = draw_batch(np.random.default_rng(0), a.naive, setup)
     with threadpool_limits(1):
         simulate_naive(setup, inp.take(slice(0, 2)), modes="full")  # warm-up (numba, caches)
-        t = time.perf_counter()
+        t, c = time.perf_counter(), _cpu_s()
         simulate_naive(setup, inp, modes="full")
         res["naive_full_samples_per_s"] = a.naive / (time.perf_counter() - t)
+        res["naive_full_samples_per_cpu_s"] = a.naive / (_cpu_s() - c)
 
     tmp = Path(a.keep) if a.keep else Path(tempfile.mkdtemp(prefix="bench_datagen_"))
     root = tmp / "ds"
@@ -72,20 +81,25 @@ def main(argv=None):
     try:
         generate(tmp / "warm", merge({"output": {"shard_size": 64}}), n=64 * a.workers, seed=9,
                  workers=a.workers, progress=False)  # compile caches of the worker processes
-        t = time.perf_counter()
+        t, c = time.perf_counter(), _cpu_s()
         generate(root, cfg, n=a.n, seed=1, workers=a.workers, progress=False)
         res["generate_samples_per_s"] = a.n / (time.perf_counter() - t)
+        res["generate_samples_per_cpu_s"] = a.n / (_cpu_s() - c)
         res["bytes_per_sample"] = _dir_bytes(root) / a.n
         res["ratio_generate_vs_naive_full"] = res["generate_samples_per_s"] / res["naive_full_samples_per_s"]
+        res["ratio_cpu_efficiency_generate_vs_naive"] = (res["generate_samples_per_cpu_s"]
+                                                         / res["naive_full_samples_per_cpu_s"])
         for kind in ("updated", "measured"):
             loader = make_loader(root, kind, columns=("stiffness_loss_Nm3",), batch_size=a.batch,
                                  num_workers=a.workers)
+            c = _cpu_s()
             it = iter(loader)
             next(it)  # start the workers
             t = time.perf_counter()
             n = sum(b["frf"].shape[0] for b in it)
             res[f"read_{kind}_frf_samples_per_s"] = n / (time.perf_counter() - t)
-            del it, loader
+            del it, loader  # joins the workers, so their CPU time is counted
+            res[f"read_{kind}_frf_samples_per_cpu_s"] = (n + a.batch) / (_cpu_s() - c)
     finally:
         if not a.keep:
             shutil.rmtree(tmp, ignore_errors=True)
