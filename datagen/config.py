@@ -22,6 +22,7 @@ from physics.updating import mass_model_name
 #: Default configuration (SI units). See README "Generating datasets".
 DEFAULTS: dict = {
     "preset": "beam5",
+    "beam": {},                        # a beam file's mapping (generate --beam FILE): the truth instead of the preset
     "mesh": {
         "truth_elements": 20,          # multiple of 4 so nodes sit at the thesis's nodes 2..5
     },
@@ -117,6 +118,10 @@ def validate(cfg: dict) -> dict:
     for sec, d in DEFAULTS.items():
         if sec not in cfg:
             raise ConfigError(f"config key {sec!r} missing")
+        if sec == "beam":  # free-form: validated by physics.beam when the setup is built
+            if not isinstance(cfg[sec], dict):
+                raise ConfigError("config key 'beam' must be a table (a beam file's keys)")
+            continue
         if isinstance(d, dict):
             if not isinstance(cfg[sec], dict):
                 raise ConfigError(f"config key {sec!r} must be a table")
@@ -211,6 +216,9 @@ def merge(overrides: dict | None = None, base: dict | None = None) -> dict:
     for k, v in (overrides or {}).items():
         if k not in DEFAULTS:
             raise ConfigError(f"unknown config key {k!r}; expected one of {sorted(DEFAULTS)}")
+        if k == "beam":
+            cfg[k] = copy.deepcopy(v)
+            continue
         if isinstance(DEFAULTS[k], dict):
             if not isinstance(v, dict):
                 raise ConfigError(f"config key {k!r} must be a table")

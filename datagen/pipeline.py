@@ -45,7 +45,8 @@ from datagen.damage import draw_slits, slit_corrections
 from datagen.solvers import light_damping_modes, pole_residues, ritz_modes
 from datagen.specimen import BeamPreset, SectionLayout, beam_preset, draw_specimens, slit_section_ei
 from physics.errors import ConfigError
-from physics.fem import assemble, element_mass, element_stiffness, kept_dofs
+from datagen.truth_beam import as_preset, load_truth_beam, unit_elements
+from physics.fem import assemble, kept_dofs
 from physics.modal import eigenvalues_from_modal, modal_parameters, undamped_modes
 from physics.updating import analyst_mass, pilkey
 
@@ -64,7 +65,7 @@ class Setup:
     Attributes
     ----------
     cfg : dict                      validated configuration
-    preset : BeamPreset
+    preset : BeamPreset             the specimen (a preset, or the fields of the beam file ``cfg["beam"]``)
     layout : SectionLayout          face/core layout matching the preset's EI (eq. 4.1)
     n_elements : int                truth mesh
     keep : ndarray (n,)             global DOF indices kept after the boundary condition
@@ -106,8 +107,12 @@ class Setup:
 
 def build_setup(cfg: dict) -> Setup:
     """Precompute the nominal truth matrices, measured DOFs, start basis and FRF grid."""
-    preset = beam_preset(cfg["preset"])
-    sec = cfg["section"]
+    beam = load_truth_beam(cfg["beam"]) if cfg["beam"] else None
+    preset = beam_preset(cfg["preset"]) if beam is None else as_preset(beam)
+    sec = dict(cfg["section"])
+    if beam is not None:  # the beam file's section, where it gives one
+        sec.update({k: getattr(beam, k) for k in ("face_thickness_m", "core_modulus_pa")
+                    if getattr(beam, k) is not None})
     layout = SectionLayout.matching(preset.EI_Nm2, preset.width_m, preset.thickness_m, sec["face_thickness_m"],
                                     sec["core_modulus_pa"])
     if cfg["damage"]["depth_m"][1] >= preset.thickness_m - sec["face_thickness_m"]:
@@ -119,8 +124,9 @@ def build_setup(cfg: dict) -> Setup:
     if not spring and any(cfg["specimen"]["root_spring_change"]):
         raise ConfigError("config key 'specimen.root_spring_change' needs a root spring "
                           "('specimen.root_spring_relative' is empty: rigid clamp)")
-    K_full = assemble(np.broadcast_to(element_stiffness(1.0, le), (n_el, 4, 4)))
-    M_full = assemble(np.broadcast_to(element_mass(1.0, le), (n_el, 4, 4)))
+    ke, me = unit_elements(beam, le)
+    K_full = assemble(np.broadcast_to(ke, (n_el, 4, 4)))
+    M_full = assemble(np.broadcast_to(me, (n_el, 4, 4)))
     keep, names = kept_dofs(n_el + 1, "clamped-free", root_spring=spring)
     K0, M0 = K_full[np.ix_(keep, keep)], M_full[np.ix_(keep, keep)]
     step = n_el // 4
