@@ -128,6 +128,7 @@ def build_setup(cfg: dict) -> Setup:
     K_full = assemble(np.broadcast_to(ke, (n_el, 4, 4)))
     M_full = assemble(np.broadcast_to(me, (n_el, 4, 4)))
     keep, names = kept_dofs(n_el + 1, "clamped-free", root_spring=spring)
+    assert np.array_equal(keep, np.arange(keep[0], 2 * (n_el + 1)))  # truth_matrices slices from keep[0]
     K0, M0 = K_full[np.ix_(keep, keep)], M_full[np.ix_(keep, keep)]
     step = n_el // 4
     meas = np.array([names.index(f"{1 + step * q}:y") for q in range(1, 5)])
@@ -247,19 +248,21 @@ def truth_matrices(setup: Setup, inp: BatchInputs):
     dK : ndarray, shape (B, n, n)     slit stiffness change (N/m ...)
     """
     ei = inp.EI
-    K = ei[:, None, None] * setup.K0
     ok = np.isfinite(inp.x_m)
     dKe, dCe = slit_corrections(np.where(ok, inp.x_m, 0.0), np.where(ok, inp.width_m, 0.0),
                                 np.where(ok, inp.ei_loss * ei[:, None], 0.0), np.where(ok, inp.beta_s, 0.0),
                                 ei, setup.length_m, setup.n_elements)
-    sel = np.ix_(setup.keep, setup.keep)
-    dK = assemble(dKe)[(...,) + sel]
-    dC = assemble(dCe)[(...,) + sel]
-    K1 = (1.0 + inp.temperature_stiffness_change)[:, None, None] * (K + dK)
+    k0 = setup.keep[0]  # the clamp removes the first DOFs only: the kept block is a slice (a view, no copy)
+    dK = assemble(dKe)[..., k0:, k0:]
+    dC = assemble(dCe)[..., k0:, k0:]
+    K = np.empty((len(inp), 2) + setup.K0.shape)
+    np.multiply(ei[:, None, None], setup.K0, out=K[:, 0])
+    np.add(K[:, 0], dK, out=K[:, 1])
+    K[:, 1] *= (1.0 + inp.temperature_stiffness_change)[:, None, None]
     if setup.spring:
-        K1[:, 0, 0] += inp.root_spring * (1.0 + inp.root_spring_change)
-        K[:, 0, 0] += inp.root_spring
-    return inp.m_per_length[:, None, None] * setup.M0, np.stack([K, K1], axis=1), dC, dK
+        K[:, 1, 0, 0] += inp.root_spring * (1.0 + inp.root_spring_change)
+        K[:, 0, 0, 0] += inp.root_spring
+    return inp.m_per_length[:, None, None] * setup.M0, K, dC, dK
 
 
 def projected_modes(setup: Setup, inp: BatchInputs, M, K, dC):
