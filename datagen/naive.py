@@ -61,7 +61,7 @@ def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
         else:
             raise ValueError(f"modes must be 'full' or 'projection', got {modes!r}")
         lam_m, psi_m = measure_modes(setup, s, lam[..., :N_MEAS], psi[..., :N_MEAS])
-        Ma = analyst_mass(s.m_per_length, setup.length_m, setup.cfg["updating"]["mass_model"])
+        Ma = analyst_mass(s.mass_per_length_kg_m, setup.length_m, setup.cfg["updating"]["mass_model"])
         up = update_models(setup, Ma, lam_m, psi_m, batched=False)
         poles, res = pole_residues(Ma[:, None], up["C"], up["K"], np.arange(N_MEAS), 0)
         with np.errstate(all="ignore"):

@@ -160,8 +160,8 @@ def get_setup(cfg: dict) -> Setup:
 class BatchInputs:
     """All random draws of a batch of ``B`` samples (see :func:`draw_batch`).
 
-    Specimen: ``EI`` (N m^2), ``m_per_length`` (kg/m), ``damping_scale``,
-    ``root_spring`` (N m/rad) each (B,). Slits: ``n_slits`` (B,), ``x_m``,
+    Specimen: ``EI_Nm2``, ``mass_per_length_kg_m``, ``damping_scale`` (-),
+    ``root_spring_Nm_rad`` (``inf`` for a rigid clamp) each (B,). Slits: ``n_slits`` (B,), ``x_m``,
     ``width_m``, ``depth_m``, ``beta_s`` (B, S) NaN-padded, ``ei_loss`` (B, S)
     relative loss of section rigidity. Between the test days (B,):
     ``temperature_stiffness_change`` (relative EI change of the current state)
@@ -172,10 +172,10 @@ class BatchInputs:
     ``noise_seed`` of the counter-based stream the FRF noise is drawn from (B,).
     """
 
-    EI: np.ndarray
-    m_per_length: np.ndarray
+    EI_Nm2: np.ndarray
+    mass_per_length_kg_m: np.ndarray
     damping_scale: np.ndarray
-    root_spring: np.ndarray
+    root_spring_Nm_rad: np.ndarray
     n_slits: np.ndarray
     x_m: np.ndarray
     width_m: np.ndarray
@@ -192,7 +192,7 @@ class BatchInputs:
     noise_seed: np.ndarray
 
     def __len__(self):
-        return self.EI.shape[0]
+        return self.EI_Nm2.shape[0]
 
     def take(self, i) -> "BatchInputs":
         """Sub-batch by index (slice or array)."""
@@ -222,9 +222,9 @@ def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
     ei0 = setup.layout.EI
     loss = np.where(np.isfinite(sl["depth_m"]),
                     1.0 - slit_section_ei(setup.layout, np.nan_to_num(sl["depth_m"])) / ei0, np.nan)
-    if not np.all(np.isfinite(sp["root_spring"])) and setup.spring:
+    if not np.all(np.isfinite(sp["root_spring_Nm_rad"])) and setup.spring:
         raise ConfigError("config key 'specimen.root_spring_relative' gave an infinite spring")
-    return BatchInputs(sp["EI"], sp["m_per_length"], sp["damping_scale"], sp["root_spring"], sl["n_slits"],
+    return BatchInputs(sp["EI_Nm2"], sp["mass_per_length_kg_m"], sp["damping_scale"], sp["root_spring_Nm_rad"], sl["n_slits"],
                        sl["x_m"], sl["width_m"], sl["depth_m"], sl["beta_s"], loss,
                        _uniform(u[:, 0], spc["temperature_stiffness_change"]),
                        _uniform(u[:, 1], spc["root_spring_change"]), nf, nz, ns,
@@ -247,7 +247,7 @@ def truth_matrices(setup: Setup, inp: BatchInputs):
     dC : ndarray, shape (B, n, n)     slit damping (N s/m ...)
     dK : ndarray, shape (B, n, n)     slit stiffness change (N/m ...)
     """
-    ei = inp.EI
+    ei = inp.EI_Nm2
     ok = np.isfinite(inp.x_m)
     dKe, dCe = slit_corrections(np.where(ok, inp.x_m, 0.0), np.where(ok, inp.width_m, 0.0),
                                 np.where(ok, inp.ei_loss * ei[:, None], 0.0), np.where(ok, inp.beta_s, 0.0),
@@ -260,9 +260,9 @@ def truth_matrices(setup: Setup, inp: BatchInputs):
     np.add(K[:, 0], dK, out=K[:, 1])
     K[:, 1] *= (1.0 + inp.temperature_stiffness_change)[:, None, None]
     if setup.spring:
-        K[:, 1, 0, 0] += inp.root_spring * (1.0 + inp.root_spring_change)
-        K[:, 0, 0, 0] += inp.root_spring
-    return inp.m_per_length[:, None, None] * setup.M0, K, dC, dK
+        K[:, 1, 0, 0] += inp.root_spring_Nm_rad * (1.0 + inp.root_spring_change)
+        K[:, 0, 0, 0] += inp.root_spring_Nm_rad
+    return inp.mass_per_length_kg_m[:, None, None] * setup.M0, K, dC, dK
 
 
 def projected_modes(setup: Setup, inp: BatchInputs, M, K, dC):
@@ -286,7 +286,7 @@ def projected_modes(setup: Setup, inp: BatchInputs, M, K, dC):
     omega2 : ndarray, shape (B, 2, p)                 undamped squared frequencies (rad^2/s^2)
     """
     sol = setup.cfg["solver"]
-    ei, mpl = inp.EI, inp.m_per_length
+    ei, mpl = inp.EI_Nm2, inp.mass_per_length_kg_m
     w2s, V = ritz_modes(setup.M0, K / ei[:, None, None, None], setup.phi0, sol["subspace_iterations"])
     w2 = w2s * (ei / mpl)[:, None, None]
     phi = V / np.sqrt(mpl)[:, None, None, None]                  # (B,2,n,p), phi^T M phi = I
@@ -313,8 +313,8 @@ def slit_frequency_drop(setup: Setup, inp: BatchInputs, K, dK, omega2):
     """
     if not setup.day_to_day:
         return np.max(1.0 - np.sqrt(omega2[:, 1, :N_MEAS] / omega2[:, 0, :N_MEAS]), axis=-1)
-    Ks = (K[:, 0] + dK) / inp.EI[:, None, None]
-    K0 = K[:, 0] / inp.EI[:, None, None]
+    Ks = (K[:, 0] + dK) / inp.EI_Nm2[:, None, None]
+    K0 = K[:, 0] / inp.EI_Nm2[:, None, None]
     it = setup.cfg["solver"]["subspace_iterations"]
     w2, _ = ritz_modes(setup.M0, np.stack([K0, Ks], axis=1), setup.phi0, it)
     return np.max(1.0 - np.sqrt(w2[:, 1, :N_MEAS] / w2[:, 0, :N_MEAS]), axis=-1)
@@ -365,7 +365,7 @@ def update_models(setup, Ma, lam_m, psi_m, batched=True):
 CHUNK = 128
 
 #: Drawn inputs recorded per sample (the columns of the samples table and the noise of the FRFs on read).
-LABEL_FIELDS = ("EI", "m_per_length", "damping_scale", "root_spring", "n_slits", "x_m", "width_m", "depth_m",
+LABEL_FIELDS = ("EI_Nm2", "mass_per_length_kg_m", "damping_scale", "root_spring_Nm_rad", "n_slits", "x_m", "width_m", "depth_m",
                 "beta_s", "ei_loss", "temperature_stiffness_change", "root_spring_change", "noise_level",
                 "noise_floor", "noise_seed")
 
@@ -411,7 +411,7 @@ def simulate_chunk(setup: Setup, inp: BatchInputs) -> dict:
     M, K, dC, dK = truth_matrices(setup, inp)
     lam, psi, w2 = projected_modes(setup, inp, M, K, dC)
     lam_m, psi_m = measure_modes(setup, inp, lam[..., :N_MEAS], psi[..., :N_MEAS])
-    Ma = analyst_mass(inp.m_per_length, setup.length_m, setup.cfg["updating"]["mass_model"])
+    Ma = analyst_mass(inp.mass_per_length_kg_m, setup.length_m, setup.cfg["updating"]["mass_model"])
     up = update_models(setup, Ma, lam_m, psi_m)
     poles, res = pole_residues(Ma[:, None], up["C"], up["K"], np.arange(N_MEAS), 0)
     return {"truth_poles": lam, "truth_shapes": psi, "eigenvalues_measured": lam_m, "eigenvectors_measured": psi_m,

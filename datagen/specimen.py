@@ -115,8 +115,8 @@ def draw_specimens(rng: np.random.Generator, n: int, cfg: dict, preset: BeamPres
     Returns
     -------
     dict of ndarray, shape (n,)
-        ``EI`` (N m^2), ``m_per_length`` (kg/m), ``damping_scale`` (-) and
-        ``root_spring`` (N m/rad, ``inf`` for a rigid clamp).
+        ``EI_Nm2``, ``mass_per_length_kg_m``, ``damping_scale`` (-) and
+        ``root_spring_Nm_rad`` (``inf`` for a rigid clamp).
     """
     sp = cfg["specimen"]
     u = rng.random((n, 4))
@@ -128,4 +128,4 @@ def draw_specimens(rng: np.random.Generator, n: int, cfg: dict, preset: BeamPres
         kr = np.exp(lo + (hi - lo) * u[:, 3]) * ei / preset.length_m
     else:
         kr = np.full(n, np.inf)
-    return {"EI": ei, "m_per_length": mpl, "damping_scale": dsc, "root_spring": kr}
+    return {"EI_Nm2": ei, "mass_per_length_kg_m": mpl, "damping_scale": dsc, "root_spring_Nm_rad": kr}

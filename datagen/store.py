@@ -130,15 +130,15 @@ def sample_table(labels: dict, outputs: dict, shard: int, first_id: int, length_
     baseline (``_base``) and current (``_cur``) states, truth and measured
     (``_meas``). Units in :data:`COLUMN_UNITS`.
     """
-    n = labels["EI"].shape[0]
-    ei = labels["EI"]
+    n = labels["EI_Nm2"].shape[0]
+    ei = labels["EI_Nm2"]
     slit_loss = labels["ei_loss"] * ei[:, None] * labels["width_m"]
     cols = {
         "sample_id": np.arange(first_id, first_id + n, dtype=np.int64),
         "shard": np.full(n, shard, dtype=np.int32),
         "damaged": labels["n_slits"] > 0,
-        "ei_Nm2": ei, "m_per_length_kg_m": labels["m_per_length"],
-        "damping_scale": labels["damping_scale"], "root_spring_Nm_rad": labels["root_spring"],
+        "ei_Nm2": ei, "m_per_length_kg_m": labels["mass_per_length_kg_m"],
+        "damping_scale": labels["damping_scale"], "root_spring_Nm_rad": labels["root_spring_Nm_rad"],
         "n_slits": labels["n_slits"].astype(np.int32),
         "temperature_stiffness_change": labels["temperature_stiffness_change"],
         "root_spring_change": labels["root_spring_change"],
