@@ -98,20 +98,29 @@ def band_cholesky(K, bw):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def band_cholesky_solve(L, B):  # pragma: no cover - compiled
-    """Solve ``L L^T X = B`` with band factors from :func:`band_cholesky`; B (N, n, p) float64."""
+    """Solve ``L L^T X = B`` with band factors from :func:`band_cholesky`; B (N, n, p) float64.
+
+    The right-hand sides are the innermost loop (contiguous, vectorised); each
+    value sees the same operations in the same order as a column-by-column solve.
+    """
     N, n, w = L.shape[0], L.shape[1], L.shape[2] - 1
     p = B.shape[2]
     X = B.copy()
     for b in range(N):
-        for c in range(p):
-            for i in range(n):  # forward: L y = b
-                acc = X[b, i, c]
-                for k in range(max(0, i - w), i):
-                    acc -= L[b, i, i - k] * X[b, k, c]
-                X[b, i, c] = acc / L[b, i, 0]
-            for i in range(n - 1, -1, -1):  # backward: L^T x = y
-                acc = X[b, i, c]
-                for k in range(i + 1, min(n, i + w + 1)):
-                    acc -= L[b, k, k - i] * X[b, k, c]
-                X[b, i, c] = acc / L[b, i, 0]
+        for i in range(n):  # forward: L y = b
+            for k in range(max(0, i - w), i):
+                lik = L[b, i, i - k]
+                for c in range(p):
+                    X[b, i, c] -= lik * X[b, k, c]
+            d = L[b, i, 0]
+            for c in range(p):
+                X[b, i, c] = X[b, i, c] / d
+        for i in range(n - 1, -1, -1):  # backward: L^T x = y
+            for k in range(i + 1, min(n, i + w + 1)):
+                lki = L[b, k, k - i]
+                for c in range(p):
+                    X[b, i, c] -= lki * X[b, k, c]
+            d = L[b, i, 0]
+            for c in range(p):
+                X[b, i, c] = X[b, i, c] / d
     return X
