@@ -175,8 +175,8 @@ def validate(cfg: dict) -> dict:
             meas[k] = _num(f"measurement.{k}", v, lo=0, hi=0.5)
     for k in ("frf_noise", "frf_noise_floor"):  # a number fixes the level; a range draws it per sample
         v = meas[k]
-        meas[k] = _range(f"measurement.{k}", [v, v] if isinstance(v, (int, float)) and not isinstance(v, bool)
-                         else v, lo=0.0, hi=0.5)
+        meas[k] = (_num(f"measurement.{k}", v, lo=0.0, hi=0.5) if isinstance(v, (int, float)) and not isinstance(v, bool)
+                   else _range(f"measurement.{k}", v, lo=0.0, hi=0.5))
     meas["band_rad_s"] = _range("measurement.band_rad_s", meas["band_rad_s"], lo=0.0)
     if meas["band_rad_s"][0] >= meas["band_rad_s"][1]:
         raise ConfigError("config key 'measurement.band_rad_s' must have low < high")

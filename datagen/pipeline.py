@@ -200,7 +200,8 @@ class BatchInputs:
 
 
 def _uniform(u, lo_hi, log=False):
-    lo, hi = lo_hi
+    """Uniform (log-uniform when ``log`` and ``lo > 0``) draws in a range ``[lo, hi]``, or a fixed number."""
+    lo, hi = (lo_hi, lo_hi) if np.isscalar(lo_hi) else lo_hi
     if lo == hi:
         return np.full(u.shape, float(lo))
     if log and lo > 0:
