@@ -7,6 +7,9 @@ import numpy as np
 from physics import fem, modal, properties, reduction
 from physics.errors import BeamDamageError
 
+#: Old name of :data:`physics.reduction.REDUCTIONS`.
+REDUCTIONS = reduction.REDUCTIONS
+
 
 def build(beam: str, elements: int, mass: str, method: str, bc: str = "clamped-free") -> dict:
     """Matrices of a preset beam, optionally reduced to the translational DOFs.

@@ -52,7 +52,7 @@ def run(args) -> dict:
     out = update(args.beam, args.modal, args.mass, args.tol, args.max_iter, args.method)
     if not args.json:
         np.set_printoptions(precision=5, linewidth=160)
-        print(f"{args.beam}, {args.mass} mass, {args.method}: {out['iterations']} iterations; "
+        print(f"{args.beam}, {out['mass']} mass, {args.method}: {out['iterations']} iterations; "
               f"orthogonality misfit of the modes {out['orthogonality_misfit']:.3g} (0 = consistent with M)")
         print("M =\n", out["M"], "\nC (N s/m) =\n", out["C"], "\nK (N/m) =\n", out["K"])
         print("model frequencies (Hz):   ", np.array2string(out["natural_frequencies_hz"], precision=3))

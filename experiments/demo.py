@@ -19,7 +19,7 @@ import numpy as np
 
 from experiments import validate
 from experiments.cli import to_jsonable
-from physics import frf, modal, thesis, updating
+from physics import frf, modal, properties, thesis, updating
 from physics.io import atomic_write_text, modal_data_from_dict
 
 
@@ -65,19 +65,22 @@ def beam5_frf_figure(path: Path) -> dict:
 def measured_data_step(out: Path) -> dict:
     """Simulated measurement -> UFF58 -> LSCF/LSFD identification -> Pilkey updating."""
     from experiments.cmd_identify import identify_frf, write_outputs
-    from experiments.cmd_update import update
-    from physics.io import read_frf, write_uff58
+    from physics.io import read_frf, read_modal_json, write_uff58
 
     frf, exact = thesis.simulated_beam5_test(noise=0.01, damping="thesis")
     uff = out / "beam5_simulated.uff"
     write_uff58(uff, frf, binary=True)
     ident = identify_frf(read_frf(uff), n_modes=4)
     write_outputs(ident, out / "identify")
-    upd = update("beam5", out / "identify" / "modal.json")
+    data = read_modal_json(out / "identify" / "modal.json")
+    beam = properties.beam_preset("beam5")
+    M = updating.analyst_mass(beam.mass_per_length_kg_m, beam.length_m, "iirs", beam.n_elements)
+    upd = updating.pilkey(M, data.eigenvalues, data.eigenvectors)
     return {"exact_frequencies_hz": exact.natural_frequencies_hz, "exact_damping_ratios": exact.damping_ratios,
             "identified_frequencies_hz": ident.estimate.natural_frequencies_hz,
             "identified_damping_ratios": ident.estimate.damping_ratios,
-            "updated_model_frequencies_hz": upd["natural_frequencies_hz"], "pilkey_iterations": upd["iterations"]}
+            "updated_model_frequencies_hz": modal.complex_modes(M, upd.C, upd.K).natural_frequencies_hz,
+            "pilkey_iterations": upd.iterations}
 
 
 def dataset_step(out: Path, n: int, workers: int) -> dict:

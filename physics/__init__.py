@@ -24,14 +24,15 @@ from physics.errors import (BeamDamageError, ConfigError, ConvergenceError, File
                             ShapeError)
 from physics.estimation import FRFEstimate, estimate_frf
 from physics.fem import BOUNDARY_CONDITIONS, FEModel, KeptDofs, beam_model, kept_dofs, lumped_mass
-from physics.frf import (FRF_KINDS, FRF_UNITS, convert_frf, pole_residue, receptance, receptance_modal,
-                         receptance_state_space)
+from physics.frf import (FRF_KINDS, FRF_UNITS, PoleResidues, convert_frf, pole_residue, poles_and_residues,
+                         receptance, receptance_modal, receptance_state_space)
 from physics.modal import (ComplexModes, complex_modes, eigenvalues_from_modal, mac, modal_parameters,
                            undamped_modes, underdamped_modes)
 from physics.properties import (CANTILEVER_BETA_L, PRESETS, BeamPreset, beam_preset, cantilever_curvature_squared,
                                 cantilever_frequencies_hz)
 from physics.reduction import Reduction, guyan, iirs, irs
-from physics.updating import MASS_MODELS, UpdateResult, analyst_mass, lancaster_direct, mass_model_name, pilkey
+from physics.updating import (MASS_MODELS, UpdateResult, analyst_mass, lancaster_direct, mass_model_name, pilkey,
+                              reduced_mass)
 
 __all__ = [
     # modules
@@ -49,8 +50,8 @@ __all__ = [
     "ComplexModes", "complex_modes", "underdamped_modes", "undamped_modes", "modal_parameters",
     "eigenvalues_from_modal", "mac",
     # FRFs
-    "FRF_KINDS", "FRF_UNITS", "convert_frf", "pole_residue", "receptance", "receptance_modal",
-    "receptance_state_space", "FRFEstimate", "estimate_frf",
+    "FRF_KINDS", "FRF_UNITS", "PoleResidues", "convert_frf", "pole_residue", "poles_and_residues", "receptance",
+    "receptance_modal", "receptance_state_space", "FRFEstimate", "estimate_frf",
     # updating
-    "MASS_MODELS", "UpdateResult", "analyst_mass", "lancaster_direct", "mass_model_name", "pilkey",
+    "MASS_MODELS", "UpdateResult", "analyst_mass", "lancaster_direct", "mass_model_name", "pilkey", "reduced_mass",
 ]

@@ -50,7 +50,7 @@ class ConvergenceError(BeamDamageError, RuntimeError):
         Last relative change of the iterate.
     """
 
-    def __init__(self, message, iterations=0, residual=float("nan")):
-        super().__init__(message)
+    def __init__(self, message, iterations=0, residual=float("nan"), *, parameter=None):
+        super().__init__(message, parameter=parameter)
         self.iterations = iterations
         self.residual = residual

@@ -14,12 +14,15 @@ rad/s. Three independent routes give the same receptance:
   (with a compiled backend for datasets);
 * the state-space model of the thesis's Programs A/B
   (``H = C_out (i w I - A)^-1 B``), :func:`receptance_state_space`, which also
-  handles overdamped members and NaN members of a batch.
+  handles overdamped members and NaN members of a batch; its poles and residues
+  come from :func:`poles_and_residues`.
 
 FRF kinds (:data:`FRF_KINDS`, units :data:`FRF_UNITS`) convert with :func:`convert_frf`.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -70,7 +73,7 @@ def receptance(M, C, K, omega_rad_s, response=None, reference=None):
 
 
 def pole_residue(eigenvalues, residues, omega_rad_s, *, lower_residual=None, upper_residual=None, out=None,
-                 noise=None, backend: str = "numba"):
+                 backend: str = "numba"):
     """FRF of a pole-residue (modal) model, conjugate pairs implied (cf. eqs. 3.27, 3.30).
 
     ``H_s(w) = sum_j [R_sj/(i w - lambda_j) + conj(R_sj)/(i w - conj(lambda_j))] - LR_s/w^2 + UR_s``
@@ -95,11 +98,6 @@ def pole_residue(eigenvalues, residues, omega_rad_s, *, lower_residual=None, upp
     out : ndarray, complex, shape (..., S, F), optional
         C-contiguous storage written in place (e.g. complex64 dataset arrays);
         ``backend="numba"`` only. Values are accumulated in float64 and written once.
-    noise : (uniforms, level), optional
-        Multiplicative measurement noise ``H (1 + level z)``, ``z`` the
-        unit-variance circular complex Gaussian of float32 uniforms of shape
-        (..., S, F, 2) (:func:`physics.kernels.box_muller`), fused into the
-        compiled pass so the noise-free FRF is never stored; ``backend="numba"`` only.
     backend : {"numba", "numpy"}
         ``"numba"``: one compiled pass (:func:`physics.kernels.pole_residue_kernel`),
         the fast path for datasets; ``"numpy"``: array expressions. Equal to rounding.
@@ -120,8 +118,8 @@ def pole_residue(eigenvalues, residues, omega_rad_s, *, lower_residual=None, upp
                          "(..., S, m)") from None
     batch, (S, m) = full[:-2], full[-2:]
     if backend == "numpy":
-        if out is not None or noise is not None:
-            raise BeamDamageError("out and noise need backend='numba'")
+        if out is not None:
+            raise BeamDamageError("out needs backend='numba'", parameter="out")
         s = 1j * w
         g = 1.0 / (s - lam[..., :, None])                      # (..., m, F)
         gc = 1.0 / (s - np.conj(lam)[..., :, None])
@@ -136,16 +134,12 @@ def pole_residue(eigenvalues, residues, omega_rad_s, *, lower_residual=None, upp
             H = np.empty(batch + (S, w.size), complex)
         elif out.shape != batch + (S, w.size) or not out.flags.c_contiguous or not np.iscomplexobj(out):
             raise ShapeError(f"out must be a C-contiguous complex array of shape {batch + (S, w.size)}, "
-                             f"got {out.shape}")
+                             f"got {out.shape}", parameter="out")
         else:
             H = out
-        uniforms, level = (np.zeros((0, 2), np.float32), 0.0) if noise is None else noise
-        uniforms = np.ascontiguousarray(uniforms, dtype=np.float32).reshape(-1, 2)
-        if noise is not None and uniforms.shape[0] != n * S * w.size:
-            raise ShapeError(f"noise uniforms must have shape {batch + (S, w.size, 2)}")
-        pole_residue_kernel(lam2, R2, np.ascontiguousarray(w), uniforms, float(level), H.reshape(n, S, w.size))
+        pole_residue_kernel(lam2, R2, np.ascontiguousarray(w), H.reshape(n, S, w.size))
     else:
-        raise BeamDamageError(f"backend {backend!r} unknown; expected 'numba' or 'numpy'")
+        raise BeamDamageError(f"backend {backend!r} unknown; expected 'numba' or 'numpy'", parameter="backend")
     if lower_residual is not None:
         with np.errstate(divide="ignore", invalid="ignore"):
             H += np.asarray(lower_residual)[..., None] / (1j * w) ** 2
@@ -180,31 +174,32 @@ def receptance_modal(eigenvalues, eigenvectors, omega_rad_s, response=None, refe
     return pole_residue(lam[..., None, :], residues, omega_rad_s)
 
 
-def receptance_state_space(M, C, K, omega_rad_s, response=None, reference=None, *, out=None):
-    """Receptance of the first-order model of the thesis's Programs A/B, batched.
+@dataclass(frozen=True)
+class PoleResidues:
+    """Poles and residues of ``(M, C, K)`` models (result of :func:`poles_and_residues`).
 
-    ``A = [[0, I], [-M^-1 K, -M^-1 C]]``, ``B = [0; M^-1 B_f]``, ``C_out = [S_out, 0]``,
-    ``H(w) = C_out (i w I - A)^-1 B = C_out V diag(1/(i w - mu)) V^-1 B``
-    from the eigen-decomposition ``A = V diag(mu) V^-1``: one eigenproblem per
-    model, then :func:`pole_residue` over the lines. Any damping works:
-    members whose eigenvalues are ``n`` conjugate pairs use the pair form,
-    others (overdamped or rigid-body modes) sum over all ``2n`` poles.
-    Members with non-finite ``C`` or ``K`` (e.g. failed updates in a batch)
-    give NaN instead of raising.
-
-    Parameters
+    Attributes
     ----------
-    M, C, K : ndarray, shape (..., n, n)
-    omega_rad_s : ndarray, shape (n_lines,)
-    response, reference : sequence of int, optional
-    out : ndarray, complex, shape (..., n_responses, n_references, n_lines), optional
-        C-contiguous storage written in place (e.g. complex64).
-
-    Returns
-    -------
-    ndarray, complex, shape (..., n_responses, n_references, n_lines)
+    eigenvalues : ndarray, complex, shape (..., n)
+        One pole of each conjugate pair (rad/s), ``Im > 0``, ascending.
+    residues : ndarray, complex, shape (..., n_responses, n_references, n)
+        ``H_sr(w) = sum_j R_srj/(i w - lambda_j) + c.c.`` (m/N times rad/s); feed
+        both to :func:`pole_residue` as ``(eigenvalues[..., None, :], residues)``.
+    underdamped : ndarray of bool, shape (...)
+        Members with ``n`` conjugate pairs and finite matrices; the others hold NaN.
     """
-    w = _omega(omega_rad_s)
+
+    eigenvalues: np.ndarray
+    residues: np.ndarray
+    underdamped: np.ndarray
+
+
+def _state_space_eig(M, C, K, response, reference):
+    """Eigen-decomposition of the state matrix of flattened models and the residues of every pole.
+
+    Returns ``batch, n, (o, r), mu (N, 2n), res (N, n_out * n_in, 2n), good (N,)``; members
+    with non-finite ``C`` or ``K`` (``good`` False) are replaced by a harmless model.
+    """
     M, C, K = np.broadcast_arrays(np.asarray(M, float), np.asarray(C, float), np.asarray(K, float))
     n = M.shape[-1]
     if M.ndim < 2 or M.shape[-2] != n:
@@ -221,20 +216,80 @@ def receptance_state_space(M, C, K, omega_rad_s, response=None, reference=None, 
     B = np.concatenate([np.zeros((M.shape[0], n, r.size)), np.linalg.solve(M, Bf)], axis=-2)
     W = np.linalg.solve(V, B.astype(complex))                                   # (N, 2n, n_in)
     res = V[:, o, None, :] * np.swapaxes(W, -1, -2)[:, None, :, :]              # (N, n_out, n_in, 2n)
-    res = res.reshape(M.shape[0], o.size * r.size, 2 * n)
+    return batch, n, (o, r), mu, res.reshape(M.shape[0], o.size * r.size, 2 * n), good
+
+
+def _pairs(mu, res, n):
+    """Upper-half poles (N, n), their residues (N, S, n) and which members are ``n`` conjugate pairs."""
     upper = _upper_half(mu)
-    pairs = upper.sum(axis=-1) == n
     order = np.argsort(np.where(upper, mu.imag, np.inf), axis=-1)[:, :n]
+    return (np.take_along_axis(mu, order, axis=-1), np.take_along_axis(res, order[:, None, :], axis=-1),
+            upper.sum(axis=-1) == n)
+
+
+def poles_and_residues(M, C, K, response=None, reference=None) -> PoleResidues:
+    """Poles and residues of ``(M, C, K)`` from the eigen-decomposition of the state matrix (batched).
+
+    ``A = [[0, I], [-M^-1 K, -M^-1 C]] = V diag(mu) V^-1`` (Programs A/B);
+    the residue of pole ``mu_k`` is ``R_srk = V_sk (V^-1 B)_kr`` with
+    ``B = [0; M^-1 B_f]``. This is what a dataset stores to synthesise FRFs
+    with :func:`pole_residue` later; :func:`receptance_state_space` evaluates it.
+
+    Parameters
+    ----------
+    M, C, K : ndarray, shape (..., n, n)
+    response, reference : sequence of int, optional
+        Response and reference (drive) DOF indices (all when omitted).
+
+    Returns
+    -------
+    PoleResidues
+        NaN for members that are not ``n`` underdamped pairs or have non-finite ``C``, ``K``.
+    """
+    batch, n, (o, r), mu, res, good = _state_space_eig(M, C, K, response, reference)
+    lam, R, pairs = _pairs(mu, res, n)
+    ok = pairs & good
+    lam = np.where(ok[:, None], lam, np.nan)
+    R = np.where(ok[:, None, None], R, np.nan)
+    return PoleResidues(lam.reshape(batch + (n,)), R.reshape(batch + (o.size, r.size, n)), ok.reshape(batch))
+
+
+def receptance_state_space(M, C, K, omega_rad_s, response=None, reference=None, *, out=None):
+    """Receptance of the first-order model of the thesis's Programs A/B, batched.
+
+    ``H(w) = C_out (i w I - A)^-1 B = C_out V diag(1/(i w - mu)) V^-1 B``
+    (see :func:`poles_and_residues`): one eigenproblem per model, then
+    :func:`pole_residue` over the lines. Any damping works: members whose
+    eigenvalues are ``n`` conjugate pairs use the pair form, others
+    (overdamped or rigid-body modes) sum over all ``2n`` poles. Members with
+    non-finite ``C`` or ``K`` (e.g. failed updates in a batch) give NaN
+    instead of raising.
+
+    Parameters
+    ----------
+    M, C, K : ndarray, shape (..., n, n)
+    omega_rad_s : ndarray, shape (n_lines,)
+    response, reference : sequence of int, optional
+    out : ndarray, complex, shape (..., n_responses, n_references, n_lines), optional
+        C-contiguous storage written in place (e.g. complex64).
+
+    Returns
+    -------
+    ndarray, complex, shape (..., n_responses, n_references, n_lines)
+    """
+    w = _omega(omega_rad_s)
+    batch, n, (o, r), mu, res, good = _state_space_eig(M, C, K, response, reference)
     shape = batch + (o.size, r.size, w.size)
+    if out is not None and (out.shape != shape or not out.flags.c_contiguous or not np.iscomplexobj(out)):
+        raise ShapeError(f"out must be a C-contiguous complex array of shape {shape}, got {out.shape}",
+                         parameter="out")
+    lam, R, pairs = _pairs(mu, res, n)
     if pairs.all() and good.all():  # the usual case: straight into the output
-        dest = None if out is None else out.reshape(-1, o.size * r.size, w.size)
-        H = pole_residue(np.take_along_axis(mu, order, axis=-1), np.take_along_axis(res, order[:, None, :], axis=-1),
-                         w, out=dest)
+        H = pole_residue(lam, R, w, out=None if out is None else out.reshape(-1, o.size * r.size, w.size))
         return out if out is not None else H.reshape(shape)
-    H = np.empty((M.shape[0], o.size * r.size, w.size), complex)
+    H = np.empty((mu.shape[0], o.size * r.size, w.size), complex)
     if pairs.any():
-        H[pairs] = pole_residue(np.take_along_axis(mu[pairs], order[pairs], axis=-1),
-                                np.take_along_axis(res[pairs], order[pairs][:, None, :], axis=-1), w)
+        H[pairs] = pole_residue(lam[pairs], R[pairs], w)
     if (~pairs).any():
         H[~pairs] = res[~pairs] @ (1.0 / (1j * w - mu[~pairs][:, :, None]))
     H[~good] = np.nan

@@ -1,6 +1,6 @@
 """The thesis's printed numbers as package data (``physics/data/thesis/*.json``).
 
-Fixtures (transcribed from /work/shared/thesis, see each file's ``source`` notes):
+Fixtures (transcribed from the thesis; the files carry ``source`` and ``note`` fields):
 
 * ``beams`` - geometry, Table 4.1 specimen data, beam 5's measured modes
   (Tables 4.5, 4.6), its IIRS-reduced matrices and identified models (Chapter Six);
@@ -20,8 +20,9 @@ import numpy as np
 
 from physics.errors import BeamDamageError
 
-#: Fixture names (files ``physics/data/thesis/NAME.json``).
-FIXTURES = ("beams", "example1_two_dof", "example2_ortiz_beam", "modeshape_example")
+_DATA = resources.files("physics").joinpath("data", "thesis")
+#: Fixture names: every ``physics/data/thesis/NAME.json`` (a fixture added there needs no code change).
+FIXTURES = tuple(sorted(p.name[:-5] for p in _DATA.iterdir() if p.name.endswith(".json")))
 #: Keys of the identified models in ``beams.json`` per analyst mass model (:data:`physics.updating.MASS_MODELS`).
 _MASS_KEYS = {"iirs": "reduced_mass", "lumped": "lumped_mass"}
 
@@ -30,7 +31,7 @@ def load(name: str) -> dict:
     """A fresh copy of the thesis fixture ``name`` (one of :data:`FIXTURES`) as parsed JSON."""
     if name not in FIXTURES:
         raise BeamDamageError(f"thesis fixture {name!r} unknown; expected one of {', '.join(FIXTURES)}")
-    return json.loads(resources.files("physics").joinpath("data", "thesis", f"{name}.json").read_text())
+    return json.loads(_DATA.joinpath(f"{name}.json").read_text())
 
 
 def beam_state(state: str, beam: str = "5") -> dict:

@@ -82,10 +82,34 @@ def mass_model_name(name: str, parameter: str = "mass_model") -> str:
 def _unit_iirs_mass(length_m: float, n_elements: int) -> np.ndarray:
     """IIRS mass of the clamped-free beam with ``EI = 1``, ``m = 1`` over nodes 2..n_elements+1 (read-only)."""
     model = beam_model(n_elements, length_m, 1.0, 1.0)
-    red = iirs(model.M, model.K, model.index([f"{k}:y" for k in range(2, n_elements + 2)]))
-    out = 0.5 * (red.M + red.M.T)
+    out = reduced_mass(model.M, model.K, model.index([f"{k}:y" for k in range(2, n_elements + 2)]))
     out.setflags(write=False)
     return out
+
+
+def reduced_mass(M, K, masters, mass_model: str = "iirs"):
+    """The analyst mass of any FE model ``(M, K)`` over the master DOFs (e.g. a beam with effects).
+
+    ``"iirs"``: the IIRS-reduced mass (eqs. 3.41-3.44); ``"lumped"``: the
+    master-master partition of ``M`` (for a uniform cantilever's translations,
+    eq. 4.6). For uniform beams :func:`analyst_mass` gives the same, batched.
+
+    Parameters
+    ----------
+    M, K : ndarray, shape (..., n, n)
+    masters : sequence of int
+        Indices of the measured DOFs (:meth:`physics.fem.FEModel.index`).
+    mass_model : {"iirs", "lumped"}   (alias "reduced")
+
+    Returns
+    -------
+    ndarray, shape (..., n_masters, n_masters)   (kg)
+    """
+    idx = np.asarray(masters, dtype=int)
+    if mass_model_name(mass_model) == "lumped":
+        return np.asarray(M, dtype=float)[..., idx[:, None], idx[None, :]]
+    red = iirs(M, K, idx).M
+    return 0.5 * (red + _t(red))
 
 
 def analyst_mass(m_per_length_kg_m, length_m: float, mass_model: str = "iirs", n_elements: int = 4):

@@ -1,6 +1,5 @@
 """Shared fixtures: the thesis's printed data and beam 5's 4-element model."""
 
-import numpy as np
 import pytest
 
 from physics import fem, properties, thesis

@@ -89,7 +89,7 @@ def test_pole_residue_with_residuals_is_the_closed_form_and_broadcasts_eigenvalu
         np.testing.assert_allclose(H, exact, rtol=1e-12)
 
 
-def test_pole_residue_writes_complex64_storage_and_fuses_noise():
+def test_pole_residue_writes_complex64_storage_in_place():
     _, cm = _modal_model(n=4, batch=(2,))
     w = np.linspace(1.0, 1.2 * np.abs(cm.eigenvalues).max(), 300)
     res = cm.eigenvectors * cm.eigenvectors[..., :1, :]
@@ -99,15 +99,21 @@ def test_pole_residue_writes_complex64_storage_and_fuses_noise():
     assert np.shares_memory(out, store)
     np.testing.assert_allclose(store[1:3], clean, rtol=0, atol=1e-6 * np.abs(clean).max())  # float32 rounding
     assert not store[0].any() and not store[3:].any()
-    # noise: H (1 + level z), z = sqrt(-ln(1-u1)) exp(2 pi i u2), written out independently here
-    u = np.random.default_rng(0).random((2, 4, 300, 2), dtype=np.float32)
-    level = 0.05
-    noisy = frf.pole_residue(cm.eigenvalues, res, w, noise=(u, level))
-    u64 = u.astype(float)
-    z = np.sqrt(-np.log1p(-u64[..., 0])) * np.exp(2j * np.pi * u64[..., 1])
-    np.testing.assert_allclose(noisy, clean * (1 + level * z), rtol=0, atol=1e-5 * level * np.abs(clean).max())
-    with pytest.raises(BeamDamageError, match="numba"):
-        frf.pole_residue(cm.eigenvalues, res, w, noise=(u, level), backend="numpy")
+    with pytest.raises(BeamDamageError, match="C-contiguous"):
+        frf.pole_residue(cm.eigenvalues, res, w, out=np.empty((2, 4, 600), complex)[..., ::2])
+
+
+def test_poles_and_residues_are_the_eq_1_10_modes_products():
+    (M, C, K), cm = _modal_model(n=5, batch=(3,))
+    C = C.copy()
+    C[2, 1, 1] = np.inf
+    pr = frf.poles_and_residues(M, C, K, [0, 4], [2])
+    assert pr.residues.shape == (3, 2, 1, 5) and pr.underdamped.tolist() == [True, True, False]
+    psi = cm.eigenvectors[:2]
+    np.testing.assert_allclose(pr.eigenvalues[:2], cm.eigenvalues[:2], rtol=1e-12)
+    np.testing.assert_allclose(pr.residues[:2], psi[:, [0, 4], None, :] * psi[:, None, [2], :], rtol=1e-8,
+                               atol=1e-10 * np.abs(psi).max() ** 2)
+    assert np.all(np.isnan(pr.eigenvalues[2])) and np.all(np.isnan(pr.residues[2]))
 
 
 def test_state_space_handles_overdamped_and_nan_members_like_direct_inversion():
@@ -128,6 +134,8 @@ def test_state_space_handles_overdamped_and_nan_members_like_direct_inversion():
         out = frf.receptance_state_space(M, C, K, w, [0, 3], [1], out=store)
     assert out is store
     np.testing.assert_allclose(store[:2], H[:2, :, :1], rtol=1e-12)
+    with pytest.raises(BeamDamageError, match="C-contiguous"):  # a strided view would be written as a copy
+        frf.receptance_state_space(M, C, K, w, [0, 3], [1], out=np.empty((3, 2, 2, 200), complex)[:, :, :1])
 
 
 def test_kind_conversion_rejects_0_rad_s_towards_receptance_and_names_the_parameter():

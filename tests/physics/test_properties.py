@@ -1,18 +1,13 @@
 import numpy as np
 import pytest
 
-from physics import fem, modal, properties, thesis
+from physics import fem, modal, properties
 from physics.errors import BeamDamageError
 
 
-def _beams():
-    return thesis.load("beams")
-
-
-def test_closed_form_frequencies_reproduce_table_4_2():
-    p = properties.beam_preset("beam5")
-    f = properties.cantilever_frequencies_hz(p.EI_Nm2, p.mass_per_length_kg_m, p.length_m)
-    np.testing.assert_allclose(f, _beams()["beams"]["5"]["theoretical_frequencies_hz"], rtol=1e-3)
+def test_closed_form_frequencies_reproduce_table_4_2(beam5, beam5_data):
+    f = properties.cantilever_frequencies_hz(beam5.EI_Nm2, beam5.mass_per_length_kg_m, beam5.length_m)
+    np.testing.assert_allclose(f, beam5_data["theoretical_frequencies_hz"], rtol=1e-3)
 
 
 def test_exact_beta_l_agrees_with_the_thesis_digits():

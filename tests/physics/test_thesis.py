@@ -10,6 +10,7 @@ def test_fixtures_load_as_fresh_copies():
     a = thesis.load("example1_two_dof")
     a["M"][0][0] = -1.0
     assert thesis.load("example1_two_dof")["M"][0][0] != -1.0
+    assert {"beams", "example1_two_dof", "example2_ortiz_beam", "modeshape_example"} <= set(thesis.FIXTURES)
     for name in thesis.FIXTURES:
         assert isinstance(thesis.load(name), dict)
     with pytest.raises(BeamDamageError, match="'beam9'"):

@@ -149,3 +149,18 @@ def test_analyst_mass_lumped_is_eq_4_6_and_unknown_names_are_named(beam5):
                                rtol=1e-14)
     with pytest.raises(BeamDamageError, match="mass_model 'consistent'"):
         updating.analyst_mass(1.0, 1.0, "consistent")
+
+
+def test_reduced_mass_of_a_non_uniform_model_is_its_iirs_mass_and_partition():
+    from physics import fem, reduction
+
+    f = np.array([1.0, 0.7, 1.3, 1.1])
+    model = fem.beam_model(4, 0.6, 20.0, 0.13, mass_factors=f)
+    masters = model.index(["2:y", "3:y", "4:y", "5:y"])
+    direct = reduction.iirs(model.M, model.K, masters).M
+    np.testing.assert_allclose(updating.reduced_mass(model.M, model.K, masters), direct, rtol=1e-12)
+    np.testing.assert_array_equal(updating.reduced_mass(model.M, model.K, masters, "lumped"),
+                                  model.M[np.ix_(masters, masters)])
+    uniform = fem.beam_model(4, 0.6, 20.0, 0.13)
+    np.testing.assert_allclose(updating.reduced_mass(uniform.M, uniform.K, masters, "lumped"),
+                               updating.analyst_mass(0.13, 0.6, "lumped"), rtol=1e-14)
