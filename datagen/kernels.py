@@ -1,9 +1,9 @@
 """Compiled inner kernels of the dataset pipeline (numba).
 
 The FRF measurement noise (a counter-based SplitMix64 stream per sample and
-state, so a sample's noise never depends on what else is read with it) and
-the banded Cholesky factorisation of the truth stiffness. FRF synthesis from
-conjugate pole pairs is :func:`physics.frf.pole_residue` (its numba backend).
+state, so a sample's noise never depends on what else is read with it), fused
+into the pole-pair FRF synthesis of :mod:`physics.kernels` (its row kernels),
+and the banded Cholesky factorisation of the truth stiffness.
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from physics.kernels import box_muller
+from physics.kernels import box_muller, pair_denominators, pair_row
 
 
 #: SplitMix64 constants (Steele, Lea, Flood 2014): a counter-based stream, ``z_k = mix(seed + k * GAMMA)``.
@@ -44,30 +44,63 @@ def hashed_normal(seed, k, u):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def noise_kernel(H, seeds, level, floor, out):  # pragma: no cover - compiled
-    """Measurement noise ``out = H (1 + level_i z1) + floor_i max_f|H_is| z2`` per response ``s`` of model ``i``.
+def add_noise_row(re, im, seed, s, level, floor, u, out):  # pragma: no cover - compiled
+    """Noisy FRF of response ``s`` of one model from its noise-free ``re + i im`` (F,) into ``out`` (F,).
 
-    ``z1 = hashed_normal(seeds[i], 2 (s F + f))`` and ``z2`` the next number of
-    the stream: multiplicative noise plus a floor relative to the FRF's peak.
-    H (N, S, F) complex128; out (N, S, F) complex (complex64 ok, may be H);
-    seeds (N,) uint64; level, floor (N,) float64.
+    ``out = H (1 + level z1) + floor max_f|H| z2`` with ``z1 = hashed_normal(seed, 2 (s F + f))``
+    and ``z2`` the next number of the stream (drawn only when the floor is not 0); ``u``: float64 buffer of 2.
     """
-    n_models, n_resp, n_lines = H.shape
+    n_lines = re.shape[0]
+    peak2 = 0.0
+    for f in range(n_lines):
+        peak2 = max(peak2, re[f] ** 2 + im[f] ** 2)
+    fl = floor * np.sqrt(peak2)
+    for f in range(n_lines):
+        k = 2 * (s * n_lines + f)
+        z1r, z1i = hashed_normal(seed, k, u)
+        h = complex(re[f], im[f]) * complex(1.0 + level * z1r, level * z1i)
+        if fl != 0.0:
+            z2r, z2i = hashed_normal(seed, k + 1, u)
+            h += fl * complex(z2r, z2i)
+        out[f] = h
+
+
+@njit(cache=True, nogil=True)
+def noisy_pole_residue_kernel(lam, residues, omega_rad_s, seeds, level, floor, out):  # pragma: no cover - compiled
+    """Measured FRFs: :func:`physics.kernels.pole_residue_kernel` with :func:`add_noise_row` fused in.
+
+    lam (N, m) complex128; residues (N, S, m) complex128; omega_rad_s (F,);
+    seeds (N,) uint64; level, floor (N,) float64; out (N, S, F) complex (complex64 ok).
+    The noise-free FRF is never stored; values equal the two-pass route bit for bit.
+    """
+    n_models, n_modes = lam.shape
+    n_lines = omega_rad_s.shape[0]
+    gr = np.empty((n_modes, n_lines))
+    gi = np.empty((n_modes, n_lines))
+    re = np.empty(n_lines)
+    im = np.empty(n_lines)
     u = np.empty(2)
     for i in range(n_models):
-        for s in range(n_resp):
-            peak2 = 0.0
-            for f in range(n_lines):
-                peak2 = max(peak2, H[i, s, f].real ** 2 + H[i, s, f].imag ** 2)
-            fl = floor[i] * np.sqrt(peak2)
-            for f in range(n_lines):
-                k = 2 * (s * n_lines + f)
-                z1r, z1i = hashed_normal(seeds[i], k, u)
-                h = H[i, s, f] * complex(1.0 + level[i] * z1r, level[i] * z1i)
-                if fl != 0.0:
-                    z2r, z2i = hashed_normal(seeds[i], k + 1, u)
-                    h += fl * complex(z2r, z2i)
-                out[i, s, f] = h
+        pair_denominators(lam[i], omega_rad_s, gr, gi)
+        for s in range(residues.shape[1]):
+            pair_row(lam[i], residues[i, s], omega_rad_s, gr, gi, re, im)
+            add_noise_row(re, im, seeds[i], s, level[i], floor[i], u, out[i, s])
+
+
+@njit(cache=True, nogil=True)
+def noise_kernel(H, seeds, level, floor, out):  # pragma: no cover - compiled
+    """The measurement noise of :func:`add_noise_row` applied to given FRFs (the per-sample cross-check).
+
+    H (N, S, F) complex128; out (N, S, F) complex; seeds (N,) uint64; level, floor (N,) float64.
+    """
+    re = np.empty(H.shape[2])
+    im = np.empty(H.shape[2])
+    u = np.empty(2)
+    for i in range(H.shape[0]):
+        for s in range(H.shape[1]):
+            re[:] = H[i, s].real
+            im[:] = H[i, s].imag
+            add_noise_row(re, im, seeds[i], s, level[i], floor[i], u, out[i, s])
 
 
 @njit(cache=True)

@@ -13,9 +13,8 @@ import numpy as np
 
 from datagen.pipeline import N_MEAS, BatchInputs, Setup, measure_modes, projected_modes, slit_frequency_drop, \
     truth_matrices, update_models
-from datagen.solvers import pole_residues
 from datagen.synth import add_noise
-from physics.frf import receptance, receptance_modal, receptance_state_space
+from physics.frf import poles_and_residues, receptance, receptance_modal, receptance_state_space
 from physics.modal import underdamped_modes, undamped_modes
 from physics.updating import analyst_mass
 
@@ -63,7 +62,8 @@ def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
         lam_m, psi_m = measure_modes(setup, s, lam[..., :N_MEAS], psi[..., :N_MEAS])
         Ma = analyst_mass(s.mass_per_length_kg_m, setup.length_m, setup.cfg["updating"]["mass_model"])
         up = update_models(setup, Ma, lam_m, psi_m, batched=False)
-        poles, res = pole_residues(Ma[:, None], up["C"], up["K"], np.arange(N_MEAS), 0)
+        pr = poles_and_residues(Ma[:, None], up["C"], up["K"], np.arange(N_MEAS), [0])
+        poles, res = pr.eigenvalues, pr.residues[..., 0, :]
         with np.errstate(all="ignore"):
             Hu = np.stack([receptance(Ma[0], up["C"][0, st], up["K"][0, st], w, np.arange(N_MEAS), [0])[:, 0, :]
                            if np.all(np.isfinite(up["C"][0, st])) and np.all(np.isfinite(up["K"][0, st]))

@@ -42,11 +42,12 @@ import json
 import numpy as np
 
 from datagen.damage import draw_slits, slit_corrections
-from datagen.solvers import light_damping_modes, pole_residues, ritz_modes
+from datagen.solvers import light_damping_modes, ritz_modes
 from datagen.specimen import BeamPreset, SectionLayout, beam_preset, draw_specimens, slit_section_ei
 from physics.errors import ConfigError
 from datagen.truth_beam import as_preset, load_truth_beam, unit_elements
 from physics.fem import assemble, kept_dofs
+from physics.frf import poles_and_residues
 from physics.modal import eigenvalues_from_modal, modal_parameters, undamped_modes
 from physics.updating import analyst_mass, pilkey
 
@@ -414,7 +415,8 @@ def simulate_chunk(setup: Setup, inp: BatchInputs) -> dict:
     lam_m, psi_m = measure_modes(setup, inp, lam[..., :N_MEAS], psi[..., :N_MEAS])
     Ma = analyst_mass(inp.mass_per_length_kg_m, setup.length_m, setup.cfg["updating"]["mass_model"])
     up = update_models(setup, Ma, lam_m, psi_m)
-    poles, res = pole_residues(Ma[:, None], up["C"], up["K"], np.arange(N_MEAS), 0)
+    pr = poles_and_residues(Ma[:, None], up["C"], up["K"], np.arange(N_MEAS), [0])
+    poles, res = pr.eigenvalues, pr.residues[..., 0, :]
     return {"truth_poles": lam, "truth_shapes": psi, "eigenvalues_measured": lam_m, "eigenvectors_measured": psi_m,
             "M_updated": Ma, "C_updated": up["C"], "K_updated": up["K"], "updated_poles": poles,
             "updated_residues": res, "converged": up["converged"], "iterations": up["iterations"],

@@ -1,13 +1,12 @@
-"""Batched solvers of the dataset pipeline: undamped (subspace) and light-damping complex modes, poles and residues.
+"""Batched solvers of the dataset pipeline: undamped (subspace iteration) and light-damping complex modes.
 
 Pure numerics (arrays in, arrays out) used by the batched pipeline
 (:mod:`datagen.pipeline`) and the per-sample cross-check (:mod:`datagen.naive`).
-FRFs are :func:`physics.frf.pole_residue` and :func:`physics.frf.receptance_state_space`.
+Poles and residues of the updated models are :func:`physics.frf.poles_and_residues`,
+FRFs :func:`physics.frf.pole_residue` and :func:`physics.frf.receptance_state_space`.
 
 Conjugate pairs follow :mod:`physics.modal`: one eigenvalue per pair with
-``Im > 0``, eq.-1.10 ("unit modal A") normalised shapes, so that
-``H(w) = sum_j a_j/(i w - lambda_j) + conj(a_j)/(i w - conj(lambda_j))`` with
-residues ``a_sj = psi_sj psi_rj`` (response ``s``, reference DOF ``r``).
+``Im > 0``, eq.-1.10 ("unit modal A") normalised shapes.
 """
 
 from __future__ import annotations
@@ -15,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from datagen.kernels import band_cholesky, band_cholesky_solve
-from physics.modal import state_matrix, undamped_modes
+from physics.modal import undamped_modes
 
 BANDWIDTH = 3       # half-bandwidth of beam matrices with DOFs ordered node by node
 
@@ -86,43 +85,3 @@ def light_damping_modes(omega2, c, iterations):
         lam = (-b + 1j * np.sqrt(4 * omega2 - b**2)) / 2
     h = 2 * lam * np.einsum("...kj,...kj->...j", Z, Z) + np.einsum("...kj,...kl,...lj->...j", Z, c, Z)
     return lam, Z / np.sqrt(h)[..., None, :]
-
-
-def pole_residues(M, C, K, response, reference):
-    """Poles and residues of ``(M, C, K)`` from the eigen-decomposition of the state matrix (batched).
-
-    Parameters
-    ----------
-    M, C, K : ndarray, shape (..., n, n)
-    response : sequence of int
-    reference : int
-        Drive DOF.
-
-    Returns
-    -------
-    lam : ndarray, complex, shape (..., n)
-        One pole per conjugate pair (``Im > 0``, ascending); NaN for members
-        that are not ``n`` conjugate pairs (real poles) or have non-finite matrices.
-    residues : ndarray, complex, shape (..., n_response, n)
-        ``H_s(w) = sum_j R_sj/(i w - lam_j) + c.c.`` (m/N per rad/s).
-    """
-    n = M.shape[-1]
-    M, C, K = np.broadcast_arrays(np.asarray(M, float), np.asarray(C, float), np.asarray(K, float))
-    batch = M.shape[:-2]
-    M, C, K = (a.reshape(-1, n, n) for a in (M, C, K))
-    good = np.isfinite(C).all(axis=(-2, -1)) & np.isfinite(K).all(axis=(-2, -1))
-    Cg = np.where(good[:, None, None], C, 0.0)
-    Kg = np.where(good[:, None, None], K, np.eye(n))
-    lam, V = np.linalg.eig(state_matrix(M, Cg, Kg))
-    Bf = np.zeros(M.shape[:-1] + (1,))
-    Bf[:, reference, 0] = 1.0
-    Bv = np.concatenate([np.zeros_like(Bf), np.linalg.solve(M, Bf)], axis=-2)
-    W = np.linalg.solve(V, Bv.astype(complex))[..., 0]                          # (N, 2n)
-    R = V[:, np.atleast_1d(response), :] * W[:, None, :]                          # (N, S, 2n)
-    scale = np.max(np.abs(lam), axis=-1, keepdims=True)
-    upper = lam.imag > 1e-9 * scale
-    ok = (upper.sum(axis=-1) == n) & good
-    order = np.argsort(np.where(upper, lam.imag, np.inf), axis=-1)[:, :n]
-    lp = np.where(ok[:, None], np.take_along_axis(lam, order, axis=-1), np.nan)
-    rp = np.where(ok[:, None, None], np.take_along_axis(R, order[:, None, :], axis=-1), np.nan)
-    return lp.reshape(batch + (n,)), rp.reshape(batch + rp.shape[1:])

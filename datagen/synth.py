@@ -6,9 +6,9 @@ measured DOF, with measurement noise
 
     ``H_meas = H (1 + level z1) + floor max_f|H| z2``   (per response FRF),
 
-``H`` from :func:`physics.frf.pole_residue` (float64), ``z1, z2`` unit
+``H`` the float64 pole-pair sum of :mod:`physics.kernels`, ``z1, z2`` unit
 circular complex Gaussian numbers drawn from a counter-based stream
-(:func:`datagen.kernels.noise_kernel`) keyed by the sample's
+(:func:`datagen.kernels.add_noise_row`, fused into the synthesis) keyed by the sample's
 ``noise_seed`` and the state, so a sample's noise never depends on which
 other samples are read with it, on the worker or on the order.
 
@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from datagen.kernels import noise_kernel
+from datagen.kernels import noise_kernel, noisy_pole_residue_kernel
 from physics.frf import pole_residue, receptance_state_space
 
 FRF_KINDS = ("measured", "updated")
@@ -52,10 +52,16 @@ def add_noise(H, noise_seed, noise_level, noise_floor, out=None):
 
 def measured_frf(a: dict, omega_rad_s, dtype=np.complex64):
     """Noisy measured receptances (m/N), complex, shape (n, 2, 4, F), from the arrays of :data:`SOURCES`."""
-    lam, psi = a["truth_poles"], a["truth_shapes"]
-    H = pole_residue(lam, psi * psi[..., :1, :], omega_rad_s)
-    return add_noise(H, a["noise_seed"], a["noise_level"], a["noise_floor"],
-                     np.empty(H.shape, dtype))
+    lam, psi = np.asarray(a["truth_poles"]), np.asarray(a["truth_shapes"])
+    n, _, S, m = psi.shape
+    w = np.ascontiguousarray(omega_rad_s, dtype=float)
+    out = np.empty((n, 2, S, w.size), dtype)
+    rep = lambda v: np.ascontiguousarray(np.repeat(np.asarray(v, float)[:, None], 2, 1).reshape(-1))  # noqa: E731
+    noisy_pole_residue_kernel(np.ascontiguousarray(lam.reshape(2 * n, m)),
+                              np.ascontiguousarray((psi * psi[..., :1, :]).reshape(2 * n, S, m)), w,
+                              state_seeds(a["noise_seed"]).reshape(-1), rep(a["noise_level"]), rep(a["noise_floor"]),
+                              out.reshape(2 * n, S, w.size))
+    return out
 
 
 def updated_frf(a: dict, omega_rad_s, dtype=np.complex64):

@@ -6,9 +6,8 @@ import pytest
 from datagen.config import merge
 from datagen.naive import simulate_naive
 from datagen.pipeline import draw_batch, get_setup, simulate_batch
-from datagen.solvers import pole_residues
 from datagen.synth import measured_frf, updated_frf
-from physics.frf import pole_residue, receptance
+from physics.frf import pole_residue, poles_and_residues, receptance
 from physics.modal import complex_modes, modal_parameters
 from physics.updating import pilkey
 
@@ -89,12 +88,14 @@ def test_updated_poles_and_residues_give_the_direct_inversion_frf(setup, batch):
     _, out = batch
     w = setup.omega_rad_s
     M, C, K = out["M_updated"][:3], out["C_updated"][:3, 1], out["K_updated"][:3, 1]
-    lam, R = pole_residues(M, C, K, np.arange(4), 0)
+    pr = poles_and_residues(M, C, K, np.arange(4), [0])
+    lam, R = pr.eigenvalues, pr.residues[..., 0, :]
     direct = receptance(M, C, K, w, np.arange(4), [0])[..., 0, :]
     assert _rel(pole_residue(lam, R, w), direct) < 1e-9
     # an overdamped model has real poles: NaN poles, and the reader takes the state-space route
     Co = C * 2000.0
-    lam_o, R_o = pole_residues(M, Co, K, np.arange(4), 0)
+    pr = poles_and_residues(M, Co, K, np.arange(4), [0])
+    lam_o, R_o = pr.eigenvalues, pr.residues[..., 0, :]
     assert np.isnan(lam_o).all()
     a = {"updated_poles": lam_o[:, None].repeat(2, 1), "updated_residues": R_o[:, None].repeat(2, 1),
          "M_updated": M, "C_updated": Co[:, None].repeat(2, 1), "K_updated": K[:, None].repeat(2, 1)}
