@@ -16,11 +16,13 @@ import math
 import tomllib
 from pathlib import Path
 
-from physics.errors import ConfigError
+from physics.errors import BeamDamageError, ConfigError
+from physics.updating import mass_model_name
 
 #: Default configuration (SI units). See README "Generating datasets".
 DEFAULTS: dict = {
     "preset": "beam5",
+    "beam": {},                        # a beam file's mapping (generate --beam FILE): the truth instead of the preset
     "mesh": {
         "truth_elements": 20,          # multiple of 4 so nodes sit at the thesis's nodes 2..5
     },
@@ -34,19 +36,26 @@ DEFAULTS: dict = {
         "damping_band": 0.2,
         "root_spring_relative": [300.0, 3000.0],   # k_r L / EI, log-uniform; [] = rigid clamp
         "damping_ratios": [0.001623, 0.002481, 0.003105, 0.00421],  # thesis beam 5, modes 1..4
+        "temperature_stiffness_change": [0.0, 0.0],  # relative EI change of the current test day (uniform)
+        "root_spring_change": [0.0, 0.0],            # relative root-spring change on re-clamping (uniform)
     },
     "damage": {
         "n_slits": [1, 1],
+        "intact_fraction": 0.0,              # share of samples without any slit
         "position_fraction": [0.03, 0.97],   # x / L of the slit centre
         "width_m": [0.002, 0.01],            # effective length of the reduced section
         "depth_m": [0.0002, 0.0003],         # thesis: 0.2-0.3 mm into the top face sheet
+        "ei_loss": [],                       # if set: relative EI loss of the slit section (depth follows)
         "slit_damping_s": [0.0, 2.0e-5],     # extra stiffness-proportional damping of the slit region (s); loss factor beta*omega
     },
     "measurement": {
-        "frequency_noise": 0.0005,     # relative std of natural frequencies
+        "modal_noise": "fixed",        # "fixed": the three stds below; "calibrated": per-mode coefficients times the
+                                       # sample's FRF noise level (configs/modal_noise.json, experiments.bench_modal_noise)
+        "frequency_noise": 0.0005,     # relative std of natural frequencies (number, or one per mode 1..4)
         "damping_noise": 0.02,         # relative std of damping ratios
         "shape_noise": 0.002,          # complex std relative to the largest entry of each mode
-        "frf_noise": 0.005,            # complex std relative to |H| per line
+        "frf_noise": 0.005,            # complex std relative to |H| per line (or [lo, hi], log-uniform per sample)
+        "frf_noise_floor": 0.0,        # complex std relative to each FRF's peak (or [lo, hi], log-uniform)
         "band_rad_s": [1.0, 5000.0],   # thesis Program A grid limits
         "lines": 1024,
     },
@@ -62,7 +71,8 @@ DEFAULTS: dict = {
     },
     "output": {
         "shard_size": 1000,
-        "frf_dtype": "complex64",
+        "frf_dtype": "complex64",      # of the FRFs synthesised when read (and of --store-frf)
+        "store_frf": False,            # also write the FRFs into the shards (opt-in; they are synthesised on read)
     },
 }
 
@@ -108,6 +118,10 @@ def validate(cfg: dict) -> dict:
     for sec, d in DEFAULTS.items():
         if sec not in cfg:
             raise ConfigError(f"config key {sec!r} missing")
+        if sec == "beam":  # free-form: validated by physics.beam when the setup is built
+            if not isinstance(cfg[sec], dict):
+                raise ConfigError("config key 'beam' must be a table (a beam file's keys)")
+            continue
         if isinstance(d, dict):
             if not isinstance(cfg[sec], dict):
                 raise ConfigError(f"config key {sec!r} must be a table")
@@ -131,6 +145,8 @@ def validate(cfg: dict) -> dict:
         dmg[k] = _num(f"specimen.{k}", dmg[k], lo=0, hi=0.5)
     dmg["root_spring_relative"] = _range("specimen.root_spring_relative", dmg["root_spring_relative"], lo=1e-3,
                                          allow_empty=True)
+    for k in ("temperature_stiffness_change", "root_spring_change"):
+        dmg[k] = _range(f"specimen.{k}", dmg[k], lo=-0.5, hi=0.5)
     zr = dmg["damping_ratios"]
     if not (isinstance(zr, list) and len(zr) >= 1 and all(isinstance(z, (int, float)) and 0 < z < 0.2 for z in zr)):
         raise ConfigError(f"config key 'specimen.damping_ratios' must be a list of ratios in (0, 0.2), got {zr!r}")
@@ -140,15 +156,35 @@ def validate(cfg: dict) -> dict:
     d["position_fraction"] = _range("damage.position_fraction", d["position_fraction"], lo=0.0, hi=1.0)
     d["width_m"] = _range("damage.width_m", d["width_m"], lo=1e-6, hi=0.1)
     d["depth_m"] = _range("damage.depth_m", d["depth_m"], lo=0.0)
+    d["intact_fraction"] = _num("damage.intact_fraction", d["intact_fraction"], lo=0.0, hi=1.0)
+    d["ei_loss"] = _range("damage.ei_loss", d["ei_loss"], lo=0.0, hi=0.9999, allow_empty=True)
     d["slit_damping_s"] = _range("damage.slit_damping_s", d["slit_damping_s"], lo=0.0, hi=1.0)
-    for k in ("frequency_noise", "damping_noise", "shape_noise", "frf_noise"):
-        meas[k] = _num(f"measurement.{k}", meas[k], lo=0, hi=0.5)
+    if meas["modal_noise"] not in ("fixed", "calibrated"):
+        raise ConfigError(f"config key 'measurement.modal_noise' must be 'fixed' or 'calibrated', "
+                          f"got {meas['modal_noise']!r}")
+    calib = modal_noise_calibration() if meas["modal_noise"] == "calibrated" else {}
+    for k in ("frequency_noise", "damping_noise", "shape_noise"):
+        v = meas[k]
+        if isinstance(v, list):
+            if len(v) != 4:
+                raise ConfigError(f"config key 'measurement.{k}' must be a number or 4 numbers (modes 1..4), got {v!r}")
+            meas[k] = [_num(f"measurement.{k}", x, lo=0, hi=100) for x in v]
+        elif calib:  # a number in calibrated mode: the shipped per-mode coefficients
+            meas[k] = [float(x) for x in calib[k.split("_")[0]]]
+        else:
+            meas[k] = _num(f"measurement.{k}", v, lo=0, hi=0.5)
+    for k in ("frf_noise", "frf_noise_floor"):  # a number fixes the level; a range draws it per sample
+        v = meas[k]
+        meas[k] = (_num(f"measurement.{k}", v, lo=0.0, hi=0.5) if isinstance(v, (int, float)) and not isinstance(v, bool)
+                   else _range(f"measurement.{k}", v, lo=0.0, hi=0.5))
     meas["band_rad_s"] = _range("measurement.band_rad_s", meas["band_rad_s"], lo=0.0)
     if meas["band_rad_s"][0] >= meas["band_rad_s"][1]:
         raise ConfigError("config key 'measurement.band_rad_s' must have low < high")
     meas["lines"] = _num("measurement.lines", meas["lines"], lo=2, hi=200000, integer=True)
-    if up["mass_model"] not in ("iirs", "lumped"):
-        raise ConfigError(f"config key 'updating.mass_model' must be 'iirs' or 'lumped', got {up['mass_model']!r}")
+    try:  # one mass-model name set (physics.updating.MASS_MODELS); "reduced" is accepted for "iirs"
+        up["mass_model"] = mass_model_name(up["mass_model"], parameter="updating.mass_model")
+    except BeamDamageError as exc:
+        raise ConfigError(f"config key 'updating.mass_model': {exc}") from None
     up["tol"] = _num("updating.tol", up["tol"], lo=0, hi=1e-2, strict_lo=True)
     up["max_iter"] = _num("updating.max_iter", up["max_iter"], lo=1, hi=100000, integer=True)
     sol["projection_modes"] = _num("solver.projection_modes", sol["projection_modes"], lo=4, hi=64, integer=True)
@@ -159,10 +195,19 @@ def validate(cfg: dict) -> dict:
     sol["damping_iterations"] = _num("solver.damping_iterations", sol["damping_iterations"], lo=1, hi=50,
                                      integer=True)
     out["shard_size"] = _num("output.shard_size", out["shard_size"], lo=1, hi=10**6, integer=True)
+    if not isinstance(out["store_frf"], bool):
+        raise ConfigError(f"config key 'output.store_frf' must be true or false, got {out['store_frf']!r}")
     if out["frf_dtype"] not in ("complex64", "complex128"):
         raise ConfigError(f"config key 'output.frf_dtype' must be 'complex64' or 'complex128', "
                           f"got {out['frf_dtype']!r}")
     return cfg
+
+
+def modal_noise_calibration() -> dict:
+    """Per-mode coefficients of the calibrated modal noise (std / FRF noise level): frequency, damping, shape."""
+    import json
+
+    return json.loads((Path(__file__).parent / "configs" / "modal_noise.json").read_text())
 
 
 def merge(overrides: dict | None = None, base: dict | None = None) -> dict:
@@ -171,6 +216,9 @@ def merge(overrides: dict | None = None, base: dict | None = None) -> dict:
     for k, v in (overrides or {}).items():
         if k not in DEFAULTS:
             raise ConfigError(f"unknown config key {k!r}; expected one of {sorted(DEFAULTS)}")
+        if k == "beam":
+            cfg[k] = copy.deepcopy(v)
+            continue
         if isinstance(DEFAULTS[k], dict):
             if not isinstance(v, dict):
                 raise ConfigError(f"config key {k!r} must be a table")
@@ -183,15 +231,53 @@ def merge(overrides: dict | None = None, base: dict | None = None) -> dict:
     return validate(cfg)
 
 
-def load_config(path=None, *, preset: str | None = None) -> dict:
-    """Read a TOML file (optional) over the defaults; ``preset`` overrides the file's."""
-    over = {}
-    if path is not None:
-        p = Path(path)
-        try:
-            over = tomllib.loads(p.read_text(encoding="utf-8"))
-        except tomllib.TOMLDecodeError as exc:
-            raise ConfigError(f"{p}: not valid TOML: {exc}") from None
+#: Named configurations shipped with the package (``datagen/configs/NAME.toml``).
+CONFIG_DIR = Path(__file__).parent / "configs"
+
+
+def named_configs() -> list[str]:
+    """Names accepted by ``generate --config NAME``."""
+    return sorted(p.stem for p in CONFIG_DIR.glob("*.toml"))
+
+
+def _read_toml(p: Path) -> dict:
+    try:
+        return tomllib.loads(p.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{p}: not valid TOML: {exc}") from None
+    except FileNotFoundError:
+        raise ConfigError(f"config {str(p)!r}: no such file, and not one of the named configs "
+                          f"{named_configs()}") from None
+
+
+def _overrides(name_or_path, depth=0) -> dict:
+    """Overrides of a named config or a TOML file, resolving a top-level ``base = "NAME"`` first."""
+    if depth > 4:
+        raise ConfigError("config key 'base': chain of base configs too long (a cycle?)")
+    s = str(name_or_path)
+    p = CONFIG_DIR / f"{s}.toml" if s in named_configs() else Path(s)
+    over = _read_toml(p)
+    base = over.pop("base", None)
+    if base is None:
+        return over
+    if not isinstance(base, str) or base not in named_configs():
+        raise ConfigError(f"{p}: config key 'base' must name a shipped config {named_configs()}, got {base!r}")
+    merged = _overrides(base, depth + 1)
+    for k, v in over.items():
+        if isinstance(v, dict) and isinstance(merged.get(k), dict):
+            merged[k] = {**merged[k], **v}
+        else:
+            merged[k] = v
+    return merged
+
+
+def load_config(name_or_path=None, *, preset: str | None = None) -> dict:
+    """A named config (:func:`named_configs`) or a TOML file over the defaults; ``preset`` overrides the file's.
+
+    A TOML file may start from a named config with a top-level ``base = "training"``
+    and override any of its keys (e.g. robustness sets: more slits, more noise).
+    """
+    over = {} if name_or_path is None else _overrides(name_or_path)
     if preset is not None:
         over["preset"] = preset
     return merge(over)

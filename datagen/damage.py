@@ -118,8 +118,13 @@ def element4_index(x_m, length_m):
     return np.where(np.isfinite(x), idx, 0)
 
 
-def draw_slits(rng: np.random.Generator, n: int, cfg: dict, length_m: float) -> dict:
+def draw_slits(rng: np.random.Generator, n: int, cfg: dict, length_m: float, layout) -> dict:
     """Slit parameters of ``n`` samples, padded to the maximum slit count with NaN.
+
+    A fraction ``damage.intact_fraction`` of the samples gets no slit. The
+    slit's depth is drawn from ``damage.depth_m``, or, when ``damage.ei_loss``
+    is set, the relative EI loss of the slit section is drawn and the depth
+    follows from the layered section (:func:`datagen.specimen.depth_for_ei_loss`).
 
     Returns
     -------
@@ -127,11 +132,14 @@ def draw_slits(rng: np.random.Generator, n: int, cfg: dict, length_m: float) -> 
         ``n_slits`` (n,), ``x_m``, ``width_m``, ``depth_m``, ``beta_s`` (n, S_max);
         absent slits are NaN.
     """
+    from datagen.specimen import depth_for_ei_loss
+
     d = cfg["damage"]
     lo, hi = d["n_slits"]
     smax = max(hi, 1)
     k = rng.integers(lo, hi + 1, size=n)
     u = rng.random((n, smax, 4))
+    k = np.where(rng.random(n) < d["intact_fraction"], 0, k)
 
     def span(key, col):
         a, b = d[key]
@@ -142,4 +150,6 @@ def draw_slits(rng: np.random.Generator, n: int, cfg: dict, length_m: float) -> 
     for key, name, col, scale in (("position_fraction", "x_m", 0, length_m), ("width_m", "width_m", 1, 1.0),
                                   ("depth_m", "depth_m", 2, 1.0), ("slit_damping_s", "beta_s", 3, 1.0)):
         out[name] = np.where(present, span(key, col) * scale, np.nan)
+    if d["ei_loss"]:
+        out["depth_m"] = np.where(present, depth_for_ei_loss(layout, span("ei_loss", 2)), np.nan)
     return out

@@ -1,11 +1,9 @@
 """Compiled inner kernels of the dataset pipeline (numba).
 
-The operations that touch every FRF value of every sample, FRF synthesis
-from conjugate pole pairs and multiplicative measurement noise, dominate the
-batched pipeline when written as numpy array expressions (many passes over
-temporaries). Here they are one fused compiled pass, in float64, with no
-Python loop, writing straight into the (complex64) dataset arrays.
-Results equal the numpy expressions to rounding (``tests/datagen``).
+The FRF measurement noise (a counter-based SplitMix64 stream per sample and
+state, so a sample's noise never depends on what else is read with it), fused
+into the pole-pair FRF synthesis of :mod:`physics.kernels` (its row kernels),
+and the banded Cholesky factorisation of the truth stiffness.
 """
 
 from __future__ import annotations
@@ -13,95 +11,96 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from physics.kernels import box_muller, pair_denominators, pair_row
+
+
+#: SplitMix64 constants (Steele, Lea, Flood 2014): a counter-based stream, ``z_k = mix(seed + k * GAMMA)``.
+_GAMMA = np.uint64(0x9E3779B97F4A7C15)
+_MIX1 = np.uint64(0xBF58476D1CE4E5B9)
+_MIX2 = np.uint64(0x94D049BB133111EB)
+
 
 @njit(cache=True)
-def pair_frf_kernel(lam, residues, omega_rad_s, uniforms, level, out):  # pragma: no cover - compiled
-    """``out[i, s, f] = sum_j a_sj/(i w_f - lam_j) + conj(a_sj)/(i w_f - conj(lam_j))``, optionally noisy.
+def splitmix64(x):  # pragma: no cover - compiled
+    """The SplitMix64 finaliser of ``x`` (uint64 -> uint64), a bijective avalanche hash."""
+    z = x
+    z = (z ^ (z >> np.uint64(30))) * _MIX1
+    z = (z ^ (z >> np.uint64(27))) * _MIX2
+    return z ^ (z >> np.uint64(31))
 
-    Each pair is ``(u + i w v) / (|lam|^2 - w^2 - 2 i w Re lam)`` with
-    ``u = -2 Re(a conj(lam))`` and ``v = 2 Re a``. Sums are accumulated in
-    float64 and written once, so ``out`` may be complex64 storage.
 
-    lam (N, m) complex128; residues (N, S, m) complex128; omega_rad_s (F,)
-    float64; uniforms (N*S*F, 2) float32, or (0, 2) for no noise; level
-    float; out (N, S, F) complex, overwritten. With noise, each value is
-    multiplied by ``1 + level z`` (see :func:`box_muller`), fused here so the
-    noise-free FRF is never stored.
+@njit(cache=True)
+def hashed_normal(seed, k, u):  # pragma: no cover - compiled
+    """Unit-variance circular complex Gaussian number ``k`` of the stream ``seed`` (counter-based).
+
+    Two 24-bit uniforms from ``splitmix64(seed + (k + 1) GAMMA)`` go through
+    :func:`physics.kernels.box_muller` (``u``: a float64 buffer of 2), so any
+    entry can be drawn on its own, in any order, on any worker. Returns ``(Re z, Im z)``.
+    """
+    z = splitmix64(seed + np.uint64(k + 1) * _GAMMA)
+    u[0] = np.float64(z >> np.uint64(40)) * (1.0 / 16777216.0)
+    u[1] = np.float64((z >> np.uint64(16)) & np.uint64(0xFFFFFF)) * (1.0 / 16777216.0)
+    return box_muller(u)
+
+
+@njit(cache=True, nogil=True)
+def add_noise_row(re, im, seed, s, level, floor, u, out):  # pragma: no cover - compiled
+    """Noisy FRF of response ``s`` of one model from its noise-free ``re + i im`` (F,) into ``out`` (F,).
+
+    ``out = H (1 + level z1) + floor max_f|H| z2`` with ``z1 = hashed_normal(seed, 2 (s F + f))``
+    and ``z2`` the next number of the stream (drawn only when the floor is not 0); ``u``: float64 buffer of 2.
+    """
+    n_lines = re.shape[0]
+    peak2 = 0.0
+    for f in range(n_lines):
+        peak2 = max(peak2, re[f] ** 2 + im[f] ** 2)
+    fl = floor * np.sqrt(peak2)
+    for f in range(n_lines):
+        k = 2 * (s * n_lines + f)
+        z1r, z1i = hashed_normal(seed, k, u)
+        h = complex(re[f], im[f]) * complex(1.0 + level * z1r, level * z1i)
+        if fl != 0.0:
+            z2r, z2i = hashed_normal(seed, k + 1, u)
+            h += fl * complex(z2r, z2i)
+        out[f] = h
+
+
+@njit(cache=True, nogil=True)
+def noisy_pole_residue_kernel(lam, residues, omega_rad_s, seeds, level, floor, out):  # pragma: no cover - compiled
+    """Measured FRFs: :func:`physics.kernels.pole_residue_kernel` with :func:`add_noise_row` fused in.
+
+    lam (N, m) complex128; residues (N, S, m) complex128; omega_rad_s (F,);
+    seeds (N,) uint64; level, floor (N,) float64; out (N, S, F) complex (complex64 ok).
+    The noise-free FRF is never stored; values equal the two-pass route bit for bit.
     """
     n_models, n_modes = lam.shape
-    n_resp = residues.shape[1]
     n_lines = omega_rad_s.shape[0]
     gr = np.empty((n_modes, n_lines))
     gi = np.empty((n_modes, n_lines))
-    u = np.empty(n_modes)
-    v = np.empty(n_modes)
+    re = np.empty(n_lines)
+    im = np.empty(n_lines)
+    u = np.empty(2)
     for i in range(n_models):
-        for j in range(n_modes):
-            lr, li = lam[i, j].real, lam[i, j].imag
-            mod2 = lr * lr + li * li
-            for f in range(n_lines):
-                w = omega_rad_s[f]
-                dr = mod2 - w * w
-                di = -2.0 * lr * w
-                inv = 1.0 / (dr * dr + di * di)
-                gr[j, f] = dr * inv
-                gi[j, f] = -di * inv
-        for s in range(n_resp):
-            for j in range(n_modes):
-                ar, ai = residues[i, s, j].real, residues[i, s, j].imag
-                u[j] = -2.0 * (ar * lam[i, j].real + ai * lam[i, j].imag)
-                v[j] = 2.0 * ar
-            for f in range(n_lines):
-                w = omega_rad_s[f]
-                re = 0.0
-                im = 0.0
-                for j in range(n_modes):
-                    re += u[j] * gr[j, f] - w * v[j] * gi[j, f]
-                    im += u[j] * gi[j, f] + w * v[j] * gr[j, f]
-                if uniforms.shape[0]:
-                    zr, zi = box_muller(uniforms[(i * n_resp + s) * n_lines + f])
-                    re, im = re * (1.0 + level * zr) - im * level * zi, im * (1.0 + level * zr) + re * level * zi
-                out[i, s, f] = complex(re, im)
+        pair_denominators(lam[i], omega_rad_s, gr, gi)
+        for s in range(residues.shape[1]):
+            pair_row(lam[i], residues[i, s], omega_rad_s, gr, gi, re, im)
+            add_noise_row(re, im, seeds[i], s, level[i], floor[i], u, out[i, s])
 
 
-#: Tables for the Box-Muller transform: cos/sin of 2 pi u and sqrt(-ln(1-u)) on a uniform grid of u.
-#: Linear interpolation is accurate to a few 1e-6 absolute (float32-level); near u = 0 and u = 1, where
-#: the radius is not smooth, the exact formula is used. About 7x cheaper than log, cos and sin per value.
-_N_TAB = 16384
-_EDGE = 64
-_GRID = np.linspace(0.0, 1.0, _N_TAB + 1)
-_COS = np.cos(2 * np.pi * _GRID)
-_SIN = np.sin(2 * np.pi * _GRID)
-_RAD = np.sqrt(-np.log1p(-np.minimum(_GRID, 1 - 1e-12)))
+@njit(cache=True, nogil=True)
+def noise_kernel(H, seeds, level, floor, out):  # pragma: no cover - compiled
+    """The measurement noise of :func:`add_noise_row` applied to given FRFs (the per-sample cross-check).
 
-
-@njit(cache=True)
-def box_muller(u):  # pragma: no cover - compiled
-    """Unit-variance circular complex Gaussian ``z = sqrt(-ln(1-u1)) exp(2 pi i u2)`` (``E|z|^2 = 1``).
-
-    ``u`` is a pair of float32 uniforms in [0, 1). Returns ``(Re z, Im z)``.
+    H (N, S, F) complex128; out (N, S, F) complex; seeds (N,) uint64; level, floor (N,) float64.
     """
-    t = np.float64(u[1]) * _N_TAB
-    k = int(t)
-    f = t - k
-    c = _COS[k] + f * (_COS[k + 1] - _COS[k])
-    s = _SIN[k] + f * (_SIN[k + 1] - _SIN[k])
-    t = np.float64(u[0]) * _N_TAB
-    k = int(t)
-    if _EDGE <= k < _N_TAB - _EDGE:
-        f = t - k
-        r = _RAD[k] + f * (_RAD[k + 1] - _RAD[k])
-    else:
-        r = np.sqrt(-np.log1p(-np.float64(u[0])))
-    return r * c, r * s
-
-
-@njit(cache=True)
-def noise_kernel(H, uniforms, level, out):  # pragma: no cover - compiled
-    """``out = H (1 + level z)`` with ``z`` from :func:`box_muller`; H, out (P,), uniforms (P, 2)."""
-    for k in range(H.shape[0]):
-        zr, zi = box_muller(uniforms[k])
-        out[k] = H[k] * complex(1.0 + level * zr, level * zi)
+    re = np.empty(H.shape[2])
+    im = np.empty(H.shape[2])
+    u = np.empty(2)
+    for i in range(H.shape[0]):
+        for s in range(H.shape[1]):
+            re[:] = H[i, s].real
+            im[:] = H[i, s].imag
+            add_noise_row(re, im, seeds[i], s, level[i], floor[i], u, out[i, s])
 
 
 @njit(cache=True)
@@ -132,20 +131,29 @@ def band_cholesky(K, bw):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def band_cholesky_solve(L, B):  # pragma: no cover - compiled
-    """Solve ``L L^T X = B`` with band factors from :func:`band_cholesky`; B (N, n, p) float64."""
+    """Solve ``L L^T X = B`` with band factors from :func:`band_cholesky`; B (N, n, p) float64.
+
+    The right-hand sides are the innermost loop (contiguous, vectorised); each
+    value sees the same operations in the same order as a column-by-column solve.
+    """
     N, n, w = L.shape[0], L.shape[1], L.shape[2] - 1
     p = B.shape[2]
     X = B.copy()
     for b in range(N):
-        for c in range(p):
-            for i in range(n):  # forward: L y = b
-                acc = X[b, i, c]
-                for k in range(max(0, i - w), i):
-                    acc -= L[b, i, i - k] * X[b, k, c]
-                X[b, i, c] = acc / L[b, i, 0]
-            for i in range(n - 1, -1, -1):  # backward: L^T x = y
-                acc = X[b, i, c]
-                for k in range(i + 1, min(n, i + w + 1)):
-                    acc -= L[b, k, k - i] * X[b, k, c]
-                X[b, i, c] = acc / L[b, i, 0]
+        for i in range(n):  # forward: L y = b
+            for k in range(max(0, i - w), i):
+                lik = L[b, i, i - k]
+                for c in range(p):
+                    X[b, i, c] -= lik * X[b, k, c]
+            d = L[b, i, 0]
+            for c in range(p):
+                X[b, i, c] = X[b, i, c] / d
+        for i in range(n - 1, -1, -1):  # backward: L^T x = y
+            for k in range(i + 1, min(n, i + w + 1)):
+                lki = L[b, k, k - i]
+                for c in range(p):
+                    X[b, i, c] -= lki * X[b, k, c]
+            d = L[b, i, 0]
+            for c in range(p):
+                X[b, i, c] = X[b, i, c] / d
     return X

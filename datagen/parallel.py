@@ -12,7 +12,8 @@ from __future__ import annotations
 import json
 import math
 import os
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from collections import deque
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from multiprocessing import get_context
 from pathlib import Path
 
@@ -20,8 +21,8 @@ import numpy as np
 
 from datagen.config import validate
 from datagen.pipeline import get_setup, simulate_shard
-from datagen.store import FORMAT, ARRAYS, finalize, package_version, read_manifest, recover, sample_table, \
-    write_manifest, write_shard
+from datagen.store import ARRAYS, COLUMN_UNITS, DERIVED, FORMAT, STATES, finalize, package_version, \
+    read_manifest, recover, sample_table, shard_arrays, write_manifest, write_shard
 from physics.errors import BeamDamageError, ConfigError
 
 
@@ -44,28 +45,66 @@ def compute_shard(cfg_json: str, seed: int, index: int, first_id: int, n: int):
     setup = get_setup(cfg)
     with threadpool_limits(1):  # one BLAS thread per process: shards are the parallel unit
         labels, out = simulate_shard(setup, np.random.SeedSequence(seed, spawn_key=(index,)), n)
-    table = sample_table(labels, out, index, first_id, setup.length_m)
-    return table, {k: out[k] for k in ARRAYS}
+    return sample_table(labels, out, index, first_id, setup.length_m), shard_arrays(labels, out)
 
 
 def _init_worker():
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 
+def _run_local_pool(todo, workers, record, cfg_json, seed):
+    """Compute shards in ``workers - 1`` spawned processes and in this one, which also writes them.
+
+    The calling process is warm (imports, compiled kernels) while a spawned
+    worker needs seconds to start, so it computes shards itself whenever no
+    worker result is waiting: no core idles during start-up, and writing
+    shards overlaps the workers' computation. Shard contents do not depend on
+    which process computed them.
+    """
+    pending = deque(todo)
+    with ProcessPoolExecutor(max_workers=workers - 1, mp_context=get_context("spawn"),
+                             initializer=_init_worker) as pool:
+        futs = {}
+
+        def top_up():
+            while pending and len(futs) < 2 * (workers - 1):
+                i, f, k = pending.popleft()
+                futs[pool.submit(compute_shard, cfg_json, seed, i, f, k)] = i
+
+        top_up()
+        while futs or pending:
+            ready = [fut for fut in futs if fut.done()]
+            for fut in ready:
+                record(futs.pop(fut), *fut.result())
+            top_up()
+            if ready:
+                continue
+            if pending:
+                i, f, k = pending.pop()  # from the end: the workers keep the front of the queue
+                record(i, *compute_shard(cfg_json, seed, i, f, k))
+            else:
+                wait(futs, return_when=FIRST_COMPLETED)
+
+
 def _schema() -> dict:
-    return {name: {"axes": axes, "description": desc} for name, (axes, desc) in ARRAYS.items()}
+    return {name: {"axes": axes, "description": desc, "stored": name in ARRAYS}
+            for name, (axes, desc) in {**ARRAYS, **DERIVED}.items()}
 
 
 def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
-    """Manifest of an existing compatible run (recovered) or of a new one."""
+    """Manifest of an existing compatible run (recovered: damaged shards are dropped for regeneration) or a new one."""
     root = Path(root)
     if (root / "manifest.json").exists():
-        m = read_manifest(root)
+        m = read_manifest(root, formats=(FORMAT,))
         for key, want in (("config", cfg), ("seed", seed), ("n_requested", n)):
             if m.get(key) != want:
                 raise ConfigError(f"{root} holds a dataset generated with a different {key}; resume needs the "
                                   f"same config, seed and --n (or choose a new --out)")
-        return recover(root, m)
+        m, damaged = recover(root, m)
+        if damaged:
+            import sys
+            print(f"{root}: {len(damaged)} damaged shard(s) {damaged} will be regenerated", file=sys.stderr)
+        return m
     if root.exists() and any(root.iterdir()):
         raise BeamDamageError(f"{root} exists, is not empty and has no manifest.json; choose a new --out")
     root.mkdir(parents=True, exist_ok=True)
@@ -73,10 +112,11 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
     np.save(root / "omega_rad_s.npy", setup.omega_rad_s, allow_pickle=False)
     m = {"format": FORMAT, "package_version": package_version(), "config": cfg, "seed": seed, "n_requested": n,
          "shard_size": cfg["output"]["shard_size"], "n_shards": len(shard_plan(n, cfg["output"]["shard_size"])),
-         "complete": False, "shards": [], "schema": {"arrays": _schema(), "states": ["reference", "damaged"],
+         "complete": False, "shards": [], "schema": {"arrays": _schema(), "states": list(STATES),
+                                                     "columns": COLUMN_UNITS,
                                                      "measured_dofs": ["2:y", "3:y", "4:y", "5:y"],
                                                      "frf_reference_dof": "2:y", "frf_kind": "receptance"},
-         "section_layout": vars(setup.layout), "preset": {**vars(setup.preset), "m_per_length": setup.preset.m_per_length}}
+         "section_layout": vars(setup.layout), "preset": {**vars(setup.preset), "mass_per_length_kg_m": setup.preset.mass_per_length_kg_m}}
     write_manifest(root, m)
     return m
 
@@ -98,9 +138,9 @@ def generate(root, cfg: dict, *, n: int, seed: int = 0, workers: int = 1, schedu
         Stop after writing this many new shards (leaves a resumable, incomplete dataset).
     """
     if n < 1:
-        raise BeamDamageError(f"--n must be >= 1, got {n}")
+        raise BeamDamageError(f"number of samples n must be >= 1, got {n}")
     if workers < 1:
-        raise BeamDamageError(f"--workers must be >= 1, got {workers}")
+        raise BeamDamageError(f"workers must be >= 1, got {workers}")
     cfg = validate(cfg)
     manifest = open_or_create(root, cfg, seed, n)
     done = {e["index"] for e in manifest["shards"]}
@@ -113,8 +153,11 @@ def generate(root, cfg: dict, *, n: int, seed: int = 0, workers: int = 1, schedu
     bar = tqdm(total=n, initial=sum(e["n_samples"] for e in manifest["shards"]), unit="sample",
                disable=not progress, file=None, desc="generate")
 
+    store = (get_setup(cfg).omega_rad_s, np.dtype(cfg["output"]["frf_dtype"])) if cfg["output"]["store_frf"] \
+        else (None, None)
+
     def record(index, table, arrays):
-        entry = write_shard(root, index, table, arrays)
+        entry = write_shard(root, index, table, arrays, *store)
         manifest["shards"] = sorted(manifest["shards"] + [entry], key=lambda e: e["index"])
         write_manifest(root, manifest)
         bar.update(entry["n_samples"])
@@ -139,11 +182,7 @@ def generate(root, cfg: dict, *, n: int, seed: int = 0, workers: int = 1, schedu
             for i, f, k in todo:
                 record(i, *compute_shard(cfg_json, seed, i, f, k))
         else:
-            with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn"),
-                                     initializer=_init_worker) as pool:
-                futs = {pool.submit(compute_shard, cfg_json, seed, i, f, k): i for i, f, k in todo}
-                for fut in as_completed(futs):
-                    record(futs[fut], *fut.result())
+            _run_local_pool(todo, workers, record, cfg_json, seed)
     finally:
         bar.close()
     if len(manifest["shards"]) == manifest["n_shards"]:

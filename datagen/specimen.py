@@ -91,23 +91,41 @@ def slit_section_ei(layout: SectionLayout, depth_m):
     return section_ei(layout.width_m, z_bot, z_top, E)
 
 
+def depth_for_ei_loss(layout: SectionLayout, ei_loss):
+    """Slit depth (m) whose section keeps ``1 - ei_loss`` of the rigidity (inverse of :func:`slit_section_ei`).
+
+    Depths range from 0 to the top of the bottom face sheet (cut through the
+    top face and the core); the loss grows monotonically with depth and is
+    inverted by interpolation on a fine table (relative error in the loss
+    below 1e-6; the stored loss is recomputed from the depth).
+    """
+    h, tf = layout.thickness_m, layout.face_thickness_m
+    grid = np.linspace(0.0, h - tf, 20001)
+    loss = 1.0 - slit_section_ei(layout, grid) / layout.EI
+    want = np.asarray(ei_loss, float)
+    if np.nanmax(want, initial=0.0) > loss[-1]:
+        raise ConfigError(f"config key 'damage.ei_loss' must stay below {loss[-1]:.4f}, the loss of a cut "
+                          f"through the top face and the core")
+    return np.interp(want, loss, grid)
+
+
 def draw_specimens(rng: np.random.Generator, n: int, cfg: dict, preset: BeamPreset) -> dict:
     """Specimen parameters of ``n`` samples (one random block, fixed draw order).
 
     Returns
     -------
     dict of ndarray, shape (n,)
-        ``EI`` (N m^2), ``m_per_length`` (kg/m), ``damping_scale`` (-) and
-        ``root_spring`` (N m/rad, ``inf`` for a rigid clamp).
+        ``EI_Nm2``, ``mass_per_length_kg_m``, ``damping_scale`` (-) and
+        ``root_spring_Nm_rad`` (``inf`` for a rigid clamp).
     """
     sp = cfg["specimen"]
     u = rng.random((n, 4))
-    ei = preset.EI * (1 + sp["ei_band"] * (2 * u[:, 0] - 1))
-    mpl = preset.m_per_length * (1 + sp["mass_band"] * (2 * u[:, 1] - 1))
+    ei = preset.EI_Nm2 * (1 + sp["ei_band"] * (2 * u[:, 0] - 1))
+    mpl = preset.mass_per_length_kg_m * (1 + sp["mass_band"] * (2 * u[:, 1] - 1))
     dsc = 1 + sp["damping_band"] * (2 * u[:, 2] - 1)
     if sp["root_spring_relative"]:
         lo, hi = np.log(sp["root_spring_relative"])
-        kr = np.exp(lo + (hi - lo) * u[:, 3]) * ei / preset.length
+        kr = np.exp(lo + (hi - lo) * u[:, 3]) * ei / preset.length_m
     else:
         kr = np.full(n, np.inf)
-    return {"EI": ei, "m_per_length": mpl, "damping_scale": dsc, "root_spring": kr}
+    return {"EI_Nm2": ei, "mass_per_length_kg_m": mpl, "damping_scale": dsc, "root_spring_Nm_rad": kr}

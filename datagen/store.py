@@ -1,23 +1,32 @@
-"""Dataset directory format: manifest, per-sample table, sharded memory-mappable arrays.
+"""Dataset directory format: manifest, per-sample table, sharded arrays of what defines each sample.
 
-Layout::
+Layout (format ``beam-damage-dataset/2``)::
 
-    DIR/manifest.json             config, seed, package version, counts, schema, shard list + checksums
+    DIR/manifest.json             config, seed, package version, counts, schema (arrays, columns with units),
+                                  shard list with sizes and sha256 checksums
     DIR/omega_rad_s.npy           FRF lines (rad/s), shape (F,)
-    DIR/samples.parquet           one row per sample (written when every shard is complete)
-    DIR/shards/shard-000000/      one complete shard: samples.parquet and one .npy per array,
-                                  checksums.json (sha256 of every file)
+    DIR/samples.parquet           one row per sample, row groups of up to 65,536 rows (written at the end)
+    DIR/shards/shard-000000/      one complete shard: samples.parquet, one .npy per stored array,
+                                  checksums.json; with ``output.store_frf`` also frf_measured.npy, frf_updated.npy
+
+A shard stores what defines its samples (:data:`ARRAYS`): about 3.3 kB per
+sample. FRFs are synthesised when read (:meth:`Dataset.frf`,
+:mod:`datagen.synth`); ``output.store_frf`` writes the very same arrays into
+the shard (128 kB per sample as complex64) for tools that want files.
 
 A shard is written into ``shards/.tmp-shard-NNNNNN-<pid>/`` and renamed to
-``shards/shard-NNNNNN`` only when all its files (and its ``checksums.json``)
-are on disk, then recorded in ``manifest.json`` (atomic rewrite). A reader
-uses only the shards listed in the manifest, so a partial shard is never
-mistaken for a complete one; a resumed run deletes temporary directories and
-adopts a renamed-but-unrecorded shard after verifying its checksums.
+``shards/shard-NNNNNN`` only when all its files (and ``checksums.json``) are
+on disk, then recorded in ``manifest.json`` (atomic rewrite). A reader uses
+only the shards listed in the manifest. Opening a dataset checks every
+listed file's size (cheap); the first read of a shard in a process checks
+its sha256 checksums, and a damaged shard is refused with a one-line error.
+A resumed ``generate`` verifies every recorded shard and regenerates damaged ones.
 
-Array axes: ``state`` (0 = undamaged reference, 1 = damaged), ``dof`` (the 4
-measured translations, thesis nodes 2..5), ``mode`` (1..4), ``line``.
+Array axes: ``state`` (0 = baseline, 1 = current), ``dof`` (the 4 measured
+translations, thesis nodes 2..5, the FRFs driven at the first), ``mode``, ``line``.
 Nothing is pickled: ``np.load(..., allow_pickle=False)`` reads every file.
+Format 1 datasets (FRFs stored in the shards) are read (``frf`` returns the
+stored arrays) but cannot be resumed.
 """
 
 from __future__ import annotations
@@ -32,24 +41,65 @@ import numpy as np
 import pandas as pd
 
 from datagen.damage import element4_index
+from datagen.synth import FRF_KINDS, SOURCES, synthesise
 from physics.errors import FileFormatError
 from physics.io import atomic_write_text
 from physics.modal import modal_parameters
 
-FORMAT = "beam-damage-dataset/1"
+FORMAT = "beam-damage-dataset/2"
+FORMAT_V1 = "beam-damage-dataset/1"
 
-#: Array files of a shard: name -> (axes, description).
+#: Stored arrays of a shard: name -> (axes, description).
 ARRAYS = {
-    "frf_measured": ("sample, state, dof, line", "noisy truth receptance (m/N), drive at DOF 1 (node 2)"),
-    "frf_updated": ("sample, state, dof, line", "receptance of the updated model (m/N), drive at DOF 1"),
-    "eigenvalues_measured": ("sample, state, mode", "noisy measured eigenvalues (rad/s), Im > 0"),
+    "truth_poles": ("sample, state, mode", "noise-free truth eigenvalues (rad/s), Im > 0, all p projected modes"),
+    "truth_shapes": ("sample, state, dof, mode", "noise-free truth shapes at the measured DOFs, eq. 1.10 normalised"),
+    "eigenvalues_measured": ("sample, state, mode", "noisy measured eigenvalues (rad/s), Im > 0, modes 1..4"),
     "eigenvectors_measured": ("sample, state, dof, mode", "noisy measured mode shapes"),
-    "eigenvalues_true": ("sample, state, mode", "noise-free truth eigenvalues (rad/s)"),
-    "eigenvectors_true": ("sample, state, dof, mode", "noise-free truth shapes, eq. 1.10 normalised"),
     "M_updated": ("sample, dof, dof", "mass matrix used by the updating (kg), IIRS or lumped"),
     "C_updated": ("sample, state, dof, dof", "identified damping matrix (N s/m)"),
     "K_updated": ("sample, state, dof, dof", "updated stiffness matrix (N/m)"),
+    "updated_poles": ("sample, state, mode", "eigenvalues of the updated models (rad/s), NaN if not 4 pairs"),
+    "updated_residues": ("sample, state, dof, mode", "receptance residues of the updated models (drive DOF 1)"),
+    "noise_seed": ("sample", "seed of the counter-based FRF noise stream (uint64)"),
+    "noise_level": ("sample", "FRF noise std relative to |H| (-)"),
+    "noise_floor": ("sample", "FRF noise floor std relative to each FRF's peak (-)"),
 }
+
+#: Arrays computed from the stored ones (names kept from format 1).
+DERIVED = {
+    "eigenvalues_true": ("sample, state, mode", "noise-free truth eigenvalues (rad/s), modes 1..4"),
+    "eigenvectors_true": ("sample, state, dof, mode", "noise-free truth shapes, modes 1..4"),
+    "frf_measured": ("sample, state, dof, line", "noisy truth receptance (m/N), drive at DOF 1 (node 2)"),
+    "frf_updated": ("sample, state, dof, line", "receptance of the updated model (m/N), drive at DOF 1"),
+}
+
+#: Arrays of format-1 shards.
+ARRAYS_V1 = ("frf_measured", "frf_updated", "eigenvalues_measured", "eigenvectors_measured", "eigenvalues_true",
+             "eigenvectors_true", "M_updated", "C_updated", "K_updated")
+
+STATES = ("baseline", "current")
+
+#: Units of the samples-table columns ("-" dimensionless); ``{k}``/``{r}`` stand for slit and mode numbers.
+COLUMN_UNITS = {
+    "sample_id": "-", "shard": "-", "damaged": "bool: at least one slit", "ei_Nm2": "N m^2",
+    "m_per_length_kg_m": "kg/m", "damping_scale": "- (factor on the damping ratios)",
+    "root_spring_Nm_rad": "N m/rad (inf: rigid clamp)", "n_slits": "-",
+    "temperature_stiffness_change": "- (relative EI change of the current day)",
+    "root_spring_change": "- (relative root-spring change on re-clamping)",
+    "noise_level": "- (FRF noise std relative to |H|)", "noise_floor": "- (FRF noise std relative to the FRF peak)",
+    "noise_seed": "- (uint64 seed of the FRF noise stream)",
+    "stiffness_loss_Nm3": "N m^3 (sum over slits of dEI * width)",
+    "max_frequency_drop_rel": "- (largest relative drop of f1..f4 due to the slits alone)",
+    "slit{k}_x_m": "m", "slit{k}_width_m": "m", "slit{k}_depth_m": "m", "slit{k}_ei_loss": "- (relative)",
+    "slit{k}_stiffness_loss_Nm3": "N m^3", "slit{k}_damping_s": "s", "slit{k}_element4": "- (1..4, 0 none)",
+    "f{r}_hz_base": "Hz", "f{r}_hz_cur": "Hz", "zeta{r}_base": "-", "zeta{r}_cur": "-",
+    "f{r}_hz_meas_base": "Hz", "f{r}_hz_meas_cur": "Hz", "zeta{r}_meas_base": "-", "zeta{r}_meas_cur": "-",
+    "df{r}_rel": "-", "df{r}_rel_meas": "-", "dzeta{r}": "-", "dzeta{r}_meas": "-",
+    "converged_base": "bool", "converged_cur": "bool", "iterations_base": "-", "iterations_cur": "-",
+    "residual_base": "-", "residual_cur": "-", "converged": "bool",
+}
+
+ROW_GROUP = 65536
 
 
 def package_version() -> str:
@@ -77,15 +127,25 @@ def sample_table(labels: dict, outputs: dict, shard: int, first_id: int, length_
 
     Slit columns ``slit{k}_*`` (k = 1..S) hold NaN (0 for ``element4``) where a
     sample has fewer slits. Frequencies/damping ratios per mode r = 1..4 for the
-    reference (``_ref``) and damaged (``_dam``) states, truth and measured.
+    baseline (``_base``) and current (``_cur``) states, truth and measured
+    (``_meas``). Units in :data:`COLUMN_UNITS`.
     """
-    n = labels["EI"].shape[0]
+    n = labels["EI_Nm2"].shape[0]
+    ei = labels["EI_Nm2"]
+    slit_loss = labels["ei_loss"] * ei[:, None] * labels["width_m"]
     cols = {
         "sample_id": np.arange(first_id, first_id + n, dtype=np.int64),
         "shard": np.full(n, shard, dtype=np.int32),
-        "ei_Nm2": labels["EI"], "m_per_length_kg_m": labels["m_per_length"],
-        "damping_scale": labels["damping_scale"], "root_spring_Nm_rad": labels["root_spring"],
+        "damaged": labels["n_slits"] > 0,
+        "ei_Nm2": ei, "m_per_length_kg_m": labels["mass_per_length_kg_m"],
+        "damping_scale": labels["damping_scale"], "root_spring_Nm_rad": labels["root_spring_Nm_rad"],
         "n_slits": labels["n_slits"].astype(np.int32),
+        "temperature_stiffness_change": labels["temperature_stiffness_change"],
+        "root_spring_change": labels["root_spring_change"],
+        "noise_level": labels["noise_level"], "noise_floor": labels["noise_floor"],
+        "noise_seed": labels["noise_seed"].astype(np.uint64),
+        "stiffness_loss_Nm3": np.nansum(slit_loss, axis=1),
+        "max_frequency_drop_rel": outputs["slit_frequency_drop"],
     }
     for k in range(labels["x_m"].shape[1]):
         x = labels["x_m"][:, k]
@@ -93,27 +153,39 @@ def sample_table(labels: dict, outputs: dict, shard: int, first_id: int, length_
         cols[f"slit{k + 1}_width_m"] = labels["width_m"][:, k]
         cols[f"slit{k + 1}_depth_m"] = labels["depth_m"][:, k]
         cols[f"slit{k + 1}_ei_loss"] = labels["ei_loss"][:, k]
-        cols[f"slit{k + 1}_stiffness_loss_Nm3"] = labels["ei_loss"][:, k] * labels["EI"] * labels["width_m"][:, k]
+        cols[f"slit{k + 1}_stiffness_loss_Nm3"] = slit_loss[:, k]
         cols[f"slit{k + 1}_damping_s"] = labels["beta_s"][:, k]
         cols[f"slit{k + 1}_element4"] = element4_index(x, length_m).astype(np.int8)
-    for src, tag in (("eigenvalues_true", ""), ("eigenvalues_measured", "_meas")):
-        f, z = modal_parameters(outputs[src])
+    for lam, tag in ((outputs["truth_poles"][..., :4], ""), (outputs["eigenvalues_measured"], "_meas")):
+        f, z = modal_parameters(lam)
         for r in range(f.shape[-1]):
-            for s, st in ((0, "ref"), (1, "dam")):
+            for s, st in ((0, "base"), (1, "cur")):
                 cols[f"f{r + 1}_hz{tag}_{st}"] = f[:, s, r]
                 cols[f"zeta{r + 1}{tag}_{st}"] = z[:, s, r]
             cols[f"df{r + 1}_rel{tag}"] = f[:, 1, r] / f[:, 0, r] - 1
             cols[f"dzeta{r + 1}{tag}"] = z[:, 1, r] - z[:, 0, r]
-    for s, st in ((0, "ref"), (1, "dam")):
+    for s, st in ((0, "base"), (1, "cur")):
         cols[f"converged_{st}"] = outputs["converged"][:, s].astype(bool)
         cols[f"iterations_{st}"] = outputs["iterations"][:, s].astype(np.int32)
         cols[f"residual_{st}"] = outputs["residual"][:, s].astype(float)
-    cols["converged"] = cols["converged_ref"] & cols["converged_dam"]
+    cols["converged"] = cols["converged_base"] & cols["converged_cur"]
     return pd.DataFrame(cols)
 
 
-def write_shard(root, index: int, table: pd.DataFrame, arrays: dict) -> dict:
-    """Write one shard atomically (temp directory, then rename); returns its manifest entry."""
+def shard_arrays(labels: dict, outputs: dict) -> dict:
+    """The stored arrays (:data:`ARRAYS`) of one shard from the pipeline's labels and outputs."""
+    out = {k: outputs[k] for k in ARRAYS if k in outputs}
+    out.update(noise_seed=labels["noise_seed"].astype(np.uint64), noise_level=labels["noise_level"].astype(float),
+               noise_floor=labels["noise_floor"].astype(float))
+    return out
+
+
+def write_shard(root, index: int, table: pd.DataFrame, arrays: dict, omega_rad_s=None, frf_dtype=None) -> dict:
+    """Write one shard atomically (temp directory, then rename); returns its manifest entry.
+
+    With ``omega_rad_s`` given, the FRFs synthesised from ``arrays`` (exactly
+    what :meth:`Dataset.frf` returns) are written too (``--store-frf``).
+    """
     root = Path(root)
     shards = root / "shards"
     shards.mkdir(parents=True, exist_ok=True)
@@ -125,14 +197,18 @@ def write_shard(root, index: int, table: pd.DataFrame, arrays: dict) -> dict:
     table.to_parquet(tmp / "samples.parquet", index=False)
     for name in ARRAYS:
         np.save(tmp / f"{name}.npy", np.ascontiguousarray(arrays[name]), allow_pickle=False)
-    sums = {p.name: _sha256(p) for p in sorted(tmp.iterdir())}
+    if omega_rad_s is not None:
+        for kind in FRF_KINDS:
+            np.save(tmp / f"frf_{kind}.npy", synthesise(kind, arrays, omega_rad_s, frf_dtype), allow_pickle=False)
+    files = sorted(tmp.iterdir())
     entry = {"index": index, "name": shard_name(index), "n_samples": int(len(table)),
-             "n_converged": int(table["converged"].sum()), "checksums": sums}
+             "n_converged": int(table["converged"].sum()), "checksums": {p.name: _sha256(p) for p in files},
+             "sizes": {p.name: p.stat().st_size for p in files}}
     (tmp / "checksums.json").write_text(json.dumps(entry, indent=1))
     for p in tmp.iterdir():  # flush file data before the rename makes the shard visible
         with open(p, "rb") as fh:
             os.fsync(fh.fileno())
-    if final.exists():  # a stale complete shard from an interrupted run with the same content
+    if final.exists():  # a stale or damaged shard of an interrupted run
         shutil.rmtree(final)
     os.replace(tmp, final)
     return entry
@@ -140,14 +216,25 @@ def write_shard(root, index: int, table: pd.DataFrame, arrays: dict) -> dict:
 
 def verify_shard(root, entry: dict) -> bool:
     """True when every file of the shard exists and matches its checksum."""
+    return damaged_file(root, entry) is None
+
+
+def damaged_file(root, entry: dict, sizes_only: bool = False):
+    """Name of the first missing or damaged file of a shard, else None."""
     d = Path(root) / "shards" / entry["name"]
-    try:
-        return all(_sha256(d / f) == h for f, h in entry["checksums"].items())
-    except OSError:
-        return False
+    for f, h in entry["checksums"].items():
+        p = d / f
+        try:
+            if "sizes" in entry and p.stat().st_size != entry["sizes"][f]:
+                return f
+            if not sizes_only and _sha256(p) != h:
+                return f
+        except OSError:
+            return f
+    return None
 
 
-def read_manifest(root) -> dict:
+def read_manifest(root, formats=(FORMAT, FORMAT_V1)) -> dict:
     p = Path(root) / "manifest.json"
     try:
         m = json.loads(p.read_text())
@@ -155,8 +242,9 @@ def read_manifest(root) -> dict:
         raise FileFormatError(f"{root}: not a dataset directory (no manifest.json)") from None
     except json.JSONDecodeError as exc:
         raise FileFormatError(f"{p}: corrupt manifest ({exc})") from None
-    if m.get("format") != FORMAT:
-        raise FileFormatError(f"{p}: format {m.get('format')!r} is not {FORMAT!r}")
+    if m.get("format") not in formats:
+        raise FileFormatError(f"{p}: dataset format {m.get('format')!r} is not supported by this version "
+                              f"(reads {', '.join(formats)}); regenerate it with `beam-damage generate`")
     return m
 
 
@@ -164,11 +252,25 @@ def write_manifest(root, manifest: dict) -> None:
     atomic_write_text(Path(root) / "manifest.json", json.dumps(manifest, indent=1, sort_keys=True))
 
 
-def recover(root, manifest: dict) -> dict:
-    """Clean up after an interrupted run: drop temp shards, adopt verified unrecorded ones."""
+def recover(root, manifest: dict) -> tuple[dict, list]:
+    """Clean up after an interrupted run before resuming.
+
+    Drops temporary shard directories, verifies every recorded shard (sha256)
+    and forgets damaged ones (they are regenerated), and adopts
+    renamed-but-unrecorded shards whose checksums verify.
+
+    Returns
+    -------
+    manifest : dict
+    damaged : list of int       indices of the recorded shards found damaged
+    """
     shards = Path(root) / "shards"
+    damaged = [e["index"] for e in manifest["shards"] if not verify_shard(root, e)]
+    manifest["shards"] = [e for e in manifest["shards"] if e["index"] not in damaged]
+    if damaged:
+        manifest["complete"] = False
     if not shards.exists():
-        return manifest
+        return manifest, damaged
     known = {e["index"] for e in manifest["shards"]}
     for d in sorted(shards.iterdir()):
         if d.name.startswith(".tmp-"):
@@ -184,74 +286,220 @@ def recover(root, manifest: dict) -> dict:
             else:
                 shutil.rmtree(d, ignore_errors=True)
     manifest["shards"].sort(key=lambda e: e["index"])
-    return manifest
+    return manifest, damaged
 
 
 def finalize(root, manifest: dict) -> dict:
-    """Write the combined ``samples.parquet`` and mark the manifest complete."""
+    """Write the combined ``samples.parquet`` (streamed shard by shard) and mark the manifest complete."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
     root = Path(root)
-    tables = [pd.read_parquet(root / "shards" / e["name"] / "samples.parquet") for e in manifest["shards"]]
-    table = pd.concat(tables, ignore_index=True)
     tmp = root / ".samples.parquet.tmp"
-    table.to_parquet(tmp, index=False)
+    writer, buf, rows, n, n_conv = None, [], 0, 0, 0
+
+    def flush():
+        nonlocal writer, buf, rows
+        if not buf:
+            return
+        t = pa.concat_tables(buf)
+        if writer is None:
+            writer = pq.ParquetWriter(tmp, t.schema)
+        writer.write_table(t, row_group_size=ROW_GROUP)
+        buf, rows = [], 0
+
+    try:
+        for e in manifest["shards"]:
+            t = pq.read_table(root / "shards" / e["name"] / "samples.parquet")
+            buf.append(t)
+            rows += t.num_rows
+            n += t.num_rows
+            n_conv += e["n_converged"]
+            if rows >= ROW_GROUP:
+                flush()
+        flush()
+    finally:
+        if writer is not None:
+            writer.close()
     os.replace(tmp, root / "samples.parquet")
     manifest["complete"] = True
-    manifest["counts"] = {"samples": int(len(table)), "converged": int(table["converged"].sum()),
-                          "not_converged": int((~table["converged"]).sum()), "shards": len(manifest["shards"])}
+    manifest["counts"] = {"samples": n, "converged": n_conv, "not_converged": n - n_conv,
+                          "shards": len(manifest["shards"])}
     manifest["checksums"] = {"samples.parquet": _sha256(root / "samples.parquet"),
                              "omega_rad_s.npy": _sha256(root / "omega_rad_s.npy")}
-    manifest["columns"] = list(table.columns)
+    manifest["columns"] = pq.read_schema(root / "samples.parquet").names
     write_manifest(root, manifest)
     return manifest
 
 
 class Dataset:
-    """Read-only view of a dataset directory (pandas + numpy; arrays memory-mapped).
+    """Read-only view of a dataset directory; FRFs synthesised on read.
 
-    Only shards recorded in ``manifest.json`` are used.
+    Only shards recorded in ``manifest.json`` are used. Opening checks the
+    size of every shard file; the first read of a shard checks its sha256
+    checksums (``verify=False`` skips both).
+
+    Attributes
+    ----------
+    root : Path
+    manifest : dict
+    shards : list of dict           manifest entries of the complete shards, in sample order
+    offsets : ndarray, shape (n_shards + 1,)   first sample row of each shard
     """
 
-    def __init__(self, root):
+    def __init__(self, root, verify: bool = True):
         self.root = Path(root)
         self.manifest = read_manifest(self.root)
-        self.shards = [e for e in self.manifest["shards"]]
+        self.legacy = self.manifest["format"] == FORMAT_V1
+        self.shards = list(self.manifest["shards"])
+        self.offsets = np.concatenate([[0], np.cumsum([e["n_samples"] for e in self.shards])]).astype(np.int64)
+        self._verify = verify
+        self._verified = set()
+        self._omega = None
+        if verify:
+            for e in self.shards:
+                bad = damaged_file(self.root, e, sizes_only=True)
+                if bad is not None:
+                    raise FileFormatError(self._damage_message(e, bad))
+
+    def __len__(self) -> int:
+        return int(self.offsets[-1])
+
+    def _damage_message(self, entry, file):
+        return (f"{self.root / 'shards' / entry['name'] / file}: missing or damaged (checksum/size mismatch); "
+                f"re-run the same `beam-damage generate` command to regenerate the shard")
 
     @property
     def omega_rad_s(self) -> np.ndarray:
-        return np.load(self.root / "omega_rad_s.npy", allow_pickle=False)
+        if self._omega is None:
+            self._omega = np.load(self.root / "omega_rad_s.npy", allow_pickle=False)
+        return self._omega
+
+    @property
+    def frf_dtype(self):
+        return np.dtype(self.manifest["config"]["output"].get("frf_dtype", "complex64"))
 
     @property
     def samples(self) -> pd.DataFrame:
+        """The whole samples table (see :meth:`table` for column selection)."""
+        return self.table()
+
+    def table(self, columns=None) -> pd.DataFrame:
+        """Samples table, optionally only ``columns`` (read column by column from parquet)."""
+        import pyarrow.parquet as pq
+
+        cols = None if columns is None else list(columns)
+        known = self.manifest.get("columns")
+        if cols is not None and known and set(cols) - set(known):
+            raise FileFormatError(f"{self.root}: unknown column(s) {sorted(set(cols) - set(known))}; "
+                                  f"see manifest.json 'schema.columns'")
         p = self.root / "samples.parquet"
         if self.manifest.get("complete") and p.exists():
-            return pd.read_parquet(p)
-        return pd.concat([pd.read_parquet(self.root / "shards" / e["name"] / "samples.parquet")
-                          for e in self.shards], ignore_index=True)
+            return pq.read_table(p, columns=cols).to_pandas()
+        parts = [pq.read_table(self.root / "shards" / e["name"] / "samples.parquet", columns=cols).to_pandas()
+                 for e in self.shards]
+        return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=cols)
 
-    def shard_arrays(self, name: str, mmap: bool = True) -> list:
-        """One (memory-mapped) array per complete shard, in sample order."""
-        if name not in ARRAYS:
-            raise FileFormatError(f"unknown array {name!r}; expected one of {sorted(ARRAYS)}")
-        return [np.load(self.root / "shards" / e["name"] / f"{name}.npy", mmap_mode="r" if mmap else None,
-                        allow_pickle=False) for e in self.shards]
+    def _check(self, i):
+        if self._verify and i not in self._verified:
+            bad = damaged_file(self.root, self.shards[i])
+            if bad is not None:
+                raise FileFormatError(self._damage_message(self.shards[i], bad))
+            self._verified.add(i)
 
-    def array(self, name: str) -> np.ndarray:
-        """Whole array over all shards (loaded into memory)."""
-        parts = self.shard_arrays(name)
-        return np.concatenate(parts) if parts else np.empty((0,))
+    def _load(self, i, name):
+        self._check(i)
+        return np.load(self.root / "shards" / self.shards[i]["name"] / f"{name}.npy", mmap_mode="r",
+                       allow_pickle=False)
+
+    def _rows(self, rows):
+        if rows is None:
+            return np.arange(len(self))
+        r = np.atleast_1d(np.asarray(rows))
+        if r.dtype == bool:
+            r = np.flatnonzero(r)
+        r = r.astype(np.int64)
+        if r.size and (r.min() < -len(self) or r.max() >= len(self)):
+            raise IndexError(f"sample rows must lie in [0, {len(self)}), got {r.min()}..{r.max()}")
+        return np.where(r < 0, r + len(self), r)
+
+    def _gather(self, names, rows):
+        """``{name: array[rows]}`` over shards (rows are positions in sample order)."""
+        r = self._rows(rows)
+        shard = np.searchsorted(self.offsets, r, side="right") - 1
+        out = {}
+        for name in names:
+            parts, where = [], []
+            for i in np.unique(shard):
+                sel = shard == i
+                parts.append(np.asarray(self._load(i, name)[r[sel] - self.offsets[i]]))
+                where.append(np.flatnonzero(sel))
+            if not parts:
+                first = self._load(0, name) if self.shards else np.empty((0,))
+                out[name] = np.empty((0,) + first.shape[1:], first.dtype)
+                continue
+            a = np.empty((r.size,) + parts[0].shape[1:], parts[0].dtype)
+            for w, p in zip(where, parts):
+                a[w] = p
+            out[name] = a
+        return out
+
+    def shard_arrays(self, name: str) -> list:
+        """One memory-mapped stored array per complete shard, in sample order."""
+        stored = ARRAYS_V1 if self.legacy else ARRAYS
+        if name not in stored:
+            raise FileFormatError(f"array {name!r} is not stored; stored arrays: {sorted(stored)}")
+        return [self._load(i, name) for i in range(len(self.shards))]
+
+    def array(self, name: str, rows=None) -> np.ndarray:
+        """Array ``name`` (stored, or derived: :data:`DERIVED`) for ``rows`` (default all), in memory."""
+        if self.legacy:
+            if name not in ARRAYS_V1:
+                raise FileFormatError(f"unknown array {name!r}; a format-1 dataset has {sorted(ARRAYS_V1)}")
+            return self._gather([name], rows)[name]
+        if name in ARRAYS:
+            return self._gather([name], rows)[name]
+        if name in ("eigenvalues_true", "eigenvectors_true"):
+            src = "truth_poles" if name == "eigenvalues_true" else "truth_shapes"
+            return self._gather([src], rows)[src][..., :4]
+        if name in ("frf_measured", "frf_updated"):
+            return self.frf(name[4:], rows)
+        raise FileFormatError(f"unknown array {name!r}; expected one of {sorted(ARRAYS) + sorted(DERIVED)}")
+
+    def frf(self, kind: str, rows=None) -> np.ndarray:
+        """FRFs of ``kind`` ("measured" | "updated"), complex, shape (n, 2 states, 4 dofs, F).
+
+        Synthesised from the stored arrays (:mod:`datagen.synth`), identical
+        to what ``generate --store-frf`` writes. Format-1 datasets return their stored FRFs.
+        """
+        if kind not in FRF_KINDS:
+            raise FileFormatError(f"FRF kind {kind!r} unknown; expected one of {', '.join(FRF_KINDS)}")
+        if self.legacy:
+            return self._gather([f"frf_{kind}"], rows)[f"frf_{kind}"]
+        return synthesise(kind, self._gather(SOURCES[kind], rows), self.omega_rad_s, self.frf_dtype)
+
+    def verify_or_raise(self) -> None:
+        """Check every shard's sha256 checksums; a damaged shard raises a one-line FileFormatError."""
+        for i, e in enumerate(self.shards):
+            if i not in self._verified:
+                bad = damaged_file(self.root, e)
+                if bad is not None:
+                    raise FileFormatError(self._damage_message(e, bad))
+                self._verified.add(i)
 
     def verify(self) -> bool:
+        """Full check: every shard file against its sha256 checksum."""
         return all(verify_shard(self.root, e) for e in self.shards)
 
 
 def load_torch(root, arrays=("frf_updated",), columns=("slit1_x_m", "slit1_depth_m"), converged_only=False,
                dtype=None):
-    """Torch-ready tensors: complex arrays as a trailing real/imag axis, labels as a float tensor.
+    """Torch-ready tensors of a whole dataset: complex arrays with a trailing real/imag axis, labels as floats.
 
     Parameters
     ----------
     root : path of the dataset directory
-    arrays : names from :data:`ARRAYS`
+    arrays : names from :data:`ARRAYS` or :data:`DERIVED`
     columns : sample-table columns stacked into ``labels`` (N, len(columns))
     converged_only : keep only samples whose updating converged in both states
     dtype : torch dtype (default float32)
@@ -264,12 +512,12 @@ def load_torch(root, arrays=("frf_updated",), columns=("slit1_x_m", "slit1_depth
     import torch
 
     ds = Dataset(root)
-    table = ds.samples
+    table = ds.table(list(columns) + ["sample_id", "converged"])
     keep = table["converged"].to_numpy() if converged_only else np.ones(len(table), bool)
     dt = torch.float32 if dtype is None else dtype
     out = {}
     for name in arrays:
-        a = ds.array(name)[keep]
+        a = ds.array(name, np.flatnonzero(keep))
         if np.iscomplexobj(a):
             a = np.stack([a.real, a.imag], axis=-1)
         out[name] = torch.as_tensor(np.ascontiguousarray(a)).to(dt)

@@ -1,21 +1,25 @@
-"""Benchmark: batched dataset pipeline vs a one-sample-at-a-time loop, side by side in one run.
+"""Benchmark: end-to-end ``generate`` and FRF reading vs a one-sample-at-a-time loop, in one run.
 
-Run: ``.venv/bin/python -m experiments.bench_datagen [--n 20000] [--naive 100] [--workers 2]``
+Run: ``.venv/bin/python -m experiments.bench_datagen [--n 20000] [--naive 60] [--workers 2] [--json]``
 
-Both paths simulate the same pipeline on the default config (beam 5, 20-element
-truth mesh, 4 measured DOFs, Pilkey updating on the IIRS mass, 1024 FRF lines,
-reference + damaged state per sample):
+All paths use the default config (beam 5, 20-element truth mesh, 4 measured
+DOFs, Pilkey updating on the IIRS mass, 1024 FRF lines, baseline + current
+state per sample):
 
 * naive: Python loop over samples; full state-space eigen-solution of the
-  truth model, :func:`physics.updating.pilkey`, FRFs by direct inversion
-  (:func:`datagen.pipeline.simulate_naive`, ``modes="full"``);
-* naive-projection: the same loop with the batched path's modal shortcut;
-* batched: :func:`datagen.pipeline.simulate_shard` (vectorised chunks), one
-  process, then all ``--workers`` processes over shards.
+  truth model, :func:`physics.updating.pilkey`, measured and updated FRFs
+  computed eagerly (:func:`datagen.naive.simulate_naive`, ``modes="full"``);
+* generate: :func:`datagen.parallel.generate` end to end on ``--workers``
+  processes, including writing the shards, checksums and ``samples.parquet``;
+* read: FRF features (real/imag float32 tensors, both states, 4 DOFs, 1024
+  lines) through :func:`datagen.torchdata.make_loader` with ``--workers``
+  worker processes, synthesised on read, for the updated and the measured FRFs.
 
-Prints samples/s, the ratio batched/naive and peak memory (tracemalloc for the
-one-process batched shard, ru_maxrss of the parent and of the workers).
-Disk writing is not included (see ``beam-damage generate`` for end-to-end rates).
+Prints samples/s (wall clock) and samples per CPU second (user + system of
+this process and its workers, which a machine shared with other jobs
+distorts less), ratios measured in this run, bytes per sample on disk and
+peak memory. Targets (issue 10): <= 16 kB/sample, generate >= 50x naive,
+read >= 20,000 samples/s on 2 cores.
 """
 
 from __future__ import annotations
@@ -23,77 +27,89 @@ from __future__ import annotations
 import argparse
 import json
 import resource
+import shutil
+import tempfile
 import time
-import tracemalloc
-from concurrent.futures import ProcessPoolExecutor
-from multiprocessing import get_context
+from pathlib import Path
 
 import numpy as np
 
 
-def _shard(args):
-    from threadpoolctl import threadpool_limits
+def _cpu_s() -> float:
+    """CPU seconds (user + system) of this process and its terminated children so far."""
+    a, b = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return a.ru_utime + a.ru_stime + b.ru_utime + b.ru_stime
 
-    from datagen.config import merge
-    from datagen.pipeline import get_setup, simulate_shard
 
-    seed, index, n = args
-    setup = get_setup(merge({}))
-    with threadpool_limits(1):
-        simulate_shard(setup, np.random.SeedSequence(seed, spawn_key=(index,)), n)
-    return n
+def _dir_bytes(root: Path) -> int:
+    return sum(p.stat().st_size for p in root.rglob("*") if p.is_file())
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--n", type=int, default=20000, help="samples for the multi-process batched run")
-    ap.add_argument("--naive", type=int, default=60, help="samples for the per-sample loops")
+    ap.add_argument("--n", type=int, default=20000, help="samples generated end to end and read back")
+    ap.add_argument("--naive", type=int, default=60, help="samples for the per-sample loop")
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--shard", type=int, default=1000)
+    ap.add_argument("--batch", type=int, default=512, help="read batch size")
+    ap.add_argument("--keep", help="directory to keep the generated dataset in (default: a temporary one)")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
 
     from threadpoolctl import threadpool_limits
 
     from datagen.config import merge
-    from datagen.pipeline import draw_batch, get_setup, simulate_naive, simulate_shard
+    from datagen.naive import simulate_naive
+    from datagen.parallel import generate
+    from datagen.pipeline import draw_batch, get_setup
+    from datagen.torchdata import make_loader
 
-    setup = get_setup(merge({}))
-    res = {"config": "defaults (beam5, 20 truth elements, 1024 lines, IIRS mass)", "workers": a.workers}
+    cfg = merge({})
+    setup = get_setup(cfg)
+    res = {"config": "defaults (beam5, 20 truth elements, 1024 lines, IIRS mass)", "workers": a.workers, "n": a.n}
     inp = draw_batch(np.random.default_rng(0), a.naive, setup)
     with threadpool_limits(1):
-        simulate_naive(setup, inp.take(slice(0, 2)), modes="full")
-        t = time.perf_counter()
+        simulate_naive(setup, inp.take(slice(0, 2)), modes="full")  # warm-up (numba, caches)
+        t, c = time.perf_counter(), _cpu_s()
         simulate_naive(setup, inp, modes="full")
         res["naive_full_samples_per_s"] = a.naive / (time.perf_counter() - t)
-        t = time.perf_counter()
-        simulate_naive(setup, inp, modes="projection")
-        res["naive_projection_samples_per_s"] = a.naive / (time.perf_counter() - t)
-        simulate_shard(setup, np.random.SeedSequence(1), 256)
-        tracemalloc.start()
-        t = time.perf_counter()
-        simulate_shard(setup, np.random.SeedSequence(2), a.shard)
-        res["batched_1proc_samples_per_s"] = a.shard / (time.perf_counter() - t)
-        res["batched_1proc_tracemalloc_peak_MB"] = tracemalloc.get_traced_memory()[1] / 2**20
-        tracemalloc.stop()
-    jobs = [(3, i, min(a.shard, a.n - i * a.shard)) for i in range(-(-a.n // a.shard))]
-    with ProcessPoolExecutor(a.workers, mp_context=get_context("spawn")) as pool:
-        list(pool.map(_shard, [(9, 0, 64)] * a.workers))  # start and warm the workers
-        t = time.perf_counter()
-        done = sum(pool.map(_shard, jobs))
-        res["batched_all_cores_samples_per_s"] = done / (time.perf_counter() - t)
-    res["ratio_batched_all_cores_vs_naive_full"] = res["batched_all_cores_samples_per_s"] / res["naive_full_samples_per_s"]
-    res["ratio_batched_1proc_vs_naive_full"] = res["batched_1proc_samples_per_s"] / res["naive_full_samples_per_s"]
-    res["ratio_batched_all_cores_vs_naive_projection"] = (res["batched_all_cores_samples_per_s"]
-                                                          / res["naive_projection_samples_per_s"])
-    res["seconds_per_100k_samples_all_cores"] = 1e5 / res["batched_all_cores_samples_per_s"]
+        res["naive_full_samples_per_cpu_s"] = a.naive / (_cpu_s() - c)
+
+    tmp = Path(a.keep) if a.keep else Path(tempfile.mkdtemp(prefix="bench_datagen_"))
+    root = tmp / "ds"
+    if root.exists():
+        shutil.rmtree(root)
+    try:
+        generate(tmp / "warm", merge({"output": {"shard_size": 64}}), n=64 * a.workers, seed=9,
+                 workers=a.workers, progress=False)  # compile caches of the worker processes
+        t, c = time.perf_counter(), _cpu_s()
+        generate(root, cfg, n=a.n, seed=1, workers=a.workers, progress=False)
+        res["generate_samples_per_s"] = a.n / (time.perf_counter() - t)
+        res["generate_samples_per_cpu_s"] = a.n / (_cpu_s() - c)
+        res["bytes_per_sample"] = _dir_bytes(root) / a.n
+        res["ratio_generate_vs_naive_full"] = res["generate_samples_per_s"] / res["naive_full_samples_per_s"]
+        res["ratio_cpu_efficiency_generate_vs_naive"] = (res["generate_samples_per_cpu_s"]
+                                                         / res["naive_full_samples_per_cpu_s"])
+        for kind in ("updated", "measured"):
+            loader = make_loader(root, kind, columns=("stiffness_loss_Nm3",), batch_size=a.batch,
+                                 num_workers=a.workers)
+            c = _cpu_s()
+            it = iter(loader)
+            next(it)  # start the workers
+            t = time.perf_counter()
+            n = sum(b["frf"].shape[0] for b in it)
+            res[f"read_{kind}_frf_samples_per_s"] = n / (time.perf_counter() - t)
+            del it, loader  # joins the workers, so their CPU time is counted
+            res[f"read_{kind}_frf_samples_per_cpu_s"] = (n + a.batch) / (_cpu_s() - c)
+    finally:
+        if not a.keep:
+            shutil.rmtree(tmp, ignore_errors=True)
     res["peak_rss_parent_MB"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     res["peak_rss_largest_worker_MB"] = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
     if a.json:
         print(json.dumps(res, indent=1))
     else:
         for k, v in res.items():
-            print(f"{k:48s} {v:.1f}" if isinstance(v, float) else f"{k:48s} {v}")
+            print(f"{k:42s} {v:.1f}" if isinstance(v, float) else f"{k:42s} {v}")
     return res
 
 

@@ -33,6 +33,7 @@ COMMAND_MODULES = [
     "experiments.cmd_generate",
     "experiments.cmd_inspect",
     "experiments.cmd_experiment",
+    "experiments.cmd_export",
 ]
 
 EXIT_USAGE = 2

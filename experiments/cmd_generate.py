@@ -1,40 +1,70 @@
-"""``beam-damage generate``: simulated slit datasets (truth -> measured -> Pilkey-updated models and FRFs)."""
+"""``beam-damage generate``: simulated slit datasets (truth -> measured -> Pilkey-updated models; FRFs on read)."""
 
 from __future__ import annotations
 
 import os
 
-from datagen.config import load_config
+from datagen.config import load_config, merge, named_configs
 from datagen.parallel import generate
+from datagen.truth_beam import beam_mapping
+from physics.errors import BeamDamageError
+from physics.properties import PRESETS
 
 
 def add_parser(subparsers):
     p = subparsers.add_parser(
-        "generate", help="generate a dataset of damaged/undamaged specimens, updated models and FRFs",
-        description="Simulate N specimens with slits (and their undamaged reference), measure their modes and FRFs "
-                    "with noise, update damping and stiffness by Pilkey's iteration and write a sharded dataset "
-                    "(manifest.json, samples.parquet, .npy shards). Re-running with the same arguments resumes an "
-                    "interrupted run; results depend only on the config and seed, not on --workers/--scheduler.")
+        "generate", help="generate a dataset of specimens tested twice (baseline, current), updated models",
+        description="Simulate N specimens, each tested on two days (baseline, then current: slits, temperature, "
+                    "re-clamping), measure their modes and FRFs with noise, update damping and stiffness by "
+                    "Pilkey's iteration and write a sharded dataset (manifest.json, samples.parquet, .npy shards "
+                    "of what defines each sample: modes, updated M, C, K, noise seeds; FRFs are synthesised when "
+                    "read). Re-running with the same arguments resumes an interrupted run and regenerates damaged "
+                    "shards; results depend only on the config and seed, not on --workers/--scheduler.")
     p.add_argument("--n", type=int, required=True, help="number of samples")
     p.add_argument("--out", required=True, help="dataset directory (created, or resumed if it holds a manifest)")
-    p.add_argument("--config", help="TOML file overriding the defaults (see README 'Generating datasets')")
-    p.add_argument("--preset", help="beam preset (beam5, beam6, beam8); default beam5 or the config's")
+    p.add_argument("--config", help=f"a named config ({', '.join(named_configs())}) or a TOML file overriding the "
+                                    "defaults; a file may start from a named one with `base = \"training\"`")
+    p.add_argument("--beam", help="the truth beam: a preset (beam5, beam6, beam8) or a beam file (TOML, physics.beam; "
+                                  "effects shear_deformation and rotary_inertia), e.g. one `discrepancy` calibrated")
+    p.add_argument("--preset", help="beam preset (beam5, beam6, beam8); default beam5 or the config's (same as --beam "
+                                    "PRESET; kept for old scripts)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--workers", type=int, default=1, help=f"local processes (this machine has {os.cpu_count()})")
-    p.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786 (needs the 'dask' extra)")
+    p.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786 (needs the 'dask' extra; "
+                                       "--out must be on a filesystem the client can write)")
+    p.add_argument("--store-frf", action="store_true",
+                   help="also write the measured and updated FRFs into the shards (128 kB per sample; identical to "
+                        "what reading synthesises)")
     p.add_argument("--json", action="store_true", help="print the manifest summary as JSON")
     p.set_defaults(func=run)
 
 
 def run(args) -> dict:
+    beam = getattr(args, "beam", None)
+    if beam is not None and args.preset is not None:
+        raise BeamDamageError("give --beam or --preset, not both")
+    if beam in PRESETS:
+        args.preset, beam = beam, None
     cfg = load_config(args.config, preset=args.preset)
+    if beam is not None:
+        try:
+            from physics.beam import load_beam
+        except ImportError:
+            raise BeamDamageError("--beam FILE needs physics.beam (beam files), which this installation lacks") \
+                from None
+        cfg = merge({"beam": beam_mapping(load_beam(beam))}, base=cfg)
+    if args.store_frf:
+        cfg["output"]["store_frf"] = True
     m = generate(args.out, cfg, n=args.n, seed=args.seed, workers=args.workers, scheduler=args.scheduler,
                  progress=True)
-    summary = {"out": str(args.out), "complete": m["complete"], "seed": m["seed"], "preset": cfg["preset"],
+    summary = {"out": str(args.out), "complete": m["complete"], "seed": m["seed"],
+               "beam": cfg["beam"].get("name") if cfg["beam"] else cfg["preset"],
+               "config": args.config or "defaults", "format": m["format"],
                "package_version": m["package_version"], "n_shards": m["n_shards"],
                "counts": m.get("counts", {}), "checksums": m.get("checksums", {})}
     if not args.json:
         c = summary["counts"]
         print(f"{args.out}: {c.get('samples', 0)} samples in {m['n_shards']} shards, "
-              f"{c.get('not_converged', 0)} flagged as not converged (kept); seed {m['seed']}, preset {cfg['preset']}")
+              f"{c.get('not_converged', 0)} flagged as not converged (kept); seed {m['seed']}, beam {summary['beam']}, "
+              f"config {summary['config']}")
     return summary

@@ -27,7 +27,7 @@ def test_no_package_imports_a_later_layer(layer):
     assert bad == []
 
 
-@pytest.mark.parametrize("package", ["physics", "learn", "experiments"])
+@pytest.mark.parametrize("package", ["physics", "datagen", "learn", "experiments"])
 def test_declared_public_names_exist(package):
     mod = importlib.import_module(package)
     assert hasattr(mod, "__all__")

@@ -1,8 +1,7 @@
-"""Dataset format: determinism across workers, atomic shards, resume, loader."""
+"""Dataset format: determinism across workers, atomic shards, resume, checksums, FRFs on read, loader."""
 
 import json
-import os
-from pathlib import Path
+import shutil
 
 import numpy as np
 import pandas as pd
@@ -11,7 +10,7 @@ import pytest
 from datagen.config import merge
 from datagen.parallel import generate
 from datagen.store import ARRAYS, Dataset, load_torch
-from physics.errors import ConfigError
+from physics.errors import ConfigError, FileFormatError
 
 CFG = merge({"output": {"shard_size": 7}, "measurement": {"lines": 64}, "damage": {"n_slits": [0, 2]}})
 N = 30  # 5 shards, the last one short
@@ -35,9 +34,13 @@ def test_layout_and_readable_with_pandas_numpy(reference):
     assert m["package_version"] and m["config"] == CFG
     table = pd.read_parquet(reference / "samples.parquet")
     assert len(table) == N and list(table["sample_id"]) == list(range(N))
-    frf = np.load(reference / "shards" / "shard-000004" / "frf_updated.npy", mmap_mode="r", allow_pickle=False)
+    poles = np.load(reference / "shards" / "shard-000004" / "truth_poles.npy", mmap_mode="r", allow_pickle=False)
+    assert poles.shape == (2, 2, 8) and poles.dtype == np.complex128
+    assert not (reference / "shards" / "shard-000004" / "frf_updated.npy").exists()  # FRFs are made when read
+    frf = Dataset(reference).frf("updated", rows=[28, 29])
     assert frf.shape == (2, 2, 4, 64) and frf.dtype == np.complex64
     assert table["n_slits"].between(0, 2).all()
+    assert (table["damaged"] == (table["n_slits"] > 0)).all()
     one = table[table.n_slits == 0]
     assert one["slit1_x_m"].isna().all() and (one["slit1_element4"] == 0).all()
     assert Dataset(reference).verify()
@@ -98,10 +101,109 @@ def test_seed_changes_data(reference, tmp_path):
     assert not np.allclose(a, Dataset(reference).array("frf_measured")[:7])
 
 
+def test_frf_on_read_is_identical_to_store_frf_and_independent_of_row_selection(reference, tmp_path):
+    cfg = merge({**CFG, "output": {**CFG["output"], "store_frf": True}})
+    generate(tmp_path / "st", cfg, n=N, seed=11, workers=1, progress=False)
+    on_read, stored = Dataset(reference), Dataset(tmp_path / "st")
+    for kind in ("measured", "updated"):
+        files = np.concatenate([np.load(tmp_path / "st" / "shards" / e["name"] / f"frf_{kind}.npy")
+                                for e in stored.shards])
+        whole = on_read.frf(kind)
+        assert whole.shape == (N, 2, 4, 64) and np.array_equal(whole, files, equal_nan=True), kind
+        rows = [29, 3, 17, 3]  # any order, repeats, across shards: each sample's noise is its own
+        assert np.array_equal(on_read.frf(kind, rows=rows), whole[rows], equal_nan=True), kind
+    for k in ARRAYS:  # the stored definition of the samples does not depend on the option
+        assert np.array_equal(on_read.array(k), stored.array(k), equal_nan=True), k
+
+
+def test_measured_frf_noise_matches_its_level(reference):
+    """The measured FRF deviates from the noise-free truth by the recorded relative level (0.5%)."""
+    from physics.frf import pole_residue
+
+    ds = Dataset(reference)
+    lam, psi = ds.array("truth_poles"), ds.array("truth_shapes")
+    clean = pole_residue(lam, psi * psi[..., :1, :], ds.omega_rad_s)
+    rel = (ds.frf("measured").astype(complex) - clean) / clean
+    level = ds.table(["noise_level"])["noise_level"].to_numpy()
+    assert np.allclose(level, 0.005)
+    assert np.sqrt(np.mean(np.abs(rel) ** 2)) == pytest.approx(0.005, rel=0.03)
+    # the two test days carry independent noise
+    assert abs(np.corrcoef(rel[:, 0].real.ravel(), rel[:, 1].real.ravel())[0, 1]) < 0.05
+
+
+def test_damaged_shard_is_refused_and_regenerated_on_resume(reference, tmp_path):
+    root = tmp_path / "ds"
+    shutil.copytree(reference, root)
+    victim = root / "shards" / "shard-000002" / "truth_shapes.npy"
+    raw = bytearray(victim.read_bytes())
+    raw[-5] ^= 0xFF  # same size, one flipped byte: only the checksum sees it
+    victim.write_bytes(bytes(raw))
+    ds = Dataset(root)  # opening checks sizes only
+    ds.frf("updated", rows=[0])  # shard 0 is fine
+    with pytest.raises(FileFormatError, match="shard-000002.*truth_shapes.npy.*generate"):
+        ds.frf("measured", rows=[15])
+    (root / "shards" / "shard-000003" / "K_updated.npy").write_bytes(b"truncated")
+    with pytest.raises(FileFormatError, match="shard-000003.*K_updated.npy"):
+        Dataset(root)
+    m = generate(root, CFG, n=N, seed=11, workers=1, progress=False)
+    assert m["complete"] and Dataset(root).verify()
+    for i in (2, 3):
+        for f in ("truth_shapes.npy", "K_updated.npy"):
+            p = f"shards/shard-{i:06d}/{f}"
+            assert (root / p).read_bytes() == (reference / p).read_bytes(), p
+
+
+def test_table_column_selection_and_row_groups(reference):
+    import pyarrow.parquet as pq
+
+    t = Dataset(reference).table(["sample_id", "stiffness_loss_Nm3"])
+    assert list(t.columns) == ["sample_id", "stiffness_loss_Nm3"] and len(t) == N
+    meta = pq.ParquetFile(reference / "samples.parquet").metadata
+    assert meta.num_rows == N and meta.num_row_groups == 1
+    m = json.loads((reference / "manifest.json").read_text())
+    assert m["format"] == "beam-damage-dataset/2" and m["schema"]["states"] == ["baseline", "current"]
+    assert m["schema"]["columns"]["stiffness_loss_Nm3"].startswith("N m^3")
+
+
+def test_other_format_is_refused_with_a_clear_message(reference, tmp_path):
+    root = tmp_path / "old"
+    shutil.copytree(reference, root)
+    m = json.loads((root / "manifest.json").read_text())
+    m["format"] = "beam-damage-dataset/0"
+    (root / "manifest.json").write_text(json.dumps(m))
+    with pytest.raises(FileFormatError, match="format 'beam-damage-dataset/0' is not supported"):
+        Dataset(root)
+
+
 def test_load_torch(reference):
-    t = load_torch(reference, arrays=("frf_updated", "K_updated"), columns=("slit1_depth_m", "f1_hz_dam"))
+    t = load_torch(reference, arrays=("frf_updated", "K_updated"), columns=("slit1_depth_m", "f1_hz_cur"))
     assert tuple(t["frf_updated"].shape) == (N, 2, 4, 64, 2)
     assert tuple(t["K_updated"].shape) == (N, 2, 4, 4)
     assert tuple(t["labels"].shape) == (N, 2)
     frf = Dataset(reference).array("frf_updated")
     assert np.allclose(t["frf_updated"][..., 1].numpy(), frf.imag)
+
+
+def test_torch_loader_synthesises_in_workers_and_refuses_damaged_shards(reference, tmp_path):
+    from datagen.torchdata import make_loader
+
+    loader = make_loader(reference, "measured", columns=("stiffness_loss_Nm3",), batch_size=8, shuffle=True,
+                         num_workers=2, seed=4)
+    seen = {}
+    for b in loader:
+        assert b["frf"].shape[1:] == (2, 4, 64, 2) and b["labels"].shape[1] == 1
+        for sid, h in zip(b["sample_id"].tolist(), b["frf"]):
+            seen[sid] = h
+    assert sorted(seen) == list(range(N))
+    want = Dataset(reference).frf("measured")
+    got = np.stack([seen[i][..., 0].numpy() + 1j * seen[i][..., 1].numpy() for i in range(N)])
+    assert np.array_equal(got, want)  # workers and order do not change a sample's FRF (noise included)
+    root = tmp_path / "bad"
+    shutil.copytree(reference, root)
+    p = root / "shards" / "shard-000001" / "noise_seed.npy"
+    raw = bytearray(p.read_bytes())
+    raw[-1] ^= 1
+    p.write_bytes(bytes(raw))
+    with pytest.raises(FileFormatError, match=r"shard-000001.*noise_seed.npy") as exc:
+        make_loader(root, "measured", num_workers=2)
+    assert "\n" not in str(exc.value)

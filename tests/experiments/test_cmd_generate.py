@@ -2,6 +2,7 @@
 
 import json
 
+import numpy as np
 import pandas as pd
 
 from experiments.cli import main
@@ -35,3 +36,48 @@ def test_bad_config_names_key(tmp_path, capsys):
     cfg.write_text('[measurment]\nlines = 3\n')
     assert main(["generate", "--n", "5", "--out", str(tmp_path / "ds"), "--config", str(cfg)]) == 2
     assert "measurment" in capsys.readouterr().err
+
+
+def test_export_round_trips_through_the_readers(tmp_path, capsys):
+    from datagen.store import Dataset
+    from physics.io import read_frf
+
+    cfg = tmp_path / "c.toml"
+    cfg.write_text('[output]\nshard_size = 4\n[measurement]\nlines = 40\n')
+    assert main(["generate", "--n", "10", "--out", str(tmp_path / "ds"), "--config", str(cfg), "--json"]) == 0
+    capsys.readouterr()
+    ds = Dataset(tmp_path / "ds")
+    for fmt in ("uff", "npz", "csv"):
+        rc = main(["export", str(tmp_path / "ds"), "--samples", "7,2", "--format", fmt, "--out",
+                   str(tmp_path / fmt), "--json"])
+        assert rc == 0
+        files = json.loads(capsys.readouterr().out)["files"]
+        assert len(files) == 2 * 2 * 2  # samples x states x kinds
+        got = read_frf(tmp_path / fmt / f"sample-000007_current_measured.{fmt}")
+        want = ds.frf("measured", rows=[7])[0, 1]
+        assert got.response_dofs == ("2:+Y", "3:+Y", "4:+Y", "5:+Y") and got.reference_dofs == ("2:+Y",)
+        assert np.allclose(got.frequency_hz, ds.omega_rad_s / (2 * np.pi), rtol=1e-5)
+        assert np.abs(got.frf[:, 0, :] - want).max() <= 1e-5 * np.abs(want).max()
+    assert main(["export", str(tmp_path / "ds"), "--samples", "3,99", "--out", str(tmp_path / "x")]) == 2
+    assert "99" in capsys.readouterr().err
+
+
+def test_training_config_by_name_and_robustness_file_on_top(tmp_path, capsys):
+    from datagen.config import load_config
+
+    cfg = load_config("training")
+    assert cfg["damage"]["intact_fraction"] == 0.25 and cfg["damage"]["ei_loss"] == [0.05, 0.9]
+    assert cfg["measurement"]["frf_noise"] == [0.001, 0.03]
+    robust = tmp_path / "r.toml"
+    robust.write_text('base = "training"\n[damage]\nn_slits = [2, 3]\n[measurement]\nfrf_noise = [0.03, 0.1]\n')
+    r = load_config(robust)
+    assert r["damage"]["n_slits"] == [2, 3] and r["damage"]["intact_fraction"] == 0.25
+    assert r["measurement"]["frf_noise"] == [0.03, 0.1] and r["measurement"]["frf_noise_floor"] == [1e-4, 1e-3]
+    from datagen.config import named_configs
+
+    assert {"training", "robust_slits", "robust_noise", "robust_environment"} <= set(named_configs())
+    assert load_config("robust_slits")["damage"]["n_slits"] == [2, 3]
+    assert load_config("robust_noise")["measurement"]["frf_noise"] == [0.03, 0.1]
+    assert load_config("robust_environment")["specimen"]["root_spring_change"] == [-0.25, 0.25]
+    assert main(["generate", "--n", "3", "--out", str(tmp_path / "ds"), "--config", "trainin"]) == 2
+    assert "trainin" in capsys.readouterr().err

@@ -1,0 +1,128 @@
+"""Dataset report: counts, label histograms, the frequency-shift-vs-curvature check and FRF overlays.
+
+:func:`inspect_dataset` writes figures (matplotlib, Agg) and tables next to
+them and returns a JSON-ready summary; ``beam-damage inspect`` prints it.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from datagen.store import STATES, Dataset
+from physics.io import atomic_write_text
+from physics.properties import cantilever_curvature_squared
+
+
+def curvature_check(table, length_m):
+    """Regress the truth frequency shift of single-slit samples on the curvature-squared prediction.
+
+    Prediction (first-order perturbation, uniform cantilever):
+    ``df_r/f_r = -(1/2) (dEI/EI) w phi_r''(x)^2 / int phi_r''^2``
+    (:func:`physics.properties.cantilever_curvature_squared`).
+
+    Returns
+    -------
+    dict per mode: ``slope`` (1 = exact), ``r2``, ``n``.
+    """
+    one = table[(table.n_slits == 1)]
+    out = {}
+    for r in range(4):
+        pred = -0.5 * one["slit1_ei_loss"] * one["slit1_width_m"] * cantilever_curvature_squared(
+            one["slit1_x_m"].to_numpy(), length_m, r)
+        act = one[f"df{r + 1}_rel"]
+        pred, act = np.asarray(pred, float), act.to_numpy()
+        if len(act) < 3:
+            out[f"mode{r + 1}"] = {"slope": None, "r2": None, "n": int(len(act))}
+            continue
+        slope = float(pred @ act / (pred @ pred))
+        r2 = float(1 - np.sum((act - slope * pred) ** 2) / np.sum((act - act.mean()) ** 2))
+        out[f"mode{r + 1}"] = {"slope": slope, "r2": r2, "n": int(len(act))}
+    return out
+
+
+def inspect_dataset(dataset_dir, out_dir=None) -> dict:
+    """Summary, ``labels.png``, ``shift_vs_position.png``, ``curvature_check.csv``, ``frf_overlay.png``, ``summary.json``.
+
+    Parameters
+    ----------
+    dataset_dir : path of a dataset directory
+    out_dir : path, optional
+        Where the figures and tables go (default ``DATASET_DIR/inspect``).
+
+    Returns
+    -------
+    dict
+        ``dir``, ``complete``, ``samples``, ``shards``, ``converged_fraction``,
+        ``curvature_check`` (per mode: slope, r2, n), ``labels`` (min/max), ``figures``.
+    """
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ds = Dataset(dataset_dir)
+    table = ds.samples
+    out = Path(out_dir) if out_dir else Path(dataset_dir) / "inspect"
+    out.mkdir(parents=True, exist_ok=True)
+    preset = ds.manifest["preset"]
+    length = preset.get("length_m", preset.get("length"))  # format-1 manifests: "length"
+    check = curvature_check(table, length)
+    summary = {"dir": str(dataset_dir), "complete": ds.manifest.get("complete", False), "samples": int(len(table)),
+               "shards": len(ds.shards), "converged_fraction": float(table["converged"].mean()) if len(table) else None,
+               "curvature_check": check,
+               "labels": {c: {"min": float(table[c].min()), "max": float(table[c].max())}
+                          for c in ("slit1_x_m", "slit1_depth_m", "slit1_width_m", "slit1_ei_loss", "ei_Nm2",
+                                    "m_per_length_kg_m", "noise_level", "temperature_stiffness_change",
+                                    "root_spring_change", "stiffness_loss_Nm3", "max_frequency_drop_rel")
+                          if c in table and table[c].notna().any()},
+               "figures": []}
+    cols = [c for c in ("n_slits", "slit1_x_m", "slit1_depth_m", "slit1_width_m", "slit1_ei_loss", "ei_Nm2",
+                        "m_per_length_kg_m", "damping_scale", "root_spring_Nm_rad") if c in table]
+    fig, axs = plt.subplots(3, 3, figsize=(11, 8))
+    for ax, c in zip(axs.flat, cols):
+        ax.hist(table[c].dropna(), bins=30)
+        ax.set_title(c, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out / "labels.png", dpi=110)
+    plt.close(fig)
+    # frequency shift vs position with curvature^2
+    one = table[table.n_slits == 1]
+    fig, axs = plt.subplots(2, 2, figsize=(11, 7))
+    xg = np.linspace(0, length, 400)
+    rows = []
+    for r, ax in enumerate(axs.flat):
+        if len(one):
+            norm = -0.5 * one["slit1_ei_loss"] * one["slit1_width_m"]
+            ax.plot(one["slit1_x_m"], one[f"df{r + 1}_rel"] / norm, ".", ms=3, label="truth shift / (-dEI/EI w/2)")
+        ax.plot(xg, cantilever_curvature_squared(xg, length, r), "r-", label="phi''(x)^2 / int phi''^2")
+        c = check[f"mode{r + 1}"]
+        ax.set_title(f"mode {r + 1}: slope {c['slope']:.3f}, R^2 {c['r2']:.4f}" if c["slope"] is not None
+                     else f"mode {r + 1}")
+        ax.set_xlabel("slit position x (m)")
+        ax.set_ylabel("normalised shift (1/m)")
+        ax.legend(fontsize=7)
+        rows.append(f"{r + 1},{c['slope']},{c['r2']},{c['n']}")
+    fig.tight_layout()
+    fig.savefig(out / "shift_vs_position.png", dpi=110)
+    plt.close(fig)
+    atomic_write_text(out / "curvature_check.csv", "mode,slope,r2,n\n" + "\n".join(rows) + "\n")
+    if ds.shards:  # FRF overlays of sample 0
+        w = ds.omega_rad_s
+        fig, axs = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
+        for ax, kind, name in ((axs[0], "measured", "measured (truth + noise)"), (axs[1], "updated", "updated model")):
+            arr = ds.frf(kind, rows=[0])
+            for s, st in enumerate(STATES):
+                ax.semilogy(w / (2 * np.pi), np.abs(arr[0, s, 3]), label=st)
+            ax.set_title(f"sample 0, {name}: response node 5 / drive node 2")
+            ax.set_ylabel("|H| (m/N)")
+            ax.legend()
+        axs[1].set_xlabel("frequency (Hz)")
+        fig.tight_layout()
+        fig.savefig(out / "frf_overlay.png", dpi=110)
+        plt.close(fig)
+    summary["figures"] = [str(out / f) for f in ("labels.png", "shift_vs_position.png", "frf_overlay.png")]
+    summary["out"] = str(out)
+    atomic_write_text(out / "summary.json", json.dumps(summary, indent=1))
+    return summary

@@ -1,0 +1,80 @@
+"""``beam-damage export``: materialise chosen samples' FRFs as UFF58, NPZ or CSV files for modal software."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from datagen.store import STATES, Dataset
+from datagen.synth import FRF_KINDS
+from physics.errors import BeamDamageError
+from physics.io import MeasuredFRF, write_frf_csv, write_frf_npz, write_uff58
+
+WRITERS = {"uff": (write_uff58, "uff"), "npz": (write_frf_npz, "npz"), "csv": (write_frf_csv, "csv")}
+
+
+def add_parser(subparsers):
+    p = subparsers.add_parser(
+        "export", help="write chosen samples' FRFs (synthesised) as UFF58, NPZ or CSV files",
+        description="Synthesise the FRFs of the chosen samples (measured: truth + noise; updated: the Pilkey-updated "
+                    "model) and write one file per sample, state (baseline, current) and kind, named "
+                    "sample-ID_STATE_KIND.EXT, receptance (m/N), responses at the measured DOFs, drive at the first.")
+    p.add_argument("dir", help="dataset directory")
+    p.add_argument("--samples", required=True, help="comma-separated sample ids, e.g. 0,17,299")
+    p.add_argument("--format", choices=sorted(WRITERS), default="uff", help="file format (default uff: dataset 58)")
+    p.add_argument("--kind", choices=[*FRF_KINDS, "both"], default="both", help="which FRFs (default both)")
+    p.add_argument("--out", required=True, help="output directory (created)")
+    p.add_argument("--json", action="store_true", help="print the list of written files as JSON")
+    p.set_defaults(func=run)
+
+
+def _sample_ids(text: str) -> list[int]:
+    try:
+        ids = [int(t) for t in text.split(",") if t.strip()]
+    except ValueError:
+        raise BeamDamageError(f"--samples must be comma-separated integers such as 0,17,299, got {text!r}") from None
+    if not ids:
+        raise BeamDamageError("--samples names no sample")
+    return ids
+
+
+def _uff_dof(name: str) -> str:
+    node, d = name.split(":")
+    return f"{node}:+{d.upper()}"
+
+
+def run(args) -> dict:
+    ids = _sample_ids(args.samples)
+    ds = Dataset(args.dir)
+    sid = ds.table(["sample_id"])["sample_id"].to_numpy()
+    pos = {int(s): i for i, s in enumerate(sid)}
+    missing = [i for i in ids if i not in pos]
+    if missing:
+        raise BeamDamageError(f"{args.dir}: no sample(s) {missing}; the dataset holds ids {sid.min()}..{sid.max()}")
+    rows = [pos[i] for i in ids]
+    schema = ds.manifest["schema"]
+    resp = tuple(_uff_dof(d) for d in schema["measured_dofs"])
+    ref = (_uff_dof(schema["frf_reference_dof"]),)
+    f_hz = ds.omega_rad_s / (2 * np.pi)
+    writer, ext = WRITERS[args.format]
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    kinds = FRF_KINDS if args.kind == "both" else (args.kind,)
+    written = []
+    for kind in kinds:
+        H = ds.frf(kind, rows).astype(complex)
+        for j, i in enumerate(ids):
+            for s, state in enumerate(STATES):
+                if not np.all(np.isfinite(H[j, s])):
+                    raise BeamDamageError(f"sample {i}: the {kind} FRF of the {state} state is not finite "
+                                          f"(updating did not converge); choose another sample or --kind measured")
+                path = out / f"sample-{i:06d}_{state}_{kind}.{ext}"
+                data = MeasuredFRF(f_hz, H[j, s][:, None, :], resp, ref, kind="receptance",
+                                   metadata={"id1": f"beam-damage sample {i} {state} {kind}", "dataset": str(args.dir),
+                                             "sample_id": i, "state": state, "frf": kind})
+                writer(path, data)
+                written.append(str(path))
+    if not args.json:
+        print(f"wrote {len(written)} {args.format} files to {out}")
+    return {"files": written, "samples": ids, "format": args.format, "kinds": list(kinds)}

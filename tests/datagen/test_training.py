@@ -1,0 +1,91 @@
+"""The shipped training configuration: label ranges, intact pairs, day-to-day changes, noise per sample."""
+
+import numpy as np
+import pytest
+
+from datagen.config import load_config, merge
+from datagen.parallel import generate
+from datagen.pipeline import draw_batch, get_setup, simulate_batch
+from datagen.store import Dataset
+
+
+@pytest.fixture(scope="module")
+def training(tmp_path_factory):
+    cfg = load_config("training")
+    cfg["measurement"]["lines"] = 64
+    cfg["output"]["shard_size"] = 100
+    root = tmp_path_factory.mktemp("tr") / "ds"
+    generate(root, merge(cfg), n=200, seed=3, workers=1, progress=False)
+    return Dataset(root)
+
+
+def test_training_labels_span_the_configured_ranges(training):
+    t = training.samples
+    assert 0.15 < 1 - t["damaged"].mean() < 0.35                      # about a quarter intact
+    d, i = t[t.damaged], t[~t.damaged]
+    assert d["slit1_ei_loss"].between(0.05 - 1e-6, 0.9 + 1e-6).all()
+    assert d["slit1_ei_loss"].min() < 0.15 and d["slit1_ei_loss"].max() > 0.8
+    assert d["slit1_width_m"].between(0.001, 0.01).all()
+    assert d["slit1_x_m"].min() < 0.05 and d["slit1_x_m"].max() > 0.55  # whole length (L = 0.6095 m)
+    assert t["noise_level"].between(0.001, 0.03).all() and t["noise_level"].max() / t["noise_level"].min() > 10
+    assert t["noise_floor"].between(1e-4, 1e-3).all()
+    assert t["temperature_stiffness_change"].between(-0.004, 0.004).all()
+    assert t["root_spring_change"].between(-0.08, 0.08).all() and t["root_spring_change"].abs().max() > 0.05
+    # stiffness loss dEI * w (N m^3) and the slit-alone frequency drop
+    np.testing.assert_allclose(d["stiffness_loss_Nm3"], d["slit1_ei_loss"] * d["ei_Nm2"] * d["slit1_width_m"])
+    assert (i["stiffness_loss_Nm3"] == 0).all() and (i["max_frequency_drop_rel"] == 0).all()
+    assert (d["max_frequency_drop_rel"] > 0).all()
+    # intact pairs still differ between the days (temperature, re-clamping)
+    assert (i["df1_rel"].abs() > 1e-5).mean() > 0.8
+
+
+def test_temperature_change_scales_frequencies_by_its_square_root():
+    """Intact, rigid clamp: K_current = (1 + t) K_baseline, so f_cur / f_base = sqrt(1 + t) (closed form)."""
+    cfg = load_config("training")
+    cfg["specimen"]["root_spring_relative"] = []
+    cfg["damage"]["intact_fraction"] = 1.0
+    cfg["specimen"]["root_spring_change"] = [0.0, 0.0]
+    cfg["specimen"]["temperature_stiffness_change"] = [-0.01, 0.01]
+    setup = get_setup(merge(cfg))
+    inp = draw_batch(np.random.default_rng(1), 20, setup)
+    out = simulate_batch(setup, inp)
+    w = np.abs(out["truth_poles"][..., :4])
+    np.testing.assert_allclose(w[:, 1] / w[:, 0], np.sqrt(1 + inp.temperature_stiffness_change)[:, None]
+                               * np.ones((1, 4)), rtol=1e-6)
+
+
+def test_slit_drop_label_ignores_day_to_day_changes():
+    """With and without temperature/re-clamping the slit-alone drop is the same number."""
+    cfg = load_config("training")
+    cfg["damage"]["intact_fraction"] = 0.0
+    quiet = {**cfg, "specimen": {**cfg["specimen"], "temperature_stiffness_change": [0.0, 0.0],
+                                 "root_spring_change": [0.0, 0.0]}}
+    a = get_setup(merge(cfg))
+    b = get_setup(merge(quiet))
+    ia = draw_batch(np.random.default_rng(2), 12, a)
+    ib = draw_batch(np.random.default_rng(2), 12, b)
+    assert not np.allclose(ia.temperature_stiffness_change, 0)
+    da = simulate_batch(a, ia)["slit_frequency_drop"]
+    db = simulate_batch(b, ib)["slit_frequency_drop"]
+    np.testing.assert_allclose(da, db, rtol=1e-4, atol=1e-8)
+    assert (da > 0).all()
+
+
+def test_calibrated_modal_noise_scales_with_each_samples_frf_noise_level():
+    cfg = load_config("training")
+    cfg["measurement"].update(frequency_noise=[0.02, 0.01, 0.01, 0.01], damping_noise=[3.0, 2.0, 1.0, 1.0],
+                              shape_noise=[0.5, 0.5, 0.5, 0.5])
+    setup = get_setup(merge(cfg))
+    inp = draw_batch(np.random.default_rng(5), 4000, setup)
+    from datagen.pipeline import measure_modes
+
+    lam = -0.002 * np.full((4000, 2, 4), 100.0) + 100j
+    psi = np.ones((4000, 2, 4, 4), complex)
+    lam_m, psi_m = measure_modes(setup, inp, lam, psi)
+    level = inp.noise_level[:, None]
+    ef = (np.abs(lam_m) / np.abs(lam) - 1)[:, :, 0] / level          # mode 1: std 0.02 per unit level
+    ez = (-lam_m.real / np.abs(lam_m) / 0.002 - 1)[:, :, 2] / level  # mode 3: std 1.0 per unit level
+    es = (psi_m - psi)[:, :, :, 1] / level[..., None]                # mode 2 shapes: complex std 0.5
+    assert np.std(ef) == pytest.approx(0.02, rel=0.05)
+    assert np.std(ez) == pytest.approx(1.0, rel=0.05)
+    assert np.sqrt(np.mean(np.abs(es) ** 2)) == pytest.approx(0.5, rel=0.05)
