@@ -29,6 +29,7 @@ COMMAND_MODULES = [
     "experiments.demo",
     "experiments.cmd_generate",
     "experiments.cmd_inspect",
+    "experiments.cmd_discrepancy",
 ]
 
 EXIT_USAGE = 2
