@@ -213,6 +213,13 @@ def _real_shape(v):
     return r / r[np.argmax(np.abs(r))]
 
 
+def _aligned(a, b):
+    """``a - c b`` with ``a`` made real (:func:`_real_shape`) and ``c`` the least-squares complex scale."""
+    a = _real_shape(a)
+    b = np.asarray(b, dtype=complex)
+    return a - b * (np.vdot(b, a) / np.vdot(b, b))
+
+
 def pair_modes(meas: Measurement, pred: Prediction) -> np.ndarray:
     """Model mode index paired with each measured mode (MAC with shapes, else log-frequency distance)."""
     if meas.shapes is not None:
@@ -417,10 +424,7 @@ class _Problem:
             for j, pj in enumerate(p):
                 if not self.mask[j]:
                     continue
-                a = _real_shape(meas.shapes[:, j])
-                b = pred.shapes[:, pj]
-                b = b * (np.vdot(b, a) / np.vdot(b, b))
-                diff = (a - b) / noise.shape
+                diff = _aligned(meas.shapes[:, j], pred.shapes[:, pj]) / noise.shape
                 r.append(diff.real)
                 if np.any(np.abs(meas.shapes.imag) > 0):
                     r.append(diff.imag)
@@ -642,7 +646,7 @@ def _separating_measurement(a: Fit, b: Fit, meas: Measurement, noise: Noise, n_e
     dn = abs(pa.frequencies_hz[n] / pb.frequencies_hz[n] - 1)
     options.append((dn / sf, f"natural frequency of mode {n + 1} ({100 * dn:.2g} % apart: "
                              f"{pa.frequencies_hz[n]:.1f} vs {pb.frequencies_hz[n]:.1f} Hz)"))
-    ds = max(np.max(np.abs(_real_shape(pa.shapes[:, j]).real - _real_shape(pb.shapes[:, j]).real)) for j in range(n))
+    ds = max(np.max(np.abs(_aligned(pa.shapes[:, j], pb.shapes[:, j]))) for j in range(n))
     options.append((ds / noise.shape, f"mode shapes at the measured points (largest normalised difference "
                                       f"{ds:.2g})"))
     x_ref = a.beam.measured_x_m[0]
@@ -745,3 +749,49 @@ def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, s
         positions = used[best.effect]
         base = best
     return DiscrepancyResult(nominal, tuple(steps), base, tuple(named), noise, untestable)
+
+
+def simulate_measurement(truth: Beam, n_modes: int = 4, noise: Noise | None = None, *, seed: int = 0,
+                         n_elements: int = 80, shapes: bool = False, damping: bool = True,
+                         frf_lines: int = 0, frf_band_hz=None) -> Measurement:
+    """Noisy "measured" data of a truth beam (for tests and benchmarks of :func:`analyse`).
+
+    Modes come from the truth's own model (its elements and effects) on an
+    ``n_elements`` mesh, usually finer than the fitted one. Frequencies get
+    relative Gaussian noise ``noise.frequency``, damping ratios relative noise
+    ``noise.damping``, shapes complex noise ``noise.shape`` times the largest
+    entry. With ``frf_lines > 0`` the receptance between the measured points
+    (reference: the first) is computed by direct inversion of the truth's full
+    ``(M, C, K)`` and gets log-normal magnitude noise of ``noise.frf_db``.
+    """
+    from physics.frf import receptance
+
+    noise = noise or Noise(0.002, 0.05, 0.01, 0.5)
+    rng = np.random.default_rng(seed)
+    xs = truth.measured_x_m
+    probe = Measurement(np.ones(n_modes), shapes=np.zeros((len(xs), n_modes)), shape_x_m=xs)
+    pred = predict(truth, probe, n_elements, n_modes)
+    sf = np.broadcast_to(np.asarray(noise.frequency, dtype=float), (n_modes,))
+    f = pred.frequencies_hz * (1 + sf * rng.standard_normal(n_modes))
+    z = None
+    if damping:
+        if not np.all(pred.damping_ratios > 0):
+            raise BeamDamageError("the truth beam needs damping (effects.proportional_damping) to simulate "
+                                  "damping ratios")
+        z = pred.damping_ratios * (1 + noise.damping * rng.standard_normal(n_modes))
+    sh = None
+    if shapes:
+        sh = pred.shapes / np.max(np.abs(pred.shapes), axis=0)
+        sh = sh + noise.shape * (rng.standard_normal(sh.shape) + 1j * rng.standard_normal(sh.shape)) / np.sqrt(2)
+    kw = {}
+    if frf_lines:
+        model = truth.fe_model(n_elements)
+        lo, hi = frf_band_hz or (0.5 * pred.frequencies_hz[0], 1.15 * pred.frequencies_hz[-1])
+        fl = np.linspace(lo, hi, frf_lines)
+        t = fx.interpolation_matrix(model, xs)
+        # receptance at all DOFs for a unit force at the first measured point, then interpolated
+        h_full = receptance(model.M, model.C, model.K, 2 * np.pi * fl)           # (n, n, F)
+        h = np.einsum("sa,abf,b->sf", t, h_full, t[0])[:, None, :]
+        h = h * 10 ** (noise.frf_db * rng.standard_normal(h.shape) / 20)
+        kw = dict(frf=h, frf_frequency_hz=fl, frf_response_x_m=xs, frf_reference_x_m=(xs[0],))
+    return Measurement(f, z, sh, xs if shapes else (), **kw)
