@@ -15,8 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
+from experiments.cmd_model import add_beam_argument
 from physics import discrepancy as dsc
-from physics.beam import Beam, load_beam, write_beam
+from physics.beam import Beam, beam_to_toml, load_beam
 from physics.effects import CANDIDATES
 from physics.errors import ConfigError, FileFormatError
 from physics.io import atomic_write_bytes, modal_data_from_dict, parse_dof, read_frf
@@ -183,7 +184,7 @@ def _figures(res: dsc.DiscrepancyResult, recal: dsc.ModeResiduals, meas: dsc.Mea
 def run_discrepancy(beam_spec, measured, out_dir=None, *, noise=None, max_effects=2, n_elements=40, seed=0,
                     candidates=CANDIDATES, progress=None) -> dict:
     """The command without printing: returns the JSON result (issue 9 keys) plus ``"_result"`` objects."""
-    beam = load_beam(beam_spec)
+    beam = beam_spec if isinstance(beam_spec, Beam) else load_beam(beam_spec)
     meas, rel_std = load_measurement(measured, beam)
     noise = noise or dsc.Noise()
     if rel_std is not None and noise.frequency == dsc.Noise().frequency:
@@ -230,14 +231,13 @@ def run_discrepancy(beam_spec, measured, out_dir=None, *, noise=None, max_effect
                   "separating_measurement": st.separating_measurement} for i, st in enumerate(res.steps)]
         calibrated = res.final.beam.with_effects(res.final.beam.effects_dict(),
                                                  name=f"{beam.name}-calibrated")
-        comment = (f"calibrated by 'beam-damage discrepancy --beam {beam_spec} --measured {measured}'\n"
+        comment = (f"calibrated by 'beam-damage discrepancy --beam {beam.name} --measured {measured}'\n"
                    f"named effects: {', '.join(res.named_effects) or 'none'}; seed {seed}; "
                    f"noise: frequency {np.max(np.asarray(noise.frequency)):.3g} (relative)")
         summary = dict(out, beam_file=str(out_dir / "beam.toml"), steps=steps,
                        noise={"frequency": noise.frequency, "damping": noise.damping, "shape": noise.shape,
                               "frf_db": noise.frf_db}, seed=seed, untestable=res.untestable)
         files["summary.json"] = (json.dumps(to_jsonable(summary), indent=1) + "\n").encode()
-        from physics.beam import beam_to_toml
 
         files["beam.toml"] = beam_to_toml(calibrated, comment).encode()
         for name, data in files.items():
@@ -316,8 +316,7 @@ def add_parser(sub):
                     "mass, local damping) with the globals, score by BIC with the measurement noise and a "
                     "leave-one-mode-out check, name the winner only when significant, and repeat once. "
                     f"Example: --beam beam5 --measured {EXAMPLE.relative_to(Path(__file__).parent.parent)}")
-    p.add_argument("--beam", default="beam5", metavar="PRESET|FILE",
-                   help="beam preset (beam5, beam6, beam8) or TOML beam file (default beam5)")
+    add_beam_argument(p)
     p.add_argument("--measured", required=True, metavar="FILE",
                    help="modal JSON (natural_frequencies_hz alone, or with damping_ratios / eigenvalues and "
                         "eigenvectors + dofs) or FRFs (.uff/.unv, .csv, .npz; identified by LSCF/LSFD first)")

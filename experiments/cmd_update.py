@@ -4,18 +4,24 @@ from __future__ import annotations
 
 import numpy as np
 
-from physics import fem, modal, properties, reduction, updating
+from experiments.cmd_model import add_beam_argument
+from physics import fem, modal, reduction, updating
+from physics.beam import Beam, load_beam
 from physics.errors import FileFormatError
 from physics.io import read_modal_json
 
 
-def reference_mass(beam: str, mass: str) -> np.ndarray:
-    """The trusted mass matrix over the masters: IIRS-reduced (eqs. 3.41-3.44) or lumped (eq. 4.6)."""
-    preset = properties.beam_preset(beam)
+def reference_mass(beam, mass: str) -> np.ndarray:
+    """The trusted mass matrix over the masters: IIRS-reduced (eqs. 3.41-3.44) or lumped (eq. 4.6).
+
+    ``beam`` is a preset name, a beam file or a :class:`Beam`; the masters are its
+    measured positions (nodes of its own mesh) and its effects are applied.
+    """
+    b = beam if isinstance(beam, Beam) else load_beam(beam)
     if mass == "lumped":
-        return fem.lumped_mass(preset.m_per_length, preset.length / preset.n_elements, len(preset.masters))
-    model = fem.beam_model(preset.n_elements, preset.length, preset.EI, preset.m_per_length)
-    return reduction.iirs(model.M, model.K, model.index(preset.masters)).M
+        return fem.lumped_mass(b.mass_per_length_kg_m, b.length_m / b.n_elements, len(b.masters))
+    model = b.fe_model()
+    return reduction.iirs(model.M, model.K, model.index(b.masters)).M
 
 
 def load_modal(modal_file, n_modes: int):
@@ -27,9 +33,11 @@ def load_modal(modal_file, n_modes: int):
     return identify_file(modal_file, n_modes=n_modes).modal_data
 
 
-def update(beam: str, modal_file, mass: str = "reduced", tol: float = 1e-10, max_iter: int = 500,
+def update(beam, modal_file, mass: str = "reduced", tol: float = 1e-10, max_iter: int = 500,
            method: str = "pilkey") -> dict:
-    M = reference_mass(beam, mass)
+    b = beam if isinstance(beam, Beam) else load_beam(beam)
+    beam = b.name
+    M = reference_mass(b, mass)
     data = load_modal(modal_file, M.shape[0])
     if data.eigenvectors is None:
         raise FileFormatError(f"{modal_file}: field 'eigenvectors' is required for updating "
@@ -37,7 +45,7 @@ def update(beam: str, modal_file, mass: str = "reduced", tol: float = 1e-10, max
     if data.eigenvectors.shape != M.shape:
         raise FileFormatError(f"{modal_file}: 'eigenvectors' is {data.eigenvectors.shape[0]}x"
                               f"{data.eigenvectors.shape[1]} but {beam} has {M.shape[0]} measured DOFs "
-                              f"({', '.join(properties.beam_preset(beam).masters)}): a complete set of "
+                              f"({', '.join(b.masters)}): a complete set of "
                               f"{M.shape[0]} modes is needed")
     if method == "direct":
         res = updating.lancaster_direct(M, data.eigenvalues, data.eigenvectors)
@@ -58,7 +66,7 @@ def run(args) -> dict:
     out = update(args.beam, args.modal, args.mass, args.tol, args.max_iter, args.method)
     if not args.json:
         np.set_printoptions(precision=5, linewidth=160)
-        print(f"{args.beam}, {args.mass} mass, {args.method}: {out['iterations']} iterations; "
+        print(f"{out['beam']}, {args.mass} mass, {args.method}: {out['iterations']} iterations; "
               f"orthogonality misfit of the modes {out['orthogonality_misfit']:.3g} (0 = consistent with M)")
         print("M =\n", out["M"], "\nC (N s/m) =\n", out["C"], "\nK (N/m) =\n", out["K"])
         print("model frequencies (Hz):   ", np.array2string(out["natural_frequencies_hz"], precision=3))
@@ -72,7 +80,7 @@ def add_parser(sub):
                        description="Identify the damping matrix by Pilkey's iteration of Lancaster's formula "
                                    "(eqs. 1.10, 1.11) and update the stiffness matrix (eq. 1.12) from measured "
                                    "complex modes and the beam's reduced or lumped mass matrix.")
-    p.add_argument("--beam", default="beam5", choices=sorted(properties.PRESETS), help="preset (default beam5)")
+    add_beam_argument(p)
     p.add_argument("--modal", required=True, metavar="FILE",
                    help="modal-data JSON: eigenvalues and eigenvectors as complex strings (rows = measured DOFs, "
                         "columns = modes), as in beams.json; or an FRF file (.uff/.unv, .csv, .npz) with a "
