@@ -7,8 +7,9 @@ and fitted on 24. Two kinds of data: frequencies + damping ratios, and the same
 plus mode shapes at the quarter points. Prints, per data kind, how often each
 truth is named as each effect (``~`` marks "named, but reported
 indistinguishable from another candidate"), the median relative error of the
-recovered parameter and the median gap (max |frequency error| after
-recalibration only -> after the named effect).
+recovered parameter, the median gap (max |frequency error| after
+recalibration only -> after the named effect) and the same for the damping
+ratios (max relative error, Rayleigh damping only -> after).
 
     python -m experiments.bench_discrepancy [--seeds 3] [--kinds freq shapes]
 """
@@ -67,7 +68,7 @@ def main(argv=None):
     for kind in args.kinds:
         print(f"\n== data: frequencies + damping ratios{' + mode shapes' if kind == 'shapes' else ''}, "
               f"{args.seeds} seeds per truth ==")
-        print(f"{'truth':34s} " + " ".join(f"{short[c]:>7s}" for c in cols) + f" {'param err':>9s} {'gap %':>15s}")
+        print(f"{'truth':34s} " + " ".join(f"{short[c]:>7s}" for c in cols) + f" {'param err':>9s} {'gap %':>15s} {'zeta gap %':>15s}")
         for name, (effect, params, key) in tqdm(TRUTHS.items(), desc=kind, leave=False):
             counts = {c: 0 for c in cols}
             ties = {c: 0 for c in cols}
@@ -80,12 +81,14 @@ def main(argv=None):
                     ties[named] += 1
                 if effect and named == effect:
                     perr.append(abs(res.final.parameters[f"{effect}.{key}"] / params[key] - 1))
-                gaps.append((res.steps[0].base.residuals.max_abs_frequency_error_pct,
-                             res.final.residuals.max_abs_frequency_error_pct))
+                b, a = res.steps[0].base.residuals, res.final.residuals
+                gaps.append((b.max_abs_frequency_error_pct, a.max_abs_frequency_error_pct,
+                             100 * np.max(np.abs(b.model_damping / b.measured_damping - 1)),
+                             100 * np.max(np.abs(a.model_damping / a.measured_damping - 1))))
             cells = " ".join(f"{(str(counts[c]) + ('~' if ties[c] else '')) if counts[c] else '.':>7s}" for c in cols)
             pe = f"{100 * np.median(perr):8.1f}%" if perr else f"{'-':>9s}"
             g = np.median(np.array(gaps), axis=0)
-            print(f"{name:34s} {cells} {pe} {g[0]:6.2f} -> {g[1]:5.2f}")
+            print(f"{name:34s} {cells} {pe} {g[0]:6.2f} -> {g[1]:5.2f} {g[2]:6.1f} -> {g[3]:5.1f}")
     print(f"\n{time.perf_counter() - t0:.0f} s")
 
 

@@ -21,8 +21,9 @@ Workflow (:func:`analyse`)
 4. The best candidate is named when its BIC is at least
    :data:`BIC_SIGNIFICANT` below the current model's ("strong evidence",
    Kass & Raftery 1995) and its LOMO error is not worse; else ``"none"``.
-   Candidates within :data:`BIC_INDISTINGUISHABLE` of the winner are reported
-   as indistinguishable, with the measurement that separates them most
+   Other significant candidates whose ``chi^2`` lies within
+   :data:`BIC_INDISTINGUISHABLE` of the winner's (likelihood ratio below
+   ``e``) are reported as indistinguishable, with the measurement that separates them most
    (a higher mode, mode shapes, or the driving-point antiresonances,
    predicted by the two fitted models).
 5. The named effect joins the model and the search repeats (at most
@@ -65,7 +66,7 @@ except ImportError:  # pragma: no cover
 
 #: BIC drop that counts as significant ("strong evidence", Kass & Raftery 1995).
 BIC_SIGNIFICANT = 6.0
-#: Candidates whose BIC lies within this of the winner are indistinguishable.
+#: Significant candidates whose chi^2 lies within this of the winner's are indistinguishable.
 BIC_INDISTINGUISHABLE = 2.0
 
 
@@ -739,7 +740,10 @@ def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, s
         if not significant:
             steps.append(Step(base, tuple(fits), "none", (), ""))
             break
-        ties = tuple(f.effect for f in fits[1:] if f.bic - best.bic < BIC_INDISTINGUISHABLE)
+        # explain the data equally well: also significant, and a likelihood within e^1 of the winner's
+        # (chi^2, not BIC: a parameter more must not make two equal fits look different)
+        ties = tuple(f.effect for f in fits[1:]
+                     if f.bic <= base.bic - BIC_SIGNIFICANT and f.chi2 - best.chi2 < BIC_INDISTINGUISHABLE)
         sep = ""
         if ties:
             other = next(f for f in fits if f.effect == ties[0])
