@@ -132,3 +132,23 @@ def test_cli_rejects_bad_measured_file(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "natural_frequencies_hz" in err and err.count("\n") == 1
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.slow
+def test_cli_on_frfs_identifies_then_names_shear(tmp_path, capsys):
+    from experiments.cli import main
+    from physics.io import MeasuredFRF, write_frf_npz
+
+    truth = BEAM.with_effects({"shear_deformation": {"kGA_N": 3e4}, **DAMPING}, EI_Nm2=26.0)
+    meas = dsc.simulate_measurement(truth, seed=2, frf_lines=1500, frf_band_hz=(5, 800),
+                                    noise=dsc.Noise(0.002, 0.05, 0.01, 0.2))
+    write_frf_npz(tmp_path / "m.npz", MeasuredFRF(meas.frf_frequency_hz, meas.frf, ("2:+Y", "3:+Y", "4:+Y", "5:+Y"),
+                                                  ("2:+Y",), "receptance"))
+    rc = main(["discrepancy", "--measured", str(tmp_path / "m.npz"), "--out", str(tmp_path / "o"),
+               "--max-effects", "1", "--elements", "24", "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert rc == 0 and out["named_effect"] == "shear_deformation"
+    assert out["parameters"]["shear_deformation.kGA_N"] == pytest.approx(3e4, rel=0.05)
+    assert out["parameters"]["mass_per_length_kg_m"] == pytest.approx(M, rel=0.01)
+    assert out["gap_after"]["frf_error_db"] < 1.0 < out["gap_before"]["frf_error_db"]
+    assert (tmp_path / "o" / "frf_overlay.png").stat().st_size > 0
