@@ -476,7 +476,7 @@ def _fit(beam, meas, noise, effect, fixed_effects, n_elements, pairs, *, fit_mas
             name, _, key = p.key.partition(".")
             if p.key in ("EI_scale", "mass_scale"):
                 u0.append(0.0)
-            elif name in named and key in start.get(name, {}):
+            elif key in start.get(name, {}) and (name in named or s == 0):
                 v = start[name][key]
                 u0.append(math.log(v) if p.log else v)
             elif s == 0:
@@ -620,8 +620,8 @@ def _candidate_fit(beam, meas, noise, name, fixed, n_elements, pairs, fit_mass, 
     """Fit one candidate on top of the named effects; returns ``(fit, positions used)``."""
     position_free = meas.shapes is not None or meas.frf is not None
     kw = dict(fit_mass=fit_mass, seed=seed, named=named, start=start)
-    if name in ("added_mass", "local_damping") and not position_free:
-        # frequencies (and damping) only: the position is chosen among the measured points
+    if name in ("added_mass", "local_damping"):
+        # scan the measured points for the position; with shapes or FRFs then refine it continuously
         options = []
         for x in beam.measured_x_m:
             pos = {**positions, name: x}
@@ -629,6 +629,11 @@ def _candidate_fit(beam, meas, noise, name, fixed, n_elements, pairs, fit_mass, 
                                   position=pos, with_lomo=False, **kw)
             options.append((f.bic, f, prob, x_opt, pos))
         _, f, prob, x_opt, pos = min(options, key=lambda t: t[0])
+        if position_free:
+            refined, _, _ = _fit(beam, meas, noise, name, fixed, n_elements, pairs, n_starts=1, position=positions,
+                                 fit_mass=fit_mass, seed=seed, named=named,
+                                 start={**start, name: f.beam.effects_dict()[name]})
+            return refined, positions
         # the discrete position counts as a parameter
         return replace(f, n_params=f.n_params + 1, bic=f.bic + math.log(f.n_obs), lomo=_lomo(prob, x_opt)), pos
     f, _, _ = _fit(beam, meas, noise, name, fixed, n_elements, pairs, n_starts=n_starts, position=positions, **kw)
