@@ -347,7 +347,8 @@ class Fit:
     parameters, parameter_std : dict
         Fitted values and standard deviations, keys ``"EI_Nm2"``,
         ``"mass_per_length_kg_m"``, ``"<effect>.<parameter>"``, derived
-        ``"shear_deformation.G_core_pa"``.
+        ``"shear_deformation.G_core_pa"``. A std of 0 marks a value held fixed
+        (the mass without FRFs), NaN a position chosen among the measured points.
     chi2 : float
         Sum of squared whitened residuals.
     n_obs, n_params : int
@@ -561,7 +562,7 @@ def _as_fit(prob: _Problem, res: OptimizeResult, effect: str, meas: Measurement)
         std[p.key] = v * std_u[i] if p.log else std_u[i]
     for name, x in prob.position.items():
         params[f"{name}.x_m"] = x
-        std[f"{name}.x_m"] = 0.0
+        std[f"{name}.x_m"] = float("nan")   # chosen among the measured points, not fitted
     if "shear_deformation.kGA_N" in params:
         params["shear_deformation.G_core_pa"] = g_core_pa(params["shear_deformation.kGA_N"], nb)
         std["shear_deformation.G_core_pa"] = g_core_pa(std["shear_deformation.kGA_N"], nb)
@@ -740,7 +741,9 @@ def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, s
             used[c] = pos
         fits.sort(key=lambda f: f.bic)
         best = fits[0]
-        lomo_ok = not (np.isfinite(best.lomo) and np.isfinite(base.lomo)) or best.lomo <= base.lomo
+        # an effect needs data left over to be tested: more observations than parameters and a held-out check
+        testable = best.n_obs > best.n_params and np.isfinite(best.lomo)
+        lomo_ok = testable and (not np.isfinite(base.lomo) or best.lomo <= base.lomo)
         significant = best.bic <= base.bic - BIC_SIGNIFICANT and lomo_ok
         if not significant:
             steps.append(Step(base, tuple(fits), "none", (), ""))

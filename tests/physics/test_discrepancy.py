@@ -93,6 +93,14 @@ def test_hidden_shear_from_frfs_recovers_mass_scale_too():
     assert res.final.residuals.frf_error_db < res.steps[0].base.residuals.frf_error_db
 
 
+def test_two_frequencies_cannot_name_an_effect():
+    # EI and one effect parameter fit two frequencies exactly: nothing is left to test the effect on
+    meas = dsc.Measurement(np.array([21.536, 129.721]))
+    res = dsc.analyse(BEAM, meas, NOISE, max_effects=1, n_elements=24, n_starts=2,
+                      candidates=("shear_deformation", "root_flexibility"))
+    assert res.named_effects == ()
+
+
 def test_measurement_validation():
     with pytest.raises(ValueError, match="frequencies_hz"):
         dsc.Measurement(np.array([10.0, np.nan]))
