@@ -20,7 +20,7 @@ from physics import discrepancy as dsc
 from physics.beam import Beam, beam_to_toml, load_beam
 from physics.effects import CANDIDATES
 from physics.errors import ConfigError, FileFormatError
-from physics.io import atomic_write_bytes, modal_data_from_dict, parse_dof, read_frf
+from physics.io import atomic_write_bytes, modal_data_from_dict, read_frf
 
 EXAMPLE = Path(__file__).parent / "data" / "thesis" / "beam5_table_4_3.json"
 
@@ -34,13 +34,13 @@ def _positions(beam: Beam, labels, n_rows: int, source: str) -> tuple:
         return beam.measured_x_m
     xs = []
     for lab in labels:
-        node = None
-        head = str(lab).split(":")[0]
+        head, _, direction = str(lab).partition(":")
         try:
-            node = parse_dof(str(lab).replace(":y", ":+Y"))[0] if ":" in str(lab) else int(head)
-        except (FileFormatError, ValueError):
-            pass
-        if node is None or not 1 <= node <= beam.n_elements + 1:
+            node = int(head)
+        except ValueError:
+            node = None
+        transverse = direction.upper().lstrip("+-") in ("", "Y", "Z")
+        if not transverse or node is None or not 1 <= node <= beam.n_elements + 1:
             raise FileFormatError(f"{source}: DOF label {lab!r} must name a node 1..{beam.n_elements + 1} of the "
                                   f"beam's {beam.n_elements}-element mesh (e.g. \"2:y\")")
         xs.append((node - 1) * beam.length_m / beam.n_elements)
