@@ -68,7 +68,8 @@ def main(argv=None):
     for kind in args.kinds:
         print(f"\n== data: frequencies + damping ratios{' + mode shapes' if kind == 'shapes' else ''}, "
               f"{args.seeds} seeds per truth ==")
-        print(f"{'truth':34s} " + " ".join(f"{short[c]:>7s}" for c in cols) + f" {'param err':>9s} {'gap %':>15s} {'zeta gap %':>15s}")
+        print(f"{'truth':34s} " + " ".join(f"{short[c]:>7s}" for c in cols)
+              + f" {'param err':>9s} {'gap %':>15s} {'zeta gap %':>15s}")
         for name, (effect, params, key) in tqdm(TRUTHS.items(), desc=kind, leave=False):
             counts = {c: 0 for c in cols}
             ties = {c: 0 for c in cols}

@@ -552,8 +552,9 @@ def _as_fit(prob: _Problem, res: OptimizeResult, effect: str, meas: Measurement)
         std_u = np.sqrt(np.clip(np.diag(cov), 0, None))
     except np.linalg.LinAlgError:
         std_u = np.full(n_par, np.nan)
-    params, std = {"EI_Nm2": nb.EI_Nm2, "mass_per_length_kg_m": nb.mass_per_length_kg_m}, {
-        "EI_Nm2": nb.EI_Nm2 * std_u[0], "mass_per_length_kg_m": nb.mass_per_length_kg_m * std_u[1] if prob.fit_mass else 0.0}
+    params = {"EI_Nm2": nb.EI_Nm2, "mass_per_length_kg_m": nb.mass_per_length_kg_m}
+    std = {"EI_Nm2": nb.EI_Nm2 * std_u[0],
+           "mass_per_length_kg_m": nb.mass_per_length_kg_m * std_u[1] if prob.fit_mass else 0.0}
     for i, p in enumerate(prob.params):
         if p.key in ("EI_scale", "mass_scale"):
             continue
