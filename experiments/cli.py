@@ -34,6 +34,7 @@ COMMAND_MODULES = [
     "experiments.cmd_inspect",
     "experiments.cmd_experiment",
     "experiments.cmd_export",
+    "experiments.cmd_discrepancy",
 ]
 
 EXIT_USAGE = 2

@@ -1,26 +1,49 @@
-"""``beam-damage model``: a preset beam's FE matrices and natural frequencies."""
+"""``beam-damage model``: FE matrices and natural frequencies of a preset beam or a beam file."""
 
 from __future__ import annotations
 
 import numpy as np
 
+import argparse
+
 from physics import fem, modal, properties, reduction
+from physics.beam import Beam, load_beam
 from physics.errors import BeamDamageError
 
 #: Old name of :data:`physics.reduction.REDUCTIONS`.
 REDUCTIONS = reduction.REDUCTIONS
 
 
-def build(beam: str, elements: int, mass: str, method: str, bc: str = "clamped-free") -> dict:
-    """Matrices of a preset beam, optionally reduced to the translational DOFs.
+def beam_argument(spec: str) -> Beam:
+    """argparse ``type`` of ``--beam PRESET|FILE``: a bad name or file is a one-line usage error (exit 2)."""
+    try:
+        return load_beam(spec)
+    except BeamDamageError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def add_beam_argument(p, default="beam5"):
+    """The shared ``--beam PRESET|FILE`` option (a preset name or a TOML beam file, see physics.beam)."""
+    p.add_argument("--beam", default=default, type=beam_argument, metavar="PRESET|FILE",
+                   help=f"beam preset ({', '.join(sorted(properties.PRESETS))}) or TOML beam file "
+                        f"(README 'beam file'; default {default})")
+
+
+def build(beam, elements: int | None, mass: str, method: str, bc: str | None = None) -> dict:
+    """Matrices of a beam (preset name, beam file or :class:`Beam`), optionally reduced to the translations.
 
     ``mass="consistent"``: the consistent mass (eq. 3.8), reduced with ``K``;
     ``mass="lumped"`` replaces the reduced mass matrix by the translation
     partition of the consistent mass matrix (eq. 4.6 for 4 elements); its
-    stiffness still comes from the chosen reduction.
+    stiffness still comes from the chosen reduction. ``elements`` and ``bc``
+    default to the beam's own; every effect of a beam file is applied.
     """
-    preset = properties.beam_preset(beam)
-    model = fem.beam_model(elements, preset.length_m, preset.EI_Nm2, preset.mass_per_length_kg_m, bc=bc)
+    b = beam if isinstance(beam, Beam) else load_beam(beam)
+    elements = b.n_elements if elements is None else elements
+    bc = bc or b.bc
+    if elements < 1:
+        raise BeamDamageError(f"--elements must be >= 1, got {elements}")
+    model = b.with_effects(b.effects, bc=bc).fe_model(elements)
     M, K, dofs, iterations = model.M, model.K, model.dofs, 0
     if method != "none":
         masters = model.translations()
@@ -34,11 +57,12 @@ def build(beam: str, elements: int, mass: str, method: str, bc: str = "clamped-f
         M = model.M[np.ix_(idx, idx)]
     w, _ = modal.undamped_modes(M, K)
     closed = None
-    if bc == "clamped-free":
-        closed = properties.cantilever_frequencies_hz(preset.EI_Nm2, preset.mass_per_length_kg_m, preset.length_m,
-                                                      properties.cantilever_beta_l(min(len(dofs), 8)))
+    if bc == "clamped-free" and not b.effects:
+        closed = properties.cantilever_frequencies_hz(
+            b.EI_Nm2, b.mass_per_length_kg_m, b.length_m, properties.cantilever_beta_l(min(len(dofs), 8)))
     return {
-        "beam": beam, "elements": elements, "mass": mass, "reduction": method, "bc": bc,
+        "beam": b.name, "effects": b.effects_dict(), "elements": elements, "mass": mass, "reduction": method,
+        "bc": bc,
         "M": M, "K": K, "dofs": list(dofs),
         "natural_frequencies_hz": w / (2 * np.pi),
         "closed_form_frequencies_hz": closed,
@@ -50,7 +74,8 @@ def run(args) -> dict:
     out = build(args.beam, args.elements, args.mass, args.reduction, args.bc)
     if not args.json:
         np.set_printoptions(precision=6, linewidth=160)
-        print(f"{args.beam}: {args.elements} elements, {args.bc}, mass {args.mass}, reduction {args.reduction}"
+        print(f"{out['beam']}: {out['elements']} elements, {out['bc']}, mass {args.mass}, reduction {args.reduction}"
+              + (f", effects {', '.join(out['effects'])}" if out["effects"] else "")
               + (f" ({out['iterations']} iterations)" if args.reduction == "iirs" else ""))
         print("DOFs:", " ".join(out["dofs"]))
         print("M (kg) =\n", out["M"], "\nK (N/m) =\n", out["K"])
@@ -61,17 +86,20 @@ def run(args) -> dict:
 
 
 def add_parser(sub):
-    p = sub.add_parser("model", help="FE matrices and natural frequencies of a preset beam",
-                       description="Assemble a preset beam (Table 4.1) with Euler-Bernoulli elements (eqs. 3.8, "
-                                   "3.9), optionally reduce it to the translational DOFs (Guyan, IRS, IIRS) and "
-                                   "print matrices and natural frequencies.")
-    p.add_argument("--beam", default="beam5", choices=sorted(properties.PRESETS), help="preset (default beam5)")
-    p.add_argument("--elements", type=int, default=4, help="number of elements (default 4, as in the thesis)")
+    p = sub.add_parser("model", help="FE matrices and natural frequencies of a preset beam or beam file",
+                       description="Assemble a preset beam (Table 4.1) or a TOML beam file with Euler-Bernoulli "
+                                   "elements (eqs. 3.8, 3.9; Timoshenko elements and the other effects of a beam "
+                                   "file applied), optionally reduce it to the translational DOFs (Guyan, IRS, "
+                                   "IIRS) and print matrices and natural frequencies.")
+    add_beam_argument(p)
+    p.add_argument("--elements", type=int, default=None,
+                   help="number of elements (default: the beam's, 4 for the presets as in the thesis)")
     p.add_argument("--mass", default="consistent", choices=("consistent", "lumped"),
                    help="consistent (reduced with K) or lumped (translation partition, eq. 4.6)")
     p.add_argument("--reduction", default="none", choices=("none",) + tuple(reduction.REDUCTIONS),
                    help="reduce to the translational DOFs (default none)")
-    p.add_argument("--bc", default="clamped-free", choices=fem.BOUNDARY_CONDITIONS, help="boundary condition")
+    p.add_argument("--bc", default=None, choices=fem.BOUNDARY_CONDITIONS,
+                   help="boundary condition (default: the beam's, clamped-free for the presets)")
     p.add_argument("--json", action="store_true",
                    help="print one JSON object: M, K, dofs, natural_frequencies_hz, closed_form_frequencies_hz, iterations")
     p.set_defaults(func=run, flags={"n_elements": "--elements", "mass": "--mass", "method": "--reduction"})

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from physics import modal, properties, updating
+from experiments.cmd_model import add_beam_argument
+from physics import modal, updating
+from physics.beam import Beam, load_beam
 from physics.errors import FileFormatError
 from physics.io import read_modal_json
 
@@ -18,12 +20,15 @@ def load_modal(modal_file, n_modes: int):
     return identify_file(modal_file, n_modes=n_modes).modal_data
 
 
-def update(beam: str, modal_file, mass: str = "iirs", tol: float = 1e-10, max_iter: int = 500,
+def update(beam, modal_file, mass: str = "iirs", tol: float = 1e-10, max_iter: int = 500,
            method: str = "pilkey") -> dict:
-    """Identify ``C`` and update ``K`` of a preset beam from a modal-data or FRF file (the analyst mass is trusted)."""
-    preset = properties.beam_preset(beam)
+    """Identify ``C`` and update ``K`` of a beam (preset, beam file or :class:`Beam`) from a modal-data or FRF
+    file; the analyst mass (IIRS or lumped, over the beam's measured DOFs, effects applied) is trusted."""
+    b = beam if isinstance(beam, Beam) else load_beam(beam)
+    beam = b.name
     mass = updating.mass_model_name(mass, "mass")
-    M = updating.analyst_mass(preset.mass_per_length_kg_m, preset.length_m, mass, preset.n_elements)
+    model = b.fe_model()
+    M = updating.reduced_mass(model.M, model.K, model.index(b.masters), mass)
     data = load_modal(modal_file, M.shape[0])
     if data.eigenvectors is None:
         raise FileFormatError(f"{modal_file}: field 'eigenvectors' is required for updating "
@@ -31,7 +36,7 @@ def update(beam: str, modal_file, mass: str = "iirs", tol: float = 1e-10, max_it
     if data.eigenvectors.shape != M.shape:
         raise FileFormatError(f"{modal_file}: 'eigenvectors' is {data.eigenvectors.shape[0]}x"
                               f"{data.eigenvectors.shape[1]} but {beam} has {M.shape[0]} measured DOFs "
-                              f"({', '.join(properties.beam_preset(beam).masters)}): a complete set of "
+                              f"({', '.join(b.masters)}): a complete set of "
                               f"{M.shape[0]} modes is needed")
     if method == "direct":
         res = updating.lancaster_direct(M, data.eigenvalues, data.eigenvectors)
@@ -52,7 +57,7 @@ def run(args) -> dict:
     out = update(args.beam, args.modal, args.mass, args.tol, args.max_iter, args.method)
     if not args.json:
         np.set_printoptions(precision=5, linewidth=160)
-        print(f"{args.beam}, {out['mass']} mass, {args.method}: {out['iterations']} iterations; "
+        print(f"{out['beam']}, {out['mass']} mass, {args.method}: {out['iterations']} iterations; "
               f"orthogonality misfit of the modes {out['orthogonality_misfit']:.3g} (0 = consistent with M)")
         print("M =\n", out["M"], "\nC (N s/m) =\n", out["C"], "\nK (N/m) =\n", out["K"])
         print("model frequencies (Hz):   ", np.array2string(out["natural_frequencies_hz"], precision=3))
@@ -66,7 +71,7 @@ def add_parser(sub):
                        description="Identify the damping matrix by Pilkey's iteration of Lancaster's formula "
                                    "(eqs. 1.10, 1.11) and update the stiffness matrix (eq. 1.12) from measured "
                                    "complex modes and the beam's reduced or lumped mass matrix.")
-    p.add_argument("--beam", default="beam5", choices=sorted(properties.PRESETS), help="preset (default beam5)")
+    add_beam_argument(p)
     p.add_argument("--modal", required=True, metavar="FILE",
                    help="modal-data JSON: eigenvalues and eigenvectors as complex strings (rows = measured DOFs, "
                         "columns = modes), as in beams.json; or an FRF file (.uff/.unv, .csv, .npz) with a "

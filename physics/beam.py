@@ -1,0 +1,306 @@
+"""The beam file: one beam (geometry, section, mass, boundary condition, measured points, effects).
+
+:class:`Beam` is the currency between commands: ``model``, ``update``,
+``discrepancy`` (which writes a calibrated one) and ``generate`` take
+``--beam PRESET|FILE``. :func:`load_beam` accepts a preset name (``beam5``,
+``beam6``, ``beam8``: Table 4.1 and the Chapter Four geometry) or a TOML file.
+
+Beam file (TOML, UTF-8)
+-----------------------
+Every key is optional when ``preset`` is given (the preset supplies it);
+otherwise the keys marked * are required. Unknown keys are errors::
+
+    preset = "beam5"                 # optional: start from a preset, override below
+    name = "beam5-calibrated"
+    bc = "clamped-free"              # clamped-free | free-free | pinned-pinned | clamped-clamped
+    n_elements = 4                   # elements of the FE model (thesis: 4)
+    length_m = 0.6095                # * free (cantilever) length
+    total_length_m = 1.219           # whole specimen (mass per length = mass_kg / total_length_m)
+    width_m = 0.051                  # * section width b
+    thickness_m = 0.007264           # * section depth h
+    face_thickness_m = 0.0005        # each face sheet of the sandwich (t_f)
+    core_modulus_pa = 1.0e8          # core Young's modulus
+    EI_Nm2 = 22.674                  # * flexural rigidity ...
+    # face_modulus_pa = 7.0e10       #   ... or the face modulus: EI from eq. 4.1 (faces + core)
+    mass_per_length_kg_m = 0.12955   # * mass per length ...
+    # mass_kg = 0.15792              #   ... or the specimen mass over total_length_m
+    measured_x_m = [0.152375, 0.30475, 0.457125, 0.6095]   # measured translations (default: quarter points)
+
+    [effects.shear_deformation]      # any of physics.effects.EFFECTS, each with its parameters
+    kGA_N = 2.0e4
+    [effects.root_flexibility]
+    k_theta_Nm_rad = 5.0e3
+
+``EI_Nm2`` and ``face_modulus_pa`` exclude each other, as do
+``mass_per_length_kg_m`` and ``mass_kg``. The effects and their parameters are
+listed in :mod:`physics.effects`. :func:`write_beam` writes every key
+explicitly (no ``preset``), so a written file stands on its own.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field, fields, replace
+from pathlib import Path
+from types import MappingProxyType
+
+import numpy as np
+
+from physics import effects as fx
+from physics.errors import ConfigError
+from physics.fem import BOUNDARY_CONDITIONS, FEModel
+from physics.io import atomic_write_text
+from physics.properties import PRESETS, layered_ei
+
+#: Face-sheet thickness and core modulus of the presets (the datagen section layout).
+PRESET_FACE_THICKNESS_M = 0.0005
+PRESET_CORE_MODULUS_PA = 1.0e8
+
+
+@dataclass(frozen=True)
+class Beam:
+    """A beam with its effects.
+
+    Attributes
+    ----------
+    name : str
+    length_m : float
+        Free (cantilever) length (m).
+    total_length_m : float
+        Whole specimen length (m), which the weighed mass is spread over.
+    width_m, thickness_m : float
+        Section width ``b`` and depth ``h`` (m).
+    EI_Nm2 : float
+        Flexural rigidity (N m^2).
+    mass_per_length_kg_m : float
+        Mass per length (kg/m).
+    bc : str
+        Boundary condition (:data:`physics.fem.BOUNDARY_CONDITIONS`).
+    n_elements : int
+        Elements of the default FE model.
+    measured_x_m : tuple of float
+        Positions (m, from node 1 at ``x = 0``) of the measured translations.
+    face_thickness_m : float or None
+        Thickness of each face sheet of a sandwich section (m).
+    core_modulus_pa : float or None
+        Young's modulus of the core (Pa).
+    effects : mapping
+        ``{effect name: {parameter: value}}`` (read-only), see :mod:`physics.effects`.
+    """
+
+    name: str
+    length_m: float
+    total_length_m: float
+    width_m: float
+    thickness_m: float
+    EI_Nm2: float
+    mass_per_length_kg_m: float
+    bc: str = "clamped-free"
+    n_elements: int = 4
+    measured_x_m: tuple = ()
+    face_thickness_m: float | None = None
+    core_modulus_pa: float | None = None
+    effects: MappingProxyType = field(default_factory=dict)
+
+    def __post_init__(self):
+        eff = fx.validate_effects(dict(self.effects), f"beam {self.name!r}")
+        object.__setattr__(self, "effects", MappingProxyType({k: MappingProxyType(v) for k, v in eff.items()}))
+        xs = self.measured_x_m or tuple(self.length_m * k / 4 for k in range(1, 5))
+        object.__setattr__(self, "measured_x_m", tuple(float(x) for x in xs))
+
+    def fe_model(self, n_elements=None, *, EI_scale=1.0, mass_scale=1.0) -> FEModel:
+        """FE model with every effect applied (:func:`physics.effects.assemble_beam`).
+
+        Parameters
+        ----------
+        n_elements : int, optional
+            Mesh (default :attr:`n_elements`).
+        EI_scale, mass_scale : float
+            Multipliers of ``EI_Nm2`` and ``mass_per_length_kg_m`` (global recalibration).
+        """
+        return fx.assemble_beam(self.length_m, self.EI_Nm2 * EI_scale, self.mass_per_length_kg_m * mass_scale,
+                                n_elements or self.n_elements, bc=self.bc, thickness_m=self.thickness_m,
+                                effects=self.effects)
+
+    def with_effects(self, effects, **changes) -> "Beam":
+        """Copy with the effect mapping replaced (and other fields changed)."""
+        return replace(self, effects=dict(effects), **changes)
+
+    @property
+    def masters(self) -> tuple[str, ...]:
+        """DOF names of the measured translations when they sit on the nodes of the default mesh."""
+        node_x = np.linspace(0.0, self.length_m, self.n_elements + 1)
+        out = []
+        for x in self.measured_x_m:
+            k = int(np.argmin(np.abs(node_x - x)))
+            if abs(node_x[k] - x) > 1e-9 * self.length_m:
+                raise ConfigError(f"beam {self.name!r}: measured position {x} m is not a node of the "
+                                  f"{self.n_elements}-element mesh")
+            out.append(f"{k + 1}:y")
+        return tuple(out)
+
+    def effects_dict(self) -> dict:
+        """Plain ``{effect: {param: value}}`` copy of :attr:`effects`."""
+        return {k: dict(v) for k, v in self.effects.items()}
+
+
+def preset_beam(name: str) -> Beam:
+    """A thesis specimen (Table 4.1, Chapter Four geometry) as a :class:`Beam` without effects."""
+    if name not in PRESETS:
+        raise ConfigError(f"unknown beam preset {name!r}; expected one of {sorted(PRESETS)} or a .toml file")
+    p = PRESETS[name]
+    return Beam(name=p.name, length_m=p.length, total_length_m=p.total_length, width_m=p.width,
+                thickness_m=p.thickness, EI_Nm2=p.EI, mass_per_length_kg_m=p.m_per_length,
+                n_elements=p.n_elements, face_thickness_m=PRESET_FACE_THICKNESS_M,
+                core_modulus_pa=PRESET_CORE_MODULUS_PA)
+
+
+_NUMBER_KEYS = ("length_m", "total_length_m", "width_m", "thickness_m", "face_thickness_m", "core_modulus_pa",
+                "EI_Nm2", "face_modulus_pa", "mass_per_length_kg_m", "mass_kg")
+_KEYS = ("preset", "name", "bc", "n_elements", "measured_x_m", "effects") + _NUMBER_KEYS
+
+
+def beam_from_dict(obj: dict, source: str = "beam") -> Beam:
+    """Validate a beam mapping (the TOML layout of the module docstring) into a :class:`Beam`."""
+    if not isinstance(obj, dict):
+        raise ConfigError(f"{source}: a beam file must be a TOML table of keys")
+    for key in obj:
+        if key not in _KEYS:
+            raise ConfigError(f"{source}: unknown key {key!r}; expected some of {sorted(_KEYS)}")
+    base = {}
+    if "preset" in obj:
+        if not isinstance(obj["preset"], str):
+            raise ConfigError(f"{source}: 'preset' must be a string such as \"beam5\"")
+        b = preset_beam(obj["preset"]) if obj["preset"] in PRESETS else None
+        if b is None:
+            raise ConfigError(f"{source}: 'preset' = {obj['preset']!r} unknown; expected one of {sorted(PRESETS)}")
+        base = {f.name: getattr(b, f.name) for f in fields(Beam)}
+        base["effects"] = b.effects_dict()
+    vals = dict(base)
+    for key in _NUMBER_KEYS:
+        if key not in obj:
+            continue
+        v = obj[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
+            raise ConfigError(f"{source}: {key!r} must be a positive finite number (SI units), got {v!r}")
+        vals[key] = float(v)
+    if "name" in obj:
+        if not isinstance(obj["name"], str) or not obj["name"]:
+            raise ConfigError(f"{source}: 'name' must be a non-empty string")
+        vals["name"] = obj["name"]
+    vals.setdefault("name", Path(source).stem)
+    if "bc" in obj:
+        if obj["bc"] not in BOUNDARY_CONDITIONS:
+            raise ConfigError(f"{source}: 'bc' = {obj['bc']!r} unknown; expected one of {list(BOUNDARY_CONDITIONS)}")
+        vals["bc"] = obj["bc"]
+    if "n_elements" in obj:
+        n = obj["n_elements"]
+        if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= 2000:
+            raise ConfigError(f"{source}: 'n_elements' must be an integer in [1, 2000], got {n!r}")
+        vals["n_elements"] = n
+    for required in ("length_m", "width_m", "thickness_m"):
+        if required not in vals:
+            raise ConfigError(f"{source}: missing key {required!r} (or give 'preset')")
+    vals.setdefault("total_length_m", vals["length_m"])
+    if "measured_x_m" in obj:
+        xs = obj["measured_x_m"]
+        if not (isinstance(xs, list) and xs and all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                                                    and math.isfinite(x) for x in xs)):
+            raise ConfigError(f"{source}: 'measured_x_m' must be a non-empty list of positions (m)")
+        if any(not 0 <= x <= vals["length_m"] for x in xs):
+            raise ConfigError(f"{source}: 'measured_x_m' positions must lie in [0, length_m = {vals['length_m']}]")
+        vals["measured_x_m"] = tuple(float(x) for x in xs)
+    # flexural rigidity: EI_Nm2 or the face modulus of the sandwich (eq. 4.1)
+    if "EI_Nm2" in obj and "face_modulus_pa" in obj:
+        raise ConfigError(f"{source}: give 'EI_Nm2' or 'face_modulus_pa', not both")
+    ef = vals.pop("face_modulus_pa", None)
+    if ef is not None:
+        tf, ec = vals.get("face_thickness_m"), vals.get("core_modulus_pa")
+        if tf is None or ec is None:
+            raise ConfigError(f"{source}: 'face_modulus_pa' needs 'face_thickness_m' and 'core_modulus_pa'")
+        h2 = vals["thickness_m"] / 2
+        if not 0 < tf < h2:
+            raise ConfigError(f"{source}: 'face_thickness_m' must be below half of 'thickness_m'")
+        vals["EI_Nm2"] = float(layered_ei(vals["width_m"], [0.0, h2 - tf, h2], [ec, ef]))
+    if "EI_Nm2" not in vals:
+        raise ConfigError(f"{source}: missing key 'EI_Nm2' (or 'face_modulus_pa' with the layers, or 'preset')")
+    if "mass_per_length_kg_m" in obj and "mass_kg" in obj:
+        raise ConfigError(f"{source}: give 'mass_per_length_kg_m' or 'mass_kg', not both")
+    mass = vals.pop("mass_kg", None)
+    if mass is not None:
+        vals["mass_per_length_kg_m"] = mass / vals["total_length_m"]
+    if "mass_per_length_kg_m" not in vals:
+        raise ConfigError(f"{source}: missing key 'mass_per_length_kg_m' (or 'mass_kg', or 'preset')")
+    if "effects" in obj:
+        eff = fx.validate_effects(obj["effects"], source)
+        vals["effects"] = {**vals.get("effects", {}), **eff}
+    tf = vals.get("face_thickness_m")
+    if tf is not None and not tf < vals["thickness_m"] / 2:
+        raise ConfigError(f"{source}: 'face_thickness_m' must be below half of 'thickness_m'")
+    for k in ("added_mass", "local_damping"):
+        x = vals.get("effects", {}).get(k, {}).get("x_m")
+        if x is not None and x > vals["length_m"]:
+            raise ConfigError(f"{source}: 'effects.{k}.x_m' = {x} lies beyond 'length_m' = {vals['length_m']}")
+    return Beam(**vals)
+
+
+def load_beam(name_or_path) -> Beam:
+    """A preset name (``beam5``, ``beam6``, ``beam8``) or a TOML beam file (module docstring).
+
+    Raises
+    ------
+    ConfigError
+        Unknown preset, missing file, non-UTF-8 or malformed TOML, or a bad key
+        (one line naming the file and key).
+    """
+    s = str(name_or_path)
+    if s in PRESETS:
+        return preset_beam(s)
+    path = Path(s)
+    if not path.exists():
+        raise ConfigError(f"{s}: neither a beam preset ({', '.join(sorted(PRESETS))}) nor an existing beam file")
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError:
+        raise ConfigError(f"{path}: not UTF-8 text; a beam file is TOML") from None
+    except IsADirectoryError:
+        raise ConfigError(f"{path}: is a directory, expected a TOML beam file") from None
+    try:
+        obj = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: not valid TOML ({exc})") from None
+    return beam_from_dict(obj, str(path))
+
+
+def _toml_value(v) -> str:
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    if isinstance(v, (bool, np.bool_)):
+        return "true" if v else "false"
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    return repr(float(v))
+
+
+def beam_to_toml(beam: Beam, comment: str = "") -> str:
+    """TOML text of a beam (every key explicit; ``comment`` lines go first, prefixed by ``#``)."""
+    lines = [f"# {c}" if c else "#" for c in comment.splitlines()] if comment else []
+    lines.append("# beam-damage beam file (see physics/beam.py or README 'beam file'); SI units")
+    for f in fields(Beam):
+        v = getattr(beam, f.name)
+        if f.name == "effects" or v is None:
+            continue
+        lines.append(f"{f.name} = {_toml_value(v)}")
+    for name, params in beam.effects.items():
+        lines.append("")
+        lines.append(f"[effects.{name}]")
+        lines.extend(f"{k} = {_toml_value(v)}" for k, v in params.items())
+    return "\n".join(lines) + "\n"
+
+
+def write_beam(path, beam: Beam, comment: str = "") -> None:
+    """Write ``beam`` as a TOML beam file, atomically (temporary file, then rename)."""
+    atomic_write_text(path, beam_to_toml(beam, comment))

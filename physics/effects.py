@@ -1,0 +1,303 @@
+"""Model augmentations ("effects") of the Euler-Bernoulli beam, with physical parameters.
+
+A beam model here is a uniform beam of equal elements (:mod:`physics.fem`
+conventions: nodes from 1 at ``x = 0``, DOFs ``"node:y"`` and ``"node:rz"``)
+plus any of these effects, each a mapping of parameter name -> value (SI, the
+unit in the name):
+
+``shear_deformation``  ``kGA_N`` (required), ``rho_I_kg_m`` (optional)
+    Timoshenko elements: shear flexibility with shear rigidity ``kGA`` (N) and
+    rotary inertia ``rho I`` (kg m, default ``m h^2 / 12``, the uniform-density
+    section). Element of Friedman & Kosmatka (Comput. Struct. 47, 1993,
+    "interdependent interpolation"), whose stiffness is exact in statics and
+    whose mass matrix reduces to eq. 3.8 when ``kGA -> inf, rho I -> 0``.
+``rotary_inertia``  ``rho_I_kg_m`` (optional, default ``m h^2 / 12``)
+    Rayleigh beam: Euler-Bernoulli stiffness plus rotary inertia.
+``root_flexibility``  ``k_theta_Nm_rad`` (required), ``k_y_N_m`` (optional)
+    The clamp becomes a rotational spring (N m/rad) and, if given, a
+    translational spring (N/m); clamped-free beams only.
+``added_mass``  ``mass_kg`` (required), ``x_m`` (default: the tip), ``J_kg_m2`` (default 0)
+    A point mass (sensor, stinger, shaker armature) with optional rotary
+    inertia, attached through the element's cubic (Hermite) shape functions, so
+    any position is allowed; at a node it adds to that node's DOFs exactly.
+``local_damping``  ``c_Ns_m`` (required), ``x_m`` (default: the tip)
+    A viscous dashpot to ground at ``x`` (shaker attachment, clamp friction
+    near the root): non-proportional damping, visible as mode complexity and a
+    damping-ratio pattern that no Rayleigh damping can follow.
+``proportional_damping``  ``alpha_1_s`` (default 0), ``beta_s`` (default 0)
+    Rayleigh damping ``C = alpha M + beta K`` of the whole beam. It is the
+    baseline damping that is always calibrated, not a candidate effect.
+
+:func:`assemble_beam` builds an :class:`physics.fem.FEModel` with every effect
+applied; :func:`interpolation_matrix` maps its DOFs onto the translations at
+arbitrary positions (measured points between nodes).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from physics import fem
+from physics.errors import BeamDamageError, ConfigError
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One physical parameter of an effect.
+
+    Attributes
+    ----------
+    name : str
+        Key in the beam file, unit in the name.
+    required : bool
+        Must be given (no physical default).
+    lower : float
+        Smallest admissible value (exclusive when ``positive``).
+    positive : bool
+        Must be strictly greater than ``lower`` (which is then 0).
+    """
+
+    name: str
+    required: bool
+    lower: float = 0.0
+    positive: bool = True
+
+
+#: effect name -> its parameters (see the module docstring).
+EFFECTS: dict[str, tuple[Parameter, ...]] = {
+    "shear_deformation": (Parameter("kGA_N", True), Parameter("rho_I_kg_m", False, positive=False)),
+    "rotary_inertia": (Parameter("rho_I_kg_m", False, positive=False),),
+    "root_flexibility": (Parameter("k_theta_Nm_rad", True), Parameter("k_y_N_m", False)),
+    "added_mass": (Parameter("mass_kg", True, positive=False), Parameter("x_m", False, positive=False),
+                   Parameter("J_kg_m2", False, positive=False)),
+    "local_damping": (Parameter("c_Ns_m", True, positive=False), Parameter("x_m", False, positive=False)),
+    "proportional_damping": (Parameter("alpha_1_s", False, positive=False),
+                             Parameter("beta_s", False, positive=False)),
+}
+
+#: Effects a discrepancy analysis may name (``proportional_damping`` is baseline).
+CANDIDATES = ("shear_deformation", "rotary_inertia", "root_flexibility", "added_mass", "local_damping")
+
+
+def validate_effects(effects, source: str = "effects") -> dict:
+    """Check effect names, parameter names and values; returns a clean ``{name: {param: float}}``.
+
+    Raises
+    ------
+    ConfigError
+        One line naming ``source``, the effect and the parameter.
+    """
+    if effects is None:
+        return {}
+    if not hasattr(effects, "items"):
+        raise ConfigError(f"{source}: 'effects' must be a table of effect name -> parameters")
+    out = {}
+    for name, params in effects.items():
+        if name not in EFFECTS:
+            raise ConfigError(f"{source}: unknown effect 'effects.{name}'; expected one of {sorted(EFFECTS)}")
+        if not hasattr(params, "items"):
+            raise ConfigError(f"{source}: 'effects.{name}' must be a table of parameters "
+                              f"({', '.join(p.name for p in EFFECTS[name])})")
+        spec = {p.name: p for p in EFFECTS[name]}
+        clean = {}
+        for key, value in params.items():
+            if key not in spec:
+                raise ConfigError(f"{source}: unknown parameter 'effects.{name}.{key}'; expected one of {sorted(spec)}")
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ConfigError(f"{source}: 'effects.{name}.{key}' must be a finite number, got {value!r}")
+            p = spec[key]
+            if value < p.lower or (p.positive and value <= p.lower):
+                raise ConfigError(f"{source}: 'effects.{name}.{key}' must be {'>' if p.positive else '>='} "
+                                  f"{p.lower:g}, got {value!r}")
+            clean[key] = float(value)
+        for p in EFFECTS[name]:
+            if p.required and p.name not in clean:
+                raise ConfigError(f"{source}: 'effects.{name}' needs parameter '{p.name}'")
+        out[name] = clean
+    return out
+
+
+# ---------------------------------------------------------------------------
+# Elements
+# ---------------------------------------------------------------------------
+
+def timoshenko_stiffness(EI, kGA, length):
+    """Timoshenko element stiffness (Friedman & Kosmatka 1993), DOFs ``[w1, theta1, w2, theta2]``.
+
+    ``K = EI / (l^3 (1 + phi)) [[12, 6l, -12, 6l], [6l, (4+phi) l^2, -6l, (2-phi) l^2], ...]``
+    with ``phi = 12 EI / (kGA l^2)``; ``kGA = inf`` gives eq. 3.9.
+
+    Parameters
+    ----------
+    EI : float   (N m^2)
+    kGA : float  (N), ``np.inf`` for no shear flexibility
+    length : float  element length (m)
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+    """
+    l = float(length)
+    phi = 12.0 * EI / (kGA * l**2)
+    a = (4 + phi) * l**2
+    b = (2 - phi) * l**2
+    k = np.array([[12, 6 * l, -12, 6 * l], [6 * l, a, -6 * l, b],
+                  [-12, -6 * l, 12, -6 * l], [6 * l, b, -6 * l, a]])
+    return EI / (l**3 * (1 + phi)) * k
+
+
+def timoshenko_mass(m_per_length, rho_I, EI, kGA, length):
+    """Consistent Timoshenko element mass: translational plus rotary inertia.
+
+    Interdependent-interpolation mass of Friedman & Kosmatka (1993)
+    (Przemieniecki's coefficients) with ``phi = 12 EI / (kGA l^2)``. For
+    ``phi = 0`` the translational part is eq. 3.8 and the rotary part is the
+    Rayleigh-beam matrix ``rho I / (30 l) [[36, 3l, -36, 3l], ...]``.
+
+    Parameters
+    ----------
+    m_per_length : float  (kg/m)
+    rho_I : float  rotary inertia per length (kg m)
+    EI, kGA : float  (N m^2, N); ``kGA = inf`` for no shear flexibility
+    length : float  (m)
+
+    Returns
+    -------
+    ndarray, shape (4, 4)
+    """
+    l = float(length)
+    p = 12.0 * EI / (kGA * l**2)
+    t11 = 13 / 35 + 7 * p / 10 + p**2 / 3
+    t12 = (11 / 210 + 11 * p / 120 + p**2 / 24) * l
+    t13 = 9 / 70 + 3 * p / 10 + p**2 / 6
+    t14 = (13 / 420 + 3 * p / 40 + p**2 / 24) * l
+    t22 = (1 / 105 + p / 60 + p**2 / 120) * l**2
+    t24 = (1 / 140 + p / 60 + p**2 / 120) * l**2
+    mt = np.array([[t11, t12, t13, -t14], [t12, t22, t14, -t24],
+                   [t13, t14, t11, -t12], [-t14, -t24, -t12, t22]]) * m_per_length * l / (1 + p) ** 2
+    r11 = 6 / 5
+    r12 = (1 / 10 - p / 2) * l
+    r22 = (2 / 15 + p / 6 + p**2 / 3) * l**2
+    r24 = (-1 / 30 - p / 6 + p**2 / 6) * l**2
+    mr = np.array([[r11, r12, -r11, r12], [r12, r22, -r12, r24],
+                   [-r11, -r12, r11, -r12], [r12, r24, -r12, r22]]) * rho_I / (l * (1 + p) ** 2)
+    return mt + mr
+
+
+def hermite_row(x_m, node_x):
+    """Cubic (Hermite) interpolation of the translation at ``x_m`` from all node DOFs.
+
+    Returns the row ``N`` (over ``[1:y, 1:rz, 2:y, ...]``) with ``w(x) = N u`` and
+    the row ``N'`` with ``w'(x) = N' u``.
+
+    Parameters
+    ----------
+    x_m : float  position along the beam (m), within ``[node_x[0], node_x[-1]]``
+    node_x : ndarray, shape (n_nodes,)  equally or unequally spaced node positions (m)
+
+    Returns
+    -------
+    N, dN : ndarray, shape (2 n_nodes,)
+    """
+    node_x = np.asarray(node_x, dtype=float)
+    if not node_x[0] - 1e-12 <= x_m <= node_x[-1] + 1e-12:
+        raise BeamDamageError(f"position {x_m} m lies outside the beam [{node_x[0]}, {node_x[-1]}] m")
+    e = int(np.clip(np.searchsorted(node_x, x_m, side="right") - 1, 0, node_x.size - 2))
+    le = node_x[e + 1] - node_x[e]
+    s = (x_m - node_x[e]) / le
+    n = np.array([1 - 3 * s**2 + 2 * s**3, le * (s - 2 * s**2 + s**3), 3 * s**2 - 2 * s**3, le * (-s**2 + s**3)])
+    dn = np.array([-6 * s + 6 * s**2, le * (1 - 4 * s + 3 * s**2), 6 * s - 6 * s**2, le * (-2 * s + 3 * s**2)]) / le
+    N = np.zeros(2 * node_x.size)
+    dN = np.zeros(2 * node_x.size)
+    N[2 * e:2 * e + 4] = n
+    dN[2 * e:2 * e + 4] = dn
+    return N, dN
+
+
+def interpolation_matrix(model: fem.FEModel, x_m) -> np.ndarray:
+    """Matrix ``T`` (n_points, n_model_dofs) with ``w(x_m) = T u`` over the model's free DOFs."""
+    all_names = fem.dof_names(model.node_x.size)
+    keep = [all_names.index(d) for d in model.dofs]
+    return np.array([hermite_row(float(x), model.node_x)[0][keep] for x in np.atleast_1d(x_m)])
+
+
+# ---------------------------------------------------------------------------
+# Assembly with effects
+# ---------------------------------------------------------------------------
+
+def assemble_beam(length_m, EI_Nm2, mass_per_length_kg_m, n_elements, *, bc="clamped-free",
+                  thickness_m=None, effects=None) -> fem.FEModel:
+    """A uniform beam of ``n_elements`` equal elements with every effect applied.
+
+    Parameters
+    ----------
+    length_m : float  free (cantilever) length (m)
+    EI_Nm2 : float  flexural rigidity (N m^2)
+    mass_per_length_kg_m : float  (kg/m)
+    n_elements : int
+    bc : str  one of :data:`physics.fem.BOUNDARY_CONDITIONS`
+    thickness_m : float, optional
+        Section depth ``h`` (m) for the default rotary inertia ``m h^2 / 12``.
+    effects : mapping, optional
+        ``{effect name: {parameter: value}}`` (module docstring).
+
+    Returns
+    -------
+    FEModel
+        ``C`` holds proportional plus local damping (zeros without them).
+    """
+    eff = validate_effects(effects)
+    n_el = int(n_elements)
+    if n_el < 1:
+        raise BeamDamageError(f"n_elements must be >= 1, got {n_elements}")
+    for name, v in (("length_m", length_m), ("EI_Nm2", EI_Nm2), ("mass_per_length_kg_m", mass_per_length_kg_m)):
+        if not (np.isfinite(v) and v > 0):
+            raise BeamDamageError(f"{name} must be a positive finite number, got {v}")
+    le = length_m / n_el
+    m = float(mass_per_length_kg_m)
+    default_rho_i = 0.0 if thickness_m is None else m * thickness_m**2 / 12.0
+    kga, rho_i = np.inf, 0.0
+    if "shear_deformation" in eff:
+        kga = eff["shear_deformation"]["kGA_N"]
+        rho_i = eff["shear_deformation"].get("rho_I_kg_m", default_rho_i)
+    if "rotary_inertia" in eff:
+        rho_i = eff["rotary_inertia"].get("rho_I_kg_m", default_rho_i)
+    if (("shear_deformation" in eff and "rho_I_kg_m" not in eff["shear_deformation"]) or
+            ("rotary_inertia" in eff and "rho_I_kg_m" not in eff["rotary_inertia"])) and thickness_m is None:
+        raise BeamDamageError("the default rotary inertia m h^2/12 needs the section thickness; give thickness_m "
+                              "or the parameter rho_I_kg_m")
+    ke = timoshenko_stiffness(EI_Nm2, kga, le)
+    me = timoshenko_mass(m, rho_i, EI_Nm2, kga, le)
+    K = fem.assemble(np.broadcast_to(ke, (n_el, 4, 4)))
+    M = fem.assemble(np.broadcast_to(me, (n_el, 4, 4)))
+    C = np.zeros_like(K)
+    node_x = np.linspace(0.0, length_m, n_el + 1)
+    if "proportional_damping" in eff:
+        p = eff["proportional_damping"]
+        C = p.get("alpha_1_s", 0.0) * M + p.get("beta_s", 0.0) * K
+    if "added_mass" in eff:
+        p = eff["added_mass"]
+        N, dN = hermite_row(p.get("x_m", length_m), node_x)
+        M = M + p["mass_kg"] * np.outer(N, N) + p.get("J_kg_m2", 0.0) * np.outer(dN, dN)
+    if "local_damping" in eff:
+        p = eff["local_damping"]
+        N, _ = hermite_row(p.get("x_m", length_m), node_x)
+        C = C + p["c_Ns_m"] * np.outer(N, N)
+    names = fem.dof_names(n_el + 1)
+    removed = set(fem.constrained_dofs(bc, n_el + 1))
+    if "root_flexibility" in eff:
+        if bc != "clamped-free":
+            raise BeamDamageError("effect 'root_flexibility' is defined for a clamped-free beam only")
+        p = eff["root_flexibility"]
+        removed.discard("1:rz")
+        K = K.copy()
+        K[1, 1] += p["k_theta_Nm_rad"]
+        if "k_y_N_m" in p:
+            removed.discard("1:y")
+            K[0, 0] += p["k_y_N_m"]
+    keep = np.array([i for i, d in enumerate(names) if d not in removed])
+    sel = np.ix_(keep, keep)
+    return fem.FEModel(M=M[sel], K=K[sel], C=C[sel], dofs=tuple(names[i] for i in keep), node_x=node_x)
