@@ -41,8 +41,6 @@ def build(beam, elements: int | None, mass: str, method: str, bc: str | None = N
     b = beam if isinstance(beam, Beam) else load_beam(beam)
     elements = b.n_elements if elements is None else elements
     bc = bc or b.bc
-    if elements < 1:
-        raise BeamDamageError(f"--elements must be >= 1, got {elements}")
     model = b.with_effects(b.effects, bc=bc).fe_model(elements)
     M, K, dofs, iterations = model.M, model.K, model.dofs, 0
     if method != "none":
