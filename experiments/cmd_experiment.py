@@ -16,6 +16,7 @@ from physics.errors import BeamDamageError
 #: Study name -> (module, title).
 STUDIES = {
     "thesis": ("experiments.study_thesis", "Thesis reproduction: beam 5, Chapters Four to Six"),
+    "discrepancy-study": ("experiments.study_discrepancy", "Discrepancy workflow: beam 5 and the hidden-effect suite"),
 }
 
 

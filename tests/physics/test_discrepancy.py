@@ -110,7 +110,7 @@ def test_measurement_validation():
 
 def test_cli_on_beam5_table_4_3(tmp_path, capsys):
     from experiments.cli import main
-    from experiments.cmd_discrepancy import EXAMPLE
+    from experiments.study_discrepancy import EXAMPLE
     from physics.beam import load_beam as lb
 
     rc = main(["discrepancy", "--beam", "beam5", "--measured", str(EXAMPLE), "--out", str(tmp_path),
