@@ -160,3 +160,25 @@ def test_calibrated_beam5_file_closes_the_gap_to_table_4_3(tmp_path, capsys):
     np.testing.assert_allclose(f, f20, rtol=2e-5)                   # same mesh: damped vs undamped only
     np.testing.assert_allclose(f, f40, rtol=1.5 * np.max(np.abs(f20 / f40 - 1)) + 1e-5)   # mesh tolerance
     assert np.max(np.abs(f40 / measured - 1)) < 0.01                # the calibration itself (fitted on 40)
+
+
+def test_every_effect_batched_shortcut_matches_per_sample_state_space():
+    """Random specimens (training variability, slits, test-day changes) of the every-effect beam: the batched
+    projection shortcut against the per-sample full state-space solution of the same truth matrices."""
+    pytest.importorskip("physics.beam")
+    from datagen.config import load_config
+    from datagen.naive import simulate_naive
+    from datagen.pipeline import build_setup, draw_batch, simulate_chunk
+    from datagen.truth_beam import beam_mapping
+    from physics.beam import preset_beam
+    from physics.modal import modal_parameters
+
+    cfg = load_config("training")
+    cfg["beam"] = beam_mapping(preset_beam("beam5").with_effects(ALL_EFFECTS, name="beam5-all"))
+    setup = build_setup(cfg)
+    inp = draw_batch(np.random.default_rng(3), 6, setup)
+    out, full = simulate_chunk(setup, inp), simulate_naive(setup, inp, modes="full")
+    f_s, z_s = modal_parameters(out["truth_poles"][..., :4])
+    f_f, z_f = modal_parameters(full["truth_poles"][..., :4])
+    np.testing.assert_allclose(f_s, f_f, rtol=1e-4)
+    np.testing.assert_allclose(z_s, z_f, rtol=1e-2)
