@@ -20,6 +20,15 @@ change of the squared natural frequency of a mass-normalised mode is
 extra damping is stiffness-proportional over the same region:
 ``Delta C_e = beta_k EI G_e``.
 
+On Timoshenko elements (``shear_deformation`` of a beam file, shear ratio
+``phi = 12 EI / (kGA l^2) > 0``) ``B`` is the curvature ``theta'`` of the
+element's own interpolation (Friedman & Kosmatka's static field: moment linear,
+shear constant), so the correction is the exact bending-energy loss of that
+element; the shear energy is left unchanged (the slit removes bending rigidity
+only). The Euler-Bernoulli (Hermite) curvature would overstate the bending
+energy of a shear-flexible element by up to ``(1 + phi)^2`` and can make the
+stiffness indefinite for deep slits.
+
 Several slits simply add their corrections (they are assumed not to overlap).
 """
 
@@ -28,30 +37,37 @@ from __future__ import annotations
 import numpy as np
 
 
-def curvature_basis(element_length):
-    """``b0, b1`` with ``B(xi) = b0 + xi b1`` (second derivative of the Hermite shapes, 1/m^2 and 1/m).
+def curvature_basis(element_length, shear_phi=0.0):
+    """``b0, b1`` with curvature ``B(xi) = b0 + xi b1`` over the element DOFs (1/m^2 and 1/m).
 
     DOF order ``[w1, theta1, w2, theta2]``, ``xi = s / l`` in ``[0, 1]``.
+    ``shear_phi = 0``: second derivative of the Hermite shapes. ``shear_phi > 0``:
+    curvature ``theta'`` of the Timoshenko element of
+    :func:`physics.effects.timoshenko_stiffness` (its slope term is the Hermite
+    one divided by ``1 + phi``).
     """
     l = float(element_length)
-    b0 = np.array([-6 / l**2, -4 / l, 6 / l**2, -2 / l])
     b1 = np.array([12 / l**2, 6 / l, -12 / l**2, 6 / l])
-    return b0, b1
+    if shear_phi == 0.0:
+        return np.array([-6 / l**2, -4 / l, 6 / l**2, -2 / l]), b1
+    b1 = b1 / (1.0 + shear_phi)
+    return np.array([0.0, -1 / l, 0.0, 1 / l]) - b1 / 2, b1
 
 
-def overlap_energy(xi1, xi2, element_length):
+def overlap_energy(xi1, xi2, element_length, shear_phi=0.0):
     """``G = int_{xi1}^{xi2} B^T B ds`` for local coordinates ``xi1 <= xi2`` (batched).
 
     Parameters
     ----------
     xi1, xi2 : ndarray, shape (...)
     element_length : float (m)
+    shear_phi : float   ``12 EI / (kGA l^2)`` of a Timoshenko element (0: Euler-Bernoulli)
 
     Returns
     -------
     ndarray, shape (..., 4, 4)   (1/m^3 ... units of stiffness / EI)
     """
-    b0, b1 = curvature_basis(element_length)
+    b0, b1 = curvature_basis(element_length, shear_phi)
     a0 = np.outer(b0, b0)
     a1 = np.outer(b0, b1) + np.outer(b1, b0)
     a2 = np.outer(b1, b1)
@@ -86,7 +102,7 @@ def slit_element_weights(x_m, width_m, length_m, n_elements):
     return xi1, np.maximum(xi1, xi2)
 
 
-def slit_corrections(x_m, width_m, ei_loss_Nm2, beta_s, ei_Nm2, length_m, n_elements):
+def slit_corrections(x_m, width_m, ei_loss_Nm2, beta_s, ei_Nm2, length_m, n_elements, shear_phi=0.0):
     """Element stiffness and damping corrections of all slits, summed.
 
     Parameters
@@ -98,6 +114,8 @@ def slit_corrections(x_m, width_m, ei_loss_Nm2, beta_s, ei_Nm2, length_m, n_elem
         Extra stiffness-proportional damping coefficient of each slit (s).
     ei_Nm2 : ndarray, shape (B,)
         Specimen rigidity (N m^2).
+    shear_phi : float
+        ``12 EI / (kGA l^2)`` of the truth elements (0: Euler-Bernoulli).
 
     Returns
     -------
@@ -105,7 +123,7 @@ def slit_corrections(x_m, width_m, ei_loss_Nm2, beta_s, ei_Nm2, length_m, n_elem
         To add to the element stiffness and damping matrices (``dK`` <= 0).
     """
     xi1, xi2 = slit_element_weights(x_m, width_m, length_m, n_elements)
-    G = overlap_energy(xi1, xi2, length_m / n_elements)  # (B, S, E, 4, 4)
+    G = overlap_energy(xi1, xi2, length_m / n_elements, shear_phi)  # (B, S, E, 4, 4)
     dK = -np.einsum("bs,bseij->beij", np.asarray(ei_loss_Nm2, float), G)
     dC = np.einsum("bs,bseij->beij", np.asarray(beta_s, float) * np.asarray(ei_Nm2, float)[:, None], G)
     return dK, dC

@@ -45,6 +45,8 @@ def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
             p = setup.p
             d = 2 * setup.zeta * wr[:p] * s.damping_scale[0]
             C0 = M[0] @ (phir[:, :p] * d) @ phir[:, :p].T @ M[0]
+            if setup.C_local is not None:
+                C0 = C0 + setup.C_local
             lam_l, psi_l, H_l = [], [], []
             for st in range(2):
                 C = C0 + (dC[0] if st else 0.0)

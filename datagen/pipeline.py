@@ -17,12 +17,15 @@ Truth model
 -----------
 Clamped-free Euler-Bernoulli beam of ``mesh.truth_elements`` equal elements
 (optionally with a root rotational spring), specimen ``EI`` and mass, slits as
-exact partial-element energy corrections (:mod:`datagen.damage`). Damping:
+exact partial-element energy corrections (:mod:`datagen.damage`); a beam file
+(``generate --beam FILE``) adds its effects as described in
+:mod:`datagen.truth_beam`. Damping:
 ``C = C_0 + Delta C_slits`` with the specimen's modal damping
 ``C_0 = M Phi_p diag(2 zeta_j omega_j) Phi_p^T M`` over the first ``p``
 undamped modes of the baseline specimen (``zeta_j`` from
 ``specimen.damping_ratios`` times the specimen's damping scale, the last ratio
-for ``j`` beyond the list), so the baseline has exactly the prescribed damping ratios.
+for ``j`` beyond the list; a beam file's Rayleigh damping gives the ratios instead), so the
+baseline has exactly the prescribed damping ratios (plus a beam file's dashpot, in both states).
 
 Cheap complex modes (the "projection" shortcut)
 -----------------------------------------------
@@ -45,8 +48,8 @@ from datagen.damage import draw_slits, slit_corrections
 from datagen.solvers import light_damping_modes, ritz_modes
 from datagen.specimen import BeamPreset, SectionLayout, beam_preset, draw_specimens, slit_section_ei
 from physics.errors import ConfigError
-from datagen.truth_beam import as_preset, load_truth_beam, unit_elements
-from physics.fem import assemble, kept_dofs
+from datagen.truth_beam import as_preset, load_truth_beam, point_effects, unit_elements
+from physics.fem import assemble, dof_names, kept_dofs
 from physics.frf import poles_and_residues
 from physics.modal import eigenvalues_from_modal, modal_parameters, undamped_modes
 from physics.updating import analyst_mass, pilkey
@@ -70,12 +73,17 @@ class Setup:
     layout : SectionLayout          face/core layout matching the preset's EI (eq. 4.1)
     n_elements : int                truth mesh
     keep : ndarray (n,)             global DOF indices kept after the boundary condition
-    spring : bool                   root rotation held by a spring (kept as DOF 0 of the model)
+    spring : bool                   root rotation held by a spring (kept as DOF ``spring_dof`` of the model)
     K0, M0 : ndarray (n, n)         truth matrices for unit EI and unit mass per length
     meas : ndarray (4,)             model indices of the measured translations
     phi0 : ndarray (n, p)           nominal modes (unit mass per length), subspace start
     omega_rad_s : ndarray (F,)      FRF lines
     zeta : ndarray (p,)             target modal damping ratios of modes 1..p
+    spring_dof : int                model index of the root rotation (with ``spring``)
+    root_spring_relative : tuple    ``(lo, hi)`` band of ``k_r L / EI`` drawn per specimen, or ``()``
+    M_added : ndarray (n, n) or None   a beam file's point mass (kg ...), both states
+    C_local : ndarray (n, n) or None   a beam file's dashpot (N s/m ...), both states
+    shear_phi : float               ``12 EI / (kGA l^2)`` of the truth elements (slit corrections)
     """
 
     cfg: dict
@@ -90,6 +98,11 @@ class Setup:
     phi0: np.ndarray
     omega_rad_s: np.ndarray
     zeta: np.ndarray
+    spring_dof: int = 0
+    root_spring_relative: tuple = ()
+    M_added: np.ndarray | None = None
+    C_local: np.ndarray | None = None
+    shear_phi: float = 0.0
 
     @property
     def length_m(self) -> float:
@@ -121,29 +134,58 @@ def build_setup(cfg: dict) -> Setup:
                           f"({preset.thickness_m - sec['face_thickness_m']:g} m)")
     n_el = cfg["mesh"]["truth_elements"]
     le = preset.length_m / n_el
-    spring = bool(cfg["specimen"]["root_spring_relative"])
+    fx = point_effects(beam, n_el)
+    band = tuple(cfg["specimen"]["root_spring_relative"])
+    if fx["k_theta_Nm_rad"] is not None:  # the calibrated root spring is the centre of the specimen band
+        centre = fx["k_theta_Nm_rad"] * preset.length_m / preset.EI_Nm2
+        half = np.sqrt(band[1] / band[0]) if band else 1.0
+        band = (centre / half, centre * half)
+    spring = bool(band)
     if not spring and any(cfg["specimen"]["root_spring_change"]):
         raise ConfigError("config key 'specimen.root_spring_change' needs a root spring "
                           "('specimen.root_spring_relative' is empty: rigid clamp)")
-    ke, me = unit_elements(beam, le)
+    ke, me, shear_phi = unit_elements(beam, le)
     K_full = assemble(np.broadcast_to(ke, (n_el, 4, 4)))
     M_full = assemble(np.broadcast_to(me, (n_el, 4, 4)))
-    keep, names = kept_dofs(n_el + 1, "clamped-free", root_spring=spring)
+    if fx["k_y_N_m"] is not None:  # translational root spring: the root translation stays a DOF
+        names = dof_names(n_el + 1)
+        keep = np.arange(len(names))
+    else:
+        keep, names = kept_dofs(n_el + 1, "clamped-free", root_spring=spring)
     assert np.array_equal(keep, np.arange(keep[0], 2 * (n_el + 1)))  # truth_matrices slices from keep[0]
-    K0, M0 = K_full[np.ix_(keep, keep)], M_full[np.ix_(keep, keep)]
+    sel = np.ix_(keep, keep)
+    K0, M0 = K_full[sel], M_full[sel]
+    K_beam = K0.copy()  # the elements alone (Rayleigh damping acts on the beam, not on the clamp springs)
+    if fx["k_y_N_m"] is not None:
+        K0[0, 0] += fx["k_y_N_m"] / preset.EI_Nm2
+    M_added = None if fx["M_added"] is None else fx["M_added"][sel]
+    C_local = None if fx["C_local"] is None else fx["C_local"][sel]
+    spring_dof = names.index("1:rz") if spring else 0
     step = n_el // 4
     meas = np.array([names.index(f"{1 + step * q}:y") for q in range(1, 5)])
     p = cfg["solver"]["projection_modes"]
     Kn = K0.copy()
     if spring:
-        lo, hi = cfg["specimen"]["root_spring_relative"]
-        Kn[0, 0] += np.sqrt(lo * hi) / preset.length_m
-    _, v = undamped_modes(M0, Kn)
-    zr = np.asarray(cfg["specimen"]["damping_ratios"], float)
-    zeta = np.concatenate([zr, np.full(max(p - zr.size, 0), zr[-1])])[:p]
+        lo, hi = band
+        Kn[spring_dof, spring_dof] += np.sqrt(lo * hi) / preset.length_m
+    Mn = M0 if M_added is None else M0 + M_added / preset.mass_per_length_kg_m
+    w, v = undamped_modes(Mn, Kn)
+    if fx["rayleigh"] is not None:  # the beam file's Rayleigh damping in the nominal truth's modes
+        alpha, beta = fx["rayleigh"]
+        ei_m = preset.EI_Nm2 / preset.mass_per_length_kg_m
+        vp = v[:, :p]
+        c_diag = alpha * np.einsum("ij,ik,kj->j", vp, M0, vp) + beta * ei_m * np.einsum("ij,ik,kj->j", vp, K_beam, vp)
+        zeta = c_diag / (2 * w[:p] * np.sqrt(ei_m))
+        if not np.all((zeta > 0) & (zeta < 0.2)):
+            raise ConfigError(f"config key 'beam': proportional_damping gives modal damping ratios {zeta.tolist()} "
+                              f"of the first {p} modes; generate needs light damping, each in (0, 0.2)")
+    else:
+        zr = np.asarray(cfg["specimen"]["damping_ratios"], float)
+        zeta = np.concatenate([zr, np.full(max(p - zr.size, 0), zr[-1])])[:p]
     lo, hi = cfg["measurement"]["band_rad_s"]
     return Setup(cfg, preset, layout, n_el, keep, spring, K0, M0, meas, v[:, :p].copy(),
-                 np.linspace(lo, hi, cfg["measurement"]["lines"]), zeta)
+                 np.linspace(lo, hi, cfg["measurement"]["lines"]), zeta, spring_dof, band, M_added, C_local,
+                 shear_phi)
 
 
 @lru_cache(maxsize=8)
@@ -213,7 +255,7 @@ def _uniform(u, lo_hi, log=False):
 def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
     """Draw specimens, slits, day-to-day changes and all measurement noise of ``n`` samples, in a fixed order."""
     cfg = setup.cfg
-    sp = draw_specimens(rng, n, cfg, setup.preset)
+    sp = draw_specimens(rng, n, cfg, setup.preset, setup.root_spring_relative)
     sl = draw_slits(rng, n, cfg, setup.length_m, setup.layout)
     nf = rng.standard_normal((n, 2, N_MEAS))
     nz = rng.standard_normal((n, 2, N_MEAS))
@@ -240,7 +282,7 @@ def truth_matrices(setup: Setup, inp: BatchInputs):
 
     The current state's stiffness is ``(1 + t) (EI K_0 + dK_slits)`` plus the
     root spring ``k_r (1 + c)``, with ``t`` the temperature stiffness change and
-    ``c`` the re-clamping change.
+    ``c`` the re-clamping change. ``M = m M_0`` plus a beam file's point mass.
 
     Returns
     -------
@@ -253,7 +295,7 @@ def truth_matrices(setup: Setup, inp: BatchInputs):
     ok = np.isfinite(inp.x_m)
     dKe, dCe = slit_corrections(np.where(ok, inp.x_m, 0.0), np.where(ok, inp.width_m, 0.0),
                                 np.where(ok, inp.ei_loss * ei[:, None], 0.0), np.where(ok, inp.beta_s, 0.0),
-                                ei, setup.length_m, setup.n_elements)
+                                ei, setup.length_m, setup.n_elements, setup.shear_phi)
     k0 = setup.keep[0]  # the clamp removes the first DOFs only: the kept block is a slice (a view, no copy)
     dK = assemble(dKe)[..., k0:, k0:]
     dC = assemble(dCe)[..., k0:, k0:]
@@ -262,9 +304,20 @@ def truth_matrices(setup: Setup, inp: BatchInputs):
     np.add(K[:, 0], dK, out=K[:, 1])
     K[:, 1] *= (1.0 + inp.temperature_stiffness_change)[:, None, None]
     if setup.spring:
-        K[:, 1, 0, 0] += inp.root_spring_Nm_rad * (1.0 + inp.root_spring_change)
-        K[:, 0, 0, 0] += inp.root_spring_Nm_rad
-    return inp.mass_per_length_kg_m[:, None, None] * setup.M0, K, dC, dK
+        r = setup.spring_dof
+        K[:, 1, r, r] += inp.root_spring_Nm_rad * (1.0 + inp.root_spring_change)
+        K[:, 0, r, r] += inp.root_spring_Nm_rad
+    M = inp.mass_per_length_kg_m[:, None, None] * setup.M0
+    if setup.M_added is not None:
+        M += setup.M_added
+    return M, K, dC, dK
+
+
+def unit_mass(setup: Setup, inp: BatchInputs):
+    """Mass for unit mass per length: ``M_0`` (n, n), or (B, 1, n, n) with a beam file's point mass."""
+    if setup.M_added is None:
+        return setup.M0
+    return (setup.M0 + setup.M_added / inp.mass_per_length_kg_m[:, None, None])[:, None]
 
 
 def projected_modes(setup: Setup, inp: BatchInputs, M, K, dC):
@@ -272,7 +325,7 @@ def projected_modes(setup: Setup, inp: BatchInputs, M, K, dC):
 
     Undamped modes by :func:`datagen.solvers.ritz_modes` on the unit-EI,
     unit-mass problem, the baseline specimen's modal damping projected on both
-    states' modes plus the slit damping ``dC``, then
+    states' modes plus a beam file's dashpot and the slit damping ``dC``, then
     :func:`datagen.solvers.light_damping_modes`.
 
     Parameters
@@ -289,12 +342,14 @@ def projected_modes(setup: Setup, inp: BatchInputs, M, K, dC):
     """
     sol = setup.cfg["solver"]
     ei, mpl = inp.EI_Nm2, inp.mass_per_length_kg_m
-    w2s, V = ritz_modes(setup.M0, K / ei[:, None, None, None], setup.phi0, sol["subspace_iterations"])
+    w2s, V = ritz_modes(unit_mass(setup, inp), K / ei[:, None, None, None], setup.phi0, sol["subspace_iterations"])
     w2 = w2s * (ei / mpl)[:, None, None]
     phi = V / np.sqrt(mpl)[:, None, None, None]                  # (B,2,n,p), phi^T M phi = I
     d = 2 * setup.zeta * np.sqrt(w2[:, 0]) * inp.damping_scale[:, None]     # (B,p)
     X = _t(phi) @ (M[:, None] @ phi[:, :1])                      # (B,2,p,p) = Phi_s^T M Phi_baseline
     c = (X * d[:, None, None, :]) @ _t(X)
+    if setup.C_local is not None:
+        c += _t(phi) @ setup.C_local @ phi
     c[:, 1] += _t(phi[:, 1]) @ dC @ phi[:, 1]
     c = 0.5 * (c + _t(c))
     lam, Z = light_damping_modes(w2, c, sol["damping_iterations"])
@@ -318,7 +373,7 @@ def slit_frequency_drop(setup: Setup, inp: BatchInputs, K, dK, omega2):
     Ks = (K[:, 0] + dK) / inp.EI_Nm2[:, None, None]
     K0 = K[:, 0] / inp.EI_Nm2[:, None, None]
     it = setup.cfg["solver"]["subspace_iterations"]
-    w2, _ = ritz_modes(setup.M0, np.stack([K0, Ks], axis=1), setup.phi0, it)
+    w2, _ = ritz_modes(unit_mass(setup, inp), np.stack([K0, Ks], axis=1), setup.phi0, it)
     return np.max(1.0 - np.sqrt(w2[:, 1, :N_MEAS] / w2[:, 0, :N_MEAS]), axis=-1)
 
 

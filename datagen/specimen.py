@@ -109,8 +109,12 @@ def depth_for_ei_loss(layout: SectionLayout, ei_loss):
     return np.interp(want, loss, grid)
 
 
-def draw_specimens(rng: np.random.Generator, n: int, cfg: dict, preset: BeamPreset) -> dict:
+def draw_specimens(rng: np.random.Generator, n: int, cfg: dict, preset: BeamPreset,
+                   root_spring_relative=None) -> dict:
     """Specimen parameters of ``n`` samples (one random block, fixed draw order).
+
+    ``root_spring_relative`` (``(lo, hi)`` or empty) overrides the config's band
+    of ``k_r L / EI`` (a beam file's calibrated root spring moves its centre).
 
     Returns
     -------
@@ -123,8 +127,9 @@ def draw_specimens(rng: np.random.Generator, n: int, cfg: dict, preset: BeamPres
     ei = preset.EI_Nm2 * (1 + sp["ei_band"] * (2 * u[:, 0] - 1))
     mpl = preset.mass_per_length_kg_m * (1 + sp["mass_band"] * (2 * u[:, 1] - 1))
     dsc = 1 + sp["damping_band"] * (2 * u[:, 2] - 1)
-    if sp["root_spring_relative"]:
-        lo, hi = np.log(sp["root_spring_relative"])
+    band = sp["root_spring_relative"] if root_spring_relative is None else root_spring_relative
+    if band:
+        lo, hi = np.log(band)
         kr = np.exp(lo + (hi - lo) * u[:, 3]) * ei / preset.length_m
     else:
         kr = np.full(n, np.inf)

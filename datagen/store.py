@@ -466,17 +466,22 @@ class Dataset:
             return self.frf(name[4:], rows)
         raise FileFormatError(f"unknown array {name!r}; expected one of {sorted(ARRAYS) + sorted(DERIVED)}")
 
-    def frf(self, kind: str, rows=None) -> np.ndarray:
+    def frf(self, kind: str, rows=None, out=None) -> np.ndarray:
         """FRFs of ``kind`` ("measured" | "updated"), complex, shape (n, 2 states, 4 dofs, F).
 
         Synthesised from the stored arrays (:mod:`datagen.synth`), identical
         to what ``generate --store-frf`` writes. Format-1 datasets return their stored FRFs.
+        ``out``: optional C-contiguous complex array of that shape written in place (e.g. shared memory).
         """
         if kind not in FRF_KINDS:
             raise FileFormatError(f"FRF kind {kind!r} unknown; expected one of {', '.join(FRF_KINDS)}")
         if self.legacy:
-            return self._gather([f"frf_{kind}"], rows)[f"frf_{kind}"]
-        return synthesise(kind, self._gather(SOURCES[kind], rows), self.omega_rad_s, self.frf_dtype)
+            H = self._gather([f"frf_{kind}"], rows)[f"frf_{kind}"]
+            if out is None:
+                return H
+            out[...] = H
+            return out
+        return synthesise(kind, self._gather(SOURCES[kind], rows), self.omega_rad_s, self.frf_dtype, out)
 
     def verify_or_raise(self) -> None:
         """Check every shard's sha256 checksums; a damaged shard raises a one-line FileFormatError."""

@@ -50,12 +50,24 @@ def add_noise(H, noise_seed, noise_level, noise_floor, out=None):
     return out
 
 
-def measured_frf(a: dict, omega_rad_s, dtype=np.complex64):
-    """Noisy measured receptances (m/N), complex, shape (n, 2, 4, F), from the arrays of :data:`SOURCES`."""
+def _out(out, shape, dtype):
+    """``out`` checked against the FRF shape, or a new array."""
+    if out is None:
+        return np.empty(shape, dtype)
+    if out.shape != shape or not out.flags.c_contiguous:
+        raise ValueError(f"out must be a C-contiguous array of shape {shape}, got {out.shape}")
+    return out
+
+
+def measured_frf(a: dict, omega_rad_s, dtype=np.complex64, out=None):
+    """Noisy measured receptances (m/N), complex, shape (n, 2, 4, F), from the arrays of :data:`SOURCES`.
+
+    ``out``: optional C-contiguous complex array of that shape to write into (returned).
+    """
     lam, psi = np.asarray(a["truth_poles"]), np.asarray(a["truth_shapes"])
     n, _, S, m = psi.shape
     w = np.ascontiguousarray(omega_rad_s, dtype=float)
-    out = np.empty((n, 2, S, w.size), dtype)
+    out = _out(out, (n, 2, S, w.size), dtype)
     rep = lambda v: np.ascontiguousarray(np.repeat(np.asarray(v, float)[:, None], 2, 1).reshape(-1))  # noqa: E731
     noisy_pole_residue_kernel(np.ascontiguousarray(lam.reshape(2 * n, m)),
                               np.ascontiguousarray((psi * psi[..., :1, :]).reshape(2 * n, S, m)), w,
@@ -64,10 +76,13 @@ def measured_frf(a: dict, omega_rad_s, dtype=np.complex64):
     return out
 
 
-def updated_frf(a: dict, omega_rad_s, dtype=np.complex64):
-    """Receptances (m/N) of the updated models, complex, shape (n, 2, 4, F), from the arrays of :data:`SOURCES`."""
+def updated_frf(a: dict, omega_rad_s, dtype=np.complex64, out=None):
+    """Receptances (m/N) of the updated models, complex, shape (n, 2, 4, F), from the arrays of :data:`SOURCES`.
+
+    ``out``: optional C-contiguous complex array of that shape to write into (returned).
+    """
     lam, R = a["updated_poles"], a["updated_residues"]
-    out = np.empty(R.shape[:-1] + (np.size(omega_rad_s),), dtype)
+    out = _out(out, R.shape[:-1] + (np.size(omega_rad_s),), dtype)
     pole_residue(lam, R, omega_rad_s, out=out)
     bad = np.isnan(lam).any(axis=-1)
     if bad.any():  # real poles or a diverged update: the general route on the stored matrices
@@ -77,10 +92,10 @@ def updated_frf(a: dict, omega_rad_s, dtype=np.complex64):
     return out
 
 
-def synthesise(kind: str, arrays: dict, omega_rad_s, dtype=np.complex64):
+def synthesise(kind: str, arrays: dict, omega_rad_s, dtype=np.complex64, out=None):
     """FRFs of ``kind`` (``"measured"`` or ``"updated"``) from the stored arrays of :data:`SOURCES`."""
     if kind == "measured":
-        return measured_frf(arrays, omega_rad_s, dtype)
+        return measured_frf(arrays, omega_rad_s, dtype, out)
     if kind == "updated":
-        return updated_frf(arrays, omega_rad_s, dtype)
+        return updated_frf(arrays, omega_rad_s, dtype, out)
     raise ValueError(f"FRF kind {kind!r} unknown; expected one of {FRF_KINDS}")

@@ -77,12 +77,28 @@ class FRFDataset(torch.utils.data.Dataset):
         if self._ds is None:
             self._ds = Dataset(self.root, verify=False)  # verified in __init__
         idx = np.asarray(indices, np.int64)
-        H = self._ds.frf(self.kind, self.rows[idx])
-        return {"frf": torch.from_numpy(np.ascontiguousarray(frf_features(H, self.features))).to(self.dtype),
+        if self.features == "complex" and self.dtype == torch.float32 and self._ds.frf_dtype == np.complex64:
+            frf = _frf_buffer((idx.size, 2, 4, self._ds.omega_rad_s.size, 2))
+            self._ds.frf(self.kind, self.rows[idx], out=frf.numpy().view(np.complex64)[..., 0])
+        else:
+            H = self._ds.frf(self.kind, self.rows[idx])
+            frf = torch.from_numpy(np.ascontiguousarray(frf_features(H, self.features))).to(self.dtype)
+        return {"frf": frf,
                 "labels": torch.from_numpy(self.labels[idx]), "sample_id": torch.from_numpy(self.sample_id[idx])}
 
     def __getitem__(self, i):
         return {k: v[0] for k, v in self.__getitems__([i]).items()}
+
+
+def _frf_buffer(shape) -> torch.Tensor:
+    """An uninitialised float32 tensor to synthesise a batch into: in shared memory inside a
+    ``DataLoader`` worker, so sending it to the main process copies nothing (``share_memory_`` on a
+    finished batch costs about twice its synthesis)."""
+    new_shared = getattr(torch.UntypedStorage, "_new_shared", None)
+    if torch.utils.data.get_worker_info() is None or new_shared is None:
+        return torch.empty(shape, dtype=torch.float32)
+    storage = new_shared(int(np.prod(shape)) * 4)
+    return torch.empty(0, dtype=torch.float32).set_(storage).view(shape)
 
 
 def _batch_as_is(batch):

@@ -2,22 +2,41 @@
 
 The truth mesh of :mod:`datagen.pipeline` is built from unit-rigidity,
 unit-mass element matrices (each specimen scales them by its ``EI`` and mass
-per length). A beam file changes those elements and the geometry:
+per length). Every effect a beam file can hold (:mod:`physics.effects`)
+enters the generator, combined with the specimen variability as follows:
 
 * ``shear_deformation`` (``kGA_N``, ``rho_I_kg_m``): Timoshenko elements
   (:func:`physics.effects.timoshenko_stiffness`, :func:`physics.effects.timoshenko_mass`);
-* ``rotary_inertia`` (``rho_I_kg_m``): Rayleigh elements.
+  ``rotary_inertia`` (``rho_I_kg_m``): Rayleigh elements. The ratios
+  ``kGA / EI`` and ``rho I / m`` of the file are kept for every specimen (a
+  specimen stiffer in bending is as much stiffer in shear), so the element
+  matrices still scale exactly with the specimen's ``EI`` and mass.
+* ``root_flexibility`` (``k_theta_Nm_rad``, ``k_y_N_m``): the calibrated
+  rotational spring is the geometric centre of the specimen root-spring band
+  (``specimen.root_spring_relative`` keeps its width ``hi / lo``; an empty band
+  means exactly the calibrated spring, relative to each specimen's ``EI``).
+  A translational spring keeps the root translation as a DOF with the spring
+  ``k_y EI / EI_file`` (it scales with the specimen like the element stiffness).
+* ``added_mass`` (``mass_kg``, ``x_m``, ``J_kg_m2``): the point mass (fixed
+  hardware, not scaled by the specimen mass band) is added to ``M`` of both
+  test days through the Hermite row of :func:`physics.effects.hermite_row`.
+* ``local_damping`` (``c_Ns_m``, ``x_m``): the dashpot ``c N N^T`` is added to
+  ``C`` of both test days (not scaled by the damping band).
+* ``proportional_damping`` (``alpha_1_s``, ``beta_s``): as in
+  :func:`physics.effects.assemble_beam`, ``C_R = alpha M + beta K`` of the beam
+  elements (not of the clamp springs or the point mass). The modal ratios
+  ``zeta_j = phi_j^T C_R phi_j / (2 omega_j)`` in the nominal truth's modes (file
+  ``EI``, mass, the band-centre root spring; ``alpha / (2 omega_j) + beta omega_j / 2``
+  without springs or point mass) replace ``specimen.damping_ratios`` as the
+  baseline modal damping; each specimen scales them by its damping scale (the
+  small off-diagonal modal terms of ``C_R`` are dropped).
 
-The ratios ``kGA / EI`` and ``rho I / m`` of the file are kept for every
-specimen (a specimen stiffer in bending is as much stiffer in shear), so the
-element matrices still scale exactly with the specimen's ``EI`` and mass.
-Slits remain the exact Euler-Bernoulli bending-energy correction over the
-slit (:mod:`datagen.damage`): for a Timoshenko element that is the bending
-energy of the Hermite curvature field, an approximation of order
-``phi = 12 EI / (kGA l^2)`` of the element. The root is clamped (a flexible
-root is ``specimen.root_spring_relative``); other effects are refused with a
-message. ``physics.beam`` is the discrepancy workflow's module: it is imported
-only when a beam is given.
+Slits remain the exact partial-element bending-energy correction
+(:mod:`datagen.damage`), with the curvature field of the truth element (the
+Timoshenko element's own one under ``shear_deformation``). The Pilkey
+analyst's mass model (``updating.mass_model``) knows the beam's mass per length
+only, not an added mass. ``physics.beam`` is the discrepancy workflow's module:
+it is imported only when a beam is given.
 """
 
 from __future__ import annotations
@@ -28,10 +47,6 @@ from physics.errors import ConfigError
 from physics.fem import element_mass, element_stiffness
 from physics.properties import BeamPreset
 
-#: Effects a beam file may carry into ``generate``.
-SUPPORTED_EFFECTS = ("shear_deformation", "rotary_inertia")
-
-
 def load_truth_beam(mapping: dict):
     """Validated :class:`physics.beam.Beam` of config key ``beam`` (the beam-file mapping)."""
     try:
@@ -40,10 +55,6 @@ def load_truth_beam(mapping: dict):
         raise ConfigError("config key 'beam' needs physics.beam (the beam-file module), which this "
                           "installation lacks") from None
     beam = beam_from_dict(dict(mapping), "config key 'beam'")
-    other = sorted(set(beam.effects) - set(SUPPORTED_EFFECTS))
-    if other:
-        raise ConfigError(f"config key 'beam': effect(s) {other} are not supported by generate yet; supported: "
-                          f"{list(SUPPORTED_EFFECTS)} (a flexible root is 'specimen.root_spring_relative')")
     if beam.bc != "clamped-free":
         raise ConfigError(f"config key 'beam': generate simulates cantilevers; bc {beam.bc!r} is not 'clamped-free'")
     quarter = beam.length_m * np.arange(1, 5) / 4
@@ -78,12 +89,17 @@ def as_preset(beam) -> BeamPreset:
 
 
 def unit_elements(beam, element_length_m: float):
-    """Element stiffness for ``EI = 1`` and mass for ``m = 1`` with the beam's effects, each (4, 4).
+    """Element stiffness for ``EI = 1`` and mass for ``m = 1`` with the beam's effects, and the shear ratio.
 
     Without a beam (``None``): the Euler-Bernoulli elements, eqs. 3.8 and 3.9.
+
+    Returns
+    -------
+    ke, me : ndarray, shape (4, 4)
+    shear_phi : float   ``12 EI / (kGA l^2)`` of the element (0 without shear deformation)
     """
-    if beam is None or not beam.effects:
-        return element_stiffness(1.0, element_length_m), element_mass(1.0, element_length_m)
+    if beam is None or not ({"shear_deformation", "rotary_inertia"} & set(beam.effects)):
+        return element_stiffness(1.0, element_length_m), element_mass(1.0, element_length_m), 0.0
     from physics.effects import timoshenko_mass, timoshenko_stiffness
 
     eff = beam.effects_dict()
@@ -95,4 +111,36 @@ def unit_elements(beam, element_length_m: float):
     if "rotary_inertia" in eff:
         rho_i = eff["rotary_inertia"].get("rho_I_kg_m", m * h**2 / 12)
     return (timoshenko_stiffness(1.0, kga / ei, element_length_m),
-            timoshenko_mass(1.0, rho_i / m, 1.0, kga / ei, element_length_m))
+            timoshenko_mass(1.0, rho_i / m, 1.0, kga / ei, element_length_m),
+            12.0 * ei / (kga * element_length_m**2))
+
+
+def point_effects(beam, n_elements: int) -> dict:
+    """The beam's lumped effects on the full (unconstrained) truth mesh, in SI units.
+
+    Returns
+    -------
+    dict with ``M_added`` (kg ...) and ``C_local`` (N s/m ...), each (2 N, 2 N) or
+    ``None``, ``k_theta_Nm_rad`` and ``k_y_N_m`` (``None`` when absent) and
+    ``rayleigh`` (``(alpha_1_s, beta_s)`` or ``None``).
+    """
+    out = {"M_added": None, "C_local": None, "k_theta_Nm_rad": None, "k_y_N_m": None, "rayleigh": None}
+    if beam is None:
+        return out
+    from physics.effects import dashpot_matrix, point_mass_matrix
+
+    eff = beam.effects_dict()
+    node_x = np.linspace(0.0, beam.length_m, n_elements + 1)
+    if "added_mass" in eff:
+        p = eff["added_mass"]
+        out["M_added"] = point_mass_matrix(node_x, p["mass_kg"], p.get("x_m", beam.length_m), p.get("J_kg_m2", 0.0))
+    if "local_damping" in eff:
+        p = eff["local_damping"]
+        out["C_local"] = dashpot_matrix(node_x, p["c_Ns_m"], p.get("x_m", beam.length_m))
+    if "root_flexibility" in eff:
+        out["k_theta_Nm_rad"] = eff["root_flexibility"]["k_theta_Nm_rad"]
+        out["k_y_N_m"] = eff["root_flexibility"].get("k_y_N_m")
+    if "proportional_damping" in eff:
+        p = eff["proportional_damping"]
+        out["rayleigh"] = (p.get("alpha_1_s", 0.0), p.get("beta_s", 0.0))
+    return out

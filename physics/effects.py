@@ -217,6 +217,30 @@ def hermite_row(x_m, node_x):
     return N, dN
 
 
+def point_mass_matrix(node_x, mass_kg, x_m, J_kg_m2=0.0) -> np.ndarray:
+    """Mass matrix of a point mass with rotary inertia at ``x_m``, over all node DOFs (``added_mass``).
+
+    ``mass_kg N N^T + J_kg_m2 N' N'^T`` with the Hermite rows of :func:`hermite_row`.
+
+    Returns
+    -------
+    ndarray, shape (2 n_nodes, 2 n_nodes)   (kg, kg m, kg m^2)
+    """
+    N, dN = hermite_row(x_m, node_x)
+    return mass_kg * np.outer(N, N) + J_kg_m2 * np.outer(dN, dN)
+
+
+def dashpot_matrix(node_x, c_Ns_m, x_m) -> np.ndarray:
+    """Damping matrix ``c N N^T`` of a dashpot to ground at ``x_m``, over all node DOFs (``local_damping``).
+
+    Returns
+    -------
+    ndarray, shape (2 n_nodes, 2 n_nodes)   (N s/m ...)
+    """
+    N, _ = hermite_row(x_m, node_x)
+    return c_Ns_m * np.outer(N, N)
+
+
 def interpolation_matrix(model: fem.FEModel, x_m) -> np.ndarray:
     """Matrix ``T`` (n_points, n_model_dofs) with ``w(x_m) = T u`` over the model's free DOFs."""
     all_names = fem.dof_names(model.node_x.size)
@@ -280,12 +304,10 @@ def assemble_beam(length_m, EI_Nm2, mass_per_length_kg_m, n_elements, *, bc="cla
         C = p.get("alpha_1_s", 0.0) * M + p.get("beta_s", 0.0) * K
     if "added_mass" in eff:
         p = eff["added_mass"]
-        N, dN = hermite_row(p.get("x_m", length_m), node_x)
-        M = M + p["mass_kg"] * np.outer(N, N) + p.get("J_kg_m2", 0.0) * np.outer(dN, dN)
+        M = M + point_mass_matrix(node_x, p["mass_kg"], p.get("x_m", length_m), p.get("J_kg_m2", 0.0))
     if "local_damping" in eff:
         p = eff["local_damping"]
-        N, _ = hermite_row(p.get("x_m", length_m), node_x)
-        C = C + p["c_Ns_m"] * np.outer(N, N)
+        C = C + dashpot_matrix(node_x, p["c_Ns_m"], p.get("x_m", length_m))
     names = fem.dof_names(n_el + 1)
     removed = set(fem.constrained_dofs(bc, n_el + 1))
     if "root_flexibility" in eff:

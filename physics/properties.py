@@ -15,7 +15,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 
 from physics.errors import BeamDamageError, ShapeError
 
@@ -93,10 +92,18 @@ def beam_preset(name: str) -> BeamPreset:
 
 
 def cantilever_beta_l(n_modes: int = 4) -> np.ndarray:
-    """Roots of ``cos(bl) cosh(bl) = -1`` (clamped-free), to machine precision."""
-    f = lambda x: np.cos(x) * np.cosh(x) + 1.0  # noqa: E731
-    return np.array([brentq(f, (k + 0.5) * np.pi - 1.0, (k + 0.5) * np.pi + 1.0, xtol=1e-15)
-                     for k in range(n_modes)])
+    """Roots of ``cos(bl) cosh(bl) = -1`` (clamped-free), to machine precision.
+
+    Newton's method from ``(k + 1/2) pi`` (each root lies within 0.31 of it; no
+    SciPy import, which costs every dataset worker about half a second).
+    """
+    x = (np.arange(n_modes) + 0.5) * np.pi
+    for _ in range(100):
+        step = (np.cos(x) * np.cosh(x) + 1.0) / (np.cos(x) * np.sinh(x) - np.sin(x) * np.cosh(x))
+        x = x - step
+        if np.all(np.abs(step) <= 4 * np.finfo(float).eps * x):
+            break
+    return x
 
 
 #: ``beta_l`` of a clamped-free beam to machine precision (first four modes).

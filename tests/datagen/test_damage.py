@@ -79,3 +79,18 @@ def test_frequency_shift_follows_curvature_squared():
     assert np.all(np.abs(actual - predicted) <= 2e-3 * scale)
     # and the shift really varies with position (a constant would not pass)
     assert np.all(np.abs(predicted).min(axis=0) < 0.5 * scale)
+
+
+def test_timoshenko_curvature_energy_plus_shear_energy_is_the_timoshenko_element():
+    """Bending energy of the Timoshenko curvature field plus the (constant) shear energy equals
+    physics.effects.timoshenko_stiffness; phi = 0 is the Hermite basis."""
+    from datagen.damage import curvature_basis
+    from physics.effects import timoshenko_stiffness
+
+    l, ei, kga = 0.03, 26.7, 2.7e4
+    phi = 12 * ei / (kga * l**2)
+    _, b1 = curvature_basis(l, phi)
+    gamma = -(ei / kga) * b1 / l                  # shear strain row: -EI/kGA d(kappa)/dx
+    k = ei * overlap_energy(0.0, 1.0, l, phi) + kga * l * np.outer(gamma, gamma)
+    np.testing.assert_allclose(k, timoshenko_stiffness(ei, kga, l), rtol=1e-12, atol=1e-9 * np.abs(k).max())
+    assert np.abs(overlap_energy(0.0, 1.0, l, phi) * ei - element_stiffness(ei, l)).max() > 0.5 * np.abs(k).max()
