@@ -29,6 +29,9 @@ COMMAND_MODULES = [
     "experiments.demo",
     "experiments.cmd_generate",
     "experiments.cmd_inspect",
+    "experiments.cmd_train",
+    "experiments.cmd_evaluate",
+    "experiments.cmd_classify",
 ]
 
 EXIT_USAGE = 2
