@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import torch
+from scipy.special import expit
 from sklearn.base import BaseEstimator, ClassifierMixin
 
 from learn.features import split_by_specimen
@@ -53,9 +54,10 @@ def fit_temperature(logits, y) -> float:
         s = z / t
         return np.mean(np.logaddexp(0.0, s) - y * s)
 
-    grid = np.exp(np.linspace(np.log(0.05), np.log(20.0), 121))
+    # a lower bound keeps a perfectly separated validation split from driving T to 0 (certainty)
+    grid = np.exp(np.linspace(np.log(0.25), np.log(20.0), 121))
     best = grid[np.argmin([nll(t) for t in grid])]
-    fine = best * np.exp(np.linspace(-0.06, 0.06, 41))
+    fine = np.clip(best * np.exp(np.linspace(-0.06, 0.06, 41)), 0.25, 20.0)
     return float(fine[np.argmin([nll(t) for t in fine])])
 
 
@@ -189,7 +191,7 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         return self._raw(X)["detect"] / self.temperature_
 
     def predict_proba(self, X):
-        p = 1.0 / (1.0 + np.exp(-self.decision_function(X)))
+        p = expit(self.decision_function(X))
         return np.stack([1 - p, p], axis=1)
 
     def predict(self, X):
@@ -208,7 +210,7 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         mu, s = raw["size_mean"], np.exp(raw["size_log_std"])
         med = np.exp(mu)
         sd = med * np.sqrt(np.expm1(s**2) * np.exp(s**2))
-        return Prediction(1.0 / (1.0 + np.exp(-z)), p, mean, std, el, np.argmax(el, axis=1) + 1, med, sd, z)
+        return Prediction(expit(z), p, mean, std, el, np.argmax(el, axis=1) + 1, med, sd, z)
 
     # ------------------------------------------------------------------ persistence (no pickle)
     def get_state(self) -> tuple[dict, dict]:
