@@ -44,7 +44,7 @@ def run(args) -> dict:
     model.check_beam(BeamSpec(args.beam or b.name, b.length_m if args.beam in (None, b.name) else _length(args.beam),
                               b.dofs, args.mass or b.mass_model), "measured beam")
     base, cur = read_input(args.baseline), read_input(args.measured)
-    res = classify(model, base, cur)
+    res = classify(model, base, cur, identified=_identify(base, cur))
     extra = res.pop("_extra")
     if args.out:
         _write(args.out, res, extra, base, cur, model)
@@ -53,6 +53,25 @@ def run(args) -> dict:
         if args.out:
             print(f"verdict.json and classify.png in {args.out}")
     return {k: res[k] for k in KEYS}
+
+
+def _identify(base, cur):
+    """Modal data of FRF inputs by peak picking (4 modes, fast) for the classical baseline; None if not possible."""
+    import warnings
+
+    from physics.errors import BeamDamageError
+    from physics.io import MeasuredFRF
+
+    if not isinstance(base, MeasuredFRF):
+        return None
+    from experiments.cmd_identify import identify_frf
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return tuple(identify_frf(f, method="peak", n_modes=4).modal_data for f in (base, cur))
+    except (BeamDamageError, np.linalg.LinAlgError, RuntimeError):
+        return None
 
 
 def _length(name):

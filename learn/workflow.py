@@ -91,7 +91,7 @@ def save_model(out_dir, config: dict, networks: dict) -> None:
         torch.save(tensors, buf)
         atomic_write_bytes(out / f"weights-{route}.pt", buf.getvalue())
         config.setdefault("networks", {})[route] = meta
-    atomic_write_text(out / "config.json", json.dumps(_jsonable(config), indent=1, sort_keys=True))
+    atomic_write_text(out / "config.json", json.dumps(config, indent=1, sort_keys=True, default=_json_default))
 
 
 def load_model(model_dir, device=None) -> TrainedModel:
@@ -121,20 +121,13 @@ def load_model(model_dir, device=None) -> TrainedModel:
     return model
 
 
-def _jsonable(obj):
-    if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
+def _json_default(obj):
+    """numpy values in ``json.dumps`` (NaN stays NaN, which ``json.loads`` reads back)."""
     if isinstance(obj, np.ndarray):
-        return _jsonable(obj.tolist())
-    if isinstance(obj, (np.bool_,)):
-        return bool(obj)
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, (float, np.floating)):
-        return float(obj) if np.isfinite(obj) else None
-    return obj
+        return obj.tolist()
+    if isinstance(obj, (np.bool_, np.integer, np.floating)):
+        return obj.item()
+    raise TypeError(f"{type(obj).__name__} is not JSON serialisable")
 
 
 # --------------------------------------------------------------------------- network outputs
@@ -259,7 +252,7 @@ def evaluate(model: TrainedModel, data, out_dir=None, *, changes: StateChanges |
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
         atomic_write_text(out / "metrics.csv", pd.DataFrame(rows).to_csv(index=False))
-        atomic_write_text(out / "metrics.json", json.dumps(_jsonable(rows), indent=1))
+        atomic_write_text(out / "metrics.json", json.dumps(rows, indent=1, default=_json_default))
         result["figures"] = figures(outs, truth, out, pairs.beam.length_m)
     return result
 
@@ -313,7 +306,7 @@ def ood_percentile(est: DamageClassifier, X) -> tuple[float, float]:
     return float(d[0]), float(np.mean(est.reference_distances_ <= d[0]) * 100)
 
 
-def classify(model: TrainedModel, baseline, current) -> dict:
+def classify(model: TrainedModel, baseline, current, identified=None) -> dict:
     """Verdict for one measured pair.
 
     Parameters
@@ -321,6 +314,8 @@ def classify(model: TrainedModel, baseline, current) -> dict:
     baseline, current : :class:`physics.io.ModalData` or :class:`physics.io.MeasuredFRF` (both the same kind)
         FRFs are mapped onto the model's log-frequency grid (any frequency lines); modal data use the
         modal-route network.
+    identified : (ModalData, ModalData), optional
+        Modal data identified from FRF inputs, for the classical baseline's answer.
     """
     from physics.io import MeasuredFRF
 
@@ -374,6 +369,11 @@ def classify(model: TrainedModel, baseline, current) -> dict:
     }
     extra = {"location_distribution": d.location_distribution[0], "mahalanobis_distance": dist,
              "training_percentile": pct, "baseline": None}
+    if lam is None and identified is not None:
+        try:
+            lam, vecs, w = modal_pair(identified[0], identified[1], beam)
+        except BeamDamageError as exc:
+            warnings.append(f"no classical baseline: identified modal data unusable ({exc})")
     if lam is not None:
         classical, _ = run_classical(lam, vecs, sens, model.config["baseline_thresholds"])
         best = next((o for o in classical if o.name == model.config["best_baseline"]), classical[0])
