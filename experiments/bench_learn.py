@@ -91,10 +91,11 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--data-dir", default="out/learn/data")
     ap.add_argument("--out", default="out/learn/bench")
-    ap.add_argument("--epochs", type=int, default=40)
+    ap.add_argument("--epochs", type=int, default=60)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--n-train", type=int, default=4000, help="pairs per training dataset (6 datasets)")
     ap.add_argument("--n-test", type=int, default=1000, help="pairs per test dataset (6 datasets)")
+    ap.add_argument("--threads", type=int, default=1, help="torch CPU threads (1 is fastest on a shared machine)")
     ap.add_argument("--skip-routes", action="store_true", help="do not train the networks of the other routes")
     args = ap.parse_args(argv)
 
@@ -107,7 +108,7 @@ def main(argv=None):
     from learn.workflow import (DEFAULT_ROUTE, TRAINING_CHANGES, frf_arrays, load_model, network_output,
                                 sensitivity_of, targets, train)
 
-    torch.set_num_threads(2)
+    torch.set_num_threads(args.threads)
     data_dir, out = Path(args.data_dir), Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     ensure_datasets(data_dir, args.n_train, args.n_test)

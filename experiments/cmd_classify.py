@@ -23,7 +23,8 @@ def add_parser(sub):
     p.add_argument("measured", metavar="MEASURED", help="current state (same kind as BASELINE)")
     p.add_argument("--beam", help="beam of the data (default: the model's); another beam is refused")
     p.add_argument("--mass", choices=("iirs", "lumped"), help="mass model of the data's updating (default: the model's)")
-    p.add_argument("--out", metavar="DIR", help="write verdict.json and classify.png here")
+    p.add_argument("--out", metavar="DIR", help="write verdict.json and classify.png here (default without --json: "
+                                                "out/classify)")
     p.add_argument("--json", action="store_true", help="print exactly the verdict keys as JSON")
     p.set_defaults(func=run)
 
@@ -46,6 +47,8 @@ def run(args) -> dict:
     base, cur = read_input(args.baseline), read_input(args.measured)
     res = classify(model, base, cur, identified=_identify(base, cur))
     extra = res.pop("_extra")
+    if not args.json and not args.out:
+        args.out = "out/classify"
     if args.out:
         _write(args.out, res, extra, base, cur, model)
     if not args.json:

@@ -11,10 +11,12 @@ def add_parser(sub):
                                    "test split and write a model directory (config.json, weights-*.pt, metrics.csv).")
     p.add_argument("--data", required=True, nargs="+", metavar="DIR", help="dataset directories (same beam)")
     p.add_argument("--out", required=True, metavar="MODEL_DIR", help="model directory to write")
-    p.add_argument("--epochs", type=int, default=40, help="training epochs (default 40)")
+    p.add_argument("--epochs", type=int, default=60, help="training epochs (default 60)")
     p.add_argument("--seed", type=int, default=0, help="random seed of split, augmentation and network (default 0)")
     p.add_argument("--route", choices=("modal", "updated", "measured"), default=None,
                    help="input route (default: the benchmark's winner, learn.workflow.DEFAULT_ROUTE)")
+    p.add_argument("--threads", type=int, help="torch CPU threads (default: torch's choice; 1 is fastest when the "
+                                               "cores are shared)")
     p.add_argument("--json", action="store_true", help="print the training summary as JSON")
     p.set_defaults(func=run)
 
@@ -25,6 +27,11 @@ def run(args) -> dict:
 
     if args.epochs < 1:
         raise BeamDamageError(f"--epochs must be >= 1, got {args.epochs}")
+    if args.threads is not None:
+        if args.threads < 1:
+            raise BeamDamageError(f"--threads must be >= 1, got {args.threads}")
+        import torch
+        torch.set_num_threads(args.threads)
     out = train(args.data, args.out, epochs=args.epochs, seed=args.seed, route=args.route, progress=True)
     if not args.json:
         m = out["test_metrics"][0]

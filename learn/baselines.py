@@ -18,7 +18,8 @@ sensitivities of the nominal beam (:mod:`learn.sensitivity`) and returns a
   network's own features.
 
 Detection scores: the largest relative frequency drop (frequency methods), the
-largest element loss (updating); thresholds are chosen on the training part.
+largest element loss (updating); each method's threshold is the 99th percentile
+of its score on the intact training pairs (1 % false alarms, as the network's).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from learn.features import modal_features, real_shapes
+from learn.features import real_shapes
 from learn.sensitivity import Sensitivity
 
 
@@ -147,13 +148,10 @@ def sensitivity_updating(df, du, sens: Sensitivity, threshold: float, sigma_f: f
     return _pack("sensitivity updating", dmax, threshold, e, size, sens)
 
 
-def best_threshold(score, damaged) -> float:
-    """Threshold on ``score`` of the highest accuracy (ties: the lower false-alarm rate)."""
+def false_alarm_threshold(score, damaged, target: float = 0.01) -> float:
+    """Detection threshold: the ``1 - target`` quantile of the scores of intact pairs (the network's rule)."""
     s = np.asarray(score, float)
-    y = np.asarray(damaged, bool)
-    cand = np.unique(np.quantile(s, np.linspace(0.0, 1.0, 401)))
-    acc = [(np.mean((s >= c) == y), -np.mean(s[~y] >= c) if (~y).any() else 0.0) for c in cand]
-    return float(cand[max(range(len(cand)), key=lambda k: acc[k])])
+    return float(np.quantile(s[~np.asarray(damaged, bool)], 1 - target))
 
 
 class BoostedBaseline:
@@ -170,13 +168,14 @@ class BoostedBaseline:
         dam = y[:, 0] > 0.5
         kw = dict(random_state=self.random_state, max_iter=self.max_iter, early_stopping=True)
         self.detect_ = HistGradientBoostingClassifier(**kw).fit(X, dam)
+        self.threshold_ = max(0.5, false_alarm_threshold(self.detect_.predict_proba(X)[:, 1], dam))
         self.locate_ = HistGradientBoostingRegressor(**kw).fit(X[dam], y[dam, 1])
         self.size_ = HistGradientBoostingRegressor(**kw).fit(X[dam], np.log(y[dam, 2]))
         return self
 
     def predict(self, X) -> MethodOutput:
         p = self.detect_.predict_proba(X)[:, 1]
-        return MethodOutput("gradient boosting", p, p >= 0.5, np.clip(self.locate_.predict(X), 0, 1),
+        return MethodOutput("gradient boosting", p, p >= self.threshold_, np.clip(self.locate_.predict(X), 0, 1),
                             np.exp(self.size_.predict(X)), probability=p)
 
 
@@ -200,12 +199,7 @@ def run_classical(eigenvalues, eigenvectors, sens: Sensitivity, thresholds: dict
     if thresholds is None:
         if damaged is None:
             raise ValueError("either thresholds or damaged labels are needed")
-        thresholds = {"freq": best_threshold(scores["freq"], damaged), "upd": best_threshold(scores["upd"], damaged)}
+        thresholds = {k: false_alarm_threshold(v, damaged) for k, v in scores.items()}
     outs = [f(df, sens, thresholds["freq"]) for f in FREQUENCY_METHODS.values()]
     outs.append(sensitivity_updating(df, du, sens, thresholds["upd"]))
     return outs, thresholds
-
-
-def features_for_boosting(eigenvalues, eigenvectors):
-    """The modal features (:func:`learn.features.modal_features`) used by :class:`BoostedBaseline`."""
-    return modal_features(eigenvalues, eigenvectors)

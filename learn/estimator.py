@@ -45,20 +45,24 @@ def _device(name):
     return torch.device("cuda" if torch.cuda.is_available() else "cpu")
 
 
-def fit_temperature(logits, y) -> float:
-    """Temperature ``T`` minimising the validation log-loss of ``sigmoid(logit / T)`` (grid + refinement)."""
+def fit_calibration(logits, y) -> tuple[float, float]:
+    """Temperature ``T`` and bias ``b`` minimising the log-loss of ``sigmoid(logit / T + b)``.
+
+    Temperature scaling (Guo et al. 2017) with a bias term (Platt scaling): the
+    bias absorbs a shift of the validation class balance. ``T`` is kept in
+    [0.25, 20] so a perfectly separated validation split cannot drive it to 0.
+    """
+    from scipy.optimize import minimize
+
     z = np.asarray(logits, float)
     y = np.asarray(y, float)
 
-    def nll(t):
-        s = z / t
+    def nll(p):
+        s = z / np.exp(p[0]) + p[1]
         return np.mean(np.logaddexp(0.0, s) - y * s)
 
-    # a lower bound keeps a perfectly separated validation split from driving T to 0 (certainty)
-    grid = np.exp(np.linspace(np.log(0.25), np.log(20.0), 121))
-    best = grid[np.argmin([nll(t) for t in grid])]
-    fine = np.clip(best * np.exp(np.linspace(-0.06, 0.06, 41)), 0.25, 20.0)
-    return float(fine[np.argmin([nll(t) for t in fine])])
+    res = minimize(nll, np.zeros(2), method="L-BFGS-B", bounds=[(np.log(0.25), np.log(20.0)), (-10.0, 10.0)])
+    return float(np.exp(res.x[0])), float(res.x[1])
 
 
 class DamageClassifier(ClassifierMixin, BaseEstimator):
@@ -73,7 +77,11 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
     loc_sigma_bins : float
         Standard deviation (in bins) of the Gaussian soft location target.
     val_fraction : float
-        Share of specimens held out for early model selection and temperature scaling.
+        Share of specimens held out for calibration and the decision threshold.
+    false_alarm_target : float
+        The verdict "damaged" needs a probability above the ``1 - false_alarm_target``
+        quantile of the validation intact pairs' probabilities (and above 0.5):
+        the probabilities stay calibrated, the verdict controls false alarms.
     random_state : int
     device : str or None
         ``None`` picks CUDA when present, else CPU.
@@ -81,9 +89,9 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         Show a tqdm bar over epochs.
     """
 
-    def __init__(self, n_bins=80, hidden=256, depth=3, dropout=0.05, epochs=60, batch_size=256, lr=2e-3,
-                 weight_decay=1e-4, loc_sigma_bins=1.0, val_fraction=0.15, random_state=0, device=None,
-                 verbose=False):
+    def __init__(self, n_bins=80, hidden=128, depth=3, dropout=0.05, epochs=60, batch_size=256, lr=2e-3,
+                 weight_decay=1e-4, loc_sigma_bins=1.0, val_fraction=0.15, false_alarm_target=0.01, random_state=0,
+                 device=None, verbose=False):
         self.n_bins = n_bins
         self.hidden = hidden
         self.depth = depth
@@ -94,6 +102,7 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         self.weight_decay = weight_decay
         self.loc_sigma_bins = loc_sigma_bins
         self.val_fraction = val_fraction
+        self.false_alarm_target = false_alarm_target
         self.random_state = random_state
         self.device = device
         self.verbose = verbose
@@ -173,10 +182,13 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
                 tot += float(loss.detach()) * len(b)
             history.append(tot / len(tr))
         self.loss_history_ = history
-        self.temperature_ = 1.0
+        self.temperature_, self.bias_, self.threshold_ = 1.0, 0.0, 0.5
         if len(va):
             raw = self._raw(X[va])
-            self.temperature_ = fit_temperature(raw["detect"], d[va])
+            self.temperature_, self.bias_ = fit_calibration(raw["detect"], d[va])
+            p_intact = expit(raw["detect"][d[va] < 0.5] / self.temperature_ + self.bias_)
+            if p_intact.size:
+                self.threshold_ = float(max(0.5, np.quantile(p_intact, 1 - self.false_alarm_target)))
         self.train_seconds_ = time.perf_counter() - t0
         self.n_train_, self.n_val_ = len(tr), len(va)
         return self
@@ -188,18 +200,18 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         return np.sqrt(np.maximum(np.einsum("ni,ij,nj->n", Z, self.precision_, Z), 0.0))
 
     def decision_function(self, X):
-        return self._raw(X)["detect"] / self.temperature_
+        return self._raw(X)["detect"] / self.temperature_ + self.bias_
 
     def predict_proba(self, X):
         p = expit(self.decision_function(X))
         return np.stack([1 - p, p], axis=1)
 
     def predict(self, X):
-        return (self.predict_proba(X)[:, 1] >= 0.5).astype(int)
+        return (self.predict_proba(X)[:, 1] >= self.threshold_).astype(int)
 
     def predict_details(self, X) -> Prediction:
         raw = self._raw(X)
-        z = raw["detect"] / self.temperature_
+        z = raw["detect"] / self.temperature_ + self.bias_
         logits = raw["locate"]
         p = np.exp(logits - logits.max(axis=1, keepdims=True))
         p /= p.sum(axis=1, keepdims=True)
@@ -220,7 +232,8 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         tensors["norm.scale"] = torch.as_tensor(self.scale_)
         tensors["ood.precision"] = torch.as_tensor(self.precision_)
         tensors["ood.reference"] = torch.as_tensor(self.reference_distances_)
-        meta = {"params": self.get_params(), "temperature": self.temperature_, "n_features": int(self.n_features_in_),
+        meta = {"params": self.get_params(), "temperature": self.temperature_, "bias": self.bias_,
+                "threshold": self.threshold_, "n_features": int(self.n_features_in_),
                 "train_seconds": self.train_seconds_, "loss_history": self.loss_history_,
                 "n_train": int(self.n_train_), "n_val": int(self.n_val_)}
         return tensors, meta
@@ -240,6 +253,8 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         est.model_ = DamageNet(est.n_features_in_, est.n_bins, est.hidden, est.depth, est.dropout).to(est.device_)
         est.model_.load_state_dict({k[4:]: v for k, v in tensors.items() if k.startswith("net.")})
         est.temperature_ = float(meta["temperature"])
+        est.bias_ = float(meta.get("bias", 0.0))
+        est.threshold_ = float(meta.get("threshold", 0.5))
         est.train_seconds_ = float(meta.get("train_seconds", float("nan")))
         est.loss_history_ = list(meta.get("loss_history", []))
         est.n_train_, est.n_val_ = int(meta.get("n_train", 0)), int(meta.get("n_val", 0))

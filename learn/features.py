@@ -428,10 +428,11 @@ class StateChanges:
     reclamp: float = 0.05
 
 
-def root_spring_effect(EI, m_per_length, root_spring, factor, length_m, n_elements: int = 20, n_modes: int = 4):
+def root_spring_effect(EI, m_per_length, root_spring, factor, length_m, n_elements: int = 8, n_modes: int = 4):
     """Frequency ratios and real-shape changes at nodes 2..5 when the root spring is multiplied by ``factor``.
 
-    Undamaged Euler-Bernoulli cantilever on a rotational root spring (batched).
+    Undamaged Euler-Bernoulli cantilever on a rotational root spring (batched); 8 elements give
+    the ratios of modes 1..4 within 0.5 % of their change on a 20-element mesh.
 
     Returns
     -------
@@ -471,11 +472,14 @@ def apply_state_changes(pairs: Pairs, changes: StateChanges, seed: int = 0, chun
     psi = pairs.eigenvectors.copy()
     m = min(lam.shape[-1], 4)
     ratios = np.ones((n, m))
+    from threadpoolctl import threadpool_limits  # (a scikit-learn dependency)
+
     for i in range(0, n, chunk):
         s = slice(i, i + chunk)
-        ratio, du = root_spring_effect(t["ei_Nm2"].to_numpy(float)[s], t["m_per_length_kg_m"].to_numpy(float)[s],
-                                       t["root_spring_Nm_rad"].to_numpy(float)[s], 1 + ek[s], pairs.beam.length_m,
-                                       n_modes=m)
+        with threadpool_limits(1):  # many tiny eigenproblems: threaded BLAS only adds overhead
+            ratio, du = root_spring_effect(t["ei_Nm2"].to_numpy(float)[s], t["m_per_length_kg_m"].to_numpy(float)[s],
+                                           t["root_spring_Nm_rad"].to_numpy(float)[s], 1 + ek[s],
+                                           pairs.beam.length_m, n_modes=m)
         ratios[s] = ratio * np.sqrt(1 + eT[s])[:, None]
         lam[s, 1, :m] *= ratios[s]
         cur = psi[s, 1, :, :m]

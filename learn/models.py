@@ -28,7 +28,7 @@ class DamageNet(nn.Module):
     dropout : float
     """
 
-    def __init__(self, n_features: int, n_bins: int = 80, hidden: int = 256, depth: int = 3, dropout: float = 0.05):
+    def __init__(self, n_features: int, n_bins: int = 80, hidden: int = 128, depth: int = 3, dropout: float = 0.05):
         super().__init__()
         layers, d = [], n_features
         for _ in range(depth):

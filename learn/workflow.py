@@ -140,7 +140,8 @@ def network_output(est: DamageClassifier, X, sens, name="network") -> tuple[Meth
     """Network answers as a :class:`MethodOutput` plus the full :class:`learn.estimator.Prediction`."""
     d = est.predict_details(X)
     detectable = sens.largest_drop(d.x_over_L, d.stiffness_loss_Nm3) >= detectability_threshold()
-    out = MethodOutput(name, d.probability_damaged, d.probability_damaged >= 0.5, d.x_over_L, d.stiffness_loss_Nm3,
+    out = MethodOutput(name, d.probability_damaged, d.probability_damaged >= est.threshold_, d.x_over_L,
+                       d.stiffness_loss_Nm3,
                        probability=d.probability_damaged, x_std_over_L=d.x_std_over_L,
                        stiffness_loss_std_Nm3=d.stiffness_loss_std_Nm3, detectable=detectable)
     return out, d
@@ -156,7 +157,7 @@ def _nominal_root_spring(source: list):
 
 
 # --------------------------------------------------------------------------- train
-def train(data, out_dir, *, epochs: int = 40, seed: int = 0, route: str | None = None, progress: bool = False,
+def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None = None, progress: bool = False,
           changes: StateChanges = TRAINING_CHANGES, test_fraction: float = 0.15) -> dict:
     """Train the default-route network (and a modal-route companion), score it and the baselines, save.
 

@@ -9,7 +9,7 @@ from sklearn.base import clone
 from sklearn.metrics import roc_auc_score
 
 from learn.baselines import cawley_adams, dlac, mdlac, sensitivity_updating
-from learn.estimator import DamageClassifier, fit_temperature
+from learn.estimator import DamageClassifier, fit_calibration
 from learn.evaluate import reliability, roc_auc
 from learn.features import (BeamSpec, curvatures, map_frf_to_grid, real_shapes, split_by_specimen,
                             warped_log_magnitude)
@@ -175,8 +175,8 @@ def test_temperature_scaling_and_calibration_metrics():
     rng = np.random.default_rng(2)
     z = rng.normal(0, 2, 20000)
     y = rng.random(z.size) < 1 / (1 + np.exp(-z))
-    t = fit_temperature(3 * z, y)                   # logits 3x overconfident
-    assert t == pytest.approx(3.0, rel=0.08)
+    t, b = fit_calibration(3 * z + 1.0, y)          # logits 3x overconfident and shifted
+    assert t == pytest.approx(3.0, rel=0.08) and b == pytest.approx(-1.0 / 3, abs=0.05)
     p = 1 / (1 + np.exp(-z))
     assert reliability(p, y)[3] < 0.02
     assert reliability(1 / (1 + np.exp(-3 * z)), y)[3] > 0.05
