@@ -18,8 +18,8 @@ sensitivities of the nominal beam (:mod:`learn.sensitivity`) and returns a
   network's own features.
 
 Detection scores: the largest relative frequency drop (frequency methods), the
-largest element loss (updating); each method's threshold is the 99th percentile
-of its score on the intact training pairs (1 % false alarms, as the network's).
+largest element loss (updating); each method's threshold is the 99.5th percentile
+of its score on the intact training pairs (0.5 % false alarms, as the network's).
 """
 
 from __future__ import annotations
@@ -148,7 +148,7 @@ def sensitivity_updating(df, du, sens: Sensitivity, threshold: float, sigma_f: f
     return _pack("sensitivity updating", dmax, threshold, e, size, sens)
 
 
-def false_alarm_threshold(score, damaged, target: float = 0.01) -> float:
+def false_alarm_threshold(score, damaged, target: float = 0.005) -> float:
     """Detection threshold: the ``1 - target`` quantile of the scores of intact pairs (the network's rule)."""
     s = np.asarray(score, float)
     return float(np.quantile(s[~np.asarray(damaged, bool)], 1 - target))

@@ -90,7 +90,7 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
     """
 
     def __init__(self, n_bins=80, hidden=128, depth=3, dropout=0.05, epochs=60, batch_size=256, lr=2e-3,
-                 weight_decay=1e-4, loc_sigma_bins=1.0, val_fraction=0.15, false_alarm_target=0.01, random_state=0,
+                 weight_decay=1e-4, loc_sigma_bins=1.0, val_fraction=0.15, false_alarm_target=0.005, random_state=0,
                  device=None, verbose=False):
         self.n_bins = n_bins
         self.hidden = hidden
