@@ -20,7 +20,7 @@ def add_parser(sub):
 def run(args) -> dict:
     from learn.workflow import evaluate, load_model
 
-    res = evaluate(load_model(args.model), args.data, args.out)
+    res = evaluate(load_model(args.model), args.data, args.out, progress=True)
     if not args.json:
         cols = ("roc_auc", "accuracy", "false_alarm_rate", "element_accuracy", "within_one_element",
                 "median_location_error_mm", "median_size_error", "ece")

@@ -226,7 +226,7 @@ def _version() -> str:
 
 # --------------------------------------------------------------------------- evaluate
 def evaluate(model: TrainedModel, data, out_dir=None, *, changes: StateChanges | None = None, seed: int = 1,
-             extra_outputs=None) -> dict:
+             extra_outputs=None, progress: bool = False) -> dict:
     """Network(s) and classical baselines on dataset(s) of the model's beam; table and figures.
 
     ``changes`` defaults to the model's training state-change ranges (drawn with another seed).
@@ -240,8 +240,11 @@ def evaluate(model: TrainedModel, data, out_dir=None, *, changes: StateChanges |
     pairs = apply_state_changes(pairs, ch, seed=seed)
     _, truth = targets(pairs)
     sens = sensitivity_of(model.beam, model.config.get("root_spring_relative"))
+    from tqdm.auto import tqdm
+
     outs = []
-    for r in [model.route] + [q for q in routes if q != model.route]:
+    for r in tqdm([model.route] + [q for q in routes if q != model.route], desc="evaluate networks",
+                  disable=not progress):
         outs.append(network_output(model.networks[r], features(pairs, r), sens, f"network ({r})")[0])
     classical, _ = run_classical(pairs.eigenvalues, pairs.eigenvectors, sens, model.config["baseline_thresholds"])
     outs += classical + list(extra_outputs or [])
