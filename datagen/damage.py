@@ -14,7 +14,12 @@ overlaps is corrected by the exact strain-energy integral over the overlap,
 
 where ``B`` holds the second derivatives of the Hermite shape functions
 (linear in the local coordinate, so ``G_e`` is closed form). Over a whole
-element ``EI * G_e`` is the element stiffness (eq. 3.9). For a narrow slit the
+element ``EI * G_e`` is the element stiffness (eq. 3.9). For a Timoshenko truth
+(``phi = 12 EI / (kGA l^2) > 0``) ``B`` is the curvature ``theta'`` of the
+element's own interdependent interpolation (Friedman & Kosmatka 1993),
+``B_T = (B + phi c) / (1 + phi)`` with ``c = [0, -1, 0, 1] / l``: then ``EI * G_e``
+over a whole element is the element's bending part, so a slit never removes
+more than that (the Hermite curvature would, for ``phi`` of order 1 or more). For a narrow slit the
 change of the squared natural frequency of a mass-normalised mode is
 ``-(EI - EI_d) w kappa(x)^2`` (curvature squared at the slit). The slit's
 extra damping is stiffness-proportional over the same region:
@@ -28,30 +33,33 @@ from __future__ import annotations
 import numpy as np
 
 
-def curvature_basis(element_length):
-    """``b0, b1`` with ``B(xi) = b0 + xi b1`` (second derivative of the Hermite shapes, 1/m^2 and 1/m).
+def curvature_basis(element_length, phi: float = 0.0):
+    """``b0, b1`` with ``B(xi) = b0 + xi b1`` (curvature of the element's shapes, 1/m^2 and 1/m).
 
-    DOF order ``[w1, theta1, w2, theta2]``, ``xi = s / l`` in ``[0, 1]``.
+    DOF order ``[w1, theta1, w2, theta2]``, ``xi = s / l`` in ``[0, 1]``. ``phi = 0``: second
+    derivative of the Hermite shapes; ``phi > 0``: ``theta'`` of the Timoshenko interdependent
+    interpolation (module docstring).
     """
     l = float(element_length)
-    b0 = np.array([-6 / l**2, -4 / l, 6 / l**2, -2 / l])
-    b1 = np.array([12 / l**2, 6 / l, -12 / l**2, 6 / l])
+    b0 = np.array([-6 / l**2, (-4 - phi) / l, 6 / l**2, (-2 + phi) / l]) / (1 + phi)
+    b1 = np.array([12 / l**2, 6 / l, -12 / l**2, 6 / l]) / (1 + phi)
     return b0, b1
 
 
-def overlap_energy(xi1, xi2, element_length):
+def overlap_energy(xi1, xi2, element_length, phi: float = 0.0):
     """``G = int_{xi1}^{xi2} B^T B ds`` for local coordinates ``xi1 <= xi2`` (batched).
 
     Parameters
     ----------
     xi1, xi2 : ndarray, shape (...)
     element_length : float (m)
+    phi : float   shear parameter ``12 EI / (kGA l^2)`` of a Timoshenko element (0: Euler-Bernoulli)
 
     Returns
     -------
     ndarray, shape (..., 4, 4)   (1/m^3 ... units of stiffness / EI)
     """
-    b0, b1 = curvature_basis(element_length)
+    b0, b1 = curvature_basis(element_length, phi)
     a0 = np.outer(b0, b0)
     a1 = np.outer(b0, b1) + np.outer(b1, b0)
     a2 = np.outer(b1, b1)
@@ -86,7 +94,7 @@ def slit_element_weights(x_m, width_m, length_m, n_elements):
     return xi1, np.maximum(xi1, xi2)
 
 
-def slit_corrections(x_m, width_m, ei_loss_Nm2, beta_s, ei_Nm2, length_m, n_elements):
+def slit_corrections(x_m, width_m, ei_loss_Nm2, beta_s, ei_Nm2, length_m, n_elements, phi: float = 0.0):
     """Element stiffness and damping corrections of all slits, summed.
 
     Parameters
@@ -98,6 +106,8 @@ def slit_corrections(x_m, width_m, ei_loss_Nm2, beta_s, ei_Nm2, length_m, n_elem
         Extra stiffness-proportional damping coefficient of each slit (s).
     ei_Nm2 : ndarray, shape (B,)
         Specimen rigidity (N m^2).
+    phi : float
+        Shear parameter of the truth elements (0: Euler-Bernoulli), :func:`curvature_basis`.
 
     Returns
     -------
@@ -105,7 +115,7 @@ def slit_corrections(x_m, width_m, ei_loss_Nm2, beta_s, ei_Nm2, length_m, n_elem
         To add to the element stiffness and damping matrices (``dK`` <= 0).
     """
     xi1, xi2 = slit_element_weights(x_m, width_m, length_m, n_elements)
-    G = overlap_energy(xi1, xi2, length_m / n_elements)  # (B, S, E, 4, 4)
+    G = overlap_energy(xi1, xi2, length_m / n_elements, phi)  # (B, S, E, 4, 4)
     dK = -np.einsum("bs,bseij->beij", np.asarray(ei_loss_Nm2, float), G)
     dC = np.einsum("bs,bseij->beij", np.asarray(beta_s, float) * np.asarray(ei_Nm2, float)[:, None], G)
     return dK, dC

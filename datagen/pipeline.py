@@ -45,7 +45,7 @@ from datagen.damage import draw_slits, slit_corrections
 from datagen.solvers import light_damping_modes, ritz_modes
 from datagen.specimen import BeamPreset, SectionLayout, beam_preset, draw_specimens, slit_section_ei
 from physics.errors import ConfigError
-from datagen.truth_beam import as_preset, load_truth_beam, unit_elements
+from datagen.truth_beam import as_preset, load_truth_beam, shear_parameter, unit_elements
 from physics.fem import assemble, kept_dofs
 from physics.frf import poles_and_residues
 from physics.modal import eigenvalues_from_modal, modal_parameters, undamped_modes
@@ -76,6 +76,7 @@ class Setup:
     phi0 : ndarray (n, p)           nominal modes (unit mass per length), subspace start
     omega_rad_s : ndarray (F,)      FRF lines
     zeta : ndarray (p,)             target modal damping ratios of modes 1..p
+    shear_phi : float               shear parameter 12 EI / (kGA l_e) of Timoshenko truth elements (0: none)
     """
 
     cfg: dict
@@ -90,6 +91,7 @@ class Setup:
     phi0: np.ndarray
     omega_rad_s: np.ndarray
     zeta: np.ndarray
+    shear_phi: float = 0.0
 
     @property
     def length_m(self) -> float:
@@ -143,7 +145,7 @@ def build_setup(cfg: dict) -> Setup:
     zeta = np.concatenate([zr, np.full(max(p - zr.size, 0), zr[-1])])[:p]
     lo, hi = cfg["measurement"]["band_rad_s"]
     return Setup(cfg, preset, layout, n_el, keep, spring, K0, M0, meas, v[:, :p].copy(),
-                 np.linspace(lo, hi, cfg["measurement"]["lines"]), zeta)
+                 np.linspace(lo, hi, cfg["measurement"]["lines"]), zeta, shear_parameter(beam, le))
 
 
 @lru_cache(maxsize=8)
@@ -253,7 +255,7 @@ def truth_matrices(setup: Setup, inp: BatchInputs):
     ok = np.isfinite(inp.x_m)
     dKe, dCe = slit_corrections(np.where(ok, inp.x_m, 0.0), np.where(ok, inp.width_m, 0.0),
                                 np.where(ok, inp.ei_loss * ei[:, None], 0.0), np.where(ok, inp.beta_s, 0.0),
-                                ei, setup.length_m, setup.n_elements)
+                                ei, setup.length_m, setup.n_elements, setup.shear_phi)
     k0 = setup.keep[0]  # the clamp removes the first DOFs only: the kept block is a slice (a view, no copy)
     dK = assemble(dKe)[..., k0:, k0:]
     dC = assemble(dCe)[..., k0:, k0:]

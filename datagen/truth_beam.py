@@ -11,10 +11,9 @@ per length). A beam file changes those elements and the geometry:
 The ratios ``kGA / EI`` and ``rho I / m`` of the file are kept for every
 specimen (a specimen stiffer in bending is as much stiffer in shear), so the
 element matrices still scale exactly with the specimen's ``EI`` and mass.
-Slits remain the exact Euler-Bernoulli bending-energy correction over the
-slit (:mod:`datagen.damage`): for a Timoshenko element that is the bending
-energy of the Hermite curvature field, an approximation of order
-``phi = 12 EI / (kGA l^2)`` of the element. The root is clamped (a flexible
+Slits remove bending energy over the slit (:mod:`datagen.damage`): for a
+Timoshenko element that of its own curvature field ``theta'`` (shear
+parameter :func:`shear_parameter`), so the element keeps its shear stiffness. The root is clamped (a flexible
 root is ``specimen.root_spring_relative``); other effects are refused with a
 message. ``physics.beam`` is the discrepancy workflow's module: it is imported
 only when a beam is given.
@@ -75,6 +74,14 @@ def as_preset(beam) -> BeamPreset:
     return BeamPreset(name=beam.name, mass_kg=beam.mass_per_length_kg_m * beam.total_length_m, EI_Nm2=beam.EI_Nm2,
                       total_length_m=beam.total_length_m, length_m=beam.length_m, width_m=beam.width_m,
                       thickness_m=beam.thickness_m)
+
+
+def shear_parameter(beam, element_length_m: float) -> float:
+    """``phi = 12 EI / (kGA l^2)`` of the truth elements (0 without shear deformation); the same for every
+    specimen since ``kGA / EI`` is kept."""
+    if beam is None or "shear_deformation" not in beam.effects:
+        return 0.0
+    return 12.0 * beam.EI_Nm2 / (beam.effects["shear_deformation"]["kGA_N"] * element_length_m**2)
 
 
 def unit_elements(beam, element_length_m: float):
