@@ -22,6 +22,8 @@ import numpy as np
 
 MIN_DROP = 0.002
 TIP_ZONE = 0.85
+#: Edges of the noise-level breakdown (FRF noise std relative to |H|; training range 0.1-3 %).
+NOISE_EDGES = (0.0, 0.003, 0.01, 0.03, np.inf)
 
 
 @dataclass(frozen=True)
@@ -118,12 +120,15 @@ def metrics(out, truth: dict, mask=None, subset: str = "all", length_m: float = 
 
 
 def subsets(truth: dict, table) -> dict:
-    """Named row masks for the breakdowns: noise level, size tercile, position (tip zone separately)."""
+    """Named row masks for the breakdowns: FRF noise level, size tercile, position (tip zone separately)."""
     n = len(truth["damaged"])
     out = {"all": np.ones(n, bool)}
-    if "frequency_noise" in table:
-        for lvl in sorted(table["frequency_noise"].unique()):
-            out[f"noise f={lvl:g}"] = table["frequency_noise"].to_numpy() == lvl
+    if "noise_level" in table:  # per-sample FRF noise (std relative to |H|)
+        lvl = table["noise_level"].to_numpy(float)
+        for lo, hi in zip(NOISE_EDGES[:-1], NOISE_EDGES[1:]):
+            sel = (lvl >= lo) & (lvl < hi)
+            if sel.any():
+                out[f"noise {100 * lo:g}-{100 * hi:g} %" if np.isfinite(hi) else f"noise >= {100 * lo:g} %"] = sel
     dam = truth["damaged"]
     s = truth["stiffness_loss_Nm3"]
     if dam.sum() >= 3:

@@ -2,10 +2,11 @@
 
 Model directory
 ---------------
-``config.json``          beam it was trained for (name, length, DOF set, mass model), default input route,
-                         estimator parameters and temperature per route, training data (paths, manifest
-                         checksums), state-change ranges, detection threshold, baseline thresholds, seed,
-                         package version, training time, test metrics
+``config.json``          beam it was trained for (name, length, DOF set, mass model; and the training data's
+                         truth beam from its manifest), default input route, estimator parameters and
+                         temperature per route, training data (paths, manifest checksums, generator config
+                         with its temperature/re-clamping ranges), detection threshold, baseline thresholds,
+                         seed, package version, training time, test metrics
 ``weights-<route>.pt``   ``torch.save`` of the network's state dict plus the input normalisation and the
                          training features' precision matrix (loaded with ``weights_only=True``)
 ``metrics.csv``          test-split metrics of the network(s) and the classical baselines
@@ -18,7 +19,7 @@ from __future__ import annotations
 
 import json
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -28,15 +29,13 @@ import torch
 from learn.baselines import MethodOutput, run_classical
 from learn.estimator import DamageClassifier
 from learn.evaluate import MIN_DROP, metrics, table_rows
-from learn.features import (DOFS, GRID_RAD_S, ROUTES, BeamSpec, Pairs, StateChanges, apply_state_changes,
-                            features, labels, load_pairs, map_frf_to_grid, modal_features, split_by_specimen)
+from learn.features import (DOFS, GRID_RAD_S, ROUTES, BeamSpec, Pairs, features, frf_features, labels, load_pairs,
+                            map_frf_to_grid, modal_features, split_by_specimen)
 from learn.sensitivity import beam_sensitivity
 from physics.errors import BeamDamageError, FileFormatError
 
 #: Input route used by default (the winner of ``python -m experiments.bench_learn``).
 DEFAULT_ROUTE = "measured"
-#: Changes between two test days present in training (temperature +-0.3 %, re-clamping +-5 %).
-TRAINING_CHANGES = StateChanges(temperature=0.003, reclamp=0.05)
 #: Width assumed when a stiffness loss is turned into a slit depth (m): middle of the training widths.
 REFERENCE_WIDTH_M = 0.0055
 FORMAT = "beam-damage-model/1"
@@ -48,8 +47,19 @@ def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
     return np.stack([t["damaged"].astype(float), t["x_over_L"], t["stiffness_loss_Nm3"]], axis=1), t
 
 
-def frf_arrays(routes) -> tuple:
-    return tuple({"measured": "frf_measured", "updated": "frf_updated"}[r] for r in routes if r != "modal")
+def frf_kinds(routes) -> tuple:
+    """FRF kinds (:meth:`datagen.store.Dataset.frf`) the input routes need."""
+    return tuple(r for r in routes if r != "modal")
+
+
+#: Generator keys of the changes between two test days (datagen config section ``specimen``).
+DAY_CHANGES = ("temperature_stiffness_change", "root_spring_change")
+
+
+def day_changes(source: list) -> dict:
+    """Temperature and re-clamping ranges of the first dataset's generator config."""
+    spec = source[0]["config"]["specimen"]
+    return {k: spec[k] for k in DAY_CHANGES}
 
 
 # --------------------------------------------------------------------------- model directory
@@ -158,12 +168,14 @@ def _nominal_root_spring(source: list):
 
 # --------------------------------------------------------------------------- train
 def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None = None, progress: bool = False,
-          changes: StateChanges = TRAINING_CHANGES, test_fraction: float = 0.15) -> dict:
+          test_fraction: float = 0.15) -> dict:
     """Train the default-route network (and a modal-route companion), score it and the baselines, save.
 
     Parameters
     ----------
-    data : path or sequence of paths    dataset directories of one beam
+    data : path or sequence of paths
+        Dataset directories of one beam, made by ``beam-damage generate --config training`` (intact and
+        damaged specimens, temperature and re-clamping changes between the two test days).
     out_dir : model directory to write
     route : input route (default :data:`DEFAULT_ROUTE`)
 
@@ -176,10 +188,15 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
         raise BeamDamageError(f"--route {route!r} must be one of {', '.join(ROUTES)}")
     routes = [route] + (["modal"] if route != "modal" else [])
     t0 = time.perf_counter()
-    pairs = apply_state_changes(load_pairs(data, frfs=frf_arrays(routes)), changes, seed=seed)
+    pairs = load_pairs(data, frfs=frf_kinds(routes))
     y, truth = targets(pairs)
     if truth["damaged"].all() or not truth["damaged"].any():
-        raise BeamDamageError("training data must hold both intact and damaged pairs (e.g. damage.n_slits = [0, 1])")
+        raise BeamDamageError("training data must hold both intact and damaged pairs: generate them with "
+                              "'beam-damage generate --config training'")
+    changes = day_changes(pairs.source)
+    warnings = [] if any(v != [0.0, 0.0] for v in changes.values()) else [
+        "the training data have no temperature/re-clamping changes between the test days: a model trained on "
+        "them will call such changes damage; generate with --config training"]
     tr, _, te = split_by_specimen(pairs.groups, (1 - test_fraction, 0.0, test_fraction), seed=seed)
     load_s = time.perf_counter() - t0
     sens = sensitivity_of(pairs.beam, _nominal_root_spring(pairs.source))
@@ -205,7 +222,8 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
         "training_data": [{k: s[k] for k in ("path", "manifest_checksum", "samples")} for s in pairs.source],
         "generator_config": pairs.source[0]["config"],
         "root_spring_relative": _nominal_root_spring(pairs.source),
-        "state_changes": asdict(changes), "detect_min_drop": detectability_threshold(),
+        "truth_beam": pairs.source[0]["truth_beam"], "day_changes": changes,
+        "detect_min_drop": detectability_threshold(),
         "reference_width_m": REFERENCE_WIDTH_M, "baseline_thresholds": thresholds, "best_baseline": best.method,
         "split": {"train_pairs": int(len(tr)), "test_pairs": int(len(te)), "by": "specimen"},
         "train_seconds": fit_s, "load_seconds": load_s, "package_version": _version(),
@@ -216,7 +234,7 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
     atomic_write_text(Path(out_dir) / "metrics.csv", pd.DataFrame(rows).to_csv(index=False))
     return {"model": str(out_dir), "route": route, "train_pairs": int(len(tr)), "test_pairs": int(len(te)),
             "train_seconds": fit_s, "load_seconds": load_s, "best_baseline": best.method,
-            "test_metrics": config["test_metrics"]}
+            "test_metrics": config["test_metrics"], "warnings": warnings}
 
 
 def _version() -> str:
@@ -225,19 +243,13 @@ def _version() -> str:
 
 
 # --------------------------------------------------------------------------- evaluate
-def evaluate(model: TrainedModel, data, out_dir=None, *, changes: StateChanges | None = None, seed: int = 1,
-             extra_outputs=None, progress: bool = False) -> dict:
-    """Network(s) and classical baselines on dataset(s) of the model's beam; table and figures.
-
-    ``changes`` defaults to the model's training state-change ranges (drawn with another seed).
-    """
+def evaluate(model: TrainedModel, data, out_dir=None, *, extra_outputs=None, progress: bool = False) -> dict:
+    """Network(s) and classical baselines on dataset(s) of the model's beam; table and figures."""
     from learn.evaluate import figures
 
     routes = list(model.networks)
-    pairs = load_pairs(data, frfs=frf_arrays(routes))
+    pairs = load_pairs(data, frfs=frf_kinds(routes))
     model.check_beam(pairs.beam, f"dataset {pairs.source[0]['path']}")
-    ch = StateChanges(**model.config["state_changes"]) if changes is None else changes
-    pairs = apply_state_changes(pairs, ch, seed=seed)
     _, truth = targets(pairs)
     sens = sensitivity_of(model.beam, model.config.get("root_spring_relative"))
     from tqdm.auto import tqdm
@@ -344,8 +356,7 @@ def classify(model: TrainedModel, baseline, current, identified=None) -> dict:
                     warnings.append(f"FRF lines cover {lo:.4g}-{hi:.4g} rad/s, the model's grid "
                                     f"{GRID_RAD_S[0]:.4g}-{GRID_RAD_S[-1]:.4g} rad/s: nearest values used outside")
                 Ls.append(map_frf_to_grid(H, w))
-            L = np.stack(Ls)[None]                      # (1, 2, 4, G)
-            X = np.concatenate([L[:, 0].reshape(1, -1) + 5.0, 10 * (L[:, 1] - L[:, 0]).reshape(1, -1)], axis=1)
+            X = frf_features(np.stack(Ls)[None])        # (1, 2, 4, G) -> (1, d)
         else:
             raise BeamDamageError(f"FRF files must hold receptances at {', '.join(beam.dofs)} driven at {beam.dofs[0]} "
                                   f"for the {model.route} route; identify modal data first (beam-damage identify)")

@@ -5,18 +5,18 @@ import json
 import numpy as np
 import pytest
 
-from datagen.config import merge
+from datagen.config import load_config, merge
 from datagen.parallel import generate
 from experiments.cli import main
 from experiments.cmd_classify import KEYS
+from learn.features import map_frf_to_grid
 from physics.io import MeasuredFRF, ModalData, write_frf_npz, write_modal_json
 
 
 @pytest.fixture(scope="module")
 def tiny(tmp_path_factory):
     root = tmp_path_factory.mktemp("learn")
-    cfg = merge({"damage": {"n_slits": [0, 1], "position_fraction": [0.0, 0.8], "depth_m": [0.0002, 0.00045]},
-                 "measurement": {"lines": 256}, "output": {"shard_size": 100}})
+    cfg = merge({"measurement": {"lines": 256}, "output": {"shard_size": 100}}, base=load_config("training"))
     generate(root / "data", cfg, n=200, seed=5, progress=False)
     assert main(["train", "--data", str(root / "data"), "--out", str(root / "model"), "--epochs", "3",
                  "--route", "measured", "--json"]) == 0
@@ -30,6 +30,44 @@ def test_train_writes_a_complete_model_directory(tiny):
                            "mass_model": "iirs"}
     assert len(cfg["training_data"][0]["manifest_checksum"]) == 64
     assert cfg["split"]["by"] == "specimen"
+    assert cfg["truth_beam"]["name"] == "beam5" and cfg["truth_beam"]["length_m"] == 0.6095
+    assert cfg["day_changes"] == {"temperature_stiffness_change": [-0.004, 0.004], "root_spring_change": [-0.08, 0.08]}
+
+
+def test_load_pairs_reads_format_2_in_chunks(tiny):
+    from datagen.store import Dataset
+    from learn.features import GRID_RAD_S, labels, load_pairs
+
+    ds = Dataset(tiny / "data")
+    pairs = load_pairs(tiny / "data", frfs=("measured",), chunk=7)       # chunks straddle the 100-sample shards
+    rows = [0, 99, 100, 150]
+    want = map_frf_to_grid(ds.frf("measured", rows), ds.omega_rad_s, GRID_RAD_S)
+    np.testing.assert_allclose(pairs.log_frf["measured"][rows], want, atol=1e-4)
+    t = ds.table(["damaged", "n_slits", "noise_level", "max_frequency_drop_rel", "slit1_x_m"])
+    lab = labels(pairs.table, 0.6095)
+    np.testing.assert_array_equal(lab["damaged"], t["n_slits"].to_numpy() > 0)
+    assert 0.1 < np.mean(~lab["damaged"]) < 0.4                       # a quarter intact in the training config
+    dam = lab["damaged"]
+    np.testing.assert_allclose(lab["x_over_L"][dam], t["slit1_x_m"].to_numpy()[dam] / 0.6095)
+    assert np.all(lab["max_drop"][dam] > 0) and np.all(np.abs(lab["max_drop"][~dam]) < 1e-9)
+    np.testing.assert_array_equal(pairs.table["noise_level"], t["noise_level"])
+
+
+def test_format_1_and_other_beams_are_refused_in_one_line(tiny, tmp_path, capsys):
+    import shutil
+
+    old = tmp_path / "old"
+    shutil.copytree(tiny / "data", old)
+    m = json.loads((old / "manifest.json").read_text())
+    (old / "manifest.json").write_text(json.dumps({**m, "format": "beam-damage-dataset/1"}))
+    assert main(["evaluate", "--model", str(tiny / "model"), "--data", str(old)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "'beam-damage-dataset/1' is not supported" in err
+    cfg = merge({"updating": {"mass_model": "lumped"}, "output": {"shard_size": 10}}, base=load_config("training"))
+    generate(tmp_path / "lumped", cfg, n=10, seed=1, progress=False)
+    assert main(["evaluate", "--model", str(tiny / "model"), "--data", str(tmp_path / "lumped")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "mass model 'lumped' instead of 'iirs'" in err
 
 
 def test_evaluate_writes_table_and_figures(tiny, capsys):

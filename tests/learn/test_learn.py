@@ -11,8 +11,7 @@ from sklearn.metrics import roc_auc_score
 from learn.baselines import cawley_adams, dlac, mdlac, sensitivity_updating
 from learn.estimator import DamageClassifier, fit_calibration
 from learn.evaluate import reliability, roc_auc
-from learn.features import (BeamSpec, curvatures, map_frf_to_grid, real_shapes, split_by_specimen,
-                            warped_log_magnitude)
+from learn.features import BeamSpec, curvatures, map_frf_to_grid, real_shapes, split_by_specimen
 from learn.sensitivity import beam_sensitivity
 from learn.workflow import TrainedModel, equivalent_depth, load_model, save_model
 from physics.errors import BeamDamageError
@@ -46,26 +45,6 @@ def test_log_grid_interpolation_is_exact_for_a_power_law():
     grid = np.geomspace(60.0, 4800.0, 40)
     H = (1.0 / w**2).astype(complex)
     np.testing.assert_allclose(map_frf_to_grid(H, w, grid), -2 * np.log10(grid), atol=1e-3)
-
-
-def test_frf_warp_of_a_uniform_stiffness_change_matches_the_recomputed_frf():
-    preset = beam_preset("beam5")
-    model = beam_model(8, preset.length, preset.EI, preset.m_per_length)
-    w0, phi = undamped_modes(model.M, model.K)
-    zeta = 0.01
-    lines = np.linspace(5.0, 6000.0, 20000)
-    grid = np.geomspace(60.0, 4800.0, 50)
-
-    def frf(scale):
-        w = w0 * np.sqrt(scale)
-        r = phi[-1] * phi[1]   # tip response, drive near the root
-        return np.sum(r / (w**2 - lines[:, None] ** 2 + 2j * zeta * w * lines[:, None]), axis=1)
-
-    a = 1.02
-    ratio = np.full((1, 4), np.sqrt(a))
-    got = warped_log_magnitude(frf(1.0)[None, None], lines, ratio, w0[None, :4], grid)[0, 0]
-    want = map_frf_to_grid(frf(a), lines, grid)
-    np.testing.assert_allclose(got[grid < 0.9 * w0[4]], want[grid < 0.9 * w0[4]], atol=0.02)
 
 
 def _independent_slit(x_over_L, loss, n_el=60, root=948.7):
