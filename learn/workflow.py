@@ -35,7 +35,7 @@ from learn.sensitivity import beam_sensitivity
 from physics.errors import BeamDamageError, FileFormatError
 
 #: Input route used by default (the winner of ``python -m experiments.bench_learn``).
-DEFAULT_ROUTE = "measured"
+DEFAULT_ROUTE = "modal"
 #: Width assumed when a stiffness loss is turned into a slit depth (m): middle of the training widths.
 REFERENCE_WIDTH_M = 0.0055
 FORMAT = "beam-damage-model/1"
@@ -331,7 +331,8 @@ def classify(model: TrainedModel, baseline, current, identified=None) -> dict:
         FRFs are mapped onto the model's log-frequency grid (any frequency lines); modal data use the
         modal-route network.
     identified : (ModalData, ModalData), optional
-        Modal data identified from FRF inputs, for the classical baseline's answer.
+        Modal data identified from FRF inputs: the modal-route network's input when the model's route is
+        ``modal``, and the classical baseline's.
     """
     from physics.io import MeasuredFRF
 
@@ -357,6 +358,10 @@ def classify(model: TrainedModel, baseline, current, identified=None) -> dict:
                                     f"{GRID_RAD_S[0]:.4g}-{GRID_RAD_S[-1]:.4g} rad/s: nearest values used outside")
                 Ls.append(map_frf_to_grid(H, w))
             X = frf_features(np.stack(Ls)[None])        # (1, 2, 4, G) -> (1, d)
+        elif model.route == "modal" and identified is not None:
+            lam, vecs, w = modal_pair(identified[0], identified[1], beam)
+            warnings += w + ["modal route on modes identified from the FRFs by peak picking (4 modes)"]
+            X = modal_features(lam, vecs)
         else:
             raise BeamDamageError(f"FRF files must hold receptances at {', '.join(beam.dofs)} driven at {beam.dofs[0]} "
                                   f"for the {model.route} route; identify modal data first (beam-damage identify)")

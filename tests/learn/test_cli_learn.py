@@ -130,6 +130,16 @@ def test_classify_frf_on_another_grid_is_accepted(tiny, capsys):
     assert json.loads(capsys.readouterr().out)["input_route"] == "measured"
 
 
+def test_modal_route_model_classifies_frf_files_through_identified_modes(tiny, capsys):
+    assert main(["train", "--data", str(tiny / "data"), "--out", str(tiny / "modal"), "--epochs", "2", "--json"]) == 0
+    capsys.readouterr()
+    assert json.loads((tiny / "modal" / "config.json").read_text())["route"] == "modal"   # the default route
+    paths = [str(tiny / f"frf{s}.npz") for s in (0, 1)]                                   # written by the test above
+    assert main(["classify", "--model", str(tiny / "modal"), "--baseline", paths[0], paths[1], "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["input_route"] == "modal" and any("peak picking" in w for w in res["warnings"])
+
+
 def test_refusals_and_bad_input_exit_2(tiny, capsys):
     base, cur = _modal_files(tiny, 0.5)
     assert main(["classify", "--model", str(tiny / "model"), "--baseline", base, cur, "--mass", "lumped"]) == 2
