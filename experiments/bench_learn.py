@@ -116,7 +116,8 @@ def main(argv=None):
     model = load_model(out / "model")
     route = model.route
     print(f"\ndefault model: route {route}, {summary['train_pairs']} training pairs (incl. validation); network fit "
-          f"{summary['train_seconds'][route]:.0f} s (+ modal companion {summary['train_seconds'].get('modal', 0):.0f} s),"
+          f"{summary['train_seconds'][route]:.0f} s"
+          + (f" (+ modal companion {summary['train_seconds']['modal']:.0f} s)" if route != "modal" else "") + ","
           f" data loading {summary['load_seconds']:.0f} s, whole 'train' {wall:.0f} s wall, torch threads "
           f"{torch.get_num_threads()}")
 
