@@ -29,7 +29,9 @@ only). The Euler-Bernoulli (Hermite) curvature would overstate the bending
 energy of a shear-flexible element by up to ``(1 + phi)^2`` and can make the
 stiffness indefinite for deep slits.
 
-Several slits simply add their corrections (they are assumed not to overlap).
+Several slits add their corrections; where they overlap the section loses the
+rigidity of the deepest one (the largest ``EI - EI_d``), not the sum, so the
+stiffness stays positive definite.
 """
 
 from __future__ import annotations
@@ -103,7 +105,7 @@ def slit_element_weights(x_m, width_m, length_m, n_elements):
 
 
 def slit_corrections(x_m, width_m, ei_loss_Nm2, beta_s, ei_Nm2, length_m, n_elements, shear_phi=0.0):
-    """Element stiffness and damping corrections of all slits, summed.
+    """Element stiffness and damping corrections of all slits (overlaps lose the deepest slit's rigidity).
 
     Parameters
     ----------
@@ -122,10 +124,17 @@ def slit_corrections(x_m, width_m, ei_loss_Nm2, beta_s, ei_Nm2, length_m, n_elem
     dK, dC : ndarray, shape (B, n_elements, 4, 4)
         To add to the element stiffness and damping matrices (``dK`` <= 0).
     """
+    le = length_m / n_elements
     xi1, xi2 = slit_element_weights(x_m, width_m, length_m, n_elements)
-    G = overlap_energy(xi1, xi2, length_m / n_elements, shear_phi)  # (B, S, E, 4, 4)
-    dK = -np.einsum("bs,bseij->beij", np.asarray(ei_loss_Nm2, float), G)
+    G = overlap_energy(xi1, xi2, le, shear_phi)  # (B, S, E, 4, 4)
     dC = np.einsum("bs,bseij->beij", np.asarray(beta_s, float) * np.asarray(ei_Nm2, float)[:, None], G)
+    # stiffness over the pieces between consecutive slit edges, each losing its deepest covering slit's rigidity
+    edges = np.sort(np.concatenate([xi1, xi2], axis=1), axis=1)           # (B, 2S, E)
+    a, b = edges[:, :-1], edges[:, 1:]
+    mid = 0.5 * (a + b)
+    cover = (xi1[:, :, None] <= mid[:, None]) & (mid[:, None] < xi2[:, :, None])      # (B, S, 2S-1, E)
+    loss = np.max(np.where(cover, np.asarray(ei_loss_Nm2, float)[:, :, None, None], 0.0), axis=1)
+    dK = -np.einsum("bke,bkeij->beij", loss, overlap_energy(a, b, le, shear_phi))
     return dK, dC
 
 

@@ -35,6 +35,9 @@ COMMAND_MODULES = [
     "experiments.cmd_experiment",
     "experiments.cmd_export",
     "experiments.cmd_discrepancy",
+    "experiments.cmd_train",
+    "experiments.cmd_evaluate",
+    "experiments.cmd_classify",
 ]
 
 EXIT_USAGE = 2

@@ -19,6 +19,34 @@ def test_overlap_energy_whole_element_is_eq_3_9_and_splits_add():
     assert np.allclose(parts, overlap_energy(0.0, 1.0, l), rtol=1e-13, atol=1e-6)
 
 
+@pytest.mark.parametrize("phi", [0.3, 10.8])   # 10.8: beam 5 with kGA = 27 100 N on the 20-element truth mesh
+def test_timoshenko_overlap_energy_is_the_bending_part_of_the_element(phi):
+    """EI G(whole element) + the shear energy of the constant shear strain of the interdependent interpolation
+    (Friedman & Kosmatka 1993) gives physics.effects' Timoshenko element: a slit removes at most its bending part."""
+    from physics.effects import timoshenko_stiffness
+
+    l, ei = 0.03, 22.674
+    kga = 12 * ei / (phi * l**2)
+    g = phi / (1 + phi) * np.array([-1 / l, -0.5, 1 / l, -0.5])       # gamma = w' - theta, DOFs [w1, t1, w2, t2]
+    total = ei * overlap_energy(0.0, 1.0, l, phi) + kga * l * np.outer(g, g)
+    np.testing.assert_allclose(total, timoshenko_stiffness(ei, kga, l), rtol=1e-12, atol=1e-9)
+    for basis, positive in ((phi, True), (0.0, phi < 1)):    # the Hermite curvature removes too much when phi >~ 1
+        e = np.linalg.eigvalsh(timoshenko_stiffness(ei, kga, l) - 0.99 * ei * overlap_energy(0.2, 0.9, l, basis))
+        assert (e[0] > -1e-6 * e[-1] and e[2] > 1e-6 * e[-1]) == positive   # two rigid-body zeros, rest positive
+
+
+def test_overlapping_slits_lose_the_deepest_rigidity_not_the_sum():
+    L, n_el = 1.0, 1
+    x, w = np.array([[0.4, 0.6]]), np.array([[0.4, 0.4]])         # [0.2, 0.6] and [0.4, 0.8] of the one element
+    loss = np.array([[0.5, 0.9]])
+    dK, _ = slit_corrections(x, w, loss, np.zeros((1, 2)), np.ones(1), L, n_el)
+    want = -(0.5 * overlap_energy(0.2, 0.4, L) + 0.9 * overlap_energy(0.4, 0.8, L))
+    np.testing.assert_allclose(dK[0, 0], want, rtol=1e-12, atol=1e-12)
+    same, _ = slit_corrections(np.array([[0.5, 0.5]]), np.array([[0.2, 0.2]]), np.array([[0.9, 0.9]]),
+                               np.zeros((1, 2)), np.ones(1), L, n_el)
+    np.testing.assert_allclose(same[0, 0], -0.9 * overlap_energy(0.4, 0.6, L), rtol=1e-12, atol=1e-12)
+
+
 def test_section_matches_table_4_1_and_eq_4_1():
     p = beam_preset("beam5")
     lay = SectionLayout.matching(p.EI, p.width, p.thickness, 0.0005, 1e8)

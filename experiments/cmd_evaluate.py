@@ -1,0 +1,34 @@
+"""``beam-damage evaluate``: the classifier and the classical baselines on a dataset."""
+
+from __future__ import annotations
+
+
+def add_parser(sub):
+    p = sub.add_parser("evaluate", help="score a trained classifier and the baselines on datasets",
+                       description="Detection ROC AUC and accuracy, false alarms on intact pairs, element accuracy "
+                                   "(thesis 4-element grid), within-one-element, location error (mm), size error, "
+                                   "expected calibration error; broken down by noise level, size and position (tip "
+                                   "zone separately) for the network and each classical baseline. With --out: "
+                                   "metrics.csv/json and roc.png, confusion.png, location_error.png, reliability.png.")
+    p.add_argument("--model", required=True, metavar="MODEL_DIR")
+    p.add_argument("--data", required=True, nargs="+", metavar="DIR", help="dataset directories of the model's beam")
+    p.add_argument("--out", metavar="DIR", help="write the table and figures here")
+    p.add_argument("--json", action="store_true", help="print all rows as JSON")
+    p.set_defaults(func=run)
+
+
+def run(args) -> dict:
+    from learn.workflow import evaluate, load_model
+
+    res = evaluate(load_model(args.model), args.data, args.out, progress=True)
+    if not args.json:
+        cols = ("roc_auc", "accuracy", "false_alarm_rate", "element_accuracy", "within_one_element",
+                "median_location_error_mm", "median_size_error", "ece")
+        print(f"{'method':<24}" + "".join(f"{c[:14]:>15}" for c in cols))
+        for r in res["rows"]:
+            if r["subset"] == "all":
+                print(f"{r['method']:<24}" + "".join(f"{r[c]:>15.4f}" if r[c] is not None else f"{'-':>15}"
+                                                     for c in cols))
+        if args.out:
+            print(f"table and figures in {args.out}")
+    return res

@@ -1,0 +1,261 @@
+"""``DamageClassifier``: a scikit-learn style estimator around :class:`learn.models.DamageNet`.
+
+``fit(X, y, groups)`` standardises the features (statistics of the training
+part only), holds out a validation part by specimen (``groups``), trains the
+network, and fits a temperature on the validation logits (temperature scaling,
+Guo et al. 2017) so that ``predict_proba`` is calibrated.
+
+Targets ``y`` have three columns: damaged (0/1), ``x / L`` of the slit (NaN if
+intact) and its stiffness loss ``dEI * width`` (N m^3, 0 if intact).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+from scipy.special import expit
+from sklearn.base import BaseEstimator, ClassifierMixin
+
+from learn.features import split_by_specimen
+from learn.models import DamageNet, loss_terms
+from physics.errors import BeamDamageError
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """Per-pair outputs of :meth:`DamageClassifier.predict_details` (arrays of shape (n,) unless noted)."""
+
+    probability_damaged: np.ndarray
+    location_distribution: np.ndarray      # (n, n_bins) over x/L bins
+    x_over_L: np.ndarray                   # mean of the distribution
+    x_std_over_L: np.ndarray
+    element_probabilities: np.ndarray      # (n, 4) thesis grid
+    element: np.ndarray                    # 1..4, most probable
+    stiffness_loss_Nm3: np.ndarray         # median of the log-normal size estimate
+    stiffness_loss_std_Nm3: np.ndarray
+    logit: np.ndarray                      # calibrated detection logit
+
+
+def _device(name):
+    if name is not None:
+        return torch.device(name)
+    return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+
+
+def fit_calibration(logits, y) -> tuple[float, float]:
+    """Temperature ``T`` and bias ``b`` minimising the log-loss of ``sigmoid(logit / T + b)``.
+
+    Temperature scaling (Guo et al. 2017) with a bias term (Platt scaling): the
+    bias absorbs a shift of the validation class balance. ``T`` is kept in
+    [0.25, 20] so a perfectly separated validation split cannot drive it to 0.
+    """
+    from scipy.optimize import minimize
+
+    z = np.asarray(logits, float)
+    y = np.asarray(y, float)
+
+    def nll(p):
+        s = z / np.exp(p[0]) + p[1]
+        return np.mean(np.logaddexp(0.0, s) - y * s)
+
+    res = minimize(nll, np.zeros(2), method="L-BFGS-B", bounds=[(np.log(0.25), np.log(20.0)), (-10.0, 10.0)])
+    return float(np.exp(res.x[0])), float(res.x[1])
+
+
+class DamageClassifier(ClassifierMixin, BaseEstimator):
+    """Detect, localise and size a slit from pair features.
+
+    Parameters
+    ----------
+    n_bins : int
+        Location bins over ``x / L`` (multiple of 4).
+    hidden, depth, dropout : network size (:class:`learn.models.DamageNet`)
+    epochs, batch_size, lr, weight_decay : optimisation (AdamW, cosine schedule)
+    loc_sigma_bins : float
+        Standard deviation (in bins) of the Gaussian soft location target.
+    val_fraction : float
+        Share of specimens held out for calibration and the decision threshold.
+    false_alarm_target : float
+        The verdict "damaged" needs a probability above the ``1 - false_alarm_target``
+        quantile of the validation intact pairs' probabilities (and above 0.5):
+        the probabilities stay calibrated, the verdict controls false alarms.
+    random_state : int
+    device : str or None
+        ``None`` picks CUDA when present, else CPU.
+    verbose : bool
+        Show a tqdm bar over epochs.
+    """
+
+    def __init__(self, n_bins=80, hidden=128, depth=3, dropout=0.05, epochs=60, batch_size=256, lr=2e-3,
+                 weight_decay=1e-4, loc_sigma_bins=1.0, val_fraction=0.15, false_alarm_target=0.005, random_state=0,
+                 device=None, verbose=False):
+        self.n_bins = n_bins
+        self.hidden = hidden
+        self.depth = depth
+        self.dropout = dropout
+        self.epochs = epochs
+        self.batch_size = batch_size
+        self.lr = lr
+        self.weight_decay = weight_decay
+        self.loc_sigma_bins = loc_sigma_bins
+        self.val_fraction = val_fraction
+        self.false_alarm_target = false_alarm_target
+        self.random_state = random_state
+        self.device = device
+        self.verbose = verbose
+
+    # ------------------------------------------------------------------ helpers
+    def _targets(self, y):
+        y = np.asarray(y, float)
+        if y.ndim != 2 or y.shape[1] != 3:
+            raise BeamDamageError(f"y must have shape (n, 3) [damaged, x/L, stiffness loss N m^3], got {y.shape}")
+        damaged = y[:, 0] > 0.5
+        centres = (np.arange(self.n_bins) + 0.5) / self.n_bins
+        sig = self.loc_sigma_bins / self.n_bins
+        x = np.nan_to_num(y[:, 1], nan=0.5)
+        soft = np.exp(-0.5 * ((centres[None] - x[:, None]) / sig) ** 2)
+        soft /= soft.sum(axis=1, keepdims=True)
+        log_size = np.log(np.where(damaged, np.maximum(y[:, 2], 1e-9), 1.0))
+        return damaged.astype(np.float32), soft.astype(np.float32), log_size.astype(np.float32)
+
+    def _tensor(self, X):
+        Z = (np.asarray(X, float) - self.mean_) / self.scale_
+        return torch.as_tensor(Z, dtype=torch.float32, device=self.device_)
+
+    def _raw(self, X, batch=8192) -> dict:
+        self.model_.eval()
+        outs = []
+        with torch.no_grad():
+            T = self._tensor(X)
+            for i in range(0, T.shape[0], batch):
+                outs.append({k: v.cpu().numpy() for k, v in self.model_(T[i:i + batch]).items()})
+        return {k: np.concatenate([o[k] for o in outs]) for k in outs[0]} if outs else {}
+
+    # ------------------------------------------------------------------ fit
+    def fit(self, X, y, groups=None):
+        """Train on features ``X`` (n, d) and targets ``y`` (n, 3); ``groups`` = specimen keys (default: rows)."""
+        X = np.asarray(X, float)
+        if X.ndim != 2 or not np.all(np.isfinite(X)):
+            raise BeamDamageError("X must be a finite 2-D feature matrix")
+        if self.n_bins % 4:
+            raise BeamDamageError(f"n_bins must be a multiple of 4, got {self.n_bins}")
+        t0 = time.perf_counter()
+        groups = np.arange(X.shape[0]) if groups is None else np.asarray(groups)
+        tr, va, _ = split_by_specimen(groups, (1 - self.val_fraction, self.val_fraction, 0.0), seed=self.random_state)
+        self.mean_ = X[tr].mean(axis=0)
+        self.scale_ = X[tr].std(axis=0) + 1e-8
+        Z = (X[tr] - self.mean_) / self.scale_
+        self.precision_ = np.linalg.pinv(np.cov(Z, rowvar=False) + 1e-3 * np.eye(X.shape[1]))
+        self.reference_distances_ = np.sort(self.mahalanobis(X[tr]))
+        self.n_features_in_ = X.shape[1]
+        self.classes_ = np.array([0, 1])
+        self.device_ = _device(self.device)
+        torch.manual_seed(self.random_state)
+        gen = torch.Generator().manual_seed(self.random_state)
+        self.model_ = DamageNet(X.shape[1], self.n_bins, self.hidden, self.depth, self.dropout).to(self.device_)
+        d, soft, ls = self._targets(y)
+        Xt = self._tensor(X[tr])
+        tgt = [torch.as_tensor(a[tr], device=self.device_) for a in (d, soft, ls)]
+        opt = torch.optim.AdamW(self.model_.parameters(), lr=self.lr, weight_decay=self.weight_decay)
+        steps = self.epochs * int(np.ceil(len(tr) / self.batch_size))
+        sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=self.lr, total_steps=max(steps, 1))
+        history = []
+        epochs = range(self.epochs)
+        if self.verbose:
+            from tqdm.auto import tqdm
+            epochs = tqdm(epochs, desc="train", unit="epoch")
+        for _ in epochs:
+            self.model_.train()
+            perm = torch.randperm(len(tr), generator=gen).to(self.device_)
+            tot = 0.0
+            for i in range(0, len(tr), self.batch_size):
+                b = perm[i:i + self.batch_size]
+                terms = loss_terms(self.model_(Xt[b]), *(t[b] for t in tgt))
+                loss = terms["detect"] + terms["locate"] + 0.5 * terms["size"]
+                opt.zero_grad()
+                loss.backward()
+                opt.step()
+                sched.step()
+                tot += float(loss.detach()) * len(b)
+            history.append(tot / len(tr))
+        self.loss_history_ = history
+        self.temperature_, self.bias_, self.threshold_ = 1.0, 0.0, 0.5
+        if len(va):
+            raw = self._raw(X[va])
+            self.temperature_, self.bias_ = fit_calibration(raw["detect"], d[va])
+            p_intact = expit(raw["detect"][d[va] < 0.5] / self.temperature_ + self.bias_)
+            if p_intact.size:
+                self.threshold_ = float(max(0.5, np.quantile(p_intact, 1 - self.false_alarm_target)))
+        self.train_seconds_ = time.perf_counter() - t0
+        self.n_train_, self.n_val_ = len(tr), len(va)
+        return self
+
+    # ------------------------------------------------------------------ predict
+    def mahalanobis(self, X):
+        """Mahalanobis distance of feature rows to the training features (out-of-distribution score)."""
+        Z = (np.asarray(X, float) - self.mean_) / self.scale_
+        return np.sqrt(np.maximum(np.einsum("ni,ij,nj->n", Z, self.precision_, Z), 0.0))
+
+    def decision_function(self, X):
+        return self._raw(X)["detect"] / self.temperature_ + self.bias_
+
+    def predict_proba(self, X):
+        p = expit(self.decision_function(X))
+        return np.stack([1 - p, p], axis=1)
+
+    def predict(self, X):
+        return (self.predict_proba(X)[:, 1] >= self.threshold_).astype(int)
+
+    def predict_details(self, X) -> Prediction:
+        raw = self._raw(X)
+        z = raw["detect"] / self.temperature_ + self.bias_
+        logits = raw["locate"]
+        p = np.exp(logits - logits.max(axis=1, keepdims=True))
+        p /= p.sum(axis=1, keepdims=True)
+        c = (np.arange(self.n_bins) + 0.5) / self.n_bins
+        mean = p @ c
+        std = np.sqrt(np.maximum(p @ c**2 - mean**2, 0.0) + 1.0 / (12 * self.n_bins**2))
+        el = p.reshape(len(p), 4, -1).sum(axis=2)
+        mu, s = raw["size_mean"], np.exp(raw["size_log_std"])
+        med = np.exp(mu)
+        sd = med * np.sqrt(np.expm1(s**2) * np.exp(s**2))
+        return Prediction(expit(z), p, mean, std, el, np.argmax(el, axis=1) + 1, med, sd, z)
+
+    # ------------------------------------------------------------------ persistence (no pickle)
+    def get_state(self) -> tuple[dict, dict]:
+        """``(tensors, meta)``: a state dict for ``torch.save`` and JSON-ready metadata."""
+        tensors = {f"net.{k}": v.detach().cpu() for k, v in self.model_.state_dict().items()}
+        tensors["norm.mean"] = torch.as_tensor(self.mean_)
+        tensors["norm.scale"] = torch.as_tensor(self.scale_)
+        tensors["ood.precision"] = torch.as_tensor(self.precision_)
+        tensors["ood.reference"] = torch.as_tensor(self.reference_distances_)
+        meta = {"params": self.get_params(), "temperature": self.temperature_, "bias": self.bias_,
+                "threshold": self.threshold_, "n_features": int(self.n_features_in_),
+                "train_seconds": self.train_seconds_, "loss_history": self.loss_history_,
+                "n_train": int(self.n_train_), "n_val": int(self.n_val_)}
+        return tensors, meta
+
+    @classmethod
+    def from_state(cls, tensors: dict, meta: dict, device=None) -> "DamageClassifier":
+        params = dict(meta["params"])
+        params["device"] = device
+        est = cls(**params)
+        est.device_ = _device(device)
+        est.mean_ = tensors["norm.mean"].numpy().astype(float)
+        est.scale_ = tensors["norm.scale"].numpy().astype(float)
+        est.n_features_in_ = int(meta["n_features"])
+        est.precision_ = tensors["ood.precision"].numpy().astype(float)
+        est.reference_distances_ = tensors["ood.reference"].numpy().astype(float)
+        est.classes_ = np.array([0, 1])
+        est.model_ = DamageNet(est.n_features_in_, est.n_bins, est.hidden, est.depth, est.dropout).to(est.device_)
+        est.model_.load_state_dict({k[4:]: v for k, v in tensors.items() if k.startswith("net.")})
+        est.temperature_ = float(meta["temperature"])
+        est.bias_ = float(meta.get("bias", 0.0))
+        est.threshold_ = float(meta.get("threshold", 0.5))
+        est.train_seconds_ = float(meta.get("train_seconds", float("nan")))
+        est.loss_history_ = list(meta.get("loss_history", []))
+        est.n_train_, est.n_val_ = int(meta.get("n_train", 0)), int(meta.get("n_val", 0))
+        return est

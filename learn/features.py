@@ -1,0 +1,377 @@
+"""Input features of the damage classifier, computed the same way from a dataset and from measured data.
+
+A *pair* is the baseline (undamaged) and the current state of one specimen.
+Three input routes turn a pair into a fixed-length real vector:
+
+``modal``
+    Modal features (:func:`modal_features`): relative natural-frequency shifts,
+    the baseline frequencies, and the changes of the real, unit-norm mode
+    shapes and of their curvatures (second differences with the clamp,
+    thesis nodes 1..5) between the states.
+``updated``
+    Log-magnitude receptances of the Lancaster/Pilkey updated models of both
+    states (the thesis's route: FRFs -> modal identification -> updated model
+    -> FRFs), on the fixed log-frequency grid :data:`GRID_RAD_S`.
+``measured``
+    The measured receptances themselves on the same grid: measured FRFs come
+    on their own frequency lines and are interpolated onto the grid in
+    log-frequency (:func:`map_frf_to_grid`).
+
+Every route sees the same pairs; :func:`load_pairs` is the only function that
+reads a dataset (format ``beam-damage-dataset/2``). What changes between two
+test days without damage (temperature, re-clamping) and the per-sample noise
+come from the generator (``beam-damage generate --config training``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from physics.errors import BeamDamageError, FileFormatError
+
+ROUTES = ("modal", "updated", "measured")
+
+#: Fixed FRF representation: log-spaced lines (rad/s) covering the four modes of the thesis beams.
+GRID_RAD_S = np.geomspace(60.0, 4800.0, 96)
+
+#: Measured translations of the 4-element thesis grid.
+DOFS = ("2:y", "3:y", "4:y", "5:y")
+
+
+@dataclass(frozen=True)
+class BeamSpec:
+    """What a model is trained for; a model refuses data of another beam, DOF set or mass model."""
+
+    name: str
+    length_m: float
+    dofs: tuple
+    mass_model: str
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "length_m": self.length_m, "dofs": list(self.dofs), "mass_model": self.mass_model}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "BeamSpec":
+        return cls(str(d["name"]), float(d["length_m"]), tuple(d["dofs"]), str(d["mass_model"]))
+
+    def differences(self, other: "BeamSpec") -> list[str]:
+        """Plain-language list of what differs (empty when compatible)."""
+        out = []
+        if self.name != other.name:
+            out.append(f"beam {other.name!r} instead of {self.name!r}")
+        if abs(self.length_m - other.length_m) > 1e-6 * self.length_m:
+            out.append(f"length {other.length_m:g} m instead of {self.length_m:g} m")
+        if tuple(self.dofs) != tuple(other.dofs):
+            out.append(f"DOF set {list(other.dofs)} instead of {list(self.dofs)}")
+        if self.mass_model != other.mass_model:
+            out.append(f"mass model {other.mass_model!r} instead of {self.mass_model!r}")
+        return out
+
+
+@dataclass
+class Pairs:
+    """Baseline/current pairs of ``n`` specimens.
+
+    Attributes
+    ----------
+    eigenvalues : ndarray, complex, shape (n, 2, m)
+        Measured eigenvalues (rad/s, Im > 0), state 0 = baseline, 1 = current.
+    eigenvectors : ndarray, complex, shape (n, 2, 4, m)
+        Measured complex shapes at :data:`DOFS`, any scaling.
+    log_frf : dict of ndarray, float32, shape (n, 2, 4, G)
+        ``log10 |H|`` on :data:`GRID_RAD_S` per FRF kind read ("measured": the noisy
+        receptances, "updated": those of the updated models), drive at DOF 1.
+    table : DataFrame
+        Per-pair labels and specimen parameters (empty columns for measured data).
+    groups : ndarray of str, shape (n,)
+        Specimen key (dataset checksum + sample id): splits never cut a group.
+    beam : BeamSpec
+    source : list of dict
+        Datasets read: path, manifest checksum, samples, config, truth beam.
+    """
+
+    eigenvalues: np.ndarray
+    eigenvectors: np.ndarray
+    log_frf: dict
+    table: pd.DataFrame
+    groups: np.ndarray
+    beam: BeamSpec
+    source: list
+
+    def __len__(self):
+        return self.eigenvalues.shape[0]
+
+    def take(self, idx) -> "Pairs":
+        idx = np.asarray(idx)
+        return replace(self, eigenvalues=self.eigenvalues[idx], eigenvectors=self.eigenvectors[idx],
+                       log_frf={k: v[idx] for k, v in self.log_frf.items()},
+                       table=self.table.iloc[idx].reset_index(drop=True), groups=self.groups[idx])
+
+
+def manifest_checksum(manifest: dict) -> str:
+    """sha256 of a dataset manifest's recorded checksums (identifies the data a model was trained on)."""
+    return hashlib.sha256(json.dumps(manifest.get("checksums", {}), sort_keys=True).encode()).hexdigest()
+
+
+def beam_of_manifest(manifest: dict) -> BeamSpec:
+    """The beam a format-2 dataset simulates: ``preset`` (name, length of the truth beam or beam file),
+    ``schema.measured_dofs`` and ``config.updating.mass_model``."""
+    return BeamSpec(manifest["preset"]["name"], float(manifest["preset"]["length_m"]),
+                    tuple(manifest["schema"]["measured_dofs"]), manifest["config"]["updating"]["mass_model"])
+
+
+def load_pairs(roots, frfs=("measured", "updated"), chunk: int = 1024) -> Pairs:
+    """Read one or more format-2 dataset directories into :class:`Pairs` (the only place that reads datasets).
+
+    FRFs are synthesised by :meth:`datagen.store.Dataset.frf` ``chunk`` samples
+    at a time and kept only as ``log10 |H|`` on :data:`GRID_RAD_S`, so memory
+    stays at ``chunk`` full FRF sets plus 3 kB per pair and kind.
+
+    Parameters
+    ----------
+    roots : path or sequence of paths
+        Directories written by ``beam-damage generate``; all must be of the same beam.
+    frfs : sequence of {"measured", "updated"}
+        FRF kinds to read (the FRF routes need them).
+
+    Raises
+    ------
+    FileFormatError
+        A directory is not a complete format-2 dataset, or datasets of different beams are mixed.
+    """
+    from datagen.store import FORMAT, Dataset, read_manifest
+
+    roots = [roots] if isinstance(roots, (str, Path)) else list(roots)
+    if not roots:
+        raise FileFormatError("no dataset directory given")
+    parts, source, beam = [], [], None
+    for root in roots:
+        read_manifest(root, formats=(FORMAT,))   # format 1 is refused in one line
+        try:
+            ds = Dataset(root)
+        except (OSError, ValueError) as exc:
+            raise FileFormatError(f"{root}: not a dataset directory written by 'beam-damage generate' ({exc})") from None
+        if not ds.shards or not ds.manifest.get("complete"):
+            raise FileFormatError(f"{root}: dataset is incomplete; re-run its 'beam-damage generate' command")
+        b = beam_of_manifest(ds.manifest)
+        if beam is not None and b != beam:
+            raise FileFormatError(f"{root}: dataset of another beam ({'; '.join(beam.differences(b))})")
+        beam = b
+        table = ds.samples.assign(dataset=str(root))
+        cs = manifest_checksum(ds.manifest)
+        W = grid_weights(ds.omega_rad_s)[0].T.astype(np.float32)
+        log_frf = {}
+        for kind in frfs:
+            out = np.empty((len(ds), 2, len(DOFS), W.shape[1]), np.float32)
+            for i in range(0, len(ds), chunk):
+                H = ds.frf(kind, np.arange(i, min(i + chunk, len(ds))))
+                out[i:i + chunk] = np.log10(np.abs(H) + 1e-30) @ W
+            log_frf[kind] = out
+        parts.append(dict(eigenvalues=ds.array("eigenvalues_measured"), eigenvectors=ds.array("eigenvectors_measured"),
+                          log_frf=log_frf, table=table,
+                          groups=np.array([f"{cs[:12]}:{k}" for k in table["sample_id"].to_numpy()])))
+        source.append({"path": str(root), "manifest_checksum": cs, "samples": int(len(table)),
+                       "config": ds.manifest["config"], "truth_beam": ds.manifest["preset"]})
+    cat = (lambda k: np.concatenate([p[k] for p in parts]))
+    return Pairs(cat("eigenvalues"), cat("eigenvectors"),
+                 {k: np.concatenate([p["log_frf"][k] for p in parts]) for k in frfs},
+                 pd.concat([p["table"] for p in parts], ignore_index=True), cat("groups"), beam, source)
+
+
+# --------------------------------------------------------------------------- labels
+def labels(table: pd.DataFrame, length_m: float) -> dict:
+    """Training targets of each pair from a format-2 sample table.
+
+    With several slits the location and element are those of the slit of
+    largest stiffness loss; the size is the summed stiffness loss (column
+    ``stiffness_loss_Nm3``).
+
+    Returns
+    -------
+    dict of ndarray, shape (n,)
+        ``damaged`` (bool), ``x_over_L`` (NaN if intact), ``stiffness_loss_Nm3`` (0 if intact),
+        ``element`` (1..4, 0 if intact), ``max_drop`` (largest relative drop of the noise-free
+        natural frequencies due to the slits alone: ``max_frequency_drop_rel``), ``n_slits``.
+    """
+    n = len(table)
+    damaged = table["damaged"].to_numpy(bool)
+    k = 1
+    loss_cols = []
+    while f"slit{k}_stiffness_loss_Nm3" in table:
+        loss_cols.append(k)
+        k += 1
+    if loss_cols:
+        loss = np.stack([np.nan_to_num(table[f"slit{j}_stiffness_loss_Nm3"].to_numpy(float)) for j in loss_cols], 1)
+        xs = np.stack([table[f"slit{j}_x_m"].to_numpy(float) for j in loss_cols], 1)
+        x = xs[np.arange(n), np.argmax(loss, axis=1)] / length_m
+    else:
+        x = np.full(n, np.nan)
+    x = np.where(damaged, np.clip(x, 0.0, 1.0), np.nan)
+    element = np.where(damaged, np.clip(np.floor(np.nan_to_num(x) * 4).astype(int) + 1, 1, 4), 0)
+    return {"damaged": damaged, "x_over_L": x,
+            "stiffness_loss_Nm3": np.where(damaged, np.nan_to_num(table["stiffness_loss_Nm3"].to_numpy(float)), 0.0),
+            "element": element, "max_drop": table["max_frequency_drop_rel"].to_numpy(float),
+            "n_slits": table["n_slits"].to_numpy(int)}
+
+
+# --------------------------------------------------------------------------- modal route
+def real_shapes(eigenvectors):
+    """Real, unit-norm mode shapes from complex ones (batched).
+
+    Each column is rotated so that its largest entry is real and positive, its
+    real part kept and scaled to unit Euclidean norm.
+
+    Parameters
+    ----------
+    eigenvectors : ndarray, complex, shape (..., n_dofs, m)
+
+    Returns
+    -------
+    ndarray, shape (..., n_dofs, m)
+    """
+    psi = np.asarray(eigenvectors, complex)
+    big = np.take_along_axis(psi, np.argmax(np.abs(psi), axis=-2)[..., None, :], axis=-2)
+    u = (psi * np.exp(-1j * np.angle(big))).real
+    return u / np.linalg.norm(u, axis=-2, keepdims=True)
+
+
+def curvatures(shapes):
+    """Second differences of shapes at the clamp and nodes 2..4 (unit element length), batched.
+
+    Displacement and slope are zero at the clamp (node 1), so there
+    ``w'' ~ 2 w_2 / h^2``; at inner nodes ``(w_{i-1} - 2 w_i + w_{i+1}) / h^2``.
+
+    Parameters
+    ----------
+    shapes : ndarray, shape (..., 4, m)   translations of nodes 2..5
+
+    Returns
+    -------
+    ndarray, shape (..., 4, m)
+    """
+    w = np.concatenate([np.zeros_like(shapes[..., :1, :]), shapes], axis=-2)
+    inner = w[..., :-2, :] - 2 * w[..., 1:-1, :] + w[..., 2:, :]
+    return np.concatenate([2 * shapes[..., :1, :], inner], axis=-2)
+
+
+def modal_features(eigenvalues, eigenvectors, n_modes: int = 4):
+    """Modal features of pairs (batched).
+
+    Parameters
+    ----------
+    eigenvalues : ndarray, complex, shape (n, 2, m)
+    eigenvectors : ndarray, complex, shape (n, 2, 4, m)
+
+    Returns
+    -------
+    ndarray, shape (n, 10 n_modes)
+        Per mode: relative frequency shift (percent) and log baseline frequency
+        (Hz); then the shape changes (4 DOFs x modes) and curvature changes
+        (clamp and nodes 2..4 x modes), times 10.
+    """
+    lam = np.asarray(eigenvalues, complex)[..., :n_modes]
+    f = np.abs(lam) / (2 * np.pi)
+    shift = 100 * (f[:, 1] / f[:, 0] - 1)
+    u = real_shapes(np.asarray(eigenvectors, complex)[..., :n_modes])
+    # the current shape's sign follows the baseline's (MAC-sign)
+    sign = np.sign(np.sum(u[:, 1] * u[:, 0], axis=-2, keepdims=True))
+    u1 = u[:, 1] * np.where(sign == 0, 1.0, sign)
+    du = u1 - u[:, 0]
+    dk = curvatures(u1) - curvatures(u[:, 0])
+    n = lam.shape[0]
+    return np.concatenate([shift, np.log(f[:, 0]), 10 * du.reshape(n, -1), 10 * dk.reshape(n, -1)], axis=1)
+
+
+# --------------------------------------------------------------------------- FRF routes
+def grid_weights(omega_rad_s, grid_rad_s=GRID_RAD_S):
+    """Linear-interpolation matrix in log-frequency from FRF lines onto the grid.
+
+    Grid points outside the lines take the nearest line's value.
+
+    Returns
+    -------
+    W : ndarray, shape (G, F)
+    covered : ndarray of bool, shape (G,)   grid points inside the measured band
+    """
+    w = np.log(np.asarray(omega_rad_s, float))
+    g = np.log(np.asarray(grid_rad_s, float))
+    j = np.clip(np.searchsorted(w, g) - 1, 0, w.size - 2)
+    t = np.clip((g - w[j]) / (w[j + 1] - w[j]), 0.0, 1.0)
+    W = np.zeros((g.size, w.size))
+    W[np.arange(g.size), j] = 1 - t
+    W[np.arange(g.size), j + 1] += t
+    return W, (g >= w[0] - 1e-12) & (g <= w[-1] + 1e-12)
+
+
+def map_frf_to_grid(H, omega_rad_s, grid_rad_s=GRID_RAD_S):
+    """``log10 |H|`` on the fixed grid (interpolated in log-frequency), batched over leading axes.
+
+    Parameters
+    ----------
+    H : ndarray, complex, shape (..., F)   receptance (m/N)
+    omega_rad_s : ndarray, shape (F,)
+
+    Returns
+    -------
+    ndarray, shape (..., G)
+    """
+    W, _ = grid_weights(omega_rad_s, grid_rad_s)
+    return np.log10(np.abs(np.asarray(H)) + 1e-30) @ W.T
+
+
+def frf_features(log_frf):
+    """FRF features of pairs: baseline log-magnitude and the current-minus-baseline change.
+
+    Parameters
+    ----------
+    log_frf : ndarray, shape (n, 2, S, G)   ``log10 |H|`` on the grid (:func:`map_frf_to_grid`)
+
+    Returns
+    -------
+    ndarray, float32, shape (n, 2 S G)
+    """
+    L = np.asarray(log_frf, np.float32)
+    n = L.shape[0]
+    return np.concatenate([L[:, 0].reshape(n, -1) + 5.0, 10 * (L[:, 1] - L[:, 0]).reshape(n, -1)], axis=1)
+
+
+def features(pairs: Pairs, route: str = "modal") -> np.ndarray:
+    """Feature matrix (n, d) of ``pairs`` for one input route (:data:`ROUTES`)."""
+    if route == "modal":
+        X = modal_features(pairs.eigenvalues, pairs.eigenvectors)
+    elif route in ("updated", "measured"):
+        if route not in pairs.log_frf:
+            raise BeamDamageError(f"input route {route!r} needs FRFs of both states; none were read")
+        X = frf_features(pairs.log_frf[route])
+    else:
+        raise BeamDamageError(f"input route {route!r} must be one of {', '.join(ROUTES)}")
+    return np.where(np.isfinite(X), X, 0.0)
+
+
+# --------------------------------------------------------------------------- splits
+def split_by_specimen(groups, fractions=(0.7, 0.15, 0.15), seed: int = 0):
+    """Train/validation/test indices with every specimen in exactly one part.
+
+    Parameters
+    ----------
+    groups : array_like, shape (n,)   specimen key of each pair
+    fractions : three fractions summing to 1
+
+    Returns
+    -------
+    tuple of three ndarray of int
+    """
+    groups = np.asarray(groups)
+    uniq, inv = np.unique(groups, return_inverse=True)
+    perm = np.random.default_rng(seed).permutation(uniq.size)
+    rank = np.empty(uniq.size, int)
+    rank[perm] = np.arange(uniq.size)
+    cut = np.cumsum(np.asarray(fractions, float)) / np.sum(fractions) * uniq.size
+    part = np.searchsorted(cut, rank[inv], side="right")
+    return tuple(np.flatnonzero(part == k) for k in range(3))

@@ -1,0 +1,67 @@
+"""The network: a small multi-head MLP on standardised pair features.
+
+Heads
+-----
+``detect``   one logit of "damaged" (calibrated afterwards by temperature scaling).
+``locate``   logits over ``n_bins`` equal bins of ``x / L`` (a distribution along the beam).
+``size``     mean and log standard deviation of ``ln(stiffness loss / 1 N m^3)``
+             (Gaussian; trained by its negative log-likelihood on damaged pairs only).
+"""
+
+from __future__ import annotations
+
+import torch
+from torch import nn
+
+
+class DamageNet(nn.Module):
+    """Shared trunk and three heads.
+
+    Parameters
+    ----------
+    n_features : int
+    n_bins : int
+        Location bins over ``x / L`` (a multiple of 4 so the thesis's elements are unions of bins).
+    hidden : int
+    depth : int
+        Hidden layers of the trunk.
+    dropout : float
+    """
+
+    def __init__(self, n_features: int, n_bins: int = 80, hidden: int = 128, depth: int = 3, dropout: float = 0.05):
+        super().__init__()
+        layers, d = [], n_features
+        for _ in range(depth):
+            layers += [nn.Linear(d, hidden), nn.GELU(), nn.Dropout(dropout)]
+            d = hidden
+        self.trunk = nn.Sequential(*layers)
+        self.detect = nn.Linear(hidden, 1)
+        self.locate = nn.Linear(hidden, n_bins)
+        self.size = nn.Linear(hidden, 2)
+
+    def forward(self, x: torch.Tensor) -> dict:
+        h = self.trunk(x)
+        s = self.size(h)
+        return {"detect": self.detect(h)[:, 0], "locate": self.locate(h), "size_mean": s[:, 0],
+                "size_log_std": s[:, 1].clamp(-6.0, 1.0)}
+
+
+def loss_terms(out: dict, damaged: torch.Tensor, loc_target: torch.Tensor, log_size: torch.Tensor) -> dict:
+    """Losses of one batch.
+
+    Parameters
+    ----------
+    damaged : (B,) float 0/1
+    loc_target : (B, n_bins) soft target distribution (rows of intact pairs are ignored)
+    log_size : (B,) ``ln`` stiffness loss (ignored where intact)
+    """
+    det = nn.functional.binary_cross_entropy_with_logits(out["detect"], damaged)
+    m = damaged > 0.5
+    if m.any():
+        logp = torch.log_softmax(out["locate"][m], dim=1)
+        loc = -(loc_target[m] * logp).sum(dim=1).mean()
+        ls = out["size_log_std"][m]
+        size = (0.5 * ((log_size[m] - out["size_mean"][m]) / ls.exp()) ** 2 + ls).mean()
+    else:
+        loc = size = out["detect"].sum() * 0.0
+    return {"detect": det, "locate": loc, "size": size}

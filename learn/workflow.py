@@ -1,0 +1,425 @@
+"""Train, store, evaluate and apply a damage classifier (the library behind ``train``/``evaluate``/``classify``).
+
+Model directory
+---------------
+``config.json``          beam it was trained for (name, length, DOF set, mass model; and the training data's
+                         truth beam from its manifest), default input route, estimator parameters and
+                         temperature per route, training data (paths, manifest checksums, generator config
+                         with its temperature/re-clamping ranges), detection threshold, baseline thresholds,
+                         seed, package version, training time, test metrics
+``weights-<route>.pt``   ``torch.save`` of the network's state dict plus the input normalisation and the
+                         training features' precision matrix (loaded with ``weights_only=True``)
+``metrics.csv``          test-split metrics of the network(s) and the classical baselines
+
+A model trained on the FRF route also carries a modal-route network, used for
+inputs that are modal data only (the thesis's measured data).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import torch
+
+from learn.baselines import MethodOutput, run_classical
+from learn.estimator import DamageClassifier
+from learn.evaluate import MIN_DROP, metrics, table_rows
+from learn.features import (DOFS, GRID_RAD_S, ROUTES, BeamSpec, Pairs, features, frf_features, labels, load_pairs,
+                            map_frf_to_grid, modal_features, split_by_specimen)
+from learn.sensitivity import beam_sensitivity
+from physics.errors import BeamDamageError, FileFormatError
+
+#: Input route used by default (the winner of ``python -m experiments.bench_learn``).
+DEFAULT_ROUTE = "modal"
+#: Width assumed when a stiffness loss is turned into a slit depth (m): middle of the training widths.
+REFERENCE_WIDTH_M = 0.0055
+FORMAT = "beam-damage-model/1"
+
+
+def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
+    """``y`` (n, 3) = [damaged, x/L, stiffness loss N m^3] and the full truth dict of :func:`labels`."""
+    t = labels(pairs.table, pairs.beam.length_m)
+    return np.stack([t["damaged"].astype(float), t["x_over_L"], t["stiffness_loss_Nm3"]], axis=1), t
+
+
+def frf_kinds(routes) -> tuple:
+    """FRF kinds (:meth:`datagen.store.Dataset.frf`) the input routes need."""
+    return tuple(r for r in routes if r != "modal")
+
+
+#: Generator keys of the changes between two test days (datagen config section ``specimen``).
+DAY_CHANGES = ("temperature_stiffness_change", "root_spring_change")
+
+
+def day_changes(source: list) -> dict:
+    """Temperature and re-clamping ranges of the first dataset's generator config."""
+    spec = source[0]["config"]["specimen"]
+    return {k: spec[k] for k in DAY_CHANGES}
+
+
+# --------------------------------------------------------------------------- model directory
+@dataclass
+class TrainedModel:
+    """A loaded model directory."""
+
+    path: Path
+    config: dict
+    networks: dict = field(default_factory=dict)   # route -> DamageClassifier
+
+    @property
+    def beam(self) -> BeamSpec:
+        return BeamSpec.from_dict(self.config["beam"])
+
+    @property
+    def route(self) -> str:
+        return self.config["route"]
+
+    def check_beam(self, other: BeamSpec, what: str = "data") -> None:
+        """Refuse data of another beam, DOF set or mass model (a frequency grid may differ)."""
+        diff = self.beam.differences(other)
+        if diff:
+            raise BeamDamageError(f"model {self.path} was trained for {self.beam.name} ({self.beam.length_m:g} m, "
+                                  f"DOFs {', '.join(self.beam.dofs)}, {self.beam.mass_model} mass); the {what} has "
+                                  + "; ".join(diff))
+
+
+def save_model(out_dir, config: dict, networks: dict) -> None:
+    """Write the model directory atomically file by file (temp file, then rename)."""
+    from physics.io import atomic_write_bytes, atomic_write_text
+    import io
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    for route, est in networks.items():
+        tensors, meta = est.get_state()
+        buf = io.BytesIO()
+        torch.save(tensors, buf)
+        atomic_write_bytes(out / f"weights-{route}.pt", buf.getvalue())
+        config.setdefault("networks", {})[route] = meta
+    atomic_write_text(out / "config.json", json.dumps(config, indent=1, sort_keys=True, default=_json_default))
+
+
+def load_model(model_dir, device=None) -> TrainedModel:
+    """Read a model directory (weights with ``torch.load(..., weights_only=True)``)."""
+    path = Path(model_dir)
+    cfg_path = path / "config.json"
+    if not cfg_path.is_file():
+        raise FileFormatError(f"{path}: not a model directory (no config.json); create one with 'beam-damage train'")
+    try:
+        config = json.loads(cfg_path.read_text())
+    except json.JSONDecodeError as exc:
+        raise FileFormatError(f"{cfg_path}: not valid JSON ({exc.msg})") from None
+    if config.get("format") != FORMAT:
+        raise FileFormatError(f"{cfg_path}: field 'format' is {config.get('format')!r}, expected {FORMAT!r}")
+    model = TrainedModel(path, config)
+    for route, meta in config.get("networks", {}).items():
+        w = path / f"weights-{route}.pt"
+        try:
+            tensors = torch.load(w, map_location="cpu", weights_only=True)
+        except FileNotFoundError:
+            raise FileFormatError(f"{w}: weights file missing") from None
+        except Exception as exc:  # noqa: BLE001 - any unpickling failure is a bad file
+            raise FileFormatError(f"{w}: not a weights file readable with weights_only=True ({exc})") from None
+        model.networks[route] = DamageClassifier.from_state(tensors, meta, device=device)
+    if config["route"] not in model.networks:
+        raise FileFormatError(f"{cfg_path}: no network for its route {config['route']!r}")
+    return model
+
+
+def _json_default(obj):
+    """numpy values in ``json.dumps`` (NaN stays NaN, which ``json.loads`` reads back)."""
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, (np.bool_, np.integer, np.floating)):
+        return obj.item()
+    raise TypeError(f"{type(obj).__name__} is not JSON serialisable")
+
+
+# --------------------------------------------------------------------------- network outputs
+def detectability_threshold() -> float:
+    """Largest first-order frequency drop below which a slit counts as not detectable (0.2 %)."""
+    return MIN_DROP
+
+
+def network_output(est: DamageClassifier, X, sens, name="network") -> tuple[MethodOutput, object]:
+    """Network answers as a :class:`MethodOutput` plus the full :class:`learn.estimator.Prediction`."""
+    d = est.predict_details(X)
+    detectable = sens.largest_drop(d.x_over_L, d.stiffness_loss_Nm3) >= detectability_threshold()
+    out = MethodOutput(name, d.probability_damaged, d.probability_damaged >= est.threshold_, d.x_over_L,
+                       d.stiffness_loss_Nm3,
+                       probability=d.probability_damaged, x_std_over_L=d.x_std_over_L,
+                       stiffness_loss_std_Nm3=d.stiffness_loss_std_Nm3, detectable=detectable)
+    return out, d
+
+
+def sensitivity_of(beam: BeamSpec, config_root_spring=None):
+    return beam_sensitivity(beam.name, config_root_spring)
+
+
+def _nominal_root_spring(source: list):
+    r = source[0]["config"]["specimen"]["root_spring_relative"]
+    return float(np.sqrt(r[0] * r[1])) if r else None
+
+
+# --------------------------------------------------------------------------- train
+def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None = None, progress: bool = False,
+          test_fraction: float = 0.15) -> dict:
+    """Train the default-route network (and a modal-route companion), score it and the baselines, save.
+
+    Parameters
+    ----------
+    data : path or sequence of paths
+        Dataset directories of one beam, made by ``beam-damage generate --config training`` (intact and
+        damaged specimens, temperature and re-clamping changes between the two test days).
+    out_dir : model directory to write
+    route : input route (default :data:`DEFAULT_ROUTE`)
+
+    Returns
+    -------
+    dict  summary (route, sizes, training seconds, test metrics)
+    """
+    route = DEFAULT_ROUTE if route is None else route
+    if route not in ROUTES:
+        raise BeamDamageError(f"--route {route!r} must be one of {', '.join(ROUTES)}")
+    routes = [route] + (["modal"] if route != "modal" else [])
+    t0 = time.perf_counter()
+    pairs = load_pairs(data, frfs=frf_kinds(routes))
+    y, truth = targets(pairs)
+    if truth["damaged"].all() or not truth["damaged"].any():
+        raise BeamDamageError("training data must hold both intact and damaged pairs: generate them with "
+                              "'beam-damage generate --config training'")
+    changes = day_changes(pairs.source)
+    warnings = [] if any(v != [0.0, 0.0] for v in changes.values()) else [
+        "the training data have no temperature/re-clamping changes between the test days: a model trained on "
+        "them will call such changes damage; generate with --config training"]
+    tr, _, te = split_by_specimen(pairs.groups, (1 - test_fraction, 0.0, test_fraction), seed=seed)
+    load_s = time.perf_counter() - t0
+    sens = sensitivity_of(pairs.beam, _nominal_root_spring(pairs.source))
+    networks, outputs, fit_s = {}, [], {}
+    for r in routes:
+        X = features(pairs, r)
+        est = DamageClassifier(epochs=epochs, random_state=seed, verbose=progress)
+        est.fit(X[tr], y[tr], pairs.groups[tr])
+        networks[r] = est
+        fit_s[r] = est.train_seconds_
+        outputs.append(network_output(est, X[te], sens, f"network ({r})")[0])
+        del X
+    classical, thresholds = run_classical(pairs.eigenvalues[tr], pairs.eigenvectors[tr], sens,
+                                          damaged=truth["damaged"][tr])
+    classical, _ = run_classical(pairs.eigenvalues[te], pairs.eigenvectors[te], sens, thresholds)
+    truth_te = {k: v[te] for k, v in truth.items()}
+    rows = table_rows(outputs + classical, truth_te, pairs.table.iloc[te].reset_index(drop=True), pairs.beam.length_m)
+    base_all = [metrics(o, truth_te, None, "all", pairs.beam.length_m) for o in classical]
+    best = max(base_all, key=lambda m: (np.nan_to_num(m.element_accuracy), -np.nan_to_num(m.median_location_error_mm)))
+    config = {
+        "format": FORMAT, "route": route, "beam": pairs.beam.to_dict(), "seed": seed, "epochs": epochs,
+        "grid_rad_s": GRID_RAD_S, "dofs": list(DOFS),
+        "training_data": [{k: s[k] for k in ("path", "manifest_checksum", "samples")} for s in pairs.source],
+        "generator_config": pairs.source[0]["config"],
+        "root_spring_relative": _nominal_root_spring(pairs.source),
+        "truth_beam": pairs.source[0]["truth_beam"], "day_changes": changes,
+        "detect_min_drop": detectability_threshold(),
+        "reference_width_m": REFERENCE_WIDTH_M, "baseline_thresholds": thresholds, "best_baseline": best.method,
+        "split": {"train_pairs": int(len(tr)), "test_pairs": int(len(te)), "by": "specimen"},
+        "train_seconds": fit_s, "load_seconds": load_s, "package_version": _version(),
+        "test_metrics": [m for m in rows if m["subset"] == "all"],
+    }
+    save_model(out_dir, config, networks)
+    from physics.io import atomic_write_text
+    atomic_write_text(Path(out_dir) / "metrics.csv", pd.DataFrame(rows).to_csv(index=False))
+    return {"model": str(out_dir), "route": route, "train_pairs": int(len(tr)), "test_pairs": int(len(te)),
+            "train_seconds": fit_s, "load_seconds": load_s, "best_baseline": best.method,
+            "test_metrics": config["test_metrics"], "warnings": warnings}
+
+
+def _version() -> str:
+    from datagen.store import package_version
+    return package_version()
+
+
+# --------------------------------------------------------------------------- evaluate
+def evaluate(model: TrainedModel, data, out_dir=None, *, extra_outputs=None, progress: bool = False) -> dict:
+    """Network(s) and classical baselines on dataset(s) of the model's beam; table and figures."""
+    from learn.evaluate import figures
+
+    routes = list(model.networks)
+    pairs = load_pairs(data, frfs=frf_kinds(routes))
+    model.check_beam(pairs.beam, f"dataset {pairs.source[0]['path']}")
+    _, truth = targets(pairs)
+    sens = sensitivity_of(model.beam, model.config.get("root_spring_relative"))
+    from tqdm.auto import tqdm
+
+    outs = []
+    for r in tqdm([model.route] + [q for q in routes if q != model.route], desc="evaluate networks",
+                  disable=not progress):
+        outs.append(network_output(model.networks[r], features(pairs, r), sens, f"network ({r})")[0])
+    classical, _ = run_classical(pairs.eigenvalues, pairs.eigenvectors, sens, model.config["baseline_thresholds"])
+    outs += classical + list(extra_outputs or [])
+    rows = table_rows(outs, truth, pairs.table, pairs.beam.length_m)
+    result = {"model": str(model.path), "data": [s["path"] for s in pairs.source], "pairs": len(pairs),
+              "rows": rows, "figures": []}
+    if out_dir is not None:
+        from physics.io import atomic_write_text
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(out / "metrics.csv", pd.DataFrame(rows).to_csv(index=False))
+        atomic_write_text(out / "metrics.json", json.dumps(rows, indent=1, default=_json_default))
+        result["figures"] = figures(outs, truth, out, pairs.beam.length_m)
+    return result
+
+
+# --------------------------------------------------------------------------- classify measured data
+def modal_pair(baseline, current, beam: BeamSpec) -> tuple[np.ndarray, np.ndarray, list]:
+    """Stack two :class:`physics.io.ModalData` of the model's DOFs into (1, 2, m) eigenvalues and (1, 2, 4, m) shapes."""
+    warnings = []
+    lams, vecs = [], []
+    for name, d in (("baseline", baseline), ("measured", current)):
+        if d.eigenvectors is None:
+            raise FileFormatError(f"{name} modal data: field 'eigenvectors' is required (rows = {', '.join(beam.dofs)})")
+        dofs = tuple(_canonical_dof(x) for x in d.dofs) if d.dofs else None
+        if dofs is None:
+            if d.eigenvectors.shape[0] != len(beam.dofs):
+                raise BeamDamageError(f"{name} modal data has {d.eigenvectors.shape[0]} DOFs but the model was trained "
+                                      f"on {len(beam.dofs)} ({', '.join(beam.dofs)})")
+            warnings.append(f"{name} modal data has no 'dofs': rows taken as {', '.join(beam.dofs)}")
+        elif dofs != tuple(beam.dofs):
+            raise BeamDamageError(f"{name} modal data: DOF set {list(d.dofs)} differs from the model's "
+                                  f"{list(beam.dofs)}")
+        if d.eigenvalues.size < 4:
+            raise FileFormatError(f"{name} modal data: 4 modes are needed, got {d.eigenvalues.size}")
+        o = np.argsort(np.abs(d.eigenvalues))[:4]
+        lams.append(d.eigenvalues[o])
+        vecs.append(d.eigenvectors[:, o])
+    return np.stack(lams)[None], np.stack(vecs)[None], warnings
+
+
+def _canonical_dof(label: str) -> str:
+    from physics.io import parse_dof
+    node, direction = parse_dof(label)
+    names = {1: "x", 2: "y", 3: "z", 4: "rx", 5: "ry", 6: "rz"}
+    return f"{node}:{names.get(abs(direction), str(direction))}"
+
+
+def frf_rows(frf, beam: BeamSpec):
+    """Receptances at the model's DOFs driven at its first DOF, shape (4, F); None if the file lacks some."""
+    f = frf.to_kind("receptance") if frf.frequency_hz[0] > 0 else frf.select_band(fmin_hz=1e-9).to_kind("receptance")
+    resp = [_canonical_dof(d) for d in f.response_dofs]
+    ref = [_canonical_dof(d) for d in f.reference_dofs]
+    if beam.dofs[0] not in ref or any(d not in resp for d in beam.dofs):
+        return None, f
+    j = ref.index(beam.dofs[0])
+    return np.stack([f.frf[resp.index(d), j] for d in beam.dofs]), f
+
+
+def ood_percentile(est: DamageClassifier, X) -> tuple[float, float]:
+    """Mahalanobis distance of features to the training features and its percentile among training pairs."""
+    d = est.mahalanobis(X)
+    return float(d[0]), float(np.mean(est.reference_distances_ <= d[0]) * 100)
+
+
+def classify(model: TrainedModel, baseline, current, identified=None) -> dict:
+    """Verdict for one measured pair.
+
+    Parameters
+    ----------
+    baseline, current : :class:`physics.io.ModalData` or :class:`physics.io.MeasuredFRF` (both the same kind)
+        FRFs are mapped onto the model's log-frequency grid (any frequency lines); modal data use the
+        modal-route network.
+    identified : (ModalData, ModalData), optional
+        Modal data identified from FRF inputs: the modal-route network's input when the model's route is
+        ``modal``, and the classical baseline's.
+    """
+    from physics.io import MeasuredFRF
+
+    beam = model.beam
+    warnings = []
+    sens = sensitivity_of(beam, model.config.get("root_spring_relative"))
+    route = "modal"
+    lam = vecs = None
+    if isinstance(baseline, MeasuredFRF) != isinstance(current, MeasuredFRF):
+        raise BeamDamageError("BASELINE and MEASURED must both be FRF files or both modal data")
+    if isinstance(baseline, MeasuredFRF):
+        rows = [frf_rows(x, beam) for x in (baseline, current)]
+        if model.route in ("measured", "updated") and all(r[0] is not None for r in rows):
+            route = model.route
+            if route == "updated":
+                warnings.append("the updated-model route is fed with the measured FRFs (no updating of measured FRFs here)")
+            Ls = []
+            for H, f in rows:
+                w = f.omega_rad_s
+                lo, hi = w[0], w[-1]
+                if lo > GRID_RAD_S[0] * 1.001 or hi < GRID_RAD_S[-1] * 0.999:
+                    warnings.append(f"FRF lines cover {lo:.4g}-{hi:.4g} rad/s, the model's grid "
+                                    f"{GRID_RAD_S[0]:.4g}-{GRID_RAD_S[-1]:.4g} rad/s: nearest values used outside")
+                Ls.append(map_frf_to_grid(H, w))
+            X = frf_features(np.stack(Ls)[None])        # (1, 2, 4, G) -> (1, d)
+        elif model.route == "modal" and identified is not None:
+            lam, vecs, w = modal_pair(identified[0], identified[1], beam)
+            warnings += w + ["modal route on modes identified from the FRFs by peak picking (4 modes)"]
+            X = modal_features(lam, vecs)
+        else:
+            raise BeamDamageError(f"FRF files must hold receptances at {', '.join(beam.dofs)} driven at {beam.dofs[0]} "
+                                  f"for the {model.route} route; identify modal data first (beam-damage identify)")
+    else:
+        lam, vecs, w = modal_pair(baseline, current, beam)
+        warnings += w
+        X = modal_features(lam, vecs)
+        if "modal" not in model.networks:
+            raise BeamDamageError("this model has no modal-route network; give FRF files")
+    est = model.networks[route]
+    out, d = network_output(est, X, sens)
+    dist, pct = ood_percentile(est, X)
+    if pct >= 99.9:
+        warnings.append(f"the pair lies far outside the training distribution (Mahalanobis distance {dist:.3g}, "
+                        f"beyond {pct:.1f}% of training pairs): treat the verdict with caution")
+    L = beam.length_m
+    depth = equivalent_depth(float(d.stiffness_loss_Nm3[0]), beam.name, model.config["reference_width_m"])
+    result = {
+        "damaged": bool(out.damaged[0]), "probability_damaged": float(d.probability_damaged[0]),
+        "location_x_over_L": float(d.x_over_L[0]), "location_x_m": float(d.x_over_L[0] * L),
+        "location_std_m": float(d.x_std_over_L[0] * L), "location_element": int(d.element[0]),
+        "element_probabilities": [float(v) for v in d.element_probabilities[0]],
+        "stiffness_loss_Nm3": float(d.stiffness_loss_Nm3[0]), "stiffness_loss_std_Nm3": float(d.stiffness_loss_std_Nm3[0]),
+        "depth_m": depth, "detectable": bool(out.detectable[0]), "input_route": route, "warnings": warnings,
+    }
+    extra = {"location_distribution": d.location_distribution[0], "mahalanobis_distance": dist,
+             "training_percentile": pct, "baseline": None}
+    if lam is None and identified is not None:
+        try:
+            lam, vecs, w = modal_pair(identified[0], identified[1], beam)
+        except BeamDamageError as exc:
+            warnings.append(f"no classical baseline: identified modal data unusable ({exc})")
+    if lam is not None:
+        classical, _ = run_classical(lam, vecs, sens, model.config["baseline_thresholds"])
+        best = next((o for o in classical if o.name == model.config["best_baseline"]), classical[0])
+        extra["baseline"] = {"method": best.name, "damaged": bool(best.damaged[0]),
+                             "largest_frequency_drop": float(best.score[0]) if best.name != "sensitivity updating" else None,
+                             "location_x_over_L": float(best.x_over_L[0]), "location_x_m": float(best.x_over_L[0] * L),
+                             "location_element": int(min(int(best.x_over_L[0] * 4) + 1, 4)),
+                             "stiffness_loss_Nm3": float(best.stiffness_loss_Nm3[0])}
+    return {**result, "_extra": extra}
+
+
+def equivalent_depth(stiffness_loss_Nm3: float, preset: str, width_m: float) -> float | None:
+    """Slit depth (m) whose layered-section rigidity loss over ``width_m`` equals the stiffness loss.
+
+    Uses the face/core layout of :mod:`datagen.specimen` (eq. 4.1, default faces 0.5 mm, core 0.1 GPa);
+    None when even a cut to mid-thickness would not remove that much.
+    """
+    from datagen.config import DEFAULTS
+    from datagen.specimen import SectionLayout, slit_section_ei
+    from physics.properties import beam_preset
+
+    p = beam_preset(preset)
+    sec = DEFAULTS["section"]
+    lay = SectionLayout.matching(p.EI, p.width, p.thickness, sec["face_thickness_m"], sec["core_modulus_pa"])
+    depths = np.linspace(0.0, 0.999 * p.thickness / 2, 4000)
+    loss = (lay.EI - slit_section_ei(lay, depths)) * width_m
+    if not np.isfinite(stiffness_loss_Nm3) or stiffness_loss_Nm3 > loss[-1]:
+        return None
+    return float(np.interp(stiffness_loss_Nm3, loss, depths))

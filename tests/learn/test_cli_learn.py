@@ -1,0 +1,154 @@
+"""train / evaluate / classify end to end on a tiny generated dataset (real files, real CLI)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from datagen.config import load_config, merge
+from datagen.parallel import generate
+from experiments.cli import main
+from experiments.cmd_classify import KEYS
+from learn.features import map_frf_to_grid
+from physics.io import MeasuredFRF, ModalData, write_frf_npz, write_modal_json
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory):
+    root = tmp_path_factory.mktemp("learn")
+    cfg = merge({"measurement": {"lines": 256}, "output": {"shard_size": 100}}, base=load_config("training"))
+    generate(root / "data", cfg, n=200, seed=5, progress=False)
+    assert main(["train", "--data", str(root / "data"), "--out", str(root / "model"), "--epochs", "3",
+                 "--route", "measured", "--json"]) == 0
+    return root
+
+
+def test_train_writes_a_complete_model_directory(tiny):
+    cfg = json.loads((tiny / "model" / "config.json").read_text())
+    assert cfg["route"] == "measured" and set(cfg["networks"]) == {"measured", "modal"}
+    assert cfg["beam"] == {"name": "beam5", "length_m": 0.6095, "dofs": ["2:y", "3:y", "4:y", "5:y"],
+                           "mass_model": "iirs"}
+    assert len(cfg["training_data"][0]["manifest_checksum"]) == 64
+    assert cfg["split"]["by"] == "specimen"
+    assert cfg["truth_beam"]["name"] == "beam5" and cfg["truth_beam"]["length_m"] == 0.6095
+    assert cfg["day_changes"] == {"temperature_stiffness_change": [-0.004, 0.004], "root_spring_change": [-0.08, 0.08]}
+
+
+def test_load_pairs_reads_format_2_in_chunks(tiny):
+    from datagen.store import Dataset
+    from learn.features import GRID_RAD_S, labels, load_pairs
+
+    ds = Dataset(tiny / "data")
+    pairs = load_pairs(tiny / "data", frfs=("measured",), chunk=7)       # chunks straddle the 100-sample shards
+    rows = [0, 99, 100, 150]
+    want = map_frf_to_grid(ds.frf("measured", rows), ds.omega_rad_s, GRID_RAD_S)
+    np.testing.assert_allclose(pairs.log_frf["measured"][rows], want, atol=1e-4)
+    t = ds.table(["damaged", "n_slits", "noise_level", "max_frequency_drop_rel", "slit1_x_m"])
+    lab = labels(pairs.table, 0.6095)
+    np.testing.assert_array_equal(lab["damaged"], t["n_slits"].to_numpy() > 0)
+    assert 0.1 < np.mean(~lab["damaged"]) < 0.4                       # a quarter intact in the training config
+    dam = lab["damaged"]
+    np.testing.assert_allclose(lab["x_over_L"][dam], t["slit1_x_m"].to_numpy()[dam] / 0.6095)
+    assert np.all(lab["max_drop"][dam] > 0) and np.all(np.abs(lab["max_drop"][~dam]) < 1e-9)
+    np.testing.assert_array_equal(pairs.table["noise_level"], t["noise_level"])
+
+
+def test_format_1_and_other_beams_are_refused_in_one_line(tiny, tmp_path, capsys):
+    import shutil
+
+    old = tmp_path / "old"
+    shutil.copytree(tiny / "data", old)
+    m = json.loads((old / "manifest.json").read_text())
+    (old / "manifest.json").write_text(json.dumps({**m, "format": "beam-damage-dataset/1"}))
+    assert main(["evaluate", "--model", str(tiny / "model"), "--data", str(old)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "'beam-damage-dataset/1' is not supported" in err
+    cfg = merge({"updating": {"mass_model": "lumped"}, "output": {"shard_size": 10}}, base=load_config("training"))
+    generate(tmp_path / "lumped", cfg, n=10, seed=1, progress=False)
+    assert main(["evaluate", "--model", str(tiny / "model"), "--data", str(tmp_path / "lumped")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "mass model 'lumped' instead of 'iirs'" in err
+
+
+def test_evaluate_writes_table_and_figures(tiny, capsys):
+    assert main(["evaluate", "--model", str(tiny / "model"), "--data", str(tiny / "data"),
+                 "--out", str(tiny / "eval"), "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    methods = {r["method"] for r in res["rows"]}
+    assert {"network (measured)", "DLAC", "MDLAC", "Cawley-Adams", "sensitivity updating"} <= methods
+    for f in ("metrics.csv", "roc.png", "confusion.png", "location_error.png", "reliability.png"):
+        assert (tiny / "eval" / f).stat().st_size > 0
+
+
+def _modal_files(tmp, drop):
+    """Baseline and damaged modal JSON of an independent FE beam (slit = element loss)."""
+    from physics.fem import beam_model
+    from physics.modal import undamped_modes
+    from physics.properties import beam_preset
+
+    p = beam_preset("beam5")
+    f = np.ones((2, 40))
+    f[1, 8] -= drop
+    m = beam_model(40, p.length, p.EI, p.m_per_length, ei_factors=f, root_spring=948.7 * p.EI / p.length)
+    w, phi = undamped_modes(m.M, m.K)
+    idx = m.index(["11:y", "21:y", "31:y", "41:y"])
+    paths = []
+    for s, name in ((0, "base.json"), (1, "cur.json")):
+        lam = -0.002 * w[s, :4] + 1j * w[s, :4]
+        write_modal_json(tmp / name, ModalData(lam, phi[s][idx, :4].astype(complex), ("2:y", "3:y", "4:y", "5:y")))
+        paths.append(str(tmp / name))
+    return paths
+
+
+def test_classify_modal_json_prints_exactly_the_keys(tiny, capsys):
+    base, cur = _modal_files(tiny, 0.5)
+    assert main(["classify", "--model", str(tiny / "model"), "--baseline", base, cur, "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert tuple(res) == KEYS
+    assert res["input_route"] == "modal" and 1 <= res["location_element"] <= 4
+    assert sum(res["element_probabilities"]) == pytest.approx(1.0, abs=1e-4)
+    assert main(["classify", "--model", str(tiny / "model"), "--baseline", base, cur, "--out", str(tiny / "cl")]) == 0
+    assert "Best classical baseline" in capsys.readouterr().out
+    assert (tiny / "cl" / "classify.png").stat().st_size > 0
+
+
+def test_classify_frf_on_another_grid_is_accepted(tiny, capsys):
+    from datagen.store import Dataset
+
+    ds = Dataset(tiny / "data")
+    H = ds.array("frf_measured")[:1]
+    w = ds.omega_rad_s
+    lines = np.linspace(w[0], w[-1], 700) / (2 * np.pi)     # a different frequency grid
+    paths = []
+    for s in (0, 1):
+        h = np.stack([np.interp(lines * 2 * np.pi, w, H[0, s, k].real) + 1j * np.interp(lines * 2 * np.pi, w,
+                      H[0, s, k].imag) for k in range(4)])[:, None, :]
+        frf = MeasuredFRF(lines, h, ("2:+Y", "3:+Y", "4:+Y", "5:+Y"), ("2:+Y",))
+        paths.append(str(tiny / f"frf{s}.npz"))
+        write_frf_npz(paths[-1], frf)
+    assert main(["classify", "--model", str(tiny / "model"), "--baseline", paths[0], paths[1], "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["input_route"] == "measured"
+
+
+def test_modal_route_model_classifies_frf_files_through_identified_modes(tiny, capsys):
+    assert main(["train", "--data", str(tiny / "data"), "--out", str(tiny / "modal"), "--epochs", "2", "--json"]) == 0
+    capsys.readouterr()
+    assert json.loads((tiny / "modal" / "config.json").read_text())["route"] == "modal"   # the default route
+    paths = [str(tiny / f"frf{s}.npz") for s in (0, 1)]                                   # written by the test above
+    assert main(["classify", "--model", str(tiny / "modal"), "--baseline", paths[0], paths[1], "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["input_route"] == "modal" and any("peak picking" in w for w in res["warnings"])
+
+
+def test_refusals_and_bad_input_exit_2(tiny, capsys):
+    base, cur = _modal_files(tiny, 0.5)
+    assert main(["classify", "--model", str(tiny / "model"), "--baseline", base, cur, "--mass", "lumped"]) == 2
+    assert "mass model 'lumped' instead of 'iirs'" in capsys.readouterr().err
+    obj = json.loads(open(cur).read())
+    obj["dofs"] = ["2:y", "3:y", "4:y", "6:y"]
+    (tiny / "other.json").write_text(json.dumps(obj))
+    assert main(["classify", "--model", str(tiny / "model"), "--baseline", base, str(tiny / "other.json")]) == 2
+    assert "DOF set" in capsys.readouterr().err
+    assert main(["evaluate", "--model", str(tiny / "nowhere"), "--data", str(tiny / "data")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "not a model directory" in err

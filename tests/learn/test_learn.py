@@ -1,0 +1,176 @@
+"""learn: features, sensitivities, baselines, estimator, model directory, refusal rules."""
+
+import json
+
+import numpy as np
+import pytest
+import torch
+from sklearn.base import clone
+from sklearn.metrics import roc_auc_score
+
+from learn.baselines import cawley_adams, dlac, mdlac, sensitivity_updating
+from learn.estimator import DamageClassifier, fit_calibration
+from learn.evaluate import reliability, roc_auc
+from learn.features import BeamSpec, curvatures, map_frf_to_grid, real_shapes, split_by_specimen
+from learn.sensitivity import beam_sensitivity
+from learn.workflow import TrainedModel, equivalent_depth, load_model, save_model
+from physics.errors import BeamDamageError
+from physics.fem import beam_model
+from physics.modal import undamped_modes
+from physics.properties import beam_preset
+
+
+def test_split_by_specimen_never_cuts_a_specimen():
+    groups = np.repeat(np.arange(300), 3)       # three pairs per specimen
+    parts = split_by_specimen(groups, (0.7, 0.15, 0.15), seed=3)
+    sets = [set(groups[p]) for p in parts]
+    assert not (sets[0] & sets[1]) and not (sets[0] & sets[2]) and not (sets[1] & sets[2])
+    assert sum(len(p) for p in parts) == groups.size
+    assert abs(len(sets[0]) - 210) <= 1 and abs(len(sets[2]) - 45) <= 1
+
+
+def test_real_shapes_remove_complex_scaling_and_curvature_of_a_parabola():
+    rng = np.random.default_rng(0)
+    u = rng.normal(size=(4, 3))
+    z = u * (0.3 - 2.1j)                                 # any complex scaling of a real mode
+    got = real_shapes(z)
+    ref = u / np.linalg.norm(u, axis=0) * np.sign(u[np.argmax(np.abs(u), axis=0), range(3)])
+    np.testing.assert_allclose(got, ref, atol=1e-12)
+    w = (np.arange(1, 5, dtype=float) ** 2)[:, None]     # w(x) = x^2 at nodes 2..5, clamp w = w' = 0 at x = 0
+    np.testing.assert_allclose(curvatures(w)[:, 0], 2.0)
+
+
+def test_log_grid_interpolation_is_exact_for_a_power_law():
+    w = np.linspace(10.0, 6000.0, 5000)
+    grid = np.geomspace(60.0, 4800.0, 40)
+    H = (1.0 / w**2).astype(complex)
+    np.testing.assert_allclose(map_frf_to_grid(H, w, grid), -2 * np.log10(grid), atol=1e-3)
+
+
+def _independent_slit(x_over_L, loss, n_el=60, root=948.7):
+    """Relative frequency shifts and complex eigen-data of a slit on an independent, finer FE mesh."""
+    p = beam_preset("beam5")
+    f = np.ones((2, n_el))
+    f[1, min(int(x_over_L * n_el), n_el - 1)] -= loss
+    m = beam_model(n_el, p.length, p.EI, p.m_per_length, ei_factors=f, root_spring=root * p.EI / p.length)
+    w, phi = undamped_modes(m.M, m.K)
+    idx = m.index([f"{1 + n_el // 4 * q}:y" for q in range(1, 5)])
+    lam = -0.002 * w[:, :4] + 1j * w[:, :4]
+    return w[1, :4] / w[0, :4] - 1, lam[None], phi[:, idx, :4][None].astype(complex), loss * p.EI * p.length / n_el
+
+
+@pytest.mark.parametrize("x", [0.12, 0.31, 0.47, 0.63])
+def test_frequency_baselines_localise_a_slit_of_an_independent_fe_model(x):
+    sens = beam_sensitivity("beam5", 948.7)
+    df, lam, psi, s = _independent_slit(x, 0.4)
+    for method in (dlac, cawley_adams, mdlac):
+        out = method(df[None], sens, threshold=1e-4)
+        assert out.damaged[0]
+        assert abs(out.x_over_L[0] - x) < 0.05, (method.__name__, out.x_over_L[0], x)
+    df, _, _, s = _independent_slit(x, 0.05)    # first order holds for a small loss: the size too
+    out = dlac(df[None], sens, threshold=1e-5)
+    assert out.stiffness_loss_Nm3[0] == pytest.approx(s, rel=0.1)
+
+
+def test_first_order_frequency_sensitivity_against_a_finer_mesh():
+    sens = beam_sensitivity("beam5", 948.7)
+    x = 12.5 / 40                                      # centre of a sensitivity element and of a fine element
+    df, _, _, s = _independent_slit(x, 0.02, n_el=120)
+    pred = sens.frequency[:, sens.element_of(x)] * s
+    np.testing.assert_allclose(pred, df, rtol=0.08, atol=2e-6)
+
+
+def test_sensitivity_updating_finds_the_element():
+    sens = beam_sensitivity("beam5", 948.7)
+    df, lam, psi, _ = _independent_slit(0.4, 0.3)
+    u = real_shapes(psi[0])
+    u0 = real_shapes(beam_pair_baseline_shapes())
+    du = (u[1] * np.sign(np.sum(u[1] * u0, axis=0)) - u0).reshape(1, -1)
+    out = sensitivity_updating(df[None], du, sens, threshold=0.0)
+    assert abs(out.x_over_L[0] - 0.4) < 0.06
+
+
+def beam_pair_baseline_shapes():
+    _, _, psi, _ = _independent_slit(0.4, 0.0)
+    return psi[0, 0]
+
+
+def _synthetic(n, rng):
+    """Pairs whose features are FE frequency shifts of a slit plus noise: the right answer is known."""
+    sens = beam_sensitivity("beam5", 948.7)
+    damaged = rng.random(n) < 0.6
+    x = rng.uniform(0.0, 0.8, n)
+    s = np.exp(rng.uniform(np.log(0.02), np.log(0.2), n))
+    df = np.where(damaged[:, None], sens.frequency[:, sens.element_of(x)].T * s[:, None], 0.0)
+    X = 100 * (df + 2e-4 * rng.standard_normal(df.shape))
+    y = np.stack([damaged, np.where(damaged, x, np.nan), np.where(damaged, s, 0.0)], axis=1)
+    return X, y
+
+
+def test_classifier_learns_a_known_synthetic_problem():
+    rng = np.random.default_rng(0)
+    X, y = _synthetic(3000, rng)
+    Xt, yt = _synthetic(600, rng)
+    est = DamageClassifier(hidden=64, depth=2, epochs=30, n_bins=40, random_state=0).fit(X, y)
+    d = est.predict_details(Xt)
+    dam = yt[:, 0] > 0.5
+    assert roc_auc_score(dam, d.probability_damaged) > 0.98
+    assert np.median(np.abs(d.x_over_L[dam] - yt[dam, 1])) < 0.05
+    assert np.median(np.abs(d.stiffness_loss_Nm3[dam] / yt[dam, 2] - 1)) < 0.3
+    np.testing.assert_allclose(d.element_probabilities.sum(axis=1), 1.0, atol=1e-5)
+    assert 0.1 < est.temperature_ < 10
+    # scikit-learn conventions: clone keeps params, drops fitted state
+    c = clone(est)
+    assert c.get_params() == est.get_params() and not hasattr(c, "model_")
+
+
+def test_model_directory_round_trip_with_weights_only(tmp_path):
+    rng = np.random.default_rng(1)
+    X, y = _synthetic(400, rng)
+    est = DamageClassifier(hidden=32, depth=1, epochs=2, n_bins=40, random_state=0).fit(X, y)
+    beam = BeamSpec("beam5", 0.6095, ("2:y", "3:y", "4:y", "5:y"), "iirs")
+    cfg = {"format": "beam-damage-model/1", "route": "modal", "beam": beam.to_dict()}
+    save_model(tmp_path, cfg, {"modal": est})
+    tensors = torch.load(tmp_path / "weights-modal.pt", weights_only=True)
+    assert "norm.mean" in tensors
+    model = load_model(tmp_path)
+    np.testing.assert_allclose(model.networks["modal"].predict_proba(X), est.predict_proba(X), atol=1e-6)
+    assert json.loads((tmp_path / "config.json").read_text())["beam"]["mass_model"] == "iirs"
+
+
+def test_refusal_names_what_differs():
+    beam = BeamSpec("beam5", 0.6095, ("2:y", "3:y", "4:y", "5:y"), "iirs")
+    model = TrainedModel(path="m", config={"beam": beam.to_dict()})
+    model.check_beam(beam)
+    with pytest.raises(BeamDamageError, match="mass model 'lumped'"):
+        model.check_beam(BeamSpec("beam5", 0.6095, beam.dofs, "lumped"))
+    with pytest.raises(BeamDamageError, match=r"DOF set \['2:y', '3:y', '4:y'\]"):
+        model.check_beam(BeamSpec("beam5", 0.6095, beam.dofs[:3], "iirs"))
+    with pytest.raises(BeamDamageError, match="beam 'beam8'"):
+        model.check_beam(BeamSpec("beam8", 0.6095, beam.dofs, "iirs"))
+
+
+def test_temperature_scaling_and_calibration_metrics():
+    rng = np.random.default_rng(2)
+    z = rng.normal(0, 2, 20000)
+    y = rng.random(z.size) < 1 / (1 + np.exp(-z))
+    t, b = fit_calibration(3 * z + 1.0, y)          # logits 3x overconfident and shifted
+    assert t == pytest.approx(3.0, rel=0.08) and b == pytest.approx(-1.0 / 3, abs=0.05)
+    p = 1 / (1 + np.exp(-z))
+    assert reliability(p, y)[3] < 0.02
+    assert reliability(1 / (1 + np.exp(-3 * z)), y)[3] > 0.05
+    s = rng.normal(size=500)
+    lab = rng.random(500) < 0.4
+    assert roc_auc(s + lab, lab) == pytest.approx(roc_auc_score(lab, s + lab))
+
+
+def test_equivalent_depth_inverts_the_layered_section():
+    from datagen.config import DEFAULTS
+    from datagen.specimen import SectionLayout, slit_section_ei
+
+    p = beam_preset("beam5")
+    lay = SectionLayout.matching(p.EI, p.width, p.thickness, DEFAULTS["section"]["face_thickness_m"],
+                                 DEFAULTS["section"]["core_modulus_pa"])
+    s = (lay.EI - float(slit_section_ei(lay, 0.00025))) * 0.005
+    assert equivalent_depth(s, "beam5", 0.005) == pytest.approx(0.00025, rel=1e-3)
+    assert equivalent_depth(1e3, "beam5", 0.005) is None
