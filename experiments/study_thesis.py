@@ -141,13 +141,13 @@ def run(out_dir) -> tuple[dict, list]:
                      (MASSES[0][1], model_frf(state, "reduced_mass"), "C0--"),
                      (MASSES[1][1], model_frf(state, "lumped_mass"), "C3:")])
         figs.append(Figure(f"Beam 5 {state}: H41 of the identified models and of the measured modal data "
-                           f"(cf. Figure 6.{k}).", path.name))
+                           f"(cf. Figure 6.{k}).", str(path)))
     path = out / "figure6_3_measured.png"
     _frf_figure(path, "Beam 5: measured modal data, undamaged vs damaged (cf. Figure 6.3)",
                 [("undamaged (Table 4.5)", measured_frf("undamaged"), "C0-"),
                  ("damaged (Table 4.6)", measured_frf("damaged"), "C3--")])
     figs.append(Figure("Beam 5: H41 rebuilt from the measured modal data, undamaged vs damaged (cf. Figure 6.3).",
-                       path.name))
+                       str(path)))
 
     tables = [Table.from_records("Table 4.2: natural frequencies of beam 5, closed form vs measured", t42),
               Table.from_records("Table 4.1 data: IIRS-reduced M and K against the printed matrices", t41),

@@ -64,26 +64,30 @@ class Sensitivity:
 
 
 @lru_cache(maxsize=16)
-def beam_sensitivity(preset: str = "beam5", root_spring_relative: float | None = 948.7, n_elements: int = 40,
+def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7, n_elements: int = 40,
                      n_modes: int = 4, step: float = 0.01) -> Sensitivity:
-    """Sensitivities of the nominal preset beam (clamped, or on a root spring ``k_r L / EI``).
+    """Sensitivities of the nominal beam (clamped, or on a root spring ``k_r L / EI``).
 
     Parameters
     ----------
-    preset : beam preset name
+    preset : beam preset name, or ``(length_m, EI_Nm2, mass_per_length_kg_m)`` of the truth beam
+        (e.g. a calibrated beam file: its Euler-Bernoulli equivalent with the same EI and mass)
     root_spring_relative : float or None
         ``k_r L / EI`` of the nominal root spring (None = rigid clamp); default the
         geometric mean of the generator's default range [300, 3000].
     n_elements : int, multiple of 4 (the measured nodes sit at quarter points)
     step : relative element stiffness loss of the finite differences
     """
-    p = beam_preset(preset)
-    L, EI = p.length, p.EI
+    if isinstance(preset, str):
+        p = beam_preset(preset)
+        L, EI, m = p.length_m, p.EI_Nm2, p.mass_per_length_kg_m
+    else:
+        L, EI, m = (float(v) for v in preset)
     le = L / n_elements
     kr = None if root_spring_relative is None else root_spring_relative * EI / L
     factors = np.ones((n_elements + 1, n_elements))
     factors[1:] -= step * np.eye(n_elements)
-    models = beam_model(n_elements, L, EI, p.m_per_length, ei_factors=factors, root_spring=kr)
+    models = beam_model(n_elements, L, EI, m, ei_factors=factors, root_spring=kr)
     w, phi = undamped_modes(models.M, models.K)
     meas = models.index([f"{1 + n_elements // 4 * q}:y" for q in range(1, 5)])
     u = real_shapes(phi[:, meas, :n_modes].astype(complex))
@@ -92,7 +96,7 @@ def beam_sensitivity(preset: str = "beam5", root_spring_relative: float | None =
     du = (u[1:] * sign - u[0]) / (step * EI * le)
     # exact first-order frequency sensitivities from the element energies
     ke = element_stiffness(1.0, le)
-    nominal = beam_model(n_elements, L, EI, p.m_per_length, root_spring=kr)
+    nominal = beam_model(n_elements, L, EI, m, root_spring=kr)
     w0, phi0 = undamped_modes(nominal.M, nominal.K)
     full = np.zeros((2 * (n_elements + 1), n_modes))
     names = [f"{n}:{d}" for n in range(1, n_elements + 2) for d in ("y", "rz")]

@@ -157,7 +157,11 @@ def network_output(est: DamageClassifier, X, sens, name="network") -> tuple[Meth
     return out, d
 
 
-def sensitivity_of(beam: BeamSpec, config_root_spring=None):
+def sensitivity_of(beam: BeamSpec, config_root_spring=None, truth_beam: dict | None = None):
+    """FE sensitivities of the truth beam a dataset or model records (its preset when it records none)."""
+    if truth_beam and "EI_Nm2" in truth_beam:
+        key = (truth_beam["length_m"], truth_beam["EI_Nm2"], truth_beam["mass_per_length_kg_m"])
+        return beam_sensitivity(key, config_root_spring)
     return beam_sensitivity(beam.name, config_root_spring)
 
 
@@ -199,7 +203,7 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
         "them will call such changes damage; generate with --config training"]
     tr, _, te = split_by_specimen(pairs.groups, (1 - test_fraction, 0.0, test_fraction), seed=seed)
     load_s = time.perf_counter() - t0
-    sens = sensitivity_of(pairs.beam, _nominal_root_spring(pairs.source))
+    sens = sensitivity_of(pairs.beam, _nominal_root_spring(pairs.source), pairs.source[0].get("truth_beam"))
     networks, outputs, fit_s = {}, [], {}
     for r in routes:
         X = features(pairs, r)
@@ -251,7 +255,7 @@ def evaluate(model: TrainedModel, data, out_dir=None, *, extra_outputs=None, pro
     pairs = load_pairs(data, frfs=frf_kinds(routes))
     model.check_beam(pairs.beam, f"dataset {pairs.source[0]['path']}")
     _, truth = targets(pairs)
-    sens = sensitivity_of(model.beam, model.config.get("root_spring_relative"))
+    sens = sensitivity_of(model.beam, model.config.get("root_spring_relative"), model.config.get("truth_beam"))
     from tqdm.auto import tqdm
 
     outs = []
@@ -338,7 +342,7 @@ def classify(model: TrainedModel, baseline, current, identified=None) -> dict:
 
     beam = model.beam
     warnings = []
-    sens = sensitivity_of(beam, model.config.get("root_spring_relative"))
+    sens = sensitivity_of(beam, model.config.get("root_spring_relative"), model.config.get("truth_beam"))
     route = "modal"
     lam = vecs = None
     if isinstance(baseline, MeasuredFRF) != isinstance(current, MeasuredFRF):
@@ -378,7 +382,8 @@ def classify(model: TrainedModel, baseline, current, identified=None) -> dict:
         warnings.append(f"the pair lies far outside the training distribution (Mahalanobis distance {dist:.3g}, "
                         f"beyond {pct:.1f}% of training pairs): treat the verdict with caution")
     L = beam.length_m
-    depth = equivalent_depth(float(d.stiffness_loss_Nm3[0]), beam.name, model.config["reference_width_m"])
+    depth = equivalent_depth(float(d.stiffness_loss_Nm3[0]), model.config.get("truth_beam") or beam.name,
+                             model.config["reference_width_m"])
     result = {
         "damaged": bool(out.damaged[0]), "probability_damaged": float(d.probability_damaged[0]),
         "location_x_over_L": float(d.x_over_L[0]), "location_x_m": float(d.x_over_L[0] * L),
@@ -405,7 +410,7 @@ def classify(model: TrainedModel, baseline, current, identified=None) -> dict:
     return {**result, "_extra": extra}
 
 
-def equivalent_depth(stiffness_loss_Nm3: float, preset: str, width_m: float) -> float | None:
+def equivalent_depth(stiffness_loss_Nm3: float, preset, width_m: float) -> float | None:
     """Slit depth (m) whose layered-section rigidity loss over ``width_m`` equals the stiffness loss.
 
     Uses the face/core layout of :mod:`datagen.specimen` (eq. 4.1, default faces 0.5 mm, core 0.1 GPa);
@@ -415,10 +420,14 @@ def equivalent_depth(stiffness_loss_Nm3: float, preset: str, width_m: float) -> 
     from datagen.specimen import SectionLayout, slit_section_ei
     from physics.properties import beam_preset
 
-    p = beam_preset(preset)
+    if isinstance(preset, str):
+        p = beam_preset(preset)
+        EI, width, thickness = p.EI_Nm2, p.width_m, p.thickness_m
+    else:   # the truth beam a model records (preset name or beam file)
+        EI, width, thickness = preset["EI_Nm2"], preset["width_m"], preset["thickness_m"]
     sec = DEFAULTS["section"]
-    lay = SectionLayout.matching(p.EI, p.width, p.thickness, sec["face_thickness_m"], sec["core_modulus_pa"])
-    depths = np.linspace(0.0, 0.999 * p.thickness / 2, 4000)
+    lay = SectionLayout.matching(EI, width, thickness, sec["face_thickness_m"], sec["core_modulus_pa"])
+    depths = np.linspace(0.0, 0.999 * thickness / 2, 4000)
     loss = (lay.EI - slit_section_ei(lay, depths)) * width_m
     if not np.isfinite(stiffness_loss_Nm3) or stiffness_loss_Nm3 > loss[-1]:
         return None
