@@ -71,7 +71,7 @@ def run_ours(frf, n_modes=4):
     f, h = frf.frequency_hz, np.asarray(frf.frf)
     return {"peak": peak_picking(f, h, n_modes, drive=(DRIVE, 0)),
             "circle": circle_fit(f, h, n_modes, drive=(DRIVE, 0)),
-            "lscf": identify_lscf(f, h, n_modes, drive=(DRIVE, 0))[0]}
+            "lscf": identify_lscf(f, h, n_modes, drive=(DRIVE, 0)).estimate}
 
 
 def run_sdypy(frf, approx_hz):

@@ -4,71 +4,18 @@ from __future__ import annotations
 
 import json
 import warnings
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from physics.errors import ConfigError
-from physics.identification import (ModalEstimate, circle_fit, identify_lscf, peak_picking,
-                                    synthesise_frf)
-from physics.io import (MeasuredFRF, ModalData, atomic_write_bytes, format_complex,
-                        modal_data_to_dict, read_frf)
+from physics.identification import METHODS, Identification, identify_frf
+from physics.io import atomic_write_bytes, format_complex, modal_data_to_dict, read_frf
 from physics.modal import mac
-
-METHODS = ("lscf", "circle", "peak")
-
-
-@dataclass(frozen=True)
-class Identification:
-    """An identification run: the receptance fitted, the estimate and its by-products."""
-
-    frf: MeasuredFRF
-    estimate: ModalEstimate
-    synthesised: np.ndarray
-    diagram: object | None
-    drive: str | None
-
-    @property
-    def modal_data(self) -> ModalData:
-        return ModalData(self.estimate.eigenvalues, self.estimate.shapes, self.frf.response_dofs)
-
-
-def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, max_order=40) -> Identification:
-    """Identify modes of a :class:`MeasuredFRF` (converted to receptance, band-limited).
-
-    The first driving point (a response DOF equal to a reference DOF) scales the
-    shapes to unit modal A; without one the shapes are unscaled (a warning).
-    """
-    if method not in METHODS:
-        raise ConfigError(f"--method {method!r} must be one of {', '.join(METHODS)}")
-    if frf.frequency_hz[0] == 0:
-        frf = frf.select_band(fmin_hz=np.nextafter(0.0, 1.0))
-    frf = frf.to_kind("receptance")
-    if band_hz is not None:
-        fmin, fmax = band_hz
-        if not fmin < fmax:
-            raise ConfigError(f"--band {fmin} {fmax}: FMIN must be below FMAX")
-        frf = frf.select_band(fmin, fmax)
-    drives = frf.driving_points
-    drive = drives[0] if drives else None
-    if drive is None:
-        warnings.warn("no driving point (response DOF equal to a reference DOF): mode shapes are not "
-                      "unit-modal-A scaled and cannot feed 'update' directly", stacklevel=2)
-    f, h = frf.frequency_hz, np.asarray(frf.frf)
-    diagram = None
-    if method == "lscf":
-        est, diagram, fit = identify_lscf(f, h, n_modes=n_modes, drive=drive, max_order=max_order)
-        synth = fit.synthesised
-    else:
-        est = (circle_fit if method == "circle" else peak_picking)(f, h, n_modes=n_modes, drive=drive)
-        synth = synthesise_frf(f, est.eigenvalues, est.residues)
-    label = frf.reference_dofs[drive[1]] if drive else None
-    return Identification(frf, est, synth, diagram, label)
 
 
 def identify_file(path, method="lscf", band_hz=None, n_modes=None, max_order=40) -> Identification:
-    """:func:`identify_frf` on a UFF58, CSV or ``.npz`` file (see :func:`physics.io.read_frf`)."""
+    """:func:`physics.identification.identify_frf` on a UFF58, CSV or ``.npz`` file."""
     return identify_frf(read_frf(path), method, band_hz, n_modes, max_order)
 
 
@@ -114,6 +61,8 @@ def write_outputs(ident: Identification, out_dir) -> dict:
 
 
 def run(args) -> dict:
+    if args.band and not args.band[0] < args.band[1]:
+        raise ConfigError(f"--band {args.band[0]:g} {args.band[1]:g}: FMIN must be below FMAX")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         ident = identify_file(args.file, args.method, tuple(args.band) if args.band else None,

@@ -8,13 +8,14 @@ Complex modes follow the package's conjugate-pair convention (see
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 
-from physics.errors import ShapeError
+from physics.errors import ConfigError, ShapeError
+from physics.io import MeasuredFRF, ModalData
+from physics.modal import eigenvalues_from_modal
 
 
 def real_modes_from_peaks(h_abs, phase_deg, omega_rad_s, zeta, drive_index=0):
@@ -98,12 +99,6 @@ def _frf3(frequency_hz, frf):
     if not (np.all(np.isfinite(f)) and np.all(np.isfinite(h))) or np.any(np.diff(f) <= 0):
         raise ShapeError("frequency_hz must be finite and strictly increasing and frf finite")
     return f, h
-
-
-def _eigenvalues(f_hz, zeta):
-    w = 2 * np.pi * np.asarray(f_hz, dtype=float)
-    z = np.asarray(zeta, dtype=float)
-    return -z * w + 1j * w * np.sqrt(1 - z**2)
 
 
 def modal_phase_collinearity(shapes):
@@ -227,9 +222,9 @@ def _estimate(f_hz, zeta, residues, drive, method, f_std=None, z_std=None, lower
     z_std = nan if z_std is None else np.asarray(z_std, float)
     residues = np.asarray(residues, complex)[..., order]
     shapes = shapes_from_residues(residues, drive)
-    return ModalEstimate(f_hz[order], zeta[order], _eigenvalues(f_hz[order], zeta[order]), shapes, residues,
-                         f_std[order], z_std[order], modal_phase_collinearity(shapes), method,
-                         drive is not None, lower, upper)
+    lam = eigenvalues_from_modal(f_hz[order], zeta[order])
+    return ModalEstimate(f_hz[order], zeta[order], lam, shapes, residues, f_std[order], z_std[order],
+                         modal_phase_collinearity(shapes), method, drive is not None, lower, upper)
 
 
 # ---------------------------------------------------------------------------
@@ -328,7 +323,7 @@ def peak_picking(frequency_hz, frf, n_modes=None, peaks=None, drive=None, promin
                       + ", ".join(f"{x:.4g} Hz" for x in fn[narrow])
                       + " spans fewer than 2 frequency lines, so half-power and circle-fit damping are not "
                       "resolved there (overestimated); use finer lines or the lscf method", stacklevel=2)
-    lam = _eigenvalues(fn, zeta)
+    lam = eigenvalues_from_modal(fn, zeta)
     s, r = (0, 0) if drive is None else drive
     w_k = 2 * np.pi * f[idx]
     corr = (1j * w_k - lam) / (1j * np.abs(lam) * np.sqrt(1 - zeta**2) - lam)
@@ -351,6 +346,33 @@ def _fit_circle(z):
     return c * scale, r * scale
 
 
+@dataclass(frozen=True)
+class CircleFit:
+    """Circle fit of one mode in one FRF (see :func:`circle_fit_sdof`).
+
+    Attributes
+    ----------
+    fn_hz, fn_std_hz : float
+        Natural frequency and its one-sigma standard error from the phase fit (Hz).
+    zeta, zeta_std : float
+        Damping ratio (mean of eq. 3.13 over point pairs) and the standard error of that mean.
+    modal_constant : complex
+        ``A`` of the receptance ``A / (w_n^2 - w^2 + 2 i zeta w_n w)`` near resonance (1/kg).
+    centre : complex
+        Centre of the fitted circle in the mobility plane (m/s/N).
+    radius : float
+        Radius of the fitted circle (m/s/N).
+    """
+
+    fn_hz: float
+    fn_std_hz: float
+    zeta: float
+    zeta_std: float
+    modal_constant: complex
+    centre: complex
+    radius: float
+
+
 def circle_fit_sdof(frequency_hz, mobility, fn_guess_hz, zeta_guess):
     """Circle fit of one mode in one mobility FRF (Nyquist plot, eq. 3.13).
 
@@ -371,10 +393,7 @@ def circle_fit_sdof(frequency_hz, mobility, fn_guess_hz, zeta_guess):
 
     Returns
     -------
-    dict
-        ``fn_hz, fn_std_hz, zeta, zeta_std, modal_constant`` where the modal
-        constant ``A`` (complex) gives the receptance ``A / (w_n^2 - w^2 + 2 i zeta w_n w)``
-        near resonance; ``centre``, ``radius``.
+    CircleFit
     """
     from scipy.optimize import least_squares
 
@@ -410,8 +429,8 @@ def circle_fit_sdof(frequency_hz, mobility, fn_guess_hz, zeta_guess):
     else:
         zeta, zeta_std = float(z_fit), np.nan
     A = 4 * rad * zeta * wn * np.exp(1j * phr)
-    return {"fn_hz": wn / (2 * np.pi), "fn_std_hz": wn_std / (2 * np.pi), "zeta": zeta,
-            "zeta_std": zeta_std, "modal_constant": A, "centre": c, "radius": rad}
+    return CircleFit(float(wn / (2 * np.pi)), float(wn_std / (2 * np.pi)), zeta, zeta_std, complex(A),
+                     complex(c), float(rad))
 
 
 def circle_fit(frequency_hz, frf, n_modes=None, peaks=None, drive=None, bandwidths=3.0, min_points=5):
@@ -462,9 +481,9 @@ def circle_fit(frequency_hz, frf, n_modes=None, peaks=None, drive=None, bandwidt
         for s in range(n_s):
             for r in range(n_r):
                 out = circle_fit_sdof(f[lo:hi + 1], mob[s, r, lo:hi + 1], fm, zm)
-                fn[s, r, m], zz[s, r, m] = out["fn_hz"], out["zeta"]
-                fsd[s, r, m], zsd[s, r, m] = out["fn_std_hz"], out["zeta_std"]
-                A[s, r, m] = out["modal_constant"]
+                fn[s, r, m], zz[s, r, m] = out.fn_hz, out.zeta
+                fsd[s, r, m], zsd[s, r, m] = out.fn_std_hz, out.zeta_std
+                A[s, r, m] = out.modal_constant
     weight = np.abs(A).reshape(-1, n_m)  # strong circles count more
     weight = weight / weight.sum(axis=0)
     f_mode = np.sum(weight * fn.reshape(-1, n_m), axis=0)
@@ -722,7 +741,8 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
     count = np.array([m.size for m in chosen])
     mpf = np.array([d.participation[m[np.argmax(d.order[m])]] for m in chosen])
     o = np.argsort(fn)
-    return SelectedPoles(_eigenvalues(fn[o], zeta[o]), fn[o], zeta[o], f_std[o], z_std[o], count[o], mpf[o])
+    lam = eigenvalues_from_modal(fn[o], zeta[o])
+    return SelectedPoles(lam, fn[o], zeta[o], f_std[o], z_std[o], count[o], mpf[o])
 
 
 @dataclass(frozen=True)
@@ -807,6 +827,23 @@ def lsfd(frequency_hz, frf, eigenvalues, lower_residual=True, upper_residual=Tru
     return LSFDResult(R, R_std, LR, UR, synth)
 
 
+@dataclass(frozen=True)
+class LSCFIdentification:
+    """Result of :func:`identify_lscf`.
+
+    Attributes
+    ----------
+    estimate : ModalEstimate
+        Selected modes; uncertainties are the spread of each pole over model orders.
+    diagram : StabilisationDiagram
+    fit : LSFDResult
+    """
+
+    estimate: ModalEstimate
+    diagram: StabilisationDiagram
+    fit: LSFDResult
+
+
 def identify_lscf(frequency_hz, frf, n_modes=None, drive=None, max_order=40, select=None, **lscf_options):
     """LSCF poles, automatic selection and LSFD residues/shapes in one call.
 
@@ -826,10 +863,7 @@ def identify_lscf(frequency_hz, frf, n_modes=None, drive=None, max_order=40, sel
 
     Returns
     -------
-    estimate : ModalEstimate
-        Uncertainties are the spread of the pole over model orders.
-    diagram : StabilisationDiagram
-    fit : LSFDResult
+    LSCFIdentification
     """
     f, h = _frf3(frequency_hz, frf)
     diagram = lscf(f, h, max_order=max_order, **lscf_options)
@@ -837,4 +871,88 @@ def identify_lscf(frequency_hz, frf, n_modes=None, drive=None, max_order=40, sel
     fit = lsfd(f, h, poles.eigenvalues)
     est = _estimate(poles.natural_frequencies_hz, poles.damping_ratios, fit.residues, drive, "lscf",
                     poles.frequency_std_hz, poles.damping_std, fit.lower_residual, fit.upper_residual)
-    return est, diagram, fit
+    return LSCFIdentification(est, diagram, fit)
+
+
+# ---------------------------------------------------------------------------
+# Identification of a measured FRF file
+# ---------------------------------------------------------------------------
+
+METHODS = ("lscf", "circle", "peak")
+
+
+@dataclass(frozen=True)
+class Identification:
+    """An identification run on a :class:`~physics.io.MeasuredFRF`.
+
+    Attributes
+    ----------
+    frf : MeasuredFRF
+        The band-limited receptance that was fitted.
+    estimate : ModalEstimate
+    synthesised : ndarray, complex, shape like ``frf.frf``
+        Receptance of the identified model on the same lines (m/N).
+    diagram : StabilisationDiagram or None
+        LSCF only.
+    drive : str or None
+        Reference DOF label of the driving point that scaled the shapes.
+    """
+
+    frf: MeasuredFRF
+    estimate: ModalEstimate
+    synthesised: np.ndarray
+    diagram: StabilisationDiagram | None
+    drive: str | None
+
+    @property
+    def modal_data(self) -> ModalData:
+        """Eigenvalues and shapes over the response DOFs, for updating."""
+        return ModalData(self.estimate.eigenvalues, self.estimate.shapes, self.frf.response_dofs)
+
+
+def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, max_order=40) -> Identification:
+    """Identify modes of a :class:`~physics.io.MeasuredFRF` (converted to receptance, band-limited).
+
+    The first driving point (a response DOF equal to a reference DOF) scales the
+    shapes to unit modal A; without one the shapes are unscaled (a warning).
+
+    Parameters
+    ----------
+    frf : MeasuredFRF
+    method : {"lscf", "circle", "peak"}
+    band_hz : (float, float), optional
+        ``(fmin, fmax)`` in Hz.
+    n_modes : int, optional
+        Modes to keep (default: all found).
+    max_order : int
+        Highest LSCF model order.
+
+    Returns
+    -------
+    Identification
+    """
+    if method not in METHODS:
+        raise ConfigError(f"method {method!r} must be one of {', '.join(METHODS)}")
+    if frf.frequency_hz[0] == 0:
+        frf = frf.select_band(fmin_hz=np.nextafter(0.0, 1.0))
+    frf = frf.to_kind("receptance")
+    if band_hz is not None:
+        fmin, fmax = band_hz
+        if not fmin < fmax:
+            raise ConfigError(f"band_hz ({fmin}, {fmax}): the lower bound must be below the upper")
+        frf = frf.select_band(fmin, fmax)
+    drives = frf.driving_points
+    drive = drives[0] if drives else None
+    if drive is None:
+        warnings.warn("no driving point (response DOF equal to a reference DOF): mode shapes are not "
+                      "unit-modal-A scaled and cannot feed 'update' directly", stacklevel=2)
+    f, h = frf.frequency_hz, np.asarray(frf.frf)
+    diagram = None
+    if method == "lscf":
+        res = identify_lscf(f, h, n_modes=n_modes, drive=drive, max_order=max_order)
+        est, diagram, synth = res.estimate, res.diagram, res.fit.synthesised
+    else:
+        est = (circle_fit if method == "circle" else peak_picking)(f, h, n_modes=n_modes, drive=drive)
+        synth = synthesise_frf(f, est.eigenvalues, est.residues)
+    label = frf.reference_dofs[drive[1]] if drive else None
+    return Identification(frf, est, synth, diagram, label)
