@@ -9,8 +9,9 @@ from pathlib import Path
 import numpy as np
 
 from physics.errors import ConfigError
-from physics.identification import METHODS, Identification, identify_frf
-from physics.io import atomic_write_bytes, format_complex, modal_data_to_dict, read_frf
+from physics.identification import METHODS, Identification, identify_frf, reconstruction_error_db
+from physics.io import (MeasuredFRF, atomic_write_bytes, format_complex, modal_data_to_dict, read_frf,
+                        write_uff58)
 from physics.modal import mac
 
 
@@ -21,25 +22,52 @@ def identify_file(path, method="lscf", band_hz=None, n_modes=None, max_order=40)
 
 def result_dict(ident: Identification) -> dict:
     e = ident.estimate
+    nan = np.full(e.eigenvalues.size, np.nan)
+    f_fit = nan if e.frequency_fit_std_hz is None else e.frequency_fit_std_hz
+    z_fit = nan if e.damping_fit_std is None else e.damping_fit_std
     modes = [{"frequency_hz": float(e.natural_frequencies_hz[j]), "damping_ratio": float(e.damping_ratios[j]),
               "frequency_std_hz": float(e.frequency_std_hz[j]), "damping_std": float(e.damping_std[j]),
+              "frequency_fit_std_hz": float(f_fit[j]), "damping_fit_std": float(z_fit[j]),
               "eigenvalue": format_complex(e.eigenvalues[j]),
               "shape": [format_complex(z) for z in e.shapes[:, j]], "mpc": float(e.mpc[j])}
              for j in range(e.eigenvalues.size)]
     resid = ident.synthesised - ident.frf.frf
-    return {"file": ident.frf.metadata.get("source"), "method": e.method,
+    med, p90 = reconstruction_error_db(ident.frf.frf, ident.synthesised)
+    return {"file": ident.frf.metadata.get("source"), "method": e.method, "kind": ident.frf.kind,
             "band_hz": [float(ident.frf.frequency_hz[0]), float(ident.frf.frequency_hz[-1])],
             "modes": modes, "dofs": list(ident.frf.response_dofs),
             "references": list(ident.frf.reference_dofs), "driving_point": ident.drive,
             "scaling": "unit modal A" if e.scaled else "unscaled (no driving point)",
             "mac": mac(e.shapes).tolist(),
-            "fit_error": float(np.linalg.norm(resid) / np.linalg.norm(ident.frf.frf))}
+            "uncertainty": dict(UNCERTAINTY[e.method]),
+            "out_of_band_poles_hz": ident.out_of_band_hz.tolist(),
+            "fit_error": float(np.linalg.norm(resid) / np.linalg.norm(ident.frf.frf)),
+            "fit_error_db": {"median": med, "p90": p90}}
+
+
+#: What each method's one-sigma values mean (reported in ``--json`` under "uncertainty").
+UNCERTAINTY = {
+    "lscf": {"frequency_std_hz, damping_std": "spread of the pole over the LSCF model orders of its cluster "
+                                              "(sensitivity to model order, not a confidence interval)",
+             "frequency_fit_std_hz, damping_fit_std": "one sigma from the LSFD fit itself: variable-projection "
+                                                      "covariance of the poles given every FRF and its residual"},
+    "circle": {"frequency_std_hz, damping_std": "weighted scatter of the circle fits over the FRFs"},
+    "peak": {"frequency_std_hz, damping_std": "none (NaN)"},
+}
+
+
+def synthesised_frf(ident: Identification) -> MeasuredFRF:
+    """The fitted FRFs as a :class:`MeasuredFRF` of the input's kind, units and (band-limited) lines."""
+    src = ident.frf
+    return MeasuredFRF(src.frequency_hz, ident.synthesised, src.response_dofs, src.reference_dofs, kind=src.kind,
+                       units=src.units, metadata={"id1": "beam-damage identify: synthesised FRF",
+                                                  "source": src.metadata.get("source")})
 
 
 def write_outputs(ident: Identification, out_dir) -> dict:
-    """Write modal JSON, stabilisation diagram (LSCF) and FRF overlay PNGs; returns their paths.
+    """Write modal JSON, the synthesised FRFs (UFF 58), stabilisation diagram (LSCF) and overlay PNGs.
 
-    All figures are rendered first, then each file is written atomically.
+    Everything is rendered first, then each file is written atomically; returns their paths.
     """
     from experiments import plots_identify as plots
 
@@ -52,11 +80,14 @@ def write_outputs(ident: Identification, out_dir) -> dict:
     if ident.diagram is not None:
         files["stabilisation.png"] = plots.stabilisation_png(ident.diagram, f, h,
                                                              ident.estimate.natural_frequencies_hz)
-    files["overlay.png"] = plots.overlay_png(f, h, ident.synthesised, labels)
+    files["overlay.png"] = plots.overlay_png(f, h, ident.synthesised, labels, ident.frf.kind, ident.frf.units)
+    synth = synthesised_frf(ident)
     written = {}
     for name, data in files.items():
         atomic_write_bytes(out_dir / name, data)
         written[name] = str(out_dir / name)
+    write_uff58(out_dir / "synthesised.uff", synth)
+    written["synthesised.uff"] = str(out_dir / "synthesised.uff")
     return written
 
 
@@ -76,11 +107,17 @@ def run(args) -> dict:
             print(f"warning: {msg}")
         print(f"{out['file']}: {len(out['modes'])} modes by {out['method']} in "
               f"{out['band_hz'][0]:g}-{out['band_hz'][1]:g} Hz ({out['scaling']}, "
-              f"relative fit error {out['fit_error']:.3g})")
-        print(f"{'mode':>4} {'f (Hz)':>12} {'+-':>9} {'zeta':>10} {'+-':>9} {'MPC':>7}")
+              f"fit error median {out['fit_error_db']['median']:.3g} dB, 90th percentile "
+              f"{out['fit_error_db']['p90']:.3g} dB)")
+        print(f"{'mode':>4} {'f (Hz)':>12} {'+-order':>9} {'+-fit':>9} {'zeta':>10} {'+-order':>9} "
+              f"{'+-fit':>9} {'MPC':>7}")
         for j, m in enumerate(out["modes"], 1):
-            print(f"{j:4d} {m['frequency_hz']:12.4f} {m['frequency_std_hz']:9.2g} {m['damping_ratio']:10.5f} "
-                  f"{m['damping_std']:9.2g} {m['mpc']:7.4f}")
+            print(f"{j:4d} {m['frequency_hz']:12.4f} {m['frequency_std_hz']:9.2g} {m['frequency_fit_std_hz']:9.2g} "
+                  f"{m['damping_ratio']:10.5f} {m['damping_std']:9.2g} {m['damping_fit_std']:9.2g} {m['mpc']:7.4f}")
+        print("+-order: spread over LSCF model orders; +-fit: one sigma from the LSFD fit covariance")
+        if out["out_of_band_poles_hz"]:
+            print("poles just outside the band used by the fit (Hz): "
+                  + ", ".join(f"{x:.4g}" for x in out["out_of_band_poles_hz"]))
         for name, p in out.get("outputs", {}).items():
             print(f"wrote {p}")
     return out
@@ -100,7 +137,8 @@ def add_parser(sub):
     p.add_argument("--modes", type=int, metavar="N", help="number of modes to keep (default: all found)")
     p.add_argument("--max-order", type=int, default=40, help="highest LSCF model order (default 40)")
     p.add_argument("--out", metavar="DIR",
-                   help="write modal.json (feedable to 'beam-damage update --modal'), stabilisation.png "
+                   help="write modal.json (feedable to 'beam-damage update --modal'), synthesised.uff (the "
+                        "fitted FRFs in the input's kind, units and lines of the band), stabilisation.png "
                         "(lscf) and overlay.png")
     p.add_argument("--json", action="store_true",
                    help='print one JSON object: {"modes": [{"frequency_hz", "damping_ratio", "shape", '

@@ -59,7 +59,7 @@ def test_identify_out_dir_feeds_update(capsys, beam5_files, tmp_path):
     code, out, err = _run(capsys, ["identify", str(d / "beam5.uff"), "--out", str(tmp_path / "id")])
     assert code == 0, err
     assert sorted(p.name for p in (tmp_path / "id").iterdir()) == ["modal.json", "overlay.png",
-                                                                   "stabilisation.png"]
+                                                                   "stabilisation.png", "synthesised.uff"]
     assert (tmp_path / "id" / "overlay.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     modal = read_modal_json(tmp_path / "id" / "modal.json")
     np.testing.assert_allclose(modal.natural_frequencies_hz, exact.natural_frequencies_hz, rtol=5e-4)
@@ -100,3 +100,26 @@ def test_update_accepts_frf_file_and_recovers_model(capsys, beam5_files):
     # the IIRS-reduced mass of the package equals the fixture's M to its printed digits,
     # so Pilkey's updated K is close to the K that made the FRFs
     np.testing.assert_allclose(np.diag(res["K"]), np.diag(K), rtol=0.02)
+
+
+def test_identify_writes_synthesised_uff_in_the_input_kind_and_reports_db_error(capsys, tmp_path):
+    from experiments.bench_identification import simulate_free_free
+    from physics.identification import reconstruction_error_db
+    from physics.io import read_frf
+
+    frf, truth = simulate_free_free(seed=2)
+    write_uff58(tmp_path / "ff.uff", frf, binary=True)
+    code, out, err = _run(capsys, ["identify", str(tmp_path / "ff.uff"), "--json", "--out", str(tmp_path / "o")])
+    assert code == 0, err
+    res = json.loads(out)
+    synth = read_frf(tmp_path / "o" / "synthesised.uff")
+    assert synth.kind == "accelerance" and synth.units == "m/s^2/N"
+    np.testing.assert_array_equal(synth.frequency_hz, frf.frequency_hz)
+    assert synth.response_dofs == frf.response_dofs and synth.reference_dofs == frf.reference_dofs
+    med, p90 = reconstruction_error_db(frf.frf, synth.frf)  # recomputed from the written file
+    assert res["fit_error_db"]["median"] == pytest.approx(med, rel=1e-6) and med < 0.1
+    assert res["fit_error_db"]["p90"] == pytest.approx(p90, rel=1e-6) and p90 < 0.3
+    assert res["kind"] == "accelerance" and res["out_of_band_poles_hz"] == [pytest.approx(1005.0, abs=0.5)]
+    m = res["modes"][0]
+    assert m["frequency_fit_std_hz"] > 0 and m["damping_fit_std"] > 0 and "model orders" in \
+        res["uncertainty"]["frequency_std_hz, damping_std"]
