@@ -23,5 +23,9 @@ test: $(STAMP)
 test-all: $(STAMP)
 	$(PY) -m pytest -m ''
 
+bench: $(STAMP)
+	$(PY) -m experiments.bench_datagen
+	$(PY) -m experiments.bench_identification
+
 clean:
 	rm -rf $(VENV) build *.egg-info

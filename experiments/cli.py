@@ -1,7 +1,10 @@
 """The ``beam-damage`` command line: parse, call, print.
 
 Each sub-command lives in its own module exposing ``add_parser(subparsers)``,
-which registers the parser and sets ``func`` to a callable ``run(args) -> dict``.
+which registers the parser and sets ``func`` to a callable ``run(args) -> dict``
+and, optionally, ``flags``: a mapping from library parameter names to its
+options (``{"n_elements": "--elements"}``), so that an error about a parameter
+(:attr:`physics.errors.BeamDamageError.parameter`) is reported with the flag.
 ``run`` returns a JSON-serialisable result and, for text output, may print a
 human-readable view itself (only when ``args.json`` is false). Errors derived
 from :class:`physics.errors.BeamDamageError` (and ``OSError`` on user files)
@@ -91,7 +94,8 @@ def main(argv=None) -> int:
     try:
         result = args.func(args)
     except BeamDamageError as exc:
-        sys.stderr.write(f"beam-damage {args.command}: error: {exc}\n")
+        flag = getattr(args, "flags", {}).get(exc.parameter)
+        sys.stderr.write(f"beam-damage {args.command}: error: {f'{flag}: ' if flag else ''}{exc}\n")
         return EXIT_USAGE
     except BrokenPipeError:  # output piped into `head` and closed: not an error of the user's input
         sys.stderr.close()

@@ -73,7 +73,7 @@ def run(args) -> dict:
     table = ds.samples
     out = Path(args.out) if args.out else Path(args.dir) / "inspect"
     out.mkdir(parents=True, exist_ok=True)
-    length = ds.manifest["preset"]["length"]
+    length = ds.manifest["preset"].get("length_m", ds.manifest["preset"].get("length"))  # old manifests: "length"
     check = curvature_check(table, length)
     summary = {"dir": str(args.dir), "complete": ds.manifest.get("complete", False), "samples": int(len(table)),
                "shards": len(ds.shards), "converged_fraction": float(table["converged"].mean()) if len(table) else None,

@@ -7,36 +7,33 @@ import numpy as np
 from physics import fem, modal, properties, reduction
 from physics.errors import BeamDamageError
 
-REDUCTIONS = {"guyan": reduction.guyan, "irs": reduction.irs, "iirs": reduction.iirs}
-
 
 def build(beam: str, elements: int, mass: str, method: str, bc: str = "clamped-free") -> dict:
     """Matrices of a preset beam, optionally reduced to the translational DOFs.
 
+    ``mass="consistent"``: the consistent mass (eq. 3.8), reduced with ``K``;
     ``mass="lumped"`` replaces the reduced mass matrix by the translation
     partition of the consistent mass matrix (eq. 4.6 for 4 elements); its
     stiffness still comes from the chosen reduction.
     """
     preset = properties.beam_preset(beam)
-    if elements < 1:
-        raise BeamDamageError(f"--elements must be >= 1, got {elements}")
-    model = fem.beam_model(elements, preset.length, preset.EI, preset.m_per_length, bc=bc)
+    model = fem.beam_model(elements, preset.length_m, preset.EI_Nm2, preset.mass_per_length_kg_m, bc=bc)
     M, K, dofs, iterations = model.M, model.K, model.dofs, 0
     if method != "none":
         masters = model.translations()
-        red = REDUCTIONS[method](model.M, model.K, model.index(masters))
+        red = reduction.reduce_model(model.M, model.K, model.index(masters), method)
         M, K, dofs, iterations = red.M, red.K, masters, red.iterations
     if mass == "lumped":
         if method == "none":
-            raise BeamDamageError("--mass lumped is a mass matrix over the translations only; "
-                                  "choose --reduction guyan|irs|iirs for the stiffness")
+            raise BeamDamageError("mass 'lumped' is a mass matrix over the translations only; choose a reduction "
+                                  "(guyan, irs or iirs) for the stiffness", parameter="mass")
         idx = model.index(dofs)
         M = model.M[np.ix_(idx, idx)]
     w, _ = modal.undamped_modes(M, K)
     closed = None
     if bc == "clamped-free":
-        closed = properties.cantilever_frequencies_hz(
-            preset.EI, preset.m_per_length, preset.length, properties.cantilever_beta_l(min(len(dofs), 8)))
+        closed = properties.cantilever_frequencies_hz(preset.EI_Nm2, preset.mass_per_length_kg_m, preset.length_m,
+                                                      properties.cantilever_beta_l(min(len(dofs), 8)))
     return {
         "beam": beam, "elements": elements, "mass": mass, "reduction": method, "bc": bc,
         "M": M, "K": K, "dofs": list(dofs),
@@ -69,9 +66,9 @@ def add_parser(sub):
     p.add_argument("--elements", type=int, default=4, help="number of elements (default 4, as in the thesis)")
     p.add_argument("--mass", default="consistent", choices=("consistent", "lumped"),
                    help="consistent (reduced with K) or lumped (translation partition, eq. 4.6)")
-    p.add_argument("--reduction", default="none", choices=("none", "guyan", "irs", "iirs"),
+    p.add_argument("--reduction", default="none", choices=("none",) + tuple(reduction.REDUCTIONS),
                    help="reduce to the translational DOFs (default none)")
     p.add_argument("--bc", default="clamped-free", choices=fem.BOUNDARY_CONDITIONS, help="boundary condition")
     p.add_argument("--json", action="store_true",
                    help="print one JSON object: M, K, dofs, natural_frequencies_hz, closed_form_frequencies_hz, iterations")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, flags={"n_elements": "--elements", "mass": "--mass", "method": "--reduction"})

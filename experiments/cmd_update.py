@@ -4,18 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from physics import fem, modal, properties, reduction, updating
+from physics import modal, properties, updating
 from physics.errors import FileFormatError
 from physics.io import read_modal_json
-
-
-def reference_mass(beam: str, mass: str) -> np.ndarray:
-    """The trusted mass matrix over the masters: IIRS-reduced (eqs. 3.41-3.44) or lumped (eq. 4.6)."""
-    preset = properties.beam_preset(beam)
-    if mass == "lumped":
-        return fem.lumped_mass(preset.m_per_length, preset.length / preset.n_elements, len(preset.masters))
-    model = fem.beam_model(preset.n_elements, preset.length, preset.EI, preset.m_per_length)
-    return reduction.iirs(model.M, model.K, model.index(preset.masters)).M
 
 
 def load_modal(modal_file, n_modes: int):
@@ -27,9 +18,12 @@ def load_modal(modal_file, n_modes: int):
     return identify_file(modal_file, n_modes=n_modes).modal_data
 
 
-def update(beam: str, modal_file, mass: str = "reduced", tol: float = 1e-10, max_iter: int = 500,
+def update(beam: str, modal_file, mass: str = "iirs", tol: float = 1e-10, max_iter: int = 500,
            method: str = "pilkey") -> dict:
-    M = reference_mass(beam, mass)
+    """Identify ``C`` and update ``K`` of a preset beam from a modal-data or FRF file (the analyst mass is trusted)."""
+    preset = properties.beam_preset(beam)
+    mass = updating.mass_model_name(mass, "mass")
+    M = updating.analyst_mass(preset.mass_per_length_kg_m, preset.length_m, mass, preset.n_elements)
     data = load_modal(modal_file, M.shape[0])
     if data.eigenvectors is None:
         raise FileFormatError(f"{modal_file}: field 'eigenvectors' is required for updating "
@@ -58,7 +52,7 @@ def run(args) -> dict:
     out = update(args.beam, args.modal, args.mass, args.tol, args.max_iter, args.method)
     if not args.json:
         np.set_printoptions(precision=5, linewidth=160)
-        print(f"{args.beam}, {args.mass} mass, {args.method}: {out['iterations']} iterations; "
+        print(f"{args.beam}, {out['mass']} mass, {args.method}: {out['iterations']} iterations; "
               f"orthogonality misfit of the modes {out['orthogonality_misfit']:.3g} (0 = consistent with M)")
         print("M =\n", out["M"], "\nC (N s/m) =\n", out["C"], "\nK (N/m) =\n", out["K"])
         print("model frequencies (Hz):   ", np.array2string(out["natural_frequencies_hz"], precision=3))
@@ -77,8 +71,9 @@ def add_parser(sub):
                    help="modal-data JSON: eigenvalues and eigenvectors as complex strings (rows = measured DOFs, "
                         "columns = modes), as in beams.json; or an FRF file (.uff/.unv, .csv, .npz) with a "
                         "driving point, identified first by 'identify --method lscf'")
-    p.add_argument("--mass", default="reduced", choices=("reduced", "lumped"),
-                   help="IIRS-reduced mass (default) or lumped mass of eq. 4.6")
+    p.add_argument("--mass", default="iirs", choices=updating.MASS_MODELS + tuple(updating.MASS_MODEL_ALIASES),
+                   help="analyst mass: iirs = the 4-element consistent mass reduced by IIRS (default; 'reduced' "
+                        "is an alias) or lumped = eq. 4.6")
     p.add_argument("--method", default="pilkey", choices=("pilkey", "direct"),
                    help="pilkey: the thesis's iteration (default); direct: non-iterative least-squares scaling "
                         "by Lancaster's orthogonality relations (exact for consistent modes at any damping)")
@@ -86,4 +81,4 @@ def add_parser(sub):
     p.add_argument("--max-iter", type=int, default=500, help="iteration limit (non-convergence is an error)")
     p.add_argument("--json", action="store_true",
                    help="print one JSON object: M, C, K, iterations, converged, natural_frequencies_hz, damping_ratios")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, flags={"mass": "--mass", "tol": "--tol", "max_iter": "--max-iter"})

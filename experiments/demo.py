@@ -19,18 +19,18 @@ import numpy as np
 
 from experiments import validate
 from experiments.cli import to_jsonable
-from physics import frf, modal, updating
+from physics import frf, modal, properties, thesis, updating
 from physics.io import atomic_write_text, modal_data_from_dict
 
 
 def beam5_frf_figure(path: Path) -> dict:
-    """Figure of H_41 (drive DOF 1, response DOF 4) of beam 5's identified models; returns the peaks."""
+    """Figure of H_41 (reference DOF 1, response DOF 4) of beam 5's identified models; returns the peaks."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    b5 = validate.thesis_fixture("beams")["beams"]["5"]
+    b5 = thesis.load("beams")["beams"]["5"]
     ident = b5["identified_models"]
     w = np.linspace(1, 5000, 25000)  # the thesis's Program A grid (rad/s)
     f_hz = w / (2 * np.pi)
@@ -51,7 +51,7 @@ def beam5_frf_figure(path: Path) -> dict:
     ax_m.set_ylabel("|H41| (dB re 1 m/N)")
     ax_p.set_ylabel("phase (deg)")
     ax_p.set_xlabel("frequency (Hz)")
-    ax_m.set_title("Beam 5: identified models (Lancaster/Pilkey), drive DOF 1, response DOF 4")
+    ax_m.set_title("Beam 5: identified models (Lancaster/Pilkey), reference DOF 1, response DOF 4")
     ax_m.legend(fontsize=8)
     ax_m.set_xlim(0, f_hz[-1])
     fig.tight_layout()
@@ -64,21 +64,23 @@ def beam5_frf_figure(path: Path) -> dict:
 
 def measured_data_step(out: Path) -> dict:
     """Simulated measurement -> UFF58 -> LSCF/LSFD identification -> Pilkey updating."""
-    from experiments.bench_identification import simulate
     from experiments.cmd_identify import identify_frf, write_outputs
-    from experiments.cmd_update import update
-    from physics.io import read_frf, write_uff58
+    from physics.io import read_frf, read_modal_json, write_uff58
 
-    frf, exact = simulate(noise=0.01, damping="thesis")
+    frf, exact = thesis.simulated_beam5_test(noise=0.01, damping="thesis")
     uff = out / "beam5_simulated.uff"
     write_uff58(uff, frf, binary=True)
     ident = identify_frf(read_frf(uff), n_modes=4)
     write_outputs(ident, out / "identify")
-    upd = update("beam5", out / "identify" / "modal.json")
+    data = read_modal_json(out / "identify" / "modal.json")
+    beam = properties.beam_preset("beam5")
+    M = updating.analyst_mass(beam.mass_per_length_kg_m, beam.length_m, "iirs", beam.n_elements)
+    upd = updating.pilkey(M, data.eigenvalues, data.eigenvectors)
     return {"exact_frequencies_hz": exact.natural_frequencies_hz, "exact_damping_ratios": exact.damping_ratios,
             "identified_frequencies_hz": ident.estimate.natural_frequencies_hz,
             "identified_damping_ratios": ident.estimate.damping_ratios,
-            "updated_model_frequencies_hz": upd["natural_frequencies_hz"], "pilkey_iterations": upd["iterations"]}
+            "updated_model_frequencies_hz": modal.complex_modes(M, upd.C, upd.K).natural_frequencies_hz,
+            "pilkey_iterations": upd.iterations}
 
 
 def dataset_step(out: Path, n: int, workers: int) -> dict:

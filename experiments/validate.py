@@ -9,13 +9,11 @@ Printed values carry rounding, so tolerances derive from the printed digits.
 
 from __future__ import annotations
 
-import json
 from dataclasses import asdict, dataclass
-from importlib import resources
 
 import numpy as np
 
-from physics import fem, frf, identification, modal, properties, reduction, updating
+from physics import fem, frf, identification, modal, properties, reduction, thesis, updating
 from physics.io import modal_data_from_dict
 
 
@@ -33,9 +31,8 @@ class Check:
     note: str = ""
 
 
-def thesis_fixture(name: str) -> dict:
-    """A thesis fixture shipped as package data (``experiments/data/thesis/NAME.json``)."""
-    return json.loads(resources.files("experiments").joinpath("data", "thesis", f"{name}.json").read_text())
+#: Old name of :func:`physics.thesis.load`.
+thesis_fixture = thesis.load
 
 
 def frob_rel(a, b) -> float:
@@ -79,7 +76,7 @@ def symmetry_misprints(printed, reproduced, unit):
 
 # ----------------------------------------------------------------------------------------------
 def example1_checks():
-    ex = thesis_fixture("example1_two_dof")
+    ex = thesis.load("example1_two_dof")
     M = np.array(ex["M"], float)
     data = modal_data_from_dict(ex, "example1_two_dof.json")
     lam, phi = data.eigenvalues, data.eigenvectors
@@ -99,7 +96,7 @@ def example1_checks():
 
 
 def example2_checks():
-    ex = thesis_fixture("example2_ortiz_beam")
+    ex = thesis.load("example2_ortiz_beam")
     M, K, C = (np.array(ex[k], float) for k in ("M", "K", "C_reference"))
     model = modal.complex_modes(M, C, K)
     printed_modes = modal_data_from_dict(ex, "example2_ortiz_beam.json")
@@ -158,10 +155,10 @@ def example2_checks():
 
 
 def beam5_checks():
-    beams = thesis_fixture("beams")
+    beams = thesis.load("beams")
     b5 = beams["beams"]["5"]
     preset = properties.beam_preset("beam5")
-    model = fem.beam_model(preset.n_elements, preset.length, preset.EI, preset.m_per_length)
+    model = fem.beam_model(preset.n_elements, preset.length_m, preset.EI_Nm2, preset.mass_per_length_kg_m)
     red = reduction.iirs(model.M, model.K, model.index(preset.masters))
     out = [
         _check("Beam 5: IIRS-reduced M (Table 4.1 data, eqs. 3.41-3.44)", "beam5", b5["iirs_reduced"]["M"], red.M,
@@ -169,11 +166,11 @@ def beam5_checks():
         _check("Beam 5: IIRS-reduced K", "beam5", b5["iirs_reduced"]["K"], red.K,
                frob_rel(red.K, np.array(b5["iirs_reduced"]["K"])), 1e-3),
     ]
-    f_cf = properties.cantilever_frequencies_hz(preset.EI, preset.m_per_length, preset.length)
+    f_cf = properties.cantilever_frequencies_hz(preset.EI_Nm2, preset.mass_per_length_kg_m, preset.length_m)
     out.append(_check("Beam 5: closed-form frequencies (eq. 4.5, Table 4.2)", "beam5",
                       b5["theoretical_frequencies_hz"], f_cf, max_rel(f_cf, b5["theoretical_frequencies_hz"]), 1e-3))
     ident = b5["identified_models"]
-    m_lumped_exact = fem.lumped_mass(preset.m_per_length, preset.length / preset.n_elements)
+    m_lumped_exact = fem.lumped_mass(preset.mass_per_length_kg_m, preset.length_m / preset.n_elements)
     m_lumped_printed = np.array(ident["undamaged"]["lumped_mass"]["M"])
     out.append(_check("Beam 5: lumped M of eq. 4.6 vs the printed (rounded) M", "beam5", m_lumped_printed,
                       m_lumped_exact, max_rel(m_lumped_exact, m_lumped_printed), 0.0005 / 0.015,
@@ -233,7 +230,7 @@ def beam5_checks():
 
 
 def modeshape_checks():
-    ex = thesis_fixture("modeshape_example")
+    ex = thesis.load("modeshape_example")
     h = np.array([ex["H_magnitude"][f"mode{i}"] for i in (1, 2, 3)]).T
     ph = np.array([ex["H_phase_deg"][f"mode{i}"] for i in (1, 2, 3)]).T
     w = np.array(ex["natural_frequencies_rad_s"], float)

@@ -2,13 +2,25 @@
 
 Every error a user can cause derives from :class:`BeamDamageError` (a
 ``ValueError``), so the command line turns it into one line on stderr and exit
-code 2. Messages name the offending file or argument, the field and the form
-that was expected.
+code 2. Messages name the offending file or parameter, the field and the form
+that was expected; they speak in parameter names (``n_elements``), never in
+command-line flags. An error about one parameter also carries its name in
+``parameter``, which the command line maps to its flag (``--elements``).
 """
 
 
 class BeamDamageError(ValueError):
-    """Base class: bad input or a computation that cannot give a trustworthy answer."""
+    """Base class: bad input or a computation that cannot give a trustworthy answer.
+
+    Attributes
+    ----------
+    parameter : str or None
+        Name of the offending function parameter, when the error is about one.
+    """
+
+    def __init__(self, *args, parameter: str | None = None):
+        super().__init__(*args)
+        self.parameter = parameter
 
 
 class ShapeError(BeamDamageError):
@@ -38,7 +50,7 @@ class ConvergenceError(BeamDamageError, RuntimeError):
         Last relative change of the iterate.
     """
 
-    def __init__(self, message, iterations=0, residual=float("nan")):
-        super().__init__(message)
+    def __init__(self, message, iterations=0, residual=float("nan"), *, parameter=None):
+        super().__init__(message, parameter=parameter)
         self.iterations = iterations
         self.residual = residual

@@ -11,7 +11,7 @@ conditions remove DOFs from that list. Choose masters and slaves by name with
 
 Batching
 --------
-Element properties may carry leading batch axes: ``EI`` and ``mass_per_length``
+Element properties may carry leading batch axes: ``EI_Nm2`` and ``mass_per_length_kg_m``
 as scalars or arrays of shape ``(..., n_elements)``. Assembly then returns
 matrices of shape ``(..., n_dof, n_dof)``, so one call builds a million models.
 """
@@ -19,6 +19,7 @@ matrices of shape ``(..., n_dof, n_dof)``, so one call builds a million models.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -40,19 +41,19 @@ _K_COEF = np.array([
 ], dtype=float)
 
 
-def _poly(coef, length):
-    l = np.asarray(length, dtype=float)[..., None, None]
+def _poly(coef, length_m):
+    l = np.asarray(length_m, dtype=float)[..., None, None]
     return coef[0] + coef[1] * l + coef[2] * l**2
 
 
-def element_mass(m_per_length, length):
+def element_mass(mass_per_length_kg_m, length_m):
     """Consistent mass matrix of a beam element (eq. 3.8).
 
     Parameters
     ----------
-    m_per_length : float or ndarray, shape (...)
+    mass_per_length_kg_m : float or ndarray, shape (...)
         Mass per unit length (kg/m).
-    length : float or ndarray, shape (...)
+    length_m : float or ndarray, shape (...)
         Element length (m).
 
     Returns
@@ -60,28 +61,28 @@ def element_mass(m_per_length, length):
     ndarray, shape (..., 4, 4)
         DOF order ``[w1, theta1, w2, theta2]``.
     """
-    m = np.asarray(m_per_length, dtype=float)[..., None, None]
-    l = np.asarray(length, dtype=float)[..., None, None]
-    return m * l / 420.0 * _poly(_M_COEF, length)
+    m = np.asarray(mass_per_length_kg_m, dtype=float)[..., None, None]
+    l = np.asarray(length_m, dtype=float)[..., None, None]
+    return m * l / 420.0 * _poly(_M_COEF, length_m)
 
 
-def element_stiffness(EI, length):
+def element_stiffness(EI_Nm2, length_m):
     """Stiffness matrix of a beam element (eq. 3.9).
 
     Parameters
     ----------
-    EI : float or ndarray, shape (...)
+    EI_Nm2 : float or ndarray, shape (...)
         Flexural rigidity (N m^2).
-    length : float or ndarray, shape (...)
+    length_m : float or ndarray, shape (...)
         Element length (m).
 
     Returns
     -------
     ndarray, shape (..., 4, 4)
     """
-    ei = np.asarray(EI, dtype=float)[..., None, None]
-    l = np.asarray(length, dtype=float)[..., None, None]
-    return ei / l**3 * _poly(_K_COEF, length)
+    ei = np.asarray(EI_Nm2, dtype=float)[..., None, None]
+    l = np.asarray(length_m, dtype=float)[..., None, None]
+    return ei / l**3 * _poly(_K_COEF, length_m)
 
 
 def assemble(element_matrices):
@@ -130,10 +131,48 @@ def constrained_dofs(bc: str, n_nodes: int, root_spring: bool = False) -> tuple[
         "clamped-clamped": ("1:y", "1:rz", f"{last}:y", f"{last}:rz"),
     }
     if bc not in table:
-        raise BeamDamageError(f"boundary condition {bc!r} unknown; expected one of {BOUNDARY_CONDITIONS}")
+        raise BeamDamageError(f"boundary condition {bc!r} unknown; expected one of {BOUNDARY_CONDITIONS}",
+                              parameter="bc")
     if root_spring and bc != "clamped-free":
         raise BeamDamageError("a root rotational spring is only defined for the clamped-free beam")
     return table[bc]
+
+
+class KeptDofs(NamedTuple):
+    """DOFs left after a boundary condition (result of :func:`kept_dofs`).
+
+    Attributes
+    ----------
+    indices : ndarray of int, shape (n,)
+        Positions in the global node-by-node order ``[1:y, 1:rz, 2:y, ...]``.
+    names : tuple of str
+        Their names (``"node:dir"``).
+    """
+
+    indices: np.ndarray
+    names: tuple
+
+
+def kept_dofs(n_nodes: int, bc: str = "clamped-free", root_spring: bool = False) -> KeptDofs:
+    """Global indices and names of the DOFs a boundary condition keeps (the one DOF bookkeeping).
+
+    Parameters
+    ----------
+    n_nodes : int
+        Nodes of the beam (elements + 1).
+    bc : {"clamped-free", "free-free", "pinned-pinned", "clamped-clamped"}
+    root_spring : bool
+        Keep the root rotation of a clamped-free beam (held by a rotational spring).
+
+    Returns
+    -------
+    KeptDofs
+        ``(indices, names)``; slice global matrices with ``np.ix_(indices, indices)``.
+    """
+    names = dof_names(n_nodes)
+    removed = set(constrained_dofs(bc, n_nodes, root_spring))
+    keep = [i for i, d in enumerate(names) if d not in removed]
+    return KeptDofs(np.array(keep, dtype=int), tuple(names[i] for i in keep))
 
 
 @dataclass(frozen=True)
@@ -149,7 +188,7 @@ class FEModel:
     dofs : tuple of str
         Names of the remaining DOFs (``"node:dir"``).
     node_x : ndarray, shape (n_nodes,)
-        Node positions along the beam (m), node 1 at ``x = 0``.
+        Node positions along the beam (m), node 1 at ``x = 0`` (also as ``node_x_m``).
     """
 
     M: np.ndarray
@@ -157,6 +196,11 @@ class FEModel:
     C: np.ndarray
     dofs: tuple
     node_x: np.ndarray
+
+    @property
+    def node_x_m(self) -> np.ndarray:
+        """Node positions along the beam (m); the unit-suffixed name of ``node_x``."""
+        return self.node_x
 
     def index(self, names) -> np.ndarray:
         """Indices of DOFs given by name (``"3:y"``); raises on unknown names."""
@@ -173,9 +217,9 @@ class FEModel:
 
 def beam_model(
     n_elements: int,
-    length: float,
-    EI,
-    m_per_length,
+    length_m: float,
+    EI_Nm2,
+    mass_per_length_kg_m,
     *,
     ei_factors=None,
     mass_factors=None,
@@ -189,11 +233,11 @@ def beam_model(
     ----------
     n_elements : int
         Number of equal elements.
-    length : float
+    length_m : float
         Beam (cantilever) length (m).
-    EI : float or ndarray, shape (...)
+    EI_Nm2 : float or ndarray, shape (...)
         Nominal flexural rigidity (N m^2); leading axes are batch axes.
-    m_per_length : float or ndarray, shape (...)
+    mass_per_length_kg_m : float or ndarray, shape (...)
         Nominal mass per length (kg/m).
     ei_factors, mass_factors : ndarray, shape (..., n_elements), optional
         Multipliers of each element's ``EI`` and mass (damage, variability).
@@ -210,24 +254,24 @@ def beam_model(
     FEModel
     """
     if int(n_elements) < 1:
-        raise BeamDamageError(f"n_elements must be >= 1, got {n_elements}")
-    if not np.isfinite(length) or length <= 0:
-        raise BeamDamageError(f"length must be a positive number of metres, got {length}")
+        raise BeamDamageError(f"n_elements must be >= 1, got {n_elements}", parameter="n_elements")
+    if not np.isfinite(length_m) or length_m <= 0:
+        raise BeamDamageError(f"length_m must be a positive number of metres, got {length_m}", parameter="length_m")
     n_el = int(n_elements)
-    ei = np.asarray(EI, dtype=float)[..., None] * (1.0 if ei_factors is None else np.asarray(ei_factors, float))
-    mpl = np.asarray(m_per_length, dtype=float)[..., None] * (
+    ei = np.asarray(EI_Nm2, dtype=float)[..., None] * (1.0 if ei_factors is None else np.asarray(ei_factors, float))
+    mpl = np.asarray(mass_per_length_kg_m, dtype=float)[..., None] * (
         1.0 if mass_factors is None else np.asarray(mass_factors, float))
-    for name, arr in (("EI", ei), ("m_per_length", mpl)):
+    for name, arr in (("EI_Nm2", ei), ("mass_per_length_kg_m", mpl)):
         if arr.shape[-1] not in (1, n_el):
             raise ShapeError(f"{name} factors must have n_elements={n_el} entries on the last axis")
     # one batch shape for both matrices
     batch = np.broadcast_shapes(ei.shape[:-1], mpl.shape[:-1])
     ei = np.broadcast_to(ei, batch + (n_el,))
     mpl = np.broadcast_to(mpl, batch + (n_el,))
-    for name, arr in (("EI", ei), ("m_per_length", mpl)):
+    for name, arr in (("EI_Nm2", ei), ("mass_per_length_kg_m", mpl)):
         if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
-            raise BeamDamageError(f"{name} (times its factors) must be finite and positive")
-    le = length / n_el
+            raise BeamDamageError(f"{name} (times its factors) must be finite and positive", parameter=name)
+    le = length_m / n_el
     ke = element_stiffness(ei, le)
     me = element_mass(mpl, le)
     K = assemble(ke)
@@ -235,18 +279,17 @@ def beam_model(
     if damping_factors is not None:
         beta = np.asarray(damping_factors, dtype=float)
         if beta.shape[-1] != n_el or np.any(beta < 0) or not np.all(np.isfinite(beta)):
-            raise BeamDamageError("damping_factors must be finite, >= 0, one per element")
+            raise BeamDamageError("damping_factors must be finite, >= 0, one per element", parameter="damping_factors")
         C = assemble(beta[..., None, None] * ke)
     else:
         C = np.zeros_like(K)
     n_nodes = n_el + 1
-    names = dof_names(n_nodes)
-    removed = set(constrained_dofs(bc, n_nodes, root_spring is not None))
-    keep = np.array([i for i, d in enumerate(names) if d not in removed])
+    keep, names = kept_dofs(n_nodes, bc, root_spring is not None)
     if root_spring is not None:
         kr = np.asarray(root_spring, dtype=float)
         if np.any(kr <= 0) or not np.all(np.isfinite(kr)):
-            raise BeamDamageError("root_spring must be a positive rotational stiffness (N m/rad)")
+            raise BeamDamageError("root_spring must be a positive rotational stiffness (N m/rad)",
+                                  parameter="root_spring")
         K = K.copy()
         K[..., 1, 1] += kr
     sel = np.ix_(keep, keep)
@@ -254,12 +297,12 @@ def beam_model(
         M=M[(...,) + sel],
         K=K[(...,) + sel],
         C=C[(...,) + sel],
-        dofs=tuple(names[i] for i in keep),
-        node_x=np.linspace(0.0, length, n_nodes),
+        dofs=names,
+        node_x=np.linspace(0.0, length_m, n_nodes),
     )
 
 
-def lumped_mass(m_per_length, element_length, n_masters: int = 4):
+def lumped_mass(mass_per_length_kg_m, element_length_m, n_masters: int = 4):
     """The thesis's lumped-mass model over the translations (eq. 4.6).
 
     It is the translation-translation partition of the consistent mass matrix of
@@ -268,9 +311,9 @@ def lumped_mass(m_per_length, element_length, n_masters: int = 4):
 
     Parameters
     ----------
-    m_per_length : float or ndarray, shape (...)
+    mass_per_length_kg_m : float or ndarray, shape (...)
         Mass per length (kg/m).
-    element_length : float
+    element_length_m : float
         Element length (m).
     n_masters : int
         Number of translational DOFs (free nodes).
@@ -281,5 +324,5 @@ def lumped_mass(m_per_length, element_length, n_masters: int = 4):
     """
     pattern = 312.0 * np.eye(n_masters) + 54.0 * (np.eye(n_masters, k=1) + np.eye(n_masters, k=-1))
     pattern[-1, -1] = 156.0
-    m = np.asarray(m_per_length, dtype=float)[..., None, None]
-    return m * element_length / 420.0 * pattern
+    m = np.asarray(mass_per_length_kg_m, dtype=float)[..., None, None]
+    return m * element_length_m / 420.0 * pattern

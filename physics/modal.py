@@ -95,6 +95,21 @@ def normalize_modes(eigenvalues, eigenvectors, M, C):
     return phi / np.sqrt(h)[..., None, :]
 
 
+def _upper_half(evals):
+    """Mask of the eigenvalues with ``Im > 0`` (relative to the largest modulus), shape like ``evals``."""
+    scale = np.max(np.abs(evals), axis=-1, keepdims=True)
+    return evals.imag > 1e-9 * scale
+
+
+def _lowest_upper(evals, evecs, n, m):
+    """The ``m`` upper-half eigenvalues of smallest ``Im`` and their displacement parts."""
+    upper = _upper_half(evals)
+    order = np.argsort(np.where(upper, evals.imag, np.inf), axis=-1)[..., :m]
+    lam = np.take_along_axis(evals, order, axis=-1)
+    vec = np.take_along_axis(evecs[..., :n, :], order[..., None, :], axis=-1)
+    return upper, lam, vec
+
+
 def complex_modes(M, C, K) -> ComplexModes:
     """Complex eigenvalues and eigenvectors of ``(M, C, K)`` by the state-space form.
 
@@ -106,35 +121,73 @@ def complex_modes(M, C, K) -> ComplexModes:
     Returns
     -------
     ComplexModes
-        In the conjugate-pair convention of this module.
+        In the conjugate-pair convention of this module, all ``n`` modes.
 
     Raises
     ------
     OverdampedError
         If any eigenvalue is real (overdamped or rigid-body mode), so that the
-        eigenvalues do not form ``n`` conjugate pairs.
+        eigenvalues do not form ``n`` conjugate pairs. See
+        :func:`underdamped_modes` for a variant that tolerates overdamped high modes.
     """
     M = check_square("M", M)
     n = M.shape[-1]
     C = check_square("C", C, n)
     K = check_square("K", K, n)
     evals, evecs = np.linalg.eig(state_matrix(M, C, K))
-    scale = np.max(np.abs(evals), axis=-1, keepdims=True)
-    upper = evals.imag > 1e-9 * scale
+    upper, lam, vec = _lowest_upper(evals, evecs, n, n)
     if np.any(upper.sum(axis=-1) != n):
         raise OverdampedError(
             "the system has real eigenvalues (overdamped or rigid-body modes); "
             "complex modes need n underdamped conjugate pairs")
-    order = np.argsort(np.where(upper, evals.imag, np.inf), axis=-1)[..., :n]
-    lam = np.take_along_axis(evals, order, axis=-1)
-    vec = np.take_along_axis(evecs[..., :n, :], order[..., None, :], axis=-1)
+    return ComplexModes(lam, normalize_modes(lam, vec, M, C))
+
+
+def underdamped_modes(M, C, K, n_modes: int) -> ComplexModes:
+    """The lowest ``n_modes`` underdamped complex modes, tolerating overdamped high modes.
+
+    Local damping (e.g. stiffness-proportional damping of a slit on a fine mesh)
+    can overdamp a mesh's highest modes; those are real eigenvalues and are
+    simply not returned. Same convention as :func:`complex_modes`.
+
+    Parameters
+    ----------
+    M, C, K : ndarray, shape (..., n, n)
+    n_modes : int
+        Number of modes returned, ``1 <= n_modes <= n``.
+
+    Returns
+    -------
+    ComplexModes
+        ``eigenvalues`` (..., n_modes), ``eigenvectors`` (..., n, n_modes), eq.-1.10 normalised.
+
+    Raises
+    ------
+    OverdampedError
+        If some member has fewer than ``n_modes`` underdamped modes.
+    """
+    M = check_square("M", M)
+    n = M.shape[-1]
+    C = check_square("C", C, n)
+    K = check_square("K", K, n)
+    if not 1 <= int(n_modes) <= n:
+        raise ShapeError(f"n_modes must be in [1, {n}], got {n_modes}")
+    evals, evecs = np.linalg.eig(state_matrix(M, C, K))
+    upper, lam, vec = _lowest_upper(evals, evecs, n, int(n_modes))
+    if np.any(upper.sum(axis=-1) < n_modes):
+        raise OverdampedError(f"fewer than n_modes={n_modes} underdamped modes (complex conjugate pairs)")
     return ComplexModes(lam, normalize_modes(lam, vec, M, C))
 
 
 def modal_parameters(eigenvalues):
-    """Natural frequencies (Hz) and damping ratios of complex eigenvalues.
+    """Natural frequencies (Hz) and damping ratios of complex eigenvalues (inverse of eq. 3.30).
 
     ``omega_j = |lambda_j|``, ``zeta_j = -Re(lambda_j) / |lambda_j|``.
+
+    Parameters
+    ----------
+    eigenvalues : array_like, complex, shape (...)
+        Eigenvalues in rad/s (the ``Im > 0`` member of each pair).
 
     Returns
     -------
@@ -146,11 +199,28 @@ def modal_parameters(eigenvalues):
 
 
 def eigenvalues_from_modal(natural_frequencies_hz, damping_ratios):
-    """``lambda = -zeta w + i w sqrt(1 - zeta^2)`` with ``w = 2 pi f`` (eq. 3.30)."""
+    """``lambda = -zeta w + i w sqrt(1 - zeta^2)`` with ``w = 2 pi f`` (eq. 3.30).
+
+    Parameters
+    ----------
+    natural_frequencies_hz : array_like, shape (...)
+        Natural (undamped) frequencies ``f = |lambda| / (2 pi)`` (Hz).
+    damping_ratios : array_like, shape (...)
+        Modal damping ratios, ``|zeta| < 1``.
+
+    Returns
+    -------
+    ndarray, complex, shape (...)   (rad/s), ``Im > 0``
+
+    Raises
+    ------
+    OverdampedError
+        If some ``|zeta| >= 1`` (no complex conjugate pair).
+    """
     w = 2 * np.pi * np.asarray(natural_frequencies_hz, dtype=float)
     z = np.asarray(damping_ratios, dtype=float)
     if np.any(np.abs(z) >= 1):
-        raise OverdampedError("damping ratios must satisfy |zeta| < 1 for complex conjugate eigenvalues")
+        raise OverdampedError("damping_ratios must satisfy |zeta| < 1 for complex conjugate eigenvalues")
     return -z * w + 1j * w * np.sqrt(1 - z**2)
 
 

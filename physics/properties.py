@@ -3,7 +3,8 @@
 * Presets ``beam5``, ``beam6``, ``beam8`` from Table 4.1 and the geometry of
   Chapter Four: mass per length = mass / 1.219 m (whole beam), cantilever
   length 0.6095 m, 4 elements, masters = translations of nodes 2..5.
-* Closed-form cantilever natural frequencies (eq. 4.5).
+* Closed-form cantilever natural frequencies (eq. 4.5), ``beta l`` constants
+  and the mode curvature used by the first-order damage sensitivity.
 * Equivalent ``EI`` from a static load-deflection test (eqs. 4.2-4.4).
 * Flexural rigidity of a layered section (eq. 4.1) and its general,
   unsymmetric form used for slits.
@@ -26,18 +27,22 @@ THESIS_BETA_L = (1.8751, 4.6941, 7.8547, 10.9955)
 class BeamPreset:
     """A specimen of the thesis (Table 4.1 and the Chapter Four geometry).
 
+    Field names match :class:`physics.beam.Beam`; the old unit-less names
+    (``EI``, ``length``, ``total_length``, ``width``, ``thickness``,
+    ``m_per_length``) remain as read-only aliases.
+
     Attributes
     ----------
     name : str
     mass_kg : float
         Mass of the whole beam (kg).
-    EI : float
+    EI_Nm2 : float
         Equivalent flexural rigidity (N m^2).
-    total_length : float
+    total_length_m : float
         Length of the whole beam (m), used for the mass per length.
-    length : float
+    length_m : float
         Cantilever (free) length (m).
-    width, thickness : float
+    width_m, thickness_m : float
         Section (m).
     n_elements : int
         Elements of the thesis's FE model.
@@ -45,22 +50,30 @@ class BeamPreset:
 
     name: str
     mass_kg: float
-    EI: float
-    total_length: float = 1.219
-    length: float = 0.6095
-    width: float = 0.051
-    thickness: float = 0.007264
+    EI_Nm2: float
+    total_length_m: float = 1.219
+    length_m: float = 0.6095
+    width_m: float = 0.051
+    thickness_m: float = 0.007264
     n_elements: int = 4
 
     @property
-    def m_per_length(self) -> float:
+    def mass_per_length_kg_m(self) -> float:
         """Mass per unit length (kg/m): beam mass over the whole length."""
-        return self.mass_kg / self.total_length
+        return self.mass_kg / self.total_length_m
 
     @property
     def masters(self) -> tuple[str, ...]:
         """The measured DOFs: translations of nodes 2..n_elements+1."""
         return tuple(f"{n}:y" for n in range(2, self.n_elements + 2))
+
+    # old names (aliases)
+    EI = property(lambda self: self.EI_Nm2, doc="Alias of ``EI_Nm2``.")
+    length = property(lambda self: self.length_m, doc="Alias of ``length_m``.")
+    total_length = property(lambda self: self.total_length_m, doc="Alias of ``total_length_m``.")
+    width = property(lambda self: self.width_m, doc="Alias of ``width_m``.")
+    thickness = property(lambda self: self.thickness_m, doc="Alias of ``thickness_m``.")
+    m_per_length = property(lambda self: self.mass_per_length_kg_m, doc="Alias of ``mass_per_length_kg_m``.")
 
 
 PRESETS = {
@@ -75,7 +88,8 @@ def beam_preset(name: str) -> BeamPreset:
     try:
         return PRESETS[name]
     except KeyError:
-        raise BeamDamageError(f"unknown beam preset {name!r}; expected one of {sorted(PRESETS)}") from None
+        raise BeamDamageError(f"unknown beam preset {name!r}; expected one of {sorted(PRESETS)}",
+                              parameter="name") from None
 
 
 def cantilever_beta_l(n_modes: int = 4) -> np.ndarray:
@@ -85,18 +99,55 @@ def cantilever_beta_l(n_modes: int = 4) -> np.ndarray:
                      for k in range(n_modes)])
 
 
-def cantilever_frequencies_hz(EI, m_per_length, length, beta_l=THESIS_BETA_L):
+#: ``beta_l`` of a clamped-free beam to machine precision (first four modes).
+CANTILEVER_BETA_L = tuple(float(x) for x in cantilever_beta_l(4))
+
+
+def cantilever_curvature_squared(x_m, length_m: float, mode: int):
+    """Normalised squared curvature ``phi_r''(x)^2 / int_0^L phi_r''^2 dx`` of a uniform cantilever (1/m).
+
+    ``phi_r(x) = cosh(bx) - cos(bx) - s (sinh(bx) - sin(bx))`` with
+    ``s = (cosh bl + cos bl)/(sinh bl + sin bl)`` and ``b = beta_l_r / L``. With
+    the clamped-free boundary conditions ``int phi''^2 = b^4 int phi^2 = b^4 L``
+    (integration by parts twice), so the normalisation is closed form. By
+    first-order perturbation, a loss ``dEI`` over a short length ``w`` at ``x``
+    shifts mode ``r`` by ``df_r/f_r = -(1/2) (dEI/EI) w`` times this value.
+
+    Parameters
+    ----------
+    x_m : float or ndarray
+        Positions from the clamp (m), ``0 <= x <= L``.
+    length_m : float
+        Cantilever length (m).
+    mode : int
+        Mode index from 0 (the first bending mode).
+
+    Returns
+    -------
+    ndarray, shape like ``x_m``   (1/m)
+    """
+    if int(mode) < 0:
+        raise BeamDamageError(f"mode must be >= 0 (0 = first bending mode), got {mode}")
+    bl = CANTILEVER_BETA_L[mode] if mode < len(CANTILEVER_BETA_L) else cantilever_beta_l(mode + 1)[mode]
+    b = bl / length_m
+    s = (np.cosh(bl) + np.cos(bl)) / (np.sinh(bl) + np.sin(bl))
+    bx = b * np.asarray(x_m, dtype=float)
+    curvature = b**2 * (np.cosh(bx) + np.cos(bx) - s * (np.sinh(bx) + np.sin(bx)))
+    return curvature**2 / (b**4 * length_m)
+
+
+def cantilever_frequencies_hz(EI_Nm2, mass_per_length_kg_m, length_m, beta_l=THESIS_BETA_L):
     """Closed-form natural frequencies of a uniform cantilever (eq. 4.5).
 
     ``f_n = (beta l_n)^2 / (2 pi l^2) sqrt(EI / m)``
 
     Parameters
     ----------
-    EI : float
+    EI_Nm2 : float
         Flexural rigidity (N m^2).
-    m_per_length : float
+    mass_per_length_kg_m : float
         Mass per unit length (kg/m).
-    length : float
+    length_m : float
         Cantilever length (m).
     beta_l : sequence of float
         Mode constants; the thesis's 5-digit values by default, or
@@ -107,7 +158,7 @@ def cantilever_frequencies_hz(EI, m_per_length, length, beta_l=THESIS_BETA_L):
     ndarray, shape (len(beta_l),)   (Hz)
     """
     bl = np.asarray(beta_l, dtype=float)
-    return bl**2 / (2 * np.pi * length**2) * np.sqrt(EI / m_per_length)
+    return bl**2 / (2 * np.pi * length_m**2) * np.sqrt(EI_Nm2 / mass_per_length_kg_m)
 
 
 @dataclass(frozen=True)
@@ -116,20 +167,24 @@ class StaticTest:
 
     Attributes
     ----------
-    EI : float
-        Equivalent flexural rigidity (N m^2), eq. 4.3.
-    slope : float
-        Least-squares slope of load over deflection (N/m).
-    intercept : float
-        Least-squares intercept (N).
+    EI_Nm2 : float
+        Equivalent flexural rigidity (N m^2), eq. 4.3 (old name ``EI``).
+    slope_N_m : float
+        Least-squares slope of load over deflection (N/m) (old name ``slope``).
+    intercept_N : float
+        Least-squares intercept (N) (old name ``intercept``).
     r_squared : float
         Coefficient of determination, eq. 4.4.
     """
 
-    EI: float
-    slope: float
-    intercept: float
+    EI_Nm2: float
+    slope_N_m: float
+    intercept_N: float
     r_squared: float
+
+    EI = property(lambda self: self.EI_Nm2, doc="Alias of ``EI_Nm2``.")
+    slope = property(lambda self: self.slope_N_m, doc="Alias of ``slope_N_m``.")
+    intercept = property(lambda self: self.intercept_N, doc="Alias of ``intercept_N``.")
 
 
 def equivalent_ei(loads_n, deflections_m, x_m: float, a_m: float) -> StaticTest:
@@ -154,36 +209,40 @@ def equivalent_ei(loads_n, deflections_m, x_m: float, a_m: float) -> StaticTest:
     if P.shape != d.shape or P.ndim != 1 or P.size < 2 or not (np.all(np.isfinite(P)) and np.all(np.isfinite(d))):
         raise ShapeError("loads_n and deflections_m must be finite 1-D arrays of equal length >= 2")
     if not 0 < x_m <= a_m:
-        raise BeamDamageError(f"need 0 < x_m <= a_m, got x_m={x_m}, a_m={a_m}")
+        raise BeamDamageError(f"need 0 < x_m <= a_m, got x_m={x_m}, a_m={a_m}", parameter="x_m")
     slope, intercept = np.polyfit(d, P, 1)
     fit = slope * d + intercept
     r2 = 1.0 - np.sum((P - fit) ** 2) / (np.sum(P**2) - np.sum(P) ** 2 / P.size)
     return StaticTest(slope * x_m**2 * (3 * a_m - x_m) / 6.0, float(slope), float(intercept), float(r2))
 
 
-def layered_ei(width, interfaces, moduli):
+def layered_ei(width_m, interfaces_m, moduli_pa):
     """Flexural rigidity of a section symmetric about its neutral axis (eq. 4.1).
 
     ``EI = (2b/3) sum_k E_k (d_{k+1}^3 - d_k^3)``
 
     Parameters
     ----------
-    width : float
+    width_m : float
         Section width ``b`` (m).
-    interfaces : array_like, shape (n_layers + 1,)
+    interfaces_m : array_like, shape (n_layers + 1,)
         Distances ``d_k`` from the neutral axis to the layer interfaces (m),
         ascending from 0 (the mid-plane) to half the thickness.
-    moduli : array_like, shape (n_layers,)
+    moduli_pa : array_like, shape (n_layers,)
         Young's modulus of each layer ``E_k`` (Pa), from the mid-plane out.
+
+    Returns
+    -------
+    float   (N m^2)
     """
-    d = np.asarray(interfaces, dtype=float)
-    E = np.asarray(moduli, dtype=float)
+    d = np.asarray(interfaces_m, dtype=float)
+    E = np.asarray(moduli_pa, dtype=float)
     if d.ndim != 1 or E.shape != (d.size - 1,) or np.any(np.diff(d) < 0):
-        raise ShapeError("interfaces must ascend and have one more entry than moduli")
-    return 2 * width / 3 * np.sum(E * (d[1:] ** 3 - d[:-1] ** 3))
+        raise ShapeError("interfaces_m must ascend and have one more entry than moduli_pa", parameter="interfaces_m")
+    return 2 * width_m / 3 * np.sum(E * (d[1:] ** 3 - d[:-1] ** 3))
 
 
-def section_ei(width, z_bottom, z_top, moduli):
+def section_ei(width_m, z_bottom_m, z_top_m, moduli_pa):
     """Flexural rigidity of a general (unsymmetric) layered section.
 
     The neutral axis sits at the modulus-weighted centroid
@@ -194,20 +253,20 @@ def section_ei(width, z_bottom, z_top, moduli):
 
     Parameters
     ----------
-    width : float or ndarray
+    width_m : float or ndarray
         Section width (m).
-    z_bottom, z_top : ndarray, shape (..., n_layers)
+    z_bottom_m, z_top_m : ndarray, shape (..., n_layers)
         Layer bounds (m) measured from the bottom face.
-    moduli : ndarray, shape (..., n_layers)
+    moduli_pa : ndarray, shape (..., n_layers)
         Young's moduli (Pa).
 
     Returns
     -------
     ndarray, shape (...)   (N m^2)
     """
-    zb = np.asarray(z_bottom, dtype=float)
-    zt = np.asarray(z_top, dtype=float)
-    E = np.asarray(moduli, dtype=float)
+    zb = np.asarray(z_bottom_m, dtype=float)
+    zt = np.asarray(z_top_m, dtype=float)
+    E = np.asarray(moduli_pa, dtype=float)
     ea = E * (zt - zb)
     z_na = np.sum(ea * 0.5 * (zt + zb), axis=-1, keepdims=True) / np.sum(ea, axis=-1, keepdims=True)
-    return np.asarray(width) / 3.0 * np.sum(E * ((zt - z_na) ** 3 - (zb - z_na) ** 3), axis=-1)
+    return np.asarray(width_m) / 3.0 * np.sum(E * ((zt - z_na) ** 3 - (zb - z_na) ** 3), axis=-1)

@@ -139,3 +139,15 @@ def iirs(M, K, masters, *, tol: float = 1e-12, max_iter: int = 1000, raise_on_fa
             "choose masters that capture the lowest modes or raise max_iter",
             iterations=max_iter, residual=change)
     return Reduction(Mr, Kr, _unpermute(T, order), max_iter, False, "iirs")
+
+
+#: Reduction methods by name.
+REDUCTIONS = {"guyan": guyan, "irs": irs, "iirs": iirs}
+
+
+def reduce_model(M, K, masters, method: str = "iirs") -> Reduction:
+    """Reduce ``(M, K)`` to ``masters`` with the method named ``method`` (one of :data:`REDUCTIONS`)."""
+    if method not in REDUCTIONS:
+        raise BeamDamageError(f"method {method!r} unknown; expected one of {', '.join(REDUCTIONS)}",
+                              parameter="method")
+    return REDUCTIONS[method](M, K, masters)

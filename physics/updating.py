@@ -17,11 +17,20 @@ Everything works on a leading batch axis, so datagen updates many models at once
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
-from physics.errors import ConvergenceError, OverdampedError, ShapeError
+from physics.errors import BeamDamageError, ConvergenceError, OverdampedError, ShapeError
+from physics.fem import beam_model, lumped_mass
 from physics.modal import check_square, normalize_modes
+from physics.reduction import iirs
+
+#: Names of the analyst mass model (the mass matrix over the measured translations that updating trusts):
+#: ``"iirs"``, the consistent FE mass reduced by IIRS (eqs. 3.41-3.44); ``"lumped"``, eq. 4.6.
+MASS_MODELS = ("iirs", "lumped")
+#: Accepted old spellings (CLI and configuration boundary) -> name in :data:`MASS_MODELS`.
+MASS_MODEL_ALIASES = {"reduced": "iirs"}
 
 
 @dataclass(frozen=True)
@@ -58,6 +67,62 @@ class UpdateResult:
 
 def _t(a):
     return np.swapaxes(a, -1, -2)
+
+
+def mass_model_name(name: str, parameter: str = "mass_model") -> str:
+    """Canonical analyst-mass name (:data:`MASS_MODELS`) of ``name`` or an alias (``"reduced"`` -> ``"iirs"``)."""
+    canonical = MASS_MODEL_ALIASES.get(name, name)
+    if canonical not in MASS_MODELS:
+        raise BeamDamageError(f"{parameter} {name!r} unknown; expected one of {', '.join(MASS_MODELS)} "
+                              f"(or the alias 'reduced' for 'iirs')", parameter=parameter)
+    return canonical
+
+
+@lru_cache(maxsize=16)
+def _unit_iirs_mass(length_m: float, n_elements: int) -> np.ndarray:
+    """IIRS mass of the clamped-free beam with ``EI = 1``, ``m = 1`` over nodes 2..n_elements+1 (read-only)."""
+    model = beam_model(n_elements, length_m, 1.0, 1.0)
+    red = iirs(model.M, model.K, model.index([f"{k}:y" for k in range(2, n_elements + 2)]))
+    out = 0.5 * (red.M + red.M.T)
+    out.setflags(write=False)
+    return out
+
+
+def analyst_mass(m_per_length_kg_m, length_m: float, mass_model: str = "iirs", n_elements: int = 4):
+    """The mass matrix the updating trusts, over the translations of nodes 2..n_elements+1 (batched).
+
+    ``"iirs"``: the consistent mass of the ``n_elements``-element clamped-free
+    model reduced by IIRS to the translations (eqs. 3.41-3.44, the thesis's
+    "reduced mass"). For a uniform beam ``K = EI K1`` and ``M = m M1``; the
+    IIRS transformation (eq. 3.42) only sees ``M_R^-1 K_R`` next to
+    ``K_ss^-1 M_s.``, where ``EI`` and ``m`` cancel, so the reduced mass is
+    exactly ``m`` times the reduced unit mass, computed once.
+    ``"lumped"``: eq. 4.6 (:func:`physics.fem.lumped_mass`).
+
+    Parameters
+    ----------
+    m_per_length_kg_m : float or ndarray, shape (...)
+        Mass per unit length (kg/m).
+    length_m : float
+        Cantilever (free) length (m).
+    mass_model : {"iirs", "lumped"}
+        See :data:`MASS_MODELS`; the alias ``"reduced"`` means ``"iirs"``.
+    n_elements : int
+        Elements of the analyst's model (4 in the thesis).
+
+    Returns
+    -------
+    ndarray, shape (..., n_elements, n_elements)   (kg)
+    """
+    model = mass_model_name(mass_model)
+    if int(n_elements) < 1:
+        raise BeamDamageError(f"n_elements must be >= 1, got {n_elements}", parameter="n_elements")
+    if not np.isfinite(length_m) or length_m <= 0:
+        raise BeamDamageError(f"length_m must be a positive number of metres, got {length_m}", parameter="length_m")
+    mpl = np.asarray(m_per_length_kg_m, dtype=float)
+    if model == "lumped":
+        return lumped_mass(mpl, length_m / n_elements, int(n_elements))
+    return mpl[..., None, None] * _unit_iirs_mass(float(length_m), int(n_elements))
 
 
 def check_modal_input(M, eigenvalues, eigenvectors):

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from experiments import cli, validate
+from physics import thesis
 
 
 def _run(capsys, *argv):
@@ -18,7 +19,7 @@ def test_validate_passes_and_prints_the_documented_json(capsys):
     code, out, _ = _run(capsys, "validate", "--json")
     res = json.loads(out)
     assert code == 0 and res["passed"] is True
-    assert len(res["checks"]) >= 30
+    assert len(res["checks"]) == 38
     for c in res["checks"]:
         assert {"name", "thesis", "reproduced", "rel_error", "tolerance", "passed"} <= set(c)
         assert c["passed"] and c["rel_error"] <= c["tolerance"]
@@ -32,7 +33,7 @@ def test_validate_passes_and_prints_the_documented_json(capsys):
 
 
 def test_validate_fails_when_a_thesis_value_is_perturbed(monkeypatch):
-    real = validate.thesis_fixture
+    real = thesis.load
 
     def perturbed(name):
         data = real(name)
@@ -40,7 +41,7 @@ def test_validate_fails_when_a_thesis_value_is_perturbed(monkeypatch):
             data["C_iterates"]["5"][0][0] += 0.001
         return data
 
-    monkeypatch.setattr(validate, "thesis_fixture", perturbed)
+    monkeypatch.setattr(thesis, "load", perturbed)
     checks = validate.run_checks()
     failed = [c.name for c in checks if not c.passed]
     assert failed == ["Example 1: damping iterate C5"]
@@ -69,7 +70,7 @@ def test_model_lumped_uses_eq_4_6(capsys):
 
 
 def test_update_reproduces_chapter_six(tmp_path, capsys):
-    b5 = validate.thesis_fixture("beams")["beams"]["5"]
+    b5 = thesis.load("beams")["beams"]["5"]
     f = tmp_path / "modal.json"
     f.write_text(json.dumps(b5["undamaged"]))
     code, out, _ = _run(capsys, "update", "--beam", "beam5", "--modal", str(f), "--json")
@@ -99,6 +100,20 @@ def test_update_bad_files_give_one_line_and_exit_2(tmp_path, capsys, content, me
     code, out, err = _run(capsys, "update", "--modal", str(f))
     assert code == 2 and out == ""
     assert message in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_library_errors_name_the_parameter_and_the_cli_adds_the_flag(capsys):
+    code, out, err = _run(capsys, "model", "--elements", "0")
+    assert code == 2 and out == ""
+    assert err == "beam-damage model: error: --elements: n_elements must be >= 1, got 0\n"
+
+
+def test_update_accepts_the_old_mass_spelling(tmp_path, capsys):
+    f = tmp_path / "modal.json"
+    f.write_text(json.dumps(thesis.beam_state("undamaged")))
+    runs = [json.loads(_run(capsys, "update", "--modal", str(f), "--mass", m, "--json")[1]) for m in ("reduced", "iirs")]
+    assert runs[0]["mass"] == runs[1]["mass"] == "iirs"
+    np.testing.assert_array_equal(runs[0]["K"], runs[1]["K"])
 
 
 def test_usage_errors_exit_2(capsys):

@@ -97,11 +97,11 @@ def test_element_factor_scales_only_that_element():
 
 def test_lumped_mass_is_eq_4_6_and_the_translation_partition_of_the_consistent_mass():
     p = properties.beam_preset("beam5")
-    le = p.length / 4
-    M = fem.lumped_mass(p.m_per_length, le)
-    c = p.m_per_length * le / 420
+    le = p.length_m / 4
+    M = fem.lumped_mass(p.mass_per_length_kg_m, le)
+    c = p.mass_per_length_kg_m * le / 420
     np.testing.assert_allclose(M, c * np.array([[312, 54, 0, 0], [54, 312, 54, 0], [0, 54, 312, 54], [0, 0, 54, 156]]))
-    model = fem.beam_model(4, p.length, p.EI, p.m_per_length)
+    model = fem.beam_model(4, p.length_m, p.EI_Nm2, p.mass_per_length_kg_m)
     idx = model.index(p.masters)
     np.testing.assert_allclose(M, model.M[np.ix_(idx, idx)], rtol=1e-14)
     np.testing.assert_allclose(M[0, 1], 2.537e-3, rtol=5e-4)  # the thesis's printed off-diagonal
@@ -114,3 +114,19 @@ def test_bad_arguments_raise_clear_errors():
         fem.beam_model(4, 1.0, -1.0, 1.0)
     with pytest.raises(BeamDamageError, match="root rotational spring"):
         fem.beam_model(4, 1.0, 1.0, 1.0, bc="free-free", root_spring=10.0)
+
+
+@pytest.mark.parametrize("bc, spring, expected", [
+    ("clamped-free", False, ["2:y", "2:rz", "3:y", "3:rz"]),
+    ("clamped-free", True, ["1:rz", "2:y", "2:rz", "3:y", "3:rz"]),
+    ("free-free", False, ["1:y", "1:rz", "2:y", "2:rz", "3:y", "3:rz"]),
+    ("pinned-pinned", False, ["1:rz", "2:y", "2:rz", "3:rz"]),
+    ("clamped-clamped", False, ["2:y", "2:rz"]),
+])
+def test_kept_dofs_indices_and_names(bc, spring, expected):
+    keep = fem.kept_dofs(3, bc, root_spring=spring)
+    all_names = ["1:y", "1:rz", "2:y", "2:rz", "3:y", "3:rz"]
+    assert list(keep.names) == expected
+    assert [all_names[i] for i in keep.indices] == expected
+    model = fem.beam_model(2, 1.0, 1.0, 1.0, bc=bc, root_spring=5.0 if spring else None)
+    assert model.dofs == keep.names and model.K.shape == (len(expected),) * 2

@@ -65,3 +65,32 @@ def test_mac_and_modal_parameters_round_trip():
     np.testing.assert_allclose(z2, z, rtol=1e-10)
     a = np.array([[1.0, 0.0], [1.0, 1.0]])
     np.testing.assert_allclose(modal.mac(a, 3j * a), [[1.0, 0.5], [0.5, 1.0]])
+
+
+def test_underdamped_modes_skip_overdamped_high_modes_closed_form():
+    # three uncoupled oscillators; the stiffest is overdamped (zeta = 5): closed-form SDOF poles
+    m = np.array([1.0, 2.0, 1.0])
+    k = np.array([100.0, 800.0, 1e4])
+    c = np.array([0.4, 1.6, 1e3])
+    M, C, K = np.diag(m), np.diag(c), np.diag(k)
+    with pytest.raises(OverdampedError):
+        modal.complex_modes(M, C, K)
+    cm = modal.underdamped_modes(M, C, K, 2)
+    wn, z = np.sqrt(k / m)[:2], (c / (2 * np.sqrt(k * m)))[:2]
+    np.testing.assert_allclose(cm.eigenvalues, -z * wn + 1j * wn * np.sqrt(1 - z**2), rtol=1e-12)
+    for j in range(2):  # eq. 1.10 on the mode's own DOF, zero elsewhere
+        psi = cm.eigenvectors[:, j]
+        assert abs(psi[1 - j]) < 1e-12 and abs(psi[2]) < 1e-12
+        assert psi[j] ** 2 * (2 * cm.eigenvalues[j] * m[j] + c[j]) == pytest.approx(1.0, rel=1e-12)
+    with pytest.raises(OverdampedError, match="n_modes=3"):
+        modal.underdamped_modes(M, C, K, 3)
+
+
+def test_underdamped_modes_equal_complex_modes_when_all_are_underdamped():
+    systems = [random_system(5, seed=s) for s in (11, 12)]
+    M, C, K = (np.stack(x) for x in zip(*systems))
+    full = modal.complex_modes(M, C, K)
+    low = modal.underdamped_modes(M, C, K, 3)
+    np.testing.assert_allclose(low.eigenvalues, full.eigenvalues[:, :3], rtol=1e-12)
+    np.testing.assert_allclose(np.abs(modal.mac(low.eigenvectors[0], full.eigenvectors[0, :, :3]).diagonal()), 1,
+                               atol=1e-10)

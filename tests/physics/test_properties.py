@@ -1,21 +1,13 @@
-import json
-from importlib import resources
-
 import numpy as np
 import pytest
 
-from physics import properties
+from physics import fem, modal, properties
 from physics.errors import BeamDamageError
 
 
-def _beams():
-    return json.loads(resources.files("experiments").joinpath("data/thesis/beams.json").read_text())
-
-
-def test_closed_form_frequencies_reproduce_table_4_2():
-    p = properties.beam_preset("beam5")
-    f = properties.cantilever_frequencies_hz(p.EI, p.m_per_length, p.length)
-    np.testing.assert_allclose(f, _beams()["beams"]["5"]["theoretical_frequencies_hz"], rtol=1e-3)
+def test_closed_form_frequencies_reproduce_table_4_2(beam5, beam5_data):
+    f = properties.cantilever_frequencies_hz(beam5.EI_Nm2, beam5.mass_per_length_kg_m, beam5.length_m)
+    np.testing.assert_allclose(f, beam5_data["theoretical_frequencies_hz"], rtol=1e-3)
 
 
 def test_exact_beta_l_agrees_with_the_thesis_digits():
@@ -29,7 +21,7 @@ def test_static_test_recovers_ei_and_r_squared():
     loads = np.linspace(0.5, 5.0, 10)
     defl = loads * x**2 * (3 * a - x) / (6 * EI)  # eq. 4.2
     res = properties.equivalent_ei(loads, defl, x, a)
-    assert res.EI == pytest.approx(EI, rel=1e-12)
+    assert res.EI_Nm2 == res.EI == pytest.approx(EI, rel=1e-12)
     assert res.r_squared == pytest.approx(1.0, abs=1e-12)
     noisy = properties.equivalent_ei(loads, defl * (1 + 0.02 * np.sin(np.arange(10))), x, a)
     assert 0.99 < noisy.r_squared < 1.0
@@ -52,3 +44,35 @@ def test_layered_ei_homogeneous_and_sandwich():
 def test_unknown_preset():
     with pytest.raises(BeamDamageError, match="beam5"):
         properties.beam_preset("beam7")
+
+
+@pytest.mark.parametrize("mode", [0, 1, 2, 3, 5])
+def test_cantilever_curvature_is_normalised_and_clamped_root_value(mode):
+    L = 0.6095
+    x = np.linspace(0.0, L, 200001)
+    k2 = properties.cantilever_curvature_squared(x, L, mode)
+    assert np.trapezoid(k2, x) == pytest.approx(1.0, rel=1e-6)  # quadrature, independent of the closed form
+    assert k2[0] == pytest.approx(4.0 / L, rel=1e-9)            # phi''(0) = 2 b^2, int phi''^2 = b^4 L
+    assert k2[-1] == pytest.approx(0.0, abs=1e-6 / L)            # free end: no moment
+
+
+def test_cantilever_curvature_predicts_fe_element_strain_energy_fractions():
+    # first-order sensitivity of a fine FE cantilever: element share of the modal strain energy
+    n_el, L = 120, 0.6
+    model = fem.beam_model(n_el, L, 1.0, 1.0)
+    w, phi = modal.undamped_modes(model.M, model.K)
+    full = np.zeros((2 * (n_el + 1), phi.shape[1]))
+    full[2:] = phi
+    ke = fem.element_stiffness(1.0, L / n_el)
+    for mode in range(3):
+        energy = np.array([full[2 * e:2 * e + 4, mode] @ ke @ full[2 * e:2 * e + 4, mode] for e in range(n_el)])
+        x_mid = (np.arange(n_el) + 0.5) * L / n_el
+        pred = properties.cantilever_curvature_squared(x_mid, L, mode) * L / n_el
+        np.testing.assert_allclose(energy / energy.sum(), pred, atol=2e-3 * pred.max())
+
+
+def test_beam_preset_unit_names_and_old_aliases():
+    p = properties.beam_preset("beam5")
+    assert (p.length, p.EI, p.total_length, p.width, p.thickness) == (
+        p.length_m, p.EI_Nm2, p.total_length_m, p.width_m, p.thickness_m)
+    assert p.m_per_length == p.mass_per_length_kg_m == pytest.approx(0.15792 / 1.219)

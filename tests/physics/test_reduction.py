@@ -1,25 +1,15 @@
-import json
-from importlib import resources
-
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from physics import fem, modal, properties, reduction
+from physics import fem, modal, reduction
 from physics.errors import BeamDamageError, ConvergenceError
 
 
-def _beam5():
-    p = properties.beam_preset("beam5")
-    model = fem.beam_model(4, p.length, p.EI, p.m_per_length)
-    return model, model.index(p.masters)
-
-
-def test_iirs_reproduces_table_4_1():
-    fixture = json.loads(resources.files("experiments").joinpath("data/thesis/beams.json").read_text())
-    ref = fixture["beams"]["5"]["iirs_reduced"]
-    model, masters = _beam5()
+def test_iirs_reproduces_table_4_1(beam5_data, beam5_model, beam5_masters):
+    ref = beam5_data["iirs_reduced"]
+    model, masters = beam5_model, beam5_masters
     red = reduction.iirs(model.M, model.K, masters)
     assert red.converged and 5 < red.iterations < 100
     for key, mat in (("M", red.M), ("K", red.K)):
@@ -27,8 +17,8 @@ def test_iirs_reproduces_table_4_1():
         assert rel < 1e-3, key
 
 
-def test_guyan_is_the_exact_static_condensation():
-    model, masters = _beam5()
+def test_guyan_is_the_exact_static_condensation(beam5_model, beam5_masters):
+    model, masters = beam5_model, beam5_masters
     g = reduction.guyan(model.M, model.K, masters)
     f = np.array([0.3, -1.0, 0.2, 1.5])  # forces on the masters only
     full = np.zeros(model.K.shape[0])
@@ -38,9 +28,9 @@ def test_guyan_is_the_exact_static_condensation():
     np.testing.assert_allclose(g.T @ np.linalg.solve(g.K, f), x, rtol=1e-10, atol=1e-14)
 
 
-def test_iirs_eigenvalues_are_exact_for_the_lowest_modes_when_converged():
+def test_iirs_eigenvalues_are_exact_for_the_lowest_modes_when_converged(beam5_model, beam5_masters):
     # Friswell et al. 1998: converged IIRS reproduces the lowest m eigenvalues exactly.
-    model, masters = _beam5()
+    model, masters = beam5_model, beam5_masters
     red = reduction.iirs(model.M, model.K, masters, tol=1e-14)
     w_full, _ = modal.undamped_modes(model.M, model.K)
     w_red, _ = modal.undamped_modes(red.M, red.K)
@@ -77,8 +67,8 @@ def test_batched_reduction_equals_single():
         np.testing.assert_allclose(red.M[i], one.M, rtol=1e-9)
 
 
-def test_non_convergence_and_bad_masters_are_reported():
-    model, masters = _beam5()
+def test_non_convergence_and_bad_masters_are_reported(beam5_model, beam5_masters):
+    model, masters = beam5_model, beam5_masters
     with pytest.raises(ConvergenceError, match="did not converge") as err:
         reduction.iirs(model.M, model.K, masters, max_iter=2)
     assert err.value.iterations == 2

@@ -1,18 +1,14 @@
-import json
-from importlib import resources
-
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from physics import modal, updating
-from physics.errors import ConvergenceError, OverdampedError, ShapeError
+from physics import modal, thesis, updating
+from physics.errors import BeamDamageError, ConvergenceError, OverdampedError, ShapeError
 from systems import random_system
 
 
-def _fixture(name):
-    return json.loads(resources.files("experiments").joinpath(f"data/thesis/{name}.json").read_text())
+_fixture = thesis.load
 
 
 def _c(vals):
@@ -129,3 +125,27 @@ def test_batched_pilkey_keeps_members_independent():
     assert res.converged.tolist() == [True, False]
     assert np.isnan(res.C[1]).all()
     np.testing.assert_allclose(res.C[0], updating.pilkey(good[0], cm.eigenvalues, cm.eigenvectors, tol=1e-12).C)
+
+
+def test_analyst_mass_iirs_equals_a_direct_iirs_of_each_specimen_and_table_4_1(beam5, beam5_data):
+    from physics import fem, reduction
+
+    mpl = beam5.mass_per_length_kg_m * np.array([0.9, 1.0, 1.15])
+    Ma = updating.analyst_mass(mpl, beam5.length_m, "iirs")
+    assert Ma.shape == (3, 4, 4)
+    for i, (m, ei) in enumerate(zip(mpl, (18.0, beam5.EI_Nm2, 30.0))):  # EI must not matter
+        model = fem.beam_model(4, beam5.length_m, ei, m)
+        direct = reduction.iirs(model.M, model.K, model.index(beam5.masters)).M
+        np.testing.assert_allclose(Ma[i], direct, rtol=1e-9, atol=1e-12 * np.abs(direct).max())
+    printed = np.array(beam5_data["iirs_reduced"]["M"])
+    assert np.linalg.norm(Ma[1] - printed) / np.linalg.norm(printed) < 1e-3
+    np.testing.assert_array_equal(updating.analyst_mass(mpl, beam5.length_m, "reduced"), Ma)  # old spelling
+
+
+def test_analyst_mass_lumped_is_eq_4_6_and_unknown_names_are_named(beam5):
+    M = updating.analyst_mass(beam5.mass_per_length_kg_m, beam5.length_m, "lumped")
+    c = beam5.mass_per_length_kg_m * beam5.length_m / 4 / 420
+    np.testing.assert_allclose(M, c * np.array([[312, 54, 0, 0], [54, 312, 54, 0], [0, 54, 312, 54], [0, 0, 54, 156]]),
+                               rtol=1e-14)
+    with pytest.raises(BeamDamageError, match="mass_model 'consistent'"):
+        updating.analyst_mass(1.0, 1.0, "consistent")
