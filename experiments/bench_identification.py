@@ -18,55 +18,20 @@ import argparse
 import json
 import sys
 import warnings
-from importlib import resources
 
 import numpy as np
 
-from physics.frf import receptance
 from physics.identification import circle_fit, identify_lscf, peak_picking
 from physics.io import MeasuredFRF, atomic_write_text
-from physics.modal import complex_modes, mac
+from physics.modal import mac
+from physics.thesis import BEAM5_TIP, simulated_beam5_test
 
-DOFS = ("2:+Y", "3:+Y", "4:+Y", "5:+Y")
-DRIVE = 3  # tip DOF 5:+Y
-
-
-def beam5_matrices(damping="heavy"):
-    """M (kg), C (N s/m, non-proportional), K (N/m) of the IIRS-reduced beam 5.
-
-    ``damping="heavy"``: Rayleigh plus root and tip dashpots (damping ratios
-    1-9 %). ``damping="thesis"``: the damping matrix the thesis identified for
-    the undamaged beam 5 (reduced-mass model, Chapter Six), damping ratios
-    0.1-0.4 %, so mode 1's half-power band (about 0.05 Hz) is far narrower
-    than a 0.5 Hz line.
-    """
-    text = resources.files("experiments").joinpath("data/thesis/beams.json").read_text()
-    b5 = json.loads(text)["beams"]["5"]
-    red = b5["iirs_reduced"]
-    M, K = np.array(red["M"]), np.array(red["K"])
-    if damping == "thesis":
-        return M, np.array(b5["identified_models"]["undamaged"]["reduced_mass"]["C"]), K
-    C = 2.0 * M + 4e-6 * K
-    C[3, 3] += 0.4
-    C[0, 0] += 0.2
-    return M, C, K
+DRIVE = BEAM5_TIP  # tip DOF 5:+Y
 
 
 def simulate(noise=0.01, seed=0, df_hz=0.5, fmax_hz=800.0, damping="heavy"):
-    """Noisy tip-force receptances of beam 5 and the exact complex modes.
-
-    Returns
-    -------
-    frf : MeasuredFRF, shape (4, 1, n_lines)
-    modes : physics.modal.ComplexModes (exact)
-    """
-    M, C, K = beam5_matrices(damping)
-    f = np.arange(df_hz, fmax_hz + df_hz / 2, df_hz)
-    H = receptance(M, C, K, 2 * np.pi * f, reference=[DRIVE])
-    rng = np.random.default_rng(seed)
-    H = H + noise * np.abs(H) * (rng.normal(size=H.shape) + 1j * rng.normal(size=H.shape)) / np.sqrt(2)
-    frf = MeasuredFRF(f, H, DOFS, (DOFS[DRIVE],), metadata={"source": f"simulated beam5 seed {seed}"})
-    return frf, complex_modes(M, C, K)
+    """:func:`physics.thesis.simulated_beam5_test` with this benchmark's default damping ("heavy")."""
+    return simulated_beam5_test(noise, seed, df_hz, fmax_hz, damping)
 
 
 # ---------------------------------------------------------------------------

@@ -9,15 +9,12 @@ from pathlib import Path
 import numpy as np
 
 from physics.errors import ConfigError
-from physics.identification import METHODS, Identification, identify_frf, reconstruction_error_db
-from physics.io import (MeasuredFRF, atomic_write_bytes, format_complex, modal_data_to_dict, read_frf,
-                        write_uff58)
+# identify_file and identify_frf stay importable from here for commands of other branches (update, classify,
+# discrepancy, demo) until they import them from physics.identification
+from physics.identification import (METHODS, Identification, identify_file, identify_frf,  # noqa: F401
+                                    reconstruction_error_db)
+from physics.io import MeasuredFRF, atomic_write_bytes, format_complex, modal_data_to_dict, write_uff58
 from physics.modal import mac
-
-
-def identify_file(path, method="lscf", band_hz=None, n_modes=None, max_order=40) -> Identification:
-    """:func:`physics.identification.identify_frf` on a UFF58, CSV or ``.npz`` file."""
-    return identify_frf(read_frf(path), method, band_hz, n_modes, max_order)
 
 
 def result_dict(ident: Identification) -> dict:

@@ -15,7 +15,7 @@ import numpy as np
 
 from physics.errors import ConfigError, ConvergenceError, ShapeError
 from physics.io import MeasuredFRF, ModalData
-from physics.frf import FRF_KINDS, convert_frf
+from physics.frf import FRF_KINDS, check_frf_kind, convert_frf, pole_residue
 from physics.modal import eigenvalues_from_modal
 
 
@@ -148,36 +148,6 @@ def shapes_from_residues(residues, drive=None):
         return col / col[k, np.arange(col.shape[1])]
     s, r = drive
     return R[:, r, :] / np.sqrt(R[s, r, :])
-
-
-def synthesise_frf(frequency_hz, eigenvalues, residues, lower_residual=None, upper_residual=None):
-    """Receptance of a modal model (pole-residue form with optional residuals).
-
-    ``H(w) = sum_j [R_j/(i w - lambda_j) + conj(R_j)/(i w - conj(lambda_j))] - LR/w^2 + UR``.
-
-    Parameters
-    ----------
-    frequency_hz : ndarray, shape (n_lines,)
-    eigenvalues : ndarray, complex, shape (n_modes,) (rad/s, Im > 0)
-    residues : ndarray, complex, shape (n_resp, n_ref, n_modes)
-    lower_residual, upper_residual : ndarray, shape (n_resp, n_ref), optional
-
-    Returns
-    -------
-    ndarray, complex, shape (n_resp, n_ref, n_lines)  (m/N)
-    """
-    iw = 2j * np.pi * np.asarray(frequency_hz, dtype=float)
-    lam = np.asarray(eigenvalues, dtype=complex)
-    R = np.asarray(residues, dtype=complex)
-    g = 1 / (iw[None, :] - lam[:, None])
-    gc = 1 / (iw[None, :] - np.conj(lam)[:, None])
-    H = np.einsum("srj,jk->srk", R, g) + np.einsum("srj,jk->srk", np.conj(R), gc)
-    if lower_residual is not None:
-        with np.errstate(divide="ignore"):
-            H = H + np.asarray(lower_residual)[..., None] / iw**2
-    if upper_residual is not None:
-        H = H + np.asarray(upper_residual)[..., None]
-    return H
 
 
 @dataclass(frozen=True)
@@ -927,9 +897,7 @@ def lsfd(frequency_hz, frf, eigenvalues, lower_residual=True, upper_residual=Tru
     """
 
     f, h = _frf3(frequency_hz, frf)
-    if kind not in FRF_KINDS:
-        raise ShapeError(f"kind {kind!r} must be one of {', '.join(FRF_KINDS)}")
-    power = FRF_KINDS.index(kind)
+    power = FRF_KINDS.index(check_frf_kind(kind))
     lam = np.asarray(eigenvalues, dtype=complex).ravel()
     if (lower_residual or power == 0) and f[0] <= 0:
         raise ShapeError("lsfd with a lower residual needs frequencies > 0 Hz (drop the 0 Hz line)")
@@ -1036,12 +1004,7 @@ def identify_lscf(frequency_hz, frf, n_modes=None, drive=None, max_order=40, sel
     """
 
     f, h = _frf3(frequency_hz, frf)
-    if kind not in FRF_KINDS:
-        raise ShapeError(f"kind {kind!r} must be one of {', '.join(FRF_KINDS)}")
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rec = convert_frf(h, 2 * np.pi * f, kind, "receptance")
-    if not np.all(np.isfinite(rec)):
-        raise ShapeError(f"a {kind} at 0 Hz cannot be converted to a receptance: drop the 0 Hz line")
+    rec = convert_frf(h, 2 * np.pi * f, check_frf_kind(kind), "receptance")
     diagram = lscf(f, rec, max_order=max_order, margin=margin, **lscf_options)
     poles = select_poles(diagram, **(select or {}))
     fn = poles.natural_frequencies_hz
@@ -1143,7 +1106,14 @@ def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, ma
     else:
         h = np.asarray(frf.to_kind("receptance").frf)
         est = (circle_fit if method == "circle" else peak_picking)(f, h, n_modes=n_modes, drive=drive)
-        synth = convert_frf(synthesise_frf(f, est.eigenvalues, est.residues), frf.omega_rad_s, "receptance",
-                            frf.kind)
+        synth = convert_frf(pole_residue(est.eigenvalues, est.residues, frf.omega_rad_s), frf.omega_rad_s,
+                            "receptance", frf.kind)
     label = frf.reference_dofs[drive[1]] if drive else None
     return Identification(frf, est, synth, diagram, label, outside)
+
+
+def identify_file(path, method="lscf", band_hz=None, n_modes=None, max_order=40) -> Identification:
+    """:func:`identify_frf` on an FRF file (UFF 58, CSV or ``.npz``; see :func:`physics.io.read_frf`)."""
+    from physics.io import read_frf
+
+    return identify_frf(read_frf(path), method, band_hz, n_modes, max_order)

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from physics.errors import FileFormatError, ShapeError
-from physics.frf import FRF_KINDS, convert_frf
+from physics.frf import FRF_KINDS, FRF_UNITS, check_frf_kind, convert_frf
 from physics.modal import modal_parameters
 
 __all__ = ["DEFAULT_UNITS", "FRF_KINDS", "MeasuredFRF", "ModalData", "dof_label", "format_complex",
@@ -60,8 +60,8 @@ def format_complex(z: complex) -> str:
 # Measured FRFs
 # ---------------------------------------------------------------------------
 
-#: SI units of each kind.
-DEFAULT_UNITS = {"receptance": "m/N", "mobility": "m/s/N", "accelerance": "m/s^2/N"}
+#: SI units of each kind (the name physics.io always had for :data:`physics.frf.FRF_UNITS`).
+DEFAULT_UNITS = FRF_UNITS
 
 _DIRECTIONS = {1: "X", 2: "Y", 3: "Z", 4: "RX", 5: "RY", 6: "RZ"}
 _DIRECTION_CODES = {v: k for k, v in _DIRECTIONS.items()}
@@ -171,9 +171,7 @@ class MeasuredFRF:
         0 Hz line is then rejected (:class:`ShapeError`). Units become the SI
         units of the new kind.
         """
-        if kind not in FRF_KINDS:
-            raise ShapeError(f"FRF kind {kind!r} must be one of {', '.join(FRF_KINDS)}")
-        if kind == self.kind:
+        if check_frf_kind(kind) == self.kind:
             return self
         if FRF_KINDS.index(kind) < FRF_KINDS.index(self.kind) and self.frequency_hz[0] == 0:
             raise ShapeError(f"cannot convert a {self.kind} to a {kind} at 0 Hz: drop the 0 Hz line first")

@@ -5,15 +5,15 @@ import json
 import numpy as np
 import pytest
 
-from experiments.bench_identification import simulate
 from experiments.cli import main
 from physics.io import MeasuredFRF, read_modal_json, write_frf_csv, write_frf_npz, write_uff58
+from physics.thesis import beam5_reduced_model, simulated_beam5_test
 
 
 @pytest.fixture(scope="module")
 def beam5_files(tmp_path_factory):
     d = tmp_path_factory.mktemp("frf")
-    frf, exact = simulate(noise=0.01, seed=3)
+    frf, exact = simulated_beam5_test(noise=0.01, seed=3, damping="heavy")
     write_uff58(d / "beam5.uff", frf, binary=True)
     write_frf_csv(d / "beam5.csv", frf.to_kind("accelerance"))
     write_frf_npz(d / "beam5.npz", frf)
@@ -80,7 +80,7 @@ def test_identify_bad_files_one_line_exit_2(capsys, tmp_path, beam5_files):
 
 
 def test_identify_without_driving_point_warns_unscaled(capsys, tmp_path):
-    frf, _ = simulate(noise=0.0, seed=0)
+    frf, _ = simulated_beam5_test(noise=0.0, seed=0, damping="heavy")
     other = MeasuredFRF(frf.frequency_hz, frf.frf[:3], frf.response_dofs[:3], frf.reference_dofs)
     write_frf_npz(tmp_path / "x.npz", other)
     code, out, err = _run(capsys, ["identify", str(tmp_path / "x.npz"), "--modes", "4", "--json"])
@@ -89,14 +89,12 @@ def test_identify_without_driving_point_warns_unscaled(capsys, tmp_path):
 
 
 def test_update_accepts_frf_file_and_recovers_model(capsys, beam5_files):
-    from experiments.bench_identification import beam5_matrices
-
     d, exact = beam5_files
     code, out, err = _run(capsys, ["update", "--modal", str(d / "beam5.uff"), "--json"])
     assert code == 0, err
     res = json.loads(out)
     np.testing.assert_allclose(res["measured_natural_frequencies_hz"], exact.natural_frequencies_hz, rtol=5e-4)
-    _, C, K = beam5_matrices()
+    _, C, K = beam5_reduced_model("heavy")
     # the IIRS-reduced mass of the package equals the fixture's M to its printed digits,
     # so Pilkey's updated K is close to the K that made the FRFs
     np.testing.assert_allclose(np.diag(res["K"]), np.diag(K), rtol=0.02)

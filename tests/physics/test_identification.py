@@ -1,28 +1,20 @@
 """Tests of modal identification against closed forms and exact simulated FRFs."""
 
-import json
-from importlib import resources
-
 import numpy as np
 import pytest
 
 from physics.errors import ConvergenceError, ShapeError
-from physics.frf import receptance
+from physics.frf import pole_residue, receptance
 from physics.identification import (circle_fit, circle_fit_sdof, identify_lscf, lscf, lsfd,
                                     modal_phase_collinearity, peak_picking, select_poles,
-                                    shapes_from_residues, synthesise_frf)
+                                    shapes_from_residues)
 from physics.modal import complex_modes, mac
+from physics.thesis import beam5_reduced_model, simulated_beam5_test
 
 
-def beam5(damping="nonprop"):
-    """IIRS-reduced beam-5 model (thesis) with a non-proportional damping matrix."""
-    text = resources.files("experiments").joinpath("data/thesis/beams.json").read_text()
-    red = json.loads(text)["beams"]["5"]["iirs_reduced"]
-    M, K = np.array(red["M"]), np.array(red["K"])
-    C = 2.0 * M + 4e-6 * K
-    C[3, 3] += 0.4  # tip dashpot and a root dashpot make the damping non-proportional
-    C[0, 0] += 0.2
-    return M, C, K
+def beam5():
+    """IIRS-reduced beam-5 model (thesis) with a non-proportional damping matrix (dashpots at root and tip)."""
+    return beam5_reduced_model("heavy")
 
 
 def align(shapes, ref):
@@ -51,7 +43,7 @@ def test_synthesis_matches_direct_inversion_and_shapes_from_residues():
     f = np.linspace(5, 800, 300)
     psi = cm.eigenvectors
     R = psi[:, None, :] * psi[[3, 1]][None, :, :]  # references: DOFs 3 and 1
-    H = synthesise_frf(f, cm.eigenvalues, R)
+    H = pole_residue(cm.eigenvalues, R, 2 * np.pi * f)
     Hd = receptance(M, C, K, 2 * np.pi * f, reference=[3, 1])
     np.testing.assert_allclose(H, Hd, rtol=1e-9, atol=1e-12 * np.abs(Hd).max())
     np.testing.assert_allclose(align(shapes_from_residues(R, drive=(1, 1)), psi), psi, rtol=1e-12)
@@ -131,7 +123,7 @@ def test_poly_reference_separates_closely_spaced_overlapping_modes():
     psi = np.array([[1.0, 0.8], [0.7, -1.0], [0.3, 0.6]], complex) * 0.01
     R = psi[:, None, :] * psi[:2][None, :, :]  # two references at DOFs 0 and 1
     f = np.arange(90.0, 110.0, 0.05)
-    H = synthesise_frf(f, lam, R)
+    H = pole_residue(lam, R, 2 * np.pi * f)
     est = identify_lscf(f, H, n_modes=2, drive=(0, 0), max_order=30).estimate
     np.testing.assert_allclose(est.natural_frequencies_hz, fn_true, rtol=1e-7)
     np.testing.assert_allclose(est.damping_ratios, z_true, rtol=1e-5)
@@ -183,7 +175,7 @@ def test_lsfd_fit_uncertainty_matches_the_scatter_over_noise_realisations():
     lam = -zeta * 2 * np.pi * fn + 2j * np.pi * fn * np.sqrt(1 - zeta**2)
     R = 1e-3 / (2j * lam.imag)
     f = np.arange(40.0, 60.0, 0.1)
-    H0 = synthesise_frf(f, [lam], np.array([[[R]]]))
+    H0 = pole_residue(np.array([lam]), np.array([[[R]]]), 2 * np.pi * f)
     sigma = 0.02 * np.abs(H0).max()
     rng = np.random.default_rng(0)
     fs = []
@@ -225,13 +217,10 @@ def test_select_poles_rules_and_errors():
 def test_peak_picking_warns_when_the_half_power_band_is_below_the_line_spacing():
     import warnings as _w
 
-    from experiments.bench_identification import simulate
-    from physics.identification import peak_picking
-
-    frf, exact = simulate(noise=0.0, damping="thesis")  # mode 1: zeta 0.26 %, band 0.1 Hz < 0.5 Hz lines
+    frf, exact = simulated_beam5_test(noise=0.0, damping="thesis")  # mode 1: zeta 0.26 %, band 0.1 Hz < 0.5 Hz lines
     with pytest.warns(UserWarning, match="fewer than 2 frequency lines"):
         peak_picking(frf.frequency_hz, frf.frf, 4, drive=(3, 0))
-    fine, _ = simulate(noise=0.0, damping="heavy")
+    fine, _ = simulated_beam5_test(noise=0.0, damping="heavy")
     with _w.catch_warnings():
         _w.simplefilter("error")
         peak_picking(fine.frequency_hz, fine.frf, 4, drive=(3, 0))
