@@ -8,12 +8,13 @@ from pathlib import Path
 
 import numpy as np
 
-from physics.errors import ConfigError
+from physics.errors import BeamDamageError, ConfigError
 # identify_file and identify_frf stay importable from here for commands of other branches (update, classify,
 # discrepancy, demo) until they import them from physics.identification
 from physics.identification import (METHODS, Identification, identify_file, identify_frf,  # noqa: F401
                                     reconstruction_error_db)
-from physics.io import MeasuredFRF, atomic_write_bytes, format_complex, modal_data_to_dict, write_uff58
+from physics.io import (MeasuredFRF, NodeGeometry, atomic_write_bytes, format_complex, measured_positions,
+                        modal_data_to_dict, write_uff58)
 from physics.modal import mac
 
 
@@ -39,7 +40,27 @@ def result_dict(ident: Identification) -> dict:
             "uncertainty": dict(UNCERTAINTY[e.method]),
             "out_of_band_poles_hz": ident.out_of_band_hz.tolist(),
             "fit_error": float(np.linalg.norm(resid) / np.linalg.norm(ident.frf.frf)),
-            "fit_error_db": {"median": med, "p90": p90}}
+            "fit_error_db": {"median": med, "p90": p90},
+            "units": units_report(ident.frf), **positions_report(ident.frf)}
+
+
+def units_report(frf: MeasuredFRF) -> dict:
+    """What the file said about units and the SI units the FRFs were converted to."""
+    found = frf.metadata.get("units")
+    if found:
+        return dict(found)
+    return {"file": [f"{frf.units} ({frf.metadata.get('format', 'file')}: SI units of the declared kind)"],
+            "si": frf.units, "factor_to_si": [1.0]}
+
+
+def positions_report(frf: MeasuredFRF) -> dict:
+    """``positions_m`` per response DOF (from node geometry) and the rule used."""
+    try:
+        pos, source = measured_positions(frf.response_dofs, NodeGeometry.from_metadata(frf.metadata))
+    except (BeamDamageError, ValueError) as exc:
+        return {"positions_m": None, "positions_source": f"geometry not usable: {exc}"}
+    return {"positions_m": None if pos is None else dict(zip(frf.response_dofs, pos.tolist())),
+            "positions_source": source}
 
 
 #: What each method's one-sigma values mean (reported in ``--json`` under "uncertainty").
@@ -54,11 +75,19 @@ UNCERTAINTY = {
 
 
 def synthesised_frf(ident: Identification) -> MeasuredFRF:
-    """The fitted FRFs as a :class:`MeasuredFRF` of the input's kind, units and (band-limited) lines."""
+    """The fitted FRFs as a :class:`MeasuredFRF` of the input's kind, units and (band-limited) lines.
+
+    When the input's axis labels named one unit (e.g. ``g/N``) the values are converted back to it and
+    the label written; otherwise (SI, or a dataset-164 unit system) they stay SI with SI labels.
+    """
     src = ident.frf
-    return MeasuredFRF(src.frequency_hz, ident.synthesised, src.response_dofs, src.reference_dofs, kind=src.kind,
-                       units=src.units, metadata={"id1": "beam-damage identify: synthesised FRF",
-                                                  "source": src.metadata.get("source")})
+    units = src.metadata.get("units") or {}
+    found, factors = units.get("file", []), units.get("factor_to_si", [])
+    h, label = ident.synthesised, src.units
+    if len(found) == 1 and len(factors) == 1 and found[0].endswith(" (axis labels)") and factors[0] != 1.0:
+        h, label = h / factors[0], found[0][: -len(" (axis labels)")]
+    return MeasuredFRF(src.frequency_hz, h, src.response_dofs, src.reference_dofs, kind=src.kind, units=label,
+                       metadata={"id1": "beam-damage identify: synthesised FRF", "source": src.metadata.get("source")})
 
 
 def write_outputs(ident: Identification, out_dir) -> dict:

@@ -9,9 +9,11 @@ import numpy as np
 
 from physics.errors import FileFormatError
 from physics.io.atomic import atomic_path
-from physics.io.types import MeasuredFRF, dof_label, parse_dof
+from physics.io.geometry import geometry_from_uff_sets
+from physics.io.types import DEFAULT_UNITS, MeasuredFRF, dof_label, parse_dof
+from physics.io.units import UnitSystem, frf_unit_factor
 
-__all__ = ["read_uff58", "write_uff58"]
+__all__ = ["read_uff58", "read_uff_context", "read_uff_geometry", "write_uff58"]
 
 
 #: UFF specific data types of dataset 58 ordinates, and the FRF kind they give.
@@ -75,32 +77,22 @@ def read_uff58(path, kind=None) -> MeasuredFRF:
         axes; NaN/inf values; mixed ordinate types; an incomplete
         response x reference matrix.
     """
-    import pyuff
-
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise FileFormatError(f"{path}: file not found") from None
-    _check_uff_complete(path, raw)
-    try:
-        uff = pyuff.UFF(str(path))
-        types = [int(t) for t in uff.get_set_types()]
-    except Exception as exc:  # pyuff raises bare Exception
-        raise FileFormatError(f"{path}: not a readable universal file ({exc})") from None
+    uff, types = _open_uff(path)
     idx58 = [i for i, t in enumerate(types) if t == 58]
-    others = sorted({t for t in types if t != 58})
+    others = sorted({t for t in types if t not in _CONTEXT_SETS})
     if not idx58:
-        found = ", ".join(f"{t} ({_UFF_SET_NAMES.get(t, 'unsupported/unreadable')})" for t in others) or "none"
+        found = ", ".join(f"{t} ({_UFF_SET_NAMES.get(t, 'unsupported/unreadable')})" for t in sorted(set(types)))
         raise FileFormatError(f"{path}: no dataset 58 (function at nodal DOF) record; dataset types "
-                              f"found: {found}")
+                              f"found: {found or 'none'}")
+    system, geometry = read_uff_context(path, uff, types)
     if others:
-        warnings.warn(f"{path}: skipped {len(types) - len(idx58)} record(s) of dataset type(s) "
+        warnings.warn(f"{path}: skipped {sum(t in others for t in types)} record(s) of dataset type(s) "
                       f"{', '.join(map(str, others))}", stacklevel=2)
     try:
         sets = uff.read_sets(idx58)
     except Exception as exc:
-        raise FileFormatError(f"{path}: cannot read dataset 58 records ({exc})") from None
+        raise FileFormatError(f"{path}: cannot read dataset 58 records ({_short(exc)})") from None
     if isinstance(sets, dict):
         sets = [sets]
     frfs, skipped = [], {}
@@ -112,8 +104,10 @@ def read_uff58(path, kind=None) -> MeasuredFRF:
             skipped[ft] = skipped.get(ft, 0) + 1
     if not frfs:
         found = ", ".join(f"{ft} ({_UFF_FUNCTION_NAMES.get(ft, 'unknown')}) x{c}" for ft, c in skipped.items())
+        hint = "; time records need a force channel: estimate FRFs with 'beam-damage estimate'" \
+            if set(skipped) == {1} else ""
         raise FileFormatError(f"{path}: dataset 58 records hold no FRF (function type 4); function types "
-                              f"found: {found}")
+                              f"found: {found}{hint}")
     if skipped:
         found = ", ".join(f"{ft} ({_UFF_FUNCTION_NAMES.get(ft, 'unknown')})" for ft in skipped)
         warnings.warn(f"{path}: skipped {sum(skipped.values())} dataset 58 record(s) that are not FRFs: "
@@ -122,6 +116,7 @@ def read_uff58(path, kind=None) -> MeasuredFRF:
     freq = None
     table = {}
     ordinates = set()
+    units_found = {}
     for n, s in frfs:
         where = f"{path}: record {n + 1} (dataset 58, response {s.get('rsp_node')}/{s.get('rsp_dir')}, " \
                 f"reference {s.get('ref_node')}/{s.get('ref_dir')})"
@@ -138,6 +133,17 @@ def read_uff58(path, kind=None) -> MeasuredFRF:
             raise FileFormatError(f"{where}: contains NaN or inf values")
         if np.any(np.diff(x) <= 0):
             raise FileFormatError(f"{where}: frequency axis is not strictly increasing")
+        x = x * _abscissa_factor(s, where)
+        try:
+            factor, label_kind, found = frf_unit_factor(s.get("ordinate_axis_units_lab"),
+                                                        s.get("orddenom_axis_units_lab"), system)
+        except FileFormatError as exc:
+            raise FileFormatError(f"{where}: {exc}") from None
+        ord_kind = _UFF_ORDINATE_KIND.get(int(s.get("ordinate_spec_data_type", 0)))
+        if label_kind and ord_kind and label_kind != ord_kind:
+            raise FileFormatError(f"{where}: unit label {s.get('ordinate_axis_units_lab')!r} is a {label_kind} "
+                                  f"unit but the ordinate type says {ord_kind}; refusing to guess")
+        data = data * factor
         if freq is None:
             freq = x
         elif x.size != freq.size or not np.allclose(x, freq, rtol=1e-6, atol=1e-9):
@@ -156,7 +162,11 @@ def read_uff58(path, kind=None) -> MeasuredFRF:
                 warnings.warn(f"{where}: duplicated record dropped", stacklevel=2)
             continue
         table[key] = data
-        ordinates.add(int(s.get("ordinate_spec_data_type", 0)))
+        ordinate = int(s.get("ordinate_spec_data_type", 0))
+        if ordinate not in _UFF_ORDINATE_KIND and label_kind:
+            ordinate = _UFF_KIND_ORDINATE[label_kind]
+        ordinates.add(ordinate)
+        units_found.setdefault(found, []).append(factor)
     known = ordinates & set(_UFF_ORDINATE_KIND)
     if len(known) > 1:
         raise FileFormatError(f"{path}: records mix ordinate types {sorted(known)} (8 displacement, "
@@ -177,10 +187,92 @@ def read_uff58(path, kind=None) -> MeasuredFRF:
         raise FileFormatError(f"{path}: no FRF for response {a} and reference {b} ({len(missing)} missing "
                               f"of {len(resp)}x{len(refs)}); every response needs a record for every reference")
     frf = np.array([[table[(a, b)] for b in refs] for a in resp])
-    return MeasuredFRF(freq, frf, tuple(resp), tuple(refs), kind=file_kind,
-                       metadata={"source": str(path), "format": "uff58",
-                                 "binary": bool(sets[0].get("binary", 0)),
-                                 "id1": str(frfs[0][1].get("id1", "")).strip()})
+    meta = {"source": str(path), "format": "uff58", "binary": bool(sets[0].get("binary", 0)),
+            "id1": str(frfs[0][1].get("id1", "")).strip(),
+            "units": {"file": sorted(units_found), "si": DEFAULT_UNITS[file_kind],
+                      "factor_to_si": sorted({float(f) for v in units_found.values() for f in v}),
+                      "unit_system": system.description}}
+    if geometry is not None:
+        meta["geometry"] = {"source": geometry.source, "nodes_m": geometry.to_dict()}
+    return MeasuredFRF(freq, frf, tuple(resp), tuple(refs), kind=file_kind, metadata=meta)
+
+
+#: Dataset types read as context of the FRFs (header, units, coordinate systems, nodes, trace lines, elements).
+_CONTEXT_SETS = {58, 151, 164, 15, 18, 82, 2411, 2412, 2420}
+#: Dataset 164 unit codes.
+_UNIT_CODES = {1: "SI: m (N)", 2: "BG: ft (lbf)", 3: "MG: m (kgf)", 4: "BA: ft (poundal)", 5: "MM: mm (mN)",
+               6: "CM: cm (cN)", 7: "IN: in (lbf)", 8: "GM: mm (kgf)", 9: "user defined"}
+
+
+def _short(exc) -> str:
+    return " ".join(str(exc).split())[:200]
+
+
+def _open_uff(path: Path):
+    """Check a universal file is complete and list its dataset types."""
+    import pyuff
+
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise FileFormatError(f"{path}: file not found") from None
+    _check_uff_complete(path, raw)
+    try:
+        uff = pyuff.UFF(str(path))
+        types = [int(t) for t in uff.get_set_types()]
+    except Exception as exc:  # pyuff raises bare Exception
+        raise FileFormatError(f"{path}: not a readable universal file ({_short(exc)})") from None
+    return uff, types
+
+
+def read_uff_context(path, uff, types):
+    """The unit system (dataset 164) and node geometry (datasets 15/2411, 18) of an open universal file."""
+    def read(idx, name):
+        if not idx:
+            return []
+        try:
+            out = uff.read_sets(idx)
+        except Exception as exc:
+            raise FileFormatError(f"{path}: cannot read the {name} dataset(s) ({_short(exc)})") from None
+        return [out] if isinstance(out, dict) else list(out)
+
+    system = UnitSystem()
+    units = read([i for i, t in enumerate(types) if t == 164], "units (164)")
+    if units:
+        u = units[0]
+        try:
+            length, force = float(u["length"]), float(u["force"])
+        except (KeyError, TypeError, ValueError):
+            raise FileFormatError(f"{path}: dataset 164 (units) lacks its length and force factors") from None
+        if not (np.isfinite(length) and np.isfinite(force) and length > 0 and force > 0):
+            raise FileFormatError(f"{path}: dataset 164 (units) has length factor {length:g} and force factor "
+                                  f"{force:g}; both must be finite and > 0")
+        code = int(u.get("units_code", 9))
+        system = UnitSystem(length, force, f"dataset 164 {_UNIT_CODES.get(code, f'code {code}')}, "
+                                           f"length factor {length:g}, force factor {force:g}", True)
+    nodes = read([i for i, t in enumerate(types) if t in (15, 2411)], "node (15/2411)")
+    cs = read([i for i, t in enumerate(types) if t == 18], "coordinate system (18)")
+    unit_text = "file units" if system.from_file else "file units (no dataset 164: m assumed)"
+    geometry = geometry_from_uff_sets(nodes, cs, system.length, str(path), unit_text)
+    return system, geometry
+
+
+def read_uff_geometry(path):
+    """Node geometry (datasets 15/2411, in metres, global system) of a universal file, or None."""
+    path = Path(path)
+    uff, types = _open_uff(path)
+    return read_uff_context(path, uff, types)[1]
+
+
+def _abscissa_factor(s, where) -> float:
+    """Factor to Hz of an FRF record's abscissa from its unit label."""
+    lab = str(s.get("abscissa_axis_units_lab", "") or "").strip().lower().replace(" ", "")
+    if lab in ("", "none", "hz", "1/s", "cps", "hertz"):
+        return 1.0
+    if lab in ("rad/s", "rad/sec"):
+        return 1.0 / (2.0 * np.pi)
+    raise FileFormatError(f"{where}: abscissa unit {s.get('abscissa_axis_units_lab')!r} is not a frequency "
+                          "unit (Hz or rad/s)")
 
 
 def write_uff58(path, data: MeasuredFRF, binary=False) -> None:

@@ -121,3 +121,35 @@ def test_identify_writes_synthesised_uff_in_the_input_kind_and_reports_db_error(
     m = res["modes"][0]
     assert m["frequency_fit_std_hz"] > 0 and m["damping_fit_std"] > 0 and "model orders" in \
         res["uncertainty"]["frequency_std_hz, damping_std"]
+
+
+def test_identify_json_reports_units_and_positions_from_the_file(capsys, tmp_path):
+    import pyuff
+
+    frf, _ = simulated_beam5_test(noise=0.0, seed=0, damping="heavy")
+    # the same test written by a system in millimetres: dataset 164 (length factor 1000), nodes in mm,
+    # receptances in mm/N with no unit labels
+    x_mm = [0.0, 152.375, 304.75, 457.125, 609.5]
+    sets = [pyuff.prepare_164(units_code=9, units_description="mm user", temp_mode=1, length=1000.0, force=1.0,
+                              temp=1.0, temp_offset=273.15),
+            pyuff.prepare_15(node_nums=[1, 2, 3, 4, 5], def_cs=[0] * 5, disp_cs=[0] * 5, color=[1] * 5,
+                             x=x_mm, y=[0.0] * 5, z=[0.0] * 5)]
+    for i, dof in enumerate(frf.response_dofs):
+        sets.append(pyuff.prepare_58(binary=1, func_type=4, rsp_node=int(dof[0]), rsp_dir=2, ref_node=5, ref_dir=2,
+                                     data=np.ascontiguousarray(frf.frf[i, 0] * 1000.0), x=frf.frequency_hz,
+                                     abscissa_spacing=1, abscissa_spec_data_type=18, ordinate_spec_data_type=8,
+                                     orddenom_spec_data_type=13))
+    pyuff.UFF(str(tmp_path / "mm.uff")).write_sets(sets, mode="add")
+    code, out, err = _run(capsys, ["identify", str(tmp_path / "mm.uff"), "--modes", "4", "--json"])
+    assert code == 0, err
+    res = json.loads(out)
+    assert res["units"]["si"] == "m/N" and res["units"]["factor_to_si"] == [pytest.approx(1e-3)]
+    assert res["positions_m"] == {"2:+Y": pytest.approx(0.152375), "3:+Y": pytest.approx(0.30475),
+                                  "4:+Y": pytest.approx(0.457125), "5:+Y": pytest.approx(0.6095)}
+    assert "geometry" in res["positions_source"]
+    # the CSV of the same FRFs has no geometry: the quarter-point convention is named
+    write_frf_csv(tmp_path / "b.csv", frf)
+    code, out, err = _run(capsys, ["identify", str(tmp_path / "b.csv"), "--modes", "4", "--json"])
+    res = json.loads(out)
+    assert res["positions_m"] is None and "quarter points" in res["positions_source"]
+    assert res["units"]["si"] == "m/N"
