@@ -1113,7 +1113,29 @@ def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, ma
 
 
 def identify_file(path, method="lscf", band_hz=None, n_modes=None, max_order=40) -> Identification:
-    """:func:`identify_frf` on an FRF file (UFF 58, CSV or ``.npz``; see :func:`physics.io.read_frf`)."""
+    """:func:`identify_frf` on an FRF file (UFF 58, CSV or ``.npz``; see :func:`physics.io.read_frf`).
+
+    A universal file of time records (force and responses, no FRF) is estimated
+    first (:func:`physics.time_records.estimate_from_records`, H1, random
+    excitation defaults), with a warning that says so.
+    """
+    return identify_frf(read_measured_frf(path), method, band_hz, n_modes, max_order)
+
+
+def read_measured_frf(path) -> MeasuredFRF:
+    """FRFs of a file: read as FRFs, or estimated from its time records (with a warning saying how)."""
+    from physics.errors import FileFormatError
     from physics.io import read_frf
 
-    return identify_frf(read_frf(path), method, band_hz, n_modes, max_order)
+    try:
+        return read_frf(path)
+    except FileFormatError as exc:
+        if "1 (time response)" not in str(exc):
+            raise
+    from physics.io.timedata import read_uff_time_records
+    from physics.time_records import estimate_from_records
+
+    est = estimate_from_records(read_uff_time_records(path))
+    warnings.warn(f"{path}: holds time records, not FRFs: estimated {est.description} before identifying",
+                  stacklevel=2)
+    return est.frf
