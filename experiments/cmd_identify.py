@@ -18,6 +18,10 @@ from physics.io import (MeasuredFRF, NodeGeometry, atomic_write_bytes, format_co
 from physics.modal import mac
 
 
+#: Highest LSCF model order accepted.
+MAX_ORDER = 200
+
+
 def result_dict(ident: Identification) -> dict:
     e = ident.estimate
     nan = np.full(e.eigenvalues.size, np.nan)
@@ -118,8 +122,16 @@ def write_outputs(ident: Identification, out_dir) -> dict:
 
 
 def run(args) -> dict:
-    if args.band and not args.band[0] < args.band[1]:
-        raise ConfigError(f"--band {args.band[0]:g} {args.band[1]:g}: FMIN must be below FMAX")
+    if args.band and not (np.all(np.isfinite(args.band)) and 0 <= args.band[0] < args.band[1]):
+        raise ConfigError(f"--band {args.band[0]:g} {args.band[1]:g}: FMIN and FMAX must be finite with "
+                          "0 <= FMIN < FMAX")
+    if args.modes is not None and args.modes < 1:
+        raise ConfigError(f"--modes {args.modes}: must be >= 1")
+    if not 1 <= args.max_order <= MAX_ORDER:
+        raise ConfigError(f"--max-order {args.max_order}: must be between 1 and {MAX_ORDER} (the LSCF normal "
+                          "equations grow with the square of the order)")
+    if args.out and Path(args.out).exists() and not Path(args.out).is_dir():
+        raise ConfigError(f"--out {args.out}: exists and is not a directory")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         ident = identify_file(args.file, args.method, tuple(args.band) if args.band else None,

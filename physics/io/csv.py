@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from physics.errors import FileFormatError
+from physics.errors import FileFormatError, ShapeError
 from physics.io.atomic import atomic_write_text
 from physics.io.types import FRF_KINDS, MeasuredFRF
 
@@ -53,6 +53,8 @@ def read_frf_csv(path, kind=None) -> MeasuredFRF:
         raise FileFormatError(f"{path}: file not found") from None
     except UnicodeDecodeError:
         raise FileFormatError(f"{path}: not a UTF-8 text CSV file") from None
+    except IsADirectoryError:
+        raise FileFormatError(f"{path}: is a directory, not a CSV file") from None
     meta, rows, header, header_line = {}, [], None, 0
     for lineno, line in enumerate(text.splitlines(), 1):
         s = line.strip()
@@ -84,16 +86,26 @@ def read_frf_csv(path, kind=None) -> MeasuredFRF:
         resp, _, ref = re_name[3:-1].partition("/")
         pairs.append((resp.strip(), ref.strip() or "ref"))
     ncol = len(header)
-    values = np.empty((len(rows), ncol))
-    for i, (lineno, s) in enumerate(rows):
-        parts = s.split(",")
-        if len(parts) != ncol:
-            raise FileFormatError(f"{path}: line {lineno}: {len(parts)} fields, expected {ncol} like the "
-                                  "header (truncated file?)")
-        try:
-            values[i] = [float(p) for p in parts]
-        except ValueError:
-            raise FileFormatError(f"{path}: line {lineno}: non-numeric field; expected {ncol} numbers") from None
+    counts = [r[1].count(",") + 1 for r in rows]
+    bad = next((i for i, c in enumerate(counts) if c != ncol), None)
+    if bad is not None:
+        raise FileFormatError(f"{path}: line {rows[bad][0]}: {counts[bad]} fields, expected {ncol} like the "
+                              "header (truncated file?)")
+    body = ",".join(r[1] for r in rows)
+    if "_" in body:  # Python's float() reads "1_000" as 1000; a CSV number never has underscores
+        bad = next(i for i, r in enumerate(rows) if "_" in r[1])
+        raise FileFormatError(f"{path}: line {rows[bad][0]}: non-numeric field (underscore); expected {ncol} "
+                              "numbers")
+    try:
+        values = np.array(body.split(","), dtype=float).reshape(len(rows), ncol)
+    except ValueError:
+        for lineno, s_ in rows:  # find the offending line for the message
+            try:
+                [float(p) for p in s_.split(",")]
+            except ValueError:
+                raise FileFormatError(f"{path}: line {lineno}: non-numeric field; expected {ncol} numbers") \
+                    from None
+        raise
     if not np.all(np.isfinite(values)):
         bad = rows[int(np.nonzero(~np.all(np.isfinite(values), axis=1))[0][0])][0]
         raise FileFormatError(f"{path}: line {bad}: NaN or inf value")
@@ -113,7 +125,10 @@ def read_frf_csv(path, kind=None) -> MeasuredFRF:
     file_kind = kind or meta.get("kind", "receptance")
     if file_kind not in FRF_KINDS:
         raise FileFormatError(f"{path}: '# kind: {file_kind}' must be one of {', '.join(FRF_KINDS)}")
-    return MeasuredFRF(f, frf, tuple(resp), tuple(refs), kind=file_kind, units=meta.get("units", ""),
-                       metadata={"source": str(path), "format": "csv"})
+    try:
+        return MeasuredFRF(f, frf, tuple(resp), tuple(refs), kind=file_kind, units=meta.get("units", ""),
+                           metadata={"source": str(path), "format": "csv"})
+    except ShapeError as exc:
+        raise FileFormatError(f"{path}: {exc}") from None
 
 

@@ -28,6 +28,12 @@ from physics.modal import eigenvalues_from_modal
 
 __all__ = ["modal_data_from_dict", "modal_data_to_dict", "read_modal_json", "write_modal_json"]
 
+#: Largest modal-data JSON file read (bytes).
+MAX_JSON_BYTES = 64 * 2**20
+#: Largest magnitude accepted in modal data (beyond it products overflow).
+MAX_MAGNITUDE = 1e100
+
+
 def _complex_array(values, path, key, ndim):
     try:
         arr = np.array(
@@ -42,6 +48,9 @@ def _complex_array(values, path, key, ndim):
         raise FileFormatError(f"{path}: field '{key}' must be {form}") from None
     if arr.ndim != ndim or not np.all(np.isfinite(arr)):
         raise FileFormatError(f"{path}: field '{key}' must be a finite {ndim}-D array")
+    if arr.size and np.max(np.abs(arr)) > MAX_MAGNITUDE:
+        raise FileFormatError(f"{path}: field '{key}' has values of magnitude {np.max(np.abs(arr)):.3g}, beyond "
+                              f"the {MAX_MAGNITUDE:g} this package accepts")
     return arr
 
 
@@ -51,7 +60,17 @@ def modal_data_from_dict(obj: dict, source="modal data") -> ModalData:
         raise FileFormatError(f"{source}: expected a JSON object with 'eigenvalues' or "
                               "'natural_frequencies_hz' and 'damping_ratios'")
     if "eigenvalues" in obj:
+        if not isinstance(obj["eigenvalues"], list):
+            raise FileFormatError(f"{source}: field 'eigenvalues' must be a list of complex strings")
         lam = _complex_array(obj["eigenvalues"], source, "eigenvalues", 1)
+        if np.any(lam.imag <= 0):
+            k = int(np.nonzero(lam.imag <= 0)[0][0])
+            raise FileFormatError(f"{source}: field 'eigenvalues' entry {k + 1} ({lam[k]:.6g}) is not in the upper "
+                                  "half-plane; give the Im > 0 member of each conjugate pair")
+        if np.any(lam.real >= 0):
+            k = int(np.nonzero(lam.real >= 0)[0][0])
+            raise FileFormatError(f"{source}: field 'eigenvalues' entry {k + 1} ({lam[k]:.6g}) has Re >= 0 "
+                                  "(no or negative damping); expected decaying modes")
     elif "natural_frequencies_hz" in obj and "damping_ratios" in obj:
         try:
             f = np.asarray(obj["natural_frequencies_hz"], dtype=float)
@@ -75,7 +94,24 @@ def modal_data_from_dict(obj: dict, source="modal data") -> ModalData:
         if vecs.shape[1] != lam.size:
             raise FileFormatError(f"{source}: field 'eigenvectors' has {vecs.shape[1]} columns "
                                   f"but there are {lam.size} eigenvalues (columns are modes)")
-    dofs = tuple(str(d) for d in obj.get("dofs", ()))
+        zero_rows = np.nonzero(~np.any(vecs != 0, axis=1))[0]
+        zero_cols = np.nonzero(~np.any(vecs != 0, axis=0))[0]
+        if zero_rows.size or zero_cols.size:
+            what = f"row {zero_rows[0] + 1}" if zero_rows.size else f"column {zero_cols[0] + 1}"
+            raise FileFormatError(f"{source}: field 'eigenvectors' {what} is zero; every measured DOF and mode "
+                                  "needs a non-zero entry")
+        if not np.any(vecs.imag):
+            raise FileFormatError(f"{source}: field 'eigenvectors' is real; complex modes scaled to unit modal A "
+                                  "(eq. 1.10) are expected, e.g. \"0.72+15.0j\"")
+    if lam.size != np.unique(lam).size:
+        _, first = np.unique(lam, return_index=True)
+        k = sorted(set(range(lam.size)) - set(first.tolist()))[0]
+        raise FileFormatError(f"{source}: field 'eigenvalues' entry {k + 1} repeats an earlier eigenvalue "
+                              f"({lam[k]:.6g}); each mode must appear once")
+    dofs = obj.get("dofs", ())
+    if not isinstance(dofs, (list, tuple)):
+        raise FileFormatError(f"{source}: field 'dofs' must be a list of labels such as \"2:y\"")
+    dofs = tuple(str(d) for d in dofs)
     if dofs and vecs is not None and len(dofs) != vecs.shape[0]:
         raise FileFormatError(f"{source}: field 'dofs' has {len(dofs)} labels but "
                               f"'eigenvectors' has {vecs.shape[0]} rows")
@@ -86,13 +122,20 @@ def read_modal_json(path) -> ModalData:
     """Read a modal-data JSON file (see module docstring)."""
     path = Path(path)
     try:
+        if path.stat().st_size > MAX_JSON_BYTES:
+            raise FileFormatError(f"{path}: {path.stat().st_size} bytes, more than the {MAX_JSON_BYTES} a "
+                                  "modal-data file may hold")
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise FileFormatError(f"{path}: file not found") from None
+    except UnicodeDecodeError as exc:
+        raise FileFormatError(f"{path}: not UTF-8 text (byte {exc.start}); expected a JSON object") from None
     try:
         obj = json.loads(text)
     except json.JSONDecodeError as exc:
         raise FileFormatError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
+    except RecursionError:
+        raise FileFormatError(f"{path}: JSON nested too deeply; expected a flat object of lists") from None
     return modal_data_from_dict(obj, str(path))
 
 

@@ -123,8 +123,13 @@ class MeasuredFRF:
     metadata: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        f = np.asarray(self.frequency_hz, dtype=np.float64)
+        f = np.asarray(self.frequency_hz)
+        if f.dtype.kind not in "iuf":
+            raise ShapeError(f"MeasuredFRF.frequency_hz must be real numbers (got {f.dtype})")
+        f = f.astype(np.float64)
         h = np.asarray(self.frf)
+        if not np.iscomplexobj(h):
+            raise ShapeError(f"MeasuredFRF.frf must be complex (got {h.dtype}); a magnitude alone is not an FRF")
         if h.ndim == 1:
             h = h[None, None, :]
         h = h.astype(np.complex128)
@@ -139,6 +144,13 @@ class MeasuredFRF:
             raise ShapeError("MeasuredFRF.frequency_hz must be finite, >= 0 and strictly increasing")
         if not np.all(np.isfinite(h)):
             raise ShapeError("MeasuredFRF.frf has NaN or inf entries")
+        mag = np.abs(h).reshape(-1, f.size)
+        if np.any(mag.max(axis=1) < 1e-250):
+            k = int(np.nonzero(mag.max(axis=1) < 1e-250)[0][0])
+            raise ShapeError(f"MeasuredFRF.frf: FRF {k + 1} is zero (all |H| < 1e-250) on every line")
+        if mag.max() > 1e100:
+            raise ShapeError(f"MeasuredFRF.frf has a value of magnitude {mag.max():.3g}, beyond the 1e+100 this "
+                             "package accepts (a unit or export error?)")
         if len(set(resp)) != len(resp) or len(set(ref)) != len(ref):
             raise ShapeError("MeasuredFRF DOF labels must be unique")
         if self.kind not in FRF_KINDS:

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from physics.errors import FileFormatError
+from physics.errors import FileFormatError, ShapeError
 from physics.io.atomic import atomic_path
 from physics.io.geometry import geometry_from_uff_sets
 from physics.io.types import DEFAULT_UNITS, MeasuredFRF, dof_label, parse_dof
@@ -120,9 +120,12 @@ def read_uff58(path, kind=None) -> MeasuredFRF:
     for n, s in frfs:
         where = f"{path}: record {n + 1} (dataset 58, response {s.get('rsp_node')}/{s.get('rsp_dir')}, " \
                 f"reference {s.get('ref_node')}/{s.get('ref_dir')})"
-        data = np.asarray(s.get("data", []))
-        x = np.asarray(s.get("x", []), dtype=float)
-        n_pts = int(s.get("num_pts", data.size))
+        try:
+            data = np.asarray(s.get("data", []))
+            x = np.asarray(s.get("x", []), dtype=float)
+            n_pts = int(s.get("num_pts", data.size))
+        except (TypeError, ValueError):
+            raise FileFormatError(f"{where}: unreadable data or frequency values") from None
         if data.size != n_pts or x.size != n_pts:
             raise FileFormatError(f"{where}: holds {data.size} values but its header announces {n_pts} "
                                   "(truncated record)")
@@ -194,7 +197,10 @@ def read_uff58(path, kind=None) -> MeasuredFRF:
                       "unit_system": system.description}}
     if geometry is not None:
         meta["geometry"] = {"source": geometry.source, "nodes_m": geometry.to_dict()}
-    return MeasuredFRF(freq, frf, tuple(resp), tuple(refs), kind=file_kind, metadata=meta)
+    try:
+        return MeasuredFRF(freq, frf, tuple(resp), tuple(refs), kind=file_kind, metadata=meta)
+    except ShapeError as exc:
+        raise FileFormatError(f"{path}: {exc}") from None
 
 
 #: Dataset types read as context of the FRFs (header, units, coordinate systems, nodes, trace lines, elements).

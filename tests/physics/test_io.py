@@ -59,11 +59,15 @@ def test_kind_conversion_is_i_omega_power(frf):
 def test_measuredfrf_validation():
     f = np.array([1.0, 2.0, 3.0])
     with pytest.raises(ShapeError, match="expected"):
-        MeasuredFRF(f, np.ones((2, 1, 3)), ("1:+Y",), ("1:+Y",))
+        MeasuredFRF(f, np.ones((2, 1, 3), complex), ("1:+Y",), ("1:+Y",))
     with pytest.raises(ShapeError, match="NaN"):
-        MeasuredFRF(f, np.array([[[1, np.nan, 1]]]), ("1:+Y",), ("1:+Y",))
+        MeasuredFRF(f, np.array([[[1, np.nan, 1]]], complex), ("1:+Y",), ("1:+Y",))
     with pytest.raises(ShapeError, match="increasing"):
-        MeasuredFRF(f[::-1], np.ones((1, 1, 3)), ("1:+Y",), ("1:+Y",))
+        MeasuredFRF(f[::-1], np.ones((1, 1, 3), complex), ("1:+Y",), ("1:+Y",))
+    with pytest.raises(ShapeError, match="complex"):
+        MeasuredFRF(f, np.ones((1, 1, 3)), ("1:+Y",), ("1:+Y",))
+    with pytest.raises(ShapeError, match="zero"):
+        MeasuredFRF(f, np.full((1, 1, 3), 1e-310 + 0j), ("1:+Y",), ("1:+Y",))
 
 
 @pytest.mark.parametrize("binary", [False, True])
