@@ -1028,6 +1028,8 @@ def identify_lscf(frequency_hz, frf, n_modes=None, drive=None, max_order=40, sel
 # ---------------------------------------------------------------------------
 
 METHODS = ("lscf", "circle", "peak")
+#: Largest lines x responses an LSCF identification takes (its cost grows with both).
+MAX_LSCF_VALUES = 100_000
 
 
 @dataclass(frozen=True)
@@ -1098,6 +1100,10 @@ def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, ma
         warnings.warn("no driving point (response DOF equal to a reference DOF): mode shapes are not "
                       "unit-modal-A scaled and cannot feed 'update' directly", stacklevel=2)
     f = frf.frequency_hz
+    if method == "lscf" and f.size * len(frf.response_dofs) > MAX_LSCF_VALUES:
+        raise ShapeError(f"{frf.metadata.get('source', 'FRF')}: {f.size} lines x {len(frf.response_dofs)} responses "
+                         f"exceed the {MAX_LSCF_VALUES} values LSCF fits in reasonable time; select a band "
+                         "(band_hz) with fewer lines")
     diagram, outside = None, np.zeros(0)
     if method == "lscf":
         res = identify_lscf(f, np.asarray(frf.frf), n_modes=n_modes, drive=drive, max_order=max_order,

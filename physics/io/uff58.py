@@ -214,6 +214,29 @@ def _short(exc) -> str:
     return " ".join(str(exc).split())[:200]
 
 
+_RECORD6_FIELDS = (("response node", 41, 51), ("response direction", 51, 55), ("reference node", 66, 76),
+                   ("reference direction", 76, 80))
+
+
+def _check_dof_fields(path: Path, raw: bytes) -> None:
+    """Node and direction fields of every dataset 58 header (record 6) must be integers.
+
+    pyuff reads a field such as ``B`` as 0, which would silently put the record at node 0.
+    """
+    import re
+
+    for k, m in enumerate(re.finditer(rb"(?m)^ {4}-1[ \t]*\r?\n {4}58b?[^\n]*\n", raw), 1):
+        lines = raw[m.end():m.end() + 2000].split(b"\n")
+        if len(lines) < 6:
+            continue
+        rec6 = lines[5].decode("latin1").rstrip("\r")
+        for name, a, b in _RECORD6_FIELDS:
+            field = rec6[a:b].strip()
+            if not re.fullmatch(r"[+-]?\d+", field):
+                raise FileFormatError(f"{path}: dataset 58 record {k}: {name} field {field!r} is not an integer "
+                                      f"(header record 6, columns {a + 1}-{b})")
+
+
 def _open_uff(path: Path):
     """Check a universal file is complete and list its dataset types."""
     import pyuff
@@ -223,6 +246,7 @@ def _open_uff(path: Path):
     except FileNotFoundError:
         raise FileFormatError(f"{path}: file not found") from None
     _check_uff_complete(path, raw)
+    _check_dof_fields(path, raw)
     try:
         uff = pyuff.UFF(str(path))
         types = [int(t) for t in uff.get_set_types()]
