@@ -67,10 +67,7 @@ def modal_data_from_dict(obj: dict, source="modal data") -> ModalData:
             k = int(np.nonzero(lam.imag <= 0)[0][0])
             raise FileFormatError(f"{source}: field 'eigenvalues' entry {k + 1} ({lam[k]:.6g}) is not in the upper "
                                   "half-plane; give the Im > 0 member of each conjugate pair")
-        if np.any(lam.real >= 0):
-            k = int(np.nonzero(lam.real >= 0)[0][0])
-            raise FileFormatError(f"{source}: field 'eigenvalues' entry {k + 1} ({lam[k]:.6g}) has Re >= 0 "
-                                  "(no or negative damping); expected decaying modes")
+
     elif "natural_frequencies_hz" in obj and "damping_ratios" in obj:
         try:
             f = np.asarray(obj["natural_frequencies_hz"], dtype=float)
@@ -100,9 +97,7 @@ def modal_data_from_dict(obj: dict, source="modal data") -> ModalData:
             what = f"row {zero_rows[0] + 1}" if zero_rows.size else f"column {zero_cols[0] + 1}"
             raise FileFormatError(f"{source}: field 'eigenvectors' {what} is zero; every measured DOF and mode "
                                   "needs a non-zero entry")
-        if not np.any(vecs.imag):
-            raise FileFormatError(f"{source}: field 'eigenvectors' is real; complex modes scaled to unit modal A "
-                                  "(eq. 1.10) are expected, e.g. \"0.72+15.0j\"")
+
     if lam.size != np.unique(lam).size:
         _, first = np.unique(lam, return_index=True)
         k = sorted(set(range(lam.size)) - set(first.tolist()))[0]
