@@ -29,6 +29,7 @@ COMMAND_MODULES = [
     "experiments.cmd_model",
     "experiments.cmd_update",
     "experiments.cmd_identify",
+    "experiments.cmd_estimate",
     "experiments.demo",
     "experiments.cmd_generate",
     "experiments.cmd_inspect",

@@ -49,7 +49,7 @@ def stabilisation_png(diagram, frequency_hz, frf, selected_hz=()) -> bytes:
     return _png(fig)
 
 
-def overlay_png(frequency_hz, measured, synthesised, labels, max_curves=6) -> bytes:
+def overlay_png(frequency_hz, measured, synthesised, labels, kind="receptance", units="m/N", max_curves=6) -> bytes:
     """Magnitude and phase of measured (lines) vs synthesised (dashed) FRFs."""
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 7), sharex=True, gridspec_kw={"height_ratios": [2, 1]})
     m = measured.reshape(-1, measured.shape[-1])
@@ -59,8 +59,8 @@ def overlay_png(frequency_hz, measured, synthesised, labels, max_curves=6) -> by
         ax1.semilogy(frequency_hz, np.abs(s[k]), "--", color=line.get_color(), lw=1.0)
         ax2.plot(frequency_hz, np.rad2deg(np.angle(m[k])), lw=1.0, color=line.get_color())
         ax2.plot(frequency_hz, np.rad2deg(np.angle(s[k])), "--", lw=1.0, color=line.get_color())
-    ax1.set_ylabel("|H| (m/N)")
-    ax1.set_title("measured (solid) vs synthesised (dashed) receptance")
+    ax1.set_ylabel(f"|H| ({units})")
+    ax1.set_title(f"measured (solid) vs synthesised (dashed) {kind}")
     ax1.legend(fontsize=7)
     ax2.set_ylabel("phase (deg)")
     ax2.set_xlabel("frequency (Hz)")

@@ -8,13 +8,15 @@ Complex modes follow the package's conjugate-pair convention (see
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import warnings
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from physics.errors import ShapeError
+from physics.errors import ConfigError, ConvergenceError, ShapeError
+from physics.io import MeasuredFRF, ModalData
+from physics.frf import FRF_KINDS, check_frf_kind, convert_frf, pole_residue
+from physics.modal import eigenvalues_from_modal
 
 
 def real_modes_from_peaks(h_abs, phase_deg, omega_rad_s, zeta, drive_index=0):
@@ -100,12 +102,6 @@ def _frf3(frequency_hz, frf):
     return f, h
 
 
-def _eigenvalues(f_hz, zeta):
-    w = 2 * np.pi * np.asarray(f_hz, dtype=float)
-    z = np.asarray(zeta, dtype=float)
-    return -z * w + 1j * w * np.sqrt(1 - z**2)
-
-
 def modal_phase_collinearity(shapes):
     """Modal phase collinearity (MPC) of complex mode shapes.
 
@@ -154,36 +150,6 @@ def shapes_from_residues(residues, drive=None):
     return R[:, r, :] / np.sqrt(R[s, r, :])
 
 
-def synthesise_frf(frequency_hz, eigenvalues, residues, lower_residual=None, upper_residual=None):
-    """Receptance of a modal model (pole-residue form with optional residuals).
-
-    ``H(w) = sum_j [R_j/(i w - lambda_j) + conj(R_j)/(i w - conj(lambda_j))] - LR/w^2 + UR``.
-
-    Parameters
-    ----------
-    frequency_hz : ndarray, shape (n_lines,)
-    eigenvalues : ndarray, complex, shape (n_modes,) (rad/s, Im > 0)
-    residues : ndarray, complex, shape (n_resp, n_ref, n_modes)
-    lower_residual, upper_residual : ndarray, shape (n_resp, n_ref), optional
-
-    Returns
-    -------
-    ndarray, complex, shape (n_resp, n_ref, n_lines)  (m/N)
-    """
-    iw = 2j * np.pi * np.asarray(frequency_hz, dtype=float)
-    lam = np.asarray(eigenvalues, dtype=complex)
-    R = np.asarray(residues, dtype=complex)
-    g = 1 / (iw[None, :] - lam[:, None])
-    gc = 1 / (iw[None, :] - np.conj(lam)[:, None])
-    H = np.einsum("srj,jk->srk", R, g) + np.einsum("srj,jk->srk", np.conj(R), gc)
-    if lower_residual is not None:
-        with np.errstate(divide="ignore"):
-            H = H + np.asarray(lower_residual)[..., None] / iw**2
-    if upper_residual is not None:
-        H = H + np.asarray(upper_residual)[..., None]
-    return H
-
-
 @dataclass(frozen=True)
 class ModalEstimate:
     """Identified modes.
@@ -203,6 +169,9 @@ class ModalEstimate:
     method : str
     scaled : bool
     lower_residual, upper_residual : ndarray, shape (n_resp, n_ref) or None
+    frequency_fit_std_hz, damping_fit_std : ndarray, shape (n_modes,) or None
+        One-sigma uncertainty from the fit itself (LSFD variable-projection
+        covariance of the poles, see :class:`LSFDResult`), where the method gives one.
     """
 
     natural_frequencies_hz: np.ndarray
@@ -217,9 +186,12 @@ class ModalEstimate:
     scaled: bool
     lower_residual: np.ndarray | None = None
     upper_residual: np.ndarray | None = None
+    frequency_fit_std_hz: np.ndarray | None = None
+    damping_fit_std: np.ndarray | None = None
 
 
-def _estimate(f_hz, zeta, residues, drive, method, f_std=None, z_std=None, lower=None, upper=None):
+def _estimate(f_hz, zeta, residues, drive, method, f_std=None, z_std=None, lower=None, upper=None,
+              f_fit_std=None, z_fit_std=None):
     f_hz, zeta = np.asarray(f_hz, float), np.asarray(zeta, float)
     order = np.argsort(f_hz)
     nan = np.full(f_hz.size, np.nan)
@@ -227,9 +199,10 @@ def _estimate(f_hz, zeta, residues, drive, method, f_std=None, z_std=None, lower
     z_std = nan if z_std is None else np.asarray(z_std, float)
     residues = np.asarray(residues, complex)[..., order]
     shapes = shapes_from_residues(residues, drive)
-    return ModalEstimate(f_hz[order], zeta[order], _eigenvalues(f_hz[order], zeta[order]), shapes, residues,
-                         f_std[order], z_std[order], modal_phase_collinearity(shapes), method,
-                         drive is not None, lower, upper)
+    lam = eigenvalues_from_modal(f_hz[order], zeta[order])
+    fit_std = [None if a is None else np.asarray(a, float)[order] for a in (f_fit_std, z_fit_std)]
+    return ModalEstimate(f_hz[order], zeta[order], lam, shapes, residues, f_std[order], z_std[order],
+                         modal_phase_collinearity(shapes), method, drive is not None, lower, upper, *fit_std)
 
 
 # ---------------------------------------------------------------------------
@@ -328,7 +301,7 @@ def peak_picking(frequency_hz, frf, n_modes=None, peaks=None, drive=None, promin
                       + ", ".join(f"{x:.4g} Hz" for x in fn[narrow])
                       + " spans fewer than 2 frequency lines, so half-power and circle-fit damping are not "
                       "resolved there (overestimated); use finer lines or the lscf method", stacklevel=2)
-    lam = _eigenvalues(fn, zeta)
+    lam = eigenvalues_from_modal(fn, zeta)
     s, r = (0, 0) if drive is None else drive
     w_k = 2 * np.pi * f[idx]
     corr = (1j * w_k - lam) / (1j * np.abs(lam) * np.sqrt(1 - zeta**2) - lam)
@@ -351,6 +324,33 @@ def _fit_circle(z):
     return c * scale, r * scale
 
 
+@dataclass(frozen=True)
+class CircleFit:
+    """Circle fit of one mode in one FRF (see :func:`circle_fit_sdof`).
+
+    Attributes
+    ----------
+    fn_hz, fn_std_hz : float
+        Natural frequency and its one-sigma standard error from the phase fit (Hz).
+    zeta, zeta_std : float
+        Damping ratio (mean of eq. 3.13 over point pairs) and the standard error of that mean.
+    modal_constant : complex
+        ``A`` of the receptance ``A / (w_n^2 - w^2 + 2 i zeta w_n w)`` near resonance (1/kg).
+    centre : complex
+        Centre of the fitted circle in the mobility plane (m/s/N).
+    radius : float
+        Radius of the fitted circle (m/s/N).
+    """
+
+    fn_hz: float
+    fn_std_hz: float
+    zeta: float
+    zeta_std: float
+    modal_constant: complex
+    centre: complex
+    radius: float
+
+
 def circle_fit_sdof(frequency_hz, mobility, fn_guess_hz, zeta_guess):
     """Circle fit of one mode in one mobility FRF (Nyquist plot, eq. 3.13).
 
@@ -371,10 +371,7 @@ def circle_fit_sdof(frequency_hz, mobility, fn_guess_hz, zeta_guess):
 
     Returns
     -------
-    dict
-        ``fn_hz, fn_std_hz, zeta, zeta_std, modal_constant`` where the modal
-        constant ``A`` (complex) gives the receptance ``A / (w_n^2 - w^2 + 2 i zeta w_n w)``
-        near resonance; ``centre``, ``radius``.
+    CircleFit
     """
     from scipy.optimize import least_squares
 
@@ -410,8 +407,8 @@ def circle_fit_sdof(frequency_hz, mobility, fn_guess_hz, zeta_guess):
     else:
         zeta, zeta_std = float(z_fit), np.nan
     A = 4 * rad * zeta * wn * np.exp(1j * phr)
-    return {"fn_hz": wn / (2 * np.pi), "fn_std_hz": wn_std / (2 * np.pi), "zeta": zeta,
-            "zeta_std": zeta_std, "modal_constant": A, "centre": c, "radius": rad}
+    return CircleFit(float(wn / (2 * np.pi)), float(wn_std / (2 * np.pi)), zeta, zeta_std, complex(A),
+                     complex(c), float(rad))
 
 
 def circle_fit(frequency_hz, frf, n_modes=None, peaks=None, drive=None, bandwidths=3.0, min_points=5):
@@ -462,9 +459,9 @@ def circle_fit(frequency_hz, frf, n_modes=None, peaks=None, drive=None, bandwidt
         for s in range(n_s):
             for r in range(n_r):
                 out = circle_fit_sdof(f[lo:hi + 1], mob[s, r, lo:hi + 1], fm, zm)
-                fn[s, r, m], zz[s, r, m] = out["fn_hz"], out["zeta"]
-                fsd[s, r, m], zsd[s, r, m] = out["fn_std_hz"], out["zeta_std"]
-                A[s, r, m] = out["modal_constant"]
+                fn[s, r, m], zz[s, r, m] = out.fn_hz, out.zeta
+                fsd[s, r, m], zsd[s, r, m] = out.fn_std_hz, out.zeta_std
+                A[s, r, m] = out.modal_constant
     weight = np.abs(A).reshape(-1, n_m)  # strong circles count more
     weight = weight / weight.sum(axis=0)
     f_mode = np.sum(weight * fn.reshape(-1, n_m), axis=0)
@@ -515,7 +512,7 @@ class StabilisationDiagram:
 
 
 def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_tol=0.05, mpf_tol=0.98,
-         max_damping=0.2):
+         max_damping=0.2, margin=0.0):
     """Poly-reference least-squares complex frequency-domain poles (pLSCF).
 
     Right matrix-fraction model in the z-domain, ``H_o(w) = B_o(z) A(z)^-1`` with
@@ -543,6 +540,11 @@ def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_to
         (always stable with one reference).
     max_damping : float
         Poles with damping outside ``(0, max_damping)`` or outside the band are dropped.
+    margin : float
+        Keep poles up to a fraction ``margin`` outside the band (``f_min/(1+margin)``
+        to ``f_max (1+margin)``), and place the z-domain Nyquist frequency at
+        ``f_max (1+margin)`` so that a mode just above the band does not alias. The
+        skirts of such modes dominate the band edges of lightly damped structures.
 
     Returns
     -------
@@ -555,7 +557,7 @@ def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_to
     if N * n_o < (max_order + 1) * (n_i + 1):
         raise ShapeError(f"lscf: {N} lines x {n_o} responses are too few for model order {max_order}")
     w = 2 * np.pi * f
-    dt = 1.0 / (2.0 * f[-1])
+    dt = 1.0 / (2.0 * f[-1] * (1.0 + margin))
     P = max_order + 1
     X = np.exp(1j * np.outer(w * dt, np.arange(P)))  # (N, P) polynomial basis
     Hrow = np.transpose(h, (0, 2, 1))  # (n_o, N, n_i)
@@ -589,7 +591,8 @@ def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_to
         L = V[:n_i, ok].T
         fn = np.abs(lam) / (2 * np.pi)
         zeta = -lam.real / np.abs(lam)
-        keep = (lam.imag > 0) & (zeta > 0) & (zeta < max_damping) & (fn >= f[0]) & (fn <= f[-1])
+        keep = (lam.imag > 0) & (zeta > 0) & (zeta < max_damping) & (fn >= f[0] / (1.0 + margin)) \
+            & (fn <= f[-1] * (1.0 + margin))
         L = L[keep] / np.linalg.norm(L[keep], axis=1, keepdims=True)
         orders.append(np.full(keep.sum(), p))
         lams.append(lam[keep])
@@ -722,23 +725,40 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
     count = np.array([m.size for m in chosen])
     mpf = np.array([d.participation[m[np.argmax(d.order[m])]] for m in chosen])
     o = np.argsort(fn)
-    return SelectedPoles(_eigenvalues(fn[o], zeta[o]), fn[o], zeta[o], f_std[o], z_std[o], count[o], mpf[o])
+    lam = eigenvalues_from_modal(fn[o], zeta[o])
+    return SelectedPoles(lam, fn[o], zeta[o], f_std[o], z_std[o], count[o], mpf[o])
+
+
+#: Weightings of :func:`lsfd` (or pass an array of noise standard deviations).
+WEIGHTINGS = ("relative", "uniform")
 
 
 @dataclass(frozen=True)
 class LSFDResult:
-    """Residues of a pole-residue model fitted by least squares.
+    """Residues of a pole-residue model fitted by least squares (see :func:`lsfd`).
 
     Attributes
     ----------
     residues : ndarray, complex, shape (n_resp, n_ref, n_modes)
+        Receptance residues ``R_j`` of ``H = sum_j R_j/(i w - lambda_j) + c.c.`` (m/N/s).
     residue_std : ndarray, shape (n_resp, n_ref, n_modes)
-        One-sigma standard error of ``|R|`` from the linear least-squares
-        covariance (white residual assumption).
+        One-sigma standard error of ``|R|`` from the weighted least-squares
+        covariance (poles taken as exact).
     lower_residual, upper_residual : ndarray, shape (n_resp, n_ref)
-        Real mass-like (``-LR/w^2``) and stiffness-like (``UR``) terms of
+        Real mass-like (``-LR/w^2``) and stiffness-like (``UR``) receptance terms of
         out-of-band modes (zero when not fitted).
     synthesised : ndarray, complex, shape (n_resp, n_ref, n_lines)
+        The fitted model on the input lines, in the input's ``kind``.
+    eigenvalues : ndarray, complex, shape (n_modes,)
+        The poles of the model (as given).
+    eigenvalue_std : ndarray, shape (n_modes, 2)
+        One-sigma standard errors of ``Re lambda`` and ``Im lambda`` (rad/s) from the
+        variable-projection covariance of the poles given every FRF (linearised,
+        residuals white within each FRF after weighting).
+    frequency_std_hz, damping_std : ndarray, shape (n_modes,)
+        The same covariance propagated to natural frequency and damping ratio.
+    kind : str
+    weighting : str
     """
 
     residues: np.ndarray
@@ -746,95 +766,382 @@ class LSFDResult:
     lower_residual: np.ndarray
     upper_residual: np.ndarray
     synthesised: np.ndarray
+    eigenvalues: np.ndarray | None = None
+    eigenvalue_std: np.ndarray | None = None
+    frequency_std_hz: np.ndarray | None = None
+    damping_std: np.ndarray | None = None
+    kind: str = "receptance"
+    weighting: str = "relative"
 
 
-def lsfd(frequency_hz, frf, eigenvalues, lower_residual=True, upper_residual=True):
-    """Least-squares frequency-domain residues with lower and upper residuals.
+def _lsfd_basis(iw, lam, power, lower, upper):
+    """Complex design matrix (n_lines, n_par): Re R, Im R per pole, then LR, UR; in the kind of ``power``."""
+    g = 1 / (iw[:, None] - lam[None, :])
+    gc = 1 / (iw[:, None] - np.conj(lam)[None, :])
+    cols = [g + gc, 1j * (g - gc)]  # basis of Re R and Im R
+    if lower:
+        cols.append((1 / iw**2)[:, None])
+    if upper:
+        cols.append(np.ones((iw.size, 1)))
+    return np.concatenate(cols, axis=1) * (iw**power)[:, None]
 
-    Fits, for all FRFs at once (one design matrix, many right-hand sides),
-    ``H(w) = sum_j [R_j/(i w - lambda_j) + conj(R_j)/(i w - conj(lambda_j))] - LR/w^2 + UR``
-    with the poles fixed, complex ``R_j`` and real ``LR``, ``UR``. Real and
-    imaginary parts are stacked so conjugate symmetry holds exactly.
+
+def _lsfd_weights(h, weighting):
+    """Weights like ``h`` (n_resp, n_ref, n_lines): 1/|H| (relative), ones (uniform) or 1/sigma (noise-based)."""
+    if isinstance(weighting, str):
+        if weighting not in WEIGHTINGS:
+            raise ShapeError(f"weighting {weighting!r} must be one of {', '.join(WEIGHTINGS)} or an array "
+                             "of noise standard deviations")
+        if weighting == "uniform":
+            return np.ones(h.shape)
+        mag = np.abs(h)
+        floor = 1e-9 * np.max(mag, axis=-1, keepdims=True)
+        if np.any(floor == 0):
+            raise ShapeError("relative weighting needs FRFs that are not identically zero")
+        return 1 / np.maximum(mag, floor)
+    try:
+        sigma = np.broadcast_to(np.asarray(weighting, dtype=float), h.shape)
+    except ValueError:
+        raise ShapeError(f"noise standard deviations (weighting) of shape {np.shape(weighting)} do not "
+                         f"broadcast to the FRF shape {h.shape}") from None
+    if not (np.all(np.isfinite(sigma)) and np.all(sigma > 0)):
+        raise ShapeError("noise standard deviations (weighting) must be finite and > 0")
+    return 1 / sigma
+
+
+def _weighted_solve(B, h, W):
+    """Batched weighted least squares of ``h_k = B x_k`` (real x) for each FRF row ``k``.
+
+    Returns the solution (n_frf, p), residual variances (n_frf,), the standard
+    errors of ``x`` (n_frf, p) and the orthonormal range basis (n_frf, 2N, p) of the
+    weighted design (columns beyond its rank zeroed).
+    """
+    A = W[:, :, None] * B[None]
+    Ar = np.concatenate([A.real, A.imag], axis=1)  # (n_frf, 2N, p)
+    wh = W * h
+    br = np.concatenate([wh.real, wh.imag], axis=1)  # (n_frf, 2N)
+    scale = np.linalg.norm(Ar, axis=1)
+    scale[scale == 0] = 1.0
+    U, s, Vt = np.linalg.svd(Ar / scale[:, None, :], full_matrices=False)
+    keep = s > s[:, :1] * max(Ar.shape[1:]) * np.finfo(float).eps
+    sinv = np.where(keep, 1 / np.where(keep, s, 1), 0.0)
+    V = np.swapaxes(Vt, 1, 2) * sinv[:, None, :]  # (n_frf, p, p): V diag(1/s)
+    x = np.einsum("fpk,fnk,fn->fp", V, U, br) / scale
+    resid = br - np.einsum("fnp,fp->fn", Ar, x)
+    dof = np.maximum(Ar.shape[1] - keep.sum(axis=1), 1)
+    s2 = np.sum(resid**2, axis=1) / dof
+    x_std = np.sqrt(np.sum(V**2, axis=-1) * s2[:, None]) / scale
+    return x, s2, x_std, U * keep[:, None, :]
+
+
+def _pole_information(iw, lam, R, power, W, Q, s2):
+    """Variable-projection (Kaufman) information matrix of the poles, shape (2m, 2m).
+
+    ``J`` is the derivative of the weighted model with respect to ``Re lambda_j`` and
+    ``Im lambda_j`` for every FRF; projected off the residue/residual columns (``Q``)
+    and weighted by each FRF's residual variance, ``S = sum_k J_k^T J_k / s2_k`` is the
+    inverse covariance of the poles had they been fitted with the residues.
+    """
+    d = 1 / (iw[:, None] - lam[None, :]) ** 2
+    dc = 1 / (iw[:, None] - np.conj(lam)[None, :]) ** 2
+    Rc = np.conj(R)
+    d_re = R[:, None, :] * d[None] + Rc[:, None, :] * dc[None]  # (n_frf, N, m)
+    d_im = 1j * (R[:, None, :] * d[None] - Rc[:, None, :] * dc[None])
+    J = np.concatenate([d_re, d_im], axis=-1) * ((iw**power)[None, :, None] * W[:, :, None])
+    Jr = np.concatenate([J.real, J.imag], axis=1)  # (n_frf, 2N, 2m)
+    Jp = Jr - np.einsum("fnk,fmk,fmq->fnq", Q, Q, Jr)
+    return np.einsum("fnp,fnq,f->pq", Jp, Jp, 1 / s2)
+
+
+def lsfd(frequency_hz, frf, eigenvalues, lower_residual=True, upper_residual=True, *, kind="receptance",
+         weighting="relative"):
+    """Least-squares frequency-domain residues, fitted to the FRFs as measured.
+
+    Fits, for every FRF with the poles common,
+    ``H(w) = (i w)^p {sum_j [R_j/(i w - lambda_j) + conj(R_j)/(i w - conj(lambda_j))] - LR/w^2 + UR}``
+    with complex residues ``R_j`` and real ``LR``, ``UR``; ``p`` = 0, 1, 2 for a
+    receptance, mobility or accelerance ``frf`` (``kind``), so the data are never
+    divided by ``i w`` and their noise is not reshaped. Real and imaginary parts are
+    stacked so conjugate symmetry holds exactly.
+
+    Weighting (why): measured FRFs span many decades, from the mass line of a
+    free-free beam at the lowest lines to antiresonances 60 dB down. Uniform
+    weights fit the largest values (the mass line, the resonance peaks) and leave
+    the rest to chance. ``"relative"`` (default) divides each line by ``|H|``, so
+    every line counts by its relative (about: decibel) error, the error a person
+    reads off an overlay plot; ``"uniform"`` is the classical unweighted fit; an
+    array of noise standard deviations (same units and shape as ``frf``, or
+    broadcastable) gives the maximum-likelihood fit for known noise.
+
+    Residual terms (why real): the rigid-body modes of a free-free test and
+    elastic modes far below the band act as a real mass line ``-LR/w^2``; modes far
+    above as a real stiffness ``UR``. Their damping adds imaginary parts of order
+    ``zeta`` (1e-4 here), below any noise, so complex residual terms would only fit
+    noise. A mode *close* to the band is not a residual: pass its pole (see
+    ``margin`` of :func:`lscf`).
 
     Parameters
     ----------
     frequency_hz : ndarray, shape (n_lines,), > 0 when ``lower_residual``
     frf : ndarray, complex, shape (n_resp, n_ref, n_lines)
-        Receptances (m/N).
+        FRFs of kind ``kind`` (SI units).
     eigenvalues : ndarray, complex, shape (n_modes,)
     lower_residual, upper_residual : bool
+    kind : {"receptance", "mobility", "accelerance"}
+    weighting : {"relative", "uniform"} or ndarray
 
     Returns
     -------
     LSFDResult
+        Residues in the receptance convention whatever ``kind``; ``synthesised`` in ``kind``.
     """
+
     f, h = _frf3(frequency_hz, frf)
+    power = FRF_KINDS.index(check_frf_kind(kind))
     lam = np.asarray(eigenvalues, dtype=complex).ravel()
-    if lower_residual and f[0] <= 0:
+    if (lower_residual or power == 0) and f[0] <= 0:
         raise ShapeError("lsfd with a lower residual needs frequencies > 0 Hz (drop the 0 Hz line)")
     iw = 2j * np.pi * f
-    g = 1 / (iw[:, None] - lam[None, :])
-    gc = 1 / (iw[:, None] - np.conj(lam)[None, :])
-    cols = [g + gc, 1j * (g - gc)]  # basis of Re R and Im R
-    if lower_residual:
-        cols.append((1 / iw**2)[:, None])
-    if upper_residual:
-        cols.append(np.ones((f.size, 1)))
-    B = np.concatenate(cols, axis=1)  # complex (N, n_par)
-    A = np.concatenate([B.real, B.imag], axis=0)
-    rhs = h.reshape(-1, f.size).T
-    b = np.concatenate([rhs.real, rhs.imag], axis=0)
-    scale = np.linalg.norm(A, axis=0)
-    sol, *_ = np.linalg.lstsq(A / scale, b, rcond=None)
-    x = sol / scale[:, None]
+    n_s, n_r, N = h.shape
+    hk = h.reshape(-1, N)
+    W = _lsfd_weights(h, weighting).reshape(-1, N)
     n_m = lam.size
-    resid = b - A @ x
-    dof = max(A.shape[0] - A.shape[1], 1)
-    s2 = np.sum(resid**2, axis=0) / dof
-    cov_diag = np.diag(np.linalg.pinv((A / scale).T @ (A / scale))) / scale**2
-    var_re, var_im = cov_diag[:n_m], cov_diag[n_m:2 * n_m]
-    R = (x[:n_m] + 1j * x[n_m:2 * n_m]).T.reshape(h.shape[0], h.shape[1], n_m)
-    R_std = np.sqrt(np.outer(s2, var_re + var_im)).reshape(h.shape[0], h.shape[1], n_m)
+    B = _lsfd_basis(iw, lam, power, lower_residual, upper_residual)
+    x, s2, x_std, Q = _weighted_solve(B, hk, W)
+    R = x[:, :n_m] + 1j * x[:, n_m:2 * n_m]
+    S = _pole_information(iw, lam, R, power, W, Q, s2)
+    cov = np.linalg.pinv(S)
+    var_re, var_im = np.clip(np.diag(cov)[:n_m], 0, None), np.clip(np.diag(cov)[n_m:], 0, None)
+    cov_ri = np.diag(cov, n_m)[:n_m]
+    a = np.abs(lam)
+    # f = |lambda|/2 pi, zeta = -Re lambda/|lambda|: first-order propagation
+    df = np.stack([lam.real, lam.imag]) / (2 * np.pi * a)
+    dz = np.stack([-1 / a + lam.real**2 / a**3, lam.real * lam.imag / a**3])
+    f_std = np.sqrt(np.clip(df[0] ** 2 * var_re + df[1] ** 2 * var_im + 2 * df[0] * df[1] * cov_ri, 0, None))
+    z_std = np.sqrt(np.clip(dz[0] ** 2 * var_re + dz[1] ** 2 * var_im + 2 * dz[0] * dz[1] * cov_ri, 0, None))
+    R = R.reshape(n_s, n_r, n_m)
+    R_std = np.hypot(x_std[:, :n_m], x_std[:, n_m:2 * n_m]).reshape(n_s, n_r, n_m)
     k = 2 * n_m
-    zero = np.zeros(h.shape[:2])
-    LR = UR = zero
+    LR = UR = np.zeros((n_s, n_r))
     if lower_residual:
-        LR = x[k].reshape(h.shape[:2])
+        LR = x[:, k].reshape(n_s, n_r)
         k += 1
     if upper_residual:
-        UR = x[k].reshape(h.shape[:2])
-    synth = (B @ x).T.reshape(h.shape)
-    return LSFDResult(R, R_std, LR, UR, synth)
+        UR = x[:, k].reshape(n_s, n_r)
+    synth = (x @ B.T).reshape(h.shape)
+    return LSFDResult(R, R_std, LR, UR, synth, lam, np.column_stack([np.sqrt(var_re), np.sqrt(var_im)]),
+                      f_std, z_std, kind, weighting if isinstance(weighting, str) else "noise")
 
 
-def identify_lscf(frequency_hz, frf, n_modes=None, drive=None, max_order=40, select=None, **lscf_options):
+def reconstruction_error_db(measured, synthesised):
+    """Median and 90th percentile over all lines and FRFs of ``|20 log10(|H_fit| / |H_meas|)|`` (dB).
+
+    Lines where either magnitude is zero are left out.
+    """
+    m, s = np.abs(np.asarray(measured)).ravel(), np.abs(np.asarray(synthesised)).ravel()
+    ok = (m > 0) & (s > 0)
+    if not np.any(ok):
+        return float("nan"), float("nan")
+    err = np.abs(20 * np.log10(s[ok] / m[ok]))
+    return float(np.median(err)), float(np.percentile(err, 90))
+
+
+@dataclass(frozen=True)
+class LSCFIdentification:
+    """Result of :func:`identify_lscf`.
+
+    Attributes
+    ----------
+    estimate : ModalEstimate
+        The modes in the band; ``frequency_std_hz``/``damping_std`` are the spread
+        of each pole over model orders, ``frequency_fit_std_hz``/``damping_fit_std``
+        the one-sigma errors of the LSFD fit.
+    diagram : StabilisationDiagram
+    fit : LSFDResult
+        Over all poles used, those of the band and those just outside it.
+    out_of_band_hz : ndarray, shape (n_out,)
+        Natural frequencies of the poles outside the band that the fit used.
+    """
+
+    estimate: ModalEstimate
+    diagram: StabilisationDiagram
+    fit: LSFDResult
+    out_of_band_hz: np.ndarray
+
+
+def identify_lscf(frequency_hz, frf, n_modes=None, drive=None, max_order=40, select=None, *, kind="receptance",
+                  weighting="relative", margin=0.1, **lscf_options):
     """LSCF poles, automatic selection and LSFD residues/shapes in one call.
+
+    Poles come from LSCF on the receptance (stabilisation over model orders),
+    including stable poles up to ``margin`` outside the band; the residues and the
+    residual terms are then fitted to ``frf`` as given (``kind``, ``weighting``,
+    see :func:`lsfd`) with every selected pole. Only modes inside the band are
+    returned as modes; the others serve the fit.
 
     Parameters
     ----------
     frequency_hz : ndarray, shape (n_lines,), > 0
     frf : ndarray, complex, shape (n_resp, n_ref, n_lines)
-        Receptances (m/N).
+        FRFs of kind ``kind`` (SI units).
     n_modes : int, optional
+        Keep the ``n_modes`` in-band modes stable over most orders.
     drive : (int, int), optional
         Driving point for unit-modal-A scaling (see :func:`shapes_from_residues`).
     max_order : int
     select : dict, optional
         Keyword arguments of :func:`select_poles`.
+    kind, weighting :
+        See :func:`lsfd`.
+    margin : float
+        See :func:`lscf`.
     **lscf_options
         Keyword arguments of :func:`lscf`.
 
     Returns
     -------
-    estimate : ModalEstimate
-        Uncertainties are the spread of the pole over model orders.
-    diagram : StabilisationDiagram
-    fit : LSFDResult
+    LSCFIdentification
     """
+
     f, h = _frf3(frequency_hz, frf)
-    diagram = lscf(f, h, max_order=max_order, **lscf_options)
-    poles = select_poles(diagram, n_modes=n_modes, **(select or {}))
-    fit = lsfd(f, h, poles.eigenvalues)
-    est = _estimate(poles.natural_frequencies_hz, poles.damping_ratios, fit.residues, drive, "lscf",
-                    poles.frequency_std_hz, poles.damping_std, fit.lower_residual, fit.upper_residual)
-    return est, diagram, fit
+    rec = convert_frf(h, 2 * np.pi * f, check_frf_kind(kind), "receptance")
+    diagram = lscf(f, rec, max_order=max_order, margin=margin, **lscf_options)
+    poles = select_poles(diagram, **(select or {}))
+    fn = poles.natural_frequencies_hz
+    inside = np.nonzero((fn >= f[0]) & (fn <= f[-1]))[0]
+    if inside.size == 0:
+        raise ConvergenceError("no stable pole inside the band: raise max_order or widen the band")
+    if n_modes is not None:
+        inside = np.sort(inside[np.argsort(-poles.count[inside], kind="stable")[:n_modes]])
+    outside = np.nonzero((fn < f[0]) | (fn > f[-1]))[0]
+    use = np.r_[inside, outside]
+    fit = lsfd(f, h, poles.eigenvalues[use], kind=kind, weighting=weighting)
+    k = np.arange(inside.size)
+    est = _estimate(fn[inside], poles.damping_ratios[inside], fit.residues[..., k], drive, "lscf",
+                    poles.frequency_std_hz[inside], poles.damping_std[inside], fit.lower_residual,
+                    fit.upper_residual, fit.frequency_std_hz[k], fit.damping_std[k])
+    return LSCFIdentification(est, diagram, fit, np.abs(fit.eigenvalues[inside.size:]) / (2 * np.pi))
+
+
+# ---------------------------------------------------------------------------
+# Identification of a measured FRF file
+# ---------------------------------------------------------------------------
+
+METHODS = ("lscf", "circle", "peak")
+#: Largest lines x responses an LSCF identification takes (its cost grows with both).
+MAX_LSCF_VALUES = 100_000
+
+
+@dataclass(frozen=True)
+class Identification:
+    """An identification run on a :class:`~physics.io.MeasuredFRF`.
+
+    Attributes
+    ----------
+    frf : MeasuredFRF
+        The band-limited FRFs that were fitted, of the input's kind (SI units).
+    estimate : ModalEstimate
+    synthesised : ndarray, complex, shape like ``frf.frf``
+        The identified model on the same lines, of the same kind and units.
+    diagram : StabilisationDiagram or None
+        LSCF only.
+    drive : str or None
+        Reference DOF label of the driving point that scaled the shapes.
+    out_of_band_hz : ndarray
+        Poles just outside the band that the fit used (LSCF only; not reported as modes).
+    """
+
+    frf: MeasuredFRF
+    estimate: ModalEstimate
+    synthesised: np.ndarray
+    diagram: StabilisationDiagram | None
+    drive: str | None
+    out_of_band_hz: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def modal_data(self) -> ModalData:
+        """Eigenvalues and shapes over the response DOFs, for updating."""
+        return ModalData(self.estimate.eigenvalues, self.estimate.shapes, self.frf.response_dofs)
+
+
+def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, max_order=40) -> Identification:
+    """Identify modes of a :class:`~physics.io.MeasuredFRF` (band-limited, fitted in its own kind).
+
+    The first driving point (a response DOF equal to a reference DOF) scales the
+    shapes to unit modal A; without one the shapes are unscaled (a warning).
+
+    Parameters
+    ----------
+    frf : MeasuredFRF
+    method : {"lscf", "circle", "peak"}
+    band_hz : (float, float), optional
+        ``(fmin, fmax)`` in Hz.
+    n_modes : int, optional
+        Modes to keep (default: all found).
+    max_order : int
+        Highest LSCF model order.
+
+    Returns
+    -------
+    Identification
+    """
+    if method not in METHODS:
+        raise ConfigError(f"method {method!r} must be one of {', '.join(METHODS)}")
+    if frf.frequency_hz[0] == 0:
+        frf = frf.select_band(fmin_hz=np.nextafter(0.0, 1.0))
+    if band_hz is not None:
+        fmin, fmax = band_hz
+        if not fmin < fmax:
+            raise ConfigError(f"band_hz ({fmin}, {fmax}): the lower bound must be below the upper")
+        frf = frf.select_band(fmin, fmax)
+    drives = frf.driving_points
+    drive = drives[0] if drives else None
+    if drive is None:
+        warnings.warn("no driving point (response DOF equal to a reference DOF): mode shapes are not "
+                      "unit-modal-A scaled and cannot feed 'update' directly", stacklevel=2)
+    f = frf.frequency_hz
+    if method == "lscf" and f.size * len(frf.response_dofs) > MAX_LSCF_VALUES:
+        raise ShapeError(f"{frf.metadata.get('source', 'FRF')}: {f.size} lines x {len(frf.response_dofs)} responses "
+                         f"exceed the {MAX_LSCF_VALUES} values LSCF fits in reasonable time; select a band "
+                         "(band_hz) with fewer lines")
+    diagram, outside = None, np.zeros(0)
+    if method == "lscf":
+        res = identify_lscf(f, np.asarray(frf.frf), n_modes=n_modes, drive=drive, max_order=max_order,
+                            kind=frf.kind)
+        est, diagram, synth, outside = res.estimate, res.diagram, res.fit.synthesised, res.out_of_band_hz
+    else:
+        h = np.asarray(frf.to_kind("receptance").frf)
+        est = (circle_fit if method == "circle" else peak_picking)(f, h, n_modes=n_modes, drive=drive)
+        synth = convert_frf(pole_residue(est.eigenvalues, est.residues, frf.omega_rad_s), frf.omega_rad_s,
+                            "receptance", frf.kind)
+    label = frf.reference_dofs[drive[1]] if drive else None
+    return Identification(frf, est, synth, diagram, label, outside)
+
+
+def identify_file(path, method="lscf", band_hz=None, n_modes=None, max_order=40) -> Identification:
+    """:func:`identify_frf` on an FRF file (UFF 58, CSV or ``.npz``; see :func:`physics.io.read_frf`).
+
+    A universal file of time records (force and responses, no FRF) is estimated
+    first (:func:`physics.time_records.estimate_from_records`, H1, random
+    excitation defaults), with a warning that says so.
+    """
+    return identify_frf(read_measured_frf(path), method, band_hz, n_modes, max_order)
+
+
+def read_measured_frf(path) -> MeasuredFRF:
+    """FRFs of a file: read as FRFs, or estimated from its time records (with a warning saying how)."""
+    from physics.errors import FileFormatError
+    from physics.io import read_frf
+
+    try:
+        return read_frf(path)
+    except FileFormatError as exc:
+        if "1 (time response)" not in str(exc):
+            raise
+    from physics.io.timedata import read_uff_time_records
+    from physics.time_records import estimate_from_records
+
+    est = estimate_from_records(read_uff_time_records(path))
+    warnings.warn(f"{path}: holds time records, not FRFs: estimated {est.description} before identifying",
+                  stacklevel=2)
+    return est.frf

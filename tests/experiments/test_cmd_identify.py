@@ -5,15 +5,15 @@ import json
 import numpy as np
 import pytest
 
-from experiments.bench_identification import simulate
 from experiments.cli import main
 from physics.io import MeasuredFRF, read_modal_json, write_frf_csv, write_frf_npz, write_uff58
+from physics.thesis import beam5_reduced_model, simulated_beam5_test
 
 
 @pytest.fixture(scope="module")
 def beam5_files(tmp_path_factory):
     d = tmp_path_factory.mktemp("frf")
-    frf, exact = simulate(noise=0.01, seed=3)
+    frf, exact = simulated_beam5_test(noise=0.01, seed=3, damping="heavy")
     write_uff58(d / "beam5.uff", frf, binary=True)
     write_frf_csv(d / "beam5.csv", frf.to_kind("accelerance"))
     write_frf_npz(d / "beam5.npz", frf)
@@ -59,7 +59,7 @@ def test_identify_out_dir_feeds_update(capsys, beam5_files, tmp_path):
     code, out, err = _run(capsys, ["identify", str(d / "beam5.uff"), "--out", str(tmp_path / "id")])
     assert code == 0, err
     assert sorted(p.name for p in (tmp_path / "id").iterdir()) == ["modal.json", "overlay.png",
-                                                                   "stabilisation.png"]
+                                                                   "stabilisation.png", "synthesised.uff"]
     assert (tmp_path / "id" / "overlay.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     modal = read_modal_json(tmp_path / "id" / "modal.json")
     np.testing.assert_allclose(modal.natural_frequencies_hz, exact.natural_frequencies_hz, rtol=5e-4)
@@ -80,7 +80,7 @@ def test_identify_bad_files_one_line_exit_2(capsys, tmp_path, beam5_files):
 
 
 def test_identify_without_driving_point_warns_unscaled(capsys, tmp_path):
-    frf, _ = simulate(noise=0.0, seed=0)
+    frf, _ = simulated_beam5_test(noise=0.0, seed=0, damping="heavy")
     other = MeasuredFRF(frf.frequency_hz, frf.frf[:3], frf.response_dofs[:3], frf.reference_dofs)
     write_frf_npz(tmp_path / "x.npz", other)
     code, out, err = _run(capsys, ["identify", str(tmp_path / "x.npz"), "--modes", "4", "--json"])
@@ -89,14 +89,67 @@ def test_identify_without_driving_point_warns_unscaled(capsys, tmp_path):
 
 
 def test_update_accepts_frf_file_and_recovers_model(capsys, beam5_files):
-    from experiments.bench_identification import beam5_matrices
-
     d, exact = beam5_files
     code, out, err = _run(capsys, ["update", "--modal", str(d / "beam5.uff"), "--json"])
     assert code == 0, err
     res = json.loads(out)
     np.testing.assert_allclose(res["measured_natural_frequencies_hz"], exact.natural_frequencies_hz, rtol=5e-4)
-    _, C, K = beam5_matrices()
+    _, C, K = beam5_reduced_model("heavy")
     # the IIRS-reduced mass of the package equals the fixture's M to its printed digits,
     # so Pilkey's updated K is close to the K that made the FRFs
     np.testing.assert_allclose(np.diag(res["K"]), np.diag(K), rtol=0.02)
+
+
+def test_identify_writes_synthesised_uff_in_the_input_kind_and_reports_db_error(capsys, tmp_path):
+    from experiments.bench_identification import simulate_free_free
+    from physics.identification import reconstruction_error_db
+    from physics.io import read_frf
+
+    frf, truth = simulate_free_free(seed=2)
+    write_uff58(tmp_path / "ff.uff", frf, binary=True)
+    code, out, err = _run(capsys, ["identify", str(tmp_path / "ff.uff"), "--json", "--out", str(tmp_path / "o")])
+    assert code == 0, err
+    res = json.loads(out)
+    synth = read_frf(tmp_path / "o" / "synthesised.uff")
+    assert synth.kind == "accelerance" and synth.units == "m/s^2/N"
+    np.testing.assert_array_equal(synth.frequency_hz, frf.frequency_hz)
+    assert synth.response_dofs == frf.response_dofs and synth.reference_dofs == frf.reference_dofs
+    med, p90 = reconstruction_error_db(frf.frf, synth.frf)  # recomputed from the written file
+    assert res["fit_error_db"]["median"] == pytest.approx(med, rel=1e-6) and med < 0.1
+    assert res["fit_error_db"]["p90"] == pytest.approx(p90, rel=1e-6) and p90 < 0.3
+    assert res["kind"] == "accelerance" and res["out_of_band_poles_hz"] == [pytest.approx(1005.0, abs=0.5)]
+    m = res["modes"][0]
+    assert m["frequency_fit_std_hz"] > 0 and m["damping_fit_std"] > 0 and "model orders" in \
+        res["uncertainty"]["frequency_std_hz, damping_std"]
+
+
+def test_identify_json_reports_units_and_positions_from_the_file(capsys, tmp_path):
+    import pyuff
+
+    frf, _ = simulated_beam5_test(noise=0.0, seed=0, damping="heavy")
+    # the same test written by a system in millimetres: dataset 164 (length factor 1000), nodes in mm,
+    # receptances in mm/N with no unit labels
+    x_mm = [0.0, 152.375, 304.75, 457.125, 609.5]
+    sets = [pyuff.prepare_164(units_code=9, units_description="mm user", temp_mode=1, length=1000.0, force=1.0,
+                              temp=1.0, temp_offset=273.15),
+            pyuff.prepare_15(node_nums=[1, 2, 3, 4, 5], def_cs=[0] * 5, disp_cs=[0] * 5, color=[1] * 5,
+                             x=x_mm, y=[0.0] * 5, z=[0.0] * 5)]
+    for i, dof in enumerate(frf.response_dofs):
+        sets.append(pyuff.prepare_58(binary=1, func_type=4, rsp_node=int(dof[0]), rsp_dir=2, ref_node=5, ref_dir=2,
+                                     data=np.ascontiguousarray(frf.frf[i, 0] * 1000.0), x=frf.frequency_hz,
+                                     abscissa_spacing=1, abscissa_spec_data_type=18, ordinate_spec_data_type=8,
+                                     orddenom_spec_data_type=13))
+    pyuff.UFF(str(tmp_path / "mm.uff")).write_sets(sets, mode="add")
+    code, out, err = _run(capsys, ["identify", str(tmp_path / "mm.uff"), "--modes", "4", "--json"])
+    assert code == 0, err
+    res = json.loads(out)
+    assert res["units"]["si"] == "m/N" and res["units"]["factor_to_si"] == [pytest.approx(1e-3)]
+    assert res["positions_m"] == {"2:+Y": pytest.approx(0.152375), "3:+Y": pytest.approx(0.30475),
+                                  "4:+Y": pytest.approx(0.457125), "5:+Y": pytest.approx(0.6095)}
+    assert "geometry" in res["positions_source"]
+    # the CSV of the same FRFs has no geometry: the quarter-point convention is named
+    write_frf_csv(tmp_path / "b.csv", frf)
+    code, out, err = _run(capsys, ["identify", str(tmp_path / "b.csv"), "--modes", "4", "--json"])
+    res = json.loads(out)
+    assert res["positions_m"] is None and "quarter points" in res["positions_source"]
+    assert res["units"]["si"] == "m/N"

@@ -1,28 +1,20 @@
 """Tests of modal identification against closed forms and exact simulated FRFs."""
 
-import json
-from importlib import resources
-
 import numpy as np
 import pytest
 
 from physics.errors import ConvergenceError, ShapeError
-from physics.frf import receptance
+from physics.frf import pole_residue, receptance
 from physics.identification import (circle_fit, circle_fit_sdof, identify_lscf, lscf, lsfd,
                                     modal_phase_collinearity, peak_picking, select_poles,
-                                    shapes_from_residues, synthesise_frf)
+                                    shapes_from_residues)
 from physics.modal import complex_modes, mac
+from physics.thesis import beam5_reduced_model, simulated_beam5_test
 
 
-def beam5(damping="nonprop"):
-    """IIRS-reduced beam-5 model (thesis) with a non-proportional damping matrix."""
-    text = resources.files("experiments").joinpath("data/thesis/beams.json").read_text()
-    red = json.loads(text)["beams"]["5"]["iirs_reduced"]
-    M, K = np.array(red["M"]), np.array(red["K"])
-    C = 2.0 * M + 4e-6 * K
-    C[3, 3] += 0.4  # tip dashpot and a root dashpot make the damping non-proportional
-    C[0, 0] += 0.2
-    return M, C, K
+def beam5():
+    """IIRS-reduced beam-5 model (thesis) with a non-proportional damping matrix (dashpots at root and tip)."""
+    return beam5_reduced_model("heavy")
 
 
 def align(shapes, ref):
@@ -51,7 +43,7 @@ def test_synthesis_matches_direct_inversion_and_shapes_from_residues():
     f = np.linspace(5, 800, 300)
     psi = cm.eigenvectors
     R = psi[:, None, :] * psi[[3, 1]][None, :, :]  # references: DOFs 3 and 1
-    H = synthesise_frf(f, cm.eigenvalues, R)
+    H = pole_residue(cm.eigenvalues, R, 2 * np.pi * f)
     Hd = receptance(M, C, K, 2 * np.pi * f, reference=[3, 1])
     np.testing.assert_allclose(H, Hd, rtol=1e-9, atol=1e-12 * np.abs(Hd).max())
     np.testing.assert_allclose(align(shapes_from_residues(R, drive=(1, 1)), psi), psi, rtol=1e-12)
@@ -63,10 +55,13 @@ def test_circle_fit_is_exact_for_sdof_mobility():
     A = 2.5 * np.exp(0.3j)
     Y = 2j * np.pi * f * sdof_receptance(f, fn, zeta, A) + (0.01 - 0.02j)  # offset from other modes
     out = circle_fit_sdof(f, Y, fn * 1.004, 0.02)
-    assert out["fn_hz"] == pytest.approx(fn, rel=1e-9)
-    assert out["zeta"] == pytest.approx(zeta, rel=1e-9)  # eq. 3.13 holds exactly for every pair
-    assert out["zeta_std"] < 1e-10
-    assert out["modal_constant"] == pytest.approx(A, rel=1e-8)
+    assert out.fn_hz == pytest.approx(fn, rel=1e-9)
+    assert out.zeta == pytest.approx(zeta, rel=1e-9)  # eq. 3.13 holds exactly for every pair
+    assert out.zeta_std < 1e-10
+    assert out.modal_constant == pytest.approx(A, rel=1e-8)
+    # the mobility circle of A/(wn^2 - w^2 + 2 i zeta wn w) has diameter |A|/(2 zeta wn)
+    assert out.radius == pytest.approx(abs(A) / (4 * zeta * 2 * np.pi * fn), rel=1e-9)
+    assert out.centre == pytest.approx((0.01 - 0.02j) + out.radius * np.exp(1j * np.angle(A)), rel=1e-8)
 
 
 def test_peak_picking_half_power_on_fine_sdof():
@@ -88,13 +83,13 @@ def test_all_methods_on_beam5_noise_free():
     cm = complex_modes(M, C, K)
     f = np.arange(0.5, 800.0, 0.5)
     H = receptance(M, C, K, 2 * np.pi * f, reference=[3])
-    lscf_est, diagram, fit = identify_lscf(f, H, n_modes=4, drive=(3, 0))
+    res = identify_lscf(f, H, n_modes=4, drive=(3, 0))
+    lscf_est, fit = res.estimate, res.fit
     np.testing.assert_allclose(lscf_est.natural_frequencies_hz, cm.natural_frequencies_hz, rtol=1e-7)
     np.testing.assert_allclose(lscf_est.damping_ratios, cm.damping_ratios, rtol=1e-5)
     np.testing.assert_allclose(align(lscf_est.shapes, cm.eigenvectors), cm.eigenvectors,
                                rtol=0, atol=1e-5 * np.abs(cm.eigenvectors).max())
     np.testing.assert_allclose(fit.synthesised, H, rtol=0, atol=1e-6 * np.abs(H).max())
-    assert np.all(diagram.status[diagram.order == diagram.order.max()] >= 0)
     circ = circle_fit(f, H, n_modes=4, drive=(3, 0))
     np.testing.assert_allclose(circ.natural_frequencies_hz, cm.natural_frequencies_hz, rtol=2e-4)
     np.testing.assert_allclose(circ.damping_ratios, cm.damping_ratios, rtol=0.03)
@@ -112,7 +107,8 @@ def test_lscf_with_noise_recovers_poles_within_spread():
     H = receptance(M, C, K, 2 * np.pi * f)  # full 4x4 FRF matrix: poly-reference
     rng = np.random.default_rng(1)
     Hn = H + 0.01 * np.abs(H) * (rng.normal(size=H.shape) + 1j * rng.normal(size=H.shape)) / np.sqrt(2)
-    est, diagram, fit = identify_lscf(f, Hn, n_modes=4, drive=(0, 0))
+    res = identify_lscf(f, Hn, n_modes=4, drive=(0, 0))
+    est, fit = res.estimate, res.fit
     np.testing.assert_allclose(est.natural_frequencies_hz, cm.natural_frequencies_hz, rtol=1e-4)
     np.testing.assert_allclose(est.damping_ratios, cm.damping_ratios, rtol=0.03)
     assert np.all(np.diag(mac(est.shapes, cm.eigenvectors)) > 0.999)
@@ -127,8 +123,8 @@ def test_poly_reference_separates_closely_spaced_overlapping_modes():
     psi = np.array([[1.0, 0.8], [0.7, -1.0], [0.3, 0.6]], complex) * 0.01
     R = psi[:, None, :] * psi[:2][None, :, :]  # two references at DOFs 0 and 1
     f = np.arange(90.0, 110.0, 0.05)
-    H = synthesise_frf(f, lam, R)
-    est, diagram, _ = identify_lscf(f, H, n_modes=2, drive=(0, 0), max_order=30)
+    H = pole_residue(lam, R, 2 * np.pi * f)
+    est = identify_lscf(f, H, n_modes=2, drive=(0, 0), max_order=30).estimate
     np.testing.assert_allclose(est.natural_frequencies_hz, fn_true, rtol=1e-7)
     np.testing.assert_allclose(est.damping_ratios, z_true, rtol=1e-5)
     assert np.all(np.diag(mac(est.shapes, psi)) > 0.99999)
@@ -136,19 +132,66 @@ def test_poly_reference_separates_closely_spaced_overlapping_modes():
     assert peak_picking(f, H, drive=(0, 0)).natural_frequencies_hz.size == 1
 
 
-def test_lsfd_residuals_absorb_out_of_band_modes():
+@pytest.mark.parametrize("weighting", ["uniform", "relative"])
+def test_lsfd_residuals_absorb_out_of_band_modes(weighting):
     M, C, K = beam5()
     cm = complex_modes(M, C, K)
     f = np.arange(80.0, 450.0, 0.5)  # modes 2 and 3 only; modes 1 and 4 out of band
     H = receptance(M, C, K, 2 * np.pi * f, reference=[3])
     R_true = cm.eigenvectors[:, None, 1:3] * cm.eigenvectors[3, 1:3]
-    with_res = lsfd(f, H, cm.eigenvalues[1:3])
-    without = lsfd(f, H, cm.eigenvalues[1:3], lower_residual=False, upper_residual=False)
+    with_res = lsfd(f, H, cm.eigenvalues[1:3], weighting=weighting)
+    without = lsfd(f, H, cm.eigenvalues[1:3], lower_residual=False, upper_residual=False, weighting=weighting)
     err_with = np.abs(with_res.residues - R_true).max() / np.abs(R_true).max()
     err_without = np.abs(without.residues - R_true).max() / np.abs(R_true).max()
-    assert err_with < 2e-3
+    # the two residual terms are a truncated expansion of modes 1 and 4 (9 % damping at the tip):
+    # exact enough for the peaks (uniform), less so near antiresonances, which relative weighting counts
+    assert err_with < (2e-3 if weighting == "uniform" else 2.5e-2)
     assert err_without > 5 * err_with
     assert with_res.lower_residual[3, 0] > 0  # a mode below the band acts like a mass line
+
+
+def test_lsfd_in_the_measured_kind_equals_the_receptance_fit_when_uniform_in_that_kind():
+    M, C, K = beam5()
+    cm = complex_modes(M, C, K)
+    f = np.arange(5.0, 800.0, 0.5)
+    w = 2 * np.pi * f
+    H = receptance(M, C, K, w, reference=[3])
+    acc = -(w**2) * H
+    fit = lsfd(f, acc, cm.eigenvalues, kind="accelerance", lower_residual=False, upper_residual=False)
+    R_true = cm.eigenvectors[:, None, :] * cm.eigenvectors[3]
+    np.testing.assert_allclose(fit.residues, R_true, rtol=0, atol=1e-9 * np.abs(R_true).max())
+    np.testing.assert_allclose(fit.synthesised, acc, rtol=0, atol=1e-9 * np.abs(acc).max())
+    assert fit.kind == "accelerance"
+    with pytest.raises(ShapeError, match="weighting"):
+        lsfd(f, acc, cm.eigenvalues, kind="accelerance", weighting="log")
+
+
+def test_lsfd_fit_uncertainty_matches_the_scatter_over_noise_realisations():
+    # one SDOF mode, known noise: the pole covariance of the fit must predict the scatter of
+    # the poles a fit of the pole itself would give (Monte Carlo with a nonlinear least squares)
+    from scipy.optimize import least_squares
+
+    fn, zeta = 50.0, 0.02
+    lam = -zeta * 2 * np.pi * fn + 2j * np.pi * fn * np.sqrt(1 - zeta**2)
+    R = 1e-3 / (2j * lam.imag)
+    f = np.arange(40.0, 60.0, 0.1)
+    H0 = pole_residue(np.array([lam]), np.array([[[R]]]), 2 * np.pi * f)
+    sigma = 0.02 * np.abs(H0).max()
+    rng = np.random.default_rng(0)
+    fs = []
+    for _ in range(40):
+        Hn = H0 + sigma * (rng.normal(size=H0.shape) + 1j * rng.normal(size=H0.shape)) / np.sqrt(2)
+
+        def resid(p):
+            lam_p = complex(p[0], p[1])
+            r = lsfd(f, Hn, [lam_p], lower_residual=False, upper_residual=False, weighting="uniform")
+            d = (r.synthesised - Hn).ravel() / sigma
+            return np.r_[d.real, d.imag]
+
+        fs.append(np.abs(complex(*least_squares(resid, [lam.real, lam.imag], diff_step=1e-7).x)) / (2 * np.pi))
+    Hn = H0 + sigma * (rng.normal(size=H0.shape) + 1j * rng.normal(size=H0.shape)) / np.sqrt(2)
+    one = lsfd(f, Hn, [lam], lower_residual=False, upper_residual=False, weighting="uniform")
+    assert one.frequency_std_hz[0] == pytest.approx(np.std(fs, ddof=1), rel=0.35)
 
 
 def test_select_poles_rules_and_errors():
@@ -156,9 +199,15 @@ def test_select_poles_rules_and_errors():
     f = np.arange(0.5, 800.0, 0.5)
     H = receptance(M, C, K, 2 * np.pi * f, reference=[3])
     d = lscf(f, H, max_order=30)
-    assert set(np.unique(d.status)) <= {0, 1, 2, 3, 4}
+    # exact data: the four poles are stable (code 4) from the order that first holds all of them
+    top_order = d.order == d.order.max()
+    assert np.sum(d.status[top_order] == 4) >= 4
     top = select_poles(d, n_modes=2)
     assert top.eigenvalues.size == 2 and np.all(top.count >= 5)
+    # the two largest clusters are two of the four true modes, sorted by frequency
+    exact = complex_modes(M, C, K).natural_frequencies_hz
+    assert np.all(np.min(np.abs(top.natural_frequencies_hz[:, None] / exact[None, :] - 1), axis=1) < 1e-6)
+    assert np.all(np.diff(top.natural_frequencies_hz) > 0)
     with pytest.raises(ConvergenceError, match="stable"):
         select_poles(d, min_count=10_000)
     with pytest.raises(ShapeError):
@@ -168,13 +217,59 @@ def test_select_poles_rules_and_errors():
 def test_peak_picking_warns_when_the_half_power_band_is_below_the_line_spacing():
     import warnings as _w
 
-    from experiments.bench_identification import simulate
-    from physics.identification import peak_picking
-
-    frf, exact = simulate(noise=0.0, damping="thesis")  # mode 1: zeta 0.26 %, band 0.1 Hz < 0.5 Hz lines
+    frf, exact = simulated_beam5_test(noise=0.0, damping="thesis")  # mode 1: zeta 0.26 %, band 0.1 Hz < 0.5 Hz lines
     with pytest.warns(UserWarning, match="fewer than 2 frequency lines"):
         peak_picking(frf.frequency_hz, frf.frf, 4, drive=(3, 0))
-    fine, _ = simulate(noise=0.0, damping="heavy")
+    fine, _ = simulated_beam5_test(noise=0.0, damping="heavy")
     with _w.catch_warnings():
         _w.simplefilter("error")
         peak_picking(fine.frequency_hz, fine.frf, 4, drive=(3, 0))
+
+
+def test_identify_reproduces_a_realistic_free_free_impact_test():
+    """Accelerance, 0.01-0.06 % damping, rigid-body mass line, a mode 5 Hz above the band, noise floor.
+
+    The truth is the closed-form free-free beam (independent of the fit). The reconstruction must sit
+    at the noise (measured vs truth: median 0.037 dB) and beat the previous fit (receptance, uniform
+    weights, in-band poles only) several times over.
+    """
+    import warnings as _w
+
+    from experiments.bench_identification import simulate_free_free
+    from physics.identification import identify_frf, reconstruction_error_db
+
+    frf, truth = simulate_free_free(seed=0)
+    noise_med, _ = reconstruction_error_db(frf.frf, truth["exact"])
+    with _w.catch_warnings():
+        _w.simplefilter("error")  # a driving point is present: no warning expected
+        ident = identify_frf(frf)
+    est = ident.estimate
+    assert ident.frf.kind == "accelerance" and ident.synthesised.shape == frf.frf.shape
+    np.testing.assert_allclose(est.natural_frequencies_hz, truth["frequency_hz"], rtol=1e-4)
+    np.testing.assert_allclose(est.damping_ratios, truth["damping_ratio"], rtol=0.06)
+    med, p90 = reconstruction_error_db(frf.frf, ident.synthesised)
+    med_truth, p90_truth = reconstruction_error_db(truth["exact"], ident.synthesised)
+    assert med < 2 * noise_med and p90 < 0.3 and med_truth < noise_med and p90_truth < 0.2
+    assert np.all(np.diag(mac(est.shapes, truth["shapes"])) > 0.9995)
+    # the previous fit: same in-band poles, receptance, uniform weights
+    old = lsfd(frf.frequency_hz, frf.to_kind("receptance").frf, est.eigenvalues, weighting="uniform")
+    old_med, old_p90 = reconstruction_error_db(frf.to_kind("receptance").frf, old.synthesised)
+    assert old_med > 4 * med and old_p90 > 10 * p90
+    # fit uncertainties: the true values lie within 4 sigma; the order spread alone is too optimistic
+    # for the lightest-damped modes
+    assert np.all(np.abs(est.natural_frequencies_hz - truth["frequency_hz"]) < 4 * est.frequency_fit_std_hz)
+    assert np.all(np.abs(est.damping_ratios - truth["damping_ratio"]) < 4 * est.damping_fit_std)
+
+
+def test_realistic_fit_beats_sdypy_ema_by_half():
+    pytest.importorskip("sdypy.EMA")
+    import warnings as _w
+
+    from experiments.bench_identification import free_free_table
+
+    with _w.catch_warnings():
+        _w.simplefilter("ignore")
+        rows = free_free_table(seed=1)["rows"]
+    ours, theirs = rows["beam-damage lscf+lsfd"], rows["sdypy-EMA lscf+lsfd"]
+    assert ours["db_measured"][0] <= 0.5 * theirs["db_measured"][0]
+    assert ours["db_measured"][1] <= 0.5 * theirs["db_measured"][1]

@@ -59,11 +59,15 @@ def test_kind_conversion_is_i_omega_power(frf):
 def test_measuredfrf_validation():
     f = np.array([1.0, 2.0, 3.0])
     with pytest.raises(ShapeError, match="expected"):
-        MeasuredFRF(f, np.ones((2, 1, 3)), ("1:+Y",), ("1:+Y",))
+        MeasuredFRF(f, np.ones((2, 1, 3), complex), ("1:+Y",), ("1:+Y",))
     with pytest.raises(ShapeError, match="NaN"):
-        MeasuredFRF(f, np.array([[[1, np.nan, 1]]]), ("1:+Y",), ("1:+Y",))
+        MeasuredFRF(f, np.array([[[1, np.nan, 1]]], complex), ("1:+Y",), ("1:+Y",))
     with pytest.raises(ShapeError, match="increasing"):
-        MeasuredFRF(f[::-1], np.ones((1, 1, 3)), ("1:+Y",), ("1:+Y",))
+        MeasuredFRF(f[::-1], np.ones((1, 1, 3), complex), ("1:+Y",), ("1:+Y",))
+    with pytest.raises(ShapeError, match="complex"):
+        MeasuredFRF(f, np.ones((1, 1, 3)), ("1:+Y",), ("1:+Y",))
+    with pytest.raises(ShapeError, match="zero"):
+        MeasuredFRF(f, np.full((1, 1, 3), 1e-310 + 0j), ("1:+Y",), ("1:+Y",))
 
 
 @pytest.mark.parametrize("binary", [False, True])
@@ -221,3 +225,32 @@ def test_writes_are_atomic_no_temp_left(tmp_path, frf):
     for writer, name in ((write_uff58, "a.uff"), (write_frf_csv, "a.csv"), (write_frf_npz, "a.npz")):
         writer(tmp_path / name, frf)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.csv", "a.npz", "a.uff"]
+
+
+def test_atomic_path_renames_on_success_and_leaves_target_on_failure(tmp_path):
+    import physics.io as pio
+
+    target = tmp_path / "sub" / "t.txt"
+    pio.atomic_write_text(target, "first")
+    with pytest.raises(RuntimeError):
+        with pio.atomic_path(target) as tmp:
+            tmp.write_text("half")
+            raise RuntimeError("writer died")
+    assert target.read_text() == "first" and sorted(p.name for p in target.parent.iterdir()) == ["t.txt"]
+    with pytest.raises(FileNotFoundError):
+        with pio.atomic_path(target):
+            pass  # the writer wrote nothing: the target must not be replaced by an empty file
+    assert target.read_text() == "first"
+    with pio.atomic_path(target) as tmp:
+        tmp.write_bytes(b"second")
+    assert target.read_bytes() == b"second" and len(list(target.parent.iterdir())) == 1
+
+
+def test_physics_io_keeps_every_public_name_of_the_module_it_replaced():
+    import physics.io as pio
+
+    names = {"MeasuredFRF", "ModalData", "FRF_KINDS", "DEFAULT_UNITS", "atomic_write_bytes", "atomic_write_text",
+             "atomic_path", "dof_label", "parse_dof", "format_complex", "modal_data_from_dict",
+             "modal_data_to_dict", "read_modal_json", "write_modal_json", "read_frf", "read_frf_csv",
+             "read_frf_npz", "read_uff58", "write_frf_csv", "write_frf_npz", "write_uff58"}
+    assert names <= set(pio.__all__) and all(hasattr(pio, n) for n in names)

@@ -1,0 +1,71 @@
+"""``beam-damage estimate``: FRFs (H1/H2/Hv with coherence) from force and response time records."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from physics.errors import ConfigError
+from physics.io import write_uff58
+from physics.io.timedata import read_uff_time_records
+from physics.time_records import ESTIMATORS, EXCITATIONS, estimate_from_records
+
+
+def run(args) -> dict:
+    if args.averages < 1:
+        raise ConfigError(f"--averages {args.averages}: must be >= 1")
+    if not 0 <= args.overlap < 1:
+        raise ConfigError(f"--overlap {args.overlap:g}: must be in [0, 1)")
+    if not 0 < args.decay <= 1:
+        raise ConfigError(f"--decay {args.decay:g}: must be in (0, 1]")
+    if args.fmax is not None and not args.fmax > 0:
+        raise ConfigError(f"--fmax {args.fmax:g}: must be > 0")
+    records = read_uff_time_records(args.file)
+    est = estimate_from_records(records, args.reference, args.estimator, args.excitation, args.averages,
+                                args.overlap, args.window, args.decay, args.fmax)
+    coh = est.coherence
+    out = {"file": str(args.file), "estimator": est.estimator, "excitation": est.excitation,
+           "description": est.description, "n_averages": est.n_averages,
+           "reference": est.frf.reference_dofs[0], "dofs": list(est.frf.response_dofs), "kind": est.frf.kind,
+           "units": est.frf.units, "lines": int(est.frf.frequency_hz.size),
+           "band_hz": [float(est.frf.frequency_hz[0]), float(est.frf.frequency_hz[-1])],
+           "coherence_median": np.median(coh, axis=-1)[:, 0].tolist(),
+           "added_decay_rate_1_s": est.added_decay_rate_1_s}
+    if est.hits is not None:
+        out["double_hits"] = list(est.hits.double_hits)
+        out["overloads"] = [{"block": b, "dof": d} for b, d in est.hits.overloads]
+    if args.out:
+        write_uff58(args.out, est.frf)
+        out["outputs"] = {"frf": str(args.out)}
+    if not args.json:
+        print(f"{args.file}: {est.description}")
+        for d, c in zip(out["dofs"], out["coherence_median"]):
+            print(f"  {d}/{out['reference']}: median coherence {c:.3f}")
+        if est.hits is not None and (est.hits.double_hits or est.hits.overloads):
+            print(f"  left out: double hits in blocks {out['double_hits']}, overloads "
+                  + ", ".join(f"{o['dof']} in block {o['block']}" for o in out["overloads"]))
+        if args.out:
+            print(f"wrote {args.out}")
+    return out
+
+
+def add_parser(sub):
+    p = sub.add_parser("estimate", help="estimate FRFs (H1/H2/Hv, coherence) from force and response time records",
+                       description="Read the time records (UFF dataset 58, function type 1) of a force and "
+                                   "responses and estimate FRFs. Random excitation: Welch averaging of overlapped "
+                                   "windowed segments. Impact tests: the record is cut into --averages blocks, "
+                                   "one hit each; force and exponential windows; blocks with a double hit or an "
+                                   "overload (clipping) are flagged and left out.")
+    p.add_argument("file", metavar="FILE", help="universal file with time records (force and responses)")
+    p.add_argument("--reference", metavar="DOF", help="DOF of the force channel, e.g. 1:+Z (default: the only force)")
+    p.add_argument("--estimator", choices=ESTIMATORS, default="h1", help="h1 (noise on responses, default), "
+                                                                         "h2 (noise on the force), hv (both)")
+    p.add_argument("--excitation", choices=EXCITATIONS, default="random", help="random (default) or impact")
+    p.add_argument("--averages", type=int, default=8, help="segments (random) or impact blocks (default 8)")
+    p.add_argument("--overlap", type=float, default=0.5, help="segment overlap for random excitation (default 0.5)")
+    p.add_argument("--window", default="hann", help="window of random-excitation segments (default hann)")
+    p.add_argument("--decay", type=float, default=0.01,
+                   help="impact: exponential window value at the block end (default 0.01; 1 = none)")
+    p.add_argument("--fmax", type=float, help="highest line to keep (Hz)")
+    p.add_argument("--out", metavar="FRF.uff", help="write the FRFs as UFF dataset 58 (function type 4)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run)

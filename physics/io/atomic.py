@@ -1,0 +1,66 @@
+"""The one atomic writer of the package: temporary file in the target folder, then rename.
+
+A reader never sees a half-written file: data go to a temporary file beside
+the target (same file system), are flushed to disk, get normal permissions and
+replace the target with :func:`os.replace`. On any error the temporary file is
+removed and the target is left as it was.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from pathlib import Path
+
+__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text"]
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+@contextlib.contextmanager
+def atomic_path(path):
+    """Yield a temporary path beside ``path``; rename it onto ``path`` if the block succeeds.
+
+    The temporary file does not exist when the block starts (writers such as
+    pyuff create it themselves). If the block raises, or leaves no file, the
+    temporary file is removed and ``path`` is untouched.
+
+    Examples
+    --------
+    >>> with atomic_path("out/frf.uff") as tmp:      # doctest: +SKIP
+    ...     pyuff.UFF(str(tmp)).write_sets(sets, mode="add")
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.close(fd)
+    os.unlink(tmp)
+    tmp = Path(tmp)
+    try:
+        yield tmp
+        if not tmp.exists():
+            raise FileNotFoundError(f"{path}: the writer produced no file")
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the file normal permissions
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def atomic_write_bytes(path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file, fsync and an atomic rename."""
+    with atomic_path(path) as tmp:
+        with open(tmp, "xb") as fh:
+            fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
+
+
+def atomic_write_text(path, text: str) -> None:
+    """Text version of :func:`atomic_write_bytes` (UTF-8)."""
+    atomic_write_bytes(path, text.encode("utf-8"))

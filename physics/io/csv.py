@@ -1,0 +1,134 @@
+"""FRFs as plain CSV text (layout in :func:`read_frf_csv`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from physics.errors import FileFormatError, ShapeError
+from physics.io.atomic import atomic_write_text
+from physics.io.types import FRF_KINDS, MeasuredFRF
+
+__all__ = ["read_frf_csv", "write_frf_csv"]
+
+
+_CSV_MAGIC = "# beam-damage FRF csv v1"
+
+
+def write_frf_csv(path, data: MeasuredFRF) -> None:
+    """Write FRFs as CSV (layout in :func:`read_frf_csv`), atomically, 17 significant digits."""
+    cols = [f"re({a}/{b}),im({a}/{b})" for a in data.response_dofs for b in data.reference_dofs]
+    lines = [_CSV_MAGIC, f"# kind: {data.kind}", f"# units: {data.units}",
+             "frequency_hz," + ",".join(cols)]
+    h = data.frf.reshape(-1, data.frequency_hz.size)
+    table = np.empty((data.frequency_hz.size, 1 + 2 * h.shape[0]))
+    table[:, 0] = data.frequency_hz
+    table[:, 1::2] = h.real.T
+    table[:, 2::2] = h.imag.T
+    body = "\n".join(",".join(f"{v:.17g}" for v in row) for row in table)
+    atomic_write_text(path, "\n".join(lines) + "\n" + body + "\n")
+
+
+def read_frf_csv(path, kind=None) -> MeasuredFRF:
+    """Read FRFs from CSV.
+
+    Layout: optional ``#`` comment lines (``# kind: receptance|mobility|accelerance``
+    and ``# units: m/N`` are recognised), then a header row, then one row per
+    frequency line::
+
+        # kind: receptance
+        frequency_hz,re(2:+Y/1:+Y),im(2:+Y/1:+Y),re(3:+Y/1:+Y),im(3:+Y/1:+Y)
+        0.5,1.2e-05,-3.0e-08,...
+
+    The first column is the frequency in Hz; then a real and an imaginary
+    column per FRF, named ``re(RESPONSE/REFERENCE)`` and ``im(RESPONSE/REFERENCE)``.
+    The ``/REFERENCE`` part may be omitted for a single reference (label
+    ``"ref"``). ``kind`` overrides the ``# kind:`` line (default receptance).
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise FileFormatError(f"{path}: file not found") from None
+    except UnicodeDecodeError:
+        raise FileFormatError(f"{path}: not a UTF-8 text CSV file") from None
+    except IsADirectoryError:
+        raise FileFormatError(f"{path}: is a directory, not a CSV file") from None
+    meta, rows, header, header_line = {}, [], None, 0
+    for lineno, line in enumerate(text.splitlines(), 1):
+        s = line.strip()
+        if not s:
+            continue
+        if s.startswith("#"):
+            key, sep, val = s.lstrip("# ").partition(":")
+            if sep:
+                meta[key.strip().lower()] = val.strip()
+            continue
+        if header is None:
+            header, header_line = [c.strip() for c in s.split(",")], lineno
+        else:
+            rows.append((lineno, s))
+    form = "'frequency_hz,re(RESP/REF),im(RESP/REF),...'"
+    if header is None or not rows:
+        raise FileFormatError(f"{path}: no header and data rows; expected a header {form} then numbers")
+    if header[0].lower() not in ("frequency_hz", "frequency", "freq_hz", "f_hz") or len(header) < 3 \
+            or len(header) % 2 != 1:
+        raise FileFormatError(f"{path}: line {header_line}: header must be {form} (a frequency column and "
+                              f"pairs of real/imaginary columns), got {len(header)} columns")
+    pairs = []
+    for k in range(1, len(header), 2):
+        re_name, im_name = header[k], header[k + 1]
+        if not (re_name.lower().startswith("re(") and re_name.endswith(")")
+                and im_name.lower().startswith("im(") and im_name[3:] == re_name[3:]):
+            raise FileFormatError(f"{path}: line {header_line}: columns {k + 1}-{k + 2} ({re_name!r}, "
+                                  f"{im_name!r}) must be 're(RESP/REF)' and 'im(RESP/REF)' of one FRF")
+        resp, _, ref = re_name[3:-1].partition("/")
+        pairs.append((resp.strip(), ref.strip() or "ref"))
+    ncol = len(header)
+    counts = [r[1].count(",") + 1 for r in rows]
+    bad = next((i for i, c in enumerate(counts) if c != ncol), None)
+    if bad is not None:
+        raise FileFormatError(f"{path}: line {rows[bad][0]}: {counts[bad]} fields, expected {ncol} like the "
+                              "header (truncated file?)")
+    body = ",".join(r[1] for r in rows)
+    if "_" in body:  # Python's float() reads "1_000" as 1000; a CSV number never has underscores
+        bad = next(i for i, r in enumerate(rows) if "_" in r[1])
+        raise FileFormatError(f"{path}: line {rows[bad][0]}: non-numeric field (underscore); expected {ncol} "
+                              "numbers")
+    try:
+        values = np.array(body.split(","), dtype=float).reshape(len(rows), ncol)
+    except ValueError:
+        for lineno, s_ in rows:  # find the offending line for the message
+            try:
+                [float(p) for p in s_.split(",")]
+            except ValueError:
+                raise FileFormatError(f"{path}: line {lineno}: non-numeric field; expected {ncol} numbers") \
+                    from None
+        raise
+    if not np.all(np.isfinite(values)):
+        bad = rows[int(np.nonzero(~np.all(np.isfinite(values), axis=1))[0][0])][0]
+        raise FileFormatError(f"{path}: line {bad}: NaN or inf value")
+    f = values[:, 0]
+    if np.any(np.diff(f) <= 0):
+        raise FileFormatError(f"{path}: column 'frequency_hz' must be strictly increasing")
+    if len(set(pairs)) != len(pairs):
+        raise FileFormatError(f"{path}: line {header_line}: the same response/reference pair appears twice")
+    resp = list(dict.fromkeys(p[0] for p in pairs))
+    refs = list(dict.fromkeys(p[1] for p in pairs))
+    if len(pairs) != len(resp) * len(refs):
+        raise FileFormatError(f"{path}: line {header_line}: {len(pairs)} FRFs do not form a full "
+                              f"{len(resp)} responses x {len(refs)} references matrix")
+    frf = np.empty((len(resp), len(refs), f.size), complex)
+    for k, (a, b) in enumerate(pairs):
+        frf[resp.index(a), refs.index(b)] = values[:, 1 + 2 * k] + 1j * values[:, 2 + 2 * k]
+    file_kind = kind or meta.get("kind", "receptance")
+    if file_kind not in FRF_KINDS:
+        raise FileFormatError(f"{path}: '# kind: {file_kind}' must be one of {', '.join(FRF_KINDS)}")
+    try:
+        return MeasuredFRF(f, frf, tuple(resp), tuple(refs), kind=file_kind, units=meta.get("units", ""),
+                           metadata={"source": str(path), "format": "csv"})
+    except ShapeError as exc:
+        raise FileFormatError(f"{path}: {exc}") from None
+
+

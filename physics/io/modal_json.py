@@ -1,0 +1,155 @@
+"""Modal-data JSON: read, validate and write :class:`~physics.io.types.ModalData`.
+
+One object with the keys of a beam state in the thesis fixture ``beams.json``::
+
+    {"natural_frequencies_hz": [f1, ...],            # optional if eigenvalues given
+     "damping_ratios": [z1, ...],                    # optional if eigenvalues given
+     "eigenvalues": ["-0.21962+135.31j", ...],       # complex strings, upper half-plane
+     "eigenvectors": [["0.72+15.0j", ...], ...],     # rows = measured DOFs, cols = modes
+     "dofs": ["2:y", "3:y", ...]}                    # optional labels of the rows
+
+Eigenvalues follow the package's conjugate-pair convention: one eigenvalue of
+each pair, ``lambda_j = -zeta_j*omega_j + i*omega_j*sqrt(1 - zeta_j**2)``; the
+partner is its complex conjugate with the conjugate eigenvector. When only
+frequencies and damping ratios are given, the eigenvalues are built from them.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from physics.errors import FileFormatError
+from physics.io.atomic import atomic_write_text
+from physics.io.types import ModalData, format_complex
+from physics.modal import eigenvalues_from_modal
+
+__all__ = ["modal_data_from_dict", "modal_data_to_dict", "read_modal_json", "write_modal_json"]
+
+#: Largest modal-data JSON file read (bytes).
+MAX_JSON_BYTES = 64 * 2**20
+#: Largest magnitude accepted in modal data (beyond it products overflow).
+MAX_MAGNITUDE = 1e100
+
+
+def _complex_array(values, path, key, ndim):
+    try:
+        arr = np.array(
+            [[complex(str(v).replace(" ", "").replace("i", "j")) for v in row] for row in values]
+            if ndim == 2
+            else [complex(str(v).replace(" ", "").replace("i", "j")) for v in values],
+            dtype=complex,
+        )
+    except (TypeError, ValueError):
+        form = "a list of lists of complex strings such as \"0.72+15.0j\"" if ndim == 2 else \
+            "a list of complex strings such as \"-0.22+135.3j\""
+        raise FileFormatError(f"{path}: field '{key}' must be {form}") from None
+    if arr.ndim != ndim or not np.all(np.isfinite(arr)):
+        raise FileFormatError(f"{path}: field '{key}' must be a finite {ndim}-D array")
+    if arr.size and np.max(np.abs(arr)) > MAX_MAGNITUDE:
+        raise FileFormatError(f"{path}: field '{key}' has values of magnitude {np.max(np.abs(arr)):.3g}, beyond "
+                              f"the {MAX_MAGNITUDE:g} this package accepts")
+    return arr
+
+
+def modal_data_from_dict(obj: dict, source="modal data") -> ModalData:
+    """Validate a modal-data mapping (see module docstring) into :class:`ModalData`."""
+    if not isinstance(obj, dict):
+        raise FileFormatError(f"{source}: expected a JSON object with 'eigenvalues' or "
+                              "'natural_frequencies_hz' and 'damping_ratios'")
+    if "eigenvalues" in obj:
+        if not isinstance(obj["eigenvalues"], list):
+            raise FileFormatError(f"{source}: field 'eigenvalues' must be a list of complex strings")
+        lam = _complex_array(obj["eigenvalues"], source, "eigenvalues", 1)
+        if np.any(lam.imag <= 0):
+            k = int(np.nonzero(lam.imag <= 0)[0][0])
+            raise FileFormatError(f"{source}: field 'eigenvalues' entry {k + 1} ({lam[k]:.6g}) is not in the upper "
+                                  "half-plane; give the Im > 0 member of each conjugate pair")
+
+    elif "natural_frequencies_hz" in obj and "damping_ratios" in obj:
+        try:
+            f = np.asarray(obj["natural_frequencies_hz"], dtype=float)
+            z = np.asarray(obj["damping_ratios"], dtype=float)
+        except (TypeError, ValueError):
+            raise FileFormatError(f"{source}: 'natural_frequencies_hz' and 'damping_ratios' "
+                                  "must be lists of numbers") from None
+        if f.shape != z.shape or f.ndim != 1 or not (np.all(np.isfinite(f)) and np.all(np.isfinite(z))):
+            raise FileFormatError(f"{source}: 'natural_frequencies_hz' and 'damping_ratios' must be "
+                                  "finite lists of equal length")
+        if np.any(z >= 1) or np.any(f <= 0):
+            raise FileFormatError(f"{source}: 'damping_ratios' must be < 1 and frequencies > 0 "
+                                  "(underdamped modes)")
+        lam = eigenvalues_from_modal(f, z)
+    else:
+        raise FileFormatError(f"{source}: missing key 'eigenvalues' (or 'natural_frequencies_hz' "
+                              "with 'damping_ratios')")
+    vecs = None
+    if obj.get("eigenvectors") is not None:
+        vecs = _complex_array(obj["eigenvectors"], source, "eigenvectors", 2)
+        if vecs.shape[1] != lam.size:
+            raise FileFormatError(f"{source}: field 'eigenvectors' has {vecs.shape[1]} columns "
+                                  f"but there are {lam.size} eigenvalues (columns are modes)")
+        zero_rows = np.nonzero(~np.any(vecs != 0, axis=1))[0]
+        zero_cols = np.nonzero(~np.any(vecs != 0, axis=0))[0]
+        if zero_rows.size or zero_cols.size:
+            what = f"row {zero_rows[0] + 1}" if zero_rows.size else f"column {zero_cols[0] + 1}"
+            raise FileFormatError(f"{source}: field 'eigenvectors' {what} is zero; every measured DOF and mode "
+                                  "needs a non-zero entry")
+
+    if lam.size != np.unique(lam).size:
+        _, first = np.unique(lam, return_index=True)
+        k = sorted(set(range(lam.size)) - set(first.tolist()))[0]
+        raise FileFormatError(f"{source}: field 'eigenvalues' entry {k + 1} repeats an earlier eigenvalue "
+                              f"({lam[k]:.6g}); each mode must appear once")
+    dofs = obj.get("dofs", ())
+    if not isinstance(dofs, (list, tuple)):
+        raise FileFormatError(f"{source}: field 'dofs' must be a list of labels such as \"2:y\"")
+    dofs = tuple(str(d) for d in dofs)
+    if dofs and vecs is not None and len(dofs) != vecs.shape[0]:
+        raise FileFormatError(f"{source}: field 'dofs' has {len(dofs)} labels but "
+                              f"'eigenvectors' has {vecs.shape[0]} rows")
+    return ModalData(lam, vecs, dofs)
+
+
+def read_modal_json(path) -> ModalData:
+    """Read a modal-data JSON file (see module docstring)."""
+    path = Path(path)
+    try:
+        if path.stat().st_size > MAX_JSON_BYTES:
+            raise FileFormatError(f"{path}: {path.stat().st_size} bytes, more than the {MAX_JSON_BYTES} a "
+                                  "modal-data file may hold")
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise FileFormatError(f"{path}: file not found") from None
+    except UnicodeDecodeError as exc:
+        raise FileFormatError(f"{path}: not UTF-8 text (byte {exc.start}); expected a JSON object") from None
+    try:
+        obj = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise FileFormatError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
+    except RecursionError:
+        raise FileFormatError(f"{path}: JSON nested too deeply; expected a flat object of lists") from None
+    return modal_data_from_dict(obj, str(path))
+
+
+def modal_data_to_dict(data: ModalData) -> dict:
+    """Inverse of :func:`modal_data_from_dict` (complex values as strings)."""
+    fmt = format_complex
+    out = {
+        "natural_frequencies_hz": data.natural_frequencies_hz.tolist(),
+        "damping_ratios": data.damping_ratios.tolist(),
+        "eigenvalues": [fmt(z) for z in data.eigenvalues],
+    }
+    if data.eigenvectors is not None:
+        out["eigenvectors"] = [[fmt(z) for z in row] for row in data.eigenvectors]
+    if data.dofs:
+        out["dofs"] = list(data.dofs)
+    return out
+
+
+def write_modal_json(path, data: ModalData) -> None:
+    """Write :class:`ModalData` as modal-data JSON, atomically."""
+    atomic_write_text(path, json.dumps(modal_data_to_dict(data), indent=1) + "\n")
+

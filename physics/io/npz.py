@@ -1,0 +1,105 @@
+"""FRFs as ``.npz`` of plain arrays (never pickled objects)."""
+
+from __future__ import annotations
+
+import io
+import json
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+from physics.errors import FileFormatError, ShapeError
+from physics.io.atomic import atomic_write_bytes
+from physics.io.types import MeasuredFRF
+
+__all__ = ["read_frf_npz", "write_frf_npz"]
+
+
+_NPZ_KEYS = ("frequency_hz", "frf", "response_dofs", "reference_dofs", "kind", "units", "metadata_json")
+
+
+def write_frf_npz(path, data: MeasuredFRF) -> None:
+    """Write :class:`MeasuredFRF` as ``.npz`` (plain arrays, no pickled objects), atomically."""
+    buf = io.BytesIO()
+    np.savez(buf, frequency_hz=data.frequency_hz, frf=data.frf,
+             response_dofs=np.array(data.response_dofs, dtype=str),
+             reference_dofs=np.array(data.reference_dofs, dtype=str),
+             kind=np.array(data.kind), units=np.array(data.units),
+             metadata_json=np.array(json.dumps(data.metadata, default=str)))
+    atomic_write_bytes(path, buf.getvalue())
+
+
+#: Largest array this reader loads from an .npz (elements), checked in the member headers before loading.
+MAX_ELEMENTS = 200_000_000
+
+
+def _check_members(path, z):
+    """Every member must be a .npy whose header announces at most MAX_ELEMENTS elements."""
+    for name in z.namelist():
+        if not name.endswith(".npy"):
+            raise FileFormatError(f"{path}: member {name!r} is not a .npy array; not an .npz of a MeasuredFRF")
+        with z.open(name) as fh:
+            try:
+                version = np.lib.format.read_magic(fh)
+                reader = np.lib.format.read_array_header_1_0 if version == (1, 0) else \
+                    np.lib.format.read_array_header_2_0
+                shape, _, dtype = reader(fh, max_header_size=10000)
+            except (ValueError, SyntaxError, EOFError) as exc:
+                raise FileFormatError(f"{path}: member {name!r} has a bad .npy header ({exc})") from None
+        size = int(np.prod(shape, dtype=object))
+        if size > MAX_ELEMENTS:
+            raise FileFormatError(f"{path}: array {name[:-4]!r} announces shape {shape} ({size} elements, "
+                                  f"{size * dtype.itemsize / 2**30:.3g} GiB); refusing more than {MAX_ELEMENTS}")
+
+
+def read_frf_npz(path) -> MeasuredFRF:
+    """Read a file written by :func:`write_frf_npz` (loaded with ``allow_pickle=False``).
+
+    Member headers are checked before anything is loaded (only .npy members, at
+    most :data:`MAX_ELEMENTS` elements each); the FRF must be complex, the
+    frequencies real, the DOF labels 1-D lists of strings, the metadata a JSON object.
+    """
+    path = Path(path)
+    try:
+        with zipfile.ZipFile(path) as zf:
+            _check_members(path, zf)
+        with np.load(path, allow_pickle=False) as z:
+            missing = [k for k in _NPZ_KEYS[:4] if k not in z.files]
+            if missing:
+                raise FileFormatError(f"{path}: missing array(s) {', '.join(missing)}; expected "
+                                      f"{', '.join(_NPZ_KEYS)}")
+            arrays = {k: z[k] for k in z.files}
+    except FileNotFoundError:
+        raise FileFormatError(f"{path}: file not found") from None
+    except (ValueError, OSError, EOFError, zipfile.BadZipFile, MemoryError) as exc:
+        if isinstance(exc, FileFormatError):
+            raise
+        raise FileFormatError(f"{path}: not a readable .npz of a MeasuredFRF ({' '.join(str(exc).split())[:150]})") \
+            from None
+    for key in ("response_dofs", "reference_dofs"):
+        a = arrays[key]
+        if a.ndim != 1 or a.dtype.kind != "U":
+            raise FileFormatError(f"{path}: array '{key}' must be a 1-D array of DOF labels (strings), got "
+                                  f"{a.dtype} of shape {a.shape}")
+    for key in ("kind", "units", "metadata_json"):
+        if key in arrays and (arrays[key].ndim != 0 or arrays[key].dtype.kind != "U"):
+            raise FileFormatError(f"{path}: array '{key}' must be a single string")
+    if arrays["frf"].dtype.kind != "c":
+        raise FileFormatError(f"{path}: array 'frf' is {arrays['frf'].dtype}; an FRF must be complex")
+    if arrays["frequency_hz"].dtype.kind not in "iuf":
+        raise FileFormatError(f"{path}: array 'frequency_hz' is {arrays['frequency_hz'].dtype}; frequencies must "
+                              "be real numbers (Hz)")
+    try:
+        meta = json.loads(str(arrays.get("metadata_json", "{}")))
+    except (json.JSONDecodeError, RecursionError):
+        raise FileFormatError(f"{path}: array 'metadata_json' is not valid JSON") from None
+    if not isinstance(meta, dict):
+        raise FileFormatError(f"{path}: array 'metadata_json' must hold a JSON object, got {type(meta).__name__}")
+    try:
+        return MeasuredFRF(arrays["frequency_hz"], arrays["frf"],
+                           tuple(arrays["response_dofs"].tolist()), tuple(arrays["reference_dofs"].tolist()),
+                           kind=str(arrays.get("kind", "receptance")), units=str(arrays.get("units", "")),
+                           metadata={**meta, "source": str(path), "format": "npz"})
+    except ShapeError as exc:
+        raise FileFormatError(f"{path}: {exc}") from None

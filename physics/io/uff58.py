@@ -1,0 +1,340 @@
+"""Universal file dataset 58 (function at nodal DOF): FRF records, ASCII and binary 58b, via pyuff."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from physics.errors import FileFormatError, ShapeError
+from physics.io.atomic import atomic_path
+from physics.io.geometry import geometry_from_uff_sets
+from physics.io.types import DEFAULT_UNITS, MeasuredFRF, dof_label, parse_dof
+from physics.io.units import UnitSystem, frf_unit_factor
+
+__all__ = ["read_uff58", "read_uff_context", "read_uff_geometry", "write_uff58"]
+
+
+#: UFF specific data types of dataset 58 ordinates, and the FRF kind they give.
+_UFF_ORDINATE_KIND = {8: "receptance", 11: "mobility", 12: "accelerance"}
+_UFF_KIND_ORDINATE = {v: k for k, v in _UFF_ORDINATE_KIND.items()}
+_UFF_FUNCTION_NAMES = {0: "general/unknown", 1: "time response", 2: "auto spectrum",
+                       3: "cross spectrum", 4: "frequency response function", 5: "transmissibility",
+                       6: "coherence", 7: "auto correlation", 8: "cross correlation",
+                       9: "power spectral density", 10: "energy spectral density",
+                       11: "probability density function", 12: "spectrum", 13: "cumulative frequency",
+                       14: "peaks valley", 15: "stress/cycles", 16: "strain/cycles", 17: "orbit",
+                       18: "mode indicator function", 19: "force pattern", 20: "partial power",
+                       21: "partial coherence", 22: "eigenvalue", 23: "eigenvector",
+                       24: "shock response spectrum", 25: "finite impulse response filter",
+                       26: "multiple coherence", 27: "order function"}
+_UFF_SET_NAMES = {15: "nodes", 55: "data at nodes (modes)", 58: "function at nodal DOF",
+                  82: "trace lines", 151: "header", 164: "units", 2411: "nodes",
+                  2412: "elements", 2414: "analysis data", 2420: "coordinate systems"}
+
+
+def _check_uff_complete(path: Path, raw: bytes) -> None:
+    """Reject a universal file whose last block has no closing ``-1`` line (truncation)."""
+    text = raw.rstrip()
+    if not text:
+        raise FileFormatError(f"{path}: file is empty; expected a universal file with dataset 58 records")
+    if not raw.lstrip()[:2] == b"-1":
+        raise FileFormatError(f"{path}: not a universal file: it must start with a '    -1' delimiter line")
+    # a complete file ends with a closing delimiter preceded by data (binary 58b data run
+    # straight into it); an opening delimiter alone at the end means a cut at a record start
+    if not text.endswith(b"    -1") or text[:-6].rstrip().endswith(b"    -1"):
+        start = text.rfind(b"    -1\n")
+        raise FileFormatError(f"{path}: truncated universal file: the last record (from byte "
+                              f"{max(start, 0)}) has no closing '    -1' delimiter line")
+
+
+def read_uff58(path, kind=None) -> MeasuredFRF:
+    """Read FRF records (dataset 58, function type 4) of a universal file.
+
+    ASCII and binary (58b) records are read through ``pyuff``. Records of other
+    dataset types and dataset-58 functions that are not FRFs are skipped with a
+    warning; a file without any FRF record is rejected. Records are arranged
+    into a ``(n_resp, n_ref, n_lines)`` matrix by their response and reference
+    node/direction; repeated records of the same pair are dropped with a warning.
+
+    Parameters
+    ----------
+    path : str or Path
+    kind : {"receptance", "mobility", "accelerance"}, optional
+        Used only when the ordinate type of the records is not set (0); the
+        ordinate types 8 (displacement), 11 (velocity) and 12 (acceleration)
+        otherwise decide. Without either, receptance is assumed with a warning.
+
+    Returns
+    -------
+    MeasuredFRF
+
+    Raises
+    ------
+    FileFormatError
+        Missing, truncated or malformed file; no FRF record; unequal frequency
+        axes; NaN/inf values; mixed ordinate types; an incomplete
+        response x reference matrix.
+    """
+    path = Path(path)
+    uff, types = _open_uff(path)
+    idx58 = [i for i, t in enumerate(types) if t == 58]
+    others = sorted({t for t in types if t not in _CONTEXT_SETS})
+    if not idx58:
+        found = ", ".join(f"{t} ({_UFF_SET_NAMES.get(t, 'unsupported/unreadable')})" for t in sorted(set(types)))
+        raise FileFormatError(f"{path}: no dataset 58 (function at nodal DOF) record; dataset types "
+                              f"found: {found or 'none'}")
+    system, geometry = read_uff_context(path, uff, types)
+    if others:
+        warnings.warn(f"{path}: skipped {sum(t in others for t in types)} record(s) of dataset type(s) "
+                      f"{', '.join(map(str, others))}", stacklevel=2)
+    try:
+        sets = uff.read_sets(idx58)
+    except Exception as exc:
+        raise FileFormatError(f"{path}: cannot read dataset 58 records ({_short(exc)})") from None
+    if isinstance(sets, dict):
+        sets = [sets]
+    frfs, skipped = [], {}
+    for n, s in zip(idx58, sets):
+        ft = int(s.get("func_type", -1))
+        if ft == 4:
+            frfs.append((n, s))
+        else:
+            skipped[ft] = skipped.get(ft, 0) + 1
+    if not frfs:
+        found = ", ".join(f"{ft} ({_UFF_FUNCTION_NAMES.get(ft, 'unknown')}) x{c}" for ft, c in skipped.items())
+        hint = "; time records need a force channel: estimate FRFs with 'beam-damage estimate'" \
+            if set(skipped) == {1} else ""
+        raise FileFormatError(f"{path}: dataset 58 records hold no FRF (function type 4); function types "
+                              f"found: {found}{hint}")
+    if skipped:
+        found = ", ".join(f"{ft} ({_UFF_FUNCTION_NAMES.get(ft, 'unknown')})" for ft in skipped)
+        warnings.warn(f"{path}: skipped {sum(skipped.values())} dataset 58 record(s) that are not FRFs: "
+                      f"function type(s) {found}", stacklevel=2)
+
+    freq = None
+    table = {}
+    ordinates = set()
+    units_found = {}
+    for n, s in frfs:
+        where = f"{path}: record {n + 1} (dataset 58, response {s.get('rsp_node')}/{s.get('rsp_dir')}, " \
+                f"reference {s.get('ref_node')}/{s.get('ref_dir')})"
+        try:
+            data = np.asarray(s.get("data", []))
+            x = np.asarray(s.get("x", []), dtype=float)
+            n_pts = int(s.get("num_pts", data.size))
+        except (TypeError, ValueError):
+            raise FileFormatError(f"{where}: unreadable data or frequency values") from None
+        if data.size != n_pts or x.size != n_pts:
+            raise FileFormatError(f"{where}: holds {data.size} values but its header announces {n_pts} "
+                                  "(truncated record)")
+        if not np.iscomplexobj(data):
+            raise FileFormatError(f"{where}: ordinate data are real (ordinate data type "
+                                  f"{s.get('ord_data_type')}); an FRF needs complex data (type 5 or 6)")
+        if not (np.all(np.isfinite(data)) and np.all(np.isfinite(x))):
+            raise FileFormatError(f"{where}: contains NaN or inf values")
+        if np.any(np.diff(x) <= 0):
+            raise FileFormatError(f"{where}: frequency axis is not strictly increasing")
+        x = x * _abscissa_factor(s, where)
+        try:
+            factor, label_kind, found = frf_unit_factor(s.get("ordinate_axis_units_lab"),
+                                                        s.get("orddenom_axis_units_lab"), system)
+        except FileFormatError as exc:
+            raise FileFormatError(f"{where}: {exc}") from None
+        ord_kind = _UFF_ORDINATE_KIND.get(int(s.get("ordinate_spec_data_type", 0)))
+        if label_kind and ord_kind and label_kind != ord_kind:
+            raise FileFormatError(f"{where}: unit label {s.get('ordinate_axis_units_lab')!r} is a {label_kind} "
+                                  f"unit but the ordinate type says {ord_kind}; refusing to guess")
+        data = data * factor
+        if freq is None:
+            freq = x
+        elif x.size != freq.size or not np.allclose(x, freq, rtol=1e-6, atol=1e-9):
+            raise FileFormatError(f"{where}: frequency axis ({x.size} lines, {x[0]:g}-{x[-1]:g} Hz) differs "
+                                  f"from the first record's ({freq.size} lines, {freq[0]:g}-{freq[-1]:g} Hz); "
+                                  "all FRFs must share one axis")
+        try:
+            key = (dof_label(s["rsp_node"], s["rsp_dir"]), dof_label(s["ref_node"], s["ref_dir"]))
+        except FileFormatError as exc:
+            raise FileFormatError(f"{where}: {exc}") from None
+        if key in table:
+            if not np.allclose(table[key], data):
+                warnings.warn(f"{where}: duplicate of an earlier record with different values; "
+                              "kept the first", stacklevel=2)
+            else:
+                warnings.warn(f"{where}: duplicated record dropped", stacklevel=2)
+            continue
+        table[key] = data
+        ordinate = int(s.get("ordinate_spec_data_type", 0))
+        if ordinate not in _UFF_ORDINATE_KIND and label_kind:
+            ordinate = _UFF_KIND_ORDINATE[label_kind]
+        ordinates.add(ordinate)
+        units_found.setdefault(found, []).append(factor)
+    known = ordinates & set(_UFF_ORDINATE_KIND)
+    if len(known) > 1:
+        raise FileFormatError(f"{path}: records mix ordinate types {sorted(known)} (8 displacement, "
+                              "11 velocity, 12 acceleration); expected one FRF kind per file")
+    if known:
+        file_kind = _UFF_ORDINATE_KIND[known.pop()]
+    elif kind is not None:
+        file_kind = kind
+    else:
+        file_kind = "receptance"
+        warnings.warn(f"{path}: ordinate type not set (found {sorted(ordinates)}); assuming receptance "
+                      "(displacement/force)", stacklevel=2)
+    resp = list(dict.fromkeys(k[0] for k in table))
+    refs = list(dict.fromkeys(k[1] for k in table))
+    missing = [(a, b) for a in resp for b in refs if (a, b) not in table]
+    if missing:
+        a, b = missing[0]
+        raise FileFormatError(f"{path}: no FRF for response {a} and reference {b} ({len(missing)} missing "
+                              f"of {len(resp)}x{len(refs)}); every response needs a record for every reference")
+    frf = np.array([[table[(a, b)] for b in refs] for a in resp])
+    meta = {"source": str(path), "format": "uff58", "binary": bool(sets[0].get("binary", 0)),
+            "id1": str(frfs[0][1].get("id1", "")).strip(),
+            "units": {"file": sorted(units_found), "si": DEFAULT_UNITS[file_kind],
+                      "factor_to_si": sorted({float(f) for v in units_found.values() for f in v}),
+                      "unit_system": system.description}}
+    if geometry is not None:
+        meta["geometry"] = {"source": geometry.source, "nodes_m": geometry.to_dict()}
+    try:
+        return MeasuredFRF(freq, frf, tuple(resp), tuple(refs), kind=file_kind, metadata=meta)
+    except ShapeError as exc:
+        raise FileFormatError(f"{path}: {exc}") from None
+
+
+#: Dataset types read as context of the FRFs (header, units, coordinate systems, nodes, trace lines, elements).
+_CONTEXT_SETS = {58, 151, 164, 15, 18, 82, 2411, 2412, 2420}
+#: Dataset 164 unit codes.
+_UNIT_CODES = {1: "SI: m (N)", 2: "BG: ft (lbf)", 3: "MG: m (kgf)", 4: "BA: ft (poundal)", 5: "MM: mm (mN)",
+               6: "CM: cm (cN)", 7: "IN: in (lbf)", 8: "GM: mm (kgf)", 9: "user defined"}
+
+
+def _short(exc) -> str:
+    return " ".join(str(exc).split())[:200]
+
+
+_RECORD6_FIELDS = (("response node", 41, 51), ("response direction", 51, 55), ("reference node", 66, 76),
+                   ("reference direction", 76, 80))
+
+
+def _check_dof_fields(path: Path, raw: bytes) -> None:
+    """Node and direction fields of every dataset 58 header (record 6) must be integers.
+
+    pyuff reads a field such as ``B`` as 0, which would silently put the record at node 0.
+    """
+    import re
+
+    for k, m in enumerate(re.finditer(rb"(?m)^ {4}-1[ \t]*\r?\n {4}58b?[^\n]*\n", raw), 1):
+        lines = raw[m.end():m.end() + 2000].split(b"\n")
+        if len(lines) < 6:
+            continue
+        rec6 = lines[5].decode("latin1").rstrip("\r")
+        for name, a, b in _RECORD6_FIELDS:
+            field = rec6[a:b].strip()
+            if not re.fullmatch(r"[+-]?\d+", field):
+                raise FileFormatError(f"{path}: dataset 58 record {k}: {name} field {field!r} is not an integer "
+                                      f"(header record 6, columns {a + 1}-{b})")
+
+
+def _open_uff(path: Path):
+    """Check a universal file is complete and list its dataset types."""
+    import pyuff
+
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        raise FileFormatError(f"{path}: file not found") from None
+    _check_uff_complete(path, raw)
+    _check_dof_fields(path, raw)
+    try:
+        uff = pyuff.UFF(str(path))
+        types = [int(t) for t in uff.get_set_types()]
+    except Exception as exc:  # pyuff raises bare Exception
+        raise FileFormatError(f"{path}: not a readable universal file ({_short(exc)})") from None
+    return uff, types
+
+
+def read_uff_context(path, uff, types):
+    """The unit system (dataset 164) and node geometry (datasets 15/2411, 18) of an open universal file."""
+    def read(idx, name):
+        if not idx:
+            return []
+        try:
+            out = uff.read_sets(idx)
+        except Exception as exc:
+            raise FileFormatError(f"{path}: cannot read the {name} dataset(s) ({_short(exc)})") from None
+        return [out] if isinstance(out, dict) else list(out)
+
+    system = UnitSystem()
+    units = read([i for i, t in enumerate(types) if t == 164], "units (164)")
+    if units:
+        u = units[0]
+        try:
+            length, force = float(u["length"]), float(u["force"])
+        except (KeyError, TypeError, ValueError):
+            raise FileFormatError(f"{path}: dataset 164 (units) lacks its length and force factors") from None
+        if not (np.isfinite(length) and np.isfinite(force) and length > 0 and force > 0):
+            raise FileFormatError(f"{path}: dataset 164 (units) has length factor {length:g} and force factor "
+                                  f"{force:g}; both must be finite and > 0")
+        code = int(u.get("units_code", 9))
+        system = UnitSystem(length, force, f"dataset 164 {_UNIT_CODES.get(code, f'code {code}')}, "
+                                           f"length factor {length:g}, force factor {force:g}", True)
+    nodes = read([i for i, t in enumerate(types) if t in (15, 2411)], "node (15/2411)")
+    cs = read([i for i, t in enumerate(types) if t == 18], "coordinate system (18)")
+    unit_text = "file units" if system.from_file else "file units (no dataset 164: m assumed)"
+    geometry = geometry_from_uff_sets(nodes, cs, system.length, str(path), unit_text)
+    return system, geometry
+
+
+def read_uff_geometry(path):
+    """Node geometry (datasets 15/2411, in metres, global system) of a universal file, or None."""
+    path = Path(path)
+    uff, types = _open_uff(path)
+    return read_uff_context(path, uff, types)[1]
+
+
+def _abscissa_factor(s, where) -> float:
+    """Factor to Hz of an FRF record's abscissa from its unit label."""
+    lab = str(s.get("abscissa_axis_units_lab", "") or "").strip().lower().replace(" ", "")
+    if lab in ("", "none", "hz", "1/s", "cps", "hertz"):
+        return 1.0
+    if lab in ("rad/s", "rad/sec"):
+        return 1.0 / (2.0 * np.pi)
+    raise FileFormatError(f"{where}: abscissa unit {s.get('abscissa_axis_units_lab')!r} is not a frequency "
+                          "unit (Hz or rad/s)")
+
+
+def write_uff58(path, data: MeasuredFRF, binary=False) -> None:
+    """Write each FRF of ``data`` as one dataset 58 record (function type 4), atomically.
+
+    Parameters
+    ----------
+    path : str or Path
+    data : MeasuredFRF
+        DOF labels must be ``"NODE:+DIR"`` (see :func:`parse_dof`).
+    binary : bool
+        Binary 58b (little/native byte order, double precision) instead of ASCII.
+        ASCII files of unevenly spaced lines keep 6 significant digits of the
+        frequencies (a limit of the format's E13.5 abscissa field).
+    """
+    import pyuff
+
+    path = Path(path)
+    resp = [parse_dof(d) for d in data.response_dofs]
+    refs = [parse_dof(d) for d in data.reference_dofs]
+    f = data.frequency_hz
+    df = np.diff(f)
+    even = bool(np.allclose(df, df[0], rtol=1e-9, atol=0))
+    sets = []
+    for i, (rn, rd) in enumerate(resp):
+        for j, (qn, qd) in enumerate(refs):
+            sets.append(pyuff.prepare_58(
+                binary=int(bool(binary)), id1=str(data.metadata.get("id1", "beam-damage FRF"))[:80] or "NONE",
+                func_type=4, rsp_node=rn, rsp_dir=rd, ref_node=qn, ref_dir=qd,
+                data=np.ascontiguousarray(data.frf[i, j]), x=f, abscissa_spacing=int(even),
+                abscissa_spec_data_type=18, ordinate_spec_data_type=_UFF_KIND_ORDINATE[data.kind],
+                orddenom_spec_data_type=13, abscissa_axis_units_lab="Hz",
+                ordinate_axis_units_lab=data.units[:20]))
+    with atomic_path(path) as tmp:  # pyuff creates the file; binary records need mode "add" on a fresh file
+        pyuff.UFF(str(tmp)).write_sets(sets, mode="add")

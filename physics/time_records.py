@@ -1,0 +1,227 @@
+"""FRFs from measured time records: random excitation (Welch, overlap) and impact tests (windows, hit checks).
+
+The spectral estimators are those of :mod:`physics.estimation` (H1, H2, Hv with
+coherence); this module prepares the records the way each test needs:
+
+* random excitation: overlapped segments with a Hann (or any scipy) window;
+* impact tests: the record is cut into ``averages`` equal blocks, each starting
+  with one hit. The force is kept over its pulse (force window: zero after the
+  pulse plus a short margin) and both channels get an exponential window
+  ``exp(-t/tau)`` decaying to ``decay`` at the block end, so that responses that
+  outlast the block do not leak. The exponential window adds ``1/tau`` (1/s) to
+  every pole's decay rate: a mode's damping ratio is overestimated by
+  ``1/(tau omega_n)``, which is reported so that it can be subtracted.
+  Blocks with a second hit (a force peak above ``double_hit`` of the first after
+  the pulse has ended) or an overload (a channel flat at its extreme over three
+  or more samples: clipping) are flagged and left out of the average.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from physics.errors import FileFormatError, ShapeError
+from physics.estimation import estimate_frf
+from physics.io.timedata import TimeRecords
+from physics.io.types import MeasuredFRF
+
+__all__ = ["ESTIMATORS", "EXCITATIONS", "HitCheck", "TimeEstimate", "check_hits", "estimate_from_records",
+           "exponential_window", "force_window"]
+
+ESTIMATORS = ("h1", "h2", "hv")
+EXCITATIONS = ("random", "impact")
+_KIND = {"displacement": "receptance", "velocity": "mobility", "acceleration": "accelerance"}
+
+
+@dataclass(frozen=True)
+class HitCheck:
+    """Impact blocks checked for double hits and overloads (clipping).
+
+    Attributes
+    ----------
+    double_hits : tuple of int
+        Blocks with a second force peak after the pulse.
+    overloads : tuple of (int, str)
+        ``(block, dof)`` of clipped channels.
+    pulse_samples : int
+        Longest force pulse found (samples above 5 % of the block's peak).
+    """
+
+    double_hits: tuple
+    overloads: tuple
+    pulse_samples: int
+
+    @property
+    def bad_blocks(self) -> set:
+        return set(self.double_hits) | {b for b, _ in self.overloads}
+
+
+@dataclass(frozen=True)
+class TimeEstimate:
+    """FRFs estimated from time records and what was done."""
+
+    frf: MeasuredFRF
+    coherence: np.ndarray
+    estimator: str
+    excitation: str
+    n_averages: int
+    hits: HitCheck | None
+    added_decay_rate_1_s: float
+    description: str
+
+
+def force_window(n, pulse_end, margin):
+    """1 up to ``pulse_end + margin`` samples, then 0 (a rectangular force window), shape (n,)."""
+    w = np.zeros(n)
+    w[: min(n, pulse_end + margin)] = 1.0
+    return w
+
+
+def exponential_window(n, decay):
+    """``exp(-t/tau)`` over ``n`` samples falling to ``decay`` at the last one; returns (window, tau in samples)."""
+    if not 0 < decay <= 1:
+        raise ShapeError(f"exponential window decay {decay} must be in (0, 1]")
+    tau = np.inf if decay == 1 else (n - 1) / -np.log(decay)
+    return np.exp(-np.arange(n) / tau), tau
+
+
+def check_hits(force_blocks, response_blocks, dofs, double_hit=0.2, flat=3):
+    """Flag double hits in ``force_blocks`` (n_blocks, n) and clipping in any channel.
+
+    ``response_blocks`` is (n_blocks, n_channels, n) with ``dofs`` naming the
+    channels (force first).
+    """
+    fb = np.abs(np.asarray(force_blocks, float))
+    peak = fb.max(axis=1, keepdims=True)
+    above = fb > 0.05 * peak
+    first = np.argmax(above, axis=1)
+    # end of the first pulse: first sample after the start below 5 % of the peak
+    n = fb.shape[1]
+    idx = np.arange(n)[None, :]
+    below_after = (~above) & (idx > first[:, None])
+    end = np.where(below_after.any(axis=1), np.argmax(below_after, axis=1), n)
+    later = np.where(idx >= end[:, None] + 1, fb, 0.0)
+    doubles = tuple(int(b) for b in np.nonzero(later.max(axis=1) > double_hit * peak[:, 0])[0])
+    overloads = []
+    allch = np.asarray(response_blocks, float)
+    for c, dof in enumerate(dofs):
+        x = allch[:, c, :]
+        top = np.abs(x).max(axis=1, keepdims=True)
+        at_top = np.isclose(np.abs(x), top, rtol=1e-9, atol=0) & (top > 0)
+        # `flat` consecutive samples at the extreme
+        run = np.ones_like(at_top[:, : n - flat + 1])
+        for k in range(flat):
+            run &= at_top[:, k: n - flat + 1 + k]
+        overloads += [(int(b), dof) for b in np.nonzero(run.any(axis=1))[0]]
+    return HitCheck(doubles, tuple(sorted(overloads)), int(np.max(end - first)))
+
+
+def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", excitation="random", averages=8,
+                          overlap=0.5, window="hann", decay=0.01, fmax_hz=None) -> TimeEstimate:
+    """FRFs (response over the reference force) of time records.
+
+    Parameters
+    ----------
+    records : TimeRecords
+    reference : str, optional
+        DOF label of the force channel (the reference DOF); default: the only force.
+    estimator : {"h1", "h2", "hv"}
+    excitation : {"random", "impact"}
+    averages : int
+        Random: number of overlapped segments; impact: number of equal blocks (one hit each).
+    overlap : float in [0, 1)
+        Random excitation only.
+    window : str
+        Random excitation only (any :func:`scipy.signal.get_window` name).
+    decay : float in (0, 1]
+        Impact: value of the exponential window at the block end (1 = none).
+    fmax_hz : float, optional
+        Keep lines up to this frequency.
+
+    Returns
+    -------
+    TimeEstimate
+    """
+    if estimator not in ESTIMATORS:
+        raise ShapeError(f"estimator {estimator!r} must be one of {', '.join(ESTIMATORS)}")
+    if excitation not in EXCITATIONS:
+        raise ShapeError(f"excitation {excitation!r} must be one of {', '.join(EXCITATIONS)}")
+    src = records.metadata.get("source", "time records")
+    forces, resp = records.forces, records.responses
+    if not forces:
+        chans = ", ".join(f"{d} {q}" for d, q in zip(records.dofs, records.quantities))
+        raise FileFormatError(f"{src}: {len(records.dofs)} time records ({chans}) but no force channel "
+                              "(ordinate type 13 or a force unit): FRFs cannot be estimated")
+    if reference is None:
+        if len(forces) > 1:
+            raise ShapeError(f"{src}: {len(forces)} force channels; name the reference DOF "
+                             f"({', '.join(records.dofs[i] for i in forces)})")
+        ref = forces[0]
+    else:
+        cand = [i for i in forces if records.dofs[i] == str(reference)]
+        if not cand:
+            raise ShapeError(f"{src}: no force channel at reference DOF {reference!r}; force channels: "
+                             f"{', '.join(records.dofs[i] for i in forces) or 'none'}")
+        ref = cand[0]
+    if not resp:
+        raise FileFormatError(f"{src}: only force channels; no response to estimate FRFs of")
+    kinds = {_KIND[records.quantities[i]] for i in resp}
+    if len(kinds) > 1:
+        raise FileFormatError(f"{src}: responses mix {', '.join(sorted(kinds))}; estimate one quantity per file")
+    kind = kinds.pop()
+    out_dofs = tuple(records.dofs[i] for i in resp)
+    if len(set(out_dofs)) != len(out_dofs):
+        dup = next(d for d in out_dofs if out_dofs.count(d) > 1)
+        raise FileFormatError(f"{src}: two response channels measure DOF {dup}")
+    if not (isinstance(averages, (int, np.integer)) and averages >= 1):
+        raise ShapeError(f"averages {averages} must be an integer >= 1")
+    fs = records.sampling_frequency_hz
+    x = records.signals
+    n = x.shape[1]
+    hits, added = None, 0.0
+    if excitation == "random":
+        if not 0 <= overlap < 1:
+            raise ShapeError(f"overlap {overlap} must be in [0, 1)")
+        nperseg = int(n / (1 + (averages - 1) * (1 - overlap)))
+        noverlap = int(round(overlap * nperseg))
+        if nperseg < 16:
+            raise ShapeError(f"{n} samples cannot give {averages} averages of at least 16 samples")
+        est = estimate_frf(x[ref], x[resp], fs, nperseg, noverlap, window=window)
+        what = f"{estimator.upper()} of random excitation, {window} window, {est.n_averages} averages, " \
+               f"{overlap:.0%} overlap, {fs / nperseg:.4g} Hz lines"
+    else:
+        block = n // averages
+        if block < 16:
+            raise ShapeError(f"{n} samples cannot give {averages} impact blocks of at least 16 samples")
+        blocks = x[:, : block * averages].reshape(x.shape[0], averages, block).transpose(1, 0, 2)
+        hits = check_hits(blocks[:, ref], blocks, records.dofs)
+        good = [b for b in range(averages) if b not in hits.bad_blocks]
+        if not good:
+            raise FileFormatError(f"{src}: every impact block has a double hit or an overload "
+                                  f"(double hits in blocks {list(hits.double_hits)}, overloads "
+                                  f"{[f'{d} in block {b}' for b, d in hits.overloads]})")
+        ew, tau = exponential_window(block, decay)
+        fw = force_window(block, hits.pulse_samples + int(np.argmax(np.abs(blocks[0, ref]) > 0)),
+                          max(hits.pulse_samples, 4))
+        g = blocks[good]
+        f_t = (g[:, ref] * fw * ew).reshape(-1)
+        r_t = (g[:, resp] * ew).transpose(1, 0, 2).reshape(len(resp), -1)
+        est = estimate_frf(f_t, r_t, fs, block, 0, window="boxcar")
+        added = 0.0 if np.isinf(tau) else fs / tau
+        what = f"{estimator.upper()} of {len(good)} impact blocks of {block} samples (force window, exponential " \
+               f"window to {decay:g}: adds {added:.4g} 1/s to every pole's decay rate), {fs / block:.4g} Hz lines"
+    h = {"h1": est.h1, "h2": est.h2, "hv": est.hv}[estimator]
+    if h is None:
+        raise ShapeError("h2 needs exactly one force channel")
+    h = h[:, :1] if h.shape[1] == 1 else h[:, [0]]
+    f = est.frequency_hz
+    keep = (f > 0) & (f <= (fmax_hz if fmax_hz is not None else f[-1]))
+    if keep.sum() < 2:
+        raise ShapeError(f"fmax_hz {fmax_hz} keeps fewer than 2 lines")
+    coh = est.coherence[:, :1, keep]
+    frf = MeasuredFRF(f[keep], h[..., keep], out_dofs, (records.dofs[ref],), kind=kind,
+                      metadata={"source": src, "format": "uff58 time records", "estimated": what})
+    return TimeEstimate(frf, coh, estimator, excitation, int(est.n_averages if excitation == "random" else
+                                                               len(good)), hits, added, what)

@@ -1,0 +1,99 @@
+"""FRF estimation from time records against the model that made them (closed forms for the estimator bias)."""
+
+import numpy as np
+import pytest
+
+from physics.errors import FileFormatError
+from physics.frf import receptance
+from physics.io.timedata import TimeRecords
+from physics.thesis import beam5_reduced_model
+from physics.time_records import estimate_from_records
+
+
+def _random_test(seed=0, n=2**17, fs=2048.0, force_noise=0.1, resp_noise=0.1):
+    """White force at the tip of beam 5, periodic (circular) response: exact for every FFT line."""
+    M, C, K = beam5_reduced_model("heavy")
+    rng = np.random.default_rng(seed)
+    force = rng.normal(size=n)
+    f = np.fft.rfftfreq(n, 1 / fs)
+    H = receptance(M, C, K, 2 * np.pi * f, reference=[3])[:, 0, :]  # (4, n/2+1)
+    resp = np.fft.irfft(H * np.fft.rfft(force)[None], n=n)
+    sf, sx = force_noise * force.std(), resp_noise * resp.std(axis=1, keepdims=True)
+    noisy_f = force + sf * rng.normal(size=n)
+    noisy_x = resp + sx * rng.normal(size=resp.shape)
+    rec = TimeRecords(1 / fs, np.vstack([noisy_f, noisy_x]), ("5:+Y", "2:+Y", "3:+Y", "4:+Y", "5:+Y"),
+                      ("force",) + ("displacement",) * 4, {"source": "simulated random test"})
+    return rec, (M, C, K), sf, sx[:, 0], force.std()
+
+
+def test_random_excitation_h1_hv_and_coherence_match_the_noise_model():
+    rec, (M, C, K), sf, sx, s_force = _random_test()
+    est = estimate_from_records(rec, estimator="h1", averages=32, overlap=0.5)
+    f = est.frf.frequency_hz
+    band = (f > 5) & (f < 400)
+    H = receptance(M, C, K, 2 * np.pi * f, reference=[3])[..., band]
+    # coherence: 1 / ((1 + N_ff/G_ff)(1 + N_xx/G_xx)) with white noise spectra (same density per line)
+    gxx = np.abs(H) ** 2 * s_force**2
+    theory = 1 / ((1 + (sf / s_force) ** 2) * (1 + sx[:, None, None] ** 2 / gxx))
+    assert np.median(np.abs(est.coherence[..., band] - theory)) < 0.03
+    good = theory > 0.9  # lines with a clean response
+    assert good.sum() > 0.3 * good.size
+    # H1 is biased by the force noise: H1 = H / (1 + var_noise / var_force) (white spectra)
+    bias = 1 / (1 + (sf / s_force) ** 2)
+    ratio = est.frf.frf[..., band] / (H * bias)
+    assert np.median(np.abs(ratio[good] - 1)) < 0.03
+    # H2 is biased the other way, by the response noise: H2 = H (1 + N_xx/G_xx)
+    h2 = estimate_from_records(rec, estimator="h2", averages=32)
+    ratio2 = h2.frf.frf[..., band] / (H * (1 + sx[:, None, None] ** 2 / gxx))
+    assert np.median(np.abs(ratio2[good] - 1)) < 0.03
+    assert est.n_averages == 32 and est.frf.kind == "receptance" and est.frf.reference_dofs == ("5:+Y",)
+
+
+def _impact_test(n_blocks=6, fs=2048.0, block_s=1.0, fn=50.0, zeta=0.01, noise=0.002):
+    m, wn = 1.0, 2 * np.pi * fn
+    c, k = 2 * zeta * wn * m, wn**2 * m
+    nb = int(fs * block_s)
+    long = 8 * nb
+    t = np.arange(long) / fs
+    f_long = np.fft.rfftfreq(long, 1 / fs)
+    s = 2j * np.pi * f_long
+    H = 1 / (m * s**2 + c * s + k)
+    rng = np.random.default_rng(4)
+    forces, resps = [], []
+    for b in range(n_blocks):
+        pulse = np.where(t < 0.002, 100 * np.sin(np.pi * t / 0.002), 0.0)
+        if b == 2:  # double hit 0.3 s later
+            pulse += np.where((t > 0.3) & (t < 0.302), 50 * np.sin(np.pi * (t - 0.3) / 0.002), 0.0)
+        x = np.fft.irfft(H * np.fft.rfft(pulse), n=long)[:nb] * wn**2  # scaled to order 1
+        x = x + noise * rng.normal(size=nb)
+        if b == 4:  # overload: the converter clips at 60 % of the peak
+            x = np.clip(x, -0.6 * np.abs(x).max(), 0.6 * np.abs(x).max())
+        forces.append(pulse[:nb] + noise * 100 * rng.normal(size=nb))
+        resps.append(x)
+    rec = TimeRecords(1 / fs, np.vstack([np.concatenate(forces), np.concatenate(resps)]), ("1:+Z", "2:+Z"),
+                      ("force", "displacement"), {"source": "simulated impact test"})
+    return rec, (m, c, k), wn**2
+
+
+def test_impacts_flag_double_hits_and_overloads_and_recover_the_windowed_frf():
+    rec, (m, c, k), scale = _impact_test()
+    est = estimate_from_records(rec, excitation="impact", averages=6, decay=0.01)
+    assert est.hits.double_hits == (2,) and est.hits.overloads == ((4, "2:+Z"),)
+    assert est.n_averages == 4
+    # the exponential window turns H(i w) into H(i w + sigma), sigma = added decay rate, exactly
+    sigma = est.added_decay_rate_1_s
+    assert sigma == pytest.approx(2048 * np.log(100) / (2048 - 1))
+    f = est.frf.frequency_hz
+    band = (f > 5) & (f < 300)
+    s = 2j * np.pi * f[band] + sigma
+    truth = scale / (m * s**2 + c * s + k)
+    err = np.abs(est.frf.frf[0, 0, band] / truth - 1)
+    assert np.median(err) < 0.01 and np.max(err) < 0.1
+    assert np.median(est.coherence[0, 0, band]) > 0.99
+
+
+def test_time_records_without_force_are_refused_in_one_line():
+    rec = TimeRecords(1e-3, np.ones((2, 100)), ("1:+Z", "2:+Z"), ("acceleration",) * 2, {"source": "x.uff"})
+    with pytest.raises(FileFormatError, match=r"x.uff: 2 time records \(1:\+Z acceleration, 2:\+Z acceleration\) "
+                                              "but no force channel"):
+        estimate_from_records(rec)

@@ -1,0 +1,427 @@
+"""Malformed-input corpus: every command of this branch on broken files and arguments.
+
+Each case builds its input in a fresh folder and runs the command in-process. Required of every case:
+exit code 2, exactly one line on stderr that names the file (or the flag) and what is wrong, nothing on
+stdout, no output file left behind, no warning printed before the error, and a bounded run time.
+``python tests/test_malformed.py`` prints the corpus table (cases per family and outcome).
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import sys
+import time
+import warnings
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+DATA = Path(__file__).resolve().parent / "data"
+TIME_LIMIT_S = 60.0
+
+
+# --------------------------------------------------------------------------- builders
+def _base_frf():
+    from physics.thesis import simulated_beam5_test
+
+    frf, _ = simulated_beam5_test(noise=0.0, seed=0, damping="heavy", df_hz=2.0)
+    return frf
+
+
+def _uff(path, h=None, binary=1, rsp_nodes=(2, 3, 4, 5), x=None, ordinate=8, func_type=4, **extra):
+    import pyuff
+
+    frf = _base_frf()
+    f = frf.frequency_hz if x is None else x
+    data = frf.frf[:, 0, :] if h is None else h
+    sets = [pyuff.prepare_58(binary=binary, func_type=func_type, rsp_node=n, rsp_dir=2, ref_node=5, ref_dir=2,
+                             data=np.ascontiguousarray(data[i]), x=f, abscissa_spacing=1,
+                             abscissa_spec_data_type=18, ordinate_spec_data_type=ordinate,
+                             orddenom_spec_data_type=13, **extra)
+            for i, n in enumerate(rsp_nodes)]
+    pyuff.UFF(str(path)).write_sets(sets, mode="add")
+    return path
+
+
+def _good_uff(path):
+    return _uff(path)
+
+
+def _npz(path, **arrays):
+    frf = _base_frf()
+    base = dict(frequency_hz=frf.frequency_hz, frf=frf.frf, response_dofs=np.array(frf.response_dofs),
+                reference_dofs=np.array(frf.reference_dofs), kind=np.array("receptance"), units=np.array("m/N"),
+                metadata_json=np.array("{}"))
+    base.update(arrays)
+    base = {k: v for k, v in base.items() if v is not None}
+    np.savez(path, **base)
+    return path
+
+
+def _csv(path, text):
+    path.write_text(text) if isinstance(text, str) else path.write_bytes(text)
+    return path
+
+
+def _modal(path, obj):
+    path.write_text(obj if isinstance(obj, str) else json.dumps(obj))
+    return path
+
+
+def _thesis_modal():
+    from physics.thesis import beam_state
+
+    return beam_state("undamaged")
+
+
+def _patch_uff_text(path, old, new, count=1):
+    text = path.read_bytes()
+    assert old in text, old
+    path.write_bytes(text.replace(old, new, count))
+    return path
+
+
+# each case: (family, name, builder(tmp) -> argv list, expected substring of the error line)
+def _frf_cases():
+    frf = _base_frf()
+    h = frf.frf[:, 0, :]
+    n = h.shape[-1]
+    cases = [
+        ("uff", "empty file", lambda d: [_csv(d / "e.uff", "")], "empty"),
+        ("uff", "random bytes", lambda d: [_csv(d / "r.uff", np.random.default_rng(0).bytes(5000))],
+         "universal file"),
+        ("uff", "truncated inside a record", lambda d: [_cut(_good_uff(d / "t.uff"), 0.57)], "truncated"),
+        ("uff", "all-zero FRFs", lambda d: [_uff(d / "z.uff", h=np.zeros_like(h))], "zero"),
+        ("uff", "denormal FRFs (1e-310)", lambda d: [_uff(d / "dn.uff", h=np.full_like(h, 1e-310 + 1e-310j))],
+         "zero"),
+        ("uff", "one value of 1e300", lambda d: [_uff(d / "big.uff", h=np.full_like(h, 1e300 + 0j))], "1e+300"),
+        ("uff", "random bytes in 58b data", lambda d: [_scramble_58b(_good_uff(d / "s.uff"))], "s.uff"),
+        ("uff", "real-valued ordinate", lambda d: [_uff(d / "real.uff", h=np.abs(h))], "real"),
+        ("uff", "node field 'B'", lambda d: [_patch_node_b(_uff(d / "b.uff", binary=0))], "b.uff"),
+        ("uff", "frequency axis decreasing", lambda d: [_uff(d / "dec.uff", x=frf.frequency_hz[::-1].copy())],
+         "increasing"),
+        ("uff", "two frequency lines", lambda d: [_uff(d / "two.uff", h=h[:, :2].copy(), x=frf.frequency_hz[:2])],
+         "lines"),
+        ("uff", "PSD records (function type 9)", lambda d: [_copy(d, "sample_dataset58_psd.uff")], "type 4"),
+        ("uff", "geometry only (Test.Lab)", lambda d: [_copy(d, "TestLab_161_164_18_15_82.uff")], "no dataset 58"),
+        ("uff", "time records without force", lambda d: [_copy(d, "MPSTD_Set001_2024_10_08_10_27_07.uff")],
+         "no force channel"),
+        ("uff", "unknown unit label", lambda d: [_uff(d / "u.uff", ordinate_axis_units_lab="furlong/s")],
+         "furlong"),
+        ("uff", "header claims 10^9 points", lambda d: [_patch_uff_text(_uff(d / "np.uff", binary=0),
+                                                                       f"{n:10d}".encode(), b"1000000000")],
+         "np.uff"),
+        ("npz", "metadata JSON is a list", lambda d: [_npz(d / "m1.npz", metadata_json=np.array("[1, 2]"))],
+         "metadata"),
+        ("npz", "metadata JSON is null", lambda d: [_npz(d / "m2.npz", metadata_json=np.array("null"))],
+         "metadata"),
+        ("npz", "metadata JSON is a number", lambda d: [_npz(d / "m3.npz", metadata_json=np.array("3"))],
+         "metadata"),
+        ("npz", "metadata not JSON", lambda d: [_npz(d / "m4.npz", metadata_json=np.array("{oops"))], "metadata"),
+        ("npz", "string-typed FRF", lambda d: [_npz(d / "s1.npz", frf=np.full(frf.frf.shape, "x"))], "frf"),
+        ("npz", "string-typed frequencies", lambda d: [_npz(d / "s2.npz", frequency_hz=np.array(["a"] * n))],
+         "frequency"),
+        ("npz", "zip of non-npy members", lambda d: [_zip_junk(d / "zj.npz")], "zj.npz"),
+        ("npz", "plain .npy named .npz", lambda d: [_npy_as_npz(d / "p.npz")], "p.npz"),
+        ("npz", "header claims 5.8 TiB", lambda d: [_huge_npy_header(d / "huge.npz")], "huge.npz"),
+        ("npz", "real-valued FRF", lambda d: [_npz(d / "rv.npz", frf=np.abs(frf.frf))], "complex"),
+        ("npz", "float16 FRF", lambda d: [_npz(d / "f16.npz", frf=np.abs(frf.frf).astype(np.float16))], "complex"),
+        ("npz", "complex frequency axis", lambda d: [_npz(d / "cf.npz", frequency_hz=frf.frequency_hz + 1j)],
+         "frequency"),
+        ("npz", "DOFs as the string 'abcd'", lambda d: [_npz(d / "dofs.npz", response_dofs=np.array("abcd"))],
+         "dofs"),
+        ("npz", "missing frf array", lambda d: [_npz(d / "miss.npz", frf=None)], "missing"),
+        ("npz", "unknown kind", lambda d: [_npz(d / "k.npz", kind=np.array("inertance"))], "kind"),
+        ("csv", "thousands separator 1_000", lambda d: [_csv(d / "u.csv", "frequency_hz,re(2:+Y),im(2:+Y)\n"
+                                                                         "1_000,1,1\n2000,1,1\n3000,1,1\n")], "line 2"),
+        ("csv", "not UTF-8", lambda d: [_csv(d / "b.csv", b"frequency_hz,re(2:+Y),im(2:+Y)\n\xff\xfe,1,1\n")],
+         "UTF-8"),
+        ("csv", "header only", lambda d: [_csv(d / "h.csv", "frequency_hz,re(2:+Y),im(2:+Y)\n")], "header"),
+        ("csv", "NaN cell", lambda d: [_csv(d / "n.csv", "frequency_hz,re(2:+Y),im(2:+Y)\n1,nan,1\n2,1,1\n"
+                                                       "3,1,1\n4,1,1\n")], "NaN"),
+        ("csv", "frequency not increasing", lambda d: [_csv(d / "f.csv", "frequency_hz,re(2:+Y),im(2:+Y)\n"
+                                                                       "2,1,1\n1,1,1\n3,1,1\n4,1,1\n")], "increasing"),
+        ("csv", "all-zero FRF", lambda d: [_csv(d / "z.csv", "frequency_hz,re(2:+Y),im(2:+Y)\n"
+                                                + "".join(f"{k},0,0\n" for k in range(1, 50)))], "zero"),
+        ("csv", "JSON named .csv", lambda d: [_csv(d / "j.csv", '{"a": 1}')], "j.csv"),
+        ("csv", "200k-line CSV of one mode", lambda d: [_big_csv(d / "big.csv")], "200000 lines"),
+    ]
+    return cases
+
+
+def _cut(path, frac):
+    raw = path.read_bytes()
+    path.write_bytes(raw[: int(len(raw) * frac)])
+    return path
+
+
+def _copy(d, name):
+    out = d / name
+    out.write_bytes((DATA / name).read_bytes())
+    return out
+
+
+def _scramble_58b(path):
+    raw = bytearray(path.read_bytes())
+    rng = np.random.default_rng(1)
+    start = raw.find(b"\n", raw.find(b"    58b") + 1)
+    for _ in range(12):  # skip the 11 header lines
+        start = raw.find(b"\n", start + 1)
+    stop = raw.find(b"    -1", start)
+    raw[start + 1: stop] = rng.bytes(stop - start - 1)
+    path.write_bytes(bytes(raw))
+    return path
+
+
+def _patch_node_b(path):
+    lines = path.read_text().splitlines(keepends=True)
+    for i, line in enumerate(lines):  # record 6 of the first dataset: function type, ..., response node
+        if line.startswith("    58") and not line.startswith("    58b"):
+            rec6 = lines[i + 6]
+            lines[i + 6] = rec6[:41] + "         B" + rec6[51:]  # the response node field, I10
+            break
+    path.write_text("".join(lines))
+    return path
+
+
+def _zip_junk(path):
+    with zipfile.ZipFile(path, "w") as z:
+        z.writestr("frf.txt", "hello")
+        z.writestr("frequency_hz.bin", b"\x00" * 16)
+    return path
+
+
+def _npy_as_npz(path):
+    buf = io.BytesIO()
+    np.save(buf, np.arange(10.0))
+    path.write_bytes(buf.getvalue())
+    return path
+
+
+def _huge_npy_header(path):
+    frf = _base_frf()
+    _npz(path)
+    with zipfile.ZipFile(path) as z:
+        members = {n: z.read(n) for n in z.namelist()}
+    raw = members["frf.npy"]
+    hl = int.from_bytes(raw[8:10], "little")
+    header = raw[10:10 + hl].decode("latin1")
+    old = str(frf.frf.shape)
+    new_header = header.replace(old, "(4, 1, 400000000000)")
+    new_header = new_header.rstrip("\n").ljust(len(header) - 1) + "\n"
+    members["frf.npy"] = raw[:10] + new_header.encode("latin1")[: hl] + raw[10 + hl:]
+    with zipfile.ZipFile(path, "w") as z:
+        for n, b in members.items():
+            z.writestr(n, b)
+    return path
+
+
+def _big_csv(path):
+    f = np.arange(1, 200_001) * 0.005
+    w, wn = 2 * np.pi * f, 2 * np.pi * 300.0
+    h = 1 / (wn**2 - w**2 + 2j * 0.01 * wn * w)
+    rows = "\n".join(f"{a:.6f},{b.real:.6e},{b.imag:.6e}" for a, b in zip(f, h))
+    path.write_text("frequency_hz,re(2:+Y),im(2:+Y)\n" + rows + "\n")
+    return path
+
+
+def _modal_cases():
+    good = _thesis_modal()
+    vec = good["eigenvectors"]
+    zero_row = [row[:] for row in vec]
+    zero_row[1] = ["0"] * len(zero_row[1])
+    real_vecs = [[str(complex(z).real) for z in row] for row in vec]
+    dup = dict(good, eigenvalues=[good["eigenvalues"][0]] * 2 + good["eigenvalues"][2:])
+    lower = dict(good, eigenvalues=[str(complex(z).conjugate()) for z in good["eigenvalues"]])
+    return [
+        ("modal-json", "a list, not an object", lambda d: _upd(_modal(d / "l.json", [1, 2])), "object"),
+        ("modal-json", "missing eigenvalues", lambda d: _upd(_modal(d / "m.json", {"dofs": []})), "eigenvalues"),
+        ("modal-json", "zero eigenvector row", lambda d: _upd(_modal(d / "z.json", dict(good, eigenvectors=zero_row))),
+         "eigenvectors"),
+        ("modal-json", "string rows", lambda d: _upd(_modal(d / "s.json", dict(good, eigenvectors=["ab", "cd",
+                                                                                               "ef", "gh"]))),
+         "eigenvectors"),
+        ("modal-json", "not UTF-8", lambda d: _upd(_bytes(d / "b.json", b'{"eigenvalues": ["\xff"]}')), "UTF-8"),
+        ("modal-json", "nesting 100k deep", lambda d: _upd(_modal(d / "deep.json", "[" * 100_000 + "]" * 100_000)),
+         "deep.json"),
+        ("modal-json", "real eigenvectors", lambda d: _upd(_modal(d / "r.json", dict(good, eigenvectors=real_vecs))),
+         "r.json"),
+        ("modal-json", "duplicated eigenvalue", lambda d: _upd(_modal(d / "dup.json", dup)), "dup.json"),
+        ("modal-json", "lower-half-plane eigenvalues (direct)",
+         lambda d: _upd(_modal(d / "low.json", lower), "--method", "direct"), "low.json"),
+        ("modal-json", "huge vectors (direct)",
+         lambda d: _upd(_modal(d / "h.json", dict(good, eigenvectors=[["1e300+1e300j"] * 4] * 4)), "--method",
+                        "direct"), "h.json"),
+        ("modal-json", "not JSON", lambda d: _upd(_modal(d / "n.json", "{eigen")), "JSON"),
+        ("modal-json", "missing file", lambda d: _upd(d / "absent.json"), "absent.json"),
+    ]
+
+
+def _bytes(path, b):
+    path.write_bytes(b)
+    return path
+
+
+def _upd(path, *more):
+    return ["update", "--modal", str(path), *more]
+
+
+def _arg_cases():
+    return [
+        ("args", "identify --modes -2", lambda d: ["identify", str(_good_uff(d / "g.uff")), "--modes", "-2"],
+         "--modes"),
+        ("args", "identify --modes 0", lambda d: ["identify", str(_good_uff(d / "g.uff")), "--modes", "0"],
+         "--modes"),
+        ("args", "identify --max-order 2000", lambda d: ["identify", str(_good_uff(d / "g.uff")), "--max-order",
+                                                         "2000"], "--max-order"),
+        ("args", "identify --max-order 0", lambda d: ["identify", str(_good_uff(d / "g.uff")), "--max-order", "0"],
+         "--max-order"),
+        ("args", "identify --band reversed", lambda d: ["identify", str(_good_uff(d / "g.uff")), "--band", "500",
+                                                        "100"], "--band"),
+        ("args", "identify --band outside the data", lambda d: ["identify", str(_good_uff(d / "g.uff")), "--band",
+                                                                "5000", "6000"], "band"),
+        ("args", "identify --band nan", lambda d: ["identify", str(_good_uff(d / "g.uff")), "--band", "nan", "100"],
+         "--band"),
+        ("args", "identify --out is a file", lambda d: ["identify", str(_good_uff(d / "g.uff")), "--out",
+                                                        str(_csv(d / "f.txt", "x"))], "--out"),
+        ("args", "model --elements 100000", lambda d: ["model", "--elements", "100000"], "--elements"),
+        ("args", "model --elements 0", lambda d: ["model", "--elements", "0"], "--elements"),
+        ("args", "update --tol -1", lambda d: ["update", "--modal", str(_modal(d / "ok.json", _thesis_modal())),
+                                               "--tol", "-1"], "--tol"),
+        ("args", "update --max-iter 0", lambda d: ["update", "--modal", str(_modal(d / "ok.json", _thesis_modal())),
+                                                   "--max-iter", "0"], "--max-iter"),
+        ("args", "estimate --averages 0", lambda d: ["estimate", str(d / "x.uff"), "--averages", "0"], "--averages"),
+        ("args", "estimate --overlap 1.5", lambda d: ["estimate", str(d / "x.uff"), "--overlap", "1.5"], "--overlap"),
+        ("args", "estimate --decay 0", lambda d: ["estimate", str(d / "x.uff"), "--decay", "0"], "--decay"),
+        ("args", "estimate unknown --reference", lambda d: ["estimate", str(_impact_uff(d / "i.uff")), "--reference",
+                                                            "9:+Z"], "9:+Z"),
+        ("args", "estimate on an FRF file", lambda d: ["estimate", str(_good_uff(d / "g.uff"))], "time record"),
+        ("args", "unknown command", lambda d: ["frobnicate"], "invalid choice"),
+    ]
+
+
+def _impact_uff(path):
+    import pyuff
+
+    fs, n = 1024.0, 4096
+    t = np.arange(n) / fs
+    force = np.where(t % 1.0 < 0.002, 100.0, 0.0)
+    resp = np.sin(2 * np.pi * 40 * t) * np.exp(-3 * (t % 1.0))
+    sets = [pyuff.prepare_58(binary=1, func_type=1, rsp_node=node, rsp_dir=3, ref_node=0, ref_dir=0,
+                             data=np.ascontiguousarray(sig), x=t, abscissa_spacing=1, abscissa_spec_data_type=17,
+                             ordinate_spec_data_type=code, orddenom_spec_data_type=0)
+            for node, sig, code in ((1, force, 13), (2, resp, 12))]
+    pyuff.UFF(str(path)).write_sets(sets, mode="add")
+    return path
+
+
+if __name__ == "__main__":
+    sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
+CASES = [*_frf_cases(), *_modal_cases(), *_arg_cases()]
+
+
+def _argv(builder, d):
+    out = builder(d)
+    if out and isinstance(out[0], Path):  # a file for identify (the FRF families)
+        return ["identify", str(out[0]), "--out", str(d / "identify-out")]
+    return out
+
+
+def run_case(builder, d, capsys=None):
+    """Run one case; returns (exit code, stdout, stderr, seconds, files created)."""
+    from experiments.cli import main
+
+    d.mkdir(parents=True, exist_ok=True)
+    argv = _argv(builder, d)
+    before = {p for p in d.rglob("*")}
+    out_buf, err_buf = io.StringIO(), io.StringIO()
+    old = sys.stdout, sys.stderr
+    t0 = time.perf_counter()
+
+    def _timeout(signum, frame):
+        raise TimeoutError(f"still running after {TIME_LIMIT_S:g} s")
+
+    import signal
+
+    previous = signal.signal(signal.SIGALRM, _timeout)
+    signal.alarm(int(TIME_LIMIT_S))
+    with warnings.catch_warnings():
+        warnings.simplefilter("default")
+        warnings.showwarning = lambda m, c, f, ln, file=None, line=None: sys.stderr.write(
+            warnings.formatwarning(m, c, f, ln))
+        sys.stdout, sys.stderr = out_buf, err_buf
+        try:
+            code = main(argv)
+        except SystemExit as exc:
+            code = exc.code
+        except BaseException as exc:  # a traceback: report it as such
+            code = f"traceback {type(exc).__name__}: {str(exc)[:120]}"
+        finally:
+            signal.alarm(0)
+            signal.signal(signal.SIGALRM, previous)
+            sys.stdout, sys.stderr = old
+    dt = time.perf_counter() - t0
+    created = sorted(str(p.relative_to(d)) for p in set(d.rglob("*")) - before)
+    return code, out_buf.getvalue(), err_buf.getvalue(), dt, created
+
+
+#: Cases that fail in commands other branches own (reported to them, not fixed here).
+OTHERS = {"model --elements 100000": "cmd_model (house): tries to allocate 298 GiB, MemoryError traceback",
+          "update --tol -1": "cmd_update (house): runs and reports non-convergence without naming --tol",
+          "update --max-iter 0": "cmd_update (house): reports non-convergence without naming --max-iter",
+          "real eigenvectors": "cmd_update (house): real shapes are valid modal data (thesis example 1) but "
+                               "not unit-modal-A complex modes; update should refuse them"}
+
+
+def _params():
+    for c in CASES:
+        marks = [pytest.mark.xfail(reason=OTHERS[c[1]], strict=False)] if c[1] in OTHERS else []
+        yield pytest.param(*c, marks=marks, id=f"{c[0]}: {c[1]}")
+
+
+@pytest.mark.parametrize("family, name, builder, expect", list(_params()))
+def test_malformed_input_gives_one_line_and_exit_2(tmp_path, family, name, builder, expect):
+    code, out, err, dt, created = run_case(builder, tmp_path / "case")
+    assert code == 2, f"exit {code!r}; stderr: {err!r}"
+    assert err.count("\n") == 1 and err.endswith("\n"), f"stderr must be one line: {err!r}"
+    assert expect.lower() in err.lower(), err
+    assert out == "", out
+    assert created == [], f"partial output: {created}"
+    assert dt < TIME_LIMIT_S
+
+
+def corpus_table():
+    """Run the corpus; rows of (family, cases, clean one-line errors, tracebacks, other failures)."""
+    import tempfile
+
+    rows, problems = {}, []
+    with tempfile.TemporaryDirectory() as tmp:
+        for k, (family, name, builder, expect) in enumerate(CASES):
+            code, out, err, dt, created = run_case(builder, Path(tmp) / f"c{k}")
+            r = rows.setdefault(family, {"cases": 0, "clean": 0, "traceback": 0, "other": 0, "max_s": 0.0})
+            r["cases"] += 1
+            r["max_s"] = max(r["max_s"], dt)
+            ok = code == 2 and err.count("\n") == 1 and expect.lower() in err.lower() and out == "" and not created
+            if isinstance(code, str):
+                r["traceback"] += 1
+                problems.append((family, name, code))
+            elif ok:
+                r["clean"] += 1
+            else:
+                r["other"] += 1
+                problems.append((family, name, f"exit {code}, stderr {err.strip()[:150]!r}, created {created}"))
+    return rows, problems
+
+
+if __name__ == "__main__":
+    # tests/physics would shadow the physics package when this file runs as a script
+    sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
+    rows, problems = corpus_table()
+    print(f"{'family':<12}{'cases':>6}{'clean':>7}{'traceback':>11}{'other':>7}{'max s':>8}")
+    for fam, r in rows.items():
+        print(f"{fam:<12}{r['cases']:>6}{r['clean']:>7}{r['traceback']:>11}{r['other']:>7}{r['max_s']:>8.1f}")
+    for p in problems:
+        print("  ", *p)
