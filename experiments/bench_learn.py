@@ -207,16 +207,15 @@ def main(argv=None):
 
 def beam5(model, out_dir) -> dict:
     """Classify the thesis's beam 5 from its measured modal data and from FRFs of its identified models."""
-    from importlib.resources import files
-
     from learn.features import modal_features
     from learn.sensitivity import beam_sensitivity
     from experiments.cmd_classify import _identify
     from learn.workflow import classify
     from physics.frf import receptance
+    from physics import thesis
     from physics.io import MeasuredFRF, modal_data_from_dict
 
-    data = json.loads((files("experiments") / "data/thesis/beams.json").read_text())["beams"]["5"]
+    data = thesis.load("beams")["beams"]["5"]
     dofs = ["2:y", "3:y", "4:y", "5:y"]
     md = {s: modal_data_from_dict({**data[s], "dofs": dofs}, f"beams.json beam 5 {s}") for s in ("undamaged", "damaged")}
     res = classify(model, md["undamaged"], md["damaged"])

@@ -67,7 +67,7 @@ def _identify(base, cur):
 
     if not isinstance(base, MeasuredFRF):
         return None
-    from experiments.cmd_identify import identify_frf
+    from physics.identification import identify_frf
 
     try:
         with warnings.catch_warnings():

@@ -2,19 +2,15 @@
 
 from __future__ import annotations
 
-import json
 import warnings
 from pathlib import Path
 
 import numpy as np
 
 from physics.errors import BeamDamageError, ConfigError
-# identify_file and identify_frf stay importable from here for commands of other branches (update, classify,
-# discrepancy, demo) until they import them from physics.identification
-from physics.identification import (METHODS, Identification, identify_file, identify_frf,  # noqa: F401
-                                    reconstruction_error_db)
-from physics.io import (MeasuredFRF, NodeGeometry, atomic_write_bytes, format_complex, measured_positions,
-                        modal_data_to_dict, write_uff58)
+from experiments.plots_identify import write_outputs
+from physics.identification import METHODS, Identification, identify_file, reconstruction_error_db
+from physics.io import MeasuredFRF, NodeGeometry, format_complex, measured_positions
 from physics.modal import mac
 
 
@@ -76,49 +72,6 @@ UNCERTAINTY = {
     "circle": {"frequency_std_hz, damping_std": "weighted scatter of the circle fits over the FRFs"},
     "peak": {"frequency_std_hz, damping_std": "none (NaN)"},
 }
-
-
-def synthesised_frf(ident: Identification) -> MeasuredFRF:
-    """The fitted FRFs as a :class:`MeasuredFRF` of the input's kind, units and (band-limited) lines.
-
-    When the input's axis labels named one unit (e.g. ``g/N``) the values are converted back to it and
-    the label written; otherwise (SI, or a dataset-164 unit system) they stay SI with SI labels.
-    """
-    src = ident.frf
-    units = src.metadata.get("units") or {}
-    found, factors = units.get("file", []), units.get("factor_to_si", [])
-    h, label = ident.synthesised, src.units
-    if len(found) == 1 and len(factors) == 1 and found[0].endswith(" (axis labels)") and factors[0] != 1.0:
-        h, label = h / factors[0], found[0][: -len(" (axis labels)")]
-    return MeasuredFRF(src.frequency_hz, h, src.response_dofs, src.reference_dofs, kind=src.kind, units=label,
-                       metadata={"id1": "beam-damage identify: synthesised FRF", "source": src.metadata.get("source")})
-
-
-def write_outputs(ident: Identification, out_dir) -> dict:
-    """Write modal JSON, the synthesised FRFs (UFF 58), stabilisation diagram (LSCF) and overlay PNGs.
-
-    Everything is rendered first, then each file is written atomically; returns their paths.
-    """
-    from experiments import plots_identify as plots
-
-    out_dir = Path(out_dir)
-    if out_dir.exists() and not out_dir.is_dir():
-        raise ConfigError(f"--out {out_dir}: exists and is not a directory")
-    f, h = ident.frf.frequency_hz, ident.frf.frf
-    labels = [f"{a}/{b}" for a in ident.frf.response_dofs for b in ident.frf.reference_dofs]
-    files = {"modal.json": (json.dumps(modal_data_to_dict(ident.modal_data), indent=1) + "\n").encode()}
-    if ident.diagram is not None:
-        files["stabilisation.png"] = plots.stabilisation_png(ident.diagram, f, h,
-                                                             ident.estimate.natural_frequencies_hz)
-    files["overlay.png"] = plots.overlay_png(f, h, ident.synthesised, labels, ident.frf.kind, ident.frf.units)
-    synth = synthesised_frf(ident)
-    written = {}
-    for name, data in files.items():
-        atomic_write_bytes(out_dir / name, data)
-        written[name] = str(out_dir / name)
-    write_uff58(out_dir / "synthesised.uff", synth)
-    written["synthesised.uff"] = str(out_dir / "synthesised.uff")
-    return written
 
 
 def run(args) -> dict:

@@ -15,7 +15,7 @@ def load_modal(modal_file, n_modes: int):
     """Modal JSON as is; an FRF file (UFF58, CSV, NPZ) is identified first (LSCF + LSFD, ``n_modes`` modes)."""
     if str(modal_file).lower().endswith(".json"):
         return read_modal_json(modal_file)
-    from experiments.cmd_identify import identify_file
+    from physics.identification import identify_file
 
     return identify_file(modal_file, n_modes=n_modes).modal_data
 

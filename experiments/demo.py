@@ -53,7 +53,8 @@ def _step(out: Path, name: str, force: bool, key: dict, fn):
 
 def measured_data_step(out: Path) -> dict:
     """Simulated beam-5 test -> UFF58 -> LSCF/LSFD identification -> Pilkey updating."""
-    from experiments.cmd_identify import identify_frf, write_outputs
+    from experiments.plots_identify import write_outputs
+    from physics.identification import identify_frf
     from physics.io import read_frf, read_modal_json, write_uff58
 
     frf, exact = thesis.simulated_beam5_test(noise=0.01, damping="thesis")
@@ -117,6 +118,13 @@ def _verdict_text(v: dict, length_m: float) -> str:
             f"fixed end: x = {length_m / 4:.3f} m on the 0.6095 m cantilever (the element 1/2 boundary).")
 
 
+def _single_thread_torch():
+    """One torch thread: the small network trains fastest so, and a second thread only contends with BLAS."""
+    import torch
+
+    torch.set_num_threads(1)
+
+
 def run(args) -> dict:
     if args.samples is not None and args.samples < 200:
         raise BeamDamageError(f"samples must be >= 200 (training pairs), got {args.samples}", parameter="samples")
@@ -129,6 +137,7 @@ def run(args) -> dict:
         n_train, n_test = args.samples, max(200, args.samples // 4)
     t_start = time.perf_counter()
     force = args.force
+    _single_thread_torch()
 
     # 1-2: the thesis
     checks = validate.run_checks()

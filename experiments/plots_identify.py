@@ -1,6 +1,7 @@
-"""Figures of the ``identify`` command (stabilisation diagram, measured vs synthesised FRFs).
+"""Outputs of an identification: figures (stabilisation diagram, measured vs synthesised FRFs), modal JSON
+and the synthesised FRFs as UFF 58 (:func:`write_outputs`, used by ``identify`` and the demo).
 
-Figures are rendered to PNG bytes; the caller writes them atomically.
+Figures are rendered to PNG bytes, then every file is written atomically.
 """
 
 from __future__ import annotations
@@ -13,7 +14,12 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from physics.identification import STABILITY_CODES, mode_indicator  # noqa: E402
+import json  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+from physics.errors import ConfigError  # noqa: E402
+from physics.identification import STABILITY_CODES, Identification, mode_indicator  # noqa: E402
+from physics.io import MeasuredFRF, atomic_write_bytes, modal_data_to_dict, write_uff58  # noqa: E402
 
 _MARKERS = {0: ("o", "0.7", "new"), 1: ("x", "tab:orange", "f"), 2: ("^", "tab:blue", "f+d"),
             3: ("v", "tab:purple", "f+v"), 4: ("s", "tab:green", "stable")}
@@ -67,3 +73,44 @@ def overlay_png(frequency_hz, measured, synthesised, labels, kind="receptance", 
     ax2.set_yticks([-180, -90, 0, 90, 180])
     fig.tight_layout()
     return _png(fig)
+
+
+def synthesised_frf(ident: Identification) -> MeasuredFRF:
+    """The fitted FRFs as a :class:`MeasuredFRF` of the input's kind, units and (band-limited) lines.
+
+    When the input's axis labels named one unit (e.g. ``g/N``) the values are converted back to it and
+    the label written; otherwise (SI, or a dataset-164 unit system) they stay SI with SI labels.
+    """
+    src = ident.frf
+    units = src.metadata.get("units") or {}
+    found, factors = units.get("file", []), units.get("factor_to_si", [])
+    h, label = ident.synthesised, src.units
+    if len(found) == 1 and len(factors) == 1 and found[0].endswith(" (axis labels)") and factors[0] != 1.0:
+        h, label = h / factors[0], found[0][: -len(" (axis labels)")]
+    return MeasuredFRF(src.frequency_hz, h, src.response_dofs, src.reference_dofs, kind=src.kind, units=label,
+                       metadata={"id1": "beam-damage identify: synthesised FRF", "source": src.metadata.get("source")})
+
+
+def write_outputs(ident: Identification, out_dir) -> dict:
+    """Write modal JSON, the synthesised FRFs (UFF 58), stabilisation diagram (LSCF) and overlay PNGs.
+
+    Everything is rendered first, then each file is written atomically; returns their paths.
+    """
+    out_dir = Path(out_dir)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise ConfigError(f"--out {out_dir}: exists and is not a directory")
+    f, h = ident.frf.frequency_hz, ident.frf.frf
+    labels = [f"{a}/{b}" for a in ident.frf.response_dofs for b in ident.frf.reference_dofs]
+    files = {"modal.json": (json.dumps(modal_data_to_dict(ident.modal_data), indent=1) + "\n").encode()}
+    if ident.diagram is not None:
+        files["stabilisation.png"] = stabilisation_png(ident.diagram, f, h,
+                                                             ident.estimate.natural_frequencies_hz)
+    files["overlay.png"] = overlay_png(f, h, ident.synthesised, labels, ident.frf.kind, ident.frf.units)
+    synth = synthesised_frf(ident)
+    written = {}
+    for name, data in files.items():
+        atomic_write_bytes(out_dir / name, data)
+        written[name] = str(out_dir / name)
+    write_uff58(out_dir / "synthesised.uff", synth)
+    written["synthesised.uff"] = str(out_dir / "synthesised.uff")
+    return written

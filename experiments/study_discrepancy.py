@@ -23,7 +23,7 @@ from physics.effects import CANDIDATES
 from physics.errors import ConfigError, FileFormatError
 from physics.io import atomic_write_bytes, modal_data_from_dict, read_frf
 
-EXAMPLE = Path(__file__).parent / "data" / "thesis" / "beam5_table_4_3.json"
+EXAMPLE = Path(__file__).parents[1] / "physics" / "data" / "thesis" / "beam5_table_4_3.json"
 
 
 def _positions(beam: Beam, labels, n_rows: int, source: str) -> tuple:
@@ -78,7 +78,7 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[dsc.Measurement, o
             return dsc.Measurement(data.natural_frequencies_hz, data.damping_ratios, shapes, xs), None
         except ValueError as exc:
             raise FileFormatError(f"{path}: {exc}") from None
-    from experiments.cmd_identify import identify_frf
+    from physics.identification import identify_frf
 
     frf = read_frf(path)
     with warnings.catch_warnings():

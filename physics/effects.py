@@ -274,9 +274,7 @@ def assemble_beam(length_m, EI_Nm2, mass_per_length_kg_m, n_elements, *, bc="cla
         ``C`` holds proportional plus local damping (zeros without them).
     """
     eff = validate_effects(effects)
-    n_el = int(n_elements)
-    if n_el < 1:
-        raise BeamDamageError(f"n_elements must be >= 1, got {n_elements}", parameter="n_elements")
+    n_el = fem.check_n_elements(n_elements)
     for name, v in (("length_m", length_m), ("EI_Nm2", EI_Nm2), ("mass_per_length_kg_m", mass_per_length_kg_m)):
         if not (np.isfinite(v) and v > 0):
             raise BeamDamageError(f"{name} must be a positive finite number, got {v}")

@@ -25,6 +25,22 @@ import numpy as np
 
 from physics.errors import BeamDamageError, ShapeError
 
+#: Most elements of a dense model (three (2n+2)^2 float64 matrices: 2000 elements need 0.38 GB).
+MAX_ELEMENTS = 2000
+
+
+def check_n_elements(n_elements) -> int:
+    """``n_elements`` as an int in ``1..MAX_ELEMENTS``; the error names the memory a larger mesh would need."""
+    n = int(n_elements)
+    if n < 1:
+        raise BeamDamageError(f"n_elements must be >= 1, got {n_elements}", parameter="n_elements")
+    if n > MAX_ELEMENTS:
+        gib = 3 * (2 * n + 2) ** 2 * 8 / 2**30
+        raise BeamDamageError(f"n_elements must be <= {MAX_ELEMENTS} (dense matrices; {n} elements would need "
+                              f"{gib:.3g} GiB), got {n}", parameter="n_elements")
+    return n
+
+
 BOUNDARY_CONDITIONS = ("clamped-free", "free-free", "pinned-pinned", "clamped-clamped")
 
 
@@ -253,8 +269,7 @@ def beam_model(
     -------
     FEModel
     """
-    if int(n_elements) < 1:
-        raise BeamDamageError(f"n_elements must be >= 1, got {n_elements}", parameter="n_elements")
+    check_n_elements(n_elements)
     if not np.isfinite(length_m) or length_m <= 0:
         raise BeamDamageError(f"length_m must be a positive number of metres, got {length_m}", parameter="length_m")
     n_el = int(n_elements)

@@ -299,6 +299,10 @@ def pilkey(M, eigenvalues, eigenvectors, C0=None, *, tol: float = 1e-10, max_ite
     -------
     UpdateResult
     """
+    if not (np.isfinite(tol) and tol > 0):
+        raise BeamDamageError(f"tol must be a positive number, got {tol}", parameter="tol")
+    if int(max_iter) != max_iter or max_iter < 1:
+        raise BeamDamageError(f"max_iter must be an integer >= 1, got {max_iter}", parameter="max_iter")
     M, lam, phi = check_modal_input(M, eigenvalues, eigenvectors)
     batch, n = M.shape[:-2], M.shape[-1]
     Mf = M.astype(float).reshape(-1, n, n)

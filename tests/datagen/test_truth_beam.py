@@ -124,7 +124,7 @@ def test_calibrated_beam5_file_closes_the_gap_to_table_4_3(tmp_path, capsys):
     from physics.beam import load_beam
     from physics.modal import undamped_modes
 
-    table = Path(__file__).parents[2] / "experiments" / "data" / "thesis" / "beam5_table_4_3.json"
+    table = Path(__file__).parents[2] / "physics" / "data" / "thesis" / "beam5_table_4_3.json"
     measured = np.array(json.loads(table.read_text())["natural_frequencies_hz"])
     np.testing.assert_array_equal(measured, [21.536, 129.721, 346.148, 634.078])
     assert main(["discrepancy", "--beam", "beam5", "--measured", str(table), "--out", str(tmp_path / "d5"),
