@@ -158,6 +158,7 @@ def _figures(res: dsc.DiscrepancyResult, recal: dsc.ModeResiduals, meas: dsc.Mea
     ax.set_xticks(modes)
     ax.set_xlabel("measured mode")
     ax.set_ylabel("frequency error, model vs measured (%)")
+    ax.set_title("Frequency error per mode before and after the discrepancy workflow")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()
