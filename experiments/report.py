@@ -40,7 +40,7 @@ class Table:
 
 @dataclass(frozen=True)
 class Figure:
-    """A PNG file (absolute or relative to the report directory) with its caption."""
+    """A PNG file (absolute, relative to the working directory, or to the report directory) with its caption."""
 
     caption: str
     path: str
@@ -75,8 +75,14 @@ def format_value(v) -> str:
     return str(v)
 
 
-def _rel(path: str, root: Path) -> str:
+def _figure_file(path: str, root: Path) -> Path:
+    """A figure's file: absolute, or relative to the working directory, else to the report directory."""
     p = Path(path)
+    return p if p.is_absolute() or p.exists() else root / p
+
+
+def _rel(path: str, root: Path) -> str:
+    p = _figure_file(path, root)
     try:
         return p.resolve().relative_to(root.resolve()).as_posix()
     except ValueError:
@@ -136,8 +142,7 @@ def _html(title: str, sections, root: Path) -> str:
                 out.append("<tr>" + "".join(f"<td>{html.escape(format_value(v))}</td>" for v in r) + "</tr>")
             out.append("</table>")
         for f in sec.figures:
-            p = Path(f.path) if Path(f.path).is_absolute() else root / f.path
-            data = base64.b64encode(p.read_bytes()).decode("ascii")
+            data = base64.b64encode(_figure_file(f.path, root).read_bytes()).decode("ascii")
             out.append(f"<figure><img alt='{html.escape(f.caption)}' src='data:image/png;base64,{data}'>"
                        f"<figcaption>{_inline(f.caption)}</figcaption></figure>")
         for s in sec.subsections:
