@@ -28,8 +28,20 @@ import numpy as np
 from physics.errors import OverdampedError, ShapeError
 
 
+class EigenvalueParameters:
+    """Natural frequencies (Hz) and damping ratios of an ``eigenvalues`` attribute (:func:`modal_parameters`)."""
+
+    @property
+    def natural_frequencies_hz(self) -> np.ndarray:
+        return modal_parameters(self.eigenvalues)[0]
+
+    @property
+    def damping_ratios(self) -> np.ndarray:
+        return modal_parameters(self.eigenvalues)[1]
+
+
 @dataclass(frozen=True)
-class ComplexModes:
+class ComplexModes(EigenvalueParameters):
     """Complex eigen-solution in the conjugate-pair convention.
 
     Attributes
@@ -42,14 +54,6 @@ class ComplexModes:
 
     eigenvalues: np.ndarray
     eigenvectors: np.ndarray
-
-    @property
-    def natural_frequencies_hz(self) -> np.ndarray:
-        return modal_parameters(self.eigenvalues)[0]
-
-    @property
-    def damping_ratios(self) -> np.ndarray:
-        return modal_parameters(self.eigenvalues)[1]
 
 
 def _t(a):

@@ -18,13 +18,13 @@ import numpy as np
 
 from physics.errors import FileFormatError, ShapeError
 from physics.frf import FRF_KINDS, FRF_UNITS, check_frf_kind, convert_frf
-from physics.modal import modal_parameters
+from physics.modal import EigenvalueParameters
 
 __all__ = ["DEFAULT_UNITS", "FRF_KINDS", "MeasuredFRF", "ModalData", "dof_label", "format_complex",
            "parse_dof"]
 
 @dataclass(frozen=True)
-class ModalData:
+class ModalData(EigenvalueParameters):
     """Measured or computed complex modal data.
 
     Attributes
@@ -40,14 +40,6 @@ class ModalData:
     eigenvalues: np.ndarray
     eigenvectors: np.ndarray | None
     dofs: tuple = ()
-
-    @property
-    def natural_frequencies_hz(self) -> np.ndarray:
-        return modal_parameters(self.eigenvalues)[0]
-
-    @property
-    def damping_ratios(self) -> np.ndarray:
-        return modal_parameters(self.eigenvalues)[1]
 
 
 def format_complex(z: complex) -> str:
