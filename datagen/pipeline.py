@@ -47,6 +47,7 @@ import numpy as np
 from datagen.damage import draw_slits, slit_corrections
 from datagen.solvers import light_damping_modes, ritz_modes
 from datagen.specimen import BeamPreset, SectionLayout, beam_preset, draw_specimens, slit_section_ei
+from datagen.synth import measured_peak
 from physics.errors import ConfigError
 from datagen.truth_beam import as_preset, load_truth_beam, point_effects, unit_elements
 from physics.fem import assemble, dof_names, kept_dofs
@@ -462,8 +463,8 @@ def simulate_chunk(setup: Setup, inp: BatchInputs) -> dict:
         measured DOFs (the measured FRFs are synthesised from them), ``eigenvalues_measured`` (B,2,4),
         ``eigenvectors_measured`` (B,2,4,4) (noisy), ``M_updated`` (B,4,4), ``C_updated``, ``K_updated``
         (B,2,4,4), ``updated_poles`` (B,2,4) and ``updated_residues`` (B,2,4,4) of the updated models
-        (drive at the first measured DOF), ``converged``, ``iterations``, ``residual`` (B,2) and
-        ``slit_frequency_drop`` (B,).
+        (drive at the first measured DOF), ``frf_peak`` (B,2,4) (:func:`datagen.synth.measured_peak`),
+        ``converged``, ``iterations``, ``residual`` (B,2) and ``slit_frequency_drop`` (B,).
     """
     M, K, dC, dK = truth_matrices(setup, inp)
     lam, psi, w2 = projected_modes(setup, inp, M, K, dC)
@@ -474,5 +475,7 @@ def simulate_chunk(setup: Setup, inp: BatchInputs) -> dict:
     poles, res = pr.eigenvalues, pr.residues[..., 0, :]
     return {"truth_poles": lam, "truth_shapes": psi, "eigenvalues_measured": lam_m, "eigenvectors_measured": psi_m,
             "M_updated": Ma, "C_updated": up["C"], "K_updated": up["K"], "updated_poles": poles,
-            "updated_residues": res, "converged": up["converged"], "iterations": up["iterations"],
+            "updated_residues": res, "frf_peak": measured_peak({"truth_poles": lam, "truth_shapes": psi,
+                                                               "noise_floor": inp.noise_floor}, setup.omega_rad_s),
+            "converged": up["converged"], "iterations": up["iterations"],
             "residual": up["residual"], "slit_frequency_drop": slit_frequency_drop(setup, inp, K, dK, w2)}

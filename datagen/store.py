@@ -41,7 +41,7 @@ import numpy as np
 import pandas as pd
 
 from datagen.damage import element4_index
-from datagen.synth import FRF_KINDS, SOURCES, synthesise
+from datagen.synth import FRF_KINDS, SOURCES, line_index, synthesise
 from physics.errors import FileFormatError
 from physics.io import atomic_write_text
 from physics.modal import modal_parameters
@@ -63,7 +63,12 @@ ARRAYS = {
     "noise_seed": ("sample", "seed of the counter-based FRF noise stream (uint64)"),
     "noise_level": ("sample", "FRF noise std relative to |H| (-)"),
     "noise_floor": ("sample", "FRF noise floor std relative to each FRF's peak (-)"),
+    "frf_peak": ("sample, state, dof", "peak over all lines of each noise-free measured |H| (m/N), the floor's "
+                 "scale; NaN where the noise floor is 0"),
 }
+
+#: Arrays added to the format after its first datasets: a shard without one reads as NaN (recomputed when needed).
+OPTIONAL = {"frf_peak": np.nan}
 
 #: Arrays computed from the stored ones (names kept from format 1).
 DERIVED = {
@@ -432,7 +437,11 @@ class Dataset:
             parts, where = [], []
             for i in np.unique(shard):
                 sel = shard == i
-                parts.append(np.asarray(self._load(i, name)[r[sel] - self.offsets[i]]))
+                if name in OPTIONAL and f"{name}.npy" not in self.shards[i]["checksums"]:
+                    like = self._load(i, "truth_shapes")  # (sample, state, dof, mode)
+                    parts.append(np.full((int(sel.sum()),) + like.shape[1:3], OPTIONAL[name]))
+                else:
+                    parts.append(np.asarray(self._load(i, name)[r[sel] - self.offsets[i]]))
                 where.append(np.flatnonzero(sel))
             if not parts:
                 first = self._load(0, name) if self.shards else np.empty((0,))
@@ -466,22 +475,26 @@ class Dataset:
             return self.frf(name[4:], rows)
         raise FileFormatError(f"unknown array {name!r}; expected one of {sorted(ARRAYS) + sorted(DERIVED)}")
 
-    def frf(self, kind: str, rows=None, out=None) -> np.ndarray:
-        """FRFs of ``kind`` ("measured" | "updated"), complex, shape (n, 2 states, 4 dofs, F).
+    def frf(self, kind: str, rows=None, out=None, lines=None) -> np.ndarray:
+        """FRFs of ``kind`` ("measured" | "updated"), complex, shape (n, 2 states, 4 dofs, L).
 
         Synthesised from the stored arrays (:mod:`datagen.synth`), identical
         to what ``generate --store-frf`` writes. Format-1 datasets return their stored FRFs.
+        ``lines``: optional indices into :attr:`omega_rad_s` (default all, L = F); only those lines are
+        synthesised, with exactly their values in the full FRF (noise included), e.g. the lines a
+        feature grid interpolates from.
         ``out``: optional C-contiguous complex array of that shape written in place (e.g. shared memory).
         """
         if kind not in FRF_KINDS:
             raise FileFormatError(f"FRF kind {kind!r} unknown; expected one of {', '.join(FRF_KINDS)}")
         if self.legacy:
             H = self._gather([f"frf_{kind}"], rows)[f"frf_{kind}"]
+            H = H if lines is None else H[..., line_index(lines, H.shape[-1])]
             if out is None:
                 return H
             out[...] = H
             return out
-        return synthesise(kind, self._gather(SOURCES[kind], rows), self.omega_rad_s, self.frf_dtype, out)
+        return synthesise(kind, self._gather(SOURCES[kind], rows), self.omega_rad_s, self.frf_dtype, out, lines)
 
     def verify_or_raise(self) -> None:
         """Check every shard's sha256 checksums; a damaged shard raises a one-line FileFormatError."""

@@ -17,7 +17,7 @@ import numpy as np
 import torch
 
 from datagen.store import Dataset
-from datagen.synth import FRF_KINDS
+from datagen.synth import FRF_KINDS, log_magnitude_map
 from physics.errors import BeamDamageError
 
 FEATURES = ("complex", "log_magnitude")
@@ -50,34 +50,48 @@ class FRFDataset(torch.utils.data.Dataset):
     rows : optional subset of sample rows (e.g. a split by specimen)
     features : see :func:`frf_features`
     dtype : torch dtype of the FRF features (default float32)
+    weights : optional array (G, F)
+        A linear map of ``log10 |H|`` over the F lines (e.g. ``learn.features.grid_weights``: the
+        classifier's log-frequency grid); only the lines it uses are synthesised
+        (:func:`datagen.synth.log_magnitude_map`). Needs ``features="log_magnitude"``.
 
-    Items are dicts: ``frf`` (2, 4, F, 2) or (2, 4, F), ``labels`` (len(columns),), ``sample_id``.
+    Items are dicts: ``frf`` (2, 4, F, 2), (2, 4, F) or (2, 4, G), ``labels`` (len(columns),), ``sample_id``.
     """
 
-    def __init__(self, root, kind="updated", columns=(), rows=None, features="complex", dtype=torch.float32):
+    def __init__(self, root, kind="updated", columns=(), rows=None, features="complex", dtype=torch.float32,
+                 weights=None):
         if kind not in FRF_KINDS:
             raise BeamDamageError(f"FRF kind {kind!r} unknown; expected one of {FRF_KINDS}")
         frf_features(np.zeros(1, complex), features)
-        self.root, self.kind, self.features, self.dtype = root, kind, features, dtype
+        if weights is not None and features != "log_magnitude":
+            raise BeamDamageError("weights map log-magnitudes: use features='log_magnitude'")
+        self.root, self.kind, self.features, self.dtype, self.weights = root, kind, features, dtype, weights
         ds = Dataset(root)
         ds.verify_or_raise()
         self.rows = np.arange(len(ds)) if rows is None else np.asarray(rows, np.int64)
         table = ds.table(["sample_id", *columns])
         self.sample_id = table["sample_id"].to_numpy()[self.rows]
         self.labels = table[list(columns)].to_numpy(dtype=np.float32)[self.rows]
-        self._ds = None
+        if weights is not None and (np.ndim(weights) != 2 or np.shape(weights)[1] != ds.omega_rad_s.size):
+            raise BeamDamageError(f"weights must have shape (G, {ds.omega_rad_s.size}), got {np.shape(weights)}")
+        self._ds = self._map = None
 
     def __len__(self):
         return self.rows.size
 
     def __getstate__(self):  # workers reopen the dataset themselves
-        return {**self.__dict__, "_ds": None}
+        return {**self.__dict__, "_ds": None, "_map": None}
 
     def __getitems__(self, indices):
         if self._ds is None:
             self._ds = Dataset(self.root, verify=False)  # verified in __init__
         idx = np.asarray(indices, np.int64)
-        if self.features == "complex" and self.dtype == torch.float32 and self._ds.frf_dtype == np.complex64:
+        if self.weights is not None:
+            if self._map is None:
+                self._map = log_magnitude_map(self.weights)
+            lines, apply = self._map
+            frf = torch.from_numpy(apply(self._ds.frf(self.kind, self.rows[idx], lines=lines))).to(self.dtype)
+        elif self.features == "complex" and self.dtype == torch.float32 and self._ds.frf_dtype == np.complex64:
             frf = _frf_buffer((idx.size, 2, 4, self._ds.omega_rad_s.size, 2))
             self._ds.frf(self.kind, self.rows[idx], out=frf.numpy().view(np.complex64)[..., 0])
         else:
@@ -106,12 +120,13 @@ def _batch_as_is(batch):
 
 
 def make_loader(root, kind="updated", columns=(), rows=None, batch_size=256, shuffle=False, num_workers=0,
-                seed=0, features="complex", **kwargs) -> torch.utils.data.DataLoader:
+                seed=0, features="complex", weights=None, **kwargs) -> torch.utils.data.DataLoader:
     """A ``DataLoader`` over :class:`FRFDataset` yielding batched dicts; FRFs synthesised in the workers.
 
-    ``seed`` seeds the shuffling (reproducible epochs). Extra keyword arguments go to ``DataLoader``.
+    ``seed`` seeds the shuffling (reproducible epochs). ``features`` and ``weights``: see
+    :class:`FRFDataset`. Extra keyword arguments go to ``DataLoader``.
     """
-    ds = FRFDataset(root, kind, columns, rows, features)
+    ds = FRFDataset(root, kind, columns, rows, features, weights=weights)
     gen = torch.Generator().manual_seed(seed)
     return torch.utils.data.DataLoader(ds, batch_size=batch_size, shuffle=shuffle, num_workers=num_workers,
                                        collate_fn=_batch_as_is, generator=gen,

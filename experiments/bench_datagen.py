@@ -11,15 +11,21 @@ state per sample):
   computed eagerly (:func:`datagen.naive.simulate_naive`, ``modes="full"``);
 * generate: :func:`datagen.parallel.generate` end to end on ``--workers``
   processes, including writing the shards, checksums and ``samples.parquet``;
-* read: FRF features (real/imag float32 tensors, both states, 4 DOFs, 1024
+* read, full FRFs: real/imag float32 tensors (both states, 4 DOFs, 1024
   lines) through :func:`datagen.torchdata.make_loader` with ``--workers``
-  worker processes, synthesised on read, for the updated and the measured FRFs.
+  worker processes, synthesised on read, for the updated and the measured FRFs;
+* read, classifier features: ``log10 |H|`` on the classifier's 96-point
+  log-frequency grid, both states, 4 DOFs, synthesised only on the 168 lines
+  the grid interpolates from: :func:`learn.features.load_pairs` (what ``train``
+  reads; ``--workers`` threads, the whole call including the table and modal
+  arrays) and the ``DataLoader`` with ``weights`` (``--workers`` processes).
 
 Prints samples/s (wall clock) and samples per CPU second (user + system of
 this process and its workers, which a machine shared with other jobs
 distorts less), ratios measured in this run, bytes per sample on disk and
 peak memory. Targets (issue 10): <= 16 kB/sample, generate >= 50x naive,
-read >= 20,000 samples/s on 2 cores.
+read >= 20,000 samples/s of FRF features on 2 cores. ``--config training``
+runs the classifier's training configuration instead of the defaults.
 """
 
 from __future__ import annotations
@@ -52,20 +58,23 @@ def main(argv=None):
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--batch", type=int, default=512, help="read batch size")
     ap.add_argument("--keep", help="directory to keep the generated dataset in (default: a temporary one)")
+    ap.add_argument("--config", default=None, help="named generator config (default: the built-in defaults)")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
 
     from threadpoolctl import threadpool_limits
 
-    from datagen.config import merge
+    from datagen.config import load_config, merge
     from datagen.naive import simulate_naive
     from datagen.parallel import generate
     from datagen.pipeline import draw_batch, get_setup
     from datagen.torchdata import make_loader
+    from learn.features import grid_weights, load_pairs
 
-    cfg = merge({})
+    cfg = load_config(a.config) if a.config else merge({})
     setup = get_setup(cfg)
-    res = {"config": "defaults (beam5, 20 truth elements, 1024 lines, IIRS mass)", "workers": a.workers, "n": a.n}
+    res = {"config": a.config or "defaults (beam5, 20 truth elements, 1024 lines, IIRS mass)",
+           "workers": a.workers, "n": a.n}
     inp = draw_batch(np.random.default_rng(0), a.naive, setup)
     with threadpool_limits(1):
         simulate_naive(setup, inp.take(slice(0, 2)), modes="full")  # warm-up (numba, caches)
@@ -89,17 +98,24 @@ def main(argv=None):
         res["ratio_generate_vs_naive_full"] = res["generate_samples_per_s"] / res["naive_full_samples_per_s"]
         res["ratio_cpu_efficiency_generate_vs_naive"] = (res["generate_samples_per_cpu_s"]
                                                          / res["naive_full_samples_per_cpu_s"])
+        W = grid_weights(np.load(root / "omega_rad_s.npy"))[0]
         for kind in ("updated", "measured"):
-            loader = make_loader(root, kind, columns=("stiffness_loss_Nm3",), batch_size=a.batch,
-                                 num_workers=a.workers)
-            c = _cpu_s()
-            it = iter(loader)
-            next(it)  # start the workers
-            t = time.perf_counter()
-            n = sum(b["frf"].shape[0] for b in it)
-            res[f"read_{kind}_frf_samples_per_s"] = n / (time.perf_counter() - t)
-            del it, loader  # joins the workers, so their CPU time is counted
-            res[f"read_{kind}_frf_samples_per_cpu_s"] = (n + a.batch) / (_cpu_s() - c)
+            for what, opts in (("frf", {}), ("grid_features_loader", {"features": "log_magnitude", "weights": W})):
+                loader = make_loader(root, kind, columns=("stiffness_loss_Nm3",), batch_size=a.batch,
+                                     num_workers=a.workers, **opts)
+                c = _cpu_s()
+                it = iter(loader)
+                next(it)  # start the workers
+                t = time.perf_counter()
+                n = sum(b["frf"].shape[0] for b in it)
+                res[f"read_{kind}_{what}_samples_per_s"] = n / (time.perf_counter() - t)
+                del it, loader  # joins the workers, so their CPU time is counted
+                res[f"read_{kind}_{what}_samples_per_cpu_s"] = (n + a.batch) / (_cpu_s() - c)
+            load_pairs(tmp / "warm", frfs=(kind,), workers=a.workers)  # compiled kernels loaded in this process
+            c, t = _cpu_s(), time.perf_counter()
+            load_pairs(root, frfs=(kind,), workers=a.workers)
+            res[f"read_{kind}_grid_features_load_pairs_samples_per_s"] = a.n / (time.perf_counter() - t)
+            res[f"read_{kind}_grid_features_load_pairs_samples_per_cpu_s"] = a.n / (_cpu_s() - c)
     finally:
         if not a.keep:
             shutil.rmtree(tmp, ignore_errors=True)

@@ -9,9 +9,6 @@ arithmetic exists once:
 * :func:`pair_denominators` - the pole terms of one model on every line,
 * :func:`pair_row` - one response's noise-free FRF from its residues.
 
-:func:`box_muller` turns two uniforms into a unit-variance circular complex
-Gaussian (datagen's measurement noise draws through it).
-
 Each pair ``a/(i w - lam) + conj(a)/(i w - conj(lam))`` is the real-coefficient
 term ``(u + i w v) / (|lam|^2 - w^2 - 2 i w Re lam)`` with
 ``u = -2 Re(a conj(lam))`` and ``v = 2 Re a``. Sums run over modes in order
@@ -80,35 +77,3 @@ def pole_residue_kernel(lam, residues, omega_rad_s, out):  # pragma: no cover - 
             pair_row(lam[i], residues[i, s], omega_rad_s, gr, gi, re, im)
             for f in range(n_lines):
                 out[i, s, f] = complex(re[f], im[f])
-
-
-#: Tables for the Box-Muller transform: cos/sin of 2 pi u and sqrt(-ln(1-u)) on a uniform grid of u.
-#: Linear interpolation is accurate to a few 1e-6 absolute (float32-level); near u = 0 and u = 1, where
-#: the radius is not smooth, the exact formula is used. About 7x cheaper than log, cos and sin per value.
-_N_TAB = 16384
-_EDGE = 64
-_GRID = np.linspace(0.0, 1.0, _N_TAB + 1)
-_COS = np.cos(2 * np.pi * _GRID)
-_SIN = np.sin(2 * np.pi * _GRID)
-_RAD = np.sqrt(-np.log1p(-np.minimum(_GRID, 1 - 1e-12)))
-
-
-@njit(cache=True)
-def box_muller(u):  # pragma: no cover - compiled
-    """Unit-variance circular complex Gaussian ``z = sqrt(-ln(1-u1)) exp(2 pi i u2)`` (``E|z|^2 = 1``).
-
-    ``u`` is a pair of float32 uniforms in [0, 1). Returns ``(Re z, Im z)``.
-    """
-    t = np.float64(u[1]) * _N_TAB
-    k = int(t)
-    f = t - k
-    c = _COS[k] + f * (_COS[k + 1] - _COS[k])
-    s = _SIN[k] + f * (_SIN[k + 1] - _SIN[k])
-    t = np.float64(u[0]) * _N_TAB
-    k = int(t)
-    if _EDGE <= k < _N_TAB - _EDGE:
-        f = t - k
-        r = _RAD[k] + f * (_RAD[k + 1] - _RAD[k])
-    else:
-        r = np.sqrt(-np.log1p(-np.float64(u[0])))
-    return r * c, r * s

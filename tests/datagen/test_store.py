@@ -116,6 +116,44 @@ def test_frf_on_read_is_identical_to_store_frf_and_independent_of_row_selection(
         assert np.array_equal(on_read.array(k), stored.array(k), equal_nan=True), k
 
 
+def test_a_subset_of_lines_has_exactly_the_values_of_the_full_frf(tmp_path):
+    """Reading only some lines (the classifier's grid needs 168 of 1024) changes no value, noise floor included;
+    the stored peak is the noise-free FRF's maximum, and shards written without it are still read exactly."""
+    from physics.frf import pole_residue
+
+    cfg = merge({**CFG, "measurement": {**CFG["measurement"], "frf_noise_floor": [1e-3, 1e-2]}})
+    generate(tmp_path / "f", cfg, n=10, seed=3, workers=1, progress=False)
+    ds = Dataset(tmp_path / "f")
+    lines = np.array([0, 5, 6, 40, 63, 17])
+    for kind in ("measured", "updated"):
+        assert np.array_equal(ds.frf(kind, lines=lines), ds.frf(kind)[..., lines], equal_nan=True), kind
+    lam, psi = ds.array("truth_poles"), ds.array("truth_shapes")
+    clean = pole_residue(lam, psi * psi[..., :1, :], ds.omega_rad_s)       # numpy route, complex128
+    np.testing.assert_allclose(ds.array("frf_peak"), np.abs(clean).max(axis=-1), rtol=1e-12)
+    old = tmp_path / "old"                                                   # as written before frf_peak existed
+    shutil.copytree(tmp_path / "f", old)
+    m = json.loads((old / "manifest.json").read_text())
+    for e in m["shards"]:
+        (old / "shards" / e["name"] / "frf_peak.npy").unlink()
+        del e["checksums"]["frf_peak.npy"], e["sizes"]["frf_peak.npy"]
+    (old / "manifest.json").write_text(json.dumps(m))
+    assert np.isnan(Dataset(old).array("frf_peak")).all()
+    assert np.array_equal(Dataset(old).frf("measured", lines=lines), ds.frf("measured", lines=lines))
+
+
+def test_loader_maps_log_magnitudes_onto_a_grid_from_the_lines_it_needs(reference):
+    from datagen.torchdata import make_loader
+    from learn.features import grid_weights
+
+    ds = Dataset(reference)
+    W = grid_weights(ds.omega_rad_s, np.geomspace(60.0, 4800.0, 20))[0]
+    batches = list(make_loader(reference, "measured", batch_size=8, features="log_magnitude", weights=W))
+    got = np.concatenate([b["frf"].numpy() for b in batches])
+    want = np.log10(np.abs(ds.frf("measured").astype(complex))) @ W.T   # dense float64 map of every line
+    assert got.shape == (N, 2, 4, 20)
+    np.testing.assert_allclose(got, want, atol=2e-5)
+
+
 def test_measured_frf_noise_matches_its_level(reference):
     """The measured FRF deviates from the noise-free truth by the recorded relative level (0.5%)."""
     from physics.frf import pole_residue
