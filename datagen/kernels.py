@@ -84,7 +84,7 @@ def row_peak(re, im):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def add_noise_row(re, im, lines, n_lines, seed, s, level, floor, peak, z, out):  # pragma: no cover - compiled
+def add_noise_row(re, im, lines, n_lines, seed, s, level, floor, peak, z, work, out):  # pragma: no cover - compiled
     """Noisy FRF of response ``s`` of one model from its noise-free ``re + i im`` (L,) into ``out`` (L,).
 
     ``out = H (1 + level z1) + floor max_f|H| z2`` with ``z1 = hashed_normal(seed, 2 (s F + f))``
@@ -93,16 +93,31 @@ def add_noise_row(re, im, lines, n_lines, seed, s, level, floor, peak, z, out): 
     the dataset, so a subset of lines gets exactly the noise of the full FRF on those lines.
     ``peak``: ``max_f |H|`` over all F lines (:func:`row_peak`), or NaN to take it from the given
     lines (then they must be all F when the floor is not 0).
-    ``z`` (L,) uint64: work space (the hashes are made in a loop of their own, which vectorises).
+    ``z`` (L,) uint64 and ``work`` (3, L) float64: work space. :func:`hashed_normal` is computed in
+    stages, each a loop of its own without branches (they vectorise), with the same arithmetic.
     """
     fl = floor * (row_peak(re, im) if np.isnan(peak) else peak) if floor != 0.0 else 0.0
     base = seed + np.uint64(2 * s * n_lines + 1) * _GAMMA
-    for f in range(re.shape[0]):
+    n = re.shape[0]
+    for f in range(n):
         z[f] = splitmix64(base + np.uint64(2 * lines[f]) * _GAMMA)   # = the hash of hashed_normal(seed, k)
-    for f in range(re.shape[0]):
-        z1r, z1i = box_muller(np.float64(z[f] >> np.uint64(40)) * (1.0 / 16777216.0),
-                              np.float64((z[f] >> np.uint64(16)) & np.uint64(0xFFFFFF)) * (1.0 / 16777216.0))
-        h = complex(re[f], im[f]) * complex(1.0 + level * z1r, level * z1i)
+    rad, cos, sin = work[0], work[1], work[2]
+    for f in range(n):  # box_muller's table interpolation, everywhere
+        t = np.float64((z[f] >> np.uint64(16)) & np.uint64(0xFFFFFF)) * (1.0 / 16777216.0) * _N_TAB
+        k = int(t)
+        g = t - k
+        cos[f] = _COS[k] + g * (_COS[k + 1] - _COS[k])
+        sin[f] = _SIN[k] + g * (_SIN[k + 1] - _SIN[k])
+        t = np.float64(z[f] >> np.uint64(40)) * (1.0 / 16777216.0) * _N_TAB
+        k = int(t)
+        g = t - k
+        rad[f] = _RAD[k] + g * (_RAD[k + 1] - _RAD[k])
+    for f in range(n):  # ... and its exact radius near u1 = 0 and 1 (about 1 % of draws)
+        k = int(z[f] >> np.uint64(50))
+        if k < _EDGE or k >= _N_TAB - _EDGE:
+            rad[f] = np.sqrt(-np.log1p(-np.float64(z[f] >> np.uint64(40)) * (1.0 / 16777216.0)))
+    for f in range(n):
+        h = complex(re[f], im[f]) * complex(1.0 + level * (rad[f] * cos[f]), level * (rad[f] * sin[f]))
         if fl != 0.0:
             z2r, z2i = hashed_normal(seed, 2 * (s * n_lines + lines[f]) + 1)
             h += fl * complex(z2r, z2i)
@@ -127,11 +142,12 @@ def noisy_pole_residue_kernel(lam, residues, omega_rad_s, lines, n_lines, seeds,
     re = np.empty(n_w)
     im = np.empty(n_w)
     z = np.empty(n_w, np.uint64)
+    work = np.empty((3, n_w))
     for i in range(n_models):
         pair_denominators(lam[i], omega_rad_s, gr, gi)
         for s in range(residues.shape[1]):
             pair_row(lam[i], residues[i, s], omega_rad_s, gr, gi, re, im)
-            add_noise_row(re, im, lines, n_lines, seeds[i], s, level[i], floor[i], peak[i, s], z, out[i, s])
+            add_noise_row(re, im, lines, n_lines, seeds[i], s, level[i], floor[i], peak[i, s], z, work, out[i, s])
 
 
 @njit(cache=True, nogil=True)
@@ -164,11 +180,12 @@ def noise_kernel(H, seeds, level, floor, out):  # pragma: no cover - compiled
     im = np.empty(n_lines)
     lines = np.arange(n_lines)
     z = np.empty(n_lines, np.uint64)
+    work = np.empty((3, n_lines))
     for i in range(H.shape[0]):
         for s in range(H.shape[1]):
             re[:] = H[i, s].real
             im[:] = H[i, s].imag
-            add_noise_row(re, im, lines, n_lines, seeds[i], s, level[i], floor[i], np.nan, z, out[i, s])
+            add_noise_row(re, im, lines, n_lines, seeds[i], s, level[i], floor[i], np.nan, z, work, out[i, s])
 
 
 @njit(cache=True)
