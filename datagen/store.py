@@ -303,15 +303,16 @@ def finalize(root, manifest: dict) -> dict:
     tmp = root / ".samples.parquet.tmp"
     writer, buf, rows, n, n_conv = None, [], 0, 0, 0
 
-    def flush():
+    def flush(final=False):  # whole row groups of ROW_GROUP rows; the remainder waits for more rows
         nonlocal writer, buf, rows
         if not buf:
             return
         t = pa.concat_tables(buf)
+        keep = 0 if final else t.num_rows % ROW_GROUP
         if writer is None:
             writer = pq.ParquetWriter(tmp, t.schema)
-        writer.write_table(t, row_group_size=ROW_GROUP)
-        buf, rows = [], 0
+        writer.write_table(t.slice(0, t.num_rows - keep), row_group_size=ROW_GROUP)
+        buf, rows = ([t.slice(t.num_rows - keep)] if keep else []), keep
 
     try:
         for e in manifest["shards"]:
@@ -322,7 +323,7 @@ def finalize(root, manifest: dict) -> dict:
             n_conv += e["n_converged"]
             if rows >= ROW_GROUP:
                 flush()
-        flush()
+        flush(final=True)
     finally:
         if writer is not None:
             writer.close()

@@ -51,6 +51,58 @@ def _dir_bytes(root: Path) -> int:
     return sum(p.stat().st_size for p in root.rglob("*") if p.is_file())
 
 
+def _vm_hwm_mb() -> float:
+    """This process's peak resident memory (MB) from /proc (``ru_maxrss`` of a spawned process carries its
+    parent's peak over the exec)."""
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("VmHWM:"):
+            return float(line.split()[1]) / 1024
+    return float("nan")
+
+
+def _table_at_scale(root: str, rows: int) -> dict:
+    """The samples table at ``rows`` rows: finalize streams shard tables into ``samples.parquet``, then
+    two columns and one row group are read back. Runs in a fresh process (its peak memory is its own):
+    the dataset's shard tables are hard-linked as many times as needed under a scratch directory."""
+    import os
+
+    import pyarrow.parquet as pq
+
+    from datagen.store import Dataset, finalize, read_manifest
+
+    src = Path(root)
+    m = read_manifest(src)
+    scratch = src.parent / "table-at-scale"
+    (scratch / "shards").mkdir(parents=True)
+    os.link(src / "omega_rad_s.npy", scratch / "omega_rad_s.npy")
+    shards, n = [], 0
+    while n < rows:
+        for e in m["shards"]:
+            if n >= rows:
+                break
+            name = f"shard-{len(shards):06d}"
+            (scratch / "shards" / name).mkdir()
+            os.link(src / "shards" / e["name"] / "samples.parquet", scratch / "shards" / name / "samples.parquet")
+            shards.append({**e, "name": name})
+            n += e["n_samples"]
+    t = time.perf_counter()
+    finalize(scratch, {**m, "shards": shards})
+    out = {"table_rows": n, "table_finalize_s": time.perf_counter() - t,
+           "table_bytes": (scratch / "samples.parquet").stat().st_size,
+           "table_row_groups": pq.ParquetFile(scratch / "samples.parquet").metadata.num_row_groups,
+           "table_finalize_peak_rss_MB": _vm_hwm_mb()}
+    t = time.perf_counter()
+    cols = Dataset(scratch, verify=False).table(["slit1_x_m", "damaged"])
+    out["table_two_columns_s"] = time.perf_counter() - t
+    t = time.perf_counter()
+    f = pq.ParquetFile(scratch / "samples.parquet")
+    group = f.read_row_group(f.metadata.num_row_groups // 2).to_pandas()
+    out["table_one_row_group_s"] = time.perf_counter() - t
+    out["table_read_peak_rss_MB"] = _vm_hwm_mb()
+    assert len(cols) == n and len(group) > 0
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=20000, help="samples generated end to end and read back")
@@ -59,6 +111,9 @@ def main(argv=None):
     ap.add_argument("--batch", type=int, default=512, help="read batch size")
     ap.add_argument("--keep", help="directory to keep the generated dataset in (default: a temporary one)")
     ap.add_argument("--config", default=None, help="named generator config (default: the built-in defaults)")
+    ap.add_argument("--table-rows", type=int, default=0,
+                    help="also build the samples table at this many rows (e.g. 10000000) from the generated "
+                         "shards' tables and time column and row-group reads")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
 
@@ -116,6 +171,12 @@ def main(argv=None):
             load_pairs(root, frfs=(kind,), workers=a.workers)
             res[f"read_{kind}_grid_features_load_pairs_samples_per_s"] = a.n / (time.perf_counter() - t)
             res[f"read_{kind}_grid_features_load_pairs_samples_per_cpu_s"] = a.n / (_cpu_s() - c)
+        if a.table_rows:
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+
+            with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
+                res.update(pool.submit(_table_at_scale, str(root), a.table_rows).result())
     finally:
         if not a.keep:
             shutil.rmtree(tmp, ignore_errors=True)

@@ -203,6 +203,21 @@ def test_table_column_selection_and_row_groups(reference):
     assert m["schema"]["columns"]["stiffness_loss_Nm3"].startswith("N m^3")
 
 
+def test_samples_table_is_written_in_whole_row_groups(reference, tmp_path, monkeypatch):
+    """Shards of 7 rows are streamed into row groups of exactly ROW_GROUP rows (here 8), the rest last."""
+    import pyarrow.parquet as pq
+
+    from datagen import store
+
+    root = tmp_path / "ds"
+    shutil.copytree(reference, root)
+    monkeypatch.setattr(store, "ROW_GROUP", 8)
+    store.finalize(root, json.loads((root / "manifest.json").read_text()))
+    meta = pq.ParquetFile(root / "samples.parquet").metadata
+    assert [meta.row_group(i).num_rows for i in range(meta.num_row_groups)] == [8, 8, 8, 6]
+    pd.testing.assert_frame_equal(pd.read_parquet(root / "samples.parquet"), pd.read_parquet(reference / "samples.parquet"))
+
+
 def test_other_format_is_refused_with_a_clear_message(reference, tmp_path):
     root = tmp_path / "old"
     shutil.copytree(reference, root)
