@@ -93,15 +93,12 @@ def main(argv=None):
     ap.add_argument("--skip-routes", action="store_true", help="do not train the networks of the other routes")
     args = ap.parse_args(argv)
 
-    import torch
-
     from learn.baselines import BoostedBaseline, run_classical
     from learn.evaluate import figures, metrics, table_rows
     from learn.features import features, load_pairs, split_by_specimen
     from learn.estimator import DamageClassifier
     from learn.workflow import frf_kinds, load_model, network_output, sensitivity_of, targets, train
 
-    torch.set_num_threads(args.threads)
     data_dir, out = Path(args.data_dir), Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     t = time.perf_counter()
@@ -111,7 +108,8 @@ def main(argv=None):
 
     # ---------------------------------------------------------------- default model
     t0 = time.perf_counter()
-    summary = train(train_dirs, out / "model", epochs=args.epochs, seed=args.seed, progress=True)
+    summary = train(train_dirs, out / "model", epochs=args.epochs, seed=args.seed, progress=True,
+                    threads=args.threads)
     wall = time.perf_counter() - t0
     model = load_model(out / "model")
     route = model.route
@@ -119,7 +117,7 @@ def main(argv=None):
           f"{summary['train_seconds'][route]:.0f} s"
           + (f" (+ modal companion {summary['train_seconds']['modal']:.0f} s)" if route != "modal" else "") + ","
           f" data loading {summary['load_seconds']:.0f} s, whole 'train' {wall:.0f} s wall, torch threads "
-          f"{torch.get_num_threads()}")
+          f"{args.threads}")
 
     all_routes = ["modal", "updated", "measured"]
     need = all_routes if not args.skip_routes else list(model.networks)
@@ -133,7 +131,7 @@ def main(argv=None):
     for r in need:
         if r not in networks:
             t = time.perf_counter()
-            networks[r] = DamageClassifier(epochs=args.epochs, random_state=args.seed).fit(
+            networks[r] = DamageClassifier(epochs=args.epochs, random_state=args.seed, n_threads=args.threads).fit(
                 features(tr_pairs, r), y_tr, tr_pairs.groups)
             print(f"network on route {r}: {time.perf_counter() - t:.0f} s", flush=True)
     net_outs = {r: network_output(networks[r], features(te_pairs, r), sens, f"network ({r})")[0] for r in need}

@@ -16,8 +16,9 @@ def add_parser(sub):
     p.add_argument("--seed", type=int, default=0, help="random seed of split, augmentation and network (default 0)")
     p.add_argument("--route", choices=("modal", "updated", "measured"), default=None,
                    help="input route (default: the benchmark's winner, learn.workflow.DEFAULT_ROUTE)")
-    p.add_argument("--threads", type=int, help="torch CPU threads (default: torch's choice; 1 is fastest when the "
-                                               "cores are shared)")
+    p.add_argument("--threads", type=int, default=1,
+                   help="torch CPU threads of the networks (default 1: fastest for this small network, and more "
+                        "threads were up to 10x slower on a machine shared with other jobs)")
     p.add_argument("--json", action="store_true", help="print the training summary as JSON")
     p.set_defaults(func=run)
 
@@ -28,12 +29,10 @@ def run(args) -> dict:
 
     if args.epochs < 1:
         raise BeamDamageError(f"--epochs must be >= 1, got {args.epochs}")
-    if args.threads is not None:
-        if args.threads < 1:
-            raise BeamDamageError(f"--threads must be >= 1, got {args.threads}")
-        import torch
-        torch.set_num_threads(args.threads)
-    out = train(args.data, args.out, epochs=args.epochs, seed=args.seed, route=args.route, progress=True)
+    if args.threads < 1:
+        raise BeamDamageError(f"--threads must be >= 1, got {args.threads}")
+    out = train(args.data, args.out, epochs=args.epochs, seed=args.seed, route=args.route, progress=True,
+                threads=args.threads)
     if not args.json:
         for w in out["warnings"]:
             print(f"warning: {w}")

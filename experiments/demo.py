@@ -120,13 +120,6 @@ def _verdict_text(v: dict, length_m: float) -> str:
             f"fixed end: x = {length_m / 4:.3f} m on the 0.6095 m cantilever (the element 1/2 boundary).")
 
 
-def _single_thread_torch():
-    """One torch thread: the small network trains fastest so, and a second thread only contends with BLAS."""
-    import torch
-
-    torch.set_num_threads(1)
-
-
 def run(args) -> dict:
     if args.samples is not None and args.samples < 200:
         raise BeamDamageError(f"samples must be >= 200 (training pairs), got {args.samples}", parameter="samples")
@@ -139,7 +132,6 @@ def run(args) -> dict:
         n_train, n_test = args.samples, max(200, args.samples // 4)
     t_start = time.perf_counter()
     force = args.force
-    _single_thread_torch()
 
     # 1-2: the thesis
     checks = validate.run_checks()

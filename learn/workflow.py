@@ -172,7 +172,7 @@ def _nominal_root_spring(source: list):
 
 # --------------------------------------------------------------------------- train
 def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None = None, progress: bool = False,
-          test_fraction: float = 0.15) -> dict:
+          test_fraction: float = 0.15, threads: int | None = 1) -> dict:
     """Train the default-route network (and a modal-route companion), score it and the baselines, save.
 
     Parameters
@@ -182,6 +182,7 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
         damaged specimens, temperature and re-clamping changes between the two test days).
     out_dir : model directory to write
     route : input route (default :data:`DEFAULT_ROUTE`)
+    threads : torch CPU threads of the networks (``DamageClassifier.n_threads``; default 1)
 
     Returns
     -------
@@ -207,7 +208,7 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
     networks, outputs, fit_s = {}, [], {}
     for r in routes:
         X = features(pairs, r)
-        est = DamageClassifier(epochs=epochs, random_state=seed, verbose=progress)
+        est = DamageClassifier(epochs=epochs, random_state=seed, n_threads=threads, verbose=progress)
         est.fit(X[tr], y[tr], pairs.groups[tr])
         networks[r] = est
         fit_s[r] = est.train_seconds_

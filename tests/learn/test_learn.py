@@ -124,6 +124,16 @@ def test_classifier_learns_a_known_synthetic_problem():
     assert c.get_params() == est.get_params() and not hasattr(c, "model_")
 
 
+def test_classifier_threads_apply_to_its_own_work_and_results_do_not_depend_on_them():
+    rng = np.random.default_rng(2)
+    X, y = _synthetic(300, rng)
+    before = torch.get_num_threads()
+    one = DamageClassifier(hidden=16, depth=1, epochs=2, n_bins=40, random_state=0).fit(X, y)
+    two = DamageClassifier(hidden=16, depth=1, epochs=2, n_bins=40, random_state=0, n_threads=2).fit(X, y)
+    assert torch.get_num_threads() == before and one.get_params()["n_threads"] == 1
+    np.testing.assert_allclose(one.predict_proba(X), two.predict_proba(X), atol=1e-5)
+
+
 def test_model_directory_round_trip_with_weights_only(tmp_path):
     rng = np.random.default_rng(1)
     X, y = _synthetic(400, rng)
