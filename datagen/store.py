@@ -9,10 +9,11 @@ Layout (format ``beam-damage-dataset/2``)::
     DIR/shards/shard-000000/      one complete shard: samples.parquet, one .npy per stored array,
                                   checksums.json; with ``output.store_frf`` also frf_measured.npy, frf_updated.npy
 
-A shard stores what defines its samples (:data:`ARRAYS`): about 3.3 kB per
-sample. FRFs are synthesised when read (:meth:`Dataset.frf`,
-:mod:`datagen.synth`); ``output.store_frf`` writes the very same arrays into
-the shard (128 kB per sample as complex64) for tools that want files.
+A shard stores what defines its samples (:data:`ARRAYS`): about 4.6 kB per
+sample with the tables. FRFs are synthesised when read (:meth:`Dataset.frf`,
+:mod:`datagen.synth`), on all lines or only on chosen ones (``lines=``);
+``output.store_frf`` writes the very same arrays into the shard (128 kB per
+sample as complex64) for tools that want files.
 
 A shard is written into ``shards/.tmp-shard-NNNNNN-<pid>/`` and renamed to
 ``shards/shard-NNNNNN`` only when all its files (and ``checksums.json``) are
