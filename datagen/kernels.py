@@ -20,7 +20,7 @@ _MIX1 = np.uint64(0xBF58476D1CE4E5B9)
 _MIX2 = np.uint64(0x94D049BB133111EB)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def splitmix64(x):  # pragma: no cover - compiled
     """The SplitMix64 finaliser of ``x`` (uint64 -> uint64), a bijective avalanche hash."""
     z = x
@@ -40,7 +40,7 @@ _SIN = np.sin(2 * np.pi * _GRID)
 _RAD = np.sqrt(-np.log1p(-np.minimum(_GRID, 1 - 1e-12)))
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def box_muller(u1, u2):  # pragma: no cover - compiled
     """Unit-variance circular complex Gaussian ``z = sqrt(-ln(1-u1)) exp(2 pi i u2)`` (``E|z|^2 = 1``).
 
@@ -61,7 +61,7 @@ def box_muller(u1, u2):  # pragma: no cover - compiled
     return r * c, r * s
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def hashed_normal(seed, k):  # pragma: no cover - compiled
     """Unit-variance circular complex Gaussian number ``k`` of the stream ``seed`` (counter-based).
 
@@ -74,7 +74,7 @@ def hashed_normal(seed, k):  # pragma: no cover - compiled
                       np.float64((z >> np.uint64(16)) & np.uint64(0xFFFFFF)) * (1.0 / 16777216.0))
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def row_peak(re, im):  # pragma: no cover - compiled
     """``max_f |re + i im|`` of one FRF row (the scale of its noise floor)."""
     peak2 = 0.0
@@ -83,7 +83,7 @@ def row_peak(re, im):  # pragma: no cover - compiled
     return np.sqrt(peak2)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def add_noise_row(re, im, lines, n_lines, seed, s, level, floor, peak, z, work, out):  # pragma: no cover - compiled
     """Noisy FRF of response ``s`` of one model from its noise-free ``re + i im`` (L,) into ``out`` (L,).
 
@@ -124,7 +124,7 @@ def add_noise_row(re, im, lines, n_lines, seed, s, level, floor, peak, z, work, 
         out[f] = h
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def noisy_pole_residue_kernel(lam, residues, omega_rad_s, lines, n_lines, seeds, level, floor, peak,
                               out):  # pragma: no cover - compiled
     """Measured FRFs: :func:`physics.kernels.pole_residue_kernel` with :func:`add_noise_row` fused in.
@@ -150,7 +150,7 @@ def noisy_pole_residue_kernel(lam, residues, omega_rad_s, lines, n_lines, seeds,
             add_noise_row(re, im, lines, n_lines, seeds[i], s, level[i], floor[i], peak[i, s], z, work, out[i, s])
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def peak_kernel(lam, residues, omega_rad_s, out):  # pragma: no cover - compiled
     """``out[i, s] = max_f |H_is(w_f)|`` of the noise-free pole-pair FRFs (:func:`row_peak`).
 
@@ -169,7 +169,7 @@ def peak_kernel(lam, residues, omega_rad_s, out):  # pragma: no cover - compiled
             out[i, s] = row_peak(re, im)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def noise_kernel(H, seeds, level, floor, out):  # pragma: no cover - compiled
     """The measurement noise of :func:`add_noise_row` applied to given FRFs (the per-sample cross-check).
 

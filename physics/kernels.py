@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def pair_denominators(lam, omega_rad_s, gr, gi):  # pragma: no cover - compiled
     """``gr + i gi = 1 / (|lam_j|^2 - w^2 - 2 i w Re lam_j)`` of one model.
 
@@ -40,7 +40,7 @@ def pair_denominators(lam, omega_rad_s, gr, gi):  # pragma: no cover - compiled
             gi[j, f] = -di * inv
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def pair_row(lam, residues, omega_rad_s, gr, gi, re, im):  # pragma: no cover - compiled
     """One response's FRF ``re + i im`` from residues (m,) and :func:`pair_denominators` of its model.
 
@@ -58,7 +58,7 @@ def pair_row(lam, residues, omega_rad_s, gr, gi, re, im):  # pragma: no cover - 
             im[f] += u * gi[j, f] + wv * gr[j, f]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def pole_residue_kernel(lam, residues, omega_rad_s, out):  # pragma: no cover - compiled
     """``out[i, s, f] = sum_j a_isj/(i w_f - lam_ij) + conj(a_isj)/(i w_f - conj(lam_ij))``.
 
