@@ -607,7 +607,7 @@ def _edit_json(path, edit):
     path.write_text(json.dumps(edit(json.loads(path.read_text()))))
 
 
-CASES = [*_frf_cases(), *_modal_cases(), *_arg_cases(), *_dataset_cases()]
+CASES = [*_frf_cases(), *_modal_cases(), *_arg_cases(), *_command_arg_cases(), *_dataset_cases()]
 
 
 def _argv(builder, d):
