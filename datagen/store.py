@@ -43,7 +43,7 @@ import pandas as pd
 from datagen.damage import element4_index
 from datagen.synth import FRF_KINDS, SOURCES, synthesise
 from physics.errors import FileFormatError
-from physics.io import atomic_write_text
+from physics.io import atomic_write_text, read_json
 from physics.modal import modal_parameters
 
 FORMAT = "beam-damage-dataset/2"
@@ -245,17 +245,9 @@ def read_manifest(root, formats=(FORMAT, FORMAT_V1)) -> dict:
     """
     p = Path(root) / "manifest.json"
     try:
-        m = json.loads(p.read_bytes().decode("utf-8"))
+        m = read_json(p, max_bytes=2**31)  # a manifest lists every shard's checksums: large, but bounded
     except FileNotFoundError:
         raise FileFormatError(f"{root}: not a dataset directory (no manifest.json)") from None
-    except IsADirectoryError:
-        raise FileFormatError(f"{p}: is a directory, expected the dataset's manifest (JSON)") from None
-    except UnicodeDecodeError as exc:
-        raise FileFormatError(f"{p}: corrupt manifest, not UTF-8 text (byte {exc.start})") from None
-    except (json.JSONDecodeError, RecursionError) as exc:
-        raise FileFormatError(f"{p}: corrupt manifest, not JSON ({str(exc)[:80]})") from None
-    if not isinstance(m, dict):
-        raise FileFormatError(f"{p}: corrupt manifest, expected a JSON object, got a {type(m).__name__}")
     if m.get("format") not in formats:
         raise FileFormatError(f"{p}: dataset format {m.get('format')!r} is not supported by this version "
                               f"(reads {', '.join(formats)}); regenerate it with `beam-damage generate`")

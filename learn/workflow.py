@@ -33,6 +33,7 @@ from learn.features import (DOFS, GRID_RAD_S, ROUTES, BeamSpec, Pairs, features,
                             map_frf_to_grid, modal_features, split_by_specimen)
 from learn.sensitivity import beam_sensitivity
 from physics.errors import BeamDamageError, FileFormatError
+from physics.io import read_json
 
 #: Input route used by default (the winner of ``python -m experiments.bench_learn``).
 DEFAULT_ROUTE = "modal"
@@ -110,14 +111,7 @@ def load_model(model_dir, device=None) -> TrainedModel:
     cfg_path = path / "config.json"
     if not cfg_path.is_file():
         raise FileFormatError(f"{path}: not a model directory (no config.json); create one with 'beam-damage train'")
-    try:
-        config = json.loads(cfg_path.read_bytes().decode("utf-8"))
-    except UnicodeDecodeError as exc:
-        raise FileFormatError(f"{cfg_path}: not UTF-8 text (byte {exc.start}); expected the model's JSON") from None
-    except (json.JSONDecodeError, RecursionError) as exc:
-        raise FileFormatError(f"{cfg_path}: not valid JSON ({getattr(exc, 'msg', exc)})") from None
-    if not isinstance(config, dict):
-        raise FileFormatError(f"{cfg_path}: expected a JSON object, got a {type(config).__name__}")
+    config = read_json(cfg_path)
     if config.get("format") != FORMAT:
         raise FileFormatError(f"{cfg_path}: field 'format' is {config.get('format')!r}, expected {FORMAT!r}")
     for key, kind in (("route", str), ("networks", dict), ("beam", dict)):

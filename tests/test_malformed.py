@@ -357,21 +357,20 @@ def _tiny_model():
     return _shared("model", build)
 
 
-def _ds_copy(d, damage=None):
-    """A fresh copy of the tiny dataset in ``d/ds``, damaged by ``damage(root)``."""
-    root = d / "ds"
-    shutil.copytree(_tiny_dataset(), root)
+def _copy_tree(src, dst, damage=None):
+    """A fresh copy of a shared folder, damaged by ``damage(dst)``."""
+    shutil.copytree(src, dst)
     if damage is not None:
-        damage(root)
-    return root
+        damage(dst)
+    return dst
+
+
+def _ds_copy(d, damage=None):
+    return _copy_tree(_tiny_dataset(), d / "ds", damage)
 
 
 def _model_copy(d, damage=None):
-    out = d / "model"
-    shutil.copytree(_tiny_model(), out)
-    if damage is not None:
-        damage(out)
-    return out
+    return _copy_tree(_tiny_model(), d / "model", damage)
 
 
 def _flip(path, offset=-5):
