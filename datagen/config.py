@@ -242,9 +242,13 @@ def named_configs() -> list[str]:
 
 def _read_toml(p: Path) -> dict:
     try:
-        return tomllib.loads(p.read_text(encoding="utf-8"))
+        return tomllib.loads(p.read_bytes().decode("utf-8"))
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{p}: not valid TOML: {exc}") from None
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{p}: not UTF-8 text (byte {exc.start}); a config is a TOML file") from None
+    except IsADirectoryError:
+        raise ConfigError(f"{p}: is a directory, expected a TOML config file") from None
     except FileNotFoundError:
         raise ConfigError(f"config {str(p)!r}: no such file, and not one of the named configs "
                           f"{named_configs()}") from None

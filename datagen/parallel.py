@@ -9,9 +9,12 @@ calling process alone writes shards and the manifest.
 
 from __future__ import annotations
 
+import io
 import json
 import math
 import os
+import shutil
+import sys
 from collections import deque
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from multiprocessing import get_context
@@ -24,6 +27,7 @@ from datagen.pipeline import get_setup, simulate_shard
 from datagen.store import ARRAYS, COLUMN_UNITS, DERIVED, FORMAT, STATES, finalize, package_version, \
     read_manifest, recover, sample_table, shard_arrays, write_manifest, write_shard
 from physics.errors import BeamDamageError, ConfigError
+from physics.io import atomic_write_bytes
 
 
 def shard_plan(n: int, shard_size: int) -> list[tuple[int, int, int]]:
@@ -91,6 +95,68 @@ def _schema() -> dict:
             for name, (axes, desc) in {**ARRAYS, **DERIVED}.items()}
 
 
+def write_omega(root, cfg: dict) -> bool:
+    """Write ``omega_rad_s.npy`` as the config defines it unless the file already holds exactly that.
+
+    Returns True when the file was (re)written. A resumed run thus repairs a damaged file instead of
+    recording its checksum.
+    """
+    buf = io.BytesIO()
+    np.save(buf, get_setup(cfg).omega_rad_s, allow_pickle=False)
+    p = Path(root) / "omega_rad_s.npy"
+    try:
+        if p.read_bytes() == buf.getvalue():
+            return False
+    except FileNotFoundError:
+        pass
+    atomic_write_bytes(p, buf.getvalue())
+    return True
+
+
+#: Disk bytes per sample without stored FRFs (shard arrays and table rows; measured: about 3.3 kB + the rows).
+BYTES_PER_SAMPLE = 4500
+
+
+def check_arguments(cfg: dict, n: int, seed: int, workers: int, root=None) -> None:
+    """Refuse impossible ``n``/``seed``/``workers`` and a dataset larger than the free disk space (one line)."""
+    def integer(v):
+        return isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_))
+
+    if not integer(n) or n < 1:
+        raise BeamDamageError(f"number of samples n must be an integer >= 1, got {n!r}", parameter="n")
+    if not integer(seed) or seed < 0:
+        raise BeamDamageError(f"seed must be an integer >= 0 (numpy SeedSequence), got {seed!r}", parameter="seed")
+    if not integer(workers) or workers < 1:
+        raise BeamDamageError(f"workers must be an integer >= 1, got {workers!r}", parameter="workers")
+    out = cfg["output"]
+    per_sample = BYTES_PER_SAMPLE + (2 * 2 * 4 * cfg["measurement"]["lines"] * np.dtype(out["frf_dtype"]).itemsize
+                                     if out["store_frf"] else 0)
+    need = n * per_sample
+    if root is not None:
+        existing = Path(root).resolve()
+        while not existing.exists() and existing != existing.parent:
+            existing = existing.parent
+        free = shutil.disk_usage(existing).free
+        if need > free and not (Path(root) / "manifest.json").exists():
+            raise BeamDamageError(f"n = {n} samples need about {need / 1e9:.3g} GB ({per_sample} bytes each) but "
+                                  f"{existing} has {free / 1e9:.3g} GB free", parameter="n")
+
+
+def _connect(scheduler: str):
+    """A Dask client of ``scheduler`` (connected before anything is written), or a one-line error."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise BeamDamageError("--scheduler needs the optional extra: pip install 'beam-damage[dask]'",
+                              parameter="scheduler") from None
+    try:
+        return Client(scheduler)
+    except (ValueError, TypeError, OSError, TimeoutError) as exc:
+        msg = " ".join(str(exc).split()) or type(exc).__name__
+        raise BeamDamageError(f"scheduler {scheduler!r}: {msg}; expected an address such as tcp://host:8786",
+                              parameter="scheduler") from None
+
+
 def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
     """Manifest of an existing compatible run (recovered: damaged shards are dropped for regeneration) or a new one."""
     root = Path(root)
@@ -102,14 +168,16 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
                                   f"same config, seed and --n (or choose a new --out)")
         m, damaged = recover(root, m)
         if damaged:
-            import sys
             print(f"{root}: {len(damaged)} damaged shard(s) {damaged} will be regenerated", file=sys.stderr)
+        if write_omega(root, cfg):
+            m["complete"] = False
+            print(f"{root / 'omega_rad_s.npy'}: missing or damaged; rewritten from the config", file=sys.stderr)
         return m
     if root.exists() and any(root.iterdir()):
         raise BeamDamageError(f"{root} exists, is not empty and has no manifest.json; choose a new --out")
     root.mkdir(parents=True, exist_ok=True)
     setup = get_setup(cfg)
-    np.save(root / "omega_rad_s.npy", setup.omega_rad_s, allow_pickle=False)
+    write_omega(root, cfg)
     m = {"format": FORMAT, "package_version": package_version(), "config": cfg, "seed": seed, "n_requested": n,
          "shard_size": cfg["output"]["shard_size"], "n_shards": len(shard_plan(n, cfg["output"]["shard_size"])),
          "complete": False, "shards": [], "schema": {"arrays": _schema(), "states": list(STATES),
@@ -137,11 +205,17 @@ def generate(root, cfg: dict, *, n: int, seed: int = 0, workers: int = 1, schedu
     max_new_shards : int, optional
         Stop after writing this many new shards (leaves a resumable, incomplete dataset).
     """
-    if n < 1:
-        raise BeamDamageError(f"number of samples n must be >= 1, got {n}")
-    if workers < 1:
-        raise BeamDamageError(f"workers must be >= 1, got {workers}")
     cfg = validate(cfg)
+    check_arguments(cfg, n, seed, workers, root)
+    client = _connect(scheduler) if scheduler else None
+    try:
+        return _generate(root, cfg, n, seed, workers, client, progress, max_new_shards)
+    finally:
+        if client is not None:
+            client.close()
+
+
+def _generate(root, cfg, n, seed, workers, client, progress, max_new_shards) -> dict:
     manifest = open_or_create(root, cfg, seed, n)
     done = {e["index"] for e in manifest["shards"]}
     todo = [s for s in shard_plan(n, cfg["output"]["shard_size"]) if s[0] not in done]
@@ -163,21 +237,14 @@ def generate(root, cfg: dict, *, n: int, seed: int = 0, workers: int = 1, schedu
         bar.update(entry["n_samples"])
 
     try:
-        if scheduler:
-            try:
-                from distributed import Client, as_completed as d_as_completed
-            except ImportError:
-                raise BeamDamageError("--scheduler needs the optional extra: pip install 'beam-damage[dask]'") \
-                    from None
-            client = Client(scheduler)
-            try:
-                futs = {client.submit(compute_shard, cfg_json, seed, i, f, k, pure=False): i for i, f, k in todo}
-                for fut in d_as_completed(futs):
-                    table, arrays = fut.result()
-                    record(futs[fut], table, arrays)
-                    fut.release()
-            finally:
-                client.close()
+        if client is not None:
+            from distributed import as_completed as d_as_completed
+
+            futs = {client.submit(compute_shard, cfg_json, seed, i, f, k, pure=False): i for i, f, k in todo}
+            for fut in d_as_completed(futs):
+                table, arrays = fut.result()
+                record(futs[fut], table, arrays)
+                fut.release()
         elif workers == 1 or len(todo) <= 1:
             for i, f, k in todo:
                 record(i, *compute_shard(cfg_json, seed, i, f, k))

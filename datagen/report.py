@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from datagen.store import STATES, Dataset
+from physics.errors import FileFormatError
 from physics.io import atomic_write_text
 from physics.properties import cantilever_curvature_squared
 
@@ -63,6 +64,10 @@ def inspect_dataset(dataset_dir, out_dir=None) -> dict:
     import matplotlib.pyplot as plt
 
     ds = Dataset(dataset_dir)
+    if not ds.shards:
+        raise FileFormatError(f"{dataset_dir}: incomplete dataset with no finished shard; run or resume its "
+                              f"`beam-damage generate` command")
+    ds.verify_or_raise()  # every checksum of the manifest, before anything is written
     table = ds.samples
     out = Path(out_dir) if out_dir else Path(dataset_dir) / "inspect"
     out.mkdir(parents=True, exist_ok=True)

@@ -44,7 +44,7 @@ import pandas as pd
 from datagen.damage import element4_index
 from datagen.synth import FRF_KINDS, SOURCES, line_index, synthesise
 from physics.errors import FileFormatError
-from physics.io import atomic_write_text
+from physics.io import atomic_write_text, read_json
 from physics.modal import modal_parameters
 
 FORMAT = "beam-damage-dataset/2"
@@ -241,17 +241,52 @@ def damaged_file(root, entry: dict, sizes_only: bool = False):
 
 
 def read_manifest(root, formats=(FORMAT, FORMAT_V1)) -> dict:
+    """``DIR/manifest.json``, checked: a JSON object of a supported format with a well-formed shard list.
+
+    Raises
+    ------
+    FileFormatError
+        Missing, not UTF-8, not JSON, not an object, another format, or a field of the wrong form
+        (one line naming the file and the field).
+    """
     p = Path(root) / "manifest.json"
     try:
-        m = json.loads(p.read_text())
+        m = read_json(p, max_bytes=2**31)  # a manifest lists every shard's checksums: large, but bounded
     except FileNotFoundError:
         raise FileFormatError(f"{root}: not a dataset directory (no manifest.json)") from None
-    except json.JSONDecodeError as exc:
-        raise FileFormatError(f"{p}: corrupt manifest ({exc})") from None
     if m.get("format") not in formats:
         raise FileFormatError(f"{p}: dataset format {m.get('format')!r} is not supported by this version "
                               f"(reads {', '.join(formats)}); regenerate it with `beam-damage generate`")
+    _check_manifest_fields(p, m)
     return m
+
+
+def _check_manifest_fields(p, m: dict) -> None:
+    """The fields readers index without further checks: config, shards (name, index, n_samples, checksums)."""
+    def bad(field, expected):
+        raise FileFormatError(f"{p}: corrupt manifest, field {field!r} must be {expected}")
+
+    if not isinstance(m.get("config"), dict):
+        bad("config", "an object (the generator config)")
+    if not isinstance(m.get("shards"), list):
+        bad("shards", "a list of shard entries")
+    for k, e in enumerate(m["shards"]):
+        f = f"shards[{k}]"
+        if not isinstance(e, dict):
+            bad(f, "an object with name, index, n_samples, checksums")
+        if not (isinstance(e.get("index"), int) and e["index"] >= 0 and e.get("name") == shard_name(e["index"])):
+            bad(f"{f}.name/index", "'shard-NNNNNN' and its index NNNNNN")
+        if not (isinstance(e.get("n_samples"), int) and e["n_samples"] >= 0):
+            bad(f"{f}.n_samples", "an integer >= 0")
+        cs = e.get("checksums")
+        if not (isinstance(cs, dict) and cs and all(isinstance(h, str) and "/" not in n and n not in (".", "..")
+                                                    for n, h in cs.items())):
+            bad(f"{f}.checksums", "an object of file name -> sha256")
+        if "sizes" in e and not (isinstance(e["sizes"], dict) and set(e["sizes"]) == set(cs)
+                                 and all(isinstance(v, int) for v in e["sizes"].values())):
+            bad(f"{f}.sizes", "an object of file name -> size in bytes, for the files of 'checksums'")
+    if "checksums" in m and not isinstance(m["checksums"], dict):
+        bad("checksums", "an object of file name -> sha256")
 
 
 def write_manifest(root, manifest: dict) -> None:
@@ -368,6 +403,7 @@ class Dataset:
                 bad = damaged_file(self.root, e, sizes_only=True)
                 if bad is not None:
                     raise FileFormatError(self._damage_message(e, bad))
+            self._check_top("omega_rad_s.npy")
 
     def __len__(self) -> int:
         return int(self.offsets[-1])
@@ -376,10 +412,35 @@ class Dataset:
         return (f"{self.root / 'shards' / entry['name'] / file}: missing or damaged (checksum/size mismatch); "
                 f"re-run the same `beam-damage generate` command to regenerate the shard")
 
+    def _check_top(self, name, force=False):
+        """Check a top-level file (omega_rad_s.npy, samples.parquet) against the manifest's checksum, once."""
+        want = self.manifest.get("checksums", {}).get(name)
+        if not (self._verify or force) or want is None or name in self._verified:
+            return
+        try:
+            ok = _sha256(self.root / name) == want
+        except OSError:
+            ok = False
+        if not ok:
+            raise FileFormatError(f"{self.root / name}: missing or damaged (checksum mismatch with manifest.json); "
+                                  f"re-run the same `beam-damage generate` command to repair it")
+        self._verified.add(name)
+
     @property
     def omega_rad_s(self) -> np.ndarray:
         if self._omega is None:
-            self._omega = np.load(self.root / "omega_rad_s.npy", allow_pickle=False)
+            self._check_top("omega_rad_s.npy")
+            p = self.root / "omega_rad_s.npy"
+            try:
+                w = np.load(p, allow_pickle=False)
+            except FileNotFoundError:
+                raise FileFormatError(f"{p}: missing; re-run the same `beam-damage generate` command") from None
+            except (ValueError, OSError, EOFError) as exc:
+                raise FileFormatError(f"{p}: not a readable .npy file ({str(exc)[:80]})") from None
+            if w.ndim != 1 or w.dtype != np.float64 or w.size < 2 or not np.all(np.isfinite(w)):
+                raise FileFormatError(f"{p}: expected a finite float64 vector of FRF lines (rad/s), got "
+                                      f"{w.dtype} of shape {w.shape}")
+            self._omega = w
         return self._omega
 
     @property
@@ -402,6 +463,7 @@ class Dataset:
                                   f"see manifest.json 'schema.columns'")
         p = self.root / "samples.parquet"
         if self.manifest.get("complete") and p.exists():
+            self._check_top("samples.parquet")
             return pq.read_table(p, columns=cols).to_pandas()
         parts = [pq.read_table(self.root / "shards" / e["name"] / "samples.parquet", columns=cols).to_pandas()
                  for e in self.shards]
@@ -499,7 +561,9 @@ class Dataset:
         return synthesise(kind, self._gather(SOURCES[kind], rows), self.omega_rad_s, self.frf_dtype, out, lines)
 
     def verify_or_raise(self) -> None:
-        """Check every shard's sha256 checksums; a damaged shard raises a one-line FileFormatError."""
+        """Check every file's sha256 checksum (shards, omega_rad_s.npy, samples.parquet); damage raises one line."""
+        for name in ("omega_rad_s.npy", "samples.parquet"):
+            self._check_top(name, force=True)
         for i, e in enumerate(self.shards):
             if i not in self._verified:
                 bad = damaged_file(self.root, e)
@@ -508,8 +572,12 @@ class Dataset:
                 self._verified.add(i)
 
     def verify(self) -> bool:
-        """Full check: every shard file against its sha256 checksum."""
-        return all(verify_shard(self.root, e) for e in self.shards)
+        """Full check: every shard file and the top-level files against their sha256 checksums."""
+        try:
+            self.verify_or_raise()
+        except FileFormatError:
+            return False
+        return True
 
 
 def load_torch(root, arrays=("frf_updated",), columns=("slit1_x_m", "slit1_depth_m"), converged_only=False,

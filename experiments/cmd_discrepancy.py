@@ -107,4 +107,4 @@ def add_parser(sub):
     p.add_argument("--json", action="store_true",
                    help="print one JSON object: named_effect, effects, parameters, parameter_std, "
                         "indistinguishable_from, gap_before, gap_after, candidates, beam_file")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, flags={"n_elements": "--elements"})

@@ -18,8 +18,11 @@ def add_parser(sub):
 
 
 def run(args) -> dict:
+    from experiments.cmd_train import check_out_dir
     from learn.workflow import evaluate, load_model
 
+    if args.out:
+        check_out_dir(args.out)
     res = evaluate(load_model(args.model), args.data, args.out, progress=True)
     if not args.json:
         cols = ("roc_auc", "accuracy", "false_alarm_rate", "element_accuracy", "within_one_element",

@@ -26,7 +26,7 @@ def add_parser(subparsers):
     p.add_argument("--kind", choices=[*FRF_KINDS, "both"], default="both", help="which FRFs (default both)")
     p.add_argument("--out", required=True, help="output directory (created)")
     p.add_argument("--json", action="store_true", help="print the list of written files as JSON")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, flags={"samples": "--samples"})
 
 
 def _sample_ids(text: str) -> list[int]:
@@ -47,11 +47,15 @@ def _uff_dof(name: str) -> str:
 def run(args) -> dict:
     ids = _sample_ids(args.samples)
     ds = Dataset(args.dir)
+    if not ds.shards:
+        raise BeamDamageError(f"{args.dir}: incomplete dataset with no finished shard; run or resume its "
+                              f"`beam-damage generate` command")
     sid = ds.table(["sample_id"])["sample_id"].to_numpy()
     pos = {int(s): i for i, s in enumerate(sid)}
     missing = [i for i in ids if i not in pos]
     if missing:
-        raise BeamDamageError(f"{args.dir}: no sample(s) {missing}; the dataset holds ids {sid.min()}..{sid.max()}")
+        raise BeamDamageError(f"{args.dir}: no sample(s) {missing}; the dataset holds ids {sid.min()}..{sid.max()}",
+                              parameter="samples")
     rows = [pos[i] for i in ids]
     schema = ds.manifest["schema"]
     resp = tuple(_uff_dof(d) for d in schema["measured_dofs"])
@@ -59,16 +63,19 @@ def run(args) -> dict:
     f_hz = ds.omega_rad_s / (2 * np.pi)
     writer, ext = WRITERS[args.format]
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     kinds = FRF_KINDS if args.kind == "both" else (args.kind,)
-    written = []
-    for kind in kinds:
-        H = ds.frf(kind, rows).astype(complex)
+    frfs = {kind: ds.frf(kind, rows).astype(complex) for kind in kinds}  # read (and verify) all before writing
+    for kind, H in frfs.items():
         for j, i in enumerate(ids):
             for s, state in enumerate(STATES):
                 if not np.all(np.isfinite(H[j, s])):
                     raise BeamDamageError(f"sample {i}: the {kind} FRF of the {state} state is not finite "
                                           f"(updating did not converge); choose another sample or --kind measured")
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    for kind, H in frfs.items():
+        for j, i in enumerate(ids):
+            for s, state in enumerate(STATES):
                 path = out / f"sample-{i:06d}_{state}_{kind}.{ext}"
                 data = MeasuredFRF(f_hz, H[j, s][:, None, :], resp, ref, kind="receptance",
                                    metadata={"id1": f"beam-damage sample {i} {state} {kind}", "dataset": str(args.dir),

@@ -36,7 +36,7 @@ def add_parser(subparsers):
                    help="also write the measured and updated FRFs into the shards (128 kB per sample; identical to "
                         "what reading synthesises)")
     p.add_argument("--json", action="store_true", help="print the manifest summary as JSON")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run, flags={"n": "--n", "seed": "--seed", "workers": "--workers", "scheduler": "--scheduler"})
 
 
 def run(args) -> dict:

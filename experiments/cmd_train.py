@@ -23,14 +23,31 @@ def add_parser(sub):
     p.set_defaults(func=run)
 
 
+def check_out_dir(path) -> None:
+    """Refuse an output directory that cannot be created, before any long computation."""
+    from pathlib import Path
+
+    from physics.errors import BeamDamageError
+
+    p = Path(path)
+    for q in (p, *p.parents):
+        if q.exists():
+            if not q.is_dir():
+                raise BeamDamageError(f"--out {path}: {q} exists and is not a directory")
+            return
+
+
 def run(args) -> dict:
     from learn.workflow import train
     from physics.errors import BeamDamageError
 
     if args.epochs < 1:
         raise BeamDamageError(f"--epochs must be >= 1, got {args.epochs}")
+    if args.seed < 0:
+        raise BeamDamageError(f"--seed must be >= 0, got {args.seed}")
     if args.threads < 1:
         raise BeamDamageError(f"--threads must be >= 1, got {args.threads}")
+    check_out_dir(args.out)
     out = train(args.data, args.out, epochs=args.epochs, seed=args.seed, route=args.route, progress=True,
                 threads=args.threads)
     if not args.json:

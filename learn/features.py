@@ -164,6 +164,8 @@ def load_pairs(roots, frfs=("measured", "updated"), chunk: int = 1024, workers: 
         read_manifest(root, formats=(FORMAT,))   # format 1 is refused in one line
         try:
             ds = Dataset(root)
+        except FileFormatError:  # names the damaged file itself
+            raise
         except (OSError, ValueError) as exc:
             raise FileFormatError(f"{root}: not a dataset directory written by 'beam-damage generate' ({exc})") from None
         if not ds.shards or not ds.manifest.get("complete"):

@@ -33,6 +33,7 @@ from learn.features import (DOFS, GRID_RAD_S, ROUTES, BeamSpec, Pairs, features,
                             map_frf_to_grid, modal_features, split_by_specimen)
 from learn.sensitivity import beam_sensitivity
 from physics.errors import BeamDamageError, FileFormatError
+from physics.io import read_json
 
 #: Input route used by default (the winner of ``python -m experiments.bench_learn``).
 DEFAULT_ROUTE = "modal"
@@ -110,12 +111,13 @@ def load_model(model_dir, device=None) -> TrainedModel:
     cfg_path = path / "config.json"
     if not cfg_path.is_file():
         raise FileFormatError(f"{path}: not a model directory (no config.json); create one with 'beam-damage train'")
-    try:
-        config = json.loads(cfg_path.read_text())
-    except json.JSONDecodeError as exc:
-        raise FileFormatError(f"{cfg_path}: not valid JSON ({exc.msg})") from None
+    config = read_json(cfg_path)
     if config.get("format") != FORMAT:
         raise FileFormatError(f"{cfg_path}: field 'format' is {config.get('format')!r}, expected {FORMAT!r}")
+    for key, kind in (("route", str), ("networks", dict), ("beam", dict)):
+        if not isinstance(config.get(key), kind):
+            raise FileFormatError(f"{cfg_path}: field {key!r} missing or not a {kind.__name__}; "
+                                  f"re-create the model with 'beam-damage train'")
     model = TrainedModel(path, config)
     for route, meta in config.get("networks", {}).items():
         w = path / f"weights-{route}.pt"
@@ -124,8 +126,14 @@ def load_model(model_dir, device=None) -> TrainedModel:
         except FileNotFoundError:
             raise FileFormatError(f"{w}: weights file missing") from None
         except Exception as exc:  # noqa: BLE001 - any unpickling failure is a bad file
-            raise FileFormatError(f"{w}: not a weights file readable with weights_only=True ({exc})") from None
-        model.networks[route] = DamageClassifier.from_state(tensors, meta, device=device)
+            why = " ".join(str(exc).split())[:160]
+            raise FileFormatError(f"{w}: not a weights file readable with weights_only=True ({why})") from None
+        try:
+            model.networks[route] = DamageClassifier.from_state(tensors, meta, device=device)
+        except (KeyError, TypeError, ValueError, AttributeError, RuntimeError) as exc:
+            why = " ".join(str(exc).split())[:160]
+            raise FileFormatError(f"{w}: weights do not match the network described in {cfg_path.name} "
+                                  f"({type(exc).__name__}: {why})") from None
     if config["route"] not in model.networks:
         raise FileFormatError(f"{cfg_path}: no network for its route {config['route']!r}")
     return model

@@ -8,9 +8,12 @@ stdout, no output file left behind, no warning printed before the error, and a b
 
 from __future__ import annotations
 
+import atexit
 import io
 import json
+import shutil
 import sys
+import tempfile
 import time
 import warnings
 import zipfile
@@ -318,9 +321,292 @@ def _impact_uff(path):
     return path
 
 
-if __name__ == "__main__":
-    sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
-CASES = [*_frf_cases(), *_modal_cases(), *_arg_cases()]
+# --------------------------------------------------------------------------- datasets and models
+_SHARED: dict = {}
+
+
+def _shared(name, build):
+    """``build(path)`` once per process into a temporary folder (removed at exit); returns the path."""
+    if "tmp" not in _SHARED:
+        _SHARED["tmp"] = Path(tempfile.mkdtemp(prefix="beam-damage-corpus-"))
+        atexit.register(shutil.rmtree, _SHARED["tmp"], True)
+    path = _SHARED["tmp"] / name
+    if name not in _SHARED:
+        build(path)
+        _SHARED[name] = path
+    return path
+
+
+def _tiny_dataset():
+    """A complete training-config dataset: 48 samples in 3 shards of 16, 64 FRF lines (about 2 s)."""
+    def build(root):
+        from datagen.config import load_config, merge
+        from datagen.parallel import generate
+
+        cfg = merge({"measurement": {"lines": 64}, "output": {"shard_size": 16}}, base=load_config("training"))
+        generate(root, cfg, n=48, seed=0, progress=False)
+    return _shared("dataset", build)
+
+
+def _tiny_model():
+    """A classifier trained one epoch on :func:`_tiny_dataset` (modal route, about 3 s)."""
+    def build(out):
+        from learn.workflow import train
+
+        train(_tiny_dataset(), out, epochs=1, seed=0)
+    return _shared("model", build)
+
+
+def _copy_tree(src, dst, damage=None):
+    """A fresh copy of a shared folder, damaged by ``damage(dst)``."""
+    shutil.copytree(src, dst)
+    if damage is not None:
+        damage(dst)
+    return dst
+
+
+def _ds_copy(d, damage=None):
+    return _copy_tree(_tiny_dataset(), d / "ds", damage)
+
+
+def _model_copy(d, damage=None):
+    return _copy_tree(_tiny_model(), d / "model", damage)
+
+
+def _flip(path, offset=-5):
+    raw = bytearray(path.read_bytes())
+    raw[offset] ^= 0xFF  # same size: only the checksum sees it
+    path.write_bytes(bytes(raw))
+
+
+def _garble_npy_header(path):
+    raw = bytearray(path.read_bytes())
+    raw[10:20] = b"{'zzzzz': "  # same size, header no longer a dict of descr/shape
+    path.write_bytes(bytes(raw))
+
+
+def _edit_manifest(root, edit):
+    m = json.loads((root / "manifest.json").read_text())
+    m = edit(m)
+    (root / "manifest.json").write_text(m if isinstance(m, str) else json.dumps(m))
+
+
+def _no_finished_shard(root):
+    def edit(m):
+        for k in ("counts", "checksums", "columns"):
+            m.pop(k, None)
+        return dict(m, shards=[], complete=False)
+    _edit_manifest(root, edit)
+    (root / "samples.parquet").unlink()
+    shutil.rmtree(root / "shards")
+
+
+SHARD = "shards/shard-000001"
+
+#: (name, damage(root), expected substring of the error line)
+DAMAGE = [
+    ("flipped data byte in a shard .npy", lambda r: _flip(r / SHARD / "eigenvalues_measured.npy"),
+     "shard-000001/eigenvalues_measured.npy"),
+    ("flipped byte in omega_rad_s.npy", lambda r: _flip(r / "omega_rad_s.npy", -3), "omega_rad_s.npy"),
+    ("truncated shard samples.parquet", lambda r: _cut(r / SHARD / "samples.parquet", 0.5),
+     "shard-000001/samples.parquet"),
+    ("deleted shard file", lambda r: (r / "shards/shard-000002/K_updated.npy").unlink(),
+     "shard-000002/K_updated.npy"),
+    ("missing shard directory", lambda r: shutil.rmtree(r / SHARD), "shard-000001"),
+    ("manifest is a list", lambda r: _edit_manifest(r, lambda m: "[1, 2]"), "manifest.json"),
+    ("manifest lacks shards", lambda r: _edit_manifest(r, lambda m: {k: v for k, v in m.items() if k != "shards"}),
+     "shards"),
+    ("manifest shard entry is a string", lambda r: _edit_manifest(r, lambda m: dict(m, shards=["shard-000000"])),
+     "shards"),
+    ("manifest not JSON", lambda r: (r / "manifest.json").write_text("{oops"), "manifest.json"),
+    ("manifest not UTF-8", lambda r: (r / "manifest.json").write_bytes(b'{"format": "\xff"}'), "UTF-8"),
+    ("no finished shard", _no_finished_shard, "incomplete"),
+    ("bad .npy header in a shard", lambda r: _garble_npy_header(r / SHARD / "truth_poles.npy"),
+     "shard-000001/truth_poles.npy"),
+    ("bad .npy header of omega_rad_s.npy", lambda r: _garble_npy_header(r / "omega_rad_s.npy"), "omega_rad_s.npy"),
+    ("top-level samples.parquet truncated", lambda r: _cut(r / "samples.parquet", 0.5), "ds/samples.parquet"),
+]
+
+#: Commands that read datasets: name -> argv(dataset dir, case dir).
+READERS = {
+    "inspect": lambda ds, d: ["inspect", str(ds)],
+    "train": lambda ds, d: ["train", "--data", str(ds), "--out", str(d / "model-out"), "--epochs", "1"],
+    "export": lambda ds, d: ["export", str(ds), "--samples", "0,17,40", "--out", str(d / "export-out")],
+    "evaluate": lambda ds, d: ["evaluate", "--model", str(_tiny_model()), "--data", str(ds), "--out",
+                               str(d / "eval-out")],
+}
+
+
+def _dataset_cases():
+    return [("dataset", f"{cmd}: {name}", (lambda d, f=damage, a=argv: a(_ds_copy(d, f), d)), expect)
+            for name, damage, expect in DAMAGE for cmd, argv in READERS.items()]
+
+
+def _gen(d, *more):
+    return ["generate", "--n", "4", "--out", str(d / "gen"), *more]
+
+
+def _toml(path, text):
+    path.write_text(text) if isinstance(text, str) else path.write_bytes(text)
+    return str(path)
+
+
+def _modal_arg(d, name="m.json"):
+    return str(_modal(d / name, _thesis_modal()))
+
+
+def _cls(d, *more, model=None):
+    return ["classify", "--model", str(model or _tiny_model()), "--baseline", _modal_arg(d, "b.json"),
+            _modal_arg(d, "c.json"), "--json", *more]
+
+
+def _measured():
+    from experiments.study_discrepancy import EXAMPLE
+
+    return str(EXAMPLE)
+
+
+def _dsc(*more):
+    return ["discrepancy", "--beam", "beam5", "--measured", _measured(), *more]
+
+
+def _command_arg_cases():
+    """Argument families of generate, train, classify, evaluate, export, discrepancy, inspect, demo."""
+    f = lambda d: str(_csv(d / "f.txt", "x"))  # noqa: E731 - a plain file where a directory is expected
+    bad_weights = lambda m: (m / "weights-modal.pt").write_bytes(np.random.default_rng(0).bytes(300))  # noqa: E731
+    return [(fam, name, b, expect) for fam, name, b, expect in [
+        ("generate", "--seed -1", lambda d: _gen(d, "--seed", "-1"), "--seed"),
+        ("generate", "--n 0", lambda d: ["generate", "--n", "0", "--out", str(d / "gen")], "--n"),
+        ("generate", "--n -5", lambda d: ["generate", "--n", "-5", "--out", str(d / "gen")], "--n"),
+        ("generate", "--n 10^15 (no disk holds it)", lambda d: ["generate", "--n", str(10**15), "--out",
+                                                                str(d / "gen")], "--n"),
+        ("generate", "--workers 0", lambda d: _gen(d, "--workers", "0"), "--workers"),
+        ("generate", "--scheduler 'not a url'", lambda d: _gen(d, "--scheduler", "not a url"), "--scheduler"),
+        ("generate", "--scheduler unknown scheme", lambda d: _gen(d, "--scheduler", "foo://host:1"), "--scheduler"),
+        ("generate", "--config unknown name", lambda d: _gen(d, "--config", "no-such-config"), "no-such-config"),
+        ("generate", "--config not UTF-8", lambda d: _gen(d, "--config", _toml(d / "c.toml", b"[mesh]\n# \xff\n")),
+         "UTF-8"),
+        ("generate", "--config malformed TOML", lambda d: _gen(d, "--config", _toml(d / "c.toml", "[mesh\n")), "TOML"),
+        ("generate", "--config unknown key", lambda d: _gen(d, "--config", _toml(d / "c.toml", "[mesh]\nfoo = 1\n")),
+         "mesh.foo"),
+        ("generate", "--config lines = 0", lambda d: _gen(d, "--config", _toml(d / "c.toml",
+                                                                                "[measurement]\nlines = 0\n")),
+         "measurement.lines"),
+        ("generate", "--config is a directory", lambda d: _gen(d, "--config", str(d)), "directory"),
+        ("generate", "--beam missing file", lambda d: _gen(d, "--beam", str(d / "absent.toml")), "absent.toml"),
+        ("generate", "--beam malformed TOML", lambda d: _gen(d, "--beam", _toml(d / "b.toml", "[beam\n")), "TOML"),
+        ("generate", "--beam not UTF-8", lambda d: _gen(d, "--beam", _toml(d / "b.toml", b"name = '\xff'\n")),
+         "UTF-8"),
+        ("generate", "--beam and --preset", lambda d: _gen(d, "--beam", "beam5", "--preset", "beam6"), "--beam"),
+        ("generate", "--out is a file", lambda d: ["generate", "--n", "4", "--out", f(d)], "f.txt"),
+        ("generate", "--out a folder of other files", lambda d: ["generate", "--n", "4", "--out",
+                                                                 str(_csv(d / "x.csv", "x").parent)], "not empty"),
+        ("train", "--data not a dataset", lambda d: ["train", "--data", str(d), "--out", str(d / "m")],
+         "not a dataset"),
+        ("train", "--data does not exist", lambda d: ["train", "--data", str(d / "nope"), "--out", str(d / "m")],
+         "nope"),
+        ("train", "--epochs 0", lambda d: ["train", "--data", str(_ds_copy(d)), "--out", str(d / "m"), "--epochs",
+                                           "0"], "--epochs"),
+        ("train", "--threads 0", lambda d: ["train", "--data", str(_ds_copy(d)), "--out", str(d / "m"), "--threads",
+                                            "0"], "--threads"),
+        ("train", "--seed -1", lambda d: ["train", "--data", str(_ds_copy(d)), "--out", str(d / "m"), "--seed", "-1",
+                                          "--epochs", "1"], "--seed"),
+        ("train", "--out is a file", lambda d: ["train", "--data", str(_ds_copy(d)), "--out", f(d), "--epochs", "1"],
+         "--out"),
+        ("train", "--route bogus", lambda d: ["train", "--data", str(d), "--out", str(d / "m"), "--route", "bogus"],
+         "invalid choice"),
+        ("classify", "missing model directory", lambda d: _cls(d, model=d / "nomodel"), "nomodel"),
+        ("classify", "model config.json not JSON", lambda d: _cls(d, model=_model_copy(
+            d, lambda m: (m / "config.json").write_text("{oops"))), "config.json"),
+        ("classify", "model config.json not UTF-8", lambda d: _cls(d, model=_model_copy(
+            d, lambda m: (m / "config.json").write_bytes(b'{"format": "\xff"}'))), "config.json"),
+        ("classify", "model config.json a list", lambda d: _cls(d, model=_model_copy(
+            d, lambda m: (m / "config.json").write_text("[1]"))), "config.json"),
+        ("classify", "model config.json lacks route", lambda d: _cls(d, model=_model_copy(
+            d, lambda m: _edit_json(m / "config.json", lambda c: {k: v for k, v in c.items() if k != "route"}))),
+         "route"),
+        ("classify", "weights file missing", lambda d: _cls(d, model=_model_copy(
+            d, lambda m: (m / "weights-modal.pt").unlink())), "weights-modal.pt"),
+        ("classify", "weights file random bytes", lambda d: _cls(d, model=_model_copy(d, bad_weights)),
+         "weights-modal.pt"),
+        ("classify", "weights file truncated", lambda d: _cls(d, model=_model_copy(
+            d, lambda m: _cut(m / "weights-modal.pt", 0.5))), "weights-modal.pt"),
+        ("classify", "weights of another network (an empty dict)", lambda d: _cls(d, model=_model_copy(
+            d, lambda m: _torch_save(m / "weights-modal.pt", {}))), "weights-modal.pt"),
+        ("classify", "config.json network without params", lambda d: _cls(d, model=_model_copy(
+            d, lambda m: _edit_json(m / "config.json", lambda c: dict(c, networks={"modal": {}})))), "weights-modal.pt"),
+        ("classify", "missing baseline file", lambda d: ["classify", "--model", str(_tiny_model()), "--baseline",
+                                                        str(d / "absent.uff"), str(_good_uff(d / "g.uff"))],
+         "absent.uff"),
+        ("classify", "missing measured file", lambda d: ["classify", "--model", str(_tiny_model()), "--baseline",
+                                                        str(_good_uff(d / "g.uff")), str(d / "absent.uff")],
+         "absent.uff"),
+        ("classify", "--out is a file", lambda d: _cls(d, "--out", f(d)), "f.txt"),
+        ("evaluate", "missing model directory", lambda d: ["evaluate", "--model", str(d / "nomodel"), "--data",
+                                                           str(_ds_copy(d))], "nomodel"),
+        ("evaluate", "--data not a dataset", lambda d: ["evaluate", "--model", str(_tiny_model()), "--data", str(d)],
+         "not a dataset"),
+        ("evaluate", "corrupt weights", lambda d: ["evaluate", "--model", str(_model_copy(d, bad_weights)), "--data",
+                                                   str(_ds_copy(d))], "weights-modal.pt"),
+        ("evaluate", "--out is a file", lambda d: ["evaluate", "--model", str(_tiny_model()), "--data",
+                                                   str(_ds_copy(d)), "--out", f(d)], "f.txt"),
+        ("export", "--samples 5,x", lambda d: ["export", str(_ds_copy(d)), "--samples", "5,x", "--out",
+                                               str(d / "e")], "--samples"),
+        ("export", "--samples 99999", lambda d: ["export", str(_ds_copy(d)), "--samples", "99999", "--out",
+                                                 str(d / "e")], "--samples"),
+        ("export", "--samples ','", lambda d: ["export", str(_ds_copy(d)), "--samples", ",", "--out", str(d / "e")],
+         "--samples"),
+        ("export", "--format bogus", lambda d: ["export", str(_ds_copy(d)), "--samples", "0", "--format", "bogus",
+                                                "--out", str(d / "e")], "invalid choice"),
+        ("export", "--out inside a file", lambda d: ["export", str(_ds_copy(d)), "--samples", "0", "--out",
+                                                     f(d) + "/sub"], "f.txt"),
+        ("export", "not a dataset", lambda d: ["export", str(d), "--samples", "0", "--out", str(d / "e")],
+         "not a dataset"),
+        ("discrepancy", "--measured missing", lambda d: _dsc_m(d / "absent.json"), "absent.json"),
+        ("discrepancy", "--measured not JSON", lambda d: _dsc_m(_modal(d / "n.json", "{oops")), "JSON"),
+        ("discrepancy", "--measured not UTF-8", lambda d: _dsc_m(_bytes(d / "u.json", b'{"a": "\xff"}')), "UTF-8"),
+        ("discrepancy", "--measured a list", lambda d: _dsc_m(_modal(d / "l.json", [1, 2])), "l.json"),
+        ("discrepancy", "--measured empty frequencies", lambda d: _dsc_m(_modal(
+            d / "e.json", {"natural_frequencies_hz": []})), "e.json"),
+        ("discrepancy", "--measured negative frequency", lambda d: _dsc_m(_modal(
+            d / "neg.json", {"natural_frequencies_hz": [-10.0, 60.0, 170.0]})), "neg.json"),
+        ("discrepancy", "--measured FRF file truncated", lambda d: _dsc_m(_cut(_good_uff(d / "t.uff"), 0.57)),
+         "t.uff"),
+        ("discrepancy", "--beam missing file", lambda d: ["discrepancy", "--beam", str(d / "absent.toml"),
+                                                          "--measured", _measured()], "absent.toml"),
+        ("discrepancy", "--beam malformed TOML", lambda d: ["discrepancy", "--beam", _toml(d / "b.toml", "[x\n"),
+                                                            "--measured", _measured()], "TOML"),
+        ("discrepancy", "--elements 0", lambda d: _dsc("--elements", "0"), "--elements"),
+        ("discrepancy", "--elements 100000", lambda d: _dsc("--elements", "100000"), "--elements"),
+        ("discrepancy", "--max-effects -1", lambda d: _dsc("--max-effects", "-1"), "--max-effects"),
+        ("discrepancy", "--frequency-noise nan", lambda d: _dsc("--frequency-noise", "nan"), "--frequency-noise"),
+        ("discrepancy", "--out is a file", lambda d: _dsc("--out", f(d)), "f.txt"),
+        ("inspect", "not a dataset", lambda d: ["inspect", str(d)], "not a dataset"),
+        ("inspect", "does not exist", lambda d: ["inspect", str(d / "nope")], "nope"),
+        ("inspect", "a file", lambda d: ["inspect", f(d)], "f.txt"),
+        ("inspect", "--out inside a file", lambda d: ["inspect", str(_ds_copy(d)), "--out", f(d) + "/sub"], "f.txt"),
+        ("demo", "--samples -1", lambda d: ["demo", "--samples", "-1", "--out", str(d / "demo")], "--samples"),
+        ("demo", "--samples 0", lambda d: ["demo", "--samples", "0", "--out", str(d / "demo")], "--samples"),
+        ("demo", "--workers 0", lambda d: ["demo", "--workers", "0", "--out", str(d / "demo")], "--workers"),
+        ("demo", "--out is a file", lambda d: ["demo", "--quick", "--out", f(d)], "f.txt"),
+    ]]
+
+
+def _dsc_m(path):
+    return ["discrepancy", "--beam", "beam5", "--measured", str(path)]
+
+
+def _torch_save(path, obj):
+    import torch
+
+    torch.save(obj, path)
+
+
+def _edit_json(path, edit):
+    path.write_text(json.dumps(edit(json.loads(path.read_text()))))
+
+
+CASES = [*_frf_cases(), *_modal_cases(), *_arg_cases(), *_command_arg_cases(), *_dataset_cases()]
 
 
 def _argv(builder, d):

@@ -113,24 +113,37 @@ def modal_data_from_dict(obj: dict, source="modal data") -> ModalData:
     return ModalData(lam, vecs, dofs)
 
 
-def read_modal_json(path) -> ModalData:
-    """Read a modal-data JSON file (see module docstring)."""
+def read_json(path, max_bytes: int = MAX_JSON_BYTES, require_object: bool = True):
+    """The value of a JSON file; a file that is too large, not UTF-8, not JSON, nested too deeply or (with
+    ``require_object``) not an object raises a one-line :class:`FileFormatError` naming it.
+
+    A missing file raises ``FileNotFoundError`` (callers say what the file should have been).
+    """
     path = Path(path)
     try:
-        if path.stat().st_size > MAX_JSON_BYTES:
-            raise FileFormatError(f"{path}: {path.stat().st_size} bytes, more than the {MAX_JSON_BYTES} a "
-                                  "modal-data file may hold")
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise FileFormatError(f"{path}: file not found") from None
+        if path.stat().st_size > max_bytes:
+            raise FileFormatError(f"{path}: {path.stat().st_size} bytes, more than the {max_bytes} this JSON "
+                                  "file may hold")
+        obj = json.loads(path.read_bytes().decode("utf-8"))
+    except IsADirectoryError:
+        raise FileFormatError(f"{path}: is a directory, expected a JSON file") from None
     except UnicodeDecodeError as exc:
         raise FileFormatError(f"{path}: not UTF-8 text (byte {exc.start}); expected a JSON object") from None
-    try:
-        obj = json.loads(text)
     except json.JSONDecodeError as exc:
         raise FileFormatError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
     except RecursionError:
-        raise FileFormatError(f"{path}: JSON nested too deeply; expected a flat object of lists") from None
+        raise FileFormatError(f"{path}: JSON nested too deeply; expected a flat object") from None
+    if require_object and not isinstance(obj, dict):
+        raise FileFormatError(f"{path}: expected a JSON object, got a {type(obj).__name__}")
+    return obj
+
+
+def read_modal_json(path) -> ModalData:
+    """Read a modal-data JSON file (see module docstring)."""
+    try:
+        obj = read_json(path, require_object=False)
+    except FileNotFoundError:
+        raise FileFormatError(f"{path}: file not found") from None
     return modal_data_from_dict(obj, str(path))
 
 

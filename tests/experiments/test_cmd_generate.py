@@ -81,3 +81,54 @@ def test_training_config_by_name_and_robustness_file_on_top(tmp_path, capsys):
     assert load_config("robust_environment")["specimen"]["root_spring_change"] == [-0.25, 0.25]
     assert main(["generate", "--n", "3", "--out", str(tmp_path / "ds"), "--config", "trainin"]) == 2
     assert "trainin" in capsys.readouterr().err
+
+
+def _tree(root):
+    """{relative path: bytes} of every file of a dataset directory."""
+    return {str(p.relative_to(root)): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()}
+
+
+def test_resumed_generate_repairs_damage_to_a_byte_identical_dataset(tmp_path, capsys):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text('[output]\nshard_size = 4\n[measurement]\nlines = 32\n')
+    argv = ["generate", "--n", "10", "--config", str(cfg), "--seed", "3", "--json", "--out"]
+    assert main([*argv, str(tmp_path / "ref")]) == 0
+    root = tmp_path / "ds"
+    assert main([*argv, str(root)]) == 0
+    want = _tree(tmp_path / "ref")
+    assert _tree(root) == want  # the same command twice: byte-identical
+    capsys.readouterr()
+    shard0, shard1 = root / "shards" / "shard-000000", root / "shards" / "shard-000001"
+    inode0 = shard0.stat().st_ino
+    for p, at in ((shard1 / "K_updated.npy", -5), (root / "omega_rad_s.npy", -3)):  # one flipped data byte each
+        raw = bytearray(p.read_bytes())
+        raw[at] ^= 0xFF
+        p.write_bytes(bytes(raw))
+    (root / "samples.parquet").write_bytes((root / "samples.parquet").read_bytes()[:1000])
+    assert main(["inspect", str(root)]) == 2
+    assert "omega_rad_s.npy: missing or damaged" in capsys.readouterr().err
+
+    assert main([*argv, str(root)]) == 0  # resumed: repairs what the checksums show damaged
+    err = capsys.readouterr().err
+    assert "1 damaged shard(s) [1] will be regenerated" in err
+    assert "omega_rad_s.npy: missing or damaged; rewritten from the config" in err
+    got = _tree(root)
+    assert got.keys() == want.keys()
+    assert [k for k in want if got[k] != want[k]] == []
+    m, m_ref = (json.loads((r / "manifest.json").read_text()) for r in (root, tmp_path / "ref"))
+    assert m["checksums"] == m_ref["checksums"]  # omega's checksum is the config's, not the damaged file's
+    assert [e["checksums"] for e in m["shards"]] == [e["checksums"] for e in m_ref["shards"]]
+    assert shard0.stat().st_ino == inode0  # the undamaged shard was kept, not recomputed
+    assert main(["inspect", str(root), "--out", str(tmp_path / "ins")]) == 0
+
+
+def test_refused_seed_leaves_nothing_that_blocks_the_corrected_run(tmp_path, capsys):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text('[output]\nshard_size = 4\n[measurement]\nlines = 32\n')
+    out = tmp_path / "ds"
+    assert main(["generate", "--n", "4", "--config", str(cfg), "--out", str(out), "--seed", "-1"]) == 2
+    assert capsys.readouterr().err == ("beam-damage generate: error: --seed: seed must be an integer >= 0 "
+                                       "(numpy SeedSequence), got -1\n")
+    assert not out.exists()
+    assert main(["generate", "--n", "4", "--config", str(cfg), "--out", str(out), "--seed", "1", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["complete"]
