@@ -151,25 +151,6 @@ def noisy_pole_residue_kernel(lam, residues, omega_rad_s, lines, n_lines, seeds,
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def peak_kernel(lam, residues, omega_rad_s, out):  # pragma: no cover - compiled
-    """``out[i, s] = max_f |H_is(w_f)|`` of the noise-free pole-pair FRFs (:func:`row_peak`).
-
-    lam (N, m) complex128; residues (N, S, m) complex128; omega_rad_s (F,); out (N, S) float64.
-    """
-    n_models, n_modes = lam.shape
-    n_w = omega_rad_s.shape[0]
-    gr = np.empty((n_modes, n_w))
-    gi = np.empty((n_modes, n_w))
-    re = np.empty(n_w)
-    im = np.empty(n_w)
-    for i in range(n_models):
-        pair_denominators(lam[i], omega_rad_s, gr, gi)
-        for s in range(residues.shape[1]):
-            pair_row(lam[i], residues[i, s], omega_rad_s, gr, gi, re, im)
-            out[i, s] = row_peak(re, im)
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
 def noise_kernel(H, seeds, level, floor, out):  # pragma: no cover - compiled
     """The measurement noise of :func:`add_noise_row` applied to given FRFs (the per-sample cross-check).
 

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from datagen.kernels import noise_kernel, noisy_pole_residue_kernel, peak_kernel
+from datagen.kernels import noise_kernel, noisy_pole_residue_kernel
 from physics.frf import pole_residue, receptance_state_space
 
 FRF_KINDS = ("measured", "updated")
@@ -87,10 +87,9 @@ def measured_peak(a: dict, omega_rad_s) -> np.ndarray:
     lam, R = _measured_inputs(a)
     need = np.repeat(np.asarray(a["noise_floor"], float) != 0, 2)
     peak = np.full(R.shape[:2], np.nan)
-    if need.any():
-        part = np.empty((int(need.sum()), R.shape[1]))
-        peak_kernel(lam[need], R[need], np.ascontiguousarray(omega_rad_s, dtype=float), part)
-        peak[need] = part
+    if need.any():  # the float64 sum of datagen.kernels.row_peak, the same values
+        H = pole_residue(lam[need], R[need], omega_rad_s)
+        peak[need] = np.sqrt(np.max(H.real ** 2 + H.imag ** 2, axis=-1))
     return peak.reshape(-1, 2, R.shape[1])
 
 

@@ -139,6 +139,11 @@ def test_a_subset_of_lines_has_exactly_the_values_of_the_full_frf(tmp_path):
     (old / "manifest.json").write_text(json.dumps(m))
     assert np.isnan(Dataset(old).array("frf_peak")).all()
     assert np.array_equal(Dataset(old).frf("measured", lines=lines), ds.frf("measured", lines=lines))
+    from datagen.synth import SOURCES, measured_frf  # the same in float64: stored peak == peak of every line
+
+    a = {k: ds.array(k) for k in SOURCES["measured"]}
+    assert np.array_equal(measured_frf(a, ds.omega_rad_s, np.complex128, lines=lines),
+                          measured_frf({**a, "frf_peak": None}, ds.omega_rad_s, np.complex128)[..., lines])
 
 
 def test_loader_maps_log_magnitudes_onto_a_grid_from_the_lines_it_needs(reference):
