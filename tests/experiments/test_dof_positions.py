@@ -24,7 +24,7 @@ SHUFFLE = [2, 0, 3, 1]  # records of nodes 4, 2, 5, 3
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     d = tmp_path_factory.mktemp("positions")
-    frf, exact = simulated_beam5_test(noise=0.005, seed=11, damping="heavy")
+    frf, exact = simulated_beam5_test(noise=0.005, seed=11, df_hz=2.0, damping="heavy")
     write_uff58(d / "canonical.uff", frf, binary=True)
     write_renumbered_uff(d / "renumbered.uff", frf, NODES, QUARTER_MM, SHUFFLE)
     write_renumbered_uff(d / "offgrid.uff", frf, NODES, {**QUARTER_MM, 103: 400.0}, SHUFFLE)
@@ -95,3 +95,31 @@ def test_update_takes_positions_from_a_beam_file(capsys, files, tmp_path):
     beam.write_text(f'preset = "beam5"\nmeasured_x_m = [{L / 2!r}, {L!r}]\n')
     code, out, err = _run(capsys, "update", "--beam", str(beam), "--modal", str(d / "nogeometry.uff"))
     assert code == 2 and err.count("\n") == 1 and "nogeometry.uff" in err
+
+
+DISCREPANCY = ("--max-effects", "1", "--elements", "6", "--candidates", "root_flexibility",
+               "--json")
+
+
+def test_discrepancy_maps_renumbered_shuffled_mm_file_by_geometry(capsys, files):
+    d, _ = files
+    code, out, err = _run(capsys, "discrepancy", "--measured", str(d / "canonical.uff"), *DISCREPANCY)
+    assert code == 0, err
+    ref = json.loads(out)
+    assert ref["dof_positions"]["source"] == "quarter-point convention"
+    code, out, err = _run(capsys, "discrepancy", "--measured", str(d / "renumbered.uff"), *DISCREPANCY)
+    assert code == 0, err
+    res = json.loads(out)
+    assert res["dof_positions"]["source"] == "uff geometry"
+    assert res["dof_positions"]["model_dofs"] == ["4:y", "2:y", "5:y", "3:y"]   # reference 104 = the tip, 5:y
+    assert res["named_effect"] == ref["named_effect"]
+    # the same fit: the residuals to 1e-4, the parameters to a fifth of their one-sigma (the bounded
+    # multi-start fit stops at a tolerance: the identical inputs, up to 1e-9, land 0.1 sigma apart at most)
+    for key, v in ref["parameters"].items():
+        assert abs(res["parameters"][key] - v) < 0.2 * ref["parameter_std"][key], key
+    for gap in ("gap_before", "gap_after"):
+        for key, v in ref[gap].items():
+            assert res[gap][key] == pytest.approx(v, rel=1e-4), (gap, key)
+    code, out, err = _run(capsys, "discrepancy", "--measured", str(d / "offgrid.uff"), *DISCREPANCY)
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert "offgrid.uff" in err and "103:+Y at x = 0.4 m is not at a model DOF" in err
