@@ -71,7 +71,7 @@ def beam_mapping(beam) -> dict:
     out = {}
     for f in fields(beam):
         v = getattr(beam, f.name)
-        if v is None:
+        if v is None or f.name == "measured_x_given":  # measured_x_m is always explicit here
             continue
         if f.name == "effects":
             v = beam.effects_dict()

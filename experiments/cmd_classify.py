@@ -8,7 +8,7 @@ import numpy as np
 
 KEYS = ("damaged", "probability_damaged", "location_x_over_L", "location_x_m", "location_std_m", "location_element",
         "element_probabilities", "stiffness_loss_Nm3", "stiffness_loss_std_Nm3", "depth_m", "detectable",
-        "input_route", "warnings")
+        "input_route", "warnings", "dof_positions")
 
 
 def add_parser(sub):
@@ -21,7 +21,9 @@ def add_parser(sub):
     p.add_argument("--model", required=True, metavar="MODEL_DIR")
     p.add_argument("--baseline", required=True, metavar="BASELINE", help="undamaged state (FRF file or modal JSON)")
     p.add_argument("measured", metavar="MEASURED", help="current state (same kind as BASELINE)")
-    p.add_argument("--beam", help="beam of the data (default: the model's); another beam is refused")
+    p.add_argument("--beam", help="beam of the data: the model's preset name (default) or a beam file of the same "
+                                  "length whose measured_x_m places measured DOFs of files without node geometry "
+                                  "(else nodes 2..5 at the quarter points); another beam is refused")
     p.add_argument("--mass", choices=("iirs", "lumped"), help="mass model of the data's updating (default: the model's)")
     p.add_argument("--out", metavar="DIR", help="write verdict.json and classify.png here (default without --json: "
                                                 "out/classify)")
@@ -38,14 +40,25 @@ def read_input(path):
 
 def run(args) -> dict:
     from learn.features import BeamSpec
-    from learn.workflow import classify, load_model
+    from learn.workflow import classify, load_model, on_model_dofs
 
     model = load_model(args.model)
     b = model.beam
-    model.check_beam(BeamSpec(args.beam or b.name, b.length_m if args.beam in (None, b.name) else _length(args.beam),
-                              b.dofs, args.mass or b.mass_model), "measured beam")
-    base, cur = read_input(args.baseline), read_input(args.measured)
+    beam_x_m = None
+    if args.beam and Path(args.beam).suffix.lower() == ".toml":
+        from physics.beam import load_beam
+
+        fb = load_beam(args.beam)
+        spec = BeamSpec(b.name, fb.length_m, b.dofs, args.mass or b.mass_model)
+        beam_x_m = fb.measured_x_m if fb.measured_x_given else None
+    else:
+        spec = BeamSpec(args.beam or b.name, b.length_m if args.beam in (None, b.name) else _length(args.beam),
+                        b.dofs, args.mass or b.mass_model)
+    model.check_beam(spec, "measured beam")
+    (base, base_map), (cur, cur_map) = (on_model_dofs(read_input(f), b, beam_x_m, str(f))
+                                        for f in (args.baseline, args.measured))
     res = classify(model, base, cur, identified=_identify(base, cur))
+    res["dof_positions"] = {"baseline": base_map and base_map.to_dict(), "measured": cur_map and cur_map.to_dict()}
     extra = res.pop("_extra")
     if not args.json and not args.out:
         args.out = "out/classify"
@@ -106,6 +119,11 @@ def verdict_text(res: dict, extra: dict, length_m: float) -> str:
         lines.append(f"Best classical baseline ({bl['method']}): {'damaged' if bl['damaged'] else 'undamaged'}, "
                      f"location x = {bl['location_x_m']:.3f} m (element {bl['location_element']}), "
                      f"stiffness loss {bl['stiffness_loss_Nm3']:.3g} N m^3.")
+    from physics.io import dof_positions_text
+
+    for name, d in res["dof_positions"].items():
+        lines.append(f"{name}: " + (dof_positions_text(d) if d else "modal data without DOF labels: rows taken as "
+                                                                  "the model's DOFs"))
     lines += [f"warning: {w}" for w in res["warnings"]]
     return "\n".join(lines)
 

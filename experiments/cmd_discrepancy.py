@@ -15,6 +15,7 @@ from experiments.study_discrepancy import EXAMPLE, run_discrepancy
 from physics import discrepancy as dsc
 from physics.effects import CANDIDATES
 from physics.errors import ConfigError
+from physics.io import dof_positions_text
 
 
 def run(args) -> dict:
@@ -41,6 +42,8 @@ def run(args) -> dict:
 
 
 def _print(out, res: dsc.DiscrepancyResult, recal: dsc.ModeResiduals):
+    print(dof_positions_text(out["dof_positions"]) if out["dof_positions"] else
+          "measured DOFs: none (natural frequencies only)")
     print(f"{'mode':>4} {'measured Hz':>12} {'before %':>9} {'recal. %':>9} {'after %':>9}"
           + (f" {'zeta meas':>10} {'zeta after':>10}" if res.final.residuals.measured_damping is not None else "")
           + (f" {'MAC after':>9}" if res.final.residuals.mac is not None else ""))

@@ -7,62 +7,103 @@ import numpy as np
 from experiments.cmd_model import add_beam_argument
 from physics import modal, updating
 from physics.beam import Beam, load_beam
-from physics.errors import FileFormatError
-from physics.io import read_modal_json
+from physics.errors import ConfigError, ConvergenceError, FileFormatError
+from physics.io import dof_positions_text, read_modal_json
 
 
 def load_modal(modal_file, n_modes: int):
-    """Modal JSON as is; an FRF file (UFF58, CSV, NPZ) is identified first (LSCF + LSFD, ``n_modes`` modes)."""
+    """Modal JSON as is; an FRF file (UFF58, CSV, NPZ) is identified first (LSCF + LSFD, ``n_modes`` modes).
+
+    Returns the modal data and the FRFs it was identified from (None for modal JSON).
+    """
     if str(modal_file).lower().endswith(".json"):
-        return read_modal_json(modal_file)
+        return read_modal_json(modal_file), None
     from physics.identification import identify_file
 
-    return identify_file(modal_file, n_modes=n_modes).modal_data
+    ident = identify_file(modal_file, n_modes=n_modes)
+    return ident.modal_data, ident.frf
 
 
 def update(beam, modal_file, mass: str = "iirs", tol: float = 1e-10, max_iter: int = 500,
-           method: str = "pilkey") -> dict:
+           method: str = "pilkey", max_eigenvalue_error: float = updating.REFUSAL_TOL) -> dict:
     """Identify ``C`` and update ``K`` of a beam (preset, beam file or :class:`Beam`) from a modal-data or FRF
-    file; the analyst mass (IIRS or lumped, over the beam's measured DOFs, effects applied) is trusted."""
+    file; the analyst mass (IIRS or lumped, over the beam's measured DOFs, effects applied) is trusted.
+
+    The measured DOFs are matched to the beam's by position (:meth:`Beam.map_dofs`), and the updated model
+    is checked: its eigenvalues must reproduce the measured ones (:func:`physics.updating.eigenvalue_errors`).
+    """
     b = beam if isinstance(beam, Beam) else load_beam(beam)
     beam = b.name
     mass = updating.mass_model_name(mass, "mass")
     model = b.fe_model()
     M = updating.reduced_mass(model.M, model.K, model.index(b.masters), mass)
-    data = load_modal(modal_file, M.shape[0])
+    data, frf = load_modal(modal_file, M.shape[0])
     if data.eigenvectors is None:
         raise FileFormatError(f"{modal_file}: field 'eigenvectors' is required for updating "
                               f"({M.shape[0]} rows = measured DOFs, one column per mode)")
-    if data.eigenvectors.shape != M.shape:
-        raise FileFormatError(f"{modal_file}: 'eigenvectors' is {data.eigenvectors.shape[0]}x"
-                              f"{data.eigenvectors.shape[1]} but {beam} has {M.shape[0]} measured DOFs "
-                              f"({', '.join(b.masters)}): a complete set of "
+    n_rows, n_modes = data.eigenvectors.shape
+    if n_modes != M.shape[0]:
+        raise FileFormatError(f"{modal_file}: 'eigenvectors' has {n_modes} modes but {beam} has {M.shape[0]} "
+                              f"measured DOFs ({', '.join(b.masters)}): a complete set of "
                               f"{M.shape[0]} modes is needed")
+    if not data.dofs and n_rows != M.shape[0]:
+        raise FileFormatError(f"{modal_file}: 'eigenvectors' has {n_rows} rows but {beam} has {M.shape[0]} "
+                              f"measured DOFs ({', '.join(b.masters)}); label the rows with 'dofs'")
+    dof_map = b.map_dofs(data.dofs, frf=frf, where=str(modal_file))
+    vectors = data.eigenvectors[dof_map.rows(b.masters, str(modal_file))]
     if method == "direct":
-        res = updating.lancaster_direct(M, data.eigenvalues, data.eigenvectors)
+        res = updating.lancaster_direct(M, data.eigenvalues, vectors)
     else:
-        res = updating.pilkey(M, data.eigenvalues, data.eigenvectors, tol=tol, max_iter=max_iter)
+        res = updating.pilkey(M, data.eigenvalues, vectors, tol=tol, max_iter=max_iter)
+    errors, model_lam = updating.eigenvalue_errors(M, res.C, res.K, data.eigenvalues)
+    worst = int(np.argmax(errors))
+    if not errors[worst] <= max_eigenvalue_error:
+        raise ConvergenceError(
+            f"{modal_file}: the updated model does not reproduce the measured modes: mode {worst + 1} at "
+            f"{abs(data.eigenvalues[worst]) / (2 * np.pi):.6g} Hz is {abs(model_lam[worst]) / (2 * np.pi):.6g} Hz "
+            f"in the model (relative eigenvalue error {errors[worst]:.3g} > {max_eigenvalue_error:g}); the "
+            "eigenvectors are not a complete set of modes consistent with the mass (for real-valued shapes: only "
+            "normal modes of proportional damping qualify)")
+    warnings = []
+    if errors[worst] > updating.REPRODUCTION_TOL:
+        warnings.append(f"the updated model reproduces the measured eigenvalues only to {errors[worst]:.2%} "
+                        f"(mode {worst + 1}; tolerance {updating.REPRODUCTION_TOL:.0%}): the measured modes are "
+                        "not consistent with the trusted mass")
     cm = modal.complex_modes(M, res.C, res.K)
     return {
-        "beam": beam, "mass": mass, "M": M, "C": res.C, "K": res.K,
+        "beam": beam, "mass": mass, "dofs": list(b.masters), "dof_positions": dof_map.to_dict(),
+        "M": M, "C": res.C, "K": res.K,
         "method": method, "iterations": res.iterations, "converged": res.converged, "residual": res.residual,
         "orthogonality_misfit": updating.orthogonality_misfit(M, data.eigenvalues, res.eigenvectors),
         "natural_frequencies_hz": cm.natural_frequencies_hz, "damping_ratios": cm.damping_ratios,
         "measured_natural_frequencies_hz": data.natural_frequencies_hz,
         "measured_damping_ratios": data.damping_ratios,
+        "eigenvalue_check": {"relative_errors": errors, "max_relative_error": float(errors[worst]),
+                             "tolerance": updating.REPRODUCTION_TOL, "refused_above": max_eigenvalue_error,
+                             "reproduces_measured": bool(errors[worst] <= updating.REPRODUCTION_TOL)},
+        "warnings": warnings,
     }
 
 
 def run(args) -> dict:
-    out = update(args.beam, args.modal, args.mass, args.tol, args.max_iter, args.method)
+    if not (np.isfinite(args.max_eigenvalue_error) and args.max_eigenvalue_error > 0):
+        raise ConfigError(f"--max-eigenvalue-error must be a positive number, got {args.max_eigenvalue_error}")
+    out = update(args.beam, args.modal, args.mass, args.tol, args.max_iter, args.method, args.max_eigenvalue_error)
     if not args.json:
         np.set_printoptions(precision=5, linewidth=160)
+        print(dof_positions_text(out["dof_positions"]))
         print(f"{out['beam']}, {out['mass']} mass, {args.method}: {out['iterations']} iterations; "
               f"orthogonality misfit of the modes {out['orthogonality_misfit']:.3g} (0 = consistent with M)")
         print("M =\n", out["M"], "\nC (N s/m) =\n", out["C"], "\nK (N/m) =\n", out["K"])
         print("model frequencies (Hz):   ", np.array2string(out["natural_frequencies_hz"], precision=3))
         print("measured frequencies (Hz):", np.array2string(out["measured_natural_frequencies_hz"], precision=3))
         print("model damping ratios:     ", np.array2string(out["damping_ratios"], precision=5))
+        chk = out["eigenvalue_check"]
+        print(f"eigenvalue check: the updated model reproduces the measured eigenvalues to "
+              f"{chk['max_relative_error']:.3g} (relative; {'within' if chk['reproduces_measured'] else 'beyond'} "
+              f"the {chk['tolerance']:g} tolerance)")
+        for w in out["warnings"]:
+            print(f"warning: {w}")
     return out
 
 
@@ -84,6 +125,12 @@ def add_parser(sub):
                         "by Lancaster's orthogonality relations (exact for consistent modes at any damping)")
     p.add_argument("--tol", type=float, default=1e-10, help="relative change of C that counts as converged")
     p.add_argument("--max-iter", type=int, default=500, help="iteration limit (non-convergence is an error)")
+    p.add_argument("--max-eigenvalue-error", type=float, default=updating.REFUSAL_TOL, metavar="REL",
+                   help="refuse an updated model whose eigenvalues miss the measured ones by more than this "
+                        f"(relative; default {updating.REFUSAL_TOL:g}; above {updating.REPRODUCTION_TOL:g} the "
+                        "output warns). Measured DOFs are matched to the beam's by position: the file's node "
+                        "geometry (UFF 15/2411), else the beam file's measured_x_m, else nodes 2..5 at the "
+                        "quarter points; the output says which")
     p.add_argument("--json", action="store_true",
                    help="print one JSON object: M, C, K, iterations, converged, natural_frequencies_hz, damping_ratios")
     p.set_defaults(func=run, flags={"mass": "--mass", "tol": "--tol", "max_iter": "--max-iter"})

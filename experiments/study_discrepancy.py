@@ -26,32 +26,14 @@ from physics.io import atomic_write_bytes, modal_data_from_dict, read_frf
 EXAMPLE = Path(__file__).parents[1] / "physics" / "data" / "thesis" / "beam5_table_4_3.json"
 
 
-def _positions(beam: Beam, labels, n_rows: int, source: str) -> tuple:
-    """Positions (m) of measured rows: DOF labels ``"N:y"``/``"N:+Y"`` are nodes of the beam's own mesh."""
-    if not labels:
-        if n_rows != len(beam.measured_x_m):
-            raise FileFormatError(f"{source}: {n_rows} shape rows but the beam has {len(beam.measured_x_m)} "
-                                  "measured positions; add 'dofs' labels such as \"2:y\"")
-        return beam.measured_x_m
-    xs = []
-    for lab in labels:
-        head, _, direction = str(lab).partition(":")
-        try:
-            node = int(head)
-        except ValueError:
-            node = None
-        transverse = direction.upper().lstrip("+-") in ("", "Y", "Z")
-        if not transverse or node is None or not 1 <= node <= beam.n_elements + 1:
-            raise FileFormatError(f"{source}: DOF label {lab!r} must name a node 1..{beam.n_elements + 1} of the "
-                                  f"beam's {beam.n_elements}-element mesh (e.g. \"2:y\")")
-        xs.append((node - 1) * beam.length_m / beam.n_elements)
-    return tuple(xs)
-
-
-def load_measurement(path, beam: Beam, n_modes=None) -> tuple[dsc.Measurement, object]:
+def load_measurement(path, beam: Beam, n_modes=None) -> tuple[dsc.Measurement, object, object]:
     """Modal JSON (frequencies alone, or with damping and shapes) or an FRF file identified by LSCF/LSFD.
 
-    Returns the measurement and the relative frequency std of an identification (or None).
+    Measured DOFs are placed at the nodes of the beam's mesh by :meth:`physics.beam.Beam.map_dofs` (file
+    geometry, else the beam file's measured_x_m, else the quarter-point convention).
+
+    Returns the measurement, the relative frequency std of an identification (or None) and the
+    :class:`physics.io.DofMap` of the measured DOFs (None for frequencies alone).
     """
     path = Path(path)
     if path.suffix.lower() == ".json":
@@ -68,14 +50,22 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[dsc.Measurement, o
             except (TypeError, ValueError):
                 raise FileFormatError(f"{path}: 'natural_frequencies_hz' must be a list of numbers") from None
             try:
-                return dsc.Measurement(f), None
+                return dsc.Measurement(f), None, None
             except ValueError as exc:
                 raise FileFormatError(f"{path}: field 'natural_frequencies_hz': {exc}") from None
         data = modal_data_from_dict(obj, str(path))
-        shapes = data.eigenvectors
-        xs = _positions(beam, data.dofs, shapes.shape[0], str(path)) if shapes is not None else ()
+        shapes, xs, dof_map = data.eigenvectors, (), None
+        if shapes is not None:
+            if not data.dofs and shapes.shape[0] != len(beam.measured_x_m):
+                raise FileFormatError(f"{path}: {shapes.shape[0]} shape rows but the beam has "
+                                      f"{len(beam.measured_x_m)} measured positions; add 'dofs' labels such as "
+                                      '"2:y"')
+            dof_map = beam.map_dofs(data.dofs, targets="nodes", where=str(path))
+            xs = _node_x(beam, dof_map.model_dofs)
+            rows = np.argsort(xs, kind="stable")   # rows in the order of the beam's nodes
+            shapes, xs = shapes[rows], tuple(np.asarray(xs)[rows])
         try:
-            return dsc.Measurement(data.natural_frequencies_hz, data.damping_ratios, shapes, xs), None
+            return dsc.Measurement(data.natural_frequencies_hz, data.damping_ratios, shapes, xs), None, dof_map
         except ValueError as exc:
             raise FileFormatError(f"{path}: {exc}") from None
     from physics.identification import identify_frf
@@ -86,13 +76,23 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[dsc.Measurement, o
         ident = identify_frf(frf, n_modes=n_modes)
     est = ident.estimate
     rec = ident.frf  # receptance, band-limited as identified
-    resp = _positions(beam, rec.response_dofs, len(rec.response_dofs), str(path))
-    ref = _positions(beam, rec.reference_dofs, len(rec.reference_dofs), str(path))
+    # responses and references placed together: a driving point's reference is where its response is
+    labels = tuple(dict.fromkeys(rec.response_dofs + rec.reference_dofs))
+    dof_map = beam.map_dofs(labels, frf=rec, targets="nodes")
+    x = dict(zip(labels, _node_x(beam, dof_map.model_dofs)))
+    rows = np.argsort([x[d] for d in rec.response_dofs], kind="stable")   # in the order of the beam's nodes
+    resp = tuple(x[rec.response_dofs[i]] for i in rows)
+    ref = tuple(x[d] for d in rec.reference_dofs)
     order = np.argsort(est.natural_frequencies_hz)
-    meas = dsc.Measurement(est.natural_frequencies_hz[order], est.damping_ratios[order], est.shapes[:, order], resp,
-                           rec.frf, rec.frequency_hz, resp, ref, rec.kind)
+    meas = dsc.Measurement(est.natural_frequencies_hz[order], est.damping_ratios[order], est.shapes[rows][:, order],
+                           resp, rec.frf[rows], rec.frequency_hz, resp, ref, rec.kind)
     rel_std = np.asarray(est.frequency_std_hz)[order] / meas.frequencies_hz
-    return meas, rel_std
+    return meas, rel_std, dof_map
+
+
+def _node_x(beam: Beam, model_dofs) -> tuple:
+    """Positions (m) of model DOFs ``"N:y"`` of the beam's mesh."""
+    return tuple((int(d.partition(":")[0]) - 1) * beam.length_m / beam.n_elements for d in model_dofs)
 
 
 def _residual_rows(label: str, r: dsc.ModeResiduals) -> list[dict]:
@@ -187,7 +187,7 @@ def run_discrepancy(beam_spec, measured, out_dir=None, *, noise=None, max_effect
                     candidates=CANDIDATES, progress=None) -> dict:
     """The command without printing: returns the JSON result (issue 9 keys) plus ``"_result"`` objects."""
     beam = beam_spec if isinstance(beam_spec, Beam) else load_beam(beam_spec)
-    meas, rel_std = load_measurement(measured, beam)
+    meas, rel_std, dof_map = load_measurement(measured, beam)
     noise = noise or dsc.Noise()
     if rel_std is not None and noise.frequency == dsc.Noise().frequency:
         # identified from FRFs: the identification's frequency std, floored at 0.1 %
@@ -211,6 +211,7 @@ def run_discrepancy(beam_spec, measured, out_dir=None, *, noise=None, max_effect
         "candidates": [{k: c[k] for k in ("effect", "score", "max_abs_frequency_error_pct", "parameters")}
                        for c in cand],
         "beam_file": None,
+        "dof_positions": None if dof_map is None else dof_map.to_dict(),
     }
     recal = first.base.residuals if first else res.final.residuals
     if out_dir is not None:

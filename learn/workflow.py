@@ -287,6 +287,40 @@ def evaluate(model: TrainedModel, data, out_dir=None, *, extra_outputs=None, pro
 
 
 # --------------------------------------------------------------------------- classify measured data
+def on_model_dofs(data, beam: BeamSpec, beam_x_m=None, where: str = "measured data"):
+    """Measured data moved onto the model's DOFs by position: ``(data on beam.dofs, DofMap or None)``.
+
+    Positions come from the file's node geometry (FRF files that carry it), else a beam file's
+    ``beam_x_m``, else the quarter-point convention (:func:`physics.io.map_measured_dofs`); each measured DOF
+    must sit at a node of the model's 4-element grid, and the model's DOFs (:attr:`BeamSpec.dofs`) must all
+    be measured (refused naming the missing ones). Rows are selected and ordered as ``beam.dofs`` and
+    relabelled with them; FRF references get the model DOF at their position too. Modal data without
+    ``dofs`` labels are returned as they are (rows taken as the model's DOFs, with a warning later).
+    """
+    from dataclasses import replace
+
+    from physics.io import MeasuredFRF, map_frf_dofs, map_measured_dofs
+
+    n = len(beam.dofs)
+    grid_x = np.linspace(0.0, beam.length_m, n + 1)
+    grid = tuple(f"{k}:y" for k in range(1, n + 2))
+    kw = dict(length_m=beam.length_m, n_elements=n, beam_x_m=beam_x_m)
+    if isinstance(data, MeasuredFRF):
+        labels = tuple(dict.fromkeys(data.response_dofs + data.reference_dofs))
+        dof_map = map_frf_dofs(data, labels, grid_x, grid, **kw)
+        to_model = dict(zip(labels, dof_map.model_dofs))
+        resp_map = replace(dof_map, dofs=data.response_dofs,
+                           model_dofs=tuple(to_model[d] for d in data.response_dofs))
+        resp = resp_map.rows(beam.dofs, where)
+        return replace(data, frf=data.frf[resp], response_dofs=tuple(beam.dofs),
+                       reference_dofs=tuple(to_model[d] for d in data.reference_dofs)), dof_map
+    if not data.dofs or data.eigenvectors is None:
+        return data, None
+    dof_map = map_measured_dofs(data.dofs, grid_x, grid, where=where, **kw)
+    rows = dof_map.rows(beam.dofs, where)
+    return replace(data, eigenvectors=data.eigenvectors[rows], dofs=tuple(beam.dofs)), dof_map
+
+
 def modal_pair(baseline, current, beam: BeamSpec) -> tuple[np.ndarray, np.ndarray, list]:
     """Stack two :class:`physics.io.ModalData` of the model's DOFs into (1, 2, m) eigenvalues and (1, 2, 4, m) shapes."""
     warnings = []

@@ -87,6 +87,10 @@ class Beam:
         Young's modulus of the core (Pa).
     effects : mapping
         ``{effect name: {parameter: value}}`` (read-only), see :mod:`physics.effects`.
+    measured_x_given : bool
+        True when a beam file gave ``measured_x_m`` (then the commands place the
+        measured DOFs of a file without node geometry there, not by the
+        quarter-point convention).
     """
 
     name: str
@@ -102,6 +106,7 @@ class Beam:
     face_thickness_m: float | None = None
     core_modulus_pa: float | None = None
     effects: MappingProxyType = field(default_factory=dict)
+    measured_x_given: bool = field(default=False, compare=False)
 
     def __post_init__(self):
         eff = fx.validate_effects(dict(self.effects), f"beam {self.name!r}")
@@ -139,6 +144,47 @@ class Beam:
                                   f"{self.n_elements}-element mesh")
             out.append(f"{k + 1}:y")
         return tuple(out)
+
+    def map_dofs(self, dofs, *, frf=None, targets: str = "masters", where: str = "measured data"):
+        """The model DOF of this beam at each measured DOF (:func:`physics.io.map_measured_dofs`).
+
+        Positions come from ``frf``'s node geometry when it has some, else from
+        this beam file's ``measured_x_m`` when it gave them, else from the
+        quarter-point convention (node ``N`` at ``(N - 1) L / n_elements``).
+        Rows without labels (``dofs`` empty) are the beam's measured DOFs in order.
+
+        Parameters
+        ----------
+        dofs : sequence of str
+            Measured DOF labels (empty: unlabelled rows, one per measured position).
+        frf : MeasuredFRF, optional
+            The file the DOFs come from (its geometry and name).
+        targets : {"masters", "nodes"}
+            Model DOFs to match: the measured translations (:attr:`masters`) or
+            the translations of every node of the default mesh.
+        where : str
+            The file, for messages.
+
+        Returns
+        -------
+        physics.io.DofMap
+        """
+        from physics.io import DofMap, map_frf_dofs, map_measured_dofs
+
+        if targets == "masters":
+            model_x, model_dofs = self.measured_x_m, self.masters
+        else:
+            model_x = np.linspace(0.0, self.length_m, self.n_elements + 1)
+            model_dofs = tuple(f"{k}:y" for k in range(1, self.n_elements + 2))
+        if not dofs:
+            source = "beam file" if self.measured_x_given else "quarter-point convention"
+            return DofMap(source, "rows without DOF labels: the beam's measured DOFs in order", self.masters,
+                          np.array(self.measured_x_m), self.masters)
+        kw = dict(length_m=self.length_m, n_elements=self.n_elements,
+                  beam_x_m=self.measured_x_m if self.measured_x_given else None)
+        if frf is not None:
+            return map_frf_dofs(frf, dofs, model_x, model_dofs, **kw)
+        return map_measured_dofs(dofs, model_x, model_dofs, where=where, **kw)
 
     def effects_dict(self) -> dict:
         """Plain ``{effect: {param: value}}`` copy of :attr:`effects`."""
@@ -211,6 +257,7 @@ def beam_from_dict(obj: dict, source: str = "beam") -> Beam:
         if any(not 0 <= x <= vals["length_m"] for x in xs):
             raise ConfigError(f"{source}: 'measured_x_m' positions must lie in [0, length_m = {vals['length_m']}]")
         vals["measured_x_m"] = tuple(float(x) for x in xs)
+        vals["measured_x_given"] = True
     # flexural rigidity: EI_Nm2 or the face modulus of the sandwich (eq. 4.1)
     if "EI_Nm2" in obj and "face_modulus_pa" in obj:
         raise ConfigError(f"{source}: give 'EI_Nm2' or 'face_modulus_pa', not both")
@@ -291,7 +338,7 @@ def beam_to_toml(beam: Beam, comment: str = "") -> str:
     lines.append("# beam-damage beam file (see physics/beam.py or README 'beam file'); SI units")
     for f in fields(Beam):
         v = getattr(beam, f.name)
-        if f.name == "effects" or v is None:
+        if f.name in ("effects", "measured_x_given") or v is None:
             continue
         lines.append(f"{f.name} = {_toml_value(v)}")
     for name, params in beam.effects.items():

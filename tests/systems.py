@@ -20,3 +20,33 @@ def random_system(n, seed, damping=0.02):
     w2 = np.linalg.eigvals(np.linalg.solve(M, K)).real
     C *= 2 * damping * np.sqrt(np.max(w2)) / np.max(np.linalg.eigvals(np.linalg.solve(M, C)).real)
     return M, C, K
+
+
+def write_renumbered_uff(path, frf, nodes, x_mm=None, order=None):
+    """Write ``frf`` (receptances at nodes 2..5, any references) as a test system might: nodes renumbered.
+
+    ``nodes`` maps each old node number to the file's; the records go in ``order`` (indices of the response
+    DOFs, default the FRF's); with ``x_mm`` ({file node: x in mm}) the file is in millimetres (dataset 164,
+    length factor 1000, FRFs in mm/N) with dataset 15 coordinates along x.
+    """
+    import pyuff
+
+    from physics.io import parse_dof
+
+    scale = 1.0 if x_mm is None else 1000.0
+    sets = []
+    if x_mm is not None:
+        ids = list(x_mm)
+        sets += [pyuff.prepare_164(units_code=9, units_description="mm user", temp_mode=1, length=1000.0, force=1.0,
+                                   temp=1.0, temp_offset=273.15),
+                 pyuff.prepare_15(node_nums=ids, def_cs=[0] * len(ids), disp_cs=[0] * len(ids), color=[1] * len(ids),
+                                  x=[float(x_mm[k]) for k in ids], y=[0.0] * len(ids), z=[0.0] * len(ids))]
+    for i in (range(len(frf.response_dofs)) if order is None else order):
+        for j, ref in enumerate(frf.reference_dofs):
+            sets.append(pyuff.prepare_58(
+                binary=1, func_type=4, rsp_node=nodes[parse_dof(frf.response_dofs[i])[0]], rsp_dir=2,
+                ref_node=nodes[parse_dof(ref)[0]], ref_dir=2, data=np.ascontiguousarray(frf.frf[i, j] * scale),
+                x=frf.frequency_hz, abscissa_spacing=1, abscissa_spec_data_type=18, ordinate_spec_data_type=8,
+                orddenom_spec_data_type=13))
+    pyuff.UFF(str(path)).write_sets(sets, mode="add")
+    return path

@@ -655,8 +655,7 @@ def run_case(builder, d, capsys=None):
 
 
 #: Cases that fail in commands other branches own (reported to them, not fixed here).
-OTHERS = {"real eigenvectors": "update: real shapes are valid modal data (thesis example 1) but not unit-modal-A "
-                               "complex modes; update should refuse them or check the updated model's frequencies"}
+OTHERS = {}
 
 
 def _params():

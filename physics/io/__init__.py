@@ -23,8 +23,8 @@ from physics.io.modal_json import (modal_data_from_dict, modal_data_to_dict, rea
 from physics.io.npz import read_frf_npz, write_frf_npz
 from physics.io.types import (DEFAULT_UNITS, FRF_KINDS, MeasuredFRF, ModalData, dof_label,
                               format_complex, parse_dof)
-from physics.io.geometry import (QUARTER_POINT_CONVENTION, NodeGeometry, match_dofs_by_position,
-                                 measured_positions, positions_along_beam)
+from physics.io.geometry import (QUARTER_POINT_CONVENTION, DofMap, NodeGeometry, dof_positions_text, map_frf_dofs,
+                                 map_measured_dofs, match_dofs_by_position, measured_positions, positions_along_beam)
 from physics.io.uff58 import read_uff58, read_uff_geometry, write_uff58
 from physics.io.units import UnitSystem, frf_unit_factor
 
@@ -32,5 +32,6 @@ __all__ = ["DEFAULT_UNITS", "FRF_KINDS", "MeasuredFRF", "ModalData", "atomic_pat
            "atomic_write_text", "dof_label", "format_complex", "modal_data_from_dict", "modal_data_to_dict",
            "parse_dof", "read_frf", "read_json", "read_frf_csv", "read_frf_npz", "read_modal_json", "read_uff58",
            "write_frf_csv", "write_frf_npz", "write_modal_json", "write_uff58",
-           "NodeGeometry", "QUARTER_POINT_CONVENTION", "UnitSystem", "frf_unit_factor", "match_dofs_by_position",
+           "DofMap", "NodeGeometry", "dof_positions_text", "QUARTER_POINT_CONVENTION", "map_frf_dofs",
+           "map_measured_dofs", "UnitSystem", "frf_unit_factor", "match_dofs_by_position",
            "measured_positions", "positions_along_beam", "read_uff_geometry"]

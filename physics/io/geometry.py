@@ -7,6 +7,12 @@ the beam axis; :func:`measured_positions` gives the positions of measured DOFs,
 from geometry when the file has it, else from the quarter-point convention of
 the thesis (nodes 2..5 at L/4, L/2, 3L/4, L), and says which;
 :func:`match_dofs_by_position` maps measured positions to model DOFs.
+:func:`map_measured_dofs` does both for a command: positions from the file's
+geometry, else a beam file's ``measured_x_m``, else the quarter-point
+convention, and the model DOF at each (:class:`DofMap`).
+
+Positions along the beam are measured from the origin of the file's global
+coordinate system (the clamped end, ``x = 0``), projected on the beam axis.
 """
 
 from __future__ import annotations
@@ -17,8 +23,8 @@ import numpy as np
 
 from physics.errors import FileFormatError, ShapeError
 
-__all__ = ["NodeGeometry", "QUARTER_POINT_CONVENTION", "geometry_from_uff_sets", "match_dofs_by_position",
-           "measured_positions", "positions_along_beam"]
+__all__ = ["DofMap", "NodeGeometry", "QUARTER_POINT_CONVENTION", "dof_positions_text", "geometry_from_uff_sets",
+           "map_frf_dofs", "map_measured_dofs", "match_dofs_by_position", "measured_positions", "positions_along_beam"]
 
 QUARTER_POINT_CONVENTION = ("no node geometry: the thesis convention holds, node N of a 4-element beam at "
                             "(N - 1) L / 4 (nodes 2..5 at the quarter points)")
@@ -129,8 +135,11 @@ def positions_along_beam(geometry: NodeGeometry, nodes) -> np.ndarray:
     """Positions (m) of ``nodes`` along the beam axis of ``geometry``.
 
     The axis is the principal direction of all nodes of the geometry (the beam
-    line); positions are measured from the geometry node with the smallest
-    projection (one end of the beam), so the whole mesh lies in ``[0, L]``.
+    line), pointing from the origin of the coordinate system towards the nodes;
+    positions are the projections of the nodes on it, measured from the origin
+    (the clamped end, ``x = 0``), so nodes offset across the beam keep their
+    position and a geometry of the measured points alone (no node at the
+    clamp) places them right.
     """
     xyz = geometry.xyz_m
     if xyz.shape[0] < 2:
@@ -138,9 +147,9 @@ def positions_along_beam(geometry: NodeGeometry, nodes) -> np.ndarray:
     centre = xyz.mean(axis=0)
     _, _, vt = np.linalg.svd(xyz - centre, full_matrices=False)
     axis = vt[0] * (np.sign(vt[0][np.argmax(np.abs(vt[0]))]) or 1.0)  # points along +X/+Y/+Z
-    proj = (xyz - centre) @ axis
-    start = proj.min()
-    return np.array([float((geometry.coordinates(n) - centre) @ axis - start) for n in nodes])
+    if centre @ axis < 0:  # the nodes lie on the negative side of the origin: measure towards them
+        axis = -axis
+    return np.array([float(geometry.coordinates(n) @ axis) for n in nodes])
 
 
 def measured_positions(dofs, geometry: NodeGeometry | None = None, length_m: float | None = None,
@@ -166,21 +175,162 @@ def measured_positions(dofs, geometry: NodeGeometry | None = None, length_m: flo
     return np.array([(n - 1) * length_m / n_elements for n in nodes], float), QUARTER_POINT_CONVENTION
 
 
-def match_dofs_by_position(measured_x_m, model_x_m, tol_m):
+def match_dofs_by_position(measured_x_m, model_x_m, tol_m, labels=None, model_labels=None):
     """Index into ``model_x_m`` of the model DOF nearest each measured position.
 
     Raises :class:`ShapeError` when a measured position is farther than
-    ``tol_m`` from every model DOF, or two measured DOFs take the same model DOF.
+    ``tol_m`` from every model DOF, or two measured DOFs take the same model DOF
+    (naming them by ``labels`` and ``model_labels`` when given).
     """
     mx = np.asarray(measured_x_m, float)
     gx = np.asarray(model_x_m, float)
+    lab = [f"measured DOF {a}" for a in labels] if labels is not None else ["measured position"] * mx.size
+    mlab = [f"model DOF {a}" for a in model_labels] if model_labels is not None else ["model DOF"] * gx.size
     d = np.abs(mx[:, None] - gx[None, :])
     idx = np.argmin(d, axis=1)
     far = d[np.arange(mx.size), idx] > tol_m
     if np.any(far):
         k = int(np.nonzero(far)[0][0])
-        raise ShapeError(f"measured position {mx[k]:.4g} m is {d[k, idx[k]]:.3g} m from the nearest model DOF "
-                         f"(at {gx[idx[k]]:.4g} m); tolerance {tol_m:.3g} m")
+        raise ShapeError(f"{lab[k]} at x = {mx[k]:.4g} m is not at a model DOF: {d[k, idx[k]]:.3g} m from the "
+                         f"nearest, {mlab[idx[k]]} at {gx[idx[k]]:.4g} m (tolerance {tol_m:.3g} m)")
     if np.unique(idx).size != idx.size:
-        raise ShapeError("two measured positions map to the same model DOF; refine the model mesh")
+        i, j = (int(k) for k in np.nonzero(idx == idx[np.nonzero(np.bincount(idx) > 1)[0][0]])[0][:2])
+        raise ShapeError(f"{lab[i]} (x = {mx[i]:.4g} m) and {lab[j]} (x = {mx[j]:.4g} m) map to the same "
+                         f"{mlab[idx[i]]} (x = {gx[idx[i]]:.4g} m)")
     return idx
+
+
+@dataclass(frozen=True)
+class DofMap:
+    """Measured DOFs, their positions along the beam and the model DOF at each.
+
+    Attributes
+    ----------
+    source : str
+        ``"<format> geometry"`` (e.g. ``"uff geometry"``), ``"beam file"`` or
+        ``"quarter-point convention"``.
+    detail : str
+        The rule in words.
+    dofs : tuple of str
+        Measured DOF labels, in the file's order.
+    positions_m : ndarray, shape (n,)
+        Position of each measured DOF along the beam (m).
+    model_dofs : tuple of str
+        Model DOF at each measured DOF.
+    """
+
+    source: str
+    detail: str
+    dofs: tuple
+    positions_m: np.ndarray
+    model_dofs: tuple
+
+    def rows(self, model_dofs, where: str = "measured data") -> np.ndarray:
+        """Index of the measured DOF at each of ``model_dofs`` (refuses naming the missing ones)."""
+        missing = [d for d in model_dofs if d not in self.model_dofs]
+        if missing:
+            have = ", ".join(f"{a} -> {b}" for a, b in zip(self.dofs, self.model_dofs))
+            raise ShapeError(f"{where}: no measured DOF at model DOF(s) {', '.join(missing)} (positions from the "
+                             f"{self.source}; measured: {have or 'none'}); all of {', '.join(model_dofs)} are needed")
+        return np.array([self.model_dofs.index(d) for d in model_dofs])
+
+    def to_dict(self) -> dict:
+        return {"source": self.source, "detail": self.detail, "dofs": list(self.dofs),
+                "positions_m": [float(x) for x in self.positions_m], "model_dofs": list(self.model_dofs)}
+
+
+
+def dof_positions_text(d: dict) -> str:
+    """One line describing a :meth:`DofMap.to_dict` (for the commands' text output)."""
+    pairs = ", ".join(f"{a} at {x:.4g} m -> {b}" for a, x, b in zip(d["dofs"], d["positions_m"], d["model_dofs"]))
+    return f"measured DOFs placed by the {d['source']} ({d['detail']}): {pairs}"
+
+
+def map_measured_dofs(dofs, model_x_m, model_dofs, *, length_m: float, n_elements: int = 4, geometry=None,
+                      geometry_format: str = "file", beam_x_m=None, tol_m=None,
+                      where: str = "measured data") -> DofMap:
+    """Positions of measured DOFs and the model DOF at each.
+
+    The positions come from the first of: the file's node ``geometry``
+    (:func:`positions_along_beam`); a beam file's ``beam_x_m``, paired with the
+    measured nodes in ascending node number; the quarter-point convention,
+    node ``N`` at ``(N - 1) length_m / n_elements``. Each position is matched to
+    the nearest of ``model_x_m`` (:func:`match_dofs_by_position`).
+
+    Parameters
+    ----------
+    dofs : sequence of str
+        Measured DOF labels ``"NODE:DIR"``.
+    model_x_m : sequence of float
+        Positions (m) of the model DOFs a measured DOF may sit at.
+    model_dofs : sequence of str
+        Their labels.
+    length_m : float
+        Beam length (m).
+    n_elements : int
+        Elements of the beam mesh whose node numbers the convention uses.
+    geometry : NodeGeometry, optional
+    geometry_format : str
+        Name of the file format, for the source (``"uff"`` -> ``"uff geometry"``).
+    beam_x_m : sequence of float, optional
+        Measured positions a beam file gives.
+    tol_m : float, optional
+        Largest distance to a model DOF (default 1 % of an element, ``0.01 length_m / n_elements``).
+    where : str
+        The file, for messages.
+
+    Raises
+    ------
+    ShapeError
+        A DOF without coordinates, a count that differs from the beam file's,
+        a position not at a model DOF, or two DOFs at one model DOF.
+    """
+    from physics.io.types import parse_dof
+
+    dofs = tuple(str(d) for d in dofs)
+    nodes = np.array([parse_dof(d)[0] for d in dofs], int)
+    tol_m = 0.01 * length_m / n_elements if tol_m is None else tol_m
+    if geometry is not None:
+        source = f"{geometry_format} geometry"
+        detail = (f"node coordinates of the file ({geometry.source}), projected on the beam axis from the "
+                  "file's origin (the clamped end)")
+        try:
+            x = positions_along_beam(geometry, nodes)
+        except ValueError as exc:
+            raise ShapeError(f"{where}: {exc}") from None
+    elif beam_x_m is not None:
+        source = "beam file"
+        detail = "the beam file's measured_x_m, in ascending node number of the measured DOFs"
+        beam_x_m = np.asarray(beam_x_m, float)
+        if beam_x_m.size != nodes.size:
+            raise ShapeError(f"{where}: {nodes.size} measured DOFs ({', '.join(dofs)}) but the beam file gives "
+                             f"{beam_x_m.size} measured_x_m positions")
+        x = np.empty(nodes.size)
+        x[np.argsort(nodes, kind="stable")] = beam_x_m
+    else:
+        source = "quarter-point convention"
+        detail = QUARTER_POINT_CONVENTION if n_elements == 4 else \
+            f"no node geometry: node N of the {n_elements}-element beam at (N - 1) L / {n_elements}"
+        x = (nodes - 1) * length_m / n_elements
+    try:
+        idx = match_dofs_by_position(x, model_x_m, tol_m, dofs, model_dofs)
+    except ShapeError as exc:
+        raise ShapeError(f"{where}: {exc} (positions from the {source})") from None
+    return DofMap(source, detail, dofs, x, tuple(str(model_dofs[k]) for k in idx))
+
+
+def map_frf_dofs(frf, dofs, model_x_m, model_dofs, **kwargs) -> DofMap:
+    """:func:`map_measured_dofs` of DOFs of a :class:`~physics.io.MeasuredFRF`, with the geometry it carries.
+
+    ``dofs`` (e.g. ``frf.response_dofs``) are mapped with the node geometry the
+    reader stored in ``frf.metadata`` (UFF datasets 15/2411, or an NPZ's
+    metadata), named after the file format; the file names the messages.
+    """
+    fmt = {"uff58": "uff"}.get(str(frf.metadata.get("format", "file")), str(frf.metadata.get("format", "file")))
+    try:
+        geometry = NodeGeometry.from_metadata(frf.metadata)
+    except (KeyError, TypeError, ValueError, AttributeError):
+        raise ShapeError(f"{frf.metadata.get('source', 'FRF')}: metadata 'geometry' must hold 'nodes_m' = "
+                         "{node: [x, y, z]} in metres") from None
+    return map_measured_dofs(dofs, model_x_m, model_dofs, geometry=geometry, geometry_format=fmt,
+                             where=str(frf.metadata.get("source", "FRF")), **kwargs)

@@ -132,6 +132,36 @@ def test_classify_frf_on_another_grid_is_accepted(tiny, capsys):
     assert json.loads(capsys.readouterr().out)["input_route"] == "measured"
 
 
+def test_classify_places_a_renumbered_shuffled_mm_uff_by_its_geometry(tiny, capsys):
+    """The FRFs of the test above as a test system writes them (nodes 101..104 in its own order, millimetres,
+    dataset-15 coordinates at the quarter points): the same verdict as the canonical files."""
+    from systems import write_renumbered_uff
+
+    from physics.io import read_frf
+
+    paths = [str(tiny / f"frf{s}.npz") for s in (0, 1)]                                   # written by the test above
+    assert main(["classify", "--model", str(tiny / "model"), "--baseline", paths[0], paths[1], "--json"]) == 0
+    ref = json.loads(capsys.readouterr().out)
+    assert ref["dof_positions"]["measured"]["source"] == "quarter-point convention"
+    nodes, x_mm = {2: 101, 3: 102, 4: 103, 5: 104}, {101: 152.375, 102: 304.75, 103: 457.125, 104: 609.5}
+    uffs = [str(write_renumbered_uff(tiny / f"renumbered{s}.uff", read_frf(p), nodes, x_mm, [3, 1, 0, 2]))
+            for s, p in enumerate(paths)]
+    assert main(["classify", "--model", str(tiny / "model"), "--baseline", uffs[0], uffs[1], "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    pos = res["dof_positions"]["measured"]
+    assert pos["source"] == "uff geometry" and pos["dofs"] == ["104:+Y", "102:+Y", "101:+Y", "103:+Y"]
+    assert pos["model_dofs"] == ["5:y", "3:y", "2:y", "4:y"]
+    assert res["input_route"] == "measured" == ref["input_route"]
+    for key in ("probability_damaged", "location_x_m", "location_std_m", "stiffness_loss_Nm3"):
+        assert res[key] == pytest.approx(ref[key], rel=1e-6), key
+    np.testing.assert_allclose(res["element_probabilities"], ref["element_probabilities"], rtol=1e-6, atol=1e-9)
+    # node 103 placed at 400 mm: off the model grid, refused in one line naming the file and the DOF
+    write_renumbered_uff(tiny / "offgrid.uff", read_frf(paths[1]), nodes, {**x_mm, 103: 400.0})
+    assert main(["classify", "--model", str(tiny / "model"), "--baseline", uffs[0], str(tiny / "offgrid.uff")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "offgrid.uff" in err and "103:+Y at x = 0.4 m is not at a model DOF" in err
+
+
 def test_modal_route_model_classifies_frf_files_through_identified_modes(tiny, capsys):
     assert main(["train", "--data", str(tiny / "data"), "--out", str(tiny / "modal"), "--epochs", "2", "--json"]) == 0
     capsys.readouterr()
@@ -150,7 +180,14 @@ def test_refusals_and_bad_input_exit_2(tiny, capsys):
     obj["dofs"] = ["2:y", "3:y", "4:y", "6:y"]
     (tiny / "other.json").write_text(json.dumps(obj))
     assert main(["classify", "--model", str(tiny / "model"), "--baseline", base, str(tiny / "other.json")]) == 2
-    assert "DOF set" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "other.json" in err
+    assert "measured DOF 6:y at x = 0.7619 m is not at a model DOF" in err
+    obj["dofs"], obj["eigenvectors"] = ["2:y", "3:y", "4:y"], obj["eigenvectors"][:3]
+    (tiny / "three.json").write_text(json.dumps(obj))
+    assert main(["classify", "--model", str(tiny / "model"), "--baseline", base, str(tiny / "three.json")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "three.json" in err and "no measured DOF at model DOF(s) 5:y" in err
     assert main(["evaluate", "--model", str(tiny / "nowhere"), "--data", str(tiny / "data")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "not a model directory" in err

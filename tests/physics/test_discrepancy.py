@@ -118,7 +118,8 @@ def test_cli_on_beam5_table_4_3(tmp_path, capsys):
     assert rc == 0
     out = json.loads(capsys.readouterr().out)
     assert set(out) == {"named_effect", "effects", "parameters", "parameter_std", "indistinguishable_from",
-                        "gap_before", "gap_after", "candidates", "beam_file"}
+                        "gap_before", "gap_after", "candidates", "beam_file", "dof_positions"}
+    assert out["dof_positions"] is None   # Table 4.3: natural frequencies only
     assert out["named_effect"] == "shear_deformation"
     # Table 4.2's 8.1 % on mode 4 before; shear closes it to the noise level
     assert out["gap_before"]["max_abs_frequency_error_pct"] == pytest.approx(8.07, abs=0.05)
