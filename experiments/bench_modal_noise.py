@@ -88,8 +88,8 @@ def _identify(args):
     f_hz, H, max_order, f_true = args
     with threadpool_limits(1):
         try:
-            est, _, _ = identify_lscf(f_hz, H[:, None, :], n_modes=4, drive=(0, 0), max_order=max_order)
-        except Exception:  # noqa: BLE001 - a failed identification is counted, not fatal
+            est = identify_lscf(f_hz, H[:, None, :], n_modes=4, drive=(0, 0), max_order=max_order).estimate
+        except (ArithmeticError, ValueError, RuntimeError):  # a failed identification is counted, not fatal
             return None
     lam = np.full(4, np.nan + 0j)
     psi = np.full((H.shape[0], 4), np.nan + 0j)
