@@ -54,6 +54,9 @@ DEFAULTS: dict = {
         "frequency_noise": 0.0005,     # relative std of natural frequencies (number, or one per mode 1..4)
         "damping_noise": 0.02,         # relative std of damping ratios
         "shape_noise": 0.002,          # complex std relative to the largest entry of each mode
+        "frequency_noise_floor": 0.0,  # "calibrated" only: std = sqrt((coefficient * level)^2 + floor^2), per mode
+        "damping_noise_floor": 0.0,
+        "shape_noise_floor": 0.0,
         "frf_noise": 0.005,            # complex std relative to |H| per line (or [lo, hi], log-uniform per sample)
         "frf_noise_floor": 0.0,        # complex std relative to each FRF's peak (or [lo, hi], log-uniform)
         "band_rad_s": [1.0, 5000.0],   # thesis Program A grid limits
@@ -163,14 +166,16 @@ def validate(cfg: dict) -> dict:
         raise ConfigError(f"config key 'measurement.modal_noise' must be 'fixed' or 'calibrated', "
                           f"got {meas['modal_noise']!r}")
     calib = modal_noise_calibration() if meas["modal_noise"] == "calibrated" else {}
-    for k in ("frequency_noise", "damping_noise", "shape_noise"):
+    for k in ("frequency_noise", "damping_noise", "shape_noise",
+              "frequency_noise_floor", "damping_noise_floor", "shape_noise_floor"):
         v = meas[k]
         if isinstance(v, list):
             if len(v) != 4:
                 raise ConfigError(f"config key 'measurement.{k}' must be a number or 4 numbers (modes 1..4), got {v!r}")
             meas[k] = [_num(f"measurement.{k}", x, lo=0, hi=100) for x in v]
         elif calib:  # a number in calibrated mode: the shipped per-mode coefficients
-            meas[k] = [float(x) for x in calib[k.split("_")[0]]]
+            q = k.split("_")[0]
+            meas[k] = [float(x) for x in calib[f"{q}_floor" if k.endswith("floor") else q]]
         else:
             meas[k] = _num(f"measurement.{k}", v, lo=0, hi=0.5)
     for k in ("frf_noise", "frf_noise_floor"):  # a number fixes the level; a range draws it per sample
@@ -204,10 +209,12 @@ def validate(cfg: dict) -> dict:
 
 
 def modal_noise_calibration() -> dict:
-    """Per-mode coefficients of the calibrated modal noise (std / FRF noise level): frequency, damping, shape."""
+    """Per-mode coefficients of the calibrated modal noise: std ``sqrt((c level)^2 + floor^2)`` with ``c`` under
+    "frequency", "damping", "shape" and the floors under "<quantity>_floor" (0 when the file has none)."""
     import json
 
-    return json.loads((Path(__file__).parent / "configs" / "modal_noise.json").read_text())
+    calib = json.loads((Path(__file__).parent / "configs" / "modal_noise.json").read_text())
+    return {**{f"{q}_floor": [0.0] * 4 for q in ("frequency", "damping", "shape")}, **calib}
 
 
 def merge(overrides: dict | None = None, base: dict | None = None) -> dict:

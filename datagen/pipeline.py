@@ -385,18 +385,22 @@ def measure_modes(setup, inp, lam4, psi4):
     Natural frequencies and damping ratios get relative Gaussian errors,
     shapes complex circular errors relative to each mode's largest entry.
     Standard deviations per mode: ``measurement.frequency_noise`` etc.
-    ("fixed"), or those coefficients times the sample's FRF noise level
+    ("fixed"), or ``sqrt((c level)^2 + floor^2)`` of the sample's FRF noise
+    level with the coefficients ``c`` and the ``*_noise_floor`` values
     ("calibrated" against LSCF/LSFD identification, ``experiments.bench_modal_noise``).
     """
     mcfg = setup.cfg["measurement"]
-    sig = {k: np.asarray(mcfg[k], float) * np.ones(N_MEAS) for k in ("frequency_noise", "damping_noise",
-                                                                        "shape_noise")}
-    scale_by = np.asarray(inp.noise_level, float)[:, None, None] if mcfg["modal_noise"] == "calibrated" else 1.0
+    if mcfg["modal_noise"] == "calibrated":
+        level = np.asarray(inp.noise_level, float)[:, None, None]
+        sig = {q: np.hypot(np.asarray(mcfg[f"{q}_noise"], float) * level, np.asarray(mcfg[f"{q}_noise_floor"], float))
+               for q in ("frequency", "damping", "shape")}                        # (B, 1, 4)
+    else:
+        sig = {q: np.asarray(mcfg[f"{q}_noise"], float) * np.ones(N_MEAS) for q in ("frequency", "damping", "shape")}
     f, z = modal_parameters(lam4)
-    f_m = f * (1 + sig["frequency_noise"] * scale_by * inp.n_freq)
-    z_m = z * (1 + sig["damping_noise"] * scale_by * inp.n_zeta)
+    f_m = f * (1 + sig["frequency"] * inp.n_freq)
+    z_m = z * (1 + sig["damping"] * inp.n_zeta)
     lam_m = eigenvalues_from_modal(f_m, z_m)
-    scale = np.max(np.abs(psi4), axis=-2, keepdims=True) * sig["shape_noise"] * np.expand_dims(scale_by, -1)
+    scale = np.max(np.abs(psi4), axis=-2, keepdims=True) * np.expand_dims(sig["shape"], -2)
     noise = (inp.n_shape[..., 0] + 1j * inp.n_shape[..., 1]) / np.sqrt(2)
     return lam_m, psi4 + scale * noise
 

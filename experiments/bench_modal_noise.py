@@ -19,11 +19,13 @@ point at the first DOF). Per mode, the identification errors
 
 are compared with the shortcut's: the fixed default model
 (``measurement.modal_noise = "fixed"``) and the calibrated one
-(``"calibrated"``: standard deviations proportional to the sample's FRF noise
-level with per-mode coefficients). The calibration fits those coefficients
-as robust standard deviations of error / level (pooled over levels; 1.4826
-MAD for real errors, ``sqrt(median|e|^2 / ln 2)`` for circular complex
-errors). ``--write-calibration`` stores them in
+(``"calibrated"``: per mode, standard deviation ``sqrt((c level)^2 + floor^2)``
+of the sample's FRF noise level: errors proportional to the noise above a
+floor of the method itself, e.g. the shapes' bias at low noise). The
+calibration fits ``c`` and ``floor`` (:func:`calibrate_std`) to the full
+path's robust standard deviation at each level (1.4826 MAD for real errors,
+``sqrt(median|e|^2 / ln 2)`` for circular complex errors).
+``--write-calibration`` stores them in
 ``datagen/configs/modal_noise.json`` (what ``"calibrated"`` uses).
 
 Writes ``modal_noise.csv`` (per level, mode and quantity: robust std of the
@@ -106,8 +108,8 @@ def _config(level, floor, calibration=None):
 
     meas = {"frf_noise": level, "frf_noise_floor": floor}
     if calibration:
-        meas.update(modal_noise="calibrated", frequency_noise=calibration["frequency"],
-                    damping_noise=calibration["damping"], shape_noise=calibration["shape"])
+        meas.update(modal_noise="calibrated", **{f"{q}_noise": calibration[q] for q in QUANTITIES},
+                    **{f"{q}_noise_floor": calibration[f"{q}_floor"] for q in QUANTITIES})
     return merge({"measurement": meas})
 
 
@@ -143,6 +145,19 @@ def full_path_errors(level, floor, specimens, seed, max_order, pool):
     return _errors(lam_e, psi_e, lam_t, psi_t), missed.tolist()
 
 
+def calibrate_std(levels, stds):
+    """``(a, b)`` of ``std = sqrt((a level)^2 + b^2)`` fitted to per-level stds (relative least squares, a, b >= 0)."""
+    from scipy.optimize import nnls
+
+    lv, sd = np.asarray(levels, float), np.asarray(stds, float)
+    ok = np.isfinite(sd) & (sd > 0)
+    if not ok.any():
+        return float("nan"), float("nan")
+    A = np.stack([lv[ok] ** 2, np.ones(ok.sum())], axis=1) / sd[ok, None] ** 2
+    (a2, b2), _ = nnls(A, np.ones(ok.sum()))
+    return float(np.sqrt(a2)), float(np.sqrt(b2))
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--specimens", type=int, default=8, help="specimens per noise level (2 FRF sets each)")
@@ -175,14 +190,13 @@ def main(argv=None):
             runs[lv] = {"full": full, "failed": failed,
                         "fixed": shortcut_errors(lv, a.floor, a.specimens, a.seed + k)[0]}
 
-    # calibration: per mode, robust std of (full-path error / level), pooled over levels
+    # calibration: per mode, std(level) = sqrt((a level)^2 + b^2) fitted to the full path's robust std at each
+    # level (relative least squares, a, b >= 0): errors grow with the FRF noise, above a floor of the method
     calib = {}
-    for q, qi in zip(QUANTITIES, range(3)):
-        per_mode = []
-        for r in range(4):
-            e = np.concatenate([(runs[lv]["full"][qi][..., r] / lv).ravel() for lv in levels])
-            per_mode.append(round(_robust_std(e), 4))
-        calib[q] = per_mode
+    for qi, q in enumerate(QUANTITIES):
+        fits = [calibrate_std(levels, [_robust_std(runs[lv]["full"][qi][..., r]) for lv in levels]) for r in range(4)]
+        calib[q] = [float(f"{a_:.4g}") for a_, _ in fits]
+        calib[f"{q}_floor"] = [float(f"{b_:.4g}") for _, b_ in fits]
     for k, lv in enumerate(levels):  # the same specimens and draws through the calibrated shortcut
         runs[lv]["calibrated"] = shortcut_errors(lv, a.floor, a.specimens, a.seed + k, calib)[0]
     rows, table = ["level,mode,quantity,full_path_std,shortcut_fixed_std,shortcut_calibrated_std,"
@@ -203,7 +217,8 @@ def main(argv=None):
               "calibration": calib, "table": table}
     atomic_write_text(out / "modal_noise.json", json.dumps(result, indent=1))
     if a.write_calibration:
-        note = (f"robust std of (LSCF/LSFD error / FRF noise level) per mode 1..4, default config, "
+        note = (f"per mode 1..4: std of the LSCF/LSFD error = sqrt((c level)^2 + floor^2), c under 'frequency', "
+                f"'damping', 'shape', floors under '<quantity>_floor', fitted to robust stds, default config, "
                 f"{a.specimens} specimens x 2 states x levels {levels}, floor {a.floor}, max_order {a.max_order}; "
                 f"written by experiments.bench_modal_noise")
         atomic_write_text(CONFIG_DIR / "modal_noise.json", json.dumps({**calib, "note": note}, indent=1) + "\n")
@@ -230,7 +245,7 @@ def main(argv=None):
     if a.json:
         print(json.dumps(result, indent=1))
     else:
-        print(f"calibration (std / FRF noise level, modes 1..4): {json.dumps(calib)}")
+        print(f"calibration (std = sqrt((c level)^2 + floor^2), modes 1..4): {json.dumps(calib)}")
         print(f"{'level':>7} {'q':>9} {'mode':>4} {'full':>10} {'fixed':>10} {'calib':>10} {'KS cal':>7} {'KS fix':>7} "
               f"{'missed':>6}")
         for t in table:

@@ -74,7 +74,8 @@ def test_slit_drop_label_ignores_day_to_day_changes():
 def test_calibrated_modal_noise_scales_with_each_samples_frf_noise_level():
     cfg = load_config("training")
     cfg["measurement"].update(frequency_noise=[0.02, 0.01, 0.01, 0.01], damping_noise=[3.0, 2.0, 1.0, 1.0],
-                              shape_noise=[0.5, 0.5, 0.5, 0.5])
+                              shape_noise=[0.5, 0.5, 0.5, 0.5], frequency_noise_floor=[0.0] * 4,
+                              damping_noise_floor=[0.0] * 4, shape_noise_floor=[0.0] * 4)
     setup = get_setup(merge(cfg))
     inp = draw_batch(np.random.default_rng(5), 4000, setup)
     from datagen.pipeline import measure_modes
@@ -89,3 +90,11 @@ def test_calibrated_modal_noise_scales_with_each_samples_frf_noise_level():
     assert np.std(ef) == pytest.approx(0.02, rel=0.05)
     assert np.std(ez) == pytest.approx(1.0, rel=0.05)
     assert np.sqrt(np.mean(np.abs(es) ** 2)) == pytest.approx(0.5, rel=0.05)
+    # std = sqrt((c level)^2 + floor^2): a floor alone gives the same std at every level
+    cfg["measurement"].update(frequency_noise=[0.0] * 4, frequency_noise_floor=[1e-3, 0.0, 0.0, 0.0])
+    setup = get_setup(merge(cfg))
+    lam_m, _ = measure_modes(setup, inp, lam, psi)
+    ef = (np.abs(lam_m) / np.abs(lam) - 1)[:, :, 0]
+    low = inp.noise_level < np.median(inp.noise_level)
+    assert np.std(ef[low]) == pytest.approx(1e-3, rel=0.07) and np.std(ef[~low]) == pytest.approx(1e-3, rel=0.07)
+    assert np.abs(np.abs(lam_m) / np.abs(lam) - 1)[:, :, 1].max() < 1e-12  # mode 2: no coefficient, no floor
