@@ -207,8 +207,7 @@ def beam5(model, out_dir) -> dict:
     """Classify the thesis's beam 5 from its measured modal data and from FRFs of its identified models."""
     from learn.features import modal_features
     from learn.sensitivity import beam_sensitivity
-    from experiments.cmd_classify import _identify
-    from learn.workflow import classify
+    from learn.workflow import classify, peak_modal_data
     from physics.frf import receptance
     from physics import thesis
     from physics.io import MeasuredFRF, modal_data_from_dict
@@ -230,7 +229,7 @@ def beam5(model, out_dir) -> dict:
         M = np.array(data["identified_models"]["undamaged"]["reduced_mass"]["M"])   # printed once, for both states
         H = receptance(M, np.array(m["C"]), np.array(m["K"]), w, [0, 1, 2, 3], [0])
         frfs.append(MeasuredFRF(w / (2 * np.pi), H, ("2:+Y", "3:+Y", "4:+Y", "5:+Y"), ("2:+Y",)))
-    r2 = classify(model, frfs[0], frfs[1], identified=_identify(*frfs))
+    r2 = classify(model, frfs[0], frfs[1], identified=peak_modal_data(*frfs))
     ex2 = r2.pop("_extra")
     out["identified_model_frf_verdict"] = {**r2, "mahalanobis_distance": ex2["mahalanobis_distance"],
                                            "training_percentile": ex2["training_percentile"]}

@@ -40,7 +40,7 @@ def read_input(path):
 
 def run(args) -> dict:
     from learn.features import BeamSpec
-    from learn.workflow import classify, load_model, on_model_dofs
+    from learn.workflow import classify, load_model, on_model_dofs, peak_modal_data
 
     model = load_model(args.model)
     b = model.beam
@@ -57,7 +57,7 @@ def run(args) -> dict:
     model.check_beam(spec, "measured beam")
     (base, base_map), (cur, cur_map) = (on_model_dofs(read_input(f), b, beam_x_m, str(f))
                                         for f in (args.baseline, args.measured))
-    res = classify(model, base, cur, identified=_identify(base, cur))
+    res = classify(model, base, cur, identified=peak_modal_data(base, cur))
     res["dof_positions"] = {"baseline": base_map and base_map.to_dict(), "measured": cur_map and cur_map.to_dict()}
     extra = res.pop("_extra")
     if not args.json and not args.out:
@@ -69,25 +69,6 @@ def run(args) -> dict:
         if args.out:
             print(f"verdict.json and classify.png in {args.out}")
     return {k: res[k] for k in KEYS}
-
-
-def _identify(base, cur):
-    """Modal data of FRF inputs by peak picking (4 modes, fast) for the classical baseline; None if not possible."""
-    import warnings
-
-    from physics.errors import BeamDamageError
-    from physics.io import MeasuredFRF
-
-    if not isinstance(base, MeasuredFRF):
-        return None
-    from physics.identification import identify_frf
-
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return tuple(identify_frf(f, method="peak", n_modes=4).modal_data for f in (base, cur))
-    except (BeamDamageError, np.linalg.LinAlgError, RuntimeError):
-        return None
 
 
 def _length(name):

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.cmd_model import add_beam_argument
+from experiments.args import add_beam_argument
 from experiments.study_discrepancy import EXAMPLE, run_discrepancy
 from physics import discrepancy as dsc
 from physics.effects import CANDIDATES

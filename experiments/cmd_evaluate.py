@@ -18,7 +18,7 @@ def add_parser(sub):
 
 
 def run(args) -> dict:
-    from experiments.cmd_train import check_out_dir
+    from experiments.args import check_out_dir
     from learn.workflow import evaluate, load_model
 
     if args.out:

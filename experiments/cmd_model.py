@@ -4,29 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
-import argparse
-
+from experiments.args import add_beam_argument
 from physics import fem, modal, properties, reduction
 from physics.beam import Beam, load_beam
 from physics.errors import BeamDamageError
 
 #: Old name of :data:`physics.reduction.REDUCTIONS`.
 REDUCTIONS = reduction.REDUCTIONS
-
-
-def beam_argument(spec: str) -> Beam:
-    """argparse ``type`` of ``--beam PRESET|FILE``: a bad name or file is a one-line usage error (exit 2)."""
-    try:
-        return load_beam(spec)
-    except BeamDamageError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-
-
-def add_beam_argument(p, default="beam5"):
-    """The shared ``--beam PRESET|FILE`` option (a preset name or a TOML beam file, see physics.beam)."""
-    p.add_argument("--beam", default=default, type=beam_argument, metavar="PRESET|FILE",
-                   help=f"beam preset ({', '.join(sorted(properties.PRESETS))}) or TOML beam file "
-                        f"(README 'beam file'; default {default})")
 
 
 def build(beam, elements: int | None, mass: str, method: str, bc: str | None = None) -> dict:

@@ -23,21 +23,8 @@ def add_parser(sub):
     p.set_defaults(func=run)
 
 
-def check_out_dir(path) -> None:
-    """Refuse an output directory that cannot be created, before any long computation."""
-    from pathlib import Path
-
-    from physics.errors import BeamDamageError
-
-    p = Path(path)
-    for q in (p, *p.parents):
-        if q.exists():
-            if not q.is_dir():
-                raise BeamDamageError(f"--out {path}: {q} exists and is not a directory")
-            return
-
-
 def run(args) -> dict:
+    from experiments.args import check_out_dir
     from learn.workflow import train
     from physics.errors import BeamDamageError
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from experiments.cmd_model import add_beam_argument
+from experiments.args import add_beam_argument
 from physics import modal, updating
 from physics.beam import Beam, load_beam
 from physics.errors import ConfigError, ConvergenceError, FileFormatError

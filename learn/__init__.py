@@ -1,6 +1,7 @@
-"""Learning damage from datasets (``datagen``): the classifier lives here (issue 8).
+"""The damage classifier: pair features from datasets and measurements, the network (scikit-learn style),
+classical baselines, metrics, and the train / evaluate / classify workflow with its model directory.
 
-Public API: nothing yet; modules added here declare theirs in ``__all__`` below.
+Imports are lazy (torch and scikit-learn load only when used): ``from learn.workflow import train``.
 """
 
-__all__: list[str] = []
+__all__ = ["baselines", "estimator", "evaluate", "features", "models", "sensitivity", "workflow"]

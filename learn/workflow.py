@@ -369,6 +369,24 @@ def ood_percentile(est: DamageClassifier, X) -> tuple[float, float]:
     return float(d[0]), float(np.mean(est.reference_distances_ <= d[0]) * 100)
 
 
+def peak_modal_data(baseline, current):
+    """Modal data (4 modes, by peak picking: fast) of a pair of FRF inputs, for ``classify``'s modal route and
+    the classical baselines; None for modal inputs or when peak picking fails."""
+    import warnings
+
+    from physics.identification import identify_frf
+    from physics.io import MeasuredFRF
+
+    if not isinstance(baseline, MeasuredFRF):
+        return None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return tuple(identify_frf(f, method="peak", n_modes=4).modal_data for f in (baseline, current))
+    except (BeamDamageError, np.linalg.LinAlgError, RuntimeError):
+        return None
+
+
 def classify(model: TrainedModel, baseline, current, identified=None) -> dict:
     """Verdict for one measured pair.
 

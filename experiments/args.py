@@ -1,0 +1,35 @@
+"""Argument helpers shared by several commands (argparse types and up-front checks; no computation)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from physics import properties
+from physics.beam import Beam, load_beam
+from physics.errors import BeamDamageError
+
+
+def beam_argument(spec: str) -> Beam:
+    """argparse ``type`` of ``--beam PRESET|FILE``: a bad name or file is a one-line usage error (exit 2)."""
+    try:
+        return load_beam(spec)
+    except BeamDamageError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def add_beam_argument(p, default="beam5"):
+    """The shared ``--beam PRESET|FILE`` option (a preset name or a TOML beam file, see physics.beam)."""
+    p.add_argument("--beam", default=default, type=beam_argument, metavar="PRESET|FILE",
+                   help=f"beam preset ({', '.join(sorted(properties.PRESETS))}) or TOML beam file "
+                        f"(README 'beam file'; default {default})")
+
+
+def check_out_dir(path) -> None:
+    """Refuse an output directory that cannot be created, before any long computation."""
+    p = Path(path)
+    for q in (p, *p.parents):
+        if q.exists():
+            if not q.is_dir():
+                raise BeamDamageError(f"--out {path}: {q} exists and is not a directory")
+            return
