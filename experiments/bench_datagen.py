@@ -83,7 +83,7 @@ def _table_at_scale(root: str, rows: int) -> dict:
             name = f"shard-{len(shards):06d}"
             (scratch / "shards" / name).mkdir()
             os.link(src / "shards" / e["name"] / "samples.parquet", scratch / "shards" / name / "samples.parquet")
-            shards.append({**e, "name": name})
+            shards.append({**e, "name": name, "index": len(shards)})
             n += e["n_samples"]
     t = time.perf_counter()
     finalize(scratch, {**m, "shards": shards})
