@@ -1,8 +1,19 @@
-"""Simulated datasets of slit-damaged beams: configuration, batched pipeline, store, FRFs on read, loaders."""
+"""Simulated datasets of slit-damaged beams: configuration, batched pipeline, store, FRFs on read, loaders.
 
-from datagen.config import load_config, merge, named_configs
-from datagen.parallel import generate
-from datagen.report import inspect_dataset
-from datagen.store import Dataset, load_torch
+The names below load their modules on first use (``import datagen.config`` stays light: no pandas, no
+workers' machinery, for the command line's parsers).
+"""
 
-__all__ = ["Dataset", "generate", "inspect_dataset", "load_config", "load_torch", "merge", "named_configs"]
+import importlib
+
+_HOMES = {"Dataset": "datagen.store", "load_torch": "datagen.store", "generate": "datagen.parallel",
+          "inspect_dataset": "datagen.report", "load_config": "datagen.config", "merge": "datagen.config",
+          "named_configs": "datagen.config"}
+
+__all__ = sorted(_HOMES)
+
+
+def __getattr__(name):
+    if name in _HOMES:
+        return getattr(importlib.import_module(_HOMES[name]), name)
+    raise AttributeError(f"module 'datagen' has no attribute {name!r}")

@@ -8,7 +8,6 @@ from pathlib import Path
 import numpy as np
 
 from physics.errors import BeamDamageError, ConfigError
-from experiments.plots_identify import write_outputs
 from physics.identification import METHODS, Identification, identify_file, reconstruction_error_db
 from physics.io import MeasuredFRF, NodeGeometry, format_complex, measured_positions
 from physics.modal import mac
@@ -92,6 +91,8 @@ def run(args) -> dict:
     out = result_dict(ident)
     out["warnings"] = [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
     if args.out:
+        from experiments.plots_identify import write_outputs  # matplotlib: only when writing
+
         out["outputs"] = write_outputs(ident, args.out)
     if not args.json:
         for msg in out["warnings"]:

@@ -17,7 +17,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
 
 from physics.errors import ShapeError
 
@@ -83,6 +82,8 @@ def estimate_frf(force, response, fs_hz, nperseg, noverlap=None, window="hann", 
         noverlap = nperseg // 2
     kw = dict(fs=fs_hz, window=window, nperseg=nperseg, noverlap=noverlap, detrend=detrend, axis=-1)
     sig = np.concatenate([f_t, x_t])  # (n_ch, n)
+    from scipy import signal  # imported here: scipy.signal costs most of a second to import
+
     freq, G = signal.csd(sig[:, None, :], sig[None, :, :], **kw)  # G[a, b] = E[conj(A) B]
     n_i = f_t.shape[0]
     Gff = np.moveaxis(G[:n_i, :n_i], -1, 0)  # (L, n_i, n_i), Gff[l, a, b] = E[conj(F_a) F_b]
