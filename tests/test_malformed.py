@@ -22,6 +22,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+if __name__ == "__main__":  # run as a script: tests/physics would shadow the physics package (CASES is built below)
+    sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
+
 DATA = Path(__file__).resolve().parent / "data"
 TIME_LIMIT_S = 60.0
 
@@ -699,8 +702,6 @@ def corpus_table():
 
 
 if __name__ == "__main__":
-    # tests/physics would shadow the physics package when this file runs as a script
-    sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
     rows, problems = corpus_table()
     print(f"{'family':<12}{'cases':>6}{'clean':>7}{'traceback':>11}{'other':>7}{'max s':>8}")
     for fam, r in rows.items():
