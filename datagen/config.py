@@ -57,6 +57,7 @@ DEFAULTS: dict = {
         "frequency_noise_floor": 0.0,  # "calibrated" only: std = sqrt((coefficient * level)^2 + floor^2), per mode
         "damping_noise_floor": 0.0,
         "shape_noise_floor": 0.0,
+        "identification": None,       # derived: the identification the calibrated modal noise describes (read-only)
         "frf_noise": 0.005,            # complex std relative to |H| per line (or [lo, hi], log-uniform per sample)
         "frf_noise_floor": 0.0,        # complex std relative to each FRF's peak (or [lo, hi], log-uniform)
         "band_rad_s": [1.0, 5000.0],   # thesis Program A grid limits
@@ -166,6 +167,7 @@ def validate(cfg: dict) -> dict:
         raise ConfigError(f"config key 'measurement.modal_noise' must be 'fixed' or 'calibrated', "
                           f"got {meas['modal_noise']!r}")
     calib = modal_noise_calibration() if meas["modal_noise"] == "calibrated" else {}
+    meas["identification"] = calib.get("identification")
     for k in ("frequency_noise", "damping_noise", "shape_noise",
               "frequency_noise_floor", "damping_noise_floor", "shape_noise_floor"):
         v = meas[k]

@@ -6,28 +6,32 @@ from pathlib import Path
 
 import numpy as np
 
-KEYS = ("damaged", "probability_damaged", "location_x_over_L", "location_x_m", "location_std_m", "location_element",
-        "element_probabilities", "stiffness_loss_Nm3", "stiffness_loss_std_Nm3", "depth_m", "detectable",
-        "input_route", "warnings", "dof_positions")
+KEYS = ("measured", "damaged", "probability_damaged", "location_x_over_L", "location_x_m", "location_std_m",
+        "location_element", "element_probabilities", "stiffness_loss_Nm3", "stiffness_loss_std_Nm3", "depth_m",
+        "detectable", "verdict_from", "in_distribution", "out_of_distribution_reasons", "mahalanobis_distance",
+        "training_percentile", "network", "classical", "classical_methods", "identification", "input_route",
+        "warnings", "dof_positions")
 
 
 def add_parser(sub):
-    p = sub.add_parser("classify", help="classify a measured beam against its baseline with a trained model",
-                       description="BASELINE and MEASURED are FRF files (UFF58 .uff/.unv, CSV, NPZ) with receptances "
-                                   "at the model's DOFs, or modal-data JSON as 'update' accepts. FRFs on any frequency "
-                                   "lines are interpolated onto the model's log-frequency grid; modal data use the "
-                                   "model's modal-route network. Prints a verdict beside the best classical "
-                                   "baseline's answer; --out writes verdict.json and classify.png.")
+    p = sub.add_parser("classify", help="classify measured beams against their baseline with a trained model",
+                       description="BASELINE and each MEASURED are FRF files (UFF58 .uff/.unv, CSV, NPZ) with "
+                                   "receptances, mobilities or accelerances at the model's DOFs, or modal-data JSON "
+                                   "as 'update' accepts. FRF files are identified by LSCF/LSFD (4 modes), the "
+                                   "identification the training data's modal noise describes. A pair outside the "
+                                   "training data gets the classical method's verdict, the network's shown beside it. "
+                                   "Several MEASURED files give a list of verdicts; --out writes verdict.json and "
+                                   "classify.png (one pair) or verdicts.json (several).")
     p.add_argument("--model", required=True, metavar="MODEL_DIR")
     p.add_argument("--baseline", required=True, metavar="BASELINE", help="undamaged state (FRF file or modal JSON)")
-    p.add_argument("measured", metavar="MEASURED", help="current state (same kind as BASELINE)")
+    p.add_argument("measured", nargs="+", metavar="MEASURED", help="current state(s) (same kind as BASELINE)")
     p.add_argument("--beam", help="beam of the data: the model's preset name (default) or a beam file of the same "
                                   "length whose measured_x_m places measured DOFs of files without node geometry "
                                   "(else nodes 2..5 at the quarter points); another beam is refused")
     p.add_argument("--mass", choices=("iirs", "lumped"), help="mass model of the data's updating (default: the model's)")
-    p.add_argument("--out", metavar="DIR", help="write verdict.json and classify.png here (default without --json: "
+    p.add_argument("--out", metavar="DIR", help="write the verdict(s) and figure here (default without --json: "
                                                 "out/classify)")
-    p.add_argument("--json", action="store_true", help="print exactly the verdict keys as JSON")
+    p.add_argument("--json", action="store_true", help="print the verdict (a list for several MEASURED) as JSON")
     p.set_defaults(func=run)
 
 
@@ -38,9 +42,9 @@ def read_input(path):
     return read_modal_json(path) if str(path).lower().endswith(".json") else read_frf(path)
 
 
-def run(args) -> dict:
+def run(args):
     from learn.features import BeamSpec
-    from learn.workflow import classify, load_model, on_model_dofs, peak_modal_data
+    from learn.workflow import classify_many, load_model, on_model_dofs
 
     model = load_model(args.model)
     b = model.beam
@@ -55,20 +59,27 @@ def run(args) -> dict:
         spec = BeamSpec(args.beam or b.name, b.length_m if args.beam in (None, b.name) else _length(args.beam),
                         b.dofs, args.mass or b.mass_model)
     model.check_beam(spec, "measured beam")
-    (base, base_map), (cur, cur_map) = (on_model_dofs(read_input(f), b, beam_x_m, str(f))
-                                        for f in (args.baseline, args.measured))
-    res = classify(model, base, cur, identified=peak_modal_data(base, cur))
-    res["dof_positions"] = {"baseline": base_map and base_map.to_dict(), "measured": cur_map and cur_map.to_dict()}
-    extra = res.pop("_extra")
+    files = [args.baseline, *args.measured]
+    mapped = [on_model_dofs(read_input(f), b, beam_x_m, str(f)) for f in files]
+    results = classify_many(model, mapped[0][0], [m[0] for m in mapped[1:]], names=[str(f) for f in files])
+    base_pos = mapped[0][1] and mapped[0][1].to_dict()
+    extras = []
+    for r, (_, cur_map) in zip(results, mapped[1:]):
+        r["dof_positions"] = {"baseline": base_pos, "measured": cur_map and cur_map.to_dict()}
+        extras.append(r.pop("_extra"))
     if not args.json and not args.out:
         args.out = "out/classify"
     if args.out:
-        _write(args.out, res, extra, base, cur, model)
+        _write(args.out, results, extras, mapped[0][0], mapped[1][0], model)
     if not args.json:
-        print(verdict_text(res, extra, b.length_m))
+        for r in results:
+            if len(results) > 1:
+                print(f"== {r['measured']}")
+            print(verdict_text(r))
         if args.out:
-            print(f"verdict.json and classify.png in {args.out}")
-    return {k: res[k] for k in KEYS}
+            print(f"{'verdict.json and classify.png' if len(results) == 1 else 'verdicts.json'} in {args.out}")
+    out = [{k: r[k] for k in KEYS} for r in results]
+    return out[0] if len(out) == 1 else out
 
 
 def _length(name):
@@ -76,30 +87,48 @@ def _length(name):
     return beam_preset(name).length
 
 
-def verdict_text(res: dict, extra: dict, length_m: float) -> str:
-    p = res["probability_damaged"]
-    lines = []
-    if not res["damaged"]:
-        lines.append(f"No damage detected (probability of damage {p:.1%}).")
-    elif not res["detectable"]:
-        lines.append(f"Possibly damaged (probability {p:.1%}), but not detectable here: a slit like the one that would "
-                     f"explain the data, near x = {res['location_x_m']:.3f} m, changes the natural frequencies by less "
-                     f"than the measurement resolution.")
+def _network_sentence(a: dict) -> str:
+    if not a["damaged"]:
+        return f"no damage detected (probability of damage {a['probability_damaged']:.1%})"
+    if not a["detectable"]:
+        return (f"possibly damaged (probability {a['probability_damaged']:.1%}), but not detectable here: a slit like "
+                f"the one that would explain the data, near x = {a['location_x_m']:.3f} m, changes the natural "
+                "frequencies by less than the measurement resolution")
+    depth = "" if a["depth_m"] is None else f", i.e. a slit about {a['depth_m'] * 1000:.2f} mm deep over 5.5 mm"
+    return (f"damaged (probability {a['probability_damaged']:.1%}): slit at x = {a['location_x_m']:.3f} m +- "
+            f"{a['location_std_m']:.3f} m (x/L = {a['location_x_over_L']:.2f}, element {a['location_element']} of "
+            f"4), stiffness loss dEI*w = {a['stiffness_loss_Nm3']:.3g} +- {a['stiffness_loss_std_Nm3']:.2g} N m^3{depth}")
+
+
+def _classical_sentence(c: dict) -> str:
+    if not c["damaged"]:
+        return f"{c['method']}: undamaged"
+    return (f"{c['method']}: damaged, x = {c['location_x_m']:.3f} m (element {c['location_element']}), stiffness "
+            f"loss {c['stiffness_loss_Nm3']:.3g} N m^3")
+
+
+def verdict_text(res: dict) -> str:
+    """The verdict as a reader sees it: the answer, where it comes from, both methods, the caveats."""
+    net, cl = res["network"], res["classical"]
+    if res["in_distribution"]:
+        head = "Verdict (network): " + _network_sentence(net) + "."
     else:
-        depth = "" if res["depth_m"] is None else f", i.e. a slit about {res['depth_m'] * 1000:.2f} mm deep over 5.5 mm"
-        lines.append(f"Damaged (probability {p:.1%}): slit at x = {res['location_x_m']:.3f} m +- "
-                     f"{res['location_std_m']:.3f} m (x/L = {res['location_x_over_L']:.2f}, element "
-                     f"{res['location_element']} of 4), stiffness loss dEI*w = {res['stiffness_loss_Nm3']:.3g} +- "
-                     f"{res['stiffness_loss_std_Nm3']:.2g} N m^3{depth}.")
-    lines.append("Element probabilities: " + ", ".join(f"{k + 1}: {v:.2f}" for k, v in
-                                                       enumerate(res["element_probabilities"])))
+        head = ("Verdict (classical method, the pair lies outside the training data): " + _classical_sentence(cl)
+                + ".")
+    lines = [head[:1].upper() + head[1:]]
+    if net["damaged"]:
+        lines.append("Element probabilities (network): " + ", ".join(f"{k + 1}: {v:.2f}" for k, v in
+                                                                     enumerate(net["element_probabilities"])))
+    lines.append(f"Network: {_network_sentence(net)}.")
+    lines.append(f"Classical ({cl['method']}, the best on the training data): {_classical_sentence(cl)}." if cl else
+                 "Classical: no answer (fewer than 4 modes identified).")
     lines.append(f"Input route: {res['input_route']}; distance from the training data: Mahalanobis "
-                 f"{extra['mahalanobis_distance']:.3g} (beyond {extra['training_percentile']:.1f}% of training pairs).")
-    bl = extra.get("baseline")
-    if bl:
-        lines.append(f"Best classical baseline ({bl['method']}): {'damaged' if bl['damaged'] else 'undamaged'}, "
-                     f"location x = {bl['location_x_m']:.3f} m (element {bl['location_element']}), "
-                     f"stiffness loss {bl['stiffness_loss_Nm3']:.3g} N m^3.")
+                 f"{res['mahalanobis_distance']:.3g} (beyond {res['training_percentile']:.1f}% of training pairs); "
+                 f"in distribution: {'yes' if res['in_distribution'] else 'no'}.")
+    ident = res["identification"]
+    lines.append(f"Natural frequencies (Hz, {ident['source']}): baseline "
+                 + ", ".join(f"{x:.2f}" for x in ident["baseline_frequencies_hz"]) + "; measured "
+                 + ", ".join(f"{x:.2f}" for x in ident["measured_frequencies_hz"]))
     from physics.io import dof_positions_text
 
     for name, d in res["dof_positions"].items():
@@ -109,21 +138,33 @@ def verdict_text(res: dict, extra: dict, length_m: float) -> str:
     return "\n".join(lines)
 
 
-def _write(out_dir, res, extra, base, cur, model):
-    import io
+def _write(out_dir, results, extras, base, cur, model):
+    """verdict.json and classify.png (one pair) or verdicts.json (several), each written atomically."""
     import json
+
+    from experiments.cli import to_jsonable
+    from physics.io import atomic_write_bytes, atomic_write_text
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    if len(results) > 1:
+        atomic_write_text(out / "verdicts.json", json.dumps(to_jsonable(results), indent=1))
+        return
+    atomic_write_bytes(out / "classify.png", _figure(results[0], extras[0], base, cur, model.beam.length_m))
+    atomic_write_text(out / "verdict.json", json.dumps(to_jsonable(results[0]), indent=1))
+
+
+def _figure(res, extra, base, cur, length_m) -> bytes:
+    """PNG: baseline and measured FRF (or FRF synthesised from modes), and the network's location distribution."""
+    import io
 
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from experiments.cli import to_jsonable
-    from physics.io import MeasuredFRF, atomic_write_bytes, atomic_write_text
+    from physics.io import MeasuredFRF
 
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    L = model.beam.length_m
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 6.5))
     for name, d in (("baseline", base), ("measured", cur)):
         if isinstance(d, MeasuredFRF):
@@ -138,18 +179,20 @@ def _write(out_dir, res, extra, base, cur, model):
     a1.set(xlabel="frequency (Hz)", ylabel="|H| (m/N)", title="Baseline vs measured")
     a1.legend(fontsize=7)
     dist = extra["location_distribution"]
-    edges = np.linspace(0, L, dist.size + 1)
-    a2.bar(edges[:-1], dist, width=np.diff(edges), align="edge", color="tab:red", alpha=0.7)
+    edges = np.linspace(0, length_m, dist.size + 1)
+    a2.bar(edges[:-1], dist, width=np.diff(edges), align="edge", color="tab:red", alpha=0.7,
+           label="network's location distribution")
+    if res["classical"] and res["classical"]["damaged"]:
+        a2.axvline(res["classical"]["location_x_m"], color="k", ls="--",
+                   label=f"{res['classical']['method']}: x = {res['classical']['location_x_m']:.3f} m")
     for k in range(1, 4):
-        a2.axvline(k * L / 4, color="grey", ls=":")
+        a2.axvline(k * length_m / 4, color="grey", ls=":")
+    a2.legend(fontsize=7)
+    net = res["network"]
     a2.set(xlabel="x from the clamp (m)", ylabel="probability",
-           title=f"Location distribution (P(damaged) = {res['probability_damaged']:.2f})")
+           title=f"Network: P(damaged) = {net['probability_damaged']:.2f}; verdict from the {res['verdict_from']}")
     buf = io.BytesIO()
     fig.tight_layout()
     fig.savefig(buf, format="png", dpi=110)
     plt.close(fig)
-    atomic_write_bytes(out / "classify.png", buf.getvalue())
-    atomic_write_text(out / "verdict.json", json.dumps(to_jsonable({**res, "baseline_method": extra.get("baseline"),
-                                                                    "mahalanobis_distance": extra["mahalanobis_distance"],
-                                                                    "training_percentile": extra["training_percentile"]}),
-                                                       indent=1))
+    return buf.getvalue()

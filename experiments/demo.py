@@ -110,14 +110,36 @@ def classify_step(out: Path, model_dir: Path) -> dict:
 
 
 def _verdict_text(v: dict, length_m: float) -> str:
-    if not v.get("damaged"):
-        return (f"The classifier calls beam 5 **undamaged** (probability of damage {v['probability_damaged']:.3f})"
-                + ("" if v.get("detectable", True) else "; a slit where it points would not be detectable") + ".")
-    return (f"The classifier calls beam 5 **damaged** (probability {v['probability_damaged']:.3f}); slit at "
-            f"x = {v['location_x_m']:.3f} +- {v['location_std_m']:.3f} m (x/L = {v['location_x_over_L']:.2f}), "
-            f"element {v['location_element']} of 4; stiffness loss {v['stiffness_loss_Nm3']:.3g} +- "
-            f"{v['stiffness_loss_std_Nm3']:.2g} N m^3. The thesis cut its slit a quarter of the length from the "
-            f"fixed end: x = {length_m / 4:.3f} m on the 0.6095 m cantilever (the element 1/2 boundary).")
+    net, cl = v["network"], v["classical"]
+    if net["damaged"]:
+        net_text = (f"the network says **damaged** (probability {net['probability_damaged']:.3f}), slit at "
+                    f"x = {net['location_x_m']:.3f} +- {net['location_std_m']:.3f} m (x/L = "
+                    f"{net['location_x_over_L']:.2f}), element {net['location_element']} of 4, stiffness loss "
+                    f"{net['stiffness_loss_Nm3']:.3g} +- {net['stiffness_loss_std_Nm3']:.2g} N m^3")
+    else:
+        net_text = f"the network says **undamaged** (probability of damage {net['probability_damaged']:.3f})"
+    cl_text = (f"{cl['method']} says **damaged**, x = {cl['location_x_m']:.3f} m (element {cl['location_element']})"
+               if cl["damaged"] else f"{cl['method']} says **undamaged**")
+    source = ("The pair lies inside the training data, so the verdict is the network's" if v["in_distribution"]
+              else f"The pair lies outside the training data (Mahalanobis distance {v['mahalanobis_distance']:.3g}, "
+                   f"beyond {v['training_percentile']:.1f}% of training pairs), so the verdict is the classical "
+                   "method's")
+    return (f"{source}: {net_text}; {cl_text}. The thesis cut its slit a quarter of the length from the fixed end: "
+            f"x = {length_m / 4:.3f} m on the 0.6095 m cantilever (the element 1/2 boundary).")
+
+
+def _answers(v: dict) -> list[dict]:
+    """One row per method of a classify verdict, the one the verdict took marked."""
+    rows = []
+    for name, a in (("network", v["network"]), ("classical: " + (v["classical"] or {}).get("method", "none"),
+                                                v["classical"])):
+        if a is None:
+            continue
+        rows.append({"method": name, "verdict": "yes" if name.split(":")[0] == v["verdict_from"] else "",
+                     "damaged": a["damaged"], "probability": a.get("probability_damaged"),
+                     "x_m": round(a["location_x_m"], 4), "element": a["location_element"],
+                     "stiffness_loss_Nm3": float(f"{a['stiffness_loss_Nm3']:.3g}")})
+    return rows
 
 
 def run(args) -> dict:
@@ -238,10 +260,7 @@ def _report_sections(vsum, checks, thesis_sections, measured, disc, data, traine
         tuple(Figure(Path(f).stem.replace("_", " "), f) for f in evaluated["figures"] if Path(f).exists()))
     s_class = Section("5. Beam 5 classified (Tables 4.5/4.6, damaged against undamaged)",
                       (_verdict_text(verdict, 0.6095),) + tuple(f"Warning: {w}" for w in verdict.get("warnings", [])),
-                      (Table.from_records("Verdict", [{k: (v if not isinstance(v, list) else
-                                                            ", ".join(f"{x:.3f}" for x in v))
-                                                       for k, v in verdict.items()
-                                                       if k not in ("warnings", "inputs")}]),))
+                      (Table.from_records("The network's and the classical method's answers", _answers(verdict)),))
     return [s_validate, *thesis_sections, s_ident, s_disc, s_learn, s_class]
 
 

@@ -363,112 +363,259 @@ def frf_rows(frf, beam: BeamSpec):
     return np.stack([f.frf[resp.index(d), j] for d in beam.dofs]), f
 
 
-def ood_percentile(est: DamageClassifier, X) -> tuple[float, float]:
-    """Mahalanobis distance of features to the training features and its percentile among training pairs."""
+def ood_percentile(est: DamageClassifier, X) -> tuple[np.ndarray, np.ndarray]:
+    """Mahalanobis distances of feature rows to the training features, and the percentage of training pairs
+    at or below each distance: arrays of shape (n,)."""
     d = est.mahalanobis(X)
-    return float(d[0]), float(np.mean(est.reference_distances_ <= d[0]) * 100)
+    return d, np.searchsorted(est.reference_distances_, d, side="right") / est.reference_distances_.size * 100
 
 
-def peak_modal_data(baseline, current):
-    """Modal data (4 modes, by peak picking: fast) of a pair of FRF inputs, for ``classify``'s modal route and
-    the classical baselines; None for modal inputs or when peak picking fails."""
-    import warnings
+#: Training percentile of the Mahalanobis distance above which a pair counts as outside the training data.
+IN_DISTRIBUTION_PERCENTILE = 99.9
 
-    from physics.identification import identify_frf
-    from physics.io import MeasuredFRF
-
-    if not isinstance(baseline, MeasuredFRF):
-        return None
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return tuple(identify_frf(f, method="peak", n_modes=4).modal_data for f in (baseline, current))
-    except (BeamDamageError, np.linalg.LinAlgError, RuntimeError):
-        return None
+#: The identification ``classify`` runs on FRF files: LSCF poles and LSFD residues, the 4 lowest modes. The
+#: training data's modal noise (``measurement.modal_noise = "calibrated"``) is calibrated against this path
+#: (``experiments.bench_modal_noise``), and the dataset records it (``measurement.identification``).
+IDENTIFICATION = {"method": "lscf", "n_modes": 4}
 
 
-def classify(model: TrainedModel, baseline, current, identified=None) -> dict:
-    """Verdict for one measured pair.
+def identify_modes(frf, fmax_hz: float | None = None, where: str = "FRF file"):
+    """Modal data of one FRF file by :data:`IDENTIFICATION` (the path the training data's modal noise describes).
 
     Parameters
     ----------
-    baseline, current : :class:`physics.io.ModalData` or :class:`physics.io.MeasuredFRF` (both the same kind)
-        FRFs are mapped onto the model's log-frequency grid (any frequency lines); modal data use the
-        modal-route network.
-    identified : (ModalData, ModalData), optional
-        Modal data identified from FRF inputs: the modal-route network's input when the model's route is
-        ``modal``, and the classical baseline's.
+    frf : :class:`physics.io.MeasuredFRF` on the model's DOFs
+    fmax_hz : float, optional
+        Upper end of the band fitted (Hz): above the highest training frequency of mode 4, so that a file
+        reaching far beyond the model's modes does not spend poles on them.
+
+    Returns
+    -------
+    :class:`physics.io.ModalData` with the 4 identified modes.
     """
+    import warnings
+
+    from physics.identification import identify_frf
+
+    band = None
+    f = frf.frequency_hz
+    if fmax_hz is not None and f[-1] > fmax_hz:
+        band = (f[f > 0][0], fmax_hz)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            ident = identify_frf(frf, method=IDENTIFICATION["method"], n_modes=IDENTIFICATION["n_modes"],
+                                 band_hz=band)
+    except (np.linalg.LinAlgError, RuntimeError) as exc:
+        raise BeamDamageError(f"{where}: LSCF/LSFD identification failed ({exc})") from None
+    md = ident.modal_data
+    if md.eigenvalues.size < IDENTIFICATION["n_modes"]:
+        fs = ", ".join(f"{x:.4g}" for x in np.abs(md.eigenvalues) / (2 * np.pi))
+        raise BeamDamageError(f"{where}: {md.eigenvalues.size} modes identified ({fs} Hz) in "
+                              f"{f[0]:.4g}-{(band or (0, f[-1]))[1]:.4g} Hz; {IDENTIFICATION['n_modes']} are needed")
+    return md
+
+
+def training_frequency_range_hz(est: DamageClassifier, n_sigma: float = 5.0) -> np.ndarray:
+    """Range of each mode's baseline natural frequency in the training data, (4, 2) Hz: the log-frequency
+    features' mean +- ``n_sigma`` standard deviations (:func:`learn.features.modal_features`, columns 4..7)."""
+    mu, sd = est.mean_[4:8], est.scale_[4:8]
+    return np.exp(np.stack([mu - n_sigma * sd, mu + n_sigma * sd], axis=1))
+
+
+def _mode_checks(lam, vecs, f_range_hz) -> list[list[str]]:
+    """Per pair, reasons it lies outside what the modal network was trained on: a mode outside its training
+    frequency range (a missing or spurious mode) or baseline and current modes that do not pair (MAC < 0.8)."""
+    from learn.features import real_shapes
+
+    f = np.abs(lam) / (2 * np.pi)                         # (n, 2, 4)
+    u = real_shapes(vecs)                                 # (n, 2, 4, m) unit norm
+    mac = np.abs(np.sum(u[:, 0] * u[:, 1], axis=1)) ** 2  # (n, m)
+    reasons = []
+    for i in range(f.shape[0]):
+        r = [f"{name} mode {k + 1} at {f[i, s, k]:.4g} Hz lies outside the training range "
+             f"{f_range_hz[k, 0]:.4g}-{f_range_hz[k, 1]:.4g} Hz (a missing or spurious mode)"
+             for s, name in enumerate(("baseline", "measured")) for k in range(4)
+             if not f_range_hz[k, 0] <= f[i, s, k] <= f_range_hz[k, 1]]
+        r += [f"mode {k + 1} of the baseline and the measured test do not pair (MAC {mac[i, k]:.2f} < 0.8)"
+              for k in range(4) if mac[i, k] < 0.8]
+        reasons.append(r)
+    return reasons
+
+
+def _modal_inputs(model: TrainedModel, baseline, currents: list, names: list[str]):
+    """Modal data of the baseline and every current input: (ModalData, list of ModalData, identified: bool)."""
     from physics.io import MeasuredFRF
 
+    kinds = {isinstance(d, MeasuredFRF) for d in [baseline, *currents]}
+    if len(kinds) > 1:
+        raise BeamDamageError("BASELINE and MEASURED must all be FRF files or all modal data")
+    if not kinds.pop():
+        return baseline, list(currents), False
+    fmax = float(training_frequency_range_hz(model.networks["modal"])[3, 1]) * 1.25 if "modal" in model.networks \
+        else None
+    try:
+        ids = [identify_modes(d, fmax, n) for d, n in zip([baseline, *currents], names)]
+    except BeamDamageError:
+        if model.route == "modal":
+            raise
+        return None, None, True          # an FRF-route model classifies the FRFs without modes
+    return ids[0], ids[1:], True
+
+
+def _frf_route_features(model: TrainedModel, baseline, currents, warnings: list):
+    """Grid features of the model's FRF route for (baseline, current) FRF pairs, or None if the files lack DOFs."""
+    rows_b = frf_rows(baseline, model.beam)
+    rows_c = [frf_rows(c, model.beam) for c in currents]
+    if rows_b[0] is None or any(r[0] is None for r in rows_c):
+        return None
+    if model.route == "updated":
+        warnings.append("the updated-model route is fed with the measured FRFs (no updating of measured FRFs here)")
+
+    def grid(r):
+        H, f = r
+        w = f.omega_rad_s
+        if w[0] > GRID_RAD_S[0] * 1.001 or w[-1] < GRID_RAD_S[-1] * 0.999:
+            msg = (f"FRF lines cover {w[0]:.4g}-{w[-1]:.4g} rad/s, the model's grid "
+                   f"{GRID_RAD_S[0]:.4g}-{GRID_RAD_S[-1]:.4g} rad/s: nearest values used outside")
+            if msg not in warnings:
+                warnings.append(msg)
+        return map_frf_to_grid(H, w)
+
+    gb = grid(rows_b)
+    return frf_features(np.stack([np.stack([gb, grid(r)]) for r in rows_c]))
+
+
+def _network_answer(d, i, out, L, depth) -> dict:
+    return {"damaged": bool(out.damaged[i]), "probability_damaged": float(d.probability_damaged[i]),
+            "location_x_over_L": float(d.x_over_L[i]), "location_x_m": float(d.x_over_L[i] * L),
+            "location_std_m": float(d.x_std_over_L[i] * L), "location_element": int(d.element[i]),
+            "element_probabilities": [float(v) for v in d.element_probabilities[i]],
+            "stiffness_loss_Nm3": float(d.stiffness_loss_Nm3[i]),
+            "stiffness_loss_std_Nm3": float(d.stiffness_loss_std_Nm3[i]),
+            "depth_m": depth, "detectable": bool(out.detectable[i])}
+
+
+def _classical_answer(o: MethodOutput, i, L) -> dict:
+    return {"method": o.name, "damaged": bool(o.damaged[i]), "location_x_over_L": float(o.x_over_L[i]),
+            "location_x_m": float(o.x_over_L[i] * L), "location_element": int(min(int(o.x_over_L[i] * 4) + 1, 4)),
+            "stiffness_loss_Nm3": float(o.stiffness_loss_Nm3[i]), "score": float(o.score[i])}
+
+
+def classify(model: TrainedModel, baseline, current) -> dict:
+    """Verdict for one measured pair: :func:`classify_many` with one current input."""
+    return classify_many(model, baseline, [current])[0]
+
+
+def classify_many(model: TrainedModel, baseline, currents: list, names: list[str] | None = None) -> list[dict]:
+    """Verdicts for tests of one beam against the same baseline (one network call for all pairs).
+
+    Parameters
+    ----------
+    baseline : :class:`physics.io.ModalData` or :class:`physics.io.MeasuredFRF`
+        The undamaged state, on the model's DOFs (:func:`on_model_dofs`).
+    currents : list of the same kind as ``baseline``
+    names : list of str, optional
+        Names of the inputs (baseline first) for messages.
+
+    FRF files are identified by :data:`IDENTIFICATION` (LSCF/LSFD, the path the training data's modal noise
+    describes); the modal-route network and every classical method read those modes. A model on an FRF route
+    reads the FRFs themselves (any frequency lines, mapped onto its grid).
+
+    Returns
+    -------
+    list of dict, one verdict per current input. The verdict keys (``damaged``, ``location_*``,
+    ``stiffness_loss_*``...) are the network's answer when the pair lies inside the training data
+    (``in_distribution``: its Mahalanobis distance within the :data:`IN_DISTRIBUTION_PERCENTILE` percentile of
+    the training pairs', its modes in their training ranges and paired), else the classical method's
+    (``verdict_from``); ``network`` and ``classical`` hold both answers, ``classical_methods`` every method's.
+    """
+    names = list(names) if names else ["baseline"] + [f"measured {k + 1}" for k in range(len(currents))]
     beam = model.beam
-    warnings = []
+    L = beam.length_m
+    warnings: list[str] = []
     sens = sensitivity_of(beam, model.config.get("root_spring_relative"), model.config.get("truth_beam"))
-    route = "modal"
+    base_md, cur_md, identified = _modal_inputs(model, baseline, currents, names)
     lam = vecs = None
-    if isinstance(baseline, MeasuredFRF) != isinstance(current, MeasuredFRF):
-        raise BeamDamageError("BASELINE and MEASURED must both be FRF files or both modal data")
-    if isinstance(baseline, MeasuredFRF):
-        rows = [frf_rows(x, beam) for x in (baseline, current)]
-        if model.route in ("measured", "updated") and all(r[0] is not None for r in rows):
-            route = model.route
-            if route == "updated":
-                warnings.append("the updated-model route is fed with the measured FRFs (no updating of measured FRFs here)")
-            Ls = []
-            for H, f in rows:
-                w = f.omega_rad_s
-                lo, hi = w[0], w[-1]
-                if lo > GRID_RAD_S[0] * 1.001 or hi < GRID_RAD_S[-1] * 0.999:
-                    warnings.append(f"FRF lines cover {lo:.4g}-{hi:.4g} rad/s, the model's grid "
-                                    f"{GRID_RAD_S[0]:.4g}-{GRID_RAD_S[-1]:.4g} rad/s: nearest values used outside")
-                Ls.append(map_frf_to_grid(H, w))
-            X = frf_features(np.stack(Ls)[None])        # (1, 2, 4, G) -> (1, d)
-        elif model.route == "modal" and identified is not None:
-            lam, vecs, w = modal_pair(identified[0], identified[1], beam)
-            warnings += w + ["modal route on modes identified from the FRFs by peak picking (4 modes)"]
-            X = modal_features(lam, vecs)
-        else:
-            raise BeamDamageError(f"FRF files must hold receptances at {', '.join(beam.dofs)} driven at {beam.dofs[0]} "
-                                  f"for the {model.route} route; identify modal data first (beam-damage identify)")
+    if base_md is not None:
+        pairs = [modal_pair(base_md, c, beam) for c in cur_md]
+        lam, vecs = np.concatenate([p[0] for p in pairs]), np.concatenate([p[1] for p in pairs])
+        warnings += list(dict.fromkeys(w for p in pairs for w in p[2]))
     else:
-        lam, vecs, w = modal_pair(baseline, current, beam)
-        warnings += w
-        X = modal_features(lam, vecs)
+        warnings.append("LSCF/LSFD found fewer than 4 modes: no classical answer; the FRF-route network alone")
+    route, X = "modal", None
+    if identified and model.route in ("measured", "updated"):
+        X = _frf_route_features(model, baseline, currents, warnings)
+        route = model.route if X is not None else "modal"
+    if X is None and lam is None:
+        raise BeamDamageError(f"{names[0]}: the files hold neither the FRFs the model's {model.route} route reads "
+                              "nor 4 identifiable modes")
+    if X is None:
         if "modal" not in model.networks:
-            raise BeamDamageError("this model has no modal-route network; give FRF files")
+            raise BeamDamageError("this model has no modal-route network; give FRF files holding receptances at "
+                                  f"{', '.join(beam.dofs)} driven at {beam.dofs[0]}")
+        X = modal_features(lam, vecs)
+    if identified:
+        warnings.append(f"modes identified from the FRF files by {IDENTIFICATION['method'].upper()}/LSFD "
+                        f"({IDENTIFICATION['n_modes']} modes), the identification the training data's modal "
+                        "noise describes")
+    calibrated = (model.config.get("generator_config") or {}).get("measurement", {}).get("identification")
+    if identified and calibrated != IDENTIFICATION:
+        warnings.append("the training data's modal noise was not calibrated against the identification run "
+                        "here: retrain on data from 'beam-damage generate --config training'")
     est = model.networks[route]
     out, d = network_output(est, X, sens)
     dist, pct = ood_percentile(est, X)
-    if pct >= 99.9:
-        warnings.append(f"the pair lies far outside the training distribution (Mahalanobis distance {dist:.3g}, "
-                        f"beyond {pct:.1f}% of training pairs): treat the verdict with caution")
-    L = beam.length_m
-    depth = equivalent_depth(float(d.stiffness_loss_Nm3[0]), model.config.get("truth_beam") or beam.name,
-                             model.config["reference_width_m"])
-    result = {
-        "damaged": bool(out.damaged[0]), "probability_damaged": float(d.probability_damaged[0]),
-        "location_x_over_L": float(d.x_over_L[0]), "location_x_m": float(d.x_over_L[0] * L),
-        "location_std_m": float(d.x_std_over_L[0] * L), "location_element": int(d.element[0]),
-        "element_probabilities": [float(v) for v in d.element_probabilities[0]],
-        "stiffness_loss_Nm3": float(d.stiffness_loss_Nm3[0]), "stiffness_loss_std_Nm3": float(d.stiffness_loss_std_Nm3[0]),
-        "depth_m": depth, "detectable": bool(out.detectable[0]), "input_route": route, "warnings": warnings,
-    }
-    extra = {"location_distribution": d.location_distribution[0], "mahalanobis_distance": dist,
-             "training_percentile": pct, "baseline": None}
-    if lam is None and identified is not None:
-        try:
-            lam, vecs, w = modal_pair(identified[0], identified[1], beam)
-        except BeamDamageError as exc:
-            warnings.append(f"no classical baseline: identified modal data unusable ({exc})")
+    mode_reasons = [[] for _ in currents]
+    classical, best = [], None
     if lam is not None:
+        if "modal" in model.networks:
+            mode_reasons = _mode_checks(lam, vecs, training_frequency_range_hz(model.networks["modal"]))
         classical, _ = run_classical(lam, vecs, sens, model.config["baseline_thresholds"])
         best = next((o for o in classical if o.name == model.config["best_baseline"]), classical[0])
-        extra["baseline"] = {"method": best.name, "damaged": bool(best.damaged[0]),
-                             "largest_frequency_drop": float(best.score[0]) if best.name != "sensitivity updating" else None,
-                             "location_x_over_L": float(best.x_over_L[0]), "location_x_m": float(best.x_over_L[0] * L),
-                             "location_element": int(min(int(best.x_over_L[0] * 4) + 1, 4)),
-                             "stiffness_loss_Nm3": float(best.stiffness_loss_Nm3[0])}
-    return {**result, "_extra": extra}
+    depth_of = model.config.get("truth_beam") or beam.name
+    results = []
+    for i in range(len(currents)):
+        net = _network_answer(d, i, out, L, equivalent_depth(float(d.stiffness_loss_Nm3[i]), depth_of,
+                                                              model.config["reference_width_m"]))
+        cl = None if best is None else _classical_answer(best, i, L)
+        reasons = list(mode_reasons[i])
+        if pct[i] > IN_DISTRIBUTION_PERCENTILE:
+            reasons.insert(0, f"Mahalanobis distance {dist[i]:.3g} from the training data, beyond "
+                              f"{pct[i]:.2f}% of training pairs")
+        inside = not reasons
+        w = list(warnings)
+        if inside or cl is None:
+            verdict = dict(net)
+            if not inside:
+                w.append("the pair lies outside the training data (" + "; ".join(reasons) + ") and no classical "
+                         "answer is available: treat the network's verdict with caution")
+        else:
+            w.append("the pair lies outside the training data (" + "; ".join(reasons) + "): the verdict is the "
+                     f"classical method's ({best.name}); the network's answer is shown beside it")
+            verdict = {"damaged": cl["damaged"], "probability_damaged": None,
+                       "location_x_over_L": cl["location_x_over_L"], "location_x_m": cl["location_x_m"],
+                       "location_std_m": None, "location_element": cl["location_element"],
+                       "element_probabilities": None, "stiffness_loss_Nm3": cl["stiffness_loss_Nm3"],
+                       "stiffness_loss_std_Nm3": None,
+                       "depth_m": equivalent_depth(cl["stiffness_loss_Nm3"], depth_of, model.config["reference_width_m"]),
+                       "detectable": bool(sens.largest_drop(np.array([cl["location_x_over_L"]]),
+                                                            np.array([cl["stiffness_loss_Nm3"]]))[0]
+                                          >= detectability_threshold())}
+        f = np.abs(lam[i]) / (2 * np.pi) if lam is not None else [[], []]
+        results.append({
+            "measured": names[i + 1], **verdict, "verdict_from": "network" if inside or cl is None else "classical",
+            "in_distribution": inside, "out_of_distribution_reasons": reasons,
+            "mahalanobis_distance": float(dist[i]), "training_percentile": float(pct[i]),
+            "network": net, "classical": cl,
+            "classical_methods": [_classical_answer(o, i, L) for o in classical],
+            "identification": {**IDENTIFICATION, "source": "identified from FRFs" if identified else "modal data",
+                               "baseline_frequencies_hz": [float(x) for x in f[0]],
+                               "measured_frequencies_hz": [float(x) for x in f[1]]},
+            "input_route": route, "warnings": w,
+            "_extra": {"location_distribution": d.location_distribution[i]},
+        })
+    return results
 
 
 def equivalent_depth(stiffness_loss_Nm3: float, preset, width_m: float) -> float | None:

@@ -730,7 +730,9 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
 
 
 #: Weightings of :func:`lsfd` (or pass an array of noise standard deviations).
-WEIGHTINGS = ("relative", "uniform")
+WEIGHTINGS = ("relative", "uniform", "estimated")
+#: Refits of ``weighting="estimated"`` after the relative-weighted start.
+ESTIMATION_PASSES = 3
 
 
 @dataclass(frozen=True)
@@ -807,6 +809,42 @@ def _lsfd_weights(h, weighting):
     if not (np.all(np.isfinite(sigma)) and np.all(sigma > 0)):
         raise ShapeError("noise standard deviations (weighting) must be finite and > 0")
     return 1 / sigma
+
+
+def estimate_noise_model(h, residual, iterations: int = 4):
+    """Noise standard deviation of each line, ``sigma = sqrt((a |h|)^2 + b^2)`` per FRF, from fit residuals.
+
+    A measured FRF carries noise proportional to its magnitude (``a``, relative) and a floor (``b``, in the
+    FRF's units) that dominates the antiresonances of a lightly damped structure. ``|residual|^2`` estimates
+    ``sigma^2`` line by line; ``a^2`` and ``b^2`` (>= 0) are fitted by iteratively reweighted least squares
+    (weights ``1 / sigma^4``, the variance of ``|residual|^2``).
+
+    Parameters
+    ----------
+    h : ndarray, complex, shape (n_frf, n_lines)
+        Model FRFs (a first fit), whose magnitude carries the relative part.
+    residual : ndarray, complex, shape (n_frf, n_lines)
+        Measured minus model.
+
+    Returns
+    -------
+    ndarray, shape (n_frf, n_lines)  standard deviations, > 0
+    """
+    m2 = np.abs(h) ** 2
+    r2 = np.abs(residual) ** 2
+    A = np.stack([m2, np.ones_like(m2)], axis=-1)                 # (n_frf, n_lines, 2)
+    w = np.ones_like(m2)
+    for _ in range(iterations):
+        Aw = A * w[..., None]
+        G = np.einsum("fni,fnj->fij", Aw, A)
+        rhs = np.einsum("fni,fn->fi", Aw, r2)
+        coef = np.linalg.solve(G + 1e-300 * np.eye(2), rhs[..., None])[..., 0]
+        coef = np.maximum(coef, 0.0)
+        var = coef[:, None, 0] * m2 + coef[:, None, 1]
+        tiny = 1e-24 * np.max(m2, axis=-1, keepdims=True) + np.finfo(float).tiny
+        var = np.maximum(var, tiny)
+        w = 1 / var**2
+    return np.sqrt(var)
 
 
 def _weighted_solve(B, h, W):
@@ -904,9 +942,15 @@ def lsfd(frequency_hz, frf, eigenvalues, lower_residual=True, upper_residual=Tru
     iw = 2j * np.pi * f
     n_s, n_r, N = h.shape
     hk = h.reshape(-1, N)
-    W = _lsfd_weights(h, weighting).reshape(-1, N)
     n_m = lam.size
     B = _lsfd_basis(iw, lam, power, lower_residual, upper_residual)
+    if isinstance(weighting, str) and weighting == "estimated":
+        W = _lsfd_weights(hk, "relative")
+        for _ in range(ESTIMATION_PASSES):   # noise model from the residuals, refit with its weights
+            synth0 = _weighted_solve(B, hk, W)[0] @ B.T
+            W = 1 / estimate_noise_model(synth0, hk - synth0)
+    else:
+        W = _lsfd_weights(h, weighting).reshape(-1, N)
     x, s2, x_std, Q = _weighted_solve(B, hk, W)
     R = x[:, :n_m] + 1j * x[:, n_m:2 * n_m]
     S = _pole_information(iw, lam, R, power, W, Q, s2)
@@ -970,7 +1014,7 @@ class LSCFIdentification:
 
 
 def identify_lscf(frequency_hz, frf, n_modes=None, drive=None, max_order=40, select=None, *, kind="receptance",
-                  weighting="relative", margin=0.1, **lscf_options):
+                  weighting="estimated", margin=0.1, **lscf_options):
     """LSCF poles, automatic selection and LSFD residues/shapes in one call.
 
     Poles come from LSCF on the receptance (stabilisation over model orders),

@@ -108,9 +108,16 @@ def test_classify_modal_json_prints_exactly_the_keys(tiny, capsys):
     res = json.loads(capsys.readouterr().out)
     assert tuple(res) == KEYS
     assert res["input_route"] == "modal" and 1 <= res["location_element"] <= 4
-    assert sum(res["element_probabilities"]) == pytest.approx(1.0, abs=1e-4)
+    assert sum(res["network"]["element_probabilities"]) == pytest.approx(1.0, abs=1e-4)
+    # the verdict is the network's inside the training data, else the classical method's; both are shown
+    inside = res["training_percentile"] <= 99.9 and not res["out_of_distribution_reasons"]
+    assert res["in_distribution"] is inside and res["verdict_from"] == ("network" if inside else "classical")
+    source = res["network"] if inside else res["classical"]
+    assert (res["damaged"], res["location_element"]) == (source["damaged"], source["location_element"])
+    assert res["classical"]["method"] in {m["method"] for m in res["classical_methods"]}
+    assert {"method", "damaged", "location_element", "location_x_over_L"} <= set(res["classical"])
     assert main(["classify", "--model", str(tiny / "model"), "--baseline", base, cur, "--out", str(tiny / "cl")]) == 0
-    assert "Best classical baseline" in capsys.readouterr().out
+    assert "Classical (" in capsys.readouterr().out
     assert (tiny / "cl" / "classify.png").stat().st_size > 0
 
 
@@ -153,8 +160,9 @@ def test_classify_places_a_renumbered_shuffled_mm_uff_by_its_geometry(tiny, caps
     assert pos["model_dofs"] == ["5:y", "3:y", "2:y", "4:y"]
     assert res["input_route"] == "measured" == ref["input_route"]
     for key in ("probability_damaged", "location_x_m", "location_std_m", "stiffness_loss_Nm3"):
-        assert res[key] == pytest.approx(ref[key], rel=1e-6), key
-    np.testing.assert_allclose(res["element_probabilities"], ref["element_probabilities"], rtol=1e-6, atol=1e-9)
+        assert res["network"][key] == pytest.approx(ref["network"][key], rel=1e-6), key
+    np.testing.assert_allclose(res["network"]["element_probabilities"], ref["network"]["element_probabilities"],
+                               rtol=1e-6, atol=1e-9)
     # node 103 placed at 400 mm: off the model grid, refused in one line naming the file and the DOF
     write_renumbered_uff(tiny / "offgrid.uff", read_frf(paths[1]), nodes, {**x_mm, 103: 400.0})
     assert main(["classify", "--model", str(tiny / "model"), "--baseline", uffs[0], str(tiny / "offgrid.uff")]) == 2
@@ -166,10 +174,21 @@ def test_modal_route_model_classifies_frf_files_through_identified_modes(tiny, c
     assert main(["train", "--data", str(tiny / "data"), "--out", str(tiny / "modal"), "--epochs", "2", "--json"]) == 0
     capsys.readouterr()
     assert json.loads((tiny / "modal" / "config.json").read_text())["route"] == "modal"   # the default route
-    paths = [str(tiny / f"frf{s}.npz") for s in (0, 1)]                                   # written by the test above
+    from datagen.store import Dataset
+
+    ds = Dataset(tiny / "data")
+    H = ds.array("frf_measured")[:1]
+    paths = []
+    for s in (0, 1):          # the dataset's own lines: mode 1 (0.13 % damping) is a one-line peak on them
+        paths.append(str(tiny / f"own{s}.npz"))
+        write_frf_npz(paths[-1], MeasuredFRF(ds.omega_rad_s / (2 * np.pi), H[0, s][:, None, :],
+                                             ("2:+Y", "3:+Y", "4:+Y", "5:+Y"), ("2:+Y",)))
     assert main(["classify", "--model", str(tiny / "modal"), "--baseline", paths[0], paths[1], "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
-    assert res["input_route"] == "modal" and any("peak picking" in w for w in res["warnings"])
+    f_true = np.abs(ds.array("truth_poles")[0, :, :4]) / (2 * np.pi)
+    np.testing.assert_allclose(res["identification"]["baseline_frequencies_hz"], f_true[0], rtol=2e-3)
+    np.testing.assert_allclose(res["identification"]["measured_frequencies_hz"], f_true[1], rtol=2e-3)
+    assert res["input_route"] == "modal" and any("LSCF/LSFD" in w for w in res["warnings"])
 
 
 def test_refusals_and_bad_input_exit_2(tiny, capsys):

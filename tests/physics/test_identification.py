@@ -273,3 +273,48 @@ def test_realistic_fit_beats_sdypy_ema_by_half():
     ours, theirs = rows["beam-damage lscf+lsfd"], rows["sdypy-EMA lscf+lsfd"]
     assert ours["db_measured"][0] <= 0.5 * theirs["db_measured"][0]
     assert ours["db_measured"][1] <= 0.5 * theirs["db_measured"][1]
+
+
+def test_estimated_noise_model_recovers_relative_noise_and_floor():
+    """|residual|^2 of complex Gaussian noise sqrt((a|H|)^2 + b^2) gives a and b back (IRLS on 4 x 4000 lines)."""
+    from physics.identification import estimate_noise_model
+
+    rng = np.random.default_rng(3)
+    w = np.linspace(1, 100, 4000)
+    h = np.stack([1 / (k + 2.0 - (w / 30) ** 2 + 0.02j * w / 30) for k in range(4)])
+    a, b = 0.01, 0.002 * np.max(np.abs(h), axis=1, keepdims=True)
+    sigma = np.sqrt((a * np.abs(h)) ** 2 + b**2)
+    noise = sigma * (rng.standard_normal(h.shape) + 1j * rng.standard_normal(h.shape)) / np.sqrt(2)
+    est = estimate_noise_model(h, noise)
+    np.testing.assert_allclose(est / sigma, 1.0, atol=0.08)
+
+
+def test_estimated_weighting_is_the_noise_weighted_fit_with_a_floor_and_the_relative_fit_without():
+    """A lightly damped cantilever with a noise floor of 0.1 % of the peak: relative weighting fits the floor at
+    the antiresonances (shape errors of tens of %), the estimated noise model gives the known-noise fit's shapes."""
+    from physics.fem import beam_model
+    from physics.frf import receptance
+    from physics.modal import complex_modes
+    from physics.properties import beam_preset
+
+    p = beam_preset("beam5")
+    m = beam_model(20, p.length, p.EI, p.m_per_length)
+    idx = m.index(["6:y", "11:y", "16:y", "21:y"])
+    C = 2e-7 * m.K + 0.3 * m.M
+    w = np.linspace(2 * np.pi, 5000.0, 1024)
+    H = receptance(m.M, C, m.K, w, idx, [idx[0]])               # (4, 1, F)
+    modes = complex_modes(m.M, C, m.K)
+    truth = modes.eigenvectors[idx][:, :4] * modes.eigenvectors[idx[0], :4] / np.sqrt(
+        modes.eigenvectors[idx[0], :4] ** 2)
+    rng = np.random.default_rng(0)
+    sigma = np.sqrt((0.003 * np.abs(H)) ** 2 + (1e-3 * np.abs(H).max(axis=-1, keepdims=True)) ** 2)
+    Hn = H + sigma * (rng.standard_normal(H.shape) + 1j * rng.standard_normal(H.shape)) / np.sqrt(2)
+
+    def shape_error(weighting):
+        s = identify_lscf(w / (2 * np.pi), Hn, n_modes=4, drive=(0, 0), weighting=weighting).estimate.shapes
+        a = np.sum(np.conj(truth) * s, 0) / np.sum(np.abs(truth) ** 2, 0)
+        return np.linalg.norm(s - a * truth, axis=0) / np.linalg.norm(s, axis=0)
+
+    known, estimated, relative = shape_error(sigma), shape_error("estimated"), shape_error("relative")
+    assert relative.max() > 0.05
+    assert estimated.max() < 0.02 and np.all(estimated < 1.5 * known + 2e-3)
