@@ -1149,6 +1149,19 @@ def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, ma
     return Identification(frf, est, synth, diagram, label, outside)
 
 
+def identify_frfs(frfs, method="lscf", band_hz=None, n_modes=None, max_order=40) -> list[Identification]:
+    """:func:`identify_frf` on each of several :class:`~physics.io.MeasuredFRF` (same arguments for all).
+
+    Files of one layout (the same frequency lines and band) share the LSCF basis and
+    its QR factor, computed once (see :func:`lscf`); results are in input order.
+
+    Returns
+    -------
+    list of Identification
+    """
+    return [identify_frf(frf, method, band_hz, n_modes, max_order) for frf in frfs]
+
+
 def identify_file(path, method="lscf", band_hz=None, n_modes=None, max_order=40) -> Identification:
     """:func:`identify_frf` on an FRF file (UFF 58, CSV or ``.npz``; see :func:`physics.io.read_frf`).
 
