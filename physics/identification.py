@@ -1034,6 +1034,14 @@ def identify_lscf(frequency_hz, frf, n_modes=None, drive=None, max_order=40, sel
     LSCFIdentification
     """
 
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1):  # small dense products and eigenproblems: one BLAS thread is fastest
+        return _identify_lscf(frequency_hz, frf, n_modes, drive, max_order, select, kind, weighting, margin,
+                              lscf_options)
+
+
+def _identify_lscf(frequency_hz, frf, n_modes, drive, max_order, select, kind, weighting, margin, lscf_options):
     f, h = _frf3(frequency_hz, frf)
     rec = convert_frf(h, 2 * np.pi * f, check_frf_kind(kind), "receptance")
     diagram = lscf(f, rec, max_order=max_order, margin=margin, **lscf_options)
