@@ -362,3 +362,20 @@ def test_identify_frfs_equals_identify_frf_file_by_file():
         np.testing.assert_array_equal(got.estimate.natural_frequencies_hz, one.estimate.natural_frequencies_hz)
         np.testing.assert_array_equal(got.estimate.shapes, one.estimate.shapes)
     assert many[0].estimate.natural_frequencies_hz[0] != many[1].estimate.natural_frequencies_hz[0]
+
+
+def test_speed_bench_file_identifies_the_modes_of_its_fe_model(tmp_path):
+    from experiments.bench_identify_speed import EI_SCALE, RAYLEIGH, write_test_file
+    from physics.beam import preset_beam
+    from physics.identification import identify_frf
+    from physics.io import read_frf
+
+    frf = read_frf(write_test_file(tmp_path / "b5.uff", noise=0.015, seed=0))
+    assert frf.frf.shape == (4, 1, 1597) and frf.frequency_hz[0] == 2.0 and frf.frequency_hz[-1] == 800.0
+    beam = preset_beam("beam5")
+    fe = beam.fe_model(8, EI_scale=EI_SCALE)
+    cm = complex_modes(fe.M, RAYLEIGH[0] * fe.M + RAYLEIGH[1] * fe.K, fe.K)
+    est = identify_frf(frf, n_modes=4).estimate
+    np.testing.assert_allclose(est.natural_frequencies_hz, cm.natural_frequencies_hz[:4], rtol=1e-4)
+    np.testing.assert_allclose(est.damping_ratios, cm.damping_ratios[:4], rtol=0.03)
+    assert np.all(np.diag(mac(est.shapes, cm.eigenvectors[fe.index(beam.masters)][:, :4])) > 0.9999)
