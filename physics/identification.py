@@ -511,6 +511,10 @@ class StabilisationDiagram:
     band_hz: tuple
 
 
+#: (frequency lines, dt, columns) -> (X, Q) of :func:`_lscf_basis`, the 4 most recent.
+_LSCF_BASIS_CACHE: dict = {}
+
+
 def _lscf_basis(f_hz, dt_s, n_cols):
     """LSCF polynomial basis ``X = exp(i w dt k)`` (N, n_cols) and an orthonormal basis (2N, n_cols) of its
     real-stacked columns (Householder QR); the first ``nb`` columns of ``Q`` span the first ``nb`` of ``X``.
@@ -530,9 +534,6 @@ def _lscf_basis(f_hz, dt_s, n_cols):
             _LSCF_BASIS_CACHE.pop(next(iter(_LSCF_BASIS_CACHE)))
         _LSCF_BASIS_CACHE[key] = hit
     return hit
-
-
-_LSCF_BASIS_CACHE: dict = {}
 
 
 def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_tol=0.05, mpf_tol=0.98,
@@ -720,12 +721,12 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
     # candidates by order, padded to a (n_orders, width) table (-1 = none)
     c_orders, c_group = np.unique(d.order[cand], return_inverse=True)
     slot = np.arange(cand.size) - np.searchsorted(c_group, c_group)  # cand is grouped by ascending order
-    table_ = np.full((c_orders.size, max(1, np.bincount(c_group).max(initial=0))), -1)
-    table_[c_group, slot] = cand
-    f_tab = np.where(table_ >= 0, d.natural_frequencies_hz[table_], np.inf)
+    by_order = np.full((c_orders.size, max(1, np.bincount(c_group).max(initial=0))), -1)
+    by_order[c_group, slot] = cand
+    f_tab = np.where(by_order >= 0, d.natural_frequencies_hz[by_order], np.inf)
     # each order's candidate nearest in frequency to each seed, kept within the tolerances
     dist = np.abs(f_tab[None] - d.natural_frequencies_hz[seeds][:, None, None])  # (n_seeds, n_orders, width)
-    near = table_[np.arange(c_orders.size)[None, :], np.argmin(dist, axis=2)]  # (n_seeds, n_orders)
+    near = by_order[np.arange(c_orders.size)[None, :], np.argmin(dist, axis=2)]  # (n_seeds, n_orders)
     fs, zs = d.natural_frequencies_hz[seeds][:, None], d.damping_ratios[seeds][:, None]
     ok = (np.abs(d.natural_frequencies_hz[near] - fs) <= freq_tol * fs) \
         & (np.abs(d.damping_ratios[near] - zs) <= damping_tol * zs)
