@@ -511,6 +511,31 @@ class StabilisationDiagram:
     band_hz: tuple
 
 
+#: (frequency lines, dt, columns) -> (X, Q) of :func:`_lscf_basis`, the 4 most recent.
+_LSCF_BASIS_CACHE: dict = {}
+
+
+def _lscf_basis(f_hz, dt_s, n_cols):
+    """LSCF polynomial basis ``X = exp(i w dt k)`` (N, n_cols) and an orthonormal basis (2N, n_cols) of its
+    real-stacked columns (Householder QR); the first ``nb`` columns of ``Q`` span the first ``nb`` of ``X``.
+
+    The last few results are cached by the frequency lines, ``dt_s`` and ``n_cols`` (files of one layout
+    share them).
+    """
+    key = (f_hz.tobytes(), float(dt_s), int(n_cols))
+    hit = _LSCF_BASIS_CACHE.get(key)
+    if hit is None:
+        X = np.exp(1j * np.outer(2 * np.pi * f_hz * dt_s, np.arange(n_cols)))
+        Q, _ = np.linalg.qr(np.concatenate([X.real, X.imag], axis=0))
+        hit = (X, Q)
+        for a in (X, Q):
+            a.setflags(write=False)
+        if len(_LSCF_BASIS_CACHE) >= 4:
+            _LSCF_BASIS_CACHE.pop(next(iter(_LSCF_BASIS_CACHE)))
+        _LSCF_BASIS_CACHE[key] = hit
+    return hit
+
+
 def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_tol=0.05, mpf_tol=0.98,
          max_damping=0.2, margin=0.0):
     """Poly-reference least-squares complex frequency-domain poles (pLSCF).
@@ -520,7 +545,8 @@ def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_to
     (``n_ref x n_ref``, ``alpha_p = I``). The linear least-squares problem is
     reduced to the normal equations of the denominator only
     (``M = sum_o T_o - S_o^T R^-1 S_o``, formed as ``sum_o Y_o^T (I - Q Q^T) Y_o``
-    with a QR factor ``Q`` of the numerator basis, for conditioning). Poles are the roots of
+    with a QR factor ``Q`` of the numerator basis, for conditioning; every order
+    from one QR and one projection at ``max_order``). Poles are the roots of
     ``det A(z)`` (block companion matrix), ``lambda = ln(z)/dt``; participation
     vectors are the left null vectors of ``A(z)``. With one reference this is
     the common-denominator LSCF.
@@ -556,26 +582,28 @@ def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_to
         raise ShapeError("lscf needs 1 <= min_order <= max_order")
     if N * n_o < (max_order + 1) * (n_i + 1):
         raise ShapeError(f"lscf: {N} lines x {n_o} responses are too few for model order {max_order}")
-    w = 2 * np.pi * f
     dt = 1.0 / (2.0 * f[-1] * (1.0 + margin))
     P = max_order + 1
-    X = np.exp(1j * np.outer(w * dt, np.arange(P)))  # (N, P) polynomial basis
+    X, Q = _lscf_basis(f, dt, P)
     Hrow = np.transpose(h, (0, 2, 1))  # (n_o, N, n_i)
     Y = -(X[None, :, :, None] * Hrow[:, :, None, :]).reshape(n_o, N, P * n_i)
-    # real-valued coefficients: stack real and imaginary parts
-    Xr = np.concatenate([X.real, X.imag], axis=0)  # (2N, P)
     Yr = np.concatenate([Y.real, Y.imag], axis=1)  # (n_o, 2N, P n_i)
+    # Eliminate the numerators: order p projects Y off the first nb = p + 1 columns of Q
+    # (QR, so the conditioning of X is not squared), then solves the denominator normal
+    # equations M_p alpha = 0 with alpha_p = I. With C = Q^T Y and Yperp = Y - Q C,
+    # Y - Q[:, :nb] C[:nb] = Yperp + Q[:, nb:] C[nb:] (orthogonal parts), so
+    # M_p = Yperp^T Yperp + sum_{k >= nb} C_k^T C_k on the first (p + 1) n_i columns:
+    # a sum of positive semi-definite terms (no cancellation), all orders from one projection.
+    C = np.matmul(Q.T, Yr)  # (n_o, P, P n_i)
+    Yperp = Yr - np.matmul(Q, C)
+    Yp2 = Yperp.reshape(-1, Yperp.shape[-1])
+    M = Yp2.T @ Yp2
     orders, lams, mpfs = [], [], []
-    for p in range(min_order, max_order + 1):
-        nb, na = p + 1, (p + 1) * n_i
-        # eliminate the numerators: project Y on the orthogonal complement of span(X)
-        # (QR, so the conditioning of X is not squared), then solve the denominator
-        # normal equations M alpha = 0 with alpha_p = I
-        Q, _ = np.linalg.qr(Xr[:, :nb])
-        Yp = Yr[:, :, :na]
-        Yperp = Yp - Q @ np.einsum("nk,onl->okl", Q, Yp)
-        Mp = np.einsum("onk,onl->kl", Yperp, Yperp)
-        m = p * n_i
+    for p in range(max_order, min_order - 1, -1):
+        nb, na, m = p + 1, (p + 1) * n_i, p * n_i
+        if nb < P:  # add the term of basis column nb, dropped from the numerator at this order
+            M = M + C[:, nb, :].T @ C[:, nb, :]
+        Mp = M[:na, :na]
         try:
             alpha = np.linalg.solve(Mp[:m, :m], -Mp[:m, m:])  # (m, n_i)
         except np.linalg.LinAlgError:
@@ -597,6 +625,7 @@ def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_to
         orders.append(np.full(keep.sum(), p))
         lams.append(lam[keep])
         mpfs.append(L)
+    orders, lams, mpfs = orders[::-1], lams[::-1], mpfs[::-1]  # ascending order
     order = np.concatenate(orders)
     lam = np.concatenate(lams)
     mpf = np.concatenate(mpfs) if mpfs else np.zeros((0, n_i), complex)
@@ -683,22 +712,25 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
 
     d = diagram
     cand = np.nonzero(d.status >= min_status)[0]
+    cand = cand[np.argsort(d.order[cand], kind="stable")]
     orders = np.unique(d.order)
     if min_count is None:
         min_count = max(2, int(np.ceil(orders.size / 3)))
     top = orders[int(np.floor((1 - seed_orders) * (orders.size - 1))):] if orders.size else orders
     seeds = cand[np.isin(d.order[cand], top)]
-    clusters = []
-    for sd in seeds:
-        members = []
-        for p in np.unique(d.order[cand]):
-            c = cand[d.order[cand] == p]
-            j = c[np.argmin(np.abs(d.natural_frequencies_hz[c] - d.natural_frequencies_hz[sd]))]
-            if abs(d.natural_frequencies_hz[j] - d.natural_frequencies_hz[sd]) <= \
-                    freq_tol * d.natural_frequencies_hz[sd] and \
-                    abs(d.damping_ratios[j] - d.damping_ratios[sd]) <= damping_tol * d.damping_ratios[sd]:
-                members.append(j)
-        clusters.append((sd, np.array(members, int)))
+    # candidates by order, padded to a (n_orders, width) table (-1 = none)
+    c_orders, c_group = np.unique(d.order[cand], return_inverse=True)
+    slot = np.arange(cand.size) - np.searchsorted(c_group, c_group)  # cand is grouped by ascending order
+    by_order = np.full((c_orders.size, max(1, np.bincount(c_group).max(initial=0))), -1)
+    by_order[c_group, slot] = cand
+    f_tab = np.where(by_order >= 0, d.natural_frequencies_hz[by_order], np.inf)
+    # each order's candidate nearest in frequency to each seed, kept within the tolerances
+    dist = np.abs(f_tab[None] - d.natural_frequencies_hz[seeds][:, None, None])  # (n_seeds, n_orders, width)
+    near = by_order[np.arange(c_orders.size)[None, :], np.argmin(dist, axis=2)]  # (n_seeds, n_orders)
+    fs, zs = d.natural_frequencies_hz[seeds][:, None], d.damping_ratios[seeds][:, None]
+    ok = (np.abs(d.natural_frequencies_hz[near] - fs) <= freq_tol * fs) \
+        & (np.abs(d.damping_ratios[near] - zs) <= damping_tol * zs)
+    clusters = [(sd, near[k][ok[k]]) for k, sd in enumerate(seeds)]
     clusters.sort(key=lambda c: (-c[1].size, -d.order[c[0]]))
     chosen, used = [], set()
     for sd, mem in clusters:
@@ -887,7 +919,7 @@ def _pole_information(iw, lam, R, power, W, Q, s2):
     d_im = 1j * (R[:, None, :] * d[None] - Rc[:, None, :] * dc[None])
     J = np.concatenate([d_re, d_im], axis=-1) * ((iw**power)[None, :, None] * W[:, :, None])
     Jr = np.concatenate([J.real, J.imag], axis=1)  # (n_frf, 2N, 2m)
-    Jp = Jr - np.einsum("fnk,fmk,fmq->fnq", Q, Q, Jr)
+    Jp = Jr - np.matmul(Q, np.matmul(np.swapaxes(Q, 1, 2), Jr))
     return np.einsum("fnp,fnq,f->pq", Jp, Jp, 1 / s2)
 
 
@@ -1047,6 +1079,14 @@ def identify_lscf(frequency_hz, frf, n_modes=None, drive=None, max_order=40, sel
     LSCFIdentification
     """
 
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1):  # small dense products and eigenproblems: one BLAS thread is fastest
+        return _identify_lscf(frequency_hz, frf, n_modes, drive, max_order, select, kind, weighting, margin,
+                              lscf_options)
+
+
+def _identify_lscf(frequency_hz, frf, n_modes, drive, max_order, select, kind, weighting, margin, lscf_options):
     f, h = _frf3(frequency_hz, frf)
     rec = convert_frf(h, 2 * np.pi * f, check_frf_kind(kind), "receptance")
     diagram = lscf(f, rec, max_order=max_order, margin=margin, **lscf_options)
@@ -1160,6 +1200,19 @@ def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, ma
                             "receptance", frf.kind)
     label = frf.reference_dofs[drive[1]] if drive else None
     return Identification(frf, est, synth, diagram, label, outside)
+
+
+def identify_frfs(frfs, method="lscf", band_hz=None, n_modes=None, max_order=40) -> list[Identification]:
+    """:func:`identify_frf` on each of several :class:`~physics.io.MeasuredFRF` (same arguments for all).
+
+    Files of one layout (the same frequency lines and band) share the LSCF basis and
+    its QR factor, computed once (see :func:`lscf`); results are in input order.
+
+    Returns
+    -------
+    list of Identification
+    """
+    return [identify_frf(frf, method, band_hz, n_modes, max_order) for frf in frfs]
 
 
 def identify_file(path, method="lscf", band_hz=None, n_modes=None, max_order=40) -> Identification:

@@ -318,3 +318,109 @@ def test_estimated_weighting_is_the_noise_weighted_fit_with_a_floor_and_the_rela
     known, estimated, relative = shape_error(sigma), shape_error("estimated"), shape_error("relative")
     assert relative.max() > 0.05
     assert estimated.max() < 0.02 and np.all(estimated < 1.5 * known + 2e-3)
+
+
+def _lscf_poles_per_order(f, h, max_order, max_damping=0.2):
+    """Reference single-reference LSCF: a separate QR, projection and solve at every order, poles from
+    the roots of the scalar denominator polynomial (np.roots); returns {order: sorted poles}."""
+    dt = 1.0 / (2.0 * f[-1])
+    out = {}
+    for p in range(1, max_order + 1):
+        X = np.exp(1j * np.outer(2 * np.pi * f * dt, np.arange(p + 1)))
+        Xr = np.concatenate([X.real, X.imag])
+        M = np.zeros((p + 1, p + 1))
+        for o in range(h.shape[0]):
+            Y = -X * h[o, 0][:, None]
+            Yr = np.concatenate([Y.real, Y.imag])
+            coef = np.linalg.lstsq(Xr, Yr, rcond=None)[0]  # numerator of each column, eliminated
+            Yperp = Yr - Xr @ coef
+            M += Yperp.T @ Yperp
+        alpha = np.r_[np.linalg.solve(M[:p, :p], -M[:p, p]), 1.0]
+        lam = np.log(np.roots(alpha[::-1]).astype(complex)) / dt
+        fn, zeta = np.abs(lam) / (2 * np.pi), -lam.real / np.abs(lam)
+        keep = (lam.imag > 0) & (zeta > 0) & (zeta < max_damping) & (fn >= f[0]) & (fn <= f[-1])
+        out[p] = np.sort_complex(lam[keep])
+    return out
+
+
+def test_lscf_orders_from_one_projection_equal_a_separate_solve_per_order():
+    frf, _ = simulated_beam5_test(noise=0.01, seed=3, df_hz=2.0, fmax_hz=800.0, damping="heavy")
+    f, h = frf.frequency_hz, np.asarray(frf.frf)
+    d = lscf(f, h, max_order=24)
+    ref = _lscf_poles_per_order(f, h, 24)
+    for p, lam_ref in ref.items():
+        lam = np.sort_complex(d.eigenvalues[d.order == p])
+        assert lam.size == lam_ref.size, p
+        np.testing.assert_allclose(lam, lam_ref, rtol=1e-7, err_msg=f"order {p}")
+
+
+def _select_reference(d, freq_tol=0.01, damping_tol=0.25, seed_orders=0.25):
+    """select_poles written as loops over seeds and orders (frequencies and damping of the clusters)."""
+    cand = np.nonzero(d.status >= 4)[0]
+    orders = np.unique(d.order)
+    min_count = max(2, int(np.ceil(orders.size / 3)))
+    top = orders[int(np.floor((1 - seed_orders) * (orders.size - 1))):]
+    clusters = []
+    for sd in cand[np.isin(d.order[cand], top)]:
+        fs, zs = d.natural_frequencies_hz[sd], d.damping_ratios[sd]
+        mem = []
+        for p in np.unique(d.order[cand]):
+            c = cand[d.order[cand] == p]
+            j = c[np.argmin(np.abs(d.natural_frequencies_hz[c] - fs))]
+            if abs(d.natural_frequencies_hz[j] - fs) <= freq_tol * fs and \
+                    abs(d.damping_ratios[j] - zs) <= damping_tol * zs:
+                mem.append(j)
+        clusters.append((sd, mem))
+    clusters.sort(key=lambda c: (-len(c[1]), -d.order[c[0]]))
+    chosen, used = [], set()
+    for sd, mem in clusters:
+        if sd in used:
+            continue
+        mem = np.array([j for j in mem if j not in used], int)
+        if mem.size >= min_count:
+            chosen.append(mem[d.order[mem] >= np.median(d.order[mem])])
+            used.update(mem.tolist() + [sd])
+    fn = np.array([np.median(d.natural_frequencies_hz[m]) for m in chosen])
+    zeta = np.array([np.median(d.damping_ratios[m]) for m in chosen])
+    o = np.argsort(fn)
+    return fn[o], zeta[o]
+
+
+def test_select_poles_equals_the_loop_over_seeds_and_orders():
+    frf, _ = simulated_beam5_test(noise=0.02, seed=5, df_hz=1.0, fmax_hz=800.0, damping="thesis")
+    d = lscf(frf.frequency_hz, np.asarray(frf.frf), max_order=40)
+    fn_ref, zeta_ref = _select_reference(d)
+    sel = select_poles(d)
+    assert fn_ref.size >= 4
+    np.testing.assert_array_equal(sel.natural_frequencies_hz, fn_ref)
+    np.testing.assert_array_equal(sel.damping_ratios, zeta_ref)
+
+
+def test_identify_frfs_equals_identify_frf_file_by_file():
+    from physics.identification import identify_frf, identify_frfs
+
+    frfs = [simulated_beam5_test(noise=0.01, seed=s, df_hz=2.0)[0] for s in (0, 1)]
+    frfs.append(frfs[0].to_kind("accelerance"))
+    many = identify_frfs(frfs, n_modes=4)
+    for frf, got in zip(frfs, many):
+        one = identify_frf(frf, n_modes=4)
+        np.testing.assert_array_equal(got.estimate.natural_frequencies_hz, one.estimate.natural_frequencies_hz)
+        np.testing.assert_array_equal(got.estimate.shapes, one.estimate.shapes)
+    assert many[0].estimate.natural_frequencies_hz[0] != many[1].estimate.natural_frequencies_hz[0]
+
+
+def test_speed_bench_file_identifies_the_modes_of_its_fe_model(tmp_path):
+    from experiments.bench_identify_speed import EI_SCALE, RAYLEIGH, write_test_file
+    from physics.beam import preset_beam
+    from physics.identification import identify_frf
+    from physics.io import read_frf
+
+    frf = read_frf(write_test_file(tmp_path / "b5.uff", noise=0.015, seed=0))
+    assert frf.frf.shape == (4, 1, 1597) and frf.frequency_hz[0] == 2.0 and frf.frequency_hz[-1] == 800.0
+    beam = preset_beam("beam5")
+    fe = beam.fe_model(8, EI_scale=EI_SCALE)
+    cm = complex_modes(fe.M, RAYLEIGH[0] * fe.M + RAYLEIGH[1] * fe.K, fe.K)
+    est = identify_frf(frf, n_modes=4).estimate
+    np.testing.assert_allclose(est.natural_frequencies_hz, cm.natural_frequencies_hz[:4], rtol=1e-4)
+    np.testing.assert_allclose(est.damping_ratios, cm.damping_ratios[:4], rtol=0.03)
+    assert np.all(np.diag(mac(est.shapes, cm.eigenvectors[fe.index(beam.masters)][:, :4])) > 0.9999)
