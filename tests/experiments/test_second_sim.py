@@ -282,3 +282,15 @@ def test_imports_nothing_from_the_project():
                 top = name.split(".")[0]
                 ok = top in allowed or name == "experiments.second_sim" or name.startswith("experiments.second_sim.")
                 assert ok, f"{path.name} imports {name}"
+
+
+def test_cli_writes_pairs_and_refuses_a_bad_band(tmp_path, capsys):
+    from experiments.second_sim.__main__ import main
+
+    assert main(["pairs", "--set", "easy", "--n", "1", "--seed", "2", "--band-hz", "5", "400", "--df-hz", "1",
+                 "--out", str(tmp_path / "p")]) == 0
+    assert sorted(p.name for p in (tmp_path / "p").iterdir()) == \
+        ["pair-000_baseline.uff", "pair-000_current.uff", "truth.csv", "truth.json"]
+    assert main(["pairs", "--band-hz", "5", "1", "--out", str(tmp_path / "q")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--band-hz" in err[0] and not (tmp_path / "q").exists()
