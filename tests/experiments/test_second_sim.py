@@ -44,19 +44,21 @@ def test_euler_bernoulli_cantilever_matches_closed_form():
     np.testing.assert_allclose(_fe_hz(Beam(L, EI, M)), _hz(lam), rtol=1e-6)
 
 
-def test_root_spring_matches_spring_hinged_frequency_equation():
-    K = 13.0  # k L / EI
-    # W = a1 cos + a2 sin + a3 cosh + a4 sinh; W(0) = 0, EI W''(0) = k W'(0), W''(L) = W'''(L) = 0
+@pytest.mark.parametrize("K, Ky", [(13.0, math.inf), (40.0, 2000.0)])
+def test_root_springs_match_the_frequency_equation(K, Ky):
+    """Rotational spring ``K = k L / EI`` (and translational ``Ky = k_y L^3 / EI``) at the root."""
+    # W = a1 cos + a2 sin + a3 cosh + a4 sinh (argument beta x): EI W''(0) = k W'(0),
+    # EI W'''(0) = -k_y W(0) (or W(0) = 0), W''(L) = W'''(L) = 0
 
     def det(t):
         c, s, ch, sh = math.cos(t), math.sin(t), math.cosh(t), math.sinh(t)
-        return np.linalg.det(np.array([[1, 0, 1, 0], [-1, -K / t, 1, -K / t],
-                                       [-c, -s, ch, sh], [s, -c, sh, ch]]))
+        row0 = [1, 0, 1, 0] if math.isinf(Ky) else [Ky / t ** 3, -1, Ky / t ** 3, 1]
+        return np.linalg.det(np.array([row0, [-1, -K / t, 1, -K / t], [-c, -s, ch, sh], [s, -c, sh, ch]]))
 
     f_exact = _hz(_roots(det))
-    f_fe = _fe_hz(Beam(L, EI, M, root_k_theta_Nm_rad=K * EI / L))
+    f_fe = _fe_hz(Beam(L, EI, M, root_k_theta_Nm_rad=K * EI / L, root_k_y_N_m=Ky * EI / L ** 3))
     np.testing.assert_allclose(f_fe, f_exact, rtol=1e-6)
-    assert f_fe[0] < 0.88 * _hz(1.8751040687)  # the spring lowers mode 1 by 12.6 %
+    assert f_fe[0] < 0.96 * _hz(1.8751040687)  # the springs lower mode 1 by 4.8 and 12.6 %
 
 
 def test_tip_mass_matches_frequency_equation():
