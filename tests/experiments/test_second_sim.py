@@ -72,7 +72,8 @@ def test_tip_mass_matches_frequency_equation():
 
 
 def _timoshenko_exact_hz(kga, rho_i, n=4):
-    """Clamped-free Timoshenko beam: transfer matrix ``expm(A L)`` of ``[w, theta, M, V]``, ``det`` of its free block."""
+    """Clamped-free Timoshenko beam: ``det`` of the free block of the transfer matrix ``expm(A L)`` of
+    ``[w, theta, M, V]``."""
 
     def det(w):
         A = np.array([[0, 1, 0, 1 / kga], [0, 0, 1 / EI, 0], [0, -rho_i * w ** 2, 0, -1], [-M * w ** 2, 0, 0, 0]])
@@ -224,7 +225,8 @@ def test_pair_files_and_truth(written_pair):
     assert [t["pair"] for t in truth] == [0, 1]
     assert (out / "truth.csv").read_text().count("\n") == 3
     for r in recs:
-        assert (out / f"pair-{r.pair:03d}_baseline.uff").is_file() and (out / f"pair-{r.pair:03d}_current.uff").is_file()
+        for day in ("baseline", "current"):
+            assert (out / f"pair-{r.pair:03d}_{day}.uff").is_file()
         if r.truth["damaged"]:
             assert r.truth["max_frequency_drop_rel"] >= 0.002
     again = pairs.simulate_pairs("timoshenko", 2, seed=4)
