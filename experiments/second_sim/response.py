@@ -52,7 +52,7 @@ def rayleigh_for(zeta_1: float, zeta_2: float, omega_1_rad_s: float, omega_2_rad
 
 
 def _modal_sum(md: Modes, d: np.ndarray, w: np.ndarray, left: np.ndarray, right: np.ndarray) -> np.ndarray:
-    """``sum_r left[..., r] right[..., r] / (omega_r^2 - w^2 + i w d_r)``; left (a, n), right (b, n) -> (a, b, n_lines)."""
+    """``sum_r left[a, r] right[b, r] / (omega_r^2 - w^2 + i w d_r)``: (a, n), (b, n) -> (a, b, n_lines)."""
     den = 1.0 / (md.omega_rad_s[:, None] ** 2 - w[None, :] ** 2 + 1j * w[None, :] * d[:, None])
     return np.einsum("ar,br,rl->abl", left, right, den)
 

@@ -44,6 +44,9 @@ def write_uff(path, freq_hz, H, node_x_m, resp_nodes, ref_node: int, kind: str =
               description: str = "") -> None:
     """One test as a universal file: units (164, mm), node geometry (15, mm) and one FRF record (58) per response.
 
+    Dataset 164 declares the MM system (mm, mN), so the ordinates in SI (m/N, m/s/N,
+    m/s^2/N) are also right in file units (mm/mN = m/N); the axis labels say it too.
+
     Parameters
     ----------
     path : path-like

@@ -44,19 +44,21 @@ def test_euler_bernoulli_cantilever_matches_closed_form():
     np.testing.assert_allclose(_fe_hz(Beam(L, EI, M)), _hz(lam), rtol=1e-6)
 
 
-def test_root_spring_matches_spring_hinged_frequency_equation():
-    K = 13.0  # k L / EI
-    # W = a1 cos + a2 sin + a3 cosh + a4 sinh; W(0) = 0, EI W''(0) = k W'(0), W''(L) = W'''(L) = 0
+@pytest.mark.parametrize("K, Ky", [(13.0, math.inf), (40.0, 2000.0)])
+def test_root_springs_match_the_frequency_equation(K, Ky):
+    """Rotational spring ``K = k L / EI`` (and translational ``Ky = k_y L^3 / EI``) at the root."""
+    # W = a1 cos + a2 sin + a3 cosh + a4 sinh (argument beta x): EI W''(0) = k W'(0),
+    # EI W'''(0) = -k_y W(0) (or W(0) = 0), W''(L) = W'''(L) = 0
 
     def det(t):
         c, s, ch, sh = math.cos(t), math.sin(t), math.cosh(t), math.sinh(t)
-        return np.linalg.det(np.array([[1, 0, 1, 0], [-1, -K / t, 1, -K / t],
-                                       [-c, -s, ch, sh], [s, -c, sh, ch]]))
+        row0 = [1, 0, 1, 0] if math.isinf(Ky) else [Ky / t ** 3, -1, Ky / t ** 3, 1]
+        return np.linalg.det(np.array([row0, [-1, -K / t, 1, -K / t], [-c, -s, ch, sh], [s, -c, sh, ch]]))
 
     f_exact = _hz(_roots(det))
-    f_fe = _fe_hz(Beam(L, EI, M, root_k_theta_Nm_rad=K * EI / L))
+    f_fe = _fe_hz(Beam(L, EI, M, root_k_theta_Nm_rad=K * EI / L, root_k_y_N_m=Ky * EI / L ** 3))
     np.testing.assert_allclose(f_fe, f_exact, rtol=1e-6)
-    assert f_fe[0] < 0.88 * _hz(1.8751040687)  # the spring lowers mode 1 by 12.6 %
+    assert f_fe[0] < 0.96 * _hz(1.8751040687)  # the springs lower mode 1 by 4.8 and 12.6 %
 
 
 def test_tip_mass_matches_frequency_equation():
@@ -70,7 +72,8 @@ def test_tip_mass_matches_frequency_equation():
 
 
 def _timoshenko_exact_hz(kga, rho_i, n=4):
-    """Clamped-free Timoshenko beam: transfer matrix ``expm(A L)`` of ``[w, theta, M, V]``, ``det`` of its free block."""
+    """Clamped-free Timoshenko beam: ``det`` of the free block of the transfer matrix ``expm(A L)`` of
+    ``[w, theta, M, V]``."""
 
     def det(w):
         A = np.array([[0, 1, 0, 1 / kga], [0, 0, 1 / EI, 0], [0, -rho_i * w ** 2, 0, -1], [-M * w ** 2, 0, 0, 0]])
@@ -222,7 +225,8 @@ def test_pair_files_and_truth(written_pair):
     assert [t["pair"] for t in truth] == [0, 1]
     assert (out / "truth.csv").read_text().count("\n") == 3
     for r in recs:
-        assert (out / f"pair-{r.pair:03d}_baseline.uff").is_file() and (out / f"pair-{r.pair:03d}_current.uff").is_file()
+        for day in ("baseline", "current"):
+            assert (out / f"pair-{r.pair:03d}_{day}.uff").is_file()
         if r.truth["damaged"]:
             assert r.truth["max_frequency_drop_rel"] >= 0.002
     again = pairs.simulate_pairs("timoshenko", 2, seed=4)
@@ -282,3 +286,15 @@ def test_imports_nothing_from_the_project():
                 top = name.split(".")[0]
                 ok = top in allowed or name == "experiments.second_sim" or name.startswith("experiments.second_sim.")
                 assert ok, f"{path.name} imports {name}"
+
+
+def test_cli_writes_pairs_and_refuses_a_bad_band(tmp_path, capsys):
+    from experiments.second_sim.__main__ import main
+
+    assert main(["pairs", "--set", "easy", "--n", "1", "--seed", "2", "--band-hz", "5", "400", "--df-hz", "1",
+                 "--out", str(tmp_path / "p")]) == 0
+    assert sorted(p.name for p in (tmp_path / "p").iterdir()) == \
+        ["pair-000_baseline.uff", "pair-000_current.uff", "truth.csv", "truth.json"]
+    assert main(["pairs", "--band-hz", "5", "1", "--out", str(tmp_path / "q")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--band-hz" in err[0] and not (tmp_path / "q").exists()
