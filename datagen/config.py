@@ -57,6 +57,10 @@ DEFAULTS: dict = {
         "frequency_noise_floor": 0.0,  # "calibrated" only: std = sqrt((coefficient * level)^2 + floor^2), per mode
         "damping_noise_floor": 0.0,
         "shape_noise_floor": 0.0,
+        "frequency_noise_per_floor": 0.0,  # "calibrated" only: + (coefficient * FRF noise floor)^2 under the root
+        "damping_noise_per_floor": 0.0,
+        "shape_noise_per_floor": 0.0,
+        "modal_noise_scale": [1.0, 1.0],  # factor on the modal noise's stds, log-uniform per sample
         "identification": None,       # derived: the identification the calibrated modal noise describes (read-only)
         "frf_noise": 0.005,            # complex std relative to |H| per line (or [lo, hi], log-uniform per sample)
         "frf_noise_floor": 0.0,        # complex std relative to each FRF's peak (or [lo, hi], log-uniform)
@@ -168,8 +172,8 @@ def validate(cfg: dict) -> dict:
                           f"got {meas['modal_noise']!r}")
     calib = modal_noise_calibration() if meas["modal_noise"] == "calibrated" else {}
     meas["identification"] = calib.get("identification")
-    for k in ("frequency_noise", "damping_noise", "shape_noise",
-              "frequency_noise_floor", "damping_noise_floor", "shape_noise_floor"):
+    for k in ("frequency_noise", "damping_noise", "shape_noise", "frequency_noise_floor", "damping_noise_floor",
+              "shape_noise_floor", "frequency_noise_per_floor", "damping_noise_per_floor", "shape_noise_per_floor"):
         v = meas[k]
         if isinstance(v, list):
             if len(v) != 4:
@@ -177,13 +181,14 @@ def validate(cfg: dict) -> dict:
             meas[k] = [_num(f"measurement.{k}", x, lo=0, hi=100) for x in v]
         elif calib:  # a number in calibrated mode: the shipped per-mode coefficients
             q = k.split("_")[0]
-            meas[k] = [float(x) for x in calib[f"{q}_floor" if k.endswith("floor") else q]]
+            meas[k] = [float(x) for x in calib[q + k.removeprefix(f"{q}_noise")]]
         else:
             meas[k] = _num(f"measurement.{k}", v, lo=0, hi=0.5)
     for k in ("frf_noise", "frf_noise_floor"):  # a number fixes the level; a range draws it per sample
         v = meas[k]
         meas[k] = (_num(f"measurement.{k}", v, lo=0.0, hi=0.5) if isinstance(v, (int, float)) and not isinstance(v, bool)
                    else _range(f"measurement.{k}", v, lo=0.0, hi=0.5))
+    meas["modal_noise_scale"] = _range("measurement.modal_noise_scale", meas["modal_noise_scale"], lo=0.01, hi=100.0)
     meas["band_rad_s"] = _range("measurement.band_rad_s", meas["band_rad_s"], lo=0.0)
     if meas["band_rad_s"][0] >= meas["band_rad_s"][1]:
         raise ConfigError("config key 'measurement.band_rad_s' must have low < high")
@@ -211,12 +216,14 @@ def validate(cfg: dict) -> dict:
 
 
 def modal_noise_calibration() -> dict:
-    """Per-mode coefficients of the calibrated modal noise: std ``sqrt((c level)^2 + floor^2)`` with ``c`` under
-    "frequency", "damping", "shape" and the floors under "<quantity>_floor" (0 when the file has none)."""
+    """Per-mode coefficients of the calibrated modal noise, std ``sqrt((c level)^2 + (g floor)^2 + e^2)`` of the
+    FRF noise level and floor: ``c`` under "frequency", "damping", "shape", ``g`` under "<quantity>_per_floor",
+    ``e`` under "<quantity>_floor" (0 when the file has none)."""
     import json
 
     calib = json.loads((Path(__file__).parent / "configs" / "modal_noise.json").read_text())
-    return {**{f"{q}_floor": [0.0] * 4 for q in ("frequency", "damping", "shape")}, **calib}
+    return {**{f"{q}{s}": [0.0] * 4 for q in ("frequency", "damping", "shape") for s in ("_floor", "_per_floor")},
+            **calib}
 
 
 def merge(overrides: dict | None = None, base: dict | None = None) -> dict:

@@ -213,7 +213,8 @@ class BatchInputs:
     measurement noise (standard normal, per state): ``n_freq``, ``n_zeta``
     (B, 2, 4), ``n_shape`` (B, 2, 4, 4, 2). FRF noise: ``noise_level`` (relative
     to |H|), ``noise_floor`` (relative to each FRF's peak) and the uint64
-    ``noise_seed`` of the counter-based stream the FRF noise is drawn from (B,).
+    ``noise_seed`` of the counter-based stream the FRF noise is drawn from (B,), and the factor
+    ``modal_noise_scale`` on the modal noise's standard deviations (B,).
     """
 
     EI_Nm2: np.ndarray
@@ -234,6 +235,7 @@ class BatchInputs:
     noise_level: np.ndarray
     noise_floor: np.ndarray
     noise_seed: np.ndarray
+    modal_noise_scale: np.ndarray
 
     def __len__(self):
         return self.EI_Nm2.shape[0]
@@ -263,6 +265,7 @@ def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
     ns = rng.standard_normal((n, 2, N_MEAS, N_MEAS, 2))
     u = rng.random((n, 4))
     seeds = rng.integers(0, np.iinfo(np.uint64).max, size=n, dtype=np.uint64, endpoint=True)
+    u_scale = rng.random(n)
     spc, meas = cfg["specimen"], cfg["measurement"]
     ei0 = setup.layout.EI
     loss = np.where(np.isfinite(sl["depth_m"]),
@@ -274,7 +277,8 @@ def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
                        _uniform(u[:, 0], spc["temperature_stiffness_change"]),
                        _uniform(u[:, 1], spc["root_spring_change"]), nf, nz, ns,
                        _uniform(u[:, 2], meas["frf_noise"], log=True),
-                       _uniform(u[:, 3], meas["frf_noise_floor"], log=True), seeds)
+                       _uniform(u[:, 3], meas["frf_noise_floor"], log=True), seeds,
+                       _uniform(u_scale, meas["modal_noise_scale"], log=True))
 
 
 # --------------------------------------------------------------------------- truth model
@@ -383,19 +387,27 @@ def measure_modes(setup, inp, lam4, psi4):
     """Noisy modal data from noise-free poles (B,2,4) and shapes (B,2,4,4): the modal-noise shortcut.
 
     Natural frequencies and damping ratios get relative Gaussian errors,
-    shapes complex circular errors relative to each mode's largest entry.
+    shapes complex circular errors relative to each mode's largest entry,
+    all scaled by the sample's ``modal_noise_scale`` (``measurement.modal_noise_scale``:
+    identifications of real files vary beyond what the FRF noise level predicts).
     Standard deviations per mode: ``measurement.frequency_noise`` etc.
-    ("fixed"), or ``sqrt((c level)^2 + floor^2)`` of the sample's FRF noise
-    level with the coefficients ``c`` and the ``*_noise_floor`` values
-    ("calibrated" against LSCF/LSFD identification, ``experiments.bench_modal_noise``).
+    ("fixed"), or ``sqrt((c level)^2 + (g floor)^2 + e^2)`` of the sample's FRF
+    noise level and noise floor with the coefficients ``c`` (``*_noise``), ``g``
+    (``*_noise_per_floor``) and ``e`` (``*_noise_floor``): "calibrated" against
+    the identification ``classify`` runs (``experiments.bench_modal_noise``).
     """
     mcfg = setup.cfg["measurement"]
     if mcfg["modal_noise"] == "calibrated":
         level = np.asarray(inp.noise_level, float)[:, None, None]
-        sig = {q: np.hypot(np.asarray(mcfg[f"{q}_noise"], float) * level, np.asarray(mcfg[f"{q}_noise_floor"], float))
+        floor = np.asarray(inp.noise_floor, float)[:, None, None]
+        sig = {q: np.sqrt((np.asarray(mcfg[f"{q}_noise"], float) * level) ** 2
+                          + (np.asarray(mcfg[f"{q}_noise_per_floor"], float) * floor) ** 2
+                          + np.asarray(mcfg[f"{q}_noise_floor"], float) ** 2)
                for q in ("frequency", "damping", "shape")}                        # (B, 1, 4)
     else:
         sig = {q: np.asarray(mcfg[f"{q}_noise"], float) * np.ones(N_MEAS) for q in ("frequency", "damping", "shape")}
+    scale = np.asarray(inp.modal_noise_scale, float)[:, None, None]
+    sig = {q: v * scale for q, v in sig.items()}
     f, z = modal_parameters(lam4)
     f_m = f * (1 + sig["frequency"] * inp.n_freq)
     z_m = z * (1 + sig["damping"] * inp.n_zeta)
@@ -429,7 +441,7 @@ CHUNK = 128
 #: Drawn inputs recorded per sample (the columns of the samples table and the noise of the FRFs on read).
 LABEL_FIELDS = ("EI_Nm2", "mass_per_length_kg_m", "damping_scale", "root_spring_Nm_rad", "n_slits", "x_m", "width_m", "depth_m",
                 "beta_s", "ei_loss", "temperature_stiffness_change", "root_spring_change", "noise_level",
-                "noise_floor", "noise_seed")
+                "noise_floor", "noise_seed", "modal_noise_scale")
 
 
 def simulate_batch(setup: Setup, inp: BatchInputs, chunk: int = CHUNK) -> dict:

@@ -94,6 +94,7 @@ COLUMN_UNITS = {
     "root_spring_change": "- (relative root-spring change on re-clamping)",
     "noise_level": "- (FRF noise std relative to |H|)", "noise_floor": "- (FRF noise std relative to the FRF peak)",
     "noise_seed": "- (uint64 seed of the FRF noise stream)",
+    "modal_noise_scale": "- (factor on the standard deviations of the modal noise)",
     "stiffness_loss_Nm3": "N m^3 (sum over slits of dEI * width)",
     "max_frequency_drop_rel": "- (largest relative drop of f1..f4 due to the slits alone)",
     "slit{k}_x_m": "m", "slit{k}_width_m": "m", "slit{k}_depth_m": "m", "slit{k}_ei_loss": "- (relative)",
@@ -150,6 +151,7 @@ def sample_table(labels: dict, outputs: dict, shard: int, first_id: int, length_
         "root_spring_change": labels["root_spring_change"],
         "noise_level": labels["noise_level"], "noise_floor": labels["noise_floor"],
         "noise_seed": labels["noise_seed"].astype(np.uint64),
+        "modal_noise_scale": labels["modal_noise_scale"],
         "stiffness_loss_Nm3": np.nansum(slit_loss, axis=1),
         "max_frequency_drop_rel": outputs["slit_frequency_drop"],
     }

@@ -1,16 +1,19 @@
 """Honesty check of the modal-noise shortcut: identify modes from noisy FRFs and compare error distributions.
 
-Run: ``.venv/bin/python -m experiments.bench_modal_noise [--specimens 8] [--levels 0.001,0.005,0.01,0.03]
-[--workers 2] [--out out/modal_noise] [--write-calibration]``
+Run: ``.venv/bin/python -m experiments.bench_modal_noise [--specimens 8] [--levels 0.001,0.003,0.01,0.03]
+[--floors 0,0.0003,0.001] [--workers 2] [--out out/modal_noise] [--write-calibration]``
 
 A dataset's measured modal data come from a shortcut: the truth modes plus
-random errors (:func:`datagen.pipeline.measure_modes`). The full path would
-identify them from the noisy FRFs. Here a few specimens (both test days) of
-the default configuration are run through the full path at several FRF noise
-levels (noise floor ``--floor`` relative to the peak): the measured FRFs
-exactly as a dataset synthesises them -> LSCF poles -> LSFD residues ->
-unit-modal-A shapes (:func:`physics.identification.identify_lscf`, driving
-point at the first DOF). Per mode, the identification errors
+random errors (:func:`datagen.pipeline.measure_modes`). ``classify`` identifies
+them from the FRF files. Here specimens of the default configuration (both test
+days) go through exactly what ``classify`` runs on a file
+(:func:`learn.workflow.identify_modes`: LSCF poles, LSFD residues with the
+estimated noise weighting, the 4 modes below 1.4 times the nominal mode 4),
+on FRFs synthesised as a dataset does, for every combination of an FRF noise
+level, a noise floor (relative to each FRF's peak) and three line layouts
+unlike the generator's own (:data:`GRIDS`: 0.25 Hz from 5 Hz, 0.5 Hz from 2 Hz,
+1 Hz from 1 Hz, bands ending 15-45 % above mode 4). Per mode, the
+identification errors
 
 * relative natural-frequency error ``f_id / f_true - 1``,
 * relative damping error ``zeta_id / zeta_true - 1``,
@@ -19,16 +22,15 @@ point at the first DOF). Per mode, the identification errors
 
 are compared with the shortcut's: the fixed default model
 (``measurement.modal_noise = "fixed"``) and the calibrated one
-(``"calibrated"``: per mode, standard deviation ``sqrt((c level)^2 + floor^2)``
-of the sample's FRF noise level: errors proportional to the noise above a
-floor of the method itself, e.g. the shapes' bias at low noise). The
-calibration fits ``c`` and ``floor`` (:func:`calibrate_std`) to the full
-path's robust standard deviation at each level (1.4826 MAD for real errors,
-``sqrt(median|e|^2 / ln 2)`` for circular complex errors).
-``--write-calibration`` stores them in
-``datagen/configs/modal_noise.json`` (what ``"calibrated"`` uses).
+(``"calibrated"``: per mode, standard deviation ``sqrt((c level)^2 + (g floor)^2 + e^2)``
+of the sample's FRF noise level and floor). The calibration fits ``c``, ``g``
+and ``e`` (:func:`calibrate_std`) to the full path's robust standard deviation
+in each condition (1.4826 MAD for real errors, ``sqrt(median|e|^2 / ln 2)`` for
+circular complex errors). ``--write-calibration`` stores them in
+``datagen/configs/modal_noise.json`` (what ``"calibrated"`` uses) with the
+identification they describe.
 
-Writes ``modal_noise.csv`` (per level, mode and quantity: robust std of the
+Writes ``modal_noise.csv`` (per condition, mode and quantity: robust std of the
 full path, of both shortcuts, KS distance full vs calibrated, failed
 identifications of the mode), ``modal_noise.json`` and ``modal_noise.png`` (error
 distributions, full path vs calibrated shortcut).
@@ -77,94 +79,112 @@ def _errors(lam_est, psi_est, lam_true, psi_true):
     return fe / ft - 1, ze / zt - 1, np.where(pick, d_minus, d_plus) / scale
 
 
+#: Line layouts (line spacing Hz, first line Hz, last line Hz) of the files the calibration identifies.
+GRIDS = ((0.25, 5.0, 800.0), (0.5, 2.0, 950.0), (1.0, 1.0, 1000.0))
+
+
 def _identify(args):
-    """Full path for one (sample, state): FRF -> LSCF/LSFD -> modes matched to the truth by frequency.
+    """Full path for one (sample, state): what ``classify`` runs on a file, modes matched to the truth.
 
     Returns (eigenvalues (4,), shapes (4 dofs, 4)) with NaN for truth modes no
     identified pole lies within 5 % of, or None when the identification fails.
     """
     from threadpoolctl import threadpool_limits
 
-    from physics.identification import identify_lscf
+    from learn.workflow import identify_modes
+    from physics.errors import BeamDamageError
+    from physics.io import MeasuredFRF
 
-    f_hz, H, max_order, f_true = args
+    f_hz, H, fmax_hz, f_true = args
+    frf = MeasuredFRF(f_hz, H[:, None, :], ("2:+Y", "3:+Y", "4:+Y", "5:+Y"), ("2:+Y",))
     with threadpool_limits(1):
         try:
-            est = identify_lscf(f_hz, H[:, None, :], n_modes=4, drive=(0, 0), max_order=max_order).estimate
-        except (ArithmeticError, ValueError, RuntimeError):  # a failed identification is counted, not fatal
+            md = identify_modes(frf, fmax_hz)
+        except (ArithmeticError, ValueError, RuntimeError, BeamDamageError):  # counted, not fatal
             return None
+    fn = md.natural_frequencies_hz
     lam = np.full(4, np.nan + 0j)
     psi = np.full((H.shape[0], 4), np.nan + 0j)
     for r, f in enumerate(f_true):
-        if est.natural_frequencies_hz.size:
-            k = int(np.argmin(np.abs(est.natural_frequencies_hz - f)))
-            if abs(est.natural_frequencies_hz[k] / f - 1) < 0.05:
-                lam[r], psi[:, r] = est.eigenvalues[k], est.shapes[:, k]
+        k = int(np.argmin(np.abs(fn - f)))
+        if abs(fn[k] / f - 1) < 0.05:
+            lam[r], psi[:, r] = md.eigenvalues[k], md.eigenvectors[:, k]
     return lam, psi
 
 
-def _config(level, floor, calibration=None):
+def _config(level, floor, calibration=None, grid=None):
     from datagen.config import merge
 
     meas = {"frf_noise": level, "frf_noise_floor": floor}
+    if grid is not None:
+        df, lo, hi = grid
+        meas.update(band_rad_s=[2 * np.pi * lo, 2 * np.pi * hi], lines=int(round((hi - lo) / df)) + 1)
     if calibration:
-        meas.update(modal_noise="calibrated", **{f"{q}_noise": calibration[q] for q in QUANTITIES},
-                    **{f"{q}_noise_floor": calibration[f"{q}_floor"] for q in QUANTITIES})
+        meas.update(modal_noise="calibrated", **{f"{q}_noise{s}": calibration[q + s] for q in QUANTITIES
+                                                 for s in ("", "_floor", "_per_floor")})
     return merge({"measurement": meas})
 
 
-def shortcut_errors(level, floor, specimens, seed, calibration=None):
+def shortcut_errors(level, floor, specimens, seed, calibration=None, grid=None):
     """Errors of the modal-noise shortcut (fixed default, or calibrated with the given coefficients)."""
     from datagen.pipeline import draw_batch, get_setup, measure_modes, simulate_batch
 
-    setup = get_setup(_config(level, floor, calibration))
+    setup = get_setup(_config(level, floor, calibration, grid))
     inp = draw_batch(np.random.default_rng(seed), specimens, setup)
     sim = simulate_batch(setup, inp)
     lam_t, psi_t = sim["truth_poles"][..., :4], sim["truth_shapes"][..., :4]
     return _errors(*measure_modes(setup, inp, lam_t, psi_t), lam_t, psi_t), (setup, inp, sim)
 
 
-def full_path_errors(level, floor, specimens, seed, max_order, pool):
-    """Errors of LSCF/LSFD identification from the measured FRFs a dataset synthesises; and the failures."""
+def full_path_errors(level, floor, specimens, seed, pool, grid):
+    """Errors of the identification ``classify`` runs on the measured FRFs a dataset synthesises; and failures."""
     from datagen.synth import measured_frf
+    from learn.sensitivity import beam_sensitivity
+    from learn.workflow import IDENTIFICATION_BAND_FACTOR
 
-    _, (setup, inp, sim) = shortcut_errors(level, floor, specimens, seed)
+    _, (setup, inp, sim) = shortcut_errors(level, floor, specimens, seed, grid=grid)
     lam_t, psi_t = sim["truth_poles"][..., :4], sim["truth_shapes"][..., :4]
     H = measured_frf({**sim, "noise_seed": inp.noise_seed, "noise_level": inp.noise_level,
                       "noise_floor": inp.noise_floor}, setup.omega_rad_s, np.complex128)
     f_hz = setup.omega_rad_s / (2 * np.pi)
     f_true = np.abs(lam_t) / (2 * np.pi)
-    ids = list(pool.map(_identify, [(f_hz, H[i, s], max_order, f_true[i, s]) for i in range(specimens)
+    r = setup.cfg["specimen"]["root_spring_relative"]
+    fmax = IDENTIFICATION_BAND_FACTOR * beam_sensitivity("beam5", float(np.sqrt(r[0] * r[1]))).frequencies_hz[3]
+    ids = list(pool.map(_identify, [(f_hz, H[i, s], fmax, f_true[i, s]) for i in range(specimens)
                                     for s in range(2)]))
     lam_e = np.full(lam_t.shape, np.nan + 0j)
     psi_e = np.full(psi_t.shape, np.nan + 0j)
-    for k, r in enumerate(ids):
-        if r is not None:
-            lam_e[k // 2, k % 2], psi_e[k // 2, k % 2] = r
+    for k, r_ in enumerate(ids):
+        if r_ is not None:
+            lam_e[k // 2, k % 2], psi_e[k // 2, k % 2] = r_
     missed = np.isnan(lam_e.real).reshape(-1, 4).sum(axis=0)   # per mode, over samples and states
-    return _errors(lam_e, psi_e, lam_t, psi_t), missed.tolist()
+    return _errors(lam_e, psi_e, lam_t, psi_t), missed
 
 
-def calibrate_std(levels, stds):
-    """``(a, b)`` of ``std = sqrt((a level)^2 + b^2)`` fitted to per-level stds (relative least squares, a, b >= 0)."""
+def _pooled(parts):
+    """Concatenate per-grid error triples along the sample axis."""
+    return tuple(np.concatenate([p[q] for p in parts], axis=0) for q in range(3))
+
+
+def calibrate_std(levels, floors, stds):
+    """``(c, g, e)`` of ``std = sqrt((c level)^2 + (g floor)^2 + e^2)`` fitted to per-condition stds (relative
+    least squares, c, g, e >= 0)."""
     from scipy.optimize import nnls
 
-    lv, sd = np.asarray(levels, float), np.asarray(stds, float)
+    lv, fl, sd = (np.asarray(a, float) for a in (levels, floors, stds))
     ok = np.isfinite(sd) & (sd > 0)
     if not ok.any():
-        return float("nan"), float("nan")
-    A = np.stack([lv[ok] ** 2, np.ones(ok.sum())], axis=1) / sd[ok, None] ** 2
-    (a2, b2), _ = nnls(A, np.ones(ok.sum()))
-    return float(np.sqrt(a2)), float(np.sqrt(b2))
+        return float("nan"), float("nan"), float("nan")
+    A = np.stack([lv[ok] ** 2, fl[ok] ** 2, np.ones(ok.sum())], axis=1) / sd[ok, None] ** 2
+    coef, _ = nnls(A, np.ones(ok.sum()))
+    return tuple(float(np.sqrt(c)) for c in coef)
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--specimens", type=int, default=8, help="specimens per noise level (2 FRF sets each)")
-    ap.add_argument("--levels", default="0.001,0.005,0.01,0.03", help="FRF noise levels (relative to |H|)")
-    ap.add_argument("--floor", type=float, default=0.0, help="noise floor relative to each FRF's peak (the calibration "
-                    "is fitted without one: the shortcut scales with the multiplicative level only)")
-    ap.add_argument("--max-order", type=int, default=16, help="LSCF maximum model order")
+    ap.add_argument("--specimens", type=int, default=8, help="specimens per condition and line layout (2 tests each)")
+    ap.add_argument("--levels", default="0.001,0.003,0.01,0.03", help="FRF noise levels (relative to |H|)")
+    ap.add_argument("--floors", default="0,0.0003,0.001", help="FRF noise floors (relative to each FRF's peak)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", default="out/modal_noise")
@@ -178,61 +198,69 @@ def main(argv=None):
     import matplotlib.pyplot as plt
 
     from datagen.config import CONFIG_DIR
+    from learn.workflow import IDENTIFICATION
     from physics.io import atomic_write_text
 
     levels = [float(x) for x in a.levels.split(",")]
+    floors = [float(x) for x in a.floors.split(",")]
+    conditions = [(lv, fl) for lv in levels for fl in floors]
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     runs = {}
     with ProcessPoolExecutor(a.workers, mp_context=get_context("spawn")) as pool:
-        for k, lv in enumerate(levels):
-            full, failed = full_path_errors(lv, a.floor, a.specimens, a.seed + k, a.max_order, pool)
-            runs[lv] = {"full": full, "failed": failed,
-                        "fixed": shortcut_errors(lv, a.floor, a.specimens, a.seed + k)[0]}
+        for k, (lv, fl) in enumerate(conditions):
+            seeds = [a.seed + 100 * k + g for g in range(len(GRIDS))]
+            full = [full_path_errors(lv, fl, a.specimens, sd, pool, grid) for sd, grid in zip(seeds, GRIDS)]
+            runs[lv, fl] = {"full": _pooled([f[0] for f in full]), "failed": sum(f[1] for f in full).tolist(),
+                            "fixed": _pooled([shortcut_errors(lv, fl, a.specimens, sd, grid=grid)[0]
+                                              for sd, grid in zip(seeds, GRIDS)]), "seeds": seeds}
 
-    # calibration: per mode, std(level) = sqrt((a level)^2 + b^2) fitted to the full path's robust std at each
-    # level (relative least squares, a, b >= 0): errors grow with the FRF noise, above a floor of the method
+    # per mode, std = sqrt((c level)^2 + (g floor)^2 + e^2) fitted to the full path's robust std in each condition
     calib = {}
     for qi, q in enumerate(QUANTITIES):
-        fits = [calibrate_std(levels, [_robust_std(runs[lv]["full"][qi][..., r]) for lv in levels]) for r in range(4)]
-        calib[q] = [float(f"{a_:.4g}") for a_, _ in fits]
-        calib[f"{q}_floor"] = [float(f"{b_:.4g}") for _, b_ in fits]
-    for k, lv in enumerate(levels):  # the same specimens and draws through the calibrated shortcut
-        runs[lv]["calibrated"] = shortcut_errors(lv, a.floor, a.specimens, a.seed + k, calib)[0]
-    rows, table = ["level,mode,quantity,full_path_std,shortcut_fixed_std,shortcut_calibrated_std,"
-                   "ks_full_vs_calibrated,ks_full_vs_fixed,modes_not_identified,fits"], []
-    for lv in levels:
-        R = runs[lv]
+        fits = [calibrate_std([c[0] for c in conditions], [c[1] for c in conditions],
+                              [_robust_std(runs[c]["full"][qi][..., r]) for c in conditions]) for r in range(4)]
+        for j, suffix in enumerate(("", "_per_floor", "_floor")):
+            calib[q + suffix] = [float(f"{f[j]:.4g}") for f in fits]
+    for c in conditions:  # the same specimens and draws through the calibrated shortcut
+        runs[c]["calibrated"] = _pooled([shortcut_errors(*c, a.specimens, sd, calib, grid)[0]
+                                         for sd, grid in zip(runs[c]["seeds"], GRIDS)])
+    fits_per_condition = 2 * a.specimens * len(GRIDS)
+    table = []
+    for (lv, fl) in conditions:
+        R = runs[lv, fl]
         for qi, q in enumerate(QUANTITIES):
             for r in range(4):
                 full, fix, cal = (R[k][qi][..., r] for k in ("full", "fixed", "calibrated"))
-                rec = {"level": lv, "mode": r + 1, "quantity": q, "full_path_std": _robust_std(full),
-                       "shortcut_fixed_std": _robust_std(fix), "shortcut_calibrated_std": _robust_std(cal),
-                       "ks_full_vs_calibrated": _ks(full, cal), "ks_full_vs_fixed": _ks(full, fix),
-                       "modes_not_identified": R["failed"][r], "fits": 2 * a.specimens}
-                table.append(rec)
-                rows.append(",".join(str(v) for v in rec.values()))
+                table.append({"level": lv, "floor": fl, "mode": r + 1, "quantity": q,
+                              "full_path_std": _robust_std(full), "shortcut_fixed_std": _robust_std(fix),
+                              "shortcut_calibrated_std": _robust_std(cal), "ks_full_vs_calibrated": _ks(full, cal),
+                              "ks_full_vs_fixed": _ks(full, fix), "modes_not_identified": R["failed"][r],
+                              "fits": fits_per_condition})
+    rows = [",".join(table[0])] + [",".join(str(v) for v in t.values()) for t in table]
     atomic_write_text(out / "modal_noise.csv", "\n".join(rows) + "\n")
-    result = {"levels": levels, "floor": a.floor, "specimens": a.specimens, "max_order": a.max_order,
-              "calibration": calib, "table": table}
+    result = {"levels": levels, "floors": floors, "grids": GRIDS, "specimens": a.specimens,
+              "identification": IDENTIFICATION, "calibration": calib, "table": table}
     atomic_write_text(out / "modal_noise.json", json.dumps(result, indent=1))
     if a.write_calibration:
-        note = (f"per mode 1..4: std of the LSCF/LSFD error = sqrt((c level)^2 + floor^2), c under 'frequency', "
-                f"'damping', 'shape', floors under '<quantity>_floor', fitted to robust stds, default config, "
-                f"{a.specimens} specimens x 2 states x levels {levels}, floor {a.floor}, max_order {a.max_order}; "
-                f"written by experiments.bench_modal_noise")
-        atomic_write_text(CONFIG_DIR / "modal_noise.json", json.dumps({**calib, "note": note}, indent=1) + "\n")
+        note = ("per mode 1..4: std of the identification error = sqrt((c level)^2 + (g floor)^2 + e^2) of the FRF "
+                "noise level and floor, c under 'frequency', 'damping', 'shape', g under '<quantity>_per_floor', e "
+                f"under '<quantity>_floor', fitted to robust stds of learn.workflow.identify_modes on the default "
+                f"config, {a.specimens} specimens x 2 states x line layouts {list(GRIDS)} x levels {levels} x floors "
+                f"{floors}; written by experiments.bench_modal_noise")
+        atomic_write_text(CONFIG_DIR / "modal_noise.json",
+                          json.dumps({**calib, "identification": IDENTIFICATION, "note": note}, indent=1) + "\n")
 
     fig, axs = plt.subplots(3, 4, figsize=(14, 9))
     for qi, q in enumerate(QUANTITIES):
         for r in range(4):
             ax = axs[qi, r]
             for key, style in (("full", "-"), ("calibrated", "--"), ("fixed", ":")):
-                e = np.concatenate([np.abs(runs[lv][key][qi][..., r]).ravel() / lv for lv in levels])
+                e = np.concatenate([np.abs(runs[c][key][qi][..., r]).ravel() / c[0] for c in conditions])
                 e = np.sort(e[np.isfinite(e)])
                 if e.size:
                     ax.semilogx(e, np.arange(1, e.size + 1) / e.size, style,
-                                label={"full": "full path (LSCF/LSFD)", "calibrated": "shortcut, calibrated",
+                                label={"full": "full path (classify's LSCF/LSFD)", "calibrated": "shortcut, calibrated",
                                        "fixed": "shortcut, fixed default"}[key])
             ax.set_title(f"{q}, mode {r + 1}", fontsize=9)
             ax.set_xlabel("|error| / FRF noise level", fontsize=8)
@@ -245,11 +273,11 @@ def main(argv=None):
     if a.json:
         print(json.dumps(result, indent=1))
     else:
-        print(f"calibration (std = sqrt((c level)^2 + floor^2), modes 1..4): {json.dumps(calib)}")
-        print(f"{'level':>7} {'q':>9} {'mode':>4} {'full':>10} {'fixed':>10} {'calib':>10} {'KS cal':>7} {'KS fix':>7} "
-              f"{'missed':>6}")
+        print(f"calibration (std = sqrt((c level)^2 + (g floor)^2 + e^2), modes 1..4): {json.dumps(calib)}")
+        print(f"{'level':>7} {'floor':>7} {'q':>9} {'mode':>4} {'full':>10} {'fixed':>10} {'calib':>10} {'KS cal':>7} "
+              f"{'KS fix':>7} {'missed':>6}")
         for t in table:
-            print(f"{t['level']:7.3g} {t['quantity']:>9} {t['mode']:4d} {t['full_path_std']:10.3g} "
+            print(f"{t['level']:7.3g} {t['floor']:7.3g} {t['quantity']:>9} {t['mode']:4d} {t['full_path_std']:10.3g} "
                   f"{t['shortcut_fixed_std']:10.3g} {t['shortcut_calibrated_std']:10.3g} "
                   f"{t['ks_full_vs_calibrated']:7.3f} {t['ks_full_vs_fixed']:7.3f} "
                   f"{t['modes_not_identified']:3d}/{t['fits']}")

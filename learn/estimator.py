@@ -3,7 +3,8 @@
 ``fit(X, y, groups)`` standardises the features (statistics of the training
 part only), holds out a validation part by specimen (``groups``), trains the
 network, and fits a temperature on the validation logits (temperature scaling,
-Guo et al. 2017) so that ``predict_proba`` is calibrated.
+Guo et al. 2017) so that ``predict_proba`` is calibrated, and a factor on the size
+head's spread so that one standard deviation covers 68 % of the validation sizes.
 
 Targets ``y`` have three columns: damaged (0/1), ``x / L`` of the slit (NaN if
 intact) and its stiffness loss ``dEI * width`` (N m^3, 0 if intact).
@@ -38,6 +39,29 @@ class Prediction:
     stiffness_loss_Nm3: np.ndarray         # median of the log-normal size estimate
     stiffness_loss_std_Nm3: np.ndarray
     logit: np.ndarray                      # calibrated detection logit
+
+
+def lognormal_std(median, log_std):
+    """Standard deviation of a log-normal variable from its median and the std of its logarithm."""
+    return median * np.sqrt(np.expm1(log_std**2) * np.exp(log_std**2))
+
+
+def fit_size_std_scale(truth, median, log_std, coverage: float = 0.6827) -> float:
+    """Factor ``k`` on the size head's log-std so that ``|truth - median| <= std(k log_std)`` holds for
+    ``coverage`` of the pairs (one sigma: 68.3 %); the std grows with ``k``, solved by bisection in log k."""
+    truth, median, log_std = (np.asarray(a, float) for a in (truth, median, log_std))
+
+    def covered(log_k):
+        with np.errstate(over="ignore", invalid="ignore"):   # an infinite std covers every truth
+            return np.mean(np.abs(truth - median) <= lognormal_std(median, np.exp(log_k) * log_std))
+
+    lo, hi = np.log(1e-3), np.log(1e2)
+    if covered(hi) < coverage:
+        return float(np.exp(hi))
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if covered(mid) < coverage else (lo, mid)
+    return float(np.exp(hi))
 
 
 def _device(name):
@@ -204,9 +228,13 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
                 tot += float(loss.detach()) * len(b)
             history.append(tot / len(tr))
         self.loss_history_ = history
-        self.temperature_, self.bias_, self.threshold_ = 1.0, 0.0, 0.5
+        self.temperature_, self.bias_, self.threshold_, self.size_std_scale_ = 1.0, 0.0, 0.5, 1.0
         if len(va):
             raw = self._raw(X[va])
+            dmg = d[va] > 0.5
+            if dmg.sum() >= 10:
+                self.size_std_scale_ = fit_size_std_scale(np.exp(ls[va][dmg]), np.exp(raw["size_mean"][dmg]),
+                                                          np.exp(raw["size_log_std"][dmg]))
             self.temperature_, self.bias_ = fit_calibration(raw["detect"], d[va])
             p_intact = expit(raw["detect"][d[va] < 0.5] / self.temperature_ + self.bias_)
             if p_intact.size:
@@ -241,9 +269,8 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         mean = p @ c
         std = np.sqrt(np.maximum(p @ c**2 - mean**2, 0.0) + 1.0 / (12 * self.n_bins**2))
         el = p.reshape(len(p), 4, -1).sum(axis=2)
-        mu, s = raw["size_mean"], np.exp(raw["size_log_std"])
-        med = np.exp(mu)
-        sd = med * np.sqrt(np.expm1(s**2) * np.exp(s**2))
+        med = np.exp(raw["size_mean"])
+        sd = lognormal_std(med, self.size_std_scale_ * np.exp(raw["size_log_std"]))
         return Prediction(expit(z), p, mean, std, el, np.argmax(el, axis=1) + 1, med, sd, z)
 
     # ------------------------------------------------------------------ persistence (no pickle)
@@ -255,7 +282,8 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         tensors["ood.precision"] = torch.as_tensor(self.precision_)
         tensors["ood.reference"] = torch.as_tensor(self.reference_distances_)
         meta = {"params": self.get_params(), "temperature": self.temperature_, "bias": self.bias_,
-                "threshold": self.threshold_, "n_features": int(self.n_features_in_),
+                "threshold": self.threshold_, "size_std_scale": self.size_std_scale_,
+                "n_features": int(self.n_features_in_),
                 "train_seconds": self.train_seconds_, "loss_history": self.loss_history_,
                 "n_train": int(self.n_train_), "n_val": int(self.n_val_)}
         return tensors, meta
@@ -277,6 +305,7 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         est.temperature_ = float(meta["temperature"])
         est.bias_ = float(meta.get("bias", 0.0))
         est.threshold_ = float(meta.get("threshold", 0.5))
+        est.size_std_scale_ = float(meta.get("size_std_scale", 1.0))
         est.train_seconds_ = float(meta.get("train_seconds", float("nan")))
         est.loss_history_ = list(meta.get("loss_history", []))
         est.n_train_, est.n_val_ = int(meta.get("n_train", 0)), int(meta.get("n_val", 0))

@@ -39,7 +39,7 @@ from physics.io import read_json
 DEFAULT_ROUTE = "modal"
 #: Width assumed when a stiffness loss is turned into a slit depth (m): middle of the training widths.
 REFERENCE_WIDTH_M = 0.0055
-FORMAT = "beam-damage-model/1"
+FORMAT = "beam-damage-model/2"
 
 
 def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
@@ -113,7 +113,9 @@ def load_model(model_dir, device=None) -> TrainedModel:
         raise FileFormatError(f"{path}: not a model directory (no config.json); create one with 'beam-damage train'")
     config = read_json(cfg_path)
     if config.get("format") != FORMAT:
-        raise FileFormatError(f"{cfg_path}: field 'format' is {config.get('format')!r}, expected {FORMAT!r}")
+        raise FileFormatError(f"{cfg_path}: field 'format' is {config.get('format')!r}, expected {FORMAT!r} "
+                              "(the modal features differ between formats): re-create the model with "
+                              "'beam-damage train'")
     for key, kind in (("route", str), ("networks", dict), ("beam", dict)):
         if not isinstance(config.get(key), kind):
             raise FileFormatError(f"{cfg_path}: field {key!r} missing or not a {kind.__name__}; "
@@ -377,6 +379,9 @@ IN_DISTRIBUTION_PERCENTILE = 99.9
 #: training data's modal noise (``measurement.modal_noise = "calibrated"``) is calibrated against this path
 #: (``experiments.bench_modal_noise``), and the dataset records it (``measurement.identification``).
 IDENTIFICATION = {"method": "lscf", "n_modes": 4}
+#: The band identified ends at this multiple of the model's nominal mode-4 frequency (mode 5 of a cantilever
+#: lies at 1.65 times mode 4; above the band, modes act through the upper residual).
+IDENTIFICATION_BAND_FACTOR = 1.4
 
 
 def identify_modes(frf, fmax_hz: float | None = None, where: str = "FRF file"):
@@ -386,8 +391,8 @@ def identify_modes(frf, fmax_hz: float | None = None, where: str = "FRF file"):
     ----------
     frf : :class:`physics.io.MeasuredFRF` on the model's DOFs
     fmax_hz : float, optional
-        Upper end of the band fitted (Hz): above the highest training frequency of mode 4, so that a file
-        reaching far beyond the model's modes does not spend poles on them.
+        Upper end of the band fitted (Hz), between the beam's modes 4 and 5, so that the 4 modes identified are
+        the 4 lowest.
 
     Returns
     -------
@@ -416,27 +421,30 @@ def identify_modes(frf, fmax_hz: float | None = None, where: str = "FRF file"):
     return md
 
 
-def training_frequency_range_hz(est: DamageClassifier, n_sigma: float = 5.0) -> np.ndarray:
-    """Range of each mode's baseline natural frequency in the training data, (4, 2) Hz: the log-frequency
-    features' mean +- ``n_sigma`` standard deviations (:func:`learn.features.modal_features`, columns 4..7)."""
-    mu, sd = est.mean_[4:8], est.scale_[4:8]
+def training_ratio_range(est: DamageClassifier, n_sigma: float = 6.0) -> np.ndarray:
+    """Range of the baseline frequency ratios ``f_k / f_1`` (k = 2..4) in the training data, shape (3, 2): the
+    ratio features' mean +- ``n_sigma`` standard deviations (:func:`learn.features.modal_features`, columns
+    4..6)."""
+    mu, sd = est.mean_[4:7], est.scale_[4:7]
     return np.exp(np.stack([mu - n_sigma * sd, mu + n_sigma * sd], axis=1))
 
 
-def _mode_checks(lam, vecs, f_range_hz) -> list[list[str]]:
-    """Per pair, reasons it lies outside what the modal network was trained on: a mode outside its training
-    frequency range (a missing or spurious mode) or baseline and current modes that do not pair (MAC < 0.8)."""
+def _mode_checks(lam, vecs, ratio_range) -> list[list[str]]:
+    """Per pair, reasons it lies outside what the modal network was trained on: a frequency ratio ``f_k / f_1``
+    outside its training range (a missing or spurious mode, or another beam), or baseline and current modes
+    that do not pair (MAC < 0.8)."""
     from learn.features import real_shapes
 
     f = np.abs(lam) / (2 * np.pi)                         # (n, 2, 4)
+    ratio = f[..., 1:] / f[..., :1]                       # (n, 2, 3)
     u = real_shapes(vecs)                                 # (n, 2, 4, m) unit norm
     mac = np.abs(np.sum(u[:, 0] * u[:, 1], axis=1)) ** 2  # (n, m)
     reasons = []
     for i in range(f.shape[0]):
-        r = [f"{name} mode {k + 1} at {f[i, s, k]:.4g} Hz lies outside the training range "
-             f"{f_range_hz[k, 0]:.4g}-{f_range_hz[k, 1]:.4g} Hz (a missing or spurious mode)"
-             for s, name in enumerate(("baseline", "measured")) for k in range(4)
-             if not f_range_hz[k, 0] <= f[i, s, k] <= f_range_hz[k, 1]]
+        r = [f"{name} f{k + 2}/f1 = {ratio[i, s, k]:.4g} lies outside the training range "
+             f"{ratio_range[k, 0]:.4g}-{ratio_range[k, 1]:.4g} (a missing or spurious mode, or another beam)"
+             for s, name in enumerate(("baseline", "measured")) for k in range(3)
+             if not ratio_range[k, 0] <= ratio[i, s, k] <= ratio_range[k, 1]]
         r += [f"mode {k + 1} of the baseline and the measured test do not pair (MAC {mac[i, k]:.2f} < 0.8)"
               for k in range(4) if mac[i, k] < 0.8]
         reasons.append(r)
@@ -452,8 +460,8 @@ def _modal_inputs(model: TrainedModel, baseline, currents: list, names: list[str
         raise BeamDamageError("BASELINE and MEASURED must all be FRF files or all modal data")
     if not kinds.pop():
         return baseline, list(currents), False
-    fmax = float(training_frequency_range_hz(model.networks["modal"])[3, 1]) * 1.25 if "modal" in model.networks \
-        else None
+    sens = sensitivity_of(model.beam, model.config.get("root_spring_relative"), model.config.get("truth_beam"))
+    fmax = IDENTIFICATION_BAND_FACTOR * float(sens.frequencies_hz[3])
     try:
         ids = [identify_modes(d, fmax, n) for d, n in zip([baseline, *currents], names)]
     except BeamDamageError:
@@ -570,7 +578,7 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     classical, best = [], None
     if lam is not None:
         if "modal" in model.networks:
-            mode_reasons = _mode_checks(lam, vecs, training_frequency_range_hz(model.networks["modal"]))
+            mode_reasons = _mode_checks(lam, vecs, training_ratio_range(model.networks["modal"]))
         classical, _ = run_classical(lam, vecs, sens, model.config["baseline_thresholds"])
         best = next((o for o in classical if o.name == model.config["best_baseline"]), classical[0])
     depth_of = model.config.get("truth_beam") or beam.name

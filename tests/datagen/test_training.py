@@ -75,7 +75,9 @@ def test_calibrated_modal_noise_scales_with_each_samples_frf_noise_level():
     cfg = load_config("training")
     cfg["measurement"].update(frequency_noise=[0.02, 0.01, 0.01, 0.01], damping_noise=[3.0, 2.0, 1.0, 1.0],
                               shape_noise=[0.5, 0.5, 0.5, 0.5], frequency_noise_floor=[0.0] * 4,
-                              damping_noise_floor=[0.0] * 4, shape_noise_floor=[0.0] * 4)
+                              damping_noise_floor=[0.0] * 4, shape_noise_floor=[0.0] * 4,
+                              frequency_noise_per_floor=[0.0] * 4, damping_noise_per_floor=[0.0] * 4,
+                              shape_noise_per_floor=[0.0] * 4, modal_noise_scale=[1.0, 1.0])
     setup = get_setup(merge(cfg))
     inp = draw_batch(np.random.default_rng(5), 4000, setup)
     from datagen.pipeline import measure_modes
@@ -98,3 +100,16 @@ def test_calibrated_modal_noise_scales_with_each_samples_frf_noise_level():
     low = inp.noise_level < np.median(inp.noise_level)
     assert np.std(ef[low]) == pytest.approx(1e-3, rel=0.07) and np.std(ef[~low]) == pytest.approx(1e-3, rel=0.07)
     assert np.abs(np.abs(lam_m) / np.abs(lam) - 1)[:, :, 1].max() < 1e-12  # mode 2: no coefficient, no floor
+    # + (g floor)^2: errors proportional to each sample's FRF noise floor
+    cfg["measurement"].update(frequency_noise_floor=[0.0] * 4, frequency_noise_per_floor=[0.0, 5.0, 0.0, 0.0])
+    lam_m, _ = measure_modes(get_setup(merge(cfg)), inp, lam, psi)
+    ef = (np.abs(lam_m) / np.abs(lam) - 1)[:, :, 1] / inp.noise_floor[:, None]
+    assert np.std(ef) == pytest.approx(5.0, rel=0.05)
+    # the per-sample modal_noise_scale multiplies every std: log-uniform in [0.5, 4] scales the errors by it
+    cfg["measurement"].update(modal_noise_scale=[0.5, 4.0])
+    setup = get_setup(merge(cfg))
+    inp = draw_batch(np.random.default_rng(5), 4000, setup)
+    assert inp.modal_noise_scale.min() >= 0.5 and inp.modal_noise_scale.max() <= 4.0
+    lam_m, _ = measure_modes(setup, inp, lam, psi)
+    ef = (np.abs(lam_m) / np.abs(lam) - 1)[:, :, 1] / (inp.noise_floor * inp.modal_noise_scale)[:, None]
+    assert np.std(ef) == pytest.approx(5.0, rel=0.05)

@@ -13,7 +13,7 @@ from learn.estimator import DamageClassifier, fit_calibration
 from learn.evaluate import reliability, roc_auc
 from learn.features import BeamSpec, curvatures, map_frf_to_grid, real_shapes, split_by_specimen
 from learn.sensitivity import beam_sensitivity
-from learn.workflow import TrainedModel, equivalent_depth, load_model, save_model
+from learn.workflow import FORMAT, TrainedModel, equivalent_depth, load_model, save_model
 from physics.errors import BeamDamageError
 from physics.fem import beam_model
 from physics.modal import undamped_modes
@@ -139,12 +139,14 @@ def test_model_directory_round_trip_with_weights_only(tmp_path):
     X, y = _synthetic(400, rng)
     est = DamageClassifier(hidden=32, depth=1, epochs=2, n_bins=40, random_state=0).fit(X, y)
     beam = BeamSpec("beam5", 0.6095, ("2:y", "3:y", "4:y", "5:y"), "iirs")
-    cfg = {"format": "beam-damage-model/1", "route": "modal", "beam": beam.to_dict()}
+    cfg = {"format": FORMAT, "route": "modal", "beam": beam.to_dict()}
     save_model(tmp_path, cfg, {"modal": est})
     tensors = torch.load(tmp_path / "weights-modal.pt", weights_only=True)
     assert "norm.mean" in tensors
     model = load_model(tmp_path)
     np.testing.assert_allclose(model.networks["modal"].predict_proba(X), est.predict_proba(X), atol=1e-6)
+    np.testing.assert_allclose(model.networks["modal"].predict_details(X).stiffness_loss_std_Nm3,
+                               est.predict_details(X).stiffness_loss_std_Nm3, rtol=1e-5)
     assert json.loads((tmp_path / "config.json").read_text())["beam"]["mass_model"] == "iirs"
 
 
@@ -184,3 +186,37 @@ def test_equivalent_depth_inverts_the_layered_section():
     s = (lay.EI - float(slit_section_ei(lay, 0.00025))) * 0.005
     assert equivalent_depth(s, "beam5", 0.005) == pytest.approx(0.00025, rel=1e-3)
     assert equivalent_depth(1e3, "beam5", 0.005) is None
+
+
+def test_size_spread_factor_gives_one_sigma_coverage():
+    """Sizes drawn log-normal with log-std 0.4 around the medians, a head claiming 0.1: the factor is about 4 and
+    then 68 % of the truths lie within one reported standard deviation."""
+    from learn.estimator import fit_size_std_scale, lognormal_std
+
+    rng = np.random.default_rng(0)
+    med = np.exp(rng.uniform(-3, 1, 20000))
+    truth = med * np.exp(0.4 * rng.standard_normal(med.size))
+    k = fit_size_std_scale(truth, med, np.full(med.size, 0.1))
+    assert 3.0 < k < 5.0
+    cover = np.mean(np.abs(truth - med) <= lognormal_std(med, k * 0.1))
+    assert cover == pytest.approx(0.6827, abs=0.005)
+
+
+def test_modal_features_ignore_a_global_stiffness_or_mass_scale():
+    """A global EI (or mass) factor moves every frequency by one factor and no shift, shape or curvature: the
+    features of an independent FE pair are the same for EI x 1.2."""
+    from learn.features import modal_features
+
+    p = beam_preset("beam5")
+    feats = []
+    for scale in (1.0, 1.2):
+        f = np.ones((2, 40))
+        f[1, 12] -= 0.4
+        m = beam_model(40, p.length, scale * p.EI, p.m_per_length, ei_factors=f,
+                       root_spring=948.7 * scale * p.EI / p.length)
+        w, phi = undamped_modes(m.M, m.K)
+        idx = m.index(["11:y", "21:y", "31:y", "41:y"])
+        lam = (-0.002 * w[:, :4] + 1j * w[:, :4])[None]
+        feats.append(modal_features(lam, phi[:, idx, :4][None].astype(complex)))
+    assert feats[0].shape == (1, 39)
+    np.testing.assert_allclose(feats[1], feats[0], atol=1e-7)
