@@ -421,18 +421,23 @@ def identify_modes(frf, fmax_hz: float | None = None, where: str = "FRF file"):
     return md
 
 
-def training_ratio_range(est: DamageClassifier, n_sigma: float = 6.0) -> np.ndarray:
-    """Range of the baseline frequency ratios ``f_k / f_1`` (k = 2..4) in the training data, shape (3, 2): the
-    ratio features' mean +- ``n_sigma`` standard deviations (:func:`learn.features.modal_features`, columns
-    4..6)."""
-    mu, sd = est.mean_[4:7], est.scale_[4:7]
-    return np.exp(np.stack([mu - n_sigma * sd, mu + n_sigma * sd], axis=1))
+#: Tolerance on the measured frequency ratios ``f_k / f_1`` against the model's nominal beam: wide enough for
+#: another stiffness, root or shear flexibility (shear lowers f4/f1 by about 10 %), narrow against a missing or
+#: spurious mode (which moves a ratio by a factor of 2.6 or more).
+RATIO_TOLERANCE = 0.35
+
+
+def nominal_ratio_range(sens) -> np.ndarray:
+    """Accepted range of the frequency ratios ``f_k / f_1`` (k = 2..4), shape (3, 2): the nominal beam's ratios
+    times ``1 -+ RATIO_TOLERANCE``."""
+    r = sens.frequencies_hz[1:4] / sens.frequencies_hz[0]
+    return np.stack([r * (1 - RATIO_TOLERANCE), r * (1 + RATIO_TOLERANCE)], axis=1)
 
 
 def _mode_checks(lam, vecs, ratio_range) -> list[list[str]]:
     """Per pair, reasons it lies outside what the modal network was trained on: a frequency ratio ``f_k / f_1``
-    outside its training range (a missing or spurious mode, or another beam), or baseline and current modes
-    that do not pair (MAC < 0.8)."""
+    outside the accepted range (a missing or spurious mode), or baseline and current modes that do not pair
+    (MAC < 0.8)."""
     from learn.features import real_shapes
 
     f = np.abs(lam) / (2 * np.pi)                         # (n, 2, 4)
@@ -442,7 +447,7 @@ def _mode_checks(lam, vecs, ratio_range) -> list[list[str]]:
     reasons = []
     for i in range(f.shape[0]):
         r = [f"{name} f{k + 2}/f1 = {ratio[i, s, k]:.4g} lies outside the training range "
-             f"{ratio_range[k, 0]:.4g}-{ratio_range[k, 1]:.4g} (a missing or spurious mode, or another beam)"
+             f"{ratio_range[k, 0]:.4g}-{ratio_range[k, 1]:.4g} (a missing or spurious mode)"
              for s, name in enumerate(("baseline", "measured")) for k in range(3)
              if not ratio_range[k, 0] <= ratio[i, s, k] <= ratio_range[k, 1]]
         r += [f"mode {k + 1} of the baseline and the measured test do not pair (MAC {mac[i, k]:.2f} < 0.8)"
@@ -577,8 +582,7 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     mode_reasons = [[] for _ in currents]
     classical, best = [], None
     if lam is not None:
-        if "modal" in model.networks:
-            mode_reasons = _mode_checks(lam, vecs, training_ratio_range(model.networks["modal"]))
+        mode_reasons = _mode_checks(lam, vecs, nominal_ratio_range(sens))
         classical, _ = run_classical(lam, vecs, sens, model.config["baseline_thresholds"])
         best = next((o for o in classical if o.name == model.config["best_baseline"]), classical[0])
     depth_of = model.config.get("truth_beam") or beam.name

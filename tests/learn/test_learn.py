@@ -218,5 +218,25 @@ def test_modal_features_ignore_a_global_stiffness_or_mass_scale():
         idx = m.index(["11:y", "21:y", "31:y", "41:y"])
         lam = (-0.002 * w[:, :4] + 1j * w[:, :4])[None]
         feats.append(modal_features(lam, phi[:, idx, :4][None].astype(complex)))
-    assert feats[0].shape == (1, 39)
+    assert feats[0].shape == (1, 36)
     np.testing.assert_allclose(feats[1], feats[0], atol=1e-7)
+
+
+def test_a_missing_mode_or_unpaired_shapes_put_a_pair_outside_the_training_data():
+    """Mode 2 missed (modes 1, 3, 4, 5 taken as 1..4): a frequency ratio far from the nominal beam's; swapped
+    shapes: MAC below 0.8. A clean pair of the nominal beam gives no reason."""
+    from learn.workflow import _mode_checks, nominal_ratio_range
+
+    sens = beam_sensitivity("beam5", 948.7)
+    p = beam_preset("beam5")
+    m = beam_model(40, p.length, p.EI, p.m_per_length, root_spring=948.7 * p.EI / p.length)
+    w, phi = undamped_modes(m.M, m.K)
+    idx = m.index(["11:y", "21:y", "31:y", "41:y"])
+    lam = -0.002 * w[:5] + 1j * w[:5]
+    vec = phi[idx, :5].astype(complex)
+    good = (np.stack([lam[:4], lam[:4]])[None], np.stack([vec[:, :4], vec[:, :4]])[None])
+    assert _mode_checks(*good, nominal_ratio_range(sens)) == [[]]
+    miss = [0, 2, 3, 4]
+    bad = (np.stack([lam[:4], lam[miss]])[None], np.stack([vec[:, :4], vec[:, miss]])[None])
+    reasons = _mode_checks(*bad, nominal_ratio_range(sens))[0]
+    assert any("measured f2/f1" in r for r in reasons) and any("do not pair" in r for r in reasons)
