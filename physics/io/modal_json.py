@@ -26,13 +26,15 @@ from physics.io.atomic import atomic_write_text
 from physics.io.types import ModalData, format_complex
 from physics.modal import eigenvalues_from_modal
 
-__all__ = ["modal_data_from_dict", "modal_data_to_dict", "read_modal_json", "write_modal_json"]
+__all__ = ["modal_data_from_dict", "modal_data_to_dict", "number_list", "read_json", "read_modal_json",
+           "write_modal_json"]
 
 #: Largest modal-data JSON file read (bytes).
 MAX_JSON_BYTES = 64 * 2**20
 #: Largest magnitude accepted in modal data (beyond it products overflow).
 MAX_MAGNITUDE = 1e100
-#: Smallest modulus of an eigenvalue (rad/s) or natural frequency (Hz) accepted (below it reciprocals overflow).
+#: Smallest modulus of an eigenvalue (rad/s), natural frequency (Hz) or mode shape's largest entry accepted
+#: (below it reciprocals and squares leave the floating-point range).
 MIN_EIGENVALUE = 1e-100
 
 
@@ -64,7 +66,7 @@ def _complex_array(values, path, key, ndim):
     return arr
 
 
-def _real_list(values, path, key):
+def number_list(values, path, key):
     """A list of finite real numbers (JSON numbers, not booleans) as a 1-D float array."""
     if not (isinstance(values, list) and all(isinstance(v, (int, float)) and not isinstance(v, bool)
                                              for v in values)):
@@ -94,8 +96,8 @@ def modal_data_from_dict(obj: dict, source="modal data") -> ModalData:
                                   "half-plane; give the Im > 0 member of each conjugate pair")
 
     elif "natural_frequencies_hz" in obj and "damping_ratios" in obj:
-        f = _real_list(obj["natural_frequencies_hz"], source, "natural_frequencies_hz")
-        z = _real_list(obj["damping_ratios"], source, "damping_ratios")
+        f = number_list(obj["natural_frequencies_hz"], source, "natural_frequencies_hz")
+        z = number_list(obj["damping_ratios"], source, "damping_ratios")
         if f.shape != z.shape:
             raise FileFormatError(f"{source}: 'natural_frequencies_hz' has {f.size} entries but 'damping_ratios' "
                                   f"has {z.size}; expected one of each per mode")
@@ -123,6 +125,11 @@ def modal_data_from_dict(obj: dict, source="modal data") -> ModalData:
             what = f"row {zero_rows[0] + 1}" if zero_rows.size else f"column {zero_cols[0] + 1}"
             raise FileFormatError(f"{source}: field 'eigenvectors' {what} is zero; every measured DOF and mode "
                                   "needs a non-zero entry")
+        peak = np.max(np.abs(vecs), axis=0)
+        if np.any(peak < MIN_EIGENVALUE):
+            k = int(np.argmin(peak))
+            raise FileFormatError(f"{source}: field 'eigenvectors' column {k + 1} has largest modulus {peak[k]:.3g}, "
+                                  f"below {MIN_EIGENVALUE:g}; a mode shape may have any scale above it")
 
     if lam.size != np.unique(lam).size:
         _, first = np.unique(lam, return_index=True)
