@@ -747,6 +747,48 @@ def _uff_field_cases():
     return cases
 
 
+def _geometry_uff(path):
+    """An FRF file with units (164, mm) and nodes (15) before the dataset 58 records."""
+    import pyuff
+
+    pyuff.UFF(str(path)).write_sets([
+        pyuff.prepare_164(units_code=5, units_description="mm", temp_mode=1, length=1000.0, force=1.0, temp=1.0,
+                          temp_offset=273.15),
+        pyuff.prepare_15(node_nums=[2, 3, 4, 5], def_cs=[0] * 4, disp_cs=[0] * 4, color=[1] * 4,
+                         x=[152.4, 304.8, 457.2, 609.6], y=[0.0] * 4, z=[0.0] * 4)], mode="add")
+    raw = path.read_bytes()
+    _uff(path, ordinate_axis_units_lab="mm/N")
+    path.write_bytes(raw + path.read_bytes()[len(raw):])
+    return path
+
+
+def _patch_set_line(path, dataset, line, old, new):
+    """Replace ``old`` by ``new`` in the ``line``-th line after the number line of the first ``dataset`` block."""
+    lines = path.read_bytes().split(b"\n")
+    i = next(k for k, ln in enumerate(lines) if ln.strip() == str(dataset).encode()) + line
+    assert old in lines[i], (lines[i], old)
+    lines[i] = lines[i].replace(old, new, 1)
+    path.write_bytes(b"\n".join(lines))
+    return path
+
+
+def _context_cases():
+    geo = lambda d, *a: [_patch_set_line(_geometry_uff(d / "g.uff"), *a)]  # noqa: E731
+    return [
+        ("uff-header", "geometry file is read (then --max-iter 0)", lambda d: ["update", "--modal", str(_geometry_uff(d / "g.uff")),
+                                                         "--max-iter", "0"], "--max-iter"),
+        ("uff-header", "164 units code 'x'", lambda d: geo(d, 164, 1, b"         5", b"         x"), "units code"),
+        ("uff-header", "164 length factor with O for 0", lambda d: geo(d, 164, 2, b"1.00000", b"1.O0000"),
+         "length factor"),
+        ("uff-header", "164 temperature offset 'zz'", lambda d: geo(d, 164, 3, b"2.7", b"zz"), "temperature offset"),
+        ("uff-header", "15 node label '2B'", lambda d: geo(d, 15, 1, b"         2", b"        2B"), "node label"),
+        ("uff-header", "15 x coordinate with O", lambda d: geo(d, 15, 2, b"3.04800E+02", b"3.048O0E+02"),
+         "x coordinate"),
+        ("uff-header", "15 y coordinate 'x'", lambda d: geo(d, 15, 4, b"0.00000E+00", b"          x"),
+         "y coordinate"),
+    ]
+
+
 def _prepend_unknown_set(path):
     path.write_bytes(b"    -1\n   999\nfoo\n    -1\n" + path.read_bytes())
     return path
@@ -833,7 +875,8 @@ def _config_range_cases():
 
 
 CASES = [*_frf_cases(), *_modal_cases(), *_arg_cases(), *_command_arg_cases(), *_dataset_cases(),
-         *_boundary_modal_cases(), *_uff_field_cases(), *_label_cases(), *_config_range_cases(), *_estimate_cases()]
+         *_boundary_modal_cases(), *_uff_field_cases(), *_label_cases(), *_config_range_cases(), *_estimate_cases(),
+         *_context_cases()]
 
 
 def _argv(builder, d):

@@ -277,6 +277,43 @@ def _check_header_fields(path: Path, raw: bytes) -> None:
                                       f"{_FIELD_NOTES.get(name, '')}")
 
 
+_NODE_FIELDS = ("node label", "definition coordinate system", "displacement coordinate system", "colour",
+                "x coordinate", "y coordinate", "z coordinate")
+
+
+def _check_context_fields(path: Path, raw: bytes) -> None:
+    """Numbers of the node (15, 2411) and units (164) datasets, which pyuff reads as whitespace-separated tokens.
+
+    pyuff fails on a letter there with a message that names neither the field nor the line.
+    """
+    import re
+
+    numbers = {True: re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eEdD][+-]?\d+)?"),   # pyuff reads D exponents ...
+               False: re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")}    # ... except in dataset 15
+    for m in re.finditer(rb"(?m)^ {4}-1[ \t]*\r?\n *(15|2411|164)[ \t]*\r?\n", raw):
+        kind = int(m.group(1))
+        stop = raw.find(b"\n    -1", m.end())
+        lines = raw[m.end():len(raw) if stop < 0 else stop].decode("latin1").splitlines()
+        name = "units" if kind == 164 else "nodes"
+        if kind == 164:
+            head = lines[0] if lines else ""
+            for field, a, b in (("units code", 1, 10), ("temperature mode", 31, 40)):
+                text = head[a - 1:b].strip()
+                if text and not re.fullmatch(r"[+-]?\d+", text):
+                    raise FileFormatError(f"{path}: dataset 164 (units) {field} field {text!r} (record 1, columns "
+                                          f"{a}-{b}) is not an integer")
+            fields = ("length factor", "force factor", "temperature factor", "temperature offset")
+            rows = [(k + 2, tok) for k, line in enumerate(lines[1:]) for tok in line.split()]
+            named = [(ln, fields[i] if i < len(fields) else "extra value", tok) for i, (ln, tok) in enumerate(rows)]
+        else:
+            rows = [(k + 1, tok) for k, line in enumerate(lines) for tok in line.split()]
+            named = [(ln, _NODE_FIELDS[i % 7], tok) for i, (ln, tok) in enumerate(rows)]
+        for ln, field, tok in named:
+            if not numbers[kind != 15].fullmatch(tok):
+                raise FileFormatError(f"{path}: dataset {kind} ({name}) line {ln}: {field} field {tok!r} is not a "
+                                      "number such as 1.52400E+02")
+
+
 def _open_uff(path: Path):
     """Check a universal file is complete and list its dataset types."""
     import pyuff
@@ -287,6 +324,7 @@ def _open_uff(path: Path):
         raise FileFormatError(f"{path}: file not found") from None
     _check_uff_complete(path, raw)
     _check_header_fields(path, raw)
+    _check_context_fields(path, raw)
     try:
         uff = pyuff.UFF(str(path))
         types = [int(t) for t in uff.get_set_types()]
