@@ -789,6 +789,24 @@ def _context_cases():
     ]
 
 
+_BAD_EFFECTS = [("local dashpot 1e9 N s/m", "[effects.local_damping]\nc_Ns_m = 1e9\n", "overdamped"),
+                ("added mass 1e12 kg", "[effects.added_mass]\nmass_kg = 1e12\n", "positive definite"),
+                ("root spring 1e-12 N m/rad", "[effects.root_flexibility]\nk_theta_Nm_rad = 1e-12\n",
+                 "positive definite")]
+
+
+def _beam_file_cases():
+    beam = lambda d, text: _toml(d / "b.toml", 'preset = "beam5"\n' + text)  # noqa: E731
+    commands = {
+        "model": lambda b, d: ["model", "--beam", b],
+        "update": lambda b, d: ["update", "--beam", b, "--modal", _modal_arg(d)],
+        "discrepancy": lambda b, d: ["discrepancy", "--beam", b, "--measured", _measured(), "--max-effects", "0"],
+        "generate": lambda b, d: _gen(d, "--beam", b),
+    }
+    return [("beam-file", f"{cmd}: {name}", lambda d, t=text, c=argv: c(beam(d, t), d), expect)
+            for name, text, expect in _BAD_EFFECTS for cmd, argv in commands.items()]
+
+
 def _prepend_unknown_set(path):
     path.write_bytes(b"    -1\n   999\nfoo\n    -1\n" + path.read_bytes())
     return path
@@ -876,7 +894,7 @@ def _config_range_cases():
 
 CASES = [*_frf_cases(), *_modal_cases(), *_arg_cases(), *_command_arg_cases(), *_dataset_cases(),
          *_boundary_modal_cases(), *_uff_field_cases(), *_label_cases(), *_config_range_cases(), *_estimate_cases(),
-         *_context_cases()]
+         *_context_cases(), *_beam_file_cases()]
 
 
 def _argv(builder, d):
