@@ -111,6 +111,19 @@ def _num(key, v, *, lo=None, hi=None, integer=False, strict_lo=False):
     return int(v) if integer else float(v)
 
 
+#: Largest loss factor ``beta * omega`` of a slit's stiffness-proportional damping over the measurement band.
+MAX_SLIT_LOSS_FACTOR = 1.0
+#: Largest relative modal noise std (frequency, damping ratio, shape), fixed or implied by calibrated FRF noise.
+MAX_MODAL_NOISE = 0.5
+
+
+def _max_calibrated_level(meas, limit):
+    """Largest FRF noise level whose calibrated modal noise stds all stay <= ``limit``."""
+    return min(math.sqrt(max(limit**2 - fl**2, 0.0)) / c if c > 0 else math.inf
+               for q in ("frequency", "damping", "shape")
+               for c, fl in zip(meas[f"{q}_noise"], meas[f"{q}_noise_floor"]))
+
+
 def validate(cfg: dict) -> dict:
     """Check every key of a full configuration; returns a normalised deep copy.
 
@@ -178,12 +191,12 @@ def validate(cfg: dict) -> dict:
         if isinstance(v, list):
             if len(v) != 4:
                 raise ConfigError(f"config key 'measurement.{k}' must be a number or 4 numbers (modes 1..4), got {v!r}")
-            meas[k] = [_num(f"measurement.{k}", x, lo=0, hi=100) for x in v]
+            meas[k] = [_num(f"measurement.{k}", x, lo=0, hi=100 if calib else MAX_MODAL_NOISE) for x in v]
         elif calib:  # a number in calibrated mode: the shipped per-mode coefficients
             q = k.split("_")[0]
             meas[k] = [float(x) for x in calib[q + k.removeprefix(f"{q}_noise")]]
         else:
-            meas[k] = _num(f"measurement.{k}", v, lo=0, hi=0.5)
+            meas[k] = _num(f"measurement.{k}", v, lo=0, hi=MAX_MODAL_NOISE)
     for k in ("frf_noise", "frf_noise_floor"):  # a number fixes the level; a range draws it per sample
         v = meas[k]
         meas[k] = (_num(f"measurement.{k}", v, lo=0.0, hi=0.5) if isinstance(v, (int, float)) and not isinstance(v, bool)
@@ -193,6 +206,20 @@ def validate(cfg: dict) -> dict:
     if meas["band_rad_s"][0] >= meas["band_rad_s"][1]:
         raise ConfigError("config key 'measurement.band_rad_s' must have low < high")
     meas["lines"] = _num("measurement.lines", meas["lines"], lo=2, hi=200000, integer=True)
+    top_rad_s = meas["band_rad_s"][1]
+    if d["slit_damping_s"][1] * top_rad_s > MAX_SLIT_LOSS_FACTOR:
+        raise ConfigError(f"config key 'damage.slit_damping_s' must keep the slit's loss factor beta*omega <= "
+                          f"{MAX_SLIT_LOSS_FACTOR:g} up to the top of measurement.band_rad_s ({top_rad_s:g} rad/s): "
+                          f"beta <= {MAX_SLIT_LOSS_FACTOR / top_rad_s:.3g} s, got {d['slit_damping_s']!r}")
+    if calib:  # the modal noise the FRF noise implies must lie where the fixed stds may
+        level = max(meas["frf_noise"]) if isinstance(meas["frf_noise"], list) else meas["frf_noise"]
+        for q in ("frequency", "damping", "shape"):
+            std = max(math.hypot(c * level, fl) for c, fl in zip(meas[f"{q}_noise"], meas[f"{q}_noise_floor"]))
+            if std > MAX_MODAL_NOISE:
+                raise ConfigError(f"config key 'measurement.frf_noise': {level:g} implies a calibrated relative "
+                                  f"{q} noise std of {std:.3g} (> {MAX_MODAL_NOISE:g}: measured modes with "
+                                  f"negative damping or lost shapes); keep frf_noise <= "
+                                  f"{_max_calibrated_level(meas, MAX_MODAL_NOISE):.3g}")
     try:  # one mass-model name set (physics.updating.MASS_MODELS); "reduced" is accepted for "iirs"
         up["mass_model"] = mass_model_name(up["mass_model"], parameter="updating.mass_model")
     except BeamDamageError as exc:

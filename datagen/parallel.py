@@ -201,7 +201,7 @@ def generate(root, cfg: dict, *, n: int, seed: int = 0, workers: int = 1, schedu
     seed : int
     workers : int       local processes (1 = in this process)
     scheduler : str     Dask scheduler address (``tcp://host:8786``); overrides ``workers``
-    progress : bool     tqdm progress bar on stderr
+    progress : bool     tqdm progress bar on stderr (when it is a terminal)
     max_new_shards : int, optional
         Stop after writing this many new shards (leaves a resumable, incomplete dataset).
     """
@@ -225,7 +225,7 @@ def _generate(root, cfg, n, seed, workers, client, progress, max_new_shards) -> 
     from tqdm import tqdm
 
     bar = tqdm(total=n, initial=sum(e["n_samples"] for e in manifest["shards"]), unit="sample",
-               disable=not progress, file=None, desc="generate")
+               disable=None if progress else True, file=None, desc="generate")  # None: only on a terminal
 
     store = (get_setup(cfg).omega_rad_s, np.dtype(cfg["output"]["frf_dtype"])) if cfg["output"]["store_frf"] \
         else (None, None)

@@ -8,7 +8,9 @@ options (``{"n_elements": "--elements"}``), so that an error about a parameter
 ``run`` returns a JSON-serialisable result and, for text output, may print a
 human-readable view itself (only when ``args.json`` is false). Errors derived
 from :class:`physics.errors.BeamDamageError` (and ``OSError`` on user files)
-become one line on stderr and exit code 2.
+become one line on stderr and exit code 2; warnings raised while a command runs are dropped when it fails
+(the error line is the whole story) and otherwise printed after it, one line each
+(``beam-damage COMMAND: warning: ...``).
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ import argparse
 import importlib
 import json
 import sys
+import warnings
 
 import numpy as np
 
@@ -99,7 +102,9 @@ def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        result = args.func(args)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("default")
+            result = args.func(args)
     except BeamDamageError as exc:
         flag = getattr(args, "flags", {}).get(exc.parameter)
         sys.stderr.write(f"beam-damage {args.command}: error: {f'{flag}: ' if flag else ''}{exc}\n")
@@ -110,6 +115,8 @@ def main(argv=None) -> int:
     except OSError as exc:
         sys.stderr.write(f"beam-damage {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}\n")
         return EXIT_USAGE
+    for message in dict.fromkeys(" ".join(str(w.message).split()) for w in caught):
+        sys.stderr.write(f"beam-damage {args.command}: warning: {message}\n")
     exit_code = int(result.pop("exit_code", 0)) if isinstance(result, dict) else 0
     if getattr(args, "json", False):
         try:

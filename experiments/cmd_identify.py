@@ -130,7 +130,8 @@ def add_parser(sub):
     p.add_argument("--max-order", type=int, default=40, help="highest LSCF model order (default 40)")
     p.add_argument("--out", metavar="DIR",
                    help="write modal.json (feedable to 'beam-damage update --modal'), synthesised.uff (the "
-                        "fitted FRFs in the input's kind, units and lines of the band), stabilisation.png "
+                        "fitted FRFs in the input's kind, units and lines of the band; synthesised.csv for a CSV "
+                        "without reference DOF), stabilisation.png "
                         "(lscf) and overlay.png")
     p.add_argument("--json", action="store_true",
                    help='print one JSON object: {"modes": [{"frequency_hz", "damping_ratio", "shape", '

@@ -7,7 +7,7 @@ import numpy as np
 from experiments.args import add_beam_argument
 from physics import modal, updating
 from physics.beam import Beam, load_beam
-from physics.errors import ConfigError, ConvergenceError, FileFormatError
+from physics.errors import BeamDamageError, ConfigError, ConvergenceError, FileFormatError
 from physics.io import dof_positions_text, read_modal_json
 
 
@@ -22,6 +22,20 @@ def load_modal(modal_file, n_modes: int):
 
     ident = identify_file(modal_file, n_modes=n_modes)
     return ident.modal_data, ident.frf
+
+
+def unstable_mode_warnings(eigenvalues) -> list:
+    """One warning per mode of an updated model that is not damped: ``Re(lambda) >= 0`` (damping ratio <= 0).
+
+    Parameters
+    ----------
+    eigenvalues : ndarray, complex, shape (n_modes,)
+        The updated model's eigenvalues (rad/s), one of each conjugate pair.
+    """
+    f_hz, zeta = modal.modal_parameters(eigenvalues)
+    return [f"the updated model is unstable: mode {k + 1} at {f_hz[k]:.6g} Hz has damping ratio {zeta[k]:.3g} "
+            "(eigenvalue real part >= 0); the measured modes have negative damping or are inconsistent with the "
+            "mass" for k in np.flatnonzero(np.asarray(eigenvalues).real >= 0)]
 
 
 def update(beam, modal_file, mass: str = "iirs", tol: float = 1e-10, max_iter: int = 500,
@@ -51,10 +65,15 @@ def update(beam, modal_file, mass: str = "iirs", tol: float = 1e-10, max_iter: i
                               f"measured DOFs ({', '.join(b.masters)}); label the rows with 'dofs'")
     dof_map = b.map_dofs(data.dofs, frf=frf, where=str(modal_file))
     vectors = data.eigenvectors[dof_map.rows(b.masters, str(modal_file))]
-    if method == "direct":
-        res = updating.lancaster_direct(M, data.eigenvalues, vectors)
-    else:
-        res = updating.pilkey(M, data.eigenvalues, vectors, tol=tol, max_iter=max_iter)
+    try:
+        if method == "direct":
+            res = updating.lancaster_direct(M, data.eigenvalues, vectors)
+        else:
+            res = updating.pilkey(M, data.eigenvalues, vectors, tol=tol, max_iter=max_iter)
+    except BeamDamageError as exc:
+        if exc.parameter is not None:
+            raise
+        raise type(exc)(f"{modal_file}: {exc}") from None
     errors, model_lam = updating.eigenvalue_errors(M, res.C, res.K, data.eigenvalues)
     worst = int(np.argmax(errors))
     if not errors[worst] <= max_eigenvalue_error:
@@ -69,7 +88,11 @@ def update(beam, modal_file, mass: str = "iirs", tol: float = 1e-10, max_iter: i
         warnings.append(f"the updated model reproduces the measured eigenvalues only to {errors[worst]:.2%} "
                         f"(mode {worst + 1}; tolerance {updating.REPRODUCTION_TOL:.0%}): the measured modes are "
                         "not consistent with the trusted mass")
-    cm = modal.complex_modes(M, res.C, res.K)
+    try:
+        cm = modal.complex_modes(M, res.C, res.K)
+    except BeamDamageError as exc:
+        raise type(exc)(f"{modal_file}: the updated model: {exc}") from None
+    warnings += unstable_mode_warnings(cm.eigenvalues)
     return {
         "beam": beam, "mass": mass, "dofs": list(b.masters), "dof_positions": dof_map.to_dict(),
         "M": M, "C": res.C, "K": res.K,

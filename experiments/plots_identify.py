@@ -19,7 +19,8 @@ from pathlib import Path  # noqa: E402
 
 from physics.errors import ConfigError  # noqa: E402
 from physics.identification import STABILITY_CODES, Identification, mode_indicator  # noqa: E402
-from physics.io import MeasuredFRF, atomic_write_bytes, modal_data_to_dict, write_uff58  # noqa: E402
+from physics.io import MeasuredFRF, atomic_write_bytes, modal_data_to_dict, write_frf_csv, write_uff58  # noqa: E402
+from physics.io.types import UNNAMED_REFERENCE  # noqa: E402
 
 _MARKERS = {0: ("o", "0.7", "new"), 1: ("x", "tab:orange", "f"), 2: ("^", "tab:blue", "f+d"),
             3: ("v", "tab:purple", "f+v"), 4: ("s", "tab:green", "stable")}
@@ -92,7 +93,8 @@ def synthesised_frf(ident: Identification) -> MeasuredFRF:
 
 
 def write_outputs(ident: Identification, out_dir) -> dict:
-    """Write modal JSON, the synthesised FRFs (UFF 58), stabilisation diagram (LSCF) and overlay PNGs.
+    """Write modal JSON, the synthesised FRFs (UFF 58; CSV when the file does not name the reference DOF),
+    stabilisation diagram (LSCF) and overlay PNGs.
 
     Everything is rendered first, then each file is written atomically; returns their paths.
     """
@@ -111,6 +113,10 @@ def write_outputs(ident: Identification, out_dir) -> dict:
     for name, data in files.items():
         atomic_write_bytes(out_dir / name, data)
         written[name] = str(out_dir / name)
-    write_uff58(out_dir / "synthesised.uff", synth)
-    written["synthesised.uff"] = str(out_dir / "synthesised.uff")
+    if UNNAMED_REFERENCE in synth.reference_dofs:  # a UFF record needs the reference node: CSV keeps the label
+        write_frf_csv(out_dir / "synthesised.csv", synth)
+        written["synthesised.csv"] = str(out_dir / "synthesised.csv")
+    else:
+        write_uff58(out_dir / "synthesised.uff", synth)
+        written["synthesised.uff"] = str(out_dir / "synthesised.uff")
     return written

@@ -21,7 +21,7 @@ from physics import discrepancy as dsc
 from physics.beam import Beam, beam_to_toml, load_beam
 from physics.effects import CANDIDATES
 from physics.errors import ConfigError, FileFormatError
-from physics.io import atomic_write_bytes, modal_data_from_dict, read_frf
+from physics.io import atomic_write_bytes, modal_data_from_dict, number_list, read_frf, read_json
 
 EXAMPLE = Path(__file__).parents[1] / "physics" / "data" / "thesis" / "beam5_table_4_3.json"
 
@@ -38,17 +38,12 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[dsc.Measurement, o
     path = Path(path)
     if path.suffix.lower() == ".json":
         try:
-            obj = json.loads(path.read_bytes().decode("utf-8"))
+            obj = read_json(path, require_object=False)
         except FileNotFoundError:
             raise FileFormatError(f"{path}: file not found") from None
-        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-            raise FileFormatError(f"{path}: not valid UTF-8 JSON ({exc})") from None
         if isinstance(obj, dict) and "natural_frequencies_hz" in obj and "damping_ratios" not in obj \
                 and "eigenvalues" not in obj:
-            try:
-                f = np.asarray(obj["natural_frequencies_hz"], dtype=float)
-            except (TypeError, ValueError):
-                raise FileFormatError(f"{path}: 'natural_frequencies_hz' must be a list of numbers") from None
+            f = number_list(obj["natural_frequencies_hz"], str(path), "natural_frequencies_hz")
             try:
                 return dsc.Measurement(f), None, None
             except ValueError as exc:

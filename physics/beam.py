@@ -289,7 +289,39 @@ def beam_from_dict(obj: dict, source: str = "beam") -> Beam:
         x = vals.get("effects", {}).get(k, {}).get("x_m")
         if x is not None and x > vals["length_m"]:
             raise ConfigError(f"{source}: 'effects.{k}.x_m' = {x} lies beyond 'length_m' = {vals['length_m']}")
-    return Beam(**vals)
+    beam = Beam(**vals)
+    if beam.effects:
+        _check_effects_keep_a_model(beam, source)
+    return beam
+
+
+#: Largest spread of the eigenvalues of the mass matrix, and of the squared natural frequencies, of a beam
+#: file's 4-element model (a plain cantilever: 3e4 and 7e4): beyond it the effects make the model singular to
+#: working precision (a root spring of almost nothing, an added mass of tonnes on a light beam).
+MAX_MODEL_SPREAD = 1e12
+
+
+def _check_effects_keep_a_model(beam: Beam, source: str) -> None:
+    """Refuse effect values that leave no positive definite, underdamped model (one line naming the file)."""
+    from scipy.linalg import eigh
+
+    from physics.modal import state_matrix
+
+    model = beam.fe_model(4)
+    names = ", ".join(f"effects.{k}" for k in beam.effects)
+    mass = np.linalg.eigvalsh(model.M)
+    w2 = eigh(model.K, model.M, eigvals_only=True) if mass.min() > 0 else np.array([-1.0])
+    if not (mass.min() > 0 and mass.max() <= MAX_MODEL_SPREAD * mass.min() and w2.min() > 0
+            and w2.max() <= MAX_MODEL_SPREAD * w2.min()):
+        raise ConfigError(f"{source}: {names} leave no positive definite model (mass spread "
+                          f"{mass.max() / mass.min() if mass.min() > 0 else float('inf'):.3g}, squared frequency "
+                          f"spread {w2.max() / w2.min() if w2.min() > 0 else float('inf'):.3g}, limit "
+                          f"{MAX_MODEL_SPREAD:g}): give values of the beam's own scale (mass, EI / length)")
+    lam = np.linalg.eigvals(state_matrix(model.M, model.C, model.K))
+    real = np.abs(lam.imag) <= 1e-9 * np.abs(lam).max()
+    if real.any():
+        raise ConfigError(f"{source}: {names} make {max(int(real.sum()) // 2, 1)} mode(s) of the model overdamped; "
+                          "the package needs underdamped modes (a smaller 'c_Ns_m')")
 
 
 def load_beam(name_or_path) -> Beam:

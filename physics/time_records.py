@@ -47,15 +47,18 @@ class HitCheck:
         ``(block, dof)`` of clipped channels.
     pulse_samples : int
         Longest force pulse found (samples above 5 % of the block's peak).
+    missed : tuple of int
+        Blocks without a hit: force peak below 5 % of the largest block's.
     """
 
     double_hits: tuple
     overloads: tuple
     pulse_samples: int
+    missed: tuple = ()
 
     @property
     def bad_blocks(self) -> set:
-        return set(self.double_hits) | {b for b, _ in self.overloads}
+        return set(self.double_hits) | {b for b, _ in self.overloads} | set(self.missed)
 
 
 @dataclass(frozen=True)
@@ -115,7 +118,20 @@ def check_hits(force_blocks, response_blocks, dofs, double_hit=0.2, flat=3):
         for k in range(flat):
             run &= at_top[:, k: n - flat + 1 + k]
         overloads += [(int(b), dof) for b in np.nonzero(run.any(axis=1))[0]]
-    return HitCheck(doubles, tuple(sorted(overloads)), int(np.max(end - first)))
+    missed = tuple(int(b) for b in np.nonzero(~(peak[:, 0] > 0.05 * peak.max()))[0])
+    return HitCheck(doubles, tuple(sorted(overloads)), int(np.max(end - first)), missed)
+
+
+#: Smallest peak force (N) of a force channel: below it the force spectra underflow (no FRF can be formed).
+MIN_FORCE_N = 1e-100
+
+
+def _estimate(src, *args, **kw):
+    """:func:`physics.estimation.estimate_frf` with its errors naming the file."""
+    try:
+        return estimate_frf(*args, **kw)
+    except ShapeError as exc:
+        raise FileFormatError(f"{src}: {exc}") from None
 
 
 def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", excitation="random", averages=8,
@@ -175,6 +191,10 @@ def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", 
     if len(set(out_dofs)) != len(out_dofs):
         dup = next(d for d in out_dofs if out_dofs.count(d) > 1)
         raise FileFormatError(f"{src}: two response channels measure DOF {dup}")
+    peak_n = float(np.max(np.abs(records.signals[ref])))
+    if not peak_n >= MIN_FORCE_N:
+        raise FileFormatError(f"{src}: force channel {records.dofs[ref]} is zero (largest |F| {peak_n:.3g} N < "
+                              f"{MIN_FORCE_N:g} N); expected a measured force")
     if not (isinstance(averages, (int, np.integer)) and averages >= 1):
         raise ShapeError(f"averages {averages} must be an integer >= 1")
     fs = records.sampling_frequency_hz
@@ -188,7 +208,7 @@ def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", 
         noverlap = int(round(overlap * nperseg))
         if nperseg < 16:
             raise ShapeError(f"{n} samples cannot give {averages} averages of at least 16 samples")
-        est = estimate_frf(x[ref], x[resp], fs, nperseg, noverlap, window=window)
+        est = _estimate(src, x[ref], x[resp], fs, nperseg, noverlap, window=window)
         what = f"{estimator.upper()} of random excitation, {window} window, {est.n_averages} averages, " \
                f"{overlap:.0%} overlap, {fs / nperseg:.4g} Hz lines"
     else:
@@ -199,16 +219,17 @@ def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", 
         hits = check_hits(blocks[:, ref], blocks, records.dofs)
         good = [b for b in range(averages) if b not in hits.bad_blocks]
         if not good:
-            raise FileFormatError(f"{src}: every impact block has a double hit or an overload "
+            raise FileFormatError(f"{src}: every impact block has a double hit, an overload or no hit "
                                   f"(double hits in blocks {list(hits.double_hits)}, overloads "
-                                  f"{[f'{d} in block {b}' for b, d in hits.overloads]})")
+                                  f"{[f'{d} in block {b}' for b, d in hits.overloads]}, no hit in blocks "
+                                  f"{list(hits.missed)})")
         ew, tau = exponential_window(block, decay)
         fw = force_window(block, hits.pulse_samples + int(np.argmax(np.abs(blocks[0, ref]) > 0)),
                           max(hits.pulse_samples, 4))
         g = blocks[good]
         f_t = (g[:, ref] * fw * ew).reshape(-1)
         r_t = (g[:, resp] * ew).transpose(1, 0, 2).reshape(len(resp), -1)
-        est = estimate_frf(f_t, r_t, fs, block, 0, window="boxcar")
+        est = _estimate(src, f_t, r_t, fs, block, 0, window="boxcar")
         added = 0.0 if np.isinf(tau) else fs / tau
         what = f"{estimator.upper()} of {len(good)} impact blocks of {block} samples (force window, exponential " \
                f"window to {decay:g}: adds {added:.4g} 1/s to every pole's decay rate), {fs / block:.4g} Hz lines"
@@ -221,7 +242,10 @@ def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", 
     if keep.sum() < 2:
         raise ShapeError(f"fmax_hz {fmax_hz} keeps fewer than 2 lines")
     coh = est.coherence[:, :1, keep]
-    frf = MeasuredFRF(f[keep], h[..., keep], out_dofs, (records.dofs[ref],), kind=kind,
-                      metadata={"source": src, "format": "uff58 time records", "estimated": what})
+    try:
+        frf = MeasuredFRF(f[keep], h[..., keep], out_dofs, (records.dofs[ref],), kind=kind,
+                          metadata={"source": src, "format": "uff58 time records", "estimated": what})
+    except ShapeError as exc:
+        raise FileFormatError(f"{src}: the estimated FRFs: {exc}") from None
     return TimeEstimate(frf, coh, estimator, excitation, int(est.n_averages if excitation == "random" else
                                                                len(good)), hits, added, what)

@@ -149,13 +149,60 @@ def analyst_mass(m_per_length_kg_m, length_m: float, mass_model: str = "iirs", n
     return mpl[..., None, None] * _unit_iirs_mass(float(length_m), int(n_elements))
 
 
-def check_modal_input(M, eigenvalues, eigenvectors):
-    """Validate ``M`` and a complete modal set; returns the arrays.
+#: Largest condition number of the eigenvector matrix (each column scaled to unit maximum modulus) accepted by
+#: updating: beyond it the modes are linearly dependent to working precision and eq. 1.12 has no stable answer.
+MAX_EIGENVECTOR_CONDITION = 1e8
+
+
+def unit_columns(eigenvectors):
+    """Eigenvectors with each column scaled to unit maximum modulus (a positive real factor per mode).
+
+    Mode shapes have arbitrary scaling, which eqs. 1.10-1.12 remove; this scaling keeps their products in
+    floating-point range (modes given as 1e-300 or 1e+90 update like any other).
+
+    Parameters
+    ----------
+    eigenvectors : ndarray, complex, shape (..., n, m)
+
+    Returns
+    -------
+    ndarray, complex, shape (..., n, m)   (zero columns stay zero)
+    """
+    phi = np.asarray(eigenvectors, dtype=complex)
+    peak = np.max(np.abs(phi), axis=-2, keepdims=True)
+    return phi / np.where(peak > 0, peak, 1.0)
+
+
+def eigenvector_condition(eigenvectors):
+    """Condition number of a square eigenvector matrix after :func:`unit_columns` (inf if singular).
+
+    Parameters
+    ----------
+    eigenvectors : ndarray, complex, shape (..., n, n), finite
+
+    Returns
+    -------
+    float or ndarray, shape (...)
+    """
+    s = np.linalg.svd(unit_columns(eigenvectors), compute_uv=False)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cond = np.where(s[..., -1] > 0, s[..., 0] / s[..., -1], np.inf)
+    return cond if cond.ndim else float(cond)
+
+
+def check_modal_input(M, eigenvalues, eigenvectors, *, dependent: str = "raise"):
+    """Validate ``M`` and a complete modal set; returns ``M``, the eigenvalues and :func:`unit_columns` vectors.
+
+    Parameters
+    ----------
+    dependent : {"raise", "nan"}
+        Linearly dependent eigenvectors (:data:`MAX_EIGENVECTOR_CONDITION`): raise, or (batched updating
+        that flags failures per member) return that member's eigenvectors as NaN.
 
     Raises
     ------
     ShapeError
-        Size mismatch, non-square ``M``, NaN.
+        Size mismatch, non-square ``M``, NaN, linearly dependent eigenvectors.
     OverdampedError
         Real eigenvalues, or a set that holds both members of a conjugate pair
         (so the conjugate information of another mode is missing).
@@ -179,7 +226,22 @@ def check_modal_input(M, eigenvalues, eigenvectors):
     if np.any((upper != 0) & (upper != n)):
         raise OverdampedError("eigenvalues mix both halves of the conjugate pairs; give one eigenvalue of each "
                               "pair (all with Im > 0), the conjugates are implied")
+    phi = unit_columns(phi)
+    cond = np.asarray(eigenvector_condition(phi))
+    bad = ~(cond <= MAX_EIGENVECTOR_CONDITION)
+    if bad.any() and dependent == "raise":
+        raise ShapeError(f"eigenvectors are linearly dependent (condition number {float(cond.max()):.3g} > "
+                         f"{MAX_EIGENVECTOR_CONDITION:g} with each mode scaled to unit maximum): updating needs "
+                         f"{n} independent mode shapes, one column per mode")
+    if bad.any():
+        phi = phi.copy()
+        phi[bad] = np.nan
     return M, lam, phi
+
+
+_SINGULAR_FLEXIBILITY = ("the modes give a singular flexibility matrix (eq. 1.12: Phi L^-1 Phi^T + c.c.), so no "
+                         "stiffness matrix: the eigenvalues and eigenvectors are not a complete set of modes of a "
+                         "structure with this mass")
 
 
 def lancaster_damping(M, eigenvalues, eigenvectors):
@@ -210,10 +272,16 @@ def lancaster_stiffness(eigenvalues, eigenvectors):
     Returns
     -------
     ndarray, shape (..., n, n), real symmetric
+        NaN where the flexibility matrix in brackets is singular to working precision (no stiffness matrix).
     """
     phi = np.asarray(eigenvectors)
     flex = -2 * ((phi / np.asarray(eigenvalues)[..., None, :]) @ _t(phi)).real
-    K = np.linalg.inv(flex)
+    eye = np.eye(flex.shape[-1])
+    finite = np.isfinite(flex).all(axis=(-2, -1))
+    s = np.linalg.svd(np.where(finite[..., None, None], flex, eye), compute_uv=False)
+    singular = ~finite | ~(s[..., -1] > s[..., 0] * (flex.shape[-1] * np.finfo(float).eps))
+    K = np.linalg.inv(np.where(singular[..., None, None], eye, flex))
+    K[singular] = np.nan
     return 0.5 * (K + _t(K))
 
 
@@ -303,7 +371,7 @@ def pilkey(M, eigenvalues, eigenvectors, C0=None, *, tol: float = 1e-10, max_ite
         raise BeamDamageError(f"tol must be a positive number, got {tol}", parameter="tol")
     if int(max_iter) != max_iter or max_iter < 1:
         raise BeamDamageError(f"max_iter must be an integer >= 1, got {max_iter}", parameter="max_iter")
-    M, lam, phi = check_modal_input(M, eigenvalues, eigenvectors)
+    M, lam, phi = check_modal_input(M, eigenvalues, eigenvectors, dependent="raise" if raise_on_failure else "nan")
     batch, n = M.shape[:-2], M.shape[-1]
     Mf = M.astype(float).reshape(-1, n, n)
     lf, pf = lam.reshape(-1, n), phi.reshape(-1, n, n)
@@ -364,6 +432,11 @@ def pilkey(M, eigenvalues, eigenvectors, C0=None, *, tol: float = 1e-10, max_ite
         K = np.full_like(C, np.nan)
         ok = np.flatnonzero(~diverged)
         K[ok] = lancaster_stiffness(lf[ok], phi_n[ok])  # eq. 5.4
+    singular = ~diverged & ~np.isfinite(K).all(axis=(-2, -1))
+    converged &= ~singular
+    if raise_on_failure and singular.any():
+        raise ConvergenceError(_SINGULAR_FLEXIBILITY, iterations=int(iterations.max()),
+                               residual=float(np.max(residual[singular])))
 
     def shaped(x):
         x = x.reshape(batch + x.shape[1:])
@@ -408,6 +481,8 @@ def lancaster_direct(M, eigenvalues, eigenvectors):
     C = lancaster_damping(M, lam, phi_n)
     C = 0.5 * (C + _t(C))
     K = lancaster_stiffness(lam, phi_n)
+    if not np.isfinite(K).all():
+        raise ShapeError(_SINGULAR_FLEXIBILITY)
     batch = M.shape[:-2]
     return UpdateResult(C=C, K=K, eigenvectors=phi_n, iterations=0,
                         converged=np.ones(batch, bool) if batch else True,

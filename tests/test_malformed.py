@@ -609,7 +609,292 @@ def _edit_json(path, edit):
     path.write_text(json.dumps(edit(json.loads(path.read_text()))))
 
 
-CASES = [*_frf_cases(), *_modal_cases(), *_arg_cases(), *_command_arg_cases(), *_dataset_cases()]
+# --------------------------------------------------------------------------- boundary classes (issue 18)
+def _with(**changes):
+    return dict(_thesis_modal(), **changes)
+
+
+def _vectors(edit):
+    vec = [row[:] for row in _thesis_modal()["eigenvectors"]]
+    return edit(vec) or vec
+
+
+def _scaled(factor):
+    return [[str(complex(z) * factor) for z in row] for row in _thesis_modal()["eigenvectors"]]
+
+
+def _dup_column(vec):
+    for row in vec:
+        row[1] = row[0]
+
+
+#: Modal data that break the updating's linear algebra: (name, modal JSON mapping, expected substring).
+_ILL_CONDITIONED = [
+    ("digit-string rows '1234'", _with(eigenvectors=["1234", "5678", "1357", "2468"]), "row 1 is a str"),
+    ("all-ones eigenvectors (rank 1)", _with(eigenvectors=[[1, 1, 1, 1]] * 4), "linearly dependent"),
+    ("duplicated row", _with(eigenvectors=_vectors(lambda v: v.__setitem__(1, v[0]))), "linearly dependent"),
+    ("duplicated column", _with(eigenvectors=_vectors(_dup_column)), "linearly dependent"),
+    ("dependent integer rows", _with(eigenvectors=[[1, 2, 3, 4], [2, 3, 4, 5], [5, 1, 2, 3], [1, 0, 1, 2]]),
+     "linearly dependent"),
+    ("shapes of 1e-300", _with(eigenvectors=[["1e-300"] * 4] * 4), "eigenvectors"),
+    ("one mode scaled by 1e-300", _with(eigenvectors=[[str(complex(z) * (1e-300 if j == 2 else 1))
+                                                       for j, z in enumerate(row)]
+                                                      for row in _thesis_modal()["eigenvectors"]]), "column 3"),
+    ("eigenvalues of 1e-300 rad/s", _with(eigenvalues=[str(complex(z) * 1e-300)
+                                                      for z in _thesis_modal()["eigenvalues"]]), "eigenvalues"),
+]
+
+_MODAL_FIELDS = [
+    ("damping ratio -5", {"natural_frequencies_hz": [21.5, 129.7, 346.1, 634.1], "damping_ratios": [-5, 0.002, 0.003,
+                                                                                                   0.004]},
+     "damping_ratios"),
+    ("damping ratio 1", {"natural_frequencies_hz": [21.5, 129.7, 346.1, 634.1], "damping_ratios": [1, 0.002, 0.003,
+                                                                                                  0.004]},
+     "damping_ratios"),
+    ("boolean frequency", {"natural_frequencies_hz": [True, 129.7, 346.1, 634.1], "damping_ratios": [0.001] * 4},
+     "natural_frequencies_hz"),
+    ("frequency 1e-300 Hz", {"natural_frequencies_hz": [1e-300, 129.7, 346.1, 634.1], "damping_ratios": [0.001] * 4},
+     "natural_frequencies_hz"),
+    ("frequencies and damping of unequal length", {"natural_frequencies_hz": [21.5, 129.7],
+                                                   "damping_ratios": [0.001] * 3}, "damping_ratios"),
+    ("dofs labels 'a'..'d'", _with(dofs=["a", "b", "c", "d"]), "dofs"),
+    ("dofs labels as numbers", _with(dofs=[2, 3, 4, 5]), "dofs"),
+    ("eigenvectors an object", _with(eigenvectors={"a": 1}), "is a dict"),
+    ("eigenvectors a string", _with(eigenvectors="abc"), "is a str"),
+    ("eigenvalues a string", _with(eigenvalues="-0.2+135j"), "eigenvalues"),
+]
+
+
+def _boundary_modal_cases():
+    cases = [("modal-json", f"{name}{' (direct)' if direct else ''}",
+              lambda d, o=obj, m=direct: _upd(_modal(d / "m.json", o), *(["--method", "direct"] if m else [])),
+              expect)
+             for name, obj, expect in _ILL_CONDITIONED for direct in (False, True)]
+    cases += [("modal-json", name, lambda d, o=obj: _upd(_modal(d / "m.json", o)), expect)
+              for name, obj, expect in _MODAL_FIELDS]
+    cases += [
+        ("discrepancy", "--measured nested 100k deep",
+         lambda d: _dsc_m(_modal(d / "deep.json", "[" * 100_000 + "]" * 100_000)), "deep.json"),
+        ("discrepancy", "--measured boolean frequency",
+         lambda d: _dsc_m(_modal(d / "b.json", {"natural_frequencies_hz": [True, 60.0, 170.0]})),
+         "natural_frequencies_hz"),
+        ("discrepancy", "--measured shapes of 1e-300",
+         lambda d: _dsc_m(_modal(d / "t.json", _with(eigenvectors=[["1e-300"] * 4] * 4))), "eigenvectors"),
+        ("discrepancy", "--measured dofs 'a'..'d'",
+         lambda d: _dsc_m(_modal(d / "a.json", _with(dofs=["a", "b", "c", "d"]))), "dofs"),
+        ("classify", "measured digit-string rows",
+         lambda d: ["classify", "--model", str(_tiny_model()), "--baseline", _modal_arg(d, "b.json"),
+                    str(_modal(d / "c.json", _with(eigenvectors=["1234"] * 4))), "--json"], "c.json"),
+        ("classify", "baseline damping ratio -5",
+         lambda d: ["classify", "--model", str(_tiny_model()), "--baseline", str(_modal(d / "b.json", dict(
+             _MODAL_FIELDS[0][1], eigenvectors=_thesis_modal()["eigenvectors"]))), _modal_arg(d, "c.json"),
+                    "--json"], "b.json"),
+    ]
+    return cases
+
+
+#: Numeric fields of a dataset 58 header: (line after the '58' line, -1 = that line; first, last column; name).
+_UFF_FIELDS = [
+    (-1, 8, 13, "byte ordering"), (-1, 14, 19, "floating-point format"), (-1, 20, 31, "ASCII header lines"),
+    (-1, 32, 43, "binary bytes"),
+    (5, 1, 5, "function type"), (5, 6, 15, "function id"), (5, 16, 20, "version number"), (5, 21, 30, "load case"),
+    (5, 42, 51, "response node"), (5, 52, 55, "response direction"), (5, 67, 76, "reference node"),
+    (5, 77, 80, "reference direction"),
+    (6, 1, 10, "ordinate data type"), (6, 11, 20, "number of points"), (6, 21, 30, "abscissa spacing"),
+    (6, 31, 43, "abscissa minimum"), (6, 44, 56, "abscissa increment"), (6, 57, 69, "z-axis value"),
+    *((7 + k, a, b, f"{axis} {name}") for k, axis in enumerate(("abscissa", "ordinate", "ordinate denominator",
+                                                                "z-axis"))
+      for a, b, name in ((1, 10, "data type"), (11, 15, "length exponent"), (16, 20, "force exponent"),
+                         (21, 25, "temperature exponent"))),
+]
+
+
+def _patch_field(path, line, first, last, text):
+    """Write ``text`` (right-aligned) into columns ``first``-``last`` of a header line of the first dataset 58."""
+    lines = path.read_bytes().split(b"\n")
+    i = next(k for k, ln in enumerate(lines) if ln.startswith(b"    58")) + (0 if line == -1 else 1 + line)
+    old = lines[i].decode("latin1").rstrip("\r").ljust(80)
+    lines[i] = (old[:first - 1] + text.rjust(last - first + 1) + old[last:]).encode("latin1")
+    path.write_bytes(b"\n".join(lines))
+    return path
+
+
+def _uff_field_cases():
+    cases = [("uff-header", f"{name} field 'x'",
+              lambda d, ln=line, a=first, b=last: [_patch_field(_uff(d / "h.uff", binary=int(ln == -1)), ln, a, b,
+                                                                "x")], name)
+             for line, first, last, name in _UFF_FIELDS]
+    codes = [(-1, 8, 13, "3", "byte ordering"), (-1, 14, 19, "3", "floating-point format"),
+             (6, 1, 10, "3", "ordinate data type"), (6, 21, 30, "2", "abscissa spacing")]
+    cases += [("uff-header", f"{name} code {text}",
+               lambda d, ln=line, a=first, b=last, t=text: [_patch_field(_uff(d / "c.uff", binary=int(ln == -1)), ln,
+                                                                         a, b, t)], name)
+              for line, first, last, text, name in codes]
+    bad = lambda d, name="h.uff": _patch_field(_uff(d / name, binary=0), 6, 11, 20, "4OO")  # noqa: E731
+    cases += [
+        ("uff-header", "warning (unknown dataset) before the error",
+         lambda d: [_prepend_unknown_set(bad(d))], "number of points"),
+        ("uff-header", "update --modal", lambda d: ["update", "--modal", str(bad(d))], "number of points"),
+        ("uff-header", "classify --baseline", lambda d: ["classify", "--model", str(_tiny_model()), "--baseline",
+                                                         str(bad(d)), str(_good_uff(d / "g.uff")), "--json"],
+         "number of points"),
+        ("uff-header", "discrepancy --measured", lambda d: _dsc_m(bad(d)), "number of points"),
+        ("uff-header", "estimate (time records)", lambda d: ["estimate", str(_patch_field(
+            _impact_uff(d / "i.uff"), 5, 42, 51, "B"))], "response node"),
+        ("uff-header", "estimate 58b byte ordering 0", lambda d: ["estimate", str(_patch_field(
+            _impact_uff(d / "i.uff"), -1, 8, 13, "0"))], "byte ordering"),
+    ]
+    return cases
+
+
+def _geometry_uff(path):
+    """An FRF file with units (164, mm) and nodes (15) before the dataset 58 records."""
+    import pyuff
+
+    pyuff.UFF(str(path)).write_sets([
+        pyuff.prepare_164(units_code=5, units_description="mm", temp_mode=1, length=1000.0, force=1.0, temp=1.0,
+                          temp_offset=273.15),
+        pyuff.prepare_15(node_nums=[2, 3, 4, 5], def_cs=[0] * 4, disp_cs=[0] * 4, color=[1] * 4,
+                         x=[152.4, 304.8, 457.2, 609.6], y=[0.0] * 4, z=[0.0] * 4)], mode="add")
+    raw = path.read_bytes()
+    _uff(path, ordinate_axis_units_lab="mm/N")
+    path.write_bytes(raw + path.read_bytes()[len(raw):])
+    return path
+
+
+def _patch_set_line(path, dataset, line, old, new):
+    """Replace ``old`` by ``new`` in the ``line``-th line after the number line of the first ``dataset`` block."""
+    lines = path.read_bytes().split(b"\n")
+    i = next(k for k, ln in enumerate(lines) if ln.strip() == str(dataset).encode()) + line
+    assert old in lines[i], (lines[i], old)
+    lines[i] = lines[i].replace(old, new, 1)
+    path.write_bytes(b"\n".join(lines))
+    return path
+
+
+def _context_cases():
+    geo = lambda d, *a: [_patch_set_line(_geometry_uff(d / "g.uff"), *a)]  # noqa: E731
+    return [
+        ("uff-header", "geometry file is read (then --max-iter 0)", lambda d: ["update", "--modal", str(_geometry_uff(d / "g.uff")),
+                                                         "--max-iter", "0"], "--max-iter"),
+        ("uff-header", "164 units code 'x'", lambda d: geo(d, 164, 1, b"         5", b"         x"), "units code"),
+        ("uff-header", "164 length factor with O for 0", lambda d: geo(d, 164, 2, b"1.00000", b"1.O0000"),
+         "length factor"),
+        ("uff-header", "164 temperature offset 'zz'", lambda d: geo(d, 164, 3, b"2.7", b"zz"), "temperature offset"),
+        ("uff-header", "15 node label '2B'", lambda d: geo(d, 15, 1, b"         2", b"        2B"), "node label"),
+        ("uff-header", "15 x coordinate with O", lambda d: geo(d, 15, 2, b"3.04800E+02", b"3.048O0E+02"),
+         "x coordinate"),
+        ("uff-header", "15 y coordinate 'x'", lambda d: geo(d, 15, 4, b"0.00000E+00", b"          x"),
+         "y coordinate"),
+    ]
+
+
+_BAD_EFFECTS = [("local dashpot 1e9 N s/m", "[effects.local_damping]\nc_Ns_m = 1e9\n", "overdamped"),
+                ("added mass 1e12 kg", "[effects.added_mass]\nmass_kg = 1e12\n", "positive definite"),
+                ("root spring 1e-12 N m/rad", "[effects.root_flexibility]\nk_theta_Nm_rad = 1e-12\n",
+                 "positive definite")]
+
+
+def _beam_file_cases():
+    beam = lambda d, text: _toml(d / "b.toml", 'preset = "beam5"\n' + text)  # noqa: E731
+    commands = {
+        "model": lambda b, d: ["model", "--beam", b],
+        "update": lambda b, d: ["update", "--beam", b, "--modal", _modal_arg(d)],
+        "discrepancy": lambda b, d: ["discrepancy", "--beam", b, "--measured", _measured(), "--max-effects", "0"],
+        "generate": lambda b, d: _gen(d, "--beam", b),
+    }
+    return [("beam-file", f"{cmd}: {name}", lambda d, t=text, c=argv: c(beam(d, t), d), expect)
+            for name, text, expect in _BAD_EFFECTS for cmd, argv in commands.items()]
+
+
+def _prepend_unknown_set(path):
+    path.write_bytes(b"    -1\n   999\nfoo\n    -1\n" + path.read_bytes())
+    return path
+
+
+def _label_cases():
+    frf = _base_frf()
+    n = frf.frequency_hz.size
+    rows = "".join(f"{k + 1},1e-3,1e-4\n" for k in range(n))
+    return [
+        ("csv", "header label 'a'", lambda d: [_csv(d / "a.csv", "frequency_hz,re(a/b),im(a/b)\n" + rows)], "'a'"),
+        ("csv", "header label '2' (no direction)", lambda d: [_csv(d / "n.csv", "frequency_hz,re(2/5),im(2/5)\n"
+                                                                   + rows)], "'2'"),
+        ("csv", "header direction Q", lambda d: [_csv(d / "q.csv", "frequency_hz,re(2:+Q),im(2:+Q)\n" + rows)],
+         "2:+Q"),
+        ("csv", "header labels not DOFs (update)", lambda d: ["update", "--modal", str(_csv(
+            d / "u.csv", "frequency_hz,re(a/b),im(a/b)\n" + rows))], "u.csv"),
+        ("npz", "DOF labels 'a'..'d'", lambda d: [_npz(d / "l.npz", response_dofs=np.array(["a", "b", "c", "d"]))],
+         "response_dofs"),
+        ("npz", "reference label '5'", lambda d: [_npz(d / "r.npz", reference_dofs=np.array(["5"]))],
+         "reference_dofs"),
+    ]
+
+
+def _time_uff(path, force=1.0, response=1.0, hits_every_s=1.0):
+    """Force (node 1) and acceleration (node 2) time records, scaled; half-sine hits every ``hits_every_s``."""
+    import pyuff
+
+    fs, n = 1024.0, 4096
+    t = np.arange(n) / fs
+    tau = t % hits_every_s
+    pulse = np.where(tau < 0.004, np.sin(np.pi * tau / 0.004), 0.0) * 100.0 * force
+    resp = np.sin(2 * np.pi * 40 * t) * np.exp(-3 * tau) * response
+    sets = [pyuff.prepare_58(binary=1, func_type=1, rsp_node=node, rsp_dir=3, ref_node=0, ref_dir=0,
+                             data=np.ascontiguousarray(sig), x=t, abscissa_spacing=1, abscissa_spec_data_type=17,
+                             ordinate_spec_data_type=code, orddenom_spec_data_type=0)
+            for node, sig, code in ((1, pulse, 13), (2, resp, 12))]
+    pyuff.UFF(str(path)).write_sets(sets, mode="add")
+    return path
+
+
+def _estimate_cases():
+    est = lambda d, *more, **kw: ["estimate", str(_time_uff(d / "t.uff", **kw)), *more]  # noqa: E731
+    return [
+        ("estimate", "zero force (random)", lambda d: est(d, force=0.0), "force channel 1:+Z"),
+        ("estimate", "zero force (impact)", lambda d: est(d, "--excitation", "impact", force=0.0),
+         "force channel 1:+Z"),
+        ("estimate", "force of 1e-300 N", lambda d: est(d, force=1e-300), "force channel 1:+Z"),
+        ("estimate", "force of 1e300 N", lambda d: est(d, force=1e300), "magnitude"),
+        ("estimate", "response of 1e300", lambda d: est(d, response=1e300), "magnitude"),
+        ("estimate", "response of 1e-310", lambda d: est(d, response=1e-310), "t.uff"),
+        ("estimate", "impact: clipped hits, no hit in the other blocks", lambda d: [
+            "estimate", str(_impact_uff(d / "i.uff")), "--excitation", "impact"], "no hit in blocks [1, 3, 5, 7]"),
+    ]
+
+
+def _config_range_cases():
+    cfg = lambda d, text: _gen(d, "--config", _toml(d / "c.toml", text))  # noqa: E731
+    return [
+        ("generate", "slit damping 1 s", lambda d: cfg(d, "[damage]\nslit_damping_s = [1.0, 1.0]\n"),
+         "damage.slit_damping_s"),
+        ("generate", "slit damping [0, 1] s", lambda d: cfg(d, "[damage]\nslit_damping_s = [0.0, 1.0]\n"),
+         "damage.slit_damping_s"),
+        ("generate", "slit damping beyond the band's loss factor", lambda d: cfg(
+            d, "[damage]\nslit_damping_s = [0.0, 1e-4]\n[measurement]\nband_rad_s = [1.0, 50000.0]\n"),
+         "damage.slit_damping_s"),
+        ("generate", "calibrated FRF noise 0.5", lambda d: cfg(
+            d, "[measurement]\nmodal_noise = 'calibrated'\nfrf_noise = 0.5\n"), "measurement.frf_noise"),
+        ("generate", "training + FRF noise [0.1, 0.5]", lambda d: cfg(
+            d, "base = 'training'\n[measurement]\nfrf_noise = [0.1, 0.5]\n"), "measurement.frf_noise"),
+        ("generate", "FRF noise 0.6", lambda d: cfg(d, "[measurement]\nfrf_noise = 0.6\n"), "measurement.frf_noise"),
+        ("generate", "fixed frequency noise per mode 100", lambda d: cfg(
+            d, "[measurement]\nfrequency_noise = [0.001, 0.001, 0.001, 100]\n"), "measurement.frequency_noise"),
+        ("generate", "fixed damping noise per mode 0.9", lambda d: cfg(
+            d, "[measurement]\ndamping_noise = [0.9, 0.1, 0.1, 0.1]\n"), "measurement.damping_noise"),
+        ("generate", "damping ratio 0.2", lambda d: cfg(d, "[specimen]\ndamping_ratios = [0.2]\n"),
+         "specimen.damping_ratios"),
+        ("generate", "intact fraction 1.5", lambda d: cfg(d, "[damage]\nintact_fraction = 1.5\n"),
+         "damage.intact_fraction"),
+        ("generate", "slit width 0", lambda d: cfg(d, "[damage]\nwidth_m = [0.0, 0.01]\n"), "damage.width_m"),
+        ("generate", "negative face thickness", lambda d: cfg(d, "[section]\nface_thickness_m = -0.001\n"),
+         "section.face_thickness_m"),
+    ]
+
+
+CASES = [*_frf_cases(), *_modal_cases(), *_arg_cases(), *_command_arg_cases(), *_dataset_cases(),
+         *_boundary_modal_cases(), *_uff_field_cases(), *_label_cases(), *_config_range_cases(), *_estimate_cases(),
+         *_context_cases(), *_beam_file_cases()]
 
 
 def _argv(builder, d):

@@ -8,7 +8,7 @@ import numpy as np
 
 from physics.errors import FileFormatError, ShapeError
 from physics.io.atomic import atomic_write_text
-from physics.io.types import FRF_KINDS, MeasuredFRF
+from physics.io.types import FRF_KINDS, UNNAMED_REFERENCE, MeasuredFRF, check_dof_labels
 
 __all__ = ["read_frf_csv", "write_frf_csv"]
 
@@ -44,7 +44,8 @@ def read_frf_csv(path, kind=None) -> MeasuredFRF:
     The first column is the frequency in Hz; then a real and an imaginary
     column per FRF, named ``re(RESPONSE/REFERENCE)`` and ``im(RESPONSE/REFERENCE)``.
     The ``/REFERENCE`` part may be omitted for a single reference (label
-    ``"ref"``). ``kind`` overrides the ``# kind:`` line (default receptance).
+    ``"ref"``, :data:`~physics.io.types.UNNAMED_REFERENCE`); labels are DOFs such as ``2:+Y``
+    (:func:`~physics.io.types.parse_dof`). ``kind`` overrides the ``# kind:`` line (default receptance).
     """
     path = Path(path)
     try:
@@ -84,7 +85,9 @@ def read_frf_csv(path, kind=None) -> MeasuredFRF:
             raise FileFormatError(f"{path}: line {header_line}: columns {k + 1}-{k + 2} ({re_name!r}, "
                                   f"{im_name!r}) must be 're(RESP/REF)' and 'im(RESP/REF)' of one FRF")
         resp, _, ref = re_name[3:-1].partition("/")
-        pairs.append((resp.strip(), ref.strip() or "ref"))
+        pairs.append((resp.strip(), ref.strip() or UNNAMED_REFERENCE))
+        check_dof_labels(pairs[-1], f"{path}: line {header_line}: column {k + 1} {re_name!r}",
+                         unnamed_reference=True)
     ncol = len(header)
     counts = [r[1].count(",") + 1 for r in rows]
     bad = next((i for i, c in enumerate(counts) if c != ncol), None)

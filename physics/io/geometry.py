@@ -288,7 +288,10 @@ def map_measured_dofs(dofs, model_x_m, model_dofs, *, length_m: float, n_element
     from physics.io.types import parse_dof
 
     dofs = tuple(str(d) for d in dofs)
-    nodes = np.array([parse_dof(d)[0] for d in dofs], int)
+    try:
+        nodes = np.array([parse_dof(d)[0] for d in dofs], int)
+    except FileFormatError as exc:
+        raise FileFormatError(f"{where}: field 'dofs': {exc}") from None
     tol_m = 0.01 * length_m / n_elements if tol_m is None else tol_m
     if geometry is not None:
         source = f"{geometry_format} geometry"

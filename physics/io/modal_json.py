@@ -26,15 +26,27 @@ from physics.io.atomic import atomic_write_text
 from physics.io.types import ModalData, format_complex
 from physics.modal import eigenvalues_from_modal
 
-__all__ = ["modal_data_from_dict", "modal_data_to_dict", "read_modal_json", "write_modal_json"]
+__all__ = ["modal_data_from_dict", "modal_data_to_dict", "number_list", "read_json", "read_modal_json",
+           "write_modal_json"]
 
 #: Largest modal-data JSON file read (bytes).
 MAX_JSON_BYTES = 64 * 2**20
 #: Largest magnitude accepted in modal data (beyond it products overflow).
 MAX_MAGNITUDE = 1e100
+#: Smallest modulus of an eigenvalue (rad/s), natural frequency (Hz) or mode shape's largest entry accepted
+#: (below it reciprocals and squares leave the floating-point range).
+MIN_EIGENVALUE = 1e-100
 
 
 def _complex_array(values, path, key, ndim):
+    rows = values if ndim == 2 and isinstance(values, list) else [values]
+    bad = next((k for k, row in enumerate(rows) if not isinstance(row, list)), None)
+    if bad is not None:  # a string row would be read character by character
+        where = f"row {bad + 1} is a {type(rows[bad]).__name__}" if ndim == 2 and isinstance(values, list) \
+            else f"is a {type(values).__name__}"
+        form = "a list of lists (one per measured DOF) of complex strings such as \"0.72+15.0j\"" if ndim == 2 \
+            else "a list of complex strings such as \"-0.22+135.3j\""
+        raise FileFormatError(f"{path}: field '{key}' {where}; expected {form}")
     try:
         arr = np.array(
             [[complex(str(v).replace(" ", "").replace("i", "j")) for v in row] for row in values]
@@ -54,6 +66,17 @@ def _complex_array(values, path, key, ndim):
     return arr
 
 
+def number_list(values, path, key):
+    """A list of finite real numbers (JSON numbers, not booleans) as a 1-D float array."""
+    if not (isinstance(values, list) and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                             for v in values)):
+        raise FileFormatError(f"{path}: field '{key}' must be a list of numbers, one per mode")
+    arr = np.array(values, dtype=float)
+    if not np.all(np.isfinite(arr)) or (arr.size and np.max(np.abs(arr)) > MAX_MAGNITUDE):
+        raise FileFormatError(f"{path}: field '{key}' must hold finite numbers of magnitude <= {MAX_MAGNITUDE:g}")
+    return arr
+
+
 def modal_data_from_dict(obj: dict, source="modal data") -> ModalData:
     """Validate a modal-data mapping (see module docstring) into :class:`ModalData`."""
     if not isinstance(obj, dict):
@@ -63,24 +86,29 @@ def modal_data_from_dict(obj: dict, source="modal data") -> ModalData:
         if not isinstance(obj["eigenvalues"], list):
             raise FileFormatError(f"{source}: field 'eigenvalues' must be a list of complex strings")
         lam = _complex_array(obj["eigenvalues"], source, "eigenvalues", 1)
+        if lam.size and np.min(np.abs(lam)) < MIN_EIGENVALUE:
+            k = int(np.argmin(np.abs(lam)))
+            raise FileFormatError(f"{source}: field 'eigenvalues' entry {k + 1} ({lam[k]:.6g}) has modulus below "
+                                  f"{MIN_EIGENVALUE:g} rad/s; expected eigenvalues in rad/s such as \"-0.22+135.3j\"")
         if np.any(lam.imag <= 0):
             k = int(np.nonzero(lam.imag <= 0)[0][0])
             raise FileFormatError(f"{source}: field 'eigenvalues' entry {k + 1} ({lam[k]:.6g}) is not in the upper "
                                   "half-plane; give the Im > 0 member of each conjugate pair")
 
     elif "natural_frequencies_hz" in obj and "damping_ratios" in obj:
-        try:
-            f = np.asarray(obj["natural_frequencies_hz"], dtype=float)
-            z = np.asarray(obj["damping_ratios"], dtype=float)
-        except (TypeError, ValueError):
-            raise FileFormatError(f"{source}: 'natural_frequencies_hz' and 'damping_ratios' "
-                                  "must be lists of numbers") from None
-        if f.shape != z.shape or f.ndim != 1 or not (np.all(np.isfinite(f)) and np.all(np.isfinite(z))):
-            raise FileFormatError(f"{source}: 'natural_frequencies_hz' and 'damping_ratios' must be "
-                                  "finite lists of equal length")
-        if np.any(z >= 1) or np.any(f <= 0):
-            raise FileFormatError(f"{source}: 'damping_ratios' must be < 1 and frequencies > 0 "
-                                  "(underdamped modes)")
+        f = number_list(obj["natural_frequencies_hz"], source, "natural_frequencies_hz")
+        z = number_list(obj["damping_ratios"], source, "damping_ratios")
+        if f.shape != z.shape:
+            raise FileFormatError(f"{source}: 'natural_frequencies_hz' has {f.size} entries but 'damping_ratios' "
+                                  f"has {z.size}; expected one of each per mode")
+        if not np.all(np.abs(z) < 1):
+            k = int(np.nonzero(~(np.abs(z) < 1))[0][0])
+            raise FileFormatError(f"{source}: field 'damping_ratios' entry {k + 1} is {z[k]:g}; expected "
+                                  "-1 < zeta < 1 (underdamped modes)")
+        if not np.all(f >= MIN_EIGENVALUE):
+            k = int(np.nonzero(~(f >= MIN_EIGENVALUE))[0][0])
+            raise FileFormatError(f"{source}: field 'natural_frequencies_hz' entry {k + 1} is {f[k]:g}; expected "
+                                  f"a frequency >= {MIN_EIGENVALUE:g} Hz")
         lam = eigenvalues_from_modal(f, z)
     else:
         raise FileFormatError(f"{source}: missing key 'eigenvalues' (or 'natural_frequencies_hz' "
@@ -97,6 +125,11 @@ def modal_data_from_dict(obj: dict, source="modal data") -> ModalData:
             what = f"row {zero_rows[0] + 1}" if zero_rows.size else f"column {zero_cols[0] + 1}"
             raise FileFormatError(f"{source}: field 'eigenvectors' {what} is zero; every measured DOF and mode "
                                   "needs a non-zero entry")
+        peak = np.max(np.abs(vecs), axis=0)
+        if np.any(peak < MIN_EIGENVALUE):
+            k = int(np.argmin(peak))
+            raise FileFormatError(f"{source}: field 'eigenvectors' column {k + 1} has largest modulus {peak[k]:.3g}, "
+                                  f"below {MIN_EIGENVALUE:g}; a mode shape may have any scale above it")
 
     if lam.size != np.unique(lam).size:
         _, first = np.unique(lam, return_index=True)

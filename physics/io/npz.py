@@ -11,7 +11,7 @@ import numpy as np
 
 from physics.errors import FileFormatError, ShapeError
 from physics.io.atomic import atomic_write_bytes
-from physics.io.types import MeasuredFRF
+from physics.io.types import MeasuredFRF, check_dof_labels
 
 __all__ = ["read_frf_npz", "write_frf_npz"]
 
@@ -82,6 +82,7 @@ def read_frf_npz(path) -> MeasuredFRF:
         if a.ndim != 1 or a.dtype.kind != "U":
             raise FileFormatError(f"{path}: array '{key}' must be a 1-D array of DOF labels (strings), got "
                                   f"{a.dtype} of shape {a.shape}")
+        check_dof_labels(a.tolist(), f"{path}: array '{key}'", unnamed_reference=key == "reference_dofs")
     for key in ("kind", "units", "metadata_json"):
         if key in arrays and (arrays[key].ndim != 0 or arrays[key].dtype.kind != "U"):
             raise FileFormatError(f"{path}: array '{key}' must be a single string")

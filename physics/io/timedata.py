@@ -16,6 +16,8 @@ __all__ = ["QUANTITIES", "TimeRecords", "read_uff_time_records"]
 #: Quantity of each dataset 58 ordinate type a time record can hold, and its SI unit.
 QUANTITIES = {13: ("force", "N"), 8: ("displacement", "m"), 11: ("velocity", "m/s"), 12: ("acceleration", "m/s^2")}
 _KIND_QUANTITY = {"receptance": "displacement", "mobility": "velocity", "accelerance": "acceleration"}
+#: Largest sample magnitude accepted (beyond it the spectra overflow).
+MAX_MAGNITUDE = 1e100
 #: Largest record this reader loads (samples x channels); beyond it the file is refused with the numbers.
 MAX_SAMPLES = 50_000_000
 
@@ -96,6 +98,9 @@ def read_uff_time_records(path) -> TimeRecords:
                                   f"{MAX_SAMPLES} this reader loads")
         if not np.all(np.isfinite(data)):
             raise FileFormatError(f"{where}: contains NaN or inf samples")
+        if data.size and np.max(np.abs(data)) > MAX_MAGNITUDE:
+            raise FileFormatError(f"{where}: a sample of magnitude {np.max(np.abs(data)):.3g}, beyond the "
+                                  f"{MAX_MAGNITUDE:g} this package accepts (a unit or export error?)")
         step = float(s.get("abscissa_inc", 0.0))
         if not step > 0 or not np.isfinite(step):
             raise FileFormatError(f"{where}: time step (abscissa increment) {step:g} s must be > 0")

@@ -20,8 +20,8 @@ from physics.errors import FileFormatError, ShapeError
 from physics.frf import FRF_KINDS, FRF_UNITS, check_frf_kind, convert_frf
 from physics.modal import EigenvalueParameters
 
-__all__ = ["DEFAULT_UNITS", "FRF_KINDS", "MeasuredFRF", "ModalData", "dof_label", "format_complex",
-           "parse_dof"]
+__all__ = ["DEFAULT_UNITS", "FRF_KINDS", "UNNAMED_REFERENCE", "MeasuredFRF", "ModalData", "check_dof_labels",
+           "dof_label", "format_complex", "parse_dof"]
 
 @dataclass(frozen=True)
 class ModalData(EigenvalueParameters):
@@ -84,6 +84,24 @@ def parse_dof(label: str) -> tuple[int, int]:
         raise FileFormatError(f"DOF label {label!r} must look like 'NODE:+DIR' with an integer node "
                               "and DIR one of X, Y, Z, RX, RY, RZ (e.g. '2:+Y')")
     return node_i, (0 if direction == "S" else sign * _DIRECTION_CODES[direction])
+
+
+#: Reference label of single-reference FRFs whose file does not name the reference DOF (CSV ``re(2:+Y)``).
+UNNAMED_REFERENCE = "ref"
+
+
+def check_dof_labels(labels, where: str, unnamed_reference: bool = False) -> None:
+    """Refuse a label that is not a DOF (:func:`parse_dof`) with one :class:`FileFormatError` naming ``where``.
+
+    ``unnamed_reference`` also accepts :data:`UNNAMED_REFERENCE` (references only).
+    """
+    for label in labels:
+        if unnamed_reference and label == UNNAMED_REFERENCE:
+            continue
+        try:
+            parse_dof(label)
+        except FileFormatError as exc:
+            raise FileFormatError(f"{where}: {exc}") from None
 
 
 @dataclass(frozen=True)

@@ -214,27 +214,104 @@ def _short(exc) -> str:
     return " ".join(str(exc).split())[:200]
 
 
-_RECORD6_FIELDS = (("response node", 41, 51), ("response direction", 51, 55), ("reference node", 66, 76),
-                   ("reference direction", 76, 80))
+#: Numeric fields of a dataset 58 header: (line after the dataset-number line, or -1 for that line itself;
+#: field name; first and last column, 1-based; "int" or "float"; required by the reader; allowed values).
+_HEADER_FIELDS = (
+    (-1, "byte ordering", 8, 13, "int", True, (1, 2)),
+    (-1, "floating-point format", 14, 19, "int", True, (2,)),
+    (-1, "ASCII header lines", 20, 31, "int", True, None),
+    (-1, "binary bytes", 32, 43, "int", True, None),
+    (5, "function type", 1, 5, "int", True, None),
+    (5, "function id", 6, 15, "int", False, None),
+    (5, "version number", 16, 20, "int", False, None),
+    (5, "load case", 21, 30, "int", False, None),
+    (5, "response node", 42, 51, "int", True, None),
+    (5, "response direction", 52, 55, "int", True, None),
+    (5, "reference node", 67, 76, "int", True, None),
+    (5, "reference direction", 77, 80, "int", True, None),
+    (6, "ordinate data type", 1, 10, "int", True, (2, 4, 5, 6)),
+    (6, "number of points", 11, 20, "int", True, None),
+    (6, "abscissa spacing", 21, 30, "int", True, (0, 1)),
+    (6, "abscissa minimum", 31, 43, "float", True, None),
+    (6, "abscissa increment", 44, 56, "float", True, None),
+    (6, "z-axis value", 57, 69, "float", True, None),
+    *((k, f"{axis} {name}", a, b, "int", True, None)
+      for k, axis in ((7, "abscissa"), (8, "ordinate"), (9, "ordinate denominator"), (10, "z-axis"))
+      for name, a, b in (("data type", 1, 10), ("length exponent", 11, 15), ("force exponent", 16, 20),
+                         ("temperature exponent", 21, 25))),
+)
+_NUMBER = {"int": (r"[+-]?\d+", "an integer"),
+           "float": (r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?", "a number such as 2.00000E+00")}
+_FIELD_NOTES = {"byte ordering": " (1 little-endian, 2 big-endian)",
+                "floating-point format": " (2 IEEE 754; 1 DEC VMS and 3 IBM 370 are not read)",
+                "ordinate data type": " (2/4 real single/double, 5/6 complex single/double)",
+                "abscissa spacing": " (0 uneven, 1 even)"}
 
 
-def _check_dof_fields(path: Path, raw: bytes) -> None:
-    """Node and direction fields of every dataset 58 header (record 6) must be integers.
+def _check_header_fields(path: Path, raw: bytes) -> None:
+    """Every numeric field of every dataset 58 header must hold a number of its form (and a known code).
 
-    pyuff reads a field such as ``B`` as 0, which would silently put the record at node 0.
+    pyuff reads a letter in an optional field (a node such as ``B``) as 0, which would silently put the
+    record at node 0, and fails on one in a required field with a message that names neither.
     """
     import re
 
-    for k, m in enumerate(re.finditer(rb"(?m)^ {4}-1[ \t]*\r?\n {4}58b?[^\n]*\n", raw), 1):
-        lines = raw[m.end():m.end() + 2000].split(b"\n")
-        if len(lines) < 6:
-            continue
-        rec6 = lines[5].decode("latin1").rstrip("\r")
-        for name, a, b in _RECORD6_FIELDS:
-            field = rec6[a:b].strip()
-            if not re.fullmatch(r"[+-]?\d+", field):
-                raise FileFormatError(f"{path}: dataset 58 record {k}: {name} field {field!r} is not an integer "
-                                      f"(header record 6, columns {a + 1}-{b})")
+    for k, m in enumerate(re.finditer(rb"(?m)^ {4}-1[ \t]*\r?\n( {4}58b?)[^\n]*\n", raw), 1):
+        binary = m.group(1).endswith(b"b")
+        first = raw[m.start(1):m.end()].decode("latin1").rstrip("\r\n")
+        lines = [first] + [ln.decode("latin1").rstrip("\r") for ln in raw[m.end():m.end() + 1200].split(b"\n")[:11]]
+        for line_no, name, a, b, form, required, allowed in _HEADER_FIELDS:
+            if line_no == -1 and not binary:
+                continue
+            line = lines[line_no + 1] if line_no + 1 < len(lines) else ""
+            field = line[a - 1:b].strip()
+            record = "the '58b' line" if line_no == -1 else f"header record {line_no + 1}"
+            where = f"{path}: dataset 58 record {k}: {name} field {field!r} ({record}, columns {a}-{b})"
+            pattern, expected = _NUMBER[form]
+            if not field and not required:
+                continue
+            if not re.fullmatch(pattern, field):
+                raise FileFormatError(f"{where} is not {expected}{_FIELD_NOTES.get(name, '')}")
+            if allowed is not None and int(field) not in allowed:
+                raise FileFormatError(f"{where} must be one of {', '.join(map(str, allowed))}"
+                                      f"{_FIELD_NOTES.get(name, '')}")
+
+
+_NODE_FIELDS = ("node label", "definition coordinate system", "displacement coordinate system", "colour",
+                "x coordinate", "y coordinate", "z coordinate")
+
+
+def _check_context_fields(path: Path, raw: bytes) -> None:
+    """Numbers of the node (15, 2411) and units (164) datasets, which pyuff reads as whitespace-separated tokens.
+
+    pyuff fails on a letter there with a message that names neither the field nor the line.
+    """
+    import re
+
+    numbers = {True: re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eEdD][+-]?\d+)?"),   # pyuff reads D exponents ...
+               False: re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")}    # ... except in dataset 15
+    for m in re.finditer(rb"(?m)^ {4}-1[ \t]*\r?\n *(15|2411|164)[ \t]*\r?\n", raw):
+        kind = int(m.group(1))
+        stop = raw.find(b"\n    -1", m.end())
+        lines = raw[m.end():len(raw) if stop < 0 else stop].decode("latin1").splitlines()
+        name = "units" if kind == 164 else "nodes"
+        if kind == 164:
+            head = lines[0] if lines else ""
+            for field, a, b in (("units code", 1, 10), ("temperature mode", 31, 40)):
+                text = head[a - 1:b].strip()
+                if text and not re.fullmatch(r"[+-]?\d+", text):
+                    raise FileFormatError(f"{path}: dataset 164 (units) {field} field {text!r} (record 1, columns "
+                                          f"{a}-{b}) is not an integer")
+            fields = ("length factor", "force factor", "temperature factor", "temperature offset")
+            rows = [(k + 2, tok) for k, line in enumerate(lines[1:]) for tok in line.split()]
+            named = [(ln, fields[i] if i < len(fields) else "extra value", tok) for i, (ln, tok) in enumerate(rows)]
+        else:
+            rows = [(k + 1, tok) for k, line in enumerate(lines) for tok in line.split()]
+            named = [(ln, _NODE_FIELDS[i % 7], tok) for i, (ln, tok) in enumerate(rows)]
+        for ln, field, tok in named:
+            if not numbers[kind != 15].fullmatch(tok):
+                raise FileFormatError(f"{path}: dataset {kind} ({name}) line {ln}: {field} field {tok!r} is not a "
+                                      "number such as 1.52400E+02")
 
 
 def _open_uff(path: Path):
@@ -246,7 +323,8 @@ def _open_uff(path: Path):
     except FileNotFoundError:
         raise FileFormatError(f"{path}: file not found") from None
     _check_uff_complete(path, raw)
-    _check_dof_fields(path, raw)
+    _check_header_fields(path, raw)
+    _check_context_fields(path, raw)
     try:
         uff = pyuff.UFF(str(path))
         types = [int(t) for t in uff.get_set_types()]

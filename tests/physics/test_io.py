@@ -254,3 +254,43 @@ def test_physics_io_keeps_every_public_name_of_the_module_it_replaced():
              "modal_data_to_dict", "read_modal_json", "write_modal_json", "read_frf", "read_frf_csv",
              "read_frf_npz", "read_uff58", "write_frf_csv", "write_frf_npz", "write_uff58"}
     assert names <= set(pio.__all__) and all(hasattr(pio, n) for n in names)
+
+
+def _big_endian_58b(raw: bytes) -> bytes:
+    """A little-endian 58b file rewritten big-endian: byte-ordering field 2, every double byte-swapped."""
+    import re
+
+    out, pos = bytearray(), 0
+    for m in re.finditer(rb"(?m)^ {4}58b[^\n]*\n", raw):
+        end = m.start()
+        for _ in range(12):  # the '58b' line and the 11 header records
+            end = raw.index(b"\n", end) + 1
+        rec7 = raw[m.start():end].split(b"\n")[7]
+        n_values = int(rec7[10:20]) * (2 if int(rec7[0:10]) in (5, 6) else 1) * (2 - int(rec7[20:30]))
+        data = np.frombuffer(raw[end:end + 8 * n_values], "<f8")
+        line = raw[m.start():m.end()]
+        out += raw[pos:m.start()] + line[:7] + b"     2" + line[13:] + raw[m.end():end] + data.astype(">f8").tobytes()
+        pos = end + 8 * n_values
+    return bytes(out + raw[pos:])
+
+
+def test_uff58b_big_endian_reads_like_little_endian(tmp_path, frf):
+    write_uff58(tmp_path / "le.uff", frf, binary=True)
+    (tmp_path / "be.uff").write_bytes(_big_endian_58b((tmp_path / "le.uff").read_bytes()))
+    assert b"    58b     2     2" in (tmp_path / "be.uff").read_bytes()
+    le, be = read_uff58(tmp_path / "le.uff"), read_uff58(tmp_path / "be.uff")
+    np.testing.assert_array_equal(be.frf, frf.frf)
+    np.testing.assert_array_equal(be.frequency_hz, le.frequency_hz)
+
+
+@pytest.mark.parametrize("field, value, message", [(slice(7, 13), b"     3", "byte ordering field '3'"),
+                                                   (slice(13, 19), b"     1", "floating-point format field '1'")])
+def test_uff58b_byte_order_and_float_format_codes_outside_the_standard_are_refused(tmp_path, frf, field, value,
+                                                                                   message):
+    write_uff58(tmp_path / "x.uff", frf, binary=True)
+    raw = bytearray((tmp_path / "x.uff").read_bytes())
+    at = raw.index(b"    58b")
+    raw[at + field.start:at + field.stop] = value
+    (tmp_path / "x.uff").write_bytes(bytes(raw))
+    with pytest.raises(FileFormatError, match=message):
+        read_uff58(tmp_path / "x.uff")

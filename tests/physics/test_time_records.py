@@ -97,3 +97,29 @@ def test_time_records_without_force_are_refused_in_one_line():
     with pytest.raises(FileFormatError, match=r"x.uff: 2 time records \(1:\+Z acceleration, 2:\+Z acceleration\) "
                                               "but no force channel"):
         estimate_from_records(rec)
+
+
+def test_impact_blocks_without_a_hit_are_left_out_and_the_frf_is_that_of_the_hits():
+    rec, (m, c, k), scale = _impact_test()
+    quiet = rec.signals.copy()
+    nb = quiet.shape[1] // 6
+    quiet[0, nb:2 * nb] = 0.0   # block 1: no hit (the force channel silent, the response decayed noise)
+    quiet[1, nb:2 * nb] *= 1e-3
+    est = estimate_from_records(TimeRecords(rec.time_step_s, quiet, rec.dofs, rec.quantities, rec.metadata),
+                                excitation="impact", averages=6, decay=0.01)
+    assert est.hits.missed == (1,) and est.n_averages == 3
+    f = est.frf.frequency_hz
+    band = (f > 5) & (f < 300)
+    s = 2j * np.pi * f[band] + est.added_decay_rate_1_s
+    err = np.abs(est.frf.frf[0, 0, band] / (scale / (m * s**2 + c * s + k)) - 1)
+    assert np.median(err) < 0.01
+
+
+@pytest.mark.parametrize("force", [0.0, 1e-300])
+def test_a_silent_force_channel_is_refused_in_one_line(force):
+    rec, _, _ = _impact_test()
+    sig = rec.signals.copy()
+    sig[0] *= force
+    with pytest.raises(FileFormatError, match="simulated impact test: force channel 1:\\+Z is zero"):
+        estimate_from_records(TimeRecords(rec.time_step_s, sig, rec.dofs, rec.quantities, rec.metadata),
+                              excitation="impact", averages=6)

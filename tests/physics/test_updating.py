@@ -189,3 +189,48 @@ def test_reduced_mass_of_a_non_uniform_model_is_its_iirs_mass_and_partition():
     uniform = fem.beam_model(4, 0.6, 20.0, 0.13)
     np.testing.assert_allclose(updating.reduced_mass(uniform.M, uniform.K, masters, "lumped"),
                                updating.analyst_mass(0.13, 0.6, "lumped"), rtol=1e-14)
+
+
+@pytest.mark.parametrize("method", ["pilkey", "direct"])
+def test_any_column_scaling_of_the_modes_gives_the_same_model(method):
+    """Modes have arbitrary scale: columns of 1e-200 and 1e+90 (whose products leave float range) update alike."""
+    M, C, K = random_system(4, seed=3)
+    cm = modal.complex_modes(M, C, K)
+    scaled = cm.eigenvectors * np.array([1e-200, 1.0, 1e90, 3e-150j])
+    run = (lambda p: updating.pilkey(M, cm.eigenvalues, p, tol=1e-13)) if method == "pilkey" else \
+        (lambda p: updating.lancaster_direct(M, cm.eigenvalues, p))
+    res = run(scaled)
+    np.testing.assert_allclose(res.C, C, rtol=1e-7, atol=1e-9 * np.abs(C).max())
+    np.testing.assert_allclose(res.K, K, rtol=1e-9)
+
+
+@pytest.mark.parametrize("method", ["pilkey", "direct"])
+def test_linearly_dependent_modes_are_a_shape_error_not_a_linalg_error(method):
+    M, C, K = random_system(4, seed=3)
+    cm = modal.complex_modes(M, C, K)
+    phi = cm.eigenvectors.copy()
+    phi[:, 2] = 2.5j * phi[:, 0]                       # mode 3 a multiple of mode 1
+    assert updating.eigenvector_condition(phi) > 1e15 and updating.eigenvector_condition(cm.eigenvectors) < 1e3
+    fit = updating.pilkey if method == "pilkey" else updating.lancaster_direct
+    with pytest.raises(ShapeError, match="linearly dependent"):
+        fit(M, cm.eigenvalues, phi)
+
+
+def test_batched_pilkey_flags_a_dependent_member_and_keeps_the_other():
+    M, C, K = random_system(4, seed=5)
+    cm = modal.complex_modes(M, C, K)
+    ones = np.ones((4, 4), complex)                     # rank 1
+    res = updating.pilkey(np.stack([M, M]), np.stack([cm.eigenvalues] * 2), np.stack([ones, cm.eigenvectors]),
+                          tol=1e-12, raise_on_failure=False)
+    assert res.converged.tolist() == [False, True]
+    assert np.isnan(res.C[0]).all() and np.isnan(res.K[0]).all()
+    np.testing.assert_allclose(res.K[1], K, rtol=1e-8)
+
+
+def test_lancaster_stiffness_is_nan_where_the_flexibility_is_singular():
+    M, C, K = random_system(3, seed=2)
+    cm = modal.complex_modes(M, C, K)
+    phi_n = cm.eigenvectors
+    out = updating.lancaster_stiffness(np.stack([cm.eigenvalues] * 2), np.stack([phi_n, np.zeros_like(phi_n)]))
+    np.testing.assert_allclose(out[0], K, rtol=1e-9)
+    assert np.isnan(out[1]).all()

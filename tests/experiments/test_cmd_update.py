@@ -1,0 +1,63 @@
+"""``beam-damage update``: warnings about an unstable updated model, one-line warnings on stderr."""
+
+import json
+
+import numpy as np
+import pytest
+
+from experiments.cli import main
+from physics import modal, updating
+from physics.beam import load_beam
+from physics.io import format_complex, write_uff58
+from physics.thesis import simulated_beam5_test
+
+
+def _beam5_mass():
+    b = load_beam("beam5")
+    model = b.fe_model()
+    return updating.reduced_mass(model.M, model.K, model.index(b.masters), "iirs")
+
+
+def _modal_file(path, zeta):
+    """Complex modes of (M, C, K) on beam 5's IIRS mass with proportional damping ratios ``zeta``."""
+    M = _beam5_mass()
+    w = 2 * np.pi * np.array([20.0, 130.0, 350.0, 650.0])
+    Q, _ = np.linalg.qr(np.arange(1.0, 17.0).reshape(4, 4) ** 0.5)
+    U = np.linalg.solve(np.linalg.cholesky(M).T, Q)  # U^T M U = I
+    K = M @ U @ np.diag(w**2) @ U.T @ M
+    C = M @ U @ np.diag(2 * np.asarray(zeta) * w) @ U.T @ M
+    cm = modal.complex_modes(M, C, K)
+    path.write_text(json.dumps({"eigenvalues": [format_complex(z) for z in cm.eigenvalues],
+                                "eigenvectors": [[format_complex(z) for z in row] for row in cm.eigenvectors],
+                                "dofs": ["2:y", "3:y", "4:y", "5:y"]}))
+    return path
+
+
+@pytest.mark.parametrize("method", ["pilkey", "direct"])
+def test_negative_damping_gives_an_unstable_model_and_a_warning_naming_the_mode(tmp_path, capsys, method):
+    path = _modal_file(tmp_path / "m.json", [-0.01, 0.002, 0.003, -0.004])
+    assert main(["update", "--modal", str(path), "--method", method, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    np.testing.assert_allclose(out["damping_ratios"], [-0.01, 0.002, 0.003, -0.004], rtol=1e-6)
+    unstable = [w for w in out["warnings"] if "unstable" in w]
+    assert len(unstable) == 2 and "mode 1 at 20 Hz" in unstable[0] and "damping ratio -0.01 " in unstable[0]
+    assert "mode 4 at 650 Hz" in unstable[1] and "damping ratio -0.004 " in unstable[1]
+
+
+def test_stable_model_has_no_warning_and_text_output_prints_them(tmp_path, capsys):
+    assert main(["update", "--modal", str(_modal_file(tmp_path / "ok.json", [0.01, 0.002, 0.003, 0.004])),
+                 "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["warnings"] == []
+    assert main(["update", "--modal", str(_modal_file(tmp_path / "bad.json", [0.01, -0.002, 0.003, 0.004]))]) == 0
+    lines = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("warning:")]
+    assert len(lines) == 1 and "mode 2 at 130 Hz has damping ratio -0.002" in lines[0]
+
+
+def test_a_warning_of_a_successful_command_is_one_stderr_line(tmp_path, capsys):
+    frf, _ = simulated_beam5_test(noise=0.0, seed=0, damping="heavy", df_hz=2.0)
+    write_uff58(tmp_path / "g.uff", frf)
+    path = tmp_path / "x.uff"
+    path.write_bytes(b"    -1\n   999\nfoo\n    -1\n" + (tmp_path / "g.uff").read_bytes())
+    assert main(["update", "--modal", str(path), "--json"]) == 0
+    err = capsys.readouterr().err
+    assert err == f"beam-damage update: warning: {path}: skipped 1 record(s) of dataset type(s) 999\n"
