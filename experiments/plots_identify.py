@@ -50,14 +50,14 @@ def stabilisation_png(diagram, frequency_hz, frf, selected_hz=()) -> bytes:
     ax2 = ax.twinx()
     ax2.semilogy(frequency_hz, np.sqrt(mode_indicator(frf)), color="0.3", lw=0.8)
     ax2.set_ylabel("sqrt(sum |H|^2) (m/N)")
-    ax.legend(loc="upper left", fontsize=7, framealpha=0.8)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=5, fontsize=7, frameon=False)
     ax.set_title("LSCF stabilisation diagram")
     fig.tight_layout()
     return _png(fig)
 
 
 def overlay_png(frequency_hz, measured, synthesised, labels, kind="receptance", units="m/N", max_curves=6) -> bytes:
-    """Magnitude and phase of measured (solid) vs synthesised (dashed) FRFs, one colour per response/reference.
+    """Magnitude and phase of measured (solid, light) vs synthesised (dashed) FRFs, one colour per FRF.
 
     The synthesised phase is unwrapped along frequency; the measured phase is drawn on the same branch
     (synthesised phase plus the wrapped difference), so a +-180 deg wrap never draws a vertical line.
@@ -72,15 +72,15 @@ def overlay_png(frequency_hz, measured, synthesised, labels, kind="receptance", 
     phase_m = phase_s + np.angle(m * np.conj(s))
     handles = []
     for k in range(m.shape[0]):
-        line, = ax1.semilogy(frequency_hz, np.abs(m[k]), lw=1.0)
+        line, = ax1.semilogy(frequency_hz, np.abs(m[k]), lw=2.0, alpha=0.45)
         ax1.semilogy(frequency_hz, np.abs(s[k]), "--", color=line.get_color(), lw=1.0)
-        ax2.plot(frequency_hz, np.rad2deg(phase_m[k]), lw=1.0, color=line.get_color())
+        ax2.plot(frequency_hz, np.rad2deg(phase_m[k]), lw=2.0, alpha=0.45, color=line.get_color())
         ax2.plot(frequency_hz, np.rad2deg(phase_s[k]), "--", lw=1.0, color=line.get_color())
         handles.append(Line2D([], [], color=line.get_color(), lw=2, label=labels[k]))
-    handles += [Line2D([], [], color="k", lw=1.0, label="measured"),
+    handles += [Line2D([], [], color="k", lw=2.0, alpha=0.45, label="measured"),
                 Line2D([], [], color="k", lw=1.0, ls="--", label="synthesised (LSFD)")]
     ax1.set_ylabel(f"|H| ({units})")
-    ax1.set_title(f"measured (solid) and synthesised (dashed) {kind}")
+    ax1.set_title(f"measured (light, solid) and synthesised (dashed) {kind}")
     ax1.legend(handles=handles, fontsize=7, ncol=2)
     ax2.set_ylabel("phase, unwrapped (deg)")
     ax2.set_xlabel("frequency (Hz)")

@@ -34,7 +34,7 @@ CAPTIONS = {
                       "held-out damaged pairs; the dotted line marks the tip zone (x/L >= 0.85).",
     "reliability": "Reliability of the network's probability of damage: observed share of damaged pairs against "
                    "the predicted probability (15 bins); the dotted diagonal is perfect calibration.",
-    "overlay": "Measured FRFs (solid) and the FRFs synthesised from the LSFD fit (dashed): magnitude above, "
+    "overlay": "Measured FRFs (light, solid) and the FRFs synthesised from the LSFD fit (dashed): magnitude above, "
                "phase unwrapped along frequency below.",
     "stabilisation": "LSCF stabilisation diagram: poles of each model order over the mode indicator; dashed "
                      "vertical lines mark the selected modes.",
@@ -208,8 +208,8 @@ _CSS = """body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans
 padding:0 1em;color:#222;line-height:1.45}h1{font-size:1.7em;margin:.2em 0 .4em}h2{margin-top:1.8em}
 .summary{background:#f4f7fb;border-left:5px solid #2b6cb0;padding:.2em 1.2em .6em;margin:0 0 1em}
 .summary h2{margin-top:.6em}.summary p{margin:.45em 0}nav ol{columns:2;margin:.3em 0 1em}
-.tbl{overflow-x:auto;max-width:100%;margin:.5em 0 1.5em}details.tbl>summary{cursor:pointer;font-weight:600}
-table{border-collapse:collapse;font-size:.88em}caption{font-weight:600;text-align:left;padding:.3em 0}
+.tbl{margin:.5em 0 1.5em}.scroll{overflow-x:auto;max-width:100%}.cap{font-weight:600;margin:.3em 0}
+details.tbl>summary{cursor:pointer;font-weight:600;margin:.3em 0}table{border-collapse:collapse;font-size:.88em}
 th,td{border:1px solid #bbb;padding:.25em .55em;vertical-align:top}th{background:#eee;text-align:left;
 vertical-align:bottom;max-width:11em;font-weight:600}td{text-align:left;max-width:34em}
 td.n{text-align:right;white-space:nowrap;font-variant-numeric:tabular-nums}
@@ -229,11 +229,11 @@ def _html_table(t: Table) -> str:
     body = "".join("<tr>" + "".join(f"<td class='n'>{html.escape(format_value(v))}</td>" if _is_number(v)
                                     else f"<td>{html.escape(format_value(v))}</td>" for v in r) + "</tr>"
                    for r in t.rows)
-    rows = f"<thead>{head}</thead><tbody>{body}</tbody></table>"
+    table = f"<div class='scroll'><table><thead>{head}</thead><tbody>{body}</tbody></table></div>"
     if t.collapsed:
         return (f"<details class='tbl'><summary>{_inline(t.caption)} ({len(t.rows)} rows; click to show)</summary>"
-                f"<table>{rows}</details>")
-    return f"<div class='tbl'><table><caption>{_inline(t.caption)}</caption>{rows}</div>"
+                f"{table}</details>")
+    return f"<div class='tbl'><p class='cap'>{_inline(t.caption)}</p>{table}</div>"
 
 
 def _html(title: str, summary, sections, root: Path) -> str:
