@@ -130,19 +130,14 @@ def _verdict_text(v: dict, length_m: float) -> str:
 
 def _answers(v: dict) -> list[dict]:
     """One row per method of a classify verdict (the network, then every classical method), the one taken marked."""
-    cl = (v.get("classical") or {}).get("method")
-    methods = [("network", v["network"])] + [(f"classical: {a['method']}", a)
+    taken = "network" if v["verdict_from"] == "network" else (v.get("classical") or {}).get("method")
+    methods = [("network", v["network"])] + [(a["method"], a)
                                               for a in (v.get("classical_methods") or [v.get("classical")]) if a]
-    rows = []
-    for name, a in methods:
-        if a is None:
-            continue
-        taken = (name == "network") if v["verdict_from"] == "network" else a.get("method") == cl and name != "network"
-        rows.append({"method": name, "verdict taken": "yes" if taken else "",
-                     "damaged": a["damaged"], "probability of damage": a.get("probability_damaged"),
-                     "x_m": round(a["location_x_m"], 4), "element": a["location_element"],
-                     "stiffness_loss_Nm3": float(f"{a['stiffness_loss_Nm3']:.3g}")})
-    return rows
+    return [{"method": name if name == "network" else f"classical: {name}",
+             "verdict taken": "yes" if name == taken else "",
+             "damaged": a["damaged"], "probability of damage": a.get("probability_damaged"),
+             "x_m": round(a["location_x_m"], 4), "element": a["location_element"],
+             "stiffness_loss_Nm3": float(f"{a['stiffness_loss_Nm3']:.3g}")} for name, a in methods if a]
 
 
 #: Metrics of the classifier in the summary: key, header, True when larger is better.
@@ -187,9 +182,8 @@ def _summary_section(checks, disc: dict, evaluated: dict, verdict: dict, length_
                 "the calibrated beam is the truth model of the training data.")
 
     net, cl = verdict["network"], verdict.get("classical") or {}
-    where = (f"element {verdict['location_element']} of 4, x = {verdict['location_x_m']:.3f} m"
-             if verdict["damaged"] else "")
-    answer = f"damaged, {where}" if verdict["damaged"] else "undamaged"
+    answer = (f"damaged, element {verdict['location_element']} of 4, x = {verdict['location_x_m']:.3f} m"
+              if verdict["damaged"] else "undamaged")
     net_answer = (f"damaged with probability {net['probability_damaged']:.3f}, element {net['location_element']}, "
                   f"x = {net['location_x_m']:.3f} m" if net["damaged"]
                   else f"undamaged (probability of damage {net['probability_damaged']:.3f})")
