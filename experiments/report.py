@@ -204,8 +204,8 @@ def _markdown(title: str, summary, sections, root: Path) -> str:
     return "\n".join(lines)
 
 
-_CSS = """body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;max-width:1100px;margin:1.5em auto;
-padding:0 1em;color:#222;line-height:1.45}h1{font-size:1.7em;margin:.2em 0 .4em}h2{margin-top:1.8em}
+_CSS = """body{font-family:system-ui,-apple-system,Segoe UI,Helvetica,Arial,sans-serif;max-width:1100px;
+margin:1.5em auto;padding:0 1em;color:#222;line-height:1.45}h1{font-size:1.7em;margin:.2em 0 .4em}h2{margin-top:1.8em}
 .summary{background:#f4f7fb;border-left:5px solid #2b6cb0;padding:.2em 1.2em .6em;margin:0 0 1em}
 .summary h2{margin-top:.6em}.summary p{margin:.45em 0}nav ol{columns:2;margin:.3em 0 1em}
 .tbl{margin:.5em 0 1.5em}.scroll{overflow-x:auto;max-width:100%}.cap{font-weight:600;margin:.3em 0}
