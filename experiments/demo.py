@@ -25,7 +25,7 @@ from pathlib import Path
 
 from experiments import study_discrepancy, study_thesis, validate
 from experiments.cli import to_jsonable
-from experiments.report import Figure, Section, Table, write_report
+from experiments.report import Section, Table, figure, write_report
 from physics import modal, properties, thesis, updating
 from physics.errors import BeamDamageError
 from physics.io import atomic_write_text, modal_data_from_dict, write_modal_json
@@ -129,17 +129,98 @@ def _verdict_text(v: dict, length_m: float) -> str:
 
 
 def _answers(v: dict) -> list[dict]:
-    """One row per method of a classify verdict, the one the verdict took marked."""
-    rows = []
-    for name, a in (("network", v["network"]), ("classical: " + (v["classical"] or {}).get("method", "none"),
-                                                v["classical"])):
-        if a is None:
-            continue
-        rows.append({"method": name, "verdict": "yes" if name.split(":")[0] == v["verdict_from"] else "",
-                     "damaged": a["damaged"], "probability": a.get("probability_damaged"),
-                     "x_m": round(a["location_x_m"], 4), "element": a["location_element"],
-                     "stiffness_loss_Nm3": float(f"{a['stiffness_loss_Nm3']:.3g}")})
-    return rows
+    """One row per method of a classify verdict (the network, then every classical method), the one taken marked."""
+    taken = "network" if v["verdict_from"] == "network" else (v.get("classical") or {}).get("method")
+    methods = [("network", v["network"])] + [(a["method"], a)
+                                              for a in (v.get("classical_methods") or [v.get("classical")]) if a]
+    return [{"method": name if name == "network" else f"classical: {name}",
+             "verdict taken": "yes" if name == taken else "",
+             "damaged": a["damaged"], "probability of damage": a.get("probability_damaged"),
+             "x_m": round(a["location_x_m"], 4), "element": a["location_element"],
+             "stiffness_loss_Nm3": float(f"{a['stiffness_loss_Nm3']:.3g}")} for name, a in methods if a]
+
+
+#: Metrics of the classifier in the summary: key, header, True when larger is better.
+SUMMARY_METRICS = (("roc_auc", "ROC AUC", True), ("element_accuracy", "element accuracy", True),
+                   ("within_one_element", "within one element", True),
+                   ("median_location_error_mm", "median location error (mm)", False),
+                   ("median_size_error", "median size error", False),
+                   ("false_alarm_rate", "false-alarm rate", False), ("accuracy", "accuracy", True))
+
+
+def _rounded(row: dict) -> dict:
+    """A metrics row with its numbers to 3 significant digits (estimates from about a thousand test pairs)."""
+    return {k: float(f"{v:.3g}") if isinstance(v, float) else v for k, v in row.items()}
+
+
+def _best_classical(rows: list[dict]) -> dict | None:
+    """The classical method with the highest element accuracy (then ROC AUC)."""
+    classical = [r for r in rows if not r["method"].startswith("network")]
+
+    def key(r):
+        return tuple(-1.0 if r.get(k) is None else r[k] for k in ("element_accuracy", "roc_auc"))
+
+    return max(classical, key=key) if classical else None
+
+
+def _summary_section(checks, disc: dict, evaluated: dict, verdict: dict, length_m: float) -> Section:
+    """What was found, in one screen: thesis checks, the model's gap, beam 5's verdict, the classifier."""
+    n_pass = sum(c.passed for c in checks)
+    worst = max(checks, key=lambda c: c.rel_error)
+    failed = [c.name for c in checks if not c.passed]
+    thesis_text = (f"**Thesis reproduced:** {n_pass} of {len(checks)} checks against the thesis's printed numbers "
+                   f"pass; the largest relative error is {100 * worst.rel_error:.2g} % ({worst.name}; tolerance "
+                   f"{100 * worst.tolerance:.2g} %)." if not failed else
+                   f"**Thesis reproduction incomplete:** {n_pass} of {len(checks)} checks pass; failing: "
+                   f"{'; '.join(failed)}.")
+    gb, ga = disc["gap_before"], disc["gap_after"]
+    effects = " then ".join(e.replace("_", " ") for e in disc["effects"])
+    gap_text = (f"**What beam 5's model lacks:** {effects or 'no effect named'}. "
+                f"Against the measured frequencies (Table 4.3) the largest frequency error falls from "
+                f"{gb['max_abs_frequency_error_pct']:.2f} % to {ga['max_abs_frequency_error_pct']:.2f} % "
+                f"(mean {gb['mean_abs_frequency_error_pct']:.2f} % -> {ga['mean_abs_frequency_error_pct']:.2f} %); "
+                "the calibrated beam is the truth model of the training data.")
+
+    net, cl = verdict["network"], verdict.get("classical") or {}
+    answer = (f"damaged, element {verdict['location_element']} of 4, x = {verdict['location_x_m']:.3f} m"
+              if verdict["damaged"] else "undamaged")
+    net_answer = (f"damaged with probability {net['probability_damaged']:.3f}, element {net['location_element']}, "
+                  f"x = {net['location_x_m']:.3f} m" if net["damaged"]
+                  else f"undamaged (probability of damage {net['probability_damaged']:.3f})")
+    cl_answer = (f"damaged, element {cl['location_element']}, x = {cl['location_x_m']:.3f} m" if cl.get("damaged")
+                 else "undamaged")
+    if verdict["verdict_from"] == "network":
+        source = (f"from the network (probability of damage {net['probability_damaged']:.3f}), the pair lying "
+                  f"inside the training data; the classical method {cl.get('method', '–')} says {cl_answer}")
+    else:
+        source = (f"from the classical method {cl.get('method', '–')}: the pair lies outside the training data "
+                  f"(Mahalanobis distance {verdict['mahalanobis_distance']:.3g}, beyond "
+                  f"{verdict['training_percentile']:.1f} % of training pairs), so the network's answer ({net_answer}) "
+                  "is not used")
+    slit_m = length_m / 4
+    caveat = (f"Caveat: the thesis cut its slit at x = {slit_m:.3f} m, on the boundary of elements 1 and 2"
+              + (f"; this answer lies {1000 * abs(verdict['location_x_m'] - slit_m):.0f} mm from it."
+                 if verdict["damaged"] else "; this answer misses it."))
+    verdict_text = f"**Beam 5, damaged against undamaged (Tables 4.5/4.6): {answer}.** Verdict {source}. {caveat}"
+
+    rows = evaluated["rows"]
+    best = _best_classical(rows)
+    nets = [r for r in rows if r["method"].startswith("network")]
+    side = nets + ([best] if best else [])
+    table_rows = [_rounded({"method": r["method"] + (" (best classical)" if r is best else ""),
+                            **{h: r.get(k) for k, h, _ in SUMMARY_METRICS}}) for r in side]
+    clf_text = f"**Classifier against the classical methods** ({evaluated.get('pairs', '–')} held-out test pairs)"
+    if nets and best:
+        ahead = [h for k, h, up in SUMMARY_METRICS if nets[0].get(k) is not None and best.get(k) is not None
+                 and (nets[0][k] > best[k] if up else nets[0][k] < best[k])]
+        clf_text += (f": the network is ahead of the best classical method, {best['method']} (highest element "
+                     f"accuracy), on {len(ahead)} of {len(SUMMARY_METRICS)} metrics"
+                     + (f" ({', '.join(ahead)})." if ahead else "."))
+    else:
+        clf_text += "."
+    return Section("Summary", (thesis_text, gap_text, verdict_text, clf_text),
+                   (Table.from_records("The network beside the best classical method on the same test pairs",
+                                       table_rows),))
 
 
 def run(args) -> dict:
@@ -198,7 +279,8 @@ def run(args) -> dict:
     elapsed = time.perf_counter() - t_start
     sections = _report_sections(vsum, checks, thesis_sections, measured, disc, data, trained, evaluated, verdict,
                                 out)
-    paths = write_report(out, "beam-damage: from the thesis to a damage classifier for beam 5", sections)
+    paths = write_report(out, "beam-damage: from the thesis to a damage classifier for beam 5", sections,
+                         summary=_summary_section(checks, disc, evaluated, verdict, 0.6095))
     result = {
         "validate_passed": vsum["passed"], "checks": len(checks),
         "thesis": thesis_summary, "measured_data": measured,
@@ -223,11 +305,16 @@ def run(args) -> dict:
 
 
 def _report_sections(vsum, checks, thesis_sections, measured, disc, data, trained, evaluated, verdict, out):
+    """The detail sections after the summary, in the order of the steps."""
     rows = [{"check": c.name, "group": c.group, "relative error": c.rel_error, "tolerance": c.tolerance,
-             "passed": c.passed} for c in checks]
-    s_validate = Section("1. Thesis reproduction (`beam-damage validate`)",
+             "share of tolerance": c.rel_error / c.tolerance if c.tolerance else None, "passed": c.passed}
+            for c in checks]
+    closest = sorted(rows, key=lambda r: -(r["share of tolerance"] or 0.0))[:5]
+    s_validate = Section("Thesis reproduction (`beam-damage validate`)",
                          (f"{sum(c.passed for c in checks)} of {len(checks)} checks pass.",),
-                         (Table.from_records("Every check against the thesis's printed numbers", rows),))
+                         (Table.from_records("The five checks closest to their tolerance", closest),
+                          Table.from_records("Every check against the thesis's printed numbers", rows,
+                                             collapsed=True)))
     s_ident = Section("Measured-data path: simulated beam-5 test -> UFF58 -> LSCF/LSFD -> Pilkey",
                       ("Beam 5's IIRS model with the thesis's identified damping, 1 % complex noise, 0.5 Hz lines, "
                        "written as binary UFF58 and identified.",),
@@ -238,29 +325,26 @@ def _report_sections(vsum, checks, thesis_sections, measured, disc, data, traine
                               ("updated model f (Hz)", *measured["updated_model_frequencies_hz"]),
                               ("exact zeta", *measured["exact_damping_ratios"]),
                               ("identified zeta", *measured["identified_damping_ratios"]))),),
-                      tuple(Figure(c, p) for c, p in zip(("Measured vs synthesised FRFs (LSFD)",
-                                                          "Stabilisation diagram (LSCF)"), measured["figures"])
-                            if Path(p).exists()))
+                      tuple(figure(p) for p in measured["figures"] if Path(p).exists()))
     s_disc = study_discrepancy.beam5_section(disc, out / "discrepancy",
-                                             "3. Discrepancy workflow: what the Euler-Bernoulli model of beam 5 lacks")
+                                             "Discrepancy workflow: what the Euler-Bernoulli model of beam 5 lacks")
     s_disc = Section(s_disc.title, s_disc.paragraphs + (f"Calibrated beam file: `{disc['beam_file']}`; it is the "
                                                         "truth model of the dataset below.",),
                      s_disc.tables, s_disc.figures)
-    metric_cols = ("method", "roc_auc", "accuracy", "false_alarm_rate", "element_accuracy",
-                   "within_one_element", "median_location_error_mm", "median_size_error", "ece")
-    ev = [{c: r.get(c) for c in metric_cols} for r in evaluated["rows"]]
+    metric_cols = {"method": "method", **{k: h for k, h, _ in SUMMARY_METRICS}, "ece": "ECE"}
     s_learn = Section(
-        "4. Damage classifier on the calibrated beam",
+        "Damage classifier on the calibrated beam",
         (f"Training data: {data['train']['samples']} specimens from `generate --config training` with the "
          f"calibrated beam as truth (slits 5-90 % local EI loss, 1-10 mm wide, anywhere; 25 % intact; noise "
          f"0.1-3 %; temperature and re-clamping between the two test days). Test: {data['test']['samples']} other "
          f"specimens (seed 1). Input route of the network: {trained.get('route')}; training "
          f"{sum((trained.get('train_seconds') or {}).values()):.0f} s.",),
-        (Table.from_records("Network against the classical baselines on the same test pairs", ev),),
-        tuple(Figure(Path(f).stem.replace("_", " "), f) for f in evaluated["figures"] if Path(f).exists()))
-    s_class = Section("5. Beam 5 classified (Tables 4.5/4.6, damaged against undamaged)",
+        (Table.from_records("Network against the classical baselines on the same test pairs",
+                            [_rounded(r) for r in evaluated["rows"]], metric_cols),),
+        tuple(figure(f) for f in evaluated["figures"] if Path(f).exists()))
+    s_class = Section("Beam 5 classified (Tables 4.5/4.6, damaged against undamaged)",
                       (_verdict_text(verdict, 0.6095),) + tuple(f"Warning: {w}" for w in verdict.get("warnings", [])),
-                      (Table.from_records("The network's and the classical method's answers", _answers(verdict)),))
+                      (Table.from_records("The network's and every classical method's answers", _answers(verdict)),))
     return [s_validate, *thesis_sections, s_ident, s_disc, s_learn, s_class]
 
 

@@ -39,39 +39,55 @@ def stabilisation_png(diagram, frequency_hz, frf, selected_hz=()) -> bytes:
     for code, (mk, col, lab) in _MARKERS.items():
         sel = diagram.status == code
         if np.any(sel):
+            text = STABILITY_CODES[code]
             ax.scatter(diagram.natural_frequencies_hz[sel], diagram.order[sel], marker=mk, s=14,
                        facecolors="none" if mk == "o" else col, edgecolors=col, linewidths=0.8,
-                       label=f"{lab}: {STABILITY_CODES[code]}")
-    for f0 in selected_hz:
-        ax.axvline(f0, color="k", lw=0.8, ls="--")
+                       label=text if lab == text else f"{lab}: {text}")
+    for i, f0 in enumerate(selected_hz):
+        ax.axvline(f0, color="k", lw=0.8, ls="--", label="selected mode" if i == 0 else None)
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel("model order")
     ax.set_xlim(diagram.band_hz)
     ax2 = ax.twinx()
     ax2.semilogy(frequency_hz, np.sqrt(mode_indicator(frf)), color="0.3", lw=0.8)
     ax2.set_ylabel("sqrt(sum |H|^2) (m/N)")
-    ax.legend(loc="upper left", fontsize=7, framealpha=0.8)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=5, fontsize=7, frameon=False)
     ax.set_title("LSCF stabilisation diagram")
     fig.tight_layout()
     return _png(fig)
 
 
 def overlay_png(frequency_hz, measured, synthesised, labels, kind="receptance", units="m/N", max_curves=6) -> bytes:
-    """Magnitude and phase of measured (lines) vs synthesised (dashed) FRFs."""
+    """Magnitude and phase of measured (solid, light) vs synthesised (dashed) FRFs, one colour per FRF.
+
+    The synthesised phase is unwrapped along frequency; the measured phase is drawn on the same branch
+    (synthesised phase plus the wrapped difference), so a +-180 deg wrap never draws a vertical line.
+    """
+    from matplotlib.lines import Line2D
+    from matplotlib.ticker import MultipleLocator
+
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 7), sharex=True, gridspec_kw={"height_ratios": [2, 1]})
-    m = measured.reshape(-1, measured.shape[-1])
-    s = synthesised.reshape(-1, synthesised.shape[-1])
-    for k in range(min(m.shape[0], max_curves)):
-        line, = ax1.semilogy(frequency_hz, np.abs(m[k]), lw=1.0, label=f"{labels[k]} measured")
+    m = measured.reshape(-1, measured.shape[-1])[:max_curves]
+    s = synthesised.reshape(-1, synthesised.shape[-1])[:max_curves]
+    phase_s = np.unwrap(np.angle(s), axis=-1)
+    phase_m = phase_s + np.angle(m * np.conj(s))
+    handles = []
+    for k in range(m.shape[0]):
+        line, = ax1.semilogy(frequency_hz, np.abs(m[k]), lw=2.0, alpha=0.45)
         ax1.semilogy(frequency_hz, np.abs(s[k]), "--", color=line.get_color(), lw=1.0)
-        ax2.plot(frequency_hz, np.rad2deg(np.angle(m[k])), lw=1.0, color=line.get_color())
-        ax2.plot(frequency_hz, np.rad2deg(np.angle(s[k])), "--", lw=1.0, color=line.get_color())
+        ax2.plot(frequency_hz, np.rad2deg(phase_m[k]), lw=2.0, alpha=0.45, color=line.get_color())
+        ax2.plot(frequency_hz, np.rad2deg(phase_s[k]), "--", lw=1.0, color=line.get_color())
+        handles.append(Line2D([], [], color=line.get_color(), lw=2, label=labels[k]))
+    handles += [Line2D([], [], color="k", lw=2.0, alpha=0.45, label="measured"),
+                Line2D([], [], color="k", lw=1.0, ls="--", label="synthesised (LSFD)")]
     ax1.set_ylabel(f"|H| ({units})")
-    ax1.set_title(f"measured (solid) vs synthesised (dashed) {kind}")
-    ax1.legend(fontsize=7)
-    ax2.set_ylabel("phase (deg)")
+    ax1.set_title(f"measured (light, solid) and synthesised (dashed) {kind}")
+    ax1.legend(handles=handles, fontsize=7, ncol=2)
+    ax2.set_ylabel("phase, unwrapped (deg)")
     ax2.set_xlabel("frequency (Hz)")
-    ax2.set_yticks([-180, -90, 0, 90, 180])
+    span_deg = np.rad2deg(np.ptp(np.concatenate([phase_m.ravel(), phase_s.ravel()]))) if m.size else 0.0
+    ax2.yaxis.set_major_locator(MultipleLocator(90 if span_deg <= 720 else 180))
+    ax2.grid(alpha=0.3)
     fig.tight_layout()
     return _png(fig)
 

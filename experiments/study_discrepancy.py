@@ -330,7 +330,7 @@ EXAMPLE_SHAPES = EXAMPLE.with_name("beam5_table_4_5.json")
 
 def beam5_section(result: dict, out_dir: Path, title: str):
     """Report section of one ``run_discrepancy`` result written into ``out_dir``."""
-    from experiments.report import Figure, Section, Table
+    from experiments.report import Section, Table, figure
 
     gb, ga = result["gap_before"], result["gap_after"]
     params = [{"parameter": k, "value": v, "std": result["parameter_std"].get(k)}
@@ -355,8 +355,7 @@ def beam5_section(result: dict, out_dir: Path, title: str):
                                     Table.from_records("Fitted parameters (one-sigma from the Jacobian and noise)",
                                                        params),
                                     Table.from_records("Candidates (BIC: lower is better)", cand)),
-                   (Figure(f"{title}: frequency error per mode before and after",
-                           str(out_dir / "frequency_error.png")),))
+                   (figure(out_dir / "frequency_error.png"),))
 
 
 def run(out_dir, seeds: int = 1) -> tuple[dict, list]:
