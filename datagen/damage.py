@@ -5,33 +5,35 @@ A slit ``k`` has a centre ``x_k`` (m, ``0 < x < L``), an effective width
 ``[x_k - w_k/2, x_k + w_k/2]`` (clipped to the beam) the rigidity drops from
 ``EI`` to ``EI_d = EI * r(d_k)`` (:func:`datagen.specimen.slit_section_ei`).
 
-Partial elements
-----------------
-The slit need not sit on element boundaries: the stiffness of every element it
-overlaps is corrected by the exact strain-energy integral over the overlap,
+Flexibility-exact elements
+--------------------------
+The slit need not sit on element boundaries. Every element it overlaps gets
+the stiffness that follows exactly from integrating ``1/EI(x)``: clamped at
+node 1 and loaded by a tip force and moment at node 2 (local ``0 <= s <= l``),
+the element's flexibility is
 
-    ``K_e = EI K_e^0 - (EI - EI_d) * G_e``,  ``G_e = int_overlap B(x)^T B(x) dx``,
+    ``F = [[int (l-s)^2/EI ds + l/kGA, int (l-s)/EI ds], [int (l-s)/EI ds, int 1/EI ds]]``,
 
-where ``B`` holds the second derivatives of the Hermite shape functions
-(linear in the local coordinate, so ``G_e`` is closed form). Over a whole
-element ``EI * G_e`` is the element stiffness (eq. 3.9). For a narrow slit the
-change of the squared natural frequency of a mass-normalised mode is
-``-(EI - EI_d) w kappa(x)^2`` (curvature squared at the slit). The slit's
-extra damping is stiffness-proportional over the same region:
-``Delta C_e = beta_k EI G_e``.
+and equilibrium gives the 4x4 stiffness ``[[H k H^T, H k], [k H^T, k]]``
+with ``k = F^-1`` and ``H = [[-1, 0], [-l, -1]]`` (DOFs ``[w1, theta1, w2,
+theta2]``). For a uniform section this is eq. 3.9, and with the shear term
+(``kGA = 12 EI / (phi l^2)``) the Timoshenko element of
+:func:`physics.effects.timoshenko_stiffness`. Over a slit ``1/EI`` rises by
+``1/EI_d - 1/EI``: moment is continuous through the reduced section, so its
+curvature is ``M / EI_d`` and the static response to any load on the nodes is
+exact on any mesh. The shear compliance is left unchanged (the slit removes
+bending rigidity only). For a narrow shallow slit the change of the squared
+natural frequency of a mass-normalised mode is ``-(EI - EI_d) w kappa(x)^2``
+(curvature squared at the slit); to first order in the width it is
+``-(EI - EI_d) (EI / EI_d) w kappa(x)^2`` at any depth.
 
-On Timoshenko elements (``shear_deformation`` of a beam file, shear ratio
-``phi = 12 EI / (kGA l^2) > 0``) ``B`` is the curvature ``theta'`` of the
-element's own interpolation (Friedman & Kosmatka's static field: moment linear,
-shear constant), so the correction is the exact bending-energy loss of that
-element; the shear energy is left unchanged (the slit removes bending rigidity
-only). The Euler-Bernoulli (Hermite) curvature would overstate the bending
-energy of a shear-flexible element by up to ``(1 + phi)^2`` and can make the
-stiffness indefinite for deep slits.
+The slit's extra damping is stiffness-proportional over the slit, with the
+element's own curvature field ``B`` (Hermite second derivatives, or on
+Timoshenko elements the curvature ``theta'`` of the interdependent
+interpolation): ``Delta C_e = beta_k EI G_e``, ``G_e = int_overlap B^T B dx``.
 
-Several slits add their corrections; where they overlap the section loses the
-rigidity of the deepest one (the largest ``EI - EI_d``), not the sum, so the
-stiffness stays positive definite.
+Where slits overlap the section loses the rigidity of the deepest one (the
+largest ``EI - EI_d``), not the sum.
 """
 
 from __future__ import annotations
@@ -104,14 +106,55 @@ def slit_element_weights(x_m, width_m, length_m, n_elements):
     return xi1, np.maximum(xi1, xi2)
 
 
+def clamped_flexibility(ei_Nm2, element_length, shear_phi=0.0):
+    """Tip flexibility ``F0`` of a uniform element clamped at node 1 (batched over ``ei_Nm2``).
+
+    Parameters
+    ----------
+    ei_Nm2 : ndarray, shape (...)
+    element_length : float (m)
+    shear_phi : float   ``12 EI / (kGA l^2)`` (0: Euler-Bernoulli)
+
+    Returns
+    -------
+    ndarray, shape (..., 2, 2)   [[m/N, 1/N], [1/N, 1/(N m)]] for tip ``[force, moment]``
+    """
+    l = float(element_length)
+    f = np.array([[l**3 * (1 / 3 + shear_phi / 12), l**2 / 2], [l**2 / 2, l]])
+    return f / np.asarray(ei_Nm2, float)[..., None, None]
+
+
+def expand_tip_stiffness(k, element_length):
+    """4x4 element stiffness ``[[H k H^T, H k], [k H^T, k]]`` from the node-2 block ``k`` (..., 2, 2).
+
+    ``H = [[-1, 0], [-l, -1]]`` carries the tip force and moment to node 1 by
+    equilibrium; DOFs ``[w1, theta1, w2, theta2]`` (N/m ...).
+    """
+    l = float(element_length)
+    hk = np.stack([-k[..., 0, :], -l * k[..., 0, :] - k[..., 1, :]], axis=-2)       # H k
+    hkh = np.stack([-hk[..., :, 0], -l * hk[..., :, 0] - hk[..., :, 1]], axis=-1)    # H k H^T
+    top = np.concatenate([hkh, hk], axis=-1)
+    bottom = np.concatenate([np.swapaxes(hk, -1, -2), k], axis=-1)
+    return np.concatenate([top, bottom], axis=-2)
+
+
+def stiffness_from_flexibility(F, element_length):
+    """Element stiffness (..., 4, 4) of the tip flexibility ``F`` (..., 2, 2) of :func:`clamped_flexibility`."""
+    return expand_tip_stiffness(np.linalg.inv(F), element_length)
+
+
 def slit_corrections(x_m, width_m, ei_loss_Nm2, beta_s, ei_Nm2, length_m, n_elements, shear_phi=0.0):
     """Element stiffness and damping corrections of all slits (overlaps lose the deepest slit's rigidity).
+
+    ``dK = K(F0 + dF) - K(F0)`` per element (flexibility-exact, see the module
+    docstring), evaluated as ``expand(-k dF k0)`` with ``k = (F0 + dF)^-1``;
+    exactly 0 where no slit covers an element.
 
     Parameters
     ----------
     x_m, width_m : ndarray, shape (B, S)
     ei_loss_Nm2 : ndarray, shape (B, S)
-        ``EI - EI_d`` of each slit (N m^2); 0 for absent slits.
+        ``EI - EI_d`` of each slit (N m^2, below ``EI``); 0 for absent slits.
     beta_s : ndarray, shape (B, S)
         Extra stiffness-proportional damping coefficient of each slit (s).
     ei_Nm2 : ndarray, shape (B,)
@@ -122,19 +165,30 @@ def slit_corrections(x_m, width_m, ei_loss_Nm2, beta_s, ei_Nm2, length_m, n_elem
     Returns
     -------
     dK, dC : ndarray, shape (B, n_elements, 4, 4)
-        To add to the element stiffness and damping matrices (``dK`` <= 0).
+        To add to the element stiffness and damping matrices (``dK`` negative semi-definite).
     """
     le = length_m / n_elements
+    ei = np.asarray(ei_Nm2, float)
     xi1, xi2 = slit_element_weights(x_m, width_m, length_m, n_elements)
     G = overlap_energy(xi1, xi2, le, shear_phi)  # (B, S, E, 4, 4)
-    dC = np.einsum("bs,bseij->beij", np.asarray(beta_s, float) * np.asarray(ei_Nm2, float)[:, None], G)
-    # stiffness over the pieces between consecutive slit edges, each losing its deepest covering slit's rigidity
+    dC = np.einsum("bs,bseij->beij", np.asarray(beta_s, float) * ei[:, None], G)
+    # pieces between consecutive slit edges, each losing its deepest covering slit's rigidity
     edges = np.sort(np.concatenate([xi1, xi2], axis=1), axis=1)           # (B, 2S, E)
     a, b = edges[:, :-1], edges[:, 1:]
     mid = 0.5 * (a + b)
     cover = (xi1[:, :, None] <= mid[:, None]) & (mid[:, None] < xi2[:, :, None])      # (B, S, 2S-1, E)
     loss = np.max(np.where(cover, np.asarray(ei_loss_Nm2, float)[:, :, None, None], 0.0), axis=1)
-    dK = -np.einsum("bke,bkeij->beij", loss, overlap_energy(a, b, le, shear_phi))
+    e = ei[:, None, None]
+    c = loss / (e * (e - loss))                                           # 1/EI_d - 1/EI (m^-2 N^-1), (B, 2S-1, E)
+    ua, ub = 1.0 - a, 1.0 - b                                             # (l - s) / l at the piece ends
+    d00 = le**3 * np.sum(c * (ua**3 - ub**3), axis=1) / 3                 # int (l-s)^2 ds, (B, E)
+    d01 = le**2 * np.sum(c * (ua**2 - ub**2), axis=1) / 2                 # int (l-s) ds
+    d11 = le * np.sum(c * (b - a), axis=1)                                # int ds
+    dF = np.stack([np.stack([d00, d01], -1), np.stack([d01, d11], -1)], -2)   # (B, E, 2, 2)
+    F0 = clamped_flexibility(ei, le, shear_phi)[:, None]                  # (B, 1, 2, 2)
+    k0 = np.linalg.inv(F0)
+    k = np.linalg.inv(F0 + dF)
+    dK = expand_tip_stiffness(-(k @ dF @ k0), le)
     return dK, dC
 
 

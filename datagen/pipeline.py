@@ -17,7 +17,8 @@ Truth model
 -----------
 Clamped-free Euler-Bernoulli beam of ``mesh.truth_elements`` equal elements
 (optionally with a root rotational spring), specimen ``EI`` and mass, slits as
-exact partial-element energy corrections (:mod:`datagen.damage`); a beam file
+flexibility-exact elements that integrate ``1/EI(x)`` over the reduced sections
+(:mod:`datagen.damage`); a beam file
 (``generate --beam FILE``) adds its effects as described in
 :mod:`datagen.truth_beam`. Damping:
 ``C = C_0 + Delta C_slits`` with the specimen's modal damping
@@ -286,7 +287,9 @@ def truth_matrices(setup: Setup, inp: BatchInputs):
     """Mass, the stiffness of both test days and the slit damping of the current state (explicit matrices).
 
     The current state's stiffness is ``(1 + t) (EI K_0 + dK_slits)`` plus the
-    root spring ``k_r (1 + c)``, with ``t`` the temperature stiffness change and
+    root spring ``k_r (1 + c)``, with ``dK_slits`` the change of the elements the
+    slits cover (flexibility-exact, :func:`datagen.damage.slit_corrections`),
+    ``t`` the temperature stiffness change and
     ``c`` the re-clamping change. ``M = m M_0`` plus a beam file's point mass.
 
     Returns

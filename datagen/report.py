@@ -20,8 +20,10 @@ from physics.properties import cantilever_curvature_squared
 def curvature_check(table, length_m):
     """Regress the truth frequency shift of single-slit samples on the curvature-squared prediction.
 
-    Prediction (first-order perturbation, uniform cantilever):
-    ``df_r/f_r = -(1/2) (dEI/EI) w phi_r''(x)^2 / int phi_r''^2``
+    Prediction (narrow slit of relative loss ``q = dEI/EI``, first order in its
+    width ``w``, uniform cantilever; the reduced section's flexibility gives
+    ``q / (1 - q)``):
+    ``df_r/f_r = -(1/2) q/(1 - q) w phi_r''(x)^2 / int phi_r''^2``
     (:func:`physics.properties.cantilever_curvature_squared`).
 
     Returns
@@ -31,7 +33,8 @@ def curvature_check(table, length_m):
     one = table[(table.n_slits == 1)]
     out = {}
     for r in range(4):
-        pred = -0.5 * one["slit1_ei_loss"] * one["slit1_width_m"] * cantilever_curvature_squared(
+        q = one["slit1_ei_loss"]
+        pred = -0.5 * q / (1 - q) * one["slit1_width_m"] * cantilever_curvature_squared(
             one["slit1_x_m"].to_numpy(), length_m, r)
         act = one[f"df{r + 1}_rel"]
         pred, act = np.asarray(pred, float), act.to_numpy()
@@ -99,8 +102,9 @@ def inspect_dataset(dataset_dir, out_dir=None) -> dict:
     rows = []
     for r, ax in enumerate(axs.flat):
         if len(one):
-            norm = -0.5 * one["slit1_ei_loss"] * one["slit1_width_m"]
-            ax.plot(one["slit1_x_m"], one[f"df{r + 1}_rel"] / norm, ".", ms=3, label="truth shift / (-dEI/EI w/2)")
+            q = one["slit1_ei_loss"]
+            norm = -0.5 * q / (1 - q) * one["slit1_width_m"]
+            ax.plot(one["slit1_x_m"], one[f"df{r + 1}_rel"] / norm, ".", ms=3, label="truth shift / (-q/(1-q) w/2)")
         ax.plot(xg, cantilever_curvature_squared(xg, length, r), "r-", label="phi''(x)^2 / int phi''^2")
         c = check[f"mode{r + 1}"]
         ax.set_title(f"mode {r + 1}: slope {c['slope']:.3f}, R^2 {c['r2']:.4f}" if c["slope"] is not None

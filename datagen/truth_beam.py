@@ -31,9 +31,9 @@ enters the generator, combined with the specimen variability as follows:
   baseline modal damping; each specimen scales them by its damping scale (the
   small off-diagonal modal terms of ``C_R`` are dropped).
 
-Slits remain the exact partial-element bending-energy correction
-(:mod:`datagen.damage`), with the curvature field of the truth element (the
-Timoshenko element's own one under ``shear_deformation``). The Pilkey
+Slits are flexibility-exact on the truth elements (:mod:`datagen.damage`):
+under ``shear_deformation`` they add bending compliance to the Timoshenko
+element and keep its shear compliance. The Pilkey
 analyst's mass model (``updating.mass_model``) knows the beam's mass per length
 only, not an added mass. ``physics.beam`` is the discrepancy workflow's module:
 it is imported only when a beam is given.

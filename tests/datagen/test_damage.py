@@ -1,15 +1,17 @@
-"""Slit model: partial-element energy integrals, layered section, curvature-squared frequency shifts."""
+"""Slit model: flexibility-exact slit elements, slit damping energy integrals, layered section, frequency shifts."""
 
 import numpy as np
 import pytest
 
 from datagen.config import merge
-from datagen.damage import element4_index, overlap_energy, slit_corrections
+from datagen.damage import clamped_flexibility, element4_index, overlap_energy, slit_corrections, \
+    stiffness_from_flexibility
 from datagen.pipeline import get_setup
 from physics.modal import undamped_modes
 from datagen.specimen import SectionLayout, beam_preset, slit_section_ei
 from physics.errors import ConfigError
-from physics.fem import element_stiffness
+from physics.effects import timoshenko_stiffness
+from physics.fem import assemble, element_stiffness
 
 
 def test_overlap_energy_whole_element_is_eq_3_9_and_splits_add():
@@ -22,17 +24,39 @@ def test_overlap_energy_whole_element_is_eq_3_9_and_splits_add():
 @pytest.mark.parametrize("phi", [0.3, 10.8])   # 10.8: beam 5 with kGA = 27 100 N on the 20-element truth mesh
 def test_timoshenko_overlap_energy_is_the_bending_part_of_the_element(phi):
     """EI G(whole element) + the shear energy of the constant shear strain of the interdependent interpolation
-    (Friedman & Kosmatka 1993) gives physics.effects' Timoshenko element: a slit removes at most its bending part."""
-    from physics.effects import timoshenko_stiffness
-
+    (Friedman & Kosmatka 1993) gives physics.effects' Timoshenko element (G weights the slit damping)."""
     l, ei = 0.03, 22.674
     kga = 12 * ei / (phi * l**2)
     g = phi / (1 + phi) * np.array([-1 / l, -0.5, 1 / l, -0.5])       # gamma = w' - theta, DOFs [w1, t1, w2, t2]
     total = ei * overlap_energy(0.0, 1.0, l, phi) + kga * l * np.outer(g, g)
     np.testing.assert_allclose(total, timoshenko_stiffness(ei, kga, l), rtol=1e-12, atol=1e-9)
-    for basis, positive in ((phi, True), (0.0, phi < 1)):    # the Hermite curvature removes too much when phi >~ 1
-        e = np.linalg.eigvalsh(timoshenko_stiffness(ei, kga, l) - 0.99 * ei * overlap_energy(0.2, 0.9, l, basis))
-        assert (e[0] > -1e-6 * e[-1] and e[2] > 1e-6 * e[-1]) == positive   # two rigid-body zeros, rest positive
+
+
+def _condensed_eb(ei_pieces, bounds):
+    """End-node stiffness of one element made of EB sub-elements with constant EI on [bounds[i], bounds[i+1]]
+    (nodal static condensation: exact for piecewise-constant EI with sub-element edges at the steps)."""
+    ke = np.stack([element_stiffness(e, b - a) for e, a, b in zip(ei_pieces, bounds[:-1], bounds[1:])])
+    k = assemble(ke)
+    ends = [0, 1, k.shape[0] - 2, k.shape[0] - 1]
+    inner = [i for i in range(k.shape[0]) if i not in ends]
+    kbi = k[np.ix_(ends, inner)]
+    return k[np.ix_(ends, ends)] - kbi @ np.linalg.solve(k[np.ix_(inner, inner)], kbi.T)
+
+
+@pytest.mark.parametrize("phi", [0.0, 0.3, 10.8])   # 10.8: beam 5 with kGA = 27 100 N on the 20-element truth mesh
+def test_uniform_flexibility_gives_the_project_elements(phi):
+    l, ei = 0.03, 22.674
+    k = stiffness_from_flexibility(clamped_flexibility(ei, l, phi), l)
+    want = element_stiffness(ei, l) if phi == 0.0 else timoshenko_stiffness(ei, 12 * ei / (phi * l**2), l)
+    np.testing.assert_allclose(k, want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+
+
+def test_slit_over_the_whole_element_scales_it_by_the_remaining_rigidity():
+    L, ei, r = 0.03, 22.674, 0.63
+    dK, _ = slit_corrections(np.array([[L / 2]]), np.array([[L]]), np.array([[r * ei]]), np.zeros((1, 1)),
+                             np.array([ei]), L, 1)
+    k0 = element_stiffness(ei, L)
+    np.testing.assert_allclose(k0 + dK[0, 0], (1 - r) * k0, rtol=1e-12, atol=1e-12 * np.abs(k0).max())
 
 
 def test_overlapping_slits_lose_the_deepest_rigidity_not_the_sum():
@@ -40,11 +64,31 @@ def test_overlapping_slits_lose_the_deepest_rigidity_not_the_sum():
     x, w = np.array([[0.4, 0.6]]), np.array([[0.4, 0.4]])         # [0.2, 0.6] and [0.4, 0.8] of the one element
     loss = np.array([[0.5, 0.9]])
     dK, _ = slit_corrections(x, w, loss, np.zeros((1, 2)), np.ones(1), L, n_el)
-    want = -(0.5 * overlap_energy(0.2, 0.4, L) + 0.9 * overlap_energy(0.4, 0.8, L))
-    np.testing.assert_allclose(dK[0, 0], want, rtol=1e-12, atol=1e-12)
+    want = _condensed_eb([1.0, 0.5, 0.1, 1.0], [0.0, 0.2, 0.4, 0.8, 1.0])
+    np.testing.assert_allclose(element_stiffness(1.0, L) + dK[0, 0], want, rtol=1e-12, atol=1e-12)
     same, _ = slit_corrections(np.array([[0.5, 0.5]]), np.array([[0.2, 0.2]]), np.array([[0.9, 0.9]]),
                                np.zeros((1, 2)), np.ones(1), L, n_el)
-    np.testing.assert_allclose(same[0, 0], -0.9 * overlap_energy(0.4, 0.6, L), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(element_stiffness(1.0, L) + same[0, 0], _condensed_eb([1.0, 0.1, 1.0], [0, 0.4, 0.6, 1]),
+                               rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("phi", [0.0, 10.8])
+@pytest.mark.parametrize("x, w, r", [(0.2713, 0.0123, 0.7), (0.05, 0.002, 0.2), (0.6095 - 0.004, 0.02, 0.95)])
+def test_cantilever_tip_deflection_with_a_slit_is_the_closed_form(phi, x, w, r):
+    """Static tip load P on the clamped 20-element truth mesh: P L^3/(3 EI) + P L/kGA + P r/((1-r) EI) int (L-s)^2 ds
+    over the slit (clipped to the beam), exact on any mesh; the second slit sits across an element edge."""
+    L, n_el, ei, P = 0.6095, 20, 22.674, 1.7
+    le = L / n_el
+    kga = np.inf if phi == 0.0 else 12 * ei / (phi * le**2)
+    k0 = np.broadcast_to(timoshenko_stiffness(ei, kga, le), (n_el, 4, 4))
+    dK, _ = slit_corrections(np.array([[x]]), np.array([[w]]), np.array([[r * ei]]), np.zeros((1, 1)),
+                             np.array([ei]), L, n_el, phi)
+    K = assemble(k0 + dK[0])[2:, 2:]
+    f = np.zeros(K.shape[0])
+    f[-2] = P
+    a, b = max(x - w / 2, 0.0), min(x + w / 2, L)
+    want = P * L**3 / (3 * ei) + P * L / kga + P * r / ((1 - r) * ei) * ((L - a)**3 - (L - b)**3) / 3
+    assert np.linalg.solve(K, f)[-2] == pytest.approx(want, rel=1e-10)
 
 
 def test_section_matches_table_4_1_and_eq_4_1():
@@ -76,8 +120,10 @@ def test_element4_index():
     assert list(element4_index(np.array([0.01, 0.16, 0.31, 0.6, np.nan]), 0.6095)) == [1, 2, 3, 4, 0]
 
 
-def test_frequency_shift_follows_curvature_squared():
-    """A narrow slit at x changes w_r^2 by -dEI w kappa_r(x)^2 (mass-normalised modes)."""
+@pytest.mark.parametrize("r", [0.01, 0.6])
+def test_frequency_shift_follows_curvature_squared(r):
+    """A narrow slit at x changes w_r^2 by -dEI/(1 - r) w kappa_r(x)^2 (mass-normalised modes; r = dEI/EI):
+    the curvature-squared sensitivity, with the flexibility of the reduced section at finite depth."""
     setup = get_setup(merge({"specimen": {"root_spring_relative": []}}))
     L, n_el = setup.length_m, setup.n_elements
     le = L / n_el
@@ -86,7 +132,7 @@ def test_frequency_shift_follows_curvature_squared():
     w2 = w**2
     full = np.zeros((2 * (n_el + 1), 4))
     full[setup.keep] = phi[:, :4]
-    dEI, w = 0.01 * 22.674, 1e-4  # small damage: first-order perturbation
+    dEI, w = r * 22.674, 1e-4  # narrow slit: first order in its width
     xs = np.array([0.05, 0.1713, 0.3, 0.4444, 0.55])  # not on element boundaries
     actual, predicted = [], []
     for x in xs:
@@ -100,7 +146,7 @@ def test_frequency_shift_follows_curvature_squared():
         xi = x / le - e
         B = np.array([-6 + 12 * xi, (-4 + 6 * xi) * le, 6 - 12 * xi, (-2 + 6 * xi) * le]) / le**2
         kappa = B @ full[2 * e:2 * e + 4]
-        predicted.append(-dEI * w * kappa**2)
+        predicted.append(-dEI / (1 - r) * w * kappa**2)
         actual.append(w2d[:4] - w2[:4])
     actual, predicted = np.array(actual), np.array(predicted)
     scale = np.abs(predicted).max(axis=0)  # per mode, over positions
@@ -113,7 +159,6 @@ def test_timoshenko_curvature_energy_plus_shear_energy_is_the_timoshenko_element
     """Bending energy of the Timoshenko curvature field plus the (constant) shear energy equals
     physics.effects.timoshenko_stiffness; phi = 0 is the Hermite basis."""
     from datagen.damage import curvature_basis
-    from physics.effects import timoshenko_stiffness
 
     l, ei, kga = 0.03, 26.7, 2.7e4
     phi = 12 * ei / (kga * l**2)
