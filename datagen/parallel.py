@@ -184,7 +184,8 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
                                                      "columns": COLUMN_UNITS,
                                                      "measured_dofs": ["2:y", "3:y", "4:y", "5:y"],
                                                      "frf_reference_dof": "2:y", "frf_kind": "receptance"},
-         "section_layout": vars(setup.layout), "preset": {**vars(setup.preset), "mass_per_length_kg_m": setup.preset.mass_per_length_kg_m}}
+         "section_layout": vars(setup.layout),
+         "preset": {**vars(setup.preset), "mass_per_length_kg_m": setup.preset.mass_per_length_kg_m}}
     write_manifest(root, m)
     return m
 

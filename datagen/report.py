@@ -48,7 +48,8 @@ def curvature_check(table, length_m):
 
 
 def inspect_dataset(dataset_dir, out_dir=None) -> dict:
-    """Summary, ``labels.png``, ``shift_vs_position.png``, ``curvature_check.csv``, ``frf_overlay.png``, ``summary.json``.
+    """Summary, ``labels.png``, ``shift_vs_position.png``, ``curvature_check.csv``, ``frf_overlay.png``,
+    ``summary.json``.
 
     Parameters
     ----------

@@ -77,7 +77,8 @@ def _measured_inputs(a: dict):
     """Poles (2n, m) and drive-point-scaled residues (2n, S, m) of the measured FRFs, states flattened."""
     lam, psi = np.asarray(a["truth_poles"]), np.asarray(a["truth_shapes"])
     n, _, S, m = psi.shape
-    return np.ascontiguousarray(lam.reshape(2 * n, m)), np.ascontiguousarray((psi * psi[..., :1, :]).reshape(2 * n, S, m))
+    return (np.ascontiguousarray(lam.reshape(2 * n, m)),
+            np.ascontiguousarray((psi * psi[..., :1, :]).reshape(2 * n, S, m)))
 
 
 def measured_peak(a: dict, omega_rad_s) -> np.ndarray:

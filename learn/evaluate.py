@@ -133,7 +133,8 @@ def subsets(truth: dict, table) -> dict:
     s = truth["stiffness_loss_Nm3"]
     if dam.sum() >= 3:
         q = np.quantile(s[dam], [1 / 3, 2 / 3])
-        for name, sel in (("size small", s <= q[0]), ("size medium", (s > q[0]) & (s <= q[1])), ("size large", s > q[1])):
+        for name, sel in (("size small", s <= q[0]), ("size medium", (s > q[0]) & (s <= q[1])),
+                          ("size large", s > q[1])):
             out[f"{name}"] = ~dam | sel
     x = truth["x_over_L"]
     for k in range(1, 5):

@@ -167,7 +167,8 @@ def load_pairs(roots, frfs=("measured", "updated"), chunk: int = 1024, workers: 
         except FileFormatError:  # names the damaged file itself
             raise
         except (OSError, ValueError) as exc:
-            raise FileFormatError(f"{root}: not a dataset directory written by 'beam-damage generate' ({exc})") from None
+            raise FileFormatError(f"{root}: not a dataset directory written by 'beam-damage generate' ({exc})") \
+                from None
         if not ds.shards or not ds.manifest.get("complete"):
             raise FileFormatError(f"{root}: dataset is incomplete; re-run its 'beam-damage generate' command")
         ds.verify_or_raise()  # every shard's checksums, before any thread reads
@@ -194,7 +195,10 @@ def load_pairs(roots, frfs=("measured", "updated"), chunk: int = 1024, workers: 
                           groups=np.array([f"{cs[:12]}:{k}" for k in table["sample_id"].to_numpy()])))
         source.append({"path": str(root), "manifest_checksum": cs, "samples": int(len(table)),
                        "config": ds.manifest["config"], "truth_beam": ds.manifest["preset"]})
-    cat = (lambda k: np.concatenate([p[k] for p in parts]))
+
+    def cat(k):
+        return np.concatenate([p[k] for p in parts])
+
     return Pairs(cat("eigenvalues"), cat("eigenvectors"),
                  {k: np.concatenate([p["log_frf"][k] for p in parts]) for k in frfs},
                  pd.concat([p["table"] for p in parts], ignore_index=True), cat("groups"), beam, source)

@@ -324,12 +324,14 @@ def on_model_dofs(data, beam: BeamSpec, beam_x_m=None, where: str = "measured da
 
 
 def modal_pair(baseline, current, beam: BeamSpec) -> tuple[np.ndarray, np.ndarray, list]:
-    """Stack two :class:`physics.io.ModalData` of the model's DOFs into (1, 2, m) eigenvalues and (1, 2, 4, m) shapes."""
+    """Stack two :class:`physics.io.ModalData` of the model's DOFs into (1, 2, m) eigenvalues and (1, 2, 4, m)
+    shapes."""
     warnings = []
     lams, vecs = [], []
     for name, d in (("baseline", baseline), ("measured", current)):
         if d.eigenvectors is None:
-            raise FileFormatError(f"{name} modal data: field 'eigenvectors' is required (rows = {', '.join(beam.dofs)})")
+            raise FileFormatError(f"{name} modal data: field 'eigenvectors' is required "
+                                  f"(rows = {', '.join(beam.dofs)})")
         dofs = tuple(_canonical_dof(x) for x in d.dofs) if d.dofs else None
         if dofs is None:
             if d.eigenvectors.shape[0] != len(beam.dofs):
@@ -610,7 +612,8 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
                        "location_std_m": None, "location_element": cl["location_element"],
                        "element_probabilities": None, "stiffness_loss_Nm3": cl["stiffness_loss_Nm3"],
                        "stiffness_loss_std_Nm3": None,
-                       "depth_m": equivalent_depth(cl["stiffness_loss_Nm3"], depth_of, model.config["reference_width_m"]),
+                       "depth_m": equivalent_depth(cl["stiffness_loss_Nm3"], depth_of,
+                                                   model.config["reference_width_m"]),
                        "detectable": bool(sens.largest_drop(np.array([cl["location_x_over_L"]]),
                                                             np.array([cl["stiffness_loss_Nm3"]]))[0]
                                           >= detectability_threshold())}

@@ -125,8 +125,8 @@ class Beam:
             Multipliers of ``EI_Nm2`` and ``mass_per_length_kg_m`` (global recalibration).
         """
         return fx.assemble_beam(self.length_m, self.EI_Nm2 * EI_scale, self.mass_per_length_kg_m * mass_scale,
-                                self.n_elements if n_elements is None else n_elements, bc=self.bc, thickness_m=self.thickness_m,
-                                effects=self.effects)
+                                self.n_elements if n_elements is None else n_elements, bc=self.bc,
+                                thickness_m=self.thickness_m, effects=self.effects)
 
     def with_effects(self, effects, **changes) -> "Beam":
         """Copy with the effect mapping replaced (and other fields changed)."""

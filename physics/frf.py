@@ -320,7 +320,8 @@ def convert_frf(H, omega_rad_s, from_kind: str, to_kind: str):
     ShapeError
         Division by ``i w`` at a 0 rad/s line.
     """
-    power = FRF_KINDS.index(check_frf_kind(to_kind, "to_kind")) - FRF_KINDS.index(check_frf_kind(from_kind, "from_kind"))
+    power = (FRF_KINDS.index(check_frf_kind(to_kind, "to_kind"))
+             - FRF_KINDS.index(check_frf_kind(from_kind, "from_kind")))
     w = _omega(omega_rad_s)
     if power == 0:
         return np.asarray(H)
