@@ -19,6 +19,10 @@ from pathlib import Path
 from physics.errors import BeamDamageError, ConfigError
 from physics.updating import mass_model_name
 
+__all__ = ["CONFIG_DIR", "DEFAULTS", "MAX_MODAL_NOISE", "MAX_SLIT_LOSS_FACTOR", "load_config", "merge",
+           "modal_noise_calibration", "named_configs", "validate"]
+
+
 #: Default configuration (SI units). See README "Generating datasets".
 DEFAULTS: dict = {
     "preset": "beam5",

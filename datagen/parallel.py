@@ -29,6 +29,9 @@ from datagen.store import ARRAYS, COLUMN_UNITS, DERIVED, FORMAT, STATES, finaliz
 from physics.errors import BeamDamageError, ConfigError
 from physics.io import atomic_write_bytes
 
+__all__ = ["BYTES_PER_SAMPLE", "check_arguments", "compute_shard", "generate", "open_or_create", "shard_plan",
+           "write_omega"]
+
 
 def shard_plan(n: int, shard_size: int) -> list[tuple[int, int, int]]:
     """``(index, first_sample_id, n_samples)`` of every shard."""

@@ -56,6 +56,10 @@ from physics.frf import poles_and_residues
 from physics.modal import eigenvalues_from_modal, modal_parameters, undamped_modes
 from physics.updating import analyst_mass, pilkey
 
+__all__ = ["BatchInputs", "CHUNK", "LABEL_FIELDS", "N_MEAS", "Setup", "build_setup", "draw_batch", "get_setup",
+           "measure_modes", "projected_modes", "simulate_batch", "simulate_chunk", "simulate_shard",
+           "slit_frequency_drop", "truth_matrices", "unit_mass", "update_models"]
+
 N_MEAS = 4          # measured translational DOFs (thesis nodes 2..5); FRFs are driven at the first
 
 

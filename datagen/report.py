@@ -16,6 +16,8 @@ from physics.errors import FileFormatError
 from physics.io import atomic_write_text
 from physics.properties import cantilever_curvature_squared
 
+__all__ = ["curvature_check", "inspect_dataset"]
+
 
 def curvature_check(table, length_m):
     """Regress the truth frequency shift of single-slit samples on the curvature-squared prediction.

@@ -28,6 +28,9 @@ import numpy as np
 from datagen.kernels import noise_kernel, noisy_pole_residue_kernel
 from physics.frf import pole_residue, receptance_state_space
 
+__all__ = ["FRF_KINDS", "SOURCES", "add_noise", "line_index", "log_magnitude_map", "measured_frf", "measured_peak",
+           "state_seeds", "synthesise", "updated_frf"]
+
 FRF_KINDS = ("measured", "updated")
 
 #: Stored arrays each FRF kind is synthesised from.

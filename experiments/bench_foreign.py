@@ -41,6 +41,8 @@ from pathlib import Path
 
 import numpy as np
 
+__all__ = ["main"]
+
 SETS = ("easy", "eb", "timoshenko")
 
 

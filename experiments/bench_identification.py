@@ -26,6 +26,8 @@ from physics.io import MeasuredFRF, atomic_write_text
 from physics.modal import mac
 from physics.thesis import BEAM5_TIP, simulated_beam5_test
 
+__all__ = ["free_free_table", "main", "simulate_free_free", "table"]
+
 DRIVE = BEAM5_TIP  # tip DOF 5:+Y
 
 

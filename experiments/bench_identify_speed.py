@@ -35,6 +35,9 @@ import numpy as np
 
 from physics.io import MeasuredFRF, atomic_write_text
 
+__all__ = ["EI_SCALE", "RAYLEIGH", "main", "write_test_file"]
+
+
 #: Multiplier of the beam-5 preset's EI (first mode near 21 Hz).
 EI_SCALE = 1.11
 #: Rayleigh damping ``C = a M + b K`` (1/s, s): ratios 0.78, 0.22, 0.34, 0.59 % for modes 1-4.

@@ -29,6 +29,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+__all__ = ["main"]
+
+
 #: Shear rigidity of the Timoshenko truth of beam 5 (N): the discrepancy study's shear-deformable beam.
 KGA_N = 27100.0
 TIMOSHENKO_FILE = "beam5-timoshenko.toml"

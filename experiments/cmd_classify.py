@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+__all__ = ["KEYS", "add_parser", "run"]
+
 KEYS = ("measured", "damaged", "probability_damaged", "location_x_over_L", "location_x_m", "location_std_m",
         "location_element", "element_probabilities", "stiffness_loss_Nm3", "stiffness_loss_std_Nm3", "depth_m",
         "detectable", "verdict_from", "in_distribution", "out_of_distribution_reasons", "mahalanobis_distance",

@@ -9,6 +9,9 @@ from physics import fem, modal, properties, reduction
 from physics.beam import Beam, load_beam
 from physics.errors import BeamDamageError
 
+__all__ = ["add_parser", "run"]
+
+
 #: Old name of :data:`physics.reduction.REDUCTIONS`.
 REDUCTIONS = reduction.REDUCTIONS
 

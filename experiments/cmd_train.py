@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+__all__ = ["add_parser", "run"]
+
 
 def add_parser(sub):
     p = sub.add_parser("train", help="train the damage classifier (detect, localise, size slits) on datasets",

@@ -17,6 +17,8 @@ from pathlib import Path
 
 from experiments.report import Section, Table
 
+__all__ = ["run"]
+
 
 def run(out_dir, n_datagen: int = 10000, n_train: int = 6000, epochs: int = 30) -> tuple[dict, list]:
     from experiments import bench_datagen, bench_identification

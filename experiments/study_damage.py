@@ -16,6 +16,8 @@ import numpy as np
 
 from experiments.report import Figure, Section, Table
 
+__all__ = ["run"]
+
 METRICS = (("roc_auc", "detection ROC AUC"), ("element_accuracy", "element accuracy"),
            ("median_location_error_mm", "median location error (mm)"), ("median_size_error", "median size error"))
 

@@ -16,6 +16,8 @@ import numpy as np
 from physics import fem, frf, identification, modal, properties, reduction, thesis, updating
 from physics.io import modal_data_from_dict
 
+__all__ = ["Check", "add_parser", "format_table", "run", "run_checks", "summary", "thesis_fixture"]
+
 
 @dataclass(frozen=True)
 class Check:

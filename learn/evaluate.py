@@ -20,6 +20,9 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+__all__ = ["MIN_DROP", "Metrics", "NOISE_EDGES", "TIP_ZONE", "figures", "metrics", "reliability", "roc_auc",
+           "roc_curve", "subsets", "table_rows"]
+
 MIN_DROP = 0.002
 TIP_ZONE = 0.85
 #: Edges of the noise-level breakdown (FRF noise std relative to |H|; training range 0.1-3 %).

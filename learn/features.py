@@ -36,6 +36,10 @@ import pandas as pd
 
 from physics.errors import BeamDamageError, FileFormatError
 
+__all__ = ["BeamSpec", "DOFS", "GRID_RAD_S", "Pairs", "ROUTES", "beam_of_manifest", "curvatures", "features",
+           "frf_features", "grid_weights", "labels", "load_pairs", "manifest_checksum", "map_frf_to_grid",
+           "modal_features", "real_shapes", "split_by_specimen"]
+
 ROUTES = ("modal", "updated", "measured")
 
 #: Fixed FRF representation: log-spaced lines (rad/s) covering the four modes of the thesis beams.

@@ -35,6 +35,13 @@ from learn.sensitivity import beam_sensitivity
 from physics.errors import BeamDamageError, FileFormatError
 from physics.io import read_json
 
+__all__ = ["DAY_CHANGES", "DEFAULT_ROUTE", "FORMAT", "IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR",
+           "IN_DISTRIBUTION_PERCENTILE", "RATIO_TOLERANCE", "REFERENCE_WIDTH_M", "TrainedModel", "classify",
+           "classify_many", "day_changes", "detectability_threshold", "equivalent_depth", "evaluate", "frf_kinds",
+           "frf_rows", "identify_modes", "load_model", "modal_pair", "network_output", "nominal_ratio_range",
+           "on_model_dofs", "ood_percentile", "save_model", "sensitivity_of", "targets", "train"]
+
+
 #: Input route used by default (the winner of ``python -m experiments.bench_learn``).
 DEFAULT_ROUTE = "modal"
 #: Width assumed when a stiffness loss is turned into a slit depth (m): middle of the training widths.

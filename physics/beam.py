@@ -53,6 +53,10 @@ from physics.fem import BOUNDARY_CONDITIONS, FEModel
 from physics.io import atomic_write_text
 from physics.properties import PRESETS, layered_ei
 
+__all__ = ["Beam", "MAX_MODEL_SPREAD", "PRESET_CORE_MODULUS_PA", "PRESET_FACE_THICKNESS_M", "beam_from_dict",
+           "beam_to_toml", "load_beam", "preset_beam", "write_beam"]
+
+
 #: Face-sheet thickness and core modulus of the presets (the datagen section layout).
 PRESET_FACE_THICKNESS_M = 0.0005
 PRESET_CORE_MODULUS_PA = 1.0e8
