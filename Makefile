@@ -18,6 +18,7 @@ demo: $(STAMP)
 	$(VENV)/bin/beam-damage demo
 
 test: $(STAMP)
+	$(PY) -m ruff check .
 	$(PY) -m pytest
 
 test-all: $(STAMP)

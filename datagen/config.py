@@ -19,6 +19,10 @@ from pathlib import Path
 from physics.errors import BeamDamageError, ConfigError
 from physics.updating import mass_model_name
 
+__all__ = ["CONFIG_DIR", "DEFAULTS", "MAX_MODAL_NOISE", "MAX_SLIT_LOSS_FACTOR", "load_config", "merge",
+           "modal_noise_calibration", "named_configs", "validate"]
+
+
 #: Default configuration (SI units). See README "Generating datasets".
 DEFAULTS: dict = {
     "preset": "beam5",
@@ -46,11 +50,13 @@ DEFAULTS: dict = {
         "width_m": [0.002, 0.01],            # effective length of the reduced section
         "depth_m": [0.0002, 0.0003],         # thesis: 0.2-0.3 mm into the top face sheet
         "ei_loss": [],                       # if set: relative EI loss of the slit section (depth follows)
-        "slit_damping_s": [0.0, 2.0e-5],     # extra stiffness-proportional damping of the slit region (s); loss factor beta*omega
+        "slit_damping_s": [0.0, 2.0e-5],     # extra stiffness-proportional damping of the slit region (s);
+                                             # loss factor beta*omega
     },
     "measurement": {
         "modal_noise": "fixed",        # "fixed": the three stds below; "calibrated": per-mode coefficients times the
-                                       # sample's FRF noise level (configs/modal_noise.json, experiments.bench_modal_noise)
+                                       # sample's FRF noise level (configs/modal_noise.json,
+                                       # experiments.bench_modal_noise)
         "frequency_noise": 0.0005,     # relative std of natural frequencies (number, or one per mode 1..4)
         "damping_noise": 0.02,         # relative std of damping ratios
         "shape_noise": 0.002,          # complex std relative to the largest entry of each mode
@@ -199,7 +205,8 @@ def validate(cfg: dict) -> dict:
             meas[k] = _num(f"measurement.{k}", v, lo=0, hi=MAX_MODAL_NOISE)
     for k in ("frf_noise", "frf_noise_floor"):  # a number fixes the level; a range draws it per sample
         v = meas[k]
-        meas[k] = (_num(f"measurement.{k}", v, lo=0.0, hi=0.5) if isinstance(v, (int, float)) and not isinstance(v, bool)
+        is_number = isinstance(v, (int, float)) and not isinstance(v, bool)
+        meas[k] = (_num(f"measurement.{k}", v, lo=0.0, hi=0.5) if is_number
                    else _range(f"measurement.{k}", v, lo=0.0, hi=0.5))
     meas["modal_noise_scale"] = _range("measurement.modal_noise_scale", meas["modal_noise_scale"], lo=0.01, hi=100.0)
     meas["band_rad_s"] = _range("measurement.band_rad_s", meas["band_rad_s"], lo=0.0)

@@ -40,6 +40,9 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["clamped_flexibility", "curvature_basis", "draw_slits", "element4_index", "expand_tip_stiffness",
+           "overlap_energy", "slit_corrections", "slit_element_weights", "stiffness_from_flexibility"]
+
 
 def curvature_basis(element_length, shear_phi=0.0):
     """``b0, b1`` with curvature ``B(xi) = b0 + xi b1`` over the element DOFs (1/m^2 and 1/m).

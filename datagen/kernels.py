@@ -13,6 +13,9 @@ from numba import njit
 
 from physics.kernels import pair_denominators, pair_row
 
+__all__ = ["add_noise_row", "band_cholesky", "band_cholesky_solve", "box_muller", "hashed_normal", "noise_kernel",
+           "noisy_pole_residue_kernel", "row_peak", "splitmix64"]
+
 
 #: SplitMix64 constants (Steele, Lea, Flood 2014): a counter-based stream, ``z_k = mix(seed + k * GAMMA)``.
 _GAMMA = np.uint64(0x9E3779B97F4A7C15)

@@ -18,6 +18,8 @@ from physics.frf import poles_and_residues, receptance, receptance_modal, recept
 from physics.modal import underdamped_modes, undamped_modes
 from physics.updating import analyst_mass
 
+__all__ = ["simulate_naive"]
+
 
 def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
     """Per-sample pipeline: the outputs of :func:`datagen.pipeline.simulate_chunk` plus eager FRFs.

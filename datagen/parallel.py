@@ -29,6 +29,9 @@ from datagen.store import ARRAYS, COLUMN_UNITS, DERIVED, FORMAT, STATES, finaliz
 from physics.errors import BeamDamageError, ConfigError
 from physics.io import atomic_write_bytes
 
+__all__ = ["BYTES_PER_SAMPLE", "check_arguments", "compute_shard", "generate", "open_or_create", "shard_plan",
+           "write_omega"]
+
 
 def shard_plan(n: int, shard_size: int) -> list[tuple[int, int, int]]:
     """``(index, first_sample_id, n_samples)`` of every shard."""
@@ -184,7 +187,8 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
                                                      "columns": COLUMN_UNITS,
                                                      "measured_dofs": ["2:y", "3:y", "4:y", "5:y"],
                                                      "frf_reference_dof": "2:y", "frf_kind": "receptance"},
-         "section_layout": vars(setup.layout), "preset": {**vars(setup.preset), "mass_per_length_kg_m": setup.preset.mass_per_length_kg_m}}
+         "section_layout": vars(setup.layout),
+         "preset": {**vars(setup.preset), "mass_per_length_kg_m": setup.preset.mass_per_length_kg_m}}
     write_manifest(root, m)
     return m
 

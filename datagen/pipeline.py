@@ -56,6 +56,10 @@ from physics.frf import poles_and_residues
 from physics.modal import eigenvalues_from_modal, modal_parameters, undamped_modes
 from physics.updating import analyst_mass, pilkey
 
+__all__ = ["BatchInputs", "CHUNK", "LABEL_FIELDS", "N_MEAS", "Setup", "build_setup", "draw_batch", "get_setup",
+           "measure_modes", "projected_modes", "simulate_batch", "simulate_chunk", "simulate_shard",
+           "slit_frequency_drop", "truth_matrices", "unit_mass", "update_models"]
+
 N_MEAS = 4          # measured translational DOFs (thesis nodes 2..5); FRFs are driven at the first
 
 
@@ -273,8 +277,8 @@ def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
                     1.0 - slit_section_ei(setup.layout, np.nan_to_num(sl["depth_m"])) / ei0, np.nan)
     if not np.all(np.isfinite(sp["root_spring_Nm_rad"])) and setup.spring:
         raise ConfigError("config key 'specimen.root_spring_relative' gave an infinite spring")
-    return BatchInputs(sp["EI_Nm2"], sp["mass_per_length_kg_m"], sp["damping_scale"], sp["root_spring_Nm_rad"], sl["n_slits"],
-                       sl["x_m"], sl["width_m"], sl["depth_m"], sl["beta_s"], loss,
+    return BatchInputs(sp["EI_Nm2"], sp["mass_per_length_kg_m"], sp["damping_scale"], sp["root_spring_Nm_rad"],
+                       sl["n_slits"], sl["x_m"], sl["width_m"], sl["depth_m"], sl["beta_s"], loss,
                        _uniform(u[:, 0], spc["temperature_stiffness_change"]),
                        _uniform(u[:, 1], spc["root_spring_change"]), nf, nz, ns,
                        _uniform(u[:, 2], meas["frf_noise"], log=True),
@@ -442,8 +446,8 @@ def update_models(setup, Ma, lam_m, psi_m, batched=True):
 CHUNK = 128
 
 #: Drawn inputs recorded per sample (the columns of the samples table and the noise of the FRFs on read).
-LABEL_FIELDS = ("EI_Nm2", "mass_per_length_kg_m", "damping_scale", "root_spring_Nm_rad", "n_slits", "x_m", "width_m", "depth_m",
-                "beta_s", "ei_loss", "temperature_stiffness_change", "root_spring_change", "noise_level",
+LABEL_FIELDS = ("EI_Nm2", "mass_per_length_kg_m", "damping_scale", "root_spring_Nm_rad", "n_slits", "x_m", "width_m",
+                "depth_m", "beta_s", "ei_loss", "temperature_stiffness_change", "root_spring_change", "noise_level",
                 "noise_floor", "noise_seed", "modal_noise_scale")
 
 

@@ -16,6 +16,8 @@ from physics.errors import FileFormatError
 from physics.io import atomic_write_text
 from physics.properties import cantilever_curvature_squared
 
+__all__ = ["curvature_check", "inspect_dataset"]
+
 
 def curvature_check(table, length_m):
     """Regress the truth frequency shift of single-slit samples on the curvature-squared prediction.
@@ -48,7 +50,8 @@ def curvature_check(table, length_m):
 
 
 def inspect_dataset(dataset_dir, out_dir=None) -> dict:
-    """Summary, ``labels.png``, ``shift_vs_position.png``, ``curvature_check.csv``, ``frf_overlay.png``, ``summary.json``.
+    """Summary, ``labels.png``, ``shift_vs_position.png``, ``curvature_check.csv``, ``frf_overlay.png``,
+    ``summary.json``.
 
     Parameters
     ----------

@@ -16,6 +16,8 @@ import numpy as np
 from datagen.kernels import band_cholesky, band_cholesky_solve
 from physics.modal import undamped_modes
 
+__all__ = ["BANDWIDTH", "light_damping_modes", "ritz_modes"]
+
 BANDWIDTH = 3       # half-bandwidth of beam matrices with DOFs ordered node by node
 
 def _t(a):

@@ -28,6 +28,8 @@ from physics.errors import BeamDamageError, ConfigError
 from physics.properties import BeamPreset, layered_ei, section_ei
 from physics.properties import beam_preset as _beam_preset
 
+__all__ = ["SectionLayout", "beam_preset", "depth_for_ei_loss", "draw_specimens", "slit_section_ei"]
+
 
 def beam_preset(name: str = "beam5") -> BeamPreset:
     """The preset of config key ``preset`` (``physics.properties.PRESETS``), as a config error if unknown."""

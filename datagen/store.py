@@ -47,6 +47,10 @@ from physics.errors import FileFormatError
 from physics.io import atomic_write_text, read_json
 from physics.modal import modal_parameters
 
+__all__ = ["ARRAYS", "ARRAYS_V1", "COLUMN_UNITS", "DERIVED", "Dataset", "FORMAT", "FORMAT_V1", "OPTIONAL", "ROW_GROUP",
+           "STATES", "damaged_file", "finalize", "load_torch", "package_version", "read_manifest", "recover",
+           "sample_table", "shard_arrays", "shard_name", "verify_shard", "write_manifest", "write_shard"]
+
 FORMAT = "beam-damage-dataset/2"
 FORMAT_V1 = "beam-damage-dataset/1"
 

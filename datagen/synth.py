@@ -28,6 +28,9 @@ import numpy as np
 from datagen.kernels import noise_kernel, noisy_pole_residue_kernel
 from physics.frf import pole_residue, receptance_state_space
 
+__all__ = ["FRF_KINDS", "SOURCES", "add_noise", "line_index", "log_magnitude_map", "measured_frf", "measured_peak",
+           "state_seeds", "synthesise", "updated_frf"]
+
 FRF_KINDS = ("measured", "updated")
 
 #: Stored arrays each FRF kind is synthesised from.
@@ -77,7 +80,8 @@ def _measured_inputs(a: dict):
     """Poles (2n, m) and drive-point-scaled residues (2n, S, m) of the measured FRFs, states flattened."""
     lam, psi = np.asarray(a["truth_poles"]), np.asarray(a["truth_shapes"])
     n, _, S, m = psi.shape
-    return np.ascontiguousarray(lam.reshape(2 * n, m)), np.ascontiguousarray((psi * psi[..., :1, :]).reshape(2 * n, S, m))
+    return (np.ascontiguousarray(lam.reshape(2 * n, m)),
+            np.ascontiguousarray((psi * psi[..., :1, :]).reshape(2 * n, S, m)))
 
 
 def measured_peak(a: dict, omega_rad_s) -> np.ndarray:

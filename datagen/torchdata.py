@@ -20,6 +20,8 @@ from datagen.store import Dataset
 from datagen.synth import FRF_KINDS, log_magnitude_map
 from physics.errors import BeamDamageError
 
+__all__ = ["FEATURES", "FRFDataset", "frf_features", "make_loader"]
+
 FEATURES = ("complex", "log_magnitude")
 
 

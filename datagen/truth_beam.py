@@ -47,6 +47,9 @@ from physics.errors import ConfigError
 from physics.fem import element_mass, element_stiffness
 from physics.properties import BeamPreset
 
+__all__ = ["as_preset", "beam_mapping", "load_truth_beam", "point_effects", "unit_elements"]
+
+
 def load_truth_beam(mapping: dict):
     """Validated :class:`physics.beam.Beam` of config key ``beam`` (the beam-file mapping)."""
     try:

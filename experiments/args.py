@@ -9,6 +9,8 @@ from physics import properties
 from physics.beam import Beam, load_beam
 from physics.errors import BeamDamageError
 
+__all__ = ["add_beam_argument", "beam_argument", "check_out_dir"]
+
 
 def beam_argument(spec: str) -> Beam:
     """argparse ``type`` of ``--beam PRESET|FILE``: a bad name or file is a one-line usage error (exit 2)."""

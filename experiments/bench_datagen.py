@@ -40,6 +40,8 @@ from pathlib import Path
 
 import numpy as np
 
+__all__ = ["main"]
+
 
 def _cpu_s() -> float:
     """CPU seconds (user + system) of this process and its terminated children so far."""

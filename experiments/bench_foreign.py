@@ -41,6 +41,8 @@ from pathlib import Path
 
 import numpy as np
 
+__all__ = ["main"]
+
 SETS = ("easy", "eb", "timoshenko")
 
 
@@ -96,7 +98,8 @@ def classify_set(model: Path, pair_dir: Path, truth: list, source_tree: str | No
     for t in truth:
         k = int(t["pair"])
         verdicts.append(_cli(["classify", "--model", str(model), "--baseline",
-                              str(pair_dir / f"pair-{k:03d}_baseline.uff"), str(pair_dir / f"pair-{k:03d}_current.uff")],
+                              str(pair_dir / f"pair-{k:03d}_baseline.uff"),
+                              str(pair_dir / f"pair-{k:03d}_current.uff")],
                              source_tree))
     return verdicts
 
@@ -186,7 +189,8 @@ def _figure(verdicts_by_set: dict, path: Path) -> None:
         for dmg, marker in ((False, "o"), (True, "x")):
             p = [v["training_percentile"] for v, t in zip(verdicts, truth) if bool(t["damaged"]) == dmg]
             ax.scatter(np.full(len(p), k) + (0.15 if dmg else -0.15), p, marker=marker,
-                       color="tab:red" if dmg else "tab:blue", label=("damaged" if dmg else "intact") if k == 0 else None)
+                       color="tab:red" if dmg else "tab:blue",
+                       label=("damaged" if dmg else "intact") if k == 0 else None)
     ax.axhline(99.9, color="grey", ls="--", label="in-distribution limit (99.9th percentile)")
     ax.set_xticks(range(len(verdicts_by_set)), list(verdicts_by_set))
     ax.set_ylabel("training percentile of the\nMahalanobis distance (%)")

@@ -26,6 +26,8 @@ from physics.io import MeasuredFRF, atomic_write_text
 from physics.modal import mac
 from physics.thesis import BEAM5_TIP, simulated_beam5_test
 
+__all__ = ["free_free_table", "main", "simulate_free_free", "table"]
+
 DRIVE = BEAM5_TIP  # tip DOF 5:+Y
 
 
@@ -267,8 +269,8 @@ def table(seeds=1, noise=0.01, damping="heavy"):
 
 
 def format_table(out) -> str:
-    lines = [f"beam5, non-proportional damping ({out['damping']}), {100 * out['noise']:g}% complex noise, 0.5 Hz lines, "
-             f"{out['seeds']} seed(s); errors are RMS over seeds",
+    lines = [f"beam5, non-proportional damping ({out['damping']}), {100 * out['noise']:g}% complex noise, "
+             f"0.5 Hz lines, {out['seeds']} seed(s); errors are RMS over seeds",
              "exact f (Hz):  " + "  ".join(f"{x:10.4f}" for x in out["exact_frequency_hz"]),
              "exact zeta:    " + "  ".join(f"{x:10.5f}" for x in out["exact_damping_ratio"]), "",
              f"{'method':<16}{'mode':>5}{'df (%)':>11}{'dzeta (%)':>11}{'MAC':>10}{'f (Hz) s0':>12}{'zeta s0':>10}"]

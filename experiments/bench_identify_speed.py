@@ -35,6 +35,9 @@ import numpy as np
 
 from physics.io import MeasuredFRF, atomic_write_text
 
+__all__ = ["EI_SCALE", "RAYLEIGH", "main", "write_test_file"]
+
+
 #: Multiplier of the beam-5 preset's EI (first mode near 21 Hz).
 EI_SCALE = 1.11
 #: Rayleigh damping ``C = a M + b K`` (1/s, s): ratios 0.78, 0.22, 0.34, 0.59 % for modes 1-4.
@@ -157,7 +160,8 @@ def bench(repeat=5, noise=0.015, seed=0, batch=8):
 def format_bench(out) -> str:
     fmt = lambda xs: "  ".join(f"{x:9.3f}" for x in xs)  # noqa: E731
     lines = [out["file"], f"median of {out['repeat']} runs",
-             f"beam-damage identify_frf lscf   {out['ours']['seconds']:8.3f} s   f (Hz) {fmt(out['ours']['frequency_hz'])}",
+             f"beam-damage identify_frf lscf   {out['ours']['seconds']:8.3f} s   "
+             f"f (Hz) {fmt(out['ours']['frequency_hz'])}",
              f"beam-damage identify_frfs       {out['ours_batched']['seconds_per_file']:8.3f} s per file "
              f"({out['ours_batched']['files']} files)"]
     if out.get("sdypy") is None:

@@ -29,6 +29,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+__all__ = ["main"]
+
+
 #: Shear rigidity of the Timoshenko truth of beam 5 (N): the discrepancy study's shear-deformable beam.
 KGA_N = 27100.0
 TIMOSHENKO_FILE = "beam5-timoshenko.toml"
@@ -149,7 +152,8 @@ def main(argv=None):
 
     print(f"\n== Held-out test: {len(te_pairs)} specimens ({int(truth['damaged'].sum())} damaged, "
           f"{int((~truth['damaged']).sum())} intact), --config training, seed 2 ==")
-    print("AUC: detectable slits (largest frequency drop > 0.2 %) vs intact; element/location/size over detectable slits")
+    print("AUC: detectable slits (largest frequency drop > 0.2 %) vs intact; "
+          "element/location/size over detectable slits")
     print_table(rows, "all test pairs")
     r0 = next(r for r in rows if r["method"] == outputs[0].name and r["subset"] == "all")
     print("\ntargets (network, default route):")
@@ -214,7 +218,8 @@ def beam5(model, out_dir) -> dict:
 
     data = thesis.load("beams")["beams"]["5"]
     dofs = ["2:y", "3:y", "4:y", "5:y"]
-    md = {s: modal_data_from_dict({**data[s], "dofs": dofs}, f"beams.json beam 5 {s}") for s in ("undamaged", "damaged")}
+    md = {s: modal_data_from_dict({**data[s], "dofs": dofs}, f"beams.json beam 5 {s}")
+          for s in ("undamaged", "damaged")}
     res = classify(model, md["undamaged"], md["damaged"])
     res.pop("_extra")
     f0, f1 = md["undamaged"].natural_frequencies_hz, md["damaged"].natural_frequencies_hz

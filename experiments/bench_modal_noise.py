@@ -46,6 +46,8 @@ from pathlib import Path
 
 import numpy as np
 
+__all__ = ["main"]
+
 QUANTITIES = ("frequency", "damping", "shape")
 
 

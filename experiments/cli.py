@@ -26,6 +26,9 @@ import numpy as np
 from physics.errors import BeamDamageError
 from physics.io import format_complex
 
+__all__ = ["build_parser", "main", "to_jsonable"]
+
+
 #: Modules registering one sub-command each, in the order ``--help`` lists them.
 COMMAND_MODULES = [
     "experiments.validate",

@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+__all__ = ["KEYS", "add_parser", "run"]
+
 KEYS = ("measured", "damaged", "probability_damaged", "location_x_over_L", "location_x_m", "location_std_m",
         "location_element", "element_probabilities", "stiffness_loss_Nm3", "stiffness_loss_std_Nm3", "depth_m",
         "detectable", "verdict_from", "in_distribution", "out_of_distribution_reasons", "mahalanobis_distance",
@@ -28,7 +30,8 @@ def add_parser(sub):
     p.add_argument("--beam", help="beam of the data: the model's preset name (default) or a beam file of the same "
                                   "length whose measured_x_m places measured DOFs of files without node geometry "
                                   "(else nodes 2..5 at the quarter points); another beam is refused")
-    p.add_argument("--mass", choices=("iirs", "lumped"), help="mass model of the data's updating (default: the model's)")
+    p.add_argument("--mass", choices=("iirs", "lumped"),
+                   help="mass model of the data's updating (default: the model's)")
     p.add_argument("--out", metavar="DIR", help="write the verdict(s) and figure here (default without --json: "
                                                 "out/classify)")
     p.add_argument("--json", action="store_true", help="print the verdict (a list for several MEASURED) as JSON")
@@ -97,7 +100,8 @@ def _network_sentence(a: dict) -> str:
     depth = "" if a["depth_m"] is None else f", i.e. a slit about {a['depth_m'] * 1000:.2f} mm deep over 5.5 mm"
     return (f"damaged (probability {a['probability_damaged']:.1%}): slit at x = {a['location_x_m']:.3f} m +- "
             f"{a['location_std_m']:.3f} m (x/L = {a['location_x_over_L']:.2f}, element {a['location_element']} of "
-            f"4), stiffness loss dEI*w = {a['stiffness_loss_Nm3']:.3g} +- {a['stiffness_loss_std_Nm3']:.2g} N m^3{depth}")
+            f"4), stiffness loss dEI*w = {a['stiffness_loss_Nm3']:.3g} +- {a['stiffness_loss_std_Nm3']:.2g} N m^3"
+            f"{depth}")
 
 
 def _classical_sentence(c: dict) -> str:
@@ -169,7 +173,8 @@ def _figure(res, extra, base, cur, length_m) -> bytes:
     for name, d in (("baseline", base), ("measured", cur)):
         if isinstance(d, MeasuredFRF):
             h = d.to_kind("receptance") if d.frequency_hz[0] > 0 else d
-            a1.semilogy(h.frequency_hz, np.abs(h.frf[-1, 0]), label=f"{name} {h.response_dofs[-1]}/{h.reference_dofs[0]}")
+            a1.semilogy(h.frequency_hz, np.abs(h.frf[-1, 0]),
+                        label=f"{name} {h.response_dofs[-1]}/{h.reference_dofs[0]}")
         else:
             w = np.linspace(1.0, 1.15 * np.abs(d.eigenvalues).max(), 4000)
             psi = d.eigenvectors

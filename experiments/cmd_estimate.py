@@ -9,6 +9,8 @@ from physics.io import write_uff58
 from physics.io.timedata import read_uff_time_records
 from physics.time_records import ESTIMATORS, EXCITATIONS, estimate_from_records
 
+__all__ = ["add_parser", "run"]
+
 
 def run(args) -> dict:
     if args.averages < 1:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+__all__ = ["add_parser", "run"]
+
 
 def add_parser(sub):
     p = sub.add_parser("evaluate", help="score a trained classifier and the baselines on datasets",

@@ -13,6 +13,9 @@ from pathlib import Path
 from experiments.report import write_report
 from physics.errors import BeamDamageError
 
+__all__ = ["add_parser", "run"]
+
+
 #: Study name -> (module, title).
 STUDIES = {
     "thesis": ("experiments.study_thesis", "Thesis reproduction: beam 5, Chapters Four to Six"),

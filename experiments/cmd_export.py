@@ -11,6 +11,8 @@ from datagen.synth import FRF_KINDS
 from physics.errors import BeamDamageError
 from physics.io import MeasuredFRF, write_frf_csv, write_frf_npz, write_uff58
 
+__all__ = ["add_parser", "run"]
+
 WRITERS = {"uff": (write_uff58, "uff"), "npz": (write_frf_npz, "npz"), "csv": (write_frf_csv, "csv")}
 
 

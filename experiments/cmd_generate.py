@@ -10,6 +10,8 @@ from datagen.truth_beam import beam_mapping
 from physics.errors import BeamDamageError
 from physics.properties import PRESETS
 
+__all__ = ["add_parser", "run"]
+
 
 def add_parser(subparsers):
     p = subparsers.add_parser(

@@ -12,6 +12,8 @@ from physics.identification import METHODS, Identification, identify_file, recon
 from physics.io import MeasuredFRF, NodeGeometry, format_complex, measured_positions
 from physics.modal import mac
 
+__all__ = ["add_parser", "run"]
+
 
 #: Highest LSCF model order accepted.
 MAX_ORDER = 200

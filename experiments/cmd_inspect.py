@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from datagen.report import inspect_dataset
 
+__all__ = ["add_parser", "run"]
+
 
 def add_parser(subparsers):
     p = subparsers.add_parser(

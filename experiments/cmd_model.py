@@ -9,6 +9,9 @@ from physics import fem, modal, properties, reduction
 from physics.beam import Beam, load_beam
 from physics.errors import BeamDamageError
 
+__all__ = ["add_parser", "run"]
+
+
 #: Old name of :data:`physics.reduction.REDUCTIONS`.
 REDUCTIONS = reduction.REDUCTIONS
 
@@ -83,5 +86,6 @@ def add_parser(sub):
     p.add_argument("--bc", default=None, choices=fem.BOUNDARY_CONDITIONS,
                    help="boundary condition (default: the beam's, clamped-free for the presets)")
     p.add_argument("--json", action="store_true",
-                   help="print one JSON object: M, K, dofs, natural_frequencies_hz, closed_form_frequencies_hz, iterations")
+                   help="print one JSON object: M, K, dofs, natural_frequencies_hz, closed_form_frequencies_hz, "
+                        "iterations")
     p.set_defaults(func=run, flags={"n_elements": "--elements", "mass": "--mass", "method": "--reduction"})

@@ -2,15 +2,19 @@
 
 from __future__ import annotations
 
+__all__ = ["add_parser", "run"]
+
 
 def add_parser(sub):
     p = sub.add_parser("train", help="train the damage classifier (detect, localise, size slits) on datasets",
                        description="Train the network on pairs (baseline, current) of one or more datasets written by "
                                    "'beam-damage generate --config training --n N --out DIR' (intact and damaged "
-                                   "specimens, temperature and re-clamping between the test days), split by specimen (85%% train incl. validation, 15%% test), "
+                                   "specimens, temperature and re-clamping between the test days), split by specimen "
+                                   "(85%% train incl. validation, 15%% test), "
                                    "calibrate it by temperature scaling, score it and the classical baselines on the "
                                    "test split and write a model directory (config.json, weights-*.pt, metrics.csv).")
-    p.add_argument("--data", required=True, nargs="+", metavar="DIR", help="dataset directories of one beam (beam-damage generate --config training)")
+    p.add_argument("--data", required=True, nargs="+", metavar="DIR",
+                   help="dataset directories of one beam (beam-damage generate --config training)")
     p.add_argument("--out", required=True, metavar="MODEL_DIR", help="model directory to write")
     p.add_argument("--epochs", type=int, default=60, help="training epochs (default 60)")
     p.add_argument("--seed", type=int, default=0, help="random seed of split, augmentation and network (default 0)")

@@ -10,6 +10,8 @@ from physics.beam import Beam, load_beam
 from physics.errors import BeamDamageError, ConfigError, ConvergenceError, FileFormatError
 from physics.io import dof_positions_text, read_modal_json
 
+__all__ = ["add_parser", "run"]
+
 
 def load_modal(modal_file, n_modes: int):
     """Modal JSON as is; an FRF file (UFF58, CSV, NPZ) is identified first (LSCF + LSFD, ``n_modes`` modes).

@@ -30,6 +30,9 @@ from physics import modal, properties, thesis, updating
 from physics.errors import BeamDamageError
 from physics.io import atomic_write_text, modal_data_from_dict, write_modal_json
 
+__all__ = ["add_parser", "run"]
+
+
 #: (training pairs, test pairs, epochs) of the full and the quick demo.
 SIZES = {"full": (20000, 5000, 40), "quick": (3000, 1000, 10)}
 

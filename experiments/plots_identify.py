@@ -22,6 +22,8 @@ from physics.identification import STABILITY_CODES, Identification, mode_indicat
 from physics.io import MeasuredFRF, atomic_write_bytes, modal_data_to_dict, write_frf_csv, write_uff58  # noqa: E402
 from physics.io.types import UNNAMED_REFERENCE  # noqa: E402
 
+__all__ = ["overlay_png", "stabilisation_png", "synthesised_frf", "write_outputs"]
+
 _MARKERS = {0: ("o", "0.7", "new"), 1: ("x", "tab:orange", "f"), 2: ("^", "tab:blue", "f+d"),
             3: ("v", "tab:purple", "f+v"), 4: ("s", "tab:green", "stable")}
 

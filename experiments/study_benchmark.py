@@ -17,6 +17,8 @@ from pathlib import Path
 
 from experiments.report import Section, Table
 
+__all__ = ["run"]
+
 
 def run(out_dir, n_datagen: int = 10000, n_train: int = 6000, epochs: int = 30) -> tuple[dict, list]:
     from experiments import bench_datagen, bench_identification
@@ -45,7 +47,8 @@ def run(out_dir, n_datagen: int = 10000, n_train: int = 6000, epochs: int = 30) 
             id_rows.append({"method": name, "mode": j, "frequency error (%)": fe, "damping error (%)": ze,
                             "MAC": mac})
     tr_rows = [{"training pairs": tr.get("train_pairs"), "epochs": epochs, "route": tr.get("route"),
-                "train command (s)": train_s, **{f"fit {k} (s)": v for k, v in (tr.get("train_seconds") or {}).items()}}]
+                "train command (s)": train_s,
+                **{f"fit {k} (s)": v for k, v in (tr.get("train_seconds") or {}).items()}}]
     summary = {"load_average_at_start": load, "datagen": dg, "identification": ident, "train_seconds": train_s,
                "train": tr}
     sec = Section("Benchmarks, measured in one run",

@@ -16,6 +16,8 @@ import numpy as np
 
 from experiments.report import Figure, Section, Table
 
+__all__ = ["run"]
+
 METRICS = (("roc_auc", "detection ROC AUC"), ("element_accuracy", "element accuracy"),
            ("median_location_error_mm", "median location error (mm)"), ("median_size_error", "median size error"))
 
@@ -78,6 +80,7 @@ def run(out_dir, model_dir="out/demo/model", n_test: int = 4000, n_train: int = 
     summary = {"model": str(model_dir), "test_pairs": res["pairs"], "rows": rows}
     sec = Section("Damage study: localisation and sizing against noise, size and position",
                   (f"{res['pairs']} held-out test pairs (training config, seed 7) for the model in `{model_dir}`. "
-                   "Sizes are terciles of the slit stiffness loss; intact pairs count in every subset's false alarms.",),
+                   "Sizes are terciles of the slit stiffness loss; "
+                   "intact pairs count in every subset's false alarms.",),
                   (Table.from_records("Every method on every subset", table),), tuple(figs))
     return summary, [sec]

@@ -25,6 +25,9 @@ from experiments.validate import thesis_fixture
 from physics import fem, frf, modal, properties, reduction, updating
 from physics.io import atomic_write_text, modal_data_from_dict
 
+__all__ = ["run"]
+
+
 #: Drive DOF 1 (node 2), response DOF 4 (node 5, the tip): the FRF the demo and Program A/B use.
 RESPONSE, REFERENCE = 3, 0
 OMEGA_RAD_S = np.linspace(1.0, 5000.0, 25000)  # the thesis's Program A grid

@@ -16,6 +16,8 @@ import numpy as np
 from physics import fem, frf, identification, modal, properties, reduction, thesis, updating
 from physics.io import modal_data_from_dict
 
+__all__ = ["Check", "add_parser", "format_table", "run", "run_checks", "summary", "thesis_fixture"]
+
 
 @dataclass(frozen=True)
 class Check:
@@ -146,7 +148,8 @@ def example2_checks():
         pilkey_note = f"Pilkey from the printed eigenvectors does not converge ({exc})"
     ok = macs > 0.999
     names = lambda mask: ", ".join(str(j + 1) for j in np.flatnonzero(mask)) or "none"  # noqa: E731
-    out.append(_check(f"Example 2: printed eigenvectors of modes {names(ok)} match the model; modes {names(~ok)} do not",
+    out.append(_check(f"Example 2: printed eigenvectors of modes {names(ok)} match the model; "
+                      f"modes {names(~ok)} do not",
                       "example2", [1.0] * int(ok.sum()), macs[ok], float(1 - np.min(macs[ok])) if ok.any() else 1.0,
                       1e-3, "MAC of each printed eigenvector with the model's: "
                       + np.array2string(macs, precision=4, separator=", ") + ". Inconsistent: "
@@ -162,7 +165,8 @@ def beam5_checks():
     red = reduction.iirs(model.M, model.K, model.index(preset.masters))
     out = [
         _check("Beam 5: IIRS-reduced M (Table 4.1 data, eqs. 3.41-3.44)", "beam5", b5["iirs_reduced"]["M"], red.M,
-               frob_rel(red.M, np.array(b5["iirs_reduced"]["M"])), 1e-3, f"IIRS converged in {red.iterations} iterations"),
+               frob_rel(red.M, np.array(b5["iirs_reduced"]["M"])), 1e-3,
+               f"IIRS converged in {red.iterations} iterations"),
         _check("Beam 5: IIRS-reduced K", "beam5", b5["iirs_reduced"]["K"], red.K,
                frob_rel(red.K, np.array(b5["iirs_reduced"]["K"])), 1e-3),
     ]
@@ -183,12 +187,14 @@ def beam5_checks():
             tag = f"Beam 5 {state}, {mass.replace('_', ' ')} model"
             for key, mat in (("C", res.C), ("K", res.K)):
                 printed = np.array(ident[state][mass][key])
-                note = f"Pilkey converged in {res.iterations} iterations from the printed M and Table 4.{5 if state == 'undamaged' else 6}"
+                table = 5 if state == "undamaged" else 6
+                note = f"Pilkey converged in {res.iterations} iterations from the printed M and Table 4.{table}"
                 if mass == "lumped_mass" and key == "K":
                     exact = updating.pilkey(m_lumped_exact, data.eigenvalues, data.eigenvectors, tol=1e-12)
                     note += (f"; with the unrounded eq. 4.6 M, K moves by {frob_rel(exact.K, res.K):.2%} "
                              f"(C by {frob_rel(exact.C, res.C):.2%})")
-                out.append(_check(f"{tag}: identified {key}", "beam5", printed, mat, frob_rel(mat, printed), 1e-2, note))
+                out.append(_check(f"{tag}: identified {key}", "beam5", printed, mat, frob_rel(mat, printed), 1e-2,
+                                  note))
             # Tables 6.1/6.2: natural frequencies of the identified model
             table = np.array(ident[state][mass]["model_frequencies_hz"])
             f_printed = modal.complex_modes(M, np.array(ident[state][mass]["C"]), np.array(ident[state][mass]["K"]))
@@ -210,9 +216,11 @@ def beam5_checks():
                               max_rel(z_full, z_printed), 0.05,
                               "thesis column = damping ratios of the printed (rounded) M, C, K; measured "
                               f"{np.array2string(np.array(b5[state]['damping_ratios']), precision=5, separator=', ')}; "
-                              f"identified C has eigenvalues {np.array2string(np.linalg.eigvalsh(res.C), precision=4, separator=', ')}"
-                              " (indefinite)" + (f"; mode(s) {', '.join(map(str, unstable))} have NEGATIVE damping: the "
-                                                 "identified model is unstable" if unstable.size else "")))
+                              "identified C has eigenvalues "
+                              f"{np.array2string(np.linalg.eigvalsh(res.C), precision=4, separator=', ')}"
+                              " (indefinite)"
+                              + (f"; mode(s) {', '.join(map(str, unstable))} have NEGATIVE damping: the "
+                                 "identified model is unstable" if unstable.size else "")))
     # The thesis's FRF programs A/B (state space) against direct inversion and modal superposition.
     M = np.array(ident["undamaged"]["reduced_mass"]["M"])
     C = np.array(ident["undamaged"]["reduced_mass"]["C"])

@@ -31,6 +31,9 @@ import numpy as np
 from learn.features import real_shapes
 from learn.sensitivity import Sensitivity
 
+__all__ = ["BoostedBaseline", "FREQUENCY_METHODS", "MethodOutput", "cawley_adams", "dlac", "false_alarm_threshold",
+           "frequency_shifts", "mdlac", "run_classical", "sensitivity_updating", "shape_changes"]
+
 
 @dataclass(frozen=True)
 class MethodOutput:

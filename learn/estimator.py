@@ -25,6 +25,8 @@ from learn.features import split_by_specimen
 from learn.models import DamageNet, loss_terms
 from physics.errors import BeamDamageError
 
+__all__ = ["DamageClassifier", "Prediction", "fit_calibration", "fit_size_std_scale", "lognormal_std", "torch_threads"]
+
 
 @dataclass(frozen=True)
 class Prediction:

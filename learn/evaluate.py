@@ -20,6 +20,9 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+__all__ = ["MIN_DROP", "Metrics", "NOISE_EDGES", "TIP_ZONE", "figures", "metrics", "reliability", "roc_auc",
+           "roc_curve", "subsets", "table_rows"]
+
 MIN_DROP = 0.002
 TIP_ZONE = 0.85
 #: Edges of the noise-level breakdown (FRF noise std relative to |H|; training range 0.1-3 %).
@@ -133,7 +136,8 @@ def subsets(truth: dict, table) -> dict:
     s = truth["stiffness_loss_Nm3"]
     if dam.sum() >= 3:
         q = np.quantile(s[dam], [1 / 3, 2 / 3])
-        for name, sel in (("size small", s <= q[0]), ("size medium", (s > q[0]) & (s <= q[1])), ("size large", s > q[1])):
+        for name, sel in (("size small", s <= q[0]), ("size medium", (s > q[0]) & (s <= q[1])),
+                          ("size large", s > q[1])):
             out[f"{name}"] = ~dam | sel
     x = truth["x_over_L"]
     for k in range(1, 5):

@@ -36,6 +36,10 @@ import pandas as pd
 
 from physics.errors import BeamDamageError, FileFormatError
 
+__all__ = ["BeamSpec", "DOFS", "GRID_RAD_S", "Pairs", "ROUTES", "beam_of_manifest", "curvatures", "features",
+           "frf_features", "grid_weights", "labels", "load_pairs", "manifest_checksum", "map_frf_to_grid",
+           "modal_features", "real_shapes", "split_by_specimen"]
+
 ROUTES = ("modal", "updated", "measured")
 
 #: Fixed FRF representation: log-spaced lines (rad/s) covering the four modes of the thesis beams.
@@ -167,7 +171,8 @@ def load_pairs(roots, frfs=("measured", "updated"), chunk: int = 1024, workers: 
         except FileFormatError:  # names the damaged file itself
             raise
         except (OSError, ValueError) as exc:
-            raise FileFormatError(f"{root}: not a dataset directory written by 'beam-damage generate' ({exc})") from None
+            raise FileFormatError(f"{root}: not a dataset directory written by 'beam-damage generate' ({exc})") \
+                from None
         if not ds.shards or not ds.manifest.get("complete"):
             raise FileFormatError(f"{root}: dataset is incomplete; re-run its 'beam-damage generate' command")
         ds.verify_or_raise()  # every shard's checksums, before any thread reads
@@ -194,7 +199,10 @@ def load_pairs(roots, frfs=("measured", "updated"), chunk: int = 1024, workers: 
                           groups=np.array([f"{cs[:12]}:{k}" for k in table["sample_id"].to_numpy()])))
         source.append({"path": str(root), "manifest_checksum": cs, "samples": int(len(table)),
                        "config": ds.manifest["config"], "truth_beam": ds.manifest["preset"]})
-    cat = (lambda k: np.concatenate([p[k] for p in parts]))
+
+    def cat(k):
+        return np.concatenate([p[k] for p in parts])
+
     return Pairs(cat("eigenvalues"), cat("eigenvectors"),
                  {k: np.concatenate([p["log_frf"][k] for p in parts]) for k in frfs},
                  pd.concat([p["table"] for p in parts], ignore_index=True), cat("groups"), beam, source)

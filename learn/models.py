@@ -13,6 +13,8 @@ from __future__ import annotations
 import torch
 from torch import nn
 
+__all__ = ["DamageNet", "loss_terms"]
+
 
 class DamageNet(nn.Module):
     """Shared trunk and three heads.

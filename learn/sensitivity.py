@@ -26,6 +26,8 @@ from physics.fem import beam_model, element_stiffness
 from physics.modal import undamped_modes
 from physics.properties import beam_preset
 
+__all__ = ["Sensitivity", "beam_sensitivity"]
+
 
 @dataclass(frozen=True)
 class Sensitivity:

@@ -35,6 +35,13 @@ from learn.sensitivity import beam_sensitivity
 from physics.errors import BeamDamageError, FileFormatError
 from physics.io import read_json
 
+__all__ = ["DAY_CHANGES", "DEFAULT_ROUTE", "FORMAT", "IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR",
+           "IN_DISTRIBUTION_PERCENTILE", "RATIO_TOLERANCE", "REFERENCE_WIDTH_M", "TrainedModel", "classify",
+           "classify_many", "day_changes", "detectability_threshold", "equivalent_depth", "evaluate", "frf_kinds",
+           "frf_rows", "identify_modes", "load_model", "modal_pair", "network_output", "nominal_ratio_range",
+           "on_model_dofs", "ood_percentile", "save_model", "sensitivity_of", "targets", "train"]
+
+
 #: Input route used by default (the winner of ``python -m experiments.bench_learn``).
 DEFAULT_ROUTE = "modal"
 #: Width assumed when a stiffness loss is turned into a slit depth (m): middle of the training widths.
@@ -324,12 +331,14 @@ def on_model_dofs(data, beam: BeamSpec, beam_x_m=None, where: str = "measured da
 
 
 def modal_pair(baseline, current, beam: BeamSpec) -> tuple[np.ndarray, np.ndarray, list]:
-    """Stack two :class:`physics.io.ModalData` of the model's DOFs into (1, 2, m) eigenvalues and (1, 2, 4, m) shapes."""
+    """Stack two :class:`physics.io.ModalData` of the model's DOFs into (1, 2, m) eigenvalues and (1, 2, 4, m)
+    shapes."""
     warnings = []
     lams, vecs = [], []
     for name, d in (("baseline", baseline), ("measured", current)):
         if d.eigenvectors is None:
-            raise FileFormatError(f"{name} modal data: field 'eigenvectors' is required (rows = {', '.join(beam.dofs)})")
+            raise FileFormatError(f"{name} modal data: field 'eigenvectors' is required "
+                                  f"(rows = {', '.join(beam.dofs)})")
         dofs = tuple(_canonical_dof(x) for x in d.dofs) if d.dofs else None
         if dofs is None:
             if d.eigenvectors.shape[0] != len(beam.dofs):
@@ -610,7 +619,8 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
                        "location_std_m": None, "location_element": cl["location_element"],
                        "element_probabilities": None, "stiffness_loss_Nm3": cl["stiffness_loss_Nm3"],
                        "stiffness_loss_std_Nm3": None,
-                       "depth_m": equivalent_depth(cl["stiffness_loss_Nm3"], depth_of, model.config["reference_width_m"]),
+                       "depth_m": equivalent_depth(cl["stiffness_loss_Nm3"], depth_of,
+                                                   model.config["reference_width_m"]),
                        "detectable": bool(sens.largest_drop(np.array([cl["location_x_over_L"]]),
                                                             np.array([cl["stiffness_loss_Nm3"]]))[0]
                                           >= detectability_threshold())}

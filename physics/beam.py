@@ -53,6 +53,10 @@ from physics.fem import BOUNDARY_CONDITIONS, FEModel
 from physics.io import atomic_write_text
 from physics.properties import PRESETS, layered_ei
 
+__all__ = ["Beam", "MAX_MODEL_SPREAD", "PRESET_CORE_MODULUS_PA", "PRESET_FACE_THICKNESS_M", "beam_from_dict",
+           "beam_to_toml", "load_beam", "preset_beam", "write_beam"]
+
+
 #: Face-sheet thickness and core modulus of the presets (the datagen section layout).
 PRESET_FACE_THICKNESS_M = 0.0005
 PRESET_CORE_MODULUS_PA = 1.0e8
@@ -125,8 +129,8 @@ class Beam:
             Multipliers of ``EI_Nm2`` and ``mass_per_length_kg_m`` (global recalibration).
         """
         return fx.assemble_beam(self.length_m, self.EI_Nm2 * EI_scale, self.mass_per_length_kg_m * mass_scale,
-                                self.n_elements if n_elements is None else n_elements, bc=self.bc, thickness_m=self.thickness_m,
-                                effects=self.effects)
+                                self.n_elements if n_elements is None else n_elements, bc=self.bc,
+                                thickness_m=self.thickness_m, effects=self.effects)
 
     def with_effects(self, effects, **changes) -> "Beam":
         """Copy with the effect mapping replaced (and other fields changed)."""

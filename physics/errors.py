@@ -8,6 +8,8 @@ command-line flags. An error about one parameter also carries its name in
 ``parameter``, which the command line maps to its flag (``--elements``).
 """
 
+__all__ = ["BeamDamageError", "ConfigError", "ConvergenceError", "FileFormatError", "OverdampedError", "ShapeError"]
+
 
 class BeamDamageError(ValueError):
     """Base class: bad input or a computation that cannot give a trustworthy answer.

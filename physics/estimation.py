@@ -20,6 +20,8 @@ import numpy as np
 
 from physics.errors import ShapeError
 
+__all__ = ["FRFEstimate", "estimate_frf"]
+
 
 @dataclass(frozen=True)
 class FRFEstimate:

@@ -25,6 +25,10 @@ import numpy as np
 
 from physics.errors import BeamDamageError, ShapeError
 
+__all__ = ["BOUNDARY_CONDITIONS", "FEModel", "KeptDofs", "MAX_ELEMENTS", "assemble", "beam_model", "check_n_elements",
+           "constrained_dofs", "dof_names", "element_mass", "element_stiffness", "kept_dofs", "lumped_mass"]
+
+
 #: Most elements of a dense model (three (2n+2)^2 float64 matrices: 2000 elements need 0.38 GB).
 MAX_ELEMENTS = 2000
 

@@ -29,6 +29,10 @@ import numpy as np
 from physics.errors import BeamDamageError, ShapeError
 from physics.modal import _upper_half, state_matrix
 
+__all__ = ["FRF_KINDS", "FRF_UNITS", "PoleResidues", "check_frf_kind", "convert_frf", "magnitude_db", "phase_deg",
+           "pole_residue", "poles_and_residues", "receptance", "receptance_modal", "receptance_state_space"]
+
+
 #: Displacement, velocity and acceleration over force, in the order of the power of ``i w``.
 FRF_KINDS = ("receptance", "mobility", "accelerance")
 #: SI units of each kind.
@@ -320,7 +324,8 @@ def convert_frf(H, omega_rad_s, from_kind: str, to_kind: str):
     ShapeError
         Division by ``i w`` at a 0 rad/s line.
     """
-    power = FRF_KINDS.index(check_frf_kind(to_kind, "to_kind")) - FRF_KINDS.index(check_frf_kind(from_kind, "from_kind"))
+    power = (FRF_KINDS.index(check_frf_kind(to_kind, "to_kind"))
+             - FRF_KINDS.index(check_frf_kind(from_kind, "from_kind")))
     w = _omega(omega_rad_s)
     if power == 0:
         return np.asarray(H)

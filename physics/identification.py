@@ -18,6 +18,13 @@ from physics.io import MeasuredFRF, ModalData
 from physics.frf import FRF_KINDS, check_frf_kind, convert_frf, pole_residue
 from physics.modal import eigenvalues_from_modal
 
+__all__ = ["CircleFit", "ESTIMATION_PASSES", "Identification", "LSCFIdentification", "LSFDResult", "MAX_LSCF_VALUES",
+           "METHODS", "ModalEstimate", "STABILITY_CODES", "SelectedPoles", "StabilisationDiagram", "WEIGHTINGS",
+           "circle_fit", "circle_fit_sdof", "complex_modes_from_driving_point", "estimate_noise_model",
+           "find_peaks_indicator", "identify_file", "identify_frf", "identify_frfs", "identify_lscf", "lscf", "lsfd",
+           "modal_phase_collinearity", "mode_indicator", "peak_picking", "read_measured_frf", "real_modes_from_peaks",
+           "reconstruction_error_db", "select_poles", "shapes_from_residues"]
+
 
 def real_modes_from_peaks(h_abs, phase_deg, omega_rad_s, zeta, drive_index=0):
     """Real mode shapes from peak FRF magnitudes and phases (eq. 3.25, Inman).

@@ -21,6 +21,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+__all__ = ["pair_denominators", "pair_row", "pole_residue_kernel"]
+
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def pair_denominators(lam, omega_rad_s, gr, gi):  # pragma: no cover - compiled

@@ -27,6 +27,9 @@ import numpy as np
 
 from physics.errors import OverdampedError, ShapeError
 
+__all__ = ["ComplexModes", "EigenvalueParameters", "check_square", "complex_modes", "eigenvalues_from_modal", "mac",
+           "modal_parameters", "normalize_modes", "state_matrix", "undamped_modes", "underdamped_modes"]
+
 
 class EigenvalueParameters:
     """Natural frequencies (Hz) and damping ratios of an ``eigenvalues`` attribute (:func:`modal_parameters`)."""

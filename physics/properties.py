@@ -18,6 +18,11 @@ import numpy as np
 
 from physics.errors import BeamDamageError, ShapeError
 
+__all__ = ["BeamPreset", "CANTILEVER_BETA_L", "PRESETS", "StaticTest", "THESIS_BETA_L", "beam_preset",
+           "cantilever_beta_l", "cantilever_curvature_squared", "cantilever_frequencies_hz", "equivalent_ei",
+           "layered_ei", "section_ei"]
+
+
 #: ``beta_l`` of a clamped-free beam as printed in the thesis (Chapter Four).
 THESIS_BETA_L = (1.8751, 4.6941, 7.8547, 10.9955)
 

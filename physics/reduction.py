@@ -14,6 +14,8 @@ import numpy as np
 
 from physics.errors import BeamDamageError, ConvergenceError, ShapeError
 
+__all__ = ["REDUCTIONS", "Reduction", "guyan", "iirs", "irs", "reduce_model"]
+
 
 @dataclass(frozen=True)
 class Reduction:

@@ -20,6 +20,9 @@ import numpy as np
 
 from physics.errors import BeamDamageError
 
+__all__ = ["BEAM5_DOFS", "BEAM5_TIP", "FIXTURES", "beam5_reduced_model", "beam_state", "identified_model", "load",
+           "simulated_beam5_test"]
+
 _DATA = resources.files("physics").joinpath("data", "thesis")
 #: Fixture names: every ``physics/data/thesis/NAME.json`` (a fixture added there needs no code change).
 FIXTURES = tuple(sorted(p.name[:-5] for p in _DATA.iterdir() if p.name.endswith(".json")))

@@ -26,6 +26,12 @@ from physics.fem import beam_model, lumped_mass
 from physics.modal import check_square, normalize_modes
 from physics.reduction import iirs
 
+__all__ = ["MASS_MODELS", "MASS_MODEL_ALIASES", "MAX_EIGENVECTOR_CONDITION", "REFUSAL_TOL", "REPRODUCTION_TOL",
+           "UpdateResult", "analyst_mass", "check_modal_input", "eigenvalue_errors", "eigenvector_condition",
+           "lancaster_damping", "lancaster_direct", "lancaster_stiffness", "mass_model_name", "orthogonality_misfit",
+           "pilkey", "reduced_mass", "unit_columns"]
+
+
 #: Names of the analyst mass model (the mass matrix over the measured translations that updating trusts):
 #: ``"iirs"``, the consistent FE mass reduced by IIRS (eqs. 3.41-3.44); ``"lumped"``, eq. 4.6.
 MASS_MODELS = ("iirs", "lumped")

@@ -537,7 +537,8 @@ def _command_arg_cases():
         ("classify", "weights of another network (an empty dict)", lambda d: _cls(d, model=_model_copy(
             d, lambda m: _torch_save(m / "weights-modal.pt", {}))), "weights-modal.pt"),
         ("classify", "config.json network without params", lambda d: _cls(d, model=_model_copy(
-            d, lambda m: _edit_json(m / "config.json", lambda c: dict(c, networks={"modal": {}})))), "weights-modal.pt"),
+            d, lambda m: _edit_json(m / "config.json", lambda c: dict(c, networks={"modal": {}})))),
+         "weights-modal.pt"),
         ("classify", "missing baseline file", lambda d: ["classify", "--model", str(_tiny_model()), "--baseline",
                                                         str(d / "absent.uff"), str(_good_uff(d / "g.uff"))],
          "absent.uff"),
@@ -775,8 +776,8 @@ def _patch_set_line(path, dataset, line, old, new):
 def _context_cases():
     geo = lambda d, *a: [_patch_set_line(_geometry_uff(d / "g.uff"), *a)]  # noqa: E731
     return [
-        ("uff-header", "geometry file is read (then --max-iter 0)", lambda d: ["update", "--modal", str(_geometry_uff(d / "g.uff")),
-                                                         "--max-iter", "0"], "--max-iter"),
+        ("uff-header", "geometry file is read (then --max-iter 0)",
+         lambda d: ["update", "--modal", str(_geometry_uff(d / "g.uff")), "--max-iter", "0"], "--max-iter"),
         ("uff-header", "164 units code 'x'", lambda d: geo(d, 164, 1, b"         5", b"         x"), "units code"),
         ("uff-header", "164 length factor with O for 0", lambda d: geo(d, 164, 2, b"1.00000", b"1.O0000"),
          "length factor"),

@@ -7,6 +7,9 @@ import os
 import sys
 import time
 
+__all__ = ["main"]
+
+
 # the matrices are small (~230 DOFs): one BLAS thread is fastest, and several stall on a shared machine
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")

@@ -26,6 +26,9 @@ from experiments.second_sim.pairs import (DOF_LABELS, EI_NM2, FREQ_HZ, LENGTH_M,
 from experiments.second_sim.response import Damping, Noise, complex_modes, measure, rayleigh_for, receptance
 from experiments.second_sim.writers import modal_dict, write_json, write_uff
 
+__all__ = ["CASES", "EffectCase", "FRF_NOISE", "MODAL_NOISE", "effect_cases", "noisy_modal", "write_effect_cases"]
+
+
 #: (effect, label, value) of every case, in order.
 CASES = (
     [("none", "none", 0.0)]

@@ -20,6 +20,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg
 
+__all__ = ["Assembled", "Beam", "Dashpot", "Modes", "N_ELEMENTS", "PointMass", "Slit", "assemble", "element_mass",
+           "element_stiffness", "modes", "point_row", "shape_functions"]
+
+
 #: Elements of the default mesh (a multiple of 4, so the quarter points are nodes).
 N_ELEMENTS = 112
 

@@ -23,6 +23,11 @@ from experiments.second_sim.fem import Beam, Slit, assemble, modes
 from experiments.second_sim.response import Damping, Noise, measure, receptance
 from experiments.second_sim.writers import write_csv, write_json, write_uff
 
+__all__ = ["DOF_LABELS", "EI_NM2", "FREQ_HZ", "LENGTH_M", "MASS_PER_LENGTH_KG_M", "NODE_X_M", "PAIR_SETS", "PairRecord",
+           "PairSet", "REF_NODE", "RESP_NODES", "RHO_I_KG_M", "THICKNESS_M", "WIDTH_M", "frequencies_hz", "max_drop",
+           "nominal_kGA_N", "simulate_pair", "simulate_pairs", "write_pairs"]
+
+
 #: Beam 5 of the thesis (Table 4.1, beams.json): cantilever length (m), width (m), thickness (m),
 #: mass per length (kg/m, beam mass 0.15792 kg over the 1.219 m total length).
 LENGTH_M = 0.6095

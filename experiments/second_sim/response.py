@@ -18,6 +18,8 @@ import numpy as np
 
 from experiments.second_sim.fem import Assembled, Modes
 
+__all__ = ["Damping", "Noise", "complex_modes", "measure", "rayleigh_for", "receptance"]
+
 
 @dataclass(frozen=True)
 class Damping:

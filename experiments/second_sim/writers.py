@@ -12,6 +12,10 @@ from pathlib import Path
 
 import numpy as np
 
+__all__ = ["KINDS", "complex_text", "convert_receptance", "modal_dict", "write_csv", "write_json", "write_text_atomic",
+           "write_uff"]
+
+
 #: dataset-58 ordinate specific data type and unit label of each FRF kind (SI).
 KINDS = {"receptance": (8, "m"), "mobility": (11, "m/s"), "accelerance": (12, "m/s^2")}
 

@@ -30,8 +30,8 @@ from physics.io.units import UnitSystem, frf_unit_factor
 
 __all__ = ["DEFAULT_UNITS", "FRF_KINDS", "MeasuredFRF", "ModalData", "atomic_path", "atomic_write_bytes",
            "atomic_write_text", "dof_label", "format_complex", "modal_data_from_dict", "modal_data_to_dict",
-           "number_list", "parse_dof", "read_frf", "read_json", "read_frf_csv", "read_frf_npz", "read_modal_json", "read_uff58",
-           "write_frf_csv", "write_frf_npz", "write_modal_json", "write_uff58",
+           "number_list", "parse_dof", "read_frf", "read_json", "read_frf_csv", "read_frf_npz", "read_modal_json",
+           "read_uff58", "write_frf_csv", "write_frf_npz", "write_modal_json", "write_uff58",
            "DofMap", "NodeGeometry", "dof_positions_text", "QUARTER_POINT_CONVENTION", "map_frf_dofs",
            "map_measured_dofs", "UnitSystem", "frf_unit_factor", "match_dofs_by_position",
            "measured_positions", "positions_along_beam", "read_uff_geometry"]

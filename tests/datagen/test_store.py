@@ -220,7 +220,8 @@ def test_samples_table_is_written_in_whole_row_groups(reference, tmp_path, monke
     store.finalize(root, json.loads((root / "manifest.json").read_text()))
     meta = pq.ParquetFile(root / "samples.parquet").metadata
     assert [meta.row_group(i).num_rows for i in range(meta.num_row_groups)] == [8, 8, 8, 6]
-    pd.testing.assert_frame_equal(pd.read_parquet(root / "samples.parquet"), pd.read_parquet(reference / "samples.parquet"))
+    pd.testing.assert_frame_equal(pd.read_parquet(root / "samples.parquet"),
+                                  pd.read_parquet(reference / "samples.parquet"))
 
 
 def test_other_format_is_refused_with_a_clear_message(reference, tmp_path):

@@ -111,7 +111,8 @@ def test_library_errors_name_the_parameter_and_the_cli_adds_the_flag(capsys):
 def test_update_accepts_the_old_mass_spelling(tmp_path, capsys):
     f = tmp_path / "modal.json"
     f.write_text(json.dumps(thesis.beam_state("undamaged")))
-    runs = [json.loads(_run(capsys, "update", "--modal", str(f), "--mass", m, "--json")[1]) for m in ("reduced", "iirs")]
+    runs = [json.loads(_run(capsys, "update", "--modal", str(f), "--mass", m, "--json")[1])
+            for m in ("reduced", "iirs")]
     assert runs[0]["mass"] == runs[1]["mass"] == "iirs"
     np.testing.assert_array_equal(runs[0]["K"], runs[1]["K"])
 

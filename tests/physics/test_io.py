@@ -1,7 +1,5 @@
 """Tests of measured-FRF I/O (UFF58 ASCII/binary, CSV, NPZ) and its validation."""
 
-import warnings
-
 import numpy as np
 import pytest
 
