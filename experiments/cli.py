@@ -29,23 +29,23 @@ from physics.io import format_complex
 __all__ = ["build_parser", "main", "to_jsonable"]
 
 
-#: Modules registering one sub-command each, in the order ``--help`` lists them.
-COMMAND_MODULES = [
-    "experiments.validate",
-    "experiments.cmd_model",
-    "experiments.cmd_update",
-    "experiments.cmd_identify",
-    "experiments.cmd_estimate",
-    "experiments.demo",
-    "experiments.cmd_generate",
-    "experiments.cmd_inspect",
-    "experiments.cmd_experiment",
-    "experiments.cmd_export",
-    "experiments.cmd_discrepancy",
-    "experiments.cmd_train",
-    "experiments.cmd_evaluate",
-    "experiments.cmd_classify",
-]
+#: Sub-command name -> module registering it (``add_parser``), in the order ``--help`` lists them.
+COMMANDS = {
+    "validate": "experiments.validate",
+    "model": "experiments.cmd_model",
+    "update": "experiments.cmd_update",
+    "identify": "experiments.cmd_identify",
+    "estimate": "experiments.cmd_estimate",
+    "demo": "experiments.demo",
+    "generate": "experiments.cmd_generate",
+    "inspect": "experiments.cmd_inspect",
+    "experiment": "experiments.cmd_experiment",
+    "export": "experiments.cmd_export",
+    "discrepancy": "experiments.cmd_discrepancy",
+    "train": "experiments.cmd_train",
+    "evaluate": "experiments.cmd_evaluate",
+    "classify": "experiments.cmd_classify",
+}
 
 EXIT_USAGE = 2
 
@@ -82,7 +82,9 @@ def to_jsonable(obj):
     return obj
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(argv=None) -> argparse.ArgumentParser:
+    """The ``beam-damage`` parser; when ``argv`` names a command, only that command's module is imported (a
+    command's start-up does not pay for every other command's imports), else all of them (``--help``)."""
     parser = _Parser(
         prog="beam-damage",
         description="Vibration-based model updating and damage detection of beams.",
@@ -96,13 +98,17 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"beam-damage {ver}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     sub.required = True
-    for name in COMMAND_MODULES:
-        importlib.import_module(name).add_parser(sub)
+    first = next((a for a in (argv or []) if not a.startswith("-")), None)
+    for name, module in COMMANDS.items():
+        if first in COMMANDS and name != first:
+            continue
+        importlib.import_module(module).add_parser(sub)
     return parser
 
 
 def main(argv=None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(argv)
     args = parser.parse_args(argv)
     try:
         with warnings.catch_warnings(record=True) as caught:

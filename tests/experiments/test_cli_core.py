@@ -148,3 +148,16 @@ def test_demo_writes_its_report(tmp_path, capsys):
     # a second run reuses every step
     code, _, err = _run(capsys, "demo", "--out", str(d), "--quick", "--samples", "200", "--workers", "1", "--json")
     assert code == 0
+
+
+def test_a_command_imports_only_its_own_module():
+    """``beam-damage classify`` builds only classify's sub-parser (its start-up pays for no other command's
+    imports); without a command every command is listed."""
+    from experiments.cli import COMMANDS, build_parser
+
+    one = build_parser(["classify", "--help"])
+    sub = next(a for a in one._actions if a.dest == "command")
+    assert list(sub.choices) == ["classify"]
+    every = build_parser(["--help"])
+    sub = next(a for a in every._actions if a.dest == "command")
+    assert list(sub.choices) == list(COMMANDS)
