@@ -6,4 +6,11 @@ Commands only parse arguments, call the libraries (``physics``, ``datagen``,
 
 __all__ = ["cli"]
 
-from experiments import cli  # noqa: E402
+
+def __getattr__(name):
+    """``experiments.cli`` loads on first use, so ``python -m experiments.<tool>`` does not pay for the CLI."""
+    if name == "cli":
+        import importlib
+
+        return importlib.import_module("experiments.cli")
+    raise AttributeError(f"module 'experiments' has no attribute {name!r}")

@@ -1,0 +1,30 @@
+"""An independent beam simulator that writes test files as a test system would.
+
+It shares no code with ``physics``, ``datagen`` or ``learn`` (only numpy, scipy,
+pyuff and the standard library): a fine-mesh Euler-Bernoulli/Timoshenko
+cantilever (:mod:`.fem`), damping, FRFs and a measurement chain
+(:mod:`.response`), UFF/JSON writers (:mod:`.writers`), specimen pairs with
+slits (:mod:`.pairs`) and hidden-effect cases (:mod:`.effects`).
+``python -m experiments.second_sim pairs|effects`` writes them.
+
+The names below load on first use (the CLI limits BLAS threads before numpy loads).
+"""
+
+import importlib
+
+_API = {
+    "Beam": "fem", "Slit": "fem", "PointMass": "fem", "Dashpot": "fem", "Assembled": "fem", "Modes": "fem",
+    "assemble": "fem", "modes": "fem",
+    "Damping": "response", "Noise": "response", "rayleigh_for": "response", "receptance": "response",
+    "complex_modes": "response", "measure": "response",
+    "PairRecord": "pairs", "PairSet": "pairs", "PAIR_SETS": "pairs", "simulate_pairs": "pairs",
+    "write_pairs": "pairs",
+    "EffectCase": "effects", "effect_cases": "effects", "write_effect_cases": "effects",
+}
+__all__ = sorted(_API)
+
+
+def __getattr__(name):
+    if name in _API:
+        return getattr(importlib.import_module(f"experiments.second_sim.{_API[name]}"), name)
+    raise AttributeError(f"module 'experiments.second_sim' has no attribute {name!r}")
