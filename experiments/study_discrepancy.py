@@ -328,8 +328,7 @@ def confusion(seeds: int = 3, kinds=("freq", "shapes"), truths=None, progress: b
 
     Each row: ``kind``, ``truth``, one count per ``none`` and candidate (``"2~"`` when named but reported
     indistinguishable), ``param_error`` (median relative error of the recovered parameter when named right),
-    ``gap_before_pct``/``gap_after_pct`` (median max |frequency error|, recalibrated only -> named effect) and
-    the same for the damping ratios.
+    ``gap_before_pct``/``gap_after_pct`` (median max |frequency error|, recalibrated only -> named effect).
     """
     from tqdm import tqdm
 
@@ -350,14 +349,12 @@ def confusion(seeds: int = 3, kinds=("freq", "shapes"), truths=None, progress: b
                 if effect and named == effect:
                     perr.append(abs(res.final.parameters[f"{effect}.{key}"] / params[key] - 1))
                 b, a = res.steps[0].base.residuals, res.final.residuals
-                gaps.append((b.max_abs_frequency_error_pct, a.max_abs_frequency_error_pct,
-                             100 * np.max(np.abs(b.model_damping / b.measured_damping - 1)),
-                             100 * np.max(np.abs(a.model_damping / a.measured_damping - 1))))
+                gaps.append((b.max_abs_frequency_error_pct, a.max_abs_frequency_error_pct))
             g = np.median(np.array(gaps), axis=0)
             row = {"kind": kind, "truth": name}
             row.update({SHORT[c]: (f"{counts[c]}~" if ties[c] else counts[c]) for c in cols})
             row.update({"param_error": float(np.median(perr)) if perr else None, "gap_before_pct": g[0],
-                        "gap_after_pct": g[1], "damping_gap_before_pct": g[2], "damping_gap_after_pct": g[3]})
+                        "gap_after_pct": g[1]})
             rows.append(row)
     return rows
 

@@ -671,10 +671,6 @@ def _as_fit(prob: _Problem, res: OptimizeResult, effect: str, meas: Measurement)
     blocks = {b: float(v @ v) for b, v in white.items()}
     if meas.damping_ratios is not None:
         nb = _with_rayleigh(nb, meas)
-        pd = nb.effects["proportional_damping"]
-        for key in ("alpha_1_s", "beta_s"):
-            params[f"proportional_damping.{key}"] = pd[key]
-            std[f"proportional_damping.{key}"] = float("nan")   # a summary of the ratios, not fitted here
     return Fit(effect, tuple(nb.effects), nb, params, std, chi2, n_obs, n_par, chi2 + n_par * math.log(n_obs),
                float("nan"), mode_residuals(meas, pred, prob.pairs), dof, blocks, white)
 
@@ -846,7 +842,9 @@ def _candidate_fit(beam, meas, noise, name, fixed, n_elements, pairs, fit_mass, 
             refined, _, _ = _fit(beam, meas, noise, name, fixed, n_elements, pairs, n_starts=1, position=positions,
                                  fit_mass=fit_mass, seed=seed, named=named,
                                  start={**start, name: f.beam.effects_dict()[name]})
-            return refined, positions
+            if refined.chi2 <= f.chi2:
+                return refined, positions
+            # the local search from the best measured point went astray: keep that point
         # the discrete position counts as a parameter
         return replace(f, n_params=f.n_params + 1, bic=f.bic + math.log(f.n_obs), dof=f.dof - 1,
                        lomo=_lomo(prob, x_opt)), pos
