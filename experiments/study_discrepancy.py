@@ -380,7 +380,10 @@ def beam5_section(result: dict, out_dir: Path, title: str):
             f"{', '.join(result['effects']) or 'none'}). The largest frequency error falls from "
             f"{gb['max_abs_frequency_error_pct']:.2f} % to {ga['max_abs_frequency_error_pct']:.2f} %."
             + (f" Indistinguishable from: {', '.join(result['indistinguishable_from'])}."
-               if result["indistinguishable_from"] else ""))
+               if result["indistinguishable_from"] else "")
+            + (f" Noise check of the final model: chi^2/dof {result['noise_check']['chi2_per_dof']:.2f} on "
+               f"{result['noise_check']['dof']} degrees of freedom ({result['noise_check']['verdict']})."
+               if "noise_check" in result else ""))
     if "shear_deformation.G_core_pa" in result["parameters"]:
         g = result["parameters"]["shear_deformation.G_core_pa"]
         text += (f" The fitted shear rigidity corresponds to a core shear modulus of {g / 1e6:.0f} MPa, inside the "

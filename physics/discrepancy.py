@@ -494,7 +494,6 @@ class _Problem:
                 return z
 
             self.modal_zeta = modal_zeta
-            self.rayleigh = (a, b)
 
     def beam_at(self, u) -> tuple[Beam, float, float]:
         eff = {k: dict(v) for k, v in self.fixed.items()}

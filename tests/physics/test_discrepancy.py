@@ -108,7 +108,7 @@ def test_rayleigh_fit_recovers_exact_coefficients():
 
 @pytest.mark.slow
 def test_local_damping_named_from_complex_shapes_not_from_ratios():
-    eff = {"local_damping": {"c_Ns_m": 1.0, "x_m": L / 4}}
+    eff = {"local_damping": {"c_Ns_m": 3.0, "x_m": L / 4}}   # +1 % damping on modes 2-3
     res = _run(eff, damping=True)
     assert res.named_effects == () and "local_damping" in res.untestable
     res = _run(eff, damping=True, shapes=True)
@@ -137,6 +137,16 @@ def test_hidden_shear_from_frfs_recovers_mass_scale_too():
     truth = _truth({}, 3)
     assert res.final.parameters["mass_per_length_kg_m"] == pytest.approx(truth.mass_per_length_kg_m, rel=0.02)
     assert res.final.residuals.frf_error_db < res.steps[0].base.residuals.frf_error_db
+
+
+def test_frf_scatter_recovers_the_line_noise_of_a_smooth_frf():
+    rng = np.random.default_rng(0)
+    f = np.linspace(5.0, 800.0, 3000)
+    h = 1 / ((2j * np.pi * f) ** 2 + 2 * 0.01 * (2j * np.pi * f) * 150 + 150**2)   # one smooth mode
+    h = np.broadcast_to(h, (4, 1, f.size)) * 10 ** (0.5 * rng.standard_normal((4, 1, f.size)) / 20)
+    meas = dsc.Measurement(np.array([24.0, 150.0]), frf=h, frf_frequency_hz=f, frf_response_x_m=(0.1, 0.2, 0.3, 0.4),
+                           frf_reference_x_m=(0.1,))
+    assert dsc.frf_scatter_db(meas) == pytest.approx(0.5, rel=0.05)
 
 
 def test_two_frequencies_cannot_name_an_effect():
