@@ -27,7 +27,7 @@ Workflow (:func:`analyse`)
    errors of known variance), with ``c_b`` the best fit's ``chi^2_b / dof_b``
    where a chi^2 test rejects block ``b``'s noise as too small
    (quasi-likelihood variance inflation, Burnham & Anderson 2002), else 1;
-   and a leave-one-mode-out (LOMO) prediction error of the frequencies.
+   and a leave-one-mode-out (LOMO) prediction error of each mode's data.
 5. The best candidate is named when its score is at least
    :data:`BIC_SIGNIFICANT` below the current model's ("strong evidence",
    Kass & Raftery 1995) and its LOMO error is not worse; else ``"none"``.
@@ -586,23 +586,23 @@ def _fit(beam, meas, noise, effect, fixed_effects, n_elements, pairs, *, fit_mas
 
 
 def _lomo(prob: _Problem, x0) -> float:
-    """Leave-one-mode-out prediction error: RMS over modes of the held-out frequency's whitened residual.
+    """Leave-one-mode-out prediction error: RMS over modes of the held-out mode's whitened residuals.
 
-    Each measured frequency is predicted by a fit on the other modes (their
-    frequencies, shapes, FRF); 1 means "predicted to within the noise".
+    Each measured mode (its frequency, its shape and its FRF band levels, as
+    measured) is predicted by a fit on the other modes; 1 means "predicted to
+    within the noise".
     """
     meas = prob.meas
     if meas.n_modes - 1 < len(prob.params) and meas.shapes is None and meas.frf is None:
         return float("nan")
     lo, hi = zip(*[p.bounds() for p in prob.params])
-    sf = np.broadcast_to(np.asarray(prob.noise.frequency, dtype=float), (meas.n_modes,))
     z2 = []
     for j in range(meas.n_modes):
         prob.mask = np.arange(meas.n_modes) != j
         res = least_squares(prob.residual, x0, bounds=(lo, hi), diff_step=1e-6, max_nfev=200)
-        pred = prob.predict(prob.beam_at(res.x)[0])
-        k = prob.pairs[j]
-        z2.append(((pred.frequencies_hz[k] / meas.frequencies_hz[j] - 1) / sf[j]) ** 2)
+        prob.mask = np.arange(meas.n_modes) == j
+        held = np.concatenate(list(prob.blocks(prob.predict(prob.beam_at(res.x)[0])).values()))
+        z2.append(np.mean(held**2))
     prob.mask = np.ones(meas.n_modes, dtype=bool)
     return float(np.sqrt(np.mean(z2)))
 
