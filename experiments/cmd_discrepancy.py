@@ -19,9 +19,9 @@ from physics.io import dof_positions_text
 
 
 def run(args) -> dict:
-    noise = dsc.Noise(args.frequency_noise, args.damping_noise, args.shape_noise, args.frf_noise_db)
-    for name, v in (("--frequency-noise", args.frequency_noise), ("--damping-noise", args.damping_noise),
-                    ("--shape-noise", args.shape_noise), ("--frf-noise-db", args.frf_noise_db)):
+    noise = dsc.Noise(args.frequency_noise, shape=args.shape_noise, frf_db=args.frf_noise_db)
+    for name, v in (("--frequency-noise", args.frequency_noise), ("--shape-noise", args.shape_noise),
+                    ("--frf-noise-db", args.frf_noise_db)):
         if not (np.isfinite(v) and v > 0):
             raise ConfigError(f"{name} must be a positive number, got {v}")
     if args.max_effects < 0:
@@ -44,6 +44,15 @@ def run(args) -> dict:
 def _print(out, res: dsc.DiscrepancyResult, recal: dsc.ModeResiduals):
     print(dof_positions_text(out["dof_positions"]) if out["dof_positions"] else
           "measured DOFs: none (natural frequencies only)")
+    an = out["assumed_noise"]
+    f = np.atleast_1d(an["frequency"])
+    print("noise (std) whitening the residuals: frequency "
+          + (f"{100 * f[0]:.3g} %" if f.size == 1 else f"{100 * f.min():.3g}-{100 * f.max():.3g} %")
+          + f" [{an['frequency_source']}]"
+          + (f", shapes {an['shape']:.3g} of the largest entry [{an['shape_source']}]" if "shape" in an else "")
+          + (f", FRF {an['frf_db']:.3g} dB [{an['frf_db_source']}]" if "frf_db" in an else "")
+          + ("; damping ratios: modal damping (one ratio per mode) is the null model" if
+             res.final.residuals.measured_damping is not None else ""))
     print(f"{'mode':>4} {'measured Hz':>12} {'before %':>9} {'recal. %':>9} {'after %':>9}"
           + (f" {'zeta meas':>10} {'zeta after':>10}" if res.final.residuals.measured_damping is not None else "")
           + (f" {'MAC after':>9}" if res.final.residuals.mac is not None else ""))
@@ -56,19 +65,30 @@ def _print(out, res: dsc.DiscrepancyResult, recal: dsc.ModeResiduals):
         if a.mac is not None:
             line += f" {a.mac[j]:9.4f}"
         print(line)
-    print("candidates (score = BIC, lower is better; LOMO in noise units):")
+    print("candidates (score = sum of chi2 per data block / its c_hat + k ln n, lower is better; "
+          "LOMO in noise units):")
     for i, st in enumerate(res.steps):
         print(f" round {i + 1}: current model '{' + '.join(res.named_effects[:i]) or 'EI/m recalibrated'}' "
-              f"BIC {st.base.bic:.1f}, LOMO {st.base.lomo:.2f}")
+              f"score {st.score(st.base):.1f}, LOMO {st.base.lomo:.2f}"
+              + "".join(f", c_hat({k}) {c:.3g} (the best fit's residual exceeds the noise)"
+                        for k, c in st.c_hat.items() if c > 1))
         for f in st.candidates:
-            print(f"   {f.effect:18s} BIC {f.bic:10.1f}  LOMO {f.lomo:6.2f}  max |error| "
+            print(f"   {f.effect:18s} score {st.score(f):10.1f}  LOMO {f.lomo:6.2f}  max |error| "
                   f"{f.residuals.max_abs_frequency_error_pct:6.3f} %")
         if st.indistinguishable_from:
             print(f"   -> '{st.named}' indistinguishable from {', '.join(st.indistinguishable_from)}; "
                   f"separate them by: {st.separating_measurement}")
     for k, why in res.untestable.items():
         print(f" not tested: {k} ({why})")
-    print(f"named effects: {', '.join(res.named_effects) or 'none'}")
+    print(f"named effects: {', '.join(res.named_effects) or 'none'}"
+          + "".join(f"; {e}: evidence from {b}" for e, b in res.evidence.items()))
+    chk = out["noise_check"]
+    print(f"noise check of the final model: chi2 {chk['chi2']:.3g} on {chk['dof']} dof, chi2/dof "
+          f"{chk['chi2_per_dof']:.3g}, p = {chk['p_value']:.3g}: {chk['verdict']}; by block: "
+          + ", ".join(f"{k} {b['chi2_per_dof']:.3g}" for k, b in chk["blocks"].items()))
+    if chk["verdict"] == "residual smaller than the noise":
+        print("  the data are more precise than assumed: smaller effects become testable with the actual noise "
+              "(--frequency-noise, --shape-noise)")
     for k, v in out["parameters"].items():
         print(f"  {k:36s} {v:12.5g} +- {out['parameter_std'].get(k, float('nan')):.3g}")
     gb, ga = out["gap_before"], out["gap_after"]
@@ -84,10 +104,12 @@ def _print(out, res: dsc.DiscrepancyResult, recal: dsc.ModeResiduals):
 def add_parser(sub):
     p = sub.add_parser(
         "discrepancy", help="find where the model misses measured data and name the missing effect",
-        description="Pair measured and model modes, recalibrate EI (and mass with FRFs) and Rayleigh damping, "
+        description="Pair measured and model modes, recalibrate EI (and mass with FRFs), "
                     "then fit each candidate effect (shear deformation, rotary inertia, root flexibility, added "
                     "mass, local damping) with the globals, score by BIC with the measurement noise and a "
                     "leave-one-mode-out check, name the winner only when significant, and repeat once. "
+                    "Damping ratios are modal (one per mode, the null model): a dashpot is named only from "
+                    "complex mode shapes or FRFs. "
                     f"Example: --beam beam5 --measured {EXAMPLE.relative_to(Path(__file__).parent.parent)}")
     add_beam_argument(p)
     p.add_argument("--measured", required=True, metavar="FILE",
@@ -97,17 +119,17 @@ def add_parser(sub):
                                                 "candidates.csv/json, summary.json and figures")
     p.add_argument("--frequency-noise", type=float, default=dsc.Noise().frequency,
                    help="relative std of measured frequencies (default 0.003; FRF input: the identification's)")
-    p.add_argument("--damping-noise", type=float, default=dsc.Noise().damping,
-                   help="relative std of damping ratios (default 0.1)")
     p.add_argument("--shape-noise", type=float, default=dsc.Noise().shape,
                    help="std of shape entries relative to the largest (default 0.02)")
-    p.add_argument("--frf-noise-db", type=float, default=dsc.Noise().frf_db, help="FRF magnitude std in dB (1)")
+    p.add_argument("--frf-noise-db", type=float, default=dsc.Noise().frf_db,
+                   help="FRF magnitude std in dB (default: estimated from the FRF's line-to-line scatter)")
     p.add_argument("--max-effects", type=int, default=2, help="most effects to name (default 2)")
     p.add_argument("--candidates", nargs="+", default=list(CANDIDATES), choices=CANDIDATES, metavar="EFFECT",
                    help=f"effects to test (default all: {' '.join(CANDIDATES)})")
     p.add_argument("--elements", type=int, default=40, help="elements of the fitted models (default 40)")
     p.add_argument("--seed", type=int, default=0, help="seed of the multi-start fits")
     p.add_argument("--json", action="store_true",
-                   help="print one JSON object: named_effect, effects, parameters, parameter_std, "
-                        "indistinguishable_from, gap_before, gap_after, candidates, beam_file")
+                   help="print one JSON object: named_effect, effects, evidence, parameters, parameter_std, "
+                        "indistinguishable_from, separating_measurement, gap_before, gap_after, assumed_noise, "
+                        "chi2_per_dof, noise_consistent, noise_check, not_tested, candidates, beam_file")
     p.set_defaults(func=run, flags={"n_elements": "--elements"})

@@ -6,31 +6,44 @@ Workflow (:func:`analyse`)
    form residuals: frequency error (%), damping ratio error, MAC, and FRF error
    per band (dB) when FRFs are given (:func:`mode_residuals`).
 2. Recalibrate the global parameters first: ``EI`` always, the mass per length
-   when FRFs fix the absolute scale, Rayleigh damping ``alpha, beta`` when
-   damping ratios exist. From frequencies alone ``EI/m`` scales every frequency
-   by one factor, so only frequency *ratios* (and shapes, damping, FRF shapes)
-   carry information about a missing effect; an effect is named only when it
-   explains what this recalibration cannot.
-3. For each candidate of :data:`physics.effects.CANDIDATES`, a bounded,
+   when FRFs fix the absolute scale. From frequencies alone ``EI/m`` scales
+   every frequency by one factor, so only frequency *ratios* (and shapes, FRF
+   shapes) carry information about a missing effect; an effect is named only
+   when it explains what this recalibration cannot.
+3. Damping is modal: every measured mode keeps its own measured damping ratio
+   (the null model, one free ratio per mode, as in most real tests), so the
+   ratios themselves never score a candidate. A local dashpot keeps only its
+   non-proportional coupling (the off-diagonal modal damping), visible in the
+   imaginary parts of complex mode shapes and in FRFs; without those it is
+   not tested.
+4. For each candidate of :data:`physics.effects.CANDIDATES`, a bounded,
    multi-start least-squares fit of its parameters together with the global
-   ones on every residual present, each whitened by its noise level
-   (:class:`Noise`). Score: ``BIC = chi^2 + k ln n`` with the noise given
+   ones on every residual present (frequencies, real and imaginary parts of
+   shapes, FRF magnitudes), each whitened by its noise level (:class:`Noise`).
+   FRFs enter as their mean level per mode band (:func:`_band_mean_db`; it
+   fixes the mass), their modes as the identified modal data.
+   Score: ``sum_b chi^2_b / c_b + k ln n``, the BIC with the noise given
    (Schwarz 1978; ``chi^2`` is ``-2 ln L`` up to a constant for Gaussian
-   errors of known variance), and a leave-one-mode-out (LOMO) prediction
-   error of the frequencies.
-4. The best candidate is named when its BIC is at least
+   errors of known variance), with ``c_b`` the best fit's ``chi^2_b / dof_b``
+   where a chi^2 test rejects block ``b``'s noise as too small
+   (quasi-likelihood variance inflation, Burnham & Anderson 2002), else 1;
+   and a leave-one-mode-out (LOMO) prediction error of each mode's data.
+5. The best candidate is named when its score is at least
    :data:`BIC_SIGNIFICANT` below the current model's ("strong evidence",
    Kass & Raftery 1995) and its LOMO error is not worse; else ``"none"``.
-   Other significant candidates whose ``chi^2`` lies within
-   :data:`BIC_INDISTINGUISHABLE` of the winner's (likelihood ratio below
-   ``e``) are reported as indistinguishable, with the measurement that separates them most
-   (a higher mode, mode shapes, or the driving-point antiresonances,
-   predicted by the two fitted models).
-5. The named effect joins the model and the search repeats (at most
+   Other significant candidates whose fitted predictions of the measured
+   quantities differ from the winner's by less than :data:`DISTINCT` (squared,
+   in noise units) are reported as indistinguishable, with the measurement that
+   separates them most (a higher mode, mode shapes, or the driving-point
+   antiresonances, predicted by the two fitted models). The data block whose
+   chi^2 fell most is the effect's evidence.
+6. The named effect joins the model and the search repeats (at most
    ``max_effects`` effects); it stops when nothing significant remains.
+7. The final model's chi^2 is tested against its degrees of freedom
+   (:func:`noise_check`): is the residual consistent with the assumed noise?
 
 Parameter uncertainties come from the Jacobian of the whitened residuals at
-the optimum, ``cov = s^2 (J^T J)^-1`` with ``s^2 = max(1, chi^2 / (n - k))``
+the optimum, ``cov = s^2 (J^T J)^-1`` with ``s^2 = max(1, chi^2 / dof)``
 (the given noise, inflated when the fit is worse than the noise).
 
 Core shear modulus
@@ -66,8 +79,10 @@ except ImportError:  # pragma: no cover
 
 #: BIC drop that counts as significant ("strong evidence", Kass & Raftery 1995).
 BIC_SIGNIFICANT = 6.0
-#: Significant candidates whose chi^2 lies within this of the winner's are indistinguishable.
-BIC_INDISTINGUISHABLE = 2.0
+#: Significant candidates whose fitted predictions differ from the winner's by less than this (sum of squared
+#: differences in noise units, each block divided by the round's c_b) are indistinguishable: were one model true, the
+#: other's expected chi^2 would exceed its own by about this much, so the data could not give strong evidence.
+DISTINCT = BIC_SIGNIFICANT
 
 
 @dataclass(frozen=True)
@@ -79,7 +94,8 @@ class Noise:
     frequency : float or ndarray, shape (n_modes,)
         Relative std of the natural frequencies (0.003 = 0.3 %).
     damping : float
-        Relative std of the damping ratios.
+        Relative std of simulated damping ratios (:func:`simulate_measurement`;
+        the analysis takes measured ratios as modal damping, step 3).
     shape : float
         Std of mode-shape entries relative to the largest entry of the mode.
     frf_db : float
@@ -164,11 +180,19 @@ class Prediction:
 
 
 def predict(beam: Beam, meas: Measurement, n_elements: int = 40, n_modes: int | None = None,
-            *, EI_scale=1.0, mass_scale=1.0) -> Prediction:
+            *, EI_scale=1.0, mass_scale=1.0, modal_zeta=None) -> Prediction:
     """Modes of ``beam`` (every effect applied) at the measured points.
 
     Damped modes come from the lowest ``n_modes + 6`` undamped modes (modal
     projection, exact for proportional damping, accurate for light local damping).
+
+    Parameters
+    ----------
+    modal_zeta : callable, optional
+        ``modal_zeta(w_rad_s) -> zeta`` (arrays of the projected undamped modes,
+        ascending). Modal damping: the diagonal of the modal damping matrix
+        becomes ``2 zeta_r w_r``; its off-diagonal part (the non-proportional
+        coupling of a local dashpot) is kept.
     """
     n = n_modes or meas.n_modes + 2
     model = beam.fe_model(n_elements, EI_scale=EI_scale, mass_scale=mass_scale)
@@ -176,6 +200,8 @@ def predict(beam: Beam, meas: Measurement, n_elements: int = 40, n_modes: int | 
     w2, phi = eigh(model.K, model.M, subset_by_index=[0, n_proj - 1])   # phi^T M phi = I
     w = np.sqrt(np.clip(w2, 0.0, None))
     c_r = phi.T @ model.C @ phi
+    if modal_zeta is not None:
+        c_r = c_r - np.diag(np.diag(c_r)) + np.diag(2 * np.asarray(modal_zeta(w), dtype=float) * w)
     xs = meas.shape_x_m if meas.shapes is not None else ()
     if np.any(c_r):
         a = np.block([[np.zeros((n_proj, n_proj)), np.eye(n_proj)], [-np.diag(w**2), -c_r]])
@@ -343,7 +369,9 @@ class Fit:
     effects : tuple of str
         Every effect in the model (previously named ones, then ``effect``).
     beam : Beam
-        The calibrated beam (global parameters and effects written in).
+        The calibrated beam (global parameters and effects written in; with
+        damping ratios, Rayleigh damping least-squares fitted to them, because
+        a beam file has no per-mode damping).
     parameters, parameter_std : dict
         Fitted values and standard deviations, keys ``"EI_Nm2"``,
         ``"mass_per_length_kg_m"``, ``"<effect>.<parameter>"``, derived
@@ -357,6 +385,13 @@ class Fit:
     lomo : float
         Leave-one-mode-out prediction error in noise units (:func:`_lomo`), NaN if not computed.
     residuals : ModeResiduals
+    dof : int
+        Degrees of freedom of ``chi2``: ``n_obs - n_params`` less the scale
+        of each compared shape (2 per mode for complex shapes, 1 for real).
+    chi2_blocks : dict
+        ``chi2`` split by data block (:data:`BLOCKS`).
+    whitened : dict
+        Data block -> its whitened residual vector (FRF: raveled ``(n_resp, n_ref, n_lines)``).
     """
 
     effect: str
@@ -370,19 +405,95 @@ class Fit:
     bic: float
     lomo: float
     residuals: ModeResiduals
+    dof: int = 0
+    chi2_blocks: dict = field(default_factory=dict)
+    whitened: dict = field(default_factory=dict)
+
+    def block_dof(self, meas: "Measurement") -> dict:
+        """Degrees of freedom of each block's chi^2: observations less what the fit takes from them.
+
+        Frequencies lose the model's parameters, shapes one scale per mode
+        (real part; the imaginary part a second), the FRF band levels the mass scale.
+        """
+        n = {k: v.size for k, v in self.whitened.items()}
+        n_modes = meas.n_modes
+        out = {"frequencies": n["frequencies"] - self.n_params + (1 if "FRF" in n else 0)}
+        if "mode shapes" in n:
+            out["mode shapes"] = n["mode shapes"] - n_modes
+        if "complex shapes" in n:
+            out["complex shapes"] = n["complex shapes"] - n_modes
+        if "FRF" in n:
+            out["FRF"] = n["FRF"] - 1
+        return out
+
+
+#: Data blocks of the residual: what the evidence for an effect can come from.
+BLOCKS = ("frequencies", "mode shapes", "complex shapes", "FRF")
+
+
+def has_complex_shapes(meas: Measurement) -> bool:
+    """Measured shapes with imaginary parts (non-proportional damping is visible in them)."""
+    return meas.shapes is not None and bool(np.any(np.abs(meas.shapes.imag) > 0))
+
+
+def rayleigh_fit(w_rad_s, zeta) -> tuple[float, float]:
+    """Least-squares Rayleigh coefficients ``(alpha 1/s, beta s) >= 0`` of ``zeta = alpha/(2w) + beta w/2``.
+
+    Relative residuals (each ratio weighted by ``1/zeta``); used to extend measured
+    ratios to unmeasured modes and for the beam file, never to score an effect.
+    """
+    from scipy.optimize import nnls
+
+    w, z = np.asarray(w_rad_s, dtype=float), np.asarray(zeta, dtype=float)
+    a = np.column_stack([1 / (2 * w), w / 2]) / z[:, None]
+    coef, _ = nnls(a, np.ones_like(z))
+    return float(coef[0]), float(coef[1])
+
+
+def _band_mean_db(meas: Measurement, err_db: np.ndarray) -> np.ndarray:
+    """Mean dB error over each measured mode's band (between the geometric means of neighbouring frequencies).
+
+    Returns ``(n_resp, n_ref, n_modes)``; a band without lines counts 0. The FRF's levels
+    (its absolute scale, hence the mass) enter the fit as these band means, one
+    observation per band: the lines of a band share the model's and the
+    identification's errors, and the modes' frequencies, damping and shapes come from
+    the identified modal data.
+    """
+    fm = meas.frequencies_hz
+    edges = np.concatenate([[0.0], np.sqrt(fm[:-1] * fm[1:]), [np.inf]])
+    band = np.searchsorted(edges, meas.frf_frequency_hz, side="right") - 1       # (n_lines,)
+    onehot = (band[:, None] == np.arange(fm.size)[None, :]).astype(float)         # (n_lines, n_modes)
+    count = np.maximum(onehot.sum(axis=0), 1.0)
+    return (err_db @ onehot) / count
 
 
 class _Problem:
-    """Residual function of one candidate model."""
+    """Residual function of one candidate model.
 
-    def __init__(self, beam, meas, noise, fixed_effects, params, position, n_elements, pairs, fit_mass, damping):
+    With damping ratios the damping is modal: every paired model mode gets its
+    measured ratio, the others the Rayleigh least-squares extension
+    (:func:`rayleigh_fit`); a dashpot only adds its non-proportional coupling.
+    """
+
+    def __init__(self, beam, meas, noise, fixed_effects, params, position, n_elements, pairs, fit_mass):
         self.beam, self.meas, self.noise = beam, meas, noise
         self.fixed = {k: dict(v) for k, v in fixed_effects.items()}
         self.position = position          # {effect: x_m} for discrete positions
         self.params = params
         self.n_elements, self.pairs = n_elements, pairs
-        self.fit_mass, self.damping = fit_mass, damping
+        self.fit_mass = fit_mass
         self.mask = np.ones(meas.n_modes, dtype=bool)
+        self.modal_zeta = None
+        if meas.damping_ratios is not None:
+            a, b = rayleigh_fit(2 * np.pi * meas.frequencies_hz, meas.damping_ratios)
+            z_meas, p = meas.damping_ratios, np.asarray(pairs)
+
+            def modal_zeta(w):
+                z = np.maximum(a / (2 * np.maximum(w, 1e-12)) + b * w / 2, np.min(z_meas))
+                z[p] = z_meas
+                return z
+
+            self.modal_zeta = modal_zeta
 
     def beam_at(self, u) -> tuple[Beam, float, float]:
         eff = {k: dict(v) for k, v in self.fixed.items()}
@@ -399,46 +510,30 @@ class _Problem:
         for name, x in self.position.items():
             if name in eff:
                 eff[name]["x_m"] = x
-        if self.damping:
-            a, b = self.rayleigh_ref
-            eff.setdefault("proportional_damping", {})
-            eff["proportional_damping"].update(alpha_1_s=a * self.rayleigh_u[0], beta_s=b * self.rayleigh_u[1])
         nb = replace(self.beam, effects=eff, EI_Nm2=self.beam.EI_Nm2 * ei_s,
                      mass_per_length_kg_m=self.beam.mass_per_length_kg_m * ms)
         return nb, ei_s, ms
 
-    def residual(self, u_all):
-        k = len(self.params)
-        u, d = u_all[:k], u_all[k:]
-        if self.damping:
-            self.rayleigh_u = d
-        nb, _, _ = self.beam_at(u)
-        pred = predict(nb, self.meas, self.n_elements)
-        return self._whiten(pred)
+    def predict(self, nb: Beam) -> Prediction:
+        return predict(nb, self.meas, self.n_elements, modal_zeta=self.modal_zeta)
 
-    def _whiten(self, pred):
+    def residual(self, u):
+        return np.concatenate(list(self.blocks(self.predict(self.beam_at(u)[0])).values()))
+
+    def blocks(self, pred) -> dict:
+        """Whitened residuals by data block (:data:`BLOCKS`; only the blocks measured)."""
         meas, noise, p = self.meas, self.noise, self.pairs
         sf = np.broadcast_to(np.asarray(noise.frequency, dtype=float), (meas.n_modes,))
-        r = [((pred.frequencies_hz[p] / meas.frequencies_hz - 1) / sf)[self.mask]]
-        if self.damping:
-            r.append(((pred.damping_ratios[p] / meas.damping_ratios - 1) / noise.damping)[self.mask])
+        out = {"frequencies": ((pred.frequencies_hz[p] / meas.frequencies_hz - 1) / sf)[self.mask]}
         if meas.shapes is not None:
-            for j, pj in enumerate(p):
-                if not self.mask[j]:
-                    continue
-                diff = _aligned(meas.shapes[:, j], pred.shapes[:, pj]) / noise.shape
-                r.append(diff.real)
-                if np.any(np.abs(meas.shapes.imag) > 0):
-                    r.append(diff.imag)
+            diff = [_aligned(meas.shapes[:, j], pred.shapes[:, pj]) / noise.shape
+                    for j, pj in enumerate(p) if self.mask[j]]
+            out["mode shapes"] = np.concatenate([d.real for d in diff])
+            if has_complex_shapes(meas):
+                out["complex shapes"] = np.concatenate([d.imag for d in diff])
         if meas.frf is not None:
-            r.append(((_db(pred.frf) - _db(meas.frf)) / noise.frf_db).ravel())
-        return np.concatenate(r)
-
-
-def _rayleigh_refs(meas: Measurement) -> tuple[float, float]:
-    w = 2 * np.pi * meas.frequencies_hz
-    z = float(np.mean(meas.damping_ratios))
-    return 2 * z * w[0], 2 * z / w[-1]
+            out["FRF"] = (_band_mean_db(meas, _db(pred.frf) - _db(meas.frf)) / noise.frf_db)[..., self.mask].ravel()
+        return out
 
 
 def _fit(beam, meas, noise, effect, fixed_effects, n_elements, pairs, *, fit_mass, n_starts=4, seed=0,
@@ -450,24 +545,19 @@ def _fit(beam, meas, noise, effect, fixed_effects, n_elements, pairs, *, fit_mas
     the new effect starts weak, then at random points within its bounds.
     ``position`` fixes ``x_m`` of position-bearing effects (``{effect: x_m}``).
     """
-    damping = meas.damping_ratios is not None
     position_free = meas.shapes is not None or meas.frf is not None
     position = dict(position or {})
     start = start or {}
     params = [_Param("EI_scale", 0.3, 3.0)]
     if fit_mass:
         params.append(_Param("mass_scale", 0.3, 3.0))
-    n_named = len(params)
     for e in named:
         params += _effect_params(e, beam, meas, position_free and e not in position)
-    n_named = len(params) - n_named
     if effect != "none":
         params += _effect_params(effect, beam, meas, position_free and effect not in position)
-    prob = _Problem(beam, meas, noise, fixed_effects, params, position, n_elements, pairs, fit_mass, damping)
-    if damping:
-        prob.rayleigh_ref = _rayleigh_refs(meas)
-    lo = [p.bounds()[0] for p in params] + ([0.0, 0.0] if damping else [])
-    hi = [p.bounds()[1] for p in params] + ([20.0, 20.0] if damping else [])
+    prob = _Problem(beam, meas, noise, fixed_effects, params, position, n_elements, pairs, fit_mass)
+    lo = [p.bounds()[0] for p in params]
+    hi = [p.bounds()[1] for p in params]
     rng = np.random.default_rng(seed)
     best = None
     for s in range(n_starts):
@@ -484,13 +574,11 @@ def _fit(beam, meas, noise, effect, fixed_effects, n_elements, pairs, *, fit_mas
                 u0.append(a + 0.75 * (b - a) if p.log else 0.5 * (a + b))  # weak effect first
             else:
                 u0.append(rng.uniform(a, b))
-        if damping:
-            u0 += [0.5, 0.5]
         res = least_squares(prob.residual, np.clip(u0, lo, hi), bounds=(lo, hi), x_scale=1.0,
                             diff_step=1e-6, max_nfev=400)
         if best is None or res.cost < best.cost:
             best = res
-        if effect == "none" and not damping and not named:
+        if effect == "none" and not named:
             break
     fit = _as_fit(prob, best, effect, meas)
     lomo = _lomo(prob, best.x) if with_lomo else float("nan")
@@ -500,31 +588,21 @@ def _fit(beam, meas, noise, effect, fixed_effects, n_elements, pairs, *, fit_mas
 def _lomo(prob: _Problem, x0) -> float:
     """Leave-one-mode-out prediction error: RMS over modes of the held-out mode's whitened residuals.
 
-    Each measured mode (its frequency, and its damping ratio when given) is
-    predicted by a fit on the other modes; the residuals are divided by their
-    noise, so 1 means "predicted to within the noise".
+    Each measured mode (its frequency, its shape and its FRF band levels, as
+    measured) is predicted by a fit on the other modes; 1 means "predicted to
+    within the noise".
     """
     meas = prob.meas
-    n_par = len(prob.params) + (2 if prob.damping else 0)
     if meas.n_modes - 1 < len(prob.params) and meas.shapes is None and meas.frf is None:
         return float("nan")
     lo, hi = zip(*[p.bounds() for p in prob.params])
-    lo = list(lo) + ([0.0, 0.0] if prob.damping else [])
-    hi = list(hi) + ([20.0, 20.0] if prob.damping else [])
-    sf = np.broadcast_to(np.asarray(prob.noise.frequency, dtype=float), (meas.n_modes,))
     z2 = []
     for j in range(meas.n_modes):
         prob.mask = np.arange(meas.n_modes) != j
         res = least_squares(prob.residual, x0, bounds=(lo, hi), diff_step=1e-6, max_nfev=200)
-        if prob.damping:
-            prob.rayleigh_u = res.x[len(prob.params):]
-        nb, _, _ = prob.beam_at(res.x[:len(prob.params)])
-        pred = predict(nb, meas, prob.n_elements)
-        k = prob.pairs[j]
-        r = [(pred.frequencies_hz[k] / meas.frequencies_hz[j] - 1) / sf[j]]
-        if prob.damping and meas.n_modes - 1 >= n_par - len(prob.params) + 1:
-            r.append((pred.damping_ratios[k] / meas.damping_ratios[j] - 1) / prob.noise.damping)
-        z2.append(np.mean(np.square(r)))
+        prob.mask = np.arange(meas.n_modes) == j
+        held = np.concatenate(list(prob.blocks(prob.predict(prob.beam_at(res.x)[0])).values()))
+        z2.append(np.mean(held**2))
     prob.mask = np.ones(meas.n_modes, dtype=bool)
     return float(np.sqrt(np.mean(z2)))
 
@@ -537,15 +615,35 @@ def g_core_pa(kGA_N: float, beam: Beam) -> float:
     return kGA_N * c / (beam.width_m * d**2)
 
 
+def _with_rayleigh(nb: Beam, meas: Measurement) -> Beam:
+    """``nb`` with Rayleigh damping fitted to the measured ratios less a dashpot's share (beam file only)."""
+    w = 2 * np.pi * meas.frequencies_hz
+    z = np.array(meas.damping_ratios, dtype=float)
+    if "local_damping" in nb.effects:
+        # a dashpot c at x adds c phi_r(x)^2 / (2 w_r) to mode r (mass-normalised phi)
+        model = nb.fe_model(24)
+        w2, phi = eigh(model.K, model.M, subset_by_index=[0, meas.n_modes - 1])
+        d = nb.effects["local_damping"]
+        t = fx.interpolation_matrix(model, [d.get("x_m", nb.length_m)])[0]
+        z = np.maximum(z - d["c_Ns_m"] * (t @ phi) ** 2 / (2 * np.sqrt(w2)), 0.05 * z)
+    a, b = rayleigh_fit(w, z)
+    return nb.with_effects({**nb.effects_dict(), "proportional_damping": {"alpha_1_s": a, "beta_s": b}})
+
+
+def _shape_dof(meas: Measurement, mask) -> int:
+    if meas.shapes is None:
+        return 0
+    return (2 if has_complex_shapes(meas) else 1) * int(np.sum(mask))
+
+
 def _as_fit(prob: _Problem, res: OptimizeResult, effect: str, meas: Measurement) -> Fit:
     k = len(prob.params)
-    if prob.damping:
-        prob.rayleigh_u = res.x[k:]
-    nb, ei_s, ms = prob.beam_at(res.x[:k])
+    nb, ei_s, ms = prob.beam_at(res.x)
     r = res.fun
     chi2 = float(r @ r)
     n_obs, n_par = r.size, res.x.size
-    s2 = max(1.0, chi2 / (n_obs - n_par)) if n_obs > n_par else 1.0
+    dof = n_obs - n_par - _shape_dof(meas, prob.mask)
+    s2 = max(1.0, chi2 / dof) if dof > 0 else 1.0
     J = res.jac
     try:
         cov = s2 * np.linalg.pinv(J.T @ J)
@@ -567,14 +665,13 @@ def _as_fit(prob: _Problem, res: OptimizeResult, effect: str, meas: Measurement)
     if "shear_deformation.kGA_N" in params:
         params["shear_deformation.G_core_pa"] = g_core_pa(params["shear_deformation.kGA_N"], nb)
         std["shear_deformation.G_core_pa"] = g_core_pa(std["shear_deformation.kGA_N"], nb)
-    if prob.damping:
-        pd = nb.effects["proportional_damping"]
-        for key, ref, i in (("alpha_1_s", prob.rayleigh_ref[0], k), ("beta_s", prob.rayleigh_ref[1], k + 1)):
-            params[f"proportional_damping.{key}"] = pd[key]
-            std[f"proportional_damping.{key}"] = ref * std_u[i]
-    pred = predict(nb, meas, prob.n_elements)
-    return Fit(effect, tuple(nb.effects), nb, params, std, chi2, n_obs, n_par,
-               chi2 + n_par * math.log(n_obs), float("nan"), mode_residuals(meas, pred, prob.pairs))
+    pred = prob.predict(nb)
+    white = prob.blocks(pred)
+    blocks = {b: float(v @ v) for b, v in white.items()}
+    if meas.damping_ratios is not None:
+        nb = _with_rayleigh(nb, meas)
+    return Fit(effect, tuple(nb.effects), nb, params, std, chi2, n_obs, n_par, chi2 + n_par * math.log(n_obs),
+               float("nan"), mode_residuals(meas, pred, prob.pairs), dof, blocks, white)
 
 
 # ---------------------------------------------------------------------------
@@ -583,13 +680,113 @@ def _as_fit(prob: _Problem, res: OptimizeResult, effect: str, meas: Measurement)
 
 @dataclass(frozen=True)
 class Step:
-    """One round of the search: the current model, every candidate fitted on top, the decision."""
+    """One round of the search: the current model, every candidate fitted on top, the decision.
+
+    Attributes
+    ----------
+    base : Fit
+    candidates : tuple of Fit   (ascending score)
+    named : str
+        The effect named in this round, ``"none"`` when nothing is significant.
+    indistinguishable_from : tuple of str
+        Significant candidates whose fitted predictions of the measured
+        quantities lie within the noise of the named one's (:data:`DISTINCT`).
+    separating_measurement : str
+        The measurement predicted to separate the named effect from the first of them.
+    c_hat : dict
+        Variance inflation of each data block in the round (:func:`_round`):
+        1 when the best fit's residual in the block is consistent with its
+        noise, else its ``chi^2 / dof``.
+    """
 
     base: Fit
     candidates: tuple
     named: str
     indistinguishable_from: tuple
     separating_measurement: str
+    c_hat: dict = field(default_factory=dict)
+
+    def score(self, fit: Fit) -> float:
+        """``sum_b chi^2_b / c_b + k ln n`` (BIC with each block's noise inflated by ``c_b``; lower is better)."""
+        chi2 = sum(v / self.c_hat.get(k, 1.0) for k, v in fit.chi2_blocks.items())
+        return chi2 + fit.n_params * math.log(fit.n_obs)
+
+    def distance(self, a: Fit, b: Fit) -> float:
+        """Squared difference of two fits' whitened residuals (their predictions, in noise units), like chi^2."""
+        return sum(float(np.sum((a.whitened[k] - b.whitened[k]) ** 2)) / self.c_hat.get(k, 1.0) for k in a.whitened)
+
+
+@dataclass(frozen=True)
+class NoiseCheck:
+    """Is the residual of a fit consistent with the noise that whitened it?
+
+    Attributes
+    ----------
+    chi2 : float
+    dof : float   (FRF lines counted at their weight)
+    chi2_per_dof : float
+    p_value : float
+        ``P(chi^2_dof >= chi2)``.
+    consistent : bool
+        ``P_LOW <= p_value <= 1 - P_LOW`` (two-sided, :data:`P_NOISE`).
+    verdict : str
+        ``"consistent"``, ``"residual larger than the noise"`` or ``"residual smaller than the noise"``.
+    blocks : dict
+        The same test per data block: ``{block: {"chi2", "dof", "chi2_per_dof", "p_value", "verdict"}}``.
+    """
+
+    chi2: float
+    dof: int
+    chi2_per_dof: float
+    p_value: float
+    consistent: bool
+    verdict: str
+    blocks: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        return {"chi2": self.chi2, "dof": self.dof, "chi2_per_dof": self.chi2_per_dof, "p_value": self.p_value,
+                "noise_consistent": self.consistent, "verdict": self.verdict, "blocks": self.blocks}
+
+
+#: Two-sided level of the chi^2 test of the noise.
+P_NOISE = 0.01
+
+
+def frf_scatter_db(meas: Measurement) -> float:
+    """Random noise (std, dB) of the measured FRF magnitudes from their line-to-line scatter.
+
+    For independent noise of std ``s`` on each line the second difference along
+    frequency has std ``sqrt(6) s``; the smooth FRF adds little between dense
+    lines, and the median absolute deviation ignores the peaks. Floored at 0.01 dB.
+    """
+    x = _db(meas.frf).reshape(-1, meas.frf_frequency_hz.size)
+    d2 = x[:, 2:] - 2 * x[:, 1:-1] + x[:, :-2]
+    mad = np.median(np.abs(d2 - np.median(d2, axis=1, keepdims=True)))
+    return max(float(1.4826 * mad / math.sqrt(6)), 0.01)
+
+
+def _chi2_test(chi2: float, dof: int) -> tuple[float, str]:
+    from scipy.stats import chi2 as chi2_dist
+
+    if dof <= 0:
+        return float("nan"), "no degrees of freedom left"
+    p = float(chi2_dist.sf(chi2, dof))
+    return p, ("residual larger than the noise" if p < P_NOISE / 2 else
+               "residual smaller than the noise" if p > 1 - P_NOISE / 2 else "consistent")
+
+
+def noise_check(fit: Fit, meas: Measurement) -> NoiseCheck:
+    """chi^2 test of ``fit``'s whitened residual against its degrees of freedom, overall and per block."""
+    p, verdict = _chi2_test(fit.chi2, fit.dof)
+    blocks = {}
+    for k, dof in fit.block_dof(meas).items():
+        pb, vb = _chi2_test(fit.chi2_blocks[k], dof)
+        blocks[k] = {"chi2": fit.chi2_blocks[k], "dof": dof,
+                     "chi2_per_dof": fit.chi2_blocks[k] / dof if dof > 0 else float("nan"), "p_value": pb,
+                     "verdict": vb}
+    consistent = verdict in ("consistent", "no degrees of freedom left")
+    return NoiseCheck(fit.chi2, fit.dof, fit.chi2 / fit.dof if fit.dof > 0 else float("nan"), p, consistent,
+                      verdict, blocks)
 
 
 @dataclass(frozen=True)
@@ -607,6 +804,12 @@ class DiscrepancyResult:
     noise : Noise
     untestable : dict
         Candidate -> why it could not be tested on this data.
+    evidence : dict
+        Named effect -> the data block (:data:`BLOCKS`) whose chi^2 fell most when it was named.
+    evidence_chi2_drop : dict
+        Named effect -> {block: chi^2 drop / c_b}.
+    noise_check : NoiseCheck
+        Of the final model.
     """
 
     nominal: ModeResiduals
@@ -615,6 +818,9 @@ class DiscrepancyResult:
     named_effects: tuple
     noise: Noise
     untestable: dict = field(default_factory=dict)
+    evidence: dict = field(default_factory=dict)
+    evidence_chi2_drop: dict = field(default_factory=dict)
+    noise_check: NoiseCheck | None = None
 
 
 def _candidate_fit(beam, meas, noise, name, fixed, n_elements, pairs, fit_mass, n_starts, seed, named, start,
@@ -635,9 +841,12 @@ def _candidate_fit(beam, meas, noise, name, fixed, n_elements, pairs, fit_mass, 
             refined, _, _ = _fit(beam, meas, noise, name, fixed, n_elements, pairs, n_starts=1, position=positions,
                                  fit_mass=fit_mass, seed=seed, named=named,
                                  start={**start, name: f.beam.effects_dict()[name]})
-            return refined, positions
+            if refined.chi2 <= f.chi2:
+                return refined, positions
+            # the local search from the best measured point went astray: keep that point
         # the discrete position counts as a parameter
-        return replace(f, n_params=f.n_params + 1, bic=f.bic + math.log(f.n_obs), lomo=_lomo(prob, x_opt)), pos
+        return replace(f, n_params=f.n_params + 1, bic=f.bic + math.log(f.n_obs), dof=f.dof - 1,
+                       lomo=_lomo(prob, x_opt)), pos
     f, _, _ = _fit(beam, meas, noise, name, fixed, n_elements, pairs, n_starts=n_starts, position=positions, **kw)
     return f, positions
 
@@ -709,6 +918,21 @@ def analyse(beam: Beam, meas: Measurement, noise: Noise | None = None, *, candid
         return _analyse(beam, meas, noise or Noise(), candidates, max_effects, n_elements, n_starts, seed, progress)
 
 
+def _round(base: Fit, fits, meas: Measurement) -> "Step":
+    """A round's variance inflation per data block, from its best-fitting model.
+
+    ``c_b`` is that model's ``chi^2_b / dof_b`` where the chi^2 test rejects the
+    block's residual as larger than its noise (quasi-likelihood, Burnham &
+    Anderson 2002), else 1: a block the models cannot fit to its noise weighs
+    by its actual scatter.
+    """
+    best = min([base, *fits], key=lambda f: f.chi2)
+    chk = noise_check(best, meas)
+    c_hat = {k: (b["chi2_per_dof"] if b["verdict"] == "residual larger than the noise" else 1.0)
+             for k, b in chk.blocks.items()}
+    return Step(base, (), "none", (), "", c_hat)
+
+
 def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, seed, progress):
     unknown = [c for c in candidates if c not in fx.CANDIDATES]
     if unknown:
@@ -716,9 +940,10 @@ def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, s
     fit_mass = meas.frf is not None
     untestable = {}
     names = list(candidates)
-    if meas.damping_ratios is None and "local_damping" in names:
+    if "local_damping" in names and meas.frf is None and not has_complex_shapes(meas):
         names.remove("local_damping")
-        untestable["local_damping"] = "needs damping ratios (or FRFs)"
+        untestable["local_damping"] = ("modal damping (one ratio per mode) fits any damping ratios; a dashpot "
+                                       "needs complex mode shapes or FRFs")
     nominal_pred = predict(beam, meas, n_elements)
     pairs = pair_modes(meas, nominal_pred)
     nominal = mode_residuals(meas, nominal_pred, pairs)
@@ -727,7 +952,7 @@ def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, s
     say("globals only")
     base, _, _ = _fit(beam, meas, noise, "none", fixed, n_elements, pairs, fit_mass=fit_mass, n_starts=n_starts,
                       seed=seed)
-    steps, named, positions = [], [], {}
+    steps, named, positions, evidence, drops = [], [], {}, {}, {}
     while len(named) < max_effects:
         todo = [c for c in names if c not in named and c not in fixed]
         if not todo:
@@ -740,28 +965,35 @@ def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, s
                                     tuple(named), start, positions)
             fits.append(f)
             used[c] = pos
-        fits.sort(key=lambda f: f.bic)
+        probe = _round(base, fits, meas)
+        fits.sort(key=probe.score)
         best = fits[0]
         # an effect needs data left over to be tested: more observations than parameters and a held-out check
         testable = best.n_obs > best.n_params and np.isfinite(best.lomo)
         lomo_ok = testable and (not np.isfinite(base.lomo) or best.lomo <= base.lomo)
-        significant = best.bic <= base.bic - BIC_SIGNIFICANT and lomo_ok
+        significant = probe.score(best) <= probe.score(base) - BIC_SIGNIFICANT and lomo_ok
         if not significant:
-            steps.append(Step(base, tuple(fits), "none", (), ""))
+            steps.append(replace(probe, candidates=tuple(fits)))
             break
-        # explain the data equally well: also significant, and a likelihood within e^1 of the winner's
-        # (chi^2, not BIC: a parameter more must not make two equal fits look different)
+        # indistinguishable: also significant, and predicting the measured quantities within the noise of the
+        # winner's predictions (the data could not give strong evidence for one over the other)
         ties = tuple(f.effect for f in fits[1:]
-                     if f.bic <= base.bic - BIC_SIGNIFICANT and f.chi2 - best.chi2 < BIC_INDISTINGUISHABLE)
+                     if probe.score(f) <= probe.score(base) - BIC_SIGNIFICANT
+                     and probe.distance(f, best) < DISTINCT)
         sep = ""
         if ties:
             other = next(f for f in fits if f.effect == ties[0])
             sep = _separating_measurement(best, other, meas, noise, n_elements)
-        steps.append(Step(base, tuple(fits), best.effect, ties, sep))
+        steps.append(replace(probe, candidates=tuple(fits), named=best.effect, indistinguishable_from=ties,
+                             separating_measurement=sep))
+        drops[best.effect] = {b: (base.chi2_blocks[b] - best.chi2_blocks[b]) / probe.c_hat.get(b, 1.0)
+                              for b in best.chi2_blocks}
+        evidence[best.effect] = max(drops[best.effect], key=drops[best.effect].get)
         named.append(best.effect)
         positions = used[best.effect]
         base = best
-    return DiscrepancyResult(nominal, tuple(steps), base, tuple(named), noise, untestable)
+    return DiscrepancyResult(nominal, tuple(steps), base, tuple(named), noise, untestable, evidence, drops,
+                             noise_check(base, meas))
 
 
 def simulate_measurement(truth: Beam, n_modes: int = 4, noise: Noise | None = None, *, seed: int = 0,
