@@ -25,6 +25,8 @@ import time
 from experiments.study_discrepancy import SHORT, TRUTHS, confusion
 from physics.effects import CANDIDATES
 
+__all__ = ["main"]
+
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])

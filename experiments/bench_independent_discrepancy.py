@@ -33,6 +33,8 @@ import numpy as np
 
 from physics.io import atomic_write_text
 
+__all__ = ["main", "markdown", "run_cases", "run_cli"]
+
 KINDS = {"modal": "modal JSON", "frequencies": "frequencies + damping", "uff": "FRF (UFF)"}
 SHORT = {"none": "none", "shear_deformation": "shear", "rotary_inertia": "rotary", "root_flexibility": "root",
          "added_mass": "mass", "local_damping": "l.damp"}
@@ -85,9 +87,9 @@ def run_cases(dirs, kinds, extra=(), progress=True) -> list[dict]:
                                parameters=out["parameters"])
                 rows.append(row)
                 if progress:
+                    ties = ",".join(row.get("indistinguishable_from") or [])
                     print(f"  {d.name} case {case['case']:2d} {kind:11s} truth {case['effect']:18s} -> "
-                          f"{'+'.join(row['effects']) or row['named']}"
-                          f"{' ~' + ','.join(row.get('indistinguishable_from', [])) if row.get('indistinguishable_from') else ''}"
+                          f"{'+'.join(row['effects']) or row['named']}{' ~' + ties if ties else ''}"
                           f" chi2/dof {row.get('chi2_per_dof', float('nan')):.3g} ({row['seconds']:.0f} s)", flush=True)
     return rows
 

@@ -17,6 +17,8 @@ from physics.effects import CANDIDATES
 from physics.errors import ConfigError
 from physics.io import dof_positions_text
 
+__all__ = ["EXAMPLE", "add_parser", "run"]
+
 
 def run(args) -> dict:
     noise = dsc.Noise(args.frequency_noise, shape=args.shape_noise, frf_db=args.frf_noise_db)

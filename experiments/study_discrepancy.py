@@ -23,6 +23,9 @@ from physics.effects import CANDIDATES
 from physics.errors import ConfigError, FileFormatError
 from physics.io import atomic_write_bytes, modal_data_from_dict, number_list, read_frf, read_json
 
+__all__ = ["EXAMPLE", "EXAMPLE_SHAPES", "TRUTHS", "assumed_noise", "beam5_section", "confusion", "load_measurement",
+           "run", "run_case", "run_discrepancy"]
+
 EXAMPLE = Path(__file__).parents[1] / "physics" / "data" / "thesis" / "beam5_table_4_3.json"
 
 

@@ -69,6 +69,11 @@ from physics.beam import Beam
 from physics.errors import BeamDamageError, ShapeError
 from physics.modal import mac, undamped_modes
 
+__all__ = ["BIC_SIGNIFICANT", "BLOCKS", "DISTINCT", "DiscrepancyResult", "Fit", "Measurement", "ModeResiduals",
+           "Noise", "NoiseCheck", "P_NOISE", "Prediction", "Step", "analyse", "frf_scatter_db", "g_core_pa",
+           "has_complex_shapes", "mode_residuals", "noise_check", "pair_modes", "predict", "rayleigh_fit",
+           "simulate_measurement"]
+
 try:  # installed with scikit-learn; only a speed-up
     from threadpoolctl import threadpool_limits
 except ImportError:  # pragma: no cover
@@ -637,7 +642,6 @@ def _shape_dof(meas: Measurement, mask) -> int:
 
 
 def _as_fit(prob: _Problem, res: OptimizeResult, effect: str, meas: Measurement) -> Fit:
-    k = len(prob.params)
     nb, ei_s, ms = prob.beam_at(res.x)
     r = res.fun
     chi2 = float(r @ r)

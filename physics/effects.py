@@ -43,6 +43,9 @@ import numpy as np
 from physics import fem
 from physics.errors import BeamDamageError, ConfigError
 
+__all__ = ["CANDIDATES", "EFFECTS", "Parameter", "assemble_beam", "dashpot_matrix", "hermite_row",
+           "interpolation_matrix", "point_mass_matrix", "timoshenko_mass", "timoshenko_stiffness", "validate_effects"]
+
 
 @dataclass(frozen=True)
 class Parameter:
