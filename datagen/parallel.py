@@ -145,8 +145,21 @@ def check_arguments(cfg: dict, n: int, seed: int, workers: int, root=None) -> No
                                   f"{existing} has {free / 1e9:.3g} GB free", parameter="n")
 
 
+#: Address schemes of Dask's communication layer (``scheme://host:port``).
+SCHEDULER_SCHEMES = ("tcp", "tls", "inproc", "ws", "wss", "ucx")
+
+
 def _connect(scheduler: str):
-    """A Dask client of ``scheduler`` (connected before anything is written), or a one-line error."""
+    """A Dask client of ``scheduler`` (connected before anything is written), or a one-line error.
+
+    The address's form is checked before Dask is imported, so a malformed one is refused at once."""
+    host, _, port = scheduler.rpartition(":")
+    if "://" not in scheduler and host and port.isdigit():
+        scheduler = f"tcp://{scheduler}"                 # host:port, Dask's default scheme
+    scheme, sep, rest = scheduler.partition("://")
+    if not sep or scheme not in SCHEDULER_SCHEMES or not rest.strip():
+        raise BeamDamageError(f"scheduler {scheduler!r}: expected an address scheme://host:port with a scheme in "
+                              f"{', '.join(SCHEDULER_SCHEMES)}, such as tcp://host:8786", parameter="scheduler")
     try:
         from distributed import Client
     except ImportError:
