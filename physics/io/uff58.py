@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 import warnings
 from pathlib import Path
 
@@ -415,4 +416,9 @@ def write_uff58(path, data: MeasuredFRF, binary=False) -> None:
                 orddenom_spec_data_type=13, abscissa_axis_units_lab="Hz",
                 ordinate_axis_units_lab=data.units[:20]))
     with atomic_path(path) as tmp:  # pyuff creates the file; binary records need mode "add" on a fresh file
-        pyuff.UFF(str(tmp)).write_sets(sets, mode="add")
+        with warnings.catch_warnings():
+            # pyuff's binary dataset-58 writer leaves a text handle of the file to the garbage collector, which
+            # flushes and closes it; collected here, before the rename, so the file is complete
+            warnings.simplefilter("ignore", ResourceWarning)
+            pyuff.UFF(str(tmp)).write_sets(sets, mode="add")
+            gc.collect()

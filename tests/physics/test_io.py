@@ -292,3 +292,17 @@ def test_uff58b_byte_order_and_float_format_codes_outside_the_standard_are_refus
     (tmp_path / "x.uff").write_bytes(bytes(raw))
     with pytest.raises(FileFormatError, match=message):
         read_uff58(tmp_path / "x.uff")
+
+
+def test_binary_uff58_writer_leaves_no_open_file(tmp_path):
+    """pyuff's binary 58 writer leaves a file handle behind: the writer closes it before the rename (no
+    ResourceWarning reaches the caller, whose CLI would print it) and the file reads back whole."""
+    import warnings as _w
+
+    frf = MeasuredFRF(np.linspace(1, 100, 50), (np.arange(100).reshape(2, 1, 50) + 1j).astype(complex),
+                      ("2:+Y", "3:+Y"), ("2:+Y",))
+    with _w.catch_warnings(record=True) as caught:
+        _w.simplefilter("always")
+        write_uff58(tmp_path / "b.uff", frf, binary=True)
+    assert not [w for w in caught if issubclass(w.category, ResourceWarning)]
+    np.testing.assert_allclose(read_frf(tmp_path / "b.uff").frf, frf.frf)
