@@ -20,6 +20,7 @@ import numpy as np
 import torch
 from scipy.special import expit
 from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.utils.validation import check_is_fitted
 
 from learn.features import split_by_specimen
 from learn.models import DamageNet, loss_terms
@@ -165,15 +166,26 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         log_size = np.log(np.where(damaged, np.maximum(y[:, 2], 1e-9), 1.0))
         return damaged.astype(np.float32), soft.astype(np.float32), log_size.astype(np.float32)
 
+    def _check_X(self, X) -> np.ndarray:
+        """Fitted, and ``X`` a finite (n, n_features_in_) matrix (scikit-learn's conventions), else a ValueError."""
+        check_is_fitted(self, "model_")
+        X = np.asarray(X, float)
+        if X.ndim != 2 or X.shape[1] != self.n_features_in_:
+            raise BeamDamageError(f"X has {X.shape[-1] if X.ndim else 0} features (shape {X.shape}), but "
+                                  f"DamageClassifier is expecting {self.n_features_in_} features as input")
+        if not np.all(np.isfinite(X)):
+            raise BeamDamageError("X must be finite (no NaN or inf)")
+        return X
+
     def _tensor(self, X):
-        Z = (np.asarray(X, float) - self.mean_) / self.scale_
+        Z = (self._check_X(X) - self.mean_) / self.scale_
         return torch.as_tensor(Z, dtype=torch.float32, device=self.device_)
 
     def _raw(self, X, batch=8192) -> dict:
+        T = self._tensor(X)
         self.model_.eval()
         outs = []
         with torch.no_grad(), torch_threads(self.n_threads):
-            T = self._tensor(X)
             for i in range(0, T.shape[0], batch):
                 outs.append({k: v.cpu().numpy() for k, v in self.model_(T[i:i + batch]).items()})
         return {k: np.concatenate([o[k] for o in outs]) for k in outs[0]} if outs else {}
@@ -197,7 +209,7 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         self.scale_ = X[tr].std(axis=0) + 1e-8
         Z = (X[tr] - self.mean_) / self.scale_
         self.precision_ = np.linalg.pinv(np.cov(Z, rowvar=False) + 1e-3 * np.eye(X.shape[1]))
-        self.reference_distances_ = np.sort(self.mahalanobis(X[tr]))
+        self.reference_distances_ = np.sort(self._distances(Z))
         self.n_features_in_ = X.shape[1]
         self.classes_ = np.array([0, 1])
         self.device_ = _device(self.device)
@@ -248,7 +260,9 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
     # ------------------------------------------------------------------ predict
     def mahalanobis(self, X):
         """Mahalanobis distance of feature rows to the training features (out-of-distribution score)."""
-        Z = (np.asarray(X, float) - self.mean_) / self.scale_
+        return self._distances((self._check_X(X) - self.mean_) / self.scale_)
+
+    def _distances(self, Z):
         return np.sqrt(np.maximum(np.einsum("ni,ij,nj->n", Z, self.precision_, Z), 0.0))
 
     def decision_function(self, X):
@@ -260,6 +274,14 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
 
     def predict(self, X):
         return (self.predict_proba(X)[:, 1] >= self.threshold_).astype(int)
+
+    def score(self, X, y, sample_weight=None) -> float:
+        """Accuracy of the damaged / intact verdict; ``y`` is the (n, 3) target of :meth:`fit` or its first column."""
+        from sklearn.metrics import accuracy_score
+
+        y = np.asarray(y, float)
+        damaged = (y[:, 0] if y.ndim == 2 else y) > 0.5
+        return float(accuracy_score(damaged.astype(int), self.predict(X), sample_weight=sample_weight))
 
     def predict_details(self, X) -> Prediction:
         raw = self._raw(X)

@@ -240,3 +240,25 @@ def test_a_missing_mode_or_unpaired_shapes_put_a_pair_outside_the_training_data(
     bad = (np.stack([lam[:4], lam[miss]])[None], np.stack([vec[:, :4], vec[:, miss]])[None])
     reasons = _mode_checks(*bad, nominal_ratio_range(sens))[0]
     assert any("measured f2/f1" in r for r in reasons) and any("do not pair" in r for r in reasons)
+
+
+def test_damage_classifier_follows_scikit_learn_conventions():
+    """Parameters only in __init__ (scikit-learn's own checks), NotFittedError before fit, X of the wrong width
+    refused naming both widths, score = accuracy of the verdict for the (n, 3) targets or their first column."""
+    from sklearn.exceptions import NotFittedError
+    from sklearn.utils.estimator_checks import (check_get_params_invariance, check_no_attributes_set_in_init,
+                                                check_parameters_default_constructible, check_set_params)
+
+    for check in (check_no_attributes_set_in_init, check_get_params_invariance, check_set_params,
+                  check_parameters_default_constructible):
+        check("DamageClassifier", DamageClassifier())
+    with pytest.raises(NotFittedError):
+        DamageClassifier().predict(np.zeros((2, 4)))
+    rng = np.random.default_rng(2)
+    X, y = _synthetic(300, rng)
+    est = DamageClassifier(hidden=16, depth=1, epochs=2, n_bins=40, random_state=0).fit(X, y)
+    assert est.n_features_in_ == X.shape[1]
+    with pytest.raises(BeamDamageError, match=f"X has {X.shape[1] - 1} features .* expecting {X.shape[1]}"):
+        est.predict(X[:, :-1])
+    acc = np.mean(est.predict(X) == (y[:, 0] > 0.5))
+    assert est.score(X, y) == pytest.approx(acc) == est.score(X, y[:, 0])
