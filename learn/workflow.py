@@ -465,7 +465,7 @@ def _mode_checks(lam, vecs, ratio_range) -> list[list[str]]:
     return reasons
 
 
-def _modal_inputs(model: TrainedModel, baseline, currents: list, names: list[str]):
+def _modal_inputs(model: TrainedModel, baseline, currents: list, names: list[str], sens):
     """Modal data of the baseline and every current input: (ModalData, list of ModalData, identified: bool)."""
     from physics.io import MeasuredFRF
 
@@ -474,7 +474,6 @@ def _modal_inputs(model: TrainedModel, baseline, currents: list, names: list[str
         raise BeamDamageError("BASELINE and MEASURED must all be FRF files or all modal data")
     if not kinds.pop():
         return baseline, list(currents), False
-    sens = sensitivity_of(model.beam, model.config.get("root_spring_relative"), model.config.get("truth_beam"))
     fmax = IDENTIFICATION_BAND_FACTOR * float(sens.frequencies_hz[3])
     try:
         ids = [identify_modes(d, fmax, n) for d, n in zip([baseline, *currents], names)]
@@ -557,7 +556,7 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     L = beam.length_m
     warnings: list[str] = []
     sens = sensitivity_of(beam, model.config.get("root_spring_relative"), model.config.get("truth_beam"))
-    base_md, cur_md, identified = _modal_inputs(model, baseline, currents, names)
+    base_md, cur_md, identified = _modal_inputs(model, baseline, currents, names, sens)
     lam = vecs = None
     if base_md is not None:
         pairs = [modal_pair(base_md, c, beam) for c in cur_md]
