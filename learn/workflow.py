@@ -455,7 +455,7 @@ def _mode_checks(lam, vecs, ratio_range) -> list[list[str]]:
     mac = np.abs(np.sum(u[:, 0] * u[:, 1], axis=1)) ** 2  # (n, m)
     reasons = []
     for i in range(f.shape[0]):
-        r = [f"{name} f{k + 2}/f1 = {ratio[i, s, k]:.4g} lies outside the training range "
+        r = [f"{name} f{k + 2}/f1 = {ratio[i, s, k]:.4g} lies outside the nominal beam's "
              f"{ratio_range[k, 0]:.4g}-{ratio_range[k, 1]:.4g} (a missing or spurious mode)"
              for s, name in enumerate(("baseline", "measured")) for k in range(3)
              if not ratio_range[k, 0] <= ratio[i, s, k] <= ratio_range[k, 1]]
@@ -576,10 +576,6 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
             raise BeamDamageError("this model has no modal-route network; give FRF files holding receptances at "
                                   f"{', '.join(beam.dofs)} driven at {beam.dofs[0]}")
         X = modal_features(lam, vecs)
-    if identified:
-        warnings.append(f"modes identified from the FRF files by {IDENTIFICATION['method'].upper()}/LSFD "
-                        f"({IDENTIFICATION['n_modes']} modes), the identification the training data's modal "
-                        "noise describes")
     calibrated = (model.config.get("generator_config") or {}).get("measurement", {}).get("identification")
     if identified and calibrated != IDENTIFICATION:
         warnings.append("the training data's modal noise was not calibrated against the identification run "

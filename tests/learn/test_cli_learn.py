@@ -188,7 +188,9 @@ def test_modal_route_model_classifies_frf_files_through_identified_modes(tiny, c
     f_true = np.abs(ds.array("truth_poles")[0, :, :4]) / (2 * np.pi)
     np.testing.assert_allclose(res["identification"]["baseline_frequencies_hz"], f_true[0], rtol=2e-3)
     np.testing.assert_allclose(res["identification"]["measured_frequencies_hz"], f_true[1], rtol=2e-3)
-    assert res["input_route"] == "modal" and any("LSCF/LSFD" in w for w in res["warnings"])
+    assert res["input_route"] == "modal" and res["identification"]["source"] == "identified from FRFs"
+    assert res["identification"]["method"] == "lscf"
+    assert not any("not calibrated against the identification" in w for w in res["warnings"])
 
 
 def test_refusals_and_bad_input_exit_2(tiny, capsys):
