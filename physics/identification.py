@@ -965,7 +965,11 @@ def lsfd(frequency_hz, frf, eigenvalues, lower_residual=True, upper_residual=Tru
     eigenvalues : ndarray, complex, shape (n_modes,)
     lower_residual, upper_residual : bool
     kind : {"receptance", "mobility", "accelerance"}
-    weighting : {"relative", "uniform"} or ndarray
+    weighting : {"relative", "uniform", "estimated"} or ndarray
+        ``"estimated"``: a relative-weighted start, then :data:`ESTIMATION_PASSES` refits weighted by the noise
+        model ``sqrt((a |H|)^2 + b^2)`` of each FRF fitted to the previous residuals
+        (:func:`estimate_noise_model`): relative weighting where the data have no floor, noise weighting where
+        a floor dominates the antiresonances (the default of :func:`identify_lscf`).
 
     Returns
     -------
