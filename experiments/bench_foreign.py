@@ -10,7 +10,7 @@ no code with the project). Every pair is classified as a user would: ``beam-dama
 
 * ``element acc.``: damaged pairs called damaged with the slit in the right quarter of the beam (element 1-4);
 * ``detection``: damaged pairs called damaged; ``false alarms``: intact pairs called damaged;
-* ``size err.``: median ``|s / s_true - 1|`` of the stiffness loss ``dEI * width`` over detected slits;
+* ``size err.``: median ``|s / s_true - 1|`` of the hinge flexibility ``w r / ((1 - r) L)`` over detected slits;
   ``1-sigma cover``: share of detected slits whose truth lies within the reported standard deviation;
 * ``in distribution``: pairs the network answered (the others got the classical method's verdict), and the
   Mahalanobis distances of intact and damaged pairs against the training percentiles.
@@ -105,7 +105,7 @@ def classify_set(model: Path, pair_dir: Path, truth: list, source_tree: str | No
 
 
 def _answers(v: dict) -> dict:
-    """Method name -> answer dict (damaged, location_element, stiffness_loss_Nm3[, stiffness_loss_std_Nm3])."""
+    """Method name -> answer dict (damaged, location_element, hinge_flexibility[, hinge_flexibility_std])."""
     out = {"verdict": v}
     if "network" in v:
         out["network"] = v["network"]
@@ -118,15 +118,15 @@ def score(verdicts: list[dict], truth: list) -> list[dict]:
     """Table rows (one per method) of a set's verdicts against the simulator's truth."""
     damaged = np.array([bool(t["damaged"]) for t in truth])
     element = np.array([int(t["element"]) if t["damaged"] else 0 for t in truth])
-    size = np.array([float(t["stiffness_loss_Nm3"]) for t in truth])
+    size = np.array([float(t["hinge_flexibility"]) for t in truth])
     answers = [_answers(v) for v in verdicts]
     rows = []
     for method in answers[0]:
         a = [x[method] for x in answers]
         called = np.array([bool(x["damaged"]) for x in a])
         el = np.array([int(x["location_element"]) if x.get("location_element") is not None else 0 for x in a])
-        s = np.array([float(x["stiffness_loss_Nm3"]) if x.get("stiffness_loss_Nm3") is not None else np.nan for x in a])
-        sd = np.array([float(x["stiffness_loss_std_Nm3"]) if x.get("stiffness_loss_std_Nm3") is not None else np.nan
+        s = np.array([float(x["hinge_flexibility"]) if x.get("hinge_flexibility") is not None else np.nan for x in a])
+        sd = np.array([float(x["hinge_flexibility_std"]) if x.get("hinge_flexibility_std") is not None else np.nan
                        for x in a])
         det = damaged & called
         err = np.abs(s[det] / size[det] - 1)

@@ -10,7 +10,9 @@ human-readable view itself (only when ``args.json`` is false). Errors derived
 from :class:`physics.errors.BeamDamageError` (and ``OSError`` on user files)
 become one line on stderr and exit code 2; warnings raised while a command runs are dropped when it fails
 (the error line is the whole story) and otherwise printed after it, one line each
-(``beam-damage COMMAND: warning: ...``).
+(``beam-damage COMMAND: warning: ...``). Commands run with one BLAS thread: their matrices are small
+(at most a few hundred DOFs, batched), where more threads only add overhead and, on a shared machine,
+slow a command down many times; parallel work uses processes (``generate --workers``) or torch threads.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ import sys
 import warnings
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from physics.errors import BeamDamageError
 from physics.io import format_complex
@@ -111,7 +114,7 @@ def main(argv=None) -> int:
     parser = build_parser(argv)
     args = parser.parse_args(argv)
     try:
-        with warnings.catch_warnings(record=True) as caught:
+        with warnings.catch_warnings(record=True) as caught, threadpool_limits(1, user_api="blas"):
             warnings.simplefilter("default")
             result = args.func(args)
     except BeamDamageError as exc:

@@ -9,7 +9,7 @@ import numpy as np
 __all__ = ["KEYS", "add_parser", "run"]
 
 KEYS = ("measured", "damaged", "probability_damaged", "location_x_over_L", "location_x_m", "location_std_m",
-        "location_element", "element_probabilities", "stiffness_loss_Nm3", "stiffness_loss_std_Nm3", "depth_m",
+        "location_element", "element_probabilities", "hinge_flexibility", "hinge_flexibility_std", "depth_m",
         "detectable", "verdict_from", "in_distribution", "out_of_distribution_reasons", "mahalanobis_distance",
         "training_percentile", "network", "classical", "classical_methods", "identification", "input_route",
         "warnings", "dof_positions")
@@ -97,18 +97,18 @@ def _network_sentence(a: dict) -> str:
         return (f"possibly damaged (probability {a['probability_damaged']:.1%}), but not detectable here: a slit like "
                 f"the one that would explain the data, near x = {a['location_x_m']:.3f} m, changes the natural "
                 "frequencies by less than the measurement resolution")
-    depth = "" if a["depth_m"] is None else f", i.e. a slit about {a['depth_m'] * 1000:.2f} mm deep over 5.5 mm"
+    depth = "" if a["depth_m"] is None else f", e.g. a slit {a['depth_m'] * 1000:.2f} mm deep over 5.5 mm"
     return (f"damaged (probability {a['probability_damaged']:.1%}): slit at x = {a['location_x_m']:.3f} m +- "
             f"{a['location_std_m']:.3f} m (x/L = {a['location_x_over_L']:.2f}, element {a['location_element']} of "
-            f"4), stiffness loss dEI*w = {a['stiffness_loss_Nm3']:.3g} +- {a['stiffness_loss_std_Nm3']:.2g} N m^3"
+            f"4), hinge flexibility EI/(k L) = {a['hinge_flexibility']:.3g} +- {a['hinge_flexibility_std']:.2g}"
             f"{depth}")
 
 
 def _classical_sentence(c: dict) -> str:
     if not c["damaged"]:
         return f"{c['method']}: undamaged"
-    return (f"{c['method']}: damaged, x = {c['location_x_m']:.3f} m (element {c['location_element']}), stiffness "
-            f"loss {c['stiffness_loss_Nm3']:.3g} N m^3")
+    return (f"{c['method']}: damaged, x = {c['location_x_m']:.3f} m (element {c['location_element']}), hinge "
+            f"flexibility {c['hinge_flexibility']:.3g}")
 
 
 def verdict_text(res: dict) -> str:

@@ -117,8 +117,8 @@ def _verdict_text(v: dict, length_m: float) -> str:
     if net["damaged"]:
         net_text = (f"the network says **damaged** (probability {net['probability_damaged']:.3f}), slit at "
                     f"x = {net['location_x_m']:.3f} +- {net['location_std_m']:.3f} m (x/L = "
-                    f"{net['location_x_over_L']:.2f}), element {net['location_element']} of 4, stiffness loss "
-                    f"{net['stiffness_loss_Nm3']:.3g} +- {net['stiffness_loss_std_Nm3']:.2g} N m^3")
+                    f"{net['location_x_over_L']:.2f}), element {net['location_element']} of 4, hinge flexibility "
+                    f"{net['hinge_flexibility']:.3g} +- {net['hinge_flexibility_std']:.2g}")
     else:
         net_text = f"the network says **undamaged** (probability of damage {net['probability_damaged']:.3f})"
     cl_text = (f"{cl['method']} says **damaged**, x = {cl['location_x_m']:.3f} m (element {cl['location_element']})"
@@ -140,7 +140,7 @@ def _answers(v: dict) -> list[dict]:
              "verdict taken": "yes" if name == taken else "",
              "damaged": a["damaged"], "probability of damage": a.get("probability_damaged"),
              "x_m": round(a["location_x_m"], 4), "element": a["location_element"],
-             "stiffness_loss_Nm3": float(f"{a['stiffness_loss_Nm3']:.3g}")} for name, a in methods if a]
+             "hinge_flexibility": float(f"{a['hinge_flexibility']:.3g}")} for name, a in methods if a]
 
 
 #: Metrics of the classifier in the summary: key, header, True when larger is better.

@@ -80,7 +80,7 @@ def run(out_dir, model_dir="out/demo/model", n_test: int = 4000, n_train: int = 
     summary = {"model": str(model_dir), "test_pairs": res["pairs"], "rows": rows}
     sec = Section("Damage study: localisation and sizing against noise, size and position",
                   (f"{res['pairs']} held-out test pairs (training config, seed 7) for the model in `{model_dir}`. "
-                   "Sizes are terciles of the slit stiffness loss; "
+                   "Sizes are terciles of the slit hinge flexibility; "
                    "intact pairs count in every subset's false alarms.",),
                   (Table.from_records("Every method on every subset", table),), tuple(figs))
     return summary, [sec]

@@ -12,7 +12,7 @@ sensitivities of the nominal beam (:mod:`learn.sensitivity`) and returns a
 * :func:`mdlac` - multiple-damage LAC: the best non-negative combination of at
   most two elements (all pairs, vectorised), the larger share locates.
 * :func:`sensitivity_updating` - regularised least squares on frequency shifts
-  and shape changes for the stiffness loss of every element of the grid;
+  and shape changes for the hinge flexibility of a slit in every element of the grid;
   reports the element of the largest loss.
 * :class:`BoostedBaseline` - scikit-learn's HistGradientBoosting on the
   network's own features.
@@ -40,17 +40,17 @@ class MethodOutput:
     """Answers of one method for ``n`` pairs.
 
     score : higher = more likely damaged (for ROC); probability : in [0, 1] when calibrated, else None
-    damaged : bool verdict; x_over_L, stiffness_loss_Nm3 : estimates (meaningful where damaged)
+    damaged : bool verdict; x_over_L, hinge_flexibility : estimates (meaningful where damaged)
     """
 
     name: str
     score: np.ndarray
     damaged: np.ndarray
     x_over_L: np.ndarray
-    stiffness_loss_Nm3: np.ndarray
+    hinge_flexibility: np.ndarray
     probability: np.ndarray | None = None
     x_std_over_L: np.ndarray | None = None
-    stiffness_loss_std_Nm3: np.ndarray | None = None
+    hinge_flexibility_std: np.ndarray | None = None
     detectable: np.ndarray | None = None
 
 
@@ -69,7 +69,7 @@ def shape_changes(eigenvectors):
 
 
 def _single_amplitude(df, sens: Sensitivity):
-    """Least-squares stiffness loss of a single slit in each element, >= 0: (n, E)."""
+    """Least-squares hinge flexibility of a single slit in each element, >= 0: (n, E)."""
     S = sens.frequency[: df.shape[1]]
     return np.maximum(df @ S / np.sum(S**2, axis=0), 0.0)
 
@@ -128,9 +128,9 @@ def mdlac(df, sens: Sensitivity, threshold: float) -> MethodOutput:
 
 def sensitivity_updating(df, du, sens: Sensitivity, threshold: float, sigma_f: float = 5e-4,
                          sigma_shape: float = 5e-3, regularisation: float = 1e-3) -> MethodOutput:
-    """Tikhonov-regularised least squares for element stiffness losses from frequencies and shapes.
+    """Tikhonov-regularised least squares for element hinge flexibilities from frequencies and shapes.
 
-    Minimises ``||W (J d - y)||^2 + mu ||d||^2`` over the loss ``d`` (N m^3) of every element, with
+    Minimises ``||W (J d - y)||^2 + mu ||d||^2`` over the hinge flexibility ``d`` of every element, with
     ``y = [df; du]``, ``J`` the FE sensitivities and ``W`` the inverse noise levels; ``mu`` is
     ``regularisation`` times the mean diagonal of ``J^T W^2 J``. Reports the element of the largest loss.
     """
@@ -158,7 +158,7 @@ def false_alarm_threshold(score, damaged, target: float = 0.005) -> float:
 
 
 class BoostedBaseline:
-    """HistGradientBoosting on the pair features: detection, ``x / L`` and ``ln`` stiffness loss."""
+    """HistGradientBoosting on the pair features: detection, ``x / L`` and ``ln`` hinge flexibility."""
 
     def __init__(self, random_state: int = 0, max_iter: int = 300):
         self.random_state = random_state

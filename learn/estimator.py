@@ -7,7 +7,7 @@ Guo et al. 2017) so that ``predict_proba`` is calibrated, and a factor on the si
 head's spread so that one standard deviation covers 68 % of the validation sizes.
 
 Targets ``y`` have three columns: damaged (0/1), ``x / L`` of the slit (NaN if
-intact) and its stiffness loss ``dEI * width`` (N m^3, 0 if intact).
+intact) and its hinge flexibility ``EI / (k_theta L)`` (:func:`learn.features.hinge_flexibility`, 0 if intact).
 """
 
 from __future__ import annotations
@@ -39,8 +39,8 @@ class Prediction:
     x_std_over_L: np.ndarray
     element_probabilities: np.ndarray      # (n, 4) thesis grid
     element: np.ndarray                    # 1..4, most probable
-    stiffness_loss_Nm3: np.ndarray         # median of the log-normal size estimate
-    stiffness_loss_std_Nm3: np.ndarray
+    hinge_flexibility: np.ndarray         # median of the log-normal size estimate
+    hinge_flexibility_std: np.ndarray
     logit: np.ndarray                      # calibrated detection logit
 
 
@@ -156,7 +156,7 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
     def _targets(self, y):
         y = np.asarray(y, float)
         if y.ndim != 2 or y.shape[1] != 3:
-            raise BeamDamageError(f"y must have shape (n, 3) [damaged, x/L, stiffness loss N m^3], got {y.shape}")
+            raise BeamDamageError(f"y must have shape (n, 3) [damaged, x/L, hinge flexibility], got {y.shape}")
         damaged = y[:, 0] > 0.5
         centres = (np.arange(self.n_bins) + 0.5) / self.n_bins
         sig = self.loc_sigma_bins / self.n_bins

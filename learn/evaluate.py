@@ -113,7 +113,7 @@ def metrics(out, truth: dict, mask=None, subset: str = "all", length_m: float = 
         el_acc = float(np.mean(el_hat == el_true))
         within = float(np.mean(np.abs(el_hat - el_true) <= 1))
         loc = float(np.median(np.abs(out.x_over_L[det] - truth["x_over_L"][det])) * length_m * 1000)
-        size = float(np.median(np.abs(out.stiffness_loss_Nm3[det] / truth["stiffness_loss_Nm3"][det] - 1)))
+        size = float(np.median(np.abs(out.hinge_flexibility[det] / truth["hinge_flexibility"][det] - 1)))
     else:
         el_acc = within = loc = size = nan
     ece = nan
@@ -133,7 +133,7 @@ def subsets(truth: dict, table) -> dict:
             if sel.any():
                 out[f"noise {100 * lo:g}-{100 * hi:g} %" if np.isfinite(hi) else f"noise >= {100 * lo:g} %"] = sel
     dam = truth["damaged"]
-    s = truth["stiffness_loss_Nm3"]
+    s = truth["hinge_flexibility"]
     if dam.sum() >= 3:
         q = np.quantile(s[dam], [1 / 3, 2 / 3])
         for name, sel in (("size small", s <= q[0]), ("size medium", (s > q[0]) & (s <= q[1])),

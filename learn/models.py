@@ -4,7 +4,7 @@ Heads
 -----
 ``detect``   one logit of "damaged" (calibrated afterwards by temperature scaling).
 ``locate``   logits over ``n_bins`` equal bins of ``x / L`` (a distribution along the beam).
-``size``     mean and log standard deviation of ``ln(stiffness loss / 1 N m^3)``
+``size``     mean and log standard deviation of ``ln`` hinge flexibility (:func:`learn.features.hinge_flexibility`)
              (Gaussian; trained by its negative log-likelihood on damaged pairs only).
 """
 
@@ -55,7 +55,7 @@ def loss_terms(out: dict, damaged: torch.Tensor, loc_target: torch.Tensor, log_s
     ----------
     damaged : (B,) float 0/1
     loc_target : (B, n_bins) soft target distribution (rows of intact pairs are ignored)
-    log_size : (B,) ``ln`` stiffness loss (ignored where intact)
+    log_size : (B,) ``ln`` hinge flexibility (ignored where intact)
     """
     det = nn.functional.binary_cross_entropy_with_logits(out["detect"], damaged)
     m = damaged > 0.5

@@ -1,11 +1,12 @@
-"""FE sensitivities of the measured modal data to a local loss of flexural rigidity.
+"""FE sensitivities of the measured modal data to a slit's hinge flexibility.
 
-For a mass-normalised undamped mode ``phi_r`` of the nominal cantilever and a
-slit of stiffness loss ``s = dEI * w`` (N m^3) inside element ``e`` of length
-``l_e``, the stiffness change is ``dK ~ -(s / l_e) K_e^1`` (``K_e^1`` the element
-stiffness for ``EI = 1``, eq. 3.9), so to first order
+A slit of hinge flexibility ``theta = EI / (k_theta L)`` (:func:`learn.features.hinge_flexibility`)
+inside element ``e`` of length ``l_e`` of the nominal cantilever changes the
+element stiffness, to first order, by ``dK ~ -(EI L theta / l_e) K_e^1``
+(``K_e^1`` the element stiffness for ``EI = 1``, eq. 3.9), so for a
+mass-normalised undamped mode ``phi_r``
 
-    ``d f_r / f_r = d(omega_r^2) / (2 omega_r^2) = -s phi_r^T K_e^1 phi_r / (2 l_e omega_r^2)``,
+    ``d f_r / f_r = d(omega_r^2) / (2 omega_r^2) = -EI L theta phi_r^T K_e^1 phi_r / (2 l_e omega_r^2)``,
 
 i.e. the curvature squared at the slit (:mod:`datagen.damage`). Shape
 sensitivities are finite differences of the real, unit-norm shapes at the
@@ -38,9 +39,9 @@ class Sensitivity:
     x_over_L : ndarray, shape (E,)           element centres / L
     length_m : float
     EI_Nm2 : float
-    frequency : ndarray, shape (m, E)        relative frequency change per unit stiffness loss (1/(N m^3)), <= 0
+    frequency : ndarray, shape (m, E)        relative frequency change per unit hinge flexibility, <= 0
     shape : ndarray, shape (4 m, E)          change of the real unit-norm shapes (DOF-major per mode, as
-                                             ``reshape`` of (4, m)) per unit stiffness loss (1/(N m^3))
+                                             ``reshape`` of (4, m)) per unit hinge flexibility
     frequencies_hz : ndarray, shape (m,)     nominal natural frequencies
     """
 
@@ -59,10 +60,10 @@ class Sensitivity:
         """Index of the grid element holding ``x / L`` (batched)."""
         return np.clip((np.asarray(x_over_L, float) * self.n_elements).astype(int), 0, self.n_elements - 1)
 
-    def largest_drop(self, x_over_L, stiffness_loss_Nm3):
+    def largest_drop(self, x_over_L, hinge_flexibility):
         """Largest first-order relative frequency drop of a slit (batched), >= 0."""
         e = self.element_of(np.nan_to_num(x_over_L))
-        return np.max(-self.frequency[:, e], axis=0) * np.asarray(stiffness_loss_Nm3, float)
+        return np.max(-self.frequency[:, e], axis=0) * np.asarray(hinge_flexibility, float)
 
 
 @lru_cache(maxsize=16)
@@ -93,9 +94,8 @@ def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7,
     w, phi = undamped_modes(models.M, models.K)
     meas = models.index([f"{1 + n_elements // 4 * q}:y" for q in range(1, 5)])
     u = real_shapes(phi[:, meas, :n_modes].astype(complex))
-    du = (u[1:] - u[0]) / (step * EI * le)                     # (E, 4, m) per unit stiffness loss
     sign = np.sign(np.sum(u[1:] * u[0], axis=-2, keepdims=True))
-    du = (u[1:] * sign - u[0]) / (step * EI * le)
+    du = (u[1:] * sign - u[0]) * L / (step * le)               # (E, 4, m) per unit hinge flexibility
     # exact first-order frequency sensitivities from the element energies
     ke = element_stiffness(1.0, le)
     nominal = beam_model(n_elements, L, EI, m, root_spring=kr)
@@ -105,6 +105,6 @@ def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7,
     full[[names.index(d) for d in nominal.dofs]] = phi0[:, :n_modes]
     ends = np.stack([full[2 * e:2 * e + 4] for e in range(n_elements)])    # (E, 4, m)
     energy = np.einsum("eim,ij,ejm->me", ends, ke, ends)
-    dlnf = -energy / (2 * le * w0[:n_modes, None] ** 2)
+    dlnf = -EI * L * energy / (2 * le * w0[:n_modes, None] ** 2)
     return Sensitivity((np.arange(n_elements) + 0.5) / n_elements, L, EI, dlnf,
                        np.transpose(du, (1, 2, 0)).reshape(4 * n_modes, n_elements), w0[:n_modes] / (2 * np.pi))

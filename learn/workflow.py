@@ -44,15 +44,15 @@ __all__ = ["DAY_CHANGES", "DEFAULT_ROUTE", "FORMAT", "IDENTIFICATION", "IDENTIFI
 
 #: Input route used by default (the winner of ``python -m experiments.bench_learn``).
 DEFAULT_ROUTE = "modal"
-#: Width assumed when a stiffness loss is turned into a slit depth (m): middle of the training widths.
+#: Width assumed when a hinge flexibility is turned into a slit depth (m): middle of the training widths.
 REFERENCE_WIDTH_M = 0.0055
-FORMAT = "beam-damage-model/2"
+FORMAT = "beam-damage-model/3"
 
 
 def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
-    """``y`` (n, 3) = [damaged, x/L, stiffness loss N m^3] and the full truth dict of :func:`labels`."""
+    """``y`` (n, 3) = [damaged, x/L, hinge flexibility] and the full truth dict of :func:`labels`."""
     t = labels(pairs.table, pairs.beam.length_m)
-    return np.stack([t["damaged"].astype(float), t["x_over_L"], t["stiffness_loss_Nm3"]], axis=1), t
+    return np.stack([t["damaged"].astype(float), t["x_over_L"], t["hinge_flexibility"]], axis=1), t
 
 
 def frf_kinds(routes) -> tuple:
@@ -166,11 +166,11 @@ def detectability_threshold() -> float:
 def network_output(est: DamageClassifier, X, sens, name="network") -> tuple[MethodOutput, object]:
     """Network answers as a :class:`MethodOutput` plus the full :class:`learn.estimator.Prediction`."""
     d = est.predict_details(X)
-    detectable = sens.largest_drop(d.x_over_L, d.stiffness_loss_Nm3) >= detectability_threshold()
+    detectable = sens.largest_drop(d.x_over_L, d.hinge_flexibility) >= detectability_threshold()
     out = MethodOutput(name, d.probability_damaged, d.probability_damaged >= est.threshold_, d.x_over_L,
-                       d.stiffness_loss_Nm3,
+                       d.hinge_flexibility,
                        probability=d.probability_damaged, x_std_over_L=d.x_std_over_L,
-                       stiffness_loss_std_Nm3=d.stiffness_loss_std_Nm3, detectable=detectable)
+                       hinge_flexibility_std=d.hinge_flexibility_std, detectable=detectable)
     return out, d
 
 
@@ -512,15 +512,15 @@ def _network_answer(d, i, out, L, depth) -> dict:
             "location_x_over_L": float(d.x_over_L[i]), "location_x_m": float(d.x_over_L[i] * L),
             "location_std_m": float(d.x_std_over_L[i] * L), "location_element": int(d.element[i]),
             "element_probabilities": [float(v) for v in d.element_probabilities[i]],
-            "stiffness_loss_Nm3": float(d.stiffness_loss_Nm3[i]),
-            "stiffness_loss_std_Nm3": float(d.stiffness_loss_std_Nm3[i]),
+            "hinge_flexibility": float(d.hinge_flexibility[i]),
+            "hinge_flexibility_std": float(d.hinge_flexibility_std[i]),
             "depth_m": depth, "detectable": bool(out.detectable[i])}
 
 
 def _classical_answer(o: MethodOutput, i, L) -> dict:
     return {"method": o.name, "damaged": bool(o.damaged[i]), "location_x_over_L": float(o.x_over_L[i]),
             "location_x_m": float(o.x_over_L[i] * L), "location_element": int(min(int(o.x_over_L[i] * 4) + 1, 4)),
-            "stiffness_loss_Nm3": float(o.stiffness_loss_Nm3[i]), "score": float(o.score[i])}
+            "hinge_flexibility": float(o.hinge_flexibility[i]), "score": float(o.score[i])}
 
 
 def classify(model: TrainedModel, baseline, current) -> dict:
@@ -546,7 +546,7 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     Returns
     -------
     list of dict, one verdict per current input. The verdict keys (``damaged``, ``location_*``,
-    ``stiffness_loss_*``...) are the network's answer when the pair lies inside the training data
+    ``hinge_flexibility*``...) are the network's answer when the pair lies inside the training data
     (``in_distribution``: its Mahalanobis distance within the :data:`IN_DISTRIBUTION_PERCENTILE` percentile of
     the training pairs', its modes in their training ranges and paired), else the classical method's
     (``verdict_from``); ``network`` and ``classical`` hold both answers, ``classical_methods`` every method's.
@@ -592,7 +592,7 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     depth_of = model.config.get("truth_beam") or beam.name
     results = []
     for i in range(len(currents)):
-        net = _network_answer(d, i, out, L, equivalent_depth(float(d.stiffness_loss_Nm3[i]), depth_of,
+        net = _network_answer(d, i, out, L, equivalent_depth(float(d.hinge_flexibility[i]), depth_of,
                                                               model.config["reference_width_m"]))
         cl = None if best is None else _classical_answer(best, i, L)
         reasons = list(mode_reasons[i])
@@ -612,12 +612,12 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
             verdict = {"damaged": cl["damaged"], "probability_damaged": None,
                        "location_x_over_L": cl["location_x_over_L"], "location_x_m": cl["location_x_m"],
                        "location_std_m": None, "location_element": cl["location_element"],
-                       "element_probabilities": None, "stiffness_loss_Nm3": cl["stiffness_loss_Nm3"],
-                       "stiffness_loss_std_Nm3": None,
-                       "depth_m": equivalent_depth(cl["stiffness_loss_Nm3"], depth_of,
+                       "element_probabilities": None, "hinge_flexibility": cl["hinge_flexibility"],
+                       "hinge_flexibility_std": None,
+                       "depth_m": equivalent_depth(cl["hinge_flexibility"], depth_of,
                                                    model.config["reference_width_m"]),
                        "detectable": bool(sens.largest_drop(np.array([cl["location_x_over_L"]]),
-                                                            np.array([cl["stiffness_loss_Nm3"]]))[0]
+                                                            np.array([cl["hinge_flexibility"]]))[0]
                                           >= detectability_threshold())}
         f = np.abs(lam[i]) / (2 * np.pi) if lam is not None else [[], []]
         results.append({
@@ -635,11 +635,12 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     return results
 
 
-def equivalent_depth(stiffness_loss_Nm3: float, preset, width_m: float) -> float | None:
-    """Slit depth (m) whose layered-section rigidity loss over ``width_m`` equals the stiffness loss.
+def equivalent_depth(hinge_flexibility: float, preset, width_m: float) -> float | None:
+    """Depth (m) of a slit ``width_m`` wide whose hinge flexibility ``w r / ((1 - r) L)`` is the given one.
 
-    Uses the face/core layout of :mod:`datagen.specimen` (eq. 4.1, default faces 0.5 mm, core 0.1 GPa);
-    None when even a cut to mid-thickness would not remove that much.
+    ``r`` is the rigidity loss of the layered section cut to that depth (face/core layout of
+    :mod:`datagen.specimen`, eq. 4.1, default faces 0.5 mm, core 0.1 GPa). None when even a cut to
+    mid-thickness would not be that flexible.
     """
     from datagen.config import DEFAULTS
     from datagen.specimen import SectionLayout, slit_section_ei
@@ -647,13 +648,13 @@ def equivalent_depth(stiffness_loss_Nm3: float, preset, width_m: float) -> float
 
     if isinstance(preset, str):
         p = beam_preset(preset)
-        EI, width, thickness = p.EI_Nm2, p.width_m, p.thickness_m
+        EI, width, thickness, length = p.EI_Nm2, p.width_m, p.thickness_m, p.length_m
     else:   # the truth beam a model records (preset name or beam file)
-        EI, width, thickness = preset["EI_Nm2"], preset["width_m"], preset["thickness_m"]
+        EI, width, thickness, length = preset["EI_Nm2"], preset["width_m"], preset["thickness_m"], preset["length_m"]
     sec = DEFAULTS["section"]
     lay = SectionLayout.matching(EI, width, thickness, sec["face_thickness_m"], sec["core_modulus_pa"])
     depths = np.linspace(0.0, 0.999 * thickness / 2, 4000)
-    loss = (lay.EI - slit_section_ei(lay, depths)) * width_m
-    if not np.isfinite(stiffness_loss_Nm3) or stiffness_loss_Nm3 > loss[-1]:
+    flexibility = width_m * (lay.EI / slit_section_ei(lay, depths) - 1.0) / length
+    if not np.isfinite(hinge_flexibility) or hinge_flexibility > flexibility[-1]:
         return None
-    return float(np.interp(stiffness_loss_Nm3, loss, depths))
+    return float(np.interp(hinge_flexibility, flexibility, depths))

@@ -40,6 +40,11 @@ class Slit:
         """Size label ``r * EI * w`` (N m^3)."""
         return self.ei_loss_fraction * EI_Nm2 * self.width_m
 
+    def hinge_flexibility(self, length_m: float) -> float:
+        """Size label ``EI / (k_theta L)``: the rotational-spring compliance ``w r / ((1 - r) EI)`` times ``EI / L``."""
+        r = self.ei_loss_fraction
+        return self.width_m * r / ((1.0 - r) * length_m)
+
 
 @dataclass(frozen=True)
 class PointMass:

@@ -156,6 +156,7 @@ def simulate_pair(cfg: PairSet, pair: int, rng: np.random.Generator, freq_hz=FRE
         "width_m": slit.width_m if slit else None,
         "ei_loss_fraction": slit.ei_loss_fraction if slit else None,
         "stiffness_loss_Nm3": slit.stiffness_loss_Nm3(EI) if slit else 0.0,
+        "hinge_flexibility": slit.hinge_flexibility(LENGTH_M) if slit else 0.0,
         # depth / thickness of a cut in a homogeneous rectangular section with the same EI loss
         "depth_fraction_rect_equiv": 1 - (1 - slit.ei_loss_fraction) ** (1 / 3) if slit else 0.0,
         "max_frequency_drop_rel": drop,

@@ -123,6 +123,21 @@ def test_small_slit_matches_first_order_sensitivity(x_over_L):
     assert np.abs(pred).max() > 1e-5
 
 
+def test_narrow_deep_slit_acts_as_a_hinge_of_its_flexibility():
+    """A narrow slit at any depth shifts omega^2 by ``-EI L theta kappa^2`` (theta its hinge flexibility)."""
+    lam = np.array([1.8751040687, 4.6940911330, 7.8547574382, 10.9955407349])
+    beam = Beam(L, EI, M)
+    for r in (0.3, 0.6, 0.85):
+        s = Slit(0.3 * L, 0.001, r)
+        df = _fe_hz(replace(beam, slits=(s,))) / _fe_hz(beam) - 1
+        omega = 2 * math.pi * _hz(lam)
+        kappa = np.array([_eb_curvature(s.x_m, t) for t in lam])
+        pred = -EI * L * s.hinge_flexibility(L) * kappa ** 2 / (2 * omega ** 2)
+        np.testing.assert_allclose(df, pred, rtol=0.08, atol=0.05 * np.abs(pred).max())
+        first_order_in_loss = -s.stiffness_loss_Nm3(EI) * kappa ** 2 / (2 * omega ** 2)
+        assert np.abs(first_order_in_loss / df - 1).max() > (0.5 * r if r > 0.5 else 0.15)   # the loss alone is not
+
+
 def test_slit_straddling_elements_equals_the_sum_of_its_parts():
     """A slit over an element boundary acts on both elements exactly as two adjacent slits."""
     h = L / 112

@@ -48,7 +48,8 @@ def test_log_grid_interpolation_is_exact_for_a_power_law():
 
 
 def _independent_slit(x_over_L, loss, n_el=60, root=948.7):
-    """Relative frequency shifts and complex eigen-data of a slit on an independent, finer FE mesh."""
+    """Relative frequency shifts, complex eigen-data and hinge flexibility ``w r / ((1 - r) L)`` of a slit
+    (one element losing the fraction ``loss`` of its rigidity) on an independent, finer FE mesh."""
     p = beam_preset("beam5")
     f = np.ones((2, n_el))
     f[1, min(int(x_over_L * n_el), n_el - 1)] -= loss
@@ -56,7 +57,7 @@ def _independent_slit(x_over_L, loss, n_el=60, root=948.7):
     w, phi = undamped_modes(m.M, m.K)
     idx = m.index([f"{1 + n_el // 4 * q}:y" for q in range(1, 5)])
     lam = -0.002 * w[:, :4] + 1j * w[:, :4]
-    return w[1, :4] / w[0, :4] - 1, lam[None], phi[:, idx, :4][None].astype(complex), loss * p.EI * p.length / n_el
+    return w[1, :4] / w[0, :4] - 1, lam[None], phi[:, idx, :4][None].astype(complex), loss / ((1 - loss) * n_el)
 
 
 @pytest.mark.parametrize("x", [0.12, 0.31, 0.47, 0.63])
@@ -69,7 +70,7 @@ def test_frequency_baselines_localise_a_slit_of_an_independent_fe_model(x):
         assert abs(out.x_over_L[0] - x) < 0.05, (method.__name__, out.x_over_L[0], x)
     df, _, _, s = _independent_slit(x, 0.05)    # first order holds for a small loss: the size too
     out = dlac(df[None], sens, threshold=1e-5)
-    assert out.stiffness_loss_Nm3[0] == pytest.approx(s, rel=0.1)
+    assert out.hinge_flexibility[0] == pytest.approx(s, rel=0.1)
 
 
 def test_first_order_frequency_sensitivity_against_a_finer_mesh():
@@ -116,7 +117,7 @@ def test_classifier_learns_a_known_synthetic_problem():
     dam = yt[:, 0] > 0.5
     assert roc_auc_score(dam, d.probability_damaged) > 0.98
     assert np.median(np.abs(d.x_over_L[dam] - yt[dam, 1])) < 0.05
-    assert np.median(np.abs(d.stiffness_loss_Nm3[dam] / yt[dam, 2] - 1)) < 0.3
+    assert np.median(np.abs(d.hinge_flexibility[dam] / yt[dam, 2] - 1)) < 0.3
     np.testing.assert_allclose(d.element_probabilities.sum(axis=1), 1.0, atol=1e-5)
     assert 0.1 < est.temperature_ < 10
     # scikit-learn conventions: clone keeps params, drops fitted state
@@ -145,8 +146,8 @@ def test_model_directory_round_trip_with_weights_only(tmp_path):
     assert "norm.mean" in tensors
     model = load_model(tmp_path)
     np.testing.assert_allclose(model.networks["modal"].predict_proba(X), est.predict_proba(X), atol=1e-6)
-    np.testing.assert_allclose(model.networks["modal"].predict_details(X).stiffness_loss_std_Nm3,
-                               est.predict_details(X).stiffness_loss_std_Nm3, rtol=1e-5)
+    np.testing.assert_allclose(model.networks["modal"].predict_details(X).hinge_flexibility_std,
+                               est.predict_details(X).hinge_flexibility_std, rtol=1e-5)
     assert json.loads((tmp_path / "config.json").read_text())["beam"]["mass_model"] == "iirs"
 
 
@@ -183,8 +184,9 @@ def test_equivalent_depth_inverts_the_layered_section():
     p = beam_preset("beam5")
     lay = SectionLayout.matching(p.EI, p.width, p.thickness, DEFAULTS["section"]["face_thickness_m"],
                                  DEFAULTS["section"]["core_modulus_pa"])
-    s = (lay.EI - float(slit_section_ei(lay, 0.00025))) * 0.005
-    assert equivalent_depth(s, "beam5", 0.005) == pytest.approx(0.00025, rel=1e-3)
+    r = 1 - float(slit_section_ei(lay, 0.00025)) / lay.EI
+    theta = 0.005 * r / ((1 - r) * p.length)
+    assert equivalent_depth(theta, "beam5", 0.005) == pytest.approx(0.00025, rel=1e-3)
     assert equivalent_depth(1e3, "beam5", 0.005) is None
 
 
