@@ -6,7 +6,7 @@
 3. The discrepancy workflow on beam 5's measured frequencies (Table 4.3): the named effect,
    the gap before and after, and the calibrated beam file.
 4. A training dataset (``--config training``) with the calibrated beam as truth, a held-out
-   test dataset of other specimens, training, and the evaluation against the baselines.
+   test dataset of other specimens, training, and the evaluation against the classical methods.
 5. ``classify`` of the thesis's beam 5, damaged against undamaged (Tables 4.5/4.6).
 6. ``report.html`` (self-contained) and ``report.md`` with every table and figure.
 
@@ -342,7 +342,7 @@ def _report_sections(vsum, checks, thesis_sections, measured, disc, data, traine
          f"0.1-3 %; temperature and re-clamping between the two test days). Test: {data['test']['samples']} other "
          f"specimens (seed 1). Input route of the network: {trained.get('route')}; training "
          f"{sum((trained.get('train_seconds') or {}).values()):.0f} s.",),
-        (Table.from_records("Network against the classical baselines on the same test pairs",
+        (Table.from_records("Network against the classical methods on the same test pairs",
                             [_rounded(r) for r in evaluated["rows"]], metric_cols),),
         tuple(figure(f) for f in evaluated["figures"] if Path(f).exists()))
     s_class = Section("Beam 5 classified (Tables 4.5/4.6, damaged against undamaged)",
@@ -355,8 +355,8 @@ def add_parser(sub):
     p = sub.add_parser("demo", help="run the main job: thesis, discrepancy, dataset, classifier, beam 5, report",
                        description="The mission end to end on embedded defaults: reproduce the thesis, name what "
                                    "beam 5's model lacks and calibrate it, generate data from the calibrated beam, "
-                                   "train and evaluate the classifier against the baselines, classify the thesis's "
-                                   "beam 5, and write report.html and report.md.")
+                                   "train and evaluate the classifier against the classical methods, classify the "
+                                   "thesis's beam 5, and write report.html and report.md.")
     p.add_argument("--out", default="out/demo", help="report directory (default out/demo)")
     p.add_argument("--quick", action="store_true", help="small dataset and short training (about a minute)")
     p.add_argument("--force", action="store_true", help="recompute every step instead of reusing earlier results")

@@ -5,11 +5,11 @@ Model directory
 ``config.json``          beam it was trained for (name, length, DOF set, mass model; and the training data's
                          truth beam from its manifest), default input route, estimator parameters and
                          temperature per route, training data (paths, manifest checksums, generator config
-                         with its temperature/re-clamping ranges), detection threshold, baseline thresholds,
-                         seed, package version, training time, test metrics
+                         with its temperature/re-clamping ranges), detection threshold, classical-method
+                         thresholds, seed, package version, training time, test metrics
 ``weights-<route>.pt``   ``torch.save`` of the network's state dict plus the input normalisation and the
                          training features' precision matrix (loaded with ``weights_only=True``)
-``metrics.csv``          test-split metrics of the network(s) and the classical baselines
+``metrics.csv``          test-split metrics of the network(s) and the classical methods
 
 A model trained on the FRF route also carries a modal-route network, used for
 inputs that are modal data only (the thesis's measured data).
@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 import torch
 
-from learn.baselines import MethodOutput, run_classical
+from learn.classical import MethodOutput, run_classical
 from learn.estimator import DamageClassifier
 from learn.evaluate import MIN_DROP, metrics, table_rows
 from learn.features import (DOFS, GRID_RAD_S, ROUTES, BeamSpec, Pairs, features, frf_features, labels, load_pairs,
@@ -46,7 +46,7 @@ __all__ = ["DAY_CHANGES", "DEFAULT_ROUTE", "FORMAT", "IDENTIFICATION", "IDENTIFI
 DEFAULT_ROUTE = "modal"
 #: Width assumed when a stiffness loss is turned into a slit depth (m): middle of the training widths.
 REFERENCE_WIDTH_M = 0.0055
-FORMAT = "beam-damage-model/2"
+FORMAT = "beam-damage-model/3"
 
 
 def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
@@ -121,7 +121,7 @@ def load_model(model_dir, device=None) -> TrainedModel:
     config = read_json(cfg_path)
     if config.get("format") != FORMAT:
         raise FileFormatError(f"{cfg_path}: field 'format' is {config.get('format')!r}, expected {FORMAT!r} "
-                              "(the modal features differ between formats): re-create the model with "
+                              "(fields and features differ between formats): re-create the model with "
                               "'beam-damage train'")
     for key, kind in (("route", str), ("networks", dict), ("beam", dict)):
         if not isinstance(config.get(key), kind):
@@ -190,7 +190,7 @@ def _nominal_root_spring(source: list):
 # --------------------------------------------------------------------------- train
 def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None = None, progress: bool = False,
           test_fraction: float = 0.15, threads: int | None = 1) -> dict:
-    """Train the default-route network (and a modal-route companion), score it and the baselines, save.
+    """Train the default-route network (and a modal-route companion), score it and the classical methods, save.
 
     Parameters
     ----------
@@ -246,7 +246,7 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
         "root_spring_relative": _nominal_root_spring(pairs.source),
         "truth_beam": pairs.source[0]["truth_beam"], "day_changes": changes,
         "detect_min_drop": detectability_threshold(),
-        "reference_width_m": REFERENCE_WIDTH_M, "baseline_thresholds": thresholds, "best_baseline": best.method,
+        "reference_width_m": REFERENCE_WIDTH_M, "classical_thresholds": thresholds, "best_classical": best.method,
         "split": {"train_pairs": int(len(tr)), "test_pairs": int(len(te)), "by": "specimen"},
         "train_seconds": fit_s, "load_seconds": load_s, "package_version": _version(),
         "test_metrics": [m for m in rows if m["subset"] == "all"],
@@ -255,7 +255,7 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
     from physics.io import atomic_write_text
     atomic_write_text(Path(out_dir) / "metrics.csv", pd.DataFrame(rows).to_csv(index=False))
     return {"model": str(out_dir), "route": route, "train_pairs": int(len(tr)), "test_pairs": int(len(te)),
-            "train_seconds": fit_s, "load_seconds": load_s, "best_baseline": best.method,
+            "train_seconds": fit_s, "load_seconds": load_s, "best_classical": best.method,
             "test_metrics": config["test_metrics"], "warnings": warnings}
 
 
@@ -266,7 +266,7 @@ def _version() -> str:
 
 # --------------------------------------------------------------------------- evaluate
 def evaluate(model: TrainedModel, data, out_dir=None, *, extra_outputs=None, progress: bool = False) -> dict:
-    """Network(s) and classical baselines on dataset(s) of the model's beam; table and figures."""
+    """Network(s) and classical methods on dataset(s) of the model's beam; table and figures."""
     from learn.evaluate import figures
 
     routes = list(model.networks)
@@ -280,7 +280,7 @@ def evaluate(model: TrainedModel, data, out_dir=None, *, extra_outputs=None, pro
     for r in tqdm([model.route] + [q for q in routes if q != model.route], desc="evaluate networks",
                   disable=not progress):
         outs.append(network_output(model.networks[r], features(pairs, r), sens, f"network ({r})")[0])
-    classical, _ = run_classical(pairs.eigenvalues, pairs.eigenvectors, sens, model.config["baseline_thresholds"])
+    classical, _ = run_classical(pairs.eigenvalues, pairs.eigenvectors, sens, model.config["classical_thresholds"])
     outs += classical + list(extra_outputs or [])
     rows = table_rows(outs, truth, pairs.table, pairs.beam.length_m)
     result = {"model": str(model.path), "data": [s["path"] for s in pairs.source], "pairs": len(pairs),
@@ -587,8 +587,8 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     classical, best = [], None
     if lam is not None:
         mode_reasons = _mode_checks(lam, vecs, nominal_ratio_range(sens))
-        classical, _ = run_classical(lam, vecs, sens, model.config["baseline_thresholds"])
-        best = next((o for o in classical if o.name == model.config["best_baseline"]), classical[0])
+        classical, _ = run_classical(lam, vecs, sens, model.config["classical_thresholds"])
+        best = next((o for o in classical if o.name == model.config["best_classical"]), classical[0])
     depth_of = model.config.get("truth_beam") or beam.name
     results = []
     for i in range(len(currents)):

@@ -1,4 +1,4 @@
-"""learn: features, sensitivities, baselines, estimator, model directory, refusal rules."""
+"""learn: features, sensitivities, classical methods, estimator, model directory, refusal rules."""
 
 import json
 
@@ -8,7 +8,7 @@ import torch
 from sklearn.base import clone
 from sklearn.metrics import roc_auc_score
 
-from learn.baselines import cawley_adams, dlac, mdlac, sensitivity_updating
+from learn.classical import cawley_adams, dlac, mdlac, sensitivity_updating
 from learn.estimator import DamageClassifier, fit_calibration
 from learn.evaluate import reliability, roc_auc
 from learn.features import BeamSpec, curvatures, map_frf_to_grid, real_shapes, split_by_specimen
@@ -60,7 +60,7 @@ def _independent_slit(x_over_L, loss, n_el=60, root=948.7):
 
 
 @pytest.mark.parametrize("x", [0.12, 0.31, 0.47, 0.63])
-def test_frequency_baselines_localise_a_slit_of_an_independent_fe_model(x):
+def test_frequency_classical_methods_localise_a_slit_of_an_independent_fe_model(x):
     sens = beam_sensitivity("beam5", 948.7)
     df, lam, psi, s = _independent_slit(x, 0.4)
     for method in (dlac, cawley_adams, mdlac):
