@@ -17,6 +17,7 @@ import tomllib
 from pathlib import Path
 
 from physics.errors import BeamDamageError, ConfigError
+from physics.properties import PRESETS
 from physics.updating import mass_model_name
 
 __all__ = ["CONFIG_DIR", "DEFAULTS", "MAX_MODAL_NOISE", "MAX_SLIT_LOSS_FACTOR", "load_config", "merge",
@@ -160,6 +161,9 @@ def validate(cfg: dict) -> dict:
                     raise ConfigError(f"config key '{sec}.{k}' missing")
     if not isinstance(cfg["preset"], str):
         raise ConfigError("config key 'preset' must be a string such as 'beam5'")
+    if cfg["preset"] not in PRESETS:
+        raise ConfigError(f"config key 'preset': unknown beam preset {cfg['preset']!r}; expected one of "
+                          f"{sorted(PRESETS)}")
     m, s, dmg, meas, up, sol, out = (cfg[k] for k in ("mesh", "section", "specimen", "measurement",
                                                        "updating", "solver", "output"))
     m["truth_elements"] = _num("mesh.truth_elements", m["truth_elements"], lo=4, hi=400, integer=True)

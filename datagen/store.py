@@ -42,7 +42,7 @@ import numpy as np
 import pandas as pd
 
 from datagen.damage import element4_index
-from datagen.synth import FRF_KINDS, SOURCES, line_index, synthesise
+from datagen.synth import DATASET_FRFS, SOURCES, line_index, synthesise
 from physics.errors import FileFormatError
 from physics.io import atomic_write_text, read_json
 from physics.modal import modal_parameters
@@ -210,7 +210,7 @@ def write_shard(root, index: int, table: pd.DataFrame, arrays: dict, omega_rad_s
     for name in ARRAYS:
         np.save(tmp / f"{name}.npy", np.ascontiguousarray(arrays[name]), allow_pickle=False)
     if omega_rad_s is not None:
-        for kind in FRF_KINDS:
+        for kind in DATASET_FRFS:
             np.save(tmp / f"frf_{kind}.npy", synthesise(kind, arrays, omega_rad_s, frf_dtype), allow_pickle=False)
     files = sorted(tmp.iterdir())
     entry = {"index": index, "name": shard_name(index), "n_samples": int(len(table)),
@@ -555,8 +555,8 @@ class Dataset:
         feature grid interpolates from.
         ``out``: optional C-contiguous complex array of that shape written in place (e.g. shared memory).
         """
-        if kind not in FRF_KINDS:
-            raise FileFormatError(f"FRF kind {kind!r} unknown; expected one of {', '.join(FRF_KINDS)}")
+        if kind not in DATASET_FRFS:
+            raise FileFormatError(f"FRF kind {kind!r} unknown; expected one of {', '.join(DATASET_FRFS)}")
         if self.legacy:
             H = self._gather([f"frf_{kind}"], rows)[f"frf_{kind}"]
             H = H if lines is None else H[..., line_index(lines, H.shape[-1])]

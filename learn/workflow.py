@@ -164,7 +164,7 @@ def detectability_threshold() -> float:
 
 
 def network_output(est: DamageClassifier, X, sens, name="network") -> tuple[MethodOutput, object]:
-    """Network answers as a :class:`MethodOutput` plus the full :class:`learn.estimator.Prediction`."""
+    """Network answers as a :class:`MethodOutput` plus the full :class:`learn.estimator.DamagePrediction`."""
     d = est.predict_details(X)
     detectable = sens.largest_drop(d.x_over_L, d.stiffness_loss_Nm3) >= detectability_threshold()
     out = MethodOutput(name, d.probability_damaged, d.probability_damaged >= est.threshold_, d.x_over_L,
