@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from datagen.store import Dataset
+from datagen.dataset import Dataset
 from datagen.synth import DATASET_FRFS, log_magnitude_map
 from physics.errors import BeamDamageError
 

@@ -6,7 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from datagen.store import STATES, Dataset
+from datagen.dataset import Dataset
+from datagen.store import STATES
 from datagen.synth import DATASET_FRFS
 from physics.errors import BeamDamageError
 from physics.io import MeasuredFRF, write_frf_csv, write_frf_npz, write_uff58

@@ -80,7 +80,7 @@ def measured_data_step(out: Path) -> dict:
 def dataset_step(out: Path, beam_file: str, n: int, seed: int, workers: int) -> dict:
     """A ``training``-config dataset with the calibrated beam as truth."""
     from datagen.config import load_config, merge
-    from datagen.parallel import generate
+    from datagen.generation import generate
     from datagen.truth_beam import beam_mapping
     from physics.beam import load_beam
 

@@ -56,7 +56,7 @@ def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
 
 
 def frf_kinds(routes) -> tuple:
-    """FRF kinds (:meth:`datagen.store.Dataset.frf`) the input routes need."""
+    """FRF kinds (:meth:`datagen.dataset.Dataset.frf`) the input routes need."""
     return tuple(r for r in routes if r != "modal")
 
 
