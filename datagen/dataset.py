@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from datagen.store import (ARRAYS, ARRAYS_V1, DERIVED, FORMAT_V1, OPTIONAL, damaged_file, file_sha256,
+from datagen.store import (ARRAYS, ARRAYS_V1, DERIVED, DATASET_FORMAT_V1, OPTIONAL, damaged_file, file_sha256,
                            read_manifest)
 from datagen.synth import DATASET_FRFS, SOURCES, line_index, synthesise
 from physics.errors import FileFormatError
@@ -40,7 +40,7 @@ class Dataset:
     def __init__(self, root, verify: bool = True):
         self.root = Path(root)
         self.manifest = read_manifest(self.root)
-        self.legacy = self.manifest["format"] == FORMAT_V1
+        self.legacy = self.manifest["format"] == DATASET_FORMAT_V1
         self.shards = list(self.manifest["shards"])
         self.offsets = np.concatenate([[0], np.cumsum([e["n_samples"] for e in self.shards])]).astype(np.int64)
         self._verify = verify

@@ -44,12 +44,12 @@ from physics.errors import FileFormatError
 from physics.io import atomic_write_text, read_json
 from physics.modal import modal_parameters
 
-__all__ = ["ARRAYS", "ARRAYS_V1", "COLUMN_UNITS", "DERIVED", "FORMAT", "FORMAT_V1", "OPTIONAL", "ROW_GROUP", "STATES",
-           "damaged_file", "file_sha256", "finalize", "package_version", "read_manifest", "recover", "sample_table",
-           "shard_arrays", "shard_name", "verify_shard", "write_manifest", "write_shard"]
+__all__ = ["ARRAYS", "ARRAYS_V1", "COLUMN_UNITS", "DATASET_FORMAT", "DATASET_FORMAT_V1", "DERIVED", "OPTIONAL",
+           "ROW_GROUP", "STATES", "damaged_file", "file_sha256", "finalize", "package_version", "read_manifest",
+           "recover", "sample_table", "shard_arrays", "shard_name", "verify_shard", "write_manifest", "write_shard"]
 
-FORMAT = "beam-damage-dataset/2"
-FORMAT_V1 = "beam-damage-dataset/1"
+DATASET_FORMAT = "beam-damage-dataset/2"
+DATASET_FORMAT_V1 = "beam-damage-dataset/1"
 
 #: Stored arrays of a shard: name -> (axes, description).
 ARRAYS = {
@@ -244,7 +244,7 @@ def damaged_file(root, entry: dict, sizes_only: bool = False):
     return None
 
 
-def read_manifest(root, formats=(FORMAT, FORMAT_V1)) -> dict:
+def read_manifest(root, formats=(DATASET_FORMAT, DATASET_FORMAT_V1)) -> dict:
     """``DIR/manifest.json``, checked: a JSON object of a supported format with a well-formed shard list.
 
     Raises

@@ -100,7 +100,7 @@ def main(argv=None):
     from learn.evaluate import figures, metrics, table_rows
     from learn.features import features, load_pairs, split_by_specimen
     from learn.estimator import DamageClassifier
-    from learn.workflow import frf_kinds, load_model, network_output, sensitivity_of, targets, train
+    from learn.workflow import dataset_frfs, load_model, network_output, sensitivity_of, targets, train
 
     data_dir, out = Path(args.data_dir), Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -124,9 +124,9 @@ def main(argv=None):
 
     all_routes = ["modal", "updated", "measured"]
     need = all_routes if not args.skip_routes else list(model.networks)
-    tr_pairs = load_pairs(train_dirs, frfs=frf_kinds(need))
+    tr_pairs = load_pairs(train_dirs, frfs=dataset_frfs(need))
     tr_pairs = tr_pairs.take(split_by_specimen(tr_pairs.groups, (0.85, 0.0, 0.15), seed=args.seed)[0])  # train()'s
-    te_pairs = load_pairs(test_dirs, frfs=frf_kinds(need))
+    te_pairs = load_pairs(test_dirs, frfs=dataset_frfs(need))
     y_tr, truth_tr = targets(tr_pairs)
     _, truth = targets(te_pairs)
     sens = sensitivity_of(model.beam, model.config["root_spring_relative"])
@@ -179,7 +179,7 @@ def main(argv=None):
         f"Timoshenko truth (kGA {KGA_N:g} N)": [data_dir / "rob-timoshenko"],
     }
     for name, dirs in sets.items():
-        P = load_pairs(dirs, frfs=frf_kinds([route]))
+        P = load_pairs(dirs, frfs=dataset_frfs([route]))
         _, tr = targets(P)
         outs = [network_output(networks[route], features(P, route), sens, f"network ({route})")[0]]
         outs += run_classical(P.eigenvalues, P.eigenvectors, sens, thresholds)[0]

@@ -157,7 +157,7 @@ def load_pairs(roots, frfs=("measured", "updated"), chunk: int = 1024, workers: 
     from concurrent.futures import ThreadPoolExecutor
 
     from datagen.dataset import Dataset
-    from datagen.store import FORMAT, read_manifest
+    from datagen.store import DATASET_FORMAT, read_manifest
     from datagen.synth import log_magnitude_map
 
     roots = [roots] if isinstance(roots, (str, Path)) else list(roots)
@@ -166,7 +166,7 @@ def load_pairs(roots, frfs=("measured", "updated"), chunk: int = 1024, workers: 
     workers = workers or len(os.sched_getaffinity(0))
     parts, source, beam = [], [], None
     for root in roots:
-        read_manifest(root, formats=(FORMAT,))   # format 1 is refused in one line
+        read_manifest(root, formats=(DATASET_FORMAT,))   # format 1 is refused in one line
         try:
             ds = Dataset(root)
         except FileFormatError:  # names the damaged file itself

@@ -35,18 +35,18 @@ from learn.sensitivity import beam_sensitivity
 from physics.errors import BeamDamageError, FileFormatError
 from physics.io import read_json
 
-__all__ = ["DAY_CHANGES", "DEFAULT_ROUTE", "FORMAT", "IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR",
-           "IN_DISTRIBUTION_PERCENTILE", "RATIO_TOLERANCE", "REFERENCE_WIDTH_M", "TrainedModel", "classify",
-           "classify_many", "day_changes", "detectability_threshold", "equivalent_depth", "evaluate", "frf_kinds",
-           "frf_rows", "identify_modes", "load_model", "modal_pair", "network_output", "nominal_ratio_range",
-           "on_model_dofs", "ood_percentile", "save_model", "sensitivity_of", "targets", "train"]
+__all__ = ["DAY_CHANGES", "DEFAULT_ROUTE", "IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "IN_DISTRIBUTION_PERCENTILE",
+           "MODEL_FORMAT", "RATIO_TOLERANCE", "REFERENCE_WIDTH_M", "TrainedModel", "classify", "classify_many",
+           "dataset_frfs", "day_changes", "detectability_threshold", "equivalent_depth", "evaluate", "frf_rows",
+           "identify_modes", "load_model", "modal_pair", "network_output", "nominal_ratio_range", "on_model_dofs",
+           "ood_percentile", "save_model", "sensitivity_of", "targets", "train"]
 
 
 #: Input route used by default (the winner of ``python -m experiments.bench_learn``).
 DEFAULT_ROUTE = "modal"
 #: Width assumed when a stiffness loss is turned into a slit depth (m): middle of the training widths.
 REFERENCE_WIDTH_M = 0.0055
-FORMAT = "beam-damage-model/3"
+MODEL_FORMAT = "beam-damage-model/3"
 
 
 def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
@@ -55,8 +55,8 @@ def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
     return np.stack([t["damaged"].astype(float), t["x_over_L"], t["stiffness_loss_Nm3"]], axis=1), t
 
 
-def frf_kinds(routes) -> tuple:
-    """FRF kinds (:meth:`datagen.dataset.Dataset.frf`) the input routes need."""
+def dataset_frfs(routes) -> tuple:
+    """Dataset FRFs (:data:`datagen.synth.DATASET_FRFS`) the input routes need."""
     return tuple(r for r in routes if r != "modal")
 
 
@@ -119,8 +119,8 @@ def load_model(model_dir, device=None) -> TrainedModel:
     if not cfg_path.is_file():
         raise FileFormatError(f"{path}: not a model directory (no config.json); create one with 'beam-damage train'")
     config = read_json(cfg_path)
-    if config.get("format") != FORMAT:
-        raise FileFormatError(f"{cfg_path}: field 'format' is {config.get('format')!r}, expected {FORMAT!r} "
+    if config.get("format") != MODEL_FORMAT:
+        raise FileFormatError(f"{cfg_path}: field 'format' is {config.get('format')!r}, expected {MODEL_FORMAT!r} "
                               "(fields and features differ between formats): re-create the model with "
                               "'beam-damage train'")
     for key, kind in (("route", str), ("networks", dict), ("beam", dict)):
@@ -210,7 +210,7 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
         raise BeamDamageError(f"--route {route!r} must be one of {', '.join(ROUTES)}")
     routes = [route] + (["modal"] if route != "modal" else [])
     t0 = time.perf_counter()
-    pairs = load_pairs(data, frfs=frf_kinds(routes))
+    pairs = load_pairs(data, frfs=dataset_frfs(routes))
     y, truth = targets(pairs)
     if truth["damaged"].all() or not truth["damaged"].any():
         raise BeamDamageError("training data must hold both intact and damaged pairs: generate them with "
@@ -239,7 +239,7 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
     base_all = [metrics(o, truth_te, None, "all", pairs.beam.length_m) for o in classical]
     best = max(base_all, key=lambda m: (np.nan_to_num(m.element_accuracy), -np.nan_to_num(m.median_location_error_mm)))
     config = {
-        "format": FORMAT, "route": route, "beam": pairs.beam.to_dict(), "seed": seed, "epochs": epochs,
+        "format": MODEL_FORMAT, "route": route, "beam": pairs.beam.to_dict(), "seed": seed, "epochs": epochs,
         "grid_rad_s": GRID_RAD_S, "dofs": list(DOFS),
         "training_data": [{k: s[k] for k in ("path", "manifest_checksum", "samples")} for s in pairs.source],
         "generator_config": pairs.source[0]["config"],
@@ -270,7 +270,7 @@ def evaluate(model: TrainedModel, data, out_dir=None, *, extra_outputs=None, pro
     from learn.evaluate import figures
 
     routes = list(model.networks)
-    pairs = load_pairs(data, frfs=frf_kinds(routes))
+    pairs = load_pairs(data, frfs=dataset_frfs(routes))
     model.check_beam(pairs.beam, f"dataset {pairs.source[0]['path']}")
     _, truth = targets(pairs)
     sens = sensitivity_of(model.beam, model.config.get("root_spring_relative"), model.config.get("truth_beam"))

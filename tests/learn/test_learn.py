@@ -13,7 +13,7 @@ from learn.estimator import DamageClassifier, fit_calibration
 from learn.evaluate import reliability, roc_auc
 from learn.features import BeamSpec, curvatures, map_frf_to_grid, real_shapes, split_by_specimen
 from learn.sensitivity import beam_sensitivity
-from learn.workflow import FORMAT, TrainedModel, equivalent_depth, load_model, save_model
+from learn.workflow import MODEL_FORMAT, TrainedModel, equivalent_depth, load_model, save_model
 from physics.errors import BeamDamageError
 from physics.fem import beam_model
 from physics.modal import undamped_modes
@@ -139,7 +139,7 @@ def test_model_directory_round_trip_with_weights_only(tmp_path):
     X, y = _synthetic(400, rng)
     est = DamageClassifier(hidden=32, depth=1, epochs=2, n_bins=40, random_state=0).fit(X, y)
     beam = BeamSpec("beam5", 0.6095, ("2:y", "3:y", "4:y", "5:y"), "iirs")
-    cfg = {"format": FORMAT, "route": "modal", "beam": beam.to_dict()}
+    cfg = {"format": MODEL_FORMAT, "route": "modal", "beam": beam.to_dict()}
     save_model(tmp_path, cfg, {"modal": est})
     tensors = torch.load(tmp_path / "weights-modal.pt", weights_only=True)
     assert "norm.mean" in tensors
