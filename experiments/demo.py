@@ -259,7 +259,8 @@ def run(args) -> dict:
         "train": dataset_step(out / "dataset", beam_file, n_train, 0, args.workers),
         "test": dataset_step(out / "testset", beam_file, n_test, 1, args.workers)})
     force_model = force or not (out / "model").exists()
-    key = {**key, "epochs": epochs}
+    from learn.workflow import MODEL_FORMAT
+    key = {**key, "epochs": epochs, "model_format": MODEL_FORMAT}   # a model of another format is retrained
 
     def train_model():
         from learn.workflow import train
