@@ -6,8 +6,8 @@ workers' machinery, for the command line's parsers).
 
 import importlib
 
-_HOMES = {"Dataset": "datagen.store", "load_torch": "datagen.store", "generate": "datagen.parallel",
-          "inspect_dataset": "datagen.report", "load_config": "datagen.config", "merge": "datagen.config",
+_HOMES = {"Dataset": "datagen.dataset", "load_torch": "datagen.dataset", "generate": "datagen.generation",
+          "inspect_dataset": "datagen.inspection", "load_config": "datagen.config", "merge": "datagen.config",
           "named_configs": "datagen.config"}
 
 __all__ = sorted(_HOMES)

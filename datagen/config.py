@@ -17,6 +17,7 @@ import tomllib
 from pathlib import Path
 
 from physics.errors import BeamDamageError, ConfigError
+from physics.properties import PRESETS
 from physics.updating import mass_model_name
 
 __all__ = ["CONFIG_DIR", "DEFAULTS", "MAX_MODAL_NOISE", "MAX_SLIT_LOSS_FACTOR", "load_config", "merge",
@@ -139,6 +140,22 @@ def validate(cfg: dict) -> dict:
         Unknown key, missing key, wrong type or out-of-range value (names the key).
     """
     cfg = copy.deepcopy(cfg)
+    _check_sections(cfg)
+    _check_beam(cfg)
+    _check_specimen(cfg["specimen"])
+    _check_damage(cfg["damage"])
+    calibrated = _check_measurement(cfg["measurement"])
+    _check_slit_loss_factor(cfg["damage"], cfg["measurement"])
+    if calibrated:
+        _check_calibrated_noise(cfg["measurement"])
+    _check_updating(cfg["updating"])
+    _check_solver(cfg["solver"], cfg["mesh"]["truth_elements"])
+    _check_output(cfg["output"])
+    return cfg
+
+
+def _check_sections(cfg: dict) -> None:
+    """Every section of :data:`DEFAULTS` present, with exactly its keys (``beam`` is free-form)."""
     for sec in cfg:
         if sec not in DEFAULTS:
             raise ConfigError(f"unknown config key {sec!r}; expected one of {sorted(DEFAULTS)}")
@@ -158,16 +175,26 @@ def validate(cfg: dict) -> dict:
             for k in d:
                 if k not in cfg[sec]:
                     raise ConfigError(f"config key '{sec}.{k}' missing")
+
+
+def _check_beam(cfg: dict) -> None:
+    """``preset``, ``mesh`` and ``section``."""
     if not isinstance(cfg["preset"], str):
         raise ConfigError("config key 'preset' must be a string such as 'beam5'")
-    m, s, dmg, meas, up, sol, out = (cfg[k] for k in ("mesh", "section", "specimen", "measurement",
-                                                       "updating", "solver", "output"))
+    if cfg["preset"] not in PRESETS:
+        raise ConfigError(f"config key 'preset': unknown beam preset {cfg['preset']!r}; expected one of "
+                          f"{sorted(PRESETS)}")
+    m, s = cfg["mesh"], cfg["section"]
     m["truth_elements"] = _num("mesh.truth_elements", m["truth_elements"], lo=4, hi=400, integer=True)
     if m["truth_elements"] % 4:
         raise ConfigError(f"config key 'mesh.truth_elements' must be a multiple of 4 (the thesis's measured nodes "
                           f"sit at quarter points), got {m['truth_elements']}")
     s["face_thickness_m"] = _num("section.face_thickness_m", s["face_thickness_m"], lo=0, hi=0.003, strict_lo=True)
     s["core_modulus_pa"] = _num("section.core_modulus_pa", s["core_modulus_pa"], lo=0)
+
+
+def _check_specimen(dmg: dict) -> None:
+    """Section ``specimen``: variability bands, root spring, day-to-day changes, damping ratios."""
     for k in ("ei_band", "mass_band", "damping_band"):
         dmg[k] = _num(f"specimen.{k}", dmg[k], lo=0, hi=0.5)
     dmg["root_spring_relative"] = _range("specimen.root_spring_relative", dmg["root_spring_relative"], lo=1e-3,
@@ -178,7 +205,10 @@ def validate(cfg: dict) -> dict:
     if not (isinstance(zr, list) and len(zr) >= 1 and all(isinstance(z, (int, float)) and 0 < z < 0.2 for z in zr)):
         raise ConfigError(f"config key 'specimen.damping_ratios' must be a list of ratios in (0, 0.2), got {zr!r}")
     dmg["damping_ratios"] = [float(z) for z in zr]
-    d = cfg["damage"]
+
+
+def _check_damage(d: dict) -> None:
+    """Section ``damage``: slit counts, positions, sizes, intact fraction, slit damping."""
     d["n_slits"] = _range("damage.n_slits", d["n_slits"], lo=0, hi=8, integer=True)
     d["position_fraction"] = _range("damage.position_fraction", d["position_fraction"], lo=0.0, hi=1.0)
     d["width_m"] = _range("damage.width_m", d["width_m"], lo=1e-6, hi=0.1)
@@ -186,6 +216,14 @@ def validate(cfg: dict) -> dict:
     d["intact_fraction"] = _num("damage.intact_fraction", d["intact_fraction"], lo=0.0, hi=1.0)
     d["ei_loss"] = _range("damage.ei_loss", d["ei_loss"], lo=0.0, hi=0.9999, allow_empty=True)
     d["slit_damping_s"] = _range("damage.slit_damping_s", d["slit_damping_s"], lo=0.0, hi=1.0)
+
+
+def _check_measurement(meas: dict) -> bool:
+    """Section ``measurement``: modal noise (fixed stds or the shipped calibration), FRF noise, band, lines.
+
+    Returns whether the modal noise is calibrated (``meas`` then holds the calibration's per-mode
+    coefficients and its ``identification``).
+    """
     if meas["modal_noise"] not in ("fixed", "calibrated"):
         raise ConfigError(f"config key 'measurement.modal_noise' must be 'fixed' or 'calibrated', "
                           f"got {meas['modal_noise']!r}")
@@ -213,40 +251,59 @@ def validate(cfg: dict) -> dict:
     if meas["band_rad_s"][0] >= meas["band_rad_s"][1]:
         raise ConfigError("config key 'measurement.band_rad_s' must have low < high")
     meas["lines"] = _num("measurement.lines", meas["lines"], lo=2, hi=200000, integer=True)
+    return bool(calib)
+
+
+def _check_slit_loss_factor(d: dict, meas: dict) -> None:
+    """The slit's loss factor ``beta * omega`` stays <= :data:`MAX_SLIT_LOSS_FACTOR` over the measurement band."""
     top_rad_s = meas["band_rad_s"][1]
     if d["slit_damping_s"][1] * top_rad_s > MAX_SLIT_LOSS_FACTOR:
         raise ConfigError(f"config key 'damage.slit_damping_s' must keep the slit's loss factor beta*omega <= "
                           f"{MAX_SLIT_LOSS_FACTOR:g} up to the top of measurement.band_rad_s ({top_rad_s:g} rad/s): "
                           f"beta <= {MAX_SLIT_LOSS_FACTOR / top_rad_s:.3g} s, got {d['slit_damping_s']!r}")
-    if calib:  # the modal noise the FRF noise implies must lie where the fixed stds may
-        level = max(meas["frf_noise"]) if isinstance(meas["frf_noise"], list) else meas["frf_noise"]
-        for q in ("frequency", "damping", "shape"):
-            std = max(math.hypot(c * level, fl) for c, fl in zip(meas[f"{q}_noise"], meas[f"{q}_noise_floor"]))
-            if std > MAX_MODAL_NOISE:
-                raise ConfigError(f"config key 'measurement.frf_noise': {level:g} implies a calibrated relative "
-                                  f"{q} noise std of {std:.3g} (> {MAX_MODAL_NOISE:g}: measured modes with "
-                                  f"negative damping or lost shapes); keep frf_noise <= "
-                                  f"{_max_calibrated_level(meas, MAX_MODAL_NOISE):.3g}")
+
+
+def _check_calibrated_noise(meas: dict) -> None:
+    """The modal noise the FRF noise implies must lie where the fixed stds may (<= :data:`MAX_MODAL_NOISE`)."""
+    level = max(meas["frf_noise"]) if isinstance(meas["frf_noise"], list) else meas["frf_noise"]
+    for q in ("frequency", "damping", "shape"):
+        std = max(math.hypot(c * level, fl) for c, fl in zip(meas[f"{q}_noise"], meas[f"{q}_noise_floor"]))
+        if std > MAX_MODAL_NOISE:
+            raise ConfigError(f"config key 'measurement.frf_noise': {level:g} implies a calibrated relative "
+                              f"{q} noise std of {std:.3g} (> {MAX_MODAL_NOISE:g}: measured modes with "
+                              f"negative damping or lost shapes); keep frf_noise <= "
+                              f"{_max_calibrated_level(meas, MAX_MODAL_NOISE):.3g}")
+
+
+def _check_updating(up: dict) -> None:
+    """Section ``updating``: mass model, tolerance, iterations."""
     try:  # one mass-model name set (physics.updating.MASS_MODELS); "reduced" is accepted for "iirs"
         up["mass_model"] = mass_model_name(up["mass_model"], parameter="updating.mass_model")
     except BeamDamageError as exc:
         raise ConfigError(f"config key 'updating.mass_model': {exc}") from None
     up["tol"] = _num("updating.tol", up["tol"], lo=0, hi=1e-2, strict_lo=True)
     up["max_iter"] = _num("updating.max_iter", up["max_iter"], lo=1, hi=100000, integer=True)
+
+
+def _check_solver(sol: dict, truth_elements: int) -> None:
+    """Section ``solver``; the projection modes fit in the truth model's ``2 truth_elements`` DOFs."""
     sol["projection_modes"] = _num("solver.projection_modes", sol["projection_modes"], lo=4, hi=64, integer=True)
-    if sol["projection_modes"] > 2 * m["truth_elements"]:
+    if sol["projection_modes"] > 2 * truth_elements:
         raise ConfigError("config key 'solver.projection_modes' exceeds the truth model's DOFs")
     sol["subspace_iterations"] = _num("solver.subspace_iterations", sol["subspace_iterations"], lo=1, hi=50,
                                       integer=True)
     sol["damping_iterations"] = _num("solver.damping_iterations", sol["damping_iterations"], lo=1, hi=50,
                                      integer=True)
+
+
+def _check_output(out: dict) -> None:
+    """Section ``output``: shard size, stored FRFs, FRF dtype."""
     out["shard_size"] = _num("output.shard_size", out["shard_size"], lo=1, hi=10**6, integer=True)
     if not isinstance(out["store_frf"], bool):
         raise ConfigError(f"config key 'output.store_frf' must be true or false, got {out['store_frf']!r}")
     if out["frf_dtype"] not in ("complex64", "complex128"):
         raise ConfigError(f"config key 'output.frf_dtype' must be 'complex64' or 'complex128', "
                           f"got {out['frf_dtype']!r}")
-    return cfg
 
 
 def modal_noise_calibration() -> dict:

@@ -137,7 +137,7 @@ def expand_tip_stiffness(k, element_length):
     hk = np.stack([-k[..., 0, :], -l * k[..., 0, :] - k[..., 1, :]], axis=-2)       # H k
     hkh = np.stack([-hk[..., :, 0], -l * hk[..., :, 0] - hk[..., :, 1]], axis=-1)    # H k H^T
     top = np.concatenate([hkh, hk], axis=-1)
-    bottom = np.concatenate([np.swapaxes(hk, -1, -2), k], axis=-1)
+    bottom = np.concatenate([hk.mT, k], axis=-1)
     return np.concatenate([top, bottom], axis=-2)
 
 

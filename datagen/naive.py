@@ -1,4 +1,4 @@
-"""One-sample-at-a-time implementation of the dataset pipeline (benchmark baseline and cross-check only).
+"""One-sample-at-a-time implementation of the dataset pipeline (benchmark reference and cross-check only).
 
 :func:`simulate_naive` runs the pipeline of :mod:`datagen.pipeline` on one
 sample at a time, from the same drawn inputs, and computes the FRFs eagerly

@@ -47,9 +47,10 @@ import numpy as np
 
 from datagen.damage import draw_slits, slit_corrections
 from datagen.solvers import light_damping_modes, ritz_modes
-from datagen.specimen import BeamPreset, SectionLayout, beam_preset, draw_specimens, slit_section_ei
+from datagen.specimen import BeamPreset, SectionLayout, draw_specimens, slit_section_ei
 from datagen.synth import measured_peak
 from physics.errors import ConfigError
+from physics.properties import beam_preset
 from datagen.truth_beam import as_preset, load_truth_beam, point_effects, unit_elements
 from physics.fem import assemble, dof_names, kept_dofs
 from physics.frf import poles_and_residues
@@ -61,10 +62,6 @@ __all__ = ["BatchInputs", "CHUNK", "LABEL_FIELDS", "N_MEAS", "Setup", "build_set
            "slit_frequency_drop", "truth_matrices", "unit_mass", "update_models"]
 
 N_MEAS = 4          # measured translational DOFs (thesis nodes 2..5); FRFs are driven at the first
-
-
-def _t(a):
-    return np.swapaxes(a, -1, -2)
 
 
 # --------------------------------------------------------------------------- setup
@@ -358,12 +355,12 @@ def projected_modes(setup: Setup, inp: BatchInputs, M, K, dC):
     w2 = w2s * (ei / mpl)[:, None, None]
     phi = V / np.sqrt(mpl)[:, None, None, None]                  # (B,2,n,p), phi^T M phi = I
     d = 2 * setup.zeta * np.sqrt(w2[:, 0]) * inp.damping_scale[:, None]     # (B,p)
-    X = _t(phi) @ (M[:, None] @ phi[:, :1])                      # (B,2,p,p) = Phi_s^T M Phi_baseline
-    c = (X * d[:, None, None, :]) @ _t(X)
+    X = phi.mT @ (M[:, None] @ phi[:, :1])                      # (B,2,p,p) = Phi_s^T M Phi_baseline
+    c = (X * d[:, None, None, :]) @ X.mT
     if setup.C_local is not None:
-        c += _t(phi) @ setup.C_local @ phi
-    c[:, 1] += _t(phi[:, 1]) @ dC @ phi[:, 1]
-    c = 0.5 * (c + _t(c))
+        c += phi.mT @ setup.C_local @ phi
+    c[:, 1] += phi[:, 1].mT @ dC @ phi[:, 1]
+    c = 0.5 * (c + c.mT)
     lam, Z = light_damping_modes(w2, c, sol["damping_iterations"])
     return lam, phi[..., setup.meas, :] @ Z, w2
 

@@ -20,9 +20,6 @@ __all__ = ["BANDWIDTH", "light_damping_modes", "ritz_modes"]
 
 BANDWIDTH = 3       # half-bandwidth of beam matrices with DOFs ordered node by node
 
-def _t(a):
-    return np.swapaxes(a, -1, -2)
-
 
 def ritz_modes(M, K, start, iterations):
     """Lowest undamped modes by subspace iteration with Rayleigh-Ritz (batched).
@@ -47,9 +44,9 @@ def ritz_modes(M, K, start, iterations):
     for _ in range(iterations):
         MV = np.broadcast_to(M @ V, K.shape[:-2] + V.shape[-2:])
         X = band_cholesky_solve(L, np.ascontiguousarray(MV).reshape(-1, n, V.shape[-1])).reshape(MV.shape)
-        Kr = _t(X) @ K @ X
-        Mr = _t(X) @ M @ X
-        w, Q = undamped_modes(0.5 * (Mr + _t(Mr)), 0.5 * (Kr + _t(Kr)))
+        Kr = X.mT @ K @ X
+        Mr = X.mT @ M @ X
+        w, Q = undamped_modes(0.5 * (Mr + Mr.mT), 0.5 * (Kr + Kr.mT))
         V = X @ Q
     return w**2, V
 

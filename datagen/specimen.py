@@ -1,4 +1,4 @@
-"""Beam presets, the layered face/core section (eq. 4.1) and specimen variability.
+"""The layered face/core section (eq. 4.1) of the beam presets and specimen variability.
 
 Section layout
 --------------
@@ -24,19 +24,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from physics.errors import BeamDamageError, ConfigError
+from physics.errors import ConfigError
 from physics.properties import BeamPreset, layered_ei, section_ei
-from physics.properties import beam_preset as _beam_preset
 
-__all__ = ["SectionLayout", "beam_preset", "depth_for_ei_loss", "draw_specimens", "slit_section_ei"]
-
-
-def beam_preset(name: str = "beam5") -> BeamPreset:
-    """The preset of config key ``preset`` (``physics.properties.PRESETS``), as a config error if unknown."""
-    try:
-        return _beam_preset(name)
-    except BeamDamageError as exc:
-        raise ConfigError(f"config key 'preset': {exc}") from None
+__all__ = ["SectionLayout", "depth_for_ei_loss", "draw_specimens", "slit_section_ei"]
 
 
 @dataclass(frozen=True)

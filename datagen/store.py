@@ -1,4 +1,4 @@
-"""Dataset directory format: manifest, per-sample table, sharded arrays of what defines each sample.
+"""Dataset directory format and its writers: manifest, per-sample table, sharded arrays of what defines each sample.
 
 Layout (format ``beam-damage-dataset/2``)::
 
@@ -10,24 +10,21 @@ Layout (format ``beam-damage-dataset/2``)::
                                   checksums.json; with ``output.store_frf`` also frf_measured.npy, frf_updated.npy
 
 A shard stores what defines its samples (:data:`ARRAYS`): about 4.6 kB per
-sample with the tables. FRFs are synthesised when read (:meth:`Dataset.frf`,
-:mod:`datagen.synth`), on all lines or only on chosen ones (``lines=``);
-``output.store_frf`` writes the very same arrays into the shard (128 kB per
-sample as complex64) for tools that want files.
+sample with the tables. FRFs are synthesised when read
+(:meth:`datagen.dataset.Dataset.frf`, :mod:`datagen.synth`), on all lines or
+only on chosen ones (``lines=``); ``output.store_frf`` writes the very same
+arrays into the shard (128 kB per sample as complex64) for tools that want files.
 
 A shard is written into ``shards/.tmp-shard-NNNNNN-<pid>/`` and renamed to
 ``shards/shard-NNNNNN`` only when all its files (and ``checksums.json``) are
-on disk, then recorded in ``manifest.json`` (atomic rewrite). A reader uses
-only the shards listed in the manifest. Opening a dataset checks every
-listed file's size (cheap); the first read of a shard in a process checks
-its sha256 checksums, and a damaged shard is refused with a one-line error.
-A resumed ``generate`` verifies every recorded shard and regenerates damaged ones.
+on disk, then recorded in ``manifest.json`` (atomic rewrite). A resumed
+``generate`` verifies every recorded shard and regenerates damaged ones
+(:func:`recover`).
 
 Array axes: ``state`` (0 = baseline, 1 = current), ``dof`` (the 4 measured
 translations, thesis nodes 2..5, the FRFs driven at the first), ``mode``, ``line``.
 Nothing is pickled: ``np.load(..., allow_pickle=False)`` reads every file.
-Format 1 datasets (FRFs stored in the shards) are read (``frf`` returns the
-stored arrays) but cannot be resumed.
+Format 1 datasets (FRFs stored in the shards) are read but cannot be resumed.
 """
 
 from __future__ import annotations
@@ -42,17 +39,17 @@ import numpy as np
 import pandas as pd
 
 from datagen.damage import element4_index
-from datagen.synth import FRF_KINDS, SOURCES, line_index, synthesise
+from datagen.synth import DATASET_FRFS, synthesise
 from physics.errors import FileFormatError
 from physics.io import atomic_write_text, read_json
 from physics.modal import modal_parameters
 
-__all__ = ["ARRAYS", "ARRAYS_V1", "COLUMN_UNITS", "DERIVED", "Dataset", "FORMAT", "FORMAT_V1", "OPTIONAL", "ROW_GROUP",
-           "STATES", "damaged_file", "finalize", "load_torch", "package_version", "read_manifest", "recover",
-           "sample_table", "shard_arrays", "shard_name", "verify_shard", "write_manifest", "write_shard"]
+__all__ = ["ARRAYS", "ARRAYS_V1", "COLUMN_UNITS", "DATASET_FORMAT", "DATASET_FORMAT_V1", "DERIVED", "OPTIONAL",
+           "ROW_GROUP", "STATES", "damaged_file", "file_sha256", "finalize", "package_version", "read_manifest",
+           "recover", "sample_table", "shard_arrays", "shard_name", "verify_shard", "write_manifest", "write_shard"]
 
-FORMAT = "beam-damage-dataset/2"
-FORMAT_V1 = "beam-damage-dataset/1"
+DATASET_FORMAT = "beam-damage-dataset/2"
+DATASET_FORMAT_V1 = "beam-damage-dataset/1"
 
 #: Stored arrays of a shard: name -> (axes, description).
 ARRAYS = {
@@ -121,7 +118,8 @@ def package_version() -> str:
         return "unknown"
 
 
-def _sha256(path) -> str:
+def file_sha256(path) -> str:
+    """sha256 hex digest of a file, read in 1 MiB blocks."""
     h = hashlib.sha256()
     with open(path, "rb") as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
@@ -196,7 +194,7 @@ def write_shard(root, index: int, table: pd.DataFrame, arrays: dict, omega_rad_s
     """Write one shard atomically (temp directory, then rename); returns its manifest entry.
 
     With ``omega_rad_s`` given, the FRFs synthesised from ``arrays`` (exactly
-    what :meth:`Dataset.frf` returns) are written too (``--store-frf``).
+    what :meth:`datagen.dataset.Dataset.frf` returns) are written too (``--store-frf``).
     """
     root = Path(root)
     shards = root / "shards"
@@ -210,11 +208,11 @@ def write_shard(root, index: int, table: pd.DataFrame, arrays: dict, omega_rad_s
     for name in ARRAYS:
         np.save(tmp / f"{name}.npy", np.ascontiguousarray(arrays[name]), allow_pickle=False)
     if omega_rad_s is not None:
-        for kind in FRF_KINDS:
+        for kind in DATASET_FRFS:
             np.save(tmp / f"frf_{kind}.npy", synthesise(kind, arrays, omega_rad_s, frf_dtype), allow_pickle=False)
     files = sorted(tmp.iterdir())
     entry = {"index": index, "name": shard_name(index), "n_samples": int(len(table)),
-             "n_converged": int(table["converged"].sum()), "checksums": {p.name: _sha256(p) for p in files},
+             "n_converged": int(table["converged"].sum()), "checksums": {p.name: file_sha256(p) for p in files},
              "sizes": {p.name: p.stat().st_size for p in files}}
     (tmp / "checksums.json").write_text(json.dumps(entry, indent=1))
     for p in tmp.iterdir():  # flush file data before the rename makes the shard visible
@@ -239,14 +237,14 @@ def damaged_file(root, entry: dict, sizes_only: bool = False):
         try:
             if "sizes" in entry and p.stat().st_size != entry["sizes"][f]:
                 return f
-            if not sizes_only and _sha256(p) != h:
+            if not sizes_only and file_sha256(p) != h:
                 return f
         except OSError:
             return f
     return None
 
 
-def read_manifest(root, formats=(FORMAT, FORMAT_V1)) -> dict:
+def read_manifest(root, formats=(DATASET_FORMAT, DATASET_FORMAT_V1)) -> dict:
     """``DIR/manifest.json``, checked: a JSON object of a supported format with a well-formed shard list.
 
     Raises
@@ -373,248 +371,8 @@ def finalize(root, manifest: dict) -> dict:
     manifest["complete"] = True
     manifest["counts"] = {"samples": n, "converged": n_conv, "not_converged": n - n_conv,
                           "shards": len(manifest["shards"])}
-    manifest["checksums"] = {"samples.parquet": _sha256(root / "samples.parquet"),
-                             "omega_rad_s.npy": _sha256(root / "omega_rad_s.npy")}
+    manifest["checksums"] = {"samples.parquet": file_sha256(root / "samples.parquet"),
+                             "omega_rad_s.npy": file_sha256(root / "omega_rad_s.npy")}
     manifest["columns"] = pq.read_schema(root / "samples.parquet").names
     write_manifest(root, manifest)
     return manifest
-
-
-class Dataset:
-    """Read-only view of a dataset directory; FRFs synthesised on read.
-
-    Only shards recorded in ``manifest.json`` are used. Opening checks the
-    size of every shard file; the first read of a shard checks its sha256
-    checksums (``verify=False`` skips both).
-
-    Attributes
-    ----------
-    root : Path
-    manifest : dict
-    shards : list of dict           manifest entries of the complete shards, in sample order
-    offsets : ndarray, shape (n_shards + 1,)   first sample row of each shard
-    """
-
-    def __init__(self, root, verify: bool = True):
-        self.root = Path(root)
-        self.manifest = read_manifest(self.root)
-        self.legacy = self.manifest["format"] == FORMAT_V1
-        self.shards = list(self.manifest["shards"])
-        self.offsets = np.concatenate([[0], np.cumsum([e["n_samples"] for e in self.shards])]).astype(np.int64)
-        self._verify = verify
-        self._verified = set()
-        self._omega = None
-        if verify:
-            for e in self.shards:
-                bad = damaged_file(self.root, e, sizes_only=True)
-                if bad is not None:
-                    raise FileFormatError(self._damage_message(e, bad))
-            self._check_top("omega_rad_s.npy")
-
-    def __len__(self) -> int:
-        return int(self.offsets[-1])
-
-    def _damage_message(self, entry, file):
-        return (f"{self.root / 'shards' / entry['name'] / file}: missing or damaged (checksum/size mismatch); "
-                f"re-run the same `beam-damage generate` command to regenerate the shard")
-
-    def _check_top(self, name, force=False):
-        """Check a top-level file (omega_rad_s.npy, samples.parquet) against the manifest's checksum, once."""
-        want = self.manifest.get("checksums", {}).get(name)
-        if not (self._verify or force) or want is None or name in self._verified:
-            return
-        try:
-            ok = _sha256(self.root / name) == want
-        except OSError:
-            ok = False
-        if not ok:
-            raise FileFormatError(f"{self.root / name}: missing or damaged (checksum mismatch with manifest.json); "
-                                  f"re-run the same `beam-damage generate` command to repair it")
-        self._verified.add(name)
-
-    @property
-    def omega_rad_s(self) -> np.ndarray:
-        if self._omega is None:
-            self._check_top("omega_rad_s.npy")
-            p = self.root / "omega_rad_s.npy"
-            try:
-                w = np.load(p, allow_pickle=False)
-            except FileNotFoundError:
-                raise FileFormatError(f"{p}: missing; re-run the same `beam-damage generate` command") from None
-            except (ValueError, OSError, EOFError) as exc:
-                raise FileFormatError(f"{p}: not a readable .npy file ({str(exc)[:80]})") from None
-            if w.ndim != 1 or w.dtype != np.float64 or w.size < 2 or not np.all(np.isfinite(w)):
-                raise FileFormatError(f"{p}: expected a finite float64 vector of FRF lines (rad/s), got "
-                                      f"{w.dtype} of shape {w.shape}")
-            self._omega = w
-        return self._omega
-
-    @property
-    def frf_dtype(self):
-        return np.dtype(self.manifest["config"]["output"].get("frf_dtype", "complex64"))
-
-    @property
-    def samples(self) -> pd.DataFrame:
-        """The whole samples table (see :meth:`table` for column selection)."""
-        return self.table()
-
-    def table(self, columns=None) -> pd.DataFrame:
-        """Samples table, optionally only ``columns`` (read column by column from parquet)."""
-        import pyarrow.parquet as pq
-
-        cols = None if columns is None else list(columns)
-        known = self.manifest.get("columns")
-        if cols is not None and known and set(cols) - set(known):
-            raise FileFormatError(f"{self.root}: unknown column(s) {sorted(set(cols) - set(known))}; "
-                                  f"see manifest.json 'schema.columns'")
-        p = self.root / "samples.parquet"
-        if self.manifest.get("complete") and p.exists():
-            self._check_top("samples.parquet")
-            return pq.read_table(p, columns=cols).to_pandas()
-        parts = [pq.read_table(self.root / "shards" / e["name"] / "samples.parquet", columns=cols).to_pandas()
-                 for e in self.shards]
-        return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=cols)
-
-    def _check(self, i):
-        if self._verify and i not in self._verified:
-            bad = damaged_file(self.root, self.shards[i])
-            if bad is not None:
-                raise FileFormatError(self._damage_message(self.shards[i], bad))
-            self._verified.add(i)
-
-    def _load(self, i, name):
-        self._check(i)
-        return np.load(self.root / "shards" / self.shards[i]["name"] / f"{name}.npy", mmap_mode="r",
-                       allow_pickle=False)
-
-    def _rows(self, rows):
-        if rows is None:
-            return np.arange(len(self))
-        r = np.atleast_1d(np.asarray(rows))
-        if r.dtype == bool:
-            r = np.flatnonzero(r)
-        r = r.astype(np.int64)
-        if r.size and (r.min() < -len(self) or r.max() >= len(self)):
-            raise IndexError(f"sample rows must lie in [0, {len(self)}), got {r.min()}..{r.max()}")
-        return np.where(r < 0, r + len(self), r)
-
-    def _gather(self, names, rows):
-        """``{name: array[rows]}`` over shards (rows are positions in sample order)."""
-        r = self._rows(rows)
-        shard = np.searchsorted(self.offsets, r, side="right") - 1
-        out = {}
-        for name in names:
-            parts, where = [], []
-            for i in np.unique(shard):
-                sel = shard == i
-                if name in OPTIONAL and f"{name}.npy" not in self.shards[i]["checksums"]:
-                    like = self._load(i, "truth_shapes")  # (sample, state, dof, mode)
-                    parts.append(np.full((int(sel.sum()),) + like.shape[1:3], OPTIONAL[name]))
-                else:
-                    parts.append(np.asarray(self._load(i, name)[r[sel] - self.offsets[i]]))
-                where.append(np.flatnonzero(sel))
-            if not parts:
-                first = self._load(0, name) if self.shards else np.empty((0,))
-                out[name] = np.empty((0,) + first.shape[1:], first.dtype)
-                continue
-            a = np.empty((r.size,) + parts[0].shape[1:], parts[0].dtype)
-            for w, p in zip(where, parts):
-                a[w] = p
-            out[name] = a
-        return out
-
-    def shard_arrays(self, name: str) -> list:
-        """One memory-mapped stored array per complete shard, in sample order."""
-        stored = ARRAYS_V1 if self.legacy else ARRAYS
-        if name not in stored:
-            raise FileFormatError(f"array {name!r} is not stored; stored arrays: {sorted(stored)}")
-        return [self._load(i, name) for i in range(len(self.shards))]
-
-    def array(self, name: str, rows=None) -> np.ndarray:
-        """Array ``name`` (stored, or derived: :data:`DERIVED`) for ``rows`` (default all), in memory."""
-        if self.legacy:
-            if name not in ARRAYS_V1:
-                raise FileFormatError(f"unknown array {name!r}; a format-1 dataset has {sorted(ARRAYS_V1)}")
-            return self._gather([name], rows)[name]
-        if name in ARRAYS:
-            return self._gather([name], rows)[name]
-        if name in ("eigenvalues_true", "eigenvectors_true"):
-            src = "truth_poles" if name == "eigenvalues_true" else "truth_shapes"
-            return self._gather([src], rows)[src][..., :4]
-        if name in ("frf_measured", "frf_updated"):
-            return self.frf(name[4:], rows)
-        raise FileFormatError(f"unknown array {name!r}; expected one of {sorted(ARRAYS) + sorted(DERIVED)}")
-
-    def frf(self, kind: str, rows=None, out=None, lines=None) -> np.ndarray:
-        """FRFs of ``kind`` ("measured" | "updated"), complex, shape (n, 2 states, 4 dofs, L).
-
-        Synthesised from the stored arrays (:mod:`datagen.synth`), identical
-        to what ``generate --store-frf`` writes. Format-1 datasets return their stored FRFs.
-        ``lines``: optional indices into :attr:`omega_rad_s` (default all, L = F); only those lines are
-        synthesised, with exactly their values in the full FRF (noise included), e.g. the lines a
-        feature grid interpolates from.
-        ``out``: optional C-contiguous complex array of that shape written in place (e.g. shared memory).
-        """
-        if kind not in FRF_KINDS:
-            raise FileFormatError(f"FRF kind {kind!r} unknown; expected one of {', '.join(FRF_KINDS)}")
-        if self.legacy:
-            H = self._gather([f"frf_{kind}"], rows)[f"frf_{kind}"]
-            H = H if lines is None else H[..., line_index(lines, H.shape[-1])]
-            if out is None:
-                return H
-            out[...] = H
-            return out
-        return synthesise(kind, self._gather(SOURCES[kind], rows), self.omega_rad_s, self.frf_dtype, out, lines)
-
-    def verify_or_raise(self) -> None:
-        """Check every file's sha256 checksum (shards, omega_rad_s.npy, samples.parquet); damage raises one line."""
-        for name in ("omega_rad_s.npy", "samples.parquet"):
-            self._check_top(name, force=True)
-        for i, e in enumerate(self.shards):
-            if i not in self._verified:
-                bad = damaged_file(self.root, e)
-                if bad is not None:
-                    raise FileFormatError(self._damage_message(e, bad))
-                self._verified.add(i)
-
-    def verify(self) -> bool:
-        """Full check: every shard file and the top-level files against their sha256 checksums."""
-        try:
-            self.verify_or_raise()
-        except FileFormatError:
-            return False
-        return True
-
-
-def load_torch(root, arrays=("frf_updated",), columns=("slit1_x_m", "slit1_depth_m"), converged_only=False,
-               dtype=None):
-    """Torch-ready tensors of a whole dataset: complex arrays with a trailing real/imag axis, labels as floats.
-
-    Parameters
-    ----------
-    root : path of the dataset directory
-    arrays : names from :data:`ARRAYS` or :data:`DERIVED`
-    columns : sample-table columns stacked into ``labels`` (N, len(columns))
-    converged_only : keep only samples whose updating converged in both states
-    dtype : torch dtype (default float32)
-
-    Returns
-    -------
-    dict of torch.Tensor
-        ``{name: tensor}`` for each array plus ``"labels"`` and ``"sample_id"``.
-    """
-    import torch
-
-    ds = Dataset(root)
-    table = ds.table(list(columns) + ["sample_id", "converged"])
-    keep = table["converged"].to_numpy() if converged_only else np.ones(len(table), bool)
-    dt = torch.float32 if dtype is None else dtype
-    out = {}
-    for name in arrays:
-        a = ds.array(name, np.flatnonzero(keep))
-        if np.iscomplexobj(a):
-            a = np.stack([a.real, a.imag], axis=-1)
-        out[name] = torch.as_tensor(np.ascontiguousarray(a)).to(dt)
-    out["labels"] = torch.as_tensor(np.array(table.loc[keep, list(columns)].to_numpy(dtype=float))).to(dt)
-    out["sample_id"] = torch.as_tensor(np.array(table.loc[keep, "sample_id"].to_numpy()))
-    return out

@@ -28,10 +28,11 @@ import numpy as np
 from datagen.kernels import noise_kernel, noisy_pole_residue_kernel
 from physics.frf import pole_residue, receptance_state_space
 
-__all__ = ["FRF_KINDS", "SOURCES", "add_noise", "line_index", "log_magnitude_map", "measured_frf", "measured_peak",
+__all__ = ["DATASET_FRFS", "SOURCES", "add_noise", "line_index", "log_magnitude_map", "measured_frf", "measured_peak",
            "state_seeds", "synthesise", "updated_frf"]
 
-FRF_KINDS = ("measured", "updated")
+#: FRFs a dataset synthesises: the noisy measurement of the truth beam and the updated model's.
+DATASET_FRFS = ("measured", "updated")
 
 #: Stored arrays each FRF kind is synthesised from.
 SOURCES = {"measured": ("truth_poles", "truth_shapes", "noise_seed", "noise_level", "noise_floor", "frf_peak"),
@@ -188,4 +189,4 @@ def synthesise(kind: str, arrays: dict, omega_rad_s, dtype=np.complex64, out=Non
         return measured_frf(arrays, omega_rad_s, dtype, out, lines)
     if kind == "updated":
         return updated_frf(arrays, omega_rad_s, dtype, out, lines)
-    raise ValueError(f"FRF kind {kind!r} unknown; expected one of {FRF_KINDS}")
+    raise ValueError(f"FRF kind {kind!r} unknown; expected one of {DATASET_FRFS}")

@@ -16,16 +16,16 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from datagen.store import Dataset
-from datagen.synth import FRF_KINDS, log_magnitude_map
+from datagen.dataset import Dataset
+from datagen.synth import DATASET_FRFS, log_magnitude_map
 from physics.errors import BeamDamageError
 
-__all__ = ["FEATURES", "FRFDataset", "frf_features", "make_loader"]
+__all__ = ["FEATURES", "FRFDataset", "frf_to_real", "make_loader"]
 
 FEATURES = ("complex", "log_magnitude")
 
 
-def frf_features(H, features: str = "complex") -> np.ndarray:
+def frf_to_real(H, features: str = "complex") -> np.ndarray:
     """Real-valued network inputs from complex FRFs (..., F).
 
     ``"complex"``: real and imaginary parts on a trailing axis (..., F, 2) (m/N).
@@ -50,7 +50,7 @@ class FRFDataset(torch.utils.data.Dataset):
     kind : "measured" | "updated"
     columns : sample-table columns returned as ``labels`` (float32), in this order
     rows : optional subset of sample rows (e.g. a split by specimen)
-    features : see :func:`frf_features`
+    features : see :func:`frf_to_real`
     dtype : torch dtype of the FRF features (default float32)
     weights : optional array (G, F)
         A linear map of ``log10 |H|`` over the F lines (e.g. ``learn.features.grid_weights``: the
@@ -62,9 +62,9 @@ class FRFDataset(torch.utils.data.Dataset):
 
     def __init__(self, root, kind="updated", columns=(), rows=None, features="complex", dtype=torch.float32,
                  weights=None):
-        if kind not in FRF_KINDS:
-            raise BeamDamageError(f"FRF kind {kind!r} unknown; expected one of {FRF_KINDS}")
-        frf_features(np.zeros(1, complex), features)
+        if kind not in DATASET_FRFS:
+            raise BeamDamageError(f"FRF kind {kind!r} unknown; expected one of {DATASET_FRFS}")
+        frf_to_real(np.zeros(1, complex), features)
         if weights is not None and features != "log_magnitude":
             raise BeamDamageError("weights map log-magnitudes: use features='log_magnitude'")
         self.root, self.kind, self.features, self.dtype, self.weights = root, kind, features, dtype, weights
@@ -98,7 +98,7 @@ class FRFDataset(torch.utils.data.Dataset):
             self._ds.frf(self.kind, self.rows[idx], out=frf.numpy().view(np.complex64)[..., 0])
         else:
             H = self._ds.frf(self.kind, self.rows[idx])
-            frf = torch.from_numpy(np.ascontiguousarray(frf_features(H, self.features))).to(self.dtype)
+            frf = torch.from_numpy(np.ascontiguousarray(frf_to_real(H, self.features))).to(self.dtype)
         return {"frf": frf,
                 "labels": torch.from_numpy(self.labels[idx]), "sample_id": torch.from_numpy(self.sample_id[idx])}
 

@@ -9,7 +9,7 @@ state per sample):
 * naive: Python loop over samples; full state-space eigen-solution of the
   truth model, :func:`physics.updating.pilkey`, measured and updated FRFs
   computed eagerly (:func:`datagen.naive.simulate_naive`, ``modes="full"``);
-* generate: :func:`datagen.parallel.generate` end to end on ``--workers``
+* generate: :func:`datagen.generation.generate` end to end on ``--workers``
   processes, including writing the shards, checksums and ``samples.parquet``;
 * read, full FRFs: real/imag float32 tensors (both states, 4 DOFs, 1024
   lines) through :func:`datagen.torchdata.make_loader` with ``--workers``
@@ -70,7 +70,8 @@ def _table_at_scale(root: str, rows: int) -> dict:
 
     import pyarrow.parquet as pq
 
-    from datagen.store import Dataset, finalize, read_manifest
+    from datagen.dataset import Dataset
+    from datagen.store import finalize, read_manifest
 
     src = Path(root)
     m = read_manifest(src)
@@ -123,7 +124,7 @@ def main(argv=None):
 
     from datagen.config import load_config, merge
     from datagen.naive import simulate_naive
-    from datagen.parallel import generate
+    from datagen.generation import generate
     from datagen.pipeline import draw_batch, get_setup
     from datagen.torchdata import make_loader
     from learn.features import grid_weights, load_pairs

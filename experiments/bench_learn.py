@@ -11,9 +11,9 @@
    come from the generator.
 2. Trains the default model (``learn.workflow.train``; its time is the training time), a network on
    each other input route on the same pairs, and gradient boosting on the default route's features.
-3. Scores network(s) and every baseline on the held-out test dataset, prints the table with the
+3. Scores network(s) and every classical method on the held-out test dataset, prints the table with the
    issue's targets and the breakdowns (noise level, size, position).
-4. Robustness: the robust_* sets and the Timoshenko truth, network vs every baseline.
+4. Robustness: the robust_* sets and the Timoshenko truth, network vs every classical method.
 5. Beam 5: classify the thesis's measured modal data and FRFs synthesised from its identified
    models; distance from the training distribution.
 Writes CSV/JSON tables and figures to ``--out``.
@@ -96,11 +96,11 @@ def main(argv=None):
     ap.add_argument("--skip-routes", action="store_true", help="do not train the networks of the other routes")
     args = ap.parse_args(argv)
 
-    from learn.baselines import BoostedBaseline, run_classical
+    from learn.classical import GradientBoosting, run_classical
     from learn.evaluate import figures, metrics, table_rows
     from learn.features import features, load_pairs, split_by_specimen
     from learn.estimator import DamageClassifier
-    from learn.workflow import frf_kinds, load_model, network_output, sensitivity_of, targets, train
+    from learn.workflow import dataset_frfs, load_model, network_output, sensitivity_of, targets, train
 
     data_dir, out = Path(args.data_dir), Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -124,9 +124,9 @@ def main(argv=None):
 
     all_routes = ["modal", "updated", "measured"]
     need = all_routes if not args.skip_routes else list(model.networks)
-    tr_pairs = load_pairs(train_dirs, frfs=frf_kinds(need))
+    tr_pairs = load_pairs(train_dirs, frfs=dataset_frfs(need))
     tr_pairs = tr_pairs.take(split_by_specimen(tr_pairs.groups, (0.85, 0.0, 0.15), seed=args.seed)[0])  # train()'s
-    te_pairs = load_pairs(test_dirs, frfs=frf_kinds(need))
+    te_pairs = load_pairs(test_dirs, frfs=dataset_frfs(need))
     y_tr, truth_tr = targets(tr_pairs)
     _, truth = targets(te_pairs)
     sens = sensitivity_of(model.beam, model.config["root_spring_relative"])
@@ -140,10 +140,10 @@ def main(argv=None):
     net_outs = {r: network_output(networks[r], features(te_pairs, r), sens, f"network ({r})")[0] for r in need}
 
     t = time.perf_counter()
-    boost = BoostedBaseline(random_state=args.seed).fit(features(tr_pairs, route), y_tr)
+    boost = GradientBoosting(random_state=args.seed).fit(features(tr_pairs, route), y_tr)
     boost_out = boost.predict(features(te_pairs, route))
     print(f"gradient boosting on the {route} features: {time.perf_counter() - t:.0f} s", flush=True)
-    thresholds = model.config["baseline_thresholds"]
+    thresholds = model.config["classical_thresholds"]
     classical, _ = run_classical(te_pairs.eigenvalues, te_pairs.eigenvectors, sens, thresholds)
     outputs = [net_outs[route]] + [net_outs[r] for r in need if r != route] + classical + [boost_out]
     rows = table_rows(outputs, truth, te_pairs.table, te_pairs.beam.length_m)
@@ -169,7 +169,7 @@ def main(argv=None):
         print_table(rows, f"breakdown: {sub}", sub)
 
     # ---------------------------------------------------------------- robustness
-    print("\n== Robustness (network on the default route vs baselines; training ranges in brackets) ==")
+    print("\n== Robustness (network on the default route vs classical methods; training ranges in brackets) ==")
     rob = []
     sets = {
         "in range (test)": test_dirs,
@@ -179,7 +179,7 @@ def main(argv=None):
         f"Timoshenko truth (kGA {KGA_N:g} N)": [data_dir / "rob-timoshenko"],
     }
     for name, dirs in sets.items():
-        P = load_pairs(dirs, frfs=frf_kinds([route]))
+        P = load_pairs(dirs, frfs=dataset_frfs([route]))
         _, tr = targets(P)
         outs = [network_output(networks[route], features(P, route), sens, f"network ({route})")[0]]
         outs += run_classical(P.eigenvalues, P.eigenvectors, sens, thresholds)[0]

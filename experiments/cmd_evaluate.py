@@ -1,4 +1,4 @@
-"""``beam-damage evaluate``: the classifier and the classical baselines on a dataset."""
+"""``beam-damage evaluate``: the classifier and the classical methods on a dataset."""
 
 from __future__ import annotations
 
@@ -6,11 +6,11 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub):
-    p = sub.add_parser("evaluate", help="score a trained classifier and the baselines on datasets",
+    p = sub.add_parser("evaluate", help="score a trained classifier and the classical methods on datasets",
                        description="Detection ROC AUC and accuracy, false alarms on intact pairs, element accuracy "
                                    "(thesis 4-element grid), within-one-element, location error (mm), size error, "
                                    "expected calibration error; broken down by noise level, size and position (tip "
-                                   "zone separately) for the network and each classical baseline. With --out: "
+                                   "zone separately) for the network and each classical method. With --out: "
                                    "metrics.csv/json and roc.png, confusion.png, location_error.png, reliability.png.")
     p.add_argument("--model", required=True, metavar="MODEL_DIR")
     p.add_argument("--data", required=True, nargs="+", metavar="DIR", help="dataset directories of the model's beam")

@@ -20,7 +20,8 @@ __all__ = ["add_parser", "run"]
 STUDIES = {
     "thesis": ("experiments.study_thesis", "Thesis reproduction: beam 5, Chapters Four to Six"),
     "discrepancy-study": ("experiments.study_discrepancy", "Discrepancy workflow: beam 5 and the hidden-effect suite"),
-    "damage-study": ("experiments.study_damage", "Damage study: network and baselines by noise, size and position"),
+    "damage-study": ("experiments.study_damage",
+                     "Damage study: network and classical methods by noise, size and position"),
     "benchmark": ("experiments.study_benchmark", "Benchmarks: data generation, training, identification"),
 }
 

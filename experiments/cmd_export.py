@@ -6,8 +6,9 @@ from pathlib import Path
 
 import numpy as np
 
-from datagen.store import STATES, Dataset
-from datagen.synth import FRF_KINDS
+from datagen.dataset import Dataset
+from datagen.store import STATES
+from datagen.synth import DATASET_FRFS
 from physics.errors import BeamDamageError
 from physics.io import MeasuredFRF, write_frf_csv, write_frf_npz, write_uff58
 
@@ -25,7 +26,7 @@ def add_parser(subparsers):
     p.add_argument("dir", help="dataset directory")
     p.add_argument("--samples", required=True, help="comma-separated sample ids, e.g. 0,17,299")
     p.add_argument("--format", choices=sorted(WRITERS), default="uff", help="file format (default uff: dataset 58)")
-    p.add_argument("--kind", choices=[*FRF_KINDS, "both"], default="both", help="which FRFs (default both)")
+    p.add_argument("--kind", choices=[*DATASET_FRFS, "both"], default="both", help="which FRFs (default both)")
     p.add_argument("--out", required=True, help="output directory (created)")
     p.add_argument("--json", action="store_true", help="print the list of written files as JSON")
     p.set_defaults(func=run, flags={"samples": "--samples"})
@@ -65,7 +66,7 @@ def run(args) -> dict:
     f_hz = ds.omega_rad_s / (2 * np.pi)
     writer, ext = WRITERS[args.format]
     out = Path(args.out)
-    kinds = FRF_KINDS if args.kind == "both" else (args.kind,)
+    kinds = DATASET_FRFS if args.kind == "both" else (args.kind,)
     frfs = {kind: ds.frf(kind, rows).astype(complex) for kind in kinds}  # read (and verify) all before writing
     for kind, H in frfs.items():
         for j, i in enumerate(ids):

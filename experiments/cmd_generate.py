@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 
 from datagen.config import load_config, merge, named_configs
-from datagen.parallel import generate
+from datagen.generation import generate
 from datagen.truth_beam import beam_mapping
 from physics.errors import BeamDamageError
 from physics.properties import PRESETS

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from datagen.report import inspect_dataset
+from datagen.inspection import inspect_dataset
 
 __all__ = ["add_parser", "run"]
 

@@ -12,10 +12,6 @@ from physics.errors import BeamDamageError
 __all__ = ["add_parser", "run"]
 
 
-#: Old name of :data:`physics.reduction.REDUCTIONS`.
-REDUCTIONS = reduction.REDUCTIONS
-
-
 def build(beam, elements: int | None, mass: str, method: str, bc: str | None = None) -> dict:
     """Matrices of a beam (preset name, beam file or :class:`Beam`), optionally reduced to the translations.
 

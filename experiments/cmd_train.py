@@ -11,7 +11,7 @@ def add_parser(sub):
                                    "'beam-damage generate --config training --n N --out DIR' (intact and damaged "
                                    "specimens, temperature and re-clamping between the test days), split by specimen "
                                    "(85%% train incl. validation, 15%% test), "
-                                   "calibrate it by temperature scaling, score it and the classical baselines on the "
+                                   "calibrate it by temperature scaling, score it and the classical methods on the "
                                    "test split and write a model directory (config.json, weights-*.pt, metrics.csv).")
     p.add_argument("--data", required=True, nargs="+", metavar="DIR",
                    help="dataset directories of one beam (beam-damage generate --config training)")
@@ -49,5 +49,5 @@ def run(args) -> dict:
               f"{sum(out['train_seconds'].values()):.0f} s of training; test split ({out['test_pairs']} pairs): "
               f"ROC AUC {m['roc_auc']:.4f}, element accuracy {m['element_accuracy']:.3f}, "
               f"median location error {m['median_location_error_mm']:.1f} mm, "
-              f"false alarms {m['false_alarm_rate']:.3f}; best baseline {out['best_baseline']}")
+              f"false alarms {m['false_alarm_rate']:.3f}; best classical method {out['best_classical']}")
     return out

@@ -6,7 +6,7 @@
 3. The discrepancy workflow on beam 5's measured frequencies (Table 4.3): the named effect,
    the gap before and after, and the calibrated beam file.
 4. A training dataset (``--config training``) with the calibrated beam as truth, a held-out
-   test dataset of other specimens, training, and the evaluation against the baselines.
+   test dataset of other specimens, training, and the evaluation against the classical methods.
 5. ``classify`` of the thesis's beam 5, damaged against undamaged (Tables 4.5/4.6).
 6. ``report.html`` (self-contained) and ``report.md`` with every table and figure.
 
@@ -80,7 +80,7 @@ def measured_data_step(out: Path) -> dict:
 def dataset_step(out: Path, beam_file: str, n: int, seed: int, workers: int) -> dict:
     """A ``training``-config dataset with the calibrated beam as truth."""
     from datagen.config import load_config, merge
-    from datagen.parallel import generate
+    from datagen.generation import generate
     from datagen.truth_beam import beam_mapping
     from physics.beam import load_beam
 
@@ -259,7 +259,8 @@ def run(args) -> dict:
         "train": dataset_step(out / "dataset", beam_file, n_train, 0, args.workers),
         "test": dataset_step(out / "testset", beam_file, n_test, 1, args.workers)})
     force_model = force or not (out / "model").exists()
-    key = {**key, "epochs": epochs}
+    from learn.workflow import MODEL_FORMAT
+    key = {**key, "epochs": epochs, "model_format": MODEL_FORMAT}   # a model of another format is retrained
 
     def train_model():
         from learn.workflow import train
@@ -342,7 +343,7 @@ def _report_sections(vsum, checks, thesis_sections, measured, disc, data, traine
          f"0.1-3 %; temperature and re-clamping between the two test days). Test: {data['test']['samples']} other "
          f"specimens (seed 1). Input route of the network: {trained.get('route')}; training "
          f"{sum((trained.get('train_seconds') or {}).values()):.0f} s.",),
-        (Table.from_records("Network against the classical baselines on the same test pairs",
+        (Table.from_records("Network against the classical methods on the same test pairs",
                             [_rounded(r) for r in evaluated["rows"]], metric_cols),),
         tuple(figure(f) for f in evaluated["figures"] if Path(f).exists()))
     s_class = Section("Beam 5 classified (Tables 4.5/4.6, damaged against undamaged)",
@@ -355,8 +356,8 @@ def add_parser(sub):
     p = sub.add_parser("demo", help="run the main job: thesis, discrepancy, dataset, classifier, beam 5, report",
                        description="The mission end to end on embedded defaults: reproduce the thesis, name what "
                                    "beam 5's model lacks and calibrate it, generate data from the calibrated beam, "
-                                   "train and evaluate the classifier against the baselines, classify the thesis's "
-                                   "beam 5, and write report.html and report.md.")
+                                   "train and evaluate the classifier against the classical methods, classify the "
+                                   "thesis's beam 5, and write report.html and report.md.")
     p.add_argument("--out", default="out/demo", help="report directory (default out/demo)")
     p.add_argument("--quick", action="store_true", help="small dataset and short training (about a minute)")
     p.add_argument("--force", action="store_true", help="recompute every step instead of reusing earlier results")

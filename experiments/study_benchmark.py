@@ -31,7 +31,7 @@ def run(out_dir, n_datagen: int = 10000, n_train: int = 6000, epochs: int = 30) 
     ident = bench_identification.table(seeds=2, damping="thesis")
 
     from datagen.config import load_config
-    from datagen.parallel import generate
+    from datagen.generation import generate
     from learn.workflow import train
 
     generate(out / "train-data", load_config("training"), n=n_train, seed=0, workers=2, progress=True)

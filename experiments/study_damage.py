@@ -2,7 +2,7 @@
 
 Evaluates a trained classifier (``--model``-style directory; by default the demo's
 ``out/demo/model``, trained on a small ``training``-config dataset when absent) and every
-classical baseline on the same held-out test pairs (``generate --config training``, other
+classical method on the same held-out test pairs (``generate --config training``, other
 seed), and draws one figure per metric with the breakdowns of
 :func:`learn.evaluate.subsets` (FRF noise level, slit-size tercile, element of the
 4-element grid with the tip zone x/L >= 0.85 apart) and one line per method.
@@ -50,7 +50,7 @@ def _figure(rows, metric, label, path):
 
 def run(out_dir, model_dir="out/demo/model", n_test: int = 4000, n_train: int = 6000) -> tuple[dict, list]:
     from datagen.config import load_config
-    from datagen.parallel import generate
+    from datagen.generation import generate
     from learn.workflow import evaluate, load_model, train
 
     out = Path(out_dir)
@@ -73,7 +73,7 @@ def run(out_dir, model_dir="out/demo/model", n_test: int = 4000, n_train: int = 
     for metric, label in METRICS:
         path = out / f"damage_{metric}.png"
         _figure(rows, metric, label, path)
-        figs.append(Figure(f"{label} of the network and every baseline by noise, size and position", str(path)))
+        figs.append(Figure(f"{label} of the network and every classical method by noise, size and position", str(path)))
     cols = ("method", "subset", "n_damaged", "roc_auc", "element_accuracy", "within_one_element",
             "median_location_error_mm", "median_size_error", "false_alarm_rate")
     table = [{c: r.get(c) for c in cols} for r in rows]

@@ -26,11 +26,12 @@ from learn.features import split_by_specimen
 from learn.models import DamageNet, loss_terms
 from physics.errors import BeamDamageError
 
-__all__ = ["DamageClassifier", "Prediction", "fit_calibration", "fit_size_std_scale", "lognormal_std", "torch_threads"]
+__all__ = ["DamageClassifier", "DamagePrediction", "fit_calibration", "fit_size_std_scale", "lognormal_std",
+           "torch_threads"]
 
 
 @dataclass(frozen=True)
-class Prediction:
+class DamagePrediction:
     """Per-pair outputs of :meth:`DamageClassifier.predict_details` (arrays of shape (n,) unless noted)."""
 
     probability_damaged: np.ndarray
@@ -283,7 +284,7 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         damaged = (y[:, 0] if y.ndim == 2 else y) > 0.5
         return float(accuracy_score(damaged.astype(int), self.predict(X), sample_weight=sample_weight))
 
-    def predict_details(self, X) -> Prediction:
+    def predict_details(self, X) -> DamagePrediction:
         raw = self._raw(X)
         z = raw["detect"] / self.temperature_ + self.bias_
         logits = raw["locate"]
@@ -295,7 +296,7 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         el = p.reshape(len(p), 4, -1).sum(axis=2)
         med = np.exp(raw["size_mean"])
         sd = lognormal_std(med, self.size_std_scale_ * np.exp(raw["size_log_std"]))
-        return Prediction(expit(z), p, mean, std, el, np.argmax(el, axis=1) + 1, med, sd, z)
+        return DamagePrediction(expit(z), p, mean, std, el, np.argmax(el, axis=1) + 1, med, sd, z)
 
     # ------------------------------------------------------------------ persistence (no pickle)
     def get_state(self) -> tuple[dict, dict]:

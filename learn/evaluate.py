@@ -1,7 +1,7 @@
 """Metrics of damage detection, location and sizing, with breakdowns and figures.
 
-All methods (network and baselines) are scored by :func:`metrics` from the same
-truth labels (:func:`learn.features.labels`) and a :class:`learn.baselines.MethodOutput`.
+All methods (network and classical methods) are scored by :func:`metrics` from the same
+truth labels (:func:`learn.features.labels`) and a :class:`learn.classical.MethodOutput`.
 
 Definitions
 -----------
@@ -95,7 +95,7 @@ def reliability(probability, outcome, n_bins: int = 15):
 
 def metrics(out, truth: dict, mask=None, subset: str = "all", length_m: float = 0.6095,
             min_drop: float = MIN_DROP) -> Metrics:
-    """Scores of ``out`` (:class:`learn.baselines.MethodOutput`) against ``truth`` on rows ``mask``."""
+    """Scores of ``out`` (:class:`learn.classical.MethodOutput`) against ``truth`` on rows ``mask``."""
     n = len(truth["damaged"])
     m = np.ones(n, bool) if mask is None else np.asarray(mask, bool)
     dam = truth["damaged"] & m

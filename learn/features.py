@@ -134,7 +134,7 @@ def beam_of_manifest(manifest: dict) -> BeamSpec:
 def load_pairs(roots, frfs=("measured", "updated"), chunk: int = 1024, workers: int | None = None) -> Pairs:
     """Read one or more format-2 dataset directories into :class:`Pairs` (the only place that reads datasets).
 
-    FRFs are synthesised by :meth:`datagen.store.Dataset.frf` ``chunk`` samples
+    FRFs are synthesised by :meth:`datagen.dataset.Dataset.frf` ``chunk`` samples
     at a time, only on the lines :data:`GRID_RAD_S` interpolates from (168 of
     the default 1024; each with exactly its value in the full FRF, noise
     included), and kept only as ``log10 |H|`` on the grid, so memory stays at
@@ -156,7 +156,8 @@ def load_pairs(roots, frfs=("measured", "updated"), chunk: int = 1024, workers: 
     """
     from concurrent.futures import ThreadPoolExecutor
 
-    from datagen.store import FORMAT, Dataset, read_manifest
+    from datagen.dataset import Dataset
+    from datagen.store import DATASET_FORMAT, read_manifest
     from datagen.synth import log_magnitude_map
 
     roots = [roots] if isinstance(roots, (str, Path)) else list(roots)
@@ -165,7 +166,7 @@ def load_pairs(roots, frfs=("measured", "updated"), chunk: int = 1024, workers: 
     workers = workers or len(os.sched_getaffinity(0))
     parts, source, beam = [], [], None
     for root in roots:
-        read_manifest(root, formats=(FORMAT,))   # format 1 is refused in one line
+        read_manifest(root, formats=(DATASET_FORMAT,))   # format 1 is refused in one line
         try:
             ds = Dataset(root)
         except FileFormatError:  # names the damaged file itself

@@ -11,7 +11,7 @@ mass-normalised undamped mode ``phi_r``
 i.e. the curvature squared at the slit (:mod:`datagen.damage`). Shape
 sensitivities are finite differences of the real, unit-norm shapes at the
 measured DOFs (:func:`learn.features.real_shapes`). The same numbers serve the
-classical baselines (Cawley-Adams, DLAC/MDLAC, sensitivity updating) and the
+classical methods (Cawley-Adams, DLAC/MDLAC, sensitivity updating) and the
 classifier's "detectable here" rule.
 """
 

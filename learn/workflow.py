@@ -5,11 +5,11 @@ Model directory
 ``config.json``          beam it was trained for (name, length, DOF set, mass model; and the training data's
                          truth beam from its manifest), default input route, estimator parameters and
                          temperature per route, training data (paths, manifest checksums, generator config
-                         with its temperature/re-clamping ranges), detection threshold, baseline thresholds,
-                         seed, package version, training time, test metrics
+                         with its temperature/re-clamping ranges), detection threshold, classical-method
+                         thresholds, seed, package version, training time, test metrics
 ``weights-<route>.pt``   ``torch.save`` of the network's state dict plus the input normalisation and the
                          training features' precision matrix (loaded with ``weights_only=True``)
-``metrics.csv``          test-split metrics of the network(s) and the classical baselines
+``metrics.csv``          test-split metrics of the network(s) and the classical methods
 
 A model trained on the FRF route also carries a modal-route network, used for
 inputs that are modal data only (the thesis's measured data).
@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 import torch
 
-from learn.baselines import MethodOutput, run_classical
+from learn.classical import MethodOutput, run_classical
 from learn.estimator import DamageClassifier
 from learn.evaluate import MIN_DROP, metrics, table_rows
 from learn.features import (DOFS, GRID_RAD_S, ROUTES, BeamSpec, Pairs, features, frf_features, labels, load_pairs,
@@ -35,18 +35,18 @@ from learn.sensitivity import beam_sensitivity
 from physics.errors import BeamDamageError, FileFormatError
 from physics.io import read_json
 
-__all__ = ["DAY_CHANGES", "DEFAULT_ROUTE", "FORMAT", "IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR",
-           "IN_DISTRIBUTION_PERCENTILE", "RATIO_TOLERANCE", "REFERENCE_WIDTH_M", "TrainedModel", "classify",
-           "classify_many", "day_changes", "detectability_threshold", "equivalent_depth", "evaluate", "frf_kinds",
-           "frf_rows", "identify_modes", "load_model", "modal_pair", "network_output", "nominal_ratio_range",
-           "on_model_dofs", "ood_percentile", "save_model", "sensitivity_of", "targets", "train"]
+__all__ = ["DAY_CHANGES", "DEFAULT_ROUTE", "IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "IN_DISTRIBUTION_PERCENTILE",
+           "MODEL_FORMAT", "RATIO_TOLERANCE", "REFERENCE_WIDTH_M", "TrainedModel", "classify", "classify_many",
+           "dataset_frfs", "day_changes", "detectability_threshold", "equivalent_depth", "evaluate", "frf_rows",
+           "identify_modes", "load_model", "modal_pair", "network_output", "nominal_ratio_range", "on_model_dofs",
+           "ood_percentile", "save_model", "sensitivity_of", "targets", "train"]
 
 
 #: Input route used by default (the winner of ``python -m experiments.bench_learn``).
 DEFAULT_ROUTE = "modal"
 #: Width assumed when a hinge flexibility is turned into a slit depth (m): middle of the training widths.
 REFERENCE_WIDTH_M = 0.0055
-FORMAT = "beam-damage-model/3"
+MODEL_FORMAT = "beam-damage-model/3"
 
 
 def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
@@ -55,8 +55,8 @@ def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
     return np.stack([t["damaged"].astype(float), t["x_over_L"], t["hinge_flexibility"]], axis=1), t
 
 
-def frf_kinds(routes) -> tuple:
-    """FRF kinds (:meth:`datagen.store.Dataset.frf`) the input routes need."""
+def dataset_frfs(routes) -> tuple:
+    """Dataset FRFs (:data:`datagen.synth.DATASET_FRFS`) the input routes need."""
     return tuple(r for r in routes if r != "modal")
 
 
@@ -119,9 +119,9 @@ def load_model(model_dir, device=None) -> TrainedModel:
     if not cfg_path.is_file():
         raise FileFormatError(f"{path}: not a model directory (no config.json); create one with 'beam-damage train'")
     config = read_json(cfg_path)
-    if config.get("format") != FORMAT:
-        raise FileFormatError(f"{cfg_path}: field 'format' is {config.get('format')!r}, expected {FORMAT!r} "
-                              "(the modal features differ between formats): re-create the model with "
+    if config.get("format") != MODEL_FORMAT:
+        raise FileFormatError(f"{cfg_path}: field 'format' is {config.get('format')!r}, expected {MODEL_FORMAT!r} "
+                              "(fields and features differ between formats): re-create the model with "
                               "'beam-damage train'")
     for key, kind in (("route", str), ("networks", dict), ("beam", dict)):
         if not isinstance(config.get(key), kind):
@@ -164,7 +164,7 @@ def detectability_threshold() -> float:
 
 
 def network_output(est: DamageClassifier, X, sens, name="network") -> tuple[MethodOutput, object]:
-    """Network answers as a :class:`MethodOutput` plus the full :class:`learn.estimator.Prediction`."""
+    """Network answers as a :class:`MethodOutput` plus the full :class:`learn.estimator.DamagePrediction`."""
     d = est.predict_details(X)
     detectable = sens.largest_drop(d.x_over_L, d.hinge_flexibility) >= detectability_threshold()
     out = MethodOutput(name, d.probability_damaged, d.probability_damaged >= est.threshold_, d.x_over_L,
@@ -190,7 +190,7 @@ def _nominal_root_spring(source: list):
 # --------------------------------------------------------------------------- train
 def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None = None, progress: bool = False,
           test_fraction: float = 0.15, threads: int | None = 1) -> dict:
-    """Train the default-route network (and a modal-route companion), score it and the baselines, save.
+    """Train the default-route network (and a modal-route companion), score it and the classical methods, save.
 
     Parameters
     ----------
@@ -210,7 +210,7 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
         raise BeamDamageError(f"--route {route!r} must be one of {', '.join(ROUTES)}")
     routes = [route] + (["modal"] if route != "modal" else [])
     t0 = time.perf_counter()
-    pairs = load_pairs(data, frfs=frf_kinds(routes))
+    pairs = load_pairs(data, frfs=dataset_frfs(routes))
     y, truth = targets(pairs)
     if truth["damaged"].all() or not truth["damaged"].any():
         raise BeamDamageError("training data must hold both intact and damaged pairs: generate them with "
@@ -239,14 +239,14 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
     base_all = [metrics(o, truth_te, None, "all", pairs.beam.length_m) for o in classical]
     best = max(base_all, key=lambda m: (np.nan_to_num(m.element_accuracy), -np.nan_to_num(m.median_location_error_mm)))
     config = {
-        "format": FORMAT, "route": route, "beam": pairs.beam.to_dict(), "seed": seed, "epochs": epochs,
+        "format": MODEL_FORMAT, "route": route, "beam": pairs.beam.to_dict(), "seed": seed, "epochs": epochs,
         "grid_rad_s": GRID_RAD_S, "dofs": list(DOFS),
         "training_data": [{k: s[k] for k in ("path", "manifest_checksum", "samples")} for s in pairs.source],
         "generator_config": pairs.source[0]["config"],
         "root_spring_relative": _nominal_root_spring(pairs.source),
         "truth_beam": pairs.source[0]["truth_beam"], "day_changes": changes,
         "detect_min_drop": detectability_threshold(),
-        "reference_width_m": REFERENCE_WIDTH_M, "baseline_thresholds": thresholds, "best_baseline": best.method,
+        "reference_width_m": REFERENCE_WIDTH_M, "classical_thresholds": thresholds, "best_classical": best.method,
         "split": {"train_pairs": int(len(tr)), "test_pairs": int(len(te)), "by": "specimen"},
         "train_seconds": fit_s, "load_seconds": load_s, "package_version": _version(),
         "test_metrics": [m for m in rows if m["subset"] == "all"],
@@ -255,7 +255,7 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
     from physics.io import atomic_write_text
     atomic_write_text(Path(out_dir) / "metrics.csv", pd.DataFrame(rows).to_csv(index=False))
     return {"model": str(out_dir), "route": route, "train_pairs": int(len(tr)), "test_pairs": int(len(te)),
-            "train_seconds": fit_s, "load_seconds": load_s, "best_baseline": best.method,
+            "train_seconds": fit_s, "load_seconds": load_s, "best_classical": best.method,
             "test_metrics": config["test_metrics"], "warnings": warnings}
 
 
@@ -266,11 +266,11 @@ def _version() -> str:
 
 # --------------------------------------------------------------------------- evaluate
 def evaluate(model: TrainedModel, data, out_dir=None, *, extra_outputs=None, progress: bool = False) -> dict:
-    """Network(s) and classical baselines on dataset(s) of the model's beam; table and figures."""
+    """Network(s) and classical methods on dataset(s) of the model's beam; table and figures."""
     from learn.evaluate import figures
 
     routes = list(model.networks)
-    pairs = load_pairs(data, frfs=frf_kinds(routes))
+    pairs = load_pairs(data, frfs=dataset_frfs(routes))
     model.check_beam(pairs.beam, f"dataset {pairs.source[0]['path']}")
     _, truth = targets(pairs)
     sens = sensitivity_of(model.beam, model.config.get("root_spring_relative"), model.config.get("truth_beam"))
@@ -280,7 +280,7 @@ def evaluate(model: TrainedModel, data, out_dir=None, *, extra_outputs=None, pro
     for r in tqdm([model.route] + [q for q in routes if q != model.route], desc="evaluate networks",
                   disable=not progress):
         outs.append(network_output(model.networks[r], features(pairs, r), sens, f"network ({r})")[0])
-    classical, _ = run_classical(pairs.eigenvalues, pairs.eigenvectors, sens, model.config["baseline_thresholds"])
+    classical, _ = run_classical(pairs.eigenvalues, pairs.eigenvectors, sens, model.config["classical_thresholds"])
     outs += classical + list(extra_outputs or [])
     rows = table_rows(outs, truth, pairs.table, pairs.beam.length_m)
     result = {"model": str(model.path), "data": [s["path"] for s in pairs.source], "pairs": len(pairs),
@@ -587,8 +587,8 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     classical, best = [], None
     if lam is not None:
         mode_reasons = _mode_checks(lam, vecs, nominal_ratio_range(sens))
-        classical, _ = run_classical(lam, vecs, sens, model.config["baseline_thresholds"])
-        best = next((o for o in classical if o.name == model.config["best_baseline"]), classical[0])
+        classical, _ = run_classical(lam, vecs, sens, model.config["classical_thresholds"])
+        best = next((o for o in classical if o.name == model.config["best_classical"]), classical[0])
     depth_of = model.config.get("truth_beam") or beam.name
     results = []
     for i in range(len(currents)):

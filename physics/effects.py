@@ -26,7 +26,7 @@ unit in the name):
     damping-ratio pattern that no Rayleigh damping can follow.
 ``proportional_damping``  ``alpha_1_s`` (default 0), ``beta_s`` (default 0)
     Rayleigh damping ``C = alpha M + beta K`` of the whole beam. It is the
-    baseline damping that is always calibrated, not a candidate effect.
+    damping that is always calibrated, not a candidate effect.
 
 :func:`assemble_beam` builds an :class:`physics.fem.FEModel` with every effect
 applied; :func:`interpolation_matrix` maps its DOFs onto the translations at
@@ -81,7 +81,7 @@ EFFECTS: dict[str, tuple[Parameter, ...]] = {
                              Parameter("beta_s", False, positive=False)),
 }
 
-#: Effects a discrepancy analysis may name (``proportional_damping`` is baseline).
+#: Effects a discrepancy analysis may name (``proportional_damping`` is always calibrated).
 CANDIDATES = ("shear_deformation", "rotary_inertia", "root_flexibility", "added_mass", "local_damping")
 
 

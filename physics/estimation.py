@@ -97,7 +97,7 @@ def estimate_frf(force, response, fs_hz, nperseg, noverlap=None, window="hann", 
     try:
         if singular.any():
             raise np.linalg.LinAlgError
-        H1 = np.swapaxes(np.linalg.solve(Gff, Gfx), -1, -2)  # (L, n_o, n_i)
+        H1 = np.linalg.solve(Gff, Gfx).mT  # (L, n_o, n_i)
     except np.linalg.LinAlgError:
         k = int(np.argmax(singular))
         raise ShapeError(f"the force cross-spectral matrix is singular at {max(int(singular.sum()), 1)} of "

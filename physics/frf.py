@@ -219,7 +219,7 @@ def _state_space_eig(M, C, K, response, reference):
     Bf[r, np.arange(r.size)] = 1.0
     B = np.concatenate([np.zeros((M.shape[0], n, r.size)), np.linalg.solve(M, Bf)], axis=-2)
     W = np.linalg.solve(V, B.astype(complex))                                   # (N, 2n, n_in)
-    res = V[:, o, None, :] * np.swapaxes(W, -1, -2)[:, None, :, :]              # (N, n_out, n_in, 2n)
+    res = V[:, o, None, :] * W.mT[:, None, :, :]              # (N, n_out, n_in, 2n)
     return batch, n, (o, r), mu, res.reshape(M.shape[0], o.size * r.size, 2 * n), good
 
 

@@ -59,10 +59,6 @@ class ComplexModes(EigenvalueParameters):
     eigenvectors: np.ndarray
 
 
-def _t(a):
-    return np.swapaxes(a, -1, -2)
-
-
 def check_square(name, A, n=None):
     """Validate a finite square (batched) matrix; returns it as float or complex array."""
     A = np.asarray(A)
@@ -245,9 +241,9 @@ def undamped_modes(M, K):
     """
     L = np.linalg.cholesky(M)
     Linv_K = np.linalg.solve(L, K)
-    A = np.linalg.solve(L, _t(Linv_K))  # L^-1 K L^-T (symmetric)
-    w2, v = np.linalg.eigh(0.5 * (A + _t(A)))
-    phi = np.linalg.solve(_t(L), v)
+    A = np.linalg.solve(L, Linv_K.mT)  # L^-1 K L^-T (symmetric)
+    w2, v = np.linalg.eigh(0.5 * (A + A.mT))
+    phi = np.linalg.solve(L.mT, v)
     return np.sqrt(np.clip(w2, 0.0, None)), phi
 
 
@@ -267,7 +263,7 @@ def mac(phi_a, phi_b=None):
     """
     a = np.asarray(phi_a, dtype=complex)
     b = a if phi_b is None else np.asarray(phi_b, dtype=complex)
-    cross = np.abs(np.conj(_t(a)) @ b) ** 2
+    cross = np.abs(np.conj(a.mT) @ b) ** 2
     na = np.sum(np.abs(a) ** 2, axis=-2)
     nb = np.sum(np.abs(b) ** 2, axis=-2)
     return cross / (na[..., :, None] * nb[..., None, :])

@@ -41,10 +41,6 @@ class Reduction:
     method: str
 
 
-def _t(a):
-    return np.swapaxes(a, -1, -2)
-
-
 def _partition(M, K, masters):
     M = np.asarray(M, dtype=float)
     K = np.asarray(K, dtype=float)
@@ -73,7 +69,7 @@ def _static_t(Kp, nm):
 def _reduce(Mp, Kp, t, nm):
     eye = np.broadcast_to(np.eye(nm), t.shape[:-2] + (nm, nm))
     T = np.concatenate([eye, t], axis=-2)  # eq. 3.41
-    return T, _t(T) @ Mp @ T, _t(T) @ Kp @ T  # eq. 3.44
+    return T, T.mT @ Mp @ T, T.mT @ Kp @ T  # eq. 3.44
 
 
 def guyan(M, K, masters) -> Reduction:

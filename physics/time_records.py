@@ -165,6 +165,36 @@ def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", 
     if excitation not in EXCITATIONS:
         raise ShapeError(f"excitation {excitation!r} must be one of {', '.join(EXCITATIONS)}")
     src = records.metadata.get("source", "time records")
+    ref, resp, kind = _select_channels(records, reference, src)
+    if not (isinstance(averages, (int, np.integer)) and averages >= 1):
+        raise ShapeError(f"averages {averages} must be an integer >= 1")
+    if excitation == "random":
+        est, n_avg, hits, added, what = _random_spectra(records, ref, resp, src, estimator, averages, overlap, window)
+    else:
+        est, n_avg, hits, added, what = _impact_spectra(records, ref, resp, src, estimator, averages, decay)
+    h = {"h1": est.h1, "h2": est.h2, "hv": est.hv}[estimator]
+    if h is None:
+        raise ShapeError("h2 needs exactly one force channel")
+    h = h[:, :1] if h.shape[1] == 1 else h[:, [0]]
+    f = est.frequency_hz
+    keep = (f > 0) & (f <= (fmax_hz if fmax_hz is not None else f[-1]))
+    if keep.sum() < 2:
+        raise ShapeError(f"fmax_hz {fmax_hz} keeps fewer than 2 lines")
+    coh = est.coherence[:, :1, keep]
+    try:
+        frf = MeasuredFRF(f[keep], h[..., keep], tuple(records.dofs[i] for i in resp), (records.dofs[ref],),
+                          kind=kind, metadata={"source": src, "format": "uff58 time records", "estimated": what})
+    except ShapeError as exc:
+        raise FileFormatError(f"{src}: the estimated FRFs: {exc}") from None
+    return TimeEstimate(frf, coh, estimator, excitation, n_avg, hits, added, what)
+
+
+def _select_channels(records: TimeRecords, reference, src) -> tuple[int, list, str]:
+    """Reference force channel, response channels and their FRF kind: ``(ref, resp, kind)``.
+
+    Refuses records without a force, an ambiguous or absent reference, no responses, responses of
+    mixed quantities or measuring one DOF twice, and a force channel that is zero.
+    """
     forces, resp = records.forces, records.responses
     if not forces:
         chans = ", ".join(f"{d} {q}" for d, q in zip(records.dofs, records.quantities))
@@ -186,7 +216,6 @@ def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", 
     kinds = {_KIND[records.quantities[i]] for i in resp}
     if len(kinds) > 1:
         raise FileFormatError(f"{src}: responses mix {', '.join(sorted(kinds))}; estimate one quantity per file")
-    kind = kinds.pop()
     out_dofs = tuple(records.dofs[i] for i in resp)
     if len(set(out_dofs)) != len(out_dofs):
         dup = next(d for d in out_dofs if out_dofs.count(d) > 1)
@@ -195,57 +224,51 @@ def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", 
     if not peak_n >= MIN_FORCE_N:
         raise FileFormatError(f"{src}: force channel {records.dofs[ref]} is zero (largest |F| {peak_n:.3g} N < "
                               f"{MIN_FORCE_N:g} N); expected a measured force")
-    if not (isinstance(averages, (int, np.integer)) and averages >= 1):
-        raise ShapeError(f"averages {averages} must be an integer >= 1")
-    fs = records.sampling_frequency_hz
-    x = records.signals
+    return ref, resp, kinds.pop()
+
+
+def _random_spectra(records: TimeRecords, ref, resp, src, estimator, averages, overlap, window):
+    """Welch spectra of random excitation: ``(estimate, n_averages, None, 0.0, description)``."""
+    fs, x = records.sampling_frequency_hz, records.signals
     n = x.shape[1]
-    hits, added = None, 0.0
-    if excitation == "random":
-        if not 0 <= overlap < 1:
-            raise ShapeError(f"overlap {overlap} must be in [0, 1)")
-        nperseg = int(n / (1 + (averages - 1) * (1 - overlap)))
-        noverlap = int(round(overlap * nperseg))
-        if nperseg < 16:
-            raise ShapeError(f"{n} samples cannot give {averages} averages of at least 16 samples")
-        est = _estimate(src, x[ref], x[resp], fs, nperseg, noverlap, window=window)
-        what = f"{estimator.upper()} of random excitation, {window} window, {est.n_averages} averages, " \
-               f"{overlap:.0%} overlap, {fs / nperseg:.4g} Hz lines"
-    else:
-        block = n // averages
-        if block < 16:
-            raise ShapeError(f"{n} samples cannot give {averages} impact blocks of at least 16 samples")
-        blocks = x[:, : block * averages].reshape(x.shape[0], averages, block).transpose(1, 0, 2)
-        hits = check_hits(blocks[:, ref], blocks, records.dofs)
-        good = [b for b in range(averages) if b not in hits.bad_blocks]
-        if not good:
-            raise FileFormatError(f"{src}: every impact block has a double hit, an overload or no hit "
-                                  f"(double hits in blocks {list(hits.double_hits)}, overloads "
-                                  f"{[f'{d} in block {b}' for b, d in hits.overloads]}, no hit in blocks "
-                                  f"{list(hits.missed)})")
-        ew, tau = exponential_window(block, decay)
-        fw = force_window(block, hits.pulse_samples + int(np.argmax(np.abs(blocks[0, ref]) > 0)),
-                          max(hits.pulse_samples, 4))
-        g = blocks[good]
-        f_t = (g[:, ref] * fw * ew).reshape(-1)
-        r_t = (g[:, resp] * ew).transpose(1, 0, 2).reshape(len(resp), -1)
-        est = _estimate(src, f_t, r_t, fs, block, 0, window="boxcar")
-        added = 0.0 if np.isinf(tau) else fs / tau
-        what = f"{estimator.upper()} of {len(good)} impact blocks of {block} samples (force window, exponential " \
-               f"window to {decay:g}: adds {added:.4g} 1/s to every pole's decay rate), {fs / block:.4g} Hz lines"
-    h = {"h1": est.h1, "h2": est.h2, "hv": est.hv}[estimator]
-    if h is None:
-        raise ShapeError("h2 needs exactly one force channel")
-    h = h[:, :1] if h.shape[1] == 1 else h[:, [0]]
-    f = est.frequency_hz
-    keep = (f > 0) & (f <= (fmax_hz if fmax_hz is not None else f[-1]))
-    if keep.sum() < 2:
-        raise ShapeError(f"fmax_hz {fmax_hz} keeps fewer than 2 lines")
-    coh = est.coherence[:, :1, keep]
-    try:
-        frf = MeasuredFRF(f[keep], h[..., keep], out_dofs, (records.dofs[ref],), kind=kind,
-                          metadata={"source": src, "format": "uff58 time records", "estimated": what})
-    except ShapeError as exc:
-        raise FileFormatError(f"{src}: the estimated FRFs: {exc}") from None
-    return TimeEstimate(frf, coh, estimator, excitation, int(est.n_averages if excitation == "random" else
-                                                               len(good)), hits, added, what)
+    if not 0 <= overlap < 1:
+        raise ShapeError(f"overlap {overlap} must be in [0, 1)")
+    nperseg = int(n / (1 + (averages - 1) * (1 - overlap)))
+    noverlap = int(round(overlap * nperseg))
+    if nperseg < 16:
+        raise ShapeError(f"{n} samples cannot give {averages} averages of at least 16 samples")
+    est = _estimate(src, x[ref], x[resp], fs, nperseg, noverlap, window=window)
+    what = f"{estimator.upper()} of random excitation, {window} window, {est.n_averages} averages, " \
+           f"{overlap:.0%} overlap, {fs / nperseg:.4g} Hz lines"
+    return est, int(est.n_averages), None, 0.0, what
+
+
+def _impact_spectra(records: TimeRecords, ref, resp, src, estimator, averages, decay):
+    """Spectra of ``averages`` impact blocks, bad blocks left out, force and exponential windows applied.
+
+    Returns ``(estimate, n_good_blocks, HitCheck, added decay rate 1/s, description)``.
+    """
+    fs, x = records.sampling_frequency_hz, records.signals
+    n = x.shape[1]
+    block = n // averages
+    if block < 16:
+        raise ShapeError(f"{n} samples cannot give {averages} impact blocks of at least 16 samples")
+    blocks = x[:, : block * averages].reshape(x.shape[0], averages, block).transpose(1, 0, 2)
+    hits = check_hits(blocks[:, ref], blocks, records.dofs)
+    good = [b for b in range(averages) if b not in hits.bad_blocks]
+    if not good:
+        raise FileFormatError(f"{src}: every impact block has a double hit, an overload or no hit "
+                              f"(double hits in blocks {list(hits.double_hits)}, overloads "
+                              f"{[f'{d} in block {b}' for b, d in hits.overloads]}, no hit in blocks "
+                              f"{list(hits.missed)})")
+    ew, tau = exponential_window(block, decay)
+    fw = force_window(block, hits.pulse_samples + int(np.argmax(np.abs(blocks[0, ref]) > 0)),
+                      max(hits.pulse_samples, 4))
+    g = blocks[good]
+    f_t = (g[:, ref] * fw * ew).reshape(-1)
+    r_t = (g[:, resp] * ew).transpose(1, 0, 2).reshape(len(resp), -1)
+    est = _estimate(src, f_t, r_t, fs, block, 0, window="boxcar")
+    added = 0.0 if np.isinf(tau) else fs / tau
+    what = f"{estimator.upper()} of {len(good)} impact blocks of {block} samples (force window, exponential " \
+           f"window to {decay:g}: adds {added:.4g} 1/s to every pole's decay rate), {fs / block:.4g} Hz lines"
+    return est, len(good), hits, added, what

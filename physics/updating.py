@@ -71,10 +71,6 @@ class UpdateResult:
     history: np.ndarray | None = None
 
 
-def _t(a):
-    return np.swapaxes(a, -1, -2)
-
-
 def mass_model_name(name: str, parameter: str = "mass_model") -> str:
     """Canonical analyst-mass name (:data:`MASS_MODELS`) of ``name`` or an alias (``"reduced"`` -> ``"iirs"``)."""
     canonical = MASS_MODEL_ALIASES.get(name, name)
@@ -115,7 +111,7 @@ def reduced_mass(M, K, masters, mass_model: str = "iirs"):
     if mass_model_name(mass_model) == "lumped":
         return np.asarray(M, dtype=float)[..., idx[:, None], idx[None, :]]
     red = iirs(M, K, idx).M
-    return 0.5 * (red + _t(red))
+    return 0.5 * (red + red.mT)
 
 
 def analyst_mass(m_per_length_kg_m, length_m: float, mass_model: str = "iirs", n_elements: int = 4):
@@ -266,7 +262,7 @@ def lancaster_damping(M, eigenvalues, eigenvectors):
     ndarray, shape (..., n, n), real symmetric
     """
     phi = np.asarray(eigenvectors)
-    inner = (phi * np.asarray(eigenvalues)[..., None, :] ** 2) @ _t(phi)
+    inner = (phi * np.asarray(eigenvalues)[..., None, :] ** 2) @ phi.mT
     return -M @ (2 * inner.real) @ M
 
 
@@ -281,14 +277,14 @@ def lancaster_stiffness(eigenvalues, eigenvectors):
         NaN where the flexibility matrix in brackets is singular to working precision (no stiffness matrix).
     """
     phi = np.asarray(eigenvectors)
-    flex = -2 * ((phi / np.asarray(eigenvalues)[..., None, :]) @ _t(phi)).real
+    flex = -2 * ((phi / np.asarray(eigenvalues)[..., None, :]) @ phi.mT).real
     eye = np.eye(flex.shape[-1])
     finite = np.isfinite(flex).all(axis=(-2, -1))
     s = np.linalg.svd(np.where(finite[..., None, None], flex, eye), compute_uv=False)
     singular = ~finite | ~(s[..., -1] > s[..., 0] * (flex.shape[-1] * np.finfo(float).eps))
     K = np.linalg.inv(np.where(singular[..., None, None], eye, flex))
     K[singular] = np.nan
-    return 0.5 * (K + _t(K))
+    return 0.5 * (K + K.mT)
 
 
 def _orthogonality_system(M, lam, phi):
@@ -303,7 +299,7 @@ def _orthogonality_system(M, lam, phi):
     P = np.einsum("...ij,...kj->...jik", phi, phi)[..., iu[0], iu[1]]   # (..., mode, n(n+1)/2)
     scale = np.mean(np.abs(lam), axis=-1)[..., None, None]
     blocks = [P * scale, P * lam[..., :, None]]
-    A = _t(np.concatenate([np.concatenate([2 * b.real, -2 * b.imag], axis=-2) for b in blocks], axis=-1))
+    A = np.concatenate([np.concatenate([2 * b.real, -2 * b.imag], axis=-2) for b in blocks], axis=-1).mT
     minv = np.linalg.inv(M)[..., iu[0], iu[1]]
     return A, np.concatenate([np.zeros_like(minv), minv], axis=-1)
 
@@ -395,7 +391,7 @@ def pilkey(M, eigenvalues, eigenvectors, C0=None, *, tol: float = 1e-10, max_ite
         with np.errstate(all="ignore"):
             h = m_term[a] + np.sum(pf[a] * (C[a] @ pf[a]), axis=-2)  # eq. 5.2: psi^T (2 lambda M + C_k) psi
             C_new = lancaster_damping(Mf[a], lf[a], pf[a] / np.sqrt(h)[:, None, :])  # eq. 5.3
-            C_new = 0.5 * (C_new + _t(C_new))
+            C_new = 0.5 * (C_new + C_new.mT)
             norm = np.linalg.norm(C_new, axis=(-2, -1))
             res = np.linalg.norm(C_new - C[a], axis=(-2, -1)) / np.where(norm > 0, norm, 1.0)
         C[a] = C_new
@@ -485,7 +481,7 @@ def lancaster_direct(M, eigenvalues, eigenvectors):
     scaling, misfit = _least_squares_scaling(M, lam, phi)
     phi_n = phi * np.sqrt(scaling)[..., None, :]
     C = lancaster_damping(M, lam, phi_n)
-    C = 0.5 * (C + _t(C))
+    C = 0.5 * (C + C.mT)
     K = lancaster_stiffness(lam, phi_n)
     if not np.isfinite(K).all():
         raise ShapeError(_SINGULAR_FLEXIBILITY)

@@ -347,7 +347,7 @@ def _tiny_dataset():
     """A complete training-config dataset: 48 samples in 3 shards of 16, 64 FRF lines (about 2 s)."""
     def build(root):
         from datagen.config import load_config, merge
-        from datagen.parallel import generate
+        from datagen.generation import generate
 
         cfg = merge({"measurement": {"lines": 64}, "output": {"shard_size": 16}}, base=load_config("training"))
         generate(root, cfg, n=48, seed=0, progress=False)

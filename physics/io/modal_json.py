@@ -23,7 +23,7 @@ import numpy as np
 
 from physics.errors import FileFormatError
 from physics.io.atomic import atomic_write_text
-from physics.io.types import ModalData, format_complex
+from physics.io.types import MAX_MAGNITUDE, ModalData, format_complex
 from physics.modal import eigenvalues_from_modal
 
 __all__ = ["modal_data_from_dict", "modal_data_to_dict", "number_list", "read_json", "read_modal_json",
@@ -31,8 +31,6 @@ __all__ = ["modal_data_from_dict", "modal_data_to_dict", "number_list", "read_js
 
 #: Largest modal-data JSON file read (bytes).
 MAX_JSON_BYTES = 64 * 2**20
-#: Largest magnitude accepted in modal data (beyond it products overflow).
-MAX_MAGNITUDE = 1e100
 #: Smallest modulus of an eigenvalue (rad/s), natural frequency (Hz) or mode shape's largest entry accepted
 #: (below it reciprocals and squares leave the floating-point range).
 MIN_EIGENVALUE = 1e-100

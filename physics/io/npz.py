@@ -31,11 +31,11 @@ def write_frf_npz(path, data: MeasuredFRF) -> None:
 
 
 #: Largest array this reader loads from an .npz (elements), checked in the member headers before loading.
-MAX_ELEMENTS = 200_000_000
+MAX_ARRAY_ELEMENTS = 200_000_000
 
 
 def _check_members(path, z):
-    """Every member must be a .npy whose header announces at most MAX_ELEMENTS elements."""
+    """Every member must be a .npy whose header announces at most MAX_ARRAY_ELEMENTS elements."""
     for name in z.namelist():
         if not name.endswith(".npy"):
             raise FileFormatError(f"{path}: member {name!r} is not a .npy array; not an .npz of a MeasuredFRF")
@@ -48,16 +48,16 @@ def _check_members(path, z):
             except (ValueError, SyntaxError, EOFError) as exc:
                 raise FileFormatError(f"{path}: member {name!r} has a bad .npy header ({exc})") from None
         size = int(np.prod(shape, dtype=object))
-        if size > MAX_ELEMENTS:
+        if size > MAX_ARRAY_ELEMENTS:
             raise FileFormatError(f"{path}: array {name[:-4]!r} announces shape {shape} ({size} elements, "
-                                  f"{size * dtype.itemsize / 2**30:.3g} GiB); refusing more than {MAX_ELEMENTS}")
+                                  f"{size * dtype.itemsize / 2**30:.3g} GiB); refusing more than {MAX_ARRAY_ELEMENTS}")
 
 
 def read_frf_npz(path) -> MeasuredFRF:
     """Read a file written by :func:`write_frf_npz` (loaded with ``allow_pickle=False``).
 
     Member headers are checked before anything is loaded (only .npy members, at
-    most :data:`MAX_ELEMENTS` elements each); the FRF must be complex, the
+    most :data:`MAX_ARRAY_ELEMENTS` elements each); the FRF must be complex, the
     frequencies real, the DOF labels 1-D lists of strings, the metadata a JSON object.
     """
     path = Path(path)

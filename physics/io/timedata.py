@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from physics.errors import FileFormatError
-from physics.io.types import dof_label
+from physics.io.types import MAX_MAGNITUDE, dof_label
 from physics.io.units import parse_force_unit, parse_response_unit
 
 __all__ = ["QUANTITIES", "TimeRecords", "read_uff_time_records"]
@@ -16,8 +16,6 @@ __all__ = ["QUANTITIES", "TimeRecords", "read_uff_time_records"]
 #: Quantity of each dataset 58 ordinate type a time record can hold, and its SI unit.
 QUANTITIES = {13: ("force", "N"), 8: ("displacement", "m"), 11: ("velocity", "m/s"), 12: ("acceleration", "m/s^2")}
 _KIND_QUANTITY = {"receptance": "displacement", "mobility": "velocity", "accelerance": "acceleration"}
-#: Largest sample magnitude accepted (beyond it the spectra overflow).
-MAX_MAGNITUDE = 1e100
 #: Largest record this reader loads (samples x channels); beyond it the file is refused with the numbers.
 MAX_SAMPLES = 50_000_000
 

@@ -20,8 +20,12 @@ from physics.errors import FileFormatError, ShapeError
 from physics.frf import FRF_KINDS, FRF_UNITS, check_frf_kind, convert_frf
 from physics.modal import EigenvalueParameters
 
-__all__ = ["DEFAULT_UNITS", "FRF_KINDS", "UNNAMED_REFERENCE", "MeasuredFRF", "ModalData", "check_dof_labels",
-           "dof_label", "format_complex", "parse_dof"]
+__all__ = ["DEFAULT_UNITS", "FRF_KINDS", "MAX_MAGNITUDE", "UNNAMED_REFERENCE", "MeasuredFRF", "ModalData",
+           "check_dof_labels", "dof_label", "format_complex", "parse_dof"]
+
+#: Largest magnitude a reader accepts in a file's numbers (beyond it products and spectra overflow).
+MAX_MAGNITUDE = 1e100
+
 
 @dataclass(frozen=True)
 class ModalData(EigenvalueParameters):

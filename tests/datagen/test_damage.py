@@ -8,7 +8,8 @@ from datagen.damage import clamped_flexibility, element4_index, overlap_energy, 
     stiffness_from_flexibility
 from datagen.pipeline import get_setup
 from physics.modal import undamped_modes
-from datagen.specimen import SectionLayout, beam_preset, slit_section_ei
+from datagen.specimen import SectionLayout, slit_section_ei
+from physics.properties import beam_preset
 from physics.errors import ConfigError
 from physics.effects import timoshenko_stiffness
 from physics.fem import assemble, element_stiffness

@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 
 from datagen.config import merge
-from datagen.parallel import generate
-from datagen.store import ARRAYS, Dataset
+from datagen.generation import generate
+from datagen.dataset import Dataset
+from datagen.store import ARRAYS
 
 distributed = pytest.importorskip("distributed")
 

@@ -8,8 +8,9 @@ import pandas as pd
 import pytest
 
 from datagen.config import merge
-from datagen.parallel import generate
-from datagen.store import ARRAYS, Dataset, load_torch
+from datagen.generation import generate
+from datagen.dataset import Dataset, load_torch
+from datagen.store import ARRAYS
 from physics.errors import ConfigError, FileFormatError
 
 CFG = merge({"output": {"shard_size": 7}, "measurement": {"lines": 64}, "damage": {"n_slits": [0, 2]}})

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from datagen.config import load_config, merge
-from datagen.parallel import generate
+from datagen.generation import generate
 from datagen.pipeline import draw_batch, get_setup, simulate_batch
-from datagen.store import Dataset
+from datagen.dataset import Dataset
 
 
 @pytest.fixture(scope="module")

@@ -31,7 +31,7 @@ def test_shear_deformation_beam_file_is_the_truth(tmp_path, capsys):
     """Baseline truth frequencies of a Timoshenko beam file: equal to the same elements assembled by
     physics.effects (20 elements) and within the mesh error of an 80-element model; far from Euler-Bernoulli."""
     beam_mod = pytest.importorskip("physics.beam")
-    from datagen.store import Dataset
+    from datagen.dataset import Dataset
     from physics.modal import undamped_modes
 
     b = beam_mod.preset_beam("beam5").with_effects({"shear_deformation": {"kGA_N": 2.0e4}}, name="beam5-timoshenko")
@@ -67,7 +67,7 @@ def test_every_effect_of_a_beam_file_is_the_truth(tmp_path, capsys):
     state-space complex modes of physics.effects' model on the same mesh (frequencies and damping ratios),
     and its frequencies are within the mesh error of an 80-element model."""
     beam_mod = pytest.importorskip("physics.beam")
-    from datagen.store import Dataset
+    from datagen.dataset import Dataset
     from physics.modal import modal_parameters, underdamped_modes, undamped_modes
 
     b = beam_mod.preset_beam("beam5").with_effects(ALL_EFFECTS, name="beam5-all")
@@ -98,7 +98,7 @@ def test_slits_on_timoshenko_elements_keep_the_stiffness_positive(tmp_path, caps
     """A deep slit (90 % EI loss) on a shear-dominated Timoshenko truth (phi ~ 13 per element): generate runs,
     and the slit lowers the frequencies less than the whole-element bending loss would."""
     beam_mod = pytest.importorskip("physics.beam")
-    from datagen.store import Dataset
+    from datagen.dataset import Dataset
 
     b = beam_mod.preset_beam("beam5").with_effects({"shear_deformation": {"kGA_N": 2.7e4}}, name="shear")
     beam_mod.write_beam(tmp_path / "b.toml", b)
@@ -120,7 +120,7 @@ def test_calibrated_beam5_file_closes_the_gap_to_table_4_3(tmp_path, capsys):
     pytest.importorskip("physics.beam")
     from pathlib import Path
 
-    from datagen.store import Dataset
+    from datagen.dataset import Dataset
     from physics.beam import load_beam
     from physics.modal import undamped_modes
 

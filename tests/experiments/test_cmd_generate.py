@@ -39,7 +39,7 @@ def test_bad_config_names_key(tmp_path, capsys):
 
 
 def test_export_round_trips_through_the_readers(tmp_path, capsys):
-    from datagen.store import Dataset
+    from datagen.dataset import Dataset
     from physics.io import read_frf
 
     cfg = tmp_path / "c.toml"

@@ -92,7 +92,7 @@ def _frf_figure(path):
 
 def _evaluate_figures(out_dir):
     """learn.evaluate.figures of two methods on 200 synthetic pairs."""
-    from learn.baselines import MethodOutput
+    from learn.classical import MethodOutput
     from learn.evaluate import figures
 
     rng = np.random.default_rng(1)

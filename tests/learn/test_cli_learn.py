@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from datagen.config import load_config, merge
-from datagen.parallel import generate
+from datagen.generation import generate
 from experiments.cli import main
 from experiments.cmd_classify import KEYS
 from learn.features import map_frf_to_grid
@@ -35,7 +35,7 @@ def test_train_writes_a_complete_model_directory(tiny):
 
 
 def test_load_pairs_reads_format_2_in_chunks(tiny):
-    from datagen.store import Dataset
+    from datagen.dataset import Dataset
     from learn.features import GRID_RAD_S, labels, load_pairs
 
     ds = Dataset(tiny / "data")
@@ -122,7 +122,7 @@ def test_classify_modal_json_prints_exactly_the_keys(tiny, capsys):
 
 
 def test_classify_frf_on_another_grid_is_accepted(tiny, capsys):
-    from datagen.store import Dataset
+    from datagen.dataset import Dataset
 
     ds = Dataset(tiny / "data")
     H = ds.array("frf_measured")[:1]
@@ -174,7 +174,7 @@ def test_modal_route_model_classifies_frf_files_through_identified_modes(tiny, c
     assert main(["train", "--data", str(tiny / "data"), "--out", str(tiny / "modal"), "--epochs", "2", "--json"]) == 0
     capsys.readouterr()
     assert json.loads((tiny / "modal" / "config.json").read_text())["route"] == "modal"   # the default route
-    from datagen.store import Dataset
+    from datagen.dataset import Dataset
 
     ds = Dataset(tiny / "data")
     H = ds.array("frf_measured")[:1]

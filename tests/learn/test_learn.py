@@ -1,4 +1,4 @@
-"""learn: features, sensitivities, baselines, estimator, model directory, refusal rules."""
+"""learn: features, sensitivities, classical methods, estimator, model directory, refusal rules."""
 
 import json
 
@@ -8,12 +8,12 @@ import torch
 from sklearn.base import clone
 from sklearn.metrics import roc_auc_score
 
-from learn.baselines import cawley_adams, dlac, mdlac, sensitivity_updating
+from learn.classical import cawley_adams, dlac, mdlac, sensitivity_updating
 from learn.estimator import DamageClassifier, fit_calibration
 from learn.evaluate import reliability, roc_auc
 from learn.features import BeamSpec, curvatures, map_frf_to_grid, real_shapes, split_by_specimen
 from learn.sensitivity import beam_sensitivity
-from learn.workflow import FORMAT, TrainedModel, equivalent_depth, load_model, save_model
+from learn.workflow import MODEL_FORMAT, TrainedModel, equivalent_depth, load_model, save_model
 from physics.errors import BeamDamageError
 from physics.fem import beam_model
 from physics.modal import undamped_modes
@@ -61,7 +61,7 @@ def _independent_slit(x_over_L, loss, n_el=60, root=948.7):
 
 
 @pytest.mark.parametrize("x", [0.12, 0.31, 0.47, 0.63])
-def test_frequency_baselines_localise_a_slit_of_an_independent_fe_model(x):
+def test_frequency_classical_methods_localise_a_slit_of_an_independent_fe_model(x):
     sens = beam_sensitivity("beam5", 948.7)
     df, lam, psi, s = _independent_slit(x, 0.4)
     for method in (dlac, cawley_adams, mdlac):
@@ -140,7 +140,7 @@ def test_model_directory_round_trip_with_weights_only(tmp_path):
     X, y = _synthetic(400, rng)
     est = DamageClassifier(hidden=32, depth=1, epochs=2, n_bins=40, random_state=0).fit(X, y)
     beam = BeamSpec("beam5", 0.6095, ("2:y", "3:y", "4:y", "5:y"), "iirs")
-    cfg = {"format": FORMAT, "route": "modal", "beam": beam.to_dict()}
+    cfg = {"format": MODEL_FORMAT, "route": "modal", "beam": beam.to_dict()}
     save_model(tmp_path, cfg, {"modal": est})
     tensors = torch.load(tmp_path / "weights-modal.pt", weights_only=True)
     assert "norm.mean" in tensors

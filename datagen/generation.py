@@ -24,7 +24,7 @@ import numpy as np
 
 from datagen.config import validate
 from datagen.pipeline import get_setup, simulate_shard
-from datagen.store import ARRAYS, COLUMN_UNITS, DERIVED, FORMAT, STATES, finalize, package_version, \
+from datagen.store import ARRAYS, COLUMN_UNITS, DERIVED, DATASET_FORMAT, STATES, finalize, package_version, \
     read_manifest, recover, sample_table, shard_arrays, write_manifest, write_shard
 from physics.errors import BeamDamageError, ConfigError
 from physics.io import atomic_write_bytes
@@ -177,7 +177,7 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
     """Manifest of an existing compatible run (recovered: damaged shards are dropped for regeneration) or a new one."""
     root = Path(root)
     if (root / "manifest.json").exists():
-        m = read_manifest(root, formats=(FORMAT,))
+        m = read_manifest(root, formats=(DATASET_FORMAT,))
         for key, want in (("config", cfg), ("seed", seed), ("n_requested", n)):
             if m.get(key) != want:
                 raise ConfigError(f"{root} holds a dataset generated with a different {key}; resume needs the "
@@ -194,7 +194,7 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
     root.mkdir(parents=True, exist_ok=True)
     setup = get_setup(cfg)
     write_omega(root, cfg)
-    m = {"format": FORMAT, "package_version": package_version(), "config": cfg, "seed": seed, "n_requested": n,
+    m = {"format": DATASET_FORMAT, "package_version": package_version(), "config": cfg, "seed": seed, "n_requested": n,
          "shard_size": cfg["output"]["shard_size"], "n_shards": len(shard_plan(n, cfg["output"]["shard_size"])),
          "complete": False, "shards": [], "schema": {"arrays": _schema(), "states": list(STATES),
                                                      "columns": COLUMN_UNITS,

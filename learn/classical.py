@@ -14,7 +14,7 @@ sensitivities of the nominal beam (:mod:`learn.sensitivity`) and returns a
 * :func:`sensitivity_updating` - regularised least squares on frequency shifts
   and shape changes for the hinge flexibility of a slit in every element of the grid;
   reports the element of the largest loss.
-* :class:`BoostedBaseline` - scikit-learn's HistGradientBoosting on the
+* :class:`GradientBoosting` - scikit-learn's HistGradientBoosting on the
   network's own features.
 
 Detection scores: the largest relative frequency drop (frequency methods), the
@@ -31,7 +31,7 @@ import numpy as np
 from learn.features import real_shapes
 from learn.sensitivity import Sensitivity
 
-__all__ = ["BoostedBaseline", "FREQUENCY_METHODS", "MethodOutput", "cawley_adams", "dlac", "false_alarm_threshold",
+__all__ = ["GradientBoosting", "FREQUENCY_METHODS", "MethodOutput", "cawley_adams", "dlac", "false_alarm_threshold",
            "frequency_shifts", "mdlac", "run_classical", "sensitivity_updating", "shape_changes"]
 
 
@@ -157,7 +157,7 @@ def false_alarm_threshold(score, damaged, target: float = 0.005) -> float:
     return float(np.quantile(s[~np.asarray(damaged, bool)], 1 - target))
 
 
-class BoostedBaseline:
+class GradientBoosting:
     """HistGradientBoosting on the pair features: detection, ``x / L`` and ``ln`` hinge flexibility."""
 
     def __init__(self, random_state: int = 0, max_iter: int = 300):

@@ -11,7 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from datagen.store import STATES, Dataset
+from datagen.dataset import Dataset
+from datagen.store import STATES
 from physics.errors import FileFormatError
 from physics.io import atomic_write_text
 from physics.properties import cantilever_curvature_squared
