@@ -22,7 +22,8 @@ from physics.identification.measured import (Identification, identify_file, iden
                                              read_measured_frf, reconstruction_error_db)
 from physics.identification.methods import MAX_LSCF_VALUES, METHODS, MethodSpec
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity, shapes_from_residues
-from physics.identification.poles import STABILITY_CODES, SelectedPoles, StabilisationDiagram, select_poles
+from physics.identification.poles import (STABILITY_CODES, SelectedPoles, StabilisationDiagram, select_poles,
+                                          stability_status)
 from physics.identification.sdof import (CircleFit, circle_fit, circle_fit_sdof, complex_modes_from_driving_point,
                                          find_peaks_indicator, mode_indicator, peak_picking, real_modes_from_peaks)
 
@@ -31,4 +32,4 @@ __all__ = ["CircleFit", "ESTIMATION_PASSES", "Identification", "LSCFIdentificati
            "WEIGHTINGS", "circle_fit", "circle_fit_sdof", "complex_modes_from_driving_point", "estimate_noise_model",
            "find_peaks_indicator", "identify_file", "identify_frf", "identify_frfs", "identify_lscf", "lscf", "lsfd",
            "modal_phase_collinearity", "mode_indicator", "peak_picking", "read_measured_frf", "real_modes_from_peaks",
-           "reconstruction_error_db", "select_poles", "shapes_from_residues"]
+           "reconstruction_error_db", "select_poles", "shapes_from_residues", "stability_status"]

@@ -11,7 +11,7 @@ from physics.errors import ConvergenceError, ShapeError
 from physics.frf import check_frf_kind, convert_frf
 from physics.identification.lsfd import LSFDResult, lsfd
 from physics.identification.modes import ModalEstimate, _estimate, _frf3
-from physics.identification.poles import StabilisationDiagram, select_poles
+from physics.identification.poles import StabilisationDiagram, select_poles, stability_status
 
 __all__ = ["LSCFIdentification", "identify_lscf", "lscf"]
 
@@ -89,67 +89,82 @@ def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_to
         raise ShapeError(f"lscf: {N} lines x {n_o} responses are too few for model order {max_order}")
     dt = 1.0 / (2.0 * f[-1] * (1.0 + margin))
     P = max_order + 1
-    X, Q = _lscf_basis(f, dt, P)
-    Hrow = np.transpose(h, (0, 2, 1))  # (n_o, N, n_i)
-    Y = -(X[None, :, :, None] * Hrow[:, :, None, :]).reshape(n_o, N, P * n_i)
-    Yr = np.concatenate([Y.real, Y.imag], axis=1)  # (n_o, 2N, P n_i)
-    # Eliminate the numerators: order p projects Y off the first nb = p + 1 columns of Q
-    # (QR, so the conditioning of X is not squared), then solves the denominator normal
-    # equations M_p alpha = 0 with alpha_p = I. With C = Q^T Y and Yperp = Y - Q C,
-    # Y - Q[:, :nb] C[:nb] = Yperp + Q[:, nb:] C[nb:] (orthogonal parts), so
-    # M_p = Yperp^T Yperp + sum_{k >= nb} C_k^T C_k on the first (p + 1) n_i columns:
-    # a sum of positive semi-definite terms (no cancellation), all orders from one projection.
-    C = np.matmul(Q.T, Yr)  # (n_o, P, P n_i)
-    Yperp = Yr - np.matmul(Q, C)
-    Yp2 = Yperp.reshape(-1, Yperp.shape[-1])
-    M = Yp2.T @ Yp2
+    M, C = _projected_normal_equations(f, h, dt, P)
+    f_lo, f_hi = f[0] / (1.0 + margin), f[-1] * (1.0 + margin)
     orders, lams, mpfs = [], [], []
     for p in range(max_order, min_order - 1, -1):
-        nb, na, m = p + 1, (p + 1) * n_i, p * n_i
-        if nb < P:  # add the term of basis column nb, dropped from the numerator at this order
-            M = M + C[:, nb, :].T @ C[:, nb, :]
-        Mp = M[:na, :na]
-        try:
-            alpha = np.linalg.solve(Mp[:m, :m], -Mp[:m, m:])  # (m, n_i)
-        except np.linalg.LinAlgError:
+        if p + 1 < P:  # add the term of basis column p + 1, dropped from the numerator at this order
+            M = M + C[:, p + 1, :].T @ C[:, p + 1, :]
+        poles = _denominator_poles(M, p, n_i, dt)
+        if poles is None:
             continue
-        # companion matrix of sum_k z^k alpha_k^T (left null vectors of A(z))
-        coeffs = alpha.reshape(p, n_i, n_i).transpose(0, 2, 1)
-        comp = np.zeros((m, m))
-        comp[:m - n_i, n_i:] = np.eye(m - n_i)
-        comp[m - n_i:, :] = -np.concatenate(list(coeffs), axis=1)
-        z, V = np.linalg.eig(comp)
-        ok = np.abs(z) > 0
-        lam = np.log(z[ok].astype(complex)) / dt
-        L = V[:n_i, ok].T
+        lam, L = poles
         fn = np.abs(lam) / (2 * np.pi)
         zeta = -lam.real / np.abs(lam)
-        keep = (lam.imag > 0) & (zeta > 0) & (zeta < max_damping) & (fn >= f[0] / (1.0 + margin)) \
-            & (fn <= f[-1] * (1.0 + margin))
-        L = L[keep] / np.linalg.norm(L[keep], axis=1, keepdims=True)
+        keep = (lam.imag > 0) & (zeta > 0) & (zeta < max_damping) & (fn >= f_lo) & (fn <= f_hi)
         orders.append(np.full(keep.sum(), p))
         lams.append(lam[keep])
-        mpfs.append(L)
+        mpfs.append(L[keep] / np.linalg.norm(L[keep], axis=1, keepdims=True))
     orders, lams, mpfs = orders[::-1], lams[::-1], mpfs[::-1]  # ascending order
     order = np.concatenate(orders)
     lam = np.concatenate(lams)
     mpf = np.concatenate(mpfs) if mpfs else np.zeros((0, n_i), complex)
     fn = np.abs(lam) / (2 * np.pi)
     zeta = -lam.real / np.abs(lam)
-    status = np.zeros(lam.size, int)
-    for p in np.unique(order)[1:]:
-        cur = np.nonzero(order == p)[0]
-        prev = np.nonzero(order == p - 1)[0]
-        if prev.size == 0 or cur.size == 0:
-            continue
-        d = np.abs(fn[cur][:, None] - fn[prev][None, :])
-        near = prev[np.argmin(d, axis=1)]
-        f_ok = np.abs(fn[cur] - fn[near]) <= freq_tol * fn[cur]
-        d_ok = np.abs(zeta[cur] - zeta[near]) <= damping_tol * zeta[cur]
-        v_ok = (np.abs(np.sum(mpf[cur].conj() * mpf[near], axis=1)) ** 2 >= mpf_tol) if n_i > 1 \
-            else np.ones(cur.size, bool)
-        status[cur] = np.where(f_ok, np.where(d_ok & v_ok, 4, np.where(v_ok, 3, np.where(d_ok, 2, 1))), 0)
+    status = stability_status(order, fn, zeta, mpf, freq_tol, damping_tol, mpf_tol)
     return StabilisationDiagram(order, lam, fn, zeta, mpf, status, (float(f[0]), float(f[-1])))
+
+
+def _projected_normal_equations(f_hz, h, dt_s, n_cols):
+    """Denominator normal equations of the highest order, with the numerators eliminated.
+
+    Order ``p`` projects ``Y`` off the first ``nb = p + 1`` columns of ``Q`` (QR, so the
+    conditioning of ``X`` is not squared), then solves ``M_p alpha = 0`` with ``alpha_p = I``.
+    With ``C = Q^T Y`` and ``Yperp = Y - Q C``, ``Y - Q[:, :nb] C[:nb] = Yperp + Q[:, nb:] C[nb:]``
+    (orthogonal parts), so ``M_p = Yperp^T Yperp + sum_{k >= nb} C_k^T C_k`` on the first
+    ``(p + 1) n_ref`` columns: a sum of positive semi-definite terms (no cancellation), all
+    orders from one projection.
+
+    Returns
+    -------
+    M : ndarray, shape (n_cols n_ref, n_cols n_ref)
+        ``Yperp^T Yperp`` (the normal equations of order ``n_cols - 1``).
+    C : ndarray, shape (n_resp, n_cols, n_cols n_ref)
+        ``Q^T Y`` per response, whose rows ``C[:, k]`` add the terms of lower orders.
+    """
+    n_o, N, n_i = h.shape[0], h.shape[2], h.shape[1]
+    X, Q = _lscf_basis(f_hz, dt_s, n_cols)
+    Hrow = np.transpose(h, (0, 2, 1))  # (n_o, N, n_i)
+    Y = -(X[None, :, :, None] * Hrow[:, :, None, :]).reshape(n_o, N, n_cols * n_i)
+    Yr = np.concatenate([Y.real, Y.imag], axis=1)  # (n_o, 2N, P n_i)
+    C = np.matmul(Q.T, Yr)  # (n_o, P, P n_i)
+    Yperp = Yr - np.matmul(Q, C)
+    Yp2 = Yperp.reshape(-1, Yperp.shape[-1])
+    return Yp2.T @ Yp2, C
+
+
+def _denominator_poles(M, p, n_i, dt_s):
+    """Poles (rad/s) and participation vectors (rows, not normalised) of the order-``p`` denominator.
+
+    Solves the normal equations ``M[:(p+1) n_i, :(p+1) n_i]`` for ``alpha`` with ``alpha_p = I``;
+    the poles are ``ln(z)/dt`` of the eigenvalues ``z`` of the companion matrix of
+    ``sum_k z^k alpha_k^T``, the participation vectors the first ``n_i`` entries of its
+    eigenvectors (left null vectors of ``A(z)``). None when the normal equations are singular.
+    """
+    na, m = (p + 1) * n_i, p * n_i
+    Mp = M[:na, :na]
+    try:
+        alpha = np.linalg.solve(Mp[:m, :m], -Mp[:m, m:])  # (m, n_i)
+    except np.linalg.LinAlgError:
+        return None
+    coeffs = alpha.reshape(p, n_i, n_i).transpose(0, 2, 1)
+    comp = np.zeros((m, m))
+    comp[:m - n_i, n_i:] = np.eye(m - n_i)
+    comp[m - n_i:, :] = -np.concatenate(list(coeffs), axis=1)
+    z, V = np.linalg.eig(comp)
+    ok = np.abs(z) > 0
+    return np.log(z[ok].astype(complex)) / dt_s, V[:n_i, ok].T
+
 
 @dataclass(frozen=True)
 class LSCFIdentification:

@@ -233,25 +233,10 @@ def lsfd(frequency_hz, frf, eigenvalues, lower_residual=True, upper_residual=Tru
     hk = h.reshape(-1, N)
     n_m = lam.size
     B = _lsfd_basis(iw, lam, power, lower_residual, upper_residual)
-    if isinstance(weighting, str) and weighting == "estimated":
-        W = _lsfd_weights(hk, "relative")
-        for _ in range(ESTIMATION_PASSES):   # noise model from the residuals, refit with its weights
-            synth0 = _weighted_solve(B, hk, W)[0] @ B.T
-            W = 1 / estimate_noise_model(synth0, hk - synth0)
-    else:
-        W = _lsfd_weights(h, weighting).reshape(-1, N)
+    W = _fit_weights(B, h, weighting)
     x, s2, x_std, Q = _weighted_solve(B, hk, W)
     R = x[:, :n_m] + 1j * x[:, n_m:2 * n_m]
-    S = _pole_information(iw, lam, R, power, W, Q, s2)
-    cov = np.linalg.pinv(S)
-    var_re, var_im = np.clip(np.diag(cov)[:n_m], 0, None), np.clip(np.diag(cov)[n_m:], 0, None)
-    cov_ri = np.diag(cov, n_m)[:n_m]
-    a = np.abs(lam)
-    # f = |lambda|/2 pi, zeta = -Re lambda/|lambda|: first-order propagation
-    df = np.stack([lam.real, lam.imag]) / (2 * np.pi * a)
-    dz = np.stack([-1 / a + lam.real**2 / a**3, lam.real * lam.imag / a**3])
-    f_std = np.sqrt(np.clip(df[0] ** 2 * var_re + df[1] ** 2 * var_im + 2 * df[0] * df[1] * cov_ri, 0, None))
-    z_std = np.sqrt(np.clip(dz[0] ** 2 * var_re + dz[1] ** 2 * var_im + 2 * dz[0] * dz[1] * cov_ri, 0, None))
+    lam_std, f_std, z_std = _pole_std(lam, np.linalg.pinv(_pole_information(iw, lam, R, power, W, Q, s2)))
     R = R.reshape(n_s, n_r, n_m)
     R_std = np.hypot(x_std[:, :n_m], x_std[:, n_m:2 * n_m]).reshape(n_s, n_r, n_m)
     k = 2 * n_m
@@ -262,7 +247,41 @@ def lsfd(frequency_hz, frf, eigenvalues, lower_residual=True, upper_residual=Tru
     if upper_residual:
         UR = x[:, k].reshape(n_s, n_r)
     synth = (x @ B.T).reshape(h.shape)
-    return LSFDResult(R, R_std, LR, UR, synth, lam, np.column_stack([np.sqrt(var_re), np.sqrt(var_im)]),
-                      f_std, z_std, kind, weighting if isinstance(weighting, str) else "noise")
+    return LSFDResult(R, R_std, LR, UR, synth, lam, lam_std, f_std, z_std, kind,
+                      weighting if isinstance(weighting, str) else "noise")
+
+
+def _fit_weights(B, h, weighting):
+    """Weights (n_frf, n_lines) of the fit of ``h`` (n_resp, n_ref, n_lines) on the design ``B``.
+
+    ``"estimated"``: relative weights, then :data:`ESTIMATION_PASSES` times the inverse of the noise model
+    (:func:`estimate_noise_model`) of the residuals of a fit with the previous weights; else
+    :func:`_lsfd_weights`.
+    """
+    hk = h.reshape(-1, h.shape[-1])
+    if not (isinstance(weighting, str) and weighting == "estimated"):
+        return _lsfd_weights(h, weighting).reshape(hk.shape)
+    W = _lsfd_weights(hk, "relative")
+    for _ in range(ESTIMATION_PASSES):
+        synth0 = _weighted_solve(B, hk, W)[0] @ B.T
+        W = 1 / estimate_noise_model(synth0, hk - synth0)
+    return W
+
+
+def _pole_std(lam, cov):
+    """One-sigma errors of the poles from their covariance ``cov`` (2m, 2m) over (Re lambda, Im lambda).
+
+    Returns the standard errors of ``(Re lambda, Im lambda)`` (m, 2) and, to first order, of
+    ``f = |lambda|/2 pi`` (Hz) and ``zeta = -Re lambda/|lambda|`` (m,).
+    """
+    n_m = lam.size
+    var_re, var_im = np.clip(np.diag(cov)[:n_m], 0, None), np.clip(np.diag(cov)[n_m:], 0, None)
+    cov_ri = np.diag(cov, n_m)[:n_m]
+    a = np.abs(lam)
+    df = np.stack([lam.real, lam.imag]) / (2 * np.pi * a)
+    dz = np.stack([-1 / a + lam.real**2 / a**3, lam.real * lam.imag / a**3])
+    f_std = np.sqrt(np.clip(df[0] ** 2 * var_re + df[1] ** 2 * var_im + 2 * df[0] * df[1] * cov_ri, 0, None))
+    z_std = np.sqrt(np.clip(dz[0] ** 2 * var_re + dz[1] ** 2 * var_im + 2 * dz[0] * dz[1] * cov_ri, 0, None))
+    return np.column_stack([np.sqrt(var_re), np.sqrt(var_im)]), f_std, z_std
 
 

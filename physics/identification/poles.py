@@ -9,7 +9,7 @@ import numpy as np
 from physics.errors import ConvergenceError
 from physics.modal import eigenvalues_from_modal
 
-__all__ = ["STABILITY_CODES", "SelectedPoles", "StabilisationDiagram", "select_poles"]
+__all__ = ["STABILITY_CODES", "SelectedPoles", "StabilisationDiagram", "select_poles", "stability_status"]
 
 
 #: Stability codes of poles in a stabilisation diagram.
@@ -40,6 +40,43 @@ class StabilisationDiagram:
     participation: np.ndarray
     status: np.ndarray
     band_hz: tuple
+
+def stability_status(order, natural_frequencies_hz, damping_ratios, participation, freq_tol=0.01, damping_tol=0.05,
+                     mpf_tol=0.98):
+    """Stability code (:data:`STABILITY_CODES`) of each pole against the nearest pole of the previous order.
+
+    Parameters
+    ----------
+    order : ndarray of int, shape (n_poles,)
+    natural_frequencies_hz, damping_ratios : ndarray, shape (n_poles,)
+    participation : ndarray, complex, shape (n_poles, n_ref)
+        Unit-norm participation vectors.
+    freq_tol, damping_tol : float
+        Relative change of frequency / damping below which they are stable.
+    mpf_tol : float
+        MAC between participation vectors above which the vector is stable (always with one reference).
+
+    Returns
+    -------
+    ndarray of int, shape (n_poles,)
+        0 for the poles of the lowest order and of an order whose previous order holds none.
+    """
+    fn, zeta, mpf = natural_frequencies_hz, damping_ratios, participation
+    status = np.zeros(fn.size, int)
+    for p in np.unique(order)[1:]:
+        cur = np.nonzero(order == p)[0]
+        prev = np.nonzero(order == p - 1)[0]
+        if prev.size == 0 or cur.size == 0:
+            continue
+        d = np.abs(fn[cur][:, None] - fn[prev][None, :])
+        near = prev[np.argmin(d, axis=1)]
+        f_ok = np.abs(fn[cur] - fn[near]) <= freq_tol * fn[cur]
+        d_ok = np.abs(zeta[cur] - zeta[near]) <= damping_tol * zeta[cur]
+        v_ok = (np.abs(np.sum(mpf[cur].conj() * mpf[near], axis=1)) ** 2 >= mpf_tol) if mpf.shape[1] > 1 \
+            else np.ones(cur.size, bool)
+        status[cur] = np.where(f_ok, np.where(d_ok & v_ok, 4, np.where(v_ok, 3, np.where(d_ok, 2, 1))), 0)
+    return status
+
 
 @dataclass(frozen=True)
 class SelectedPoles:
@@ -110,13 +147,27 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
         min_count = max(2, int(np.ceil(orders.size / 3)))
     top = orders[int(np.floor((1 - seed_orders) * (orders.size - 1))):] if orders.size else orders
     seeds = cand[np.isin(d.order[cand], top)]
+    chosen = _take_clusters(_seed_clusters(d, cand, seeds, freq_tol, damping_tol), min_count)
+    if n_modes is not None:
+        chosen = chosen[:n_modes]
+    if not chosen:
+        raise ConvergenceError("no pole is stable over enough model orders: raise max_order, widen the "
+                               "band or relax the selection tolerances")
+    return _summarise_clusters(d, chosen)
+
+
+def _seed_clusters(d: StabilisationDiagram, cand, seeds, freq_tol, damping_tol):
+    """For each seed, each order's candidate nearest in frequency within the tolerances of the seed.
+
+    ``cand`` (pole indices) is sorted by ascending order. Returns ``[(seed, members), ...]``,
+    largest cluster first (ties: the seed of the higher order first).
+    """
     # candidates by order, padded to a (n_orders, width) table (-1 = none)
     c_orders, c_group = np.unique(d.order[cand], return_inverse=True)
     slot = np.arange(cand.size) - np.searchsorted(c_group, c_group)  # cand is grouped by ascending order
     by_order = np.full((c_orders.size, max(1, np.bincount(c_group).max(initial=0))), -1)
     by_order[c_group, slot] = cand
     f_tab = np.where(by_order >= 0, d.natural_frequencies_hz[by_order], np.inf)
-    # each order's candidate nearest in frequency to each seed, kept within the tolerances
     dist = np.abs(f_tab[None] - d.natural_frequencies_hz[seeds][:, None, None])  # (n_seeds, n_orders, width)
     near = by_order[np.arange(c_orders.size)[None, :], np.argmin(dist, axis=2)]  # (n_seeds, n_orders)
     fs, zs = d.natural_frequencies_hz[seeds][:, None], d.damping_ratios[seeds][:, None]
@@ -124,6 +175,12 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
         & (np.abs(d.damping_ratios[near] - zs) <= damping_tol * zs)
     clusters = [(sd, near[k][ok[k]]) for k, sd in enumerate(seeds)]
     clusters.sort(key=lambda c: (-c[1].size, -d.order[c[0]]))
+    return clusters
+
+
+def _take_clusters(clusters, min_count):
+    """Clusters in turn, skipping a seed already taken and poles already taken; those left with fewer
+    than ``min_count`` members are dropped. Returns the member index arrays taken."""
     chosen, used = [], set()
     for sd, mem in clusters:
         if sd in used:
@@ -134,13 +191,14 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
         chosen.append(mem)
         used.update(mem.tolist())
         used.add(sd)
-    if n_modes is not None:
-        chosen = chosen[:n_modes]
-    if not chosen:
-        raise ConvergenceError("no pole is stable over enough model orders: raise max_order, widen the "
-                               "band or relax the selection tolerances")
-    # low orders are biased (the z-domain model converges with order): summarise the
-    # upper half of each cluster's orders
+    return chosen
+
+
+def _summarise_clusters(d: StabilisationDiagram, chosen) -> SelectedPoles:
+    """Medians and spreads over the upper half (by order) of each cluster, sorted by frequency.
+
+    Low orders are biased (the z-domain model converges with order), hence the upper half.
+    """
     chosen = [m[d.order[m] >= np.median(d.order[m])] for m in chosen]
     fn = np.array([np.median(d.natural_frequencies_hz[m]) for m in chosen])
     zeta = np.array([np.median(d.damping_ratios[m]) for m in chosen])
@@ -151,5 +209,3 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
     o = np.argsort(fn)
     lam = eigenvalues_from_modal(fn[o], zeta[o])
     return SelectedPoles(lam, fn[o], zeta[o], f_std[o], z_std[o], count[o], mpf[o])
-
-
