@@ -56,3 +56,19 @@ def test_method_spec_names_real_fields_and_the_options_its_fit_takes(name):
     params = list(inspect.signature(spec.fit).parameters)
     assert params == ["frf", "drive", "n_modes", *spec.options]
     assert set(spec.options) <= set(inspect.signature(identify_frf).parameters)
+
+
+def test_stability_status_codes_against_the_previous_order():
+    from physics.identification import STABILITY_CODES, stability_status
+
+    order = np.array([1, 2, 2, 2, 2, 4])
+    fn = np.array([10.0, 10.05, 10.5, 10.05, 10.05, 10.0])
+    zeta = np.array([0.01, 0.0102, 0.01, 0.02, 0.0102, 0.01])
+    v, w = np.array([1.0, 0.0]), np.array([0.6, 0.8])  # MAC(v, w) = 0.36
+    mpf = np.array([v, v, v, v, w, v])
+    status = stability_status(order, fn, zeta, mpf, freq_tol=0.01, damping_tol=0.05, mpf_tol=0.98)
+    # first order: new; 0.5 % / 2 %: stable; 5 % in frequency: new; damping doubled: vector only;
+    # other vector: damping only; order 4 has no order 3 before it: new
+    assert [STABILITY_CODES[s] for s in status] == ["new", "stable", "new", "stable frequency and vector",
+                                                    "stable frequency and damping", "new"]
+    assert list(stability_status(order, fn, zeta, mpf[:, :1] / np.abs(mpf[:, :1]))) == [0, 4, 0, 3, 4, 0]
