@@ -21,7 +21,7 @@ import warnings
 
 import numpy as np
 
-from physics.identification import circle_fit, identify_lscf, peak_picking
+from physics.identification import METHODS, identify_frf
 from physics.io import MeasuredFRF, atomic_write_text
 from physics.modal import mac
 from physics.thesis import BEAM5_TIP, simulated_beam5_test
@@ -118,10 +118,8 @@ def simulate_free_free(noise=0.005, floor=3e-3, seed=0, f1_hz=40.5, mass_kg=2.0,
 
 
 def run_ours(frf, n_modes=4):
-    f, h = frf.frequency_hz, np.asarray(frf.frf)
-    return {"peak": peak_picking(f, h, n_modes, drive=(DRIVE, 0)),
-            "circle": circle_fit(f, h, n_modes, drive=(DRIVE, 0)),
-            "lscf": identify_lscf(f, h, n_modes, drive=(DRIVE, 0)).estimate}
+    """The :class:`ModalEstimate` of every method of :data:`physics.identification.METHODS`, by name."""
+    return {name: identify_frf(frf, name, n_modes=n_modes).estimate for name in METHODS}
 
 
 def run_sdypy(frf, approx_hz):
@@ -182,7 +180,7 @@ def free_free_table(seed=0, noise=0.005, floor=3e-3):
     installed (given the true in-band frequencies to pick its poles); the noise
     itself (measured against the noise-free truth).
     """
-    from physics.identification import identify_frf, lsfd, reconstruction_error_db
+    from physics.identification import lsfd, reconstruction_error_db
 
     frf, truth = simulate_free_free(noise, floor, seed)
     exact = truth["exact"]

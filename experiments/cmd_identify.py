@@ -38,7 +38,7 @@ def result_dict(ident: Identification) -> dict:
             "references": list(ident.frf.reference_dofs), "driving_point": ident.drive,
             "scaling": "unit modal A" if e.scaled else "unscaled (no driving point)",
             "mac": mac(e.shapes).tolist(),
-            "uncertainty": dict(UNCERTAINTY[e.method]),
+            "uncertainty": dict(METHODS[e.method].uncertainty),
             "out_of_band_poles_hz": ident.out_of_band_hz.tolist(),
             "fit_error": float(np.linalg.norm(resid) / np.linalg.norm(ident.frf.frf)),
             "fit_error_db": {"median": med, "p90": p90},
@@ -62,17 +62,6 @@ def positions_report(frf: MeasuredFRF) -> dict:
         return {"positions_m": None, "positions_source": f"geometry not usable: {exc}"}
     return {"positions_m": None if pos is None else dict(zip(frf.response_dofs, pos.tolist())),
             "positions_source": source}
-
-
-#: What each method's one-sigma values mean (reported in ``--json`` under "uncertainty").
-UNCERTAINTY = {
-    "lscf": {"frequency_std_hz, damping_std": "spread of the pole over the LSCF model orders of its cluster "
-                                              "(sensitivity to model order, not a confidence interval)",
-             "frequency_fit_std_hz, damping_fit_std": "one sigma from the LSFD fit itself: variable-projection "
-                                                      "covariance of the poles given every FRF and its residual"},
-    "circle": {"frequency_std_hz, damping_std": "weighted scatter of the circle fits over the FRFs"},
-    "peak": {"frequency_std_hz, damping_std": "none (NaN)"},
-}
 
 
 def run(args) -> dict:
@@ -117,19 +106,25 @@ def run(args) -> dict:
     return out
 
 
+def method_help() -> str:
+    """``name: help`` of every method of :data:`physics.identification.METHODS`, separated by semicolons."""
+    return "; ".join(f"{name}: {spec.help}" for name, spec in METHODS.items())
+
+
 def add_parser(sub):
     p = sub.add_parser(
         "identify", help="identify natural frequencies, damping and complex modes from measured FRFs",
         description="Modal identification from an FRF file (UFF dataset 58 ASCII/binary, CSV or .npz of "
-                    "MeasuredFRF). Methods: lscf (poly-reference LSCF poles with automatic stabilisation-"
-                    "diagram selection, then LSFD residues with lower/upper residuals), circle (Nyquist "
-                    "circle fit, eq. 3.13), peak (peak picking with half-power damping, eqs. 3.33/3.34). "
+                    f"MeasuredFRF). Methods (--method): {method_help()}. "
                     "Shapes are unit-modal-A scaled when a driving-point FRF is present.")
     p.add_argument("file", metavar="FILE", help="FRF file: .uff/.unv (dataset 58), .csv or .npz")
-    p.add_argument("--method", default="lscf", choices=METHODS, help="identification method (default lscf)")
+    p.add_argument("--method", default="lscf", choices=list(METHODS),
+                   help="identification method (default %(default)s; see the methods above)")
     p.add_argument("--band", nargs=2, type=float, metavar=("FMIN", "FMAX"), help="frequency band in Hz")
     p.add_argument("--modes", type=int, metavar="N", help="number of modes to keep (default: all found)")
-    p.add_argument("--max-order", type=int, default=40, help="highest LSCF model order (default 40)")
+    p.add_argument("--max-order", type=int, default=40,
+                   help="highest LSCF model order (default %(default)s; used by "
+                        f"{', '.join(m for m, spec in METHODS.items() if 'max_order' in spec.options)})")
     p.add_argument("--out", metavar="DIR",
                    help="write modal.json (feedable to 'beam-damage update --modal'), synthesised.uff (the "
                         "fitted FRFs in the input's kind, units and lines of the band; synthesised.csv for a CSV "

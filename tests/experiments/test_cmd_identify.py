@@ -5,7 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from experiments.cli import main
+from experiments.cli import build_parser, main
+from physics.identification import METHODS
 from physics.io import MeasuredFRF, read_modal_json, write_frf_csv, write_frf_npz, write_uff58
 from physics.thesis import beam5_reduced_model, simulated_beam5_test
 
@@ -44,14 +45,28 @@ def test_identify_json_recovers_exact_modes(capsys, beam5_files, name):
     assert all(0.99 < m["mpc"] <= 1.0 for m in res["modes"])
 
 
-@pytest.mark.parametrize("method", ["circle", "peak"])
-def test_identify_sdof_methods_and_band(capsys, beam5_files, method):
+@pytest.mark.parametrize("method", list(METHODS))
+def test_identify_every_method_in_a_band(capsys, beam5_files, method):
     d, exact = beam5_files
     code, out, err = _run(capsys, ["identify", str(d / "beam5.uff"), "--method", method, "--band", "80", "500",
                                    "--json"])
     assert code == 0, err
-    f = np.array([m["frequency_hz"] for m in json.loads(out)["modes"]])
+    res = json.loads(out)
+    f = np.array([m["frequency_hz"] for m in res["modes"]])
     np.testing.assert_allclose(f, exact.natural_frequencies_hz[1:3], rtol=2e-3)
+    assert res["method"] == method and res["uncertainty"] == dict(METHODS[method].uncertainty)
+
+
+def test_identify_method_choices_and_help_are_the_method_table():
+    sub = next(a for a in build_parser(["identify"])._actions if a.dest == "command")
+    parser = sub.choices["identify"]
+    actions = {a.dest: a for a in parser._actions}
+    assert list(actions["method"].choices) == list(METHODS)
+    assert actions["method"].default in METHODS
+    for name, spec in METHODS.items():
+        assert f"{name}: {spec.help}" in parser.description
+    with_order = [name for name, spec in METHODS.items() if "max_order" in spec.options]
+    assert actions["max_order"].help.endswith(f"used by {', '.join(with_order)})")
 
 
 def test_identify_out_dir_feeds_update(capsys, beam5_files, tmp_path):

@@ -1,0 +1,35 @@
+"""Modal identification from measured FRFs.
+
+Modules (each name below is re-exported here):
+
+``modes``     :class:`ModalEstimate`, the identified modes every method returns; shapes from residues, MPC
+``sdof``      single-mode methods: peak picking with half-power damping, circle fit (eq. 3.13)
+``poles``     stabilisation diagrams and the automatic selection of physical poles
+``lscf``      poly-reference LSCF poles; :func:`identify_lscf` (LSCF, pole selection and LSFD in one call)
+``lsfd``      LSFD residues for given poles, residual terms, weighting and noise model
+``methods``   :data:`METHODS`, the table of identification methods (function, help, uncertainty, options)
+``measured``  :func:`identify_frf` on a :class:`~physics.io.MeasuredFRF` or an FRF file, by a method of the table
+
+Conventions: FRF arrays are ``(n_responses, n_references, n_lines)`` receptances
+(m/N) unless stated; frequencies carry ``_hz`` or ``_rad_s`` in their names.
+Complex modes follow the package's conjugate-pair convention (see
+:mod:`physics.modal`).
+"""
+
+from physics.identification.lscf import LSCFIdentification, identify_lscf, lscf
+from physics.identification.lsfd import ESTIMATION_PASSES, WEIGHTINGS, LSFDResult, estimate_noise_model, lsfd
+from physics.identification.measured import (Identification, identify_file, identify_frf, identify_frfs,
+                                             read_measured_frf, reconstruction_error_db)
+from physics.identification.methods import MAX_LSCF_VALUES, METHODS, MethodSpec
+from physics.identification.modes import ModalEstimate, modal_phase_collinearity, shapes_from_residues
+from physics.identification.poles import (STABILITY_CODES, SelectedPoles, StabilisationDiagram, select_poles,
+                                          stability_status)
+from physics.identification.sdof import (CircleFit, circle_fit, circle_fit_sdof, complex_modes_from_driving_point,
+                                         find_peaks_indicator, mode_indicator, peak_picking, real_modes_from_peaks)
+
+__all__ = ["CircleFit", "ESTIMATION_PASSES", "Identification", "LSCFIdentification", "LSFDResult", "MAX_LSCF_VALUES",
+           "METHODS", "MethodSpec", "ModalEstimate", "STABILITY_CODES", "SelectedPoles", "StabilisationDiagram",
+           "WEIGHTINGS", "circle_fit", "circle_fit_sdof", "complex_modes_from_driving_point", "estimate_noise_model",
+           "find_peaks_indicator", "identify_file", "identify_frf", "identify_frfs", "identify_lscf", "lscf", "lsfd",
+           "modal_phase_collinearity", "mode_indicator", "peak_picking", "read_measured_frf", "real_modes_from_peaks",
+           "reconstruction_error_db", "select_poles", "shapes_from_residues", "stability_status"]

@@ -1,0 +1,253 @@
+"""Poly-reference least-squares complex frequency-domain (LSCF) poles, and the automatic LSCF + LSFD
+identification of FRF arrays."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from physics.errors import ConvergenceError, ShapeError
+from physics.frf import check_frf_kind, convert_frf
+from physics.identification.lsfd import LSFDResult, lsfd
+from physics.identification.modes import ModalEstimate, _estimate, _frf3
+from physics.identification.poles import StabilisationDiagram, select_poles, stability_status
+
+__all__ = ["LSCFIdentification", "identify_lscf", "lscf"]
+
+
+#: (frequency lines, dt, columns) -> (X, Q) of :func:`_lscf_basis`, the 4 most recent.
+_LSCF_BASIS_CACHE: dict = {}
+
+
+def _lscf_basis(f_hz, dt_s, n_cols):
+    """LSCF polynomial basis ``X = exp(i w dt k)`` (N, n_cols) and an orthonormal basis (2N, n_cols) of its
+    real-stacked columns (Householder QR); the first ``nb`` columns of ``Q`` span the first ``nb`` of ``X``.
+
+    The last few results are cached by the frequency lines, ``dt_s`` and ``n_cols`` (files of one layout
+    share them).
+    """
+    key = (f_hz.tobytes(), float(dt_s), int(n_cols))
+    hit = _LSCF_BASIS_CACHE.get(key)
+    if hit is None:
+        X = np.exp(1j * np.outer(2 * np.pi * f_hz * dt_s, np.arange(n_cols)))
+        Q, _ = np.linalg.qr(np.concatenate([X.real, X.imag], axis=0))
+        hit = (X, Q)
+        for a in (X, Q):
+            a.setflags(write=False)
+        if len(_LSCF_BASIS_CACHE) >= 4:
+            _LSCF_BASIS_CACHE.pop(next(iter(_LSCF_BASIS_CACHE)))
+        _LSCF_BASIS_CACHE[key] = hit
+    return hit
+
+
+def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_tol=0.05, mpf_tol=0.98,
+         max_damping=0.2, margin=0.0):
+    """Poly-reference least-squares complex frequency-domain poles (pLSCF).
+
+    Right matrix-fraction model in the z-domain, ``H_o(w) = B_o(z) A(z)^-1`` with
+    ``z = exp(i w dt)``, ``dt = 1/(2 f_max)``, ``A(z) = sum_{k=0}^p z^k alpha_k``
+    (``n_ref x n_ref``, ``alpha_p = I``). The linear least-squares problem is
+    reduced to the normal equations of the denominator only
+    (``M = sum_o T_o - S_o^T R^-1 S_o``, formed as ``sum_o Y_o^T (I - Q Q^T) Y_o``
+    with a QR factor ``Q`` of the numerator basis, for conditioning; every order
+    from one QR and one projection at ``max_order``). Poles are the roots of
+    ``det A(z)`` (block companion matrix), ``lambda = ln(z)/dt``; participation
+    vectors are the left null vectors of ``A(z)``. With one reference this is
+    the common-denominator LSCF.
+
+    Parameters
+    ----------
+    frequency_hz : ndarray, shape (n_lines,)
+        Band to fit (select it beforehand).
+    frf : ndarray, complex, shape (n_resp, n_ref, n_lines)
+    max_order, min_order : int
+        Model orders ``p`` (``p * n_ref`` poles each).
+    freq_tol, damping_tol : float
+        Relative change with respect to the nearest pole of the previous order
+        below which frequency / damping are called stable.
+    mpf_tol : float
+        MAC between participation vectors above which the vector is stable
+        (always stable with one reference).
+    max_damping : float
+        Poles with damping outside ``(0, max_damping)`` or outside the band are dropped.
+    margin : float
+        Keep poles up to a fraction ``margin`` outside the band (``f_min/(1+margin)``
+        to ``f_max (1+margin)``), and place the z-domain Nyquist frequency at
+        ``f_max (1+margin)`` so that a mode just above the band does not alias. The
+        skirts of such modes dominate the band edges of lightly damped structures.
+
+    Returns
+    -------
+    StabilisationDiagram
+    """
+    f, h = _frf3(frequency_hz, frf)
+    n_o, n_i, N = h.shape
+    if max_order < min_order or min_order < 1:
+        raise ShapeError("lscf needs 1 <= min_order <= max_order")
+    if N * n_o < (max_order + 1) * (n_i + 1):
+        raise ShapeError(f"lscf: {N} lines x {n_o} responses are too few for model order {max_order}")
+    dt = 1.0 / (2.0 * f[-1] * (1.0 + margin))
+    P = max_order + 1
+    M, C = _projected_normal_equations(f, h, dt, P)
+    f_lo, f_hi = f[0] / (1.0 + margin), f[-1] * (1.0 + margin)
+    orders, lams, mpfs = [], [], []
+    for p in range(max_order, min_order - 1, -1):
+        if p + 1 < P:  # add the term of basis column p + 1, dropped from the numerator at this order
+            M = M + C[:, p + 1, :].T @ C[:, p + 1, :]
+        poles = _denominator_poles(M, p, n_i, dt)
+        if poles is None:
+            continue
+        lam, L = poles
+        fn = np.abs(lam) / (2 * np.pi)
+        zeta = -lam.real / np.abs(lam)
+        keep = (lam.imag > 0) & (zeta > 0) & (zeta < max_damping) & (fn >= f_lo) & (fn <= f_hi)
+        orders.append(np.full(keep.sum(), p))
+        lams.append(lam[keep])
+        mpfs.append(L[keep] / np.linalg.norm(L[keep], axis=1, keepdims=True))
+    orders, lams, mpfs = orders[::-1], lams[::-1], mpfs[::-1]  # ascending order
+    order = np.concatenate(orders)
+    lam = np.concatenate(lams)
+    mpf = np.concatenate(mpfs) if mpfs else np.zeros((0, n_i), complex)
+    fn = np.abs(lam) / (2 * np.pi)
+    zeta = -lam.real / np.abs(lam)
+    status = stability_status(order, fn, zeta, mpf, freq_tol, damping_tol, mpf_tol)
+    return StabilisationDiagram(order, lam, fn, zeta, mpf, status, (float(f[0]), float(f[-1])))
+
+
+def _projected_normal_equations(f_hz, h, dt_s, n_cols):
+    """Denominator normal equations of the highest order, with the numerators eliminated.
+
+    Order ``p`` projects ``Y`` off the first ``nb = p + 1`` columns of ``Q`` (QR, so the
+    conditioning of ``X`` is not squared), then solves ``M_p alpha = 0`` with ``alpha_p = I``.
+    With ``C = Q^T Y`` and ``Yperp = Y - Q C``, ``Y - Q[:, :nb] C[:nb] = Yperp + Q[:, nb:] C[nb:]``
+    (orthogonal parts), so ``M_p = Yperp^T Yperp + sum_{k >= nb} C_k^T C_k`` on the first
+    ``(p + 1) n_ref`` columns: a sum of positive semi-definite terms (no cancellation), all
+    orders from one projection.
+
+    Returns
+    -------
+    M : ndarray, shape (n_cols n_ref, n_cols n_ref)
+        ``Yperp^T Yperp`` (the normal equations of order ``n_cols - 1``).
+    C : ndarray, shape (n_resp, n_cols, n_cols n_ref)
+        ``Q^T Y`` per response, whose rows ``C[:, k]`` add the terms of lower orders.
+    """
+    n_o, N, n_i = h.shape[0], h.shape[2], h.shape[1]
+    X, Q = _lscf_basis(f_hz, dt_s, n_cols)
+    Hrow = np.transpose(h, (0, 2, 1))  # (n_o, N, n_i)
+    Y = -(X[None, :, :, None] * Hrow[:, :, None, :]).reshape(n_o, N, n_cols * n_i)
+    Yr = np.concatenate([Y.real, Y.imag], axis=1)  # (n_o, 2N, P n_i)
+    C = np.matmul(Q.T, Yr)  # (n_o, P, P n_i)
+    Yperp = Yr - np.matmul(Q, C)
+    Yp2 = Yperp.reshape(-1, Yperp.shape[-1])
+    return Yp2.T @ Yp2, C
+
+
+def _denominator_poles(M, p, n_i, dt_s):
+    """Poles (rad/s) and participation vectors (rows, not normalised) of the order-``p`` denominator.
+
+    Solves the normal equations ``M[:(p+1) n_i, :(p+1) n_i]`` for ``alpha`` with ``alpha_p = I``;
+    the poles are ``ln(z)/dt`` of the eigenvalues ``z`` of the companion matrix of
+    ``sum_k z^k alpha_k^T``, the participation vectors the first ``n_i`` entries of its
+    eigenvectors (left null vectors of ``A(z)``). None when the normal equations are singular.
+    """
+    na, m = (p + 1) * n_i, p * n_i
+    Mp = M[:na, :na]
+    try:
+        alpha = np.linalg.solve(Mp[:m, :m], -Mp[:m, m:])  # (m, n_i)
+    except np.linalg.LinAlgError:
+        return None
+    coeffs = alpha.reshape(p, n_i, n_i).transpose(0, 2, 1)
+    comp = np.zeros((m, m))
+    comp[:m - n_i, n_i:] = np.eye(m - n_i)
+    comp[m - n_i:, :] = -np.concatenate(list(coeffs), axis=1)
+    z, V = np.linalg.eig(comp)
+    ok = np.abs(z) > 0
+    return np.log(z[ok].astype(complex)) / dt_s, V[:n_i, ok].T
+
+
+@dataclass(frozen=True)
+class LSCFIdentification:
+    """Result of :func:`identify_lscf`.
+
+    Attributes
+    ----------
+    estimate : ModalEstimate
+        The modes in the band; ``frequency_std_hz``/``damping_std`` are the spread
+        of each pole over model orders, ``frequency_fit_std_hz``/``damping_fit_std``
+        the one-sigma errors of the LSFD fit.
+    diagram : StabilisationDiagram
+    fit : LSFDResult
+        Over all poles used, those of the band and those just outside it.
+    out_of_band_hz : ndarray, shape (n_out,)
+        Natural frequencies of the poles outside the band that the fit used.
+    """
+
+    estimate: ModalEstimate
+    diagram: StabilisationDiagram
+    fit: LSFDResult
+    out_of_band_hz: np.ndarray
+
+
+def identify_lscf(frequency_hz, frf, n_modes=None, drive=None, max_order=40, select=None, *, kind="receptance",
+                  weighting="estimated", margin=0.1, **lscf_options):
+    """LSCF poles, automatic selection and LSFD residues/shapes in one call.
+
+    Poles come from LSCF on the receptance (stabilisation over model orders),
+    including stable poles up to ``margin`` outside the band; the residues and the
+    residual terms are then fitted to ``frf`` as given (``kind``, ``weighting``,
+    see :func:`lsfd`) with every selected pole. Only modes inside the band are
+    returned as modes; the others serve the fit.
+
+    Parameters
+    ----------
+    frequency_hz : ndarray, shape (n_lines,), > 0
+    frf : ndarray, complex, shape (n_resp, n_ref, n_lines)
+        FRFs of kind ``kind`` (SI units).
+    n_modes : int, optional
+        Keep the ``n_modes`` in-band modes stable over most orders.
+    drive : (int, int), optional
+        Driving point for unit-modal-A scaling (see :func:`shapes_from_residues`).
+    max_order : int
+    select : dict, optional
+        Keyword arguments of :func:`select_poles`.
+    kind, weighting :
+        See :func:`lsfd`.
+    margin : float
+        See :func:`lscf`.
+    **lscf_options
+        Keyword arguments of :func:`lscf`.
+
+    Returns
+    -------
+    LSCFIdentification
+    """
+
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(1):  # small dense products and eigenproblems: one BLAS thread is fastest
+        return _identify_lscf(frequency_hz, frf, n_modes, drive, max_order, select, kind, weighting, margin,
+                              lscf_options)
+
+
+def _identify_lscf(frequency_hz, frf, n_modes, drive, max_order, select, kind, weighting, margin, lscf_options):
+    f, h = _frf3(frequency_hz, frf)
+    rec = convert_frf(h, 2 * np.pi * f, check_frf_kind(kind), "receptance")
+    diagram = lscf(f, rec, max_order=max_order, margin=margin, **lscf_options)
+    poles = select_poles(diagram, **(select or {}))
+    fn = poles.natural_frequencies_hz
+    inside = np.nonzero((fn >= f[0]) & (fn <= f[-1]))[0]
+    if inside.size == 0:
+        raise ConvergenceError("no stable pole inside the band: raise max_order or widen the band")
+    if n_modes is not None:
+        inside = np.sort(inside[np.argsort(-poles.count[inside], kind="stable")[:n_modes]])
+    outside = np.nonzero((fn < f[0]) | (fn > f[-1]))[0]
+    use = np.r_[inside, outside]
+    fit = lsfd(f, h, poles.eigenvalues[use], kind=kind, weighting=weighting)
+    k = np.arange(inside.size)
+    est = _estimate(fn[inside], poles.damping_ratios[inside], fit.residues[..., k], drive, "lscf",
+                    poles.frequency_std_hz[inside], poles.damping_std[inside], fit.lower_residual,
+                    fit.upper_residual, fit.frequency_std_hz[k], fit.damping_std[k])
+    return LSCFIdentification(est, diagram, fit, np.abs(fit.eigenvalues[inside.size:]) / (2 * np.pi))
+
+

@@ -1,0 +1,147 @@
+"""Identification of a :class:`~physics.io.MeasuredFRF` or an FRF file by a method of :data:`METHODS`."""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from physics.errors import ConfigError
+from physics.identification.methods import METHODS
+from physics.identification.modes import ModalEstimate
+from physics.identification.poles import StabilisationDiagram
+from physics.io import MeasuredFRF, ModalData
+
+__all__ = ["Identification", "identify_file", "identify_frf", "identify_frfs", "read_measured_frf",
+           "reconstruction_error_db"]
+
+
+def reconstruction_error_db(measured, synthesised):
+    """Median and 90th percentile over all lines and FRFs of ``|20 log10(|H_fit| / |H_meas|)|`` (dB).
+
+    Lines where either magnitude is zero are left out.
+    """
+    m, s = np.abs(np.asarray(measured)).ravel(), np.abs(np.asarray(synthesised)).ravel()
+    ok = (m > 0) & (s > 0)
+    if not np.any(ok):
+        return float("nan"), float("nan")
+    err = np.abs(20 * np.log10(s[ok] / m[ok]))
+    return float(np.median(err)), float(np.percentile(err, 90))
+
+
+@dataclass(frozen=True)
+class Identification:
+    """An identification run on a :class:`~physics.io.MeasuredFRF`.
+
+    Attributes
+    ----------
+    frf : MeasuredFRF
+        The band-limited FRFs that were fitted, of the input's kind (SI units).
+    estimate : ModalEstimate
+    synthesised : ndarray, complex, shape like ``frf.frf``
+        The identified model on the same lines, of the same kind and units.
+    diagram : StabilisationDiagram or None
+        LSCF only.
+    drive : str or None
+        Reference DOF label of the driving point that scaled the shapes.
+    out_of_band_hz : ndarray
+        Poles just outside the band that the fit used (LSCF only; not reported as modes).
+    """
+
+    frf: MeasuredFRF
+    estimate: ModalEstimate
+    synthesised: np.ndarray
+    diagram: StabilisationDiagram | None
+    drive: str | None
+    out_of_band_hz: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def modal_data(self) -> ModalData:
+        """Eigenvalues and shapes over the response DOFs, for updating."""
+        return ModalData(self.estimate.eigenvalues, self.estimate.shapes, self.frf.response_dofs)
+
+
+def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, max_order=40) -> Identification:
+    """Identify modes of a :class:`~physics.io.MeasuredFRF` (band-limited, fitted in its own kind).
+
+    The first driving point (a response DOF equal to a reference DOF) scales the
+    shapes to unit modal A; without one the shapes are unscaled (a warning).
+
+    Parameters
+    ----------
+    frf : MeasuredFRF
+    method : str
+        A key of :data:`~physics.identification.METHODS`.
+    band_hz : (float, float), optional
+        ``(fmin, fmax)`` in Hz.
+    n_modes : int, optional
+        Modes to keep (default: all found).
+    max_order : int
+        Highest LSCF model order (methods with ``"max_order"`` in their options).
+
+    Returns
+    -------
+    Identification
+    """
+    if method not in METHODS:
+        raise ConfigError(f"method {method!r} must be one of {', '.join(METHODS)}")
+    spec = METHODS[method]
+    if frf.frequency_hz[0] == 0:
+        frf = frf.select_band(fmin_hz=np.nextafter(0.0, 1.0))
+    if band_hz is not None:
+        fmin, fmax = band_hz
+        if not fmin < fmax:
+            raise ConfigError(f"band_hz ({fmin}, {fmax}): the lower bound must be below the upper")
+        frf = frf.select_band(fmin, fmax)
+    drives = frf.driving_points
+    drive = drives[0] if drives else None
+    if drive is None:
+        warnings.warn("no driving point (response DOF equal to a reference DOF): mode shapes are not "
+                      "unit-modal-A scaled and cannot feed 'update' directly", stacklevel=2)
+    options = {"max_order": max_order}
+    est, synth, diagram, outside = spec.fit(frf, drive, n_modes, **{k: options[k] for k in spec.options})
+    label = frf.reference_dofs[drive[1]] if drive else None
+    return Identification(frf, est, synth, diagram, label, outside)
+
+
+def identify_frfs(frfs, method="lscf", band_hz=None, n_modes=None, max_order=40) -> list[Identification]:
+    """:func:`identify_frf` on each of several :class:`~physics.io.MeasuredFRF` (same arguments for all).
+
+    Files of one layout (the same frequency lines and band) share the LSCF basis and
+    its QR factor, computed once (see :func:`~physics.identification.lscf`); results are in input order.
+
+    Returns
+    -------
+    list of Identification
+    """
+    return [identify_frf(frf, method, band_hz, n_modes, max_order) for frf in frfs]
+
+
+def identify_file(path, method="lscf", band_hz=None, n_modes=None, max_order=40) -> Identification:
+    """:func:`identify_frf` on an FRF file (UFF 58, CSV or ``.npz``; see :func:`physics.io.read_frf`).
+
+    A universal file of time records (force and responses, no FRF) is estimated
+    first (:func:`physics.time_records.estimate_from_records`, H1, random
+    excitation defaults), with a warning that says so.
+    """
+    return identify_frf(read_measured_frf(path), method, band_hz, n_modes, max_order)
+
+
+def read_measured_frf(path) -> MeasuredFRF:
+    """FRFs of a file: read as FRFs, or estimated from its time records (with a warning saying how)."""
+    from physics.errors import FileFormatError
+    from physics.io import read_frf
+
+    try:
+        return read_frf(path)
+    except FileFormatError as exc:
+        if "1 (time response)" not in str(exc):
+            raise
+    from physics.io.timedata import read_uff_time_records
+    from physics.time_records import estimate_from_records
+
+    est = estimate_from_records(read_uff_time_records(path))
+    warnings.warn(f"{path}: holds time records, not FRFs: estimated {est.description} before identifying",
+                  stacklevel=2)
+    return est.frf

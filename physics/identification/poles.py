@@ -1,0 +1,211 @@
+"""Stabilisation diagrams of poles over model orders and the automatic selection of physical poles."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from physics.errors import ConvergenceError
+from physics.modal import eigenvalues_from_modal
+
+__all__ = ["STABILITY_CODES", "SelectedPoles", "StabilisationDiagram", "select_poles", "stability_status"]
+
+
+#: Stability codes of poles in a stabilisation diagram.
+STABILITY_CODES = {0: "new", 1: "stable frequency", 2: "stable frequency and damping",
+                   3: "stable frequency and vector", 4: "stable"}
+
+
+@dataclass(frozen=True)
+class StabilisationDiagram:
+    """Poles of LSCF models of increasing order (one row per pole).
+
+    Attributes
+    ----------
+    order : ndarray of int, shape (n_poles,)
+    eigenvalues : ndarray, complex, shape (n_poles,)  (rad/s, Im > 0)
+    natural_frequencies_hz, damping_ratios : ndarray, shape (n_poles,)
+    participation : ndarray, complex, shape (n_poles, n_ref)
+        Modal participation vectors (unit norm).
+    status : ndarray of int, shape (n_poles,)
+        See :data:`STABILITY_CODES`; compared with the previous order.
+    band_hz : (float, float)
+    """
+
+    order: np.ndarray
+    eigenvalues: np.ndarray
+    natural_frequencies_hz: np.ndarray
+    damping_ratios: np.ndarray
+    participation: np.ndarray
+    status: np.ndarray
+    band_hz: tuple
+
+def stability_status(order, natural_frequencies_hz, damping_ratios, participation, freq_tol=0.01, damping_tol=0.05,
+                     mpf_tol=0.98):
+    """Stability code (:data:`STABILITY_CODES`) of each pole against the nearest pole of the previous order.
+
+    Parameters
+    ----------
+    order : ndarray of int, shape (n_poles,)
+    natural_frequencies_hz, damping_ratios : ndarray, shape (n_poles,)
+    participation : ndarray, complex, shape (n_poles, n_ref)
+        Unit-norm participation vectors.
+    freq_tol, damping_tol : float
+        Relative change of frequency / damping below which they are stable.
+    mpf_tol : float
+        MAC between participation vectors above which the vector is stable (always with one reference).
+
+    Returns
+    -------
+    ndarray of int, shape (n_poles,)
+        0 for the poles of the lowest order and of an order whose previous order holds none.
+    """
+    fn, zeta, mpf = natural_frequencies_hz, damping_ratios, participation
+    status = np.zeros(fn.size, int)
+    for p in np.unique(order)[1:]:
+        cur = np.nonzero(order == p)[0]
+        prev = np.nonzero(order == p - 1)[0]
+        if prev.size == 0 or cur.size == 0:
+            continue
+        d = np.abs(fn[cur][:, None] - fn[prev][None, :])
+        near = prev[np.argmin(d, axis=1)]
+        f_ok = np.abs(fn[cur] - fn[near]) <= freq_tol * fn[cur]
+        d_ok = np.abs(zeta[cur] - zeta[near]) <= damping_tol * zeta[cur]
+        v_ok = (np.abs(np.sum(mpf[cur].conj() * mpf[near], axis=1)) ** 2 >= mpf_tol) if mpf.shape[1] > 1 \
+            else np.ones(cur.size, bool)
+        status[cur] = np.where(f_ok, np.where(d_ok & v_ok, 4, np.where(v_ok, 3, np.where(d_ok, 2, 1))), 0)
+    return status
+
+
+@dataclass(frozen=True)
+class SelectedPoles:
+    """Physical poles picked from a stabilisation diagram.
+
+    Attributes
+    ----------
+    eigenvalues : ndarray, complex, shape (n_modes,)
+    natural_frequencies_hz, damping_ratios : ndarray, shape (n_modes,)
+        Medians over the upper half (by model order) of the cluster of stable poles.
+    frequency_std_hz, damping_std : ndarray, shape (n_modes,)
+        Standard deviation over those poles (spread across model orders, a
+        measure of the estimate's sensitivity to model order, not a
+        statistical confidence interval).
+    count : ndarray of int, shape (n_modes,)
+        Orders (upper half of the cluster) in which the pole was found stable.
+    participation : ndarray, complex, shape (n_modes, n_ref)
+    """
+
+    eigenvalues: np.ndarray
+    natural_frequencies_hz: np.ndarray
+    damping_ratios: np.ndarray
+    frequency_std_hz: np.ndarray
+    damping_std: np.ndarray
+    count: np.ndarray
+    participation: np.ndarray
+
+
+def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq_tol=0.01,
+                 damping_tol=0.25, min_count=None, seed_orders=0.25):
+    """Automatic pole selection from a stabilisation diagram (no GUI; rules are parameters).
+
+    1. Candidate poles have ``status >= min_status`` (4 = stable in frequency,
+       damping and participation vector).
+    2. Seeds are the candidates of the highest ``seed_orders`` fraction of orders.
+       For each seed, every order contributes its candidate nearest in frequency
+       if within ``freq_tol`` (relative) and ``damping_tol`` (relative) of the seed.
+    3. Clusters are taken largest first; a seed already in a taken cluster is
+       skipped and poles already taken are removed from later clusters, which
+       are dropped below ``min_count`` members (default: a third of the orders
+       that hold any pole).
+    4. With ``n_modes``, the ``n_modes`` largest clusters are kept.
+
+    Parameters
+    ----------
+    diagram : StabilisationDiagram
+    n_modes : int, optional
+    min_status : int
+    freq_tol, damping_tol : float
+    min_count : int, optional
+    seed_orders : float in (0, 1]
+
+    Returns
+    -------
+    SelectedPoles
+        Sorted by frequency.
+
+    Raises
+    ------
+    ConvergenceError
+        If no pole is stable enough.
+    """
+    d = diagram
+    cand = np.nonzero(d.status >= min_status)[0]
+    cand = cand[np.argsort(d.order[cand], kind="stable")]
+    orders = np.unique(d.order)
+    if min_count is None:
+        min_count = max(2, int(np.ceil(orders.size / 3)))
+    top = orders[int(np.floor((1 - seed_orders) * (orders.size - 1))):] if orders.size else orders
+    seeds = cand[np.isin(d.order[cand], top)]
+    chosen = _take_clusters(_seed_clusters(d, cand, seeds, freq_tol, damping_tol), min_count)
+    if n_modes is not None:
+        chosen = chosen[:n_modes]
+    if not chosen:
+        raise ConvergenceError("no pole is stable over enough model orders: raise max_order, widen the "
+                               "band or relax the selection tolerances")
+    return _summarise_clusters(d, chosen)
+
+
+def _seed_clusters(d: StabilisationDiagram, cand, seeds, freq_tol, damping_tol):
+    """For each seed, each order's candidate nearest in frequency within the tolerances of the seed.
+
+    ``cand`` (pole indices) is sorted by ascending order. Returns ``[(seed, members), ...]``,
+    largest cluster first (ties: the seed of the higher order first).
+    """
+    # candidates by order, padded to a (n_orders, width) table (-1 = none)
+    c_orders, c_group = np.unique(d.order[cand], return_inverse=True)
+    slot = np.arange(cand.size) - np.searchsorted(c_group, c_group)  # cand is grouped by ascending order
+    by_order = np.full((c_orders.size, max(1, np.bincount(c_group).max(initial=0))), -1)
+    by_order[c_group, slot] = cand
+    f_tab = np.where(by_order >= 0, d.natural_frequencies_hz[by_order], np.inf)
+    dist = np.abs(f_tab[None] - d.natural_frequencies_hz[seeds][:, None, None])  # (n_seeds, n_orders, width)
+    near = by_order[np.arange(c_orders.size)[None, :], np.argmin(dist, axis=2)]  # (n_seeds, n_orders)
+    fs, zs = d.natural_frequencies_hz[seeds][:, None], d.damping_ratios[seeds][:, None]
+    ok = (np.abs(d.natural_frequencies_hz[near] - fs) <= freq_tol * fs) \
+        & (np.abs(d.damping_ratios[near] - zs) <= damping_tol * zs)
+    clusters = [(sd, near[k][ok[k]]) for k, sd in enumerate(seeds)]
+    clusters.sort(key=lambda c: (-c[1].size, -d.order[c[0]]))
+    return clusters
+
+
+def _take_clusters(clusters, min_count):
+    """Clusters in turn, skipping a seed already taken and poles already taken; those left with fewer
+    than ``min_count`` members are dropped. Returns the member index arrays taken."""
+    chosen, used = [], set()
+    for sd, mem in clusters:
+        if sd in used:
+            continue
+        mem = np.array([j for j in mem if j not in used], int)
+        if mem.size < min_count:
+            continue
+        chosen.append(mem)
+        used.update(mem.tolist())
+        used.add(sd)
+    return chosen
+
+
+def _summarise_clusters(d: StabilisationDiagram, chosen) -> SelectedPoles:
+    """Medians and spreads over the upper half (by order) of each cluster, sorted by frequency.
+
+    Low orders are biased (the z-domain model converges with order), hence the upper half.
+    """
+    chosen = [m[d.order[m] >= np.median(d.order[m])] for m in chosen]
+    fn = np.array([np.median(d.natural_frequencies_hz[m]) for m in chosen])
+    zeta = np.array([np.median(d.damping_ratios[m]) for m in chosen])
+    f_std = np.array([np.std(d.natural_frequencies_hz[m], ddof=1) for m in chosen])
+    z_std = np.array([np.std(d.damping_ratios[m], ddof=1) for m in chosen])
+    count = np.array([m.size for m in chosen])
+    mpf = np.array([d.participation[m[np.argmax(d.order[m])]] for m in chosen])
+    o = np.argsort(fn)
+    lam = eigenvalues_from_modal(fn[o], zeta[o])
+    return SelectedPoles(lam, fn[o], zeta[o], f_std[o], z_std[o], count[o], mpf[o])
