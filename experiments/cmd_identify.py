@@ -92,12 +92,14 @@ def run(args) -> dict:
               f"{out['band_hz'][0]:g}-{out['band_hz'][1]:g} Hz ({out['scaling']}, "
               f"fit error median {out['fit_error_db']['median']:.3g} dB, 90th percentile "
               f"{out['fit_error_db']['p90']:.3g} dB)")
-        print(f"{'mode':>4} {'f (Hz)':>12} {'+-order':>9} {'+-fit':>9} {'zeta':>10} {'+-order':>9} "
+        print(f"{'mode':>4} {'f (Hz)':>12} {'+-std':>9} {'+-fit':>9} {'zeta':>10} {'+-std':>9} "
               f"{'+-fit':>9} {'MPC':>7}")
         for j, m in enumerate(out["modes"], 1):
             print(f"{j:4d} {m['frequency_hz']:12.4f} {m['frequency_std_hz']:9.2g} {m['frequency_fit_std_hz']:9.2g} "
                   f"{m['damping_ratio']:10.5f} {m['damping_std']:9.2g} {m['damping_fit_std']:9.2g} {m['mpc']:7.4f}")
-        print("+-order: spread over LSCF model orders; +-fit: one sigma from the LSFD fit covariance")
+        notes = dict(METHODS[out["method"]].uncertainty)
+        print("+-std: " + notes.get("frequency_std_hz, damping_std", "none (NaN)") + "; +-fit: "
+              + notes.get("frequency_fit_std_hz, damping_fit_std", "none (NaN)"))
         if out["out_of_band_poles_hz"]:
             print("poles just outside the band used by the fit (Hz): "
                   + ", ".join(f"{x:.4g}" for x in out["out_of_band_poles_hz"]))
