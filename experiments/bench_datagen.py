@@ -214,7 +214,7 @@ def docs_table(res: dict) -> str:
     cfg = "`--config training`" if res["config"] == "training" else "default config"
     rate = "read_{}_{}_samples_per_s"
     return "\n".join([
-        f"| {cfg}, {_sig(res['n'], 6)} samples, {res['workers']} workers | value |",
+        f"| {cfg}, {_sig(res['n'], 6)} samples, {res['workers']} worker{'s' * (res['workers'] != 1)} | value |",
         "| --- | --- |",
         f"| bytes per sample on disk | {_sig(res['bytes_per_sample'], 4)} |",
         f"| naive loop (samples/s) | {res['naive_full_samples_per_s']:.1f} |",
