@@ -24,7 +24,7 @@ __all__ = ["CONFIG_DIR", "DEFAULTS", "MAX_MODAL_NOISE", "MAX_SLIT_LOSS_FACTOR", 
            "modal_noise_calibration", "named_configs", "validate"]
 
 
-#: Default configuration (SI units). See README "Generating datasets".
+#: Default configuration (SI units). See docs/datasets.md.
 DEFAULTS: dict = {
     "preset": "beam5",
     "beam": {},                        # a beam file's mapping (generate --beam FILE): the truth instead of the preset

@@ -24,7 +24,7 @@ def add_beam_argument(p, default="beam5"):
     """The shared ``--beam PRESET|FILE`` option (a preset name or a TOML beam file, see physics.beam)."""
     p.add_argument("--beam", default=default, type=beam_argument, metavar="PRESET|FILE",
                    help=f"beam preset ({', '.join(sorted(properties.PRESETS))}) or TOML beam file "
-                        f"(README 'beam file'; default {default})")
+                        f"(docs/beam-file.md; default {default})")
 
 
 def check_out_dir(path) -> None:

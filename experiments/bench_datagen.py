@@ -118,7 +118,11 @@ def main(argv=None):
                     help="also build the samples table at this many rows (e.g. 10000000) from the generated "
                          "shards' tables and time column and row-group reads")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--docs", action="store_true", help="write the table into docs/datasets.md (default config or "
+                                                        "--config training)")
     a = ap.parse_args(argv)
+    if a.docs and a.config not in DOCS_BLOCKS:
+        ap.error("--docs: docs/datasets.md holds the tables of the default and the training config only")
 
     from threadpoolctl import threadpool_limits
 
@@ -190,7 +194,42 @@ def main(argv=None):
     else:
         for k, v in res.items():
             print(f"{k:42s} {v:.1f}" if isinstance(v, float) else f"{k:42s} {v}")
+    if a.docs:
+        from experiments.doc_tables import write_table
+
+        write_table("datasets.md", DOCS_BLOCKS[a.config], docs_table(res))
     return res
+
+
+#: Block of docs/datasets.md per ``--config``.
+DOCS_BLOCKS = {None: "datasets-defaults", "training": "datasets-training"}
+
+
+def _sig(v: float, digits: int = 3) -> str:
+    """``v`` rounded to ``digits`` significant figures, thousands separated by a space."""
+    return f"{float(f'{v:.{digits}g}'):,.0f}".replace(",", " ")
+
+
+def docs_table(res: dict) -> str:
+    """Markdown table of one run for docs/datasets.md."""
+    cfg = "`--config training`" if res["config"] == "training" else "default config"
+    rate = "read_{}_{}_samples_per_s"
+    return "\n".join([
+        f"| {cfg}, {_sig(res['n'], 6)} samples, {res['workers']} worker{'s' * (res['workers'] != 1)} | value |",
+        "| --- | --- |",
+        f"| bytes per sample on disk | {_sig(res['bytes_per_sample'], 4)} |",
+        f"| naive loop (samples/s) | {res['naive_full_samples_per_s']:.1f} |",
+        f"| `generate` end to end (samples/s) | {_sig(res['generate_samples_per_s'], 4)} "
+        f"({res['ratio_generate_vs_naive_full']:.0f}x the loop; "
+        f"{res['ratio_cpu_efficiency_generate_vs_naive']:.0f}x per CPU second) |",
+        f"| grid features, measured FRFs: DataLoader / `load_pairs` (samples/s) | "
+        f"{_sig(res[rate.format('measured', 'grid_features_loader')])} / "
+        f"{_sig(res[rate.format('measured', 'grid_features_load_pairs')])} |",
+        f"| grid features, updated-model FRFs: DataLoader / `load_pairs` (samples/s) | "
+        f"{_sig(res[rate.format('updated', 'grid_features_loader')])} / "
+        f"{_sig(res[rate.format('updated', 'grid_features_load_pairs')])} |",
+        f"| full FRFs (1024 lines): updated / measured (samples/s) | {_sig(res[rate.format('updated', 'frf')])} / "
+        f"{_sig(res[rate.format('measured', 'frf')])} |"]) + "\n"
 
 
 if __name__ == "__main__":

@@ -34,6 +34,7 @@ def main(argv=None):
     ap.add_argument("--kinds", nargs="+", default=["freq", "shapes"], choices=["freq", "shapes"])
     ap.add_argument("--truths", nargs="+", default=list(TRUTHS), choices=list(TRUTHS), metavar="TRUTH",
                     help="subset of the truths (default all)")
+    ap.add_argument("--docs", action="store_true", help="write the confusion table into docs/discrepancy.md")
     args = ap.parse_args(argv)
     cols = [SHORT[c] for c in ("none", *CANDIDATES)]
     t0 = time.perf_counter()
@@ -48,6 +49,25 @@ def main(argv=None):
             pe = f"{100 * r['param_error']:8.1f}%" if r["param_error"] is not None else f"{'-':>9s}"
             print(f"{r['truth']:34s} {cells} {pe} {r['gap_before_pct']:6.2f} -> {r['gap_after_pct']:5.2f}")
     print(f"\n{time.perf_counter() - t0:.0f} s")
+    if args.docs:
+        from experiments.doc_tables import write_table
+
+        write_table("discrepancy.md", "discrepancy-confusion", docs_table(rows, args.kinds, cols))
+
+
+def docs_table(rows, kinds, cols) -> str:
+    """Markdown table for docs/discrepancy.md: per truth and data kind, the effects named and how often."""
+    head = {"freq": "named (freq + damping)", "shapes": "named (+ shapes)"}
+
+    def cell(r):
+        named = sorted((c for c in cols if r[c]), key=lambda c: -int(str(r[c]).rstrip("~")))
+        return ", ".join(f"{c} {r[c]}" for c in named)
+
+    lines = ["| truth | " + " | ".join(head[k] for k in kinds) + " |", "| --- |" + " --- |" * len(kinds)]
+    for truth in dict.fromkeys(r["truth"] for r in rows):
+        by_kind = {r["kind"]: r for r in rows if r["truth"] == truth}
+        lines.append(f"| {truth} | " + " | ".join(cell(by_kind[k]) for k in kinds) + " |")
+    return "\n".join(lines) + "\n"
 
 
 if __name__ == "__main__":

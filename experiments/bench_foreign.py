@@ -213,6 +213,7 @@ def main(argv=None):
     ap.add_argument("--source-tree", help="run classify of this checkout (subprocess)")
     ap.add_argument("--label", default=None, help="model label in the tables (default: the model's path)")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--docs", action="store_true", help="write the table into docs/classifier.md")
     a = ap.parse_args(argv)
     if not a.model and not a.loop:
         ap.error("give --model or --loop")
@@ -249,6 +250,10 @@ def main(argv=None):
             print(f"classify: {timing['pairs']} pairs in one call {timing['batch_seconds']:.2f} s "
                   f"({timing['pairs_per_second']:.1f} pairs/s); one pair in a fresh process "
                   f"{timing['one_pair_wall_seconds']:.2f} s wall")
+    if a.docs:
+        from experiments.doc_tables import write_table
+
+        write_table("classifier.md", "classifier-independent", markdown(rows))
     return rows
 
 

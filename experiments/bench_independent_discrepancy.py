@@ -147,6 +147,8 @@ def main(argv=None):
     ap.add_argument("--kinds", nargs="+", default=list(KINDS), choices=list(KINDS))
     ap.add_argument("--cli-args", default="", help="extra arguments of the command, e.g. "
                                                    "'--frequency-noise 0.0003 --shape-noise 0.005' (the actual noise)")
+    ap.add_argument("--docs", metavar="BLOCK", choices=DOCS_BLOCKS,
+                    help="write the table into this block of docs/discrepancy.md: " + ", ".join(DOCS_BLOCKS))
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
     rows = run_cases(args.dirs, args.kinds, tuple(args.cli_args.split()))
@@ -166,6 +168,14 @@ def main(argv=None):
     atomic_write_text(out / "independent_confusion.csv", buf.getvalue())
     print(md)
     print(f"{time.perf_counter() - t0:.0f} s")
+    if args.docs:
+        from experiments.doc_tables import write_table
+
+        write_table("discrepancy.md", args.docs, md)
+
+
+#: Blocks of docs/discrepancy.md: the run with the default noise, and the one given the actual noise (--cli-args).
+DOCS_BLOCKS = ("discrepancy-independent-default-noise", "discrepancy-independent-actual-noise")
 
 
 if __name__ == "__main__":

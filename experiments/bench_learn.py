@@ -94,6 +94,8 @@ def main(argv=None):
     ap.add_argument("--workers", type=int, default=2, help="generate's local processes")
     ap.add_argument("--threads", type=int, default=1, help="torch CPU threads (1 is fastest on a shared machine)")
     ap.add_argument("--skip-routes", action="store_true", help="do not train the networks of the other routes")
+    ap.add_argument("--docs", action="store_true", help="write the benchmark and robustness tables into "
+                                                        "docs/classifier.md")
     args = ap.parse_args(argv)
 
     from learn.classical import GradientBoosting, run_classical
@@ -205,6 +207,12 @@ def main(argv=None):
     (out / "summary.json").write_text(json.dumps({"commands": commands, "train": summary, "train_wall_s": wall,
                                                   "rows_all": [
         r for r in rows if r["subset"] == "all"], "robustness": rob}, indent=1, default=float))
+    if args.docs:
+        from experiments.doc_tables import write_table
+
+        test_rows = [r for r in rows if r["subset"] == "all"]
+        write_table("classifier.md", "classifier-benchmark", benchmark_markdown(test_rows))
+        write_table("classifier.md", "classifier-robustness", robustness_markdown(rob))
 
 
 def beam5(model, out_dir) -> dict:
@@ -250,6 +258,34 @@ def beam5(model, out_dir) -> dict:
     Z = (X - est.mean_) / est.scale_
     out["largest_standardised_features"] = {int(i): float(Z[0, i]) for i in np.argsort(-np.abs(Z[0]))[:5]}
     return out
+
+
+def _md_row(cells) -> str:
+    return "| " + " | ".join(cells) + " |"
+
+
+def benchmark_markdown(rows) -> str:
+    """Markdown table of every method on the held-out test pairs (subset ``all``) for docs/classifier.md."""
+    cols = (("ROC AUC", "roc_auc", 4), ("accuracy", "accuracy", 3), ("false alarms", "false_alarm_rate", 4),
+            ("element acc.", "element_accuracy", 3), ("within 1 el.", "within_one_element", 3),
+            ("location err. (mm)", "median_location_error_mm", 2), ("size err.", "median_size_error", 3),
+            ("ECE", "ece", 3))
+    lines = [_md_row(["method", *(c[0] for c in cols)]), _md_row(["---"] * (len(cols) + 1))]
+    lines += [_md_row([r["method"], *(fmt(r[k], nd) for _, k, nd in cols)]) for r in rows]
+    return "\n".join(lines) + "\n"
+
+
+def robustness_markdown(rob, methods=("DLAC", "gradient boosting")) -> str:
+    """Markdown table of the network and ``methods`` on each robustness set for docs/classifier.md."""
+    cols = (("AUC", "roc_auc", 3), ("false alarms", "false_alarm_rate", 3), ("detection", "detection_rate", 3),
+            ("element acc.", "element_accuracy", 3), ("location (mm)", "median_location_error_mm", 1),
+            ("size err.", "median_size_error", 2))
+    lines = [_md_row(["set", "method", *(c[0] for c in cols)]), _md_row(["---"] * (len(cols) + 2))]
+    for name in dict.fromkeys(r["subset"] for r in rob):
+        keep = [r for r in rob if r["subset"] == name and (r["method"].startswith("network") or r["method"] in methods)]
+        lines += [_md_row([name if k == 0 else "", r["method"], *(fmt(r[c], nd) for _, c, nd in cols)])
+                  for k, r in enumerate(keep)]
+    return "\n".join(lines) + "\n"
 
 
 if __name__ == "__main__":

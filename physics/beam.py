@@ -371,7 +371,7 @@ def _toml_value(v) -> str:
 def beam_to_toml(beam: Beam, comment: str = "") -> str:
     """TOML text of a beam (every key explicit; ``comment`` lines go first, prefixed by ``#``)."""
     lines = [f"# {c}" if c else "#" for c in comment.splitlines()] if comment else []
-    lines.append("# beam-damage beam file (see physics/beam.py or README 'beam file'); SI units")
+    lines.append("# beam-damage beam file (see docs/beam-file.md); SI units")
     for f in fields(Beam):
         v = getattr(beam, f.name)
         if f.name in ("effects", "measured_x_given") or v is None:
