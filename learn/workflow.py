@@ -123,7 +123,8 @@ def load_model(model_dir, device=None) -> TrainedModel:
         raise FileFormatError(f"{cfg_path}: field 'format' is {config.get('format')!r}, expected {MODEL_FORMAT!r} "
                               "(fields and features differ between formats): re-create the model with "
                               "'beam-damage train'")
-    for key, kind in (("route", str), ("networks", dict), ("beam", dict)):
+    for key, kind in (("route", str), ("networks", dict), ("beam", dict), ("classical_thresholds", dict),
+                      ("best_classical", str), ("reference_width_m", float)):
         if not isinstance(config.get(key), kind):
             raise FileFormatError(f"{cfg_path}: field {key!r} missing or not a {kind.__name__}; "
                                   f"re-create the model with 'beam-damage train'")
