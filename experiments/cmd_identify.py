@@ -9,7 +9,7 @@ import numpy as np
 
 from physics.errors import BeamDamageError, ConfigError
 from physics.identification import METHODS, Identification, identify_file, reconstruction_error_db
-from physics.io import MeasuredFRF, NodeGeometry, format_complex, measured_positions
+from physics.io import FRF, MeasuredFRF, NodeGeometry, accepted, format_complex, measured_positions
 from physics.modal import mac
 
 __all__ = ["add_parser", "run"]
@@ -120,12 +120,12 @@ def run(args) -> dict:
 def add_parser(sub):
     p = sub.add_parser(
         "identify", help="identify natural frequencies, damping and complex modes from measured FRFs",
-        description="Modal identification from an FRF file (UFF dataset 58 ASCII/binary, CSV or .npz of "
-                    "MeasuredFRF). Methods: lscf (poly-reference LSCF poles with automatic stabilisation-"
-                    "diagram selection, then LSFD residues with lower/upper residuals), circle (Nyquist "
-                    "circle fit, eq. 3.13), peak (peak picking with half-power damping, eqs. 3.33/3.34). "
+        description="Modal identification from an FRF file. Methods: lscf (poly-reference LSCF poles with "
+                    "automatic stabilisation-diagram selection, then LSFD residues with lower/upper residuals), "
+                    "circle (Nyquist circle fit, eq. 3.13), peak (peak picking with half-power damping, "
+                    "eqs. 3.33/3.34). "
                     "Shapes are unit-modal-A scaled when a driving-point FRF is present.")
-    p.add_argument("file", metavar="FILE", help="FRF file: .uff/.unv (dataset 58), .csv or .npz")
+    p.add_argument("file", metavar="FILE", help=f"FRF file: {accepted(FRF)}")
     p.add_argument("--method", default="lscf", choices=METHODS, help="identification method (default lscf)")
     p.add_argument("--band", nargs=2, type=float, metavar=("FMIN", "FMAX"), help="frequency band in Hz")
     p.add_argument("--modes", type=int, metavar="N", help="number of modes to keep (default: all found)")

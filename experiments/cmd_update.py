@@ -8,18 +8,19 @@ from experiments.args import add_beam_argument
 from physics import modal, updating
 from physics.beam import Beam, load_beam
 from physics.errors import BeamDamageError, ConfigError, ConvergenceError, FileFormatError
-from physics.io import dof_positions_text, read_modal_json
+from physics.io import FRF, MODAL, accepted, dof_positions_text, format_of
 
 __all__ = ["add_parser", "run"]
 
 
 def load_modal(modal_file, n_modes: int):
-    """Modal JSON as is; an FRF file (UFF58, CSV, NPZ) is identified first (LSCF + LSFD, ``n_modes`` modes).
+    """Modal data as they are; FRFs are identified first (LSCF + LSFD, ``n_modes`` modes).
 
-    Returns the modal data and the FRFs it was identified from (None for modal JSON).
+    Returns the modal data and the FRFs it was identified from (None for a modal-data file).
     """
-    if str(modal_file).lower().endswith(".json"):
-        return read_modal_json(modal_file), None
+    fmt = format_of(modal_file, MODAL, FRF)
+    if MODAL in fmt.holds:
+        return fmt.reader(MODAL)(modal_file), None
     from physics.identification import identify_file
 
     ident = identify_file(modal_file, n_modes=n_modes)
@@ -139,9 +140,9 @@ def add_parser(sub):
                                    "complex modes and the beam's reduced or lumped mass matrix.")
     add_beam_argument(p)
     p.add_argument("--modal", required=True, metavar="FILE",
-                   help="modal-data JSON: eigenvalues and eigenvectors as complex strings (rows = measured DOFs, "
-                        "columns = modes), as in beams.json; or an FRF file (.uff/.unv, .csv, .npz) with a "
-                        "driving point, identified first by 'identify --method lscf'")
+                   help=f"{accepted(MODAL, FRF)}. Modal data: eigenvalues and eigenvectors as complex strings "
+                        "(rows = measured DOFs, columns = modes), as in beams.json; FRFs: with a driving point, "
+                        "identified first by 'identify --method lscf'")
     p.add_argument("--mass", default="iirs", choices=updating.MASS_MODELS + tuple(updating.MASS_MODEL_ALIASES),
                    help="analyst mass: iirs = the 4-element consistent mass reduced by IIRS (default; 'reduced' "
                         "is an alias) or lumped = eq. 4.6")

@@ -191,7 +191,7 @@ def read_uff58(path, kind=None) -> MeasuredFRF:
         raise FileFormatError(f"{path}: no FRF for response {a} and reference {b} ({len(missing)} missing "
                               f"of {len(resp)}x{len(refs)}); every response needs a record for every reference")
     frf = np.array([[table[(a, b)] for b in refs] for a in resp])
-    meta = {"source": str(path), "format": "uff58", "binary": bool(sets[0].get("binary", 0)),
+    meta = {"source": str(path), "format": "uff", "binary": bool(sets[0].get("binary", 0)),
             "id1": str(frfs[0][1].get("id1", "")).strip(),
             "units": {"file": sorted(units_found), "si": DEFAULT_UNITS[file_kind],
                       "factor_to_si": sorted({float(f) for v in units_found.values() for f in v}),
