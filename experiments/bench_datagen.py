@@ -124,60 +124,22 @@ def main(argv=None):
     if a.docs and a.config not in DOCS_BLOCKS:
         ap.error("--docs: docs/datasets.md holds the tables of the default and the training config only")
 
-    from threadpoolctl import threadpool_limits
-
     from datagen.config import load_config, merge
-    from datagen.naive import simulate_naive
-    from datagen.generation import generate
-    from datagen.pipeline import draw_batch, get_setup
-    from datagen.torchdata import make_loader
-    from learn.features import grid_weights, load_pairs
 
     cfg = load_config(a.config) if a.config else merge({})
-    setup = get_setup(cfg)
     res = {"config": a.config or "defaults (beam5, 20 truth elements, 1024 lines, IIRS mass)",
            "workers": a.workers, "n": a.n}
-    inp = draw_batch(np.random.default_rng(0), a.naive, setup)
-    with threadpool_limits(1):
-        simulate_naive(setup, inp.take(slice(0, 2)), modes="full")  # warm-up (numba, caches)
-        t, c = time.perf_counter(), _cpu_s()
-        simulate_naive(setup, inp, modes="full")
-        res["naive_full_samples_per_s"] = a.naive / (time.perf_counter() - t)
-        res["naive_full_samples_per_cpu_s"] = a.naive / (_cpu_s() - c)
-
+    res.update(_naive_rates(cfg, a.naive))
     tmp = Path(a.keep) if a.keep else Path(tempfile.mkdtemp(prefix="bench_datagen_"))
     root = tmp / "ds"
     if root.exists():
         shutil.rmtree(root)
     try:
-        generate(tmp / "warm", merge({"output": {"shard_size": 64}}), n=64 * a.workers, seed=9,
-                 workers=a.workers, progress=False)  # compile caches of the worker processes
-        t, c = time.perf_counter(), _cpu_s()
-        generate(root, cfg, n=a.n, seed=1, workers=a.workers, progress=False)
-        res["generate_samples_per_s"] = a.n / (time.perf_counter() - t)
-        res["generate_samples_per_cpu_s"] = a.n / (_cpu_s() - c)
-        res["bytes_per_sample"] = _dir_bytes(root) / a.n
+        res.update(_generate_rates(tmp, root, cfg, a.n, a.workers))
         res["ratio_generate_vs_naive_full"] = res["generate_samples_per_s"] / res["naive_full_samples_per_s"]
         res["ratio_cpu_efficiency_generate_vs_naive"] = (res["generate_samples_per_cpu_s"]
                                                          / res["naive_full_samples_per_cpu_s"])
-        W = grid_weights(np.load(root / "omega_rad_s.npy"))[0]
-        for kind in ("updated", "measured"):
-            for what, opts in (("frf", {}), ("grid_features_loader", {"features": "log_magnitude", "weights": W})):
-                loader = make_loader(root, kind, columns=("stiffness_loss_Nm3",), batch_size=a.batch,
-                                     num_workers=a.workers, **opts)
-                c = _cpu_s()
-                it = iter(loader)
-                next(it)  # start the workers
-                t = time.perf_counter()
-                n = sum(b["frf"].shape[0] for b in it)
-                res[f"read_{kind}_{what}_samples_per_s"] = n / (time.perf_counter() - t)
-                del it, loader  # joins the workers, so their CPU time is counted
-                res[f"read_{kind}_{what}_samples_per_cpu_s"] = (n + a.batch) / (_cpu_s() - c)
-            load_pairs(tmp / "warm", frfs=(kind,), workers=a.workers)  # compiled kernels loaded in this process
-            c, t = _cpu_s(), time.perf_counter()
-            load_pairs(root, frfs=(kind,), workers=a.workers)
-            res[f"read_{kind}_grid_features_load_pairs_samples_per_s"] = a.n / (time.perf_counter() - t)
-            res[f"read_{kind}_grid_features_load_pairs_samples_per_cpu_s"] = a.n / (_cpu_s() - c)
+        res.update(_read_rates(tmp, root, a.n, a.workers, a.batch))
         if a.table_rows:
             import multiprocessing
             from concurrent.futures import ProcessPoolExecutor
@@ -230,6 +192,65 @@ def docs_table(res: dict) -> str:
         f"{_sig(res[rate.format('updated', 'grid_features_load_pairs')])} |",
         f"| full FRFs (1024 lines): updated / measured (samples/s) | {_sig(res[rate.format('updated', 'frf')])} / "
         f"{_sig(res[rate.format('measured', 'frf')])} |"]) + "\n"
+
+
+def _naive_rates(cfg, n: int) -> dict:
+    """Samples per second (wall and CPU) of the per-sample loop, ``n`` samples, one thread, after a warm-up."""
+    from threadpoolctl import threadpool_limits
+
+    from datagen.naive import simulate_naive
+    from datagen.pipeline import draw_batch, get_setup
+
+    setup = get_setup(cfg)
+    inp = draw_batch(np.random.default_rng(0), n, setup)
+    with threadpool_limits(1):
+        simulate_naive(setup, inp.take(slice(0, 2)), modes="full")  # warm-up (numba, caches)
+        t, c = time.perf_counter(), _cpu_s()
+        simulate_naive(setup, inp, modes="full")
+        return {"naive_full_samples_per_s": n / (time.perf_counter() - t),
+                "naive_full_samples_per_cpu_s": n / (_cpu_s() - c)}
+
+
+def _generate_rates(tmp: Path, root: Path, cfg, n: int, workers: int) -> dict:
+    """Samples per second (wall and CPU) and bytes per sample of ``generate`` writing ``n`` samples to ``root``,
+    after a small warm-up dataset in ``tmp / "warm"`` (compile caches of the worker processes)."""
+    from datagen.config import merge
+    from datagen.generation import generate
+
+    generate(tmp / "warm", merge({"output": {"shard_size": 64}}), n=64 * workers, seed=9,
+             workers=workers, progress=False)  # compile caches of the worker processes
+    t, c = time.perf_counter(), _cpu_s()
+    generate(root, cfg, n=n, seed=1, workers=workers, progress=False)
+    return {"generate_samples_per_s": n / (time.perf_counter() - t),
+            "generate_samples_per_cpu_s": n / (_cpu_s() - c), "bytes_per_sample": _dir_bytes(root) / n}
+
+
+def _read_rates(tmp: Path, root: Path, n_samples: int, workers: int, batch: int) -> dict:
+    """Samples per second (wall and CPU) reading the dataset at ``root`` back: the torch loader of FRFs and of
+    grid features, and :func:`learn.features.load_pairs`, for the updated and the measured FRFs."""
+    from datagen.torchdata import make_loader
+    from learn.features import grid_weights, load_pairs
+
+    res = {}
+    W = grid_weights(np.load(root / "omega_rad_s.npy"))[0]
+    for kind in ("updated", "measured"):
+        for what, opts in (("frf", {}), ("grid_features_loader", {"features": "log_magnitude", "weights": W})):
+            loader = make_loader(root, kind, columns=("stiffness_loss_Nm3",), batch_size=batch,
+                                 num_workers=workers, **opts)
+            c = _cpu_s()
+            it = iter(loader)
+            next(it)  # start the workers
+            t = time.perf_counter()
+            n = sum(b["frf"].shape[0] for b in it)
+            res[f"read_{kind}_{what}_samples_per_s"] = n / (time.perf_counter() - t)
+            del it, loader  # joins the workers, so their CPU time is counted
+            res[f"read_{kind}_{what}_samples_per_cpu_s"] = (n + batch) / (_cpu_s() - c)
+        load_pairs(tmp / "warm", frfs=(kind,), workers=workers)  # compiled kernels loaded in this process
+        c, t = _cpu_s(), time.perf_counter()
+        load_pairs(root, frfs=(kind,), workers=workers)
+        res[f"read_{kind}_grid_features_load_pairs_samples_per_s"] = n_samples / (time.perf_counter() - t)
+        res[f"read_{kind}_grid_features_load_pairs_samples_per_cpu_s"] = n_samples / (_cpu_s() - c)
+    return res
 
 
 if __name__ == "__main__":

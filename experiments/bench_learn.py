@@ -98,20 +98,44 @@ def main(argv=None):
                                                         "docs/classifier.md")
     args = ap.parse_args(argv)
 
-    from learn.classical import GradientBoosting, run_classical
-    from learn.evaluate import figures, metrics, table_rows
-    from learn.features import features, load_pairs, split_by_specimen
-    from learn.estimator import DamageClassifier
-    from learn.workflow import dataset_frfs, load_model, network_output, sensitivity_of, targets, train
-
     data_dir, out = Path(args.data_dir), Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     t = time.perf_counter()
     commands = ensure_datasets(data_dir, datasets(args.n_train, args.n_test, args.n_rob), args.workers)
     print(f"datasets ready ({time.perf_counter() - t:.0f} s)", flush=True)
     train_dirs, test_dirs = [data_dir / "train"], [data_dir / "test"]
+    model, summary, wall = _default_model(train_dirs, out, args)
+    test = _held_out(model, train_dirs, test_dirs, out, args)
+    _print_held_out(test)
+    rob = _robustness(data_dir, test_dirs, model, test)
+    pd.DataFrame(rob).to_csv(out / "robustness.csv", index=False)
+    cols = ("roc_auc", "accuracy", "false_alarm_rate", "detection_rate", "element_accuracy",
+            "median_location_error_mm", "median_size_error", "ece")
+    print(f"{'set':<42}{'method':<24}" + "".join(f"{c[:13]:>14}" for c in cols))
+    for r in rob:
+        print(f"{r['subset']:<42}{r['method']:<24}" + "".join(f"{fmt(r[c]):>14}" for c in cols))
 
-    # ---------------------------------------------------------------- default model
+    # ---------------------------------------------------------------- beam 5
+    res5 = beam5(model, out / "beam5")
+    (out / "beam5.json").write_text(json.dumps(res5, indent=1, default=float))
+    print("\n== Beam 5 (thesis Tables 4.5/4.6) ==")
+    for k, v in res5.items():
+        print(f"{k}: {json.dumps(v, default=float)}")
+    (out / "summary.json").write_text(json.dumps({"commands": commands, "train": summary, "train_wall_s": wall,
+                                                  "rows_all": [
+        r for r in test["rows"] if r["subset"] == "all"], "robustness": rob}, indent=1, default=float))
+    if args.docs:
+        from experiments.doc_tables import write_table
+
+        test_rows = [r for r in test["rows"] if r["subset"] == "all"]
+        write_table("classifier.md", "classifier-benchmark", benchmark_markdown(test_rows))
+        write_table("classifier.md", "classifier-robustness", robustness_markdown(rob))
+
+
+def _default_model(train_dirs, out: Path, args) -> tuple:
+    """Train the default model into ``out / "model"``; returns it, the training summary and the wall time (s)."""
+    from learn.workflow import load_model, train
+
     t0 = time.perf_counter()
     summary = train(train_dirs, out / "model", epochs=args.epochs, seed=args.seed, progress=True,
                     threads=args.threads)
@@ -123,7 +147,23 @@ def main(argv=None):
           + (f" (+ modal companion {summary['train_seconds']['modal']:.0f} s)" if route != "modal" else "") + ","
           f" data loading {summary['load_seconds']:.0f} s, whole 'train' {wall:.0f} s wall, torch threads "
           f"{args.threads}")
+    return model, summary, wall
 
+
+def _held_out(model, train_dirs, test_dirs, out: Path, args) -> dict:
+    """Networks on every route (the model's and, unless ``--skip-routes``, the others trained on the same pairs),
+    gradient boosting and the classical methods scored on the held-out test split (``benchmark.csv``, figures).
+
+    Returns a mapping: ``rows`` (the table), ``outputs`` (the default network first), ``truth``, ``networks``,
+    ``boost``, ``sens`` (sensitivities of the nominal beam), ``thresholds`` (the classical methods') and ``n``.
+    """
+    from learn.classical import GradientBoosting, run_classical
+    from learn.estimator import DamageClassifier
+    from learn.evaluate import figures, table_rows
+    from learn.features import features, load_pairs, split_by_specimen
+    from learn.workflow import dataset_frfs, network_output, sensitivity_of, targets
+
+    route = model.route
     all_routes = ["modal", "updated", "measured"]
     need = all_routes if not args.skip_routes else list(model.networks)
     tr_pairs = load_pairs(train_dirs, frfs=dataset_frfs(need))
@@ -151,8 +191,14 @@ def main(argv=None):
     rows = table_rows(outputs, truth, te_pairs.table, te_pairs.beam.length_m)
     pd.DataFrame(rows).to_csv(out / "benchmark.csv", index=False)
     figures(outputs, truth, out / "figures", te_pairs.beam.length_m)
+    return {"rows": rows, "outputs": outputs, "truth": truth, "networks": networks, "boost": boost, "sens": sens,
+            "thresholds": thresholds, "n": len(te_pairs)}
 
-    print(f"\n== Held-out test: {len(te_pairs)} specimens ({int(truth['damaged'].sum())} damaged, "
+
+def _print_held_out(test: dict) -> None:
+    """The held-out table, the issue's targets for the default network and the breakdowns."""
+    rows, outputs, truth = test["rows"], test["outputs"], test["truth"]
+    print(f"\n== Held-out test: {test['n']} specimens ({int(truth['damaged'].sum())} damaged, "
           f"{int((~truth['damaged']).sum())} intact), --config training, seed 2 ==")
     print("AUC: detectable slits (largest frequency drop > 0.2 %) vs intact; "
           "element/location/size over detectable slits")
@@ -162,7 +208,7 @@ def main(argv=None):
     for k, (op, v) in TARGETS.items():
         ok = r0[k] is not None and np.isfinite(r0[k]) and (r0[k] >= v if op == ">=" else r0[k] <= v)
         print(f"  {k:<28} {fmt(r0[k]):>10}  target {op} {v:g}  {'met' if ok else 'NOT met'}")
-    hon = net_outs[route]
+    hon = outputs[0]
     small = truth["damaged"] & (truth["max_drop"] <= 0.002)
     big = truth["damaged"] & (truth["max_drop"] > 0.002)
     print(f"  'not detectable here': flagged on {np.mean(~hon.detectable[small]):.1%} of slits whose largest drop "
@@ -170,8 +216,16 @@ def main(argv=None):
     for sub in dict.fromkeys(r["subset"] for r in rows if r["subset"] != "all"):
         print_table(rows, f"breakdown: {sub}", sub)
 
-    # ---------------------------------------------------------------- robustness
+
+def _robustness(data_dir: Path, test_dirs, model, test: dict) -> list:
+    """Metrics rows of the default network, the classical methods and gradient boosting on each robustness set."""
+    from learn.classical import run_classical
+    from learn.evaluate import metrics
+    from learn.features import features, load_pairs
+    from learn.workflow import dataset_frfs, network_output, targets
+
     print("\n== Robustness (network on the default route vs classical methods; training ranges in brackets) ==")
+    route, sens = model.route, test["sens"]
     rob = []
     sets = {
         "in range (test)": test_dirs,
@@ -183,36 +237,15 @@ def main(argv=None):
     for name, dirs in sets.items():
         P = load_pairs(dirs, frfs=dataset_frfs([route]))
         _, tr = targets(P)
-        outs = [network_output(networks[route], features(P, route), sens, f"network ({route})")[0]]
-        outs += run_classical(P.eigenvalues, P.eigenvectors, sens, thresholds)[0]
-        outs.append(boost.predict(features(P, route)))
+        outs = [network_output(test["networks"][route], features(P, route), sens, f"network ({route})")[0]]
+        outs += run_classical(P.eigenvalues, P.eigenvectors, sens, test["thresholds"])[0]
+        outs.append(test["boost"].predict(features(P, route)))
         for o in outs:
             m = metrics(o, tr, None, name, P.beam.length_m).row()
             if name.startswith("several"):
                 m["detection_rate_all_damaged"] = float(np.mean(o.damaged[tr["damaged"]]))
             rob.append(m)
-    pd.DataFrame(rob).to_csv(out / "robustness.csv", index=False)
-    cols = ("roc_auc", "accuracy", "false_alarm_rate", "detection_rate", "element_accuracy",
-            "median_location_error_mm", "median_size_error", "ece")
-    print(f"{'set':<42}{'method':<24}" + "".join(f"{c[:13]:>14}" for c in cols))
-    for r in rob:
-        print(f"{r['subset']:<42}{r['method']:<24}" + "".join(f"{fmt(r[c]):>14}" for c in cols))
-
-    # ---------------------------------------------------------------- beam 5
-    res5 = beam5(model, out / "beam5")
-    (out / "beam5.json").write_text(json.dumps(res5, indent=1, default=float))
-    print("\n== Beam 5 (thesis Tables 4.5/4.6) ==")
-    for k, v in res5.items():
-        print(f"{k}: {json.dumps(v, default=float)}")
-    (out / "summary.json").write_text(json.dumps({"commands": commands, "train": summary, "train_wall_s": wall,
-                                                  "rows_all": [
-        r for r in rows if r["subset"] == "all"], "robustness": rob}, indent=1, default=float))
-    if args.docs:
-        from experiments.doc_tables import write_table
-
-        test_rows = [r for r in rows if r["subset"] == "all"]
-        write_table("classifier.md", "classifier-benchmark", benchmark_markdown(test_rows))
-        write_table("classifier.md", "classifier-robustness", robustness_markdown(rob))
+    return rob
 
 
 def beam5(model, out_dir) -> dict:

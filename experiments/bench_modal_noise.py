@@ -195,10 +195,6 @@ def main(argv=None):
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
 
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from datagen.config import CONFIG_DIR
     from learn.workflow import IDENTIFICATION
     from physics.io import atomic_write_text
@@ -208,37 +204,9 @@ def main(argv=None):
     conditions = [(lv, fl) for lv in levels for fl in floors]
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
-    runs = {}
-    with ProcessPoolExecutor(a.workers, mp_context=get_context("spawn")) as pool:
-        for k, (lv, fl) in enumerate(conditions):
-            seeds = [a.seed + 100 * k + g for g in range(len(GRIDS))]
-            full = [full_path_errors(lv, fl, a.specimens, sd, pool, grid) for sd, grid in zip(seeds, GRIDS)]
-            runs[lv, fl] = {"full": _pooled([f[0] for f in full]), "failed": sum(f[1] for f in full).tolist(),
-                            "fixed": _pooled([shortcut_errors(lv, fl, a.specimens, sd, grid=grid)[0]
-                                              for sd, grid in zip(seeds, GRIDS)]), "seeds": seeds}
-
-    # per mode, std = sqrt((c level)^2 + (g floor)^2 + e^2) fitted to the full path's robust std in each condition
-    calib = {}
-    for qi, q in enumerate(QUANTITIES):
-        fits = [calibrate_std([c[0] for c in conditions], [c[1] for c in conditions],
-                              [_robust_std(runs[c]["full"][qi][..., r]) for c in conditions]) for r in range(4)]
-        for j, suffix in enumerate(("", "_per_floor", "_floor")):
-            calib[q + suffix] = [float(f"{f[j]:.4g}") for f in fits]
-    for c in conditions:  # the same specimens and draws through the calibrated shortcut
-        runs[c]["calibrated"] = _pooled([shortcut_errors(*c, a.specimens, sd, calib, grid)[0]
-                                         for sd, grid in zip(runs[c]["seeds"], GRIDS)])
-    fits_per_condition = 2 * a.specimens * len(GRIDS)
-    table = []
-    for (lv, fl) in conditions:
-        R = runs[lv, fl]
-        for qi, q in enumerate(QUANTITIES):
-            for r in range(4):
-                full, fix, cal = (R[k][qi][..., r] for k in ("full", "fixed", "calibrated"))
-                table.append({"level": lv, "floor": fl, "mode": r + 1, "quantity": q,
-                              "full_path_std": _robust_std(full), "shortcut_fixed_std": _robust_std(fix),
-                              "shortcut_calibrated_std": _robust_std(cal), "ks_full_vs_calibrated": _ks(full, cal),
-                              "ks_full_vs_fixed": _ks(full, fix), "modes_not_identified": R["failed"][r],
-                              "fits": fits_per_condition})
+    runs = _run_conditions(conditions, a.specimens, a.seed, a.workers)
+    calib = _calibrate(runs, conditions, a.specimens)
+    table = _table(runs, conditions, 2 * a.specimens * len(GRIDS))
     rows = [",".join(table[0])] + [",".join(str(v) for v in t.values()) for t in table]
     atomic_write_text(out / "modal_noise.csv", "\n".join(rows) + "\n")
     result = {"levels": levels, "floors": floors, "grids": GRIDS, "specimens": a.specimens,
@@ -252,6 +220,65 @@ def main(argv=None):
                 f"{floors}; written by experiments.bench_modal_noise")
         atomic_write_text(CONFIG_DIR / "modal_noise.json",
                           json.dumps({**calib, "identification": IDENTIFICATION, "note": note}, indent=1) + "\n")
+    _figure(out / "modal_noise.png", runs, conditions)
+    if a.json:
+        print(json.dumps(result, indent=1))
+    else:
+        _print(calib, table)
+        print(f"figures and tables in {out}")
+    return result
+
+
+def _run_conditions(conditions, specimens: int, seed: int, workers: int) -> dict:
+    """Per (level, floor): pooled errors of the full path and of the fixed-default shortcut, the modes the full
+    path missed and the seeds (one per line layout of :data:`GRIDS`)."""
+    runs = {}
+    with ProcessPoolExecutor(workers, mp_context=get_context("spawn")) as pool:
+        for k, (lv, fl) in enumerate(conditions):
+            seeds = [seed + 100 * k + g for g in range(len(GRIDS))]
+            full = [full_path_errors(lv, fl, specimens, sd, pool, grid) for sd, grid in zip(seeds, GRIDS)]
+            runs[lv, fl] = {"full": _pooled([f[0] for f in full]), "failed": sum(f[1] for f in full).tolist(),
+                            "fixed": _pooled([shortcut_errors(lv, fl, specimens, sd, grid=grid)[0]
+                                              for sd, grid in zip(seeds, GRIDS)]), "seeds": seeds}
+    return runs
+
+
+def _calibrate(runs: dict, conditions, specimens: int) -> dict:
+    """Per quantity and mode, ``std = sqrt((c level)^2 + (g floor)^2 + e^2)`` fitted to the full path's robust
+    std in each condition; adds to ``runs`` the same specimens and draws through the calibrated shortcut."""
+    calib = {}
+    for qi, q in enumerate(QUANTITIES):
+        fits = [calibrate_std([c[0] for c in conditions], [c[1] for c in conditions],
+                              [_robust_std(runs[c]["full"][qi][..., r]) for c in conditions]) for r in range(4)]
+        for j, suffix in enumerate(("", "_per_floor", "_floor")):
+            calib[q + suffix] = [float(f"{f[j]:.4g}") for f in fits]
+    for c in conditions:
+        runs[c]["calibrated"] = _pooled([shortcut_errors(*c, specimens, sd, calib, grid)[0]
+                                         for sd, grid in zip(runs[c]["seeds"], GRIDS)])
+    return calib
+
+
+def _table(runs: dict, conditions, fits_per_condition: int) -> list:
+    """One row per condition, quantity and mode: robust stds of the three paths and their KS distances."""
+    table = []
+    for (lv, fl) in conditions:
+        R = runs[lv, fl]
+        for qi, q in enumerate(QUANTITIES):
+            for r in range(4):
+                full, fix, cal = (R[k][qi][..., r] for k in ("full", "fixed", "calibrated"))
+                table.append({"level": lv, "floor": fl, "mode": r + 1, "quantity": q,
+                              "full_path_std": _robust_std(full), "shortcut_fixed_std": _robust_std(fix),
+                              "shortcut_calibrated_std": _robust_std(cal), "ks_full_vs_calibrated": _ks(full, cal),
+                              "ks_full_vs_fixed": _ks(full, fix), "modes_not_identified": R["failed"][r],
+                              "fits": fits_per_condition})
+    return table
+
+
+def _figure(path: Path, runs: dict, conditions) -> None:
+    """Cumulative distributions of |error| / FRF noise level per quantity and mode, the three paths."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
 
     fig, axs = plt.subplots(3, 4, figsize=(14, 9))
     for qi, q in enumerate(QUANTITIES):
@@ -270,21 +297,19 @@ def main(argv=None):
                 ax.set_ylabel("cumulative fraction")
     axs[0, 0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(out / "modal_noise.png", dpi=110)
+    fig.savefig(path, dpi=110)
     plt.close(fig)
-    if a.json:
-        print(json.dumps(result, indent=1))
-    else:
-        print(f"calibration (std = sqrt((c level)^2 + (g floor)^2 + e^2), modes 1..4): {json.dumps(calib)}")
-        print(f"{'level':>7} {'floor':>7} {'q':>9} {'mode':>4} {'full':>10} {'fixed':>10} {'calib':>10} {'KS cal':>7} "
-              f"{'KS fix':>7} {'missed':>6}")
-        for t in table:
-            print(f"{t['level']:7.3g} {t['floor']:7.3g} {t['quantity']:>9} {t['mode']:4d} {t['full_path_std']:10.3g} "
-                  f"{t['shortcut_fixed_std']:10.3g} {t['shortcut_calibrated_std']:10.3g} "
-                  f"{t['ks_full_vs_calibrated']:7.3f} {t['ks_full_vs_fixed']:7.3f} "
-                  f"{t['modes_not_identified']:3d}/{t['fits']}")
-        print(f"figures and tables in {out}")
-    return result
+
+
+def _print(calib: dict, table: list) -> None:
+    print(f"calibration (std = sqrt((c level)^2 + (g floor)^2 + e^2), modes 1..4): {json.dumps(calib)}")
+    print(f"{'level':>7} {'floor':>7} {'q':>9} {'mode':>4} {'full':>10} {'fixed':>10} {'calib':>10} {'KS cal':>7} "
+          f"{'KS fix':>7} {'missed':>6}")
+    for t in table:
+        print(f"{t['level']:7.3g} {t['floor']:7.3g} {t['quantity']:>9} {t['mode']:4d} {t['full_path_std']:10.3g} "
+              f"{t['shortcut_fixed_std']:10.3g} {t['shortcut_calibrated_std']:10.3g} "
+              f"{t['ks_full_vs_calibrated']:7.3f} {t['ks_full_vs_fixed']:7.3f} "
+              f"{t['modes_not_identified']:3d}/{t['fits']}")
 
 
 if __name__ == "__main__":

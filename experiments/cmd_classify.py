@@ -16,10 +16,12 @@ KEYS = ("measured", "damaged", "probability_damaged", "location_x_over_L", "loca
 
 
 def add_parser(sub):
+    from physics.io import FRF, MODAL, accepted
+
     p = sub.add_parser("classify", help="classify measured beams against their baseline with a trained model",
-                       description="BASELINE and each MEASURED are FRF files (UFF58 .uff/.unv, CSV, NPZ) with "
-                                   "receptances, mobilities or accelerances at the model's DOFs, or modal-data JSON "
-                                   "as 'update' accepts. FRF files are identified by LSCF/LSFD (4 modes), the "
+                       description=f"BASELINE and each MEASURED are files of {accepted(FRF, MODAL)}. FRFs: "
+                                   "receptances, mobilities or accelerances at the model's DOFs; modal data: as "
+                                   "'update' accepts. FRF files are identified by LSCF/LSFD (4 modes), the "
                                    "identification the training data's modal noise describes. A pair outside the "
                                    "training data gets the classical method's verdict, the network's shown beside it. "
                                    "Several MEASURED files give a list of verdicts; --out writes verdict.json and "
@@ -39,10 +41,11 @@ def add_parser(sub):
 
 
 def read_input(path):
-    """Modal JSON -> ModalData, anything else -> MeasuredFRF."""
-    from physics.io import read_frf, read_modal_json
+    """A modal-data file -> ModalData, an FRF file -> MeasuredFRF (the format by :func:`physics.io.format_of`)."""
+    from physics.io import FRF, MODAL, format_of
 
-    return read_modal_json(path) if str(path).lower().endswith(".json") else read_frf(path)
+    fmt = format_of(path, MODAL, FRF)
+    return fmt.reader(fmt.holds[0])(path)
 
 
 def run(args):

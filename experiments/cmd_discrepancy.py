@@ -15,7 +15,7 @@ from experiments.study_discrepancy import EXAMPLE, run_discrepancy
 from physics import discrepancy as dsc
 from physics.effects import CANDIDATES
 from physics.errors import ConfigError
-from physics.io import dof_positions_text
+from physics.io import FRF, MODAL, accepted, dof_positions_text
 
 __all__ = ["EXAMPLE", "add_parser", "run"]
 
@@ -115,8 +115,8 @@ def add_parser(sub):
                     f"Example: --beam beam5 --measured {EXAMPLE.relative_to(Path(__file__).parent.parent)}")
     add_beam_argument(p)
     p.add_argument("--measured", required=True, metavar="FILE",
-                   help="modal JSON (natural_frequencies_hz alone, or with damping_ratios / eigenvalues and "
-                        "eigenvectors + dofs) or FRFs (.uff/.unv, .csv, .npz; identified by LSCF/LSFD first)")
+                   help=f"{accepted(MODAL, FRF)}. Modal data: natural_frequencies_hz alone, or with "
+                        "damping_ratios / eigenvalues and eigenvectors + dofs; FRFs: identified by LSCF/LSFD first")
     p.add_argument("--out", metavar="DIR", help="write beam.toml (calibrated), residuals.csv/json, "
                                                 "candidates.csv/json, summary.json and figures")
     p.add_argument("--frequency-noise", type=float, default=dsc.Noise().frequency,

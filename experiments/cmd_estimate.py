@@ -5,8 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from physics.errors import ConfigError
-from physics.io import write_uff58
-from physics.io.timedata import read_uff_time_records
+from physics.io import TIME, accepted, read, write_uff58
 from physics.time_records import ESTIMATORS, EXCITATIONS, estimate_from_records
 
 __all__ = ["add_parser", "run"]
@@ -21,7 +20,7 @@ def run(args) -> dict:
         raise ConfigError(f"--decay {args.decay:g}: must be in (0, 1]")
     if args.fmax is not None and not args.fmax > 0:
         raise ConfigError(f"--fmax {args.fmax:g}: must be > 0")
-    records = read_uff_time_records(args.file)
+    records = read(args.file, TIME)
     est = estimate_from_records(records, args.reference, args.estimator, args.excitation, args.averages,
                                 args.overlap, args.window, args.decay, args.fmax)
     coh = est.coherence
@@ -52,12 +51,12 @@ def run(args) -> dict:
 
 def add_parser(sub):
     p = sub.add_parser("estimate", help="estimate FRFs (H1/H2/Hv, coherence) from force and response time records",
-                       description="Read the time records (UFF dataset 58, function type 1) of a force and "
+                       description="Read the time records (dataset 58, function type 1) of a force and "
                                    "responses and estimate FRFs. Random excitation: Welch averaging of overlapped "
                                    "windowed segments. Impact tests: the record is cut into --averages blocks, "
                                    "one hit each; force and exponential windows; blocks with a double hit or an "
                                    "overload (clipping) are flagged and left out.")
-    p.add_argument("file", metavar="FILE", help="universal file with time records (force and responses)")
+    p.add_argument("file", metavar="FILE", help=f"time records (force and responses): {accepted(TIME)}")
     p.add_argument("--reference", metavar="DOF", help="DOF of the force channel, e.g. 1:+Z (default: the only force)")
     p.add_argument("--estimator", choices=ESTIMATORS, default="h1", help="h1 (noise on responses, default), "
                                                                          "h2 (noise on the force), hv (both)")

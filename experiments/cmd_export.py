@@ -1,4 +1,5 @@
-"""``beam-damage export``: materialise chosen samples' FRFs as UFF58, NPZ or CSV files for modal software."""
+"""``beam-damage export``: materialise chosen samples' FRFs as files for modal software (the FRF formats of
+:data:`physics.io.FORMATS` with a writer)."""
 
 from __future__ import annotations
 
@@ -10,22 +11,23 @@ from datagen.dataset import Dataset
 from datagen.store import STATES
 from datagen.synth import DATASET_FRFS
 from physics.errors import BeamDamageError
-from physics.io import MeasuredFRF, write_frf_csv, write_frf_npz, write_uff58
+from physics.io import FRF, MeasuredFRF, writable
 
 __all__ = ["add_parser", "run"]
 
-WRITERS = {"uff": (write_uff58, "uff"), "npz": (write_frf_npz, "npz"), "csv": (write_frf_csv, "csv")}
-
-
 def add_parser(subparsers):
+    writers = writable(FRF)
     p = subparsers.add_parser(
-        "export", help="write chosen samples' FRFs (synthesised) as UFF58, NPZ or CSV files",
+        "export", help="write chosen samples' FRFs (synthesised) as "
+                       f"{'/'.join(f.name.upper() for f in writers.values())} files",
         description="Synthesise the FRFs of the chosen samples (measured: truth + noise; updated: the Pilkey-updated "
                     "model) and write one file per sample, state (baseline, current) and kind, named "
                     "sample-ID_STATE_KIND.EXT, receptance (m/N), responses at the measured DOFs, drive at the first.")
     p.add_argument("dir", help="dataset directory")
     p.add_argument("--samples", required=True, help="comma-separated sample ids, e.g. 0,17,299")
-    p.add_argument("--format", choices=sorted(WRITERS), default="uff", help="file format (default uff: dataset 58)")
+    p.add_argument("--format", choices=sorted(writers), default="uff",
+                   help="file format (default uff): " + "; ".join(f"{f.name}: {f.description}"
+                                                                  for f in writers.values()))
     p.add_argument("--kind", choices=[*DATASET_FRFS, "both"], default="both", help="which FRFs (default both)")
     p.add_argument("--out", required=True, help="output directory (created)")
     p.add_argument("--json", action="store_true", help="print the list of written files as JSON")
@@ -64,7 +66,7 @@ def run(args) -> dict:
     resp = tuple(_uff_dof(d) for d in schema["measured_dofs"])
     ref = (_uff_dof(schema["frf_reference_dof"]),)
     f_hz = ds.omega_rad_s / (2 * np.pi)
-    writer, ext = WRITERS[args.format]
+    fmt = writable(FRF)[args.format]
     out = Path(args.out)
     kinds = DATASET_FRFS if args.kind == "both" else (args.kind,)
     frfs = {kind: ds.frf(kind, rows).astype(complex) for kind in kinds}  # read (and verify) all before writing
@@ -79,11 +81,11 @@ def run(args) -> dict:
     for kind, H in frfs.items():
         for j, i in enumerate(ids):
             for s, state in enumerate(STATES):
-                path = out / f"sample-{i:06d}_{state}_{kind}.{ext}"
+                path = out / f"sample-{i:06d}_{state}_{kind}{fmt.extensions[0]}"
                 data = MeasuredFRF(f_hz, H[j, s][:, None, :], resp, ref, kind="receptance",
                                    metadata={"id1": f"beam-damage sample {i} {state} {kind}", "dataset": str(args.dir),
                                              "sample_id": i, "state": state, "frf": kind})
-                writer(path, data)
+                fmt.writer(path, data)
                 written.append(str(path))
     if not args.json:
         print(f"wrote {len(written)} {args.format} files to {out}")

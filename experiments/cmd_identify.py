@@ -9,7 +9,7 @@ import numpy as np
 
 from physics.errors import BeamDamageError, ConfigError
 from physics.identification import METHODS, Identification, identify_file, reconstruction_error_db
-from physics.io import MeasuredFRF, NodeGeometry, format_complex, measured_positions
+from physics.io import FRF, MeasuredFRF, NodeGeometry, accepted, format_complex, measured_positions
 from physics.modal import mac
 
 __all__ = ["add_parser", "run"]
@@ -116,10 +116,10 @@ def method_help() -> str:
 def add_parser(sub):
     p = sub.add_parser(
         "identify", help="identify natural frequencies, damping and complex modes from measured FRFs",
-        description="Modal identification from an FRF file (UFF dataset 58 ASCII/binary, CSV or .npz of "
-                    f"MeasuredFRF). Methods (--method): {method_help()}. "
+        description="Modal identification from an FRF file. "
+                    f"Methods (--method): {method_help()}. "
                     "Shapes are unit-modal-A scaled when a driving-point FRF is present.")
-    p.add_argument("file", metavar="FILE", help="FRF file: .uff/.unv (dataset 58), .csv or .npz")
+    p.add_argument("file", metavar="FILE", help=f"FRF file: {accepted(FRF)}")
     p.add_argument("--method", default="lscf", choices=list(METHODS),
                    help="identification method (default %(default)s; see the methods above)")
     p.add_argument("--band", nargs=2, type=float, metavar=("FMIN", "FMAX"), help="frequency band in Hz")

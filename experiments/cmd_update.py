@@ -7,37 +7,66 @@ import numpy as np
 from experiments.args import add_beam_argument
 from physics import modal, updating
 from physics.beam import Beam, load_beam
-from physics.errors import BeamDamageError, ConfigError, ConvergenceError, FileFormatError
-from physics.io import dof_positions_text, read_modal_json
+from physics.errors import BeamDamageError, ConfigError, ConvergenceError, FileFormatError, OverdampedError
+from physics.io import FRF, MODAL, accepted, dof_positions_text, format_of
 
 __all__ = ["add_parser", "run"]
 
 
 def load_modal(modal_file, n_modes: int):
-    """Modal JSON as is; an FRF file (UFF58, CSV, NPZ) is identified first (LSCF + LSFD, ``n_modes`` modes).
+    """Modal data as they are; FRFs are identified first (LSCF + LSFD, ``n_modes`` modes).
 
-    Returns the modal data and the FRFs it was identified from (None for modal JSON).
+    Returns the modal data and the FRFs it was identified from (None for a modal-data file).
     """
-    if str(modal_file).lower().endswith(".json"):
-        return read_modal_json(modal_file), None
+    fmt = format_of(modal_file, MODAL, FRF)
+    if MODAL in fmt.holds:
+        return fmt.reader(MODAL)(modal_file), None
     from physics.identification import identify_file
 
     ident = identify_file(modal_file, n_modes=n_modes)
     return ident.modal_data, ident.frf
 
 
-def unstable_mode_warnings(eigenvalues) -> list:
+def unstable_mode_warnings(eigenvalues, real_eigenvalues=()) -> list:
     """One warning per mode of an updated model that is not damped: ``Re(lambda) >= 0`` (damping ratio <= 0).
 
     Parameters
     ----------
     eigenvalues : ndarray, complex, shape (n_modes,)
         The updated model's eigenvalues (rad/s), one of each conjugate pair.
+    real_eigenvalues : ndarray, float, shape (n_real,), optional
+        Its real (non-oscillating) eigenvalues (1/s); one ``>= 0`` is a mode that grows without oscillating.
     """
     f_hz, zeta = modal.modal_parameters(eigenvalues)
-    return [f"the updated model is unstable: mode {k + 1} at {f_hz[k]:.6g} Hz has damping ratio {zeta[k]:.3g} "
-            "(eigenvalue real part >= 0); the measured modes have negative damping or are inconsistent with the "
-            "mass" for k in np.flatnonzero(np.asarray(eigenvalues).real >= 0)]
+    out = [f"the updated model is unstable: mode {k + 1} at {f_hz[k]:.6g} Hz has damping ratio {zeta[k]:.3g} "
+           "(eigenvalue real part >= 0); the measured modes have negative damping or are inconsistent with the "
+           "mass" for k in np.flatnonzero(np.asarray(eigenvalues).real >= 0)]
+    return out + [f"the updated model is unstable: a real eigenvalue {r:.6g} 1/s >= 0 (a mode that grows without "
+                  "oscillating); the measured modes are inconsistent with the mass" for r in real_eigenvalues if r >= 0]
+
+
+def model_modes(M, C, K, paired_eigenvalues, where) -> tuple:
+    """Natural frequencies (Hz), damping ratios and warnings of the updated model ``(M, C, K)``.
+
+    A model of ``n`` conjugate pairs gives its complex modes; one with real eigenvalues (overdamped or
+    non-oscillating unstable modes) gives the frequencies and damping ratios of ``paired_eigenvalues``
+    (its eigenvalues paired with the measured ones, :func:`physics.updating.eigenvalue_errors`) and a warning.
+    Either way each unstable mode is warned of (:func:`unstable_mode_warnings`).
+    """
+    try:
+        cm = modal.complex_modes(M, C, K)
+    except OverdampedError:
+        lam = np.linalg.eigvals(modal.state_matrix(M, C, K))
+        upper = lam[lam.imag > 0]
+        upper = upper[np.argsort(np.abs(upper))]
+        real = np.sort(lam[lam.imag == 0].real)
+        f_hz, zeta = modal.modal_parameters(paired_eigenvalues)
+        return f_hz, zeta, [f"the updated model has {real.size} real eigenvalue(s) (overdamped or non-oscillating "
+                            "modes): its natural frequencies and damping ratios are those of its eigenvalues paired "
+                            "with the measured ones", *unstable_mode_warnings(upper, real)]
+    except BeamDamageError as exc:
+        raise type(exc)(f"{where}: the updated model: {exc}") from None
+    return cm.natural_frequencies_hz, cm.damping_ratios, unstable_mode_warnings(cm.eigenvalues)
 
 
 def update(beam, modal_file, mass: str = "iirs", tol: float = 1e-10, max_iter: int = 500,
@@ -90,17 +119,14 @@ def update(beam, modal_file, mass: str = "iirs", tol: float = 1e-10, max_iter: i
         warnings.append(f"the updated model reproduces the measured eigenvalues only to {errors[worst]:.2%} "
                         f"(mode {worst + 1}; tolerance {updating.REPRODUCTION_TOL:.0%}): the measured modes are "
                         "not consistent with the trusted mass")
-    try:
-        cm = modal.complex_modes(M, res.C, res.K)
-    except BeamDamageError as exc:
-        raise type(exc)(f"{modal_file}: the updated model: {exc}") from None
-    warnings += unstable_mode_warnings(cm.eigenvalues)
+    f_hz, zeta, more = model_modes(M, res.C, res.K, model_lam, modal_file)
+    warnings += more
     return {
         "beam": beam, "mass": mass, "dofs": list(b.masters), "dof_positions": dof_map.to_dict(),
         "M": M, "C": res.C, "K": res.K,
         "method": method, "iterations": res.iterations, "converged": res.converged, "residual": res.residual,
         "orthogonality_misfit": updating.orthogonality_misfit(M, data.eigenvalues, res.eigenvectors),
-        "natural_frequencies_hz": cm.natural_frequencies_hz, "damping_ratios": cm.damping_ratios,
+        "natural_frequencies_hz": f_hz, "damping_ratios": zeta,
         "measured_natural_frequencies_hz": data.natural_frequencies_hz,
         "measured_damping_ratios": data.damping_ratios,
         "eigenvalue_check": {"relative_errors": errors, "max_relative_error": float(errors[worst]),
@@ -139,9 +165,9 @@ def add_parser(sub):
                                    "complex modes and the beam's reduced or lumped mass matrix.")
     add_beam_argument(p)
     p.add_argument("--modal", required=True, metavar="FILE",
-                   help="modal-data JSON: eigenvalues and eigenvectors as complex strings (rows = measured DOFs, "
-                        "columns = modes), as in beams.json; or an FRF file (.uff/.unv, .csv, .npz) with a "
-                        "driving point, identified first by 'identify --method lscf'")
+                   help=f"{accepted(MODAL, FRF)}. Modal data: eigenvalues and eigenvectors as complex strings "
+                        "(rows = measured DOFs, columns = modes), as in beams.json; FRFs: with a driving point, "
+                        "identified first by 'identify --method lscf'")
     p.add_argument("--mass", default="iirs", choices=updating.MASS_MODELS + tuple(updating.MASS_MODEL_ALIASES),
                    help="analyst mass: iirs = the 4-element consistent mass reduced by IIRS (default; 'reduced' "
                         "is an alias) or lumped = eq. 4.6")

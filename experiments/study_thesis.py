@@ -86,24 +86,61 @@ def run(out_dir) -> tuple[dict, list]:
     out.mkdir(parents=True, exist_ok=True)
     b5 = thesis_fixture("beams")["beams"]["5"]
     preset = properties.beam_preset("beam5")
+    t42 = _table_4_2(b5, preset)
+    t41 = _table_4_1(b5, preset)
+    ident = identified_models(b5)
+    t_ident, t6 = _chapter_six_tables(b5, ident)
+    figs = _figures_6(out, ident)
+    tables = [Table.from_records("Table 4.2: natural frequencies of beam 5, closed form vs measured", t42),
+              Table.from_records("Table 4.1 data: IIRS-reduced M and K against the printed matrices", t41),
+              Table.from_records("Chapter Six: identified C and K against the printed matrices", t_ident)]
+    for k, state in enumerate(("undamaged", "damaged"), start=1):
+        tables.append(Table.from_records(f"Table 6.{k}: natural frequencies of the identified {state} models",
+                                         t6[state]))
+    _write_tables(out, tables)
 
-    # Table 4.2
+    worst_cf = max(abs(r["model error (%)"]) for r in t42)
+    summary = {"closed_form_max_error_pct": worst_cf,
+               "iirs_rel_error": {r["matrix"]: r["relative error (Frobenius)"] for r in t41},
+               "identified_max_rel_error": max(max(r["C error vs printed"], r["K error vs printed"])
+                                               for r in t_ident),
+               "unstable_models": [f"{r['state']} {r['model']}" for r in t_ident if r["min damping ratio"] < 0],
+               "figures": [f.path for f in figs]}
+    section = Section(
+        "Thesis reproduction: beam 5, Chapters Four to Six",
+        (f"The Euler-Bernoulli closed form (eq. 4.5) misses the measured frequencies by up to {worst_cf:.1f}% "
+         "(mode 4): the gap the discrepancy workflow explains. The IIRS reduction and Pilkey's identification "
+         "reproduce the printed matrices; the thesis's Tables 6.1/6.2 are the frequencies of its printed, rounded "
+         "matrices (column 'thesis M,C,K printed'), and the full-precision identified models differ by the rounding.",
+         "Identified models with a negative damping ratio are unstable: "
+         + (", ".join(summary["unstable_models"]) or "none") + "."),
+        tuple(tables), tuple(figs))
+    return summary, [section]
+
+
+def _table_4_2(b5: dict, preset) -> list:
+    """Rows of Table 4.2: the closed-form frequencies (eq. 4.5, and with exact ``beta l``) against the printed
+    ones and the measured (Hz)."""
     f_cf = properties.cantilever_frequencies_hz(preset.EI, preset.m_per_length, preset.length)
     f_exact = properties.cantilever_frequencies_hz(preset.EI, preset.m_per_length, preset.length,
                                                    properties.cantilever_beta_l(4))
     f_meas = np.array(b5["undamaged"]["natural_frequencies_hz"])
-    t42 = [{"mode": r + 1, "thesis eq. 4.5 (Hz)": b5["theoretical_frequencies_hz"][r],
-            "ours eq. 4.5 (Hz)": f_cf[r], "ours, exact beta l (Hz)": f_exact[r], "measured (Hz)": f_meas[r],
-            "model error (%)": 100 * (f_cf[r] / f_meas[r] - 1)} for r in range(4)]
+    return [{"mode": r + 1, "thesis eq. 4.5 (Hz)": b5["theoretical_frequencies_hz"][r],
+             "ours eq. 4.5 (Hz)": f_cf[r], "ours, exact beta l (Hz)": f_exact[r], "measured (Hz)": f_meas[r],
+             "model error (%)": 100 * (f_cf[r] / f_meas[r] - 1)} for r in range(4)]
 
-    # Table 4.1 data: IIRS reduction
+
+def _table_4_1(b5: dict, preset) -> list:
+    """Rows of the Table 4.1 check: relative Frobenius error of the IIRS-reduced ``M`` and ``K``."""
     model = fem.beam_model(preset.n_elements, preset.length, preset.EI, preset.m_per_length)
     red = reduction.iirs(model.M, model.K, model.index(preset.masters))
-    t41 = [{"matrix": name, "relative error (Frobenius)": _rel_frob(ours, b5["iirs_reduced"][name]),
-            "IIRS iterations": red.iterations} for name, ours in (("M", red.M), ("K", red.K))]
+    return [{"matrix": name, "relative error (Frobenius)": _rel_frob(ours, b5["iirs_reduced"][name]),
+             "IIRS iterations": red.iterations} for name, ours in (("M", red.M), ("K", red.K))]
 
-    # Chapter Six
-    ident = identified_models(b5)
+
+def _chapter_six_tables(b5: dict, ident: dict) -> tuple:
+    """Rows comparing the identified ``C``, ``K`` with the printed ones, and per state the rows of Tables
+    6.1/6.2 (natural frequencies of the printed and of our identified models beside the measured)."""
     t_ident, t6 = [], {}
     for (state, mass), d in ident.items():
         printed = b5["identified_models"][state][mass]
@@ -125,8 +162,12 @@ def run(out_dir) -> tuple[dict, list]:
             row[f"{tag}: thesis M,C,K printed (Hz)"] = cm_printed.natural_frequencies_hz[r]
             row[f"{tag}: ours, full precision (Hz)"] = cm_ours.natural_frequencies_hz[r]
             row[f"{tag}: ours error (%)"] = 100 * (cm_ours.natural_frequencies_hz[r] / meas[r] - 1)
+    by_state = {state: [v for (s, _), v in t6.items() if s == state] for state in ("undamaged", "damaged")}
+    return t_ident, by_state
 
-    # Figures 6.1-6.3
+
+def _figures_6(out: Path, ident: dict) -> list:
+    """Figures in the style of 6.1-6.3 (H41 in dB of the identified models and of the measured modal data)."""
     def model_frf(state, mass):
         d = ident[state, mass]
         return frf.receptance(d["M"], d["result"].C, d["result"].K, OMEGA_RAD_S, [RESPONSE], [REFERENCE])[0, 0]
@@ -151,36 +192,17 @@ def run(out_dir) -> tuple[dict, list]:
                  ("damaged (Table 4.6)", measured_frf("damaged"), "C3--")])
     figs.append(Figure("Beam 5: H41 rebuilt from the measured modal data, undamaged vs damaged (cf. Figure 6.3).",
                        str(path)))
+    return figs
 
-    tables = [Table.from_records("Table 4.2: natural frequencies of beam 5, closed form vs measured", t42),
-              Table.from_records("Table 4.1 data: IIRS-reduced M and K against the printed matrices", t41),
-              Table.from_records("Chapter Six: identified C and K against the printed matrices", t_ident)]
-    for k, state in enumerate(("undamaged", "damaged"), start=1):
-        rows = [v for (s, _), v in t6.items() if s == state]
-        tables.append(Table.from_records(f"Table 6.{k}: natural frequencies of the identified {state} models", rows))
+
+def _write_tables(out: Path, tables: list) -> None:
+    """Each table as ``tableN.csv`` (N from 1), atomically."""
+    import csv
+    import io
+
     for i, t in enumerate(tables):
-        import csv
-        import io
         buf = io.StringIO()
         w = csv.writer(buf)
         w.writerow(t.columns)
         w.writerows(t.rows)
         atomic_write_text(out / f"table{i + 1}.csv", buf.getvalue())
-
-    worst_cf = max(abs(r["model error (%)"]) for r in t42)
-    summary = {"closed_form_max_error_pct": worst_cf,
-               "iirs_rel_error": {r["matrix"]: r["relative error (Frobenius)"] for r in t41},
-               "identified_max_rel_error": max(max(r["C error vs printed"], r["K error vs printed"])
-                                               for r in t_ident),
-               "unstable_models": [f"{r['state']} {r['model']}" for r in t_ident if r["min damping ratio"] < 0],
-               "figures": [f.path for f in figs]}
-    section = Section(
-        "Thesis reproduction: beam 5, Chapters Four to Six",
-        (f"The Euler-Bernoulli closed form (eq. 4.5) misses the measured frequencies by up to {worst_cf:.1f}% "
-         "(mode 4): the gap the discrepancy workflow explains. The IIRS reduction and Pilkey's identification "
-         "reproduce the printed matrices; the thesis's Tables 6.1/6.2 are the frequencies of its printed, rounded "
-         "matrices (column 'thesis M,C,K printed'), and the full-precision identified models differ by the rounding.",
-         "Identified models with a negative damping ratio are unstable: "
-         + (", ".join(summary["unstable_models"]) or "none") + "."),
-        tuple(tables), tuple(figs))
-    return summary, [section]

@@ -11,7 +11,7 @@ Modules (one concept each; float64, batched over leading axes, SI units)
 ``updating``        Lancaster/Pilkey damping and stiffness updating; the analyst mass
 ``estimation``      FRF estimation from time histories (H1, H2, Hv)
 ``identification``  modal identification from FRFs (peak picking, circle fit, LSCF/LSFD)
-``io``              file formats (UFF58, CSV, NPZ, modal JSON) and atomic writes
+``io``              file formats (one table, ``physics.io.FORMATS``: readers, writers, sniffing) and atomic writes
 ``thesis``          the thesis's printed numbers as package data
 ``kernels``         compiled (numba) backends
 

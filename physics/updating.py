@@ -369,16 +369,78 @@ def pilkey(M, eigenvalues, eigenvectors, C0=None, *, tol: float = 1e-10, max_ite
     -------
     UpdateResult
     """
-    if not (np.isfinite(tol) and tol > 0):
-        raise BeamDamageError(f"tol must be a positive number, got {tol}", parameter="tol")
-    if int(max_iter) != max_iter or max_iter < 1:
-        raise BeamDamageError(f"max_iter must be an integer >= 1, got {max_iter}", parameter="max_iter")
+    _check_iteration_options(tol, max_iter)
     M, lam, phi = check_modal_input(M, eigenvalues, eigenvectors, dependent="raise" if raise_on_failure else "nan")
     batch, n = M.shape[:-2], M.shape[-1]
     Mf = M.astype(float).reshape(-1, n, n)
     lf, pf = lam.reshape(-1, n), phi.reshape(-1, n, n)
     C = np.broadcast_to(np.eye(n) if C0 is None else np.asarray(check_square("C0", C0, n), dtype=float),
                         Mf.shape).copy()
+    it = _iterate_damping(Mf, lf, pf, C, tol, max_iter, keep_history)
+    C, residual, iterations, converged = it.C, it.residual, it.iterations, it.converged
+    if check_spurious:
+        spurious, misfit = _spurious_fixed_points(Mf, lf, pf, C, converged)
+        converged &= ~spurious
+        if raise_on_failure and spurious.any():
+            raise ConvergenceError(
+                "Pilkey's iteration settled on a spurious fixed point: the modes are consistent with M, but the "
+                f"converged C violates Lancaster's orthogonality relations (misfit "
+                f"{float(misfit[spurious].max()):.2g}); the true C is an unstable fixed point here (heavier or "
+                "strongly non-proportional damping): use lancaster_direct", iterations=int(iterations.max()),
+                residual=float(misfit[spurious].max()))
+    if raise_on_failure and not converged.all():
+        worst = float(np.max(residual[~converged]))
+        raise ConvergenceError(
+            f"Pilkey damping iteration did not converge after {int(iterations.max())} iterations (relative change "
+            f"{worst:.3g} > tol {tol:g}); the modal data may be inconsistent with M (check scaling, mode order and "
+            "that the set is complete)", iterations=int(iterations.max()), residual=worst)
+    C, K, phi_n, singular = _updated_stiffness(Mf, lf, pf, C)
+    converged &= ~singular
+    if raise_on_failure and singular.any():
+        raise ConvergenceError(_SINGULAR_FLEXIBILITY, iterations=int(iterations.max()),
+                               residual=float(np.max(residual[singular])))
+
+    def shaped(x):
+        x = x.reshape(batch + x.shape[1:])
+        return x if batch else x.item()
+
+    return UpdateResult(
+        C=C.reshape(batch + (n, n)), K=K.reshape(batch + (n, n)), eigenvectors=phi_n.reshape(batch + (n, n)),
+        iterations=shaped(iterations), converged=shaped(converged), residual=shaped(residual),
+        history=np.stack(it.history).reshape((-1,) + batch + (n, n)) if keep_history else None,
+    )
+
+
+def _check_iteration_options(tol, max_iter) -> None:
+    """``tol`` a positive number, ``max_iter`` an integer >= 1 (:class:`BeamDamageError` naming the option)."""
+    if not (np.isfinite(tol) and tol > 0):
+        raise BeamDamageError(f"tol must be a positive number, got {tol}", parameter="tol")
+    if int(max_iter) != max_iter or max_iter < 1:
+        raise BeamDamageError(f"max_iter must be an integer >= 1, got {max_iter}", parameter="max_iter")
+
+
+@dataclass(frozen=True)
+class _Iteration:
+    """State of Pilkey's damping iteration over a batch of ``m`` models (arrays shaped (m, ...))."""
+
+    C: np.ndarray           # (m, n, n) last iterate
+    residual: np.ndarray    # (m,) relative Frobenius change of the last step
+    iterations: np.ndarray  # (m,) steps taken
+    converged: np.ndarray   # (m,) residual <= tol
+    history: list | None    # C_0, C_1, ... when kept
+
+
+def _iterate_damping(Mf, lf, pf, C, tol, max_iter, keep_history) -> _Iteration:
+    """Eqs. 5.2-5.3 from ``C`` (updated in place) until each model's relative change is <= ``tol``.
+
+    Parameters
+    ----------
+    Mf : ndarray, shape (m, n, n)
+    lf : ndarray, complex, shape (m, n)
+    pf : ndarray, complex, shape (m, n, n)
+    C : ndarray, shape (m, n, n)
+        Starting damping matrices; each model iterates independently of the others.
+    """
     history = [C.copy()] if keep_history else None
     residual = np.full(len(Mf), np.inf)
     iterations = np.zeros(len(Mf), dtype=int)
@@ -403,30 +465,44 @@ def pilkey(M, eigenvalues, eigenvectors, C0=None, *, tol: float = 1e-10, max_ite
             history.append(C.copy())
         if active.size == 0:
             break
-    # Guard against a spurious fixed point: modal data consistent with M (the direct least-squares scaling
-    # fits Lancaster's orthogonality relations) but an iterate that does not satisfy them.
-    misfit = np.zeros(len(Mf))
-    if check_spurious:
-        with np.errstate(all="ignore"):
-            misfit = orthogonality_misfit(Mf, lf, normalize_modes(lf, pf, Mf, C))
-    suspect = np.flatnonzero(converged & (misfit > 1e-6)) if check_spurious else np.zeros(0, int)
+    return _Iteration(C, residual, iterations, converged, history)
+
+
+def _spurious_fixed_points(Mf, lf, pf, C, converged) -> tuple:
+    """Converged models at a spurious fixed point, and each model's orthogonality misfit.
+
+    Spurious: modal data consistent with ``M`` (the direct least-squares scaling fits Lancaster's
+    orthogonality relations) but an iterate ``C`` that does not satisfy them.
+
+    Returns
+    -------
+    spurious : ndarray, bool, shape (m,)
+    misfit : ndarray, shape (m,)
+    """
+    with np.errstate(all="ignore"):
+        misfit = orthogonality_misfit(Mf, lf, normalize_modes(lf, pf, Mf, C))
+    suspect = np.flatnonzero(converged & (misfit > 1e-6))
     spurious = np.zeros(len(Mf), dtype=bool)
     if suspect.size:
         _, best = _least_squares_scaling(Mf[suspect], lf[suspect], pf[suspect])
         spurious[suspect[best < 1e-9]] = True
-        converged &= ~spurious
-    if raise_on_failure and spurious.any():
-        raise ConvergenceError(
-            "Pilkey's iteration settled on a spurious fixed point: the modes are consistent with M, but the "
-            f"converged C violates Lancaster's orthogonality relations (misfit {float(misfit[spurious].max()):.2g}); "
-            "the true C is an unstable fixed point here (heavier or strongly non-proportional damping): use "
-            "lancaster_direct", iterations=int(iterations.max()), residual=float(misfit[spurious].max()))
-    if raise_on_failure and not converged.all():
-        worst = float(np.max(residual[~converged]))
-        raise ConvergenceError(
-            f"Pilkey damping iteration did not converge after {int(iterations.max())} iterations (relative change "
-            f"{worst:.3g} > tol {tol:g}); the modal data may be inconsistent with M (check scaling, mode order and "
-            "that the set is complete)", iterations=int(iterations.max()), residual=worst)
+    return spurious, misfit
+
+
+def _updated_stiffness(Mf, lf, pf, C) -> tuple:
+    """Eq. 5.4: the stiffness of each model from its modes normalised with ``C``.
+
+    Returns
+    -------
+    C : ndarray, shape (m, n, n)
+        ``C`` with NaN for a model whose iteration diverged.
+    K : ndarray, shape (m, n, n)
+        NaN for a diverged model or a singular flexibility.
+    eigenvectors : ndarray, complex, shape (m, n, n)
+        The normalised modes.
+    singular : ndarray, bool, shape (m,)
+        Finite ``C`` but no finite ``K`` (singular flexibility).
+    """
     diverged = ~np.isfinite(C).all(axis=(-2, -1))
     C[diverged] = np.nan
     with np.errstate(all="ignore"):
@@ -434,21 +510,7 @@ def pilkey(M, eigenvalues, eigenvectors, C0=None, *, tol: float = 1e-10, max_ite
         K = np.full_like(C, np.nan)
         ok = np.flatnonzero(~diverged)
         K[ok] = lancaster_stiffness(lf[ok], phi_n[ok])  # eq. 5.4
-    singular = ~diverged & ~np.isfinite(K).all(axis=(-2, -1))
-    converged &= ~singular
-    if raise_on_failure and singular.any():
-        raise ConvergenceError(_SINGULAR_FLEXIBILITY, iterations=int(iterations.max()),
-                               residual=float(np.max(residual[singular])))
-
-    def shaped(x):
-        x = x.reshape(batch + x.shape[1:])
-        return x if batch else x.item()
-
-    return UpdateResult(
-        C=C.reshape(batch + (n, n)), K=K.reshape(batch + (n, n)), eigenvectors=phi_n.reshape(batch + (n, n)),
-        iterations=shaped(iterations), converged=shaped(converged), residual=shaped(residual),
-        history=np.stack(history).reshape((-1,) + batch + (n, n)) if keep_history else None,
-    )
+    return C, K, phi_n, ~diverged & ~np.isfinite(K).all(axis=(-2, -1))
 
 
 def lancaster_direct(M, eigenvalues, eigenvectors):

@@ -50,3 +50,21 @@ def write_renumbered_uff(path, frf, nodes, x_mm=None, order=None):
                 orddenom_spec_data_type=13))
     pyuff.UFF(str(path)).write_sets(sets, mode="add")
     return path
+
+
+def big_endian_58b(raw: bytes) -> bytes:
+    """A little-endian 58b file rewritten big-endian: byte-ordering field 2, every double byte-swapped."""
+    import re
+
+    out, pos = bytearray(), 0
+    for m in re.finditer(rb"(?m)^ {4}58b[^\n]*\n", raw):
+        end = m.start()
+        for _ in range(12):  # the '58b' line and the 11 header records
+            end = raw.index(b"\n", end) + 1
+        rec7 = raw[m.start():end].split(b"\n")[7]
+        n_values = int(rec7[10:20]) * (2 if int(rec7[0:10]) in (5, 6) else 1) * (2 - int(rec7[20:30]))
+        data = np.frombuffer(raw[end:end + 8 * n_values], "<f8")
+        line = raw[m.start():m.end()]
+        out += raw[pos:m.start()] + line[:7] + b"     2" + line[13:] + raw[m.end():end] + data.astype(">f8").tobytes()
+        pos = end + 8 * n_values
+    return bytes(out + raw[pos:])

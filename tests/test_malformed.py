@@ -646,6 +646,14 @@ _ILL_CONDITIONED = [
                                                       for row in _thesis_modal()["eigenvectors"]]), "column 3"),
     ("eigenvalues of 1e-300 rad/s", _with(eigenvalues=[str(complex(z) * 1e-300)
                                                       for z in _thesis_modal()["eigenvalues"]]), "eigenvalues"),
+    ("real-number rows 1.5", _with(eigenvectors=[1.5, 2.5, 3.5, 4.5]), "row 1 is a float"),
+    ("real-valued shapes inconsistent with the mass", _with(eigenvectors=[[1.5, 2.5, 3.5, 4.5], [0.5, -1, 2, 3],
+                                                                          [1, 1, -2, 0.3], [2, -3, 1, 1]]),
+     "does not reproduce the measured modes"),
+    ("one row scaled by 1e-300", _with(eigenvectors=[[str(complex(z) * (1e-300 if i == 2 else 1)) for z in row]
+                                                     for i, row in enumerate(_thesis_modal()["eigenvectors"])]),
+     "linearly dependent"),
+    ("non-numeric strings 'abc'", _with(eigenvectors=[["abc"] * 4] * 4), "complex strings"),
 ]
 
 _MODAL_FIELDS = [

@@ -1,6 +1,6 @@
 """Reading and writing measured and modal data (file I/O lives only here).
 
-One module per format, the data types and the atomic writer apart:
+One module per format, listed in one table (:data:`FORMATS`), the data types and the atomic writer apart:
 
 * :mod:`physics.io.types` -- :class:`MeasuredFRF`, :class:`ModalData`, DOF labels;
 * :mod:`physics.io.atomic` -- the one temp-file-then-rename writer;
@@ -8,7 +8,9 @@ One module per format, the data types and the atomic writer apart:
 * :mod:`physics.io.csv` -- FRFs as CSV text;
 * :mod:`physics.io.npz` -- FRFs as ``.npz`` of plain arrays;
 * :mod:`physics.io.modal_json` -- modal data (eigenvalues, complex shapes) as JSON;
-* :mod:`physics.io.auto` -- :func:`read_frf`, choosing a reader from the name or content;
+* :mod:`physics.io.timedata` -- time records (dataset 58, function type 1) of force and responses;
+* :mod:`physics.io.formats` -- the format table :data:`FORMATS` (extensions, content, sniffing, reader,
+  writer, description) and :func:`read_frf` / :func:`read`, choosing a reader from the name or content;
 * :mod:`physics.io.units` -- dataset 164 unit factors and unit labels, to SI;
 * :mod:`physics.io.geometry` -- node geometry (datasets 15/2411) and measured positions along the beam.
 
@@ -16,8 +18,9 @@ Every name below is importable from ``physics.io`` directly.
 """
 
 from physics.io.atomic import atomic_path, atomic_write_bytes, atomic_write_text
-from physics.io.auto import read_frf
 from physics.io.csv import read_frf_csv, write_frf_csv
+from physics.io.formats import (FORMATS, FRF, MODAL, TIME, FileFormat, accepted, format_of, read, read_frf,
+                               writable)
 from physics.io.modal_json import (modal_data_from_dict, modal_data_to_dict, number_list, read_json,
                                    read_modal_json, write_modal_json)
 from physics.io.npz import read_frf_npz, write_frf_npz
@@ -28,7 +31,8 @@ from physics.io.geometry import (QUARTER_POINT_CONVENTION, DofMap, NodeGeometry,
 from physics.io.uff58 import read_uff58, read_uff_geometry, write_uff58
 from physics.io.units import UnitSystem, frf_unit_factor
 
-__all__ = ["DEFAULT_UNITS", "FRF_KINDS", "MeasuredFRF", "ModalData", "atomic_path", "atomic_write_bytes",
+__all__ = ["FORMATS", "FRF", "MODAL", "TIME", "FileFormat", "accepted", "format_of", "read", "writable",
+           "DEFAULT_UNITS", "FRF_KINDS", "MeasuredFRF", "ModalData", "atomic_path", "atomic_write_bytes",
            "atomic_write_text", "dof_label", "format_complex", "modal_data_from_dict", "modal_data_to_dict",
            "number_list", "parse_dof", "read_frf", "read_json", "read_frf_csv", "read_frf_npz", "read_modal_json",
            "read_uff58", "write_frf_csv", "write_frf_npz", "write_modal_json", "write_uff58",

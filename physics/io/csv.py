@@ -48,6 +48,29 @@ def read_frf_csv(path, kind=None) -> MeasuredFRF:
     (:func:`~physics.io.types.parse_dof`). ``kind`` overrides the ``# kind:`` line (default receptance).
     """
     path = Path(path)
+    meta, header, header_line, rows = _csv_lines(path)
+    pairs = _header_pairs(path, header, header_line)
+    values = _csv_values(path, rows, len(header))
+    f = values[:, 0]
+    if np.any(np.diff(f) <= 0):
+        raise FileFormatError(f"{path}: column 'frequency_hz' must be strictly increasing")
+    resp, refs, frf = _frf_matrix(path, header_line, pairs, values)
+    file_kind = kind or meta.get("kind", "receptance")
+    if file_kind not in FRF_KINDS:
+        raise FileFormatError(f"{path}: '# kind: {file_kind}' must be one of {', '.join(FRF_KINDS)}")
+    try:
+        return MeasuredFRF(f, frf, tuple(resp), tuple(refs), kind=file_kind, units=meta.get("units", ""),
+                           metadata={"source": str(path), "format": "csv"})
+    except ShapeError as exc:
+        raise FileFormatError(f"{path}: {exc}") from None
+
+
+_HEADER_FORM = "'frequency_hz,re(RESP/REF),im(RESP/REF),...'"
+
+
+def _csv_lines(path: Path) -> tuple:
+    """The ``# key: value`` comments (keys lower case), the header's cells and line number, and the data rows
+    as ``[(line number, text), ...]`` of a CSV file; blank lines skipped."""
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
@@ -70,13 +93,17 @@ def read_frf_csv(path, kind=None) -> MeasuredFRF:
             header, header_line = [c.strip() for c in s.split(",")], lineno
         else:
             rows.append((lineno, s))
-    form = "'frequency_hz,re(RESP/REF),im(RESP/REF),...'"
     if header is None or not rows:
-        raise FileFormatError(f"{path}: no header and data rows; expected a header {form} then numbers")
+        raise FileFormatError(f"{path}: no header and data rows; expected a header {_HEADER_FORM} then numbers")
+    return meta, header, header_line, rows
+
+
+def _header_pairs(path: Path, header: list, header_line: int) -> list:
+    """``[(response DOF, reference DOF), ...]`` of the header's ``re(...)``/``im(...)`` column pairs."""
     if header[0].lower() not in ("frequency_hz", "frequency", "freq_hz", "f_hz") or len(header) < 3 \
             or len(header) % 2 != 1:
-        raise FileFormatError(f"{path}: line {header_line}: header must be {form} (a frequency column and "
-                              f"pairs of real/imaginary columns), got {len(header)} columns")
+        raise FileFormatError(f"{path}: line {header_line}: header must be {_HEADER_FORM} (a frequency column "
+                              f"and pairs of real/imaginary columns), got {len(header)} columns")
     pairs = []
     for k in range(1, len(header), 2):
         re_name, im_name = header[k], header[k + 1]
@@ -88,7 +115,11 @@ def read_frf_csv(path, kind=None) -> MeasuredFRF:
         pairs.append((resp.strip(), ref.strip() or UNNAMED_REFERENCE))
         check_dof_labels(pairs[-1], f"{path}: line {header_line}: column {k + 1} {re_name!r}",
                          unnamed_reference=True)
-    ncol = len(header)
+    return pairs
+
+
+def _csv_values(path: Path, rows: list, ncol: int) -> np.ndarray:
+    """The data rows as a finite ``(n_rows, ncol)`` float array; the first bad line is named."""
     counts = [r[1].count(",") + 1 for r in rows]
     bad = next((i for i, c in enumerate(counts) if c != ncol), None)
     if bad is not None:
@@ -112,9 +143,12 @@ def read_frf_csv(path, kind=None) -> MeasuredFRF:
     if not np.all(np.isfinite(values)):
         bad = rows[int(np.nonzero(~np.all(np.isfinite(values), axis=1))[0][0])][0]
         raise FileFormatError(f"{path}: line {bad}: NaN or inf value")
-    f = values[:, 0]
-    if np.any(np.diff(f) <= 0):
-        raise FileFormatError(f"{path}: column 'frequency_hz' must be strictly increasing")
+    return values
+
+
+def _frf_matrix(path: Path, header_line: int, pairs: list, values: np.ndarray) -> tuple:
+    """Response DOFs, reference DOFs and the ``(n_resp, n_ref, n_lines)`` FRF of the columns of ``pairs``,
+    which must form a full response x reference matrix."""
     if len(set(pairs)) != len(pairs):
         raise FileFormatError(f"{path}: line {header_line}: the same response/reference pair appears twice")
     resp = list(dict.fromkeys(p[0] for p in pairs))
@@ -122,16 +156,7 @@ def read_frf_csv(path, kind=None) -> MeasuredFRF:
     if len(pairs) != len(resp) * len(refs):
         raise FileFormatError(f"{path}: line {header_line}: {len(pairs)} FRFs do not form a full "
                               f"{len(resp)} responses x {len(refs)} references matrix")
-    frf = np.empty((len(resp), len(refs), f.size), complex)
+    frf = np.empty((len(resp), len(refs), values.shape[0]), complex)
     for k, (a, b) in enumerate(pairs):
         frf[resp.index(a), refs.index(b)] = values[:, 1 + 2 * k] + 1j * values[:, 2 + 2 * k]
-    file_kind = kind or meta.get("kind", "receptance")
-    if file_kind not in FRF_KINDS:
-        raise FileFormatError(f"{path}: '# kind: {file_kind}' must be one of {', '.join(FRF_KINDS)}")
-    try:
-        return MeasuredFRF(f, frf, tuple(resp), tuple(refs), kind=file_kind, units=meta.get("units", ""),
-                           metadata={"source": str(path), "format": "csv"})
-    except ShapeError as exc:
-        raise FileFormatError(f"{path}: {exc}") from None
-
-
+    return resp, refs, frf

@@ -329,7 +329,7 @@ def map_frf_dofs(frf, dofs, model_x_m, model_dofs, **kwargs) -> DofMap:
     reader stored in ``frf.metadata`` (UFF datasets 15/2411, or an NPZ's
     metadata), named after the file format; the file names the messages.
     """
-    fmt = {"uff58": "uff"}.get(str(frf.metadata.get("format", "file")), str(frf.metadata.get("format", "file")))
+    fmt = str(frf.metadata.get("format", "file"))
     try:
         geometry = NodeGeometry.from_metadata(frf.metadata)
     except (KeyError, TypeError, ValueError, AttributeError):

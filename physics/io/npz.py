@@ -53,12 +53,13 @@ def _check_members(path, z):
                                   f"{size * dtype.itemsize / 2**30:.3g} GiB); refusing more than {MAX_ARRAY_ELEMENTS}")
 
 
-def read_frf_npz(path) -> MeasuredFRF:
+def read_frf_npz(path, kind=None) -> MeasuredFRF:
     """Read a file written by :func:`write_frf_npz` (loaded with ``allow_pickle=False``).
 
     Member headers are checked before anything is loaded (only .npy members, at
     most :data:`MAX_ARRAY_ELEMENTS` elements each); the FRF must be complex, the
     frequencies real, the DOF labels 1-D lists of strings, the metadata a JSON object.
+    ``kind`` applies to a file without a ``kind`` array (default receptance).
     """
     path = Path(path)
     try:
@@ -100,7 +101,7 @@ def read_frf_npz(path) -> MeasuredFRF:
     try:
         return MeasuredFRF(arrays["frequency_hz"], arrays["frf"],
                            tuple(arrays["response_dofs"].tolist()), tuple(arrays["reference_dofs"].tolist()),
-                           kind=str(arrays.get("kind", "receptance")), units=str(arrays.get("units", "")),
+                           kind=str(arrays.get("kind", kind or "receptance")), units=str(arrays.get("units", "")),
                            metadata={**meta, "source": str(path), "format": "npz"})
     except ShapeError as exc:
         raise FileFormatError(f"{path}: {exc}") from None

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import gc
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -80,16 +81,50 @@ def read_uff58(path, kind=None) -> MeasuredFRF:
     """
     path = Path(path)
     uff, types = _open_uff(path)
+    frfs, binary = _frf_records(path, uff, types)
+    system, geometry = read_uff_context(path, uff, types)
+    freq, table, ordinates, units_found = None, {}, set(), {}
+    for n, s in frfs:
+        rec = _frf_record(path, n, s, system, freq)
+        freq = rec.frequency_hz if freq is None else freq
+        if _is_duplicate(table, rec):
+            continue
+        table[rec.key] = rec.data
+        ordinates.add(rec.ordinate)
+        units_found.setdefault(rec.unit_label, []).append(rec.factor)
+    file_kind = _file_kind(path, ordinates, kind)
+    resp, refs, frf = _frf_matrix(path, table)
+    meta = {"source": str(path), "format": "uff", "binary": binary,
+            "id1": str(frfs[0][1].get("id1", "")).strip(),
+            "units": {"file": sorted(units_found), "si": DEFAULT_UNITS[file_kind],
+                      "factor_to_si": sorted({float(f) for v in units_found.values() for f in v}),
+                      "unit_system": system.description}}
+    if geometry is not None:
+        meta["geometry"] = {"source": geometry.source, "nodes_m": geometry.to_dict()}
+    try:
+        return MeasuredFRF(freq, frf, tuple(resp), tuple(refs), kind=file_kind, metadata=meta)
+    except ShapeError as exc:
+        raise FileFormatError(f"{path}: {exc}") from None
+
+
+def _frf_records(path: Path, uff, types) -> tuple:
+    """The FRF records (function type 4) of an open universal file, as ``[(index, set), ...]``, and whether the
+    first dataset 58 record is binary; other datasets and functions are skipped with a warning.
+
+    Raises
+    ------
+    FileFormatError
+        No dataset 58 record, unreadable records, or no FRF among them.
+    """
     idx58 = [i for i, t in enumerate(types) if t == 58]
     others = sorted({t for t in types if t not in _CONTEXT_SETS})
     if not idx58:
         found = ", ".join(f"{t} ({_UFF_SET_NAMES.get(t, 'unsupported/unreadable')})" for t in sorted(set(types)))
         raise FileFormatError(f"{path}: no dataset 58 (function at nodal DOF) record; dataset types "
                               f"found: {found or 'none'}")
-    system, geometry = read_uff_context(path, uff, types)
     if others:
         warnings.warn(f"{path}: skipped {sum(t in others for t in types)} record(s) of dataset type(s) "
-                      f"{', '.join(map(str, others))}", stacklevel=2)
+                      f"{', '.join(map(str, others))}", stacklevel=3)
     try:
         sets = uff.read_sets(idx58)
     except Exception as exc:
@@ -112,77 +147,100 @@ def read_uff58(path, kind=None) -> MeasuredFRF:
     if skipped:
         found = ", ".join(f"{ft} ({_UFF_FUNCTION_NAMES.get(ft, 'unknown')})" for ft in skipped)
         warnings.warn(f"{path}: skipped {sum(skipped.values())} dataset 58 record(s) that are not FRFs: "
-                      f"function type(s) {found}", stacklevel=2)
+                      f"function type(s) {found}", stacklevel=3)
+    return frfs, bool(sets[0].get("binary", 0))
 
-    freq = None
-    table = {}
-    ordinates = set()
-    units_found = {}
-    for n, s in frfs:
-        where = f"{path}: record {n + 1} (dataset 58, response {s.get('rsp_node')}/{s.get('rsp_dir')}, " \
-                f"reference {s.get('ref_node')}/{s.get('ref_dir')})"
-        try:
-            data = np.asarray(s.get("data", []))
-            x = np.asarray(s.get("x", []), dtype=float)
-            n_pts = int(s.get("num_pts", data.size))
-        except (TypeError, ValueError):
-            raise FileFormatError(f"{where}: unreadable data or frequency values") from None
-        if data.size != n_pts or x.size != n_pts:
-            raise FileFormatError(f"{where}: holds {data.size} values but its header announces {n_pts} "
-                                  "(truncated record)")
-        if not np.iscomplexobj(data):
-            raise FileFormatError(f"{where}: ordinate data are real (ordinate data type "
-                                  f"{s.get('ord_data_type')}); an FRF needs complex data (type 5 or 6)")
-        if not (np.all(np.isfinite(data)) and np.all(np.isfinite(x))):
-            raise FileFormatError(f"{where}: contains NaN or inf values")
-        if np.any(np.diff(x) <= 0):
-            raise FileFormatError(f"{where}: frequency axis is not strictly increasing")
-        x = x * _abscissa_factor(s, where)
-        try:
-            factor, label_kind, found = frf_unit_factor(s.get("ordinate_axis_units_lab"),
-                                                        s.get("orddenom_axis_units_lab"), system)
-        except FileFormatError as exc:
-            raise FileFormatError(f"{where}: {exc}") from None
-        ord_kind = _UFF_ORDINATE_KIND.get(int(s.get("ordinate_spec_data_type", 0)))
-        if label_kind and ord_kind and label_kind != ord_kind:
-            raise FileFormatError(f"{where}: unit label {s.get('ordinate_axis_units_lab')!r} is a {label_kind} "
-                                  f"unit but the ordinate type says {ord_kind}; refusing to guess")
-        data = data * factor
-        if freq is None:
-            freq = x
-        elif x.size != freq.size or not np.allclose(x, freq, rtol=1e-6, atol=1e-9):
-            raise FileFormatError(f"{where}: frequency axis ({x.size} lines, {x[0]:g}-{x[-1]:g} Hz) differs "
-                                  f"from the first record's ({freq.size} lines, {freq[0]:g}-{freq[-1]:g} Hz); "
-                                  "all FRFs must share one axis")
-        try:
-            key = (dof_label(s["rsp_node"], s["rsp_dir"]), dof_label(s["ref_node"], s["ref_dir"]))
-        except FileFormatError as exc:
-            raise FileFormatError(f"{where}: {exc}") from None
-        if key in table:
-            if not np.allclose(table[key], data):
-                warnings.warn(f"{where}: duplicate of an earlier record with different values; "
-                              "kept the first", stacklevel=2)
-            else:
-                warnings.warn(f"{where}: duplicated record dropped", stacklevel=2)
-            continue
-        table[key] = data
-        ordinate = int(s.get("ordinate_spec_data_type", 0))
-        if ordinate not in _UFF_ORDINATE_KIND and label_kind:
-            ordinate = _UFF_KIND_ORDINATE[label_kind]
-        ordinates.add(ordinate)
-        units_found.setdefault(found, []).append(factor)
+
+@dataclass(frozen=True)
+class _Record:
+    """One FRF record of a universal file, in SI units."""
+
+    where: str              # the record, for messages
+    key: tuple              # (response DOF, reference DOF) labels
+    frequency_hz: np.ndarray
+    data: np.ndarray        # complex FRF values, SI
+    ordinate: int           # ordinate specific data type (from the unit label where the type is unset)
+    unit_label: str         # the file's unit text
+    factor: float           # file unit -> SI
+
+
+def _frf_record(path: Path, n: int, s: dict, system: UnitSystem, freq) -> _Record:
+    """Check one dataset 58 FRF record ``s`` (record ``n``, 0-based) and convert it to SI units and Hz.
+
+    ``freq`` (Hz) is the first record's frequency axis, which this record must share (None for the first).
+    """
+    where = f"{path}: record {n + 1} (dataset 58, response {s.get('rsp_node')}/{s.get('rsp_dir')}, " \
+            f"reference {s.get('ref_node')}/{s.get('ref_dir')})"
+    try:
+        data = np.asarray(s.get("data", []))
+        x = np.asarray(s.get("x", []), dtype=float)
+        n_pts = int(s.get("num_pts", data.size))
+    except (TypeError, ValueError):
+        raise FileFormatError(f"{where}: unreadable data or frequency values") from None
+    if data.size != n_pts or x.size != n_pts:
+        raise FileFormatError(f"{where}: holds {data.size} values but its header announces {n_pts} "
+                              "(truncated record)")
+    if not np.iscomplexobj(data):
+        raise FileFormatError(f"{where}: ordinate data are real (ordinate data type "
+                              f"{s.get('ord_data_type')}); an FRF needs complex data (type 5 or 6)")
+    if not (np.all(np.isfinite(data)) and np.all(np.isfinite(x))):
+        raise FileFormatError(f"{where}: contains NaN or inf values")
+    if np.any(np.diff(x) <= 0):
+        raise FileFormatError(f"{where}: frequency axis is not strictly increasing")
+    x = x * _abscissa_factor(s, where)
+    try:
+        factor, label_kind, found = frf_unit_factor(s.get("ordinate_axis_units_lab"),
+                                                    s.get("orddenom_axis_units_lab"), system)
+    except FileFormatError as exc:
+        raise FileFormatError(f"{where}: {exc}") from None
+    ordinate = int(s.get("ordinate_spec_data_type", 0))
+    ord_kind = _UFF_ORDINATE_KIND.get(ordinate)
+    if label_kind and ord_kind and label_kind != ord_kind:
+        raise FileFormatError(f"{where}: unit label {s.get('ordinate_axis_units_lab')!r} is a {label_kind} "
+                              f"unit but the ordinate type says {ord_kind}; refusing to guess")
+    if freq is not None and (x.size != freq.size or not np.allclose(x, freq, rtol=1e-6, atol=1e-9)):
+        raise FileFormatError(f"{where}: frequency axis ({x.size} lines, {x[0]:g}-{x[-1]:g} Hz) differs "
+                              f"from the first record's ({freq.size} lines, {freq[0]:g}-{freq[-1]:g} Hz); "
+                              "all FRFs must share one axis")
+    try:
+        key = (dof_label(s["rsp_node"], s["rsp_dir"]), dof_label(s["ref_node"], s["ref_dir"]))
+    except FileFormatError as exc:
+        raise FileFormatError(f"{where}: {exc}") from None
+    if ordinate not in _UFF_ORDINATE_KIND and label_kind:
+        ordinate = _UFF_KIND_ORDINATE[label_kind]
+    return _Record(where, key, x, data * factor, ordinate, found, factor)
+
+
+def _is_duplicate(table: dict, rec: _Record) -> bool:
+    """Whether an earlier record has the DOF pair of ``rec`` (warned of; the first is kept)."""
+    if rec.key not in table:
+        return False
+    if not np.allclose(table[rec.key], rec.data):
+        warnings.warn(f"{rec.where}: duplicate of an earlier record with different values; kept the first",
+                      stacklevel=3)
+    else:
+        warnings.warn(f"{rec.where}: duplicated record dropped", stacklevel=3)
+    return True
+
+
+def _file_kind(path: Path, ordinates: set, kind) -> str:
+    """The FRF kind of a file from its records' ordinate types, else ``kind``, else receptance (warned)."""
     known = ordinates & set(_UFF_ORDINATE_KIND)
     if len(known) > 1:
         raise FileFormatError(f"{path}: records mix ordinate types {sorted(known)} (8 displacement, "
                               "11 velocity, 12 acceleration); expected one FRF kind per file")
     if known:
-        file_kind = _UFF_ORDINATE_KIND[known.pop()]
-    elif kind is not None:
-        file_kind = kind
-    else:
-        file_kind = "receptance"
-        warnings.warn(f"{path}: ordinate type not set (found {sorted(ordinates)}); assuming receptance "
-                      "(displacement/force)", stacklevel=2)
+        return _UFF_ORDINATE_KIND[known.pop()]
+    if kind is not None:
+        return kind
+    warnings.warn(f"{path}: ordinate type not set (found {sorted(ordinates)}); assuming receptance "
+                  "(displacement/force)", stacklevel=3)
+    return "receptance"
+
+
+def _frf_matrix(path: Path, table: dict) -> tuple:
+    """Response DOFs, reference DOFs and the ``(n_resp, n_ref, n_lines)`` FRF of ``{(resp, ref): values}``;
+    every response needs a record for every reference."""
     resp = list(dict.fromkeys(k[0] for k in table))
     refs = list(dict.fromkeys(k[1] for k in table))
     missing = [(a, b) for a in resp for b in refs if (a, b) not in table]
@@ -190,18 +248,7 @@ def read_uff58(path, kind=None) -> MeasuredFRF:
         a, b = missing[0]
         raise FileFormatError(f"{path}: no FRF for response {a} and reference {b} ({len(missing)} missing "
                               f"of {len(resp)}x{len(refs)}); every response needs a record for every reference")
-    frf = np.array([[table[(a, b)] for b in refs] for a in resp])
-    meta = {"source": str(path), "format": "uff58", "binary": bool(sets[0].get("binary", 0)),
-            "id1": str(frfs[0][1].get("id1", "")).strip(),
-            "units": {"file": sorted(units_found), "si": DEFAULT_UNITS[file_kind],
-                      "factor_to_si": sorted({float(f) for v in units_found.values() for f in v}),
-                      "unit_system": system.description}}
-    if geometry is not None:
-        meta["geometry"] = {"source": geometry.source, "nodes_m": geometry.to_dict()}
-    try:
-        return MeasuredFRF(freq, frf, tuple(resp), tuple(refs), kind=file_kind, metadata=meta)
-    except ShapeError as exc:
-        raise FileFormatError(f"{path}: {exc}") from None
+    return resp, refs, np.array([[table[(a, b)] for b in refs] for a in resp])
 
 
 #: Dataset types read as context of the FRFs (header, units, coordinate systems, nodes, trace lines, elements).

@@ -61,3 +61,24 @@ def test_a_warning_of_a_successful_command_is_one_stderr_line(tmp_path, capsys):
     assert main(["update", "--modal", str(path), "--json"]) == 0
     err = capsys.readouterr().err
     assert err == f"beam-damage update: warning: {path}: skipped 1 record(s) of dataset type(s) 999\n"
+
+
+def test_an_unstable_model_with_real_eigenvalues_is_a_warning_not_an_error(tmp_path, capsys):
+    """Real-valued shapes inconsistent with the mass, the refusal lifted: the direct update has a real eigenvalue
+    > 0 and complex pairs with Re > 0; each is one warning (no error about real eigenvalues)."""
+    path = tmp_path / "real.json"
+    path.write_text(json.dumps({"eigenvalues": ["-0.21962+135.31j", "-2.0222+815.06j", "-6.7531+2174.9j",
+                                                "-16.773+3984j"],
+                                "eigenvectors": [[1.5, 2.5, 3.5, 4.5], [0.5, -1, 2, 3], [1, 1, -2, 0.3],
+                                                 [2, -3, 1, 1]]}))
+    assert main(["update", "--modal", str(path), "--method", "direct", "--max-eigenvalue-error", "1e9",
+                 "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    lam = np.linalg.eigvals(modal.state_matrix(np.array(out["M"]), np.array(out["C"]), np.array(out["K"])))
+    real = lam[lam.imag == 0].real
+    assert real.size and real.max() > 0
+    growing = [w for w in out["warnings"] if "grows without oscillating" in w]
+    assert len(growing) == np.sum(real >= 0) and f"{real.max():.6g} 1/s" in growing[-1]
+    oscillating = [w for w in out["warnings"] if "unstable: mode" in w]
+    assert len(oscillating) == np.sum((lam.imag > 0) & (lam.real >= 0))
+    assert any("real eigenvalue(s)" in w for w in out["warnings"])

@@ -8,6 +8,7 @@ pyuff = pytest.importorskip("pyuff")
 from physics.errors import FileFormatError, ShapeError
 from physics.io import (MeasuredFRF, dof_label, parse_dof, read_frf, read_frf_csv, read_frf_npz,
                         read_uff58, write_frf_csv, write_frf_npz, write_uff58)
+from systems import big_endian_58b
 
 
 def sdof_frf(f_hz, fn=30.0, zeta=0.02, m=0.1):
@@ -254,31 +255,29 @@ def test_physics_io_keeps_every_public_name_of_the_module_it_replaced():
     assert names <= set(pio.__all__) and all(hasattr(pio, n) for n in names)
 
 
-def _big_endian_58b(raw: bytes) -> bytes:
-    """A little-endian 58b file rewritten big-endian: byte-ordering field 2, every double byte-swapped."""
-    import re
-
-    out, pos = bytearray(), 0
-    for m in re.finditer(rb"(?m)^ {4}58b[^\n]*\n", raw):
-        end = m.start()
-        for _ in range(12):  # the '58b' line and the 11 header records
-            end = raw.index(b"\n", end) + 1
-        rec7 = raw[m.start():end].split(b"\n")[7]
-        n_values = int(rec7[10:20]) * (2 if int(rec7[0:10]) in (5, 6) else 1) * (2 - int(rec7[20:30]))
-        data = np.frombuffer(raw[end:end + 8 * n_values], "<f8")
-        line = raw[m.start():m.end()]
-        out += raw[pos:m.start()] + line[:7] + b"     2" + line[13:] + raw[m.end():end] + data.astype(">f8").tobytes()
-        pos = end + 8 * n_values
-    return bytes(out + raw[pos:])
-
-
 def test_uff58b_big_endian_reads_like_little_endian(tmp_path, frf):
     write_uff58(tmp_path / "le.uff", frf, binary=True)
-    (tmp_path / "be.uff").write_bytes(_big_endian_58b((tmp_path / "le.uff").read_bytes()))
+    (tmp_path / "be.uff").write_bytes(big_endian_58b((tmp_path / "le.uff").read_bytes()))
     assert b"    58b     2     2" in (tmp_path / "be.uff").read_bytes()
     le, be = read_uff58(tmp_path / "le.uff"), read_uff58(tmp_path / "be.uff")
     np.testing.assert_array_equal(be.frf, frf.frf)
     np.testing.assert_array_equal(be.frequency_hz, le.frequency_hz)
+
+
+def test_uff58b_big_endian_time_records_read_like_little_endian(tmp_path):
+    from physics.io import TIME, read
+
+    t = np.arange(512) / 256.0
+    sets = [pyuff.prepare_58(binary=1, func_type=1, rsp_node=node, rsp_dir=3, ref_node=0, ref_dir=0, data=sig, x=t,
+                             abscissa_spacing=1, abscissa_spec_data_type=17, ordinate_spec_data_type=code,
+                             orddenom_spec_data_type=0)
+            for node, sig, code in ((1, np.exp(-t), 13), (2, np.sin(2 * np.pi * 7 * t), 12))]
+    _write_pyuff(tmp_path / "le.uff", sets)
+    (tmp_path / "be.uff").write_bytes(big_endian_58b((tmp_path / "le.uff").read_bytes()))
+    assert (tmp_path / "be.uff").read_bytes().count(b"    58b     2     2") == 2
+    be = read(tmp_path / "be.uff", TIME)
+    np.testing.assert_array_equal(be.signals, [np.exp(-t), np.sin(2 * np.pi * 7 * t)])
+    assert be.quantities == ("force", "acceleration") and be.time_step_s == pytest.approx(1 / 256.0, rel=1e-5)
 
 
 @pytest.mark.parametrize("field, value, message", [(slice(7, 13), b"     3", "byte ordering field '3'"),
