@@ -140,7 +140,8 @@ def test_model_directory_round_trip_with_weights_only(tmp_path):
     X, y = _synthetic(400, rng)
     est = DamageClassifier(hidden=32, depth=1, epochs=2, n_bins=40, random_state=0).fit(X, y)
     beam = BeamSpec("beam5", 0.6095, ("2:y", "3:y", "4:y", "5:y"), "iirs")
-    cfg = {"format": MODEL_FORMAT, "route": "modal", "beam": beam.to_dict()}
+    cfg = {"format": MODEL_FORMAT, "route": "modal", "beam": beam.to_dict(), "classical_thresholds": {"DLAC": 1e-3},
+           "best_classical": "DLAC", "reference_width_m": 0.0055}
     save_model(tmp_path, cfg, {"modal": est})
     tensors = torch.load(tmp_path / "weights-modal.pt", weights_only=True)
     assert "norm.mean" in tensors
