@@ -4,7 +4,7 @@
 part only), holds out a validation part by specimen (``groups``), trains the
 network, and fits a temperature on the validation logits (temperature scaling,
 Guo et al. 2017) so that ``predict_proba`` is calibrated, and a factor on the size
-head's spread so that one standard deviation covers 68 % of the validation sizes.
+head's spread so that one standard deviation covers 68 % of the sizes of the validation pairs called damaged.
 
 Targets ``y`` have three columns: damaged (0/1), ``x / L`` of the slit (NaN if
 intact) and its hinge flexibility ``EI / (k_theta L)`` (:func:`learn.features.hinge_flexibility`, 0 if intact).
@@ -246,14 +246,15 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         self.temperature_, self.bias_, self.threshold_, self.size_std_scale_ = 1.0, 0.0, 0.5, 1.0
         if len(va):
             raw = self._raw(X[va])
-            dmg = d[va] > 0.5
+            self.temperature_, self.bias_ = fit_calibration(raw["detect"], d[va])
+            p = expit(raw["detect"] / self.temperature_ + self.bias_)
+            if (d[va] < 0.5).any():
+                self.threshold_ = float(max(0.5, np.quantile(p[d[va] < 0.5], 1 - self.false_alarm_target)))
+            # sizes are reported for pairs called damaged: the spread is scaled on those
+            dmg = (d[va] > 0.5) & (p >= self.threshold_)
             if dmg.sum() >= 10:
                 self.size_std_scale_ = fit_size_std_scale(np.exp(ls[va][dmg]), np.exp(raw["size_mean"][dmg]),
                                                           np.exp(raw["size_log_std"][dmg]))
-            self.temperature_, self.bias_ = fit_calibration(raw["detect"], d[va])
-            p_intact = expit(raw["detect"][d[va] < 0.5] / self.temperature_ + self.bias_)
-            if p_intact.size:
-                self.threshold_ = float(max(0.5, np.quantile(p_intact, 1 - self.false_alarm_target)))
         self.train_seconds_ = time.perf_counter() - t0
         self.n_train_, self.n_val_ = len(tr), len(va)
         return self

@@ -5,15 +5,18 @@ Heads
 ``detect``   one logit of "damaged" (calibrated afterwards by temperature scaling).
 ``locate``   logits over ``n_bins`` equal bins of ``x / L`` (a distribution along the beam).
 ``size``     mean and log standard deviation of ``ln`` hinge flexibility (:func:`learn.features.hinge_flexibility`)
-             (Gaussian; trained by its negative log-likelihood on damaged pairs only).
+             (the mean by least squares, the spread by the Gaussian negative log-likelihood of the mean's
+             residuals; damaged pairs only).
 """
 
 from __future__ import annotations
 
+import math
+
 import torch
 from torch import nn
 
-__all__ = ["DamageNet", "loss_terms"]
+__all__ = ["DamageNet", "LOG_STD_MAX", "LOG_STD_MIN", "SIZE_MEAN_WEIGHT", "loss_terms"]
 
 
 class DamageNet(nn.Module):
@@ -44,8 +47,18 @@ class DamageNet(nn.Module):
     def forward(self, x: torch.Tensor) -> dict:
         h = self.trunk(x)
         s = self.size(h)
+        spread = self.size(h.detach())[:, 1]   # the spread reads the features; it does not shape them
         return {"detect": self.detect(h)[:, 0], "locate": self.locate(h), "size_mean": s[:, 0],
-                "size_log_std": s[:, 1].clamp(-6.0, 1.0)}
+                "size_log_std": LOG_STD_MIN + (LOG_STD_MAX - LOG_STD_MIN) * torch.sigmoid(spread)}
+
+
+#: Range of the size head's log standard deviation. A smooth bound: a hard clamp has no gradient beyond it, and
+#: the large size errors of the first epochs would push the head there for good (a constant spread).
+LOG_STD_MIN, LOG_STD_MAX = -6.0, 1.0
+#: Weight of the size mean's squared ``ln`` error. The mean is fitted by least squares with this fixed weight and
+#: the spread by the Gaussian negative log-likelihood of the (detached) residuals, so that a small spread does not
+#: turn the size into the loss that shapes the shared features (``exp(-2)``: the weight at the spread ``e``).
+SIZE_MEAN_WEIGHT = math.exp(-2.0)
 
 
 def loss_terms(out: dict, damaged: torch.Tensor, loc_target: torch.Tensor, log_size: torch.Tensor) -> dict:
@@ -63,7 +76,8 @@ def loss_terms(out: dict, damaged: torch.Tensor, loc_target: torch.Tensor, log_s
         logp = torch.log_softmax(out["locate"][m], dim=1)
         loc = -(loc_target[m] * logp).sum(dim=1).mean()
         ls = out["size_log_std"][m]
-        size = (0.5 * ((log_size[m] - out["size_mean"][m]) / ls.exp()) ** 2 + ls).mean()
+        r = log_size[m] - out["size_mean"][m]
+        size = (SIZE_MEAN_WEIGHT * 0.5 * r ** 2 + 0.5 * (r.detach() / ls.exp()) ** 2 + ls).mean()
     else:
         loc = size = out["detect"].sum() * 0.0
     return {"detect": det, "locate": loc, "size": size}

@@ -159,8 +159,8 @@ def test_classify_places_a_renumbered_shuffled_mm_uff_by_its_geometry(tiny, caps
     assert pos["source"] == "uff geometry" and pos["dofs"] == ["104:+Y", "102:+Y", "101:+Y", "103:+Y"]
     assert pos["model_dofs"] == ["5:y", "3:y", "2:y", "4:y"]
     assert res["input_route"] == "measured" == ref["input_route"]
-    for key in ("probability_damaged", "location_x_m", "location_std_m", "hinge_flexibility"):
-        assert res["network"][key] == pytest.approx(ref["network"][key], rel=1e-6), key
+    for key in ("probability_damaged", "location_x_m", "location_std_m", "hinge_flexibility"):   # UFF: 6-7 digits
+        assert res["network"][key] == pytest.approx(ref["network"][key], rel=1e-5), key
     np.testing.assert_allclose(res["network"]["element_probabilities"], ref["network"]["element_probabilities"],
                                rtol=1e-6, atol=1e-9)
     # node 103 placed at 400 mm: off the model grid, refused in one line naming the file and the DOF
