@@ -813,7 +813,17 @@ class DiscrepancyResult:
     evidence_chi2_drop : dict
         Named effect -> {block: chi^2 drop / c_b}.
     noise_check : NoiseCheck
-        Of the final model.
+        Of the final model, against the noise given.
+    detection_limits : dict
+        Candidate not named -> :class:`DetectionLimit` (with the noise used for the selection).
+    noise_scale : float
+        Factor on the given noise stds used for the selection: 1, or with
+        ``estimate_noise`` ``sqrt(chi^2/dof)`` of round 1's best-fitting model
+        when below 1 (:func:`analyse`).
+    noise_scale_dof : int
+        Degrees of freedom of that estimate (0: not estimated).
+    noise_scale_from : str
+        The model the estimate comes from, or why there is none.
     """
 
     nominal: ModeResiduals
@@ -825,6 +835,10 @@ class DiscrepancyResult:
     evidence: dict = field(default_factory=dict)
     evidence_chi2_drop: dict = field(default_factory=dict)
     noise_check: NoiseCheck | None = None
+    detection_limits: dict = field(default_factory=dict)
+    noise_scale: float = 1.0
+    noise_scale_dof: int = 0
+    noise_scale_from: str = ""
 
 
 def _candidate_fit(beam, meas, noise, name, fixed, n_elements, pairs, fit_mass, n_starts, seed, named, start,
@@ -891,7 +905,7 @@ def _antiresonances_hz(beam: Beam, x_m: float, n_elements: int, n: int) -> np.nd
 
 def analyse(beam: Beam, meas: Measurement, noise: Noise | None = None, *, candidates=fx.CANDIDATES,
             max_effects: int = 2, n_elements: int = 40, n_starts: int = 4, seed: int = 0,
-            progress=None) -> DiscrepancyResult:
+            estimate_noise: bool = False, progress=None) -> DiscrepancyResult:
     """Name the effects ``beam`` lacks to explain ``meas`` (module docstring).
 
     Parameters
@@ -911,6 +925,14 @@ def analyse(beam: Beam, meas: Measurement, noise: Noise | None = None, *, candid
         the others uniform in the bounds).
     seed : int
         Seed of the random starts.
+    estimate_noise : bool
+        For a ``noise`` that is only assumed: scale it by ``s = sqrt(chi^2/dof)``
+        of round 1's best-fitting model (the lowest chi^2 among the globals-only
+        model and every one-effect candidate) when ``s < 1`` and that model has
+        at least :data:`NOISE_DOF_MIN` degrees of freedom (Mallows' Cp with
+        ``sigma^2`` from the richest model fitted), one factor for every block,
+        held for every round. A block whose residual exceeds the scaled noise
+        is inflated as usual (:func:`_round`).
     progress : callable, optional
         Called with a short text before each candidate fit.
 
@@ -919,85 +941,322 @@ def analyse(beam: Beam, meas: Measurement, noise: Noise | None = None, *, candid
     DiscrepancyResult
     """
     with threadpool_limits(1):   # small dense eigenproblems: one BLAS thread is fastest
-        return _analyse(beam, meas, noise or Noise(), candidates, max_effects, n_elements, n_starts, seed, progress)
+        return _analyse(beam, meas, noise or Noise(), candidates, max_effects, n_elements, n_starts, seed,
+                        estimate_noise, progress)
 
 
-def _round(base: Fit, fits, meas: Measurement) -> "Step":
+#: Fewest degrees of freedom of the fit whose chi^2/dof estimates the noise scale (``estimate_noise``): with
+#: 10 the estimate of the variance has a relative std of ``sqrt(2/10) = 0.45``.
+NOISE_DOF_MIN = 10
+
+
+def _round(base: Fit, fits, meas: Measurement, scale2: float = 1.0) -> "Step":
     """A round's variance inflation per data block, from its best-fitting model.
 
     ``c_b`` is that model's ``chi^2_b / dof_b`` where the chi^2 test rejects the
-    block's residual as larger than its noise (quasi-likelihood, Burnham &
-    Anderson 2002), else 1: a block the models cannot fit to its noise weighs
-    by its actual scatter.
+    block's residual as larger than its noise times ``sqrt(scale2)``
+    (quasi-likelihood, Burnham & Anderson 2002), else ``scale2``: a block the
+    models cannot fit to its noise weighs by its actual scatter.
     """
     best = min([base, *fits], key=lambda f: f.chi2)
-    chk = noise_check(best, meas)
-    c_hat = {k: (b["chi2_per_dof"] if b["verdict"] == "residual larger than the noise" else 1.0)
-             for k, b in chk.blocks.items()}
+    c_hat = {}
+    for k, dof in best.block_dof(meas).items():
+        _, verdict = _chi2_test(best.chi2_blocks[k] / scale2, dof)
+        c_hat[k] = best.chi2_blocks[k] / dof if verdict == "residual larger than the noise" else scale2
     return Step(base, (), "none", (), "", c_hat)
 
 
-def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, seed, progress):
+def _noise_scale(base: Fit, fits) -> tuple[float, int, str]:
+    """``(s^2, dof, source)``: the variance factor from round 1's best-fitting model (:func:`analyse`)."""
+    best = min([base, *fits], key=lambda f: f.chi2)
+    if best.dof < NOISE_DOF_MIN:
+        return 1.0, 0, (f"not estimated: the best-fitting model ({best.effect}) has {best.dof} degrees of freedom, "
+                        f"fewer than {NOISE_DOF_MIN}")
+    s2 = best.chi2 / best.dof
+    src = f"chi2/dof {s2:.3g} of round 1's best-fitting model ({best.effect}) on {best.dof} dof"
+    return (min(s2, 1.0), best.dof, src if s2 < 1 else src + "; not below 1, the noise given is kept")
+
+
+def _untestable(names: list, meas: Measurement) -> dict:
+    if "local_damping" in names and meas.frf is None and not has_complex_shapes(meas):
+        names.remove("local_damping")
+        return {"local_damping": "modal damping (one ratio per mode) fits any damping ratios; a dashpot "
+                                 "needs complex mode shapes or FRFs"}
+    return {}
+
+
+def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, seed, estimate_noise, progress):
     unknown = [c for c in candidates if c not in fx.CANDIDATES]
     if unknown:
         raise BeamDamageError(f"unknown candidate effect(s) {unknown}; expected some of {list(fx.CANDIDATES)}")
     fit_mass = meas.frf is not None
-    untestable = {}
     names = list(candidates)
-    if "local_damping" in names and meas.frf is None and not has_complex_shapes(meas):
-        names.remove("local_damping")
-        untestable["local_damping"] = ("modal damping (one ratio per mode) fits any damping ratios; a dashpot "
-                                       "needs complex mode shapes or FRFs")
+    untestable = _untestable(names, meas)
     nominal_pred = predict(beam, meas, n_elements)
     pairs = pair_modes(meas, nominal_pred)
-    nominal = mode_residuals(meas, nominal_pred, pairs)
     fixed = {k: dict(v) for k, v in beam.effects.items() if k != "proportional_damping"}
     say = progress or (lambda s: None)
     say("globals only")
     base, _, _ = _fit(beam, meas, noise, "none", fixed, n_elements, pairs, fit_mass=fit_mass, n_starts=n_starts,
                       seed=seed)
+    ctx = dict(beam=beam, meas=meas, noise=noise, fixed=fixed, n_elements=n_elements, pairs=pairs,
+               fit_mass=fit_mass, n_starts=n_starts, seed=seed, say=say)
     steps, named, positions, evidence, drops = [], [], {}, {}, {}
+    scale = (1.0, 0, "not estimated: the noise was given")
     while len(named) < max_effects:
         todo = [c for c in names if c not in named and c not in fixed]
         if not todo:
             break
-        fits, used = [], {}
-        start = base.beam.effects_dict()
-        for c in todo:
-            say(c if not named else f"{' + '.join(named)} + {c}")
-            f, pos = _candidate_fit(beam, meas, noise, c, fixed, n_elements, pairs, fit_mass, n_starts, seed,
-                                    tuple(named), start, positions)
-            fits.append(f)
-            used[c] = pos
-        probe = _round(base, fits, meas)
-        fits.sort(key=probe.score)
-        best = fits[0]
-        # an effect needs data left over to be tested: more observations than parameters and a held-out check
-        testable = best.n_obs > best.n_params and np.isfinite(best.lomo)
-        lomo_ok = testable and (not np.isfinite(base.lomo) or best.lomo <= base.lomo)
-        significant = probe.score(best) <= probe.score(base) - BIC_SIGNIFICANT and lomo_ok
-        if not significant:
-            steps.append(replace(probe, candidates=tuple(fits)))
+        fits, used = _fit_candidates(ctx, todo, named, base, positions)
+        if not steps and estimate_noise:
+            scale = _noise_scale(base, fits)
+        step = _decide(ctx, base, fits, scale[0])
+        steps.append(step)
+        if step.named == "none":
             break
-        # indistinguishable: also significant, and predicting the measured quantities within the noise of the
-        # winner's predictions (the data could not give strong evidence for one over the other)
-        ties = tuple(f.effect for f in fits[1:]
-                     if probe.score(f) <= probe.score(base) - BIC_SIGNIFICANT
-                     and probe.distance(f, best) < DISTINCT)
-        sep = ""
-        if ties:
-            other = next(f for f in fits if f.effect == ties[0])
-            sep = _separating_measurement(best, other, meas, noise, n_elements)
-        steps.append(replace(probe, candidates=tuple(fits), named=best.effect, indistinguishable_from=ties,
-                             separating_measurement=sep))
-        drops[best.effect] = {b: (base.chi2_blocks[b] - best.chi2_blocks[b]) / probe.c_hat.get(b, 1.0)
+        best = step.candidates[0]
+        drops[best.effect] = {b: (base.chi2_blocks[b] - best.chi2_blocks[b]) / step.c_hat.get(b, 1.0)
                               for b in best.chi2_blocks}
         evidence[best.effect] = max(drops[best.effect], key=drops[best.effect].get)
         named.append(best.effect)
         positions = used[best.effect]
         base = best
-    return DiscrepancyResult(nominal, tuple(steps), base, tuple(named), noise, untestable, evidence, drops,
-                             noise_check(base, meas))
+    c_last = steps[-1].c_hat if steps else {}
+    rest = [c for c in names if c not in named and c not in fixed]
+    say("detection limits")
+    limits = detection_limits(beam, meas, noise, base, c_last, rest, fixed=fixed, named=tuple(named),
+                              positions=positions, n_elements=n_elements, pairs=pairs)
+    return DiscrepancyResult(mode_residuals(meas, nominal_pred, pairs), tuple(steps), base, tuple(named), noise,
+                             untestable, evidence, drops, noise_check(base, meas), limits, math.sqrt(scale[0]),
+                             scale[1], scale[2])
+
+
+def _fit_candidates(ctx: dict, todo, named, base: Fit, positions) -> tuple[list, dict]:
+    """Every candidate of ``todo`` fitted on top of the ``named`` effects; ``(fits, positions used by each)``."""
+    fits, used = [], {}
+    start = base.beam.effects_dict()
+    for c in todo:
+        ctx["say"](c if not named else f"{' + '.join(named)} + {c}")
+        f, pos = _candidate_fit(ctx["beam"], ctx["meas"], ctx["noise"], c, ctx["fixed"], ctx["n_elements"],
+                                ctx["pairs"], ctx["fit_mass"], ctx["n_starts"], ctx["seed"], tuple(named), start,
+                                positions)
+        fits.append(f)
+        used[c] = pos
+    return fits, used
+
+
+def _decide(ctx: dict, base: Fit, fits: list, scale2: float) -> "Step":
+    """One round's decision: the best candidate named when significant, with its indistinguishable rivals."""
+    probe = _round(base, fits, ctx["meas"], scale2)
+    fits = sorted(fits, key=probe.score)
+    best = fits[0]
+    # an effect needs data left over to be tested: more observations than parameters and a held-out check
+    testable = best.n_obs > best.n_params and np.isfinite(best.lomo)
+    lomo_ok = testable and (not np.isfinite(base.lomo) or best.lomo <= base.lomo)
+    significant = probe.score(best) <= probe.score(base) - BIC_SIGNIFICANT and lomo_ok
+    if not significant:
+        return replace(probe, candidates=tuple(fits))
+    # indistinguishable: also significant, and predicting the measured quantities within the noise of the
+    # winner's predictions (the data could not give strong evidence for one over the other)
+    ties = tuple(f.effect for f in fits[1:]
+                 if probe.score(f) <= probe.score(base) - BIC_SIGNIFICANT and probe.distance(f, best) < DISTINCT)
+    sep = ""
+    if ties:
+        other = next(f for f in fits if f.effect == ties[0])
+        sep = _separating_measurement(best, other, ctx["meas"], ctx["noise"], ctx["n_elements"])
+    return replace(probe, candidates=tuple(fits), named=best.effect, indistinguishable_from=ties,
+                   separating_measurement=sep)
+
+
+# ---------------------------------------------------------------------------
+# Detection limits
+# ---------------------------------------------------------------------------
+
+#: effect -> (dimensionless size reported, its parameter, True when a *smaller* value is the stronger effect).
+SIZES = {
+    "shear_deformation": ("kGA_L2_over_EI", "kGA_N", True),
+    "rotary_inertia": ("rho_I_over_m_h2_12", "rho_I_kg_m", False),
+    "root_flexibility": ("k_L_over_EI", "k_theta_Nm_rad", True),
+    "added_mass": ("mass_fraction_of_m_L", "mass_kg", False),
+    "local_damping": ("added_damping_ratio", "c_Ns_m", False),
+}
+
+
+@dataclass(frozen=True)
+class DetectionLimit:
+    """How large an effect that was not named would have to be to be named with these data and this noise.
+
+    The limit is the size at which the effect's noise-free signature, after the
+    refit of every other parameter of the final model (globals, named effects)
+    has absorbed what it can (linearised), reaches the naming threshold
+    ``BIC_SIGNIFICANT + k ln n`` in chi^2 (each block divided by the last
+    round's ``c_b``): at that size the expected chi^2 drop equals the drop the
+    score requires, so an effect there is named about half the time and a
+    clearly larger one nearly always. The leave-one-mode-out check is not part of it.
+
+    Attributes
+    ----------
+    effect : str
+    quantity : str
+        The dimensionless size (:data:`SIZES`): ``k_L_over_EI``, ``kGA_L2_over_EI``,
+        ``mass_fraction_of_m_L``, ``rho_I_over_m_h2_12`` or ``added_damping_ratio``
+        (a dashpot's first-order added damping ratio ``c phi_r(x)^2 / (2 w_r)``,
+        largest over the measured modes, mass-normalised ``phi``).
+    named_below : bool
+        True when the effect is named for a size *below* the limit (a root
+        spring or shear rigidity: softer is stronger), else above.
+    limit : float or None
+        At the most sensitive measured position for position-bearing effects;
+        None when not detectable anywhere within the candidate's bounds.
+    limit_by_x_m : dict
+        Position (m) -> limit (None: not detectable there), for added mass and local damping.
+    threshold_chi2 : float
+        The chi^2 drop the score requires.
+    """
+
+    effect: str
+    quantity: str
+    named_below: bool
+    limit: float | None
+    limit_by_x_m: dict = field(default_factory=dict)
+    threshold_chi2: float = float("nan")
+
+    def below_limit(self, size: float, x_m: float | None = None) -> bool:
+        """True when an effect of ``size`` (at ``x_m``, nearest measured position) is too weak to be named."""
+        lim = self.limit
+        if x_m is not None and self.limit_by_x_m:
+            lim = self.limit_by_x_m[min(self.limit_by_x_m, key=lambda x: abs(x - x_m))]
+        if lim is None:
+            return True
+        return size > lim if self.named_below else size < lim
+
+    def text(self) -> str:
+        side = "<=" if self.named_below else ">="
+        if self.limit is None:
+            return f"{self.effect}: not detectable within its bounds with these data and this noise"
+        where = ""
+        if self.limit_by_x_m:
+            best = min((x for x, v in self.limit_by_x_m.items() if v is not None),
+                       key=lambda x: self.limit_by_x_m[x] * (-1 if self.named_below else 1))
+            others = ", ".join(f"{v:.3g} at {x:.3g} m" if v is not None else f"none at {x:.3g} m"
+                               for x, v in self.limit_by_x_m.items() if x != best)
+            where = f" at x = {best:.3g} m" + (f" ({others})" if others else "")
+        return f"{self.effect}: named only for {self.quantity} {side} {self.limit:.3g}{where}"
+
+    def to_dict(self) -> dict:
+        return {"quantity": self.quantity, "named_when": "below" if self.named_below else "above",
+                "limit": self.limit, "limit_by_x_m": {f"{x:.6g}": v for x, v in self.limit_by_x_m.items()},
+                "threshold_chi2": self.threshold_chi2, "text": self.text()}
+
+
+def _u_of(params: list, fit: Fit, beam: Beam) -> np.ndarray:
+    """Optimisation vector of ``params`` at the values of ``fit``."""
+    u = []
+    for p in params:
+        v = (fit.parameters["EI_Nm2"] / beam.EI_Nm2 if p.key == "EI_scale" else
+             fit.parameters["mass_per_length_kg_m"] / beam.mass_per_length_kg_m if p.key == "mass_scale" else
+             fit.parameters[p.key])
+        u.append(math.log(v) if p.log else v)
+    return np.asarray(u, dtype=float)
+
+
+def _size_factor(effect: str, nb: Beam, meas: Measurement, x_m: float | None, n_elements: int) -> float:
+    """Dimensionless size per unit of the effect's parameter on the calibrated beam ``nb`` (:data:`SIZES`)."""
+    L, EI, m = nb.length_m, nb.EI_Nm2, nb.mass_per_length_kg_m
+    if effect == "shear_deformation":
+        return L**2 / EI
+    if effect == "rotary_inertia":
+        return 12 / (m * nb.thickness_m**2)
+    if effect == "root_flexibility":
+        return L / EI
+    if effect == "added_mass":
+        return 1 / (m * L)
+    model = nb.fe_model(n_elements)
+    w2, phi = eigh(model.K, model.M, subset_by_index=[0, meas.n_modes - 1])
+    t = fx.interpolation_matrix(model, [x_m])[0]
+    return float(np.max((t @ phi) ** 2 / (2 * np.sqrt(w2))))
+
+
+def detection_limits(beam: Beam, meas: Measurement, noise: Noise, final: Fit, c_hat: dict, effects,
+                     *, fixed=None, named=(), positions=None, n_elements: int = 40, pairs=None) -> dict:
+    """:class:`DetectionLimit` of each of ``effects`` on top of the ``final`` model.
+
+    Parameters
+    ----------
+    beam : Beam
+        The nominal beam the fits started from.
+    final : Fit
+        The model with the named effects (its parameters are the linearisation point).
+    c_hat : dict
+        Variance inflation per data block of the last round (:class:`Step`).
+    effects : sequence of str
+        Candidates not named.
+    fixed, named, positions, n_elements, pairs
+        As in the search: the beam's own effects, the named effects, their
+        discrete positions, the fitted mesh and the mode pairing.
+    """
+    fixed = {k: dict(v) for k, v in (fixed or {}).items()}
+    positions = dict(positions or {})
+    pairs = pair_modes(meas, predict(beam, meas, n_elements)) if pairs is None else pairs
+    position_free = meas.shapes is not None or meas.frf is not None
+    fit_mass = meas.frf is not None
+    nuis = [_Param("EI_scale", 0.3, 3.0)] + ([_Param("mass_scale", 0.3, 3.0)] if fit_mass else [])
+    for e in named:
+        nuis += _effect_params(e, beam, meas, position_free and e not in positions)
+    null = _Problem(beam, meas, noise, fixed, nuis, positions, n_elements, pairs, fit_mass)
+    u_n = _u_of(nuis, final, beam)
+    blocks0 = null.blocks(null.predict(null.beam_at(u_n)[0]))
+    weight = np.concatenate([np.full(v.size, 1 / math.sqrt(c_hat.get(k, 1.0))) for k, v in blocks0.items()])
+    r0 = np.concatenate(list(blocks0.values()))
+    jac = np.empty((r0.size, u_n.size))
+    for i in range(u_n.size):
+        du = np.zeros_like(u_n)
+        du[i] = 1e-6
+        jac[:, i] = (null.residual(u_n + du) - null.residual(u_n - du)) / 2e-6
+    q, sv, _ = np.linalg.svd(jac * weight[:, None], full_matrices=False)
+    q = q[:, sv > 1e-9 * sv[0]] if sv.size and sv[0] > 0 else q[:, :0]
+    out = {}
+    for effect in effects:
+        p = _effect_params(effect, beam, meas, False)[0]
+        xs = list(beam.measured_x_m) if effect in ("added_mass", "local_damping") else [None]
+        k_new = 1 + (xs[0] is not None)    # a position, continuous or among the measured points, counts as one
+        thr = BIC_SIGNIFICANT + k_new * math.log(final.n_obs)
+        by_x = {}
+        for x in xs:
+            pos = positions if x is None else {**positions, effect: x}
+            prob = _Problem(beam, meas, noise, fixed, nuis + [p], pos, n_elements, pairs, fit_mass)
+
+            def lam(u_e):
+                d = (prob.residual(np.append(u_n, u_e)) - r0) * weight
+                return float(d @ d - np.sum((q.T @ d) ** 2))
+
+            by_x[x] = _crossing(lam, p, thr, weak_at_upper=SIZES[effect][2])
+        quantity, _, named_below = SIZES[effect]
+        nb = final.beam
+        lims = {x: (None if v is None else v * _size_factor(effect, nb, meas, x, n_elements)) for x, v in by_x.items()}
+        found = [v for v in lims.values() if v is not None]
+        best = (min(found) if not named_below else max(found)) if found else None
+        out[effect] = DetectionLimit(effect, quantity, named_below, best,
+                                     {x: v for x, v in lims.items()} if xs[0] is not None else {}, thr)
+    return out
+
+
+def _crossing(lam, p: _Param, thr: float, weak_at_upper: bool, n_scan: int = 13, n_bisect: int = 14):
+    """Weakest parameter value (physical units) in ``p``'s bounds where ``lam`` reaches ``thr``; None if none."""
+    a, b = p.bounds()
+    grid = np.linspace(b, a, n_scan) if weak_at_upper else np.linspace(a, b, n_scan)
+    prev = None
+    for u in grid:
+        if lam(u) >= thr:
+            if prev is None:
+                return p.to_phys(u)
+            lo, hi = prev, u        # lam(lo) < thr <= lam(hi)
+            for _ in range(n_bisect):
+                mid = 0.5 * (lo + hi)
+                lo, hi = (lo, mid) if lam(mid) >= thr else (mid, hi)
+            return p.to_phys(hi)
+        prev = u
+    return None
 
 
 def simulate_measurement(truth: Beam, n_modes: int = 4, noise: Noise | None = None, *, seed: int = 0,
