@@ -327,13 +327,14 @@ TRUTHS = {
 THICK = BEAM.with_effects({}, thickness_m=0.04, face_thickness_m=0.002)
 
 
-def run_case(effect, params, seed, shapes, beam=BEAM):
+def run_case(effect, params, seed, shapes, beam=BEAM, estimate_noise=False):
     rng = np.random.default_rng(seed)
     eff = {effect: params} if effect else {}
     truth = beam.with_effects({**eff, **DAMPING}, EI_Nm2=EI * (1 + 0.03 * rng.standard_normal()),
                               mass_per_length_kg_m=M * (1 + 0.02 * rng.standard_normal()))
     meas = dsc.simulate_measurement(truth, seed=seed, noise=NOISE, shapes=shapes)
-    return dsc.analyse(beam, meas, NOISE, max_effects=1, n_elements=24, n_starts=3, seed=seed)
+    return dsc.analyse(beam, meas, NOISE, max_effects=1, n_elements=24, n_starts=3, seed=seed,
+                       estimate_noise=estimate_noise)
 
 
 
@@ -341,12 +342,15 @@ SHORT = {"none": "none", "shear_deformation": "shear", "rotary_inertia": "rotary
          "added_mass": "mass", "local_damping": "l.damp"}
 
 
-def confusion(seeds: int = 3, kinds=("freq", "shapes"), truths=None, progress: bool = False) -> list[dict]:
+def confusion(seeds: int = 3, kinds=("freq", "shapes"), truths=None, progress: bool = False,
+              estimate_noise: bool = False) -> list[dict]:
     """Confusion rows of the hidden-effect suite: per data kind and truth, how often each effect is named.
 
     Each row: ``kind``, ``truth``, one count per ``none`` and candidate (``"2~"`` when named but reported
     indistinguishable), ``param_error`` (median relative error of the recovered parameter when named right),
     ``gap_before_pct``/``gap_after_pct`` (median max |frequency error|, recalibrated only -> named effect).
+    ``estimate_noise``: the simulated noise, given, is treated as only assumed and scaled to the data
+    (:func:`physics.discrepancy.analyse`).
     """
     from tqdm import tqdm
 
@@ -359,7 +363,8 @@ def confusion(seeds: int = 3, kinds=("freq", "shapes"), truths=None, progress: b
             ties = {c: 0 for c in cols}
             perr, gaps = [], []
             for seed in range(seeds):
-                res = run_case(effect, params, seed, kind == "shapes", THICK if name.startswith("thick") else BEAM)
+                res = run_case(effect, params, seed, kind == "shapes", THICK if name.startswith("thick") else BEAM,
+                               estimate_noise)
                 named = res.named_effects[0] if res.named_effects else "none"
                 counts[named] += 1
                 if res.steps and res.steps[0].indistinguishable_from:
