@@ -91,7 +91,8 @@ def _print(out, res: dsc.DiscrepancyResult, recal: dsc.ModeResiduals):
         for lim in res.detection_limits.values():
             print(f"   {lim.text()}")
     print(f"named effects: {', '.join(res.named_effects) or 'none'}"
-          + "".join(f"; {e}: evidence from {b}" for e, b in res.evidence.items()))
+          + "".join(f"; {e}: evidence from {b}" for e, b in res.evidence.items())
+          + ("; effects below the detection limits above are not excluded" if res.detection_limits else ""))
     chk = out["noise_check"]
     est = out["estimated_noise"]
     if est["scale"] < 1:
