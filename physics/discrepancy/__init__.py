@@ -57,7 +57,7 @@ limits; ``workflow``  :func:`analyse`.
 
 from physics.discrepancy.candidates import g_core_pa
 from physics.discrepancy.fitting import BLOCKS, Fit
-from physics.discrepancy.limits import SIZES, DetectionLimit, detection_limits
+from physics.discrepancy.limits import DETECTION_POWER, SIZES, DetectionLimit, detection_limits
 from physics.discrepancy.measurement import Measurement, Noise, frf_scatter_db, has_complex_shapes
 from physics.discrepancy.model import (ModeResiduals, Prediction, mode_residuals, pair_modes, predict, rayleigh_fit,
                                        simulate_measurement)
@@ -65,7 +65,7 @@ from physics.discrepancy.selection import (BIC_SIGNIFICANT, DISTINCT, NOISE_DOF_
                                            noise_check)
 from physics.discrepancy.workflow import DiscrepancyResult, analyse
 
-__all__ = ["BIC_SIGNIFICANT", "BLOCKS", "DISTINCT", "DetectionLimit", "DiscrepancyResult", "Fit", "Measurement",
-           "ModeResiduals", "NOISE_DOF_MIN", "Noise", "NoiseCheck", "P_NOISE", "Prediction", "SIZES", "Step", "analyse",
-           "detection_limits", "frf_scatter_db", "g_core_pa", "has_complex_shapes", "mode_residuals", "noise_check",
-           "pair_modes", "predict", "rayleigh_fit", "simulate_measurement"]
+__all__ = ["BIC_SIGNIFICANT", "BLOCKS", "DETECTION_POWER", "DISTINCT", "DetectionLimit", "DiscrepancyResult", "Fit",
+           "Measurement", "ModeResiduals", "NOISE_DOF_MIN", "Noise", "NoiseCheck", "P_NOISE", "Prediction", "SIZES",
+           "Step", "analyse", "detection_limits", "frf_scatter_db", "g_core_pa", "has_complex_shapes", "mode_residuals",
+           "noise_check", "pair_modes", "predict", "rayleigh_fit", "simulate_measurement"]

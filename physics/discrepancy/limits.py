@@ -16,7 +16,11 @@ from physics.discrepancy.measurement import Measurement, Noise
 from physics.discrepancy.model import pair_modes, predict
 from physics.discrepancy.selection import BIC_SIGNIFICANT
 
-__all__ = ["SIZES", "DetectionLimit", "detection_limits"]
+__all__ = ["DETECTION_POWER", "SIZES", "DetectionLimit", "detection_limits"]
+
+#: Probability that an effect at its detection limit is named (one less the false-negative rate, as for a limit
+#: of detection): below the limit an effect may be present and unnamed.
+DETECTION_POWER = 0.9
 
 
 #: effect -> (dimensionless size reported, its parameter, True when a *smaller* value is the stronger effect).
@@ -33,13 +37,14 @@ SIZES = {
 class DetectionLimit:
     """How large an effect that was not named would have to be to be named with these data and this noise.
 
-    The limit is the size at which the effect's noise-free signature, after the
-    refit of every other parameter of the final model (globals, named effects)
-    has absorbed what it can (linearised), reaches the naming threshold
-    ``BIC_SIGNIFICANT + k ln n`` in chi^2 (each block divided by the last
-    round's ``c_b``): at that size the expected chi^2 drop equals the drop the
-    score requires, so an effect there is named about half the time and a
-    clearly larger one nearly always. The leave-one-mode-out check is not part of it.
+    The effect's noise-free signature, after the refit of every other
+    parameter of the final model (globals, named effects) has absorbed what
+    it can (linearised), has a squared norm ``lambda`` in noise units (each
+    block divided by the last round's ``c_b``). Fitting its ``k`` parameters
+    then lowers chi^2 by a noncentral ``chi^2_k(lambda)``, and the effect is
+    named when the drop reaches ``BIC_SIGNIFICANT + k ln n``. The limit is the
+    size whose ``lambda`` makes that happen with probability
+    :data:`DETECTION_POWER`. The leave-one-mode-out check is not part of it.
 
     Attributes
     ----------
@@ -59,6 +64,8 @@ class DetectionLimit:
         Position (m) -> limit (None: not detectable there), for added mass and local damping.
     threshold_chi2 : float
         The chi^2 drop the score requires.
+    noncentrality : float
+        ``lambda`` at the limit.
     """
 
     effect: str
@@ -67,6 +74,7 @@ class DetectionLimit:
     limit: float | None
     limit_by_x_m: dict = field(default_factory=dict)
     threshold_chi2: float = float("nan")
+    noncentrality: float = float("nan")
 
     def below_limit(self, size: float, x_m: float | None = None) -> bool:
         """True when an effect of ``size`` (at ``x_m``, nearest measured position) is too weak to be named."""
@@ -93,7 +101,8 @@ class DetectionLimit:
     def to_dict(self) -> dict:
         return {"quantity": self.quantity, "named_when": "below" if self.named_below else "above",
                 "limit": self.limit, "limit_by_x_m": {f"{x:.6g}": v for x, v in self.limit_by_x_m.items()},
-                "threshold_chi2": self.threshold_chi2, "text": self.text()}
+                "threshold_chi2": self.threshold_chi2, "noncentrality": self.noncentrality,
+                "power": DETECTION_POWER, "text": self.text()}
 
 
 def detection_limits(beam: Beam, meas: Measurement, noise: Noise, final: Fit, c_hat: dict, effects,
@@ -140,6 +149,7 @@ def detection_limits(beam: Beam, meas: Measurement, noise: Noise, final: Fit, c_
         xs = list(beam.measured_x_m) if effect in ("added_mass", "local_damping") else [None]
         k_new = 1 + (xs[0] is not None)    # a position, continuous or among the measured points, counts as one
         thr = BIC_SIGNIFICANT + k_new * math.log(final.n_obs)
+        lam_lim = _noncentrality(thr, k_new)
         by_x = {}
         for x in xs:
             pos = positions if x is None else {**positions, effect: x}
@@ -149,14 +159,14 @@ def detection_limits(beam: Beam, meas: Measurement, noise: Noise, final: Fit, c_
                 d = (prob.residual(np.append(u_n, u_e)) - r0) * weight
                 return float(d @ d - np.sum((q.T @ d) ** 2))
 
-            by_x[x] = _crossing(lam, p, thr, weak_at_upper=SIZES[effect][2])
+            by_x[x] = _crossing(lam, p, lam_lim, weak_at_upper=SIZES[effect][2])
         quantity, _, named_below = SIZES[effect]
         nb = final.beam
         lims = {x: (None if v is None else v * _size_factor(effect, nb, meas, x, n_elements)) for x, v in by_x.items()}
         found = [v for v in lims.values() if v is not None]
         best = (min(found) if not named_below else max(found)) if found else None
-        out[effect] = DetectionLimit(effect, quantity, named_below, best,
-                                     {x: v for x, v in lims.items()} if xs[0] is not None else {}, thr)
+        out[effect] = DetectionLimit(effect, quantity, named_below, best, lims if xs[0] is not None else {}, thr,
+                                     lam_lim)
     return out
 
 
@@ -186,6 +196,14 @@ def _size_factor(effect: str, nb: Beam, meas: Measurement, x_m: float | None, n_
     w2, phi = eigh(model.K, model.M, subset_by_index=[0, meas.n_modes - 1])
     t = fx.interpolation_matrix(model, [x_m])[0]
     return float(np.max((t @ phi) ** 2 / (2 * np.sqrt(w2))))
+
+
+def _noncentrality(thr: float, k: int, power: float = DETECTION_POWER) -> float:
+    """``lambda`` with ``P(chi^2_k(lambda) >= thr) = power`` (noncentral chi^2 with ``k`` degrees of freedom)."""
+    from scipy.optimize import brentq
+    from scipy.stats import ncx2
+
+    return float(brentq(lambda lam: ncx2.sf(thr, k, lam) - power, 1e-9, 10 * thr + 100))
 
 
 def _crossing(lam, p: Param, thr: float, weak_at_upper: bool, n_scan: int = 13, n_bisect: int = 14):
