@@ -137,10 +137,11 @@ def detection_limits(beam: Beam, meas: Measurement, noise: Noise, final: Fit, c_
     weight = np.concatenate([np.full(v.size, 1 / math.sqrt(c_hat.get(k, 1.0))) for k, v in blocks0.items()])
     r0 = np.concatenate(list(blocks0.values()))
     jac = np.empty((r0.size, u_n.size))
-    for i in range(u_n.size):
-        du = np.zeros_like(u_n)
-        du[i] = 1e-6
-        jac[:, i] = (null.residual(u_n + du) - null.residual(u_n - du)) / 2e-6
+    for i, p in enumerate(nuis):
+        lo, hi = p.bounds()   # one-sided at a bound (a position fitted at the tip)
+        up, dn = u_n.copy(), u_n.copy()
+        up[i], dn[i] = min(u_n[i] + 1e-6, hi), max(u_n[i] - 1e-6, lo)
+        jac[:, i] = (null.residual(up) - null.residual(dn)) / (up[i] - dn[i])
     q, sv, _ = np.linalg.svd(jac * weight[:, None], full_matrices=False)
     q = q[:, sv > 1e-9 * sv[0]] if sv.size and sv[0] > 0 else q[:, :0]
     out = {}
