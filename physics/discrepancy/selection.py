@@ -155,8 +155,11 @@ def estimate_noise_scale(base: Fit, fits) -> tuple[float, int, str]:
         return 1.0, 0, (f"not estimated: the best-fitting model ({best.effect}) has {best.dof} degrees of freedom, "
                         f"fewer than {NOISE_DOF_MIN}")
     s2 = best.chi2 / best.dof
-    src = f"chi2/dof {s2:.3g} of round 1's best-fitting model ({best.effect}) on {best.dof} dof"
-    return (min(s2, 1.0), best.dof, src if s2 < 1 else src + "; not below 1, the noise given is kept")
+    p, verdict = _chi2_test(best.chi2, best.dof)
+    src = f"chi2/dof {s2:.3g} of round 1's best-fitting model ({best.effect}) on {best.dof} dof, p = {p:.3g}"
+    if verdict != "residual smaller than the noise":
+        return 1.0, best.dof, src + "; the noise given is not rejected as too large and is kept"
+    return s2, best.dof, src
 
 
 def decide(ctx: dict, base: Fit, fits: list, scale2: float) -> "Step":

@@ -99,11 +99,13 @@ def analyse(beam: Beam, meas: Measurement, noise: Noise | None = None, *, candid
     estimate_noise : bool
         For a ``noise`` that is only assumed: scale it by ``s = sqrt(chi^2/dof)``
         of round 1's best-fitting model (the lowest chi^2 among the globals-only
-        model and every one-effect candidate) when ``s < 1`` and that model has
-        at least :data:`NOISE_DOF_MIN` degrees of freedom (Mallows' Cp with
-        ``sigma^2`` from the richest model fitted), one factor for every block,
-        held for every round. A block whose residual exceeds the scaled noise
-        is inflated as usual (:class:`physics.discrepancy.selection.Step`).
+        model and every one-effect candidate; Mallows' Cp with ``sigma^2`` from
+        the richest model fitted) when that model has at least
+        :data:`NOISE_DOF_MIN` degrees of freedom and the chi^2 test rejects the
+        assumed noise as too large (level ``P_NOISE``, two-sided), as the
+        inflation of a block needs it rejected as too small. One factor for
+        every block, held for every round; a block whose residual exceeds the
+        scaled noise is inflated as usual.
     progress : callable, optional
         Called with a short text before each candidate fit.
 

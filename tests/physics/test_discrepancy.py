@@ -292,6 +292,11 @@ def test_noise_scale_estimated_from_modal_data_only_with_enough_dof():
     assert res.noise_scale_dof == 26 and 0.12 < res.noise_scale < 0.3
     assert res.named_effects == ("shear_deformation",)
     assert all(c == pytest.approx(res.noise_scale**2) for c in res.steps[0].c_hat.values())
+    # the noise given is the simulated one: the chi^2 test does not reject it, and it is kept
+    meas = dsc.simulate_measurement(truth, seed=3, noise=NOISE, shapes=True, damping=False)
+    res = dsc.analyse(BEAM, meas, NOISE, max_effects=1, n_elements=24, n_starts=2, estimate_noise=True,
+                      candidates=("shear_deformation",))
+    assert res.noise_scale == 1.0 and res.noise_scale_dof == 26 and "kept" in res.noise_scale_from
     freq = dsc.Measurement(meas.frequencies_hz)
     res = dsc.analyse(BEAM, freq, NOISE, max_effects=1, n_elements=24, n_starts=2, estimate_noise=True,
                       candidates=("shear_deformation",))
