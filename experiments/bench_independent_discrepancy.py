@@ -14,8 +14,19 @@ effects are counted per truth and data kind.
 
 Writes ``OUT/independent_confusion.{csv,json,md}`` (one row per case and kind in
 the CSV/JSON; the Markdown table counts, per truth, the first effect named,
-``~`` when reported indistinguishable from another, ``+X`` a second effect)
+``~`` when reported indistinguishable from another, ``+X`` a second effect,
+``(<lim)`` a hidden effect left unnamed below the reported detection limit)
 and prints the Markdown table with the chi^2/dof noise checks per kind.
+
+Scoring (:func:`verdict`): *right* when the truth is named first (or reported
+indistinguishable from the one named) and nothing else is; *right but
+undetectable* when nothing is named and the command's ``detection_limits``
+say an effect of the truth's size (at the truth's position, nearest measured
+point) is below what these data and this noise can name, or the effect is
+reported not testable on this data (a dashpot from frequencies and damping
+ratios); *wrong* otherwise, in particular an effect left unnamed although
+the reported limit says its size should have been named. The two right
+kinds are counted separately in the table.
 """
 
 from __future__ import annotations
@@ -33,7 +44,7 @@ import numpy as np
 
 from physics.io import atomic_write_text
 
-__all__ = ["main", "markdown", "run_cases", "run_cli"]
+__all__ = ["below_limit", "correct", "main", "markdown", "run_cases", "run_cli", "truth_size", "verdict"]
 
 KINDS = {"modal": "modal JSON", "frequencies": "frequencies + damping", "uff": "FRF (UFF)"}
 SHORT = {"none": "none", "shear_deformation": "shear", "rotary_inertia": "rotary", "root_flexibility": "root",
@@ -72,6 +83,7 @@ def run_cases(dirs, kinds, extra=(), progress=True) -> list[dict]:
                 t0 = time.perf_counter()
                 out = run_cli(d / case["files"][kind], extra)
                 row = {"dir": d.name, "case": case["case"], "truth": case["effect"], "truth_label": truth_label(case),
+                       "truth_size": truth_size(case), "truth_x_m": case["parameters"].get("x_m"),
                        "base_damping": case["damping"]["kind"], "kind": kind, "seconds": time.perf_counter() - t0}
                 if "error" in out:
                     row.update(named="error", effects=[], error=out["error"])
@@ -84,7 +96,8 @@ def run_cases(dirs, kinds, extra=(), progress=True) -> list[dict]:
                                not_tested=sorted(out["not_tested"]), gap_before_pct=out["gap_before"][
                                    "max_abs_frequency_error_pct"],
                                gap_after_pct=out["gap_after"]["max_abs_frequency_error_pct"],
-                               parameters=out["parameters"])
+                               parameters=out["parameters"], detection_limits=out["detection_limits"],
+                               estimated_noise_scale=out["estimated_noise"]["scale"])
                 rows.append(row)
                 if progress:
                     ties = ",".join(row.get("indistinguishable_from") or [])
@@ -102,20 +115,48 @@ def cell(rows) -> str:
             name += "~" + "/".join(SHORT[e] for e in r["indistinguishable_from"])
         if len(r["effects"]) > 1:
             name += " +" + "+".join(SHORT[e] for e in r["effects"][1:])
+        if r["truth"] != "none" and verdict(r) == "undetectable":
+            name += " (<lim)"
         c[name] += 1
     return ", ".join(f"{k} {v}" for k, v in c.most_common())
 
 
-def correct(r) -> bool:
-    """The truth named first, or reported indistinguishable from the one named, and no further effect.
+def truth_size(case: dict) -> float:
+    """The hidden effect's size in the dimensionless quantity of the command's ``detection_limits``."""
+    # k L/EI, kGA L^2/EI, mass / (m L) and the dashpot's added damping ratio are the cases' own labels
+    return float(case["value"])
 
-    A dashpot that the data cannot test (no complex shapes or FRFs) is right as ``none``.
-    """
-    want = r["truth"]
-    if want == "local_damping" and "local_damping" in r.get("not_tested", []):
-        want = "none"
-    hit = r["named"] == want or want in r.get("indistinguishable_from", [])
-    return hit and len(r["effects"]) <= (0 if want == "none" else 1)
+
+def below_limit(r) -> bool:
+    """The unnamed truth is below the detection limit the command reported for it (or not testable)."""
+    if r["truth"] in r.get("not_tested", []):
+        return True
+    lim = (r.get("detection_limits") or {}).get(r["truth"])
+    if lim is None:
+        return False
+    by_x = {float(x): v for x, v in lim["limit_by_x_m"].items()}
+    v = lim["limit"]
+    if by_x and r["truth_x_m"] is not None:
+        v = by_x[min(by_x, key=lambda x: abs(x - r["truth_x_m"]))]
+    if v is None:
+        return True
+    return r["truth_size"] > v if lim["named_when"] == "below" else r["truth_size"] < v
+
+
+def verdict(r) -> str:
+    """``"right"``, ``"undetectable"`` (right: nothing named, the truth below the reported limit) or ``"wrong"``."""
+    if r["named"] == "error":
+        return "wrong"
+    if r["truth"] == "none":
+        return "right" if not r["effects"] else "wrong"
+    if (r["named"] == r["truth"] or r["truth"] in r.get("indistinguishable_from", [])) and len(r["effects"]) == 1:
+        return "right"
+    return "undetectable" if not r["effects"] and below_limit(r) else "wrong"
+
+
+def correct(r) -> bool:
+    """Right or right-but-undetectable (:func:`verdict`)."""
+    return verdict(r) != "wrong"
 
 
 def markdown(rows, kinds) -> str:
@@ -126,17 +167,26 @@ def markdown(rows, kinds) -> str:
     for lab in labels:
         lines.append(f"| {lab} | " + " | ".join(cell([r for r in rows if r["truth_label"] == lab and r["kind"] == k])
                                                for k in kinds) + " |")
-    tot = []
-    for k in kinds:
-        rk = [r for r in rows if r["kind"] == k]
-        tot.append(f"{sum(map(correct, rk))}/{len(rk)}")
-    lines.append("| **right (or tied with the truth), nothing else** | " + " | ".join(tot) + " |")
+    for what, title in (("right", "**right (or tied with the truth), nothing else**"),
+                        ("undetectable", "right but undetectable (none named, truth below the reported limit)"),
+                        ("wrong", "wrong")):
+        tot = []
+        for k in kinds:
+            rk = [r for r in rows if r["kind"] == k]
+            tot.append(f"{sum(verdict(r) == what for r in rk)}/{len(rk)}")
+        lines.append(f"| {title} | " + " | ".join(tot) + " |")
     chi = []
     for k in kinds:
         rk = [r for r in rows if r["kind"] == k and r["named"] != "error" and np.isfinite(r["chi2_per_dof"])]
         q = np.percentile([r["chi2_per_dof"] for r in rk], [10, 50, 90]) if rk else [np.nan] * 3
         chi.append(f"{q[1]:.2g} ({q[0]:.2g}-{q[2]:.2g}); consistent {sum(r['noise_consistent'] for r in rk)}/{len(rk)}")
     lines.append("| chi^2/dof after, median (10-90 %) | " + " | ".join(chi) + " |")
+    sc = []
+    for k in kinds:
+        v = [r["estimated_noise_scale"] for r in rows if r["kind"] == k and "estimated_noise_scale" in r]
+        q = np.percentile(v, [10, 50, 90]) if v else [np.nan] * 3
+        sc.append(f"{q[1]:.2g} ({q[0]:.2g}-{q[2]:.2g})")
+    lines.append("| noise scale used for the selection (x the assumed), median (10-90 %) | " + " | ".join(sc) + " |")
     return "\n".join(lines) + "\n"
 
 
@@ -152,6 +202,8 @@ def main(argv=None):
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
     rows = run_cases(args.dirs, args.kinds, tuple(args.cli_args.split()))
+    for r in rows:
+        r["verdict"] = verdict(r)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     md = markdown(rows, args.kinds)
@@ -159,8 +211,8 @@ def main(argv=None):
     atomic_write_text(out / "independent_confusion.json", json.dumps(rows, indent=1, default=float) + "\n")
     buf = io.StringIO()
     keys = ["dir", "case", "truth", "truth_label", "base_damping", "kind", "named", "effects", "indistinguishable_from",
-            "evidence", "chi2_per_dof", "noise_consistent", "noise_verdict", "gap_before_pct", "gap_after_pct",
-            "seconds"]
+            "evidence", "chi2_per_dof", "noise_consistent", "noise_verdict", "estimated_noise_scale", "verdict",
+            "truth_size", "detection_limits", "gap_before_pct", "gap_after_pct", "seconds"]
     w = csv.DictWriter(buf, fieldnames=keys, extrasaction="ignore", lineterminator="\n")
     w.writeheader()
     for r in rows:

@@ -21,8 +21,12 @@ __all__ = ["EXAMPLE", "add_parser", "run"]
 
 
 def run(args) -> dict:
-    noise = dsc.Noise(args.frequency_noise, shape=args.shape_noise, frf_db=args.frf_noise_db)
-    for name, v in (("--frequency-noise", args.frequency_noise), ("--shape-noise", args.shape_noise),
+    # a noise not given is assumed (the defaults), and then scaled to the data (analyse's estimate_noise)
+    estimate = args.frequency_noise is None and args.shape_noise is None
+    d = dsc.Noise()
+    noise = dsc.Noise(d.frequency if args.frequency_noise is None else args.frequency_noise,
+                      shape=d.shape if args.shape_noise is None else args.shape_noise, frf_db=args.frf_noise_db)
+    for name, v in (("--frequency-noise", noise.frequency), ("--shape-noise", noise.shape),
                     ("--frf-noise-db", args.frf_noise_db)):
         if not (np.isfinite(v) and v > 0):
             raise ConfigError(f"{name} must be a positive number, got {v}")
@@ -36,7 +40,7 @@ def run(args) -> dict:
             print(f"  fitting {s} ...", flush=True)
     out = run_discrepancy(args.beam, args.measured, args.out, noise=noise, max_effects=args.max_effects,
                           n_elements=args.elements, seed=args.seed, candidates=tuple(args.candidates),
-                          progress=progress)
+                          estimate_noise=estimate, progress=progress)
     res, recal = out.pop("_result")
     if not args.json:
         _print(out, res, recal)
@@ -82,13 +86,26 @@ def _print(out, res: dsc.DiscrepancyResult, recal: dsc.ModeResiduals):
                   f"separate them by: {st.separating_measurement}")
     for k, why in res.untestable.items():
         print(f" not tested: {k} ({why})")
+    if res.detection_limits:
+        print(" detection limits of the effects not named (with the noise used for the selection):")
+        for lim in res.detection_limits.values():
+            print(f"   {lim.text()}")
     print(f"named effects: {', '.join(res.named_effects) or 'none'}"
-          + "".join(f"; {e}: evidence from {b}" for e, b in res.evidence.items()))
+          + "".join(f"; {e}: evidence from {b}" for e, b in res.evidence.items())
+          + ("; effects below the detection limits above are not excluded" if res.detection_limits else ""))
     chk = out["noise_check"]
+    est = out["estimated_noise"]
+    if est["scale"] < 1:
+        print(f"noise estimated from the data: x{est['scale']:.3g} of the assumed "
+              f"(frequency {100 * np.max(np.atleast_1d(est['frequency'])):.3g} %"
+              + (f", shapes {est['shape']:.3g}" if "shape" in est else "")
+              + f"; {est['from']}), used for the selection")
+    elif est["from"]:
+        print(f"noise estimate: {est['from']}")
     print(f"noise check of the final model: chi2 {chk['chi2']:.3g} on {chk['dof']} dof, chi2/dof "
           f"{chk['chi2_per_dof']:.3g}, p = {chk['p_value']:.3g}: {chk['verdict']}; by block: "
           + ", ".join(f"{k} {b['chi2_per_dof']:.3g}" for k, b in chk["blocks"].items()))
-    if chk["verdict"] == "residual smaller than the noise":
+    if chk["verdict"] == "residual smaller than the noise" and est["scale"] == 1:
         print("  the data are more precise than assumed: smaller effects become testable with the actual noise "
               "(--frequency-noise, --shape-noise)")
     for k, v in out["parameters"].items():
@@ -119,10 +136,12 @@ def add_parser(sub):
                         "damping_ratios / eigenvalues and eigenvectors + dofs; FRFs: identified by LSCF/LSFD first")
     p.add_argument("--out", metavar="DIR", help="write beam.toml (calibrated), residuals.csv/json, "
                                                 "candidates.csv/json, summary.json and figures")
-    p.add_argument("--frequency-noise", type=float, default=dsc.Noise().frequency,
-                   help="relative std of measured frequencies (default 0.003; FRF input: the identification's)")
-    p.add_argument("--shape-noise", type=float, default=dsc.Noise().shape,
-                   help="std of shape entries relative to the largest (default 0.02)")
+    p.add_argument("--frequency-noise", type=float, default=None,
+                   help="relative std of measured frequencies (default: 0.003 assumed, scaled down to the data's "
+                        "residual when neither noise option is given; FRF input: the identification's)")
+    p.add_argument("--shape-noise", type=float, default=None,
+                   help="std of shape entries relative to the largest (default: 0.02 assumed, scaled as "
+                        "--frequency-noise)")
     p.add_argument("--frf-noise-db", type=float, default=dsc.Noise().frf_db,
                    help="FRF magnitude std in dB (default: estimated from the FRF's line-to-line scatter)")
     p.add_argument("--max-effects", type=int, default=2, help="most effects to name (default 2)")
@@ -133,5 +152,6 @@ def add_parser(sub):
     p.add_argument("--json", action="store_true",
                    help="print one JSON object: named_effect, effects, evidence, parameters, parameter_std, "
                         "indistinguishable_from, separating_measurement, gap_before, gap_after, assumed_noise, "
-                        "chi2_per_dof, noise_consistent, noise_check, not_tested, candidates, beam_file")
+                        "estimated_noise, chi2_per_dof, noise_consistent, noise_check, not_tested, "
+                        "detection_limits, candidates, beam_file")
     p.set_defaults(func=run, flags={"n_elements": "--elements"})

@@ -23,8 +23,8 @@ from physics.effects import CANDIDATES
 from physics.errors import ConfigError, FileFormatError
 from physics.io import FRF, MODAL, atomic_write_bytes, format_of, modal_data_from_dict, number_list, read_frf, read_json
 
-__all__ = ["EXAMPLE", "EXAMPLE_SHAPES", "TRUTHS", "assumed_noise", "beam5_section", "confusion", "load_measurement",
-           "run", "run_case", "run_discrepancy"]
+__all__ = ["EXAMPLE", "EXAMPLE_SHAPES", "TRUTHS", "assumed_noise", "beam5_section", "confusion", "estimated_noise",
+           "load_measurement", "run", "run_case", "run_discrepancy"]
 
 EXAMPLE = Path(__file__).parents[1] / "physics" / "data" / "thesis" / "beam5_table_4_3.json"
 
@@ -198,9 +198,27 @@ def assumed_noise(meas: dsc.Measurement, noise: dsc.Noise, identified: bool, giv
     return out
 
 
+def estimated_noise(meas: dsc.Measurement, res: dsc.DiscrepancyResult) -> dict:
+    """The noise used for the selection when it was scaled to the data, and the final model's check against it."""
+    s = res.noise_scale
+    out = {"scale": s, "dof": res.noise_scale_dof, "from": res.noise_scale_from}
+    f = np.asarray(res.noise.frequency, dtype=float) * s
+    out["frequency"] = f.tolist() if f.ndim else float(f)
+    if meas.shapes is not None:
+        out["shape"] = res.noise.shape * s
+    fin = res.final
+    dof = fin.dof
+    out["chi2_per_dof"] = fin.chi2 / s**2 / dof if dof > 0 else float("nan")
+    return out
+
+
 def run_discrepancy(beam_spec, measured, out_dir=None, *, noise=None, max_effects=2, n_elements=40, seed=0,
-                    candidates=CANDIDATES, progress=None) -> dict:
-    """The command without printing: returns the JSON result (issue 9 keys) plus ``"_result"`` objects."""
+                    candidates=CANDIDATES, estimate_noise=False, progress=None) -> dict:
+    """The command without printing: returns the JSON result (issue 9 keys) plus ``"_result"`` objects.
+
+    ``estimate_noise`` (modal JSON only; FRF input takes its noise from the identification and the FRF's
+    scatter) scales an assumed noise to the data (:func:`physics.discrepancy.analyse`).
+    """
     beam = beam_spec if isinstance(beam_spec, Beam) else load_beam(beam_spec)
     meas, rel_std, dof_map = load_measurement(measured, beam)
     noise = noise or dsc.Noise()
@@ -216,7 +234,7 @@ def run_discrepancy(beam_spec, measured, out_dir=None, *, noise=None, max_effect
         if out_dir.exists() and not out_dir.is_dir():
             raise ConfigError(f"--out {out_dir}: exists and is not a directory")
     res = dsc.analyse(beam, meas, noise, candidates=candidates, max_effects=max_effects, n_elements=n_elements,
-                      seed=seed, progress=progress)
+                      seed=seed, estimate_noise=estimate_noise and meas.frf is None, progress=progress)
     first = res.steps[0] if res.steps else None
     cand = _candidate_rows(res)
     check = res.noise_check.to_dict()
@@ -235,6 +253,8 @@ def run_discrepancy(beam_spec, measured, out_dir=None, *, noise=None, max_effect
         "noise_consistent": check["noise_consistent"],
         "noise_check": check,
         "not_tested": res.untestable,
+        "detection_limits": {k: v.to_dict() for k, v in res.detection_limits.items()},
+        "estimated_noise": estimated_noise(meas, res),
         "candidates": [{k: c[k] for k in ("effect", "score", "max_abs_frequency_error_pct", "parameters")}
                        for c in cand],
         "beam_file": None,
@@ -307,13 +327,14 @@ TRUTHS = {
 THICK = BEAM.with_effects({}, thickness_m=0.04, face_thickness_m=0.002)
 
 
-def run_case(effect, params, seed, shapes, beam=BEAM):
+def run_case(effect, params, seed, shapes, beam=BEAM, estimate_noise=False):
     rng = np.random.default_rng(seed)
     eff = {effect: params} if effect else {}
     truth = beam.with_effects({**eff, **DAMPING}, EI_Nm2=EI * (1 + 0.03 * rng.standard_normal()),
                               mass_per_length_kg_m=M * (1 + 0.02 * rng.standard_normal()))
     meas = dsc.simulate_measurement(truth, seed=seed, noise=NOISE, shapes=shapes)
-    return dsc.analyse(beam, meas, NOISE, max_effects=1, n_elements=24, n_starts=3, seed=seed)
+    return dsc.analyse(beam, meas, NOISE, max_effects=1, n_elements=24, n_starts=3, seed=seed,
+                       estimate_noise=estimate_noise)
 
 
 
@@ -321,12 +342,15 @@ SHORT = {"none": "none", "shear_deformation": "shear", "rotary_inertia": "rotary
          "added_mass": "mass", "local_damping": "l.damp"}
 
 
-def confusion(seeds: int = 3, kinds=("freq", "shapes"), truths=None, progress: bool = False) -> list[dict]:
+def confusion(seeds: int = 3, kinds=("freq", "shapes"), truths=None, progress: bool = False,
+              estimate_noise: bool = False) -> list[dict]:
     """Confusion rows of the hidden-effect suite: per data kind and truth, how often each effect is named.
 
     Each row: ``kind``, ``truth``, one count per ``none`` and candidate (``"2~"`` when named but reported
     indistinguishable), ``param_error`` (median relative error of the recovered parameter when named right),
     ``gap_before_pct``/``gap_after_pct`` (median max |frequency error|, recalibrated only -> named effect).
+    ``estimate_noise``: the simulated noise, given, is treated as only assumed and scaled to the data
+    (:func:`physics.discrepancy.analyse`).
     """
     from tqdm import tqdm
 
@@ -339,7 +363,8 @@ def confusion(seeds: int = 3, kinds=("freq", "shapes"), truths=None, progress: b
             ties = {c: 0 for c in cols}
             perr, gaps = [], []
             for seed in range(seeds):
-                res = run_case(effect, params, seed, kind == "shapes", THICK if name.startswith("thick") else BEAM)
+                res = run_case(effect, params, seed, kind == "shapes", THICK if name.startswith("thick") else BEAM,
+                               estimate_noise)
                 named = res.named_effects[0] if res.named_effects else "none"
                 counts[named] += 1
                 if res.steps and res.steps[0].indistinguishable_from:

@@ -181,8 +181,8 @@ def test_cli_on_beam5_table_4_3(tmp_path, capsys):
     out = json.loads(capsys.readouterr().out)
     assert set(out) == {"named_effect", "effects", "evidence", "parameters", "parameter_std",
                         "indistinguishable_from", "separating_measurement", "gap_before", "gap_after",
-                        "assumed_noise", "chi2_per_dof", "noise_consistent", "noise_check", "not_tested",
-                        "candidates", "beam_file", "dof_positions"}
+                        "assumed_noise", "estimated_noise", "chi2_per_dof", "noise_consistent", "noise_check",
+                        "not_tested", "detection_limits", "candidates", "beam_file", "dof_positions"}
     assert out["assumed_noise"]["frequency"] == 0.003 and "default" in out["assumed_noise"]["frequency_source"]
     assert out["evidence"] == {"shear_deformation": "frequencies"}
     # modal damping fits Table 4.3's four ratios: no damping effect is named from them
@@ -231,3 +231,73 @@ def test_cli_on_frfs_identifies_then_names_shear(tmp_path, capsys):
     assert out["parameters"]["mass_per_length_kg_m"] == pytest.approx(M, rel=0.01)
     assert out["gap_after"]["frf_error_db"] < 1.0 < out["gap_before"]["frf_error_db"]
     assert (tmp_path / "o" / "frf_overlay.png").stat().st_size > 0
+
+
+def _exact(effects, shapes=False):
+    """Noise-free data of the beam5 preset with ``effects`` on the fitted mesh (24 elements)."""
+    return dsc.simulate_measurement(BEAM.with_effects(effects), seed=0, noise=dsc.Noise(0.0, 0.0, 0.0, 0.0),
+                                    n_elements=24, shapes=shapes, damping=False)
+
+
+def test_detection_limit_of_a_root_spring_matches_the_nonlinear_refit():
+    res = dsc.analyse(BEAM, _exact({}), NOISE, max_effects=1, n_elements=24, n_starts=2,
+                      candidates=("root_flexibility",))
+    assert res.named_effects == ()
+    lim = res.detection_limits["root_flexibility"]
+    assert lim.quantity == "k_L_over_EI" and lim.named_below and 5 < lim.limit < 500
+    # 4 frequencies, one new parameter: the BIC threshold 6 + ln 4, reached with probability 0.9 by the chi^2 drop
+    assert lim.threshold_chi2 == pytest.approx(6 + np.log(4))
+    from scipy.stats import ncx2
+
+    assert ncx2.sf(lim.threshold_chi2, 1, lim.noncentrality) == pytest.approx(dsc.DETECTION_POWER)
+    # at the limit, the globals-only refit (nonlinear) leaves lambda as chi^2; twice as soft is named
+    k_lim = lim.limit * EI / L
+    at = dsc.analyse(BEAM, _exact({"root_flexibility": {"k_theta_Nm_rad": k_lim}}), NOISE, max_effects=1,
+                     n_elements=24, n_starts=2, candidates=("root_flexibility",))
+    assert at.steps[0].base.chi2 == pytest.approx(lim.noncentrality, rel=0.15)
+    soft = dsc.analyse(BEAM, _exact({"root_flexibility": {"k_theta_Nm_rad": k_lim / 2}}), NOISE, max_effects=1,
+                       n_elements=24, candidates=("root_flexibility",))
+    stiff = dsc.analyse(BEAM, _exact({"root_flexibility": {"k_theta_Nm_rad": 2 * k_lim}}), NOISE, max_effects=1,
+                        n_elements=24, n_starts=2, candidates=("root_flexibility",))
+    assert soft.named_effects == ("root_flexibility",) and stiff.named_effects == ()
+    assert stiff.detection_limits["root_flexibility"].below_limit(2 * lim.limit)
+
+
+def test_detection_limit_of_a_dashpot_from_complex_shapes_per_position():
+    res = dsc.analyse(BEAM, _exact({}, shapes=True), NOISE, max_effects=1, n_elements=24, n_starts=2,
+                      candidates=("local_damping",))
+    lim = res.detection_limits["local_damping"]
+    assert lim.quantity == "added_damping_ratio" and not lim.named_below
+    found = {x: v for x, v in lim.limit_by_x_m.items() if v is not None}
+    assert set(lim.limit_by_x_m) == set(BEAM.measured_x_m) and lim.limit == min(found.values())
+    x_best = min(found, key=found.get)
+    # the imaginary parts are first order in c: half the noise, half the limit
+    half = dsc.Noise(NOISE.frequency / 2, shape=NOISE.shape / 2)
+    res2 = dsc.analyse(BEAM, _exact({}, shapes=True), half, max_effects=1, n_elements=24, n_starts=2,
+                       candidates=("local_damping",))
+    half_found = res2.detection_limits["local_damping"].limit_by_x_m
+    assert x_best in half_found and all(half_found[x] == pytest.approx(v / 2, rel=0.05) for x, v in found.items())
+    assert lim.below_limit(0.9 * lim.limit, x_m=x_best) and not lim.below_limit(1.1 * lim.limit, x_m=x_best)
+    # where no dashpot within the candidate's bounds is detectable, every size is below the limit
+    assert all(lim.below_limit(1.0, x_m=x) for x, v in lim.limit_by_x_m.items() if v is None)
+
+
+def test_noise_scale_estimated_from_modal_data_only_with_enough_dof():
+    small = dsc.Noise(NOISE.frequency / 5, NOISE.damping, NOISE.shape / 5)
+    truth = _truth({"shear_deformation": {"kGA_N": 2.5e4}}, 3)
+    meas = dsc.simulate_measurement(truth, seed=3, noise=small, shapes=True, damping=False)
+    res = dsc.analyse(BEAM, meas, NOISE, max_effects=1, n_elements=24, n_starts=2, estimate_noise=True,
+                      candidates=("shear_deformation", "root_flexibility"))
+    # chi^2/dof of the best round-1 fit on 26 dof: the std 5x below the assumed one, within sampling
+    assert res.noise_scale_dof == 26 and 0.12 < res.noise_scale < 0.3
+    assert res.named_effects == ("shear_deformation",)
+    assert all(c == pytest.approx(res.noise_scale**2) for c in res.steps[0].c_hat.values())
+    # the noise given is the simulated one: the chi^2 test does not reject it, and it is kept
+    meas = dsc.simulate_measurement(truth, seed=3, noise=NOISE, shapes=True, damping=False)
+    res = dsc.analyse(BEAM, meas, NOISE, max_effects=1, n_elements=24, n_starts=2, estimate_noise=True,
+                      candidates=("shear_deformation",))
+    assert res.noise_scale == 1.0 and res.noise_scale_dof == 26 and "kept" in res.noise_scale_from
+    freq = dsc.Measurement(meas.frequencies_hz)
+    res = dsc.analyse(BEAM, freq, NOISE, max_effects=1, n_elements=24, n_starts=2, estimate_noise=True,
+                      candidates=("shear_deformation",))
+    assert res.noise_scale == 1.0 and res.noise_scale_dof == 0 and "fewer than" in res.noise_scale_from

@@ -1,0 +1,63 @@
+"""Free parameters of each candidate effect, bounded on the beam's own scales.
+
+Core shear modulus
+------------------
+For a sandwich of two faces of thickness ``t_f`` on a core of thickness
+``c = h - 2 t_f``, the shear rigidity is ``kGA = G_c b d^2 / c`` with
+``d = c + t_f`` the distance between face centroids (Allen, *Analysis and
+Design of Structural Sandwich Panels*, 1969, ch. 2; Zenkert, *An Introduction
+to Sandwich Construction*, 1995), so ``G_c = kGA c / (b d^2)``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from physics.beam import Beam
+from physics.discrepancy.measurement import Measurement
+
+__all__ = ["Param", "effect_params", "g_core_pa"]
+
+
+@dataclass(frozen=True)
+class Param:
+    key: str            # "EI_scale", "mass_scale", "<effect>.<parameter>"
+    lower: float
+    upper: float
+    log: bool = True
+
+    def to_phys(self, u):
+        return math.exp(u) if self.log else u
+
+    def bounds(self):
+        return (math.log(self.lower), math.log(self.upper)) if self.log else (self.lower, self.upper)
+
+
+def effect_params(effect: str, beam: Beam, meas: Measurement, position_free: bool) -> list[Param]:
+    """Free parameters of ``effect`` with physical bounds scaled on the beam."""
+    L, EI, m = beam.length_m, beam.EI_Nm2, beam.mass_per_length_kg_m
+    rho_i = m * beam.thickness_m**2 / 12
+    w1 = 2 * np.pi * meas.frequencies_hz[0]
+    table = {
+        "shear_deformation": [Param("shear_deformation.kGA_N", 1.0 * EI / L**2, 1e6 * EI / L**2)],
+        # between a tenth of the uniform section's and all the mass in the faces (3 m h^2 / 12)
+        "rotary_inertia": [Param("rotary_inertia.rho_I_kg_m", 0.1 * rho_i, 3.0 * rho_i)],
+        "root_flexibility": [Param("root_flexibility.k_theta_Nm_rad", 0.1 * EI / L, 1e5 * EI / L)],
+        "added_mass": [Param("added_mass.mass_kg", 1e-4 * m * L, 2.0 * m * L)],
+        "local_damping": [Param("local_damping.c_Ns_m", 1e-7 * m * L * w1, 0.3 * m * L * w1)],
+    }
+    out = list(table[effect])
+    if effect in ("added_mass", "local_damping") and position_free:
+        out.append(Param(f"{effect}.x_m", 0.02 * L, L, log=False))
+    return out
+
+
+def g_core_pa(kGA_N: float, beam: Beam) -> float:
+    """Equivalent core shear modulus ``G_c = kGA c / (b d^2)`` (module docstring; thin-face limit ``kGA/(b h)``)."""
+    tf = beam.face_thickness_m or 0.0
+    c = beam.thickness_m - 2 * tf
+    d = c + tf
+    return kGA_N * c / (beam.width_m * d**2)

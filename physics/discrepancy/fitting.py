@@ -1,0 +1,340 @@
+"""Fits of one candidate model: whitened residuals by data block, bounded multi-start least squares, LOMO.
+
+Parameter uncertainties come from the Jacobian of the whitened residuals at
+the optimum, ``cov = s^2 (J^T J)^-1`` with ``s^2 = max(1, chi^2 / dof)``
+(the given noise, inflated when the fit is worse than the noise).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from scipy.linalg import eigh
+from scipy.optimize import OptimizeResult, least_squares
+
+from physics import effects as fx
+from physics.beam import Beam
+from physics.discrepancy.candidates import Param, effect_params, g_core_pa
+from physics.discrepancy.measurement import Measurement, has_complex_shapes, magnitude_db
+from physics.discrepancy.model import ModeResiduals, Prediction, aligned, mode_residuals, predict, rayleigh_fit
+
+__all__ = ["BLOCKS", "Fit", "Problem", "as_fit", "candidate_fit", "fit_model", "lomo_error", "with_rayleigh"]
+
+
+@dataclass(frozen=True)
+class Fit:
+    """One fitted model: the effects it contains and how well it explains the data.
+
+    Attributes
+    ----------
+    effect : str
+        The effect tested in this fit (``"none"`` for the globals-only model).
+    effects : tuple of str
+        Every effect in the model (previously named ones, then ``effect``).
+    beam : Beam
+        The calibrated beam (global parameters and effects written in; with
+        damping ratios, Rayleigh damping least-squares fitted to them, because
+        a beam file has no per-mode damping).
+    parameters, parameter_std : dict
+        Fitted values and standard deviations, keys ``"EI_Nm2"``,
+        ``"mass_per_length_kg_m"``, ``"<effect>.<parameter>"``, derived
+        ``"shear_deformation.G_core_pa"``. A std of 0 marks a value held fixed
+        (the mass without FRFs), NaN a position chosen among the measured points.
+    chi2 : float
+        Sum of squared whitened residuals.
+    n_obs, n_params : int
+    bic : float
+        ``chi2 + n_params ln n_obs``.
+    lomo : float
+        Leave-one-mode-out prediction error in noise units (:func:`lomo_error`), NaN if not computed.
+    residuals : ModeResiduals
+    dof : int
+        Degrees of freedom of ``chi2``: ``n_obs - n_params`` less the scale
+        of each compared shape (2 per mode for complex shapes, 1 for real).
+    chi2_blocks : dict
+        ``chi2`` split by data block (:data:`BLOCKS`).
+    whitened : dict
+        Data block -> its whitened residual vector (FRF: raveled ``(n_resp, n_ref, n_lines)``).
+    """
+
+    effect: str
+    effects: tuple
+    beam: Beam
+    parameters: dict
+    parameter_std: dict
+    chi2: float
+    n_obs: int
+    n_params: int
+    bic: float
+    lomo: float
+    residuals: ModeResiduals
+    dof: int = 0
+    chi2_blocks: dict = field(default_factory=dict)
+    whitened: dict = field(default_factory=dict)
+
+    def block_dof(self, meas: "Measurement") -> dict:
+        """Degrees of freedom of each block's chi^2: observations less what the fit takes from them.
+
+        Frequencies lose the model's parameters, shapes one scale per mode
+        (real part; the imaginary part a second), the FRF band levels the mass scale.
+        """
+        n = {k: v.size for k, v in self.whitened.items()}
+        n_modes = meas.n_modes
+        out = {"frequencies": n["frequencies"] - self.n_params + (1 if "FRF" in n else 0)}
+        if "mode shapes" in n:
+            out["mode shapes"] = n["mode shapes"] - n_modes
+        if "complex shapes" in n:
+            out["complex shapes"] = n["complex shapes"] - n_modes
+        if "FRF" in n:
+            out["FRF"] = n["FRF"] - 1
+        return out
+
+
+#: Data blocks of the residual: what the evidence for an effect can come from.
+BLOCKS = ("frequencies", "mode shapes", "complex shapes", "FRF")
+
+
+def _band_mean_db(meas: Measurement, err_db: np.ndarray) -> np.ndarray:
+    """Mean dB error over each measured mode's band (between the geometric means of neighbouring frequencies).
+
+    Returns ``(n_resp, n_ref, n_modes)``; a band without lines counts 0. The FRF's levels
+    (its absolute scale, hence the mass) enter the fit as these band means, one
+    observation per band: the lines of a band share the model's and the
+    identification's errors, and the modes' frequencies, damping and shapes come from
+    the identified modal data.
+    """
+    fm = meas.frequencies_hz
+    edges = np.concatenate([[0.0], np.sqrt(fm[:-1] * fm[1:]), [np.inf]])
+    band = np.searchsorted(edges, meas.frf_frequency_hz, side="right") - 1       # (n_lines,)
+    onehot = (band[:, None] == np.arange(fm.size)[None, :]).astype(float)         # (n_lines, n_modes)
+    count = np.maximum(onehot.sum(axis=0), 1.0)
+    return (err_db @ onehot) / count
+
+
+class Problem:
+    """Residual function of one candidate model.
+
+    With damping ratios the damping is modal: every paired model mode gets its
+    measured ratio, the others the Rayleigh least-squares extension
+    (:func:`rayleigh_fit`); a dashpot only adds its non-proportional coupling.
+    """
+
+    def __init__(self, beam, meas, noise, fixed_effects, params, position, n_elements, pairs, fit_mass):
+        self.beam, self.meas, self.noise = beam, meas, noise
+        self.fixed = {k: dict(v) for k, v in fixed_effects.items()}
+        self.position = position          # {effect: x_m} for discrete positions
+        self.params = params
+        self.n_elements, self.pairs = n_elements, pairs
+        self.fit_mass = fit_mass
+        self.mask = np.ones(meas.n_modes, dtype=bool)
+        self.modal_zeta = None
+        if meas.damping_ratios is not None:
+            a, b = rayleigh_fit(2 * np.pi * meas.frequencies_hz, meas.damping_ratios)
+            z_meas, p = meas.damping_ratios, np.asarray(pairs)
+
+            def modal_zeta(w):
+                z = np.maximum(a / (2 * np.maximum(w, 1e-12)) + b * w / 2, np.min(z_meas))
+                z[p] = z_meas
+                return z
+
+            self.modal_zeta = modal_zeta
+
+    def beam_at(self, u) -> tuple[Beam, float, float]:
+        eff = {k: dict(v) for k, v in self.fixed.items()}
+        ei_s = ms = 1.0
+        for p, ui in zip(self.params, u):
+            v = p.to_phys(ui)
+            if p.key == "EI_scale":
+                ei_s = v
+            elif p.key == "mass_scale":
+                ms = v
+            else:
+                name, key = p.key.split(".")
+                eff.setdefault(name, {})[key] = v
+        for name, x in self.position.items():
+            if name in eff:
+                eff[name]["x_m"] = x
+        nb = replace(self.beam, effects=eff, EI_Nm2=self.beam.EI_Nm2 * ei_s,
+                     mass_per_length_kg_m=self.beam.mass_per_length_kg_m * ms)
+        return nb, ei_s, ms
+
+    def predict(self, nb: Beam) -> Prediction:
+        return predict(nb, self.meas, self.n_elements, modal_zeta=self.modal_zeta)
+
+    def residual(self, u):
+        return np.concatenate(list(self.blocks(self.predict(self.beam_at(u)[0])).values()))
+
+    def blocks(self, pred) -> dict:
+        """Whitened residuals by data block (:data:`BLOCKS`; only the blocks measured)."""
+        meas, noise, p = self.meas, self.noise, self.pairs
+        sf = np.broadcast_to(np.asarray(noise.frequency, dtype=float), (meas.n_modes,))
+        out = {"frequencies": ((pred.frequencies_hz[p] / meas.frequencies_hz - 1) / sf)[self.mask]}
+        if meas.shapes is not None:
+            diff = [aligned(meas.shapes[:, j], pred.shapes[:, pj]) / noise.shape
+                    for j, pj in enumerate(p) if self.mask[j]]
+            out["mode shapes"] = np.concatenate([d.real for d in diff])
+            if has_complex_shapes(meas):
+                out["complex shapes"] = np.concatenate([d.imag for d in diff])
+        if meas.frf is not None:
+            err_db = _band_mean_db(meas, magnitude_db(pred.frf) - magnitude_db(meas.frf))
+            out["FRF"] = (err_db / noise.frf_db)[..., self.mask].ravel()
+        return out
+
+
+def fit_model(beam, meas, noise, effect, fixed_effects, n_elements, pairs, *, fit_mass, n_starts=4, seed=0,
+         position=None, with_lomo=True, named=(), start=None) -> tuple[Fit, Problem, np.ndarray]:
+    """Bounded multi-start least squares of the globals, the ``named`` effects and ``effect``.
+
+    ``effect = "none"`` fits the globals (and the named effects) only. Named
+    effects start from their values in ``start`` (``{effect: {param: value}}``);
+    the new effect starts weak, then at random points within its bounds.
+    ``position`` fixes ``x_m`` of position-bearing effects (``{effect: x_m}``).
+    """
+    position_free = meas.shapes is not None or meas.frf is not None
+    position = dict(position or {})
+    start = start or {}
+    params = [Param("EI_scale", 0.3, 3.0)]
+    if fit_mass:
+        params.append(Param("mass_scale", 0.3, 3.0))
+    for e in named:
+        params += effect_params(e, beam, meas, position_free and e not in position)
+    if effect != "none":
+        params += effect_params(effect, beam, meas, position_free and effect not in position)
+    prob = Problem(beam, meas, noise, fixed_effects, params, position, n_elements, pairs, fit_mass)
+    lo = [p.bounds()[0] for p in params]
+    hi = [p.bounds()[1] for p in params]
+    rng = np.random.default_rng(seed)
+    best = None
+    for s in range(n_starts):
+        u0 = []
+        for p in params:
+            a, b = p.bounds()
+            name, _, key = p.key.partition(".")
+            if p.key in ("EI_scale", "mass_scale"):
+                u0.append(0.0)
+            elif key in start.get(name, {}) and (name in named or s == 0):
+                v = start[name][key]
+                u0.append(math.log(v) if p.log else v)
+            elif s == 0:
+                u0.append(a + 0.75 * (b - a) if p.log else 0.5 * (a + b))  # weak effect first
+            else:
+                u0.append(rng.uniform(a, b))
+        res = least_squares(prob.residual, np.clip(u0, lo, hi), bounds=(lo, hi), x_scale=1.0,
+                            diff_step=1e-6, max_nfev=400)
+        if best is None or res.cost < best.cost:
+            best = res
+        if effect == "none" and not named:
+            break
+    fit = as_fit(prob, best, effect, meas)
+    lomo = lomo_error(prob, best.x) if with_lomo else float("nan")
+    return replace(fit, lomo=lomo), prob, best.x
+
+
+def lomo_error(prob: Problem, x0) -> float:
+    """Leave-one-mode-out prediction error: RMS over modes of the held-out mode's whitened residuals.
+
+    Each measured mode (its frequency, its shape and its FRF band levels, as
+    measured) is predicted by a fit on the other modes; 1 means "predicted to
+    within the noise".
+    """
+    meas = prob.meas
+    if meas.n_modes - 1 < len(prob.params) and meas.shapes is None and meas.frf is None:
+        return float("nan")
+    lo, hi = zip(*[p.bounds() for p in prob.params])
+    z2 = []
+    for j in range(meas.n_modes):
+        prob.mask = np.arange(meas.n_modes) != j
+        res = least_squares(prob.residual, x0, bounds=(lo, hi), diff_step=1e-6, max_nfev=200)
+        prob.mask = np.arange(meas.n_modes) == j
+        held = np.concatenate(list(prob.blocks(prob.predict(prob.beam_at(res.x)[0])).values()))
+        z2.append(np.mean(held**2))
+    prob.mask = np.ones(meas.n_modes, dtype=bool)
+    return float(np.sqrt(np.mean(z2)))
+
+
+def with_rayleigh(nb: Beam, meas: Measurement) -> Beam:
+    """``nb`` with Rayleigh damping fitted to the measured ratios less a dashpot's share (beam file only)."""
+    w = 2 * np.pi * meas.frequencies_hz
+    z = np.array(meas.damping_ratios, dtype=float)
+    if "local_damping" in nb.effects:
+        # a dashpot c at x adds c phi_r(x)^2 / (2 w_r) to mode r (mass-normalised phi)
+        model = nb.fe_model(24)
+        w2, phi = eigh(model.K, model.M, subset_by_index=[0, meas.n_modes - 1])
+        d = nb.effects["local_damping"]
+        t = fx.interpolation_matrix(model, [d.get("x_m", nb.length_m)])[0]
+        z = np.maximum(z - d["c_Ns_m"] * (t @ phi) ** 2 / (2 * np.sqrt(w2)), 0.05 * z)
+    a, b = rayleigh_fit(w, z)
+    return nb.with_effects({**nb.effects_dict(), "proportional_damping": {"alpha_1_s": a, "beta_s": b}})
+
+
+def _shape_dof(meas: Measurement, mask) -> int:
+    if meas.shapes is None:
+        return 0
+    return (2 if has_complex_shapes(meas) else 1) * int(np.sum(mask))
+
+
+def as_fit(prob: Problem, res: OptimizeResult, effect: str, meas: Measurement) -> Fit:
+    nb, ei_s, ms = prob.beam_at(res.x)
+    r = res.fun
+    chi2 = float(r @ r)
+    n_obs, n_par = r.size, res.x.size
+    dof = n_obs - n_par - _shape_dof(meas, prob.mask)
+    s2 = max(1.0, chi2 / dof) if dof > 0 else 1.0
+    J = res.jac
+    try:
+        cov = s2 * np.linalg.pinv(J.T @ J)
+        std_u = np.sqrt(np.clip(np.diag(cov), 0, None))
+    except np.linalg.LinAlgError:
+        std_u = np.full(n_par, np.nan)
+    params = {"EI_Nm2": nb.EI_Nm2, "mass_per_length_kg_m": nb.mass_per_length_kg_m}
+    std = {"EI_Nm2": nb.EI_Nm2 * std_u[0],
+           "mass_per_length_kg_m": nb.mass_per_length_kg_m * std_u[1] if prob.fit_mass else 0.0}
+    for i, p in enumerate(prob.params):
+        if p.key in ("EI_scale", "mass_scale"):
+            continue
+        v = p.to_phys(res.x[i])
+        params[p.key] = v
+        std[p.key] = v * std_u[i] if p.log else std_u[i]
+    for name, x in prob.position.items():
+        params[f"{name}.x_m"] = x
+        std[f"{name}.x_m"] = float("nan")   # chosen among the measured points, not fitted
+    if "shear_deformation.kGA_N" in params:
+        params["shear_deformation.G_core_pa"] = g_core_pa(params["shear_deformation.kGA_N"], nb)
+        std["shear_deformation.G_core_pa"] = g_core_pa(std["shear_deformation.kGA_N"], nb)
+    pred = prob.predict(nb)
+    white = prob.blocks(pred)
+    blocks = {b: float(v @ v) for b, v in white.items()}
+    if meas.damping_ratios is not None:
+        nb = with_rayleigh(nb, meas)
+    return Fit(effect, tuple(nb.effects), nb, params, std, chi2, n_obs, n_par, chi2 + n_par * math.log(n_obs),
+               float("nan"), mode_residuals(meas, pred, prob.pairs), dof, blocks, white)
+
+
+def candidate_fit(beam, meas, noise, name, fixed, n_elements, pairs, fit_mass, n_starts, seed, named, start,
+                   positions):
+    """Fit one candidate on top of the named effects; returns ``(fit, positions used)``."""
+    position_free = meas.shapes is not None or meas.frf is not None
+    kw = dict(fit_mass=fit_mass, seed=seed, named=named, start=start)
+    if name in ("added_mass", "local_damping"):
+        # scan the measured points for the position; with shapes or FRFs then refine it continuously
+        options = []
+        for x in beam.measured_x_m:
+            pos = {**positions, name: x}
+            f, prob, x_opt = fit_model(beam, meas, noise, name, fixed, n_elements, pairs,
+                                       n_starts=max(2, n_starts // 2), position=pos, with_lomo=False, **kw)
+            options.append((f.bic, f, prob, x_opt, pos))
+        _, f, prob, x_opt, pos = min(options, key=lambda t: t[0])
+        if position_free:
+            refined, _, _ = fit_model(beam, meas, noise, name, fixed, n_elements, pairs, n_starts=1,
+                                      position=positions, fit_mass=fit_mass, seed=seed, named=named,
+                                      start={**start, name: f.beam.effects_dict()[name]})
+            if refined.chi2 <= f.chi2:
+                return refined, positions
+            # the local search from the best measured point went astray: keep that point
+        # the discrete position counts as a parameter
+        return replace(f, n_params=f.n_params + 1, bic=f.bic + math.log(f.n_obs), dof=f.dof - 1,
+                       lomo=lomo_error(prob, x_opt)), pos
+    f, _, _ = fit_model(beam, meas, noise, name, fixed, n_elements, pairs, n_starts=n_starts, position=positions, **kw)
+    return f, positions
