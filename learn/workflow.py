@@ -17,6 +17,8 @@ inputs that are modal data only (the thesis's measured data).
 
 from __future__ import annotations
 
+import functools
+
 import json
 import time
 from dataclasses import dataclass, field
@@ -553,10 +555,64 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     (``verdict_from``); ``network`` and ``classical`` hold both answers, ``classical_methods`` every method's.
     """
     names = list(names) if names else ["baseline"] + [f"measured {k + 1}" for k in range(len(currents))]
-    beam = model.beam
-    L = beam.length_m
     warnings: list[str] = []
-    sens = sensitivity_of(beam, model.config.get("root_spring_relative"), model.config.get("truth_beam"))
+    sens = sensitivity_of(model.beam, model.config.get("root_spring_relative"), model.config.get("truth_beam"))
+    route, X, lam, vecs, identified = _network_inputs(model, baseline, currents, names, sens, warnings)
+    est = model.networks[route]
+    out, d = network_output(est, X, sens)
+    dist, pct = ood_percentile(est, X)
+    mode_reasons = [[] for _ in currents]
+    classical, best = [], None
+    if lam is not None:
+        mode_reasons = _mode_checks(lam, vecs, nominal_ratio_range(sens))
+        classical, _ = run_classical(lam, vecs, sens, model.config["classical_thresholds"])
+        best = next((o for o in classical if o.name == model.config["best_classical"]), classical[0])
+    depth = functools.partial(equivalent_depth, preset=model.config.get("truth_beam") or model.beam.name,
+                              width_m=model.config["reference_width_m"])
+    L = model.beam.length_m
+    results = []
+    for i in range(len(currents)):
+        net = _network_answer(d, i, out, L, depth(float(d.hinge_flexibility[i])))
+        cl = None if best is None else _classical_answer(best, i, L)
+        reasons = list(mode_reasons[i])
+        if pct[i] > IN_DISTRIBUTION_PERCENTILE:
+            reasons.insert(0, f"Mahalanobis distance {dist[i]:.3g} from the training data, beyond "
+                              f"{pct[i]:.2f}% of training pairs")
+        inside = not reasons
+        w = list(warnings)
+        if inside or cl is None:
+            verdict = dict(net)
+            if not inside:
+                w.append("the pair lies outside the training data (" + "; ".join(reasons) + ") and no classical "
+                         "answer is available: treat the network's verdict with caution")
+        else:
+            w.append("the pair lies outside the training data (" + "; ".join(reasons) + "): the verdict is the "
+                     f"classical method's ({best.name}); the network's answer is shown beside it")
+            verdict = _classical_verdict(cl, sens, depth)
+        f = np.abs(lam[i]) / (2 * np.pi) if lam is not None else [[], []]
+        results.append({
+            "measured": names[i + 1], **verdict, "verdict_from": "network" if inside or cl is None else "classical",
+            "in_distribution": inside, "out_of_distribution_reasons": reasons,
+            "mahalanobis_distance": float(dist[i]), "training_percentile": float(pct[i]),
+            "network": net, "classical": cl,
+            "classical_methods": [_classical_answer(o, i, L) for o in classical],
+            "identification": {**IDENTIFICATION, "source": "identified from FRFs" if identified else "modal data",
+                               "baseline_frequencies_hz": [float(x) for x in f[0]],
+                               "measured_frequencies_hz": [float(x) for x in f[1]]},
+            "input_route": route, "warnings": w,
+            "_extra": {"location_distribution": d.location_distribution[i]},
+        })
+    return results
+
+
+def _network_inputs(model: TrainedModel, baseline, currents: list, names: list[str], sens, warnings: list):
+    """Route, feature rows and the paired modes of every pair: ``(route, X, lam, vecs, identified)``.
+
+    ``lam``, ``vecs`` (pairs, 2, 4[, dofs]) are None when the files do not hold 4 identifiable modes; ``X``
+    are the FRF-route features when the model reads FRFs and the inputs are FRF files, else the modal features.
+    Warnings are appended to ``warnings``.
+    """
+    beam = model.beam
     base_md, cur_md, identified = _modal_inputs(model, baseline, currents, names, sens)
     lam = vecs = None
     if base_md is not None:
@@ -581,59 +637,18 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     if identified and calibrated != IDENTIFICATION:
         warnings.append("the training data's modal noise was not calibrated against the identification run "
                         "here: retrain on data from 'beam-damage generate --config training'")
-    est = model.networks[route]
-    out, d = network_output(est, X, sens)
-    dist, pct = ood_percentile(est, X)
-    mode_reasons = [[] for _ in currents]
-    classical, best = [], None
-    if lam is not None:
-        mode_reasons = _mode_checks(lam, vecs, nominal_ratio_range(sens))
-        classical, _ = run_classical(lam, vecs, sens, model.config["classical_thresholds"])
-        best = next((o for o in classical if o.name == model.config["best_classical"]), classical[0])
-    depth_of = model.config.get("truth_beam") or beam.name
-    results = []
-    for i in range(len(currents)):
-        net = _network_answer(d, i, out, L, equivalent_depth(float(d.hinge_flexibility[i]), depth_of,
-                                                              model.config["reference_width_m"]))
-        cl = None if best is None else _classical_answer(best, i, L)
-        reasons = list(mode_reasons[i])
-        if pct[i] > IN_DISTRIBUTION_PERCENTILE:
-            reasons.insert(0, f"Mahalanobis distance {dist[i]:.3g} from the training data, beyond "
-                              f"{pct[i]:.2f}% of training pairs")
-        inside = not reasons
-        w = list(warnings)
-        if inside or cl is None:
-            verdict = dict(net)
-            if not inside:
-                w.append("the pair lies outside the training data (" + "; ".join(reasons) + ") and no classical "
-                         "answer is available: treat the network's verdict with caution")
-        else:
-            w.append("the pair lies outside the training data (" + "; ".join(reasons) + "): the verdict is the "
-                     f"classical method's ({best.name}); the network's answer is shown beside it")
-            verdict = {"damaged": cl["damaged"], "probability_damaged": None,
-                       "location_x_over_L": cl["location_x_over_L"], "location_x_m": cl["location_x_m"],
-                       "location_std_m": None, "location_element": cl["location_element"],
-                       "element_probabilities": None, "hinge_flexibility": cl["hinge_flexibility"],
-                       "hinge_flexibility_std": None,
-                       "depth_m": equivalent_depth(cl["hinge_flexibility"], depth_of,
-                                                   model.config["reference_width_m"]),
-                       "detectable": bool(sens.largest_drop(np.array([cl["location_x_over_L"]]),
-                                                            np.array([cl["hinge_flexibility"]]))[0]
-                                          >= detectability_threshold())}
-        f = np.abs(lam[i]) / (2 * np.pi) if lam is not None else [[], []]
-        results.append({
-            "measured": names[i + 1], **verdict, "verdict_from": "network" if inside or cl is None else "classical",
-            "in_distribution": inside, "out_of_distribution_reasons": reasons,
-            "mahalanobis_distance": float(dist[i]), "training_percentile": float(pct[i]),
-            "network": net, "classical": cl,
-            "classical_methods": [_classical_answer(o, i, L) for o in classical],
-            "identification": {**IDENTIFICATION, "source": "identified from FRFs" if identified else "modal data",
-                               "baseline_frequencies_hz": [float(x) for x in f[0]],
-                               "measured_frequencies_hz": [float(x) for x in f[1]]},
-            "input_route": route, "warnings": w,
-            "_extra": {"location_distribution": d.location_distribution[i]},
-        })
-    return results
+    return route, X, lam, vecs, identified
+
+
+def _classical_verdict(cl: dict, sens, depth) -> dict:
+    """The verdict keys from the classical method's answer ``cl`` (no probabilities or spreads)."""
+    detectable = sens.largest_drop(np.array([cl["location_x_over_L"]]), np.array([cl["hinge_flexibility"]]))[0]
+    return {"damaged": cl["damaged"], "probability_damaged": None,
+            "location_x_over_L": cl["location_x_over_L"], "location_x_m": cl["location_x_m"],
+            "location_std_m": None, "location_element": cl["location_element"],
+            "element_probabilities": None, "hinge_flexibility": cl["hinge_flexibility"],
+            "hinge_flexibility_std": None, "depth_m": depth(cl["hinge_flexibility"]),
+            "detectable": bool(detectable >= detectability_threshold())}
 
 
 def equivalent_depth(hinge_flexibility: float, preset, width_m: float) -> float | None:
