@@ -249,11 +249,14 @@ def test_damage_classifier_follows_scikit_learn_conventions():
     """Parameters only in __init__ (scikit-learn's own checks), NotFittedError before fit, X of the wrong width
     refused naming both widths, score = accuracy of the verdict for the (n, 3) targets or their first column."""
     from sklearn.exceptions import NotFittedError
-    from sklearn.utils.estimator_checks import (check_get_params_invariance, check_no_attributes_set_in_init,
-                                                check_parameters_default_constructible, check_set_params)
+    from sklearn.utils import estimator_checks as ec
 
-    for check in (check_no_attributes_set_in_init, check_get_params_invariance, check_set_params,
-                  check_parameters_default_constructible):
+    # the checks of sklearn.utils.estimator_checks that apply: the others fit on 1-column class labels, which
+    # fit refuses (y is (n, 3): damaged, x/L, size), or test sample weights and sparse input, which it does not take
+    for check in (ec.check_no_attributes_set_in_init, ec.check_get_params_invariance, ec.check_set_params,
+                  ec.check_parameters_default_constructible, ec.check_estimators_unfitted, ec.check_estimator_repr,
+                  ec.check_estimator_cloneable, ec.check_do_not_raise_errors_in_init_or_set_params,
+                  ec.check_estimator_tags_renamed, ec.check_valid_tag_types, ec.check_mixin_order):
         check("DamageClassifier", DamageClassifier())
     with pytest.raises(NotFittedError):
         DamageClassifier().predict(np.zeros((2, 4)))
