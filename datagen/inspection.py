@@ -81,15 +81,33 @@ def inspect_dataset(dataset_dir, out_dir=None) -> dict:
     preset = ds.manifest["preset"]
     length = preset.get("length_m", preset.get("length"))  # format-1 manifests: "length"
     check = curvature_check(table, length)
-    summary = {"dir": str(dataset_dir), "complete": ds.manifest.get("complete", False), "samples": int(len(table)),
-               "shards": len(ds.shards), "converged_fraction": float(table["converged"].mean()) if len(table) else None,
-               "curvature_check": check,
-               "labels": {c: {"min": float(table[c].min()), "max": float(table[c].max())}
-                          for c in ("slit1_x_m", "slit1_depth_m", "slit1_width_m", "slit1_ei_loss", "ei_Nm2",
-                                    "m_per_length_kg_m", "noise_level", "temperature_stiffness_change",
-                                    "root_spring_change", "stiffness_loss_Nm3", "max_frequency_drop_rel")
-                          if c in table and table[c].notna().any()},
-               "figures": []}
+    summary = _summary(ds, table, check, dataset_dir)
+    _plot_labels(plt, table, out)
+    rows = _plot_shift_vs_position(plt, table, length, check, out)
+    atomic_write_text(out / "curvature_check.csv", "mode,slope,r2,n\n" + "\n".join(rows) + "\n")
+    if ds.shards:
+        _plot_frf_overlay(plt, ds, out)
+    summary["figures"] = [str(out / f) for f in ("labels.png", "shift_vs_position.png", "frf_overlay.png")]
+    summary["out"] = str(out)
+    atomic_write_text(out / "summary.json", json.dumps(summary, indent=1))
+    return summary
+
+
+def _summary(ds: Dataset, table, check: dict, dataset_dir) -> dict:
+    """Counts, converged fraction, curvature check and label ranges of a dataset (``figures`` still empty)."""
+    return {"dir": str(dataset_dir), "complete": ds.manifest.get("complete", False), "samples": int(len(table)),
+            "shards": len(ds.shards), "converged_fraction": float(table["converged"].mean()) if len(table) else None,
+            "curvature_check": check,
+            "labels": {c: {"min": float(table[c].min()), "max": float(table[c].max())}
+                       for c in ("slit1_x_m", "slit1_depth_m", "slit1_width_m", "slit1_ei_loss", "ei_Nm2",
+                                 "m_per_length_kg_m", "noise_level", "temperature_stiffness_change",
+                                 "root_spring_change", "stiffness_loss_Nm3", "max_frequency_drop_rel")
+                       if c in table and table[c].notna().any()},
+            "figures": []}
+
+
+def _plot_labels(plt, table, out: Path) -> None:
+    """Write ``labels.png``: histograms of the damage and property labels present in ``table``."""
     cols = [c for c in ("n_slits", "slit1_x_m", "slit1_depth_m", "slit1_width_m", "slit1_ei_loss", "ei_Nm2",
                         "m_per_length_kg_m", "damping_scale", "root_spring_Nm_rad") if c in table]
     fig, axs = plt.subplots(3, 3, figsize=(11, 8))
@@ -99,17 +117,20 @@ def inspect_dataset(dataset_dir, out_dir=None) -> dict:
     fig.tight_layout()
     fig.savefig(out / "labels.png", dpi=110)
     plt.close(fig)
-    # frequency shift vs position with curvature^2
+
+
+def _plot_shift_vs_position(plt, table, length_m: float, check: dict, out: Path) -> list[str]:
+    """Write ``shift_vs_position.png`` (single-slit shifts against curvature squared); return the CSV rows per mode."""
     one = table[table.n_slits == 1]
     fig, axs = plt.subplots(2, 2, figsize=(11, 7))
-    xg = np.linspace(0, length, 400)
+    xg = np.linspace(0, length_m, 400)
     rows = []
     for r, ax in enumerate(axs.flat):
         if len(one):
             q = one["slit1_ei_loss"]
             norm = -0.5 * q / (1 - q) * one["slit1_width_m"]
             ax.plot(one["slit1_x_m"], one[f"df{r + 1}_rel"] / norm, ".", ms=3, label="truth shift / (-q/(1-q) w/2)")
-        ax.plot(xg, cantilever_curvature_squared(xg, length, r), "r-", label="phi''(x)^2 / int phi''^2")
+        ax.plot(xg, cantilever_curvature_squared(xg, length_m, r), "r-", label="phi''(x)^2 / int phi''^2")
         c = check[f"mode{r + 1}"]
         ax.set_title(f"mode {r + 1}: slope {c['slope']:.3f}, R^2 {c['r2']:.4f}" if c["slope"] is not None
                      else f"mode {r + 1}")
@@ -120,22 +141,21 @@ def inspect_dataset(dataset_dir, out_dir=None) -> dict:
     fig.tight_layout()
     fig.savefig(out / "shift_vs_position.png", dpi=110)
     plt.close(fig)
-    atomic_write_text(out / "curvature_check.csv", "mode,slope,r2,n\n" + "\n".join(rows) + "\n")
-    if ds.shards:  # FRF overlays of sample 0
-        w = ds.omega_rad_s
-        fig, axs = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
-        for ax, kind, name in ((axs[0], "measured", "measured (truth + noise)"), (axs[1], "updated", "updated model")):
-            arr = ds.frf(kind, rows=[0])
-            for s, st in enumerate(STATES):
-                ax.semilogy(w / (2 * np.pi), np.abs(arr[0, s, 3]), label=st)
-            ax.set_title(f"sample 0, {name}: response node 5 / drive node 2")
-            ax.set_ylabel("|H| (m/N)")
-            ax.legend()
-        axs[1].set_xlabel("frequency (Hz)")
-        fig.tight_layout()
-        fig.savefig(out / "frf_overlay.png", dpi=110)
-        plt.close(fig)
-    summary["figures"] = [str(out / f) for f in ("labels.png", "shift_vs_position.png", "frf_overlay.png")]
-    summary["out"] = str(out)
-    atomic_write_text(out / "summary.json", json.dumps(summary, indent=1))
-    return summary
+    return rows
+
+
+def _plot_frf_overlay(plt, ds: Dataset, out: Path) -> None:
+    """Write ``frf_overlay.png``: sample 0's measured and updated-model FRFs (node 5 / node 2) in every state."""
+    w = ds.omega_rad_s
+    fig, axs = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
+    for ax, kind, name in ((axs[0], "measured", "measured (truth + noise)"), (axs[1], "updated", "updated model")):
+        arr = ds.frf(kind, rows=[0])
+        for s, st in enumerate(STATES):
+            ax.semilogy(w / (2 * np.pi), np.abs(arr[0, s, 3]), label=st)
+        ax.set_title(f"sample 0, {name}: response node 5 / drive node 2")
+        ax.set_ylabel("|H| (m/N)")
+        ax.legend()
+    axs[1].set_xlabel("frequency (Hz)")
+    fig.tight_layout()
+    fig.savefig(out / "frf_overlay.png", dpi=110)
+    plt.close(fig)

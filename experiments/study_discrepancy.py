@@ -221,14 +221,7 @@ def run_discrepancy(beam_spec, measured, out_dir=None, *, noise=None, max_effect
     """
     beam = beam_spec if isinstance(beam_spec, Beam) else load_beam(beam_spec)
     meas, rel_std, dof_map = load_measurement(measured, beam)
-    noise = noise or dsc.Noise()
-    given_frf_db = noise.frf_db != dsc.Noise().frf_db
-    if rel_std is not None and noise.frequency == dsc.Noise().frequency:
-        # identified from FRFs: the identification's frequency std, floored at 0.1 %
-        noise = dsc.Noise(np.maximum(rel_std, 1e-3), noise.damping, noise.shape, noise.frf_db)
-    if meas.frf is not None and noise.frf_db == dsc.Noise().frf_db:
-        # the FRF's own random noise, from its line-to-line scatter
-        noise = dsc.Noise(noise.frequency, noise.damping, noise.shape, dsc.frf_scatter_db(meas))
+    noise, given_frf_db = _noise_for(meas, rel_std, noise)
     if out_dir is not None:
         out_dir = Path(out_dir)
         if out_dir.exists() and not out_dir.is_dir():
@@ -238,7 +231,45 @@ def run_discrepancy(beam_spec, measured, out_dir=None, *, noise=None, max_effect
     first = res.steps[0] if res.steps else None
     cand = _candidate_rows(res)
     check = res.noise_check.to_dict()
-    out = {
+    out = _result_json(res, meas, noise, rel_std is not None, given_frf_db, dof_map, cand, check)
+    recal = first.base.residuals if first else res.final.residuals
+    if out_dir is not None:
+        before_frf = after_frf = None
+        if meas.frf is not None:
+            before_frf = dsc.predict(beam, meas, n_elements).frf
+            after_frf = dsc.predict(res.final.beam, meas, n_elements).frf
+        files = _figures(res, recal, meas, before_frf, after_frf)
+        files.update(_table_files(res, recal, cand))
+        calibrated = res.final.beam.with_effects(res.final.beam.effects_dict(),
+                                                 name=f"{beam.name}-calibrated")
+        comment = _calibration_comment(beam, measured, res, meas, noise, check, seed)
+        files["summary.json"] = _summary_json(out, out_dir, res, seed)
+        files["beam.toml"] = beam_to_toml(calibrated, comment).encode()
+        for name, data in files.items():
+            atomic_write_bytes(out_dir / name, data)
+        out["beam_file"] = str(out_dir / "beam.toml")
+    out["_result"] = (res, recal)
+    return out
+
+
+def _noise_for(meas: dsc.Measurement, rel_std, noise) -> tuple[dsc.Noise, bool]:
+    """The noise of the data (identification's frequency std, FRF scatter) and whether ``frf_db`` was given."""
+    noise = noise or dsc.Noise()
+    given_frf_db = noise.frf_db != dsc.Noise().frf_db
+    if rel_std is not None and noise.frequency == dsc.Noise().frequency:
+        # identified from FRFs: the identification's frequency std, floored at 0.1 %
+        noise = dsc.Noise(np.maximum(rel_std, 1e-3), noise.damping, noise.shape, noise.frf_db)
+    if meas.frf is not None and noise.frf_db == dsc.Noise().frf_db:
+        # the FRF's own random noise, from its line-to-line scatter
+        noise = dsc.Noise(noise.frequency, noise.damping, noise.shape, dsc.frf_scatter_db(meas))
+    return noise, given_frf_db
+
+
+def _result_json(res: dsc.DiscrepancyResult, meas: dsc.Measurement, noise: dsc.Noise, identified: bool,
+                 given_frf_db: bool, dof_map, cand: list[dict], check: dict) -> dict:
+    """The JSON result of the command (issue 9 keys; ``beam_file`` None until the files are written)."""
+    first = res.steps[0] if res.steps else None
+    return {
         "named_effect": res.named_effects[0] if res.named_effects else "none",
         "effects": list(res.named_effects),
         "evidence": res.evidence,
@@ -248,7 +279,7 @@ def run_discrepancy(beam_spec, measured, out_dir=None, *, noise=None, max_effect
         "separating_measurement": first.separating_measurement if first else "",
         "gap_before": res.nominal.gap(),
         "gap_after": res.final.residuals.gap(),
-        "assumed_noise": assumed_noise(meas, noise, rel_std is not None, given_frf_db),
+        "assumed_noise": assumed_noise(meas, noise, identified, given_frf_db),
         "chi2_per_dof": check["chi2_per_dof"],
         "noise_consistent": check["noise_consistent"],
         "noise_check": check,
@@ -260,44 +291,43 @@ def run_discrepancy(beam_spec, measured, out_dir=None, *, noise=None, max_effect
         "beam_file": None,
         "dof_positions": None if dof_map is None else dof_map.to_dict(),
     }
-    recal = first.base.residuals if first else res.final.residuals
-    if out_dir is not None:
-        before_frf = after_frf = None
-        if meas.frf is not None:
-            before_frf = dsc.predict(beam, meas, n_elements).frf
-            after_frf = dsc.predict(res.final.beam, meas, n_elements).frf
-        files = _figures(res, recal, meas, before_frf, after_frf)
-        rows = (_residual_rows("before", res.nominal) + _residual_rows("recalibrated", recal)
-                + _residual_rows("after", res.final.residuals))
-        files["residuals.csv"] = _csv(rows)
-        files["residuals.json"] = (json.dumps(rows, indent=1) + "\n").encode()
-        flat = [{**{k: v for k, v in c.items() if k != "parameters"},
-                 "parameters": json.dumps(c["parameters"], sort_keys=True)} for c in cand]
-        files["candidates.csv"] = _csv(flat)
-        from experiments.cli import to_jsonable
 
-        files["candidates.json"] = (json.dumps(to_jsonable(cand), indent=1) + "\n").encode()
-        steps = [{"round": i + 1, "named": st.named, "indistinguishable_from": list(st.indistinguishable_from),
-                  "separating_measurement": st.separating_measurement, "c_hat": st.c_hat}
-                 for i, st in enumerate(res.steps)]
-        calibrated = res.final.beam.with_effects(res.final.beam.effects_dict(),
-                                                 name=f"{beam.name}-calibrated")
-        comment = (f"calibrated by 'beam-damage discrepancy --beam {beam.name} --measured {measured}'\n"
-                   f"named effects: {', '.join(res.named_effects) or 'none'}; seed {seed}; "
-                   f"noise: frequency {np.max(np.asarray(noise.frequency)):.3g} (relative); chi2/dof "
-                   f"{check['chi2_per_dof']:.3g} ({check['verdict']})"
-                   + ("\ndamping: Rayleigh least-squares fitted to the measured damping ratios"
-                      if meas.damping_ratios is not None else ""))
-        summary = dict(out, beam_file=str(out_dir / "beam.toml"), steps=steps,
-                       evidence_chi2_drop=res.evidence_chi2_drop, seed=seed)
-        files["summary.json"] = (json.dumps(to_jsonable(summary), indent=1) + "\n").encode()
 
-        files["beam.toml"] = beam_to_toml(calibrated, comment).encode()
-        for name, data in files.items():
-            atomic_write_bytes(out_dir / name, data)
-        out["beam_file"] = str(out_dir / "beam.toml")
-    out["_result"] = (res, recal)
-    return out
+def _table_files(res: dsc.DiscrepancyResult, recal: dsc.ModeResiduals, cand: list[dict]) -> dict[str, bytes]:
+    """``residuals.csv/json`` (before, recalibrated, after) and ``candidates.csv/json``, rendered."""
+    from experiments.cli import to_jsonable
+
+    rows = (_residual_rows("before", res.nominal) + _residual_rows("recalibrated", recal)
+            + _residual_rows("after", res.final.residuals))
+    files = {"residuals.csv": _csv(rows), "residuals.json": (json.dumps(rows, indent=1) + "\n").encode()}
+    flat = [{**{k: v for k, v in c.items() if k != "parameters"},
+             "parameters": json.dumps(c["parameters"], sort_keys=True)} for c in cand]
+    files["candidates.csv"] = _csv(flat)
+    files["candidates.json"] = (json.dumps(to_jsonable(cand), indent=1) + "\n").encode()
+    return files
+
+
+def _calibration_comment(beam: Beam, measured, res: dsc.DiscrepancyResult, meas: dsc.Measurement,
+                         noise: dsc.Noise, check: dict, seed: int) -> str:
+    """Header of the calibrated beam file: the command, the named effects, seed, noise and chi2/dof."""
+    return (f"calibrated by 'beam-damage discrepancy --beam {beam.name} --measured {measured}'\n"
+            f"named effects: {', '.join(res.named_effects) or 'none'}; seed {seed}; "
+            f"noise: frequency {np.max(np.asarray(noise.frequency)):.3g} (relative); chi2/dof "
+            f"{check['chi2_per_dof']:.3g} ({check['verdict']})"
+            + ("\ndamping: Rayleigh least-squares fitted to the measured damping ratios"
+               if meas.damping_ratios is not None else ""))
+
+
+def _summary_json(out: dict, out_dir: Path, res: dsc.DiscrepancyResult, seed: int) -> bytes:
+    """``summary.json``: the JSON result with the beam file's path, the rounds of the selection and the seed."""
+    from experiments.cli import to_jsonable
+
+    steps = [{"round": i + 1, "named": st.named, "indistinguishable_from": list(st.indistinguishable_from),
+              "separating_measurement": st.separating_measurement, "c_hat": st.c_hat}
+             for i, st in enumerate(res.steps)]
+    summary = dict(out, beam_file=str(out_dir / "beam.toml"), steps=steps,
+                   evidence_chi2_drop=res.evidence_chi2_drop, seed=seed)
+    return (json.dumps(to_jsonable(summary), indent=1) + "\n").encode()
 
 
 # ---------------------------------------------------------------------------

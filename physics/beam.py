@@ -218,16 +218,43 @@ def beam_from_dict(obj: dict, source: str = "beam") -> Beam:
     for key in obj:
         if key not in _KEYS:
             raise ConfigError(f"{source}: unknown key {key!r}; expected some of {sorted(_KEYS)}")
-    base = {}
-    if "preset" in obj:
-        if not isinstance(obj["preset"], str):
-            raise ConfigError(f"{source}: 'preset' must be a string such as \"beam5\"")
-        b = preset_beam(obj["preset"]) if obj["preset"] in PRESETS else None
-        if b is None:
-            raise ConfigError(f"{source}: 'preset' = {obj['preset']!r} unknown; expected one of {sorted(PRESETS)}")
-        base = {f.name: getattr(b, f.name) for f in fields(Beam)}
-        base["effects"] = b.effects_dict()
-    vals = dict(base)
+    vals = _preset_values(obj, source)
+    _read_scalars(obj, vals, source)
+    for required in ("length_m", "width_m", "thickness_m"):
+        if required not in vals:
+            raise ConfigError(f"{source}: missing key {required!r} (or give 'preset')")
+    vals.setdefault("total_length_m", vals["length_m"])
+    if "measured_x_m" in obj:
+        vals["measured_x_m"] = _measured_positions(obj["measured_x_m"], vals["length_m"], source)
+        vals["measured_x_given"] = True
+    _resolve_rigidity(obj, vals, source)
+    _resolve_mass(obj, vals, source)
+    if "effects" in obj:
+        eff = fx.validate_effects(obj["effects"], source)
+        vals["effects"] = {**vals.get("effects", {}), **eff}
+    _check_layout(vals, source)
+    beam = Beam(**vals)
+    if beam.effects:
+        _check_effects_keep_a_model(beam, source)
+    return beam
+
+
+def _preset_values(obj: dict, source: str) -> dict:
+    """The fields of the ``preset`` beam (its effects as a mapping), or an empty dict without ``preset``."""
+    if "preset" not in obj:
+        return {}
+    if not isinstance(obj["preset"], str):
+        raise ConfigError(f"{source}: 'preset' must be a string such as \"beam5\"")
+    b = preset_beam(obj["preset"]) if obj["preset"] in PRESETS else None
+    if b is None:
+        raise ConfigError(f"{source}: 'preset' = {obj['preset']!r} unknown; expected one of {sorted(PRESETS)}")
+    base = {f.name: getattr(b, f.name) for f in fields(Beam)}
+    base["effects"] = b.effects_dict()
+    return base
+
+
+def _read_scalars(obj: dict, vals: dict, source: str) -> None:
+    """Copy the checked numbers (SI), ``name`` (default: the file stem), ``bc`` and ``n_elements`` into ``vals``."""
     for key in _NUMBER_KEYS:
         if key not in obj:
             continue
@@ -249,20 +276,20 @@ def beam_from_dict(obj: dict, source: str = "beam") -> Beam:
         if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= 2000:
             raise ConfigError(f"{source}: 'n_elements' must be an integer in [1, 2000], got {n!r}")
         vals["n_elements"] = n
-    for required in ("length_m", "width_m", "thickness_m"):
-        if required not in vals:
-            raise ConfigError(f"{source}: missing key {required!r} (or give 'preset')")
-    vals.setdefault("total_length_m", vals["length_m"])
-    if "measured_x_m" in obj:
-        xs = obj["measured_x_m"]
-        if not (isinstance(xs, list) and xs and all(isinstance(x, (int, float)) and not isinstance(x, bool)
-                                                    and math.isfinite(x) for x in xs)):
-            raise ConfigError(f"{source}: 'measured_x_m' must be a non-empty list of positions (m)")
-        if any(not 0 <= x <= vals["length_m"] for x in xs):
-            raise ConfigError(f"{source}: 'measured_x_m' positions must lie in [0, length_m = {vals['length_m']}]")
-        vals["measured_x_m"] = tuple(float(x) for x in xs)
-        vals["measured_x_given"] = True
-    # flexural rigidity: EI_Nm2 or the face modulus of the sandwich (eq. 4.1)
+
+
+def _measured_positions(xs, length_m: float, source: str) -> tuple:
+    """``measured_x_m`` as a tuple of floats (m), each in ``[0, length_m]``."""
+    if not (isinstance(xs, list) and xs and all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                                                and math.isfinite(x) for x in xs)):
+        raise ConfigError(f"{source}: 'measured_x_m' must be a non-empty list of positions (m)")
+    if any(not 0 <= x <= length_m for x in xs):
+        raise ConfigError(f"{source}: 'measured_x_m' positions must lie in [0, length_m = {length_m}]")
+    return tuple(float(x) for x in xs)
+
+
+def _resolve_rigidity(obj: dict, vals: dict, source: str) -> None:
+    """Set ``vals["EI_Nm2"]``, given or from the sandwich's face modulus (eq. 4.1), which leaves ``vals``."""
     if "EI_Nm2" in obj and "face_modulus_pa" in obj:
         raise ConfigError(f"{source}: give 'EI_Nm2' or 'face_modulus_pa', not both")
     ef = vals.pop("face_modulus_pa", None)
@@ -276,6 +303,10 @@ def beam_from_dict(obj: dict, source: str = "beam") -> Beam:
         vals["EI_Nm2"] = float(layered_ei(vals["width_m"], [0.0, h2 - tf, h2], [ec, ef]))
     if "EI_Nm2" not in vals:
         raise ConfigError(f"{source}: missing key 'EI_Nm2' (or 'face_modulus_pa' with the layers, or 'preset')")
+
+
+def _resolve_mass(obj: dict, vals: dict, source: str) -> None:
+    """Set ``vals["mass_per_length_kg_m"]``, given or ``mass_kg / total_length_m`` (``mass_kg`` leaves ``vals``)."""
     if "mass_per_length_kg_m" in obj and "mass_kg" in obj:
         raise ConfigError(f"{source}: give 'mass_per_length_kg_m' or 'mass_kg', not both")
     mass = vals.pop("mass_kg", None)
@@ -283,9 +314,10 @@ def beam_from_dict(obj: dict, source: str = "beam") -> Beam:
         vals["mass_per_length_kg_m"] = mass / vals["total_length_m"]
     if "mass_per_length_kg_m" not in vals:
         raise ConfigError(f"{source}: missing key 'mass_per_length_kg_m' (or 'mass_kg', or 'preset')")
-    if "effects" in obj:
-        eff = fx.validate_effects(obj["effects"], source)
-        vals["effects"] = {**vals.get("effects", {}), **eff}
+
+
+def _check_layout(vals: dict, source: str) -> None:
+    """Faces thinner than half the section, and the added mass and local damper on the beam (``x_m <= length_m``)."""
     tf = vals.get("face_thickness_m")
     if tf is not None and not tf < vals["thickness_m"] / 2:
         raise ConfigError(f"{source}: 'face_thickness_m' must be below half of 'thickness_m'")
@@ -293,10 +325,6 @@ def beam_from_dict(obj: dict, source: str = "beam") -> Beam:
         x = vals.get("effects", {}).get(k, {}).get("x_m")
         if x is not None and x > vals["length_m"]:
             raise ConfigError(f"{source}: 'effects.{k}.x_m' = {x} lies beyond 'length_m' = {vals['length_m']}")
-    beam = Beam(**vals)
-    if beam.effects:
-        _check_effects_keep_a_model(beam, source)
-    return beam
 
 
 #: Largest spread of the eigenvalues of the mass matrix, and of the squared natural frequencies, of a beam

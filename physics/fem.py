@@ -277,6 +277,29 @@ def beam_model(
     if not np.isfinite(length_m) or length_m <= 0:
         raise BeamDamageError(f"length_m must be a positive number of metres, got {length_m}", parameter="length_m")
     n_el = int(n_elements)
+    ei, mpl = _element_properties(n_el, EI_Nm2, mass_per_length_kg_m, ei_factors, mass_factors)
+    le = length_m / n_el
+    ke = element_stiffness(ei, le)
+    me = element_mass(mpl, le)
+    K = assemble(ke)
+    M = assemble(me)
+    C = _damping_matrix(damping_factors, ke, n_el) if damping_factors is not None else np.zeros_like(K)
+    n_nodes = n_el + 1
+    keep, names = kept_dofs(n_nodes, bc, root_spring is not None)
+    if root_spring is not None:
+        K = _with_root_spring(K, root_spring)
+    sel = np.ix_(keep, keep)
+    return FEModel(
+        M=M[(...,) + sel],
+        K=K[(...,) + sel],
+        C=C[(...,) + sel],
+        dofs=names,
+        node_x=np.linspace(0.0, length_m, n_nodes),
+    )
+
+
+def _element_properties(n_el: int, EI_Nm2, mass_per_length_kg_m, ei_factors, mass_factors):
+    """Checked ``EI`` (N m^2) and mass per length (kg/m) of each element, both of shape (batch..., n_el)."""
     ei = np.asarray(EI_Nm2, dtype=float)[..., None] * (1.0 if ei_factors is None else np.asarray(ei_factors, float))
     mpl = np.asarray(mass_per_length_kg_m, dtype=float)[..., None] * (
         1.0 if mass_factors is None else np.asarray(mass_factors, float))
@@ -290,35 +313,26 @@ def beam_model(
     for name, arr in (("EI_Nm2", ei), ("mass_per_length_kg_m", mpl)):
         if not np.all(np.isfinite(arr)) or np.any(arr <= 0):
             raise BeamDamageError(f"{name} (times its factors) must be finite and positive", parameter=name)
-    le = length_m / n_el
-    ke = element_stiffness(ei, le)
-    me = element_mass(mpl, le)
-    K = assemble(ke)
-    M = assemble(me)
-    if damping_factors is not None:
-        beta = np.asarray(damping_factors, dtype=float)
-        if beta.shape[-1] != n_el or np.any(beta < 0) or not np.all(np.isfinite(beta)):
-            raise BeamDamageError("damping_factors must be finite, >= 0, one per element", parameter="damping_factors")
-        C = assemble(beta[..., None, None] * ke)
-    else:
-        C = np.zeros_like(K)
-    n_nodes = n_el + 1
-    keep, names = kept_dofs(n_nodes, bc, root_spring is not None)
-    if root_spring is not None:
-        kr = np.asarray(root_spring, dtype=float)
-        if np.any(kr <= 0) or not np.all(np.isfinite(kr)):
-            raise BeamDamageError("root_spring must be a positive rotational stiffness (N m/rad)",
-                                  parameter="root_spring")
-        K = K.copy()
-        K[..., 1, 1] += kr
-    sel = np.ix_(keep, keep)
-    return FEModel(
-        M=M[(...,) + sel],
-        K=K[(...,) + sel],
-        C=C[(...,) + sel],
-        dofs=names,
-        node_x=np.linspace(0.0, length_m, n_nodes),
-    )
+    return ei, mpl
+
+
+def _damping_matrix(damping_factors, ke, n_el: int):
+    """Assembled ``C = sum_e beta_e K_e`` (N s/m) from checked coefficients ``beta_e >= 0`` (s), one per element."""
+    beta = np.asarray(damping_factors, dtype=float)
+    if beta.shape[-1] != n_el or np.any(beta < 0) or not np.all(np.isfinite(beta)):
+        raise BeamDamageError("damping_factors must be finite, >= 0, one per element", parameter="damping_factors")
+    return assemble(beta[..., None, None] * ke)
+
+
+def _with_root_spring(K, root_spring):
+    """A copy of ``K`` with the checked rotational stiffness ``root_spring`` (N m/rad) added on the root rotation."""
+    kr = np.asarray(root_spring, dtype=float)
+    if np.any(kr <= 0) or not np.all(np.isfinite(kr)):
+        raise BeamDamageError("root_spring must be a positive rotational stiffness (N m/rad)",
+                              parameter="root_spring")
+    K = K.copy()
+    K[..., 1, 1] += kr
+    return K
 
 
 def lumped_mass(mass_per_length_kg_m, element_length_m, n_masters: int = 4):
