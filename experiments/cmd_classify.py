@@ -90,7 +90,7 @@ def run(args):
 
 def _length(name):
     from physics.properties import beam_preset
-    return beam_preset(name).length
+    return beam_preset(name).length_m
 
 
 def _network_sentence(a: dict) -> str:

@@ -121,8 +121,8 @@ def run(out_dir) -> tuple[dict, list]:
 def _table_4_2(b5: dict, preset) -> list:
     """Rows of Table 4.2: the closed-form frequencies (eq. 4.5, and with exact ``beta l``) against the printed
     ones and the measured (Hz)."""
-    f_cf = properties.cantilever_frequencies_hz(preset.EI, preset.m_per_length, preset.length)
-    f_exact = properties.cantilever_frequencies_hz(preset.EI, preset.m_per_length, preset.length,
+    f_cf = properties.cantilever_frequencies_hz(preset.EI_Nm2, preset.mass_per_length_kg_m, preset.length_m)
+    f_exact = properties.cantilever_frequencies_hz(preset.EI_Nm2, preset.mass_per_length_kg_m, preset.length_m,
                                                    properties.cantilever_beta_l(4))
     f_meas = np.array(b5["undamaged"]["natural_frequencies_hz"])
     return [{"mode": r + 1, "thesis eq. 4.5 (Hz)": b5["theoretical_frequencies_hz"][r],
@@ -132,7 +132,7 @@ def _table_4_2(b5: dict, preset) -> list:
 
 def _table_4_1(b5: dict, preset) -> list:
     """Rows of the Table 4.1 check: relative Frobenius error of the IIRS-reduced ``M`` and ``K``."""
-    model = fem.beam_model(preset.n_elements, preset.length, preset.EI, preset.m_per_length)
+    model = fem.beam_model(preset.n_elements, preset.length_m, preset.EI_Nm2, preset.mass_per_length_kg_m)
     red = reduction.iirs(model.M, model.K, model.index(preset.masters))
     return [{"matrix": name, "relative error (Frobenius)": _rel_frob(ours, b5["iirs_reduced"][name]),
              "IIRS iterations": red.iterations} for name, ours in (("M", red.M), ("K", red.K))]

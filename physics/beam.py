@@ -200,8 +200,8 @@ def preset_beam(name: str) -> Beam:
     if name not in PRESETS:
         raise ConfigError(f"unknown beam preset {name!r}; expected one of {sorted(PRESETS)} or a .toml file")
     p = PRESETS[name]
-    return Beam(name=p.name, length_m=p.length, total_length_m=p.total_length, width_m=p.width,
-                thickness_m=p.thickness, EI_Nm2=p.EI, mass_per_length_kg_m=p.m_per_length,
+    return Beam(name=p.name, length_m=p.length_m, total_length_m=p.total_length_m, width_m=p.width_m,
+                thickness_m=p.thickness_m, EI_Nm2=p.EI_Nm2, mass_per_length_kg_m=p.mass_per_length_kg_m,
                 n_elements=p.n_elements, face_thickness_m=PRESET_FACE_THICKNESS_M,
                 core_modulus_pa=PRESET_CORE_MODULUS_PA)
 

@@ -31,9 +31,7 @@ THESIS_BETA_L = (1.8751, 4.6941, 7.8547, 10.9955)
 class BeamPreset:
     """A specimen of the thesis (Table 4.1 and the Chapter Four geometry).
 
-    Field names match :class:`physics.beam.Beam`; the old unit-less names
-    (``EI``, ``length``, ``total_length``, ``width``, ``thickness``,
-    ``m_per_length``) remain as read-only aliases.
+    Field names match :class:`physics.beam.Beam`.
 
     Attributes
     ----------
@@ -70,14 +68,6 @@ class BeamPreset:
     def masters(self) -> tuple[str, ...]:
         """The measured DOFs: translations of nodes 2..n_elements+1."""
         return tuple(f"{n}:y" for n in range(2, self.n_elements + 2))
-
-    # old names (aliases)
-    EI = property(lambda self: self.EI_Nm2, doc="Alias of ``EI_Nm2``.")
-    length = property(lambda self: self.length_m, doc="Alias of ``length_m``.")
-    total_length = property(lambda self: self.total_length_m, doc="Alias of ``total_length_m``.")
-    width = property(lambda self: self.width_m, doc="Alias of ``width_m``.")
-    thickness = property(lambda self: self.thickness_m, doc="Alias of ``thickness_m``.")
-    m_per_length = property(lambda self: self.mass_per_length_kg_m, doc="Alias of ``mass_per_length_kg_m``.")
 
 
 PRESETS = {
@@ -193,10 +183,6 @@ class StaticTest:
     slope_N_m: float
     intercept_N: float
     r_squared: float
-
-    EI = property(lambda self: self.EI_Nm2, doc="Alias of ``EI_Nm2``.")
-    slope = property(lambda self: self.slope_N_m, doc="Alias of ``slope_N_m``.")
-    intercept = property(lambda self: self.intercept_N, doc="Alias of ``intercept_N``.")
 
 
 def equivalent_ei(loads_n, deflections_m, x_m: float, a_m: float) -> StaticTest:

@@ -94,11 +94,11 @@ def test_cantilever_tip_deflection_with_a_slit_is_the_closed_form(phi, x, w, r):
 
 def test_section_matches_table_4_1_and_eq_4_1():
     p = beam_preset("beam5")
-    lay = SectionLayout.matching(p.EI, p.width, p.thickness, 0.0005, 1e8)
+    lay = SectionLayout.matching(p.EI_Nm2, p.width_m, p.thickness_m, 0.0005, 1e8)
     assert lay.EI == pytest.approx(22.674, rel=1e-12)
     # eq. 4.1 written out by hand for face/core/face
-    h2, c = p.thickness / 2, p.thickness / 2 - 0.0005
-    by_hand = 2 * p.width / 3 * (1e8 * c**3 + lay.face_modulus_pa * (h2**3 - c**3))
+    h2, c = p.thickness_m / 2, p.thickness_m / 2 - 0.0005
+    by_hand = 2 * p.width_m / 3 * (1e8 * c**3 + lay.face_modulus_pa * (h2**3 - c**3))
     assert by_hand == pytest.approx(22.674, rel=1e-12)
     assert slit_section_ei(lay, 0.0) == pytest.approx(22.674, rel=1e-12)
     # a homogeneous section cut by d: E b (h-d)^3 / 12 (closed form, shifted neutral axis)

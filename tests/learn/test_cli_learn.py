@@ -91,7 +91,8 @@ def _modal_files(tmp, drop):
     p = beam_preset("beam5")
     f = np.ones((2, 40))
     f[1, 8] -= drop
-    m = beam_model(40, p.length, p.EI, p.m_per_length, ei_factors=f, root_spring=948.7 * p.EI / p.length)
+    m = beam_model(40, p.length_m, p.EI_Nm2, p.mass_per_length_kg_m, ei_factors=f,
+                   root_spring=948.7 * p.EI_Nm2 / p.length_m)
     w, phi = undamped_modes(m.M, m.K)
     idx = m.index(["11:y", "21:y", "31:y", "41:y"])
     paths = []

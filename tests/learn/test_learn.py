@@ -53,7 +53,8 @@ def _independent_slit(x_over_L, loss, n_el=60, root=948.7):
     p = beam_preset("beam5")
     f = np.ones((2, n_el))
     f[1, min(int(x_over_L * n_el), n_el - 1)] -= loss
-    m = beam_model(n_el, p.length, p.EI, p.m_per_length, ei_factors=f, root_spring=root * p.EI / p.length)
+    m = beam_model(n_el, p.length_m, p.EI_Nm2, p.mass_per_length_kg_m, ei_factors=f,
+                   root_spring=root * p.EI_Nm2 / p.length_m)
     w, phi = undamped_modes(m.M, m.K)
     idx = m.index([f"{1 + n_el // 4 * q}:y" for q in range(1, 5)])
     lam = -0.002 * w[:, :4] + 1j * w[:, :4]
@@ -183,10 +184,10 @@ def test_equivalent_depth_inverts_the_layered_section():
     from datagen.specimen import SectionLayout, slit_section_ei
 
     p = beam_preset("beam5")
-    lay = SectionLayout.matching(p.EI, p.width, p.thickness, DEFAULTS["section"]["face_thickness_m"],
+    lay = SectionLayout.matching(p.EI_Nm2, p.width_m, p.thickness_m, DEFAULTS["section"]["face_thickness_m"],
                                  DEFAULTS["section"]["core_modulus_pa"])
     r = 1 - float(slit_section_ei(lay, 0.00025)) / lay.EI
-    theta = 0.005 * r / ((1 - r) * p.length)
+    theta = 0.005 * r / ((1 - r) * p.length_m)
     assert equivalent_depth(theta, "beam5", 0.005) == pytest.approx(0.00025, rel=1e-3)
     assert equivalent_depth(1e3, "beam5", 0.005) is None
 
@@ -215,8 +216,8 @@ def test_modal_features_ignore_a_global_stiffness_or_mass_scale():
     for scale in (1.0, 1.2):
         f = np.ones((2, 40))
         f[1, 12] -= 0.4
-        m = beam_model(40, p.length, scale * p.EI, p.m_per_length, ei_factors=f,
-                       root_spring=948.7 * scale * p.EI / p.length)
+        m = beam_model(40, p.length_m, scale * p.EI_Nm2, p.mass_per_length_kg_m, ei_factors=f,
+                       root_spring=948.7 * scale * p.EI_Nm2 / p.length_m)
         w, phi = undamped_modes(m.M, m.K)
         idx = m.index(["11:y", "21:y", "31:y", "41:y"])
         lam = (-0.002 * w[:, :4] + 1j * w[:, :4])[None]
@@ -232,7 +233,7 @@ def test_a_missing_mode_or_unpaired_shapes_put_a_pair_outside_the_training_data(
 
     sens = beam_sensitivity("beam5", 948.7)
     p = beam_preset("beam5")
-    m = beam_model(40, p.length, p.EI, p.m_per_length, root_spring=948.7 * p.EI / p.length)
+    m = beam_model(40, p.length_m, p.EI_Nm2, p.mass_per_length_kg_m, root_spring=948.7 * p.EI_Nm2 / p.length_m)
     w, phi = undamped_modes(m.M, m.K)
     idx = m.index(["11:y", "21:y", "31:y", "41:y"])
     lam = -0.002 * w[:5] + 1j * w[:5]

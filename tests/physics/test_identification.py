@@ -298,7 +298,7 @@ def test_estimated_weighting_is_the_noise_weighted_fit_with_a_floor_and_the_rela
     from physics.properties import beam_preset
 
     p = beam_preset("beam5")
-    m = beam_model(20, p.length, p.EI, p.m_per_length)
+    m = beam_model(20, p.length_m, p.EI_Nm2, p.mass_per_length_kg_m)
     idx = m.index(["6:y", "11:y", "16:y", "21:y"])
     C = 2e-7 * m.K + 0.3 * m.M
     w = np.linspace(2 * np.pi, 5000.0, 1024)
