@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from threadpoolctl import threadpool_limits
 
 from physics import effects as fx
 from physics.beam import Beam
@@ -16,15 +17,6 @@ from physics.discrepancy.model import ModeResiduals, mode_residuals, pair_modes,
 from physics.discrepancy.selection import NoiseCheck, decide, estimate_noise_scale, noise_check
 
 __all__ = ["DiscrepancyResult", "analyse"]
-
-try:  # installed with scikit-learn; only a speed-up
-    from threadpoolctl import threadpool_limits
-except ImportError:  # pragma: no cover
-    from contextlib import nullcontext
-
-    def threadpool_limits(_):
-        return nullcontext()
-
 
 @dataclass(frozen=True)
 class DiscrepancyResult:
