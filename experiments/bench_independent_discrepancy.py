@@ -42,13 +42,12 @@ from pathlib import Path
 
 import numpy as np
 
+from experiments.study_discrepancy import SHORT
 from physics.io import atomic_write_text
 
-__all__ = ["below_limit", "correct", "main", "markdown", "run_cases", "run_cli", "truth_size", "verdict"]
+__all__ = ["below_limit", "main", "markdown", "run_cases", "run_cli", "truth_size", "verdict"]
 
 KINDS = {"modal": "modal JSON", "frequencies": "frequencies + damping", "uff": "FRF (UFF)"}
-SHORT = {"none": "none", "shear_deformation": "shear", "rotary_inertia": "rotary", "root_flexibility": "root",
-         "added_mass": "mass", "local_damping": "l.damp"}
 
 
 def run_cli(measured: Path, extra=()) -> dict:
@@ -129,18 +128,12 @@ def truth_size(case: dict) -> float:
 
 def below_limit(r) -> bool:
     """The unnamed truth is below the detection limit the command reported for it (or not testable)."""
+    from physics.discrepancy.limits import DetectionLimit
+
     if r["truth"] in r.get("not_tested", []):
         return True
     lim = (r.get("detection_limits") or {}).get(r["truth"])
-    if lim is None:
-        return False
-    by_x = {float(x): v for x, v in lim["limit_by_x_m"].items()}
-    v = lim["limit"]
-    if by_x and r["truth_x_m"] is not None:
-        v = by_x[min(by_x, key=lambda x: abs(x - r["truth_x_m"]))]
-    if v is None:
-        return True
-    return r["truth_size"] > v if lim["named_when"] == "below" else r["truth_size"] < v
+    return lim is not None and DetectionLimit.from_dict(r["truth"], lim).below_limit(r["truth_size"], r["truth_x_m"])
 
 
 def verdict(r) -> str:
@@ -152,11 +145,6 @@ def verdict(r) -> str:
     if (r["named"] == r["truth"] or r["truth"] in r.get("indistinguishable_from", [])) and len(r["effects"]) == 1:
         return "right"
     return "undetectable" if not r["effects"] and below_limit(r) else "wrong"
-
-
-def correct(r) -> bool:
-    """Right or right-but-undetectable (:func:`verdict`)."""
-    return verdict(r) != "wrong"
 
 
 def markdown(rows, kinds) -> str:

@@ -98,6 +98,12 @@ class DetectionLimit:
             where = f" at x = {best:.3g} m" + (f" ({others})" if others else "")
         return f"{self.effect}: named only for {self.quantity} {side} {self.limit:.3g}{where}"
 
+    @classmethod
+    def from_dict(cls, effect: str, d: dict) -> "DetectionLimit":
+        """The limit of :meth:`to_dict`'s form (e.g. read back from ``--json``)."""
+        return cls(effect, d["quantity"], d["named_when"] == "below", d["limit"],
+                   {float(x): v for x, v in d["limit_by_x_m"].items()}, d["threshold_chi2"], d["noncentrality"])
+
     def to_dict(self) -> dict:
         return {"quantity": self.quantity, "named_when": "below" if self.named_below else "above",
                 "limit": self.limit, "limit_by_x_m": {f"{x:.6g}": v for x, v in self.limit_by_x_m.items()},
