@@ -24,7 +24,7 @@ of its score on the intact training pairs (0.5 % false alarms, as the network's)
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -204,5 +204,5 @@ def run_classical(eigenvalues, eigenvectors, sens: Sensitivity, thresholds: dict
             raise ValueError("either thresholds or damaged labels are needed")
         thresholds = {k: false_alarm_threshold(v, damaged) for k, v in scores.items()}
     outs = [f(df, sens, thresholds["freq"]) for f in FREQUENCY_METHODS.values()]
-    outs.append(sensitivity_updating(df, du, sens, thresholds["upd"]))
+    outs.append(replace(up, damaged=up.score >= thresholds["upd"]))
     return outs, thresholds

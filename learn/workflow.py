@@ -32,10 +32,11 @@ from learn.classical import MethodOutput, run_classical
 from learn.estimator import DamageClassifier
 from learn.evaluate import MIN_DROP, metrics, table_rows
 from learn.features import (DOFS, GRID_RAD_S, ROUTES, BeamSpec, Pairs, features, frf_features, labels, load_pairs,
-                            map_frf_to_grid, modal_features, split_by_specimen)
+                            map_frf_to_grid, modal_features, real_shapes, split_by_specimen)
 from learn.sensitivity import beam_sensitivity
 from physics.errors import BeamDamageError, FileFormatError
 from physics.io import read_json
+from physics.modal import mac
 
 __all__ = ["DAY_CHANGES", "DEFAULT_ROUTE", "IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "IN_DISTRIBUTION_PERCENTILE",
            "MODEL_FORMAT", "RATIO_TOLERANCE", "REFERENCE_WIDTH_M", "TrainedModel", "classify", "classify_many",
@@ -450,20 +451,18 @@ def _mode_checks(lam, vecs, ratio_range) -> list[list[str]]:
     """Per pair, reasons it lies outside what the modal network was trained on: a frequency ratio ``f_k / f_1``
     outside the accepted range (a missing or spurious mode), or baseline and current modes that do not pair
     (MAC < 0.8)."""
-    from learn.features import real_shapes
-
-    f = np.abs(lam) / (2 * np.pi)                         # (n, 2, 4)
-    ratio = f[..., 1:] / f[..., :1]                       # (n, 2, 3)
-    u = real_shapes(vecs)                                 # (n, 2, 4, m) unit norm
-    mac = np.abs(np.sum(u[:, 0] * u[:, 1], axis=1)) ** 2  # (n, m)
+    f = np.abs(lam) / (2 * np.pi)                                 # (n, 2, 4)
+    ratio = f[..., 1:] / f[..., :1]                               # (n, 2, 3)
+    u = real_shapes(vecs)                                         # (n, 2, 4, m)
+    pairing = np.diagonal(mac(u[:, 0], u[:, 1]), axis1=-2, axis2=-1)  # (n, m)
     reasons = []
     for i in range(f.shape[0]):
         r = [f"{name} f{k + 2}/f1 = {ratio[i, s, k]:.4g} lies outside the nominal beam's "
              f"{ratio_range[k, 0]:.4g}-{ratio_range[k, 1]:.4g} (a missing or spurious mode)"
              for s, name in enumerate(("baseline", "measured")) for k in range(3)
              if not ratio_range[k, 0] <= ratio[i, s, k] <= ratio_range[k, 1]]
-        r += [f"mode {k + 1} of the baseline and the measured test do not pair (MAC {mac[i, k]:.2f} < 0.8)"
-              for k in range(4) if mac[i, k] < 0.8]
+        r += [f"mode {k + 1} of the baseline and the measured test do not pair (MAC {pairing[i, k]:.2f} < 0.8)"
+              for k in range(4) if pairing[i, k] < 0.8]
         reasons.append(r)
     return reasons
 
@@ -660,6 +659,7 @@ def equivalent_depth(hinge_flexibility: float, preset, width_m: float) -> float 
     """
     from datagen.config import DEFAULTS
     from datagen.specimen import SectionLayout, slit_section_ei
+    from learn import features as features_module
     from physics.properties import beam_preset
 
     if isinstance(preset, str):
@@ -670,7 +670,7 @@ def equivalent_depth(hinge_flexibility: float, preset, width_m: float) -> float 
     sec = DEFAULTS["section"]
     lay = SectionLayout.matching(EI, width, thickness, sec["face_thickness_m"], sec["core_modulus_pa"])
     depths = np.linspace(0.0, 0.999 * thickness / 2, 4000)
-    flexibility = width_m * (lay.EI / slit_section_ei(lay, depths) - 1.0) / length
+    flexibility = features_module.hinge_flexibility(1.0 - slit_section_ei(lay, depths) / lay.EI, width_m, length)
     if not np.isfinite(hinge_flexibility) or hinge_flexibility > flexibility[-1]:
         return None
     return float(np.interp(hinge_flexibility, flexibility, depths))
