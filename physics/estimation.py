@@ -94,15 +94,12 @@ def estimate_frf(force, response, fs_hz, nperseg, noverlap=None, window="hann", 
     # H1: X = H F  ->  E[conj(F_a) X_o] = sum_b H_ob E[conj(F_a) F_b], i.e. Gfx = Gff H^T
     # a line whose force power is 300 dB below the strongest (a zero or underflowing force) has no H1
     singular = ~(np.min(np.linalg.svd(Gff, compute_uv=False), axis=-1) > 1e-30 * np.max(np.abs(Gff)))
-    try:
-        if singular.any():
-            raise np.linalg.LinAlgError
-        H1 = np.linalg.solve(Gff, Gfx).mT  # (L, n_o, n_i)
-    except np.linalg.LinAlgError:
+    if singular.any():
         k = int(np.argmax(singular))
-        raise ShapeError(f"the force cross-spectral matrix is singular at {max(int(singular.sum()), 1)} of "
+        raise ShapeError(f"the force cross-spectral matrix is singular at {int(singular.sum())} of "
                          f"{singular.size} lines (first {freq[k]:.6g} Hz): the force has no energy there or the "
-                         "force channels are dependent; H1 needs force at every line") from None
+                         "force channels are dependent; H1 needs force at every line")
+    H1 = np.linalg.solve(Gff, Gfx).mT  # (L, n_o, n_i)
     gff = np.real(np.einsum("Laa->La", Gff))  # (L, n_i)
     coh = np.abs(Gfx) ** 2 / (gff[:, :, None] * Gxx[:, None, :])  # (L, n_i, n_o)
     mult = np.real(np.einsum("Loa,Lao->Lo", H1, Gfx.conj())) / Gxx

@@ -175,7 +175,7 @@ def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", 
     h = {"h1": est.h1, "h2": est.h2, "hv": est.hv}[estimator]
     if h is None:
         raise ShapeError("h2 needs exactly one force channel")
-    h = h[:, :1] if h.shape[1] == 1 else h[:, [0]]
+    h = h[:, :1]
     f = est.frequency_hz
     keep = (f > 0) & (f <= (fmax_hz if fmax_hz is not None else f[-1]))
     if keep.sum() < 2:

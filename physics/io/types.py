@@ -162,9 +162,9 @@ class MeasuredFRF:
         if np.any(mag.max(axis=1) < 1e-250):
             k = int(np.nonzero(mag.max(axis=1) < 1e-250)[0][0])
             raise ShapeError(f"MeasuredFRF.frf: FRF {k + 1} is zero (all |H| < 1e-250) on every line")
-        if mag.max() > 1e100:
-            raise ShapeError(f"MeasuredFRF.frf has a value of magnitude {mag.max():.3g}, beyond the 1e+100 this "
-                             "package accepts (a unit or export error?)")
+        if mag.max() > MAX_MAGNITUDE:
+            raise ShapeError(f"MeasuredFRF.frf has a value of magnitude {mag.max():.3g}, beyond the {MAX_MAGNITUDE:g} "
+                             "this package accepts (a unit or export error?)")
         if len(set(resp)) != len(resp) or len(set(ref)) != len(ref):
             raise ShapeError("MeasuredFRF DOF labels must be unique")
         if self.kind not in FRF_KINDS:
