@@ -41,13 +41,15 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["main"]
+__all__ = ["cli_json", "main"]
 
 SETS = ("easy", "eb", "timoshenko")
 
 
-def _cli(argv: list[str], source_tree: str | None = None) -> dict | list:
-    """``beam-damage ARGV --json`` in this process (the CLI's own entry point), or in ``source_tree``'s."""
+def cli_json(argv: list[str], source_tree: str | None = None) -> dict | list:
+    """``beam-damage ARGV --json`` in this process (the CLI's own entry point), or in ``source_tree``'s; its JSON.
+
+    A non-zero exit raises ``RuntimeError`` with the command's stderr."""
     if source_tree is None:
         from experiments.cli import main
 
@@ -85,10 +87,10 @@ def loop_model(out: Path, name: str, n_train: int, seed: int) -> Path:
     if (model / "config.json").is_file():
         return model
     base = out / "pairs" / name / "pair-000_baseline.uff"
-    _cli(["discrepancy", "--beam", "beam5", "--measured", str(base), "--out", str(d / "cal")])
-    _cli(["generate", "--beam", str(d / "cal" / "beam.toml"), "--config", "training", "--n", str(n_train),
+    cli_json(["discrepancy", "--beam", "beam5", "--measured", str(base), "--out", str(d / "cal")])
+    cli_json(["generate", "--beam", str(d / "cal" / "beam.toml"), "--config", "training", "--n", str(n_train),
           "--seed", str(seed), "--out", str(d / "data"), "--workers", "2"])
-    _cli(["train", "--data", str(d / "data"), "--out", str(model)])
+    cli_json(["train", "--data", str(d / "data"), "--out", str(model)])
     return model
 
 
@@ -97,7 +99,7 @@ def classify_set(model: Path, pair_dir: Path, truth: list, source_tree: str | No
     verdicts = []
     for t in truth:
         k = int(t["pair"])
-        verdicts.append(_cli(["classify", "--model", str(model), "--baseline",
+        verdicts.append(cli_json(["classify", "--model", str(model), "--baseline",
                               str(pair_dir / f"pair-{k:03d}_baseline.uff"),
                               str(pair_dir / f"pair-{k:03d}_current.uff")],
                              source_tree))
@@ -154,7 +156,7 @@ def batch_rate(model: Path, pair_dir: Path, n: int) -> dict:
     files = [str(pair_dir / f"pair-{k:03d}_current.uff") for k in range(n)]
     base = str(pair_dir / "pair-000_baseline.uff")
     t0 = time.perf_counter()
-    _cli(["classify", "--model", str(model), "--baseline", base, *files])
+    cli_json(["classify", "--model", str(model), "--baseline", base, *files])
     t_batch = time.perf_counter() - t0
     t0 = time.perf_counter()
     subprocess.run([sys.executable, "-m", "experiments.cli", "classify", "--model", str(model), "--baseline", base,

@@ -32,7 +32,6 @@ kinds are counted separately in the table.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import csv
 import io
 import json
@@ -51,15 +50,14 @@ KINDS = {"modal": "modal JSON", "frequencies": "frequencies + damping", "uff": "
 
 
 def run_cli(measured: Path, extra=()) -> dict:
-    """``beam-damage discrepancy --beam beam5 --measured FILE --json [extra]`` in this process; its JSON."""
-    from experiments.cli import main
+    """``beam-damage discrepancy --beam beam5 --measured FILE --json [extra]`` in this process; its JSON, or
+    ``{"error": ...}`` when it exits non-zero."""
+    from experiments.bench_foreign import cli_json
 
-    buf, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(err):
-        rc = main(["discrepancy", "--beam", "beam5", "--measured", str(measured), "--json", *extra])
-    if rc != 0:
-        return {"error": err.getvalue().strip() or f"exit code {rc}"}
-    return json.loads(buf.getvalue())
+    try:
+        return cli_json(["discrepancy", "--beam", "beam5", "--measured", str(measured), *extra])
+    except RuntimeError as exc:
+        return {"error": str(exc)}
 
 
 def truth_label(case: dict) -> str:

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from experiments.report import Figure, Section, Table
-from experiments.validate import thesis_fixture
+from experiments.validate import frob_rel, thesis_fixture
 from physics import fem, frf, modal, properties, reduction, updating
 from physics.io import atomic_write_text, modal_data_from_dict
 
@@ -32,10 +32,6 @@ __all__ = ["run"]
 RESPONSE, REFERENCE = 3, 0
 OMEGA_RAD_S = np.linspace(1.0, 5000.0, 25000)  # the thesis's Program A grid
 MASSES = (("reduced_mass", "reduced-mass model (IIRS)"), ("lumped_mass", "lumped-mass model (eq. 4.6)"))
-
-
-def _rel_frob(a, b) -> float:
-    return float(np.linalg.norm(np.asarray(a) - np.asarray(b)) / np.linalg.norm(b))
 
 
 def identified_models(b5: dict) -> dict:
@@ -134,7 +130,7 @@ def _table_4_1(b5: dict, preset) -> list:
     """Rows of the Table 4.1 check: relative Frobenius error of the IIRS-reduced ``M`` and ``K``."""
     model = fem.beam_model(preset.n_elements, preset.length_m, preset.EI_Nm2, preset.mass_per_length_kg_m)
     red = reduction.iirs(model.M, model.K, model.index(preset.masters))
-    return [{"matrix": name, "relative error (Frobenius)": _rel_frob(ours, b5["iirs_reduced"][name]),
+    return [{"matrix": name, "relative error (Frobenius)": frob_rel(ours, b5["iirs_reduced"][name]),
              "IIRS iterations": red.iterations} for name, ours in (("M", red.M), ("K", red.K))]
 
 
@@ -148,8 +144,8 @@ def _chapter_six_tables(b5: dict, ident: dict) -> tuple:
         cm_ours = modal.complex_modes(d["M"], res.C, res.K)
         cm_printed = modal.complex_modes(d["M"], np.array(printed["C"]), np.array(printed["K"]))
         t_ident.append({"state": state, "model": mass.replace("_", " "),
-                        "C error vs printed": _rel_frob(res.C, printed["C"]),
-                        "K error vs printed": _rel_frob(res.K, printed["K"]),
+                        "C error vs printed": frob_rel(res.C, printed["C"]),
+                        "K error vs printed": frob_rel(res.K, printed["K"]),
                         "Pilkey iterations": int(res.iterations),
                         "negative eigenvalues of C": int(np.sum(np.linalg.eigvalsh(res.C) < 0)),
                         "min damping ratio": float(cm_ours.damping_ratios.min())})
