@@ -52,6 +52,25 @@ def write_renumbered_uff(path, frf, nodes, x_mm=None, order=None):
     return path
 
 
+def write_time_uff(path, t_s, channels):
+    """Time records as binary UFF 58 (function type 1) through pyuff; returns ``path``.
+
+    ``channels``: ``(node, signal, ordinate code[, units label])`` per record, +Z direction, no reference
+    (ordinate codes 13 force, 8 displacement, 12 acceleration).
+    """
+    import pyuff
+
+    sets = []
+    for node, sig, code, *label in channels:
+        units = {"abscissa_axis_units_lab": "s", "ordinate_axis_units_lab": label[0]} if label else {}
+        sets.append(pyuff.prepare_58(binary=1, func_type=1, rsp_node=int(node), rsp_dir=3, ref_node=0, ref_dir=0,
+                                     data=np.ascontiguousarray(sig), x=t_s, abscissa_spacing=1,
+                                     abscissa_spec_data_type=17, ordinate_spec_data_type=code,
+                                     orddenom_spec_data_type=0, **units))
+    pyuff.UFF(str(path)).write_sets(sets, mode="add")
+    return path
+
+
 def big_endian_58b(raw: bytes) -> bytes:
     """A little-endian 58b file rewritten big-endian: byte-ordering field 2, every double byte-swapped."""
     import re

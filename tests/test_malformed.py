@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from systems import write_time_uff  # before the path below drops this directory
 
 if __name__ == "__main__":  # run as a script: tests/physics would shadow the physics package (CASES is built below)
     sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
@@ -309,22 +310,10 @@ def _arg_cases():
     ]
 
 
-def _write_time_records(path, t, force, resp):
-    """Force (node 1) and acceleration (node 2) time records as binary UFF 58, through pyuff."""
-    import pyuff
-
-    sets = [pyuff.prepare_58(binary=1, func_type=1, rsp_node=node, rsp_dir=3, ref_node=0, ref_dir=0,
-                             data=np.ascontiguousarray(sig), x=t, abscissa_spacing=1, abscissa_spec_data_type=17,
-                             ordinate_spec_data_type=code, orddenom_spec_data_type=0)
-            for node, sig, code in ((1, force, 13), (2, resp, 12))]
-    pyuff.UFF(str(path)).write_sets(sets, mode="add")
-    return path
-
-
 def _impact_uff(path):
     t = np.arange(4096) / 1024.0
     force = np.where(t % 1.0 < 0.002, 100.0, 0.0)
-    return _write_time_records(path, t, force, np.sin(2 * np.pi * 40 * t) * np.exp(-3 * (t % 1.0)))
+    return write_time_uff(path, t, [(1, force, 13), (2, np.sin(2 * np.pi * 40 * t) * np.exp(-3 * (t % 1.0)), 12)])
 
 
 # --------------------------------------------------------------------------- datasets and models
@@ -848,7 +837,7 @@ def _time_uff(path, force=1.0, response=1.0, hits_every_s=1.0):
     t = np.arange(4096) / 1024.0
     tau = t % hits_every_s
     pulse = np.where(tau < 0.004, np.sin(np.pi * tau / 0.004), 0.0) * 100.0 * force
-    return _write_time_records(path, t, pulse, np.sin(2 * np.pi * 40 * t) * np.exp(-3 * tau) * response)
+    return write_time_uff(path, t, [(1, pulse, 13), (2, np.sin(2 * np.pi * 40 * t) * np.exp(-3 * tau) * response, 12)])
 
 
 def _estimate_cases():

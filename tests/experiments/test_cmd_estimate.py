@@ -5,6 +5,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from systems import write_time_uff
 
 from experiments.cli import main
 from physics.io import read_frf
@@ -19,19 +20,6 @@ def _run(capsys, argv):
     return code, cap.out, cap.err
 
 
-def _write_time_uff(path, records_obj, labels):
-    sets = []
-    for sig, dof, q, lab in zip(records_obj.signals, records_obj.dofs, records_obj.quantities, labels):
-        node, sign_dir = dof.split(":")
-        code = {"force": 13, "displacement": 8, "acceleration": 12}[q]
-        sets.append(pyuff.prepare_58(binary=1, func_type=1, rsp_node=int(node), rsp_dir=3, ref_node=0, ref_dir=0,
-                                     data=np.ascontiguousarray(sig), x=np.arange(sig.size) * records_obj.time_step_s,
-                                     abscissa_spacing=1, abscissa_spec_data_type=17, ordinate_spec_data_type=code,
-                                     orddenom_spec_data_type=0, abscissa_axis_units_lab="s",
-                                     ordinate_axis_units_lab=lab))
-    pyuff.UFF(str(path)).write_sets(sets, mode="add")
-
-
 @pytest.fixture(scope="module")
 def impact_file(tmp_path_factory):
     import sys
@@ -41,7 +29,10 @@ def impact_file(tmp_path_factory):
 
     rec, model, scale = _impact_test()
     path = tmp_path_factory.mktemp("t") / "impact.uff"
-    _write_time_uff(path, rec, ["N", "m"])
+    codes = {"force": 13, "displacement": 8, "acceleration": 12}
+    write_time_uff(path, np.arange(rec.signals[0].size) * rec.time_step_s,
+                   [(d.split(":")[0], sig, codes[q], lab)
+                    for sig, d, q, lab in zip(rec.signals, rec.dofs, rec.quantities, ["N", "m"])])
     return path, rec, model, scale
 
 

@@ -8,7 +8,7 @@ pyuff = pytest.importorskip("pyuff")
 from physics.errors import FileFormatError, ShapeError
 from physics.io import (MeasuredFRF, dof_label, parse_dof, read_frf, read_frf_csv, read_frf_npz,
                         read_uff58, write_frf_csv, write_frf_npz, write_uff58)
-from systems import big_endian_58b
+from systems import big_endian_58b, write_time_uff
 
 
 def sdof_frf(f_hz, fn=30.0, zeta=0.02, m=0.1):
@@ -268,11 +268,7 @@ def test_uff58b_big_endian_time_records_read_like_little_endian(tmp_path):
     from physics.io import TIME, read
 
     t = np.arange(512) / 256.0
-    sets = [pyuff.prepare_58(binary=1, func_type=1, rsp_node=node, rsp_dir=3, ref_node=0, ref_dir=0, data=sig, x=t,
-                             abscissa_spacing=1, abscissa_spec_data_type=17, ordinate_spec_data_type=code,
-                             orddenom_spec_data_type=0)
-            for node, sig, code in ((1, np.exp(-t), 13), (2, np.sin(2 * np.pi * 7 * t), 12))]
-    _write_pyuff(tmp_path / "le.uff", sets)
+    write_time_uff(tmp_path / "le.uff", t, [(1, np.exp(-t), 13), (2, np.sin(2 * np.pi * 7 * t), 12)])
     (tmp_path / "be.uff").write_bytes(big_endian_58b((tmp_path / "le.uff").read_bytes()))
     assert (tmp_path / "be.uff").read_bytes().count(b"    58b     2     2") == 2
     be = read(tmp_path / "be.uff", TIME)
