@@ -16,10 +16,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from physics import effects as fx
 from physics.beam import Beam
 from physics.discrepancy.measurement import Measurement
 
-__all__ = ["Param", "effect_params", "g_core_pa"]
+__all__ = ["Param", "effect_params", "g_core_pa", "has_position"]
 
 
 @dataclass(frozen=True)
@@ -50,9 +51,14 @@ def effect_params(effect: str, beam: Beam, meas: Measurement, position_free: boo
         "local_damping": [Param("local_damping.c_Ns_m", 1e-7 * m * L * w1, 0.3 * m * L * w1)],
     }
     out = list(table[effect])
-    if effect in ("added_mass", "local_damping") and position_free:
+    if has_position(effect) and position_free:
         out.append(Param(f"{effect}.x_m", 0.02 * L, L, log=False))
     return out
+
+
+def has_position(effect: str) -> bool:
+    """Whether the effect sits at a point of the beam (an ``x_m`` parameter in :data:`physics.effects.EFFECTS`)."""
+    return any(p.name == "x_m" for p in fx.EFFECTS[effect])
 
 
 def g_core_pa(kGA_N: float, beam: Beam) -> float:

@@ -16,7 +16,7 @@ from scipy.optimize import OptimizeResult, least_squares
 
 from physics import effects as fx
 from physics.beam import Beam
-from physics.discrepancy.candidates import Param, effect_params, g_core_pa
+from physics.discrepancy.candidates import Param, effect_params, g_core_pa, has_position
 from physics.discrepancy.measurement import Measurement, has_complex_shapes, magnitude_db
 from physics.discrepancy.model import ModeResiduals, Prediction, aligned, mode_residuals, predict, rayleigh_fit
 
@@ -317,7 +317,7 @@ def candidate_fit(beam, meas, noise, name, fixed, n_elements, pairs, fit_mass, n
     """Fit one candidate on top of the named effects; returns ``(fit, positions used)``."""
     position_free = meas.shapes is not None or meas.frf is not None
     kw = dict(fit_mass=fit_mass, seed=seed, named=named, start=start)
-    if name in ("added_mass", "local_damping"):
+    if has_position(name):
         # scan the measured points for the position; with shapes or FRFs then refine it continuously
         options = []
         for x in beam.measured_x_m:

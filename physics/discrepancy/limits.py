@@ -10,7 +10,7 @@ from scipy.linalg import eigh
 
 from physics import effects as fx
 from physics.beam import Beam
-from physics.discrepancy.candidates import Param, effect_params
+from physics.discrepancy.candidates import Param, effect_params, has_position
 from physics.discrepancy.fitting import Fit, Problem
 from physics.discrepancy.measurement import Measurement, Noise
 from physics.discrepancy.model import pair_modes, predict
@@ -153,7 +153,7 @@ def detection_limits(beam: Beam, meas: Measurement, noise: Noise, final: Fit, c_
     out = {}
     for effect in effects:
         p = effect_params(effect, beam, meas, False)[0]
-        xs = list(beam.measured_x_m) if effect in ("added_mass", "local_damping") else [None]
+        xs = list(beam.measured_x_m) if has_position(effect) else [None]
         k_new = 1 + (xs[0] is not None)    # a position, continuous or among the measured points, counts as one
         thr = BIC_SIGNIFICANT + k_new * math.log(final.n_obs)
         lam_lim = _noncentrality(thr, k_new)
