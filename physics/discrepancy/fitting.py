@@ -20,7 +20,8 @@ from physics.discrepancy.candidates import Param, effect_params, g_core_pa, has_
 from physics.discrepancy.measurement import Measurement, has_complex_shapes, magnitude_db
 from physics.discrepancy.model import ModeResiduals, Prediction, aligned, mode_residuals, predict, rayleigh_fit
 
-__all__ = ["BLOCKS", "Fit", "Problem", "as_fit", "candidate_fit", "fit_model", "lomo_error", "with_rayleigh"]
+__all__ = ["BLOCKS", "Fit", "Problem", "as_fit", "candidate_fit", "fit_model", "lomo_error", "model_params",
+           "with_rayleigh"]
 
 
 @dataclass(frozen=True)
@@ -183,6 +184,16 @@ class Problem:
         return out
 
 
+def model_params(beam, meas, effects, positions, fit_mass) -> list[Param]:
+    """Fitted parameters: the global EI (and mass) scale, then each effect's (its ``x_m`` too when the data carry
+    shapes or FRFs and ``positions`` does not fix it)."""
+    position_free = meas.shapes is not None or meas.frf is not None
+    params = [Param("EI_scale", 0.3, 3.0)] + ([Param("mass_scale", 0.3, 3.0)] if fit_mass else [])
+    for e in effects:
+        params += effect_params(e, beam, meas, position_free and e not in positions)
+    return params
+
+
 def fit_model(beam, meas, noise, effect, fixed_effects, n_elements, pairs, *, fit_mass, n_starts=4, seed=0,
          position=None, with_lomo=True, named=(), start=None) -> tuple[Fit, Problem, np.ndarray]:
     """Bounded multi-start least squares of the globals, the ``named`` effects and ``effect``.
@@ -192,16 +203,9 @@ def fit_model(beam, meas, noise, effect, fixed_effects, n_elements, pairs, *, fi
     the new effect starts weak, then at random points within its bounds.
     ``position`` fixes ``x_m`` of position-bearing effects (``{effect: x_m}``).
     """
-    position_free = meas.shapes is not None or meas.frf is not None
     position = dict(position or {})
     start = start or {}
-    params = [Param("EI_scale", 0.3, 3.0)]
-    if fit_mass:
-        params.append(Param("mass_scale", 0.3, 3.0))
-    for e in named:
-        params += effect_params(e, beam, meas, position_free and e not in position)
-    if effect != "none":
-        params += effect_params(effect, beam, meas, position_free and effect not in position)
+    params = model_params(beam, meas, [*named, *([effect] if effect != "none" else [])], position, fit_mass)
     prob = Problem(beam, meas, noise, fixed_effects, params, position, n_elements, pairs, fit_mass)
     lo = [p.bounds()[0] for p in params]
     hi = [p.bounds()[1] for p in params]

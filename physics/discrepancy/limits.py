@@ -11,7 +11,7 @@ from scipy.linalg import eigh
 from physics import effects as fx
 from physics.beam import Beam
 from physics.discrepancy.candidates import Param, effect_params, has_position
-from physics.discrepancy.fitting import Fit, Problem
+from physics.discrepancy.fitting import Fit, Problem, model_params
 from physics.discrepancy.measurement import Measurement, Noise
 from physics.discrepancy.model import pair_modes, predict
 from physics.discrepancy.selection import BIC_SIGNIFICANT
@@ -132,11 +132,8 @@ def detection_limits(beam: Beam, meas: Measurement, noise: Noise, final: Fit, c_
     fixed = {k: dict(v) for k, v in (fixed or {}).items()}
     positions = dict(positions or {})
     pairs = pair_modes(meas, predict(beam, meas, n_elements)) if pairs is None else pairs
-    position_free = meas.shapes is not None or meas.frf is not None
     fit_mass = meas.frf is not None
-    nuis = [Param("EI_scale", 0.3, 3.0)] + ([Param("mass_scale", 0.3, 3.0)] if fit_mass else [])
-    for e in named:
-        nuis += effect_params(e, beam, meas, position_free and e not in positions)
+    nuis = model_params(beam, meas, named, positions, fit_mass)
     null = Problem(beam, meas, noise, fixed, nuis, positions, n_elements, pairs, fit_mass)
     u_n = _u_of(nuis, final, beam)
     blocks0 = null.blocks(null.predict(null.beam_at(u_n)[0]))
