@@ -16,12 +16,14 @@ import math
 import tomllib
 from pathlib import Path
 
+import numpy as np
+
 from physics.errors import BeamDamageError, ConfigError
 from physics.properties import PRESETS
 from physics.updating import mass_model_name
 
-__all__ = ["CONFIG_DIR", "DEFAULTS", "MAX_MODAL_NOISE", "MAX_SLIT_LOSS_FACTOR", "load_config", "merge",
-           "modal_noise_calibration", "named_configs", "validate"]
+__all__ = ["CONFIG_DIR", "DEFAULTS", "MAX_MODAL_NOISE", "MAX_SLIT_LOSS_FACTOR", "calibrated_modal_std", "load_config",
+           "merge", "modal_noise_calibration", "named_configs", "validate"]
 
 
 #: Default configuration (SI units). See docs/datasets.md.
@@ -124,11 +126,24 @@ MAX_SLIT_LOSS_FACTOR = 1.0
 MAX_MODAL_NOISE = 0.5
 
 
-def _max_calibrated_level(meas, limit):
-    """Largest FRF noise level whose calibrated modal noise stds all stay <= ``limit``."""
-    return min(math.sqrt(max(limit**2 - fl**2, 0.0)) / c if c > 0 else math.inf
+def calibrated_modal_std(meas: dict, level, floor) -> dict:
+    """Relative std of each modal quantity, ``sqrt((c level)^2 + (g floor)^2 + e^2)`` per mode.
+
+    ``c``, ``g`` and ``e`` are ``measurement.{q}_noise``, ``{q}_noise_per_floor`` and ``{q}_noise_floor``;
+    ``level`` and ``floor`` (FRF noise level and floor) broadcast against the 4 modes.
+    Returns ``{"frequency", "damping", "shape"}`` -> ndarray.
+    """
+    return {q: np.sqrt((np.asarray(meas[f"{q}_noise"], float) * level) ** 2
+                       + (np.asarray(meas[f"{q}_noise_per_floor"], float) * floor) ** 2
+                       + np.asarray(meas[f"{q}_noise_floor"], float) ** 2)
+            for q in ("frequency", "damping", "shape")}
+
+
+def _max_calibrated_level(meas, floor, limit):
+    """Largest FRF noise level whose calibrated modal noise stds (at noise floor ``floor``) all stay <= ``limit``."""
+    return min(math.sqrt(max(limit**2 - (g * floor) ** 2 - e**2, 0.0)) / c if c > 0 else math.inf
                for q in ("frequency", "damping", "shape")
-               for c, fl in zip(meas[f"{q}_noise"], meas[f"{q}_noise_floor"]))
+               for c, g, e in zip(meas[f"{q}_noise"], meas[f"{q}_noise_per_floor"], meas[f"{q}_noise_floor"]))
 
 
 def validate(cfg: dict) -> dict:
@@ -266,13 +281,13 @@ def _check_slit_loss_factor(d: dict, meas: dict) -> None:
 def _check_calibrated_noise(meas: dict) -> None:
     """The modal noise the FRF noise implies must lie where the fixed stds may (<= :data:`MAX_MODAL_NOISE`)."""
     level = max(meas["frf_noise"]) if isinstance(meas["frf_noise"], list) else meas["frf_noise"]
-    for q in ("frequency", "damping", "shape"):
-        std = max(math.hypot(c * level, fl) for c, fl in zip(meas[f"{q}_noise"], meas[f"{q}_noise_floor"]))
-        if std > MAX_MODAL_NOISE:
+    floor = max(meas["frf_noise_floor"]) if isinstance(meas["frf_noise_floor"], list) else meas["frf_noise_floor"]
+    for q, std in calibrated_modal_std(meas, level, floor).items():
+        if std.max() > MAX_MODAL_NOISE:
             raise ConfigError(f"config key 'measurement.frf_noise': {level:g} implies a calibrated relative "
-                              f"{q} noise std of {std:.3g} (> {MAX_MODAL_NOISE:g}: measured modes with "
+                              f"{q} noise std of {std.max():.3g} (> {MAX_MODAL_NOISE:g}: measured modes with "
                               f"negative damping or lost shapes); keep frf_noise <= "
-                              f"{_max_calibrated_level(meas, MAX_MODAL_NOISE):.3g}")
+                              f"{_max_calibrated_level(meas, floor, MAX_MODAL_NOISE):.3g}")
 
 
 def _check_updating(up: dict) -> None:

@@ -45,6 +45,7 @@ import json
 
 import numpy as np
 
+from datagen.config import calibrated_modal_std
 from datagen.damage import draw_slits, slit_corrections
 from datagen.solvers import light_damping_modes, ritz_modes
 from datagen.specimen import BeamPreset, SectionLayout, draw_specimens, slit_section_ei
@@ -402,12 +403,8 @@ def measure_modes(setup, inp, lam4, psi4):
     """
     mcfg = setup.cfg["measurement"]
     if mcfg["modal_noise"] == "calibrated":
-        level = np.asarray(inp.noise_level, float)[:, None, None]
-        floor = np.asarray(inp.noise_floor, float)[:, None, None]
-        sig = {q: np.sqrt((np.asarray(mcfg[f"{q}_noise"], float) * level) ** 2
-                          + (np.asarray(mcfg[f"{q}_noise_per_floor"], float) * floor) ** 2
-                          + np.asarray(mcfg[f"{q}_noise_floor"], float) ** 2)
-               for q in ("frequency", "damping", "shape")}                        # (B, 1, 4)
+        sig = calibrated_modal_std(mcfg, np.asarray(inp.noise_level, float)[:, None, None],
+                                   np.asarray(inp.noise_floor, float)[:, None, None])   # (B, 1, 4)
     else:
         sig = {q: np.asarray(mcfg[f"{q}_noise"], float) * np.ones(N_MEAS) for q in ("frequency", "damping", "shape")}
     scale = np.asarray(inp.modal_noise_scale, float)[:, None, None]
