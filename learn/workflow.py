@@ -572,7 +572,8 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     results = []
     for i in range(len(currents)):
         net = _network_answer(d, i, out, L, depth(float(d.hinge_flexibility[i])))
-        cl = None if best is None else _classical_answer(best, i, L)
+        answers = [_classical_answer(o, i, L) for o in classical]
+        cl = None if best is None else answers[classical.index(best)]
         reasons = list(mode_reasons[i])
         if pct[i] > IN_DISTRIBUTION_PERCENTILE:
             reasons.insert(0, f"Mahalanobis distance {dist[i]:.3g} from the training data, beyond "
@@ -594,7 +595,7 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
             "in_distribution": inside, "out_of_distribution_reasons": reasons,
             "mahalanobis_distance": float(dist[i]), "training_percentile": float(pct[i]),
             "network": net, "classical": cl,
-            "classical_methods": [_classical_answer(o, i, L) for o in classical],
+            "classical_methods": answers,
             "identification": {**IDENTIFICATION, "source": "identified from FRFs" if identified else "modal data",
                                "baseline_frequencies_hz": [float(x) for x in f[0]],
                                "measured_frequencies_hz": [float(x) for x in f[1]]},
