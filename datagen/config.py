@@ -22,8 +22,8 @@ from physics.errors import BeamDamageError, ConfigError
 from physics.properties import PRESETS
 from physics.updating import mass_model_name
 
-__all__ = ["CONFIG_DIR", "DEFAULTS", "MAX_MODAL_NOISE", "MAX_SLIT_LOSS_FACTOR", "calibrated_modal_std", "load_config",
-           "merge", "modal_noise_calibration", "named_configs", "validate"]
+__all__ = ["CONFIG_DIR", "DEFAULTS", "MAX_MODAL_NOISE", "MAX_SHEAR_FLEXIBILITY", "MAX_SLIT_LOSS_FACTOR",
+           "calibrated_modal_std", "load_config", "merge", "modal_noise_calibration", "named_configs", "validate"]
 
 
 #: Default configuration (SI units). See docs/datasets.md.
@@ -45,6 +45,7 @@ DEFAULTS: dict = {
         "damping_ratios": [0.001623, 0.002481, 0.003105, 0.00421],  # thesis beam 5, modes 1..4
         "temperature_stiffness_change": [0.0, 0.0],  # relative EI change of the current test day (uniform)
         "root_spring_change": [0.0, 0.0],            # relative root-spring change on re-clamping (uniform)
+        "shear_flexibility": [0.0, 0.0],  # EI / (kGA L^2) of the specimen (uniform; 0: Euler-Bernoulli elements)
     },
     "damage": {
         "n_slits": [1, 1],
@@ -124,6 +125,11 @@ def _num(key, v, *, lo=None, hi=None, integer=False, strict_lo=False):
 MAX_SLIT_LOSS_FACTOR = 1.0
 #: Largest relative modal noise std (frequency, damping ratio, shape), fixed or implied by calibrated FRF noise.
 MAX_MODAL_NOISE = 0.5
+
+
+#: Largest specimen shear flexibility ``EI / (kGA L^2)``: mode 4 of a cantilever then lies about half
+#: below its Euler-Bernoulli frequency.
+MAX_SHEAR_FLEXIBILITY = 0.02
 
 
 def calibrated_modal_std(meas: dict, level, floor) -> dict:
@@ -216,6 +222,8 @@ def _check_specimen(dmg: dict) -> None:
                                          allow_empty=True)
     for k in ("temperature_stiffness_change", "root_spring_change"):
         dmg[k] = _range(f"specimen.{k}", dmg[k], lo=-0.5, hi=0.5)
+    dmg["shear_flexibility"] = _range("specimen.shear_flexibility", dmg["shear_flexibility"], lo=0.0,
+                                      hi=MAX_SHEAR_FLEXIBILITY)
     zr = dmg["damping_ratios"]
     if not (isinstance(zr, list) and len(zr) >= 1 and all(isinstance(z, (int, float)) and 0 < z < 0.2 for z in zr)):
         raise ConfigError(f"config key 'specimen.damping_ratios' must be a list of ratios in (0, 0.2), got {zr!r}")

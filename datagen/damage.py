@@ -47,17 +47,24 @@ __all__ = ["clamped_flexibility", "curvature_basis", "draw_slits", "element4_ind
 def curvature_basis(element_length, shear_phi=0.0):
     """``b0, b1`` with curvature ``B(xi) = b0 + xi b1`` over the element DOFs (1/m^2 and 1/m).
 
-    DOF order ``[w1, theta1, w2, theta2]``, ``xi = s / l`` in ``[0, 1]``.
-    ``shear_phi = 0``: second derivative of the Hermite shapes. ``shear_phi > 0``:
+    DOF order ``[w1, theta1, w2, theta2]``, ``xi = s / l`` in ``[0, 1]``:
     curvature ``theta'`` of the Timoshenko element of
     :func:`physics.effects.timoshenko_stiffness` (its slope term is the Hermite
-    one divided by ``1 + phi``).
+    one divided by ``1 + phi``); ``shear_phi = 0`` gives the second derivative of
+    the Hermite shapes.
+
+    Parameters
+    ----------
+    element_length : float (m)
+    shear_phi : float or ndarray, shape (...)   ``12 EI / (kGA l^2)``
+
+    Returns
+    -------
+    b0, b1 : ndarray, shape (..., 4)
     """
     l = float(element_length)
-    b1 = np.array([12 / l**2, 6 / l, -12 / l**2, 6 / l])
-    if shear_phi == 0.0:
-        return np.array([-6 / l**2, -4 / l, 6 / l**2, -2 / l]), b1
-    b1 = b1 / (1.0 + shear_phi)
+    phi = np.asarray(shear_phi, float)[..., None]
+    b1 = np.array([12 / l**2, 6 / l, -12 / l**2, 6 / l]) / (1.0 + phi)
     return np.array([0.0, -1 / l, 0.0, 1 / l]) - b1 / 2, b1
 
 
@@ -68,16 +75,18 @@ def overlap_energy(xi1, xi2, element_length, shear_phi=0.0):
     ----------
     xi1, xi2 : ndarray, shape (...)
     element_length : float (m)
-    shear_phi : float   ``12 EI / (kGA l^2)`` of a Timoshenko element (0: Euler-Bernoulli)
+    shear_phi : float or ndarray broadcasting against ``xi1``
+        ``12 EI / (kGA l^2)`` of a Timoshenko element (0: Euler-Bernoulli)
 
     Returns
     -------
     ndarray, shape (..., 4, 4)   (1/m^3 ... units of stiffness / EI)
     """
     b0, b1 = curvature_basis(element_length, shear_phi)
-    a0 = np.outer(b0, b0)
-    a1 = np.outer(b0, b1) + np.outer(b1, b0)
-    a2 = np.outer(b1, b1)
+    b0c, b0r, b1c, b1r = b0[..., :, None], b0[..., None, :], b1[..., :, None], b1[..., None, :]
+    a0 = b0c * b0r
+    a1 = b0c * b1r + b1c * b0r
+    a2 = b1c * b1r
     x1 = np.asarray(xi1, float)[..., None, None]
     x2 = np.asarray(xi2, float)[..., None, None]
     return element_length * ((x2 - x1) * a0 + (x2**2 - x1**2) / 2 * a1 + (x2**3 - x1**3) / 3 * a2)
@@ -116,14 +125,15 @@ def clamped_flexibility(ei_Nm2, element_length, shear_phi=0.0):
     ----------
     ei_Nm2 : ndarray, shape (...)
     element_length : float (m)
-    shear_phi : float   ``12 EI / (kGA l^2)`` (0: Euler-Bernoulli)
+    shear_phi : float or ndarray, shape (...)   ``12 EI / (kGA l^2)`` (0: Euler-Bernoulli)
 
     Returns
     -------
     ndarray, shape (..., 2, 2)   [[m/N, 1/N], [1/N, 1/(N m)]] for tip ``[force, moment]``
     """
     l = float(element_length)
-    f = np.array([[l**3 * (1 / 3 + shear_phi / 12), l**2 / 2], [l**2 / 2, l]])
+    f = np.array([[l**3 / 3, l**2 / 2], [l**2 / 2, l]]) + np.array([[l**3 / 12, 0.0], [0.0, 0.0]]) * np.asarray(
+        shear_phi, float)[..., None, None]
     return f / np.asarray(ei_Nm2, float)[..., None, None]
 
 
@@ -162,8 +172,8 @@ def slit_corrections(x_m, width_m, ei_loss_Nm2, beta_s, ei_Nm2, length_m, n_elem
         Extra stiffness-proportional damping coefficient of each slit (s).
     ei_Nm2 : ndarray, shape (B,)
         Specimen rigidity (N m^2).
-    shear_phi : float
-        ``12 EI / (kGA l^2)`` of the truth elements (0: Euler-Bernoulli).
+    shear_phi : float or ndarray, shape (B,)
+        ``12 EI / (kGA l^2)`` of the truth elements (0: Euler-Bernoulli), per sample or for all.
 
     Returns
     -------
@@ -173,7 +183,8 @@ def slit_corrections(x_m, width_m, ei_loss_Nm2, beta_s, ei_Nm2, length_m, n_elem
     le = length_m / n_elements
     ei = np.asarray(ei_Nm2, float)
     xi1, xi2 = slit_element_weights(x_m, width_m, length_m, n_elements)
-    G = overlap_energy(xi1, xi2, le, shear_phi)  # (B, S, E, 4, 4)
+    phi = np.asarray(shear_phi, float)
+    G = overlap_energy(xi1, xi2, le, phi[..., None, None] if phi.ndim else phi)  # (B, S, E, 4, 4)
     dC = np.einsum("bs,bseij->beij", np.asarray(beta_s, float) * ei[:, None], G)
     # pieces between consecutive slit edges, each losing its deepest covering slit's rigidity
     edges = np.sort(np.concatenate([xi1, xi2], axis=1), axis=1)           # (B, 2S, E)
@@ -188,7 +199,7 @@ def slit_corrections(x_m, width_m, ei_loss_Nm2, beta_s, ei_Nm2, length_m, n_elem
     d01 = le**2 * np.sum(c * (ua**2 - ub**2), axis=1) / 2                 # int (l-s) ds
     d11 = le * np.sum(c * (b - a), axis=1)                                # int ds
     dF = np.stack([np.stack([d00, d01], -1), np.stack([d01, d11], -1)], -2)   # (B, E, 2, 2)
-    F0 = clamped_flexibility(ei, le, shear_phi)[:, None]                  # (B, 1, 2, 2)
+    F0 = clamped_flexibility(ei, le, phi)[:, None]                        # (B, 1, 2, 2)
     k0 = np.linalg.inv(F0)
     k = np.linalg.inv(F0 + dF)
     dK = expand_tip_stiffness(-(k @ dF @ k0), le)

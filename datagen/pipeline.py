@@ -52,7 +52,7 @@ from datagen.specimen import BeamPreset, SectionLayout, draw_specimens, slit_sec
 from datagen.synth import measured_peak
 from physics.errors import ConfigError
 from physics.properties import beam_preset
-from datagen.truth_beam import as_preset, load_truth_beam, point_effects, unit_elements
+from datagen.truth_beam import as_preset, load_truth_beam, point_effects, shear_parameters, unit_elements
 from physics.fem import assemble, dof_names, kept_dofs
 from physics.frf import poles_and_residues
 from physics.modal import eigenvalues_from_modal, modal_parameters, undamped_modes
@@ -87,7 +87,11 @@ class Setup:
     root_spring_relative : tuple    ``(lo, hi)`` band of ``k_r L / EI`` drawn per specimen, or ``()``
     M_added : ndarray (n, n) or None   a beam file's point mass (kg ...), both states
     C_local : ndarray (n, n) or None   a beam file's dashpot (N s/m ...), both states
-    shear_phi : float               ``12 EI / (kGA l^2)`` of the truth elements (slit corrections)
+    shear_band : tuple              ``(lo, hi)`` of the specimen shear flexibility ``EI / (kGA L^2)`` (uniform);
+                                    ``K0``, ``M0`` hold its centre; ``lo == hi``: every specimen has those matrices
+    rho_i_over_m_m2 : float         rotary inertia per unit mass per length (m^2) of Timoshenko elements
+    timoshenko : bool               Timoshenko/Rayleigh elements (else Euler-Bernoulli, eqs. 3.8, 3.9)
+    k_y_unit : float                a beam file's translational root spring for unit EI (1/m^3), 0 without
     """
 
     cfg: dict
@@ -106,7 +110,10 @@ class Setup:
     root_spring_relative: tuple = ()
     M_added: np.ndarray | None = None
     C_local: np.ndarray | None = None
-    shear_phi: float = 0.0
+    shear_band: tuple = (0.0, 0.0)
+    rho_i_over_m_m2: float = 0.0
+    timoshenko: bool = False
+    k_y_unit: float = 0.0
 
     @property
     def length_m(self) -> float:
@@ -117,10 +124,40 @@ class Setup:
         return self.phi0.shape[-1]
 
     @property
+    def shear_varies(self) -> bool:
+        """Whether the specimens' shear flexibility is drawn (then their unit matrices differ)."""
+        return self.shear_band[0] != self.shear_band[1]
+
+    def unit_matrices(self, shear_flexibility):
+        """Truth stiffness for unit EI and mass for unit mass per length, and the element shear ratio.
+
+        Parameters
+        ----------
+        shear_flexibility : float or ndarray, shape (B,)   ``EI / (kGA L^2)``
+
+        Returns
+        -------
+        K0, M0 : ndarray, shape (n, n) or (B, n, n)   on the kept DOFs (a translational root spring included)
+        shear_phi : ndarray, shape () or (B,)         ``12 EI / (kGA l^2)`` of the elements
+        """
+        return _unit_matrices(shear_flexibility, self.rho_i_over_m_m2, self.length_m, self.n_elements,
+                              self.timoshenko, self.keep[0], self.k_y_unit)
+
+    @property
     def day_to_day(self) -> bool:
         """Whether the current state differs from the baseline by more than its slits."""
         sp = self.cfg["specimen"]
         return any(v != 0.0 for k in ("temperature_stiffness_change", "root_spring_change") for v in sp[k])
+
+
+def _unit_matrices(shear_flexibility, rho_i_over_m_m2, length_m, n_elements, timoshenko, first_kept, k_y_unit):
+    """:meth:`Setup.unit_matrices` from its parameters (``first_kept``: the first DOF the clamp keeps)."""
+    ke, me, phi = unit_elements(shear_flexibility, rho_i_over_m_m2, length_m, n_elements, timoshenko)
+    k0 = first_kept  # the clamp removes the first DOFs only: the kept block is a slice
+    K0 = assemble(np.broadcast_to(ke[..., None, :, :], ke.shape[:-2] + (n_elements, 4, 4)))[..., k0:, k0:]
+    M0 = assemble(np.broadcast_to(me[..., None, :, :], me.shape[:-2] + (n_elements, 4, 4)))[..., k0:, k0:]
+    K0[..., 0, 0] += k_y_unit
+    return K0, M0, phi
 
 
 def build_setup(cfg: dict) -> Setup:
@@ -137,7 +174,6 @@ def build_setup(cfg: dict) -> Setup:
         raise ConfigError(f"config key 'damage.depth_m' must stay below the thickness minus the bottom face "
                           f"({preset.thickness_m - sec['face_thickness_m']:g} m)")
     n_el = cfg["mesh"]["truth_elements"]
-    le = preset.length_m / n_el
     fx = point_effects(beam, n_el)
     band = tuple(cfg["specimen"]["root_spring_relative"])
     if fx["k_theta_Nm_rad"] is not None:  # the calibrated root spring is the centre of the specimen band
@@ -148,20 +184,24 @@ def build_setup(cfg: dict) -> Setup:
     if not spring and any(cfg["specimen"]["root_spring_change"]):
         raise ConfigError("config key 'specimen.root_spring_change' needs a root spring "
                           "('specimen.root_spring_relative' is empty: rigid clamp)")
-    ke, me, shear_phi = unit_elements(beam, le)
-    K_full = assemble(np.broadcast_to(ke, (n_el, 4, 4)))
-    M_full = assemble(np.broadcast_to(me, (n_el, 4, 4)))
+    shear_file, rho_ratio, timoshenko = shear_parameters(beam, preset.thickness_m)
+    shear_band = tuple(cfg["specimen"]["shear_flexibility"])
+    if shear_file > 0:  # the file's shear flexibility is the centre of the specimen band (its width kept)
+        half = (shear_band[1] - shear_band[0]) / 2
+        shear_band = (max(shear_file - half, 0.0), shear_file + half)
+    timoshenko = timoshenko or shear_band[1] > 0
     if fx["k_y_N_m"] is not None:  # translational root spring: the root translation stays a DOF
         names = dof_names(n_el + 1)
         keep = np.arange(len(names))
     else:
         keep, names = kept_dofs(n_el + 1, "clamped-free", root_spring=spring)
-    assert np.array_equal(keep, np.arange(keep[0], 2 * (n_el + 1)))  # truth_matrices slices from keep[0]
+    assert np.array_equal(keep, np.arange(keep[0], 2 * (n_el + 1)))  # unit_matrices slices from keep[0]
+    k_y_unit = 0.0 if fx["k_y_N_m"] is None else fx["k_y_N_m"] / preset.EI_Nm2
+    K_beam, M0, _ = _unit_matrices(0.5 * (shear_band[0] + shear_band[1]), rho_ratio, preset.length_m, n_el,
+                                   timoshenko, keep[0], 0.0)  # the beam elements alone
+    K0 = K_beam.copy()  # plus the clamp springs (Rayleigh damping acts on the beam, not on them)
+    K0[0, 0] += k_y_unit
     sel = np.ix_(keep, keep)
-    K0, M0 = K_full[sel], M_full[sel]
-    K_beam = K0.copy()  # the elements alone (Rayleigh damping acts on the beam, not on the clamp springs)
-    if fx["k_y_N_m"] is not None:
-        K0[0, 0] += fx["k_y_N_m"] / preset.EI_Nm2
     M_added = None if fx["M_added"] is None else fx["M_added"][sel]
     C_local = None if fx["C_local"] is None else fx["C_local"][sel]
     spring_dof = names.index("1:rz") if spring else 0
@@ -189,7 +229,7 @@ def build_setup(cfg: dict) -> Setup:
     lo, hi = cfg["measurement"]["band_rad_s"]
     return Setup(cfg, preset, layout, n_el, keep, spring, K0, M0, meas, v[:, :p].copy(),
                  np.linspace(lo, hi, cfg["measurement"]["lines"]), zeta, spring_dof, band, M_added, C_local,
-                 shear_phi)
+                 shear_band, rho_ratio, timoshenko, k_y_unit)
 
 
 @lru_cache(maxsize=8)
@@ -217,7 +257,8 @@ class BatchInputs:
     (B, 2, 4), ``n_shape`` (B, 2, 4, 4, 2). FRF noise: ``noise_level`` (relative
     to |H|), ``noise_floor`` (relative to each FRF's peak) and the uint64
     ``noise_seed`` of the counter-based stream the FRF noise is drawn from (B,), and the factor
-    ``modal_noise_scale`` on the modal noise's standard deviations (B,).
+    ``modal_noise_scale`` on the modal noise's standard deviations (B,); the specimen's
+    ``shear_flexibility`` ``EI / (kGA L^2)`` (B,).
     """
 
     EI_Nm2: np.ndarray
@@ -239,6 +280,7 @@ class BatchInputs:
     noise_floor: np.ndarray
     noise_seed: np.ndarray
     modal_noise_scale: np.ndarray
+    shear_flexibility: np.ndarray
 
     def __len__(self):
         return self.EI_Nm2.shape[0]
@@ -261,7 +303,7 @@ def _uniform(u, lo_hi, log=False):
 def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
     """Draw specimens, slits, day-to-day changes and all measurement noise of ``n`` samples, in a fixed order."""
     cfg = setup.cfg
-    sp = draw_specimens(rng, n, cfg, setup.preset, setup.root_spring_relative)
+    sp = draw_specimens(rng, n, cfg, setup.preset, setup.root_spring_relative, setup.shear_band)
     sl = draw_slits(rng, n, cfg, setup.length_m, setup.layout)
     nf = rng.standard_normal((n, 2, N_MEAS))
     nz = rng.standard_normal((n, 2, N_MEAS))
@@ -281,7 +323,7 @@ def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
                        _uniform(u[:, 1], spc["root_spring_change"]), nf, nz, ns,
                        _uniform(u[:, 2], meas["frf_noise"], log=True),
                        _uniform(u[:, 3], meas["frf_noise_floor"], log=True), seeds,
-                       _uniform(u_scale, meas["modal_noise_scale"], log=True))
+                       _uniform(u_scale, meas["modal_noise_scale"], log=True), sp["shear_flexibility"])
 
 
 # --------------------------------------------------------------------------- truth model
@@ -303,31 +345,39 @@ def truth_matrices(setup: Setup, inp: BatchInputs):
     """
     ei = inp.EI_Nm2
     ok = np.isfinite(inp.x_m)
+    if setup.shear_varies:
+        K0, M0, shear_phi = setup.unit_matrices(inp.shear_flexibility)
+    else:
+        K0, M0, shear_phi = setup.K0, setup.M0, 12.0 * setup.n_elements**2 * setup.shear_band[0]
     dKe, dCe = slit_corrections(np.where(ok, inp.x_m, 0.0), np.where(ok, inp.width_m, 0.0),
                                 np.where(ok, inp.ei_loss * ei[:, None], 0.0), np.where(ok, inp.beta_s, 0.0),
-                                ei, setup.length_m, setup.n_elements, setup.shear_phi)
+                                ei, setup.length_m, setup.n_elements, shear_phi)
     k0 = setup.keep[0]  # the clamp removes the first DOFs only: the kept block is a slice (a view, no copy)
     dK = assemble(dKe)[..., k0:, k0:]
     dC = assemble(dCe)[..., k0:, k0:]
     K = np.empty((len(inp), 2) + setup.K0.shape)
-    np.multiply(ei[:, None, None], setup.K0, out=K[:, 0])
+    np.multiply(ei[:, None, None], K0, out=K[:, 0])
     np.add(K[:, 0], dK, out=K[:, 1])
     K[:, 1] *= (1.0 + inp.temperature_stiffness_change)[:, None, None]
     if setup.spring:
         r = setup.spring_dof
         K[:, 1, r, r] += inp.root_spring_Nm_rad * (1.0 + inp.root_spring_change)
         K[:, 0, r, r] += inp.root_spring_Nm_rad
-    M = inp.mass_per_length_kg_m[:, None, None] * setup.M0
+    M = inp.mass_per_length_kg_m[:, None, None] * M0
     if setup.M_added is not None:
         M += setup.M_added
     return M, K, dC, dK
 
 
 def unit_mass(setup: Setup, inp: BatchInputs):
-    """Mass for unit mass per length: ``M_0`` (n, n), or (B, 1, n, n) with a beam file's point mass."""
+    """Mass for unit mass per length: ``M_0`` (n, n), or (B, 1, n, n) with a beam file's point mass or a
+    shear flexibility drawn per specimen."""
+    M0 = setup.unit_matrices(inp.shear_flexibility)[1] if setup.shear_varies else setup.M0
+    if setup.M_added is None and not setup.shear_varies:
+        return M0
     if setup.M_added is None:
-        return setup.M0
-    return (setup.M0 + setup.M_added / inp.mass_per_length_kg_m[:, None, None])[:, None]
+        return M0[:, None]
+    return (M0 + setup.M_added / inp.mass_per_length_kg_m[:, None, None])[:, None]
 
 
 def projected_modes(setup: Setup, inp: BatchInputs, M, K, dC):
@@ -442,7 +492,7 @@ CHUNK = 128
 #: Drawn inputs recorded per sample (the columns of the samples table and the noise of the FRFs on read).
 LABEL_FIELDS = ("EI_Nm2", "mass_per_length_kg_m", "damping_scale", "root_spring_Nm_rad", "n_slits", "x_m", "width_m",
                 "depth_m", "beta_s", "ei_loss", "temperature_stiffness_change", "root_spring_change", "noise_level",
-                "noise_floor", "noise_seed", "modal_noise_scale")
+                "noise_floor", "noise_seed", "modal_noise_scale", "shear_flexibility")
 
 
 def simulate_batch(setup: Setup, inp: BatchInputs, chunk: int = CHUNK) -> dict:

@@ -103,17 +103,21 @@ def depth_for_ei_loss(layout: SectionLayout, ei_loss):
 
 
 def draw_specimens(rng: np.random.Generator, n: int, cfg: dict, preset: BeamPreset,
-                   root_spring_relative=None) -> dict:
+                   root_spring_relative=None, shear_flexibility=None) -> dict:
     """Specimen parameters of ``n`` samples (one random block, fixed draw order).
 
     ``root_spring_relative`` (``(lo, hi)`` or empty) overrides the config's band
-    of ``k_r L / EI`` (a beam file's calibrated root spring moves its centre).
+    of ``k_r L / EI`` (a beam file's calibrated root spring moves its centre);
+    ``shear_flexibility`` (``(lo, hi)``) the config's band of ``EI / (kGA L^2)``
+    (a beam file's shear deformation moves its centre). A band of one value is
+    not drawn (the draws of the other parameters stay those of a config without it).
 
     Returns
     -------
     dict of ndarray, shape (n,)
-        ``EI_Nm2``, ``mass_per_length_kg_m``, ``damping_scale`` (-) and
-        ``root_spring_Nm_rad`` (``inf`` for a rigid clamp).
+        ``EI_Nm2``, ``mass_per_length_kg_m``, ``damping_scale`` (-),
+        ``root_spring_Nm_rad`` (``inf`` for a rigid clamp) and ``shear_flexibility``
+        (``EI / (kGA L^2)``, -).
     """
     sp = cfg["specimen"]
     u = rng.random((n, 4))
@@ -126,4 +130,7 @@ def draw_specimens(rng: np.random.Generator, n: int, cfg: dict, preset: BeamPres
         kr = np.exp(lo + (hi - lo) * u[:, 3]) * ei / preset.length_m
     else:
         kr = np.full(n, np.inf)
-    return {"EI_Nm2": ei, "mass_per_length_kg_m": mpl, "damping_scale": dsc, "root_spring_Nm_rad": kr}
+    lo, hi = sp["shear_flexibility"] if shear_flexibility is None else shear_flexibility
+    shear = np.full(n, float(lo)) if lo == hi else lo + (hi - lo) * rng.random(n)
+    return {"EI_Nm2": ei, "mass_per_length_kg_m": mpl, "damping_scale": dsc, "root_spring_Nm_rad": kr,
+            "shear_flexibility": shear}

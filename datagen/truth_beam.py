@@ -47,7 +47,7 @@ from physics.errors import ConfigError
 from physics.fem import element_mass, element_stiffness
 from physics.properties import BeamPreset
 
-__all__ = ["as_preset", "beam_mapping", "load_truth_beam", "point_effects", "unit_elements"]
+__all__ = ["as_preset", "beam_mapping", "load_truth_beam", "point_effects", "shear_parameters", "unit_elements"]
 
 
 def load_truth_beam(mapping: dict):
@@ -91,31 +91,55 @@ def as_preset(beam) -> BeamPreset:
                       thickness_m=beam.thickness_m)
 
 
-def unit_elements(beam, element_length_m: float):
-    """Element stiffness for ``EI = 1`` and mass for ``m = 1`` with the beam's effects, and the shear ratio.
+def shear_parameters(beam, thickness_m: float) -> tuple[float, float, bool]:
+    """The beam file's shear flexibility ``EI / (kGA L^2)`` (0 without shear deformation), ``rho I / m`` (m^2;
+    default ``h^2 / 12``) and whether its elements are Timoshenko/Rayleigh ones (shear or rotary inertia given).
 
-    Without a beam (``None``): the Euler-Bernoulli elements, eqs. 3.8 and 3.9.
+    Without a beam (``None``): ``(0, h^2 / 12, False)``, the Euler-Bernoulli elements of eqs. 3.8 and 3.9.
+    """
+    default = thickness_m**2 / 12
+    if beam is None or not ({"shear_deformation", "rotary_inertia"} & set(beam.effects)):
+        return 0.0, default, False
+    eff = beam.effects_dict()
+    m = beam.mass_per_length_kg_m
+    shear, rho_i = 0.0, 0.0
+    if "shear_deformation" in eff:
+        shear = beam.EI_Nm2 / (eff["shear_deformation"]["kGA_N"] * beam.length_m**2)
+        rho_i = eff["shear_deformation"].get("rho_I_kg_m", m * default)
+    if "rotary_inertia" in eff:
+        rho_i = eff["rotary_inertia"].get("rho_I_kg_m", m * default)
+    return shear, rho_i / m, True
+
+
+def unit_elements(shear_flexibility, rho_i_over_m_m2: float, length_m: float, n_elements: int,
+                  timoshenko: bool = True):
+    """Element stiffness for ``EI = 1`` and mass for ``m = 1``, and the element shear ratio (batched).
+
+    Parameters
+    ----------
+    shear_flexibility : float or ndarray, shape (...)
+        ``EI / (kGA L^2)`` of the beam (0: no shear deformation).
+    rho_i_over_m_m2 : float
+        Rotary inertia per unit mass per length (m^2).
+    timoshenko : bool
+        False: the Euler-Bernoulli elements of eqs. 3.8 and 3.9 (``shear_flexibility`` must be 0).
 
     Returns
     -------
-    ke, me : ndarray, shape (4, 4)
-    shear_phi : float   ``12 EI / (kGA l^2)`` of the element (0 without shear deformation)
+    ke, me : ndarray, shape (..., 4, 4)
+    shear_phi : ndarray, shape (...)   ``12 EI / (kGA l^2) = 12 n^2 EI / (kGA L^2)`` of the element
     """
-    if beam is None or not ({"shear_deformation", "rotary_inertia"} & set(beam.effects)):
-        return element_stiffness(1.0, element_length_m), element_mass(1.0, element_length_m), 0.0
     from physics.effects import timoshenko_mass, timoshenko_stiffness
 
-    eff = beam.effects_dict()
-    ei, m, h = beam.EI_Nm2, beam.mass_per_length_kg_m, beam.thickness_m
-    kga, rho_i = np.inf, 0.0
-    if "shear_deformation" in eff:
-        kga = eff["shear_deformation"]["kGA_N"]
-        rho_i = eff["shear_deformation"].get("rho_I_kg_m", m * h**2 / 12)
-    if "rotary_inertia" in eff:
-        rho_i = eff["rotary_inertia"].get("rho_I_kg_m", m * h**2 / 12)
-    return (timoshenko_stiffness(1.0, kga / ei, element_length_m),
-            timoshenko_mass(1.0, rho_i / m, 1.0, kga / ei, element_length_m),
-            12.0 * ei / (kga * element_length_m**2))
+    le = length_m / n_elements
+    s = np.asarray(shear_flexibility, float)
+    if not timoshenko:
+        ke, me = element_stiffness(1.0, le), element_mass(1.0, le)
+        return np.broadcast_to(ke, s.shape + (4, 4)), np.broadcast_to(me, s.shape + (4, 4)), 12.0 * n_elements**2 * s
+    with np.errstate(divide="ignore"):
+        kga_over_ei = np.where(s > 0, 1.0 / (s * length_m**2), np.inf)
+    return (timoshenko_stiffness(1.0, kga_over_ei, le), timoshenko_mass(1.0, rho_i_over_m_m2, 1.0, kga_over_ei, le),
+            12.0 * n_elements**2 * s)
 
 
 def point_effects(beam, n_elements: int) -> dict:

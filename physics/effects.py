@@ -127,6 +127,12 @@ def validate_effects(effects, source: str = "effects") -> dict:
 # Elements
 # ---------------------------------------------------------------------------
 
+def _matrix4(rows):
+    """(..., 4, 4) array from a 4x4 nested list of scalars and broadcastable arrays."""
+    flat = np.broadcast_arrays(*(v for row in rows for v in row))
+    return np.stack(flat, axis=-1).reshape(flat[0].shape + (4, 4))
+
+
 def timoshenko_stiffness(EI, kGA, length):
     """Timoshenko element stiffness (Friedman & Kosmatka 1993), DOFs ``[w1, theta1, w2, theta2]``.
 
@@ -135,21 +141,22 @@ def timoshenko_stiffness(EI, kGA, length):
 
     Parameters
     ----------
-    EI : float   (N m^2)
-    kGA : float  (N), ``np.inf`` for no shear flexibility
+    EI : float or ndarray, shape (...)   (N m^2)
+    kGA : float or ndarray, shape (...)  (N), ``np.inf`` for no shear flexibility
     length : float  element length (m)
 
     Returns
     -------
-    ndarray, shape (4, 4)
+    ndarray, shape (..., 4, 4)   (broadcast over ``EI`` and ``kGA``)
     """
     l = float(length)
+    EI, kGA = np.broadcast_arrays(np.asarray(EI, float), np.asarray(kGA, float))
     phi = 12.0 * EI / (kGA * l**2)
     a = (4 + phi) * l**2
     b = (2 - phi) * l**2
-    k = np.array([[12, 6 * l, -12, 6 * l], [6 * l, a, -6 * l, b],
+    k = _matrix4([[12, 6 * l, -12, 6 * l], [6 * l, a, -6 * l, b],
                   [-12, -6 * l, 12, -6 * l], [6 * l, b, -6 * l, a]])
-    return EI / (l**3 * (1 + phi)) * k
+    return (EI / (l**3 * (1 + phi)))[..., None, None] * k
 
 
 def timoshenko_mass(m_per_length, rho_I, EI, kGA, length):
@@ -162,16 +169,17 @@ def timoshenko_mass(m_per_length, rho_I, EI, kGA, length):
 
     Parameters
     ----------
-    m_per_length : float  (kg/m)
-    rho_I : float  rotary inertia per length (kg m)
-    EI, kGA : float  (N m^2, N); ``kGA = inf`` for no shear flexibility
+    m_per_length : float or ndarray, shape (...)  (kg/m)
+    rho_I : float or ndarray, shape (...)  rotary inertia per length (kg m)
+    EI, kGA : float or ndarray, shape (...)  (N m^2, N); ``kGA = inf`` for no shear flexibility
     length : float  (m)
 
     Returns
     -------
-    ndarray, shape (4, 4)
+    ndarray, shape (..., 4, 4)   (broadcast over the array arguments)
     """
     l = float(length)
+    m, rho_I, EI, kGA = np.broadcast_arrays(*(np.asarray(v, float) for v in (m_per_length, rho_I, EI, kGA)))
     p = 12.0 * EI / (kGA * l**2)
     t11 = 13 / 35 + 7 * p / 10 + p**2 / 3
     t12 = (11 / 210 + 11 * p / 120 + p**2 / 24) * l
@@ -179,14 +187,14 @@ def timoshenko_mass(m_per_length, rho_I, EI, kGA, length):
     t14 = (13 / 420 + 3 * p / 40 + p**2 / 24) * l
     t22 = (1 / 105 + p / 60 + p**2 / 120) * l**2
     t24 = (1 / 140 + p / 60 + p**2 / 120) * l**2
-    mt = np.array([[t11, t12, t13, -t14], [t12, t22, t14, -t24],
-                   [t13, t14, t11, -t12], [-t14, -t24, -t12, t22]]) * m_per_length * l / (1 + p) ** 2
-    r11 = 6 / 5
+    mt = _matrix4([[t11, t12, t13, -t14], [t12, t22, t14, -t24],
+                   [t13, t14, t11, -t12], [-t14, -t24, -t12, t22]]) * (m * l / (1 + p) ** 2)[..., None, None]
+    r11 = np.full(p.shape, 6 / 5)
     r12 = (1 / 10 - p / 2) * l
     r22 = (2 / 15 + p / 6 + p**2 / 3) * l**2
     r24 = (-1 / 30 - p / 6 + p**2 / 6) * l**2
-    mr = np.array([[r11, r12, -r11, r12], [r12, r22, -r12, r24],
-                   [-r11, -r12, r11, -r12], [r12, r24, -r12, r22]]) * rho_I / (l * (1 + p) ** 2)
+    mr = _matrix4([[r11, r12, -r11, r12], [r12, r22, -r12, r24],
+                   [-r11, -r12, r11, -r12], [r12, r24, -r12, r22]]) * (rho_I / (l * (1 + p) ** 2))[..., None, None]
     return mt + mr
 
 

@@ -168,3 +168,20 @@ def test_timoshenko_curvature_energy_plus_shear_energy_is_the_timoshenko_element
     k = ei * overlap_energy(0.0, 1.0, l, phi) + kga * l * np.outer(gamma, gamma)
     np.testing.assert_allclose(k, timoshenko_stiffness(ei, kga, l), rtol=1e-12, atol=1e-9 * np.abs(k).max())
     assert np.abs(overlap_energy(0.0, 1.0, l, phi) * ei - element_stiffness(ei, l)).max() > 0.5 * np.abs(k).max()
+
+
+def test_slit_corrections_with_a_shear_ratio_per_sample_are_the_scalar_ones():
+    """A per-sample shear ratio (specimen.shear_flexibility) gives, sample by sample, the corrections of that
+    sample's scalar ratio."""
+    L, n_el = 0.6, 8
+    phi = np.array([0.0, 0.3, 10.8])
+    x, w = np.array([[0.21], [0.33], [0.5]]), np.array([[0.02], [0.05], [0.004]])
+    loss, beta, ei = np.array([[5.0], [12.0], [20.0]]), np.array([[1e-5], [0.0], [2e-5]]), np.array([22., 25., 27.])
+    dK, dC = slit_corrections(x, w, loss, beta, ei, L, n_el, phi)
+    for b in range(3):
+        dKb, dCb = slit_corrections(x[b:b + 1], w[b:b + 1], loss[b:b + 1], beta[b:b + 1], ei[b:b + 1], L, n_el,
+                                    float(phi[b]))
+        np.testing.assert_allclose(dK[b], dKb[0], rtol=1e-12, atol=1e-12 * np.abs(dKb).max())
+        np.testing.assert_allclose(dC[b], dCb[0], rtol=1e-12, atol=1e-12 * np.abs(dCb).max() + 1e-300)
+    euler, _ = slit_corrections(x, w, loss, beta, ei, L, n_el, 0.0)
+    assert np.abs(dK[2] - euler[2]).max() > 0.1 * np.abs(euler[2]).max()  # the ratio matters
