@@ -697,8 +697,8 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
         w = list(warnings)
         modes_text = ", ".join(str(j + 1) for j in p.modes) if p is not None else ""
         if net is None:
-            w.append("the pair lies outside the training data (" + "; ".join(reasons) + "): the verdict is the "
-                     f"classical method's ({cl['method']}) on modes {modes_text}; the network gives no answer")
+            w.append(f"the network gives no answer for this pair (it needs modes 1-4): the verdict is the classical "
+                     f"method's ({cl['method']}) on modes {modes_text}")
             verdict = _classical_verdict(cl, mode_sens[i], depth)
         elif inside or cl is None:
             verdict = dict(net)
