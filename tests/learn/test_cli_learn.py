@@ -295,6 +295,11 @@ def test_a_band_below_mode_4_gets_the_classical_verdict_on_the_modes_found(tiny,
     assert "Network: no answer" in text
     assert json.loads((tiny / "cut" / "verdict.json").read_text())["network"] is None
     assert (tiny / "cut" / "classify.png").stat().st_size > 0
+    # a model reading FRFs answers such a pair itself; the classical answer is on modes 1-3
+    assert main(["classify", "--model", str(tiny / "model"), "--baseline", base, cur, "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["input_route"] == "measured" and res["network"] is not None
+    assert res["identification"]["modes_classified"] == [1, 2, 3] and res["classical"]["location_element"] == 2
     # two modes: still an answer
     base2, cur2 = _beam_frfs(tiny, 0.5, 14, 250.0, ("base2", "cur2"))
     assert main(["classify", "--model", str(modal_model), "--baseline", base2, cur2, "--json"]) == 0
