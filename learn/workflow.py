@@ -368,7 +368,7 @@ def pair_modes(frequencies_hz, nominal_hz, tolerance: float | None = None) -> np
     The identified modes and the nominal beam's are aligned in frequency order: each identified mode pairs with
     one nominal mode or none, each nominal mode with at most one, minimising the sum of the squared log frequency
     ratios plus ``ln(1 + tolerance)^2`` per identified mode left unpaired (a spurious mode). A pairing farther
-    than a factor ``1 + tolerance`` is never kept; adjacent cantilever modes lie a factor 1.9 or more apart.
+    than a factor ``1 + tolerance`` is never kept; modes 1-4 of a cantilever lie a factor 1.96 or more apart.
 
     Parameters
     ----------
@@ -683,9 +683,8 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     for i in range(len(currents)):
         r = at.get(i)
         net = None if r is None else _network_answer(d, r, out, L, depth(float(d.hinge_flexibility[r])))
-        best = [a["method"] for a in answers[i]]
-        cl = answers[i][best.index(model.config["best_classical"])
-                        if model.config["best_classical"] in best else 0] if answers[i] else None
+        cl = next((a for a in answers[i] if a["method"] == model.config["best_classical"]),
+                  answers[i][0] if answers[i] else None)
         p = pairs[i] if pairs else None
         reasons = list(mode_reasons[i])
         if net is None:
