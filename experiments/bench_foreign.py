@@ -1,7 +1,7 @@
 """The classifier on data it did not make: pairs of UFF files from an independent simulator, through the CLI.
 
 Run: ``.venv/bin/python -m experiments.bench_foreign --model MODEL_DIR [--sets easy,eb,timoshenko] [--n 24]
-[--seed 100] [--out out/foreign] [--loop --train-n 60000] [--source-tree DIR --label before]``
+[--seed 100] [--band-hz 2 500] [--out out/foreign] [--loop --train-n 60000] [--source-tree DIR --label before]``
 
 The pairs come from :mod:`experiments.second_sim` (112-element Euler-Bernoulli or Timoshenko beams, its own
 slit, damping, noise and frequency grid, files written through pyuff with node geometry and units; it shares
@@ -67,15 +67,24 @@ def cli_json(argv: list[str], source_tree: str | None = None) -> dict | list:
     return json.loads(p.stdout)
 
 
-def write_sets(out: Path, sets, n: int, seed: int) -> dict:
-    """The independent simulator's pair sets (``truth.json`` per set)."""
-    from experiments.second_sim import simulate_pairs, write_pairs
+def set_dir(out: Path, name: str, band_hz=None) -> Path:
+    """Directory of a set's pairs (the band in its name when not the simulator's default)."""
+    return out / "pairs" / (name if band_hz is None else f"{name}-{band_hz[0]:g}-{band_hz[1]:g}Hz")
 
+
+def write_sets(out: Path, sets, n: int, seed: int, band_hz=None) -> dict:
+    """The independent simulator's pair sets (``truth.json`` per set); ``band_hz`` (first, last line in Hz, 0.5 Hz
+    apart) replaces the simulator's default lines."""
+    from experiments.second_sim import simulate_pairs, write_pairs
+    from experiments.second_sim.pairs import FREQ_HZ
+
+    freq_hz = FREQ_HZ if band_hz is None else band_hz[0] + 0.5 * np.arange(int(round((band_hz[1] - band_hz[0]) / 0.5))
+                                                                          + 1)
     truths = {}
     for k, name in enumerate(sets):
-        d = out / "pairs" / name
+        d = set_dir(out, name, band_hz)
         if not (d / "truth.json").is_file():
-            write_pairs(simulate_pairs(name, n, seed + k), d)
+            write_pairs(simulate_pairs(name, n, seed + k, freq_hz), d)
         truths[name] = json.loads((d / "truth.json").read_text())["pairs"]
     return truths
 
@@ -86,7 +95,7 @@ def loop_model(out: Path, name: str, n_train: int, seed: int) -> Path:
     model = d / "model"
     if (model / "config.json").is_file():
         return model
-    base = out / "pairs" / name / "pair-000_baseline.uff"
+    base = set_dir(out, name) / "pair-000_baseline.uff"
     cli_json(["discrepancy", "--beam", "beam5", "--measured", str(base), "--out", str(d / "cal")])
     cli_json(["generate", "--beam", str(d / "cal" / "beam.toml"), "--config", "training", "--n", str(n_train),
           "--seed", str(seed), "--out", str(d / "data"), "--workers", "2"])
@@ -107,7 +116,8 @@ def classify_set(model: Path, pair_dir: Path, truth: list, source_tree: str | No
 
 
 def _answers(v: dict) -> dict:
-    """Method name -> answer dict (damaged, location_element, hinge_flexibility[, hinge_flexibility_std])."""
+    """Method name -> answer dict (damaged, location_element, hinge_flexibility[, hinge_flexibility_std]), None
+    where the method gave no answer (the network on a pair missing some of modes 1-4)."""
     out = {"verdict": v}
     if "network" in v:
         out["network"] = v["network"]
@@ -124,7 +134,8 @@ def score(verdicts: list[dict], truth: list) -> list[dict]:
     answers = [_answers(v) for v in verdicts]
     rows = []
     for method in answers[0]:
-        a = [x[method] for x in answers]
+        given = np.array([x.get(method) is not None for x in answers])
+        a = [x.get(method) or {"damaged": False} for x in answers]
         called = np.array([bool(x["damaged"]) for x in a])
         el = np.array([int(x["location_element"]) if x.get("location_element") is not None else 0 for x in a])
         s = np.array([float(x["hinge_flexibility"]) if x.get("hinge_flexibility") is not None else np.nan for x in a])
@@ -133,20 +144,25 @@ def score(verdicts: list[dict], truth: list) -> list[dict]:
         det = damaged & called
         err = np.abs(s[det] / size[det] - 1)
         cover = np.abs(s[det] - size[det]) <= sd[det]
-        rows.append({"method": method, "pairs": len(a), "damaged_pairs": int(damaged.sum()),
-                     "element_accuracy": float(np.mean(det[damaged] & (el[damaged] == element[damaged])))
-                     if damaged.any() else float("nan"),
-                     "detection": float(np.mean(called[damaged])) if damaged.any() else float("nan"),
-                     "false_alarms": int(np.sum(called[~damaged])), "intact_pairs": int((~damaged).sum()),
+        dm, im = damaged & given, ~damaged & given          # scored on the pairs the method answered
+        rows.append({"method": method, "pairs": len(a), "answered": int(given.sum()), "damaged_pairs": int(dm.sum()),
+                     "element_accuracy": float(np.mean(det[dm] & (el[dm] == element[dm])))
+                     if dm.any() else float("nan"),
+                     "detection": float(np.mean(called[dm])) if dm.any() else float("nan"),
+                     "false_alarms": int(np.sum(called[im])), "intact_pairs": int(im.sum()),
                      "median_size_error": float(np.median(err)) if err.size else float("nan"),
                      "size_one_sigma_cover": float(np.mean(cover)) if np.isfinite(sd[det]).any() else float("nan")})
     if "in_distribution" in verdicts[0]:
         ind = np.array([bool(v["in_distribution"]) for v in verdicts])
-        pct = np.array([float(v["training_percentile"]) for v in verdicts])
+        pct = np.array([np.nan if v["training_percentile"] is None else float(v["training_percentile"])
+                        for v in verdicts])
+        has = np.isfinite(pct)
         for r in rows:
             r.update(in_distribution=float(ind.mean()),
-                     median_percentile_intact=float(np.median(pct[~damaged])) if (~damaged).any() else float("nan"),
-                     median_percentile_damaged=float(np.median(pct[damaged])) if damaged.any() else float("nan"))
+                     median_percentile_intact=float(np.median(pct[~damaged & has])) if (~damaged & has).any()
+                     else float("nan"),
+                     median_percentile_damaged=float(np.median(pct[damaged & has])) if (damaged & has).any()
+                     else float("nan"))
     return rows
 
 
@@ -165,6 +181,11 @@ def batch_rate(model: Path, pair_dir: Path, n: int) -> dict:
             "one_pair_wall_seconds": time.perf_counter() - t0}
 
 
+def _method_label(r: dict) -> str:
+    answered = r.get("answered", r["pairs"])
+    return r["method"] if answered == r["pairs"] else f"{r['method']} ({answered} of {r['pairs']} pairs answered)"
+
+
 def markdown(rows: list[dict]) -> str:
     head = ("| set | model | method | element acc. | detection | false alarms | size err. | 1-sigma cover | "
             "in distribution |\n|---|---|---|---|---|---|---|---|---|\n")
@@ -173,7 +194,7 @@ def markdown(rows: list[dict]) -> str:
         return "-" if v is None or (isinstance(v, float) and not np.isfinite(v)) else (f"{v:.0%}" if pct else f"{v}")
 
     return head + "".join(
-        f"| {r['set']} | {r['model']} | {r['method']} | {f(r['element_accuracy'])} | {f(r['detection'])} | "
+        f"| {r['set']} | {r['model']} | {_method_label(r)} | {f(r['element_accuracy'])} | {f(r['detection'])} | "
         f"{r['false_alarms']} of {r['intact_pairs']} | {f(r['median_size_error'])} | "
         f"{f(r['size_one_sigma_cover'])} | {f(r.get('in_distribution'))} |\n" for r in rows)
 
@@ -189,7 +210,8 @@ def _figure(verdicts_by_set: dict, path: Path) -> None:
         if not verdicts or "training_percentile" not in verdicts[0]:
             continue
         for dmg, marker in ((False, "o"), (True, "x")):
-            p = [v["training_percentile"] for v, t in zip(verdicts, truth) if bool(t["damaged"]) == dmg]
+            p = [v["training_percentile"] for v, t in zip(verdicts, truth)
+                 if bool(t["damaged"]) == dmg and v["training_percentile"] is not None]
             ax.scatter(np.full(len(p), k) + (0.15 if dmg else -0.15), p, marker=marker,
                        color="tab:red" if dmg else "tab:blue",
                        label=("damaged" if dmg else "intact") if k == 0 else None)
@@ -209,6 +231,9 @@ def main(argv=None):
     ap.add_argument("--sets", default=",".join(SETS))
     ap.add_argument("--n", type=int, default=24, help="pairs per set")
     ap.add_argument("--seed", type=int, default=100)
+    ap.add_argument("--band-hz", type=float, nargs=2, metavar=("F_MIN", "F_MAX"),
+                    help="first and last frequency line of the simulated files (Hz, 0.5 Hz apart; default the "
+                         "simulator's 2 800); a band stopping below mode 4 leaves the network without an answer")
     ap.add_argument("--out", default="out/foreign")
     ap.add_argument("--loop", action="store_true", help="calibrate, generate and train per set first")
     ap.add_argument("--train-n", type=int, default=60000, help="specimens generated per set by --loop")
@@ -222,17 +247,19 @@ def main(argv=None):
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     sets = [s for s in a.sets.split(",") if s]
-    truths = write_sets(out, sets, a.n, a.seed)
+    if a.loop and a.band_hz:
+        ap.error("--loop calibrates on the default band: give --model with --band-hz")
+    truths = write_sets(out, sets, a.n, a.seed, a.band_hz)
     rows, by_set, timing = [], {}, None
     for name in sets:
         model = loop_model(out, name, a.train_n, a.seed + 50) if a.loop else Path(a.model)
         label = a.label or ("loop: calibrated on the set's first baseline" if a.loop else str(model))
-        pair_dir = out / "pairs" / name
-        verdicts = classify_set(model, pair_dir, truths[name], a.source_tree)
+        pairs = set_dir(out, name, a.band_hz)
+        verdicts = classify_set(model, pairs, truths[name], a.source_tree)
         by_set[name] = (verdicts, truths[name])
         rows += [{"set": name, "model": label, **r} for r in score(verdicts, truths[name])]
         if timing is None and a.source_tree is None:
-            timing = batch_rate(model, pair_dir, min(a.n, 24))
+            timing = batch_rate(model, pairs, min(a.n, 24))
     tag = "" if a.label is None else f"-{a.label}"
     from physics.io import atomic_write_text
 

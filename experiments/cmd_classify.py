@@ -23,7 +23,9 @@ def add_parser(sub):
                                    "receptances, mobilities or accelerances at the model's DOFs; modal data: as "
                                    "'update' accepts. FRF files are identified by LSCF/LSFD (4 modes), the "
                                    "identification the training data's modal noise describes. A pair outside the "
-                                   "training data gets the classical method's verdict, the network's shown beside it. "
+                                   "training data gets the classical method's verdict, the network's shown beside it; "
+                                   "a pair whose tests do not both hold modes 1-4 gets the classical method's verdict "
+                                   "on the modes both hold (at least 2) and no network answer. "
                                    "Several MEASURED files give a list of verdicts; --out writes verdict.json and "
                                    "classify.png (one pair) or verdicts.json (several).")
     p.add_argument("--model", required=True, metavar="MODEL_DIR")
@@ -117,25 +119,37 @@ def _classical_sentence(c: dict) -> str:
 def verdict_text(res: dict) -> str:
     """The verdict as a reader sees it: the answer, where it comes from, both methods, the caveats."""
     net, cl = res["network"], res["classical"]
-    if res["in_distribution"]:
+    modes = res["identification"].get("modes_classified") or []
+    if res["verdict_from"] == "network":
         head = "Verdict (network): " + _network_sentence(net) + "."
+    elif net is None:
+        head = (f"Verdict (classical method on modes {', '.join(map(str, modes))}, the network needs modes 1-4): "
+                + _classical_sentence(cl) + ".")
     else:
         head = ("Verdict (classical method, the pair lies outside the training data): " + _classical_sentence(cl)
                 + ".")
     lines = [head[:1].upper() + head[1:]]
-    if net["damaged"]:
-        lines.append("Element probabilities (network): " + ", ".join(f"{k + 1}: {v:.2f}" for k, v in
-                                                                     enumerate(net["element_probabilities"])))
-    lines.append(f"Network: {_network_sentence(net)}.")
+    if net is None:
+        lines.append("Why: " + "; ".join(res["out_of_distribution_reasons"]) + ".")
+        lines.append("Network: no answer (trained on modes 1-4).")
+    else:
+        if net["damaged"]:
+            lines.append("Element probabilities (network): " + ", ".join(f"{k + 1}: {v:.2f}" for k, v in
+                                                                         enumerate(net["element_probabilities"])))
+        lines.append(f"Network: {_network_sentence(net)}.")
     lines.append(f"Classical ({cl['method']}, the best on the training data): {_classical_sentence(cl)}." if cl else
-                 "Classical: no answer (fewer than 4 modes identified).")
-    lines.append(f"Input route: {res['input_route']}; distance from the training data: Mahalanobis "
-                 f"{res['mahalanobis_distance']:.3g} (beyond {res['training_percentile']:.1f}% of training pairs); "
-                 f"in distribution: {'yes' if res['in_distribution'] else 'no'}.")
+                 "Classical: no answer (fewer than 2 modes identified in both tests).")
+    if net is None:
+        lines.append(f"Input route: {res['input_route']}; in distribution: no.")
+    else:
+        lines.append(f"Input route: {res['input_route']}; distance from the training data: Mahalanobis "
+                     f"{res['mahalanobis_distance']:.3g} (beyond {res['training_percentile']:.1f}% of training pairs); "
+                     f"in distribution: {'yes' if res['in_distribution'] else 'no'}.")
     ident = res["identification"]
     lines.append(f"Natural frequencies (Hz, {ident['source']}): baseline "
                  + ", ".join(f"{x:.2f}" for x in ident["baseline_frequencies_hz"]) + "; measured "
-                 + ", ".join(f"{x:.2f}" for x in ident["measured_frequencies_hz"]))
+                 + ", ".join(f"{x:.2f}" for x in ident["measured_frequencies_hz"])
+                 + (f"; modes classified: {', '.join(map(str, modes))}" if modes and len(modes) < 4 else ""))
     from physics.io import dof_positions_text
 
     for name, d in res["dof_positions"].items():
@@ -187,18 +201,23 @@ def _figure(res, extra, base, cur, length_m) -> bytes:
     a1.set(xlabel="frequency (Hz)", ylabel="|H| (m/N)", title="Baseline vs measured")
     a1.legend(fontsize=7)
     dist = extra["location_distribution"]
-    edges = np.linspace(0, length_m, dist.size + 1)
-    a2.bar(edges[:-1], dist, width=np.diff(edges), align="edge", color="tab:red", alpha=0.7,
-           label="network's location distribution")
+    if dist is not None:
+        edges = np.linspace(0, length_m, dist.size + 1)
+        a2.bar(edges[:-1], dist, width=np.diff(edges), align="edge", color="tab:red", alpha=0.7,
+               label="network's location distribution")
     if res["classical"] and res["classical"]["damaged"]:
         a2.axvline(res["classical"]["location_x_m"], color="k", ls="--",
                    label=f"{res['classical']['method']}: x = {res['classical']['location_x_m']:.3f} m")
     for k in range(1, 4):
         a2.axvline(k * length_m / 4, color="grey", ls=":")
-    a2.legend(fontsize=7)
+    if a2.get_legend_handles_labels()[0]:
+        a2.legend(fontsize=7)
     net = res["network"]
+    modes = ", ".join(map(str, res["identification"].get("modes_classified") or []))
     a2.set(xlabel="x from the clamp (m)", ylabel="probability",
-           title=f"Network: P(damaged) = {net['probability_damaged']:.2f}; verdict from the {res['verdict_from']}")
+           title=(f"Network: P(damaged) = {net['probability_damaged']:.2f}" if net else
+                  "Network: no answer (it needs modes 1-4)") + f"; verdict from the {res['verdict_from']}"
+           + ("" if net else f" method on modes {modes}"))
     buf = io.BytesIO()
     fig.tight_layout()
     fig.savefig(buf, format="png", dpi=110)

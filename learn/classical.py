@@ -10,7 +10,7 @@ sensitivities of the nominal beam (:mod:`learn.sensitivity`) and returns a
 * :func:`dlac` - damage location assurance criterion (Messina et al. 1996):
   ``DLAC_e = (df . s_e)^2 / ((df . df)(s_e . s_e))``, largest wins.
 * :func:`mdlac` - multiple-damage LAC: the best non-negative combination of at
-  most two elements (all pairs, vectorised), the larger share locates.
+  most two elements (all pairs, vectorised; one element on fewer than 4 modes), the larger share locates.
 * :func:`sensitivity_updating` - regularised least squares on frequency shifts
   and shape changes for the hinge flexibility of a slit in every element of the grid;
   reports the element of the largest loss.
@@ -101,7 +101,10 @@ def dlac(df, sens: Sensitivity, threshold: float) -> MethodOutput:
 
 
 def mdlac(df, sens: Sensitivity, threshold: float) -> MethodOutput:
-    """MDLAC with up to two damaged elements: best non-negative pair fit, larger member locates."""
+    """MDLAC with up to two damaged elements: best non-negative pair fit, larger member locates.
+
+    On 3 modes or fewer (a test missing some of modes 1-4) a pair of elements, two places and two sizes, fits
+    nearly any shift vector: the single-element fit alone answers."""
     S = sens.frequency[: df.shape[1]]                       # (m, E)
     E = S.shape[1]
     a, b = np.triu_indices(E, 1)
@@ -115,7 +118,7 @@ def mdlac(df, sens: Sensitivity, threshold: float) -> MethodOutput:
     fit = np.einsum("mpi,npi->npm", A, da)                  # (n, P, m)
     res2 = np.sum((df[:, None, :] - fit) ** 2, axis=-1)
     res1 = np.sum((df[:, None, :] - d1[:, :, None] * S.T[None]) ** 2, axis=-1)   # (n, E)
-    use_pair = (d >= 0).all(-1)
+    use_pair = (d >= 0).all(-1) & (df.shape[1] >= 4)      # on 3 modes or fewer two slits fit any shifts
     res2 = np.where(use_pair, res2, np.inf)
     bp, b1 = np.argmin(res2, axis=1), np.argmin(res1, axis=1)
     n = np.arange(len(df))

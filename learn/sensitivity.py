@@ -17,7 +17,7 @@ classifier's "detectable here" rule.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
@@ -59,6 +59,14 @@ class Sensitivity:
     def element_of(self, x_over_L):
         """Index of the grid element holding ``x / L`` (batched)."""
         return np.clip((np.asarray(x_over_L, float) * self.n_elements).astype(int), 0, self.n_elements - 1)
+
+    def modes(self, indices) -> "Sensitivity":
+        """The sensitivities of the nominal modes ``indices`` (0-based, ascending) alone, e.g. ``[0, 1, 3]`` for
+        modes 1, 2 and 4."""
+        k = np.asarray(indices, int)
+        m = self.frequency.shape[0]
+        shape = self.shape.reshape(-1, m, self.n_elements)[:, k].reshape(-1, self.n_elements)
+        return replace(self, frequency=self.frequency[k], shape=shape, frequencies_hz=self.frequencies_hz[k])
 
     def largest_drop(self, x_over_L, hinge_flexibility):
         """Largest first-order relative frequency drop of a slit (batched), >= 0."""

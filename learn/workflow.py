@@ -41,8 +41,9 @@ from physics.modal import mac
 __all__ = ["DAY_CHANGES", "DEFAULT_ROUTE", "IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "IN_DISTRIBUTION_PERCENTILE",
            "MODEL_FORMAT", "RATIO_TOLERANCE", "REFERENCE_WIDTH_M", "TrainedModel", "classify", "classify_many",
            "dataset_frfs", "day_changes", "detectability_threshold", "equivalent_depth", "evaluate", "frf_rows",
-           "identify_modes", "load_model", "modal_pair", "network_output", "nominal_ratio_range", "on_model_dofs",
-           "ood_percentile", "save_model", "sensitivity_of", "targets", "train"]
+           "identification_band_hz", "identify_modes", "load_model", "ModalPair", "modal_pair", "network_output",
+           "nominal_ratio_range", "on_model_dofs", "ood_percentile", "pair_modes", "save_model", "sensitivity_of",
+           "targets", "train"]
 
 
 #: Input route used by default (the winner of ``python -m experiments.bench_learn``).
@@ -334,12 +335,84 @@ def on_model_dofs(data, beam: BeamSpec, beam_x_m=None, where: str = "measured da
     return replace(data, eigenvectors=data.eigenvectors[rows], dofs=tuple(beam.dofs)), dof_map
 
 
-def modal_pair(baseline, current, beam: BeamSpec) -> tuple[np.ndarray, np.ndarray, list]:
-    """Stack two :class:`physics.io.ModalData` of the model's DOFs into (1, 2, m) eigenvalues and (1, 2, 4, m)
-    shapes."""
+@dataclass(frozen=True)
+class ModalPair:
+    """The modes of one (baseline, current) pair on the model's DOFs that both tests hold.
+
+    Attributes
+    ----------
+    eigenvalues : ndarray, complex, shape (2, c)          baseline and current, ascending frequency
+    eigenvectors : ndarray, complex, shape (2, n_dofs, c)
+    modes : ndarray, int, shape (c,)                      0-based nominal modes they are (``[0, 1, 2, 3]`` when
+                                                          both tests hold 4 modes)
+    missing : tuple of str                                which of modes 1-4 a test lacks, and why (empty when
+                                                          complete)
+    warnings : tuple of str
+    """
+
+    eigenvalues: np.ndarray
+    eigenvectors: np.ndarray
+    modes: np.ndarray
+    missing: tuple = ()
+    warnings: tuple = ()
+
+    @property
+    def complete(self) -> bool:
+        """Both tests hold modes 1-4 (what the modal network reads)."""
+        return self.modes.size == 4
+
+
+def pair_modes(frequencies_hz, nominal_hz, tolerance: float | None = None) -> np.ndarray:
+    """The nominal mode each identified mode is: 0-based indices into ``nominal_hz``, -1 for none.
+
+    The identified modes and the nominal beam's are aligned in frequency order: each identified mode pairs with
+    one nominal mode or none, each nominal mode with at most one, minimising the sum of the squared log frequency
+    ratios plus ``ln(1 + tolerance)^2`` per identified mode left unpaired (a spurious mode). A pairing farther
+    than a factor ``1 + tolerance`` is never kept; modes 1-4 of a cantilever lie a factor 1.96 or more apart.
+
+    Parameters
+    ----------
+    frequencies_hz : array, shape (k,)     identified natural frequencies (Hz), any order
+    nominal_hz : array, shape (m,)         the nominal beam's natural frequencies (Hz), ascending
+    tolerance : float, optional            default :data:`RATIO_TOLERANCE`
+
+    Returns
+    -------
+    ndarray, int, shape (k,)  e.g. ``[0, 1, 3]`` for modes 1, 2 and 4 of a test that misses mode 3.
+    """
+    from itertools import combinations
+
+    f = np.asarray(frequencies_hz, float)
+    nominal = np.asarray(nominal_hz, float)
+    order = np.argsort(f)
+    cost = np.log(f[order, None] / nominal[None]) ** 2                 # (k, m)
+    skip = np.log1p(RATIO_TOLERANCE if tolerance is None else tolerance) ** 2
+    best, best_cost = np.full(f.size, -1), skip * f.size
+    for r in range(1, min(f.size, nominal.size) + 1):
+        for kept in combinations(range(f.size), r):
+            for target in combinations(range(nominal.size), r):
+                c = cost[kept, target].sum() + skip * (f.size - r)
+                if c < best_cost:
+                    best_cost = c
+                    best = np.full(f.size, -1)
+                    best[list(kept)] = target
+    out = np.empty(f.size, int)
+    out[order] = best
+    return out
+
+
+def modal_pair(baseline, current, beam: BeamSpec, nominal_hz, names=("baseline", "measured"),
+               found=None) -> ModalPair:
+    """The modes two :class:`physics.io.ModalData` of the model's DOFs both hold.
+
+    Two tests of 4 or more modes give their 4 lowest. When either holds fewer, each test's modes are paired with
+    the nominal beam's (:func:`pair_modes`, against ``nominal_hz``) and the modes both hold are kept; ``found``
+    (one text per test, e.g. ``"LSCF/LSFD found 2 modes in 2-500 Hz"``) says in :attr:`ModalPair.missing` where
+    the others went.
+    """
     warnings = []
     lams, vecs = [], []
-    for name, d in (("baseline", baseline), ("measured", current)):
+    for name, d in zip(names, (baseline, current)):
         if d.eigenvectors is None:
             raise FileFormatError(f"{name} modal data: field 'eigenvectors' is required "
                                   f"(rows = {', '.join(beam.dofs)})")
@@ -352,12 +425,24 @@ def modal_pair(baseline, current, beam: BeamSpec) -> tuple[np.ndarray, np.ndarra
         elif dofs != tuple(beam.dofs):
             raise BeamDamageError(f"{name} modal data: DOF set {list(d.dofs)} differs from the model's "
                                   f"{list(beam.dofs)}")
-        if d.eigenvalues.size < 4:
-            raise FileFormatError(f"{name} modal data: 4 modes are needed, got {d.eigenvalues.size}")
         o = np.argsort(np.abs(d.eigenvalues))[:4]
         lams.append(d.eigenvalues[o])
         vecs.append(d.eigenvectors[:, o])
-    return np.stack(lams)[None], np.stack(vecs)[None], warnings
+    if all(x.size == 4 for x in lams):
+        return ModalPair(np.stack(lams), np.stack(vecs), np.arange(4), (), tuple(warnings))
+    found = [how or f"it holds {x.size} mode{'s' * (x.size != 1)}" for how, x in zip(found or (None, None), lams)]
+    which = [pair_modes(np.abs(x) / (2 * np.pi), nominal_hz[:4]) for x in lams]
+    common = np.intersect1d(*which)
+    common = common[common >= 0]
+    missing = []
+    for name, how, k in zip(names, found, which):
+        absent = [j + 1 for j in range(4) if j not in k]
+        if absent:
+            missing.append(f"mode{'s' * (len(absent) > 1)} {', '.join(map(str, absent))} not identified in {name} "
+                           f"({how})")
+    take = [[int(np.flatnonzero(k == j)[0]) for j in common] for k in which]
+    return ModalPair(np.stack([x[t] for x, t in zip(lams, take)]), np.stack([v[:, t] for v, t in zip(vecs, take)]),
+                     common, tuple(missing), tuple(warnings))
 
 
 def _canonical_dof(label: str) -> str:
@@ -397,6 +482,12 @@ IDENTIFICATION = {"method": "lscf", "n_modes": 4}
 IDENTIFICATION_BAND_FACTOR = 1.4
 
 
+def identification_band_hz(frf, fmax_hz: float | None = None) -> tuple[float, float]:
+    """Band (Hz) :func:`identify_modes` fits: the file's lines from the first above 0 Hz up to ``fmax_hz``."""
+    f = frf.frequency_hz
+    return float(f[f > 0][0]), float(f[-1] if fmax_hz is None else min(f[-1], fmax_hz))
+
+
 def identify_modes(frf, fmax_hz: float | None = None, where: str = "FRF file"):
     """Modal data of one FRF file by :data:`IDENTIFICATION` (the path the training data's modal noise describes).
 
@@ -409,16 +500,16 @@ def identify_modes(frf, fmax_hz: float | None = None, where: str = "FRF file"):
 
     Returns
     -------
-    :class:`physics.io.ModalData` with the 4 identified modes.
+    :class:`physics.io.ModalData` with the modes identified in the band (at most 4; fewer when the band stops
+    below mode 4 or a mode sinks into the noise floor: :func:`pair_modes` tells which they are).
     """
     import warnings
 
     from physics.identification import identify_frf
 
     band = None
-    f = frf.frequency_hz
-    if fmax_hz is not None and f[-1] > fmax_hz:
-        band = (f[f > 0][0], fmax_hz)
+    if fmax_hz is not None and frf.frequency_hz[-1] > fmax_hz:
+        band = identification_band_hz(frf, fmax_hz)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -426,12 +517,7 @@ def identify_modes(frf, fmax_hz: float | None = None, where: str = "FRF file"):
                                  band_hz=band)
     except (np.linalg.LinAlgError, RuntimeError) as exc:
         raise BeamDamageError(f"{where}: LSCF/LSFD identification failed ({exc})") from None
-    md = ident.modal_data
-    if md.eigenvalues.size < IDENTIFICATION["n_modes"]:
-        fs = ", ".join(f"{x:.4g}" for x in np.abs(md.eigenvalues) / (2 * np.pi))
-        raise BeamDamageError(f"{where}: {md.eigenvalues.size} modes identified ({fs} Hz) in "
-                              f"{f[0]:.4g}-{(band or (0, f[-1]))[1]:.4g} Hz; {IDENTIFICATION['n_modes']} are needed")
-    return md
+    return ident.modal_data
 
 
 #: Tolerance on the measured frequency ratios ``f_k / f_1`` against the model's nominal beam: wide enough for
@@ -468,22 +554,29 @@ def _mode_checks(lam, vecs, ratio_range) -> list[list[str]]:
 
 
 def _modal_inputs(model: TrainedModel, baseline, currents: list, names: list[str], sens):
-    """Modal data of the baseline and every current input: (ModalData, list of ModalData, identified: bool)."""
+    """Modal data of the baseline and every current input: ``(ModalData, list of ModalData, identified, found)``,
+    ``found`` one text per input on the modes it holds (e.g. "LSCF/LSFD found 2 modes in 2-500 Hz")."""
     from physics.io import MeasuredFRF
 
-    kinds = {isinstance(d, MeasuredFRF) for d in [baseline, *currents]}
+    inputs = [baseline, *currents]
+    kinds = {isinstance(d, MeasuredFRF) for d in inputs}
     if len(kinds) > 1:
         raise BeamDamageError("BASELINE and MEASURED must all be FRF files or all modal data")
     if not kinds.pop():
-        return baseline, list(currents), False
+        return baseline, list(currents), False, None
     fmax = IDENTIFICATION_BAND_FACTOR * float(sens.frequencies_hz[3])
     try:
-        ids = [identify_modes(d, fmax, n) for d, n in zip([baseline, *currents], names)]
+        ids = [identify_modes(d, fmax, n) for d, n in zip(inputs, names)]
     except BeamDamageError:
         if model.route == "modal":
             raise
-        return None, None, True          # an FRF-route model classifies the FRFs without modes
-    return ids[0], ids[1:], True
+        return None, None, True, None          # an FRF-route model classifies the FRFs without modes
+    found = []
+    for d, md in zip(inputs, ids):
+        k = md.eigenvalues.size
+        lo, hi = identification_band_hz(d, fmax)
+        found.append(f"LSCF/LSFD found {k} mode{'s' * (k != 1)} in {lo:.4g}-{hi:.4g} Hz")
+    return ids[0], ids[1:], True, found
 
 
 def _frf_route_features(model: TrainedModel, baseline, currents, warnings: list):
@@ -545,99 +638,156 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     describes); the modal-route network and every classical method read those modes. A model on an FRF route
     reads the FRFs themselves (any frequency lines, mapped onto its grid).
 
+    A pair whose tests do not both hold modes 1-4 (a band that stops below mode 4, a mode lost in the noise
+    floor) is classified on the modes both hold (:func:`modal_pair`) by every classical method; the modal
+    network, trained on 4 modes, gives no answer for it (``network`` None). Fewer than 2 common modes are refused
+    when the modal network would have to read them.
+
     Returns
     -------
     list of dict, one verdict per current input. The verdict keys (``damaged``, ``location_*``,
     ``hinge_flexibility*``...) are the network's answer when the pair lies inside the training data
     (``in_distribution``: its Mahalanobis distance within the :data:`IN_DISTRIBUTION_PERCENTILE` percentile of
-    the training pairs', its modes in their training ranges and paired), else the classical method's
-    (``verdict_from``); ``network`` and ``classical`` hold both answers, ``classical_methods`` every method's.
+    the training pairs', its modes 1-4 all present, in their training ranges and paired), else the classical
+    method's (``verdict_from``); ``network`` and ``classical`` hold both answers, ``classical_methods`` every
+    method's.
     """
     names = list(names) if names else ["baseline"] + [f"measured {k + 1}" for k in range(len(currents))]
     warnings: list[str] = []
     sens = sensitivity_of(model.beam, model.config.get("root_spring_relative"), model.config.get("truth_beam"))
-    route, X, lam, vecs, identified = _network_inputs(model, baseline, currents, names, sens, warnings)
+    base_md, cur_md, identified, found = _modal_inputs(model, baseline, currents, names, sens)
+    pairs = None
+    if base_md is not None:
+        found = found or [None] * len(names)
+        pairs = [modal_pair(base_md, c, model.beam, sens.frequencies_hz, (names[0], n), (found[0], f))
+                 for c, n, f in zip(cur_md, names[1:], found[1:])]
+        warnings += list(dict.fromkeys(w for p in pairs for w in p.warnings))
+    else:
+        warnings.append("LSCF/LSFD identification failed: no classical answer; the FRF-route network alone")
+    route, X, rows = _network_inputs(model, baseline, currents, pairs, identified, warnings)
+    if route == "modal":
+        for p, n in zip(pairs, names[1:]):
+            if p.modes.size < 2:
+                raise BeamDamageError(f"{n}: {p.modes.size} of modes 1-4 found in both it and {names[0]} ("
+                                      + "; ".join(p.missing) + "); classify needs at least 2 common modes")
     est = model.networks[route]
-    out, d = network_output(est, X, sens)
-    dist, pct = ood_percentile(est, X)
-    mode_reasons = [[] for _ in currents]
-    classical, best = [], None
-    if lam is not None:
-        mode_reasons = _mode_checks(lam, vecs, nominal_ratio_range(sens))
-        classical, _ = run_classical(lam, vecs, sens, model.config["classical_thresholds"])
-        best = next((o for o in classical if o.name == model.config["best_classical"]), classical[0])
+    at = {i: r for r, i in enumerate(rows)}
+    if rows:
+        out, d = network_output(est, X, sens)
+        dist, pct = ood_percentile(est, X)
+    answers, mode_reasons, mode_sens = _classical_answers(model, pairs, len(currents), sens)
     depth = functools.partial(equivalent_depth, preset=model.config.get("truth_beam") or model.beam.name,
                               width_m=model.config["reference_width_m"])
     L = model.beam.length_m
     results = []
     for i in range(len(currents)):
-        net = _network_answer(d, i, out, L, depth(float(d.hinge_flexibility[i])))
-        answers = [_classical_answer(o, i, L) for o in classical]
-        cl = None if best is None else answers[classical.index(best)]
+        r = at.get(i)
+        net = None if r is None else _network_answer(d, r, out, L, depth(float(d.hinge_flexibility[r])))
+        cl = next((a for a in answers[i] if a["method"] == model.config["best_classical"]),
+                  answers[i][0] if answers[i] else None)
+        p = pairs[i] if pairs else None
         reasons = list(mode_reasons[i])
-        if pct[i] > IN_DISTRIBUTION_PERCENTILE:
-            reasons.insert(0, f"Mahalanobis distance {dist[i]:.3g} from the training data, beyond "
-                              f"{pct[i]:.2f}% of training pairs")
+        if net is None:
+            reasons.append("; ".join(p.missing) + ": the network needs modes 1-4")
+        elif pct[r] > IN_DISTRIBUTION_PERCENTILE:
+            reasons.insert(0, f"Mahalanobis distance {dist[r]:.3g} from the training data, beyond "
+                              f"{pct[r]:.2f}% of training pairs")
         inside = not reasons
         w = list(warnings)
-        if inside or cl is None:
+        modes_text = ", ".join(str(j + 1) for j in p.modes) if p is not None else ""
+        if net is None:
+            w.append(f"the network gives no answer for this pair (it needs modes 1-4): the verdict is the classical "
+                     f"method's ({cl['method']}) on modes {modes_text}")
+            verdict = _classical_verdict(cl, mode_sens[i], depth)
+        elif inside or cl is None:
             verdict = dict(net)
             if not inside:
                 w.append("the pair lies outside the training data (" + "; ".join(reasons) + ") and no classical "
                          "answer is available: treat the network's verdict with caution")
         else:
             w.append("the pair lies outside the training data (" + "; ".join(reasons) + "): the verdict is the "
-                     f"classical method's ({best.name}); the network's answer is shown beside it")
-            verdict = _classical_verdict(cl, sens, depth)
-        f = np.abs(lam[i]) / (2 * np.pi) if lam is not None else [[], []]
+                     f"classical method's ({cl['method']}"
+                     + ("" if p is None or p.complete else f" on modes {modes_text}")
+                     + "); the network's answer is shown beside it")
+            verdict = _classical_verdict(cl, mode_sens[i], depth)
+        from_network = net is not None and (inside or cl is None)
+        if p is None:
+            freqs, modes = ([], []), []
+        elif p.complete:
+            freqs, modes = np.abs(p.eigenvalues) / (2 * np.pi), [1, 2, 3, 4]
+        else:                      # every mode found, paired or not
+            freqs = [np.sort(np.abs(md.eigenvalues)) / (2 * np.pi) for md in (base_md, cur_md[i])]
+            modes = [int(j) + 1 for j in p.modes]
         results.append({
-            "measured": names[i + 1], **verdict, "verdict_from": "network" if inside or cl is None else "classical",
+            "measured": names[i + 1], **verdict, "verdict_from": "network" if from_network else "classical",
             "in_distribution": inside, "out_of_distribution_reasons": reasons,
-            "mahalanobis_distance": float(dist[i]), "training_percentile": float(pct[i]),
+            "mahalanobis_distance": None if r is None else float(dist[r]),
+            "training_percentile": None if r is None else float(pct[r]),
             "network": net, "classical": cl,
-            "classical_methods": answers,
+            "classical_methods": answers[i],
             "identification": {**IDENTIFICATION, "source": "identified from FRFs" if identified else "modal data",
-                               "baseline_frequencies_hz": [float(x) for x in f[0]],
-                               "measured_frequencies_hz": [float(x) for x in f[1]]},
+                               "baseline_frequencies_hz": [float(x) for x in freqs[0]],
+                               "measured_frequencies_hz": [float(x) for x in freqs[1]],
+                               "modes_classified": modes},
             "input_route": route, "warnings": w,
-            "_extra": {"location_distribution": d.location_distribution[i]},
+            "_extra": {"location_distribution": None if r is None else d.location_distribution[r]},
         })
     return results
 
 
-def _network_inputs(model: TrainedModel, baseline, currents: list, names: list[str], sens, warnings: list):
-    """Route, feature rows and the paired modes of every pair: ``(route, X, lam, vecs, identified)``.
+def _classical_answers(model: TrainedModel, pairs, n: int, sens):
+    """Every classical method's answers per pair, the reasons a complete pair's modes lie outside the training
+    data, and the sensitivities of the modes each pair was classified on: three lists of ``n``.
 
-    ``lam``, ``vecs`` (pairs, 2, 4[, dofs]) are None when the files do not hold 4 identifiable modes; ``X``
-    are the FRF-route features when the model reads FRFs and the inputs are FRF files, else the modal features.
-    Warnings are appended to ``warnings``.
+    Complete pairs are classified in one call on modes 1-4; the others each on the modes both tests hold (the
+    sensitivities of those modes alone), none below 2 common modes."""
+    L = model.beam.length_m
+    thresholds = model.config["classical_thresholds"]
+    answers, reasons, mode_sens = [[] for _ in range(n)], [[] for _ in range(n)], [sens] * n
+    if pairs is None:
+        return answers, reasons, mode_sens
+    full = [i for i, p in enumerate(pairs) if p.complete]
+    if full:
+        lam = np.stack([pairs[i].eigenvalues for i in full])
+        vecs = np.stack([pairs[i].eigenvectors for i in full])
+        outs, _ = run_classical(lam, vecs, sens, thresholds)
+        for j, (i, why) in enumerate(zip(full, _mode_checks(lam, vecs, nominal_ratio_range(sens)))):
+            answers[i], reasons[i] = [_classical_answer(o, j, L) for o in outs], why
+    for i, p in enumerate(pairs):
+        if not p.complete and p.modes.size >= 2:
+            mode_sens[i] = sens.modes(p.modes)
+            outs, _ = run_classical(p.eigenvalues[None], p.eigenvectors[None], mode_sens[i], thresholds)
+            answers[i] = [_classical_answer(o, 0, L) for o in outs]
+    return answers, reasons, mode_sens
+
+
+def _network_inputs(model: TrainedModel, baseline, currents: list, pairs, identified: bool, warnings: list):
+    """Route, feature rows and the pairs they belong to: ``(route, X, rows)``.
+
+    ``X`` are the FRF-route features of every pair when the model reads FRFs and the inputs are FRF files, else
+    the modal features of the pairs whose tests both hold modes 1-4 (``rows``: their indices; ``X`` None when
+    there are none). Warnings are appended to ``warnings``.
     """
-    beam = model.beam
-    base_md, cur_md, identified = _modal_inputs(model, baseline, currents, names, sens)
-    lam = vecs = None
-    if base_md is not None:
-        pairs = [modal_pair(base_md, c, beam) for c in cur_md]
-        lam, vecs = np.concatenate([p[0] for p in pairs]), np.concatenate([p[1] for p in pairs])
-        warnings += list(dict.fromkeys(w for p in pairs for w in p[2]))
-    else:
-        warnings.append("LSCF/LSFD found fewer than 4 modes: no classical answer; the FRF-route network alone")
-    route, X = "modal", None
     if identified and model.route in ("measured", "updated"):
         X = _frf_route_features(model, baseline, currents, warnings)
-        route = model.route if X is not None else "modal"
-    if X is None and lam is None:
-        raise BeamDamageError(f"{names[0]}: the files hold neither the FRFs the model's {model.route} route reads "
-                              "nor 4 identifiable modes")
-    if X is None:
-        if "modal" not in model.networks:
-            raise BeamDamageError("this model has no modal-route network; give FRF files holding receptances at "
-                                  f"{', '.join(beam.dofs)} driven at {beam.dofs[0]}")
-        X = modal_features(lam, vecs)
+        if X is not None:
+            return model.route, X, list(range(len(currents)))
+    if pairs is None:
+        raise BeamDamageError(f"the files hold neither the FRFs the model's {model.route} route reads "
+                              "nor identifiable modes")
+    if "modal" not in model.networks:
+        raise BeamDamageError("this model has no modal-route network; give FRF files holding receptances at "
+                              f"{', '.join(model.beam.dofs)} driven at {model.beam.dofs[0]}")
+    rows = [i for i, p in enumerate(pairs) if p.complete]
+    X = None
+    if rows:
+        X = modal_features(np.stack([pairs[i].eigenvalues for i in rows]),
+                           np.stack([pairs[i].eigenvectors for i in rows]))
     calibrated = (model.config.get("generator_config") or {}).get("measurement", {}).get("identification")
     if identified and calibrated != IDENTIFICATION:
         warnings.append("the training data's modal noise was not calibrated against the identification run "
                         "here: retrain on data from 'beam-damage generate --config training'")
-    return route, X, lam, vecs, identified
+    return "modal", X, rows
 
 
 def _classical_verdict(cl: dict, sens, depth) -> dict:

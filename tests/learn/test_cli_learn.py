@@ -23,6 +23,13 @@ def tiny(tmp_path_factory):
     return root
 
 
+@pytest.fixture(scope="module")
+def modal_model(tiny):
+    """A model of the default (modal) route trained on the tiny dataset."""
+    assert main(["train", "--data", str(tiny / "data"), "--out", str(tiny / "modal"), "--epochs", "2", "--json"]) == 0
+    return tiny / "modal"
+
+
 def test_train_writes_a_complete_model_directory(tiny):
     cfg = json.loads((tiny / "model" / "config.json").read_text())
     assert cfg["route"] == "measured" and set(cfg["networks"]) == {"measured", "modal"}
@@ -171,10 +178,9 @@ def test_classify_places_a_renumbered_shuffled_mm_uff_by_its_geometry(tiny, caps
     assert err.count("\n") == 1 and "offgrid.uff" in err and "103:+Y at x = 0.4 m is not at a model DOF" in err
 
 
-def test_modal_route_model_classifies_frf_files_through_identified_modes(tiny, capsys):
-    assert main(["train", "--data", str(tiny / "data"), "--out", str(tiny / "modal"), "--epochs", "2", "--json"]) == 0
+def test_modal_route_model_classifies_frf_files_through_identified_modes(tiny, modal_model, capsys):
     capsys.readouterr()
-    assert json.loads((tiny / "modal" / "config.json").read_text())["route"] == "modal"   # the default route
+    assert json.loads((modal_model / "config.json").read_text())["route"] == "modal"   # the default route
     from datagen.dataset import Dataset
 
     ds = Dataset(tiny / "data")
@@ -234,3 +240,124 @@ def test_classify_several_independent_uff_files_in_one_call(tiny, capsys):
         np.testing.assert_allclose(r["identification"]["baseline_frequencies_hz"], truth[0]["baseline_frequencies_hz"],
                                    rtol=2e-3)
         assert r["verdict_from"] in ("network", "classical") and r["classical"]["method"]
+
+
+def _beam_frfs(tmp, loss, element, fmax_hz, names=("base", "cur")):
+    """Receptances at nodes 2..5 driven at node 2 (0.5 Hz lines from 2 Hz to ``fmax_hz``, 0.5 % modal damping) of
+    the nominal beam 5 (40 elements, the models' root spring) and of the same beam with element ``element`` of 40
+    losing ``loss`` of its EI, written as UFF files; modes 1-4 lie at 19.9, 125, 349, 684 Hz."""
+    from physics.fem import beam_model
+    from physics.io import write_uff58
+    from physics.modal import undamped_modes
+    from physics.properties import beam_preset
+
+    p = beam_preset("beam5")
+    f = np.ones((2, 40))
+    f[1, element] -= loss
+    m = beam_model(40, p.length_m, p.EI_Nm2, p.mass_per_length_kg_m, ei_factors=f,
+                   root_spring=948.7 * p.EI_Nm2 / p.length_m)
+    w, phi = undamped_modes(m.M, m.K)
+    idx = m.index(["11:y", "21:y", "31:y", "41:y"])
+    f_hz = np.arange(2.0, fmax_hz + 0.25, 0.5)
+    om = 2 * np.pi * f_hz
+    paths = []
+    for s, name in enumerate(names):
+        ph, wr = phi[s][idx, :8], w[s, :8, None]
+        H = np.einsum("jr,r,rf->jf", ph, ph[0], 1 / (wr**2 - om**2 + 2j * 0.005 * wr * om))
+        paths.append(str(tmp / f"{name}.uff"))
+        write_uff58(paths[-1], MeasuredFRF(f_hz, H[:, None, :], ("2:+Y", "3:+Y", "4:+Y", "5:+Y"), ("2:+Y",)))
+    return paths
+
+
+def test_a_band_below_mode_4_gets_the_classical_verdict_on_the_modes_found(tiny, modal_model, capsys):
+    """Files of 2-500 Hz (modes 1-3) and 2-250 Hz (modes 1-2): every classical method answers on those modes,
+    the modal network (trained on 4) does not; a slit in element 2 of 4 (1.2-1.6 % drops) is found there, a
+    uniform 0.1 % EI change (temperature) is not called damage."""
+    base, cur = _beam_frfs(tiny, 0.5, 14, 500.0)
+    assert main(["classify", "--model", str(modal_model), "--baseline", base, cur, "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert tuple(res) == KEYS
+    assert res["verdict_from"] == "classical" and res["network"] is None and res["in_distribution"] is False
+    assert res["mahalanobis_distance"] is None and res["training_percentile"] is None
+    assert res["out_of_distribution_reasons"] == [
+        f"mode 4 not identified in {base} (LSCF/LSFD found 3 modes in 2-500 Hz); mode 4 not identified in {cur} "
+        "(LSCF/LSFD found 3 modes in 2-500 Hz): the network needs modes 1-4"]
+    assert res["identification"]["modes_classified"] == [1, 2, 3]
+    np.testing.assert_allclose(res["identification"]["baseline_frequencies_hz"], [19.886, 124.627, 348.962],
+                               rtol=1e-4)
+    assert res["damaged"] and res["location_element"] == 2 == res["classical"]["location_element"]
+    assert (res["damaged"], res["location_x_m"]) == (res["classical"]["damaged"], res["classical"]["location_x_m"])
+    assert {c["method"] for c in res["classical_methods"]} == {"Cawley-Adams", "DLAC", "MDLAC",
+                                                                "sensitivity updating"}
+    assert main(["classify", "--model", str(modal_model), "--baseline", base, cur, "--out", str(tiny / "cut")]) == 0
+    text = capsys.readouterr().out
+    assert "Verdict (classical method on modes 1, 2, 3, the network needs modes 1-4): " in text
+    assert "Network: no answer" in text
+    assert json.loads((tiny / "cut" / "verdict.json").read_text())["network"] is None
+    assert (tiny / "cut" / "classify.png").stat().st_size > 0
+    # a model reading FRFs answers such a pair itself; the classical answer is on modes 1-3
+    assert main(["classify", "--model", str(tiny / "model"), "--baseline", base, cur, "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["input_route"] == "measured" and res["network"] is not None
+    assert res["identification"]["modes_classified"] == [1, 2, 3] and res["classical"]["location_element"] == 2
+    # two modes: still an answer
+    base2, cur2 = _beam_frfs(tiny, 0.5, 14, 250.0, ("base2", "cur2"))
+    assert main(["classify", "--model", str(modal_model), "--baseline", base2, cur2, "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["identification"]["modes_classified"] == [1, 2] and res["network"] is None
+    assert res["damaged"] and res["verdict_from"] == "classical"
+    # intact: a uniform 0.1 % EI change of the whole beam between the tests
+    base3, cur3 = _beam_frfs(tiny, 0.0, 14, 500.0, ("base3", "cur3"))
+    from physics.io import read_frf, write_uff58
+
+    warm = read_frf(cur3)
+    write_uff58(cur3, MeasuredFRF(warm.frequency_hz * np.sqrt(0.999), warm.frf / 0.999, warm.response_dofs,
+                                  warm.reference_dofs))
+    assert main(["classify", "--model", str(modal_model), "--baseline", base3, cur3, "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["verdict_from"] == "classical" and not res["damaged"]
+    assert not any(c["damaged"] for c in res["classical_methods"])
+
+
+def test_several_files_complete_pairs_go_to_the_network_the_others_to_the_classical_methods(tiny, modal_model,
+                                                                                           capsys):
+    base, full = _beam_frfs(tiny, 0.5, 14, 800.0, ("mbase", "mfull"))
+    _, cut = _beam_frfs(tiny, 0.5, 14, 500.0, ("mbase-cut", "mcut"))
+    assert main(["classify", "--model", str(modal_model), "--baseline", base, full, cut, "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert [r["identification"]["modes_classified"] for r in res] == [[1, 2, 3, 4], [1, 2, 3]]
+    assert res[0]["network"] is not None and res[0]["training_percentile"] is not None
+    assert res[1]["network"] is None and res[1]["verdict_from"] == "classical"
+    assert res[1]["out_of_distribution_reasons"] == [
+        f"mode 4 not identified in {cut} (LSCF/LSFD found 3 modes in 2-500 Hz): the network needs modes 1-4"]
+    assert res[1]["location_element"] == 2
+    # the baseline cut below mode 4: every pair falls back; verdicts.json is written
+    assert main(["classify", "--model", str(modal_model), "--baseline", str(tiny / "mbase-cut.uff"), full, cut,
+                 "--out", str(tiny / "many")]) == 0
+    many = json.loads((tiny / "many" / "verdicts.json").read_text())
+    assert [r["network"] for r in many] == [None, None] and [r["location_element"] for r in many] == [2, 2]
+    assert capsys.readouterr().out.count("Verdict (classical method on modes 1, 2, 3") == 2
+
+
+def test_a_missing_middle_mode_and_a_single_mode(tiny, capsys):
+    """Modal data of a slit in element 1 of 4 whose current test misses mode 3: classified on modes 1, 2 and 4;
+    a test holding mode 1 alone is refused in one line."""
+    base, cur = _modal_files(tiny, 0.5)
+    obj = json.loads(open(cur).read())
+    keep = [0, 1, 3]
+    obj["eigenvalues"] = [obj["eigenvalues"][k] for k in keep]
+    obj["eigenvectors"] = [[row[k] for k in keep] for row in obj["eigenvectors"]]
+    (tiny / "no3.json").write_text(json.dumps(obj))
+    assert main(["classify", "--model", str(tiny / "model"), "--baseline", base, str(tiny / "no3.json"),
+                 "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["identification"]["modes_classified"] == [1, 2, 4] and res["network"] is None
+    assert res["out_of_distribution_reasons"] == [f"mode 3 not identified in {tiny / 'no3.json'} (it holds 3 modes): "
+                                                  "the network needs modes 1-4"]
+    assert res["damaged"] and res["location_element"] == 1
+    obj["eigenvalues"], obj["eigenvectors"] = obj["eigenvalues"][:1], [row[:1] for row in obj["eigenvectors"]]
+    (tiny / "one.json").write_text(json.dumps(obj))
+    assert main(["classify", "--model", str(tiny / "model"), "--baseline", base, str(tiny / "one.json")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "one.json: 1 of modes 1-4 found in both" in err
+    assert "modes 2, 3, 4 not identified in" in err and "at least 2 common modes" in err

@@ -269,3 +269,34 @@ def test_damage_classifier_follows_scikit_learn_conventions():
         est.predict(X[:, :-1])
     acc = np.mean(est.predict(X) == (y[:, 0] > 0.5))
     assert est.score(X, y) == pytest.approx(acc) == est.score(X, y[:, 0])
+
+
+def test_modes_are_paired_with_the_nominal_beam_by_frequency():
+    """Modes 1, 2, 4 of a beam 5 % stiffer than nominal with shear (mode 4 8 % low) -> [0, 1, 3]; a spurious
+    pole between modes 1 and 2 pairs with none; the order of the input is kept; a band cut -> [0, 1]."""
+    from learn.workflow import pair_modes
+
+    nominal = beam_sensitivity("beam5", 948.7).frequencies_hz        # 19.9, 125, 349, 684 Hz
+    f = nominal * np.sqrt(1.05) * np.array([1.0, 1.0, 1.0, 0.92])
+    np.testing.assert_array_equal(pair_modes(f[[0, 1, 3]], nominal), [0, 1, 3])
+    np.testing.assert_array_equal(pair_modes(f[[3, 0, 1]], nominal), [3, 0, 1])
+    np.testing.assert_array_equal(pair_modes([f[0], 70.0, f[1], f[2]], nominal), [0, -1, 1, 2])
+    np.testing.assert_array_equal(pair_modes(f[:2], nominal), [0, 1])
+    np.testing.assert_array_equal(pair_modes([5.0, f[1]], nominal), [-1, 1])      # 5 Hz: 4 times below mode 1
+
+
+@pytest.mark.parametrize("modes", [[0, 1, 2], [0, 1, 3], [0, 2, 3]])
+def test_every_classical_method_localises_a_slit_on_three_of_the_four_modes(modes):
+    """run_classical on the modes present (the sensitivities of those modes alone) places slits of an independent
+    finer mesh in the right element, and a pair without change gives the smallest scores."""
+    from learn.classical import run_classical
+
+    sens = beam_sensitivity("beam5", 948.7)
+    sub = sens.modes(modes)
+    np.testing.assert_array_equal(sub.frequency, sens.frequency[modes])
+    np.testing.assert_array_equal(sub.shape.reshape(4, 3, -1), sens.shape.reshape(4, 4, -1)[:, modes])
+    for x in (0.31, 0.63):
+        _, lam, psi, _ = _independent_slit(x, 0.4)
+        outs, _ = run_classical(lam[..., modes], psi[..., modes], sub, {"freq": 1e-4, "upd": 0.0})
+        for o in outs:
+            assert o.damaged[0] and int(o.x_over_L[0] * 4) == int(x * 4), (o.name, x, o.x_over_L[0])
