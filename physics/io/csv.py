@@ -113,8 +113,9 @@ def _header_pairs(path: Path, header: list, header_line: int) -> list:
                                   f"{im_name!r}) must be 're(RESP/REF)' and 'im(RESP/REF)' of one FRF")
         resp, _, ref = re_name[3:-1].partition("/")
         pairs.append((resp.strip(), ref.strip() or UNNAMED_REFERENCE))
-        check_dof_labels(pairs[-1], f"{path}: line {header_line}: column {k + 1} {re_name!r}",
-                         unnamed_reference=True)
+        where = f"{path}: line {header_line}: column {k + 1} {re_name!r}"
+        check_dof_labels(pairs[-1][:1], where)
+        check_dof_labels(pairs[-1][1:], where, unnamed_reference=True)
     return pairs
 
 
