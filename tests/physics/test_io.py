@@ -280,6 +280,26 @@ def test_uff58b_big_endian_time_records_read_like_little_endian(tmp_path):
     assert be.quantities == ("force", "acceleration") and be.time_step_s == pytest.approx(1 / 256.0, rel=1e-5)
 
 
+def test_measured_frf_of_time_records_reads_the_universal_file_once(tmp_path, monkeypatch):
+    import pyuff
+
+    from physics.identification import read_measured_frf
+    from physics.io import TIME, read
+    from physics.time_records import estimate_from_records
+
+    t = np.arange(4096) / 512.0
+    force = np.random.default_rng(3).standard_normal(t.size)
+    write_time_uff(tmp_path / "t.uff", t, [(1, force, 13), (2, np.convolve(force, np.exp(-t[:200] * 20), "same"), 12)])
+    expected = estimate_from_records(read(tmp_path / "t.uff", TIME)).frf
+    reads, read_sets = [], pyuff.UFF.read_sets
+    monkeypatch.setattr(pyuff.UFF, "read_sets", lambda self, *a, **k: reads.append(a) or read_sets(self, *a, **k))
+    with pytest.warns(UserWarning, match="holds time records, not FRFs"):
+        got = read_measured_frf(tmp_path / "t.uff")
+    assert len(reads) == 1
+    np.testing.assert_array_equal(got.frf, expected.frf)
+    assert got.response_dofs == ("2:+Z",) and got.reference_dofs == ("1:+Z",)
+
+
 @pytest.mark.parametrize("field, value, message", [(slice(7, 13), b"     3", "byte ordering field '3'"),
                                                    (slice(13, 19), b"     1", "floating-point format field '1'")])
 def test_uff58b_byte_order_and_float_format_codes_outside_the_standard_are_refused(tmp_path, frf, field, value,
