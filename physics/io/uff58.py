@@ -13,7 +13,7 @@ import numpy as np
 from physics.errors import FileFormatError, ShapeError
 from physics.io.atomic import atomic_path
 from physics.io.geometry import geometry_from_uff_sets
-from physics.io.types import DEFAULT_UNITS, MeasuredFRF, dof_label, parse_dof
+from physics.io.types import DEFAULT_UNITS, MeasuredFRF, dof_label, frf_matrix, parse_dof
 from physics.io.units import UnitSystem, frf_unit_factor
 
 __all__ = ["UffFile", "read_uff58", "read_uff_context", "read_uff_geometry", "write_uff58"]
@@ -95,7 +95,7 @@ def read_uff58(path, kind=None) -> MeasuredFRF:
         ordinates.add(rec.ordinate)
         units_found.setdefault(rec.unit_label, []).append(rec.factor)
     file_kind = _file_kind(path, ordinates, kind)
-    resp, refs, frf = _frf_matrix(path, table)
+    resp, refs, frf = frf_matrix(table, str(path))
     meta = {"source": str(path), "format": "uff", "binary": binary,
             "id1": str(frfs[0][1].get("id1", "")).strip(),
             "units": {"file": sorted(units_found), "si": DEFAULT_UNITS[file_kind],
@@ -233,19 +233,6 @@ def _file_kind(path: Path, ordinates: set, kind) -> str:
     warnings.warn(f"{path}: ordinate type not set (found {sorted(ordinates)}); assuming receptance "
                   "(displacement/force)", stacklevel=3)
     return "receptance"
-
-
-def _frf_matrix(path: Path, table: dict) -> tuple:
-    """Response DOFs, reference DOFs and the ``(n_resp, n_ref, n_lines)`` FRF of ``{(resp, ref): values}``;
-    every response needs a record for every reference."""
-    resp = list(dict.fromkeys(k[0] for k in table))
-    refs = list(dict.fromkeys(k[1] for k in table))
-    missing = [(a, b) for a in resp for b in refs if (a, b) not in table]
-    if missing:
-        a, b = missing[0]
-        raise FileFormatError(f"{path}: no FRF for response {a} and reference {b} ({len(missing)} missing "
-                              f"of {len(resp)}x{len(refs)}); every response needs a record for every reference")
-    return resp, refs, np.array([[table[(a, b)] for b in refs] for a in resp])
 
 
 #: Dataset types read as context of the FRFs (header, units, coordinate systems, nodes, trace lines, elements).

@@ -193,6 +193,10 @@ def test_csv_hand_written_single_reference_and_errors(tmp_path):
     path.write_text("frequency_hz,re(2:+Y),im(2:+Y)\n1.0,1.5,nan\n2.0,1,1\n")
     with pytest.raises(FileFormatError, match="line 2: NaN"):
         read_frf(path)
+    path.write_text("frequency_hz,re(2:+Y/1:+Y),im(2:+Y/1:+Y),re(3:+Y/5:+Y),im(3:+Y/5:+Y)\n1.0,1,1,1,1\n2.0,1,1,1,1\n")
+    with pytest.raises(FileFormatError, match=r"hand.csv: line 1: no FRF for response 2:\+Y and reference 5:\+Y "
+                                              r"\(2 missing of 2x2\)"):
+        read_frf(path)
     for head in ("re(ref),im(ref)", "re(ref/5:+Y),im(ref/5:+Y)"):   # "ref" names only an unnamed reference
         path.write_text(f"frequency_hz,{head}\n1.0,1.5,-2.0\n2.0,0.5,0.25\n")
         with pytest.raises(FileFormatError, match=r"hand.csv: line 1: column 2 're\(ref.*DOF label 'ref' must look"):
