@@ -21,7 +21,7 @@ from physics import discrepancy as dsc
 from physics.beam import Beam, beam_to_toml, load_beam
 from physics.effects import CANDIDATES
 from physics.errors import ConfigError, FileFormatError
-from physics.io import FRF, MODAL, atomic_write_bytes, format_of, modal_data_from_dict, number_list, read_frf, read_json
+from physics.io import MODAL, atomic_write_bytes, modal_data_from_dict, modal_or_frf, number_list, read_frf, read_json
 
 __all__ = ["EXAMPLE", "EXAMPLE_SHAPES", "TRUTHS", "assumed_noise", "beam5_section", "confusion", "estimated_noise",
            "load_measurement", "run", "run_case", "run_discrepancy"]
@@ -39,7 +39,7 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[dsc.Measurement, o
     :class:`physics.io.DofMap` of the measured DOFs (None for frequencies alone).
     """
     path = Path(path)
-    if MODAL in format_of(path, MODAL, FRF).holds:
+    if modal_or_frf(path) == MODAL:
         try:
             obj = read_json(path, require_object=False)
         except FileNotFoundError:
