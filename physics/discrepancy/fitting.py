@@ -51,9 +51,6 @@ class Fit:
     lomo : float
         Leave-one-mode-out prediction error in noise units (:func:`lomo_error`), NaN if not computed.
     residuals : ModeResiduals
-    dof : int
-        Degrees of freedom of ``chi2``: ``n_obs - n_params`` less the scale
-        of each compared shape (2 per mode for complex shapes, 1 for real).
     chi2_blocks : dict
         ``chi2`` split by data block (:data:`BLOCKS`).
     whitened : dict
@@ -71,26 +68,37 @@ class Fit:
     bic: float
     lomo: float
     residuals: ModeResiduals
-    dof: int = 0
     chi2_blocks: dict = field(default_factory=dict)
     whitened: dict = field(default_factory=dict)
 
-    def block_dof(self, meas: "Measurement") -> dict:
+    @property
+    def block_dof(self) -> dict:
         """Degrees of freedom of each block's chi^2: observations less what the fit takes from them.
 
         Frequencies lose the model's parameters, shapes one scale per mode
         (real part; the imaginary part a second), the FRF band levels the mass scale.
         """
-        n = {k: v.size for k, v in self.whitened.items()}
-        n_modes = meas.n_modes
-        out = {"frequencies": n["frequencies"] - self.n_params + (1 if "FRF" in n else 0)}
-        if "mode shapes" in n:
-            out["mode shapes"] = n["mode shapes"] - n_modes
-        if "complex shapes" in n:
-            out["complex shapes"] = n["complex shapes"] - n_modes
-        if "FRF" in n:
-            out["FRF"] = n["FRF"] - 1
-        return out
+        return _block_dof(self.whitened, self.n_params)
+
+    @property
+    def dof(self) -> int:
+        """Degrees of freedom of ``chi2``: ``n_obs - n_params`` less the scale of each compared shape (2 per mode
+        for complex shapes, 1 for real); the sum of :attr:`block_dof`."""
+        return sum(self.block_dof.values())
+
+
+def _block_dof(whitened: dict, n_params: int) -> dict:
+    """:attr:`Fit.block_dof` of whitened residual blocks (every mode compared) and ``n_params`` parameters."""
+    n = {k: v.size for k, v in whitened.items()}
+    n_modes = n["frequencies"]     # one per measured mode
+    out = {"frequencies": n["frequencies"] - n_params + (1 if "FRF" in n else 0)}
+    if "mode shapes" in n:
+        out["mode shapes"] = n["mode shapes"] - n_modes
+    if "complex shapes" in n:
+        out["complex shapes"] = n["complex shapes"] - n_modes
+    if "FRF" in n:
+        out["FRF"] = n["FRF"] - 1
+    return out
 
 
 #: Data blocks of the residual: what the evidence for an effect can come from.
@@ -273,18 +281,14 @@ def with_rayleigh(nb: Beam, meas: Measurement) -> Beam:
     return nb.with_effects({**nb.effects_dict(), "proportional_damping": {"alpha_1_s": a, "beta_s": b}})
 
 
-def _shape_dof(meas: Measurement, mask) -> int:
-    if meas.shapes is None:
-        return 0
-    return (2 if has_complex_shapes(meas) else 1) * int(np.sum(mask))
-
-
 def as_fit(prob: Problem, res: OptimizeResult, effect: str, meas: Measurement) -> Fit:
     nb, ei_s, ms = prob.beam_at(res.x)
     r = res.fun
     chi2 = float(r @ r)
     n_obs, n_par = r.size, res.x.size
-    dof = n_obs - n_par - _shape_dof(meas, prob.mask)
+    pred = prob.predict(nb)
+    white = prob.blocks(pred)
+    dof = sum(_block_dof(white, n_par).values())   # the result's Fit.dof
     s2 = max(1.0, chi2 / dof) if dof > 0 else 1.0
     J = res.jac
     try:
@@ -307,13 +311,11 @@ def as_fit(prob: Problem, res: OptimizeResult, effect: str, meas: Measurement) -
     if "shear_deformation.kGA_N" in params:
         params["shear_deformation.G_core_pa"] = g_core_pa(params["shear_deformation.kGA_N"], nb)
         std["shear_deformation.G_core_pa"] = g_core_pa(std["shear_deformation.kGA_N"], nb)
-    pred = prob.predict(nb)
-    white = prob.blocks(pred)
     blocks = {b: float(v @ v) for b, v in white.items()}
     if meas.damping_ratios is not None:
         nb = with_rayleigh(nb, meas)
     return Fit(effect, tuple(nb.effects), nb, params, std, chi2, n_obs, n_par, chi2 + n_par * math.log(n_obs),
-               float("nan"), mode_residuals(meas, pred, prob.pairs), dof, blocks, white)
+               float("nan"), mode_residuals(meas, pred, prob.pairs), blocks, white)
 
 
 def candidate_fit(beam, meas, noise, name, fixed, n_elements, pairs, fit_mass, n_starts, seed, named, start,
@@ -338,7 +340,6 @@ def candidate_fit(beam, meas, noise, name, fixed, n_elements, pairs, fit_mass, n
                 return refined, positions
             # the local search from the best measured point went astray: keep that point
         # the discrete position counts as a parameter
-        return replace(f, n_params=f.n_params + 1, bic=f.bic + math.log(f.n_obs), dof=f.dof - 1,
-                       lomo=lomo_error(prob, x_opt)), pos
+        return replace(f, n_params=f.n_params + 1, bic=f.bic + math.log(f.n_obs), lomo=lomo_error(prob, x_opt)), pos
     f, _, _ = fit_model(beam, meas, noise, name, fixed, n_elements, pairs, n_starts=n_starts, position=positions, **kw)
     return f, positions
