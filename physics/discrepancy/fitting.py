@@ -114,10 +114,7 @@ def _band_mean_db(meas: Measurement, err_db: np.ndarray) -> np.ndarray:
     identification's errors, and the modes' frequencies, damping and shapes come from
     the identified modal data.
     """
-    fm = meas.frequencies_hz
-    edges = np.concatenate([[0.0], np.sqrt(fm[:-1] * fm[1:]), [np.inf]])
-    band = np.searchsorted(edges, meas.frf_frequency_hz, side="right") - 1       # (n_lines,)
-    onehot = (band[:, None] == np.arange(fm.size)[None, :]).astype(float)         # (n_lines, n_modes)
+    onehot = meas.frf_band_onehot                                                 # (n_lines, n_modes)
     count = np.maximum(onehot.sum(axis=0), 1.0)
     return (err_db @ onehot) / count
 
@@ -187,7 +184,7 @@ class Problem:
             if has_complex_shapes(meas):
                 out["complex shapes"] = np.concatenate([d.imag for d in diff])
         if meas.frf is not None:
-            err_db = _band_mean_db(meas, magnitude_db(pred.frf) - magnitude_db(meas.frf))
+            err_db = _band_mean_db(meas, magnitude_db(pred.frf) - meas.frf_db)
             out["FRF"] = (err_db / noise.frf_db)[..., self.mask].ravel()
         return out
 

@@ -155,12 +155,9 @@ def mode_residuals(meas: Measurement, pred: Prediction, pairs=None) -> ModeResid
         macs = np.array([mac(meas.shapes[:, [j]], pred.shapes[:, [p]])[0, 0] for j, p in enumerate(pairs)])
     band = total = None
     if meas.frf is not None:
-        err = magnitude_db(pred.frf) - magnitude_db(meas.frf)
-        fm = meas.frequencies_hz
-        edges = np.concatenate([[0.0], np.sqrt(fm[:-1] * fm[1:]), [np.inf]])
-        lines = meas.frf_frequency_hz
-        band = np.array([np.sqrt(np.mean(err[..., (lines >= lo) & (lines < hi)] ** 2))
-                         if np.any((lines >= lo) & (lines < hi)) else np.nan for lo, hi in zip(edges[:-1], edges[1:])])
+        err = magnitude_db(pred.frf) - meas.frf_db
+        band = np.array([np.sqrt(np.mean(err[..., meas.frf_band == j] ** 2)) if np.any(meas.frf_band == j) else np.nan
+                         for j in range(meas.n_modes)])
         total = float(np.sqrt(np.mean(err**2)))
     return ModeResiduals(meas.frequencies_hz, f, 100 * (f / meas.frequencies_hz - 1), meas.damping_ratios,
                          None if meas.damping_ratios is None else pred.damping_ratios[pairs], macs, band, total)
