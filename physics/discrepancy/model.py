@@ -11,6 +11,7 @@ from scipy.optimize import linear_sum_assignment
 from physics import effects as fx
 from physics.beam import Beam
 from physics.errors import BeamDamageError
+from physics.frf import convert_frf, receptance
 from physics.modal import mac
 from physics.discrepancy.measurement import Measurement, Noise, magnitude_db
 
@@ -77,7 +78,7 @@ def predict(beam: Beam, meas: Measurement, n_elements: int = 40, n_modes: int | 
         pole = 1 / (s[:, None] - lam[None, :])
         pole_c = 1 / (s[:, None] - np.conj(lam)[None, :])
         frf = (np.einsum("sj,rj,fj->srf", tr, tf, pole) + np.einsum("sj,rj,fj->srf", np.conj(tr), np.conj(tf), pole_c))
-        frf = frf * s ** {"receptance": 0, "mobility": 1, "accelerance": 2}[meas.frf_kind]
+        frf = convert_frf(frf, 2 * np.pi * meas.frf_frequency_hz, "receptance", meas.frf_kind)
     return Prediction(wn[:n] / (2 * np.pi), zeta[:n], shapes, frf)
 
 
@@ -190,8 +191,6 @@ def simulate_measurement(truth: Beam, n_modes: int = 4, noise: Noise | None = No
     (reference: the first) is computed by direct inversion of the truth's full
     ``(M, C, K)`` and gets log-normal magnitude noise of ``noise.frf_db``.
     """
-    from physics.frf import receptance
-
     noise = noise or Noise(0.002, 0.05, 0.01, 0.5)
     rng = np.random.default_rng(seed)
     xs = truth.measured_x_m
