@@ -11,14 +11,13 @@ import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy.linalg import eigh
 from scipy.optimize import OptimizeResult, least_squares
 
-from physics import effects as fx
 from physics.beam import Beam
 from physics.discrepancy.candidates import Param, effect_params, g_core_pa, has_position
 from physics.discrepancy.measurement import Measurement, has_complex_shapes, magnitude_db
-from physics.discrepancy.model import ModeResiduals, Prediction, aligned, mode_residuals, predict, rayleigh_fit
+from physics.discrepancy.model import (ModeResiduals, Prediction, aligned, dashpot_damping_per_c, mode_residuals,
+                                       predict, rayleigh_fit)
 
 __all__ = ["BLOCKS", "Fit", "Problem", "as_fit", "candidate_fit", "fit_model", "lomo_error", "model_params",
            "with_rayleigh"]
@@ -268,12 +267,9 @@ def with_rayleigh(nb: Beam, meas: Measurement) -> Beam:
     w = 2 * np.pi * meas.frequencies_hz
     z = np.array(meas.damping_ratios, dtype=float)
     if "local_damping" in nb.effects:
-        # a dashpot c at x adds c phi_r(x)^2 / (2 w_r) to mode r (mass-normalised phi)
-        model = nb.fe_model(24)
-        w2, phi = eigh(model.K, model.M, subset_by_index=[0, meas.n_modes - 1])
         d = nb.effects["local_damping"]
-        t = fx.interpolation_matrix(model, [d.get("x_m", nb.length_m)])[0]
-        z = np.maximum(z - d["c_Ns_m"] * (t @ phi) ** 2 / (2 * np.sqrt(w2)), 0.05 * z)
+        per_c = dashpot_damping_per_c(nb, [d.get("x_m", nb.length_m)], meas.n_modes, 24)[0]
+        z = np.maximum(z - d["c_Ns_m"] * per_c, 0.05 * z)
     a, b = rayleigh_fit(w, z)
     return nb.with_effects({**nb.effects_dict(), "proportional_damping": {"alpha_1_s": a, "beta_s": b}})
 

@@ -15,8 +15,8 @@ from physics.frf import convert_frf, receptance
 from physics.modal import mac
 from physics.discrepancy.measurement import Measurement, Noise, magnitude_db
 
-__all__ = ["ModeResiduals", "Prediction", "aligned", "mode_residuals", "pair_modes", "predict", "rayleigh_fit",
-           "simulate_measurement"]
+__all__ = ["ModeResiduals", "Prediction", "aligned", "dashpot_damping_per_c", "mode_residuals", "pair_modes",
+           "predict", "rayleigh_fit", "simulate_measurement"]
 
 
 @dataclass(frozen=True)
@@ -80,6 +80,26 @@ def predict(beam: Beam, meas: Measurement, n_elements: int = 40, n_modes: int | 
         frf = (np.einsum("sj,rj,fj->srf", tr, tf, pole) + np.einsum("sj,rj,fj->srf", np.conj(tr), np.conj(tf), pole_c))
         frf = convert_frf(frf, 2 * np.pi * meas.frf_frequency_hz, "receptance", meas.frf_kind)
     return Prediction(wn[:n] / (2 * np.pi), zeta[:n], shapes, frf)
+
+
+def dashpot_damping_per_c(beam: Beam, x_m, n_modes: int, n_elements: int) -> np.ndarray:
+    """First-order damping ratio a dashpot of 1 N s/m adds to each of the lowest modes, at each position.
+
+    ``phi_r(x)^2 / (2 w_r)`` with mass-normalised ``phi`` of the undamped ``n_elements`` model of ``beam``
+    (one eigensolution for every position); a dashpot ``c`` adds ``c`` times this.
+
+    Parameters
+    ----------
+    x_m : sequence of float
+        Dashpot positions (m), shape (n_x,).
+
+    Returns
+    -------
+    ndarray, shape (n_x, n_modes)   (m/(N s))
+    """
+    model = beam.fe_model(n_elements)
+    w2, phi = eigh(model.K, model.M, subset_by_index=[0, n_modes - 1])
+    return (fx.interpolation_matrix(model, list(x_m)) @ phi) ** 2 / (2 * np.sqrt(w2))
 
 
 def _real_shape(v):
