@@ -213,6 +213,27 @@ def test_cli_rejects_bad_measured_file(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
+def test_cli_noise_given_is_used_even_when_equal_to_the_default(tmp_path, capsys):
+    """A noise given on the command line is used and named as given, whatever its value; one not given comes from
+    the FRF (its scatter, the identification's frequency std)."""
+    from experiments.cli import main
+    from physics.io import write_uff58
+    from physics.thesis import simulated_beam5_test
+
+    write_uff58(tmp_path / "m.uff", simulated_beam5_test(noise=0.005, seed=11, df_hz=2.0, damping="heavy")[0])
+    fast = ["discrepancy", "--measured", str(tmp_path / "m.uff"), "--elements", "6", "--max-effects", "0",
+            "--candidates", "root_flexibility", "--json"]
+    runs = {}
+    for name, more in (("default", []), ("given", ["--frf-noise-db", "1", "--frequency-noise", "0.003"])):
+        assert main(fast + more) == 0
+        runs[name] = json.loads(capsys.readouterr().out)["assumed_noise"]
+    assert runs["given"]["frf_db"] == 1.0 and runs["given"]["frf_db_source"] == "--frf-noise-db"
+    assert runs["given"]["frequency"] == 0.003 and runs["given"]["frequency_source"] == "--frequency-noise"
+    assert 0.01 <= runs["default"]["frf_db"] < 0.2 and "scatter" in runs["default"]["frf_db_source"]
+    assert "identification" in runs["default"]["frequency_source"]
+    assert all(0.001 <= f < 0.003 for f in runs["default"]["frequency"])
+
+
 @pytest.mark.slow
 def test_cli_on_frfs_identifies_then_names_shear(tmp_path, capsys):
     from experiments.cli import main
