@@ -107,9 +107,14 @@ def _residual_rows(label: str, r: dsc.ModeResiduals) -> list[dict]:
     return rows
 
 
-def _csv(rows: list[dict]) -> bytes:
+#: Columns of candidates.csv.
+_CANDIDATE_COLUMNS = ("effect", "score", "max_abs_frequency_error_pct", "round", "lomo", "n_params", "parameters")
+
+
+def _csv(rows: list[dict], columns=()) -> bytes:
+    """CSV text of ``rows``; the columns are the first row's keys, else (no rows: a header alone) ``columns``."""
     buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
+    w = csv.DictWriter(buf, fieldnames=list(rows[0]) if rows else list(columns), lineterminator="\n")
     w.writeheader()
     for r in rows:
         w.writerow({k: ("" if v is None else v) for k, v in r.items()})
@@ -313,7 +318,7 @@ def _table_files(res: dsc.DiscrepancyResult, recal: dsc.ModeResiduals, cand: lis
     files = {"residuals.csv": _csv(rows), "residuals.json": (json.dumps(rows, indent=1) + "\n").encode()}
     flat = [{**{k: v for k, v in c.items() if k != "parameters"},
              "parameters": json.dumps(c["parameters"], sort_keys=True)} for c in cand]
-    files["candidates.csv"] = _csv(flat)
+    files["candidates.csv"] = _csv(flat, _CANDIDATE_COLUMNS)
     files["candidates.json"] = (json.dumps(to_jsonable(cand), indent=1) + "\n").encode()
     return files
 

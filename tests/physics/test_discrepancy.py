@@ -202,6 +202,20 @@ def test_cli_on_beam5_table_4_3(tmp_path, capsys):
         assert (tmp_path / name).stat().st_size > 0
 
 
+def test_cli_names_no_effect_with_max_effects_0_and_writes_every_file(tmp_path, capsys):
+    from experiments.cli import main
+    from experiments.study_discrepancy import EXAMPLE
+
+    assert main(["discrepancy", "--measured", str(EXAMPLE), "--out", str(tmp_path), "--max-effects", "0",
+                 "--elements", "12", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["effects"] == [] and out["candidates"] == []
+    assert (tmp_path / "candidates.csv").read_text() == ("effect,score,max_abs_frequency_error_pct,round,lomo,"
+                                                        "n_params,parameters\n")
+    header = (tmp_path / "residuals.csv").read_text().splitlines()[0]
+    assert header.startswith("model,mode,measured_hz") and (tmp_path / "beam.toml").stat().st_size > 0
+
+
 def test_cli_rejects_bad_measured_file(tmp_path, capsys):
     from experiments.cli import main
 
