@@ -43,11 +43,10 @@ def add_parser(sub):
 
 
 def read_input(path):
-    """A modal-data file -> ModalData, an FRF file -> MeasuredFRF (the format by :func:`physics.io.format_of`)."""
-    from physics.io import FRF, MODAL, format_of
+    """A modal-data file -> ModalData, an FRF file -> MeasuredFRF (:func:`physics.io.modal_or_frf`)."""
+    from physics.io import modal_or_frf, read
 
-    fmt = format_of(path, MODAL, FRF)
-    return fmt.reader(fmt.holds[0])(path)
+    return read(path, modal_or_frf(path))
 
 
 def run(args):

@@ -21,14 +21,9 @@ __all__ = ["EXAMPLE", "add_parser", "run"]
 
 
 def run(args) -> dict:
-    # a noise not given is assumed (the defaults), and then scaled to the data (analyse's estimate_noise)
-    estimate = args.frequency_noise is None and args.shape_noise is None
-    d = dsc.Noise()
-    noise = dsc.Noise(d.frequency if args.frequency_noise is None else args.frequency_noise,
-                      shape=d.shape if args.shape_noise is None else args.shape_noise, frf_db=args.frf_noise_db)
-    for name, v in (("--frequency-noise", noise.frequency), ("--shape-noise", noise.shape),
+    for name, v in (("--frequency-noise", args.frequency_noise), ("--shape-noise", args.shape_noise),
                     ("--frf-noise-db", args.frf_noise_db)):
-        if not (np.isfinite(v) and v > 0):
+        if v is not None and not (np.isfinite(v) and v > 0):
             raise ConfigError(f"{name} must be a positive number, got {v}")
     if args.max_effects < 0:
         raise ConfigError(f"--max-effects must be >= 0, got {args.max_effects}")
@@ -38,9 +33,13 @@ def run(args) -> dict:
     if not args.json:
         def progress(s):
             print(f"  fitting {s} ...", flush=True)
-    out = run_discrepancy(args.beam, args.measured, args.out, noise=noise, max_effects=args.max_effects,
+    # a noise not given is of the data or assumed (run_discrepancy), and assumed ones are scaled to the data
+    # (analyse's estimate_noise)
+    out = run_discrepancy(args.beam, args.measured, args.out, frequency_noise=args.frequency_noise,
+                          shape_noise=args.shape_noise, frf_noise_db=args.frf_noise_db, max_effects=args.max_effects,
                           n_elements=args.elements, seed=args.seed, candidates=tuple(args.candidates),
-                          estimate_noise=estimate, progress=progress)
+                          estimate_noise=args.frequency_noise is None and args.shape_noise is None,
+                          progress=progress)
     res, recal = out.pop("_result")
     if not args.json:
         _print(out, res, recal)
@@ -142,7 +141,7 @@ def add_parser(sub):
     p.add_argument("--shape-noise", type=float, default=None,
                    help="std of shape entries relative to the largest (default: 0.02 assumed, scaled as "
                         "--frequency-noise)")
-    p.add_argument("--frf-noise-db", type=float, default=dsc.Noise().frf_db,
+    p.add_argument("--frf-noise-db", type=float, default=None,
                    help="FRF magnitude std in dB (default: estimated from the FRF's line-to-line scatter)")
     p.add_argument("--max-effects", type=int, default=2, help="most effects to name (default 2)")
     p.add_argument("--candidates", nargs="+", default=list(CANDIDATES), choices=CANDIDATES, metavar="EFFECT",

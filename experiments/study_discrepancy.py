@@ -21,7 +21,7 @@ from physics import discrepancy as dsc
 from physics.beam import Beam, beam_to_toml, load_beam
 from physics.effects import CANDIDATES
 from physics.errors import ConfigError, FileFormatError
-from physics.io import FRF, MODAL, atomic_write_bytes, format_of, modal_data_from_dict, number_list, read_frf, read_json
+from physics.io import MODAL, atomic_write_bytes, modal_data_from_dict, modal_or_frf, number_list, read_frf, read_json
 
 __all__ = ["EXAMPLE", "EXAMPLE_SHAPES", "TRUTHS", "assumed_noise", "beam5_section", "confusion", "estimated_noise",
            "load_measurement", "run", "run_case", "run_discrepancy"]
@@ -39,7 +39,7 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[dsc.Measurement, o
     :class:`physics.io.DofMap` of the measured DOFs (None for frequencies alone).
     """
     path = Path(path)
-    if MODAL in format_of(path, MODAL, FRF).holds:
+    if modal_or_frf(path) == MODAL:
         try:
             obj = read_json(path, require_object=False)
         except FileNotFoundError:
@@ -107,9 +107,14 @@ def _residual_rows(label: str, r: dsc.ModeResiduals) -> list[dict]:
     return rows
 
 
-def _csv(rows: list[dict]) -> bytes:
+#: Columns of candidates.csv.
+_CANDIDATE_COLUMNS = ("effect", "score", "max_abs_frequency_error_pct", "round", "lomo", "n_params", "parameters")
+
+
+def _csv(rows: list[dict], columns=()) -> bytes:
+    """CSV text of ``rows``; the columns are the first row's keys, else (no rows: a header alone) ``columns``."""
     buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
+    w = csv.DictWriter(buf, fieldnames=list(rows[0]) if rows else list(columns), lineterminator="\n")
     w.writeheader()
     for r in rows:
         w.writerow({k: ("" if v is None else v) for k, v in r.items()})
@@ -181,20 +186,17 @@ def _figures(res: dsc.DiscrepancyResult, recal: dsc.ModeResiduals, meas: dsc.Mea
     return out
 
 
-def assumed_noise(meas: dsc.Measurement, noise: dsc.Noise, identified: bool, given_frf_db: bool) -> dict:
-    """The noise that whitens the residuals, for the data present, and where it comes from."""
+def assumed_noise(meas: dsc.Measurement, noise: dsc.Noise, sources: dict) -> dict:
+    """The noise that whitens the residuals, for the data present, and where it comes from (``sources`` of
+    :func:`_noise_for`)."""
     f = np.asarray(noise.frequency, dtype=float)
-    out = {"frequency": f.tolist() if f.ndim else float(f),
-           "frequency_source": "FRF identification (its frequency std, at least 0.1 %)" if identified else
-           ("assumed (default, --frequency-noise)" if float(f) == dsc.Noise().frequency else "--frequency-noise")}
+    out = {"frequency": f.tolist() if f.ndim else float(f), "frequency_source": sources["frequency"]}
     if meas.shapes is not None:
         out["shape"] = noise.shape
-        out["shape_source"] = ("assumed (default, --shape-noise)" if noise.shape == dsc.Noise().shape
-                               else "--shape-noise")
+        out["shape_source"] = sources["shape"]
     if meas.frf is not None:
         out["frf_db"] = noise.frf_db
-        out["frf_db_source"] = ("--frf-noise-db" if given_frf_db else
-                                "the FRF's line-to-line scatter; compared as the mean level per mode band")
+        out["frf_db_source"] = sources["frf_db"]
     return out
 
 
@@ -212,16 +214,18 @@ def estimated_noise(meas: dsc.Measurement, res: dsc.DiscrepancyResult) -> dict:
     return out
 
 
-def run_discrepancy(beam_spec, measured, out_dir=None, *, noise=None, max_effects=2, n_elements=40, seed=0,
-                    candidates=CANDIDATES, estimate_noise=False, progress=None) -> dict:
+def run_discrepancy(beam_spec, measured, out_dir=None, *, frequency_noise=None, shape_noise=None, frf_noise_db=None,
+                    max_effects=2, n_elements=40, seed=0, candidates=CANDIDATES, estimate_noise=False,
+                    progress=None) -> dict:
     """The command without printing: returns the JSON result (issue 9 keys) plus ``"_result"`` objects.
 
-    ``estimate_noise`` (modal JSON only; FRF input takes its noise from the identification and the FRF's
-    scatter) scales an assumed noise to the data (:func:`physics.discrepancy.analyse`).
+    ``frequency_noise``, ``shape_noise`` and ``frf_noise_db`` are the noise stds given (None: not given;
+    :func:`_noise_for`). ``estimate_noise`` (modal JSON only; FRF input takes its noise from the identification
+    and the FRF's scatter) scales an assumed noise to the data (:func:`physics.discrepancy.analyse`).
     """
     beam = beam_spec if isinstance(beam_spec, Beam) else load_beam(beam_spec)
     meas, rel_std, dof_map = load_measurement(measured, beam)
-    noise, given_frf_db = _noise_for(meas, rel_std, noise)
+    noise, sources = _noise_for(meas, rel_std, frequency_noise, shape_noise, frf_noise_db)
     if out_dir is not None:
         out_dir = Path(out_dir)
         if out_dir.exists() and not out_dir.is_dir():
@@ -231,7 +235,7 @@ def run_discrepancy(beam_spec, measured, out_dir=None, *, noise=None, max_effect
     first = res.steps[0] if res.steps else None
     cand = _candidate_rows(res)
     check = res.noise_check.to_dict()
-    out = _result_json(res, meas, noise, rel_std is not None, given_frf_db, dof_map, cand, check)
+    out = _result_json(res, meas, noise, sources, dof_map, cand, check)
     recal = first.base.residuals if first else res.final.residuals
     if out_dir is not None:
         before_frf = after_frf = None
@@ -252,21 +256,33 @@ def run_discrepancy(beam_spec, measured, out_dir=None, *, noise=None, max_effect
     return out
 
 
-def _noise_for(meas: dsc.Measurement, rel_std, noise) -> tuple[dsc.Noise, bool]:
-    """The noise of the data (identification's frequency std, FRF scatter) and whether ``frf_db`` was given."""
-    noise = noise or dsc.Noise()
-    given_frf_db = noise.frf_db != dsc.Noise().frf_db
-    if rel_std is not None and noise.frequency == dsc.Noise().frequency:
-        # identified from FRFs: the identification's frequency std, floored at 0.1 %
-        noise = dsc.Noise(np.maximum(rel_std, 1e-3), noise.damping, noise.shape, noise.frf_db)
-    if meas.frf is not None and noise.frf_db == dsc.Noise().frf_db:
-        # the FRF's own random noise, from its line-to-line scatter
-        noise = dsc.Noise(noise.frequency, noise.damping, noise.shape, dsc.frf_scatter_db(meas))
-    return noise, given_frf_db
+def _noise_for(meas: dsc.Measurement, rel_std=None, frequency=None, shape=None, frf_db=None) -> tuple[dsc.Noise, dict]:
+    """The noise that whitens the residuals and where each std comes from (``{"frequency", "shape", "frf_db"}``).
+
+    Each std is the one given, else of the data (the relative frequency std ``rel_std`` of an FRF
+    identification, floored at 0.1 %; the FRF's line-to-line scatter), else assumed (:class:`Noise`'s default).
+    """
+    d = dsc.Noise()
+    if frequency is not None:
+        src_f = "--frequency-noise"
+    elif rel_std is not None:
+        frequency, src_f = np.maximum(rel_std, 1e-3), "FRF identification (its frequency std, at least 0.1 %)"
+    else:
+        frequency, src_f = d.frequency, "assumed (default, --frequency-noise)"
+    src_s = "--shape-noise" if shape is not None else "assumed (default, --shape-noise)"
+    if frf_db is not None:
+        src_h = "--frf-noise-db"
+    elif meas.frf is not None:
+        frf_db = dsc.frf_scatter_db(meas)
+        src_h = "the FRF's line-to-line scatter; compared as the mean level per mode band"
+    else:
+        frf_db, src_h = d.frf_db, "assumed (default; no FRF)"
+    noise = dsc.Noise(frequency, d.damping, d.shape if shape is None else shape, frf_db)
+    return noise, {"frequency": src_f, "shape": src_s, "frf_db": src_h}
 
 
-def _result_json(res: dsc.DiscrepancyResult, meas: dsc.Measurement, noise: dsc.Noise, identified: bool,
-                 given_frf_db: bool, dof_map, cand: list[dict], check: dict) -> dict:
+def _result_json(res: dsc.DiscrepancyResult, meas: dsc.Measurement, noise: dsc.Noise, sources: dict, dof_map,
+                 cand: list[dict], check: dict) -> dict:
     """The JSON result of the command (issue 9 keys; ``beam_file`` None until the files are written)."""
     first = res.steps[0] if res.steps else None
     return {
@@ -279,7 +295,7 @@ def _result_json(res: dsc.DiscrepancyResult, meas: dsc.Measurement, noise: dsc.N
         "separating_measurement": first.separating_measurement if first else "",
         "gap_before": res.nominal.gap(),
         "gap_after": res.final.residuals.gap(),
-        "assumed_noise": assumed_noise(meas, noise, identified, given_frf_db),
+        "assumed_noise": assumed_noise(meas, noise, sources),
         "chi2_per_dof": check["chi2_per_dof"],
         "noise_consistent": check["noise_consistent"],
         "noise_check": check,
@@ -302,7 +318,7 @@ def _table_files(res: dsc.DiscrepancyResult, recal: dsc.ModeResiduals, cand: lis
     files = {"residuals.csv": _csv(rows), "residuals.json": (json.dumps(rows, indent=1) + "\n").encode()}
     flat = [{**{k: v for k, v in c.items() if k != "parameters"},
              "parameters": json.dumps(c["parameters"], sort_keys=True)} for c in cand]
-    files["candidates.csv"] = _csv(flat)
+    files["candidates.csv"] = _csv(flat, _CANDIDATE_COLUMNS)
     files["candidates.json"] = (json.dumps(to_jsonable(cand), indent=1) + "\n").encode()
     return files
 

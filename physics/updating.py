@@ -186,7 +186,12 @@ def eigenvector_condition(eigenvectors):
     -------
     float or ndarray, shape (...)
     """
-    s = np.linalg.svd(unit_columns(eigenvectors), compute_uv=False)
+    return _condition(unit_columns(eigenvectors))
+
+
+def _condition(a):
+    """2-norm condition number of square matrices ``a`` (..., n, n) (inf if singular)."""
+    s = np.linalg.svd(a, compute_uv=False)
     with np.errstate(divide="ignore", invalid="ignore"):
         cond = np.where(s[..., -1] > 0, s[..., 0] / s[..., -1], np.inf)
     return cond if cond.ndim else float(cond)
@@ -229,7 +234,7 @@ def check_modal_input(M, eigenvalues, eigenvectors, *, dependent: str = "raise")
         raise OverdampedError("eigenvalues mix both halves of the conjugate pairs; give one eigenvalue of each "
                               "pair (all with Im > 0), the conjugates are implied")
     phi = unit_columns(phi)
-    cond = np.asarray(eigenvector_condition(phi))
+    cond = np.asarray(_condition(phi))   # of the unit columns: eigenvector_condition(eigenvectors)
     bad = ~(cond <= MAX_EIGENVECTOR_CONDITION)
     if bad.any() and dependent == "raise":
         raise ShapeError(f"eigenvectors are linearly dependent (condition number {float(cond.max()):.3g} > "

@@ -821,6 +821,8 @@ def _label_cases():
         ("csv", "header label 'a'", lambda d: [_csv(d / "a.csv", "frequency_hz,re(a/b),im(a/b)\n" + rows)], "'a'"),
         ("csv", "header label '2' (no direction)", lambda d: [_csv(d / "n.csv", "frequency_hz,re(2/5),im(2/5)\n"
                                                                    + rows)], "'2'"),
+        ("csv", "response label 'ref'", lambda d: [_csv(d / "r.csv", "frequency_hz,re(ref),im(ref)\n" + rows)],
+         "r.csv: line 1: column 2 're(ref)': DOF label 'ref' must look like 'NODE:+DIR'"),
         ("csv", "header direction Q", lambda d: [_csv(d / "q.csv", "frequency_hz,re(2:+Q),im(2:+Q)\n" + rows)],
          "2:+Q"),
         ("csv", "header labels not DOFs (update)", lambda d: ["update", "--modal", str(_csv(

@@ -11,14 +11,13 @@ import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy.linalg import eigh
 from scipy.optimize import OptimizeResult, least_squares
 
-from physics import effects as fx
 from physics.beam import Beam
 from physics.discrepancy.candidates import Param, effect_params, g_core_pa, has_position
 from physics.discrepancy.measurement import Measurement, has_complex_shapes, magnitude_db
-from physics.discrepancy.model import ModeResiduals, Prediction, aligned, mode_residuals, predict, rayleigh_fit
+from physics.discrepancy.model import (ModeResiduals, Prediction, aligned, dashpot_damping_per_c, mode_residuals,
+                                       predict, rayleigh_fit)
 
 __all__ = ["BLOCKS", "Fit", "Problem", "as_fit", "candidate_fit", "fit_model", "lomo_error", "model_params",
            "with_rayleigh"]
@@ -51,9 +50,6 @@ class Fit:
     lomo : float
         Leave-one-mode-out prediction error in noise units (:func:`lomo_error`), NaN if not computed.
     residuals : ModeResiduals
-    dof : int
-        Degrees of freedom of ``chi2``: ``n_obs - n_params`` less the scale
-        of each compared shape (2 per mode for complex shapes, 1 for real).
     chi2_blocks : dict
         ``chi2`` split by data block (:data:`BLOCKS`).
     whitened : dict
@@ -71,26 +67,37 @@ class Fit:
     bic: float
     lomo: float
     residuals: ModeResiduals
-    dof: int = 0
     chi2_blocks: dict = field(default_factory=dict)
     whitened: dict = field(default_factory=dict)
 
-    def block_dof(self, meas: "Measurement") -> dict:
+    @property
+    def block_dof(self) -> dict:
         """Degrees of freedom of each block's chi^2: observations less what the fit takes from them.
 
         Frequencies lose the model's parameters, shapes one scale per mode
         (real part; the imaginary part a second), the FRF band levels the mass scale.
         """
-        n = {k: v.size for k, v in self.whitened.items()}
-        n_modes = meas.n_modes
-        out = {"frequencies": n["frequencies"] - self.n_params + (1 if "FRF" in n else 0)}
-        if "mode shapes" in n:
-            out["mode shapes"] = n["mode shapes"] - n_modes
-        if "complex shapes" in n:
-            out["complex shapes"] = n["complex shapes"] - n_modes
-        if "FRF" in n:
-            out["FRF"] = n["FRF"] - 1
-        return out
+        return _block_dof(self.whitened, self.n_params)
+
+    @property
+    def dof(self) -> int:
+        """Degrees of freedom of ``chi2``: ``n_obs - n_params`` less the scale of each compared shape (2 per mode
+        for complex shapes, 1 for real); the sum of :attr:`block_dof`."""
+        return sum(self.block_dof.values())
+
+
+def _block_dof(whitened: dict, n_params: int) -> dict:
+    """:attr:`Fit.block_dof` of whitened residual blocks (every mode compared) and ``n_params`` parameters."""
+    n = {k: v.size for k, v in whitened.items()}
+    n_modes = n["frequencies"]     # one per measured mode
+    out = {"frequencies": n["frequencies"] - n_params + (1 if "FRF" in n else 0)}
+    if "mode shapes" in n:
+        out["mode shapes"] = n["mode shapes"] - n_modes
+    if "complex shapes" in n:
+        out["complex shapes"] = n["complex shapes"] - n_modes
+    if "FRF" in n:
+        out["FRF"] = n["FRF"] - 1
+    return out
 
 
 #: Data blocks of the residual: what the evidence for an effect can come from.
@@ -106,10 +113,7 @@ def _band_mean_db(meas: Measurement, err_db: np.ndarray) -> np.ndarray:
     identification's errors, and the modes' frequencies, damping and shapes come from
     the identified modal data.
     """
-    fm = meas.frequencies_hz
-    edges = np.concatenate([[0.0], np.sqrt(fm[:-1] * fm[1:]), [np.inf]])
-    band = np.searchsorted(edges, meas.frf_frequency_hz, side="right") - 1       # (n_lines,)
-    onehot = (band[:, None] == np.arange(fm.size)[None, :]).astype(float)         # (n_lines, n_modes)
+    onehot = meas.frf_band_onehot                                                 # (n_lines, n_modes)
     count = np.maximum(onehot.sum(axis=0), 1.0)
     return (err_db @ onehot) / count
 
@@ -179,7 +183,7 @@ class Problem:
             if has_complex_shapes(meas):
                 out["complex shapes"] = np.concatenate([d.imag for d in diff])
         if meas.frf is not None:
-            err_db = _band_mean_db(meas, magnitude_db(pred.frf) - magnitude_db(meas.frf))
+            err_db = _band_mean_db(meas, magnitude_db(pred.frf) - meas.frf_db)
             out["FRF"] = (err_db / noise.frf_db)[..., self.mask].ravel()
         return out
 
@@ -263,20 +267,11 @@ def with_rayleigh(nb: Beam, meas: Measurement) -> Beam:
     w = 2 * np.pi * meas.frequencies_hz
     z = np.array(meas.damping_ratios, dtype=float)
     if "local_damping" in nb.effects:
-        # a dashpot c at x adds c phi_r(x)^2 / (2 w_r) to mode r (mass-normalised phi)
-        model = nb.fe_model(24)
-        w2, phi = eigh(model.K, model.M, subset_by_index=[0, meas.n_modes - 1])
         d = nb.effects["local_damping"]
-        t = fx.interpolation_matrix(model, [d.get("x_m", nb.length_m)])[0]
-        z = np.maximum(z - d["c_Ns_m"] * (t @ phi) ** 2 / (2 * np.sqrt(w2)), 0.05 * z)
+        per_c = dashpot_damping_per_c(nb, [d.get("x_m", nb.length_m)], meas.n_modes, 24)[0]
+        z = np.maximum(z - d["c_Ns_m"] * per_c, 0.05 * z)
     a, b = rayleigh_fit(w, z)
     return nb.with_effects({**nb.effects_dict(), "proportional_damping": {"alpha_1_s": a, "beta_s": b}})
-
-
-def _shape_dof(meas: Measurement, mask) -> int:
-    if meas.shapes is None:
-        return 0
-    return (2 if has_complex_shapes(meas) else 1) * int(np.sum(mask))
 
 
 def as_fit(prob: Problem, res: OptimizeResult, effect: str, meas: Measurement) -> Fit:
@@ -284,7 +279,9 @@ def as_fit(prob: Problem, res: OptimizeResult, effect: str, meas: Measurement) -
     r = res.fun
     chi2 = float(r @ r)
     n_obs, n_par = r.size, res.x.size
-    dof = n_obs - n_par - _shape_dof(meas, prob.mask)
+    pred = prob.predict(nb)
+    white = prob.blocks(pred)
+    dof = sum(_block_dof(white, n_par).values())   # the result's Fit.dof
     s2 = max(1.0, chi2 / dof) if dof > 0 else 1.0
     J = res.jac
     try:
@@ -307,13 +304,11 @@ def as_fit(prob: Problem, res: OptimizeResult, effect: str, meas: Measurement) -
     if "shear_deformation.kGA_N" in params:
         params["shear_deformation.G_core_pa"] = g_core_pa(params["shear_deformation.kGA_N"], nb)
         std["shear_deformation.G_core_pa"] = g_core_pa(std["shear_deformation.kGA_N"], nb)
-    pred = prob.predict(nb)
-    white = prob.blocks(pred)
     blocks = {b: float(v @ v) for b, v in white.items()}
     if meas.damping_ratios is not None:
         nb = with_rayleigh(nb, meas)
     return Fit(effect, tuple(nb.effects), nb, params, std, chi2, n_obs, n_par, chi2 + n_par * math.log(n_obs),
-               float("nan"), mode_residuals(meas, pred, prob.pairs), dof, blocks, white)
+               float("nan"), mode_residuals(meas, pred, prob.pairs), blocks, white)
 
 
 def candidate_fit(beam, meas, noise, name, fixed, n_elements, pairs, fit_mass, n_starts, seed, named, start,
@@ -338,7 +333,6 @@ def candidate_fit(beam, meas, noise, name, fixed, n_elements, pairs, fit_mass, n
                 return refined, positions
             # the local search from the best measured point went astray: keep that point
         # the discrete position counts as a parameter
-        return replace(f, n_params=f.n_params + 1, bic=f.bic + math.log(f.n_obs), dof=f.dof - 1,
-                       lomo=lomo_error(prob, x_opt)), pos
+        return replace(f, n_params=f.n_params + 1, bic=f.bic + math.log(f.n_obs), lomo=lomo_error(prob, x_opt)), pos
     f, _, _ = fit_model(beam, meas, noise, name, fixed, n_elements, pairs, n_starts=n_starts, position=positions, **kw)
     return f, positions

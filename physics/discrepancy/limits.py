@@ -6,14 +6,12 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.linalg import eigh
 
-from physics import effects as fx
 from physics.beam import Beam
 from physics.discrepancy.candidates import Param, effect_params, has_position
 from physics.discrepancy.fitting import Fit, Problem, model_params
 from physics.discrepancy.measurement import Measurement, Noise
-from physics.discrepancy.model import pair_modes, predict
+from physics.discrepancy.model import dashpot_damping_per_c, pair_modes, predict
 from physics.discrepancy.selection import BIC_SIGNIFICANT
 
 __all__ = ["DETECTION_POWER", "SIZES", "DetectionLimit", "detection_limits"]
@@ -165,8 +163,8 @@ def detection_limits(beam: Beam, meas: Measurement, noise: Noise, final: Fit, c_
 
             by_x[x] = _crossing(lam, p, lam_lim, weak_at_upper=SIZES[effect][2])
         quantity, _, named_below = SIZES[effect]
-        nb = final.beam
-        lims = {x: (None if v is None else v * _size_factor(effect, nb, meas, x, n_elements)) for x, v in by_x.items()}
+        per_unit = _size_factors(effect, final.beam, meas, xs, n_elements)
+        lims = {x: (None if v is None else v * per_unit[x]) for x, v in by_x.items()}
         found = [v for v in lims.values() if v is not None]
         best = (min(found) if not named_below else max(found)) if found else None
         out[effect] = DetectionLimit(effect, quantity, named_below, best, lims if xs[0] is not None else {}, thr,
@@ -185,21 +183,16 @@ def _u_of(params: list, fit: Fit, beam: Beam) -> np.ndarray:
     return np.asarray(u, dtype=float)
 
 
-def _size_factor(effect: str, nb: Beam, meas: Measurement, x_m: float | None, n_elements: int) -> float:
-    """Dimensionless size per unit of the effect's parameter on the calibrated beam ``nb`` (:data:`SIZES`)."""
+def _size_factors(effect: str, nb: Beam, meas: Measurement, xs: list, n_elements: int) -> dict:
+    """Position (or None) -> dimensionless size per unit of the effect's parameter on the calibrated beam ``nb``
+    (:data:`SIZES`); a dashpot's is the largest first-order added damping ratio over the measured modes."""
     L, EI, m = nb.length_m, nb.EI_Nm2, nb.mass_per_length_kg_m
-    if effect == "shear_deformation":
-        return L**2 / EI
-    if effect == "rotary_inertia":
-        return 12 / (m * nb.thickness_m**2)
-    if effect == "root_flexibility":
-        return L / EI
-    if effect == "added_mass":
-        return 1 / (m * L)
-    model = nb.fe_model(n_elements)
-    w2, phi = eigh(model.K, model.M, subset_by_index=[0, meas.n_modes - 1])
-    t = fx.interpolation_matrix(model, [x_m])[0]
-    return float(np.max((t @ phi) ** 2 / (2 * np.sqrt(w2))))
+    if effect == "local_damping":
+        per_c = dashpot_damping_per_c(nb, xs, meas.n_modes, n_elements)
+        return {x: float(np.max(row)) for x, row in zip(xs, per_c)}
+    factor = {"shear_deformation": L**2 / EI, "rotary_inertia": 12 / (m * nb.thickness_m**2),
+              "root_flexibility": L / EI, "added_mass": 1 / (m * L)}[effect]
+    return dict.fromkeys(xs, factor)
 
 
 def _noncentrality(thr: float, k: int, power: float = DETECTION_POWER) -> float:

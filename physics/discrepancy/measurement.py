@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -91,6 +92,27 @@ class Measurement:
     def n_modes(self) -> int:
         return self.frequencies_hz.size
 
+    @cached_property
+    def frf_db(self) -> np.ndarray:
+        """``20 log10 |frf|`` (dB), shape like ``frf`` (computed once)."""
+        return magnitude_db(self.frf)
+
+    @cached_property
+    def frf_band(self) -> np.ndarray:
+        """``(n_lines,)`` index of the measured mode whose band holds each FRF line (computed once).
+
+        Mode ``j``'s band runs from the geometric mean of its frequency and the one below
+        (0 for the first) to the geometric mean with the one above (infinity for the last).
+        """
+        fm = self.frequencies_hz
+        edges = np.concatenate([[0.0], np.sqrt(fm[:-1] * fm[1:]), [np.inf]])
+        return np.searchsorted(edges, self.frf_frequency_hz, side="right") - 1
+
+    @cached_property
+    def frf_band_onehot(self) -> np.ndarray:
+        """``(n_lines, n_modes)``: 1 where a line lies in a mode's band (:attr:`frf_band`), else 0."""
+        return (self.frf_band[:, None] == np.arange(self.n_modes)[None, :]).astype(float)
+
 
 def has_complex_shapes(meas: Measurement) -> bool:
     """Measured shapes with imaginary parts (non-proportional damping is visible in them)."""
@@ -108,7 +130,7 @@ def frf_scatter_db(meas: Measurement) -> float:
     frequency has std ``sqrt(6) s``; the smooth FRF adds little between dense
     lines, and the median absolute deviation ignores the peaks. Floored at 0.01 dB.
     """
-    x = magnitude_db(meas.frf).reshape(-1, meas.frf_frequency_hz.size)
+    x = meas.frf_db.reshape(-1, meas.frf_frequency_hz.size)
     d2 = x[:, 2:] - 2 * x[:, 1:-1] + x[:, :-2]
     mad = np.median(np.abs(d2 - np.median(d2, axis=1, keepdims=True)))
     return max(float(1.4826 * mad / math.sqrt(6)), 0.01)

@@ -11,11 +11,12 @@ from scipy.optimize import linear_sum_assignment
 from physics import effects as fx
 from physics.beam import Beam
 from physics.errors import BeamDamageError
+from physics.frf import convert_frf, receptance
 from physics.modal import mac
 from physics.discrepancy.measurement import Measurement, Noise, magnitude_db
 
-__all__ = ["ModeResiduals", "Prediction", "aligned", "mode_residuals", "pair_modes", "predict", "rayleigh_fit",
-           "simulate_measurement"]
+__all__ = ["ModeResiduals", "Prediction", "aligned", "dashpot_damping_per_c", "mode_residuals", "pair_modes",
+           "predict", "rayleigh_fit", "simulate_measurement"]
 
 
 @dataclass(frozen=True)
@@ -77,8 +78,28 @@ def predict(beam: Beam, meas: Measurement, n_elements: int = 40, n_modes: int | 
         pole = 1 / (s[:, None] - lam[None, :])
         pole_c = 1 / (s[:, None] - np.conj(lam)[None, :])
         frf = (np.einsum("sj,rj,fj->srf", tr, tf, pole) + np.einsum("sj,rj,fj->srf", np.conj(tr), np.conj(tf), pole_c))
-        frf = frf * s ** {"receptance": 0, "mobility": 1, "accelerance": 2}[meas.frf_kind]
+        frf = convert_frf(frf, 2 * np.pi * meas.frf_frequency_hz, "receptance", meas.frf_kind)
     return Prediction(wn[:n] / (2 * np.pi), zeta[:n], shapes, frf)
+
+
+def dashpot_damping_per_c(beam: Beam, x_m, n_modes: int, n_elements: int) -> np.ndarray:
+    """First-order damping ratio a dashpot of 1 N s/m adds to each of the lowest modes, at each position.
+
+    ``phi_r(x)^2 / (2 w_r)`` with mass-normalised ``phi`` of the undamped ``n_elements`` model of ``beam``
+    (one eigensolution for every position); a dashpot ``c`` adds ``c`` times this.
+
+    Parameters
+    ----------
+    x_m : sequence of float
+        Dashpot positions (m), shape (n_x,).
+
+    Returns
+    -------
+    ndarray, shape (n_x, n_modes)   (m/(N s))
+    """
+    model = beam.fe_model(n_elements)
+    w2, phi = eigh(model.K, model.M, subset_by_index=[0, n_modes - 1])
+    return (fx.interpolation_matrix(model, list(x_m)) @ phi) ** 2 / (2 * np.sqrt(w2))
 
 
 def _real_shape(v):
@@ -155,12 +176,9 @@ def mode_residuals(meas: Measurement, pred: Prediction, pairs=None) -> ModeResid
         macs = np.array([mac(meas.shapes[:, [j]], pred.shapes[:, [p]])[0, 0] for j, p in enumerate(pairs)])
     band = total = None
     if meas.frf is not None:
-        err = magnitude_db(pred.frf) - magnitude_db(meas.frf)
-        fm = meas.frequencies_hz
-        edges = np.concatenate([[0.0], np.sqrt(fm[:-1] * fm[1:]), [np.inf]])
-        lines = meas.frf_frequency_hz
-        band = np.array([np.sqrt(np.mean(err[..., (lines >= lo) & (lines < hi)] ** 2))
-                         if np.any((lines >= lo) & (lines < hi)) else np.nan for lo, hi in zip(edges[:-1], edges[1:])])
+        err = magnitude_db(pred.frf) - meas.frf_db
+        band = np.array([np.sqrt(np.mean(err[..., meas.frf_band == j] ** 2)) if np.any(meas.frf_band == j) else np.nan
+                         for j in range(meas.n_modes)])
         total = float(np.sqrt(np.mean(err**2)))
     return ModeResiduals(meas.frequencies_hz, f, 100 * (f / meas.frequencies_hz - 1), meas.damping_ratios,
                          None if meas.damping_ratios is None else pred.damping_ratios[pairs], macs, band, total)
@@ -193,8 +211,6 @@ def simulate_measurement(truth: Beam, n_modes: int = 4, noise: Noise | None = No
     (reference: the first) is computed by direct inversion of the truth's full
     ``(M, C, K)`` and gets log-normal magnitude noise of ``noise.frf_db``.
     """
-    from physics.frf import receptance
-
     noise = noise or Noise(0.002, 0.05, 0.01, 0.5)
     rng = np.random.default_rng(seed)
     xs = truth.measured_x_m

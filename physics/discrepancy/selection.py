@@ -113,11 +113,11 @@ def _chi2_test(chi2: float, dof: int) -> tuple[float, str]:
                "residual smaller than the noise" if p > 1 - P_NOISE / 2 else "consistent")
 
 
-def noise_check(fit: Fit, meas: Measurement) -> NoiseCheck:
+def noise_check(fit: Fit) -> NoiseCheck:
     """chi^2 test of ``fit``'s whitened residual against its degrees of freedom, overall and per block."""
     p, verdict = _chi2_test(fit.chi2, fit.dof)
     blocks = {}
-    for k, dof in fit.block_dof(meas).items():
+    for k, dof in fit.block_dof.items():
         pb, vb = _chi2_test(fit.chi2_blocks[k], dof)
         blocks[k] = {"chi2": fit.chi2_blocks[k], "dof": dof,
                      "chi2_per_dof": fit.chi2_blocks[k] / dof if dof > 0 else float("nan"), "p_value": pb,
@@ -132,7 +132,7 @@ def noise_check(fit: Fit, meas: Measurement) -> NoiseCheck:
 NOISE_DOF_MIN = 10
 
 
-def _round(base: Fit, fits, meas: Measurement, scale2: float = 1.0) -> "Step":
+def _round(base: Fit, fits, scale2: float = 1.0) -> "Step":
     """A round's variance inflation per data block, from its best-fitting model.
 
     ``c_b`` is that model's ``chi^2_b / dof_b`` where the chi^2 test rejects the
@@ -142,7 +142,7 @@ def _round(base: Fit, fits, meas: Measurement, scale2: float = 1.0) -> "Step":
     """
     best = min([base, *fits], key=lambda f: f.chi2)
     c_hat = {}
-    for k, dof in best.block_dof(meas).items():
+    for k, dof in best.block_dof.items():
         _, verdict = _chi2_test(best.chi2_blocks[k] / scale2, dof)
         c_hat[k] = best.chi2_blocks[k] / dof if verdict == "residual larger than the noise" else scale2
     return Step(base, (), "none", (), "", c_hat)
@@ -164,7 +164,7 @@ def estimate_noise_scale(base: Fit, fits) -> tuple[float, int, str]:
 
 def decide(ctx: dict, base: Fit, fits: list, scale2: float) -> "Step":
     """One round's decision: the best candidate named when significant, with its indistinguishable rivals."""
-    probe = _round(base, fits, ctx["meas"], scale2)
+    probe = _round(base, fits, scale2)
     fits = sorted(fits, key=probe.score)
     best = fits[0]
     # an effect needs data left over to be tested: more observations than parameters and a held-out check

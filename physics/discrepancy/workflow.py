@@ -160,7 +160,7 @@ def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, s
     limits = detection_limits(beam, meas, noise, base, c_last, rest, fixed=fixed, named=tuple(named),
                               positions=positions, n_elements=n_elements, pairs=pairs)
     return DiscrepancyResult(mode_residuals(meas, nominal_pred, pairs), tuple(steps), base, tuple(named), noise,
-                             untestable, evidence, drops, noise_check(base, meas), limits, math.sqrt(scale[0]),
+                             untestable, evidence, drops, noise_check(base), limits, math.sqrt(scale[0]),
                              scale[1], scale[2])
 
 

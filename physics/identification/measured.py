@@ -129,19 +129,19 @@ def identify_file(path, method="lscf", band_hz=None, n_modes=None, max_order=40)
 
 
 def read_measured_frf(path) -> MeasuredFRF:
-    """FRFs of a file: read as FRFs, or estimated from its time records (with a warning saying how)."""
-    from physics.errors import FileFormatError
-    from physics.io import read_frf
-
-    try:
-        return read_frf(path)
-    except FileFormatError as exc:
-        if "1 (time response)" not in str(exc):
-            raise
+    """FRFs of a file: read as FRFs, or estimated from the time records of a universal file without FRF records
+    (with a warning saying how); a universal file is parsed once."""
+    from physics.io import FRF, format_of, read_frf
     from physics.io.timedata import read_uff_time_records
+    from physics.io.uff58 import UffFile, read_uff58
     from physics.time_records import estimate_from_records
 
-    est = estimate_from_records(read_uff_time_records(path))
+    if format_of(path, FRF).name != "uff":
+        return read_frf(path)
+    uf = UffFile(path)
+    if 4 in uf.function_types or 1 not in uf.function_types:   # FRF records, or nothing to estimate from
+        return read_uff58(uf)
+    est = estimate_from_records(read_uff_time_records(uf))
     warnings.warn(f"{path}: holds time records, not FRFs: estimated {est.description} before identifying",
                   stacklevel=2)
     return est.frf

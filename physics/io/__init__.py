@@ -10,7 +10,8 @@ One module per format, listed in one table (:data:`FORMATS`), the data types and
 * :mod:`physics.io.modal_json` -- modal data (eigenvalues, complex shapes) as JSON;
 * :mod:`physics.io.timedata` -- time records (dataset 58, function type 1) of force and responses;
 * :mod:`physics.io.formats` -- the format table :data:`FORMATS` (extensions, content, sniffing, reader,
-  writer, description) and :func:`read_frf` / :func:`read`, choosing a reader from the name or content;
+  writer, description) and :func:`read_frf` / :func:`read`, choosing a reader from the name or content,
+  and :func:`modal_or_frf`, whether a file of measured data holds modal data or FRFs;
 * :mod:`physics.io.units` -- dataset 164 unit factors and unit labels, to SI;
 * :mod:`physics.io.geometry` -- node geometry (datasets 15/2411) and measured positions along the beam.
 
@@ -19,8 +20,8 @@ Every name below is importable from ``physics.io`` directly.
 
 from physics.io.atomic import atomic_path, atomic_write_bytes, atomic_write_text
 from physics.io.csv import read_frf_csv, write_frf_csv
-from physics.io.formats import (FORMATS, FRF, MODAL, TIME, FileFormat, accepted, format_of, read, read_frf,
-                               writable)
+from physics.io.formats import (FORMATS, FRF, MODAL, TIME, FileFormat, accepted, format_of, modal_or_frf, read,
+                               read_frf, writable)
 from physics.io.modal_json import (modal_data_from_dict, modal_data_to_dict, number_list, read_json,
                                    read_modal_json, write_modal_json)
 from physics.io.npz import read_frf_npz, write_frf_npz
@@ -31,7 +32,8 @@ from physics.io.geometry import (QUARTER_POINT_CONVENTION, DofMap, NodeGeometry,
 from physics.io.uff58 import read_uff58, read_uff_geometry, write_uff58
 from physics.io.units import UnitSystem, frf_unit_factor
 
-__all__ = ["FORMATS", "FRF", "MODAL", "TIME", "FileFormat", "accepted", "format_of", "read", "writable",
+__all__ = ["FORMATS", "FRF", "MODAL", "TIME", "FileFormat", "accepted", "format_of", "modal_or_frf", "read",
+           "writable",
            "DEFAULT_UNITS", "FRF_KINDS", "MeasuredFRF", "ModalData", "atomic_path", "atomic_write_bytes",
            "atomic_write_text", "dof_label", "format_complex", "modal_data_from_dict", "modal_data_to_dict",
            "number_list", "parse_dof", "read_frf", "read_json", "read_frf_csv", "read_frf_npz", "read_modal_json",

@@ -8,7 +8,7 @@ import numpy as np
 
 from physics.errors import FileFormatError, ShapeError
 from physics.io.atomic import atomic_write_text
-from physics.io.types import FRF_KINDS, UNNAMED_REFERENCE, MeasuredFRF, check_dof_labels
+from physics.io.types import FRF_KINDS, UNNAMED_REFERENCE, MeasuredFRF, check_dof_labels, frf_matrix
 
 __all__ = ["read_frf_csv", "write_frf_csv"]
 
@@ -54,7 +54,10 @@ def read_frf_csv(path, kind=None) -> MeasuredFRF:
     f = values[:, 0]
     if np.any(np.diff(f) <= 0):
         raise FileFormatError(f"{path}: column 'frequency_hz' must be strictly increasing")
-    resp, refs, frf = _frf_matrix(path, header_line, pairs, values)
+    if len(set(pairs)) != len(pairs):
+        raise FileFormatError(f"{path}: line {header_line}: the same response/reference pair appears twice")
+    resp, refs, frf = frf_matrix({p: values[:, 1 + 2 * k] + 1j * values[:, 2 + 2 * k] for k, p in enumerate(pairs)},
+                                 f"{path}: line {header_line}")
     file_kind = kind or meta.get("kind", "receptance")
     if file_kind not in FRF_KINDS:
         raise FileFormatError(f"{path}: '# kind: {file_kind}' must be one of {', '.join(FRF_KINDS)}")
@@ -113,8 +116,9 @@ def _header_pairs(path: Path, header: list, header_line: int) -> list:
                                   f"{im_name!r}) must be 're(RESP/REF)' and 'im(RESP/REF)' of one FRF")
         resp, _, ref = re_name[3:-1].partition("/")
         pairs.append((resp.strip(), ref.strip() or UNNAMED_REFERENCE))
-        check_dof_labels(pairs[-1], f"{path}: line {header_line}: column {k + 1} {re_name!r}",
-                         unnamed_reference=True)
+        where = f"{path}: line {header_line}: column {k + 1} {re_name!r}"
+        check_dof_labels(pairs[-1][:1], where)
+        check_dof_labels(pairs[-1][1:], where, unnamed_reference=True)
     return pairs
 
 
@@ -144,19 +148,3 @@ def _csv_values(path: Path, rows: list, ncol: int) -> np.ndarray:
         bad = rows[int(np.nonzero(~np.all(np.isfinite(values), axis=1))[0][0])][0]
         raise FileFormatError(f"{path}: line {bad}: NaN or inf value")
     return values
-
-
-def _frf_matrix(path: Path, header_line: int, pairs: list, values: np.ndarray) -> tuple:
-    """Response DOFs, reference DOFs and the ``(n_resp, n_ref, n_lines)`` FRF of the columns of ``pairs``,
-    which must form a full response x reference matrix."""
-    if len(set(pairs)) != len(pairs):
-        raise FileFormatError(f"{path}: line {header_line}: the same response/reference pair appears twice")
-    resp = list(dict.fromkeys(p[0] for p in pairs))
-    refs = list(dict.fromkeys(p[1] for p in pairs))
-    if len(pairs) != len(resp) * len(refs):
-        raise FileFormatError(f"{path}: line {header_line}: {len(pairs)} FRFs do not form a full "
-                              f"{len(resp)} responses x {len(refs)} references matrix")
-    frf = np.empty((len(resp), len(refs), values.shape[0]), complex)
-    for k, (a, b) in enumerate(pairs):
-        frf[resp.index(a), refs.index(b)] = values[:, 1 + 2 * k] + 1j * values[:, 2 + 2 * k]
-    return resp, refs, frf

@@ -23,8 +23,8 @@ from physics.io.timedata import read_uff_time_records
 from physics.io.types import MeasuredFRF
 from physics.io.uff58 import read_uff58, write_uff58
 
-__all__ = ["FORMATS", "FRF", "MODAL", "SNIFF_BYTES", "TIME", "FileFormat", "accepted", "format_of", "read",
-           "read_frf", "writable"]
+__all__ = ["FORMATS", "FRF", "MODAL", "SNIFF_BYTES", "TIME", "FileFormat", "accepted", "format_of", "modal_or_frf",
+           "read", "read_frf", "writable"]
 
 #: What a file holds: frequency response functions (:class:`~physics.io.types.MeasuredFRF`).
 FRF = "FRFs"
@@ -159,6 +159,11 @@ def format_of(path, *holds: str) -> FileFormat:
     what = f"looks like {found.name.upper()} ({' or '.join(found.holds)})" if found else "is of no known format"
     expected = "; ".join(f"{h} as {accepted(h)}" for h in holds)
     raise FileFormatError(f"{path}: {what}; expected {expected}")
+
+
+def modal_or_frf(path) -> str:
+    """What a file of measured data holds: :data:`MODAL` or :data:`FRF` (its format by :func:`format_of`)."""
+    return MODAL if MODAL in format_of(path, MODAL, FRF).holds else FRF
 
 
 def read(path, holds: str, **options):

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
@@ -60,27 +59,22 @@ def read_uff_time_records(path) -> TimeRecords:
     Each channel's quantity comes from its ordinate type (13 force, 8
     displacement, 11 velocity, 12 acceleration) or its unit label; values are
     converted to SI with the labels or the dataset 164 unit system. All records
-    must share one time step and length.
+    must share one time step and length. ``path`` is a file name or a file already
+    opened (:class:`~physics.io.uff58.UffFile`).
 
     Raises
     ------
     FileFormatError
         No time record, an unknown quantity, unequal sampling, NaN values.
     """
-    from physics.io.uff58 import _UFF_FUNCTION_NAMES, _open_uff, _short, read_uff_context
+    from physics.io.uff58 import _UFF_FUNCTION_NAMES, UffFile
 
-    path = Path(path)
-    uff, types = _open_uff(path)
-    idx58 = [i for i, t in enumerate(types) if t == 58]
-    system, _ = read_uff_context(path, uff, types)
-    try:
-        sets = uff.read_sets(idx58) if idx58 else []
-    except Exception as exc:
-        raise FileFormatError(f"{path}: cannot read dataset 58 records ({_short(exc)})") from None
-    sets = [sets] if isinstance(sets, dict) else list(sets)
-    recs = [(n, s) for n, s in zip(idx58, sets) if int(s.get("func_type", -1)) == 1]
+    uf = path if isinstance(path, UffFile) else UffFile(path)
+    path = uf.path
+    system, _ = uf.context
+    recs = [(n, s) for n, s in uf.records58 if int(s.get("func_type", -1)) == 1]
     if not recs:
-        found = sorted({int(s.get("func_type", -1)) for s in sets})
+        found = sorted(uf.function_types)
         raise FileFormatError(f"{path}: no time record (dataset 58, function type 1); function types found: "
                               + (", ".join(f"{f} ({_UFF_FUNCTION_NAMES.get(f, 'unknown')})" for f in found)
                                  or "none"))

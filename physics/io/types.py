@@ -21,7 +21,7 @@ from physics.frf import FRF_KINDS, FRF_UNITS, check_frf_kind, convert_frf
 from physics.modal import EigenvalueParameters
 
 __all__ = ["DEFAULT_UNITS", "FRF_KINDS", "MAX_MAGNITUDE", "UNNAMED_REFERENCE", "MeasuredFRF", "ModalData",
-           "check_dof_labels", "dof_label", "format_complex", "parse_dof"]
+           "check_dof_labels", "dof_label", "format_complex", "frf_matrix", "parse_dof"]
 
 #: Largest magnitude a reader accepts in a file's numbers (beyond it products and spectra overflow).
 MAX_MAGNITUDE = 1e100
@@ -106,6 +106,25 @@ def check_dof_labels(labels, where: str, unnamed_reference: bool = False) -> Non
             parse_dof(label)
         except FileFormatError as exc:
             raise FileFormatError(f"{where}: {exc}") from None
+
+
+def frf_matrix(table: dict, where: str) -> tuple:
+    """Response DOFs, reference DOFs (in first-seen order) and the ``(n_resp, n_ref, n_lines)`` FRF of
+    ``{(response DOF, reference DOF): values}``.
+
+    Raises
+    ------
+    FileFormatError
+        A response without an FRF for every reference (the message starts with ``where``).
+    """
+    resp = list(dict.fromkeys(k[0] for k in table))
+    refs = list(dict.fromkeys(k[1] for k in table))
+    missing = [(a, b) for a in resp for b in refs if (a, b) not in table]
+    if missing:
+        a, b = missing[0]
+        raise FileFormatError(f"{where}: no FRF for response {a} and reference {b} ({len(missing)} missing "
+                              f"of {len(resp)}x{len(refs)}); every response needs an FRF for every reference")
+    return resp, refs, np.array([[table[(a, b)] for b in refs] for a in resp])
 
 
 @dataclass(frozen=True)

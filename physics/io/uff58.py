@@ -5,6 +5,7 @@ from __future__ import annotations
 import gc
 import warnings
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -12,10 +13,10 @@ import numpy as np
 from physics.errors import FileFormatError, ShapeError
 from physics.io.atomic import atomic_path
 from physics.io.geometry import geometry_from_uff_sets
-from physics.io.types import DEFAULT_UNITS, MeasuredFRF, dof_label, parse_dof
+from physics.io.types import DEFAULT_UNITS, MeasuredFRF, dof_label, frf_matrix, parse_dof
 from physics.io.units import UnitSystem, frf_unit_factor
 
-__all__ = ["read_uff58", "read_uff_context", "read_uff_geometry", "write_uff58"]
+__all__ = ["UffFile", "read_uff58", "read_uff_context", "read_uff_geometry", "write_uff58"]
 
 
 #: UFF specific data types of dataset 58 ordinates, and the FRF kind they give.
@@ -62,7 +63,8 @@ def read_uff58(path, kind=None) -> MeasuredFRF:
 
     Parameters
     ----------
-    path : str or Path
+    path : str, Path or UffFile
+        A file name, or a file already opened (:class:`UffFile`).
     kind : {"receptance", "mobility", "accelerance"}, optional
         Used only when the ordinate type of the records is not set (0); the
         ordinate types 8 (displacement), 11 (velocity) and 12 (acceleration)
@@ -79,10 +81,10 @@ def read_uff58(path, kind=None) -> MeasuredFRF:
         axes; NaN/inf values; mixed ordinate types; an incomplete
         response x reference matrix.
     """
-    path = Path(path)
-    uff, types = _open_uff(path)
-    frfs, binary = _frf_records(path, uff, types)
-    system, geometry = read_uff_context(path, uff, types)
+    uf = path if isinstance(path, UffFile) else UffFile(path)
+    path = uf.path
+    frfs, binary = _frf_records(uf)
+    system, geometry = uf.context
     freq, table, ordinates, units_found = None, {}, set(), {}
     for n, s in frfs:
         rec = _frf_record(path, n, s, system, freq)
@@ -93,7 +95,7 @@ def read_uff58(path, kind=None) -> MeasuredFRF:
         ordinates.add(rec.ordinate)
         units_found.setdefault(rec.unit_label, []).append(rec.factor)
     file_kind = _file_kind(path, ordinates, kind)
-    resp, refs, frf = _frf_matrix(path, table)
+    resp, refs, frf = frf_matrix(table, str(path))
     meta = {"source": str(path), "format": "uff", "binary": binary,
             "id1": str(frfs[0][1].get("id1", "")).strip(),
             "units": {"file": sorted(units_found), "si": DEFAULT_UNITS[file_kind],
@@ -107,7 +109,7 @@ def read_uff58(path, kind=None) -> MeasuredFRF:
         raise FileFormatError(f"{path}: {exc}") from None
 
 
-def _frf_records(path: Path, uff, types) -> tuple:
+def _frf_records(uf: "UffFile") -> tuple:
     """The FRF records (function type 4) of an open universal file, as ``[(index, set), ...]``, and whether the
     first dataset 58 record is binary; other datasets and functions are skipped with a warning.
 
@@ -116,6 +118,7 @@ def _frf_records(path: Path, uff, types) -> tuple:
     FileFormatError
         No dataset 58 record, unreadable records, or no FRF among them.
     """
+    path, types = uf.path, uf.types
     idx58 = [i for i, t in enumerate(types) if t == 58]
     others = sorted({t for t in types if t not in _CONTEXT_SETS})
     if not idx58:
@@ -125,14 +128,8 @@ def _frf_records(path: Path, uff, types) -> tuple:
     if others:
         warnings.warn(f"{path}: skipped {sum(t in others for t in types)} record(s) of dataset type(s) "
                       f"{', '.join(map(str, others))}", stacklevel=3)
-    try:
-        sets = uff.read_sets(idx58)
-    except Exception as exc:
-        raise FileFormatError(f"{path}: cannot read dataset 58 records ({_short(exc)})") from None
-    if isinstance(sets, dict):
-        sets = [sets]
     frfs, skipped = [], {}
-    for n, s in zip(idx58, sets):
+    for n, s in uf.records58:
         ft = int(s.get("func_type", -1))
         if ft == 4:
             frfs.append((n, s))
@@ -148,7 +145,7 @@ def _frf_records(path: Path, uff, types) -> tuple:
         found = ", ".join(f"{ft} ({_UFF_FUNCTION_NAMES.get(ft, 'unknown')})" for ft in skipped)
         warnings.warn(f"{path}: skipped {sum(skipped.values())} dataset 58 record(s) that are not FRFs: "
                       f"function type(s) {found}", stacklevel=3)
-    return frfs, bool(sets[0].get("binary", 0))
+    return frfs, bool(uf.records58[0][1].get("binary", 0))
 
 
 @dataclass(frozen=True)
@@ -236,19 +233,6 @@ def _file_kind(path: Path, ordinates: set, kind) -> str:
     warnings.warn(f"{path}: ordinate type not set (found {sorted(ordinates)}); assuming receptance "
                   "(displacement/force)", stacklevel=3)
     return "receptance"
-
-
-def _frf_matrix(path: Path, table: dict) -> tuple:
-    """Response DOFs, reference DOFs and the ``(n_resp, n_ref, n_lines)`` FRF of ``{(resp, ref): values}``;
-    every response needs a record for every reference."""
-    resp = list(dict.fromkeys(k[0] for k in table))
-    refs = list(dict.fromkeys(k[1] for k in table))
-    missing = [(a, b) for a in resp for b in refs if (a, b) not in table]
-    if missing:
-        a, b = missing[0]
-        raise FileFormatError(f"{path}: no FRF for response {a} and reference {b} ({len(missing)} missing "
-                              f"of {len(resp)}x{len(refs)}); every response needs a record for every reference")
-    return resp, refs, np.array([[table[(a, b)] for b in refs] for a in resp])
 
 
 #: Dataset types read as context of the FRFs (header, units, coordinate systems, nodes, trace lines, elements).
@@ -381,6 +365,46 @@ def _open_uff(path: Path):
     return uff, types
 
 
+class UffFile:
+    """A universal file opened and checked once (:func:`_open_uff`), for the readers of its FRFs and time records.
+
+    Its dataset 58 records and its context (units, geometry) are read on first use and kept.
+
+    Attributes
+    ----------
+    path : Path
+    uff : pyuff.UFF
+    types : list of int
+        Dataset type of each block, in file order.
+    """
+
+    def __init__(self, path):
+        self.path = Path(path)
+        self.uff, self.types = _open_uff(self.path)
+
+    @cached_property
+    def records58(self) -> list:
+        """``[(index, set), ...]`` of the dataset 58 records (``index`` 0-based among all blocks)."""
+        idx58 = [i for i, t in enumerate(self.types) if t == 58]
+        if not idx58:
+            return []
+        try:
+            sets = self.uff.read_sets(idx58)
+        except Exception as exc:
+            raise FileFormatError(f"{self.path}: cannot read dataset 58 records ({_short(exc)})") from None
+        return list(zip(idx58, [sets] if isinstance(sets, dict) else sets))
+
+    @property
+    def function_types(self) -> set:
+        """Function types of the dataset 58 records (1 time response, 4 FRF, ...)."""
+        return {int(s.get("func_type", -1)) for _, s in self.records58}
+
+    @cached_property
+    def context(self) -> tuple:
+        """``(UnitSystem, NodeGeometry or None)`` (:func:`read_uff_context`)."""
+        return read_uff_context(self.path, self.uff, self.types)
+
+
 def read_uff_context(path, uff, types):
     """The unit system (dataset 164) and node geometry (datasets 15/2411, 18) of an open universal file."""
     def read(idx, name):
@@ -415,9 +439,7 @@ def read_uff_context(path, uff, types):
 
 def read_uff_geometry(path):
     """Node geometry (datasets 15/2411, in metres, global system) of a universal file, or None."""
-    path = Path(path)
-    uff, types = _open_uff(path)
-    return read_uff_context(path, uff, types)[1]
+    return UffFile(path).context[1]
 
 
 def _abscissa_factor(s, where) -> float:

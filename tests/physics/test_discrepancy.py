@@ -202,6 +202,20 @@ def test_cli_on_beam5_table_4_3(tmp_path, capsys):
         assert (tmp_path / name).stat().st_size > 0
 
 
+def test_cli_names_no_effect_with_max_effects_0_and_writes_every_file(tmp_path, capsys):
+    from experiments.cli import main
+    from experiments.study_discrepancy import EXAMPLE
+
+    assert main(["discrepancy", "--measured", str(EXAMPLE), "--out", str(tmp_path), "--max-effects", "0",
+                 "--elements", "12", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["effects"] == [] and out["candidates"] == []
+    assert (tmp_path / "candidates.csv").read_text() == ("effect,score,max_abs_frequency_error_pct,round,lomo,"
+                                                        "n_params,parameters\n")
+    header = (tmp_path / "residuals.csv").read_text().splitlines()[0]
+    assert header.startswith("model,mode,measured_hz") and (tmp_path / "beam.toml").stat().st_size > 0
+
+
 def test_cli_rejects_bad_measured_file(tmp_path, capsys):
     from experiments.cli import main
 
@@ -211,6 +225,27 @@ def test_cli_rejects_bad_measured_file(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "natural_frequencies_hz" in err and err.count("\n") == 1
     assert not (tmp_path / "o").exists()
+
+
+def test_cli_noise_given_is_used_even_when_equal_to_the_default(tmp_path, capsys):
+    """A noise given on the command line is used and named as given, whatever its value; one not given comes from
+    the FRF (its scatter, the identification's frequency std)."""
+    from experiments.cli import main
+    from physics.io import write_uff58
+    from physics.thesis import simulated_beam5_test
+
+    write_uff58(tmp_path / "m.uff", simulated_beam5_test(noise=0.005, seed=11, df_hz=2.0, damping="heavy")[0])
+    fast = ["discrepancy", "--measured", str(tmp_path / "m.uff"), "--elements", "6", "--max-effects", "0",
+            "--candidates", "root_flexibility", "--json"]
+    runs = {}
+    for name, more in (("default", []), ("given", ["--frf-noise-db", "1", "--frequency-noise", "0.003"])):
+        assert main(fast + more) == 0
+        runs[name] = json.loads(capsys.readouterr().out)["assumed_noise"]
+    assert runs["given"]["frf_db"] == 1.0 and runs["given"]["frf_db_source"] == "--frf-noise-db"
+    assert runs["given"]["frequency"] == 0.003 and runs["given"]["frequency_source"] == "--frequency-noise"
+    assert 0.01 <= runs["default"]["frf_db"] < 0.2 and "scatter" in runs["default"]["frf_db_source"]
+    assert "identification" in runs["default"]["frequency_source"]
+    assert all(0.001 <= f < 0.003 for f in runs["default"]["frequency"])
 
 
 @pytest.mark.slow

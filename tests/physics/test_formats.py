@@ -10,8 +10,8 @@ pytest.importorskip("pyuff")
 
 from experiments.cli import build_parser
 from physics.errors import FileFormatError
-from physics.io import (FORMATS, FRF, MODAL, TIME, MeasuredFRF, ModalData, accepted, format_of, read, read_frf,
-                        writable)
+from physics.io import (FORMATS, FRF, MODAL, TIME, MeasuredFRF, ModalData, accepted, format_of, modal_or_frf, read,
+                        read_frf, writable)
 from physics.modal import eigenvalues_from_modal
 
 
@@ -76,6 +76,7 @@ def test_every_writer_round_trips_through_its_reader_and_sniffing(tmp_path, name
     unnamed = tmp_path / "x.dat"
     unnamed.write_bytes(named.read_bytes())
     assert format_of(named, fmt.holds[0]) is fmt and format_of(unnamed, fmt.holds[0]) is fmt
+    assert modal_or_frf(named) == modal_or_frf(unnamed) == (MODAL if name == "json" else FRF)
     for back in (read(named, fmt.holds[0]), read(unnamed, fmt.holds[0])):
         if fmt.holds[0] == FRF:
             assert (back.response_dofs, back.reference_dofs, back.kind) == (data.response_dofs,

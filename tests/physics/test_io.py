@@ -193,6 +193,14 @@ def test_csv_hand_written_single_reference_and_errors(tmp_path):
     path.write_text("frequency_hz,re(2:+Y),im(2:+Y)\n1.0,1.5,nan\n2.0,1,1\n")
     with pytest.raises(FileFormatError, match="line 2: NaN"):
         read_frf(path)
+    path.write_text("frequency_hz,re(2:+Y/1:+Y),im(2:+Y/1:+Y),re(3:+Y/5:+Y),im(3:+Y/5:+Y)\n1.0,1,1,1,1\n2.0,1,1,1,1\n")
+    with pytest.raises(FileFormatError, match=r"hand.csv: line 1: no FRF for response 2:\+Y and reference 5:\+Y "
+                                              r"\(2 missing of 2x2\)"):
+        read_frf(path)
+    for head in ("re(ref),im(ref)", "re(ref/5:+Y),im(ref/5:+Y)"):   # "ref" names only an unnamed reference
+        path.write_text(f"frequency_hz,{head}\n1.0,1.5,-2.0\n2.0,0.5,0.25\n")
+        with pytest.raises(FileFormatError, match=r"hand.csv: line 1: column 2 're\(ref.*DOF label 'ref' must look"):
+            read_frf(path)
 
 
 def test_npz_round_trip_without_pickle(tmp_path, frf):
@@ -274,6 +282,26 @@ def test_uff58b_big_endian_time_records_read_like_little_endian(tmp_path):
     be = read(tmp_path / "be.uff", TIME)
     np.testing.assert_array_equal(be.signals, [np.exp(-t), np.sin(2 * np.pi * 7 * t)])
     assert be.quantities == ("force", "acceleration") and be.time_step_s == pytest.approx(1 / 256.0, rel=1e-5)
+
+
+def test_measured_frf_of_time_records_reads_the_universal_file_once(tmp_path, monkeypatch):
+    import pyuff
+
+    from physics.identification import read_measured_frf
+    from physics.io import TIME, read
+    from physics.time_records import estimate_from_records
+
+    t = np.arange(4096) / 512.0
+    force = np.random.default_rng(3).standard_normal(t.size)
+    write_time_uff(tmp_path / "t.uff", t, [(1, force, 13), (2, np.convolve(force, np.exp(-t[:200] * 20), "same"), 12)])
+    expected = estimate_from_records(read(tmp_path / "t.uff", TIME)).frf
+    reads, read_sets = [], pyuff.UFF.read_sets
+    monkeypatch.setattr(pyuff.UFF, "read_sets", lambda self, *a, **k: reads.append(a) or read_sets(self, *a, **k))
+    with pytest.warns(UserWarning, match="holds time records, not FRFs"):
+        got = read_measured_frf(tmp_path / "t.uff")
+    assert len(reads) == 1
+    np.testing.assert_array_equal(got.frf, expected.frf)
+    assert got.response_dofs == ("2:+Z",) and got.reference_dofs == ("1:+Z",)
 
 
 @pytest.mark.parametrize("field, value, message", [(slice(7, 13), b"     3", "byte ordering field '3'"),
