@@ -9,7 +9,8 @@ no code with the project). Every pair is classified as a user would: ``beam-dama
 --baseline pair-K_baseline.uff pair-K_current.uff --json``. Per set and method:
 
 * ``element acc.``: damaged pairs called damaged with the slit in the right quarter of the beam (element 1-4);
-* ``detection``: damaged pairs called damaged; ``false alarms``: intact pairs called damaged;
+* ``detection``: damaged pairs called damaged; ``false alarms``: intact pairs called damaged (in brackets, how
+  many of them the method itself called "possibly damaged, but not detectable here");
 * ``size err.``: median ``|s / s_true - 1|`` of the hinge flexibility ``w r / ((1 - r) L)`` over detected slits;
   ``1-sigma cover``: share of detected slits whose truth lies within the reported standard deviation;
 * ``in distribution``: pairs the network answered (the others got the classical method's verdict), and the
@@ -137,6 +138,7 @@ def score(verdicts: list[dict], truth: list) -> list[dict]:
         given = np.array([x.get(method) is not None for x in answers])
         a = [x.get(method) or {"damaged": False} for x in answers]
         called = np.array([bool(x["damaged"]) for x in a])
+        faint = called & np.array([x.get("detectable") is False for x in a])  # "possibly damaged, not detectable"
         el = np.array([int(x["location_element"]) if x.get("location_element") is not None else 0 for x in a])
         s = np.array([float(x["hinge_flexibility"]) if x.get("hinge_flexibility") is not None else np.nan for x in a])
         sd = np.array([float(x["hinge_flexibility_std"]) if x.get("hinge_flexibility_std") is not None else np.nan
@@ -150,6 +152,7 @@ def score(verdicts: list[dict], truth: list) -> list[dict]:
                      if dm.any() else float("nan"),
                      "detection": float(np.mean(called[dm])) if dm.any() else float("nan"),
                      "false_alarms": int(np.sum(called[im])), "intact_pairs": int(im.sum()),
+                     "false_alarms_not_detectable": int(np.sum(faint[im])),
                      "median_size_error": float(np.median(err)) if err.size else float("nan"),
                      "size_one_sigma_cover": float(np.mean(cover)) if np.isfinite(sd[det]).any() else float("nan")})
     if "in_distribution" in verdicts[0]:
@@ -186,6 +189,12 @@ def _method_label(r: dict) -> str:
     return r["method"] if answered == r["pairs"] else f"{r['method']} ({answered} of {r['pairs']} pairs answered)"
 
 
+def _false_alarms(r: dict) -> str:
+    """``"k of n"``, with how many of the k the method itself called not detectable."""
+    faint = r.get("false_alarms_not_detectable", 0)
+    return f"{r['false_alarms']} of {r['intact_pairs']}" + (f" ({faint} not detectable)" if faint else "")
+
+
 def markdown(rows: list[dict]) -> str:
     head = ("| set | model | method | element acc. | detection | false alarms | size err. | 1-sigma cover | "
             "in distribution |\n|---|---|---|---|---|---|---|---|---|\n")
@@ -195,7 +204,7 @@ def markdown(rows: list[dict]) -> str:
 
     return head + "".join(
         f"| {r['set']} | {r['model']} | {_method_label(r)} | {f(r['element_accuracy'])} | {f(r['detection'])} | "
-        f"{r['false_alarms']} of {r['intact_pairs']} | {f(r['median_size_error'])} | "
+        f"{_false_alarms(r)} | {f(r['median_size_error'])} | "
         f"{f(r['size_one_sigma_cover'])} | {f(r.get('in_distribution'))} |\n" for r in rows)
 
 
