@@ -14,12 +14,12 @@ __all__ = ["add_parser", "run"]
 
 
 def load_modal(modal_file, n_modes: int):
-    """Modal data as they are; FRFs are identified first (LSCF + LSFD, ``n_modes`` modes).
+    """Modal data on the positive sense of every DOF; FRFs are identified first (LSCF + LSFD, ``n_modes`` modes).
 
     Returns the modal data and the FRFs it was identified from (None for a modal-data file).
     """
     if modal_or_frf(modal_file) == MODAL:
-        return read(modal_file, MODAL), None
+        return read(modal_file, MODAL).with_positive_directions(), None
     from physics.identification import identify_file
 
     ident = identify_file(modal_file, n_modes=n_modes)

@@ -51,7 +51,7 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[dsc.Measurement, o
                 return dsc.Measurement(f), None, None
             except ValueError as exc:
                 raise FileFormatError(f"{path}: field 'natural_frequencies_hz': {exc}") from None
-        data = modal_data_from_dict(obj, str(path))
+        data = modal_data_from_dict(obj, str(path)).with_positive_directions()
         shapes, xs, dof_map = data.eigenvectors, (), None
         if shapes is not None:
             if not data.dofs and shapes.shape[0] != len(beam.measured_x_m):

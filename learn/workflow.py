@@ -308,8 +308,11 @@ def on_model_dofs(data, beam: BeamSpec, beam_x_m=None, where: str = "measured da
     ``beam_x_m``, else the quarter-point convention (:func:`physics.io.map_measured_dofs`); each measured DOF
     must sit at a node of the model's 4-element grid, and the model's DOFs (:attr:`BeamSpec.dofs`) must all
     be measured (refused naming the missing ones). Rows are selected and ordered as ``beam.dofs`` and
-    relabelled with them; FRF references get the model DOF at their position too. Modal data without
-    ``dofs`` labels are returned as they are (rows taken as the model's DOFs, with a warning later).
+    relabelled with them; FRF references get the model DOF at their position too. DOFs labelled with a
+    negative sense (``"3:-Y"``) are turned to the positive one first. An FRF file whose references, not its
+    responses, cover the model's DOFs (a roving hammer, one accelerometer) is read by reciprocity
+    (:meth:`physics.io.MeasuredFRF.reciprocal`). Modal data without ``dofs`` labels are returned as they are
+    (rows taken as the model's DOFs, with a warning later).
     """
     from dataclasses import replace
 
@@ -319,10 +322,16 @@ def on_model_dofs(data, beam: BeamSpec, beam_x_m=None, where: str = "measured da
     grid_x = np.linspace(0.0, beam.length_m, n + 1)
     grid = tuple(f"{k}:y" for k in range(1, n + 2))
     kw = dict(length_m=beam.length_m, n_elements=n, beam_x_m=beam_x_m)
+    data = data.with_positive_directions()
     if isinstance(data, MeasuredFRF):
         labels = tuple(dict.fromkeys(data.response_dofs + data.reference_dofs))
         dof_map = map_frf_dofs(data, labels, grid_x, grid, **kw)
         to_model = dict(zip(labels, dof_map.model_dofs))
+        at = lambda dofs: {to_model[d] for d in dofs}  # noqa: E731
+        if not set(beam.dofs) <= at(data.response_dofs) and set(beam.dofs) <= at(data.reference_dofs):
+            data = data.reciprocal()  # a roving-hammer test: the hammer positions are the responses
+            dof_map = replace(dof_map, detail=dof_map.detail + "; responses at the hammer positions by "
+                              "reciprocity (H_ij = H_ji, a roving-hammer test)")
         resp_map = replace(dof_map, dofs=data.response_dofs,
                            model_dofs=tuple(to_model[d] for d in data.response_dofs))
         resp = resp_map.rows(beam.dofs, where)

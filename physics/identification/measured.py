@@ -67,6 +67,11 @@ def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, ma
 
     The first driving point (a response DOF equal to a reference DOF) scales the
     shapes to unit modal A; without one the shapes are unscaled (a warning).
+    DOFs labelled with a negative sense are turned to the positive one first
+    (:meth:`~physics.io.MeasuredFRF.with_positive_directions`), and a file with
+    more references than responses (a roving hammer) is read by reciprocity
+    (:meth:`~physics.io.MeasuredFRF.reciprocal`), so the shapes run over the more
+    numerous DOFs; ``Identification.frf`` is the matrix as identified.
 
     Parameters
     ----------
@@ -87,6 +92,9 @@ def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, ma
     if method not in METHODS:
         raise ConfigError(f"method {method!r} must be one of {', '.join(METHODS)}")
     spec = METHODS[method]
+    frf = frf.with_positive_directions()
+    if frf.frf.shape[1] > frf.frf.shape[0]:
+        frf = frf.reciprocal()
     if frf.frequency_hz[0] == 0:
         frf = frf.select_band(fmin_hz=np.nextafter(0.0, 1.0))
     if band_hz is not None:

@@ -45,6 +45,13 @@ class ModalData(EigenvalueParameters):
     eigenvectors: np.ndarray | None
     dofs: tuple = ()
 
+    def with_positive_directions(self) -> "ModalData":
+        """The same modes on the positive sense of every DOF (rows labelled ``"3:-Y"`` negated, made ``"3:+Y"``)."""
+        signs = _direction_signs(self.dofs)
+        if self.eigenvectors is None or np.all(signs > 0):
+            return self
+        return replace(self, eigenvectors=self.eigenvectors * signs[:, None], dofs=_positive_labels(self.dofs))
+
 
 def format_complex(z: complex) -> str:
     """Complex number as ``"a+bj"`` with 17 significant digits (round-trips ``complex()``)."""
@@ -88,6 +95,22 @@ def parse_dof(label: str) -> tuple[int, int]:
         raise FileFormatError(f"DOF label {label!r} must look like 'NODE:+DIR' with an integer node "
                               "and DIR one of X, Y, Z, RX, RY, RZ (e.g. '2:+Y')")
     return node_i, (0 if direction == "S" else sign * _DIRECTION_CODES[direction])
+
+
+def _direction_signs(labels) -> np.ndarray:
+    """+1 or -1 per DOF label: the sense of its direction (+1 for a label that is not ``NODE:DIR``)."""
+    out = []
+    for label in labels:
+        try:
+            out.append(-1.0 if parse_dof(label)[1] < 0 else 1.0)
+        except FileFormatError:
+            out.append(1.0)
+    return np.array(out)
+
+
+def _positive_labels(labels) -> tuple:
+    """Labels with a ``-`` sense made ``+`` (``"3:-Y"`` -> ``"3:+Y"``)."""
+    return tuple(str(d).replace(":-", ":+", 1) if s < 0 else str(d) for d, s in zip(labels, _direction_signs(labels)))
 
 
 #: Reference label of single-reference FRFs whose file does not name the reference DOF (CSV ``re(2:+Y)``).
@@ -222,6 +245,29 @@ class MeasuredFRF:
             raise ShapeError(f"cannot convert a {self.kind} to a {kind} at 0 Hz: drop the 0 Hz line first")
         return replace(self, frf=convert_frf(self.frf, self.omega_rad_s, self.kind, kind), kind=kind,
                        units=DEFAULT_UNITS[kind])
+
+    def with_positive_directions(self) -> "MeasuredFRF":
+        """The same FRFs on the positive sense of every DOF: ``H(+i, +j) = s_i s_j H(s_i i, s_j j)``.
+
+        A response or reference labelled ``"3:-Y"`` (an accelerometer mounted upside down, a hammer struck
+        towards -Y) has its row or column negated and its label made ``"3:+Y"``; other labels are kept.
+        """
+        rs, qs = _direction_signs(self.response_dofs), _direction_signs(self.reference_dofs)
+        if np.all(rs > 0) and np.all(qs > 0):
+            return self
+        return replace(self, frf=self.frf * rs[:, None, None] * qs[None, :, None],
+                       response_dofs=_positive_labels(self.response_dofs),
+                       reference_dofs=_positive_labels(self.reference_dofs))
+
+    def reciprocal(self) -> "MeasuredFRF":
+        """Responses and references swapped, ``H_ji = H_ij`` (Maxwell-Betti reciprocity of a linear structure).
+
+        A roving-hammer test (one accelerometer, the hammer at every measured point) then reads as one drive at
+        the accelerometer with responses at every point. Both DOF sets must be on the same kind of motion
+        (translations along one axis).
+        """
+        return replace(self, frf=np.swapaxes(self.frf, 0, 1), response_dofs=self.reference_dofs,
+                       reference_dofs=self.response_dofs)
 
     def select_band(self, fmin_hz=None, fmax_hz=None) -> "MeasuredFRF":
         """Lines with ``fmin_hz <= f <= fmax_hz`` (either bound may be None)."""

@@ -361,3 +361,38 @@ def test_a_missing_middle_mode_and_a_single_mode(tiny, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "one.json: 1 of modes 1-4 found in both" in err
     assert "modes 2, 3, 4 not identified in" in err and "at least 2 common modes" in err
+
+
+def test_roving_hammer_and_negative_senses_give_the_verdict_of_the_canonical_files(tiny, modal_model, capsys):
+    """The same FRFs as a roving-hammer test writes them (one accelerometer at node 2, the hammer at nodes 2..5:
+    responses and references swapped, H_ij = H_ji), and with node 4 measured towards -Y (its row negated,
+    labelled '4:-Y'): the verdict and the identified frequencies are those of the canonical files."""
+    from dataclasses import replace
+
+    from physics.io import read_frf, write_uff58
+
+    canonical = _beam_frfs(tiny, 0.4, 12, 800.0, names=("hb", "hc"))
+    assert main(["classify", "--model", str(modal_model), "--baseline", *canonical, "--json"]) == 0
+    ref = json.loads(capsys.readouterr().out)
+    assert ref["damaged"] and ref["location_element"] == 2
+    for variant in ("roving", "negative"):
+        paths = []
+        for p in canonical:
+            f = read_frf(p)
+            if variant == "roving":
+                g = MeasuredFRF(f.frequency_hz, np.swapaxes(f.frf, 0, 1), f.reference_dofs, f.response_dofs)
+            else:
+                g = replace(f, frf=f.frf * np.array([1, 1, -1, 1])[:, None, None],
+                            response_dofs=("2:+Y", "3:+Y", "4:-Y", "5:+Y"))
+            paths.append(str(tiny / f"{variant}-{len(paths)}.uff"))
+            write_uff58(paths[-1], g)
+        assert main(["classify", "--model", str(modal_model), "--baseline", *paths, "--json"]) == 0
+        res = json.loads(capsys.readouterr().out)
+        for key in ("damaged", "location_element", "verdict_from"):
+            assert res[key] == ref[key], (variant, key)
+        for key in ("probability_damaged", "location_x_m", "hinge_flexibility"):
+            assert res[key] == pytest.approx(ref[key], rel=1e-4), (variant, key)
+        np.testing.assert_allclose(res["identification"]["measured_frequencies_hz"],
+                                   ref["identification"]["measured_frequencies_hz"], rtol=1e-6)
+        if variant == "roving":
+            assert "reciprocity" in res["dof_positions"]["measured"]["detail"]

@@ -424,3 +424,32 @@ def test_speed_bench_file_identifies_the_modes_of_its_fe_model(tmp_path):
     np.testing.assert_allclose(est.natural_frequencies_hz, cm.natural_frequencies_hz[:4], rtol=1e-4)
     np.testing.assert_allclose(est.damping_ratios, cm.damping_ratios[:4], rtol=0.03)
     assert np.all(np.diag(mac(est.shapes, cm.eigenvectors[fe.index(beam.masters)][:, :4])) > 0.9999)
+
+
+def test_identify_frf_reads_a_roving_hammer_by_reciprocity_and_negative_senses_as_positive():
+    """Beam 5 (symmetric M, C, K): one accelerometer at the tip and the hammer at all 4 DOFs (H^T of the shaker
+    test driven at the tip), and the shaker test with node 3 labelled '3:-Y' (its row negated): both identify
+    the shapes of the canonical matrix (the exact complex modes, scaled at the driving point)."""
+    from dataclasses import replace
+
+    from physics.identification import identify_frf
+    from physics.io import MeasuredFRF
+
+    M, C, K = beam5()
+    cm = complex_modes(M, C, K)
+    f = np.arange(0.5, 800.0, 0.5)
+    H = receptance(M, C, K, 2 * np.pi * f, reference=[3])                      # (4, 1, F)
+    dofs = ("2:+Y", "3:+Y", "4:+Y", "5:+Y")
+    shaker = MeasuredFRF(f, H, dofs, ("5:+Y",))
+    roving = MeasuredFRF(f, np.swapaxes(H, 0, 1), ("5:+Y",), dofs)
+    flipped = replace(shaker, frf=H * np.array([1, -1, 1, 1])[:, None, None],
+                      response_dofs=("2:+Y", "3:-Y", "4:+Y", "5:+Y"))
+    ref = identify_frf(shaker, n_modes=4)
+    for data in (roving, flipped):
+        ident = identify_frf(data, n_modes=4)
+        assert ident.frf.response_dofs == dofs and ident.frf.reference_dofs == ("5:+Y",)
+        np.testing.assert_allclose(ident.estimate.natural_frequencies_hz, cm.natural_frequencies_hz, rtol=1e-7)
+        np.testing.assert_allclose(ident.estimate.shapes, ref.estimate.shapes, rtol=0,
+                                   atol=1e-6 * np.abs(ref.estimate.shapes).max())
+    np.testing.assert_allclose(align(ref.estimate.shapes, cm.eigenvectors), cm.eigenvectors, rtol=0,
+                               atol=1e-5 * np.abs(cm.eigenvectors).max())

@@ -329,3 +329,28 @@ def test_binary_uff58_writer_leaves_no_open_file(tmp_path):
         write_uff58(tmp_path / "b.uff", frf, binary=True)
     assert not [w for w in caught if issubclass(w.category, ResourceWarning)]
     np.testing.assert_allclose(read_frf(tmp_path / "b.uff").frf, frf.frf)
+
+
+def test_positive_directions_and_reciprocity_of_measured_frfs():
+    """'3:-Y' rows and '2:-Y' columns are negated and relabelled (twice negated: unchanged), modal data rows too;
+    reciprocal() swaps responses and references and is its own inverse."""
+    from physics.io import MeasuredFRF, ModalData
+
+    rng = np.random.default_rng(0)
+    h = rng.standard_normal((3, 2, 5)) + 1j * rng.standard_normal((3, 2, 5))
+    f = MeasuredFRF(np.arange(1.0, 6.0), h, ("2:+Y", "3:-Y", "4:+Y"), ("2:-Y", "4:+Y"))
+    g = f.with_positive_directions()
+    assert g.response_dofs == ("2:+Y", "3:+Y", "4:+Y") and g.reference_dofs == ("2:+Y", "4:+Y")
+    np.testing.assert_array_equal(g.frf[1, 1], -h[1, 1])
+    np.testing.assert_array_equal(g.frf[1, 0], h[1, 0])          # -Y response, -Y reference: signs cancel
+    np.testing.assert_array_equal(g.frf[0, 0], -h[0, 0])
+    np.testing.assert_array_equal(g.frf[2, 1], h[2, 1])
+    assert g.with_positive_directions() is g
+    r = f.reciprocal()
+    assert r.response_dofs == f.reference_dofs and r.reference_dofs == f.response_dofs
+    np.testing.assert_array_equal(r.frf[1, 2], h[2, 1])
+    np.testing.assert_array_equal(r.reciprocal().frf, h)
+    md = ModalData(np.array([-1 + 10j, -2 + 30j]), np.arange(6.0).reshape(3, 2) + 0j, ("2:+Y", "3:-Y", "4:+Y"))
+    p = md.with_positive_directions()
+    assert p.dofs == ("2:+Y", "3:+Y", "4:+Y")
+    np.testing.assert_array_equal(p.eigenvectors, md.eigenvectors * np.array([1, -1, 1])[:, None])
