@@ -306,8 +306,9 @@ def on_model_dofs(data, beam: BeamSpec, beam_x_m=None, where: str = "measured da
 
     Positions come from the file's node geometry (FRF files that carry it), else a beam file's
     ``beam_x_m``, else the quarter-point convention (:func:`physics.io.map_measured_dofs`); each measured DOF
-    must sit at a node of the model's 4-element grid, and the model's DOFs (:attr:`BeamSpec.dofs`) must all
-    be measured (refused naming the missing ones). Rows are selected and ordered as ``beam.dofs`` and
+    at a node of the model's 4-element grid is used (others, e.g. extra sensors between the quarter points, are
+    left out and named in the map's detail), and the model's DOFs (:attr:`BeamSpec.dofs`) must all be measured
+    (refused naming the missing ones). Rows are selected and ordered as ``beam.dofs`` and
     relabelled with them; FRF references get the model DOF at their position too. DOFs labelled with a
     negative sense (``"3:-Y"``) are turned to the positive one first. An FRF file whose references, not its
     responses, cover the model's DOFs (a roving hammer, one accelerometer) is read by reciprocity
@@ -325,7 +326,7 @@ def on_model_dofs(data, beam: BeamSpec, beam_x_m=None, where: str = "measured da
     data = data.with_positive_directions()
     if isinstance(data, MeasuredFRF):
         labels = tuple(dict.fromkeys(data.response_dofs + data.reference_dofs))
-        dof_map = map_frf_dofs(data, labels, grid_x, grid, **kw)
+        dof_map = map_frf_dofs(data, labels, grid_x, grid, off_grid="ignore", **kw)
         to_model = dict(zip(labels, dof_map.model_dofs))
         at = lambda dofs: {to_model[d] for d in dofs}  # noqa: E731
         if not set(beam.dofs) <= at(data.response_dofs) and set(beam.dofs) <= at(data.reference_dofs):
@@ -336,10 +337,10 @@ def on_model_dofs(data, beam: BeamSpec, beam_x_m=None, where: str = "measured da
                            model_dofs=tuple(to_model[d] for d in data.response_dofs))
         resp = resp_map.rows(beam.dofs, where)
         return replace(data, frf=data.frf[resp], response_dofs=tuple(beam.dofs),
-                       reference_dofs=tuple(to_model[d] for d in data.reference_dofs)), dof_map
+                       reference_dofs=tuple(to_model[d] or d for d in data.reference_dofs)), dof_map
     if not data.dofs or data.eigenvectors is None:
         return data, None
-    dof_map = map_measured_dofs(data.dofs, grid_x, grid, where=where, **kw)
+    dof_map = map_measured_dofs(data.dofs, grid_x, grid, where=where, off_grid="ignore", **kw)
     rows = dof_map.rows(beam.dofs, where)
     return replace(data, eigenvectors=data.eigenvectors[rows], dofs=tuple(beam.dofs)), dof_map
 

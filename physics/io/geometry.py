@@ -175,12 +175,13 @@ def measured_positions(dofs, geometry: NodeGeometry | None = None, length_m: flo
     return np.array([(n - 1) * length_m / n_elements for n in nodes], float), QUARTER_POINT_CONVENTION
 
 
-def match_dofs_by_position(measured_x_m, model_x_m, tol_m, labels=None, model_labels=None):
+def match_dofs_by_position(measured_x_m, model_x_m, tol_m, labels=None, model_labels=None, off_grid="refuse"):
     """Index into ``model_x_m`` of the model DOF nearest each measured position.
 
     Raises :class:`ShapeError` when a measured position is farther than
-    ``tol_m`` from every model DOF, or two measured DOFs take the same model DOF
-    (naming them by ``labels`` and ``model_labels`` when given).
+    ``tol_m`` from every model DOF (unless ``off_grid="ignore"``: its index is then -1),
+    or two measured DOFs take the same model DOF (naming them by ``labels`` and
+    ``model_labels`` when given).
     """
     mx = np.asarray(measured_x_m, float)
     gx = np.asarray(model_x_m, float)
@@ -189,12 +190,16 @@ def match_dofs_by_position(measured_x_m, model_x_m, tol_m, labels=None, model_la
     d = np.abs(mx[:, None] - gx[None, :])
     idx = np.argmin(d, axis=1)
     far = d[np.arange(mx.size), idx] > tol_m
+    if off_grid == "ignore":
+        idx = np.where(far, -1, idx)
+        far = np.zeros_like(far)
     if np.any(far):
         k = int(np.nonzero(far)[0][0])
         raise ShapeError(f"{lab[k]} at x = {mx[k]:.4g} m is not at a model DOF: {d[k, idx[k]]:.3g} m from the "
                          f"nearest, {mlab[idx[k]]} at {gx[idx[k]]:.4g} m (tolerance {tol_m:.3g} m)")
-    if np.unique(idx).size != idx.size:
-        i, j = (int(k) for k in np.nonzero(idx == idx[np.nonzero(np.bincount(idx) > 1)[0][0]])[0][:2])
+    on = idx[idx >= 0]
+    if np.unique(on).size != on.size:
+        i, j = (int(k) for k in np.nonzero(idx == np.nonzero(np.bincount(on) > 1)[0][0])[0][:2])
         raise ShapeError(f"{lab[i]} (x = {mx[i]:.4g} m) and {lab[j]} (x = {mx[j]:.4g} m) map to the same "
                          f"{mlab[idx[i]]} (x = {gx[idx[i]]:.4g} m)")
     return idx
@@ -229,7 +234,8 @@ class DofMap:
         """Index of the measured DOF at each of ``model_dofs`` (refuses naming the missing ones)."""
         missing = [d for d in model_dofs if d not in self.model_dofs]
         if missing:
-            have = ", ".join(f"{a} -> {b}" for a, b in zip(self.dofs, self.model_dofs))
+            have = ", ".join(f"{a} -> {b or f'none (x = {x:.4g} m)'}"
+                             for a, b, x in zip(self.dofs, self.model_dofs, self.positions_m))
             raise ShapeError(f"{where}: no measured DOF at model DOF(s) {', '.join(missing)} (positions from the "
                              f"{self.source}; measured: {have or 'none'}); all of {', '.join(model_dofs)} are needed")
         return np.array([self.model_dofs.index(d) for d in model_dofs])
@@ -248,7 +254,7 @@ def dof_positions_text(d: dict) -> str:
 
 def map_measured_dofs(dofs, model_x_m, model_dofs, *, length_m: float, n_elements: int = 4, geometry=None,
                       geometry_format: str = "file", beam_x_m=None, tol_m=None,
-                      where: str = "measured data") -> DofMap:
+                      where: str = "measured data", off_grid: str = "refuse") -> DofMap:
     """Positions of measured DOFs and the model DOF at each.
 
     The positions come from the first of: the file's node ``geometry``
@@ -278,12 +284,15 @@ def map_measured_dofs(dofs, model_x_m, model_dofs, *, length_m: float, n_element
         Largest distance to a model DOF (default 1 % of an element, ``0.01 length_m / n_elements``).
     where : str
         The file, for messages.
+    off_grid : {"refuse", "ignore"}
+        A measured DOF away from every model DOF is refused, or left out: its model DOF is ``""`` and
+        the detail names it.
 
     Raises
     ------
     ShapeError
         A DOF without coordinates, a count that differs from the beam file's,
-        a position not at a model DOF, or two DOFs at one model DOF.
+        a position not at a model DOF (``off_grid="refuse"``), or two DOFs at one model DOF.
     """
     from physics.io.types import parse_dof
 
@@ -316,10 +325,13 @@ def map_measured_dofs(dofs, model_x_m, model_dofs, *, length_m: float, n_element
             f"no node geometry: node N of the {n_elements}-element beam at (N - 1) L / {n_elements}"
         x = (nodes - 1) * length_m / n_elements
     try:
-        idx = match_dofs_by_position(x, model_x_m, tol_m, dofs, model_dofs)
+        idx = match_dofs_by_position(x, model_x_m, tol_m, dofs, model_dofs, off_grid)
     except ShapeError as exc:
         raise ShapeError(f"{where}: {exc} (positions from the {source})") from None
-    return DofMap(source, detail, dofs, x, tuple(str(model_dofs[k]) for k in idx))
+    if np.any(idx < 0):
+        detail += "; not at a model DOF, not used: " + ", ".join(f"{d} (x = {xk:.4g} m)" for d, xk, k
+                                                                 in zip(dofs, x, idx) if k < 0)
+    return DofMap(source, detail, dofs, x, tuple(str(model_dofs[k]) if k >= 0 else "" for k in idx))
 
 
 def map_frf_dofs(frf, dofs, model_x_m, model_dofs, **kwargs) -> DofMap:

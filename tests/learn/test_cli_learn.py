@@ -171,11 +171,24 @@ def test_classify_places_a_renumbered_shuffled_mm_uff_by_its_geometry(tiny, caps
         assert res["network"][key] == pytest.approx(ref["network"][key], rel=1e-5), key
     np.testing.assert_allclose(res["network"]["element_probabilities"], ref["network"]["element_probabilities"],
                                rtol=1e-6, atol=1e-9)
-    # node 103 placed at 400 mm: off the model grid, refused in one line naming the file and the DOF
+    # an extra sensor (node 105 at 400 mm, between the quarter points) is left out, and named
+    extra = []
+    for s, p in enumerate(paths):
+        f = read_frf(p)
+        f = MeasuredFRF(f.frequency_hz, np.concatenate([f.frf, 0.5 * (f.frf[1:2] + f.frf[2:3])]),
+                        f.response_dofs + ("6:+Y",), f.reference_dofs)
+        extra.append(str(write_renumbered_uff(tiny / f"extra{s}.uff", f, {**nodes, 6: 105},
+                                              {**x_mm, 105: 400.0})))
+    assert main(["classify", "--model", str(tiny / "model"), "--baseline", *extra, "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert "105:+Y (x = 0.4 m)" in res["dof_positions"]["measured"]["detail"]
+    assert res["network"]["probability_damaged"] == pytest.approx(ref["network"]["probability_damaged"], rel=1e-5)
+    # node 103 placed at 400 mm: no sensor at model DOF 4:y, refused in one line naming the file and the DOFs
     write_renumbered_uff(tiny / "offgrid.uff", read_frf(paths[1]), nodes, {**x_mm, 103: 400.0})
     assert main(["classify", "--model", str(tiny / "model"), "--baseline", uffs[0], str(tiny / "offgrid.uff")]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "offgrid.uff" in err and "103:+Y at x = 0.4 m is not at a model DOF" in err
+    assert err.count("\n") == 1 and "offgrid.uff" in err and "no measured DOF at model DOF(s) 4:y" in err
+    assert "103:+Y -> none (x = 0.4 m)" in err
 
 
 def test_modal_route_model_classifies_frf_files_through_identified_modes(tiny, modal_model, capsys):
@@ -210,7 +223,7 @@ def test_refusals_and_bad_input_exit_2(tiny, capsys):
     assert main(["classify", "--model", str(tiny / "model"), "--baseline", base, str(tiny / "other.json")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "other.json" in err
-    assert "measured DOF 6:y at x = 0.7619 m is not at a model DOF" in err
+    assert "no measured DOF at model DOF(s) 5:y" in err and "6:y -> none (x = 0.7619 m)" in err
     obj["dofs"], obj["eigenvectors"] = ["2:y", "3:y", "4:y"], obj["eigenvectors"][:3]
     (tiny / "three.json").write_text(json.dumps(obj))
     assert main(["classify", "--model", str(tiny / "model"), "--baseline", base, str(tiny / "three.json")]) == 2
