@@ -155,3 +155,20 @@ def test_band_cholesky_solve_equals_dense_solve(setup):
     np.testing.assert_allclose(X, np.linalg.solve(K, B), rtol=1e-9, atol=1e-12 * np.abs(X).max())
     with pytest.raises(ValueError, match="positive definite"):
         band_cholesky(-K, 3)
+
+
+def test_projection_shortcut_with_a_shear_flexibility_per_specimen_matches_full_state_space():
+    """Specimens with shear flexibility 0-0.006 (Timoshenko truth elements per sample, slits on them, the
+    nominal basis of the band's centre as the subspace start): the shortcut's modes are the full solution's."""
+    from datagen.config import load_config
+
+    cfg = merge({"specimen": {"shear_flexibility": [0.0, 0.006]}, "measurement": {"lines": 128}},
+                base=load_config("training"))
+    st = get_setup(cfg)
+    inp = draw_batch(np.random.default_rng(3), 10, st)
+    assert np.ptp(inp.shear_flexibility) > 0.003
+    out, full = simulate_batch(st, inp, chunk=4), simulate_naive(st, inp, modes="full")
+    f_s, z_s = modal_parameters(out["truth_poles"][..., :4])
+    f_f, z_f = modal_parameters(full["truth_poles"][..., :4])
+    np.testing.assert_allclose(f_s, f_f, rtol=1e-4)
+    np.testing.assert_allclose(z_s, z_f, rtol=1e-3)
