@@ -71,6 +71,8 @@ DEFAULTS: dict = {
         "damping_noise_per_floor": 0.0,
         "shape_noise_per_floor": 0.0,
         "modal_noise_scale": [1.0, 1.0],  # factor on the modal noise's stds, log-uniform per sample
+        "frequency_scatter": [0.0, 0.0],  # relative std of independent per-mode frequency changes of each test
+                                          # (log-uniform per sample; repeatability beyond temperature/re-clamping)
         "identification": None,       # derived: the identification the calibrated modal noise describes (read-only)
         "frf_noise": 0.005,            # complex std relative to |H| per line (or [lo, hi], log-uniform per sample)
         "frf_noise_floor": 0.0,        # complex std relative to each FRF's peak (or [lo, hi], log-uniform)
@@ -270,6 +272,7 @@ def _check_measurement(meas: dict) -> bool:
         meas[k] = (_num(f"measurement.{k}", v, lo=0.0, hi=0.5) if is_number
                    else _range(f"measurement.{k}", v, lo=0.0, hi=0.5))
     meas["modal_noise_scale"] = _range("measurement.modal_noise_scale", meas["modal_noise_scale"], lo=0.01, hi=100.0)
+    meas["frequency_scatter"] = _range("measurement.frequency_scatter", meas["frequency_scatter"], lo=0.0, hi=0.01)
     meas["band_rad_s"] = _range("measurement.band_rad_s", meas["band_rad_s"], lo=0.0)
     if meas["band_rad_s"][0] >= meas["band_rad_s"][1]:
         raise ConfigError("config key 'measurement.band_rad_s' must have low < high")

@@ -258,7 +258,8 @@ class BatchInputs:
     to |H|), ``noise_floor`` (relative to each FRF's peak) and the uint64
     ``noise_seed`` of the counter-based stream the FRF noise is drawn from (B,), and the factor
     ``modal_noise_scale`` on the modal noise's standard deviations (B,); the specimen's
-    ``shear_flexibility`` ``EI / (kGA L^2)`` (B,).
+    ``shear_flexibility`` ``EI / (kGA L^2)`` (B,); ``frequency_scatter`` (B,), the relative std of
+    independent per-mode frequency changes of each test (repeatability), added to the frequency noise.
     """
 
     EI_Nm2: np.ndarray
@@ -281,6 +282,7 @@ class BatchInputs:
     noise_seed: np.ndarray
     modal_noise_scale: np.ndarray
     shear_flexibility: np.ndarray
+    frequency_scatter: np.ndarray
 
     def __len__(self):
         return self.EI_Nm2.shape[0]
@@ -311,6 +313,9 @@ def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
     u = rng.random((n, 4))
     seeds = rng.integers(0, np.iinfo(np.uint64).max, size=n, dtype=np.uint64, endpoint=True)
     u_scale = rng.random(n)
+    meas_range = cfg["measurement"]["frequency_scatter"]
+    scatter = np.full(n, float(meas_range[0])) if meas_range[0] == meas_range[1] else \
+        _uniform(rng.random(n), meas_range, log=True)
     spc, meas = cfg["specimen"], cfg["measurement"]
     ei0 = setup.layout.EI
     loss = np.where(np.isfinite(sl["depth_m"]),
@@ -323,7 +328,7 @@ def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
                        _uniform(u[:, 1], spc["root_spring_change"]), nf, nz, ns,
                        _uniform(u[:, 2], meas["frf_noise"], log=True),
                        _uniform(u[:, 3], meas["frf_noise_floor"], log=True), seeds,
-                       _uniform(u_scale, meas["modal_noise_scale"], log=True), sp["shear_flexibility"])
+                       _uniform(u_scale, meas["modal_noise_scale"], log=True), sp["shear_flexibility"], scatter)
 
 
 # --------------------------------------------------------------------------- truth model
@@ -444,7 +449,10 @@ def measure_modes(setup, inp, lam4, psi4):
     Natural frequencies and damping ratios get relative Gaussian errors,
     shapes complex circular errors relative to each mode's largest entry,
     all scaled by the sample's ``modal_noise_scale`` (``measurement.modal_noise_scale``:
-    identifications of real files vary beyond what the FRF noise level predicts).
+    identifications of real files vary beyond what the FRF noise level predicts); the
+    frequencies' std is combined in quadrature with the sample's ``frequency_scatter``
+    (``measurement.frequency_scatter``: per-mode changes of each test that temperature and
+    re-clamping do not describe; the synthesised FRFs do not carry it).
     Standard deviations per mode: ``measurement.frequency_noise`` etc.
     ("fixed"), or ``sqrt((c level)^2 + (g floor)^2 + e^2)`` of the sample's FRF
     noise level and noise floor with the coefficients ``c`` (``*_noise``), ``g``
@@ -459,6 +467,7 @@ def measure_modes(setup, inp, lam4, psi4):
         sig = {q: np.asarray(mcfg[f"{q}_noise"], float) * np.ones(N_MEAS) for q in ("frequency", "damping", "shape")}
     scale = np.asarray(inp.modal_noise_scale, float)[:, None, None]
     sig = {q: v * scale for q, v in sig.items()}
+    sig["frequency"] = np.hypot(sig["frequency"], np.asarray(inp.frequency_scatter, float)[:, None, None])
     f, z = modal_parameters(lam4)
     f_m = f * (1 + sig["frequency"] * inp.n_freq)
     z_m = z * (1 + sig["damping"] * inp.n_zeta)
@@ -492,7 +501,7 @@ CHUNK = 128
 #: Drawn inputs recorded per sample (the columns of the samples table and the noise of the FRFs on read).
 LABEL_FIELDS = ("EI_Nm2", "mass_per_length_kg_m", "damping_scale", "root_spring_Nm_rad", "n_slits", "x_m", "width_m",
                 "depth_m", "beta_s", "ei_loss", "temperature_stiffness_change", "root_spring_change", "noise_level",
-                "noise_floor", "noise_seed", "modal_noise_scale", "shear_flexibility")
+                "noise_floor", "noise_seed", "modal_noise_scale", "shear_flexibility", "frequency_scatter")
 
 
 def simulate_batch(setup: Setup, inp: BatchInputs, chunk: int = CHUNK) -> dict:

@@ -97,6 +97,7 @@ COLUMN_UNITS = {
     "noise_seed": "- (uint64 seed of the FRF noise stream)",
     "modal_noise_scale": "- (factor on the standard deviations of the modal noise)",
     "shear_flexibility": "- (EI / (kGA L^2) of the specimen; 0: Euler-Bernoulli)",
+    "frequency_scatter": "- (relative std of independent per-mode frequency changes of each test)",
     "stiffness_loss_Nm3": "N m^3 (sum over slits of dEI * width)",
     "max_frequency_drop_rel": "- (largest relative drop of f1..f4 due to the slits alone)",
     "slit{k}_x_m": "m", "slit{k}_width_m": "m", "slit{k}_depth_m": "m", "slit{k}_ei_loss": "- (relative)",
@@ -156,6 +157,7 @@ def sample_table(labels: dict, outputs: dict, shard: int, first_id: int, length_
         "noise_seed": labels["noise_seed"].astype(np.uint64),
         "modal_noise_scale": labels["modal_noise_scale"],
         "shear_flexibility": labels["shear_flexibility"],
+        "frequency_scatter": labels["frequency_scatter"],
         "stiffness_loss_Nm3": np.nansum(slit_loss, axis=1),
         "max_frequency_drop_rel": outputs["slit_frequency_drop"],
     }

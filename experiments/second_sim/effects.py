@@ -23,10 +23,11 @@ import numpy as np
 from experiments.second_sim.fem import Beam, Dashpot, PointMass, assemble, modes
 from experiments.second_sim.pairs import (DOF_LABELS, EI_NM2, FREQ_HZ, LENGTH_M, MASS_PER_LENGTH_KG_M, NODE_X_M,
                                           REF_NODE, RESP_NODES, RHO_I_KG_M)
-from experiments.second_sim.response import Damping, Noise, complex_modes, measure, rayleigh_for, receptance
+from experiments.second_sim.response import (MODAL_NOISE, Damping, Noise, complex_modes, measure, noisy_modal,
+                                              rayleigh_for, receptance)
 from experiments.second_sim.writers import modal_dict, write_json, write_uff
 
-__all__ = ["CASES", "EffectCase", "FRF_NOISE", "MODAL_NOISE", "effect_cases", "noisy_modal", "write_effect_cases"]
+__all__ = ["CASES", "EffectCase", "FRF_NOISE", "effect_cases", "write_effect_cases"]
 
 
 #: (effect, label, value) of every case, in order.
@@ -38,8 +39,6 @@ CASES = (
     + [("shear_deformation", "kGA_over_EI_L2", v) for v in (100.0, 300.0, 2000.0)]
     + [("local_damping", "added_damping_ratio", v) for v in (0.005, 0.02)]
 )
-#: Noise of the modal data: relative sd of frequencies, damping ratios and shape entries (x max |shape|).
-MODAL_NOISE = (0.0003, 0.03, 0.005)
 #: FRF noise of the UFF baseline test.
 FRF_NOISE = Noise(0.01)
 
@@ -87,17 +86,6 @@ def _base_damping(rng: np.random.Generator) -> Damping:
         return Damping("modal", tuple(rng.uniform(0.003, 0.02, 4)))
     w1, w4 = 2 * math.pi * 21.7, 2 * math.pi * 746.0
     return rayleigh_for(rng.uniform(0.003, 0.02), rng.uniform(0.003, 0.02), w1, w4)
-
-
-def noisy_modal(lam: np.ndarray, psi: np.ndarray, rng: np.random.Generator, noise=MODAL_NOISE):
-    """Modal data with relative noise on frequencies, damping ratios and shapes; returns ``(lam, psi)``."""
-    sf, sz, sp = noise
-    w = np.abs(lam) * (1 + sf * rng.standard_normal(lam.size))
-    z = (-lam.real / np.abs(lam)) * (1 + sz * rng.standard_normal(lam.size))
-    lam_n = -z * w + 1j * w * np.sqrt(1 - z ** 2)
-    scale = np.abs(psi).max(axis=0, keepdims=True)
-    psi_n = psi + sp * scale * (rng.standard_normal(psi.shape) + 1j * rng.standard_normal(psi.shape)) / math.sqrt(2)
-    return lam_n, psi_n
 
 
 def effect_cases(seed: int, freq_hz=FREQ_HZ) -> list[EffectCase]:

@@ -20,8 +20,8 @@ import numpy as np
 import scipy.optimize
 
 from experiments.second_sim.fem import Beam, Slit, assemble, modes
-from experiments.second_sim.response import Damping, Noise, measure, receptance
-from experiments.second_sim.writers import write_csv, write_json, write_uff
+from experiments.second_sim.response import Damping, Noise, complex_modes, measure, noisy_modal, receptance
+from experiments.second_sim.writers import modal_dict, write_csv, write_json, write_uff
 
 __all__ = ["DOF_LABELS", "EI_NM2", "FREQ_HZ", "LENGTH_M", "MASS_PER_LENGTH_KG_M", "NODE_X_M", "PAIR_SETS", "PairRecord",
            "PairSet", "REF_NODE", "RESP_NODES", "RHO_I_KG_M", "THICKNESS_M", "WIDTH_M", "frequencies_hz", "max_drop",
@@ -101,7 +101,8 @@ def max_drop(beam: Beam, slit: Slit) -> float:
 
 @dataclass(frozen=True)
 class PairRecord:
-    """One specimen's two tests: receptances (m/N) at nodes 2..5 driven at node 2, and the truth."""
+    """One specimen's two tests: receptances (m/N) at nodes 2..5 driven at node 2, and the truth; ``modal``: the
+    two tests' modal data (modal-data mappings of the first 4 complex modes with :data:`MODAL_NOISE`)."""
 
     pair: int
     truth: dict
@@ -109,6 +110,7 @@ class PairRecord:
     baseline: np.ndarray
     current: np.ndarray
     kind: str = "receptance"
+    modal: tuple = ()
 
 
 def _uniform(rng, spread):
@@ -125,8 +127,11 @@ def _slit(rng, beam: Beam, min_drop: float) -> tuple[Slit, float]:
     raise RuntimeError("no slit reached the minimum frequency drop in 1000 draws")
 
 
-def simulate_pair(cfg: PairSet, pair: int, rng: np.random.Generator, freq_hz=FREQ_HZ) -> PairRecord:
-    """Draw one specimen (and slit, if damaged) and simulate its baseline and current tests."""
+def simulate_pair(cfg: PairSet, pair: int, rng: np.random.Generator, freq_hz=FREQ_HZ,
+                  modal_rng: np.random.Generator | None = None) -> PairRecord:
+    """Draw one specimen (and slit, if damaged) and simulate its baseline and current tests.
+
+    ``modal_rng`` draws the noise of the modal data (its own stream: the FRFs do not depend on it)."""
     EI = EI_NM2 * _uniform(rng, cfg.ei_spread)
     m = MASS_PER_LENGTH_KG_M * _uniform(rng, cfg.mass_spread)
     k_r_rel = math.exp(rng.uniform(math.log(200), math.log(2000)))
@@ -140,13 +145,15 @@ def simulate_pair(cfg: PairSet, pair: int, rng: np.random.Generator, freq_hz=FRE
     clamp = _uniform(rng, cfg.reclamp_k)
     current = replace(specimen, EI_Nm2=EI * temp, root_k_theta_Nm_rad=specimen.root_k_theta_Nm_rad * clamp,
                       slits=(slit,) if slit else ())
-    H, f_true = [], []
+    H, f_true, modal = [], [], []
+    modal_rng = np.random.default_rng(0) if modal_rng is None else modal_rng
     for beam in (specimen, current):
         asm = assemble(beam)
         md = modes(asm)
         dofs = asm.translation_dofs(NODE_X_M[1:])
         H.append(measure(receptance(asm, md, damping, freq_hz, dofs, dofs[0]), cfg.noise, rng))
         f_true.append(md.frequencies_hz[:4])
+        modal.append(modal_dict(*noisy_modal(*complex_modes(asm, md, damping, dofs, 4), modal_rng), DOF_LABELS))
     kind = "accelerance" if cfg.accelerance_every_other and pair % 2 else "receptance"
     truth = {
         "pair": pair, "set": cfg.name, "damaged": damaged,
@@ -170,7 +177,7 @@ def simulate_pair(cfg: PairSet, pair: int, rng: np.random.Generator, freq_hz=FRE
         "baseline_frequencies_hz": [float(v) for v in f_true[0]],
         "current_frequencies_hz": [float(v) for v in f_true[1]],
     }
-    return PairRecord(pair, truth, np.asarray(freq_hz, dtype=float), H[0], H[1], kind)
+    return PairRecord(pair, truth, np.asarray(freq_hz, dtype=float), H[0], H[1], kind, tuple(modal))
 
 
 def simulate_pairs(set_name: str, n: int, seed: int, freq_hz=FREQ_HZ, mode4_drop: float | None = None
@@ -186,12 +193,13 @@ def simulate_pairs(set_name: str, n: int, seed: int, freq_hz=FREQ_HZ, mode4_drop
         if not (cfg.timoshenko and 0 < mode4_drop < 0.5):
             raise ValueError(f"mode4_drop applies to the timoshenko set only and must be in (0, 0.5), got {mode4_drop}")
         cfg = replace(cfg, mode4_drop=mode4_drop)
-    rng = np.random.default_rng(seed)
-    return [simulate_pair(cfg, k, rng, freq_hz) for k in range(n)]
+    rng, modal_rng = np.random.default_rng(seed), np.random.default_rng([seed, 1])
+    return [simulate_pair(cfg, k, rng, freq_hz, modal_rng) for k in range(n)]
 
 
 def write_pairs(records: list[PairRecord], out_dir) -> Path:
-    """``pair-KKK_baseline.uff``, ``pair-KKK_current.uff`` per record, ``truth.csv`` and ``truth.json``."""
+    """``pair-KKK_baseline.uff``, ``pair-KKK_current.uff`` (and the modal data ``pair-KKK_baseline.json``,
+    ``pair-KKK_current.json``) per record, ``truth.csv`` and ``truth.json``."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     rows = []
@@ -199,6 +207,8 @@ def write_pairs(records: list[PairRecord], out_dir) -> Path:
         for day, H in (("baseline", r.baseline), ("current", r.current)):
             write_uff(out / f"pair-{r.pair:03d}_{day}.uff", r.freq_hz, H, NODE_X_M, RESP_NODES, REF_NODE,
                       kind=r.kind, description=f"second_sim {r.truth['set']} pair {r.pair} {day}")
+        for day, md in zip(("baseline", "current"), r.modal):
+            write_json(out / f"pair-{r.pair:03d}_{day}.json", md)
         rows.append(r.truth)
     write_json(out / "truth.json", {"length_m": LENGTH_M, "measured_x_m": list(NODE_X_M[1:]),
                                     "dofs": list(DOF_LABELS), "reference_dof": f"{REF_NODE}:y", "pairs": rows})

@@ -18,7 +18,7 @@ import numpy as np
 
 from experiments.second_sim.fem import Assembled, Modes
 
-__all__ = ["Damping", "Noise", "complex_modes", "measure", "rayleigh_for", "receptance"]
+__all__ = ["MODAL_NOISE", "Damping", "Noise", "complex_modes", "measure", "noisy_modal", "rayleigh_for", "receptance"]
 
 
 @dataclass(frozen=True)
@@ -163,3 +163,18 @@ def measure(H: np.ndarray, noise: Noise, rng: np.random.Generator) -> np.ndarray
     if noise.floor:
         out = out + noise.floor * peak * cn()
     return out
+
+
+#: Noise of the modal data: relative sd of frequencies, damping ratios and shape entries (x max |shape|).
+MODAL_NOISE = (0.0003, 0.03, 0.005)
+
+
+def noisy_modal(lam: np.ndarray, psi: np.ndarray, rng: np.random.Generator, noise=MODAL_NOISE):
+    """Modal data with relative noise on frequencies, damping ratios and shapes; returns ``(lam, psi)``."""
+    sf, sz, sp = noise
+    w = np.abs(lam) * (1 + sf * rng.standard_normal(lam.size))
+    z = (-lam.real / np.abs(lam)) * (1 + sz * rng.standard_normal(lam.size))
+    lam_n = -z * w + 1j * w * np.sqrt(1 - z ** 2)
+    scale = np.abs(psi).max(axis=0, keepdims=True)
+    psi_n = psi + sp * scale * (rng.standard_normal(psi.shape) + 1j * rng.standard_normal(psi.shape)) / math.sqrt(2)
+    return lam_n, psi_n

@@ -77,7 +77,8 @@ def test_calibrated_modal_noise_scales_with_each_samples_frf_noise_level():
                               shape_noise=[0.5, 0.5, 0.5, 0.5], frequency_noise_floor=[0.0] * 4,
                               damping_noise_floor=[0.0] * 4, shape_noise_floor=[0.0] * 4,
                               frequency_noise_per_floor=[0.0] * 4, damping_noise_per_floor=[0.0] * 4,
-                              shape_noise_per_floor=[0.0] * 4, modal_noise_scale=[1.0, 1.0])
+                              shape_noise_per_floor=[0.0] * 4, modal_noise_scale=[1.0, 1.0],
+                              frequency_scatter=[0.0, 0.0])
     setup = get_setup(merge(cfg))
     inp = draw_batch(np.random.default_rng(5), 4000, setup)
     from datagen.pipeline import measure_modes
@@ -113,3 +114,18 @@ def test_calibrated_modal_noise_scales_with_each_samples_frf_noise_level():
     lam_m, _ = measure_modes(setup, inp, lam, psi)
     ef = (np.abs(lam_m) / np.abs(lam) - 1)[:, :, 1] / (inp.noise_floor * inp.modal_noise_scale)[:, None]
     assert np.std(ef) == pytest.approx(5.0, rel=0.05)
+    # frequency_scatter (log-uniform per sample) adds in quadrature on every mode's frequency, not on shapes
+    cfg["measurement"].update(frequency_noise_per_floor=[0.0] * 4, modal_noise_scale=[1.0, 1.0],
+                              frequency_scatter=[1e-5, 1e-3])
+    setup = get_setup(merge(cfg))
+    inp = draw_batch(np.random.default_rng(6), 4000, setup)
+    assert 1e-5 <= inp.frequency_scatter.min() and inp.frequency_scatter.max() <= 1e-3
+    assert np.median(inp.frequency_scatter) == pytest.approx(1e-4, rel=0.1)          # log-uniform
+    lam_m, psi_m = measure_modes(setup, inp, lam, psi)
+    ef = (np.abs(lam_m) / np.abs(lam) - 1)[:, :, 1:] / inp.frequency_scatter[:, None, None]
+    assert np.std(ef) == pytest.approx(1.0, rel=0.05)
+    from dataclasses import replace
+
+    lam_0, psi_0 = measure_modes(setup, replace(inp, frequency_scatter=np.zeros(4000)), lam, psi)
+    np.testing.assert_array_equal(psi_0, psi_m)
+    assert np.abs(np.abs(lam_0) / np.abs(lam) - 1)[:, :, 1:].max() < 1e-12

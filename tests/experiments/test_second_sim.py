@@ -309,7 +309,13 @@ def test_cli_writes_pairs_and_refuses_a_bad_band(tmp_path, capsys):
     assert main(["pairs", "--set", "easy", "--n", "1", "--seed", "2", "--band-hz", "5", "400", "--df-hz", "1",
                  "--out", str(tmp_path / "p")]) == 0
     assert sorted(p.name for p in (tmp_path / "p").iterdir()) == \
-        ["pair-000_baseline.uff", "pair-000_current.uff", "truth.csv", "truth.json"]
+        ["pair-000_baseline.json", "pair-000_baseline.uff", "pair-000_current.json", "pair-000_current.uff",
+         "truth.csv", "truth.json"]
+    truth = json.loads((tmp_path / "p" / "truth.json").read_text())["pairs"][0]
+    for day in ("baseline", "current"):   # modal data: the truth's modes with 0.03 % frequency noise
+        md = json.loads((tmp_path / "p" / f"pair-000_{day}.json").read_text())
+        assert md["dofs"] == ["2:y", "3:y", "4:y", "5:y"] and len(md["eigenvectors"]) == 4
+        np.testing.assert_allclose(md["natural_frequencies_hz"], truth[f"{day}_frequencies_hz"], rtol=2e-3)
     assert main(["pairs", "--band-hz", "5", "1", "--out", str(tmp_path / "q")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--band-hz" in err[0] and not (tmp_path / "q").exists()
