@@ -150,7 +150,7 @@ def timoshenko_stiffness(EI, kGA, length):
     ndarray, shape (..., 4, 4)   (broadcast over ``EI`` and ``kGA``)
     """
     l = float(length)
-    EI, kGA = np.broadcast_arrays(np.asarray(EI, float), np.asarray(kGA, float))
+    EI, kGA = np.broadcast_arrays(np.asarray(EI), np.asarray(kGA))
     phi = 12.0 * EI / (kGA * l**2)
     a = (4 + phi) * l**2
     b = (2 - phi) * l**2
@@ -179,7 +179,7 @@ def timoshenko_mass(m_per_length, rho_I, EI, kGA, length):
     ndarray, shape (..., 4, 4)   (broadcast over the array arguments)
     """
     l = float(length)
-    m, rho_I, EI, kGA = np.broadcast_arrays(*(np.asarray(v, float) for v in (m_per_length, rho_I, EI, kGA)))
+    m, rho_I, EI, kGA = np.broadcast_arrays(*(np.asarray(v) for v in (m_per_length, rho_I, EI, kGA)))
     p = 12.0 * EI / (kGA * l**2)
     t11 = 13 / 35 + 7 * p / 10 + p**2 / 3
     t12 = (11 / 210 + 11 * p / 120 + p**2 / 24) * l

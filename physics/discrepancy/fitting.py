@@ -229,8 +229,7 @@ def fit_model(beam, meas, noise, effect, fixed_effects, n_elements, pairs, *, fi
                 u0.append(a + 0.75 * (b - a) if p.log else 0.5 * (a + b))  # weak effect first
             else:
                 u0.append(rng.uniform(a, b))
-        res = least_squares(prob.residual, np.clip(u0, lo, hi), bounds=(lo, hi), x_scale=1.0,
-                            diff_step=1e-6, max_nfev=400)
+        res = _solve(prob.residual, np.clip(u0, lo, hi), lo, hi, max_nfev=400)
         if best is None or res.cost < best.cost:
             best = res
         if effect == "none" and not named:
@@ -238,6 +237,33 @@ def fit_model(beam, meas, noise, effect, fixed_effects, n_elements, pairs, *, fi
     fit = as_fit(prob, best, effect, meas)
     lomo = lomo_error(prob, best.x) if with_lomo else float("nan")
     return replace(fit, lomo=lomo), prob, best.x
+
+
+#: Forward-difference step of the fits' Jacobians, absolute in the (log-)parameters. scipy's relative step is
+#: ``sqrt(eps)`` at a parameter of exactly 0 (the globals' start), below the eigensolver's resolution of the
+#: frequencies (~1e-8 relative): such a Jacobian is noise, and the fit's path then turns on rounding.
+JACOBIAN_STEP = 1e-6
+
+
+def _solve(fun, u0, lo, hi, max_nfev):
+    """Bounded least squares of ``fun`` from ``u0`` with forward differences of step :data:`JACOBIAN_STEP`."""
+    last = {}
+
+    def f(u):
+        last["u"], last["f"] = np.array(u), fun(u)
+        return last["f"]
+
+    def jac(u):
+        f0 = last["f"] if "u" in last and np.array_equal(last["u"], u) else fun(u)
+        cols = []
+        for k in range(u.size):
+            h = JACOBIAN_STEP if u[k] + JACOBIAN_STEP <= hi[k] else -JACOBIAN_STEP   # stay within the bounds
+            v = np.array(u, dtype=float)
+            v[k] += h
+            cols.append((fun(v) - f0) / h)
+        return np.stack(cols, axis=1)
+
+    return least_squares(f, u0, jac=jac, bounds=(lo, hi), x_scale=1.0, max_nfev=max_nfev)
 
 
 def lomo_error(prob: Problem, x0) -> float:
@@ -254,7 +280,7 @@ def lomo_error(prob: Problem, x0) -> float:
     z2 = []
     for j in range(meas.n_modes):
         prob.mask = np.arange(meas.n_modes) != j
-        res = least_squares(prob.residual, x0, bounds=(lo, hi), diff_step=1e-6, max_nfev=200)
+        res = _solve(prob.residual, x0, np.asarray(lo), np.asarray(hi), max_nfev=200)
         prob.mask = np.arange(meas.n_modes) == j
         held = np.concatenate(list(prob.blocks(prob.predict(prob.beam_at(res.x)[0])).values()))
         z2.append(np.mean(held**2))
