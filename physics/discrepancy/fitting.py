@@ -239,14 +239,16 @@ def fit_model(beam, meas, noise, effect, fixed_effects, n_elements, pairs, *, fi
     return replace(fit, lomo=lomo), prob, best.x
 
 
-#: Forward-difference step of the fits' Jacobians, absolute in the (log-)parameters. scipy's relative step is
-#: ``sqrt(eps)`` at a parameter of exactly 0 (the globals' start), below the eigensolver's resolution of the
-#: frequencies (~1e-8 relative): such a Jacobian is noise, and the fit's path then turns on rounding.
+#: Forward-difference step of the fits' Jacobians, relative to ``max(1, |u|)`` of each (log-)parameter ``u``.
+#: scipy's relative step falls back to ``sqrt(eps)`` at a parameter of exactly 0 (the globals' start), below the
+#: eigensolver's resolution of the frequencies (~1e-8 relative): such a Jacobian is noise, and the fit's path
+#: then turns on rounding.
 JACOBIAN_STEP = 1e-6
 
 
 def _solve(fun, u0, lo, hi, max_nfev):
-    """Bounded least squares of ``fun`` from ``u0`` with forward differences of step :data:`JACOBIAN_STEP`."""
+    """Bounded least squares of ``fun`` from ``u0`` with forward differences of step :data:`JACOBIAN_STEP`
+    times ``max(1, |u|)``."""
     last = {}
 
     def f(u):
@@ -257,7 +259,8 @@ def _solve(fun, u0, lo, hi, max_nfev):
         f0 = last["f"] if "u" in last and np.array_equal(last["u"], u) else fun(u)
         cols = []
         for k in range(u.size):
-            h = JACOBIAN_STEP if u[k] + JACOBIAN_STEP <= hi[k] else -JACOBIAN_STEP   # stay within the bounds
+            h = JACOBIAN_STEP * max(1.0, abs(u[k]))
+            h = h if u[k] + h <= hi[k] else -h                                       # stay within the bounds
             v = np.array(u, dtype=float)
             v[k] += h
             cols.append((fun(v) - f0) / h)
