@@ -41,7 +41,7 @@ def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
     results = []
     for i in range(len(inp)):
         s = inp.take(slice(i, i + 1))
-        M, K, dC, dK = truth_matrices(setup, s)
+        M, Mu, K, dC, dK = truth_matrices(setup, s)
         if modes == "full":
             wr, phir = undamped_modes(M[0], K[0, 0])
             p = setup.p
@@ -59,7 +59,7 @@ def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
             lam, psi, H = np.stack(lam_l)[None], np.stack(psi_l)[None], np.stack(H_l)[None]
             w2 = np.stack([undamped_modes(M[0], K[0, st])[0][:setup.p] ** 2 for st in range(2)])[None]
         elif modes == "projection":
-            lam, psi, w2 = projected_modes(setup, s, M, K, dC)
+            lam, psi, w2 = projected_modes(setup, s, M, Mu, K, dC)
             H = receptance_modal(lam, psi, w, np.arange(N_MEAS), [0])[..., 0, :]
         else:
             raise ValueError(f"modes must be 'full' or 'projection', got {modes!r}")
@@ -76,6 +76,6 @@ def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
             "truth_poles": lam, "truth_shapes": psi, "eigenvalues_measured": lam_m, "eigenvectors_measured": psi_m,
             "M_updated": Ma, "C_updated": up["C"], "K_updated": up["K"], "updated_poles": poles,
             "updated_residues": res, "converged": up["converged"], "iterations": up["iterations"],
-            "residual": up["residual"], "slit_frequency_drop": slit_frequency_drop(setup, s, K, dK, w2),
+            "residual": up["residual"], "slit_frequency_drop": slit_frequency_drop(setup, s, Mu, K, dK, w2),
             "frf_measured": add_noise(H, s.noise_seed, s.noise_level, s.noise_floor), "frf_updated": Hu})
     return {k: np.concatenate([r[k] for r in results]) for k in results[0]}

@@ -344,6 +344,7 @@ def truth_matrices(setup: Setup, inp: BatchInputs):
     Returns
     -------
     M : ndarray, shape (B, n, n)      kg ...
+    Mu : ndarray                      the same for unit mass per length (:func:`unit_mass`)
     K : ndarray, shape (B, 2, n, n)   N/m ... (state 0 baseline, 1 current)
     dC : ndarray, shape (B, n, n)     slit damping (N s/m ...)
     dK : ndarray, shape (B, n, n)     slit stiffness change (N/m ...)
@@ -371,21 +372,19 @@ def truth_matrices(setup: Setup, inp: BatchInputs):
     M = inp.mass_per_length_kg_m[:, None, None] * M0
     if setup.M_added is not None:
         M += setup.M_added
-    return M, K, dC, dK
+    return M, unit_mass(setup, inp, M0), K, dC, dK
 
 
-def unit_mass(setup: Setup, inp: BatchInputs):
-    """Mass for unit mass per length: ``M_0`` (n, n), or (B, 1, n, n) with a beam file's point mass or a
-    shear flexibility drawn per specimen."""
-    M0 = setup.unit_matrices(inp.shear_flexibility)[1] if setup.shear_varies else setup.M0
-    if setup.M_added is None and not setup.shear_varies:
-        return M0
+def unit_mass(setup: Setup, inp: BatchInputs, M0):
+    """Mass for unit mass per length from the element mass ``M0`` of :func:`truth_matrices` ((n, n) or, with a
+    shear flexibility drawn per specimen, (B, n, n)): ``M0`` (n, n), or (B, 1, n, n) with a beam file's point
+    mass or per-specimen elements."""
     if setup.M_added is None:
-        return M0[:, None]
+        return M0 if M0.ndim == 2 else M0[:, None]
     return (M0 + setup.M_added / inp.mass_per_length_kg_m[:, None, None])[:, None]
 
 
-def projected_modes(setup: Setup, inp: BatchInputs, M, K, dC):
+def projected_modes(setup: Setup, inp: BatchInputs, M, Mu, K, dC):
     """Complex modes of both states by the light-damping shortcut (batched).
 
     Undamped modes by :func:`datagen.solvers.ritz_modes` on the unit-EI,
@@ -396,6 +395,7 @@ def projected_modes(setup: Setup, inp: BatchInputs, M, K, dC):
     Parameters
     ----------
     M : ndarray, shape (B, n, n)
+    Mu : ndarray                      ``M`` for unit mass per length (:func:`unit_mass`)
     K : ndarray, shape (B, 2, n, n)   truth stiffness of baseline and current state
     dC : ndarray, shape (B, n, n)     slit damping
 
@@ -407,7 +407,7 @@ def projected_modes(setup: Setup, inp: BatchInputs, M, K, dC):
     """
     sol = setup.cfg["solver"]
     ei, mpl = inp.EI_Nm2, inp.mass_per_length_kg_m
-    w2s, V = ritz_modes(unit_mass(setup, inp), K / ei[:, None, None, None], setup.phi0, sol["subspace_iterations"])
+    w2s, V = ritz_modes(Mu, K / ei[:, None, None, None], setup.phi0, sol["subspace_iterations"])
     w2 = w2s * (ei / mpl)[:, None, None]
     phi = V / np.sqrt(mpl)[:, None, None, None]                  # (B,2,n,p), phi^T M phi = I
     d = 2 * setup.zeta * np.sqrt(w2[:, 0]) * inp.damping_scale[:, None]     # (B,p)
@@ -421,13 +421,13 @@ def projected_modes(setup: Setup, inp: BatchInputs, M, K, dC):
     return lam, phi[..., setup.meas, :] @ Z, w2
 
 
-def slit_frequency_drop(setup: Setup, inp: BatchInputs, K, dK, omega2):
+def slit_frequency_drop(setup: Setup, inp: BatchInputs, Mu, K, dK, omega2):
     """Largest relative drop of the first four natural frequencies caused by the slits alone.
 
     Undamped frequencies (subspace iteration). Without day-to-day changes
     that is the drop between the two states' ``omega2`` (B, 2, p); otherwise
-    the baseline stiffness plus ``dK`` is solved once more, so temperature
-    and re-clamping do not enter this label.
+    the baseline stiffness plus ``dK`` is solved once more (unit mass ``Mu``), so
+    temperature and re-clamping do not enter this label.
 
     Returns
     -------
@@ -438,7 +438,7 @@ def slit_frequency_drop(setup: Setup, inp: BatchInputs, K, dK, omega2):
     Ks = (K[:, 0] + dK) / inp.EI_Nm2[:, None, None]
     K0 = K[:, 0] / inp.EI_Nm2[:, None, None]
     it = setup.cfg["solver"]["subspace_iterations"]
-    w2, _ = ritz_modes(unit_mass(setup, inp), np.stack([K0, Ks], axis=1), setup.phi0, it)
+    w2, _ = ritz_modes(Mu, np.stack([K0, Ks], axis=1), setup.phi0, it)
     return np.max(1.0 - np.sqrt(w2[:, 1, :N_MEAS] / w2[:, 0, :N_MEAS]), axis=-1)
 
 
@@ -542,8 +542,8 @@ def simulate_chunk(setup: Setup, inp: BatchInputs) -> dict:
         (drive at the first measured DOF), ``frf_peak`` (B,2,4) (:func:`datagen.synth.measured_peak`),
         ``converged``, ``iterations``, ``residual`` (B,2) and ``slit_frequency_drop`` (B,).
     """
-    M, K, dC, dK = truth_matrices(setup, inp)
-    lam, psi, w2 = projected_modes(setup, inp, M, K, dC)
+    M, Mu, K, dC, dK = truth_matrices(setup, inp)
+    lam, psi, w2 = projected_modes(setup, inp, M, Mu, K, dC)
     lam_m, psi_m = measure_modes(setup, inp, lam[..., :N_MEAS], psi[..., :N_MEAS])
     Ma = analyst_mass(inp.mass_per_length_kg_m, setup.length_m, setup.cfg["updating"]["mass_model"])
     up = update_models(setup, Ma, lam_m, psi_m)
@@ -554,4 +554,4 @@ def simulate_chunk(setup: Setup, inp: BatchInputs) -> dict:
             "updated_residues": res, "frf_peak": measured_peak({"truth_poles": lam, "truth_shapes": psi,
                                                                "noise_floor": inp.noise_floor}, setup.omega_rad_s),
             "converged": up["converged"], "iterations": up["iterations"],
-            "residual": up["residual"], "slit_frequency_drop": slit_frequency_drop(setup, inp, K, dK, w2)}
+            "residual": up["residual"], "slit_frequency_drop": slit_frequency_drop(setup, inp, Mu, K, dK, w2)}

@@ -133,13 +133,14 @@ def unit_elements(shear_flexibility, rho_i_over_m_m2: float, length_m: float, n_
 
     le = length_m / n_elements
     s = np.asarray(shear_flexibility, float)
+    phi = 12.0 * n_elements**2 * s
     if not timoshenko:
         ke, me = element_stiffness(1.0, le), element_mass(1.0, le)
-        return np.broadcast_to(ke, s.shape + (4, 4)), np.broadcast_to(me, s.shape + (4, 4)), 12.0 * n_elements**2 * s
+        return np.broadcast_to(ke, s.shape + (4, 4)), np.broadcast_to(me, s.shape + (4, 4)), phi
     with np.errstate(divide="ignore"):
         kga_over_ei = np.where(s > 0, 1.0 / (s * length_m**2), np.inf)
     return (timoshenko_stiffness(1.0, kga_over_ei, le), timoshenko_mass(1.0, rho_i_over_m_m2, 1.0, kga_over_ei, le),
-            12.0 * n_elements**2 * s)
+            phi)
 
 
 def point_effects(beam, n_elements: int) -> dict:

@@ -189,7 +189,7 @@ def timoshenko_mass(m_per_length, rho_I, EI, kGA, length):
     t24 = (1 / 140 + p / 60 + p**2 / 120) * l**2
     mt = _matrix4([[t11, t12, t13, -t14], [t12, t22, t14, -t24],
                    [t13, t14, t11, -t12], [-t14, -t24, -t12, t22]]) * (m * l / (1 + p) ** 2)[..., None, None]
-    r11 = np.full(p.shape, 6 / 5)
+    r11 = 6 / 5
     r12 = (1 / 10 - p / 2) * l
     r22 = (2 / 15 + p / 6 + p**2 / 3) * l**2
     r24 = (-1 / 30 - p / 6 + p**2 / 6) * l**2
