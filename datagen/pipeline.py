@@ -313,10 +313,9 @@ def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
     u = rng.random((n, 4))
     seeds = rng.integers(0, np.iinfo(np.uint64).max, size=n, dtype=np.uint64, endpoint=True)
     u_scale = rng.random(n)
-    meas_range = cfg["measurement"]["frequency_scatter"]
-    scatter = np.full(n, float(meas_range[0])) if meas_range[0] == meas_range[1] else \
-        _uniform(rng.random(n), meas_range, log=True)
     spc, meas = cfg["specimen"], cfg["measurement"]
+    lo, hi = meas["frequency_scatter"]
+    scatter = _uniform(np.zeros(n) if lo == hi else rng.random(n), (lo, hi), log=True)  # one value: not drawn
     ei0 = setup.layout.EI
     loss = np.where(np.isfinite(sl["depth_m"]),
                     1.0 - slit_section_ei(setup.layout, np.nan_to_num(sl["depth_m"])) / ei0, np.nan)
