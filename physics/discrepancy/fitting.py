@@ -283,7 +283,7 @@ def lomo_error(prob: Problem, x0) -> float:
     z2 = []
     for j in range(meas.n_modes):
         prob.mask = np.arange(meas.n_modes) != j
-        res = _solve(prob.residual, x0, np.asarray(lo), np.asarray(hi), max_nfev=200)
+        res = _solve(prob.residual, x0, lo, hi, max_nfev=200)
         prob.mask = np.arange(meas.n_modes) == j
         held = np.concatenate(list(prob.blocks(prob.predict(prob.beam_at(res.x)[0])).values()))
         z2.append(np.mean(held**2))

@@ -50,7 +50,7 @@ class ModalData(EigenvalueParameters):
         signs = _direction_signs(self.dofs)
         if self.eigenvectors is None or np.all(signs > 0):
             return self
-        return replace(self, eigenvectors=self.eigenvectors * signs[:, None], dofs=_positive_labels(self.dofs))
+        return replace(self, eigenvectors=self.eigenvectors * signs[:, None], dofs=_positive_labels(self.dofs, signs))
 
 
 def format_complex(z: complex) -> str:
@@ -108,9 +108,9 @@ def _direction_signs(labels) -> np.ndarray:
     return np.array(out)
 
 
-def _positive_labels(labels) -> tuple:
-    """Labels with a ``-`` sense made ``+`` (``"3:-Y"`` -> ``"3:+Y"``)."""
-    return tuple(str(d).replace(":-", ":+", 1) if s < 0 else str(d) for d, s in zip(labels, _direction_signs(labels)))
+def _positive_labels(labels, signs) -> tuple:
+    """Labels whose sign (:func:`_direction_signs`) is negative made positive (``"3:-Y"`` -> ``"3:+Y"``)."""
+    return tuple(str(d).replace(":-", ":+", 1) if s < 0 else str(d) for d, s in zip(labels, signs))
 
 
 #: Reference label of single-reference FRFs whose file does not name the reference DOF (CSV ``re(2:+Y)``).
@@ -256,8 +256,8 @@ class MeasuredFRF:
         if np.all(rs > 0) and np.all(qs > 0):
             return self
         return replace(self, frf=self.frf * rs[:, None, None] * qs[None, :, None],
-                       response_dofs=_positive_labels(self.response_dofs),
-                       reference_dofs=_positive_labels(self.reference_dofs))
+                       response_dofs=_positive_labels(self.response_dofs, rs),
+                       reference_dofs=_positive_labels(self.reference_dofs, qs))
 
     def reciprocal(self) -> "MeasuredFRF":
         """Responses and references swapped, ``H_ji = H_ij`` (Maxwell-Betti reciprocity of a linear structure).
