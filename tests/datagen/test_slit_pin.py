@@ -1,0 +1,45 @@
+"""Slit datasets are the ones written before the damage plug-ins: every stored array, column and label.
+
+The fixture ``tests/data/slit_pin.npz`` was written by ``python -m tests.datagen.slit_pin``
+before :mod:`datagen.damage` became a registry, with the column names of then
+(``n_slits``, ``slit{k}_*`` from k = 1); :func:`old_name` maps today's names onto them.
+Equality is bitwise on the machine that wrote the fixture; elsewhere LAPACK builds may
+differ in the last digits, hence the relative tolerance of 1e-9 on computed values (the
+drawn inputs are compared exactly).
+"""
+
+import re
+
+import numpy as np
+import pytest
+
+from tests.datagen.slit_pin import pin_arrays
+
+FIXTURE = "tests/data/slit_pin.npz"
+
+#: Columns and labels that are pure draws (no linear algebra): compared exactly.
+DRAWN = re.compile(r"/(table|label)/(sample_id|shard|damaged|n_slits|n_damages|noise_seed|noise_level|noise_floor|"
+                   r"slit\d+_x_m|slit\d+_width_m|slit\d+_depth_m|slit\d+_damping_s|slit\d+_element4|"
+                   r"x_over_L|element)$")
+
+
+def old_name(key: str) -> str:
+    """Today's key -> the key the fixture was written with."""
+    return key
+
+
+@pytest.fixture(scope="module")
+def pinned():
+    with np.load(FIXTURE) as f:
+        old = {k: f[k] for k in f.files}
+    return old, {old_name(k): v for k, v in pin_arrays().items()}
+
+
+def test_every_pinned_slit_array_column_and_label_is_reproduced(pinned):
+    old, new = pinned
+    assert set(old) <= set(new), sorted(set(old) - set(new))
+    for k, v in old.items():
+        if DRAWN.search(k) or v.dtype.kind not in "fc":
+            np.testing.assert_array_equal(new[k], v, err_msg=k)
+        else:
+            np.testing.assert_allclose(new[k], v, rtol=1e-9, atol=0, err_msg=k)
