@@ -24,7 +24,7 @@ import numpy as np
 
 from datagen.config import validate
 from datagen.pipeline import get_setup, simulate_shard
-from datagen.store import ARRAYS, COLUMN_UNITS, DERIVED, DATASET_FORMAT, STATES, finalize, package_version, \
+from datagen.store import ARRAYS, DERIVED, DATASET_FORMAT, STATES, column_units, finalize, package_version, \
     read_manifest, recover, sample_table, shard_arrays, write_manifest, write_shard
 from physics.errors import BeamDamageError, ConfigError
 from physics.io import atomic_write_bytes
@@ -52,7 +52,7 @@ def compute_shard(cfg_json: str, seed: int, index: int, first_id: int, n: int):
     setup = get_setup(cfg)
     with threadpool_limits(1):  # one BLAS thread per process: shards are the parallel unit
         labels, out = simulate_shard(setup, np.random.SeedSequence(seed, spawn_key=(index,)), n)
-    return sample_table(labels, out, index, first_id, setup.length_m), shard_arrays(labels, out)
+    return sample_table(labels, out, index, first_id, setup.length_m, setup.damage), shard_arrays(labels, out)
 
 
 def _init_worker():
@@ -197,7 +197,7 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
     m = {"format": DATASET_FORMAT, "package_version": package_version(), "config": cfg, "seed": seed, "n_requested": n,
          "shard_size": cfg["output"]["shard_size"], "n_shards": len(shard_plan(n, cfg["output"]["shard_size"])),
          "complete": False, "shards": [], "schema": {"arrays": _schema(), "states": list(STATES),
-                                                     "columns": COLUMN_UNITS,
+                                                     "columns": column_units(setup.damage),
                                                      "measured_dofs": ["2:y", "3:y", "4:y", "5:y"],
                                                      "frf_reference_dof": "2:y", "frf_kind": "receptance"},
          "section_layout": vars(setup.layout),

@@ -7,7 +7,7 @@ Guo et al. 2017) so that ``predict_proba`` is calibrated, and a factor on the si
 head's spread so that one standard deviation covers 68 % of the sizes of the validation pairs called damaged.
 
 Targets ``y`` have three columns: damaged (0/1), ``x / L`` of the slit (NaN if
-intact) and its hinge flexibility ``EI / (k_theta L)`` (:func:`learn.features.hinge_flexibility`, 0 if intact).
+intact) and its hinge flexibility ``EI / (k_theta L)`` (:func:`datagen.damage.slit.hinge_flexibility`, 0 if intact).
 """
 
 from __future__ import annotations

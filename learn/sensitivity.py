@@ -1,6 +1,6 @@
 """FE sensitivities of the measured modal data to a slit's hinge flexibility.
 
-A slit of hinge flexibility ``theta = EI / (k_theta L)`` (:func:`learn.features.hinge_flexibility`)
+A slit of hinge flexibility ``theta = EI / (k_theta L)`` (:func:`datagen.damage.slit.hinge_flexibility`)
 inside element ``e`` of length ``l_e`` of the nominal cantilever changes the
 element stiffness, to first order, by ``dK ~ -(EI L theta / l_e) K_e^1``
 (``K_e^1`` the element stiffness for ``EI = 1``, eq. 3.9), so for a

@@ -812,26 +812,8 @@ def _classical_verdict(cl: dict, sens, depth) -> dict:
 
 
 def equivalent_depth(hinge_flexibility: float, preset, width_m: float) -> float | None:
-    """Depth (m) of a slit ``width_m`` wide whose hinge flexibility ``w r / ((1 - r) L)`` is the given one.
-
-    ``r`` is the rigidity loss of the layered section cut to that depth (face/core layout of
-    :mod:`datagen.specimen`, eq. 4.1, default faces 0.5 mm, core 0.1 GPa). None when even a cut to
-    mid-thickness would not be that flexible.
-    """
+    """Depth (m) of a slit ``width_m`` wide of that hinge flexibility (:func:`datagen.damage.slit.equivalent_depth`)."""
     from datagen.config import DEFAULTS
-    from datagen.specimen import SectionLayout, slit_section_ei
-    from learn import features as features_module
-    from physics.properties import beam_preset
+    from datagen.damage.slit import equivalent_depth as slit_depth
 
-    if isinstance(preset, str):
-        p = beam_preset(preset)
-        EI, width, thickness, length = p.EI_Nm2, p.width_m, p.thickness_m, p.length_m
-    else:   # the truth beam a model records (preset name or beam file)
-        EI, width, thickness, length = preset["EI_Nm2"], preset["width_m"], preset["thickness_m"], preset["length_m"]
-    sec = DEFAULTS["section"]
-    lay = SectionLayout.matching(EI, width, thickness, sec["face_thickness_m"], sec["core_modulus_pa"])
-    depths = np.linspace(0.0, 0.999 * thickness / 2, 4000)
-    flexibility = features_module.hinge_flexibility(1.0 - slit_section_ei(lay, depths) / lay.EI, width_m, length)
-    if not np.isfinite(hinge_flexibility) or hinge_flexibility > flexibility[-1]:
-        return None
-    return float(np.interp(hinge_flexibility, flexibility, depths))
+    return slit_depth(hinge_flexibility, preset, width_m, DEFAULTS["section"])

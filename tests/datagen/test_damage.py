@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from datagen.config import merge
-from datagen.damage import clamped_flexibility, element4_index, overlap_energy, slit_corrections, \
+from datagen.damage import element4_index
+from datagen.damage.slit import clamped_flexibility, overlap_energy, slit_corrections, \
     stiffness_from_flexibility
 from datagen.pipeline import get_setup
 from physics.modal import undamped_modes
@@ -159,7 +160,7 @@ def test_frequency_shift_follows_curvature_squared(r):
 def test_timoshenko_curvature_energy_plus_shear_energy_is_the_timoshenko_element():
     """Bending energy of the Timoshenko curvature field plus the (constant) shear energy equals
     physics.effects.timoshenko_stiffness; phi = 0 is the Hermite basis."""
-    from datagen.damage import curvature_basis
+    from datagen.damage.slit import curvature_basis
 
     l, ei, kga = 0.03, 26.7, 2.7e4
     phi = 12 * ei / (kga * l**2)

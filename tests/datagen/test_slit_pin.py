@@ -24,8 +24,9 @@ DRAWN = re.compile(r"/(table|label)/(sample_id|shard|damaged|n_slits|n_damages|n
 
 
 def old_name(key: str) -> str:
-    """Today's key -> the key the fixture was written with."""
-    return key
+    """Today's key -> the key the fixture was written with (``damage{k}_*`` was ``slit{k+1}_*``)."""
+    key = re.sub(r"/(table|label)/n_damages$", r"/\1/n_slits", key)
+    return re.sub(r"/table/damage(\d+)_", lambda m: f"/table/slit{int(m[1]) + 1}_", key)
 
 
 @pytest.fixture(scope="module")

@@ -52,12 +52,12 @@ def test_load_pairs_reads_format_2_in_chunks(tiny):
     np.testing.assert_allclose(pairs.log_frf["measured"][rows], want, atol=1e-4)
     one = load_pairs(tiny / "data", frfs=("measured",), chunk=7, workers=1)
     assert np.array_equal(one.log_frf["measured"], pairs.log_frf["measured"])  # threads change nothing
-    t = ds.table(["damaged", "n_slits", "noise_level", "max_frequency_drop_rel", "slit1_x_m"])
+    t = ds.table(["damaged", "n_damages", "noise_level", "max_frequency_drop_rel", "damage0_x_m"])
     lab = labels(pairs.table, 0.6095)
-    np.testing.assert_array_equal(lab["damaged"], t["n_slits"].to_numpy() > 0)
+    np.testing.assert_array_equal(lab["damaged"], t["n_damages"].to_numpy() > 0)
     assert 0.1 < np.mean(~lab["damaged"]) < 0.4                       # a quarter intact in the training config
     dam = lab["damaged"]
-    np.testing.assert_allclose(lab["x_over_L"][dam], t["slit1_x_m"].to_numpy()[dam] / 0.6095)
+    np.testing.assert_allclose(lab["x_over_L"][dam], t["damage0_x_m"].to_numpy()[dam] / 0.6095)
     assert np.all(lab["max_drop"][dam] > 0) and np.all(np.abs(lab["max_drop"][~dam]) < 1e-9)
     np.testing.assert_array_equal(pairs.table["noise_level"], t["noise_level"])
 
