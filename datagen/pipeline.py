@@ -175,9 +175,7 @@ def build_setup(cfg: dict) -> Setup:
                     if getattr(beam, k) is not None})
     layout = SectionLayout.matching(preset.EI_Nm2, preset.width_m, preset.thickness_m, sec["face_thickness_m"],
                                     sec["core_modulus_pa"])
-    if cfg["damage"]["depth_m"][1] >= preset.thickness_m - sec["face_thickness_m"]:
-        raise ConfigError(f"config key 'damage.depth_m' must stay below the thickness minus the bottom face "
-                          f"({preset.thickness_m - sec['face_thickness_m']:g} m)")
+    damage_model(cfg["damage"]["kind"]).check_beam(cfg["damage"], preset, sec)
     n_el = cfg["mesh"]["truth_elements"]
     fx = point_effects(beam, n_el)
     band = tuple(cfg["specimen"]["root_spring_relative"])

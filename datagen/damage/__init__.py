@@ -5,6 +5,8 @@ A damage model turns its section of the configuration (``damage``, selected by
 
 * ``validate(d, cfg)`` normalises its keys of ``d = cfg["damage"]`` in place
   (raises :class:`physics.errors.ConfigError` naming the key);
+* ``check_beam(d, preset, section)`` refuses damage the specimen cannot hold
+  (e.g. a slit deeper than the beam), once the truth beam is known;
 * ``draw(rng, n, cfg, setup)`` draws ``n`` samples: ``n_damages`` (n,), centres
   ``x_m`` (n, S) and the model's parameters (n, S), NaN where a sample has fewer
   than ``S`` damages;
@@ -52,6 +54,8 @@ class DamageModel(Protocol):
     size_meaning: str
 
     def validate(self, d: dict, cfg: dict) -> None: ...
+
+    def check_beam(self, d: dict, preset, section: dict) -> None: ...
 
     def draw(self, rng: np.random.Generator, n: int, cfg: dict, setup) -> dict: ...
 

@@ -86,6 +86,9 @@ class MassChange:
         d["n_masses"] = _range(d, "n_masses", 0, 8, integer=True)
         d["mass_ratio"] = _range(d, "mass_ratio", -0.5, 1.0)
 
+    def check_beam(self, d: dict, preset, section: dict) -> None:
+        """Any beam holds a point mass."""
+
     def draw(self, rng: np.random.Generator, n: int, cfg: dict, setup) -> dict:
         """Counts, positions and signed masses of ``n`` samples (mass from the specimen's nominal beam mass)."""
         d = cfg["damage"]

@@ -351,6 +351,11 @@ class Slit:
                               f"{MAX_LOSS_FACTOR:g} up to the top of measurement.band_rad_s ({top_rad_s:g} rad/s): "
                               f"beta <= {MAX_LOSS_FACTOR / top_rad_s:.3g} s, got {d['slit_damping_s']!r}")
 
+    def check_beam(self, d: dict, preset, section: dict) -> None:
+        if d["depth_m"][1] >= preset.thickness_m - section["face_thickness_m"]:
+            raise ConfigError(f"config key 'damage.depth_m' must stay below the thickness minus the bottom face "
+                              f"({preset.thickness_m - section['face_thickness_m']:g} m)")
+
     def draw(self, rng: np.random.Generator, n: int, cfg: dict, setup) -> dict:
         sl = draw_slits(rng, n, cfg, setup.length_m, setup.layout)
         ei0 = setup.layout.EI

@@ -1,0 +1,81 @@
+"""Damage kind "mass_change" (datagen/damage/mass_change.py): a signed point mass in the current state."""
+
+import numpy as np
+import pytest
+
+from datagen.config import load_config, merge
+from datagen.dataset import Dataset
+from datagen.generation import generate
+from learn.features import labels
+from physics.effects import point_mass_matrix
+from physics.errors import ConfigError
+from physics.fem import beam_model
+from physics.modal import undamped_modes
+from physics.properties import beam_preset
+
+#: Rigid clamp, Euler-Bernoulli, no test-day changes: the current state differs by the point mass alone.
+QUIET = {"specimen": {"root_spring_relative": []},
+         "damage": {"kind": "mass_change", "n_masses": [1, 1], "mass_ratio": [-0.01, 0.01]},
+         "measurement": {"lines": 64}, "output": {"shard_size": 6}}
+
+
+def _cantilever_shape_squared(x_m, length_m, r):
+    """``W_r(x)^2`` of the uniform cantilever's mode r (0-based), normalised to ``int_0^L W^2 dx = L``."""
+    bl = np.array([1.8751040687, 4.6940911330, 7.8547574382, 10.9955407349])[r]
+    s = bl * np.asarray(x_m) / length_m
+    sigma = (np.cosh(bl) + np.cos(bl)) / (np.sinh(bl) + np.sin(bl))
+    return (np.cosh(s) - np.cos(s) - sigma * (np.sinh(s) - np.sin(s))) ** 2
+
+
+@pytest.fixture(scope="module")
+def masses(tmp_path_factory):
+    root = tmp_path_factory.mktemp("mass") / "data"
+    generate(root, merge(QUIET), n=12, seed=3, progress=False)
+    ds = Dataset(root)
+    return ds.table(), ds.manifest
+
+
+def test_frequency_changes_are_those_of_the_fe_beam_with_the_point_mass(masses):
+    """Truth shifts against an independent solve: physics.fem's 20-element beam plus
+    physics.effects.point_mass_matrix at x, and to first order ``df/f = -(1/2) (m_k / m L) W_r(x)^2``."""
+    t, manifest = masses
+    L = beam_preset("beam5").length_m
+    assert manifest["config"]["damage"]["kind"] == "mass_change"
+    n_el = manifest["config"]["mesh"]["truth_elements"]
+    for _, row in t.iterrows():
+        beam = beam_model(n_el, L, row.ei_Nm2, row.m_per_length_kg_m)
+        assert beam.dofs[:2] == ("2:y", "2:rz")     # the clamp removed node 1
+        dM = point_mass_matrix(beam.node_x, row.damage0_mass_kg, row.damage0_x_m)[2:, 2:]
+        w0 = undamped_modes(beam.M, beam.K)[0][:4]
+        w1 = undamped_modes(beam.M + dM, beam.K)[0][:4]
+        stored = np.array([row[f"df{r + 1}_rel"] for r in range(4)])
+        np.testing.assert_allclose(stored, w1 / w0 - 1, rtol=1e-4, atol=1e-8)
+        first_order = -0.5 * row.damage0_size * _cantilever_shape_squared(row.damage0_x_m, L, np.arange(4))
+        np.testing.assert_allclose(stored, first_order, rtol=0.05, atol=2e-5)
+        # a mass added lowers every frequency, a mass lost raises it
+        assert np.all(np.sign(stored) == -np.sign(row.damage0_mass_kg)) or np.max(np.abs(stored)) < 1e-7
+
+
+def test_size_is_the_signed_mass_ratio_and_labels_read_it(masses):
+    t, _ = masses
+    L = beam_preset("beam5").length_m
+    np.testing.assert_allclose(t.damage0_size, t.damage0_mass_kg / (t.m_per_length_kg_m * L), rtol=1e-15)
+    assert t.damage0_size.between(-0.0101, 0.0101).all() and (t.damage0_size < 0).any() and (t.damage0_size > 0).any()
+    lab = labels(t, L)
+    np.testing.assert_array_equal(lab["hinge_flexibility"], t.damage0_size)
+    np.testing.assert_allclose(lab["x_over_L"], t.damage0_x_m / L)
+    assert "damage0_width_m" not in t and "n_slits" not in t
+
+
+def test_the_damage_section_takes_the_keys_of_its_kind():
+    cfg = merge({"damage": {"kind": "mass_change"}})
+    assert cfg["damage"] == {"kind": "mass_change", "intact_fraction": 0.0, "position_fraction": [0.03, 0.97],
+                             "n_masses": [1, 1], "mass_ratio": [-0.02, 0.02]}
+    training = merge({"damage": {"kind": "mass_change"}}, base=load_config("training"))
+    assert training["damage"]["kind"] == "mass_change" and "n_slits" not in training["damage"]
+    with pytest.raises(ConfigError, match="'damage.n_slits'"):
+        merge({"damage": {"kind": "mass_change", "n_slits": [1, 1]}})
+    with pytest.raises(ConfigError, match="'damage.kind' must be one of \\['mass_change', 'slit'\\]"):
+        merge({"damage": {"kind": "debond"}})
+    with pytest.raises(ConfigError, match="'damage.mass_ratio'"):
+        merge({"damage": {"kind": "mass_change", "mass_ratio": [0.1, -0.1]}})
