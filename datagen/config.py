@@ -48,7 +48,7 @@ DEFAULTS: dict = {
         "root_spring_change": [0.0, 0.0],            # relative root-spring change on re-clamping (uniform)
         "shear_flexibility": [0.0, 0.0],  # EI / (kGA L^2) of the specimen (uniform; 0: Euler-Bernoulli elements)
     },
-    "damage": damage_defaults(DEFAULT_KIND),   # kind "slit": datagen/damage/slit.py; see datagen.damage
+    "damage": damage_defaults(DEFAULT_KIND),   # keys of the default kind; another damage.kind has its own
     "measurement": {
         "modal_noise": "fixed",        # "fixed": the three stds below; "calibrated": per-mode coefficients times the
                                        # sample's FRF noise level (configs/modal_noise.json,
@@ -400,7 +400,7 @@ def load_config(name_or_path=None, *, preset: str | None = None) -> dict:
     """A named config (:func:`named_configs`) or a TOML file over the defaults; ``preset`` overrides the file's.
 
     A TOML file may start from a named config with a top-level ``base = "training"``
-    and override any of its keys (e.g. robustness sets: more slits, more noise).
+    and override any of its keys (e.g. robustness sets: more damages, more noise).
     """
     over = {} if name_or_path is None else _overrides(name_or_path)
     if preset is not None:

@@ -18,7 +18,7 @@ Truth model
 Clamped-free Euler-Bernoulli beam of ``mesh.truth_elements`` equal elements
 (optionally with a root rotational spring), specimen ``EI`` and mass, the
 damage of ``damage.kind`` as element corrections ``(dM, dK, dC)`` of the current
-state (:mod:`datagen.damage`; slits: flexibility-exact elements); a beam file
+state (:mod:`datagen.damage`); a beam file
 (``generate --beam FILE``) adds its effects as described in
 :mod:`datagen.truth_beam`. Damping:
 ``C = C_0 + Delta C_damage`` with the specimen's modal damping
@@ -253,7 +253,7 @@ class BatchInputs:
     Specimen: ``EI_Nm2``, ``mass_per_length_kg_m``, ``damping_scale`` (-),
     ``root_spring_Nm_rad`` (``inf`` for a rigid clamp) each (B,). Damage: ``n_damages`` (B,), centres
     ``x_m`` (B, S) NaN-padded and ``damage``, the parameters of the damage model (name -> (B, S),
-    e.g. a slit's ``width_m``, ``depth_m``, ``beta_s``, ``ei_loss``). Between the test days (B,):
+    its ``draw`` returns). Between the test days (B,):
     ``temperature_stiffness_change`` (relative EI change of the current state)
     and ``root_spring_change`` (relative change of the root spring). Modal
     measurement noise (standard normal, per state): ``n_freq``, ``n_zeta``
@@ -334,8 +334,7 @@ def truth_matrices(setup: Setup, inp: BatchInputs):
 
     The current state's stiffness is ``(1 + t) (EI K_0 + dK)`` plus the root
     spring ``k_r (1 + c)`` and its mass ``M + dM``, with ``(dM, dK, dC)`` the
-    element corrections of the damage model (:mod:`datagen.damage`; slits:
-    flexibility-exact, :func:`datagen.damage.slit.slit_corrections`), ``t`` the
+    element corrections of the damage model (:mod:`datagen.damage`), ``t`` the
     temperature stiffness change and ``c`` the re-clamping change. ``M = m M_0``
     plus a beam file's point mass.
 

@@ -19,6 +19,9 @@ A damage model turns its section of the configuration (``damage``, selected by
 * ``columns(...)`` (same arguments) gives the model's own stored columns:
   per sample ``{name: (B,)}`` and per damage ``{suffix: (B, S)}`` stored as
   ``damage{k}_{suffix}``; ``sample_units`` and ``units`` give their units;
+* ``perturbs`` ("stiffness" or "mass") says which element matrix a unit size
+  changes to first order, for the classical methods' sensitivities
+  (:func:`learn.sensitivity.beam_sensitivity`);
 * ``describe(x_m, size, preset)`` is the verdict's prose for a damage of that
   size at ``x_m`` on a beam (``preset``: the specimen's fields).
 
@@ -52,6 +55,7 @@ class DamageModel(Protocol):
     units: dict
     sample_units: dict
     size_meaning: str
+    perturbs: str
 
     def validate(self, d: dict, cfg: dict) -> None: ...
 

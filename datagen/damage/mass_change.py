@@ -81,6 +81,7 @@ class MassChange:
     units = {"mass_kg": "kg (signed: > 0 added, < 0 lost)"}
     sample_units: dict = {}
     size_meaning = "signed mass ratio m / (m_per_length L): > 0 mass added, < 0 mass lost"
+    perturbs = "mass"
 
     def validate(self, d: dict, cfg: dict) -> None:
         d["n_masses"] = _range(d, "n_masses", 0, 8, integer=True)

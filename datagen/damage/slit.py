@@ -338,6 +338,7 @@ class Slit:
              "damping_s": "s"}
     sample_units = {"stiffness_loss_Nm3": "N m^3 (sum over slits of dEI * width)"}
     size_meaning = "hinge flexibility EI / (k_theta L) = w r / ((1 - r) L)"
+    perturbs = "stiffness"
 
     def validate(self, d: dict, cfg: dict) -> None:
         d["n_slits"] = _range(d, "n_slits", lo=0, hi=8, integer=True)

@@ -79,3 +79,19 @@ def test_the_damage_section_takes_the_keys_of_its_kind():
         merge({"damage": {"kind": "debond"}})
     with pytest.raises(ConfigError, match="'damage.mass_ratio'"):
         merge({"damage": {"kind": "mass_change", "mass_ratio": [0.1, -0.1]}})
+
+
+def test_mass_sensitivities_are_the_displacement_squared_of_the_cantilever_modes():
+    """beam_sensitivity(kind="mass_change") on a rigid clamp: ``d ln f_r / d mu = -(1/2) W_r(x)^2`` to first
+    order, averaged over each element (the mass of a unit size spreads over it; 5-point Gauss)."""
+    from learn.sensitivity import beam_sensitivity
+
+    sens = beam_sensitivity("beam5", None, kind="mass_change")
+    L, E = sens.length_m, sens.n_elements
+    g, wg = np.polynomial.legendre.leggauss(5)
+    x = (np.arange(E)[:, None] + 0.5 + g / 2) * L / E                      # (E, 5)
+    expected = -0.5 * np.stack([_cantilever_shape_squared(x, L, r) @ wg / 2 for r in range(4)])
+    np.testing.assert_allclose(sens.frequency, expected, rtol=1e-3, atol=1e-5)
+    assert np.all(sens.frequency <= 0) and -2.0 < sens.frequency[0, -1] < -1.9   # W_1(L)^2 = 4 at the tip itself
+    slit = beam_sensitivity("beam5", None)
+    assert np.all(slit.frequency[0, :-1] < slit.frequency[0, 1:])   # a slit counts most at the root (curvature)
