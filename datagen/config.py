@@ -157,11 +157,11 @@ def validate(cfg: dict) -> dict:
     _check_beam(cfg)
     _check_specimen(cfg["specimen"])
     calibrated = _check_measurement(cfg["measurement"])
-    _check_damage(cfg)
     if calibrated:
         _check_calibrated_noise(cfg["measurement"])
     _check_updating(cfg["updating"])
     _check_solver(cfg["solver"], cfg["mesh"]["truth_elements"])
+    _check_damage(cfg)
     _check_output(cfg["output"])
     return cfg
 

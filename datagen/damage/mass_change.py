@@ -16,6 +16,15 @@ Size
 ----
 The size is the signed mass ratio ``m_k / (m L)``, the change over the
 specimen's beam mass (mass per length ``m`` times length ``L``).
+
+Mass lost
+---------
+Taking a point mass ``m_k < 0`` off the consistent mass matrix leaves it
+positive definite only while ``|m_k| < 1 / (N M^-1 N^T)``, smallest at the tip:
+``0.0722 m l_e`` for an element of length ``l_e`` (the same on any mesh). A
+mass lost is therefore bounded by half of that, :data:`MAX_LOST_ELEMENT_FRACTION`
+of one truth element's mass (``mass_ratio >= -0.0018`` on the default 20
+elements); larger losses are losses of section, not point masses.
 """
 
 from __future__ import annotations
@@ -24,7 +33,10 @@ import numpy as np
 
 from physics.errors import ConfigError
 
-__all__ = ["MassChange", "point_mass_corrections"]
+__all__ = ["MAX_LOST_ELEMENT_FRACTION", "MassChange", "point_mass_corrections"]
+
+#: Largest point mass lost, as a fraction of one truth element's mass (half of what keeps M positive definite).
+MAX_LOST_ELEMENT_FRACTION = 0.036
 
 
 def point_mass_corrections(x_m, mass_kg, length_m, n_elements):
@@ -76,7 +88,7 @@ class MassChange:
     kind = "mass_change"
     defaults = {
         "n_masses": [1, 1],
-        "mass_ratio": [-0.02, 0.02],     # signed mass / beam mass: lost (< 0) or added (> 0)
+        "mass_ratio": [-0.0015, 0.015],  # signed mass / beam mass: lost (< 0) or added (> 0)
     }
     units = {"mass_kg": "kg (signed: > 0 added, < 0 lost)"}
     sample_units: dict = {}
@@ -85,7 +97,12 @@ class MassChange:
 
     def validate(self, d: dict, cfg: dict) -> None:
         d["n_masses"] = _range(d, "n_masses", 0, 8, integer=True)
-        d["mass_ratio"] = _range(d, "mass_ratio", -0.5, 1.0)
+        d["mass_ratio"] = _range(d, "mass_ratio", -1.0, 1.0)
+        lost = MAX_LOST_ELEMENT_FRACTION / cfg["mesh"]["truth_elements"]
+        if d["mass_ratio"][0] < -lost:
+            raise ConfigError(f"config key 'damage.mass_ratio' must be >= {-lost:.3g}: a point mass lost may be at "
+                              f"most {MAX_LOST_ELEMENT_FRACTION:.1%} of one of the {cfg['mesh']['truth_elements']} "
+                              f"truth elements' mass (the mass matrix stays positive definite), got {d['mass_ratio']!r}")
 
     def check_beam(self, d: dict, preset, section: dict) -> None:
         """Any beam holds a point mass."""
