@@ -100,9 +100,10 @@ class MassChange:
         d["mass_ratio"] = _range(d, "mass_ratio", -1.0, 1.0)
         lost = MAX_LOST_ELEMENT_FRACTION / cfg["mesh"]["truth_elements"]
         if d["mass_ratio"][0] < -lost:
+            n_el = cfg["mesh"]["truth_elements"]
             raise ConfigError(f"config key 'damage.mass_ratio' must be >= {-lost:.3g}: a point mass lost may be at "
-                              f"most {MAX_LOST_ELEMENT_FRACTION:.1%} of one of the {cfg['mesh']['truth_elements']} "
-                              f"truth elements' mass (the mass matrix stays positive definite), got {d['mass_ratio']!r}")
+                              f"most {MAX_LOST_ELEMENT_FRACTION:.1%} of one of the {n_el} truth elements' mass (the "
+                              f"mass matrix stays positive definite), got {d['mass_ratio']!r}")
 
     def check_beam(self, d: dict, preset, section: dict) -> None:
         """Any beam holds a point mass."""
