@@ -179,12 +179,15 @@ def network_output(est: DamageClassifier, X, sens, name="network") -> tuple[Meth
     return out, d
 
 
-def sensitivity_of(beam: BeamSpec, config_root_spring=None, truth_beam: dict | None = None):
-    """FE sensitivities of the truth beam a dataset or model records (its preset when it records none)."""
+def sensitivity_of(beam: BeamSpec, config_root_spring=None, truth_beam: dict | None = None,
+                   generator_config: dict | None = None):
+    """FE sensitivities of the truth beam a dataset or model records (its preset when it records none), to the
+    damage kind of its generator config (slits when it records none)."""
+    kind = ((generator_config or {}).get("damage") or {}).get("kind", "slit")
     if truth_beam and "EI_Nm2" in truth_beam:
         key = (truth_beam["length_m"], truth_beam["EI_Nm2"], truth_beam["mass_per_length_kg_m"])
-        return beam_sensitivity(key, config_root_spring)
-    return beam_sensitivity(beam.name, config_root_spring)
+        return beam_sensitivity(key, config_root_spring, kind=kind)
+    return beam_sensitivity(beam.name, config_root_spring, kind=kind)
 
 
 def _nominal_root_spring(source: list):
@@ -226,7 +229,8 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
         "them will call such changes damage; generate with --config training"]
     tr, _, te = split_by_specimen(pairs.groups, (1 - test_fraction, 0.0, test_fraction), seed=seed)
     load_s = time.perf_counter() - t0
-    sens = sensitivity_of(pairs.beam, _nominal_root_spring(pairs.source), pairs.source[0].get("truth_beam"))
+    sens = sensitivity_of(pairs.beam, _nominal_root_spring(pairs.source), pairs.source[0].get("truth_beam"),
+                          pairs.source[0].get("config"))
     networks, outputs, fit_s = {}, [], {}
     for r in routes:
         X = features(pairs, r)
@@ -278,7 +282,8 @@ def evaluate(model: TrainedModel, data, out_dir=None, *, extra_outputs=None, pro
     pairs = load_pairs(data, frfs=dataset_frfs(routes))
     model.check_beam(pairs.beam, f"dataset {pairs.source[0]['path']}")
     _, truth = targets(pairs)
-    sens = sensitivity_of(model.beam, model.config.get("root_spring_relative"), model.config.get("truth_beam"))
+    sens = sensitivity_of(model.beam, model.config.get("root_spring_relative"), model.config.get("truth_beam"),
+                          model.config.get("generator_config"))
     from tqdm.auto import tqdm
 
     outs = []
@@ -664,7 +669,8 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     """
     names = list(names) if names else ["baseline"] + [f"measured {k + 1}" for k in range(len(currents))]
     warnings: list[str] = []
-    sens = sensitivity_of(model.beam, model.config.get("root_spring_relative"), model.config.get("truth_beam"))
+    sens = sensitivity_of(model.beam, model.config.get("root_spring_relative"), model.config.get("truth_beam"),
+                          model.config.get("generator_config"))
     base_md, cur_md, identified, found = _modal_inputs(model, baseline, currents, names, sens)
     pairs = None
     if base_md is not None:
