@@ -1,6 +1,6 @@
 """Slit datasets are the ones written before the damage plug-ins: every stored array, column and label.
 
-The fixture ``tests/data/slit_pin.npz`` was written by ``python -m tests.datagen.slit_pin``
+The fixture ``tests/data/slit_pin.npz`` was written by ``tests/slit_pin.py``
 before :mod:`datagen.damage` became a registry, with the column names of then
 (``n_slits``, ``slit{k}_*`` from k = 1); :func:`old_name` maps today's names onto them.
 Equality is bitwise on the machine that wrote the fixture; elsewhere LAPACK builds may
@@ -13,7 +13,7 @@ import re
 import numpy as np
 import pytest
 
-from tests.datagen.slit_pin import pin_arrays
+from slit_pin import pin_arrays
 
 FIXTURE = "tests/data/slit_pin.npz"
 

@@ -1,6 +1,6 @@
 """Slit datasets of the default and ``training`` configs, as plain arrays (the pin of ``test_slit_pin.py``).
 
-``python -m tests.datagen.slit_pin OUT.npz`` writes them (the committed fixture
+``PYTHONPATH=tests python -m slit_pin OUT.npz`` writes them (the committed fixture
 ``tests/data/slit_pin.npz``); ``--sha256`` prints one checksum per array instead,
 for a bitwise comparison between two versions of the code.
 
