@@ -44,3 +44,28 @@ def test_every_pinned_slit_array_column_and_label_is_reproduced(pinned):
             np.testing.assert_array_equal(new[k], v, err_msg=k)
         else:
             np.testing.assert_allclose(new[k], v, rtol=1e-9, atol=0, err_msg=k)
+
+
+def test_a_dataset_written_before_the_damage_kinds_is_refused_in_one_line(tmp_path, capsys):
+    """Its manifest's config has no damage.kind (and its table slit{k}_* columns): readers and commands refuse it
+    naming manifest.json and the new column names, exit 2, no traceback."""
+    import json
+
+    from datagen.config import merge
+    from datagen.dataset import Dataset
+    from datagen.generation import generate
+    from experiments.cli import main
+    from physics.errors import FileFormatError
+
+    root = tmp_path / "old"
+    generate(root, merge({"measurement": {"lines": 16}}), n=2, seed=0, progress=False)
+    m = json.loads((root / "manifest.json").read_text())
+    del m["config"]["damage"]["kind"]
+    (root / "manifest.json").write_text(json.dumps(m))
+    with pytest.raises(FileFormatError, match=r"manifest.json: written before the damage kinds \(columns n_slits, "
+                                              r"slit\{k\}_\*; now n_damages, damage\{k\}_\*"):
+        Dataset(root)
+    for argv in (["inspect", str(root)], ["train", "--data", str(root), "--out", str(tmp_path / "m")]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err and "regenerate it with `beam-damage generate`" in err
