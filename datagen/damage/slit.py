@@ -3,7 +3,10 @@
 A slit ``k`` has a centre ``x_k`` (m, ``0 < x < L``), an effective width
 ``w_k`` (m) and a depth ``d_k`` (m) into the top face sheet. Over
 ``[x_k - w_k/2, x_k + w_k/2]`` (clipped to the beam) the rigidity drops from
-``EI`` to ``EI_d = EI * r(d_k)`` (:func:`datagen.specimen.slit_section_ei`).
+``EI`` to ``EI_d = EI * r(d_k)`` (:func:`slit_section_ei`: the top ``d_k`` of the
+layered section of :mod:`datagen.specimen` removed; the section is then no longer
+symmetric, so its rigidity is computed about the shifted neutral axis, which
+reduces to eq. 4.1 for ``d = 0``).
 
 Flexibility-exact elements
 --------------------------
@@ -50,16 +53,57 @@ from __future__ import annotations
 
 import numpy as np
 
-from datagen.specimen import SectionLayout, depth_for_ei_loss, slit_section_ei
+from datagen.specimen import SectionLayout
 from physics.errors import ConfigError
-from physics.properties import beam_preset
+from physics.properties import beam_preset, section_ei
 
-__all__ = ["MAX_LOSS_FACTOR", "Slit", "clamped_flexibility", "curvature_basis", "draw_slits", "equivalent_depth",
-           "expand_tip_stiffness", "hinge_flexibility", "overlap_energy", "slit_corrections", "slit_element_weights",
-           "stiffness_from_flexibility"]
+__all__ = ["MAX_LOSS_FACTOR", "Slit", "clamped_flexibility", "curvature_basis", "depth_for_ei_loss", "draw_slits",
+           "equivalent_depth", "expand_tip_stiffness", "hinge_flexibility", "overlap_energy", "slit_corrections",
+           "slit_element_weights", "slit_section_ei", "stiffness_from_flexibility"]
 
 #: Largest loss factor ``beta * omega`` of a slit's stiffness-proportional damping over the measurement band.
 MAX_LOSS_FACTOR = 1.0
+
+
+def slit_section_ei(layout: SectionLayout, depth_m):
+    """Rigidity of the section with the top ``depth_m`` removed (about its own neutral axis).
+
+    Parameters
+    ----------
+    layout : SectionLayout
+    depth_m : float or ndarray, shape (...)
+        Slit depth(s) from the top surface (m), ``0 <= d < h/2``.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        ``EI`` (N m^2); equals ``layout.EI`` for ``d = 0``.
+    """
+    d = np.asarray(depth_m, dtype=float)[..., None]
+    h, tf = layout.thickness_m, layout.face_thickness_m
+    top = h - d                                            # the section is cut at h - d
+    z_bot = np.minimum(np.array([0.0, tf, h - tf]), top)  # layers bottom face / core / top face
+    z_top = np.minimum(np.array([tf, h - tf, h]), top)
+    E = np.array([layout.face_modulus_pa, layout.core_modulus_pa, layout.face_modulus_pa])
+    return section_ei(layout.width_m, z_bot, z_top, E)
+
+
+def depth_for_ei_loss(layout: SectionLayout, ei_loss):
+    """Slit depth (m) whose section keeps ``1 - ei_loss`` of the rigidity (inverse of :func:`slit_section_ei`).
+
+    Depths range from 0 to the top of the bottom face sheet (cut through the
+    top face and the core); the loss grows monotonically with depth and is
+    inverted by interpolation on a fine table (relative error in the loss
+    below 1e-6; the stored loss is recomputed from the depth).
+    """
+    h, tf = layout.thickness_m, layout.face_thickness_m
+    grid = np.linspace(0.0, h - tf, 20001)
+    loss = 1.0 - slit_section_ei(layout, grid) / layout.EI
+    want = np.asarray(ei_loss, float)
+    if np.nanmax(want, initial=0.0) > loss[-1]:
+        raise ConfigError(f"config key 'damage.ei_loss' must stay below {loss[-1]:.4f}, the loss of a cut "
+                          f"through the top face and the core")
+    return np.interp(want, loss, grid)
 
 
 def curvature_basis(element_length, shear_phi=0.0):
@@ -230,7 +274,7 @@ def draw_slits(rng: np.random.Generator, n: int, cfg: dict, length_m: float, lay
     A fraction ``damage.intact_fraction`` of the samples gets no slit. The
     slit's depth is drawn from ``damage.depth_m``, or, when ``damage.ei_loss``
     is set, the relative EI loss of the slit section is drawn and the depth
-    follows from the layered section (:func:`datagen.specimen.depth_for_ei_loss`).
+    follows from the layered section (:func:`depth_for_ei_loss`).
 
     Returns
     -------

@@ -9,7 +9,8 @@ from datagen.damage.slit import clamped_flexibility, overlap_energy, slit_correc
     stiffness_from_flexibility
 from datagen.pipeline import get_setup
 from physics.modal import undamped_modes
-from datagen.specimen import SectionLayout, slit_section_ei
+from datagen.damage.slit import slit_section_ei
+from datagen.specimen import SectionLayout
 from physics.properties import beam_preset
 from physics.errors import ConfigError
 from physics.effects import timoshenko_stiffness
