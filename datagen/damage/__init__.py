@@ -22,8 +22,9 @@ A damage model turns its section of the configuration (``damage``, selected by
 * ``perturbs`` ("stiffness" or "mass") says which element matrix a unit size
   changes to first order, for the classical methods' sensitivities
   (:func:`learn.sensitivity.beam_sensitivity`);
-* ``describe(x_m, size, preset)`` is the verdict's prose for a damage of that
-  size at ``x_m`` on a beam (``preset``: the specimen's fields).
+* ``describe(x_m, size, preset, section=None)`` is the verdict's prose for a
+  damage of that size at ``x_m`` on a beam (``preset``: a preset name or the
+  truth beam's fields; ``section``: the config's section keys).
 
 Generic keys of the section: ``kind``, ``intact_fraction`` (share of samples
 without damage) and ``position_fraction`` (``x / L`` range of the centres);
@@ -70,7 +71,7 @@ class DamageModel(Protocol):
 
     def columns(self, params: dict, x_m, ei_Nm2, mass_per_length_kg_m, length_m: float) -> tuple[dict, dict]: ...
 
-    def describe(self, x_m: float, size: float, preset) -> str: ...
+    def describe(self, x_m: float, size: float, preset, section: dict | None = None) -> str: ...
 
 
 #: The damage kinds ``damage.kind`` may name.

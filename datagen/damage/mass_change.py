@@ -131,6 +131,6 @@ class MassChange:
     def columns(self, params, x_m, ei_Nm2, mass_per_length_kg_m, length_m):
         return {}, {"mass_kg": params["mass_kg"]}
 
-    def describe(self, x_m: float, size: float, preset, **_) -> str:
+    def describe(self, x_m: float, size: float, preset, section: dict | None = None) -> str:
         """``"a mass added at x = 0.300 m of 1.2 % of the beam's mass"`` (or lost, for a negative size)."""
         return f"a mass {'added' if size >= 0 else 'lost'} at x = {x_m:.3f} m of {abs(size):.2%} of the beam's mass"

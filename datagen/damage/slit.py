@@ -425,11 +425,16 @@ class Slit:
                 {"width_m": params["width_m"], "depth_m": params["depth_m"], "ei_loss": params["ei_loss"],
                  "stiffness_loss_Nm3": loss, "damping_s": params["beta_s"]})
 
-    def describe(self, x_m: float, size: float, preset, width_m: float = 0.0055, section: dict | None = None) -> str:
+    #: Width (m) of the depth example of :meth:`describe`: the middle of the training widths.
+    reference_width_m = 0.0055
+
+    def describe(self, x_m: float, size: float, preset, section: dict | None = None) -> str:
         """``"a slit at x = 0.152 m of hinge flexibility EI/(k L) = 0.0123 (e.g. 0.25 mm deep over 5.5 mm)"``.
 
-        The depth example (:func:`equivalent_depth`) needs the config's ``section``; without it it is left out.
+        The depth example (:func:`equivalent_depth`, :attr:`reference_width_m` wide) needs the config's
+        ``section``; without it, or when no cut is that flexible, it is left out.
         """
+        width_m = self.reference_width_m
         depth = None if section is None else equivalent_depth(size, preset, width_m, section)
         eg = "" if depth is None else f" (e.g. {depth * 1000:.2f} mm deep over {width_m * 1000:.1f} mm)"
         return f"a slit at x = {x_m:.3f} m of hinge flexibility EI/(k L) = {size:.3g}{eg}"
