@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from datagen.checks import value_range
 from physics.errors import ConfigError
 
 __all__ = ["MAX_LOST_ELEMENT_FRACTION", "MassChange", "point_mass_corrections"]
@@ -65,18 +66,6 @@ def point_mass_corrections(x_m, mass_kg, length_m, n_elements):
     return np.einsum("bs,bse,bsi,bsj->beij", m, onehot, N, N)
 
 
-def _range(d, key, lo, hi, integer=False):
-    v = d[key]
-    ok = isinstance(v, list) and len(v) == 2 and all(isinstance(x, (int, float)) and not isinstance(x, bool)
-                                                     for x in v)
-    if not ok or not (np.isfinite(v[0]) and np.isfinite(v[1])) or v[0] > v[1] or v[0] < lo or v[1] > hi \
-            or integer and not all(float(x).is_integer() for x in v):
-        kind = "integers" if integer else "numbers"
-        raise ConfigError(f"config key 'damage.{key}' must be a range [low, high] of {kind} within [{lo}, {hi}], "
-                          f"got {v!r}")
-    return [int(v[0]), int(v[1])] if integer else [float(v[0]), float(v[1])]
-
-
 class MassChange:
     """Damage kind ``"mass_change"``: signed point masses (see the module docstring).
 
@@ -96,8 +85,8 @@ class MassChange:
     perturbs = "mass"
 
     def validate(self, d: dict, cfg: dict) -> None:
-        d["n_masses"] = _range(d, "n_masses", 0, 8, integer=True)
-        d["mass_ratio"] = _range(d, "mass_ratio", -1.0, 1.0)
+        d["n_masses"] = value_range("damage.n_masses", d["n_masses"], lo=0, hi=8, integer=True)
+        d["mass_ratio"] = value_range("damage.mass_ratio", d["mass_ratio"], lo=-1.0, hi=1.0)
         lost = MAX_LOST_ELEMENT_FRACTION / cfg["mesh"]["truth_elements"]
         if d["mass_ratio"][0] < -lost:
             n_el = cfg["mesh"]["truth_elements"]

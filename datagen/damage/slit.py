@@ -53,6 +53,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from datagen.checks import value_range
 from datagen.specimen import SectionLayout
 from physics.errors import ConfigError
 from physics.properties import beam_preset, section_ei
@@ -344,24 +345,6 @@ def equivalent_depth(flexibility: float, preset, width_m: float, section: dict) 
     return float(np.interp(flexibility, curve, depths))
 
 
-def _range(d, key, lo=None, hi=None, integer=False, allow_empty=False):
-    """``d[key]`` as a range ``[low, high]`` within ``[lo, hi]`` (ConfigError naming ``damage.key``)."""
-    v = d[key]
-    if allow_empty and isinstance(v, list) and len(v) == 0:
-        return []
-    ok = isinstance(v, list) and len(v) == 2 and all(isinstance(x, (int, float)) and not isinstance(x, bool)
-                                                     for x in v)
-    if not ok:
-        raise ConfigError(f"config key 'damage.{key}' must be a range [low, high] of two numbers, got {v!r}")
-    if integer and not all(float(x).is_integer() for x in v):
-        raise ConfigError(f"config key 'damage.{key}' must hold integers, got {v!r}")
-    if not (np.isfinite(v[0]) and np.isfinite(v[1])) or v[0] > v[1]:
-        raise ConfigError(f"config key 'damage.{key}' must satisfy low <= high (finite), got {v!r}")
-    if lo is not None and v[0] < lo or hi is not None and v[1] > hi:
-        raise ConfigError(f"config key 'damage.{key}' must lie within [{lo}, {hi}], got {v!r}")
-    return [int(v[0]), int(v[1])] if integer else [float(v[0]), float(v[1])]
-
-
 class Slit:
     """Damage kind ``"slit"``: a cut into the top face sheet (see the module docstring).
 
@@ -385,11 +368,11 @@ class Slit:
     perturbs = "stiffness"
 
     def validate(self, d: dict, cfg: dict) -> None:
-        d["n_slits"] = _range(d, "n_slits", lo=0, hi=8, integer=True)
-        d["width_m"] = _range(d, "width_m", lo=1e-6, hi=0.1)
-        d["depth_m"] = _range(d, "depth_m", lo=0.0)
-        d["ei_loss"] = _range(d, "ei_loss", lo=0.0, hi=0.9999, allow_empty=True)
-        d["slit_damping_s"] = _range(d, "slit_damping_s", lo=0.0, hi=1.0)
+        d["n_slits"] = value_range("damage.n_slits", d["n_slits"], lo=0, hi=8, integer=True)
+        d["width_m"] = value_range("damage.width_m", d["width_m"], lo=1e-6, hi=0.1)
+        d["depth_m"] = value_range("damage.depth_m", d["depth_m"], lo=0.0)
+        d["ei_loss"] = value_range("damage.ei_loss", d["ei_loss"], lo=0.0, hi=0.9999, allow_empty=True)
+        d["slit_damping_s"] = value_range("damage.slit_damping_s", d["slit_damping_s"], lo=0.0, hi=1.0)
         top_rad_s = cfg["measurement"]["band_rad_s"][1]
         if d["slit_damping_s"][1] * top_rad_s > MAX_LOSS_FACTOR:
             raise ConfigError(f"config key 'damage.slit_damping_s' must keep the slit's loss factor beta*omega <= "
