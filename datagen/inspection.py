@@ -44,14 +44,14 @@ def curvature_check(table, length_m):
     one = _single_slits(table)
     out = {}
     for r in range(4):
+        if len(one) < 3:
+            out[f"mode{r + 1}"] = {"slope": None, "r2": None, "n": int(len(one))}
+            continue
         q = one["damage0_ei_loss"]
         pred = -0.5 * q / (1 - q) * one["damage0_width_m"] * cantilever_curvature_squared(
             one["damage0_x_m"].to_numpy(), length_m, r)
         act = one[f"df{r + 1}_rel"]
         pred, act = np.asarray(pred, float), act.to_numpy()
-        if len(act) < 3:
-            out[f"mode{r + 1}"] = {"slope": None, "r2": None, "n": int(len(act))}
-            continue
         slope = float(pred @ act / (pred @ pred))
         r2 = float(1 - np.sum((act - slope * pred) ** 2) / np.sum((act - act.mean()) ** 2))
         out[f"mode{r + 1}"] = {"slope": slope, "r2": r2, "n": int(len(act))}
@@ -122,7 +122,8 @@ def _plot_labels(plt, table, out: Path) -> None:
                         "root_spring_Nm_rad") if c in table][:9]
     fig, axs = plt.subplots(3, 3, figsize=(11, 8))
     for ax, c in zip(axs.flat, cols):
-        ax.hist(table[c].dropna(), bins=30)
+        v = table[c].to_numpy(float)
+        ax.hist(v[np.isfinite(v)], bins=30)     # a rigid clamp's root spring is inf
         ax.set_title(c, fontsize=9)
     fig.tight_layout()
     fig.savefig(out / "labels.png", dpi=110)

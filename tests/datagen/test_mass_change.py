@@ -32,13 +32,13 @@ def masses(tmp_path_factory):
     root = tmp_path_factory.mktemp("mass") / "data"
     generate(root, merge(QUIET), n=12, seed=3, progress=False)
     ds = Dataset(root)
-    return ds.table(), ds.manifest
+    return ds.table(), ds.manifest, root
 
 
 def test_frequency_changes_are_those_of_the_fe_beam_with_the_point_mass(masses):
     """Truth shifts against an independent solve: physics.fem's 20-element beam plus
     physics.effects.point_mass_matrix at x, and to first order ``df/f = -(1/2) (m_k / m L) W_r(x)^2``."""
-    t, manifest = masses
+    t, manifest, _ = masses
     L = beam_preset("beam5").length_m
     assert manifest["config"]["damage"]["kind"] == "mass_change"
     n_el = manifest["config"]["mesh"]["truth_elements"]
@@ -57,7 +57,7 @@ def test_frequency_changes_are_those_of_the_fe_beam_with_the_point_mass(masses):
 
 
 def test_size_is_the_signed_mass_ratio_and_labels_read_it(masses):
-    t, _ = masses
+    t, _, _ = masses
     L = beam_preset("beam5").length_m
     np.testing.assert_allclose(t.damage0_size, t.damage0_mass_kg / (t.m_per_length_kg_m * L), rtol=1e-15)
     assert t.damage0_size.between(-0.00181, 0.0101).all() and (t.damage0_size < 0).any() and (t.damage0_size > 0).any()
@@ -131,3 +131,16 @@ def test_projection_and_the_drop_label_hold_with_test_day_changes():
         w0 = undamped_modes(beam.M, beam.K)[0][:4]
         w1 = undamped_modes(beam.M + dM, beam.K)[0][:4]
         assert out["damage_frequency_drop"][b] == pytest.approx(np.max(1 - w1 / w0), abs=1e-8)
+
+
+def test_inspect_summarises_a_mass_change_dataset(masses, tmp_path):
+    """No slit columns: the curvature check is empty (n = 0), the labels are the mass change's, the units too."""
+    from datagen.inspection import inspect_dataset
+
+    t, manifest, root = masses
+    s = inspect_dataset(root, tmp_path / "inspect")
+    assert all(c == {"slope": None, "r2": None, "n": 0} for c in s["curvature_check"].values())
+    assert s["labels"]["damage0_mass_kg"]["min"] == t.damage0_mass_kg.min() and "damage0_ei_loss" not in s["labels"]
+    assert manifest["schema"]["columns"]["damage{k}_mass_kg"].startswith("kg (signed")
+    assert "signed mass ratio" in manifest["schema"]["columns"]["damage{k}_size"]
+    assert (tmp_path / "inspect" / "shift_vs_position.png").stat().st_size > 0
