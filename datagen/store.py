@@ -148,7 +148,7 @@ def sample_table(labels: dict, outputs: dict, shard: int, first_id: int, length_
     ``model``'s own columns hold NaN (0 for ``element4``) where a sample has fewer
     damages. Frequencies/damping ratios per mode r = 1..4 for the
     baseline (``_base``) and current (``_cur``) states, truth and measured
-    (``_meas``). Units in :data:`COLUMN_UNITS`.
+    (``_meas``). Units in :func:`column_units`.
     """
     n = labels["EI_Nm2"].shape[0]
     ei, mpl, x_m = labels["EI_Nm2"], labels["mass_per_length_kg_m"], labels["x_m"]
