@@ -311,7 +311,7 @@ def _result_json(res: dsc.DiscrepancyResult, meas: dsc.Measurement, noise: dsc.N
 
 def _table_files(res: dsc.DiscrepancyResult, recal: dsc.ModeResiduals, cand: list[dict]) -> dict[str, bytes]:
     """``residuals.csv/json`` (before, recalibrated, after) and ``candidates.csv/json``, rendered."""
-    from experiments.cli import to_jsonable
+    from experiments.jsonable import to_jsonable
 
     rows = (_residual_rows("before", res.nominal) + _residual_rows("recalibrated", recal)
             + _residual_rows("after", res.final.residuals))
@@ -336,7 +336,7 @@ def _calibration_comment(beam: Beam, measured, res: dsc.DiscrepancyResult, meas:
 
 def _summary_json(out: dict, out_dir: Path, res: dsc.DiscrepancyResult, seed: int) -> bytes:
     """``summary.json``: the JSON result with the beam file's path, the rounds of the selection and the seed."""
-    from experiments.cli import to_jsonable
+    from experiments.jsonable import to_jsonable
 
     steps = [{"round": i + 1, "named": st.named, "indistinguishable_from": list(st.indistinguishable_from),
               "separating_measurement": st.separating_measurement, "c_hat": st.c_hat}
