@@ -21,7 +21,8 @@ from physics import discrepancy as dsc
 from physics.beam import Beam, beam_to_toml, load_beam
 from physics.effects import CANDIDATES
 from physics.errors import ConfigError, FileFormatError
-from physics.io import MODAL, atomic_write_bytes, modal_data_from_dict, modal_or_frf, number_list, read_frf, read_json
+from physics.io import (MODAL, atomic_write_bytes, modal_data_from_dict, modal_or_frf, number_list, prepare_measured,
+                        read_frf, read_json)
 
 __all__ = ["EXAMPLE", "EXAMPLE_SHAPES", "TRUTHS", "assumed_noise", "beam5_section", "confusion", "estimated_noise",
            "load_measurement", "run", "run_case", "run_discrepancy"]
@@ -51,7 +52,7 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[dsc.Measurement, o
                 return dsc.Measurement(f), None, None
             except ValueError as exc:
                 raise FileFormatError(f"{path}: field 'natural_frequencies_hz': {exc}") from None
-        data = modal_data_from_dict(obj, str(path)).with_positive_directions()
+        data = prepare_measured(modal_data_from_dict(obj, str(path))).data
         shapes, xs, dof_map = data.eigenvectors, (), None
         if shapes is not None:
             if not data.dofs and shapes.shape[0] != len(beam.measured_x_m):

@@ -12,7 +12,7 @@ import numpy as np
 from learn.features import BeamSpec, real_shapes
 from physics.errors import BeamDamageError, FileFormatError
 from physics.identification import identify_frf
-from physics.io import MeasuredFRF, map_frf_dofs, map_measured_dofs, parse_dof
+from physics.io import MeasuredFRF, map_frf_dofs, map_measured_dofs, parse_dof, prepare_measured
 from physics.modal import mac
 
 __all__ = ["IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "RATIO_TOLERANCE", "ModalPair", "frf_rows",
@@ -44,23 +44,24 @@ def on_model_dofs(data, beam: BeamSpec, beam_x_m=None, where: str = "measured da
     left out and named in the map's detail), and the model's DOFs (:attr:`BeamSpec.dofs`) must all be measured
     (refused naming the missing ones). Rows are selected and ordered as ``beam.dofs`` and
     relabelled with them; FRF references get the model DOF at their position too. DOFs labelled with a
-    negative sense (``"3:-Y"``) are turned to the positive one first. An FRF file whose references, not its
+    negative sense (``"3:-Y"``) are turned to the positive one first, and an FRF file whose references, not its
     responses, cover the model's DOFs (a roving hammer, one accelerometer) is read by reciprocity
-    (:meth:`physics.io.MeasuredFRF.reciprocal`). Modal data without ``dofs`` labels are returned as they are
+    (:func:`physics.io.prepare_measured`, the one rule). Modal data without ``dofs`` labels are returned as they are
     (rows taken as the model's DOFs, with a warning later).
     """
     n = len(beam.dofs)
     grid_x = np.linspace(0.0, beam.length_m, n + 1)
     grid = tuple(f"{k}:y" for k in range(1, n + 2))
     kw = dict(length_m=beam.length_m, n_elements=n, beam_x_m=beam_x_m)
-    data = data.with_positive_directions()
     if isinstance(data, MeasuredFRF):
-        labels = tuple(dict.fromkeys(data.response_dofs + data.reference_dofs))
-        dof_map = map_frf_dofs(data, labels, grid_x, grid, off_grid="ignore", **kw)
-        to_model = dict(zip(labels, dof_map.model_dofs))
-        at = lambda dofs: {to_model[d] for d in dofs}  # noqa: E731
-        if not set(beam.dofs) <= at(data.response_dofs) and set(beam.dofs) <= at(data.reference_dofs):
-            data = data.reciprocal()  # a roving-hammer test: the hammer positions are the responses
+        def frf_map(d):
+            labels = tuple(dict.fromkeys(d.response_dofs + d.reference_dofs))
+            return map_frf_dofs(d, labels, grid_x, grid, off_grid="ignore", **kw)
+
+        prepared = prepare_measured(data, frf_map, wanted=beam.dofs)
+        data, dof_map = prepared.data, prepared.dof_map
+        to_model = dict(zip(dof_map.dofs, dof_map.model_dofs))
+        if prepared.reciprocal:  # a roving-hammer test: the hammer positions are the responses
             dof_map = replace(dof_map, detail=dof_map.detail + "; responses at the hammer positions by "
                               "reciprocity (H_ij = H_ji, a roving-hammer test)")
         resp_map = replace(dof_map, dofs=data.response_dofs,
@@ -68,6 +69,7 @@ def on_model_dofs(data, beam: BeamSpec, beam_x_m=None, where: str = "measured da
         resp = resp_map.rows(beam.dofs, where)
         return replace(data, frf=data.frf[resp], response_dofs=tuple(beam.dofs),
                        reference_dofs=tuple(to_model[d] or d for d in data.reference_dofs)), dof_map
+    data = prepare_measured(data).data
     if not data.dofs or data.eigenvectors is None:
         return data, None
     dof_map = map_measured_dofs(data.dofs, grid_x, grid, where=where, off_grid="ignore", **kw)
