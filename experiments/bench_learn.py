@@ -9,7 +9,7 @@
    ``--config training --beam beam5-timoshenko.toml`` (a Timoshenko truth, kGA = 27,100 N, beam file
    written here with :func:`physics.beam.write_beam`). Temperature, re-clamping and per-sample noise
    come from the generator.
-2. Trains the default model (``learn.workflow.train``; its time is the training time), a network on
+2. Trains the default model (``learn.training.train``; its time is the training time), a network on
    each other input route on the same pairs, and gradient boosting on the default route's features.
 3. Scores network(s) and every classical method on the held-out test dataset, prints the table with the
    issue's targets and the breakdowns (noise level, size, position).
@@ -134,7 +134,8 @@ def main(argv=None):
 
 def _default_model(train_dirs, out: Path, args) -> tuple:
     """Train the default model into ``out / "model"``; returns it, the training summary and the wall time (s)."""
-    from learn.workflow import load_model, train
+    from learn.model_dir import load_model
+    from learn.training import train
 
     t0 = time.perf_counter()
     summary = train(train_dirs, out / "model", epochs=args.epochs, seed=args.seed, progress=True,
@@ -161,7 +162,9 @@ def _held_out(model, train_dirs, test_dirs, out: Path, args) -> dict:
     from learn.estimator import DamageClassifier
     from learn.evaluate import figures, table_rows
     from learn.features import features, load_pairs, split_by_specimen
-    from learn.workflow import dataset_frfs, network_output, sensitivity_of, targets
+    from learn.model_dir import sensitivity_of
+    from learn.training import dataset_frfs, targets
+    from learn.verdict import network_output
 
     route = model.route
     all_routes = ["modal", "updated", "measured"]
@@ -222,7 +225,8 @@ def _robustness(data_dir: Path, test_dirs, model, test: dict) -> list:
     from learn.classical import run_classical
     from learn.evaluate import metrics
     from learn.features import features, load_pairs
-    from learn.workflow import dataset_frfs, network_output, targets
+    from learn.training import dataset_frfs, targets
+    from learn.verdict import network_output
 
     print("\n== Robustness (network on the default route vs classical methods; training ranges in brackets) ==")
     route, sens = model.route, test["sens"]
@@ -252,7 +256,7 @@ def beam5(model, out_dir) -> dict:
     """Classify the thesis's beam 5 from its measured modal data and from FRFs of its identified models."""
     from learn.features import modal_features
     from learn.sensitivity import beam_sensitivity
-    from learn.workflow import classify
+    from learn.classify import classify
     from physics.frf import receptance
     from physics import thesis
     from physics.io import MeasuredFRF, modal_data_from_dict

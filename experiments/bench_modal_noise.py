@@ -7,7 +7,7 @@ A dataset's measured modal data come from a shortcut: the truth modes plus
 random errors (:func:`datagen.pipeline.measure_modes`). ``classify`` identifies
 them from the FRF files. Here specimens of the default configuration (both test
 days) go through exactly what ``classify`` runs on a file
-(:func:`learn.workflow.identify_modes`: LSCF poles, LSFD residues with the
+(:func:`learn.measured.identify_modes`: LSCF poles, LSFD residues with the
 estimated noise weighting, the 4 modes below 1.4 times the nominal mode 4),
 on FRFs synthesised as a dataset does, for every combination of an FRF noise
 level, a noise floor (relative to each FRF's peak) and three line layouts
@@ -93,7 +93,7 @@ def _identify(args):
     """
     from threadpoolctl import threadpool_limits
 
-    from learn.workflow import identify_modes
+    from learn.measured import identify_modes
     from physics.errors import BeamDamageError
     from physics.io import MeasuredFRF
 
@@ -143,7 +143,7 @@ def full_path_errors(level, floor, specimens, seed, pool, grid):
     missed, and the errors of the fixed-default shortcut on the same draws."""
     from datagen.synth import measured_frf
     from learn.sensitivity import beam_sensitivity
-    from learn.workflow import IDENTIFICATION_BAND_FACTOR
+    from learn.measured import IDENTIFICATION_BAND_FACTOR
 
     fixed, (setup, inp, sim) = shortcut_errors(level, floor, specimens, seed, grid=grid)
     lam_t, psi_t = sim["truth_poles"][..., :4], sim["truth_shapes"][..., :4]
@@ -197,7 +197,7 @@ def main(argv=None):
     a = ap.parse_args(argv)
 
     from datagen.config import CONFIG_DIR
-    from learn.workflow import IDENTIFICATION
+    from learn.measured import IDENTIFICATION
     from physics.io import atomic_write_text
 
     levels = [float(x) for x in a.levels.split(",")]
@@ -216,7 +216,7 @@ def main(argv=None):
     if a.write_calibration:
         note = ("per mode 1..4: std of the identification error = sqrt((c level)^2 + (g floor)^2 + e^2) of the FRF "
                 "noise level and floor, c under 'frequency', 'damping', 'shape', g under '<quantity>_per_floor', e "
-                f"under '<quantity>_floor', fitted to robust stds of learn.workflow.identify_modes on the default "
+                f"under '<quantity>_floor', fitted to robust stds of learn.measured.identify_modes on the default "
                 f"config, {a.specimens} specimens x 2 states x line layouts {list(GRIDS)} x levels {levels} x floors "
                 f"{floors}; written by experiments.bench_modal_noise")
         atomic_write_text(CONFIG_DIR / "modal_noise.json",

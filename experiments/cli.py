@@ -23,13 +23,12 @@ import json
 import sys
 import warnings
 
-import numpy as np
 from threadpoolctl import threadpool_limits
 
+from experiments.jsonable import to_jsonable
 from physics.errors import BeamDamageError
-from physics.io import format_complex
 
-__all__ = ["build_parser", "main", "to_jsonable"]
+__all__ = ["build_parser", "main"]
 
 
 #: Sub-command name -> module registering it (``add_parser``), in the order ``--help`` lists them.
@@ -59,30 +58,6 @@ class _Parser(argparse.ArgumentParser):
     def error(self, message):
         sys.stderr.write(f"beam-damage: error: {message}\n")
         raise SystemExit(EXIT_USAGE)
-
-
-def to_jsonable(obj):
-    """Convert numpy arrays/scalars and complex numbers into JSON-ready values.
-
-    Complex numbers become strings such as ``"-0.21962+135.31j"`` (the form of
-    the thesis fixtures), arrays become nested lists.
-    """
-    if isinstance(obj, dict):
-        return {str(k): to_jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [to_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return to_jsonable(obj.tolist())
-    if isinstance(obj, (complex, np.complexfloating)):
-        return format_complex(complex(obj))
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, (float, np.floating)):
-        v = float(obj)
-        return v if np.isfinite(v) else None
-    return obj
 
 
 def build_parser(argv=None) -> argparse.ArgumentParser:

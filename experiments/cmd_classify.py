@@ -2,9 +2,18 @@
 
 from __future__ import annotations
 
+import io
+import json
 from pathlib import Path
 
 import numpy as np
+
+from experiments.jsonable import to_jsonable
+from learn.classify import classify_many
+from learn.measured import on_model_dofs
+from learn.model_dir import load_model
+from physics.frf import receptance_modal
+from physics.io import FRF, MODAL, MeasuredFRF, accepted, atomic_write_bytes, atomic_write_text, modal_or_frf, read
 
 __all__ = ["KEYS", "add_parser", "run"]
 
@@ -16,8 +25,6 @@ KEYS = ("measured", "damaged", "probability_damaged", "location_x_over_L", "loca
 
 
 def add_parser(sub):
-    from physics.io import FRF, MODAL, accepted
-
     p = sub.add_parser("classify", help="classify measured beams against their baseline with a trained model",
                        description=f"BASELINE and each MEASURED are files of {accepted(FRF, MODAL)}. FRFs: "
                                    "receptances, mobilities or accelerances at the model's DOFs; modal data: as "
@@ -44,30 +51,14 @@ def add_parser(sub):
 
 def read_input(path):
     """A modal-data file -> ModalData, an FRF file -> MeasuredFRF (:func:`physics.io.modal_or_frf`)."""
-    from physics.io import modal_or_frf, read
-
     return read(path, modal_or_frf(path))
 
 
 def run(args):
-    from learn.features import BeamSpec
-    from learn.workflow import classify_many, load_model, on_model_dofs
-
     model = load_model(args.model)
-    b = model.beam
-    beam_x_m = None
-    if args.beam and Path(args.beam).suffix.lower() == ".toml":
-        from physics.beam import load_beam
-
-        fb = load_beam(args.beam)
-        spec = BeamSpec(b.name, fb.length_m, b.dofs, args.mass or b.mass_model)
-        beam_x_m = fb.measured_x_m if fb.measured_x_given else None
-    else:
-        spec = BeamSpec(args.beam or b.name, b.length_m if args.beam in (None, b.name) else _length(args.beam),
-                        b.dofs, args.mass or b.mass_model)
-    model.check_beam(spec, "measured beam")
+    _, beam_x_m = model.measured_beam(args.beam, args.mass)
     files = [args.baseline, *args.measured]
-    mapped = [on_model_dofs(read_input(f), b, beam_x_m, str(f)) for f in files]
+    mapped = [on_model_dofs(read_input(f), model.beam, beam_x_m, str(f)) for f in files]
     results = classify_many(model, mapped[0][0], [m[0] for m in mapped[1:]], names=[str(f) for f in files])
     base_pos = mapped[0][1] and mapped[0][1].to_dict()
     extras = []
@@ -82,89 +73,15 @@ def run(args):
         for r in results:
             if len(results) > 1:
                 print(f"== {r['measured']}")
-            print(verdict_text(r))
+            print(model.verdict_text(r))
         if args.out:
             print(f"{'verdict.json and classify.png' if len(results) == 1 else 'verdicts.json'} in {args.out}")
     out = [{k: r[k] for k in KEYS} for r in results]
     return out[0] if len(out) == 1 else out
 
 
-def _length(name):
-    from physics.properties import beam_preset
-    return beam_preset(name).length_m
-
-
-def _network_sentence(a: dict) -> str:
-    if not a["damaged"]:
-        return f"no damage detected (probability of damage {a['probability_damaged']:.1%})"
-    if not a["detectable"]:
-        return (f"possibly damaged (probability {a['probability_damaged']:.1%}), but not detectable here: a slit like "
-                f"the one that would explain the data, near x = {a['location_x_m']:.3f} m, changes the natural "
-                "frequencies by less than the measurement resolution")
-    depth = "" if a["depth_m"] is None else f", e.g. a slit {a['depth_m'] * 1000:.2f} mm deep over 5.5 mm"
-    return (f"damaged (probability {a['probability_damaged']:.1%}): slit at x = {a['location_x_m']:.3f} m +- "
-            f"{a['location_std_m']:.3f} m (x/L = {a['location_x_over_L']:.2f}, element {a['location_element']} of "
-            f"4), hinge flexibility EI/(k L) = {a['hinge_flexibility']:.3g} +- {a['hinge_flexibility_std']:.2g}"
-            f"{depth}")
-
-
-def _classical_sentence(c: dict) -> str:
-    if not c["damaged"]:
-        return f"{c['method']}: undamaged"
-    return (f"{c['method']}: damaged, x = {c['location_x_m']:.3f} m (element {c['location_element']}), hinge "
-            f"flexibility {c['hinge_flexibility']:.3g}")
-
-
-def verdict_text(res: dict) -> str:
-    """The verdict as a reader sees it: the answer, where it comes from, both methods, the caveats."""
-    net, cl = res["network"], res["classical"]
-    modes = res["identification"].get("modes_classified") or []
-    if res["verdict_from"] == "network":
-        head = "Verdict (network): " + _network_sentence(net) + "."
-    elif net is None:
-        head = (f"Verdict (classical method on modes {', '.join(map(str, modes))}, the network needs modes 1-4): "
-                + _classical_sentence(cl) + ".")
-    else:
-        head = ("Verdict (classical method, the pair lies outside the training data): " + _classical_sentence(cl)
-                + ".")
-    lines = [head[:1].upper() + head[1:]]
-    if net is None:
-        lines.append("Why: " + "; ".join(res["out_of_distribution_reasons"]) + ".")
-        lines.append("Network: no answer (trained on modes 1-4).")
-    else:
-        if net["damaged"]:
-            lines.append("Element probabilities (network): " + ", ".join(f"{k + 1}: {v:.2f}" for k, v in
-                                                                         enumerate(net["element_probabilities"])))
-        lines.append(f"Network: {_network_sentence(net)}.")
-    lines.append(f"Classical ({cl['method']}, the best on the training data): {_classical_sentence(cl)}." if cl else
-                 "Classical: no answer (fewer than 2 modes identified in both tests).")
-    if net is None:
-        lines.append(f"Input route: {res['input_route']}; in distribution: no.")
-    else:
-        lines.append(f"Input route: {res['input_route']}; distance from the training data: Mahalanobis "
-                     f"{res['mahalanobis_distance']:.3g} (beyond {res['training_percentile']:.1f}% of training pairs); "
-                     f"in distribution: {'yes' if res['in_distribution'] else 'no'}.")
-    ident = res["identification"]
-    lines.append(f"Natural frequencies (Hz, {ident['source']}): baseline "
-                 + ", ".join(f"{x:.2f}" for x in ident["baseline_frequencies_hz"]) + "; measured "
-                 + ", ".join(f"{x:.2f}" for x in ident["measured_frequencies_hz"])
-                 + (f"; modes classified: {', '.join(map(str, modes))}" if modes and len(modes) < 4 else ""))
-    from physics.io import dof_positions_text
-
-    for name, d in res["dof_positions"].items():
-        lines.append(f"{name}: " + (dof_positions_text(d) if d else "modal data without DOF labels: rows taken as "
-                                                                  "the model's DOFs"))
-    lines += [f"warning: {w}" for w in res["warnings"]]
-    return "\n".join(lines)
-
-
 def _write(out_dir, results, extras, base, cur, model):
     """verdict.json and classify.png (one pair) or verdicts.json (several), each written atomically."""
-    import json
-
-    from experiments.cli import to_jsonable
-    from physics.io import atomic_write_bytes, atomic_write_text
-
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     if len(results) > 1:
@@ -176,14 +93,10 @@ def _write(out_dir, results, extras, base, cur, model):
 
 def _figure(res, extra, base, cur, length_m) -> bytes:
     """PNG: baseline and measured FRF (or FRF synthesised from modes), and the network's location distribution."""
-    import io
-
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from physics.io import MeasuredFRF
 
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 6.5))
     for name, d in (("baseline", base), ("measured", cur)):
@@ -193,9 +106,7 @@ def _figure(res, extra, base, cur, length_m) -> bytes:
                         label=f"{name} {h.response_dofs[-1]}/{h.reference_dofs[0]}")
         else:
             w = np.linspace(1.0, 1.15 * np.abs(d.eigenvalues).max(), 4000)
-            psi = d.eigenvectors
-            H = np.sum(psi[-1] * psi[0] / (1j * w[:, None] - d.eigenvalues)
-                       + np.conj(psi[-1] * psi[0]) / (1j * w[:, None] - np.conj(d.eigenvalues)), axis=1)
+            H = receptance_modal(d.eigenvalues, d.eigenvectors, w, response=[-1], reference=[0])[0, 0]
             a1.semilogy(w / (2 * np.pi), np.abs(H), label=f"{name} (synthesised from modes, unscaled)")
     a1.set(xlabel="frequency (Hz)", ylabel="|H| (m/N)", title="Baseline vs measured")
     a1.legend(fontsize=7)

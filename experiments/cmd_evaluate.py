@@ -21,7 +21,8 @@ def add_parser(sub):
 
 def run(args) -> dict:
     from experiments.args import check_out_dir
-    from learn.workflow import evaluate, load_model
+    from learn.model_dir import load_model
+    from learn.training import evaluate
 
     if args.out:
         check_out_dir(args.out)

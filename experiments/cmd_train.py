@@ -19,7 +19,7 @@ def add_parser(sub):
     p.add_argument("--epochs", type=int, default=60, help="training epochs (default 60)")
     p.add_argument("--seed", type=int, default=0, help="random seed of split, augmentation and network (default 0)")
     p.add_argument("--route", choices=("modal", "updated", "measured"), default=None,
-                   help="input route (default: the benchmark's winner, learn.workflow.DEFAULT_ROUTE)")
+                   help="input route (default: the benchmark's winner, learn.model_dir.DEFAULT_ROUTE)")
     p.add_argument("--threads", type=int, default=1,
                    help="torch CPU threads of the networks (default 1: fastest for this small network, and more "
                         "threads were up to 10x slower on a machine shared with other jobs)")
@@ -29,7 +29,7 @@ def add_parser(sub):
 
 def run(args) -> dict:
     from experiments.args import check_out_dir
-    from learn.workflow import train
+    from learn.training import train
     from physics.errors import BeamDamageError
 
     if args.epochs < 1:

@@ -8,7 +8,7 @@ from experiments.args import add_beam_argument
 from physics import modal, updating
 from physics.beam import Beam, load_beam
 from physics.errors import BeamDamageError, ConfigError, ConvergenceError, FileFormatError, OverdampedError
-from physics.io import FRF, MODAL, accepted, dof_positions_text, modal_or_frf, read
+from physics.io import FRF, MODAL, accepted, dof_positions_text, modal_or_frf, prepare_measured, read
 
 __all__ = ["add_parser", "run"]
 
@@ -19,7 +19,7 @@ def load_modal(modal_file, n_modes: int):
     Returns the modal data and the FRFs it was identified from (None for a modal-data file).
     """
     if modal_or_frf(modal_file) == MODAL:
-        return read(modal_file, MODAL).with_positive_directions(), None
+        return prepare_measured(read(modal_file, MODAL)).data, None
     from physics.identification import identify_file
 
     ident = identify_file(modal_file, n_modes=n_modes)

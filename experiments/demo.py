@@ -24,7 +24,7 @@ from pathlib import Path
 
 
 from experiments import study_discrepancy, study_thesis, validate
-from experiments.cli import to_jsonable
+from experiments.jsonable import to_jsonable
 from experiments.report import Section, Table, figure, write_report
 from physics import modal, properties, thesis, updating
 from physics.errors import BeamDamageError
@@ -94,7 +94,8 @@ def dataset_step(out: Path, beam_file: str, n: int, seed: int, workers: int) -> 
 
 def classify_step(out: Path, model_dir: Path) -> dict:
     """Beam 5 (Tables 4.5/4.6 as modal JSON) through the trained model."""
-    from learn.workflow import classify, load_model
+    from learn.classify import classify
+    from learn.model_dir import load_model
 
     out.mkdir(parents=True, exist_ok=True)
     b5 = thesis.load("beams")["beams"]["5"]
@@ -259,17 +260,18 @@ def run(args) -> dict:
         "train": dataset_step(out / "dataset", beam_file, n_train, 0, args.workers),
         "test": dataset_step(out / "testset", beam_file, n_test, 1, args.workers)})
     force_model = force or not (out / "model").exists()
-    from learn.workflow import MODEL_FORMAT
+    from learn.model_dir import MODEL_FORMAT
     key = {**key, "epochs": epochs, "model_format": MODEL_FORMAT}   # a model of another format is retrained
 
     def train_model():
-        from learn.workflow import train
+        from learn.training import train
         return train(out / "dataset", out / "model", epochs=epochs, seed=0, progress=True)
 
     trained = _step(out, "train", force_model, key, train_model)
 
     def evaluate_model():
-        from learn.workflow import evaluate, load_model
+        from learn.model_dir import load_model
+        from learn.training import evaluate
         res = evaluate(load_model(out / "model"), out / "testset", out / "evaluate", progress=True)
         return {"rows": [r for r in res["rows"] if r["subset"] == "all"], "figures": res["figures"],
                 "pairs": res["pairs"]}

@@ -32,7 +32,7 @@ def run(out_dir, n_datagen: int = 10000, n_train: int = 6000, epochs: int = 30) 
 
     from datagen.config import load_config
     from datagen.generation import generate
-    from learn.workflow import train
+    from learn.training import train
 
     generate(out / "train-data", load_config("training"), n=n_train, seed=0, workers=2, progress=True)
     t0 = time.perf_counter()

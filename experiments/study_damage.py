@@ -51,7 +51,8 @@ def _figure(rows, metric, label, path):
 def run(out_dir, model_dir="out/demo/model", n_test: int = 4000, n_train: int = 6000) -> tuple[dict, list]:
     from datagen.config import load_config
     from datagen.generation import generate
-    from learn.workflow import evaluate, load_model, train
+    from learn.model_dir import load_model
+    from learn.training import evaluate, train
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

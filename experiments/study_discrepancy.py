@@ -21,7 +21,8 @@ from physics import discrepancy as dsc
 from physics.beam import Beam, beam_to_toml, load_beam
 from physics.effects import CANDIDATES
 from physics.errors import ConfigError, FileFormatError
-from physics.io import MODAL, atomic_write_bytes, modal_data_from_dict, modal_or_frf, number_list, read_frf, read_json
+from physics.io import (MODAL, atomic_write_bytes, modal_data_from_dict, modal_or_frf, number_list, prepare_measured,
+                        read_frf, read_json)
 
 __all__ = ["EXAMPLE", "EXAMPLE_SHAPES", "TRUTHS", "assumed_noise", "beam5_section", "confusion", "estimated_noise",
            "load_measurement", "run", "run_case", "run_discrepancy"]
@@ -51,7 +52,7 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[dsc.Measurement, o
                 return dsc.Measurement(f), None, None
             except ValueError as exc:
                 raise FileFormatError(f"{path}: field 'natural_frequencies_hz': {exc}") from None
-        data = modal_data_from_dict(obj, str(path)).with_positive_directions()
+        data = prepare_measured(modal_data_from_dict(obj, str(path))).data
         shapes, xs, dof_map = data.eigenvectors, (), None
         if shapes is not None:
             if not data.dofs and shapes.shape[0] != len(beam.measured_x_m):
@@ -311,7 +312,7 @@ def _result_json(res: dsc.DiscrepancyResult, meas: dsc.Measurement, noise: dsc.N
 
 def _table_files(res: dsc.DiscrepancyResult, recal: dsc.ModeResiduals, cand: list[dict]) -> dict[str, bytes]:
     """``residuals.csv/json`` (before, recalibrated, after) and ``candidates.csv/json``, rendered."""
-    from experiments.cli import to_jsonable
+    from experiments.jsonable import to_jsonable
 
     rows = (_residual_rows("before", res.nominal) + _residual_rows("recalibrated", recal)
             + _residual_rows("after", res.final.residuals))
@@ -336,7 +337,7 @@ def _calibration_comment(beam: Beam, measured, res: dsc.DiscrepancyResult, meas:
 
 def _summary_json(out: dict, out_dir: Path, res: dsc.DiscrepancyResult, seed: int) -> bytes:
     """``summary.json``: the JSON result with the beam file's path, the rounds of the selection and the seed."""
-    from experiments.cli import to_jsonable
+    from experiments.jsonable import to_jsonable
 
     steps = [{"round": i + 1, "named": st.named, "indistinguishable_from": list(st.indistinguishable_from),
               "separating_measurement": st.separating_measurement, "c_hat": st.c_hat}

@@ -54,7 +54,7 @@ PUBLIC_MODULES = sorted(_public_modules())
 
 def test_every_layer_module_is_walked():
     assert len(PUBLIC_MODULES) >= 70
-    assert {"physics.fem", "datagen.pipeline", "learn.workflow", "experiments.cmd_update",
+    assert {"physics.fem", "datagen.pipeline", "learn.classify", "experiments.cmd_update",
             "experiments.second_sim.fem"} <= set(PUBLIC_MODULES)
 
 

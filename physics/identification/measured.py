@@ -11,7 +11,7 @@ from physics.errors import ConfigError
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate
 from physics.identification.poles import StabilisationDiagram
-from physics.io import MeasuredFRF, ModalData
+from physics.io import MeasuredFRF, ModalData, prepare_measured
 
 __all__ = ["Identification", "identify_file", "identify_frf", "identify_frfs", "read_measured_frf",
            "reconstruction_error_db"]
@@ -67,11 +67,11 @@ def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, ma
 
     The first driving point (a response DOF equal to a reference DOF) scales the
     shapes to unit modal A; without one the shapes are unscaled (a warning).
-    DOFs labelled with a negative sense are turned to the positive one first
-    (:meth:`~physics.io.MeasuredFRF.with_positive_directions`), and a file with
-    more references than responses (a roving hammer) is read by reciprocity
-    (:meth:`~physics.io.MeasuredFRF.reciprocal`), so the shapes run over the more
-    numerous DOFs; ``Identification.frf`` is the matrix as identified.
+    The file is prepared by :func:`~physics.io.prepare_measured`: DOFs labelled with
+    a negative sense are turned to the positive one, and a file whose references,
+    not its responses, cover every DOF it names (a roving hammer) is read by
+    reciprocity, so the shapes run over every DOF the test touched;
+    ``Identification.frf`` is the matrix as identified.
 
     Parameters
     ----------
@@ -92,9 +92,7 @@ def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, ma
     if method not in METHODS:
         raise ConfigError(f"method {method!r} must be one of {', '.join(METHODS)}")
     spec = METHODS[method]
-    frf = frf.with_positive_directions()
-    if frf.frf.shape[1] > frf.frf.shape[0]:
-        frf = frf.reciprocal()
+    frf = prepare_measured(frf).data
     if frf.frequency_hz[0] == 0:
         frf = frf.select_band(fmin_hz=np.nextafter(0.0, 1.0))
     if band_hz is not None:

@@ -13,7 +13,9 @@ One module per format, listed in one table (:data:`FORMATS`), the data types and
   writer, description) and :func:`read_frf` / :func:`read`, choosing a reader from the name or content,
   and :func:`modal_or_frf`, whether a file of measured data holds modal data or FRFs;
 * :mod:`physics.io.units` -- dataset 164 unit factors and unit labels, to SI;
-* :mod:`physics.io.geometry` -- node geometry (datasets 15/2411) and measured positions along the beam.
+* :mod:`physics.io.geometry` -- node geometry (datasets 15/2411) and measured positions along the beam;
+* :mod:`physics.io.prepare` -- measured data made ready for a model (positive senses, DOF map, the one
+  reciprocity rule).
 
 Every name below is importable from ``physics.io`` directly.
 """
@@ -29,6 +31,7 @@ from physics.io.types import (DEFAULT_UNITS, FRF_KINDS, MeasuredFRF, ModalData, 
                               format_complex, parse_dof)
 from physics.io.geometry import (QUARTER_POINT_CONVENTION, DofMap, NodeGeometry, dof_positions_text, map_frf_dofs,
                                  map_measured_dofs, match_dofs_by_position, measured_positions, positions_along_beam)
+from physics.io.prepare import Prepared, prepare_measured, reads_by_reciprocity
 from physics.io.uff58 import read_uff58, read_uff_geometry, write_uff58
 from physics.io.units import UnitSystem, frf_unit_factor
 
@@ -40,4 +43,5 @@ __all__ = ["FORMATS", "FRF", "MODAL", "TIME", "FileFormat", "accepted", "format_
            "read_uff58", "write_frf_csv", "write_frf_npz", "write_modal_json", "write_uff58",
            "DofMap", "NodeGeometry", "dof_positions_text", "QUARTER_POINT_CONVENTION", "map_frf_dofs",
            "map_measured_dofs", "UnitSystem", "frf_unit_factor", "match_dofs_by_position",
-           "measured_positions", "positions_along_beam", "read_uff_geometry"]
+           "measured_positions", "positions_along_beam", "read_uff_geometry", "Prepared", "prepare_measured",
+           "reads_by_reciprocity"]

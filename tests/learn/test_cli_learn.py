@@ -412,3 +412,35 @@ def test_roving_hammer_and_negative_senses_give_the_verdict_of_the_canonical_fil
                                    ref["identification"]["measured_frequencies_hz"], rtol=1e-6)
         if variant == "roving":
             assert "reciprocity" in res["dof_positions"]["measured"]["detail"]
+
+
+@pytest.mark.parametrize("kind", ["modal json", "uff"])
+def test_the_printed_verdict_the_json_and_the_written_file_are_one_verdict(tiny, capsys, kind):
+    """``classify`` prints the model's verdict text of the very result ``--json`` gives, and writes that result
+    to verdict.json: for modal JSON files and for renumbered, shuffled UFF files (the FRF route)."""
+    from systems import write_renumbered_uff
+
+    from datagen.dataset import Dataset
+    from learn.model_dir import load_model
+
+    if kind == "modal json":
+        files = _modal_files(tiny, 0.4)
+    else:
+        ds = Dataset(tiny / "data")
+        H = ds.array("frf_measured")[1]
+        files = [str(write_renumbered_uff(tiny / f"pin{s}.uff",
+                                          MeasuredFRF(ds.omega_rad_s / (2 * np.pi), H[s][:, None, :],
+                                                      ("2:+Y", "3:+Y", "4:+Y", "5:+Y"), ("2:+Y",)),
+                                          {2: 101, 3: 102, 4: 103, 5: 104},
+                                          {101: 152.375, 102: 304.75, 103: 457.125, 104: 609.5}, [3, 1, 0, 2]))
+                 for s in (0, 1)]
+    args = ["classify", "--model", str(tiny / "model"), "--baseline", *files]
+    assert main([*args, "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    out = tiny / f"pin-{kind.replace(' ', '-')}"
+    assert main([*args, "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert text == load_model(tiny / "model").verdict_text(res) + f"\nverdict.json and classify.png in {out}\n"
+    assert json.loads((out / "verdict.json").read_text()) == res
+    assert res["input_route"] == ("modal" if kind == "modal json" else "measured")
+    assert text.startswith(f"Verdict ({res['verdict_from']}")

@@ -13,7 +13,8 @@ from learn.estimator import DamageClassifier, fit_calibration
 from learn.evaluate import reliability, roc_auc
 from learn.features import BeamSpec, curvatures, map_frf_to_grid, real_shapes, split_by_specimen
 from learn.sensitivity import beam_sensitivity
-from learn.workflow import MODEL_FORMAT, TrainedModel, equivalent_depth, load_model, save_model
+from learn.model_dir import MODEL_FORMAT, TrainedModel, load_model, save_model
+from learn.verdict import equivalent_depth
 from physics.errors import BeamDamageError
 from physics.fem import beam_model
 from physics.modal import undamped_modes
@@ -230,7 +231,7 @@ def test_modal_features_ignore_a_global_stiffness_or_mass_scale():
 def test_a_missing_mode_or_unpaired_shapes_put_a_pair_outside_the_training_data():
     """Mode 2 missed (modes 1, 3, 4, 5 taken as 1..4): a frequency ratio far from the nominal beam's; swapped
     shapes: MAC below 0.8. A clean pair of the nominal beam gives no reason."""
-    from learn.workflow import _mode_checks, nominal_ratio_range
+    from learn.measured import mode_checks, nominal_ratio_range
 
     sens = beam_sensitivity("beam5", 948.7)
     p = beam_preset("beam5")
@@ -240,10 +241,10 @@ def test_a_missing_mode_or_unpaired_shapes_put_a_pair_outside_the_training_data(
     lam = -0.002 * w[:5] + 1j * w[:5]
     vec = phi[idx, :5].astype(complex)
     good = (np.stack([lam[:4], lam[:4]])[None], np.stack([vec[:, :4], vec[:, :4]])[None])
-    assert _mode_checks(*good, nominal_ratio_range(sens)) == [[]]
+    assert mode_checks(*good, nominal_ratio_range(sens)) == [[]]
     miss = [0, 2, 3, 4]
     bad = (np.stack([lam[:4], lam[miss]])[None], np.stack([vec[:, :4], vec[:, miss]])[None])
-    reasons = _mode_checks(*bad, nominal_ratio_range(sens))[0]
+    reasons = mode_checks(*bad, nominal_ratio_range(sens))[0]
     assert any("measured f2/f1" in r for r in reasons) and any("do not pair" in r for r in reasons)
 
 
@@ -275,15 +276,15 @@ def test_damage_classifier_follows_scikit_learn_conventions():
 def test_modes_are_paired_with_the_nominal_beam_by_frequency():
     """Modes 1, 2, 4 of a beam 5 % stiffer than nominal with shear (mode 4 8 % low) -> [0, 1, 3]; a spurious
     pole between modes 1 and 2 pairs with none; the order of the input is kept; a band cut -> [0, 1]."""
-    from learn.workflow import pair_modes
+    from learn.measured import pair_modes_by_frequency
 
     nominal = beam_sensitivity("beam5", 948.7).frequencies_hz        # 19.9, 125, 349, 684 Hz
     f = nominal * np.sqrt(1.05) * np.array([1.0, 1.0, 1.0, 0.92])
-    np.testing.assert_array_equal(pair_modes(f[[0, 1, 3]], nominal), [0, 1, 3])
-    np.testing.assert_array_equal(pair_modes(f[[3, 0, 1]], nominal), [3, 0, 1])
-    np.testing.assert_array_equal(pair_modes([f[0], 70.0, f[1], f[2]], nominal), [0, -1, 1, 2])
-    np.testing.assert_array_equal(pair_modes(f[:2], nominal), [0, 1])
-    np.testing.assert_array_equal(pair_modes([5.0, f[1]], nominal), [-1, 1])      # 5 Hz: 4 times below mode 1
+    np.testing.assert_array_equal(pair_modes_by_frequency(f[[0, 1, 3]], nominal), [0, 1, 3])
+    np.testing.assert_array_equal(pair_modes_by_frequency(f[[3, 0, 1]], nominal), [3, 0, 1])
+    np.testing.assert_array_equal(pair_modes_by_frequency([f[0], 70.0, f[1], f[2]], nominal), [0, -1, 1, 2])
+    np.testing.assert_array_equal(pair_modes_by_frequency(f[:2], nominal), [0, 1])
+    np.testing.assert_array_equal(pair_modes_by_frequency([5.0, f[1]], nominal), [-1, 1])   # 5 Hz: 4 times below mode 1
 
 
 @pytest.mark.parametrize("modes", [[0, 1, 2], [0, 1, 3], [0, 2, 3]])

@@ -1,0 +1,34 @@
+"""JSON-ready values of command results (numpy arrays and scalars, complex numbers), for ``--json`` and the
+files commands write."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from physics.io import format_complex
+
+__all__ = ["to_jsonable"]
+
+
+def to_jsonable(obj):
+    """Convert numpy arrays/scalars and complex numbers into JSON-ready values.
+
+    Complex numbers become strings such as ``"-0.21962+135.31j"`` (the form of
+    the thesis fixtures), arrays become nested lists.
+    """
+    if isinstance(obj, dict):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return to_jsonable(obj.tolist())
+    if isinstance(obj, (complex, np.complexfloating)):
+        return format_complex(complex(obj))
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        v = float(obj)
+        return v if np.isfinite(v) else None
+    return obj

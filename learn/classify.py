@@ -1,0 +1,268 @@
+"""Classify measured pairs of a beam with a trained model (the library behind ``classify``)."""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from learn.classical import run_classical
+from learn.features import GRID_RAD_S, frf_features, map_frf_to_grid, modal_features
+from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows, identification_band_hz,
+                            identify_modes, modal_pair, mode_checks, nominal_ratio_range)
+from learn.model_dir import TrainedModel
+from learn.verdict import (IN_DISTRIBUTION_PERCENTILE, classical_answer, classical_verdict, equivalent_depth,
+                           network_answer, network_output, ood_percentile)
+from physics.errors import BeamDamageError
+from physics.io import MeasuredFRF
+
+__all__ = ["classify", "classify_many"]
+
+
+def classify(model: TrainedModel, baseline, current) -> dict:
+    """Verdict for one measured pair: :func:`classify_many` with one current input."""
+    return classify_many(model, baseline, [current])[0]
+
+
+def classify_many(model: TrainedModel, baseline, currents: list, names: list[str] | None = None) -> list[dict]:
+    """Verdicts for tests of one beam against the same baseline (one network call for all pairs).
+
+    Parameters
+    ----------
+    baseline : :class:`physics.io.ModalData` or :class:`physics.io.MeasuredFRF`
+        The undamaged state, on the model's DOFs (:func:`on_model_dofs`).
+    currents : list of the same kind as ``baseline``
+    names : list of str, optional
+        Names of the inputs (baseline first) for messages.
+
+    FRF files are identified by :data:`IDENTIFICATION` (LSCF/LSFD, the path the training data's modal noise
+    describes); the modal-route network and every classical method read those modes. A model on an FRF route
+    reads the FRFs themselves (any frequency lines, mapped onto its grid).
+
+    A pair whose tests do not both hold modes 1-4 (a band that stops below mode 4, a mode lost in the noise
+    floor) is classified on the modes both hold (:func:`modal_pair`) by every classical method; the modal
+    network, trained on 4 modes, gives no answer for it (``network`` None). Fewer than 2 common modes are refused
+    when the modal network would have to read them.
+
+    Returns
+    -------
+    list of dict, one verdict per current input. The verdict keys (``damaged``, ``location_*``,
+    ``hinge_flexibility*``...) are the network's answer when the pair lies inside the training data
+    (``in_distribution``: its Mahalanobis distance within the :data:`IN_DISTRIBUTION_PERCENTILE` percentile of
+    the training pairs', its modes 1-4 all present, in their training ranges and paired), else the classical
+    method's (``verdict_from``); ``network`` and ``classical`` hold both answers, ``classical_methods`` every
+    method's.
+    """
+    names = list(names) if names else ["baseline"] + [f"measured {k + 1}" for k in range(len(currents))]
+    warnings: list[str] = []
+    sens = model.sensitivity
+    base_md, cur_md, identified, pairs = _measured_pairs(model, baseline, currents, names, sens, warnings)
+    route, X, rows = _network_inputs(model, baseline, currents, pairs, identified, warnings)
+    if route == "modal":
+        _require_common_modes(pairs, names)
+    depth = functools.partial(equivalent_depth, preset=model.config.get("truth_beam") or model.beam.name,
+                              width_m=model.config["reference_width_m"])
+    nets, dist, pct, where = _network_answers(model, route, X, rows, sens, len(currents), depth)
+    answers, mode_reasons, mode_sens = _classical_answers(model, pairs, len(currents), sens)
+    results = []
+    for i, net in enumerate(nets):
+        cl = next((a for a in answers[i] if a["method"] == model.config["best_classical"]),
+                  answers[i][0] if answers[i] else None)
+        p = pairs[i] if pairs else None
+        reasons = list(mode_reasons[i])
+        if net is None:
+            reasons.append("; ".join(p.missing) + ": the network needs modes 1-4")
+        elif pct[i] > IN_DISTRIBUTION_PERCENTILE:
+            reasons.insert(0, f"Mahalanobis distance {dist[i]:.3g} from the training data, beyond "
+                              f"{pct[i]:.2f}% of training pairs")
+        verdict, from_network, w = _chosen_verdict(net, cl, p, reasons, warnings, mode_sens[i], depth)
+        freqs, modes = _frequencies_classified(p, base_md, cur_md[i] if cur_md else None)
+        results.append({
+            "measured": names[i + 1], **verdict, "verdict_from": "network" if from_network else "classical",
+            "in_distribution": not reasons, "out_of_distribution_reasons": reasons,
+            "mahalanobis_distance": dist[i], "training_percentile": pct[i],
+            "network": net, "classical": cl,
+            "classical_methods": answers[i],
+            "identification": {**IDENTIFICATION, "source": "identified from FRFs" if identified else "modal data",
+                               "baseline_frequencies_hz": [float(x) for x in freqs[0]],
+                               "measured_frequencies_hz": [float(x) for x in freqs[1]],
+                               "modes_classified": modes},
+            "input_route": route, "warnings": w,
+            "_extra": {"location_distribution": where[i]},
+        })
+    return results
+
+
+def _measured_pairs(model: TrainedModel, baseline, currents: list, names: list[str], sens, warnings: list):
+    """Modal data of the inputs and the modes each (baseline, current) pair holds:
+    ``(baseline ModalData, list of current ModalData, identified, list of ModalPair)``, the last three None when
+    the FRFs could not be identified (an FRF-input model then reads the FRFs alone)."""
+    base_md, cur_md, identified, found = _modal_inputs(model, baseline, currents, names, sens)
+    if base_md is None:
+        warnings.append("LSCF/LSFD identification failed: no classical answer; the FRF-route network alone")
+        return None, None, identified, None
+    found = found or [None] * len(names)
+    pairs = [modal_pair(base_md, c, model.beam, sens.frequencies_hz, (names[0], n), (found[0], f))
+             for c, n, f in zip(cur_md, names[1:], found[1:])]
+    warnings += list(dict.fromkeys(w for p in pairs for w in p.warnings))
+    return base_md, cur_md, identified, pairs
+
+
+def _require_common_modes(pairs: list, names: list[str]) -> None:
+    """Refuse a pair with fewer than 2 modes both tests hold (the modal network reads modes)."""
+    for p, n in zip(pairs, names[1:]):
+        if p.modes.size < 2:
+            raise BeamDamageError(f"{n}: {p.modes.size} of modes 1-4 found in both it and {names[0]} ("
+                                  + "; ".join(p.missing) + "); classify needs at least 2 common modes")
+
+
+def _network_answers(model: TrainedModel, route: str, X, rows: list, sens, n: int, depth):
+    """Per input (lists of ``n``): the network's answer (None for a pair it does not read), the Mahalanobis
+    distance from the training data, its training percentile, and the network's location distribution."""
+    nets, dist, pct, where = [None] * n, [None] * n, [None] * n, [None] * n
+    if not rows:
+        return nets, dist, pct, where
+    est = model.networks[route]
+    out, d = network_output(est, X, sens)
+    distance, percentile = ood_percentile(est, X)
+    for r, i in enumerate(rows):
+        nets[i] = network_answer(d, r, out, model.beam.length_m, depth(float(d.hinge_flexibility[r])))
+        dist[i], pct[i], where[i] = float(distance[r]), float(percentile[r]), d.location_distribution[r]
+    return nets, dist, pct, where
+
+
+def _chosen_verdict(net, cl, p, reasons: list, warnings: list, sens, depth):
+    """The verdict keys (the network's inside the training data, else the classical method's), whether they are
+    the network's, and the pair's warnings: ``(dict, bool, list)``."""
+    w = list(warnings)
+    inside = not reasons
+    modes_text = ", ".join(str(j + 1) for j in p.modes) if p is not None else ""
+    if net is None:
+        w.append(f"the network gives no answer for this pair (it needs modes 1-4): the verdict is the classical "
+                 f"method's ({cl['method']}) on modes {modes_text}")
+        return classical_verdict(cl, sens, depth), False, w
+    if inside or cl is None:
+        if not inside:
+            w.append("the pair lies outside the training data (" + "; ".join(reasons) + ") and no classical "
+                     "answer is available: treat the network's verdict with caution")
+        return dict(net), True, w
+    w.append("the pair lies outside the training data (" + "; ".join(reasons) + "): the verdict is the "
+             f"classical method's ({cl['method']}"
+             + ("" if p is None or p.complete else f" on modes {modes_text}")
+             + "); the network's answer is shown beside it")
+    return classical_verdict(cl, sens, depth), False, w
+
+
+def _frequencies_classified(p, base_md, cur_md):
+    """Baseline and measured natural frequencies (Hz) shown with the verdict, and the 1-based modes classified."""
+    if p is None:
+        return ([], []), []
+    if p.complete:
+        return np.abs(p.eigenvalues) / (2 * np.pi), [1, 2, 3, 4]
+    # every mode found, paired or not
+    return [np.sort(np.abs(md.eigenvalues)) / (2 * np.pi) for md in (base_md, cur_md)], [int(j) + 1 for j in p.modes]
+
+
+
+def _modal_inputs(model: TrainedModel, baseline, currents: list, names: list[str], sens):
+    """Modal data of the baseline and every current input: ``(ModalData, list of ModalData, identified, found)``,
+    ``found`` one text per input on the modes it holds (e.g. "LSCF/LSFD found 2 modes in 2-500 Hz")."""
+    inputs = [baseline, *currents]
+    kinds = {isinstance(d, MeasuredFRF) for d in inputs}
+    if len(kinds) > 1:
+        raise BeamDamageError("BASELINE and MEASURED must all be FRF files or all modal data")
+    if not kinds.pop():
+        return baseline, list(currents), False, None
+    fmax = IDENTIFICATION_BAND_FACTOR * float(sens.frequencies_hz[3])
+    try:
+        ids = [identify_modes(d, fmax, n) for d, n in zip(inputs, names)]
+    except BeamDamageError:
+        if model.route == "modal":
+            raise
+        return None, None, True, None          # an FRF-route model classifies the FRFs without modes
+    found = []
+    for d, md in zip(inputs, ids):
+        k = md.eigenvalues.size
+        lo, hi = identification_band_hz(d, fmax)
+        found.append(f"LSCF/LSFD found {k} mode{'s' * (k != 1)} in {lo:.4g}-{hi:.4g} Hz")
+    return ids[0], ids[1:], True, found
+
+
+def _frf_route_features(model: TrainedModel, baseline, currents, warnings: list):
+    """Grid features of the model's FRF route for (baseline, current) FRF pairs, or None if the files lack DOFs."""
+    rows_b = frf_rows(baseline, model.beam)
+    rows_c = [frf_rows(c, model.beam) for c in currents]
+    if rows_b[0] is None or any(r[0] is None for r in rows_c):
+        return None
+    if model.route == "updated":
+        warnings.append("the updated-model route is fed with the measured FRFs (no updating of measured FRFs here)")
+
+    def grid(r):
+        H, f = r
+        w = f.omega_rad_s
+        if w[0] > GRID_RAD_S[0] * 1.001 or w[-1] < GRID_RAD_S[-1] * 0.999:
+            msg = (f"FRF lines cover {w[0]:.4g}-{w[-1]:.4g} rad/s, the model's grid "
+                   f"{GRID_RAD_S[0]:.4g}-{GRID_RAD_S[-1]:.4g} rad/s: nearest values used outside")
+            if msg not in warnings:
+                warnings.append(msg)
+        return map_frf_to_grid(H, w)
+
+    gb = grid(rows_b)
+    return frf_features(np.stack([np.stack([gb, grid(r)]) for r in rows_c]))
+
+
+def _classical_answers(model: TrainedModel, pairs, n: int, sens):
+    """Every classical method's answers per pair, the reasons a complete pair's modes lie outside the training
+    data, and the sensitivities of the modes each pair was classified on: three lists of ``n``.
+
+    Complete pairs are classified in one call on modes 1-4; the others each on the modes both tests hold (the
+    sensitivities of those modes alone), none below 2 common modes."""
+    L = model.beam.length_m
+    thresholds = model.config["classical_thresholds"]
+    answers, reasons, mode_sens = [[] for _ in range(n)], [[] for _ in range(n)], [sens] * n
+    if pairs is None:
+        return answers, reasons, mode_sens
+    full = [i for i, p in enumerate(pairs) if p.complete]
+    if full:
+        lam = np.stack([pairs[i].eigenvalues for i in full])
+        vecs = np.stack([pairs[i].eigenvectors for i in full])
+        outs, _ = run_classical(lam, vecs, sens, thresholds)
+        for j, (i, why) in enumerate(zip(full, mode_checks(lam, vecs, nominal_ratio_range(sens)))):
+            answers[i], reasons[i] = [classical_answer(o, j, L) for o in outs], why
+    for i, p in enumerate(pairs):
+        if not p.complete and p.modes.size >= 2:
+            mode_sens[i] = sens.modes(p.modes)
+            outs, _ = run_classical(p.eigenvalues[None], p.eigenvectors[None], mode_sens[i], thresholds)
+            answers[i] = [classical_answer(o, 0, L) for o in outs]
+    return answers, reasons, mode_sens
+
+
+def _network_inputs(model: TrainedModel, baseline, currents: list, pairs, identified: bool, warnings: list):
+    """Route, feature rows and the pairs they belong to: ``(route, X, rows)``.
+
+    ``X`` are the FRF-route features of every pair when the model reads FRFs and the inputs are FRF files, else
+    the modal features of the pairs whose tests both hold modes 1-4 (``rows``: their indices; ``X`` None when
+    there are none). Warnings are appended to ``warnings``.
+    """
+    if identified and model.route in ("measured", "updated"):
+        X = _frf_route_features(model, baseline, currents, warnings)
+        if X is not None:
+            return model.route, X, list(range(len(currents)))
+    if pairs is None:
+        raise BeamDamageError(f"the files hold neither the FRFs the model's {model.route} route reads "
+                              "nor identifiable modes")
+    if "modal" not in model.networks:
+        raise BeamDamageError("this model has no modal-route network; give FRF files holding receptances at "
+                              f"{', '.join(model.beam.dofs)} driven at {model.beam.dofs[0]}")
+    rows = [i for i, p in enumerate(pairs) if p.complete]
+    X = None
+    if rows:
+        X = modal_features(np.stack([pairs[i].eigenvalues for i in rows]),
+                           np.stack([pairs[i].eigenvectors for i in rows]))
+    calibrated = (model.config.get("generator_config") or {}).get("measurement", {}).get("identification")
+    if identified and calibrated != IDENTIFICATION:
+        warnings.append("the training data's modal noise was not calibrated against the identification run "
+                        "here: retrain on data from 'beam-damage generate --config training'")
+    return "modal", X, rows
+
+

@@ -1,0 +1,267 @@
+"""Measured data made ready for a trained model: on its DOFs, modes identified from FRFs, and paired by frequency
+with the nominal beam's modes."""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, replace
+from itertools import combinations
+
+import numpy as np
+
+from learn.features import BeamSpec, real_shapes
+from physics.errors import BeamDamageError, FileFormatError
+from physics.identification import identify_frf
+from physics.io import MeasuredFRF, map_frf_dofs, map_measured_dofs, parse_dof, prepare_measured
+from physics.modal import mac
+
+__all__ = ["IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "RATIO_TOLERANCE", "ModalPair", "frf_rows",
+           "identification_band_hz", "identify_modes", "modal_pair", "mode_checks", "nominal_ratio_range",
+           "on_model_dofs", "pair_modes_by_frequency"]
+
+#: The identification ``classify`` runs on FRF files: LSCF poles and LSFD residues, the 4 lowest modes. The
+#: training data's modal noise (``measurement.modal_noise = "calibrated"``) is calibrated against this path
+#: (``experiments.bench_modal_noise``), and the dataset records it (``measurement.identification``).
+IDENTIFICATION = {"method": "lscf", "n_modes": 4}
+#: The band identified ends at this multiple of the model's nominal mode-4 frequency (mode 5 of a cantilever
+#: lies at 1.65 times mode 4; above the band, modes act through the upper residual).
+IDENTIFICATION_BAND_FACTOR = 1.4
+
+
+#: Tolerance on the measured frequency ratios ``f_k / f_1`` against the model's nominal beam: wide enough for
+#: another stiffness, root or shear flexibility (shear lowers f4/f1 by about 10 %), narrow against a missing or
+#: spurious mode (which moves a ratio by a factor of 2.6 or more).
+RATIO_TOLERANCE = 0.35
+
+
+
+def on_model_dofs(data, beam: BeamSpec, beam_x_m=None, where: str = "measured data"):
+    """Measured data moved onto the model's DOFs by position: ``(data on beam.dofs, DofMap or None)``.
+
+    Positions come from the file's node geometry (FRF files that carry it), else a beam file's
+    ``beam_x_m``, else the quarter-point convention (:func:`physics.io.map_measured_dofs`); each measured DOF
+    at a node of the model's 4-element grid is used (others, e.g. extra sensors between the quarter points, are
+    left out and named in the map's detail), and the model's DOFs (:attr:`BeamSpec.dofs`) must all be measured
+    (refused naming the missing ones). Rows are selected and ordered as ``beam.dofs`` and
+    relabelled with them; FRF references get the model DOF at their position too. DOFs labelled with a
+    negative sense (``"3:-Y"``) are turned to the positive one first, and an FRF file whose references, not its
+    responses, cover the model's DOFs (a roving hammer, one accelerometer) is read by reciprocity
+    (:func:`physics.io.prepare_measured`, the one rule). Modal data without ``dofs`` labels are returned as they are
+    (rows taken as the model's DOFs, with a warning later).
+    """
+    n = len(beam.dofs)
+    grid_x = np.linspace(0.0, beam.length_m, n + 1)
+    grid = tuple(f"{k}:y" for k in range(1, n + 2))
+    kw = dict(length_m=beam.length_m, n_elements=n, beam_x_m=beam_x_m)
+    if isinstance(data, MeasuredFRF):
+        def frf_map(d):
+            labels = tuple(dict.fromkeys(d.response_dofs + d.reference_dofs))
+            return map_frf_dofs(d, labels, grid_x, grid, off_grid="ignore", **kw)
+
+        prepared = prepare_measured(data, frf_map, wanted=beam.dofs)
+        data, dof_map = prepared.data, prepared.dof_map
+        to_model = dict(zip(dof_map.dofs, dof_map.model_dofs))
+        if prepared.reciprocal:  # a roving-hammer test: the hammer positions are the responses
+            dof_map = replace(dof_map, detail=dof_map.detail + "; responses at the hammer positions by "
+                              "reciprocity (H_ij = H_ji, a roving-hammer test)")
+        resp_map = replace(dof_map, dofs=data.response_dofs,
+                           model_dofs=tuple(to_model[d] for d in data.response_dofs))
+        resp = resp_map.rows(beam.dofs, where)
+        return replace(data, frf=data.frf[resp], response_dofs=tuple(beam.dofs),
+                       reference_dofs=tuple(to_model[d] or d for d in data.reference_dofs)), dof_map
+    data = prepare_measured(data).data
+    if not data.dofs or data.eigenvectors is None:
+        return data, None
+    dof_map = map_measured_dofs(data.dofs, grid_x, grid, where=where, off_grid="ignore", **kw)
+    rows = dof_map.rows(beam.dofs, where)
+    return replace(data, eigenvectors=data.eigenvectors[rows], dofs=tuple(beam.dofs)), dof_map
+
+
+@dataclass(frozen=True)
+class ModalPair:
+    """The modes of one (baseline, current) pair on the model's DOFs that both tests hold.
+
+    Attributes
+    ----------
+    eigenvalues : ndarray, complex, shape (2, c)          baseline and current, ascending frequency
+    eigenvectors : ndarray, complex, shape (2, n_dofs, c)
+    modes : ndarray, int, shape (c,)                      0-based nominal modes they are (``[0, 1, 2, 3]`` when
+                                                          both tests hold 4 modes)
+    missing : tuple of str                                which of modes 1-4 a test lacks, and why (empty when
+                                                          complete)
+    warnings : tuple of str
+    """
+
+    eigenvalues: np.ndarray
+    eigenvectors: np.ndarray
+    modes: np.ndarray
+    missing: tuple = ()
+    warnings: tuple = ()
+
+    @property
+    def complete(self) -> bool:
+        """Both tests hold modes 1-4 (what the modal network reads)."""
+        return self.modes.size == 4
+
+
+def pair_modes_by_frequency(frequencies_hz, nominal_hz, tolerance: float | None = None) -> np.ndarray:
+    """The nominal mode each identified mode is: 0-based indices into ``nominal_hz``, -1 for none.
+
+    The identified modes and the nominal beam's are aligned in frequency order: each identified mode pairs with
+    one nominal mode or none, each nominal mode with at most one, minimising the sum of the squared log frequency
+    ratios plus ``ln(1 + tolerance)^2`` per identified mode left unpaired (a spurious mode). A pairing farther
+    than a factor ``1 + tolerance`` is never kept; modes 1-4 of a cantilever lie a factor 1.96 or more apart.
+
+    Parameters
+    ----------
+    frequencies_hz : array, shape (k,)     identified natural frequencies (Hz), any order
+    nominal_hz : array, shape (m,)         the nominal beam's natural frequencies (Hz), ascending
+    tolerance : float, optional            default :data:`RATIO_TOLERANCE`
+
+    Returns
+    -------
+    ndarray, int, shape (k,)  e.g. ``[0, 1, 3]`` for modes 1, 2 and 4 of a test that misses mode 3.
+    """
+    f = np.asarray(frequencies_hz, float)
+    nominal = np.asarray(nominal_hz, float)
+    order = np.argsort(f)
+    cost = np.log(f[order, None] / nominal[None]) ** 2                 # (k, m)
+    skip = np.log1p(RATIO_TOLERANCE if tolerance is None else tolerance) ** 2
+    best, best_cost = np.full(f.size, -1), skip * f.size
+    for r in range(1, min(f.size, nominal.size) + 1):
+        for kept in combinations(range(f.size), r):
+            for target in combinations(range(nominal.size), r):
+                c = cost[kept, target].sum() + skip * (f.size - r)
+                if c < best_cost:
+                    best_cost = c
+                    best = np.full(f.size, -1)
+                    best[list(kept)] = target
+    out = np.empty(f.size, int)
+    out[order] = best
+    return out
+
+
+def modal_pair(baseline, current, beam: BeamSpec, nominal_hz, names=("baseline", "measured"),
+               found=None) -> ModalPair:
+    """The modes two :class:`physics.io.ModalData` of the model's DOFs both hold.
+
+    Two tests of 4 or more modes give their 4 lowest. When either holds fewer, each test's modes are paired with
+    the nominal beam's (:func:`pair_modes_by_frequency`, against ``nominal_hz``) and the modes both hold are
+    kept; ``found`` (one text per test, e.g. ``"LSCF/LSFD found 2 modes in 2-500 Hz"``) says in
+    :attr:`ModalPair.missing` where the others went.
+    """
+    warnings = []
+    lams, vecs = [], []
+    for name, d in zip(names, (baseline, current)):
+        if d.eigenvectors is None:
+            raise FileFormatError(f"{name} modal data: field 'eigenvectors' is required "
+                                  f"(rows = {', '.join(beam.dofs)})")
+        dofs = tuple(_canonical_dof(x) for x in d.dofs) if d.dofs else None
+        if dofs is None:
+            if d.eigenvectors.shape[0] != len(beam.dofs):
+                raise BeamDamageError(f"{name} modal data has {d.eigenvectors.shape[0]} DOFs but the model was trained "
+                                      f"on {len(beam.dofs)} ({', '.join(beam.dofs)})")
+            warnings.append(f"{name} modal data has no 'dofs': rows taken as {', '.join(beam.dofs)}")
+        elif dofs != tuple(beam.dofs):
+            raise BeamDamageError(f"{name} modal data: DOF set {list(d.dofs)} differs from the model's "
+                                  f"{list(beam.dofs)}")
+        o = np.argsort(np.abs(d.eigenvalues))[:4]
+        lams.append(d.eigenvalues[o])
+        vecs.append(d.eigenvectors[:, o])
+    if all(x.size == 4 for x in lams):
+        return ModalPair(np.stack(lams), np.stack(vecs), np.arange(4), (), tuple(warnings))
+    found = [how or f"it holds {x.size} mode{'s' * (x.size != 1)}" for how, x in zip(found or (None, None), lams)]
+    which = [pair_modes_by_frequency(np.abs(x) / (2 * np.pi), nominal_hz[:4]) for x in lams]
+    common = np.intersect1d(*which)
+    common = common[common >= 0]
+    missing = []
+    for name, how, k in zip(names, found, which):
+        absent = [j + 1 for j in range(4) if j not in k]
+        if absent:
+            missing.append(f"mode{'s' * (len(absent) > 1)} {', '.join(map(str, absent))} not identified in {name} "
+                           f"({how})")
+    take = [[int(np.flatnonzero(k == j)[0]) for j in common] for k in which]
+    return ModalPair(np.stack([x[t] for x, t in zip(lams, take)]), np.stack([v[:, t] for v, t in zip(vecs, take)]),
+                     common, tuple(missing), tuple(warnings))
+
+
+def _canonical_dof(label: str) -> str:
+    node, direction = parse_dof(label)
+    names = {1: "x", 2: "y", 3: "z", 4: "rx", 5: "ry", 6: "rz"}
+    return f"{node}:{names.get(abs(direction), str(direction))}"
+
+
+def frf_rows(frf, beam: BeamSpec):
+    """Receptances at the model's DOFs driven at its first DOF, shape (4, F); None if the file lacks some."""
+    f = frf.to_kind("receptance") if frf.frequency_hz[0] > 0 else frf.select_band(fmin_hz=1e-9).to_kind("receptance")
+    resp = [_canonical_dof(d) for d in f.response_dofs]
+    ref = [_canonical_dof(d) for d in f.reference_dofs]
+    if beam.dofs[0] not in ref or any(d not in resp for d in beam.dofs):
+        return None, f
+    j = ref.index(beam.dofs[0])
+    return np.stack([f.frf[resp.index(d), j] for d in beam.dofs]), f
+
+
+
+def identification_band_hz(frf, fmax_hz: float | None = None) -> tuple[float, float]:
+    """Band (Hz) :func:`identify_modes` fits: the file's lines from the first above 0 Hz up to ``fmax_hz``."""
+    f = frf.frequency_hz
+    return float(f[f > 0][0]), float(f[-1] if fmax_hz is None else min(f[-1], fmax_hz))
+
+
+def identify_modes(frf, fmax_hz: float | None = None, where: str = "FRF file"):
+    """Modal data of one FRF file by :data:`IDENTIFICATION` (the path the training data's modal noise describes).
+
+    Parameters
+    ----------
+    frf : :class:`physics.io.MeasuredFRF` on the model's DOFs
+    fmax_hz : float, optional
+        Upper end of the band fitted (Hz), between the beam's modes 4 and 5, so that the 4 modes identified are
+        the 4 lowest.
+
+    Returns
+    -------
+    :class:`physics.io.ModalData` with the modes identified in the band (at most 4; fewer when the band stops
+    below mode 4 or a mode sinks into the noise floor: :func:`pair_modes_by_frequency` tells which they are).
+    """
+    band = None
+    if fmax_hz is not None and frf.frequency_hz[-1] > fmax_hz:
+        band = identification_band_hz(frf, fmax_hz)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            ident = identify_frf(frf, method=IDENTIFICATION["method"], n_modes=IDENTIFICATION["n_modes"],
+                                 band_hz=band)
+    except (np.linalg.LinAlgError, RuntimeError) as exc:
+        raise BeamDamageError(f"{where}: LSCF/LSFD identification failed ({exc})") from None
+    return ident.modal_data
+
+
+
+def nominal_ratio_range(sens) -> np.ndarray:
+    """Accepted range of the frequency ratios ``f_k / f_1`` (k = 2..4), shape (3, 2): the nominal beam's ratios
+    times ``1 -+ RATIO_TOLERANCE``."""
+    r = sens.frequencies_hz[1:4] / sens.frequencies_hz[0]
+    return np.stack([r * (1 - RATIO_TOLERANCE), r * (1 + RATIO_TOLERANCE)], axis=1)
+
+
+def mode_checks(lam, vecs, ratio_range) -> list[list[str]]:
+    """Per pair, reasons it lies outside what the modal network was trained on: a frequency ratio ``f_k / f_1``
+    outside the accepted range (a missing or spurious mode), or baseline and current modes that do not pair
+    (MAC < 0.8)."""
+    f = np.abs(lam) / (2 * np.pi)                                 # (n, 2, 4)
+    ratio = f[..., 1:] / f[..., :1]                               # (n, 2, 3)
+    u = real_shapes(vecs)                                         # (n, 2, 4, m)
+    pairing = np.diagonal(mac(u[:, 0], u[:, 1]), axis1=-2, axis2=-1)  # (n, m)
+    reasons = []
+    for i in range(f.shape[0]):
+        r = [f"{name} f{k + 2}/f1 = {ratio[i, s, k]:.4g} lies outside the nominal beam's "
+             f"{ratio_range[k, 0]:.4g}-{ratio_range[k, 1]:.4g} (a missing or spurious mode)"
+             for s, name in enumerate(("baseline", "measured")) for k in range(3)
+             if not ratio_range[k, 0] <= ratio[i, s, k] <= ratio_range[k, 1]]
+        r += [f"mode {k + 1} of the baseline and the measured test do not pair (MAC {pairing[i, k]:.2f} < 0.8)"
+              for k in range(4) if pairing[i, k] < 0.8]
+        reasons.append(r)
+    return reasons
+
+

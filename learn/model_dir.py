@@ -1,0 +1,181 @@
+"""The model directory: what a trained classifier is, how it is written and read back.
+
+Model directory
+---------------
+``config.json``          beam it was trained for (name, length, DOF set, mass model; and the training data's
+                         truth beam from its manifest), default classifier input, estimator parameters and
+                         temperature per input, training data (paths, manifest checksums, generator config
+                         with its temperature/re-clamping ranges), detection threshold, classical-method
+                         thresholds, seed, package version, training time, test metrics
+``weights-<input>.pt``   ``torch.save`` of the network's state dict plus the input normalisation and the
+                         training features' precision matrix (loaded with ``weights_only=True``)
+``metrics.csv``          test-split metrics of the network(s) and the classical methods
+
+A model trained on an FRF input also carries a modal-input network, used for inputs that are modal data only
+(the thesis's measured data).
+"""
+
+from __future__ import annotations
+
+import io
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from learn.estimator import DamageClassifier
+from learn.features import BeamSpec
+from learn.sensitivity import beam_sensitivity
+from learn.verdict import verdict_text
+from physics.beam import load_beam
+from physics.errors import BeamDamageError, FileFormatError
+from physics.io import atomic_write_bytes, atomic_write_text, read_json
+from physics.properties import beam_preset
+
+__all__ = ["DEFAULT_ROUTE", "MODEL_FORMAT", "REFERENCE_WIDTH_M", "TrainedModel", "json_default", "load_model",
+           "save_model", "sensitivity_of"]
+
+
+#: Input route used by default (the winner of ``python -m experiments.bench_learn``).
+DEFAULT_ROUTE = "modal"
+#: Width assumed when a hinge flexibility is turned into a slit depth (m): middle of the training widths.
+REFERENCE_WIDTH_M = 0.0055
+MODEL_FORMAT = "beam-damage-model/3"
+
+
+@dataclass
+class TrainedModel:
+    """A loaded model directory."""
+
+    path: Path
+    config: dict
+    networks: dict = field(default_factory=dict)   # route -> DamageClassifier
+
+    @property
+    def beam(self) -> BeamSpec:
+        return BeamSpec.from_dict(self.config["beam"])
+
+    @property
+    def route(self) -> str:
+        return self.config["route"]
+
+    def check_beam(self, other: BeamSpec, what: str = "data") -> None:
+        """Refuse data of another beam, DOF set or mass model (a frequency grid may differ)."""
+        diff = self.beam.differences(other)
+        if diff:
+            raise BeamDamageError(f"model {self.path} was trained for {self.beam.name} ({self.beam.length_m:g} m, "
+                                  f"DOFs {', '.join(self.beam.dofs)}, {self.beam.mass_model} mass); the {what} has "
+                                  + "; ".join(diff))
+
+
+    @property
+    def sensitivity(self):
+        """FE sensitivities of the truth beam the model records (:func:`sensitivity_of`)."""
+        return sensitivity_of(self.beam, self.config.get("root_spring_relative"), self.config.get("truth_beam"),
+                              self.config.get("generator_config"))
+
+    def measured_beam(self, beam: str | None = None, mass_model: str | None = None):
+        """The beam spec of measured data and the sensor positions a beam file gives: ``(BeamSpec, x_m or None)``.
+
+        Parameters
+        ----------
+        beam : str, optional
+            The model's preset name (default), another preset name, or a beam file (``.toml``) whose
+            ``measured_x_m`` places the measured DOFs of files without node geometry.
+        mass_model : str, optional
+            Mass model of the data's updating (default: the model's).
+
+        Raises :class:`BeamDamageError` when the data's beam is not the model's (:meth:`check_beam`).
+        """
+        b = self.beam
+        mass_model = mass_model or b.mass_model
+        beam_x_m = None
+        if beam and Path(beam).suffix.lower() == ".toml":
+            fb = load_beam(beam)
+            spec = BeamSpec(b.name, fb.length_m, b.dofs, mass_model)
+            beam_x_m = fb.measured_x_m if fb.measured_x_given else None
+        else:
+            length_m = b.length_m if beam in (None, b.name) else beam_preset(beam).length_m
+            spec = BeamSpec(beam or b.name, length_m, b.dofs, mass_model)
+        self.check_beam(spec, "measured beam")
+        return spec, beam_x_m
+
+    @staticmethod
+    def verdict_text(result: dict) -> str:
+        """The verdict of one classified pair as a reader sees it (:func:`learn.verdict.verdict_text`)."""
+        return verdict_text(result)
+
+
+def save_model(out_dir, config: dict, networks: dict) -> None:
+    """Write the model directory atomically file by file (temp file, then rename)."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    for route, est in networks.items():
+        tensors, meta = est.get_state()
+        buf = io.BytesIO()
+        torch.save(tensors, buf)
+        atomic_write_bytes(out / f"weights-{route}.pt", buf.getvalue())
+        config.setdefault("networks", {})[route] = meta
+    atomic_write_text(out / "config.json", json.dumps(config, indent=1, sort_keys=True, default=json_default))
+
+
+
+def load_model(model_dir, device=None) -> TrainedModel:
+    """Read a model directory (weights with ``torch.load(..., weights_only=True)``)."""
+    path = Path(model_dir)
+    cfg_path = path / "config.json"
+    if not cfg_path.is_file():
+        raise FileFormatError(f"{path}: not a model directory (no config.json); create one with 'beam-damage train'")
+    config = read_json(cfg_path)
+    if config.get("format") != MODEL_FORMAT:
+        raise FileFormatError(f"{cfg_path}: field 'format' is {config.get('format')!r}, expected {MODEL_FORMAT!r} "
+                              "(fields and features differ between formats): re-create the model with "
+                              "'beam-damage train'")
+    for key, kind in (("route", str), ("networks", dict), ("beam", dict), ("classical_thresholds", dict),
+                      ("best_classical", str), ("reference_width_m", float)):
+        if not isinstance(config.get(key), kind):
+            raise FileFormatError(f"{cfg_path}: field {key!r} missing or not a {kind.__name__}; "
+                                  f"re-create the model with 'beam-damage train'")
+    model = TrainedModel(path, config)
+    for route, meta in config.get("networks", {}).items():
+        w = path / f"weights-{route}.pt"
+        try:
+            tensors = torch.load(w, map_location="cpu", weights_only=True)
+        except FileNotFoundError:
+            raise FileFormatError(f"{w}: weights file missing") from None
+        except Exception as exc:  # noqa: BLE001 - any unpickling failure is a bad file
+            why = " ".join(str(exc).split())[:160]
+            raise FileFormatError(f"{w}: not a weights file readable with weights_only=True ({why})") from None
+        try:
+            model.networks[route] = DamageClassifier.from_state(tensors, meta, device=device)
+        except (KeyError, TypeError, ValueError, AttributeError, RuntimeError) as exc:
+            why = " ".join(str(exc).split())[:160]
+            raise FileFormatError(f"{w}: weights do not match the network described in {cfg_path.name} "
+                                  f"({type(exc).__name__}: {why})") from None
+    if config["route"] not in model.networks:
+        raise FileFormatError(f"{cfg_path}: no network for its route {config['route']!r}")
+    return model
+
+
+
+def json_default(obj):
+    """numpy values in ``json.dumps`` (NaN stays NaN, which ``json.loads`` reads back)."""
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, (np.bool_, np.integer, np.floating)):
+        return obj.item()
+    raise TypeError(f"{type(obj).__name__} is not JSON serialisable")
+
+
+def sensitivity_of(beam: BeamSpec, config_root_spring=None, truth_beam: dict | None = None,
+                   generator_config: dict | None = None):
+    """FE sensitivities of the truth beam a dataset or model records (its preset when it records none), to the
+    damage kind of its generator config (slits when it records none)."""
+    kind = ((generator_config or {}).get("damage") or {}).get("kind", "slit")
+    if truth_beam and "EI_Nm2" in truth_beam:
+        key = (truth_beam["length_m"], truth_beam["EI_Nm2"], truth_beam["mass_per_length_kg_m"])
+        return beam_sensitivity(key, config_root_spring, kind=kind)
+    return beam_sensitivity(beam.name, config_root_spring, kind=kind)
+

@@ -1,0 +1,149 @@
+"""Train a damage classifier on generated datasets and evaluate it (the library behind ``train``/``evaluate``)."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from tqdm.auto import tqdm
+
+from datagen.store import package_version
+from learn.classical import run_classical
+from learn.estimator import DamageClassifier
+from learn.evaluate import figures, metrics, table_rows
+from learn.features import DOFS, GRID_RAD_S, ROUTES, Pairs, features, labels, load_pairs, split_by_specimen
+from learn.model_dir import (DEFAULT_ROUTE, MODEL_FORMAT, REFERENCE_WIDTH_M, TrainedModel, json_default, save_model,
+                             sensitivity_of)
+from learn.verdict import detectability_threshold, network_output
+from physics.errors import BeamDamageError
+from physics.io import atomic_write_text
+
+__all__ = ["DAY_CHANGES", "dataset_frfs", "day_changes", "evaluate", "targets", "train"]
+
+
+def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
+    """``y`` (n, 3) = [damaged, x/L, hinge flexibility] and the full truth dict of :func:`labels`."""
+    t = labels(pairs.table, pairs.beam.length_m)
+    return np.stack([t["damaged"].astype(float), t["x_over_L"], t["hinge_flexibility"]], axis=1), t
+
+
+def dataset_frfs(routes) -> tuple:
+    """Dataset FRFs (:data:`datagen.synth.DATASET_FRFS`) the input routes need."""
+    return tuple(r for r in routes if r != "modal")
+
+
+#: Generator keys of the changes between two test days (datagen config section ``specimen``).
+DAY_CHANGES = ("temperature_stiffness_change", "root_spring_change")
+
+
+def day_changes(source: list) -> dict:
+    """Temperature and re-clamping ranges of the first dataset's generator config."""
+    spec = source[0]["config"]["specimen"]
+    return {k: spec[k] for k in DAY_CHANGES}
+
+
+
+def _nominal_root_spring(source: list):
+    r = source[0]["config"]["specimen"]["root_spring_relative"]
+    return float(np.sqrt(r[0] * r[1])) if r else None
+
+
+# --------------------------------------------------------------------------- train
+def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None = None, progress: bool = False,
+          test_fraction: float = 0.15, threads: int | None = 1) -> dict:
+    """Train the default-route network (and a modal-route companion), score it and the classical methods, save.
+
+    Parameters
+    ----------
+    data : path or sequence of paths
+        Dataset directories of one beam, made by ``beam-damage generate --config training`` (intact and
+        damaged specimens, temperature and re-clamping changes between the two test days).
+    out_dir : model directory to write
+    route : input route (default :data:`DEFAULT_ROUTE`)
+    threads : torch CPU threads of the networks (``DamageClassifier.n_threads``; default 1)
+
+    Returns
+    -------
+    dict  summary (route, sizes, training seconds, test metrics)
+    """
+    route = DEFAULT_ROUTE if route is None else route
+    if route not in ROUTES:
+        raise BeamDamageError(f"--route {route!r} must be one of {', '.join(ROUTES)}")
+    routes = [route] + (["modal"] if route != "modal" else [])
+    t0 = time.perf_counter()
+    pairs = load_pairs(data, frfs=dataset_frfs(routes))
+    y, truth = targets(pairs)
+    if truth["damaged"].all() or not truth["damaged"].any():
+        raise BeamDamageError("training data must hold both intact and damaged pairs: generate them with "
+                              "'beam-damage generate --config training'")
+    changes = day_changes(pairs.source)
+    warnings = [] if any(v != [0.0, 0.0] for v in changes.values()) else [
+        "the training data have no temperature/re-clamping changes between the test days: a model trained on "
+        "them will call such changes damage; generate with --config training"]
+    tr, _, te = split_by_specimen(pairs.groups, (1 - test_fraction, 0.0, test_fraction), seed=seed)
+    load_s = time.perf_counter() - t0
+    sens = sensitivity_of(pairs.beam, _nominal_root_spring(pairs.source), pairs.source[0].get("truth_beam"),
+                          pairs.source[0].get("config"))
+    networks, outputs, fit_s = {}, [], {}
+    for r in routes:
+        X = features(pairs, r)
+        est = DamageClassifier(epochs=epochs, random_state=seed, n_threads=threads, verbose=progress)
+        est.fit(X[tr], y[tr], pairs.groups[tr])
+        networks[r] = est
+        fit_s[r] = est.train_seconds_
+        outputs.append(network_output(est, X[te], sens, f"network ({r})")[0])
+        del X
+    classical, thresholds = run_classical(pairs.eigenvalues[tr], pairs.eigenvectors[tr], sens,
+                                          damaged=truth["damaged"][tr])
+    classical, _ = run_classical(pairs.eigenvalues[te], pairs.eigenvectors[te], sens, thresholds)
+    truth_te = {k: v[te] for k, v in truth.items()}
+    rows = table_rows(outputs + classical, truth_te, pairs.table.iloc[te].reset_index(drop=True), pairs.beam.length_m)
+    base_all = [metrics(o, truth_te, None, "all", pairs.beam.length_m) for o in classical]
+    best = max(base_all, key=lambda m: (np.nan_to_num(m.element_accuracy), -np.nan_to_num(m.median_location_error_mm)))
+    config = {
+        "format": MODEL_FORMAT, "route": route, "beam": pairs.beam.to_dict(), "seed": seed, "epochs": epochs,
+        "grid_rad_s": GRID_RAD_S, "dofs": list(DOFS),
+        "training_data": [{k: s[k] for k in ("path", "manifest_checksum", "samples")} for s in pairs.source],
+        "generator_config": pairs.source[0]["config"],
+        "root_spring_relative": _nominal_root_spring(pairs.source),
+        "truth_beam": pairs.source[0]["truth_beam"], "day_changes": changes,
+        "detect_min_drop": detectability_threshold(),
+        "reference_width_m": REFERENCE_WIDTH_M, "classical_thresholds": thresholds, "best_classical": best.method,
+        "split": {"train_pairs": int(len(tr)), "test_pairs": int(len(te)), "by": "specimen"},
+        "train_seconds": fit_s, "load_seconds": load_s, "package_version": package_version(),
+        "test_metrics": [m for m in rows if m["subset"] == "all"],
+    }
+    save_model(out_dir, config, networks)
+    atomic_write_text(Path(out_dir) / "metrics.csv", pd.DataFrame(rows).to_csv(index=False))
+    return {"model": str(out_dir), "route": route, "train_pairs": int(len(tr)), "test_pairs": int(len(te)),
+            "train_seconds": fit_s, "load_seconds": load_s, "best_classical": best.method,
+            "test_metrics": config["test_metrics"], "warnings": warnings}
+
+
+def evaluate(model: TrainedModel, data, out_dir=None, *, extra_outputs=None, progress: bool = False) -> dict:
+    """Network(s) and classical methods on dataset(s) of the model's beam; table and figures."""
+    routes = list(model.networks)
+    pairs = load_pairs(data, frfs=dataset_frfs(routes))
+    model.check_beam(pairs.beam, f"dataset {pairs.source[0]['path']}")
+    _, truth = targets(pairs)
+    sens = model.sensitivity
+    outs = []
+    for r in tqdm([model.route] + [q for q in routes if q != model.route], desc="evaluate networks",
+                  disable=not progress):
+        outs.append(network_output(model.networks[r], features(pairs, r), sens, f"network ({r})")[0])
+    classical, _ = run_classical(pairs.eigenvalues, pairs.eigenvectors, sens, model.config["classical_thresholds"])
+    outs += classical + list(extra_outputs or [])
+    rows = table_rows(outs, truth, pairs.table, pairs.beam.length_m)
+    result = {"model": str(model.path), "data": [s["path"] for s in pairs.source], "pairs": len(pairs),
+              "rows": rows, "figures": []}
+    if out_dir is not None:
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(out / "metrics.csv", pd.DataFrame(rows).to_csv(index=False))
+        atomic_write_text(out / "metrics.json", json.dumps(rows, indent=1, default=json_default))
+        result["figures"] = figures(outs, truth, out, pairs.beam.length_m)
+    return result
+
