@@ -20,6 +20,7 @@ import numpy as np
 
 from datagen.checks import number as _num, value_range as _range
 from datagen.damage import DEFAULT_KIND, GENERIC_DEFAULTS, damage_defaults, damage_model
+from physics.io.inputs import check_input_file
 from physics.errors import BeamDamageError, ConfigError
 from physics.properties import PRESETS
 from physics.updating import mass_model_name
@@ -334,6 +335,9 @@ def named_configs() -> list[str]:
 
 
 def _read_toml(p: Path) -> dict:
+    if not p.exists() and not p.is_symlink():
+        raise ConfigError(f"config {str(p)!r}: no such file, and not one of the named configs {named_configs()}")
+    check_input_file(p, "toml", ConfigError, "a TOML config file")
     try:
         return tomllib.loads(p.read_bytes().decode("utf-8"))
     except tomllib.TOMLDecodeError as exc:
