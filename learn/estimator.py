@@ -45,6 +45,13 @@ class DamagePrediction:
     logit: np.ndarray                      # calibrated detection logit
 
 
+#: Bound of the network's raw outputs (far beyond any trained value), so that no exp of them overflows.
+RAW_LIMIT = 1e3
+#: Bound of the log of the size (hinge flexibility from e^-30 to e^30) and of its log-std (a factor e^5).
+LOG_SIZE_LIMIT = 30.0
+MAX_SIZE_LOG_STD = 5.0
+
+
 def lognormal_std(median, log_std):
     """Standard deviation of a log-normal variable from its median and the std of its logarithm."""
     return median * np.sqrt(np.expm1(log_std**2) * np.exp(log_std**2))
@@ -189,7 +196,11 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         with torch.no_grad(), torch_threads(self.n_threads):
             for i in range(0, T.shape[0], batch):
                 outs.append({k: v.cpu().numpy() for k, v in self.model_(T[i:i + batch]).items()})
-        return {k: np.concatenate([o[k] for o in outs]) for k in outs[0]} if outs else {}
+        if not outs:
+            return {}
+        # float64, and finite: inputs far outside the training data can drive float32 outputs to +-inf
+        return {k: np.clip(np.nan_to_num(np.concatenate([o[k] for o in outs]).astype(float), nan=0.0),
+                           -RAW_LIMIT, RAW_LIMIT) for k in outs[0]}
 
     # ------------------------------------------------------------------ fit
     def fit(self, X, y, groups=None):
@@ -295,8 +306,10 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         mean = p @ c
         std = np.sqrt(np.maximum(p @ c**2 - mean**2, 0.0) + 1.0 / (12 * self.n_bins**2))
         el = p.reshape(len(p), 4, -1).sum(axis=2)
-        med = np.exp(raw["size_mean"])
-        sd = lognormal_std(med, self.size_std_scale_ * np.exp(raw["size_log_std"]))
+        med = np.exp(np.clip(raw["size_mean"], -LOG_SIZE_LIMIT, LOG_SIZE_LIMIT))
+        log_std = np.minimum(self.size_std_scale_ * np.exp(np.minimum(raw["size_log_std"], LOG_SIZE_LIMIT)),
+                             MAX_SIZE_LOG_STD)
+        sd = lognormal_std(med, log_std)
         return DamagePrediction(expit(z), p, mean, std, el, np.argmax(el, axis=1) + 1, med, sd, z)
 
     # ------------------------------------------------------------------ persistence (no pickle)

@@ -2,7 +2,10 @@
 
 import json
 
+import warnings
+
 import numpy as np
+from pathlib import Path
 import pytest
 
 from datagen.config import load_config, merge
@@ -444,3 +447,41 @@ def test_the_printed_verdict_the_json_and_the_written_file_are_one_verdict(tiny,
     assert json.loads((out / "verdict.json").read_text()) == res
     assert res["input_route"] == ("modal" if kind == "modal json" else "measured")
     assert text.startswith(f"Verdict ({res['verdict_from']}")
+
+
+def test_a_pair_far_outside_the_training_data_gets_finite_network_numbers_and_no_raw_warning(tiny, modal_model,
+                                                                                             capsys):
+    """Beam 5's Table 4.5 against itself with every frequency halved: the network's inputs lie far outside the
+    training data; its probability and sizes stay finite and no numpy overflow warning reaches the user."""
+    from physics.io import format_complex, read_json
+
+    src = Path(__file__).resolve().parents[2] / "physics" / "data" / "thesis" / "beam5_table_4_5.json"
+    obj = read_json(src)
+    obj["eigenvalues"] = [format_complex(complex(str(c).replace(" ", "")) / 2) for c in obj["eigenvalues"]]
+    half = tiny / "half.json"
+    half.write_text(json.dumps(obj))
+    assert main(["classify", "--model", str(modal_model), "--baseline", str(src), str(half), "--json"]) == 0
+    cap = capsys.readouterr()
+    assert "overflow" not in cap.err and "warning" not in cap.err, cap.err
+    res = json.loads(cap.out)
+    assert res["verdict_from"] == "classical" and not res["in_distribution"]
+    net = res["network"]
+    assert 0.0 <= net["probability_damaged"] <= 1.0
+    assert np.isfinite(net["hinge_flexibility"]) and np.isfinite(net["hinge_flexibility_std"])
+    # the estimator itself when its network's float32 outputs overflow (as a trained network's do on such pairs)
+    from learn.model_dir import load_model
+
+    est = load_model(modal_model).networks["modal"]
+    real_model = est.model_
+
+    def overflowing(T):
+        out = real_model(T)
+        return {k: v * np.float32(3e38) * 10 for k, v in out.items()}   # +-inf (and NaN where 0 * inf)
+
+    est.model_ = overflowing
+    est.model_.eval = lambda: None
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        d = est.predict_details(np.zeros((2, est.n_features_in_)))
+    for name in ("probability_damaged", "x_over_L", "hinge_flexibility", "hinge_flexibility_std"):
+        assert np.all(np.isfinite(getattr(d, name))), name
