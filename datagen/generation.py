@@ -184,7 +184,7 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
                                   f"same config, seed and --n (or choose a new --out)")
         m, damaged = recover(root, m)
         if damaged:
-            print(f"{root}: {len(damaged)} damaged or foreign shard(s) {damaged} will be regenerated", file=sys.stderr)
+            print(f"{root}: {len(damaged)} damaged shard(s) {damaged} will be regenerated", file=sys.stderr)
         if write_omega(root, cfg):
             m["complete"] = False
             print(f"{root / 'omega_rad_s.npy'}: missing or damaged; rewritten from the config", file=sys.stderr)
