@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 
 from datagen.store import (ARRAYS, ARRAYS_V1, DERIVED, DATASET_FORMAT_V1, OPTIONAL, damaged_file, file_sha256,
-                           read_manifest)
+                           foreign_shard, read_manifest)
 from datagen.synth import DATASET_FRFS, SOURCES, line_index, synthesise
 from physics.errors import FileFormatError
 
@@ -48,6 +48,10 @@ class Dataset:
         self._omega = None
         if verify:
             for e in self.shards:
+                why = foreign_shard(self.manifest, e)
+                if why is not None:
+                    raise FileFormatError(f"{self.root / 'shards' / e['name']}: belongs to another dataset ({why}); "
+                                          f"re-run the same `beam-damage generate` command to regenerate the shard")
                 bad = damaged_file(self.root, e, sizes_only=True)
                 if bad is not None:
                     raise FileFormatError(self._damage_message(e, bad))

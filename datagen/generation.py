@@ -26,8 +26,8 @@ import numpy as np
 from datagen.config import validate
 from datagen.lock import LOCK_NAME, dataset_lock
 from datagen.pipeline import get_setup, simulate_shard
-from datagen.store import ARRAYS, DERIVED, DATASET_FORMAT, STATES, column_units, finalize, package_version, \
-    read_manifest, recover, sample_table, shard_arrays, write_manifest, write_shard
+from datagen.store import ARRAYS, DERIVED, DATASET_FORMAT, STATES, column_units, dataset_identity, finalize, \
+    package_version, read_manifest, recover, sample_table, shard_arrays, write_manifest, write_shard
 from physics.errors import BeamDamageError, ConfigError
 from physics.io import atomic_write_bytes
 
@@ -209,7 +209,8 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
     root.mkdir(parents=True, exist_ok=True)
     setup = get_setup(cfg)
     write_omega(root, cfg)
-    m = {"format": DATASET_FORMAT, "package_version": package_version(), "config": cfg, "seed": seed, "n_requested": n,
+    m = {"format": DATASET_FORMAT, "identity": dataset_identity(cfg, seed), "package_version": package_version(),
+         "config": cfg, "seed": seed, "n_requested": n,
          "shard_size": cfg["output"]["shard_size"], "n_shards": len(shard_plan(n, cfg["output"]["shard_size"])),
          "complete": False, "shards": [], "schema": {"arrays": _schema(), "states": list(STATES),
                                                      "columns": column_units(setup.damage),
@@ -263,8 +264,10 @@ def _generate(root, cfg, n, seed, workers, client, progress, max_new_shards) -> 
     store = (get_setup(cfg).omega_rad_s, np.dtype(cfg["output"]["frf_dtype"])) if cfg["output"]["store_frf"] \
         else (None, None)
 
+    identity = manifest.get("identity")
+
     def record(index, table, arrays):
-        entry = write_shard(root, index, table, arrays, *store)
+        entry = write_shard(root, index, table, arrays, *store, identity=identity)
         manifest["shards"] = sorted(manifest["shards"] + [entry], key=lambda e: e["index"])
         write_manifest(root, manifest)
         bar.update(entry["n_samples"])

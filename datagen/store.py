@@ -45,9 +45,9 @@ from physics.io import atomic_write_text, read_json
 from physics.modal import modal_parameters
 
 __all__ = ["ARRAYS", "ARRAYS_V1", "COLUMN_UNITS", "DATASET_FORMAT", "DATASET_FORMAT_V1", "DERIVED", "OPTIONAL",
-           "ROW_GROUP", "STATES", "column_units", "damaged_file", "file_sha256", "finalize", "package_version",
-           "read_manifest", "recover", "sample_table", "shard_arrays", "shard_name", "verify_shard", "write_manifest",
-           "write_shard"]
+           "ROW_GROUP", "STATES", "column_units", "damaged_file", "dataset_identity", "file_sha256", "finalize",
+           "foreign_shard", "package_version", "read_manifest", "recover", "sample_table", "shard_arrays",
+           "shard_name", "verify_shard", "write_manifest", "write_shard"]
 
 DATASET_FORMAT = "beam-damage-dataset/2"
 DATASET_FORMAT_V1 = "beam-damage-dataset/1"
@@ -134,6 +134,35 @@ def shard_name(index: int) -> str:
     return f"shard-{index:06d}"
 
 
+def dataset_identity(cfg: dict, seed: int) -> dict:
+    """What a dataset's samples depend on: format, sha256 of the canonical config JSON, seed.
+
+    Recorded in ``manifest.json`` (``identity``) and, with the shard's ``index``, in every shard entry and the
+    shard's ``checksums.json``; a shard or manifest entry whose identity differs belongs to another dataset.
+    """
+    text = json.dumps(cfg, sort_keys=True)
+    return {"format": DATASET_FORMAT, "config_sha256": hashlib.sha256(text.encode()).hexdigest(), "seed": int(seed)}
+
+
+def foreign_shard(manifest: dict, entry: dict) -> str | None:
+    """Why a shard entry belongs to another dataset than ``manifest`` (one phrase), else None.
+
+    Manifests written before identities existed (no ``identity`` key) accept every entry.
+    """
+    if "identity" not in manifest:
+        return None
+    want = {**dataset_identity(manifest["config"], manifest["seed"]), "shard": entry.get("index")}
+    if manifest["identity"] != {k: v for k, v in want.items() if k != "shard"}:
+        return "the manifest's identity does not match its own config and seed"
+    got = entry.get("identity")
+    if got == want:
+        return None
+    if not isinstance(got, dict):
+        return "its entry carries no dataset identity"
+    diff = [k for k in want if got.get(k) != want[k]]
+    return f"its identity differs in {', '.join(diff)} (seed {got.get('seed')!r}, not {want['seed']})"
+
+
 def column_units(model: DamageModel) -> dict:
     """:data:`COLUMN_UNITS` plus the columns of the damage ``model`` (``damage{k}_size`` says what its size is)."""
     return {**COLUMN_UNITS, "damage{k}_size": f"- ({model.size_meaning})", **model.sample_units,
@@ -200,8 +229,11 @@ def shard_arrays(labels: dict, outputs: dict) -> dict:
     return out
 
 
-def write_shard(root, index: int, table: pd.DataFrame, arrays: dict, omega_rad_s=None, frf_dtype=None) -> dict:
+def write_shard(root, index: int, table: pd.DataFrame, arrays: dict, omega_rad_s=None, frf_dtype=None,
+                identity: dict | None = None) -> dict:
     """Write one shard atomically (temp directory, then rename); returns its manifest entry.
+
+    ``identity`` (:func:`dataset_identity`) is recorded with the shard's index in the entry and ``checksums.json``.
 
     With ``omega_rad_s`` given, the FRFs synthesised from ``arrays`` (exactly
     what :meth:`datagen.dataset.Dataset.frf` returns) are written too (``--store-frf``).
@@ -224,6 +256,8 @@ def write_shard(root, index: int, table: pd.DataFrame, arrays: dict, omega_rad_s
     entry = {"index": index, "name": shard_name(index), "n_samples": int(len(table)),
              "n_converged": int(table["converged"].sum()), "checksums": {p.name: file_sha256(p) for p in files},
              "sizes": {p.name: p.stat().st_size for p in files}}
+    if identity is not None:
+        entry["identity"] = dict(sorted({**identity, "shard": index}.items()))  # same bytes after a JSON reload
     (tmp / "checksums.json").write_text(json.dumps(entry, indent=1))
     for p in tmp.iterdir():  # flush file data before the rename makes the shard visible
         with open(p, "rb") as fh:
@@ -316,16 +350,17 @@ def recover(root, manifest: dict) -> tuple[dict, list]:
     """Clean up after an interrupted run before resuming.
 
     Drops temporary shard directories, verifies every recorded shard (sha256)
-    and forgets damaged ones (they are regenerated), and adopts
-    renamed-but-unrecorded shards whose checksums verify.
+    and forgets damaged ones and ones of another dataset (:func:`foreign_shard`;
+    they are regenerated), and adopts renamed-but-unrecorded shards whose
+    checksums verify and whose identity is this dataset's.
 
     Returns
     -------
     manifest : dict
-    damaged : list of int       indices of the recorded shards found damaged
+    damaged : list of int       indices of the recorded shards found damaged or foreign
     """
     shards = Path(root) / "shards"
-    damaged = [e["index"] for e in manifest["shards"] if not verify_shard(root, e)]
+    damaged = [e["index"] for e in manifest["shards"] if foreign_shard(manifest, e) or not verify_shard(root, e)]
     manifest["shards"] = [e for e in manifest["shards"] if e["index"] not in damaged]
     if damaged:
         manifest["complete"] = False
@@ -341,7 +376,8 @@ def recover(root, manifest: dict) -> tuple[dict, list]:
             except (OSError, json.JSONDecodeError):
                 shutil.rmtree(d, ignore_errors=True)
                 continue
-            if verify_shard(root, entry):
+            if isinstance(entry, dict) and entry.get("index") == int(d.name[6:]) \
+                    and foreign_shard(manifest, entry) is None and verify_shard(root, entry):
                 manifest["shards"].append(entry)
             else:
                 shutil.rmtree(d, ignore_errors=True)

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +25,8 @@ def add_parser(subparsers):
                     "model) and write one file per sample, state (baseline, current) and kind, named "
                     "sample-ID_STATE_KIND.EXT, receptance (m/N), responses at the measured DOFs, drive at the first.")
     p.add_argument("dir", help="dataset directory")
-    p.add_argument("--samples", required=True, help="comma-separated sample ids, e.g. 0,17,299")
+    p.add_argument("--samples", required=True, help="comma-separated sample ids, e.g. 0,17,299 (a repeated id is "
+                                                     "written once)")
     p.add_argument("--format", choices=sorted(writers), default="uff",
                    help="file format (default uff): " + "; ".join(f"{f.name}: {f.description}"
                                                                   for f in writers.values()))
@@ -41,7 +43,11 @@ def _sample_ids(text: str) -> list[int]:
         raise BeamDamageError(f"--samples must be comma-separated integers such as 0,17,299, got {text!r}") from None
     if not ids:
         raise BeamDamageError("--samples names no sample")
-    return ids
+    unique = list(dict.fromkeys(ids))
+    if len(unique) < len(ids):
+        print(f"note: --samples names {len(ids) - len(unique)} id(s) more than once; each sample is written once",
+              file=sys.stderr)
+    return unique
 
 
 def _uff_dof(name: str) -> str:

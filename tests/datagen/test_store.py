@@ -267,3 +267,44 @@ def test_torch_loader_synthesises_in_workers_and_refuses_damaged_shards(referenc
     with pytest.raises(FileFormatError, match=r"shard-000001.*noise_seed.npy") as exc:
         make_loader(root, "measured", num_workers=2)
     assert "\n" not in str(exc.value)
+
+
+@pytest.fixture(scope="module")
+def other_seed(tmp_path_factory):
+    root = tmp_path_factory.mktemp("other") / "ds"
+    generate(root, CFG, n=N, seed=12, workers=1, progress=False)
+    return root
+
+
+def _swap_shard(reference, other, root, with_entry):
+    shutil.copytree(reference, root)
+    shutil.rmtree(root / "shards" / "shard-000002")
+    shutil.copytree(other / "shards" / "shard-000002", root / "shards" / "shard-000002")
+    if with_entry:
+        m = json.loads((root / "manifest.json").read_text())
+        m["shards"][2] = json.loads((other / "manifest.json").read_text())["shards"][2]
+        (root / "manifest.json").write_text(json.dumps(m))
+
+
+@pytest.mark.parametrize("with_entry", [False, True], ids=["shard-only", "shard-and-manifest-entry"])
+def test_shard_of_another_seed_is_refused_and_regenerated(reference, other_seed, tmp_path, with_entry, capsys):
+    root = tmp_path / "ds"
+    _swap_shard(reference, other_seed, root, with_entry)
+    m = json.loads((root / "manifest.json").read_text())
+    assert m["identity"]["seed"] == 11 and m["shards"][2]["identity"]["seed"] == (12 if with_entry else 11)
+    assert json.loads((root / "shards/shard-000002/checksums.json").read_text())["identity"]["seed"] == 12
+    with pytest.raises(FileFormatError, match="shard-000002"):
+        Dataset(root).verify_or_raise()
+    m = generate(root, CFG, n=N, seed=11, workers=1, progress=False)
+    assert "[2] will be regenerated" in capsys.readouterr().err
+    assert m["complete"] and Dataset(root).verify()
+    for f in sorted((reference / "shards" / "shard-000002").iterdir()):
+        assert (root / "shards/shard-000002" / f.name).read_bytes() == f.read_bytes(), f.name
+    assert (root / "samples.parquet").read_bytes() == (reference / "samples.parquet").read_bytes()
+
+
+def test_copied_manifest_entry_is_named_by_the_loader(reference, other_seed, tmp_path):
+    root = tmp_path / "ds"
+    _swap_shard(reference, other_seed, root, with_entry=True)
+    with pytest.raises(FileFormatError, match=r"shard-000002: belongs to another dataset .*seed 12, not 11"):
+        Dataset(root)

@@ -60,6 +60,14 @@ def test_export_round_trips_through_the_readers(tmp_path, capsys):
         assert np.abs(got.frf[:, 0, :] - want).max() <= 1e-5 * np.abs(want).max()
     assert main(["export", str(tmp_path / "ds"), "--samples", "3,99", "--out", str(tmp_path / "x")]) == 2
     assert "99" in capsys.readouterr().err
+    rc = main(["export", str(tmp_path / "ds"), "--samples", "0,0,5,0", "--kind", "measured", "--format", "npz",
+               "--out", str(tmp_path / "dup"), "--json"])
+    assert rc == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["samples"] == [0, 5] and len(json.loads(out)["files"]) == 2 * 2
+    assert err == "note: --samples names 2 id(s) more than once; each sample is written once\n"
+    assert sorted(p.name for p in (tmp_path / "dup").iterdir()) == [
+        f"sample-{i:06d}_{s}_measured.npz" for i in (0, 5) for s in ("baseline", "current")]
 
 
 def test_training_config_by_name_and_robustness_file_on_top(tmp_path, capsys):
