@@ -259,7 +259,9 @@ def circle_fit_sdof(frequency_hz, mobility, fn_guess_hz, zeta_guess):
 
     wn0 = 2 * np.pi * fn_guess_hz
     k0 = np.argmin(np.abs(w - wn0))
-    sol = least_squares(resid, [wn0, max(zeta_guess, 1e-5), phi[k0]],
+    # the peak's own estimates may fall outside the fitted lines' range (a peak at the band edge, a broad one)
+    start = [float(np.clip(wn0, w[0], w[-1])), float(np.clip(zeta_guess, 1e-5, 0.4)), phi[k0]]
+    sol = least_squares(resid, start,
                         bounds=([w[0], 1e-6, -np.inf], [w[-1], 0.5, np.inf]), x_scale=[wn0 * 1e-3, 1e-3, 1])
     wn, z_fit, phr = sol.x
     dof = max(w.size - 3, 1)
@@ -320,6 +322,7 @@ def circle_fit(frequency_hz, frf, n_modes=None, peaks=None, drive=None, bandwidt
     zsd = np.empty_like(fn)
     A = np.empty((n_s, n_r, n_m), complex)
     edges = np.r_[0, (idx[1:] + idx[:-1]) // 2, f.size - 1]
+    fitted = np.ones(n_m, bool)
     for m in range(n_m):
         fm, zm = pk.natural_frequencies_hz[m], pk.damping_ratios[m]
         sel = np.nonzero(np.abs(f - fm) <= bandwidths * max(zm, 1e-4) * fm)[0]
@@ -328,14 +331,20 @@ def circle_fit(frequency_hz, frf, n_modes=None, peaks=None, drive=None, bandwidt
             lo, hi = max(lo - 1, 0), min(hi + 1, f.size - 1)
         lo, hi = max(lo, edges[m]), min(hi, edges[m + 1])
         if hi - lo + 1 < 4:
-            raise ShapeError(f"circle fit: fewer than 4 lines around the peak at {fm:.4g} Hz; "
-                             "use finer lines or the lscf method")
+            fitted[m] = False
+            warnings.warn(f"circle fit: the peak at {fm:.4g} Hz was skipped: fewer than 4 lines around it "
+                          "(finer lines or the lscf method fit it)", stacklevel=2)
+            continue
         for s in range(n_s):
             for r in range(n_r):
                 out = circle_fit_sdof(f[lo:hi + 1], mob[s, r, lo:hi + 1], fm, zm)
                 fn[s, r, m], zz[s, r, m] = out.fn_hz, out.zeta
                 fsd[s, r, m], zsd[s, r, m] = out.fn_std_hz, out.zeta_std
                 A[s, r, m] = out.modal_constant
+    if not fitted.any():
+        raise ShapeError("circle fit: no peak has 4 lines around it; use finer lines or the lscf method")
+    fn, zz, fsd, zsd, A = (a[..., fitted] for a in (fn, zz, fsd, zsd, A))
+    n_m = int(fitted.sum())
     weight = np.abs(A).reshape(-1, n_m)  # strong circles count more
     weight = weight / weight.sum(axis=0)
     f_mode = np.sum(weight * fn.reshape(-1, n_m), axis=0)

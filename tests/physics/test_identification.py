@@ -453,3 +453,18 @@ def test_identify_frf_reads_a_roving_hammer_by_reciprocity_and_negative_senses_a
                                    atol=1e-6 * np.abs(ref.estimate.shapes).max())
     np.testing.assert_allclose(align(ref.estimate.shapes, cm.eigenvectors), cm.eigenvectors, rtol=0,
                                atol=1e-5 * np.abs(cm.eigenvectors).max())
+
+
+def test_circle_fit_sdof_starts_inside_its_bounds():
+    """A peak whose estimated frequency lies beyond the fitted lines and whose damping estimate exceeds the bound
+    (a broad peak at a band edge of a wide-band file) is still fitted: the start is clipped into the bounds
+    (before: 'Initial guess is outside of provided bounds')."""
+    from physics.identification.sdof import circle_fit_sdof
+
+    fn, zeta = 100.0, 0.01
+    f = np.linspace(97.0, 103.0, 31)
+    w, wn = 2 * np.pi * f, 2 * np.pi * fn
+    mobility = 1j * w / (wn**2 - w**2 + 2j * zeta * wn * w)
+    for fn_guess, zeta_guess in ((110.0, 0.01), (100.0, 0.9), (90.0, 0.7)):
+        out = circle_fit_sdof(f, mobility, fn_guess, zeta_guess)
+        assert out.fn_hz == pytest.approx(fn, rel=1e-6) and out.zeta == pytest.approx(zeta, rel=1e-3)
