@@ -1,4 +1,5 @@
-"""Simulated datasets of slit-damaged beams: configuration, batched pipeline, store, FRFs on read, loaders.
+"""Simulated datasets of damaged beams: configuration, damage kinds (:mod:`datagen.damage`), batched pipeline,
+store, FRFs on read, loaders.
 
 The names below load their modules on first use (``import datagen.config`` stays light: no pandas, no
 workers' machinery, for the command line's parsers).

@@ -18,11 +18,14 @@ from pathlib import Path
 
 import numpy as np
 
+from datagen.checks import number as _num, value_range as _range
+from datagen.damage import DEFAULT_KIND, GENERIC_DEFAULTS, damage_defaults, damage_model
+from physics.io.inputs import check_input_file
 from physics.errors import BeamDamageError, ConfigError
 from physics.properties import PRESETS
 from physics.updating import mass_model_name
 
-__all__ = ["CONFIG_DIR", "DEFAULTS", "MAX_MODAL_NOISE", "MAX_SHEAR_FLEXIBILITY", "MAX_SLIT_LOSS_FACTOR",
+__all__ = ["CONFIG_DIR", "DEFAULTS", "MAX_MODAL_NOISE", "MAX_SHEAR_FLEXIBILITY",
            "calibrated_modal_std", "load_config", "merge", "modal_noise_calibration", "named_configs", "validate"]
 
 
@@ -47,16 +50,7 @@ DEFAULTS: dict = {
         "root_spring_change": [0.0, 0.0],            # relative root-spring change on re-clamping (uniform)
         "shear_flexibility": [0.0, 0.0],  # EI / (kGA L^2) of the specimen (uniform; 0: Euler-Bernoulli elements)
     },
-    "damage": {
-        "n_slits": [1, 1],
-        "intact_fraction": 0.0,              # share of samples without any slit
-        "position_fraction": [0.03, 0.97],   # x / L of the slit centre
-        "width_m": [0.002, 0.01],            # effective length of the reduced section
-        "depth_m": [0.0002, 0.0003],         # thesis: 0.2-0.3 mm into the top face sheet
-        "ei_loss": [],                       # if set: relative EI loss of the slit section (depth follows)
-        "slit_damping_s": [0.0, 2.0e-5],     # extra stiffness-proportional damping of the slit region (s);
-                                             # loss factor beta*omega
-    },
+    "damage": damage_defaults(DEFAULT_KIND),   # keys of the default kind; another damage.kind has its own
     "measurement": {
         "modal_noise": "fixed",        # "fixed": the three stds below; "calibrated": per-mode coefficients times the
                                        # sample's FRF noise level (configs/modal_noise.json,
@@ -97,34 +91,6 @@ DEFAULTS: dict = {
 }
 
 
-def _range(key, v, *, lo=None, hi=None, integer=False, allow_empty=False):
-    if allow_empty and isinstance(v, list) and len(v) == 0:
-        return []
-    if not (isinstance(v, list) and len(v) == 2 and all(isinstance(x, (int, float)) and not isinstance(x, bool)
-                                                           for x in v)):
-        raise ConfigError(f"config key {key!r} must be a range [low, high] of two numbers, got {v!r}")
-    a, b = v
-    if integer and not all(float(x).is_integer() for x in v):
-        raise ConfigError(f"config key {key!r} must hold integers, got {v!r}")
-    if not (math.isfinite(a) and math.isfinite(b)) or a > b:
-        raise ConfigError(f"config key {key!r} must satisfy low <= high (finite), got {v!r}")
-    if lo is not None and a < lo or hi is not None and b > hi:
-        raise ConfigError(f"config key {key!r} must lie within [{lo}, {hi}], got {v!r}")
-    return [int(a), int(b)] if integer else [float(a), float(b)]
-
-
-def _num(key, v, *, lo=None, hi=None, integer=False, strict_lo=False):
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or (integer and not float(v).is_integer()):
-        raise ConfigError(f"config key {key!r} must be {'an integer' if integer else 'a number'}, got {v!r}")
-    if not math.isfinite(v):
-        raise ConfigError(f"config key {key!r} must be finite, got {v!r}")
-    if lo is not None and (v <= lo if strict_lo else v < lo) or hi is not None and v > hi:
-        raise ConfigError(f"config key {key!r} must lie in {'(' if strict_lo else '['}{lo}, {hi}], got {v!r}")
-    return int(v) if integer else float(v)
-
-
-#: Largest loss factor ``beta * omega`` of a slit's stiffness-proportional damping over the measurement band.
-MAX_SLIT_LOSS_FACTOR = 1.0
 #: Largest relative modal noise std (frequency, damping ratio, shape), fixed or implied by calibrated FRF noise.
 MAX_MODAL_NOISE = 0.5
 
@@ -166,13 +132,12 @@ def validate(cfg: dict) -> dict:
     _check_sections(cfg)
     _check_beam(cfg)
     _check_specimen(cfg["specimen"])
-    _check_damage(cfg["damage"])
     calibrated = _check_measurement(cfg["measurement"])
-    _check_slit_loss_factor(cfg["damage"], cfg["measurement"])
     if calibrated:
         _check_calibrated_noise(cfg["measurement"])
     _check_updating(cfg["updating"])
     _check_solver(cfg["solver"], cfg["mesh"]["truth_elements"])
+    _check_damage(cfg)
     _check_output(cfg["output"])
     return cfg
 
@@ -192,6 +157,8 @@ def _check_sections(cfg: dict) -> None:
         if isinstance(d, dict):
             if not isinstance(cfg[sec], dict):
                 raise ConfigError(f"config key {sec!r} must be a table")
+            if sec == "damage":  # the keys of its kind
+                d = damage_defaults(cfg[sec].get("kind", DEFAULT_KIND))
             for k in cfg[sec]:
                 if k not in d:
                     raise ConfigError(f"unknown config key '{sec}.{k}'; expected one of {sorted(d)}")
@@ -232,15 +199,13 @@ def _check_specimen(dmg: dict) -> None:
     dmg["damping_ratios"] = [float(z) for z in zr]
 
 
-def _check_damage(d: dict) -> None:
-    """Section ``damage``: slit counts, positions, sizes, intact fraction, slit damping."""
-    d["n_slits"] = _range("damage.n_slits", d["n_slits"], lo=0, hi=8, integer=True)
+def _check_damage(cfg: dict) -> None:
+    """Section ``damage``: kind, intact fraction, positions, then the kind's own keys (its ``validate``)."""
+    d = cfg["damage"]
+    model = damage_model(d["kind"])
     d["position_fraction"] = _range("damage.position_fraction", d["position_fraction"], lo=0.0, hi=1.0)
-    d["width_m"] = _range("damage.width_m", d["width_m"], lo=1e-6, hi=0.1)
-    d["depth_m"] = _range("damage.depth_m", d["depth_m"], lo=0.0)
     d["intact_fraction"] = _num("damage.intact_fraction", d["intact_fraction"], lo=0.0, hi=1.0)
-    d["ei_loss"] = _range("damage.ei_loss", d["ei_loss"], lo=0.0, hi=0.9999, allow_empty=True)
-    d["slit_damping_s"] = _range("damage.slit_damping_s", d["slit_damping_s"], lo=0.0, hi=1.0)
+    model.validate(d, cfg)
 
 
 def _check_measurement(meas: dict) -> bool:
@@ -278,15 +243,6 @@ def _check_measurement(meas: dict) -> bool:
         raise ConfigError("config key 'measurement.band_rad_s' must have low < high")
     meas["lines"] = _num("measurement.lines", meas["lines"], lo=2, hi=200000, integer=True)
     return bool(calib)
-
-
-def _check_slit_loss_factor(d: dict, meas: dict) -> None:
-    """The slit's loss factor ``beta * omega`` stays <= :data:`MAX_SLIT_LOSS_FACTOR` over the measurement band."""
-    top_rad_s = meas["band_rad_s"][1]
-    if d["slit_damping_s"][1] * top_rad_s > MAX_SLIT_LOSS_FACTOR:
-        raise ConfigError(f"config key 'damage.slit_damping_s' must keep the slit's loss factor beta*omega <= "
-                          f"{MAX_SLIT_LOSS_FACTOR:g} up to the top of measurement.band_rad_s ({top_rad_s:g} rad/s): "
-                          f"beta <= {MAX_SLIT_LOSS_FACTOR / top_rad_s:.3g} s, got {d['slit_damping_s']!r}")
 
 
 def _check_calibrated_noise(meas: dict) -> None:
@@ -355,9 +311,14 @@ def merge(overrides: dict | None = None, base: dict | None = None) -> dict:
         if isinstance(DEFAULTS[k], dict):
             if not isinstance(v, dict):
                 raise ConfigError(f"config key {k!r} must be a table")
+            keys = DEFAULTS[k]
+            if k == "damage" and v.get("kind", cfg[k].get("kind")) != cfg[k].get("kind"):
+                cfg[k] = damage_defaults(v["kind"])   # another kind: its own defaults
+            if k == "damage":
+                keys = damage_defaults(cfg[k].get("kind", DEFAULT_KIND))
             for kk in v:
-                if kk not in DEFAULTS[k]:
-                    raise ConfigError(f"unknown config key '{k}.{kk}'; expected one of {sorted(DEFAULTS[k])}")
+                if kk not in keys:
+                    raise ConfigError(f"unknown config key '{k}.{kk}'; expected one of {sorted(keys)}")
             cfg[k].update(copy.deepcopy(v))
         else:
             cfg[k] = v
@@ -374,6 +335,9 @@ def named_configs() -> list[str]:
 
 
 def _read_toml(p: Path) -> dict:
+    if not p.exists() and not p.is_symlink():
+        raise ConfigError(f"config {str(p)!r}: no such file, and not one of the named configs {named_configs()}")
+    check_input_file(p, "toml", ConfigError, "a TOML config file")
     try:
         return tomllib.loads(p.read_bytes().decode("utf-8"))
     except tomllib.TOMLDecodeError as exc:
@@ -401,7 +365,10 @@ def _overrides(name_or_path, depth=0) -> dict:
         raise ConfigError(f"{p}: config key 'base' must name a shipped config {named_configs()}, got {base!r}")
     merged = _overrides(base, depth + 1)
     for k, v in over.items():
-        if isinstance(v, dict) and isinstance(merged.get(k), dict):
+        if k == "damage" and isinstance(v, dict) and isinstance(merged.get(k), dict) \
+                and v.get("kind", DEFAULT_KIND) != merged[k].get("kind", DEFAULT_KIND):
+            merged[k] = {kk: x for kk, x in merged[k].items() if kk in GENERIC_DEFAULTS} | v   # another kind
+        elif isinstance(v, dict) and isinstance(merged.get(k), dict):
             merged[k] = {**merged[k], **v}
         else:
             merged[k] = v
@@ -412,7 +379,7 @@ def load_config(name_or_path=None, *, preset: str | None = None) -> dict:
     """A named config (:func:`named_configs`) or a TOML file over the defaults; ``preset`` overrides the file's.
 
     A TOML file may start from a named config with a top-level ``base = "training"``
-    and override any of its keys (e.g. robustness sets: more slits, more noise).
+    and override any of its keys (e.g. robustness sets: more damages, more noise).
     """
     over = {} if name_or_path is None else _overrides(name_or_path)
     if preset is not None:

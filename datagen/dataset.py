@@ -228,7 +228,7 @@ class Dataset:
         return True
 
 
-def load_torch(root, arrays=("frf_updated",), columns=("slit1_x_m", "slit1_depth_m"), converged_only=False,
+def load_torch(root, arrays=("frf_updated",), columns=("damage0_x_m", "damage0_size"), converged_only=False,
                dtype=None):
     """Torch-ready tensors of a whole dataset: complex arrays with a trailing real/imag axis, labels as floats.
 

@@ -13,6 +13,7 @@ import io
 import json
 import math
 import os
+import signal
 import shutil
 import sys
 from collections import deque
@@ -23,8 +24,9 @@ from pathlib import Path
 import numpy as np
 
 from datagen.config import validate
+from datagen.lock import LOCK_NAME, dataset_lock
 from datagen.pipeline import get_setup, simulate_shard
-from datagen.store import ARRAYS, COLUMN_UNITS, DERIVED, DATASET_FORMAT, STATES, finalize, package_version, \
+from datagen.store import ARRAYS, DERIVED, DATASET_FORMAT, STATES, column_units, finalize, package_version, \
     read_manifest, recover, sample_table, shard_arrays, write_manifest, write_shard
 from physics.errors import BeamDamageError, ConfigError
 from physics.io import atomic_write_bytes
@@ -52,11 +54,20 @@ def compute_shard(cfg_json: str, seed: int, index: int, first_id: int, n: int):
     setup = get_setup(cfg)
     with threadpool_limits(1):  # one BLAS thread per process: shards are the parallel unit
         labels, out = simulate_shard(setup, np.random.SeedSequence(seed, spawn_key=(index,)), n)
-    return sample_table(labels, out, index, first_id, setup.length_m), shard_arrays(labels, out)
+    return sample_table(labels, out, index, first_id, setup.length_m, setup.damage), shard_arrays(labels, out)
 
 
 def _init_worker():
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    # Ctrl-C reaches the whole process group: the parent alone reports it and stops the workers
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _stop_workers(pool) -> None:
+    """Cancel queued shards and end the workers at once (an interrupted run resumes from the written shards)."""
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        proc.terminate()
 
 
 def _run_local_pool(todo, workers, record, cfg_json, seed):
@@ -78,19 +89,23 @@ def _run_local_pool(todo, workers, record, cfg_json, seed):
                 i, f, k = pending.popleft()
                 futs[pool.submit(compute_shard, cfg_json, seed, i, f, k)] = i
 
-        top_up()
-        while futs or pending:
-            ready = [fut for fut in futs if fut.done()]
-            for fut in ready:
-                record(futs.pop(fut), *fut.result())
+        try:
             top_up()
-            if ready:
-                continue
-            if pending:
-                i, f, k = pending.pop()  # from the end: the workers keep the front of the queue
-                record(i, *compute_shard(cfg_json, seed, i, f, k))
-            else:
-                wait(futs, return_when=FIRST_COMPLETED)
+            while futs or pending:
+                ready = [fut for fut in futs if fut.done()]
+                for fut in ready:
+                    record(futs.pop(fut), *fut.result())
+                top_up()
+                if ready:
+                    continue
+                if pending:
+                    i, f, k = pending.pop()  # from the end: the workers keep the front of the queue
+                    record(i, *compute_shard(cfg_json, seed, i, f, k))
+                else:
+                    wait(futs, return_when=FIRST_COMPLETED)
+        except BaseException:
+            _stop_workers(pool)
+            raise
 
 
 def _schema() -> dict:
@@ -189,7 +204,7 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
             m["complete"] = False
             print(f"{root / 'omega_rad_s.npy'}: missing or damaged; rewritten from the config", file=sys.stderr)
         return m
-    if root.exists() and any(root.iterdir()):
+    if root.exists() and any(p.name != LOCK_NAME for p in root.iterdir()):
         raise BeamDamageError(f"{root} exists, is not empty and has no manifest.json; choose a new --out")
     root.mkdir(parents=True, exist_ok=True)
     setup = get_setup(cfg)
@@ -197,7 +212,7 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
     m = {"format": DATASET_FORMAT, "package_version": package_version(), "config": cfg, "seed": seed, "n_requested": n,
          "shard_size": cfg["output"]["shard_size"], "n_shards": len(shard_plan(n, cfg["output"]["shard_size"])),
          "complete": False, "shards": [], "schema": {"arrays": _schema(), "states": list(STATES),
-                                                     "columns": COLUMN_UNITS,
+                                                     "columns": column_units(setup.damage),
                                                      "measured_dofs": ["2:y", "3:y", "4:y", "5:y"],
                                                      "frf_reference_dof": "2:y", "frf_kind": "receptance"},
          "section_layout": vars(setup.layout),
@@ -226,7 +241,8 @@ def generate(root, cfg: dict, *, n: int, seed: int = 0, workers: int = 1, schedu
     check_arguments(cfg, n, seed, workers, root)
     client = _connect(scheduler) if scheduler else None
     try:
-        return _generate(root, cfg, n, seed, workers, client, progress, max_new_shards)
+        with dataset_lock(root):
+            return _generate(root, cfg, n, seed, workers, client, progress, max_new_shards)
     finally:
         if client is not None:
             client.close()

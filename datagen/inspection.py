@@ -20,6 +20,13 @@ from physics.properties import cantilever_curvature_squared
 __all__ = ["curvature_check", "inspect_dataset"]
 
 
+def _single_slits(table):
+    """Rows of ``table`` with exactly one slit (none for another damage kind or a format-1 table)."""
+    if "damage0_ei_loss" not in table:
+        return table.iloc[:0]
+    return table[table.n_damages == 1]
+
+
 def curvature_check(table, length_m):
     """Regress the truth frequency shift of single-slit samples on the curvature-squared prediction.
 
@@ -27,23 +34,24 @@ def curvature_check(table, length_m):
     width ``w``, uniform cantilever; the reduced section's flexibility gives
     ``q / (1 - q)``):
     ``df_r/f_r = -(1/2) q/(1 - q) w phi_r''(x)^2 / int phi_r''^2``
-    (:func:`physics.properties.cantilever_curvature_squared`).
+    (:func:`physics.properties.cantilever_curvature_squared`). Slit datasets only
+    (``n`` is 0 for other damage kinds).
 
     Returns
     -------
     dict per mode: ``slope`` (1 = exact), ``r2``, ``n``.
     """
-    one = table[(table.n_slits == 1)]
+    one = _single_slits(table)
     out = {}
     for r in range(4):
-        q = one["slit1_ei_loss"]
-        pred = -0.5 * q / (1 - q) * one["slit1_width_m"] * cantilever_curvature_squared(
-            one["slit1_x_m"].to_numpy(), length_m, r)
+        if len(one) < 3:
+            out[f"mode{r + 1}"] = {"slope": None, "r2": None, "n": int(len(one))}
+            continue
+        q = one["damage0_ei_loss"]
+        pred = -0.5 * q / (1 - q) * one["damage0_width_m"] * cantilever_curvature_squared(
+            one["damage0_x_m"].to_numpy(), length_m, r)
         act = one[f"df{r + 1}_rel"]
         pred, act = np.asarray(pred, float), act.to_numpy()
-        if len(act) < 3:
-            out[f"mode{r + 1}"] = {"slope": None, "r2": None, "n": int(len(act))}
-            continue
         slope = float(pred @ act / (pred @ pred))
         r2 = float(1 - np.sum((act - slope * pred) ** 2) / np.sum((act - act.mean()) ** 2))
         out[f"mode{r + 1}"] = {"slope": slope, "r2": r2, "n": int(len(act))}
@@ -99,7 +107,8 @@ def _summary(ds: Dataset, table, check: dict, dataset_dir) -> dict:
             "shards": len(ds.shards), "converged_fraction": float(table["converged"].mean()) if len(table) else None,
             "curvature_check": check,
             "labels": {c: {"min": float(table[c].min()), "max": float(table[c].max())}
-                       for c in ("slit1_x_m", "slit1_depth_m", "slit1_width_m", "slit1_ei_loss", "ei_Nm2",
+                       for c in ("damage0_x_m", "damage0_size", "damage0_depth_m", "damage0_width_m",
+                                 "damage0_ei_loss", "damage0_mass_kg", "ei_Nm2",
                                  "m_per_length_kg_m", "noise_level", "temperature_stiffness_change",
                                  "root_spring_change", "stiffness_loss_Nm3", "max_frequency_drop_rel")
                        if c in table and table[c].notna().any()},
@@ -108,11 +117,13 @@ def _summary(ds: Dataset, table, check: dict, dataset_dir) -> dict:
 
 def _plot_labels(plt, table, out: Path) -> None:
     """Write ``labels.png``: histograms of the damage and property labels present in ``table``."""
-    cols = [c for c in ("n_slits", "slit1_x_m", "slit1_depth_m", "slit1_width_m", "slit1_ei_loss", "ei_Nm2",
-                        "m_per_length_kg_m", "damping_scale", "root_spring_Nm_rad") if c in table]
+    cols = [c for c in ("n_damages", "damage0_x_m", "damage0_size", "damage0_depth_m", "damage0_width_m",
+                        "damage0_ei_loss", "damage0_mass_kg", "ei_Nm2", "m_per_length_kg_m", "damping_scale",
+                        "root_spring_Nm_rad") if c in table][:9]
     fig, axs = plt.subplots(3, 3, figsize=(11, 8))
     for ax, c in zip(axs.flat, cols):
-        ax.hist(table[c].dropna(), bins=30)
+        v = table[c].to_numpy(float)
+        ax.hist(v[np.isfinite(v)], bins=30)     # a rigid clamp's root spring is inf
         ax.set_title(c, fontsize=9)
     fig.tight_layout()
     fig.savefig(out / "labels.png", dpi=110)
@@ -121,15 +132,15 @@ def _plot_labels(plt, table, out: Path) -> None:
 
 def _plot_shift_vs_position(plt, table, length_m: float, check: dict, out: Path) -> list[str]:
     """Write ``shift_vs_position.png`` (single-slit shifts against curvature squared); return the CSV rows per mode."""
-    one = table[table.n_slits == 1]
+    one = _single_slits(table)
     fig, axs = plt.subplots(2, 2, figsize=(11, 7))
     xg = np.linspace(0, length_m, 400)
     rows = []
     for r, ax in enumerate(axs.flat):
         if len(one):
-            q = one["slit1_ei_loss"]
-            norm = -0.5 * q / (1 - q) * one["slit1_width_m"]
-            ax.plot(one["slit1_x_m"], one[f"df{r + 1}_rel"] / norm, ".", ms=3, label="truth shift / (-q/(1-q) w/2)")
+            q = one["damage0_ei_loss"]
+            norm = -0.5 * q / (1 - q) * one["damage0_width_m"]
+            ax.plot(one["damage0_x_m"], one[f"df{r + 1}_rel"] / norm, ".", ms=3, label="truth shift / (-q/(1-q) w/2)")
         ax.plot(xg, cantilever_curvature_squared(xg, length_m, r), "r-", label="phi''(x)^2 / int phi''^2")
         c = check[f"mode{r + 1}"]
         ax.set_title(f"mode {r + 1}: slope {c['slope']:.3f}, R^2 {c['r2']:.4f}" if c["slope"] is not None

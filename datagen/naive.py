@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from datagen.pipeline import N_MEAS, BatchInputs, Setup, measure_modes, projected_modes, slit_frequency_drop, \
+from datagen.pipeline import N_MEAS, BatchInputs, Setup, measure_modes, projected_modes, damage_frequency_drop, \
     truth_matrices, update_models
 from datagen.synth import add_noise
 from physics.frf import poles_and_residues, receptance, receptance_modal, receptance_state_space
@@ -49,15 +49,17 @@ def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
             C0 = M[0] @ (phir[:, :p] * d) @ phir[:, :p].T @ M[0]
             if setup.C_local is not None:
                 C0 = C0 + setup.C_local
+            # a mass change: the current state's mass is m Mu[1] (Mu of both states, truth_matrices)
+            Ms = [M[0], Mu[0, 1] * s.mass_per_length_kg_m[0] if Mu.ndim == 4 and Mu.shape[1] == 2 else M[0]]
             lam_l, psi_l, H_l = [], [], []
             for st in range(2):
                 C = C0 + (dC[0] if st else 0.0)
-                cm = underdamped_modes(M[0], C, K[0, st], setup.p)
+                cm = underdamped_modes(Ms[st], C, K[0, st], setup.p)
                 lam_l.append(cm.eigenvalues)
                 psi_l.append(cm.eigenvectors[setup.meas])
-                H_l.append(receptance_state_space(M[0], C, K[0, st], w, setup.meas, [setup.meas[0]])[:, 0, :])
+                H_l.append(receptance_state_space(Ms[st], C, K[0, st], w, setup.meas, [setup.meas[0]])[:, 0, :])
             lam, psi, H = np.stack(lam_l)[None], np.stack(psi_l)[None], np.stack(H_l)[None]
-            w2 = np.stack([undamped_modes(M[0], K[0, st])[0][:setup.p] ** 2 for st in range(2)])[None]
+            w2 = np.stack([undamped_modes(Ms[st], K[0, st])[0][:setup.p] ** 2 for st in range(2)])[None]
         elif modes == "projection":
             lam, psi, w2 = projected_modes(setup, s, M, Mu, K, dC)
             H = receptance_modal(lam, psi, w, np.arange(N_MEAS), [0])[..., 0, :]
@@ -76,6 +78,6 @@ def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
             "truth_poles": lam, "truth_shapes": psi, "eigenvalues_measured": lam_m, "eigenvectors_measured": psi_m,
             "M_updated": Ma, "C_updated": up["C"], "K_updated": up["K"], "updated_poles": poles,
             "updated_residues": res, "converged": up["converged"], "iterations": up["iterations"],
-            "residual": up["residual"], "slit_frequency_drop": slit_frequency_drop(setup, s, Mu, K, dK, w2),
+            "residual": up["residual"], "damage_frequency_drop": damage_frequency_drop(setup, s, Mu, K, dK, w2),
             "frf_measured": add_noise(H, s.noise_seed, s.noise_level, s.noise_floor), "frf_updated": Hu})
     return {k: np.concatenate([r[k] for r in results]) for k in results[0]}

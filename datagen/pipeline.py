@@ -1,7 +1,7 @@
 """Batched simulation of one shard: truth model -> measured modal data -> Pilkey updating.
 
 Every sample is one specimen tested on two days: state 0 = baseline
-(undamaged), state 1 = current (slits, plus what changes between test days:
+(undamaged), state 1 = current (damage, plus what changes between test days:
 a global stiffness change from temperature and a re-clamped root spring), so
 features can be current-minus-baseline as in the thesis's before/after tests.
 All randomness of a batch is drawn up front by :func:`draw_batch` (fixed
@@ -16,12 +16,12 @@ seed. FRFs are synthesised from those when read (:mod:`datagen.synth`).
 Truth model
 -----------
 Clamped-free Euler-Bernoulli beam of ``mesh.truth_elements`` equal elements
-(optionally with a root rotational spring), specimen ``EI`` and mass, slits as
-flexibility-exact elements that integrate ``1/EI(x)`` over the reduced sections
-(:mod:`datagen.damage`); a beam file
+(optionally with a root rotational spring), specimen ``EI`` and mass, the
+damage of ``damage.kind`` as element corrections ``(dM, dK, dC)`` of the current
+state (:mod:`datagen.damage`); a beam file
 (``generate --beam FILE``) adds its effects as described in
 :mod:`datagen.truth_beam`. Damping:
-``C = C_0 + Delta C_slits`` with the specimen's modal damping
+``C = C_0 + Delta C_damage`` with the specimen's modal damping
 ``C_0 = M Phi_p diag(2 zeta_j omega_j) Phi_p^T M`` over the first ``p``
 undamped modes of the baseline specimen (``zeta_j`` from
 ``specimen.damping_ratios`` times the specimen's damping scale, the last ratio
@@ -46,9 +46,9 @@ import json
 import numpy as np
 
 from datagen.config import calibrated_modal_std
-from datagen.damage import draw_slits, slit_corrections
+from datagen.damage import DamageModel, damage_model
 from datagen.solvers import light_damping_modes, ritz_modes
-from datagen.specimen import BeamPreset, SectionLayout, draw_specimens, slit_section_ei
+from datagen.specimen import BeamPreset, SectionLayout, draw_specimens
 from datagen.synth import measured_peak
 from physics.errors import ConfigError
 from physics.properties import beam_preset
@@ -60,7 +60,7 @@ from physics.updating import analyst_mass, pilkey
 
 __all__ = ["BatchInputs", "CHUNK", "LABEL_FIELDS", "N_MEAS", "Setup", "build_setup", "draw_batch", "get_setup",
            "measure_modes", "projected_modes", "simulate_batch", "simulate_chunk", "simulate_shard",
-           "slit_frequency_drop", "truth_matrices", "unit_mass", "update_models"]
+           "damage_frequency_drop", "truth_matrices", "unit_mass", "update_models"]
 
 N_MEAS = 4          # measured translational DOFs (thesis nodes 2..5); FRFs are driven at the first
 
@@ -120,6 +120,11 @@ class Setup:
         return self.preset.length_m
 
     @property
+    def damage(self) -> DamageModel:
+        """The damage model of ``damage.kind`` (:data:`datagen.damage.DAMAGE_MODELS`)."""
+        return damage_model(self.cfg["damage"]["kind"])
+
+    @property
     def p(self) -> int:
         return self.phi0.shape[-1]
 
@@ -145,7 +150,7 @@ class Setup:
 
     @property
     def day_to_day(self) -> bool:
-        """Whether the current state differs from the baseline by more than its slits."""
+        """Whether the current state differs from the baseline by more than its damage."""
         sp = self.cfg["specimen"]
         return any(v != 0.0 for k in ("temperature_stiffness_change", "root_spring_change") for v in sp[k])
 
@@ -170,9 +175,7 @@ def build_setup(cfg: dict) -> Setup:
                     if getattr(beam, k) is not None})
     layout = SectionLayout.matching(preset.EI_Nm2, preset.width_m, preset.thickness_m, sec["face_thickness_m"],
                                     sec["core_modulus_pa"])
-    if cfg["damage"]["depth_m"][1] >= preset.thickness_m - sec["face_thickness_m"]:
-        raise ConfigError(f"config key 'damage.depth_m' must stay below the thickness minus the bottom face "
-                          f"({preset.thickness_m - sec['face_thickness_m']:g} m)")
+    damage_model(cfg["damage"]["kind"]).check_beam(cfg["damage"], preset, sec)
     n_el = cfg["mesh"]["truth_elements"]
     fx = point_effects(beam, n_el)
     band = tuple(cfg["specimen"]["root_spring_relative"])
@@ -248,9 +251,9 @@ class BatchInputs:
     """All random draws of a batch of ``B`` samples (see :func:`draw_batch`).
 
     Specimen: ``EI_Nm2``, ``mass_per_length_kg_m``, ``damping_scale`` (-),
-    ``root_spring_Nm_rad`` (``inf`` for a rigid clamp) each (B,). Slits: ``n_slits`` (B,), ``x_m``,
-    ``width_m``, ``depth_m``, ``beta_s`` (B, S) NaN-padded, ``ei_loss`` (B, S)
-    relative loss of section rigidity. Between the test days (B,):
+    ``root_spring_Nm_rad`` (``inf`` for a rigid clamp) each (B,). Damage: ``n_damages`` (B,), centres
+    ``x_m`` (B, S) NaN-padded and ``damage``, the parameters of the damage model (name -> (B, S),
+    its ``draw`` returns). Between the test days (B,):
     ``temperature_stiffness_change`` (relative EI change of the current state)
     and ``root_spring_change`` (relative change of the root spring). Modal
     measurement noise (standard normal, per state): ``n_freq``, ``n_zeta``
@@ -266,12 +269,9 @@ class BatchInputs:
     mass_per_length_kg_m: np.ndarray
     damping_scale: np.ndarray
     root_spring_Nm_rad: np.ndarray
-    n_slits: np.ndarray
+    n_damages: np.ndarray
     x_m: np.ndarray
-    width_m: np.ndarray
-    depth_m: np.ndarray
-    beta_s: np.ndarray
-    ei_loss: np.ndarray
+    damage: dict
     temperature_stiffness_change: np.ndarray
     root_spring_change: np.ndarray
     n_freq: np.ndarray
@@ -289,7 +289,8 @@ class BatchInputs:
 
     def take(self, i) -> "BatchInputs":
         """Sub-batch by index (slice or array)."""
-        return BatchInputs(**{k: getattr(self, k)[i] for k in self.__dataclass_fields__})
+        return BatchInputs(**{k: ({p: v[i] for p, v in getattr(self, k).items()} if k == "damage"
+                                  else getattr(self, k)[i]) for k in self.__dataclass_fields__})
 
 
 def _uniform(u, lo_hi, log=False):
@@ -303,10 +304,10 @@ def _uniform(u, lo_hi, log=False):
 
 
 def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
-    """Draw specimens, slits, day-to-day changes and all measurement noise of ``n`` samples, in a fixed order."""
+    """Draw specimens, damage, day-to-day changes and all measurement noise of ``n`` samples, in a fixed order."""
     cfg = setup.cfg
     sp = draw_specimens(rng, n, cfg, setup.preset, setup.root_spring_relative, setup.shear_band)
-    sl = draw_slits(rng, n, cfg, setup.length_m, setup.layout)
+    dmg = setup.damage.draw(rng, n, cfg, setup)
     nf = rng.standard_normal((n, 2, N_MEAS))
     nz = rng.standard_normal((n, 2, N_MEAS))
     ns = rng.standard_normal((n, 2, N_MEAS, N_MEAS, 2))
@@ -316,13 +317,10 @@ def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
     spc, meas = cfg["specimen"], cfg["measurement"]
     lo, hi = meas["frequency_scatter"]
     scatter = _uniform(np.zeros(n) if lo == hi else rng.random(n), (lo, hi), log=True)  # one value: not drawn
-    ei0 = setup.layout.EI
-    loss = np.where(np.isfinite(sl["depth_m"]),
-                    1.0 - slit_section_ei(setup.layout, np.nan_to_num(sl["depth_m"])) / ei0, np.nan)
     if not np.all(np.isfinite(sp["root_spring_Nm_rad"])) and setup.spring:
         raise ConfigError("config key 'specimen.root_spring_relative' gave an infinite spring")
     return BatchInputs(sp["EI_Nm2"], sp["mass_per_length_kg_m"], sp["damping_scale"], sp["root_spring_Nm_rad"],
-                       sl["n_slits"], sl["x_m"], sl["width_m"], sl["depth_m"], sl["beta_s"], loss,
+                       dmg.pop("n_damages"), dmg.pop("x_m"), dmg,
                        _uniform(u[:, 0], spc["temperature_stiffness_change"]),
                        _uniform(u[:, 1], spc["root_spring_change"]), nf, nz, ns,
                        _uniform(u[:, 2], meas["frf_noise"], log=True),
@@ -332,34 +330,34 @@ def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
 
 # --------------------------------------------------------------------------- truth model
 def truth_matrices(setup: Setup, inp: BatchInputs):
-    """Mass, the stiffness of both test days and the slit damping of the current state (explicit matrices).
+    """Mass, the stiffness of both test days and the damage's damping of the current state (explicit matrices).
 
-    The current state's stiffness is ``(1 + t) (EI K_0 + dK_slits)`` plus the
-    root spring ``k_r (1 + c)``, with ``dK_slits`` the change of the elements the
-    slits cover (flexibility-exact, :func:`datagen.damage.slit_corrections`),
-    ``t`` the temperature stiffness change and
-    ``c`` the re-clamping change. ``M = m M_0`` plus a beam file's point mass.
+    The current state's stiffness is ``(1 + t) (EI K_0 + dK)`` plus the root
+    spring ``k_r (1 + c)`` and its mass ``M + dM``, with ``(dM, dK, dC)`` the
+    element corrections of the damage model (:mod:`datagen.damage`), ``t`` the
+    temperature stiffness change and ``c`` the re-clamping change. ``M = m M_0``
+    plus a beam file's point mass.
 
     Returns
     -------
-    M : ndarray, shape (B, n, n)      kg ...
-    Mu : ndarray                      the same for unit mass per length (:func:`unit_mass`)
+    M : ndarray, shape (B, n, n)      baseline mass (kg ...)
+    Mu : ndarray                      the same for unit mass per length (:func:`unit_mass`); with a mass
+                                      change (B, 2, n, n), state 1 holding ``(M + dM) / m``
     K : ndarray, shape (B, 2, n, n)   N/m ... (state 0 baseline, 1 current)
-    dC : ndarray, shape (B, n, n)     slit damping (N s/m ...)
-    dK : ndarray, shape (B, n, n)     slit stiffness change (N/m ...)
+    dC : ndarray, shape (B, n, n)     damage damping (N s/m ...)
+    dK : ndarray, shape (B, n, n)     damage stiffness change (N/m ...)
     """
-    ei = inp.EI_Nm2
-    ok = np.isfinite(inp.x_m)
+    ei, mpl = inp.EI_Nm2, inp.mass_per_length_kg_m
     if setup.shear_varies:
         K0, M0, shear_phi = setup.unit_matrices(inp.shear_flexibility)
     else:
         K0, M0, shear_phi = setup.K0, setup.M0, 12.0 * setup.n_elements**2 * setup.shear_band[0]
-    dKe, dCe = slit_corrections(np.where(ok, inp.x_m, 0.0), np.where(ok, inp.width_m, 0.0),
-                                np.where(ok, inp.ei_loss * ei[:, None], 0.0), np.where(ok, inp.beta_s, 0.0),
-                                ei, setup.length_m, setup.n_elements, shear_phi)
+    dMe, dKe, dCe = setup.damage.corrections(inp.damage, inp.x_m, ei, mpl, setup.length_m, setup.n_elements,
+                                             shear_phi)
     k0 = setup.keep[0]  # the clamp removes the first DOFs only: the kept block is a slice (a view, no copy)
-    dK = assemble(dKe)[..., k0:, k0:]
-    dC = assemble(dCe)[..., k0:, k0:]
+    shape = (len(inp),) + setup.K0.shape
+    dK = np.zeros(shape) if dKe is None else assemble(dKe)[..., k0:, k0:]
+    dC = np.zeros(shape) if dCe is None else assemble(dCe)[..., k0:, k0:]
     K = np.empty((len(inp), 2) + setup.K0.shape)
     np.multiply(ei[:, None, None], K0, out=K[:, 0])
     np.add(K[:, 0], dK, out=K[:, 1])
@@ -368,10 +366,14 @@ def truth_matrices(setup: Setup, inp: BatchInputs):
         r = setup.spring_dof
         K[:, 1, r, r] += inp.root_spring_Nm_rad * (1.0 + inp.root_spring_change)
         K[:, 0, r, r] += inp.root_spring_Nm_rad
-    M = inp.mass_per_length_kg_m[:, None, None] * M0
+    M = mpl[:, None, None] * M0
     if setup.M_added is not None:
         M += setup.M_added
-    return M, unit_mass(setup, inp, M0), K, dC, dK
+    Mu = unit_mass(setup, inp, M0)
+    if dMe is not None:
+        base = np.broadcast_to(Mu, (len(inp), 1) + setup.M0.shape)
+        Mu = np.concatenate([base, base + (assemble(dMe)[..., k0:, k0:] / mpl[:, None, None])[:, None]], axis=1)
+    return M, Mu, K, dC, dK
 
 
 def unit_mass(setup: Setup, inp: BatchInputs, M0):
@@ -388,15 +390,15 @@ def projected_modes(setup: Setup, inp: BatchInputs, M, Mu, K, dC):
 
     Undamped modes by :func:`datagen.solvers.ritz_modes` on the unit-EI,
     unit-mass problem, the baseline specimen's modal damping projected on both
-    states' modes plus a beam file's dashpot and the slit damping ``dC``, then
+    states' modes plus a beam file's dashpot and the damage damping ``dC``, then
     :func:`datagen.solvers.light_damping_modes`.
 
     Parameters
     ----------
-    M : ndarray, shape (B, n, n)
-    Mu : ndarray                      ``M`` for unit mass per length (:func:`unit_mass`)
+    M : ndarray, shape (B, n, n)      baseline mass (the specimen's modal damping ``C_0`` is built on it)
+    Mu : ndarray                      mass of each state for unit mass per length (:func:`truth_matrices`)
     K : ndarray, shape (B, 2, n, n)   truth stiffness of baseline and current state
-    dC : ndarray, shape (B, n, n)     slit damping
+    dC : ndarray, shape (B, n, n)     damage damping
 
     Returns
     -------
@@ -420,17 +422,18 @@ def projected_modes(setup: Setup, inp: BatchInputs, M, Mu, K, dC):
     return lam, phi[..., setup.meas, :] @ Z, w2
 
 
-def slit_frequency_drop(setup: Setup, inp: BatchInputs, Mu, K, dK, omega2):
-    """Largest relative drop of the first four natural frequencies caused by the slits alone.
+def damage_frequency_drop(setup: Setup, inp: BatchInputs, Mu, K, dK, omega2):
+    """Largest relative drop of the first four natural frequencies caused by the damage alone.
 
     Undamped frequencies (subspace iteration). Without day-to-day changes
     that is the drop between the two states' ``omega2`` (B, 2, p); otherwise
-    the baseline stiffness plus ``dK`` is solved once more (unit mass ``Mu``), so
+    the baseline stiffness plus ``dK`` is solved once more (unit masses ``Mu`` of both states), so
     temperature and re-clamping do not enter this label.
 
     Returns
     -------
-    ndarray, shape (B,)   ``max_r (1 - f_r,slit / f_r,baseline)`` (>= 0 for a stiffness loss)
+    ndarray, shape (B,)   ``max_r (1 - f_r,damaged / f_r,baseline)`` (>= 0 for a stiffness loss or a mass
+                          added; < 0 when every frequency rises, e.g. a mass lost)
     """
     if not setup.day_to_day:
         return np.max(1.0 - np.sqrt(omega2[:, 1, :N_MEAS] / omega2[:, 0, :N_MEAS]), axis=-1)
@@ -498,9 +501,10 @@ def update_models(setup, Ma, lam_m, psi_m, batched=True):
 CHUNK = 128
 
 #: Drawn inputs recorded per sample (the columns of the samples table and the noise of the FRFs on read).
-LABEL_FIELDS = ("EI_Nm2", "mass_per_length_kg_m", "damping_scale", "root_spring_Nm_rad", "n_slits", "x_m", "width_m",
-                "depth_m", "beta_s", "ei_loss", "temperature_stiffness_change", "root_spring_change", "noise_level",
-                "noise_floor", "noise_seed", "modal_noise_scale", "shear_flexibility", "frequency_scatter")
+#: The damage model's parameters (``BatchInputs.damage``) are recorded next to them under their own names.
+LABEL_FIELDS = ("EI_Nm2", "mass_per_length_kg_m", "damping_scale", "root_spring_Nm_rad", "n_damages", "x_m",
+                "temperature_stiffness_change", "root_spring_change", "noise_level", "noise_floor", "noise_seed",
+                "modal_noise_scale", "shear_flexibility", "frequency_scatter")
 
 
 def simulate_batch(setup: Setup, inp: BatchInputs, chunk: int = CHUNK) -> dict:
@@ -523,7 +527,7 @@ def simulate_shard(setup: Setup, seed_seq: np.random.SeedSequence, n: int, chunk
     for i in range(0, n, chunk):
         b = draw_batch(rng, min(chunk, n - i), setup)
         outs.append(simulate_chunk(setup, b))
-        labs.append({k: getattr(b, k) for k in LABEL_FIELDS})
+        labs.append({**{k: getattr(b, k) for k in LABEL_FIELDS}, **b.damage})
     cat = lambda parts: {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}  # noqa: E731
     return cat(labs), cat(outs)
 
@@ -539,7 +543,7 @@ def simulate_chunk(setup: Setup, inp: BatchInputs) -> dict:
         ``eigenvectors_measured`` (B,2,4,4) (noisy), ``M_updated`` (B,4,4), ``C_updated``, ``K_updated``
         (B,2,4,4), ``updated_poles`` (B,2,4) and ``updated_residues`` (B,2,4,4) of the updated models
         (drive at the first measured DOF), ``frf_peak`` (B,2,4) (:func:`datagen.synth.measured_peak`),
-        ``converged``, ``iterations``, ``residual`` (B,2) and ``slit_frequency_drop`` (B,).
+        ``converged``, ``iterations``, ``residual`` (B,2) and ``damage_frequency_drop`` (B,).
     """
     M, Mu, K, dC, dK = truth_matrices(setup, inp)
     lam, psi, w2 = projected_modes(setup, inp, M, Mu, K, dC)
@@ -553,4 +557,4 @@ def simulate_chunk(setup: Setup, inp: BatchInputs) -> dict:
             "updated_residues": res, "frf_peak": measured_peak({"truth_poles": lam, "truth_shapes": psi,
                                                                "noise_floor": inp.noise_floor}, setup.omega_rad_s),
             "converged": up["converged"], "iterations": up["iterations"],
-            "residual": up["residual"], "slit_frequency_drop": slit_frequency_drop(setup, inp, Mu, K, dK, w2)}
+            "residual": up["residual"], "damage_frequency_drop": damage_frequency_drop(setup, inp, Mu, K, dK, w2)}

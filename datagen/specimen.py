@@ -12,10 +12,7 @@ the face modulus ``E_f`` is then solved so that eq. 4.1,
     ``EI = (2 b / 3) sum_k E_k (d_{k+1}^3 - d_k^3)``,
 
 reproduces Table 4.1 exactly (beam 5: ``E_f`` about 38.6 GPa, plausible for a
-woven carbon/epoxy face). A slit of depth ``d`` across the top face removes
-the top ``d`` of the section over the slit; the section is then no longer
-symmetric, so its rigidity is computed about the shifted neutral axis
-(:func:`slit_section_ei`), which reduces to eq. 4.1 for ``d = 0``.
+woven carbon/epoxy face). A damage kind may cut it (:mod:`datagen.damage.slit`).
 """
 
 from __future__ import annotations
@@ -25,9 +22,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from physics.errors import ConfigError
-from physics.properties import BeamPreset, layered_ei, section_ei
+from physics.properties import BeamPreset, layered_ei
 
-__all__ = ["SectionLayout", "depth_for_ei_loss", "draw_specimens", "slit_section_ei"]
+__all__ = ["SectionLayout", "draw_specimens"]
 
 
 @dataclass(frozen=True)
@@ -59,47 +56,6 @@ class SectionLayout:
             raise ConfigError("config key 'section.core_modulus_pa' is so stiff that the core alone exceeds EI")
         e_f = (EI - core) / (2 * width_m / 3 * (h2**3 - c**3))
         return cls(width_m, thickness_m, face_thickness_m, e_f, core_modulus_pa)
-
-
-def slit_section_ei(layout: SectionLayout, depth_m):
-    """Rigidity of the section with the top ``depth_m`` removed (about its own neutral axis).
-
-    Parameters
-    ----------
-    layout : SectionLayout
-    depth_m : float or ndarray, shape (...)
-        Slit depth(s) from the top surface (m), ``0 <= d < h/2``.
-
-    Returns
-    -------
-    ndarray, shape (...)
-        ``EI`` (N m^2); equals ``layout.EI`` for ``d = 0``.
-    """
-    d = np.asarray(depth_m, dtype=float)[..., None]
-    h, tf = layout.thickness_m, layout.face_thickness_m
-    top = h - d                                            # the section is cut at h - d
-    z_bot = np.minimum(np.array([0.0, tf, h - tf]), top)  # layers bottom face / core / top face
-    z_top = np.minimum(np.array([tf, h - tf, h]), top)
-    E = np.array([layout.face_modulus_pa, layout.core_modulus_pa, layout.face_modulus_pa])
-    return section_ei(layout.width_m, z_bot, z_top, E)
-
-
-def depth_for_ei_loss(layout: SectionLayout, ei_loss):
-    """Slit depth (m) whose section keeps ``1 - ei_loss`` of the rigidity (inverse of :func:`slit_section_ei`).
-
-    Depths range from 0 to the top of the bottom face sheet (cut through the
-    top face and the core); the loss grows monotonically with depth and is
-    inverted by interpolation on a fine table (relative error in the loss
-    below 1e-6; the stored loss is recomputed from the depth).
-    """
-    h, tf = layout.thickness_m, layout.face_thickness_m
-    grid = np.linspace(0.0, h - tf, 20001)
-    loss = 1.0 - slit_section_ei(layout, grid) / layout.EI
-    want = np.asarray(ei_loss, float)
-    if np.nanmax(want, initial=0.0) > loss[-1]:
-        raise ConfigError(f"config key 'damage.ei_loss' must stay below {loss[-1]:.4f}, the loss of a cut "
-                          f"through the top face and the core")
-    return np.interp(want, loss, grid)
 
 
 def draw_specimens(rng: np.random.Generator, n: int, cfg: dict, preset: BeamPreset,

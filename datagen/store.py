@@ -38,15 +38,16 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from datagen.damage import element4_index
+from datagen.damage import DamageModel, element4_index
 from datagen.synth import DATASET_FRFS, synthesise
 from physics.errors import FileFormatError
 from physics.io import atomic_write_text, read_json
 from physics.modal import modal_parameters
 
 __all__ = ["ARRAYS", "ARRAYS_V1", "COLUMN_UNITS", "DATASET_FORMAT", "DATASET_FORMAT_V1", "DERIVED", "OPTIONAL",
-           "ROW_GROUP", "STATES", "damaged_file", "file_sha256", "finalize", "package_version", "read_manifest",
-           "recover", "sample_table", "shard_arrays", "shard_name", "verify_shard", "write_manifest", "write_shard"]
+           "ROW_GROUP", "STATES", "column_units", "damaged_file", "file_sha256", "finalize", "package_version",
+           "read_manifest", "recover", "sample_table", "shard_arrays", "shard_name", "verify_shard", "write_manifest",
+           "write_shard"]
 
 DATASET_FORMAT = "beam-damage-dataset/2"
 DATASET_FORMAT_V1 = "beam-damage-dataset/1"
@@ -86,11 +87,12 @@ ARRAYS_V1 = ("frf_measured", "frf_updated", "eigenvalues_measured", "eigenvector
 
 STATES = ("baseline", "current")
 
-#: Units of the samples-table columns ("-" dimensionless); ``{k}``/``{r}`` stand for slit and mode numbers.
+#: Units of the samples-table columns of every damage kind ("-" dimensionless); ``{k}``/``{r}`` stand for damage
+#: (from 0) and mode (from 1) numbers. The damage model adds its own (:func:`column_units`).
 COLUMN_UNITS = {
-    "sample_id": "-", "shard": "-", "damaged": "bool: at least one slit", "ei_Nm2": "N m^2",
+    "sample_id": "-", "shard": "-", "damaged": "bool: at least one damage", "ei_Nm2": "N m^2",
     "m_per_length_kg_m": "kg/m", "damping_scale": "- (factor on the damping ratios)",
-    "root_spring_Nm_rad": "N m/rad (inf: rigid clamp)", "n_slits": "-",
+    "root_spring_Nm_rad": "N m/rad (inf: rigid clamp)", "n_damages": "-",
     "temperature_stiffness_change": "- (relative EI change of the current day)",
     "root_spring_change": "- (relative root-spring change on re-clamping)",
     "noise_level": "- (FRF noise std relative to |H|)", "noise_floor": "- (FRF noise std relative to the FRF peak)",
@@ -98,10 +100,9 @@ COLUMN_UNITS = {
     "modal_noise_scale": "- (factor on the standard deviations of the modal noise)",
     "shear_flexibility": "- (EI / (kGA L^2) of the specimen; 0: Euler-Bernoulli)",
     "frequency_scatter": "- (relative std of independent per-mode frequency changes of each test)",
-    "stiffness_loss_Nm3": "N m^3 (sum over slits of dEI * width)",
-    "max_frequency_drop_rel": "- (largest relative drop of f1..f4 due to the slits alone)",
-    "slit{k}_x_m": "m", "slit{k}_width_m": "m", "slit{k}_depth_m": "m", "slit{k}_ei_loss": "- (relative)",
-    "slit{k}_stiffness_loss_Nm3": "N m^3", "slit{k}_damping_s": "s", "slit{k}_element4": "- (1..4, 0 none)",
+    "max_frequency_drop_rel": "- (largest relative drop of f1..f4 due to the damage alone)",
+    "damage{k}_x_m": "m", "damage{k}_size": "- (the damage model's size_meaning)",
+    "damage{k}_element4": "- (1..4, 0 none)",
     "f{r}_hz_base": "Hz", "f{r}_hz_cur": "Hz", "zeta{r}_base": "-", "zeta{r}_cur": "-",
     "f{r}_hz_meas_base": "Hz", "f{r}_hz_meas_cur": "Hz", "zeta{r}_meas_base": "-", "zeta{r}_meas_cur": "-",
     "df{r}_rel": "-", "df{r}_rel_meas": "-", "dzeta{r}": "-", "dzeta{r}_meas": "-",
@@ -133,24 +134,33 @@ def shard_name(index: int) -> str:
     return f"shard-{index:06d}"
 
 
-def sample_table(labels: dict, outputs: dict, shard: int, first_id: int, length_m: float) -> pd.DataFrame:
+def column_units(model: DamageModel) -> dict:
+    """:data:`COLUMN_UNITS` plus the columns of the damage ``model`` (``damage{k}_size`` says what its size is)."""
+    return {**COLUMN_UNITS, "damage{k}_size": f"- ({model.size_meaning})", **model.sample_units,
+            **{f"damage{{k}}_{c}": u for c, u in model.units.items()}}
+
+
+def sample_table(labels: dict, outputs: dict, shard: int, first_id: int, length_m: float,
+                 model: DamageModel) -> pd.DataFrame:
     """Per-sample labels and scalar results as a DataFrame (one row per sample).
 
-    Slit columns ``slit{k}_*`` (k = 1..S) hold NaN (0 for ``element4``) where a
-    sample has fewer slits. Frequencies/damping ratios per mode r = 1..4 for the
+    Damage columns ``damage{k}_*`` (k = 0..S-1): centre ``x_m``, ``size`` and the
+    ``model``'s own columns hold NaN (0 for ``element4``) where a sample has fewer
+    damages. Frequencies/damping ratios per mode r = 1..4 for the
     baseline (``_base``) and current (``_cur``) states, truth and measured
-    (``_meas``). Units in :data:`COLUMN_UNITS`.
+    (``_meas``). Units in :func:`column_units`.
     """
     n = labels["EI_Nm2"].shape[0]
-    ei = labels["EI_Nm2"]
-    slit_loss = labels["ei_loss"] * ei[:, None] * labels["width_m"]
+    ei, mpl, x_m = labels["EI_Nm2"], labels["mass_per_length_kg_m"], labels["x_m"]
+    size = model.size(labels, x_m, ei, mpl, length_m)
+    per_sample, per_damage = model.columns(labels, x_m, ei, mpl, length_m)
     cols = {
         "sample_id": np.arange(first_id, first_id + n, dtype=np.int64),
         "shard": np.full(n, shard, dtype=np.int32),
-        "damaged": labels["n_slits"] > 0,
+        "damaged": labels["n_damages"] > 0,
         "ei_Nm2": ei, "m_per_length_kg_m": labels["mass_per_length_kg_m"],
         "damping_scale": labels["damping_scale"], "root_spring_Nm_rad": labels["root_spring_Nm_rad"],
-        "n_slits": labels["n_slits"].astype(np.int32),
+        "n_damages": labels["n_damages"].astype(np.int32),
         "temperature_stiffness_change": labels["temperature_stiffness_change"],
         "root_spring_change": labels["root_spring_change"],
         "noise_level": labels["noise_level"], "noise_floor": labels["noise_floor"],
@@ -158,18 +168,14 @@ def sample_table(labels: dict, outputs: dict, shard: int, first_id: int, length_
         "modal_noise_scale": labels["modal_noise_scale"],
         "shear_flexibility": labels["shear_flexibility"],
         "frequency_scatter": labels["frequency_scatter"],
-        "stiffness_loss_Nm3": np.nansum(slit_loss, axis=1),
-        "max_frequency_drop_rel": outputs["slit_frequency_drop"],
+        **per_sample,
+        "max_frequency_drop_rel": outputs["damage_frequency_drop"],
     }
-    for k in range(labels["x_m"].shape[1]):
-        x = labels["x_m"][:, k]
-        cols[f"slit{k + 1}_x_m"] = x
-        cols[f"slit{k + 1}_width_m"] = labels["width_m"][:, k]
-        cols[f"slit{k + 1}_depth_m"] = labels["depth_m"][:, k]
-        cols[f"slit{k + 1}_ei_loss"] = labels["ei_loss"][:, k]
-        cols[f"slit{k + 1}_stiffness_loss_Nm3"] = slit_loss[:, k]
-        cols[f"slit{k + 1}_damping_s"] = labels["beta_s"][:, k]
-        cols[f"slit{k + 1}_element4"] = element4_index(x, length_m).astype(np.int8)
+    for k in range(x_m.shape[1]):
+        cols[f"damage{k}_x_m"] = x_m[:, k]
+        cols[f"damage{k}_size"] = size[:, k]
+        cols.update({f"damage{k}_{c}": v[:, k] for c, v in per_damage.items()})
+        cols[f"damage{k}_element4"] = element4_index(x_m[:, k], length_m).astype(np.int8)
     for lam, tag in ((outputs["truth_poles"][..., :4], ""), (outputs["eigenvalues_measured"], "_meas")):
         f, z = modal_parameters(lam)
         for r in range(f.shape[-1]):
@@ -266,6 +272,11 @@ def read_manifest(root, formats=(DATASET_FORMAT, DATASET_FORMAT_V1)) -> dict:
         raise FileFormatError(f"{p}: dataset format {m.get('format')!r} is not supported by this version "
                               f"(reads {', '.join(formats)}); regenerate it with `beam-damage generate`")
     _check_manifest_fields(p, m)
+    damage = m["config"].get("damage")
+    if m["format"] == DATASET_FORMAT and not (isinstance(damage, dict) and "kind" in damage):
+        raise FileFormatError(f"{p}: written before the damage kinds (columns n_slits, slit{{k}}_*; now n_damages, "
+                              f"damage{{k}}_*, see docs/datasets.md); regenerate it with `beam-damage generate` "
+                              f"(the same config and seed give the same samples)")
     return m
 
 

@@ -31,7 +31,7 @@ enters the generator, combined with the specimen variability as follows:
   baseline modal damping; each specimen scales them by its damping scale (the
   small off-diagonal modal terms of ``C_R`` are dropped).
 
-Slits are flexibility-exact on the truth elements (:mod:`datagen.damage`):
+Slits (damage kind "slit") are flexibility-exact on the truth elements (:mod:`datagen.damage.slit`):
 under ``shear_deformation`` they add bending compliance to the Timoshenko
 element and keep its shear compliance. The Pilkey
 analyst's mass model (``updating.mass_model``) knows the beam's mass per length

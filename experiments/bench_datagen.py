@@ -95,7 +95,7 @@ def _table_at_scale(root: str, rows: int) -> dict:
            "table_row_groups": pq.ParquetFile(scratch / "samples.parquet").metadata.num_row_groups,
            "table_finalize_peak_rss_MB": _vm_hwm_mb()}
     t = time.perf_counter()
-    cols = Dataset(scratch, verify=False).table(["slit1_x_m", "damaged"])
+    cols = Dataset(scratch, verify=False).table(["damage0_x_m", "damaged"])
     out["table_two_columns_s"] = time.perf_counter() - t
     t = time.perf_counter()
     f = pq.ParquetFile(scratch / "samples.parquet")

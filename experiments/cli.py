@@ -20,7 +20,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import signal
 import sys
+import threading
 import warnings
 
 from threadpoolctl import threadpool_limits
@@ -50,6 +52,24 @@ COMMANDS = {
 }
 
 EXIT_USAGE = 2
+#: Exit codes of a command ended by SIGINT (Ctrl-C) and SIGTERM: 128 + the signal number, as shells report them.
+EXIT_SIGINT = 128 + signal.SIGINT
+EXIT_SIGTERM = 128 + signal.SIGTERM
+
+
+class Terminated(BaseException):
+    """Raised in the main thread on SIGTERM, so a command unwinds (temporary files removed) as on Ctrl-C."""
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated()
+
+
+def one_line(text: str) -> str:
+    """``text`` as one printable line: control characters (a newline in a file name) escaped, and lone
+    surrogates (a file name that is not UTF-8) written as ``\\udcXX``."""
+    text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in str(text))
+    return text.encode("utf-8", "backslashreplace").decode("utf-8")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -88,22 +108,36 @@ def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser(argv)
     args = parser.parse_args(argv)
+    if threading.current_thread() is threading.main_thread():
+        previous = signal.signal(signal.SIGTERM, _raise_terminated)
     try:
         with warnings.catch_warnings(record=True) as caught, threadpool_limits(1, user_api="blas"):
             warnings.simplefilter("default")
             result = args.func(args)
     except BeamDamageError as exc:
         flag = getattr(args, "flags", {}).get(exc.parameter)
-        sys.stderr.write(f"beam-damage {args.command}: error: {f'{flag}: ' if flag else ''}{exc}\n")
+        sys.stderr.write(one_line(f"beam-damage {args.command}: error: {f'{flag}: ' if flag else ''}{exc}") + "\n")
         return EXIT_USAGE
     except BrokenPipeError:  # output piped into `head` and closed: not an error of the user's input
         sys.stderr.close()
         return 0
     except OSError as exc:
-        sys.stderr.write(f"beam-damage {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}\n")
+        sys.stderr.write(one_line(f"beam-damage {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}")
+                         + "\n")
         return EXIT_USAGE
+    except KeyboardInterrupt:
+        sys.stderr.write(f"beam-damage {args.command}: interrupted (SIGINT); what was written is kept and complete"
+                         " (generate resumes from it)\n")
+        return EXIT_SIGINT
+    except Terminated:
+        sys.stderr.write(f"beam-damage {args.command}: terminated (SIGTERM); what was written is kept and complete"
+                         " (generate resumes from it)\n")
+        return EXIT_SIGTERM
+    finally:
+        if threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGTERM, previous)
     for message in dict.fromkeys(" ".join(str(w.message).split()) for w in caught):
-        sys.stderr.write(f"beam-damage {args.command}: warning: {message}\n")
+        sys.stderr.write(one_line(f"beam-damage {args.command}: warning: {message}") + "\n")
     exit_code = int(result.pop("exit_code", 0)) if isinstance(result, dict) else 0
     if getattr(args, "json", False):
         try:

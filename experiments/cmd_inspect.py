@@ -12,7 +12,7 @@ def add_parser(subparsers):
         "inspect", help="summarise a generated dataset and plot labels, shift-vs-position and FRF overlays",
         description="Summary of a dataset directory (counts, convergence, label ranges), label histograms, the "
                     "frequency shift of each mode versus slit position against the mode's curvature squared "
-                    "(single-slit samples), and FRF overlays of the current state vs the baseline.")
+                    "(single-slit samples of slit datasets), and FRF overlays of the current state vs the baseline.")
     p.add_argument("dir", help="dataset directory")
     p.add_argument("--out", help="directory for figures and tables (default DIR/inspect)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")

@@ -14,10 +14,13 @@ def to_jsonable(obj):
     """Convert numpy arrays/scalars and complex numbers into JSON-ready values.
 
     Complex numbers become strings such as ``"-0.21962+135.31j"`` (the form of
-    the thesis fixtures), arrays become nested lists.
+    the thesis fixtures), arrays become nested lists. A lone surrogate (a file name that is not UTF-8, as
+    ``os.fsdecode`` gives it) is written as the text ``\\udcXX``, so the output is valid UTF-8.
     """
+    if isinstance(obj, str):
+        return obj.encode("utf-8", "backslashreplace").decode("utf-8")
     if isinstance(obj, dict):
-        return {str(k): to_jsonable(v) for k, v in obj.items()}
+        return {to_jsonable(str(k)): to_jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
         return [to_jsonable(v) for v in obj]
     if isinstance(obj, np.ndarray):

@@ -26,11 +26,11 @@ __all__ = ["Table", "Figure", "Section", "CAPTIONS", "figure", "figure_caption",
 
 #: Caption of each figure the tools write, by file name without suffix.
 CAPTIONS = {
-    "roc": "ROC curves of the network and the classical methods on the held-out test pairs: detectable slits "
+    "roc": "ROC curves of the network and the classical methods on the held-out test pairs: detectable damage "
            "against intact pairs, false-positive rate on a logarithmic axis.",
     "confusion": "Confusion matrix of the network on the thesis's 4-element grid: true element (rows; intact "
                  "pairs apart) against the element the network predicts (columns), held-out test pairs.",
-    "location_error": "Median location error of every method against the true slit position x/L on the "
+    "location_error": "Median location error of every method against the true damage position x/L on the "
                       "held-out damaged pairs; the dotted line marks the tip zone (x/L >= 0.85).",
     "reliability": "Reliability of the network's probability of damage: observed share of damaged pairs against "
                    "the predicted probability (15 bins); the dotted diagonal is perfect calibration.",

@@ -4,7 +4,7 @@ Evaluates a trained classifier (``--model``-style directory; by default the demo
 ``out/demo/model``, trained on a small ``training``-config dataset when absent) and every
 classical method on the same held-out test pairs (``generate --config training``, other
 seed), and draws one figure per metric with the breakdowns of
-:func:`learn.evaluate.subsets` (FRF noise level, slit-size tercile, element of the
+:func:`learn.evaluate.subsets` (FRF noise level, damage-size tercile, element of the
 4-element grid with the tip zone x/L >= 0.85 apart) and one line per method.
 """
 
@@ -37,7 +37,7 @@ def _figure(rows, metric, label, path):
         ax.plot(x, np.asarray(y, float), "o-", lw=1, ms=4, label=m)
     ax.set_xticks(x, subsets, rotation=30, ha="right", fontsize=8)
     ax.set_ylabel(label)
-    ax.set_xlabel("test subset (FRF noise level, slit size, position)")
+    ax.set_xlabel("test subset (FRF noise level, damage size, position)")
     ax.set_title(f"{label} by noise, size and position")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
@@ -81,7 +81,7 @@ def run(out_dir, model_dir="out/demo/model", n_test: int = 4000, n_train: int = 
     summary = {"model": str(model_dir), "test_pairs": res["pairs"], "rows": rows}
     sec = Section("Damage study: localisation and sizing against noise, size and position",
                   (f"{res['pairs']} held-out test pairs (training config, seed 7) for the model in `{model_dir}`. "
-                   "Sizes are terciles of the slit hinge flexibility; "
+                   "Sizes are terciles of the damage size (a slit's hinge flexibility); "
                    "intact pairs count in every subset's false alarms.",),
                   (Table.from_records("Every method on every subset", table),), tuple(figs))
     return summary, [sec]

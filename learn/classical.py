@@ -12,7 +12,7 @@ sensitivities of the nominal beam (:mod:`learn.sensitivity`) and returns a
 * :func:`mdlac` - multiple-damage LAC: the best non-negative combination of at
   most two elements (all pairs, vectorised; one element on fewer than 4 modes), the larger share locates.
 * :func:`sensitivity_updating` - regularised least squares on frequency shifts
-  and shape changes for the hinge flexibility of a slit in every element of the grid;
+  and shape changes for the size of a damage in every element of the grid;
   reports the element of the largest loss.
 * :class:`GradientBoosting` - scikit-learn's HistGradientBoosting on the
   network's own features.
@@ -69,7 +69,7 @@ def shape_changes(eigenvectors):
 
 
 def _single_amplitude(df, sens: Sensitivity):
-    """Least-squares hinge flexibility of a single slit in each element, >= 0: (n, E)."""
+    """Least-squares size of a single damage in each element, >= 0: (n, E)."""
     S = sens.frequency[: df.shape[1]]
     return np.maximum(df @ S / np.sum(S**2, axis=0), 0.0)
 
@@ -118,7 +118,7 @@ def mdlac(df, sens: Sensitivity, threshold: float) -> MethodOutput:
     fit = np.einsum("mpi,npi->npm", A, da)                  # (n, P, m)
     res2 = np.sum((df[:, None, :] - fit) ** 2, axis=-1)
     res1 = np.sum((df[:, None, :] - d1[:, :, None] * S.T[None]) ** 2, axis=-1)   # (n, E)
-    use_pair = (d >= 0).all(-1) & (df.shape[1] >= 4)      # on 3 modes or fewer two slits fit any shifts
+    use_pair = (d >= 0).all(-1) & (df.shape[1] >= 4)      # on 3 modes or fewer two damages fit any shifts
     res2 = np.where(use_pair, res2, np.inf)
     bp, b1 = np.argmin(res2, axis=1), np.argmin(res1, axis=1)
     n = np.arange(len(df))
@@ -147,7 +147,7 @@ def sensitivity_updating(df, du, sens: Sensitivity, threshold: float, sigma_f: f
     d = (np.concatenate([df, du], axis=1) * w) @ P.T             # (n, E)
     e = np.argmax(d, axis=1)
     dmax = d[np.arange(len(d)), e]
-    # the loss of a slit spreads over neighbouring elements: sum the peak and its neighbours
+    # a damage's estimate spreads over neighbouring elements: sum the peak and its neighbours
     E = d.shape[1]
     size = sum(np.maximum(d[np.arange(len(d)), np.clip(e + k, 0, E - 1)], 0) * (0 <= e + k) * (e + k < E)
                for k in (-1, 0, 1))

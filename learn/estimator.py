@@ -6,8 +6,8 @@ network, and fits a temperature on the validation logits (temperature scaling,
 Guo et al. 2017) so that ``predict_proba`` is calibrated, and a factor on the size
 head's spread so that one standard deviation covers 68 % of the sizes of the validation pairs called damaged.
 
-Targets ``y`` have three columns: damaged (0/1), ``x / L`` of the slit (NaN if
-intact) and its hinge flexibility ``EI / (k_theta L)`` (:func:`learn.features.hinge_flexibility`, 0 if intact).
+Targets ``y`` have three columns: damaged (0/1), ``x / L`` of the damage (NaN if
+intact) and its size (:func:`learn.features.labels`: a slit's hinge flexibility ``EI / (k_theta L)``, 0 if intact).
 """
 
 from __future__ import annotations
@@ -107,7 +107,7 @@ def fit_calibration(logits, y) -> tuple[float, float]:
 
 
 class DamageClassifier(ClassifierMixin, BaseEstimator):
-    """Detect, localise and size a slit from pair features.
+    """Detect, localise and size damage from pair features.
 
     Parameters
     ----------

@@ -5,11 +5,11 @@ truth labels (:func:`learn.features.labels`) and a :class:`learn.classical.Metho
 
 Definitions
 -----------
-* *detectable* slit: its largest noise-free relative frequency drop exceeds
-  ``min_drop`` (0.2 %); ROC AUC is computed on detectable slits against intact pairs.
-* element accuracy / within one element: on detectable single... slits, the thesis's
+* *detectable* damage: its largest noise-free relative frequency drop exceeds
+  ``min_drop`` (0.2 %); ROC AUC is computed on detectable damage against intact pairs.
+* element accuracy / within one element: on detectable damage, the thesis's
   4-element grid (element ``floor(4 x / L) + 1``).
-* location error (mm) and relative size error ``|s_hat / s - 1|``: medians over detectable slits.
+* location error (mm) and relative size error ``|s_hat / s - 1|``: medians over detectable damage.
 * false-alarm rate: share of intact pairs called damaged.
 * ECE: expected calibration error of ``probability`` (15 equal-width bins).
 """
@@ -205,7 +205,7 @@ def figures(outputs, truth, out_dir, length_m: float, n_bins: int = 15) -> list[
         med = [np.median(err[dam & (b == k)]) if (dam & (b == k)).any() else np.nan for k in range(20)]
         ax.plot(c, med, marker=".", label=o.name)
     ax.axvline(TIP_ZONE, color="grey", ls=":")
-    ax.set(xlabel="true slit position x/L", ylabel="median location error (mm)", yscale="log",
+    ax.set(xlabel="true damage position x/L", ylabel="median location error (mm)", yscale="log",
            title="Location error vs position (all damaged pairs)")
     ax.legend(fontsize=7)
     paths.append(_save(fig, out_dir / "location_error.png"))

@@ -37,7 +37,7 @@ import pandas as pd
 from physics.errors import BeamDamageError, FileFormatError
 
 __all__ = ["BeamSpec", "DOFS", "GRID_RAD_S", "Pairs", "ROUTES", "beam_of_manifest", "curvatures", "features",
-           "frf_features", "grid_weights", "hinge_flexibility", "labels", "load_pairs", "manifest_checksum",
+           "frf_features", "grid_weights", "labels", "load_pairs", "manifest_checksum",
            "map_frf_to_grid", "modal_features", "real_shapes", "split_by_specimen"]
 
 ROUTES = ("modal", "updated", "measured")
@@ -213,37 +213,28 @@ def load_pairs(roots, frfs=("measured", "updated"), chunk: int = 1024, workers: 
 def labels(table: pd.DataFrame, length_m: float) -> dict:
     """Training targets of each pair from a format-2 sample table.
 
-    The size of a slit is its hinge flexibility: a slit of width ``w`` whose
-    section keeps a fraction ``1 - r`` of the rigidity (column
-    ``slit{k}_ei_loss`` = ``r``) adds the rotational compliance
-    ``w r / ((1 - r) EI)`` of a rotational spring ``k_theta`` at its centre, and
-    the non-dimensional flexibility ``theta = EI / (k_theta L) = w r / ((1 - r) L)``
-    is what the natural frequencies and shapes determine (to first order in
-    ``w``, ``d(omega^2) = -EI L theta kappa(x)^2`` for a mass-normalised mode of
-    curvature ``kappa``; width and depth on their own are not). With several
-    slits the location and element are those of the most flexible slit and the
-    size is the summed flexibility.
+    The size of a damage is the ``damage{k}_size`` its model stores
+    (:mod:`datagen.damage`; a slit's hinge flexibility ``w r / ((1 - r) L)``, a mass
+    change's signed mass ratio). With several damages the location and element are
+    those of the largest ``|size|`` and the size is the sum.
 
     Returns
     -------
     dict of ndarray, shape (n,)
-        ``damaged`` (bool), ``x_over_L`` (NaN if intact), ``hinge_flexibility`` (0 if intact),
+        ``damaged`` (bool), ``x_over_L`` (NaN if intact), ``hinge_flexibility`` (the size; 0 if intact),
         ``element`` (1..4, 0 if intact), ``max_drop`` (largest relative drop of the noise-free
-        natural frequencies due to the slits alone: ``max_frequency_drop_rel``), ``n_slits``.
+        natural frequencies due to the damage alone: ``max_frequency_drop_rel``), ``n_damages``.
     """
     n = len(table)
     damaged = table["damaged"].to_numpy(bool)
-    k = 1
-    while f"slit{k}_ei_loss" in table:
+    k = 0
+    while f"damage{k}_size" in table:
         k += 1
-    slits = range(1, k)
-    if k > 1:
-        r = np.stack([np.nan_to_num(table[f"slit{j}_ei_loss"].to_numpy(float)) for j in slits], 1)
-        w = np.stack([np.nan_to_num(table[f"slit{j}_width_m"].to_numpy(float)) for j in slits], 1)
-        flex = hinge_flexibility(r, w, length_m)
-        xs = np.stack([table[f"slit{j}_x_m"].to_numpy(float) for j in slits], 1)
-        x = xs[np.arange(n), np.argmax(flex, axis=1)] / length_m
-        size = flex.sum(axis=1)
+    if k > 0:
+        sizes = np.stack([np.nan_to_num(table[f"damage{j}_size"].to_numpy(float)) for j in range(k)], 1)
+        xs = np.stack([table[f"damage{j}_x_m"].to_numpy(float) for j in range(k)], 1)
+        x = xs[np.arange(n), np.argmax(np.abs(sizes), axis=1)] / length_m
+        size = sizes.sum(axis=1)
     else:
         x = np.full(n, np.nan)
         size = np.zeros(n)
@@ -251,23 +242,7 @@ def labels(table: pd.DataFrame, length_m: float) -> dict:
     element = np.where(damaged, np.clip(np.floor(np.nan_to_num(x) * 4).astype(int) + 1, 1, 4), 0)
     return {"damaged": damaged, "x_over_L": x, "hinge_flexibility": np.where(damaged, size, 0.0),
             "element": element, "max_drop": table["max_frequency_drop_rel"].to_numpy(float),
-            "n_slits": table["n_slits"].to_numpy(int)}
-
-
-def hinge_flexibility(ei_loss, width_m, length_m):
-    """Non-dimensional flexibility ``EI / (k_theta L) = w r / ((1 - r) L)`` of slits (batched).
-
-    Parameters
-    ----------
-    ei_loss : array_like
-        ``r``, the fraction of the flexural rigidity the slit section loses (0 <= r < 1).
-    width_m : array_like
-        Slit width ``w`` (m), broadcast against ``ei_loss``.
-    length_m : float
-        Beam length ``L`` (m).
-    """
-    r = np.asarray(ei_loss, float)
-    return np.asarray(width_m, float) * r / ((1.0 - r) * length_m)
+            "n_damages": table["n_damages"].to_numpy(int)}
 
 
 # --------------------------------------------------------------------------- modal route

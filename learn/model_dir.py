@@ -73,7 +73,8 @@ class TrainedModel:
     @property
     def sensitivity(self):
         """FE sensitivities of the truth beam the model records (:func:`sensitivity_of`)."""
-        return sensitivity_of(self.beam, self.config.get("root_spring_relative"), self.config.get("truth_beam"))
+        return sensitivity_of(self.beam, self.config.get("root_spring_relative"), self.config.get("truth_beam"),
+                              self.config.get("generator_config"))
 
     def measured_beam(self, beam: str | None = None, mass_model: str | None = None):
         """The beam spec of measured data and the sensor positions a beam file gives: ``(BeamSpec, x_m or None)``.
@@ -168,10 +169,13 @@ def json_default(obj):
     raise TypeError(f"{type(obj).__name__} is not JSON serialisable")
 
 
-def sensitivity_of(beam: BeamSpec, config_root_spring=None, truth_beam: dict | None = None):
-    """FE sensitivities of the truth beam a dataset or model records (its preset when it records none)."""
+def sensitivity_of(beam: BeamSpec, config_root_spring=None, truth_beam: dict | None = None,
+                   generator_config: dict | None = None):
+    """FE sensitivities of the truth beam a dataset or model records (its preset when it records none), to the
+    damage kind of its generator config (slits when it records none)."""
+    kind = ((generator_config or {}).get("damage") or {}).get("kind", "slit")
     if truth_beam and "EI_Nm2" in truth_beam:
         key = (truth_beam["length_m"], truth_beam["EI_Nm2"], truth_beam["mass_per_length_kg_m"])
-        return beam_sensitivity(key, config_root_spring)
-    return beam_sensitivity(beam.name, config_root_spring)
+        return beam_sensitivity(key, config_root_spring, kind=kind)
+    return beam_sensitivity(beam.name, config_root_spring, kind=kind)
 

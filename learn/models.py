@@ -4,7 +4,8 @@ Heads
 -----
 ``detect``   one logit of "damaged" (calibrated afterwards by temperature scaling).
 ``locate``   logits over ``n_bins`` equal bins of ``x / L`` (a distribution along the beam).
-``size``     mean and log standard deviation of ``ln`` hinge flexibility (:func:`learn.features.hinge_flexibility`)
+``size``     mean and log standard deviation of ``ln`` damage size (a slit's hinge flexibility,
+             :func:`learn.features.labels`)
              (the mean by least squares, the spread by the Gaussian negative log-likelihood of the mean's
              residuals; damaged pairs only).
 """

@@ -1,6 +1,8 @@
-"""FE sensitivities of the measured modal data to a slit's hinge flexibility.
+"""FE sensitivities of the measured modal data to the size of a damage in each element.
 
-A slit of hinge flexibility ``theta = EI / (k_theta L)`` (:func:`learn.features.hinge_flexibility`)
+What a unit size changes comes from the damage model's ``perturbs``
+(:mod:`datagen.damage`). A stiffness damage (a slit: size the hinge flexibility
+``theta = EI / (k_theta L)``, :func:`datagen.damage.slit.hinge_flexibility`)
 inside element ``e`` of length ``l_e`` of the nominal cantilever changes the
 element stiffness, to first order, by ``dK ~ -(EI L theta / l_e) K_e^1``
 (``K_e^1`` the element stiffness for ``EI = 1``, eq. 3.9), so for a
@@ -8,8 +10,11 @@ mass-normalised undamped mode ``phi_r``
 
     ``d f_r / f_r = d(omega_r^2) / (2 omega_r^2) = -EI L theta phi_r^T K_e^1 phi_r / (2 l_e omega_r^2)``,
 
-i.e. the curvature squared at the slit (:mod:`datagen.damage`). Shape
-sensitivities are finite differences of the real, unit-norm shapes at the
+i.e. the curvature squared at the damage. A mass damage (a mass change: size
+the mass ratio ``mu = m_k / (m L)``) spread over element ``e`` adds
+``dM = (m L mu / l_e) M_e^1`` (``M_e^1`` the consistent element mass for unit
+mass per length, eq. 3.8), so ``d f_r / f_r = -m L mu phi_r^T M_e^1 phi_r / (2 l_e)``,
+the displacement squared there. Shape sensitivities are finite differences of the real, unit-norm shapes at the
 measured DOFs (:func:`learn.features.real_shapes`). The same numbers serve the
 classical methods (Cawley-Adams, DLAC/MDLAC, sensitivity updating) and the
 classifier's "detectable here" rule.
@@ -23,7 +28,8 @@ from functools import lru_cache
 import numpy as np
 
 from learn.features import real_shapes
-from physics.fem import beam_model, element_stiffness
+from datagen.damage import damage_model
+from physics.fem import beam_model, element_mass, element_stiffness
 from physics.modal import undamped_modes
 from physics.properties import beam_preset
 
@@ -39,9 +45,9 @@ class Sensitivity:
     x_over_L : ndarray, shape (E,)           element centres / L
     length_m : float
     EI_Nm2 : float
-    frequency : ndarray, shape (m, E)        relative frequency change per unit hinge flexibility, <= 0
+    frequency : ndarray, shape (m, E)        relative frequency change per unit damage size, <= 0
     shape : ndarray, shape (4 m, E)          change of the real unit-norm shapes (DOF-major per mode, as
-                                             ``reshape`` of (4, m)) per unit hinge flexibility
+                                             ``reshape`` of (4, m)) per unit damage size
     frequencies_hz : ndarray, shape (m,)     nominal natural frequencies
     """
 
@@ -69,15 +75,15 @@ class Sensitivity:
         return replace(self, frequency=self.frequency[k], shape=shape, frequencies_hz=self.frequencies_hz[k])
 
     def largest_drop(self, x_over_L, hinge_flexibility):
-        """Largest first-order relative frequency drop of a slit (batched), >= 0."""
+        """Largest first-order relative frequency drop of a damage of that size (batched), >= 0 for sizes >= 0."""
         e = self.element_of(np.nan_to_num(x_over_L))
         return np.max(-self.frequency[:, e], axis=0) * np.asarray(hinge_flexibility, float)
 
 
 @lru_cache(maxsize=16)
 def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7, n_elements: int = 40,
-                     n_modes: int = 4, step: float = 0.01) -> Sensitivity:
-    """Sensitivities of the nominal beam (clamped, or on a root spring ``k_r L / EI``).
+                     n_modes: int = 4, step: float = 0.01, kind: str = "slit") -> Sensitivity:
+    """Sensitivities of the nominal beam (clamped, or on a root spring ``k_r L / EI``) to damage of ``kind``.
 
     Parameters
     ----------
@@ -87,8 +93,10 @@ def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7,
         ``k_r L / EI`` of the nominal root spring (None = rigid clamp); default the
         geometric mean of the generator's default range [300, 3000].
     n_elements : int, multiple of 4 (the measured nodes sit at quarter points)
-    step : relative element stiffness loss of the finite differences
+    step : relative element stiffness loss (mass gain, for a mass damage) of the finite differences
+    kind : damage kind (:data:`datagen.damage.DAMAGE_MODELS`): its ``perturbs`` says which matrix a size changes
     """
+    perturbs = damage_model(kind).perturbs
     if isinstance(preset, str):
         p = beam_preset(preset)
         L, EI, m = p.length_m, p.EI_Nm2, p.mass_per_length_kg_m
@@ -97,22 +105,28 @@ def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7,
     le = L / n_elements
     kr = None if root_spring_relative is None else root_spring_relative * EI / L
     factors = np.ones((n_elements + 1, n_elements))
-    factors[1:] -= step * np.eye(n_elements)
-    models = beam_model(n_elements, L, EI, m, ei_factors=factors, root_spring=kr)
+    if perturbs == "stiffness":
+        factors[1:] -= step * np.eye(n_elements)
+        models = beam_model(n_elements, L, EI, m, ei_factors=factors, root_spring=kr)
+    else:
+        factors[1:] += step * np.eye(n_elements)
+        models = beam_model(n_elements, L, EI, m, mass_factors=factors, root_spring=kr)
     w, phi = undamped_modes(models.M, models.K)
     meas = models.index([f"{1 + n_elements // 4 * q}:y" for q in range(1, 5)])
     u = real_shapes(phi[:, meas, :n_modes].astype(complex))
     sign = np.sign(np.sum(u[1:] * u[0], axis=-2, keepdims=True))
-    du = (u[1:] * sign - u[0]) * L / (step * le)               # (E, 4, m) per unit hinge flexibility
+    du = (u[1:] * sign - u[0]) * L / (step * le)               # (E, 4, m) per unit size (step le / L per step)
     # exact first-order frequency sensitivities from the element energies
-    ke = element_stiffness(1.0, le)
     nominal = beam_model(n_elements, L, EI, m, root_spring=kr)
     w0, phi0 = undamped_modes(nominal.M, nominal.K)
     full = np.zeros((2 * (n_elements + 1), n_modes))
     names = [f"{n}:{d}" for n in range(1, n_elements + 2) for d in ("y", "rz")]
     full[[names.index(d) for d in nominal.dofs]] = phi0[:, :n_modes]
     ends = np.stack([full[2 * e:2 * e + 4] for e in range(n_elements)])    # (E, 4, m)
-    energy = np.einsum("eim,ij,ejm->me", ends, ke, ends)
-    dlnf = -EI * L * energy / (2 * le * w0[:n_modes, None] ** 2)
+    if perturbs == "stiffness":
+        energy = np.einsum("eim,ij,ejm->me", ends, element_stiffness(1.0, le), ends)
+        dlnf = -EI * L * energy / (2 * le * w0[:n_modes, None] ** 2)
+    else:
+        dlnf = -m * L * np.einsum("eim,ij,ejm->me", ends, element_mass(1.0, le), ends) / (2 * le)
     return Sensitivity((np.arange(n_elements) + 0.5) / n_elements, L, EI, dlnf,
                        np.transpose(du, (1, 2, 0)).reshape(4 * n_modes, n_elements), w0[:n_modes] / (2 * np.pi))

@@ -85,7 +85,8 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
         "them will call such changes damage; generate with --config training"]
     tr, _, te = split_by_specimen(pairs.groups, (1 - test_fraction, 0.0, test_fraction), seed=seed)
     load_s = time.perf_counter() - t0
-    sens = sensitivity_of(pairs.beam, _nominal_root_spring(pairs.source), pairs.source[0].get("truth_beam"))
+    sens = sensitivity_of(pairs.beam, _nominal_root_spring(pairs.source), pairs.source[0].get("truth_beam"),
+                          pairs.source[0].get("config"))
     params = dict(epochs=epochs, random_state=seed, n_threads=threads, verbose=progress)
     networks, outputs, fit_s = _fit_networks(pairs, routes, y, (tr, te), sens, params)
     classical, thresholds = run_classical(pairs.eigenvalues[tr], pairs.eigenvectors[tr], sens,
@@ -137,7 +138,7 @@ def evaluate(model: TrainedModel, data, out_dir=None, *, extra_outputs=None, pro
     pairs = load_pairs(data, frfs=dataset_frfs(routes))
     model.check_beam(pairs.beam, f"dataset {pairs.source[0]['path']}")
     _, truth = targets(pairs)
-    sens = sensitivity_of(model.beam, model.config.get("root_spring_relative"), model.config.get("truth_beam"))
+    sens = model.sensitivity
     outs = []
     for r in tqdm([model.route] + [q for q in routes if q != model.route], desc="evaluate networks",
                   disable=not progress):

@@ -6,13 +6,11 @@ from __future__ import annotations
 import numpy as np
 
 from datagen.config import DEFAULTS
-from datagen.specimen import SectionLayout, slit_section_ei
+from datagen.damage.slit import equivalent_depth as slit_depth
 from learn.classical import MethodOutput
 from learn.estimator import DamageClassifier
 from learn.evaluate import MIN_DROP
-from learn.features import hinge_flexibility as hinge_flexibility_of_loss
 from physics.io import dof_positions_text
-from physics.properties import beam_preset
 
 __all__ = ["IN_DISTRIBUTION_PERCENTILE", "classical_answer", "classical_verdict", "detectability_threshold",
            "equivalent_depth", "network_answer", "network_output", "ood_percentile", "verdict_text"]
@@ -76,24 +74,8 @@ def classical_verdict(cl: dict, sens, depth) -> dict:
 
 
 def equivalent_depth(hinge_flexibility: float, preset, width_m: float) -> float | None:
-    """Depth (m) of a slit ``width_m`` wide whose hinge flexibility ``w r / ((1 - r) L)`` is the given one.
-
-    ``r`` is the rigidity loss of the layered section cut to that depth (face/core layout of
-    :mod:`datagen.specimen`, eq. 4.1, default faces 0.5 mm, core 0.1 GPa). None when even a cut to
-    mid-thickness would not be that flexible.
-    """
-    if isinstance(preset, str):
-        p = beam_preset(preset)
-        EI, width, thickness, length = p.EI_Nm2, p.width_m, p.thickness_m, p.length_m
-    else:   # the truth beam a model records (preset name or beam file)
-        EI, width, thickness, length = preset["EI_Nm2"], preset["width_m"], preset["thickness_m"], preset["length_m"]
-    sec = DEFAULTS["section"]
-    lay = SectionLayout.matching(EI, width, thickness, sec["face_thickness_m"], sec["core_modulus_pa"])
-    depths = np.linspace(0.0, 0.999 * thickness / 2, 4000)
-    flexibility = hinge_flexibility_of_loss(1.0 - slit_section_ei(lay, depths) / lay.EI, width_m, length)
-    if not np.isfinite(hinge_flexibility) or hinge_flexibility > flexibility[-1]:
-        return None
-    return float(np.interp(hinge_flexibility, flexibility, depths))
+    """Depth (m) of a slit ``width_m`` wide of that hinge flexibility (:func:`datagen.damage.slit.equivalent_depth`)."""
+    return slit_depth(hinge_flexibility, preset, width_m, DEFAULTS["section"])
 
 
 def _network_sentence(a: dict) -> str:

@@ -51,6 +51,7 @@ from physics import effects as fx
 from physics.errors import ConfigError
 from physics.fem import BOUNDARY_CONDITIONS, FEModel
 from physics.io import atomic_write_text
+from physics.io.inputs import check_input_file
 from physics.properties import PRESETS, layered_ei
 
 __all__ = ["Beam", "MAX_MODEL_SPREAD", "PRESET_CORE_MODULUS_PA", "PRESET_FACE_THICKNESS_M", "beam_from_dict",
@@ -371,6 +372,7 @@ def load_beam(name_or_path) -> Beam:
     path = Path(s)
     if not path.exists():
         raise ConfigError(f"{s}: neither a beam preset ({', '.join(sorted(PRESETS))}) nor an existing beam file")
+    check_input_file(path, "toml", ConfigError, "a TOML beam file")
     try:
         text = path.read_bytes().decode("utf-8")
     except UnicodeDecodeError:

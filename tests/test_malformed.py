@@ -11,6 +11,7 @@ from __future__ import annotations
 import atexit
 import io
 import json
+import os
 import shutil
 import sys
 import tempfile
@@ -886,7 +887,40 @@ def _config_range_cases():
     ]
 
 
-CASES = [*_frf_cases(), *_modal_cases(), *_arg_cases(), *_command_arg_cases(), *_dataset_cases(),
+def _fifo(path):
+    os.mkfifo(path)
+    return path
+
+
+def _sparse(path, size=2 << 30):
+    with open(path, "wb") as f:
+        f.truncate(size)
+    return path
+
+
+def _input_cases():
+    """Inputs that are not regular files of bounded size: refused from ``stat`` before anything is read."""
+    return [
+        ("inputs", "identify /dev/zero", lambda d: ["identify", "/dev/zero"], "character device"),
+        ("inputs", "update --modal /dev/urandom", lambda d: ["update", "--modal", "/dev/urandom"], "character device"),
+        ("inputs", "generate --config /dev/zero", lambda d: ["generate", "--config", "/dev/zero", "--n", "4", "--out",
+                                                             str(d / "ds")], "character device"),
+        ("inputs", "model --beam /dev/urandom", lambda d: ["model", "--beam", "/dev/urandom"], "character device"),
+        ("inputs", "identify a FIFO", lambda d: ["identify", str(_fifo(d / "pipe.uff"))], "FIFO"),
+        ("inputs", "update --modal a FIFO", lambda d: ["update", "--modal", str(_fifo(d / "pipe.json"))], "FIFO"),
+        ("inputs", "identify a 2 GB sparse UFF", lambda d: ["identify", str(_sparse(d / "big.uff"))], "MiB"),
+        ("inputs", "identify a 2 GB sparse CSV", lambda d: ["identify", str(_sparse(d / "big.csv"))], "MiB"),
+        ("inputs", "estimate a 2 GB sparse UFF", lambda d: ["estimate", str(_sparse(d / "big.uff"))], "MiB"),
+        ("inputs", "update --modal a 2 GB sparse JSON", lambda d: ["update", "--modal", str(_sparse(d / "m.json"))],
+         "MiB"),
+        ("inputs", "model --beam a 2 MB TOML", lambda d: ["model", "--beam", str(_sparse(d / "b.toml", 2 << 20))],
+         "MiB"),
+        ("inputs", "identify a name with a newline", lambda d: ["identify", str(_bytes(d / "a\nb.uff", b"x\n"))],
+         "a\\nb.uff"),
+    ]
+
+
+CASES = [*_input_cases(), *_frf_cases(), *_modal_cases(), *_arg_cases(), *_command_arg_cases(), *_dataset_cases(),
          *_boundary_modal_cases(), *_uff_field_cases(), *_label_cases(), *_config_range_cases(), *_estimate_cases(),
          *_context_cases(), *_beam_file_cases()]
 

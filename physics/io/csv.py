@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from physics.io.inputs import check_input_file
 from physics.errors import FileFormatError, ShapeError
 from physics.io.atomic import atomic_write_text
 from physics.io.types import FRF_KINDS, UNNAMED_REFERENCE, MeasuredFRF, check_dof_labels, frf_matrix
@@ -74,6 +75,7 @@ _HEADER_FORM = "'frequency_hz,re(RESP/REF),im(RESP/REF),...'"
 def _csv_lines(path: Path) -> tuple:
     """The ``# key: value`` comments (keys lower case), the header's cells and line number, and the data rows
     as ``[(line number, text), ...]`` of a CSV file; blank lines skipped."""
+    check_input_file(path, "csv", what="a CSV file")
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:

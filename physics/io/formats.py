@@ -15,6 +15,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from physics.io.inputs import check_input_file
 from physics.errors import FileFormatError
 from physics.io.csv import read_frf_csv, write_frf_csv
 from physics.io.modal_json import read_modal_json, write_modal_json
@@ -146,6 +147,7 @@ def format_of(path, *holds: str) -> FileFormat:
     by_ext = next((f for f in serving if ext in f.extensions), None)
     if by_ext is not None:
         return by_ext
+    check_input_file(path, "uff" if "time" in holds else "csv", what=f"a file of {' or '.join(holds)}")
     try:
         with path.open("rb") as fh:
             head = fh.read(SNIFF_BYTES)

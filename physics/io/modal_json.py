@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from physics.io.inputs import check_input_file
 from physics.errors import FileFormatError
 from physics.io.atomic import atomic_write_text
 from physics.io.types import MAX_MAGNITUDE, ModalData, format_complex
@@ -151,6 +152,9 @@ def read_json(path, max_bytes: int = MAX_JSON_BYTES, require_object: bool = True
     A missing file raises ``FileNotFoundError`` (callers say what the file should have been).
     """
     path = Path(path)
+    if not path.exists() and not path.is_symlink():
+        raise FileNotFoundError(2, "No such file or directory", str(path))
+    check_input_file(path, "json", what="a JSON file")
     try:
         if path.stat().st_size > max_bytes:
             raise FileFormatError(f"{path}: {path.stat().st_size} bytes, more than the {max_bytes} this JSON "

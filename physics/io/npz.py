@@ -5,10 +5,10 @@ from __future__ import annotations
 import io
 import json
 import zipfile
-from pathlib import Path
 
 import numpy as np
 
+from physics.io.inputs import check_input_file
 from physics.errors import FileFormatError, ShapeError
 from physics.io.atomic import atomic_write_bytes
 from physics.io.types import MeasuredFRF, check_dof_labels
@@ -61,7 +61,7 @@ def read_frf_npz(path, kind=None) -> MeasuredFRF:
     frequencies real, the DOF labels 1-D lists of strings, the metadata a JSON object.
     ``kind`` applies to a file without a ``kind`` array (default receptance).
     """
-    path = Path(path)
+    path = check_input_file(path, "npz", what="an NPZ file")
     try:
         with zipfile.ZipFile(path) as zf:
             _check_members(path, zf)

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from physics.io.inputs import check_input_file
 from physics.errors import FileFormatError, ShapeError
 from physics.io.atomic import atomic_path
 from physics.io.geometry import geometry_from_uff_sets
@@ -350,6 +351,7 @@ def _open_uff(path: Path):
     """Check a universal file is complete and list its dataset types."""
     import pyuff
 
+    check_input_file(path, "uff", what="a universal file")
     try:
         raw = path.read_bytes()
     except FileNotFoundError:

@@ -4,11 +4,13 @@ import numpy as np
 import pytest
 
 from datagen.config import merge
-from datagen.damage import clamped_flexibility, element4_index, overlap_energy, slit_corrections, \
+from datagen.damage import element4_index
+from datagen.damage.slit import clamped_flexibility, overlap_energy, slit_corrections, \
     stiffness_from_flexibility
 from datagen.pipeline import get_setup
 from physics.modal import undamped_modes
-from datagen.specimen import SectionLayout, slit_section_ei
+from datagen.damage.slit import slit_section_ei
+from datagen.specimen import SectionLayout
 from physics.properties import beam_preset
 from physics.errors import ConfigError
 from physics.effects import timoshenko_stiffness
@@ -159,7 +161,7 @@ def test_frequency_shift_follows_curvature_squared(r):
 def test_timoshenko_curvature_energy_plus_shear_energy_is_the_timoshenko_element():
     """Bending energy of the Timoshenko curvature field plus the (constant) shear energy equals
     physics.effects.timoshenko_stiffness; phi = 0 is the Hermite basis."""
-    from datagen.damage import curvature_basis
+    from datagen.damage.slit import curvature_basis
 
     l, ei, kga = 0.03, 26.7, 2.7e4
     phi = 12 * ei / (kga * l**2)
@@ -185,3 +187,23 @@ def test_slit_corrections_with_a_shear_ratio_per_sample_are_the_scalar_ones():
         np.testing.assert_allclose(dC[b], dCb[0], rtol=1e-12, atol=1e-12 * np.abs(dCb).max() + 1e-300)
     euler, _ = slit_corrections(x, w, loss, beta, ei, L, n_el, 0.0)
     assert np.abs(dK[2] - euler[2]).max() > 0.1 * np.abs(euler[2]).max()  # the ratio matters
+
+
+def test_each_kind_describes_its_damage_for_the_verdict():
+    """The verdict's prose comes from the kind: a slit of the hinge flexibility of a 0.25 mm cut 5.5 mm wide is
+    described with that depth (the layered section inverted), a mass change by its sign and share of the mass."""
+    from datagen.config import DEFAULTS
+    from datagen.damage import DAMAGE_MODELS
+    from datagen.damage.slit import hinge_flexibility
+
+    from physics.properties import beam_preset
+
+    p, sec = beam_preset("beam5"), DEFAULTS["section"]
+    lay = SectionLayout.matching(p.EI_Nm2, p.width_m, p.thickness_m, sec["face_thickness_m"], sec["core_modulus_pa"])
+    theta = float(hinge_flexibility(1 - slit_section_ei(lay, 0.00025) / lay.EI, 0.0055, p.length_m))
+    text = DAMAGE_MODELS["slit"].describe(0.1524, theta, "beam5", section=DEFAULTS["section"])
+    assert text == f"a slit at x = 0.152 m of hinge flexibility EI/(k L) = {theta:.3g} (e.g. 0.25 mm deep over 5.5 mm)"
+    assert DAMAGE_MODELS["slit"].describe(0.3, 1e3, "beam5", section=DEFAULTS["section"]).endswith("= 1e+03")
+    assert DAMAGE_MODELS["mass_change"].describe(0.3, -0.0125, "beam5") == \
+        "a mass lost at x = 0.300 m of 1.25% of the beam's mass"
+    assert DAMAGE_MODELS["mass_change"].describe(0.61, 0.004, "beam5").startswith("a mass added at x = 0.610 m")

@@ -35,7 +35,7 @@ def test_batched_equals_per_sample(setup, batch):
     inp, out = batch
     ref = simulate_naive(setup, inp, modes="projection")
     for k in ("truth_poles", "truth_shapes", "eigenvalues_measured", "eigenvectors_measured", "M_updated",
-              "C_updated", "K_updated", "updated_poles", "updated_residues", "slit_frequency_drop"):
+              "C_updated", "K_updated", "updated_poles", "updated_residues", "damage_frequency_drop"):
         assert _rel(out[k], ref[k]) < 1e-8, k
     # FRFs synthesised on read (compiled pair kernel, fused noise) against eager per-sample FRFs
     # (modal superposition, direct inversion, the same noise applied afterwards)

@@ -40,10 +40,10 @@ def test_layout_and_readable_with_pandas_numpy(reference):
     assert not (reference / "shards" / "shard-000004" / "frf_updated.npy").exists()  # FRFs are made when read
     frf = Dataset(reference).frf("updated", rows=[28, 29])
     assert frf.shape == (2, 2, 4, 64) and frf.dtype == np.complex64
-    assert table["n_slits"].between(0, 2).all()
-    assert (table["damaged"] == (table["n_slits"] > 0)).all()
-    one = table[table.n_slits == 0]
-    assert one["slit1_x_m"].isna().all() and (one["slit1_element4"] == 0).all()
+    assert table["n_damages"].between(0, 2).all()
+    assert (table["damaged"] == (table["n_damages"] > 0)).all()
+    one = table[table.n_damages == 0]
+    assert one["damage0_x_m"].isna().all() and (one["damage0_element4"] == 0).all()
     assert Dataset(reference).verify()
 
 
@@ -236,7 +236,7 @@ def test_other_format_is_refused_with_a_clear_message(reference, tmp_path):
 
 
 def test_load_torch(reference):
-    t = load_torch(reference, arrays=("frf_updated", "K_updated"), columns=("slit1_depth_m", "f1_hz_cur"))
+    t = load_torch(reference, arrays=("frf_updated", "K_updated"), columns=("damage0_depth_m", "f1_hz_cur"))
     assert tuple(t["frf_updated"].shape) == (N, 2, 4, 64, 2)
     assert tuple(t["K_updated"].shape) == (N, 2, 4, 4)
     assert tuple(t["labels"].shape) == (N, 2)

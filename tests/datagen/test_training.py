@@ -23,16 +23,16 @@ def test_training_labels_span_the_configured_ranges(training):
     t = training.samples
     assert 0.15 < 1 - t["damaged"].mean() < 0.35                      # about a quarter intact
     d, i = t[t.damaged], t[~t.damaged]
-    assert d["slit1_ei_loss"].between(0.05 - 1e-6, 0.9 + 1e-6).all()
-    assert d["slit1_ei_loss"].min() < 0.15 and d["slit1_ei_loss"].max() > 0.8
-    assert d["slit1_width_m"].between(0.001, 0.01).all()
-    assert d["slit1_x_m"].min() < 0.05 and d["slit1_x_m"].max() > 0.55  # whole length (L = 0.6095 m)
+    assert d["damage0_ei_loss"].between(0.05 - 1e-6, 0.9 + 1e-6).all()
+    assert d["damage0_ei_loss"].min() < 0.15 and d["damage0_ei_loss"].max() > 0.8
+    assert d["damage0_width_m"].between(0.001, 0.01).all()
+    assert d["damage0_x_m"].min() < 0.05 and d["damage0_x_m"].max() > 0.55  # whole length (L = 0.6095 m)
     assert t["noise_level"].between(0.001, 0.03).all() and t["noise_level"].max() / t["noise_level"].min() > 10
     assert t["noise_floor"].between(1e-4, 1e-3).all()
     assert t["temperature_stiffness_change"].between(-0.004, 0.004).all()
     assert t["root_spring_change"].between(-0.08, 0.08).all() and t["root_spring_change"].abs().max() > 0.05
     # stiffness loss dEI * w (N m^3) and the slit-alone frequency drop
-    np.testing.assert_allclose(d["stiffness_loss_Nm3"], d["slit1_ei_loss"] * d["ei_Nm2"] * d["slit1_width_m"])
+    np.testing.assert_allclose(d["stiffness_loss_Nm3"], d["damage0_ei_loss"] * d["ei_Nm2"] * d["damage0_width_m"])
     assert (i["stiffness_loss_Nm3"] == 0).all() and (i["max_frequency_drop_rel"] == 0).all()
     assert (d["max_frequency_drop_rel"] > 0).all()
     # intact pairs still differ between the days (temperature, re-clamping)
@@ -65,8 +65,8 @@ def test_slit_drop_label_ignores_day_to_day_changes():
     ia = draw_batch(np.random.default_rng(2), 12, a)
     ib = draw_batch(np.random.default_rng(2), 12, b)
     assert not np.allclose(ia.temperature_stiffness_change, 0)
-    da = simulate_batch(a, ia)["slit_frequency_drop"]
-    db = simulate_batch(b, ib)["slit_frequency_drop"]
+    da = simulate_batch(a, ia)["damage_frequency_drop"]
+    db = simulate_batch(b, ib)["damage_frequency_drop"]
     np.testing.assert_allclose(da, db, rtol=1e-4, atol=1e-8)
     assert (da > 0).all()
 

@@ -182,7 +182,8 @@ def test_temperature_scaling_and_calibration_metrics():
 
 def test_equivalent_depth_inverts_the_layered_section():
     from datagen.config import DEFAULTS
-    from datagen.specimen import SectionLayout, slit_section_ei
+    from datagen.damage.slit import slit_section_ei
+    from datagen.specimen import SectionLayout
 
     p = beam_preset("beam5")
     lay = SectionLayout.matching(p.EI_Nm2, p.width_m, p.thickness_m, DEFAULTS["section"]["face_thickness_m"],

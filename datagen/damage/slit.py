@@ -1,9 +1,12 @@
-"""Slits as local losses of flexural rigidity on the truth mesh.
+"""Slits as local losses of flexural rigidity on the truth mesh: damage kind ``"slit"`` (:class:`Slit`).
 
 A slit ``k`` has a centre ``x_k`` (m, ``0 < x < L``), an effective width
 ``w_k`` (m) and a depth ``d_k`` (m) into the top face sheet. Over
 ``[x_k - w_k/2, x_k + w_k/2]`` (clipped to the beam) the rigidity drops from
-``EI`` to ``EI_d = EI * r(d_k)`` (:func:`datagen.specimen.slit_section_ei`).
+``EI`` to ``EI_d = EI * r(d_k)`` (:func:`slit_section_ei`: the top ``d_k`` of the
+layered section of :mod:`datagen.specimen` removed; the section is then no longer
+symmetric, so its rigidity is computed about the shifted neutral axis, which
+reduces to eq. 4.1 for ``d = 0``).
 
 Flexibility-exact elements
 --------------------------
@@ -34,14 +37,74 @@ interpolation): ``Delta C_e = beta_k EI G_e``, ``G_e = int_overlap B^T B dx``.
 
 Where slits overlap the section loses the rigidity of the deepest one (the
 largest ``EI - EI_d``), not the sum.
+
+Size
+----
+The size of a slit is its hinge flexibility: a slit of width ``w`` whose
+section keeps a fraction ``1 - r`` of the rigidity adds the rotational
+compliance ``w r / ((1 - r) EI)`` of a rotational spring ``k_theta`` at its
+centre, and the non-dimensional flexibility ``theta = EI / (k_theta L) = w r /
+((1 - r) L)`` is what the natural frequencies and shapes determine (to first
+order in ``w``, ``d(omega^2) = -EI L theta kappa(x)^2`` for a mass-normalised
+mode of curvature ``kappa``; width and depth on their own are not).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["clamped_flexibility", "curvature_basis", "draw_slits", "element4_index", "expand_tip_stiffness",
-           "overlap_energy", "slit_corrections", "slit_element_weights", "stiffness_from_flexibility"]
+from datagen.checks import value_range
+from datagen.specimen import SectionLayout
+from physics.errors import ConfigError
+from physics.properties import beam_preset, section_ei
+
+__all__ = ["MAX_LOSS_FACTOR", "Slit", "clamped_flexibility", "curvature_basis", "depth_for_ei_loss", "draw_slits",
+           "equivalent_depth", "expand_tip_stiffness", "hinge_flexibility", "overlap_energy", "slit_corrections",
+           "slit_element_weights", "slit_section_ei", "stiffness_from_flexibility"]
+
+#: Largest loss factor ``beta * omega`` of a slit's stiffness-proportional damping over the measurement band.
+MAX_LOSS_FACTOR = 1.0
+
+
+def slit_section_ei(layout: SectionLayout, depth_m):
+    """Rigidity of the section with the top ``depth_m`` removed (about its own neutral axis).
+
+    Parameters
+    ----------
+    layout : SectionLayout
+    depth_m : float or ndarray, shape (...)
+        Slit depth(s) from the top surface (m), ``0 <= d < h/2``.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        ``EI`` (N m^2); equals ``layout.EI`` for ``d = 0``.
+    """
+    d = np.asarray(depth_m, dtype=float)[..., None]
+    h, tf = layout.thickness_m, layout.face_thickness_m
+    top = h - d                                            # the section is cut at h - d
+    z_bot = np.minimum(np.array([0.0, tf, h - tf]), top)  # layers bottom face / core / top face
+    z_top = np.minimum(np.array([tf, h - tf, h]), top)
+    E = np.array([layout.face_modulus_pa, layout.core_modulus_pa, layout.face_modulus_pa])
+    return section_ei(layout.width_m, z_bot, z_top, E)
+
+
+def depth_for_ei_loss(layout: SectionLayout, ei_loss):
+    """Slit depth (m) whose section keeps ``1 - ei_loss`` of the rigidity (inverse of :func:`slit_section_ei`).
+
+    Depths range from 0 to the top of the bottom face sheet (cut through the
+    top face and the core); the loss grows monotonically with depth and is
+    inverted by interpolation on a fine table (relative error in the loss
+    below 1e-6; the stored loss is recomputed from the depth).
+    """
+    h, tf = layout.thickness_m, layout.face_thickness_m
+    grid = np.linspace(0.0, h - tf, 20001)
+    loss = 1.0 - slit_section_ei(layout, grid) / layout.EI
+    want = np.asarray(ei_loss, float)
+    if np.nanmax(want, initial=0.0) > loss[-1]:
+        raise ConfigError(f"config key 'damage.ei_loss' must stay below {loss[-1]:.4f}, the loss of a cut "
+                          f"through the top face and the core")
+    return np.interp(want, loss, grid)
 
 
 def curvature_basis(element_length, shear_phi=0.0):
@@ -206,20 +269,13 @@ def slit_corrections(x_m, width_m, ei_loss_Nm2, beta_s, ei_Nm2, length_m, n_elem
     return dK, dC
 
 
-def element4_index(x_m, length_m):
-    """1-based element of the thesis's 4-element grid holding ``x`` (0 where ``x`` is NaN)."""
-    x = np.asarray(x_m, float)
-    idx = np.clip(np.floor(np.nan_to_num(x, nan=-1.0) / (length_m / 4)).astype(int) + 1, 1, 4)
-    return np.where(np.isfinite(x), idx, 0)
-
-
 def draw_slits(rng: np.random.Generator, n: int, cfg: dict, length_m: float, layout) -> dict:
     """Slit parameters of ``n`` samples, padded to the maximum slit count with NaN.
 
     A fraction ``damage.intact_fraction`` of the samples gets no slit. The
     slit's depth is drawn from ``damage.depth_m``, or, when ``damage.ei_loss``
     is set, the relative EI loss of the slit section is drawn and the depth
-    follows from the layered section (:func:`datagen.specimen.depth_for_ei_loss`).
+    follows from the layered section (:func:`depth_for_ei_loss`).
 
     Returns
     -------
@@ -227,8 +283,6 @@ def draw_slits(rng: np.random.Generator, n: int, cfg: dict, length_m: float, lay
         ``n_slits`` (n,), ``x_m``, ``width_m``, ``depth_m``, ``beta_s`` (n, S_max);
         absent slits are NaN.
     """
-    from datagen.specimen import depth_for_ei_loss
-
     d = cfg["damage"]
     lo, hi = d["n_slits"]
     smax = max(hi, 1)
@@ -248,3 +302,122 @@ def draw_slits(rng: np.random.Generator, n: int, cfg: dict, length_m: float, lay
     if d["ei_loss"]:
         out["depth_m"] = np.where(present, depth_for_ei_loss(layout, span("ei_loss", 2)), np.nan)
     return out
+
+
+def hinge_flexibility(ei_loss, width_m, length_m):
+    """Non-dimensional flexibility ``EI / (k_theta L) = w r / ((1 - r) L)`` of slits (batched).
+
+    Parameters
+    ----------
+    ei_loss : array_like
+        ``r``, the fraction of the flexural rigidity the slit section loses (0 <= r < 1).
+    width_m : array_like
+        Slit width ``w`` (m), broadcast against ``ei_loss``.
+    length_m : float
+        Beam length ``L`` (m).
+    """
+    r = np.asarray(ei_loss, float)
+    return np.asarray(width_m, float) * r / ((1.0 - r) * length_m)
+
+
+def _beam_fields(preset):
+    """``EI, width, thickness, length`` of a preset name or of a truth beam's mapping (SI)."""
+    if isinstance(preset, str):
+        p = beam_preset(preset)
+        return p.EI_Nm2, p.width_m, p.thickness_m, p.length_m
+    return preset["EI_Nm2"], preset["width_m"], preset["thickness_m"], preset["length_m"]
+
+
+def equivalent_depth(flexibility: float, preset, width_m: float, section: dict) -> float | None:
+    """Depth (m) of a slit ``width_m`` wide whose hinge flexibility ``w r / ((1 - r) L)`` is the given one.
+
+    ``r`` is the rigidity loss of the layered section cut to that depth (face/core layout of
+    :mod:`datagen.specimen`, eq. 4.1, with the config's ``section`` keys ``face_thickness_m`` and
+    ``core_modulus_pa``). ``preset``: a preset name or a truth beam's mapping. None when even a cut to
+    mid-thickness would not be that flexible.
+    """
+    EI, width, thickness, length = _beam_fields(preset)
+    lay = SectionLayout.matching(EI, width, thickness, section["face_thickness_m"], section["core_modulus_pa"])
+    depths = np.linspace(0.0, 0.999 * thickness / 2, 4000)
+    curve = hinge_flexibility(1.0 - slit_section_ei(lay, depths) / lay.EI, width_m, length)
+    if not np.isfinite(flexibility) or flexibility > curve[-1]:
+        return None
+    return float(np.interp(flexibility, curve, depths))
+
+
+class Slit:
+    """Damage kind ``"slit"``: a cut into the top face sheet (see the module docstring).
+
+    Parameters per damage: ``width_m``, ``depth_m``, ``ei_loss`` (relative rigidity loss of
+    the section), ``beta_s`` (extra stiffness-proportional damping, s). Size: the hinge
+    flexibility ``w r / ((1 - r) L)``.
+    """
+
+    kind = "slit"
+    defaults = {
+        "n_slits": [1, 1],
+        "width_m": [0.002, 0.01],            # effective length of the reduced section
+        "depth_m": [0.0002, 0.0003],         # thesis: 0.2-0.3 mm into the top face sheet
+        "ei_loss": [],                       # if set: relative EI loss of the slit section (depth follows)
+        "slit_damping_s": [0.0, 2.0e-5],     # extra stiffness-proportional damping of the slit region (s)
+    }
+    units = {"width_m": "m", "depth_m": "m", "ei_loss": "- (relative)", "stiffness_loss_Nm3": "N m^3",
+             "damping_s": "s"}
+    sample_units = {"stiffness_loss_Nm3": "N m^3 (sum over slits of dEI * width)"}
+    size_meaning = "hinge flexibility EI / (k_theta L) = w r / ((1 - r) L)"
+    perturbs = "stiffness"
+
+    def validate(self, d: dict, cfg: dict) -> None:
+        d["n_slits"] = value_range("damage.n_slits", d["n_slits"], lo=0, hi=8, integer=True)
+        d["width_m"] = value_range("damage.width_m", d["width_m"], lo=1e-6, hi=0.1)
+        d["depth_m"] = value_range("damage.depth_m", d["depth_m"], lo=0.0)
+        d["ei_loss"] = value_range("damage.ei_loss", d["ei_loss"], lo=0.0, hi=0.9999, allow_empty=True)
+        d["slit_damping_s"] = value_range("damage.slit_damping_s", d["slit_damping_s"], lo=0.0, hi=1.0)
+        top_rad_s = cfg["measurement"]["band_rad_s"][1]
+        if d["slit_damping_s"][1] * top_rad_s > MAX_LOSS_FACTOR:
+            raise ConfigError(f"config key 'damage.slit_damping_s' must keep the slit's loss factor beta*omega <= "
+                              f"{MAX_LOSS_FACTOR:g} up to the top of measurement.band_rad_s ({top_rad_s:g} rad/s): "
+                              f"beta <= {MAX_LOSS_FACTOR / top_rad_s:.3g} s, got {d['slit_damping_s']!r}")
+
+    def check_beam(self, d: dict, preset, section: dict) -> None:
+        if d["depth_m"][1] >= preset.thickness_m - section["face_thickness_m"]:
+            raise ConfigError(f"config key 'damage.depth_m' must stay below the thickness minus the bottom face "
+                              f"({preset.thickness_m - section['face_thickness_m']:g} m)")
+
+    def draw(self, rng: np.random.Generator, n: int, cfg: dict, setup) -> dict:
+        sl = draw_slits(rng, n, cfg, setup.length_m, setup.layout)
+        ei0 = setup.layout.EI
+        sl["ei_loss"] = np.where(np.isfinite(sl["depth_m"]),
+                                 1.0 - slit_section_ei(setup.layout, np.nan_to_num(sl["depth_m"])) / ei0, np.nan)
+        sl["n_damages"] = sl.pop("n_slits")
+        return sl
+
+    def corrections(self, params, x_m, ei_Nm2, mass_per_length_kg_m, length_m, n_elements, shear_phi=0.0):
+        ok = np.isfinite(x_m)
+        dK, dC = slit_corrections(np.where(ok, x_m, 0.0), np.where(ok, params["width_m"], 0.0),
+                                  np.where(ok, params["ei_loss"] * ei_Nm2[:, None], 0.0),
+                                  np.where(ok, params["beta_s"], 0.0), ei_Nm2, length_m, n_elements, shear_phi)
+        return None, dK, dC
+
+    def size(self, params, x_m, ei_Nm2, mass_per_length_kg_m, length_m):
+        return hinge_flexibility(params["ei_loss"], params["width_m"], length_m)
+
+    def columns(self, params, x_m, ei_Nm2, mass_per_length_kg_m, length_m):
+        loss = params["ei_loss"] * ei_Nm2[:, None] * params["width_m"]
+        return ({"stiffness_loss_Nm3": np.nansum(loss, axis=1)},
+                {"width_m": params["width_m"], "depth_m": params["depth_m"], "ei_loss": params["ei_loss"],
+                 "stiffness_loss_Nm3": loss, "damping_s": params["beta_s"]})
+
+    #: Width (m) of the depth example of :meth:`describe`: the middle of the training widths.
+    reference_width_m = 0.0055
+
+    def describe(self, x_m: float, size: float, preset, section: dict | None = None) -> str:
+        """``"a slit at x = 0.152 m of hinge flexibility EI/(k L) = 0.0123 (e.g. 0.25 mm deep over 5.5 mm)"``.
+
+        The depth example (:func:`equivalent_depth`, :attr:`reference_width_m` wide) needs the config's
+        ``section``; without it, or when no cut is that flexible, it is left out.
+        """
+        width_m = self.reference_width_m
+        depth = None if section is None else equivalent_depth(size, preset, width_m, section)
+        eg = "" if depth is None else f" (e.g. {depth * 1000:.2f} mm deep over {width_m * 1000:.1f} mm)"
+        return f"a slit at x = {x_m:.3f} m of hinge flexibility EI/(k L) = {size:.3g}{eg}"

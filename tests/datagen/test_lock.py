@@ -1,0 +1,80 @@
+"""One writer per dataset directory (datagen.lock) and interrupted commands (experiments.cli)."""
+
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+
+import pytest
+
+from experiments.cli import main, one_line
+from experiments.jsonable import to_jsonable
+
+
+def _lock(path, pid):
+    path.write_text(json.dumps({"pid": pid, "host": socket.gethostname(), "since": "2026-01-01T00:00:00"}))
+
+
+def test_a_second_writer_is_refused_naming_the_holder(tmp_path, capsys):
+    out = tmp_path / "ds"
+    out.mkdir()
+    _lock(out / ".lock", os.getpid())          # this process runs: the lock is held
+    assert main(["generate", "--n", "4", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"pid {os.getpid()} on {socket.gethostname()}" in err
+    assert "another generate writes this dataset" in err
+    assert sorted(p.name for p in out.iterdir()) == [".lock"]   # nothing written
+
+
+def test_a_stale_lock_is_taken_over_and_released(tmp_path, capsys):
+    out = tmp_path / "ds"
+    out.mkdir()
+    proc = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    _lock(out / ".lock", int(proc.stdout))     # a pid that has ended
+    assert main(["generate", "--n", "4", "--out", str(out), "--json"]) == 0
+    cap = capsys.readouterr()
+    assert json.loads(cap.out)["complete"] and "took over the stale lock" in cap.err
+    assert not (out / ".lock").exists()
+
+
+def test_sigint_and_sigterm_end_generate_in_one_line_and_resume_completes_it(tmp_path):
+    """Interrupted mid-run (after its first shard), generate says so in one line with exit 130 / 143; a second
+    run completes the dataset with the samples of an uninterrupted run."""
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    cfg = tmp_path / "small-shards.toml"
+    cfg.write_text('base = "training"\n[output]\nshard_size = 100\n')
+    args = ["--n", "1200", "--config", str(cfg), "--seed", "3"]
+    full = tmp_path / "full"
+    assert main(["generate", *args, "--out", str(full)]) == 0
+    for sig, code in ((signal.SIGINT, 130), (signal.SIGTERM, 143)):
+        out = tmp_path / sig.name
+        proc = subprocess.Popen([sys.executable, "-m", "experiments.cli", "generate", *args, "--out", str(out)],
+                                env=env, stderr=subprocess.PIPE, text=True)
+        deadline = time.time() + 120
+        while not list((out / "shards").glob("shard-*")) and time.time() < deadline and proc.poll() is None:
+            time.sleep(0.05)
+        if proc.poll() is not None:
+            pytest.skip("generate finished before it could be interrupted")
+        proc.send_signal(sig)
+        err = proc.communicate(timeout=120)[1]
+        assert proc.returncode == code, err
+        assert err.strip().count("\n") == 0 and ("interrupted" in err or "terminated" in err), err
+        assert not (out / ".lock").exists()
+        assert main(["generate", *args, "--out", str(out)]) == 0
+        assert (out / "samples.parquet").read_bytes() == (full / "samples.parquet").read_bytes()
+        for shard in sorted((full / "shards").iterdir()):
+            for f in sorted(shard.iterdir()):
+                assert (out / "shards" / shard.name / f.name).read_bytes() == f.read_bytes(), (sig, f)
+
+
+def test_errors_and_json_stay_one_line_of_valid_utf8(tmp_path, capsys):
+    bad = tmp_path / "two\nlines.uff"
+    bad.write_text("not a universal file\n")
+    assert main(["identify", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "two\\nlines.uff" in err
+    assert one_line("a\tb\udcff") == "a\\tb\\udcff"
+    json.dumps(to_jsonable({"file\udcff": "x\udcff"})).encode("utf-8")

@@ -1,0 +1,146 @@
+"""Damage kind "mass_change" (datagen/damage/mass_change.py): a signed point mass in the current state."""
+
+import numpy as np
+import pytest
+
+from datagen.config import load_config, merge
+from datagen.dataset import Dataset
+from datagen.generation import generate
+from learn.features import labels
+from physics.effects import point_mass_matrix
+from physics.errors import ConfigError
+from physics.fem import beam_model
+from physics.modal import undamped_modes
+from physics.properties import beam_preset
+
+#: Rigid clamp, Euler-Bernoulli, no test-day changes: the current state differs by the point mass alone.
+QUIET = {"specimen": {"root_spring_relative": []},
+         "damage": {"kind": "mass_change", "n_masses": [1, 1], "mass_ratio": [-0.0018, 0.01]},
+         "measurement": {"lines": 64}, "output": {"shard_size": 6}}
+
+
+def _cantilever_shape_squared(x_m, length_m, r):
+    """``W_r(x)^2`` of the uniform cantilever's mode r (0-based), normalised to ``int_0^L W^2 dx = L``."""
+    bl = np.array([1.8751040687, 4.6940911330, 7.8547574382, 10.9955407349])[r]
+    s = bl * np.asarray(x_m) / length_m
+    sigma = (np.cosh(bl) + np.cos(bl)) / (np.sinh(bl) + np.sin(bl))
+    return (np.cosh(s) - np.cos(s) - sigma * (np.sinh(s) - np.sin(s))) ** 2
+
+
+@pytest.fixture(scope="module")
+def masses(tmp_path_factory):
+    root = tmp_path_factory.mktemp("mass") / "data"
+    generate(root, merge(QUIET), n=12, seed=3, progress=False)
+    ds = Dataset(root)
+    return ds.table(), ds.manifest, root
+
+
+def test_frequency_changes_are_those_of_the_fe_beam_with_the_point_mass(masses):
+    """Truth shifts against an independent solve: physics.fem's 20-element beam plus
+    physics.effects.point_mass_matrix at x, and to first order ``df/f = -(1/2) (m_k / m L) W_r(x)^2``."""
+    t, manifest, _ = masses
+    L = beam_preset("beam5").length_m
+    assert manifest["config"]["damage"]["kind"] == "mass_change"
+    n_el = manifest["config"]["mesh"]["truth_elements"]
+    for _, row in t.iterrows():
+        beam = beam_model(n_el, L, row.ei_Nm2, row.m_per_length_kg_m)
+        assert beam.dofs[:2] == ("2:y", "2:rz")     # the clamp removed node 1
+        dM = point_mass_matrix(beam.node_x, row.damage0_mass_kg, row.damage0_x_m)[2:, 2:]
+        w0 = undamped_modes(beam.M, beam.K)[0][:4]
+        w1 = undamped_modes(beam.M + dM, beam.K)[0][:4]
+        stored = np.array([row[f"df{r + 1}_rel"] for r in range(4)])
+        np.testing.assert_allclose(stored, w1 / w0 - 1, rtol=1e-4, atol=1e-8)
+        first_order = -0.5 * row.damage0_size * _cantilever_shape_squared(row.damage0_x_m, L, np.arange(4))
+        np.testing.assert_allclose(stored, first_order, rtol=0.05, atol=2e-5)
+        # a mass added lowers every frequency, a mass lost raises it
+        assert np.all(np.sign(stored) == -np.sign(row.damage0_mass_kg)) or np.max(np.abs(stored)) < 1e-7
+
+
+def test_size_is_the_signed_mass_ratio_and_labels_read_it(masses):
+    t, _, _ = masses
+    L = beam_preset("beam5").length_m
+    np.testing.assert_allclose(t.damage0_size, t.damage0_mass_kg / (t.m_per_length_kg_m * L), rtol=1e-15)
+    assert t.damage0_size.between(-0.00181, 0.0101).all() and (t.damage0_size < 0).any() and (t.damage0_size > 0).any()
+    lab = labels(t, L)
+    np.testing.assert_array_equal(lab["hinge_flexibility"], t.damage0_size)
+    np.testing.assert_allclose(lab["x_over_L"], t.damage0_x_m / L)
+    assert "damage0_width_m" not in t and "n_slits" not in t
+
+
+def test_the_damage_section_takes_the_keys_of_its_kind():
+    cfg = merge({"damage": {"kind": "mass_change"}})
+    assert cfg["damage"] == {"kind": "mass_change", "intact_fraction": 0.0, "position_fraction": [0.03, 0.97],
+                             "n_masses": [1, 1], "mass_ratio": [-0.0015, 0.015]}
+    training = merge({"damage": {"kind": "mass_change"}}, base=load_config("training"))
+    assert training["damage"]["kind"] == "mass_change" and "n_slits" not in training["damage"]
+    with pytest.raises(ConfigError, match="'damage.n_slits'"):
+        merge({"damage": {"kind": "mass_change", "n_slits": [1, 1]}})
+    with pytest.raises(ConfigError, match="'damage.kind' must be one of \\['mass_change', 'slit'\\]"):
+        merge({"damage": {"kind": "debond"}})
+    with pytest.raises(ConfigError, match="'damage.mass_ratio'"):
+        merge({"damage": {"kind": "mass_change", "mass_ratio": [0.1, -0.1]}})
+    with pytest.raises(ConfigError, match="'damage.mass_ratio' must be >= -0.0018: a point mass lost"):
+        merge({"damage": {"kind": "mass_change", "mass_ratio": [-0.002, 0.01]}})
+    assert merge({"damage": {"kind": "mass_change", "mass_ratio": [-0.0029, 0.01]},
+                  "mesh": {"truth_elements": 12}})["damage"]["mass_ratio"][0] == -0.0029
+
+
+def test_mass_sensitivities_are_the_displacement_squared_of_the_cantilever_modes():
+    """beam_sensitivity(kind="mass_change") on a rigid clamp: ``d ln f_r / d mu = -(1/2) W_r(x)^2`` to first
+    order, averaged over each element (the mass of a unit size spreads over it; 5-point Gauss)."""
+    from learn.sensitivity import beam_sensitivity
+
+    sens = beam_sensitivity("beam5", None, kind="mass_change")
+    L, E = sens.length_m, sens.n_elements
+    g, wg = np.polynomial.legendre.leggauss(5)
+    x = (np.arange(E)[:, None] + 0.5 + g / 2) * L / E                      # (E, 5)
+    expected = -0.5 * np.stack([_cantilever_shape_squared(x, L, r) @ wg / 2 for r in range(4)])
+    np.testing.assert_allclose(sens.frequency, expected, rtol=1e-3, atol=1e-5)
+    assert np.all(sens.frequency <= 0) and -2.0 < sens.frequency[0, -1] < -1.9   # W_1(L)^2 = 4 at the tip itself
+    slit = beam_sensitivity("beam5", None)
+    assert np.all(slit.frequency[0, :-1] < slit.frequency[0, 1:])   # a slit counts most at the root (curvature)
+
+
+def test_projection_and_the_drop_label_hold_with_test_day_changes():
+    """With a root spring, temperature and re-clamping between the days and 0-2 masses per specimen: the batched
+    projection matches the per-sample state-space solution (datagen.naive, the current state on M + dM), and the
+    drop label is the masses' alone (physics.fem with the root spring and the point masses, no day-to-day change)."""
+    from datagen.naive import simulate_naive
+    from datagen.pipeline import draw_batch, get_setup, simulate_batch
+    from physics.modal import modal_parameters
+
+    setup = get_setup(merge({"specimen": {"temperature_stiffness_change": [-0.003, 0.003],
+                                          "root_spring_change": [-0.05, 0.05]},
+                             "damage": {"kind": "mass_change", "n_masses": [0, 2], "mass_ratio": [-0.0018, 0.05]},
+                             "measurement": {"lines": 64}}))
+    inp = draw_batch(np.random.default_rng(4), 8, setup)
+    assert set(inp.damage) == {"mass_kg"} and (inp.n_damages == 2).any() and (inp.n_damages == 0).any()
+    out = simulate_batch(setup, inp)
+    full = simulate_naive(setup, inp, modes="full")
+    f_s, z_s = modal_parameters(out["truth_poles"][..., :4])
+    f_f, z_f = modal_parameters(full["truth_poles"][..., :4])
+    np.testing.assert_allclose(f_s, f_f, rtol=1e-4)
+    np.testing.assert_allclose(z_s, z_f, rtol=1e-3)
+    n_el, L = setup.n_elements, setup.length_m
+    for b in range(len(inp)):
+        beam = beam_model(n_el, L, inp.EI_Nm2[b], inp.mass_per_length_kg_m[b], root_spring=inp.root_spring_Nm_rad[b])
+        names = [f"{n}:{d}" for n in range(1, n_el + 2) for d in ("y", "rz")]
+        keep = [names.index(d) for d in beam.dofs]                        # with the root rotation on its spring
+        dM = sum(point_mass_matrix(beam.node_x, m, x)[np.ix_(keep, keep)]
+                 for x, m in zip(inp.x_m[b], inp.damage["mass_kg"][b]) if np.isfinite(x))
+        w0 = undamped_modes(beam.M, beam.K)[0][:4]
+        w1 = undamped_modes(beam.M + dM, beam.K)[0][:4]
+        assert out["damage_frequency_drop"][b] == pytest.approx(np.max(1 - w1 / w0), abs=1e-8)
+
+
+def test_inspect_summarises_a_mass_change_dataset(masses, tmp_path):
+    """No slit columns: the curvature check is empty (n = 0), the labels are the mass change's, the units too."""
+    from datagen.inspection import inspect_dataset
+
+    t, manifest, root = masses
+    s = inspect_dataset(root, tmp_path / "inspect")
+    assert all(c == {"slope": None, "r2": None, "n": 0} for c in s["curvature_check"].values())
+    assert s["labels"]["damage0_mass_kg"]["min"] == t.damage0_mass_kg.min() and "damage0_ei_loss" not in s["labels"]
+    assert manifest["schema"]["columns"]["damage{k}_mass_kg"].startswith("kg (signed")
+    assert "signed mass ratio" in manifest["schema"]["columns"]["damage{k}_size"]
+    assert (tmp_path / "inspect" / "shift_vs_position.png").stat().st_size > 0
