@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from datagen.kernels import band_cholesky, band_cholesky_solve
+from datagen.band_cholesky import band_cholesky, band_cholesky_solve
 from physics.modal import undamped_modes
 
 __all__ = ["BANDWIDTH", "light_damping_modes", "ritz_modes"]

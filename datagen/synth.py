@@ -6,10 +6,10 @@ measured DOF, with measurement noise
 
     ``H_meas = H (1 + level z1) + floor max_f|H| z2``   (per response FRF),
 
-``H`` the float64 pole-pair sum of :mod:`physics.kernels`, ``max_f|H|`` over
+``H`` the float64 pole-pair sum of :mod:`physics.frf_kernels`, ``max_f|H|`` over
 all lines stored at generation (``frf_peak``, :func:`measured_peak`), ``z1, z2`` unit
 circular complex Gaussian numbers drawn from a counter-based stream
-(:func:`datagen.kernels.add_noise_row`, fused into the synthesis) keyed by the sample's
+(:func:`datagen.noise_kernels.add_noise_row`, fused into the synthesis) keyed by the sample's
 ``noise_seed`` and the state, so a sample's noise never depends on which
 other samples are read with it, on the worker or on the order. Noise keyed
 by the line index and the stored peak let any subset of lines be synthesised
@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from datagen.kernels import noise_kernel, noisy_pole_residue_kernel
+from datagen.noise_kernels import noise_kernel, noisy_pole_residue_kernel
 from physics.frf import pole_residue, receptance_state_space
 
 __all__ = ["DATASET_FRFS", "SOURCES", "add_noise", "line_index", "log_magnitude_map", "measured_frf", "measured_peak",
@@ -92,7 +92,7 @@ def measured_peak(a: dict, omega_rad_s) -> np.ndarray:
     lam, R = _measured_inputs(a)
     need = np.repeat(np.asarray(a["noise_floor"], float) != 0, 2)
     peak = np.full(R.shape[:2], np.nan)
-    if need.any():  # the float64 sum of datagen.kernels.row_peak, the same values
+    if need.any():  # the float64 sum of datagen.noise_kernels.row_peak, the same values
         H = pole_residue(lam[need], R[need], omega_rad_s)
         peak[need] = np.sqrt(np.max(H.real ** 2 + H.imag ** 2, axis=-1))
     return peak.reshape(-1, 2, R.shape[1])

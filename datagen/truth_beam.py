@@ -47,7 +47,14 @@ from physics.errors import ConfigError
 from physics.fem import element_mass, element_stiffness
 from physics.properties import BeamPreset
 
-__all__ = ["as_preset", "beam_mapping", "load_truth_beam", "point_effects", "shear_parameters", "unit_elements"]
+__all__ = ["APPLIED_EFFECTS", "as_preset", "beam_mapping", "load_truth_beam", "point_effects", "shear_parameters",
+           "unit_elements"]
+
+
+#: The beam-file effects the generator applies (module docstring: how each enters); a beam file with another
+#: effect is refused, and ``generate --help`` lists these.
+APPLIED_EFFECTS = ("shear_deformation", "rotary_inertia", "root_flexibility", "added_mass", "local_damping",
+                   "proportional_damping")
 
 
 def load_truth_beam(mapping: dict):
@@ -58,6 +65,10 @@ def load_truth_beam(mapping: dict):
         raise ConfigError("config key 'beam' needs physics.beam (the beam-file module), which this "
                           "installation lacks") from None
     beam = beam_from_dict(dict(mapping), "config key 'beam'")
+    other = [name for name in beam.effects if name not in APPLIED_EFFECTS]
+    if other:
+        raise ConfigError(f"config key 'beam': generate applies the effects {', '.join(APPLIED_EFFECTS)}; the beam "
+                          f"has {', '.join(other)}")
     if beam.bc != "clamped-free":
         raise ConfigError(f"config key 'beam': generate simulates cantilevers; bc {beam.bc!r} is not 'clamped-free'")
     quarter = beam.length_m * np.arange(1, 5) / 4

@@ -7,7 +7,7 @@ import os
 
 from datagen.config import load_config, merge, named_configs
 from datagen.generation import generate
-from datagen.truth_beam import beam_mapping
+from datagen.truth_beam import APPLIED_EFFECTS, beam_mapping
 from physics.errors import BeamDamageError
 from physics.properties import PRESETS
 
@@ -29,7 +29,8 @@ def add_parser(subparsers):
     p.add_argument("--config", help=f"a named config ({', '.join(named_configs())}) or a TOML file overriding the "
                                     "defaults; a file may start from a named one with `base = \"training\"`")
     p.add_argument("--beam", help="the truth beam: a preset (beam5, beam6, beam8) or a beam file (TOML, physics.beam; "
-                                  "effects shear_deformation and rotary_inertia), e.g. one `discrepancy` calibrated")
+                                  f"effects applied: {', '.join(APPLIED_EFFECTS)}), e.g. one `discrepancy` "
+                                  "calibrated")
     p.add_argument("--preset", help="beam preset (beam5, beam6, beam8); default beam5 or the config's (same as --beam "
                                     "PRESET; kept for old scripts)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")

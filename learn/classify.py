@@ -76,17 +76,13 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
             reasons.insert(0, f"Mahalanobis distance {dist[i]:.3g} from the training data, beyond "
                               f"{pct[i]:.2f}% of training pairs")
         verdict, from_network, w = _chosen_verdict(net, cl, p, reasons, warnings, mode_sens[i], depth)
-        freqs, modes = _frequencies_classified(p, base_md, cur_md[i] if cur_md else None)
         results.append({
             "measured": names[i + 1], **verdict, "verdict_from": "network" if from_network else "classical",
             "in_distribution": not reasons, "out_of_distribution_reasons": reasons,
             "mahalanobis_distance": dist[i], "training_percentile": pct[i],
             "network": net, "classical": cl,
             "classical_methods": answers[i],
-            "identification": {**IDENTIFICATION, "source": "identified from FRFs" if identified else "modal data",
-                               "baseline_frequencies_hz": [float(x) for x in freqs[0]],
-                               "measured_frequencies_hz": [float(x) for x in freqs[1]],
-                               "modes_classified": modes},
+            "identification": _identification(p, base_md, cur_md[i] if cur_md else None, identified),
             "input_route": route, "warnings": w,
             "_extra": {"location_distribution": where[i]},
         })
@@ -153,14 +149,19 @@ def _chosen_verdict(net, cl, p, reasons: list, warnings: list, sens, depth):
     return classical_verdict(cl, sens, depth), False, w
 
 
-def _frequencies_classified(p, base_md, cur_md):
-    """Baseline and measured natural frequencies (Hz) shown with the verdict, and the 1-based modes classified."""
+def _identification(p, base_md, cur_md, identified: bool) -> dict:
+    """The verdict's ``identification``: how the modes were found, the baseline and measured natural frequencies
+    (Hz; every mode found when the pair is not complete) and the 1-based modes classified."""
     if p is None:
-        return ([], []), []
-    if p.complete:
-        return np.abs(p.eigenvalues) / (2 * np.pi), [1, 2, 3, 4]
-    # every mode found, paired or not
-    return [np.sort(np.abs(md.eigenvalues)) / (2 * np.pi) for md in (base_md, cur_md)], [int(j) + 1 for j in p.modes]
+        freqs, modes = ([], []), []
+    elif p.complete:
+        freqs, modes = np.abs(p.eigenvalues) / (2 * np.pi), [1, 2, 3, 4]
+    else:
+        freqs = [np.sort(np.abs(md.eigenvalues)) / (2 * np.pi) for md in (base_md, cur_md)]
+        modes = [int(j) + 1 for j in p.modes]
+    return {**IDENTIFICATION, "source": "identified from FRFs" if identified else "modal data",
+            "baseline_frequencies_hz": [float(x) for x in freqs[0]],
+            "measured_frequencies_hz": [float(x) for x in freqs[1]], "modes_classified": modes}
 
 
 

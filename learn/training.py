@@ -87,15 +87,8 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
     load_s = time.perf_counter() - t0
     sens = sensitivity_of(pairs.beam, _nominal_root_spring(pairs.source), pairs.source[0].get("truth_beam"),
                           pairs.source[0].get("config"))
-    networks, outputs, fit_s = {}, [], {}
-    for r in routes:
-        X = features(pairs, r)
-        est = DamageClassifier(epochs=epochs, random_state=seed, n_threads=threads, verbose=progress)
-        est.fit(X[tr], y[tr], pairs.groups[tr])
-        networks[r] = est
-        fit_s[r] = est.train_seconds_
-        outputs.append(network_output(est, X[te], sens, f"network ({r})")[0])
-        del X
+    params = dict(epochs=epochs, random_state=seed, n_threads=threads, verbose=progress)
+    networks, outputs, fit_s = _fit_networks(pairs, routes, y, (tr, te), sens, params)
     classical, thresholds = run_classical(pairs.eigenvalues[tr], pairs.eigenvectors[tr], sens,
                                           damaged=truth["damaged"][tr])
     classical, _ = run_classical(pairs.eigenvalues[te], pairs.eigenvectors[te], sens, thresholds)
@@ -121,6 +114,22 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
     return {"model": str(out_dir), "route": route, "train_pairs": int(len(tr)), "test_pairs": int(len(te)),
             "train_seconds": fit_s, "load_seconds": load_s, "best_classical": best.method,
             "test_metrics": config["test_metrics"], "warnings": warnings}
+
+
+def _fit_networks(pairs: Pairs, routes: list, y, split: tuple, sens, params: dict):
+    """One network per classifier input fitted on the training split and scored on the test split: the networks,
+    their test outputs and fit seconds (``{input: DamageClassifier}``, list of MethodOutput, ``{input: s}``)."""
+    tr, te = split
+    networks, outputs, fit_s = {}, [], {}
+    for r in routes:
+        X = features(pairs, r)
+        est = DamageClassifier(**params)
+        est.fit(X[tr], y[tr], pairs.groups[tr])
+        networks[r] = est
+        fit_s[r] = est.train_seconds_
+        outputs.append(network_output(est, X[te], sens, f"network ({r})")[0])
+        del X
+    return networks, outputs, fit_s
 
 
 def evaluate(model: TrainedModel, data, out_dir=None, *, extra_outputs=None, progress: bool = False) -> dict:

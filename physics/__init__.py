@@ -13,7 +13,7 @@ Modules (one concept each; float64, batched over leading axes, SI units)
 ``identification``  modal identification from FRFs (peak picking, circle fit, LSCF/LSFD)
 ``io``              file formats (one table, ``physics.io.FORMATS``: readers, writers, sniffing) and atomic writes
 ``thesis``          the thesis's printed numbers as package data
-``kernels``         compiled (numba) backends
+``frf_kernels``     compiled (numba) pole-pair FRF synthesis
 
 The names below are the public API other packages (``datagen``, ``learn``,
 ``experiments``) import; ``io`` and ``identification`` are used as modules.

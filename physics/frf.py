@@ -103,7 +103,7 @@ def pole_residue(eigenvalues, residues, omega_rad_s, *, lower_residual=None, upp
         C-contiguous storage written in place (e.g. complex64 dataset arrays);
         ``backend="numba"`` only. Values are accumulated in float64 and written once.
     backend : {"numba", "numpy"}
-        ``"numba"``: one compiled pass (:func:`physics.kernels.pole_residue_kernel`),
+        ``"numba"``: one compiled pass (:func:`physics.frf_kernels.pole_residue_kernel`),
         the fast path for datasets; ``"numpy"``: array expressions. Equal to rounding.
 
     Returns
@@ -129,7 +129,7 @@ def pole_residue(eigenvalues, residues, omega_rad_s, *, lower_residual=None, upp
         gc = 1.0 / (s - np.conj(lam)[..., :, None])
         H = R @ g + np.conj(R) @ gc
     elif backend == "numba":
-        from physics.kernels import pole_residue_kernel
+        from physics.frf_kernels import pole_residue_kernel
 
         n = int(np.prod(batch, dtype=int))
         lam2 = np.ascontiguousarray(np.broadcast_to(lam, batch + (m,)).reshape(n, m))
@@ -334,9 +334,9 @@ def convert_frf(H, omega_rad_s, from_kind: str, to_kind: str):
     return np.asarray(H) * (1j * w) ** power
 
 def magnitude_db(H):
-    """``20 log10 |H|`` (dB re 1 unit of H)."""
-    with np.errstate(divide="ignore"):
-        return 20.0 * np.log10(np.abs(H))
+    """``20 log10 |H|`` (dB re 1 unit of H); a zero magnitude is read as ``1e-300`` (-6000 dB), so differences of
+    magnitudes stay finite."""
+    return 20.0 * np.log10(np.maximum(np.abs(H), 1e-300))
 
 
 def phase_deg(H, unwrap: bool = False):

@@ -59,8 +59,8 @@ from physics.discrepancy.candidates import g_core_pa
 from physics.discrepancy.fitting import BLOCKS, Fit
 from physics.discrepancy.limits import DETECTION_POWER, SIZES, DetectionLimit, detection_limits
 from physics.discrepancy.measurement import Measurement, Noise, frf_scatter_db, has_complex_shapes
-from physics.discrepancy.model import (ModeResiduals, Prediction, mode_residuals, pair_modes, predict, rayleigh_fit,
-                                       simulate_measurement)
+from physics.discrepancy.model import (ModeResiduals, Prediction, mode_residuals, pair_modes_by_mac, predict,
+                                       rayleigh_fit, simulate_measurement)
 from physics.discrepancy.selection import (BIC_SIGNIFICANT, DISTINCT, NOISE_DOF_MIN, P_NOISE, NoiseCheck, Step,
                                            noise_check)
 from physics.discrepancy.workflow import DiscrepancyResult, analyse
@@ -68,4 +68,4 @@ from physics.discrepancy.workflow import DiscrepancyResult, analyse
 __all__ = ["BIC_SIGNIFICANT", "BLOCKS", "DETECTION_POWER", "DISTINCT", "DetectionLimit", "DiscrepancyResult", "Fit",
            "Measurement", "ModeResiduals", "NOISE_DOF_MIN", "Noise", "NoiseCheck", "P_NOISE", "Prediction", "SIZES",
            "Step", "analyse", "detection_limits", "frf_scatter_db", "g_core_pa", "has_complex_shapes", "mode_residuals",
-           "noise_check", "pair_modes", "predict", "rayleigh_fit", "simulate_measurement"]
+           "noise_check", "pair_modes_by_mac", "predict", "rayleigh_fit", "simulate_measurement"]

@@ -15,7 +15,8 @@ from scipy.optimize import OptimizeResult, least_squares
 
 from physics.beam import Beam
 from physics.discrepancy.candidates import Param, effect_params, g_core_pa, has_position
-from physics.discrepancy.measurement import Measurement, has_complex_shapes, magnitude_db
+from physics.discrepancy.measurement import Measurement, has_complex_shapes
+from physics.frf import magnitude_db
 from physics.discrepancy.model import (ModeResiduals, Prediction, aligned, dashpot_damping_per_c, mode_residuals,
                                        predict, rayleigh_fit)
 

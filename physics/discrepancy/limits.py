@@ -11,7 +11,7 @@ from physics.beam import Beam
 from physics.discrepancy.candidates import Param, effect_params, has_position
 from physics.discrepancy.fitting import Fit, Problem, model_params
 from physics.discrepancy.measurement import Measurement, Noise
-from physics.discrepancy.model import dashpot_damping_per_c, pair_modes, predict
+from physics.discrepancy.model import dashpot_damping_per_c, pair_modes_by_mac, predict
 from physics.discrepancy.selection import BIC_SIGNIFICANT
 
 __all__ = ["DETECTION_POWER", "SIZES", "DetectionLimit", "detection_limits"]
@@ -129,7 +129,7 @@ def detection_limits(beam: Beam, meas: Measurement, noise: Noise, final: Fit, c_
     """
     fixed = {k: dict(v) for k, v in (fixed or {}).items()}
     positions = dict(positions or {})
-    pairs = pair_modes(meas, predict(beam, meas, n_elements)) if pairs is None else pairs
+    pairs = pair_modes_by_mac(meas, predict(beam, meas, n_elements)) if pairs is None else pairs
     fit_mass = meas.frf is not None
     nuis = model_params(beam, meas, named, positions, fit_mass)
     null = Problem(beam, meas, noise, fixed, nuis, positions, n_elements, pairs, fit_mass)

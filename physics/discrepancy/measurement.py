@@ -9,8 +9,9 @@ from functools import cached_property
 import numpy as np
 
 from physics.errors import ShapeError
+from physics.frf import magnitude_db
 
-__all__ = ["Measurement", "Noise", "frf_scatter_db", "has_complex_shapes", "magnitude_db"]
+__all__ = ["Measurement", "Noise", "frf_scatter_db", "has_complex_shapes"]
 
 
 @dataclass(frozen=True)
@@ -117,10 +118,6 @@ class Measurement:
 def has_complex_shapes(meas: Measurement) -> bool:
     """Measured shapes with imaginary parts (non-proportional damping is visible in them)."""
     return meas.shapes is not None and bool(np.any(np.abs(meas.shapes.imag) > 0))
-
-
-def magnitude_db(h):
-    return 20 * np.log10(np.maximum(np.abs(h), 1e-300))
 
 
 def frf_scatter_db(meas: Measurement) -> float:

@@ -13,9 +13,10 @@ from physics.beam import Beam
 from physics.errors import BeamDamageError
 from physics.frf import convert_frf, receptance
 from physics.modal import mac
-from physics.discrepancy.measurement import Measurement, Noise, magnitude_db
+from physics.discrepancy.measurement import Measurement, Noise
+from physics.frf import magnitude_db
 
-__all__ = ["ModeResiduals", "Prediction", "aligned", "dashpot_damping_per_c", "mode_residuals", "pair_modes",
+__all__ = ["ModeResiduals", "Prediction", "aligned", "dashpot_damping_per_c", "mode_residuals", "pair_modes_by_mac",
            "predict", "rayleigh_fit", "simulate_measurement"]
 
 
@@ -117,8 +118,9 @@ def aligned(a, b):
     return a - b * (np.vdot(b, a) / np.vdot(b, b))
 
 
-def pair_modes(meas: Measurement, pred: Prediction) -> np.ndarray:
-    """Model mode index paired with each measured mode (MAC with shapes, else log-frequency distance)."""
+def pair_modes_by_mac(meas: Measurement, pred: Prediction) -> np.ndarray:
+    """Model mode index paired with each measured mode: the assignment of largest MAC when the measurement has
+    shapes, else of smallest log-frequency distance after the median frequency ratio."""
     if meas.shapes is not None:
         cost = -mac(meas.shapes, pred.shapes)
     else:
@@ -168,8 +170,8 @@ class ModeResiduals:
 
 
 def mode_residuals(meas: Measurement, pred: Prediction, pairs=None) -> ModeResiduals:
-    """Per-mode residuals of ``pred`` against ``meas`` (modes paired by :func:`pair_modes`)."""
-    pairs = pair_modes(meas, pred) if pairs is None else pairs
+    """Per-mode residuals of ``pred`` against ``meas`` (modes paired by :func:`pair_modes_by_mac`)."""
+    pairs = pair_modes_by_mac(meas, pred) if pairs is None else pairs
     f = pred.frequencies_hz[pairs]
     macs = None
     if meas.shapes is not None:

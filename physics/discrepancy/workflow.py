@@ -13,7 +13,7 @@ from physics.errors import BeamDamageError
 from physics.discrepancy.fitting import Fit, candidate_fit, fit_model
 from physics.discrepancy.limits import detection_limits
 from physics.discrepancy.measurement import Measurement, Noise, has_complex_shapes
-from physics.discrepancy.model import ModeResiduals, mode_residuals, pair_modes, predict
+from physics.discrepancy.model import ModeResiduals, mode_residuals, pair_modes_by_mac, predict
 from physics.discrepancy.selection import NoiseCheck, decide, estimate_noise_scale, noise_check
 
 __all__ = ["DiscrepancyResult", "analyse"]
@@ -126,7 +126,7 @@ def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, s
     names = list(candidates)
     untestable = _untestable(names, meas)
     nominal_pred = predict(beam, meas, n_elements)
-    pairs = pair_modes(meas, nominal_pred)
+    pairs = pair_modes_by_mac(meas, nominal_pred)
     fixed = {k: dict(v) for k, v in beam.effects.items() if k != "proportional_damping"}
     say = progress or (lambda s: None)
     say("globals only")

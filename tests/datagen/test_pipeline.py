@@ -116,7 +116,7 @@ def test_updated_model_with_consistent_data_reproduces_measured_modes(setup):
 
 
 def test_tabulated_box_muller_matches_the_exact_transform_and_is_gaussian():
-    from datagen.kernels import box_muller  # the transform the noise streams go through
+    from datagen.noise_kernels import box_muller  # the transform the noise streams go through
 
     rng = np.random.default_rng(3)
     # z = sqrt(-ln(1 - u1)) exp(2 pi i u2), including the exact branch near u1 = 0 and 1
@@ -132,7 +132,7 @@ def test_tabulated_box_muller_matches_the_exact_transform_and_is_gaussian():
 def test_counter_based_noise_stream_is_unit_circular_gaussian_and_independent():
     from scipy import stats
 
-    from datagen.kernels import hashed_normal
+    from datagen.noise_kernels import hashed_normal
 
     seed = np.uint64(12345)
     z = np.array([hashed_normal(seed, k) for k in range(40000)])
@@ -145,7 +145,7 @@ def test_counter_based_noise_stream_is_unit_circular_gaussian_and_independent():
 
 
 def test_band_cholesky_solve_equals_dense_solve(setup):
-    from datagen.kernels import band_cholesky, band_cholesky_solve
+    from datagen.band_cholesky import band_cholesky, band_cholesky_solve
 
     rng = np.random.default_rng(4)
     K = np.stack([setup.K0 * f for f in (1.0, 2.5)])

@@ -218,3 +218,19 @@ def test_shear_flexibility_drawn_per_specimen_is_the_truth(tmp_path, capsys):
                                                                                b.fe_model(n_elements=80)))
         np.testing.assert_allclose(f, same, rtol=2e-5)
         np.testing.assert_allclose(f, fine, rtol=5e-3)
+
+
+def test_generate_help_names_the_effects_the_generator_applies(capsys):
+    """``generate --help`` lists the beam-file effects the generator applies: every effect a beam file can hold,
+    those the test above shows entering the truth (rotary inertia: the shear test's Timoshenko mass)."""
+    from datagen.truth_beam import APPLIED_EFFECTS, beam_mapping, load_truth_beam
+    from physics.effects import EFFECTS
+
+    assert set(APPLIED_EFFECTS) == set(EFFECTS) and set(ALL_EFFECTS) <= set(APPLIED_EFFECTS)
+    with pytest.raises(SystemExit):
+        main(["generate", "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    assert f"effects applied: {', '.join(APPLIED_EFFECTS)}" in help_text
+    beam_mod = pytest.importorskip("physics.beam")
+    mapping = beam_mapping(beam_mod.preset_beam("beam5").with_effects(ALL_EFFECTS))
+    assert set(load_truth_beam(mapping).effects) == set(ALL_EFFECTS)

@@ -49,6 +49,7 @@ def test_kind_conversion_and_db():
     np.testing.assert_allclose(frf.convert_frf(mob, w, "mobility", "accelerance"), -(w**2) * h)
     np.testing.assert_allclose(frf.convert_frf(-(w**2) * h, w, "accelerance", "receptance"), h)
     assert frf.magnitude_db(np.array([10.0]))[0] == pytest.approx(20.0)
+    np.testing.assert_array_equal(frf.magnitude_db(np.array([0.0, 1e-300j])), [-6000.0, -6000.0])  # zeros: finite
     assert frf.phase_deg(np.array([1j]))[0] == pytest.approx(90.0)
     with pytest.raises(BeamDamageError, match="FRF kind"):
         frf.convert_frf(h, w, "receptance", "inertance")
