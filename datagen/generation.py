@@ -9,6 +9,8 @@ calling process alone writes shards and the manifest.
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import io
 import json
 import math
@@ -24,10 +26,10 @@ from pathlib import Path
 import numpy as np
 
 from datagen.config import validate
-from datagen.lock import LOCK_NAME, dataset_lock
+from datagen.lock import LOCK_NAME, LockedError, dataset_lock
 from datagen.pipeline import get_setup, simulate_shard
-from datagen.store import ARRAYS, DERIVED, DATASET_FORMAT, STATES, column_units, dataset_identity, finalize, \
-    package_version, read_manifest, recover, sample_table, shard_arrays, write_manifest, write_shard
+from datagen.store import ARRAYS, DERIVED, DATASET_FORMAT, STATES, column_units, dataset_identity, file_sha256, \
+    finalize, package_version, read_manifest, recover, sample_table, shard_arrays, write_manifest, write_shard
 from physics.errors import BeamDamageError, ConfigError
 from physics.io import atomic_write_bytes
 
@@ -204,7 +206,7 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
             m["complete"] = False
             print(f"{root / 'omega_rad_s.npy'}: missing or damaged; rewritten from the config", file=sys.stderr)
         return m
-    if root.exists() and any(p.name != LOCK_NAME for p in root.iterdir()):
+    if root.exists() and any(not p.name.startswith(LOCK_NAME) for p in root.iterdir()):
         raise BeamDamageError(f"{root} exists, is not empty and has no manifest.json; choose a new --out")
     root.mkdir(parents=True, exist_ok=True)
     setup = get_setup(cfg)
@@ -220,6 +222,17 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
          "preset": {**vars(setup.preset), "mass_per_length_kg_m": setup.preset.mass_per_length_kg_m}}
     write_manifest(root, m)
     return m
+
+
+def _finalized(root: Path, manifest: dict) -> bool:
+    """True when a complete manifest's samples.parquet is on disk as recorded (nothing to rewrite)."""
+    want = manifest.get("checksums", {}).get("samples.parquet")
+    if not manifest.get("complete") or want is None:
+        return False
+    try:
+        return file_sha256(root / "samples.parquet") == want
+    except OSError:
+        return False
 
 
 def generate(root, cfg: dict, *, n: int, seed: int = 0, workers: int = 1, scheduler: str | None = None,
@@ -240,13 +253,39 @@ def generate(root, cfg: dict, *, n: int, seed: int = 0, workers: int = 1, schedu
     """
     cfg = validate(cfg)
     check_arguments(cfg, n, seed, workers, root)
+    root = Path(root)
     client = _connect(scheduler) if scheduler else None
+    created = not root.exists()
     try:
-        with dataset_lock(root):
+        with _writer_lock(root):
             return _generate(root, cfg, n, seed, workers, client, progress, max_new_shards)
+    except LockedError:
+        raise
+    except BeamDamageError:
+        if created:  # a run refused or failed before its first shard leaves nothing behind
+            shutil.rmtree(root, ignore_errors=True)
+        raise
     finally:
         if client is not None:
             client.close()
+
+
+@contextlib.contextmanager
+def _writer_lock(root: Path):
+    """:func:`datagen.lock.dataset_lock` of ``root``; none in a directory this user cannot write (a complete
+    dataset is then only verified, and any write it would need fails with its own one-line error)."""
+    root.mkdir(parents=True, exist_ok=True)
+    lock = dataset_lock(root)
+    try:
+        lock.__enter__()
+    except OSError as exc:
+        if exc.errno in (errno.EACCES, errno.EROFS, errno.EPERM) and (root / "manifest.json").exists():
+            yield None
+            return
+        raise
+    with contextlib.ExitStack() as stack:
+        stack.push(lock)
+        yield
 
 
 def _generate(root, cfg, n, seed, workers, client, progress, max_new_shards) -> dict:
@@ -288,6 +327,6 @@ def _generate(root, cfg, n, seed, workers, client, progress, max_new_shards) -> 
             _run_local_pool(todo, workers, record, cfg_json, seed)
     finally:
         bar.close()
-    if len(manifest["shards"]) == manifest["n_shards"]:
+    if len(manifest["shards"]) == manifest["n_shards"] and not _finalized(root, manifest):
         manifest = finalize(root, manifest)
     return manifest

@@ -1,34 +1,30 @@
-"""One writer per dataset directory: the lock file ``.lock`` that ``generate`` holds on its ``--out``.
+"""The writer's lock of a dataset directory: ``DIR/.generate.lock`` holds the pid, host and start time of the
+one ``generate`` allowed to write there.
 
-The lock file holds the writer's pid, host and start time (JSON). It is created
-with ``O_CREAT | O_EXCL``, so of two writers starting together exactly one gets
-it; the other is refused in one line naming the holder. A lock left by a writer
-that no longer runs on this host (killed with SIGKILL, machine crash) is stale:
-the next writer takes it over with a warning. A lock of another host is never
-taken over (its process cannot be checked from here): remove the file by hand
-when that writer is known to be gone.
+The lock file is created complete (written beside, then hard-linked into
+place, which fails if it exists), so a reader never sees a half-written lock.
+A lock whose pid no longer runs on this host is stale (its writer was killed)
+and is taken over; a lock of another host is never taken over.
 """
 
 from __future__ import annotations
 
 import contextlib
-import errno
 import json
 import os
 import socket
 import time
-import warnings
 from pathlib import Path
 
 from physics.errors import BeamDamageError
 
-__all__ = ["LOCK_NAME", "DatasetLockedError", "dataset_lock"]
+__all__ = ["LOCK_NAME", "LockedError", "dataset_lock"]
 
-LOCK_NAME = ".lock"
+LOCK_NAME = ".generate.lock"
 
 
-class DatasetLockedError(BeamDamageError):
-    """Another writer holds the dataset directory."""
+class LockedError(BeamDamageError):
+    """Another live writer holds the dataset directory."""
 
 
 def _alive(pid: int) -> bool:
@@ -36,66 +32,69 @@ def _alive(pid: int) -> bool:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
-    except PermissionError:  # a process of another user holds that pid
+    except PermissionError:  # exists, owned by another user
         return True
     return True
 
 
-def _holder(path: Path) -> dict:
+def _holder(lock: Path):
+    """The lock's record (dict with pid, host, since), or None when it cannot be read as one."""
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
+        rec = json.loads(lock.read_text())
     except (OSError, ValueError):
-        return {}
+        return None
+    ok = isinstance(rec, dict) and isinstance(rec.get("pid"), int) and isinstance(rec.get("host"), str)
+    return rec if ok else None
 
 
-def _try_create(path: Path, record: dict) -> bool:
+def _try_create(lock: Path, record: dict) -> bool:
+    tmp = lock.with_name(f"{LOCK_NAME}.{os.getpid()}.tmp")
+    tmp.write_text(json.dumps(record))
     try:
-        fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        os.link(tmp, lock)
+        return True
     except FileExistsError:
         return False
-    except OSError as exc:  # a read-only directory: no writer can change it, so none needs the lock
-        if exc.errno in (errno.EACCES, errno.EPERM, errno.EROFS):
-            return True
-        raise
-    with os.fdopen(fd, "w", encoding="utf-8") as f:
-        json.dump(record, f)
-    return True
+    finally:
+        tmp.unlink(missing_ok=True)
 
 
 @contextlib.contextmanager
 def dataset_lock(root):
-    """Hold ``root/.lock`` while the block runs (``root`` is created if missing).
+    """Hold the writer's lock of ``root`` (created if missing) for the block.
 
     Raises
     ------
-    DatasetLockedError
-        When a running writer (on this host, or any writer on another host) holds the lock.
+    LockedError
+        A live process (or one on another host) holds the lock: one line naming its pid, host and start time.
     """
     root = Path(root)
-    root.mkdir(parents=True, exist_ok=True)
-    path = root / LOCK_NAME
-    host = socket.gethostname()
-    record = {"pid": os.getpid(), "host": host, "since": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
-    for _ in range(3):  # a stale lock removed by a third writer in between: try again
-        if _try_create(path, record):
+    lock = root / LOCK_NAME
+    record = {"pid": os.getpid(), "host": socket.gethostname(),
+              "since": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
+    for _ in range(3):
+        if _try_create(lock, record):
             break
-        held = _holder(path)
-        pid, their_host = held.get("pid"), held.get("host")
-        if their_host == host and isinstance(pid, int) and pid != os.getpid() and not _alive(pid):
-            warnings.warn(f"{root}: took over the stale lock of pid {pid} (started {held.get('since', '?')}), "
-                          "which no longer runs", stacklevel=3)
-            with contextlib.suppress(FileNotFoundError):
-                path.unlink()
+        rec = _holder(lock)
+        if rec is not None and (rec["host"] != record["host"] or _alive(rec["pid"])) and rec["pid"] != os.getpid():
+            raise LockedError(f"{root}: another `generate` writes this dataset (pid {rec['pid']} on {rec['host']} "
+                              f"since {rec.get('since', '?')}); wait for it to finish, or delete {lock} if it is "
+                              f"gone")
+        if rec is None and time.time() - _mtime(lock) < 10:  # being replaced by another taker right now
+            time.sleep(0.2)
             continue
-        who = (f"pid {pid} on {their_host}, since {held.get('since', '?')}" if pid is not None
-               else f"an unreadable lock file {path}")
-        raise DatasetLockedError(f"{root}: another generate writes this dataset ({who}); wait for it to end, or "
-                                 f"remove {path} if that process is gone")
+        lock.unlink(missing_ok=True)  # stale: its writer died on this host (or an unreadable leftover)
     else:
-        raise DatasetLockedError(f"{root}: could not take the lock {path}")
+        raise LockedError(f"{root}: could not take the writer's lock {lock}; delete it if no `generate` runs")
     try:
-        yield
+        yield record
     finally:
-        if _holder(path).get("pid") == os.getpid():
-            with contextlib.suppress(FileNotFoundError):
-                path.unlink()
+        if _holder(lock) == record:
+            lock.unlink(missing_ok=True)
+
+
+def _mtime(p: Path) -> float:
+    try:
+        return p.stat().st_mtime
+    except OSError:
+        return 0.0
