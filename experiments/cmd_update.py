@@ -114,6 +114,11 @@ def update(beam, modal_file, mass: str = "iirs", tol: float = 1e-10, max_iter: i
             "eigenvectors are not a complete set of modes consistent with the mass (for real-valued shapes: only "
             "normal modes of proportional damping qualify)")
     warnings = []
+    f_meas = np.asarray(data.natural_frequencies_hz, float)
+    if np.any(np.diff(f_meas) < 0):
+        warnings.append(f"{modal_file}: the modes are not in ascending order of frequency "
+                        f"({', '.join(f'{x:.4g}' for x in f_meas)} Hz); each eigenvalue is updated with the shape "
+                        "column of the same index, so check that every frequency sits beside its own shape")
     if errors[worst] > updating.REPRODUCTION_TOL:
         warnings.append(f"the updated model reproduces the measured eigenvalues only to {errors[worst]:.2%} "
                         f"(mode {worst + 1}; tolerance {updating.REPRODUCTION_TOL:.0%}): the measured modes are "

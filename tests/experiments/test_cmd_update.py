@@ -82,3 +82,17 @@ def test_an_unstable_model_with_real_eigenvalues_is_a_warning_not_an_error(tmp_p
     oscillating = [w for w in out["warnings"] if "unstable: mode" in w]
     assert len(oscillating) == np.sum((lam.imag > 0) & (lam.real >= 0))
     assert any("real eigenvalue(s)" in w for w in out["warnings"])
+
+
+def test_frequencies_out_of_order_against_their_shapes_are_warned_of(tmp_path, capsys):
+    """Modal JSON whose first two eigenvalues are swapped (each no longer beside its own shape) is updated, as
+    the file asks, but with a warning naming the order; the file in order gets none."""
+    path = _modal_file(tmp_path / "m.json", [0.01, 0.002, 0.003, 0.004])
+    obj = json.loads(path.read_text())
+    obj["eigenvalues"][0], obj["eigenvalues"][1] = obj["eigenvalues"][1], obj["eigenvalues"][0]
+    swapped = tmp_path / "swapped.json"
+    swapped.write_text(json.dumps(obj))
+    assert main(["update", "--modal", str(swapped), "--json"]) == 0
+    cap = capsys.readouterr()
+    order = [w for w in json.loads(cap.out)["warnings"] if "ascending order" in w]
+    assert len(order) == 1 and "(130, 20, 350, 650 Hz)" in order[0], order
