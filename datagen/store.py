@@ -246,6 +246,15 @@ def write_shard(root, index: int, table: pd.DataFrame, arrays: dict, omega_rad_s
     if tmp.exists():
         shutil.rmtree(tmp)
     tmp.mkdir()
+    try:
+        return _fill_shard(root, index, table, arrays, omega_rad_s, frf_dtype, identity, tmp, final)
+    except BaseException:  # a full disk, an interrupt: no half-written shard directory is left behind
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def _fill_shard(root, index, table, arrays, omega_rad_s, frf_dtype, identity, tmp: Path, final: Path) -> dict:
+    """Write the shard's files into ``tmp`` and rename it onto ``final`` (:func:`write_shard`)."""
     table.to_parquet(tmp / "samples.parquet", index=False)
     for name in ARRAYS:
         np.save(tmp / f"{name}.npy", np.ascontiguousarray(arrays[name]), allow_pickle=False)

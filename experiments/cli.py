@@ -18,6 +18,7 @@ slow a command down many times; parallel work uses processes (``generate --worke
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import json
 import signal
@@ -122,8 +123,10 @@ def main(argv=None) -> int:
         sys.stderr.close()
         return 0
     except OSError as exc:
-        sys.stderr.write(one_line(f"beam-damage {args.command}: error: {exc.strerror or exc}: {exc.filename or ''}")
-                         + "\n")
+        where = f": {exc.filename}" if exc.filename else ""
+        kept = ("; nothing was half-written: files from before are as they were, and generate resumes from its "
+                "complete shards") if exc.errno in (errno.ENOSPC, errno.EDQUOT) else ""
+        sys.stderr.write(one_line(f"beam-damage {args.command}: error: {exc.strerror or exc}{where}{kept}") + "\n")
         return EXIT_USAGE
     except KeyboardInterrupt:
         sys.stderr.write(f"beam-damage {args.command}: interrupted (SIGINT); what was written is kept and complete"
