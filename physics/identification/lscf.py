@@ -3,11 +3,12 @@ identification of FRF arrays."""
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
-from physics.errors import ConvergenceError, ShapeError
+from physics.errors import BeamDamageError, ConvergenceError, ShapeError
 from physics.frf import check_frf_kind, convert_frf
 from physics.identification.lsfd import LSFDResult, lsfd
 from physics.identification.modes import ModalEstimate, _estimate, _frf3
@@ -20,17 +21,19 @@ __all__ = ["LSCFIdentification", "identify_lscf", "lscf"]
 _LSCF_BASIS_CACHE: dict = {}
 
 
-def _lscf_basis(f_hz, dt_s, n_cols):
+def _lscf_basis(f_hz, dt_s, n_cols, weight=None):
     """LSCF polynomial basis ``X = exp(i w dt k)`` (N, n_cols) and an orthonormal basis (2N, n_cols) of its
     real-stacked columns (Householder QR); the first ``nb`` columns of ``Q`` span the first ``nb`` of ``X``.
 
     The last few results are cached by the frequency lines, ``dt_s`` and ``n_cols`` (files of one layout
     share them).
     """
-    key = (f_hz.tobytes(), float(dt_s), int(n_cols))
+    key = (f_hz.tobytes(), float(dt_s), int(n_cols), None if weight is None else weight.tobytes())
     hit = _LSCF_BASIS_CACHE.get(key)
     if hit is None:
         X = np.exp(1j * np.outer(2 * np.pi * f_hz * dt_s, np.arange(n_cols)))
+        if weight is not None:
+            X = weight[:, None] * X
         Q, _ = np.linalg.qr(np.concatenate([X.real, X.imag], axis=0))
         hit = (X, Q)
         for a in (X, Q):
@@ -41,8 +44,81 @@ def _lscf_basis(f_hz, dt_s, n_cols):
     return hit
 
 
+#: Each lower sub-band of :func:`_with_subband_poles` ends at this fraction of the one above it.
+SUBBAND_STEP = 0.25
+#: A sub-band's pole joins the modes only where the FRF shows a peak: its magnitude at the pole this many times
+#: the median magnitude of the lines within +-:data:`PEAK_WINDOW` (relative) of it.
+PEAK_PROMINENCE = 3.0
+PEAK_WINDOW = 0.15
+
+
+def visible_peak(frequency_hz, magnitude, fn_hz) -> np.ndarray:
+    """Whether the FRF magnitude shows a peak at each ``fn_hz`` (prominence over the local median, batched).
+
+    Parameters
+    ----------
+    frequency_hz : ndarray, shape (n_lines,)
+    magnitude : ndarray, shape (n_lines,)    e.g. the RMS of ``|H|`` over responses and references
+    fn_hz : ndarray, shape (n,)
+
+    Returns
+    -------
+    ndarray of bool, shape (n,)
+    """
+    f = np.asarray(frequency_hz, float)
+    out = np.zeros(np.size(fn_hz), bool)
+    for k, fn in enumerate(np.atleast_1d(fn_hz)):
+        i = int(np.clip(np.searchsorted(f, fn), 1, f.size - 2))
+        near = magnitude[i - 1:i + 2].max()
+        window = magnitude[(f >= fn * (1 - PEAK_WINDOW)) & (f <= fn * (1 + PEAK_WINDOW))]
+        out[k] = window.size >= 5 and near >= PEAK_PROMINENCE * np.median(window)
+    return out
+
+
+def _with_subband_poles(f, rec, poles, max_order, margin, select, lscf_options):
+    """``poles`` of the whole band plus the physical poles that only lower sub-bands resolve.
+
+    One z-domain model over a wide band (an accelerance over five decades, 0.3-2000 Hz) resolves its lowest modes
+    poorly: their poles crowd near ``z = 1`` and a mode narrower than two lines barely weighs in the fit. The band
+    ``[f_min, f_max q^k]`` (``q`` = :data:`SUBBAND_STEP`, k = 1, 2, ...) is fitted again while it holds enough
+    lines; a pole found there that the larger band lacked (no pole within 1 %) joins when it lies inside that
+    sub-band and the FRF shows a peak at it (:func:`visible_peak`).
+    """
+    n_o, n_i = rec.shape[0], rec.shape[1]
+    mag = np.sqrt(np.mean(np.abs(rec) ** 2, axis=(0, 1)))
+    found = [poles]
+    hi = f[-1] * SUBBAND_STEP
+    while hi > 4 * f[0]:
+        sel = f <= hi
+        order = min(max_order, sel.sum() * n_o // (n_i + 1) - 1)
+        if order < 4:
+            break
+        try:
+            with warnings.catch_warnings():  # a sub-band without a stable pole: empty clusters
+                warnings.simplefilter("ignore", RuntimeWarning)
+                sub = select_poles(lscf(f[sel], rec[..., sel], max_order=order, margin=margin, **lscf_options),
+                                   **(select or {}))
+        except BeamDamageError:
+            break
+        known = np.concatenate([p.natural_frequencies_hz for p in found])
+        fn = sub.natural_frequencies_hz
+        new = ((fn >= f[0]) & (fn <= hi / (1 + margin))
+               & np.all(np.abs(fn[:, None] / known[None, :] - 1) > 0.01, axis=1) & visible_peak(f, mag, fn))
+        if new.any():
+            found.append(_take(sub, np.nonzero(new)[0]))
+        hi *= SUBBAND_STEP
+    if len(found) == 1:
+        return poles
+    merged = type(poles)(**{k: np.concatenate([getattr(p, k) for p in found]) for k in poles.__dataclass_fields__})
+    return _take(merged, np.argsort(merged.natural_frequencies_hz, kind="stable"))
+
+
+def _take(poles, idx):
+    return type(poles)(**{k: getattr(poles, k)[idx] for k in poles.__dataclass_fields__})
+
+
 def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_tol=0.05, mpf_tol=0.98,
-         max_damping=0.2, margin=0.0):
+         max_damping=0.2, margin=0.0, line_weight=None):
     """Poly-reference least-squares complex frequency-domain poles (pLSCF).
 
     Right matrix-fraction model in the z-domain, ``H_o(w) = B_o(z) A(z)^-1`` with
@@ -89,7 +165,7 @@ def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_to
         raise ShapeError(f"lscf: {N} lines x {n_o} responses are too few for model order {max_order}")
     dt = 1.0 / (2.0 * f[-1] * (1.0 + margin))
     P = max_order + 1
-    M, C = _projected_normal_equations(f, h, dt, P)
+    M, C = _projected_normal_equations(f, h, dt, P, None if line_weight is None else np.asarray(line_weight, float))
     f_lo, f_hi = f[0] / (1.0 + margin), f[-1] * (1.0 + margin)
     orders, lams, mpfs = [], [], []
     for p in range(max_order, min_order - 1, -1):
@@ -115,7 +191,7 @@ def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_to
     return StabilisationDiagram(order, lam, fn, zeta, mpf, status, (float(f[0]), float(f[-1])))
 
 
-def _projected_normal_equations(f_hz, h, dt_s, n_cols):
+def _projected_normal_equations(f_hz, h, dt_s, n_cols, weight=None):
     """Denominator normal equations of the highest order, with the numerators eliminated.
 
     Order ``p`` projects ``Y`` off the first ``nb = p + 1`` columns of ``Q`` (QR, so the
@@ -133,7 +209,7 @@ def _projected_normal_equations(f_hz, h, dt_s, n_cols):
         ``Q^T Y`` per response, whose rows ``C[:, k]`` add the terms of lower orders.
     """
     n_o, N, n_i = h.shape[0], h.shape[2], h.shape[1]
-    X, Q = _lscf_basis(f_hz, dt_s, n_cols)
+    X, Q = _lscf_basis(f_hz, dt_s, n_cols, weight)
     Hrow = np.transpose(h, (0, 2, 1))  # (n_o, N, n_i)
     Y = -(X[None, :, :, None] * Hrow[:, :, None, :]).reshape(n_o, N, n_cols * n_i)
     Yr = np.concatenate([Y.real, Y.imag], axis=1)  # (n_o, 2N, P n_i)
@@ -234,7 +310,8 @@ def _identify_lscf(frequency_hz, frf, n_modes, drive, max_order, select, kind, w
     f, h = _frf3(frequency_hz, frf)
     rec = convert_frf(h, 2 * np.pi * f, check_frf_kind(kind), "receptance")
     diagram = lscf(f, rec, max_order=max_order, margin=margin, **lscf_options)
-    poles = select_poles(diagram, **(select or {}))
+    poles = _with_subband_poles(f, rec, select_poles(diagram, **(select or {})), max_order, margin, select,
+                                lscf_options)
     fn = poles.natural_frequencies_hz
     inside = np.nonzero((fn >= f[0]) & (fn <= f[-1]))[0]
     if inside.size == 0:
