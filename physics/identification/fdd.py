@@ -67,7 +67,8 @@ def cross_spectra(signals, sampling_frequency_hz, n_per_segment, frames_per_chun
     n_ch, n = y.shape
     L, hop = int(n_per_segment), int(n_per_segment) // 2
     if n < 2 * L:
-        raise ShapeError(f"{where}: {n} samples are fewer than two frames of {L}")
+        raise ShapeError(f"{where}: {n} samples are fewer than two frames of {L} (a {sampling_frequency_hz / L:.3g} Hz "
+                         "resolution): too short a record for this resolution")
     mean, _, _ = _check_channels(y, where)
     win = signal.get_window("hann", L)
     scale = 2.0 / (sampling_frequency_hz * np.sum(win ** 2))
