@@ -92,6 +92,9 @@ def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, ma
     if method not in METHODS:
         raise ConfigError(f"method {method!r} must be one of {', '.join(METHODS)}")
     spec = METHODS[method]
+    if spec.data != "frf":
+        raise ConfigError(f"method {method!r} identifies response records output-only, not FRFs "
+                          "(see physics.identification.identify_records)")
     frf = frf.with_positive_directions()
     if frf.frf.shape[1] > frf.frf.shape[0]:
         frf = frf.reciprocal()

@@ -1,0 +1,114 @@
+"""Output-only identification of response records (no force) by a method of :data:`METHODS` with
+``data == "records"``: the records of a file, :func:`identify_records` and its :class:`RecordsIdentification`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from physics.errors import ConfigError, FileFormatError
+from physics.identification.methods import METHODS
+from physics.identification.modes import ModalEstimate
+from physics.identification.poles import StabilisationDiagram
+from physics.io import TIME, ModalData, format_of, read
+from physics.io.timedata import TimeRecords
+
+__all__ = ["DEFAULT_OUTPUT_ONLY", "SCALING", "RecordsIdentification", "holds_response_records", "identify_records",
+           "read_response_records"]
+
+#: The method ``identify`` picks for a file of response records without a force channel.
+DEFAULT_OUTPUT_ONLY = "ssi"
+#: What modal.json says of output-only shapes.
+SCALING = "unscaled (output-only: no force measured, so no modal mass)"
+
+
+@dataclass(frozen=True)
+class RecordsIdentification:
+    """An output-only identification of response records.
+
+    Attributes
+    ----------
+    records : TimeRecords
+        The response channels identified (SI units of one quantity).
+    estimate : ModalEstimate
+        Unit-norm, unscaled shapes over ``records.dofs``.
+    diagram : StabilisationDiagram or None
+    """
+
+    records: TimeRecords
+    estimate: ModalEstimate
+    diagram: StabilisationDiagram | None
+
+    @property
+    def modal_data(self) -> ModalData:
+        """Eigenvalues and unit-norm shapes over the channels' DOFs."""
+        return ModalData(self.estimate.eigenvalues, self.estimate.shapes, self.records.dofs)
+
+
+def holds_response_records(path) -> bool:
+    """Whether a file holds time records rather than FRFs: a universal file with time records and no FRF, an
+    ``.npz`` with a ``signals`` field, or a CSV whose header starts with ``time_s``."""
+    from physics.io import FRF
+
+    fmt = format_of(path, FRF, TIME)
+    if fmt.name == "uff":
+        from physics.io.uff58 import UffFile
+
+        types = UffFile(path).function_types
+        return 1 in types and 4 not in types
+    if fmt.name == "npz":
+        with np.load(path, allow_pickle=False) as z:
+            return "signals" in z.files
+    if fmt.name == "csv":
+        with open(path, encoding="utf-8", errors="replace") as fh:
+            first = next((s.strip() for s in fh if s.strip() and not s.lstrip().startswith("#")), "")
+        return first.lower().startswith("time_s")
+    return False
+
+
+def read_response_records(path) -> TimeRecords:
+    """The response channels of a time-record file (forces dropped); one quantity over all channels."""
+    rec = read(path, TIME)
+    resp = rec.responses
+    if not resp:
+        raise FileFormatError(f"{path}: no response channel, only forces")
+    quantities = sorted({rec.quantities[i] for i in resp})
+    if len(quantities) > 1:
+        raise FileFormatError(f"{path}: response channels of several quantities ({', '.join(quantities)}); "
+                              "output-only shapes need one quantity over all channels")
+    return TimeRecords(rec.time_step_s, rec.signals[resp], tuple(rec.dofs[i] for i in resp),
+                       tuple(rec.quantities[i] for i in resp), rec.metadata)
+
+
+def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=None, n_modes=None,
+                     max_order=40) -> RecordsIdentification:
+    """Identify modes of response records by an output-only method of :data:`METHODS`.
+
+    Parameters
+    ----------
+    records : TimeRecords
+        Response channels only (see :func:`read_response_records`).
+    method : str
+        A key of :data:`METHODS` with ``data == "records"``.
+    band_hz : (float, float), optional
+    n_modes : int, optional
+    max_order : int
+        Highest SSI model order (state dimension).
+
+    Returns
+    -------
+    RecordsIdentification
+    """
+    spec = METHODS.get(method)
+    if spec is None or spec.data != "records":
+        names = [n for n, s in METHODS.items() if s.data == "records"]
+        raise ConfigError(f"method {method!r}: response records without a force are identified output-only, by "
+                          f"{', '.join(names)}")
+    if band_hz is not None and not band_hz[0] < band_hz[1]:
+        raise ConfigError(f"band_hz ({band_hz[0]}, {band_hz[1]}): the lower bound must be below the upper")
+    where = str(records.metadata.get("source", "records"))
+    options = {"max_order": max_order}
+    est, diagram = spec.fit(records.signals, records.sampling_frequency_hz, band_hz, n_modes, where,
+                            **{k: options[k] for k in spec.options})
+    return RecordsIdentification(records, est, diagram)
