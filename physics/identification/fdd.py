@@ -18,7 +18,7 @@ from scipy import signal
 
 from physics.errors import ConvergenceError, ShapeError
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
-from physics.identification.ssi import _check_channels, _unit_shapes
+from physics.identification.ssi import _check_channels, _unit_shapes, check_duration
 from physics.modal import eigenvalues_from_modal
 
 __all__ = ["FDDIdentification", "cross_spectra", "identify_fdd"]
@@ -149,6 +149,7 @@ def identify_fdd(signals, sampling_frequency_hz, band_hz=None, n_modes=None, res
     if band[1] > fs / 2:
         raise ShapeError(f"{where}: band up to {band[1]:g} Hz is above the Nyquist frequency {fs / 2:g} Hz "
                          f"of a {fs:g} Hz sampling rate")
+    check_duration(np.shape(signals)[1] / fs, band[0], where)
     df = band[1] / 2400 if resolution_hz is None else float(resolution_hz)
     L = int(2 ** np.ceil(np.log2(fs / df)))
     if resolution_hz is None:

@@ -49,8 +49,12 @@ class RecordsIdentification:
 def holds_response_records(path) -> bool:
     """Whether a file holds time records rather than FRFs: a universal file with time records and no FRF, an
     ``.npz`` with a ``signals`` field, or a CSV whose header starts with ``time_s``."""
+    from pathlib import Path
+
     from physics.io import FRF
 
+    if not Path(path).is_file():
+        return False                                  # the FRF reader names what is missing
     fmt = format_of(path, FRF, TIME)
     if fmt.name == "uff":
         from physics.io.uff58 import UffFile

@@ -167,6 +167,13 @@ def output_correlations(signals, sampling_frequency_hz, n_lags, references=None,
     return OutputCorrelations(sums, counts, fs / q, n, q)
 
 
+def check_duration(duration_s, band_low_hz, where="record"):
+    """Refuse a record shorter than ten periods of the band's lower limit (the lowest mode it may hold)."""
+    if band_low_hz > 0 and duration_s < 10 / band_low_hz:
+        raise ShapeError(f"{where}: {duration_s:.3g} s is shorter than ten periods of the band's lower limit "
+                         f"{band_low_hz:g} Hz: modes below {10 / duration_s:.3g} Hz cannot be identified")
+
+
 def _toeplitz(R, block_rows):
     """Block Toeplitz ``T[a, b] = R[block_rows + a - b]`` (a, b = 0..block_rows-1), shape (l i, r i)."""
     i = block_rows
@@ -327,6 +334,7 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     if max_order > i * min(n_ref, y.shape[0]):
         raise ShapeError(f"{where}: max_order {max_order} exceeds block_rows x channels = "
                          f"{i * min(n_ref, y.shape[0])}")
+    check_duration(y.shape[1] / fs, band[0], where)
     cor = output_correlations(y, fs, 2 * i, references, band_hz, n_segments, chunk_samples, where)
     orders = np.arange(2, max_order + 1, 2)
     diagram = ssi_poles(cor.correlations, cor.sampling_frequency_hz, i, orders, band, max_damping)

@@ -2,12 +2,12 @@
 
 import numpy as np
 import pytest
+from oma_records import chain_record
 from scipy import signal
 
 from physics.errors import BeamDamageError
 from physics.identification.fdd import cross_spectra, identify_fdd
 from physics.modal import mac
-from tests.physics.test_ssi import chain_record
 
 
 def test_cross_spectra_in_chunks_equal_scipy_welch():
