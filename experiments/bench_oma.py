@@ -1,0 +1,155 @@
+"""Output-only identification against the independent simulator's truth, and pyOMA2 side by side.
+
+Records: the second simulator's nominal cantilever (``experiments.second_sim``, 16 elements, modes 1-4 at
+21.7, 136, 381 and 747 Hz, modal damping 1, 0.8, 0.6 and 0.5 %) under random forces, eight accelerometers at
+``x = L/8 .. L`` with 2 % noise, 2 kHz sampling. Cases: white force at the tip; coloured forces at two points
+(second-order low-pass at 127 Hz); and a short record. Per case and method: modes found of the four, the largest
+frequency and damping errors, the smallest MAC with the true shapes, and the wall time of the identification
+on the same record. pyOMA2 (``pyoma-2``, optional extra ``compare``) is given the true frequencies to pick its
+poles (its ``mpe``); ours selects them automatically.
+
+Run ``python -m experiments.bench_oma [--minutes 10] [--seed 1] [--no-peer] [--json FILE] [--docs]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+import time
+import warnings
+
+import numpy as np
+
+from experiments.second_sim.ambient import ambient_record
+from experiments.second_sim.fem import Beam
+from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
+from physics.identification.fdd import identify_fdd
+from physics.identification.ssi import identify_ssi
+from physics.io import atomic_write_text
+from physics.modal import mac
+
+__all__ = ["CASES", "main", "score", "table"]
+
+FS_HZ = 2000.0
+DAMPING = (0.01, 0.008, 0.006, 0.005)
+BAND_HZ = (5.0, 800.0)
+SENSORS_X_M = LENGTH_M * np.arange(1, 9) / 8
+#: name -> (minutes factor, coloured, force positions)
+CASES = {"white, tip force": (1.0, False, (LENGTH_M,)),
+         "coloured, two forces": (1.0, True, (SENSORS_X_M[2], LENGTH_M)),
+         "white, tip force, short": (None, False, (LENGTH_M,))}
+
+
+def _nanmax(a) -> float:
+    return float(np.nanmax(a)) if a and np.any(np.isfinite(a)) else float("nan")
+
+
+def score(truth, fn, zeta, shapes) -> dict:
+    """Modes found (nearest identified frequency within 5 % of a true one), largest |frequency| and |damping|
+    relative errors and smallest MAC over the modes found."""
+    f_true, z_true, phi = truth
+    fn = np.asarray(fn, float)
+    found, ef, ez, m = 0, [], [], []
+    for j, f in enumerate(f_true):
+        if fn.size == 0:
+            break
+        k = int(np.argmin(np.abs(fn - f)))
+        if abs(fn[k] - f) > 0.05 * f:
+            continue
+        found += 1
+        ef.append(abs(fn[k] / f - 1))
+        ez.append(abs(zeta[k] / z_true[j] - 1) if np.isfinite(zeta[k]) else np.nan)
+        m.append(float(mac(phi[:, [j]], shapes[:, [k]])[0, 0]))
+    return {"found": found, "of": len(f_true), "max_freq_err_pct": 100 * _nanmax(ef),
+            "max_damping_err_pct": 100 * _nanmax(ez), "min_mac": min(m) if m else float("nan")}
+
+
+def _ours(rec):
+    out = {}
+    for name, fit in (("SSI-cov (this package)", lambda: identify_ssi(rec.signals, FS_HZ, BAND_HZ, max_order=40)),
+                      ("EFDD (this package)", lambda: identify_fdd(rec.signals, FS_HZ, BAND_HZ))):
+        t = time.perf_counter()
+        e = fit().estimate
+        out[name] = (time.perf_counter() - t, e.natural_frequencies_hz, e.damping_ratios, e.shapes)
+    return out
+
+
+def _peer(rec):
+    """pyOMA2 SSI-cov (30 block rows, orders to 40, as ours) and EFDD on the same record, or {} if absent."""
+    try:
+        from pyoma2.algorithms.fdd import EFDD
+        from pyoma2.algorithms.ssi import SSI
+        from pyoma2.setup.single import SingleSetup
+    except ImportError:
+        return {}
+    logging.disable(logging.WARNING)
+    out = {}
+    for name, alg, mpe in (("pyOMA2 SSI-cov (given the true frequencies)", SSI(name="a", method="cov", br=30,
+                                                                                 ordmax=40),
+                            {"order_in": "find_min"}),
+                           ("pyOMA2 EFDD (given the true frequencies)", EFDD(name="a", nxseg=8192), {})):
+        t = time.perf_counter()
+        ss = SingleSetup(rec.signals.T.copy(), fs=FS_HZ)
+        ss.add_algorithms(alg)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            ss.run_by_name("a")
+            ss.mpe("a", sel_freq=list(rec.frequencies_hz), **mpe)
+        r = ss["a"].result
+        out[name] = (time.perf_counter() - t, np.asarray(r.Fn), np.asarray(r.Xi), np.asarray(r.Phi))
+    return out
+
+
+def table(minutes=10.0, seed=1, peer=True) -> list[dict]:
+    """One row per case and method (see the module docstring)."""
+    beam = Beam(LENGTH_M, EI_NM2, MASS_PER_LENGTH_KG_M, n_elements=16)
+    rows = []
+    for k, (case, (factor, coloured, inputs)) in enumerate(CASES.items()):
+        duration = 60 * (minutes * factor if factor else 2.0)
+        rec = ambient_record(beam, SENSORS_X_M, duration, FS_HZ, DAMPING, inputs, coloured, 0.02, 4,
+                             seed=seed + k)
+        truth = (rec.frequencies_hz, rec.damping_ratios, rec.shapes)
+        results = {**_ours(rec), **(_peer(rec) if peer else {})}
+        for method, (wall, fn, zeta, shapes) in results.items():
+            rows.append({"case": case, "minutes": duration / 60, "method": method, "wall_s": wall,
+                         **score(truth, fn, zeta, shapes)})
+    return rows
+
+
+def markdown(rows) -> str:
+    head = ("| record | method | modes found | max freq. error | max damping error | min MAC | time |\n"
+            "| --- | --- | --- | --- | --- | --- | --- |\n")
+    return head + "".join(
+        f"| {r['case']}, {r['minutes']:g} min | {r['method']} | {r['found']} of {r['of']} | "
+        f"{r['max_freq_err_pct']:.3f} % | {r['max_damping_err_pct']:.1f} % | {r['min_mac']:.5f} | "
+        f"{r['wall_s']:.2f} s |\n" for r in rows)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--minutes", type=float, default=10.0, help="record length of the long cases (default 10)")
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--no-peer", action="store_true", help="leave pyOMA2 out")
+    p.add_argument("--json", metavar="FILE", help="write the rows as JSON")
+    p.add_argument("--docs", action="store_true", help="write the table into docs/identification.md")
+    args = p.parse_args(argv)
+    rows = table(args.minutes, args.seed, not args.no_peer)
+    md = markdown(rows)
+    sys.stdout.write(md)
+    ours = {r["case"]: r["wall_s"] for r in rows if r["method"].startswith("SSI-cov")}
+    for r in rows:
+        if r["method"].startswith("pyOMA2 SSI"):
+            print(f"{r['case']}: pyOMA2 SSI-cov / ours wall time = {r['wall_s'] / ours[r['case']]:.1f}")
+    if args.json:
+        atomic_write_text(args.json, json.dumps({"config": vars(args), "rows": rows}, indent=1) + "\n")
+    if args.docs:
+        from experiments.doc_tables import write_table
+
+        write_table("identification.md", "oma", md)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
