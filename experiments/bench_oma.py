@@ -151,6 +151,14 @@ def long_record_memory(minutes=60.0, seed=1) -> dict:
             "frequencies_hz": e.natural_frequencies_hz.tolist(), "damping_ratios": e.damping_ratios.tolist()}
 
 
+def memory_markdown(r, minutes) -> str:
+    """One-row table of :func:`long_record_memory`."""
+    return ("| record | file | SSI-cov time | peak allocated | modes found (Hz) |\n| --- | --- | --- | --- | --- |\n"
+            f"| {minutes:g} min, {r['channels']} channels, {FS_HZ:g} Hz ({r['samples']} samples) | "
+            f"{r['file_bytes'] / 2**20:.0f} MiB float32, memory-mapped | {r['wall_s']:.1f} s | "
+            f"{r['peak_alloc_bytes'] / 2**20:.0f} MiB | {', '.join(f'{f:.3f}' for f in r['frequencies_hz'])} |\n")
+
+
 def markdown(rows) -> str:
     head = ("| record | method | modes found | max freq. error | max damping error | min MAC | time |\n"
             "| --- | --- | --- | --- | --- | --- | --- |\n")
@@ -178,6 +186,10 @@ def main(argv=None) -> int:
               + ", ".join(f"{f:.3f}" for f in r["frequencies_hz"]))
         if args.json:
             atomic_write_text(args.json, json.dumps({"config": vars(args), "long_record": r}, indent=1) + "\n")
+        if args.docs:
+            from experiments.doc_tables import write_table
+
+            write_table("identification.md", "oma-memory", memory_markdown(r, args.long_record))
         return 0
     rows = table(args.minutes, args.seed, not args.no_peer)
     md = markdown(rows)
