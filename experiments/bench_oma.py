@@ -8,7 +8,7 @@ frequency and damping errors, the smallest MAC with the true shapes, and the wal
 on the same record. pyOMA2 (``pyoma-2``, optional extra ``compare``) is given the true frequencies to pick its
 poles (its ``mpe``); ours selects them automatically.
 
-Run ``python -m experiments.bench_oma [--minutes 10] [--seed 1] [--no-peer] [--json FILE] [--docs]``;
+Run ``python -m experiments.bench_oma [--minutes 10] [--seed 1] [--threads 1] [--no-peer] [--json FILE] [--docs]``;
 ``--long-record MINUTES`` instead writes a record of 16 channels at 2 kHz (float32 ``.npy``, built of 5-minute
 simulated blocks) to a temporary directory and reports the wall time and the peak of the memory numpy allocates
 (``tracemalloc``) while SSI-cov identifies it from the memory-mapped file.
@@ -177,7 +177,18 @@ def main(argv=None) -> int:
     p.add_argument("--docs", action="store_true", help="write the table into docs/identification.md")
     p.add_argument("--long-record", type=float, metavar="MINUTES",
                    help="report the memory and time of SSI-cov on a memory-mapped record of this length instead")
+    p.add_argument("--threads", type=int, default=1,
+                   help="BLAS/FFT threads of both packages (default 1: timings on a loaded machine stay comparable)")
     args = p.parse_args(argv)
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:                                   # timings then use the BLAS default
+        return _main(args)
+    with threadpool_limits(args.threads):
+        return _main(args)
+
+
+def _main(args) -> int:
     if args.long_record:
         r = long_record_memory(args.long_record, args.seed)
         print(f"SSI-cov on {r['channels']} channels x {r['samples']} samples at {FS_HZ:g} Hz (float32 file "

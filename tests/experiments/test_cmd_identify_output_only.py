@@ -111,3 +111,32 @@ def test_bad_records_get_one_line_and_exit_2(capsys, chain, tmp_path, case, mess
         argv_extra = ["--method", "ssi"]
     code, out, err = _run(capsys, ["identify", str(path), *argv_extra])
     assert code == 2 and message in err and err.count("\n") == 1, err
+
+
+@pytest.mark.slow
+def test_output_only_modes_feed_discrepancy_like_the_true_modes(capsys, tmp_path):
+    """Records of the thesis beam-5 model -> identify (SSI) -> discrepancy: the gap it reports equals the gap of the
+    simulation's true frequencies within the identification error."""
+    from scipy import linalg, signal
+
+    from physics.thesis import BEAM5_DOFS, beam5_reduced_model
+
+    M, _, K = beam5_reduced_model("thesis")
+    w2, phi = linalg.eigh(K, M)
+    wn, fs, rng = np.sqrt(w2), 2000.0, np.random.default_rng(0)
+    force, y = rng.standard_normal(int(300 * fs)), 0.0
+    for r in range(4):
+        b, a, _ = signal.cont2discrete(([1.0, 0, 0], [1, 2 * 0.005 * wn[r], wn[r] ** 2]), 1 / fs, "zoh")
+        y = y + np.outer(phi[:, r], signal.lfilter(b.ravel(), a, phi[3, r] * force))
+    y = y + 0.02 * y.std(axis=1, keepdims=True) * rng.standard_normal(y.shape)
+    np.savez(tmp_path / "b5.npz", signals=y, sampling_frequency_hz=np.array(fs), dofs=np.array(BEAM5_DOFS))
+    code, out, err = _run(capsys, ["identify", str(tmp_path / "b5.npz"), "--band", "5", "800", "--out",
+                                   str(tmp_path / "id")])
+    assert code == 0, err
+    (tmp_path / "true.json").write_text(json.dumps({"natural_frequencies_hz": (wn / (2 * np.pi)).tolist()}))
+    gaps = []
+    for name in ("id/modal.json", "true.json"):
+        code, out, err = _run(capsys, ["discrepancy", "--beam", "beam5", "--measured", str(tmp_path / name), "--json"])
+        assert code == 0, err
+        gaps.append(json.loads(out)["gap_before"]["max_abs_frequency_error_pct"])
+    assert gaps[0] == pytest.approx(gaps[1], abs=0.1)
