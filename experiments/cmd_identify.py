@@ -11,7 +11,7 @@ from physics.errors import BeamDamageError, ConfigError
 from physics.identification import (DEFAULT_OUTPUT_ONLY, METHODS, Identification, RecordsIdentification,
                                     holds_response_records, identify_file, identify_records,
                                     read_response_records, reconstruction_error_db)
-from physics.identification.output_only import SCALING
+from physics.identification.output_only import SCALING, merge_setups
 from physics.io import FRF, TIME, MeasuredFRF, NodeGeometry, accepted, format_complex, measured_positions
 from physics.modal import mac
 
@@ -108,6 +108,8 @@ def run(args) -> dict:
         records = _output_only_records(args.file, args.method)
         if records is not None:
             return _run_output_only(args, records, band)
+    if getattr(args, "setup", None):
+        raise ConfigError(f"--setup: merges setups of response records (output-only); {args.file} holds FRFs")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         ident = identify_file(args.file, args.method or "lscf", band, args.modes, args.max_order)
@@ -163,7 +165,16 @@ def _run_output_only(args, records, band) -> dict:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         ident = identify_records(records, method, band, args.modes, args.max_order)
+        others = [identify_records(read_response_records(f), method, band, args.modes, args.max_order)
+                  for f in getattr(args, "setup", None) or ()]
     out = records_result_dict(ident, band, picked=args.method is None)
+    modal_data = ident.modal_data
+    if others:
+        merged = merge_setups([ident, *others])
+        modal_data = merged.modal_data
+        out.update(modes=modes_list(merged.estimate), dofs=list(merged.dofs), mac=mac(merged.estimate.shapes).tolist(),
+                   setups=[out["file"], *args.setup], setup_references=list(merged.references),
+                   dropped_modes_hz=list(merged.dropped_hz), **positions_report_dofs(merged.dofs, records.metadata))
     out["warnings"] = [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
     if args.out:
         import json
@@ -171,7 +182,7 @@ def _run_output_only(args, records, band) -> dict:
         from physics.io import atomic_write_text, modal_data_to_dict
 
         Path(args.out).mkdir(parents=True, exist_ok=True)
-        obj = {**modal_data_to_dict(ident.modal_data), "scaling": SCALING, "method": method,
+        obj = {**modal_data_to_dict(modal_data), "scaling": SCALING, "method": method,
                "frequency_std_hz": [m["frequency_std_hz"] for m in out["modes"]],
                "damping_std": [m["damping_std"] for m in out["modes"]]}
         path = Path(args.out) / "modal.json"
@@ -179,6 +190,10 @@ def _run_output_only(args, records, band) -> dict:
         out["outputs"] = {"modal.json": str(path)}
     if not args.json:
         print(out["method_choice"])
+        if others:
+            print(f"{len(others) + 1} setups merged on the reference DOFs {', '.join(out['setup_references'])}"
+                  + (f"; modes not in every setup left out (Hz): {out['dropped_modes_hz']}"
+                     if out["dropped_modes_hz"] else ""))
         print(f"{out['file']}: {len(out['modes'])} modes by {method} in {out['band_hz'][0]:g}-"
               f"{out['band_hz'][1]:g} Hz from {len(out['dofs'])} channels x {out['duration_s']:.4g} s "
               f"({out['scaling']})")
@@ -210,6 +225,9 @@ def add_parser(sub):
     p.add_argument("--method", default=None, choices=list(METHODS),
                    help="identification method (default: lscf for FRFs, "
                         f"{DEFAULT_OUTPUT_ONLY} for response records without a force; see the methods above)")
+    p.add_argument("--setup", action="append", metavar="FILE",
+                   help="output-only: another setup's response records (repeatable); its modes are scaled onto "
+                        "FILE's on the DOFs every setup measures (fixed references) and merged into one set of shapes")
     p.add_argument("--band", nargs=2, type=float, metavar=("FMIN", "FMAX"), help="frequency band in Hz")
     p.add_argument("--modes", type=int, metavar="N", help="number of modes to keep (default: all found)")
     p.add_argument("--max-order", type=int, default=40,

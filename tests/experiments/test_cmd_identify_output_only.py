@@ -140,3 +140,21 @@ def test_output_only_modes_feed_discrepancy_like_the_true_modes(capsys, tmp_path
         assert code == 0, err
         gaps.append(json.loads(out)["gap_before"]["max_abs_frequency_error_pct"])
     assert gaps[0] == pytest.approx(gaps[1], abs=0.1)
+
+
+def test_identify_merges_setups_with_a_fixed_reference(capsys, tmp_path):
+    y, fs, fn, zeta, phi = chain_record(seconds=300, seed=6)
+    y2, *_ = chain_record(seconds=300, seed=7)
+    np.savez(tmp_path / "s1.npz", signals=y[[2, 0]], sampling_frequency_hz=np.array(fs),
+             dofs=np.array(["3:+Z", "1:+Z"]), quantity=np.array("displacement"))
+    np.savez(tmp_path / "s2.npz", signals=3 * y2[[1, 2]], sampling_frequency_hz=np.array(fs),
+             dofs=np.array(["2:+Z", "3:+Z"]), quantity=np.array("displacement"))
+    code, out, err = _run(capsys, ["identify", str(tmp_path / "s1.npz"), "--setup", str(tmp_path / "s2.npz"),
+                                   "--band", "1", "60", "--max-order", "30", "--json"])
+    assert code == 0, err
+    res = json.loads(out)
+    assert res["dofs"] == ["3:+Z", "1:+Z", "2:+Z"] and res["setup_references"] == ["3:+Z"]
+    shapes = np.array([[complex(z) for z in m["shape"]] for m in res["modes"]]).T
+    assert np.all(np.diag(mac(phi[[2, 0, 1]], shapes)) > 0.999)
+    code, out, err = _run(capsys, ["identify", str(tmp_path / "s1.npz"), "--setup", str(DATA / "nothing.npz")])
+    assert code == 2 and err.count("\n") == 1
