@@ -36,7 +36,10 @@ def _refuse_unscaled(modal_file) -> None:
     """Refuse a modal-data JSON that says its shapes are unscaled (output-only identification), in one line."""
     from physics.io import read_json
 
-    obj = read_json(modal_file, require_object=False)
+    try:
+        obj = read_json(modal_file, require_object=False)
+    except FileNotFoundError:
+        return                                        # the modal-data reader names the missing file
     scaling = obj.get("scaling", "") if isinstance(obj, dict) else ""
     if isinstance(scaling, str) and scaling.startswith("unscaled"):
         raise FileFormatError(f"{modal_file}: shapes are {scaling}: 'update' needs unit-modal-A shapes to "

@@ -63,7 +63,13 @@ def holds_response_records(path) -> bool:
         types = UffFile(path).function_types
         return 1 in types and 4 not in types
     if fmt.name == "npz":
-        with np.load(path, allow_pickle=False) as z:
+        try:
+            z = np.load(path, allow_pickle=False)
+        except (ValueError, OSError, EOFError):
+            return False                              # the FRF reader names what is wrong
+        if not isinstance(z, np.lib.npyio.NpzFile):
+            return False
+        with z:
             return "signals" in z.files
     if fmt.name == "csv":
         with open(path, encoding="utf-8", errors="replace") as fh:
