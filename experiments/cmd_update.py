@@ -8,7 +8,7 @@ from experiments.args import add_beam_argument
 from physics import modal, updating
 from physics.beam import Beam, load_beam
 from physics.errors import BeamDamageError, ConfigError, ConvergenceError, FileFormatError, OverdampedError
-from physics.io import FRF, MODAL, accepted, dof_positions_text, modal_or_frf, prepare_measured, read
+from physics.io import FRF, MODAL, TIME, accepted, dof_positions_text, modal_or_frf, prepare_measured, read
 
 __all__ = ["add_parser", "run"]
 
@@ -19,11 +19,31 @@ def load_modal(modal_file, n_modes: int):
     Returns the modal data and the FRFs it was identified from (None for a modal-data file).
     """
     if modal_or_frf(modal_file) == MODAL:
+        _refuse_unscaled(modal_file)
         return prepare_measured(read(modal_file, MODAL)).data, None
-    from physics.identification import identify_file
+    from physics.identification import holds_response_records, identify_file
+
+    if holds_response_records(modal_file) and not read(modal_file, TIME).forces:
+        raise FileFormatError(f"{modal_file}: response records without a force: output-only shapes are unscaled "
+                              "(no modal mass), so 'update' cannot mass-normalise them; measure a driving-point "
+                              "FRF (force and response at one DOF)")
 
     ident = identify_file(modal_file, n_modes=n_modes)
     return ident.modal_data, ident.frf
+
+
+def _refuse_unscaled(modal_file) -> None:
+    """Refuse a modal-data JSON that says its shapes are unscaled (output-only identification), in one line."""
+    from physics.io import read_json
+
+    try:
+        obj = read_json(modal_file, require_object=False)
+    except FileNotFoundError:
+        return                                        # the modal-data reader names the missing file
+    scaling = obj.get("scaling", "") if isinstance(obj, dict) else ""
+    if isinstance(scaling, str) and scaling.startswith("unscaled"):
+        raise FileFormatError(f"{modal_file}: shapes are {scaling}: 'update' needs unit-modal-A shapes to "
+                              "mass-normalise them and identify C and K; measure a driving-point FRF")
 
 
 def unstable_mode_warnings(eigenvalues, real_eigenvalues=()) -> list:

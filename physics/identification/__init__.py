@@ -9,6 +9,9 @@ Modules (each name below is re-exported here):
 ``lsfd``      LSFD residues for given poles, residual terms, weighting and noise model
 ``methods``   :data:`METHODS`, the table of identification methods (function, help, uncertainty, options)
 ``measured``  :func:`identify_frf` on a :class:`~physics.io.MeasuredFRF` or an FRF file, by a method of the table
+``ssi``       output-only: covariance-driven stochastic subspace identification of response records
+``fdd``       output-only: frequency-domain decomposition and enhanced FDD of response records
+``output_only`` :func:`identify_records` on response records (no force) by an output-only method of the table
 
 Conventions: FRF arrays are ``(n_responses, n_references, n_lines)`` receptances
 (m/N) unless stated; frequencies carry ``_hz`` or ``_rad_s`` in their names.
@@ -22,12 +25,16 @@ from physics.identification.measured import (Identification, identify_file, iden
                                              read_measured_frf, reconstruction_error_db)
 from physics.identification.methods import MAX_LSCF_VALUES, METHODS, MethodSpec
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity, shapes_from_residues
+from physics.identification.output_only import (DEFAULT_OUTPUT_ONLY, RecordsIdentification, holds_response_records,
+                                                identify_records, read_response_records)
 from physics.identification.poles import (STABILITY_CODES, SelectedPoles, StabilisationDiagram, select_poles,
                                           stability_status)
 from physics.identification.sdof import (CircleFit, circle_fit, circle_fit_sdof, complex_modes_from_driving_point,
                                          find_peaks_indicator, mode_indicator, peak_picking, real_modes_from_peaks)
 
-__all__ = ["CircleFit", "ESTIMATION_PASSES", "Identification", "LSCFIdentification", "LSFDResult", "MAX_LSCF_VALUES",
+__all__ = ["DEFAULT_OUTPUT_ONLY", "RecordsIdentification", "holds_response_records", "identify_records",
+           "read_response_records",
+           "CircleFit", "ESTIMATION_PASSES", "Identification", "LSCFIdentification", "LSFDResult", "MAX_LSCF_VALUES",
            "METHODS", "MethodSpec", "ModalEstimate", "STABILITY_CODES", "SelectedPoles", "StabilisationDiagram",
            "WEIGHTINGS", "circle_fit", "circle_fit_sdof", "complex_modes_from_driving_point", "estimate_noise_model",
            "find_peaks_indicator", "identify_file", "identify_frf", "identify_frfs", "identify_lscf", "lscf", "lsfd",

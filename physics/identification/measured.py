@@ -118,6 +118,9 @@ def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, ma
     if method not in METHODS:
         raise ConfigError(f"method {method!r} must be one of {', '.join(METHODS)}")
     spec = METHODS[method]
+    if spec.data != "frf":
+        raise ConfigError(f"method {method!r} identifies response records output-only, not FRFs "
+                          "(see physics.identification.identify_records)")
     frf = prepare_measured(frf).data
     if frf.frequency_hz[0] == 0:
         frf = frf.select_band(fmin_hz=np.nextafter(0.0, 1.0))

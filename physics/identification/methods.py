@@ -1,4 +1,5 @@
-"""The identification methods of :func:`~physics.identification.identify_frf`, in one table: :data:`METHODS`.
+"""The identification methods, in one table: :data:`METHODS`: from FRFs (:func:`~physics.identification.identify_frf`)
+and output-only, from response records (:func:`~physics.identification.identify_records`).
 
 ``beam-damage identify`` takes its ``--method`` choices and help from this table, and reports each method's
 :attr:`MethodSpec.uncertainty` beside the one-sigma values it gives.
@@ -14,8 +15,10 @@ import numpy as np
 
 from physics.errors import ShapeError
 from physics.frf import convert_frf, pole_residue
+from physics.identification.fdd import identify_fdd
 from physics.identification.lscf import identify_lscf
 from physics.identification.sdof import circle_fit, peak_picking
+from physics.identification.ssi import identify_ssi
 from physics.io import MeasuredFRF
 
 __all__ = ["MAX_LSCF_VALUES", "METHODS", "MethodSpec"]
@@ -46,6 +49,10 @@ class MethodSpec:
     options : tuple of str
         Keyword arguments of ``identify_frf`` besides ``band_hz`` and ``n_modes`` that the method takes
         (passed on to ``fit``).
+    data : str
+        ``"frf"``, or ``"records"`` for an output-only method: then ``fit(signals, sampling_frequency_hz,
+        band_hz, n_modes, where, **options)`` on response records ``(n_channels, n_samples)`` returns
+        ``(estimate, diagram)`` with unscaled, unit-norm shapes.
     """
 
     fit: Callable
@@ -53,6 +60,7 @@ class MethodSpec:
     uncertainty: tuple[tuple[str, str], ...]
     yields_uncertainty: bool
     options: tuple[str, ...] = ()
+    data: str = "frf"
 
 
 def _fit_lscf(frf: MeasuredFRF, drive, n_modes, max_order):
@@ -72,6 +80,15 @@ def _fit_receptance(estimator, frf: MeasuredFRF, drive, n_modes):
     est = estimator(f, np.asarray(frf.to_kind("receptance").frf), n_modes=n_modes, drive=drive)
     synth = convert_frf(pole_residue(est.eigenvalues, est.residues, w), w, "receptance", frf.kind)
     return est, synth, None, np.zeros(0)
+
+
+def _fit_ssi(signals, fs, band_hz, n_modes, where, max_order):
+    res = identify_ssi(signals, fs, band_hz, n_modes, max_order=max_order, where=where)
+    return res.estimate, res.diagram
+
+
+def _fit_fdd(signals, fs, band_hz, n_modes, where, enhanced):
+    return identify_fdd(signals, fs, band_hz, n_modes, enhanced=enhanced, where=where).estimate, None
 
 
 #: Identification methods by name.
@@ -95,4 +112,20 @@ METHODS: dict[str, MethodSpec] = {
         "peak picking with half-power damping (eqs. 3.33/3.34)",
         (("frequency_std_hz, damping_std", "none (NaN)"),),
         yields_uncertainty=False),
+    "ssi": MethodSpec(
+        _fit_ssi,
+        "output-only: covariance-driven stochastic subspace identification (SSI-cov) of response records, with "
+        "automatic stabilisation-diagram selection",
+        (("frequency_std_hz, damping_std", "standard error from the spread of the mode over segments of the "
+                                           "record (divided by sqrt of their number)"),),
+        yields_uncertainty=True, options=("max_order",), data="records"),
+    "fdd": MethodSpec(
+        partial(_fit_fdd, enhanced=False),
+        "output-only: frequency-domain decomposition (peaks of the first singular value of the output "
+        "cross-spectra; no damping)",
+        (("frequency_std_hz, damping_std", "none (NaN)"),), yields_uncertainty=False, data="records"),
+    "efdd": MethodSpec(
+        partial(_fit_fdd, enhanced=True),
+        "output-only: enhanced FDD (damping from the log decrement of each peak's SDOF bell in the time domain)",
+        (("frequency_std_hz, damping_std", "none (NaN)"),), yields_uncertainty=False, data="records"),
 }

@@ -21,6 +21,7 @@ from physics.io.csv import read_frf_csv, write_frf_csv
 from physics.io.modal_json import read_modal_json, write_modal_json
 from physics.io.npz import read_frf_npz, write_frf_npz
 from physics.io.timedata import read_uff_time_records
+from physics.io.timeseries import read_time_csv, read_time_npz
 from physics.io.types import MeasuredFRF
 from physics.io.uff58 import read_uff58, write_uff58
 
@@ -100,12 +101,14 @@ FORMATS: dict[str, FileFormat] = {f.name: f for f in (
                _starts_with(b"-1"), write_uff58,
                "universal file: dataset 58 FRFs or time records (ASCII or binary 58b), with units (164) and "
                "node geometry (15/2411)"),
-    FileFormat("npz", (".npz",), ((FRF, read_frf_npz),), lambda head: head.startswith(b"PK"), write_frf_npz,
-               "NumPy archive of plain arrays: frequency_hz, complex frf, DOF labels (never pickled)"),
+    FileFormat("npz", (".npz",), ((FRF, read_frf_npz), (TIME, read_time_npz)), lambda head: head.startswith(b"PK"),
+               write_frf_npz, "NumPy archive of plain arrays: frequency_hz, complex frf, DOF labels, or signals "
+                              "and sampling_frequency_hz of response time series (never pickled)"),
     FileFormat("json", (".json",), ((MODAL, read_modal_json),), _starts_with(b"{", b"["), write_modal_json,
                "modal data: complex eigenvalues and eigenvectors (or natural frequencies and damping ratios)"),
-    FileFormat("csv", (".csv", ".txt"), ((FRF, read_frf_csv),), _is_text, write_frf_csv,
-               "text: a frequency_hz column, then re(RESP/REF) and im(RESP/REF) columns per FRF"),
+    FileFormat("csv", (".csv", ".txt"), ((FRF, read_frf_csv), (TIME, read_time_csv)), _is_text, write_frf_csv,
+               "text: a frequency_hz column, then re(RESP/REF) and im(RESP/REF) columns per FRF; or a time_s "
+               "column, then one column per response channel"),
 )}
 
 

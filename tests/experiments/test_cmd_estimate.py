@@ -62,7 +62,7 @@ def test_identify_accepts_time_records_by_estimating_first_and_says_so(capsys, i
     assert res["modes"][0]["frequency_hz"] == pytest.approx(50.0, rel=1e-2)
 
 
-@pytest.mark.parametrize("command", ["estimate", "identify"])
+@pytest.mark.parametrize("command", ["estimate"])   # identify runs them output-only (test_cmd_identify_output_only)
 def test_real_time_records_without_force_give_one_line(capsys, command, tmp_path):
     code, out, err = _run(capsys, [command, str(DATA / "MPSTD_Set001_2024_10_08_10_27_07.uff"),
                                    *(["--out", str(tmp_path / "x.uff")] if command == "estimate" else [])])

@@ -45,7 +45,7 @@ def test_identify_json_recovers_exact_modes(capsys, beam5_files, name):
     assert all(0.99 < m["mpc"] <= 1.0 for m in res["modes"])
 
 
-@pytest.mark.parametrize("method", list(METHODS))
+@pytest.mark.parametrize("method", [n for n, spec in METHODS.items() if spec.data == "frf"])
 def test_identify_every_method_in_a_band(capsys, beam5_files, method):
     d, exact = beam5_files
     code, out, err = _run(capsys, ["identify", str(d / "beam5.uff"), "--method", method, "--band", "80", "500",
@@ -62,7 +62,7 @@ def test_identify_method_choices_and_help_are_the_method_table():
     parser = sub.choices["identify"]
     actions = {a.dest: a for a in parser._actions}
     assert list(actions["method"].choices) == list(METHODS)
-    assert actions["method"].default in METHODS
+    assert actions["method"].default is None          # lscf for FRFs, ssi for response records
     for name, spec in METHODS.items():
         assert f"{name}: {spec.help}" in parser.description
     with_order = [name for name, spec in METHODS.items() if "max_order" in spec.options]

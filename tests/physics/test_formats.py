@@ -94,8 +94,11 @@ def test_a_file_of_another_content_is_named_with_what_was_expected(tmp_path):
     FORMATS["json"].writer(tmp_path / "m.dat", _modal())
     with pytest.raises(FileFormatError, match=r"m.dat: looks like JSON \(modal data\); expected FRFs as UFF"):
         read_frf(tmp_path / "m.dat")
-    FORMATS["csv"].writer(tmp_path / "f.dat", _frf())
-    with pytest.raises(FileFormatError, match=r"looks like CSV \(FRFs\); expected time records as UFF \(.uff/"):
+    FORMATS["json"].writer(tmp_path / "n.dat", _modal())
+    with pytest.raises(FileFormatError, match=r"looks like JSON \(modal data\); expected time records as UFF \(.uff/"):
+        read(tmp_path / "n.dat", TIME)
+    FORMATS["csv"].writer(tmp_path / "f.dat", _frf())      # CSV holds time series too: its header is refused
+    with pytest.raises(FileFormatError, match=r"f.dat: expected a header 'time_s,<dof>"):
         read(tmp_path / "f.dat", TIME)
     (tmp_path / "g.dat").write_bytes(bytes(range(128, 256)))
     with pytest.raises(FileFormatError, match="is of no known format"):

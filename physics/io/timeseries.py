@@ -1,0 +1,89 @@
+"""Response time series as ``.npz`` (plain arrays) or CSV text, read as :class:`~physics.io.timedata.TimeRecords`.
+
+NPZ keys: ``signals`` (n_channels, n_samples) real, ``sampling_frequency_hz`` (scalar), optional ``dofs``
+(``"NODE:+DIR"`` per channel) and ``quantity`` (``"displacement"``, ``"velocity"`` or ``"acceleration"``, SI
+units; default acceleration). CSV: a header ``time_s,<dof>,<dof>,...`` and one row per sample at a uniform time
+step (the sampling rate is read from the time column); an optional comment line ``# quantity: velocity`` sets the
+quantity.
+"""
+
+from __future__ import annotations
+
+import io
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+from physics.errors import FileFormatError
+from physics.io.timedata import TimeRecords
+from physics.io.types import check_dof_labels
+
+__all__ = ["read_time_csv", "read_time_npz"]
+
+_QUANTITIES = ("displacement", "velocity", "acceleration")
+
+
+def _records(path, signals, fs, dofs, quantity) -> TimeRecords:
+    if signals.ndim != 2 or signals.shape[1] < 2 or not np.issubdtype(signals.dtype, np.number) \
+            or np.iscomplexobj(signals):
+        raise FileFormatError(f"{path}: field 'signals' must be a real (n_channels, n_samples) array")
+    if not (np.isfinite(fs) and fs > 0):
+        raise FileFormatError(f"{path}: field 'sampling_frequency_hz' must be a finite number > 0, got {fs:g}")
+    if quantity not in _QUANTITIES:
+        raise FileFormatError(f"{path}: field 'quantity' {quantity!r} must be one of {', '.join(_QUANTITIES)}")
+    dofs = tuple(dofs) if dofs is not None else tuple(f"{k + 1}:+Z" for k in range(signals.shape[0]))
+    if len(dofs) != signals.shape[0]:
+        raise FileFormatError(f"{path}: field 'dofs' has {len(dofs)} labels for {signals.shape[0]} channels")
+    check_dof_labels(dofs, f"{path}: field 'dofs'")
+    return TimeRecords(1.0 / fs, np.asarray(signals, dtype=np.float64), dofs, (quantity,) * len(dofs),
+                       {"source": str(path), "format": Path(path).suffix.lstrip(".")})
+
+
+def read_time_npz(path) -> TimeRecords:
+    """Read response time series from ``.npz`` (see module docstring); never unpickles."""
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            if "signals" not in z.files:
+                raise FileFormatError(f"{path}: no field 'signals' (n_channels, n_samples); fields: "
+                                      f"{', '.join(z.files)}")
+            if "sampling_frequency_hz" not in z.files:
+                raise FileFormatError(f"{path}: field 'sampling_frequency_hz' is missing; the sampling rate is "
+                                      "needed to identify from time series")
+            signals = z["signals"]
+            fs = float(np.asarray(z["sampling_frequency_hz"]).reshape(-1)[0])
+            dofs = [str(d) for d in z["dofs"]] if "dofs" in z.files else None
+            quantity = str(z["quantity"]) if "quantity" in z.files else "acceleration"
+    except (zipfile.BadZipFile, ValueError, OSError) as exc:
+        raise FileFormatError(f"{path}: not a readable .npz of plain arrays ({exc})") from None
+    return _records(path, signals, fs, dofs, quantity)
+
+
+def read_time_csv(path) -> TimeRecords:
+    """Read response time series from CSV text (see module docstring)."""
+    text = Path(path).read_text(encoding="utf-8", errors="replace")
+    lines = text.splitlines()
+    quantity = "acceleration"
+    body = []
+    for line in lines:
+        s = line.strip()
+        if s.startswith("#"):
+            if s[1:].strip().lower().startswith("quantity:"):
+                quantity = s.split(":", 1)[1].strip().lower()
+            continue
+        if s:
+            body.append(s)
+    if not body or not body[0].lower().startswith("time_s"):
+        raise FileFormatError(f"{path}: expected a header 'time_s,<dof>,...' (a time column in s, then one "
+                              "column per channel)")
+    dofs = [c.strip() for c in body[0].split(",")[1:]]
+    try:
+        data = np.loadtxt(io.StringIO("\n".join(body[1:])), delimiter=",", ndmin=2)
+    except ValueError as exc:
+        raise FileFormatError(f"{path}: rows must hold {len(dofs) + 1} numbers ({exc})") from None
+    if data.shape[1] != len(dofs) + 1 or data.shape[0] < 2:
+        raise FileFormatError(f"{path}: rows must hold {len(dofs) + 1} numbers (time_s and one per channel)")
+    dt = np.diff(data[:, 0])
+    if not (np.all(dt > 0) and np.allclose(dt, dt[0], rtol=1e-6)):
+        raise FileFormatError(f"{path}: column 'time_s' must increase by one uniform step (the sampling rate)")
+    return _records(path, data[:, 1:].T.copy(), 1.0 / float(np.mean(dt)), dofs, quantity)

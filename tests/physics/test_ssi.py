@@ -1,0 +1,63 @@
+"""SSI-cov output-only identification against a closed-form 3-DOF chain under white noise."""
+
+import numpy as np
+import pytest
+from oma_records import chain_record
+
+from physics.errors import BeamDamageError
+from physics.identification.ssi import identify_ssi, output_correlations
+from physics.modal import mac
+
+
+def test_correlations_accumulated_in_chunks_equal_the_direct_sums():
+    rng = np.random.default_rng(0)
+    y = rng.standard_normal((2, 5000))
+    y[1] = np.roll(y[0], 3) + 0.1 * y[1]
+    R = output_correlations(y, 100.0, 6, chunk_samples=700).correlations
+    ym = y - y.mean(axis=1, keepdims=True)
+    direct = np.array([ym[:, k:] @ ym[:, :ym.shape[1] - k].T / (ym.shape[1] - k) for k in range(6)])
+    np.testing.assert_allclose(R, direct, atol=1e-12)
+    assert R[3, 1, 0] == pytest.approx(1.0, abs=0.05)      # channel 1 is channel 0 three samples later
+
+
+def test_ssi_cov_finds_the_chain_modes_with_their_damping_and_shapes():
+    y, fs, fn, zeta, phi = chain_record()
+    res = identify_ssi(y, fs, band_hz=(1, 60), max_order=30)
+    e = res.estimate
+    assert e.natural_frequencies_hz.size == 3
+    np.testing.assert_allclose(e.natural_frequencies_hz, fn, rtol=2e-3)
+    np.testing.assert_allclose(e.damping_ratios, zeta, rtol=0.15)
+    assert np.all(np.diag(mac(phi, e.shapes)) > 0.999)
+    np.testing.assert_allclose(np.linalg.norm(e.shapes, axis=0), 1.0)
+    assert not e.scaled and e.method == "ssi"
+    # the segment spread is a standard error: the truth lies within 4 sigma, and sigma is small but not zero
+    assert np.all(np.abs(e.natural_frequencies_hz - fn) < 4 * e.frequency_std_hz)
+    assert np.all((e.frequency_std_hz > 0) & (e.frequency_std_hz < 2e-3 * fn))
+    assert np.all((e.damping_std > 0) & (e.damping_std < 0.2 * zeta))
+
+
+def test_decimation_to_the_band_keeps_the_modes():
+    y, fs, fn, zeta, _ = chain_record(seconds=300, fs_hz=1000.0, seed=2)
+    res = identify_ssi(y, fs, band_hz=(1, 40), max_order=30)
+    assert res.correlations.decimation == 10
+    np.testing.assert_allclose(res.estimate.natural_frequencies_hz, fn, rtol=3e-3)
+
+
+@pytest.mark.parametrize("case, message", [
+    ("nan", "NaN"), ("clip", "clipped"), ("nyquist", "Nyquist"), ("short", "ten periods"), ("constant", "constant")])
+def test_bad_records_are_refused_with_what_cannot_be_identified(case, message):
+    y, fs, *_ = chain_record(seconds=120, seed=3)
+    band = (1, 60)
+    if case == "nan":
+        y[1, 500] = np.nan
+    elif case == "clip":
+        y[2] = np.clip(y[2], -np.inf, 0.5 * y[2].max())
+    elif case == "nyquist":
+        band = (1, 150)
+    elif case == "short":
+        y = y[:, :150]          # 0.75 s, five periods of the 7 Hz mode
+        band = (5, 60)
+    elif case == "constant":
+        y[0] = 1.0
+    with pytest.raises(BeamDamageError, match=message):
+        identify_ssi(y, fs, band_hz=band, max_order=12, block_rows=8 if case == "short" else None)
