@@ -16,6 +16,7 @@ import json
 import math
 import os
 import shutil
+import signal
 import sys
 from collections import deque
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -60,6 +61,7 @@ def compute_shard(cfg_json: str, seed: int, index: int, first_id: int, n: int):
 
 def _init_worker():
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole group; the parent alone reports it
 
 
 def _run_local_pool(todo, workers, record, cfg_json, seed):
@@ -179,7 +181,8 @@ def _connect(scheduler: str):
 def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
     """Manifest of an existing compatible run (recovered: damaged shards are dropped for regeneration) or a new one."""
     root = Path(root)
-    if (root / "manifest.json").exists():
+    _remove_stale_temporaries(root)
+    if (root / "manifest.json").exists() and not _truncated_manifest(root):
         m = read_manifest(root, formats=(DATASET_FORMAT,))
         for key, want in (("config", cfg), ("seed", seed), ("n_requested", n)):
             if m.get(key) != want:
@@ -192,7 +195,8 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
             m["complete"] = False
             print(f"{root / 'omega_rad_s.npy'}: missing or damaged; rewritten from the config", file=sys.stderr)
         return m
-    if root.exists() and any(not p.name.startswith(LOCK_NAME) for p in root.iterdir()):
+    rebuild = (root / "manifest.json").exists()
+    if not rebuild and root.exists() and any(not p.name.startswith(LOCK_NAME) for p in root.iterdir()):
         raise BeamDamageError(f"{root} exists, is not empty and has no manifest.json; choose a new --out")
     root.mkdir(parents=True, exist_ok=True)
     setup = get_setup(cfg)
@@ -206,8 +210,36 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
                                                      "frf_reference_dof": "2:y", "frf_kind": "receptance"},
          "section_layout": vars(setup.layout),
          "preset": {**vars(setup.preset), "mass_per_length_kg_m": setup.preset.mass_per_length_kg_m}}
+    if rebuild:  # the shards of this config and seed that verify are adopted, the rest regenerated
+        m, _ = recover(root, m)
+        print(f"{root / 'manifest.json'}: truncated or not JSON; rebuilt from {len(m['shards'])} shard(s) that "
+              f"verify", file=sys.stderr)
     write_manifest(root, m)
     return m
+
+
+def _truncated_manifest(root: Path) -> bool:
+    """True when ``manifest.json`` is not a JSON document (a write cut short); other damage is refused elsewhere."""
+    try:
+        json.loads((root / "manifest.json").read_bytes())
+    except (ValueError, UnicodeDecodeError):
+        return True
+    except OSError:
+        return False
+    return False
+
+
+#: Temporary files of this package's writers beside a dataset's top-level files.
+_TEMPORARY_PREFIXES = (".manifest.json.", ".omega_rad_s.npy.", ".samples.parquet.", f"{LOCK_NAME}.")
+
+
+def _remove_stale_temporaries(root: Path) -> None:
+    """Remove the temporary files an interrupted run left (called under the writer's lock)."""
+    if not root.is_dir():
+        return
+    for p in root.iterdir():
+        if p.name.endswith(".tmp") and p.name.startswith(_TEMPORARY_PREFIXES) and p.is_file():
+            p.unlink(missing_ok=True)
 
 
 def _finalized(root: Path, manifest: dict) -> bool:

@@ -20,7 +20,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import signal
 import sys
+import threading
 import warnings
 
 import numpy as np
@@ -51,6 +53,8 @@ COMMANDS = {
 }
 
 EXIT_USAGE = 2
+EXIT_SIGINT = 130   # 128 + SIGINT
+EXIT_SIGTERM = 143  # 128 + SIGTERM
 
 
 class _Parser(argparse.ArgumentParser):
@@ -109,14 +113,44 @@ def build_parser(argv=None) -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(BaseException):
+    """SIGTERM received: unwinds like KeyboardInterrupt, so writers' cleanup runs."""
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated
+
+
+def _on_signals():
+    """SIGTERM raises :class:`Terminated` while a command runs (main thread only); returns the previous handler."""
+    if threading.current_thread() is not threading.main_thread():
+        return None
+    return signal.signal(signal.SIGTERM, _raise_terminated)
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser(argv)
     args = parser.parse_args(argv)
+    previous = _on_signals()
+    try:
+        return _run(args)
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _run(args) -> int:
     try:
         with warnings.catch_warnings(record=True) as caught, threadpool_limits(1, user_api="blas"):
             warnings.simplefilter("default")
             result = args.func(args)
+    except KeyboardInterrupt:  # SIGINT: one line, exit 128 + 2; what was written stays resumable
+        sys.stderr.write(f"beam-damage {args.command}: interrupted (SIGINT)\n")
+        return EXIT_SIGINT
+    except Terminated:
+        sys.stderr.write(f"beam-damage {args.command}: terminated (SIGTERM)\n")
+        return EXIT_SIGTERM
     except BeamDamageError as exc:
         flag = getattr(args, "flags", {}).get(exc.parameter)
         sys.stderr.write(f"beam-damage {args.command}: error: {f'{flag}: ' if flag else ''}{exc}\n")
