@@ -40,7 +40,7 @@ import pandas as pd
 
 from datagen.damage import element4_index
 from datagen.synth import DATASET_FRFS, synthesise
-from physics.errors import FileFormatError
+from physics.errors import DISK_FULL_ERRNOS, DiskFullError, FileFormatError
 from physics.io import atomic_write_text, read_json
 from physics.modal import modal_parameters
 
@@ -240,7 +240,25 @@ def write_shard(root, index: int, table: pd.DataFrame, arrays: dict, omega_rad_s
     tmp = shards / f".tmp-{shard_name(index)}-{os.getpid()}"
     if tmp.exists():
         shutil.rmtree(tmp)
-    tmp.mkdir()
+    try:
+        tmp.mkdir()
+        entry = _write_files(tmp, index, table, arrays, omega_rad_s, frf_dtype, identity)
+    except OSError as exc:
+        shutil.rmtree(tmp, ignore_errors=True)
+        if exc.errno in DISK_FULL_ERRNOS:
+            raise DiskFullError(f"{final}: no space left on device; the shard was not written and the dataset's "
+                                f"recorded shards are intact: free space and re-run the same command to resume") \
+                from None
+        raise
+    if final.exists():  # a stale or damaged shard of an interrupted run
+        shutil.rmtree(final)
+    os.replace(tmp, final)
+    return entry
+
+
+def _write_files(tmp: Path, index: int, table: pd.DataFrame, arrays: dict, omega_rad_s, frf_dtype,
+                 identity) -> dict:
+    """Write a shard's files, its ``checksums.json`` and fsync them into ``tmp``; returns its manifest entry."""
     table.to_parquet(tmp / "samples.parquet", index=False)
     for name in ARRAYS:
         np.save(tmp / f"{name}.npy", np.ascontiguousarray(arrays[name]), allow_pickle=False)
@@ -257,9 +275,6 @@ def write_shard(root, index: int, table: pd.DataFrame, arrays: dict, omega_rad_s
     for p in tmp.iterdir():  # flush file data before the rename makes the shard visible
         with open(p, "rb") as fh:
             os.fsync(fh.fileno())
-    if final.exists():  # a stale or damaged shard of an interrupted run
-        shutil.rmtree(final)
-    os.replace(tmp, final)
     return entry
 
 

@@ -28,6 +28,8 @@ import tempfile
 import time
 from pathlib import Path
 
+__all__ = ["CASES", "main", "run_case", "run_matrix", "tree"]
+
 CONFIG = "[output]\nshard_size = 3\n[measurement]\nlines = 32\n"
 N = 36  # 12 shards
 SEED = 5
