@@ -69,4 +69,7 @@ def run(args) -> dict:
         print(f"{args.out}: {c.get('samples', 0)} samples in {m['n_shards']} shards, "
               f"{c.get('not_converged', 0)} flagged as not converged (kept); seed {m['seed']}, beam {summary['beam']}, "
               f"config {summary['config']}")
+        flagged = {k: v for k, v in c.get("status", {}).items() if k != "ok" and v}
+        if flagged:
+            print("  status: " + ", ".join(f"{v} {k}" for k, v in flagged.items()) + " (samples table column 'status')")
     return summary
