@@ -30,7 +30,7 @@ from datagen.lock import LOCK_NAME, LockedError, dataset_lock
 from datagen.pipeline import get_setup, simulate_shard
 from datagen.store import ARRAYS, COLUMN_UNITS, DERIVED, DATASET_FORMAT, STATES, dataset_identity, finalize, \
     file_sha256, package_version, read_manifest, recover, sample_table, shard_arrays, write_manifest, write_shard
-from physics.errors import BeamDamageError, ConfigError
+from physics.errors import BeamDamageError, ConfigError, OverdampedError
 from physics.io import atomic_write_bytes
 
 __all__ = ["BYTES_PER_SAMPLE", "check_arguments", "compute_shard", "generate", "open_or_create", "shard_plan",
@@ -55,7 +55,14 @@ def compute_shard(cfg_json: str, seed: int, index: int, first_id: int, n: int):
     cfg = json.loads(cfg_json)
     setup = get_setup(cfg)
     with threadpool_limits(1):  # one BLAS thread per process: shards are the parallel unit
-        labels, out = simulate_shard(setup, np.random.SeedSequence(seed, spawn_key=(index,)), n)
+        try:
+            labels, out = simulate_shard(setup, np.random.SeedSequence(seed, spawn_key=(index,)), n)
+        except OverdampedError:  # the updating's input check: a noisy measured frequency fell to <= 0
+            meas = cfg["measurement"]
+            raise ConfigError(f"shard {index}: the config's modal noise drives measured natural frequencies to <= 0 "
+                              f"(measurement.modal_noise {meas['modal_noise']!r}, frequency_noise "
+                              f"{meas['frequency_noise']}, modal_noise_scale {meas['modal_noise_scale']}); lower "
+                              f"measurement.frequency_noise or modal_noise_scale") from None
     return sample_table(labels, out, index, first_id, setup.length_m), shard_arrays(labels, out)
 
 
