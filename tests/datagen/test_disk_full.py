@@ -68,3 +68,26 @@ def test_a_new_dataset_on_a_full_disk_leaves_nothing(tmp_path, monkeypatch, caps
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "no space left on device" in err
     assert not (tmp_path / "ds").exists()
+
+
+def test_export_on_a_full_disk_removes_what_it_wrote(tmp_path, monkeypatch, capsys):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text(CONFIG)
+    assert main(["generate", "--n", "8", "--config", str(cfg), "--out", str(tmp_path / "ds"), "--json"]) == 0
+    out = tmp_path / "x"
+    out.mkdir()
+    (out / "keep.txt").write_text("previous")
+    real, calls = os.fsync, []
+
+    def fsync(fd):  # the disk fills on the third file
+        calls.append(fd)
+        if len(calls) == 3:
+            _full()
+        return real(fd)
+
+    monkeypatch.setattr(os, "fsync", fsync)
+    capsys.readouterr()
+    rc = main(["export", str(tmp_path / "ds"), "--samples", "1,2", "--format", "npz", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.count("\n") == 1 and "no space left on device" in err, err
+    assert sorted(p.name for p in out.iterdir()) == ["keep.txt"] and (out / "keep.txt").read_text() == "previous"
