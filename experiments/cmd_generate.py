@@ -61,7 +61,7 @@ def run(args) -> dict:
                  progress=True)
     summary = {"out": str(args.out), "complete": m["complete"], "seed": m["seed"],
                "beam": cfg["beam"].get("name") if cfg["beam"] else cfg["preset"],
-               "config": args.config or "defaults", "format": m["format"],
+               "config": args.config or "defaults", "format": m["format"], "identity": m.get("identity"),
                "package_version": m["package_version"], "n_shards": m["n_shards"],
                "counts": m.get("counts", {}), "checksums": m.get("checksums", {})}
     if not args.json:
