@@ -35,3 +35,22 @@ def test_the_whole_interrupt_matrix_resumes_byte_identical(tmp_path):
     assert [r["case"] for r in rows] == list(CASES)
     assert [r["stderr"] for r in rows if r["case"] == "sigterm"] == ["beam-damage generate: terminated (SIGTERM)"]
     _check(rows)
+
+
+@pytest.mark.parametrize(("sig", "code", "line"), [("SIGINT", 130, "interrupted (SIGINT)"),
+                                                    ("SIGTERM", 143, "terminated (SIGTERM)")])
+def test_any_command_ends_with_one_line_on_a_signal(monkeypatch, capsys, tmp_path, sig, code, line):
+    import signal
+
+    import experiments.cmd_inspect
+    from experiments.cli import main
+
+    def run(args):
+        os.kill(os.getpid(), getattr(signal, sig))
+        raise AssertionError("the signal did not stop the command")
+
+    before = signal.getsignal(signal.SIGTERM)
+    monkeypatch.setattr(experiments.cmd_inspect, "inspect_dataset", lambda *a: run(a))
+    assert main(["inspect", str(tmp_path)]) == code
+    assert capsys.readouterr().err == f"beam-damage inspect: {line}\n"
+    assert signal.getsignal(signal.SIGTERM) is before  # the handler is the command's only
