@@ -30,7 +30,7 @@ from datagen.lock import LOCK_NAME, LockedError, dataset_lock
 from datagen.pipeline import get_setup, simulate_shard
 from datagen.store import ARRAYS, DERIVED, DATASET_FORMAT, STATES, column_units, dataset_identity, file_sha256, \
     finalize, package_version, read_manifest, recover, sample_table, shard_arrays, write_manifest, write_shard
-from physics.errors import BeamDamageError, ConfigError
+from physics.errors import BeamDamageError, ConfigError, OverdampedError
 from physics.io import atomic_write_bytes
 
 __all__ = ["BYTES_PER_SAMPLE", "check_arguments", "compute_shard", "generate", "open_or_create", "shard_plan",
@@ -55,7 +55,14 @@ def compute_shard(cfg_json: str, seed: int, index: int, first_id: int, n: int):
     cfg = json.loads(cfg_json)
     setup = get_setup(cfg)
     with threadpool_limits(1):  # one BLAS thread per process: shards are the parallel unit
-        labels, out = simulate_shard(setup, np.random.SeedSequence(seed, spawn_key=(index,)), n)
+        try:
+            labels, out = simulate_shard(setup, np.random.SeedSequence(seed, spawn_key=(index,)), n)
+        except OverdampedError:  # the updating's input check: a noisy measured frequency fell to <= 0
+            meas = cfg["measurement"]
+            raise ConfigError(f"shard {index}: the config's modal noise drives measured natural frequencies to <= 0 "
+                              f"(measurement.modal_noise {meas['modal_noise']!r}, frequency_noise "
+                              f"{meas['frequency_noise']}, modal_noise_scale {meas['modal_noise_scale']}); lower "
+                              f"measurement.frequency_noise or modal_noise_scale") from None
     return sample_table(labels, out, index, first_id, setup.length_m, setup.damage), shard_arrays(labels, out)
 
 
@@ -193,7 +200,8 @@ def _connect(scheduler: str):
 def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
     """Manifest of an existing compatible run (recovered: damaged shards are dropped for regeneration) or a new one."""
     root = Path(root)
-    if (root / "manifest.json").exists():
+    _remove_stale_temporaries(root)
+    if (root / "manifest.json").exists() and not _truncated_manifest(root):
         m = read_manifest(root, formats=(DATASET_FORMAT,))
         for key, want in (("config", cfg), ("seed", seed), ("n_requested", n)):
             if m.get(key) != want:
@@ -206,7 +214,8 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
             m["complete"] = False
             print(f"{root / 'omega_rad_s.npy'}: missing or damaged; rewritten from the config", file=sys.stderr)
         return m
-    if root.exists() and any(not p.name.startswith(LOCK_NAME) for p in root.iterdir()):
+    rebuild = (root / "manifest.json").exists()
+    if not rebuild and root.exists() and any(not p.name.startswith(LOCK_NAME) for p in root.iterdir()):
         raise BeamDamageError(f"{root} exists, is not empty and has no manifest.json; choose a new --out")
     root.mkdir(parents=True, exist_ok=True)
     setup = get_setup(cfg)
@@ -220,8 +229,36 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
                                                      "frf_reference_dof": "2:y", "frf_kind": "receptance"},
          "section_layout": vars(setup.layout),
          "preset": {**vars(setup.preset), "mass_per_length_kg_m": setup.preset.mass_per_length_kg_m}}
+    if rebuild:  # the shards of this config and seed that verify are adopted, the rest regenerated
+        m, _ = recover(root, m)
+        print(f"{root / 'manifest.json'}: truncated or not JSON; rebuilt from {len(m['shards'])} shard(s) that "
+              f"verify", file=sys.stderr)
     write_manifest(root, m)
     return m
+
+
+def _truncated_manifest(root: Path) -> bool:
+    """True when ``manifest.json`` is not a JSON document (a write cut short); other damage is refused elsewhere."""
+    try:
+        json.loads((root / "manifest.json").read_bytes())
+    except (ValueError, UnicodeDecodeError):
+        return True
+    except OSError:
+        return False
+    return False
+
+
+#: Temporary files of this package's writers beside a dataset's top-level files.
+_TEMPORARY_PREFIXES = (".manifest.json.", ".omega_rad_s.npy.", ".samples.parquet.", f"{LOCK_NAME}.")
+
+
+def _remove_stale_temporaries(root: Path) -> None:
+    """Remove the temporary files an interrupted run left (called under the writer's lock)."""
+    if not root.is_dir():
+        return
+    for p in root.iterdir():
+        if p.name.endswith(".tmp") and p.name.startswith(_TEMPORARY_PREFIXES) and p.is_file():
+            p.unlink(missing_ok=True)
 
 
 def _finalized(root: Path, manifest: dict) -> bool:

@@ -40,14 +40,14 @@ import pandas as pd
 
 from datagen.damage import DamageModel, element4_index
 from datagen.synth import DATASET_FRFS, synthesise
-from physics.errors import FileFormatError
+from physics.errors import DISK_FULL_ERRNOS, DiskFullError, FileFormatError
 from physics.io import atomic_write_text, read_json
 from physics.modal import modal_parameters
 
 __all__ = ["ARRAYS", "ARRAYS_V1", "COLUMN_UNITS", "DATASET_FORMAT", "DATASET_FORMAT_V1", "DERIVED", "OPTIONAL",
-           "ROW_GROUP", "STATES", "column_units", "damaged_file", "dataset_identity", "file_sha256", "finalize",
-           "foreign_shard", "package_version", "read_manifest", "recover", "sample_table", "shard_arrays",
-           "shard_name", "verify_shard", "write_manifest", "write_shard"]
+           "NO_EFFECT_DROP", "ROW_GROUP", "STATES", "STATUS", "column_units", "damaged_file", "dataset_identity",
+           "file_sha256", "finalize", "foreign_shard", "package_version", "read_manifest", "recover", "sample_status",
+           "sample_table", "shard_arrays", "shard_name", "verify_shard", "write_manifest", "write_shard"]
 
 DATASET_FORMAT = "beam-damage-dataset/2"
 DATASET_FORMAT_V1 = "beam-damage-dataset/1"
@@ -107,7 +107,9 @@ COLUMN_UNITS = {
     "f{r}_hz_meas_base": "Hz", "f{r}_hz_meas_cur": "Hz", "zeta{r}_meas_base": "-", "zeta{r}_meas_cur": "-",
     "df{r}_rel": "-", "df{r}_rel_meas": "-", "dzeta{r}": "-", "dzeta{r}_meas": "-",
     "converged_base": "bool", "converged_cur": "bool", "iterations_base": "-", "iterations_cur": "-",
-    "residual_base": "-", "residual_cur": "-", "converged": "bool",
+    "residual_base": "-", "residual_cur": "-",
+    "converged": "bool: both states converged to a positive definite model with finite poles",
+    "status": "str: ok, not_converged, not_positive_definite, nan_poles or no_damage_effect (datagen.store.STATUS)",
 }
 
 ROW_GROUP = 65536
@@ -217,8 +219,36 @@ def sample_table(labels: dict, outputs: dict, shard: int, first_id: int, length_
         cols[f"converged_{st}"] = outputs["converged"][:, s].astype(bool)
         cols[f"iterations_{st}"] = outputs["iterations"][:, s].astype(np.int32)
         cols[f"residual_{st}"] = outputs["residual"][:, s].astype(float)
-    cols["converged"] = cols["converged_base"] & cols["converged_cur"]
+    status = sample_status(labels, outputs)
+    cols["converged"] = cols["converged_base"] & cols["converged_cur"] & np.isin(status, ("ok", "no_damage_effect"))
+    cols["status"] = status
     return pd.DataFrame(cols)
+
+
+#: Values of the samples table's ``status`` column, the first that applies (updating failures first).
+STATUS = {
+    "not_converged": "the Pilkey iteration did not reach its tolerance in a state",
+    "not_positive_definite": "an updated stiffness matrix has an eigenvalue <= 0 (converged = false)",
+    "nan_poles": "the updated model has no 4 finite conjugate pole pairs (converged = false)",
+    "no_damage_effect": "damaged, yet its slits lower no frequency f1..f4 by 1e-9 or more (a label without effect)",
+    "ok": "none of the above",
+}
+
+#: Relative frequency change below which a sample's damage counts as changing nothing.
+NO_EFFECT_DROP = 1e-9
+
+
+def sample_status(labels: dict, outputs: dict) -> np.ndarray:
+    """Status of each sample (:data:`STATUS`), shape (B,), from the pipeline's labels and outputs."""
+    K = np.asarray(outputs["K_updated"], dtype=float)
+    finite_k = np.all(np.isfinite(K), axis=(-2, -1))
+    Ks = np.where(finite_k[..., None, None], 0.5 * (K + np.swapaxes(K, -1, -2)), 0.0)
+    not_pd = np.any(~finite_k | (np.linalg.eigvalsh(Ks)[..., 0] <= 0), axis=1)
+    nan_poles = ~np.all(np.isfinite(outputs["updated_poles"]), axis=(1, 2))
+    no_effect = (labels["n_damages"] > 0) & ~(np.abs(outputs["damage_frequency_drop"]) >= NO_EFFECT_DROP)
+    not_converged = ~np.all(np.asarray(outputs["converged"], dtype=bool), axis=1)
+    return np.select([not_converged, not_pd, nan_poles, no_effect],
+                     ["not_converged", "not_positive_definite", "nan_poles", "no_damage_effect"], default="ok")
 
 
 def shard_arrays(labels: dict, outputs: dict) -> dict:
@@ -245,16 +275,25 @@ def write_shard(root, index: int, table: pd.DataFrame, arrays: dict, omega_rad_s
     tmp = shards / f".tmp-{shard_name(index)}-{os.getpid()}"
     if tmp.exists():
         shutil.rmtree(tmp)
-    tmp.mkdir()
     try:
-        return _fill_shard(root, index, table, arrays, omega_rad_s, frf_dtype, identity, tmp, final)
-    except BaseException:  # a full disk, an interrupt: no half-written shard directory is left behind
+        tmp.mkdir()
+        entry = _write_files(tmp, index, table, arrays, omega_rad_s, frf_dtype, identity)
+    except BaseException as exc:  # a full disk, an interrupt: no half-written shard directory is left behind
         shutil.rmtree(tmp, ignore_errors=True)
+        if isinstance(exc, OSError) and exc.errno in DISK_FULL_ERRNOS:
+            raise DiskFullError(f"{final}: no space left on device; the shard was not written and the dataset's "
+                                f"recorded shards are intact: free space and re-run the same command to resume") \
+                from None
         raise
+    if final.exists():  # a stale or damaged shard of an interrupted run
+        shutil.rmtree(final)
+    os.replace(tmp, final)
+    return entry
 
 
-def _fill_shard(root, index, table, arrays, omega_rad_s, frf_dtype, identity, tmp: Path, final: Path) -> dict:
-    """Write the shard's files into ``tmp`` and rename it onto ``final`` (:func:`write_shard`)."""
+def _write_files(tmp: Path, index: int, table: pd.DataFrame, arrays: dict, omega_rad_s, frf_dtype,
+                 identity) -> dict:
+    """Write a shard's files, its ``checksums.json`` and fsync them into ``tmp``; returns its manifest entry."""
     table.to_parquet(tmp / "samples.parquet", index=False)
     for name in ARRAYS:
         np.save(tmp / f"{name}.npy", np.ascontiguousarray(arrays[name]), allow_pickle=False)
@@ -265,15 +304,14 @@ def _fill_shard(root, index, table, arrays, omega_rad_s, frf_dtype, identity, tm
     entry = {"index": index, "name": shard_name(index), "n_samples": int(len(table)),
              "n_converged": int(table["converged"].sum()), "checksums": {p.name: file_sha256(p) for p in files},
              "sizes": {p.name: p.stat().st_size for p in files}}
+    if "status" in table:
+        entry["status"] = {k: int((table["status"] == k).sum()) for k in STATUS}
     if identity is not None:
         entry["identity"] = dict(sorted({**identity, "shard": index}.items()))  # same bytes after a JSON reload
     (tmp / "checksums.json").write_text(json.dumps(entry, indent=1))
     for p in tmp.iterdir():  # flush file data before the rename makes the shard visible
         with open(p, "rb") as fh:
             os.fsync(fh.fileno())
-    if final.exists():  # a stale or damaged shard of an interrupted run
-        shutil.rmtree(final)
-    os.replace(tmp, final)
     return entry
 
 
@@ -402,6 +440,7 @@ def finalize(root, manifest: dict) -> dict:
     root = Path(root)
     tmp = root / ".samples.parquet.tmp"
     writer, buf, rows, n, n_conv = None, [], 0, 0, 0
+    status = dict.fromkeys(STATUS, 0)
 
     def flush(final=False):  # whole row groups of ROW_GROUP rows; the remainder waits for more rows
         nonlocal writer, buf, rows
@@ -421,6 +460,8 @@ def finalize(root, manifest: dict) -> dict:
             rows += t.num_rows
             n += t.num_rows
             n_conv += e["n_converged"]
+            for k, c in e.get("status", {}).items():
+                status[k] = status.get(k, 0) + c
             if rows >= ROW_GROUP:
                 flush()
         flush(final=True)
@@ -429,7 +470,7 @@ def finalize(root, manifest: dict) -> dict:
             writer.close()
     os.replace(tmp, root / "samples.parquet")
     manifest["complete"] = True
-    manifest["counts"] = {"samples": n, "converged": n_conv, "not_converged": n - n_conv,
+    manifest["counts"] = {"samples": n, "converged": n_conv, "not_converged": n - n_conv, "status": status,
                           "shards": len(manifest["shards"])}
     manifest["checksums"] = {"samples.parquet": file_sha256(root / "samples.parquet"),
                              "omega_rad_s.npy": file_sha256(root / "omega_rad_s.npy")}

@@ -129,12 +129,10 @@ def main(argv=None) -> int:
         sys.stderr.write(one_line(f"beam-damage {args.command}: error: {exc.strerror or exc}{where}{kept}") + "\n")
         return EXIT_USAGE
     except KeyboardInterrupt:
-        sys.stderr.write(f"beam-damage {args.command}: interrupted (SIGINT); what was written is kept and complete"
-                         " (generate resumes from it)\n")
+        sys.stderr.write(f"beam-damage {args.command}: interrupted (SIGINT)\n")
         return EXIT_SIGINT
     except Terminated:
-        sys.stderr.write(f"beam-damage {args.command}: terminated (SIGTERM); what was written is kept and complete"
-                         " (generate resumes from it)\n")
+        sys.stderr.write(f"beam-damage {args.command}: terminated (SIGTERM)\n")
         return EXIT_SIGTERM
     finally:
         if threading.current_thread() is threading.main_thread():

@@ -83,16 +83,25 @@ def run(args) -> dict:
                     raise BeamDamageError(f"sample {i}: the {kind} FRF of the {state} state is not finite "
                                           f"(updating did not converge); choose another sample or --kind measured")
     out.mkdir(parents=True, exist_ok=True)
-    written = []
-    for kind, H in frfs.items():
-        for j, i in enumerate(ids):
-            for s, state in enumerate(STATES):
-                path = out / f"sample-{i:06d}_{state}_{kind}{fmt.extensions[0]}"
-                data = MeasuredFRF(f_hz, H[j, s][:, None, :], resp, ref, kind="receptance",
-                                   metadata={"id1": f"beam-damage sample {i} {state} {kind}", "dataset": str(args.dir),
-                                             "sample_id": i, "state": state, "frf": kind})
-                fmt.writer(path, data)
-                written.append(str(path))
+    written, new = [], []
+    try:
+        for kind, H in frfs.items():
+            for j, i in enumerate(ids):
+                for s, state in enumerate(STATES):
+                    path = out / f"sample-{i:06d}_{state}_{kind}{fmt.extensions[0]}"
+                    data = MeasuredFRF(f_hz, H[j, s][:, None, :], resp, ref, kind="receptance",
+                                       metadata={"id1": f"beam-damage sample {i} {state} {kind}",
+                                                 "dataset": str(args.dir), "sample_id": i, "state": state,
+                                                 "frf": kind})
+                    existed = path.exists()
+                    fmt.writer(path, data)
+                    written.append(str(path))
+                    if not existed:
+                        new.append(path)
+    except (BeamDamageError, OSError):  # e.g. a full disk: the files this run created go again
+        for p in new:
+            p.unlink(missing_ok=True)
+        raise
     if not args.json:
         print(f"wrote {len(written)} {args.format} files to {out}")
     return {"files": written, "samples": ids, "format": args.format, "kinds": list(kinds)}

@@ -64,7 +64,7 @@ def run(args) -> dict:
                  progress=True)
     summary = {"out": str(args.out), "complete": m["complete"], "seed": m["seed"],
                "beam": cfg["beam"].get("name") if cfg["beam"] else cfg["preset"],
-               "config": args.config or "defaults", "format": m["format"],
+               "config": args.config or "defaults", "format": m["format"], "identity": m.get("identity"),
                "package_version": m["package_version"], "n_shards": m["n_shards"],
                "counts": m.get("counts", {}), "checksums": m.get("checksums", {})}
     if not args.json:
@@ -72,4 +72,7 @@ def run(args) -> dict:
         print(f"{args.out}: {c.get('samples', 0)} samples in {m['n_shards']} shards, "
               f"{c.get('not_converged', 0)} flagged as not converged (kept); seed {m['seed']}, beam {summary['beam']}, "
               f"config {summary['config']}")
+        flagged = {k: v for k, v in c.get("status", {}).items() if k != "ok" and v}
+        if flagged:
+            print("  status: " + ", ".join(f"{v} {k}" for k, v in flagged.items()) + " (samples table column 'status')")
     return summary

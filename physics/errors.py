@@ -8,7 +8,8 @@ command-line flags. An error about one parameter also carries its name in
 ``parameter``, which the command line maps to its flag (``--elements``).
 """
 
-__all__ = ["BeamDamageError", "ConfigError", "ConvergenceError", "FileFormatError", "OverdampedError", "ShapeError"]
+__all__ = ["BeamDamageError", "ConfigError", "ConvergenceError", "DiskFullError", "FileFormatError", "OverdampedError",
+           "ShapeError"]
 
 
 class BeamDamageError(ValueError):
@@ -35,6 +36,14 @@ class OverdampedError(BeamDamageError):
 
 class FileFormatError(BeamDamageError):
     """A data file is missing, truncated, malformed or holds the wrong kind of record."""
+
+
+class DiskFullError(BeamDamageError):
+    """A write ran out of disk space (ENOSPC) or quota (EDQUOT); what existed before is kept as it was."""
+
+
+#: errno values of a full disk or an exhausted quota.
+DISK_FULL_ERRNOS = (28, 122)  # ENOSPC, EDQUOT (Linux)
 
 
 class ConfigError(BeamDamageError):

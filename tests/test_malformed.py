@@ -421,6 +421,12 @@ DAMAGE = [
      "shard-000001/truth_poles.npy"),
     ("bad .npy header of omega_rad_s.npy", lambda r: _garble_npy_header(r / "omega_rad_s.npy"), "omega_rad_s.npy"),
     ("top-level samples.parquet truncated", lambda r: _cut(r / "samples.parquet", 0.5), "ds/samples.parquet"),
+    ("shard entry of another seed", lambda r: _edit_manifest(r, lambda m: dict(m, shards=[
+        dict(e, identity=dict(e["identity"], seed=99)) if e["index"] == 1 else e for e in m["shards"]])),
+     "shard-000001: belongs to another dataset"),
+    ("shard entry without identity", lambda r: _edit_manifest(r, lambda m: dict(m, shards=[
+        {k: v for k, v in e.items() if k != "identity"} if e["index"] == 1 else e for e in m["shards"]])),
+     "shard-000001: belongs to another dataset"),
 ]
 
 #: Commands that read datasets: name -> argv(dataset dir, case dir).
@@ -863,6 +869,12 @@ def _config_range_cases():
     return [
         ("generate", "slit damping 1 s", lambda d: cfg(d, "[damage]\nslit_damping_s = [1.0, 1.0]\n"),
          "damage.slit_damping_s"),
+        ("generate", "slits of depth [0, 0]", lambda d: cfg(d, "[damage]\ndepth_m = [0.0, 0.0]\n"), "damage.depth_m"),
+        ("generate", "slits of EI loss [0, 0]", lambda d: cfg(d, "[damage]\nei_loss = [0.0, 0.0]\n"),
+         "damage.ei_loss"),
+        ("generate", "root spring 0.001 k_r L/EI", lambda d: cfg(
+            d, "[specimen]\nroot_spring_relative = [0.001, 0.001]\n"), "specimen.root_spring_relative"),
+
         ("generate", "slit damping [0, 1] s", lambda d: cfg(d, "[damage]\nslit_damping_s = [0.0, 1.0]\n"),
          "damage.slit_damping_s"),
         ("generate", "slit damping beyond the band's loss factor", lambda d: cfg(

@@ -372,6 +372,12 @@ class Slit:
         d["width_m"] = value_range("damage.width_m", d["width_m"], lo=1e-6, hi=0.1)
         d["depth_m"] = value_range("damage.depth_m", d["depth_m"], lo=0.0)
         d["ei_loss"] = value_range("damage.ei_loss", d["ei_loss"], lo=0.0, hi=0.9999, allow_empty=True)
+        slits = d["n_slits"][1] > 0 and d["intact_fraction"] < 1
+        key, size = ("ei_loss", d["ei_loss"]) if d["ei_loss"] else ("depth_m", d["depth_m"])
+        if slits and size[1] == 0:
+            raise ConfigError(f"config key 'damage.{key}' = {size}: slits of zero size change nothing, yet their "
+                              f"samples would be labelled damaged; give an upper bound > 0 (or n_slits = [0, 0] "
+                              f"for intact samples only)")
         d["slit_damping_s"] = value_range("damage.slit_damping_s", d["slit_damping_s"], lo=0.0, hi=1.0)
         top_rad_s = cfg["measurement"]["band_rad_s"][1]
         if d["slit_damping_s"][1] * top_rad_s > MAX_LOSS_FACTOR:

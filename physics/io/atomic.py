@@ -3,7 +3,8 @@
 A reader never sees a half-written file: data go to a temporary file beside
 the target (same file system), are flushed to disk, get normal permissions and
 replace the target with :func:`os.replace`. On any error the temporary file is
-removed and the target is left as it was.
+removed and the target is left as it was; a full disk (ENOSPC, EDQUOT) becomes a one-line
+:class:`physics.errors.DiskFullError` saying so.
 """
 
 from __future__ import annotations
@@ -12,6 +13,8 @@ import contextlib
 import os
 import tempfile
 from pathlib import Path
+
+from physics.errors import DISK_FULL_ERRNOS, DiskFullError
 
 __all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text"]
 
@@ -47,6 +50,12 @@ def atomic_path(path):
             raise FileNotFoundError(f"{path}: the writer produced no file")
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the file normal permissions
         os.replace(tmp, path)
+    except OSError as exc:
+        if exc.errno in DISK_FULL_ERRNOS:
+            raise DiskFullError(f"{path}: no space left on device; not written, "
+                                f"{'its previous version is intact' if path.exists() else 'nothing left behind'}") \
+                from None
+        raise
     finally:
         if tmp.exists():
             tmp.unlink()

@@ -140,3 +140,15 @@ def test_refused_seed_leaves_nothing_that_blocks_the_corrected_run(tmp_path, cap
     assert not out.exists()
     assert main(["generate", "--n", "4", "--config", str(cfg), "--out", str(out), "--seed", "1", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["complete"]
+
+
+def test_a_run_failing_on_its_config_names_the_cause_and_leaves_nothing(tmp_path, capsys):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text('[output]\nshard_size = 10\n[measurement]\nlines = 32\nfrequency_noise = 0.5\ndamping_noise = 0.5\n'
+                   'shape_noise = 0.5\nfrf_noise = 0.5\n')
+    out = tmp_path / "ds"
+    assert main(["generate", "--n", "30", "--config", str(cfg), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "measured natural frequencies to <= 0" in err and "frequency_noise 0.5" in err
+    assert "conjugate pairs" not in err
+    assert not out.exists()
