@@ -30,6 +30,7 @@ from learn.features import BeamSpec
 from learn.sensitivity import beam_sensitivity
 from learn.verdict import verdict_text
 from physics.beam import load_beam
+from physics.io.inputs import check_input_file
 from physics.errors import BeamDamageError, FileFormatError
 from physics.io import atomic_write_bytes, atomic_write_text, read_json
 from physics.properties import beam_preset
@@ -126,6 +127,8 @@ def load_model(model_dir, device=None) -> TrainedModel:
     """Read a model directory (weights with ``torch.load(..., weights_only=True)``)."""
     path = Path(model_dir)
     cfg_path = path / "config.json"
+    if cfg_path.exists() or cfg_path.is_symlink():  # there, but perhaps a device, a FIFO or a dangling link
+        check_input_file(cfg_path, "json", what="a model directory's config.json")
     if not cfg_path.is_file():
         raise FileFormatError(f"{path}: not a model directory (no config.json); create one with 'beam-damage train'")
     config = read_json(cfg_path)

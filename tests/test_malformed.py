@@ -527,6 +527,9 @@ def _command_arg_cases():
         ("classify", "model config.json lacks route", lambda d: _cls(d, model=_model_copy(
             d, lambda m: _edit_json(m / "config.json", lambda c: {k: v for k, v in c.items() if k != "route"}))),
          "route"),
+        ("classify", "model config.json a link to /dev/zero", lambda d: _cls(d, model=_model_copy(
+            d, lambda m: ((m / "config.json").unlink(), (m / "config.json").symlink_to("/dev/zero")))),
+         "character device"),
         ("classify", "weights file missing", lambda d: _cls(d, model=_model_copy(
             d, lambda m: (m / "weights-modal.pt").unlink())), "weights-modal.pt"),
         ("classify", "weights file random bytes", lambda d: _cls(d, model=_model_copy(d, bad_weights)),
