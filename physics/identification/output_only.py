@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from physics.io.inputs import MAX_BYTES, check_input_file
 from physics.errors import ConfigError, FileFormatError, ShapeError
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
@@ -47,6 +48,10 @@ class RecordsIdentification:
         return ModalData(self.estimate.eigenvalues, self.estimate.shapes, self.records.dofs)
 
 
+#: The header of a CSV file is looked for in its first lines, each read up to a bounded length.
+SNIFF_LINES, SNIFF_LINE_CHARS = 200, 1 << 16
+
+
 def holds_response_records(path) -> bool:
     """Whether a file holds time records rather than FRFs: a universal file with time records and no FRF, an
     ``.npz`` with a ``signals`` field, or a CSV whose header starts with ``time_s``."""
@@ -57,6 +62,7 @@ def holds_response_records(path) -> bool:
     if not Path(path).is_file():
         return False                                  # the FRF reader names what is missing
     fmt = format_of(path, FRF, TIME)
+    check_input_file(path, fmt.name if fmt.name in MAX_BYTES else "csv")
     if fmt.name == "uff":
         from physics.io.uff58 import UffFile
 
@@ -73,7 +79,8 @@ def holds_response_records(path) -> bool:
             return "signals" in z.files
     if fmt.name == "csv":
         with open(path, encoding="utf-8", errors="replace") as fh:
-            first = next((s.strip() for s in fh if s.strip() and not s.lstrip().startswith("#")), "")
+            lines = (fh.readline(SNIFF_LINE_CHARS) for _ in range(SNIFF_LINES))   # bounded: no newline in 2 GB
+            first = next((s.strip() for s in lines if s.strip() and not s.lstrip().startswith("#")), "")
         return first.lower().startswith("time_s")
     return False
 

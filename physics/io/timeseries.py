@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from physics.io.inputs import check_input_file
 from physics.errors import FileFormatError
 from physics.io.timedata import TimeRecords
 from physics.io.types import check_dof_labels
@@ -42,6 +43,7 @@ def _records(path, signals, fs, dofs, quantity) -> TimeRecords:
 
 def read_time_npz(path) -> TimeRecords:
     """Read response time series from ``.npz`` (see module docstring); never unpickles."""
+    check_input_file(path, "npz", what="an NPZ time series")
     try:
         with np.load(path, allow_pickle=False) as z:
             if "signals" not in z.files:
@@ -61,7 +63,7 @@ def read_time_npz(path) -> TimeRecords:
 
 def read_time_csv(path) -> TimeRecords:
     """Read response time series from CSV text (see module docstring)."""
-    text = Path(path).read_text(encoding="utf-8", errors="replace")
+    text = check_input_file(path, "csv", what="a CSV time series").read_text(encoding="utf-8", errors="replace")
     lines = text.splitlines()
     quantity = "acceleration"
     body = []
