@@ -28,8 +28,9 @@ unit in the name):
     Rayleigh damping ``C = alpha M + beta K`` of the whole beam. It is the
     damping that is always calibrated, not a candidate effect.
 
-:func:`assemble_beam` builds an :class:`physics.fem.FEModel` with every effect
-applied; :func:`interpolation_matrix` maps its DOFs onto the translations at
+Each effect is one :class:`Effect` record of :data:`EFFECTS` (its parameters, how it
+enters the model, its discrepancy-fit bounds). :func:`assemble_beam` builds an
+:class:`physics.fem.FEModel` with every effect applied; :func:`interpolation_matrix` maps its DOFs onto the translations at
 arbitrary positions (measured points between nodes).
 """
 
@@ -37,13 +38,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
 from physics import fem
 from physics.errors import BeamDamageError, ConfigError
 
-__all__ = ["CANDIDATES", "EFFECTS", "Parameter", "assemble_beam", "dashpot_matrix", "hermite_row",
+__all__ = ["CANDIDATES", "EFFECTS", "Effect", "Parameter", "assemble_beam", "dashpot_matrix", "hermite_row",
            "interpolation_matrix", "point_mass_matrix", "timoshenko_mass", "timoshenko_stiffness", "validate_effects"]
 
 
@@ -69,17 +71,106 @@ class Parameter:
     positive: bool = True
 
 
-#: effect name -> its parameters (see the module docstring).
-EFFECTS: dict[str, tuple[Parameter, ...]] = {
-    "shear_deformation": (Parameter("kGA_N", True), Parameter("rho_I_kg_m", False, positive=False)),
-    "rotary_inertia": (Parameter("rho_I_kg_m", False, positive=False),),
-    "root_flexibility": (Parameter("k_theta_Nm_rad", True), Parameter("k_y_N_m", False)),
-    "added_mass": (Parameter("mass_kg", True, positive=False), Parameter("x_m", False, positive=False),
-                   Parameter("J_kg_m2", False, positive=False)),
-    "local_damping": (Parameter("c_Ns_m", True, positive=False), Parameter("x_m", False, positive=False)),
-    "proportional_damping": (Parameter("alpha_1_s", False, positive=False),
-                             Parameter("beta_s", False, positive=False)),
-}
+@dataclass
+class _Parts:
+    """A beam under assembly, which the effects' ``apply`` steps change in place (:func:`assemble_beam`)."""
+
+    length_m: float
+    bc: str
+    default_rho_i: float | None     # m h^2 / 12, or None without the section thickness
+    kga: float = np.inf             # element shear rigidity (N)
+    rho_i: float = 0.0              # element rotary inertia (kg m)
+    M: np.ndarray | None = None
+    K: np.ndarray | None = None
+    C: np.ndarray | None = None
+    node_x: np.ndarray | None = None
+    removed: set | None = None      # constrained DOF names
+
+    def rotary_inertia(self, p: dict) -> float:
+        if "rho_I_kg_m" in p:
+            return p["rho_I_kg_m"]
+        if self.default_rho_i is None:
+            raise BeamDamageError("the default rotary inertia m h^2/12 needs the section thickness; give "
+                                  "thickness_m or the parameter rho_I_kg_m")
+        return self.default_rho_i
+
+
+@dataclass(frozen=True)
+class Effect:
+    """One modelled effect: its beam-file parameters, how it enters the model and its fit bounds.
+
+    Attributes
+    ----------
+    name : str
+        Key under ``[effects]`` in the beam file.
+    params : tuple of Parameter
+    stage : {"element", "assembled"}
+        ``element`` effects set the element's shear rigidity and rotary inertia before assembly; ``assembled``
+        ones change ``M``, ``C``, ``K`` or the constrained DOFs after it, in :data:`EFFECTS` order.
+    apply : callable ``(parts, params) -> None``
+        Changes the beam under assembly in place.
+    fit_bounds : callable ``(L, EI, m, rho_i, w1) -> {parameter: (lower, upper)}``, or None
+        Bounds of the free parameters of a discrepancy fit, on the beam's own scales (``w1``: the first
+        measured mode, rad/s); None for an effect that is not a discrepancy candidate.
+    """
+
+    name: str
+    params: tuple
+    stage: str
+    apply: Callable
+    fit_bounds: Callable | None = None
+
+
+def _shear(parts: _Parts, p: dict) -> None:
+    parts.kga = p["kGA_N"]
+    parts.rho_i = parts.rotary_inertia(p)
+
+
+def _rotary(parts: _Parts, p: dict) -> None:
+    parts.rho_i = parts.rotary_inertia(p)
+
+
+def _proportional(parts: _Parts, p: dict) -> None:
+    parts.C = p.get("alpha_1_s", 0.0) * parts.M + p.get("beta_s", 0.0) * parts.K
+
+
+def _added_mass(parts: _Parts, p: dict) -> None:
+    parts.M = parts.M + point_mass_matrix(parts.node_x, p["mass_kg"], p.get("x_m", parts.length_m),
+                                          p.get("J_kg_m2", 0.0))
+
+
+def _dashpot(parts: _Parts, p: dict) -> None:
+    parts.C = parts.C + dashpot_matrix(parts.node_x, p["c_Ns_m"], p.get("x_m", parts.length_m))
+
+
+def _root_springs(parts: _Parts, p: dict) -> None:
+    if parts.bc != "clamped-free":
+        raise BeamDamageError("effect 'root_flexibility' is defined for a clamped-free beam only")
+    parts.removed.discard("1:rz")
+    parts.K = parts.K.copy()
+    parts.K[1, 1] += p["k_theta_Nm_rad"]
+    if "k_y_N_m" in p:
+        parts.removed.discard("1:y")
+        parts.K[0, 0] += p["k_y_N_m"]
+
+
+#: Every effect, one record each (see the module docstring); ``assembled`` effects apply in this order.
+EFFECTS: dict[str, Effect] = {e.name: e for e in (
+    Effect("shear_deformation", (Parameter("kGA_N", True), Parameter("rho_I_kg_m", False, positive=False)),
+           "element", _shear, lambda L, EI, m, rho_i, w1: {"kGA_N": (1.0 * EI / L**2, 1e6 * EI / L**2)}),
+    # between a tenth of the uniform section's and all the mass in the faces (3 m h^2 / 12)
+    Effect("rotary_inertia", (Parameter("rho_I_kg_m", False, positive=False),), "element", _rotary,
+           lambda L, EI, m, rho_i, w1: {"rho_I_kg_m": (0.1 * rho_i, 3.0 * rho_i)}),
+    Effect("proportional_damping", (Parameter("alpha_1_s", False, positive=False),
+                                    Parameter("beta_s", False, positive=False)), "assembled", _proportional),
+    Effect("added_mass", (Parameter("mass_kg", True, positive=False), Parameter("x_m", False, positive=False),
+                          Parameter("J_kg_m2", False, positive=False)), "assembled", _added_mass,
+           lambda L, EI, m, rho_i, w1: {"mass_kg": (1e-4 * m * L, 2.0 * m * L)}),
+    Effect("local_damping", (Parameter("c_Ns_m", True, positive=False), Parameter("x_m", False, positive=False)),
+           "assembled", _dashpot, lambda L, EI, m, rho_i, w1: {"c_Ns_m": (1e-7 * m * L * w1, 0.3 * m * L * w1)}),
+    Effect("root_flexibility", (Parameter("k_theta_Nm_rad", True), Parameter("k_y_N_m", False)), "assembled",
+           _root_springs, lambda L, EI, m, rho_i, w1: {"k_theta_Nm_rad": (0.1 * EI / L, 1e5 * EI / L)}),
+)}
 
 #: Effects a discrepancy analysis may name (``proportional_damping`` is always calibrated).
 CANDIDATES = ("shear_deformation", "rotary_inertia", "root_flexibility", "added_mass", "local_damping")
@@ -103,8 +194,8 @@ def validate_effects(effects, source: str = "effects") -> dict:
             raise ConfigError(f"{source}: unknown effect 'effects.{name}'; expected one of {sorted(EFFECTS)}")
         if not hasattr(params, "items"):
             raise ConfigError(f"{source}: 'effects.{name}' must be a table of parameters "
-                              f"({', '.join(p.name for p in EFFECTS[name])})")
-        spec = {p.name: p for p in EFFECTS[name]}
+                              f"({', '.join(p.name for p in EFFECTS[name].params)})")
+        spec = {p.name: p for p in EFFECTS[name].params}
         clean = {}
         for key, value in params.items():
             if key not in spec:
@@ -116,7 +207,7 @@ def validate_effects(effects, source: str = "effects") -> dict:
                 raise ConfigError(f"{source}: 'effects.{name}.{key}' must be {'>' if p.positive else '>='} "
                                   f"{p.lower:g}, got {value!r}")
             clean[key] = float(value)
-        for p in EFFECTS[name]:
+        for p in EFFECTS[name].params:
             if p.required and p.name not in clean:
                 raise ConfigError(f"{source}: 'effects.{name}' needs parameter '{p.name}'")
         out[name] = clean
@@ -291,44 +382,20 @@ def assemble_beam(length_m, EI_Nm2, mass_per_length_kg_m, n_elements, *, bc="cla
             raise BeamDamageError(f"{name} must be a positive finite number, got {v}")
     le = length_m / n_el
     m = float(mass_per_length_kg_m)
-    default_rho_i = 0.0 if thickness_m is None else m * thickness_m**2 / 12.0
-    kga, rho_i = np.inf, 0.0
-    if "shear_deformation" in eff:
-        kga = eff["shear_deformation"]["kGA_N"]
-        rho_i = eff["shear_deformation"].get("rho_I_kg_m", default_rho_i)
-    if "rotary_inertia" in eff:
-        rho_i = eff["rotary_inertia"].get("rho_I_kg_m", default_rho_i)
-    if (("shear_deformation" in eff and "rho_I_kg_m" not in eff["shear_deformation"]) or
-            ("rotary_inertia" in eff and "rho_I_kg_m" not in eff["rotary_inertia"])) and thickness_m is None:
-        raise BeamDamageError("the default rotary inertia m h^2/12 needs the section thickness; give thickness_m "
-                              "or the parameter rho_I_kg_m")
-    ke = timoshenko_stiffness(EI_Nm2, kga, le)
-    me = timoshenko_mass(m, rho_i, EI_Nm2, kga, le)
-    K = fem.assemble(np.broadcast_to(ke, (n_el, 4, 4)))
-    M = fem.assemble(np.broadcast_to(me, (n_el, 4, 4)))
-    C = np.zeros_like(K)
-    node_x = np.linspace(0.0, length_m, n_el + 1)
-    if "proportional_damping" in eff:
-        p = eff["proportional_damping"]
-        C = p.get("alpha_1_s", 0.0) * M + p.get("beta_s", 0.0) * K
-    if "added_mass" in eff:
-        p = eff["added_mass"]
-        M = M + point_mass_matrix(node_x, p["mass_kg"], p.get("x_m", length_m), p.get("J_kg_m2", 0.0))
-    if "local_damping" in eff:
-        p = eff["local_damping"]
-        C = C + dashpot_matrix(node_x, p["c_Ns_m"], p.get("x_m", length_m))
+    parts = _Parts(length_m, bc, None if thickness_m is None else m * thickness_m**2 / 12.0)
+    for name in (n for n in EFFECTS if n in eff and EFFECTS[n].stage == "element"):
+        EFFECTS[name].apply(parts, eff[name])
+    ke = timoshenko_stiffness(EI_Nm2, parts.kga, le)
+    me = timoshenko_mass(m, parts.rho_i, EI_Nm2, parts.kga, le)
+    parts.K = fem.assemble(np.broadcast_to(ke, (n_el, 4, 4)))
+    parts.M = fem.assemble(np.broadcast_to(me, (n_el, 4, 4)))
+    parts.C = np.zeros_like(parts.K)
+    parts.node_x = np.linspace(0.0, length_m, n_el + 1)
     names = fem.dof_names(n_el + 1)
-    removed = set(fem.constrained_dofs(bc, n_el + 1))
-    if "root_flexibility" in eff:
-        if bc != "clamped-free":
-            raise BeamDamageError("effect 'root_flexibility' is defined for a clamped-free beam only")
-        p = eff["root_flexibility"]
-        removed.discard("1:rz")
-        K = K.copy()
-        K[1, 1] += p["k_theta_Nm_rad"]
-        if "k_y_N_m" in p:
-            removed.discard("1:y")
-            K[0, 0] += p["k_y_N_m"]
+    parts.removed = set(fem.constrained_dofs(bc, n_el + 1))
+    for name in (n for n in EFFECTS if n in eff and EFFECTS[n].stage == "assembled"):
+        EFFECTS[name].apply(parts, eff[name])
+    M, K, C, node_x, removed = parts.M, parts.K, parts.C, parts.node_x, parts.removed
     keep = np.array([i for i, d in enumerate(names) if d not in removed])
     sel = np.ix_(keep, keep)
     return fem.FEModel(M=M[sel], K=K[sel], C=C[sel], dofs=tuple(names[i] for i in keep), node_x=node_x)

@@ -42,15 +42,8 @@ def effect_params(effect: str, beam: Beam, meas: Measurement, position_free: boo
     L, EI, m = beam.length_m, beam.EI_Nm2, beam.mass_per_length_kg_m
     rho_i = m * beam.thickness_m**2 / 12
     w1 = 2 * np.pi * meas.frequencies_hz[0]
-    table = {
-        "shear_deformation": [Param("shear_deformation.kGA_N", 1.0 * EI / L**2, 1e6 * EI / L**2)],
-        # between a tenth of the uniform section's and all the mass in the faces (3 m h^2 / 12)
-        "rotary_inertia": [Param("rotary_inertia.rho_I_kg_m", 0.1 * rho_i, 3.0 * rho_i)],
-        "root_flexibility": [Param("root_flexibility.k_theta_Nm_rad", 0.1 * EI / L, 1e5 * EI / L)],
-        "added_mass": [Param("added_mass.mass_kg", 1e-4 * m * L, 2.0 * m * L)],
-        "local_damping": [Param("local_damping.c_Ns_m", 1e-7 * m * L * w1, 0.3 * m * L * w1)],
-    }
-    out = list(table[effect])
+    bounds = fx.EFFECTS[effect].fit_bounds(L, EI, m, rho_i, w1)
+    out = [Param(f"{effect}.{key}", lo, hi) for key, (lo, hi) in bounds.items()]
     if has_position(effect) and position_free:
         out.append(Param(f"{effect}.x_m", 0.02 * L, L, log=False))
     return out
@@ -58,7 +51,7 @@ def effect_params(effect: str, beam: Beam, meas: Measurement, position_free: boo
 
 def has_position(effect: str) -> bool:
     """Whether the effect sits at a point of the beam (an ``x_m`` parameter in :data:`physics.effects.EFFECTS`)."""
-    return any(p.name == "x_m" for p in fx.EFFECTS[effect])
+    return any(p.name == "x_m" for p in fx.EFFECTS[effect].params)
 
 
 def g_core_pa(kGA_N: float, beam: Beam) -> float:
