@@ -30,8 +30,8 @@ unit in the name):
 
 Each effect is one :class:`Effect` record of :data:`EFFECTS` (its parameters, how it
 enters the model, its discrepancy-fit bounds). :func:`assemble_beam` builds an
-:class:`physics.fem.FEModel` with every effect applied; :func:`interpolation_matrix` maps its DOFs onto the translations at
-arbitrary positions (measured points between nodes).
+:class:`physics.fem.FEModel` with every effect applied; :func:`interpolation_matrix`
+maps its DOFs onto the translations at arbitrary positions (measured points between nodes).
 """
 
 from __future__ import annotations
