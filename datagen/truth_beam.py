@@ -46,6 +46,7 @@ import numpy as np
 from physics.errors import ConfigError
 from physics.fem import element_mass, element_stiffness
 from physics.properties import BeamPreset
+from physics.effects import dashpot_matrix, point_mass_matrix, timoshenko_mass, timoshenko_stiffness
 
 __all__ = ["APPLIED_EFFECTS", "as_preset", "beam_mapping", "load_truth_beam", "point_effects", "shear_parameters",
            "unit_elements"]
@@ -140,8 +141,6 @@ def unit_elements(shear_flexibility, rho_i_over_m_m2: float, length_m: float, n_
     ke, me : ndarray, shape (..., 4, 4)
     shear_phi : ndarray, shape (...)   ``12 EI / (kGA l^2) = 12 n^2 EI / (kGA L^2)`` of the element
     """
-    from physics.effects import timoshenko_mass, timoshenko_stiffness
-
     le = length_m / n_elements
     s = np.asarray(shear_flexibility, float)
     phi = 12.0 * n_elements**2 * s
@@ -166,7 +165,6 @@ def point_effects(beam, n_elements: int) -> dict:
     out = {"M_added": None, "C_local": None, "k_theta_Nm_rad": None, "k_y_N_m": None, "rayleigh": None}
     if beam is None:
         return out
-    from physics.effects import dashpot_matrix, point_mass_matrix
 
     eff = beam.effects_dict()
     node_x = np.linspace(0.0, beam.length_m, n_elements + 1)

@@ -19,6 +19,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 import numpy as np
+from physics.io import atomic_write_bytes
 
 __all__ = ["MIN_DROP", "Metrics", "NOISE_EDGES", "TIP_ZONE", "figures", "metrics", "reliability", "roc_auc",
            "roc_curve", "subsets", "table_rows"]
@@ -223,7 +224,6 @@ def figures(outputs, truth, out_dir, length_m: float, n_bins: int = 15) -> list[
 
 
 def _save(fig, path) -> str:
-    from physics.io import atomic_write_bytes
     import io
 
     buf = io.BytesIO()

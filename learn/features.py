@@ -35,6 +35,9 @@ import numpy as np
 import pandas as pd
 
 from physics.errors import BeamDamageError, FileFormatError
+from datagen.dataset import Dataset
+from datagen.store import DATASET_FORMAT, read_manifest
+from datagen.synth import log_magnitude_map
 
 __all__ = ["BeamSpec", "DOFS", "GRID_RAD_S", "Pairs", "ROUTES", "beam_of_manifest", "curvatures", "features",
            "frf_features", "grid_weights", "labels", "load_pairs", "manifest_checksum",
@@ -155,10 +158,6 @@ def load_pairs(roots, frfs=("measured", "updated"), chunk: int = 1024, workers: 
         A directory is not a complete format-2 dataset, or datasets of different beams are mixed.
     """
     from concurrent.futures import ThreadPoolExecutor
-
-    from datagen.dataset import Dataset
-    from datagen.store import DATASET_FORMAT, read_manifest
-    from datagen.synth import log_magnitude_map
 
     roots = [roots] if isinstance(roots, (str, Path)) else list(roots)
     if not roots:

@@ -50,9 +50,10 @@ import numpy as np
 from physics import effects as fx
 from physics.errors import ConfigError
 from physics.fem import BOUNDARY_CONDITIONS, FEModel
-from physics.io import atomic_write_text
+from physics.io import DofMap, atomic_write_text, map_frf_dofs, map_measured_dofs
 from physics.io.inputs import check_input_file
 from physics.properties import PRESETS, layered_ei
+from physics.modal import state_matrix
 
 __all__ = ["Beam", "MAX_MODEL_SPREAD", "PRESET_CORE_MODULUS_PA", "PRESET_FACE_THICKNESS_M", "beam_from_dict",
            "beam_to_toml", "load_beam", "preset_beam", "write_beam"]
@@ -174,8 +175,6 @@ class Beam:
         -------
         physics.io.DofMap
         """
-        from physics.io import DofMap, map_frf_dofs, map_measured_dofs
-
         if targets == "masters":
             model_x, model_dofs = self.measured_x_m, self.masters
         else:
@@ -337,8 +336,6 @@ MAX_MODEL_SPREAD = 1e12
 def _check_effects_keep_a_model(beam: Beam, source: str) -> None:
     """Refuse effect values that leave no positive definite, underdamped model (one line naming the file)."""
     from scipy.linalg import eigh
-
-    from physics.modal import state_matrix
 
     model = beam.fe_model(4)
     names = ", ".join(f"effects.{k}" for k in beam.effects)

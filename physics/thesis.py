@@ -19,6 +19,10 @@ from importlib import resources
 import numpy as np
 
 from physics.errors import BeamDamageError
+from physics.updating import mass_model_name
+from physics.frf import receptance
+from physics.io import MeasuredFRF
+from physics.modal import complex_modes
 
 __all__ = ["BEAM5_DOFS", "BEAM5_TIP", "FIXTURES", "beam5_reduced_model", "beam_state", "identified_model", "load",
            "simulated_beam5_test"]
@@ -59,8 +63,6 @@ def identified_model(state: str, mass_model: str = "iirs", beam: str = "5"):
     mass_model : {"iirs", "lumped"}   (alias "reduced" accepted)
     beam : str
     """
-    from physics.updating import mass_model_name
-
     key = _MASS_KEYS[mass_model_name(mass_model)]
     ident = load("beams")["beams"][beam]["identified_models"]
     if state not in ident:
@@ -112,10 +114,6 @@ def simulated_beam5_test(noise: float = 0.01, seed: int = 0, df_hz: float = 0.5,
     frf : physics.io.MeasuredFRF, shape (4, 1, n_lines)
     modes : physics.modal.ComplexModes   (exact)
     """
-    from physics.frf import receptance
-    from physics.io import MeasuredFRF
-    from physics.modal import complex_modes
-
     M, C, K = beam5_reduced_model(damping)
     f = np.arange(df_hz, fmax_hz + df_hz / 2, df_hz)
     H = receptance(M, C, K, 2 * np.pi * f, reference=[BEAM5_TIP])

@@ -23,7 +23,7 @@ import numpy as np
 
 from physics.errors import BeamDamageError, ConvergenceError, OverdampedError, ShapeError
 from physics.fem import beam_model, lumped_mass
-from physics.modal import check_square, normalize_modes
+from physics.modal import check_square, normalize_modes, state_matrix
 from physics.reduction import iirs
 
 __all__ = ["MASS_MODELS", "MASS_MODEL_ALIASES", "MAX_EIGENVECTOR_CONDITION", "REFUSAL_TOL", "REPRODUCTION_TOL",
@@ -587,8 +587,6 @@ def eigenvalue_errors(M, C, K, eigenvalues):
         The paired model eigenvalues (NaN if the model is not finite).
     """
     from scipy.optimize import linear_sum_assignment
-
-    from physics.modal import state_matrix
 
     lam = np.asarray(eigenvalues, dtype=complex)
     if not (np.all(np.isfinite(C)) and np.all(np.isfinite(K))):

@@ -11,7 +11,10 @@ from physics.errors import ConfigError
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate
 from physics.identification.poles import StabilisationDiagram
-from physics.io import MeasuredFRF, ModalData, prepare_measured
+from physics.io import FRF, MeasuredFRF, ModalData, format_of, prepare_measured, read_frf
+from physics.io.timedata import read_uff_time_records
+from physics.io.uff58 import UffFile, read_uff58
+from physics.time_records import estimate_from_records
 
 __all__ = ["Identification", "identify_file", "identify_frf", "identify_frfs", "read_measured_frf",
            "reconstruction_error_db"]
@@ -173,11 +176,6 @@ def identify_file(path, method="lscf", band_hz=None, n_modes=None, max_order=40)
 def read_measured_frf(path) -> MeasuredFRF:
     """FRFs of a file: read as FRFs, or estimated from the time records of a universal file without FRF records
     (with a warning saying how); a universal file is parsed once."""
-    from physics.io import FRF, format_of, read_frf
-    from physics.io.timedata import read_uff_time_records
-    from physics.io.uff58 import UffFile, read_uff58
-    from physics.time_records import estimate_from_records
-
     if format_of(path, FRF).name != "uff":
         return read_frf(path)
     uf = UffFile(path)

@@ -12,7 +12,7 @@ from physics.errors import ConfigError, FileFormatError, ShapeError
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.poles import StabilisationDiagram
-from physics.io import TIME, ModalData, format_of, read
+from physics.io import FRF, ModalData, TIME, format_of, read
 from physics.io.timedata import TimeRecords
 from physics.modal import eigenvalues_from_modal
 
@@ -56,8 +56,6 @@ def holds_response_records(path) -> bool:
     """Whether a file holds time records rather than FRFs: a universal file with time records and no FRF, an
     ``.npz`` with a ``signals`` field, or a CSV whose header starts with ``time_s``."""
     from pathlib import Path
-
-    from physics.io import FRF
 
     if not Path(path).is_file():
         return False                                  # the FRF reader names what is missing

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from physics.errors import FileFormatError, ShapeError
+from physics.io.types import parse_dof
 
 __all__ = ["DofMap", "NodeGeometry", "QUARTER_POINT_CONVENTION", "dof_positions_text", "geometry_from_uff_sets",
            "map_frf_dofs", "map_measured_dofs", "match_dofs_by_position", "measured_positions", "positions_along_beam"]
@@ -165,8 +166,6 @@ def measured_positions(dofs, geometry: NodeGeometry | None = None, length_m: flo
     positions_m : ndarray, shape (n_dofs,), or None
     source : str
     """
-    from physics.io.types import parse_dof
-
     nodes = [parse_dof(d)[0] for d in dofs]
     if geometry is not None:
         return positions_along_beam(geometry, nodes), f"node geometry of the file ({geometry.source})"
@@ -294,8 +293,6 @@ def map_measured_dofs(dofs, model_x_m, model_dofs, *, length_m: float, n_element
         A DOF without coordinates, a count that differs from the beam file's,
         a position not at a model DOF (``off_grid="refuse"``), or two DOFs at one model DOF.
     """
-    from physics.io.types import parse_dof
-
     dofs = tuple(str(d) for d in dofs)
     try:
         nodes = np.array([parse_dof(d)[0] for d in dofs], int)

@@ -9,6 +9,7 @@ import numpy as np
 from physics.errors import FileFormatError
 from physics.io.types import MAX_MAGNITUDE, dof_label
 from physics.io.units import parse_force_unit, parse_response_unit
+from physics.io.uff58 import _UFF_FUNCTION_NAMES, UffFile
 
 __all__ = ["QUANTITIES", "TimeRecords", "read_uff_time_records"]
 
@@ -67,8 +68,6 @@ def read_uff_time_records(path) -> TimeRecords:
     FileFormatError
         No time record, an unknown quantity, unequal sampling, NaN values.
     """
-    from physics.io.uff58 import _UFF_FUNCTION_NAMES, UffFile
-
     uf = path if isinstance(path, UffFile) else UffFile(path)
     path = uf.path
     system, _ = uf.context
