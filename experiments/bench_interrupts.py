@@ -28,7 +28,7 @@ import tempfile
 import time
 from pathlib import Path
 
-__all__ = ["CASES", "main", "run_case", "run_matrix", "tree"]
+__all__ = ["CASES", "default_sigint", "main", "run_case", "run_matrix", "tree"]
 
 CONFIG = "[output]\nshard_size = 3\n[measurement]\nlines = 32\n"
 N = 36  # 12 shards
@@ -62,10 +62,17 @@ def _argv(out: Path, config: Path) -> list[str]:
             "--out", str(out)]
 
 
+def default_sigint():
+    """SIGINT back to its default action in a child about to run a command."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _spawn(args, driver=None):
+    """The command in a child whose SIGINT has its default action, as in a terminal's foreground job (a shell
+    without job control starts background jobs with SIGINT ignored, and Python then keeps ignoring it)."""
     code = driver or "import sys; from experiments.cli import main; sys.exit(main(sys.argv[1:]))"
     return subprocess.Popen([sys.executable, "-c", code, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
+                            text=True, preexec_fn=default_sigint)
 
 
 def tree(root: Path) -> dict:

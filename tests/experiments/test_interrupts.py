@@ -10,6 +10,7 @@ import time
 
 import pytest
 
+from experiments.bench_interrupts import default_sigint
 from experiments.cli import main, one_line
 from experiments.jsonable import to_jsonable
 
@@ -30,7 +31,7 @@ def test_sigint_and_sigterm_end_generate_in_one_line_and_resume_completes_it(tmp
     for sig, code in ((signal.SIGINT, 130), (signal.SIGTERM, 143)):
         out = tmp_path / sig.name
         proc = subprocess.Popen([sys.executable, "-m", "experiments.cli", "generate", *args, "--out", str(out)],
-                                env=env, stderr=subprocess.PIPE, text=True)
+                                env=env, stderr=subprocess.PIPE, text=True, preexec_fn=default_sigint)
         deadline = time.time() + 120
         while not list((out / "shards").glob("shard-*")) and time.time() < deadline and proc.poll() is None:
             time.sleep(0.05)

@@ -49,8 +49,13 @@ def test_any_command_ends_with_one_line_on_a_signal(monkeypatch, capsys, tmp_pat
         os.kill(os.getpid(), getattr(signal, sig))
         raise AssertionError("the signal did not stop the command")
 
+    # Python's Ctrl-C handler, also when the suite runs with SIGINT ignored (a background job of a plain shell)
+    previous_sigint = signal.signal(signal.SIGINT, signal.default_int_handler)
     before = signal.getsignal(signal.SIGTERM)
     monkeypatch.setattr(experiments.cmd_inspect, "inspect_dataset", lambda *a: run(a))
-    assert main(["inspect", str(tmp_path)]) == code
+    try:
+        assert main(["inspect", str(tmp_path)]) == code
+    finally:
+        signal.signal(signal.SIGINT, previous_sigint)
     assert capsys.readouterr().err == f"beam-damage inspect: {line}\n"
     assert signal.getsignal(signal.SIGTERM) is before  # the handler is the command's only
