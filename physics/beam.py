@@ -25,6 +25,9 @@ otherwise the keys marked * are required. Unknown keys are errors::
     mass_per_length_kg_m = 0.12955   # * mass per length ...
     # mass_kg = 0.15792              #   ... or the specimen mass over total_length_m
     measured_x_m = [0.152375, 0.30475, 0.457125, 0.6095]   # measured translations (default: quarter points)
+    drive_x_m = 0.152375             # the reference DOF, where the force acts (default: the first sensor)
+    band_hz = [9.549, 763.9]         # band measured (default: physics.layout)
+    zones_x_m = [0.2, 0.4]           # interior edges of the location zones (default: between the sensors)
 
     [effects.shear_deformation]      # any of physics.effects.EFFECTS, each with its parameters
     kGA_N = 2.0e4
@@ -93,6 +96,12 @@ class Beam:
         Young's modulus of the core (Pa).
     effects : mapping
         ``{effect name: {parameter: value}}`` (read-only), see :mod:`physics.effects`.
+    drive_x_m : float or None
+        Position of the reference DOF (m); None: the first sensor.
+    band_hz : tuple (lo, hi) or None
+        Band measured (Hz); None: the default of :mod:`physics.layout`.
+    zones_x_m : tuple of float or None
+        Interior edges of the location zones (m); None: the default of :mod:`physics.layout`.
     measured_x_given : bool
         True when a beam file gave ``measured_x_m`` (then the commands place the
         measured DOFs of a file without node geometry there, not by the
@@ -112,6 +121,9 @@ class Beam:
     face_thickness_m: float | None = None
     core_modulus_pa: float | None = None
     effects: MappingProxyType = field(default_factory=dict)
+    drive_x_m: float | None = None
+    band_hz: tuple | None = None
+    zones_x_m: tuple | None = None
     measured_x_given: bool = field(default=False, compare=False)
 
     def __post_init__(self):
@@ -208,7 +220,11 @@ def preset_beam(name: str) -> Beam:
 
 _NUMBER_KEYS = ("length_m", "total_length_m", "width_m", "thickness_m", "face_thickness_m", "core_modulus_pa",
                 "EI_Nm2", "face_modulus_pa", "mass_per_length_kg_m", "mass_kg")
-_KEYS = ("preset", "name", "bc", "n_elements", "measured_x_m", "effects") + _NUMBER_KEYS
+_KEYS = ("preset", "name", "bc", "n_elements", "measured_x_m", "drive_x_m", "band_hz", "zones_x_m",
+         "effects") + _NUMBER_KEYS
+
+#: Supports that leave a beam free to move as a mechanism (refused with that reason).
+MECHANISMS = ("pinned-free", "free-pinned", "free-guided", "guided-free")
 
 
 def beam_from_dict(obj: dict, source: str = "beam") -> Beam:
@@ -227,6 +243,7 @@ def beam_from_dict(obj: dict, source: str = "beam") -> Beam:
     if "measured_x_m" in obj:
         vals["measured_x_m"] = _measured_positions(obj["measured_x_m"], vals["length_m"], source)
         vals["measured_x_given"] = True
+    _read_test_keys(obj, vals, source)
     _resolve_rigidity(obj, vals, source)
     _resolve_mass(obj, vals, source)
     if "effects" in obj:
@@ -268,6 +285,9 @@ def _read_scalars(obj: dict, vals: dict, source: str) -> None:
         vals["name"] = obj["name"]
     vals.setdefault("name", Path(source).stem)
     if "bc" in obj:
+        if obj["bc"] in MECHANISMS:
+            raise ConfigError(f"{source}: 'bc' = {obj['bc']!r} leaves the beam a mechanism (it moves without "
+                              f"bending); expected one of {list(BOUNDARY_CONDITIONS)}")
         if obj["bc"] not in BOUNDARY_CONDITIONS:
             raise ConfigError(f"{source}: 'bc' = {obj['bc']!r} unknown; expected one of {list(BOUNDARY_CONDITIONS)}")
         vals["bc"] = obj["bc"]
@@ -286,6 +306,31 @@ def _measured_positions(xs, length_m: float, source: str) -> tuple:
     if any(not 0 <= x <= length_m for x in xs):
         raise ConfigError(f"{source}: 'measured_x_m' positions must lie in [0, length_m = {length_m}]")
     return tuple(float(x) for x in xs)
+
+
+def _read_test_keys(obj: dict, vals: dict, source: str) -> None:
+    """``drive_x_m`` (a position on the beam), ``band_hz`` ([lo, hi], 0 <= lo < hi) and ``zones_x_m`` (interior
+    edges, checked with the modes by :func:`physics.layout.layout_of`) into ``vals``."""
+    def number(v):
+        return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+    L = vals["length_m"]
+    if "drive_x_m" in obj:
+        v = obj["drive_x_m"]
+        if not (number(v) and 0 <= v <= L):
+            raise ConfigError(f"{source}: 'drive_x_m' must be a position in [0, length_m = {L}] m, got {v!r}")
+        vals["drive_x_m"] = float(v)
+    if "band_hz" in obj:
+        v = obj["band_hz"]
+        if not (isinstance(v, list) and len(v) == 2 and all(map(number, v)) and 0 <= v[0] < v[1]):
+            raise ConfigError(f"{source}: 'band_hz' must be [lo, hi] in Hz with 0 <= lo < hi, got {v!r}")
+        vals["band_hz"] = (float(v[0]), float(v[1]))
+    if "zones_x_m" in obj:
+        v = obj["zones_x_m"]
+        if not (isinstance(v, list) and all(map(number, v)) and all(0 < x < L for x in v)):
+            raise ConfigError(f"{source}: 'zones_x_m' must be a list of positions strictly inside (0, {L}) m, "
+                              f"got {v!r}")
+        vals["zones_x_m"] = tuple(float(x) for x in v)
 
 
 def _resolve_rigidity(obj: dict, vals: dict, source: str) -> None:
