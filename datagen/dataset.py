@@ -186,7 +186,8 @@ class Dataset:
             return self._gather([name], rows)[name]
         if name in ("eigenvalues_true", "eigenvectors_true"):
             src = "truth_poles" if name == "eigenvalues_true" else "truth_shapes"
-            return self._gather([src], rows)[src][..., :4]
+            used = self.manifest.get("layout", {}).get("modes_idx", [0, 1, 2, 3])
+            return self._gather([src], rows)[src][..., used]
         if name in ("frf_measured", "frf_updated"):
             return self.frf(name[4:], rows)
         raise FileFormatError(f"unknown array {name!r}; expected one of {sorted(ARRAYS) + sorted(DERIVED)}")
@@ -210,7 +211,9 @@ class Dataset:
                 return H
             out[...] = H
             return out
-        return synthesise(kind, self._gather(SOURCES[kind], rows), self.omega_rad_s, self.frf_dtype, out, lines)
+        arrays = self._gather(SOURCES[kind], rows)
+        arrays["drive_row"] = self.manifest.get("schema", {}).get("frf_reference_row", 0)
+        return synthesise(kind, arrays, self.omega_rad_s, self.frf_dtype, out, lines)
 
     def verify_or_raise(self) -> None:
         """Check every file's sha256 checksum (shards, omega_rad_s.npy, samples.parquet); damage raises one line."""

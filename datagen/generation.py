@@ -122,6 +122,24 @@ def _schema() -> dict:
             for name, (axes, desc) in {**ARRAYS, **DERIVED}.items()}
 
 
+def measured_dof_names(setup) -> list:
+    """Names of the measured DOFs: the thesis's nodes 2..5 of its 4-element grid, else the truth mesh's nodes."""
+    if setup.test.thesis:
+        return ["2:y", "3:y", "4:y", "5:y"]
+    n = setup.n_elements
+    return [f"{1 + int(round(x / setup.length_m * n))}:y" for x in sorted(setup.test.sensors_x_m)]
+
+
+def update_statement(setup) -> str:
+    """What the Lancaster/Pilkey update of a dataset uses, in one sentence."""
+    S, m = setup.n_meas, setup.n_modes
+    if not setup.n_update:
+        return (f"no updated model: the band holds {m} mode(s) the sensors see and there are {S} sensors; "
+                "Lancaster/Pilkey needs at least as many modes as DOFs (the 'updated' route is unavailable)")
+    extra = f" (of the {m} measured)" if m > S else ""
+    return f"Lancaster/Pilkey on the {S} lowest modes{extra} over the {S} sensors"
+
+
 def write_omega(root, cfg: dict) -> bool:
     """Write ``omega_rad_s.npy`` as the config defines it unless the file already holds exactly that.
 
@@ -220,13 +238,18 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
     root.mkdir(parents=True, exist_ok=True)
     setup = get_setup(cfg)
     write_omega(root, cfg)
+    dofs = measured_dof_names(setup)
     m = {"format": DATASET_FORMAT, "identity": dataset_identity(cfg, seed), "package_version": package_version(),
          "config": cfg, "seed": seed, "n_requested": n,
          "shard_size": cfg["output"]["shard_size"], "n_shards": len(shard_plan(n, cfg["output"]["shard_size"])),
          "complete": False, "shards": [], "schema": {"arrays": _schema(), "states": list(STATES),
                                                      "columns": column_units(setup.damage),
-                                                     "measured_dofs": ["2:y", "3:y", "4:y", "5:y"],
-                                                     "frf_reference_dof": "2:y", "frf_kind": "receptance"},
+                                                     "measured_dofs": dofs,
+                                                     "frf_reference_dof": dofs[setup.drive_row],
+                                                     "frf_reference_row": setup.drive_row, "frf_kind": "receptance"},
+         "layout": {**setup.test.to_dict(), "modes_idx": setup.modes_idx.tolist(),
+                    "measured_x_m": sorted(setup.test.sensors_x_m), "truth_elements": setup.n_elements,
+                    "updating": update_statement(setup)},
          "section_layout": vars(setup.layout),
          "preset": {**vars(setup.preset), "mass_per_length_kg_m": setup.preset.mass_per_length_kg_m}}
     if rebuild:  # the shards of this config and seed that verify are adopted, the rest regenerated

@@ -11,12 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from datagen.pipeline import N_MEAS, BatchInputs, Setup, measure_modes, projected_modes, damage_frequency_drop, \
+from datagen.pipeline import BatchInputs, Setup, measure_modes, projected_modes, damage_frequency_drop, \
     truth_matrices, update_models
 from datagen.synth import add_noise
 from physics.frf import poles_and_residues, receptance, receptance_modal, receptance_state_space
 from physics.modal import underdamped_modes, undamped_modes
-from physics.updating import analyst_mass
 
 __all__ = ["simulate_naive"]
 
@@ -38,6 +37,9 @@ def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
     ``frf_updated`` (B, 2, 4, F) complex128.
     """
     w = setup.omega_rad_s
+    S, drive, used = setup.n_meas, setup.drive_row, setup.modes_idx
+    if not setup.n_update:
+        raise ValueError("simulate_naive needs an updated model: as many modes as sensors or more")
     results = []
     for i in range(len(inp)):
         s = inp.take(slice(i, i + 1))
@@ -57,23 +59,23 @@ def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
                 cm = underdamped_modes(Ms[st], C, K[0, st], setup.p)
                 lam_l.append(cm.eigenvalues)
                 psi_l.append(cm.eigenvectors[setup.meas])
-                H_l.append(receptance_state_space(Ms[st], C, K[0, st], w, setup.meas, [setup.meas[0]])[:, 0, :])
+                H_l.append(receptance_state_space(Ms[st], C, K[0, st], w, setup.meas, [setup.meas[drive]])[:, 0, :])
             lam, psi, H = np.stack(lam_l)[None], np.stack(psi_l)[None], np.stack(H_l)[None]
             w2 = np.stack([undamped_modes(Ms[st], K[0, st])[0][:setup.p] ** 2 for st in range(2)])[None]
         elif modes == "projection":
             lam, psi, w2 = projected_modes(setup, s, M, Mu, K, dC)
-            H = receptance_modal(lam, psi, w, np.arange(N_MEAS), [0])[..., 0, :]
+            H = receptance_modal(lam, psi, w, np.arange(S), [drive])[..., 0, :]
         else:
             raise ValueError(f"modes must be 'full' or 'projection', got {modes!r}")
-        lam_m, psi_m = measure_modes(setup, s, lam[..., :N_MEAS], psi[..., :N_MEAS])
-        Ma = analyst_mass(s.mass_per_length_kg_m, setup.length_m, setup.cfg["updating"]["mass_model"])
-        up = update_models(setup, Ma, lam_m, psi_m, batched=False)
-        pr = poles_and_residues(Ma[:, None], up["C"], up["K"], np.arange(N_MEAS), [0])
+        lam_m, psi_m = measure_modes(setup, s, lam[..., used], psi[..., used])
+        Ma = setup.analyst_mass(s.mass_per_length_kg_m)
+        up = update_models(setup, Ma, lam_m[..., :S], psi_m[..., :S], batched=False)
+        pr = poles_and_residues(Ma[:, None], up["C"], up["K"], np.arange(S), [drive])
         poles, res = pr.eigenvalues, pr.residues[..., 0, :]
         with np.errstate(all="ignore"):
-            Hu = np.stack([receptance(Ma[0], up["C"][0, st], up["K"][0, st], w, np.arange(N_MEAS), [0])[:, 0, :]
+            Hu = np.stack([receptance(Ma[0], up["C"][0, st], up["K"][0, st], w, np.arange(S), [drive])[:, 0, :]
                            if np.all(np.isfinite(up["C"][0, st])) and np.all(np.isfinite(up["K"][0, st]))
-                           else np.full((N_MEAS, w.size), np.nan + 0j) for st in range(2)])[None]
+                           else np.full((S, w.size), np.nan + 0j) for st in range(2)])[None]
         results.append({
             "truth_poles": lam, "truth_shapes": psi, "eigenvalues_measured": lam_m, "eigenvectors_measured": psi_m,
             "M_updated": Ma, "C_updated": up["C"], "K_updated": up["K"], "updated_poles": poles,

@@ -39,7 +39,7 @@ full state-space solution is checked in ``tests/datagen/test_pipeline.py``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 import json
 
@@ -53,10 +53,11 @@ from datagen.synth import measured_peak
 from physics.errors import ConfigError
 from physics.properties import beam_preset
 from datagen.truth_beam import as_preset, load_truth_beam, point_effects, shear_parameters, unit_elements
-from physics.fem import assemble, dof_names, kept_dofs
+from physics.fem import assemble, dof_names
 from physics.frf import poles_and_residues
+from physics.layout import RIGID_BODY_MODES, Layout, layout_of
 from physics.modal import eigenvalues_from_modal, modal_parameters, undamped_modes
-from physics.updating import analyst_mass, pilkey
+from physics.updating import analyst_mass, pilkey, reduced_mass
 
 __all__ = ["BatchInputs", "CHUNK", "LABEL_FIELDS", "N_MEAS", "Setup", "build_setup", "draw_batch", "get_setup",
            "measure_modes", "projected_modes", "simulate_batch", "simulate_chunk", "simulate_shard",
@@ -77,13 +78,13 @@ class Setup:
     layout : SectionLayout          face/core layout matching the preset's EI (eq. 4.1)
     n_elements : int                truth mesh
     keep : ndarray (n,)             global DOF indices kept after the boundary condition
-    spring : bool                   root rotation held by a spring (kept as DOF ``spring_dof`` of the model)
+    spring : bool                   clamp rotations held by the drawn spring (DOFs ``spring_dofs`` of the model)
     K0, M0 : ndarray (n, n)         truth matrices for unit EI and unit mass per length
-    meas : ndarray (4,)             model indices of the measured translations
+    meas : ndarray (S,) or (S, n)   model indices of the measured translations (sensors on nodes), or the rows
+                                    interpolating them from the model's DOFs (sensors between nodes)
     phi0 : ndarray (n, p)           nominal modes (unit mass per length), subspace start
     omega_rad_s : ndarray (F,)      FRF lines
     zeta : ndarray (p,)             target modal damping ratios of modes 1..p
-    spring_dof : int                model index of the root rotation (with ``spring``)
     root_spring_relative : tuple    ``(lo, hi)`` band of ``k_r L / EI`` drawn per specimen, or ``()``
     M_added : ndarray (n, n) or None   a beam file's point mass (kg ...), both states
     C_local : ndarray (n, n) or None   a beam file's dashpot (N s/m ...), both states
@@ -91,7 +92,14 @@ class Setup:
                                     ``K0``, ``M0`` hold its centre; ``lo == hi``: every specimen has those matrices
     rho_i_over_m_m2 : float         rotary inertia per unit mass per length (m^2) of Timoshenko elements
     timoshenko : bool               Timoshenko/Rayleigh elements (else Euler-Bernoulli, eqs. 3.8, 3.9)
-    k_y_unit : float                a beam file's translational root spring for unit EI (1/m^3), 0 without
+    K0_springs : ndarray (n, n)     fixed springs for unit EI in ``K0`` (a beam file's translational root spring,
+                                    a free-free beam's suspension), zeros without
+    test : Layout                   the test (:mod:`physics.layout`): supports, sensors, reference DOF, band, modes
+    modes_idx : ndarray (m,)        projected modes used (indices into the ``p`` modes: rigid-body modes and modes
+                                    no sensor sees left out)
+    drive_row : int                 row of the reference DOF among the measured DOFs
+    spring_dofs : ndarray (k,)      model indices of the support rotations held by the drawn spring (``spring``)
+    analyst_unit_mass : ndarray (S, S) or None   the analyst's mass for unit mass per length (None: the thesis's)
     """
 
     cfg: dict
@@ -106,14 +114,51 @@ class Setup:
     phi0: np.ndarray
     omega_rad_s: np.ndarray
     zeta: np.ndarray
-    spring_dof: int = 0
     root_spring_relative: tuple = ()
     M_added: np.ndarray | None = None
     C_local: np.ndarray | None = None
     shear_band: tuple = (0.0, 0.0)
     rho_i_over_m_m2: float = 0.0
     timoshenko: bool = False
-    k_y_unit: float = 0.0
+    K0_springs: np.ndarray | float = 0.0
+    test: Layout | None = None
+    modes_idx: np.ndarray = field(default_factory=lambda: np.arange(N_MEAS))
+    drive_row: int = 0
+    spring_dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    analyst_unit_mass: np.ndarray | None = None
+
+    def analyst_mass(self, mass_per_length_kg_m):
+        """The analyst's mass over the sensors (B, S, S) (kg): the thesis's model (``updating.mass_model`` of the
+        4-element cantilever), else the nominal truth mesh reduced to the sensors the same way (IIRS or lumped),
+        for unit mass per length, times the specimen's."""
+        mpl = np.asarray(mass_per_length_kg_m, float)
+        if self.analyst_unit_mass is None:
+            return analyst_mass(mpl, self.length_m, self.cfg["updating"]["mass_model"])
+        return mpl[..., None, None] * self.analyst_unit_mass
+
+    @property
+    def n_meas(self) -> int:
+        """Measured translations (sensors)."""
+        return self.meas.shape[0]
+
+    @property
+    def n_modes(self) -> int:
+        """Modes measured (the modes of the band the sensors see)."""
+        return self.modes_idx.size
+
+    @property
+    def n_update(self) -> int:
+        """Modes the Lancaster/Pilkey update uses: as many as sensors (the lowest of the modes measured), or 0 when
+        the band holds fewer modes than there are sensors (then no updated model)."""
+        return self.n_meas if self.n_modes >= self.n_meas else 0
+
+    def kept(self, A):
+        """The kept-DOF block of full-mesh matrices ``A`` (..., 2N, 2N): a view when the supports remove the first
+        DOFs only (a clamp at ``x = 0``), else a copy."""
+        k = self.keep
+        if k[-1] - k[0] + 1 == k.size:
+            return A[..., k[0]:k[-1] + 1, k[0]:k[-1] + 1]
+        return A[..., k[:, None], k]
 
     @property
     def length_m(self) -> float:
@@ -145,8 +190,11 @@ class Setup:
         K0, M0 : ndarray, shape (n, n) or (B, n, n)   on the kept DOFs (a translational root spring included)
         shear_phi : ndarray, shape () or (B,)         ``12 EI / (kGA l^2)`` of the elements
         """
-        return _unit_matrices(shear_flexibility, self.rho_i_over_m_m2, self.length_m, self.n_elements,
-                              self.timoshenko, self.keep[0], self.k_y_unit)
+        K0, M0, phi = _unit_matrices(shear_flexibility, self.rho_i_over_m_m2, self.length_m, self.n_elements,
+                                     self.timoshenko)
+        K0, M0 = self.kept(K0), self.kept(M0)
+        K0 += self.K0_springs
+        return K0, M0, phi
 
     @property
     def day_to_day(self) -> bool:
@@ -155,66 +203,154 @@ class Setup:
         return any(v != 0.0 for k in ("temperature_stiffness_change", "root_spring_change") for v in sp[k])
 
 
-def _unit_matrices(shear_flexibility, rho_i_over_m_m2, length_m, n_elements, timoshenko, first_kept, k_y_unit):
-    """:meth:`Setup.unit_matrices` from its parameters (``first_kept``: the first DOF the clamp keeps)."""
+def _unit_matrices(shear_flexibility, rho_i_over_m_m2, length_m, n_elements, timoshenko):
+    """Full-mesh stiffness for unit EI and mass for unit mass per length, and the element shear ratio."""
     ke, me, phi = unit_elements(shear_flexibility, rho_i_over_m_m2, length_m, n_elements, timoshenko)
-    k0 = first_kept  # the clamp removes the first DOFs only: the kept block is a slice
-    K0 = assemble(np.broadcast_to(ke[..., None, :, :], ke.shape[:-2] + (n_elements, 4, 4)))[..., k0:, k0:]
-    M0 = assemble(np.broadcast_to(me[..., None, :, :], me.shape[:-2] + (n_elements, 4, 4)))[..., k0:, k0:]
-    K0[..., 0, 0] += k_y_unit
+    K0 = assemble(np.broadcast_to(ke[..., None, :, :], ke.shape[:-2] + (n_elements, 4, 4)))
+    M0 = assemble(np.broadcast_to(me[..., None, :, :], me.shape[:-2] + (n_elements, 4, 4)))
     return K0, M0, phi
+
+
+def truth_beam_of(cfg: dict):
+    """The beam of a configuration: the beam file of config key ``beam``, or the preset as a beam."""
+    from physics.beam import preset_beam
+
+    return load_truth_beam(cfg["beam"]) if cfg["beam"] else preset_beam(cfg["preset"])
+
+
+#: Largest truth mesh (elements) aligned with the sensors.
+MAX_TRUTH_ELEMENTS = 400
+
+
+def aligned_elements(test: Layout, n_min: int) -> tuple[int, bool]:
+    """Elements of the uniform truth mesh: the fewest in ``[n_min, 3 n_min]`` with a node at every sensor (to
+    1e-6 L), else ``n_min``; and whether the sensors sit on nodes (else their translations are interpolated by the
+    elements' cubic shape functions)."""
+    x = np.asarray(test.sensors_x_m) / test.length_m
+    n = np.arange(n_min, min(3 * n_min, MAX_TRUTH_ELEMENTS) + 1)
+    off = np.abs(x[None, :] * n[:, None] - np.round(x[None, :] * n[:, None])).max(axis=1) / n
+    ok = np.flatnonzero(off <= 1e-6)
+    return (int(n[ok[0]]), True) if ok.size else (int(n_min), False)
+
+
+def sensor_rows(x_m, node_x_m, keep) -> np.ndarray:
+    """Interpolation rows (S, n) of the translations at ``x_m`` over the kept DOFs (Hermite cubics)."""
+    from physics.effects import hermite_row
+
+    return np.array([hermite_row(float(x), node_x_m)[0][keep] for x in x_m])
+
+
+def analyst_unit_mass(test: Layout, mass_model: str, per_span: int = 4) -> np.ndarray:
+    """The analyst's mass over the sensors for unit mass and unit EI (S, S): an Euler-Bernoulli model with nodes at
+    the ends and the sensors, ``per_span`` elements between neighbours, reduced to the sensors' translations
+    (:func:`physics.updating.reduced_mass`), the supports as the test's (a free-free model on the suspension of
+    :func:`suspension_unit_stiffness`)."""
+    from physics.fem import element_mass, element_stiffness
+
+    L = test.length_m
+    xs = np.sort(np.asarray(test.sensors_x_m))
+    knots = np.unique(np.concatenate([[0.0, L], xs]))
+    nodes = np.concatenate([np.linspace(a, b, per_span + 1)[:-1] for a, b in zip(knots[:-1], knots[1:])] + [[L]])
+    le = np.diff(nodes)
+    K = assemble(np.stack([element_stiffness(1.0, h) for h in le]))
+    M = assemble(np.stack([element_mass(1.0, h) for h in le]))
+    last = nodes.size
+    removed = {"clamped-free": ["1:y", "1:rz"], "free-free": [], "pinned-pinned": ["1:y", f"{last}:y"],
+               "clamped-clamped": ["1:y", "1:rz", f"{last}:y", f"{last}:rz"]}[test.bc]
+    names = dof_names(last)
+    if test.bc == "free-free":
+        k_s = 0.5 * L * (0.05 * 22.3733 / L**2) ** 2
+        for d in ("1:y", f"{last}:y"):
+            K[names.index(d), names.index(d)] += k_s
+    keep = [i for i, d in enumerate(names) if d not in removed]
+    kept = [names[i] for i in keep]
+    masters = [kept.index(f"{1 + int(np.argmin(np.abs(nodes - x)))}:y") for x in xs]
+    return reduced_mass(M[np.ix_(keep, keep)], K[np.ix_(keep, keep)], masters, mass_model)
+
+
+def suspension_unit_stiffness(beam, bounce_fraction: float = 0.05) -> float:
+    """Default suspension of a free-free beam for unit EI (1/m^3), one spring at each end: the bounce mode at
+    ``bounce_fraction`` of the first bending frequency (``omega_1 = 22.373 sqrt(EI / (m L^4))``)."""
+    L = beam.length_m
+    omega1_unit = 22.3733 / L**2 * np.sqrt(1.0 / beam.mass_per_length_kg_m)   # for EI = 1
+    return 0.5 * beam.mass_per_length_kg_m * L * (bounce_fraction * omega1_unit) ** 2
 
 
 def build_setup(cfg: dict) -> Setup:
     """Precompute the nominal truth matrices, measured DOFs, start basis and FRF grid."""
-    beam = load_truth_beam(cfg["beam"]) if cfg["beam"] else None
-    preset = beam_preset(cfg["preset"]) if beam is None else as_preset(beam)
+    beam = truth_beam_of(cfg)
+    test = layout_of(beam, "config key 'beam'" if cfg["beam"] else f"preset {cfg['preset']!r}")
+    if test.drive_sensor is None:
+        raise ConfigError(f"config key 'beam': generate needs a sensor at the reference DOF drive_x_m = "
+                          f"{test.drive_x_m:g} m (a driving-point FRF); the sensors are at {list(test.sensors_x_m)}")
+    preset = as_preset(beam) if cfg["beam"] else beam_preset(cfg["preset"])
     sec = dict(cfg["section"])
-    if beam is not None:  # the beam file's section, where it gives one
+    if cfg["beam"]:  # the beam file's section, where it gives one
         sec.update({k: getattr(beam, k) for k in ("face_thickness_m", "core_modulus_pa")
                     if getattr(beam, k) is not None})
-    layout = SectionLayout.matching(preset.EI_Nm2, preset.width_m, preset.thickness_m, sec["face_thickness_m"],
-                                    sec["core_modulus_pa"])
+    section = SectionLayout.matching(preset.EI_Nm2, preset.width_m, preset.thickness_m, sec["face_thickness_m"],
+                                 sec["core_modulus_pa"])
     damage_model(cfg["damage"]["kind"]).check_beam(cfg["damage"], preset, sec)
-    n_el = cfg["mesh"]["truth_elements"]
-    fx = point_effects(beam, n_el)
-    band = tuple(cfg["specimen"]["root_spring_relative"])
+    n_rigid = RIGID_BODY_MODES[test.bc]
+    n_el, on_nodes = aligned_elements(test, max(cfg["mesh"]["truth_elements"], 4 * (n_rigid + max(test.modes) + 1)))
+    truth = beam if cfg["beam"] else None
+    fx = point_effects(truth, n_el)
+    band = tuple(cfg["specimen"]["root_spring_relative"]) if test.bc in ("clamped-free", "clamped-clamped") else ()
     if fx["k_theta_Nm_rad"] is not None:  # the calibrated root spring is the centre of the specimen band
         centre = fx["k_theta_Nm_rad"] * preset.length_m / preset.EI_Nm2
         half = np.sqrt(band[1] / band[0]) if band else 1.0
         band = (centre / half, centre * half)
     spring = bool(band)
-    if not spring and any(cfg["specimen"]["root_spring_change"]):
-        raise ConfigError("config key 'specimen.root_spring_change' needs a root spring "
+    if not spring and any(cfg["specimen"]["root_spring_change"]) and test.bc in ("clamped-free", "clamped-clamped"):
+        raise ConfigError("config key 'specimen.root_spring_change' needs a clamp spring "
                           "('specimen.root_spring_relative' is empty: rigid clamp)")
-    shear_file, rho_ratio, timoshenko = shear_parameters(beam, preset.thickness_m)
+    shear_file, rho_ratio, timoshenko = shear_parameters(truth, preset.thickness_m)
     shear_band = tuple(cfg["specimen"]["shear_flexibility"])
     if shear_file > 0:  # the file's shear flexibility is the centre of the specimen band (its width kept)
         half = (shear_band[1] - shear_band[0]) / 2
         shear_band = (max(shear_file - half, 0.0), shear_file + half)
     timoshenko = timoshenko or shear_band[1] > 0
+    names = dof_names(n_el + 1)
+    last = n_el + 1
+    removed = {"clamped-free": ["1:y", "1:rz"], "free-free": [], "pinned-pinned": ["1:y", f"{last}:y"],
+               "clamped-clamped": ["1:y", "1:rz", f"{last}:y", f"{last}:rz"]}[test.bc]
+    clamp_rotations = [d for d in ("1:rz", f"{last}:rz") if d in removed]
+    if spring:
+        removed = [d for d in removed if d not in clamp_rotations]
     if fx["k_y_N_m"] is not None:  # translational root spring: the root translation stays a DOF
-        names = dof_names(n_el + 1)
-        keep = np.arange(len(names))
-    else:
-        keep, names = kept_dofs(n_el + 1, "clamped-free", root_spring=spring)
-    assert np.array_equal(keep, np.arange(keep[0], 2 * (n_el + 1)))  # unit_matrices slices from keep[0]
-    k_y_unit = 0.0 if fx["k_y_N_m"] is None else fx["k_y_N_m"] / preset.EI_Nm2
-    K_beam, M0, _ = _unit_matrices(0.5 * (shear_band[0] + shear_band[1]), rho_ratio, preset.length_m, n_el,
-                                   timoshenko, keep[0], 0.0)  # the beam elements alone
-    K0 = K_beam.copy()  # plus the clamp springs (Rayleigh damping acts on the beam, not on them)
-    K0[0, 0] += k_y_unit
+        removed = [d for d in removed if d != "1:y"]
+    keep = np.array([i for i, d in enumerate(names) if d not in removed])
+    kept_names = [names[i] for i in keep]
+    springs = {}                                          # model index -> unit-EI stiffness of fixed springs
+    if fx["k_y_N_m"] is not None:
+        springs[kept_names.index("1:y")] = fx["k_y_N_m"] / preset.EI_Nm2
+    if test.bc == "free-free":                          # the suspension (rigid-body modes left out)
+        for d in ("1:y", f"{last}:y"):
+            springs[kept_names.index(d)] = suspension_unit_stiffness(beam)
+    K_full, M_full, _ = _unit_matrices(0.5 * (shear_band[0] + shear_band[1]), rho_ratio, preset.length_m, n_el,
+                                       timoshenko)  # the beam elements alone
     sel = np.ix_(keep, keep)
+    K_beam, M0 = K_full[sel], M_full[sel]
+    K_springs = np.zeros_like(K_beam)
+    for r, k in springs.items():
+        K_springs[r, r] = k
+    K0 = K_beam + K_springs  # plus the fixed springs (Rayleigh damping acts on the beam, not on them)
     M_added = None if fx["M_added"] is None else fx["M_added"][sel]
     C_local = None if fx["C_local"] is None else fx["C_local"][sel]
-    spring_dof = names.index("1:rz") if spring else 0
-    step = n_el // 4
-    meas = np.array([names.index(f"{1 + step * q}:y") for q in range(1, 5)])
-    p = cfg["solver"]["projection_modes"]
+    spring_dofs = np.array([kept_names.index(d) for d in clamp_rotations] if spring else [], int)
+    order = np.argsort(test.sensors_x_m, kind="stable")
+    xs = np.asarray(test.sensors_x_m)[order]
+    if on_nodes:
+        meas = np.array([kept_names.index(f"{1 + k}:y") for k in np.rint(xs / test.length_m * n_el).astype(int)])
+    else:  # the sensors between nodes: their translations interpolated
+        meas = sensor_rows(xs, np.linspace(0.0, test.length_m, n_el + 1), keep)
+    drive_row = int(np.flatnonzero(order == test.drive_sensor)[0])
+    modes_idx = n_rigid + np.asarray(test.modes) - 1
+    p = max(cfg["solver"]["projection_modes"], int(modes_idx[-1]) + 1 + (4 if not test.thesis else 0))
     Kn = K0.copy()
     if spring:
         lo, hi = band
-        Kn[spring_dof, spring_dof] += np.sqrt(lo * hi) / preset.length_m
+        Kn[spring_dofs, spring_dofs] += np.sqrt(lo * hi) / preset.length_m
     Mn = M0 if M_added is None else M0 + M_added / preset.mass_per_length_kg_m
     w, v = undamped_modes(Mn, Kn)
     if fx["rayleigh"] is not None:  # the beam file's Rayleigh damping in the nominal truth's modes
@@ -228,11 +364,12 @@ def build_setup(cfg: dict) -> Setup:
                               f"of the first {p} modes; generate needs light damping, each in (0, 0.2)")
     else:
         zr = np.asarray(cfg["specimen"]["damping_ratios"], float)
-        zeta = np.concatenate([zr, np.full(max(p - zr.size, 0), zr[-1])])[:p]
-    lo, hi = cfg["measurement"]["band_rad_s"]
-    return Setup(cfg, preset, layout, n_el, keep, spring, K0, M0, meas, v[:, :p].copy(),
-                 np.linspace(lo, hi, cfg["measurement"]["lines"]), zeta, spring_dof, band, M_added, C_local,
-                 shear_band, rho_ratio, timoshenko, k_y_unit)
+        zeta = np.concatenate([np.full(n_rigid, zr[0]), zr, np.full(max(p - zr.size, 0), zr[-1])])[:p]
+    lo, hi = cfg["measurement"]["band_rad_s"] if test.thesis else 2 * np.pi * np.asarray(test.band_hz)
+    ma = None if test.thesis else analyst_unit_mass(test, cfg["updating"]["mass_model"])
+    return Setup(cfg, preset, section, n_el, keep, spring, K0, M0, meas, v[:, :p].copy(),
+                 np.linspace(lo, hi, cfg["measurement"]["lines"]), zeta, band, M_added, C_local,
+                 shear_band, rho_ratio, timoshenko, K_springs, test, modes_idx, drive_row, spring_dofs, ma)
 
 
 @lru_cache(maxsize=8)
@@ -308,9 +445,10 @@ def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
     cfg = setup.cfg
     sp = draw_specimens(rng, n, cfg, setup.preset, setup.root_spring_relative, setup.shear_band)
     dmg = setup.damage.draw(rng, n, cfg, setup)
-    nf = rng.standard_normal((n, 2, N_MEAS))
-    nz = rng.standard_normal((n, 2, N_MEAS))
-    ns = rng.standard_normal((n, 2, N_MEAS, N_MEAS, 2))
+    S, m = setup.n_meas, setup.n_modes
+    nf = rng.standard_normal((n, 2, m))
+    nz = rng.standard_normal((n, 2, m))
+    ns = rng.standard_normal((n, 2, S, m, 2))
     u = rng.random((n, 4))
     seeds = rng.integers(0, np.iinfo(np.uint64).max, size=n, dtype=np.uint64, endpoint=True)
     u_scale = rng.random(n)
@@ -354,25 +492,24 @@ def truth_matrices(setup: Setup, inp: BatchInputs):
         K0, M0, shear_phi = setup.K0, setup.M0, 12.0 * setup.n_elements**2 * setup.shear_band[0]
     dMe, dKe, dCe = setup.damage.corrections(inp.damage, inp.x_m, ei, mpl, setup.length_m, setup.n_elements,
                                              shear_phi)
-    k0 = setup.keep[0]  # the clamp removes the first DOFs only: the kept block is a slice (a view, no copy)
     shape = (len(inp),) + setup.K0.shape
-    dK = np.zeros(shape) if dKe is None else assemble(dKe)[..., k0:, k0:]
-    dC = np.zeros(shape) if dCe is None else assemble(dCe)[..., k0:, k0:]
+    dK = np.zeros(shape) if dKe is None else setup.kept(assemble(dKe))
+    dC = np.zeros(shape) if dCe is None else setup.kept(assemble(dCe))
     K = np.empty((len(inp), 2) + setup.K0.shape)
     np.multiply(ei[:, None, None], K0, out=K[:, 0])
     np.add(K[:, 0], dK, out=K[:, 1])
     K[:, 1] *= (1.0 + inp.temperature_stiffness_change)[:, None, None]
     if setup.spring:
-        r = setup.spring_dof
-        K[:, 1, r, r] += inp.root_spring_Nm_rad * (1.0 + inp.root_spring_change)
-        K[:, 0, r, r] += inp.root_spring_Nm_rad
+        r = setup.spring_dofs
+        K[:, 1, r, r] += (inp.root_spring_Nm_rad * (1.0 + inp.root_spring_change))[:, None]
+        K[:, 0, r, r] += inp.root_spring_Nm_rad[:, None]
     M = mpl[:, None, None] * M0
     if setup.M_added is not None:
         M += setup.M_added
     Mu = unit_mass(setup, inp, M0)
     if dMe is not None:
         base = np.broadcast_to(Mu, (len(inp), 1) + setup.M0.shape)
-        Mu = np.concatenate([base, base + (assemble(dMe)[..., k0:, k0:] / mpl[:, None, None])[:, None]], axis=1)
+        Mu = np.concatenate([base, base + (setup.kept(assemble(dMe)) / mpl[:, None, None])[:, None]], axis=1)
     return M, Mu, K, dC, dK
 
 
@@ -419,7 +556,8 @@ def projected_modes(setup: Setup, inp: BatchInputs, M, Mu, K, dC):
     c[:, 1] += phi[:, 1].mT @ dC @ phi[:, 1]
     c = 0.5 * (c + c.mT)
     lam, Z = light_damping_modes(w2, c, sol["damping_iterations"])
-    return lam, phi[..., setup.meas, :] @ Z, w2
+    at = phi[..., setup.meas, :] if setup.meas.ndim == 1 else setup.meas @ phi
+    return lam, at @ Z, w2
 
 
 def damage_frequency_drop(setup: Setup, inp: BatchInputs, Mu, K, dK, omega2):
@@ -435,13 +573,14 @@ def damage_frequency_drop(setup: Setup, inp: BatchInputs, Mu, K, dK, omega2):
     ndarray, shape (B,)   ``max_r (1 - f_r,damaged / f_r,baseline)`` (>= 0 for a stiffness loss or a mass
                           added; < 0 when every frequency rises, e.g. a mass lost)
     """
+    used = setup.modes_idx
     if not setup.day_to_day:
-        return np.max(1.0 - np.sqrt(omega2[:, 1, :N_MEAS] / omega2[:, 0, :N_MEAS]), axis=-1)
+        return np.max(1.0 - np.sqrt(omega2[:, 1, used] / omega2[:, 0, used]), axis=-1)
     Ks = (K[:, 0] + dK) / inp.EI_Nm2[:, None, None]
     K0 = K[:, 0] / inp.EI_Nm2[:, None, None]
     it = setup.cfg["solver"]["subspace_iterations"]
     w2, _ = ritz_modes(Mu, np.stack([K0, Ks], axis=1), setup.phi0, it)
-    return np.max(1.0 - np.sqrt(w2[:, 1, :N_MEAS] / w2[:, 0, :N_MEAS]), axis=-1)
+    return np.max(1.0 - np.sqrt(w2[:, 1, used] / w2[:, 0, used]), axis=-1)
 
 
 # --------------------------------------------------------------------------- measurement + updating
@@ -463,10 +602,12 @@ def measure_modes(setup, inp, lam4, psi4):
     """
     mcfg = setup.cfg["measurement"]
     if mcfg["modal_noise"] == "calibrated":
-        sig = calibrated_modal_std(mcfg, np.asarray(inp.noise_level, float)[:, None, None],
-                                   np.asarray(inp.noise_floor, float)[:, None, None])   # (B, 1, 4)
+        coef = {k: per_mode(mcfg[k], setup.n_modes) for q in ("frequency", "damping", "shape")
+                for k in (f"{q}_noise", f"{q}_noise_per_floor", f"{q}_noise_floor")}
+        sig = calibrated_modal_std(coef, np.asarray(inp.noise_level, float)[:, None, None],
+                                   np.asarray(inp.noise_floor, float)[:, None, None])   # (B, 1, m)
     else:
-        sig = {q: np.asarray(mcfg[f"{q}_noise"], float) * np.ones(N_MEAS) for q in ("frequency", "damping", "shape")}
+        sig = {q: per_mode(mcfg[f"{q}_noise"], setup.n_modes) for q in ("frequency", "damping", "shape")}
     scale = np.asarray(inp.modal_noise_scale, float)[:, None, None]
     sig = {q: v * scale for q, v in sig.items()}
     sig["frequency"] = np.hypot(sig["frequency"], np.asarray(inp.frequency_scatter, float)[:, None, None])
@@ -479,18 +620,25 @@ def measure_modes(setup, inp, lam4, psi4):
     return lam_m, psi4 + scale * noise
 
 
+def per_mode(values, m: int) -> np.ndarray:
+    """A number or per-mode list (modes 1, 2, ...) as ``m`` values, the last repeated beyond the list."""
+    v = np.atleast_1d(np.asarray(values, float))
+    return np.concatenate([v, np.full(max(m - v.size, 0), v[-1])])[:m]
+
+
 def update_models(setup, Ma, lam_m, psi_m, batched=True):
-    """Pilkey updating of both states on the analyst mass ``Ma`` (B,4,4): returns a dict of (B,2,...) arrays."""
+    """Pilkey updating of both states on the analyst mass ``Ma`` (B,S,S) with ``S`` modes ``lam_m`` (B,2,S) and
+    shapes ``psi_m`` (B,2,S,S): returns a dict of (B,2,...) arrays."""
     up = setup.cfg["updating"]
-    B = Ma.shape[0]
-    Ma2 = np.repeat(Ma[:, None], 2, axis=1).reshape(2 * B, N_MEAS, N_MEAS)
+    B, S = Ma.shape[0], Ma.shape[-1]
+    Ma2 = np.repeat(Ma[:, None], 2, axis=1).reshape(2 * B, S, S)
     kw = dict(tol=up["tol"], max_iter=up["max_iter"], raise_on_failure=False,
               check_spurious=False)  # modes of the truth mesh are never consistent with the 4-DOF M
     if batched:
-        res = pilkey(Ma2, lam_m.reshape(2 * B, N_MEAS), psi_m.reshape(2 * B, N_MEAS, N_MEAS), **kw)
+        res = pilkey(Ma2, lam_m.reshape(2 * B, S), psi_m.reshape(2 * B, S, S), **kw)
         parts = {k: getattr(res, k) for k in ("C", "K", "converged", "iterations", "residual")}
     else:
-        rs = [pilkey(Ma2[i], lam_m.reshape(2 * B, N_MEAS)[i], psi_m.reshape(2 * B, N_MEAS, N_MEAS)[i], **kw)
+        rs = [pilkey(Ma2[i], lam_m.reshape(2 * B, S)[i], psi_m.reshape(2 * B, S, S)[i], **kw)
               for i in range(2 * B)]
         parts = {k: np.stack([np.asarray(getattr(r, k)) for r in rs])
                  for k in ("C", "K", "converged", "iterations", "residual")}
@@ -547,14 +695,24 @@ def simulate_chunk(setup: Setup, inp: BatchInputs) -> dict:
     """
     M, Mu, K, dC, dK = truth_matrices(setup, inp)
     lam, psi, w2 = projected_modes(setup, inp, M, Mu, K, dC)
-    lam_m, psi_m = measure_modes(setup, inp, lam[..., :N_MEAS], psi[..., :N_MEAS])
-    Ma = analyst_mass(inp.mass_per_length_kg_m, setup.length_m, setup.cfg["updating"]["mass_model"])
-    up = update_models(setup, Ma, lam_m, psi_m)
-    pr = poles_and_residues(Ma[:, None], up["C"], up["K"], np.arange(N_MEAS), [0])
-    poles, res = pr.eigenvalues, pr.residues[..., 0, :]
-    return {"truth_poles": lam, "truth_shapes": psi, "eigenvalues_measured": lam_m, "eigenvectors_measured": psi_m,
+    used = setup.modes_idx
+    lam_m, psi_m = measure_modes(setup, inp, lam[..., used], psi[..., used])
+    Ma = setup.analyst_mass(inp.mass_per_length_kg_m)
+    B, S, d = len(inp), setup.n_meas, setup.drive_row
+    if setup.n_update:
+        up = update_models(setup, Ma, lam_m[..., :S], psi_m[..., :S])
+        pr = poles_and_residues(Ma[:, None], up["C"], up["K"], np.arange(S), [d])
+        poles, res = pr.eigenvalues, pr.residues[..., 0, :]
+    else:  # fewer modes than sensors: no updated model (stated in the manifest)
+        nan = np.full((B, 2, S, S), np.nan)
+        up = {"C": nan, "K": nan.copy(), "converged": np.ones((B, 2), bool), "iterations": np.zeros((B, 2), int),
+              "residual": np.zeros((B, 2))}
+        poles, res = np.full((B, 2, S), np.nan + 0j), np.full((B, 2, S, S), np.nan + 0j)
+    peak = measured_peak({"truth_poles": lam, "truth_shapes": psi, "drive_row": d, "noise_floor": inp.noise_floor},
+                         setup.omega_rad_s)
+    return {"has_update": np.full(B, bool(setup.n_update)), "truth_poles_used": lam[..., used],
+            "truth_poles": lam, "truth_shapes": psi, "eigenvalues_measured": lam_m, "eigenvectors_measured": psi_m,
             "M_updated": Ma, "C_updated": up["C"], "K_updated": up["K"], "updated_poles": poles,
-            "updated_residues": res, "frf_peak": measured_peak({"truth_poles": lam, "truth_shapes": psi,
-                                                               "noise_floor": inp.noise_floor}, setup.omega_rad_s),
+            "updated_residues": res, "frf_peak": peak,
             "converged": up["converged"], "iterations": up["iterations"],
             "residual": up["residual"], "damage_frequency_drop": damage_frequency_drop(setup, inp, Mu, K, dK, w2)}

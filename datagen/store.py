@@ -207,7 +207,8 @@ def sample_table(labels: dict, outputs: dict, shard: int, first_id: int, length_
         cols[f"damage{k}_size"] = size[:, k]
         cols.update({f"damage{k}_{c}": v[:, k] for c, v in per_damage.items()})
         cols[f"damage{k}_element4"] = element4_index(x_m[:, k], length_m).astype(np.int8)
-    for lam, tag in ((outputs["truth_poles"][..., :4], ""), (outputs["eigenvalues_measured"], "_meas")):
+    truth = outputs["truth_poles_used"] if "truth_poles_used" in outputs else outputs["truth_poles"][..., :4]
+    for lam, tag in ((truth, ""), (outputs["eigenvalues_measured"], "_meas")):
         f, z = modal_parameters(lam)
         for r in range(f.shape[-1]):
             for s, st in ((0, "base"), (1, "cur")):
@@ -243,8 +244,9 @@ def sample_status(labels: dict, outputs: dict) -> np.ndarray:
     K = np.asarray(outputs["K_updated"], dtype=float)
     finite_k = np.all(np.isfinite(K), axis=(-2, -1))
     Ks = np.where(finite_k[..., None, None], 0.5 * (K + np.swapaxes(K, -1, -2)), 0.0)
-    not_pd = np.any(~finite_k | (np.linalg.eigvalsh(Ks)[..., 0] <= 0), axis=1)
-    nan_poles = ~np.all(np.isfinite(outputs["updated_poles"]), axis=(1, 2))
+    updated = np.asarray(outputs.get("has_update", True), bool)   # False: no updated model (fewer modes than sensors)
+    not_pd = updated & np.any(~finite_k | (np.linalg.eigvalsh(Ks)[..., 0] <= 0), axis=1)
+    nan_poles = updated & ~np.all(np.isfinite(outputs["updated_poles"]), axis=(1, 2))
     no_effect = (labels["n_damages"] > 0) & ~(np.abs(outputs["damage_frequency_drop"]) >= NO_EFFECT_DROP)
     not_converged = ~np.all(np.asarray(outputs["converged"], dtype=bool), axis=1)
     return np.select([not_converged, not_pd, nan_poles, no_effect],

@@ -63,8 +63,9 @@ class Layout:
     modes : tuple of int               bending-mode numbers used (1 = first bending mode), ascending
     frequencies_hz : tuple of float    their nominal natural frequencies (Hz)
     unseen : tuple of int              bending modes in the band that no sensor or the reference DOF sees
-    thesis : bool                      the thesis's test: clamped-free, 4 sensors at the quarter points, driven at
-                                       the first, its band, modes 1-4
+    thesis : bool                      the thesis's test: a clamped-free beam measured at the quarter points and
+                                       driven at the first, without ``band_hz`` or ``zones_x_m``: its band
+                                       (60-4800 rad/s), modes 1-4 and 4 element zones, whatever the band holds
     """
 
     bc: str
@@ -179,9 +180,15 @@ def layout_of(beam, source: str = "beam") -> Layout:
         raise ConfigError(f"{source}: 'measured_x_m' sensors {a + 1} and {b + 1} coincide at {xs[a]:g} m; "
                           "expected distinct positions")
     drive = float(xs[0]) if beam.drive_x_m is None else float(beam.drive_x_m)
+    quarter = xs.size == 4 and np.allclose(xs, L * np.arange(1, 5) / 4, rtol=0, atol=1e-9 * L)
+    thesis = (beam.bc == "clamped-free" and quarter and drive == xs[0]
+              and beam.band_hz is None and beam.zones_x_m is None)
     f_all, shape_at = nominal_modes(beam)
-    band = _default_band(f_all, xs.size) if beam.band_hz is None else tuple(map(float, beam.band_hz))
+    band = DEFAULT_BAND_HZ if thesis else _default_band(f_all, xs.size) if beam.band_hz is None else \
+        tuple(map(float, beam.band_hz))
     inside = np.flatnonzero((f_all >= band[0]) & (f_all <= band[1]))
+    if thesis:
+        inside = np.arange(4)
     if inside.size == 0:
         near = ", ".join(f"{v:.4g}" for v in f_all[:4])
         raise ConfigError(f"{source}: 'band_hz' [{band[0]:g}, {band[1]:g}] holds no bending mode of the beam "
@@ -208,9 +215,8 @@ def layout_of(beam, source: str = "beam") -> Layout:
         raise ConfigError(f"{source}: 'zones_x_m' must be increasing positions strictly inside (0, {L:g}) m, "
                           f"got {list(beam.zones_x_m)}")
     modes = tuple(int(i) + 1 for i in inside[seen])
-    quarter = np.allclose(xs, L * np.arange(1, 5) / 4, rtol=0, atol=1e-9 * L) if xs.size == 4 else False
-    thesis = (beam.bc == "clamped-free" and quarter and drive == xs[0] and band == DEFAULT_BAND_HZ
-              and modes == (1, 2, 3, 4) and beam.zones_x_m is None)
+    if thesis:
+        modes = (1, 2, 3, 4)
     return Layout(beam.bc, float(L), tuple(map(float, xs)), drive, band, tuple(map(float, zones)), modes,
                       tuple(float(f_all[m - 1]) for m in modes),
                       tuple(int(i) + 1 for i in inside[~seen]), thesis)
