@@ -38,8 +38,8 @@ class DamagePrediction:
     location_distribution: np.ndarray      # (n, n_bins) over x/L bins
     x_over_L: np.ndarray                   # mean of the distribution
     x_std_over_L: np.ndarray
-    element_probabilities: np.ndarray      # (n, 4) thesis grid
-    element: np.ndarray                    # 1..4, most probable
+    element_probabilities: np.ndarray      # (n, Z) zones (the thesis's 4 elements)
+    element: np.ndarray                    # 1..Z, most probable zone
     hinge_flexibility: np.ndarray         # median of the log-normal size estimate
     hinge_flexibility_std: np.ndarray
     logit: np.ndarray                      # calibrated detection logit
@@ -119,7 +119,7 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
     Parameters
     ----------
     n_bins : int
-        Location bins over ``x / L`` (multiple of 4).
+        Location bins over ``x / L``.
     hidden, depth, dropout : network size (:class:`learn.models.DamageNet`)
     epochs, batch_size, lr, weight_decay : optimisation (AdamW, cosine schedule)
     loc_sigma_bins : float
@@ -139,12 +139,16 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         on a machine shared with other jobs more threads were up to ten times slower.
     verbose : bool
         Show a tqdm bar over epochs.
+    zone_edges : sequence of float or None
+        Edges of the location zones over ``x / L`` (``0 ... 1``); None: the thesis's 4 elements. A zone's
+        probability is the sum over the bins whose centre lies in it.
     """
 
     def __init__(self, n_bins=80, hidden=128, depth=3, dropout=0.05, epochs=60, batch_size=256, lr=2e-3,
                  weight_decay=1e-4, loc_sigma_bins=1.0, val_fraction=0.15, false_alarm_target=0.005, random_state=0,
-                 device=None, n_threads=1, verbose=False):
+                 device=None, n_threads=1, verbose=False, zone_edges=None):
         self.n_bins = n_bins
+        self.zone_edges = zone_edges
         self.hidden = hidden
         self.depth = depth
         self.dropout = dropout
@@ -212,8 +216,8 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         X = np.asarray(X, float)
         if X.ndim != 2 or not np.all(np.isfinite(X)):
             raise BeamDamageError("X must be a finite 2-D feature matrix")
-        if self.n_bins % 4:
-            raise BeamDamageError(f"n_bins must be a multiple of 4, got {self.n_bins}")
+        if self.zone_edges is None and self.n_bins % 4:
+            raise BeamDamageError(f"n_bins must be a multiple of 4 (the thesis's elements), got {self.n_bins}")
         t0 = time.perf_counter()
         groups = np.arange(X.shape[0]) if groups is None else np.asarray(groups)
         tr, va, _ = split_by_specimen(groups, (1 - self.val_fraction, self.val_fraction, 0.0), seed=self.random_state)
@@ -305,7 +309,12 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         c = (np.arange(self.n_bins) + 0.5) / self.n_bins
         mean = p @ c
         std = np.sqrt(np.maximum(p @ c**2 - mean**2, 0.0) + 1.0 / (12 * self.n_bins**2))
-        el = p.reshape(len(p), 4, -1).sum(axis=2)
+        if self.zone_edges is None:
+            el = p.reshape(len(p), 4, -1).sum(axis=2)
+        else:
+            edges = np.asarray(self.zone_edges, float)
+            zone = np.clip(np.searchsorted(edges, c, side="right") - 1, 0, edges.size - 2)
+            el = p @ (zone[:, None] == np.arange(edges.size - 1)[None]).astype(float)
         med = np.exp(np.clip(raw["size_mean"], -LOG_SIZE_LIMIT, LOG_SIZE_LIMIT))
         log_std = np.minimum(self.size_std_scale_ * np.exp(np.minimum(raw["size_log_std"], LOG_SIZE_LIMIT)),
                              MAX_SIZE_LOG_STD)

@@ -96,7 +96,10 @@ def reliability(probability, outcome, n_bins: int = 15):
 
 def metrics(out, truth: dict, mask=None, subset: str = "all", length_m: float = 0.6095,
             min_drop: float = MIN_DROP) -> Metrics:
-    """Scores of ``out`` (:class:`learn.classical.MethodOutput`) against ``truth`` on rows ``mask``."""
+    """Scores of ``out`` (:class:`learn.classical.MethodOutput`) against ``truth`` on rows ``mask``; ``length_m``
+    the beam's length or its :class:`learn.features.BeamSpec` (whose zones the element accuracy counts)."""
+    spec = as_spec(length_m)
+    length_m = spec.length_m
     n = len(truth["damaged"])
     m = np.ones(n, bool) if mask is None else np.asarray(mask, bool)
     dam = truth["damaged"] & m
@@ -110,7 +113,7 @@ def metrics(out, truth: dict, mask=None, subset: str = "all", length_m: float = 
     nan = float("nan")
     if det.any():
         el_true = truth["element"][det]
-        el_hat = np.clip(np.floor(np.nan_to_num(out.x_over_L[det]) * 4).astype(int) + 1, 1, 4)
+        el_hat = spec.zone_of(np.nan_to_num(out.x_over_L[det]))
         el_acc = float(np.mean(el_hat == el_true))
         within = float(np.mean(np.abs(el_hat - el_true) <= 1))
         loc = float(np.median(np.abs(out.x_over_L[det] - truth["x_over_L"][det])) * length_m * 1000)
@@ -148,6 +151,13 @@ def subsets(truth: dict, table) -> dict:
     return out
 
 
+def as_spec(beam):
+    """A :class:`learn.features.BeamSpec` from itself or from a length (m): the thesis's 4-element zones."""
+    from learn.features import BeamSpec
+
+    return beam if isinstance(beam, BeamSpec) else BeamSpec("", float(beam), (), "")
+
+
 def table_rows(outputs, truth, table, length_m) -> list[dict]:
     """One row per (method, subset)."""
     rows = []
@@ -159,13 +169,16 @@ def table_rows(outputs, truth, table, length_m) -> list[dict]:
 
 # --------------------------------------------------------------------------- figures
 def figures(outputs, truth, out_dir, length_m: float, n_bins: int = 15) -> list[str]:
-    """ROC, confusion matrix (4-element grid, network), location error vs position, reliability (PNG, Agg)."""
+    """ROC, confusion matrix (zones, network), location error vs position, reliability (PNG, Agg); ``length_m`` the
+    beam's length or its :class:`learn.features.BeamSpec`."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from pathlib import Path
 
+    spec = as_spec(length_m)
+    length_m = spec.length_m
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     det = truth["damaged"] & (truth["max_drop"] > MIN_DROP)
@@ -183,17 +196,19 @@ def figures(outputs, truth, out_dir, length_m: float, n_bins: int = 15) -> list[
     paths.append(_save(fig, out_dir / "roc.png"))
 
     net = outputs[0]
-    el_hat = np.where(net.damaged, np.clip(np.floor(np.nan_to_num(net.x_over_L) * 4).astype(int) + 1, 1, 4), 0)
-    cm = np.zeros((5, 5), int)
+    el_hat = np.where(net.damaged, spec.zone_of(np.nan_to_num(net.x_over_L)), 0)
+    k = spec.zone_edges_m.size
+    cm = np.zeros((k, k), int)
     np.add.at(cm, (truth["element"], el_hat), 1)
     fig, ax = plt.subplots(figsize=(4.5, 4))
     ax.imshow(cm, cmap="Blues")
-    for i in range(5):
-        for j in range(5):
+    for i in range(k):
+        for j in range(k):
             ax.text(j, i, cm[i, j], ha="center", va="center", fontsize=8)
-    lab = ["intact", "1", "2", "3", "4"]
-    ax.set(xticks=range(5), yticks=range(5), xticklabels=lab, yticklabels=lab, xlabel=f"{net.name}: predicted",
-           ylabel="true element", title="Confusion matrix (4-element grid)")
+    lab = ["intact"] + [str(z) for z in range(1, k)]
+    what = "element" if spec.test is None else "zone"
+    ax.set(xticks=range(k), yticks=range(k), xticklabels=lab, yticklabels=lab, xlabel=f"{net.name}: predicted",
+           ylabel=f"true {what}", title=f"Confusion matrix ({k - 1} {what}s)")
     paths.append(_save(fig, out_dir / "confusion.png"))
 
     fig, ax = plt.subplots(figsize=(6, 4))

@@ -38,6 +38,7 @@ from physics.errors import BeamDamageError, FileFormatError
 from datagen.dataset import Dataset
 from datagen.store import DATASET_FORMAT, read_manifest
 from datagen.synth import log_magnitude_map
+from physics.layout import Layout
 
 __all__ = ["BeamSpec", "DOFS", "GRID_RAD_S", "Pairs", "ROUTES", "beam_of_manifest", "curvatures", "features",
            "frf_features", "grid_weights", "labels", "load_pairs", "manifest_checksum",
@@ -54,19 +55,63 @@ DOFS = ("2:y", "3:y", "4:y", "5:y")
 
 @dataclass(frozen=True)
 class BeamSpec:
-    """What a model is trained for; a model refuses data of another beam, DOF set or mass model."""
+    """What a model is trained for; a model refuses data of another beam, DOF set, test or mass model.
+
+    ``test`` is the test of the beam file (:class:`physics.layout.Layout`: supports, sensors, band, modes,
+    zones), None for the thesis's (4 sensors at the quarter points, modes 1-4, :data:`GRID_RAD_S`, 4 elements).
+    """
 
     name: str
     length_m: float
     dofs: tuple
     mass_model: str
+    test: Layout | None = None
+
+    @property
+    def n_modes(self) -> int:
+        return 4 if self.test is None else self.test.n_modes
+
+    @property
+    def grid_rad_s(self) -> np.ndarray:
+        """The FRF features' log-spaced lines: :data:`GRID_RAD_S`, or 96 over the test's band."""
+        if self.test is None:
+            return GRID_RAD_S
+        lo, hi = self.test.band_hz
+        return np.geomspace(2 * np.pi * max(lo, hi / 200), 2 * np.pi * hi, GRID_RAD_S.size)
+
+    @property
+    def zone_edges_m(self) -> np.ndarray:
+        """Edges of the location zones (m): the thesis's 4 elements, or the test's zones."""
+        if self.test is None:
+            return np.linspace(0.0, self.length_m, 5)
+        return np.asarray(self.test.zones_x_m)
+
+    @property
+    def sensors_x_m(self) -> np.ndarray:
+        """Sensor positions (m), ascending (the order of the measured DOFs)."""
+        if self.test is None:
+            return self.length_m * np.arange(1, 5) / 4
+        return np.sort(np.asarray(self.test.sensors_x_m))
+
+    def zone_of(self, x_over_L) -> np.ndarray:
+        """1-based zone of each ``x / L`` (0 where NaN)."""
+        x = np.asarray(x_over_L, float)
+        if self.test is None:  # the thesis's elements
+            return np.where(np.isnan(x), 0, np.clip(np.floor(np.nan_to_num(x) * 4).astype(int) + 1, 1, 4))
+        edges = self.zone_edges_m / self.length_m
+        z = np.clip(np.searchsorted(edges, np.nan_to_num(x), side="right"), 1, edges.size - 1)
+        return np.where(np.isnan(x), 0, z)
 
     def to_dict(self) -> dict:
-        return {"name": self.name, "length_m": self.length_m, "dofs": list(self.dofs), "mass_model": self.mass_model}
+        out = {"name": self.name, "length_m": self.length_m, "dofs": list(self.dofs), "mass_model": self.mass_model}
+        if self.test is not None:
+            out["test"] = self.test.to_dict()
+        return out
 
     @classmethod
     def from_dict(cls, d: dict) -> "BeamSpec":
-        return cls(str(d["name"]), float(d["length_m"]), tuple(d["dofs"]), str(d["mass_model"]))
+        test = Layout.from_dict(d["test"]) if d.get("test") else None
+        return cls(str(d["name"]), float(d["length_m"]), tuple(d["dofs"]), str(d["mass_model"]), test)
 
     def differences(self, other: "BeamSpec") -> list[str]:
         """Plain-language list of what differs (empty when compatible)."""
@@ -79,6 +124,15 @@ class BeamSpec:
             out.append(f"DOF set {list(other.dofs)} instead of {list(self.dofs)}")
         if self.mass_model != other.mass_model:
             out.append(f"mass model {other.mass_model!r} instead of {self.mass_model!r}")
+        a, b = self.test, other.test
+        if a is not None and b is not None:
+            if a.bc != b.bc:
+                out.append(f"supports {b.bc} instead of {a.bc}")
+            if a.modes != b.modes:
+                out.append(f"modes {list(b.modes)} instead of {list(a.modes)}")
+        elif (a is None) != (b is None):
+            out.append("the thesis's test instead of the beam file's" if b is None else
+                       f"a {b.bc} test with {b.n_sensors} sensor(s) and modes {list(b.modes)} instead of the thesis's")
         return out
 
 
@@ -129,9 +183,11 @@ def manifest_checksum(manifest: dict) -> str:
 
 def beam_of_manifest(manifest: dict) -> BeamSpec:
     """The beam a format-2 dataset simulates: ``preset`` (name, length of the truth beam or beam file),
-    ``schema.measured_dofs`` and ``config.updating.mass_model``."""
+    ``schema.measured_dofs``, ``config.updating.mass_model`` and ``layout`` (the test; None for the thesis's)."""
+    lay = manifest.get("layout")
+    test = Layout.from_dict(lay) if lay and not lay.get("thesis") else None
     return BeamSpec(manifest["preset"]["name"], float(manifest["preset"]["length_m"]),
-                    tuple(manifest["schema"]["measured_dofs"]), manifest["config"]["updating"]["mass_model"])
+                    tuple(manifest["schema"]["measured_dofs"]), manifest["config"]["updating"]["mass_model"], test)
 
 
 def load_pairs(roots, frfs=("measured", "updated"), chunk: int = 1024, workers: int | None = None) -> Pairs:
@@ -182,10 +238,12 @@ def load_pairs(roots, frfs=("measured", "updated"), chunk: int = 1024, workers: 
         beam = b
         table = ds.samples.assign(dataset=str(root))
         cs = manifest_checksum(ds.manifest)
-        lines, log_grid = log_magnitude_map(grid_weights(ds.omega_rad_s)[0])
+        lines, log_grid = log_magnitude_map(grid_weights(ds.omega_rad_s, b.grid_rad_s)[0])
         log_frf = {}
+        if "updated" in frfs and "no updated model" in ds.manifest.get("layout", {}).get("updating", ""):
+            raise FileFormatError(f"{root}: {ds.manifest['layout']['updating']}")
         for kind in frfs:
-            out = np.empty((len(ds), 2, len(DOFS), GRID_RAD_S.size), np.float32)
+            out = np.empty((len(ds), 2, len(b.dofs), b.grid_rad_s.size), np.float32)
 
             def read(i, kind=kind, out=out):
                 H = ds.frf(kind, np.arange(i, min(i + chunk, len(ds))), lines=lines)
@@ -209,7 +267,7 @@ def load_pairs(roots, frfs=("measured", "updated"), chunk: int = 1024, workers: 
 
 
 # --------------------------------------------------------------------------- labels
-def labels(table: pd.DataFrame, length_m: float) -> dict:
+def labels(table: pd.DataFrame, beam) -> dict:
     """Training targets of each pair from a format-2 sample table.
 
     The size of a damage is the ``damage{k}_size`` its model stores
@@ -221,9 +279,12 @@ def labels(table: pd.DataFrame, length_m: float) -> dict:
     -------
     dict of ndarray, shape (n,)
         ``damaged`` (bool), ``x_over_L`` (NaN if intact), ``hinge_flexibility`` (the size; 0 if intact),
-        ``element`` (1..4, 0 if intact), ``max_drop`` (largest relative drop of the noise-free
+        ``element`` (the zone of :meth:`BeamSpec.zone_of`, 1.., 0 if intact; the thesis's elements 1..4),
+        ``max_drop`` (largest relative drop of the noise-free
         natural frequencies due to the damage alone: ``max_frequency_drop_rel``), ``n_damages``.
     """
+    beam = beam if isinstance(beam, BeamSpec) else BeamSpec("", float(beam), (), "")
+    length_m = beam.length_m
     n = len(table)
     damaged = table["damaged"].to_numpy(bool)
     k = 0
@@ -238,7 +299,7 @@ def labels(table: pd.DataFrame, length_m: float) -> dict:
         x = np.full(n, np.nan)
         size = np.zeros(n)
     x = np.where(damaged, np.clip(x, 0.0, 1.0), np.nan)
-    element = np.where(damaged, np.clip(np.floor(np.nan_to_num(x) * 4).astype(int) + 1, 1, 4), 0)
+    element = np.where(damaged, beam.zone_of(x), 0)
     return {"damaged": damaged, "x_over_L": x, "hinge_flexibility": np.where(damaged, size, 0.0),
             "element": element, "max_drop": table["max_frequency_drop_rel"].to_numpy(float),
             "n_damages": table["n_damages"].to_numpy(int)}
@@ -284,7 +345,42 @@ def curvatures(shapes):
     return np.concatenate([2 * shapes[..., :1, :], inner], axis=-2)
 
 
-def modal_features(eigenvalues, eigenvectors, n_modes: int = 4):
+def layout_curvatures(shapes, test: Layout):
+    """Second divided differences of shapes at the sensors of any test, times the mean sensor spacing squared.
+
+    The points are the sensors (ascending) plus each end whose translation a support holds at zero (a clamp or a
+    pin) when no sensor sits there; every point with a neighbour on both sides gets
+    ``2 (w_- / (h_- (h_- + h_+)) - w / (h_- h_+) + w_+ / (h_+ (h_- + h_+)))``.
+
+    Parameters
+    ----------
+    shapes : ndarray, shape (..., S, m)   translations at the sensors, ascending positions
+
+    Returns
+    -------
+    ndarray, shape (..., K, m)   K = the points with two neighbours (0 for one sensor on a free-free beam)
+    """
+    x = np.sort(np.asarray(test.sensors_x_m, float))
+    L, tol = test.length_m, 1e-9 * test.length_m
+    held = {"clamped-free": (True, False), "free-free": (False, False), "pinned-pinned": (True, True),
+            "clamped-clamped": (True, True)}[test.bc]
+    zero = np.zeros_like(shapes[..., :1, :])
+    parts, pos = [shapes], [x]
+    if held[0] and x[0] > tol:
+        parts.insert(0, zero)
+        pos.insert(0, [0.0])
+    if held[1] and x[-1] < L - tol:
+        parts.append(zero)
+        pos.append([L])
+    w, xp = np.concatenate(parts, axis=-2), np.concatenate(pos)
+    if xp.size < 3:
+        return shapes[..., :0, :]
+    hm, hp = np.diff(xp)[:-1, None], np.diff(xp)[1:, None]
+    d2 = 2 * (w[..., :-2, :] / (hm * (hm + hp)) - w[..., 1:-1, :] / (hm * hp) + w[..., 2:, :] / (hp * (hm + hp)))
+    return d2 * np.mean(np.diff(xp)) ** 2
+
+
+def modal_features(eigenvalues, eigenvectors, n_modes: int = 4, test: Layout | None = None):
     """Modal features of pairs (batched).
 
     Parameters
@@ -310,7 +406,8 @@ def modal_features(eigenvalues, eigenvectors, n_modes: int = 4):
     sign = np.sign(np.sum(u[:, 1] * u[:, 0], axis=-2, keepdims=True))
     u1 = u[:, 1] * np.where(sign == 0, 1.0, sign)
     du = u1 - u[:, 0]
-    dk = curvatures(u1) - curvatures(u[:, 0])
+    curv = curvatures if test is None else (lambda v: layout_curvatures(v, test))
+    dk = curv(u1) - curv(u[:, 0])
     n = lam.shape[0]
     return np.concatenate([shift, 10 * du.reshape(n, -1), 10 * dk.reshape(n, -1)], axis=1)
 
@@ -371,7 +468,7 @@ def frf_features(log_frf):
 def features(pairs: Pairs, route: str = "modal") -> np.ndarray:
     """Feature matrix (n, d) of ``pairs`` for one input route (:data:`ROUTES`)."""
     if route == "modal":
-        X = modal_features(pairs.eigenvalues, pairs.eigenvectors)
+        X = modal_features(pairs.eigenvalues, pairs.eigenvectors, pairs.beam.n_modes, pairs.beam.test)
     elif route in ("updated", "measured"):
         if route not in pairs.log_frf:
             raise BeamDamageError(f"input route {route!r} needs FRFs of both states; none were read")

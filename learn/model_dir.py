@@ -179,6 +179,6 @@ def sensitivity_of(beam: BeamSpec, config_root_spring=None, truth_beam: dict | N
     kind = ((generator_config or {}).get("damage") or {}).get("kind", "slit")
     if truth_beam and "EI_Nm2" in truth_beam:
         key = (truth_beam["length_m"], truth_beam["EI_Nm2"], truth_beam["mass_per_length_kg_m"])
-        return beam_sensitivity(key, config_root_spring, kind=kind)
-    return beam_sensitivity(beam.name, config_root_spring, kind=kind)
+        return beam_sensitivity(key, config_root_spring, kind=kind, test=beam.test)
+    return beam_sensitivity(beam.name, config_root_spring, kind=kind, test=beam.test)
 

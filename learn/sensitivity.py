@@ -82,7 +82,7 @@ class Sensitivity:
 
 @lru_cache(maxsize=16)
 def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7, n_elements: int = 40,
-                     n_modes: int = 4, step: float = 0.01, kind: str = "slit") -> Sensitivity:
+                     n_modes: int = 4, step: float = 0.01, kind: str = "slit", test=None) -> Sensitivity:
     """Sensitivities of the nominal beam (clamped, or on a root spring ``k_r L / EI``) to damage of ``kind``.
 
     Parameters
@@ -95,8 +95,13 @@ def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7,
     n_elements : int, multiple of 4 (the measured nodes sit at quarter points)
     step : relative element stiffness loss (mass gain, for a mass damage) of the finite differences
     kind : damage kind (:data:`datagen.damage.DAMAGE_MODELS`): its ``perturbs`` says which matrix a size changes
+    test : physics.layout.Layout, optional
+        Another test than the thesis's: its supports, sensors (shapes interpolated there) and modes (``n_modes``
+        is then theirs; a free-free beam's rigid-body modes left out); the root spring acts on a clamp at ``x = 0``.
     """
     perturbs = damage_model(kind).perturbs
+    if test is not None and not test.thesis:
+        return _layout_sensitivity(preset, root_spring_relative, n_elements, step, perturbs, test)
     if isinstance(preset, str):
         p = beam_preset(preset)
         L, EI, m = p.length_m, p.EI_Nm2, p.mass_per_length_kg_m
@@ -130,3 +135,48 @@ def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7,
         dlnf = -m * L * np.einsum("eim,ij,ejm->me", ends, element_mass(1.0, le), ends) / (2 * le)
     return Sensitivity((np.arange(n_elements) + 0.5) / n_elements, L, EI, dlnf,
                        np.transpose(du, (1, 2, 0)).reshape(4 * n_modes, n_elements), w0[:n_modes] / (2 * np.pi))
+
+
+def _layout_sensitivity(preset, root_spring_relative, n_elements, step, perturbs, test) -> Sensitivity:
+    """:func:`beam_sensitivity` of any test (:class:`physics.layout.Layout`): shapes at the sensors."""
+    from physics.effects import hermite_row
+    from physics.layout import RIGID_BODY_MODES
+
+    if isinstance(preset, str):
+        p = beam_preset(preset)
+        L, EI, m = p.length_m, p.EI_Nm2, p.mass_per_length_kg_m
+    else:
+        L, EI, m = (float(v) for v in preset)
+    le = L / n_elements
+    clamp = test.bc == "clamped-free" and root_spring_relative is not None
+    kr = root_spring_relative * EI / L if clamp else None
+    factors = np.ones((n_elements + 1, n_elements))
+    key = "ei_factors" if perturbs == "stiffness" else "mass_factors"
+    factors[1:] += (-step if perturbs == "stiffness" else step) * np.eye(n_elements)
+    models = beam_model(n_elements, L, EI, m, bc=test.bc, root_spring=kr, **{key: factors})
+    K = np.array(models.K)
+    if test.bc == "free-free":  # a soft suspension at both ends (the rigid-body modes stay the two lowest)
+        k_s = 0.5 * m * L * (0.05 * 22.3733 / L**2) ** 2 * EI / m
+        for d in models.index(["1:y", f"{n_elements + 1}:y"]):
+            K[..., d, d] += k_s
+    w, phi = undamped_modes(models.M, K)
+    names = [f"{n}:{d}" for n in range(1, n_elements + 2) for d in ("y", "rz")]
+    keep = [names.index(d) for d in models.dofs]
+    node_x = np.linspace(0.0, L, n_elements + 1)
+    T = np.array([hermite_row(float(x), node_x)[0][keep] for x in sorted(test.sensors_x_m)])   # (S, n)
+    used = RIGID_BODY_MODES[test.bc] + np.asarray(test.modes) - 1
+    S = T.shape[0]
+    u = real_shapes((T @ phi[..., used]).astype(complex))                     # (E + 1, S, m)
+    sign = np.sign(np.sum(u[1:] * u[0], axis=-2, keepdims=True))
+    du = (u[1:] * np.where(sign == 0, 1.0, sign) - u[0]) * L / (step * le)   # (E, S, m)
+    w0, phi0 = w[0][used], phi[0][:, used]
+    full = np.zeros((2 * (n_elements + 1), used.size))
+    full[keep] = phi0
+    ends = np.stack([full[2 * e:2 * e + 4] for e in range(n_elements)])     # (E, 4, m)
+    if perturbs == "stiffness":
+        energy = np.einsum("eim,ij,ejm->me", ends, element_stiffness(1.0, le), ends)
+        dlnf = -EI * L * energy / (2 * le * w0[:, None] ** 2)
+    else:
+        dlnf = -m * L * np.einsum("eim,ij,ejm->me", ends, element_mass(1.0, le), ends) / (2 * le)
+    return Sensitivity((np.arange(n_elements) + 0.5) / n_elements, L, EI, dlnf,
+                       np.transpose(du, (1, 2, 0)).reshape(S * used.size, n_elements), w0 / (2 * np.pi))

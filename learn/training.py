@@ -14,7 +14,7 @@ from datagen.store import package_version
 from learn.classical import run_classical
 from learn.estimator import DamageClassifier
 from learn.evaluate import figures, metrics, table_rows
-from learn.features import DOFS, GRID_RAD_S, ROUTES, Pairs, features, labels, load_pairs, split_by_specimen
+from learn.features import ROUTES, Pairs, features, labels, load_pairs, split_by_specimen
 from learn.model_dir import (DEFAULT_ROUTE, MODEL_FORMAT, REFERENCE_WIDTH_M, TrainedModel, json_default, save_model,
                              sensitivity_of)
 from learn.verdict import detectability_threshold, network_output
@@ -26,7 +26,7 @@ __all__ = ["DAY_CHANGES", "dataset_frfs", "day_changes", "evaluate", "targets", 
 
 def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
     """``y`` (n, 3) = [damaged, x/L, hinge flexibility] and the full truth dict of :func:`labels`."""
-    t = labels(pairs.table, pairs.beam.length_m)
+    t = labels(pairs.table, pairs.beam)
     return np.stack([t["damaged"].astype(float), t["x_over_L"], t["hinge_flexibility"]], axis=1), t
 
 
@@ -88,17 +88,19 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
     sens = sensitivity_of(pairs.beam, _nominal_root_spring(pairs.source), pairs.source[0].get("truth_beam"),
                           pairs.source[0].get("config"))
     params = dict(epochs=epochs, random_state=seed, n_threads=threads, verbose=progress)
+    if pairs.beam.test is not None:
+        params["zone_edges"] = [float(v) for v in pairs.beam.zone_edges_m / pairs.beam.length_m]
     networks, outputs, fit_s = _fit_networks(pairs, routes, y, (tr, te), sens, params)
     classical, thresholds = run_classical(pairs.eigenvalues[tr], pairs.eigenvectors[tr], sens,
                                           damaged=truth["damaged"][tr])
     classical, _ = run_classical(pairs.eigenvalues[te], pairs.eigenvectors[te], sens, thresholds)
     truth_te = {k: v[te] for k, v in truth.items()}
-    rows = table_rows(outputs + classical, truth_te, pairs.table.iloc[te].reset_index(drop=True), pairs.beam.length_m)
-    base_all = [metrics(o, truth_te, None, "all", pairs.beam.length_m) for o in classical]
+    rows = table_rows(outputs + classical, truth_te, pairs.table.iloc[te].reset_index(drop=True), pairs.beam)
+    base_all = [metrics(o, truth_te, None, "all", pairs.beam) for o in classical]
     best = max(base_all, key=lambda m: (np.nan_to_num(m.element_accuracy), -np.nan_to_num(m.median_location_error_mm)))
     config = {
         "format": MODEL_FORMAT, "route": route, "beam": pairs.beam.to_dict(), "seed": seed, "epochs": epochs,
-        "grid_rad_s": GRID_RAD_S, "dofs": list(DOFS),
+        "grid_rad_s": pairs.beam.grid_rad_s, "dofs": list(pairs.beam.dofs),
         "training_data": [{k: s[k] for k in ("path", "manifest_checksum", "samples")} for s in pairs.source],
         "generator_config": pairs.source[0]["config"],
         "root_spring_relative": _nominal_root_spring(pairs.source),
@@ -145,7 +147,7 @@ def evaluate(model: TrainedModel, data, out_dir=None, *, extra_outputs=None, pro
         outs.append(network_output(model.networks[r], features(pairs, r), sens, f"network ({r})")[0])
     classical, _ = run_classical(pairs.eigenvalues, pairs.eigenvectors, sens, model.config["classical_thresholds"])
     outs += classical + list(extra_outputs or [])
-    rows = table_rows(outs, truth, pairs.table, pairs.beam.length_m)
+    rows = table_rows(outs, truth, pairs.table, pairs.beam)
     result = {"model": str(model.path), "data": [s["path"] for s in pairs.source], "pairs": len(pairs),
               "rows": rows, "figures": []}
     if out_dir is not None:
@@ -153,6 +155,6 @@ def evaluate(model: TrainedModel, data, out_dir=None, *, extra_outputs=None, pro
         out.mkdir(parents=True, exist_ok=True)
         atomic_write_text(out / "metrics.csv", pd.DataFrame(rows).to_csv(index=False))
         atomic_write_text(out / "metrics.json", json.dumps(rows, indent=1, default=json_default))
-        result["figures"] = figures(outs, truth, out, pairs.beam.length_m)
+        result["figures"] = figures(outs, truth, out, pairs.beam)
     return result
 
