@@ -18,6 +18,7 @@ from physics.io import FRF, MODAL, MeasuredFRF, accepted, atomic_write_bytes, at
 __all__ = ["KEYS", "add_parser", "run"]
 
 KEYS = ("measured", "damaged", "probability_damaged", "location_x_over_L", "location_x_m", "location_std_m",
+        "location_zone", "zone_edges_m", "zone_probabilities",
         "location_element", "element_probabilities", "hinge_flexibility", "hinge_flexibility_std", "depth_m",
         "detectable", "verdict_from", "in_distribution", "out_of_distribution_reasons", "mahalanobis_distance",
         "training_percentile", "network", "classical", "classical_methods", "identification", "input_route",
@@ -87,12 +88,13 @@ def _write(out_dir, results, extras, base, cur, model):
     if len(results) > 1:
         atomic_write_text(out / "verdicts.json", json.dumps(to_jsonable(results), indent=1))
         return
-    atomic_write_bytes(out / "classify.png", _figure(results[0], extras[0], base, cur, model.beam.length_m))
+    atomic_write_bytes(out / "classify.png", _figure(results[0], extras[0], base, cur, model.beam))
     atomic_write_text(out / "verdict.json", json.dumps(to_jsonable(results[0]), indent=1))
 
 
-def _figure(res, extra, base, cur, length_m) -> bytes:
-    """PNG: baseline and measured FRF (or FRF synthesised from modes), and the network's location distribution."""
+def _figure(res, extra, base, cur, beam) -> bytes:
+    """PNG: baseline and measured FRF (or FRF synthesised from modes), and the beam (supports, sensors, zones) under
+    the network's location distribution."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -110,6 +112,7 @@ def _figure(res, extra, base, cur, length_m) -> bytes:
             a1.semilogy(w / (2 * np.pi), np.abs(H), label=f"{name} (synthesised from modes, unscaled)")
     a1.set(xlabel="frequency (Hz)", ylabel="|H| (m/N)", title="Baseline vs measured")
     a1.legend(fontsize=7)
+    length_m = beam.length_m
     dist = extra["location_distribution"]
     if dist is not None:
         edges = np.linspace(0, length_m, dist.size + 1)
@@ -118,18 +121,37 @@ def _figure(res, extra, base, cur, length_m) -> bytes:
     if res["classical"] and res["classical"]["damaged"]:
         a2.axvline(res["classical"]["location_x_m"], color="k", ls="--",
                    label=f"{res['classical']['method']}: x = {res['classical']['location_x_m']:.3f} m")
-    for k in range(1, 4):
-        a2.axvline(k * length_m / 4, color="grey", ls=":")
+    for x in beam.zone_edges_m[1:-1]:
+        a2.axvline(x, color="grey", ls=":")
+    _draw_beam(a2, beam)
     if a2.get_legend_handles_labels()[0]:
         a2.legend(fontsize=7)
     net = res["network"]
     modes = ", ".join(map(str, res["identification"].get("modes_classified") or []))
-    a2.set(xlabel="x from the clamp (m)", ylabel="probability",
+    a2.set(xlabel="x (m)", ylabel="probability",
            title=(f"Network: P(damaged) = {net['probability_damaged']:.2f}" if net else
-                  "Network: no answer (it needs modes 1-4)") + f"; verdict from the {res['verdict_from']}"
+                  "Network: no answer (it needs more modes)") + f"; verdict from the {res['verdict_from']}"
            + ("" if net else f" method on modes {modes}"))
     buf = io.BytesIO()
     fig.tight_layout()
     fig.savefig(buf, format="png", dpi=110)
     plt.close(fig)
     return buf.getvalue()
+
+
+def _draw_beam(ax, beam) -> None:
+    """The beam under the location axis: its supports (clamp: a wall; pin: a triangle), sensors (v) and zones."""
+    L = beam.length_m
+    bc = "clamped-free" if beam.test is None else beam.test.bc
+    ends = {"clamped-free": ("clamp", None), "free-free": (None, None), "pinned-pinned": ("pin", "pin"),
+            "clamped-clamped": ("clamp", "clamp")}[bc]
+    y = ax.get_ylim()[1] if ax.has_data() else 1.0
+    ax.plot([0, L], [-0.06 * y] * 2, color="k", lw=3, solid_capstyle="butt")
+    for x, kind in zip((0.0, L), ends):
+        if kind == "clamp":
+            ax.plot([x, x], [-0.14 * y, 0.02 * y], color="k", lw=5)
+        elif kind == "pin":
+            ax.plot([x], [-0.1 * y], marker="^", ms=10, color="k")
+    ax.plot(beam.sensors_x_m, [-0.02 * y] * len(beam.sensors_x_m), "v", color="tab:blue", ms=7,
+            label=f"sensors ({len(beam.sensors_x_m)}), {bc}")
+    ax.set_ylim(-0.18 * y, 1.05 * y)

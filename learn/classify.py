@@ -7,12 +7,12 @@ import functools
 import numpy as np
 
 from learn.classical import run_classical
-from learn.features import GRID_RAD_S, frf_features, map_frf_to_grid, modal_features
+from learn.features import frf_features, map_frf_to_grid, modal_features
 from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows, identification_band_hz,
                             identify_modes, modal_pair, mode_checks, nominal_ratio_range)
 from learn.model_dir import TrainedModel
 from learn.verdict import (IN_DISTRIBUTION_PERCENTILE, classical_answer, classical_verdict, equivalent_depth,
-                           network_answer, network_output, ood_percentile)
+                           modes_text, network_answer, network_output, ood_percentile)
 from physics.errors import BeamDamageError
 from physics.io import MeasuredFRF
 
@@ -59,7 +59,7 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     base_md, cur_md, identified, pairs = _measured_pairs(model, baseline, currents, names, sens, warnings)
     route, X, rows = _network_inputs(model, baseline, currents, pairs, identified, warnings)
     if route == "modal":
-        _require_common_modes(pairs, names)
+        _require_common_modes(pairs, names, model.beam)
     depth = functools.partial(equivalent_depth, preset=model.config.get("truth_beam") or model.beam.name,
                               width_m=model.config["reference_width_m"])
     nets, dist, pct, where = _network_answers(model, route, X, rows, sens, len(currents), depth)
@@ -71,18 +71,18 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
         p = pairs[i] if pairs else None
         reasons = list(mode_reasons[i])
         if net is None:
-            reasons.append("; ".join(p.missing) + ": the network needs modes 1-4")
+            reasons.append("; ".join(p.missing) + f": the network needs modes {modes_text(model.beam.modes)}")
         elif pct[i] > IN_DISTRIBUTION_PERCENTILE:
             reasons.insert(0, f"Mahalanobis distance {dist[i]:.3g} from the training data, beyond "
                               f"{pct[i]:.2f}% of training pairs")
-        verdict, from_network, w = _chosen_verdict(net, cl, p, reasons, warnings, mode_sens[i], depth)
+        verdict, from_network, w = _chosen_verdict(net, cl, p, reasons, warnings, mode_sens[i], depth, model.beam)
         results.append({
             "measured": names[i + 1], **verdict, "verdict_from": "network" if from_network else "classical",
             "in_distribution": not reasons, "out_of_distribution_reasons": reasons,
             "mahalanobis_distance": dist[i], "training_percentile": pct[i],
             "network": net, "classical": cl,
             "classical_methods": answers[i],
-            "identification": _identification(p, base_md, cur_md[i] if cur_md else None, identified),
+            "identification": _identification(p, base_md, cur_md[i] if cur_md else None, identified, model.beam),
             "input_route": route, "warnings": w,
             "_extra": {"location_distribution": where[i]},
         })
@@ -104,11 +104,12 @@ def _measured_pairs(model: TrainedModel, baseline, currents: list, names: list[s
     return base_md, cur_md, identified, pairs
 
 
-def _require_common_modes(pairs: list, names: list[str]) -> None:
+def _require_common_modes(pairs: list, names: list[str], beam) -> None:
     """Refuse a pair with fewer than 2 modes both tests hold (the modal network reads modes)."""
     for p, n in zip(pairs, names[1:]):
         if p.modes.size < 2:
-            raise BeamDamageError(f"{n}: {p.modes.size} of modes 1-4 found in both it and {names[0]} ("
+            raise BeamDamageError(f"{n}: {p.modes.size} of modes {modes_text(beam.modes)} found in both it and "
+                                  f"{names[0]} ("
                                   + "; ".join(p.missing) + "); classify needs at least 2 common modes")
 
 
@@ -122,21 +123,21 @@ def _network_answers(model: TrainedModel, route: str, X, rows: list, sens, n: in
     out, d = network_output(est, X, sens)
     distance, percentile = ood_percentile(est, X)
     for r, i in enumerate(rows):
-        nets[i] = network_answer(d, r, out, model.beam.length_m, depth(float(d.hinge_flexibility[r])))
+        nets[i] = network_answer(d, r, out, model.beam, depth(float(d.hinge_flexibility[r])))
         dist[i], pct[i], where[i] = float(distance[r]), float(percentile[r]), d.location_distribution[r]
     return nets, dist, pct, where
 
 
-def _chosen_verdict(net, cl, p, reasons: list, warnings: list, sens, depth):
+def _chosen_verdict(net, cl, p, reasons: list, warnings: list, sens, depth, beam):
     """The verdict keys (the network's inside the training data, else the classical method's), whether they are
     the network's, and the pair's warnings: ``(dict, bool, list)``."""
     w = list(warnings)
     inside = not reasons
-    modes_text = ", ".join(str(j + 1) for j in p.modes) if p is not None else ""
+    found = ", ".join(str(beam.modes[j]) for j in p.modes) if p is not None else ""
     if net is None:
-        w.append(f"the network gives no answer for this pair (it needs modes 1-4): the verdict is the classical "
-                 f"method's ({cl['method']}) on modes {modes_text}")
-        return classical_verdict(cl, sens, depth), False, w
+        w.append(f"the network gives no answer for this pair (it needs modes {modes_text(beam.modes)}): the verdict "
+                 f"is the classical method's ({cl['method']}) on modes {found}")
+        return classical_verdict(cl, sens, depth, beam), False, w
     if inside or cl is None:
         if not inside:
             w.append("the pair lies outside the training data (" + "; ".join(reasons) + ") and no classical "
@@ -144,22 +145,23 @@ def _chosen_verdict(net, cl, p, reasons: list, warnings: list, sens, depth):
         return dict(net), True, w
     w.append("the pair lies outside the training data (" + "; ".join(reasons) + "): the verdict is the "
              f"classical method's ({cl['method']}"
-             + ("" if p is None or p.complete else f" on modes {modes_text}")
+             + ("" if p is None or p.complete else f" on modes {found}")
              + "); the network's answer is shown beside it")
-    return classical_verdict(cl, sens, depth), False, w
+    return classical_verdict(cl, sens, depth, beam), False, w
 
 
-def _identification(p, base_md, cur_md, identified: bool) -> dict:
+def _identification(p, base_md, cur_md, identified: bool, beam) -> dict:
     """The verdict's ``identification``: how the modes were found, the baseline and measured natural frequencies
     (Hz; every mode found when the pair is not complete) and the 1-based modes classified."""
     if p is None:
         freqs, modes = ([], []), []
     elif p.complete:
-        freqs, modes = np.abs(p.eigenvalues) / (2 * np.pi), [1, 2, 3, 4]
+        freqs, modes = np.abs(p.eigenvalues) / (2 * np.pi), list(beam.modes)
     else:
         freqs = [np.sort(np.abs(md.eigenvalues)) / (2 * np.pi) for md in (base_md, cur_md)]
-        modes = [int(j) + 1 for j in p.modes]
-    return {**IDENTIFICATION, "source": "identified from FRFs" if identified else "modal data",
+        modes = [beam.modes[int(j)] for j in p.modes]
+    return {**IDENTIFICATION, "n_modes": beam.n_modes, "modes_model": list(beam.modes),
+            "source": "identified from FRFs" if identified else "modal data",
             "baseline_frequencies_hz": [float(x) for x in freqs[0]],
             "measured_frequencies_hz": [float(x) for x in freqs[1]], "modes_classified": modes}
 
@@ -174,9 +176,13 @@ def _modal_inputs(model: TrainedModel, baseline, currents: list, names: list[str
         raise BeamDamageError("BASELINE and MEASURED must all be FRF files or all modal data")
     if not kinds.pop():
         return baseline, list(currents), False, None
-    fmax = IDENTIFICATION_BAND_FACTOR * float(sens.frequencies_hz[3])
+    test = model.beam.test
+    if test is None:
+        fmax, fmin = IDENTIFICATION_BAND_FACTOR * float(sens.frequencies_hz[3]), 0.0
+    else:
+        fmin, fmax = test.band_hz
     try:
-        ids = [identify_modes(d, fmax, n) for d, n in zip(inputs, names)]
+        ids = [identify_modes(d, fmax, n, model.beam.n_modes, fmin) for d, n in zip(inputs, names)]
     except BeamDamageError:
         if model.route == "modal":
             raise
@@ -184,7 +190,7 @@ def _modal_inputs(model: TrainedModel, baseline, currents: list, names: list[str
     found = []
     for d, md in zip(inputs, ids):
         k = md.eigenvalues.size
-        lo, hi = identification_band_hz(d, fmax)
+        lo, hi = identification_band_hz(d, fmax, fmin)
         found.append(f"LSCF/LSFD found {k} mode{'s' * (k != 1)} in {lo:.4g}-{hi:.4g} Hz")
     return ids[0], ids[1:], True, found
 
@@ -200,13 +206,13 @@ def _frf_route_features(model: TrainedModel, baseline, currents, warnings: list)
 
     def grid(r):
         H, f = r
-        w = f.omega_rad_s
-        if w[0] > GRID_RAD_S[0] * 1.001 or w[-1] < GRID_RAD_S[-1] * 0.999:
+        w, g = f.omega_rad_s, model.beam.grid_rad_s
+        if w[0] > g[0] * 1.001 or w[-1] < g[-1] * 0.999:
             msg = (f"FRF lines cover {w[0]:.4g}-{w[-1]:.4g} rad/s, the model's grid "
-                   f"{GRID_RAD_S[0]:.4g}-{GRID_RAD_S[-1]:.4g} rad/s: nearest values used outside")
+                   f"{g[0]:.4g}-{g[-1]:.4g} rad/s: nearest values used outside")
             if msg not in warnings:
                 warnings.append(msg)
-        return map_frf_to_grid(H, w)
+        return map_frf_to_grid(H, w, g)
 
     gb = grid(rows_b)
     return frf_features(np.stack([np.stack([gb, grid(r)]) for r in rows_c]))
@@ -218,7 +224,7 @@ def _classical_answers(model: TrainedModel, pairs, n: int, sens):
 
     Complete pairs are classified in one call on modes 1-4; the others each on the modes both tests hold (the
     sensitivities of those modes alone), none below 2 common modes."""
-    L = model.beam.length_m
+    L = model.beam
     thresholds = model.config["classical_thresholds"]
     answers, reasons, mode_sens = [[] for _ in range(n)], [[] for _ in range(n)], [sens] * n
     if pairs is None:
@@ -254,12 +260,12 @@ def _network_inputs(model: TrainedModel, baseline, currents: list, pairs, identi
                               "nor identifiable modes")
     if "modal" not in model.networks:
         raise BeamDamageError("this model has no modal-route network; give FRF files holding receptances at "
-                              f"{', '.join(model.beam.dofs)} driven at {model.beam.dofs[0]}")
+                              f"{', '.join(model.beam.dofs)} driven at {model.beam.dofs[model.beam.drive_row]}")
     rows = [i for i, p in enumerate(pairs) if p.complete]
     X = None
     if rows:
         X = modal_features(np.stack([pairs[i].eigenvalues for i in rows]),
-                           np.stack([pairs[i].eigenvectors for i in rows]))
+                           np.stack([pairs[i].eigenvectors for i in rows]), model.beam.n_modes, model.beam.test)
     calibrated = (model.config.get("generator_config") or {}).get("measurement", {}).get("identification")
     if identified and calibrated != IDENTIFICATION:
         warnings.append("the training data's modal noise was not calibrated against the identification run "

@@ -19,6 +19,8 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 import numpy as np
+
+from learn.features import as_spec
 from physics.io import atomic_write_bytes
 
 __all__ = ["MIN_DROP", "Metrics", "NOISE_EDGES", "TIP_ZONE", "figures", "metrics", "reliability", "roc_auc",
@@ -149,13 +151,6 @@ def subsets(truth: dict, table) -> dict:
         out[f"element {k}" + (" (x/L<0.85)" if k == 4 else "")] = ~dam | ((x >= lo) & (x < hi))
     out["tip zone x/L>=0.85"] = ~dam | (x >= TIP_ZONE)
     return out
-
-
-def as_spec(beam):
-    """A :class:`learn.features.BeamSpec` from itself or from a length (m): the thesis's 4-element zones."""
-    from learn.features import BeamSpec
-
-    return beam if isinstance(beam, BeamSpec) else BeamSpec("", float(beam), (), "")
 
 
 def table_rows(outputs, truth, table, length_m) -> list[dict]:

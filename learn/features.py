@@ -40,7 +40,7 @@ from datagen.store import DATASET_FORMAT, read_manifest
 from datagen.synth import log_magnitude_map
 from physics.layout import Layout
 
-__all__ = ["BeamSpec", "DOFS", "GRID_RAD_S", "Pairs", "ROUTES", "beam_of_manifest", "curvatures", "features",
+__all__ = ["BeamSpec", "DOFS", "as_spec", "GRID_RAD_S", "Pairs", "ROUTES", "beam_of_manifest", "curvatures", "features",
            "frf_features", "grid_weights", "labels", "load_pairs", "manifest_checksum",
            "map_frf_to_grid", "modal_features", "real_shapes", "split_by_specimen"]
 
@@ -92,6 +92,18 @@ class BeamSpec:
         if self.test is None:
             return self.length_m * np.arange(1, 5) / 4
         return np.sort(np.asarray(self.test.sensors_x_m))
+
+    @property
+    def drive_row(self) -> int:
+        """Row of the reference DOF among :attr:`dofs` (the thesis's: the first)."""
+        if self.test is None:
+            return 0
+        return int(np.argmin(np.abs(self.sensors_x_m - self.test.drive_x_m)))
+
+    @property
+    def modes(self) -> tuple:
+        """Bending modes used (1-based)."""
+        return (1, 2, 3, 4) if self.test is None else tuple(self.test.modes)
 
     def zone_of(self, x_over_L) -> np.ndarray:
         """1-based zone of each ``x / L`` (0 where NaN)."""
@@ -174,6 +186,11 @@ class Pairs:
         return replace(self, eigenvalues=self.eigenvalues[idx], eigenvectors=self.eigenvectors[idx],
                        log_frf={k: v[idx] for k, v in self.log_frf.items()},
                        table=self.table.iloc[idx].reset_index(drop=True), groups=self.groups[idx])
+
+
+def as_spec(beam) -> BeamSpec:
+    """A :class:`BeamSpec` from itself or from a length (m): the thesis's test (4 element zones)."""
+    return beam if isinstance(beam, BeamSpec) else BeamSpec("", float(beam), (), "")
 
 
 def manifest_checksum(manifest: dict) -> str:
@@ -283,7 +300,7 @@ def labels(table: pd.DataFrame, beam) -> dict:
         ``max_drop`` (largest relative drop of the noise-free
         natural frequencies due to the damage alone: ``max_frequency_drop_rel``), ``n_damages``.
     """
-    beam = beam if isinstance(beam, BeamSpec) else BeamSpec("", float(beam), (), "")
+    beam = as_spec(beam)
     length_m = beam.length_m
     n = len(table)
     damaged = table["damaged"].to_numpy(bool)

@@ -50,9 +50,15 @@ def on_model_dofs(data, beam: BeamSpec, beam_x_m=None, where: str = "measured da
     (rows taken as the model's DOFs, with a warning later).
     """
     n = len(beam.dofs)
-    grid_x = np.linspace(0.0, beam.length_m, n + 1)
-    grid = tuple(f"{k}:y" for k in range(1, n + 2))
-    kw = dict(length_m=beam.length_m, n_elements=n, beam_x_m=beam_x_m)
+    if beam.test is None:
+        grid_x = np.linspace(0.0, beam.length_m, n + 1)
+        grid = tuple(f"{k}:y" for k in range(1, n + 2))
+        kw = dict(length_m=beam.length_m, n_elements=n, beam_x_m=beam_x_m)
+    else:  # the model's sensors; files without node geometry are read in ascending node number onto them
+        grid_x, grid = beam.sensors_x_m, tuple(beam.dofs)
+        gap = np.min(np.diff(grid_x)) if n > 1 else beam.length_m
+        kw = dict(length_m=beam.length_m, n_elements=n, tol_m=0.05 * gap,
+                  beam_x_m=grid_x if beam_x_m is None else np.sort(np.asarray(beam_x_m, float)))
     if isinstance(data, MeasuredFRF):
         def frf_map(d):
             labels = tuple(dict.fromkeys(d.response_dofs + d.reference_dofs))
@@ -85,11 +91,13 @@ class ModalPair:
     ----------
     eigenvalues : ndarray, complex, shape (2, c)          baseline and current, ascending frequency
     eigenvectors : ndarray, complex, shape (2, n_dofs, c)
-    modes : ndarray, int, shape (c,)                      0-based nominal modes they are (``[0, 1, 2, 3]`` when
-                                                          both tests hold 4 modes)
-    missing : tuple of str                                which of modes 1-4 a test lacks, and why (empty when
-                                                          complete)
+    modes : ndarray, int, shape (c,)                      0-based indices of the model's modes they are
+                                                          (``[0, 1, 2, 3]`` when both tests hold the 4 of the
+                                                          thesis's test)
+    missing : tuple of str                                which of the model's modes a test lacks, and why (empty
+                                                          when complete)
     warnings : tuple of str
+    n_modes : int                                         modes the model reads
     """
 
     eigenvalues: np.ndarray
@@ -97,11 +105,12 @@ class ModalPair:
     modes: np.ndarray
     missing: tuple = ()
     warnings: tuple = ()
+    n_modes: int = 4
 
     @property
     def complete(self) -> bool:
-        """Both tests hold modes 1-4 (what the modal network reads)."""
-        return self.modes.size == 4
+        """Both tests hold every mode the model reads (what the modal network reads)."""
+        return self.modes.size == self.n_modes
 
 
 def pair_modes_by_frequency(frequencies_hz, nominal_hz, tolerance: float | None = None) -> np.ndarray:
@@ -165,24 +174,26 @@ def modal_pair(baseline, current, beam: BeamSpec, nominal_hz, names=("baseline",
         elif dofs != tuple(beam.dofs):
             raise BeamDamageError(f"{name} modal data: DOF set {list(d.dofs)} differs from the model's "
                                   f"{list(beam.dofs)}")
-        o = np.argsort(np.abs(d.eigenvalues))[:4]
+        m = beam.n_modes
+        o = np.argsort(np.abs(d.eigenvalues))[:m] if beam.test is None else np.argsort(np.abs(d.eigenvalues))
         lams.append(d.eigenvalues[o])
         vecs.append(d.eigenvectors[:, o])
-    if all(x.size == 4 for x in lams):
-        return ModalPair(np.stack(lams), np.stack(vecs), np.arange(4), (), tuple(warnings))
+    m = beam.n_modes
+    if beam.test is None and all(x.size == m for x in lams):
+        return ModalPair(np.stack(lams), np.stack(vecs), np.arange(m), (), tuple(warnings), m)
     found = [how or f"it holds {x.size} mode{'s' * (x.size != 1)}" for how, x in zip(found or (None, None), lams)]
-    which = [pair_modes_by_frequency(np.abs(x) / (2 * np.pi), nominal_hz[:4]) for x in lams]
+    which = [pair_modes_by_frequency(np.abs(x) / (2 * np.pi), nominal_hz[:m]) for x in lams]
     common = np.intersect1d(*which)
     common = common[common >= 0]
     missing = []
     for name, how, k in zip(names, found, which):
-        absent = [j + 1 for j in range(4) if j not in k]
+        absent = [beam.modes[j] for j in range(m) if j not in k]
         if absent:
             missing.append(f"mode{'s' * (len(absent) > 1)} {', '.join(map(str, absent))} not identified in {name} "
                            f"({how})")
     take = [[int(np.flatnonzero(k == j)[0]) for j in common] for k in which]
     return ModalPair(np.stack([x[t] for x, t in zip(lams, take)]), np.stack([v[:, t] for v, t in zip(vecs, take)]),
-                     common, tuple(missing), tuple(warnings))
+                     common, tuple(missing), tuple(warnings), m)
 
 
 def _canonical_dof(label: str) -> str:
@@ -196,20 +207,23 @@ def frf_rows(frf, beam: BeamSpec):
     f = frf.to_kind("receptance") if frf.frequency_hz[0] > 0 else frf.select_band(fmin_hz=1e-9).to_kind("receptance")
     resp = [_canonical_dof(d) for d in f.response_dofs]
     ref = [_canonical_dof(d) for d in f.reference_dofs]
-    if beam.dofs[0] not in ref or any(d not in resp for d in beam.dofs):
+    drive = beam.dofs[beam.drive_row]
+    if drive not in ref or any(d not in resp for d in beam.dofs):
         return None, f
-    j = ref.index(beam.dofs[0])
+    j = ref.index(drive)
     return np.stack([f.frf[resp.index(d), j] for d in beam.dofs]), f
 
 
 
-def identification_band_hz(frf, fmax_hz: float | None = None) -> tuple[float, float]:
-    """Band (Hz) :func:`identify_modes` fits: the file's lines from the first above 0 Hz up to ``fmax_hz``."""
+def identification_band_hz(frf, fmax_hz: float | None = None, fmin_hz: float = 0.0) -> tuple[float, float]:
+    """Band (Hz) :func:`identify_modes` fits: the file's lines from the first above ``fmin_hz`` (and 0 Hz) up to
+    ``fmax_hz``."""
     f = frf.frequency_hz
-    return float(f[f > 0][0]), float(f[-1] if fmax_hz is None else min(f[-1], fmax_hz))
+    return float(f[f > fmin_hz][0]), float(f[-1] if fmax_hz is None else min(f[-1], fmax_hz))
 
 
-def identify_modes(frf, fmax_hz: float | None = None, where: str = "FRF file"):
+def identify_modes(frf, fmax_hz: float | None = None, where: str = "FRF file", n_modes: int = 4,
+                   fmin_hz: float = 0.0):
     """Modal data of one FRF file by :data:`IDENTIFICATION` (the path the training data's modal noise describes).
 
     Parameters
@@ -225,13 +239,12 @@ def identify_modes(frf, fmax_hz: float | None = None, where: str = "FRF file"):
     below mode 4 or a mode sinks into the noise floor: :func:`pair_modes_by_frequency` tells which they are).
     """
     band = None
-    if fmax_hz is not None and frf.frequency_hz[-1] > fmax_hz:
-        band = identification_band_hz(frf, fmax_hz)
+    if (fmax_hz is not None and frf.frequency_hz[-1] > fmax_hz) or fmin_hz > frf.frequency_hz[0]:
+        band = identification_band_hz(frf, fmax_hz, fmin_hz)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            ident = identify_frf(frf, method=IDENTIFICATION["method"], n_modes=IDENTIFICATION["n_modes"],
-                                 band_hz=band)
+            ident = identify_frf(frf, method=IDENTIFICATION["method"], n_modes=n_modes, band_hz=band)
     except (np.linalg.LinAlgError, RuntimeError) as exc:
         raise BeamDamageError(f"{where}: LSCF/LSFD identification failed ({exc})") from None
     return ident.modal_data
@@ -239,9 +252,9 @@ def identify_modes(frf, fmax_hz: float | None = None, where: str = "FRF file"):
 
 
 def nominal_ratio_range(sens) -> np.ndarray:
-    """Accepted range of the frequency ratios ``f_k / f_1`` (k = 2..4), shape (3, 2): the nominal beam's ratios
+    """Accepted range of the frequency ratios ``f_k / f_1`` (k = 2..m), shape (m - 1, 2): the nominal beam's ratios
     times ``1 -+ RATIO_TOLERANCE``."""
-    r = sens.frequencies_hz[1:4] / sens.frequencies_hz[0]
+    r = sens.frequencies_hz[1:] / sens.frequencies_hz[0]
     return np.stack([r * (1 - RATIO_TOLERANCE), r * (1 + RATIO_TOLERANCE)], axis=1)
 
 
@@ -249,18 +262,19 @@ def mode_checks(lam, vecs, ratio_range) -> list[list[str]]:
     """Per pair, reasons it lies outside what the modal network was trained on: a frequency ratio ``f_k / f_1``
     outside the accepted range (a missing or spurious mode), or baseline and current modes that do not pair
     (MAC < 0.8)."""
-    f = np.abs(lam) / (2 * np.pi)                                 # (n, 2, 4)
-    ratio = f[..., 1:] / f[..., :1]                               # (n, 2, 3)
+    f = np.abs(lam) / (2 * np.pi)                                 # (n, 2, m)
+    ratio = f[..., 1:] / f[..., :1]                               # (n, 2, m - 1)
+    m = f.shape[-1]
     u = real_shapes(vecs)                                         # (n, 2, 4, m)
     pairing = np.diagonal(mac(u[:, 0], u[:, 1]), axis1=-2, axis2=-1)  # (n, m)
     reasons = []
     for i in range(f.shape[0]):
         r = [f"{name} f{k + 2}/f1 = {ratio[i, s, k]:.4g} lies outside the nominal beam's "
              f"{ratio_range[k, 0]:.4g}-{ratio_range[k, 1]:.4g} (a missing or spurious mode)"
-             for s, name in enumerate(("baseline", "measured")) for k in range(3)
+             for s, name in enumerate(("baseline", "measured")) for k in range(m - 1)
              if not ratio_range[k, 0] <= ratio[i, s, k] <= ratio_range[k, 1]]
         r += [f"mode {k + 1} of the baseline and the measured test do not pair (MAC {pairing[i, k]:.2f} < 0.8)"
-              for k in range(4) if pairing[i, k] < 0.8]
+              for k in range(m) if pairing[i, k] < 0.8]
         reasons.append(r)
     return reasons
 

@@ -10,6 +10,7 @@ from datagen.damage.slit import equivalent_depth as slit_depth
 from learn.classical import MethodOutput
 from learn.estimator import DamageClassifier
 from learn.evaluate import MIN_DROP
+from learn.features import as_spec
 from physics.io import dof_positions_text
 
 __all__ = ["IN_DISTRIBUTION_PERCENTILE", "classical_answer", "classical_verdict", "detectability_threshold",
@@ -44,29 +45,44 @@ def ood_percentile(est: DamageClassifier, X) -> tuple[np.ndarray, np.ndarray]:
 
 
 
-def network_answer(d, i, out, L, depth) -> dict:
+def zone_keys(beam, zone: int, probabilities=None) -> dict:
+    """``location_zone``, ``zone_edges_m`` (and ``zone_probabilities``) of a verdict; ``location_element`` and
+    ``element_probabilities`` are the zone's on the thesis's test (its 4 elements), None on another."""
+    thesis = beam.test is None
+    p = None if probabilities is None else [float(v) for v in probabilities]
+    return {"location_zone": int(zone), "zone_edges_m": [float(v) for v in beam.zone_edges_m],
+            "zone_probabilities": p, "location_element": int(zone) if thesis else None,
+            "element_probabilities": p if thesis else None}
+
+
+def network_answer(d, i, out, beam, depth) -> dict:
+    beam = as_spec(beam)
+    L = beam.length_m
     return {"damaged": bool(out.damaged[i]), "probability_damaged": float(d.probability_damaged[i]),
             "location_x_over_L": float(d.x_over_L[i]), "location_x_m": float(d.x_over_L[i] * L),
-            "location_std_m": float(d.x_std_over_L[i] * L), "location_element": int(d.element[i]),
-            "element_probabilities": [float(v) for v in d.element_probabilities[i]],
+            "location_std_m": float(d.x_std_over_L[i] * L),
+            **zone_keys(beam, d.element[i], d.element_probabilities[i]),
             "hinge_flexibility": float(d.hinge_flexibility[i]),
             "hinge_flexibility_std": float(d.hinge_flexibility_std[i]),
             "depth_m": depth, "detectable": bool(out.detectable[i])}
 
 
-def classical_answer(o: MethodOutput, i, L) -> dict:
+def classical_answer(o: MethodOutput, i, beam) -> dict:
+    beam = as_spec(beam)
+    zone = {k: v for k, v in zone_keys(beam, beam.zone_of(o.x_over_L[i])).items() if "probabilities" not in k}
     return {"method": o.name, "damaged": bool(o.damaged[i]), "location_x_over_L": float(o.x_over_L[i]),
-            "location_x_m": float(o.x_over_L[i] * L), "location_element": int(min(int(o.x_over_L[i] * 4) + 1, 4)),
+            "location_x_m": float(o.x_over_L[i] * beam.length_m), **zone,
             "hinge_flexibility": float(o.hinge_flexibility[i]), "score": float(o.score[i])}
 
 
 
-def classical_verdict(cl: dict, sens, depth) -> dict:
+def classical_verdict(cl: dict, sens, depth, beam=None) -> dict:
     """The verdict keys from the classical method's answer ``cl`` (no probabilities or spreads)."""
     detectable = sens.largest_drop(np.array([cl["location_x_over_L"]]), np.array([cl["hinge_flexibility"]]))[0]
     return {"damaged": cl["damaged"], "probability_damaged": None,
             "location_x_over_L": cl["location_x_over_L"], "location_x_m": cl["location_x_m"],
             "location_std_m": None, "location_element": cl["location_element"],
+            "location_zone": cl["location_zone"], "zone_edges_m": cl["zone_edges_m"], "zone_probabilities": None,
             "element_probabilities": None, "hinge_flexibility": cl["hinge_flexibility"],
             "hinge_flexibility_std": None, "depth_m": depth(cl["hinge_flexibility"]),
             "detectable": bool(detectable >= detectability_threshold())}
@@ -87,15 +103,29 @@ def _network_sentence(a: dict) -> str:
                 "frequencies by less than the measurement resolution")
     depth = "" if a["depth_m"] is None else f", e.g. a slit {a['depth_m'] * 1000:.2f} mm deep over 5.5 mm"
     return (f"damaged (probability {a['probability_damaged']:.1%}): slit at x = {a['location_x_m']:.3f} m +- "
-            f"{a['location_std_m']:.3f} m (x/L = {a['location_x_over_L']:.2f}, element {a['location_element']} of "
-            f"4), hinge flexibility EI/(k L) = {a['hinge_flexibility']:.3g} +- {a['hinge_flexibility_std']:.2g}"
+            f"{a['location_std_m']:.3f} m (x/L = {a['location_x_over_L']:.2f}, {_zone_text(a)}), hinge flexibility "
+            f"EI/(k L) = {a['hinge_flexibility']:.3g} +- {a['hinge_flexibility_std']:.2g}"
             f"{depth}")
+
+
+def modes_text(modes) -> str:
+    """``"1-4"`` for a run of 3 or more modes, else ``"1, 3, 5"``."""
+    modes = list(modes)
+    run = modes == list(range(modes[0], modes[-1] + 1))
+    return f"{modes[0]}-{modes[-1]}" if run and len(modes) > 2 else ", ".join(map(str, modes))
+
+
+def _zone_text(a: dict) -> str:
+    edges, z = a.get("zone_edges_m"), a.get("location_zone")
+    if a.get("location_element") is not None:
+        return f"element {a['location_element']} of 4"
+    return f"zone {z} of {len(edges) - 1}, {edges[z - 1]:.3g}-{edges[z]:.3g} m"
 
 
 def _classical_sentence(c: dict) -> str:
     if not c["damaged"]:
         return f"{c['method']}: undamaged"
-    return (f"{c['method']}: damaged, x = {c['location_x_m']:.3f} m (element {c['location_element']}), hinge "
+    return (f"{c['method']}: damaged, x = {c['location_x_m']:.3f} m ({_zone_text(c)}), hinge "
             f"flexibility {c['hinge_flexibility']:.3g}")
 
 
@@ -106,7 +136,8 @@ def verdict_text(res: dict) -> str:
     if res["verdict_from"] == "network":
         head = "Verdict (network): " + _network_sentence(net) + "."
     elif net is None:
-        head = (f"Verdict (classical method on modes {', '.join(map(str, modes))}, the network needs modes 1-4): "
+        need = modes_text(res["identification"].get("modes_model", [1, 2, 3, 4]))
+        head = (f"Verdict (classical method on modes {', '.join(map(str, modes))}, the network needs modes {need}): "
                 + _classical_sentence(cl) + ".")
     else:
         head = ("Verdict (classical method, the pair lies outside the training data): " + _classical_sentence(cl)
@@ -114,11 +145,13 @@ def verdict_text(res: dict) -> str:
     lines = [head[:1].upper() + head[1:]]
     if net is None:
         lines.append("Why: " + "; ".join(res["out_of_distribution_reasons"]) + ".")
-        lines.append("Network: no answer (trained on modes 1-4).")
+        lines.append(f"Network: no answer (trained on modes "
+                     f"{modes_text(res['identification'].get('modes_model', [1, 2, 3, 4]))}).")
     else:
         if net["damaged"]:
-            lines.append("Element probabilities (network): " + ", ".join(f"{k + 1}: {v:.2f}" for k, v in
-                                                                         enumerate(net["element_probabilities"])))
+            what = "Element" if net.get("location_element") is not None else "Zone"
+            lines.append(f"{what} probabilities (network): " + ", ".join(f"{k + 1}: {v:.2f}" for k, v in
+                                                                         enumerate(net["zone_probabilities"])))
         lines.append(f"Network: {_network_sentence(net)}.")
     lines.append(f"Classical ({cl['method']}, the best on the training data): {_classical_sentence(cl)}." if cl else
                  "Classical: no answer (fewer than 2 modes identified in both tests).")
@@ -132,7 +165,8 @@ def verdict_text(res: dict) -> str:
     lines.append(f"Natural frequencies (Hz, {ident['source']}): baseline "
                  + ", ".join(f"{x:.2f}" for x in ident["baseline_frequencies_hz"]) + "; measured "
                  + ", ".join(f"{x:.2f}" for x in ident["measured_frequencies_hz"])
-                 + (f"; modes classified: {', '.join(map(str, modes))}" if modes and len(modes) < 4 else ""))
+                 + (f"; modes classified: {', '.join(map(str, modes))}"
+                    if modes and len(modes) < ident.get("n_modes", 4) else ""))
     for name, d in res["dof_positions"].items():
         lines.append(f"{name}: " + (dof_positions_text(d) if d else "modal data without DOF labels: rows taken as "
                                                                   "the model's DOFs"))
