@@ -223,7 +223,7 @@ def identification_band_hz(frf, fmax_hz: float | None = None, fmin_hz: float = 0
 
 
 def identify_modes(frf, fmax_hz: float | None = None, where: str = "FRF file", n_modes: int = 4,
-                   fmin_hz: float = 0.0):
+                   fmin_hz: float = 0.0, max_order: int = 40):
     """Modal data of one FRF file by :data:`IDENTIFICATION` (the path the training data's modal noise describes).
 
     Parameters
@@ -244,7 +244,8 @@ def identify_modes(frf, fmax_hz: float | None = None, where: str = "FRF file", n
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            ident = identify_frf(frf, method=IDENTIFICATION["method"], n_modes=n_modes, band_hz=band)
+            ident = identify_frf(frf, method=IDENTIFICATION["method"], n_modes=n_modes, band_hz=band,
+                                 max_order=max_order)
     except (np.linalg.LinAlgError, RuntimeError) as exc:
         raise BeamDamageError(f"{where}: LSCF/LSFD identification failed ({exc})") from None
     return ident.modal_data

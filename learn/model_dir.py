@@ -95,11 +95,11 @@ class TrainedModel:
         beam_x_m = None
         if beam and Path(beam).suffix.lower() == ".toml":
             fb = load_beam(beam)
-            spec = BeamSpec(b.name, fb.length_m, b.dofs, mass_model)
+            spec = BeamSpec(b.name, fb.length_m, b.dofs, mass_model, b.test)
             beam_x_m = fb.measured_x_m if fb.measured_x_given else None
         else:
             length_m = b.length_m if beam in (None, b.name) else beam_preset(beam).length_m
-            spec = BeamSpec(beam or b.name, length_m, b.dofs, mass_model)
+            spec = BeamSpec(beam or b.name, length_m, b.dofs, mass_model, b.test if beam in (None, b.name) else None)
         self.check_beam(spec, "measured beam")
         return spec, beam_x_m
 
