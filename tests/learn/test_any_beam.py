@@ -1,0 +1,128 @@
+"""The loop on beams unlike the thesis's: a free-free steel bar with 6 accelerometers (two at its free ends) and a
+pinned girder with one sensor; generate -> train -> classify by the CLI, checked against closed forms and the
+samples' own labels."""
+
+import json
+
+import numpy as np
+import pytest
+
+from experiments.cli import main
+from tests.systems import write_renumbered_uff
+
+EI, M, L = 700.0, 3.14, 1.0
+BAR = f"""name = "steel-bar"
+bc = "free-free"
+length_m = {L}
+width_m = 0.04
+thickness_m = 0.01
+EI_Nm2 = {EI}
+mass_per_length_kg_m = {M}
+measured_x_m = [0.8, 0.0, 0.2, 0.4, 0.6, 1.0]
+drive_x_m = 0.0
+band_hz = [20.0, 700.0]
+"""
+FAST = 'base = "training"\n[output]\nshard_size = 200\n[measurement]\nlines = 512\n'
+
+
+@pytest.fixture(scope="module")
+def bar(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("bar")
+    (tmp / "bar.toml").write_text(BAR)
+    (tmp / "fast.toml").write_text(FAST)
+    assert main(["generate", "--beam", str(tmp / "bar.toml"), "--config", str(tmp / "fast.toml"), "--n", "1500",
+                 "--seed", "4", "--out", str(tmp / "data")]) == 0
+    return tmp
+
+
+def test_a_free_free_bar_is_simulated_on_its_own_test(bar):
+    from datagen.dataset import Dataset
+    from learn.features import beam_of_manifest, labels
+
+    ds = Dataset(bar / "data")
+    lay = ds.manifest["layout"]
+    assert lay["bc"] == "free-free" and lay["modes"] == [1, 2, 3, 4] and not lay["thesis"]
+    # bending frequencies of the nominal bar: beta L = 4.7300, 7.8532, 10.9956, 14.1372
+    closed = np.square([4.7300, 7.8532, 10.9956, 14.1372]) * np.sqrt(EI / M) / (2 * np.pi * L**2)
+    np.testing.assert_allclose(lay["frequencies_hz"], closed, rtol=2e-4)
+    # specimens scatter around it (EI +-8 %, mass +-4 %): the baseline's mode-r frequency over the closed form
+    f = ds.table([f"f{r}_hz_base" for r in range(1, 5)]).to_numpy() / closed
+    assert 0.9 < f.min() and f.max() < 1.1 and np.ptp(f[:, 0] / f[:, 3]) < 0.02   # rigid-body modes left out
+    assert ds.manifest["schema"]["frf_reference_row"] == 0 and len(ds.manifest["schema"]["measured_dofs"]) == 6
+    assert ds.manifest["layout"]["updating"].startswith("no updated model: the band holds 4 mode(s)")
+    H = ds.frf("measured", np.arange(3))
+    assert H.shape == (3, 2, 6, 512)
+    # the driving point (the free end x = 0) and the far free end move in phase in mode 1 and in antiphase in 2
+    lam = ds.array("truth_poles", [0])[0, 0]
+    psi = ds.array("truth_shapes", [0])[0, 0]
+    used = lay["modes_idx"]
+    ratio = (psi[5, used] / psi[0, used]).real
+    np.testing.assert_allclose(np.sign(ratio), [1, -1, 1, -1])
+    np.testing.assert_allclose(np.abs(lam[used]) / (2 * np.pi) / closed, f[0], rtol=1e-3)
+    spec = beam_of_manifest(ds.manifest)
+    np.testing.assert_allclose(spec.zone_edges_m, [0, 0.2, 0.4, 0.6, 0.8, 1.0])
+    t = labels(ds.samples, spec)
+    dam = t["damaged"]
+    np.testing.assert_array_equal(t["element"][dam], np.ceil(t["x_over_L"][dam] / 0.2).clip(1, 5).astype(int))
+
+
+def test_train_and_classify_files_of_the_bar(bar, capsys):
+    from datagen.dataset import Dataset
+    from physics.io import MeasuredFRF
+
+    assert main(["train", "--data", str(bar / "data"), "--out", str(bar / "model"), "--epochs", "25",
+                 "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    net = next(m for m in summary["test_metrics"] if m["method"].startswith("network"))
+    assert net["false_alarm_rate"] <= 0.05
+    ds = Dataset(bar / "data")
+    t = ds.samples
+    i = int(np.flatnonzero(t["damaged"] & (t["max_frequency_drop_rel"] > 0.02))[0])
+    H = ds.array("frf_measured", [i])[0]
+    xs = sorted(ds.manifest["layout"]["sensors_x_m"])
+    dofs = tuple(f"{k + 2}:+Y" for k in range(6))
+    files = []
+    for st in range(2):
+        frf = MeasuredFRF(ds.omega_rad_s / (2 * np.pi), H[st][:, None, :], dofs, (dofs[0],))
+        files.append(str(write_renumbered_uff(bar / f"t{st}.uff", frf, {k + 2: 31 + k for k in range(6)},
+                                              {31 + k: 1000 * x for k, x in enumerate(xs)}, [3, 0, 5, 1, 4, 2])))
+    assert main(["classify", "--model", str(bar / "model"), "--baseline", *files, "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["zone_edges_m"] == pytest.approx([0, 0.2, 0.4, 0.6, 0.8, 1.0])
+    assert res["location_element"] is None and res["identification"]["modes_model"] == [1, 2, 3, 4]
+    x_true = float(t["damage0_x_m"][i])
+    assert res["damaged"] and abs(res["location_x_m"] - x_true) < 0.05, (res["location_x_m"], x_true)
+    assert res["location_zone"] == int(np.ceil(x_true / 0.2))
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    ("measured_x_m = [0.2, 0.2]", "sensors 1 and 2 coincide at 0.2 m"),
+    ('bc = "pinned-free"', "leaves the beam a mechanism"),
+    ("drive_x_m = 0.5", "generate needs a sensor at the reference DOF drive_x_m = 0.5 m"),
+    ("band_hz = [1.0, 5.0]", "'band_hz' [1, 5] holds no bending mode"),
+])
+def test_a_test_generate_cannot_run_is_refused_in_one_line(tmp_path, capsys, change, message):
+    key = change.split(" = ")[0]
+    text = "\n".join(line for line in BAR.splitlines() if not line.startswith(key + " ")) + f"\n{change}\n"
+    (tmp_path / "b.toml").write_text(text)
+    assert main(["generate", "--beam", str(tmp_path / "b.toml"), "--n", "10", "--out", str(tmp_path / "d")]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert not (tmp_path / "d").exists()
+
+
+def test_a_beam_file_of_the_thesis_test_keeps_the_thesis_dataset(tmp_path):
+    """beam5 written as a beam file (quarter-point sensors, no band) simulates what --preset beam5 does."""
+    from datagen.dataset import Dataset
+    from physics.beam import preset_beam, write_beam
+
+    write_beam(tmp_path / "b5.toml", preset_beam("beam5"))
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("[measurement]\nlines = 64\n")
+    for name, extra in (("file", ["--beam", str(tmp_path / "b5.toml")]), ("preset", [])):
+        assert main(["generate", *extra, "--config", str(cfg), "--n", "40", "--seed", "2",
+                     "--out", str(tmp_path / name)]) == 0
+    a, b = Dataset(tmp_path / "file"), Dataset(tmp_path / "preset")
+    assert a.manifest["layout"]["thesis"] and a.manifest["schema"]["measured_dofs"] == ["2:y", "3:y", "4:y", "5:y"]
+    np.testing.assert_allclose(a.array("truth_poles"), b.array("truth_poles"), rtol=1e-12)
+    np.testing.assert_allclose(a.array("K_updated"), b.array("K_updated"), rtol=1e-9)
