@@ -18,7 +18,7 @@ from physics.io import FRF, MODAL, MeasuredFRF, accepted, atomic_write_bytes, at
 __all__ = ["KEYS", "add_parser", "run"]
 
 KEYS = ("measured", "damaged", "probability_damaged", "location_x_over_L", "location_x_m", "location_std_m",
-        "location_zone", "zone_edges_m", "zone_probabilities",
+        "location_zone", "zone_edges_m", "zone_probabilities", "location_ambiguity",
         "location_element", "element_probabilities", "hinge_flexibility", "hinge_flexibility_std", "depth_m",
         "detectable", "verdict_from", "in_distribution", "out_of_distribution_reasons", "mahalanobis_distance",
         "training_percentile", "network", "classical", "classical_methods", "identification", "input_route",

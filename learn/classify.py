@@ -6,8 +6,8 @@ import functools
 
 import numpy as np
 
-from learn.classical import run_classical
-from learn.features import frf_features, map_frf_to_grid, modal_features
+from learn.classical import FREQUENCY_METHODS, run_classical
+from learn.features import frf_features, frequency_features, map_frf_to_grid, modal_features
 from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows, identification_band_hz,
                             identify_modes, modal_pair, mode_checks, nominal_ratio_range)
 from learn.model_dir import TrainedModel
@@ -58,12 +58,16 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     sens = model.sensitivity
     base_md, cur_md, identified, pairs = _measured_pairs(model, baseline, currents, names, sens, warnings)
     route, X, rows = _network_inputs(model, baseline, currents, pairs, identified, warnings)
-    if route == "modal":
+    if route in ("modal", "frequency"):
         _require_common_modes(pairs, names, model.beam)
     depth = functools.partial(equivalent_depth, preset=model.config.get("truth_beam") or model.beam.name,
                               width_m=model.config["reference_width_m"])
     nets, dist, pct, where = _network_answers(model, route, X, rows, sens, len(currents), depth)
     answers, mode_reasons, mode_sens = _classical_answers(model, pairs, len(currents), sens)
+    for i in range(len(currents)):
+        if mirrored(model.beam, pairs[i] if pairs else None):
+            nets[i] = nets[i] and fold_to_half(nets[i], model.beam, where[i])
+            answers[i] = [fold_to_half(a, model.beam) for a in answers[i]]
     results = []
     for i, net in enumerate(nets):
         cl = next((a for a in answers[i] if a["method"] == model.config["best_classical"]),
@@ -77,7 +81,8 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
                               f"{pct[i]:.2f}% of training pairs")
         verdict, from_network, w = _chosen_verdict(net, cl, p, reasons, warnings, mode_sens[i], depth, model.beam)
         results.append({
-            "measured": names[i + 1], **verdict, "verdict_from": "network" if from_network else "classical",
+            "measured": names[i + 1], **verdict, "location_ambiguity": location_ambiguity(model.beam, verdict, p),
+            "verdict_from": "network" if from_network else "classical",
             "in_distribution": not reasons, "out_of_distribution_reasons": reasons,
             "mahalanobis_distance": dist[i], "training_percentile": pct[i],
             "network": net, "classical": cl,
@@ -87,6 +92,49 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
             "_extra": {"location_distribution": where[i]},
         })
     return results
+
+
+#: Supports whose beam is its own mirror image about midspan.
+SYMMETRIC_SUPPORTS = ("free-free", "pinned-pinned", "clamped-clamped")
+
+
+def mirrored(beam, pair) -> bool:
+    """Whether a pair leaves the mirror ambiguity: a symmetric beam (:data:`SYMMETRIC_SUPPORTS`) read on natural
+    frequencies only (no shapes, or one sensor), where a damage at ``x`` and at ``L - x`` change every frequency
+    alike."""
+    test = beam.test
+    return (test is not None and test.bc in SYMMETRIC_SUPPORTS
+            and (test.n_sensors == 1 or (pair is not None and pair.frequency_only)))
+
+
+def fold_to_half(answer: dict, beam, distribution=None) -> dict:
+    """An answer located on the half ``x <= L / 2`` (the mirror ambiguity, :func:`mirrored`): the network's
+    distribution folded onto it (mean and std of ``min(x, L - x)``), a classical ``x`` mirrored there."""
+    L = beam.length_m
+    out = dict(answer)
+    if distribution is not None:
+        p = np.asarray(distribution, float)
+        c = (np.arange(p.size) + 0.5) / p.size
+        c = np.minimum(c, 1 - c)
+        mean = float(p @ c)
+        out["location_std_m"] = float(np.sqrt(max(p @ c**2 - mean**2, 0.0) + 1 / (12 * p.size**2)) * L)
+    else:
+        mean = min(answer["location_x_over_L"], 1 - answer["location_x_over_L"])
+    out["location_x_over_L"], out["location_x_m"] = mean, mean * L
+    z = int(beam.zone_of(mean))
+    out["location_zone"] = z
+    if out.get("location_element") is not None:
+        out["location_element"] = z
+    return out
+
+
+def location_ambiguity(beam, verdict: dict, pair) -> str | None:
+    """What frequencies alone cannot tell (:func:`mirrored`): the mirror image of the located damage, or None."""
+    if not verdict.get("damaged") or not mirrored(beam, pair):
+        return None
+    x, L = verdict["location_x_m"], beam.length_m
+    return (f"natural frequencies alone cannot tell x = {x:.3f} m from its mirror image L - x = {L - x:.3f} m on "
+            f"this symmetric {beam.test.bc} beam: both places fit the data equally")
 
 
 def _measured_pairs(model: TrainedModel, baseline, currents: list, names: list[str], sens, warnings: list):
@@ -238,12 +286,17 @@ def _classical_answers(model: TrainedModel, pairs, n: int, sens):
         vecs = np.stack([pairs[i].eigenvectors for i in full])
         outs, _ = run_classical(lam, vecs, sens, thresholds)
         for j, (i, why) in enumerate(zip(full, mode_checks(lam, vecs, nominal_ratio_range(sens)))):
-            answers[i], reasons[i] = [classical_answer(o, j, L) for o in outs], why
+            if pairs[i].frequency_only:  # no shapes: the frequency-only methods, no MAC check
+                why = [r for r in why if "MAC" not in r]
+            answers[i] = [classical_answer(o, j, L) for o in outs
+                          if not pairs[i].frequency_only or o.name in FREQUENCY_METHODS]
+            reasons[i] = why
     for i, p in enumerate(pairs):
         if not p.complete and p.modes.size >= 2:
             mode_sens[i] = sens.modes(p.modes)
             outs, _ = run_classical(p.eigenvalues[None], p.eigenvectors[None], mode_sens[i], thresholds)
-            answers[i] = [classical_answer(o, 0, L) for o in outs]
+            answers[i] = [classical_answer(o, 0, L) for o in outs
+                          if not p.frequency_only or o.name in FREQUENCY_METHODS]
     return answers, reasons, mode_sens
 
 
@@ -261,6 +314,13 @@ def _network_inputs(model: TrainedModel, baseline, currents: list, pairs, identi
     if pairs is None:
         raise BeamDamageError(f"the files hold neither the FRFs the model's {model.route} route reads "
                               "nor identifiable modes")
+    if any(p.frequency_only for p in pairs):
+        if "frequency" not in model.networks:
+            raise BeamDamageError("natural frequencies without mode shapes need a model with a frequency-route "
+                                  "network: re-create it with 'beam-damage train'")
+        rows = [i for i, p in enumerate(pairs) if p.complete]
+        X = frequency_features(np.stack([pairs[i].eigenvalues for i in rows]), model.beam.n_modes) if rows else None
+        return "frequency", X, rows
     if "modal" not in model.networks:
         raise BeamDamageError("this model has no modal-route network; give FRF files holding receptances at "
                               f"{', '.join(model.beam.dofs)} driven at {model.beam.dofs[model.beam.drive_row]}")

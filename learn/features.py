@@ -12,6 +12,9 @@ Three input routes turn a pair into a fixed-length real vector:
     Log-magnitude receptances of the Lancaster/Pilkey updated models of both
     states (the thesis's route: FRFs -> modal identification -> updated model
     -> FRFs), on the fixed log-frequency grid :data:`GRID_RAD_S`.
+``frequency``
+    The relative natural-frequency shifts alone (:func:`frequency_features`): one sensor, or natural
+    frequencies without shapes.
 ``measured``
     The measured receptances themselves on the same grid: measured FRFs come
     on their own frequency lines and are interpolated onto the grid in
@@ -44,7 +47,7 @@ __all__ = ["BeamSpec", "DOFS", "as_spec", "GRID_RAD_S", "Pairs", "ROUTES", "beam
            "frf_features", "grid_weights", "labels", "load_pairs", "manifest_checksum",
            "map_frf_to_grid", "modal_features", "real_shapes", "split_by_specimen"]
 
-ROUTES = ("modal", "updated", "measured")
+ROUTES = ("modal", "updated", "measured", "frequency")
 
 #: Fixed FRF representation: log-spaced lines (rad/s) covering the four modes of the thesis beams.
 GRID_RAD_S = np.geomspace(60.0, 4800.0, 96)
@@ -429,6 +432,13 @@ def modal_features(eigenvalues, eigenvectors, n_modes: int = 4, test: Layout | N
     return np.concatenate([shift, 10 * du.reshape(n, -1), 10 * dk.reshape(n, -1)], axis=1)
 
 
+def frequency_features(eigenvalues, n_modes: int = 4):
+    """The ``frequency`` route: relative natural-frequency shifts (percent) of each mode, shape (n, n_modes); what
+    one sensor, or natural frequencies alone, tell (the first columns of :func:`modal_features`)."""
+    f = np.abs(np.asarray(eigenvalues, complex)[..., :n_modes])
+    return 100 * (f[:, 1] / f[:, 0] - 1)
+
+
 # --------------------------------------------------------------------------- FRF routes
 def grid_weights(omega_rad_s, grid_rad_s=GRID_RAD_S):
     """Linear-interpolation matrix in log-frequency from FRF lines onto the grid.
@@ -484,7 +494,9 @@ def frf_features(log_frf):
 
 def features(pairs: Pairs, route: str = "modal") -> np.ndarray:
     """Feature matrix (n, d) of ``pairs`` for one input route (:data:`ROUTES`)."""
-    if route == "modal":
+    if route == "frequency":
+        X = frequency_features(pairs.eigenvalues, pairs.beam.n_modes)
+    elif route == "modal":
         X = modal_features(pairs.eigenvalues, pairs.eigenvectors, pairs.beam.n_modes, pairs.beam.test)
     elif route in ("updated", "measured"):
         if route not in pairs.log_frf:

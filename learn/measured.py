@@ -10,7 +10,7 @@ from itertools import combinations
 import numpy as np
 
 from learn.features import BeamSpec, real_shapes
-from physics.errors import BeamDamageError, FileFormatError
+from physics.errors import BeamDamageError
 from physics.identification import identify_frf
 from physics.io import MeasuredFRF, map_frf_dofs, map_measured_dofs, parse_dof, prepare_measured
 from physics.modal import mac
@@ -98,6 +98,8 @@ class ModalPair:
                                                           when complete)
     warnings : tuple of str
     n_modes : int                                         modes the model reads
+    frequency_only : bool                                 natural frequencies without shapes in a test (the
+                                                          eigenvectors are placeholders)
     """
 
     eigenvalues: np.ndarray
@@ -106,6 +108,7 @@ class ModalPair:
     missing: tuple = ()
     warnings: tuple = ()
     n_modes: int = 4
+    frequency_only: bool = False
 
     @property
     def complete(self) -> bool:
@@ -161,10 +164,12 @@ def modal_pair(baseline, current, beam: BeamSpec, nominal_hz, names=("baseline",
     """
     warnings = []
     lams, vecs = [], []
+    shapeless = any(d.eigenvectors is None for d in (baseline, current))
+    if shapeless:
+        warnings.append("natural frequencies without mode shapes: the verdict reads the frequencies alone")
     for name, d in zip(names, (baseline, current)):
-        if d.eigenvectors is None:
-            raise FileFormatError(f"{name} modal data: field 'eigenvectors' is required "
-                                  f"(rows = {', '.join(beam.dofs)})")
+        if shapeless:  # placeholders: the frequency route and the frequency-only methods read no shape
+            d = replace(d, eigenvectors=np.ones((len(beam.dofs), d.eigenvalues.size), complex), dofs=beam.dofs)
         dofs = tuple(_canonical_dof(x) for x in d.dofs) if d.dofs else None
         if dofs is None:
             if d.eigenvectors.shape[0] != len(beam.dofs):
@@ -180,7 +185,7 @@ def modal_pair(baseline, current, beam: BeamSpec, nominal_hz, names=("baseline",
         vecs.append(d.eigenvectors[:, o])
     m = beam.n_modes
     if beam.test is None and all(x.size == m for x in lams):
-        return ModalPair(np.stack(lams), np.stack(vecs), np.arange(m), (), tuple(warnings), m)
+        return ModalPair(np.stack(lams), np.stack(vecs), np.arange(m), (), tuple(warnings), m, shapeless)
     found = [how or f"it holds {x.size} mode{'s' * (x.size != 1)}" for how, x in zip(found or (None, None), lams)]
     which = [pair_modes_by_frequency(np.abs(x) / (2 * np.pi), nominal_hz[:m]) for x in lams]
     common = np.intersect1d(*which)
@@ -193,7 +198,7 @@ def modal_pair(baseline, current, beam: BeamSpec, nominal_hz, names=("baseline",
                            f"({how})")
     take = [[int(np.flatnonzero(k == j)[0]) for j in common] for k in which]
     return ModalPair(np.stack([x[t] for x, t in zip(lams, take)]), np.stack([v[:, t] for v, t in zip(vecs, take)]),
-                     common, tuple(missing), tuple(warnings), m)
+                     common, tuple(missing), tuple(warnings), m, shapeless)
 
 
 def _canonical_dof(label: str) -> str:

@@ -32,7 +32,7 @@ def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
 
 def dataset_frfs(routes) -> tuple:
     """Dataset FRFs (:data:`datagen.synth.DATASET_FRFS`) the input routes need."""
-    return tuple(r for r in routes if r != "modal")
+    return tuple(r for r in routes if r not in ("modal", "frequency"))
 
 
 #: Generator keys of the changes between two test days (datagen config section ``specimen``).
@@ -54,7 +54,8 @@ def _nominal_root_spring(source: list):
 # --------------------------------------------------------------------------- train
 def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None = None, progress: bool = False,
           test_fraction: float = 0.15, threads: int | None = 1) -> dict:
-    """Train the default-route network (and a modal-route companion), score it and the classical methods, save.
+    """Train the default-route network (and modal- and frequency-route companions), score it and the classical
+    methods, save.
 
     Parameters
     ----------
@@ -72,7 +73,7 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
     route = DEFAULT_ROUTE if route is None else route
     if route not in ROUTES:
         raise BeamDamageError(f"--route {route!r} must be one of {', '.join(ROUTES)}")
-    routes = [route] + (["modal"] if route != "modal" else [])
+    routes = [route] + [r for r in ("modal", "frequency") if r != route]
     t0 = time.perf_counter()
     pairs = load_pairs(data, frfs=dataset_frfs(routes))
     y, truth = targets(pairs)

@@ -170,5 +170,7 @@ def verdict_text(res: dict) -> str:
     for name, d in res["dof_positions"].items():
         lines.append(f"{name}: " + (dof_positions_text(d) if d else "modal data without DOF labels: rows taken as "
                                                                   "the model's DOFs"))
+    if res.get("location_ambiguity"):
+        lines.append(f"Location: {res['location_ambiguity']}.")
     lines += [f"warning: {w}" for w in res["warnings"]]
     return "\n".join(lines)

@@ -3,7 +3,7 @@
 One object with the keys of a beam state in the thesis fixture ``beams.json``::
 
     {"natural_frequencies_hz": [f1, ...],            # optional if eigenvalues given
-     "damping_ratios": [z1, ...],                    # optional if eigenvalues given
+     "damping_ratios": [z1, ...],                    # optional (0 without: natural frequencies alone)
      "eigenvalues": ["-0.21962+135.31j", ...],       # complex strings, upper half-plane
      "eigenvectors": [["0.72+15.0j", ...], ...],     # rows = measured DOFs, cols = modes
      "dofs": ["2:y", "3:y", ...]}                    # optional labels of the rows
@@ -94,9 +94,10 @@ def modal_data_from_dict(obj: dict, source="modal data") -> ModalData:
             raise FileFormatError(f"{source}: field 'eigenvalues' entry {k + 1} ({lam[k]:.6g}) is not in the upper "
                                   "half-plane; give the Im > 0 member of each conjugate pair")
 
-    elif "natural_frequencies_hz" in obj and "damping_ratios" in obj:
+    elif "natural_frequencies_hz" in obj:
         f = number_list(obj["natural_frequencies_hz"], source, "natural_frequencies_hz")
-        z = number_list(obj["damping_ratios"], source, "damping_ratios")
+        z = (number_list(obj["damping_ratios"], source, "damping_ratios") if "damping_ratios" in obj
+             else np.zeros(f.size))   # natural frequencies alone
         if f.shape != z.shape:
             raise FileFormatError(f"{source}: 'natural_frequencies_hz' has {f.size} entries but 'damping_ratios' "
                                   f"has {z.size}; expected one of each per mode")
@@ -110,8 +111,8 @@ def modal_data_from_dict(obj: dict, source="modal data") -> ModalData:
                                   f"a frequency >= {MIN_EIGENVALUE:g} Hz")
         lam = eigenvalues_from_modal(f, z)
     else:
-        raise FileFormatError(f"{source}: missing key 'eigenvalues' (or 'natural_frequencies_hz' "
-                              "with 'damping_ratios')")
+        raise FileFormatError(f"{source}: missing key 'eigenvalues' (or 'natural_frequencies_hz', "
+                              "optionally with 'damping_ratios')")
     vecs = None
     if obj.get("eigenvectors") is not None:
         vecs = _complex_array(obj["eigenvectors"], source, "eigenvectors", 2)

@@ -32,6 +32,7 @@ def bar(tmp_path_factory):
     (tmp / "fast.toml").write_text(FAST)
     assert main(["generate", "--beam", str(tmp / "bar.toml"), "--config", str(tmp / "fast.toml"), "--n", "1500",
                  "--seed", "4", "--out", str(tmp / "data")]) == 0
+    assert main(["train", "--data", str(tmp / "data"), "--out", str(tmp / "model"), "--epochs", "25"]) == 0
     return tmp
 
 
@@ -70,10 +71,9 @@ def test_train_and_classify_files_of_the_bar(bar, capsys):
     from datagen.dataset import Dataset
     from physics.io import MeasuredFRF
 
-    assert main(["train", "--data", str(bar / "data"), "--out", str(bar / "model"), "--epochs", "25",
-                 "--json"]) == 0
-    summary = json.loads(capsys.readouterr().out)
-    net = next(m for m in summary["test_metrics"] if m["method"].startswith("network"))
+    cfg = json.loads((bar / "model" / "config.json").read_text())
+    assert set(cfg["networks"]) == {"modal", "frequency"} and cfg["beam"]["test"]["bc"] == "free-free"
+    net = next(m for m in cfg["test_metrics"] if m["method"] == "network (modal)")
     assert net["false_alarm_rate"] <= 0.05
     ds = Dataset(bar / "data")
     t = ds.samples
@@ -126,3 +126,27 @@ def test_a_beam_file_of_the_thesis_test_keeps_the_thesis_dataset(tmp_path):
     assert a.manifest["layout"]["thesis"] and a.manifest["schema"]["measured_dofs"] == ["2:y", "3:y", "4:y", "5:y"]
     np.testing.assert_allclose(a.array("truth_poles"), b.array("truth_poles"), rtol=1e-12)
     np.testing.assert_allclose(a.array("K_updated"), b.array("K_updated"), rtol=1e-9)
+
+
+def test_natural_frequencies_alone_get_a_verdict_with_the_mirror_ambiguity_stated(bar, capsys):
+    """Modal JSON with natural_frequencies_hz only: the frequency-route network and the frequency-only classical
+    methods answer, and on this symmetric bar the verdict names the mirror position."""
+    from datagen.dataset import Dataset
+
+    ds = Dataset(bar / "data")
+    t = ds.samples
+    i = int(np.flatnonzero(t["damaged"] & (t["max_frequency_drop_rel"] > 0.02))[0])
+    f = np.abs(ds.array("eigenvalues_measured", [i])[0]) / (2 * np.pi)
+    files = []
+    for st in range(2):
+        (bar / f"f{st}.json").write_text(json.dumps({"natural_frequencies_hz": f[st].tolist()}))
+        files.append(str(bar / f"f{st}.json"))
+    assert main(["classify", "--model", str(bar / "model"), "--baseline", *files, "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["input_route"] == "frequency" and res["damaged"]
+    assert {c["method"] for c in res["classical_methods"]} == {"Cawley-Adams", "DLAC", "MDLAC"}
+    x = res["location_x_m"]
+    x_true = float(t["damage0_x_m"][i])
+    assert min(abs(x - x_true), abs(1.0 - x - x_true)) < 0.08, (x, x_true)
+    assert f"L - x = {1.0 - x:.3f} m" in res["location_ambiguity"]
+    assert "natural frequencies without mode shapes" in " ".join(res["warnings"])

@@ -35,7 +35,7 @@ def modal_model(tiny):
 
 def test_train_writes_a_complete_model_directory(tiny):
     cfg = json.loads((tiny / "model" / "config.json").read_text())
-    assert cfg["route"] == "measured" and set(cfg["networks"]) == {"measured", "modal"}
+    assert cfg["route"] == "measured" and set(cfg["networks"]) == {"measured", "modal", "frequency"}
     assert cfg["beam"] == {"name": "beam5", "length_m": 0.6095, "dofs": ["2:y", "3:y", "4:y", "5:y"],
                            "mass_model": "iirs"}
     assert len(cfg["training_data"][0]["manifest_checksum"]) == 64
