@@ -108,7 +108,7 @@ class Layout:
         return {"bc": self.bc, "length_m": self.length_m, "sensors_x_m": list(self.sensors_x_m),
                 "drive_x_m": self.drive_x_m, "band_hz": list(self.band_hz), "zones_x_m": list(self.zones_x_m),
                 "modes": list(self.modes), "frequencies_hz": list(self.frequencies_hz), "unseen": list(self.unseen),
-                "thesis": self.thesis}
+                "thesis": bool(self.thesis)}
 
     @classmethod
     def from_dict(cls, d: dict) -> "Layout":
@@ -180,7 +180,7 @@ def layout_of(beam, source: str = "beam") -> Layout:
         raise ConfigError(f"{source}: 'measured_x_m' sensors {a + 1} and {b + 1} coincide at {xs[a]:g} m; "
                           "expected distinct positions")
     drive = float(xs[0]) if beam.drive_x_m is None else float(beam.drive_x_m)
-    quarter = xs.size == 4 and np.allclose(xs, L * np.arange(1, 5) / 4, rtol=0, atol=1e-9 * L)
+    quarter = xs.size == 4 and bool(np.allclose(xs, L * np.arange(1, 5) / 4, rtol=0, atol=1e-9 * L))
     thesis = (beam.bc == "clamped-free" and quarter and drive == xs[0]
               and beam.band_hz is None and beam.zones_x_m is None)
     f_all, shape_at = nominal_modes(beam)
