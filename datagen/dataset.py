@@ -192,6 +192,16 @@ class Dataset:
             return self.frf(name[4:], rows)
         raise FileFormatError(f"unknown array {name!r}; expected one of {sorted(ARRAYS) + sorted(DERIVED)}")
 
+    @property
+    def updating(self) -> str:
+        """What the dataset's Lancaster/Pilkey update uses, in one sentence ("" for datasets that predate it)."""
+        return self.manifest.get("layout", {}).get("updating", "")
+
+    @property
+    def has_updated_model(self) -> bool:
+        """False when the test holds fewer modes than sensors, so no updated model (nor its FRFs) exists."""
+        return not self.updating.startswith("no updated model")
+
     def frf(self, kind: str, rows=None, out=None, lines=None) -> np.ndarray:
         """FRFs of ``kind`` ("measured" | "updated"), complex, shape (n, 2 states, 4 dofs, L).
 
@@ -204,6 +214,8 @@ class Dataset:
         """
         if kind not in DATASET_FRFS:
             raise FileFormatError(f"FRF kind {kind!r} unknown; expected one of {', '.join(DATASET_FRFS)}")
+        if kind == "updated" and not self.has_updated_model:
+            raise FileFormatError(f"{self.root}: {self.updating}")
         if self.legacy:
             H = self._gather([f"frf_{kind}"], rows)[f"frf_{kind}"]
             H = H if lines is None else H[..., line_index(lines, H.shape[-1])]

@@ -59,8 +59,8 @@ from physics.layout import RIGID_BODY_MODES, Layout, layout_of
 from physics.modal import eigenvalues_from_modal, modal_parameters, undamped_modes
 from physics.updating import analyst_mass, pilkey, reduced_mass
 
-__all__ = ["BatchInputs", "CHUNK", "LABEL_FIELDS", "N_MEAS", "Setup", "build_setup", "draw_batch", "get_setup",
-           "measure_modes", "projected_modes", "simulate_batch", "simulate_chunk", "simulate_shard",
+__all__ = ["BatchInputs", "CHUNK", "LABEL_FIELDS", "N_MEAS", "Setup", "build_setup", "draw_batch", "generated_test",
+           "get_setup", "measure_modes", "projected_modes", "simulate_batch", "simulate_chunk", "simulate_shard",
            "damage_frequency_drop", "truth_matrices", "unit_mass", "update_models"]
 
 N_MEAS = 4          # measured translational DOFs (thesis nodes 2..5); FRFs are driven at the first
@@ -276,13 +276,19 @@ def suspension_unit_stiffness(beam, bounce_fraction: float = 0.05) -> float:
     return 0.5 * beam.mass_per_length_kg_m * L * (bounce_fraction * omega1_unit) ** 2
 
 
+def generated_test(beam, source: str):
+    """The :class:`physics.layout.Layout` of ``beam`` that ``generate`` can simulate; ConfigError naming ``source``."""
+    test = layout_of(beam, source)
+    if test.drive_sensor is None:
+        raise ConfigError(f"{source}: generate needs a sensor at the reference DOF drive_x_m = "
+                          f"{test.drive_x_m:g} m (a driving-point FRF); the sensors are at {list(test.sensors_x_m)}")
+    return test
+
+
 def build_setup(cfg: dict) -> Setup:
     """Precompute the nominal truth matrices, measured DOFs, start basis and FRF grid."""
     beam = truth_beam_of(cfg)
-    test = layout_of(beam, "config key 'beam'" if cfg["beam"] else f"preset {cfg['preset']!r}")
-    if test.drive_sensor is None:
-        raise ConfigError(f"config key 'beam': generate needs a sensor at the reference DOF drive_x_m = "
-                          f"{test.drive_x_m:g} m (a driving-point FRF); the sensors are at {list(test.sensors_x_m)}")
+    test = generated_test(beam, "config key 'beam'" if cfg["beam"] else f"preset {cfg['preset']!r}")
     preset = as_preset(beam) if cfg["beam"] else beam_preset(cfg["preset"])
     sec = dict(cfg["section"])
     if cfg["beam"]:  # the beam file's section, where it gives one

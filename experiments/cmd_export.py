@@ -30,7 +30,8 @@ def add_parser(subparsers):
     p.add_argument("--format", choices=sorted(writers), default="uff",
                    help="file format (default uff): " + "; ".join(f"{f.name}: {f.description}"
                                                                   for f in writers.values()))
-    p.add_argument("--kind", choices=[*DATASET_FRFS, "both"], default="both", help="which FRFs (default both)")
+    p.add_argument("--kind", choices=[*DATASET_FRFS, "both"], default="both",
+                   help="which FRFs (default both; measured only for a dataset without an updated model)")
     p.add_argument("--out", required=True, help="output directory (created)")
     p.add_argument("--json", action="store_true", help="print the list of written files as JSON")
     p.set_defaults(func=run, flags={"samples": "--samples"})
@@ -74,7 +75,7 @@ def run(args) -> dict:
     f_hz = ds.omega_rad_s / (2 * np.pi)
     fmt = writable(FRF)[args.format]
     out = Path(args.out)
-    kinds = DATASET_FRFS if args.kind == "both" else (args.kind,)
+    kinds = (DATASET_FRFS if ds.has_updated_model else ("measured",)) if args.kind == "both" else (args.kind,)
     frfs = {kind: ds.frf(kind, rows).astype(complex) for kind in kinds}  # read (and verify) all before writing
     for kind, H in frfs.items():
         for j, i in enumerate(ids):

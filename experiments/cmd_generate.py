@@ -57,7 +57,11 @@ def run(args) -> dict:
         except ImportError:
             raise BeamDamageError("--beam FILE needs physics.beam (beam files), which this installation lacks") \
                 from None
-        cfg = merge({"beam": beam_mapping(load_beam(beam))}, base=cfg)
+        from datagen.pipeline import generated_test
+
+        truth = load_beam(beam)
+        generated_test(truth, beam)             # the test it describes, refused here naming the file
+        cfg = merge({"beam": beam_mapping(truth)}, base=cfg)
     if args.store_frf:
         cfg["output"]["store_frf"] = True
     m = generate(args.out, cfg, n=args.n, seed=args.seed, workers=args.workers, scheduler=args.scheduler,

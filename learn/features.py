@@ -260,8 +260,8 @@ def load_pairs(roots, frfs=("measured", "updated"), chunk: int = 1024, workers: 
         cs = manifest_checksum(ds.manifest)
         lines, log_grid = log_magnitude_map(grid_weights(ds.omega_rad_s, b.grid_rad_s)[0])
         log_frf = {}
-        if "updated" in frfs and "no updated model" in ds.manifest.get("layout", {}).get("updating", ""):
-            raise FileFormatError(f"{root}: {ds.manifest['layout']['updating']}")
+        if "updated" in frfs and not ds.has_updated_model:
+            raise FileFormatError(f"{root}: {ds.updating}")
         for kind in frfs:
             out = np.empty((len(ds), 2, len(b.dofs), b.grid_rad_s.size), np.float32)
 

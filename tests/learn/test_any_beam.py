@@ -100,15 +100,31 @@ def test_train_and_classify_files_of_the_bar(bar, capsys):
     ('bc = "pinned-free"', "leaves the beam a mechanism"),
     ("drive_x_m = 0.5", "generate needs a sensor at the reference DOF drive_x_m = 0.5 m"),
     ("band_hz = [1.0, 5.0]", "'band_hz' [1, 5] holds no bending mode"),
+    ("measured_x_m = [0.5, 1.3]", "'measured_x_m' positions must lie in [0, length_m = 1.0]"),
+    # the band holds mode 2 alone (146 Hz), antisymmetric: the mid-point is its node
+    ("band_hz = [100.0, 200.0]\nmeasured_x_m = [0.0, 0.5]",
+     "sensor 2 at 0.5 m lies at a node of every mode in the band"),
 ])
 def test_a_test_generate_cannot_run_is_refused_in_one_line(tmp_path, capsys, change, message):
-    key = change.split(" = ")[0]
-    text = "\n".join(line for line in BAR.splitlines() if not line.startswith(key + " ")) + f"\n{change}\n"
+    keys = tuple(line.split(" = ")[0] + " " for line in change.splitlines())
+    text = "\n".join(line for line in BAR.splitlines() if not line.startswith(keys)) + f"\n{change}\n"
     (tmp_path / "b.toml").write_text(text)
     assert main(["generate", "--beam", str(tmp_path / "b.toml"), "--n", "10", "--out", str(tmp_path / "d")]) == 2
     err = capsys.readouterr().err
-    assert message in err and err.count("\n") == 1
+    assert f"error: {tmp_path / 'b.toml'}: " in err and message in err and err.count("\n") == 1
     assert not (tmp_path / "d").exists()
+
+
+def test_export_writes_the_measured_frfs_of_a_dataset_without_an_updated_model(bar, tmp_path, capsys):
+    """6 sensors, 4 modes: no Lancaster/Pilkey update, so export writes the measured FRFs and refuses 'updated'."""
+    assert main(["export", str(bar / "data"), "--samples", "3", "--format", "uff", "--out", str(tmp_path / "e")]) == 0
+    assert sorted(p.name for p in (tmp_path / "e").iterdir()) == [
+        "sample-000003_baseline_measured.uff", "sample-000003_current_measured.uff"]
+    capsys.readouterr()
+    assert main(["export", str(bar / "data"), "--samples", "3", "--kind", "updated", "--out", str(tmp_path / "u")]) == 2
+    err = capsys.readouterr().err
+    assert "no updated model: the band holds 4 mode(s) the sensors see and there are 6 sensors" in err
+    assert not (tmp_path / "u").exists()
 
 
 def test_a_beam_file_of_the_thesis_test_keeps_the_thesis_dataset(tmp_path):
