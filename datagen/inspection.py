@@ -15,7 +15,7 @@ from datagen.dataset import Dataset
 from datagen.store import STATES
 from physics.errors import FileFormatError
 from physics.io import atomic_write_text
-from physics.properties import cantilever_curvature_squared
+from physics.properties import curvature_squared
 
 __all__ = ["curvature_check", "inspect_dataset"]
 
@@ -27,34 +27,41 @@ def _single_slits(table):
     return table[table.n_damages == 1]
 
 
-def curvature_check(table, length_m):
+def curvature_check(table, length_m, bc: str = "clamped-free", modes=(1, 2, 3, 4)):
     """Regress the truth frequency shift of single-slit samples on the curvature-squared prediction.
 
     Prediction (narrow slit of relative loss ``q = dEI/EI``, first order in its
-    width ``w``, uniform cantilever; the reduced section's flexibility gives
+    width ``w``, uniform beam on ideal supports ``bc``; the reduced section's flexibility gives
     ``q / (1 - q)``):
     ``df_r/f_r = -(1/2) q/(1 - q) w phi_r''(x)^2 / int phi_r''^2``
-    (:func:`physics.properties.cantilever_curvature_squared`). Slit datasets only
+    (:func:`physics.properties.curvature_squared`). Slit datasets only
     (``n`` is 0 for other damage kinds).
+
+    Parameters
+    ----------
+    table : DataFrame        the samples, with ``df{k}_rel`` of the ``k``-th mode used
+    length_m : float
+    bc : str                 the supports
+    modes : sequence of int  bending-mode number of each mode used (the dataset's ``layout.modes``)
 
     Returns
     -------
-    dict per mode: ``slope`` (1 = exact), ``r2``, ``n``.
+    dict per mode used (``mode{number}``): ``slope`` (1 = exact), ``r2``, ``n``.
     """
     one = _single_slits(table)
     out = {}
-    for r in range(4):
+    for k, number in enumerate(modes, start=1):
         if len(one) < 3:
-            out[f"mode{r + 1}"] = {"slope": None, "r2": None, "n": int(len(one))}
+            out[f"mode{number}"] = {"slope": None, "r2": None, "n": int(len(one))}
             continue
         q = one["damage0_ei_loss"]
-        pred = -0.5 * q / (1 - q) * one["damage0_width_m"] * cantilever_curvature_squared(
-            one["damage0_x_m"].to_numpy(), length_m, r)
-        act = one[f"df{r + 1}_rel"]
+        pred = -0.5 * q / (1 - q) * one["damage0_width_m"] * curvature_squared(
+            one["damage0_x_m"].to_numpy(), length_m, number - 1, bc)
+        act = one[f"df{k}_rel"]
         pred, act = np.asarray(pred, float), act.to_numpy()
         slope = float(pred @ act / (pred @ pred))
         r2 = float(1 - np.sum((act - slope * pred) ** 2) / np.sum((act - act.mean()) ** 2))
-        out[f"mode{r + 1}"] = {"slope": slope, "r2": r2, "n": int(len(act))}
+        out[f"mode{number}"] = {"slope": slope, "r2": r2, "n": int(len(act))}
     return out
 
 
@@ -88,10 +95,12 @@ def inspect_dataset(dataset_dir, out_dir=None) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     preset = ds.manifest["preset"]
     length = preset.get("length_m", preset.get("length"))  # format-1 manifests: "length"
-    check = curvature_check(table, length)
+    layout = ds.manifest.get("layout", {})
+    bc, modes = layout.get("bc", "clamped-free"), tuple(layout.get("modes", (1, 2, 3, 4)))
+    check = curvature_check(table, length, bc, modes)
     summary = _summary(ds, table, check, dataset_dir)
     _plot_labels(plt, table, out)
-    rows = _plot_shift_vs_position(plt, table, length, check, out)
+    rows = _plot_shift_vs_position(plt, table, length, bc, modes, check, out)
     atomic_write_text(out / "curvature_check.csv", "mode,slope,r2,n\n" + "\n".join(rows) + "\n")
     if ds.shards:
         _plot_frf_overlay(plt, ds, out)
@@ -130,25 +139,29 @@ def _plot_labels(plt, table, out: Path) -> None:
     plt.close(fig)
 
 
-def _plot_shift_vs_position(plt, table, length_m: float, check: dict, out: Path) -> list[str]:
+def _plot_shift_vs_position(plt, table, length_m: float, bc: str, modes, check: dict, out: Path) -> list[str]:
     """Write ``shift_vs_position.png`` (single-slit shifts against curvature squared); return the CSV rows per mode."""
     one = _single_slits(table)
-    fig, axs = plt.subplots(2, 2, figsize=(11, 7))
+    ncols = 2 if len(modes) <= 4 else 4
+    nrows = -(-len(modes) // ncols)
+    fig, axs = plt.subplots(nrows, ncols, figsize=(5.5 * ncols, 3.5 * nrows), squeeze=False)
+    for ax in axs.flat[len(modes):]:
+        ax.set_visible(False)
     xg = np.linspace(0, length_m, 400)
     rows = []
-    for r, ax in enumerate(axs.flat):
+    for k, (number, ax) in enumerate(zip(modes, axs.flat), start=1):
         if len(one):
             q = one["damage0_ei_loss"]
             norm = -0.5 * q / (1 - q) * one["damage0_width_m"]
-            ax.plot(one["damage0_x_m"], one[f"df{r + 1}_rel"] / norm, ".", ms=3, label="truth shift / (-q/(1-q) w/2)")
-        ax.plot(xg, cantilever_curvature_squared(xg, length_m, r), "r-", label="phi''(x)^2 / int phi''^2")
-        c = check[f"mode{r + 1}"]
-        ax.set_title(f"mode {r + 1}: slope {c['slope']:.3f}, R^2 {c['r2']:.4f}" if c["slope"] is not None
-                     else f"mode {r + 1}")
+            ax.plot(one["damage0_x_m"], one[f"df{k}_rel"] / norm, ".", ms=3, label="truth shift / (-q/(1-q) w/2)")
+        ax.plot(xg, curvature_squared(xg, length_m, number - 1, bc), "r-", label="phi''(x)^2 / int phi''^2")
+        c = check[f"mode{number}"]
+        ax.set_title(f"mode {number}: slope {c['slope']:.3f}, R^2 {c['r2']:.4f}" if c["slope"] is not None
+                     else f"mode {number}")
         ax.set_xlabel("slit position x (m)")
         ax.set_ylabel("normalised shift (1/m)")
         ax.legend(fontsize=7)
-        rows.append(f"{r + 1},{c['slope']},{c['r2']},{c['n']}")
+        rows.append(f"{number},{c['slope']},{c['r2']},{c['n']}")
     fig.tight_layout()
     fig.savefig(out / "shift_vs_position.png", dpi=110)
     plt.close(fig)
@@ -156,17 +169,24 @@ def _plot_shift_vs_position(plt, table, length_m: float, check: dict, out: Path)
 
 
 def _plot_frf_overlay(plt, ds: Dataset, out: Path) -> None:
-    """Write ``frf_overlay.png``: sample 0's measured and updated-model FRFs (node 5 / node 2) in every state."""
+    """Write ``frf_overlay.png``: sample 0's measured and (where the dataset has one) updated-model FRF from the
+    reference DOF to the last measured DOF, in every state."""
     w = ds.omega_rad_s
-    fig, axs = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
-    for ax, kind, name in ((axs[0], "measured", "measured (truth + noise)"), (axs[1], "updated", "updated model")):
+    schema = ds.manifest.get("schema", {})
+    dofs = schema.get("measured_dofs", ["2:y", "3:y", "4:y", "5:y"])
+    ref = dofs[schema.get("frf_reference_row", 0)]
+    kinds = [("measured", "measured (truth + noise)")]
+    if ds.has_updated_model:
+        kinds.append(("updated", "updated model"))
+    fig, axs = plt.subplots(len(kinds), 1, figsize=(10, 3.5 * len(kinds) + 0.5), sharex=True, squeeze=False)
+    for ax, (kind, name) in zip(axs[:, 0], kinds):
         arr = ds.frf(kind, rows=[0])
         for s, st in enumerate(STATES):
-            ax.semilogy(w / (2 * np.pi), np.abs(arr[0, s, 3]), label=st)
-        ax.set_title(f"sample 0, {name}: response node 5 / drive node 2")
+            ax.semilogy(w / (2 * np.pi), np.abs(arr[0, s, -1]), label=st)
+        ax.set_title(f"sample 0, {name}: response {dofs[-1]} / reference {ref}")
         ax.set_ylabel("|H| (m/N)")
         ax.legend()
-    axs[1].set_xlabel("frequency (Hz)")
+    axs[-1, 0].set_xlabel("frequency (Hz)")
     fig.tight_layout()
     fig.savefig(out / "frf_overlay.png", dpi=110)
     plt.close(fig)

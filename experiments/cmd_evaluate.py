@@ -28,9 +28,10 @@ def run(args) -> dict:
         check_out_dir(args.out)
     res = evaluate(load_model(args.model), args.data, args.out, progress=True)
     if not args.json:
-        cols = ("roc_auc", "accuracy", "false_alarm_rate", "element_accuracy", "within_one_element",
-                "median_location_error_mm", "median_size_error", "ece")
-        print(f"{'method':<24}" + "".join(f"{c[:14]:>15}" for c in cols))
+        cols = {"roc_auc": "ROC AUC", "accuracy": "accuracy", "false_alarm_rate": "false alarms",
+                "detection_rate": "detection", "element_accuracy": "zone acc.", "within_one_element": "within 1 zone",
+                "median_location_error_mm": "loc. err. (mm)", "median_size_error": "size err.", "ece": "ECE"}
+        print(f"{'method':<24}" + "".join(f"{c:>15}" for c in cols.values()))
         for r in res["rows"]:
             if r["subset"] == "all":
                 print(f"{r['method']:<24}" + "".join(f"{r[c]:>15.4f}" if r[c] is not None else f"{'-':>15}"

@@ -19,8 +19,8 @@ import numpy as np
 from physics.errors import BeamDamageError, ShapeError
 
 __all__ = ["BeamPreset", "CANTILEVER_BETA_L", "PRESETS", "StaticTest", "THESIS_BETA_L", "beam_preset",
-           "cantilever_beta_l", "cantilever_curvature_squared", "cantilever_frequencies_hz", "equivalent_ei",
-           "layered_ei", "section_ei"]
+           "cantilever_beta_l", "cantilever_curvature_squared", "cantilever_frequencies_hz", "curvature_squared",
+           "equivalent_ei", "free_free_beta_l", "layered_ei", "section_ei"]
 
 
 #: ``beta_l`` of a clamped-free beam as printed in the thesis (Chapter Four).
@@ -105,37 +105,76 @@ def cantilever_beta_l(n_modes: int = 4) -> np.ndarray:
 CANTILEVER_BETA_L = tuple(float(x) for x in cantilever_beta_l(4))
 
 
-def cantilever_curvature_squared(x_m, length_m: float, mode: int):
-    """Normalised squared curvature ``phi_r''(x)^2 / int_0^L phi_r''^2 dx`` of a uniform cantilever (1/m).
+def free_free_beta_l(n_modes: int = 4) -> np.ndarray:
+    """Roots of ``cos(bl) cosh(bl) = 1`` above 0 (free-free and clamped-clamped bending modes), by Newton's method
+    from ``(k + 3/2) pi``."""
+    x = (np.arange(n_modes) + 1.5) * np.pi
+    for _ in range(100):
+        step = (np.cos(x) * np.cosh(x) - 1.0) / (np.cos(x) * np.sinh(x) - np.sin(x) * np.cosh(x))
+        x = x - step
+        if np.all(np.abs(step) <= 4 * np.finfo(float).eps * x):
+            break
+    return x
 
-    ``phi_r(x) = cosh(bx) - cos(bx) - s (sinh(bx) - sin(bx))`` with
-    ``s = (cosh bl + cos bl)/(sinh bl + sin bl)`` and ``b = beta_l_r / L``. With
-    the clamped-free boundary conditions ``int phi''^2 = b^4 int phi^2 = b^4 L``
-    (integration by parts twice), so the normalisation is closed form. By
-    first-order perturbation, a loss ``dEI`` over a short length ``w`` at ``x``
-    shifts mode ``r`` by ``df_r/f_r = -(1/2) (dEI/EI) w`` times this value.
+
+def curvature_squared(x_m, length_m: float, mode: int, bc: str = "clamped-free"):
+    """Normalised squared curvature ``phi_r''(x)^2 / int_0^L phi_r''^2 dx`` of bending mode ``r`` of a uniform beam
+    (1/m).
+
+    With ``b = beta_l_r / L``, ``u = b x`` and ``C, S, c, s = cosh, sinh, cos, sin`` of ``beta_l_r``:
+
+    ============== ============================== ======================================
+    bc             ``phi''(x) / b^2``             ``sigma``
+    ============== ============================== ======================================
+    clamped-free   ``cosh u + cos u - sigma (sinh u + sin u)``  ``(C + c) / (S + s)``
+    free-free      ``cosh u - cos u - sigma (sinh u - sin u)``  ``(C - c) / (S - s)``
+    clamped-clamped ``cosh u + cos u - sigma (sinh u + sin u)`` ``(C - c) / (S - s)``
+    pinned-pinned  ``-sin(r pi x / L)``            (``beta_l_r = r pi``)
+    ============== ============================== ======================================
+
+    For every one of these supports ``int phi''^2 = b^4 int phi^2`` (integration by parts twice), which is
+    ``b^4 L`` (``b^4 L / 2`` pinned-pinned). ``cosh u - sigma sinh u`` is evaluated as
+    ``((1 - sigma) e^u + (1 + sigma) e^-u) / 2`` with ``1 - sigma`` in closed form, exact at high modes where
+    the two terms cancel. By first-order perturbation, a loss ``dEI`` over a short length ``w`` at ``x`` shifts
+    mode ``r`` by ``df_r/f_r = -(1/2) (dEI/EI) w`` times this value.
 
     Parameters
     ----------
-    x_m : float or ndarray
-        Positions from the clamp (m), ``0 <= x <= L``.
-    length_m : float
-        Cantilever length (m).
-    mode : int
-        Mode index from 0 (the first bending mode).
+    x_m : float or ndarray      positions from the end ``x = 0`` (m), ``0 <= x <= L``
+    length_m : float            beam length (m)
+    mode : int                  bending-mode index from 0 (rigid-body modes of a free-free beam not counted)
+    bc : str                    clamped-free, free-free, pinned-pinned or clamped-clamped
 
     Returns
     -------
     ndarray, shape like ``x_m``   (1/m)
     """
-    if int(mode) < 0:
+    mode = int(mode)
+    if mode < 0:
         raise BeamDamageError(f"mode must be >= 0 (0 = first bending mode), got {mode}")
-    bl = CANTILEVER_BETA_L[mode] if mode < len(CANTILEVER_BETA_L) else cantilever_beta_l(mode + 1)[mode]
-    b = bl / length_m
-    s = (np.cosh(bl) + np.cos(bl)) / (np.sinh(bl) + np.sin(bl))
-    bx = b * np.asarray(x_m, dtype=float)
-    curvature = b**2 * (np.cosh(bx) + np.cos(bx) - s * (np.sinh(bx) + np.sin(bx)))
-    return curvature**2 / (b**4 * length_m)
+    x = np.asarray(x_m, dtype=float)
+    if bc == "pinned-pinned":
+        return 2.0 * np.sin((mode + 1) * np.pi * x / length_m) ** 2 / length_m
+    if bc == "clamped-free":
+        bl = CANTILEVER_BETA_L[mode] if mode < len(CANTILEVER_BETA_L) else cantilever_beta_l(mode + 1)[mode]
+    elif bc in ("free-free", "clamped-clamped"):
+        bl = free_free_beta_l(mode + 1)[mode]
+    else:
+        raise BeamDamageError(f"bc {bc!r} unknown; expected clamped-free, free-free, pinned-pinned or clamped-clamped")
+    C, S, c, s = np.cosh(bl), np.sinh(bl), np.cos(bl), np.sin(bl)
+    if bc == "clamped-free":
+        sigma, one_minus = (C + c) / (S + s), (s - c - np.exp(-bl)) / (S + s)
+    else:
+        sigma, one_minus = (C - c) / (S - s), (c - s - np.exp(-bl)) / (S - s)
+    u = bl * x / length_m
+    hyper = 0.5 * (one_minus * np.exp(u) + (1.0 + sigma) * np.exp(-u))
+    trig = np.cos(u) - sigma * np.sin(u) if bc != "free-free" else -np.cos(u) + sigma * np.sin(u)
+    return (hyper + trig) ** 2 / length_m
+
+
+def cantilever_curvature_squared(x_m, length_m: float, mode: int):
+    """:func:`curvature_squared` of a uniform cantilever (1/m), ``x_m`` from the clamp."""
+    return curvature_squared(x_m, length_m, mode, "clamped-free")
 
 
 def cantilever_frequencies_hz(EI_Nm2, mass_per_length_kg_m, length_m, beta_l=THESIS_BETA_L):

@@ -166,3 +166,14 @@ def test_natural_frequencies_alone_get_a_verdict_with_the_mirror_ambiguity_state
     assert min(abs(x - x_true), abs(1.0 - x - x_true)) < 0.08, (x, x_true)
     assert f"L - x = {1.0 - x:.3f} m" in res["location_ambiguity"]
     assert "natural frequencies without mode shapes" in " ".join(res["warnings"])
+
+
+def test_inspect_checks_the_bars_shifts_against_free_free_curvatures(bar, tmp_path, capsys):
+    """Single-slit frequency shifts of the free-free bar follow the closed-form free-free curvature squared (a
+    cantilever's would not: its curvature is largest at x = 0, where a free end has none)."""
+    assert main(["inspect", str(bar / "data"), "--out", str(tmp_path / "i"), "--json"]) == 0
+    check = json.loads(capsys.readouterr().out)["curvature_check"]
+    assert sorted(check) == ["mode1", "mode2", "mode3", "mode4"]
+    for c in check.values():
+        assert 0.8 < c["slope"] < 1.05 and c["r2"] > 0.9 and c["n"] > 500
+    assert (tmp_path / "i" / "frf_overlay.png").stat().st_size > 10_000
