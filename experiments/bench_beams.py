@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import shutil
 import tempfile
 import time
@@ -82,6 +83,21 @@ def _classify_rate(data: Path, model_dir: Path, n_pairs: int, epochs: int) -> tu
     return len(cur) / (time.perf_counter() - t0), train_s
 
 
+def markdown(result: dict) -> str:
+    """The speed table (and the training line) as markdown."""
+    lines = ["| sensors | modes | elements | generate (samples/s) | classify (pairs/s) | cost per sample vs 1st |",
+             "| --- | --- | --- | --- | --- | --- |"]
+    lines += [f"| {r['sensors']} | {r['modes']} | {r['truth_elements']} | {r['generate_samples_per_s']:.0f} | "
+              f"{r['classify_pairs_per_s']:.0f} | {r['cost_per_sample_vs_first']:.2f} |" for r in result["rows"]]
+    text = "\n".join(lines) + "\n"
+    if "train" in result:
+        t = result["train"]
+        text += (f"\n8 sensors, {t['samples']} samples: generate {t['generate_s']:.1f} s, train {t['train_s']:.1f} s "
+                 f"(network fits {', '.join(f'{k} {v:.1f} s' for k, v in t['fit_s'].items())}).\n")
+    return text + (f"\n{result['n']} samples per beam on {result['workers']} processes, load average "
+                   f"{result['load']:.1f} at the start.\n")
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m experiments.bench_beams", description=__doc__.split("\n")[0])
     p.add_argument("--n", type=int, default=6000, help="samples generated per beam (default 6000)")
@@ -92,10 +108,12 @@ def main(argv=None) -> int:
     p.add_argument("--train", type=int, default=0, metavar="N", help="also generate N samples of the 8-sensor beam "
                    "and time train on them (default: off)")
     p.add_argument("--json", action="store_true", help="print the table as JSON")
+    p.add_argument("--docs", action="store_true", help="write the table into docs/any-beam.md")
     args = p.parse_args(argv)
     from threadpoolctl import threadpool_limits
 
     limits = threadpool_limits(1, user_api="blas")     # as the CLI runs: one BLAS thread per process
+    load = os.getloadavg()[0]
     work = Path(tempfile.mkdtemp(prefix="bench-beams-"))
     rows = []
     try:
@@ -108,7 +126,7 @@ def main(argv=None) -> int:
         base = rows[0]["generate_samples_per_s"]
         for r in rows:
             r["cost_per_sample_vs_first"] = base / r["generate_samples_per_s"]
-        result = {"n": args.n, "workers": args.workers, "rows": rows}
+        result = {"n": args.n, "workers": args.workers, "load": load, "rows": rows}
         if args.train:
             gen_s, data, _ = _generate(work, 8, args.train, args.workers, seed=2)
             from learn.training import train
@@ -123,14 +141,12 @@ def main(argv=None) -> int:
     if args.json:
         print(json.dumps(result, indent=1))
         return 0
-    print(f"{'sensors':>7} {'modes':>5} {'elements':>8} {'generate/s':>10} {'classify/s':>10} {'cost x':>7}")
-    for r in rows:
-        print(f"{r['sensors']:>7} {r['modes']:>5} {r['truth_elements']:>8} {r['generate_samples_per_s']:>10.0f} "
-              f"{r['classify_pairs_per_s']:>10.0f} {r['cost_per_sample_vs_first']:>7.2f}")
-    if "train" in result:
-        t = result["train"]
-        print(f"8 sensors, {t['samples']} samples: generate {t['generate_s']:.1f} s, train {t['train_s']:.1f} s "
-              f"(network fits {', '.join(f'{k} {v:.1f} s' for k, v in t['fit_s'].items())})")
+    md = markdown(result)
+    print(md, end="")
+    if args.docs:
+        from experiments.doc_tables import write_table
+
+        write_table("any-beam.md", "beams", md)
     return 0
 
 
