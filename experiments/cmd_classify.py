@@ -21,21 +21,22 @@ KEYS = ("measured", "damaged", "probability_damaged", "location_x_over_L", "loca
         "location_zone", "zone_edges_m", "zone_probabilities", "location_ambiguity",
         "location_element", "element_probabilities", "hinge_flexibility", "hinge_flexibility_std", "depth_m",
         "detectable", "verdict_from", "in_distribution", "out_of_distribution_reasons", "mahalanobis_distance",
-        "training_percentile", "network", "classical", "classical_methods", "identification", "input_route",
-        "warnings", "dof_positions")
+        "training_percentile", "distance_terms", "network", "classical", "classical_methods", "identification",
+        "input_route", "warnings", "dof_positions")
 
 
 def add_parser(sub):
     p = sub.add_parser("classify", help="classify measured beams against their baseline with a trained model",
                        description=f"BASELINE and each MEASURED are files of {accepted(FRF, MODAL)}. FRFs: "
                                    "receptances, mobilities or accelerances at the model's DOFs; modal data: as "
-                                   "'update' accepts. FRF files are identified by LSCF/LSFD (4 modes), the "
-                                   "identification the training data's modal noise describes. A pair outside the "
-                                   "training data gets the classical method's verdict, the network's shown beside it; "
-                                   "a pair whose tests do not both hold modes 1-4 gets the classical method's verdict "
-                                   "on the modes both hold (at least 2) and no network answer. "
-                                   "Several MEASURED files give a list of verdicts; --out writes verdict.json and "
-                                   "classify.png (one pair) or verdicts.json (several).")
+                                   "'update' accepts. FRF files are identified by LSCF/LSFD over the model's band for "
+                                   "its modes, the identification the training data's modal noise describes. A pair "
+                                   "outside the training data gets the classical method's verdict, the network's shown"
+                                   " beside it, and the features that put it outside (distance_terms); a pair whose "
+                                   "tests do not both hold the model's modes gets the classical method's verdict on "
+                                   "the modes both hold (at least 2) and no network answer. Several MEASURED files "
+                                   "give a list of verdicts; --out writes verdict.json and classify.png (one pair) or "
+                                   "verdicts.json (several).")
     p.add_argument("--model", required=True, metavar="MODEL_DIR")
     p.add_argument("--baseline", required=True, metavar="BASELINE", help="undamaged state (FRF file or modal JSON)")
     p.add_argument("measured", nargs="+", metavar="MEASURED", help="current state(s) (same kind as BASELINE)")

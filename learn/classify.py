@@ -7,7 +7,7 @@ import functools
 import numpy as np
 
 from learn.classical import FREQUENCY_METHODS, run_classical
-from learn.features import frf_features, frequency_features, map_frf_to_grid, modal_features
+from learn.features import feature_names, frf_features, frequency_features, map_frf_to_grid, modal_features
 from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows, identification_band_hz,
                             identify_modes, modal_pair, mode_checks, nominal_ratio_range)
 from learn.model_dir import TrainedModel
@@ -16,7 +16,7 @@ from learn.verdict import (IN_DISTRIBUTION_PERCENTILE, classical_answer, classic
 from physics.errors import BeamDamageError
 from physics.io import MeasuredFRF
 
-__all__ = ["classify", "classify_many"]
+__all__ = ["DISTANCE_TERMS", "classify", "classify_many", "distance_terms", "distance_text"]
 
 
 def classify(model: TrainedModel, baseline, current) -> dict:
@@ -62,7 +62,7 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
         _require_common_modes(pairs, names, model.beam)
     depth = functools.partial(equivalent_depth, preset=model.config.get("truth_beam") or model.beam.name,
                               width_m=model.config["reference_width_m"])
-    nets, dist, pct, where = _network_answers(model, route, X, rows, sens, len(currents), depth)
+    nets, dist, pct, where, terms = _network_answers(model, route, X, rows, sens, len(currents), depth)
     answers, mode_reasons, mode_sens = _classical_answers(model, pairs, len(currents), sens)
     for i in range(len(currents)):
         if mirrored(model.beam, pairs[i] if pairs else None):
@@ -78,13 +78,14 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
             reasons.append("; ".join(p.missing) + f": the network needs modes {modes_text(model.beam.modes)}")
         elif pct[i] > IN_DISTRIBUTION_PERCENTILE:
             reasons.insert(0, f"Mahalanobis distance {dist[i]:.3g} from the training data, beyond "
-                              f"{pct[i]:.2f}% of training pairs")
+                              f"{pct[i]:.2f}% of training pairs"
+                              + (f"; largest terms: {distance_text(terms[i])}" if terms[i] else ""))
         verdict, from_network, w = _chosen_verdict(net, cl, p, reasons, warnings, mode_sens[i], depth, model.beam)
         results.append({
             "measured": names[i + 1], **verdict, "location_ambiguity": location_ambiguity(model.beam, verdict, p),
             "verdict_from": "network" if from_network else "classical",
             "in_distribution": not reasons, "out_of_distribution_reasons": reasons,
-            "mahalanobis_distance": dist[i], "training_percentile": pct[i],
+            "mahalanobis_distance": dist[i], "training_percentile": pct[i], "distance_terms": terms[i],
             "network": net, "classical": cl,
             "classical_methods": answers[i],
             "identification": _identification(p, base_md, cur_md[i] if cur_md else None, identified, model.beam),
@@ -164,16 +165,45 @@ def _require_common_modes(pairs: list, names: list[str], beam) -> None:
 def _network_answers(model: TrainedModel, route: str, X, rows: list, sens, n: int, depth):
     """Per input (lists of ``n``): the network's answer (None for a pair it does not read), the Mahalanobis
     distance from the training data, its training percentile, and the network's location distribution."""
-    nets, dist, pct, where = [None] * n, [None] * n, [None] * n, [None] * n
+    nets, dist, pct, where, terms = [None] * n, [None] * n, [None] * n, [None] * n, [None] * n
     if not rows:
-        return nets, dist, pct, where
+        return nets, dist, pct, where, terms
     est = model.networks[route]
     out, d = network_output(est, X, sens)
     distance, percentile = ood_percentile(est, X)
+    named = distance_terms(est, X, route, model.beam) if route in ("modal", "frequency") else [None] * len(rows)
     for r, i in enumerate(rows):
         nets[i] = network_answer(d, r, out, model.beam, depth(float(d.hinge_flexibility[r])))
         dist[i], pct[i], where[i] = float(distance[r]), float(percentile[r]), d.location_distribution[r]
-    return nets, dist, pct, where
+        terms[i] = named[r]
+    return nets, dist, pct, where, terms
+
+
+#: Features listed in ``distance_terms`` of a verdict (the largest terms of the squared distance).
+DISTANCE_TERMS = 6
+
+
+def distance_terms(est, X, route: str, beam, top: int = DISTANCE_TERMS) -> list[list[dict]]:
+    """Per row of ``X``: the features that make up most of its squared Mahalanobis distance, largest first.
+
+    Each entry: ``feature`` (:func:`learn.features.feature_names`), ``value`` (the pair's feature),
+    ``training_std`` (how many training standard deviations it lies from the training mean) and ``share``
+    (its term ``z_i (P z)_i`` over the squared distance; the shares of all features sum to 1).
+    """
+    terms, Z = est.distance_terms(X)
+    names = feature_names(route, beam)
+    total = np.maximum(terms.sum(axis=1), 1e-300)
+    out = []
+    for r in range(terms.shape[0]):
+        order = np.argsort(-terms[r])[:top]
+        out.append([{"feature": names[j], "value": float(np.asarray(X)[r, j]), "training_std": float(Z[r, j]),
+                     "share": float(terms[r, j] / total[r])} for j in order])
+    return out
+
+
+def distance_text(terms: list[dict], n: int = 3) -> str:
+    """The largest terms in words, e.g. ``df1 (%) -7.1 sd (62 %), dphi 2:y m1 +3.0 sd (12 %)``."""
+    return ", ".join(f"{t['feature']} {t['training_std']:+.1f} sd ({t['share']:.0%})" for t in terms[:n])
 
 
 def _chosen_verdict(net, cl, p, reasons: list, warnings: list, sens, depth, beam):

@@ -279,6 +279,13 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         """Mahalanobis distance of feature rows to the training features (out-of-distribution score)."""
         return self._distances((self._check_X(X) - self.mean_) / self.scale_)
 
+    def distance_terms(self, X):
+        """Each feature's term of the squared Mahalanobis distance, ``z_i (P z)_i`` with ``z`` the row in training
+        standard deviations and ``P`` the training features' precision: shape (n, p), each row summing to the
+        squared distance of :meth:`mahalanobis` (a term may be negative where correlated features offset)."""
+        Z = (self._check_X(X) - self.mean_) / self.scale_
+        return Z * (Z @ self.precision_), Z
+
     def _distances(self, Z):
         return np.sqrt(np.maximum(np.einsum("ni,ij,nj->n", Z, self.precision_, Z), 0.0))
 

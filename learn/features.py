@@ -43,9 +43,10 @@ from datagen.store import DATASET_FORMAT, read_manifest
 from datagen.synth import log_magnitude_map
 from physics.layout import Layout
 
-__all__ = ["BeamSpec", "DOFS", "as_spec", "GRID_RAD_S", "Pairs", "ROUTES", "beam_of_manifest", "curvatures", "features",
-           "frf_features", "grid_weights", "labels", "load_pairs", "manifest_checksum",
-           "map_frf_to_grid", "modal_features", "real_shapes", "split_by_specimen"]
+__all__ = ["BeamSpec", "DOFS", "as_spec", "GRID_RAD_S", "Pairs", "ROUTES", "beam_of_manifest", "curvature_points",
+           "curvatures", "feature_names", "features", "frequency_features", "frf_features", "grid_weights", "labels",
+           "layout_curvatures", "load_pairs", "manifest_checksum", "map_frf_to_grid", "modal_features", "real_shapes",
+           "split_by_specimen"]
 
 ROUTES = ("modal", "updated", "measured", "frequency")
 
@@ -365,6 +366,17 @@ def curvatures(shapes):
     return np.concatenate([2 * shapes[..., :1, :], inner], axis=-2)
 
 
+def curvature_points(test: Layout) -> tuple[np.ndarray, tuple[int, int]]:
+    """The points of :func:`layout_curvatures`: the sensors (ascending) plus each end whose translation a support
+    holds at zero when no sensor sits there; returns their positions (m) and how many ends were added (0/1, 0/1)."""
+    x = np.sort(np.asarray(test.sensors_x_m, float))
+    L, tol = test.length_m, 1e-9 * test.length_m
+    held = {"clamped-free": (True, False), "free-free": (False, False), "pinned-pinned": (True, True),
+            "clamped-clamped": (True, True)}[test.bc]
+    ends = (int(held[0] and x[0] > tol), int(held[1] and x[-1] < L - tol))
+    return np.concatenate([[0.0] * ends[0], x, [L] * ends[1]]), ends
+
+
 def layout_curvatures(shapes, test: Layout):
     """Second divided differences of shapes at the sensors of any test, times the mean sensor spacing squared.
 
@@ -380,19 +392,9 @@ def layout_curvatures(shapes, test: Layout):
     -------
     ndarray, shape (..., K, m)   K = the points with two neighbours (0 for one sensor on a free-free beam)
     """
-    x = np.sort(np.asarray(test.sensors_x_m, float))
-    L, tol = test.length_m, 1e-9 * test.length_m
-    held = {"clamped-free": (True, False), "free-free": (False, False), "pinned-pinned": (True, True),
-            "clamped-clamped": (True, True)}[test.bc]
+    xp, ends = curvature_points(test)
     zero = np.zeros_like(shapes[..., :1, :])
-    parts, pos = [shapes], [x]
-    if held[0] and x[0] > tol:
-        parts.insert(0, zero)
-        pos.insert(0, [0.0])
-    if held[1] and x[-1] < L - tol:
-        parts.append(zero)
-        pos.append([L])
-    w, xp = np.concatenate(parts, axis=-2), np.concatenate(pos)
+    w = np.concatenate([zero] * ends[0] + [shapes] + [zero] * ends[1], axis=-2)
     if xp.size < 3:
         return shapes[..., :0, :]
     hm, hp = np.diff(xp)[:-1, None], np.diff(xp)[1:, None]
@@ -430,6 +432,27 @@ def modal_features(eigenvalues, eigenvectors, n_modes: int = 4, test: Layout | N
     dk = curv(u1) - curv(u[:, 0])
     n = lam.shape[0]
     return np.concatenate([shift, 10 * du.reshape(n, -1), 10 * dk.reshape(n, -1)], axis=1)
+
+
+def feature_names(route: str, beam) -> list[str]:
+    """Names of the feature columns of ``route`` ("modal" or "frequency") for ``beam``'s test, in column order:
+    ``"df{r} (%)"`` the relative shift of mode ``r``; ``"dphi {dof} m{r}"`` the shape change of mode ``r`` at a
+    sensor; ``"dkappa x={x} m{r}"`` its curvature change at a point (the clamp, ``x = 0``, on the thesis's test)."""
+    beam = as_spec(beam)
+    modes = beam.modes
+    names = [f"df{r} (%)" for r in modes]
+    if route == "frequency":
+        return names
+    if route != "modal":
+        raise BeamDamageError(f"feature names are defined for the modal and frequency routes, not {route!r}")
+    names += [f"dphi {d} m{r}" for d in beam.dofs for r in modes]
+    if beam.test is None:
+        points = beam.length_m * np.arange(4) / 4
+    else:
+        xp = curvature_points(beam.test)[0]
+        points = xp[1:-1] if xp.size >= 3 else xp[:0]
+    names += [f"dkappa x={x:.4g} m m{r}" for x in points for r in modes]
+    return names
 
 
 def frequency_features(eigenvalues, n_modes: int = 4):

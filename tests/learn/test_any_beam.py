@@ -177,3 +177,37 @@ def test_inspect_checks_the_bars_shifts_against_free_free_curvatures(bar, tmp_pa
     for c in check.values():
         assert 0.8 < c["slope"] < 1.05 and c["r2"] > 0.9 and c["n"] > 500
     assert (tmp_path / "i" / "frf_overlay.png").stat().st_size > 10_000
+
+
+def test_a_pair_outside_the_training_data_names_the_features_that_put_it_there(bar, capsys):
+    """Modal data of an intact pair whose mode-2 frequency rises 10 % alone (no slit or day change of the training
+    does that): outside, with df2 the largest term of the squared distance; the terms of every feature sum to it."""
+    from datagen.dataset import Dataset
+    from learn.features import feature_names, modal_features
+    from learn.model_dir import load_model
+    from physics.io import ModalData, write_modal_json
+
+    ds = Dataset(bar / "data")
+    i = int(np.flatnonzero(~ds.samples["damaged"].to_numpy())[0])
+    lam = ds.array("eigenvalues_measured", [i])[0]
+    vec = ds.array("eigenvectors_measured", [i])[0]
+    lam_cur = lam[1] * np.array([1.0, 1.1, 1.0, 1.0])
+    model = load_model(bar / "model")
+    write_modal_json(bar / "m0.json", ModalData(lam[0], vec[0], model.beam.dofs))
+    write_modal_json(bar / "m1.json", ModalData(lam_cur, vec[1], model.beam.dofs))
+    assert main(["classify", "--model", str(bar / "model"), "--baseline", str(bar / "m0.json"), str(bar / "m1.json"),
+                 "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert not res["in_distribution"] and res["training_percentile"] > 99.9
+    top = res["distance_terms"][0]
+    expected = 100 * (abs(lam_cur[1]) / abs(lam[0, 1]) - 1)                # 10 % on the pair's own small change
+    assert top["feature"] == "df2 (%)" and top["value"] == pytest.approx(expected, rel=1e-6)
+    assert top["training_std"] > 5 and top["share"] > 0.3
+    assert "largest terms: df2 (%)" in res["out_of_distribution_reasons"][0]
+    # 4 shifts, 6 sensors x 4 modes of shape changes, 4 interior points x 4 modes of curvature changes
+    names = feature_names("modal", model.beam)
+    assert len(names) == 4 + 24 + 16 and names[4] == f"dphi {model.beam.dofs[0]} m1"
+    X = modal_features(np.stack([lam[0], lam_cur])[None], np.stack([vec[0], vec[1]])[None], 4, model.beam.test)
+    est = model.networks["modal"]
+    terms, _ = est.distance_terms(X)
+    assert terms.shape == (1, 44) and terms.sum() == pytest.approx(est.mahalanobis(X)[0] ** 2, rel=1e-9)
