@@ -8,6 +8,7 @@ import numpy as np
 
 from learn.classical import FREQUENCY_METHODS, run_classical
 from learn.features import feature_names, frf_features, frequency_features, map_frf_to_grid, modal_features
+from learn.hypotheses import explain
 from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows, identification_band_hz,
                             identify_modes, modal_pair, mode_checks, nominal_ratio_range)
 from learn.model_dir import TrainedModel
@@ -89,6 +90,8 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
             "network": net, "classical": cl,
             "classical_methods": answers[i],
             "identification": _identification(p, base_md, cur_md[i] if cur_md else None, identified, model.beam),
+            **(explain(model, p) if p is not None else {"hypotheses": None, "hypotheses_summary": None,
+                                                        "frequency_change_std": None}),
             "input_route": route, "warnings": w,
             "_extra": {"location_distribution": where[i]},
         })

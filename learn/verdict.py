@@ -172,5 +172,10 @@ def verdict_text(res: dict) -> str:
                                                                   "the model's DOFs"))
     if res.get("location_ambiguity"):
         lines.append(f"Location: {res['location_ambiguity']}.")
+    if res.get("hypotheses"):
+        lines.append("Explanations of the frequency changes (equal priors, "
+                     f"{100 * res['frequency_change_std']:.2g} % noise per mode): "
+                     + ", ".join(f"{h['name']} {h['probability']:.2f}" for h in res["hypotheses"])
+                     + f"; {res['hypotheses_summary']}.")
     lines += [f"warning: {w}" for w in res["warnings"]]
     return "\n".join(lines)
