@@ -92,8 +92,8 @@ class Setup:
                                     ``K0``, ``M0`` hold its centre; ``lo == hi``: every specimen has those matrices
     rho_i_over_m_m2 : float         rotary inertia per unit mass per length (m^2) of Timoshenko elements
     timoshenko : bool               Timoshenko/Rayleigh elements (else Euler-Bernoulli, eqs. 3.8, 3.9)
-    K0_springs : ndarray (n, n)     fixed springs for unit EI in ``K0`` (a beam file's translational root spring,
-                                    a free-free beam's suspension), zeros without
+    K0_springs : ndarray (n, n)     fixed springs for unit EI in ``K0`` (a beam file's translational clamp springs
+                                    and bearing springs, a free-free beam's suspension), zeros without
     test : Layout                   the test (:mod:`physics.layout`): supports, sensors, reference DOF, band, modes
     modes_idx : ndarray (m,)        projected modes used (indices into the ``p`` modes: rigid-body modes and modes
                                     no sensor sees left out)
@@ -319,16 +319,23 @@ def build_setup(cfg: dict) -> Setup:
     clamp_rotations = [d for d in ("1:rz", f"{last}:rz") if d in removed]
     if spring:
         removed = [d for d in removed if d not in clamp_rotations]
-    if fx["k_y_N_m"] is not None:  # translational root spring: the root translation stays a DOF
-        removed = [d for d in removed if d != "1:y"]
+    clamp_translations = [d.replace(":rz", ":y") for d in clamp_rotations]
+    if fx["k_y_N_m"] is not None:  # translational clamp springs: the clamps' translations stay DOFs
+        removed = [d for d in removed if d not in clamp_translations]
     keep = np.array([i for i, d in enumerate(names) if d not in removed])
     kept_names = [names[i] for i in keep]
     springs = {}                                          # model index -> unit-EI stiffness of fixed springs
     if fx["k_y_N_m"] is not None:
-        springs[kept_names.index("1:y")] = fx["k_y_N_m"] / preset.EI_Nm2
+        for d in clamp_translations:
+            springs[kept_names.index(d)] = fx["k_y_N_m"] / preset.EI_Nm2
+    if fx["bearing_k_theta_Nm_rad"] is not None:        # bearing springs on the pinned ends' rotations
+        for d in ("1:rz", f"{last}:rz"):
+            springs[kept_names.index(d)] = fx["bearing_k_theta_Nm_rad"] / preset.EI_Nm2
     if test.bc == "free-free":                          # the suspension (rigid-body modes left out)
+        k_s = (suspension_unit_stiffness(beam) if fx["suspension_k_y_N_m"] is None
+               else fx["suspension_k_y_N_m"] / preset.EI_Nm2)
         for d in ("1:y", f"{last}:y"):
-            springs[kept_names.index(d)] = suspension_unit_stiffness(beam)
+            springs[kept_names.index(d)] = k_s
     K_full, M_full, _ = _unit_matrices(0.5 * (shear_band[0] + shear_band[1]), rho_ratio, preset.length_m, n_el,
                                        timoshenko)  # the beam elements alone
     sel = np.ix_(keep, keep)
