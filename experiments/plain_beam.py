@@ -1,9 +1,12 @@
 """Independent references for beams on any supports: exact Euler-Bernoulli roots with end springs and a plain
-Hermite-element model (numpy/scipy only, nothing from physics/)."""
+Hermite-element model (numpy/scipy only, nothing from physics/), the truths of ``tests/physics/test_supports.py``
+and :mod:`experiments.bench_supports`."""
 
 import numpy as np
 from scipy.linalg import eigh
 from scipy.optimize import brentq
+
+__all__ = ["exact_beta_l", "plain_fe"]
 
 
 def exact_beta_l(kappa_theta, kappa_y, n=4, right=None):
