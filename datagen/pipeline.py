@@ -92,8 +92,8 @@ class Setup:
                                     ``K0``, ``M0`` hold its centre; ``lo == hi``: every specimen has those matrices
     rho_i_over_m_m2 : float         rotary inertia per unit mass per length (m^2) of Timoshenko elements
     timoshenko : bool               Timoshenko/Rayleigh elements (else Euler-Bernoulli, eqs. 3.8, 3.9)
-    K0_springs : ndarray (n, n)     fixed springs for unit EI in ``K0`` (a beam file's translational root spring,
-                                    a free-free beam's suspension), zeros without
+    K0_springs : ndarray (n, n)     fixed springs for unit EI in ``K0`` (a beam file's translational clamp springs
+                                    and bearing springs, a free-free beam's suspension), zeros without
     test : Layout                   the test (:mod:`physics.layout`): supports, sensors, reference DOF, band, modes
     modes_idx : ndarray (m,)        projected modes used (indices into the ``p`` modes: rigid-body modes and modes
                                     no sensor sees left out)
@@ -240,11 +240,12 @@ def sensor_rows(x_m, node_x_m, keep) -> np.ndarray:
     return np.array([hermite_row(float(x), node_x_m)[0][keep] for x in x_m])
 
 
-def analyst_unit_mass(test: Layout, mass_model: str, per_span: int = 4) -> np.ndarray:
+def analyst_unit_mass(test: Layout, mass_model: str, per_span: int = 4, suspension_unit: float | None = None
+                      ) -> np.ndarray:
     """The analyst's mass over the sensors for unit mass and unit EI (S, S): an Euler-Bernoulli model with nodes at
     the ends and the sensors, ``per_span`` elements between neighbours, reduced to the sensors' translations
-    (:func:`physics.updating.reduced_mass`), the supports as the test's (a free-free model on the suspension of
-    :func:`suspension_unit_stiffness`)."""
+    (:func:`physics.updating.reduced_mass`), the supports as the test's (a free-free model on the suspension
+    ``suspension_unit`` (1/m^3, for unit EI; default that of :func:`suspension_unit_stiffness`))."""
     from physics.fem import element_mass, element_stiffness
 
     L = test.length_m
@@ -259,7 +260,7 @@ def analyst_unit_mass(test: Layout, mass_model: str, per_span: int = 4) -> np.nd
                "clamped-clamped": ["1:y", "1:rz", f"{last}:y", f"{last}:rz"]}[test.bc]
     names = dof_names(last)
     if test.bc == "free-free":
-        k_s = 0.5 * L * (0.05 * 22.3733 / L**2) ** 2
+        k_s = 0.5 * L * (0.05 * 22.3733 / L**2) ** 2 if suspension_unit is None else suspension_unit
         for d in ("1:y", f"{last}:y"):
             K[names.index(d), names.index(d)] += k_s
     keep = [i for i, d in enumerate(names) if d not in removed]
@@ -325,16 +326,22 @@ def build_setup(cfg: dict) -> Setup:
     clamp_rotations = [d for d in ("1:rz", f"{last}:rz") if d in removed]
     if spring:
         removed = [d for d in removed if d not in clamp_rotations]
-    if fx["k_y_N_m"] is not None:  # translational root spring: the root translation stays a DOF
-        removed = [d for d in removed if d != "1:y"]
+    clamp_translations = [d.replace(":rz", ":y") for d in clamp_rotations]
+    if fx["k_y_N_m"] is not None:  # translational clamp springs: the clamps' translations stay DOFs
+        removed = [d for d in removed if d not in clamp_translations]
     keep = np.array([i for i, d in enumerate(names) if d not in removed])
     kept_names = [names[i] for i in keep]
     springs = {}                                          # model index -> unit-EI stiffness of fixed springs
     if fx["k_y_N_m"] is not None:
-        springs[kept_names.index("1:y")] = fx["k_y_N_m"] / preset.EI_Nm2
+        for d in clamp_translations:
+            springs[kept_names.index(d)] = fx["k_y_N_m"] / preset.EI_Nm2
+    if fx["bearing_k_theta_Nm_rad"] is not None:        # bearing springs on the pinned ends' rotations
+        for d in ("1:rz", f"{last}:rz"):
+            springs[kept_names.index(d)] = fx["bearing_k_theta_Nm_rad"] / preset.EI_Nm2
+    k_suspension = None if fx["suspension_k_y_N_m"] is None else fx["suspension_k_y_N_m"] / preset.EI_Nm2
     if test.bc == "free-free":                          # the suspension (rigid-body modes left out)
         for d in ("1:y", f"{last}:y"):
-            springs[kept_names.index(d)] = suspension_unit_stiffness(beam)
+            springs[kept_names.index(d)] = suspension_unit_stiffness(beam) if k_suspension is None else k_suspension
     K_full, M_full, _ = _unit_matrices(0.5 * (shear_band[0] + shear_band[1]), rho_ratio, preset.length_m, n_el,
                                        timoshenko)  # the beam elements alone
     sel = np.ix_(keep, keep)
@@ -374,7 +381,8 @@ def build_setup(cfg: dict) -> Setup:
         zr = np.asarray(cfg["specimen"]["damping_ratios"], float)
         zeta = np.concatenate([np.full(n_rigid, zr[0]), zr, np.full(max(p - zr.size, 0), zr[-1])])[:p]
     lo, hi = cfg["measurement"]["band_rad_s"] if test.thesis else 2 * np.pi * np.asarray(test.band_hz)
-    ma = None if test.thesis else analyst_unit_mass(test, cfg["updating"]["mass_model"])
+    ma = None if test.thesis else analyst_unit_mass(test, cfg["updating"]["mass_model"],
+                                                     suspension_unit=k_suspension)
     return Setup(cfg, preset, section, n_el, keep, spring, K0, M0, meas, v[:, :p].copy(),
                  np.linspace(lo, hi, cfg["measurement"]["lines"]), zeta, band, M_added, C_local,
                  shear_band, rho_ratio, timoshenko, K_springs, test, modes_idx, drive_row, spring_dofs, ma)

@@ -17,6 +17,14 @@ enters the generator, combined with the specimen variability as follows:
   means exactly the calibrated spring, relative to each specimen's ``EI``).
   A translational spring keeps the root translation as a DOF with the spring
   ``k_y EI / EI_file`` (it scales with the specimen like the element stiffness).
+* ``clamp_flexibility`` (``k_theta_Nm_rad``, ``k_y_N_m``), clamped-clamped: as
+  ``root_flexibility`` at both clamps (the specimen's drawn spring holds both
+  clamp rotations; a translational spring keeps both clamp translations).
+* ``bearing_flexibility`` (``k_theta_Nm_rad``), pinned-pinned: a rotational
+  spring ``k_theta EI / EI_file`` on the rotation of each pinned end.
+* ``suspension`` (``k_y_N_m``), free-free: translational springs
+  ``k_y EI / EI_file`` at both ends replace the default suspension (bounce
+  mode at 5 % of the first bending frequency, :func:`datagen.pipeline.suspension_unit_stiffness`).
 * ``added_mass`` (``mass_kg``, ``x_m``, ``J_kg_m2``): the point mass (fixed
   hardware, not scaled by the specimen mass band) is added to ``M`` of both
   test days through the Hermite row of :func:`physics.effects.hermite_row`.
@@ -54,8 +62,8 @@ __all__ = ["APPLIED_EFFECTS", "as_preset", "beam_mapping", "load_truth_beam", "p
 
 #: The beam-file effects the generator applies (module docstring: how each enters); a beam file with another
 #: effect is refused, and ``generate --help`` lists these.
-APPLIED_EFFECTS = ("shear_deformation", "rotary_inertia", "root_flexibility", "added_mass", "local_damping",
-                   "proportional_damping")
+APPLIED_EFFECTS = ("shear_deformation", "rotary_inertia", "root_flexibility", "clamp_flexibility",
+                   "bearing_flexibility", "suspension", "added_mass", "local_damping", "proportional_damping")
 
 
 def load_truth_beam(mapping: dict):
@@ -153,10 +161,12 @@ def point_effects(beam, n_elements: int) -> dict:
     Returns
     -------
     dict with ``M_added`` (kg ...) and ``C_local`` (N s/m ...), each (2 N, 2 N) or
-    ``None``, ``k_theta_Nm_rad`` and ``k_y_N_m`` (``None`` when absent) and
-    ``rayleigh`` (``(alpha_1_s, beta_s)`` or ``None``).
+    ``None``; the clamp springs ``k_theta_Nm_rad`` and ``k_y_N_m`` (``root_flexibility`` or
+    ``clamp_flexibility``), the bearing spring ``bearing_k_theta_Nm_rad``, the suspension spring
+    ``suspension_k_y_N_m`` (each ``None`` when absent) and ``rayleigh`` (``(alpha_1_s, beta_s)`` or ``None``).
     """
-    out = {"M_added": None, "C_local": None, "k_theta_Nm_rad": None, "k_y_N_m": None, "rayleigh": None}
+    out = {"M_added": None, "C_local": None, "k_theta_Nm_rad": None, "k_y_N_m": None,
+           "bearing_k_theta_Nm_rad": None, "suspension_k_y_N_m": None, "rayleigh": None}
     if beam is None:
         return out
 
@@ -168,9 +178,14 @@ def point_effects(beam, n_elements: int) -> dict:
     if "local_damping" in eff:
         p = eff["local_damping"]
         out["C_local"] = dashpot_matrix(node_x, p["c_Ns_m"], p.get("x_m", beam.length_m))
-    if "root_flexibility" in eff:
-        out["k_theta_Nm_rad"] = eff["root_flexibility"]["k_theta_Nm_rad"]
-        out["k_y_N_m"] = eff["root_flexibility"].get("k_y_N_m")
+    for clamp in ("root_flexibility", "clamp_flexibility"):   # the two fit different supports: one at most
+        if clamp in eff:
+            out["k_theta_Nm_rad"] = eff[clamp]["k_theta_Nm_rad"]
+            out["k_y_N_m"] = eff[clamp].get("k_y_N_m")
+    if "bearing_flexibility" in eff:
+        out["bearing_k_theta_Nm_rad"] = eff["bearing_flexibility"]["k_theta_Nm_rad"]
+    if "suspension" in eff:
+        out["suspension_k_y_N_m"] = eff["suspension"]["k_y_N_m"]
     if "proportional_damping" in eff:
         p = eff["proportional_damping"]
         out["rayleigh"] = (p.get("alpha_1_s", 0.0), p.get("beta_s", 0.0))

@@ -26,8 +26,8 @@ from __future__ import annotations
 import argparse
 import time
 
-from experiments.study_discrepancy import SHORT, TRUTHS, confusion
-from physics.effects import CANDIDATES
+from experiments.study_discrepancy import BEAM, SHORT, TRUTHS, confusion
+from physics.effects import candidates_for
 
 __all__ = ["main"]
 
@@ -42,7 +42,7 @@ def main(argv=None):
     ap.add_argument("--estimate-noise", action="store_true",
                     help="scale the given noise to the data (physics.discrepancy.analyse's estimate_noise)")
     args = ap.parse_args(argv)
-    cols = [SHORT[c] for c in ("none", *CANDIDATES)]
+    cols = [SHORT[c] for c in ("none", *candidates_for(BEAM.bc))]
     t0 = time.perf_counter()
     rows = confusion(args.seeds, args.kinds, args.truths, progress=True, estimate_noise=args.estimate_noise)
     for kind in args.kinds:

@@ -13,7 +13,7 @@ import numpy as np
 from experiments.args import add_beam_argument
 from experiments.study_discrepancy import EXAMPLE, run_discrepancy
 from physics import discrepancy as dsc
-from physics.effects import CANDIDATES
+from physics.effects import CANDIDATES, SUPPORT_EFFECTS
 from physics.errors import ConfigError
 from physics.io import FRF, MODAL, accepted, dof_positions_text
 
@@ -37,7 +37,8 @@ def run(args) -> dict:
     # (analyse's estimate_noise)
     out = run_discrepancy(args.beam, args.measured, args.out, frequency_noise=args.frequency_noise,
                           shape_noise=args.shape_noise, frf_noise_db=args.frf_noise_db, max_effects=args.max_effects,
-                          n_elements=args.elements, seed=args.seed, candidates=tuple(args.candidates),
+                          n_elements=args.elements, seed=args.seed,
+                          candidates=None if args.candidates is None else tuple(args.candidates),
                           estimate_noise=args.frequency_noise is None and args.shape_noise is None,
                           progress=progress)
     res, recal = out.pop("_result")
@@ -123,8 +124,10 @@ def add_parser(sub):
     p = sub.add_parser(
         "discrepancy", help="find where the model misses measured data and name the missing effect",
         description="Pair measured and model modes, recalibrate EI (and mass with FRFs), "
-                    "then fit each candidate effect (shear deformation, rotary inertia, root flexibility, added "
-                    "mass, local damping) with the globals, score by BIC with the measurement noise and a "
+                    "then fit each candidate effect of the beam's supports (shear deformation, rotary inertia, "
+                    "added mass, local damping, and the supports' own: root flexibility of a clamped-free beam, "
+                    "clamp flexibility of a clamped-clamped one, bearing flexibility of a pinned-pinned one, the "
+                    "suspension of a free-free one) with the globals, score by BIC with the measurement noise and a "
                     "leave-one-mode-out check, name the winner only when significant, and repeat once. "
                     "Damping ratios are modal (one per mode, the null model): a dashpot is named only from "
                     "complex mode shapes or FRFs. "
@@ -144,8 +147,11 @@ def add_parser(sub):
     p.add_argument("--frf-noise-db", type=float, default=None,
                    help="FRF magnitude std in dB (default: estimated from the FRF's line-to-line scatter)")
     p.add_argument("--max-effects", type=int, default=2, help="most effects to name (default 2)")
-    p.add_argument("--candidates", nargs="+", default=list(CANDIDATES), choices=CANDIDATES, metavar="EFFECT",
-                   help=f"effects to test (default all: {' '.join(CANDIDATES)})")
+    p.add_argument("--candidates", nargs="+", default=None, choices=CANDIDATES, metavar="EFFECT",
+                   help="effects to test (default: all that fit the beam's supports: "
+                        + " ".join(c for c in CANDIDATES if c not in SUPPORT_EFFECTS.values())
+                        + " on every beam, plus " + ", ".join(f"{e} ({bc})" for bc, e in SUPPORT_EFFECTS.items())
+                        + "); one that does not fit the supports is refused")
     p.add_argument("--elements", type=int, default=40, help="elements of the fitted models (default 40)")
     p.add_argument("--seed", type=int, default=0, help="seed of the multi-start fits")
     p.add_argument("--json", action="store_true",

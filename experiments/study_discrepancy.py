@@ -19,7 +19,7 @@ import numpy as np
 
 from physics import discrepancy as dsc
 from physics.beam import Beam, beam_to_toml, load_beam
-from physics.effects import CANDIDATES
+from physics.effects import candidates_for
 from physics.errors import ConfigError, FileFormatError
 from physics.io import (MODAL, atomic_write_bytes, modal_data_from_dict, modal_or_frf, number_list, prepare_measured,
                         read_frf, read_json)
@@ -216,15 +216,21 @@ def estimated_noise(meas: dsc.Measurement, res: dsc.DiscrepancyResult) -> dict:
 
 
 def run_discrepancy(beam_spec, measured, out_dir=None, *, frequency_noise=None, shape_noise=None, frf_noise_db=None,
-                    max_effects=2, n_elements=40, seed=0, candidates=CANDIDATES, estimate_noise=False,
+                    max_effects=2, n_elements=40, seed=0, candidates=None, estimate_noise=False,
                     progress=None) -> dict:
     """The command without printing: returns the JSON result (issue 9 keys) plus ``"_result"`` objects.
 
+    ``candidates`` (None: every one of the beam's supports, :func:`physics.effects.candidates_for`) are checked
+    against the beam's supports before the measurement is read.
     ``frequency_noise``, ``shape_noise`` and ``frf_noise_db`` are the noise stds given (None: not given;
     :func:`_noise_for`). ``estimate_noise`` (modal JSON only; FRF input takes its noise from the identification
     and the FRF's scatter) scales an assumed noise to the data (:func:`physics.discrepancy.analyse`).
     """
     beam = beam_spec if isinstance(beam_spec, Beam) else load_beam(beam_spec)
+    try:
+        candidates = dsc.check_candidates(candidates, beam.bc)
+    except ValueError as exc:
+        raise ConfigError(f"--candidates: {exc}") from None
     meas, rel_std, dof_map = load_measurement(measured, beam)
     noise, sources = _noise_for(meas, rel_std, frequency_noise, shape_noise, frf_noise_db)
     if out_dir is not None:
@@ -386,7 +392,8 @@ def run_case(effect, params, seed, shapes, beam=BEAM, estimate_noise=False):
 
 
 SHORT = {"none": "none", "shear_deformation": "shear", "rotary_inertia": "rotary", "root_flexibility": "root",
-         "added_mass": "mass", "local_damping": "l.damp"}
+         "clamp_flexibility": "clamp", "bearing_flexibility": "bearing", "suspension": "susp", "added_mass": "mass",
+         "local_damping": "l.damp"}
 
 
 def confusion(seeds: int = 3, kinds=("freq", "shapes"), truths=None, progress: bool = False,
@@ -401,7 +408,7 @@ def confusion(seeds: int = 3, kinds=("freq", "shapes"), truths=None, progress: b
     """
     from tqdm import tqdm
 
-    cols = ["none", *CANDIDATES]
+    cols = ["none", *candidates_for(BEAM.bc)]
     rows = []
     for kind in kinds:
         for name in tqdm(list(truths or TRUTHS), desc=f"hidden effects ({kind})", leave=False, disable=not progress):

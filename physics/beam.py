@@ -31,7 +31,7 @@ otherwise the keys marked * are required. Unknown keys are errors::
 
     [effects.shear_deformation]      # any of physics.effects.EFFECTS, each with its parameters
     kGA_N = 2.0e4
-    [effects.root_flexibility]
+    [effects.root_flexibility]       # the supports' effect follows bc (physics.effects.SUPPORT_EFFECTS)
     k_theta_Nm_rad = 5.0e3
 
 ``EI_Nm2`` and ``face_modulus_pa`` exclude each other, as do
@@ -128,6 +128,7 @@ class Beam:
 
     def __post_init__(self):
         eff = fx.validate_effects(dict(self.effects), f"beam {self.name!r}")
+        fx.check_supports(eff, self.bc, f"beam {self.name!r}")
         object.__setattr__(self, "effects", MappingProxyType({k: MappingProxyType(v) for k, v in eff.items()}))
         xs = self.measured_x_m or tuple(self.length_m * k / 4 for k in range(1, 5))
         object.__setattr__(self, "measured_x_m", tuple(float(x) for x in xs))
@@ -249,6 +250,7 @@ def beam_from_dict(obj: dict, source: str = "beam") -> Beam:
     if "effects" in obj:
         eff = fx.validate_effects(obj["effects"], source)
         vals["effects"] = {**vals.get("effects", {}), **eff}
+    fx.check_supports(vals.get("effects", {}), vals.get("bc", "clamped-free"), source)
     _check_layout(vals, source)
     beam = Beam(**vals)
     if beam.effects:

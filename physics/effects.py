@@ -16,6 +16,20 @@ unit in the name):
 ``root_flexibility``  ``k_theta_Nm_rad`` (required), ``k_y_N_m`` (optional)
     The clamp becomes a rotational spring (N m/rad) and, if given, a
     translational spring (N/m); clamped-free beams only.
+``clamp_flexibility``  ``k_theta_Nm_rad`` (required), ``k_y_N_m`` (optional)
+    Both clamps of a clamped-clamped beam become rotational springs of the
+    same stiffness (N m/rad) and, if given, translational springs (N/m). One
+    value for both: the frequencies of a symmetric beam depend to first order
+    on the sum of the two end compliances only, so measured modes cannot tell
+    the two clamps apart.
+``bearing_flexibility``  ``k_theta_Nm_rad`` (required)
+    A rotational spring (N m/rad) at each pinned end of a pinned-pinned beam,
+    one value for both (as ``clamp_flexibility``): 0 is the ideal pin, infinity a clamp.
+``suspension``  ``k_y_N_m`` (required)
+    A translational spring to ground (N/m) at each end of a free-free beam
+    (the soft suspension of a free-free test): the two rigid-body modes become
+    the bounce and pitch modes (bounce at ``sqrt(2 k / (m L))`` for a stiff
+    beam), and the bending modes stiffen slightly.
 ``added_mass``  ``mass_kg`` (required), ``x_m`` (default: the tip), ``J_kg_m2`` (default 0)
     A point mass (sensor, stinger, shaker armature) with optional rotary
     inertia, attached through the element's cubic (Hermite) shape functions, so
@@ -29,8 +43,10 @@ unit in the name):
     damping that is always calibrated, not a candidate effect.
 
 Each effect is one :class:`Effect` record of :data:`EFFECTS` (its parameters, how it
-enters the model, its discrepancy-fit bounds). :func:`assemble_beam` builds an
-:class:`physics.fem.FEModel` with every effect applied; :func:`interpolation_matrix`
+enters the model, the supports it fits, its discrepancy-fit bounds). The support effects follow
+the boundary condition (:data:`SUPPORT_EFFECTS`); an effect on supports the beam lacks is refused
+in one line. :func:`candidates_for` lists the candidates of a discrepancy analysis of a beam.
+:func:`assemble_beam` builds an :class:`physics.fem.FEModel` with every effect applied; :func:`interpolation_matrix`
 maps its DOFs onto the translations at arbitrary positions (measured points between nodes).
 """
 
@@ -45,8 +61,9 @@ import numpy as np
 from physics import fem
 from physics.errors import BeamDamageError, ConfigError
 
-__all__ = ["CANDIDATES", "EFFECTS", "Effect", "Parameter", "assemble_beam", "dashpot_matrix", "hermite_row",
-           "interpolation_matrix", "point_mass_matrix", "timoshenko_mass", "timoshenko_stiffness", "validate_effects"]
+__all__ = ["CANDIDATES", "EFFECTS", "SUPPORT_EFFECTS", "Effect", "Parameter", "assemble_beam", "candidates_for",
+           "check_supports", "dashpot_matrix", "hermite_row", "interpolation_matrix", "point_mass_matrix",
+           "timoshenko_mass", "timoshenko_stiffness", "validate_effects"]
 
 
 @dataclass(frozen=True)
@@ -112,6 +129,8 @@ class Effect:
     fit_bounds : callable ``(L, EI, m, rho_i, w1) -> {parameter: (lower, upper)}``, or None
         Bounds of the free parameters of a discrepancy fit, on the beam's own scales (``w1``: the first
         measured mode, rad/s); None for an effect that is not a discrepancy candidate.
+    supports : tuple of str, or None
+        Boundary conditions the effect fits (None: every one).
     """
 
     name: str
@@ -119,6 +138,7 @@ class Effect:
     stage: str
     apply: Callable
     fit_bounds: Callable | None = None
+    supports: tuple | None = None
 
 
 def _shear(parts: _Parts, p: dict) -> None:
@@ -143,15 +163,39 @@ def _dashpot(parts: _Parts, p: dict) -> None:
     parts.C = parts.C + dashpot_matrix(parts.node_x, p["c_Ns_m"], p.get("x_m", parts.length_m))
 
 
-def _root_springs(parts: _Parts, p: dict) -> None:
-    if parts.bc != "clamped-free":
-        raise BeamDamageError("effect 'root_flexibility' is defined for a clamped-free beam only")
-    parts.removed.discard("1:rz")
+def _dof(node: int, direction: str) -> int:
+    """Index of DOF ``"node:direction"`` in the global order ``[1:y, 1:rz, 2:y, ...]``."""
+    return 2 * (node - 1) + (direction == "rz")
+
+
+def _end_nodes(parts: _Parts, kind: str) -> list[int]:
+    """Nodes (1 and/or the last) of the ends of ``parts.bc`` with support ``kind`` ("clamped", "pinned", "free")."""
+    left, right = parts.bc.split("-")
+    return [n for n, k in ((1, left), (parts.node_x.size, right)) if k == kind]
+
+
+def _springs(parts: _Parts, nodes, direction: str, k: float) -> None:
+    """Springs to ground of stiffness ``k`` on ``"node:direction"`` of each of ``nodes``, their DOFs kept."""
     parts.K = parts.K.copy()
-    parts.K[1, 1] += p["k_theta_Nm_rad"]
+    for n in nodes:
+        parts.removed.discard(f"{n}:{direction}")
+        i = _dof(n, direction)
+        parts.K[i, i] += k
+
+
+def _clamp_springs(parts: _Parts, p: dict) -> None:
+    clamps = _end_nodes(parts, "clamped")
+    _springs(parts, clamps, "rz", p["k_theta_Nm_rad"])
     if "k_y_N_m" in p:
-        parts.removed.discard("1:y")
-        parts.K[0, 0] += p["k_y_N_m"]
+        _springs(parts, clamps, "y", p["k_y_N_m"])
+
+
+def _bearing_springs(parts: _Parts, p: dict) -> None:
+    _springs(parts, _end_nodes(parts, "pinned"), "rz", p["k_theta_Nm_rad"])
+
+
+def _suspension(parts: _Parts, p: dict) -> None:
+    _springs(parts, _end_nodes(parts, "free"), "y", p["k_y_N_m"])
 
 
 #: Every effect, one record each (see the module docstring); ``assembled`` effects apply in this order.
@@ -169,11 +213,57 @@ EFFECTS: dict[str, Effect] = {e.name: e for e in (
     Effect("local_damping", (Parameter("c_Ns_m", True, positive=False), Parameter("x_m", False, positive=False)),
            "assembled", _dashpot, lambda L, EI, m, rho_i, w1: {"c_Ns_m": (1e-7 * m * L * w1, 0.3 * m * L * w1)}),
     Effect("root_flexibility", (Parameter("k_theta_Nm_rad", True), Parameter("k_y_N_m", False)), "assembled",
-           _root_springs, lambda L, EI, m, rho_i, w1: {"k_theta_Nm_rad": (0.1 * EI / L, 1e5 * EI / L)}),
+           _clamp_springs, lambda L, EI, m, rho_i, w1: {"k_theta_Nm_rad": (0.1 * EI / L, 1e5 * EI / L)},
+           ("clamped-free",)),
+    Effect("clamp_flexibility", (Parameter("k_theta_Nm_rad", True), Parameter("k_y_N_m", False)), "assembled",
+           _clamp_springs, lambda L, EI, m, rho_i, w1: {"k_theta_Nm_rad": (0.1 * EI / L, 1e5 * EI / L)},
+           ("clamped-clamped",)),
+    # from an almost ideal pin (a frequency shift of ~1e-4) to almost a clamp
+    Effect("bearing_flexibility", (Parameter("k_theta_Nm_rad", True),), "assembled", _bearing_springs,
+           lambda L, EI, m, rho_i, w1: {"k_theta_Nm_rad": (1e-3 * EI / L, 1e3 * EI / L)}, ("pinned-pinned",)),
+    # bounce mode sqrt(2 k / (m L)) from 0.5 % to 40 % of the first measured (bending) mode
+    Effect("suspension", (Parameter("k_y_N_m", True),), "assembled", _suspension,
+           lambda L, EI, m, rho_i, w1: {"k_y_N_m": (0.5 * m * L * (0.005 * w1) ** 2, 0.5 * m * L * (0.4 * w1) ** 2)},
+           ("free-free",)),
 )}
 
-#: Effects a discrepancy analysis may name (``proportional_damping`` is always calibrated).
-CANDIDATES = ("shear_deformation", "rotary_inertia", "root_flexibility", "added_mass", "local_damping")
+#: The effect of each boundary condition's supports (the discrepancy candidate that follows them).
+SUPPORT_EFFECTS = {"clamped-free": "root_flexibility", "clamped-clamped": "clamp_flexibility",
+                   "pinned-pinned": "bearing_flexibility", "free-free": "suspension"}
+
+#: Effects a discrepancy analysis may name on some beam (``proportional_damping`` is always calibrated); the
+#: candidates of one beam are :func:`candidates_for` its boundary condition.
+CANDIDATES = ("shear_deformation", "rotary_inertia", "root_flexibility", "clamp_flexibility", "bearing_flexibility",
+              "suspension", "added_mass", "local_damping")
+
+
+def candidates_for(bc: str) -> tuple[str, ...]:
+    """The candidate effects of a beam with boundary condition ``bc``: :data:`CANDIDATES` that fit its supports.
+
+    Shear deformation, rotary inertia, added mass and local damping fit every beam; of the support effects the
+    one of :data:`SUPPORT_EFFECTS`.
+    """
+    if bc not in SUPPORT_EFFECTS:
+        raise BeamDamageError(f"boundary condition {bc!r} unknown; expected one of {list(SUPPORT_EFFECTS)}",
+                              parameter="bc")
+    return tuple(c for c in CANDIDATES if EFFECTS[c].supports is None or bc in EFFECTS[c].supports)
+
+
+def check_supports(names, bc: str, source: str = "effects") -> None:
+    """Refuse effects that do not fit the supports of a ``bc`` beam.
+
+    Raises
+    ------
+    ConfigError
+        One line naming ``source``, the effect, the boundary condition and the support effect that fits it.
+    """
+    if bc not in SUPPORT_EFFECTS:
+        return                    # an unknown boundary condition is refused by physics.fem
+    for name in names:
+        sup = EFFECTS[name].supports
+        if sup is not None and bc not in sup:
+            raise ConfigError(f"{source}: effect '{name}' is defined for a {' or '.join(sup)} beam, not {bc}; "
+                              f"the supports of a {bc} beam take '{SUPPORT_EFFECTS[bc]}'")
 
 
 def validate_effects(effects, source: str = "effects") -> dict:
@@ -376,6 +466,7 @@ def assemble_beam(length_m, EI_Nm2, mass_per_length_kg_m, n_elements, *, bc="cla
         ``C`` holds proportional plus local damping (zeros without them).
     """
     eff = validate_effects(effects)
+    check_supports(eff, bc)
     n_el = fem.check_n_elements(n_elements)
     for name, v in (("length_m", length_m), ("EI_Nm2", EI_Nm2), ("mass_per_length_kg_m", mass_per_length_kg_m)):
         if not (np.isfinite(v) and v > 0):

@@ -4,7 +4,9 @@ Workflow (:func:`analyse`)
 --------------------------
 1. Pair measured and model modes (MAC when shapes exist, else frequency) and
    form residuals: frequency error (%), damping ratio error, MAC, and FRF error
-   per band (dB) when FRFs are given (:func:`mode_residuals`).
+   per band (dB) when FRFs are given (:func:`mode_residuals`). Measured modes are
+   bending modes: a free-free model's two lowest modes (rigid-body, or bounce and
+   pitch on a suspension) are left out (:func:`bending_modes`).
 2. Recalibrate the global parameters first: ``EI`` always, the mass per length
    when FRFs fix the absolute scale. From frequencies alone ``EI/m`` scales
    every frequency by one factor, so only frequency *ratios* (and shapes, FRF
@@ -16,7 +18,9 @@ Workflow (:func:`analyse`)
    non-proportional coupling (the off-diagonal modal damping), visible in the
    imaginary parts of complex mode shapes and in FRFs; without those it is
    not tested.
-4. For each candidate of :data:`physics.effects.CANDIDATES`, a bounded,
+4. For each candidate of the beam's supports (:func:`physics.effects.candidates_for`
+   its ``bc``: shear deformation, rotary inertia, added mass, local damping and
+   the support's own effect: root or clamp springs, bearing springs, suspension), a bounded,
    multi-start least-squares fit of its parameters together with the global
    ones on every residual present (frequencies, real and imaginary parts of
    shapes, FRF magnitudes), each whitened by its noise level (:class:`Noise`).
@@ -59,13 +63,14 @@ from physics.discrepancy.candidates import g_core_pa
 from physics.discrepancy.fitting import BLOCKS, Fit
 from physics.discrepancy.limits import DETECTION_POWER, SIZES, DetectionLimit, detection_limits
 from physics.discrepancy.measurement import Measurement, Noise, frf_scatter_db, has_complex_shapes
-from physics.discrepancy.model import (ModeResiduals, Prediction, mode_residuals, pair_modes_by_mac, predict,
-                                       rayleigh_fit, simulate_measurement)
+from physics.discrepancy.model import (ModeResiduals, Prediction, bending_modes, mode_residuals, pair_modes_by_mac,
+                                       predict, rayleigh_fit, simulate_measurement)
 from physics.discrepancy.selection import (BIC_SIGNIFICANT, DISTINCT, NOISE_DOF_MIN, P_NOISE, NoiseCheck, Step,
                                            noise_check)
-from physics.discrepancy.workflow import DiscrepancyResult, analyse
+from physics.discrepancy.workflow import DiscrepancyResult, analyse, check_candidates
 
 __all__ = ["BIC_SIGNIFICANT", "BLOCKS", "DETECTION_POWER", "DISTINCT", "DetectionLimit", "DiscrepancyResult", "Fit",
            "Measurement", "ModeResiduals", "NOISE_DOF_MIN", "Noise", "NoiseCheck", "P_NOISE", "Prediction", "SIZES",
-           "Step", "analyse", "detection_limits", "frf_scatter_db", "g_core_pa", "has_complex_shapes", "mode_residuals",
-           "noise_check", "pair_modes_by_mac", "predict", "rayleigh_fit", "simulate_measurement"]
+           "Step", "analyse", "bending_modes", "check_candidates", "detection_limits", "frf_scatter_db", "g_core_pa",
+           "has_complex_shapes", "mode_residuals", "noise_check", "pair_modes_by_mac", "predict", "rayleigh_fit",
+           "simulate_measurement"]

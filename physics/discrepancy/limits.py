@@ -26,6 +26,9 @@ SIZES = {
     "shear_deformation": ("kGA_L2_over_EI", "kGA_N", True),
     "rotary_inertia": ("rho_I_over_m_h2_12", "rho_I_kg_m", False),
     "root_flexibility": ("k_L_over_EI", "k_theta_Nm_rad", True),
+    "clamp_flexibility": ("k_L_over_EI", "k_theta_Nm_rad", True),
+    "bearing_flexibility": ("k_L_over_EI", "k_theta_Nm_rad", False),
+    "suspension": ("k_L3_over_EI", "k_y_N_m", False),
     "added_mass": ("mass_fraction_of_m_L", "mass_kg", False),
     "local_damping": ("added_damping_ratio", "c_Ns_m", False),
 }
@@ -48,13 +51,15 @@ class DetectionLimit:
     ----------
     effect : str
     quantity : str
-        The dimensionless size (:data:`SIZES`): ``k_L_over_EI``, ``kGA_L2_over_EI``,
+        The dimensionless size (:data:`SIZES`): ``k_L_over_EI`` (clamp and bearing springs),
+        ``k_L3_over_EI`` (suspension springs), ``kGA_L2_over_EI``,
         ``mass_fraction_of_m_L``, ``rho_I_over_m_h2_12`` or ``added_damping_ratio``
         (a dashpot's first-order added damping ratio ``c phi_r(x)^2 / (2 w_r)``,
         largest over the measured modes, mass-normalised ``phi``).
     named_below : bool
-        True when the effect is named for a size *below* the limit (a root
-        spring or shear rigidity: softer is stronger), else above.
+        True when the effect is named for a size *below* the limit (a clamp
+        spring or shear rigidity: softer is stronger), else above (a bearing
+        or suspension spring: stiffer is stronger).
     limit : float or None
         At the most sensitive measured position for position-bearing effects;
         None when not detectable anywhere within the candidate's bounds.
@@ -191,7 +196,8 @@ def _size_factors(effect: str, nb: Beam, meas: Measurement, xs: list, n_elements
         per_c = dashpot_damping_per_c(nb, xs, meas.n_modes, n_elements)
         return {x: float(np.max(row)) for x, row in zip(xs, per_c)}
     factor = {"shear_deformation": L**2 / EI, "rotary_inertia": 12 / (m * nb.thickness_m**2),
-              "root_flexibility": L / EI, "added_mass": 1 / (m * L)}[effect]
+              "root_flexibility": L / EI, "clamp_flexibility": L / EI, "bearing_flexibility": L / EI,
+              "suspension": L**3 / EI, "added_mass": 1 / (m * L)}[effect]
     return dict.fromkeys(xs, factor)
 
 

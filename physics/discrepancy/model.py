@@ -12,12 +12,13 @@ from physics import effects as fx
 from physics.beam import Beam
 from physics.errors import BeamDamageError
 from physics.frf import convert_frf, receptance
+from physics.layout import RIGID_BODY_MODES
 from physics.modal import mac
 from physics.discrepancy.measurement import Measurement, Noise
 from physics.frf import magnitude_db
 
-__all__ = ["ModeResiduals", "Prediction", "aligned", "dashpot_damping_per_c", "mode_residuals", "pair_modes_by_mac",
-           "predict", "rayleigh_fit", "simulate_measurement"]
+__all__ = ["ModeResiduals", "Prediction", "aligned", "bending_modes", "dashpot_damping_per_c", "mode_residuals",
+           "pair_modes_by_mac", "predict", "rayleigh_fit", "simulate_measurement"]
 
 
 @dataclass(frozen=True)
@@ -30,11 +31,23 @@ class Prediction:
     frf: np.ndarray | None      # like Measurement.frf
 
 
+def bending_modes(beam: Beam, model, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The ``n`` lowest bending modes of ``model`` (of ``beam``): ``(w^2 (rad/s)^2, mass-normalised phi)``.
+
+    A free-free beam's two lowest modes, rigid-body ones or (with ``suspension``) the bounce and pitch modes
+    on the suspension, are left out (:data:`physics.layout.RIGID_BODY_MODES`): the measured modes are bending
+    modes. Fewer than ``n`` when the model has fewer DOFs.
+    """
+    first = RIGID_BODY_MODES[beam.bc]
+    last = min(first + n, len(model.dofs)) - 1
+    return eigh(model.K, model.M, subset_by_index=[first, last])
+
+
 def predict(beam: Beam, meas: Measurement, n_elements: int = 40, n_modes: int | None = None,
             *, EI_scale=1.0, mass_scale=1.0, modal_zeta=None) -> Prediction:
     """Modes of ``beam`` (every effect applied) at the measured points.
 
-    Damped modes come from the lowest ``n_modes + 6`` undamped modes (modal
+    Damped modes come from the lowest ``n_modes + 6`` undamped bending modes (:func:`bending_modes`; modal
     projection, exact for proportional damping, accurate for light local damping).
 
     Parameters
@@ -47,8 +60,8 @@ def predict(beam: Beam, meas: Measurement, n_elements: int = 40, n_modes: int | 
     """
     n = n_modes or meas.n_modes + 2
     model = beam.fe_model(n_elements, EI_scale=EI_scale, mass_scale=mass_scale)
-    n_proj = min(n + 6, len(model.dofs))
-    w2, phi = eigh(model.K, model.M, subset_by_index=[0, n_proj - 1])   # phi^T M phi = I
+    w2, phi = bending_modes(beam, model, n + 6)   # phi^T M phi = I
+    n_proj = w2.size
     w = np.sqrt(np.clip(w2, 0.0, None))
     c_r = phi.T @ model.C @ phi
     if modal_zeta is not None:
@@ -87,7 +100,8 @@ def dashpot_damping_per_c(beam: Beam, x_m, n_modes: int, n_elements: int) -> np.
     """First-order damping ratio a dashpot of 1 N s/m adds to each of the lowest modes, at each position.
 
     ``phi_r(x)^2 / (2 w_r)`` with mass-normalised ``phi`` of the undamped ``n_elements`` model of ``beam``
-    (one eigensolution for every position); a dashpot ``c`` adds ``c`` times this.
+    (its bending modes, :func:`bending_modes`; one eigensolution for every position); a dashpot ``c`` adds
+    ``c`` times this.
 
     Parameters
     ----------
@@ -99,7 +113,7 @@ def dashpot_damping_per_c(beam: Beam, x_m, n_modes: int, n_elements: int) -> np.
     ndarray, shape (n_x, n_modes)   (m/(N s))
     """
     model = beam.fe_model(n_elements)
-    w2, phi = eigh(model.K, model.M, subset_by_index=[0, n_modes - 1])
+    w2, phi = bending_modes(beam, model, n_modes)
     return (fx.interpolation_matrix(model, list(x_m)) @ phi) ** 2 / (2 * np.sqrt(w2))
 
 

@@ -9,6 +9,7 @@ import numpy as np
 
 from physics import effects as fx
 from physics.beam import Beam
+from physics.layout import RIGID_BODY_MODES
 from physics.modal import undamped_modes
 from physics.discrepancy.fitting import Fit
 from physics.discrepancy.measurement import Measurement, Noise
@@ -209,11 +210,13 @@ def _separating_measurement(a: Fit, b: Fit, meas: Measurement, noise: Noise, n_e
 
 
 def _antiresonances_hz(beam: Beam, x_m: float, n_elements: int, n: int) -> np.ndarray:
-    """Antiresonances of the driving-point receptance at ``x_m``: the frequencies with ``w(x_m)`` held at zero."""
+    """Antiresonances of the driving-point receptance at ``x_m``: the frequencies with ``w(x_m)`` held at zero
+    (of the bending modes)."""
     model = beam.fe_model(n_elements)
     t = fx.interpolation_matrix(model, [x_m])[0]
     # constrain t^T u = 0 by a null-space basis
     q, _ = np.linalg.qr(np.column_stack([t, np.eye(t.size)]))
     z = q[:, 1:]
     w, _ = undamped_modes(z.T @ model.M @ z, z.T @ model.K @ z)
-    return w[:n] / (2 * np.pi)
+    skip = max(RIGID_BODY_MODES[beam.bc] - 1, 0)   # a free-free beam held at x keeps its pitch about x
+    return w[skip:skip + n] / (2 * np.pi)

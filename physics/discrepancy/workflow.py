@@ -16,7 +16,7 @@ from physics.discrepancy.measurement import Measurement, Noise, has_complex_shap
 from physics.discrepancy.model import ModeResiduals, mode_residuals, pair_modes_by_mac, predict
 from physics.discrepancy.selection import NoiseCheck, decide, estimate_noise_scale, noise_check
 
-__all__ = ["DiscrepancyResult", "analyse"]
+__all__ = ["DiscrepancyResult", "analyse", "check_candidates"]
 
 @dataclass(frozen=True)
 class DiscrepancyResult:
@@ -66,7 +66,7 @@ class DiscrepancyResult:
     noise_scale_from: str = ""
 
 
-def analyse(beam: Beam, meas: Measurement, noise: Noise | None = None, *, candidates=fx.CANDIDATES,
+def analyse(beam: Beam, meas: Measurement, noise: Noise | None = None, *, candidates=None,
             max_effects: int = 2, n_elements: int = 40, n_starts: int = 4, seed: int = 0,
             estimate_noise: bool = False, progress=None) -> DiscrepancyResult:
     """Name the effects ``beam`` lacks to explain ``meas`` (module docstring).
@@ -77,8 +77,9 @@ def analyse(beam: Beam, meas: Measurement, noise: Noise | None = None, *, candid
         Nominal model (its own effects are kept and refitted as globals are).
     meas : Measurement
     noise : Noise, optional
-    candidates : sequence of str
-        Effects to test (default all of :data:`physics.effects.CANDIDATES`).
+    candidates : sequence of str, optional
+        Effects to test (default: every candidate of the beam's supports,
+        :func:`physics.effects.candidates_for` ``beam.bc``); one that does not fit them is refused.
     max_effects : int
         Most effects to name.
     n_elements : int
@@ -106,8 +107,30 @@ def analyse(beam: Beam, meas: Measurement, noise: Noise | None = None, *, candid
     DiscrepancyResult
     """
     with threadpool_limits(1):   # small dense eigenproblems: one BLAS thread is fastest
-        return _analyse(beam, meas, noise or Noise(), candidates, max_effects, n_elements, n_starts, seed,
-                        estimate_noise, progress)
+        return _analyse(beam, meas, noise or Noise(), check_candidates(candidates, beam.bc), max_effects,
+                        n_elements, n_starts, seed, estimate_noise, progress)
+
+
+def check_candidates(candidates, bc: str) -> tuple[str, ...]:
+    """``candidates`` checked against the supports of a ``bc`` beam (None: all of
+    :func:`physics.effects.candidates_for` ``bc``).
+
+    Raises
+    ------
+    BeamDamageError
+        One line naming the unknown effect, or the effect, the bc and the candidates that fit it.
+    """
+    fits = fx.candidates_for(bc)
+    if candidates is None:
+        return fits
+    unknown = [c for c in candidates if c not in fx.CANDIDATES]
+    if unknown:
+        raise BeamDamageError(f"unknown candidate effect(s) {unknown}; expected some of {list(fx.CANDIDATES)}")
+    for c in candidates:
+        if c not in fits:
+            raise BeamDamageError(f"candidate effect '{c}' does not fit a {bc} beam; its candidates are "
+                                  f"{', '.join(fits)}")
+    return tuple(candidates)
 
 
 def _untestable(names: list, meas: Measurement) -> dict:
@@ -119,9 +142,6 @@ def _untestable(names: list, meas: Measurement) -> dict:
 
 
 def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, seed, estimate_noise, progress):
-    unknown = [c for c in candidates if c not in fx.CANDIDATES]
-    if unknown:
-        raise BeamDamageError(f"unknown candidate effect(s) {unknown}; expected some of {list(fx.CANDIDATES)}")
     fit_mass = meas.frf is not None
     names = list(candidates)
     untestable = _untestable(names, meas)
