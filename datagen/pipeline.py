@@ -286,6 +286,85 @@ def generated_test(beam, source: str):
     return test
 
 
+def _clamp_band(cfg: dict, test, fx: dict, preset) -> tuple:
+    """The specimen band of the clamp spring ``k_r L / EI`` (empty: rigid clamps or no clamp); a calibrated root or
+    clamp spring is its geometric centre, the config's width kept."""
+    band = tuple(cfg["specimen"]["root_spring_relative"]) if test.bc in ("clamped-free", "clamped-clamped") else ()
+    if fx["k_theta_Nm_rad"] is not None:
+        centre = fx["k_theta_Nm_rad"] * preset.length_m / preset.EI_Nm2
+        half = np.sqrt(band[1] / band[0]) if band else 1.0
+        band = (centre / half, centre * half)
+    if not band and any(cfg["specimen"]["root_spring_change"]) and test.bc in ("clamped-free", "clamped-clamped"):
+        raise ConfigError("config key 'specimen.root_spring_change' needs a clamp spring "
+                          "('specimen.root_spring_relative' is empty: rigid clamp)")
+    return band
+
+
+def _supports(test, n_el: int, fx: dict, spring: bool, preset, beam):
+    """The truth mesh's DOFs and fixed springs under the test's supports.
+
+    Returns ``keep`` (indices of the kept DOFs among all), their names, the fixed springs ``{model index: stiffness
+    for unit EI}`` (translational clamp springs, bearing springs, the suspension), the model indices of the clamp
+    rotations held by the drawn spring, and the suspension for unit EI (None: the default of
+    :func:`suspension_unit_stiffness`).
+    """
+    names = dof_names(n_el + 1)
+    last = n_el + 1
+    removed = {"clamped-free": ["1:y", "1:rz"], "free-free": [], "pinned-pinned": ["1:y", f"{last}:y"],
+               "clamped-clamped": ["1:y", "1:rz", f"{last}:y", f"{last}:rz"]}[test.bc]
+    clamp_rotations = [d for d in ("1:rz", f"{last}:rz") if d in removed]
+    if spring:
+        removed = [d for d in removed if d not in clamp_rotations]
+    clamp_translations = [d.replace(":rz", ":y") for d in clamp_rotations]
+    if fx["k_y_N_m"] is not None:  # translational clamp springs: the clamps' translations stay DOFs
+        removed = [d for d in removed if d not in clamp_translations]
+    keep = np.array([i for i, d in enumerate(names) if d not in removed])
+    kept_names = [names[i] for i in keep]
+    springs = {}
+    if fx["k_y_N_m"] is not None:
+        for d in clamp_translations:
+            springs[kept_names.index(d)] = fx["k_y_N_m"] / preset.EI_Nm2
+    if fx["bearing_k_theta_Nm_rad"] is not None:        # bearing springs on the pinned ends' rotations
+        for d in ("1:rz", f"{last}:rz"):
+            springs[kept_names.index(d)] = fx["bearing_k_theta_Nm_rad"] / preset.EI_Nm2
+    k_suspension = None if fx["suspension_k_y_N_m"] is None else fx["suspension_k_y_N_m"] / preset.EI_Nm2
+    if test.bc == "free-free":                          # the suspension (rigid-body modes left out)
+        for d in ("1:y", f"{last}:y"):
+            springs[kept_names.index(d)] = suspension_unit_stiffness(beam) if k_suspension is None else k_suspension
+    spring_dofs = np.array([kept_names.index(d) for d in clamp_rotations] if spring else [], int)
+    return keep, kept_names, springs, spring_dofs, k_suspension
+
+
+def _measured_rows(test, n_el: int, on_nodes: bool, keep, kept_names):
+    """The sensors' rows (indices of their translations, or interpolation rows between nodes) in ascending
+    position, and the reference DOF's row among them."""
+    order = np.argsort(test.sensors_x_m, kind="stable")
+    xs = np.asarray(test.sensors_x_m)[order]
+    if on_nodes:
+        meas = np.array([kept_names.index(f"{1 + k}:y") for k in np.rint(xs / test.length_m * n_el).astype(int)])
+    else:  # the sensors between nodes: their translations interpolated
+        meas = sensor_rows(xs, np.linspace(0.0, test.length_m, n_el + 1), keep)
+    return meas, int(np.flatnonzero(order == test.drive_sensor)[0])
+
+
+def _modal_damping(cfg: dict, fx: dict, preset, w, v, M0, K_beam, n_rigid: int, p: int) -> np.ndarray:
+    """Baseline modal damping ratios of the first ``p`` modes: the beam file's Rayleigh damping in the nominal
+    truth's modes, else the config's ``specimen.damping_ratios`` (the first one for rigid-body modes, the last one
+    beyond)."""
+    if fx["rayleigh"] is not None:
+        alpha, beta = fx["rayleigh"]
+        ei_m = preset.EI_Nm2 / preset.mass_per_length_kg_m
+        vp = v[:, :p]
+        c_diag = alpha * np.einsum("ij,ik,kj->j", vp, M0, vp) + beta * ei_m * np.einsum("ij,ik,kj->j", vp, K_beam, vp)
+        zeta = c_diag / (2 * w[:p] * np.sqrt(ei_m))
+        if not np.all((zeta > 0) & (zeta < 0.2)):
+            raise ConfigError(f"config key 'beam': proportional_damping gives modal damping ratios {zeta.tolist()} "
+                              f"of the first {p} modes; generate needs light damping, each in (0, 0.2)")
+        return zeta
+    zr = np.asarray(cfg["specimen"]["damping_ratios"], float)
+    return np.concatenate([np.full(n_rigid, zr[0]), zr, np.full(max(p - zr.size, 0), zr[-1])])[:p]
+
+
 def build_setup(cfg: dict) -> Setup:
     """Precompute the nominal truth matrices, measured DOFs, start basis and FRF grid."""
     beam = truth_beam_of(cfg)
@@ -302,15 +381,8 @@ def build_setup(cfg: dict) -> Setup:
     n_el, on_nodes = aligned_elements(test, max(cfg["mesh"]["truth_elements"], 4 * (n_rigid + max(test.modes) + 1)))
     truth = beam if cfg["beam"] else None
     fx = point_effects(truth, n_el)
-    band = tuple(cfg["specimen"]["root_spring_relative"]) if test.bc in ("clamped-free", "clamped-clamped") else ()
-    if fx["k_theta_Nm_rad"] is not None:  # the calibrated root spring is the centre of the specimen band
-        centre = fx["k_theta_Nm_rad"] * preset.length_m / preset.EI_Nm2
-        half = np.sqrt(band[1] / band[0]) if band else 1.0
-        band = (centre / half, centre * half)
+    band = _clamp_band(cfg, test, fx, preset)
     spring = bool(band)
-    if not spring and any(cfg["specimen"]["root_spring_change"]) and test.bc in ("clamped-free", "clamped-clamped"):
-        raise ConfigError("config key 'specimen.root_spring_change' needs a clamp spring "
-                          "('specimen.root_spring_relative' is empty: rigid clamp)")
     shear_file, rho_ratio, timoshenko = shear_parameters(truth, preset.thickness_m)
     shear_band = tuple(cfg["specimen"]["shear_flexibility"])
     if not test.thesis and shear_file == 0:  # the band describes sandwich cores: a beam file states its own shear
@@ -319,29 +391,7 @@ def build_setup(cfg: dict) -> Setup:
         half = (shear_band[1] - shear_band[0]) / 2
         shear_band = (max(shear_file - half, 0.0), shear_file + half)
     timoshenko = timoshenko or shear_band[1] > 0
-    names = dof_names(n_el + 1)
-    last = n_el + 1
-    removed = {"clamped-free": ["1:y", "1:rz"], "free-free": [], "pinned-pinned": ["1:y", f"{last}:y"],
-               "clamped-clamped": ["1:y", "1:rz", f"{last}:y", f"{last}:rz"]}[test.bc]
-    clamp_rotations = [d for d in ("1:rz", f"{last}:rz") if d in removed]
-    if spring:
-        removed = [d for d in removed if d not in clamp_rotations]
-    clamp_translations = [d.replace(":rz", ":y") for d in clamp_rotations]
-    if fx["k_y_N_m"] is not None:  # translational clamp springs: the clamps' translations stay DOFs
-        removed = [d for d in removed if d not in clamp_translations]
-    keep = np.array([i for i, d in enumerate(names) if d not in removed])
-    kept_names = [names[i] for i in keep]
-    springs = {}                                          # model index -> unit-EI stiffness of fixed springs
-    if fx["k_y_N_m"] is not None:
-        for d in clamp_translations:
-            springs[kept_names.index(d)] = fx["k_y_N_m"] / preset.EI_Nm2
-    if fx["bearing_k_theta_Nm_rad"] is not None:        # bearing springs on the pinned ends' rotations
-        for d in ("1:rz", f"{last}:rz"):
-            springs[kept_names.index(d)] = fx["bearing_k_theta_Nm_rad"] / preset.EI_Nm2
-    k_suspension = None if fx["suspension_k_y_N_m"] is None else fx["suspension_k_y_N_m"] / preset.EI_Nm2
-    if test.bc == "free-free":                          # the suspension (rigid-body modes left out)
-        for d in ("1:y", f"{last}:y"):
-            springs[kept_names.index(d)] = suspension_unit_stiffness(beam) if k_suspension is None else k_suspension
+    keep, kept_names, springs, spring_dofs, k_suspension = _supports(test, n_el, fx, spring, preset, beam)
     K_full, M_full, _ = _unit_matrices(0.5 * (shear_band[0] + shear_band[1]), rho_ratio, preset.length_m, n_el,
                                        timoshenko)  # the beam elements alone
     sel = np.ix_(keep, keep)
@@ -352,34 +402,15 @@ def build_setup(cfg: dict) -> Setup:
     K0 = K_beam + K_springs  # plus the fixed springs (Rayleigh damping acts on the beam, not on them)
     M_added = None if fx["M_added"] is None else fx["M_added"][sel]
     C_local = None if fx["C_local"] is None else fx["C_local"][sel]
-    spring_dofs = np.array([kept_names.index(d) for d in clamp_rotations] if spring else [], int)
-    order = np.argsort(test.sensors_x_m, kind="stable")
-    xs = np.asarray(test.sensors_x_m)[order]
-    if on_nodes:
-        meas = np.array([kept_names.index(f"{1 + k}:y") for k in np.rint(xs / test.length_m * n_el).astype(int)])
-    else:  # the sensors between nodes: their translations interpolated
-        meas = sensor_rows(xs, np.linspace(0.0, test.length_m, n_el + 1), keep)
-    drive_row = int(np.flatnonzero(order == test.drive_sensor)[0])
+    meas, drive_row = _measured_rows(test, n_el, on_nodes, keep, kept_names)
     modes_idx = n_rigid + np.asarray(test.modes) - 1
     p = max(cfg["solver"]["projection_modes"], int(modes_idx[-1]) + 1 + (4 if not test.thesis else 0))
     Kn = K0.copy()
     if spring:
-        lo, hi = band
-        Kn[spring_dofs, spring_dofs] += np.sqrt(lo * hi) / preset.length_m
+        Kn[spring_dofs, spring_dofs] += np.sqrt(band[0] * band[1]) / preset.length_m
     Mn = M0 if M_added is None else M0 + M_added / preset.mass_per_length_kg_m
     w, v = undamped_modes(Mn, Kn)
-    if fx["rayleigh"] is not None:  # the beam file's Rayleigh damping in the nominal truth's modes
-        alpha, beta = fx["rayleigh"]
-        ei_m = preset.EI_Nm2 / preset.mass_per_length_kg_m
-        vp = v[:, :p]
-        c_diag = alpha * np.einsum("ij,ik,kj->j", vp, M0, vp) + beta * ei_m * np.einsum("ij,ik,kj->j", vp, K_beam, vp)
-        zeta = c_diag / (2 * w[:p] * np.sqrt(ei_m))
-        if not np.all((zeta > 0) & (zeta < 0.2)):
-            raise ConfigError(f"config key 'beam': proportional_damping gives modal damping ratios {zeta.tolist()} "
-                              f"of the first {p} modes; generate needs light damping, each in (0, 0.2)")
-    else:
-        zr = np.asarray(cfg["specimen"]["damping_ratios"], float)
-        zeta = np.concatenate([np.full(n_rigid, zr[0]), zr, np.full(max(p - zr.size, 0), zr[-1])])[:p]
+    zeta = _modal_damping(cfg, fx, preset, w, v, M0, K_beam, n_rigid, p)
     lo, hi = cfg["measurement"]["band_rad_s"] if test.thesis else 2 * np.pi * np.asarray(test.band_hz)
     ma = None if test.thesis else analyst_unit_mass(test, cfg["updating"]["mass_model"],
                                                      suspension_unit=k_suspension)
