@@ -99,6 +99,9 @@ class Setup:
                                     no sensor sees left out)
     drive_row : int                 row of the reference DOF among the measured DOFs
     spring_dofs : ndarray (k,)      model indices of the support rotations held by the drawn spring (``spring``)
+    day_spring_dofs : ndarray (j,)  model indices of the fixed support springs (a free-free beam's suspension, a
+                                    pinned beam's bearing springs) that change by ``root_spring_change`` between the
+                                    test days
     analyst_unit_mass : ndarray (S, S) or None   the analyst's mass for unit mass per length (None: the thesis's)
     """
 
@@ -125,6 +128,7 @@ class Setup:
     modes_idx: np.ndarray = field(default_factory=lambda: np.arange(N_MEAS))
     drive_row: int = 0
     spring_dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    day_spring_dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     analyst_unit_mass: np.ndarray | None = None
 
     def analyst_mass(self, mass_per_length_kg_m):
@@ -305,7 +309,8 @@ def _supports(test, n_el: int, fx: dict, spring: bool, preset, beam):
 
     Returns ``keep`` (indices of the kept DOFs among all), their names, the fixed springs ``{model index: stiffness
     for unit EI}`` (translational clamp springs, bearing springs, the suspension), the model indices of the clamp
-    rotations held by the drawn spring, and the suspension for unit EI (None: the default of
+    rotations held by the drawn spring, those of the fixed support springs that change between the test days
+    (the suspension, bearing springs), and the suspension for unit EI (None: the default of
     :func:`suspension_unit_stiffness`).
     """
     names = dof_names(n_el + 1)
@@ -332,7 +337,9 @@ def _supports(test, n_el: int, fx: dict, spring: bool, preset, beam):
         for d in ("1:y", f"{last}:y"):
             springs[kept_names.index(d)] = suspension_unit_stiffness(beam) if k_suspension is None else k_suspension
     spring_dofs = np.array([kept_names.index(d) for d in clamp_rotations] if spring else [], int)
-    return keep, kept_names, springs, spring_dofs, k_suspension
+    day = [kept_names.index(d) for d in ("1:y", f"{last}:y")] if test.bc == "free-free" else \
+        [kept_names.index(d) for d in ("1:rz", f"{last}:rz")] if fx["bearing_k_theta_Nm_rad"] is not None else []
+    return keep, kept_names, springs, spring_dofs, np.array(day, int), k_suspension
 
 
 def _measured_rows(test, n_el: int, on_nodes: bool, keep, kept_names):
@@ -391,7 +398,7 @@ def build_setup(cfg: dict) -> Setup:
         half = (shear_band[1] - shear_band[0]) / 2
         shear_band = (max(shear_file - half, 0.0), shear_file + half)
     timoshenko = timoshenko or shear_band[1] > 0
-    keep, kept_names, springs, spring_dofs, k_suspension = _supports(test, n_el, fx, spring, preset, beam)
+    keep, kept_names, springs, spring_dofs, day_dofs, k_suspension = _supports(test, n_el, fx, spring, preset, beam)
     K_full, M_full, _ = _unit_matrices(0.5 * (shear_band[0] + shear_band[1]), rho_ratio, preset.length_m, n_el,
                                        timoshenko)  # the beam elements alone
     sel = np.ix_(keep, keep)
@@ -416,7 +423,7 @@ def build_setup(cfg: dict) -> Setup:
                                                      suspension_unit=k_suspension)
     return Setup(cfg, preset, section, n_el, keep, spring, K0, M0, meas, v[:, :p].copy(),
                  np.linspace(lo, hi, cfg["measurement"]["lines"]), zeta, band, M_added, C_local,
-                 shear_band, rho_ratio, timoshenko, K_springs, test, modes_idx, drive_row, spring_dofs, ma)
+                 shear_band, rho_ratio, timoshenko, K_springs, test, modes_idx, drive_row, spring_dofs, day_dofs, ma)
 
 
 @lru_cache(maxsize=8)
@@ -550,6 +557,9 @@ def truth_matrices(setup: Setup, inp: BatchInputs):
         r = setup.spring_dofs
         K[:, 1, r, r] += (inp.root_spring_Nm_rad * (1.0 + inp.root_spring_change))[:, None]
         K[:, 0, r, r] += inp.root_spring_Nm_rad[:, None]
+    if setup.day_spring_dofs.size:   # the suspension or bearing springs change between the test days
+        r = setup.day_spring_dofs
+        K[:, 1, r, r] += (ei * inp.root_spring_change)[:, None] * setup.K0_springs[r, r]
     M = mpl[:, None, None] * M0
     if setup.M_added is not None:
         M += setup.M_added

@@ -52,3 +52,38 @@ def test_support_effect_of_a_beam_file_is_the_truth(bc, tmp_path, capsys):
     np.testing.assert_allclose(f, np.broadcast_to(f_fx, f.shape), rtol=2e-5)
     f_without = freqs(b.with_effects({}))
     assert np.max(np.abs(f_without / f_fx - 1)) > 1e-2     # the effect moves the truth: the check can fail
+
+
+@pytest.mark.parametrize("bc", ["pinned-pinned", "free-free"])
+def test_the_bearing_or_suspension_spring_changes_between_the_test_days(bc, tmp_path):
+    """``specimen.root_spring_change`` changes a pinned beam's bearing springs (a free-free beam's suspension)
+    between the two test days: each intact specimen's current frequencies are the beam file's model with the
+    spring times ``1 + c``."""
+    from datagen.dataset import Dataset
+    from datagen.pipeline import get_setup
+    from physics.beam import preset_beam, write_beam
+    from physics.discrepancy import bending_modes
+
+    effect, params = SUPPORTS[bc]
+    key = next(iter(params))
+    b = preset_beam("beam5").with_effects({effect: params}, name=f"beam5-{bc}", bc=bc, measured_x_m=SENSORS)
+    write_beam(tmp_path / "b.toml", b)
+    (tmp_path / "c.toml").write_text(QUIET.replace("root_spring_relative = []\n",
+                                                   "root_spring_relative = []\nroot_spring_change = [-0.5, 0.5]\n"))
+    assert main(["generate", "--n", "4", "--seed", "2", "--out", str(tmp_path / "ds"), "--beam",
+                 str(tmp_path / "b.toml"), "--config", str(tmp_path / "c.toml")]) == 0
+    ds = Dataset(tmp_path / "ds")
+    setup = get_setup(ds.manifest["config"])
+    n = setup.n_modes
+    t = ds.table(["root_spring_change"] + [f"f{r}_hz_{s}" for s in ("base", "cur") for r in range(1, n + 1)])
+    c = t["root_spring_change"].to_numpy()
+    assert np.ptp(c) > 0.2
+    ratio = t[[f"f{r}_hz_cur" for r in range(1, n + 1)]].to_numpy() / t[[f"f{r}_hz_base"
+                                                                         for r in range(1, n + 1)]].to_numpy()
+
+    def freqs(beam):
+        return np.sqrt(bending_modes(beam, beam.fe_model(setup.n_elements), n)[0])
+
+    expected = np.array([freqs(b.with_effects({effect: {key: params[key] * (1 + ci)}})) / freqs(b) for ci in c])
+    np.testing.assert_allclose(ratio, expected, rtol=2e-6)
+    assert np.max(np.abs(expected - 1)) > (1e-3 if bc == "pinned-pinned" else 1e-6)    # the change shows
