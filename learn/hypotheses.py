@@ -23,7 +23,8 @@ explanation         predicted ``y`` (first order unless stated)                 
 
 ``a`` (the temperature nuisance, within the training's ``temperature_stiffness_change``: ``a = dEI / (2 EI)``)
 enters every explanation but ``global_stiffness``. The likelihood is Gaussian with a relative standard deviation
-``sigma`` per mode (default :data:`FREQUENCY_CHANGE_STD`); each explanation's evidence is its likelihood averaged
+``sigma`` per mode (default :data:`FREQUENCY_CHANGE_STD`) plus :data:`MODEL_ERROR` of each predicted change
+(the sizes' intervals also hold :data:`SIZE_SCALE_STD`); each explanation's evidence is its likelihood averaged
 over its prior (a grid), so a more flexible explanation pays for the predictions it could have made. With equal
 prior probabilities (:data:`PRIOR`), the probabilities are the normalised evidences.
 
@@ -39,8 +40,8 @@ import numpy as np
 
 from physics.errors import BeamDamageError
 
-__all__ = ["FREQUENCY_CHANGE_STD", "HYPOTHESES", "PRIOR", "SEPARATE", "Hypothesis", "explain", "summary",
-           "support_curve", "weigh"]
+__all__ = ["FREQUENCY_CHANGE_STD", "HYPOTHESES", "MODEL_ERROR", "PRIOR", "SEPARATE", "SIZE_SCALE_STD", "Hypothesis",
+           "explain", "summary", "support_curve", "weigh"]
 
 #: Relative standard deviation of a mode's frequency change between two tests (0.1 %): modal tests repeated on
 #: the same specimen and mounting scatter 0.05-0.5 % in frequency; the training's frequency scatter and modal
@@ -52,6 +53,13 @@ HYPOTHESES = ("intact", "global_stiffness", "support_change", "slit", "mass_chan
 
 #: Prior probability of each explanation (equal: the verdict states it).
 PRIOR = {h: 1.0 / len(HYPOTHESES) for h in HYPOTHESES}
+
+#: Relative error of each predicted change, mode by mode (3 %): the sensitivities are those of the nominal shapes.
+MODEL_ERROR = 0.03
+
+#: Relative standard deviation of a size for a given change (10 %): the nominal beam's sensitivities stand for a
+#: specimen whose EI, mass and clamp differ from it by several percent; it widens the size intervals.
+SIZE_SCALE_STD = 0.1
 
 #: Grids of the parameters.
 N_NUISANCE, N_SIZE, N_GLOBAL, N_SUPPORT = 15, 200, 401, 121
@@ -96,12 +104,21 @@ def _log_mean_exp(v: np.ndarray) -> float:
 
 
 def _interval(values: np.ndarray, weights: np.ndarray, level: float, half_width: float = 0.0) -> list:
-    """Equal-tailed interval of a discrete distribution (values ascending), widened by ``half_width`` on each side
-    (the half-width of a grid cell: a location grid's elements)."""
+    """Equal-tailed interval of a discrete distribution, widened by ``half_width`` on each side (the half-width of
+    a grid cell: a location grid's elements)."""
+    order = np.argsort(values, kind="stable")
+    values, weights = np.asarray(values)[order], np.asarray(weights)[order]
     c = np.cumsum(weights) / np.sum(weights)
     lo = values[min(np.searchsorted(c, (1 - level) / 2), values.size - 1)]
     hi = values[min(np.searchsorted(c, 1 - (1 - level) / 2), values.size - 1)]
     return [float(lo - half_width), float(hi + half_width)]
+
+
+def _scaled(sizes: np.ndarray, weights: np.ndarray):
+    """The size distribution times a factor ``N(1, SIZE_SCALE_STD)`` (9 points): values and weights, flattened."""
+    c = 1 + SIZE_SCALE_STD * np.linspace(-2.5, 2.5, 9)
+    w = np.exp(-0.5 * ((c - 1) / SIZE_SCALE_STD) ** 2)
+    return (sizes[:, None] * c[None]).ravel(), (weights[:, None] * w[None]).ravel()
 
 
 def support_curve(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_spring_relative, ln_factors,
@@ -151,7 +168,8 @@ def support_curve(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_spring_
 
 
 def weigh(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.004, 0.004), reclamp_range=None,
-          theta_max: float = 0.2, sigma=FREQUENCY_CHANGE_STD, length_m: float = 1.0) -> list[Hypothesis]:
+          theta_max: float = 0.2, sigma=FREQUENCY_CHANGE_STD, length_m: float = 1.0,
+          model_error: float = MODEL_ERROR) -> list[Hypothesis]:
     """Weigh the explanations of measured relative frequency changes (module docstring).
 
     Parameters
@@ -164,6 +182,7 @@ def weigh(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.004, 0.
     theta_max : float                   largest slit hinge flexibility of the prior
     sigma : float or array (m,)         relative std of each mode's change
     length_m : float
+    model_error : float                 relative std of each predicted change (:data:`MODEL_ERROR`)
 
     Returns
     -------
@@ -176,7 +195,8 @@ def weigh(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.004, 0.
     a = _nuisance(temperature_range)                                     # (A,)
 
     def loglik(pred):                                                    # pred (..., m) -> (...)
-        return -0.5 * np.sum(((pred - y) / s) ** 2, axis=-1)
+        var = s**2 + (model_error * pred) ** 2
+        return -0.5 * np.sum((pred - y) ** 2 / var + np.log(var / s**2), axis=-1)
 
     out = {}
     # intact: temperature, and the re-clamping of a clamp
@@ -213,7 +233,8 @@ def weigh(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.004, 0.
     out["slit"] = (_log_mean_exp(ll), {
         "x_m": float(x_m[e]), "x_over_L": float(sens.x_over_L[e]), "hinge_flexibility": float(th[t]),
         "x_m_68": _interval(x_m, px, 0.68, h), "x_m_95": _interval(x_m, px, 0.95, h),
-        "hinge_flexibility_68": _interval(th, pt, 0.68), "hinge_flexibility_95": _interval(th, pt, 0.95)},
+        "hinge_flexibility_68": _interval(*_scaled(th, pt), 0.68),
+        "hinge_flexibility_95": _interval(*_scaled(th, pt), 0.95)},
         pred[i, t, e])
     # mass change at x
     G = np.asarray(mass_sens.frequency, float)                           # (m, E) per unit mass ratio added

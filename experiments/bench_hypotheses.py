@@ -1,0 +1,169 @@
+"""Benchmark: the competing explanations of ``classify`` on pairs of the independent simulator, in one run.
+
+Run: ``.venv/bin/python -m experiments.bench_hypotheses [--n 24] [--seed 0] [--noise 0.0007] [--json FILE] [--docs]``
+
+Pairs of beam-5-like cantilevers from :mod:`experiments.second_sim` (its own finite elements, slits, point masses
+and root spring; it shares no code with the package): each specimen drawn with EI +-5 %, mass +-3 % and a root
+spring ``k_r L / EI`` log-uniform in 300-3000, tested twice with the day-to-day changes of the training
+(temperature: EI +-0.4 %, re-clamping: root spring +-8 %) and a relative frequency noise per mode and test
+(``--noise``, default 0.07 %: 0.1 % on the change). ``--n`` pairs of each truth:
+
+* ``intact``: the day-to-day changes only;
+* ``slit``: a slit anywhere (2-98 % of L), 1-10 mm wide, 30-90 % EI loss, dropping some mode by 0.5 % or more;
+* ``support_change``: the root spring 2-5 times softer or stiffer;
+* ``mass_change``: a point mass of 1-5 % of the beam's mass at 5-100 % of L, added or (half of them) removed;
+* ``global_stiffness``: EI 1-4 % higher or lower.
+
+Each pair's relative frequency changes of modes 1-4 are weighed by :func:`learn.hypotheses.weigh` on the nominal
+beam's sensitivities (the second simulator's nominal EI and mass, root spring 948.7). Printed: the confusion table
+of the most probable explanation against the truth, and for the slits the share whose position and hinge
+flexibility lie inside the 68 % and 95 % intervals.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+import numpy as np
+
+__all__ = ["TRUTHS", "main", "pairs", "table"]
+
+TRUTHS = ("intact", "slit", "support_change", "mass_change", "global_stiffness")
+KR_REL = 948.7
+
+
+def _specimen(rng, L, EI, M):
+    from experiments.second_sim.fem import Beam
+
+    ei = EI * (1 + rng.uniform(-0.05, 0.05))
+    kr = np.exp(rng.uniform(np.log(300), np.log(3000))) * ei / L
+    return Beam(L, ei, M * (1 + rng.uniform(-0.03, 0.03)), root_k_theta_Nm_rad=kr)
+
+
+def _frequencies(beam) -> np.ndarray:
+    from experiments.second_sim.fem import assemble, modes
+
+    return modes(assemble(beam), n_refine=4).frequencies_hz[:4]
+
+
+def pairs(truth: str, n: int, rng, noise: float) -> list[dict]:
+    """``n`` pairs of one truth: measured relative frequency changes and the truth's parameters."""
+    from dataclasses import replace
+
+    from experiments.second_sim.fem import PointMass, Slit
+    from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
+
+    L, EI, M = LENGTH_M, EI_NM2, MASS_PER_LENGTH_KG_M
+    out = []
+    while len(out) < n:
+        base = _specimen(rng, L, EI, M)
+        day = dict(EI_Nm2=base.EI_Nm2 * (1 + rng.uniform(-0.004, 0.004)),
+                   root_k_theta_Nm_rad=base.root_k_theta_Nm_rad * (1 + rng.uniform(-0.08, 0.08)))
+        info = {}
+        if truth == "slit":
+            s = Slit(rng.uniform(0.02, 0.98) * L, rng.uniform(0.001, 0.01), rng.uniform(0.3, 0.9))
+            cur = replace(base, **day, slits=(s,))
+            info = {"x_m": s.x_m, "hinge_flexibility": s.hinge_flexibility(L)}
+        elif truth == "support_change":
+            factor = np.exp(rng.choice([-1, 1]) * rng.uniform(np.log(2), np.log(5)))
+            cur = replace(base, **{**day, "root_k_theta_Nm_rad": day["root_k_theta_Nm_rad"] * factor})
+            info = {"factor": float(factor)}
+        elif truth == "mass_change":
+            p = PointMass(rng.uniform(0.05, 1.0) * L, rng.uniform(0.01, 0.05) * M * L)
+            if rng.random() < 0.5:
+                cur = replace(base, **day, masses=(p,))
+                info = {"x_m": p.x_m, "mass_ratio": p.mass_kg / (M * L)}
+            else:
+                cur, base = replace(base, **day), replace(base, masses=(p,))
+                info = {"x_m": p.x_m, "mass_ratio": -p.mass_kg / (M * L)}
+        elif truth == "global_stiffness":
+            g = rng.choice([-1, 1]) * rng.uniform(0.01, 0.04)
+            cur = replace(base, **{**day, "EI_Nm2": day["EI_Nm2"] * (1 + g)})
+            info = {"EI_change": float(g)}
+        else:
+            cur = replace(base, **day)
+        f0, f1 = _frequencies(base), _frequencies(cur)
+        if truth == "slit" and np.max(1 - f1 / f0) < 0.005:
+            continue                                          # not a slit these frequencies can show
+        f0 = f0 * (1 + noise * rng.standard_normal(4))
+        f1 = f1 * (1 + noise * rng.standard_normal(4))
+        out.append({"truth": truth, "shifts": f1 / f0 - 1, **info})
+    return out
+
+
+def table(n: int = 24, seed: int = 0, noise: float = 7e-4) -> dict:
+    """Every pair weighed: the confusion counts and the slits' interval cover."""
+    from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
+    from learn.features import BeamSpec
+    from learn.hypotheses import _support_curves, weigh
+    from learn.sensitivity import beam_sensitivity
+
+    L, EI, M = LENGTH_M, EI_NM2, MASS_PER_LENGTH_KG_M
+    spec = BeamSpec("beam5", L, ("2:y", "3:y", "4:y", "5:y"), "iirs")
+    slit = beam_sensitivity((L, EI, M), KR_REL)
+    mass = beam_sensitivity((L, EI, M), KR_REL, kind="mass_change")
+    support = _support_curves(spec, EI, M, KR_REL, (-0.08, 0.08))
+    rng = np.random.default_rng(seed)
+    confusion = {t: {h: 0 for h in TRUTHS} for t in TRUTHS}
+    cover = {"x_68": 0, "x_95": 0, "theta_68": 0, "theta_95": 0, "n": 0}
+    rows = []
+    for truth in TRUTHS:
+        for p in pairs(truth, n, rng, noise):
+            ranked = weigh(p["shifts"], slit, mass, support, (-0.004, 0.004), theta_max=0.15, length_m=L)
+            top = ranked[0].name
+            confusion[truth][top] += 1
+            rows.append({"truth": truth, "top": top, "probabilities": {r.name: r.probability for r in ranked},
+                         "shifts_pct": [float(v) for v in 100 * p["shifts"]]})
+            if truth == "slit":
+                q = next(r for r in ranked if r.name == "slit").parameters
+                cover["n"] += 1
+                for level in ("68", "95"):
+                    lo, hi = q[f"x_m_{level}"]
+                    cover[f"x_{level}"] += lo <= p["x_m"] <= hi
+                    lo, hi = q[f"hinge_flexibility_{level}"]
+                    cover[f"theta_{level}"] += lo <= p["hinge_flexibility"] <= hi
+    return {"n": n, "seed": seed, "noise": noise, "confusion": confusion, "slit_cover": cover, "pairs": rows}
+
+
+def markdown(res: dict) -> str:
+    head = "| truth \\ most probable | " + " | ".join(TRUTHS) + " | right |"
+    lines = [head, "| --- " * (len(TRUTHS) + 2) + "|"]
+    for t in TRUTHS:
+        row = res["confusion"][t]
+        total = sum(row.values())
+        lines.append(f"| {t} | " + " | ".join(str(row[h]) for h in TRUTHS) + f" | {row[t] / total:.0%} |")
+    c = res["slit_cover"]
+    lines.append("")
+    lines.append(f"Slits ({c['n']}): position inside the 68 % interval {c['x_68'] / c['n']:.0%}, the 95 % interval "
+                 f"{c['x_95'] / c['n']:.0%}; hinge flexibility {c['theta_68'] / c['n']:.0%} and "
+                 f"{c['theta_95'] / c['n']:.0%}. {res['n']} pairs per truth, seed {res['seed']}, frequency noise "
+                 f"{100 * res['noise']:.2g} % per mode and test.")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python -m experiments.bench_hypotheses", description=__doc__.split("\n")[0])
+    p.add_argument("--n", type=int, default=24, help="pairs per truth (default 24)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--noise", type=float, default=7e-4, help="relative frequency noise per mode and test")
+    p.add_argument("--json", metavar="FILE", help="write every pair's probabilities as JSON")
+    p.add_argument("--docs", action="store_true", help="write the table into docs/classifier.md")
+    args = p.parse_args(argv)
+    res = table(args.n, args.seed, args.noise)
+    md = markdown(res)
+    sys.stdout.write(md)
+    if args.json:
+        from physics.io import atomic_write_text
+
+        atomic_write_text(args.json, json.dumps(res, indent=1) + "\n")
+    if args.docs:
+        from experiments.doc_tables import write_table
+
+        write_table("classifier.md", "hypotheses", md)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
