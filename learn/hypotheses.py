@@ -37,6 +37,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+from scipy.special import log_ndtr
 
 from physics.errors import BeamDamageError
 
@@ -62,7 +63,7 @@ MODEL_ERROR = 0.03
 SIZE_SCALE_STD = 0.1
 
 #: Grids of the parameters.
-N_NUISANCE, N_SIZE, N_GLOBAL, N_SUPPORT = 15, 200, 401, 121
+N_SIZE, N_GLOBAL, N_SUPPORT = 200, 401, 121
 GLOBAL_RANGE, MASS_RANGE, SUPPORT_LN_RANGE = 0.05, 0.10, np.log(10.0)
 
 
@@ -91,11 +92,6 @@ class Hypothesis:
         return {"name": self.name, "probability": self.probability, "parameters": self.parameters,
                 "max_abs_frequency_error_pct": self.max_abs_frequency_error_pct,
                 "predicted_change_pct": [float(v) for v in 100 * self.predicted]}
-
-
-def _nuisance(temperature_range) -> np.ndarray:
-    t = max(abs(float(v)) for v in temperature_range) if temperature_range else 0.0
-    return np.linspace(-t / 2, t / 2, N_NUISANCE) if t > 0 else np.zeros(1)
 
 
 def _log_mean_exp(v: np.ndarray) -> float:
@@ -192,42 +188,59 @@ def weigh(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.004, 0.
     if y.ndim != 1 or y.size < 1 or not np.all(np.isfinite(y)):
         raise BeamDamageError(f"frequency changes must be a finite 1-D array, got {y!r}")
     s = np.broadcast_to(np.asarray(sigma, float), y.shape)
-    a = _nuisance(temperature_range)                                     # (A,)
 
-    def loglik(pred):                                                    # pred (..., m) -> (...)
-        var = s**2 + (model_error * pred) ** 2
-        return -0.5 * np.sum((pred - y) ** 2 / var + np.log(var / s**2), axis=-1)
+    half = max((abs(float(v)) for v in temperature_range), default=0.0) / 2   # the temperature nuisance: +-half
+
+    def loglik(g):
+        """Log-likelihood of ``a + g`` averaged over the nuisance ``a`` (uniform in +-half; a Gaussian integral in
+        closed form), and the most likely ``a``, for every change ``g`` (..., m) with the model error on ``g``."""
+        var = s**2 + (model_error * g) ** 2
+        r = g - y
+        s0, s1, s2 = np.sum(r**2 / var, -1), np.sum(r / var, -1), np.sum(1.0 / var, -1)
+        logdet = -0.5 * np.sum(np.log(var / s**2), -1)
+        centre = -s1 / s2                                                # the a that fits best
+        a_best = np.clip(centre, -half, half)
+        if half == 0:
+            return -0.5 * s0 + logdet, a_best
+        root = np.sqrt(s2)
+        lo, hi = (-half - centre) * root, (half - centre) * root
+        # log P(lo < z < hi), from the tail the interval lies in (no cancellation of two values near 1)
+        right = lo > 0
+        big = np.where(right, log_ndtr(-lo), log_ndtr(hi))
+        small = np.where(right, log_ndtr(-hi), log_ndtr(lo))
+        mass = big + np.log(-np.expm1(np.minimum(small - big, -1e-300)))
+        return (-0.5 * (s0 - s1**2 / s2) + logdet + 0.5 * np.log(2 * np.pi) - np.log(root) + mass
+                - np.log(2 * half)), a_best
 
     out = {}
     # intact: temperature, and the re-clamping of a clamp
     ln_grid, curve, what, reclamp = support
     rc = np.zeros((1, y.size)) if reclamp is None else reclamp
-    pred = a[:, None, None] + rc[None]                                   # (A, R, m)
-    ll = loglik(pred)
-    i, j = np.unravel_index(np.argmax(ll), ll.shape)
-    out["intact"] = (_log_mean_exp(ll), {"temperature_frequency_change": float(a[i])}, pred[i, j])
-    # global stiffness
+    ll, ab = loglik(rc)                                                  # (R,)
+    j = int(np.argmax(ll))
+    out["intact"] = (_log_mean_exp(ll), {"temperature_frequency_change": float(ab[j])}, ab[j] + rc[j])
+    # global stiffness (no temperature nuisance: it is one)
     gl = np.linspace(-GLOBAL_RANGE, GLOBAL_RANGE, N_GLOBAL)
-    pred = np.broadcast_to(gl[:, None], (gl.size, y.size))
-    ll = loglik(pred)
+    g = np.broadcast_to(gl[:, None], (gl.size, y.size))
+    var = s**2 + (model_error * g) ** 2
+    ll = -0.5 * np.sum((g - y) ** 2 / var + np.log(var / s**2), -1)
     k = int(np.argmax(ll))
     out["global_stiffness"] = (_log_mean_exp(ll), {"frequency_change": float(gl[k]),
-                                                   "EI_change": float((1 + gl[k]) ** 2 - 1)}, pred[k])
+                                                   "EI_change": float((1 + gl[k]) ** 2 - 1)}, g[k])
     # support change
-    pred = a[:, None, None] + curve[None]                                # (A, G, m)
-    ll = loglik(pred)
-    i, j = np.unravel_index(np.argmax(ll), ll.shape)
+    ll, ab = loglik(curve)                                               # (G,)
+    j = int(np.argmax(ll))
     out["support_change"] = (_log_mean_exp(ll), {"parameter": what, "value": float(ln_grid[j]),
-                                                 "temperature_frequency_change": float(a[i])}, pred[i, j])
+                                                 "temperature_frequency_change": float(ab[j])}, ab[j] + curve[j])
     # slit at x with hinge flexibility theta
     F = np.asarray(sens.frequency, float)                                # (m, E)
     th = np.linspace(0.0, theta_max, N_SIZE)
     # Rayleigh quotient with the nominal shapes: f^2 scales by 1 + 2 theta F (F = d ln f / d theta < 0)
-    pred = a[:, None, None, None] + np.sqrt(np.maximum(1 + 2 * th[None, :, None, None] * F.T[None, None], 1e-6)) - 1
-    ll = loglik(pred)
+    g = np.sqrt(np.maximum(1 + 2 * th[:, None, None] * F.T[None], 1e-6)) - 1          # (T, E, m)
+    ll, ab = loglik(g)                                                   # (T, E)
     post = np.exp(ll - ll.max())
-    i, t, e = np.unravel_index(np.argmax(ll), ll.shape)
-    px, pt = post.sum(axis=(0, 1)), post.sum(axis=(0, 2))
+    t, e = np.unravel_index(np.argmax(ll), ll.shape)
+    px, pt = post.sum(axis=0), post.sum(axis=1)
     x_m = np.asarray(sens.x_over_L) * length_m
     h = 0.5 * length_m / x_m.size                                        # half an element of the grid
     out["slit"] = (_log_mean_exp(ll), {
@@ -235,15 +248,14 @@ def weigh(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.004, 0.
         "x_m_68": _interval(x_m, px, 0.68, h), "x_m_95": _interval(x_m, px, 0.95, h),
         "hinge_flexibility_68": _interval(*_scaled(th, pt), 0.68),
         "hinge_flexibility_95": _interval(*_scaled(th, pt), 0.95)},
-        pred[i, t, e])
+        ab[t, e] + g[t, e])
     # mass change at x
     G = np.asarray(mass_sens.frequency, float)                           # (m, E) per unit mass ratio added
     mu = np.linspace(-MASS_RANGE, MASS_RANGE, N_SIZE + 1)
-    pred = a[:, None, None, None] + 1 / np.sqrt(np.maximum(1 - 2 * mu[None, :, None, None] * G.T[None, None],
-                                                           1e-6)) - 1
-    ll = loglik(pred)
-    i, t, e = np.unravel_index(np.argmax(ll), ll.shape)
-    out["mass_change"] = (_log_mean_exp(ll), {"x_m": float(x_m[e]), "mass_ratio": float(mu[t])}, pred[i, t, e])
+    g = 1 / np.sqrt(np.maximum(1 - 2 * mu[:, None, None] * G.T[None], 1e-6)) - 1      # (T, E, m)
+    ll, ab = loglik(g)
+    t, e = np.unravel_index(np.argmax(ll), ll.shape)
+    out["mass_change"] = (_log_mean_exp(ll), {"x_m": float(x_m[e]), "mass_ratio": float(mu[t])}, ab[t, e] + g[t, e])
     logz = np.array([out[h][0] + np.log(PRIOR[h]) for h in HYPOTHESES])
     p = np.exp(logz - logz.max())
     p /= p.sum()
