@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, replace
-from itertools import combinations
 
 import numpy as np
 
@@ -139,15 +138,25 @@ def pair_modes_by_frequency(frequencies_hz, nominal_hz, tolerance: float | None 
     order = np.argsort(f)
     cost = np.log(f[order, None] / nominal[None]) ** 2                 # (k, m)
     skip = np.log1p(RATIO_TOLERANCE if tolerance is None else tolerance) ** 2
-    best, best_cost = np.full(f.size, -1), skip * f.size
-    for r in range(1, min(f.size, nominal.size) + 1):
-        for kept in combinations(range(f.size), r):
-            for target in combinations(range(nominal.size), r):
-                c = cost[kept, target].sum() + skip * (f.size - r)
-                if c < best_cost:
-                    best_cost = c
-                    best = np.full(f.size, -1)
-                    best[list(kept)] = target
+    k, m = cost.shape
+    total = np.full((k + 1, m + 1), np.inf)                            # order-preserving alignment, O(k m)
+    total[0, :] = 0.0
+    step = np.zeros((k + 1, m + 1), int)                               # 0 pair, 1 skip nominal, 2 skip identified
+    for i in range(1, k + 1):
+        total[i, 0], step[i, 0] = total[i - 1, 0] + skip, 2
+        for j in range(1, m + 1):
+            options = (total[i - 1, j - 1] + cost[i - 1, j - 1], total[i, j - 1], total[i - 1, j] + skip)
+            step[i, j] = int(np.argmin(options))
+            total[i, j] = options[step[i, j]]
+    best, i, j = np.full(k, -1), k, m
+    while i > 0:
+        if step[i, j] == 1:
+            j -= 1
+        elif step[i, j] == 2:
+            i -= 1
+        else:
+            i, j = i - 1, j - 1
+            best[i] = j
     out = np.empty(f.size, int)
     out[order] = best
     return out

@@ -285,6 +285,11 @@ def test_modes_are_paired_with_the_nominal_beam_by_frequency():
     np.testing.assert_array_equal(pair_modes_by_frequency([f[0], 70.0, f[1], f[2]], nominal), [0, -1, 1, 2])
     np.testing.assert_array_equal(pair_modes_by_frequency(f[:2], nominal), [0, 1])
     np.testing.assert_array_equal(pair_modes_by_frequency([5.0, f[1]], nominal), [-1, 1])   # 5 Hz: 4 times below mode 1
+    # 16 cantilever modes (beta_r L ~ (r - 1/2) pi), modes 5 and 11 missed and a spurious pole at 1.5 x mode 13
+    nominal16 = ((np.arange(1, 17) - 0.5) * np.pi) ** 2
+    found = np.r_[np.delete(nominal16, [4, 10]) * 1.02, 1.5 * nominal16[12]]
+    expect = np.r_[np.delete(np.arange(16), [4, 10]), -1]
+    np.testing.assert_array_equal(pair_modes_by_frequency(found, nominal16), expect)
 
 
 @pytest.mark.parametrize("modes", [[0, 1, 2], [0, 1, 3], [0, 2, 3]])
