@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["TARGETS", "fold", "main", "markdown", "run_beam", "score_beam"]
+__all__ = ["TARGETS", "fold", "main", "markdown", "pooled", "run_beam", "score_beam", "targets"]
 
 #: Targets of the network on every beam.
 TARGETS = {"false_alarm_pct": 2.0, "median_dx_over_L": 0.03}
@@ -222,6 +222,33 @@ def targets(rows: list[dict]) -> list[dict]:
     return out
 
 
+def pooled(rows: list[dict]) -> list[dict]:
+    """Over all beams: the network's, the verdict's and the best classical method's (per beam) zone accuracy,
+    detection and false alarms, weighted by each beam's damaged and intact pairs."""
+    out = []
+    for label, pick in (("network", lambda r: r["method"] == "network"),
+                        ("verdict", lambda r: r["method"] == "verdict"),
+                        ("best classical (per beam)", lambda r: r["method"] == r["best_classical"])):
+        sel = [r for r in rows if pick(r)]
+        dm = sum(r["damaged_pairs"] for r in sel)
+        im = sum(r["intact_pairs"] for r in sel)
+        fa = sum(r["false_alarms"] for r in sel)
+        out.append({"method": label, "beams": len(sel), "damaged_pairs": dm, "intact_pairs": im,
+                    "zone_accuracy": sum(np.nan_to_num(r["zone_accuracy"]) * r["damaged_pairs"] for r in sel) / dm
+                    if dm else float("nan"),
+                    "detection": sum(np.nan_to_num(r["detection"]) * r["damaged_pairs"] for r in sel) / dm
+                    if dm else float("nan"),
+                    "false_alarms": fa, "false_alarm_pct": 100 * fa / im if im else float("nan")})
+    return out
+
+
+def pooled_markdown(rows: list[dict]) -> str:
+    return ("| all beams | beams | zone acc. | detection | false alarms |\n|---|---|---|---|---|\n"
+            + "".join(f"| {p['method']} | {p['beams']} | {_f(p['zone_accuracy'])} of {p['damaged_pairs']} | "
+                      f"{_f(p['detection'])} | {p['false_alarms']} of {p['intact_pairs']} "
+                      f"({_f(p['false_alarm_pct'], False)} %) |\n" for p in pooled(rows)))
+
+
 def _figure(rows: list[dict], path: Path) -> None:
     import matplotlib
 
@@ -292,13 +319,13 @@ def main(argv=None) -> int:
               "beams": [i["beam"] for i in infos], "targets": TARGETS, "seconds": time.perf_counter() - t0}
     atomic_write_text(out / "beams.csv", pd.DataFrame(rows).to_csv(index=False))
     atomic_write_text(out / "beams.json", json.dumps({"config": config, "beams": infos, "targets": targets(rows),
-                                                      "rows": rows}, indent=1))
-    atomic_write_text(out / "beams.md", markdown(rows))
+                                                      "pooled": pooled(rows), "rows": rows}, indent=1))
+    atomic_write_text(out / "beams.md", markdown(rows) + "\n" + pooled_markdown(rows))
     _figure(rows, out / "beams.png")
     if a.json:
-        print(json.dumps({"config": config, "targets": targets(rows), "rows": rows}, indent=1))
+        print(json.dumps({"config": config, "targets": targets(rows), "pooled": pooled(rows), "rows": rows}, indent=1))
     else:
-        print(markdown(rows))
+        print(markdown(rows) + "\n" + pooled_markdown(rows))
     return 0
 
 

@@ -39,8 +39,8 @@ from experiments.second_sim.fem import N_ELEMENTS, Beam, Slit, assemble, mesh_el
 from experiments.second_sim.response import Damping, Noise, measure, receptance
 from experiments.second_sim.writers import KINDS, write_csv, write_json, write_text_atomic, write_uff
 
-__all__ = ["CATALOGUE", "MATERIALS", "SUPPORTS", "BeamPair", "CatalogueBeam", "beam_toml", "default_zones",
-           "nominal_beam", "simulate_beam_pairs", "write_beam_pairs"]
+__all__ = ["CATALOGUE", "MATERIALS", "SPREAD", "SUPPORTS", "BeamPair", "CatalogueBeam", "Spread", "beam_toml",
+           "default_zones", "nominal_beam", "simulate_beam_pairs", "write_beam_pairs"]
 
 
 #: Young's modulus (Pa), density (kg/m^3) and modal damping-ratio range of each material.
@@ -196,6 +196,31 @@ def beam_toml(cb: CatalogueBeam) -> str:
 
 
 @dataclass(frozen=True)
+class Spread:
+    """The distribution of the pairs (module docstring); ranges are ``(lo, hi)``, spreads relative ``+-``."""
+
+    ei: float = 0.05
+    mass: float = 0.03
+    clamp_k_L_over_EI: tuple = (200.0, 2000.0)
+    bearing_k_L_over_EI: tuple = (0.01, 0.1)
+    bearing_share: float = 0.5
+    bounce_over_f1: tuple = (0.02, 0.08)
+    temperature_ei: float = 0.004
+    clamp_change: float = 0.08
+    bearing_change: float = 0.2
+    suspension_change: float = 0.2
+    noise_level: tuple = (0.005, 0.02)
+    noise_floor: float = 2e-4
+    h1_bias: float = 0.02
+    damaged_fraction: float = 2 / 3
+    min_drop: float = 0.002
+
+
+#: The catalogue pairs' distribution.
+SPREAD = Spread()
+
+
+@dataclass(frozen=True)
 class BeamPair:
     """One specimen's two tests of a catalogue beam: receptances (m/N) at the sensors (catalogue order) driven
     at the drive sensor, the kind each file is written as, and the truth."""
@@ -228,13 +253,14 @@ def _nominal_f1_hz(cb: CatalogueBeam) -> float:
     return float(bending_frequencies_hz(nominal_beam(cb), cb.bc, 1)[0])
 
 
-def _specimen(cb: CatalogueBeam, rng) -> tuple[Beam, dict]:
+def _specimen(cb: CatalogueBeam, rng, sp: Spread) -> tuple[Beam, dict]:
     """A specimen on its supports as built, and the drawn support parameters."""
-    EI = cb.EI_Nm2 * (1 + rng.uniform(-0.05, 0.05))
-    m = cb.mass_per_length_kg_m * (1 + rng.uniform(-0.03, 0.03))
-    clamp = tuple(_loguniform(rng, 200, 2000) for _ in range(2))
-    pin = tuple(_loguniform(rng, 0.01, 0.1) for _ in range(2)) if rng.random() < 0.5 else (0.0, 0.0)
-    bounce = rng.uniform(0.02, 0.08)
+    EI = cb.EI_Nm2 * (1 + rng.uniform(-sp.ei, sp.ei))
+    m = cb.mass_per_length_kg_m * (1 + rng.uniform(-sp.mass, sp.mass))
+    clamp = tuple(_loguniform(rng, *sp.clamp_k_L_over_EI) for _ in range(2))
+    pin = tuple(_loguniform(rng, *sp.bearing_k_L_over_EI) for _ in range(2)) if rng.random() < sp.bearing_share \
+        else (0.0, 0.0)
+    bounce = rng.uniform(*sp.bounce_over_f1)
     f1 = _nominal_f1_hz(cb)
     k_susp = 0.5 * m * cb.length_m * (2 * math.pi * bounce * f1) ** 2 if cb.bc == "free-free" else 0.0
     beam = Beam(cb.length_m, EI, m, n_elements=cb.n_elements,
@@ -244,14 +270,14 @@ def _specimen(cb: CatalogueBeam, rng) -> tuple[Beam, dict]:
                   "suspension_k_N_m": k_susp}
 
 
-def _next_day(cb: CatalogueBeam, beam: Beam, rng) -> tuple[Beam, dict]:
+def _next_day(cb: CatalogueBeam, beam: Beam, rng, sp: Spread) -> tuple[Beam, dict]:
     """The specimen on the second test day: temperature, and the supports re-made."""
-    temp = 1 + rng.uniform(-0.004, 0.004)
+    temp = 1 + rng.uniform(-sp.temperature_ei, sp.temperature_ei)
     kw, factors = {"EI_Nm2": beam.EI_Nm2 * temp}, {"temperature_ei_factor": temp}
     for side in ("root", "tip"):
         end = SUPPORTS[cb.bc][0 if side == "root" else 1]
         name = f"{side}_k_y_N_m" if end == "free" else f"{side}_k_theta_Nm_rad"
-        spread = 0.08 if end == "clamped" else 0.2
+        spread = {"clamped": sp.clamp_change, "pinned": sp.bearing_change, "free": sp.suspension_change}[end]
         f = 1 + rng.uniform(-spread, spread)
         kw[name] = getattr(beam, name) * f
         factors[f"{side}_support_factor"] = f
@@ -264,19 +290,18 @@ def _measured_receptance(H: np.ndarray, freq_hz: np.ndarray, noise: Noise, rng) 
     return measure(-w2 * H, noise, rng) / -w2
 
 
-def simulate_pair(cb: CatalogueBeam, pair: int, rng: np.random.Generator, damaged_fraction: float = 2 / 3,
-                  min_drop: float = 0.002) -> BeamPair:
+def simulate_pair(cb: CatalogueBeam, pair: int, rng: np.random.Generator, sp: Spread = SPREAD) -> BeamPair:
     """Draw one specimen of ``cb`` (and a slit, if damaged) and simulate its two tests (module docstring)."""
     freq_hz = frequency_lines_hz(cb)
-    specimen, support = _specimen(cb, rng)
+    specimen, support = _specimen(cb, rng, sp)
     zeta = MATERIALS[cb.material][2]
     damping = Damping("modal", tuple(rng.uniform(*zeta, _rigid_modes(cb.bc) + cb.n_modes + 2)))
-    damaged = bool(rng.random() < damaged_fraction)
+    damaged = bool(rng.random() < sp.damaged_fraction)
     f_base = bending_frequencies_hz(specimen, cb.bc, cb.n_modes)
-    slit, drop = _slit(rng, cb, specimen, f_base, min_drop) if damaged else (None, 0.0)
-    current, day = _next_day(cb, specimen, rng)
+    slit, drop = _slit(rng, cb, specimen, f_base, sp.min_drop) if damaged else (None, 0.0)
+    current, day = _next_day(cb, specimen, rng, sp)
     current = replace(current, slits=(slit,) if slit else ())
-    noise = Noise(_loguniform(rng, 0.005, 0.02), 2e-4, rng.uniform(0.0, 0.02))
+    noise = Noise(_loguniform(rng, *sp.noise_level), sp.noise_floor, rng.uniform(0.0, sp.h1_bias))
     H, f_true = [], []
     for beam in (specimen, current):
         asm = assemble(beam)
@@ -305,11 +330,12 @@ def simulate_pair(cb: CatalogueBeam, pair: int, rng: np.random.Generator, damage
     return BeamPair(pair, truth, freq_hz, H[0], H[1], kinds)
 
 
-def simulate_beam_pairs(cb: CatalogueBeam, n: int, seed: int) -> list[BeamPair]:
-    """``n`` pairs of ``cb``, reproducible from ``seed`` and the beam's place in :data:`CATALOGUE`."""
+def simulate_beam_pairs(cb: CatalogueBeam, n: int, seed: int, sp: Spread = SPREAD) -> list[BeamPair]:
+    """``n`` pairs of ``cb`` drawn from ``sp``, reproducible from ``seed`` and the beam's place in
+    :data:`CATALOGUE`."""
     index = next((k for k, c in enumerate(CATALOGUE) if c.name == cb.name), len(CATALOGUE))
     rng = np.random.default_rng([seed, index])
-    return [simulate_pair(cb, k, rng) for k in range(n)]
+    return [simulate_pair(cb, k, rng, sp) for k in range(n)]
 
 
 def write_beam_pairs(cb: CatalogueBeam, records: list[BeamPair], out_dir, seed: int | None = None) -> Path:
