@@ -1,7 +1,7 @@
 """The loop on every beam of the independent simulator's catalogue, scored per beam and per method.
 
 Run: ``python -m experiments.study_beams --out out/beams [--n-pairs 40] [--train-n 20000] [--only NAME]
-[--seed 0] [--json]``
+[--seed 0] [--spread KEY=VALUE ...] [--json]``
 
 For each beam of :data:`experiments.second_sim.beams.CATALOGUE` (any support, 1-12 sensors, its own band),
 as the README's loop, through the CLI: the simulator writes ``beam.toml`` and ``--n-pairs`` (baseline, current)
@@ -23,6 +23,9 @@ median ``|dx/L|`` <= 0.03 on beams read unfolded.
 Writes ``beams.csv``, ``beams.json`` (rows, per-beam timings and training metrics, seed and config),
 ``beams.md`` and ``beams.png`` (zone accuracy, network vs best classical method, per beam) in ``--out``;
 pairs, datasets, models and verdicts stay under ``--out/NAME`` and are reused by a rerun with the same sizes.
+``--spread KEY=VALUE`` changes a field of the pairs' distribution (:class:`experiments.second_sim.beams.Spread`,
+e.g. ``suspension_change=0`` or ``bounce_over_f1=0.05,0.05``): new pairs, classified by the same models, and
+the outputs named ``beams-KEY=VALUE...``.
 """
 
 from __future__ import annotations
@@ -35,7 +38,10 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["TARGETS", "fold", "main", "markdown", "pooled", "run_beam", "score_beam", "targets"]
+__all__ = ["TARGETS", "fold", "main", "markdown", "parse_spread", "pooled", "run_beam", "score_beam", "targets"]
+
+#: A slit is "small" when it lowers no mode of the band by this much (relative) on its own.
+SMALL_DROP = 0.005
 
 #: Targets of the network on every beam.
 TARGETS = {"false_alarm_pct": 2.0, "median_dx_over_L": 0.03}
@@ -110,7 +116,14 @@ def score_beam(verdicts: list[dict], meta: dict) -> list[dict]:
     classical = [r for r in rows if r["method"] not in ("network", "verdict")]
     best = max(classical, key=lambda r: np.nan_to_num(r["zone_accuracy"], nan=-1.0)) if classical else None
     ind = np.array([bool(v.get("in_distribution")) for v in verdicts])
+    pct = np.array([_nan(v.get("training_percentile")) for v in verdicts])
+    small = damaged & (np.array([float(t.get("max_frequency_drop_rel") or 0.0) for t in truth]) < SMALL_DROP)
+    net_called = np.array([bool((v.get("network") or {}).get("damaged")) for v in verdicts])
     for r in rows:
+        r["intact_training_percentile_median"] = float(np.nanmedian(pct[~damaged])) \
+            if np.isfinite(pct[~damaged]).any() else float("nan")
+        r["small_slits"] = int(small.sum())
+        r["small_slits_detected_by_network"] = int((net_called & small).sum())
         r["best_classical"] = best["method"] if best else None
         r["in_distribution"] = float(ind.mean())
         r["zones_as_simulator"] = bool(np.allclose(edges, meta["zone_edges_m"], rtol=0, atol=1e-9 * L))
@@ -132,34 +145,63 @@ def _complete(data: Path) -> bool:
         return False
 
 
-def run_beam(cb, out: Path, n_pairs: int, train_n: int, seed: int, workers: int = 2) -> tuple[list[dict], dict]:
-    """Pairs, dataset, model and verdicts of one catalogue beam (reused when present); its rows and timings."""
-    from experiments.second_sim.beams import simulate_beam_pairs, write_beam_pairs
+def parse_spread(items: list[str]) -> tuple[dict, str]:
+    """``KEY=VALUE`` items (a value with commas is a range) as :class:`Spread` fields, and their tag ('' if none).
+
+    Raises ``ValueError`` naming the item and the expected form."""
+    from dataclasses import fields
+
+    from experiments.second_sim.beams import Spread
+
+    names = {f.name for f in fields(Spread)}
+    out = {}
+    for item in items:
+        key, _, value = item.partition("=")
+        try:
+            nums = tuple(float(v) for v in value.split(","))
+        except ValueError:
+            nums = ()
+        if key not in names or not nums or len(nums) > 2:
+            raise ValueError(f"--spread {item!r}: expected KEY=NUMBER or KEY=LO,HI with KEY one of {sorted(names)}")
+        out[key] = nums if len(nums) == 2 else nums[0]
+    return out, "-".join(items)
+
+
+def _step(timings: dict, key: str, done: bool, fn) -> None:
+    """Run ``fn`` unless ``done``, recording its wall time (s) under ``key`` (a rerun keeps the first run's)."""
+    if not done:
+        t0 = time.perf_counter()
+        fn()
+        timings[key] = time.perf_counter() - t0
+
+
+def run_beam(cb, out: Path, n_pairs: int, train_n: int, seed: int, workers: int = 2, spread: dict | None = None,
+             tag: str = "") -> tuple[list[dict], dict]:
+    """Pairs, dataset, model and verdicts of one catalogue beam (reused when present); its rows and timings.
+    ``spread`` (fields of :class:`Spread`, named by ``tag``) draws the pairs from a changed distribution."""
+    from dataclasses import replace
+
+    from experiments.second_sim.beams import SPREAD, simulate_beam_pairs, write_beam_pairs
     from physics.io import atomic_write_text
 
     d = out / cb.name
-    pairs = d / f"pairs-n{n_pairs}-s{seed}"
+    suffix = f"-{tag}" if tag else ""
+    pairs = d / f"pairs-n{n_pairs}-s{seed}{suffix}"
     data, model = d / f"data-n{train_n}-s{seed}", d / f"model-n{train_n}-s{seed}"
-    t = {}
-    t0 = time.perf_counter()
-    if not (pairs / "truth.json").is_file():
-        write_beam_pairs(cb, simulate_beam_pairs(cb, n_pairs, seed), pairs, seed)
-    t["simulate_s"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    if not _complete(data):
-        _cli(["generate", "--beam", str(pairs / "beam.toml"), "--config", "training", "--n", str(train_n),
-              "--seed", str(seed + 1), "--out", str(data), "--workers", str(workers)])
-    t["generate_s"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    if not (model / "config.json").is_file():
-        _cli(["train", "--data", str(data), "--out", str(model)])
-    t["train_s"] = time.perf_counter() - t0
+    tfile = d / "timings.json"
+    t = json.loads(tfile.read_text()) if tfile.is_file() else {}
+    spread_of = replace(SPREAD, **(spread or {}))
+    _step(t, pairs.name, (pairs / "truth.json").is_file(),
+          lambda: write_beam_pairs(cb, simulate_beam_pairs(cb, n_pairs, seed, spread_of), pairs, seed))
+    _step(t, data.name, _complete(data),
+          lambda: _cli(["generate", "--beam", str(pairs / "beam.toml"), "--config", "training", "--n", str(train_n),
+                        "--seed", str(seed + 1), "--out", str(data), "--workers", str(workers)]))
+    _step(t, model.name, (model / "config.json").is_file(),
+          lambda: _cli(["train", "--data", str(data), "--out", str(model)]))
     meta = json.loads((pairs / "truth.json").read_text())
-    vfile = d / f"verdicts-n{n_pairs}-s{seed}-t{train_n}.json"
-    t0 = time.perf_counter()
-    if vfile.is_file():
-        verdicts = json.loads(vfile.read_text())
-    else:
+    vfile = d / f"verdicts-n{n_pairs}-s{seed}-t{train_n}{suffix}.json"
+
+    def classify_all():
         verdicts = []
         for p in meta["pairs"]:
             k = int(p["pair"])
@@ -167,7 +209,12 @@ def run_beam(cb, out: Path, n_pairs: int, train_n: int, seed: int, workers: int 
                       str(pairs / f"pair-{k:03d}_current.uff")])
             verdicts.append(v[0] if isinstance(v, list) else v)
         atomic_write_text(vfile, json.dumps(verdicts, indent=1))
-    t["classify_s"] = time.perf_counter() - t0
+
+    _step(t, vfile.name, vfile.is_file(), classify_all)
+    atomic_write_text(tfile, json.dumps(t, indent=1))
+    verdicts = json.loads(vfile.read_text())
+    t = {"simulate_s": t.get(pairs.name), "generate_s": t.get(data.name), "train_s": t.get(model.name),
+         "classify_s": t.get(vfile.name)}
     cfg = json.loads((model / "config.json").read_text())
     own = {m["method"]: {k: m.get(k) for k in ("element_accuracy", "false_alarm_rate", "median_location_error_mm",
                                                 "detection_rate")}
@@ -220,6 +267,24 @@ def targets(rows: list[dict]) -> list[dict]:
                     "dx_ok": None if net["folded"] else bool(net["median_dx_over_L"] <= TARGETS["median_dx_over_L"]),
                     "folded": net["folded"]})
     return out
+
+
+def diagnosis_markdown(rows: list[dict], infos: list[dict]) -> str:
+    """Per beam: the network on the independent pairs next to the network on its own training data's test split,
+    its detection of small slits, and where the intact pairs fall among the training pairs' Mahalanobis distances
+    (a median far above 50 % is a shift between the simulator's pairs and the training data)."""
+    head = ("| beam | modes | zone acc. (independent) | element acc. (training split) | detection (independent) | "
+            "detection (training split) | small slits (drop < 0.5 %) detected | intact pairs: median training "
+            "percentile |\n|---|---|---|---|---|---|---|---|\n")
+    lines = []
+    for info in infos:
+        net = next(r for r in rows if r["beam"] == info["beam"] and r["method"] == "network")
+        own = info["training_split_metrics"].get("network (modal)", {})
+        lines.append(f"| {info['beam']} | {len(info['modes'])} | {_f(net['zone_accuracy'])} | "
+                     f"{_f(own.get('element_accuracy'))} | {_f(net['detection'])} | {_f(own.get('detection_rate'))} | "
+                     f"{net['small_slits_detected_by_network']} of {net['small_slits']} | "
+                     f"{_f(net['intact_training_percentile_median'], False)} % |\n")
+    return head + "".join(lines)
 
 
 def pooled(rows: list[dict]) -> list[dict]:
@@ -288,6 +353,8 @@ def main(argv=None) -> int:
     ap.add_argument("--only", default=None, help="one catalogue beam by name")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--spread", action="append", default=[], metavar="KEY=VALUE",
+                    help="a field of the pairs' distribution (second_sim.beams.Spread), e.g. suspension_change=0")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
     from experiments.second_sim.beams import CATALOGUE
@@ -301,31 +368,39 @@ def main(argv=None) -> int:
         print(f"study_beams: error: --n-pairs must be >= 1 and --train-n >= 100, got {a.n_pairs} and {a.train_n}",
               file=sys.stderr)
         return 2
+    try:
+        spread, tag = parse_spread(a.spread)
+    except ValueError as exc:
+        print(f"study_beams: error: {exc}", file=sys.stderr)
+        return 2
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     rows, infos = [], []
     t0 = time.perf_counter()
     for cb in CATALOGUE:
         if a.only in (None, cb.name):
-            r, info = run_beam(cb, out, a.n_pairs, a.train_n, a.seed, a.workers)
+            r, info = run_beam(cb, out, a.n_pairs, a.train_n, a.seed, a.workers, spread, tag)
             rows += r
             infos.append(info)
-            print(f"{cb.name}: " + ", ".join(f"{k} {v:.0f}" for k, v in info["timing_s"].items()), file=sys.stderr)
+            print(f"{cb.name}: " + ", ".join(f"{k} {_f(v, False)}" for k, v in info["timing_s"].items()),
+                  file=sys.stderr)
     from physics.io import atomic_write_text
 
     import pandas as pd
 
-    config = {"n_pairs": a.n_pairs, "train_n": a.train_n, "seed": a.seed, "config": "training",
+    config = {"n_pairs": a.n_pairs, "train_n": a.train_n, "seed": a.seed, "config": "training", "spread": spread,
               "beams": [i["beam"] for i in infos], "targets": TARGETS, "seconds": time.perf_counter() - t0}
-    atomic_write_text(out / "beams.csv", pd.DataFrame(rows).to_csv(index=False))
-    atomic_write_text(out / "beams.json", json.dumps({"config": config, "beams": infos, "targets": targets(rows),
+    stem = "beams" + (f"-{tag}" if tag else "")
+    atomic_write_text(out / f"{stem}.csv", pd.DataFrame(rows).to_csv(index=False))
+    atomic_write_text(out / f"{stem}.json", json.dumps({"config": config, "beams": infos, "targets": targets(rows),
                                                       "pooled": pooled(rows), "rows": rows}, indent=1))
-    atomic_write_text(out / "beams.md", markdown(rows) + "\n" + pooled_markdown(rows))
-    _figure(rows, out / "beams.png")
+    atomic_write_text(out / f"{stem}.md", markdown(rows) + "\n" + pooled_markdown(rows) + "\n"
+                      + diagnosis_markdown(rows, infos))
+    _figure(rows, out / f"{stem}.png")
     if a.json:
         print(json.dumps({"config": config, "targets": targets(rows), "pooled": pooled(rows), "rows": rows}, indent=1))
     else:
-        print(markdown(rows) + "\n" + pooled_markdown(rows))
+        print(markdown(rows) + "\n" + pooled_markdown(rows) + "\n" + diagnosis_markdown(rows, infos))
     return 0
 
 
