@@ -214,6 +214,7 @@ class Spread:
     h1_bias: float = 0.02
     damaged_fraction: float = 2 / 3
     min_drop: float = 0.002
+    damping_ratio: tuple | None = None     # (lo, hi) of every mode's ratio; None: the material's range
 
 
 #: The catalogue pairs' distribution.
@@ -294,7 +295,7 @@ def simulate_pair(cb: CatalogueBeam, pair: int, rng: np.random.Generator, sp: Sp
     """Draw one specimen of ``cb`` (and a slit, if damaged) and simulate its two tests (module docstring)."""
     freq_hz = frequency_lines_hz(cb)
     specimen, support = _specimen(cb, rng, sp)
-    zeta = MATERIALS[cb.material][2]
+    zeta = MATERIALS[cb.material][2] if sp.damping_ratio is None else sp.damping_ratio
     damping = Damping("modal", tuple(rng.uniform(*zeta, _rigid_modes(cb.bc) + cb.n_modes + 2)))
     damaged = bool(rng.random() < sp.damaged_fraction)
     f_base = bending_frequencies_hz(specimen, cb.bc, cb.n_modes)
