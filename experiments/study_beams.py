@@ -332,10 +332,10 @@ def _figure(rows: list[dict], path: Path) -> None:
         if t["folded"]:
             ax.text(i, 1.02, "folded", fontsize=7, ha="center")
     ax.set_xticks(k, [t["beam"] for t in tg], rotation=25, ha="right", fontsize=8)
-    ax.set_ylim(0, 1.1)
+    ax.set_ylim(0, 1.25)
     ax.set_ylabel("zone accuracy (damaged pairs)")
     ax.set_title("Independent pairs per beam: network vs best classical method")
-    ax.legend(fontsize=8, loc="lower right")
+    ax.legend(fontsize=8, loc="upper right", ncol=2)
     fig.tight_layout()
     import io
 
