@@ -2,10 +2,11 @@
 
 It shares no code with ``physics``, ``datagen`` or ``learn`` (only numpy, scipy,
 pyuff and the standard library): a fine-mesh Euler-Bernoulli/Timoshenko
-cantilever (:mod:`.fem`), damping, FRFs and a measurement chain
+beam with springs at both ends (:mod:`.fem`), damping, FRFs and a measurement chain
 (:mod:`.response`), UFF/JSON writers (:mod:`.writers`), specimen pairs with
-slits (:mod:`.pairs`) and hidden-effect cases (:mod:`.effects`).
-``python -m experiments.second_sim pairs|effects`` writes them.
+slits (:mod:`.pairs`), hidden-effect cases (:mod:`.effects`) and a catalogue of beams on
+every support with their own sensors and bands (:mod:`.beams`).
+``python -m experiments.second_sim pairs|effects|beams`` writes them.
 
 The names below load on first use (the CLI limits BLAS threads before numpy loads).
 """
@@ -19,6 +20,7 @@ _API = {
     "complex_modes": "response", "measure": "response",
     "PairRecord": "pairs", "PairSet": "pairs", "PAIR_SETS": "pairs", "simulate_pairs": "pairs",
     "write_pairs": "pairs",
+    "CATALOGUE": "beams", "CatalogueBeam": "beams", "simulate_beam_pairs": "beams", "write_beam_pairs": "beams",
     "EffectCase": "effects", "effect_cases": "effects", "write_effect_cases": "effects",
 }
 __all__ = sorted(_API)

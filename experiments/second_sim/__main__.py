@@ -1,4 +1,4 @@
-"""``python -m experiments.second_sim pairs|effects ...``: write test files of the independent simulator."""
+"""``python -m experiments.second_sim pairs|effects|beams ...``: write test files of the independent simulator."""
 
 from __future__ import annotations
 
@@ -33,6 +33,11 @@ def main(argv=None) -> int:
     pe = sub.add_parser("effects", help="hidden-effect cases (modal JSON, frequency JSON, UFF) with cases.json")
     pe.add_argument("--seed", type=int, default=0)
     pe.add_argument("--out", required=True)
+    pb = sub.add_parser("beams", help="per catalogue beam: beam.toml, baseline/current UFF pairs, truth.csv/json")
+    pb.add_argument("--out", required=True)
+    pb.add_argument("--n", type=int, default=40, help="pairs per beam (default 40)")
+    pb.add_argument("--seed", type=int, default=0)
+    pb.add_argument("--only", default=None, help="one catalogue beam by name (default: every beam)")
     args = p.parse_args(argv)
     t0 = time.perf_counter()
     try:
@@ -50,6 +55,21 @@ def main(argv=None) -> int:
             freq_hz = f0 + args.df_hz * np.arange(int(round((f1 - f0) / args.df_hz)) + 1)
             out = write_pairs(simulate_pairs(args.set_name, args.n, args.seed, freq_hz, args.mode4_drop), args.out)
             what = f"{args.n} pairs of set {args.set_name}"
+        elif args.command == "beams":
+            from pathlib import Path
+
+            from experiments.second_sim.beams import CATALOGUE, simulate_beam_pairs, write_beam_pairs
+
+            names = [c.name for c in CATALOGUE]
+            if args.only is not None and args.only not in names:
+                raise ValueError(f"--only: unknown beam {args.only!r}; expected one of {', '.join(names)}")
+            if args.n < 1:
+                raise ValueError(f"--n must be >= 1, got {args.n}")
+            chosen = [c for c in CATALOGUE if args.only in (None, c.name)]
+            for cb in chosen:
+                write_beam_pairs(cb, simulate_beam_pairs(cb, args.n, args.seed), Path(args.out) / cb.name, args.seed)
+            out = args.out
+            what = f"{args.n} pairs of {len(chosen)} beam(s)"
         else:
             from experiments.second_sim.effects import effect_cases, write_effect_cases
 

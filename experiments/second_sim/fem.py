@@ -1,7 +1,10 @@
-"""Finite-element cantilever of the independent simulator: Euler-Bernoulli and Timoshenko elements.
+"""Finite-element beam of the independent simulator: Euler-Bernoulli and Timoshenko elements, springs at both ends.
 
 Uniform mesh of ``n_elements`` two-node elements, DOFs ``(v_i, theta_i)`` of node
-``i = 0..n_elements`` (node 0 at the root, ``x = 0``). Element stiffness is the
+``i = 0..n_elements`` (node 0 at the root, ``x = 0``; the other end, ``x = L``, is the tip).
+Each end has a translational and a rotational spring to ground: ``0`` leaves the DOF free,
+``inf`` removes it (fixed), a finite value adds it to ``K``; so clamped-free (the default),
+free-free (soft suspension springs), pinned-pinned and clamped-clamped beams are one class. Element stiffness is the
 exact static stiffness obtained by inverting the element flexibility of a
 cantilevered element: with a compliance ``1/EI(x)`` that is piecewise constant
 (slits) the integrals are closed-form, and with uniform ``EI`` it is the exact
@@ -21,7 +24,7 @@ import numpy as np
 import scipy.linalg
 
 __all__ = ["Assembled", "Beam", "Dashpot", "Modes", "N_ELEMENTS", "PointMass", "Slit", "assemble", "element_mass",
-           "element_stiffness", "modes", "point_row", "shape_functions"]
+           "element_stiffness", "mesh_elements", "modes", "point_row", "shape_functions"]
 
 
 #: Elements of the default mesh (a multiple of 4, so the quarter points are nodes).
@@ -64,10 +67,11 @@ class Dashpot:
 
 @dataclass(frozen=True)
 class Beam:
-    """A cantilever (root at ``x = 0``, free tip at ``x = length_m``).
+    """A beam from the root (``x = 0``) to the tip (``x = length_m``); by default a cantilever clamped at the root.
 
-    ``kGA_N = inf`` gives Euler-Bernoulli elements; ``root_k_theta_Nm_rad = inf``
-    and ``root_k_y_N_m = inf`` a rigid clamp, finite values root springs.
+    ``kGA_N = inf`` gives Euler-Bernoulli elements. End supports: ``root_k_y_N_m`` (N/m),
+    ``root_k_theta_Nm_rad`` (N m/rad) at ``x = 0`` and ``tip_k_y_N_m``, ``tip_k_theta_Nm_rad`` at
+    ``x = length_m``; ``inf`` fixes the DOF, ``0`` leaves it free, a finite value is a spring.
     """
 
     length_m: float
@@ -77,16 +81,22 @@ class Beam:
     rho_I_kg_m: float = 0.0
     root_k_theta_Nm_rad: float = math.inf
     root_k_y_N_m: float = math.inf
+    tip_k_y_N_m: float = 0.0
+    tip_k_theta_Nm_rad: float = 0.0
     slits: tuple[Slit, ...] = ()
     masses: tuple[PointMass, ...] = ()
     dashpots: tuple[Dashpot, ...] = ()
     n_elements: int = N_ELEMENTS
 
     def __post_init__(self):
-        for name in ("length_m", "EI_Nm2", "mass_per_length_kg_m", "kGA_N", "root_k_theta_Nm_rad", "root_k_y_N_m"):
+        for name in ("length_m", "EI_Nm2", "mass_per_length_kg_m", "kGA_N"):
             v = getattr(self, name)
             if not (v > 0):
                 raise ValueError(f"Beam.{name} must be > 0, got {v!r}")
+        for name in ("root_k_y_N_m", "root_k_theta_Nm_rad", "tip_k_y_N_m", "tip_k_theta_Nm_rad"):
+            v = getattr(self, name)
+            if not (v >= 0):
+                raise ValueError(f"Beam.{name} must be >= 0 (0 free, inf fixed), got {v!r}")
         if self.rho_I_kg_m < 0 or self.n_elements < 1:
             raise ValueError("Beam.rho_I_kg_m must be >= 0 and Beam.n_elements >= 1")
         for s in self.slits:
@@ -131,7 +141,7 @@ class Assembled:
             raise ValueError(f"positions {x.tolist()} m are not all nodes of the mesh (spacing {h:g} m)")
         idx = self.dof_index[2 * node]
         if np.any(idx < 0):
-            raise ValueError("a requested translation is constrained (clamped root)")
+            raise ValueError("a requested translation is constrained (a fixed end)")
         return idx
 
 
@@ -205,7 +215,7 @@ def point_row(beam: Beam, x_m: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def assemble(beam: Beam) -> Assembled:
-    """Assemble ``(M, K, C)`` of a beam on its free DOFs (root constraints or springs applied)."""
+    """Assemble ``(M, K, C)`` of a beam on its free DOFs (end constraints or springs applied)."""
     n, h = beam.n_elements, beam.length_m / beam.n_elements
     nd = 2 * (n + 1)
     node_x = np.linspace(0.0, beam.length_m, n + 1)
@@ -226,10 +236,11 @@ def assemble(beam: Beam) -> Assembled:
         C[np.ix_(d, d)] += p.c_Ns_m * np.outer(N, N)
         B[j, d] = N
     keep = np.ones(nd, bool)
-    for dof, k in ((0, beam.root_k_y_N_m), (1, beam.root_k_theta_Nm_rad)):
+    for dof, k in ((0, beam.root_k_y_N_m), (1, beam.root_k_theta_Nm_rad),
+                   (nd - 2, beam.tip_k_y_N_m), (nd - 1, beam.tip_k_theta_Nm_rad)):
         if math.isinf(k):
             keep[dof] = False
-        else:
+        elif k > 0:
             K[dof, dof] += k
     dof_index = np.full(nd, -1)
     dof_index[keep] = np.arange(keep.sum())
@@ -237,6 +248,18 @@ def assemble(beam: Beam) -> Assembled:
     return Assembled(M=M[sel], K=K[sel], C=C[sel], dashpot_rows=B[:, keep],
                      dashpot_c_Ns_m=np.array([p.c_Ns_m for p in beam.dashpots], dtype=float),
                      node_x_m=node_x, dof_index=dof_index)
+
+
+def mesh_elements(length_m: float, points_x_m, min_elements: int = N_ELEMENTS, max_elements: int = 2000) -> int:
+    """The fewest elements ``>= min_elements`` of a uniform mesh with a node at every point ``points_x_m`` (m).
+
+    Raises ``ValueError`` when no mesh up to ``max_elements`` has them all as nodes."""
+    r = np.asarray(points_x_m, dtype=float) / length_m
+    for n in range(max(1, min_elements), max_elements + 1):
+        if np.all(np.abs(r * n - np.rint(r * n)) <= 1e-9 * n):
+            return n
+    raise ValueError(f"no uniform mesh of {min_elements}-{max_elements} elements has nodes at {list(points_x_m)} m "
+                     f"on a {length_m} m beam")
 
 
 @dataclass(frozen=True)
@@ -256,12 +279,18 @@ def modes(asm: Assembled, n_refine: int = 12) -> Modes:
 
     The dense generalised eigensolver is accurate to ``eps * omega_max^2``, which for a fine mesh
     is ~1e-7 of the fundamental's ``omega^2``; two steps of subspace (inverse) iteration with
-    ``K^-1 M`` and a Rayleigh-Ritz solve restore the low modes to ~``eps``.
+    ``K^-1 M`` and a Rayleigh-Ritz solve restore the low modes to ~``eps``. A beam free at both ends
+    without springs (singular ``K``) iterates with ``(K + s M)^-1 M``, ``s`` a small shift; the
+    Rayleigh-Ritz solve on ``(K, M)`` gives its rigid-body modes at ``omega = 0``.
     """
     w2, phi = scipy.linalg.eigh(asm.K, asm.M)
     n = min(n_refine, w2.size)
     if n:
-        chol = scipy.linalg.cho_factor(asm.K)
+        try:
+            chol = scipy.linalg.cho_factor(asm.K)
+        except np.linalg.LinAlgError:
+            shift = 1e-6 * float(abs(w2[n - 1]))
+            chol = scipy.linalg.cho_factor(asm.K + shift * asm.M)
         X = phi[:, :n]
         for _ in range(2):
             X = scipy.linalg.cho_solve(chol, asm.M @ X)

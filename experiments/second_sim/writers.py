@@ -45,7 +45,7 @@ def convert_receptance(H: np.ndarray, freq_hz: np.ndarray, kind: str) -> np.ndar
 
 
 def write_uff(path, freq_hz, H, node_x_m, resp_nodes, ref_node: int, kind: str = "receptance",
-              description: str = "") -> None:
+              description: str = "", node_numbers=None) -> None:
     """One test as a universal file: units (164, mm), node geometry (15, mm) and one FRF record (58) per response.
 
     Dataset 164 declares the MM system (mm, mN), so the ordinates in SI (m/N, m/s/N,
@@ -59,11 +59,13 @@ def write_uff(path, freq_hz, H, node_x_m, resp_nodes, ref_node: int, kind: str =
     H : ndarray, complex, shape (n_resp, n_lines)
         Receptance (m/N); written as ``kind`` in SI with explicit unit labels.
     node_x_m : sequence of float
-        Coordinates of nodes 1.. along X (m), written in mm.
+        Coordinates of the nodes along X (m), written in mm.
     resp_nodes : sequence of int
         Node number of each response (direction +Y).
     ref_node : int
         Reference (drive) node, direction +Y.
+    node_numbers : sequence of int, optional
+        Number of each node of ``node_x_m`` (default ``1, 2, ...``).
     """
     import pyuff
 
@@ -71,7 +73,10 @@ def write_uff(path, freq_hz, H, node_x_m, resp_nodes, ref_node: int, kind: str =
     f = np.asarray(freq_hz, dtype=float)
     data = convert_receptance(np.asarray(H), f, kind)
     spec, label = KINDS[kind]
-    nodes = np.arange(1, len(node_x_m) + 1)
+    nodes = np.arange(1, len(node_x_m) + 1) if node_numbers is None else np.asarray(node_numbers, dtype=int)
+    if nodes.size != len(node_x_m) or not set(map(int, resp_nodes)) | {int(ref_node)} <= set(nodes.tolist()):
+        raise ValueError(f"write_uff: {nodes.size} node numbers for {len(node_x_m)} coordinates, or a response/"
+                         f"reference node outside {nodes.tolist()}")
     sets = [pyuff.prepare_164(units_code=5, units_description="mm (milli-newton)", temp_mode=2,
                               length=1000.0, force=1000.0, temp=1.0, temp_offset=273.15),
             pyuff.prepare_15(node_nums=nodes, def_cs=np.zeros(nodes.size, int), disp_cs=np.zeros(nodes.size, int),
