@@ -92,7 +92,7 @@ def beam_mapping(beam) -> dict:
             continue
         if f.name == "effects":
             v = beam.effects_dict()
-        elif f.name == "measured_x_m":
+        elif isinstance(v, tuple):  # measured_x_m, band_hz, zones_x_m: as JSON reads them back
             v = list(v)
         out[f.name] = v
     return out

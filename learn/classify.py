@@ -15,6 +15,7 @@ from learn.model_dir import TrainedModel
 from learn.verdict import (IN_DISTRIBUTION_PERCENTILE, classical_answer, classical_verdict, equivalent_depth,
                            modes_text, network_answer, network_output, ood_percentile)
 from physics.errors import BeamDamageError
+from physics.layout import SYMMETRIC_SUPPORTS
 from physics.io import MeasuredFRF
 
 __all__ = ["DISTANCE_TERMS", "classify", "classify_many", "distance_terms", "distance_text"]
@@ -98,14 +99,10 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     return results
 
 
-#: Supports whose beam is its own mirror image about midspan.
-SYMMETRIC_SUPPORTS = ("free-free", "pinned-pinned", "clamped-clamped")
-
-
 def mirrored(beam, pair) -> bool:
-    """Whether a pair leaves the mirror ambiguity: a symmetric beam (:data:`SYMMETRIC_SUPPORTS`) read on natural
-    frequencies only (no shapes, or one sensor), where a damage at ``x`` and at ``L - x`` change every frequency
-    alike."""
+    """Whether a pair leaves the mirror ambiguity: a symmetric beam (:data:`physics.layout.SYMMETRIC_SUPPORTS`)
+    read on natural frequencies only (no shapes, or one sensor), where a damage at ``x`` and at ``L - x`` change
+    every frequency alike."""
     test = beam.test
     return (test is not None and test.bc in SYMMETRIC_SUPPORTS
             and (test.n_sensors == 1 or (pair is not None and pair.frequency_only)))

@@ -20,11 +20,13 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from learn.classical import FREQUENCY_METHODS
 from learn.features import as_spec
+from physics.layout import SYMMETRIC_SUPPORTS
 from physics.io import atomic_write_bytes
 
-__all__ = ["MIN_DROP", "Metrics", "NOISE_EDGES", "TIP_ZONE", "figures", "metrics", "reliability", "roc_auc",
-           "roc_curve", "subsets", "table_rows"]
+__all__ = ["MIN_DROP", "Metrics", "NOISE_EDGES", "TIP_ZONE", "figures", "metrics", "mirrored_method", "reliability",
+           "roc_auc", "roc_curve", "subsets", "table_rows"]
 
 MIN_DROP = 0.002
 TIP_ZONE = 0.85
@@ -96,6 +98,17 @@ def reliability(probability, outcome, n_bins: int = 15):
     return conf, freq, count, ece
 
 
+def mirrored_method(beam, name: str) -> bool:
+    """Whether a method's location on ``beam`` is the mirror-ambiguous one: a symmetric beam
+    (:data:`physics.layout.SYMMETRIC_SUPPORTS`) read with one sensor, or by a method that reads natural frequencies
+    alone (the frequency route's network, Cawley-Adams, DLAC, MDLAC); such locations are scored folded onto
+    ``x <= L / 2``."""
+    test = as_spec(beam).test
+    if test is None or test.bc not in SYMMETRIC_SUPPORTS:
+        return False
+    return test.n_sensors == 1 or name == "network (frequency)" or name in FREQUENCY_METHODS
+
+
 def metrics(out, truth: dict, mask=None, subset: str = "all", length_m: float = 0.6095,
             min_drop: float = MIN_DROP) -> Metrics:
     """Scores of ``out`` (:class:`learn.classical.MethodOutput`) against ``truth`` on rows ``mask``; ``length_m``
@@ -114,11 +127,15 @@ def metrics(out, truth: dict, mask=None, subset: str = "all", length_m: float = 
     dr = float(np.mean(verdict[det])) if det.any() else float("nan")
     nan = float("nan")
     if det.any():
+        x_true, x_hat = truth["x_over_L"][det], np.nan_to_num(out.x_over_L[det])
         el_true = truth["element"][det]
-        el_hat = spec.zone_of(np.nan_to_num(out.x_over_L[det]))
+        if mirrored_method(spec, out.name):     # scored on the half x <= L/2, as classify answers
+            x_true, x_hat = np.minimum(x_true, 1 - x_true), np.minimum(x_hat, 1 - x_hat)
+            el_true = spec.zone_of(x_true)
+        el_hat = spec.zone_of(x_hat)
         el_acc = float(np.mean(el_hat == el_true))
         within = float(np.mean(np.abs(el_hat - el_true) <= 1))
-        loc = float(np.median(np.abs(out.x_over_L[det] - truth["x_over_L"][det])) * length_m * 1000)
+        loc = float(np.median(np.abs(x_hat - x_true)) * length_m * 1000)
         size = float(np.median(np.abs(out.hinge_flexibility[det] / truth["hinge_flexibility"][det] - 1)))
     else:
         el_acc = within = loc = size = nan

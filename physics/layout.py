@@ -33,7 +33,7 @@ import numpy as np
 
 from physics.errors import ConfigError
 
-__all__ = ["DEFAULT_BAND_HZ", "MIN_VISIBLE", "Layout", "nominal_modes", "layout_of"]
+__all__ = ["DEFAULT_BAND_HZ", "MIN_VISIBLE", "SYMMETRIC_SUPPORTS", "Layout", "nominal_modes", "layout_of"]
 
 #: The thesis's band: 60-4800 rad/s.
 DEFAULT_BAND_HZ = (60.0 / (2 * np.pi), 4800.0 / (2 * np.pi))
@@ -43,6 +43,10 @@ MIN_VISIBLE = 0.02
 
 #: Rigid-body modes of each support (recognised and left out of the modes used).
 RIGID_BODY_MODES = {"clamped-free": 0, "free-free": 2, "pinned-pinned": 0, "clamped-clamped": 0}
+
+#: Supports whose beam is its own mirror image about midspan: a damage at ``x`` and at ``L - x`` change every
+#: natural frequency alike.
+SYMMETRIC_SUPPORTS = ("free-free", "pinned-pinned", "clamped-clamped")
 
 #: Elements of the mesh the nominal modes are computed on.
 NOMINAL_ELEMENTS = 120

@@ -140,11 +140,13 @@ def positions_along_beam(geometry: NodeGeometry, nodes) -> np.ndarray:
     positions are the projections of the nodes on it, measured from the origin
     (the clamped end, ``x = 0``), so nodes offset across the beam keep their
     position and a geometry of the measured points alone (no node at the
-    clamp) places them right.
+    clamp) places them right. A geometry of one node (one sensor) places it at its distance from the origin.
     """
     xyz = geometry.xyz_m
-    if xyz.shape[0] < 2:
-        raise ShapeError("positions along a beam need a geometry of at least 2 nodes")
+    if xyz.shape[0] == 0:
+        raise ShapeError("positions along a beam need a geometry of at least 1 node")
+    if xyz.shape[0] == 1:  # one sensor: its distance from the origin (the end x = 0)
+        return np.array([float(np.linalg.norm(geometry.coordinates(n))) for n in nodes])
     centre = xyz.mean(axis=0)
     _, _, vt = np.linalg.svd(xyz - centre, full_matrices=False)
     axis = vt[0] * (np.sign(vt[0][np.argmax(np.abs(vt[0]))]) or 1.0)  # points along +X/+Y/+Z

@@ -211,3 +211,37 @@ def test_a_pair_outside_the_training_data_names_the_features_that_put_it_there(b
     est = model.networks["modal"]
     terms, _ = est.distance_terms(X)
     assert terms.shape == (1, 44) and terms.sum() == pytest.approx(est.mahalanobis(X)[0] ** 2, rel=1e-9)
+
+
+def test_a_complete_dataset_of_a_beam_file_with_a_band_resumes(bar, capsys):
+    """The beam file's band_hz and zones are recorded as JSON lists and compared as such: re-running the same
+    generate command on the finished dataset is a resume, not 'a different config'."""
+    before = (bar / "data" / "manifest.json").read_bytes()
+    assert main(["generate", "--beam", str(bar / "bar.toml"), "--config", str(bar / "fast.toml"), "--n", "1500",
+                 "--seed", "4", "--out", str(bar / "data")]) == 0
+    assert "1500 samples" in capsys.readouterr().out
+    assert (bar / "data" / "manifest.json").read_bytes() == before
+
+
+@pytest.mark.parametrize(("sensors", "method", "folded"), [
+    ([0.3, 0.5, 0.8], "DLAC", True), ([0.3, 0.5, 0.8], "network (frequency)", True),
+    ([0.3, 0.5, 0.8], "network (modal)", False), ([0.3], "network (modal)", True)])
+def test_mirror_ambiguous_locations_are_scored_on_the_half_beam(sensors, method, folded):
+    """On a pinned-pinned beam every answer at the mirror image L - x of the truth: right for a method that reads
+    frequencies alone or one sensor (scored folded, as classify answers), wrong for the network reading shapes."""
+    from learn.classical import MethodOutput
+    from learn.evaluate import metrics
+    from learn.features import BeamSpec
+    from physics.beam import beam_from_dict
+    from physics.layout import layout_of
+
+    beam = beam_from_dict({"name": "g", "bc": "pinned-pinned", "length_m": 1.0, "width_m": 0.04,
+                           "thickness_m": 0.01, "EI_Nm2": EI, "mass_per_length_kg_m": M, "measured_x_m": sensors})
+    spec = BeamSpec("g", 1.0, tuple(f"{k}:y" for k in range(len(sensors))), "iirs", layout_of(beam))
+    x = np.array([0.05, 0.15, 0.3, 0.35, 0.45])
+    truth = {"damaged": np.ones(5, bool), "max_drop": np.full(5, 0.01), "x_over_L": x,
+             "element": spec.zone_of(x), "hinge_flexibility": np.full(5, 0.01)}
+    out = MethodOutput(method, np.ones(5), np.ones(5, bool), 1 - x, np.full(5, 0.01))
+    m = metrics(out, truth, length_m=spec)
+    assert m.element_accuracy == (1.0 if folded else 0.0)
+    assert m.median_location_error_mm == pytest.approx(0.0 if folded else 1000 * np.median(np.abs(1 - 2 * x)))

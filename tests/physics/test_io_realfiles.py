@@ -143,3 +143,12 @@ def test_written_uff_keeps_units_label_and_round_trips(tmp_path):
     back = read_uff58(tmp_path / "m.uff")
     assert back.metadata["units"]["file"] == ["m/s/N (axis labels)"]
     np.testing.assert_array_equal(back.frequency_hz, f)
+
+
+def test_a_geometry_of_one_node_places_it_at_its_distance_from_the_origin():
+    """One accelerometer (a file whose geometry holds its node alone): its position along the beam is its
+    distance from the origin, the end x = 0, wherever the beam's axis points."""
+    from physics.io.geometry import NodeGeometry, positions_along_beam
+
+    g = NodeGeometry(np.array([7]), np.array([[0.0, -0.3, 0.4]]), "test")
+    np.testing.assert_allclose(positions_along_beam(g, [7]), [0.5])
