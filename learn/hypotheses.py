@@ -163,9 +163,50 @@ def support_curve(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_spring_
     return f[1:] / f[:1] - 1.0, what
 
 
-def weigh(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.004, 0.004), reclamp_range=None,
-          theta_max: float = 0.2, sigma=FREQUENCY_CHANGE_STD, length_m: float = 1.0,
-          model_error: float = MODEL_ERROR) -> list[Hypothesis]:
+def _loglik(g, y, s, half: float, model_error: float):
+    """Log-likelihood of ``a + g`` averaged over the temperature nuisance ``a`` (uniform in +-``half``; a Gaussian
+    integral in closed form), and the most likely ``a``, for every change ``g`` (..., m): measured ``y`` (m,) with
+    relative std ``s`` (m,) and the model error on ``g``. ``half = 0``: no nuisance."""
+    var = s**2 + (model_error * g) ** 2
+    r = g - y
+    s0, s1, s2 = np.sum(r**2 / var, -1), np.sum(r / var, -1), np.sum(1.0 / var, -1)
+    logdet = -0.5 * np.sum(np.log(var / s**2), -1)
+    centre = -s1 / s2                                                    # the a that fits best
+    a_best = np.clip(centre, -half, half)
+    if half == 0:
+        return -0.5 * s0 + logdet, a_best
+    root = np.sqrt(s2)
+    lo, hi = (-half - centre) * root, (half - centre) * root
+    # log P(lo < z < hi), from the tail the interval lies in (no cancellation of two values near 1)
+    right = lo > 0
+    big = np.where(right, log_ndtr(-lo), log_ndtr(hi))
+    small = np.where(right, log_ndtr(-hi), log_ndtr(lo))
+    mass = big + np.log(-np.expm1(np.minimum(small - big, -1e-300)))
+    return (-0.5 * (s0 - s1**2 / s2) + logdet + 0.5 * np.log(2 * np.pi) - np.log(root) + mass
+            - np.log(2 * half)), a_best
+
+
+def _slit(loglik, sens, theta_max: float, length_m: float) -> tuple:
+    """Evidence, parameters (place, size, their intervals) and prediction of the slit explanation."""
+    F = np.asarray(sens.frequency, float)                                # (m, E)
+    th = np.linspace(0.0, theta_max, N_SIZE)
+    # Rayleigh quotient with the nominal shapes: f^2 scales by 1 + 2 theta F (F = d ln f / d theta < 0)
+    g = np.sqrt(np.maximum(1 + 2 * th[:, None, None] * F.T[None], 1e-6)) - 1          # (T, E, m)
+    ll, ab = loglik(g)                                                   # (T, E)
+    post = np.exp(ll - ll.max())
+    t, e = np.unravel_index(np.argmax(ll), ll.shape)
+    px, pt = post.sum(axis=0), post.sum(axis=1)
+    x_m = np.asarray(sens.x_over_L) * length_m
+    h = 0.5 * length_m / x_m.size                                        # half an element of the grid
+    return _log_mean_exp(ll), {
+        "x_m": float(x_m[e]), "x_over_L": float(sens.x_over_L[e]), "hinge_flexibility": float(th[t]),
+        "x_m_68": _interval(x_m, px, 0.68, h), "x_m_95": _interval(x_m, px, 0.95, h),
+        "hinge_flexibility_68": _interval(*_scaled(th, pt), 0.68),
+        "hinge_flexibility_95": _interval(*_scaled(th, pt), 0.95)}, ab[t, e] + g[t, e]
+
+
+def weigh(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.004, 0.004), theta_max: float = 0.2,
+          sigma=FREQUENCY_CHANGE_STD, length_m: float = 1.0, model_error: float = MODEL_ERROR) -> list[Hypothesis]:
     """Weigh the explanations of measured relative frequency changes (module docstring).
 
     Parameters
@@ -188,74 +229,35 @@ def weigh(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.004, 0.
     if y.ndim != 1 or y.size < 1 or not np.all(np.isfinite(y)):
         raise BeamDamageError(f"frequency changes must be a finite 1-D array, got {y!r}")
     s = np.broadcast_to(np.asarray(sigma, float), y.shape)
-
     half = max((abs(float(v)) for v in temperature_range), default=0.0) / 2   # the temperature nuisance: +-half
 
-    def loglik(g):
-        """Log-likelihood of ``a + g`` averaged over the nuisance ``a`` (uniform in +-half; a Gaussian integral in
-        closed form), and the most likely ``a``, for every change ``g`` (..., m) with the model error on ``g``."""
-        var = s**2 + (model_error * g) ** 2
-        r = g - y
-        s0, s1, s2 = np.sum(r**2 / var, -1), np.sum(r / var, -1), np.sum(1.0 / var, -1)
-        logdet = -0.5 * np.sum(np.log(var / s**2), -1)
-        centre = -s1 / s2                                                # the a that fits best
-        a_best = np.clip(centre, -half, half)
-        if half == 0:
-            return -0.5 * s0 + logdet, a_best
-        root = np.sqrt(s2)
-        lo, hi = (-half - centre) * root, (half - centre) * root
-        # log P(lo < z < hi), from the tail the interval lies in (no cancellation of two values near 1)
-        right = lo > 0
-        big = np.where(right, log_ndtr(-lo), log_ndtr(hi))
-        small = np.where(right, log_ndtr(-hi), log_ndtr(lo))
-        mass = big + np.log(-np.expm1(np.minimum(small - big, -1e-300)))
-        return (-0.5 * (s0 - s1**2 / s2) + logdet + 0.5 * np.log(2 * np.pi) - np.log(root) + mass
-                - np.log(2 * half)), a_best
+    def loglik(g, nuisance=half):
+        return _loglik(g, y, s, nuisance, model_error)
 
     out = {}
-    # intact: temperature, and the re-clamping of a clamp
     ln_grid, curve, what, reclamp = support
-    rc = np.zeros((1, y.size)) if reclamp is None else reclamp
-    ll, ab = loglik(rc)                                                  # (R,)
+    rc = np.zeros((1, y.size)) if reclamp is None else reclamp          # intact: temperature and re-clamping
+    ll, ab = loglik(rc)
     j = int(np.argmax(ll))
     out["intact"] = (_log_mean_exp(ll), {"temperature_frequency_change": float(ab[j])}, ab[j] + rc[j])
-    # global stiffness (no temperature nuisance: it is one)
-    gl = np.linspace(-GLOBAL_RANGE, GLOBAL_RANGE, N_GLOBAL)
+    gl = np.linspace(-GLOBAL_RANGE, GLOBAL_RANGE, N_GLOBAL)            # no temperature nuisance: it is one
     g = np.broadcast_to(gl[:, None], (gl.size, y.size))
-    var = s**2 + (model_error * g) ** 2
-    ll = -0.5 * np.sum((g - y) ** 2 / var + np.log(var / s**2), -1)
+    ll, _ = loglik(g, 0.0)
     k = int(np.argmax(ll))
     out["global_stiffness"] = (_log_mean_exp(ll), {"frequency_change": float(gl[k]),
                                                    "EI_change": float((1 + gl[k]) ** 2 - 1)}, g[k])
-    # support change
-    ll, ab = loglik(curve)                                               # (G,)
+    ll, ab = loglik(curve)
     j = int(np.argmax(ll))
     out["support_change"] = (_log_mean_exp(ll), {"parameter": what, "value": float(ln_grid[j]),
                                                  "temperature_frequency_change": float(ab[j])}, ab[j] + curve[j])
-    # slit at x with hinge flexibility theta
-    F = np.asarray(sens.frequency, float)                                # (m, E)
-    th = np.linspace(0.0, theta_max, N_SIZE)
-    # Rayleigh quotient with the nominal shapes: f^2 scales by 1 + 2 theta F (F = d ln f / d theta < 0)
-    g = np.sqrt(np.maximum(1 + 2 * th[:, None, None] * F.T[None], 1e-6)) - 1          # (T, E, m)
-    ll, ab = loglik(g)                                                   # (T, E)
-    post = np.exp(ll - ll.max())
-    t, e = np.unravel_index(np.argmax(ll), ll.shape)
-    px, pt = post.sum(axis=0), post.sum(axis=1)
-    x_m = np.asarray(sens.x_over_L) * length_m
-    h = 0.5 * length_m / x_m.size                                        # half an element of the grid
-    out["slit"] = (_log_mean_exp(ll), {
-        "x_m": float(x_m[e]), "x_over_L": float(sens.x_over_L[e]), "hinge_flexibility": float(th[t]),
-        "x_m_68": _interval(x_m, px, 0.68, h), "x_m_95": _interval(x_m, px, 0.95, h),
-        "hinge_flexibility_68": _interval(*_scaled(th, pt), 0.68),
-        "hinge_flexibility_95": _interval(*_scaled(th, pt), 0.95)},
-        ab[t, e] + g[t, e])
-    # mass change at x
+    out["slit"] = _slit(loglik, sens, theta_max, length_m)
     G = np.asarray(mass_sens.frequency, float)                           # (m, E) per unit mass ratio added
     mu = np.linspace(-MASS_RANGE, MASS_RANGE, N_SIZE + 1)
     g = 1 / np.sqrt(np.maximum(1 - 2 * mu[:, None, None] * G.T[None], 1e-6)) - 1      # (T, E, m)
     ll, ab = loglik(g)
     t, e = np.unravel_index(np.argmax(ll), ll.shape)
-    out["mass_change"] = (_log_mean_exp(ll), {"x_m": float(x_m[e]), "mass_ratio": float(mu[t])}, ab[t, e] + g[t, e])
+    out["mass_change"] = (_log_mean_exp(ll), {"x_m": float(sens.x_over_L[e] * length_m), "mass_ratio": float(mu[t])},
+                          ab[t, e] + g[t, e])
     logz = np.array([out[h][0] + np.log(PRIOR[h]) for h in HYPOTHESES])
     p = np.exp(logz - logz.max())
     p /= p.sum()
