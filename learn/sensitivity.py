@@ -80,6 +80,14 @@ class Sensitivity:
         return np.max(-self.frequency[:, e], axis=0) * np.asarray(hinge_flexibility, float)
 
 
+def _beam_numbers(preset) -> tuple[float, float, float]:
+    """``(length_m, EI_Nm2, mass_per_length_kg_m)`` of a preset name or of such a tuple."""
+    if isinstance(preset, str):
+        p = beam_preset(preset)
+        return p.length_m, p.EI_Nm2, p.mass_per_length_kg_m
+    return tuple(float(v) for v in preset)
+
+
 @lru_cache(maxsize=16)
 def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7, n_elements: int = 40,
                      n_modes: int = 4, step: float = 0.01, kind: str = "slit", test=None) -> Sensitivity:
@@ -102,11 +110,7 @@ def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7,
     perturbs = damage_model(kind).perturbs
     if test is not None and not test.thesis:
         return _layout_sensitivity(preset, root_spring_relative, n_elements, step, perturbs, test)
-    if isinstance(preset, str):
-        p = beam_preset(preset)
-        L, EI, m = p.length_m, p.EI_Nm2, p.mass_per_length_kg_m
-    else:
-        L, EI, m = (float(v) for v in preset)
+    L, EI, m = _beam_numbers(preset)
     le = L / n_elements
     kr = None if root_spring_relative is None else root_spring_relative * EI / L
     factors = np.ones((n_elements + 1, n_elements))
@@ -142,11 +146,7 @@ def _layout_sensitivity(preset, root_spring_relative, n_elements, step, perturbs
     from physics.effects import hermite_row
     from physics.layout import RIGID_BODY_MODES
 
-    if isinstance(preset, str):
-        p = beam_preset(preset)
-        L, EI, m = p.length_m, p.EI_Nm2, p.mass_per_length_kg_m
-    else:
-        L, EI, m = (float(v) for v in preset)
+    L, EI, m = _beam_numbers(preset)
     le = L / n_elements
     clamp = test.bc == "clamped-free" and root_spring_relative is not None
     kr = root_spring_relative * EI / L if clamp else None
