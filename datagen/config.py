@@ -234,8 +234,9 @@ def _check_measurement(meas: dict) -> bool:
               "shape_noise_floor", "frequency_noise_per_floor", "damping_noise_per_floor", "shape_noise_per_floor"):
         v = meas[k]
         if isinstance(v, list):
-            if len(v) != 4:
-                raise ConfigError(f"config key 'measurement.{k}' must be a number or 4 numbers (modes 1..4), got {v!r}")
+            if not 1 <= len(v) <= 100:
+                raise ConfigError(f"config key 'measurement.{k}' must be a number or one number per mode (modes 1, "
+                                  f"2, ...; the last repeats beyond the list), got {v!r}")
             meas[k] = [_num(f"measurement.{k}", x, lo=0, hi=100 if calib else MAX_MODAL_NOISE) for x in v]
         elif calib:  # a number in calibrated mode: the shipped per-mode coefficients
             q = k.split("_")[0]

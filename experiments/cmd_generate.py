@@ -4,6 +4,7 @@ on read)."""
 from __future__ import annotations
 
 import os
+import sys
 
 from datagen.config import load_config, merge, named_configs
 from datagen.generation import generate
@@ -40,6 +41,10 @@ def add_parser(subparsers):
     p.add_argument("--store-frf", action="store_true",
                    help="also write the measured and updated FRFs into the shards (128 kB per sample; identical to "
                         "what reading synthesises)")
+    p.add_argument("--modal-noise", choices=("test", "shipped"), default="test",
+                   help="with a beam file whose test is not the thesis's and the calibrated modal noise: 'test' "
+                        "(default) calibrates it on that test first (learn.noise_calibration: LSCF/LSFD of 144 "
+                        "simulated files, about 15-60 s), 'shipped' keeps the thesis test's coefficients")
     p.add_argument("--json", action="store_true", help="print the manifest summary as JSON")
     p.set_defaults(func=run, flags={"n": "--n", "seed": "--seed", "workers": "--workers", "scheduler": "--scheduler"})
 
@@ -60,8 +65,14 @@ def run(args) -> dict:
         from datagen.pipeline import generated_test
 
         truth = load_beam(beam)
-        generated_test(truth, beam)             # the test it describes, refused here naming the file
+        test = generated_test(truth, beam)      # the test it describes, refused here naming the file
         cfg = merge({"beam": beam_mapping(truth)}, base=cfg)
+        if not test.thesis and cfg["measurement"]["modal_noise"] == "calibrated" and args.modal_noise == "test":
+            from learn.noise_calibration import calibrate_test
+
+            print(f"{beam}: calibrating the modal noise on this test ({test.n_sensors} sensors, modes "
+                  f"{', '.join(map(str, test.modes))})", file=sys.stderr)
+            cfg = merge({"measurement": calibrate_test(cfg)}, base=cfg)
     if args.store_frf:
         cfg["output"]["store_frf"] = True
     m = generate(args.out, cfg, n=args.n, seed=args.seed, workers=args.workers, scheduler=args.scheduler,

@@ -1,0 +1,119 @@
+"""The modal noise of a test, calibrated against the identification ``classify`` runs on that test's files.
+
+A dataset's measured modal data are the truth modes plus random errors whose standard deviation per mode is
+``sqrt((c level)^2 + (g floor)^2 + e^2)`` of the sample's FRF noise level and floor
+(:func:`datagen.pipeline.measure_modes`, ``measurement.modal_noise = "calibrated"``). The coefficients shipped in
+``datagen/configs/modal_noise.json`` describe LSCF/LSFD on the thesis's test (4 sensors, modes 1-4). Another test
+identifies differently: more sensors, modes that a sensor barely sees, higher modes, another band and model order.
+:func:`calibrate_test` measures it on the test itself: specimens of the config are simulated, their FRFs
+synthesised as a dataset synthesises them at :data:`LEVELS` x :data:`FLOORS`, identified exactly as ``classify``
+identifies a file of that model (:func:`learn.measured.identify_modes` over the test's band with two spare poles and
+order ``max(40, 10 x modes)``, modes paired by frequency), and ``c``, ``g``, ``e`` of every mode fitted to the
+robust standard deviations of the errors (:func:`calibrate_std`). Deterministic for a config and seed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from learn.measured import identify_modes, pair_modes_by_frequency
+from physics.errors import BeamDamageError
+from physics.io import MeasuredFRF
+
+__all__ = ["FLOORS", "LEVELS", "QUANTITIES", "calibrate_std", "calibrate_test", "identification_errors",
+           "robust_std"]
+
+#: FRF noise levels (relative to |H|) and floors (relative to each FRF's peak) of the calibration: the range the
+#: training config draws (floors 1e-4 to 1e-3; without a floor LSFD weights the lines otherwise).
+LEVELS = (0.003, 0.01, 0.03)
+FLOORS = (0.0001, 0.0003, 0.001)
+QUANTITIES = ("frequency", "damping", "shape")
+
+
+def robust_std(e) -> float:
+    """1.4826 MAD of real errors, ``sqrt(median |e|^2 / ln 2)`` of circular complex ones; NaN without data."""
+    e = np.asarray(e)
+    e = e[np.isfinite(e)]
+    if e.size == 0:
+        return float("nan")
+    if np.iscomplexobj(e):
+        return float(np.sqrt(np.median(np.abs(e) ** 2) / np.log(2)))
+    return float(1.4826 * np.median(np.abs(e - np.median(e))))
+
+
+def calibrate_std(levels, floors, stds) -> tuple[float, float, float]:
+    """``(c, g, e)`` of ``std = sqrt((c level)^2 + (g floor)^2 + e^2)`` fitted to per-condition stds (relative
+    least squares, c, g, e >= 0)."""
+    from scipy.optimize import nnls
+
+    lv, fl, sd = (np.asarray(a, float) for a in (levels, floors, stds))
+    ok = np.isfinite(sd) & (sd > 0)
+    if not ok.any():
+        return float("nan"), float("nan"), float("nan")
+    A = np.stack([lv[ok] ** 2, fl[ok] ** 2, np.ones(ok.sum())], axis=1) / sd[ok, None] ** 2
+    coef, _ = nnls(A, np.ones(ok.sum()))
+    return tuple(float(np.sqrt(c)) for c in coef)
+
+
+def identification_errors(cfg: dict, level: float, floor: float, specimens: int, seed: int):
+    """Errors of ``classify``'s identification on ``specimens`` specimens of ``cfg`` (both test days) at one FRF
+    noise level and floor: relative frequency and damping errors (N, m) and shape errors relative to each mode's
+    largest entry (N, S, m), NaN where a mode was not found; N = 2 specimens."""
+    from datagen.config import merge
+    from datagen.pipeline import draw_batch, get_setup, simulate_batch
+    from datagen.synth import measured_frf
+    from physics.modal import modal_parameters
+
+    setup = get_setup(merge({"measurement": {"frf_noise": level, "frf_noise_floor": floor}}, base=cfg))
+    test = setup.test
+    inp = draw_batch(np.random.default_rng(seed), specimens, setup)
+    sim = simulate_batch(setup, inp)
+    H = measured_frf({**sim, "drive_row": setup.drive_row, "noise_seed": inp.noise_seed,
+                      "noise_level": inp.noise_level, "noise_floor": inp.noise_floor}, setup.omega_rad_s, np.complex128)
+    used = setup.modes_idx
+    lam_t = sim["truth_poles"][..., used].reshape(2 * specimens, -1)
+    psi_t = sim["truth_shapes"][..., used].reshape(2 * specimens, setup.n_meas, -1)
+    m = used.size
+    dofs = tuple(f"{k + 1}:+Y" for k in range(setup.n_meas))
+    f_hz = setup.omega_rad_s / (2 * np.pi)
+    fmin, fmax = test.band_hz
+    nominal = np.asarray(test.frequencies_hz)
+    lam_e, psi_e = np.full(lam_t.shape, np.nan + 0j), np.full(psi_t.shape, np.nan + 0j)
+    k_poles, order = m + 2, max(40, 10 * (m + 2))
+    for i, Hs in enumerate(H.reshape(2 * specimens, setup.n_meas, -1)):
+        frf = MeasuredFRF(f_hz, Hs[:, None, :], dofs, (dofs[setup.drive_row],))
+        try:
+            md = identify_modes(frf, fmax, "calibration", k_poles, fmin, order)
+        except BeamDamageError:
+            continue
+        which = pair_modes_by_frequency(np.abs(md.eigenvalues) / (2 * np.pi), nominal)
+        for k, j in enumerate(which):
+            if j >= 0:
+                lam_e[i, j], psi_e[i, :, j] = md.eigenvalues[k], md.eigenvectors[:, k]
+    fe, ze = modal_parameters(lam_e)
+    ft, zt = modal_parameters(lam_t)
+    scale = np.max(np.abs(psi_t), axis=-2, keepdims=True)
+    plus, minus = psi_e - psi_t, psi_e + psi_t          # the square root of the driving-point residue: sign free
+    pick = np.sum(np.abs(minus) ** 2, axis=-2, keepdims=True) < np.sum(np.abs(plus) ** 2, axis=-2, keepdims=True)
+    return fe / ft - 1, ze / zt - 1, np.where(pick, minus, plus) / scale
+
+
+def calibrate_test(cfg: dict, specimens: int = 8, seed: int = 0) -> dict:
+    """``measurement`` keys ``{q}_noise``, ``{q}_noise_per_floor``, ``{q}_noise_floor`` (per mode used) of the
+    test of ``cfg`` (module docstring); a mode no identification found keeps the shipped value of its index."""
+    from datagen.pipeline import per_mode
+
+    conditions = [(lv, fl) for lv in LEVELS for fl in FLOORS]
+    errors = [identification_errors(cfg, lv, fl, specimens, seed + 100 * k) for k, (lv, fl) in enumerate(conditions)]
+    m = errors[0][0].shape[-1]
+    out = {}
+    for qi, q in enumerate(QUANTITIES):
+        shipped = [per_mode(cfg["measurement"][q + s], m) for s in ("_noise", "_noise_per_floor", "_noise_floor")]
+        fits = []
+        for r in range(m):
+            stds = [robust_std(e[qi][..., r]) for e in errors]
+            fit = calibrate_std([c[0] for c in conditions], [c[1] for c in conditions], stds)
+            fits.append(fit if np.all(np.isfinite(fit)) else tuple(v[r] for v in shipped))
+        for j, suffix in enumerate(("_noise", "_noise_per_floor", "_noise_floor")):
+            out[q + suffix] = [float(f"{f[j]:.4g}") for f in fits]
+    return out
