@@ -237,7 +237,7 @@ def _check_measurement(meas: dict) -> bool:
             if not 1 <= len(v) <= 100:
                 raise ConfigError(f"config key 'measurement.{k}' must be a number or one number per mode (modes 1, "
                                   f"2, ...; the last repeats beyond the list), got {v!r}")
-            meas[k] = [_num(f"measurement.{k}", x, lo=0, hi=100 if calib else MAX_MODAL_NOISE) for x in v]
+            meas[k] = [_num(f"measurement.{k}", x, lo=0, hi=1e4 if calib else MAX_MODAL_NOISE) for x in v]
         elif calib:  # a number in calibrated mode: the shipped per-mode coefficients
             q = k.split("_")[0]
             meas[k] = [float(x) for x in calib[q + k.removeprefix(f"{q}_noise")]]
