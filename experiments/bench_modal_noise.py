@@ -24,7 +24,7 @@ are compared with the shortcut's: the fixed default model
 (``measurement.modal_noise = "fixed"``) and the calibrated one
 (``"calibrated"``: per mode, standard deviation ``sqrt((c level)^2 + (g floor)^2 + e^2)``
 of the sample's FRF noise level and floor). The calibration fits ``c``, ``g``
-and ``e`` (:func:`calibrate_std`) to the full path's robust standard deviation
+and ``e`` (:func:`learn.noise_calibration.calibrate_std`) to the full path's robust standard deviation
 in each condition (1.4826 MAD for real errors, ``sqrt(median|e|^2 / ln 2)`` for
 circular complex errors). ``--write-calibration`` stores them in
 ``datagen/configs/modal_noise.json`` (what ``"calibrated"`` uses) with the
@@ -46,17 +46,11 @@ from pathlib import Path
 
 import numpy as np
 
+from learn.noise_calibration import calibrate_std, robust_std
+
 __all__ = ["main"]
 
 QUANTITIES = ("frequency", "damping", "shape")
-
-
-def _robust_std(e):
-    e = np.asarray(e)
-    e = e[np.isfinite(e)]
-    if np.iscomplexobj(e):
-        return float(np.sqrt(np.median(np.abs(e) ** 2) / np.log(2)))
-    return float(1.4826 * np.median(np.abs(e - np.median(e))))
 
 
 def _ks(a, b):
@@ -169,20 +163,6 @@ def _pooled(parts):
     return tuple(np.concatenate([p[q] for p in parts], axis=0) for q in range(3))
 
 
-def calibrate_std(levels, floors, stds):
-    """``(c, g, e)`` of ``std = sqrt((c level)^2 + (g floor)^2 + e^2)`` fitted to per-condition stds (relative
-    least squares, c, g, e >= 0)."""
-    from scipy.optimize import nnls
-
-    lv, fl, sd = (np.asarray(a, float) for a in (levels, floors, stds))
-    ok = np.isfinite(sd) & (sd > 0)
-    if not ok.any():
-        return float("nan"), float("nan"), float("nan")
-    A = np.stack([lv[ok] ** 2, fl[ok] ** 2, np.ones(ok.sum())], axis=1) / sd[ok, None] ** 2
-    coef, _ = nnls(A, np.ones(ok.sum()))
-    return tuple(float(np.sqrt(c)) for c in coef)
-
-
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--specimens", type=int, default=8, help="specimens per condition and line layout (2 tests each)")
@@ -249,7 +229,7 @@ def _calibrate(runs: dict, conditions, specimens: int) -> dict:
     calib = {}
     for qi, q in enumerate(QUANTITIES):
         fits = [calibrate_std([c[0] for c in conditions], [c[1] for c in conditions],
-                              [_robust_std(runs[c]["full"][qi][..., r]) for c in conditions]) for r in range(4)]
+                              [robust_std(runs[c]["full"][qi][..., r]) for c in conditions]) for r in range(4)]
         for j, suffix in enumerate(("", "_per_floor", "_floor")):
             calib[q + suffix] = [float(f"{f[j]:.4g}") for f in fits]
     for c in conditions:
@@ -267,8 +247,8 @@ def _table(runs: dict, conditions, fits_per_condition: int) -> list:
             for r in range(4):
                 full, fix, cal = (R[k][qi][..., r] for k in ("full", "fixed", "calibrated"))
                 table.append({"level": lv, "floor": fl, "mode": r + 1, "quantity": q,
-                              "full_path_std": _robust_std(full), "shortcut_fixed_std": _robust_std(fix),
-                              "shortcut_calibrated_std": _robust_std(cal), "ks_full_vs_calibrated": _ks(full, cal),
+                              "full_path_std": robust_std(full), "shortcut_fixed_std": robust_std(fix),
+                              "shortcut_calibrated_std": robust_std(cal), "ks_full_vs_calibrated": _ks(full, cal),
                               "ks_full_vs_fixed": _ks(full, fix), "modes_not_identified": R["failed"][r],
                               "fits": fits_per_condition})
     return table
