@@ -8,7 +8,7 @@ import numpy as np
 
 from learn.classical import FREQUENCY_METHODS, run_classical
 from learn.features import feature_names, frf_features, frequency_features, map_frf_to_grid, modal_features
-from learn.hypotheses import explain
+from learn.hypotheses import explain_many
 from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows, identification_band_hz,
                             identify_modes, modal_pair, mode_checks, nominal_ratio_range)
 from learn.model_dir import TrainedModel
@@ -70,6 +70,10 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
         if mirrored(model.beam, pairs[i] if pairs else None):
             nets[i] = nets[i] and fold_to_half(nets[i], model.beam, where[i])
             answers[i] = [fold_to_half(a, model.beam) for a in answers[i]]
+    known = [i for i in range(len(currents)) if pairs and pairs[i] is not None]
+    explained = [None] * len(currents)
+    for i, e in zip(known, explain_many(model, [pairs[i] for i in known])):
+        explained[i] = e
     results = []
     for i, net in enumerate(nets):
         cl = next((a for a in answers[i] if a["method"] == model.config["best_classical"]),
@@ -91,8 +95,7 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
             "network": net, "classical": cl,
             "classical_methods": answers[i],
             "identification": _identification(p, base_md, cur_md[i] if cur_md else None, identified, model.beam),
-            **(explain(model, p) if p is not None else {"hypotheses": None, "hypotheses_summary": None,
-                                                        "frequency_change_std": None}),
+            **(explained[i] or {"hypotheses": None, "hypotheses_summary": None, "frequency_change_std": None}),
             "input_route": route, "warnings": w,
             "_extra": {"location_distribution": where[i]},
         })

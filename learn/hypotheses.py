@@ -42,7 +42,7 @@ from scipy.special import log_ndtr
 from physics.errors import BeamDamageError
 
 __all__ = ["FREQUENCY_CHANGE_STD", "HYPOTHESES", "MODEL_ERROR", "PRIOR", "SEPARATE", "SIZE_SCALE_STD", "Hypothesis",
-           "explain", "summary", "support_curve", "weigh"]
+           "explain", "explain_many", "summary", "support_curve", "weigh", "weigh_many"]
 
 #: Relative standard deviation of a mode's frequency change between two tests (0.1 %): modal tests repeated on
 #: the same specimen and mounting scatter 0.05-0.5 % in frequency; the training's frequency scatter and modal
@@ -165,10 +165,11 @@ def support_curve(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_spring_
 
 def _loglik(g, y, s, half: float, model_error: float):
     """Log-likelihood of ``a + g`` averaged over the temperature nuisance ``a`` (uniform in +-``half``; a Gaussian
-    integral in closed form), and the most likely ``a``, for every change ``g`` (..., m): measured ``y`` (m,) with
-    relative std ``s`` (m,) and the model error on ``g``. ``half = 0``: no nuisance."""
-    var = s**2 + (model_error * g) ** 2
-    r = g - y
+    integral in closed form), and the most likely ``a``: shapes (n, ...) for every pair's measured changes ``y``
+    (n, m) and every predicted change ``g`` (..., m), relative std ``s`` (m,) and the model error on ``g``.
+    ``half = 0``: no nuisance."""
+    var = s**2 + (model_error * g) ** 2                                  # (..., m)
+    r = g - y.reshape(y.shape[:1] + (1,) * (g.ndim - 1) + y.shape[-1:])  # (n, ..., m)
     s0, s1, s2 = np.sum(r**2 / var, -1), np.sum(r / var, -1), np.sum(1.0 / var, -1)
     logdet = -0.5 * np.sum(np.log(var / s**2), -1)
     centre = -s1 / s2                                                    # the a that fits best
@@ -186,32 +187,28 @@ def _loglik(g, y, s, half: float, model_error: float):
             - np.log(2 * half)), a_best
 
 
-def _slit(loglik, sens, theta_max: float, length_m: float) -> tuple:
-    """Evidence, parameters (place, size, their intervals) and prediction of the slit explanation."""
-    F = np.asarray(sens.frequency, float)                                # (m, E)
-    th = np.linspace(0.0, theta_max, N_SIZE)
-    # Rayleigh quotient with the nominal shapes: f^2 scales by 1 + 2 theta F (F = d ln f / d theta < 0)
-    g = np.sqrt(np.maximum(1 + 2 * th[:, None, None] * F.T[None], 1e-6)) - 1          # (T, E, m)
-    ll, ab = loglik(g)                                                   # (T, E)
-    post = np.exp(ll - ll.max())
-    t, e = np.unravel_index(np.argmax(ll), ll.shape)
-    px, pt = post.sum(axis=0), post.sum(axis=1)
-    x_m = np.asarray(sens.x_over_L) * length_m
-    h = 0.5 * length_m / x_m.size                                        # half an element of the grid
-    return _log_mean_exp(ll), {
-        "x_m": float(x_m[e]), "x_over_L": float(sens.x_over_L[e]), "hinge_flexibility": float(th[t]),
-        "x_m_68": _interval(x_m, px, 0.68, h), "x_m_95": _interval(x_m, px, 0.95, h),
-        "hinge_flexibility_68": _interval(*_scaled(th, pt), 0.68),
-        "hinge_flexibility_95": _interval(*_scaled(th, pt), 0.95)}, ab[t, e] + g[t, e]
+#: Pairs weighed in one array operation (memory: about 2 MB per pair and mode).
+CHUNK_PAIRS = 32
 
 
 def weigh(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.004, 0.004), theta_max: float = 0.2,
           sigma=FREQUENCY_CHANGE_STD, length_m: float = 1.0, model_error: float = MODEL_ERROR) -> list[Hypothesis]:
-    """Weigh the explanations of measured relative frequency changes (module docstring).
+    """Weigh the explanations of one pair's relative frequency changes (module docstring; :func:`weigh_many`)."""
+    y = np.asarray(shifts, float)
+    if y.ndim != 1:
+        raise BeamDamageError(f"frequency changes must be a finite 1-D array, got {y!r}")
+    return weigh_many(y[None], sens, mass_sens, support, temperature_range, theta_max, sigma, length_m,
+                      model_error)[0]
+
+
+def weigh_many(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.004, 0.004), theta_max: float = 0.2,
+               sigma=FREQUENCY_CHANGE_STD, length_m: float = 1.0,
+               model_error: float = MODEL_ERROR) -> list[list[Hypothesis]]:
+    """Weigh the explanations of measured relative frequency changes of pairs holding the same modes, batched.
 
     Parameters
     ----------
-    shifts : array, shape (m,)          measured ``f_current / f_baseline - 1`` of the modes both tests hold
+    shifts : array, shape (n, m)        measured ``f_current / f_baseline - 1`` of the modes both tests hold
     sens : learn.sensitivity.Sensitivity          slit sensitivities of those modes (``frequency`` (m, E))
     mass_sens : learn.sensitivity.Sensitivity     mass-change sensitivities of those modes
     support : (ln_grid (G,), curve (G, m), what, reclamp_curve (R, m) or None)   from :func:`support_curve`
@@ -223,47 +220,71 @@ def weigh(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.004, 0.
 
     Returns
     -------
-    list of :class:`Hypothesis`, most probable first.
+    per pair, a list of :class:`Hypothesis`, most probable first.
     """
-    y = np.asarray(shifts, float)
-    if y.ndim != 1 or y.size < 1 or not np.all(np.isfinite(y)):
-        raise BeamDamageError(f"frequency changes must be a finite 1-D array, got {y!r}")
-    s = np.broadcast_to(np.asarray(sigma, float), y.shape)
+    Y = np.asarray(shifts, float)
+    if Y.ndim != 2 or Y.shape[1] < 1 or not np.all(np.isfinite(Y)):
+        raise BeamDamageError(f"frequency changes must be a finite (pairs, modes) array, got {Y!r}")
+    s = np.broadcast_to(np.asarray(sigma, float), Y.shape[1:])
     half = max((abs(float(v)) for v in temperature_range), default=0.0) / 2   # the temperature nuisance: +-half
-
-    def loglik(g, nuisance=half):
-        return _loglik(g, y, s, nuisance, model_error)
-
-    out = {}
     ln_grid, curve, what, reclamp = support
-    rc = np.zeros((1, y.size)) if reclamp is None else reclamp          # intact: temperature and re-clamping
-    ll, ab = loglik(rc)
-    j = int(np.argmax(ll))
-    out["intact"] = (_log_mean_exp(ll), {"temperature_frequency_change": float(ab[j])}, ab[j] + rc[j])
-    gl = np.linspace(-GLOBAL_RANGE, GLOBAL_RANGE, N_GLOBAL)            # no temperature nuisance: it is one
-    g = np.broadcast_to(gl[:, None], (gl.size, y.size))
-    ll, _ = loglik(g, 0.0)
-    k = int(np.argmax(ll))
-    out["global_stiffness"] = (_log_mean_exp(ll), {"frequency_change": float(gl[k]),
-                                                   "EI_change": float((1 + gl[k]) ** 2 - 1)}, g[k])
-    ll, ab = loglik(curve)
-    j = int(np.argmax(ll))
-    out["support_change"] = (_log_mean_exp(ll), {"parameter": what, "value": float(ln_grid[j]),
-                                                 "temperature_frequency_change": float(ab[j])}, ab[j] + curve[j])
-    out["slit"] = _slit(loglik, sens, theta_max, length_m)
-    G = np.asarray(mass_sens.frequency, float)                           # (m, E) per unit mass ratio added
+    grids = {
+        "intact": np.zeros((1, Y.shape[1])) if reclamp is None else reclamp,          # temperature, re-clamping
+        "global_stiffness": np.broadcast_to(np.linspace(-GLOBAL_RANGE, GLOBAL_RANGE, N_GLOBAL)[:, None],
+                                            (N_GLOBAL, Y.shape[1])),
+        "support_change": curve,
+    }
+    th = np.linspace(0.0, theta_max, N_SIZE)
+    # Rayleigh quotient with the nominal shapes: f^2 scales by 1 + 2 theta F (F = d ln f / d theta < 0)
+    F = np.asarray(sens.frequency, float)                                # (m, E)
+    grids["slit"] = np.sqrt(np.maximum(1 + 2 * th[:, None, None] * F.T[None], 1e-6)) - 1          # (T, E, m)
     mu = np.linspace(-MASS_RANGE, MASS_RANGE, N_SIZE + 1)
-    g = 1 / np.sqrt(np.maximum(1 - 2 * mu[:, None, None] * G.T[None], 1e-6)) - 1      # (T, E, m)
-    ll, ab = loglik(g)
-    t, e = np.unravel_index(np.argmax(ll), ll.shape)
-    out["mass_change"] = (_log_mean_exp(ll), {"x_m": float(sens.x_over_L[e] * length_m), "mass_ratio": float(mu[t])},
-                          ab[t, e] + g[t, e])
-    logz = np.array([out[h][0] + np.log(PRIOR[h]) for h in HYPOTHESES])
-    p = np.exp(logz - logz.max())
-    p /= p.sum()
-    rows = [Hypothesis(h, float(p[k]), float(out[h][0]), out[h][1], np.asarray(out[h][2], float),
-                       float(100 * np.max(np.abs(out[h][2] - y)))) for k, h in enumerate(HYPOTHESES)]
-    return sorted(rows, key=lambda r: -r.probability)
+    G = np.asarray(mass_sens.frequency, float)                           # (m, E) per unit mass ratio added
+    grids["mass_change"] = 1 / np.sqrt(np.maximum(1 - 2 * mu[:, None, None] * G.T[None], 1e-6)) - 1
+    x_m = np.asarray(sens.x_over_L) * length_m
+    h = 0.5 * length_m / x_m.size                                        # half an element of the grid
+    out = []
+    for start in range(0, Y.shape[0], CHUNK_PAIRS):
+        y = Y[start:start + CHUNK_PAIRS]
+        ll = {name: _loglik(g, y, s, 0.0 if name == "global_stiffness" else half, model_error)
+              for name, g in grids.items()}
+        for i in range(y.shape[0]):
+            fits = {}
+            for name, g in grids.items():
+                li, ai = ll[name][0][i], ll[name][1][i]
+                j = np.unravel_index(np.argmax(li), li.shape)
+                fits[name] = (_log_mean_exp(li), j, (0.0 if name == "global_stiffness" else ai[j]) + g[j], li)
+            params = {
+                "intact": {"temperature_frequency_change": float(ll["intact"][1][i][fits["intact"][1]])},
+                "global_stiffness": {"frequency_change": float(grids["global_stiffness"][fits["global_stiffness"][1]
+                                                                                        ][0])},
+                "support_change": {"parameter": what, "value": float(ln_grid[fits["support_change"][1][0]]),
+                                   "temperature_frequency_change":
+                                       float(ll["support_change"][1][i][fits["support_change"][1]])},
+                "slit": _slit_parameters(fits["slit"], th, x_m, sens, h),
+                "mass_change": {"x_m": float(x_m[fits["mass_change"][1][1]]),
+                                "mass_ratio": float(mu[fits["mass_change"][1][0]])},
+            }
+            g_best = params["global_stiffness"]["frequency_change"]
+            params["global_stiffness"]["EI_change"] = float((1 + g_best) ** 2 - 1)
+            logz = np.array([fits[n][0] + np.log(PRIOR[n]) for n in HYPOTHESES])
+            p = np.exp(logz - logz.max())
+            p /= p.sum()
+            rows = [Hypothesis(n, float(p[k]), float(fits[n][0]), params[n], np.asarray(fits[n][2], float),
+                               float(100 * np.max(np.abs(fits[n][2] - y[i])))) for k, n in enumerate(HYPOTHESES)]
+            out.append(sorted(rows, key=lambda r: -r.probability))
+    return out
+
+
+def _slit_parameters(fit: tuple, th, x_m, sens, h: float) -> dict:
+    """The slit's most likely place and size and their 68 % / 95 % intervals from its likelihood grid (T, E)."""
+    _, (t, e), _, ll = fit
+    post = np.exp(ll - ll.max())
+    px, pt = post.sum(axis=0), post.sum(axis=1)
+    return {"x_m": float(x_m[e]), "x_over_L": float(sens.x_over_L[e]), "hinge_flexibility": float(th[t]),
+            "x_m_68": _interval(x_m, px, 0.68, h), "x_m_95": _interval(x_m, px, 0.95, h),
+            "hinge_flexibility_68": _interval(*_scaled(th, pt), 0.68),
+            "hinge_flexibility_95": _interval(*_scaled(th, pt), 0.95)}
 
 
 #: What would tell two explanations apart that the frequencies of these modes cannot.
@@ -315,6 +336,11 @@ def _support_curves(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_sprin
 def explain(model, pair, sigma=FREQUENCY_CHANGE_STD) -> dict:
     """The explanations of one classified pair (a :class:`learn.measured.ModalPair`) on the model's beam:
     ``{"hypotheses": [row, ...], "hypotheses_summary": str, "frequency_change_std": sigma}``."""
+    return explain_many(model, [pair], sigma)[0]
+
+
+def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD) -> list[dict]:
+    """:func:`explain` of every pair, the pairs holding the same modes weighed in one batch."""
     from datagen.damage.slit import hinge_flexibility
     from learn.model_dir import sensitivity_of
     from physics.properties import beam_preset
@@ -327,23 +353,28 @@ def explain(model, pair, sigma=FREQUENCY_CHANGE_STD) -> dict:
         p = beam_preset(beam.name)
         EI, m = p.EI_Nm2, p.mass_per_length_kg_m
     gen = cfg.get("generator_config") or {}
-    mass_sens = sensitivity_of(beam, cfg.get("root_spring_relative"), truth,
-                               {**gen, "damage": {"kind": "mass_change"}}).modes(pair.modes)
-    sens = model.sensitivity.modes(pair.modes)
+    mass_all = sensitivity_of(beam, cfg.get("root_spring_relative"), truth, {**gen, "damage": {"kind": "mass_change"}})
     days = cfg.get("day_changes") or {}
     clamp = beam.test is None or beam.test.bc in ("clamped-free", "clamped-clamped")
-    grid, curve, what, reclamp = _support_curves(beam, EI, m, cfg.get("root_spring_relative"),
-                                                 tuple(days.get("root_spring_change") or ()) if clamp else ())
-    k = np.asarray(pair.modes, int)
-    curve, reclamp = curve[:, k], None if reclamp is None else reclamp[:, k]
+    grid, curve_all, what, reclamp_all = _support_curves(beam, EI, m, cfg.get("root_spring_relative"),
+                                                         tuple(days.get("root_spring_change") or ()) if clamp else ())
     damage = gen.get("damage") or {}
     theta_max = 0.2
     if damage.get("kind", "slit") == "slit" and "ei_loss" in damage and "width_m" in damage:
         theta_max = float(hinge_flexibility(max(damage["ei_loss"]), max(damage["width_m"]), beam.length_m))
-    f = np.abs(np.asarray(pair.eigenvalues))
-    rows = weigh(f[1] / f[0] - 1.0, sens, mass_sens, (grid, curve, what, reclamp),
-                 days.get("temperature_stiffness_change", (-0.004, 0.004)), theta_max=theta_max, sigma=sigma,
-                 length_m=beam.length_m)
-    modes = [beam.modes[j] for j in pair.modes]
-    return {"hypotheses": [r.row() for r in rows], "hypotheses_summary": summary(rows, modes),
-            "frequency_change_std": float(sigma)}
+    out = [None] * len(pairs)
+    groups: dict = {}
+    for i, pair in enumerate(pairs):
+        groups.setdefault(tuple(int(j) for j in pair.modes), []).append(i)
+    for key, members in groups.items():
+        k = np.asarray(key, int)
+        f = np.abs(np.stack([np.asarray(pairs[i].eigenvalues) for i in members]))         # (n, 2, m)
+        support = (grid, curve_all[:, k], what, None if reclamp_all is None else reclamp_all[:, k])
+        ranked = weigh_many(f[:, 1] / f[:, 0] - 1.0, model.sensitivity.modes(k), mass_all.modes(k), support,
+                            days.get("temperature_stiffness_change", (-0.004, 0.004)), theta_max=theta_max,
+                            sigma=sigma, length_m=beam.length_m)
+        modes = [beam.modes[j] for j in key]
+        for i, rows in zip(members, ranked):
+            out[i] = {"hypotheses": [r.row() for r in rows], "hypotheses_summary": summary(rows, modes),
+                      "frequency_change_std": float(sigma)}
+    return out

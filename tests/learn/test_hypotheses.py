@@ -95,3 +95,17 @@ def test_two_explanations_the_modes_cannot_separate_are_said_so(models):
     rows = weighed(models, shifts(mass))
     assert {rows[0].name, rows[1].name} == {"slit", "mass_change"} and rows[1].probability > 0.2
     assert "a higher mode (a slit follows the curvature squared" in summary(rows, [1, 2, 3, 4])
+
+
+def test_pairs_weighed_in_one_batch_get_what_each_gets_alone(models):
+    from learn.hypotheses import weigh_many
+
+    slit, mass, support = models
+    Y = np.stack([shifts(CASES[t]) for t in ("slit", "support_change", "intact")])
+    batch = weigh_many(Y, slit, mass, support, (-0.004, 0.004), theta_max=0.15, length_m=L)
+    for y, rows in zip(Y, batch):
+        alone = weighed(models, y)
+        assert [r.name for r in rows] == [r.name for r in alone]
+        np.testing.assert_allclose([r.probability for r in rows], [r.probability for r in alone], rtol=1e-9,
+                                   atol=1e-15)
+        assert rows[0].parameters == alone[0].parameters
