@@ -35,7 +35,9 @@ def add_parser(sub):
                                    "outside the training data gets the classical method's verdict, the network's shown"
                                    " beside it, and the features that put it outside (distance_terms); a pair whose "
                                    "tests do not both hold the model's modes gets the classical method's verdict on "
-                                   "the modes both hold (at least 2) and no network answer. Several MEASURED files "
+                                   "the modes both hold (at least 2) and no network answer. Every verdict weighs the "
+                                   "explanations of the frequency changes (intact, global stiffness, support change, "
+                                   "slit, mass change: hypotheses). Several MEASURED files "
                                    "give a list of verdicts; --out writes verdict.json and classify.png (one pair) or "
                                    "verdicts.json (several).")
     p.add_argument("--model", required=True, metavar="MODEL_DIR")
