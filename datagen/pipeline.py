@@ -53,7 +53,7 @@ from datagen.synth import measured_peak
 from physics.errors import ConfigError
 from physics.properties import beam_preset
 from datagen.truth_beam import as_preset, load_truth_beam, point_effects, shear_parameters, unit_elements
-from physics.fem import assemble, dof_names
+from physics.fem import assemble, constrained_dofs, dof_names
 from physics.frf import poles_and_residues
 from physics.layout import RIGID_BODY_MODES, Layout, layout_of
 from physics.modal import eigenvalues_from_modal, modal_parameters, undamped_modes
@@ -260,11 +260,10 @@ def analyst_unit_mass(test: Layout, mass_model: str, per_span: int = 4, suspensi
     K = assemble(np.stack([element_stiffness(1.0, h) for h in le]))
     M = assemble(np.stack([element_mass(1.0, h) for h in le]))
     last = nodes.size
-    removed = {"clamped-free": ["1:y", "1:rz"], "free-free": [], "pinned-pinned": ["1:y", f"{last}:y"],
-               "clamped-clamped": ["1:y", "1:rz", f"{last}:y", f"{last}:rz"]}[test.bc]
+    removed = constrained_dofs(test.bc, last)
     names = dof_names(last)
     if test.bc == "free-free":
-        k_s = 0.5 * L * (0.05 * 22.3733 / L**2) ** 2 if suspension_unit is None else suspension_unit
+        k_s = suspension_unit_stiffness(L) if suspension_unit is None else suspension_unit
         for d in ("1:y", f"{last}:y"):
             K[names.index(d), names.index(d)] += k_s
     keep = [i for i, d in enumerate(names) if d not in removed]
@@ -273,12 +272,11 @@ def analyst_unit_mass(test: Layout, mass_model: str, per_span: int = 4, suspensi
     return reduced_mass(M[np.ix_(keep, keep)], K[np.ix_(keep, keep)], masters, mass_model)
 
 
-def suspension_unit_stiffness(beam, bounce_fraction: float = 0.05) -> float:
+def suspension_unit_stiffness(length_m: float, bounce_fraction: float = 0.05) -> float:
     """Default suspension of a free-free beam for unit EI (1/m^3), one spring at each end: the bounce mode at
-    ``bounce_fraction`` of the first bending frequency (``omega_1 = 22.373 sqrt(EI / (m L^4))``)."""
-    L = beam.length_m
-    omega1_unit = 22.3733 / L**2 * np.sqrt(1.0 / beam.mass_per_length_kg_m)   # for EI = 1
-    return 0.5 * beam.mass_per_length_kg_m * L * (bounce_fraction * omega1_unit) ** 2
+    ``bounce_fraction`` of the first bending frequency (``omega_1 = 22.373 sqrt(EI / (m L^4))``; the bounce
+    frequency ``sqrt(2 k / (m L))``, so the mass per length drops out)."""
+    return 0.5 * length_m * (bounce_fraction * 22.3733 / length_m**2) ** 2
 
 
 def generated_test(beam, source: str):
@@ -304,7 +302,7 @@ def _clamp_band(cfg: dict, test, fx: dict, preset) -> tuple:
     return band
 
 
-def _supports(test, n_el: int, fx: dict, spring: bool, preset, beam):
+def _supports(test, n_el: int, fx: dict, spring: bool, preset):
     """The truth mesh's DOFs and fixed springs under the test's supports.
 
     Returns ``keep`` (indices of the kept DOFs among all), their names, the fixed springs ``{model index: stiffness
@@ -315,8 +313,7 @@ def _supports(test, n_el: int, fx: dict, spring: bool, preset, beam):
     """
     names = dof_names(n_el + 1)
     last = n_el + 1
-    removed = {"clamped-free": ["1:y", "1:rz"], "free-free": [], "pinned-pinned": ["1:y", f"{last}:y"],
-               "clamped-clamped": ["1:y", "1:rz", f"{last}:y", f"{last}:rz"]}[test.bc]
+    removed = list(constrained_dofs(test.bc, last))
     clamp_rotations = [d for d in ("1:rz", f"{last}:rz") if d in removed]
     if spring:
         removed = [d for d in removed if d not in clamp_rotations]
@@ -334,8 +331,9 @@ def _supports(test, n_el: int, fx: dict, spring: bool, preset, beam):
             springs[kept_names.index(d)] = fx["bearing_k_theta_Nm_rad"] / preset.EI_Nm2
     k_suspension = None if fx["suspension_k_y_N_m"] is None else fx["suspension_k_y_N_m"] / preset.EI_Nm2
     if test.bc == "free-free":                          # the suspension (rigid-body modes left out)
+        k = suspension_unit_stiffness(test.length_m) if k_suspension is None else k_suspension
         for d in ("1:y", f"{last}:y"):
-            springs[kept_names.index(d)] = suspension_unit_stiffness(beam) if k_suspension is None else k_suspension
+            springs[kept_names.index(d)] = k
     spring_dofs = np.array([kept_names.index(d) for d in clamp_rotations] if spring else [], int)
     day = [kept_names.index(d) for d in ("1:y", f"{last}:y")] if test.bc == "free-free" else \
         [kept_names.index(d) for d in ("1:rz", f"{last}:rz")] if fx["bearing_k_theta_Nm_rad"] is not None else []
@@ -398,7 +396,7 @@ def build_setup(cfg: dict) -> Setup:
         half = (shear_band[1] - shear_band[0]) / 2
         shear_band = (max(shear_file - half, 0.0), shear_file + half)
     timoshenko = timoshenko or shear_band[1] > 0
-    keep, kept_names, springs, spring_dofs, day_dofs, k_suspension = _supports(test, n_el, fx, spring, preset, beam)
+    keep, kept_names, springs, spring_dofs, day_dofs, k_suspension = _supports(test, n_el, fx, spring, preset)
     K_full, M_full, _ = _unit_matrices(0.5 * (shear_band[0] + shear_band[1]), rho_ratio, preset.length_m, n_el,
                                        timoshenko)  # the beam elements alone
     sel = np.ix_(keep, keep)

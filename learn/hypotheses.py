@@ -125,6 +125,7 @@ def support_curve(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_spring_
     ``ln_factors`` (G,): ``ln(k / k_0)`` of the clamp springs or the suspension; for pinned ends ``log10`` of the
     bearing spring ``k L / EI`` added to none.
     """
+    from datagen.pipeline import suspension_unit_stiffness
     from physics.fem import beam_model
     from physics.layout import RIGID_BODY_MODES
     from physics.modal import undamped_modes
@@ -154,7 +155,7 @@ def support_curve(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_spring_
             K[1:, names.index(d), names.index(d)] += 10.0 ** g * EI_Nm2 / L
     else:
         what = "ln(k / k0) of the suspension springs at both ends"
-        ks = 0.5 * mass_per_length_kg_m * L * (0.05 * 22.3733 / L**2) ** 2 * EI_Nm2 / mass_per_length_kg_m
+        ks = suspension_unit_stiffness(L) * EI_Nm2
         for d in ("1:y", f"{last}:y"):
             K[:, names.index(d), names.index(d)] += ks * np.exp(scale)
     w, _ = undamped_modes(np.repeat(M[None], K.shape[0], axis=0), K)

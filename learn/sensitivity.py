@@ -29,6 +29,7 @@ import numpy as np
 
 from learn.features import real_shapes
 from datagen.damage import damage_model
+from datagen.pipeline import suspension_unit_stiffness
 from physics.fem import beam_model, element_mass, element_stiffness
 from physics.modal import undamped_modes
 from physics.properties import beam_preset
@@ -156,7 +157,7 @@ def _layout_sensitivity(preset, root_spring_relative, n_elements, step, perturbs
     models = beam_model(n_elements, L, EI, m, bc=test.bc, root_spring=kr, **{key: factors})
     K = np.array(models.K)
     if test.bc == "free-free":  # a soft suspension at both ends (the rigid-body modes stay the two lowest)
-        k_s = 0.5 * m * L * (0.05 * 22.3733 / L**2) ** 2 * EI / m
+        k_s = suspension_unit_stiffness(L) * EI
         for d in models.index(["1:y", f"{n_elements + 1}:y"]):
             K[..., d, d] += k_s
     w, phi = undamped_modes(models.M, K)
