@@ -199,8 +199,10 @@ class Dataset:
 
     @property
     def has_updated_model(self) -> bool:
-        """False when the test holds fewer modes than sensors, so no updated model (nor its FRFs) exists."""
-        return not self.updating.startswith("no updated model")
+        """False when the test holds fewer modes than sensors, so no updated model (nor its FRFs) exists
+        (:attr:`datagen.pipeline.Setup.n_update`); datasets that predate ``layout`` are the thesis's test."""
+        layout = self.manifest.get("layout")
+        return not layout or len(layout["modes"]) >= len(layout["sensors_x_m"])
 
     def frf(self, kind: str, rows=None, out=None, lines=None) -> np.ndarray:
         """FRFs of ``kind`` ("measured" | "updated"), complex, shape (n, 2 states, 4 dofs, L).
