@@ -49,6 +49,10 @@ DEFAULTS: dict = {
         "damping_ratios": [0.001623, 0.002481, 0.003105, 0.00421],  # thesis beam 5, modes 1..4
         "temperature_stiffness_change": [0.0, 0.0],  # relative EI change of the current test day (uniform)
         "root_spring_change": [0.0, 0.0],            # relative root-spring change on re-clamping (uniform)
+        "support_change_fraction": 0.0,  # share of the intact specimens whose supports change between the days
+                                         # beyond re-clamping (label support_changed)
+        "support_change_factor": [2.0, 5.0],  # those supports' springs that many times softer or stiffer
+                                              # (log-uniform, either way alike)
         "shear_flexibility": [0.0, 0.0],  # EI / (kGA L^2) of the specimen (uniform; 0: Euler-Bernoulli elements)
     },
     "damage": damage_defaults(DEFAULT_KIND),   # keys of the default kind; another damage.kind has its own
@@ -68,6 +72,10 @@ DEFAULTS: dict = {
         "modal_noise_scale": [1.0, 1.0],  # factor on the modal noise's stds, log-uniform per sample
         "frequency_scatter": [0.0, 0.0],  # relative std of independent per-mode frequency changes of each test
                                           # (log-uniform per sample; repeatability beyond temperature/re-clamping)
+        "damping_scatter": [0.0, 0.0],    # relative std of independent per-mode damping-ratio changes of each test
+        "shape_scatter": [0.0, 0.0],      # complex std, relative to each mode's largest entry, of independent
+                                          # per-sensor, per-mode shape changes of each test
+        "gain_scatter": [0.0, 0.0],       # relative std of each sensor channel's gain in each test (all its modes)
         "identification": None,       # derived: the identification the calibrated modal noise describes (read-only)
         "frf_noise": 0.005,            # complex std relative to |H| per line (or [lo, hi], log-uniform per sample)
         "frf_noise_floor": 0.0,        # complex std relative to each FRF's peak (or [lo, hi], log-uniform)
@@ -94,6 +102,10 @@ DEFAULTS: dict = {
 
 #: Largest relative modal noise std (frequency, damping ratio, shape), fixed or implied by calibrated FRF noise.
 MAX_MODAL_NOISE = 0.5
+
+#: The repeatability ranges of ``measurement`` (per-sample stds of each test's own changes, log-uniform) and
+#: their largest accepted values (docs/datasets.md, "Repeatability of the tests").
+REPEATABILITY_MAX = {"frequency_scatter": 0.01, "damping_scatter": 0.5, "shape_scatter": 0.1, "gain_scatter": 0.1}
 
 
 #: Largest specimen shear flexibility ``EI / (kGA L^2)``: mode 4 of a cantilever then lies about half
@@ -202,6 +214,10 @@ def _check_specimen(dmg: dict) -> None:
                           f"{MIN_ROOT_SPRING_RELATIVE:g}")
     for k in ("temperature_stiffness_change", "root_spring_change"):
         dmg[k] = _range(f"specimen.{k}", dmg[k], lo=-0.5, hi=0.5)
+    dmg["support_change_fraction"] = _num("specimen.support_change_fraction", dmg["support_change_fraction"], lo=0,
+                                          hi=1)
+    dmg["support_change_factor"] = _range("specimen.support_change_factor", dmg["support_change_factor"], lo=1.0,
+                                          hi=1e3)
     dmg["shear_flexibility"] = _range("specimen.shear_flexibility", dmg["shear_flexibility"], lo=0.0,
                                       hi=MAX_SHEAR_FLEXIBILITY)
     zr = dmg["damping_ratios"]
@@ -249,7 +265,8 @@ def _check_measurement(meas: dict) -> bool:
         meas[k] = (_num(f"measurement.{k}", v, lo=0.0, hi=0.5) if is_number
                    else _range(f"measurement.{k}", v, lo=0.0, hi=0.5))
     meas["modal_noise_scale"] = _range("measurement.modal_noise_scale", meas["modal_noise_scale"], lo=0.01, hi=100.0)
-    meas["frequency_scatter"] = _range("measurement.frequency_scatter", meas["frequency_scatter"], lo=0.0, hi=0.01)
+    for k, hi in REPEATABILITY_MAX.items():
+        meas[k] = _range(f"measurement.{k}", meas[k], lo=0.0, hi=hi)
     meas["band_rad_s"] = _range("measurement.band_rad_s", meas["band_rad_s"], lo=0.0)
     if meas["band_rad_s"][0] >= meas["band_rad_s"][1]:
         raise ConfigError("config key 'measurement.band_rad_s' must have low < high")

@@ -296,9 +296,10 @@ def _clamp_band(cfg: dict, test, fx: dict, preset) -> tuple:
         centre = fx["k_theta_Nm_rad"] * preset.length_m / preset.EI_Nm2
         half = np.sqrt(band[1] / band[0]) if band else 1.0
         band = (centre / half, centre * half)
-    if not band and any(cfg["specimen"]["root_spring_change"]) and test.bc in ("clamped-free", "clamped-clamped"):
-        raise ConfigError("config key 'specimen.root_spring_change' needs a clamp spring "
-                          "('specimen.root_spring_relative' is empty: rigid clamp)")
+    for key in ("root_spring_change", "support_change_fraction"):
+        if not band and np.any(cfg["specimen"][key]) and test.bc in ("clamped-free", "clamped-clamped"):
+            raise ConfigError(f"config key 'specimen.{key}' needs a clamp spring "
+                              "('specimen.root_spring_relative' is empty: rigid clamp)")
     return band
 
 
@@ -450,8 +451,14 @@ class BatchInputs:
     to |H|), ``noise_floor`` (relative to each FRF's peak) and the uint64
     ``noise_seed`` of the counter-based stream the FRF noise is drawn from (B,), and the factor
     ``modal_noise_scale`` on the modal noise's standard deviations (B,); the specimen's
-    ``shear_flexibility`` ``EI / (kGA L^2)`` (B,); ``frequency_scatter`` (B,), the relative std of
-    independent per-mode frequency changes of each test (repeatability), added to the frequency noise.
+    ``shear_flexibility`` ``EI / (kGA L^2)`` (B,). Repeatability of the tests (B,) each
+    (``measurement.*_scatter``): ``frequency_scatter``, ``damping_scatter`` and ``shape_scatter``, stds of
+    independent per-mode changes of each test added in quadrature to the modal noise, and ``gain_scatter``, the
+    std of each sensor channel's relative gain error per test, with its standard normal draws ``n_gain``
+    (B, 2, S) (zeros when ``gain_scatter`` is 0). ``support_changed`` (B,) bool: an intact specimen whose
+    supports change between the days beyond re-clamping (``specimen.support_change_fraction``); its
+    ``root_spring_change`` is then ``factor - 1`` with the factor drawn from ``specimen.support_change_factor``
+    (softer or stiffer alike).
     """
 
     EI_Nm2: np.ndarray
@@ -472,6 +479,11 @@ class BatchInputs:
     modal_noise_scale: np.ndarray
     shear_flexibility: np.ndarray
     frequency_scatter: np.ndarray
+    damping_scatter: np.ndarray
+    shape_scatter: np.ndarray
+    gain_scatter: np.ndarray
+    n_gain: np.ndarray
+    support_changed: np.ndarray
 
     def __len__(self):
         return self.EI_Nm2.shape[0]
@@ -505,17 +517,31 @@ def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
     seeds = rng.integers(0, np.iinfo(np.uint64).max, size=n, dtype=np.uint64, endpoint=True)
     u_scale = rng.random(n)
     spc, meas = cfg["specimen"], cfg["measurement"]
-    lo, hi = meas["frequency_scatter"]
-    scatter = _uniform(np.zeros(n) if lo == hi else rng.random(n), (lo, hi), log=True)  # one value: not drawn
+    scatter = {k: _uniform(np.zeros(n) if meas[k][0] == meas[k][1] else rng.random(n), meas[k], log=True)
+               for k in REPEATABILITY}                                     # one value: not drawn
+    gain_drawn = meas["gain_scatter"][0] != meas["gain_scatter"][1] or meas["gain_scatter"][0] > 0
+    n_gain = rng.standard_normal((n, 2, S)) if gain_drawn else np.zeros((n, 2, S))
+    change = _uniform(u[:, 1], spc["root_spring_change"])
+    support = np.zeros(n, bool)
+    if spc["support_change_fraction"] > 0:
+        v = rng.random((n, 3))
+        support = (dmg["n_damages"] == 0) & (v[:, 0] < spc["support_change_fraction"])
+        factor = _uniform(v[:, 1], spc["support_change_factor"], log=True) ** np.where(v[:, 2] < 0.5, -1, 1)
+        change = np.where(support, factor - 1, change)
     if not np.all(np.isfinite(sp["root_spring_Nm_rad"])) and setup.spring:
         raise ConfigError("config key 'specimen.root_spring_relative' gave an infinite spring")
     return BatchInputs(sp["EI_Nm2"], sp["mass_per_length_kg_m"], sp["damping_scale"], sp["root_spring_Nm_rad"],
                        dmg.pop("n_damages"), dmg.pop("x_m"), dmg,
                        _uniform(u[:, 0], spc["temperature_stiffness_change"]),
-                       _uniform(u[:, 1], spc["root_spring_change"]), nf, nz, ns,
+                       change, nf, nz, ns,
                        _uniform(u[:, 2], meas["frf_noise"], log=True),
                        _uniform(u[:, 3], meas["frf_noise_floor"], log=True), seeds,
-                       _uniform(u_scale, meas["modal_noise_scale"], log=True), sp["shear_flexibility"], scatter)
+                       _uniform(u_scale, meas["modal_noise_scale"], log=True), sp["shear_flexibility"],
+                       *(scatter[k] for k in REPEATABILITY), n_gain, support)
+
+
+#: The repeatability ranges of ``measurement``, in the order they are drawn.
+REPEATABILITY = ("frequency_scatter", "damping_scatter", "shape_scatter", "gain_scatter")
 
 
 # --------------------------------------------------------------------------- truth model
@@ -645,10 +671,12 @@ def measure_modes(setup, inp, lam4, psi4):
     Natural frequencies and damping ratios get relative Gaussian errors,
     shapes complex circular errors relative to each mode's largest entry,
     all scaled by the sample's ``modal_noise_scale`` (``measurement.modal_noise_scale``:
-    identifications of real files vary beyond what the FRF noise level predicts); the
-    frequencies' std is combined in quadrature with the sample's ``frequency_scatter``
-    (``measurement.frequency_scatter``: per-mode changes of each test that temperature and
-    re-clamping do not describe; the synthesised FRFs do not carry it).
+    identifications of real files vary beyond what the FRF noise level predicts); each std is
+    combined in quadrature with the sample's ``frequency_scatter``, ``damping_scatter`` or
+    ``shape_scatter`` (the repeatability of the tests: per-mode changes of each test that
+    temperature and re-clamping do not describe), and each sensor's entries are multiplied by
+    ``1 + gain_scatter n_gain`` (its channel's gain error in that test, common to its modes).
+    The synthesised FRFs carry none of the repeatability terms.
     Standard deviations per mode: ``measurement.frequency_noise`` etc.
     ("fixed"), or ``sqrt((c level)^2 + (g floor)^2 + e^2)`` of the sample's FRF
     noise level and noise floor with the coefficients ``c`` (``*_noise``), ``g``
@@ -665,14 +693,16 @@ def measure_modes(setup, inp, lam4, psi4):
         sig = {q: per_mode(mcfg[f"{q}_noise"], setup.n_modes) for q in ("frequency", "damping", "shape")}
     scale = np.asarray(inp.modal_noise_scale, float)[:, None, None]
     sig = {q: v * scale for q, v in sig.items()}
-    sig["frequency"] = np.hypot(sig["frequency"], np.asarray(inp.frequency_scatter, float)[:, None, None])
+    for q in ("frequency", "damping", "shape"):
+        sig[q] = np.hypot(sig[q], np.asarray(getattr(inp, f"{q}_scatter"), float)[:, None, None])
     f, z = modal_parameters(lam4)
     f_m = f * (1 + sig["frequency"] * inp.n_freq)
     z_m = z * (1 + sig["damping"] * inp.n_zeta)
     lam_m = eigenvalues_from_modal(f_m, z_m)
     scale = np.max(np.abs(psi4), axis=-2, keepdims=True) * np.expand_dims(sig["shape"], -2)
     noise = (inp.n_shape[..., 0] + 1j * inp.n_shape[..., 1]) / np.sqrt(2)
-    return lam_m, psi4 + scale * noise
+    gain = 1 + np.asarray(inp.gain_scatter, float)[:, None, None, None] * inp.n_gain[..., None]
+    return lam_m, gain * (psi4 + scale * noise)
 
 
 def per_mode(values, m: int) -> np.ndarray:
@@ -707,7 +737,7 @@ CHUNK = 128
 #: The damage model's parameters (``BatchInputs.damage``) are recorded next to them under their own names.
 LABEL_FIELDS = ("EI_Nm2", "mass_per_length_kg_m", "damping_scale", "root_spring_Nm_rad", "n_damages", "x_m",
                 "temperature_stiffness_change", "root_spring_change", "noise_level", "noise_floor", "noise_seed",
-                "modal_noise_scale", "shear_flexibility", "frequency_scatter")
+                "modal_noise_scale", "shear_flexibility", *REPEATABILITY, "support_changed")
 
 
 def simulate_batch(setup: Setup, inp: BatchInputs, chunk: int = CHUNK) -> dict:

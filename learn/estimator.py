@@ -43,6 +43,7 @@ class DamagePrediction:
     hinge_flexibility: np.ndarray         # median of the log-normal size estimate
     hinge_flexibility_std: np.ndarray
     logit: np.ndarray                      # calibrated detection logit
+    probability_support_change: np.ndarray  # supports changed beyond re-clamping (NaN: a model not trained on it)
 
 
 #: Bound of the network's raw outputs (far beyond any trained value), so that no exp of them overflows.
@@ -167,8 +168,9 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
     # ------------------------------------------------------------------ helpers
     def _targets(self, y):
         y = np.asarray(y, float)
-        if y.ndim != 2 or y.shape[1] != 3:
-            raise BeamDamageError(f"y must have shape (n, 3) [damaged, x/L, hinge flexibility], got {y.shape}")
+        if y.ndim != 2 or y.shape[1] not in (3, 4):
+            raise BeamDamageError(f"y must have shape (n, 3) [damaged, x/L, hinge flexibility] or (n, 4) [..., "
+                                  f"support changed], got {y.shape}")
         damaged = y[:, 0] > 0.5
         centres = (np.arange(self.n_bins) + 0.5) / self.n_bins
         sig = self.loc_sigma_bins / self.n_bins
@@ -176,7 +178,9 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         soft = np.exp(-0.5 * ((centres[None] - x[:, None]) / sig) ** 2)
         soft /= soft.sum(axis=1, keepdims=True)
         log_size = np.log(np.where(damaged, np.maximum(y[:, 2], 1e-9), 1.0))
-        return damaged.astype(np.float32), soft.astype(np.float32), log_size.astype(np.float32)
+        support = (y[:, 3] > 0.5) if y.shape[1] == 4 else np.zeros(len(y), bool)
+        return (damaged.astype(np.float32), soft.astype(np.float32), log_size.astype(np.float32),
+                support.astype(np.float32))
 
     def _check_X(self, X) -> np.ndarray:
         """Fitted, and ``X`` a finite (n, n_features_in_) matrix (scikit-learn's conventions), else a ValueError."""
@@ -232,9 +236,12 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         torch.manual_seed(self.random_state)
         gen = torch.Generator().manual_seed(self.random_state)
         self.model_ = DamageNet(X.shape[1], self.n_bins, self.hidden, self.depth, self.dropout).to(self.device_)
-        d, soft, ls = self._targets(y)
+        d, soft, ls, sup = self._targets(y)
+        self.support_trained_ = bool(sup[tr].any())
         Xt = self._tensor(X[tr])
         tgt = [torch.as_tensor(a[tr], device=self.device_) for a in (d, soft, ls)]
+        if self.support_trained_:
+            tgt.append(torch.as_tensor(sup[tr], device=self.device_))
         opt = torch.optim.AdamW(self.model_.parameters(), lr=self.lr, weight_decay=self.weight_decay)
         steps = self.epochs * int(np.ceil(len(tr) / self.batch_size))
         sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=self.lr, total_steps=max(steps, 1))
@@ -250,7 +257,7 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
             for i in range(0, len(tr), self.batch_size):
                 b = perm[i:i + self.batch_size]
                 terms = loss_terms(self.model_(Xt[b]), *(t[b] for t in tgt))
-                loss = terms["detect"] + terms["locate"] + 0.5 * terms["size"]
+                loss = terms["detect"] + terms["locate"] + 0.5 * terms["size"] + terms["support"]
                 opt.zero_grad()
                 loss.backward()
                 opt.step()
@@ -326,7 +333,8 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         log_std = np.minimum(self.size_std_scale_ * np.exp(np.minimum(raw["size_log_std"], LOG_SIZE_LIMIT)),
                              MAX_SIZE_LOG_STD)
         sd = lognormal_std(med, log_std)
-        return DamagePrediction(expit(z), p, mean, std, el, np.argmax(el, axis=1) + 1, med, sd, z)
+        sup = expit(raw["support"]) if self.support_trained_ else np.full(len(z), np.nan)
+        return DamagePrediction(expit(z), p, mean, std, el, np.argmax(el, axis=1) + 1, med, sd, z, sup)
 
     # ------------------------------------------------------------------ persistence (no pickle)
     def get_state(self) -> tuple[dict, dict]:
@@ -338,7 +346,7 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         tensors["ood.reference"] = torch.as_tensor(self.reference_distances_)
         meta = {"params": self.get_params(), "temperature": self.temperature_, "bias": self.bias_,
                 "threshold": self.threshold_, "size_std_scale": self.size_std_scale_,
-                "n_features": int(self.n_features_in_),
+                "n_features": int(self.n_features_in_), "support_trained": self.support_trained_,
                 "train_seconds": self.train_seconds_, "loss_history": self.loss_history_,
                 "n_train": int(self.n_train_), "n_val": int(self.n_val_)}
         return tensors, meta
@@ -356,7 +364,11 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         est.reference_distances_ = tensors["ood.reference"].numpy().astype(float)
         est.classes_ = np.array([0, 1])
         est.model_ = DamageNet(est.n_features_in_, est.n_bins, est.hidden, est.depth, est.dropout).to(est.device_)
-        est.model_.load_state_dict({k[4:]: v for k, v in tensors.items() if k.startswith("net.")})
+        est.support_trained_ = bool(meta.get("support_trained", False))
+        net = {k[4:]: v for k, v in tensors.items() if k.startswith("net.")}
+        if not est.support_trained_:   # tensors without a support head: it keeps its initial weights, never read
+            net = {**{k: v for k, v in est.model_.state_dict().items() if k.startswith("support.")}, **net}
+        est.model_.load_state_dict(net)
         est.temperature_ = float(meta["temperature"])
         est.bias_ = float(meta.get("bias", 0.0))
         est.threshold_ = float(meta.get("threshold", 0.5))

@@ -303,7 +303,8 @@ def labels(table: pd.DataFrame, beam) -> dict:
         ``damaged`` (bool), ``x_over_L`` (NaN if intact), ``hinge_flexibility`` (the size; 0 if intact),
         ``element`` (the zone of :meth:`BeamSpec.zone_of`, 1.., 0 if intact; the thesis's elements 1..4),
         ``max_drop`` (largest relative drop of the noise-free
-        natural frequencies due to the damage alone: ``max_frequency_drop_rel``), ``n_damages``.
+        natural frequencies due to the damage alone: ``max_frequency_drop_rel``), ``n_damages``,
+        ``support_changed`` (bool: supports changed beyond re-clamping; False where the table lacks the column).
     """
     beam = as_spec(beam)
     length_m = beam.length_m
@@ -324,7 +325,9 @@ def labels(table: pd.DataFrame, beam) -> dict:
     element = np.where(damaged, beam.zone_of(x), 0)
     return {"damaged": damaged, "x_over_L": x, "hinge_flexibility": np.where(damaged, size, 0.0),
             "element": element, "max_drop": table["max_frequency_drop_rel"].to_numpy(float),
-            "n_damages": table["n_damages"].to_numpy(int)}
+            "n_damages": table["n_damages"].to_numpy(int),
+            "support_changed": (table["support_changed"].to_numpy(bool) if "support_changed" in table
+                                else np.zeros(n, bool))}
 
 
 # --------------------------------------------------------------------------- modal route

@@ -4,6 +4,8 @@ Heads
 -----
 ``detect``   one logit of "damaged" (calibrated afterwards by temperature scaling).
 ``locate``   logits over ``n_bins`` equal bins of ``x / L`` (a distribution along the beam).
+``support``  one logit of "the supports changed beyond re-clamping" (an intact specimen, datasets with
+             ``specimen.support_change_fraction`` > 0; untrained otherwise).
 ``size``     mean and log standard deviation of ``ln`` damage size (a slit's hinge flexibility,
              :func:`learn.features.labels`)
              (the mean by least squares, the spread by the Gaussian negative log-likelihood of the mean's
@@ -21,7 +23,7 @@ __all__ = ["DamageNet", "LOG_STD_MAX", "LOG_STD_MIN", "SIZE_MEAN_WEIGHT", "loss_
 
 
 class DamageNet(nn.Module):
-    """Shared trunk and three heads.
+    """Shared trunk and four heads.
 
     Parameters
     ----------
@@ -44,12 +46,14 @@ class DamageNet(nn.Module):
         self.detect = nn.Linear(hidden, 1)
         self.locate = nn.Linear(hidden, n_bins)
         self.size = nn.Linear(hidden, 2)
+        self.support = nn.Linear(hidden, 1)
 
     def forward(self, x: torch.Tensor) -> dict:
         h = self.trunk(x)
         s = self.size(h)
         spread = self.size(h.detach())[:, 1]   # the spread reads the features; it does not shape them
-        return {"detect": self.detect(h)[:, 0], "locate": self.locate(h), "size_mean": s[:, 0],
+        return {"detect": self.detect(h)[:, 0], "support": self.support(h)[:, 0], "locate": self.locate(h),
+                "size_mean": s[:, 0],
                 "size_log_std": LOG_STD_MIN + (LOG_STD_MAX - LOG_STD_MIN) * torch.sigmoid(spread)}
 
 
@@ -62,12 +66,14 @@ LOG_STD_MIN, LOG_STD_MAX = -6.0, 1.0
 SIZE_MEAN_WEIGHT = math.exp(-2.0)
 
 
-def loss_terms(out: dict, damaged: torch.Tensor, loc_target: torch.Tensor, log_size: torch.Tensor) -> dict:
+def loss_terms(out: dict, damaged: torch.Tensor, loc_target: torch.Tensor, log_size: torch.Tensor,
+               support: torch.Tensor | None = None) -> dict:
     """Losses of one batch.
 
     Parameters
     ----------
     damaged : (B,) float 0/1
+    support : (B,) float 0/1, optional   supports changed beyond re-clamping (no ``support`` term without it)
     loc_target : (B, n_bins) soft target distribution (rows of intact pairs are ignored)
     log_size : (B,) ``ln`` hinge flexibility (ignored where intact)
     """
@@ -81,4 +87,6 @@ def loss_terms(out: dict, damaged: torch.Tensor, loc_target: torch.Tensor, log_s
         size = (SIZE_MEAN_WEIGHT * 0.5 * r ** 2 + 0.5 * (r.detach() / ls.exp()) ** 2 + ls).mean()
     else:
         loc = size = out["detect"].sum() * 0.0
-    return {"detect": det, "locate": loc, "size": size}
+    sup = (out["detect"].sum() * 0.0 if support is None
+           else nn.functional.binary_cross_entropy_with_logits(out["support"], support))
+    return {"detect": det, "locate": loc, "size": size, "support": sup}

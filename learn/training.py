@@ -25,9 +25,11 @@ __all__ = ["DAY_CHANGES", "dataset_frfs", "day_changes", "evaluate", "targets", 
 
 
 def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
-    """``y`` (n, 3) = [damaged, x/L, hinge flexibility] and the full truth dict of :func:`labels`."""
+    """``y`` (n, 4) = [damaged, x/L, hinge flexibility, supports changed] and the full truth dict of
+    :func:`labels`."""
     t = labels(pairs.table, pairs.beam)
-    return np.stack([t["damaged"].astype(float), t["x_over_L"], t["hinge_flexibility"]], axis=1), t
+    return np.stack([t["damaged"].astype(float), t["x_over_L"], t["hinge_flexibility"],
+                     t["support_changed"].astype(float)], axis=1), t
 
 
 def dataset_frfs(routes) -> tuple:
@@ -92,8 +94,10 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
     if pairs.beam.test is not None:
         params["zone_edges"] = [float(v) for v in pairs.beam.zone_edges_m / pairs.beam.length_m]
     networks, outputs, fit_s = _fit_networks(pairs, routes, y, (tr, te), sens, params)
-    classical, thresholds = run_classical(pairs.eigenvalues[tr], pairs.eigenvectors[tr], sens,
-                                          damaged=truth["damaged"][tr])
+    # classical thresholds on the day-to-day changes alone: no classical method tells a support change from damage
+    day = tr[~truth["support_changed"][tr]]
+    classical, thresholds = run_classical(pairs.eigenvalues[day], pairs.eigenvectors[day], sens,
+                                          damaged=truth["damaged"][day])
     classical, _ = run_classical(pairs.eigenvalues[te], pairs.eigenvectors[te], sens, thresholds)
     truth_te = {k: v[te] for k, v in truth.items()}
     rows = table_rows(outputs + classical, truth_te, pairs.table.iloc[te].reset_index(drop=True), pairs.beam)

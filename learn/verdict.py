@@ -64,7 +64,16 @@ def network_answer(d, i, out, beam, depth) -> dict:
             **zone_keys(beam, d.element[i], d.element_probabilities[i]),
             "hinge_flexibility": float(d.hinge_flexibility[i]),
             "hinge_flexibility_std": float(d.hinge_flexibility_std[i]),
-            "depth_m": depth, "detectable": bool(out.detectable[i])}
+            "depth_m": depth, "detectable": bool(out.detectable[i]), **support_answer(d, i)}
+
+
+def support_answer(d, i) -> dict:
+    """``probability_support_change`` and ``support_changed`` (above one half) of pair ``i``; None for a model not
+    trained on support changes."""
+    p = float(d.probability_support_change[i])
+    if not np.isfinite(p):
+        return {"probability_support_change": None, "support_changed": None}
+    return {"probability_support_change": p, "support_changed": p >= 0.5}
 
 
 def classical_answer(o: MethodOutput, i, beam) -> dict:
@@ -85,7 +94,8 @@ def classical_verdict(cl: dict, sens, depth, beam=None) -> dict:
             "location_zone": cl["location_zone"], "zone_edges_m": cl["zone_edges_m"], "zone_probabilities": None,
             "element_probabilities": None, "hinge_flexibility": cl["hinge_flexibility"],
             "hinge_flexibility_std": None, "depth_m": depth(cl["hinge_flexibility"]),
-            "detectable": bool(detectable >= detectability_threshold())}
+            "detectable": bool(detectable >= detectability_threshold()),
+            "probability_support_change": None, "support_changed": None}
 
 
 
@@ -95,6 +105,17 @@ def equivalent_depth(hinge_flexibility: float, preset, width_m: float) -> float 
 
 
 def _network_sentence(a: dict) -> str:
+    return _damage_sentence(a) + _support_sentence(a)
+
+
+def _support_sentence(a: dict) -> str:
+    if not a.get("support_changed"):
+        return ""
+    return (f"; the supports changed beyond re-clamping (probability {a['probability_support_change']:.1%}: "
+            "a clamp, bearing or suspension stiffer or softer than on the baseline day)")
+
+
+def _damage_sentence(a: dict) -> str:
     if not a["damaged"]:
         return f"no damage detected (probability of damage {a['probability_damaged']:.1%})"
     if not a["detectable"]:

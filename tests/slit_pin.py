@@ -27,13 +27,20 @@ from learn.features import labels
 #: Configurations pinned: (name, overrides, n, seed).
 CASES = (("default", None, 6, 11), ("training", "training", 8, 5))
 
+#: The ``training`` config as pinned: without the repeatability of the tests and the support changes (drawn after
+#: every pinned draw, so that the pinned arrays are reproduced with these keys at zero).
+PINNED_TRAINING = {"measurement": {"damping_scatter": [0.0, 0.0], "shape_scatter": [0.0, 0.0],
+                                   "gain_scatter": [0.0, 0.0]},
+                   "specimen": {"support_change_fraction": 0.0}}
+
 
 def pin_arrays() -> dict:
     """``{key: ndarray}`` of every stored array, table column and label of the pinned datasets."""
     out = {}
     with tempfile.TemporaryDirectory() as tmp:
         for name, base, n, seed in CASES:
-            cfg = merge({"output": {"shard_size": 5}}, base=load_config(base))
+            cfg = merge({"output": {"shard_size": 5}, **(PINNED_TRAINING if base == "training" else {})},
+                        base=load_config(base))
             root = Path(tmp) / name
             generate(root, cfg, n=n, seed=seed, progress=False)
             ds = Dataset(root)

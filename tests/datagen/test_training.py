@@ -7,6 +7,7 @@ from datagen.config import load_config, merge
 from datagen.generation import generate
 from datagen.pipeline import draw_batch, get_setup, simulate_batch
 from datagen.dataset import Dataset
+from physics.errors import ConfigError
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +31,11 @@ def test_training_labels_span_the_configured_ranges(training):
     assert t["noise_level"].between(0.001, 0.03).all() and t["noise_level"].max() / t["noise_level"].min() > 10
     assert t["noise_floor"].between(1e-4, 1e-3).all()
     assert t["temperature_stiffness_change"].between(-0.004, 0.004).all()
-    assert t["root_spring_change"].between(-0.08, 0.08).all() and t["root_spring_change"].abs().max() > 0.05
+    day = t["root_spring_change"][~t["support_changed"]]
+    assert day.between(-0.08, 0.08).all() and day.abs().max() > 0.05
+    moved = 1 + t["root_spring_change"][t["support_changed"]]       # supports 2-5x softer or stiffer
+    assert len(moved) > 0 and np.all((moved >= 2) & (moved <= 5) | (moved >= 0.2) & (moved <= 0.5))
+    assert not (t["support_changed"] & t["damaged"]).any()
     # stiffness loss dEI * w (N m^3) and the slit-alone frequency drop
     np.testing.assert_allclose(d["stiffness_loss_Nm3"], d["damage0_ei_loss"] * d["ei_Nm2"] * d["damage0_width_m"])
     assert (i["stiffness_loss_Nm3"] == 0).all() and (i["max_frequency_drop_rel"] == 0).all()
@@ -42,9 +47,8 @@ def test_training_labels_span_the_configured_ranges(training):
 def test_temperature_change_scales_frequencies_by_its_square_root():
     """Intact, rigid clamp: K_current = (1 + t) K_baseline, so f_cur / f_base = sqrt(1 + t) (closed form)."""
     cfg = load_config("training")
-    cfg["specimen"]["root_spring_relative"] = []
+    cfg["specimen"].update(root_spring_relative=[], root_spring_change=[0.0, 0.0], support_change_fraction=0.0)
     cfg["damage"]["intact_fraction"] = 1.0
-    cfg["specimen"]["root_spring_change"] = [0.0, 0.0]
     cfg["specimen"]["temperature_stiffness_change"] = [-0.01, 0.01]
     setup = get_setup(merge(cfg))
     inp = draw_batch(np.random.default_rng(1), 20, setup)
@@ -78,7 +82,8 @@ def test_calibrated_modal_noise_scales_with_each_samples_frf_noise_level():
                               damping_noise_floor=[0.0] * 4, shape_noise_floor=[0.0] * 4,
                               frequency_noise_per_floor=[0.0] * 4, damping_noise_per_floor=[0.0] * 4,
                               shape_noise_per_floor=[0.0] * 4, modal_noise_scale=[1.0, 1.0],
-                              frequency_scatter=[0.0, 0.0])
+                              frequency_scatter=[0.0, 0.0], damping_scatter=[0.0, 0.0], shape_scatter=[0.0, 0.0],
+                              gain_scatter=[0.0, 0.0])
     setup = get_setup(merge(cfg))
     inp = draw_batch(np.random.default_rng(5), 4000, setup)
     from datagen.pipeline import measure_modes
@@ -129,3 +134,51 @@ def test_calibrated_modal_noise_scales_with_each_samples_frf_noise_level():
     lam_0, psi_0 = measure_modes(setup, replace(inp, frequency_scatter=np.zeros(4000)), lam, psi)
     np.testing.assert_array_equal(psi_0, psi_m)
     assert np.abs(np.abs(lam_0) / np.abs(lam) - 1)[:, :, 1:].max() < 1e-12
+
+
+def test_repeatability_scatter_of_damping_shapes_and_channel_gains():
+    """damping_scatter and shape_scatter add in quadrature per mode; gain_scatter multiplies a sensor's entries of
+    every mode by one factor per test (the same for all modes of that sensor); a range of 0 draws nothing."""
+    from datagen.pipeline import measure_modes
+
+    cfg = load_config("training")
+    zero = [0.0] * 4
+    cfg["measurement"].update({f"{q}_{s}": zero for q in ("frequency", "damping", "shape")
+                               for s in ("noise", "noise_floor", "noise_per_floor")})
+    cfg["measurement"].update(modal_noise_scale=[1.0, 1.0], frequency_scatter=[0.0, 0.0],
+                              damping_scatter=[0.05, 0.3], shape_scatter=[0.01, 0.01], gain_scatter=[0.02, 0.02])
+    setup = get_setup(merge(cfg))
+    inp = draw_batch(np.random.default_rng(7), 4000, setup)
+    assert 0.05 <= inp.damping_scatter.min() and inp.damping_scatter.max() <= 0.3
+    assert np.median(inp.damping_scatter) == pytest.approx(np.sqrt(0.05 * 0.3), rel=0.1)     # log-uniform
+    lam = -0.002 * np.full((4000, 2, 4), 100.0) + 100j
+    psi = np.ones((4000, 2, 4, 4), complex)
+    lam_m, psi_m = measure_modes(setup, inp, lam, psi)
+    ez = (-lam_m.real / np.abs(lam_m) / 0.002 - 1) / inp.damping_scatter[:, None, None]
+    assert np.std(ez) == pytest.approx(1.0, rel=0.05)
+    assert np.abs(np.abs(lam_m) / np.abs(lam) - 1).max() < 1e-12                       # frequencies untouched
+    # shapes: psi (1 + 0.02 n_gain) + 0.01 (1 + 0.02 n_gain) noise; the gain is common to the modes of a sensor
+    ratio = psi_m / psi_m.mean(axis=-1, keepdims=True)          # the sensor's gain divides out
+    np.testing.assert_allclose(np.sqrt(np.mean(np.abs(ratio - 1) ** 2)), 0.01 * np.sqrt(3 / 4), rtol=0.05)
+    gain = psi_m.mean(axis=-1).real - 1                         # (B, 2, S): gain error plus the mean of 4 noises
+    assert np.std(gain) == pytest.approx(np.hypot(0.02, 0.01 / np.sqrt(8)), rel=0.05)
+    cfg["measurement"].update(gain_scatter=[0.0, 0.0])
+    assert not draw_batch(np.random.default_rng(7), 10, get_setup(merge(cfg))).n_gain.any()
+
+
+def test_support_changes_are_drawn_for_intact_specimens_only_beyond_re_clamping():
+    cfg = load_config("training")
+    cfg["specimen"].update(support_change_fraction=0.5, support_change_factor=[2.0, 5.0])
+    inp = draw_batch(np.random.default_rng(8), 4000, get_setup(merge(cfg)))
+    s = inp.support_changed
+    assert not (s & (inp.n_damages > 0)).any()
+    assert np.mean(s[inp.n_damages == 0]) == pytest.approx(0.5, abs=0.05)
+    factor = 1 + inp.root_spring_change[s]
+    stiffer = factor > 1
+    assert np.mean(stiffer) == pytest.approx(0.5, abs=0.05)
+    assert factor[stiffer].min() >= 2 and factor[stiffer].max() <= 5
+    assert (1 / factor[~stiffer]).min() >= 2 and (1 / factor[~stiffer]).max() <= 5
+    assert np.abs(inp.root_spring_change[~s]).max() <= 0.08                      # the config's re-clamping
+    cfg["specimen"].update(root_spring_relative=[], root_spring_change=[0.0, 0.0])
+    with pytest.raises(ConfigError, match="specimen.support_change_fraction"):
+        get_setup(merge(cfg))

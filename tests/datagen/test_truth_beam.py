@@ -150,7 +150,7 @@ def test_calibrated_beam5_file_closes_the_gap_to_table_4_3(tmp_path, capsys):
 
     cfg = tmp_path / "nominal.toml"
     cfg.write_text('base = "training"\n[specimen]\nei_band = 0.0\nmass_band = 0.0\ndamping_band = 0.0\n'
-                   'root_spring_relative = []\nroot_spring_change = [0.0, 0.0]\n'
+                   'root_spring_relative = []\nroot_spring_change = [0.0, 0.0]\nsupport_change_fraction = 0.0\n'
                    'temperature_stiffness_change = [0.0, 0.0]\nshear_flexibility = [0.0, 0.0]\n'
                    '[damage]\nn_slits = [0, 0]\n')
     assert main(["generate", "--beam", str(beam_file), "--config", str(cfg), "--n", "2", "--out",
