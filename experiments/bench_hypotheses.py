@@ -48,8 +48,23 @@ def _frequencies(beam) -> np.ndarray:
     return modes(assemble(beam), n_refine=4).frequencies_hz[:4]
 
 
-def pairs(truth: str, n: int, rng, noise: float) -> list[dict]:
-    """``n`` pairs of one truth: measured relative frequency changes and the truth's parameters."""
+def _modal(beam, ratios, rng) -> dict:
+    """The simulator's modal data of one test: modes 1-4 at the quarter points, its own modal noise."""
+    from experiments.second_sim.fem import assemble, modes
+    from experiments.second_sim.pairs import DOF_LABELS, NODE_X_M
+    from experiments.second_sim.response import Damping, complex_modes, noisy_modal
+    from experiments.second_sim.writers import modal_dict
+
+    asm = assemble(beam)
+    md = modes(asm, n_refine=4)
+    dofs = asm.translation_dofs(NODE_X_M[1:])
+    return modal_dict(*noisy_modal(*complex_modes(asm, md, Damping("modal", ratios), dofs, 4), rng), DOF_LABELS)
+
+
+def pairs(truth: str, n: int, rng, noise: float, modal_rng=None) -> list[dict]:
+    """``n`` pairs of one truth: measured relative frequency changes and the truth's parameters; with a
+    ``modal_rng`` also both tests' modal data (``modal``: baseline and current mappings with the simulator's own
+    modal noise, drawn from that stream so that the frequency changes do not depend on it)."""
     from dataclasses import replace
 
     from experiments.second_sim.fem import PointMass, Slit
@@ -90,11 +105,51 @@ def pairs(truth: str, n: int, rng, noise: float) -> list[dict]:
         f0 = f0 * (1 + noise * rng.standard_normal(4))
         f1 = f1 * (1 + noise * rng.standard_normal(4))
         out.append({"truth": truth, "shifts": f1 / f0 - 1, **info})
+        if modal_rng is not None:
+            ratios = tuple(modal_rng.uniform(0.003, 0.02, 4))
+            out[-1]["modal"] = (_modal(base, ratios, modal_rng), _modal(cur, ratios, modal_rng))
     return out
 
 
-def table(n: int = 24, seed: int = 0, noise: float = 7e-4) -> dict:
-    """Every pair weighed: the confusion counts and the slits' interval cover."""
+def network_answers(model_dir, pair_list) -> list[dict]:
+    """``classify`` (in this process) of each pair's modal data with the model in ``model_dir``: per pair the
+    network's ``damaged``, the verdict's ``damaged`` and where it comes from, ``in_distribution``, the network's
+    element, and ``support_changed`` when the model answers it."""
+    from learn.classify import classify
+    from learn.model_dir import load_model
+    from physics.io import modal_data_from_dict
+
+    model = load_model(model_dir)
+    out = []
+    for p in pair_list:
+        base, cur = (modal_data_from_dict(d, f"{p['truth']} pair") for d in p["modal"])
+        v = classify(model, base, cur)
+        net = v.get("network") or {}
+        out.append({"network_damaged": bool(net.get("damaged")), "verdict_damaged": bool(v["damaged"]),
+                    "verdict_from": v["verdict_from"], "in_distribution": bool(v["in_distribution"]),
+                    "network_element": net.get("location_element"),
+                    "support_changed": net.get("support_changed")})
+    return out
+
+
+def network_table(rows: list[dict]) -> dict:
+    """Per truth: pairs, called damaged by the network and by the verdict, inside the training data, slits in the
+    right element (network), support changes named."""
+    res = {}
+    for t in TRUTHS:
+        r = [x for x in rows if x["truth"] == t]
+        res[t] = {"n": len(r), "network_damaged": sum(x["network_damaged"] for x in r),
+                  "verdict_damaged": sum(x["verdict_damaged"] for x in r),
+                  "in_distribution": sum(x["in_distribution"] for x in r),
+                  "support_changed": sum(bool(x["support_changed"]) for x in r),
+                  "element_right": sum(x["network_damaged"] and x["network_element"] == x.get("element")
+                                       for x in r)}
+    return res
+
+
+def table(n: int = 24, seed: int = 0, noise: float = 7e-4, model_dir=None) -> dict:
+    """Every pair weighed: the confusion counts and the slits' interval cover; with ``model_dir`` also the
+    network's answers on the pairs' modal data (:func:`network_table`)."""
     from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
     from learn.features import BeamSpec
     from learn.hypotheses import _support_curves, weigh
@@ -109,13 +164,17 @@ def table(n: int = 24, seed: int = 0, noise: float = 7e-4) -> dict:
     confusion = {t: {h: 0 for h in TRUTHS} for t in TRUTHS}
     cover = {"x_68": 0, "x_95": 0, "theta_68": 0, "theta_95": 0, "n": 0}
     rows = []
+    modal_rng = np.random.default_rng([seed, 1]) if model_dir else None
     for truth in TRUTHS:
-        for p in pairs(truth, n, rng, noise):
+        plist = pairs(truth, n, rng, noise, modal_rng)
+        answers = network_answers(model_dir, plist) if model_dir else [{}] * len(plist)
+        for p, a in zip(plist, answers):
             ranked = weigh(p["shifts"], slit, mass, support, (-0.004, 0.004), theta_max=0.15, length_m=L)
             top = ranked[0].name
             confusion[truth][top] += 1
+            element = min(4, int(p["x_m"] // (L / 4)) + 1) if truth == "slit" else None
             rows.append({"truth": truth, "top": top, "probabilities": {r.name: r.probability for r in ranked},
-                         "shifts_pct": [float(v) for v in 100 * p["shifts"]]})
+                         "shifts_pct": [float(v) for v in 100 * p["shifts"]], "element": element, **a})
             if truth == "slit":
                 q = next(r for r in ranked if r.name == "slit").parameters
                 cover["n"] += 1
@@ -124,7 +183,11 @@ def table(n: int = 24, seed: int = 0, noise: float = 7e-4) -> dict:
                     cover[f"x_{level}"] += lo <= p["x_m"] <= hi
                     lo, hi = q[f"hinge_flexibility_{level}"]
                     cover[f"theta_{level}"] += lo <= p["hinge_flexibility"] <= hi
-    return {"n": n, "seed": seed, "noise": noise, "confusion": confusion, "slit_cover": cover, "pairs": rows}
+    res = {"n": n, "seed": seed, "noise": noise, "confusion": confusion, "slit_cover": cover, "pairs": rows}
+    if model_dir:
+        res["model"] = str(model_dir)
+        res["network"] = network_table(rows)
+    return res
 
 
 def markdown(res: dict) -> str:
@@ -140,6 +203,15 @@ def markdown(res: dict) -> str:
                  f"{c['x_95'] / c['n']:.0%}; hinge flexibility {c['theta_68'] / c['n']:.0%} and "
                  f"{c['theta_95'] / c['n']:.0%}. {res['n']} pairs per truth, seed {res['seed']}, frequency noise "
                  f"{100 * res['noise']:.2g} % per mode and test.")
+    if "network" in res:
+        lines += ["", f"The network ({res['model']}) on the same pairs' modal data (modes 1-4 at the quarter points, "
+                  "the simulator's own modal noise):", "",
+                  "| truth | pairs | network: damaged | verdict: damaged | inside the training data | "
+                  "support change named | slit in the right element |", "| --- " * 7 + "|"]
+        for t, r in res["network"].items():
+            right = f"{r['element_right']}" if t == "slit" else "-"
+            lines.append(f"| {t} | {r['n']} | {r['network_damaged']} | {r['verdict_damaged']} | "
+                         f"{r['in_distribution']} | {r['support_changed']} | {right} |")
     return "\n".join(lines) + "\n"
 
 
@@ -149,9 +221,10 @@ def main(argv=None) -> int:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--noise", type=float, default=7e-4, help="relative frequency noise per mode and test")
     p.add_argument("--json", metavar="FILE", help="write every pair's probabilities as JSON")
+    p.add_argument("--model", metavar="MODEL_DIR", help="also classify every pair's modal data with this model")
     p.add_argument("--docs", action="store_true", help="write the table into docs/classifier.md")
     args = p.parse_args(argv)
-    res = table(args.n, args.seed, args.noise)
+    res = table(args.n, args.seed, args.noise, args.model)
     md = markdown(res)
     sys.stdout.write(md)
     if args.json:
