@@ -169,6 +169,12 @@ def peak_picking(frequency_hz, frf, n_modes=None, peaks=None, drive=None, promin
         fa[m] = np.interp(half, [mif[lo], mif[lo + 1]], [f[lo], f[lo + 1]]) if mif[lo] <= half else f[lo]
         fb[m] = np.interp(half, [mif[hi], mif[hi - 1]], [f[hi], f[hi - 1]]) if mif[hi] <= half else f[hi]
     zeta = (fb - fa) / (2 * fn)
+    broad = ~(zeta < 1)
+    if np.any(broad):
+        warnings.warn("peak picking: the peak(s) at " + ", ".join(f"{x:.4g} Hz" for x in fn[broad])
+                      + " left out: the half-power band is wider than twice the frequency (damping ratio >= 1), "
+                      "a bump of the noise, not a mode", stacklevel=2)
+        idx, fn, zeta, fa, fb, df_line = (a[~broad] for a in (idx, fn, zeta, fa, fb, df_line))
     narrow = (fb - fa) < 2 * df_line
     if np.any(narrow):
         warnings.warn("peak picking: the half-power band of the mode(s) at "

@@ -516,3 +516,23 @@ def test_a_visible_peak_no_mode_explains_is_named():
     for k in (0, 3):
         missed = peaks_left_out(frf, np.delete(truth_hz, k))
         assert missed.size == 1 and missed[0] == pytest.approx(truth_hz[k], rel=0.01)
+
+
+@pytest.mark.parametrize("method", ["peak", "circle"])
+def test_a_noise_peak_on_the_static_plateau_is_left_out_not_fatal(method):
+    """A receptance's flat low-frequency plateau with one noisy line 1.3 times it (as a mobility's noise floor
+    divided by i w gives; its neighbours stay above half its power): its half-power band runs up to the resonance, a damping ratio above 1. The peak is left
+    out with a warning naming it; the mode at 100 Hz is identified as on the clean FRF."""
+    from physics.identification import identify_frf
+    from physics.io import MeasuredFRF
+
+    f = 0.5 * np.arange(1, 401)
+    r = f / 100.0
+    H = 1e-6 / (1 - r**2 + 2j * 0.01 * r)
+    clean = identify_frf(MeasuredFRF(f, H[None, None, :], ("1:+Y",), ("1:+Y",), kind="receptance"), method=method)
+    H[3] *= 1.3
+    with pytest.warns(UserWarning, match=r"2 Hz .*damping ratio"):
+        ident = identify_frf(MeasuredFRF(f, H[None, None, :], ("1:+Y",), ("1:+Y",), kind="receptance"),
+                             method=method)
+    np.testing.assert_allclose(ident.estimate.natural_frequencies_hz, clean.estimate.natural_frequencies_hz)
+    assert ident.estimate.natural_frequencies_hz == pytest.approx([100.0], rel=1e-3)
