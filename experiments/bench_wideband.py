@@ -46,8 +46,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["CASES", "METHODS", "WideBandTest", "main", "markdown", "peak_prominence", "run_identify", "score", "simulate_test",
-           "summarise"]
+__all__ = ["CASES", "METHODS", "WideBandTest", "main", "markdown", "peak_prominence", "run_identify", "score",
+           "simulate_test", "summarise"]
 
 #: (FRF kind, number of sensors) of each case.
 CASES = tuple((kind, n) for kind in ("accelerance", "mobility") for n in (1, 2, 3))
@@ -253,11 +253,12 @@ def markdown(summary: list[dict], args) -> str:
     def pct(v, digits):
         return "-" if not np.isfinite(v) else f"{100 * v:.{digits}f} %"
 
-    lines = ["| method | kind | sensors | present (5x) | found 1 % | found 0.1 % | missed, warned | missed, silent (5x) | "
-             "spurious | median freq. error | median damping error | exit != 0 |",
+    lines = ["| method | kind | sensors | present (5x) | found 1 % | found 0.1 % | missed, warned | "
+             "missed, silent (5x) | spurious | median freq. error | median damping error | exit != 0 |",
              "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     lines += [f"| {s['method']} | {s['kind']} | {s['n_sensors']} | {s['present']} ({s['loud']}) | {s['found']} | "
-              f"{s['found_01']} | {s['warned']} | {s['silent']} ({s['silent_loud']}) | {s['spurious']} | {pct(s['median_freq_err'], 3)} | "
+              f"{s['found_01']} | {s['warned']} | {s['silent']} ({s['silent_loud']}) | {s['spurious']} | "
+              f"{pct(s['median_freq_err'], 3)} | "
               f"{pct(s['median_zeta_err'], 0)} | {s['failed']}{crashed(s)} |"
               for s in summary]
     return "\n".join(lines) + (
