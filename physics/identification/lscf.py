@@ -44,7 +44,7 @@ def _lscf_basis(f_hz, dt_s, n_cols, weight=None):
     return hit
 
 
-#: Each lower sub-band of :func:`_with_subband_poles` ends at this fraction of the one above it.
+#: Each lower sub-band of :func:`_with_refit_poles` ends at this fraction of the one above it.
 SUBBAND_STEP = 0.25
 #: A sub-band's pole joins the modes only where the FRF shows a peak: its magnitude at the pole this many times
 #: the median magnitude of the lines within +-:data:`PEAK_WINDOW` (relative) of it.
@@ -75,38 +75,58 @@ def visible_peak(frequency_hz, magnitude, fn_hz) -> np.ndarray:
     return out
 
 
-def _with_subband_poles(f, rec, poles, max_order, margin, select, lscf_options):
-    """``poles`` of the whole band plus the physical poles that only lower sub-bands resolve.
+def kind_weight(frequency_hz, kind) -> np.ndarray:
+    """LSCF line weight ``|w|^k / max`` that turns a receptance's residual into that of an FRF of ``kind``
+    (k = 0 receptance, 1 mobility, 2 accelerance), shape (n_lines,)."""
+    w = np.abs(convert_frf(np.ones(np.size(frequency_hz)), 2 * np.pi * np.asarray(frequency_hz, float), "receptance",
+                           kind))
+    return w / w.max()
+
+
+def _refits(f, weight):
+    """``(lines, line weight, highest frequency of a pole that joins)`` of each fit after the whole band's: the whole
+    band weighted by ``weight`` (if given), then the sub-bands ``[f_min, f_max q^k]`` unweighted."""
+    if weight is not None:
+        yield np.ones(f.size, bool), weight, f[-1]
+    hi = f[-1] * SUBBAND_STEP
+    while hi > 4 * f[0]:
+        yield f <= hi, None, hi
+        hi *= SUBBAND_STEP
+
+
+def _with_refit_poles(f, rec, poles, max_order, margin, select, lscf_options, weight=None):
+    """``poles`` of the whole band plus the physical poles that other fits resolve.
 
     One z-domain model over a wide band (an accelerance over five decades, 0.3-2000 Hz) resolves its lowest modes
-    poorly: their poles crowd near ``z = 1`` and a mode narrower than two lines barely weighs in the fit. The band
-    ``[f_min, f_max q^k]`` (``q`` = :data:`SUBBAND_STEP`, k = 1, 2, ...) is fitted again while it holds enough
-    lines; a pole found there that the larger band lacked (no pole within 1 %) joins when it lies inside that
-    sub-band and the FRF shows a peak at it (:func:`visible_peak`).
+    poorly: their poles crowd near ``z = 1`` and a mode narrower than two lines barely weighs in the fit. A noise
+    floor even in the measured kind, divided by ``w^k`` into a receptance, can swamp it from the lowest lines. So
+    the whole band is fitted again weighted by ``weight`` (the measured kind's residual, :func:`kind_weight`), and
+    the band ``[f_min, f_max q^k]`` (``q`` = :data:`SUBBAND_STEP`, k = 1, 2, ...) while it holds enough lines; a
+    pole found there that the fits before lacked (no pole within 1 %) joins when it lies inside that band and the
+    FRF shows a peak at it (:func:`visible_peak`).
     """
     n_o, n_i = rec.shape[0], rec.shape[1]
     mag = np.sqrt(np.mean(np.abs(rec) ** 2, axis=(0, 1)))
     found = [poles]
-    hi = f[-1] * SUBBAND_STEP
-    while hi > 4 * f[0]:
-        sel = f <= hi
+    for sel, w, hi in _refits(f, weight):
         order = min(max_order, sel.sum() * n_o // (n_i + 1) - 1)
         if order < 4:
             break
         try:
-            with warnings.catch_warnings():  # a sub-band without a stable pole: empty clusters
+            with warnings.catch_warnings():  # a band without a stable pole: empty clusters
                 warnings.simplefilter("ignore", RuntimeWarning)
-                sub = select_poles(lscf(f[sel], rec[..., sel], max_order=order, margin=margin, **lscf_options),
-                                   **(select or {}))
+                sub = select_poles(lscf(f[sel], rec[..., sel], max_order=order, margin=margin,
+                                        **{**lscf_options, "line_weight": w}), **(select or {}))
         except BeamDamageError:
-            break
+            if w is None:
+                break
+            continue
         known = np.concatenate([p.natural_frequencies_hz for p in found])
         fn = sub.natural_frequencies_hz
-        new = ((fn >= f[0]) & (fn <= hi / (1 + margin))
+        new = ((fn >= f[0]) & (fn <= hi)
                & np.all(np.abs(fn[:, None] / known[None, :] - 1) > 0.01, axis=1) & visible_peak(f, mag, fn))
         if new.any():
             found.append(_take(sub, np.nonzero(new)[0]))
-        hi *= SUBBAND_STEP
     if len(found) == 1:
         return poles
     merged = type(poles)(**{k: np.concatenate([getattr(p, k) for p in found]) for k in poles.__dataclass_fields__})
@@ -269,7 +289,8 @@ def identify_lscf(frequency_hz, frf, n_modes=None, drive=None, max_order=40, sel
                   weighting="estimated", margin=0.1, **lscf_options):
     """LSCF poles, automatic selection and LSFD residues/shapes in one call.
 
-    Poles come from LSCF on the receptance (stabilisation over model orders),
+    Poles come from LSCF on the receptance (stabilisation over model orders; the whole band, again weighted as an
+    FRF of ``kind``, and lower sub-bands add the poles it lacks, see :func:`_with_refit_poles`),
     including stable poles up to ``margin`` outside the band; the residues and the
     residual terms are then fitted to ``frf`` as given (``kind``, ``weighting``,
     see :func:`lsfd`) with every selected pole. Only modes inside the band are
@@ -309,9 +330,16 @@ def identify_lscf(frequency_hz, frf, n_modes=None, drive=None, max_order=40, sel
 def _identify_lscf(frequency_hz, frf, n_modes, drive, max_order, select, kind, weighting, margin, lscf_options):
     f, h = _frf3(frequency_hz, frf)
     rec = convert_frf(h, 2 * np.pi * f, check_frf_kind(kind), "receptance")
+    weight = None if "line_weight" in lscf_options or kind == "receptance" else kind_weight(f, kind)
     diagram = lscf(f, rec, max_order=max_order, margin=margin, **lscf_options)
-    poles = _with_subband_poles(f, rec, select_poles(diagram, **(select or {})), max_order, margin, select,
-                                lscf_options)
+    try:
+        first = select_poles(diagram, **(select or {}))
+    except ConvergenceError:
+        if weight is None:
+            raise
+        diagram = lscf(f, rec, max_order=max_order, margin=margin, line_weight=weight, **lscf_options)
+        first, weight = select_poles(diagram, **(select or {})), None
+    poles = _with_refit_poles(f, rec, first, max_order, margin, select, lscf_options, weight)
     fn = poles.natural_frequencies_hz
     inside = np.nonzero((fn >= f[0]) & (fn <= f[-1]))[0]
     if inside.size == 0:

@@ -83,6 +83,11 @@ def complex_modes_from_driving_point(h_peak, zeta, drive_index=0):
     return factor * h_peak / psi_s  # eq. 3.34 (gives psi_s again on the drive row)
 
 
+#: Largest damping ratio of a mode that peak picking and the circle fit report (that of LSCF's poles): a broader
+#: peak is a bump of the noise floor.
+MAX_DAMPING = 0.2
+
+
 def mode_indicator(frf):
     """Sum of squared FRF magnitudes over all responses and references, shape (n_lines,)."""
     h = np.asarray(frf)
@@ -169,6 +174,12 @@ def peak_picking(frequency_hz, frf, n_modes=None, peaks=None, drive=None, promin
         fa[m] = np.interp(half, [mif[lo], mif[lo + 1]], [f[lo], f[lo + 1]]) if mif[lo] <= half else f[lo]
         fb[m] = np.interp(half, [mif[hi], mif[hi - 1]], [f[hi], f[hi - 1]]) if mif[hi] <= half else f[hi]
     zeta = (fb - fa) / (2 * fn)
+    broad = ~(zeta <= MAX_DAMPING)
+    if np.any(broad):
+        warnings.warn("peak picking: the peak(s) at " + ", ".join(f"{x:.4g} Hz" for x in fn[broad])
+                      + f" left out: the half-power band gives a damping ratio above {MAX_DAMPING:g}, "
+                      "a bump of the noise, not a mode", stacklevel=2)
+        idx, fn, zeta, fa, fb, df_line = (a[~broad] for a in (idx, fn, zeta, fa, fb, df_line))
     narrow = (fb - fa) < 2 * df_line
     if np.any(narrow):
         warnings.warn("peak picking: the half-power band of the mode(s) at "
@@ -355,6 +366,12 @@ def circle_fit(frequency_hz, frf, n_modes=None, peaks=None, drive=None, bandwidt
         z_std = np.sqrt(np.sum(weight * (zz.reshape(-1, n_m) - z_mode) ** 2, axis=0) / (n_frf - 1))
     else:
         f_std, z_std = fsd[0, 0], zsd[0, 0]
+    broad = ~(z_mode <= MAX_DAMPING)
+    if np.any(broad):
+        warnings.warn("circle fit: the peak(s) at " + ", ".join(f"{x:.4g} Hz" for x in f_mode[broad])
+                      + f" left out: the circles give a damping ratio above {MAX_DAMPING:g}, a bump of the noise, "
+                      "not a mode", stacklevel=2)
+        f_mode, z_mode, f_std, z_std, A = (a[..., ~broad] for a in (f_mode, z_mode, f_std, z_std, A))
     wd = 2 * np.pi * f_mode * np.sqrt(1 - z_mode**2)
     residues = A / (2j * wd)
     return _estimate(f_mode, z_mode, residues, drive, "circle", f_std, z_std)
