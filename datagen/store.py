@@ -100,6 +100,8 @@ COLUMN_UNITS = {
     "modal_noise_scale": "- (factor on the standard deviations of the modal noise)",
     "shear_flexibility": "- (EI / (kGA L^2) of the specimen; 0: Euler-Bernoulli)",
     "frequency_scatter": "- (relative std of independent per-mode frequency changes of each test)",
+    "sensor_noise": "- (output-only modal noise: sensor noise std relative to the response RMS)",
+    "record_length_s": "s (output-only modal noise: record length of each test)",
     "max_frequency_drop_rel": "- (largest relative drop of f1..f4 due to the damage alone)",
     "damage{k}_x_m": "m", "damage{k}_size": "- (the damage model's size_meaning)",
     "damage{k}_element4": "- (1..4, 0 none)",
@@ -199,6 +201,7 @@ def sample_table(labels: dict, outputs: dict, shard: int, first_id: int, length_
         "modal_noise_scale": labels["modal_noise_scale"],
         "shear_flexibility": labels["shear_flexibility"],
         "frequency_scatter": labels["frequency_scatter"],
+        **{k: labels[k] for k in ("sensor_noise", "record_length_s") if k in labels},   # output-only modal noise
         **per_sample,
         "max_frequency_drop_rel": outputs["damage_frequency_drop"],
     }
