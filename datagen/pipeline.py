@@ -59,7 +59,8 @@ from physics.layout import RIGID_BODY_MODES, Layout, layout_of
 from physics.modal import eigenvalues_from_modal, modal_parameters, undamped_modes
 from physics.updating import analyst_mass, pilkey, reduced_mass
 
-__all__ = ["BatchInputs", "CHUNK", "LABEL_FIELDS", "N_MEAS", "OUTPUT_ONLY_FIELDS", "Setup", "build_setup", "draw_batch", "generated_test",
+__all__ = ["BatchInputs", "CHUNK", "LABEL_FIELDS", "N_MEAS", "OUTPUT_ONLY_FIELDS", "Setup", "build_setup", "draw_batch",
+           "generated_test",
            "get_setup", "measure_modes", "projected_modes", "simulate_batch", "simulate_chunk", "simulate_shard",
            "damage_frequency_drop", "truth_matrices", "unit_mass", "update_models"]
 

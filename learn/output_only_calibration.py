@@ -87,8 +87,8 @@ def output_only_errors(setup, sim: dict, sensor_noise: float, record_length_s: f
     """Errors of SSI-cov on the records of every test in ``sim`` (:func:`datagen.pipeline.simulate_batch` of
     ``setup``) at one sensor noise and record length: relative frequency and damping errors (N, m) and shape
     errors (N, S, m) (:func:`learn.noise_calibration.mode_errors`, unscaled), NaN where a mode was not found;
-    N = 2 x specimens; the records hold the next fast FFT length of samples from ``record_length_s``. ``seed``: anything :func:`numpy.random.default_rng` takes; record ``i`` draws from
-    ``[*seed, i]``."""
+    N = 2 x specimens; a record holds the next fast FFT length of samples from ``record_length_s``. ``seed``:
+    anything :func:`numpy.random.default_rng` takes; record ``i`` draws from ``[*seed, i]``."""
     from scipy.fft import next_fast_len
     from threadpoolctl import threadpool_limits
 
