@@ -1,7 +1,7 @@
 """Benchmark: the classifier on output-only pairs beside the FRF route, on the independent simulator's specimens.
 
 Run: ``.venv/bin/python -m experiments.bench_output_only --model MODEL_DIR [--model MODEL_DIR2 ...] [--n 24]
-[--seed 500] [--minutes 5] [--out out/output-only] [--docs] [--table output-only-classify]``
+[--seed 500] [--minutes 5] [--out out/output-only] [--docs] [--table output-only-noise]``
 
 Several ``--model`` are scored on the same pairs, e.g. one trained on the FRF route's modal noise beside one
 trained on ``generate --modal-noise output-only`` data.
@@ -95,7 +95,9 @@ def main(argv=None) -> int:
     p.add_argument("--minutes", type=float, default=5.0, help="record length of each test (default 5)")
     p.add_argument("--out", default="out/output-only")
     p.add_argument("--docs", action="store_true", help="write the table into docs/identification.md")
-    p.add_argument("--table", default="output-only-classify", help="the docs table's name (with --docs)")
+    p.add_argument("--table", choices=("output-only-classify", "output-only-noise"), default="output-only-classify",
+                   help="the docs table written (with --docs): one model's routes, or models trained on FRF-route "
+                        "against output-only modal noise")
     args = p.parse_args(argv)
     from experiments.bench_foreign import classify_set, score, write_sets
 
