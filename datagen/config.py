@@ -25,9 +25,9 @@ from physics.errors import BeamDamageError, ConfigError
 from physics.properties import PRESETS
 from physics.updating import mass_model_name
 
-__all__ = ["CONFIG_DIR", "DEFAULTS", "MAX_MODAL_NOISE", "MAX_SHEAR_FLEXIBILITY",
-           "MIN_ROOT_SPRING_RELATIVE", "calibrated_modal_std", "load_config", "merge", "modal_noise_calibration",
-           "named_configs", "validate"]
+__all__ = ["CONFIG_DIR", "DEFAULTS", "MAX_MODAL_NOISE", "MAX_SHEAR_FLEXIBILITY", "MIN_ROOT_SPRING_RELATIVE",
+           "MODAL_NOISE_MODES", "calibrated_modal_std", "load_config", "merge", "modal_noise_calibration",
+           "named_configs", "output_only_variables", "validate"]
 
 
 #: Default configuration (SI units). See docs/datasets.md.
@@ -59,7 +59,9 @@ DEFAULTS: dict = {
     "measurement": {
         "modal_noise": "fixed",        # "fixed": the three stds below; "calibrated": per-mode coefficients times the
                                        # sample's FRF noise level (configs/modal_noise.json,
-                                       # experiments.bench_modal_noise)
+                                       # experiments.bench_modal_noise); "output-only": per-mode coefficients of the
+                                       # sample's sensor noise and record length (SSI-cov of response records,
+                                       # learn.output_only_calibration; generate --modal-noise output-only)
         "frequency_noise": 0.0005,     # relative std of natural frequencies (number, or one per mode 1..4)
         "damping_noise": 0.02,         # relative std of damping ratios
         "shape_noise": 0.002,          # complex std relative to the largest entry of each mode
@@ -77,6 +79,10 @@ DEFAULTS: dict = {
                                           # per-sensor, per-mode shape changes of each test
         "gain_scatter": [0.0, 0.0],       # relative std of each sensor channel's gain in each test (all its modes)
         "identification": None,       # derived: the identification the calibrated modal noise describes (read-only)
+        "sensor_noise": [0.005, 0.03],   # "output-only" only: sensor noise std relative to each channel's response
+                                         # RMS (or [lo, hi], log-uniform per sample)
+        "record_length_s": [120.0, 900.0],  # "output-only" only: record length of each test (s; or [lo, hi],
+                                            # log-uniform per sample)
         "frf_noise": 0.005,            # complex std relative to |H| per line (or [lo, hi], log-uniform per sample)
         "frf_noise_floor": 0.0,        # complex std relative to each FRF's peak (or [lo, hi], log-uniform)
         "band_rad_s": [1.0, 5000.0],   # thesis Program A grid limits
@@ -117,13 +123,23 @@ def calibrated_modal_std(meas: dict, level, floor) -> dict:
     """Relative std of each modal quantity, ``sqrt((c level)^2 + (g floor)^2 + e^2)`` per mode.
 
     ``c``, ``g`` and ``e`` are ``measurement.{q}_noise``, ``{q}_noise_per_floor`` and ``{q}_noise_floor``;
-    ``level`` and ``floor`` (FRF noise level and floor) broadcast against the 4 modes.
+    ``level`` and ``floor`` (FRF noise level and floor, or the output-only variables of
+    :func:`output_only_variables`) broadcast against the modes.
     Returns ``{"frequency", "damping", "shape"}`` -> ndarray.
     """
     return {q: np.sqrt((np.asarray(meas[f"{q}_noise"], float) * level) ** 2
                        + (np.asarray(meas[f"{q}_noise_per_floor"], float) * floor) ** 2
                        + np.asarray(meas[f"{q}_noise_floor"], float) ** 2)
             for q in ("frequency", "damping", "shape")}
+
+
+def output_only_variables(sensor_noise, record_length_s):
+    """``(sensor_noise / sqrt(T), 1 / sqrt(T))`` of a record of ``T = record_length_s`` seconds: the variables
+    that take the FRF noise level's and floor's places in :func:`calibrated_modal_std` for ``modal_noise =
+    "output-only"``, so that ``std^2 = ((c noise)^2 + g^2) / T + e^2`` (the errors of an output-only
+    identification fall as one over the square root of the record length; sensor noise adds to them)."""
+    t = np.asarray(record_length_s, float)
+    return np.asarray(sensor_noise, float) / np.sqrt(t), 1.0 / np.sqrt(t)
 
 
 def _max_calibrated_level(meas, floor, limit):
@@ -146,8 +162,10 @@ def validate(cfg: dict) -> dict:
     _check_beam(cfg)
     _check_specimen(cfg["specimen"])
     calibrated = _check_measurement(cfg["measurement"])
-    if calibrated:
+    if calibrated == "calibrated":
         _check_calibrated_noise(cfg["measurement"])
+    elif calibrated == "output-only":
+        _check_output_only_noise(cfg["measurement"])
     _check_updating(cfg["updating"])
     _check_solver(cfg["solver"], cfg["mesh"]["truth_elements"])
     _check_damage(cfg)
@@ -235,16 +253,23 @@ def _check_damage(cfg: dict) -> None:
     model.validate(d, cfg)
 
 
-def _check_measurement(meas: dict) -> bool:
-    """Section ``measurement``: modal noise (fixed stds or the shipped calibration), FRF noise, band, lines.
+#: What ``measurement.modal_noise`` may be.
+MODAL_NOISE_MODES = ("fixed", "calibrated", "output-only")
 
-    Returns whether the modal noise is calibrated (``meas`` then holds the calibration's per-mode
-    coefficients and its ``identification``).
+
+def _check_measurement(meas: dict) -> str:
+    """Section ``measurement``: modal noise (fixed stds, the FRF calibration or the output-only one), FRF noise,
+    sensor noise and record length, band, lines.
+
+    Returns ``measurement.modal_noise``; ``meas["identification"]`` is set to the identification the calibrated
+    modal noise describes (``{"method": "lscf", ...}`` of the shipped file, ``{"method": "ssi", ...}`` for
+    "output-only", None for "fixed").
     """
-    if meas["modal_noise"] not in ("fixed", "calibrated"):
-        raise ConfigError(f"config key 'measurement.modal_noise' must be 'fixed' or 'calibrated', "
-                          f"got {meas['modal_noise']!r}")
-    calib = modal_noise_calibration() if meas["modal_noise"] == "calibrated" else {}
+    mode = meas["modal_noise"]
+    if mode not in MODAL_NOISE_MODES:
+        raise ConfigError(f"config key 'measurement.modal_noise' must be one of {', '.join(MODAL_NOISE_MODES)}, "
+                          f"got {mode!r}")
+    calib = modal_noise_calibration() if mode == "calibrated" else {}
     meas["identification"] = calib.get("identification")
     for k in ("frequency_noise", "damping_noise", "shape_noise", "frequency_noise_floor", "damping_noise_floor",
               "shape_noise_floor", "frequency_noise_per_floor", "damping_noise_per_floor", "shape_noise_per_floor"):
@@ -253,7 +278,11 @@ def _check_measurement(meas: dict) -> bool:
             if not 1 <= len(v) <= 100:
                 raise ConfigError(f"config key 'measurement.{k}' must be a number or one number per mode (modes 1, "
                                   f"2, ...; the last repeats beyond the list), got {v!r}")
-            meas[k] = [_num(f"measurement.{k}", x, lo=0, hi=1e4 if calib else MAX_MODAL_NOISE) for x in v]
+            meas[k] = [_num(f"measurement.{k}", x, lo=0, hi=MAX_MODAL_NOISE if mode == "fixed" else 1e4) for x in v]
+        elif mode == "output-only":
+            raise ConfigError(f"config key 'measurement.{k}': modal_noise 'output-only' takes one coefficient per "
+                              "mode, calibrated on the test by 'beam-damage generate --modal-noise output-only'; "
+                              f"got {v!r}")
         elif calib:  # a number in calibrated mode: the shipped per-mode coefficients
             q = k.split("_")[0]
             meas[k] = [float(x) for x in calib[q + k.removeprefix(f"{q}_noise")]]
@@ -264,6 +293,13 @@ def _check_measurement(meas: dict) -> bool:
         is_number = isinstance(v, (int, float)) and not isinstance(v, bool)
         meas[k] = (_num(f"measurement.{k}", v, lo=0.0, hi=0.5) if is_number
                    else _range(f"measurement.{k}", v, lo=0.0, hi=0.5))
+    if mode == "output-only":
+        meas["identification"] = {"method": "ssi", "n_modes": len(meas["frequency_noise"])}
+    for k, lo, hi in (("sensor_noise", 0.0, 0.5), ("record_length_s", 1.0, 1e6)):  # a number fixes it
+        v = meas[k]
+        is_number = isinstance(v, (int, float)) and not isinstance(v, bool)
+        meas[k] = _num(f"measurement.{k}", v, lo=lo, hi=hi) if is_number else _range(f"measurement.{k}", v, lo=lo,
+                                                                                          hi=hi)
     meas["modal_noise_scale"] = _range("measurement.modal_noise_scale", meas["modal_noise_scale"], lo=0.01, hi=100.0)
     for k, hi in REPEATABILITY_MAX.items():
         meas[k] = _range(f"measurement.{k}", meas[k], lo=0.0, hi=hi)
@@ -271,7 +307,7 @@ def _check_measurement(meas: dict) -> bool:
     if meas["band_rad_s"][0] >= meas["band_rad_s"][1]:
         raise ConfigError("config key 'measurement.band_rad_s' must have low < high")
     meas["lines"] = _num("measurement.lines", meas["lines"], lo=2, hi=200000, integer=True)
-    return bool(calib)
+    return mode
 
 
 def _check_calibrated_noise(meas: dict) -> None:
@@ -284,6 +320,18 @@ def _check_calibrated_noise(meas: dict) -> None:
                               f"{q} noise std of {std.max():.3g} (> {MAX_MODAL_NOISE:g}: measured modes with "
                               f"negative damping or lost shapes); keep frf_noise <= "
                               f"{_max_calibrated_level(meas, floor, MAX_MODAL_NOISE):.3g}")
+
+
+def _check_output_only_noise(meas: dict) -> None:
+    """The output-only modal noise of the noisiest, shortest record must stay <= :data:`MAX_MODAL_NOISE`."""
+    noise, length_s = meas["sensor_noise"], meas["record_length_s"]
+    noise, length_s = (max(noise) if isinstance(noise, list) else noise,
+                       min(length_s) if isinstance(length_s, list) else length_s)
+    for q, std in calibrated_modal_std(meas, *output_only_variables(noise, length_s)).items():
+        if std.max() > MAX_MODAL_NOISE:
+            raise ConfigError(f"config key 'measurement.record_length_s': {length_s:g} s with sensor noise "
+                              f"{noise:g} implies an output-only relative {q} noise std of {std.max():.3g} "
+                              f"(> {MAX_MODAL_NOISE:g}); give longer records or less sensor noise")
 
 
 def _check_updating(up: dict) -> None:

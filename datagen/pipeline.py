@@ -45,7 +45,7 @@ import json
 
 import numpy as np
 
-from datagen.config import calibrated_modal_std
+from datagen.config import calibrated_modal_std, output_only_variables
 from datagen.damage import DamageModel, damage_model
 from datagen.solvers import light_damping_modes, ritz_modes
 from datagen.specimen import BeamPreset, SectionLayout, draw_specimens
@@ -59,7 +59,8 @@ from physics.layout import RIGID_BODY_MODES, Layout, layout_of
 from physics.modal import eigenvalues_from_modal, modal_parameters, undamped_modes
 from physics.updating import analyst_mass, pilkey, reduced_mass
 
-__all__ = ["BatchInputs", "CHUNK", "LABEL_FIELDS", "N_MEAS", "Setup", "build_setup", "draw_batch", "generated_test",
+__all__ = ["BatchInputs", "CHUNK", "LABEL_FIELDS", "N_MEAS", "OUTPUT_ONLY_FIELDS", "Setup", "build_setup", "draw_batch",
+           "generated_test",
            "get_setup", "measure_modes", "projected_modes", "simulate_batch", "simulate_chunk", "simulate_shard",
            "damage_frequency_drop", "truth_matrices", "unit_mass", "update_models"]
 
@@ -459,6 +460,8 @@ class BatchInputs:
     supports change between the days beyond re-clamping (``specimen.support_change_fraction``); its
     ``root_spring_change`` is then ``factor - 1`` with the factor drawn from ``specimen.support_change_factor``
     (softer or stiffer alike).
+    With ``measurement.modal_noise = "output-only"``: ``sensor_noise`` (relative to the response RMS) and
+    ``record_length_s`` (s) of each sample's tests (B,), drawn after everything else (None otherwise).
     """
 
     EI_Nm2: np.ndarray
@@ -484,14 +487,18 @@ class BatchInputs:
     gain_scatter: np.ndarray
     n_gain: np.ndarray
     support_changed: np.ndarray
+    sensor_noise: np.ndarray | None = None
+    record_length_s: np.ndarray | None = None
 
     def __len__(self):
         return self.EI_Nm2.shape[0]
 
     def take(self, i) -> "BatchInputs":
         """Sub-batch by index (slice or array)."""
-        return BatchInputs(**{k: ({p: v[i] for p, v in getattr(self, k).items()} if k == "damage"
-                                  else getattr(self, k)[i]) for k in self.__dataclass_fields__})
+        def part(k):
+            v = getattr(self, k)
+            return {p: a[i] for p, a in v.items()} if k == "damage" else None if v is None else v[i]
+        return BatchInputs(**{k: part(k) for k in self.__dataclass_fields__})
 
 
 def _uniform(u, lo_hi, log=False):
@@ -530,6 +537,11 @@ def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
         change = np.where(support, factor - 1, change)
     if not np.all(np.isfinite(sp["root_spring_Nm_rad"])) and setup.spring:
         raise ConfigError("config key 'specimen.root_spring_relative' gave an infinite spring")
+    oma = {}
+    if meas["modal_noise"] == "output-only":       # drawn last: the other draws stay those of the other modes
+        u_oma = rng.random((n, 2))
+        oma = {"sensor_noise": _uniform(u_oma[:, 0], meas["sensor_noise"], log=True),
+               "record_length_s": _uniform(u_oma[:, 1], meas["record_length_s"], log=True)}
     return BatchInputs(sp["EI_Nm2"], sp["mass_per_length_kg_m"], sp["damping_scale"], sp["root_spring_Nm_rad"],
                        dmg.pop("n_damages"), dmg.pop("x_m"), dmg,
                        _uniform(u[:, 0], spc["temperature_stiffness_change"]),
@@ -537,7 +549,7 @@ def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
                        _uniform(u[:, 2], meas["frf_noise"], log=True),
                        _uniform(u[:, 3], meas["frf_noise_floor"], log=True), seeds,
                        _uniform(u_scale, meas["modal_noise_scale"], log=True), sp["shear_flexibility"],
-                       *(scatter[k] for k in REPEATABILITY), n_gain, support)
+                       *(scatter[k] for k in REPEATABILITY), n_gain, support, **oma)
 
 
 #: The repeatability ranges of ``measurement``, in the order they are drawn.
@@ -681,14 +693,18 @@ def measure_modes(setup, inp, lam4, psi4):
     ("fixed"), or ``sqrt((c level)^2 + (g floor)^2 + e^2)`` of the sample's FRF
     noise level and noise floor with the coefficients ``c`` (``*_noise``), ``g``
     (``*_noise_per_floor``) and ``e`` (``*_noise_floor``): "calibrated" against
-    the identification ``classify`` runs (``experiments.bench_modal_noise``).
+    the identification ``classify`` runs (``experiments.bench_modal_noise``); "output-only": the same form of
+    the sample's sensor noise and record length (:func:`datagen.config.output_only_variables`), calibrated
+    against SSI-cov of response records (:mod:`learn.output_only_calibration`).
     """
     mcfg = setup.cfg["measurement"]
-    if mcfg["modal_noise"] == "calibrated":
+    if mcfg["modal_noise"] in ("calibrated", "output-only"):
         coef = {k: per_mode(mcfg[k], setup.n_modes) for q in ("frequency", "damping", "shape")
                 for k in (f"{q}_noise", f"{q}_noise_per_floor", f"{q}_noise_floor")}
-        sig = calibrated_modal_std(coef, np.asarray(inp.noise_level, float)[:, None, None],
-                                   np.asarray(inp.noise_floor, float)[:, None, None])   # (B, 1, m)
+        x, y = ((inp.noise_level, inp.noise_floor) if mcfg["modal_noise"] == "calibrated"
+                else output_only_variables(inp.sensor_noise, inp.record_length_s))
+        sig = calibrated_modal_std(coef, np.asarray(x, float)[:, None, None],
+                                   np.asarray(y, float)[:, None, None])   # (B, 1, m)
     else:
         sig = {q: per_mode(mcfg[f"{q}_noise"], setup.n_modes) for q in ("frequency", "damping", "shape")}
     scale = np.asarray(inp.modal_noise_scale, float)[:, None, None]
@@ -740,6 +756,10 @@ LABEL_FIELDS = ("EI_Nm2", "mass_per_length_kg_m", "damping_scale", "root_spring_
                 "modal_noise_scale", "shear_flexibility", *REPEATABILITY, "support_changed")
 
 
+#: Drawn inputs recorded per sample with ``measurement.modal_noise = "output-only"`` only.
+OUTPUT_ONLY_FIELDS = ("sensor_noise", "record_length_s")
+
+
 def simulate_batch(setup: Setup, inp: BatchInputs, chunk: int = CHUNK) -> dict:
     """Batched pipeline for ``B`` samples, in vectorised chunks of ``chunk`` samples (see :func:`simulate_chunk`)."""
     parts = [simulate_chunk(setup, inp.take(slice(i, i + chunk))) for i in range(0, len(inp), chunk)]
@@ -760,7 +780,8 @@ def simulate_shard(setup: Setup, seed_seq: np.random.SeedSequence, n: int, chunk
     for i in range(0, n, chunk):
         b = draw_batch(rng, min(chunk, n - i), setup)
         outs.append(simulate_chunk(setup, b))
-        labs.append({**{k: getattr(b, k) for k in LABEL_FIELDS}, **b.damage})
+        labs.append({**{k: getattr(b, k) for k in LABEL_FIELDS + OUTPUT_ONLY_FIELDS if getattr(b, k) is not None},
+                     **b.damage})
     cat = lambda parts: {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}  # noqa: E731
     return cat(labs), cat(outs)
 

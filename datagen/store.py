@@ -104,6 +104,8 @@ COLUMN_UNITS = {
     "shape_scatter": "- (std of independent shape changes of each test, relative to each mode's largest entry)",
     "gain_scatter": "- (relative std of each sensor channel's gain in each test)",
     "support_changed": "bool: an intact specimen whose supports changed beyond re-clamping",
+    "sensor_noise": "- (output-only modal noise: sensor noise std relative to the response RMS)",
+    "record_length_s": "s (output-only modal noise: record length of each test)",
     "max_frequency_drop_rel": "- (largest relative drop of f1..f4 due to the damage alone)",
     "damage{k}_x_m": "m", "damage{k}_size": "- (the damage model's size_meaning)",
     "damage{k}_element4": "- (1..4, 0 none)",
@@ -204,6 +206,7 @@ def sample_table(labels: dict, outputs: dict, shard: int, first_id: int, length_
         "shear_flexibility": labels["shear_flexibility"],
         **{k: labels[k] for k in ("frequency_scatter", "damping_scatter", "shape_scatter", "gain_scatter")},
         "support_changed": labels["support_changed"].astype(bool),
+        **{k: labels[k] for k in ("sensor_noise", "record_length_s") if k in labels},   # output-only modal noise
         **per_sample,
         "max_frequency_drop_rel": outputs["damage_frequency_drop"],
     }

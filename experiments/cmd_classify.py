@@ -60,12 +60,24 @@ def read_input(path):
     return read(path, modal_or_frf(path))
 
 
+def identification_method(path) -> str | None:
+    """The ``method`` a modal-data JSON file names (``identify --out`` writes it for output-only modes), else None."""
+    from physics.io import read_json
+
+    if modal_or_frf(path) != MODAL or not str(path).lower().endswith(".json"):
+        return None
+    obj = read_json(path, require_object=False)
+    method = obj.get("method") if isinstance(obj, dict) else None
+    return method if isinstance(method, str) else None
+
+
 def run(args):
     model = load_model(args.model)
     _, beam_x_m = model.measured_beam(args.beam, args.mass)
     files = [args.baseline, *args.measured]
     mapped = [on_model_dofs(read_input(f), model.beam, beam_x_m, str(f)) for f in files]
-    results = classify_many(model, mapped[0][0], [m[0] for m in mapped[1:]], names=[str(f) for f in files])
+    results = classify_many(model, mapped[0][0], [m[0] for m in mapped[1:]], names=[str(f) for f in files],
+                            methods=[identification_method(f) for f in files])
     base_pos = mapped[0][1] and mapped[0][1].to_dict()
     extras = []
     for r, (_, cur_map) in zip(results, mapped[1:]):

@@ -12,7 +12,7 @@ from datagen.truth_beam import APPLIED_EFFECTS, beam_mapping
 from physics.errors import BeamDamageError
 from physics.properties import PRESETS
 
-__all__ = ["add_parser", "run"]
+__all__ = ["CALIBRATED_KEYS", "add_parser", "recorded_calibration", "run"]
 
 
 def add_parser(subparsers):
@@ -41,10 +41,16 @@ def add_parser(subparsers):
     p.add_argument("--store-frf", action="store_true",
                    help="also write the measured and updated FRFs into the shards (128 kB per sample; identical to "
                         "what reading synthesises)")
-    p.add_argument("--modal-noise", choices=("test", "shipped"), default="test",
-                   help="with a beam file whose test is not the thesis's and the calibrated modal noise: 'test' "
-                        "(default) calibrates it on that test first (learn.noise_calibration: LSCF/LSFD of 144 "
-                        "simulated files, about 15-60 s), 'shipped' keeps the thesis test's coefficients")
+    p.add_argument("--modal-noise", choices=("test", "shipped", "output-only"), default="test",
+                   help="the training pairs' modal noise: 'test' (default) with a beam file whose test is not the "
+                        "thesis's and the calibrated modal noise calibrates it on that test first "
+                        "(learn.noise_calibration: LSCF/LSFD of 144 simulated FRF files, about 15-60 s), 'shipped' "
+                        "keeps the thesis test's coefficients, 'output-only' calibrates it on the test's output-only "
+                        "identification instead (learn.output_only_calibration: SSI-cov of 144 simulated response "
+                        "records under white random force, sensor noise 0.5-3 %% of the RMS, 2-15 min; about "
+                        "1 min) and draws each sample's sensor noise and record length (measurement.sensor_noise, "
+                        "record_length_s), for tests that 'classify' reads as the modal.json of 'identify' on "
+                        "response records. A calibration is recorded in the dataset's config and reused on resume")
     p.add_argument("--json", action="store_true", help="print the manifest summary as JSON")
     p.set_defaults(func=run, flags={"n": "--n", "seed": "--seed", "workers": "--workers", "scheduler": "--scheduler"})
 
@@ -68,11 +74,12 @@ def run(args) -> dict:
         test = generated_test(truth, beam)      # the test it describes, refused here naming the file
         cfg = merge({"beam": beam_mapping(truth)}, base=cfg)
         if not test.thesis and cfg["measurement"]["modal_noise"] == "calibrated" and args.modal_noise == "test":
-            from learn.noise_calibration import calibrate_test
-
-            print(f"{beam}: calibrating the modal noise on this test ({test.n_sensors} sensors, modes "
-                  f"{', '.join(map(str, test.modes))})", file=sys.stderr)
-            cfg = merge({"measurement": calibrate_test(cfg)}, base=cfg)
+            cfg = _calibrated(cfg, args.out, "calibrated", f"{beam}: calibrating the modal noise on this test "
+                                                           f"({test.n_sensors} sensors, modes "
+                                                           f"{', '.join(map(str, test.modes))})")
+    if args.modal_noise == "output-only":
+        cfg = _calibrated(cfg, args.out, "output-only", f"{beam or cfg['preset']}: calibrating the modal noise on "
+                                                        "this test's output-only identification (SSI-cov)")
     if args.store_frf:
         cfg["output"]["store_frf"] = True
     m = generate(args.out, cfg, n=args.n, seed=args.seed, workers=args.workers, scheduler=args.scheduler,
@@ -91,3 +98,44 @@ def run(args) -> dict:
         if flagged:
             print("  status: " + ", ".join(f"{v} {k}" for k, v in flagged.items()) + " (samples table column 'status')")
     return summary
+
+
+#: The ``measurement`` keys a modal-noise calibration sets.
+CALIBRATED_KEYS = ("modal_noise",) + tuple(f"{q}{s}" for q in ("frequency", "damping", "shape")
+                                           for s in ("_noise", "_noise_per_floor", "_noise_floor"))
+
+
+def recorded_calibration(out, cfg: dict, mode: str) -> dict | None:
+    """The ``measurement`` keys of the calibration recorded in ``out/manifest.json``, when that dataset's config is
+    ``cfg`` calibrated the same way (``modal_noise == mode``), else None: a resumed run reuses its calibration."""
+    from pathlib import Path
+
+    from physics.io import read_json
+
+    try:
+        stored = read_json(Path(out) / "manifest.json").get("config")
+        meas = {k: stored["measurement"][k] for k in CALIBRATED_KEYS}
+        if meas["modal_noise"] != mode or merge({"measurement": meas}, base=cfg) != stored:
+            return None
+    except (BeamDamageError, OSError, KeyError, TypeError, AttributeError):
+        return None
+    return meas
+
+
+def _calibrated(cfg: dict, out, mode: str, message: str) -> dict:
+    """``cfg`` with the modal noise calibrated by ``mode`` ("calibrated": LSCF/LSFD of FRF files, "output-only":
+    SSI-cov of response records), the calibration of a dataset being resumed at ``out`` reused."""
+    meas = recorded_calibration(out, cfg, mode)
+    if meas is not None:
+        print(f"{out}: reusing the modal-noise calibration recorded in its manifest", file=sys.stderr)
+    elif mode == "output-only":
+        from learn.output_only_calibration import calibrate_output_only
+
+        print(message, file=sys.stderr)
+        meas = calibrate_output_only(cfg)
+    else:
+        from learn.noise_calibration import calibrate_test
+
+        print(message, file=sys.stderr)
+        meas = calibrate_test(cfg)
+    return merge({"measurement": meas}, base=cfg)

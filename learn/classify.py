@@ -18,7 +18,7 @@ from physics.errors import BeamDamageError
 from physics.layout import SYMMETRIC_SUPPORTS
 from physics.io import MeasuredFRF
 
-__all__ = ["DISTANCE_TERMS", "classify", "classify_many", "distance_terms", "distance_text"]
+__all__ = ["DISTANCE_TERMS", "classify", "classify_many", "distance_terms", "distance_text", "identification_warning"]
 
 
 def classify(model: TrainedModel, baseline, current) -> dict:
@@ -26,7 +26,8 @@ def classify(model: TrainedModel, baseline, current) -> dict:
     return classify_many(model, baseline, [current])[0]
 
 
-def classify_many(model: TrainedModel, baseline, currents: list, names: list[str] | None = None) -> list[dict]:
+def classify_many(model: TrainedModel, baseline, currents: list, names: list[str] | None = None,
+                  methods: list | None = None) -> list[dict]:
     """Verdicts for tests of one beam against the same baseline (one network call for all pairs).
 
     Parameters
@@ -36,6 +37,11 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     currents : list of the same kind as ``baseline``
     names : list of str, optional
         Names of the inputs (baseline first) for messages.
+    methods : list of (str or None), optional
+        The identification method of :data:`physics.identification.METHODS` that produced each modal-data input
+        (baseline first; ``"ssi"`` in a ``modal.json`` of ``identify`` on response records), None where unknown:
+        an input identified otherwise than the training data's modal noise describes gets one warning
+        (:func:`identification_warning`).
 
     FRF files are identified by :data:`IDENTIFICATION` (LSCF/LSFD, the path the training data's modal noise
     describes); the modal-route network and every classical method read those modes. A model on an FRF route
@@ -59,7 +65,7 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     warnings: list[str] = []
     sens = model.sensitivity
     base_md, cur_md, identified, pairs = _measured_pairs(model, baseline, currents, names, sens, warnings)
-    route, X, rows = _network_inputs(model, baseline, currents, pairs, identified, warnings)
+    route, X, rows = _network_inputs(model, baseline, currents, pairs, identified, warnings, methods)
     if route in ("modal", "frequency"):
         _require_common_modes(pairs, names, model.beam)
     depth = functools.partial(equivalent_depth, preset=model.config.get("truth_beam") or model.beam.name,
@@ -333,7 +339,8 @@ def _classical_answers(model: TrainedModel, pairs, n: int, sens):
     return answers, reasons, mode_sens
 
 
-def _network_inputs(model: TrainedModel, baseline, currents: list, pairs, identified: bool, warnings: list):
+def _network_inputs(model: TrainedModel, baseline, currents: list, pairs, identified: bool, warnings: list,
+                    methods=None):
     """Route, feature rows and the pairs they belong to: ``(route, X, rows)``.
 
     ``X`` are the FRF-route features of every pair when the model reads FRFs and the inputs are FRF files, else
@@ -362,10 +369,42 @@ def _network_inputs(model: TrainedModel, baseline, currents: list, pairs, identi
     if rows:
         X = modal_features(np.stack([pairs[i].eigenvalues for i in rows]),
                            np.stack([pairs[i].eigenvectors for i in rows]), model.beam.n_modes, model.beam.test)
-    calibrated = (model.config.get("generator_config") or {}).get("measurement", {}).get("identification")
-    if identified and calibrated != IDENTIFICATION:
-        warnings.append("the training data's modal noise was not calibrated against the identification run "
-                        "here: retrain on data from 'beam-damage generate --config training'")
+    w = identification_warning(model, identified, methods)
+    if w:
+        warnings.append(w)
     return "modal", X, rows
+
+
+def _output_only(method) -> bool:
+    from physics.identification import METHODS
+
+    return method in METHODS and METHODS[method].data == "records"
+
+
+def identification_warning(model: TrainedModel, identified: bool, methods=None) -> str | None:
+    """One line when the inputs' modes were identified otherwise than the training data's modal noise describes
+    (``measurement.identification`` of its generator config), else None.
+
+    FRF files (``identified``) are identified here by :data:`IDENTIFICATION`; modal data carry the ``methods``
+    that produced them (None: unknown, nothing said). Output-only inputs (SSI-cov, FDD) against FRF-route or
+    fixed modal noise, and FRF-route inputs against output-only modal noise, are named.
+    """
+    trained = (model.config.get("generator_config") or {}).get("measurement", {}).get("identification")
+    trained_oo = _output_only((trained or {}).get("method"))
+    used = sorted({m for m in (methods or ()) if m is not None})
+    oo = [m for m in used if _output_only(m)]
+    if oo and not trained_oo:
+        what = "the FRF route's LSCF/LSFD" if trained else "fixed stds, not an identification"
+        return (f"the training data's modal noise describes {what}, not the output-only identification of these "
+                f"modes ({', '.join(oo)}): retrain on data from 'beam-damage generate --modal-noise output-only'")
+    frf = identified or any(not _output_only(m) for m in used)
+    if frf and trained_oo:
+        return ("the training data's modal noise describes the output-only identification (SSI-cov), not the "
+                "FRF route's of these modes: retrain on data from 'beam-damage generate' without "
+                "--modal-noise output-only")
+    if identified and trained != IDENTIFICATION:
+        return ("the training data's modal noise was not calibrated against the identification run here: retrain "
+                "on data from 'beam-damage generate --config training'")
+    return None
 
 

@@ -20,8 +20,8 @@ from learn.measured import identify_modes, pair_modes_by_frequency
 from physics.errors import BeamDamageError
 from physics.io import MeasuredFRF
 
-__all__ = ["FLOORS", "LEVELS", "QUANTITIES", "calibrate_std", "calibrate_test", "identification_errors",
-           "robust_std"]
+__all__ = ["FLOORS", "LEVELS", "QUANTITIES", "calibrate_std", "calibrate_test", "fit_coefficients",
+           "identification_errors", "mode_errors", "robust_std"]
 
 #: FRF noise levels (relative to |H|) and floors (relative to each FRF's peak) of the calibration: the range the
 #: training config draws (floors 1e-4 to 1e-3; without a floor LSFD weights the lines otherwise).
@@ -62,7 +62,6 @@ def identification_errors(cfg: dict, level: float, floor: float, specimens: int,
     from datagen.config import merge
     from datagen.pipeline import draw_batch, get_setup, simulate_batch
     from datagen.synth import measured_frf
-    from physics.modal import modal_parameters
 
     setup = get_setup(merge({"measurement": {"frf_noise": level, "frf_noise_floor": floor}}, base=cfg))
     test = setup.test
@@ -90,30 +89,59 @@ def identification_errors(cfg: dict, level: float, floor: float, specimens: int,
         for k, j in enumerate(which):
             if j >= 0:
                 lam_e[i, j], psi_e[i, :, j] = md.eigenvalues[k], md.eigenvectors[:, k]
+    return mode_errors(lam_e, psi_e, lam_t, psi_t)
+
+
+def mode_errors(lam_e, psi_e, lam_t, psi_t, unscaled: bool = False):
+    """Relative frequency and damping errors (..., m) and shape errors relative to each mode's largest truth entry
+    (..., S, m) of identified poles ``lam_e`` and shapes ``psi_e`` against the truth ``lam_t``, ``psi_t`` (NaN
+    where a mode was not found).
+
+    Shapes of the FRF path (the square root of the driving-point residue) are compared up to their sign;
+    ``unscaled`` ones (output-only, unit norm) are first scaled onto the truth by the complex least-squares factor,
+    and the errors multiplied by ``sqrt(S / (S - 1))`` for the one complex direction that factor absorbs (so that
+    circular errors of a given std, as a dataset draws them, measure that std)."""
+    from physics.modal import modal_parameters
+
     fe, ze = modal_parameters(lam_e)
     ft, zt = modal_parameters(lam_t)
     scale = np.max(np.abs(psi_t), axis=-2, keepdims=True)
+    if unscaled:
+        S = psi_t.shape[-2]
+        with np.errstate(invalid="ignore"):         # NaN where a mode was not found
+            alpha = (np.sum(np.conj(psi_e) * psi_t, axis=-2, keepdims=True)
+                     / np.sum(np.abs(psi_e) ** 2, axis=-2, keepdims=True))
+        err = (alpha * psi_e - psi_t) * (np.sqrt(S / (S - 1)) if S > 1 else 0.0)
+        return fe / ft - 1, ze / zt - 1, err / scale
     plus, minus = psi_e - psi_t, psi_e + psi_t          # the square root of the driving-point residue: sign free
     pick = np.sum(np.abs(minus) ** 2, axis=-2, keepdims=True) < np.sum(np.abs(plus) ** 2, axis=-2, keepdims=True)
     return fe / ft - 1, ze / zt - 1, np.where(pick, minus, plus) / scale
 
 
+def fit_coefficients(xs, ys, errors, default: dict | None = None) -> dict:
+    """``measurement`` keys ``{q}_noise``, ``{q}_noise_per_floor``, ``{q}_noise_floor`` (per mode) fitted by
+    :func:`calibrate_std` to the robust stds of ``errors`` (one :func:`mode_errors` triple per condition
+    ``(xs[k], ys[k])``); a mode without data takes its index's value of those keys in ``default`` (a
+    ``measurement`` section), else NaN."""
+    from datagen.pipeline import per_mode
+
+    m = errors[0][0].shape[-1]
+    suffixes = ("_noise", "_noise_per_floor", "_noise_floor")
+    out = {}
+    for qi, q in enumerate(QUANTITIES):
+        keep = [per_mode(default[q + s], m) if default else np.full(m, np.nan) for s in suffixes]
+        fits = []
+        for r in range(m):
+            fit = calibrate_std(xs, ys, [robust_std(e[qi][..., r]) for e in errors])
+            fits.append(fit if np.all(np.isfinite(fit)) else tuple(v[r] for v in keep))
+        for j, suffix in enumerate(suffixes):
+            out[q + suffix] = [float(f"{f[j]:.4g}") for f in fits]
+    return out
+
+
 def calibrate_test(cfg: dict, specimens: int = 8, seed: int = 0) -> dict:
     """``measurement`` keys ``{q}_noise``, ``{q}_noise_per_floor``, ``{q}_noise_floor`` (per mode used) of the
     test of ``cfg`` (module docstring); a mode no identification found keeps the shipped value of its index."""
-    from datagen.pipeline import per_mode
-
     conditions = [(lv, fl) for lv in LEVELS for fl in FLOORS]
     errors = [identification_errors(cfg, lv, fl, specimens, seed + 100 * k) for k, (lv, fl) in enumerate(conditions)]
-    m = errors[0][0].shape[-1]
-    out = {}
-    for qi, q in enumerate(QUANTITIES):
-        shipped = [per_mode(cfg["measurement"][q + s], m) for s in ("_noise", "_noise_per_floor", "_noise_floor")]
-        fits = []
-        for r in range(m):
-            stds = [robust_std(e[qi][..., r]) for e in errors]
-            fit = calibrate_std([c[0] for c in conditions], [c[1] for c in conditions], stds)
-            fits.append(fit if np.all(np.isfinite(fit)) else tuple(v[r] for v in shipped))
-        for j, suffix in enumerate(("_noise", "_noise_per_floor", "_noise_floor")):
-            out[q + suffix] = [float(f"{f[j]:.4g}") for f in fits]
-    return out
+    return fit_coefficients([c[0] for c in conditions], [c[1] for c in conditions], errors, cfg["measurement"])
