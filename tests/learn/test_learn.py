@@ -310,9 +310,10 @@ def test_every_classical_method_localises_a_slit_on_three_of_the_four_modes(mode
 
 
 def test_support_head_learns_a_support_change_and_survives_the_model_directory(tmp_path):
-    """A support change shifts every mode almost alike (a clamp spring 3x softer: -0.45, -0.44, -0.44, -0.43 %); intact pairs by noise only, slits
-    by their FE shifts: the support head separates the support changes, the detect head does not call them
-    damaged; a model without the fourth column has no support answer (NaN), before and after saving."""
+    """A support change shifts every mode almost alike (a clamp spring 3x softer: -0.45, -0.44, -0.44, -0.43 %);
+    intact pairs by noise only, slits by their FE shifts: the support head separates the support changes, the
+    detect head does not call them damaged; a model without the fourth column has no support answer (NaN), before
+    and after saving."""
     rng = np.random.default_rng(3)
 
     def data(n):
