@@ -16,6 +16,7 @@ unless ``--force`` (or a different ``--quick``/``--samples`` choice) asks for it
 
 from __future__ import annotations
 
+import hashlib
 import json
 import shutil
 import sys
@@ -258,7 +259,9 @@ def run(args) -> dict:
     beam_file = disc["beam_file"]
 
     # 4: data, training, evaluation
-    key = {"beam": beam_file, "n_train": n_train, "n_test": n_test}
+    from datagen.config import load_config
+    config = hashlib.sha256(json.dumps(load_config("training"), sort_keys=True).encode()).hexdigest()[:16]
+    key = {"beam": beam_file, "n_train": n_train, "n_test": n_test, "training_config": config}
     data = _step(out, "dataset", force, key, lambda: {
         "train": dataset_step(out / "dataset", beam_file, n_train, 0, args.workers),
         "test": dataset_step(out / "testset", beam_file, n_test, 1, args.workers)})
