@@ -195,8 +195,12 @@ def _summary_section(checks, disc: dict, evaluated: dict, verdict: dict, length_
     cl_answer = (f"damaged, element {cl['location_element']}, x = {cl['location_x_m']:.3f} m" if cl.get("damaged")
                  else "undamaged")
     if verdict["verdict_from"] == "network":
-        source = (f"from the network (probability of damage {net['probability_damaged']:.3f}), the pair lying "
-                  f"inside the training data; the classical method {cl.get('method', '–')} says {cl_answer}")
+        support = ("" if net.get("probability_support_change") is None else
+                   f"; supports changed beyond re-clamping: probability {net['probability_support_change']:.2g}")
+        source = (f"from the network (probability of damage {net['probability_damaged']:.3f}{support}), the pair "
+                  f"lying inside the training data (Mahalanobis distance {verdict['mahalanobis_distance']:.3g}; "
+                  f"{verdict['training_percentile']:.0f} % of the training pairs lie nearer); the classical method "
+                  f"{cl.get('method', '–')} says {cl_answer}")
     else:
         source = (f"from the classical method {cl.get('method', '–')}: the pair lies outside the training data "
                   f"(Mahalanobis distance {verdict['mahalanobis_distance']:.3g}, beyond "
