@@ -15,7 +15,7 @@ def shortcut_shape_std(cfg, level, floor, specimens, seed):
     from learn.noise_calibration import robust_std
 
     meas = {"frf_noise": level, "frf_noise_floor": floor, "modal_noise_scale": [1.0, 1.0],
-            "frequency_scatter": [0.0, 0.0]}
+            **{f"{q}_scatter": [0.0, 0.0] for q in ("frequency", "damping", "shape", "gain")}}
     setup = get_setup(merge({"measurement": meas}, base=cfg))
     inp = draw_batch(np.random.default_rng(seed), specimens, setup)
     sim = simulate_batch(setup, inp)
