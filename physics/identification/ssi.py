@@ -288,6 +288,24 @@ def _segment_modes(cor, block_rows, order, band_hz, fn, shapes, max_damping):
     return f_seg, z_seg
 
 
+def steadiest_text(diagram: StabilisationDiagram, n: int = 3) -> str:
+    """What a failed selection saw: the ``n`` frequencies whose poles kept their frequency and shape (status >= 3)
+    over the most model orders, and what to try; empty without such poles."""
+    d = diagram
+    ok = d.status >= 3
+    if not ok.any():
+        return ""
+    key = np.round(np.log(d.natural_frequencies_hz[ok]) / np.log1p(0.01)).astype(int)    # 1 % bins
+    bins, inverse = np.unique(key, return_inverse=True)
+    orders = np.array([np.unique(d.order[ok][inverse == b]).size for b in range(bins.size)])
+    top = np.argsort(-orders, kind="stable")[:n]
+    total = np.unique(d.order).size
+    seen = ", ".join(f"{np.median(d.natural_frequencies_hz[ok][inverse == b]):.4g} Hz ({orders[b]} of {total} "
+                     "orders)" for b in top)
+    return (f"; the steadiest poles (frequency and shape): {seen}; try --band around one of them, or --method fdd "
+            "(peaks of the spectra)")
+
+
 def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max_order=40, block_rows=None,
                  references=None, n_segments=8, max_damping=0.2, chunk_samples=8192,
                  where="record") -> SSIIdentification:
@@ -345,7 +363,7 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     except ConvergenceError as exc:
         lowest_hz = np.min(diagram.natural_frequencies_hz, initial=np.inf)
         if duration_s >= 10 / lowest_hz:
-            raise ConvergenceError(f"{where}: {exc}") from None
+            raise ConvergenceError(f"{where}: {exc}{steadiest_text(diagram)}") from None
     if duration_s < 10 / lowest_hz:
         raise ShapeError(f"{where}: {duration_s:.3g} s is shorter than ten periods of the lowest mode "
                          f"(near {lowest_hz:.4g} Hz): mode 1 cannot be identified")

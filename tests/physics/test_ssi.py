@@ -61,3 +61,22 @@ def test_bad_records_are_refused_with_what_cannot_be_identified(case, message):
         y[0] = 1.0
     with pytest.raises(BeamDamageError, match=message):
         identify_ssi(y, fs, band_hz=band, max_order=12, block_rows=8 if case == "short" else None)
+
+
+def test_a_failed_selection_names_the_steadiest_poles_and_what_to_try():
+    """Poles whose frequency and shape hold over orders (status 3) but whose damping does not: the error names
+    them, most orders first, with the orders counted over the whole diagram."""
+    from physics.identification.poles import StabilisationDiagram
+    from physics.identification.ssi import steadiest_text
+
+    order = np.array([1, 2, 3, 4, 5, 6, 4, 5, 6])
+    fn = np.array([100.0, 100.2, 99.9, 100.1, 100.0, 100.3, 250.0, 250.5, 260.0])
+    status = np.array([0, 3, 3, 3, 3, 3, 0, 3, 1])
+    d = StabilisationDiagram(order, 2j * np.pi * fn, fn, np.full(fn.size, 0.01), np.ones((fn.size, 2), complex),
+                             status, (50.0, 400.0))
+    text = steadiest_text(d)
+    assert text.startswith("; the steadiest poles (frequency and shape): 100.1 Hz (5 of 6 orders), 250.5 Hz (1 of 6")
+    assert "--method fdd" in text
+    assert steadiest_text(StabilisationDiagram(order, 2j * np.pi * fn, fn, np.full(fn.size, 0.01),
+                                               np.ones((fn.size, 2), complex), np.zeros(fn.size, int),
+                                               (50.0, 400.0))) == ""
