@@ -38,7 +38,9 @@ def add_parser(sub):
                                    "tests do not both hold the model's modes gets the classical method's verdict on "
                                    "the modes both hold (at least 2) and no network answer. Every verdict weighs the "
                                    "explanations of the frequency changes (intact, global stiffness, support change, "
-                                   "slit, mass change: hypotheses). Several MEASURED files "
+                                   "slit, mass change: hypotheses), and a network trained with support changes "
+                                   "says whether the supports changed beyond re-clamping (support_changed, "
+                                   "probability_support_change). Several MEASURED files "
                                    "give a list of verdicts; --out writes verdict.json and classify.png (one pair) or "
                                    "verdicts.json (several).")
     p.add_argument("--model", required=True, metavar="MODEL_DIR")
