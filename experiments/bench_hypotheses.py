@@ -48,20 +48,23 @@ def _frequencies(beam) -> np.ndarray:
     return modes(assemble(beam), n_refine=4).frequencies_hz[:4]
 
 
-def _modal(beam, ratios, rng) -> dict:
-    """The simulator's modal data of one test: modes 1-4 at the quarter points, its own modal noise."""
+def _modal(beam, ratios, rng, shape_noise=None) -> dict:
+    """The simulator's modal data of one test: modes 1-4 at the quarter points, its own modal noise (the shapes'
+    std relative to each mode's largest entry ``shape_noise`` instead, when given)."""
     from experiments.second_sim.fem import assemble, modes
     from experiments.second_sim.pairs import DOF_LABELS, NODE_X_M
-    from experiments.second_sim.response import Damping, complex_modes, noisy_modal
+    from experiments.second_sim.response import MODAL_NOISE, Damping, complex_modes, noisy_modal
     from experiments.second_sim.writers import modal_dict
 
     asm = assemble(beam)
     md = modes(asm, n_refine=4)
     dofs = asm.translation_dofs(NODE_X_M[1:])
-    return modal_dict(*noisy_modal(*complex_modes(asm, md, Damping("modal", ratios), dofs, 4), rng), DOF_LABELS)
+    noise = MODAL_NOISE if shape_noise is None else (*MODAL_NOISE[:2], shape_noise)
+    return modal_dict(*noisy_modal(*complex_modes(asm, md, Damping("modal", ratios), dofs, 4), rng, noise),
+                      DOF_LABELS)
 
 
-def pairs(truth: str, n: int, rng, noise: float, modal_rng=None) -> list[dict]:
+def pairs(truth: str, n: int, rng, noise: float, modal_rng=None, shape_noise=None) -> list[dict]:
     """``n`` pairs of one truth: measured relative frequency changes and the truth's parameters; with a
     ``modal_rng`` also both tests' modal data (``modal``: baseline and current mappings with the simulator's own
     modal noise, drawn from that stream so that the frequency changes do not depend on it)."""
@@ -107,7 +110,7 @@ def pairs(truth: str, n: int, rng, noise: float, modal_rng=None) -> list[dict]:
         out.append({"truth": truth, "shifts": f1 / f0 - 1, **info})
         if modal_rng is not None:
             ratios = tuple(modal_rng.uniform(0.003, 0.02, 4))
-            out[-1]["modal"] = (_modal(base, ratios, modal_rng), _modal(cur, ratios, modal_rng))
+            out[-1]["modal"] = tuple(_modal(b, ratios, modal_rng, shape_noise) for b in (base, cur))
     return out
 
 
@@ -147,31 +150,39 @@ def network_table(rows: list[dict]) -> dict:
     return res
 
 
-def table(n: int = 24, seed: int = 0, noise: float = 7e-4, model_dir=None) -> dict:
+def table(n: int = 24, seed: int = 0, noise: float = 7e-4, model_dir=None, shape_noise=None,
+          shape_sigma=None) -> dict:
     """Every pair weighed: the confusion counts and the slits' interval cover; with ``model_dir`` also the
     network's answers on the pairs' modal data (:func:`network_table`)."""
     from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
     from learn.features import BeamSpec
-    from learn.hypotheses import _support_curves, weigh
+    from learn.hypotheses import SHAPE_CHANGE_STD, _support_curves, shape_changes, weigh
     from learn.sensitivity import beam_sensitivity
+    from physics.io import modal_data_from_dict
 
     L, EI, M = LENGTH_M, EI_NM2, MASS_PER_LENGTH_KG_M
     spec = BeamSpec("beam5", L, ("2:y", "3:y", "4:y", "5:y"), "iirs")
     slit = beam_sensitivity((L, EI, M), KR_REL)
     mass = beam_sensitivity((L, EI, M), KR_REL, kind="mass_change")
-    support = _support_curves(spec, EI, M, KR_REL, (-0.08, 0.08))
+    *support, support_shapes = _support_curves(spec, EI, M, KR_REL, (-0.08, 0.08))
     rng = np.random.default_rng(seed)
     confusion = {t: {h: 0 for h in TRUTHS} for t in TRUTHS}
+    with_shapes = {t: {h: 0 for h in TRUTHS} for t in TRUTHS}
     cover = {"x_68": 0, "x_95": 0, "theta_68": 0, "theta_95": 0, "n": 0}
     rows = []
-    modal_rng = np.random.default_rng([seed, 1]) if model_dir else None
+    modal_rng = np.random.default_rng([seed, 1])
     for truth in TRUTHS:
-        plist = pairs(truth, n, rng, noise, modal_rng)
+        plist = pairs(truth, n, rng, noise, modal_rng, shape_noise)
         answers = network_answers(model_dir, plist) if model_dir else [{}] * len(plist)
         for p, a in zip(plist, answers):
-            ranked = weigh(p["shifts"], slit, mass, support, (-0.004, 0.004), theta_max=0.15, length_m=L)
+            ranked = weigh(p["shifts"], slit, mass, tuple(support), (-0.004, 0.004), theta_max=0.15, length_m=L)
             top = ranked[0].name
             confusion[truth][top] += 1
+            tests = [modal_data_from_dict(d, truth).eigenvectors for d in p["modal"]]
+            shaped = weigh(p["shifts"], slit, mass, tuple(support), (-0.004, 0.004), theta_max=0.15, length_m=L,
+                           shapes=shape_changes(np.stack(tests)[None])[0], support_shapes=support_shapes,
+                           shape_sigma=SHAPE_CHANGE_STD if shape_sigma is None else shape_sigma)
+            with_shapes[truth][shaped[0].name] += 1
             element = min(4, int(p["x_m"] // (L / 4)) + 1) if truth == "slit" else None
             rows.append({"truth": truth, "top": top, "probabilities": {r.name: r.probability for r in ranked},
                          "shifts_pct": [float(v) for v in 100 * p["shifts"]], "element": element, **a})
@@ -183,26 +194,33 @@ def table(n: int = 24, seed: int = 0, noise: float = 7e-4, model_dir=None) -> di
                     cover[f"x_{level}"] += lo <= p["x_m"] <= hi
                     lo, hi = q[f"hinge_flexibility_{level}"]
                     cover[f"theta_{level}"] += lo <= p["hinge_flexibility"] <= hi
-    res = {"n": n, "seed": seed, "noise": noise, "confusion": confusion, "slit_cover": cover, "pairs": rows}
+    res = {"n": n, "seed": seed, "noise": noise, "confusion": confusion, "confusion_with_shapes": with_shapes,
+           "slit_cover": cover, "pairs": rows}
     if model_dir:
         res["model"] = str(model_dir)
         res["network"] = network_table(rows)
     return res
 
 
-def markdown(res: dict) -> str:
-    head = "| truth \\ most probable | " + " | ".join(TRUTHS) + " | right |"
-    lines = [head, "| --- " * (len(TRUTHS) + 2) + "|"]
+def _confusion_lines(confusion: dict) -> list[str]:
+    lines = ["| truth \\ most probable | " + " | ".join(TRUTHS) + " | right |", "| --- " * (len(TRUTHS) + 2) + "|"]
     for t in TRUTHS:
-        row = res["confusion"][t]
+        row = confusion[t]
         total = sum(row.values())
         lines.append(f"| {t} | " + " | ".join(str(row[h]) for h in TRUTHS) + f" | {row[t] / total:.0%} |")
+    return lines
+
+
+def markdown(res: dict) -> str:
+    lines = _confusion_lines(res["confusion"])
     c = res["slit_cover"]
     lines.append("")
     lines.append(f"Slits ({c['n']}): position inside the 68 % interval {c['x_68'] / c['n']:.0%}, the 95 % interval "
                  f"{c['x_95'] / c['n']:.0%}; hinge flexibility {c['theta_68'] / c['n']:.0%} and "
                  f"{c['theta_95'] / c['n']:.0%}. {res['n']} pairs per truth, seed {res['seed']}, frequency noise "
                  f"{100 * res['noise']:.2g} % per mode and test.")
+    lines += ["", "Weighed on the frequency and shape changes (the same pairs' modal data: modes 1-4 at the quarter "
+              "points, the simulator's own modal noise):", ""] + _confusion_lines(res["confusion_with_shapes"])
     if "network" in res:
         lines += ["", f"The network ({res['model']}) on the same pairs' modal data (modes 1-4 at the quarter points, "
                   "the simulator's own modal noise):", "",
@@ -221,10 +239,16 @@ def main(argv=None) -> int:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--noise", type=float, default=7e-4, help="relative frequency noise per mode and test")
     p.add_argument("--json", metavar="FILE", help="write every pair's probabilities as JSON")
+    p.add_argument("--shape-noise", type=float, default=None,
+                   help="std of the modal data's shapes per test, relative to each mode's largest entry (default: "
+                        "the simulator's 0.5 %%)")
+    p.add_argument("--shape-sigma", type=float, default=None,
+                   help="std of a shape entry's change the explanations assume (default learn.hypotheses."
+                        "SHAPE_CHANGE_STD)")
     p.add_argument("--model", metavar="MODEL_DIR", help="also classify every pair's modal data with this model")
     p.add_argument("--docs", action="store_true", help="write the table into docs/classifier.md")
     args = p.parse_args(argv)
-    res = table(args.n, args.seed, args.noise, args.model)
+    res = table(args.n, args.seed, args.noise, args.model, args.shape_noise, args.shape_sigma)
     md = markdown(res)
     sys.stdout.write(md)
     if args.json:

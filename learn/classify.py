@@ -101,7 +101,8 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
             "network": net, "classical": cl,
             "classical_methods": answers[i],
             "identification": _identification(p, base_md, cur_md[i] if cur_md else None, identified, model.beam),
-            **(explained[i] or {"hypotheses": None, "hypotheses_summary": None, "frequency_change_std": None}),
+            **(explained[i] or {"hypotheses": None, "hypotheses_summary": None, "frequency_change_std": None,
+                               "shape_change_std": None}),
             "input_route": route, "warnings": w,
             "_extra": {"location_distribution": where[i]},
         })

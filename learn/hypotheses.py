@@ -28,7 +28,13 @@ enters every explanation but ``global_stiffness``. The likelihood is Gaussian wi
 over its prior (a grid), so a more flexible explanation pays for the predictions it could have made. With equal
 prior probabilities (:data:`PRIOR`), the probabilities are the normalised evidences.
 
-Only frequencies enter: damping changes and shape changes are not weighed here.
+Shapes, where both tests hold them: the change of the real unit-norm shapes at the sensors
+(:func:`learn.features.real_shapes`, the current shape's sign following the baseline's) enters the same
+likelihood with a standard deviation :data:`SHAPE_CHANGE_STD` per entry. A slit or a mass predicts the first-order
+shape change of its size at its place (the shape sensitivities of :mod:`learn.sensitivity`), a support change the
+exact change of the nominal shapes (:func:`support_curve`), the day-to-day changes and a global stiffness change
+none. Damping changes are not weighed: the repeatability of damping ratios (5-30 % between tests) is larger than
+what a slit changes.
 """
 
 from __future__ import annotations
@@ -41,8 +47,9 @@ from scipy.special import log_ndtr
 
 from physics.errors import BeamDamageError
 
-__all__ = ["FREQUENCY_CHANGE_STD", "HYPOTHESES", "MODEL_ERROR", "PRIOR", "SEPARATE", "SIZE_SCALE_STD", "Hypothesis",
-           "explain", "explain_many", "summary", "support_curve", "weigh", "weigh_many"]
+__all__ = ["FREQUENCY_CHANGE_STD", "HYPOTHESES", "MODEL_ERROR", "PRIOR", "SEPARATE", "SHAPE_CHANGE_STD",
+           "SIZE_SCALE_STD", "Hypothesis", "explain", "explain_many", "shape_changes", "summary", "support_curve",
+           "weigh", "weigh_many"]
 
 #: Relative standard deviation of a mode's frequency change between two tests (0.1 %): modal tests repeated on
 #: the same specimen and mounting scatter 0.05-0.5 % in frequency; the training's frequency scatter and modal
@@ -57,6 +64,12 @@ PRIOR = {h: 1.0 / len(HYPOTHESES) for h in HYPOTHESES}
 
 #: Relative error of each predicted change, mode by mode (3 %): the sensitivities are those of the nominal shapes.
 MODEL_ERROR = 0.03
+
+#: Standard deviation of each entry of a real unit-norm shape's change between two tests (0.03): the top of the
+#: repeatability of mode shapes (3 % of the largest entry per test, docs/datasets.md). Smaller values trust the
+#: first-order shape predictions too much on noisier shapes (bench_hypotheses --shape-noise 0.03: slits 58 % right
+#: with 0.01 against 71 % with 0.03).
+SHAPE_CHANGE_STD = 0.03
 
 #: Relative standard deviation of a size for a given change (10 %): the nominal beam's sensitivities stand for a
 #: specimen whose EI, mass and clamp differ from it by several percent; it widens the size intervals.
@@ -118,14 +131,17 @@ def _scaled(sizes: np.ndarray, weights: np.ndarray):
 
 
 def support_curve(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_spring_relative, ln_factors,
-                  mode_index, n_elements: int = 40) -> tuple[np.ndarray, str]:
+                  mode_index, n_elements: int = 40) -> tuple[np.ndarray, np.ndarray, str]:
     """Relative frequency changes (G, m) of the modes ``mode_index`` (0-based bending modes) when the beam's
-    support springs change (module docstring), and what the parameter means.
+    support springs change (module docstring), the changes of their real unit-norm shapes at the sensors
+    (G, S m; sensor-major as :attr:`learn.sensitivity.Sensitivity.shape`), and what the parameter means.
 
     ``ln_factors`` (G,): ``ln(k / k_0)`` of the clamp springs or the suspension; for pinned ends ``log10`` of the
     bearing spring ``k L / EI`` added to none.
     """
     from datagen.pipeline import suspension_unit_stiffness
+    from learn.features import real_shapes
+    from physics.effects import hermite_row
     from physics.fem import beam_model
     from physics.layout import RIGID_BODY_MODES
     from physics.modal import undamped_modes
@@ -158,10 +174,18 @@ def support_curve(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_spring_
         ks = suspension_unit_stiffness(L) * EI_Nm2
         for d in ("1:y", f"{last}:y"):
             K[:, names.index(d), names.index(d)] += ks * np.exp(scale)
-    w, _ = undamped_modes(np.repeat(M[None], K.shape[0], axis=0), K)
+    w, phi = undamped_modes(np.repeat(M[None], K.shape[0], axis=0), K)
     idx = RIGID_BODY_MODES[bc] + np.asarray(mode_index, int)
     f = w[:, idx]
-    return f[1:] / f[:1] - 1.0, what
+    all_dofs = [f"{n}:{d}" for n in range(1, last + 1) for d in ("y", "rz")]
+    keep = [all_dofs.index(d) for d in names]
+    node_x = np.linspace(0.0, L, last)
+    sensors = np.arange(1, 5) * L / 4 if test is None else sorted(test.sensors_x_m)
+    T = np.array([hermite_row(float(x), node_x)[0][keep] for x in sensors])          # (S, n)
+    u = real_shapes((T @ phi[..., idx]).astype(complex))                               # (G + 1, S, m)
+    sign = np.sign(np.sum(u[1:] * u[:1], axis=-2, keepdims=True))
+    du = u[1:] * np.where(sign == 0, 1.0, sign) - u[:1]
+    return f[1:] / f[:1] - 1.0, du.reshape(du.shape[0], -1), what
 
 
 def _loglik(g, y, s, half: float, model_error: float):
@@ -193,18 +217,40 @@ CHUNK_PAIRS = 32
 
 
 def weigh(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.004, 0.004), theta_max: float = 0.2,
-          sigma=FREQUENCY_CHANGE_STD, length_m: float = 1.0, model_error: float = MODEL_ERROR) -> list[Hypothesis]:
-    """Weigh the explanations of one pair's relative frequency changes (module docstring; :func:`weigh_many`)."""
+          sigma=FREQUENCY_CHANGE_STD, length_m: float = 1.0, model_error: float = MODEL_ERROR, shapes=None,
+          support_shapes=None, shape_sigma: float = SHAPE_CHANGE_STD) -> list[Hypothesis]:
+    """Weigh the explanations of one pair's relative frequency changes (and shape changes ``shapes`` (S m,)), see
+    the module docstring and :func:`weigh_many`."""
     y = np.asarray(shifts, float)
     if y.ndim != 1:
         raise BeamDamageError(f"frequency changes must be a finite 1-D array, got {y!r}")
     return weigh_many(y[None], sens, mass_sens, support, temperature_range, theta_max, sigma, length_m,
-                      model_error)[0]
+                      model_error, None if shapes is None else np.asarray(shapes, float)[None], support_shapes,
+                      shape_sigma)[0]
+
+
+def _shape_loglik(shapes, grids_shapes: dict, sigma: float) -> dict:
+    """Shape terms of the log-likelihood, ``(p . y - |p|^2 / 2) / sigma^2`` for each explanation's predicted shape
+    changes ``p`` and the measured ``y`` (n, D) (the ``|y|^2`` term is common to all and left out): arrays of the
+    shapes of the frequency terms, (n, grid...). ``grids_shapes``: name -> (scale (K,), sensitivity (D, E)) for a
+    change linear in a size, or (G, D) predictions, or None for no shape change."""
+    out = {}
+    for name, g in grids_shapes.items():
+        if g is None:
+            out[name] = 0.0
+        elif isinstance(g, tuple):
+            scale, S = g                                                    # (K,), (D, E)
+            dot = (shapes @ S)[:, None, :] * scale[None, :, None]           # (n, K, E)
+            sq = scale[:, None] ** 2 * np.sum(S**2, axis=0)[None, :]        # (K, E)
+            out[name] = (dot - 0.5 * sq[None]) / sigma**2
+        else:
+            out[name] = (shapes @ g.T - 0.5 * np.sum(g**2, axis=1)[None]) / sigma**2   # (n, G)
+    return out
 
 
 def weigh_many(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.004, 0.004), theta_max: float = 0.2,
-               sigma=FREQUENCY_CHANGE_STD, length_m: float = 1.0,
-               model_error: float = MODEL_ERROR) -> list[list[Hypothesis]]:
+               sigma=FREQUENCY_CHANGE_STD, length_m: float = 1.0, model_error: float = MODEL_ERROR, shapes=None,
+               support_shapes=None, shape_sigma: float = SHAPE_CHANGE_STD) -> list[list[Hypothesis]]:
     """Weigh the explanations of measured relative frequency changes of pairs holding the same modes, batched.
 
     Parameters
@@ -218,6 +264,11 @@ def weigh_many(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.00
     sigma : float or array (m,)         relative std of each mode's change
     length_m : float
     model_error : float                 relative std of each predicted change (:data:`MODEL_ERROR`)
+    shapes : array, shape (n, S m), optional   measured changes of the real unit-norm shapes at the sensors
+                                        (:func:`shape_changes`; sensor-major as ``sens.shape``); without them
+                                        frequencies alone are weighed
+    support_shapes : array, shape (G, S m), optional   the support grid's shape changes (:func:`support_curve`)
+    shape_sigma : float                 std of each shape entry's change (:data:`SHAPE_CHANGE_STD`)
 
     Returns
     -------
@@ -245,10 +296,22 @@ def weigh_many(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.00
     x_m = np.asarray(sens.x_over_L) * length_m
     h = 0.5 * length_m / x_m.size                                        # half an element of the grid
     out = []
+    if shapes is not None:
+        shapes = np.asarray(shapes, float)
+        if shapes.shape != (Y.shape[0], np.asarray(sens.shape).shape[0]) or not np.all(np.isfinite(shapes)):
+            raise BeamDamageError(f"shape changes must be a finite (pairs, sensors x modes) array of shape "
+                                  f"{(Y.shape[0], np.asarray(sens.shape).shape[0])}, got {shapes.shape}")
+        grid_shapes = {"intact": None, "global_stiffness": None,
+                       "support_change": None if support_shapes is None else np.asarray(support_shapes, float),
+                       "slit": (th, np.asarray(sens.shape, float)), "mass_change": (mu, np.asarray(mass_sens.shape,
+                                                                                                  float))}
     for start in range(0, Y.shape[0], CHUNK_PAIRS):
         y = Y[start:start + CHUNK_PAIRS]
         ll = {name: _loglik(g, y, s, 0.0 if name == "global_stiffness" else half, model_error)
               for name, g in grids.items()}
+        if shapes is not None:
+            extra = _shape_loglik(shapes[start:start + CHUNK_PAIRS], grid_shapes, shape_sigma)
+            ll = {name: (v[0] + extra[name], v[1]) for name, v in ll.items()}
         for i in range(y.shape[0]):
             fits = {}
             for name, g in grids.items():
@@ -320,18 +383,30 @@ def summary(rows: list[Hypothesis], modes) -> str:
 
 @lru_cache(maxsize=8)
 def _support_curves(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_spring_relative, reclamp_range: tuple):
-    """The support grid, its curve over all the model's modes, what it means, and the re-clamping curve (or None)
-    of a model's beam (cached: one model classifies many pairs)."""
+    """The support grid, its curve over all the model's modes, what it means, the re-clamping curve (or None) and
+    the support's shape changes (G, S m) of a model's beam (cached: one model classifies many pairs)."""
     number = [r - 1 for r in beam.modes]
     pinned = beam.test is not None and beam.test.bc == "pinned-pinned"
     grid = (np.linspace(-2.0, 2.0, N_SUPPORT) if pinned
             else np.linspace(-SUPPORT_LN_RANGE, SUPPORT_LN_RANGE, N_SUPPORT))
-    curve, what = support_curve(beam, EI_Nm2, mass_per_length_kg_m, root_spring_relative, grid, number)
+    curve, shapes, what = support_curve(beam, EI_Nm2, mass_per_length_kg_m, root_spring_relative, grid, number)
     reclamp = None
     if reclamp_range:
         reclamp = support_curve(beam, EI_Nm2, mass_per_length_kg_m, root_spring_relative,
                                 np.log1p(np.linspace(reclamp_range[0], reclamp_range[1], 9)), number)[0]
-    return grid, curve, what, reclamp
+    return grid, curve, what, reclamp, shapes
+
+
+def shape_changes(eigenvectors) -> np.ndarray:
+    """Changes of the real unit-norm shapes between the two tests, the current shape's sign following the
+    baseline's (as the modal features take them): ``eigenvectors`` (n, 2, S, m) complex -> (n, S m), sensor-major
+    as :attr:`learn.sensitivity.Sensitivity.shape`."""
+    from learn.features import real_shapes
+
+    u = real_shapes(np.asarray(eigenvectors, complex))                   # (n, 2, S, m)
+    sign = np.sign(np.sum(u[:, 1] * u[:, 0], axis=-2, keepdims=True))
+    du = u[:, 1] * np.where(sign == 0, 1.0, sign) - u[:, 0]
+    return du.reshape(du.shape[0], -1)
 
 
 def explain(model, pair, sigma=FREQUENCY_CHANGE_STD) -> dict:
@@ -357,8 +432,8 @@ def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD) -> list[dict]:
     mass_all = sensitivity_of(beam, cfg.get("root_spring_relative"), truth, {**gen, "damage": {"kind": "mass_change"}})
     days = cfg.get("day_changes") or {}
     clamp = beam.test is None or beam.test.bc in ("clamped-free", "clamped-clamped")
-    grid, curve_all, what, reclamp_all = _support_curves(beam, EI, m, cfg.get("root_spring_relative"),
-                                                         tuple(days.get("root_spring_change") or ()) if clamp else ())
+    grid, curve_all, what, reclamp_all, shapes_all = _support_curves(
+        beam, EI, m, cfg.get("root_spring_relative"), tuple(days.get("root_spring_change") or ()) if clamp else ())
     damage = gen.get("damage") or {}
     theta_max = 0.2
     if damage.get("kind", "slit") == "slit" and "ei_loss" in damage and "width_m" in damage:
@@ -366,16 +441,24 @@ def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD) -> list[dict]:
     out = [None] * len(pairs)
     groups: dict = {}
     for i, pair in enumerate(pairs):
-        groups.setdefault(tuple(int(j) for j in pair.modes), []).append(i)
-    for key, members in groups.items():
+        groups.setdefault((tuple(int(j) for j in pair.modes), bool(pair.frequency_only)), []).append(i)
+    n_all = len(beam.modes)
+    for (key, frequency_only), members in groups.items():
         k = np.asarray(key, int)
         f = np.abs(np.stack([np.asarray(pairs[i].eigenvalues) for i in members]))         # (n, 2, m)
         support = (grid, curve_all[:, k], what, None if reclamp_all is None else reclamp_all[:, k])
-        ranked = weigh_many(f[:, 1] / f[:, 0] - 1.0, model.sensitivity.modes(k), mass_all.modes(k), support,
+        sens = model.sensitivity.modes(k)
+        cols = (np.arange(shapes_all.shape[1] // n_all)[:, None] * n_all + k[None]).ravel()   # sensor-major
+        shapes = None
+        if not frequency_only and np.asarray(sens.shape).shape[0] == cols.size:
+            shapes = shape_changes(np.stack([np.asarray(pairs[i].eigenvectors) for i in members]))
+        ranked = weigh_many(f[:, 1] / f[:, 0] - 1.0, sens, mass_all.modes(k), support,
                             days.get("temperature_stiffness_change", (-0.004, 0.004)), theta_max=theta_max,
-                            sigma=sigma, length_m=beam.length_m)
+                            sigma=sigma, length_m=beam.length_m, shapes=shapes,
+                            support_shapes=shapes_all[:, cols])
         modes = [beam.modes[j] for j in key]
         for i, rows in zip(members, ranked):
             out[i] = {"hypotheses": [r.row() for r in rows], "hypotheses_summary": summary(rows, modes),
-                      "frequency_change_std": float(sigma)}
+                      "frequency_change_std": float(sigma),
+                      "shape_change_std": None if shapes is None else SHAPE_CHANGE_STD}
     return out

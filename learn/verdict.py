@@ -150,6 +150,12 @@ def _classical_sentence(c: dict) -> str:
             f"flexibility {c['hinge_flexibility']:.3g}")
 
 
+def explained_text(res: dict) -> str:
+    """What the competing explanations were weighed on: ``"frequency and shape changes"`` or
+    ``"frequency changes"``."""
+    return "frequency and shape changes" if res.get("shape_change_std") else "frequency changes"
+
+
 def verdict_text(res: dict) -> str:
     """The verdict as a reader sees it: the answer, where it comes from, both methods, the caveats."""
     net, cl = res["network"], res["classical"]
@@ -194,8 +200,10 @@ def verdict_text(res: dict) -> str:
     if res.get("location_ambiguity"):
         lines.append(f"Location: {res['location_ambiguity']}.")
     if res.get("hypotheses"):
-        lines.append("Explanations of the frequency changes (equal priors, "
-                     f"{100 * res['frequency_change_std']:.2g} % noise per mode): "
+        lines.append(f"Explanations of the {explained_text(res)} (equal priors, "
+                     f"{100 * res['frequency_change_std']:.2g} % noise per mode"
+                     + (f", {res['shape_change_std']:.2g} per shape entry" if res.get("shape_change_std") else "")
+                     + "): "
                      + ", ".join(f"{h['name']} {h['probability']:.2f}" for h in res["hypotheses"])
                      + f"; {res['hypotheses_summary']}.")
     lines += [f"warning: {w}" for w in res["warnings"]]

@@ -24,13 +24,20 @@ def models():
     spec = BeamSpec("beam5", L, ("2:y", "3:y", "4:y", "5:y"), "iirs")
     slit = beam_sensitivity((L, EI, M), KR_REL)
     mass = beam_sensitivity((L, EI, M), KR_REL, kind="mass_change")
-    grid, curve, what, reclamp = _support_curves(spec, EI, M, KR_REL, (-0.08, 0.08))
-    return slit, mass, (grid, curve, what, reclamp)
+    grid, curve, what, reclamp, support_shapes = _support_curves(spec, EI, M, KR_REL, (-0.08, 0.08))
+    return slit, mass, (grid, curve, what, reclamp), support_shapes
 
 
-def weighed(models, y):
-    slit, mass, support = models
-    return weigh(y, slit, mass, support, (-0.004, 0.004), theta_max=0.15, length_m=L)
+def weighed(models, y, shapes=None):
+    slit, mass, support, support_shapes = models
+    return weigh(y, slit, mass, support, (-0.004, 0.004), theta_max=0.15, length_m=L, shapes=shapes,
+                 support_shapes=support_shapes)
+
+
+def quarter_point_shapes(beam: Beam) -> np.ndarray:
+    """The independent simulator's modes 1-4 at x = L/4, L/2, 3L/4, L (4, 4)."""
+    asm = assemble(beam)
+    return modes(asm).phi[asm.translation_dofs([L * q / 4 for q in range(1, 5)]), :4]
 
 
 CASES = {
@@ -86,7 +93,7 @@ def test_two_explanations_the_modes_cannot_separate_are_said_so(models):
     """Mode 1 alone, lowered by 1 %: a slit near the clamp and a mass near the tip both fit; the summary says
     they cannot be told apart and names what would separate them. So do a slit at 0.16 m and a 3 % mass at 0.45 m
     on modes 1-4 (their frequency changes agree to 0.1 %)."""
-    slit, mass, (grid, curve, what, reclamp) = models
+    slit, mass, (grid, curve, what, reclamp), _ = models
     rows = weigh(np.array([-0.01]), slit.modes([0]), mass.modes([0]), (grid, curve[:, :1], what, reclamp[:, :1]),
                  (-0.004, 0.004), theta_max=0.15, length_m=L)
     text = summary(rows, [1])
@@ -100,7 +107,7 @@ def test_two_explanations_the_modes_cannot_separate_are_said_so(models):
 def test_pairs_weighed_in_one_batch_get_what_each_gets_alone(models):
     from learn.hypotheses import weigh_many
 
-    slit, mass, support = models
+    slit, mass, support, _ = models
     Y = np.stack([shifts(CASES[t]) for t in ("slit", "support_change", "intact")])
     batch = weigh_many(Y, slit, mass, support, (-0.004, 0.004), theta_max=0.15, length_m=L)
     for y, rows in zip(Y, batch):
@@ -109,3 +116,19 @@ def test_pairs_weighed_in_one_batch_get_what_each_gets_alone(models):
         np.testing.assert_allclose([r.probability for r in rows], [r.probability for r in alone], rtol=1e-9,
                                    atol=1e-15)
         assert rows[0].parameters == alone[0].parameters
+
+
+@pytest.mark.parametrize("x_over_L", [0.3, 0.7, 1.0])
+def test_the_shape_changes_tell_an_added_mass_from_a_slit(models, x_over_L):
+    """The same 2 % masses with the shapes of both tests (exact, from the independent simulator): the mass change
+    is now the most probable explanation; a slit, with its shapes, stays the most probable."""
+    from learn.hypotheses import shape_changes
+
+    beam = Beam(L, EI, M, root_k_theta_Nm_rad=KR_REL * EI / L, masses=(PointMass(x_over_L * L, 0.02 * M * L),))
+    du = shape_changes(np.stack([quarter_point_shapes(BASE), quarter_point_shapes(beam)])[None])[0]
+    rows = weighed(models, shifts(beam), du)
+    assert rows[0].name == "mass_change", [(r.name, round(r.probability, 3)) for r in rows]
+    assert rows[0].parameters["mass_ratio"] == pytest.approx(0.02, rel=0.3)
+    slit = CASES["slit"]
+    du = shape_changes(np.stack([quarter_point_shapes(BASE), quarter_point_shapes(slit)])[None])[0]
+    assert weighed(models, shifts(slit), du)[0].name == "slit"
