@@ -160,7 +160,38 @@ def _measured_pairs(model: TrainedModel, baseline, currents: list, names: list[s
     pairs = [modal_pair(base_md, c, model.beam, sens.frequencies_hz, (names[0], n), (found[0], f))
              for c, n, f in zip(cur_md, names[1:], found[1:])]
     warnings += list(dict.fromkeys(w for p in pairs for w in p.warnings))
+    w = damping_warning(model, pairs)
+    if w:
+        warnings.append(w)
     return base_md, cur_md, identified, pairs
+
+
+#: How far outside the training's damping ratios a baseline may lie before :func:`damping_warning` speaks (factor).
+DAMPING_RANGE_FACTOR = 2.0
+
+
+def damping_warning(model: TrainedModel, pairs: list) -> str | None:
+    """One line when the baseline's damping ratios lie beyond :data:`DAMPING_RANGE_FACTOR` times the training pairs'
+    range (``damping_ratio_range`` of the model: the central 99 % of the training's measured baseline ratios),
+    else None: the modal noise the model was trained with depends on the damping (an output-only identification's
+    frequency scatter grows with its square root)."""
+    trained = model.config.get("damping_ratio_range")
+    pair = next((p for p in pairs if p is not None and p.modes.size), None)
+    if pair is None or not trained:
+        return None
+    lo, hi = np.asarray(trained, float)[pair.modes].T
+    lam = np.asarray(pair.eigenvalues[0])
+    zeta = -lam.real / np.abs(lam)
+    given = np.isfinite(zeta) & (zeta > 0)                                # frequencies alone carry no damping
+    out = given & ((zeta < lo / DAMPING_RANGE_FACTOR) | (zeta > hi * DAMPING_RANGE_FACTOR))
+    if not out.any():
+        return None
+    modes = [model.beam.modes[j] for j in pair.modes[out]]
+    return (f"the baseline's damping ratios of mode(s) {', '.join(map(str, modes))} ("
+            + ", ".join(f"{100 * z:.3g} %" for z in zeta[out]) + ") lie beyond twice the training's ("
+            + ", ".join(f"{100 * a:.3g}-{100 * b:.3g} %" for a, b in zip(lo[out], hi[out]))
+            + "): the modal noise the model was trained with depends on the damping; generate with "
+              "specimen.damping_ratios set to the test's")
 
 
 def _require_common_modes(pairs: list, names: list[str], beam) -> None:

@@ -21,7 +21,7 @@ from learn.verdict import detectability_threshold, network_output
 from physics.errors import BeamDamageError
 from physics.io import atomic_write_text
 
-__all__ = ["DAY_CHANGES", "dataset_frfs", "day_changes", "evaluate", "targets", "train"]
+__all__ = ["DAY_CHANGES", "damping_ratio_range", "dataset_frfs", "day_changes", "evaluate", "targets", "train"]
 
 
 def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
@@ -30,6 +30,15 @@ def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
     t = labels(pairs.table, pairs.beam)
     return np.stack([t["damaged"].astype(float), t["x_over_L"], t["hinge_flexibility"],
                      t["support_changed"].astype(float)], axis=1), t
+
+
+def damping_ratio_range(eigenvalues, coverage: float = 0.99) -> list[list[float]]:
+    """Per mode, the central ``coverage`` range ``[lo, hi]`` of the measured baseline damping ratios of training
+    pairs (``eigenvalues`` (n, 2, m)): what ``classify`` compares a test's damping with."""
+    lam = np.asarray(eigenvalues)[:, 0]
+    zeta = -lam.real / np.abs(lam)
+    q = np.nanquantile(zeta, [(1 - coverage) / 2, (1 + coverage) / 2], axis=0)
+    return [[float(a), float(b)] for a, b in q.T]
 
 
 def dataset_frfs(routes) -> tuple:
@@ -115,6 +124,7 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
         "split": {"train_pairs": int(len(tr)), "test_pairs": int(len(te)), "by": "specimen"},
         "train_seconds": fit_s, "load_seconds": load_s, "package_version": package_version(),
         "test_metrics": [m for m in rows if m["subset"] == "all"],
+        "damping_ratio_range": damping_ratio_range(pairs.eigenvalues[tr]),
     }
     save_model(out_dir, config, networks)
     atomic_write_text(Path(out_dir) / "metrics.csv", pd.DataFrame(rows).to_csv(index=False))

@@ -340,3 +340,31 @@ def test_support_head_learns_a_support_change_and_survives_the_model_directory(t
         save_model(tmp_path, cfg, {"modal": e})
         back = load_model(tmp_path).networks["modal"].predict_details(Xt).probability_support_change
         np.testing.assert_allclose(back, e.predict_details(Xt).probability_support_change, atol=1e-6)
+
+
+def test_a_baseline_damped_far_outside_the_training_is_named():
+    """The model records the central 99 % of its training pairs' baseline damping ratios; a test damped beyond twice
+    that range gets one warning naming the modes, and a test without damping (frequencies only) none."""
+    from learn.classify import damping_warning
+    from learn.measured import ModalPair
+    from learn.training import damping_ratio_range
+    from physics.modal import eigenvalues_from_modal
+
+    rng = np.random.default_rng(0)
+    f_hz = np.array([20.0, 125.0, 350.0, 680.0])
+    zeta = np.array([0.002, 0.0025, 0.003, 0.004]) * rng.uniform(0.7, 1.3, (2000, 1))
+    lam = eigenvalues_from_modal(np.broadcast_to(f_hz, zeta.shape), zeta)
+    trained = damping_ratio_range(np.stack([lam, lam], axis=1))
+    np.testing.assert_allclose(np.array(trained)[:, 1] / np.array(trained)[:, 0], 1.3 / 0.7, rtol=0.02)
+    beam = BeamSpec("beam5", 0.6095, ("2:y", "3:y", "4:y", "5:y"), "iirs")
+    model = TrainedModel(path="m", config={"beam": beam.to_dict(), "damping_ratio_range": trained})
+
+    def pair(z):
+        lam = eigenvalues_from_modal(f_hz, np.asarray(z, float))
+        return ModalPair(np.stack([lam, lam]), np.ones((2, 4, 4), complex), np.arange(4))
+
+    assert damping_warning(model, [pair([0.002, 0.0025, 0.003, 0.004])]) is None
+    text = damping_warning(model, [pair([0.002, 0.02, 0.003, 0.004])])
+    assert "mode(s) 2 (2 %)" in text and "specimen.damping_ratios" in text
+    assert damping_warning(model, [pair([0.0, 0.0, 0.0, 0.0])]) is None
+    assert damping_warning(TrainedModel(path="m", config={"beam": beam.to_dict()}), [pair([0.1] * 4)]) is None
