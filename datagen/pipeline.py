@@ -459,7 +459,7 @@ class BatchInputs:
     (B, 2, S) (zeros when ``gain_scatter`` is 0). ``support_changed`` (B,) bool: an intact specimen whose
     supports change between the days beyond re-clamping (``specimen.support_change_fraction``); its
     ``root_spring_change`` is then ``factor - 1`` with the factor drawn from ``specimen.support_change_factor``
-    (softer or stiffer alike).
+    (softer or stiffer alike). Supports without a spring (pinned ends without bearing springs) change none.
     With ``measurement.modal_noise = "output-only"``: ``sensor_noise`` (relative to the response RMS) and
     ``record_length_s`` (s) of each sample's tests (B,), drawn after everything else (None otherwise).
     """
@@ -530,7 +530,7 @@ def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
     n_gain = rng.standard_normal((n, 2, S)) if gain_drawn else np.zeros((n, 2, S))
     change = _uniform(u[:, 1], spc["root_spring_change"])
     support = np.zeros(n, bool)
-    if spc["support_change_fraction"] > 0:
+    if spc["support_change_fraction"] > 0 and (setup.spring or setup.day_spring_dofs.size):   # a spring to change
         v = rng.random((n, 3))
         support = (dmg["n_damages"] == 0) & (v[:, 0] < spc["support_change_fraction"])
         factor = _uniform(v[:, 1], spc["support_change_factor"], log=True) ** np.where(v[:, 2] < 0.5, -1, 1)

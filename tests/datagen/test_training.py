@@ -182,3 +182,19 @@ def test_support_changes_are_drawn_for_intact_specimens_only_beyond_re_clamping(
     cfg["specimen"].update(root_spring_relative=[], root_spring_change=[0.0, 0.0])
     with pytest.raises(ConfigError, match="specimen.support_change_fraction"):
         get_setup(merge(cfg))
+
+
+def test_a_beam_without_support_springs_draws_no_support_change(tmp_path):
+    """Pinned ends without bearing springs hold no spring that could change: no sample is labelled
+    support_changed, and the other draws are those of a config without support changes."""
+    cfg = load_config("training")
+    cfg["beam"] = {"name": "pp", "bc": "pinned-pinned", "length_m": 1.0, "width_m": 0.03, "thickness_m": 0.008,
+                   "EI_Nm2": 256.0, "mass_per_length_kg_m": 1.9, "measured_x_m": [0.2, 0.5, 0.8],
+                   "drive_x_m": 0.2, "band_hz": [5.0, 600.0]}
+    cfg["specimen"]["root_spring_change"] = [0.0, 0.0]
+    inp = draw_batch(np.random.default_rng(3), 200, get_setup(merge(cfg)))
+    cfg["specimen"]["support_change_fraction"] = 0.0
+    ref = draw_batch(np.random.default_rng(3), 200, get_setup(merge(cfg)))
+    assert not inp.support_changed.any()
+    np.testing.assert_array_equal(inp.root_spring_change, ref.root_spring_change)
+    np.testing.assert_array_equal(inp.noise_seed, ref.noise_seed)
