@@ -121,7 +121,7 @@ def test_pairs_weighed_in_one_batch_get_what_each_gets_alone(models):
 @pytest.mark.parametrize("x_over_L", [0.3, 0.7, 1.0])
 def test_the_shape_changes_tell_an_added_mass_from_a_slit(models, x_over_L):
     """The same 2 % masses with the shapes of both tests (exact, from the independent simulator): the mass change
-    is now the most probable explanation; a slit, with its shapes, stays the most probable."""
+    is the most probable explanation; a slit, with its shapes, stays the most probable."""
     from learn.hypotheses import shape_changes
 
     beam = Beam(L, EI, M, root_k_theta_Nm_rad=KR_REL * EI / L, masses=(PointMass(x_over_L * L, 0.02 * M * L),))
