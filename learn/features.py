@@ -47,7 +47,7 @@ from physics.layout import Layout
 __all__ = ["BeamSpec", "DOFS", "as_spec", "GRID_RAD_S", "Pairs", "ROUTES", "beam_of_manifest", "curvature_points",
            "curvatures", "feature_names", "features", "frequency_features", "frf_features", "grid_weights", "labels",
            "layout_curvatures", "load_pairs", "manifest_checksum", "map_frf_to_grid", "modal_features", "real_shapes",
-           "split_by_specimen"]
+           "sign_aligned", "split_by_specimen"]
 
 ROUTES = ("modal", "updated", "measured", "frequency")
 
@@ -351,6 +351,13 @@ def real_shapes(eigenvectors):
     return u / np.linalg.norm(u, axis=-2, keepdims=True)
 
 
+def sign_aligned(shapes, reference):
+    """``shapes`` (..., S, m) with each mode's sign following ``reference``'s (the sign of their dot product, MAC
+    sign; a mode orthogonal to its reference keeps its sign): what a shape change between two tests compares."""
+    sign = np.sign(np.sum(shapes * reference, axis=-2, keepdims=True))
+    return shapes * np.where(sign == 0, 1.0, sign)
+
+
 def curvatures(shapes):
     """Second differences of shapes at the clamp and nodes 2..4 (unit element length), batched.
 
@@ -427,9 +434,7 @@ def modal_features(eigenvalues, eigenvectors, n_modes: int = 4, test: Layout | N
     f = np.abs(lam) / (2 * np.pi)
     shift = 100 * (f[:, 1] / f[:, 0] - 1)
     u = real_shapes(np.asarray(eigenvectors, complex)[..., :n_modes])
-    # the current shape's sign follows the baseline's (MAC-sign)
-    sign = np.sign(np.sum(u[:, 1] * u[:, 0], axis=-2, keepdims=True))
-    u1 = u[:, 1] * np.where(sign == 0, 1.0, sign)
+    u1 = sign_aligned(u[:, 1], u[:, 0])                              # the current shape's sign follows the baseline's
     du = u1 - u[:, 0]
     curv = curvatures if test is None else (lambda v: layout_curvatures(v, test))
     dk = curv(u1) - curv(u[:, 0])

@@ -140,7 +140,7 @@ def support_curve(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_spring_
     bearing spring ``k L / EI`` added to none.
     """
     from datagen.pipeline import suspension_unit_stiffness
-    from learn.features import real_shapes
+    from learn.features import real_shapes, sign_aligned
     from physics.effects import hermite_row
     from physics.fem import beam_model
     from physics.layout import RIGID_BODY_MODES
@@ -183,8 +183,7 @@ def support_curve(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_spring_
     sensors = np.arange(1, 5) * L / 4 if test is None else sorted(test.sensors_x_m)
     T = np.array([hermite_row(float(x), node_x)[0][keep] for x in sensors])          # (S, n)
     u = real_shapes((T @ phi[..., idx]).astype(complex))                               # (G + 1, S, m)
-    sign = np.sign(np.sum(u[1:] * u[:1], axis=-2, keepdims=True))
-    du = u[1:] * np.where(sign == 0, 1.0, sign) - u[:1]
+    du = sign_aligned(u[1:], u[:1]) - u[:1]
     return f[1:] / f[:1] - 1.0, du.reshape(du.shape[0], -1), what
 
 
@@ -401,12 +400,10 @@ def shape_changes(eigenvectors) -> np.ndarray:
     """Changes of the real unit-norm shapes between the two tests, the current shape's sign following the
     baseline's (as the modal features take them): ``eigenvectors`` (n, 2, S, m) complex -> (n, S m), sensor-major
     as :attr:`learn.sensitivity.Sensitivity.shape`."""
-    from learn.features import real_shapes
+    from learn.features import real_shapes, sign_aligned
 
     u = real_shapes(np.asarray(eigenvectors, complex))                   # (n, 2, S, m)
-    sign = np.sign(np.sum(u[:, 1] * u[:, 0], axis=-2, keepdims=True))
-    du = u[:, 1] * np.where(sign == 0, 1.0, sign) - u[:, 0]
-    return du.reshape(du.shape[0], -1)
+    return (sign_aligned(u[:, 1], u[:, 0]) - u[:, 0]).reshape(u.shape[0], -1)
 
 
 def explain(model, pair, sigma=FREQUENCY_CHANGE_STD) -> dict:

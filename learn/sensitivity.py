@@ -27,7 +27,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from learn.features import real_shapes
+from learn.features import real_shapes, sign_aligned
 from datagen.damage import damage_model
 from datagen.pipeline import suspension_unit_stiffness
 from physics.fem import beam_model, element_mass, element_stiffness
@@ -124,8 +124,7 @@ def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7,
     w, phi = undamped_modes(models.M, models.K)
     meas = models.index([f"{1 + n_elements // 4 * q}:y" for q in range(1, 5)])
     u = real_shapes(phi[:, meas, :n_modes].astype(complex))
-    sign = np.sign(np.sum(u[1:] * u[0], axis=-2, keepdims=True))
-    du = (u[1:] * sign - u[0]) * L / (step * le)               # (E, 4, m) per unit size (step le / L per step)
+    du = (sign_aligned(u[1:], u[0]) - u[0]) * L / (step * le)   # (E, 4, m) per unit size (step le / L per step)
     # exact first-order frequency sensitivities from the element energies
     nominal = beam_model(n_elements, L, EI, m, root_spring=kr)
     w0, phi0 = undamped_modes(nominal.M, nominal.K)
@@ -168,8 +167,7 @@ def _layout_sensitivity(preset, root_spring_relative, n_elements, step, perturbs
     used = RIGID_BODY_MODES[test.bc] + np.asarray(test.modes) - 1
     S = T.shape[0]
     u = real_shapes((T @ phi[..., used]).astype(complex))                     # (E + 1, S, m)
-    sign = np.sign(np.sum(u[1:] * u[0], axis=-2, keepdims=True))
-    du = (u[1:] * np.where(sign == 0, 1.0, sign) - u[0]) * L / (step * le)   # (E, S, m)
+    du = (sign_aligned(u[1:], u[0]) - u[0]) * L / (step * le)   # (E, S, m)
     w0, phi0 = w[0][used], phi[0][:, used]
     full = np.zeros((2 * (n_elements + 1), used.size))
     full[keep] = phi0
