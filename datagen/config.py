@@ -26,8 +26,8 @@ from physics.properties import PRESETS
 from physics.updating import mass_model_name
 
 __all__ = ["CONFIG_DIR", "DEFAULTS", "MAX_MODAL_NOISE", "MAX_SHEAR_FLEXIBILITY", "MIN_ROOT_SPRING_RELATIVE",
-           "MODAL_NOISE_MODES", "calibrated_modal_std", "load_config", "merge", "modal_noise_calibration",
-           "named_configs", "output_only_variables", "validate"]
+           "MODAL_NOISE_MODES", "OUTPUT_ONLY_VARIABLES", "REPEATABILITY", "REPEATABILITY_MAX", "calibrated_modal_std",
+           "load_config", "merge", "modal_noise_calibration", "named_configs", "output_only_variables", "validate"]
 
 
 #: Default configuration (SI units). See docs/datasets.md.
@@ -112,6 +112,10 @@ MAX_MODAL_NOISE = 0.5
 #: The repeatability ranges of ``measurement`` (per-sample stds of each test's own changes, log-uniform) and
 #: their largest accepted values (docs/datasets.md, "Repeatability of the tests").
 REPEATABILITY_MAX = {"frequency_scatter": 0.01, "damping_scatter": 0.5, "shape_scatter": 0.1, "gain_scatter": 0.1}
+#: Those keys, in the order a batch draws them (:func:`datagen.pipeline.draw_batch`).
+REPEATABILITY = tuple(REPEATABILITY_MAX)
+#: The per-sample variables of ``measurement.modal_noise = "output-only"`` (:func:`output_only_variables`).
+OUTPUT_ONLY_VARIABLES = ("sensor_noise", "record_length_s")
 
 
 #: Largest specimen shear flexibility ``EI / (kGA L^2)``: mode 4 of a cantilever then lies about half
@@ -288,18 +292,15 @@ def _check_measurement(meas: dict) -> str:
             meas[k] = [float(x) for x in calib[q + k.removeprefix(f"{q}_noise")]]
         else:
             meas[k] = _num(f"measurement.{k}", v, lo=0, hi=MAX_MODAL_NOISE)
-    for k in ("frf_noise", "frf_noise_floor"):  # a number fixes the level; a range draws it per sample
-        v = meas[k]
-        is_number = isinstance(v, (int, float)) and not isinstance(v, bool)
-        meas[k] = (_num(f"measurement.{k}", v, lo=0.0, hi=0.5) if is_number
-                   else _range(f"measurement.{k}", v, lo=0.0, hi=0.5))
     if mode == "output-only":
         meas["identification"] = {"method": "ssi", "n_modes": len(meas["frequency_noise"])}
-    for k, lo, hi in (("sensor_noise", 0.0, 0.5), ("record_length_s", 1.0, 1e6)):  # a number fixes it
+    # a number fixes the value; a range draws it per sample
+    for k, lo, hi in (("frf_noise", 0.0, 0.5), ("frf_noise_floor", 0.0, 0.5), ("sensor_noise", 0.0, 0.5),
+                      ("record_length_s", 1.0, 1e6)):
         v = meas[k]
         is_number = isinstance(v, (int, float)) and not isinstance(v, bool)
-        meas[k] = _num(f"measurement.{k}", v, lo=lo, hi=hi) if is_number else _range(f"measurement.{k}", v, lo=lo,
-                                                                                          hi=hi)
+        meas[k] = (_num(f"measurement.{k}", v, lo=lo, hi=hi) if is_number
+                   else _range(f"measurement.{k}", v, lo=lo, hi=hi))
     meas["modal_noise_scale"] = _range("measurement.modal_noise_scale", meas["modal_noise_scale"], lo=0.01, hi=100.0)
     for k, hi in REPEATABILITY_MAX.items():
         meas[k] = _range(f"measurement.{k}", meas[k], lo=0.0, hi=hi)

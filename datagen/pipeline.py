@@ -45,7 +45,7 @@ import json
 
 import numpy as np
 
-from datagen.config import calibrated_modal_std, output_only_variables
+from datagen.config import OUTPUT_ONLY_VARIABLES, REPEATABILITY, calibrated_modal_std, output_only_variables
 from datagen.damage import DamageModel, damage_model
 from datagen.solvers import light_damping_modes, ritz_modes
 from datagen.specimen import BeamPreset, SectionLayout, draw_specimens
@@ -59,8 +59,7 @@ from physics.layout import RIGID_BODY_MODES, Layout, layout_of
 from physics.modal import eigenvalues_from_modal, modal_parameters, undamped_modes
 from physics.updating import analyst_mass, pilkey, reduced_mass
 
-__all__ = ["BatchInputs", "CHUNK", "LABEL_FIELDS", "N_MEAS", "OUTPUT_ONLY_FIELDS", "Setup", "build_setup", "draw_batch",
-           "generated_test",
+__all__ = ["BatchInputs", "CHUNK", "LABEL_FIELDS", "N_MEAS", "Setup", "build_setup", "draw_batch", "generated_test",
            "get_setup", "measure_modes", "projected_modes", "simulate_batch", "simulate_chunk", "simulate_shard",
            "damage_frequency_drop", "truth_matrices", "unit_mass", "update_models"]
 
@@ -526,8 +525,7 @@ def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
     spc, meas = cfg["specimen"], cfg["measurement"]
     scatter = {k: _uniform(np.zeros(n) if meas[k][0] == meas[k][1] else rng.random(n), meas[k], log=True)
                for k in REPEATABILITY}                                     # one value: not drawn
-    gain_drawn = meas["gain_scatter"][0] != meas["gain_scatter"][1] or meas["gain_scatter"][0] > 0
-    n_gain = rng.standard_normal((n, 2, S)) if gain_drawn else np.zeros((n, 2, S))
+    n_gain = rng.standard_normal((n, 2, S)) if meas["gain_scatter"][1] > 0 else np.zeros((n, 2, S))
     change = _uniform(u[:, 1], spc["root_spring_change"])
     support = np.zeros(n, bool)
     if spc["support_change_fraction"] > 0 and (setup.spring or setup.day_spring_dofs.size):   # a spring to change
@@ -551,9 +549,6 @@ def draw_batch(rng: np.random.Generator, n: int, setup: Setup) -> BatchInputs:
                        _uniform(u_scale, meas["modal_noise_scale"], log=True), sp["shear_flexibility"],
                        *(scatter[k] for k in REPEATABILITY), n_gain, support, **oma)
 
-
-#: The repeatability ranges of ``measurement``, in the order they are drawn.
-REPEATABILITY = ("frequency_scatter", "damping_scatter", "shape_scatter", "gain_scatter")
 
 
 # --------------------------------------------------------------------------- truth model
@@ -756,9 +751,6 @@ LABEL_FIELDS = ("EI_Nm2", "mass_per_length_kg_m", "damping_scale", "root_spring_
                 "modal_noise_scale", "shear_flexibility", *REPEATABILITY, "support_changed")
 
 
-#: Drawn inputs recorded per sample with ``measurement.modal_noise = "output-only"`` only.
-OUTPUT_ONLY_FIELDS = ("sensor_noise", "record_length_s")
-
 
 def simulate_batch(setup: Setup, inp: BatchInputs, chunk: int = CHUNK) -> dict:
     """Batched pipeline for ``B`` samples, in vectorised chunks of ``chunk`` samples (see :func:`simulate_chunk`)."""
@@ -780,7 +772,7 @@ def simulate_shard(setup: Setup, seed_seq: np.random.SeedSequence, n: int, chunk
     for i in range(0, n, chunk):
         b = draw_batch(rng, min(chunk, n - i), setup)
         outs.append(simulate_chunk(setup, b))
-        labs.append({**{k: getattr(b, k) for k in LABEL_FIELDS + OUTPUT_ONLY_FIELDS if getattr(b, k) is not None},
+        labs.append({**{k: getattr(b, k) for k in LABEL_FIELDS + OUTPUT_ONLY_VARIABLES if getattr(b, k) is not None},
                      **b.damage})
     cat = lambda parts: {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}  # noqa: E731
     return cat(labs), cat(outs)

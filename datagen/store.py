@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from datagen.config import OUTPUT_ONLY_VARIABLES, REPEATABILITY
 from datagen.damage import DamageModel, element4_index
 from datagen.synth import DATASET_FRFS, synthesise
 from physics.errors import DISK_FULL_ERRNOS, DiskFullError, FileFormatError
@@ -204,9 +205,9 @@ def sample_table(labels: dict, outputs: dict, shard: int, first_id: int, length_
         "noise_seed": labels["noise_seed"].astype(np.uint64),
         "modal_noise_scale": labels["modal_noise_scale"],
         "shear_flexibility": labels["shear_flexibility"],
-        **{k: labels[k] for k in ("frequency_scatter", "damping_scatter", "shape_scatter", "gain_scatter")},
+        **{k: labels[k] for k in REPEATABILITY},
         "support_changed": labels["support_changed"].astype(bool),
-        **{k: labels[k] for k in ("sensor_noise", "record_length_s") if k in labels},   # output-only modal noise
+        **{k: labels[k] for k in OUTPUT_ONLY_VARIABLES if k in labels},   # output-only modal noise
         **per_sample,
         "max_frequency_drop_rel": outputs["damage_frequency_drop"],
     }
