@@ -179,9 +179,10 @@ def damping_warning(model: TrainedModel, pairs: list) -> str | None:
     pair = next((p for p in pairs if p is not None and p.modes.size), None)
     if pair is None or not trained:
         return None
+    from physics.modal import modal_parameters
+
     lo, hi = np.asarray(trained, float)[pair.modes].T
-    lam = np.asarray(pair.eigenvalues[0])
-    zeta = -lam.real / np.abs(lam)
+    zeta = modal_parameters(pair.eigenvalues[0])[1]
     given = np.isfinite(zeta) & (zeta > 0)                                # frequencies alone carry no damping
     out = given & ((zeta < lo / DAMPING_RANGE_FACTOR) | (zeta > hi * DAMPING_RANGE_FACTOR))
     if not out.any():

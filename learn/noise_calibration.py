@@ -21,7 +21,7 @@ from physics.errors import BeamDamageError
 from physics.io import MeasuredFRF
 
 __all__ = ["FLOORS", "LEVELS", "QUANTITIES", "calibrate_std", "calibrate_test", "fit_coefficients",
-           "identification_errors", "mode_errors", "robust_std"]
+           "identification_errors", "mode_errors", "on_nominal_modes", "robust_std"]
 
 #: FRF noise levels (relative to |H|) and floors (relative to each FRF's peak) of the calibration: the range the
 #: training config draws (floors 1e-4 to 1e-3; without a floor LSFD weights the lines otherwise).
@@ -85,11 +85,21 @@ def identification_errors(cfg: dict, level: float, floor: float, specimens: int,
             md = identify_modes(frf, fmax, "calibration", k_poles, fmin, order)
         except BeamDamageError:
             continue
-        which = pair_modes_by_frequency(np.abs(md.eigenvalues) / (2 * np.pi), nominal)
-        for k, j in enumerate(which):
-            if j >= 0:
-                lam_e[i, j], psi_e[i, :, j] = md.eigenvalues[k], md.eigenvectors[:, k]
+        lam_e[i], psi_e[i] = on_nominal_modes(md.eigenvalues, md.eigenvectors, nominal)
     return mode_errors(lam_e, psi_e, lam_t, psi_t)
+
+
+def on_nominal_modes(eigenvalues, shapes, nominal_hz):
+    """Identified poles (k,) and shapes (S, k) placed on the nominal modes they pair with by frequency
+    (:func:`learn.measured.pair_modes_by_frequency`): (m,) and (S, m), NaN where no identified mode pairs."""
+    lam = np.asarray(eigenvalues)
+    psi = np.asarray(shapes)
+    which = pair_modes_by_frequency(np.abs(lam) / (2 * np.pi), nominal_hz)
+    lam_out = np.full(len(nominal_hz), np.nan + 0j)
+    psi_out = np.full((psi.shape[0], len(nominal_hz)), np.nan + 0j)
+    k = np.flatnonzero(which >= 0)
+    lam_out[which[k]], psi_out[:, which[k]] = lam[k], psi[:, k]
+    return lam_out, psi_out
 
 
 def mode_errors(lam_e, psi_e, lam_t, psi_t, unscaled: bool = False):

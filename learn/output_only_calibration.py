@@ -23,8 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from learn.measured import pair_modes_by_frequency
-from learn.noise_calibration import fit_coefficients, mode_errors
+from learn.noise_calibration import fit_coefficients, mode_errors, on_nominal_modes
 from physics.errors import BeamDamageError
 
 __all__ = ["RECORD_LENGTHS_S", "SAMPLING_FACTOR", "SENSOR_NOISES", "calibrate_output_only", "drive_row",
@@ -113,10 +112,7 @@ def output_only_errors(setup, sim: dict, sensor_noise: float, record_length_s: f
                 est = identify_records(rec, "ssi", band_hz=tuple(test.band_hz)).estimate
         except BeamDamageError:
             continue
-        which = pair_modes_by_frequency(est.natural_frequencies_hz, nominal)
-        for k, j in enumerate(which):
-            if j >= 0:
-                lam_e[i, j], psi_e[i, :, j] = est.eigenvalues[k], est.shapes[:, k]
+        lam_e[i], psi_e[i] = on_nominal_modes(est.eigenvalues, est.shapes, nominal)
     return mode_errors(lam_e, psi_e, poles[:, used], shapes[:, :, used], unscaled=True)
 
 

@@ -35,8 +35,9 @@ def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
 def damping_ratio_range(eigenvalues, coverage: float = 0.99) -> list[list[float]]:
     """Per mode, the central ``coverage`` range ``[lo, hi]`` of the measured baseline damping ratios of training
     pairs (``eigenvalues`` (n, 2, m)): what ``classify`` compares a test's damping with."""
-    lam = np.asarray(eigenvalues)[:, 0]
-    zeta = -lam.real / np.abs(lam)
+    from physics.modal import modal_parameters
+
+    zeta = modal_parameters(np.asarray(eigenvalues)[:, 0])[1]
     q = np.nanquantile(zeta, [(1 - coverage) / 2, (1 + coverage) / 2], axis=0)
     return [[float(a), float(b)] for a, b in q.T]
 
