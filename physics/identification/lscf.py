@@ -12,7 +12,7 @@ from physics.errors import BeamDamageError, ConvergenceError, ShapeError
 from physics.frf import check_frf_kind, convert_frf
 from physics.identification.lsfd import LSFDResult, lsfd
 from physics.identification.modes import ModalEstimate, _estimate, _frf3
-from physics.identification.poles import StabilisationDiagram, select_poles, stability_status
+from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles, stability_status
 
 __all__ = ["LSCFIdentification", "identify_lscf", "lscf"]
 
@@ -138,7 +138,7 @@ def _take(poles, idx):
 
 
 def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_tol=0.05, mpf_tol=0.98,
-         max_damping=0.2, margin=0.0, line_weight=None):
+         max_damping=MAX_DAMPING, margin=0.0, line_weight=None):
     """Poly-reference least-squares complex frequency-domain poles (pLSCF).
 
     Right matrix-fraction model in the z-domain, ``H_o(w) = B_o(z) A(z)^-1`` with

@@ -9,7 +9,12 @@ import numpy as np
 from physics.errors import ConvergenceError
 from physics.modal import eigenvalues_from_modal
 
-__all__ = ["STABILITY_CODES", "SelectedPoles", "StabilisationDiagram", "select_poles", "stability_status"]
+__all__ = ["MAX_DAMPING", "STABILITY_CODES", "SelectedPoles", "StabilisationDiagram", "select_poles",
+           "stability_status"]
+
+#: Largest damping ratio of a physical pole (LSCF and SSI-cov poles, peaks of peak picking and the circle fit): a
+#: broader one is a computational pole or a bump of the noise floor.
+MAX_DAMPING = 0.2
 
 
 #: Stability codes of poles in a stabilisation diagram.

@@ -12,6 +12,7 @@ import numpy as np
 
 from physics.errors import ShapeError
 from physics.identification.modes import _estimate, _frf3
+from physics.identification.poles import MAX_DAMPING
 from physics.modal import eigenvalues_from_modal
 
 __all__ = ["CircleFit", "circle_fit", "circle_fit_sdof", "complex_modes_from_driving_point", "find_peaks_indicator",
@@ -81,11 +82,6 @@ def complex_modes_from_driving_point(h_peak, zeta, drive_index=0):
     factor = zeta / (-zeta + 1j)
     psi_s = np.sqrt(factor * h_peak[drive_index])  # eq. 3.33
     return factor * h_peak / psi_s  # eq. 3.34 (gives psi_s again on the drive row)
-
-
-#: Largest damping ratio of a mode that peak picking and the circle fit report (that of LSCF's poles): a broader
-#: peak is a bump of the noise floor.
-MAX_DAMPING = 0.2
 
 
 def mode_indicator(frf):

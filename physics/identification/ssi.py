@@ -20,7 +20,8 @@ from scipy import signal
 
 from physics.errors import ConvergenceError, ShapeError
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
-from physics.identification.poles import SelectedPoles, StabilisationDiagram, select_poles, stability_status
+from physics.identification.poles import (MAX_DAMPING, SelectedPoles, StabilisationDiagram, select_poles,
+                                         stability_status)
 from physics.modal import eigenvalues_from_modal
 
 __all__ = ["OutputCorrelations", "SSIIdentification", "identify_ssi", "output_correlations", "ssi_poles"]
@@ -204,7 +205,7 @@ def _poles_of_order(U, s, n_out, order, fs, max_damping, band_hz):
     return fn[keep], zeta[keep], lam[keep], phi.T
 
 
-def ssi_poles(R, sampling_frequency_hz, block_rows, orders, band_hz, max_damping=0.2, freq_tol=0.01,
+def ssi_poles(R, sampling_frequency_hz, block_rows, orders, band_hz, max_damping=MAX_DAMPING, freq_tol=0.01,
               damping_tol=0.05, mac_tol=0.98) -> StabilisationDiagram:
     """Stabilisation diagram of SSI-cov models of the given orders from one SVD.
 
@@ -307,7 +308,7 @@ def steadiest_text(diagram: StabilisationDiagram, n: int = 3) -> str:
 
 
 def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max_order=40, block_rows=None,
-                 references=None, n_segments=8, max_damping=0.2, chunk_samples=8192,
+                 references=None, n_segments=8, max_damping=MAX_DAMPING, chunk_samples=8192,
                  where="record") -> SSIIdentification:
     """SSI-cov identification of a multichannel response record (output-only).
 
