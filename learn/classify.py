@@ -8,7 +8,7 @@ import numpy as np
 
 from learn.classical import FREQUENCY_METHODS, run_classical
 from learn.features import feature_names, frf_features, frequency_features, map_frf_to_grid, modal_features
-from learn.hypotheses import explain_many
+from learn.hypotheses import NO_EXPLANATION, explain_many
 from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows, identification_band_hz,
                             identify_modes, modal_pair, mode_checks, nominal_ratio_range)
 from learn.model_dir import TrainedModel
@@ -101,8 +101,7 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
             "network": net, "classical": cl,
             "classical_methods": answers[i],
             "identification": _identification(p, base_md, cur_md[i] if cur_md else None, identified, model.beam),
-            **(explained[i] or {"hypotheses": None, "hypotheses_summary": None, "frequency_change_std": None,
-                               "shape_change_std": None}),
+            **(explained[i] or NO_EXPLANATION),
             "input_route": route, "warnings": w,
             "_extra": {"location_distribution": where[i]},
         })

@@ -47,9 +47,9 @@ from scipy.special import log_ndtr
 
 from physics.errors import BeamDamageError
 
-__all__ = ["FREQUENCY_CHANGE_STD", "HYPOTHESES", "MODEL_ERROR", "PRIOR", "SEPARATE", "SHAPE_CHANGE_STD",
-           "SIZE_SCALE_STD", "Hypothesis", "explain", "explain_many", "shape_changes", "summary", "support_curve",
-           "weigh", "weigh_many"]
+__all__ = ["FREQUENCY_CHANGE_STD", "HYPOTHESES", "MODEL_ERROR", "NO_EXPLANATION", "PRIOR", "SEPARATE",
+           "SHAPE_CHANGE_STD", "SIZE_SCALE_STD", "Hypothesis", "explain", "explain_many", "shape_changes", "summary",
+           "support_curve", "weigh", "weigh_many"]
 
 #: Relative standard deviation of a mode's frequency change between two tests (0.1 %): modal tests repeated on
 #: the same specimen and mounting scatter 0.05-0.5 % in frequency; the training's frequency scatter and modal
@@ -404,6 +404,11 @@ def shape_changes(eigenvectors) -> np.ndarray:
 
     u = real_shapes(np.asarray(eigenvectors, complex))                   # (n, 2, S, m)
     return (sign_aligned(u[:, 1], u[:, 0]) - u[:, 0]).reshape(u.shape[0], -1)
+
+
+#: The verdict keys of :func:`explain`, all None for a pair without explanations.
+NO_EXPLANATION = {"hypotheses": None, "hypotheses_summary": None, "frequency_change_std": None,
+                  "shape_change_std": None}
 
 
 def explain(model, pair, sigma=FREQUENCY_CHANGE_STD) -> dict:
