@@ -25,7 +25,7 @@ KEYS = ("measured", "damaged", "probability_damaged", "location_x_over_L", "loca
         "detectable", "probability_support_change", "support_changed", "verdict_from", "in_distribution",
         "out_of_distribution_reasons", "mahalanobis_distance",
         "training_percentile", "distance_terms", "hypotheses", "hypotheses_summary",
-        "frequency_change_std", "shape_change_std", "normal_variation", "network", "classical",
+        "frequency_change_std", "shape_change_std", "normal_variation", "agreement", "network", "classical",
         "classical_methods", "identification", "input_route", "warnings", "dof_positions")
 
 

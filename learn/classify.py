@@ -14,8 +14,8 @@ from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows
                             identify_modes, modal_pair, mode_checks, nominal_ratio_range)
 from learn.model_dir import TrainedModel
 from learn.normal_variation import measure, model_modes
-from learn.verdict import (IN_DISTRIBUTION_PERCENTILE, classical_answer, classical_verdict, equivalent_depth,
-                           modes_text, network_answer, network_output, ood_percentile)
+from learn.verdict import (IN_DISTRIBUTION_PERCENTILE, agreement, classical_answer, classical_verdict,
+                           equivalent_depth, modes_text, network_answer, network_output, ood_percentile)
 from physics.errors import BeamDamageError
 from physics.layout import SYMMETRIC_SUPPORTS
 from physics.io import MeasuredFRF
@@ -128,7 +128,10 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
             "classical_methods": answers[i],
             "identification": _identification(p, base_md, cur_md[i] if cur_md else None, identified, model.beam),
             **(explained[i] or NO_EXPLANATION),
-            "input_route": route, "normal_variation": nv_i, "warnings": w,
+            "input_route": route, "normal_variation": nv_i,
+            "agreement": agreement(verdict, net, cl, (explained[i] or NO_EXPLANATION)["hypotheses"],
+                                   "network" if from_network else "classical"),
+            "warnings": w,
             "_extra": {"location_distribution": where[i]},
         })
     return results

@@ -35,6 +35,10 @@ shape change of its size at its place (the shape sensitivities of :mod:`learn.se
 exact change of the nominal shapes (:func:`support_curve`), the day-to-day changes and a global stiffness change
 none. Damping changes are not weighed: the repeatability of damping ratios (5-30 % between tests) is larger than
 what a slit changes.
+
+An explanation whose predicted change misses a mode's measured change by more than :data:`FIT_LIMIT` standard
+deviations (the noise and the model error) does not fit: the summary says so when the most likely does not, and a
+slit that does not fit reports no intervals.
 """
 
 from __future__ import annotations
@@ -47,7 +51,7 @@ from scipy.special import log_ndtr
 
 from physics.errors import BeamDamageError
 
-__all__ = ["FREQUENCY_CHANGE_STD", "HYPOTHESES", "MODEL_ERROR", "NO_EXPLANATION", "PRIOR", "SEPARATE",
+__all__ = ["FIT_LIMIT", "FREQUENCY_CHANGE_STD", "HYPOTHESES", "MODEL_ERROR", "NO_EXPLANATION", "PRIOR", "SEPARATE",
            "SHAPE_CHANGE_STD", "SIZE_SCALE_STD", "Hypothesis", "explain", "explain_many", "shape_changes", "summary",
            "support_curve", "weigh", "weigh_many"]
 
@@ -75,6 +79,10 @@ SHAPE_CHANGE_STD = 0.03
 #: specimen whose EI, mass and clamp differ from it by several percent; it widens the size intervals.
 SIZE_SCALE_STD = 0.1
 
+#: Largest misfit of a mode's change, in its standard deviations, of an explanation that fits (3: a chance of
+#: about 1 % over 4 modes).
+FIT_LIMIT = 3.0
+
 #: Grids of the parameters.
 N_SIZE, N_GLOBAL, N_SUPPORT = 200, 401, 121
 GLOBAL_RANGE, MASS_RANGE, SUPPORT_LN_RANGE = 0.05, 0.10, np.log(10.0)
@@ -92,6 +100,9 @@ class Hypothesis:
     parameters : dict                        the most likely parameters, and for ``slit`` the 68 %/95 % intervals
     predicted : ndarray, shape (m,)          relative frequency changes at the most likely parameters
     max_abs_frequency_error_pct : float      largest |measured - predicted| change there (%)
+    max_misfit_std : float                   largest |measured - predicted| change over its std (the noise and
+                                             the model error of the prediction); beyond :data:`FIT_LIMIT` the
+                                             explanation does not fit
     """
 
     name: str
@@ -100,10 +111,17 @@ class Hypothesis:
     parameters: dict
     predicted: np.ndarray
     max_abs_frequency_error_pct: float
+    max_misfit_std: float = 0.0
+
+    @property
+    def fits(self) -> bool:
+        """Whether every predicted change lies within :data:`FIT_LIMIT` standard deviations of the measured one."""
+        return self.max_misfit_std <= FIT_LIMIT
 
     def row(self) -> dict:
         return {"name": self.name, "probability": self.probability, "parameters": self.parameters,
                 "max_abs_frequency_error_pct": self.max_abs_frequency_error_pct,
+                "max_misfit_std": self.max_misfit_std, "fits": self.fits,
                 "predicted_change_pct": [float(v) for v in 100 * self.predicted]}
 
 
@@ -336,8 +354,14 @@ def weigh_many(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.00
             logz = np.array([fits[n][0] + np.log(PRIOR[n]) for n in HYPOTHESES])
             p = np.exp(logz - logz.max())
             p /= p.sum()
+            miss = {n: float(np.max(np.abs(fits[n][2] - y[i]) / np.sqrt(s**2 + (model_error * fits[n][2]) ** 2)))
+                    for n in HYPOTHESES}
+            if miss["slit"] > FIT_LIMIT:          # a slit that does not fit: no interval rather than a narrow one
+                params["slit"].update({k: None for k in ("x_m_68", "x_m_95", "hinge_flexibility_68",
+                                                         "hinge_flexibility_95")})
             rows = [Hypothesis(n, float(p[k]), float(fits[n][0]), params[n], np.asarray(fits[n][2], float),
-                               float(100 * np.max(np.abs(fits[n][2] - y[i])))) for k, n in enumerate(HYPOTHESES)]
+                               float(100 * np.max(np.abs(fits[n][2] - y[i]))), miss[n])
+                    for k, n in enumerate(HYPOTHESES)]
             out.append(sorted(rows, key=lambda r: -r.probability))
     return out
 
@@ -372,6 +396,10 @@ def summary(rows: list[Hypothesis], modes) -> str:
     best, second = rows[0], rows[1]
     text = (f"most likely explanation: {best.name} (probability {best.probability:.2f}, largest frequency misfit "
             f"{best.max_abs_frequency_error_pct:.2f} %)")
+    if not best.fits:
+        text = (f"no explanation fits the change within its noise (the most likely, {best.name}, misses a mode by "
+                f"{best.max_misfit_std:.1f} standard deviations, {best.max_abs_frequency_error_pct:.2f} %: a change "
+                f"none of them describes, or a noisier test than weighed); " + text)
     if second.probability > best.probability / 3:
         gap = np.abs(best.predicted - second.predicted)
         pair = frozenset({best.name, second.name})

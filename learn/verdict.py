@@ -13,9 +13,9 @@ from learn.evaluate import MIN_DROP
 from learn.features import as_spec
 from physics.io import dof_positions_text
 
-__all__ = ["IN_DISTRIBUTION_PERCENTILE", "classical_answer", "classical_verdict", "detectability_threshold",
-           "equivalent_depth", "network_answer", "network_output", "noise_text", "normal_variation_text",
-           "ood_percentile", "verdict_text"]
+__all__ = ["DAMAGE_EXPLANATIONS", "IN_DISTRIBUTION_PERCENTILE", "agreement", "classical_answer", "classical_verdict",
+           "detectability_threshold", "equivalent_depth", "network_answer", "network_output", "noise_text",
+           "normal_variation_text", "ood_percentile", "verdict_text"]
 
 #: Training percentile of the Mahalanobis distance above which a pair counts as outside the training data.
 IN_DISTRIBUTION_PERCENTILE = 99.9
@@ -157,6 +157,38 @@ def explained_text(res: dict) -> str:
     return "frequency and shape changes" if res.get("shape_change_std") else "frequency changes"
 
 
+#: What each explanation says of damage.
+DAMAGE_EXPLANATIONS = ("slit", "mass_change")
+
+
+def agreement(verdict: dict, net, cl, hypotheses, source: str) -> dict:
+    """Whether the network, the classical method and the competing explanations tell one story about damage:
+    ``{"network", "classical", "explanations", "agree", "text"}`` (None for an answer not given; the
+    explanations' answer is the most likely one's name, a damage when it is a slit or a mass change)."""
+    best = hypotheses[0] if hypotheses else None
+    votes = {"network": None if net is None else bool(net["damaged"]),
+             "classical": None if cl is None else bool(cl["damaged"]),
+             "explanations": None if best is None else best["name"] in DAMAGE_EXPLANATIONS}
+    given = {k: v for k, v in votes.items() if v is not None}
+    agree = len(set(given.values())) <= 1
+    said = {"network": f"the network {'calls it damaged' if votes['network'] else 'finds no damage'}",
+            "classical": f"{cl['method'] if cl else ''} {'calls it damaged' if votes['classical'] else 'finds none'}",
+            "explanations": (f"the most likely explanation is {best['name']} ({best['probability']:.2f}"
+                             + ("" if best.get("fits", True) else ", not fitting") + ")") if best else ""}
+    parts = [said[k] for k in given]
+    if agree:
+        text = "One story: " + "; ".join(parts) + "."
+    else:
+        text = (f"They disagree: {'; '.join(parts)}. The verdict ({'damaged' if verdict['damaged'] else 'undamaged'}) "
+                f"is the {source}'s")
+        if best is not None and votes["explanations"] != bool(verdict["damaged"]):
+            text += (": the explanations find the change within the noise they weigh" if best["name"] == "intact"
+                     else f": the explanations weigh the change against its noise and find {best['name']} more "
+                          "probable")
+        text += "."
+    return {**votes, "agree": agree, "text": text}
+
+
 def verdict_text(res: dict) -> str:
     """The verdict as a reader sees it: the answer, where it comes from, both methods, the caveats."""
     net, cl = res["network"], res["classical"]
@@ -202,6 +234,8 @@ def verdict_text(res: dict) -> str:
         lines.append(f"Location: {res['location_ambiguity']}.")
     if res.get("normal_variation"):
         lines.append(normal_variation_text(res["normal_variation"]))
+    if res.get("agreement"):
+        lines.append(res["agreement"]["text"])
     if res.get("hypotheses"):
         lines.append(f"Explanations of the {explained_text(res)} (equal priors, {noise_text(res)}): "
                      + ", ".join(f"{h['name']} {h['probability']:.2f}" for h in res["hypotheses"])
