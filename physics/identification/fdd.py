@@ -183,12 +183,16 @@ class ClearPeaks:
         Height above the smoothed floor.
     valleys : ndarray of int, shape (n_peaks, 2)
         Lowest line between each peak and its neighbour (or the band's edge) on either side.
+    tolerance_hz : ndarray, shape (n_peaks,)
+        How far a mode may lie from the peak and still explain it: the larger of 1 % of its frequency, 1.5 lines
+        and the peak's half-power (-3 dB) half-width.
     """
 
     lines: np.ndarray
     frequency_hz: np.ndarray
     height_db: np.ndarray
     valleys: np.ndarray
+    tolerance_hz: np.ndarray
 
 
 def clear_peaks(sv: SingularValueSpectrum, band_hz=None) -> ClearPeaks:
@@ -199,7 +203,7 @@ def clear_peaks(sv: SingularValueSpectrum, band_hz=None) -> ClearPeaks:
     f = sv.frequency_hz
     idx = np.nonzero(np.isfinite(sv.floor) & (f >= max(band[0], sv.lowest_hz)) & (f <= band[1]))[0]
     if idx.size < 3:
-        return ClearPeaks(np.zeros(0, int), np.zeros(0), np.zeros(0), np.zeros((0, 2), int))
+        return ClearPeaks(np.zeros(0, int), np.zeros(0), np.zeros(0), np.zeros((0, 2), int), np.zeros(0))
     db = 10 * np.log10(np.maximum(sv.singular_values[idx, 0], np.finfo(float).tiny))
     over = db - 10 * np.log10(sv.floor[idx])
     pk, _ = signal.find_peaks(db, prominence=PEAK_PROMINENCE_DB)
@@ -207,16 +211,20 @@ def clear_peaks(sv: SingularValueSpectrum, band_hz=None) -> ClearPeaks:
     edges = np.concatenate([[0], pk, [idx.size - 1]])
     valleys = np.array([[a + np.argmin(db[a:p + 1]), p + np.argmin(db[p:b + 1])]
                         for a, p, b in zip(edges[:-2], pk, edges[2:])], int).reshape(-1, 2)
-    return ClearPeaks(idx[pk], f[idx[pk]], over[pk], idx[valleys] if pk.size else valleys)
+    half = np.zeros(pk.size)
+    if pk.size:                                        # half-power half-width, within the valleys
+        bases = (np.full(pk.size, 3.0), np.ascontiguousarray(valleys[:, 0]), np.ascontiguousarray(valleys[:, 1]))
+        half = signal.peak_widths(db, pk, rel_height=1.0, prominence_data=bases)[0] / 2
+    tol = np.maximum.reduce([0.01 * f[idx[pk]], np.full(pk.size, 1.5 * sv.resolution_hz), half * sv.resolution_hz])
+    return ClearPeaks(idx[pk], f[idx[pk]], over[pk], idx[valleys] if pk.size else valleys, tol)
 
 
-def unexplained_peaks(peaks: ClearPeaks, frequencies_hz, resolution_hz, rel_tol=0.01) -> np.ndarray:
-    """Boolean mask of the peaks with no frequency within ``max(rel_tol f, 1.5 lines)`` of theirs."""
+def unexplained_peaks(peaks: ClearPeaks, frequencies_hz) -> np.ndarray:
+    """Boolean mask of the peaks with no frequency within their :attr:`ClearPeaks.tolerance_hz`."""
     fn = np.asarray(frequencies_hz, float)
     if fn.size == 0:
         return np.ones(peaks.lines.size, bool)
-    d = np.abs(peaks.frequency_hz[:, None] - fn[None, :]).min(axis=1)
-    return d > np.maximum(rel_tol * peaks.frequency_hz, 1.5 * resolution_hz)
+    return np.abs(peaks.frequency_hz[:, None] - fn[None, :]).min(axis=1) > peaks.tolerance_hz
 
 
 def peak_text(peaks: ClearPeaks, mask) -> str:

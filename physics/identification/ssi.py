@@ -236,7 +236,7 @@ def steadiest_text(diagram: StabilisationDiagram, n: int = 3) -> str:
 
 
 #: Periods of the lowest clear peak of a pass's band that its block rows cover (its correlation lags twice as many).
-BLOCK_ROW_PERIODS = 2
+BLOCK_ROW_PERIODS = 1
 #: Largest block Toeplitz dimension (block rows x channels) of a pass with automatic block rows: bounds the SVD.
 MAX_TOEPLITZ_ROWS = 160
 #: Least block rows, and least highest model order, of a pass sized automatically.
@@ -401,7 +401,7 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     band = checked.band_hz
     sv = singular_value_spectrum(checked, where=where)
     peaks = clear_peaks(sv)
-    tol_hz = np.maximum(0.01 * peaks.frequency_hz, 1.5 * sv.resolution_hz)
+    tol_hz = peaks.tolerance_hz
     passes, modes = [], []                 # modes: (f, zeta, weak, count, shape, f_seg, z_seg)
     hi = band[1]
     for k in range(MAX_PASSES):
@@ -410,7 +410,7 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         passes.append(this)
         if sel is not None:
             strong_hz = np.array([m[0] for m in modes if not m[2]])
-            wanted = unexplained_peaks(peaks, strong_hz, sv.resolution_hz)
+            wanted = unexplained_peaks(peaks, strong_hz)
             for j, f in enumerate(sel.natural_frequencies_hz):
                 near = [m for m in modes if abs(m[0] - f) <= 0.01 * f]
                 if k and not np.any(wanted & (np.abs(peaks.frequency_hz - f) <= tol_hz)):
@@ -420,7 +420,7 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
                 modes = [m for m in modes if not any(m is n for n in near)]
                 modes.append((f, sel.damping_ratios[j], bool(sel.weakly_stable[j]), int(sel.count[j]),
                               seg[0][:, j], seg[1][:, j], seg[2][:, j]))
-        wanted = unexplained_peaks(peaks, [m[0] for m in modes if not m[2]], sv.resolution_hz) \
+        wanted = unexplained_peaks(peaks, [m[0] for m in modes if not m[2]]) \
             & (peaks.frequency_hz <= hi)
         if not wanted.any():
             break
@@ -450,7 +450,7 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
             / np.sqrt(np.maximum(n_seen, 1))
         z_std = np.where(n_seen >= 2, np.nanstd(np.where(n_seen >= 2, z_seg, 0), axis=0, ddof=1), np.nan) \
             / np.sqrt(np.maximum(n_seen, 1))
-    unexplained = unexplained_peaks(peaks, fn, sv.resolution_hz)
+    unexplained = unexplained_peaks(peaks, fn)
     if weak.any():
         warnings.warn(f"{where}: mode(s) at {', '.join(f'{f:.4g} Hz' for f in fn[weak])} weakly stable (stable "
                       "over fewer model orders than the selection asks), kept because a clear spectral peak lies "
