@@ -18,7 +18,7 @@ harmonic), *warned* the clear spectral peaks the command names without a mode, *
 Python allocate) of the whole command. pyOMA2 (``pyoma-2``, optional extra ``compare``) runs SSI-cov on the same
 array with its default 20 block rows and orders up to 40 (its default highest order fails: ``ordmax=None``), and is
 given the true frequencies to pick its poles (``mpe``, at the lowest order holding each, else at the highest order):
-it has no automatic selection.
+it has no automatic selection. It is left out on records of more than :data:`PEER_MAX_VALUES` values (its memory).
 
 Run ``python -m experiments.bench_oma_defaults [--minutes 5] [--seed 1] [--no-peer] [--json FILE] [--docs]``.
 """
@@ -47,6 +47,8 @@ from physics.modal import mac
 __all__ = ["CASES", "main", "run_case"]
 
 DAMPING = (0.01, 0.008, 0.006, 0.005, 0.005)
+#: pyOMA2 runs on records of at most this many values (its memory: about 1.7 GiB for 4 channels x 1.3 M samples).
+PEER_MAX_VALUES = 12_000_000
 F1_HZ = 21.706                                    # the lowest mode of the 16-element cantilever
 QUARTERS = tuple(LENGTH_M * np.arange(1, 5) / 4)
 SIXTEENTHS = tuple(LENGTH_M * np.arange(1, 17) / 16)
@@ -167,7 +169,7 @@ def run_case(name, minutes=5.0, seed=1, peer=True, tmp=None) -> list[dict]:
                  "error": ours.get("error"), "weak": ours.get("weak", 0), "warned": ours.get("warned", 0),
                  **(score(truth, ours["fn"], np.asarray(ours["zeta"]), ours["shapes"]) if "fn" in ours
                     else score(truth, [], [], None))})
-    if peer:
+    if peer and rec.signals.size <= PEER_MAX_VALUES:
         theirs, wall, peak = _measured(lambda: _peer(rec))
         if theirs is not None:
             rows.append({**base, "method": "pyOMA2 SSI-cov (defaults, given the true frequencies)", "wall_s": wall,

@@ -201,7 +201,7 @@ def _run_output_only(args, records, band) -> dict:
         print(f"{'mode':>4} {'f (Hz)':>12} {'+-std':>9} {'zeta':>10} {'+-std':>9} {'MPC':>7}")
         for j, m in enumerate(out["modes"], 1):
             print(f"{j:4d} {m['frequency_hz']:12.4f} {m['frequency_std_hz']:9.2g} {m['damping_ratio']:10.5f} "
-                  f"{m['damping_std']:9.2g} {m['mpc']:7.4f}")
+                  f"{m['damping_std']:9.2g} {m['mpc']:7.4f}" + ("  weakly stable" if m["weakly_stable"] else ""))
         print("+-std: " + out["uncertainty"].get("frequency_std_hz, damping_std", "none (NaN)"))
         for name, p in out.get("outputs", {}).items():
             print(f"wrote {p}")

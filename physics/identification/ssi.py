@@ -245,6 +245,8 @@ MIN_BLOCK_ROWS, MIN_MAX_ORDER = 30, 40
 ORDERS_PER_PEAK = 8
 #: Most passes (the whole band, then lower sub-bands decimated further).
 MAX_PASSES = 4
+#: A mode whose pass's correlation lags span fewer of its periods is identified again in a sub-band.
+MIN_LAG_PERIODS = 2
 #: A sub-band's upper limit is at most this many times the highest clear peak it is identified for.
 SUB_BAND_PEAK_RATIO = 2.5
 
@@ -359,7 +361,9 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     :data:`MIN_MAX_ORDER`). The first pass identifies the whole band; while a clear peak has no stable mode, a
     lower sub-band (upper limit half the last, or :data:`SUB_BAND_PEAK_RATIO` times the highest such peak) is
     decimated to and identified
-    again, keeping only modes at those peaks (:data:`MAX_PASSES` passes at most). A cluster of poles stable over
+    again, keeping only modes at those peaks (:data:`MAX_PASSES` passes at most); a mode whose correlation lags
+    span fewer than :data:`MIN_LAG_PERIODS` of its periods is identified again so, and replaced by the sub-band's
+    estimate when that one is stable. A cluster of poles stable over
     fewer orders than the selection asks but at a clear peak is kept, flagged ``weakly_stable``. A clear peak left
     without a mode is named in a warning.
 
@@ -402,26 +406,31 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     sv = singular_value_spectrum(checked, where=where)
     peaks = clear_peaks(sv)
     tol_hz = peaks.tolerance_hz
-    passes, modes = [], []                 # modes: (f, zeta, weak, count, shape, f_seg, z_seg)
+    # modes: (f, zeta, weakly stable, count, shape, f_seg, z_seg, provisional: weakly stable or its pass's lags
+    # short of MIN_LAG_PERIODS of it, so that a sub-band pass identifies it again)
+    passes, modes = [], []
     hi = band[1]
     for k in range(MAX_PASSES):
         this, sel, seg = _ssi_pass(checked, (band[0], hi), peaks, tol_hz, max_order, block_rows, references,
                                    n_segments, max_damping, chunk_samples, where)
         passes.append(this)
-        if sel is not None:
-            strong_hz = np.array([m[0] for m in modes if not m[2]])
-            wanted = unexplained_peaks(peaks, strong_hz)
-            for j, f in enumerate(sel.natural_frequencies_hz):
-                near = [m for m in modes if abs(m[0] - f) <= 0.01 * f]
-                if k and not np.any(wanted & (np.abs(peaks.frequency_hz - f) <= tol_hz)):
-                    continue                   # a sub-band keeps only modes at peaks still wanted
-                if near and not (all(m[2] for m in near) and not sel.weakly_stable[j]):
+        lag_s = 2 * this.block_rows / this.correlations.sampling_frequency_hz
+        wanted = unexplained_peaks(peaks, [m[0] for m in modes if not m[7]])
+        for j, f in enumerate(sel.natural_frequencies_hz if sel is not None else ()):
+            weak = bool(sel.weakly_stable[j])
+            entry = (f, sel.damping_ratios[j], weak, int(sel.count[j]), seg[0][:, j], seg[1][:, j], seg[2][:, j],
+                     weak or lag_s * f < MIN_LAG_PERIODS)
+            if k:                              # a sub-band keeps only modes at peaks still wanted
+                at = wanted & (np.abs(peaks.frequency_hz - f) <= tol_hz)
+                if not at.any():
                     continue
-                modes = [m for m in modes if not any(m is n for n in near)]
-                modes.append((f, sel.damping_ratios[j], bool(sel.weakly_stable[j]), int(sel.count[j]),
-                              seg[0][:, j], seg[1][:, j], seg[2][:, j]))
-        wanted = unexplained_peaks(peaks, [m[0] for m in modes if not m[2]]) \
-            & (peaks.frequency_hz <= hi)
+                same = [m for m in modes if abs(m[0] - f) <= 0.01 * f
+                        or np.any(np.abs(m[0] - peaks.frequency_hz[at]) <= tol_hz[at])]
+                if same and (entry[7] or not all(m[7] for m in same)):
+                    continue
+                modes = [m for m in modes if not any(m is s for s in same)]
+            modes.append(entry)
+        wanted = unexplained_peaks(peaks, [m[0] for m in modes if not m[7]]) & (peaks.frequency_hz <= hi)
         if not wanted.any():
             break
         hi = min(hi / 2, SUB_BAND_PEAK_RATIO * peaks.frequency_hz[wanted].max())

@@ -84,6 +84,9 @@ def test_identify_the_real_four_channel_acceleration_file_output_only(capsys):
     assert res["method"] == "ssi" and res["sampling_frequency_hz"] == 3200 and res["kind"] == "acceleration"
     assert res["duration_s"] == pytest.approx(222400 / 3200)
     assert any(abs(m["frequency_hz"] - 141) < 2 for m in res["modes"])   # the 141 Hz mode of its FDD and SSI
+    code, out, err = _run(capsys, ["identify", str(DATA / "MPSTD_Set001_2024_10_08_10_27_07.uff"), "--json"])
+    assert code == 0, err                        # with the defaults: the 182.3 Hz mode the docs name
+    assert any(abs(m["frequency_hz"] - 182.3) < 0.5 for m in json.loads(out)["modes"])
 
 
 @pytest.mark.parametrize("method", ["ssi", "fdd", "efdd"])
