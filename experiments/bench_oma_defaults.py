@@ -39,10 +39,10 @@ from pathlib import Path
 
 import numpy as np
 
+from experiments.bench_oma import score
 from experiments.second_sim.ambient import ambient_record, write_npz
 from experiments.second_sim.fem import Beam, assemble, modes
 from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
-from physics.modal import mac
 
 __all__ = ["CASES", "main", "run_case"]
 
@@ -68,30 +68,6 @@ CASES = {
     "fs = 100 f1, 16 channels": (100, SIXTEENTHS, False, False, True),
     "fs = 200 f1, 16 channels": (200, SIXTEENTHS, False, False, True),
 }
-
-
-def score(truth, fn, zeta, shapes, tol=0.01) -> dict:
-    """Modes found (within ``tol`` of a true frequency), extra modes, largest frequency and damping errors and
-    smallest MAC over the modes found."""
-    f_true, z_true, phi = truth
-    fn = np.asarray(fn, float)
-    ef, ez, m, hit = [], [], [], np.zeros(fn.size, bool)
-    for j, f in enumerate(f_true):
-        if fn.size == 0:
-            break
-        k = int(np.argmin(np.abs(fn - f)))
-        if abs(fn[k] - f) > tol * f:
-            continue
-        hit[k] = True
-        ef.append(abs(fn[k] / f - 1))
-        ez.append(abs(zeta[k] / z_true[j] - 1) if np.isfinite(zeta[k]) else np.nan)
-        m.append(float(mac(phi[:, [j]], shapes[:, [k]])[0, 0]))
-
-    def worst(a):
-        return 100 * float(np.nanmax(a)) if a and np.any(np.isfinite(a)) else float("nan")
-
-    return {"present": len(f_true), "found": len(ef), "extra": int((~hit).sum()), "max_freq_err_pct": worst(ef),
-            "max_damping_err_pct": worst(ez), "min_mac": min(m) if m else float("nan")}
 
 
 def _measured(fn):
@@ -167,15 +143,15 @@ def run_case(name, minutes=5.0, seed=1, peer=True, tmp=None) -> list[dict]:
     ours, wall, peak = _measured(lambda: _ours(path))
     rows.append({**base, "method": "identify (defaults)", "wall_s": wall, "peak_mib": peak / 2**20,
                  "error": ours.get("error"), "weak": ours.get("weak", 0), "warned": ours.get("warned", 0),
-                 **(score(truth, ours["fn"], np.asarray(ours["zeta"]), ours["shapes"]) if "fn" in ours
-                    else score(truth, [], [], None))})
+                 **(score(truth, ours["fn"], np.asarray(ours["zeta"]), ours["shapes"], 0.01) if "fn" in ours
+                    else score(truth, [], [], None, 0.01))})
     if peer and rec.signals.size <= PEER_MAX_VALUES:
         theirs, wall, peak = _measured(lambda: _peer(rec))
         if theirs is not None:
             rows.append({**base, "method": "pyOMA2 SSI-cov (defaults, given the true frequencies)", "wall_s": wall,
                          "peak_mib": peak / 2**20, "error": theirs.get("error"), "weak": None, "warned": None,
-                         **(score(truth, theirs["fn"], theirs["zeta"], theirs["shapes"]) if "fn" in theirs
-                            else score(truth, [], [], None))})
+                         **(score(truth, theirs["fn"], theirs["zeta"], theirs["shapes"], 0.01) if "fn" in theirs
+                            else score(truth, [], [], None, 0.01))})
     return rows
 
 
@@ -187,7 +163,7 @@ def markdown(rows) -> str:
             "time | peak memory |\n| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n")
     return head + "".join(
         f"| {r['case']} ({r['fs_hz']:g} Hz, {r['channels']} ch) | {r['method']} | "
-        f"{r['found']} of {r['present']}{' (failed)' if r['error'] else ''} | {r['extra']} | {n(r['warned'], 'd')} | "
+        f"{r['found']} of {r['of']}{' (failed)' if r['error'] else ''} | {r['extra']} | {n(r['warned'], 'd')} | "
         f"{n(r['weak'], 'd')} | {n(r['max_freq_err_pct'], '.3f')} % | {n(r['max_damping_err_pct'], '.1f')} % | "
         f"{n(r['min_mac'], '.4f')} | {r['wall_s']:.2f} s | {r['peak_mib']:.0f} MiB |\n" for r in rows)
 
