@@ -267,7 +267,7 @@ def weigh_many(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.00
                                         (:func:`shape_changes`; sensor-major as ``sens.shape``); without them
                                         frequencies alone are weighed
     support_shapes : array, shape (G, S m), optional   the support grid's shape changes (:func:`support_curve`)
-    shape_sigma : float                 std of each shape entry's change (:data:`SHAPE_CHANGE_STD`)
+    shape_sigma : float or array (S m,)  std of each shape entry's change (:data:`SHAPE_CHANGE_STD`)
 
     Returns
     -------
@@ -300,16 +300,19 @@ def weigh_many(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.00
         if shapes.shape != (Y.shape[0], np.asarray(sens.shape).shape[0]) or not np.all(np.isfinite(shapes)):
             raise BeamDamageError(f"shape changes must be a finite (pairs, sensors x modes) array of shape "
                                   f"{(Y.shape[0], np.asarray(sens.shape).shape[0])}, got {shapes.shape}")
+        # whitened by each entry's std: the shape terms then take a unit std
+        ss = np.broadcast_to(np.asarray(shape_sigma, float), shapes.shape[1:])
+        shapes = shapes / ss
         grid_shapes = {"intact": None, "global_stiffness": None,
-                       "support_change": None if support_shapes is None else np.asarray(support_shapes, float),
-                       "slit": (th, np.asarray(sens.shape, float)), "mass_change": (mu, np.asarray(mass_sens.shape,
-                                                                                                  float))}
+                       "support_change": None if support_shapes is None else np.asarray(support_shapes, float) / ss,
+                       "slit": (th, np.asarray(sens.shape, float) / ss[:, None]),
+                       "mass_change": (mu, np.asarray(mass_sens.shape, float) / ss[:, None])}
     for start in range(0, Y.shape[0], CHUNK_PAIRS):
         y = Y[start:start + CHUNK_PAIRS]
         ll = {name: _loglik(g, y, s, 0.0 if name == "global_stiffness" else half, model_error)
               for name, g in grids.items()}
         if shapes is not None:
-            extra = _shape_loglik(shapes[start:start + CHUNK_PAIRS], grid_shapes, shape_sigma)
+            extra = _shape_loglik(shapes[start:start + CHUNK_PAIRS], grid_shapes, 1.0)
             ll = {name: (v[0] + extra[name], v[1]) for name, v in ll.items()}
         for i in range(y.shape[0]):
             fits = {}
@@ -417,8 +420,13 @@ def explain(model, pair, sigma=FREQUENCY_CHANGE_STD) -> dict:
     return explain_many(model, [pair], sigma)[0]
 
 
-def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD) -> list[dict]:
-    """:func:`explain` of every pair, the pairs holding the same modes weighed in one batch."""
+def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD, shape_sigma=SHAPE_CHANGE_STD) -> list[dict]:
+    """:func:`explain` of every pair, the pairs holding the same modes weighed in one batch.
+
+    ``sigma``: the relative std of a frequency change, one for every mode or one per model mode (m,);
+    ``shape_sigma``: the std of a unit-norm shape entry's change, one or per sensor and model mode (S, m) (a
+    normal variation measured on several baselines). ``frequency_change_std`` and ``shape_change_std`` of each
+    result are then lists over the pair's modes (and sensors)."""
     from datagen.damage.slit import hinge_flexibility
     from learn.model_dir import sensitivity_of
     from physics.properties import beam_preset
@@ -454,13 +462,20 @@ def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD) -> list[dict]:
         shapes = None
         if not frequency_only and np.asarray(sens.shape).shape[0] == cols.size:
             shapes = shape_changes(np.stack([np.asarray(pairs[i].eigenvectors) for i in members]))
+        s = sigma if np.ndim(sigma) == 0 else np.asarray(sigma, float)[k]
+        ss = shape_sigma if np.ndim(shape_sigma) == 0 else np.asarray(shape_sigma, float)[:, k].ravel()
         ranked = weigh_many(f[:, 1] / f[:, 0] - 1.0, sens, mass_all.modes(k), support,
                             days.get("temperature_stiffness_change", (-0.004, 0.004)), theta_max=theta_max,
-                            sigma=sigma, length_m=beam.length_m, shapes=shapes,
-                            support_shapes=shapes_all[:, cols])
+                            sigma=s, length_m=beam.length_m, shapes=shapes,
+                            support_shapes=shapes_all[:, cols], shape_sigma=ss)
         modes = [beam.modes[j] for j in key]
         for i, rows in zip(members, ranked):
             out[i] = {"hypotheses": [r.row() for r in rows], "hypotheses_summary": summary(rows, modes),
-                      "frequency_change_std": float(sigma),
-                      "shape_change_std": None if shapes is None else SHAPE_CHANGE_STD}
+                      "frequency_change_std": _listed(s),
+                      "shape_change_std": None if shapes is None else _listed(ss)}
     return out
+
+
+def _listed(v):
+    """A float, or a list of floats."""
+    return float(v) if np.ndim(v) == 0 else [float(a) for a in np.ravel(v)]
