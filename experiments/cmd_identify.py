@@ -190,6 +190,8 @@ def _run_output_only(args, records, band) -> dict:
         atomic_write_text(path, json.dumps(obj, indent=1) + "\n")
         out["outputs"] = {"modal.json": str(path)}
     if not args.json:
+        for msg in out["warnings"]:
+            print(f"warning: {msg}")
         print(out["method_choice"])
         if others:
             print(f"{len(others) + 1} setups merged on the reference DOFs {', '.join(out['setup_references'])}"
