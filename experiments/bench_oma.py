@@ -49,23 +49,25 @@ def _nanmax(a) -> float:
     return float(np.nanmax(a)) if a and np.any(np.isfinite(a)) else float("nan")
 
 
-def score(truth, fn, zeta, shapes) -> dict:
-    """Modes found (nearest identified frequency within 5 % of a true one), largest |frequency| and |damping|
-    relative errors and smallest MAC over the modes found."""
+def score(truth, fn, zeta, shapes, tol=0.05) -> dict:
+    """Modes found (nearest identified frequency within ``tol`` of a true one), extra modes (within ``tol`` of
+    none), largest |frequency| and |damping| relative errors and smallest MAC over the modes found."""
     f_true, z_true, phi = truth
     fn = np.asarray(fn, float)
     found, ef, ez, m = 0, [], [], []
+    hit = np.zeros(fn.size, bool)
     for j, f in enumerate(f_true):
         if fn.size == 0:
             break
         k = int(np.argmin(np.abs(fn - f)))
-        if abs(fn[k] - f) > 0.05 * f:
+        if abs(fn[k] - f) > tol * f:
             continue
         found += 1
+        hit[k] = True
         ef.append(abs(fn[k] / f - 1))
         ez.append(abs(zeta[k] / z_true[j] - 1) if np.isfinite(zeta[k]) else np.nan)
         m.append(float(mac(phi[:, [j]], shapes[:, [k]])[0, 0]))
-    return {"found": found, "of": len(f_true), "max_freq_err_pct": 100 * _nanmax(ef),
+    return {"found": found, "of": len(f_true), "extra": int((~hit).sum()), "max_freq_err_pct": 100 * _nanmax(ef),
             "max_damping_err_pct": 100 * _nanmax(ez), "min_mac": min(m) if m else float("nan")}
 
 

@@ -18,8 +18,8 @@ from physics.modal import mac
 __all__ = ["add_parser", "run"]
 
 
-#: Highest LSCF model order accepted.
-MAX_ORDER = 200
+#: Highest model order accepted, and LSCF's default.
+MAX_ORDER, LSCF_MAX_ORDER = 200, 40
 
 
 def modes_list(e) -> list:
@@ -31,6 +31,7 @@ def modes_list(e) -> list:
               "frequency_std_hz": float(e.frequency_std_hz[j]), "damping_std": float(e.damping_std[j]),
               "frequency_fit_std_hz": float(f_fit[j]), "damping_fit_std": float(z_fit[j]),
               "eigenvalue": format_complex(e.eigenvalues[j]),
+              "weakly_stable": None if e.weakly_stable is None else bool(e.weakly_stable[j]),
               "shape": [format_complex(z) for z in e.shapes[:, j]], "mpc": float(e.mpc[j])}
              for j in range(e.eigenvalues.size)]
 
@@ -98,7 +99,7 @@ def run(args) -> dict:
                           "0 <= FMIN < FMAX")
     if args.modes is not None and args.modes < 1:
         raise ConfigError(f"--modes {args.modes}: must be >= 1")
-    if not 1 <= args.max_order <= MAX_ORDER:
+    if args.max_order is not None and not 1 <= args.max_order <= MAX_ORDER:
         raise ConfigError(f"--max-order {args.max_order}: must be between 1 and {MAX_ORDER} (the LSCF normal "
                           "equations grow with the square of the order)")
     if args.out and Path(args.out).exists() and not Path(args.out).is_dir():
@@ -112,7 +113,7 @@ def run(args) -> dict:
         raise ConfigError(f"--setup: merges setups of response records (output-only); {args.file} holds FRFs")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        ident = identify_file(args.file, args.method or "lscf", band, args.modes, args.max_order)
+        ident = identify_file(args.file, args.method or "lscf", band, args.modes, args.max_order or LSCF_MAX_ORDER)
     out = result_dict(ident)
     out["warnings"] = [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
     if args.out:
@@ -189,6 +190,8 @@ def _run_output_only(args, records, band) -> dict:
         atomic_write_text(path, json.dumps(obj, indent=1) + "\n")
         out["outputs"] = {"modal.json": str(path)}
     if not args.json:
+        for msg in out["warnings"]:
+            print(f"warning: {msg}")
         print(out["method_choice"])
         if others:
             print(f"{len(others) + 1} setups merged on the reference DOFs {', '.join(out['setup_references'])}"
@@ -200,7 +203,7 @@ def _run_output_only(args, records, band) -> dict:
         print(f"{'mode':>4} {'f (Hz)':>12} {'+-std':>9} {'zeta':>10} {'+-std':>9} {'MPC':>7}")
         for j, m in enumerate(out["modes"], 1):
             print(f"{j:4d} {m['frequency_hz']:12.4f} {m['frequency_std_hz']:9.2g} {m['damping_ratio']:10.5f} "
-                  f"{m['damping_std']:9.2g} {m['mpc']:7.4f}")
+                  f"{m['damping_std']:9.2g} {m['mpc']:7.4f}" + ("  weakly stable" if m["weakly_stable"] else ""))
         print("+-std: " + out["uncertainty"].get("frequency_std_hz, damping_std", "none (NaN)"))
         for name, p in out.get("outputs", {}).items():
             print(f"wrote {p}")
@@ -230,8 +233,9 @@ def add_parser(sub):
                         "FILE's on the DOFs every setup measures (fixed references) and merged into one set of shapes")
     p.add_argument("--band", nargs=2, type=float, metavar=("FMIN", "FMAX"), help="frequency band in Hz")
     p.add_argument("--modes", type=int, metavar="N", help="number of modes to keep (default: all found)")
-    p.add_argument("--max-order", type=int, default=40,
-                   help="highest LSCF model order (default %(default)s; used by "
+    p.add_argument("--max-order", type=int, default=None,
+                   help=f"highest model order (default {LSCF_MAX_ORDER} for lscf; ssi sizes it to the clear peaks "
+                        "of the record's spectrum; used by "
                         f"{', '.join(m for m, spec in METHODS.items() if 'max_order' in spec.options)})")
     p.add_argument("--out", metavar="DIR",
                    help="write modal.json (feedable to 'beam-damage update --modal'), synthesised.uff (the "

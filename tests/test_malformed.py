@@ -115,8 +115,6 @@ def _frf_cases():
          "lines"),
         ("uff", "PSD records (function type 9)", lambda d: [_copy(d, "sample_dataset58_psd.uff")], "type 4"),
         ("uff", "geometry only (Test.Lab)", lambda d: [_copy(d, "TestLab_161_164_18_15_82.uff")], "no dataset 58"),
-        ("uff", "time records without force", lambda d: [_copy(d, "MPSTD_Set001_2024_10_08_10_27_07.uff")],
-         "no pole is stable"),             # identified output-only: over the whole band no mode is stable enough
         ("uff", "unknown unit label", lambda d: [_uff(d / "u.uff", ordinate_axis_units_lab="furlong/s")],
          "furlong"),
         ("uff", "header claims 10^9 points", lambda d: [_patch_uff_text(_uff(d / "np.uff", binary=0),

@@ -97,6 +97,9 @@ class ModalEstimate:
     frequency_fit_std_hz, damping_fit_std : ndarray, shape (n_modes,) or None
         One-sigma uncertainty from the fit itself (LSFD variable-projection
         covariance of the poles, see :class:`LSFDResult`), where the method gives one.
+    weakly_stable : ndarray of bool, shape (n_modes,), or None
+        Modes stable over fewer model orders than the pole selection asks, kept because a clear spectral peak
+        lies at them (SSI-cov); None for a method that does not flag them.
     """
 
     natural_frequencies_hz: np.ndarray
@@ -113,6 +116,7 @@ class ModalEstimate:
     upper_residual: np.ndarray | None = None
     frequency_fit_std_hz: np.ndarray | None = None
     damping_fit_std: np.ndarray | None = None
+    weakly_stable: np.ndarray | None = None
 
 
 def _estimate(f_hz, zeta, residues, drive, method, f_std=None, z_std=None, lower=None, upper=None,

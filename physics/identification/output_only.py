@@ -67,14 +67,13 @@ def holds_response_records(path) -> bool:
         types = UffFile(path).function_types
         return 1 in types and 4 not in types
     if fmt.name == "npz":
+        import zipfile
+
         try:
-            z = np.load(path, allow_pickle=False)
-        except (ValueError, OSError, EOFError):
+            with zipfile.ZipFile(path) as zf:
+                return "signals.npy" in zf.namelist()
+        except (zipfile.BadZipFile, OSError, EOFError, ValueError):
             return False                              # the FRF reader names what is wrong
-        if not isinstance(z, np.lib.npyio.NpzFile):
-            return False
-        with z:
-            return "signals" in z.files
     if fmt.name == "csv":
         with open(path, encoding="utf-8", errors="replace") as fh:
             lines = (fh.readline(SNIFF_LINE_CHARS) for _ in range(SNIFF_LINES))   # bounded: no newline in 2 GB
@@ -98,7 +97,7 @@ def read_response_records(path) -> TimeRecords:
 
 
 def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=None, n_modes=None,
-                     max_order=40) -> RecordsIdentification:
+                     max_order=None) -> RecordsIdentification:
     """Identify modes of response records by an output-only method of :data:`METHODS`.
 
     Parameters
@@ -109,8 +108,8 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         A key of :data:`METHODS` with ``data == "records"``.
     band_hz : (float, float), optional
     n_modes : int, optional
-    max_order : int
-        Highest SSI model order (state dimension).
+    max_order : int, optional
+        Highest SSI model order (state dimension; default sized to the record's spectrum).
 
     Returns
     -------

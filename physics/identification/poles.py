@@ -99,6 +99,8 @@ class SelectedPoles:
     count : ndarray of int, shape (n_modes,)
         Orders (upper half of the cluster) in which the pole was found stable.
     participation : ndarray, complex, shape (n_modes, n_ref)
+    weakly_stable : ndarray of bool, shape (n_modes,)
+        Stable over fewer orders than the selection asks, kept because a clear spectral peak lies at its frequency.
     """
 
     eigenvalues: np.ndarray
@@ -108,10 +110,12 @@ class SelectedPoles:
     damping_std: np.ndarray
     count: np.ndarray
     participation: np.ndarray
+    weakly_stable: np.ndarray
 
 
 def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq_tol=0.01,
-                 damping_tol=0.25, min_count=None, seed_orders=0.25):
+                 damping_tol=0.25, min_count=None, seed_orders=0.25, peaks_hz=(), peak_tol_hz=None,
+                 weak_min_count=3):
     """Automatic pole selection from a stabilisation diagram (no GUI; rules are parameters).
 
     1. Candidate poles have ``status >= min_status`` (4 = stable in frequency,
@@ -123,7 +127,9 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
        skipped and poles already taken are removed from later clusters, which
        are dropped below ``min_count`` members (default: a third of the orders
        that hold any pole).
-    4. With ``n_modes``, the ``n_modes`` largest clusters are kept.
+    4. A cluster left with fewer members but at least ``weak_min_count``, within ``peak_tol_hz`` of one of
+       ``peaks_hz`` (clear spectral peaks) and ``freq_tol`` of no cluster taken, is kept *weakly stable*.
+    5. With ``n_modes``, the ``n_modes`` largest clusters are kept (weakly stable ones last).
 
     Parameters
     ----------
@@ -133,6 +139,11 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
     freq_tol, damping_tol : float
     min_count : int, optional
     seed_orders : float in (0, 1]
+    peaks_hz : sequence of float
+        Frequencies of clear spectral peaks (Hz).
+    peak_tol_hz : sequence of float, optional
+        Largest distance of a weakly stable cluster's median frequency from each peak (default ``freq_tol`` f).
+    weak_min_count : int
 
     Returns
     -------
@@ -152,13 +163,27 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
         min_count = max(2, int(np.ceil(orders.size / 3)))
     top = orders[int(np.floor((1 - seed_orders) * (orders.size - 1))):] if orders.size else orders
     seeds = cand[np.isin(d.order[cand], top)]
-    chosen = _take_clusters(_seed_clusters(d, cand, seeds, freq_tol, damping_tol), min_count)
-    if n_modes is not None:
-        chosen = chosen[:n_modes]
+    clusters = _seed_clusters(d, cand, seeds, freq_tol, damping_tol)
+    used = set()
+    chosen = _take_clusters(clusters, min_count, used)
+    peaks = np.asarray(peaks_hz, float)
+    tol = freq_tol * peaks if peak_tol_hz is None else np.asarray(peak_tol_hz, float)
+    taken_hz = [np.median(d.natural_frequencies_hz[m]) for m in chosen]
+
+    def at_a_peak(mem):
+        f = np.median(d.natural_frequencies_hz[mem])
+        ok = np.any(np.abs(peaks - f) <= tol) and all(abs(f - g) > freq_tol * g for g in taken_hz)
+        if ok:
+            taken_hz.append(f)
+        return ok
+
+    weak = _take_clusters(clusters, weak_min_count, used, at_a_peak) if peaks.size else []
+    flags = [False] * len(chosen) + [True] * len(weak)
+    chosen = (chosen + weak)[:n_modes]
     if not chosen:
         raise ConvergenceError("no pole is stable over enough model orders: raise max_order, widen the "
                                "band or relax the selection tolerances")
-    return _summarise_clusters(d, chosen)
+    return _summarise_clusters(d, chosen, flags[:len(chosen)])
 
 
 def _seed_clusters(d: StabilisationDiagram, cand, seeds, freq_tol, damping_tol):
@@ -183,15 +208,16 @@ def _seed_clusters(d: StabilisationDiagram, cand, seeds, freq_tol, damping_tol):
     return clusters
 
 
-def _take_clusters(clusters, min_count):
-    """Clusters in turn, skipping a seed already taken and poles already taken; those left with fewer
-    than ``min_count`` members are dropped. Returns the member index arrays taken."""
-    chosen, used = [], set()
+def _take_clusters(clusters, min_count, used, accept=None):
+    """Clusters in turn, skipping a seed already taken and poles already taken (``used``, updated); those left
+    with fewer than ``min_count`` members, or that ``accept(members)`` refuses, are dropped. Returns the member
+    index arrays taken."""
+    chosen = []
     for sd, mem in clusters:
         if sd in used:
             continue
         mem = np.array([j for j in mem if j not in used], int)
-        if mem.size < min_count:
+        if mem.size < min_count or (accept is not None and not accept(mem)):
             continue
         chosen.append(mem)
         used.update(mem.tolist())
@@ -199,7 +225,7 @@ def _take_clusters(clusters, min_count):
     return chosen
 
 
-def _summarise_clusters(d: StabilisationDiagram, chosen) -> SelectedPoles:
+def _summarise_clusters(d: StabilisationDiagram, chosen, weak) -> SelectedPoles:
     """Medians and spreads over the upper half (by order) of each cluster, sorted by frequency.
 
     Low orders are biased (the z-domain model converges with order), hence the upper half.
@@ -213,4 +239,4 @@ def _summarise_clusters(d: StabilisationDiagram, chosen) -> SelectedPoles:
     mpf = np.array([d.participation[m[np.argmax(d.order[m])]] for m in chosen])
     o = np.argsort(fn)
     lam = eigenvalues_from_modal(fn[o], zeta[o])
-    return SelectedPoles(lam, fn[o], zeta[o], f_std[o], z_std[o], count[o], mpf[o])
+    return SelectedPoles(lam, fn[o], zeta[o], f_std[o], z_std[o], count[o], mpf[o], np.asarray(weak, bool)[o])

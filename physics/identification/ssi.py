@@ -1,9 +1,10 @@
 """Output-only identification by covariance-driven stochastic subspace identification (SSI-cov).
 
 The output correlations ``R_k = E[y_{t+k} y_ref,t^T]`` are accumulated chunk by chunk (FFT cross-correlation of
-each chunk with the ``n_lags`` samples before it), so a long record (an array or a ``np.memmap``) is read once
-in bounded memory; a low-pass filter and decimation to the band run in the same pass (filter state carried across
-chunks). One SVD of the block Toeplitz matrix of the correlations gives every model order of the stabilisation
+each chunk with the ``n_lags`` samples before it), so a long record (an array or a ``np.memmap``) is read in
+bounded memory: once by the shared checks, once for the singular-value spectrum whose clear peaks size the model,
+and once per pass; a low-pass filter and decimation to the pass's band run in the same pass (filter state carried
+across chunks). One SVD of the block Toeplitz matrix of the correlations gives every model order of the stabilisation
 diagram; the physical poles are selected by :func:`~physics.identification.poles.select_poles` as for LSCF. The
 record is split into segments whose correlations are kept apart: the one-sigma frequency and damping of each mode
 are the spread of the mode over the segments divided by ``sqrt(n_segments)`` (batch estimate of the standard
@@ -12,6 +13,7 @@ error of the full-record estimate).
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,16 +21,15 @@ from scipy import fft as sfft
 from scipy import signal
 
 from physics.errors import ConvergenceError, ShapeError
+from physics.identification.fdd import (ClearPeaks, clear_peaks, peak_text, singular_value_spectrum,
+                                        unexplained_peaks, unit_shapes)
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
-from physics.identification.poles import (MAX_DAMPING, SelectedPoles, StabilisationDiagram, select_poles,
+from physics.identification.poles import (MAX_DAMPING, StabilisationDiagram, select_poles,
                                          stability_status)
+from physics.identification.record_checks import CheckedRecord, check_periods, check_records
 from physics.modal import eigenvalues_from_modal
 
-__all__ = ["OutputCorrelations", "SSIIdentification", "identify_ssi", "output_correlations", "ssi_poles"]
-
-#: Fraction of a channel's samples at its extreme value beyond which the channel is called clipped.
-CLIP_FRACTION = 1e-3
-
+__all__ = ["OutputCorrelations", "SSIIdentification", "SSIPass", "identify_ssi", "output_correlations", "ssi_poles"]
 
 @dataclass(frozen=True)
 class OutputCorrelations:
@@ -63,33 +64,15 @@ class OutputCorrelations:
         return self.sums / self.counts[:, :, None, None]
 
 
-def _check_channels(y, where):
-    """Mean, and the error of a channel with NaN samples or no variation, in one pass over chunks."""
-    n_ch, n = y.shape
-    total, lo, hi = np.zeros(n_ch), np.full(n_ch, np.inf), np.full(n_ch, -np.inf)
-    step = max(1, 2**22 // max(n_ch, 1))
-    for a in range(0, n, step):
-        c = np.asarray(y[:, a:a + step], dtype=np.float64)
-        bad = ~np.all(np.isfinite(c), axis=1)
-        if np.any(bad):
-            raise ShapeError(f"{where}: channel {int(np.argmax(bad))} holds NaN or inf samples (sample "
-                             f"{a + int(np.argmax(~np.isfinite(c[np.argmax(bad)])))})")
-        total += c.sum(axis=1)
-        lo, hi = np.minimum(lo, c.min(axis=1)), np.maximum(hi, c.max(axis=1))
-    flat = hi <= lo
-    if np.any(flat):
-        raise ShapeError(f"{where}: channel {int(np.argmax(flat))} is constant; nothing to identify from it")
-    return total / n, lo, hi
-
-
 def output_correlations(signals, sampling_frequency_hz, n_lags, references=None, band_hz=None, n_segments=8,
                         chunk_samples=8192, where="record") -> OutputCorrelations:
     """Output correlations of a multichannel record, accumulated chunk by chunk.
 
     Parameters
     ----------
-    signals : array_like, shape (n_channels, n_samples)
-        Responses (any unit); a ``np.memmap`` is read chunk by chunk.
+    signals : array_like, shape (n_channels, n_samples), or CheckedRecord
+        Responses (any unit); a ``np.memmap`` is read chunk by chunk. Unless a :class:`CheckedRecord`,
+        :func:`~physics.identification.record_checks.check_records` checks it first.
     sampling_frequency_hz : float
     n_lags : int
         Lags ``0 .. n_lags - 1`` (decimated samples).
@@ -112,27 +95,19 @@ def output_correlations(signals, sampling_frequency_hz, n_lags, references=None,
     Raises
     ------
     ShapeError
-        NaN samples, a constant or clipped channel, a band above the Nyquist frequency, too short a record.
+        A record :func:`~physics.identification.record_checks.check_records` refuses, or too short a record for
+        ``n_lags``.
     """
-    y = signals if isinstance(signals, np.ndarray) else np.asarray(signals, dtype=np.float64)
-    if y.ndim != 2 or y.shape[0] < 1:
-        raise ShapeError(f"{where}: signals must be (n_channels, n_samples)")
-    fs = float(sampling_frequency_hz)
-    if not (np.isfinite(fs) and fs > 0):
-        raise ShapeError(f"{where}: sampling rate {fs:g} Hz must be finite and > 0")
+    checked = signals if isinstance(signals, CheckedRecord) else \
+        check_records(signals, sampling_frequency_hz, band_hz, where)
+    y, fs, mean = checked.signals, checked.sampling_frequency_hz, checked.mean
     n_ch, n_raw = y.shape
     ref = np.arange(n_ch) if references is None else np.asarray(references, int)
-    q = 1
-    if band_hz is not None:
-        if band_hz[1] > fs / 2:
-            raise ShapeError(f"{where}: band up to {band_hz[1]:g} Hz is above the Nyquist frequency {fs / 2:g} Hz "
-                             f"of a {fs:g} Hz sampling rate")
-        q = max(1, int(fs // (2.5 * band_hz[1])))
+    q = 1 if band_hz is None else max(1, int(fs // (2.5 * band_hz[1])))
     n = n_raw // q
     if n < 4 * n_lags:
         raise ShapeError(f"{where}: {n_raw} samples at {fs:g} Hz are too short for {n_lags} correlation lags "
                          f"(need {4 * n_lags * q} samples)")
-    mean, lo, hi = _check_channels(y, where)
     sos = signal.butter(8, 0.8 / q, output="sos") if q > 1 else None
     zi = None if sos is None else np.zeros((sos.shape[0], n_ch, 2))
     n_segments = int(max(1, min(n_segments, n // (4 * n_lags))))
@@ -141,13 +116,10 @@ def output_correlations(signals, sampling_frequency_hz, n_lags, references=None,
     nfft = sfft.next_fast_len(m + n_lags, real=True)
     sums = np.zeros((n_segments, n_lags, n_ch, ref.size))
     tail = np.zeros((ref.size, n_lags))
-    at_extreme = np.zeros(n_ch, int)
     for s in range(n_segments):
         for a in range(seg_edges[s], seg_edges[s + 1], m):
             b = min(a + m, seg_edges[s + 1])
-            raw = np.asarray(y[:, a * q:b * q], dtype=np.float64)
-            at_extreme += np.sum((raw >= hi[:, None]) | (raw <= lo[:, None]), axis=1)
-            raw = raw - mean[:, None]
+            raw = np.asarray(y[:, a * q:b * q], dtype=np.float64) - mean[:, None]
             if sos is not None:
                 raw, zi = signal.sosfilt(sos, raw, axis=1, zi=zi)
             c = raw[:, ::q] if q > 1 else raw
@@ -158,21 +130,9 @@ def output_correlations(signals, sampling_frequency_hz, n_lags, references=None,
             # lag k pairs c[j] with comb[j + n_lags - k]
             sums[s] += np.moveaxis(r[:, :, n_lags - np.arange(n_lags)], 2, 0)
             tail = comb[:, -n_lags:]
-    clipped = at_extreme > CLIP_FRACTION * n_raw + 2
-    if np.any(clipped):
-        k = int(np.argmax(clipped))
-        raise ShapeError(f"{where}: channel {k} is clipped ({at_extreme[k]} samples at its extreme values "
-                         f"{lo[k]:.4g}/{hi[k]:.4g}); identify from unclipped records")
     counts = np.repeat(np.diff(seg_edges)[:, None], n_lags, axis=1).astype(float)
     counts[0] -= np.arange(n_lags)
     return OutputCorrelations(sums, counts, fs / q, n, q)
-
-
-def check_duration(duration_s, band_low_hz, where="record"):
-    """Refuse a record shorter than ten periods of the band's lower limit (the lowest mode it may hold)."""
-    if band_low_hz > 0 and duration_s < 10 / band_low_hz:
-        raise ShapeError(f"{where}: {duration_s:.3g} s is shorter than ten periods of the band's lower limit "
-                         f"{band_low_hz:g} Hz: modes below {10 / duration_s:.3g} Hz cannot be identified")
 
 
 def _toeplitz(R, block_rows):
@@ -237,38 +197,6 @@ def ssi_poles(R, sampling_frequency_hz, block_rows, orders, band_hz, max_damping
     return StabilisationDiagram(order, lam, fn, zeta, phi, status, tuple(float(b) for b in band_hz))
 
 
-@dataclass(frozen=True)
-class SSIIdentification:
-    """An SSI-cov identification.
-
-    Attributes
-    ----------
-    estimate : ModalEstimate
-        Shapes unit-norm over the channels (largest entry real positive), unscaled (output-only).
-    diagram : StabilisationDiagram
-    poles : SelectedPoles
-    segment_frequencies_hz, segment_damping_ratios : ndarray, shape (n_segments, n_modes)
-        Each mode in each segment (NaN where a segment did not show it).
-    correlations : OutputCorrelations
-    block_rows : int
-    """
-
-    estimate: ModalEstimate
-    diagram: StabilisationDiagram
-    poles: SelectedPoles
-    segment_frequencies_hz: np.ndarray
-    segment_damping_ratios: np.ndarray
-    correlations: OutputCorrelations
-    block_rows: int
-
-
-def _unit_shapes(phi):
-    """Columns of unit norm with the largest entry real and positive."""
-    k = np.argmax(np.abs(phi), axis=0)
-    ph = phi[k, np.arange(phi.shape[1])]
-    return phi * (np.abs(ph) / ph) / np.linalg.norm(phi, axis=0)
-
-
 def _segment_modes(cor, block_rows, order, band_hz, fn, shapes, max_damping):
     """Each selected mode's nearest pole (frequency within 5 %, shape MAC >= 0.8) in each segment's model."""
     f_seg = np.full((cor.sums.shape[0], fn.size), np.nan)
@@ -307,10 +235,137 @@ def steadiest_text(diagram: StabilisationDiagram, n: int = 3) -> str:
             "(peaks of the spectra)")
 
 
-def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max_order=40, block_rows=None,
+#: Periods of the lowest clear peak of a pass's band that its block rows cover (its correlation lags twice as many).
+BLOCK_ROW_PERIODS = 1
+#: Largest block Toeplitz dimension (block rows x channels) of a pass with automatic block rows: bounds the SVD.
+MAX_TOEPLITZ_ROWS = 160
+#: Least block rows, and least highest model order, of a pass sized automatically.
+MIN_BLOCK_ROWS, MIN_MAX_ORDER = 30, 40
+#: The automatic highest model order (state dimension) is at least this many per clear peak of the pass's band.
+ORDERS_PER_PEAK = 8
+#: Most passes (the whole band, then lower sub-bands decimated further).
+MAX_PASSES = 4
+#: A mode whose pass's correlation lags span fewer of its periods is identified again in a sub-band.
+MIN_LAG_PERIODS = 2
+#: A sub-band's upper limit is at most this many times the highest clear peak it is identified for.
+SUB_BAND_PEAK_RATIO = 2.5
+
+
+@dataclass(frozen=True)
+class SSIPass:
+    """One SSI-cov pass: the band it identified (decimated to it), its sizes and its stabilisation diagram.
+
+    Attributes
+    ----------
+    band_hz : (float, float)
+    block_rows : int
+    orders : ndarray of int
+        Model orders (state dimensions).
+    diagram : StabilisationDiagram
+    correlations : OutputCorrelations
+    """
+
+    band_hz: tuple
+    block_rows: int
+    orders: np.ndarray
+    diagram: StabilisationDiagram
+    correlations: OutputCorrelations
+
+
+@dataclass(frozen=True)
+class SSIIdentification:
+    """An SSI-cov identification.
+
+    Attributes
+    ----------
+    estimate : ModalEstimate
+        Shapes unit-norm over the channels (largest entry real positive), unscaled (output-only);
+        ``weakly_stable`` flags modes kept on fewer model orders because a clear spectral peak lies at them.
+    passes : tuple of SSIPass
+        The whole band first, then the lower sub-bands identified for clear peaks no mode explained.
+    peaks : ClearPeaks
+        The clear peaks of the record's singular-value spectrum.
+    unexplained_hz : ndarray
+        Clear peaks left without a mode (named in a warning).
+    segment_frequencies_hz, segment_damping_ratios : ndarray, shape (n_segments, n_modes)
+        Each mode in each segment of its pass (NaN where a segment did not show it).
+    """
+
+    estimate: ModalEstimate
+    passes: tuple
+    peaks: ClearPeaks
+    unexplained_hz: np.ndarray
+    segment_frequencies_hz: np.ndarray
+    segment_damping_ratios: np.ndarray
+
+    @property
+    def diagram(self) -> StabilisationDiagram:
+        """The stabilisation diagram of the whole band."""
+        return self.passes[0].diagram
+
+    @property
+    def correlations(self) -> OutputCorrelations:
+        return self.passes[0].correlations
+
+    @property
+    def block_rows(self) -> int:
+        return self.passes[0].block_rows
+
+
+def _pass_sizes(fs_dec, n_dec, lowest_hz, n_peaks, n_ch, n_ref, max_order, block_rows):
+    """Block rows and highest model order of a pass (the given ones, or sized to its band)."""
+    if block_rows:
+        i = int(block_rows)
+    else:
+        least = max(MIN_BLOCK_ROWS, int(np.ceil((max_order or 0) / n_ref)) + 1)
+        want = int(np.ceil(BLOCK_ROW_PERIODS * fs_dec / lowest_hz)) if lowest_hz else least
+        i = max(least, min(want, MAX_TOEPLITZ_ROWS // n_ch, n_dec // 8))
+    p = max_order or min(max(MIN_MAX_ORDER, ORDERS_PER_PEAK * n_peaks), i * min(n_ref, n_ch))
+    return i, 2 * (p // 2)
+
+
+def _ssi_pass(checked, band, peaks, tol_hz, max_order, block_rows, references, n_segments, max_damping,
+              chunk_samples, where):
+    """One pass over ``band``: the pass, its selected poles (or None) and their segment frequencies/damping."""
+    fs = checked.sampling_frequency_hz
+    n_ch = checked.signals.shape[0]
+    n_ref = n_ch if references is None else len(references)
+    q = max(1, int(fs // (2.5 * band[1])))
+    inside = (peaks.frequency_hz >= band[0]) & (peaks.frequency_hz <= band[1])
+    lowest = peaks.frequency_hz[inside][0] if inside.any() else None
+    i, p = _pass_sizes(fs / q, checked.signals.shape[1] // q, lowest, int(inside.sum()), n_ch, n_ref, max_order,
+                       block_rows)
+    if p > i * min(n_ref, n_ch):
+        raise ShapeError(f"{where}: max_order {p} exceeds block_rows x channels = {i * min(n_ref, n_ch)}")
+    cor = output_correlations(checked, fs, 2 * i, references, band, n_segments, chunk_samples, where)
+    orders = np.arange(2, p + 1, 2)
+    diagram = ssi_poles(cor.correlations, cor.sampling_frequency_hz, i, orders, band, max_damping)
+    this = SSIPass(band, i, orders, diagram, cor)
+    try:
+        sel = select_poles(diagram, peaks_hz=peaks.frequency_hz[inside], peak_tol_hz=tol_hz[inside])
+    except ConvergenceError:
+        return this, None, None
+    shapes = unit_shapes(sel.participation.T)
+    seg = _segment_modes(cor, i, int(orders[-1]), band, sel.natural_frequencies_hz, shapes, max_damping)
+    return this, sel, (shapes, *seg)
+
+
+def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max_order=None, block_rows=None,
                  references=None, n_segments=8, max_damping=MAX_DAMPING, chunk_samples=8192,
                  where="record") -> SSIIdentification:
-    """SSI-cov identification of a multichannel response record (output-only).
+    """SSI-cov identification of a multichannel response record (output-only), sized to the record's spectrum.
+
+    The clear peaks of the record's singular-value spectrum (:func:`~physics.identification.fdd.clear_peaks`)
+    size each pass: block rows covering :data:`BLOCK_ROW_PERIODS` periods of the lowest peak of the pass's band
+    (at most :data:`MAX_TOEPLITZ_ROWS` / channels), model orders up to :data:`ORDERS_PER_PEAK` per peak (at least
+    :data:`MIN_MAX_ORDER`). The first pass identifies the whole band; while a clear peak has no stable mode, a
+    lower sub-band (upper limit half the last, or :data:`SUB_BAND_PEAK_RATIO` times the highest such peak) is
+    decimated to and identified
+    again, keeping only modes at those peaks (:data:`MAX_PASSES` passes at most); a mode whose correlation lags
+    span fewer than :data:`MIN_LAG_PERIODS` of its periods is identified again so, and replaced by the sub-band's
+    estimate when that one is stable. A cluster of poles stable over
+    fewer orders than the selection asks but at a clear peak is kept, flagged ``weakly_stable``. A clear peak left
+    without a mode is named in a warning.
 
     Parameters
     ----------
@@ -320,11 +375,11 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     band_hz : (float, float), optional
         Modes kept (Hz); the record is decimated to it. Default: 0 to 0.4 of the sampling rate.
     n_modes : int, optional
-        Modes to keep (default: every stable cluster).
-    max_order : int
-        Highest model order (state dimension; even orders from 2).
+        Modes to keep (default: every stable cluster; with it, the steadiest).
+    max_order : int, optional
+        Highest model order (state dimension; even orders from 2) of every pass (default: sized per pass).
     block_rows : int, optional
-        Block rows ``i`` of the Toeplitz matrix (default ``max(max_order / n_references + 1, 30)``).
+        Block rows ``i`` of the Toeplitz matrix of every pass (default: sized per pass).
     references : sequence of int, optional
         Reference channels (default: all).
     n_segments : int
@@ -341,43 +396,79 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     Raises
     ------
     ShapeError
-        Bad record (see :func:`output_correlations`) or a record shorter than ten periods of the lowest mode.
+        A record :func:`~physics.identification.record_checks.check_records` refuses, or shorter than ten periods
+        of the lowest mode.
     ConvergenceError
         No stable pole.
     """
-    fs = float(sampling_frequency_hz)
-    y = signals if isinstance(signals, np.ndarray) else np.asarray(signals, dtype=np.float64)
-    band = (0.0, 0.4 * fs) if band_hz is None else (float(band_hz[0]), float(band_hz[1]))
-    n_ref = y.shape[0] if references is None else len(references)
-    i = int(block_rows) if block_rows else max(int(np.ceil(max_order / n_ref)) + 1, 30)
-    if max_order > i * min(n_ref, y.shape[0]):
-        raise ShapeError(f"{where}: max_order {max_order} exceeds block_rows x channels = "
-                         f"{i * min(n_ref, y.shape[0])}")
-    check_duration(y.shape[1] / fs, band[0], where)
-    cor = output_correlations(y, fs, 2 * i, references, band_hz, n_segments, chunk_samples, where)
-    orders = np.arange(2, max_order + 1, 2)
-    diagram = ssi_poles(cor.correlations, cor.sampling_frequency_hz, i, orders, band, max_damping)
-    duration_s = y.shape[1] / fs
-    try:
-        sel = select_poles(diagram, n_modes)
-        lowest_hz = sel.natural_frequencies_hz[0]
-    except ConvergenceError as exc:
-        lowest_hz = np.min(diagram.natural_frequencies_hz, initial=np.inf)
-        if duration_s >= 10 / lowest_hz:
-            raise ConvergenceError(f"{where}: {exc}{steadiest_text(diagram)}") from None
-    if duration_s < 10 / lowest_hz:
-        raise ShapeError(f"{where}: {duration_s:.3g} s is shorter than ten periods of the lowest mode "
-                         f"(near {lowest_hz:.4g} Hz): mode 1 cannot be identified")
-    shapes = _unit_shapes(sel.participation.T)
-    f_seg, z_seg = _segment_modes(cor, i, int(orders[-1]), band, sel.natural_frequencies_hz, shapes, max_damping)
+    checked = check_records(signals, sampling_frequency_hz, band_hz, where)
+    band = checked.band_hz
+    sv = singular_value_spectrum(checked, where=where)
+    peaks = clear_peaks(sv)
+    tol_hz = peaks.tolerance_hz
+    # modes: (f, zeta, weakly stable, count, shape, f_seg, z_seg, provisional: weakly stable or its pass's lags
+    # short of MIN_LAG_PERIODS of it, so that a sub-band pass identifies it again)
+    passes, modes = [], []
+    hi = band[1]
+    for k in range(MAX_PASSES):
+        this, sel, seg = _ssi_pass(checked, (band[0], hi), peaks, tol_hz, max_order, block_rows, references,
+                                   n_segments, max_damping, chunk_samples, where)
+        passes.append(this)
+        lag_s = 2 * this.block_rows / this.correlations.sampling_frequency_hz
+        wanted = unexplained_peaks(peaks, [m[0] for m in modes if not m[7]])
+        for j, f in enumerate(sel.natural_frequencies_hz if sel is not None else ()):
+            weak = bool(sel.weakly_stable[j])
+            entry = (f, sel.damping_ratios[j], weak, int(sel.count[j]), seg[0][:, j], seg[1][:, j], seg[2][:, j],
+                     weak or lag_s * f < MIN_LAG_PERIODS)
+            if k:                              # a sub-band keeps only modes at peaks still wanted
+                at = wanted & (np.abs(peaks.frequency_hz - f) <= tol_hz)
+                if not at.any():
+                    continue
+                same = [m for m in modes if abs(m[0] - f) <= 0.01 * f
+                        or np.any(np.abs(m[0] - peaks.frequency_hz[at]) <= tol_hz[at])]
+                if same and (entry[7] or not all(m[7] for m in same)):
+                    continue
+                modes = [m for m in modes if not any(m is s for s in same)]
+            modes.append(entry)
+        wanted = unexplained_peaks(peaks, [m[0] for m in modes if not m[7]]) & (peaks.frequency_hz <= hi)
+        if not wanted.any():
+            break
+        hi = min(hi / 2, SUB_BAND_PEAK_RATIO * peaks.frequency_hz[wanted].max())
+        if hi <= band[0]:
+            break
+    duration_s = checked.duration_s
+    if not modes:
+        d = passes[0].diagram
+        lowest_hz = np.min(d.natural_frequencies_hz, initial=np.inf)
+        check_periods(duration_s, lowest_hz, "the lowest pole", where)
+        raise ConvergenceError(f"{where}: no pole is stable over enough model orders: raise max_order, widen the "
+                               f"band or relax the selection tolerances{steadiest_text(d)}")
+    if n_modes is not None:
+        modes = sorted(modes, key=lambda m: (m[2], -m[3]))[:n_modes]
+    modes.sort(key=lambda m: m[0])
+    check_periods(duration_s, modes[0][0], "the lowest mode", where)
+    fn, zeta = np.array([m[0] for m in modes]), np.array([m[1] for m in modes])
+    weak = np.array([m[2] for m in modes])
+    shapes = np.array([m[4] for m in modes]).T
+    n_seg = max(m[5].size for m in modes)
+    f_seg, z_seg = (np.array([np.pad(m[c], (0, n_seg - m[c].size), constant_values=np.nan) for m in modes]).T
+                    for c in (5, 6))
     n_seen = np.sum(np.isfinite(f_seg), axis=0)
     with np.errstate(invalid="ignore", divide="ignore"):
         f_std = np.where(n_seen >= 2, np.nanstd(np.where(n_seen >= 2, f_seg, 0), axis=0, ddof=1), np.nan) \
             / np.sqrt(np.maximum(n_seen, 1))
         z_std = np.where(n_seen >= 2, np.nanstd(np.where(n_seen >= 2, z_seg, 0), axis=0, ddof=1), np.nan) \
             / np.sqrt(np.maximum(n_seen, 1))
-    fn, zeta = sel.natural_frequencies_hz, sel.damping_ratios
+    unexplained = unexplained_peaks(peaks, fn)
+    if weak.any():
+        warnings.warn(f"{where}: mode(s) at {', '.join(f'{f:.4g} Hz' for f in fn[weak])} weakly stable (stable "
+                      "over fewer model orders than the selection asks), kept because a clear spectral peak lies "
+                      "there", UserWarning, stacklevel=2)
+    if unexplained.any():
+        warnings.warn(f"{where}: clear spectral peak(s) without an identified mode: {peak_text(peaks, unexplained)} "
+                      f"above the floor; a harmonic, or a mode to look for with --band around it or --method efdd",
+                      UserWarning, stacklevel=2)
     est = ModalEstimate(fn, zeta, eigenvalues_from_modal(fn, zeta), shapes,
                         np.zeros((shapes.shape[0], 0, fn.size), complex), f_std, z_std,
-                        modal_phase_collinearity(shapes), "ssi", False)
-    return SSIIdentification(est, diagram, sel, f_seg, z_seg, cor, i)
+                        modal_phase_collinearity(shapes), "ssi", False, weakly_stable=weak)
+    return SSIIdentification(est, tuple(passes), peaks, peaks.frequency_hz[unexplained], f_seg, z_seg)

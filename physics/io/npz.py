@@ -1,10 +1,12 @@
-"""FRFs as ``.npz`` of plain arrays (never pickled objects)."""
+"""``.npz`` files of plain arrays (never pickled objects): the one guarded reader of every NPZ input
+(:func:`read_npz_arrays`), and FRFs as NPZ."""
 
 from __future__ import annotations
 
 import io
 import json
 import zipfile
+import zlib
 
 import numpy as np
 
@@ -13,7 +15,7 @@ from physics.errors import FileFormatError, ShapeError
 from physics.io.atomic import atomic_write_bytes
 from physics.io.types import MeasuredFRF, check_dof_labels
 
-__all__ = ["read_frf_npz", "write_frf_npz"]
+__all__ = ["read_frf_npz", "read_npz_arrays", "write_frf_npz"]
 
 
 _NPZ_KEYS = ("frequency_hz", "frf", "response_dofs", "reference_dofs", "kind", "units", "metadata_json")
@@ -34,11 +36,15 @@ def write_frf_npz(path, data: MeasuredFRF) -> None:
 MAX_ARRAY_ELEMENTS = 200_000_000
 
 
-def _check_members(path, z):
+#: What a damaged NPZ raises while it is opened or its members read (truncated, bad CRC, bad compression ...).
+NPZ_ERRORS = (ValueError, OSError, EOFError, zipfile.BadZipFile, zlib.error, MemoryError, KeyError, SyntaxError)
+
+
+def _check_members(path, z, what):
     """Every member must be a .npy whose header announces at most MAX_ARRAY_ELEMENTS elements."""
     for name in z.namelist():
         if not name.endswith(".npy"):
-            raise FileFormatError(f"{path}: member {name!r} is not a .npy array; not an .npz of a MeasuredFRF")
+            raise FileFormatError(f"{path}: member {name!r} is not a .npy array; not {what}")
         with z.open(name) as fh:
             try:
                 version = np.lib.format.read_magic(fh)
@@ -53,6 +59,31 @@ def _check_members(path, z):
                                   f"{size * dtype.itemsize / 2**30:.3g} GiB); refusing more than {MAX_ARRAY_ELEMENTS}")
 
 
+def read_npz_arrays(path, what="an NPZ file of plain arrays") -> dict:
+    """Every array of an ``.npz`` file, loaded with ``allow_pickle=False`` after its member headers are checked
+    (only .npy members, at most :data:`MAX_ARRAY_ELEMENTS` elements each).
+
+    Raises
+    ------
+    FileFormatError
+        One line naming the file and ``what`` it should be: missing, not a regular file, too large, not a zip
+        archive, truncated or damaged (bad CRC, bad compression), a member that is not a .npy array.
+    """
+    path = check_input_file(path, "npz", what=what)
+    try:
+        with zipfile.ZipFile(path) as zf:
+            _check_members(path, zf, what)
+        with np.load(path, allow_pickle=False) as z:
+            return {k: z[k] for k in z.files}
+    except FileFormatError:
+        raise
+    except FileNotFoundError:
+        raise FileFormatError(f"{path}: file not found; expected {what}") from None
+    except NPZ_ERRORS as exc:
+        raise FileFormatError(f"{path}: not a readable .npz ({type(exc).__name__}: "
+                              f"{' '.join(str(exc).split())[:150]}); expected {what}") from None
+
+
 def read_frf_npz(path, kind=None) -> MeasuredFRF:
     """Read a file written by :func:`write_frf_npz` (loaded with ``allow_pickle=False``).
 
@@ -61,23 +92,10 @@ def read_frf_npz(path, kind=None) -> MeasuredFRF:
     frequencies real, the DOF labels 1-D lists of strings, the metadata a JSON object.
     ``kind`` applies to a file without a ``kind`` array (default receptance).
     """
-    path = check_input_file(path, "npz", what="an NPZ file")
-    try:
-        with zipfile.ZipFile(path) as zf:
-            _check_members(path, zf)
-        with np.load(path, allow_pickle=False) as z:
-            missing = [k for k in _NPZ_KEYS[:4] if k not in z.files]
-            if missing:
-                raise FileFormatError(f"{path}: missing array(s) {', '.join(missing)}; expected "
-                                      f"{', '.join(_NPZ_KEYS)}")
-            arrays = {k: z[k] for k in z.files}
-    except FileNotFoundError:
-        raise FileFormatError(f"{path}: file not found") from None
-    except (ValueError, OSError, EOFError, zipfile.BadZipFile, MemoryError) as exc:
-        if isinstance(exc, FileFormatError):
-            raise
-        raise FileFormatError(f"{path}: not a readable .npz of a MeasuredFRF ({' '.join(str(exc).split())[:150]})") \
-            from None
+    arrays = read_npz_arrays(path, "an .npz of a MeasuredFRF")
+    missing = [k for k in _NPZ_KEYS[:4] if k not in arrays]
+    if missing:
+        raise FileFormatError(f"{path}: missing array(s) {', '.join(missing)}; expected {', '.join(_NPZ_KEYS)}")
     for key in ("response_dofs", "reference_dofs"):
         a = arrays[key]
         if a.ndim != 1 or a.dtype.kind != "U":

@@ -10,13 +10,13 @@ quantity.
 from __future__ import annotations
 
 import io
-import zipfile
 from pathlib import Path
 
 import numpy as np
 
 from physics.io.inputs import check_input_file
 from physics.errors import FileFormatError
+from physics.io.npz import read_npz_arrays
 from physics.io.timedata import TimeRecords
 from physics.io.types import check_dof_labels
 
@@ -43,22 +43,18 @@ def _records(path, signals, fs, dofs, quantity) -> TimeRecords:
 
 def read_time_npz(path) -> TimeRecords:
     """Read response time series from ``.npz`` (see module docstring); never unpickles."""
-    check_input_file(path, "npz", what="an NPZ time series")
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            if "signals" not in z.files:
-                raise FileFormatError(f"{path}: no field 'signals' (n_channels, n_samples); fields: "
-                                      f"{', '.join(z.files)}")
-            if "sampling_frequency_hz" not in z.files:
-                raise FileFormatError(f"{path}: field 'sampling_frequency_hz' is missing; the sampling rate is "
-                                      "needed to identify from time series")
-            signals = z["signals"]
-            fs = float(np.asarray(z["sampling_frequency_hz"]).reshape(-1)[0])
-            dofs = [str(d) for d in z["dofs"]] if "dofs" in z.files else None
-            quantity = str(z["quantity"]) if "quantity" in z.files else "acceleration"
-    except (zipfile.BadZipFile, ValueError, OSError) as exc:
-        raise FileFormatError(f"{path}: not a readable .npz of plain arrays ({exc})") from None
-    return _records(path, signals, fs, dofs, quantity)
+    z = read_npz_arrays(path, "an NPZ time series")
+    if "signals" not in z:
+        raise FileFormatError(f"{path}: no field 'signals' (n_channels, n_samples); fields: {', '.join(z)}")
+    if "sampling_frequency_hz" not in z:
+        raise FileFormatError(f"{path}: field 'sampling_frequency_hz' is missing; the sampling rate is "
+                              "needed to identify from time series")
+    rate = np.asarray(z["sampling_frequency_hz"]).reshape(-1)
+    if rate.size != 1 or rate.dtype.kind not in "iuf":
+        raise FileFormatError(f"{path}: field 'sampling_frequency_hz' must be one real number (Hz)")
+    dofs = [str(d) for d in z["dofs"].reshape(-1)] if "dofs" in z else None
+    quantity = str(z["quantity"]) if "quantity" in z else "acceleration"
+    return _records(path, z["signals"], float(rate[0]), dofs, quantity)
 
 
 def read_time_csv(path) -> TimeRecords:

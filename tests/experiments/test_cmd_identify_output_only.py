@@ -84,16 +84,26 @@ def test_identify_the_real_four_channel_acceleration_file_output_only(capsys):
     assert res["method"] == "ssi" and res["sampling_frequency_hz"] == 3200 and res["kind"] == "acceleration"
     assert res["duration_s"] == pytest.approx(222400 / 3200)
     assert any(abs(m["frequency_hz"] - 141) < 2 for m in res["modes"])   # the 141 Hz mode of its FDD and SSI
+    code, out, err = _run(capsys, ["identify", str(DATA / "MPSTD_Set001_2024_10_08_10_27_07.uff"), "--json"])
+    assert code == 0, err                        # with the defaults: the 182.3 Hz mode the docs name
+    assert any(abs(m["frequency_hz"] - 182.3) < 0.5 for m in json.loads(out)["modes"])
 
 
+@pytest.mark.parametrize("method", ["ssi", "fdd", "efdd"])
 @pytest.mark.parametrize("case, message", [
-    ("nan", "NaN"), ("clip", "clipped"), ("nyquist", "Nyquist"), ("no_rate", "sampling_frequency_hz"),
-    ("short", "ten periods"), ("frf_file", "holds FRFs")])
-def test_bad_records_get_one_line_and_exit_2(capsys, chain, tmp_path, case, message):
+    ("nan", "NaN"), ("inf", "inf"), ("constant", "constant"), ("clip", "clipped"), ("nyquist", "Nyquist"),
+    ("no_rate", "sampling_frequency_hz"), ("short", "ten periods"), ("frf_file", "holds FRFs")])
+def test_bad_records_get_one_line_and_exit_2_from_every_output_only_method(capsys, chain, tmp_path, case, message,
+                                                                          method):
+    """One set of checks (physics.identification.record_checks) for every output-only method."""
     y, fs, *_ = (a.copy() if isinstance(a, np.ndarray) else a for a in chain)
     argv_extra = ["--band", "1", "60"]
     if case == "nan":
         y[0, 100] = np.nan
+    elif case == "inf":
+        y[2, 7] = -np.inf
+    elif case == "constant":
+        y[1] = 0.25
     elif case == "clip":
         y[1] = np.minimum(y[1], 0.5 * y[1].max())
     elif case == "nyquist":
@@ -108,8 +118,7 @@ def test_bad_records_get_one_line_and_exit_2(capsys, chain, tmp_path, case, mess
 
         f = np.linspace(1, 50, 100)
         write_frf_npz(path, MeasuredFRF(f, np.ones((1, 1, 100), complex) / (1 + f * 1j), ("1:+Z",), ("1:+Z",)))
-        argv_extra = ["--method", "ssi"]
-    code, out, err = _run(capsys, ["identify", str(path), *argv_extra])
+    code, out, err = _run(capsys, ["identify", str(path), "--method", method, *argv_extra])
     assert code == 2 and message in err and err.count("\n") == 1, err
 
 

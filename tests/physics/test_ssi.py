@@ -80,3 +80,31 @@ def test_a_failed_selection_names_the_steadiest_poles_and_what_to_try():
     assert steadiest_text(StabilisationDiagram(order, 2j * np.pi * fn, fn, np.full(fn.size, 0.01),
                                                np.ones((fn.size, 2), complex), np.zeros(fn.size, int),
                                                (50.0, 400.0))) == ""
+
+
+def _diagram_with_a_short_cluster():
+    """Orders 1-20: a pole at 100 Hz stable in every order, one at 30 Hz stable only in orders 15-19 (5 of 20, below
+    the selection's third of the orders)."""
+    from physics.identification.poles import StabilisationDiagram
+
+    order = np.concatenate([np.arange(1, 21), np.arange(15, 20)])
+    fn = np.concatenate([np.full(20, 100.0), np.full(5, 30.0)]) * (1 + 1e-4 * np.sin(np.arange(25)))
+    zeta = np.full(25, 0.01)
+    status = np.where(order > 1, 4, 0)
+    status[20] = 0                                   # the 30 Hz pole of order 15 is new
+    return StabilisationDiagram(order, 2j * np.pi * fn, fn, zeta, np.ones((25, 2), complex) / np.sqrt(2), status,
+                                (10.0, 200.0))
+
+
+def test_a_short_cluster_at_a_clear_peak_is_kept_weakly_stable_and_dropped_without_one():
+    from physics.identification.poles import select_poles
+
+    d = _diagram_with_a_short_cluster()
+    sel = select_poles(d)
+    np.testing.assert_allclose(sel.natural_frequencies_hz, [100.0], rtol=1e-3)
+    assert not sel.weakly_stable.any()
+    sel = select_poles(d, peaks_hz=[30.2])
+    np.testing.assert_allclose(sel.natural_frequencies_hz, [30.0, 100.0], rtol=1e-3)
+    assert sel.weakly_stable.tolist() == [True, False] and sel.count[0] < sel.count[1]
+    assert select_poles(d, peaks_hz=[33.0]).natural_frequencies_hz.size == 1     # 10 % away: no peak at it
+    assert select_poles(d, peaks_hz=[30.2], n_modes=1).weakly_stable.tolist() == [False]   # the steadiest first
