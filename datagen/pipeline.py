@@ -103,6 +103,7 @@ class Setup:
                                     pinned beam's bearing springs) that change by ``root_spring_change`` between the
                                     test days
     analyst_unit_mass : ndarray (S, S) or None   the analyst's mass for unit mass per length (None: the thesis's)
+    added_masses : tuple            ``(x_m, mass_kg)`` of each of the beam file's added masses
     """
 
     cfg: dict
@@ -130,6 +131,7 @@ class Setup:
     spring_dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     day_spring_dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     analyst_unit_mass: np.ndarray | None = None
+    added_masses: tuple = ()
 
     def analyst_mass(self, mass_per_length_kg_m):
         """The analyst's mass over the sensors (B, S, S) (kg): the thesis's model (``updating.mass_model`` of the
@@ -382,11 +384,11 @@ def build_setup(cfg: dict) -> Setup:
                     if getattr(beam, k) is not None})
     section = SectionLayout.matching(preset.EI_Nm2, preset.width_m, preset.thickness_m, sec["face_thickness_m"],
                                  sec["core_modulus_pa"])
-    damage_model(cfg["damage"]["kind"]).check_beam(cfg["damage"], preset, sec)
     n_rigid = RIGID_BODY_MODES[test.bc]
     n_el, on_nodes = aligned_elements(test, max(cfg["mesh"]["truth_elements"], 4 * (n_rigid + max(test.modes) + 1)))
     truth = beam if cfg["beam"] else None
     fx = point_effects(truth, n_el)
+    damage_model(cfg["damage"]["kind"]).check_beam(cfg["damage"], preset, sec, fx["added_masses"])
     band = _clamp_band(cfg, test, fx, preset)
     spring = bool(band)
     shear_file, rho_ratio, timoshenko = shear_parameters(truth, preset.thickness_m)
@@ -422,7 +424,8 @@ def build_setup(cfg: dict) -> Setup:
                                                      suspension_unit=k_suspension)
     return Setup(cfg, preset, section, n_el, keep, spring, K0, M0, meas, v[:, :p].copy(),
                  np.linspace(lo, hi, cfg["measurement"]["lines"]), zeta, band, M_added, C_local,
-                 shear_band, rho_ratio, timoshenko, K_springs, test, modes_idx, drive_row, spring_dofs, day_dofs, ma)
+                 shear_band, rho_ratio, timoshenko, K_springs, test, modes_idx, drive_row, spring_dofs, day_dofs, ma,
+                 fx["added_masses"])
 
 
 @lru_cache(maxsize=8)
