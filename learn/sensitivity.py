@@ -76,9 +76,10 @@ class Sensitivity:
         return replace(self, frequency=self.frequency[k], shape=shape, frequencies_hz=self.frequencies_hz[k])
 
     def largest_drop(self, x_over_L, hinge_flexibility):
-        """Largest first-order relative frequency drop of a damage of that size (batched), >= 0 for sizes >= 0."""
+        """Largest first-order relative frequency change (either sign: a rise is a change too) of a damage of that
+        signed size (batched), >= 0."""
         e = self.element_of(np.nan_to_num(x_over_L))
-        return np.max(-self.frequency[:, e], axis=0) * np.asarray(hinge_flexibility, float)
+        return np.max(np.abs(self.frequency[:, e]), axis=0) * np.abs(np.asarray(hinge_flexibility, float))
 
 
 def _beam_numbers(preset) -> tuple[float, float, float]:
