@@ -373,6 +373,24 @@ def _modal_damping(cfg: dict, fx: dict, preset, w, v, M0, K_beam, n_rigid: int, 
     return np.concatenate([np.full(n_rigid, zr[0]), zr, np.full(max(p - zr.size, 0), zr[-1])])[:p]
 
 
+#: Share of a solid rectangular section's depth a slit leaves at least (the deepest cut: EI loss ``1 - 0.05^3``).
+SOLID_LIGAMENT_FRACTION = 0.05
+
+
+def slit_section_keys(beam) -> dict:
+    """The section keys (``face_thickness_m``, ``core_modulus_pa``) a beam file gives the slits' layered section.
+
+    A sandwich's own faces and core; a solid rectangle is one material (the "core" as stiff as the "faces", whose
+    modulus :class:`datagen.specimen.SectionLayout` solves from ``EI``), cut down to a ligament of
+    :data:`SOLID_LIGAMENT_FRACTION` of its depth; other sections keep the config's.
+    """
+    if beam.section == "rectangular":
+        h = beam.thickness_m
+        return {"face_thickness_m": SOLID_LIGAMENT_FRACTION * h,
+                "core_modulus_pa": beam.EI_Nm2 / (beam.width_m * h**3 / 12)}
+    return {k: getattr(beam, k) for k in ("face_thickness_m", "core_modulus_pa") if getattr(beam, k) is not None}
+
+
 def build_setup(cfg: dict) -> Setup:
     """Precompute the nominal truth matrices, measured DOFs, start basis and FRF grid."""
     beam = truth_beam_of(cfg)
@@ -380,8 +398,7 @@ def build_setup(cfg: dict) -> Setup:
     preset = as_preset(beam) if cfg["beam"] else beam_preset(cfg["preset"])
     sec = dict(cfg["section"])
     if cfg["beam"]:  # the beam file's section, where it gives one
-        sec.update({k: getattr(beam, k) for k in ("face_thickness_m", "core_modulus_pa")
-                    if getattr(beam, k) is not None})
+        sec.update(slit_section_keys(beam))
     section = SectionLayout.matching(preset.EI_Nm2, preset.width_m, preset.thickness_m, sec["face_thickness_m"],
                                  sec["core_modulus_pa"])
     n_rigid = RIGID_BODY_MODES[test.bc]
