@@ -20,8 +20,9 @@ import numpy as np
 from physics.errors import BeamDamageError, ShapeError
 
 __all__ = ["BeamPreset", "CANTILEVER_BETA_L", "PRESETS", "SECTION_KINDS", "SOLID_SECTIONS", "SolidSection",
-           "StaticTest", "THESIS_BETA_L", "beam_preset", "solid_section", "cantilever_beta_l", "cantilever_curvature_squared", "cantilever_frequencies_hz", "curvature_squared",
-           "equivalent_ei", "free_free_beta_l", "layered_ei", "section_ei"]
+           "StaticTest", "THESIS_BETA_L", "beam_preset", "cantilever_beta_l", "cantilever_curvature_squared",
+           "cantilever_frequencies_hz", "curvature_squared", "equivalent_ei", "free_free_beta_l", "layered_ei",
+           "section_ei", "solid_section"]
 
 
 #: ``beta_l`` of a clamped-free beam as printed in the thesis (Chapter Four).

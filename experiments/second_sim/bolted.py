@@ -8,9 +8,11 @@ mass) sit at ``x = 0.05, 0.11, ..., 0.35 m``. The test measures modes 1-4 at the
 of a 4-element grid; a roving-hammer test with one accelerometer) with the modal noise of :mod:`.effects`.
 Damage: ``removed_kg`` taken off the mass nearest ``damage_x_m`` (every frequency rises).
 
-Writes ``baseline_modal.json``, ``current_modal.json`` (and frequency-only ``*_freq.json``), two beam files
-``bar.toml`` (the bar alone, as a user who leaves the masses out would write it) and ``bolted.toml`` (the bar
-with one ``[[effects.added_mass]]`` table per mass), and ``truth.json``.
+:func:`write_bolted_test` writes ``baseline_modal.json``, ``current_modal.json`` (and frequency-only
+``*_freq.json``), two beam files ``bar.toml`` (the bar alone, as a user who leaves the masses out would write it)
+and ``bolted.toml`` (the bar with one ``[[effects.added_mass]]`` table per mass), and ``truth.json``;
+:func:`write_mass_change_pairs` a set of specimen pairs with masses added (1-20 % of the bar's mass) or lost
+(1-8 %, from a bolted mass).
 """
 
 from __future__ import annotations
@@ -24,7 +26,8 @@ from experiments.second_sim.fem import Beam, PointMass, assemble, modes
 from experiments.second_sim.response import Damping, complex_modes, noisy_modal
 from experiments.second_sim.writers import modal_dict, write_json, write_text_atomic
 
-__all__ = ["BoltedCantilever", "bolted_beam", "bolted_test", "write_bolted_test"]
+__all__ = ["BoltedCantilever", "bolted_beam", "bolted_test", "mass_change_pairs", "write_bolted_test",
+           "write_mass_change_pairs"]
 
 LENGTH_M = 0.38
 WIDTH_M = 0.0254
@@ -124,3 +127,65 @@ def write_bolted_test(out_dir, seed: int = 0, removed_kg: float = 0.005, damage_
                                                      for s in ("baseline", "current")}})
     return out
 
+
+
+def mass_change_pairs(n: int, seed: int = 0) -> list[dict]:
+    """``n`` baseline/current modal-data pairs of bolted cantilevers with a mass added or lost between the days.
+
+    Each specimen: EI within +-3 %, the bar's mass within +-2 %, each bolted mass 35 +- 0.5 g, modal damping
+    0.2-1 %; between the days EI changes by +-0.1 % (temperature). A fifth of the pairs are intact; of the others
+    half gain a point mass of 1-20 % of the bar's mass anywhere on 3-97 % of the length, half lose 1-8 % of it from
+    one bolted mass (material removed; at most 90 % of that mass). Modal noise as :mod:`.effects`.
+
+    Returns
+    -------
+    list of dict  ``{"baseline": modal dict, "current": modal dict, "truth": dict}``
+    """
+    rng = np.random.default_rng(seed)
+    b = bar()
+    out = []
+    for k in range(n):
+        ei = b.EI_Nm2 * (1 + rng.uniform(-0.03, 0.03))
+        m = b.mass_per_length_kg_m * (1 + rng.uniform(-0.02, 0.02))
+        masses = list(MASS_KG + rng.uniform(-0.0005, 0.0005, len(MASS_X_M)))
+        damping = Damping("modal", tuple(rng.uniform(0.002, 0.01, 4)))
+        kind = "intact" if k % 5 == 4 else ("added" if rng.random() < 0.5 else "lost")
+        bar_kg = m * LENGTH_M
+        extra, now, x, ratio = (), list(masses), float("nan"), 0.0
+        if kind == "added":
+            ratio = rng.uniform(0.01, 0.20)
+            x = rng.uniform(0.03, 0.97) * LENGTH_M
+            extra = (PointMass(x, ratio * bar_kg),)
+        elif kind == "lost":
+            j = int(rng.integers(len(MASS_X_M)))
+            ratio = -min(rng.uniform(0.01, 0.08), 0.9 * masses[j] / bar_kg)
+            now[j] += ratio * bar_kg
+            x = MASS_X_M[j]
+
+        def beam(ms, more=(), ei_scale=1.0):
+            return Beam(LENGTH_M, ei * ei_scale, m, kGA_N=b.kGA_N, rho_I_kg_m=b.rho_I_kg_m,
+                        masses=tuple(PointMass(p, q) for p, q in zip(MASS_X_M, ms)) + more)
+
+        pair = {}
+        for state, bm in (("baseline", beam(masses)), ("current", beam(now, extra, 1 + rng.uniform(-0.001, 0.001)))):
+            lam, psi, _ = _modal(bm, damping, rng)
+            pair[state] = modal_dict(*noisy_modal(lam, psi, rng), DOF_LABELS)
+        pair["truth"] = {"pair": k, "damaged": kind != "intact", "change": kind, "mass_ratio": ratio,
+                         "x_m": x, "x_over_L": x / LENGTH_M, "bar_mass_kg": bar_kg}
+        out.append(pair)
+    return out
+
+
+def write_mass_change_pairs(out_dir, n: int, seed: int = 0) -> Path:
+    """``pair-KK_baseline.json``, ``pair-KK_current.json`` per pair, ``truth.json`` and ``bolted.toml``."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for p in mass_change_pairs(n, seed):
+        stem = f"pair-{p['truth']['pair']:02d}"
+        write_json(out / f"{stem}_baseline.json", p["baseline"])
+        write_json(out / f"{stem}_current.json", p["current"])
+        rows.append({**p["truth"], "baseline": f"{stem}_baseline.json", "current": f"{stem}_current.json"})
+    write_text_atomic(out / "bolted.toml", _toml(True))
+    write_json(out / "truth.json", {"seed": seed, "pairs": rows})
+    return out

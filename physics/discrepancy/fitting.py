@@ -21,8 +21,8 @@ from physics.frf import magnitude_db
 from physics.discrepancy.model import (ModeResiduals, Prediction, aligned, dashpot_damping_per_c, mode_residuals,
                                        predict, rayleigh_fit)
 
-__all__ = ["BLOCKS", "Fit", "MAX_JOINT_INSTANCES", "Problem", "as_fit", "candidate_fit", "fit_model", "lomo_error", "model_params",
-           "with_rayleigh"]
+__all__ = ["BLOCKS", "Fit", "MAX_JOINT_INSTANCES", "Problem", "as_fit", "candidate_fit", "fit_model", "lomo_error",
+           "model_params", "with_rayleigh"]
 
 
 @dataclass(frozen=True)

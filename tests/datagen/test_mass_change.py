@@ -15,7 +15,8 @@ from physics.properties import beam_preset
 
 #: Rigid clamp, Euler-Bernoulli, no test-day changes: the current state differs by the mass change alone.
 QUIET = {"specimen": {"root_spring_relative": []},
-         "damage": {"kind": "mass_change", "n_masses": [1, 1], "mass_ratio": [-0.02, 0.02], "width_fraction": [0, 0.05]},
+         "damage": {"kind": "mass_change", "n_masses": [1, 1], "mass_ratio": [-0.02, 0.02],
+                    "width_fraction": [0, 0.05]},
          "measurement": {"lines": 64}, "output": {"shard_size": 6}}
 
 
