@@ -19,7 +19,8 @@ method (the verdict, the network, each classical method):
 * ``zone right``: detected pairs located in the truth's zone (the beam file's zones: between the sensors);
 * ``size err.``: median ``|s - s_true|`` of the signed mass ratio over detected pairs with the right sign.
 
-Writes ``mass_change.csv`` and ``mass_change.json`` in ``--out``; ``--json`` prints the rows.
+Writes ``mass_change.csv`` and ``mass_change.json`` in ``--out``; ``--json`` prints the rows; ``--docs`` writes
+the table into docs/datasets.md (block ``mass_change``).
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ import pandas as pd
 
 from experiments.bench_foreign import cli_json
 
-__all__ = ["classify_pairs", "main", "score"]
+__all__ = ["classify_pairs", "main", "markdown", "score"]
 
 
 def classify_pairs(model: Path, pair_dir: Path) -> tuple[list, list]:
@@ -79,12 +80,27 @@ def score(truth: list, verdicts: list, zone_edges_m) -> list[dict]:
     return rows
 
 
+def markdown(rows: list[dict]) -> str:
+    """The rows as the docs' table (fractions in %, NaN as a dash)."""
+    def pct(v):
+        return "-" if v != v else f"{100 * v:.0f} %"
+
+    lines = ["| change | method | pairs | detected | sign right | zone right | size err. |",
+             "| --- | --- | --- | --- | --- | --- | --- |"]
+    for r in sorted(rows, key=lambda r: ("added", "lost", "intact").index(r["change"])):
+        err = "-" if r["size err."] != r["size err."] else f"{r['size err.']:.3f}"
+        lines.append(f"| {r['change']} | {r['method']} | {r['pairs']} | {pct(r['detected'])} | "
+                     f"{pct(r['sign right'])} | {pct(r['zone right'])} | {err} |")
+    return "\n".join(lines) + "\n"
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m experiments.bench_mass_change", description=__doc__.splitlines()[0])
     ap.add_argument("--model", required=True)
     ap.add_argument("--pairs", required=True, help="directory of second_sim bolted --pairs")
     ap.add_argument("--out", default="out/mass_change")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--docs", action="store_true", help="write the table into docs/datasets.md (block mass_change)")
     a = ap.parse_args(argv)
     pair_dir = Path(a.pairs)
     truth, verdicts = classify_pairs(Path(a.model), pair_dir)
@@ -97,6 +113,10 @@ def main(argv=None) -> int:
         print(json.dumps(rows, indent=1, default=float))
     else:
         print(pd.DataFrame(rows).to_string(index=False, float_format=lambda v: f"{v:.3g}"))
+    if a.docs:
+        from experiments.doc_tables import write_table
+
+        write_table("datasets.md", "mass_change", markdown(rows))
     return 0
 
 
