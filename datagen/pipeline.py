@@ -103,6 +103,7 @@ class Setup:
                                     pinned beam's bearing springs) that change by ``root_spring_change`` between the
                                     test days
     analyst_unit_mass : ndarray (S, S) or None   the analyst's mass for unit mass per length (None: the thesis's)
+    added_masses : tuple            ``(x_m, mass_kg)`` of each of the beam file's added masses
     """
 
     cfg: dict
@@ -130,6 +131,7 @@ class Setup:
     spring_dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     day_spring_dofs: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     analyst_unit_mass: np.ndarray | None = None
+    added_masses: tuple = ()
 
     def analyst_mass(self, mass_per_length_kg_m):
         """The analyst's mass over the sensors (B, S, S) (kg): the thesis's model (``updating.mass_model`` of the
@@ -371,6 +373,24 @@ def _modal_damping(cfg: dict, fx: dict, preset, w, v, M0, K_beam, n_rigid: int, 
     return np.concatenate([np.full(n_rigid, zr[0]), zr, np.full(max(p - zr.size, 0), zr[-1])])[:p]
 
 
+#: Share of a solid rectangular section's depth a slit leaves at least (the deepest cut: EI loss ``1 - 0.05^3``).
+SOLID_LIGAMENT_FRACTION = 0.05
+
+
+def slit_section_keys(beam) -> dict:
+    """The section keys (``face_thickness_m``, ``core_modulus_pa``) a beam file gives the slits' layered section.
+
+    A sandwich's own faces and core; a solid rectangle is one material (the "core" as stiff as the "faces", whose
+    modulus :class:`datagen.specimen.SectionLayout` solves from ``EI``), cut down to a ligament of
+    :data:`SOLID_LIGAMENT_FRACTION` of its depth; other sections keep the config's.
+    """
+    if beam.section == "rectangular":
+        h = beam.thickness_m
+        return {"face_thickness_m": SOLID_LIGAMENT_FRACTION * h,
+                "core_modulus_pa": beam.EI_Nm2 / (beam.width_m * h**3 / 12)}
+    return {k: getattr(beam, k) for k in ("face_thickness_m", "core_modulus_pa") if getattr(beam, k) is not None}
+
+
 def build_setup(cfg: dict) -> Setup:
     """Precompute the nominal truth matrices, measured DOFs, start basis and FRF grid."""
     beam = truth_beam_of(cfg)
@@ -378,15 +398,14 @@ def build_setup(cfg: dict) -> Setup:
     preset = as_preset(beam) if cfg["beam"] else beam_preset(cfg["preset"])
     sec = dict(cfg["section"])
     if cfg["beam"]:  # the beam file's section, where it gives one
-        sec.update({k: getattr(beam, k) for k in ("face_thickness_m", "core_modulus_pa")
-                    if getattr(beam, k) is not None})
+        sec.update(slit_section_keys(beam))
     section = SectionLayout.matching(preset.EI_Nm2, preset.width_m, preset.thickness_m, sec["face_thickness_m"],
                                  sec["core_modulus_pa"])
-    damage_model(cfg["damage"]["kind"]).check_beam(cfg["damage"], preset, sec)
     n_rigid = RIGID_BODY_MODES[test.bc]
     n_el, on_nodes = aligned_elements(test, max(cfg["mesh"]["truth_elements"], 4 * (n_rigid + max(test.modes) + 1)))
     truth = beam if cfg["beam"] else None
     fx = point_effects(truth, n_el)
+    damage_model(cfg["damage"]["kind"]).check_beam(cfg["damage"], preset, sec, fx["added_masses"])
     band = _clamp_band(cfg, test, fx, preset)
     spring = bool(band)
     shear_file, rho_ratio, timoshenko = shear_parameters(truth, preset.thickness_m)
@@ -422,7 +441,8 @@ def build_setup(cfg: dict) -> Setup:
                                                      suspension_unit=k_suspension)
     return Setup(cfg, preset, section, n_el, keep, spring, K0, M0, meas, v[:, :p].copy(),
                  np.linspace(lo, hi, cfg["measurement"]["lines"]), zeta, band, M_added, C_local,
-                 shear_band, rho_ratio, timoshenko, K_springs, test, modes_idx, drive_row, spring_dofs, day_dofs, ma)
+                 shear_band, rho_ratio, timoshenko, K_springs, test, modes_idx, drive_row, spring_dofs, day_dofs, ma,
+                 fx["added_masses"])
 
 
 @lru_cache(maxsize=8)

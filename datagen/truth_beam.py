@@ -25,10 +25,10 @@ enters the generator, combined with the specimen variability as follows:
 * ``suspension`` (``k_y_N_m``), free-free: translational springs
   ``k_y EI / EI_file`` at both ends replace the default suspension (bounce
   mode at 5 % of the first bending frequency, :func:`datagen.pipeline.suspension_unit_stiffness`).
-* ``added_mass`` (``mass_kg``, ``x_m``, ``J_kg_m2``): the point mass (fixed
+* ``added_mass`` (``mass_kg``, ``x_m``, ``J_kg_m2``; any number): each point mass (fixed
   hardware, not scaled by the specimen mass band) is added to ``M`` of both
   test days through the Hermite row of :func:`physics.effects.hermite_row`.
-* ``local_damping`` (``c_Ns_m``, ``x_m``): the dashpot ``c N N^T`` is added to
+* ``local_damping`` (``c_Ns_m``, ``x_m``; any number): each dashpot ``c N N^T`` is added to
   ``C`` of both test days (not scaled by the damping band).
 * ``proportional_damping`` (``alpha_1_s``, ``beta_s``): as in
   :func:`physics.effects.assemble_beam`, ``C_R = alpha M + beta K`` of the beam
@@ -54,7 +54,8 @@ import numpy as np
 from physics.errors import ConfigError
 from physics.fem import element_mass, element_stiffness
 from physics.properties import BeamPreset
-from physics.effects import dashpot_matrix, point_mass_matrix, timoshenko_mass, timoshenko_stiffness
+from physics.effects import (dashpot_matrix, effect_of, instances, point_mass_matrix, timoshenko_mass,
+                             timoshenko_stiffness)
 
 __all__ = ["APPLIED_EFFECTS", "as_preset", "beam_mapping", "load_truth_beam", "point_effects", "shear_parameters",
            "unit_elements"]
@@ -74,7 +75,7 @@ def load_truth_beam(mapping: dict):
         raise ConfigError("config key 'beam' needs physics.beam (the beam-file module), which this "
                           "installation lacks") from None
     beam = beam_from_dict(dict(mapping), "config key 'beam'")
-    other = [name for name in beam.effects if name not in APPLIED_EFFECTS]
+    other = [name for name in dict.fromkeys(map(effect_of, beam.effects)) if name not in APPLIED_EFFECTS]
     if other:
         raise ConfigError(f"config key 'beam': generate applies the effects {', '.join(APPLIED_EFFECTS)}; the beam "
                           f"has {', '.join(other)}")
@@ -161,23 +162,26 @@ def point_effects(beam, n_elements: int) -> dict:
     Returns
     -------
     dict with ``M_added`` (kg ...) and ``C_local`` (N s/m ...), each (2 N, 2 N) or
-    ``None``; the clamp springs ``k_theta_Nm_rad`` and ``k_y_N_m`` (``root_flexibility`` or
+    ``None`` (the sum of every added mass, of every dashpot); ``added_masses``, the ``(x_m, mass_kg)`` of each
+    added mass; the clamp springs ``k_theta_Nm_rad`` and ``k_y_N_m`` (``root_flexibility`` or
     ``clamp_flexibility``), the bearing spring ``bearing_k_theta_Nm_rad``, the suspension spring
     ``suspension_k_y_N_m`` (each ``None`` when absent) and ``rayleigh`` (``(alpha_1_s, beta_s)`` or ``None``).
     """
-    out = {"M_added": None, "C_local": None, "k_theta_Nm_rad": None, "k_y_N_m": None,
+    out = {"M_added": None, "C_local": None, "added_masses": (), "k_theta_Nm_rad": None, "k_y_N_m": None,
            "bearing_k_theta_Nm_rad": None, "suspension_k_y_N_m": None, "rayleigh": None}
     if beam is None:
         return out
 
     eff = beam.effects_dict()
     node_x = np.linspace(0.0, beam.length_m, n_elements + 1)
-    if "added_mass" in eff:
-        p = eff["added_mass"]
-        out["M_added"] = point_mass_matrix(node_x, p["mass_kg"], p.get("x_m", beam.length_m), p.get("J_kg_m2", 0.0))
-    if "local_damping" in eff:
-        p = eff["local_damping"]
-        out["C_local"] = dashpot_matrix(node_x, p["c_Ns_m"], p.get("x_m", beam.length_m))
+    masses = instances(eff, "added_mass")
+    if masses:
+        out["M_added"] = sum(point_mass_matrix(node_x, p["mass_kg"], p.get("x_m", beam.length_m),
+                                               p.get("J_kg_m2", 0.0)) for p in masses)
+    out["added_masses"] = tuple((p.get("x_m", beam.length_m), p["mass_kg"]) for p in masses)
+    dashpots = instances(eff, "local_damping")
+    if dashpots:
+        out["C_local"] = sum(dashpot_matrix(node_x, p["c_Ns_m"], p.get("x_m", beam.length_m)) for p in dashpots)
     for clamp in ("root_flexibility", "clamp_flexibility"):   # the two fit different supports: one at most
         if clamp in eff:
             out["k_theta_Nm_rad"] = eff[clamp]["k_theta_Nm_rad"]

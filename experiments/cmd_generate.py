@@ -19,7 +19,7 @@ def add_parser(subparsers):
     p = subparsers.add_parser(
         "generate", help="generate a dataset of specimens tested twice (baseline, current), updated models",
         description="Simulate N specimens, each tested on two days (baseline, then current: damage of the "
-                    "config's damage.kind (slits, or point masses added or lost), temperature, "
+                    "config's damage.kind (slits, or masses added or lost), temperature, "
                     "re-clamping), measure their modes and FRFs with noise, update damping and stiffness by "
                     "Pilkey's iteration and write a sharded dataset (manifest.json, samples.parquet, .npy shards "
                     "of what defines each sample: modes, updated M, C, K, noise seeds; FRFs are synthesised when "

@@ -228,7 +228,7 @@ def run_discrepancy(beam_spec, measured, out_dir=None, *, frequency_noise=None, 
     """
     beam = beam_spec if isinstance(beam_spec, Beam) else load_beam(beam_spec)
     try:
-        candidates = dsc.check_candidates(candidates, beam.bc)
+        candidates = dsc.check_candidates(candidates, beam.bc, beam.section)
     except ValueError as exc:
         raise ConfigError(f"--candidates: {exc}") from None
     meas, rel_std, dof_map = load_measurement(measured, beam)

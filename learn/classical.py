@@ -9,17 +9,19 @@ sensitivities of the nominal beam (:mod:`learn.sensitivity`) and returns a
   measured ones (ratios in the bounded form ``df_i / (|df_i| + |df_j|)``).
 * :func:`dlac` - damage location assurance criterion (Messina et al. 1996):
   ``DLAC_e = (df . s_e)^2 / ((df . df)(s_e . s_e))``, largest wins.
-* :func:`mdlac` - multiple-damage LAC: the best non-negative combination of at
-  most two elements (all pairs, vectorised; one element on fewer than 4 modes), the larger share locates.
+* :func:`mdlac` - multiple-damage LAC: the best combination of at most two elements
+  with sizes of one sign (all pairs, vectorised; one element on fewer than 4 modes), the larger share locates.
 * :func:`sensitivity_updating` - regularised least squares on frequency shifts
   and shape changes for the size of a damage in every element of the grid;
-  reports the element of the largest loss.
+  reports the element of the largest change.
 * :class:`GradientBoosting` - scikit-learn's HistGradientBoosting on the
   network's own features.
 
-Detection scores: the largest relative frequency drop (frequency methods), the
-largest element loss (updating); each method's threshold is the 99.5th percentile
-of its score on the intact training pairs (0.5 % false alarms, as the network's).
+Detection scores: the largest relative frequency change of either sign (frequency
+methods), the largest element change of either sign (updating): a rise is a change too
+(a mass lost, a stiffness gained), and the sizes are signed (negative: the frequencies
+rise). Each method's threshold is the 99.5th percentile of its score on the intact
+training pairs (0.5 % false alarms, as the network's).
 """
 
 from __future__ import annotations
@@ -31,7 +33,8 @@ import numpy as np
 from learn.features import real_shapes
 from learn.sensitivity import Sensitivity
 
-__all__ = ["GradientBoosting", "FREQUENCY_METHODS", "MethodOutput", "cawley_adams", "dlac", "false_alarm_threshold",
+__all__ = ["GradientBoosting", "FREQUENCY_METHODS", "MethodOutput", "cawley_adams", "change_score", "dlac",
+           "false_alarm_threshold",
            "frequency_shifts", "mdlac", "run_classical", "sensitivity_updating", "shape_changes"]
 
 
@@ -69,9 +72,16 @@ def shape_changes(eigenvectors):
 
 
 def _single_amplitude(df, sens: Sensitivity):
-    """Least-squares size of a single damage in each element, >= 0: (n, E)."""
+    """Least-squares signed size of a single damage in each element: (n, E) (negative: a change that raises the
+    frequencies, a stiffness gained or a mass lost)."""
     S = sens.frequency[: df.shape[1]]
-    return np.maximum(df @ S / np.sum(S**2, axis=0), 0.0)
+    return df @ S / np.sum(S**2, axis=0)
+
+
+def change_score(df):
+    """Detection score of the frequency methods: the largest relative frequency change of either sign (a rise is
+    a change too: a mass lost, a stiffness gained), shape (n,)."""
+    return np.abs(df).max(axis=1)
 
 
 def _pack(name, score, threshold, e, size, sens):
@@ -87,7 +97,7 @@ def cawley_adams(df, sens: Sensitivity, threshold: float) -> MethodOutput:
     err = np.sum((rm[:, :, None] - rp[None]) ** 2, axis=1)                        # (n, E)
     e = np.argmin(err, axis=1)
     amp = _single_amplitude(df, sens)[np.arange(len(df)), e]
-    return _pack("Cawley-Adams", -df.min(axis=1), threshold, e, amp, sens)
+    return _pack("Cawley-Adams", change_score(df), threshold, e, amp, sens)
 
 
 def dlac(df, sens: Sensitivity, threshold: float) -> MethodOutput:
@@ -97,11 +107,12 @@ def dlac(df, sens: Sensitivity, threshold: float) -> MethodOutput:
     den = np.sum(df**2, axis=1, keepdims=True) * np.sum(S**2, axis=0)[None] + 1e-300
     e = np.argmax(num / den, axis=1)
     amp = _single_amplitude(df, sens)[np.arange(len(df)), e]
-    return _pack("DLAC", -df.min(axis=1), threshold, e, amp, sens)
+    return _pack("DLAC", change_score(df), threshold, e, amp, sens)
 
 
 def mdlac(df, sens: Sensitivity, threshold: float) -> MethodOutput:
-    """MDLAC with up to two damaged elements: best non-negative pair fit, larger member locates.
+    """MDLAC with up to two damaged elements: best pair fit of sizes of one sign (both losses or both gains), the
+    larger member locates; the size is signed.
 
     On 3 modes or fewer (a test missing some of modes 1-4) a pair of elements, two places and two sizes, fits
     nearly any shift vector: the single-element fit alone answers."""
@@ -113,20 +124,21 @@ def mdlac(df, sens: Sensitivity, threshold: float) -> MethodOutput:
     Ginv = np.linalg.pinv(G)
     rhs = np.einsum("mpi,nm->npi", A, df)                   # (n, P, 2)
     d = np.einsum("pij,npj->npi", Ginv, rhs)
-    d1 = np.maximum(_single_amplitude(df, sens), 0.0)       # fallbacks: one element only
-    da = np.where((d >= 0).all(-1, keepdims=True), d, 0.0)
+    d1 = _single_amplitude(df, sens)                        # fallbacks: one element only
+    one_sign = (d >= 0).all(-1) | (d <= 0).all(-1)
+    da = np.where(one_sign[..., None], d, 0.0)
     fit = np.einsum("mpi,npi->npm", A, da)                  # (n, P, m)
     res2 = np.sum((df[:, None, :] - fit) ** 2, axis=-1)
     res1 = np.sum((df[:, None, :] - d1[:, :, None] * S.T[None]) ** 2, axis=-1)   # (n, E)
-    use_pair = (d >= 0).all(-1) & (df.shape[1] >= 4)      # on 3 modes or fewer two damages fit any shifts
+    use_pair = one_sign & (df.shape[1] >= 4)              # on 3 modes or fewer two damages fit any shifts
     res2 = np.where(use_pair, res2, np.inf)
     bp, b1 = np.argmin(res2, axis=1), np.argmin(res1, axis=1)
     n = np.arange(len(df))
     pair_better = res2[n, bp] < res1[n, b1] * 0.999
     dp = da[n, bp]
-    e = np.where(pair_better, np.where(dp[:, 0] >= dp[:, 1], a[bp], b[bp]), b1)
+    e = np.where(pair_better, np.where(np.abs(dp[:, 0]) >= np.abs(dp[:, 1]), a[bp], b[bp]), b1)
     amp = np.where(pair_better, dp.sum(axis=1), d1[n, b1])
-    return _pack("MDLAC", -df.min(axis=1), threshold, e, amp, sens)
+    return _pack("MDLAC", change_score(df), threshold, e, amp, sens)
 
 
 def sensitivity_updating(df, du, sens: Sensitivity, threshold: float, sigma_f: float = 5e-4,
@@ -135,7 +147,9 @@ def sensitivity_updating(df, du, sens: Sensitivity, threshold: float, sigma_f: f
 
     Minimises ``||W (J d - y)||^2 + mu ||d||^2`` over the hinge flexibility ``d`` of every element, with
     ``y = [df; du]``, ``J`` the FE sensitivities and ``W`` the inverse noise levels; ``mu`` is
-    ``regularisation`` times the mean diagonal of ``J^T W^2 J``. Reports the element of the largest loss.
+    ``regularisation`` times the mean diagonal of ``J^T W^2 J``. Reports the element of the largest change of
+    either sign (a negative size: a stiffness gained or a mass lost), its size summed with its neighbours' of the
+    same sign.
     """
     m = df.shape[1]
     J = np.concatenate([sens.frequency[:m], sens.shape[: du.shape[1]]], axis=0)
@@ -145,13 +159,14 @@ def sensitivity_updating(df, du, sens: Sensitivity, threshold: float, sigma_f: f
     mu = regularisation * np.mean(np.diag(H))
     P = np.linalg.solve(H + mu * np.eye(H.shape[0]), Jw.T)   # (E, m + s)
     d = (np.concatenate([df, du], axis=1) * w) @ P.T             # (n, E)
-    e = np.argmax(d, axis=1)
-    dmax = d[np.arange(len(d)), e]
-    # a damage's estimate spreads over neighbouring elements: sum the peak and its neighbours
+    rows = np.arange(len(d))
+    e = np.argmax(np.abs(d), axis=1)
+    dmax = d[rows, e]
+    # a damage's estimate spreads over neighbouring elements: sum the peak and its neighbours of its sign
     E = d.shape[1]
-    size = sum(np.maximum(d[np.arange(len(d)), np.clip(e + k, 0, E - 1)], 0) * (0 <= e + k) * (e + k < E)
-               for k in (-1, 0, 1))
-    return _pack("sensitivity updating", dmax, threshold, e, size, sens)
+    size = sum(np.where(np.sign(d[rows, np.clip(e + k, 0, E - 1)]) == np.sign(dmax),
+                        d[rows, np.clip(e + k, 0, E - 1)], 0.0) * (0 <= e + k) * (e + k < E) for k in (-1, 0, 1))
+    return _pack("sensitivity updating", np.abs(dmax), threshold, e, size, sens)
 
 
 def false_alarm_threshold(score, damaged, target: float = 0.005) -> float:
@@ -161,11 +176,13 @@ def false_alarm_threshold(score, damaged, target: float = 0.005) -> float:
 
 
 class GradientBoosting:
-    """HistGradientBoosting on the pair features: detection, ``x / L`` and ``ln`` hinge flexibility."""
+    """HistGradientBoosting on the pair features: detection, ``x / L`` and the size through ``size_transform``
+    (:class:`learn.estimator.SizeTransform`: ``ln`` of a slit's hinge flexibility, ``asinh`` of a signed size)."""
 
-    def __init__(self, random_state: int = 0, max_iter: int = 300):
+    def __init__(self, random_state: int = 0, max_iter: int = 300, size_transform: str = "log"):
         self.random_state = random_state
         self.max_iter = max_iter
+        self.size_transform = size_transform
 
     def fit(self, X, y):
         from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
@@ -176,13 +193,19 @@ class GradientBoosting:
         self.detect_ = HistGradientBoostingClassifier(**kw).fit(X, dam)
         self.threshold_ = max(0.5, false_alarm_threshold(self.detect_.predict_proba(X)[:, 1], dam))
         self.locate_ = HistGradientBoostingRegressor(**kw).fit(X[dam], y[dam, 1])
-        self.size_ = HistGradientBoostingRegressor(**kw).fit(X[dam], np.log(y[dam, 2]))
+        self.size_ = HistGradientBoostingRegressor(**kw).fit(X[dam], self._transform.forward(y[dam, 2]))
         return self
 
     def predict(self, X) -> MethodOutput:
         p = self.detect_.predict_proba(X)[:, 1]
         return MethodOutput("gradient boosting", p, p >= self.threshold_, np.clip(self.locate_.predict(X), 0, 1),
-                            np.exp(self.size_.predict(X)), probability=p)
+                            self._transform.inverse(self.size_.predict(X)), probability=p)
+
+    @property
+    def _transform(self):
+        from learn.estimator import SizeTransform
+
+        return SizeTransform.parse(self.size_transform)
 
 
 FREQUENCY_METHODS = {"Cawley-Adams": cawley_adams, "DLAC": dlac, "MDLAC": mdlac}
@@ -199,7 +222,7 @@ def run_classical(eigenvalues, eigenvectors, sens: Sensitivity, thresholds: dict
     """
     df = frequency_shifts(eigenvalues)[:, :4]
     du = shape_changes(np.asarray(eigenvectors)[..., :4])
-    scores = {"freq": -df.min(axis=1)}
+    scores = {"freq": change_score(df)}
     up = sensitivity_updating(df, du, sens, np.inf)
     scores["upd"] = up.score
     if thresholds is None:

@@ -7,7 +7,8 @@ Guo et al. 2017) so that ``predict_proba`` is calibrated, and a factor on the si
 head's spread so that one standard deviation covers 68 % of the sizes of the validation pairs called damaged.
 
 Targets ``y`` have three columns: damaged (0/1), ``x / L`` of the damage (NaN if
-intact) and its size (:func:`learn.features.labels`: a slit's hinge flexibility ``EI / (k_theta L)``, 0 if intact).
+intact) and its size (:func:`learn.features.labels`: a slit's hinge flexibility ``EI / (k_theta L)``, a mass
+change's signed mass ratio; 0 if intact), learned through the kind's :class:`SizeTransform`.
 """
 
 from __future__ import annotations
@@ -26,8 +27,8 @@ from learn.features import split_by_specimen
 from learn.models import DamageNet, loss_terms
 from physics.errors import BeamDamageError
 
-__all__ = ["DamageClassifier", "DamagePrediction", "fit_calibration", "fit_size_std_scale", "lognormal_std",
-           "torch_threads"]
+__all__ = ["DamageClassifier", "DamagePrediction", "SizeTransform", "fit_calibration", "fit_size_std_scale",
+           "lognormal_std", "torch_threads"]
 
 
 @dataclass(frozen=True)
@@ -40,7 +41,7 @@ class DamagePrediction:
     x_std_over_L: np.ndarray
     element_probabilities: np.ndarray      # (n, Z) zones (the thesis's 4 elements)
     element: np.ndarray                    # 1..Z, most probable zone
-    hinge_flexibility: np.ndarray         # median of the log-normal size estimate
+    hinge_flexibility: np.ndarray         # median of the size estimate (signed for a signed kind)
     hinge_flexibility_std: np.ndarray
     logit: np.ndarray                      # calibrated detection logit
     probability_support_change: np.ndarray  # supports changed beyond re-clamping (NaN: a model not trained on it)
@@ -58,14 +59,59 @@ def lognormal_std(median, log_std):
     return median * np.sqrt(np.expm1(log_std**2) * np.exp(log_std**2))
 
 
-def fit_size_std_scale(truth, median, log_std, coverage: float = 0.6827) -> float:
+@dataclass(frozen=True)
+class SizeTransform:
+    """How the size head learns a size: ``t = forward(size)`` is what it predicts (a mean and a log-std of ``t``).
+
+    ``"log"``: ``t = ln(size)`` (a positive size, a slit's hinge flexibility; the estimate is log-normal);
+    ``"asinh:<scale>"``: ``t = asinh(size / scale)`` (a signed size, a mass change's ratio: linear below the
+    scale, logarithmic above). Each damage kind declares its own (:mod:`datagen.damage`, ``size_transform``).
+    """
+
+    kind: str
+    scale: float = 1.0
+
+    @classmethod
+    def parse(cls, spec: str) -> "SizeTransform":
+        name, _, scale = str(spec).partition(":")
+        try:
+            if name == "log" and not scale:
+                return cls("log")
+            if name == "asinh" and float(scale) > 0:
+                return cls("asinh", float(scale))
+        except ValueError:
+            pass
+        raise BeamDamageError(f"size_transform {spec!r} unknown; expected 'log' or 'asinh:<scale>' (scale > 0)")
+
+    def forward(self, size):
+        size = np.asarray(size, float)
+        if self.kind == "log":
+            return np.log(np.maximum(size, 1e-9))
+        return np.arcsinh(size / self.scale)
+
+    def inverse(self, t):
+        t = np.clip(np.asarray(t, float), -LOG_SIZE_LIMIT, LOG_SIZE_LIMIT)
+        return np.exp(t) if self.kind == "log" else self.scale * np.sinh(t)
+
+    def std(self, t, t_std):
+        """Standard deviation of the size from the transformed mean ``t`` and std ``t_std``: log-normal for
+        ``log``, half the width of the one-sigma interval ``inverse(t +- t_std)`` for ``asinh``."""
+        t = np.clip(np.asarray(t, float), -LOG_SIZE_LIMIT, LOG_SIZE_LIMIT)
+        if self.kind == "log":
+            return lognormal_std(np.exp(t), t_std)
+        return self.scale * np.cosh(t) * np.sinh(t_std)
+
+
+def fit_size_std_scale(truth, median, log_std, coverage: float = 0.6827, spread=None) -> float:
     """Factor ``k`` on the size head's log-std so that ``|truth - median| <= std(k log_std)`` holds for
-    ``coverage`` of the pairs (one sigma: 68.3 %); the std grows with ``k``, solved by bisection in log k."""
+    ``coverage`` of the pairs (one sigma: 68.3 %); the std grows with ``k``, solved by bisection in log k.
+    ``spread(t_std)`` gives the std of each pair from its transformed std (default: log-normal about ``median``)."""
     truth, median, log_std = (np.asarray(a, float) for a in (truth, median, log_std))
+    spread = spread or (lambda t_std: lognormal_std(median, t_std))
 
     def covered(log_k):
         with np.errstate(over="ignore", invalid="ignore"):   # an infinite std covers every truth
-            return np.mean(np.abs(truth - median) <= lognormal_std(median, np.exp(log_k) * log_std))
+            return np.mean(np.abs(truth - median) <= spread(np.exp(log_k) * log_std))
 
     lo, hi = np.log(1e-3), np.log(1e2)
     if covered(hi) < coverage:
@@ -143,12 +189,16 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
     zone_edges : sequence of float or None
         Edges of the location zones over ``x / L`` (``0 ... 1``); None: the thesis's 4 elements. A zone's
         probability is the sum over the bins whose centre lies in it.
+    size_transform : str
+        What the size head learns (:class:`SizeTransform`): ``"log"`` (a slit's positive hinge flexibility) or
+        ``"asinh:<scale>"`` (a signed size: a mass change); the damage kind's ``size_transform``.
     """
 
     def __init__(self, n_bins=80, hidden=128, depth=3, dropout=0.05, epochs=60, batch_size=256, lr=2e-3,
                  weight_decay=1e-4, loc_sigma_bins=1.0, val_fraction=0.15, false_alarm_target=0.005, random_state=0,
-                 device=None, n_threads=1, verbose=False, zone_edges=None):
+                 device=None, n_threads=1, verbose=False, zone_edges=None, size_transform="log"):
         self.n_bins = n_bins
+        self.size_transform = size_transform
         self.zone_edges = zone_edges
         self.hidden = hidden
         self.depth = depth
@@ -177,7 +227,8 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         x = np.nan_to_num(y[:, 1], nan=0.5)
         soft = np.exp(-0.5 * ((centres[None] - x[:, None]) / sig) ** 2)
         soft /= soft.sum(axis=1, keepdims=True)
-        log_size = np.log(np.where(damaged, np.maximum(y[:, 2], 1e-9), 1.0))
+        tf = SizeTransform.parse(self.size_transform)
+        log_size = np.where(damaged, tf.forward(np.where(damaged, y[:, 2], 1.0)), tf.forward(1.0))
         support = (y[:, 3] > 0.5) if y.shape[1] == 4 else np.zeros(len(y), bool)
         return (damaged.astype(np.float32), soft.astype(np.float32), log_size.astype(np.float32),
                 support.astype(np.float32))
@@ -275,8 +326,11 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
             # sizes are reported for pairs called damaged: the spread is scaled on those
             dmg = (d[va] > 0.5) & (p >= self.threshold_)
             if dmg.sum() >= 10:
-                self.size_std_scale_ = fit_size_std_scale(np.exp(ls[va][dmg]), np.exp(raw["size_mean"][dmg]),
-                                                          np.exp(raw["size_log_std"][dmg]))
+                tf = SizeTransform.parse(self.size_transform)
+                mu = raw["size_mean"][dmg]
+                self.size_std_scale_ = fit_size_std_scale(tf.inverse(ls[va][dmg]), tf.inverse(mu),
+                                                          np.exp(raw["size_log_std"][dmg]),
+                                                          spread=lambda t_std: tf.std(mu, t_std))
         self.train_seconds_ = time.perf_counter() - t0
         self.n_train_, self.n_val_ = len(tr), len(va)
         return self
@@ -329,10 +383,11 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
             edges = np.asarray(self.zone_edges, float)
             zone = np.clip(np.searchsorted(edges, c, side="right") - 1, 0, edges.size - 2)
             el = p @ (zone[:, None] == np.arange(edges.size - 1)[None]).astype(float)
-        med = np.exp(np.clip(raw["size_mean"], -LOG_SIZE_LIMIT, LOG_SIZE_LIMIT))
+        tf = SizeTransform.parse(self.size_transform)
+        med = tf.inverse(raw["size_mean"])
         log_std = np.minimum(self.size_std_scale_ * np.exp(np.minimum(raw["size_log_std"], LOG_SIZE_LIMIT)),
                              MAX_SIZE_LOG_STD)
-        sd = lognormal_std(med, log_std)
+        sd = tf.std(raw["size_mean"], log_std)
         sup = expit(raw["support"]) if self.support_trained_ else np.full(len(z), np.nan)
         return DamagePrediction(expit(z), p, mean, std, el, np.argmax(el, axis=1) + 1, med, sd, z, sup)
 

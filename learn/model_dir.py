@@ -174,11 +174,17 @@ def json_default(obj):
 
 def sensitivity_of(beam: BeamSpec, config_root_spring=None, truth_beam: dict | None = None,
                    generator_config: dict | None = None):
-    """FE sensitivities of the truth beam a dataset or model records (its preset when it records none), to the
-    damage kind of its generator config (slits when it records none)."""
+    """FE sensitivities of the truth beam a dataset or model records (its preset when it records none; its EI and
+    mass, and the added masses of the generator config's beam file), to the damage kind of its generator config
+    (slits when it records none)."""
     kind = ((generator_config or {}).get("damage") or {}).get("kind", "slit")
     if truth_beam and "EI_Nm2" in truth_beam:
-        key = (truth_beam["length_m"], truth_beam["EI_Nm2"], truth_beam["mass_per_length_kg_m"])
+        from physics.effects import effect_of
+
+        effects = ((generator_config or {}).get("beam") or {}).get("effects") or {}   # the beam file's
+        masses = tuple((float(p.get("x_m", truth_beam["length_m"])), float(p["mass_kg"]))
+                       for k, p in effects.items() if effect_of(k) == "added_mass")
+        key = (truth_beam["length_m"], truth_beam["EI_Nm2"], truth_beam["mass_per_length_kg_m"], masses)
         return beam_sensitivity(key, config_root_spring, kind=kind, test=beam.test)
     return beam_sensitivity(beam.name, config_root_spring, kind=kind, test=beam.test)
 

@@ -76,17 +76,33 @@ class Sensitivity:
         return replace(self, frequency=self.frequency[k], shape=shape, frequencies_hz=self.frequencies_hz[k])
 
     def largest_drop(self, x_over_L, hinge_flexibility):
-        """Largest first-order relative frequency drop of a damage of that size (batched), >= 0 for sizes >= 0."""
+        """Largest first-order relative frequency change (either sign: a rise is a change too) of a damage of that
+        signed size (batched), >= 0."""
         e = self.element_of(np.nan_to_num(x_over_L))
-        return np.max(-self.frequency[:, e], axis=0) * np.asarray(hinge_flexibility, float)
+        return np.max(np.abs(self.frequency[:, e]), axis=0) * np.abs(np.asarray(hinge_flexibility, float))
 
 
-def _beam_numbers(preset) -> tuple[float, float, float]:
-    """``(length_m, EI_Nm2, mass_per_length_kg_m)`` of a preset name or of such a tuple."""
+def _beam_numbers(preset) -> tuple[float, float, float, tuple]:
+    """``(length_m, EI_Nm2, mass_per_length_kg_m, added masses)`` of a preset name or of such a tuple (the added
+    masses ``((x_m, mass_kg), ...)`` optional, none for a preset)."""
     if isinstance(preset, str):
         p = beam_preset(preset)
-        return p.length_m, p.EI_Nm2, p.mass_per_length_kg_m
-    return tuple(float(v) for v in preset)
+        return p.length_m, p.EI_Nm2, p.mass_per_length_kg_m, ()
+    L, EI, m, *rest = preset
+    return float(L), float(EI), float(m), tuple(rest[0]) if rest else ()
+
+
+def _with_masses(models, masses, length_m: float, n_elements: int):
+    """``models`` (a batch of one beam's FE models) with the point masses ``((x_m, mass_kg), ...)`` added to M."""
+    if not masses:
+        return models
+    from physics.effects import point_mass_matrix
+
+    node_x = np.linspace(0.0, length_m, n_elements + 1)
+    names = [f"{n}:{d}" for n in range(1, n_elements + 2) for d in ("y", "rz")]
+    keep = [names.index(d) for d in models.dofs]
+    dM = sum(point_mass_matrix(node_x, mk, x) for x, mk in masses)[np.ix_(keep, keep)]
+    return replace(models, M=np.asarray(models.M) + dM)
 
 
 @lru_cache(maxsize=16)
@@ -96,8 +112,9 @@ def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7,
 
     Parameters
     ----------
-    preset : beam preset name, or ``(length_m, EI_Nm2, mass_per_length_kg_m)`` of the truth beam
-        (e.g. a calibrated beam file: its Euler-Bernoulli equivalent with the same EI and mass)
+    preset : beam preset name, or ``(length_m, EI_Nm2, mass_per_length_kg_m[, added masses])`` of the truth beam
+        (e.g. a calibrated beam file: its Euler-Bernoulli equivalent with the same EI and mass, and its added
+        masses ``((x_m, mass_kg), ...)``)
     root_spring_relative : float or None
         ``k_r L / EI`` of the nominal root spring (None = rigid clamp); default the
         geometric mean of the generator's default range [300, 3000].
@@ -111,7 +128,7 @@ def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7,
     perturbs = damage_model(kind).perturbs
     if test is not None and not test.thesis:
         return _layout_sensitivity(preset, root_spring_relative, n_elements, step, perturbs, test)
-    L, EI, m = _beam_numbers(preset)
+    L, EI, m, masses = _beam_numbers(preset)
     le = L / n_elements
     kr = None if root_spring_relative is None else root_spring_relative * EI / L
     factors = np.ones((n_elements + 1, n_elements))
@@ -121,12 +138,13 @@ def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7,
     else:
         factors[1:] += step * np.eye(n_elements)
         models = beam_model(n_elements, L, EI, m, mass_factors=factors, root_spring=kr)
+    models = _with_masses(models, masses, L, n_elements)
     w, phi = undamped_modes(models.M, models.K)
     meas = models.index([f"{1 + n_elements // 4 * q}:y" for q in range(1, 5)])
     u = real_shapes(phi[:, meas, :n_modes].astype(complex))
     du = (sign_aligned(u[1:], u[0]) - u[0]) * L / (step * le)   # (E, 4, m) per unit size (step le / L per step)
     # exact first-order frequency sensitivities from the element energies
-    nominal = beam_model(n_elements, L, EI, m, root_spring=kr)
+    nominal = _with_masses(beam_model(n_elements, L, EI, m, root_spring=kr), masses, L, n_elements)
     w0, phi0 = undamped_modes(nominal.M, nominal.K)
     full = np.zeros((2 * (n_elements + 1), n_modes))
     names = [f"{n}:{d}" for n in range(1, n_elements + 2) for d in ("y", "rz")]
@@ -146,14 +164,15 @@ def _layout_sensitivity(preset, root_spring_relative, n_elements, step, perturbs
     from physics.effects import hermite_row
     from physics.layout import RIGID_BODY_MODES
 
-    L, EI, m = _beam_numbers(preset)
+    L, EI, m, masses = _beam_numbers(preset)
     le = L / n_elements
     clamp = test.bc == "clamped-free" and root_spring_relative is not None
     kr = root_spring_relative * EI / L if clamp else None
     factors = np.ones((n_elements + 1, n_elements))
     key = "ei_factors" if perturbs == "stiffness" else "mass_factors"
     factors[1:] += (-step if perturbs == "stiffness" else step) * np.eye(n_elements)
-    models = beam_model(n_elements, L, EI, m, bc=test.bc, root_spring=kr, **{key: factors})
+    models = _with_masses(beam_model(n_elements, L, EI, m, bc=test.bc, root_spring=kr, **{key: factors}), masses, L,
+                          n_elements)
     K = np.array(models.K)
     if test.bc == "free-free":  # a soft suspension at both ends (the rigid-body modes stay the two lowest)
         k_s = suspension_unit_stiffness(L) * EI

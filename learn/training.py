@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 from tqdm.auto import tqdm
 
+from datagen.damage import damage_model
 from datagen.store import package_version
 from learn.classical import run_classical
 from learn.estimator import DamageClassifier
@@ -100,7 +101,9 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
     load_s = time.perf_counter() - t0
     sens = sensitivity_of(pairs.beam, _nominal_root_spring(pairs.source), pairs.source[0].get("truth_beam"),
                           pairs.source[0].get("config"))
-    params = dict(epochs=epochs, random_state=seed, n_threads=threads, verbose=progress)
+    kind = ((pairs.source[0].get("config") or {}).get("damage") or {}).get("kind", "slit")
+    params = dict(epochs=epochs, random_state=seed, n_threads=threads, verbose=progress,
+                  size_transform=damage_model(kind).size_transform)
     if pairs.beam.test is not None:
         params["zone_edges"] = [float(v) for v in pairs.beam.zone_edges_m / pairs.beam.length_m]
     networks, outputs, fit_s = _fit_networks(pairs, routes, y, (tr, te), sens, params)

@@ -18,6 +18,7 @@ otherwise the keys marked * are required. Unknown keys are errors::
     total_length_m = 1.219           # whole specimen (mass per length = mass_kg / total_length_m)
     width_m = 0.051                  # * section width b
     thickness_m = 0.007264           # * section depth h
+    section = "sandwich"             # sandwich | rectangular | circular (solid) | given (EI and mass only)
     face_thickness_m = 0.0005        # each face sheet of the sandwich (t_f)
     core_modulus_pa = 1.0e8          # core Young's modulus
     EI_Nm2 = 22.674                  # * flexural rigidity ...
@@ -33,9 +34,18 @@ otherwise the keys marked * are required. Unknown keys are errors::
     kGA_N = 2.0e4
     [effects.root_flexibility]       # the supports' effect follows bc (physics.effects.SUPPORT_EFFECTS)
     k_theta_Nm_rad = 5.0e3
+    [[effects.added_mass]]           # point effects: one [[...]] table per instance (or one [...] table)
+    mass_kg = 0.035
+    x_m = 0.06
+    [[effects.added_mass]]
+    mass_kg = 0.035
+    x_m = 0.12
 
 ``EI_Nm2`` and ``face_modulus_pa`` exclude each other, as do
-``mass_per_length_kg_m`` and ``mass_kg``. The effects and their parameters are
+``mass_per_length_kg_m``, ``mass_kg`` and ``density_kg_m3``. A solid section
+(``section = "rectangular"`` or ``"circular"``, the circle's ``diameter_m``)
+takes ``modulus_pa`` (its ``EI`` unless ``EI_Nm2`` is given), ``poisson_ratio``
+(default 0.3) and ``density_kg_m3``; each section's keys are refused on another. The effects and their parameters are
 listed in :mod:`physics.effects`. :func:`write_beam` writes every key
 explicitly (no ``preset``), so a written file stands on its own.
 """
@@ -55,7 +65,7 @@ from physics.errors import ConfigError
 from physics.fem import BOUNDARY_CONDITIONS, FEModel
 from physics.io import DofMap, atomic_write_text, map_frf_dofs, map_measured_dofs
 from physics.io.inputs import check_input_file
-from physics.properties import PRESETS, layered_ei
+from physics.properties import PRESETS, SECTION_KINDS, SOLID_SECTIONS, layered_ei, solid_section
 from physics.modal import state_matrix
 
 __all__ = ["Beam", "MAX_MODEL_SPREAD", "PRESET_CORE_MODULUS_PA", "PRESET_FACE_THICKNESS_M", "beam_from_dict",
@@ -94,6 +104,15 @@ class Beam:
         Thickness of each face sheet of a sandwich section (m).
     core_modulus_pa : float or None
         Young's modulus of the core (Pa).
+    section : str or None
+        What the section is (:data:`physics.properties.SECTION_KINDS`): ``sandwich`` (faces on a core),
+        ``rectangular`` or ``circular`` (solid, one material; a circle's diameter is ``thickness_m``), or
+        ``given`` (``EI`` and mass per length only: an I, a box, anything). None: ``sandwich`` when face or
+        core keys are given, else ``given``.
+    modulus_pa : float or None
+        Young's modulus of a solid section's material (Pa).
+    poisson_ratio : float or None
+        Poisson's ratio of a solid section's material (default 0.3 where needed).
     effects : mapping
         ``{effect name: {parameter: value}}`` (read-only), see :mod:`physics.effects`.
     drive_x_m : float or None
@@ -120,6 +139,9 @@ class Beam:
     measured_x_m: tuple = ()
     face_thickness_m: float | None = None
     core_modulus_pa: float | None = None
+    section: str | None = None
+    modulus_pa: float | None = None
+    poisson_ratio: float | None = None
     effects: MappingProxyType = field(default_factory=dict)
     drive_x_m: float | None = None
     band_hz: tuple | None = None
@@ -127,6 +149,12 @@ class Beam:
     measured_x_given: bool = field(default=False, compare=False)
 
     def __post_init__(self):
+        if self.section is None:
+            sandwich = self.face_thickness_m is not None or self.core_modulus_pa is not None
+            object.__setattr__(self, "section", "sandwich" if sandwich else "given")
+        if self.section not in SECTION_KINDS:
+            raise ConfigError(f"beam {self.name!r}: section {self.section!r} unknown; expected one of "
+                              f"{list(SECTION_KINDS)}")
         eff = fx.validate_effects(dict(self.effects), f"beam {self.name!r}")
         fx.check_supports(eff, self.bc, f"beam {self.name!r}")
         object.__setattr__(self, "effects", MappingProxyType({k: MappingProxyType(v) for k, v in eff.items()}))
@@ -203,6 +231,14 @@ class Beam:
             return map_frf_dofs(frf, dofs, model_x, model_dofs, **kw)
         return map_measured_dofs(dofs, model_x, model_dofs, where=where, **kw)
 
+    @property
+    def solid(self):
+        """The :class:`physics.properties.SolidSection` of a solid section with its modulus given, else None."""
+        if self.section not in SOLID_SECTIONS or self.modulus_pa is None:
+            return None
+        return solid_section(self.section, self.width_m, self.thickness_m, self.modulus_pa,
+                             0.3 if self.poisson_ratio is None else self.poisson_ratio)
+
     def effects_dict(self) -> dict:
         """Plain ``{effect: {param: value}}`` copy of :attr:`effects`."""
         return {k: dict(v) for k, v in self.effects.items()}
@@ -216,13 +252,19 @@ def preset_beam(name: str) -> Beam:
     return Beam(name=p.name, length_m=p.length_m, total_length_m=p.total_length_m, width_m=p.width_m,
                 thickness_m=p.thickness_m, EI_Nm2=p.EI_Nm2, mass_per_length_kg_m=p.mass_per_length_kg_m,
                 n_elements=p.n_elements, face_thickness_m=PRESET_FACE_THICKNESS_M,
-                core_modulus_pa=PRESET_CORE_MODULUS_PA)
+                core_modulus_pa=PRESET_CORE_MODULUS_PA, section="sandwich")
 
 
 _NUMBER_KEYS = ("length_m", "total_length_m", "width_m", "thickness_m", "face_thickness_m", "core_modulus_pa",
-                "EI_Nm2", "face_modulus_pa", "mass_per_length_kg_m", "mass_kg")
+                "EI_Nm2", "face_modulus_pa", "mass_per_length_kg_m", "mass_kg", "modulus_pa", "poisson_ratio",
+                "density_kg_m3", "diameter_m")
 _KEYS = ("preset", "name", "bc", "n_elements", "measured_x_m", "drive_x_m", "band_hz", "zones_x_m",
-         "effects") + _NUMBER_KEYS
+         "effects", "section") + _NUMBER_KEYS
+#: The keys of each section kind beyond the geometry, EI and mass (any other section's keys are refused).
+_SECTION_KEYS = {"sandwich": ("face_thickness_m", "core_modulus_pa", "face_modulus_pa"),
+                 "rectangular": ("modulus_pa", "poisson_ratio", "density_kg_m3"),
+                 "circular": ("modulus_pa", "poisson_ratio", "density_kg_m3", "diameter_m"),
+                 "given": ()}
 
 #: Supports that leave a beam free to move as a mechanism (refused with that reason).
 MECHANISMS = ("pinned-free", "free-pinned", "free-guided", "guided-free")
@@ -237,6 +279,7 @@ def beam_from_dict(obj: dict, source: str = "beam") -> Beam:
             raise ConfigError(f"{source}: unknown key {key!r}; expected some of {sorted(_KEYS)}")
     vals = _preset_values(obj, source)
     _read_scalars(obj, vals, source)
+    _read_section(obj, vals, source)
     for required in ("length_m", "width_m", "thickness_m"):
         if required not in vals:
             raise ConfigError(f"{source}: missing key {required!r} (or give 'preset')")
@@ -270,6 +313,32 @@ def _preset_values(obj: dict, source: str) -> dict:
     base = {f.name: getattr(b, f.name) for f in fields(Beam)}
     base["effects"] = b.effects_dict()
     return base
+
+
+def _read_section(obj: dict, vals: dict, source: str) -> None:
+    """``section`` (default: ``sandwich`` with a preset or face/core keys, else ``given``), its keys checked; a
+    circle's ``diameter_m`` becomes its ``width_m`` and ``thickness_m``."""
+    if "section" in obj and obj["section"] not in SECTION_KINDS:
+        raise ConfigError(f"{source}: 'section' = {obj['section']!r} unknown; expected one of {list(SECTION_KINDS)}")
+    sandwich = any(vals.get(k) is not None for k in _SECTION_KEYS["sandwich"])
+    kind = obj.get("section", "sandwich" if sandwich or "preset" in obj else "given")
+    vals["section"] = kind
+    for other, keys in _SECTION_KEYS.items():
+        for k in keys:
+            if k in obj and k not in _SECTION_KEYS[kind]:
+                raise ConfigError(f"{source}: {k!r} describes a {other} section, not this {kind} one (section = "
+                                  f"{kind!r}); its keys are {', '.join(_SECTION_KEYS[kind]) or 'EI_Nm2 and the mass'}")
+    if kind != "sandwich":
+        vals.pop("face_thickness_m", None)
+        vals.pop("core_modulus_pa", None)
+    if kind == "circular":
+        d = vals.pop("diameter_m", None)
+        if d is not None:
+            if "width_m" in obj or "thickness_m" in obj:
+                raise ConfigError(f"{source}: give 'diameter_m' or 'width_m' and 'thickness_m', not both")
+            vals["width_m"] = vals["thickness_m"] = d
+    if vals.get("poisson_ratio") is not None and not vals["poisson_ratio"] < 0.5:
+        raise ConfigError(f"{source}: 'poisson_ratio' must lie in (0, 0.5), got {vals['poisson_ratio']!r}")
 
 
 def _read_scalars(obj: dict, vals: dict, source: str) -> None:
@@ -336,9 +405,13 @@ def _read_test_keys(obj: dict, vals: dict, source: str) -> None:
 
 
 def _resolve_rigidity(obj: dict, vals: dict, source: str) -> None:
-    """Set ``vals["EI_Nm2"]``, given or from the sandwich's face modulus (eq. 4.1), which leaves ``vals``."""
+    """Set ``vals["EI_Nm2"]``, given or from the section: the sandwich's face modulus (eq. 4.1), which leaves
+    ``vals``, or a solid section's modulus (which stays: it gives the shear modulus too)."""
     if "EI_Nm2" in obj and "face_modulus_pa" in obj:
         raise ConfigError(f"{source}: give 'EI_Nm2' or 'face_modulus_pa', not both")
+    if vals["section"] in SOLID_SECTIONS and "EI_Nm2" not in obj and vals.get("modulus_pa") is not None:
+        vals["EI_Nm2"] = solid_section(vals["section"], vals["width_m"], vals["thickness_m"],
+                                       vals["modulus_pa"]).EI_Nm2
     ef = vals.pop("face_modulus_pa", None)
     if ef is not None:
         tf, ec = vals.get("face_thickness_m"), vals.get("core_modulus_pa")
@@ -349,18 +422,26 @@ def _resolve_rigidity(obj: dict, vals: dict, source: str) -> None:
             raise ConfigError(f"{source}: 'face_thickness_m' must be below half of 'thickness_m'")
         vals["EI_Nm2"] = float(layered_ei(vals["width_m"], [0.0, h2 - tf, h2], [ec, ef]))
     if "EI_Nm2" not in vals:
-        raise ConfigError(f"{source}: missing key 'EI_Nm2' (or 'face_modulus_pa' with the layers, or 'preset')")
+        raise ConfigError(f"{source}: missing key 'EI_Nm2' (or 'face_modulus_pa' with the layers of a sandwich, "
+                          f"'modulus_pa' of a solid section, or 'preset')")
 
 
 def _resolve_mass(obj: dict, vals: dict, source: str) -> None:
     """Set ``vals["mass_per_length_kg_m"]``, given or ``mass_kg / total_length_m`` (``mass_kg`` leaves ``vals``)."""
-    if "mass_per_length_kg_m" in obj and "mass_kg" in obj:
-        raise ConfigError(f"{source}: give 'mass_per_length_kg_m' or 'mass_kg', not both")
+    given = [k for k in ("mass_per_length_kg_m", "mass_kg", "density_kg_m3") if k in obj]
+    if len(given) > 1:
+        raise ConfigError(f"{source}: give one of 'mass_per_length_kg_m', 'mass_kg' and 'density_kg_m3', not "
+                          f"{' and '.join(given)}")
     mass = vals.pop("mass_kg", None)
     if mass is not None:
         vals["mass_per_length_kg_m"] = mass / vals["total_length_m"]
+    density = vals.pop("density_kg_m3", None)
+    if density is not None:
+        vals["mass_per_length_kg_m"] = density * solid_section(vals["section"], vals["width_m"], vals["thickness_m"],
+                                                               1.0).area_m2
     if "mass_per_length_kg_m" not in vals:
-        raise ConfigError(f"{source}: missing key 'mass_per_length_kg_m' (or 'mass_kg', or 'preset')")
+        raise ConfigError(f"{source}: missing key 'mass_per_length_kg_m' (or 'mass_kg', 'density_kg_m3' of a solid "
+                          f"section, or 'preset')")
 
 
 def _check_layout(vals: dict, source: str) -> None:
@@ -368,8 +449,8 @@ def _check_layout(vals: dict, source: str) -> None:
     tf = vals.get("face_thickness_m")
     if tf is not None and not tf < vals["thickness_m"] / 2:
         raise ConfigError(f"{source}: 'face_thickness_m' must be below half of 'thickness_m'")
-    for k in ("added_mass", "local_damping"):
-        x = vals.get("effects", {}).get(k, {}).get("x_m")
+    for k, p in vals.get("effects", {}).items():
+        x = p.get("x_m")
         if x is not None and x > vals["length_m"]:
             raise ConfigError(f"{source}: 'effects.{k}.x_m' = {x} lies beyond 'length_m' = {vals['length_m']}")
 
@@ -451,9 +532,10 @@ def beam_to_toml(beam: Beam, comment: str = "") -> str:
         if f.name in ("effects", "measured_x_given") or v is None:
             continue
         lines.append(f"{f.name} = {_toml_value(v)}")
-    for name, params in beam.effects.items():
+    for key, params in beam.effects.items():
+        name = fx.effect_of(key)
         lines.append("")
-        lines.append(f"[effects.{name}]")
+        lines.append(f"[[effects.{name}]]" if len(fx.instances(beam.effects, name)) > 1 else f"[effects.{name}]")
         lines.extend(f"{k} = {_toml_value(v)}" for k, v in params.items())
     return "\n".join(lines) + "\n"
 

@@ -31,13 +31,15 @@ unit in the name):
     the bounce and pitch modes (bounce at ``sqrt(2 k / (m L))`` for a stiff
     beam), and the bending modes stiffen slightly.
 ``added_mass``  ``mass_kg`` (required), ``x_m`` (default: the tip), ``J_kg_m2`` (default 0)
-    A point mass (sensor, stinger, shaker armature) with optional rotary
+    A point mass (sensor, stinger, shaker armature, bolted mass) with optional rotary
     inertia, attached through the element's cubic (Hermite) shape functions, so
-    any position is allowed; at a node it adds to that node's DOFs exactly.
+    any position is allowed; at a node it adds to that node's DOFs exactly. A beam
+    holds any number of them (one ``[[effects.added_mass]]`` table each).
 ``local_damping``  ``c_Ns_m`` (required), ``x_m`` (default: the tip)
     A viscous dashpot to ground at ``x`` (shaker attachment, clamp friction
     near the root): non-proportional damping, visible as mode complexity and a
-    damping-ratio pattern that no Rayleigh damping can follow.
+    damping-ratio pattern that no Rayleigh damping can follow. Any number of them
+    (one ``[[effects.local_damping]]`` table each).
 ``proportional_damping``  ``alpha_1_s`` (default 0), ``beta_s`` (default 0)
     Rayleigh damping ``C = alpha M + beta K`` of the whole beam. It is the
     damping that is always calibrated, not a candidate effect.
@@ -61,9 +63,10 @@ import numpy as np
 from physics import fem
 from physics.errors import BeamDamageError, ConfigError
 
-__all__ = ["CANDIDATES", "EFFECTS", "SUPPORT_EFFECTS", "Effect", "Parameter", "assemble_beam", "candidates_for",
-           "check_supports", "dashpot_matrix", "hermite_row", "interpolation_matrix", "point_mass_matrix",
-           "timoshenko_mass", "timoshenko_stiffness", "validate_effects"]
+__all__ = ["CANDIDATES", "EFFECTS", "INSTANCE_SEP", "SUPPORT_EFFECTS", "Effect", "Parameter", "assemble_beam",
+           "candidates_for", "check_supports", "dashpot_matrix", "effect_of", "hermite_row", "instance_key",
+           "instances", "interpolation_matrix", "next_instance", "point_mass_matrix", "timoshenko_mass",
+           "timoshenko_stiffness", "validate_effects"]
 
 
 @dataclass(frozen=True)
@@ -131,6 +134,11 @@ class Effect:
         measured mode, rad/s); None for an effect that is not a discrepancy candidate.
     supports : tuple of str, or None
         Boundary conditions the effect fits (None: every one).
+    repeatable : bool
+        A point effect a beam may hold several of (one ``[[effects.<name>]]`` table each); its instances are
+        keyed ``name``, ``name#2``, ``name#3``, ... (:func:`instance_key`).
+    sections : tuple of str, or None
+        Section kinds the effect fits (:data:`physics.properties.SECTION_KINDS`; None: every one).
     """
 
     name: str
@@ -139,6 +147,32 @@ class Effect:
     apply: Callable
     fit_bounds: Callable | None = None
     supports: tuple | None = None
+    repeatable: bool = False
+    sections: tuple | None = None
+
+
+#: Separator of an effect's name and its instance number in the keys of repeated point effects.
+INSTANCE_SEP = "#"
+
+
+def effect_of(key: str) -> str:
+    """The effect name of an effect key (``"added_mass#3"`` -> ``"added_mass"``)."""
+    return key.split(INSTANCE_SEP, 1)[0]
+
+
+def instance_key(name: str, i: int) -> str:
+    """Key of the ``i``-th (0-based) instance of effect ``name``: ``name`` for the first, ``name#{i+1}`` after."""
+    return name if i == 0 else f"{name}{INSTANCE_SEP}{i + 1}"
+
+
+def instances(effects, name: str) -> list:
+    """The parameter mappings of every instance of effect ``name`` in ``effects`` (keys in order)."""
+    return [v for k, v in effects.items() if effect_of(k) == name]
+
+
+def next_instance(effects, name: str) -> str:
+    """The key of a further instance of ``name`` in ``effects``."""
+    return instance_key(name, len(instances(effects, name)))
 
 
 def _shear(parts: _Parts, p: dict) -> None:
@@ -202,16 +236,18 @@ def _suspension(parts: _Parts, p: dict) -> None:
 EFFECTS: dict[str, Effect] = {e.name: e for e in (
     Effect("shear_deformation", (Parameter("kGA_N", True), Parameter("rho_I_kg_m", False, positive=False)),
            "element", _shear, lambda L, EI, m, rho_i, w1: {"kGA_N": (1.0 * EI / L**2, 1e6 * EI / L**2)}),
-    # between a tenth of the uniform section's and all the mass in the faces (3 m h^2 / 12)
+    # between a tenth of the uniform section's and all the mass in the faces (3 m h^2 / 12); a solid section's
+    # is m h^2 / 12 (rectangle) or m d^2 / 16 (circle), known, so no candidate there
     Effect("rotary_inertia", (Parameter("rho_I_kg_m", False, positive=False),), "element", _rotary,
-           lambda L, EI, m, rho_i, w1: {"rho_I_kg_m": (0.1 * rho_i, 3.0 * rho_i)}),
+           lambda L, EI, m, rho_i, w1: {"rho_I_kg_m": (0.1 * rho_i, 3.0 * rho_i)}, sections=("sandwich", "given")),
     Effect("proportional_damping", (Parameter("alpha_1_s", False, positive=False),
                                     Parameter("beta_s", False, positive=False)), "assembled", _proportional),
     Effect("added_mass", (Parameter("mass_kg", True, positive=False), Parameter("x_m", False, positive=False),
                           Parameter("J_kg_m2", False, positive=False)), "assembled", _added_mass,
-           lambda L, EI, m, rho_i, w1: {"mass_kg": (1e-4 * m * L, 2.0 * m * L)}),
+           lambda L, EI, m, rho_i, w1: {"mass_kg": (1e-4 * m * L, 2.0 * m * L)}, repeatable=True),
     Effect("local_damping", (Parameter("c_Ns_m", True, positive=False), Parameter("x_m", False, positive=False)),
-           "assembled", _dashpot, lambda L, EI, m, rho_i, w1: {"c_Ns_m": (1e-7 * m * L * w1, 0.3 * m * L * w1)}),
+           "assembled", _dashpot, lambda L, EI, m, rho_i, w1: {"c_Ns_m": (1e-7 * m * L * w1, 0.3 * m * L * w1)},
+           repeatable=True),
     Effect("root_flexibility", (Parameter("k_theta_Nm_rad", True), Parameter("k_y_N_m", False)), "assembled",
            _clamp_springs, lambda L, EI, m, rho_i, w1: {"k_theta_Nm_rad": (0.1 * EI / L, 1e5 * EI / L)},
            ("clamped-free",)),
@@ -237,16 +273,18 @@ CANDIDATES = ("shear_deformation", "rotary_inertia", "root_flexibility", "clamp_
               "suspension", "added_mass", "local_damping")
 
 
-def candidates_for(bc: str) -> tuple[str, ...]:
-    """The candidate effects of a beam with boundary condition ``bc``: :data:`CANDIDATES` that fit its supports.
+def candidates_for(bc: str, section: str | None = None) -> tuple[str, ...]:
+    """The candidate effects of a beam with boundary condition ``bc`` and section kind ``section``: the
+    :data:`CANDIDATES` that fit its supports and its section (None: any section).
 
-    Shear deformation, rotary inertia, added mass and local damping fit every beam; of the support effects the
-    one of :data:`SUPPORT_EFFECTS`.
+    Shear deformation, added mass and local damping fit every beam, rotary inertia every section but a solid
+    one (whose ``rho I`` is known); of the support effects the one of :data:`SUPPORT_EFFECTS`.
     """
     if bc not in SUPPORT_EFFECTS:
         raise BeamDamageError(f"boundary condition {bc!r} unknown; expected one of {list(SUPPORT_EFFECTS)}",
                               parameter="bc")
-    return tuple(c for c in CANDIDATES if EFFECTS[c].supports is None or bc in EFFECTS[c].supports)
+    return tuple(c for c in CANDIDATES if (EFFECTS[c].supports is None or bc in EFFECTS[c].supports)
+                 and (section is None or EFFECTS[c].sections is None or section in EFFECTS[c].sections))
 
 
 def check_supports(names, bc: str, source: str = "effects") -> None:
@@ -259,7 +297,7 @@ def check_supports(names, bc: str, source: str = "effects") -> None:
     """
     if bc not in SUPPORT_EFFECTS:
         return                    # an unknown boundary condition is refused by physics.fem
-    for name in names:
+    for name in dict.fromkeys(effect_of(n) for n in names):
         sup = EFFECTS[name].supports
         if sup is not None and bc not in sup:
             raise ConfigError(f"{source}: effect '{name}' is defined for a {' or '.join(sup)} beam, not {bc}; "
@@ -267,41 +305,67 @@ def check_supports(names, bc: str, source: str = "effects") -> None:
 
 
 def validate_effects(effects, source: str = "effects") -> dict:
-    """Check effect names, parameter names and values; returns a clean ``{name: {param: float}}``.
+    """Check effect names, parameter names and values; returns a clean ``{key: {param: float}}``.
+
+    A repeatable point effect (:attr:`Effect.repeatable`) may be a list of tables (TOML ``[[effects.added_mass]]``,
+    one per instance), which become the keys ``added_mass``, ``added_mass#2``, ... (:func:`instance_key`); those
+    keys are read back as they are.
 
     Raises
     ------
     ConfigError
-        One line naming ``source``, the effect and the parameter.
+        One line naming ``source``, the effect (with the table's index among its instances, from 1:
+        ``effects.added_mass[2].mass_kg``) and the parameter.
     """
     if effects is None:
         return {}
     if not hasattr(effects, "items"):
         raise ConfigError(f"{source}: 'effects' must be a table of effect name -> parameters")
     out = {}
-    for name, params in effects.items():
+    for key, params in effects.items():
+        name = effect_of(key)
         if name not in EFFECTS:
-            raise ConfigError(f"{source}: unknown effect 'effects.{name}'; expected one of {sorted(EFFECTS)}")
-        if not hasattr(params, "items"):
-            raise ConfigError(f"{source}: 'effects.{name}' must be a table of parameters "
-                              f"({', '.join(p.name for p in EFFECTS[name].params)})")
-        spec = {p.name: p for p in EFFECTS[name].params}
-        clean = {}
-        for key, value in params.items():
-            if key not in spec:
-                raise ConfigError(f"{source}: unknown parameter 'effects.{name}.{key}'; expected one of {sorted(spec)}")
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-                raise ConfigError(f"{source}: 'effects.{name}.{key}' must be a finite number, got {value!r}")
-            p = spec[key]
-            if value < p.lower or (p.positive and value <= p.lower):
-                raise ConfigError(f"{source}: 'effects.{name}.{key}' must be {'>' if p.positive else '>='} "
-                                  f"{p.lower:g}, got {value!r}")
-            clean[key] = float(value)
-        for p in EFFECTS[name].params:
-            if p.required and p.name not in clean:
-                raise ConfigError(f"{source}: 'effects.{name}' needs parameter '{p.name}'")
-        out[name] = clean
+            raise ConfigError(f"{source}: unknown effect 'effects.{key}'; expected one of {sorted(EFFECTS)}")
+        if isinstance(params, (list, tuple)):
+            if not EFFECTS[name].repeatable or key != name:
+                rep = sorted(n for n, e in EFFECTS.items() if e.repeatable)
+                raise ConfigError(f"{source}: 'effects.{key}' must be one table (only {', '.join(rep)} take one "
+                                  f"[[effects.<name>]] table per instance)")
+            if not params:
+                raise ConfigError(f"{source}: 'effects.{key}' is an empty list of tables")
+            tables = [(f"effects.{key}[{i + 1}]", instance_key(name, i), p) for i, p in enumerate(params)]
+        else:
+            if key != name and not EFFECTS[name].repeatable:
+                raise ConfigError(f"{source}: unknown effect 'effects.{key}'; expected one of {sorted(EFFECTS)}")
+            tables = [(f"effects.{key}", key, params)]
+        for where, ikey, table in tables:
+            if ikey in out:
+                raise ConfigError(f"{source}: '{where}' repeats the effect key '{ikey}'")
+            out[ikey] = _validate_table(name, table, where, source)
     return out
+
+
+def _validate_table(name: str, params, where: str, source: str) -> dict:
+    """One table of effect ``name``'s parameters (``where``: its place in the file, for messages)."""
+    if not hasattr(params, "items"):
+        raise ConfigError(f"{source}: '{where}' must be a table of parameters "
+                          f"({', '.join(p.name for p in EFFECTS[name].params)})")
+    spec = {p.name: p for p in EFFECTS[name].params}
+    clean = {}
+    for key, value in params.items():
+        if key not in spec:
+            raise ConfigError(f"{source}: unknown parameter '{where}.{key}'; expected one of {sorted(spec)}")
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise ConfigError(f"{source}: '{where}.{key}' must be a finite number, got {value!r}")
+        p = spec[key]
+        if value < p.lower or (p.positive and value <= p.lower):
+            raise ConfigError(f"{source}: '{where}.{key}' must be {'>' if p.positive else '>='} "
+                              f"{p.lower:g}, got {value!r}")
+        clean[key] = float(value)
+    for p in EFFECTS[name].params:
+        if p.required and p.name not in clean:
+            raise ConfigError(f"{source}: '{where}' needs parameter '{p.name}'")
+    return clean
 
 
 # ---------------------------------------------------------------------------
@@ -444,6 +508,11 @@ def interpolation_matrix(model: fem.FEModel, x_m) -> np.ndarray:
 # Assembly with effects
 # ---------------------------------------------------------------------------
 
+def _in_order(eff: dict, stage: str) -> list:
+    """The keys of ``eff`` whose effect enters at ``stage``, in :data:`EFFECTS` order (instances in key order)."""
+    return [k for name in EFFECTS if EFFECTS[name].stage == stage for k in eff if effect_of(k) == name]
+
+
 def assemble_beam(length_m, EI_Nm2, mass_per_length_kg_m, n_elements, *, bc="clamped-free",
                   thickness_m=None, effects=None) -> fem.FEModel:
     """A uniform beam of ``n_elements`` equal elements with every effect applied.
@@ -458,7 +527,8 @@ def assemble_beam(length_m, EI_Nm2, mass_per_length_kg_m, n_elements, *, bc="cla
     thickness_m : float, optional
         Section depth ``h`` (m) for the default rotary inertia ``m h^2 / 12``.
     effects : mapping, optional
-        ``{effect name: {parameter: value}}`` (module docstring).
+        ``{effect key: {parameter: value}}`` (module docstring; several instances of a point effect keyed by
+        :func:`instance_key`).
 
     Returns
     -------
@@ -474,8 +544,8 @@ def assemble_beam(length_m, EI_Nm2, mass_per_length_kg_m, n_elements, *, bc="cla
     le = length_m / n_el
     m = float(mass_per_length_kg_m)
     parts = _Parts(length_m, bc, None if thickness_m is None else m * thickness_m**2 / 12.0)
-    for name in (n for n in EFFECTS if n in eff and EFFECTS[n].stage == "element"):
-        EFFECTS[name].apply(parts, eff[name])
+    for key in _in_order(eff, "element"):
+        EFFECTS[effect_of(key)].apply(parts, eff[key])
     ke = timoshenko_stiffness(EI_Nm2, parts.kga, le)
     me = timoshenko_mass(m, parts.rho_i, EI_Nm2, parts.kga, le)
     parts.K = fem.assemble(np.broadcast_to(ke, (n_el, 4, 4)))
@@ -484,8 +554,8 @@ def assemble_beam(length_m, EI_Nm2, mass_per_length_kg_m, n_elements, *, bc="cla
     parts.node_x = np.linspace(0.0, length_m, n_el + 1)
     names = fem.dof_names(n_el + 1)
     parts.removed = set(fem.constrained_dofs(bc, n_el + 1))
-    for name in (n for n in EFFECTS if n in eff and EFFECTS[n].stage == "assembled"):
-        EFFECTS[name].apply(parts, eff[name])
+    for key in _in_order(eff, "assembled"):
+        EFFECTS[effect_of(key)].apply(parts, eff[key])
     M, K, C, node_x, removed = parts.M, parts.K, parts.C, parts.node_x, parts.removed
     keep = np.array([i for i, d in enumerate(names) if d not in removed])
     sel = np.ix_(keep, keep)

@@ -7,7 +7,8 @@
   and the mode curvature used by the first-order damage sensitivity.
 * Equivalent ``EI`` from a static load-deflection test (eqs. 4.2-4.4).
 * Flexural rigidity of a layered section (eq. 4.1) and its general,
-  unsymmetric form used for slits.
+  unsymmetric form used for slits; solid rectangular and circular sections
+  (:func:`solid_section`: ``EI``, area, the shear coefficient of the shape).
 """
 
 from __future__ import annotations
@@ -18,9 +19,10 @@ import numpy as np
 
 from physics.errors import BeamDamageError, ShapeError
 
-__all__ = ["BeamPreset", "CANTILEVER_BETA_L", "PRESETS", "StaticTest", "THESIS_BETA_L", "beam_preset",
-           "cantilever_beta_l", "cantilever_curvature_squared", "cantilever_frequencies_hz", "curvature_squared",
-           "equivalent_ei", "free_free_beta_l", "layered_ei", "section_ei"]
+__all__ = ["BeamPreset", "CANTILEVER_BETA_L", "PRESETS", "SECTION_KINDS", "SOLID_SECTIONS", "SolidSection",
+           "StaticTest", "THESIS_BETA_L", "beam_preset", "cantilever_beta_l", "cantilever_curvature_squared",
+           "cantilever_frequencies_hz", "curvature_squared", "equivalent_ei", "free_free_beta_l", "layered_ei",
+           "section_ei", "solid_section"]
 
 
 #: ``beta_l`` of a clamped-free beam as printed in the thesis (Chapter Four).
@@ -307,3 +309,58 @@ def section_ei(width_m, z_bottom_m, z_top_m, moduli_pa):
     ea = E * (zt - zb)
     z_na = np.sum(ea * 0.5 * (zt + zb), axis=-1, keepdims=True) / np.sum(ea, axis=-1, keepdims=True)
     return np.asarray(width_m) / 3.0 * np.sum(E * ((zt - z_na) ** 3 - (zb - z_na) ** 3), axis=-1)
+
+
+#: Section kinds of a beam file (``section``): a sandwich of two faces on a core (its EI by eq. 4.1), a solid
+#: rectangle or circle of one material, or a section given only by its ``EI`` and mass per length (I, box, any).
+SECTION_KINDS = ("sandwich", "rectangular", "circular", "given")
+
+#: Solid section kinds.
+SOLID_SECTIONS = ("rectangular", "circular")
+
+
+@dataclass(frozen=True)
+class SolidSection:
+    """A solid section of one isotropic material.
+
+    Attributes
+    ----------
+    kind : {"rectangular", "circular"}
+    area_m2 : float
+    second_moment_m4 : float
+    shear_coefficient : float
+        Timoshenko's ``k`` of the shape (Cowper 1966: ``10 (1 + nu) / (12 + 11 nu)`` for a rectangle,
+        ``6 (1 + nu) / (7 + 6 nu)`` for a circle).
+    modulus_pa, shear_modulus_pa : float
+        ``E`` and ``G = E / (2 (1 + nu))``.
+    """
+
+    kind: str
+    area_m2: float
+    second_moment_m4: float
+    shear_coefficient: float
+    modulus_pa: float
+    shear_modulus_pa: float
+
+    @property
+    def EI_Nm2(self) -> float:
+        return self.modulus_pa * self.second_moment_m4
+
+    @property
+    def kGA_N(self) -> float:
+        """Shear rigidity ``k G A`` (N) of the section."""
+        return self.shear_coefficient * self.shear_modulus_pa * self.area_m2
+
+
+def solid_section(kind: str, width_m: float, thickness_m: float, modulus_pa: float,
+                  poisson_ratio: float = 0.3) -> SolidSection:
+    """The :class:`SolidSection` of a ``width_m`` x ``thickness_m`` rectangle or a circle of diameter
+    ``thickness_m`` (``width_m`` ignored)."""
+    nu = float(poisson_ratio)
+    if kind == "rectangular":
+        area, second, k = width_m * thickness_m, width_m * thickness_m**3 / 12, 10 * (1 + nu) / (12 + 11 * nu)
+    elif kind == "circular":
+        area, second, k = np.pi * thickness_m**2 / 4, np.pi * thickness_m**4 / 64, 6 * (1 + nu) / (7 + 6 * nu)
+    else:
+        raise BeamDamageError(f"solid section {kind!r} unknown; expected one of {list(SOLID_SECTIONS)}")
+    return SolidSection(kind, float(area), float(second), float(k), float(modulus_pa), modulus_pa / (2 * (1 + nu)))

@@ -5,8 +5,9 @@ A damage model turns its section of the configuration (``damage``, selected by
 
 * ``validate(d, cfg)`` normalises its keys of ``d = cfg["damage"]`` in place
   (raises :class:`physics.errors.ConfigError` naming the key);
-* ``check_beam(d, preset, section)`` refuses damage the specimen cannot hold
-  (e.g. a slit deeper than the beam), once the truth beam is known;
+* ``check_beam(d, preset, section, added_masses)`` refuses damage the specimen cannot hold
+  (e.g. a slit deeper than the beam, a mass lost beyond what the beam carries), once the truth beam
+  is known (``added_masses``: the ``(x_m, mass_kg)`` of its added masses);
 * ``draw(rng, n, cfg, setup)`` draws ``n`` samples: ``n_damages`` (n,), centres
   ``x_m`` (n, S) and the model's parameters (n, S), NaN where a sample has fewer
   than ``S`` damages;
@@ -19,6 +20,9 @@ A damage model turns its section of the configuration (``damage``, selected by
 * ``columns(...)`` (same arguments) gives the model's own stored columns:
   per sample ``{name: (B,)}`` and per damage ``{suffix: (B, S)}`` stored as
   ``damage{k}_{suffix}``; ``sample_units`` and ``units`` give their units;
+* ``size_transform`` is how the network's size head learns the size: ``"log"`` (a positive size)
+  or ``"asinh:<scale>"`` (a signed size, ``asinh(size / scale)``), read by
+  :class:`learn.estimator.DamageClassifier`;
 * ``perturbs`` ("stiffness" or "mass") says which element matrix a unit size
   changes to first order, for the classical methods' sensitivities
   (:func:`learn.sensitivity.beam_sensitivity`);
@@ -56,11 +60,12 @@ class DamageModel(Protocol):
     units: dict
     sample_units: dict
     size_meaning: str
+    size_transform: str
     perturbs: str
 
     def validate(self, d: dict, cfg: dict) -> None: ...
 
-    def check_beam(self, d: dict, preset, section: dict) -> None: ...
+    def check_beam(self, d: dict, preset, section: dict, added_masses=()) -> None: ...
 
     def draw(self, rng: np.random.Generator, n: int, cfg: dict, setup) -> dict: ...
 

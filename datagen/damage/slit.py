@@ -365,6 +365,8 @@ class Slit:
              "damping_s": "s"}
     sample_units = {"stiffness_loss_Nm3": "N m^3 (sum over slits of dEI * width)"}
     size_meaning = "hinge flexibility EI / (k_theta L) = w r / ((1 - r) L)"
+    #: The size head learns ``log(size)``: a slit's hinge flexibility is positive.
+    size_transform = "log"
     perturbs = "stiffness"
 
     def validate(self, d: dict, cfg: dict) -> None:
@@ -385,7 +387,7 @@ class Slit:
                               f"{MAX_LOSS_FACTOR:g} up to the top of measurement.band_rad_s ({top_rad_s:g} rad/s): "
                               f"beta <= {MAX_LOSS_FACTOR / top_rad_s:.3g} s, got {d['slit_damping_s']!r}")
 
-    def check_beam(self, d: dict, preset, section: dict) -> None:
+    def check_beam(self, d: dict, preset, section: dict, added_masses=()) -> None:
         if d["depth_m"][1] >= preset.thickness_m - section["face_thickness_m"]:
             raise ConfigError(f"config key 'damage.depth_m' must stay below the thickness minus the bottom face "
                               f"({preset.thickness_m - section['face_thickness_m']:g} m)")

@@ -1,4 +1,4 @@
-"""``python -m experiments.second_sim pairs|effects|beams ...``: write test files of the independent simulator."""
+"""``python -m experiments.second_sim pairs|effects|beams|bolted ...``: test files of the independent simulator."""
 
 from __future__ import annotations
 
@@ -38,6 +38,16 @@ def main(argv=None) -> int:
     pb.add_argument("--n", type=int, default=40, help="pairs per beam (default 40)")
     pb.add_argument("--seed", type=int, default=0)
     pb.add_argument("--only", default=None, help="one catalogue beam by name (default: every beam)")
+    po = sub.add_parser("bolted", help="a steel cantilever with six bolted masses: baseline/current modal JSON, "
+                                       "bar.toml (masses left out), bolted.toml, truth.json")
+    po.add_argument("--out", required=True)
+    po.add_argument("--seed", type=int, default=0)
+    po.add_argument("--removed-kg", type=float, default=0.005,
+                    help="mass taken off the bolted mass nearest --damage-x-m (kg; default 0.005)")
+    po.add_argument("--damage-x-m", type=float, default=0.23, help="where (m; default 0.23)")
+    po.add_argument("--pairs", type=int, default=0,
+                    help="instead: this many specimen pairs with masses added (1-20 %% of the bar's mass) or lost "
+                         "(1-8 %%), pair-KK_baseline/current.json and truth.json")
     args = p.parse_args(argv)
     t0 = time.perf_counter()
     try:
@@ -70,6 +80,19 @@ def main(argv=None) -> int:
                 write_beam_pairs(cb, simulate_beam_pairs(cb, args.n, args.seed), Path(args.out) / cb.name, args.seed)
             out = args.out
             what = f"{args.n} pairs of {len(chosen)} beam(s)"
+        elif args.command == "bolted":
+            from experiments.second_sim.bolted import MASS_KG, write_bolted_test, write_mass_change_pairs
+
+            if not 0 <= args.removed_kg < MASS_KG:
+                raise ValueError(f"--removed-kg must lie in [0, {MASS_KG}) kg, got {args.removed_kg}")
+            if args.pairs < 0:
+                raise ValueError(f"--pairs must be >= 0, got {args.pairs}")
+            if args.pairs:
+                out = write_mass_change_pairs(args.out, args.pairs, args.seed)
+                what = f"{args.pairs} bolted-cantilever pairs with mass changes"
+            else:
+                out = write_bolted_test(args.out, args.seed, args.removed_kg, args.damage_x_m)
+                what = "the bolted cantilever"
         else:
             from experiments.second_sim.effects import effect_cases, write_effect_cases
 

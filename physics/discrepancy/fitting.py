@@ -13,15 +13,16 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.optimize import OptimizeResult, least_squares
 
+from physics import effects as fx
 from physics.beam import Beam
-from physics.discrepancy.candidates import Param, effect_params, g_core_pa, has_position
+from physics.discrepancy.candidates import Param, effect_params, has_position, shear_in_section_terms
 from physics.discrepancy.measurement import Measurement, has_complex_shapes
 from physics.frf import magnitude_db
 from physics.discrepancy.model import (ModeResiduals, Prediction, aligned, dashpot_damping_per_c, mode_residuals,
                                        predict, rayleigh_fit)
 
-__all__ = ["BLOCKS", "Fit", "Problem", "as_fit", "candidate_fit", "fit_model", "lomo_error", "model_params",
-           "with_rayleigh"]
+__all__ = ["BLOCKS", "Fit", "MAX_JOINT_INSTANCES", "Problem", "as_fit", "candidate_fit", "fit_model", "lomo_error",
+           "model_params", "with_rayleigh"]
 
 
 @dataclass(frozen=True)
@@ -40,8 +41,9 @@ class Fit:
         a beam file has no per-mode damping).
     parameters, parameter_std : dict
         Fitted values and standard deviations, keys ``"EI_Nm2"``,
-        ``"mass_per_length_kg_m"``, ``"<effect>.<parameter>"``, derived
-        ``"shear_deformation.G_core_pa"``. A std of 0 marks a value held fixed
+        ``"mass_per_length_kg_m"``, ``"<effect>.<parameter>"``, the shear rigidity in the section's terms
+        (:func:`physics.discrepancy.candidates.shear_in_section_terms`: a sandwich's ``G_core_pa``, a solid
+        section's ``G_pa`` and ``k``). A std of 0 marks a value held fixed
         (the mass without FRFs), NaN a position chosen among the measured points.
     chi2 : float
         Sum of squared whitened residuals.
@@ -296,10 +298,10 @@ def with_rayleigh(nb: Beam, meas: Measurement) -> Beam:
     """``nb`` with Rayleigh damping fitted to the measured ratios less a dashpot's share (beam file only)."""
     w = 2 * np.pi * meas.frequencies_hz
     z = np.array(meas.damping_ratios, dtype=float)
-    if "local_damping" in nb.effects:
-        d = nb.effects["local_damping"]
-        per_c = dashpot_damping_per_c(nb, [d.get("x_m", nb.length_m)], meas.n_modes, 24)[0]
-        z = np.maximum(z - d["c_Ns_m"] * per_c, 0.05 * z)
+    dashpots = fx.instances(nb.effects, "local_damping")
+    if dashpots:
+        per_c = dashpot_damping_per_c(nb, [d.get("x_m", nb.length_m) for d in dashpots], meas.n_modes, 24)
+        z = np.maximum(z - np.array([d["c_Ns_m"] for d in dashpots]) @ per_c, 0.05 * z)
     a, b = rayleigh_fit(w, z)
     return nb.with_effects({**nb.effects_dict(), "proportional_damping": {"alpha_1_s": a, "beta_s": b}})
 
@@ -332,8 +334,9 @@ def as_fit(prob: Problem, res: OptimizeResult, effect: str, meas: Measurement) -
         params[f"{name}.x_m"] = x
         std[f"{name}.x_m"] = float("nan")   # chosen among the measured points, not fitted
     if "shear_deformation.kGA_N" in params:
-        params["shear_deformation.G_core_pa"] = g_core_pa(params["shear_deformation.kGA_N"], nb)
-        std["shear_deformation.G_core_pa"] = g_core_pa(std["shear_deformation.kGA_N"], nb)
+        for k, (v, sd) in shear_in_section_terms(params["shear_deformation.kGA_N"], std["shear_deformation.kGA_N"],
+                                                  nb).items():
+            params[k], std[k] = v, sd
     blocks = {b: float(v @ v) for b, v in white.items()}
     if meas.damping_ratios is not None:
         nb = with_rayleigh(nb, meas)
@@ -341,9 +344,42 @@ def as_fit(prob: Problem, res: OptimizeResult, effect: str, meas: Measurement) -
                float("nan"), mode_residuals(meas, pred, prob.pairs), blocks, white)
 
 
+#: Most point masses of a repeatable effect fitted together as one candidate (each with its mass and position).
+MAX_JOINT_INSTANCES = 2
+
+
 def candidate_fit(beam, meas, noise, name, fixed, n_elements, pairs, fit_mass, n_starts, seed, named, start,
                    positions):
-    """Fit one candidate on top of the named effects; returns ``(fit, positions used)``."""
+    """Fit one candidate on top of the named effects; returns ``(fit, positions used)``.
+
+    A repeatable point effect (``added_mass``) with shapes or FRFs is also fitted as up to
+    :data:`MAX_JOINT_INSTANCES` instances at once, each at its own fitted position (bolted masses along a beam: no
+    single point mass fits them, several together do); the candidate is the set of lowest BIC, its
+    :attr:`Fit.effects` naming every instance.
+    """
+    f, pos = _candidate_fit(beam, meas, noise, name, fixed, n_elements, pairs, fit_mass, n_starts, seed, named,
+                            start, positions)
+    position_free = meas.shapes is not None or meas.frf is not None
+    if not (fx.EFFECTS[fx.effect_of(name)].repeatable and position_free):
+        return f, pos
+    base = fx.effect_of(name)
+    held = {**fixed, **dict.fromkeys(named, {})}
+    keys = [name]
+    for _ in range(MAX_JOINT_INSTANCES - 1):
+        held[keys[-1]] = {}
+        keys.append(fx.next_instance(held, base))
+        if 2 * len(keys) + 1 + len(named) >= f.n_obs:
+            break
+        g, _, _ = fit_model(beam, meas, noise, keys[-1], fixed, n_elements, pairs, n_starts=n_starts,
+                            position=positions, fit_mass=fit_mass, seed=seed, named=(*named, *keys[:-1]),
+                            start=start)
+        if g.bic < f.bic:
+            f, pos = g, positions
+    return f, pos
+
+
+def _candidate_fit(beam, meas, noise, name, fixed, n_elements, pairs, fit_mass, n_starts, seed, named, start,
+                   positions):
     position_free = meas.shapes is not None or meas.frf is not None
     kw = dict(fit_mass=fit_mass, seed=seed, named=named, start=start)
     if has_position(name):

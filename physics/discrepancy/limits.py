@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from physics import effects as fx
 from physics.beam import Beam
 from physics.discrepancy.candidates import Param, effect_params, has_position
 from physics.discrepancy.fitting import Fit, Problem, model_params
@@ -166,8 +167,8 @@ def detection_limits(beam: Beam, meas: Measurement, noise: Noise, final: Fit, c_
                 d = (prob.residual(np.append(u_n, u_e)) - r0) * weight
                 return float(d @ d - np.sum((q.T @ d) ** 2))
 
-            by_x[x] = _crossing(lam, p, lam_lim, weak_at_upper=SIZES[effect][2])
-        quantity, _, named_below = SIZES[effect]
+            by_x[x] = _crossing(lam, p, lam_lim, weak_at_upper=SIZES[fx.effect_of(effect)][2])
+        quantity, _, named_below = SIZES[fx.effect_of(effect)]
         per_unit = _size_factors(effect, final.beam, meas, xs, n_elements)
         lims = {x: (None if v is None else v * per_unit[x]) for x, v in by_x.items()}
         found = [v for v in lims.values() if v is not None]
@@ -192,9 +193,10 @@ def _size_factors(effect: str, nb: Beam, meas: Measurement, xs: list, n_elements
     """Position (or None) -> dimensionless size per unit of the effect's parameter on the calibrated beam ``nb``
     (:data:`SIZES`); a dashpot's is the largest first-order added damping ratio over the measured modes."""
     L, EI, m = nb.length_m, nb.EI_Nm2, nb.mass_per_length_kg_m
-    if effect == "local_damping":
+    if fx.effect_of(effect) == "local_damping":
         per_c = dashpot_damping_per_c(nb, xs, meas.n_modes, n_elements)
         return {x: float(np.max(row)) for x, row in zip(xs, per_c)}
+    effect = fx.effect_of(effect)
     factor = {"shear_deformation": L**2 / EI, "rotary_inertia": 12 / (m * nb.thickness_m**2),
               "root_flexibility": L / EI, "clamp_flexibility": L / EI, "bearing_flexibility": L / EI,
               "suspension": L**3 / EI, "added_mass": 1 / (m * L)}[effect]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
 from threadpoolctl import threadpool_limits
 
 from physics import effects as fx
@@ -107,20 +108,21 @@ def analyse(beam: Beam, meas: Measurement, noise: Noise | None = None, *, candid
     DiscrepancyResult
     """
     with threadpool_limits(1):   # small dense eigenproblems: one BLAS thread is fastest
-        return _analyse(beam, meas, noise or Noise(), check_candidates(candidates, beam.bc), max_effects,
+        return _analyse(beam, meas, noise or Noise(), check_candidates(candidates, beam.bc, beam.section),
+                        max_effects,
                         n_elements, n_starts, seed, estimate_noise, progress)
 
 
-def check_candidates(candidates, bc: str) -> tuple[str, ...]:
-    """``candidates`` checked against the supports of a ``bc`` beam (None: all of
-    :func:`physics.effects.candidates_for` ``bc``).
+def check_candidates(candidates, bc: str, section: str | None = None) -> tuple[str, ...]:
+    """``candidates`` checked against the supports of a ``bc`` beam and its section kind (None: all of
+    :func:`physics.effects.candidates_for` ``bc, section``).
 
     Raises
     ------
     BeamDamageError
-        One line naming the unknown effect, or the effect, the bc and the candidates that fit it.
+        One line naming the unknown effect, or the effect, the bc (and section) and the candidates that fit it.
     """
-    fits = fx.candidates_for(bc)
+    fits = fx.candidates_for(bc, section)
     if candidates is None:
         return fits
     unknown = [c for c in candidates if c not in fx.CANDIDATES]
@@ -128,23 +130,46 @@ def check_candidates(candidates, bc: str) -> tuple[str, ...]:
         raise BeamDamageError(f"unknown candidate effect(s) {unknown}; expected some of {list(fx.CANDIDATES)}")
     for c in candidates:
         if c not in fits:
-            raise BeamDamageError(f"candidate effect '{c}' does not fit a {bc} beam; its candidates are "
+            where = f"{section} section" if c in fx.candidates_for(bc) else f"{bc} beam"
+            raise BeamDamageError(f"candidate effect '{c}' does not fit a {where}; its candidates are "
                                   f"{', '.join(fits)}")
     return tuple(candidates)
 
 
-def _untestable(names: list, meas: Measurement) -> dict:
+def _untestable(names: list, meas: Measurement, beam: Beam, noise: Noise, n_elements: int) -> dict:
+    """Candidates these data cannot test, removed from ``names``: ``{effect: why}``."""
+    out = {}
     if "local_damping" in names and meas.frf is None and not has_complex_shapes(meas):
         names.remove("local_damping")
-        return {"local_damping": "modal damping (one ratio per mode) fits any damping ratios; a dashpot "
-                                 "needs complex mode shapes or FRFs"}
-    return {}
+        out["local_damping"] = ("modal damping (one ratio per mode) fits any damping ratios; a dashpot needs "
+                                "complex mode shapes or FRFs")
+    solid = beam.solid
+    if "shear_deformation" in names and solid is not None and "shear_deformation" not in beam.effects:
+        shift = _solid_shear_shift(beam, meas, n_elements)
+        sf = float(np.min(noise.frequency))
+        if shift < sf:
+            names.remove("shear_deformation")
+            out["shear_deformation"] = (f"the {beam.section} section's own shear rigidity kGA = {solid.kGA_N:.3g} N "
+                                        f"(k = {solid.shear_coefficient:.3f}, G = {solid.shear_modulus_pa:.3g} Pa) "
+                                        f"shifts the measured modes by at most {100 * shift:.2g} %, below the "
+                                        f"frequency noise {100 * sf:.2g} %")
+    return out
+
+
+def _solid_shear_shift(beam: Beam, meas: Measurement, n_elements: int) -> float:
+    """Largest relative frequency change over the measured modes that a solid section's own ``k G A`` (with its
+    rotary inertia) makes."""
+    base = predict(beam, meas, n_elements)
+    shear = beam.with_effects({**beam.effects_dict(), "shear_deformation": {"kGA_N": beam.solid.kGA_N}})
+    f = predict(shear, meas, n_elements)
+    n = meas.n_modes
+    return float(np.max(np.abs(f.frequencies_hz[:n] / base.frequencies_hz[:n] - 1)))
 
 
 def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, seed, estimate_noise, progress):
     fit_mass = meas.frf is not None
     names = list(candidates)
-    untestable = _untestable(names, meas)
+    untestable = _untestable(names, meas, beam, noise, n_elements)
     nominal_pred = predict(beam, meas, n_elements)
     pairs = pair_modes_by_mac(meas, nominal_pred)
     fixed = {k: dict(v) for k, v in beam.effects.items() if k != "proportional_damping"}
@@ -157,7 +182,7 @@ def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, s
     steps, named, positions, evidence, drops = [], [], {}, {}, {}
     scale = (1.0, 0, "not estimated: the noise was given")
     while len(named) < max_effects:
-        todo = [c for c in names if c not in named and c not in fixed]
+        todo = _todo(names, named, fixed)
         if not todo:
             break
         fits, used = _fit_candidates(ctx, todo, named, base, positions)
@@ -171,7 +196,8 @@ def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, s
         drops[best.effect] = {b: (base.chi2_blocks[b] - best.chi2_blocks[b]) / step.c_hat.get(b, 1.0)
                               for b in best.chi2_blocks}
         evidence[best.effect] = max(drops[best.effect], key=drops[best.effect].get)
-        named.append(best.effect)
+        # the candidate's every new effect key (several point masses fitted together)
+        named += [k for k in best.effects if k not in fixed and k not in named and k != "proportional_damping"]
         positions = used[best.effect]
         base = best
     c_last = steps[-1].c_hat if steps else {}
@@ -184,6 +210,14 @@ def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, s
                              scale[1], scale[2])
 
 
+def _todo(names, named, fixed) -> list:
+    """The candidates of a round: each effect the model lacks, and a further instance of each repeatable point
+    effect (:attr:`physics.effects.Effect.repeatable`: one more point mass at its own position) it holds."""
+    held = {**fixed, **dict.fromkeys(named, {})}
+    return [fx.next_instance(held, c) if fx.EFFECTS[c].repeatable else c for c in names
+            if fx.EFFECTS[c].repeatable or (c not in named and c not in fixed)]
+
+
 def _fit_candidates(ctx: dict, todo, named, base: Fit, positions) -> tuple[list, dict]:
     """Every candidate of ``todo`` fitted on top of the ``named`` effects; ``(fits, positions used by each)``."""
     fits, used = [], {}
@@ -194,5 +228,5 @@ def _fit_candidates(ctx: dict, todo, named, base: Fit, positions) -> tuple[list,
                                ctx["pairs"], ctx["fit_mass"], ctx["n_starts"], ctx["seed"], tuple(named), start,
                                positions)
         fits.append(f)
-        used[c] = pos
+        used[f.effect] = pos
     return fits, used

@@ -234,3 +234,22 @@ def test_generate_help_names_the_effects_the_generator_applies(capsys):
     beam_mod = pytest.importorskip("physics.beam")
     mapping = beam_mapping(beam_mod.preset_beam("beam5").with_effects(ALL_EFFECTS))
     assert set(load_truth_beam(mapping).effects) == set(ALL_EFFECTS)
+
+
+def test_slits_in_a_solid_rectangle_cut_one_material_as_deep_as_the_section_allows():
+    """A solid steel bar's slit section is homogeneous: the EI left is the rectangle's ``(1 - d/h)^3`` (closed form),
+    and a loss of 95 % (depth 0.63 h) is drawn; the deepest cut leaves 5 % of the depth."""
+    from datagen.damage.slit import depth_for_ei_loss
+    from datagen.config import merge
+    from datagen.pipeline import SOLID_LIGAMENT_FRACTION, draw_batch, get_setup
+
+    beam = {"name": "bar", "length_m": 0.38, "width_m": 0.0254, "thickness_m": 0.00475, "section": "rectangular",
+            "modulus_pa": 2e11, "density_kg_m3": 7850.0}
+    setup = get_setup(merge({"beam": beam, "damage": {"ei_loss": [0.05, 0.95], "width_m": [0.002, 0.01]},
+                             "measurement": {"lines": 64}}))
+    loss = np.array([0.1, 0.5, 0.875, 0.95])
+    d = depth_for_ei_loss(setup.layout, loss)
+    np.testing.assert_allclose(1 - (1 - d / 0.00475) ** 3, loss, atol=1e-6)
+    assert setup.layout.face_thickness_m == pytest.approx(SOLID_LIGAMENT_FRACTION * 0.00475)
+    inp = draw_batch(np.random.default_rng(0), 16, setup)
+    assert inp.damage["ei_loss"].max() > 0.9 and np.all(inp.damage["depth_m"] < 0.95 * 0.00475)

@@ -203,3 +203,100 @@ def test_effect_validation_is_one_line_naming_the_key():
 def test_beam_file_effects_reach_the_model():
     b = load_beam("beam5").with_effects({"shear_deformation": {"kGA_N": 2e4}})
     assert _freqs(b.fe_model(20))[3] < 0.95 * _freqs(load_beam("beam5").fe_model(20))[3]
+
+
+BOLTED = """
+name = "bar"
+section = "rectangular"
+length_m = 0.38
+width_m = 0.0254
+thickness_m = 0.00475
+modulus_pa = 2.0e11
+density_kg_m3 = 7850.0
+"""
+
+
+def _bolted_file(tmp_path, xs=(0.05, 0.11, 0.17, 0.23, 0.29, 0.35), extra=""):
+    p = tmp_path / "bolted.toml"
+    p.write_text(BOLTED + "".join(f"\n[[effects.added_mass]]\nmass_kg = 0.035\nx_m = {x}\n" for x in xs) + extra)
+    return p
+
+
+def test_several_added_masses_give_the_independent_simulators_frequencies(tmp_path):
+    """Six bolted masses, one [[effects.added_mass]] table each, on a solid steel bar: the beam file's 40-element
+    model against experiments.second_sim's 112-element Euler-Bernoulli beam with the same point masses."""
+    from experiments.second_sim.fem import Beam as SimBeam, PointMass, assemble as sim_assemble, modes as sim_modes
+
+    beam = load_beam(_bolted_file(tmp_path))
+    assert len(beam.effects) == 6 and beam.section == "rectangular"
+    assert beam.EI_Nm2 == pytest.approx(2e11 * 0.0254 * 0.00475**3 / 12)
+    assert beam.mass_per_length_kg_m == pytest.approx(7850 * 0.0254 * 0.00475)
+    model = beam.fe_model(40)
+    from scipy.linalg import eigh
+
+    f = np.sqrt(eigh(model.K, model.M, eigvals_only=True)[:5]) / (2 * np.pi)
+    sim = SimBeam(0.38, beam.EI_Nm2, beam.mass_per_length_kg_m,
+                  masses=tuple(PointMass(x, 0.035) for x in (0.05, 0.11, 0.17, 0.23, 0.29, 0.35)))
+    np.testing.assert_allclose(f, sim_modes(sim_assemble(sim)).frequencies_hz[:5], rtol=5e-5)   # 40 vs 112 elements
+    # one table, or a table per mass: the same model as their sum
+    one = load_beam(_bolted_file(tmp_path, xs=(0.23,)))
+    assert list(one.effects) == ["added_mass"]
+    plain = load_beam(_bolted_file(tmp_path, xs=()))
+    dM = beam.fe_model(40).M - plain.fe_model(40).M
+    from physics.effects import point_mass_matrix
+    node_x = np.linspace(0, 0.38, 41)
+    ref = sum(point_mass_matrix(node_x, 0.035, x) for x in (0.05, 0.11, 0.17, 0.23, 0.29, 0.35))[2:, 2:]
+    np.testing.assert_allclose(dM, ref, atol=1e-15)
+
+
+def test_several_masses_round_trip_and_a_bad_one_names_its_table(tmp_path):
+    from physics.beam import beam_to_toml
+
+    beam = load_beam(_bolted_file(tmp_path, xs=(0.1, 0.2)))
+    assert list(beam.effects) == ["added_mass", "added_mass#2"]
+    text = beam_to_toml(beam)
+    assert text.count("[[effects.added_mass]]") == 2
+    (tmp_path / "back.toml").write_text(text)
+    assert load_beam(tmp_path / "back.toml") == beam
+    bad = tmp_path / "bad.toml"
+    bad.write_text(BOLTED + "\n[[effects.added_mass]]\nmass_kg = 0.035\n[[effects.added_mass]]\nmass_kg = -1.0\n")
+    with pytest.raises(ConfigError) as e:
+        load_beam(bad)
+    assert str(e.value) == f"{bad}: 'effects.added_mass[2].mass_kg' must be >= 0, got -1.0"
+    beyond = _bolted_file(tmp_path, xs=(0.1, 0.5))
+    with pytest.raises(ConfigError, match=r"'effects.added_mass#2.x_m' = 0.5 lies beyond 'length_m' = 0.38"):
+        load_beam(beyond)
+    twice = tmp_path / "twice.toml"
+    twice.write_text(BOLTED + "\n[[effects.root_flexibility]]\nk_theta_Nm_rad = 1.0\n")
+    with pytest.raises(ConfigError, match="'effects.root_flexibility' must be one table"):
+        load_beam(twice)
+
+
+def test_a_solid_section_says_what_it_is(tmp_path):
+    """A solid bar: EI and mass from its material, Cowper's shear coefficient, no core keys, no rotary-inertia
+    candidate; a circle from its diameter."""
+    from physics.effects import candidates_for
+    from physics.properties import solid_section
+
+    beam = load_beam(_bolted_file(tmp_path, xs=()))
+    s = beam.solid
+    nu = 0.3
+    assert s.shear_coefficient == pytest.approx(10 * (1 + nu) / (12 + 11 * nu))
+    assert s.kGA_N == pytest.approx(s.shear_coefficient * 2e11 / 2.6 * 0.0254 * 0.00475)
+    assert "rotary_inertia" not in candidates_for("clamped-free", "rectangular")
+    assert "rotary_inertia" in candidates_for("clamped-free", "sandwich")
+    core = tmp_path / "core.toml"
+    core.write_text(BOLTED + "core_modulus_pa = 1.0e8\n")
+    with pytest.raises(ConfigError, match="'core_modulus_pa' describes a sandwich section, not this rectangular one"):
+        load_beam(core)
+    rod = tmp_path / "rod.toml"
+    rod.write_text('name = "rod"\nsection = "circular"\nlength_m = 0.5\ndiameter_m = 0.01\nmodulus_pa = 7.0e10\n'
+                   'density_kg_m3 = 2700.0\n')
+    r = load_beam(rod)
+    assert r.width_m == r.thickness_m == 0.01 and r.EI_Nm2 == pytest.approx(7e10 * np.pi * 0.01**4 / 64)
+    assert r.mass_per_length_kg_m == pytest.approx(2700 * np.pi * 0.01**2 / 4)
+    assert solid_section("circular", 0.01, 0.01, 7e10, 0.3).shear_coefficient == pytest.approx(6 * 1.3 / 8.8)
+    given = tmp_path / "given.toml"
+    given.write_text('name = "box"\nlength_m = 1.0\nwidth_m = 0.05\nthickness_m = 0.05\nEI_Nm2 = 1.0e4\n'
+                     'mass_per_length_kg_m = 2.0\n')
+    assert load_beam(given).section == "given"
