@@ -582,11 +582,12 @@ class Regression:
         self.dof_ = X0.shape[1]
         return self
 
-    def expected(self, C):
+    def expected(self, X, C):
+        """The features the normal variation predicts for each test (its conditions' prediction), (n, p)."""
         return np.c_[np.ones(len(C)), np.asarray(C, float)] @ self.coef_
 
     def novelty(self, X, C):
-        mean = self.expected(C)
+        mean = self.expected(X, C)
         return _mahalanobis(_impute(X, mean, self.cov_) - mean, self.cov_)
 
     def describe(self, names) -> dict:
@@ -615,6 +616,11 @@ class PCARemoval:
         self.k_ = min(self.k, X0.shape[1] - 1)
         self.dof_ = X0.shape[1] - self.k_
         return self
+
+    def expected(self, X, C=None):
+        """The mean plus the removed components' part of each test: what the environment's factors explain."""
+        U = self.components_[:, :self.k_]
+        return self.mean_ + (_impute(X, self.mean_, self.cov_) - self.mean_) @ U @ U.T
 
     def novelty(self, X, C=None):
         scores = (_impute(X, self.mean_, self.cov_) - self.mean_) @ self.components_[:, self.k_:]
@@ -650,6 +656,11 @@ class FactorRemoval:
         self.fa_.fit((X0 - self.mean_) / self.scale_)
         self.dof_ = X0.shape[1] - int(self.fa_.n_components)
         return self
+
+    def expected(self, X, C=None):
+        """The mean plus the factors' expected contribution to each test."""
+        Y = (_impute(X, self.mean_, self.cov_) - self.mean_) / self.scale_
+        return self.mean_ + self.fa_.transform(Y) @ self.fa_.components_ * self.scale_
 
     def novelty(self, X, C=None):
         Y = (_impute(X, self.mean_, self.cov_) - self.mean_) / self.scale_
@@ -690,6 +701,10 @@ class Mixture:
         self.gm_ = best[1]
         self.dof_ = X0.shape[1]
         return self
+
+    def expected(self, X, C=None):
+        """The mean of the component most responsible for each test."""
+        return self.gm_.means_[self.gm_.predict(_impute(X, self.mean_, self.cov_))]
 
     def novelty(self, X, C=None):
         X0 = _impute(X, self.mean_, self.cov_)
@@ -912,12 +927,12 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     if rest.size:
         novelty[rest] = model.novelty(X[rest], None if Cq is None else Cq[rest])
     novelty[b_idx] = held
-    # per-mode normal variation: residual about the conditions' prediction (regression) or the baseline median
+    # per-mode normal variation: the residual about what the model explains (conditions, removed factors)
     Xb = X[b_idx]
-    if q:
-        expected_log = model.expected(np.where(np.isfinite(C), C, np.nanmedian(C[b_idx], axis=0)))
-    else:
-        expected_log = np.broadcast_to(np.nanmedian(Xb, axis=0), X.shape)
+    Cf = None if Cq is None else np.where(np.isfinite(Cq), Cq, np.nanmedian(Cq[b_idx], axis=0))
+    expected_log = np.full(X.shape, np.nan)
+    have = np.isfinite(X).any(axis=1)
+    expected_log[have] = model.expected(X[have], None if Cf is None else Cf[have])
     resid_b = Xb - expected_log[b_idx]
     sigma = np.nanstd(resid_b, axis=0, ddof=1)
     z = (X - expected_log) / sigma
