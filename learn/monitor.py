@@ -556,6 +556,19 @@ def _start(X):
     return X
 
 
+def _filled(X, passes: int = 2):
+    """``(X filled, mean, cov)``: the missing entries at their column median, then ``passes`` times at their
+    conditional mean under the Gaussian of the filled rows (:func:`_impute`)."""
+    X0 = _start(X)
+    for _ in range(passes):
+        X0 = _impute(X, X0.mean(axis=0), _cov(X0))
+    return X0, X0.mean(axis=0), _cov(X0)
+
+
+def _cov(X):
+    return np.cov(X, rowvar=False).reshape(X.shape[1], X.shape[1])
+
+
 def _mahalanobis(R, cov):
     P = np.linalg.pinv(cov)
     return np.einsum("ij,jk,ik->i", R, P, R)
@@ -605,11 +618,7 @@ class PCARemoval:
         self.k = k
 
     def fit(self, X, C=None):
-        X0 = _start(X)
-        for _ in range(2):
-            self.mean_ = X0.mean(axis=0)
-            self.cov_ = np.cov(X0, rowvar=False).reshape(X0.shape[1], X0.shape[1])
-            X0 = _impute(X, self.mean_, self.cov_)
+        X0, self.mean_, self.cov_ = _filled(X)
         lam, V = np.linalg.eigh(self.cov_)
         order = np.argsort(lam)[::-1]
         self.var_, self.components_ = lam[order], V[:, order]
@@ -647,10 +656,7 @@ class FactorRemoval:
     def fit(self, X, C=None):
         from sklearn.decomposition import FactorAnalysis
 
-        X0 = _start(X)
-        mean, cov = X0.mean(axis=0), np.cov(X0, rowvar=False).reshape(X0.shape[1], X0.shape[1])
-        X0 = _impute(X, mean, cov)
-        self.mean_, self.cov_ = X0.mean(axis=0), np.cov(X0, rowvar=False).reshape(X0.shape[1], X0.shape[1])
+        X0, self.mean_, self.cov_ = _filled(X)
         self.scale_ = np.where(X0.std(axis=0) > 0, X0.std(axis=0), 1.0)
         self.fa_ = FactorAnalysis(n_components=min(self.k, X0.shape[1] - 1), random_state=self.seed)
         self.fa_.fit((X0 - self.mean_) / self.scale_)
@@ -685,10 +691,7 @@ class Mixture:
     def fit(self, X, C=None):
         from sklearn.mixture import GaussianMixture
 
-        X0 = _start(X)
-        mean, cov = X0.mean(axis=0), np.cov(X0, rowvar=False).reshape(X0.shape[1], X0.shape[1])
-        X0 = _impute(X, mean, cov)
-        self.mean_, self.cov_ = X0.mean(axis=0), np.cov(X0, rowvar=False).reshape(X0.shape[1], X0.shape[1])
+        X0, self.mean_, self.cov_ = _filled(X)
         best = None
         for c in range(1, self.max_components + 1):
             if len(X0) < 3 * c * (X0.shape[1] + 1):
