@@ -233,8 +233,9 @@ def _print(out: dict, res) -> None:
             print(f"    {v['hypotheses_summary']}")
         if v.get("network"):
             n = v["network"]
-            print(f"    network (against {v['network_baseline']}): damaged {n['damaged']}, "
-                  f"P = {n['probability_damaged']}")
+            against = (f"{v['network_baselines']} baseline tests" if v["network_baselines"] != 1
+                       else v["network_baseline"])
+            print(f"    network (against {against}): damaged {n['damaged']}, P = {n['probability_damaged']}")
     if len(alarms) > 10:
         print(f"  ... {len(alarms) - 10} more in monitor.json")
     for name, p in out.get("outputs", {}).items():

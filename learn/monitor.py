@@ -1059,12 +1059,12 @@ def alarm_verdicts(result: SeriesResult, model=None, beam_x_m=None) -> dict:
     """Per alarmed test after the baseline period (row index -> dict): what changed mode by mode against the
     baseline population (``what_changed``, ``summary``), and with a trained model the competing explanations
     weighed with the measured per-mode scatter (``hypotheses``, ``hypotheses_summary``, ``frequency_change_std``)
-    and the network's verdict against the baseline test nearest the baseline median (``network``)."""
+    and the network's verdict against the baseline period (``network``, :func:`_network_verdicts`)."""
     alarms = [i for i, r in enumerate(result.rows) if r["alarm"] and not r["baseline"]]
     out = {i: {"what_changed": what_changed(result.rows[i], result.sigma),
                "summary": changed_text(what_changed(result.rows[i], result.sigma)),
                "hypotheses": None, "hypotheses_summary": None, "frequency_change_std": None, "network": None,
-               "network_baseline": None, "network_error": None} for i in alarms}
+               "network_baselines": None, "network_baseline": None, "network_error": None} for i in alarms}
     if model is None or not alarms:
         return out
     from learn.hypotheses import FREQUENCY_CHANGE_STD, explain_many
@@ -1101,11 +1101,15 @@ def alarm_verdicts(result: SeriesResult, model=None, beam_x_m=None) -> dict:
 
 
 def _network_verdicts(result: SeriesResult, model, beam_x_m, alarms: list, out: dict) -> dict:
+    """The network's verdicts of the alarms (``network``) by :func:`learn.classify.classify_many` against the
+    whole baseline period (its scatter the normal variation; ``network_baselines``: how many tests), else, when
+    classify refuses that, against the baseline test nearest the baseline median (``network_baseline``)."""
     from learn.classify import classify_many
     from learn.measured import on_model_dofs
 
-    b = baseline_nearest_median(result)
-    if b is None:
+    base = [i for i, r in enumerate(result.rows) if r["baseline"] and r["identified"]]
+    nearest = baseline_nearest_median(result)
+    if not base:
         return out
 
     def md(i):
@@ -1116,21 +1120,25 @@ def _network_verdicts(result: SeriesResult, model, beam_x_m, alarms: list, out: 
     keys = ("damaged", "probability_damaged", "location_x_m", "location_zone", "hinge_flexibility", "depth_m",
             "verdict_from", "in_distribution", "out_of_distribution_reasons", "hypotheses_summary", "warnings")
     methods = [None if t is None else t.method if t.method in ("lscf", "ssi") else None for t in result.tests]
-    name_b = result.rows[b]["file"]
+    rate = result.threshold.rate
 
-    def run(group):
-        vs = classify_many(model, md(b), [md(i) for i in group], names=[name_b] + [result.rows[i]["file"]
-                                                                                  for i in group],
-                           methods=[methods[b]] + [methods[i] for i in group])
+    def run(group, baselines):
+        names = [result.rows[i]["file"] for i in (*baselines, *group)]
+        vs = classify_many(model, [md(i) for i in baselines], [md(i) for i in group], names=names,
+                           methods=[methods[i] for i in (*baselines, *group)], false_alarm_rate=rate)
         for i, v in zip(group, vs):
-            out[i].update(network={k: v.get(k) for k in keys}, network_baseline=name_b)
+            out[i].update(network={k: v.get(k) for k in keys}, network_baselines=len(baselines),
+                          network_baseline=result.rows[baselines[0]]["file"] if len(baselines) == 1 else None)
 
-    try:
-        run(alarms)                                          # one network call for every alarm
-    except BeamDamageError:
-        for i in alarms:                                     # one alarm's error apart
-            try:
-                run([i])
-            except BeamDamageError as exc:
-                out[i].update(network_error=str(exc), network_baseline=name_b)
+    for baselines in (base, [nearest]):
+        try:
+            run(alarms, baselines)                           # one network call for every alarm
+            return out
+        except BeamDamageError:
+            pass
+    for i in alarms:                                         # one alarm's error apart
+        try:
+            run([i], [nearest])
+        except BeamDamageError as exc:
+            out[i].update(network_error=str(exc), network_baseline=result.rows[nearest]["file"])
     return out
