@@ -1,0 +1,381 @@
+"""Benchmark: monitoring a beam over a year; true-positive rate at 1 % false alarms and detection delay, per method.
+
+Run: ``python -m experiments.bench_monitor --out out/monitor-bench [--sizes small medium large]
+[--kinds frf output-only] [--n-tests 240] [--baseline-tests 80] [--n-train 12000] [--docs]``
+
+The series are the independent simulator's (:mod:`experiments.second_sim.series`: a steel cantilever tested on
+``--n-tests`` days over a year; temperature driving EI by about +-1 %, re-mounting, a bolted mass re-placed a few cm
+each time, measurement noise; a slit appearing on day ``--damage-day``), one per slit size and record kind: FRFs
+(UFF) and output-only response records (NPZ). Every series holds the same tests before the damage day. The first
+``--baseline-tests`` tests are the baseline period (the first third of the year: winter and spring, so summer lies
+beyond the temperatures the baseline saw). Methods, each through the CLI:
+
+* ``monitor (temperature)`` / ``monitor``: ``beam-damage monitor TEST... --baseline-tests N --beam beam.toml
+  --false-alarm-rate 0.01 --json``, with the measured temperatures (``--conditions conditions.csv``) and without;
+* ``classify, 1 baseline``: ``beam-damage classify --model M TEST... --baseline FIRST`` (the pair classifier
+  against the first test; the model trained on the series' ``beam.toml`` by ``generate --config`` (training with
+  the series' damping ratios, as classify's warning asks) and ``train``, cached under ``--out``);
+* ``classify, N baselines``: the same with every test of the baseline period as ``--baseline``;
+* ``frequency shift``: the signed mean relative frequency shift of each test against the first test, alarmed
+  below the 1st percentile of the baseline period's shifts (a drop larger than 99 % of the baseline's).
+
+Output-only records are identified by ``beam-damage identify REC.npz --band 5 400 --max-order 120`` into modal
+JSON for ``classify`` and the frequency shift (cached by content: the tests before the damage day once for every
+size); ``monitor`` reads the records itself.
+
+Scores per method and series: alarms on the intact tests after the baseline period (false-alarm rate), alarms on
+the damaged tests (true-positive rate at the method's own threshold), the true-positive rate at 1 % false alarms of
+the method's continuous score (novelty / threshold, probability of damage, frequency drop) with the threshold set
+on the intact monitoring tests, and the delay: days from the slit's appearance to the first of ``--stay`` alarms in
+a row. Writes ``monitor_bench.csv``, ``.json``, ``.md`` and ``monitor_bench.png`` in ``--out``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["main", "markdown", "score_series"]
+
+METHODS = ("monitor (temperature)", "monitor", "classify, 1 baseline", "classify, N baselines", "frequency shift")
+OUTPUT_ONLY_BAND_HZ = (5.0, 400.0)
+
+
+def _cli(argv: list) -> dict | list:
+    """``beam-damage ARGV --json`` in this process; a refusal (also argparse's, e.g. an unknown command) raises
+    ``RuntimeError``."""
+    from experiments.bench_foreign import cli_json
+
+    try:
+        return cli_json(argv)
+    except SystemExit as exc:
+        raise RuntimeError(f"beam-damage {argv[0]}: usage error (exit {exc.code})") from None
+
+
+def _series(out: Path, kind: str, size: str, a) -> Path:
+    """The series of one record kind and slit size (written once)."""
+    from experiments.second_sim.series import SLIT_SIZES, SeriesConfig, simulate_series, write_series
+
+    d = out / "series" / f"{kind}-{size}"
+    if not (d / "truth.json").is_file():
+        cfg = SeriesConfig(n_tests=a.n_tests, seed=a.seed, kind=kind, damage_day=a.damage_day,
+                           slit_ei_loss=SLIT_SIZES[size])
+        write_series(cfg, simulate_series(cfg), d)
+    return d
+
+
+def _model(out: Path, beam_toml: Path, damping_ratios, n_train: int, seed: int) -> Path:
+    """The pair classifier trained on the series' beam file (generate with the series' damping, train); cached."""
+    from physics.io import atomic_write_text
+
+    model = out / "model"
+    if (model / "config.json").is_file():
+        return model
+    cfg = out / "generate.toml"
+    atomic_write_text(cfg, 'base = "training"\n[specimen]\ndamping_ratios = ['
+                      + ", ".join(f"{z:g}" for z in damping_ratios) + "]\n")
+    _cli(["generate", "--beam", str(beam_toml), "--config", str(cfg), "--n", str(n_train), "--seed", str(seed),
+              "--out", str(out / "model-data"), "--workers", "2"])
+    _cli(["train", "--data", str(out / "model-data"), "--out", str(model)])
+    return model
+
+
+def _modal_json(cache: Path, record: Path) -> Path | None:
+    """``identify`` of one response record into modal JSON, cached by the record's content; None if it fails."""
+    key = hashlib.sha1(record.read_bytes()).hexdigest()[:16]
+    target = cache / f"{key}.json"
+    failed = cache / f"{key}.failed"
+    if target.is_file():
+        return target
+    if failed.is_file():
+        return None
+    work = cache / f"id-{key}"
+    try:
+        _cli(["identify", str(record), "--band", *(f"{v:g}" for v in OUTPUT_ONLY_BAND_HZ), "--max-order", "120",
+                  "--out", str(work)])
+    except RuntimeError as exc:
+        failed.write_text(str(exc) + "\n")
+        return None
+    (work / "modal.json").replace(target)
+    return target
+
+
+def _classify(model: Path, tests: list, baselines: list, chunk: int = 40) -> list:
+    """``classify --json`` of every test against ``baselines`` (one or several); None for a test it refused."""
+    def run(files):
+        v = _cli(["classify", "--model", str(model), *map(str, files), "--baseline", *map(str, baselines)])
+        return v if isinstance(v, list) else [v]
+
+    out = []
+    for i in range(0, len(tests), chunk):
+        part = tests[i:i + chunk]
+        try:
+            out += run(part)
+        except RuntimeError:
+            for f in part:
+                try:
+                    out += run([f])
+                except RuntimeError as exc:
+                    out.append({"error": str(exc)})
+    return out
+
+
+def _frequencies(verdicts: list, modal_files: list | None, n_modes: int) -> np.ndarray:
+    """Identified frequencies per test (NaN where missing), shape (n_tests, n_modes): from the modal JSON files
+    (output-only) or classify's identification (the first test's from its baseline entry)."""
+    F = np.full((len(verdicts) + 1, n_modes), np.nan)
+    if modal_files is not None:
+        for k, p in enumerate(modal_files):
+            if p is not None:
+                f = json.loads(Path(p).read_text())["natural_frequencies_hz"][:n_modes]
+                F[k, :len(f)] = f
+        return F
+    for k, v in enumerate(verdicts, start=1):
+        ident = v.get("identification") or {}
+        if k == 1 and ident.get("baseline_frequencies_hz"):
+            F[0] = [np.nan if x is None else x for x in ident["baseline_frequencies_hz"][:n_modes]]
+        if ident.get("measured_frequencies_hz"):
+            F[k] = [np.nan if x is None else x for x in ident["measured_frequencies_hz"][:n_modes]]
+    return F
+
+
+def frequency_shift(F: np.ndarray, n_baseline: int) -> tuple[np.ndarray, np.ndarray]:
+    """Score (the drop: minus the signed mean relative shift against test 0) and alarms (score above the 99th
+    percentile of the baseline period's tests 1..N-1)."""
+    drop = -np.nanmean((F - F[0]) / F[0], axis=1)
+    threshold = np.nanpercentile(drop[1:n_baseline], 99)
+    return drop, drop > threshold
+
+
+def score_series(day: np.ndarray, damaged: np.ndarray, alarm: np.ndarray, score: np.ndarray, n_baseline: int,
+                 damage_day: float, stay: int = 5) -> dict:
+    """Rates and delay of one method on one series.
+
+    Parameters
+    ----------
+    day : ndarray, shape (n,)
+        Day of each test.
+    damaged : ndarray of bool, shape (n,)
+    alarm : ndarray of float, shape (n,)
+        1 alarmed, 0 not, NaN not answered.
+    score : ndarray, shape (n,)
+        The method's continuous score (larger: more likely damaged), NaN where not answered.
+    n_baseline : int
+        Tests of the baseline period (not scored).
+    damage_day : float
+    stay : int
+        Alarms in a row that make a detection.
+
+    Returns
+    -------
+    dict
+        ``false_alarm_rate`` and ``true_positive_rate`` at the method's own threshold, ``tpr_at_1pct`` of the
+        score (threshold: the 99th percentile of the intact monitoring tests' scores), ``delay_days`` (None: no
+        ``stay`` alarms in a row), ``answered`` and the test counts.
+    """
+    mon = np.arange(day.size) >= n_baseline
+    neg, pos = mon & ~damaged, mon & damaged
+    a = np.asarray(alarm, float)
+    s = np.asarray(score, float)
+    ok = np.isfinite(a)
+    fpr = float(np.mean(a[neg & ok])) if (neg & ok).any() else float("nan")
+    tpr = float(np.mean(a[pos & ok])) if (pos & ok).any() else float("nan")
+    sn, sp = s[neg & np.isfinite(s)], s[pos & np.isfinite(s)]
+    tpr1 = float(np.mean(sp > np.percentile(sn, 99))) if sn.size and sp.size else float("nan")
+    delay = None
+    hit = np.where(pos, np.nan_to_num(a) > 0, False)
+    idx = np.flatnonzero(pos)
+    for i in idx:
+        run = hit[i:i + stay]
+        if run.size == min(stay, idx[-1] + 1 - i) and run.all():
+            delay = float(day[i] - damage_day)
+            break
+    return {"false_alarm_rate": fpr, "true_positive_rate": tpr, "tpr_at_1pct": tpr1, "delay_days": delay,
+            "answered": int(ok[mon].sum()), "intact_tests": int(neg.sum()), "damaged_tests": int(pos.sum())}
+
+
+def _monitor(series: Path, files: list, n_baseline: int, conditions: bool, kind: str, out: Path) -> tuple:
+    """``monitor --json`` of the series; alarms and novelty / threshold per test."""
+    argv = ["monitor", *map(str, files), "--baseline-tests", str(n_baseline), "--beam", str(series / "beam.toml"),
+            "--false-alarm-rate", "0.01", "--out", str(out)]
+    if conditions:
+        argv += ["--conditions", str(series / "conditions.csv")]
+    if kind == "output-only":
+        argv += ["--band", *(f"{v:g}" for v in OUTPUT_ONLY_BAND_HZ)]
+    res = _cli(argv)
+    by_file = {Path(t["file"]).name: t for t in res["tests"]}
+    rows = [by_file.get(Path(f).name, {}) for f in files]
+    alarm = np.array([np.nan if r.get("alarm") is None else float(bool(r["alarm"])) for r in rows])
+    score = np.array([np.nan if r.get("novelty") is None or not r.get("threshold") else
+                      float(r["novelty"]) / float(r["threshold"]) for r in rows])
+    return alarm, score, res
+
+
+def run_series(series: Path, model: Path | None, a, out: Path) -> dict:
+    """Every method on one series: ``{method: (alarm, score) or error text}`` and the truth."""
+    truth = json.loads((series / "truth.json").read_text())
+    kind = truth["kind"]
+    tests = truth["tests"]
+    files = [series / t["file"] for t in tests]
+    n_b = a.baseline_tests
+    res: dict = {}
+    for label, cond in (("monitor (temperature)", True), ("monitor", False)):
+        try:
+            alarm, score, _ = _monitor(series, files, n_b, cond, kind, out / "monitor" / f"{series.name}-{cond:d}")
+            res[label] = (alarm, score)
+        except RuntimeError as exc:
+            res[label] = str(exc).splitlines()[0][:300]
+    if kind == "output-only":
+        modal = [_modal_json(out / "identified", f) for f in files]
+        inputs = list(modal)
+    else:
+        modal, inputs = None, files
+    first = inputs[0]
+    verdicts1 = None
+    if model is not None and first is not None:
+        idx = [k for k in range(1, len(inputs)) if inputs[k] is not None]
+        for label, baselines in (("classify, 1 baseline", [first]),
+                                 ("classify, N baselines", [p for p in inputs[:n_b] if p is not None])):
+            if label.endswith("N baselines") and not a.several_baselines:
+                res[label] = "not run (--several-baselines not given)"
+                continue
+            try:
+                v = _classify(model, [inputs[k] for k in idx], baselines)
+            except RuntimeError as exc:
+                res[label] = str(exc).splitlines()[0][:300]
+                continue
+            alarm, score = np.full(len(files), np.nan), np.full(len(files), np.nan)
+            for k, r in zip(idx, v):
+                if "damaged" in r:
+                    alarm[k], score[k] = float(bool(r["damaged"])), float(r["probability_damaged"])
+            res[label] = (alarm, score)
+            if verdicts1 is None:
+                verdicts1 = [{}] * (len(files) - 1)
+                for k, r in zip(idx, v):
+                    verdicts1[k - 1] = r
+    if modal is not None or verdicts1 is not None:
+        F = _frequencies(verdicts1 or [{}] * (len(files) - 1), modal, truth["config"]["n_modes"])
+        drop, alarm = frequency_shift(F, n_b)
+        res["frequency shift"] = (np.where(np.isfinite(drop), alarm, np.nan), drop)
+    return {"truth": truth, "results": res}
+
+
+def markdown(rows: list) -> str:
+    """The benchmark table."""
+
+    def pct(v):
+        return "-" if v is None or not np.isfinite(v) else f"{100 * v:.0f} %"
+
+    lines = ["| record | slit (mode-1 drop) | method | false alarms (intact tests) | detected (damaged tests) | "
+             "detected at 1 % false alarms | delay (days) |", "| --- | --- | --- | --- | --- | --- | --- |"]
+    for r in rows:
+        if r.get("error"):
+            lines.append(f"| {r['kind']} | {r['size']} ({r['drop_pct']:.2f} %) | {r['method']} | "
+                         f"{r['error']} | | | |")
+            continue
+        delay = "never" if r["delay_days"] is None else f"{r['delay_days']:.0f}"
+        lines.append(f"| {r['kind']} | {r['size']} ({r['drop_pct']:.2f} %) | {r['method']} | "
+                     f"{pct(r['false_alarm_rate'])} of {r['intact_tests']} | {pct(r['true_positive_rate'])} of "
+                     f"{r['damaged_tests']} | {pct(r['tpr_at_1pct'])} | {delay} |")
+    return "\n".join(lines) + "\n"
+
+
+def _figure(rows: list, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    kinds = sorted({r["kind"] for r in rows})
+    sizes = list(dict.fromkeys(r["size"] for r in rows))
+    fig, axes = plt.subplots(len(kinds), 2, figsize=(12, 3.6 * len(kinds)), squeeze=False)
+    width = 0.8 / len(METHODS)
+    for i, kind in enumerate(kinds):
+        for j, (key, label) in enumerate((("true_positive_rate", "detected (own threshold)"),
+                                          ("false_alarm_rate", "false alarms (own threshold)"))):
+            ax = axes[i, j]
+            for m, method in enumerate(METHODS):
+                vals = [next((r.get(key) for r in rows if r["kind"] == kind and r["size"] == s
+                              and r["method"] == method and not r.get("error")), None) for s in sizes]
+                ax.bar(np.arange(len(sizes)) + m * width, [np.nan if v is None else 100 * v for v in vals], width,
+                       label=method)
+            ax.set_xticks(np.arange(len(sizes)) + 0.4 - width / 2, sizes)
+            ax.set_ylabel(f"{label} (%)")
+            ax.set_title(f"{kind}")
+            if key == "false_alarm_rate":
+                ax.axhline(1.0, color="k", lw=0.8, ls=":")
+    axes[0, 0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(argv=None) -> int:
+    from experiments.second_sim.series import SLIT_SIZES, SERIES_KINDS
+
+    p = argparse.ArgumentParser(prog="python -m experiments.bench_monitor", description=__doc__.split("\n")[0])
+    p.add_argument("--out", default="out/monitor-bench")
+    p.add_argument("--kinds", nargs="+", choices=SERIES_KINDS, default=list(SERIES_KINDS))
+    p.add_argument("--sizes", nargs="+", choices=list(SLIT_SIZES), default=list(SLIT_SIZES))
+    p.add_argument("--n-tests", type=int, default=240, help="tests over the year (default 240)")
+    p.add_argument("--baseline-tests", type=int, default=80, help="tests of the baseline period (default 80)")
+    p.add_argument("--damage-day", type=float, default=270.0)
+    p.add_argument("--n-train", type=int, default=12000, help="pairs generated for the classifier (default 12000)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--stay", type=int, default=5, help="alarms in a row that make a detection (default 5)")
+    p.add_argument("--several-baselines", action="store_true",
+                   help="also run classify with every baseline-period test as --baseline")
+    p.add_argument("--docs", action="store_true", help="write the table into docs/monitoring.md")
+    a = p.parse_args(argv)
+    from physics.io import atomic_write_text
+
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    rows, series_out = [], {}
+    model = None
+    for kind in a.kinds:
+        for size in a.sizes:
+            d = _series(out, kind, size, a)
+            truth = json.loads((d / "truth.json").read_text())
+            if model is None:
+                model = _model(out, d / "beam.toml", truth["config"]["damping_ratios"], a.n_train, a.seed)
+            r = run_series(d, model, a, out)
+            tests = truth["tests"]
+            day = np.array([t["day"] for t in tests])
+            damaged = np.array([t["damaged"] for t in tests])
+            drop = 100 * truth["slit_frequency_drop"][0]
+            series_out[d.name] = {}
+            for method in METHODS:
+                v = r["results"].get(method)
+                base = {"kind": kind, "size": size, "drop_pct": drop, "method": method}
+                if v is None or isinstance(v, str):
+                    rows.append({**base, "error": v or "not run"})
+                    continue
+                alarm, score = v
+                rows.append({**base, **score_series(day, damaged, alarm, score, a.baseline_tests,
+                                                    a.damage_day, a.stay)})
+                series_out[d.name][method] = {"alarm": alarm.tolist(), "score": score.tolist()}
+            print(markdown([x for x in rows if x["kind"] == kind and x["size"] == size]), file=sys.stderr)
+    md = markdown(rows)
+    sys.stdout.write(md)
+    import pandas as pd
+
+    atomic_write_text(out / "monitor_bench.csv", pd.DataFrame(rows).to_csv(index=False))
+    atomic_write_text(out / "monitor_bench.json", json.dumps({"config": vars(a), "rows": rows,
+                                                              "series": series_out}, indent=1, default=str))
+    atomic_write_text(out / "monitor_bench.md", md)
+    _figure(rows, out / "monitor_bench.png")
+    if a.docs:
+        from experiments.doc_tables import write_table
+
+        write_table("monitoring.md", "monitor", md)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
