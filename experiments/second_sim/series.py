@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from experiments.second_sim.ambient import ambient_record, write_npz
-from experiments.second_sim.fem import Beam, PointMass, Slit, assemble, mesh_elements, modes
+from experiments.second_sim.fem import N_ELEMENTS, Beam, PointMass, Slit, assemble, mesh_elements, modes
 from experiments.second_sim.response import Damping, Noise, measure, receptance
 from experiments.second_sim.writers import write_csv, write_json, write_text_atomic, write_uff
 
@@ -72,6 +72,7 @@ class SeriesConfig:
     damping_ratios: tuple = (0.008, 0.006, 0.005, 0.005)
     damping_scatter: float = 0.05
     n_modes: int = 4
+    min_elements: int = N_ELEMENTS
     # the environment and the handling between tests
     temperature_mean_c: float = 10.0
     temperature_amplitude_c: float = 12.0
@@ -137,7 +138,7 @@ class SeriesConfig:
     def n_elements(self) -> int:
         pts = (*self.sensors_x_m, self.hammer_x_over_L * self.length_m,
                *(r * self.length_m for r in self.ambient_x_over_L))
-        return mesh_elements(self.length_m, pts)
+        return mesh_elements(self.length_m, pts, self.min_elements)
 
 
 @dataclass(frozen=True)
