@@ -57,6 +57,15 @@ def _cli(argv: list) -> dict | list:
         raise RuntimeError(f"beam-damage {argv[0]}: usage error (exit {exc.code})") from None
 
 
+def classify_takes_several_baselines() -> bool:
+    """Whether this checkout's ``classify --baseline`` takes several files."""
+    from experiments.cli import build_parser
+
+    sub = next(a for a in build_parser(["classify"])._actions if isinstance(a, argparse._SubParsersAction))
+    action = next(a for a in sub.choices["classify"]._actions if "--baseline" in a.option_strings)
+    return action.nargs not in (None, 1)
+
+
 def _series(out: Path, kind: str, size: str, a) -> Path:
     """The series of one record kind and slit size (written once)."""
     from experiments.second_sim.series import SLIT_SIZES, SeriesConfig, simulate_series, write_series
@@ -200,11 +209,11 @@ def score_series(day: np.ndarray, damaged: np.ndarray, alarm: np.ndarray, score:
 
 
 def _monitor(series: Path, files: list, n_baseline: int, conditions: bool, kind: str, out: Path) -> tuple:
-    """``monitor --json`` of the series; alarms and novelty / threshold per test."""
-    argv = ["monitor", *map(str, files), "--baseline-tests", str(n_baseline), "--beam", str(series / "beam.toml"),
-            "--false-alarm-rate", "0.01", "--out", str(out)]
-    if conditions:
-        argv += ["--conditions", str(series / "conditions.csv")]
+    """``monitor --json`` of the series (its files, or its ``conditions.csv`` with the measured temperatures);
+    alarms and novelty / threshold per test."""
+    argv = ["monitor", *(["--conditions", str(series / "conditions.csv")] if conditions else map(str, files)),
+            "--baseline-tests", str(n_baseline), "--beam", str(series / "beam.toml"), "--false-alarm-rate", "0.01",
+            "--out", str(out)]
     if kind == "output-only":
         argv += ["--band", *(f"{v:g}" for v in OUTPUT_ONLY_BAND_HZ)]
     res = _cli(argv)
@@ -216,50 +225,75 @@ def _monitor(series: Path, files: list, n_baseline: int, conditions: bool, kind:
     return alarm, score, res
 
 
+def _cached(path: Path, compute):
+    """``(alarm, score)`` or an error text of one method on one series, computed once and kept in ``path``."""
+    if path.is_file():
+        d = json.loads(path.read_text())
+        return d["error"] if "error" in d else (np.array(d["alarm"], float), np.array(d["score"], float))
+    from physics.io import atomic_write_text
+
+    v = compute()
+    if isinstance(v, str):
+        if "usage error" not in v:                      # a command this checkout lacks is retried next run
+            atomic_write_text(path, json.dumps({"error": v}))
+        return v
+    atomic_write_text(path, json.dumps({"alarm": [None if not np.isfinite(x) else x for x in v[0]],
+                                        "score": [None if not np.isfinite(x) else x for x in v[1]]}))
+    return v
+
+
 def run_series(series: Path, model: Path | None, a, out: Path) -> dict:
-    """Every method on one series: ``{method: (alarm, score) or error text}`` and the truth."""
+    """Every method on one series: ``{method: (alarm, score) or error text}`` and the truth (each method's answer
+    cached in ``out/results``)."""
     truth = json.loads((series / "truth.json").read_text())
     kind = truth["kind"]
-    tests = truth["tests"]
-    files = [series / t["file"] for t in tests]
+    files = [series / t["file"] for t in truth["tests"]]
     n_b = a.baseline_tests
+    cache = out / "results" / f"{series.name}-b{n_b}"
+    cache.mkdir(parents=True, exist_ok=True)
     res: dict = {}
-    for label, cond in (("monitor (temperature)", True), ("monitor", False)):
+
+    def monitor(cond):
         try:
             alarm, score, _ = _monitor(series, files, n_b, cond, kind, out / "monitor" / f"{series.name}-{cond:d}")
-            res[label] = (alarm, score)
+            return alarm, score
         except RuntimeError as exc:
-            res[label] = str(exc).splitlines()[0][:300]
-    if kind == "output-only":
-        modal = [_modal_json(out / "identified", f) for f in files]
-        inputs = list(modal)
-    else:
-        modal, inputs = None, files
-    first = inputs[0]
-    verdicts1 = None
-    if model is not None and first is not None:
-        idx = [k for k in range(1, len(inputs)) if inputs[k] is not None]
-        for label, baselines in (("classify, 1 baseline", [first]),
-                                 ("classify, N baselines", [p for p in inputs[:n_b] if p is not None])):
-            if label.endswith("N baselines") and not a.several_baselines:
-                res[label] = "not run (--several-baselines not given)"
-                continue
-            try:
-                v = _classify(model, [inputs[k] for k in idx], baselines)
-            except RuntimeError as exc:
-                res[label] = str(exc).splitlines()[0][:300]
-                continue
-            alarm, score = np.full(len(files), np.nan), np.full(len(files), np.nan)
-            for k, r in zip(idx, v):
-                if "damaged" in r:
-                    alarm[k], score[k] = float(bool(r["damaged"])), float(r["probability_damaged"])
-            res[label] = (alarm, score)
-            if verdicts1 is None:
-                verdicts1 = [{}] * (len(files) - 1)
-                for k, r in zip(idx, v):
-                    verdicts1[k - 1] = r
-    if modal is not None or verdicts1 is not None:
-        F = _frequencies(verdicts1 or [{}] * (len(files) - 1), modal, truth["config"]["n_modes"])
+            return str(exc).splitlines()[0][:300]
+
+    for label, cond in (("monitor (temperature)", True), ("monitor", False)):
+        res[label] = _cached(cache / f"monitor-{cond:d}.json", lambda cond=cond: monitor(cond))
+    modal = [_modal_json(out / "identified", f) for f in files] if kind == "output-only" else None
+    inputs = modal if modal is not None else files
+    idx = [k for k in range(1, len(inputs)) if inputs[k] is not None]
+
+    def classify(baselines):
+        try:
+            v = _classify(model, [inputs[k] for k in idx], baselines)
+        except RuntimeError as exc:
+            return str(exc).splitlines()[0][:300]
+        alarm, score = np.full(len(files), np.nan), np.full(len(files), np.nan)
+        for k, r in zip(idx, v):
+            if "damaged" in r:
+                alarm[k], score[k] = float(bool(r["damaged"])), float(r["probability_damaged"])
+        if len(baselines) == 1:                          # the frequencies classify identified, for the shift
+            F = _frequencies([{}] * (len(files) - 1) if modal is not None else
+                             [dict(zip(idx, v)).get(k, {}) for k in range(1, len(files))], modal,
+                             truth["config"]["n_modes"])
+            atomic_write_text(cache / "frequencies.json", json.dumps(np.where(np.isfinite(F), F, -1.0).tolist()))
+        return alarm, score
+
+    from physics.io import atomic_write_text
+
+    if model is not None and inputs[0] is not None:
+        res["classify, 1 baseline"] = _cached(cache / "classify-1.json", lambda: classify([inputs[0]]))
+        if classify_takes_several_baselines():
+            res["classify, N baselines"] = _cached(cache / "classify-n.json", lambda: classify(
+                [p for p in inputs[:n_b] if p is not None]))
+        else:
+            res["classify, N baselines"] = "not run: this checkout's classify takes one --baseline"
+    if (cache / "frequencies.json").is_file():
+        F = np.array(json.loads((cache / "frequencies.json").read_text()), float)
+        F[F < 0] = np.nan
         drop, alarm = frequency_shift(F, n_b)
         res["frequency shift"] = (np.where(np.isfinite(drop), alarm, np.nan), drop)
     return {"truth": truth, "results": res}
@@ -328,8 +362,6 @@ def main(argv=None) -> int:
     p.add_argument("--n-train", type=int, default=12000, help="pairs generated for the classifier (default 12000)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--stay", type=int, default=5, help="alarms in a row that make a detection (default 5)")
-    p.add_argument("--several-baselines", action="store_true",
-                   help="also run classify with every baseline-period test as --baseline")
     p.add_argument("--docs", action="store_true", help="write the table into docs/monitoring.md")
     a = p.parse_args(argv)
     from physics.io import atomic_write_text
