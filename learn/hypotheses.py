@@ -418,7 +418,14 @@ def explain(model, pair, sigma=FREQUENCY_CHANGE_STD) -> dict:
 
 
 def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD) -> list[dict]:
-    """:func:`explain` of every pair, the pairs holding the same modes weighed in one batch."""
+    """:func:`explain` of every pair, the pairs holding the same modes weighed in one batch.
+
+    ``sigma``: the relative std of every mode's frequency change, one number for all modes or one per mode of the
+    model (array (n_modes,), e.g. the scatter measured over many baseline tests); a pair is weighed with the
+    entries of the modes it holds, and its ``frequency_change_std`` is a list of them then."""
+    sig = np.asarray(sigma, float)
+    if sig.ndim and sig.shape != (len(model.beam.modes),):
+        raise BeamDamageError(f"sigma: one std per mode of the model ({len(model.beam.modes)}), got shape {sig.shape}")
     from datagen.damage.slit import hinge_flexibility
     from learn.model_dir import sensitivity_of
     from physics.properties import beam_preset
@@ -456,11 +463,11 @@ def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD) -> list[dict]:
             shapes = shape_changes(np.stack([np.asarray(pairs[i].eigenvectors) for i in members]))
         ranked = weigh_many(f[:, 1] / f[:, 0] - 1.0, sens, mass_all.modes(k), support,
                             days.get("temperature_stiffness_change", (-0.004, 0.004)), theta_max=theta_max,
-                            sigma=sigma, length_m=beam.length_m, shapes=shapes,
+                            sigma=sig if sig.ndim == 0 else sig[k], length_m=beam.length_m, shapes=shapes,
                             support_shapes=shapes_all[:, cols])
         modes = [beam.modes[j] for j in key]
         for i, rows in zip(members, ranked):
             out[i] = {"hypotheses": [r.row() for r in rows], "hypotheses_summary": summary(rows, modes),
-                      "frequency_change_std": float(sigma),
+                      "frequency_change_std": float(sig) if sig.ndim == 0 else sig[k].tolist(),
                       "shape_change_std": None if shapes is None else SHAPE_CHANGE_STD}
     return out
