@@ -36,10 +36,15 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
+import os
 import sys
 from pathlib import Path
 
-import numpy as np
+# the simulator's matrices are small: one BLAS thread is fastest, and several stall on a shared machine
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
 
 __all__ = ["main", "markdown", "score_series"]
 
