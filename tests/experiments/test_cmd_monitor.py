@@ -109,3 +109,25 @@ def test_a_bad_file_is_its_rows_error_and_mixed_kinds_are_named(tmp_path, capsys
     code, _, err = run_json(capsys, ["monitor", str(frf_series[1][0]), *series[:20], "--baseline-tests", "15",
                                      "--json"])
     assert code == 2 and "mixed kinds" in err and err.count("\n") == 1
+
+
+@pytest.mark.slow
+def test_an_alarm_gets_the_explanations_with_the_measured_scatter_and_the_networks_verdict(tmp_path, capsys,
+                                                                                          modal_series):
+    from datagen.config import load_config, merge
+    from datagen.generation import generate
+
+    cfg = merge({"measurement": {"lines": 256}, "output": {"shard_size": 100}}, base=load_config("training"))
+    generate(tmp_path / "data", cfg, n=200, seed=5, progress=False)
+    assert main(["train", "--data", str(tmp_path / "data"), "--out", str(tmp_path / "model"), "--epochs", "2",
+                 "--json"]) == 0
+    capsys.readouterr()
+    csv_path, _, _ = modal_series
+    code, res, err = run_json(capsys, ["monitor", "--conditions", str(csv_path), "--baseline-tests", "18",
+                                       "--model", str(tmp_path / "model"), "--json"])
+    assert code == 0, err
+    v = res["tests"][24]["verdict"]
+    sigma = v["frequency_change_std"]
+    np.testing.assert_allclose(sigma, res["normal_variation"]["per_mode_std"], rtol=1e-12)
+    assert [h["name"] for h in v["hypotheses"]][0] != "intact"
+    assert v["network"]["probability_damaged"] is not None and v["network_baseline"].endswith(".json")
