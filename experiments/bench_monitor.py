@@ -281,7 +281,8 @@ def run_series(series: Path, model: Path | None, a, out: Path) -> dict:
         alarm, score = np.full(len(files), np.nan), np.full(len(files), np.nan)
         for k, r in zip(idx, v):
             if "damaged" in r:
-                alarm[k], score[k] = float(bool(r["damaged"])), float(r["probability_damaged"])
+                alarm[k] = float(bool(r["damaged"]))     # the classical verdict has no probability: its call
+                score[k] = alarm[k] if r.get("probability_damaged") is None else float(r["probability_damaged"])
         if len(baselines) == 1:                          # the frequencies classify identified, for the shift
             F = _frequencies([{}] * (len(files) - 1) if modal is not None else
                              [dict(zip(idx, v)).get(k, {}) for k in range(1, len(files))], modal,
