@@ -12,6 +12,8 @@ beyond the temperatures the baseline saw). Methods, each through the CLI:
 
 * ``monitor (temperature)`` / ``monitor``: ``beam-damage monitor TEST... --baseline-tests N --beam beam.toml
   --false-alarm-rate 0.01 --json``, with the measured temperatures (``--conditions conditions.csv``) and without;
+* ``monitor (temperature), identify's modes`` (output-only): ``monitor`` on the modal JSON that
+  ``identify --max-order 120`` gave each record (below), to separate the identification from the detection;
 * ``classify, 1 baseline``: ``beam-damage classify --model M TEST... --baseline FIRST`` (the pair classifier
   against the first test; the model trained on the series' ``beam.toml`` by ``generate --config`` (training with
   the series' damping ratios, as classify's warning asks) and ``train``, cached under ``--out``);
@@ -48,7 +50,8 @@ import numpy as np  # noqa: E402
 
 __all__ = ["main", "markdown", "score_series"]
 
-METHODS = ("monitor (temperature)", "monitor", "classify, 1 baseline", "classify, N baselines", "frequency shift")
+METHODS = ("monitor (temperature)", "monitor", "monitor (temperature), identify's modes", "classify, 1 baseline",
+           "classify, N baselines", "frequency shift")
 OUTPUT_ONLY_BAND_HZ = (5.0, 400.0)
 
 
@@ -214,21 +217,33 @@ def score_series(day: np.ndarray, damaged: np.ndarray, alarm: np.ndarray, score:
             "answered": int(ok[mon].sum()), "intact_tests": int(neg.sum()), "damaged_tests": int(pos.sum())}
 
 
-def _monitor(series: Path, files: list, n_baseline: int, conditions: bool, kind: str, out: Path) -> tuple:
-    """``monitor --json`` of the series (its files, or its ``conditions.csv`` with the measured temperatures);
-    alarms and novelty / threshold per test."""
-    argv = ["monitor", *(["--conditions", str(series / "conditions.csv")] if conditions else map(str, files)),
-            "--baseline-tests", str(n_baseline), "--beam", str(series / "beam.toml"), "--false-alarm-rate", "0.01",
-            "--out", str(out)]
-    if kind == "output-only":
-        argv += ["--band", *(f"{v:g}" for v in OUTPUT_ONLY_BAND_HZ)]
+def _monitor(files: list, conditions: Path | None, n_baseline: int, beam: Path, band_hz, out: Path) -> tuple:
+    """``monitor --json`` of the series (its files, or the ``conditions`` CSV listing them with the measured
+    temperatures); alarms and novelty / threshold per test."""
+    argv = ["monitor", *(["--conditions", str(conditions)] if conditions else map(str, files)),
+            "--baseline-tests", str(n_baseline), "--beam", str(beam), "--false-alarm-rate", "0.01", "--out", str(out)]
+    if band_hz is not None:
+        argv += ["--band", *(f"{v:g}" for v in band_hz)]
     res = _cli(argv)
     by_file = {Path(t["file"]).name: t for t in res["tests"]}
     rows = [by_file.get(Path(f).name, {}) for f in files]
     alarm = np.array([np.nan if r.get("alarm") is None else float(bool(r["alarm"])) for r in rows])
     score = np.array([np.nan if r.get("novelty") is None or not r.get("threshold") else
                       float(r["novelty"]) / float(r["threshold"]) for r in rows])
-    return alarm, score, res
+    return alarm, score
+
+
+def _modal_conditions(series: Path, modal: list, path: Path) -> Path:
+    """``conditions.csv`` of the series with each record replaced by its identified modal JSON (absolute paths)."""
+    import csv
+
+    from physics.io import atomic_write_text
+
+    rows = list(csv.DictReader((series / "conditions.csv").open()))
+    lines = ["file,time,temperature_c"] + [f"{m.resolve()},{r['time']},{r['temperature_c']}"
+                                           for r, m in zip(rows, modal) if m is not None]
+    atomic_write_text(path, "\n".join(lines) + "\n")
+    return path
 
 
 def _cached(path: Path, compute):
@@ -259,17 +274,24 @@ def run_series(series: Path, model: Path | None, a, out: Path) -> dict:
     cache.mkdir(parents=True, exist_ok=True)
     res: dict = {}
 
-    def monitor(cond):
+    beam = series / "beam.toml"
+    band = OUTPUT_ONLY_BAND_HZ if kind == "output-only" else None
+
+    def monitor(test_files, conditions, directory):
         try:
-            # one directory per record kind: its identification cache (keyed by file content) serves every size
-            alarm, score, _ = _monitor(series, files, n_b, cond, kind, out / "monitor" / kind)
-            return alarm, score
+            return _monitor(test_files, conditions, n_b, beam, band, out / "monitor" / directory)
         except RuntimeError as exc:
             return str(exc).splitlines()[0][:300]
 
-    for label, cond in (("monitor (temperature)", True), ("monitor", False)):
-        res[label] = _cached(cache / f"monitor-{cond:d}.json", lambda cond=cond: monitor(cond))
+    # one directory per record kind: its identification cache (keyed by file content) serves every size
+    res["monitor (temperature)"] = _cached(cache / "monitor-1.json",
+                                           lambda: monitor(files, series / "conditions.csv", kind))
+    res["monitor"] = _cached(cache / "monitor-0.json", lambda: monitor(files, None, kind))
     modal = [_modal_json(out / "identified", f) for f in files] if kind == "output-only" else None
+    if modal is not None:
+        band = None
+        res["monitor (temperature), identify's modes"] = _cached(cache / "monitor-modal.json", lambda: monitor(
+            modal, _modal_conditions(series, modal, cache / "conditions-modal.csv"), "modal"))
     inputs = modal if modal is not None else files
     idx = [k for k in range(1, len(inputs)) if inputs[k] is not None]
 
@@ -410,8 +432,10 @@ def main(argv=None) -> int:
             for method in METHODS:
                 v = r["results"].get(method)
                 base = {"kind": kind, "size": size, "drop_pct": drop, "method": method}
-                if v is None or isinstance(v, str):
-                    rows.append({**base, "error": v or "not run"})
+                if v is None:                           # not a method of this record kind
+                    continue
+                if isinstance(v, str):
+                    rows.append({**base, "error": v})
                     continue
                 alarm, score = v
                 rows.append({**base, **score_series(day, damaged, alarm, score, a.baseline_tests,
