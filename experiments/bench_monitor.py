@@ -390,8 +390,9 @@ def _figure(rows: list, path: Path) -> None:
             ax.set_title(f"{kind}")
             if key == "false_alarm_rate":
                 ax.axhline(1.0, color="k", lw=0.8, ls=":")
-    axes[0, 0].legend(fontsize=7)
-    fig.tight_layout()
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=3, fontsize=8)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
