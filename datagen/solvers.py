@@ -35,7 +35,8 @@ def ritz_modes(M, K, start, iterations):
     Returns
     -------
     omega2 : ndarray, shape (..., p)   ascending (rad^2/s^2 for SI K, M)
-    phi : ndarray, shape (..., n, p)   ``phi^T M phi = I``
+    phi : ndarray, shape (..., n, p)   ``phi^T M phi = I``; each mode's sign makes its projection on its
+                                       starting vector positive (the same on every LAPACK build)
     """
     V = np.broadcast_to(start, K.shape[:-2] + start.shape)
     n = K.shape[-1]
@@ -48,7 +49,8 @@ def ritz_modes(M, K, start, iterations):
         Mr = X.mT @ M @ X
         w, Q = undamped_modes(0.5 * (Mr + Mr.mT), 0.5 * (Kr + Kr.mT))
         V = X @ Q
-    return w**2, V
+    sign = np.sign(np.sum(start * V, axis=-2, keepdims=True))
+    return w**2, V * np.where(sign == 0, 1.0, sign)
 
 
 def light_damping_modes(omega2, c, iterations):

@@ -248,13 +248,19 @@ STATUS = {
 NO_EFFECT_DROP = 1e-9
 
 
+#: An updated stiffness whose smallest eigenvalue is at most this fraction of its largest is not positive definite.
+SINGULAR_RTOL = 1e-12
+
+
 def sample_status(labels: dict, outputs: dict) -> np.ndarray:
     """Status of each sample (:data:`STATUS`), shape (B,), from the pipeline's labels and outputs."""
     K = np.asarray(outputs["K_updated"], dtype=float)
     finite_k = np.all(np.isfinite(K), axis=(-2, -1))
     Ks = np.where(finite_k[..., None, None], 0.5 * (K + np.swapaxes(K, -1, -2)), 0.0)
     updated = np.asarray(outputs.get("has_update", True), bool)   # False: no updated model (fewer modes than sensors)
-    not_pd = updated & np.any(~finite_k | (np.linalg.eigvalsh(Ks)[..., 0] <= 0), axis=1)
+    eig = np.linalg.eigvalsh(Ks)
+    # singular to working precision counts as not positive definite (the rounding decides the sign of a zero)
+    not_pd = updated & np.any(~finite_k | (eig[..., 0] <= SINGULAR_RTOL * np.abs(eig[..., -1])), axis=1)
     nan_poles = updated & ~np.all(np.isfinite(outputs["updated_poles"]), axis=(1, 2))
     no_effect = (labels["n_damages"] > 0) & ~(np.abs(outputs["damage_frequency_drop"]) >= NO_EFFECT_DROP)
     not_converged = ~np.all(np.asarray(outputs["converged"], dtype=bool), axis=1)

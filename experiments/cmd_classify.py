@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import glob
 import io
 import json
 from pathlib import Path
@@ -9,10 +10,11 @@ from pathlib import Path
 import numpy as np
 
 from experiments.jsonable import to_jsonable
-from learn.classify import classify_many
+from learn.classify import DEFAULT_FALSE_ALARM_RATE, classify_many
 from learn.measured import on_model_dofs
 from learn.model_dir import load_model
 from physics.frf import receptance_modal
+from physics.errors import BeamDamageError
 from physics.io import FRF, MODAL, MeasuredFRF, accepted, atomic_write_bytes, atomic_write_text, modal_or_frf, read
 
 __all__ = ["KEYS", "add_parser", "run"]
@@ -23,7 +25,7 @@ KEYS = ("measured", "damaged", "probability_damaged", "location_x_over_L", "loca
         "detectable", "probability_support_change", "support_changed", "verdict_from", "in_distribution",
         "out_of_distribution_reasons", "mahalanobis_distance",
         "training_percentile", "distance_terms", "hypotheses", "hypotheses_summary",
-        "frequency_change_std", "shape_change_std", "network", "classical",
+        "frequency_change_std", "shape_change_std", "normal_variation", "agreement", "network", "classical",
         "classical_methods", "identification", "input_route", "warnings", "dof_positions")
 
 
@@ -44,7 +46,13 @@ def add_parser(sub):
                                    "give a list of verdicts; --out writes verdict.json and classify.png (one pair) or "
                                    "verdicts.json (several).")
     p.add_argument("--model", required=True, metavar="MODEL_DIR")
-    p.add_argument("--baseline", required=True, metavar="BASELINE", help="undamaged state (FRF file or modal JSON)")
+    p.add_argument("--baseline", required=True, action="append", metavar="BASELINE",
+                   help="undamaged state (FRF file or modal JSON); repeat it, or give a quoted glob pattern such as "
+                        "'base/*.uff', for several baseline tests: their scatter is the normal variation between "
+                        "tests (measured instead of assumed) that a change must exceed")
+    p.add_argument("--false-alarm-rate", type=float, default=DEFAULT_FALSE_ALARM_RATE, metavar="ALPHA",
+                   help="false-alarm rate of the test against the normal variation measured on several baselines "
+                        f"(default {DEFAULT_FALSE_ALARM_RATE})")
     p.add_argument("measured", nargs="+", metavar="MEASURED", help="current state(s) (same kind as BASELINE)")
     p.add_argument("--beam", help="beam of the data: the model's preset name (default) or a beam file of the same "
                                   "length whose measured_x_m places measured DOFs of files without node geometry "
@@ -55,6 +63,21 @@ def add_parser(sub):
                                                 "out/classify)")
     p.add_argument("--json", action="store_true", help="print the verdict (a list for several MEASURED) as JSON")
     p.set_defaults(func=run)
+
+
+def baseline_files(given: list[str]) -> list[str]:
+    """The baseline files of ``--baseline`` values: each a path or a glob pattern (sorted matches), in order,
+    each file once; a pattern matching nothing is refused in one line."""
+    out = []
+    for g in given:
+        if glob.has_magic(g):
+            hits = sorted(glob.glob(g))
+            if not hits:
+                raise BeamDamageError(f"--baseline {g!r}: the pattern matches no file")
+            out += hits
+        else:
+            out.append(g)
+    return list(dict.fromkeys(out))
 
 
 def read_input(path):
@@ -76,19 +99,24 @@ def identification_method(path) -> str | None:
 def run(args):
     model = load_model(args.model)
     _, beam_x_m = model.measured_beam(args.beam, args.mass)
-    files = [args.baseline, *args.measured]
+    baselines = baseline_files(args.baseline)
+    nb = len(baselines)
+    files = [*baselines, *args.measured]
     mapped = [on_model_dofs(read_input(f), model.beam, beam_x_m, str(f)) for f in files]
-    results = classify_many(model, mapped[0][0], [m[0] for m in mapped[1:]], names=[str(f) for f in files],
-                            methods=[identification_method(f) for f in files])
-    base_pos = mapped[0][1] and mapped[0][1].to_dict()
+    base = [m[0] for m in mapped[:nb]]
+    results = classify_many(model, base if nb > 1 else base[0], [m[0] for m in mapped[nb:]],
+                            names=[str(f) for f in files], methods=[identification_method(f) for f in files],
+                            false_alarm_rate=args.false_alarm_rate)
+    ref = files.index(results[0]["normal_variation"].get("reference_baseline", files[0]))
+    base_pos = mapped[ref][1] and mapped[ref][1].to_dict()
     extras = []
-    for r, (_, cur_map) in zip(results, mapped[1:]):
+    for r, (_, cur_map) in zip(results, mapped[nb:]):
         r["dof_positions"] = {"baseline": base_pos, "measured": cur_map and cur_map.to_dict()}
         extras.append(r.pop("_extra"))
     if not args.json and not args.out:
         args.out = "out/classify"
     if args.out:
-        _write(args.out, results, extras, mapped[0][0], mapped[1][0], model)
+        _write(args.out, results, extras, mapped[ref][0], mapped[nb][0], model)
     if not args.json:
         for r in results:
             if len(results) > 1:

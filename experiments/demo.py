@@ -210,11 +210,10 @@ def _summary_section(checks, disc: dict, evaluated: dict, verdict: dict, length_
     caveat = (f"Caveat: the thesis cut its slit at x = {slit_m:.3f} m, on the boundary of elements 1 and 2"
               + (f"; this answer lies {1000 * abs(verdict['location_x_m'] - slit_m):.0f} mm from it."
                  if verdict["damaged"] else "; this answer misses it."))
-    from learn.verdict import explained_text
+    from learn.verdict import explained_text, noise_text
 
-    explained = (f" Explanations of the {explained_text(verdict)} ({verdict['frequency_change_std'] * 100:.2g} % "
-                 f"noise per mode, equal priors): {verdict['hypotheses_summary']}." if verdict.get("hypotheses")
-                 else "")
+    explained = (f" Explanations of the {explained_text(verdict)} ({noise_text(verdict)}, equal priors): "
+                 f"{verdict['hypotheses_summary']}." if verdict.get("hypotheses") else "")
     verdict_text = (f"**Beam 5, damaged against undamaged (Tables 4.5/4.6): {answer}.** Verdict {source}. {caveat}"
                     f"{explained}")
 

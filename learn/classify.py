@@ -3,23 +3,29 @@
 from __future__ import annotations
 
 import functools
+from dataclasses import replace
 
 import numpy as np
 
 from learn.classical import FREQUENCY_METHODS, run_classical
 from learn.features import feature_names, frf_features, frequency_features, map_frf_to_grid, modal_features
-from learn.hypotheses import NO_EXPLANATION, explain_many
+from learn.hypotheses import FREQUENCY_CHANGE_STD, NO_EXPLANATION, SHAPE_CHANGE_STD, explain_many
 from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows, identification_band_hz,
                             identify_modes, modal_pair, mode_checks, nominal_ratio_range)
 from learn.model_dir import TrainedModel
-from learn.verdict import (IN_DISTRIBUTION_PERCENTILE, classical_answer, classical_verdict, equivalent_depth,
-                           modes_text, network_answer, network_output, ood_percentile)
+from learn.normal_variation import measure, model_modes
+from learn.verdict import (IN_DISTRIBUTION_PERCENTILE, agreement, classical_answer, classical_verdict,
+                           equivalent_depth, modes_text, network_answer, network_output, ood_percentile)
 from physics.errors import BeamDamageError
 from physics.layout import SYMMETRIC_SUPPORTS
 from physics.io import MeasuredFRF
 
-__all__ = ["DISTANCE_TERMS", "classify", "classify_many", "distance_terms", "distance_text", "identification_warning"]
+__all__ = ["DEFAULT_FALSE_ALARM_RATE", "DISTANCE_TERMS", "classify", "classify_many", "distance_terms",
+           "distance_text", "identification_warning"]
 
+
+#: False-alarm rate of the test against a measured normal variation (``classify --false-alarm-rate``).
+DEFAULT_FALSE_ALARM_RATE = 0.01
 
 def classify(model: TrainedModel, baseline, current) -> dict:
     """Verdict for one measured pair: :func:`classify_many` with one current input."""
@@ -27,21 +33,26 @@ def classify(model: TrainedModel, baseline, current) -> dict:
 
 
 def classify_many(model: TrainedModel, baseline, currents: list, names: list[str] | None = None,
-                  methods: list | None = None) -> list[dict]:
+                  methods: list | None = None, false_alarm_rate: float = DEFAULT_FALSE_ALARM_RATE) -> list[dict]:
     """Verdicts for tests of one beam against the same baseline (one network call for all pairs).
 
     Parameters
     ----------
-    baseline : :class:`physics.io.ModalData` or :class:`physics.io.MeasuredFRF`
-        The undamaged state, on the model's DOFs (:func:`on_model_dofs`).
+    baseline : :class:`physics.io.ModalData` or :class:`physics.io.MeasuredFRF`, or a list of them
+        The undamaged state, on the model's DOFs (:func:`on_model_dofs`). Several baseline tests measure the
+        normal variation between tests (:mod:`learn.normal_variation`): it decides whether a change is more than
+        that variation, and it replaces the assumed noise in the competing explanations and the distance check;
+        the pair methods compare each test with the baseline nearest the baselines' centre.
     currents : list of the same kind as ``baseline``
     names : list of str, optional
-        Names of the inputs (baseline first) for messages.
+        Names of the inputs (the baselines first) for messages.
     methods : list of (str or None), optional
         The identification method of :data:`physics.identification.METHODS` that produced each modal-data input
-        (baseline first; ``"ssi"`` in a ``modal.json`` of ``identify`` on response records), None where unknown:
+        (baselines first; ``"ssi"`` in a ``modal.json`` of ``identify`` on response records), None where unknown:
         an input identified otherwise than the training data's modal noise describes gets one warning
         (:func:`identification_warning`).
+    false_alarm_rate : float
+        Of the test against the measured normal variation (several baselines).
 
     FRF files are identified by :data:`IDENTIFICATION` (LSCF/LSFD, the path the training data's modal noise
     describes); the modal-route network and every classical method read those modes. A model on an FRF route
@@ -61,16 +72,24 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     method's (``verdict_from``); ``network`` and ``classical`` hold both answers, ``classical_methods`` every
     method's.
     """
-    names = list(names) if names else ["baseline"] + [f"measured {k + 1}" for k in range(len(currents))]
+    baselines = list(baseline) if isinstance(baseline, (list, tuple)) else [baseline]
+    nb = len(baselines)
+    names = (list(names) if names else
+             (["baseline"] if nb == 1 else [f"baseline {k + 1}" for k in range(nb)])
+             + [f"measured {k + 1}" for k in range(len(currents))])
     warnings: list[str] = []
     sens = model.sensitivity
-    base_md, cur_md, identified, pairs = _measured_pairs(model, baseline, currents, names, sens, warnings)
-    route, X, rows = _network_inputs(model, baseline, currents, pairs, identified, warnings, methods)
+    base_md, cur_md, identified, pairs, nv, base_mds = _measured_pairs(model, baselines, currents, names, sens,
+                                                                       warnings)
+    ref = 0 if nv is None else nv.reference
+    names = [names[ref], *names[nb:]]
+    route, X, rows = _network_inputs(model, baselines[ref], currents, pairs, identified, warnings, methods)
     if route in ("modal", "frequency"):
         _require_common_modes(pairs, names, model.beam)
     depth = functools.partial(equivalent_depth, preset=model.config.get("truth_beam") or model.beam.name,
                               width_m=model.config["reference_width_m"])
     nets, dist, pct, where, terms = _network_answers(model, route, X, rows, sens, len(currents), depth)
+    normal = _normal_variation(model, route, nv, base_mds, warnings)
     answers, mode_reasons, mode_sens = _classical_answers(model, pairs, len(currents), sens)
     for i in range(len(currents)):
         if mirrored(model.beam, pairs[i] if pairs else None):
@@ -78,7 +97,7 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
             answers[i] = [fold_to_half(a, model.beam) for a in answers[i]]
     known = [i for i in range(len(currents)) if pairs and pairs[i] is not None]
     explained = [None] * len(currents)
-    for i, e in zip(known, explain_many(model, [pairs[i] for i in known])):
+    for i, e in zip(known, _explanations(model, [pairs[i] for i in known], nv)):
         explained[i] = e
     results = []
     for i, net in enumerate(nets):
@@ -88,11 +107,18 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
         reasons = list(mode_reasons[i])
         if net is None:
             reasons.append("; ".join(p.missing) + f": the network needs modes {modes_text(model.beam.modes)}")
-        elif pct[i] > IN_DISTRIBUTION_PERCENTILE:
+        elif pct[i] > IN_DISTRIBUTION_PERCENTILE and not _like_baseline_pairs(dist[i], normal):
             reasons.insert(0, f"Mahalanobis distance {dist[i]:.3g} from the training data, beyond "
                               f"{pct[i]:.2f}% of training pairs"
+                              + (f" and the baseline tests' own pairs (at most "
+                                 f"{normal['baseline_pairs_distance_max']:.3g})" if nv is not None else "")
                               + (f"; largest terms: {distance_text(terms[i])}" if terms[i] else ""))
         verdict, from_network, w = _chosen_verdict(net, cl, p, reasons, warnings, mode_sens[i], depth, model.beam)
+        nv_i = dict(normal)
+        if nv is not None and cur_md is not None:
+            nv_i.update(nv.test(model_modes(cur_md[i], model.beam, sens.frequencies_hz, names[i + 1])[0],
+                                false_alarm_rate), false_alarm_rate=false_alarm_rate)
+            verdict, w = _within_normal_variation(verdict, nv_i, w, "network" if from_network else cl and cl["method"])
         results.append({
             "measured": names[i + 1], **verdict, "location_ambiguity": location_ambiguity(model.beam, verdict, p),
             "verdict_from": "network" if from_network else "classical",
@@ -102,7 +128,10 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
             "classical_methods": answers[i],
             "identification": _identification(p, base_md, cur_md[i] if cur_md else None, identified, model.beam),
             **(explained[i] or NO_EXPLANATION),
-            "input_route": route, "warnings": w,
+            "input_route": route, "normal_variation": nv_i,
+            "agreement": agreement(verdict, net, cl, (explained[i] or NO_EXPLANATION)["hypotheses"],
+                                   "network" if from_network else "classical"),
+            "warnings": w,
             "_extra": {"location_distribution": where[i]},
         })
     return results
@@ -147,22 +176,106 @@ def location_ambiguity(beam, verdict: dict, pair) -> str | None:
             f"this symmetric {beam.test.bc} beam: both places fit the data equally")
 
 
-def _measured_pairs(model: TrainedModel, baseline, currents: list, names: list[str], sens, warnings: list):
-    """Modal data of the inputs and the modes each (baseline, current) pair holds:
-    ``(baseline ModalData, list of current ModalData, identified, list of ModalPair)``, the last three None when
-    the FRFs could not be identified (an FRF-input model then reads the FRFs alone)."""
-    base_md, cur_md, identified, found = _modal_inputs(model, baseline, currents, names, sens)
-    if base_md is None:
+def _measured_pairs(model: TrainedModel, baselines: list, currents: list, names: list[str], sens, warnings: list):
+    """Modal data of the inputs and the modes each (baseline, current) pair holds: ``(baseline ModalData, list of
+    current ModalData, identified, list of ModalPair, NormalVariation or None, list of baseline ModalData)``, the
+    modal data and pairs None when the FRFs could not be identified (an FRF-input model then reads the FRFs
+    alone). With several baselines the pairs compare with the reference baseline of their normal variation."""
+    nb = len(baselines)
+    mds, identified, found = _modal_inputs(model, [*baselines, *currents], names, sens)
+    if mds is None:
+        if nb > 1:
+            raise BeamDamageError("several baseline tests need their modes, and LSCF/LSFD identification failed")
         warnings.append("LSCF/LSFD identification failed: no classical answer; the FRF-route network alone")
-        return None, None, identified, None
+        return None, None, identified, None, None, None
     found = found or [None] * len(names)
-    pairs = [modal_pair(base_md, c, model.beam, sens.frequencies_hz, (names[0], n), (found[0], f))
-             for c, n, f in zip(cur_md, names[1:], found[1:])]
+    nv = measure(mds[:nb], model.beam, sens.frequencies_hz, names[:nb]) if nb > 1 else None
+    r = 0 if nv is None else nv.reference
+    base_md = mds[r]
+    pairs = [modal_pair(base_md, c, model.beam, sens.frequencies_hz, (names[r], n), (found[r], f))
+             for c, n, f in zip(mds[nb:], names[nb:], found[nb:])]
     warnings += list(dict.fromkeys(w for p in pairs for w in p.warnings))
     w = damping_warning(model, pairs)
     if w:
         warnings.append(w)
-    return base_md, cur_md, identified, pairs
+    return base_md, mds[nb:], identified, pairs, nv, mds[:nb]
+
+
+def _normal_variation(model: TrainedModel, route: str, nv, base_mds, warnings: list) -> dict:
+    """The verdicts' ``normal_variation`` shared by all pairs: assumed (one baseline) or measured, with the
+    Mahalanobis distances of the baseline tests' own pairs (reference against each other baseline) from the
+    training data; one warning when most of those pairs lie outside it."""
+    if nv is None:
+        return {"n_baselines": 1, "measured": False, "frequency_std_pct": 100 * FREQUENCY_CHANGE_STD,
+                "baseline_pairs_distance_max": None, "baseline_pairs_training_percentile": None}
+    out = {**nv.summary(), "baseline_pairs_distance_max": None, "baseline_pairs_training_percentile": None}
+    if route not in ("modal", "frequency"):
+        return out
+    others = [k for k in range(nv.n_baselines) if k != nv.reference]
+    pairs = [modal_pair(base_mds[nv.reference], base_mds[k], model.beam, model.sensitivity.frequencies_hz)
+             for k in others]
+    full = [p for p in pairs if p.complete and (route == "frequency" or not p.frequency_only)]
+    if not full:
+        return out
+    lam = np.stack([p.eigenvalues for p in full])
+    X = (frequency_features(lam, model.beam.n_modes) if route == "frequency" else
+         modal_features(lam, np.stack([p.eigenvectors for p in full]), model.beam.n_modes, model.beam.test))
+    dist, pct = ood_percentile(model.networks[route], X)
+    out["baseline_pairs_distance_max"] = float(dist.max())
+    out["baseline_pairs_training_percentile"] = [float(v) for v in pct]
+    outside = int(np.sum(pct > IN_DISTRIBUTION_PERCENTILE))
+    if 2 * outside > len(full):
+        scatter = max(v for v in out["frequency_std_pct"] if v is not None)
+        warnings.append(f"{outside} of the {len(full)} pairs of baseline tests lie outside the training data (beyond "
+                        f"{IN_DISTRIBUTION_PERCENTILE}% of its pairs; measured frequency scatter up to {scatter:.2g} % "
+                        "per mode): the network was trained for a smaller variation between tests; the verdict "
+                        "rests on the measured variation, and a model trained with measurement.frequency_scatter "
+                        "covering it would answer better")
+    return out
+
+
+def _like_baseline_pairs(distance: float, normal: dict) -> bool:
+    """Whether a pair lies no farther from the training data than the baseline tests' own pairs."""
+    top = normal.get("baseline_pairs_distance_max")
+    return top is not None and distance <= top
+
+
+def _explanations(model: TrainedModel, pairs: list, nv) -> list[dict]:
+    """The competing explanations of the pairs: with the assumed noise, or with the normal variation measured on
+    several baselines (each frequency against the baselines' mean, std ``s sqrt(1 + 1/n)``; each shape entry
+    against the reference baseline's, std ``s sqrt(2)``)."""
+    if nv is None or not pairs:
+        return explain_many(model, pairs)
+    mean_hz, counts = nv.frequency_mean_hz, nv.counts
+    sigma = np.where(counts >= 2, nv.frequency_std_rel * np.sqrt(1 + 1 / np.maximum(counts, 1)),
+                     FREQUENCY_CHANGE_STD)
+    centred = []
+    for p in pairs:                       # the baseline's frequencies moved to the baselines' mean
+        lam = np.array(p.eigenvalues)
+        f = np.abs(lam[0]) / (2 * np.pi)
+        lam[0] = lam[0] * np.where(np.isfinite(mean_hz[p.modes]), mean_hz[p.modes] / f, 1.0)
+        centred.append(replace(p, eigenvalues=lam))
+    shape = nv.shape_std
+    shape_sigma = SHAPE_CHANGE_STD if shape is None else np.where(np.isfinite(shape), shape * np.sqrt(2),
+                                                                   SHAPE_CHANGE_STD)
+    return explain_many(model, centred, sigma, shape_sigma)
+
+
+def _within_normal_variation(verdict: dict, normal: dict, warnings: list, source) -> tuple[dict, list]:
+    """The verdict after the test against the measured normal variation: a damage called inside it is withdrawn
+    (said in a warning); a change beyond it that the verdict's source calls undamaged is said."""
+    w = list(warnings)
+    n, p, alpha = normal["n_baselines"], normal["p_value"], normal["false_alarm_rate"]
+    test = (f"{'Hotelling T2' if normal['test'] == 'hotelling' else 'largest |z|'} {normal['statistic']:.3g} "
+            f"against {normal['threshold']:.3g}, p = {p:.2g}")
+    if verdict["damaged"] and not normal["beyond"]:
+        verdict = {**verdict, "damaged": False}
+        w.append(f"the {source} calls the pair damaged, but its natural frequencies lie within the normal variation "
+                 f"measured on {n} baseline tests ({test} >= {alpha:g}): no damage detected")
+    elif normal["beyond"] and not verdict["damaged"]:
+        w.append(f"the natural frequencies lie beyond the normal variation measured on {n} baseline tests ({test} < "
+                 f"{alpha:g}), though the {source} finds no damage: see the competing explanations")
+    return verdict, w
 
 
 #: How far outside the training's damping ratios a baseline may lie before :func:`damping_warning` speaks (factor).
@@ -286,15 +399,14 @@ def _identification(p, base_md, cur_md, identified: bool, beam) -> dict:
 
 
 
-def _modal_inputs(model: TrainedModel, baseline, currents: list, names: list[str], sens):
-    """Modal data of the baseline and every current input: ``(ModalData, list of ModalData, identified, found)``,
-    ``found`` one text per input on the modes it holds (e.g. "LSCF/LSFD found 2 modes in 2-500 Hz")."""
-    inputs = [baseline, *currents]
+def _modal_inputs(model: TrainedModel, inputs: list, names: list[str], sens):
+    """Modal data of every input: ``(list of ModalData, identified, found)``, ``found`` one text per input on the
+    modes it holds (e.g. "LSCF/LSFD found 2 modes in 2-500 Hz")."""
     kinds = {isinstance(d, MeasuredFRF) for d in inputs}
     if len(kinds) > 1:
         raise BeamDamageError("BASELINE and MEASURED must all be FRF files or all modal data")
     if not kinds.pop():
-        return baseline, list(currents), False, None
+        return list(inputs), False, None
     test = model.beam.test
     if test is None:
         fmax, fmin = IDENTIFICATION_BAND_FACTOR * float(sens.frequencies_hz[3]), 0.0
@@ -308,13 +420,13 @@ def _modal_inputs(model: TrainedModel, baseline, currents: list, names: list[str
     except BeamDamageError:
         if model.route == "modal":
             raise
-        return None, None, True, None          # an FRF-route model classifies the FRFs without modes
+        return None, True, None                # an FRF-route model classifies the FRFs without modes
     found = []
     for d, md in zip(inputs, ids):
         k = md.eigenvalues.size
         lo, hi = identification_band_hz(d, fmax, fmin)
         found.append(f"LSCF/LSFD found {k} mode{'s' * (k != 1)} in {lo:.4g}-{hi:.4g} Hz")
-    return ids[0], ids[1:], True, found
+    return ids, True, found
 
 
 def _frf_route_features(model: TrainedModel, baseline, currents, warnings: list):

@@ -35,6 +35,10 @@ shape change of its size at its place (the shape sensitivities of :mod:`learn.se
 exact change of the nominal shapes (:func:`support_curve`), the day-to-day changes and a global stiffness change
 none. Damping changes are not weighed: the repeatability of damping ratios (5-30 % between tests) is larger than
 what a slit changes.
+
+An explanation whose predicted change misses a mode's measured change by more than :data:`FIT_LIMIT` standard
+deviations (the noise and the model error) does not fit: the summary says so when the most likely does not, and a
+slit that does not fit reports no intervals.
 """
 
 from __future__ import annotations
@@ -47,7 +51,7 @@ from scipy.special import log_ndtr
 
 from physics.errors import BeamDamageError
 
-__all__ = ["FREQUENCY_CHANGE_STD", "HYPOTHESES", "MODEL_ERROR", "NO_EXPLANATION", "PRIOR", "SEPARATE",
+__all__ = ["FIT_LIMIT", "FREQUENCY_CHANGE_STD", "HYPOTHESES", "MODEL_ERROR", "NO_EXPLANATION", "PRIOR", "SEPARATE",
            "SHAPE_CHANGE_STD", "SIZE_SCALE_STD", "Hypothesis", "explain", "explain_many", "shape_changes", "summary",
            "support_curve", "weigh", "weigh_many"]
 
@@ -75,6 +79,10 @@ SHAPE_CHANGE_STD = 0.03
 #: specimen whose EI, mass and clamp differ from it by several percent; it widens the size intervals.
 SIZE_SCALE_STD = 0.1
 
+#: Largest misfit of a mode's change, in its standard deviations, of an explanation that fits (3: a chance of
+#: about 1 % over 4 modes).
+FIT_LIMIT = 3.0
+
 #: Grids of the parameters.
 N_SIZE, N_GLOBAL, N_SUPPORT = 200, 401, 121
 GLOBAL_RANGE, MASS_RANGE, SUPPORT_LN_RANGE = 0.05, 0.10, np.log(10.0)
@@ -92,6 +100,9 @@ class Hypothesis:
     parameters : dict                        the most likely parameters, and for ``slit`` the 68 %/95 % intervals
     predicted : ndarray, shape (m,)          relative frequency changes at the most likely parameters
     max_abs_frequency_error_pct : float      largest |measured - predicted| change there (%)
+    max_misfit_std : float                   largest |measured - predicted| change over its std (the noise and
+                                             the model error of the prediction); beyond :data:`FIT_LIMIT` the
+                                             explanation does not fit
     """
 
     name: str
@@ -100,10 +111,17 @@ class Hypothesis:
     parameters: dict
     predicted: np.ndarray
     max_abs_frequency_error_pct: float
+    max_misfit_std: float = 0.0
+
+    @property
+    def fits(self) -> bool:
+        """Whether every predicted change lies within :data:`FIT_LIMIT` standard deviations of the measured one."""
+        return self.max_misfit_std <= FIT_LIMIT
 
     def row(self) -> dict:
         return {"name": self.name, "probability": self.probability, "parameters": self.parameters,
                 "max_abs_frequency_error_pct": self.max_abs_frequency_error_pct,
+                "max_misfit_std": self.max_misfit_std, "fits": self.fits,
                 "predicted_change_pct": [float(v) for v in 100 * self.predicted]}
 
 
@@ -267,7 +285,7 @@ def weigh_many(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.00
                                         (:func:`shape_changes`; sensor-major as ``sens.shape``); without them
                                         frequencies alone are weighed
     support_shapes : array, shape (G, S m), optional   the support grid's shape changes (:func:`support_curve`)
-    shape_sigma : float                 std of each shape entry's change (:data:`SHAPE_CHANGE_STD`)
+    shape_sigma : float or array (S m,)  std of each shape entry's change (:data:`SHAPE_CHANGE_STD`)
 
     Returns
     -------
@@ -300,16 +318,19 @@ def weigh_many(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.00
         if shapes.shape != (Y.shape[0], np.asarray(sens.shape).shape[0]) or not np.all(np.isfinite(shapes)):
             raise BeamDamageError(f"shape changes must be a finite (pairs, sensors x modes) array of shape "
                                   f"{(Y.shape[0], np.asarray(sens.shape).shape[0])}, got {shapes.shape}")
+        # whitened by each entry's std: the shape terms then take a unit std
+        ss = np.broadcast_to(np.asarray(shape_sigma, float), shapes.shape[1:])
+        shapes = shapes / ss
         grid_shapes = {"intact": None, "global_stiffness": None,
-                       "support_change": None if support_shapes is None else np.asarray(support_shapes, float),
-                       "slit": (th, np.asarray(sens.shape, float)), "mass_change": (mu, np.asarray(mass_sens.shape,
-                                                                                                  float))}
+                       "support_change": None if support_shapes is None else np.asarray(support_shapes, float) / ss,
+                       "slit": (th, np.asarray(sens.shape, float) / ss[:, None]),
+                       "mass_change": (mu, np.asarray(mass_sens.shape, float) / ss[:, None])}
     for start in range(0, Y.shape[0], CHUNK_PAIRS):
         y = Y[start:start + CHUNK_PAIRS]
         ll = {name: _loglik(g, y, s, 0.0 if name == "global_stiffness" else half, model_error)
               for name, g in grids.items()}
         if shapes is not None:
-            extra = _shape_loglik(shapes[start:start + CHUNK_PAIRS], grid_shapes, shape_sigma)
+            extra = _shape_loglik(shapes[start:start + CHUNK_PAIRS], grid_shapes, 1.0)
             ll = {name: (v[0] + extra[name], v[1]) for name, v in ll.items()}
         for i in range(y.shape[0]):
             fits = {}
@@ -333,8 +354,14 @@ def weigh_many(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.00
             logz = np.array([fits[n][0] + np.log(PRIOR[n]) for n in HYPOTHESES])
             p = np.exp(logz - logz.max())
             p /= p.sum()
+            miss = {n: float(np.max(np.abs(fits[n][2] - y[i]) / np.sqrt(s**2 + (model_error * fits[n][2]) ** 2)))
+                    for n in HYPOTHESES}
+            if miss["slit"] > FIT_LIMIT:          # a slit that does not fit: no interval rather than a narrow one
+                params["slit"].update({k: None for k in ("x_m_68", "x_m_95", "hinge_flexibility_68",
+                                                         "hinge_flexibility_95")})
             rows = [Hypothesis(n, float(p[k]), float(fits[n][0]), params[n], np.asarray(fits[n][2], float),
-                               float(100 * np.max(np.abs(fits[n][2] - y[i])))) for k, n in enumerate(HYPOTHESES)]
+                               float(100 * np.max(np.abs(fits[n][2] - y[i]))), miss[n])
+                    for k, n in enumerate(HYPOTHESES)]
             out.append(sorted(rows, key=lambda r: -r.probability))
     return out
 
@@ -369,6 +396,10 @@ def summary(rows: list[Hypothesis], modes) -> str:
     best, second = rows[0], rows[1]
     text = (f"most likely explanation: {best.name} (probability {best.probability:.2f}, largest frequency misfit "
             f"{best.max_abs_frequency_error_pct:.2f} %)")
+    if not best.fits:
+        text = (f"no explanation fits the change within its noise (the most likely, {best.name}, misses a mode by "
+                f"{best.max_misfit_std:.1f} standard deviations, {best.max_abs_frequency_error_pct:.2f} %: a change "
+                f"none of them describes, or a noisier test than weighed); " + text)
     if second.probability > best.probability / 3:
         gap = np.abs(best.predicted - second.predicted)
         pair = frozenset({best.name, second.name})
@@ -417,15 +448,13 @@ def explain(model, pair, sigma=FREQUENCY_CHANGE_STD) -> dict:
     return explain_many(model, [pair], sigma)[0]
 
 
-def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD) -> list[dict]:
+def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD, shape_sigma=SHAPE_CHANGE_STD) -> list[dict]:
     """:func:`explain` of every pair, the pairs holding the same modes weighed in one batch.
 
-    ``sigma``: the relative std of every mode's frequency change, one number for all modes or one per mode of the
-    model (array (n_modes,), e.g. the scatter measured over many baseline tests); a pair is weighed with the
-    entries of the modes it holds, and its ``frequency_change_std`` is a list of them then."""
-    sig = np.asarray(sigma, float)
-    if sig.ndim and sig.shape != (len(model.beam.modes),):
-        raise BeamDamageError(f"sigma: one std per mode of the model ({len(model.beam.modes)}), got shape {sig.shape}")
+    ``sigma``: the relative std of a frequency change, one for every mode or one per model mode (m,);
+    ``shape_sigma``: the std of a unit-norm shape entry's change, one or per sensor and model mode (S, m) (a
+    normal variation measured on several baselines). ``frequency_change_std`` and ``shape_change_std`` of each
+    result are then lists over the pair's modes (and sensors)."""
     from datagen.damage.slit import hinge_flexibility
     from learn.model_dir import sensitivity_of
     from physics.properties import beam_preset
@@ -461,13 +490,20 @@ def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD) -> list[dict]:
         shapes = None
         if not frequency_only and np.asarray(sens.shape).shape[0] == cols.size:
             shapes = shape_changes(np.stack([np.asarray(pairs[i].eigenvectors) for i in members]))
+        s = sigma if np.ndim(sigma) == 0 else np.asarray(sigma, float)[k]
+        ss = shape_sigma if np.ndim(shape_sigma) == 0 else np.asarray(shape_sigma, float)[:, k].ravel()
         ranked = weigh_many(f[:, 1] / f[:, 0] - 1.0, sens, mass_all.modes(k), support,
                             days.get("temperature_stiffness_change", (-0.004, 0.004)), theta_max=theta_max,
-                            sigma=sig if sig.ndim == 0 else sig[k], length_m=beam.length_m, shapes=shapes,
-                            support_shapes=shapes_all[:, cols])
+                            sigma=s, length_m=beam.length_m, shapes=shapes,
+                            support_shapes=shapes_all[:, cols], shape_sigma=ss)
         modes = [beam.modes[j] for j in key]
         for i, rows in zip(members, ranked):
             out[i] = {"hypotheses": [r.row() for r in rows], "hypotheses_summary": summary(rows, modes),
-                      "frequency_change_std": float(sig) if sig.ndim == 0 else sig[k].tolist(),
-                      "shape_change_std": None if shapes is None else SHAPE_CHANGE_STD}
+                      "frequency_change_std": _listed(s),
+                      "shape_change_std": None if shapes is None else _listed(ss)}
     return out
+
+
+def _listed(v):
+    """A float, or a list of floats."""
+    return float(v) if np.ndim(v) == 0 else [float(a) for a in np.ravel(v)]

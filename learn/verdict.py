@@ -13,8 +13,9 @@ from learn.evaluate import MIN_DROP
 from learn.features import as_spec
 from physics.io import dof_positions_text
 
-__all__ = ["IN_DISTRIBUTION_PERCENTILE", "classical_answer", "classical_verdict", "detectability_threshold",
-           "equivalent_depth", "network_answer", "network_output", "ood_percentile", "verdict_text"]
+__all__ = ["DAMAGE_EXPLANATIONS", "IN_DISTRIBUTION_PERCENTILE", "agreement", "classical_answer", "classical_verdict",
+           "detectability_threshold", "equivalent_depth", "network_answer", "network_output", "noise_text",
+           "normal_variation_text", "ood_percentile", "verdict_text"]
 
 #: Training percentile of the Mahalanobis distance above which a pair counts as outside the training data.
 IN_DISTRIBUTION_PERCENTILE = 99.9
@@ -156,6 +157,38 @@ def explained_text(res: dict) -> str:
     return "frequency and shape changes" if res.get("shape_change_std") else "frequency changes"
 
 
+#: What each explanation says of damage.
+DAMAGE_EXPLANATIONS = ("slit", "mass_change")
+
+
+def agreement(verdict: dict, net, cl, hypotheses, source: str) -> dict:
+    """Whether the network, the classical method and the competing explanations tell one story about damage:
+    ``{"network", "classical", "explanations", "agree", "text"}`` (None for an answer not given; the
+    explanations' answer is the most likely one's name, a damage when it is a slit or a mass change)."""
+    best = hypotheses[0] if hypotheses else None
+    votes = {"network": None if net is None else bool(net["damaged"]),
+             "classical": None if cl is None else bool(cl["damaged"]),
+             "explanations": None if best is None else best["name"] in DAMAGE_EXPLANATIONS}
+    given = {k: v for k, v in votes.items() if v is not None}
+    agree = len(set(given.values())) <= 1
+    said = {"network": f"the network {'calls it damaged' if votes['network'] else 'finds no damage'}",
+            "classical": f"{cl['method'] if cl else ''} {'calls it damaged' if votes['classical'] else 'finds none'}",
+            "explanations": (f"the most likely explanation is {best['name']} ({best['probability']:.2f}"
+                             + ("" if best.get("fits", True) else ", not fitting") + ")") if best else ""}
+    parts = [said[k] for k in given]
+    if agree:
+        text = "One story: " + "; ".join(parts) + "."
+    else:
+        text = (f"They disagree: {'; '.join(parts)}. The verdict ({'damaged' if verdict['damaged'] else 'undamaged'}) "
+                f"is the {source}'s")
+        if best is not None and votes["explanations"] != bool(verdict["damaged"]):
+            text += (": the explanations find the change within the noise they weigh" if best["name"] == "intact"
+                     else f": the explanations weigh the change against its noise and find {best['name']} more "
+                          "probable")
+        text += "."
+    return {**votes, "agree": agree, "text": text}
+
+
 def verdict_text(res: dict) -> str:
     """The verdict as a reader sees it: the answer, where it comes from, both methods, the caveats."""
     net, cl = res["network"], res["classical"]
@@ -199,12 +232,49 @@ def verdict_text(res: dict) -> str:
                                                                   "the model's DOFs"))
     if res.get("location_ambiguity"):
         lines.append(f"Location: {res['location_ambiguity']}.")
+    if res.get("normal_variation"):
+        lines.append(normal_variation_text(res["normal_variation"]))
+    if res.get("agreement"):
+        lines.append(res["agreement"]["text"])
     if res.get("hypotheses"):
-        lines.append(f"Explanations of the {explained_text(res)} (equal priors, "
-                     f"{100 * res['frequency_change_std']:.2g} % noise per mode"
-                     + (f", {res['shape_change_std']:.2g} per shape entry" if res.get("shape_change_std") else "")
-                     + "): "
+        lines.append(f"Explanations of the {explained_text(res)} (equal priors, {noise_text(res)}): "
                      + ", ".join(f"{h['name']} {h['probability']:.2f}" for h in res["hypotheses"])
                      + f"; {res['hypotheses_summary']}.")
     lines += [f"warning: {w}" for w in res["warnings"]]
     return "\n".join(lines)
+
+
+def _span(v, scale: float = 1.0, unit: str = "") -> str:
+    """``"0.1 %"`` for one value, ``"0.05-0.8 %"`` for the range of a list."""
+    if not isinstance(v, (list, tuple)):
+        return f"{scale * v:.2g}{unit}"
+    v = [scale * a for a in v if a is not None]
+    lo, hi = min(v), max(v)
+    return f"{lo:.2g}{unit}" if f"{lo:.2g}" == f"{hi:.2g}" else f"{lo:.2g}-{hi:.2g}{unit}"
+
+
+def noise_text(res: dict) -> str:
+    """The noise the explanations were weighed with, e.g. ``"0.1 % noise per mode, 0.03 per shape entry"``."""
+    what = "measured" if isinstance(res["frequency_change_std"], list) else "assumed"
+    return (f"{what} noise {_span(res['frequency_change_std'], 100, ' %')} per mode"
+            + (f", {_span(res['shape_change_std'])} per shape entry" if res.get("shape_change_std") else ""))
+
+
+def normal_variation_text(nv: dict) -> str:
+    """The normal variation between tests in one line: assumed, or measured on several baselines with the test
+    of this pair against it."""
+    if not nv["measured"]:
+        return (f"Normal variation between tests: assumed ({nv['frequency_std_pct']:.2g} % per mode in the "
+                "explanations, the training's ranges in the network), not measured: give several baseline tests "
+                "(--baseline repeated) to measure it.")
+    text = (f"Normal variation measured on {nv['n_baselines']} baseline tests (reference {nv['reference_baseline']}):"
+            f" frequency scatter {_span(nv['frequency_std_pct'], 1, ' %')} per mode"
+            + (f", shapes {_span(nv['shape_std'])} per entry" if nv.get("shape_std") else "")
+            + (f", damping {_span(nv['damping_std_pct'], 1, ' points')}"
+               if any(v is not None for v in nv["damping_std_pct"]) else ""))
+    if "beyond" in nv:
+        change = ", ".join(f"{c:+.3g} %" for c in nv["frequency_change_pct"] if c is not None)
+        text += (f"; this test's frequencies change by {change} from the baselines' mean, "
+                 f"{'beyond' if nv['beyond'] else 'within'} that variation (p = {nv['p_value']:.2g}, false-alarm "
+                 f"rate {nv['false_alarm_rate']:g})")
+    return text + "."

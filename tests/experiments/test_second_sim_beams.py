@@ -60,7 +60,8 @@ def test_the_cantilever_defaults_are_unchanged_and_the_ends_can_swap():
     slit = Slit(0.2, 0.004, 0.6)
     mirror = replace(base, root_k_y_N_m=0.0, root_k_theta_Nm_rad=0.0, tip_k_y_N_m=INF, tip_k_theta_Nm_rad=INF,
                      slits=(replace(slit, x_m=L - slit.x_m),))
-    np.testing.assert_allclose(_fe_hz(mirror, 4), _fe_hz(replace(base, slits=(slit,)), 4), rtol=1e-9)
+    # a fine mesh's stiffness spans many decades: LAPACK builds agree on the fundamental to about 1e-8
+    np.testing.assert_allclose(_fe_hz(mirror, 4), _fe_hz(replace(base, slits=(slit,)), 4), rtol=1e-8)
     with pytest.raises(ValueError, match="tip_k_y_N_m must be >= 0"):
         Beam(L, EI, M, tip_k_y_N_m=-1.0)
 

@@ -485,3 +485,58 @@ def test_a_pair_far_outside_the_training_data_gets_finite_network_numbers_and_no
         d = est.predict_details(np.zeros((2, est.n_features_in_)))
     for name in ("probability_damaged", "x_over_L", "hinge_flexibility", "hinge_flexibility_std"):
         assert np.all(np.isfinite(getattr(d, name))), name
+
+
+def _series_files(tmp, rng, name, n, slit=None):
+    """``n`` modal JSON tests of the independent simulator's beam-5 cantilever whose 3 % bolted mass is re-placed
+    +-3 cm around 0.7 L each time (temperature +-0.3 % EI), optionally with a slit."""
+    from experiments.second_sim.fem import Beam, PointMass, assemble, modes
+
+    p = []
+    for k in range(n):
+        L, EI, m = 0.6095, 26.9, 0.15792 / 1.219
+        beam = Beam(L, EI * (1 + 0.003 * rng.uniform(-1, 1)), m, root_k_theta_Nm_rad=948.7 * EI / L,
+                    masses=(PointMass(0.7 * L + rng.uniform(-0.03, 0.03), 0.03 * m * L),),
+                    slits=() if slit is None else (slit,))
+        asm = assemble(beam)
+        md = modes(asm)
+        w = 2 * np.pi * md.frequencies_hz[:4]
+        phi = md.phi[asm.translation_dofs([L * q / 4 for q in range(1, 5)]), :4]
+        p.append(str(tmp / f"{name}{k:02d}.json"))
+        write_modal_json(p[-1], ModalData(-0.002 * w + 1j * w, phi.astype(complex), ("2:y", "3:y", "4:y", "5:y")))
+    return p
+
+
+def test_several_baselines_measure_the_normal_variation_and_decide_with_it(modal_model, tmp_path, capsys):
+    """Ten baseline tests of a beam whose bolted mass is re-placed between tests (independent simulator): the
+    verdict measures their scatter mode by mode, an intact test lies within it (never called damaged), a slit
+    that lowers mode 1 by about 1 % lies beyond it; the explanations are weighed with the measured scatter. With
+    one baseline the verdict says the normal variation is assumed."""
+    from experiments.second_sim.fem import Slit
+
+    rng = np.random.default_rng(4)
+    base = _series_files(tmp_path, rng, "base", 10)
+    intact = _series_files(tmp_path, rng, "intact", 2)
+    slit = _series_files(tmp_path, rng, "slit", 1, Slit(0.1, 0.004, 0.6))
+    assert main(["classify", "--model", str(modal_model), "--baseline", str(tmp_path / "base*.json"), *intact,
+                 *slit, "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert [tuple(r) for r in res] == [KEYS] * 3
+    lnf = np.log([json.loads(Path(b).read_text())["natural_frequencies_hz"] for b in base])
+    nv = [r["normal_variation"] for r in res]
+    assert nv[0]["n_baselines"] == 10 and nv[0]["measured"] and nv[0]["reference_baseline"] in base
+    np.testing.assert_allclose(nv[0]["frequency_std_pct"], 100 * np.std(lnf, axis=0, ddof=1), rtol=1e-6)
+    assert max(nv[0]["frequency_std_pct"]) > 0.1                  # the masses' scatter, not the 0.1 % assumed
+    assert [v["beyond"] for v in nv] == [False, False, True]
+    assert not res[0]["damaged"] and not res[1]["damaged"]
+    assert nv[2]["frequency_change_pct"][0] < -0.8 and nv[2]["p_value"] < 0.01 <= nv[0]["p_value"]
+    assert isinstance(res[2]["frequency_change_std"], list) and len(res[2]["frequency_change_std"]) == 4
+    assert res[2]["hypotheses"][0]["name"] != "intact"
+    # one baseline: the variation is assumed, said in the text
+    assert main(["classify", "--model", str(modal_model), "--baseline", base[0], intact[0]]) == 0
+    out = capsys.readouterr().out
+    assert "Normal variation between tests: assumed" in out
+    assert main(["classify", "--model", str(modal_model), "--baseline", base[0], "--baseline", base[1],
+                 "--baseline", base[2], intact[0]]) == 0
+    assert "Normal variation measured on 3 baseline tests" in capsys.readouterr().out
+    assert main(["classify", "--model", str(modal_model), "--baseline", str(tmp_path / "none*.json"), intact[0]]) == 2

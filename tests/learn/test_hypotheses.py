@@ -132,3 +132,32 @@ def test_the_shape_changes_tell_an_added_mass_from_a_slit(models, x_over_L):
     slit = CASES["slit"]
     du = shape_changes(np.stack([quarter_point_shapes(BASE), quarter_point_shapes(slit)])[None])[0]
     assert weighed(models, shifts(slit), du)[0].name == "slit"
+
+
+def test_a_change_no_explanation_describes_is_said_and_gets_no_slit_interval(models):
+    """Mode 2 up by 1 % while modes 1, 3, 4 fall by 0.5 %: no slit, mass, support or temperature does that; the
+    most likely explanation misses a mode by more than FIT_LIMIT std, the summary says no explanation fits, and
+    the slit reports no interval rather than a narrow one. The true slit of CASES fits."""
+    from learn.hypotheses import FIT_LIMIT
+
+    rows = weighed(models, np.array([-0.005, 0.01, -0.005, -0.005]))
+    assert not rows[0].fits and rows[0].max_misfit_std > FIT_LIMIT
+    assert summary(rows, [1, 2, 3, 4]).startswith("no explanation fits the change within its noise")
+    slit = next(r for r in rows if r.name == "slit")
+    assert slit.parameters["x_m_95"] is None and slit.parameters["hinge_flexibility_68"] is None
+    good = weighed(models, shifts(CASES["slit"]))[0]
+    assert good.fits and good.parameters["x_m_95"] is not None
+    assert not summary([good, *weighed(models, shifts(CASES["slit"]))[1:]], [1, 2, 3, 4]).startswith("no expl")
+
+
+def test_the_verdict_says_when_its_sources_disagree():
+    from learn.verdict import agreement
+
+    net, cl = {"damaged": True}, {"damaged": False, "method": "DLAC"}
+    hyp = [{"name": "intact", "probability": 0.51, "fits": True}]
+    a = agreement({"damaged": True}, net, cl, hyp, "network")
+    assert (a["network"], a["classical"], a["explanations"], a["agree"]) == (True, False, False, False)
+    assert a["text"].startswith("They disagree") and "within the noise they weigh" in a["text"]
+    b = agreement({"damaged": True}, net, {"damaged": True, "method": "DLAC"},
+                  [{"name": "slit", "probability": 0.9, "fits": True}], "network")
+    assert b["agree"] and b["text"].startswith("One story")
