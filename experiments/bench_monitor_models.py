@@ -30,7 +30,7 @@ def write_series(root: Path, seed: int, size: str, n_tests: int, kind: str) -> P
     from experiments.second_sim.series import SLIT_SIZES, SeriesConfig, simulate_series, write_series as write
 
     if not (root / "truth.json").is_file():
-        cfg = SeriesConfig(n_tests=n_tests, seed=seed, kind=kind, slit_ei_loss=SLIT_SIZES[size])
+        cfg = SeriesConfig(n_tests=n_tests, seed=seed, kind=kind, slit_ei_loss=SLIT_SIZES.get(size) or float(size))
         write(cfg, simulate_series(cfg), root)
     return root
 
@@ -75,13 +75,15 @@ def main(argv=None) -> int:
     p.add_argument("--n-tests", type=int, default=240)
     p.add_argument("--baseline-tests", type=int, default=80)
     p.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    p.add_argument("--sizes", nargs="+", default=list(SIZES),
+                   help="slit sizes cycled over the seeds: small, medium, large or an EI loss of the 4-mm slit")
     p.add_argument("--kind", choices=("frf", "output-only"), default="frf")
     p.add_argument("--rate", type=float, default=0.01)
     p.add_argument("--models", nargs="+", default=[m for m in NORMAL_MODELS if m != "regression"])
     args = p.parse_args(argv)
     rows = []
     for seed in args.seeds:
-        size = SIZES[seed % len(SIZES)]
+        size = args.sizes[seed % len(args.sizes)]
         root = write_series(Path(args.out) / f"{args.kind}-seed{seed}-{size}", seed, size, args.n_tests, args.kind)
         truth = json.loads((root / "truth.json").read_text())
         for model in ["regression", *args.models]:
@@ -90,13 +92,13 @@ def main(argv=None) -> int:
                    "threshold": res["threshold"]["value"], **score(res, truth, args.baseline_tests)}
             rows.append(row)
             print(json.dumps(row), flush=True)
-    out = Path(args.out) / f"summary-{args.kind}.json"
+    out = Path(args.out) / f"summary-{args.kind}-{'-'.join(map(str, args.seeds))}.json"
     out.write_text(json.dumps({"config": vars(args), "rows": rows}, indent=1))
-    print(f"{'model':>10} {'false alarms':>13} {'TPR small':>10} {'TPR medium':>11} {'TPR large':>10}")
+    print(f"{'model':>10} {'false alarms':>13} " + " ".join(f"{'TPR ' + s:>10}" for s in dict.fromkeys(args.sizes)))
     for model in ["regression", *args.models]:
         mine = [r for r in rows if r["model"] == model]
         fa = sum(r["false_alarm_rate"] * r["n_intact"] for r in mine) / max(sum(r["n_intact"] for r in mine), 1)
-        tpr = {s: [r["true_positive_rate"] for r in mine if r["slit"] == s] for s in SIZES}
+        tpr = {s: [r["true_positive_rate"] for r in mine if r["slit"] == s] for s in dict.fromkeys(args.sizes)}
         print(f"{model:>10} {fa:13.3%} " + " ".join(f"{np.mean(v):10.1%}" if v else f"{'-':>10}"
                                                     for v in tpr.values()))
     return 0

@@ -32,11 +32,12 @@ from scipy import optimize, stats
 from physics.errors import BeamDamageError, ConfigError
 from physics.io import MODAL, atomic_write_text, format_complex, modal_or_frf, read
 
-__all__ = ["CACHE_FORMAT", "DEFAULT_LATENT", "MAC_MIN", "MIN_PRESENCE", "NORMAL_MODELS", "FactorRemoval",
-           "IdentificationSettings", "IdentifiedModes", "Mixture", "PCARemoval", "ReferenceModes", "Regression",
-           "SeriesInput", "SeriesResult", "Threshold", "alarm_verdicts", "cached_identification", "check_series",
-           "held_out_novelty", "identification_settings", "identify_test", "minimum_baseline", "monitor_series",
-           "read_conditions", "reference_modes", "threshold", "track_modes", "write_cache"]
+__all__ = ["CACHE_FORMAT", "DEFAULT_LATENT", "MAC_MIN", "MIN_PRESENCE", "NORMAL_MODELS", "PCA_EXPLAINED",
+           "alarm_verdicts", "cached_identification", "check_series", "FactorRemoval", "held_out_novelty",
+           "identification_settings", "IdentificationSettings", "IdentifiedModes", "identify_test",
+           "minimum_baseline", "Mixture", "monitor_series", "PCARemoval", "read_conditions", "reference_modes",
+           "ReferenceModes", "Regression", "SeriesInput", "SeriesResult", "Threshold", "threshold", "track_modes",
+           "write_cache"]
 
 #: Format tag of a cache entry (a change of the identification or of the entry's fields changes it).
 CACHE_FORMAT = "beam-damage-monitor-cache/1"
@@ -54,6 +55,8 @@ MAC_MIN = 0.6
 LOO_MAX, N_FOLDS = 200, 20
 #: The latent-variable model used without measured conditions (chosen in docs/monitoring.md).
 DEFAULT_LATENT = "pca"
+#: Share of the baseline's variance the components :class:`PCARemoval` removes explain (its ``k=None``).
+PCA_EXPLAINED = 0.95
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -595,6 +598,9 @@ class Regression:
         self.dof_ = X0.shape[1]
         return self
 
+    def with_choices(self):
+        return Regression()
+
     def expected(self, X, C):
         """The features the normal variation predicts for each test (its conditions' prediction), (n, p)."""
         return np.c_[np.ones(len(C)), np.asarray(C, float)] @ self.coef_
@@ -610,11 +616,15 @@ class Regression:
 
 class PCARemoval:
     """PCA of the baseline features with the ``k`` leading components (the environment's factors) removed (Yan et
-    al. 2005); the index is the squared Mahalanobis distance in the remaining ``p - k`` components."""
+    al. 2005); the index is the squared Mahalanobis distance in the remaining ``p - k`` components.
+
+    ``k=None``: the fewest leading components that explain :data:`PCA_EXPLAINED` of the baseline's variance (at
+    most ``p - 1``): the environment's factors dominate a baseline period's variation, the identification noise and
+    what is left are the rest."""
 
     name = "pca"
 
-    def __init__(self, k: int = 1):
+    def __init__(self, k: int | None = None):
         self.k = k
 
     def fit(self, X, C=None):
@@ -622,9 +632,17 @@ class PCARemoval:
         lam, V = np.linalg.eigh(self.cov_)
         order = np.argsort(lam)[::-1]
         self.var_, self.components_ = lam[order], V[:, order]
-        self.k_ = min(self.k, X0.shape[1] - 1)
+        k = self.k
+        if k is None:
+            share = np.cumsum(self.var_) / max(self.var_.sum(), 1e-300)
+            k = int(np.searchsorted(share, PCA_EXPLAINED) + 1)
+        self.k_ = min(k, X0.shape[1] - 1)
         self.dof_ = X0.shape[1] - self.k_
         return self
+
+    def with_choices(self):
+        """An unfitted copy keeping the number of components chosen here."""
+        return PCARemoval(self.k_)
 
     def expected(self, X, C=None):
         """The mean plus the removed components' part of each test: what the environment's factors explain."""
@@ -663,6 +681,9 @@ class FactorRemoval:
         self.dof_ = X0.shape[1] - int(self.fa_.n_components)
         return self
 
+    def with_choices(self):
+        return FactorRemoval(self.k, self.seed)
+
     def expected(self, X, C=None):
         """The mean plus the factors' expected contribution to each test."""
         Y = (_impute(X, self.mean_, self.cov_) - self.mean_) / self.scale_
@@ -685,16 +706,20 @@ class Mixture:
 
     name = "mixture"
 
-    def __init__(self, max_components: int = 3, seed: int = 0):
-        self.max_components, self.seed = max_components, seed
+    def __init__(self, max_components: int = 3, seed: int = 0, n_components: int | None = None):
+        self.max_components, self.seed, self.n_components = max_components, seed, n_components
+
+    def with_choices(self):
+        """An unfitted copy keeping the number of components chosen here."""
+        return Mixture(self.max_components, self.seed, int(self.gm_.n_components))
 
     def fit(self, X, C=None):
         from sklearn.mixture import GaussianMixture
 
         X0, self.mean_, self.cov_ = _filled(X)
         best = None
-        for c in range(1, self.max_components + 1):
-            if len(X0) < 3 * c * (X0.shape[1] + 1):
+        for c in ([self.n_components] if self.n_components else range(1, self.max_components + 1)):
+            if c > 1 and len(X0) < 3 * c * (X0.shape[1] + 1):
                 break
             g = GaussianMixture(c, covariance_type="full", random_state=self.seed, reg_covar=1e-10, n_init=2)
             g.fit(X0)
@@ -719,11 +744,14 @@ class Mixture:
         return {"model": self.name, "components": int(self.gm_.n_components), "weights": self.gm_.weights_.tolist()}
 
 
-#: Normal-variation models by name: a factory ``(n_features, n_conditions) -> estimator``.
+#: Normal-variation models by name: a factory ``(n_features, n_conditions) -> estimator`` (``fit(X, C)``,
+#: ``novelty(X, C)``, ``expected(X, C)``, ``describe(names)``, ``with_choices()``: an unfitted copy keeping what
+#: the fit chose from the data, so that every held-out fit is the same model).
 NORMAL_MODELS = {
     "regression": lambda p, q: Regression(),
-    "pca": lambda p, q: PCARemoval(1),
+    "pca": lambda p, q: PCARemoval(None),
     "pca0": lambda p, q: PCARemoval(0),
+    "pca1": lambda p, q: PCARemoval(1),
     "pca2": lambda p, q: PCARemoval(2),
     "factor": lambda p, q: FactorRemoval(1),
     "mixture": lambda p, q: Mixture(),
@@ -915,13 +943,8 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
                 np.isfinite(C[i]).all() else "conditions not measured"
     b_idx = np.flatnonzero(ok[:n_baseline])
     Cq = C if q else None
-    factory = NORMAL_MODELS[normal_model]
-
-    def make():
-        return factory(m, q)
-
-    held = held_out_novelty(make, X[b_idx], None if Cq is None else Cq[b_idx])
-    model = make().fit(X[b_idx], None if Cq is None else Cq[b_idx])
+    model = NORMAL_MODELS[normal_model](m, q).fit(X[b_idx], None if Cq is None else Cq[b_idx])
+    held = held_out_novelty(model.with_choices, X[b_idx], None if Cq is None else Cq[b_idx])
     thr = threshold(held, false_alarm_rate, model.dof_, len(b_idx) - (1 if len(b_idx) <= LOO_MAX else
                                                                         len(b_idx) // N_FOLDS), q)
     novelty = np.full(n, np.nan)

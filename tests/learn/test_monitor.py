@@ -230,3 +230,16 @@ def test_explanations_weigh_the_measured_scatter_mode_by_mode(monkeypatch):
     with pytest.raises(BeamDamageError, match="one std per mode"):
         explain_many(model, [pair], np.array([0.001, 0.002]))
     learn.hypotheses._support_curves.cache_clear()
+
+
+def test_pca_removes_the_factors_that_explain_95_percent_and_keeps_them_in_every_held_out_fit():
+    rng = np.random.default_rng(8)
+    temperature, mass = rng.standard_normal((2, 60, 1))
+    noise = 0.05 * rng.standard_normal((60, 4))
+    one = temperature * [1.0, 1.0, 1.0, 1.0] + noise
+    two = one + mass * [0.5, -1.0, 0.2, 0.8]
+    assert PCARemoval().fit(one).k_ == 1 and PCARemoval().fit(two).k_ == 2
+    model = PCARemoval().fit(two)
+    assert model.with_choices().k == 2
+    held = held_out_novelty(model.with_choices, two)
+    assert np.median(held) < 3                    # the 2 remaining dimensions: noise only, F(2, 55) scaled ~ 2
