@@ -17,7 +17,8 @@ beyond the temperatures the baseline saw). Methods, each through the CLI:
 * ``classify, 1 baseline``: ``beam-damage classify --model M TEST... --baseline FIRST`` (the pair classifier
   against the first test; the model trained on the series' ``beam.toml`` by ``generate --config`` (training with
   the series' damping ratios, as classify's warning asks) and ``train``, cached under ``--out``);
-* ``classify, N baselines``: the same with every test of the baseline period as ``--baseline``;
+* ``classify, N baselines``: the same with every test of the baseline period as ``--baseline`` (repeated; its
+  ``--false-alarm-rate`` left at the default);
 * ``frequency shift``: the signed mean relative frequency shift of each test against the first test, alarmed
   below the 1st percentile of the baseline period's shifts (a drop larger than 99 % of the baseline's).
 
@@ -72,7 +73,7 @@ def classify_takes_several_baselines() -> bool:
 
     sub = next(a for a in build_parser(["classify"])._actions if isinstance(a, argparse._SubParsersAction))
     action = next(a for a in sub.choices["classify"]._actions if "--baseline" in a.option_strings)
-    return action.nargs not in (None, 1)
+    return isinstance(action, argparse._AppendAction) or action.nargs not in (None, 1)
 
 
 def _series(out: Path, kind: str, size: str, a) -> Path:
@@ -124,11 +125,17 @@ def _modal_json(cache: Path, record: Path) -> Path | None:
 
 
 def _classify(model: Path, tests: list, baselines: list, chunk: int = 40) -> list:
-    """``classify --json`` of every test against ``baselines`` (one or several); None for a test it refused."""
+    """``classify --json`` of every test against ``baselines`` (one or several): one call for every test, else
+    (a test refused) calls of ``chunk`` tests, else one per test; ``{"error": ...}`` for a test it refused."""
     def run(files):
-        v = _cli(["classify", "--model", str(model), *map(str, files), "--baseline", *map(str, baselines)])
+        v = _cli(["classify", "--model", str(model), *map(str, files),
+                  *(x for b in baselines for x in ("--baseline", str(b)))])
         return v if isinstance(v, list) else [v]
 
+    try:
+        return run(tests)
+    except RuntimeError:
+        pass
     out = []
     for i in range(0, len(tests), chunk):
         part = tests[i:i + chunk]
