@@ -1,4 +1,4 @@
-"""``python -m experiments.second_sim pairs|effects|beams|series ...``: write test files of the independent simulator."""
+"""``python -m experiments.second_sim pairs|effects|beams|series ...``: write the independent simulator's test files."""
 
 from __future__ import annotations
 

@@ -35,12 +35,12 @@ from pathlib import Path
 import numpy as np
 
 from experiments.second_sim.ambient import ambient_record, write_npz
-from experiments.second_sim.fem import Beam, PointMass, Slit, assemble, mesh_elements, modes
+from experiments.second_sim.fem import N_ELEMENTS, Beam, PointMass, Slit, assemble, mesh_elements, modes
 from experiments.second_sim.response import Damping, Noise, measure, receptance
 from experiments.second_sim.writers import write_csv, write_json, write_text_atomic, write_uff
 
 __all__ = ["SERIES_KINDS", "SLIT_SIZES", "SeriesConfig", "SeriesTest", "nominal_series_beam", "series_beam_toml",
-           "simulate_series", "test_beam", "write_series"]
+           "simulate_series", "slit_frequency_drop", "test_beam", "write_series"]
 
 #: The ways a test is recorded.
 SERIES_KINDS = ("frf", "output-only")
@@ -72,6 +72,7 @@ class SeriesConfig:
     damping_ratios: tuple = (0.008, 0.006, 0.005, 0.005)
     damping_scatter: float = 0.05
     n_modes: int = 4
+    min_elements: int = N_ELEMENTS
     # the environment and the handling between tests
     temperature_mean_c: float = 10.0
     temperature_amplitude_c: float = 12.0
@@ -137,7 +138,7 @@ class SeriesConfig:
     def n_elements(self) -> int:
         pts = (*self.sensors_x_m, self.hammer_x_over_L * self.length_m,
                *(r * self.length_m for r in self.ambient_x_over_L))
-        return mesh_elements(self.length_m, pts)
+        return mesh_elements(self.length_m, pts, self.min_elements)
 
 
 @dataclass(frozen=True)
@@ -165,6 +166,15 @@ def test_beam(cfg: SeriesConfig, truth: dict) -> Beam:
     return replace(nominal, EI_Nm2=cfg.EI_Nm2 * truth["ei_factor"],
                    root_k_theta_Nm_rad=nominal.root_k_theta_Nm_rad * truth["root_spring_factor"],
                    masses=(PointMass(truth["mass_x_m"], cfg.mass_kg),), slits=tuple(slits))
+
+
+def slit_frequency_drop(cfg: SeriesConfig) -> np.ndarray:
+    """Relative frequency drop of each of the first ``n_modes`` modes that the slit alone gives the nominal beam."""
+    nominal = nominal_series_beam(cfg)
+    slit = Slit(cfg.slit_x_over_L * cfg.length_m, cfg.slit_width_m, cfg.slit_ei_loss)
+    f0, f1 = (modes(assemble(b), n_refine=cfg.n_modes).frequencies_hz[:cfg.n_modes]
+              for b in (nominal, replace(nominal, slits=(slit,))))
+    return 1.0 - f1 / f0
 
 
 def _draws(cfg: SeriesConfig) -> list[dict]:
@@ -293,6 +303,7 @@ def write_series(cfg: SeriesConfig, tests: list[SeriesTest], out_dir) -> Path:
         "config": asdict(cfg), "kind": cfg.kind, "beam_toml": "beam.toml", "sensors_x_m": sensors,
         "node_numbers": nodes, "hammer_x_m": hammer, "EI_Nm2": cfg.EI_Nm2,
         "mass_per_length_kg_m": cfg.mass_per_length_kg_m, "mass_kg": cfg.mass_kg,
+        "slit_frequency_drop": [float(v) for v in slit_frequency_drop(cfg)],
         "first_damaged_test": next((r["test"] for r in rows if r["damaged"]), None),
         "first_damaged_day": damaged[0] if damaged else None, "tests": rows})
     return out
