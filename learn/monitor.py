@@ -35,9 +35,9 @@ from physics.io import MODAL, atomic_write_text, format_complex, modal_or_frf, r
 __all__ = ["CACHE_FORMAT", "DEFAULT_LATENT", "MAC_MIN", "MIN_PRESENCE", "NORMAL_MODELS", "PCA_EXPLAINED",
            "alarm_verdicts", "cached_identification", "check_series", "FactorRemoval", "held_out_novelty",
            "identification_settings", "IdentificationSettings", "IdentifiedModes", "identify_test",
-           "minimum_baseline", "Mixture", "monitor_series", "PCARemoval", "read_conditions", "reference_modes",
-           "ReferenceModes", "Regression", "SeriesInput", "SeriesResult", "Threshold", "threshold", "track_modes",
-           "write_cache"]
+           "minimum_baseline", "missing_evidence", "Mixture", "monitor_series", "PCARemoval", "read_conditions",
+           "reference_modes", "ReferenceModes", "Regression", "SeriesInput", "SeriesResult", "Threshold", "threshold",
+           "track_modes", "write_cache"]
 
 #: Format tag of a cache entry (a change of the identification or of the entry's fields changes it).
 CACHE_FORMAT = "beam-damage-monitor-cache/1"
@@ -771,16 +771,29 @@ def _folds(n: int):
     return [np.arange(k, n, N_FOLDS) for k in range(N_FOLDS)]
 
 
+def missing_evidence(X, X_train) -> np.ndarray:
+    """``-2 ln P`` of each test's missing modes (NaN features of ``X``, (n, p)) under the training tests' share
+    missing them (``(count + 1) / (n_train + 2)`` per mode, independent): a mode the baseline period always held adds
+    ``2 ln(n_train + 2)`` to the index when a test lacks it, a mode often lost adds little. The features of the
+    missing modes are filled from the others (:func:`_impute`), so the index would otherwise never see a mode
+    that a change has moved beyond its tracking tolerance."""
+    miss = ~np.isfinite(np.asarray(X, float))
+    train = ~np.isfinite(np.asarray(X_train, float))
+    log_p = np.log((train.sum(axis=0) + 1.0) / (train.shape[0] + 2.0))        # (p,)
+    return -2.0 * (miss * log_p).sum(axis=1)
+
+
 def held_out_novelty(make_model, X, C=None) -> np.ndarray:
-    """Every baseline test's novelty index by a model fitted on the other baseline tests (leave-one-out up to
-    :data:`LOO_MAX` tests, else :data:`N_FOLDS` interleaved folds): the index of a test is never computed by a
-    model that saw it."""
+    """Every baseline test's novelty index (plus :func:`missing_evidence`) by a model fitted on the other
+    baseline tests (leave-one-out up to :data:`LOO_MAX` tests, else :data:`N_FOLDS` interleaved folds): the index of
+    a test is never computed by a model that saw it."""
     X = np.asarray(X, float)
     out = np.empty(len(X))
     for held in _folds(len(X)):
         train = np.setdiff1d(np.arange(len(X)), held)
         model = make_model().fit(X[train], None if C is None else C[train])
-        out[held] = model.novelty(X[held], None if C is None else C[held])
+        out[held] = (model.novelty(X[held], None if C is None else C[held])
+                     + missing_evidence(X[held], X[train]))
     return out
 
 
@@ -958,7 +971,8 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     rest = np.flatnonzero(ok)
     rest = rest[rest >= n_baseline]
     if rest.size:
-        novelty[rest] = model.novelty(X[rest], None if Cq is None else Cq[rest])
+        novelty[rest] = (model.novelty(X[rest], None if Cq is None else Cq[rest])
+                         + missing_evidence(X[rest], X[b_idx]))
     novelty[b_idx] = held
     # per-mode normal variation: the residual about what the model explains (conditions, removed factors)
     Xb = X[b_idx]

@@ -243,3 +243,18 @@ def test_pca_removes_the_factors_that_explain_95_percent_and_keeps_them_in_every
     assert model.with_choices().k == 2
     held = held_out_novelty(model.with_choices, two)
     assert np.median(held) < 3                    # the 2 remaining dimensions: noise only, F(2, 55) scaled ~ 2
+
+
+def test_a_mode_the_baseline_always_held_that_goes_missing_is_novel():
+    """A change that moves a mode beyond its tracking tolerance leaves it missing: its features are filled from the
+    others, and the missing mode itself adds 2 ln(n + 2) to the index."""
+    from learn.monitor import missing_evidence
+
+    rng = np.random.default_rng(3)
+    X = rng.standard_normal((40, 4)) * 0.002
+    gone = np.array([[np.nan, np.nan, 0.0, 0.0]])
+    np.testing.assert_allclose(missing_evidence(gone, X), 2 * 2 * np.log(42))
+    X[:10, 0] = np.nan                                 # mode 1 lost in a quarter of the baseline tests
+    np.testing.assert_allclose(missing_evidence(gone, X), -2 * np.log(11 / 42) + 2 * np.log(42))
+    held = held_out_novelty(lambda: PCARemoval(0), X)
+    np.testing.assert_allclose(held[0] - PCARemoval(0).fit(X[1:]).novelty(X[:1])[0], -2 * np.log(10 / 41))
