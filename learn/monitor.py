@@ -618,9 +618,11 @@ class PCARemoval:
     """PCA of the baseline features with the ``k`` leading components (the environment's factors) removed (Yan et
     al. 2005); the index is the squared Mahalanobis distance in the remaining ``p - k`` components.
 
-    ``k=None``: the fewest leading components that explain :data:`PCA_EXPLAINED` of the baseline's variance (at
-    most ``p - 1``): the environment's factors dominate a baseline period's variation, the identification noise and
-    what is left are the rest."""
+    ``k=None``: the fewest leading components that explain :data:`PCA_EXPLAINED` of the baseline's variance, leaving
+    at least two (one with two features): the environment's factors dominate a baseline period's variation, the
+    identification noise and what is left are the rest, and a change is told from them by its pattern over at least
+    two remaining directions (docs/monitoring.md: on the output-only series one direction left found 1 of 31
+    damaged tests, two 10)."""
 
     name = "pca"
 
@@ -632,11 +634,11 @@ class PCARemoval:
         lam, V = np.linalg.eigh(self.cov_)
         order = np.argsort(lam)[::-1]
         self.var_, self.components_ = lam[order], V[:, order]
-        k = self.k
+        k, p = self.k, X0.shape[1]
         if k is None:
             share = np.cumsum(self.var_) / max(self.var_.sum(), 1e-300)
-            k = int(np.searchsorted(share, PCA_EXPLAINED) + 1)
-        self.k_ = min(k, X0.shape[1] - 1)
+            k = min(int(np.searchsorted(share, PCA_EXPLAINED) + 1), p - 2 if p >= 3 else p - 1)
+        self.k_ = min(k, p - 1)
         self.dof_ = X0.shape[1] - self.k_
         return self
 
