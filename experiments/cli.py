@@ -50,6 +50,7 @@ COMMANDS = {
     "train": "experiments.cmd_train",
     "evaluate": "experiments.cmd_evaluate",
     "classify": "experiments.cmd_classify",
+    "monitor": "experiments.cmd_monitor",
 }
 
 EXIT_USAGE = 2

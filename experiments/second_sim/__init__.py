@@ -5,8 +5,9 @@ pyuff and the standard library): a fine-mesh Euler-Bernoulli/Timoshenko
 beam with springs at both ends (:mod:`.fem`), damping, FRFs and a measurement chain
 (:mod:`.response`), UFF/JSON writers (:mod:`.writers`), specimen pairs with
 slits (:mod:`.pairs`), hidden-effect cases (:mod:`.effects`) and a catalogue of beams on
-every support with their own sensors and bands (:mod:`.beams`) and a steel cantilever with bolted masses
-(:mod:`.bolted`). ``python -m experiments.second_sim pairs|effects|beams|bolted`` writes them.
+every support with their own sensors and bands (:mod:`.beams`), a steel cantilever with bolted masses
+(:mod:`.bolted`) and a monitoring series of one cantilever (:mod:`.series`).
+``python -m experiments.second_sim pairs|effects|beams|bolted|series`` writes them.
 
 The names below load on first use (the CLI limits BLAS threads before numpy loads).
 """
@@ -21,6 +22,8 @@ _API = {
     "PairRecord": "pairs", "PairSet": "pairs", "PAIR_SETS": "pairs", "simulate_pairs": "pairs",
     "write_pairs": "pairs",
     "CATALOGUE": "beams", "CatalogueBeam": "beams", "simulate_beam_pairs": "beams", "write_beam_pairs": "beams",
+    "SeriesConfig": "series", "SeriesTest": "series", "SLIT_SIZES": "series", "simulate_series": "series",
+    "write_series": "series",
     "EffectCase": "effects", "effect_cases": "effects", "write_effect_cases": "effects",
     "bolted_beam": "bolted", "bolted_test": "bolted", "write_bolted_test": "bolted",
 }

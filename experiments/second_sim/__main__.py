@@ -1,4 +1,5 @@
-"""``python -m experiments.second_sim pairs|effects|beams|bolted ...``: test files of the independent simulator."""
+"""``python -m experiments.second_sim pairs|effects|beams|bolted|series ...``: test files of the independent
+simulator."""
 
 from __future__ import annotations
 
@@ -48,6 +49,24 @@ def main(argv=None) -> int:
     po.add_argument("--pairs", type=int, default=0,
                     help="instead: this many specimen pairs with masses added (1-20 %% of the bar's mass) or lost "
                          "(1-8 %%), pair-KK_baseline/current.json and truth.json")
+    ps = sub.add_parser("series", help="a monitoring series of one cantilever: a test a day, temperature, re-mounting, "
+                                       "a re-placed mass, a slit from a known day; conditions.csv, truth.json, "
+                                       "beam.toml")
+    ps.add_argument("--out", required=True)
+    ps.add_argument("--kind", choices=("frf", "output-only"), default="frf",
+                    help="FRFs (UFF58 accelerance, hammer) or output-only records (NPZ of acceleration)")
+    ps.add_argument("--n-tests", type=int, default=365, help="tests (default 365)")
+    ps.add_argument("--days", type=float, default=365.0, help="days the tests span (default 365)")
+    ps.add_argument("--seed", type=int, default=0)
+    ps.add_argument("--damage-day", type=float, default=270.0, help="day the slit appears (default 270; < 0: none)")
+    ps.add_argument("--slit-size", default="medium",
+                    help="slit EI loss (4 mm wide at 0.15 L): small, medium, large or a number in [0, 1)")
+    ps.add_argument("--growth-day", type=float, default=None,
+                    help="a second slit (0.55 L) whose EI loss grows linearly from this day to 0.6 at the end")
+    ps.add_argument("--sensors", type=float, nargs="+", default=None, metavar="X_OVER_L",
+                    help="accelerometer positions as fractions of the length (default 1/3 2/3 1)")
+    ps.add_argument("--hammer", type=float, default=None, metavar="X_OVER_L",
+                    help="hammer position as a fraction of the length (default 1, the tip)")
     args = p.parse_args(argv)
     t0 = time.perf_counter()
     try:
@@ -93,6 +112,24 @@ def main(argv=None) -> int:
             else:
                 out = write_bolted_test(args.out, args.seed, args.removed_kg, args.damage_x_m)
                 what = "the bolted cantilever"
+        elif args.command == "series":
+            from experiments.second_sim.series import SLIT_SIZES, SeriesConfig, simulate_series, write_series
+
+            size = SLIT_SIZES.get(args.slit_size)
+            if size is None:
+                try:
+                    size = float(args.slit_size)
+                except ValueError:
+                    raise ValueError(f"--slit-size must be one of {', '.join(SLIT_SIZES)} or a number in [0, 1), "
+                                     f"got {args.slit_size!r}") from None
+            kw = {"sensors_x_over_L": tuple(args.sensors)} if args.sensors else {}
+            if args.hammer is not None:
+                kw["hammer_x_over_L"] = args.hammer
+            cfg = SeriesConfig(n_tests=args.n_tests, days=args.days, seed=args.seed, kind=args.kind,
+                               damage_day=None if args.damage_day < 0 else args.damage_day, slit_ei_loss=size,
+                               growth_day=args.growth_day, **kw)
+            out = write_series(cfg, simulate_series(cfg), args.out)
+            what = f"a series of {args.n_tests} {args.kind} tests"
         else:
             from experiments.second_sim.effects import effect_cases, write_effect_cases
 

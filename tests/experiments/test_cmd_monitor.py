@@ -1,0 +1,133 @@
+"""``beam-damage monitor`` through the CLI on series of the independent simulator (tests/monitor_series.py)."""
+
+import csv
+import json
+
+import numpy as np
+import pytest
+
+from experiments.cli import main
+from monitor_series import write_frf_series, write_modal_series
+
+
+@pytest.fixture(scope="module")
+def frf_series(tmp_path_factory):
+    """16 daily UFF tests (receptances at 4 points, 1 % noise), a slit from day 13 on."""
+    return write_frf_series(tmp_path_factory.mktemp("frf"), 16, slit_day=13, seed=11)
+
+
+@pytest.fixture(scope="module")
+def modal_series(tmp_path_factory):
+    return write_modal_series(tmp_path_factory.mktemp("modal"), 30, slit_day=24, seed=12)
+
+
+def run_json(capsys, argv):
+    code = main(argv)
+    out, err = capsys.readouterr()
+    return code, (json.loads(out) if code == 0 else None), err
+
+
+@pytest.mark.slow
+def test_an_frf_series_is_identified_once_and_the_slit_alarmed(tmp_path, capsys, monkeypatch, frf_series):
+    csv_path, _ = frf_series
+    out = tmp_path / "mon"
+    code, res, err = run_json(capsys, ["monitor", "--conditions", str(csv_path), "--baseline-tests", "12",
+                                       "--out", str(out), "--json"])
+    assert code == 0, err
+    assert res["baseline_tests"] == 12 and res["false_alarm_rate"] == 0.01
+    assert res["normal_variation"]["model"] == "regression"
+    f = np.array([r["frequencies_hz"] for r in res["tests"]])
+    assert f.shape == (16, 4) and np.isfinite(f).all()
+    np.testing.assert_allclose(np.median(f[:12], axis=0), [21.7, 136, 381, 746], rtol=0.02)   # 12-element mesh
+    alarms = [r["alarm"] for r in res["tests"]]
+    assert alarms[13:] == [True] * 3 and not any(alarms[12:13])
+    assert res["first_alarm"]["index"] == 13
+    v = res["tests"][13]["verdict"]
+    assert v["what_changed"][0]["z"] < -5 and v["what_changed"][0]["change_pct"] < -0.3
+    for name in ("monitor.png", "monitor.csv", "monitor.json", "report.html"):
+        assert (out / name).is_file()
+    assert "data:image/png;base64," in (out / "report.html").read_text()
+    rows = list(csv.DictReader(open(out / "monitor.csv")))
+    assert len(rows) == 16 and rows[13]["alarm"] == "True"
+    assert len(list((out / "cache").glob("*.json"))) == 16
+    import learn.monitor
+
+    monkeypatch.setattr(learn.monitor, "identify_test", lambda *a: pytest.fail("identified again"))
+    code, again, err = run_json(capsys, ["monitor", "--conditions", str(csv_path), "--baseline-tests", "12",
+                                         "--out", str(out), "--json"])
+    assert code == 0, err
+    assert [r["novelty"] for r in again["tests"]] == [r["novelty"] for r in res["tests"]]
+
+
+def test_a_modal_series_writes_its_chart_table_and_report_and_reruns_from_the_cache(tmp_path, capsys, monkeypatch,
+                                                                                   modal_series):
+    csv_path, files, _ = modal_series
+    out = tmp_path / "mon"
+    argv = ["monitor", "--conditions", str(csv_path), "--baseline-tests", "18", "--out", str(out), "--json"]
+    code, res, err = run_json(capsys, argv)
+    assert code == 0, err
+    assert [r["alarm"] for r in res["tests"][18:]] == [False] * 6 + [True] * 6
+    assert res["first_alarm"]["index"] == 24 and res["n_alarms_after_baseline"] == 6
+    assert res["tests"][24]["verdict"]["summary"].startswith("mode ")
+    saved = json.loads((out / "monitor.json").read_text())
+    assert saved["tests"][24]["novelty"] == res["tests"][24]["novelty"]
+    assert "data:image/png;base64," in (out / "report.html").read_text()
+    rows = list(csv.DictReader(open(out / "monitor.csv")))
+    assert len(rows) == 30 and rows[24]["alarm"] == "True" and float(rows[0]["temperature_c"]) == pytest.approx(
+        res["tests"][0]["conditions"]["temperature_c"])
+    assert len(list((out / "cache").glob("*.json"))) == 30
+    import learn.monitor
+
+    monkeypatch.setattr(learn.monitor, "identify_test", lambda *a: pytest.fail("identified again"))
+    code, again, err = run_json(capsys, argv)
+    assert code == 0, err
+    assert [r["novelty"] for r in again["tests"]] == [r["novelty"] for r in res["tests"]]
+
+
+def test_too_few_baseline_tests_is_one_line_and_nothing_written(tmp_path, capsys, modal_series):
+    csv_path, _, _ = modal_series
+    out = tmp_path / "never"
+    code, _, err = run_json(capsys, ["monitor", "--conditions", str(csv_path), "--baseline-tests", "9",
+                                     "--out", str(out), "--json"])
+    assert code == 2
+    assert err.count("\n") == 1 and "at least 11" in err and "--baseline-tests" in err
+    assert not out.exists()
+
+
+def test_a_bad_file_is_its_rows_error_and_mixed_kinds_are_named(tmp_path, capsys, modal_series, frf_series):
+    _, files, _ = modal_series
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"natural_frequencies_hz": "many"}')
+    series = [str(f) for f in files[:26]] + [str(bad), str(frf_series[1][0])] + [str(f) for f in files[26:]]
+    code, res, err = run_json(capsys, ["monitor", *series, "--baseline-tests", "15", "--json"])
+    assert code == 0, err
+    rows = res["tests"]
+    assert rows[26]["identified"] is False and "bad.json" in rows[26]["error"]
+    assert rows[27]["identified"] is False and rows[27]["error"].startswith("mixed kinds")
+    assert all(r["alarm"] for r in rows[28:])                        # the slit, after both bad rows
+    assert res["normal_variation"]["model"] == "pca"
+    code, _, err = run_json(capsys, ["monitor", str(frf_series[1][0]), *series[:20], "--baseline-tests", "15",
+                                     "--json"])
+    assert code == 2 and "mixed kinds" in err and err.count("\n") == 1
+
+
+@pytest.mark.slow
+def test_an_alarm_gets_the_explanations_with_the_measured_scatter_and_the_networks_verdict(tmp_path, capsys,
+                                                                                          modal_series):
+    from datagen.config import load_config, merge
+    from datagen.generation import generate
+
+    cfg = merge({"measurement": {"lines": 256}, "output": {"shard_size": 100}}, base=load_config("training"))
+    generate(tmp_path / "data", cfg, n=200, seed=5, progress=False)
+    assert main(["train", "--data", str(tmp_path / "data"), "--out", str(tmp_path / "model"), "--epochs", "2",
+                 "--json"]) == 0
+    capsys.readouterr()
+    csv_path, _, _ = modal_series
+    code, res, err = run_json(capsys, ["monitor", "--conditions", str(csv_path), "--baseline-tests", "18",
+                                       "--model", str(tmp_path / "model"), "--json"])
+    assert code == 0, err
+    v = res["tests"][24]["verdict"]
+    sigma = v["frequency_change_std"]
+    np.testing.assert_allclose(sigma, res["normal_variation"]["per_mode_std"], rtol=1e-12)
+    assert [h["name"] for h in v["hypotheses"]][0] != "intact"
+    assert v["network"]["probability_damaged"] is not None and v["network_baselines"] == 18
