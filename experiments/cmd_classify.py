@@ -10,10 +10,11 @@ import numpy as np
 
 from experiments.jsonable import to_jsonable
 from learn.classify import classify_many
-from learn.measured import on_model_dofs
+from learn.measured import on_model_dofs, differences_from_model
 from learn.model_dir import load_model
 from physics.frf import receptance_modal
-from physics.io import FRF, MODAL, MeasuredFRF, accepted, atomic_write_bytes, atomic_write_text, modal_or_frf, read
+from physics.io import (FRF, MODAL, MeasuredFRF, accepted, atomic_write_bytes, atomic_write_text, modal_or_frf, parse_dof,
+                        read)
 
 __all__ = ["KEYS", "add_parser", "run"]
 
@@ -62,6 +63,28 @@ def read_input(path):
     return read(path, modal_or_frf(path))
 
 
+def measured_test_warnings(model, files, raw, mapped) -> list[str]:
+    """One line per way the files' test differs from the model's (:func:`learn.measured.differences_from_model`), and
+    per file whose measured DOFs the model does not read."""
+    frfs = {str(f): d for f, d in zip(files, raw) if isinstance(d, MeasuredFRF)}
+    gen = (model.config.get("generator_config") or {}).get("measurement", {})
+    test = model.beam.test
+    df = None
+    if gen.get("lines") and test is not None:
+        df = (test.band_hz[1] - test.band_hz[0]) / (int(gen["lines"]) - 1)
+    out = differences_from_model(frfs, model.beam, df)
+    for f, d, (_, dof_map) in zip(files, raw, mapped):
+        if dof_map is not None and "not used" in dof_map.detail:
+            forces = ({parse_dof(x)[0] for x in d.reference_dofs} - {parse_dof(x)[0] for x in d.response_dofs}
+                      if isinstance(d, MeasuredFRF) else set())
+            unused = [x for x, m in zip(dof_map.dofs, dof_map.model_dofs) if not m and parse_dof(x)[0] not in forces]
+            if not unused:
+                continue
+            out.append(f"{f}: measured DOF{'s' * (len(unused) > 1)} {', '.join(unused)} lie at no sensor of the "
+                       f"model ({', '.join(model.beam.dofs)}): not used")
+    return out
+
+
 def identification_method(path) -> str | None:
     """The ``method`` a modal-data JSON file names (``identify --out`` writes it for output-only modes), else None."""
     from physics.io import read_json
@@ -77,9 +100,13 @@ def run(args):
     model = load_model(args.model)
     _, beam_x_m = model.measured_beam(args.beam, args.mass)
     files = [args.baseline, *args.measured]
-    mapped = [on_model_dofs(read_input(f), model.beam, beam_x_m, str(f)) for f in files]
+    raw = [read_input(f) for f in files]
+    mapped = [on_model_dofs(d, model.beam, beam_x_m, str(f)) for d, f in zip(raw, files)]
     results = classify_many(model, mapped[0][0], [m[0] for m in mapped[1:]], names=[str(f) for f in files],
                             methods=[identification_method(f) for f in files])
+    differ = measured_test_warnings(model, files, raw, mapped)
+    for r in results:
+        r["warnings"] = differ + [w for w in r["warnings"] if w not in differ]
     base_pos = mapped[0][1] and mapped[0][1].to_dict()
     extras = []
     for r, (_, cur_map) in zip(results, mapped[1:]):

@@ -10,7 +10,7 @@ from learn.classical import FREQUENCY_METHODS, run_classical
 from learn.features import feature_names, frf_features, frequency_features, map_frf_to_grid, modal_features
 from learn.hypotheses import NO_EXPLANATION, explain_many
 from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows, identification_band_hz,
-                            identify_modes, modal_pair, mode_checks, nominal_ratio_range)
+                            identify_modes, identify_test, modal_pair, mode_checks, nominal_ratio_range)
 from learn.model_dir import TrainedModel
 from learn.verdict import (IN_DISTRIBUTION_PERCENTILE, classical_answer, classical_verdict, equivalent_depth,
                            modes_text, network_answer, network_output, ood_percentile)
@@ -300,11 +300,9 @@ def _modal_inputs(model: TrainedModel, baseline, currents: list, names: list[str
         fmax, fmin = IDENTIFICATION_BAND_FACTOR * float(sens.frequencies_hz[3]), 0.0
     else:
         fmin, fmax = test.band_hz
-    try:
-        # another test: spare poles and a model order for wide noisy bands, then paired by frequency
-        k = model.beam.n_modes + (0 if test is None else 2)
-        order = 40 if test is None else max(40, 10 * k)
-        ids = [identify_modes(d, fmax, n, k, fmin, order) for d, n in zip(inputs, names)]
+    try:  # the thesis's test: its 4 modes; another test: as 'identify --band' does, then paired by frequency
+        ids = [identify_modes(d, fmax, n) if test is None else identify_test(d, test.band_hz, n)
+               for d, n in zip(inputs, names)]
     except BeamDamageError:
         if model.route == "modal":
             raise
