@@ -2,16 +2,17 @@
 modes, a drive point the beam file leaves out, one accelerometer with a transfer FRF over a wide band.
 
 Run: ``python -m experiments.bench_test_as_run --out out/test-as-run [--n-pairs 36] [--train-n 10000] [--seed 0]
-[--only NAME] [--json]``
+[--only NAME] [--before MAIN_CHECKOUT] [--json]``
 
 For each beam of :data:`experiments.second_sim.beams.TEST_AS_RUN` (the independent simulator's, sharing no code
 with the package) the loop of :func:`experiments.study_beams.run_beam`: the simulator writes ``beam.toml`` and
 ``--n-pairs`` UFF pairs; ``generate --beam beam.toml --config training --n TRAIN_N``; ``train``; ``classify``
-per pair. A beam file that leaves ``drive_x_m`` out while the files' geometry places the reference DOF is first
-completed by the files' value (:func:`learn.measured.completed_beam_file`, what ``classify`` and ``discrepancy``
-say and use). Printed per beam: the network's answer rate, zone accuracy, detection and false alarms of the
-network, the verdict and the best classical method; and, per beam, the modes ``identify --band`` (the
-identification ``classify`` runs) finds in the baseline files against the modes the simulator put in the band.
+per pair. A beam file that leaves ``drive_x_m`` out (the files' geometry places the reference DOF) is run twice:
+as written (the model trained for a force at the first sensor), and as the README's loop calibrates it
+(``discrepancy`` on the first baseline file writes the files' drive point into its beam file). Printed per beam
+and model: the network's answer rate, zone accuracy, detection and false alarms of the network, the verdict and
+the best classical method; and the modes ``identify --band`` (the identification ``classify`` runs) finds in
+the baseline files against the modes the simulator put in the band (``--before``: also another checkout's).
 """
 
 from __future__ import annotations
@@ -26,9 +27,10 @@ import numpy as np
 __all__ = ["main", "modes_found"]
 
 
-def modes_found(pairs: Path, meta: dict, tolerance: float = 0.03) -> dict:
+def modes_found(pairs: Path, meta: dict, tolerance: float = 0.03, source_tree: str | None = None) -> dict:
     """Per baseline file: the simulator's bending modes in the band and those ``identify --band`` finds (within
-    ``tolerance``, relative); pooled counts and the files missing a mode."""
+    ``tolerance``, relative; ``source_tree``: another checkout's ``identify``); pooled counts and the files
+    missing a mode."""
     from experiments.bench_foreign import cli_json
 
     lo, hi = meta["band_hz"]
@@ -38,7 +40,8 @@ def modes_found(pairs: Path, meta: dict, tolerance: float = 0.03) -> dict:
         k = int(p["pair"])
         truth = np.asarray(p["baseline_frequencies_hz"])
         truth = truth[(truth >= lo) & (truth <= hi)]
-        out = cli_json(["identify", str(pairs / f"pair-{k:03d}_baseline.uff"), "--band", str(lo), str(hi)])
+        out = cli_json(["identify", str((pairs / f"pair-{k:03d}_baseline.uff").resolve()), "--band", str(lo), str(hi)],
+                       source_tree)
         f = np.array([m["frequency_hz"] for m in out["modes"]])
         hit = np.array([f.size > 0 and np.min(np.abs(f / t - 1)) <= tolerance for t in truth])
         present += truth.size
@@ -46,6 +49,14 @@ def modes_found(pairs: Path, meta: dict, tolerance: float = 0.03) -> dict:
         if not hit.all():
             missing.append({"pair": k, "missed_hz": truth[~hit].round(2).tolist()})
     return {"modes_present": present, "modes_found": found, "files": len(meta["pairs"]), "missing": missing}
+
+
+def _row(cb, label: str, r: list[dict], info: dict, ident: dict | None) -> dict:
+    net = next(x for x in r if x["method"] == "network")
+    ver = next(x for x in r if x["method"] == "verdict")
+    best = next((x for x in r if x["method"] == net["best_classical"]), None)
+    return {"beam": cb.name, "model": label, "modes": info["modes"], "network_answered": net["answered"],
+            "pairs": net["pairs"], "network": net, "verdict": ver, "best_classical": best, "identification": ident}
 
 
 def main(argv=None) -> int:
@@ -56,27 +67,34 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--only", default=None)
+    ap.add_argument("--before", default=None, metavar="DIR",
+                    help="another checkout (e.g. main) whose 'identify' is scored beside this one's")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
+    from experiments.bench_foreign import cli_json
     from experiments.second_sim.beams import TEST_AS_RUN
     from experiments.study_beams import run_beam
 
     out = Path(a.out)
-    rows, table = [], []
+    table = []
     for cb in TEST_AS_RUN:
         if a.only not in (None, cb.name):
             continue
         r, info = run_beam(cb, out, a.n_pairs, a.train_n, a.seed, a.workers)
-        rows += r
         pairs = out / cb.name / f"pairs-n{a.n_pairs}-s{a.seed}"
         meta = json.loads((pairs / "truth.json").read_text())
-        ident = modes_found(pairs, meta)
-        net = next(x for x in r if x["method"] == "network")
-        ver = next(x for x in r if x["method"] == "verdict")
-        best = next((x for x in r if x["method"] == net["best_classical"]), None)
-        table.append({"beam": cb.name, "modes": info["modes"], "network_answered": net["answered"],
-                      "pairs": net["pairs"], "network": net, "verdict": ver, "best_classical": best,
-                      "identification": ident})
+        ident = {"this": modes_found(pairs, meta)}
+        if a.before:
+            ident["before"] = modes_found(pairs, meta, source_tree=a.before)
+        table.append(_row(cb, "beam file as written", r, info, ident))
+        if not cb.file_drive:  # the README's loop: discrepancy writes the files' drive point into the beam file
+            cal = out / cb.name / "calibrated"
+            if not (cal / "beam.toml").is_file():
+                cli_json(["discrepancy", "--beam", str(pairs / "beam.toml"), "--measured",
+                          str(pairs / "pair-000_baseline.uff"), "--out", str(cal)])
+            r, info = run_beam(cb, out, a.n_pairs, a.train_n, a.seed, a.workers, beam_file=cal / "beam.toml",
+                               model_tag="calibrated")
+            table.append(_row(cb, "discrepancy's beam file (the files' drive point)", r, info, None))
     from physics.io import atomic_write_text
 
     out.mkdir(parents=True, exist_ok=True)
@@ -85,17 +103,20 @@ def main(argv=None) -> int:
     if a.json:
         print(json.dumps(table, indent=1))
         return 0
-    print("| beam | modes | network answers | zone acc. network / verdict / best classical | detection network / "
-          "verdict | false alarms network / verdict | modes found / present (identify --band) |")
-    print("|---|---|---|---|---|---|---|")
+    print("| beam | model trained on | modes | network answers | zone acc. network / verdict / best classical | "
+          "detection network / verdict | false alarms network / verdict | modes found / present (identify --band)"
+          + (" before / after |" if a.before else " |"))
+    print("|---|---|---|---|---|---|---|---|")
+    pct = lambda x: "-" if x is None or not np.isfinite(x) else f"{x:.0%}"  # noqa: E731
     for t in table:
         n, v, b = t["network"], t["verdict"], t["best_classical"] or {}
-        pct = lambda x: "-" if x is None or not np.isfinite(x) else f"{x:.0%}"  # noqa: E731
-        print(f"| {t['beam']} | {','.join(map(str, t['modes']))} | {t['network_answered']} of {t['pairs']} | "
-              f"{pct(n['zone_accuracy'])} / {pct(v['zone_accuracy'])} / {pct(b.get('zone_accuracy'))} "
+        ident = t["identification"] or {}
+        found = " / ".join(f"{ident[k]['modes_found']} of {ident[k]['modes_present']}" for k in ("before", "this")
+                           if k in ident) or "-"
+        print(f"| {t['beam']} | {t['model']} | {','.join(map(str, t['modes']))} | {t['network_answered']} of "
+              f"{t['pairs']} | {pct(n['zone_accuracy'])} / {pct(v['zone_accuracy'])} / {pct(b.get('zone_accuracy'))} "
               f"({b.get('method', '-')}) | {pct(n['detection'])} / {pct(v['detection'])} | "
-              f"{n['false_alarms']} / {v['false_alarms']} of {n['intact_pairs']} | "
-              f"{t['identification']['modes_found']} / {t['identification']['modes_present']} |")
+              f"{n['false_alarms']} / {v['false_alarms']} of {n['intact_pairs']} | {found} |")
     return 0
 
 

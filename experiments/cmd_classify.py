@@ -13,8 +13,8 @@ from learn.classify import classify_many
 from learn.measured import on_model_dofs, differences_from_model
 from learn.model_dir import load_model
 from physics.frf import receptance_modal
-from physics.io import (FRF, MODAL, MeasuredFRF, accepted, atomic_write_bytes, atomic_write_text, modal_or_frf, parse_dof,
-                        read)
+from physics.io import (FRF, MODAL, MeasuredFRF, accepted, atomic_write_bytes, atomic_write_text, modal_or_frf,
+                        parse_dof, read)
 
 __all__ = ["KEYS", "add_parser", "run"]
 

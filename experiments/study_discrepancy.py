@@ -13,6 +13,7 @@ import csv
 import io
 import json
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -44,6 +45,7 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[dsc.Measurement, o
     :class:`physics.io.DofMap` of the measured DOFs (None for frequencies alone).
     """
     path = Path(path)
+    beam = measurement_mesh(beam)
     if modal_or_frf(path) == MODAL:
         try:
             obj = read_json(path, require_object=False)
@@ -81,9 +83,10 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[dsc.Measurement, o
         ident = identify_frf(frf, n_modes=n_modes)
     est = ident.estimate
     rec = ident.frf  # receptance, band-limited as identified
-    # responses and references placed together (a driving point's reference is where its response is), but a
-    # force where no sensor is does not count as one (physics.io.sensor_labels)
-    labels = sensor_labels(rec, beam.measured_x_m if beam.measured_x_given else None)
+    # the sensors placed (a driving point's reference is where its response is); a force where no sensor is does
+    # not count as one (physics.io.sensor_labels) and is placed by the file's geometry, else the beam file
+    labels = tuple(dict.fromkeys(rec.response_dofs)) if rec.metadata.get("geometry") else \
+        sensor_labels(rec, beam.measured_x_m if beam.measured_x_given else None)
     dof_map = beam.map_dofs(labels, frf=rec, targets="nodes")
     x = dict(zip(labels, _node_x(beam, dof_map.model_dofs)))
     for d in rec.reference_dofs:
@@ -101,6 +104,16 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[dsc.Measurement, o
                            resp if shapes is not None else (), rec.frf[rows], rec.frequency_hz, resp, ref, rec.kind)
     rel_std = np.asarray(est.frequency_std_hz)[order] / meas.frequencies_hz
     return meas, rel_std, dof_map
+
+
+def measurement_mesh(beam: Beam, most: int = 400) -> Beam:
+    """``beam`` on the fewest elements (at least its own, at most ``most``) that put a node at every measured
+    position and the drive point, which measured DOFs are placed on; ``beam`` itself when none does."""
+    points = np.r_[beam.measured_x_m, [] if beam.drive_x_m is None else [beam.drive_x_m]] / beam.length_m
+    for n in range(beam.n_elements, most + 1):
+        if np.all(np.abs(points * n - np.rint(points * n)) <= 1e-6 * n):
+            return beam if n == beam.n_elements else replace(beam, n_elements=n)
+    return beam
 
 
 def _node_x(beam: Beam, model_dofs) -> tuple:

@@ -270,8 +270,10 @@ def _chosen_verdict(net, cl, p, reasons: list, warnings: list, sens, depth, beam
 
 
 def _identification(p, base_md, cur_md, identified: bool, beam) -> dict:
-    """The verdict's ``identification``: how the modes were found, the baseline and measured natural frequencies
-    (Hz; every mode found when the pair is not complete) and the 1-based modes classified."""
+    """The verdict's ``identification``: how the modes were found (``as``: the ``identify`` command that finds the
+    same modes), the baseline and measured natural frequencies (Hz; every mode found when the pair is not complete),
+    the 1-based modes classified, and every pole found in each test with the model's mode it was paired with
+    (``baseline_poles``, ``measured_poles``: ``{"frequency_hz", "mode"}``, mode None for a pole left unpaired)."""
     if p is None:
         freqs, modes = ([], []), []
     elif p.complete:
@@ -279,10 +281,14 @@ def _identification(p, base_md, cur_md, identified: bool, beam) -> dict:
     else:
         freqs = [np.sort(np.abs(md.eigenvalues)) / (2 * np.pi) for md in (base_md, cur_md)]
         modes = [beam.modes[int(j)] for j in p.modes]
+    poles = p.poles if p is not None and p.poles else ([], [])
     return {**IDENTIFICATION, "n_modes": beam.n_modes, "modes_model": list(beam.modes),
             "source": "identified from FRFs" if identified else "modal data",
+            **({"as": "identify --band " + " ".join(f"{b:g}" for b in beam.test.band_hz)}
+               if identified and beam.test is not None else {}),
             "baseline_frequencies_hz": [float(x) for x in freqs[0]],
-            "measured_frequencies_hz": [float(x) for x in freqs[1]], "modes_classified": modes}
+            "measured_frequencies_hz": [float(x) for x in freqs[1]], "modes_classified": modes,
+            "baseline_poles": list(poles[0]), "measured_poles": list(poles[1])}
 
 
 

@@ -85,7 +85,7 @@ def identification_errors(cfg: dict, level: float, floor: float, specimens: int,
         except BeamDamageError:
             continue
         lam_e[i], psi_e[i] = on_nominal_modes(md.eigenvalues, md.eigenvectors, nominal)
-    return mode_errors(lam_e, psi_e, lam_t, psi_t)
+    return mode_errors(lam_e, psi_e, lam_t, psi_t, unscaled=setup.drive_off_sensors)   # no driving point: unscaled
 
 
 def on_nominal_modes(eigenvalues, shapes, nominal_hz):

@@ -69,7 +69,7 @@ def test_the_files_reference_dof_is_named_with_the_modes_it_cannot_excite():
     assert len(drive) == 1 and "trained for a drive point at 0.15 m" in drive[0] and "modes 3, 6" in drive[0]
     assert not differences_from_model({"b.uff": _frf(beam.test.sensors_x_m, 0.4)}, _pinned(0.4), 0.625)
     spacing = differences_from_model({"b.uff": _frf(beam.test.sensors_x_m, 0.4)}, _pinned(0.4), 0.1)
-    assert len(spacing) == 1 and "line spacing 0.801 Hz, the training data's 0.1 Hz" in spacing[0]
+    assert len(spacing) == 1 and "line spacing 0.801 Hz, coarser than the training data's 0.1 Hz" in spacing[0]
     short = _frf(beam.test.sensors_x_m, 0.4)
     short = MeasuredFRF(short.frequency_hz[:300], short.frf[..., :300], short.response_dofs, short.reference_dofs,
                         metadata=short.metadata)                # 10-250 Hz: modes 4 and 5 (261, 407 Hz) are not
@@ -95,7 +95,7 @@ def test_one_accelerometer_and_a_hammer_elsewhere_is_one_sensor():
 
 @pytest.fixture(scope="module")
 def impact(tmp_path_factory):
-    """One pair of the independent simulator's impact test: one accelerometer at the tip, the hammer at 0.06 m."""
+    """One pair of the independent simulator's impact test: one accelerometer at the tip, the hammer at 0.09 m."""
     from experiments.second_sim.beams import TEST_AS_RUN, simulate_beam_pairs, write_beam_pairs
 
     cb = next(c for c in TEST_AS_RUN if c.name == "steel-cf-1acc-impact")
@@ -104,6 +104,7 @@ def impact(tmp_path_factory):
     return tmp
 
 
+@pytest.mark.slow
 def test_identify_writes_one_sensor_modal_data_that_discrepancy_takes(impact, capsys):
     f = impact / "pair-000_baseline.uff"
     assert main(["identify", str(f), "--band", "10", "1600", "--out", str(impact / "id"), "--json"]) == 0
@@ -114,3 +115,33 @@ def test_identify_writes_one_sensor_modal_data_that_discrepancy_takes(impact, ca
                  "--max-effects", "0", "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
     assert res["gap_before"]["max_abs_frequency_error_pct"] < 8.0
+
+
+@pytest.mark.slow
+def test_the_one_accelerometer_transfer_test_is_generated_classified_and_discrepancyd(impact, capsys):
+    """generate simulates the test as run (the hammer at 0.09 m, no sensor there); classify takes its files (two
+    DOFs, one of them the force's) and finds the modes 'identify --band' finds; discrepancy takes the FRF."""
+    fast = impact / "fast.toml"
+    fast.write_text('base = "training"\n[output]\nshard_size = 200\n[measurement]\nlines = 512\n')
+    assert main(["generate", "--beam", str(impact / "beam.toml"), "--config", str(fast), "--n", "600",
+                 "--seed", "2", "--modal-noise", "shipped", "--out", str(impact / "data"), "--json"]) == 0
+    manifest = json.loads((impact / "data" / "manifest.json").read_text())
+    assert manifest["schema"]["frf_reference_row"] == 1 and len(manifest["schema"]["measured_dofs"]) == 1
+    capsys.readouterr()
+    assert main(["train", "--data", str(impact / "data"), "--out", str(impact / "model"), "--epochs", "5",
+                 "--json"]) == 0
+    capsys.readouterr()
+    base, cur = impact / "pair-000_baseline.uff", impact / "pair-000_current.uff"
+    assert main(["classify", "--model", str(impact / "model"), "--baseline", str(base), str(cur), "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    ident = res["identification"]
+    assert ident["as"] == "identify --band 10 1600" and [p["mode"] for p in ident["baseline_poles"]] == [1, 2, 3, 4, 5]
+    assert any("no node geometry of their reference DOF" in w for w in res["warnings"])
+    for name, f in (("baseline", base), ("measured", cur)):
+        assert main(["identify", str(f), "--band", "10", "1600", "--json"]) == 0
+        found = [m["frequency_hz"] for m in json.loads(capsys.readouterr().out)["modes"]]
+        np.testing.assert_allclose([p["frequency_hz"] for p in ident[f"{name}_poles"]], found, rtol=1e-9)
+    assert main(["discrepancy", "--beam", str(impact / "beam.toml"), "--measured", str(base), "--max-effects", "0",
+                 "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert any("one sensor" in n for n in res["notes"]) and res["drive_x_m_from_file"] is None
