@@ -270,7 +270,7 @@ def run_discrepancy(beam_spec, measured, out_dir=None, *, frequency_noise=None, 
     cand = _candidate_rows(res)
     check = res.noise_check.to_dict()
     out = _result_json(res, meas, noise, sources, dof_map, cand, check)
-    out["notes"], out["drive_x_m_from_file"] = test_notes(beam, meas, measured)
+    out["notes"], out["drive_x_m_from_file"] = measured_test_notes(beam, meas, measured)
     recal = first.base.residuals if first else res.final.residuals
     if out_dir is not None:
         before_frf = after_frf = None
@@ -292,7 +292,7 @@ def run_discrepancy(beam_spec, measured, out_dir=None, *, frequency_noise=None, 
     return out
 
 
-def test_notes(beam: Beam, meas: dsc.Measurement, measured) -> tuple[list[str], float | None]:
+def measured_test_notes(beam: Beam, meas: dsc.Measurement, measured) -> tuple[list[str], float | None]:
     """What the measured test adds to or leaves out of the beam file, one line each, and the reference DOF's
     position (m) the calibrated beam file takes from the measured file (None: the beam file's stands).
 

@@ -145,3 +145,20 @@ def test_the_one_accelerometer_transfer_test_is_generated_classified_and_discrep
                  "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
     assert any("one sensor" in n for n in res["notes"]) and res["drive_x_m_from_file"] is None
+
+
+def test_discrepancy_takes_the_drive_point_a_beam_file_leaves_out_from_the_file():
+    from experiments.study_discrepancy import measurement_mesh, measured_test_notes
+    from physics.discrepancy import Measurement
+
+    d = {"name": "pp", "bc": "pinned-pinned", "length_m": 1.2, "width_m": 0.05, "thickness_m": 0.01,
+         "EI_Nm2": 875.0, "mass_per_length_kg_m": 3.925, "measured_x_m": [0.15, 0.3, 0.6, 0.9, 1.05]}
+    beam = beam_from_dict(d, "pp.toml")
+    assert measurement_mesh(beam).n_elements == 8                     # nodes at 0.15 m steps
+    f = np.linspace(10.0, 20.0, 8)
+    meas = Measurement(np.array([16.3, 65.1]), frf=np.ones((1, 1, 8)), frf_frequency_hz=f,
+                       frf_response_x_m=(0.6,), frf_reference_x_m=(0.4,))
+    notes, drive = measured_test_notes(beam, meas, "b.uff")
+    assert drive == 0.4 and len(notes) == 2 and "one sensor" in notes[0]
+    assert "drive_x_m = 0.4 m from b.uff: its reference DOF" in notes[1]
+    assert measured_test_notes(beam_from_dict({**d, "drive_x_m": 0.15}, "pp.toml"), meas, "b.uff")[1] is None
