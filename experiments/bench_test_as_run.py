@@ -2,7 +2,7 @@
 modes, a drive point the beam file leaves out, one accelerometer with a transfer FRF over a wide band.
 
 Run: ``python -m experiments.bench_test_as_run --out out/test-as-run [--n-pairs 36] [--train-n 10000] [--seed 0]
-[--only NAME] [--before MAIN_CHECKOUT] [--json]``
+[--only NAME] [--before MAIN_CHECKOUT] [--docs] [--json]``
 
 For each beam of :data:`experiments.second_sim.beams.TEST_AS_RUN` (the independent simulator's, sharing no code
 with the package) the loop of :func:`experiments.study_beams.run_beam`: the simulator writes ``beam.toml`` and
@@ -12,7 +12,8 @@ as written (the model trained for a force at the first sensor), and as the READM
 (``discrepancy`` on the first baseline file writes the files' drive point into its beam file). Printed per beam
 and model: the network's answer rate, zone accuracy, detection and false alarms of the network, the verdict and
 the best classical method; and the modes ``identify --band`` (the identification ``classify`` runs) finds in
-the baseline files against the modes the simulator put in the band (``--before``: also another checkout's).
+the baseline files against the modes the simulator put in the band that the force excites (``--before``: also
+another checkout's).
 """
 
 from __future__ import annotations
@@ -27,8 +28,10 @@ import numpy as np
 __all__ = ["main", "modes_found"]
 
 
-def modes_found(pairs: Path, meta: dict, tolerance: float = 0.03, source_tree: str | None = None) -> dict:
-    """Per baseline file: the simulator's bending modes in the band and those ``identify --band`` finds (within
+def modes_found(pairs: Path, meta: dict, excited=None, tolerance: float = 0.03, source_tree: str | None = None
+                ) -> dict:
+    """Per baseline file: the simulator's bending modes in the band that the force excites (``excited``, 1-based:
+    :func:`experiments.second_sim.beams.excited_modes`) and those ``identify --band`` finds (within
     ``tolerance``, relative; ``source_tree``: another checkout's ``identify``); pooled counts and the files
     missing a mode."""
     from experiments.bench_foreign import cli_json
@@ -39,6 +42,8 @@ def modes_found(pairs: Path, meta: dict, tolerance: float = 0.03, source_tree: s
     for p in meta["pairs"]:
         k = int(p["pair"])
         truth = np.asarray(p["baseline_frequencies_hz"])
+        if excited is not None:
+            truth = truth[np.asarray(excited, int) - 1]
         truth = truth[(truth >= lo) & (truth <= hi)]
         out = cli_json(["identify", str((pairs / f"pair-{k:03d}_baseline.uff").resolve()), "--band", str(lo), str(hi)],
                        source_tree)
@@ -49,6 +54,37 @@ def modes_found(pairs: Path, meta: dict, tolerance: float = 0.03, source_tree: s
         if not hit.all():
             missing.append({"pair": k, "missed_hz": truth[~hit].round(2).tolist()})
     return {"modes_present": present, "modes_found": found, "files": len(meta["pairs"]), "missing": missing}
+
+
+#: What each test of :data:`experiments.second_sim.beams.TEST_AS_RUN` is, for the table.
+TESTS = {
+    "al-cantilever-cf-6s-tipforce": "aluminium cantilever, 6 accelerometers off the quarter points, mobilities, the "
+                                    "shaker at the tip (no sensor there)",
+    "steel-pp-5s-drive-third": "steel pinned-pinned beam, 5 accelerometers, receptances, the force at L/3 (a node of "
+                               "modes 3 and 6); the beam file names no drive point, the files' geometry does",
+    "steel-cf-1acc-impact": "steel cantilever with a 0.1 kg mass, one accelerometer at the tip, the hammer at 0.15 L, "
+                            "accelerances 10-1600 Hz in 0.4 Hz lines, no node geometry",
+}
+
+
+def markdown(table: list[dict]) -> str:
+    """The table: one row per beam and model."""
+    pct = lambda x: "-" if x is None or not np.isfinite(x) else f"{x:.0%}".replace("%", " %")  # noqa: E731
+    lines = ["| test | model trained on | modes | network answers | zone acc. network / verdict / best classical | "
+             "detection network / verdict | false alarms network / verdict | modes found (before) |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for t in table:
+        n, v, b = t["network"], t["verdict"], t["best_classical"] or {}
+        ident = t["identification"] or {}
+        found = "".join(f"{ident[k]['modes_found']} of {ident[k]['modes_present']}" for k in ("this",) if k in ident)
+        if "before" in ident:
+            found += f" ({ident['before']['modes_found']} of {ident['before']['modes_present']})"
+        lines.append(f"| {TESTS.get(t['beam'], t['beam'])} | {t['model']} | {', '.join(map(str, t['modes']))} | "
+                     f"{t['network_answered']} of {t['pairs']} | {pct(n['zone_accuracy'])} / {pct(v['zone_accuracy'])}"
+                     f" / {pct(b.get('zone_accuracy'))} ({b.get('method', '-')}) | {pct(n['detection'])} / "
+                     f"{pct(v['detection'])} | {n['false_alarms']} / {v['false_alarms']} of {v['intact_pairs']} | "
+                     f"{found or '-'} |")
+    return "\n".join(lines)
 
 
 def _row(cb, label: str, r: list[dict], info: dict, ident: dict | None) -> dict:
@@ -69,10 +105,11 @@ def main(argv=None) -> int:
     ap.add_argument("--only", default=None)
     ap.add_argument("--before", default=None, metavar="DIR",
                     help="another checkout (e.g. main) whose 'identify' is scored beside this one's")
+    ap.add_argument("--docs", action="store_true", help="write the table into docs/any-beam.md")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
     from experiments.bench_foreign import cli_json
-    from experiments.second_sim.beams import TEST_AS_RUN
+    from experiments.second_sim.beams import TEST_AS_RUN, excited_modes
     from experiments.study_beams import run_beam
 
     out = Path(a.out)
@@ -83,10 +120,12 @@ def main(argv=None) -> int:
         r, info = run_beam(cb, out, a.n_pairs, a.train_n, a.seed, a.workers)
         pairs = out / cb.name / f"pairs-n{a.n_pairs}-s{a.seed}"
         meta = json.loads((pairs / "truth.json").read_text())
-        ident = {"this": modes_found(pairs, meta)}
+        excited = excited_modes(cb, 0.02)
+        ident = {"this": modes_found(pairs, meta, excited)}
         if a.before:
-            ident["before"] = modes_found(pairs, meta, source_tree=a.before)
-        table.append(_row(cb, "beam file as written", r, info, ident))
+            ident["before"] = modes_found(pairs, meta, excited, source_tree=a.before)
+        table.append(_row(cb, "the beam file" if cb.file_drive else "the beam file as written (a force at the first "
+                          "sensor)", r, info, ident))
         if not cb.file_drive:  # the README's loop: discrepancy writes the files' drive point into the beam file
             cal = out / cb.name / "calibrated"
             if not (cal / "beam.toml").is_file():
@@ -95,6 +134,7 @@ def main(argv=None) -> int:
             r, info = run_beam(cb, out, a.n_pairs, a.train_n, a.seed, a.workers, beam_file=cal / "beam.toml",
                                model_tag="calibrated")
             table.append(_row(cb, "discrepancy's beam file (the files' drive point)", r, info, None))
+            table[-1]["beam"] = "the same"
     from physics.io import atomic_write_text
 
     out.mkdir(parents=True, exist_ok=True)
@@ -103,20 +143,12 @@ def main(argv=None) -> int:
     if a.json:
         print(json.dumps(table, indent=1))
         return 0
-    print("| beam | model trained on | modes | network answers | zone acc. network / verdict / best classical | "
-          "detection network / verdict | false alarms network / verdict | modes found / present (identify --band)"
-          + (" before / after |" if a.before else " |"))
-    print("|---|---|---|---|---|---|---|---|")
-    pct = lambda x: "-" if x is None or not np.isfinite(x) else f"{x:.0%}"  # noqa: E731
-    for t in table:
-        n, v, b = t["network"], t["verdict"], t["best_classical"] or {}
-        ident = t["identification"] or {}
-        found = " / ".join(f"{ident[k]['modes_found']} of {ident[k]['modes_present']}" for k in ("before", "this")
-                           if k in ident) or "-"
-        print(f"| {t['beam']} | {t['model']} | {','.join(map(str, t['modes']))} | {t['network_answered']} of "
-              f"{t['pairs']} | {pct(n['zone_accuracy'])} / {pct(v['zone_accuracy'])} / {pct(b.get('zone_accuracy'))} "
-              f"({b.get('method', '-')}) | {pct(n['detection'])} / {pct(v['detection'])} | "
-              f"{n['false_alarms']} / {v['false_alarms']} of {n['intact_pairs']} | {found} |")
+    md = markdown(table)
+    print(md)
+    if a.docs:
+        from experiments.doc_tables import write_table
+
+        write_table("any-beam.md", "test-as-run", md)
     return 0
 
 

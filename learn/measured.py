@@ -13,10 +13,10 @@ from physics.errors import BeamDamageError
 from physics.identification import identify_frf
 from physics.io import (MeasuredFRF, map_frf_dofs, map_measured_dofs, parse_dof, prepare_measured,
                         reference_position_m, sensor_labels)
-from physics.layout import uniform_shapes
+from physics.layout import MIN_VISIBLE, uniform_shapes
 from physics.modal import mac
 
-__all__ = ["IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "MIN_PAIR_MAC", "NODE_FRACTION", "RATIO_TOLERANCE",
+__all__ = ["IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "MIN_PAIR_MAC", "RATIO_TOLERANCE",
            "ModalPair", "differences_from_model", "frf_rows", "identification_band_hz", "identify_modes",
            "identify_test", "modal_pair", "mode_checks", "nominal_ratio_range", "on_model_dofs",
            "pair_modes_by_frequency", "unexcited_modes"]
@@ -327,17 +327,15 @@ def identify_test(frf, band_hz, where: str = "FRF file"):
     return ident.modal_data
 
 
-#: A mode the force cannot excite: its shape at the reference DOF is below this fraction of its largest entry.
-NODE_FRACTION = 0.05
-
-
 def unexcited_modes(test, drive_x_m: float) -> tuple:
     """The test's modes (1-based) with a node at ``drive_x_m`` (m): their uniform-beam shape there below
-    :data:`NODE_FRACTION` of their largest along the beam (:func:`physics.layout.uniform_shapes`)."""
+    :data:`physics.layout.MIN_VISIBLE` of their largest along the beam (:func:`physics.layout.uniform_shapes`; the
+    rule by which the layout leaves out a mode its drive point cannot see: a mode near a clamp, 3 % there, still
+    shows a clear peak)."""
     grid = np.linspace(0.0, test.length_m, 241)
     peak = np.abs(uniform_shapes(test, grid)).max(axis=0)
     rel = np.abs(uniform_shapes(test, [drive_x_m]))[0] / peak
-    return tuple(int(m) for m, r in zip(test.modes, rel) if r < NODE_FRACTION)
+    return tuple(int(m) for m, r in zip(test.modes, rel) if r < MIN_VISIBLE)
 
 
 def differences_from_model(frfs: dict, beam: BeamSpec, line_spacing_hz: float | None = None) -> list[str]:
@@ -377,7 +375,7 @@ def differences_from_model(frfs: dict, beam: BeamSpec, line_spacing_hz: float | 
             out.append(f"{n}: the reference DOF {frfs[n].reference_dofs[0]} lies at {x:.4g} m (the file's node "
                        f"geometry), the model was trained for a drive point at {test.drive_x_m:.4g} m"
                        + (f"; a force at {x:.4g} m cannot excite mode{'s' * (len(lost) > 1)} "
-                          f"{', '.join(map(str, lost))} (a node there: below {NODE_FRACTION:.0%} of the mode's "
+                          f"{', '.join(map(str, lost))} (a node there: below {MIN_VISIBLE:.0%} of the mode's "
                           "largest amplitude), which the model reads" if lost else "")
                        + ": generate the training data for this drive point (drive_x_m in the beam file)")
         unplaced = [n for n in frfs if n not in placed]

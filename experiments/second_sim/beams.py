@@ -6,8 +6,8 @@ first ``n_modes`` bending modes). :data:`TEST_AS_RUN` holds tests that differ fr
 the force where no sensor is (``drive_x_over_L``; the files' reference node is then a geometry node after the
 sensors'), a beam file that names no drive point (``file_drive``), one file kind throughout (``kind``), a point
 mass on the beam (``mass``, stated in the beam file as ``added_mass``), files without node geometry
-(``geometry``) and a band of its own (``band``). :func:`beam_toml` writes its beam file in the project's format (the TOML
-text is written here: nothing of the project is imported). :func:`simulate_beam_pairs` draws specimen pairs:
+(``geometry``) and a band of its own (``band``). :func:`beam_toml` writes its beam file in the project's format
+(the TOML text is written here: nothing of the project is imported). :func:`simulate_beam_pairs` draws specimen pairs:
 
 * specimen: EI within +-5 %, mass per length within +-3 %, modal damping ratios drawn per mode (the
   material's range);
@@ -45,7 +45,7 @@ from experiments.second_sim.response import Damping, Noise, measure, receptance
 from experiments.second_sim.writers import KINDS, write_csv, write_json, write_text_atomic, write_uff
 
 __all__ = ["CATALOGUE", "MATERIALS", "SPREAD", "SUPPORTS", "TEST_AS_RUN", "BeamPair", "CatalogueBeam", "Spread",
-           "beam_toml", "default_zones", "nominal_beam", "simulate_beam_pairs", "write_beam_pairs"]
+           "beam_toml", "default_zones", "excited_modes", "nominal_beam", "simulate_beam_pairs", "write_beam_pairs"]
 
 
 #: Young's modulus (Pa), density (kg/m^3) and modal damping-ratio range of each material.
@@ -184,6 +184,19 @@ def bending_frequencies_hz(beam: Beam, bc: str, n: int) -> np.ndarray:
     r = _rigid_modes(bc)
     w2 = scipy.linalg.eigh(asm.K, asm.M, eigvals_only=True, subset_by_index=[0, r + n - 1])
     return np.sqrt(np.clip(w2[r:], 0.0, None)) / (2 * math.pi)
+
+
+def excited_modes(cb: CatalogueBeam, fraction: float = 0.05) -> tuple:
+    """Bending modes (1-based, of the first ``n_modes``) of the nominal beam that the force excites: its shape at
+    the drive point at least ``fraction`` of its largest translation along the beam."""
+    asm = assemble(nominal_beam(cb))
+    md = modes(asm)
+    r = _rigid_modes(cb.bc)
+    phi = md.phi[:, r:r + cb.n_modes]
+    free = asm.translation_dofs([x for x in np.linspace(0.0, cb.length_m, cb.n_elements + 1)
+                                 if asm.dof_index[2 * int(round(x / cb.length_m * cb.n_elements))] >= 0])
+    at = np.abs(phi[asm.translation_dofs([cb.drive_x_m])[0]]) / np.abs(phi[free]).max(axis=0)
+    return tuple(int(k) + 1 for k in np.flatnonzero(at >= fraction))
 
 
 def _nice(v: float, up: bool) -> float:
