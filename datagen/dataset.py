@@ -187,10 +187,17 @@ class Dataset:
         if name in ("eigenvalues_true", "eigenvectors_true"):
             src = "truth_poles" if name == "eigenvalues_true" else "truth_shapes"
             used = self.manifest.get("layout", {}).get("modes_idx", [0, 1, 2, 3])
-            return self._gather([src], rows)[src][..., used]
+            a = self._gather([src], rows)[src][..., used]
+            return a if name == "eigenvalues_true" else a[..., :self._n_responses, :]
         if name in ("frf_measured", "frf_updated"):
             return self.frf(name[4:], rows)
         raise FileFormatError(f"unknown array {name!r}; expected one of {sorted(ARRAYS) + sorted(DERIVED)}")
+
+    @property
+    def _n_responses(self) -> int | None:
+        """Measured DOFs (rows of ``truth_shapes`` before the reference DOF's, when it is no sensor); None (every
+        row) for datasets that do not name them."""
+        return len(self.manifest.get("schema", {}).get("measured_dofs", ())) or None
 
     @property
     def updating(self) -> str:
@@ -226,7 +233,10 @@ class Dataset:
             out[...] = H
             return out
         arrays = self._gather(SOURCES[kind], rows)
-        arrays["drive_row"] = self.manifest.get("schema", {}).get("frf_reference_row", 0)
+        schema = self.manifest.get("schema", {})
+        arrays["drive_row"] = schema.get("frf_reference_row", 0)
+        arrays["update_drive_row"] = schema.get("updated_reference_row", arrays["drive_row"])
+        arrays["n_responses"] = self._n_responses
         return synthesise(kind, arrays, self.omega_rad_s, self.frf_dtype, out, lines)
 
     def verify_or_raise(self) -> None:

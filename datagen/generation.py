@@ -130,6 +130,13 @@ def measured_dof_names(setup) -> list:
     return [f"{1 + int(round(x / setup.length_m * n))}:y" for x in sorted(setup.test.sensors_x_m)]
 
 
+def reference_dof_name(setup) -> str:
+    """Name of the reference DOF: a measured DOF's, or (no sensor there) the truth mesh's node nearest to it."""
+    if not setup.drive_off_sensors:
+        return measured_dof_names(setup)[setup.drive_row]
+    return f"{1 + int(round(setup.test.drive_x_m / setup.length_m * setup.n_elements))}:y"
+
+
 def update_statement(setup) -> str:
     """What the Lancaster/Pilkey update of a dataset uses, in one sentence."""
     S, m = setup.n_meas, setup.n_modes
@@ -245,8 +252,11 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
          "complete": False, "shards": [], "schema": {"arrays": _schema(), "states": list(STATES),
                                                      "columns": column_units(setup.damage),
                                                      "measured_dofs": dofs,
-                                                     "frf_reference_dof": dofs[setup.drive_row],
-                                                     "frf_reference_row": setup.drive_row, "frf_kind": "receptance"},
+                                                     "frf_reference_dof": reference_dof_name(setup),
+                                                     "frf_reference_row": setup.drive_row,
+                                                     **({"updated_reference_row": setup.update_drive_row}
+                                                        if setup.drive_off_sensors else {}),
+                                                     "frf_kind": "receptance"},
          "layout": {**setup.test.to_dict(), "modes_idx": setup.modes_idx.tolist(),
                     "measured_x_m": sorted(setup.test.sensors_x_m), "truth_elements": setup.n_elements,
                     "updating": update_statement(setup)},

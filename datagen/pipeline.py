@@ -97,7 +97,8 @@ class Setup:
     test : Layout                   the test (:mod:`physics.layout`): supports, sensors, reference DOF, band, modes
     modes_idx : ndarray (m,)        projected modes used (indices into the ``p`` modes: rigid-body modes and modes
                                     no sensor sees left out)
-    drive_row : int                 row of the reference DOF among the measured DOFs
+    drive_row : int                 row of the reference DOF among the rows of ``meas`` (``S`` when it is no
+                                    sensor: ``meas`` then holds its row last)
     spring_dofs : ndarray (k,)      model indices of the support rotations held by the drawn spring (``spring``)
     day_spring_dofs : ndarray (j,)  model indices of the fixed support springs (a free-free beam's suspension, a
                                     pinned beam's bearing springs) that change by ``root_spring_change`` between the
@@ -145,7 +146,20 @@ class Setup:
     @property
     def n_meas(self) -> int:
         """Measured translations (sensors)."""
-        return self.meas.shape[0]
+        return self.meas.shape[0] - int(self.drive_off_sensors)
+
+    @property
+    def drive_off_sensors(self) -> bool:
+        """The reference DOF is no sensor: ``meas`` holds its row last, and the measured FRFs are transfer FRFs."""
+        return self.test is not None and self.test.drive_sensor is None
+
+    @property
+    def update_drive_row(self) -> int:
+        """Row of the updated models' reference DOF among the sensors: the reference DOF's, else the nearest
+        sensor's (the updated model has the sensors' DOFs only)."""
+        if not self.drive_off_sensors:
+            return self.drive_row
+        return int(np.argmin(np.abs(np.sort(self.test.sensors_x_m) - self.test.drive_x_m)))
 
     @property
     def n_modes(self) -> int:
@@ -229,10 +243,10 @@ MAX_TRUTH_ELEMENTS = 400
 
 
 def aligned_elements(test: Layout, n_min: int) -> tuple[int, bool]:
-    """Elements of the uniform truth mesh: the fewest in ``[n_min, 3 n_min]`` with a node at every sensor (to
-    1e-6 L), else ``n_min``; and whether the sensors sit on nodes (else their translations are interpolated by the
-    elements' cubic shape functions)."""
-    x = np.asarray(test.sensors_x_m) / test.length_m
+    """Elements of the uniform truth mesh: the fewest in ``[n_min, 3 n_min]`` with a node at every sensor and at
+    the reference DOF (to 1e-6 L), else ``n_min``; and whether they sit on nodes (else their translations are
+    interpolated by the elements' cubic shape functions)."""
+    x = np.r_[test.sensors_x_m, test.drive_x_m] / test.length_m
     n = np.arange(n_min, min(3 * n_min, MAX_TRUTH_ELEMENTS) + 1)
     off = np.abs(x[None, :] * n[:, None] - np.round(x[None, :] * n[:, None])).max(axis=1) / n
     ok = np.flatnonzero(off <= 1e-6)
@@ -282,12 +296,9 @@ def suspension_unit_stiffness(length_m: float, bounce_fraction: float = 0.05) ->
 
 
 def generated_test(beam, source: str):
-    """The :class:`physics.layout.Layout` of ``beam`` that ``generate`` can simulate; ConfigError naming ``source``."""
-    test = layout_of(beam, source)
-    if test.drive_sensor is None:
-        raise ConfigError(f"{source}: generate needs a sensor at the reference DOF drive_x_m = "
-                          f"{test.drive_x_m:g} m (a driving-point FRF); the sensors are at {list(test.sensors_x_m)}")
-    return test
+    """The :class:`physics.layout.Layout` of ``beam`` that ``generate`` simulates; ConfigError naming ``source``.
+    A reference DOF off the sensors (a hammer where no accelerometer is) gives transfer FRFs only."""
+    return layout_of(beam, source)
 
 
 def _clamp_band(cfg: dict, test, fx: dict, preset) -> tuple:
@@ -345,9 +356,12 @@ def _supports(test, n_el: int, fx: dict, spring: bool, preset):
 
 def _measured_rows(test, n_el: int, on_nodes: bool, keep, kept_names):
     """The sensors' rows (indices of their translations, or interpolation rows between nodes) in ascending
-    position, and the reference DOF's row among them."""
+    position, and the reference DOF's row among them; a reference DOF off the sensors is one more row, the last
+    (then every row interpolates)."""
     order = np.argsort(test.sensors_x_m, kind="stable")
     xs = np.asarray(test.sensors_x_m)[order]
+    if test.drive_sensor is None:
+        return sensor_rows(np.r_[xs, test.drive_x_m], np.linspace(0.0, test.length_m, n_el + 1), keep), xs.size
     if on_nodes:
         meas = np.array([kept_names.index(f"{1 + k}:y") for k in np.rint(xs / test.length_m * n_el).astype(int)])
     else:  # the sensors between nodes: their translations interpolated
@@ -805,7 +819,8 @@ def simulate_chunk(setup: Setup, inp: BatchInputs) -> dict:
     -------
     dict of ndarray (state axis 1: 0 = baseline, 1 = current)
         ``truth_poles`` (B,2,p) and ``truth_shapes`` (B,2,4,p): all ``p`` projected truth modes at the
-        measured DOFs (the measured FRFs are synthesised from them), ``eigenvalues_measured`` (B,2,4),
+        measured DOFs (and at the reference DOF, one more row, when it is no sensor; the measured FRFs are
+        synthesised from them), ``eigenvalues_measured`` (B,2,4),
         ``eigenvectors_measured`` (B,2,4,4) (noisy), ``M_updated`` (B,4,4), ``C_updated``, ``K_updated``
         (B,2,4,4), ``updated_poles`` (B,2,4) and ``updated_residues`` (B,2,4,4) of the updated models
         (drive at the first measured DOF), ``frf_peak`` (B,2,4) (:func:`datagen.synth.measured_peak`),
@@ -814,20 +829,20 @@ def simulate_chunk(setup: Setup, inp: BatchInputs) -> dict:
     M, Mu, K, dC, dK = truth_matrices(setup, inp)
     lam, psi, w2 = projected_modes(setup, inp, M, Mu, K, dC)
     used = setup.modes_idx
-    lam_m, psi_m = measure_modes(setup, inp, lam[..., used], psi[..., used])
-    Ma = setup.analyst_mass(inp.mass_per_length_kg_m)
     B, S, d = len(inp), setup.n_meas, setup.drive_row
+    lam_m, psi_m = measure_modes(setup, inp, lam[..., used], psi[..., :S, used])
+    Ma = setup.analyst_mass(inp.mass_per_length_kg_m)
     if setup.n_update:
         up = update_models(setup, Ma, lam_m[..., :S], psi_m[..., :S])
-        pr = poles_and_residues(Ma[:, None], up["C"], up["K"], np.arange(S), [d])
+        pr = poles_and_residues(Ma[:, None], up["C"], up["K"], np.arange(S), [setup.update_drive_row])
         poles, res = pr.eigenvalues, pr.residues[..., 0, :]
     else:  # fewer modes than sensors: no updated model (stated in the manifest)
         nan = np.full((B, 2, S, S), np.nan)
         up = {"C": nan, "K": nan.copy(), "converged": np.ones((B, 2), bool), "iterations": np.zeros((B, 2), int),
               "residual": np.zeros((B, 2))}
         poles, res = np.full((B, 2, S), np.nan + 0j), np.full((B, 2, S, S), np.nan + 0j)
-    peak = measured_peak({"truth_poles": lam, "truth_shapes": psi, "drive_row": d, "noise_floor": inp.noise_floor},
-                         setup.omega_rad_s)
+    peak = measured_peak({"truth_poles": lam, "truth_shapes": psi, "drive_row": d, "n_responses": S,
+                          "noise_floor": inp.noise_floor}, setup.omega_rad_s)
     return {"has_update": np.full(B, bool(setup.n_update)), "truth_poles_used": lam[..., used],
             "truth_poles": lam, "truth_shapes": psi, "eigenvalues_measured": lam_m, "eigenvectors_measured": psi_m,
             "M_updated": Ma, "C_updated": up["C"], "K_updated": up["K"], "updated_poles": poles,

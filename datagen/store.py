@@ -56,7 +56,8 @@ DATASET_FORMAT_V1 = "beam-damage-dataset/1"
 #: Stored arrays of a shard: name -> (axes, description).
 ARRAYS = {
     "truth_poles": ("sample, state, mode", "noise-free truth eigenvalues (rad/s), Im > 0, all p projected modes"),
-    "truth_shapes": ("sample, state, dof, mode", "noise-free truth shapes at the measured DOFs, eq. 1.10 normalised"),
+    "truth_shapes": ("sample, state, dof, mode", "noise-free truth shapes at the measured DOFs (and at the "
+                     "reference DOF, a row after them, when it is no sensor), eq. 1.10 normalised"),
     "eigenvalues_measured": ("sample, state, mode", "noisy measured eigenvalues (rad/s), Im > 0, modes 1..4"),
     "eigenvectors_measured": ("sample, state, dof, mode", "noisy measured mode shapes"),
     "M_updated": ("sample, dof, dof", "mass matrix used by the updating (kg), IIRS or lumped"),

@@ -2,7 +2,8 @@
 
 Measured FRFs: the truth modes at the measured DOFs (all ``p`` projected
 modes, poles ``truth_poles`` and shapes ``truth_shapes``), drive at the measured DOF
-``drive_row`` (the manifest's ``schema.frf_reference_row``, default the first), with measurement noise
+``drive_row`` (the manifest's ``schema.frf_reference_row``, default the first; a row after the
+``n_responses`` sensors' when the reference DOF is no sensor), with measurement noise
 
     ``H_meas = H (1 + level z1) + floor max_f|H| z2``   (per response FRF),
 
@@ -78,12 +79,14 @@ def line_index(lines, n_lines: int) -> np.ndarray:
 
 
 def _measured_inputs(a: dict):
-    """Poles (2n, m) and drive-point-scaled residues (2n, S, m) of the measured FRFs, states flattened."""
+    """Poles (2n, m) and drive-point-scaled residues (2n, S, m) of the measured FRFs, states flattened: the first
+    ``n_responses`` rows of ``truth_shapes`` (default all) are the responses, row ``drive_row`` the reference DOF
+    (a row after the responses when the reference DOF is no sensor)."""
     lam, psi = np.asarray(a["truth_poles"]), np.asarray(a["truth_shapes"])
-    n, _, S, m = psi.shape
-    d = int(a.get("drive_row", 0))
+    n, _, rows, m = psi.shape
+    S, d = int(a.get("n_responses") or rows), int(a.get("drive_row", 0))
     return (np.ascontiguousarray(lam.reshape(2 * n, m)),
-            np.ascontiguousarray((psi * psi[..., d:d + 1, :]).reshape(2 * n, S, m)))
+            np.ascontiguousarray((psi[..., :S, :] * psi[..., d:d + 1, :]).reshape(2 * n, S, m)))
 
 
 def measured_peak(a: dict, omega_rad_s) -> np.ndarray:
@@ -146,7 +149,8 @@ def updated_frf(a: dict, omega_rad_s, dtype=np.complex64, out=None, lines=None):
     if bad.any():  # real poles or a diverged update: the general route on the stored matrices
         M = np.broadcast_to(np.asarray(a["M_updated"])[:, None], a["C_updated"].shape)
         out[bad] = receptance_state_space(M[bad], a["C_updated"][bad], a["K_updated"][bad], w,
-                                          np.arange(R.shape[-2]), [int(a.get("drive_row", 0))])[..., 0, :]
+                                          np.arange(R.shape[-2]),
+                                          [int(a.get("update_drive_row", a.get("drive_row", 0)))])[..., 0, :]
     return out
 
 

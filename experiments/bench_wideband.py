@@ -23,7 +23,7 @@ Each file is written as UFF 58 (with units and node geometry) and identified by 
 A truth mode is **present** when the file shows its peak: the RMS magnitude over the FRFs, at its largest on the
 lines within 1 % of the mode, is at least 3 times the median of the lines within +-15 % (a mode of up to ~2.5 %
 damping; a noise line exceeds it with probability 2e-3); **5x** counts those at least 5 times, the prominence of
-the ``identify`` warning (:data:`physics.identification.measured.MISSED_PEAK_PROMINENCE`). A present mode is
+the ``identify`` warning (:data:`physics.identification.lscf.CLEAR_PEAK_PROMINENCE`). A present mode is
 **found** when an identified mode lies within 1 % (and 0.1 %) of it, each identified mode matched to one truth mode
 at most; a present mode not found is **warned** when a warning names a peak within 2 % of it, else **silent**
 (**silent 5x**: a peak the warning should have named). An identified mode within 1 % of no truth mode in the band

@@ -11,11 +11,12 @@ import numpy as np
 
 from experiments.jsonable import to_jsonable
 from learn.classify import DEFAULT_FALSE_ALARM_RATE, classify_many
-from learn.measured import on_model_dofs
+from learn.measured import differences_from_model, on_model_dofs
 from learn.model_dir import load_model
-from physics.frf import receptance_modal
 from physics.errors import BeamDamageError
-from physics.io import FRF, MODAL, MeasuredFRF, accepted, atomic_write_bytes, atomic_write_text, modal_or_frf, read
+from physics.frf import receptance_modal
+from physics.io import (FRF, MODAL, MeasuredFRF, accepted, atomic_write_bytes, atomic_write_text, modal_or_frf,
+                        parse_dof, read)
 
 __all__ = ["KEYS", "add_parser", "run"]
 
@@ -33,8 +34,12 @@ def add_parser(sub):
     p = sub.add_parser("classify", help="classify measured beams against their baseline with a trained model",
                        description=f"BASELINE and each MEASURED are files of {accepted(FRF, MODAL)}. FRFs: "
                                    "receptances, mobilities or accelerances at the model's DOFs; modal data: as "
-                                   "'update' accepts. FRF files are identified by LSCF/LSFD over the model's band for "
-                                   "its modes, the identification the training data's modal noise describes. A pair "
+                                   "'update' accepts. FRF files are identified by LSCF/LSFD over the model's band as "
+                                   "'identify --band' identifies them, the identification the training data's modal "
+                                   "noise describes, and every pole is paired with the model's modes (by frequency, "
+                                   "and by shape with two or more sensors; identification.*_poles lists them). How "
+                                   "the files' test differs from the model's (reference DOF, FRF kind, band, line "
+                                   "spacing, sensors) is named in warnings. A pair "
                                    "outside the training data gets the classical method's verdict, the network's shown"
                                    " beside it, and the features that put it outside (distance_terms); a pair whose "
                                    "tests do not both hold the model's modes gets the classical method's verdict on "
@@ -85,6 +90,28 @@ def read_input(path):
     return read(path, modal_or_frf(path))
 
 
+def measured_test_warnings(model, files, raw, mapped) -> list[str]:
+    """One line per way the files' test differs from the model's (:func:`learn.measured.differences_from_model`), and
+    per file whose measured DOFs the model does not read."""
+    frfs = {str(f): d for f, d in zip(files, raw) if isinstance(d, MeasuredFRF)}
+    gen = (model.config.get("generator_config") or {}).get("measurement", {})
+    test = model.beam.test
+    df = None
+    if gen.get("lines") and test is not None:
+        df = (test.band_hz[1] - test.band_hz[0]) / (int(gen["lines"]) - 1)
+    out = differences_from_model(frfs, model.beam, df)
+    for f, d, (_, dof_map) in zip(files, raw, mapped):
+        if dof_map is not None and "not used" in dof_map.detail:
+            forces = ({parse_dof(x)[0] for x in d.reference_dofs} - {parse_dof(x)[0] for x in d.response_dofs}
+                      if isinstance(d, MeasuredFRF) else set())
+            unused = [x for x, m in zip(dof_map.dofs, dof_map.model_dofs) if not m and parse_dof(x)[0] not in forces]
+            if not unused:
+                continue
+            out.append(f"{f}: measured DOF{'s' * (len(unused) > 1)} {', '.join(unused)} lie at no sensor of the "
+                       f"model ({', '.join(model.beam.dofs)}): not used")
+    return out
+
+
 def identification_method(path) -> str | None:
     """The ``method`` a modal-data JSON file names (``identify --out`` writes it for output-only modes), else None."""
     from physics.io import read_json
@@ -102,11 +129,15 @@ def run(args):
     baselines = baseline_files(args.baseline)
     nb = len(baselines)
     files = [*baselines, *args.measured]
-    mapped = [on_model_dofs(read_input(f), model.beam, beam_x_m, str(f)) for f in files]
+    raw = [read_input(f) for f in files]
+    mapped = [on_model_dofs(d, model.beam, beam_x_m, str(f)) for d, f in zip(raw, files)]
     base = [m[0] for m in mapped[:nb]]
     results = classify_many(model, base if nb > 1 else base[0], [m[0] for m in mapped[nb:]],
                             names=[str(f) for f in files], methods=[identification_method(f) for f in files],
                             false_alarm_rate=args.false_alarm_rate)
+    differ = measured_test_warnings(model, files, raw, mapped)
+    for r in results:
+        r["warnings"] = differ + [w for w in r["warnings"] if w not in differ]
     ref = files.index(results[0]["normal_variation"].get("reference_baseline", files[0]))
     base_pos = mapped[ref][1] and mapped[ref][1].to_dict()
     extras = []

@@ -50,6 +50,8 @@ def run(args) -> dict:
 def _print(out, res: dsc.DiscrepancyResult, recal: dsc.ModeResiduals):
     print(dof_positions_text(out["dof_positions"]) if out["dof_positions"] else
           "measured DOFs: none (natural frequencies only)")
+    for note in out["notes"]:
+        print(f"note: {note}")
     an = out["assumed_noise"]
     f = np.atleast_1d(an["frequency"])
     print("noise (std) whitening the residuals: frequency "
@@ -158,5 +160,5 @@ def add_parser(sub):
                    help="print one JSON object: named_effect, effects, evidence, parameters, parameter_std, "
                         "indistinguishable_from, separating_measurement, gap_before, gap_after, assumed_noise, "
                         "estimated_noise, chi2_per_dof, noise_consistent, noise_check, not_tested, "
-                        "detection_limits, candidates, beam_file")
+                        "detection_limits, candidates, beam_file, notes, drive_x_m_from_file")
     p.set_defaults(func=run, flags={"n_elements": "--elements"})

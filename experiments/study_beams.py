@@ -176,9 +176,11 @@ def _step(timings: dict, key: str, done: bool, fn) -> None:
 
 
 def run_beam(cb, out: Path, n_pairs: int, train_n: int, seed: int, workers: int = 2, spread: dict | None = None,
-             tag: str = "") -> tuple[list[dict], dict]:
+             tag: str = "", beam_file=None, model_tag: str = "") -> tuple[list[dict], dict]:
     """Pairs, dataset, model and verdicts of one catalogue beam (reused when present); its rows and timings.
-    ``spread`` (fields of :class:`Spread`, named by ``tag``) draws the pairs from a changed distribution."""
+    ``spread`` (fields of :class:`Spread`, named by ``tag``) draws the pairs from a changed distribution;
+    ``beam_file`` (default: the simulator's ``beam.toml``, e.g. one ``discrepancy`` calibrated) drives ``generate``,
+    its dataset, model and verdicts named by ``model_tag``."""
     from dataclasses import replace
 
     from experiments.second_sim.beams import SPREAD, simulate_beam_pairs, write_beam_pairs
@@ -187,19 +189,21 @@ def run_beam(cb, out: Path, n_pairs: int, train_n: int, seed: int, workers: int 
     d = out / cb.name
     suffix = f"-{tag}" if tag else ""
     pairs = d / f"pairs-n{n_pairs}-s{seed}{suffix}"
-    data, model = d / f"data-n{train_n}-s{seed}", d / f"model-n{train_n}-s{seed}"
+    mt = f"-{model_tag}" if model_tag else ""
+    data, model = d / f"data-n{train_n}-s{seed}{mt}", d / f"model-n{train_n}-s{seed}{mt}"
     tfile = d / "timings.json"
     t = json.loads(tfile.read_text()) if tfile.is_file() else {}
     spread_of = replace(SPREAD, **(spread or {}))
     _step(t, pairs.name, (pairs / "truth.json").is_file(),
           lambda: write_beam_pairs(cb, simulate_beam_pairs(cb, n_pairs, seed, spread_of), pairs, seed))
     _step(t, data.name, _complete(data),
-          lambda: _cli(["generate", "--beam", str(pairs / "beam.toml"), "--config", "training", "--n", str(train_n),
+          lambda: _cli(["generate", "--beam", str(beam_file or pairs / "beam.toml"), "--config", "training",
+                        "--n", str(train_n),
                         "--seed", str(seed + 1), "--out", str(data), "--workers", str(workers)]))
     _step(t, model.name, (model / "config.json").is_file(),
           lambda: _cli(["train", "--data", str(data), "--out", str(model)]))
     meta = json.loads((pairs / "truth.json").read_text())
-    vfile = d / f"verdicts-n{n_pairs}-s{seed}-t{train_n}{suffix}.json"
+    vfile = d / f"verdicts-n{n_pairs}-s{seed}-t{train_n}{suffix}{mt}.json"
 
     def classify_all():
         verdicts = []

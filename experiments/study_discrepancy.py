@@ -13,6 +13,7 @@ import csv
 import io
 import json
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +23,7 @@ from physics.beam import Beam, beam_to_toml, load_beam
 from physics.effects import candidates_for
 from physics.errors import ConfigError, FileFormatError
 from physics.io import (MODAL, atomic_write_bytes, modal_data_from_dict, modal_or_frf, number_list, prepare_measured,
-                        read_frf, read_json)
+                        read_frf, read_json, reference_position_m, sensor_labels)
 
 __all__ = ["EXAMPLE", "EXAMPLE_SHAPES", "TRUTHS", "assumed_noise", "beam5_section", "confusion", "estimated_noise",
            "load_measurement", "run", "run_case", "run_discrepancy"]
@@ -36,10 +37,15 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[dsc.Measurement, o
     Measured DOFs are placed at the nodes of the beam's mesh by :meth:`physics.beam.Beam.map_dofs` (file
     geometry, else the beam file's measured_x_m, else the quarter-point convention).
 
+    One sensor (one shape row) gives frequencies, damping ratios and, from an FRF file, the FRF: one entry per
+    mode compares no shape. A force where no sensor is (a hammer away from the accelerometer) is placed by the file's
+    node geometry, else the beam file's ``drive_x_m``.
+
     Returns the measurement, the relative frequency std of an identification (or None) and the
     :class:`physics.io.DofMap` of the measured DOFs (None for frequencies alone).
     """
     path = Path(path)
+    beam = measurement_mesh(beam)
     if modal_or_frf(path) == MODAL:
         try:
             obj = read_json(path, require_object=False)
@@ -54,6 +60,8 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[dsc.Measurement, o
                 raise FileFormatError(f"{path}: field 'natural_frequencies_hz': {exc}") from None
         data = prepare_measured(modal_data_from_dict(obj, str(path))).data
         shapes, xs, dof_map = data.eigenvectors, (), None
+        if shapes is not None and shapes.shape[0] < 2:   # one sensor: one entry per mode compares no shape
+            shapes = None
         if shapes is not None:
             if not data.dofs and shapes.shape[0] != len(beam.measured_x_m):
                 raise FileFormatError(f"{path}: {shapes.shape[0]} shape rows but the beam has "
@@ -75,18 +83,37 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[dsc.Measurement, o
         ident = identify_frf(frf, n_modes=n_modes)
     est = ident.estimate
     rec = ident.frf  # receptance, band-limited as identified
-    # responses and references placed together: a driving point's reference is where its response is
-    labels = tuple(dict.fromkeys(rec.response_dofs + rec.reference_dofs))
+    # the sensors placed (a driving point's reference is where its response is); a force where no sensor is does
+    # not count as one (physics.io.sensor_labels) and is placed by the file's geometry, else the beam file
+    labels = tuple(dict.fromkeys(rec.response_dofs)) if rec.metadata.get("geometry") else \
+        sensor_labels(rec, beam.measured_x_m if beam.measured_x_given else None)
     dof_map = beam.map_dofs(labels, frf=rec, targets="nodes")
     x = dict(zip(labels, _node_x(beam, dof_map.model_dofs)))
+    for d in rec.reference_dofs:
+        if d not in x:  # the force where no sensor is: the file's geometry, else the beam file, places it
+            x[d] = reference_position_m(rec) if reference_position_m(rec) is not None else beam.drive_x_m
+            if x[d] is None:
+                raise ConfigError(f"{path}: the reference DOF {d} is no sensor and neither the file's node geometry "
+                                  "nor the beam file (drive_x_m) places it")
     rows = np.argsort([x[d] for d in rec.response_dofs], kind="stable")   # in the order of the beam's nodes
     resp = tuple(x[rec.response_dofs[i]] for i in rows)
     ref = tuple(x[d] for d in rec.reference_dofs)
     order = np.argsort(est.natural_frequencies_hz)
-    meas = dsc.Measurement(est.natural_frequencies_hz[order], est.damping_ratios[order], est.shapes[rows][:, order],
-                           resp, rec.frf[rows], rec.frequency_hz, resp, ref, rec.kind)
+    shapes = est.shapes[rows][:, order] if len(resp) >= 2 else None   # one sensor: frequencies and the FRF
+    meas = dsc.Measurement(est.natural_frequencies_hz[order], est.damping_ratios[order], shapes,
+                           resp if shapes is not None else (), rec.frf[rows], rec.frequency_hz, resp, ref, rec.kind)
     rel_std = np.asarray(est.frequency_std_hz)[order] / meas.frequencies_hz
     return meas, rel_std, dof_map
+
+
+def measurement_mesh(beam: Beam, most: int = 400) -> Beam:
+    """``beam`` on the fewest elements (at least its own, at most ``most``) that put a node at every measured
+    position and the drive point, which measured DOFs are placed on; ``beam`` itself when none does."""
+    points = np.r_[beam.measured_x_m, [] if beam.drive_x_m is None else [beam.drive_x_m]] / beam.length_m
+    for n in range(beam.n_elements, most + 1):
+        if np.all(np.abs(points * n - np.rint(points * n)) <= 1e-6 * n):
+            return beam if n == beam.n_elements else replace(beam, n_elements=n)
+    return beam
 
 
 def _node_x(beam: Beam, model_dofs) -> tuple:
@@ -243,6 +270,7 @@ def run_discrepancy(beam_spec, measured, out_dir=None, *, frequency_noise=None, 
     cand = _candidate_rows(res)
     check = res.noise_check.to_dict()
     out = _result_json(res, meas, noise, sources, dof_map, cand, check)
+    out["notes"], out["drive_x_m_from_file"] = measured_test_notes(beam, meas, measured)
     recal = first.base.residuals if first else res.final.residuals
     if out_dir is not None:
         before_frf = after_frf = None
@@ -251,8 +279,9 @@ def run_discrepancy(beam_spec, measured, out_dir=None, *, frequency_noise=None, 
             after_frf = dsc.predict(res.final.beam, meas, n_elements).frf
         files = _figures(res, recal, meas, before_frf, after_frf)
         files.update(_table_files(res, recal, cand))
-        calibrated = res.final.beam.with_effects(res.final.beam.effects_dict(),
-                                                 name=f"{beam.name}-calibrated")
+        calibrated = res.final.beam.with_effects(res.final.beam.effects_dict(), name=f"{beam.name}-calibrated",
+                                                 **({"drive_x_m": out["drive_x_m_from_file"]}
+                                                    if out["drive_x_m_from_file"] is not None else {}))
         comment = _calibration_comment(beam, measured, res, meas, noise, check, seed)
         files["summary.json"] = _summary_json(out, out_dir, res, seed)
         files["beam.toml"] = beam_to_toml(calibrated, comment).encode()
@@ -261,6 +290,28 @@ def run_discrepancy(beam_spec, measured, out_dir=None, *, frequency_noise=None, 
         out["beam_file"] = str(out_dir / "beam.toml")
     out["_result"] = (res, recal)
     return out
+
+
+def measured_test_notes(beam: Beam, meas: dsc.Measurement, measured) -> tuple[list[str], float | None]:
+    """What the measured test adds to or leaves out of the beam file, one line each, and the reference DOF's
+    position (m) the calibrated beam file takes from the measured file (None: the beam file's stands).
+
+    The reference DOF of an FRF file is written to the calibrated beam file as ``drive_x_m`` when the beam file
+    names none and the file places it elsewhere than the default (the first sensor), so that ``generate`` simulates
+    the test as it was run. One sensor: its one entry per mode compares no shape (a MAC of one entry is 1), so the
+    frequencies, damping and FRF are compared."""
+    notes, drive = [], None
+    if meas.frf is not None and meas.frf_response_x_m and len(meas.frf_response_x_m) < 2:
+        notes.append(f"{measured}: one sensor: its mode-shape entries compare no shape; frequencies, damping ratios "
+                     "and the FRF are compared")
+    if meas.frf is not None and beam.drive_x_m is None and meas.frf_reference_x_m:
+        x = float(meas.frf_reference_x_m[0])
+        if abs(x - beam.measured_x_m[0]) > 1e-6 * beam.length_m:
+            drive = x
+            notes.append(f"drive_x_m = {x:.6g} m from {measured}: its reference DOF (the beam file names no drive "
+                         f"point; the default, the first sensor, lies at {beam.measured_x_m[0]:.6g} m); the "
+                         "calibrated beam file records it")
+    return notes, drive
 
 
 def _noise_for(meas: dsc.Measurement, rel_std=None, frequency=None, shape=None, frf_db=None) -> tuple[dsc.Noise, dict]:

@@ -11,7 +11,7 @@ from learn.classical import FREQUENCY_METHODS, run_classical
 from learn.features import feature_names, frf_features, frequency_features, map_frf_to_grid, modal_features
 from learn.hypotheses import FREQUENCY_CHANGE_STD, NO_EXPLANATION, SHAPE_CHANGE_STD, explain_many
 from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows, identification_band_hz,
-                            identify_modes, modal_pair, mode_checks, nominal_ratio_range)
+                            identify_modes, identify_test, modal_pair, mode_checks, nominal_ratio_range)
 from learn.model_dir import TrainedModel
 from learn.normal_variation import measure, model_modes
 from learn.verdict import (IN_DISTRIBUTION_PERCENTILE, agreement, classical_answer, classical_verdict,
@@ -394,8 +394,10 @@ def _chosen_verdict(net, cl, p, reasons: list, warnings: list, sens, depth, beam
 
 
 def _identification(p, base_md, cur_md, identified: bool, beam) -> dict:
-    """The verdict's ``identification``: how the modes were found, the baseline and measured natural frequencies
-    (Hz; every mode found when the pair is not complete) and the 1-based modes classified."""
+    """The verdict's ``identification``: how the modes were found (``as``: the ``identify`` command that finds the
+    same modes), the baseline and measured natural frequencies (Hz; every mode found when the pair is not complete),
+    the 1-based modes classified, and every pole found in each test with the model's mode it was paired with
+    (``baseline_poles``, ``measured_poles``: ``{"frequency_hz", "mode"}``, mode None for a pole left unpaired)."""
     if p is None:
         freqs, modes = ([], []), []
     elif p.complete:
@@ -403,10 +405,14 @@ def _identification(p, base_md, cur_md, identified: bool, beam) -> dict:
     else:
         freqs = [np.sort(np.abs(md.eigenvalues)) / (2 * np.pi) for md in (base_md, cur_md)]
         modes = [beam.modes[int(j)] for j in p.modes]
+    poles = p.poles if p is not None and p.poles else ([], [])
     return {**IDENTIFICATION, "n_modes": beam.n_modes, "modes_model": list(beam.modes),
             "source": "identified from FRFs" if identified else "modal data",
+            **({"as": "identify --band " + " ".join(f"{b:g}" for b in beam.test.band_hz)}
+               if identified and beam.test is not None else {}),
             "baseline_frequencies_hz": [float(x) for x in freqs[0]],
-            "measured_frequencies_hz": [float(x) for x in freqs[1]], "modes_classified": modes}
+            "measured_frequencies_hz": [float(x) for x in freqs[1]], "modes_classified": modes,
+            "baseline_poles": list(poles[0]), "measured_poles": list(poles[1])}
 
 
 
@@ -423,11 +429,9 @@ def _modal_inputs(model: TrainedModel, inputs: list, names: list[str], sens):
         fmax, fmin = IDENTIFICATION_BAND_FACTOR * float(sens.frequencies_hz[3]), 0.0
     else:
         fmin, fmax = test.band_hz
-    try:
-        # another test: spare poles and a model order for wide noisy bands, then paired by frequency
-        k = model.beam.n_modes + (0 if test is None else 2)
-        order = 40 if test is None else max(40, 10 * k)
-        ids = [identify_modes(d, fmax, n, k, fmin, order) for d, n in zip(inputs, names)]
+    try:  # the thesis's test: its 4 modes; another test: as 'identify --band' does, then paired by frequency
+        ids = [identify_modes(d, fmax, n) if test is None else identify_test(d, test.band_hz, n)
+               for d, n in zip(inputs, names)]
     except BeamDamageError:
         if model.route == "modal":
             raise

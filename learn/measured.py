@@ -11,12 +11,15 @@ import numpy as np
 from learn.features import BeamSpec, real_shapes
 from physics.errors import BeamDamageError
 from physics.identification import identify_frf
-from physics.io import MeasuredFRF, map_frf_dofs, map_measured_dofs, parse_dof, prepare_measured
+from physics.io import (MeasuredFRF, map_frf_dofs, map_measured_dofs, parse_dof, prepare_measured,
+                        reference_position_m, sensor_labels)
+from physics.layout import MIN_VISIBLE, uniform_shapes
 from physics.modal import mac
 
-__all__ = ["IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "RATIO_TOLERANCE", "ModalPair", "frf_rows",
-           "identification_band_hz", "identify_modes", "modal_pair", "mode_checks", "nominal_ratio_range",
-           "on_model_dofs", "pair_modes_by_frequency"]
+__all__ = ["IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "MIN_PAIR_MAC", "RATIO_TOLERANCE",
+           "ModalPair", "differences_from_model", "frf_rows", "identification_band_hz", "identify_modes",
+           "identify_test", "modal_pair", "mode_checks", "nominal_ratio_range", "on_model_dofs",
+           "pair_modes_by_frequency", "unexcited_modes"]
 
 #: The identification ``classify`` runs on FRF files: LSCF poles and LSFD residues, the 4 lowest modes. The
 #: training data's modal noise (``measurement.modal_noise = "calibrated"``) is calibrated against this path
@@ -32,6 +35,10 @@ IDENTIFICATION_BAND_FACTOR = 1.4
 #: spurious mode (which moves a ratio by a factor of 2.6 or more).
 RATIO_TOLERANCE = 0.35
 
+#: Least MAC between an identified shape and a nominal mode's shape at the sensors for the two to pair (two or
+#: more sensors): a slit or a support change leaves the MAC of a mode with its nominal shape above 0.9; a
+#: spurious pole (a mains line, a fixture's resonance) has a shape of its own.
+MIN_PAIR_MAC = 0.5
 
 
 def on_model_dofs(data, beam: BeamSpec, beam_x_m=None, where: str = "measured data"):
@@ -60,8 +67,7 @@ def on_model_dofs(data, beam: BeamSpec, beam_x_m=None, where: str = "measured da
                   beam_x_m=grid_x if beam_x_m is None else np.sort(np.asarray(beam_x_m, float)))
     if isinstance(data, MeasuredFRF):
         def frf_map(d):
-            labels = tuple(dict.fromkeys(d.response_dofs + d.reference_dofs))
-            return map_frf_dofs(d, labels, grid_x, grid, off_grid="ignore", **kw)
+            return map_frf_dofs(d, sensor_labels(d, kw["beam_x_m"]), grid_x, grid, off_grid="ignore", **kw)
 
         prepared = prepare_measured(data, frf_map, wanted=beam.dofs)
         data, dof_map = prepared.data, prepared.dof_map
@@ -70,10 +76,10 @@ def on_model_dofs(data, beam: BeamSpec, beam_x_m=None, where: str = "measured da
             dof_map = replace(dof_map, detail=dof_map.detail + "; responses at the hammer positions by "
                               "reciprocity (H_ij = H_ji, a roving-hammer test)")
         resp_map = replace(dof_map, dofs=data.response_dofs,
-                           model_dofs=tuple(to_model[d] for d in data.response_dofs))
+                           model_dofs=tuple(to_model.get(d, "") for d in data.response_dofs))
         resp = resp_map.rows(beam.dofs, where)
         return replace(data, frf=data.frf[resp], response_dofs=tuple(beam.dofs),
-                       reference_dofs=tuple(to_model[d] or d for d in data.reference_dofs)), dof_map
+                       reference_dofs=tuple(to_model.get(d) or d for d in data.reference_dofs)), dof_map
     data = prepare_measured(data).data
     if not data.dofs or data.eigenvectors is None:
         return data, None
@@ -99,6 +105,9 @@ class ModalPair:
     n_modes : int                                         modes the model reads
     frequency_only : bool                                 natural frequencies without shapes in a test (the
                                                           eigenvectors are placeholders)
+    poles : tuple of 2 lists                              per test, every mode found: ``{"frequency_hz", "mode"}``
+                                                          (the model's 1-based mode it was paired with, None for
+                                                          a pole left unpaired); empty on the thesis's 4 modes
     """
 
     eigenvalues: np.ndarray
@@ -108,6 +117,7 @@ class ModalPair:
     warnings: tuple = ()
     n_modes: int = 4
     frequency_only: bool = False
+    poles: tuple = ()
 
     @property
     def complete(self) -> bool:
@@ -115,19 +125,25 @@ class ModalPair:
         return self.modes.size == self.n_modes
 
 
-def pair_modes_by_frequency(frequencies_hz, nominal_hz, tolerance: float | None = None) -> np.ndarray:
+def pair_modes_by_frequency(frequencies_hz, nominal_hz, tolerance: float | None = None,
+                            shape_mac=None) -> np.ndarray:
     """The nominal mode each identified mode is: 0-based indices into ``nominal_hz``, -1 for none.
 
     The identified modes and the nominal beam's are aligned in frequency order: each identified mode pairs with
     one nominal mode or none, each nominal mode with at most one, minimising the sum of the squared log frequency
-    ratios plus ``ln(1 + tolerance)^2`` per identified mode left unpaired (a spurious mode). A pairing farther
-    than a factor ``1 + tolerance`` is never kept; modes 1-4 of a cantilever lie a factor 1.96 or more apart.
+    ratios plus ``ln(1 + tol_j)^2`` per identified mode left unpaired (a spurious mode). A pairing farther
+    than a factor ``1 + tol_j`` is never kept: ``tol_j`` is ``tolerance``, narrowed to the geometric midpoint
+    between nominal mode ``j`` and its nearest neighbour (modes 1-4 of a cantilever lie a factor 1.96 or more
+    apart, so there it is ``tolerance``; a free-free beam's mode 6 lies a factor 1.40 above mode 5, so a pole
+    more than 18 % from it is not mode 6). With ``shape_mac`` (two or more sensors), a mode whose MAC against
+    the nominal shape is below :data:`MIN_PAIR_MAC` is not paired with it either.
 
     Parameters
     ----------
     frequencies_hz : array, shape (k,)     identified natural frequencies (Hz), any order
     nominal_hz : array, shape (m,)         the nominal beam's natural frequencies (Hz), ascending
     tolerance : float, optional            default :data:`RATIO_TOLERANCE`
+    shape_mac : array, shape (k, m), optional   MAC of each identified shape against each nominal shape
 
     Returns
     -------
@@ -136,7 +152,15 @@ def pair_modes_by_frequency(frequencies_hz, nominal_hz, tolerance: float | None 
     f = np.asarray(frequencies_hz, float)
     nominal = np.asarray(nominal_hz, float)
     order = np.argsort(f)
+    tol = np.full(nominal.size, RATIO_TOLERANCE if tolerance is None else tolerance)
+    if nominal.size > 1:
+        gap = np.log(nominal[1:] / nominal[:-1])                      # (m - 1,) log spacing of neighbours
+        half = np.minimum(np.r_[np.inf, gap], np.r_[gap, np.inf]) / 2
+        tol = np.minimum(tol, np.expm1(half))
     cost = np.log(f[order, None] / nominal[None]) ** 2                 # (k, m)
+    cost = np.where(cost > np.log1p(tol)[None] ** 2, np.inf, cost)
+    if shape_mac is not None:
+        cost = np.where(np.asarray(shape_mac, float)[order] < MIN_PAIR_MAC, np.inf, cost)
     skip = np.log1p(RATIO_TOLERANCE if tolerance is None else tolerance) ** 2
     k, m = cost.shape
     total = np.full((k + 1, m + 1), np.inf)                            # order-preserving alignment, O(k m)
@@ -196,7 +220,9 @@ def modal_pair(baseline, current, beam: BeamSpec, nominal_hz, names=("baseline",
     if beam.test is None and all(x.size == m for x in lams):
         return ModalPair(np.stack(lams), np.stack(vecs), np.arange(m), (), tuple(warnings), m, shapeless)
     found = [how or f"it holds {x.size} mode{'s' * (x.size != 1)}" for how, x in zip(found or (None, None), lams)]
-    which = [pair_modes_by_frequency(np.abs(x) / (2 * np.pi), nominal_hz[:m]) for x in lams]
+    which = [pair_modes_by_frequency(np.abs(x) / (2 * np.pi), nominal_hz[:m],
+                                     shape_mac=None if shapeless else _nominal_mac(v, beam))
+             for x, v in zip(lams, vecs)]
     common = np.intersect1d(*which)
     common = common[common >= 0]
     missing = []
@@ -206,8 +232,23 @@ def modal_pair(baseline, current, beam: BeamSpec, nominal_hz, names=("baseline",
             missing.append(f"mode{'s' * (len(absent) > 1)} {', '.join(map(str, absent))} not identified in {name} "
                            f"({how})")
     take = [[int(np.flatnonzero(k == j)[0]) for j in common] for k in which]
+    poles = tuple([{"frequency_hz": float(abs(lam) / (2 * np.pi)), "mode": beam.modes[j] if j >= 0 else None}
+                   for lam, j in zip(x, k)] for x, k in zip(lams, which))
     return ModalPair(np.stack([x[t] for x, t in zip(lams, take)]), np.stack([v[:, t] for v, t in zip(vecs, take)]),
-                     common, tuple(missing), tuple(warnings), m, shapeless)
+                     common, tuple(missing), tuple(warnings), m, shapeless, poles)
+
+
+def _nominal_mac(shapes, beam: BeamSpec):
+    """MAC (k, m) of identified shapes (S, k) on the model's sensors against the nominal uniform beam's, or None
+    (one sensor, the thesis's test)."""
+    test = beam.test
+    if test is None or test.n_sensors < 2:
+        return None
+    ref = uniform_shapes(test, beam.sensors_x_m)                      # (S, m)
+    u = np.asarray(shapes)
+    num = np.abs(u.conj().T @ ref) ** 2
+    den = np.sum(np.abs(u) ** 2, axis=0)[:, None] * np.sum(ref ** 2, axis=0)[None]
+    return num / np.maximum(den, 1e-300)
 
 
 def _canonical_dof(label: str) -> str:
@@ -264,6 +305,97 @@ def identify_modes(frf, fmax_hz: float | None = None, where: str = "FRF file", n
         raise BeamDamageError(f"{where}: LSCF/LSFD identification failed ({exc})") from None
     return ident.modal_data
 
+
+
+def identify_test(frf, band_hz, where: str = "FRF file"):
+    """Modal data of one FRF file of a beam-file test, identified as ``beam-damage identify FILE --band LO HI``
+    identifies it (:func:`physics.identification.identify_frf`: LSCF over the band, every stable pole inside it,
+    its default model order, a clear peak no pole explains fitted again around it). ``classify`` and the modal-noise
+    calibration of ``generate`` run this; the poles are then paired with the model's modes
+    (:func:`pair_modes_by_frequency`), so a spurious pole takes no mode's place.
+
+    Returns
+    -------
+    :class:`physics.io.ModalData` of every mode found in ``band_hz`` (Hz).
+    """
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            ident = identify_frf(frf, method=IDENTIFICATION["method"], band_hz=tuple(map(float, band_hz)))
+    except (np.linalg.LinAlgError, RuntimeError) as exc:
+        raise BeamDamageError(f"{where}: LSCF/LSFD identification failed ({exc})") from None
+    return ident.modal_data
+
+
+def unexcited_modes(test, drive_x_m: float) -> tuple:
+    """The test's modes (1-based) with a node at ``drive_x_m`` (m): their uniform-beam shape there below
+    :data:`physics.layout.MIN_VISIBLE` of their largest along the beam (:func:`physics.layout.uniform_shapes`; the
+    rule by which the layout leaves out a mode its drive point cannot see: a mode near a clamp, 3 % there, still
+    shows a clear peak)."""
+    grid = np.linspace(0.0, test.length_m, 241)
+    peak = np.abs(uniform_shapes(test, grid)).max(axis=0)
+    rel = np.abs(uniform_shapes(test, [drive_x_m]))[0] / peak
+    return tuple(int(m) for m, r in zip(test.modes, rel) if r < MIN_VISIBLE)
+
+
+def differences_from_model(frfs: dict, beam: BeamSpec, line_spacing_hz: float | None = None) -> list[str]:
+    """How the measured test differs from the model's, one line each (empty when it does not).
+
+    Parameters
+    ----------
+    frfs : dict of str -> :class:`physics.io.MeasuredFRF`
+        The files as read (name -> FRFs), before they are placed on the model's DOFs.
+    beam : BeamSpec
+        The model's test (``beam.test``; the thesis's test is compared on its band and line spacing alone).
+    line_spacing_hz : float, optional
+        The training data's line spacing (Hz).
+
+    Compared: the reference DOF's position (from the files' node geometry) against the model's drive point, and
+    the modes that position cannot excite (:func:`unexcited_modes`); the files' FRF kinds; the band the files
+    cover against the model's modes (a mode outside the lines, or within 5 % of their ends); their line spacing
+    against the training data's (coarser by more than a factor 2: the identification errs more than the training
+    data's modal noise says; finer lines err less).
+    """
+    test = beam.test
+    out = []
+    if not frfs:
+        return out
+    kinds = {name: f.kind for name, f in frfs.items()}
+    if len(set(kinds.values())) > 1:
+        out.append("FRF kinds differ between the files (" + ", ".join(f"{n}: {k}" for n, k in kinds.items())
+                   + "): each is converted to receptance before identification")
+    if test is not None:
+        where = {n: reference_position_m(f) for n, f in frfs.items()}
+        placed = {n: x for n, x in where.items() if x is not None}
+        tol = 0.02 * test.length_m
+        for n, x in placed.items():
+            if abs(x - test.drive_x_m) <= tol:
+                continue
+            lost = unexcited_modes(test, x)
+            out.append(f"{n}: the reference DOF {frfs[n].reference_dofs[0]} lies at {x:.4g} m (the file's node "
+                       f"geometry), the model was trained for a drive point at {test.drive_x_m:.4g} m"
+                       + (f"; a force at {x:.4g} m cannot excite mode{'s' * (len(lost) > 1)} "
+                          f"{', '.join(map(str, lost))} (a node there: below {MIN_VISIBLE:.0%} of the mode's "
+                          "largest amplitude), which the model reads" if lost else "")
+                       + ": generate the training data for this drive point (drive_x_m in the beam file)")
+        unplaced = [n for n in frfs if n not in placed]
+        if unplaced and len(unplaced) == len(frfs):
+            out.append(f"the files carry no node geometry of their reference DOF: the force is taken at the model's "
+                       f"drive point {test.drive_x_m:.4g} m")
+    lo, hi = beam.test.band_hz if test is not None else (None, None)
+    for n, f in frfs.items():
+        fr = f.frequency_hz[f.frequency_hz > 0]
+        outside = [] if test is None else \
+            [m for m, fm in zip(test.modes, test.frequencies_hz) if not fr[0] * 1.05 <= fm <= fr[-1] / 1.05]
+        if outside:
+            out.append(f"{n}: its lines cover {fr[0]:.4g}-{fr[-1]:.4g} Hz, the model's band is {lo:.4g}-{hi:.4g} Hz: "
+                       f"mode{'s' * (len(outside) > 1)} {', '.join(map(str, outside))} of the model lie outside the "
+                       "file's lines or within 5 % of their ends")
+        df = float(np.median(np.diff(fr))) if fr.size > 1 else None
+        if line_spacing_hz and df and df > 2.0 * line_spacing_hz:
+            out.append(f"{n}: line spacing {df:.4g} Hz, coarser than the training data's {line_spacing_hz:.4g} Hz: "
+                       "the modal noise the model was trained with describes the identification on finer lines")
+    return out
 
 
 def nominal_ratio_range(sens) -> np.ndarray:

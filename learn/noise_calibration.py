@@ -7,8 +7,8 @@ A dataset's measured modal data are the truth modes plus random errors whose sta
 identifies differently: more sensors, modes that a sensor barely sees, higher modes, another band and model order.
 :func:`calibrate_test` measures it on the test itself: specimens of the config are simulated, their FRFs
 synthesised as a dataset synthesises them at :data:`LEVELS` x :data:`FLOORS`, identified exactly as ``classify``
-identifies a file of that model (:func:`learn.measured.identify_modes` over the test's band with two spare poles and
-order ``max(40, 10 x modes)``, modes paired by frequency), and ``c``, ``g``, ``e`` of every mode fitted to the
+identifies a file of that model (:func:`learn.measured.identify_test`: as ``identify --band`` over the test's band,
+modes paired by frequency), and ``c``, ``g``, ``e`` of every mode fitted to the
 robust standard deviations of the errors (:func:`calibrate_std`). Deterministic for a config and seed.
 """
 
@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from learn.measured import identify_modes, pair_modes_by_frequency
+from learn.measured import identify_test, pair_modes_by_frequency
 from physics.errors import BeamDamageError
 from physics.io import MeasuredFRF
 
@@ -67,26 +67,25 @@ def identification_errors(cfg: dict, level: float, floor: float, specimens: int,
     test = setup.test
     inp = draw_batch(np.random.default_rng(seed), specimens, setup)
     sim = simulate_batch(setup, inp)
-    H = measured_frf({**sim, "drive_row": setup.drive_row, "noise_seed": inp.noise_seed,
+    S = setup.n_meas
+    H = measured_frf({**sim, "drive_row": setup.drive_row, "n_responses": S, "noise_seed": inp.noise_seed,
                       "noise_level": inp.noise_level, "noise_floor": inp.noise_floor}, setup.omega_rad_s, np.complex128)
     used = setup.modes_idx
     lam_t = sim["truth_poles"][..., used].reshape(2 * specimens, -1)
-    psi_t = sim["truth_shapes"][..., used].reshape(2 * specimens, setup.n_meas, -1)
-    m = used.size
-    dofs = tuple(f"{k + 1}:+Y" for k in range(setup.n_meas))
+    psi_t = sim["truth_shapes"][..., :S, used].reshape(2 * specimens, S, -1)
+    dofs = tuple(f"{k + 1}:+Y" for k in range(S + int(setup.drive_off_sensors)))   # the reference DOF last
     f_hz = setup.omega_rad_s / (2 * np.pi)
     fmin, fmax = test.band_hz
     nominal = np.asarray(test.frequencies_hz)
     lam_e, psi_e = np.full(lam_t.shape, np.nan + 0j), np.full(psi_t.shape, np.nan + 0j)
-    k_poles, order = m + 2, max(40, 10 * (m + 2))
-    for i, Hs in enumerate(H.reshape(2 * specimens, setup.n_meas, -1)):
-        frf = MeasuredFRF(f_hz, Hs[:, None, :], dofs, (dofs[setup.drive_row],))
+    for i, Hs in enumerate(H.reshape(2 * specimens, S, -1)):
+        frf = MeasuredFRF(f_hz, Hs[:, None, :], dofs[:S], (dofs[setup.drive_row],))
         try:
-            md = identify_modes(frf, fmax, "calibration", k_poles, fmin, order)
+            md = identify_test(frf, (fmin, fmax), "calibration")
         except BeamDamageError:
             continue
         lam_e[i], psi_e[i] = on_nominal_modes(md.eigenvalues, md.eigenvectors, nominal)
-    return mode_errors(lam_e, psi_e, lam_t, psi_t)
+    return mode_errors(lam_e, psi_e, lam_t, psi_t, unscaled=setup.drive_off_sensors)   # no driving point: unscaled
 
 
 def on_nominal_modes(eigenvalues, shapes, nominal_hz):

@@ -96,7 +96,7 @@ def output_only_errors(setup, sim: dict, sensor_noise: float, record_length_s: f
 
     test, used, S = setup.test, setup.modes_idx, setup.n_meas
     poles = sim["truth_poles"].reshape(-1, sim["truth_poles"].shape[-1])
-    shapes = sim["truth_shapes"].reshape(-1, S, sim["truth_shapes"].shape[-1])
+    shapes = sim["truth_shapes"][:, :, :S].reshape(-1, S, sim["truth_shapes"].shape[-1])
     fs = SAMPLING_FACTOR * float(test.band_hz[1])
     n = next_fast_len(int(round(record_length_s * fs)), real=True)
     nominal = np.asarray(test.frequencies_hz)

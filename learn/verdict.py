@@ -227,6 +227,13 @@ def verdict_text(res: dict) -> str:
                  + ", ".join(f"{x:.2f}" for x in ident["measured_frequencies_hz"])
                  + (f"; modes classified: {', '.join(map(str, modes))}"
                     if modes and len(modes) < ident.get("n_modes", 4) else ""))
+    for name in ("baseline", "measured"):
+        poles = ident.get(f"{name}_poles")
+        if poles:
+            lines.append(f"{name.capitalize()} poles -> the model's modes: "
+                         + ", ".join(f"{p['frequency_hz']:.2f} Hz -> "
+                                     + (f"mode {p['mode']}" if p["mode"] is not None else "none (unpaired)")
+                                     for p in poles))
     for name, d in res["dof_positions"].items():
         lines.append(f"{name}: " + (dof_positions_text(d) if d else "modal data without DOF labels: rows taken as "
                                                                   "the model's DOFs"))

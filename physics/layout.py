@@ -28,12 +28,14 @@ mode, a sensor at a node of every mode used (it measures nothing), a reference D
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
 from physics.errors import ConfigError
 
-__all__ = ["DEFAULT_BAND_HZ", "MIN_VISIBLE", "SYMMETRIC_SUPPORTS", "Layout", "nominal_modes", "layout_of"]
+__all__ = ["DEFAULT_BAND_HZ", "MIN_VISIBLE", "SYMMETRIC_SUPPORTS", "Layout", "layout_of", "nominal_modes",
+           "relative_amplitude", "uniform_shapes"]
 
 #: The thesis's band: 60-4800 rad/s.
 DEFAULT_BAND_HZ = (60.0 / (2 * np.pi), 4800.0 / (2 * np.pi))
@@ -145,6 +147,31 @@ def nominal_modes(beam, n_elements: int = NOMINAL_ELEMENTS):
     return f, shape_at
 
 
+def relative_amplitude(shape_at, x_m, length_m: float) -> np.ndarray:
+    """``|phi(x)|`` over each mode's largest amplitude along the beam, shape (len(x_m), r), of ``shape_at`` of
+    :func:`nominal_modes` (the measure :data:`MIN_VISIBLE` is compared with)."""
+    peak = np.abs(shape_at(np.linspace(0, length_m, 241))).max(axis=0)
+    return np.abs(shape_at(x_m)) / peak
+
+
+def uniform_shapes(test: Layout, x_m) -> np.ndarray:
+    """Shapes (len(x_m), m) of the test's modes at ``x_m`` for a uniform beam on the test's supports (mass
+    normalised for unit mass per length; a uniform beam's shapes do not depend on ``EI`` or the mass), rigid-body
+    modes left out."""
+    shape_at = _uniform_shape_at(test.bc, float(test.length_m))
+    return shape_at(np.atleast_1d(np.asarray(x_m, float)))[:, np.asarray(test.modes) - 1]
+
+
+@lru_cache(maxsize=16)
+def _uniform_shape_at(bc: str, length_m: float):
+    from physics.beam import beam_from_dict
+
+    beam = beam_from_dict({"name": "uniform", "bc": bc, "length_m": length_m, "width_m": 0.01,
+                           "thickness_m": 0.01, "EI_Nm2": 1.0, "mass_per_length_kg_m": 1.0,
+                           "measured_x_m": [length_m]}, "uniform beam")
+    return nominal_modes(beam)[1]
+
+
 def _default_band(f_hz: np.ndarray, n_sensors: int) -> tuple:
     lo, hi = DEFAULT_BAND_HZ
     if np.count_nonzero((f_hz >= lo) & (f_hz <= hi)) >= 4:
@@ -197,8 +224,7 @@ def layout_of(beam, source: str = "beam") -> Layout:
         near = ", ".join(f"{v:.4g}" for v in f_all[:4])
         raise ConfigError(f"{source}: 'band_hz' [{band[0]:g}, {band[1]:g}] holds no bending mode of the beam "
                           f"(its first bending frequencies: {near} Hz); expected a band around them")
-    phi = shape_at(np.concatenate([xs, [drive]]))[:, inside]         # (S + 1, r)
-    rel = np.abs(phi) / np.abs(shape_at(np.linspace(0, L, 241))[:, inside]).max(axis=0)
+    rel = relative_amplitude(shape_at, np.concatenate([xs, [drive]]), L)[:, inside]   # (S + 1, r)
     sensor_sees = rel[:-1] >= MIN_VISIBLE                            # (S, r)
     drive_sees = rel[-1] >= MIN_VISIBLE                              # (r,)
     blind = np.flatnonzero(~sensor_sees.any(axis=1))

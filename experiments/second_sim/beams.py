@@ -2,8 +2,12 @@
 
 Each :class:`CatalogueBeam` has its support (clamped-free, free-free, pinned-pinned, clamped-clamped),
 material, section, sensors (1 to 12, anywhere; the drive point is one of them) and band (the nominal beam's
-first ``n_modes`` bending modes). :func:`beam_toml` writes its beam file in the project's format (the TOML
-text is written here: nothing of the project is imported). :func:`simulate_beam_pairs` draws specimen pairs:
+first ``n_modes`` bending modes). :data:`TEST_AS_RUN` holds tests that differ from what a usual beam file says:
+the force where no sensor is (``drive_x_over_L``; the files' reference node is then a geometry node after the
+sensors'), a beam file that names no drive point (``file_drive``), one file kind throughout (``kind``), a point
+mass on the beam (``mass``, stated in the beam file as ``added_mass``), files without node geometry
+(``geometry``) and a band of its own (``band``). :func:`beam_toml` writes its beam file in the project's format
+(the TOML text is written here: nothing of the project is imported). :func:`simulate_beam_pairs` draws specimen pairs:
 
 * specimen: EI within +-5 %, mass per length within +-3 %, modal damping ratios drawn per mode (the
   material's range);
@@ -20,8 +24,9 @@ text is written here: nothing of the project is imported). :func:`simulate_beam_
   accelerance (cycling over the files; the exported quantity is the accelerance divided by ``(i w)^k``).
 
 Files per beam: ``beam.toml``, ``pair-KKK_baseline.uff``, ``pair-KKK_current.uff`` (datasets 164, 15, 58:
-node numbers in the beam file's sensor order, coordinates in mm; a beam with one sensor also has its two ends
-as unmeasured geometry nodes, the line a test engineer draws, since one point defines no beam axis),
+node numbers in the beam file's sensor order, the drive point next when no sensor is there, coordinates in mm; a
+beam with one geometry node also has its two ends as unmeasured geometry nodes, the line a test engineer draws,
+since one point defines no beam axis),
 ``truth.csv`` and ``truth.json``.
 """
 
@@ -35,12 +40,12 @@ from pathlib import Path
 import numpy as np
 import scipy.linalg
 
-from experiments.second_sim.fem import N_ELEMENTS, Beam, Slit, assemble, mesh_elements, modes
+from experiments.second_sim.fem import N_ELEMENTS, Beam, PointMass, Slit, assemble, mesh_elements, modes
 from experiments.second_sim.response import Damping, Noise, measure, receptance
 from experiments.second_sim.writers import KINDS, write_csv, write_json, write_text_atomic, write_uff
 
-__all__ = ["CATALOGUE", "MATERIALS", "SPREAD", "SUPPORTS", "BeamPair", "CatalogueBeam", "Spread", "beam_toml",
-           "default_zones", "nominal_beam", "simulate_beam_pairs", "write_beam_pairs"]
+__all__ = ["CATALOGUE", "MATERIALS", "SPREAD", "SUPPORTS", "TEST_AS_RUN", "BeamPair", "CatalogueBeam", "Spread",
+           "beam_toml", "default_zones", "excited_modes", "nominal_beam", "simulate_beam_pairs", "write_beam_pairs"]
 
 
 #: Young's modulus (Pa), density (kg/m^3) and modal damping-ratio range of each material.
@@ -70,6 +75,12 @@ class CatalogueBeam:
     sensors_x_over_L: tuple
     drive_sensor: int
     n_modes: int
+    drive_x_over_L: float | None = None    # the force where no sensor is (then ``drive_sensor`` is not used)
+    file_drive: bool = True                # the beam file states ``drive_x_m`` (else the files' geometry alone)
+    kind: str | None = None                # every file written as this kind (None: cycling over KINDS)
+    mass: tuple | None = None              # ``(x_over_L, mass_kg)``: a point mass on the beam (in the beam file)
+    geometry: bool = True                  # the files carry node geometry (datasets 15)
+    band: tuple | None = None              # the band measured (Hz); None: around the ``n_modes`` modes
 
     @property
     def EI_Nm2(self) -> float:
@@ -85,7 +96,17 @@ class CatalogueBeam:
 
     @property
     def drive_x_m(self) -> float:
+        if self.drive_x_over_L is not None:
+            return self.length_m * self.drive_x_over_L
         return self.sensors_x_m[self.drive_sensor]
+
+    @property
+    def drive_off_sensors(self) -> bool:
+        return self.drive_x_over_L is not None
+
+    @property
+    def point_masses(self) -> tuple:
+        return () if self.mass is None else (PointMass(self.length_m * self.mass[0], self.mass[1]),)
 
     @property
     def symmetric(self) -> bool:
@@ -94,7 +115,8 @@ class CatalogueBeam:
 
     @property
     def n_elements(self) -> int:
-        return mesh_elements(self.length_m, self.sensors_x_m, max(N_ELEMENTS, 16 * (self.n_modes + 2)))
+        points = (*self.sensors_x_m, self.drive_x_m, *(m.x_m for m in self.point_masses))
+        return mesh_elements(self.length_m, points, max(N_ELEMENTS, 16 * (self.n_modes + 2)))
 
 
 CATALOGUE = (
@@ -109,6 +131,22 @@ CATALOGUE = (
     CatalogueBeam("steel-cantilever-cf-8s", "clamped-free", "steel", 1.5, 0.05, 0.01,
                   tuple(k / 8 for k in range(8, 0, -1)), 0, 5),
     CatalogueBeam("cfrp-strip-cc-2s", "clamped-clamped", "cfrp", 0.5, 0.03, 0.004, (0.3, 0.625), 0, 4),
+)
+
+#: Tests that differ from what the usual beam file says: the force where no sensor is, at a node of some modes,
+#: a drive point the beam file leaves out, one accelerometer with a transfer FRF over a wide band.
+TEST_AS_RUN = (
+    # 6 accelerometers off the quarter points, the shaker at the tip (no sensor there), mobilities
+    CatalogueBeam("al-cantilever-cf-6s-tipforce", "clamped-free", "aluminium", 0.8, 0.04, 0.006,
+                  (0.1, 0.3, 0.45, 0.6, 0.7, 0.9), 0, 5, drive_x_over_L=1.0, kind="mobility"),
+    # 5 accelerometers, the force at L/3 (a node of modes 3 and 6), receptances; the beam file names no drive point,
+    # the files' geometry does
+    CatalogueBeam("steel-pp-5s-drive-third", "pinned-pinned", "steel", 1.2, 0.05, 0.01,
+                  (0.125, 0.25, 0.5, 0.75, 0.875), 0, 6, drive_x_over_L=1 / 3, file_drive=False, kind="receptance"),
+    # an impact test: one accelerometer at the tip, the hammer near the clamp, a mass on the beam, accelerances over
+    # a wide band from below mode 1 (23 Hz) past mode 5, no node geometry in the files
+    CatalogueBeam("steel-cf-1acc-impact", "clamped-free", "steel", 0.6, 0.03, 0.01, (1.0,), 0, 5,
+                  drive_x_over_L=0.15, kind="accelerance", mass=(0.5, 0.1), geometry=False, band=(10.0, 1600.0)),
 )
 
 
@@ -129,7 +167,7 @@ def _ends(bc: str, EI_Nm2: float, length_m: float, clamp_rel=(math.inf, math.inf
 @functools.lru_cache(maxsize=None)
 def nominal_beam(cb: CatalogueBeam) -> Beam:
     """The nominal beam on ideal supports (rigid clamps and pins, a free-free beam without suspension)."""
-    return Beam(cb.length_m, cb.EI_Nm2, cb.mass_per_length_kg_m, n_elements=cb.n_elements,
+    return Beam(cb.length_m, cb.EI_Nm2, cb.mass_per_length_kg_m, n_elements=cb.n_elements, masses=cb.point_masses,
                 **_ends(cb.bc, cb.EI_Nm2, cb.length_m))
 
 
@@ -148,6 +186,19 @@ def bending_frequencies_hz(beam: Beam, bc: str, n: int) -> np.ndarray:
     return np.sqrt(np.clip(w2[r:], 0.0, None)) / (2 * math.pi)
 
 
+def excited_modes(cb: CatalogueBeam, fraction: float = 0.05) -> tuple:
+    """Bending modes (1-based, of the first ``n_modes``) of the nominal beam that the force excites: its shape at
+    the drive point at least ``fraction`` of its largest translation along the beam."""
+    asm = assemble(nominal_beam(cb))
+    md = modes(asm)
+    r = _rigid_modes(cb.bc)
+    phi = md.phi[:, r:r + cb.n_modes]
+    free = asm.translation_dofs([x for x in np.linspace(0.0, cb.length_m, cb.n_elements + 1)
+                                 if asm.dof_index[2 * int(round(x / cb.length_m * cb.n_elements))] >= 0])
+    at = np.abs(phi[asm.translation_dofs([cb.drive_x_m])[0]]) / np.abs(phi[free]).max(axis=0)
+    return tuple(int(k) + 1 for k in np.flatnonzero(at >= fraction))
+
+
 def _nice(v: float, up: bool) -> float:
     """``v`` rounded (down or up) to 2 significant digits."""
     e = math.floor(math.log10(v)) - 1
@@ -156,7 +207,10 @@ def _nice(v: float, up: bool) -> float:
 
 @functools.lru_cache(maxsize=None)
 def band_hz(cb: CatalogueBeam) -> tuple:
-    """The band measured: 0.6 times the first to 1.12 times the ``n_modes``-th nominal bending frequency."""
+    """The band measured: ``cb.band``, else 0.6 times the first to 1.12 times the ``n_modes``-th nominal bending
+    frequency."""
+    if cb.band is not None:
+        return tuple(map(float, cb.band))
     f = bending_frequencies_hz(nominal_beam(cb), cb.bc, cb.n_modes + 1)
     hi = min(1.12 * f[cb.n_modes - 1], 0.5 * (f[cb.n_modes - 1] + f[cb.n_modes]))
     return _nice(0.6 * f[0], up=False), _nice(hi, up=False)
@@ -192,7 +246,9 @@ def beam_toml(cb: CatalogueBeam) -> str:
         f"thickness_m = {num(cb.thickness_m)}", f"EI_Nm2 = {num(cb.EI_Nm2)}",
         f"mass_per_length_kg_m = {num(cb.mass_per_length_kg_m)}",
         "measured_x_m = [" + ", ".join(num(x) for x in cb.sensors_x_m) + "]",
-        f"drive_x_m = {num(cb.drive_x_m)}", f"band_hz = [{num(lo)}, {num(hi)}]", ""])
+        *([f"drive_x_m = {num(cb.drive_x_m)}"] if cb.file_drive else []), f"band_hz = [{num(lo)}, {num(hi)}]",
+        *([f"[effects.added_mass]\nmass_kg = {num(cb.mass[1])}\nx_m = {num(cb.length_m * cb.mass[0])}"]
+          if cb.mass else []), ""])
 
 
 @dataclass(frozen=True)
@@ -264,7 +320,7 @@ def _specimen(cb: CatalogueBeam, rng, sp: Spread) -> tuple[Beam, dict]:
     bounce = rng.uniform(*sp.bounce_over_f1)
     f1 = _nominal_f1_hz(cb)
     k_susp = 0.5 * m * cb.length_m * (2 * math.pi * bounce * f1) ** 2 if cb.bc == "free-free" else 0.0
-    beam = Beam(cb.length_m, EI, m, n_elements=cb.n_elements,
+    beam = Beam(cb.length_m, EI, m, n_elements=cb.n_elements, masses=cb.point_masses,
                 **_ends(cb.bc, EI, cb.length_m, clamp, pin, (k_susp, k_susp)))
     return beam, {"EI_Nm2": EI, "mass_per_length_kg_m": m, "clamp_k_L_over_EI": list(clamp),
                   "bearing_k_L_over_EI": list(pin), "suspension_bounce_over_f1": bounce if k_susp else None,
@@ -308,10 +364,10 @@ def simulate_pair(cb: CatalogueBeam, pair: int, rng: np.random.Generator, sp: Sp
         asm = assemble(beam)
         md = modes(asm)
         dofs = asm.translation_dofs(cb.sensors_x_m)
-        H.append(_measured_receptance(receptance(asm, md, damping, freq_hz, dofs, dofs[cb.drive_sensor]), freq_hz,
-                                      noise, rng))
+        drive = asm.translation_dofs([cb.drive_x_m])[0]
+        H.append(_measured_receptance(receptance(asm, md, damping, freq_hz, dofs, drive), freq_hz, noise, rng))
         f_true.append(md.frequencies_hz[_rigid_modes(cb.bc):_rigid_modes(cb.bc) + cb.n_modes])
-    kinds = tuple(list(KINDS)[(2 * pair + day_k) % 3] for day_k in range(2))
+    kinds = tuple(cb.kind or list(KINDS)[(2 * pair + day_k) % 3] for day_k in range(2))
     L = cb.length_m
     zones = np.asarray(default_zones(cb))
     truth = {
@@ -333,8 +389,9 @@ def simulate_pair(cb: CatalogueBeam, pair: int, rng: np.random.Generator, sp: Sp
 
 def simulate_beam_pairs(cb: CatalogueBeam, n: int, seed: int, sp: Spread = SPREAD) -> list[BeamPair]:
     """``n`` pairs of ``cb`` drawn from ``sp``, reproducible from ``seed`` and the beam's place in
-    :data:`CATALOGUE`."""
-    index = next((k for k, c in enumerate(CATALOGUE) if c.name == cb.name), len(CATALOGUE))
+    :data:`CATALOGUE` + :data:`TEST_AS_RUN`."""
+    every = CATALOGUE + TEST_AS_RUN
+    index = next((k for k, c in enumerate(every) if c.name == cb.name), len(every))
     rng = np.random.default_rng([seed, index])
     return [simulate_pair(cb, k, rng, sp) for k in range(n)]
 
@@ -345,20 +402,23 @@ def write_beam_pairs(cb: CatalogueBeam, records: list[BeamPair], out_dir, seed: 
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(out / "beam.toml", beam_toml(cb))
     nodes = list(range(1, len(cb.sensors_x_m) + 1))
-    geometry_x_m = list(cb.sensors_x_m) + ([0.0, cb.length_m] if len(nodes) == 1 else [])
+    geometry_x_m = list(cb.sensors_x_m) + ([cb.drive_x_m] if cb.drive_off_sensors else [])
+    ref_node = len(nodes) + 1 if cb.drive_off_sensors else nodes[cb.drive_sensor]
+    geometry_x_m += [0.0, cb.length_m] if len(geometry_x_m) == 1 else []
     geometry_nodes = list(range(1, len(geometry_x_m) + 1))
     for r in records:
         for day, H, kind in (("baseline", r.baseline, r.kinds[0]), ("current", r.current, r.kinds[1])):
             write_uff(out / f"pair-{r.pair:03d}_{day}.uff", r.freq_hz, H, geometry_x_m, nodes,
-                      nodes[cb.drive_sensor], kind=kind, description=f"second_sim {cb.name} pair {r.pair} {day}",
-                      node_numbers=geometry_nodes)
+                      ref_node, kind=kind, description=f"second_sim {cb.name} pair {r.pair} {day}",
+                      node_numbers=geometry_nodes, geometry=cb.geometry)
     rows = [r.truth for r in records]
     lo, hi = band_hz(cb)
     write_json(out / "truth.json", {
         "beam": cb.name, "bc": cb.bc, "material": cb.material, "length_m": cb.length_m, "width_m": cb.width_m,
         "thickness_m": cb.thickness_m, "EI_Nm2": cb.EI_Nm2, "mass_per_length_kg_m": cb.mass_per_length_kg_m,
         "measured_x_m": list(cb.sensors_x_m), "node_numbers": nodes,
-        "geometry_x_m": geometry_x_m, "drive_x_m": cb.drive_x_m,
+        "geometry_x_m": geometry_x_m if cb.geometry else None, "drive_x_m": cb.drive_x_m,
+        "drive_off_sensors": cb.drive_off_sensors, "beam_file_names_drive": cb.file_drive,
         "band_hz": [lo, hi], "n_modes": cb.n_modes, "symmetric": cb.symmetric,
         "zone_edges_m": list(default_zones(cb)), "seed": seed,
         "nominal_frequencies_hz": [float(v) for v in bending_frequencies_hz(nominal_beam(cb), cb.bc, cb.n_modes)],

@@ -45,8 +45,9 @@ def convert_receptance(H: np.ndarray, freq_hz: np.ndarray, kind: str) -> np.ndar
 
 
 def write_uff(path, freq_hz, H, node_x_m, resp_nodes, ref_node: int, kind: str = "receptance",
-              description: str = "", node_numbers=None) -> None:
-    """One test as a universal file: units (164, mm), node geometry (15, mm) and one FRF record (58) per response.
+              description: str = "", node_numbers=None, geometry: bool = True) -> None:
+    """One test as a universal file: units (164, mm), node geometry (15, mm; left out with ``geometry`` False, as
+    many impact tests are written) and one FRF record (58) per response.
 
     Dataset 164 declares the MM system (mm, mN), so the ordinates in SI (m/N, m/s/N,
     m/s^2/N) are also right in file units (mm/mN = m/N); the axis labels say it too.
@@ -81,7 +82,7 @@ def write_uff(path, freq_hz, H, node_x_m, resp_nodes, ref_node: int, kind: str =
                               length=1000.0, force=1000.0, temp=1.0, temp_offset=273.15),
             pyuff.prepare_15(node_nums=nodes, def_cs=np.zeros(nodes.size, int), disp_cs=np.zeros(nodes.size, int),
                              color=np.full(nodes.size, 8), x=1000.0 * np.asarray(node_x_m, dtype=float),
-                             y=np.zeros(nodes.size), z=np.zeros(nodes.size))]
+                             y=np.zeros(nodes.size), z=np.zeros(nodes.size))][:2 if geometry else 1]
     for k, node in enumerate(resp_nodes):
         sets.append(pyuff.prepare_58(
             binary=0, id1=f"FRF {node}:+Y/{ref_node}:+Y", id2=description[:80] or "second_sim",

@@ -50,6 +50,36 @@ SUBBAND_STEP = 0.25
 #: the median magnitude of the lines within +-:data:`PEAK_WINDOW` (relative) of it.
 PEAK_PROMINENCE = 3.0
 PEAK_WINDOW = 0.15
+#: A peak of the FRFs this many times the median of the lines within +-:data:`PEAK_WINDOW` of it is one a person
+#: sees (:func:`clear_peaks`): a noise floor's Rayleigh-distributed magnitudes exceed it with a probability of 3e-8
+#: per line.
+CLEAR_PEAK_PROMINENCE = 5.0
+#: A clear peak that no selected pole explains is fitted again over the band within this factor of it.
+CLEAR_PEAK_BAND = 1.25
+#: A pole explains a peak within this relative distance.
+CLEAR_PEAK_TOLERANCE = 0.02
+
+
+def clear_peaks(frequency_hz, magnitude, known_hz=(), tolerance: float = CLEAR_PEAK_TOLERANCE) -> np.ndarray:
+    """Frequencies (Hz) of plainly visible peaks of ``magnitude`` (:data:`CLEAR_PEAK_PROMINENCE` times the median
+    of the lines within +-:data:`PEAK_WINDOW`) with no frequency of ``known_hz`` within ``tolerance`` (relative),
+    the band's outer 2 % left aside (a mode's skirt)."""
+    from scipy.signal import find_peaks
+
+    f = np.asarray(frequency_hz, float)
+    mag = np.asarray(magnitude, float)
+    idx, _ = find_peaks(mag)
+    idx = idx[(f[idx] > f[0] * 1.02) & (f[idx] < f[-1] / 1.02)]
+    known = np.asarray(known_hz, float)
+    out = []
+    for i in idx:
+        window = mag[(f >= f[i] * (1 - PEAK_WINDOW)) & (f <= f[i] * (1 + PEAK_WINDOW))]
+        if window.size < 5 or mag[i] < CLEAR_PEAK_PROMINENCE * np.median(window):
+            continue
+        if known.size and np.min(np.abs(known / f[i] - 1)) <= tolerance:
+            continue
+        out.append(f[i])
+    return np.array(out)
 
 
 def visible_peak(frequency_hz, magnitude, fn_hz) -> np.ndarray:
@@ -127,8 +157,40 @@ def _with_refit_poles(f, rec, poles, max_order, margin, select, lscf_options, we
                & np.all(np.abs(fn[:, None] / known[None, :] - 1) > 0.01, axis=1) & visible_peak(f, mag, fn))
         if new.any():
             found.append(_take(sub, np.nonzero(new)[0]))
+    return _merged(found)
+
+
+def _with_peak_poles(f, h, rec, poles, max_order, margin, select, lscf_options):
+    """``poles`` plus, for each clear peak of the FRFs ``h`` (:func:`clear_peaks`, in the kind measured) that no
+    pole explains, the pole nearest to it (within :data:`CLEAR_PEAK_TOLERANCE`) of an LSCF fit of the band within a
+    factor :data:`CLEAR_PEAK_BAND` of the peak: one model over a wide band can spend its order on the many modes
+    above a low first mode and leave that mode out."""
+    missed = clear_peaks(f, np.sqrt(np.mean(np.abs(h) ** 2, axis=(0, 1))), poles.natural_frequencies_hz)
+    found = [poles]
+    n_o, n_i = rec.shape[0], rec.shape[1]
+    for fp in missed:
+        sel = (f >= fp / CLEAR_PEAK_BAND) & (f <= fp * CLEAR_PEAK_BAND)
+        order = min(max_order, sel.sum() * n_o // (n_i + 1) - 1)
+        if order < 4:
+            continue
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                sub = select_poles(lscf(f[sel], rec[..., sel], max_order=order, margin=margin, **lscf_options),
+                                   **(select or {}))
+        except BeamDamageError:
+            continue
+        near = np.abs(sub.natural_frequencies_hz / fp - 1)
+        if near.size and near.min() <= CLEAR_PEAK_TOLERANCE:
+            found.append(_take(sub, [int(np.argmin(near))]))
+    return _merged(found)
+
+
+def _merged(found):
+    """One set of poles, ascending in frequency, of the sets ``found`` (the first returned as it is when alone)."""
     if len(found) == 1:
-        return poles
+        return found[0]
+    poles = found[0]
     merged = type(poles)(**{k: np.concatenate([getattr(p, k) for p in found]) for k in poles.__dataclass_fields__})
     return _take(merged, np.argsort(merged.natural_frequencies_hz, kind="stable"))
 
@@ -340,6 +402,7 @@ def _identify_lscf(frequency_hz, frf, n_modes, drive, max_order, select, kind, w
         diagram = lscf(f, rec, max_order=max_order, margin=margin, line_weight=weight, **lscf_options)
         first, weight = select_poles(diagram, **(select or {})), None
     poles = _with_refit_poles(f, rec, first, max_order, margin, select, lscf_options, weight)
+    poles = _with_peak_poles(f, h, rec, poles, max_order, margin, select, lscf_options)
     fn = poles.natural_frequencies_hz
     inside = np.nonzero((fn >= f[0]) & (fn <= f[-1]))[0]
     if inside.size == 0:

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from physics.errors import ConfigError
+from physics.identification.lscf import CLEAR_PEAK_PROMINENCE, clear_peaks
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate
 from physics.identification.poles import StabilisationDiagram
@@ -65,30 +66,11 @@ class Identification:
         return ModalData(self.estimate.eigenvalues, self.estimate.shapes, self.frf.response_dofs)
 
 
-#: A peak of the FRFs this many times the median of the lines within +-15 % of it is one a person sees: a noise
-#: floor's Rayleigh-distributed magnitudes exceed it with a probability of 3e-8 per line.
-MISSED_PEAK_PROMINENCE = 5.0
-
-
 def peaks_left_out(frf: MeasuredFRF, identified_hz, tolerance: float = 0.02) -> np.ndarray:
     """Frequencies (Hz) of plainly visible peaks of the FRFs' RMS magnitude with no identified mode within
-    ``tolerance`` (relative), the band's outer 2 % left aside (a mode's skirt)."""
-    from scipy.signal import find_peaks
-
-    f = np.asarray(frf.frequency_hz, float)
+    ``tolerance`` (relative) (:func:`physics.identification.lscf.clear_peaks`)."""
     mag = np.sqrt(np.mean(np.abs(np.asarray(frf.frf)) ** 2, axis=(0, 1)))
-    idx, _ = find_peaks(mag)
-    idx = idx[(f[idx] > f[0] * 1.02) & (f[idx] < f[-1] / 1.02)]
-    out = []
-    known = np.asarray(identified_hz, float)
-    for i in idx:
-        window = mag[(f >= f[i] * 0.85) & (f <= f[i] * 1.15)]
-        if window.size < 5 or mag[i] < MISSED_PEAK_PROMINENCE * np.median(window):
-            continue
-        if known.size and np.min(np.abs(known / f[i] - 1)) <= tolerance:
-            continue
-        out.append(f[i])
-    return np.array(out)
+    return clear_peaks(frf.frequency_hz, mag, identified_hz, tolerance)
 
 
 def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, max_order=40) -> Identification:
@@ -143,7 +125,7 @@ def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, ma
         missed = peaks_left_out(frf, est.natural_frequencies_hz)
         if missed.size:
             warnings.warn(f"{method}: the FRFs show {'a peak' if missed.size == 1 else 'peaks'} at "
-                          f"{', '.join(f'{x:.4g}' for x in missed)} Hz, at least {MISSED_PEAK_PROMINENCE:g} times "
+                          f"{', '.join(f'{x:.4g}' for x in missed)} Hz, at least {CLEAR_PEAK_PROMINENCE:g} times "
                           "their surroundings, that no identified mode explains; narrow the band around "
                           f"{'it' if missed.size == 1 else 'them'} (--band) or raise the model order", stacklevel=2)
     label = frf.reference_dofs[drive[1]] if drive else None

@@ -30,8 +30,9 @@ from physics.io.npz import read_frf_npz, write_frf_npz
 from physics.io.types import (DEFAULT_UNITS, FRF_KINDS, MeasuredFRF, ModalData, dof_label,
                               format_complex, parse_dof)
 from physics.io.geometry import (QUARTER_POINT_CONVENTION, DofMap, NodeGeometry, dof_positions_text, map_frf_dofs,
-                                 map_measured_dofs, match_dofs_by_position, measured_positions, positions_along_beam)
-from physics.io.prepare import Prepared, prepare_measured, reads_by_reciprocity
+                                 map_measured_dofs, match_dofs_by_position, measured_positions, positions_along_beam,
+                                 reference_position_m)
+from physics.io.prepare import Prepared, prepare_measured, reads_by_reciprocity, sensor_labels
 from physics.io.uff58 import read_uff58, read_uff_geometry, write_uff58
 from physics.io.units import UnitSystem, frf_unit_factor
 
@@ -43,5 +44,5 @@ __all__ = ["FORMATS", "FRF", "MODAL", "TIME", "FileFormat", "accepted", "format_
            "read_uff58", "write_frf_csv", "write_frf_npz", "write_modal_json", "write_uff58",
            "DofMap", "NodeGeometry", "dof_positions_text", "QUARTER_POINT_CONVENTION", "map_frf_dofs",
            "map_measured_dofs", "UnitSystem", "frf_unit_factor", "match_dofs_by_position",
-           "measured_positions", "positions_along_beam", "read_uff_geometry", "Prepared", "prepare_measured",
-           "reads_by_reciprocity"]
+           "measured_positions", "positions_along_beam", "reference_position_m", "read_uff_geometry", "Prepared",
+           "prepare_measured", "sensor_labels", "reads_by_reciprocity"]

@@ -21,11 +21,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from physics.errors import FileFormatError, ShapeError
+from physics.errors import BeamDamageError, FileFormatError, ShapeError
 from physics.io.types import parse_dof
 
 __all__ = ["DofMap", "NodeGeometry", "QUARTER_POINT_CONVENTION", "dof_positions_text", "geometry_from_uff_sets",
-           "map_frf_dofs", "map_measured_dofs", "match_dofs_by_position", "measured_positions", "positions_along_beam"]
+           "map_frf_dofs", "map_measured_dofs", "match_dofs_by_position", "measured_positions", "positions_along_beam",
+           "reference_position_m"]
 
 QUARTER_POINT_CONVENTION = ("no node geometry: the thesis convention holds, node N of a 4-element beam at "
                             "(N - 1) L / 4 (nodes 2..5 at the quarter points)")
@@ -153,6 +154,17 @@ def positions_along_beam(geometry: NodeGeometry, nodes) -> np.ndarray:
     if centre @ axis < 0:  # the nodes lie on the negative side of the origin: measure towards them
         axis = -axis
     return np.array([float(geometry.coordinates(n) @ axis) for n in nodes])
+
+
+def reference_position_m(frf) -> float | None:
+    """Position (m) along the beam of the first reference DOF of a :class:`~physics.io.MeasuredFRF`, from the node
+    geometry it carries (:func:`positions_along_beam`); None without geometry or without that node in it."""
+    try:
+        geometry = NodeGeometry.from_metadata(frf.metadata)
+        node = parse_dof(frf.reference_dofs[0])[0]
+        return None if geometry is None else float(positions_along_beam(geometry, [node])[0])
+    except (KeyError, TypeError, ValueError, AttributeError, IndexError, BeamDamageError):
+        return None
 
 
 def measured_positions(dofs, geometry: NodeGeometry | None = None, length_m: float | None = None,

@@ -17,7 +17,7 @@ from typing import Callable
 from physics.io.geometry import DofMap
 from physics.io.types import MeasuredFRF, ModalData
 
-__all__ = ["Prepared", "prepare_measured", "reads_by_reciprocity"]
+__all__ = ["Prepared", "prepare_measured", "reads_by_reciprocity", "sensor_labels"]
 
 
 @dataclass(frozen=True)
@@ -71,3 +71,19 @@ def prepare_measured(data, map_dofs: Callable[[object], DofMap] | None = None, w
     if reads_by_reciprocity(resp, ref, wanted):
         return Prepared(data.reciprocal(), dof_map, True)
     return Prepared(data, dof_map)
+
+
+def sensor_labels(frf, beam_x_m=None) -> tuple:
+    """The DOF labels of an FRF file that stand for sensors: its responses and references together; but a file
+    without node geometry whose positions come from a beam file's ``beam_x_m`` (paired in ascending node number)
+    names the DOFs that match their count: its responses alone when the references are forces where no sensor is
+    (one accelerometer and a hammer elsewhere, or roving accelerometers with a fixed hammer), its references alone
+    for a roving hammer (one accelerometer, the hammer at every point)."""
+    both = tuple(dict.fromkeys(frf.response_dofs + frf.reference_dofs))
+    if beam_x_m is None or frf.metadata.get("geometry"):
+        return both
+    n = len(beam_x_m)
+    for labels in (both, tuple(dict.fromkeys(frf.response_dofs)), tuple(dict.fromkeys(frf.reference_dofs))):
+        if len(labels) == n:
+            return labels
+    return both

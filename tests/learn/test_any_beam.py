@@ -98,7 +98,6 @@ def test_train_and_classify_files_of_the_bar(bar, capsys):
 @pytest.mark.parametrize(("change", "message"), [
     ("measured_x_m = [0.2, 0.2]", "sensors 1 and 2 coincide at 0.2 m"),
     ('bc = "pinned-free"', "leaves the beam a mechanism"),
-    ("drive_x_m = 0.5", "generate needs a sensor at the reference DOF drive_x_m = 0.5 m"),
     ("band_hz = [1.0, 5.0]", "'band_hz' [1, 5] holds no bending mode"),
     ("measured_x_m = [0.5, 1.3]", "'measured_x_m' positions must lie in [0, length_m = 1.0]"),
     # the band holds mode 2 alone (146 Hz), antisymmetric: the mid-point is its node

@@ -182,7 +182,8 @@ def test_cli_on_beam5_table_4_3(tmp_path, capsys):
     assert set(out) == {"named_effect", "effects", "evidence", "parameters", "parameter_std",
                         "indistinguishable_from", "separating_measurement", "gap_before", "gap_after",
                         "assumed_noise", "estimated_noise", "chi2_per_dof", "noise_consistent", "noise_check",
-                        "not_tested", "detection_limits", "candidates", "beam_file", "dof_positions"}
+                        "not_tested", "detection_limits", "candidates", "beam_file", "dof_positions", "notes",
+                        "drive_x_m_from_file"}
     assert out["assumed_noise"]["frequency"] == 0.003 and "default" in out["assumed_noise"]["frequency_source"]
     assert out["evidence"] == {"shear_deformation": "frequencies"}
     # modal damping fits Table 4.3's four ratios: no damping effect is named from them
