@@ -48,7 +48,7 @@ def held_out(model, before, data) -> list[dict]:
     """Rows per missing mode of the networks and the best classical method on held-out dataset pairs."""
     from learn.classical import run_classical
     from learn.evaluate import metrics
-    from learn.features import load_pairs, modal_features, with_missing_modes
+    from learn.features import load_pairs
     from learn.training import targets
     from learn.verdict import IN_DISTRIBUTION_PERCENTILE, network_output
 
@@ -61,10 +61,7 @@ def held_out(model, before, data) -> list[dict]:
     rows = []
     for k in [None, *range(m)]:
         keep = [j for j in range(m) if j != k]
-        lam, vec = with_missing_modes(lam_all[..., keep], vec_all[..., keep], keep, m)
-        X = modal_features(lam, vec, m, beam.test)
-        held = np.isin(np.arange(X.shape[1]) % m, keep)
-        X = np.where(held & ~np.isfinite(X), 0.0, X)            # as features() reads a dataset
+        X = _masked_features(pairs, k)
         case = "none" if k is None else f"mode {beam.modes[k]}"
         outs = []
         est = model.networks["modal"]
@@ -82,6 +79,51 @@ def held_out(model, before, data) -> list[dict]:
             rows.append({"case": case, "method": name, "pairs": r.n_pairs, "auc": r.roc_auc,
                          "detection": r.detection_rate, "false_alarms": r.false_alarm_rate,
                          "element_accuracy": r.element_accuracy, "in_distribution": inside})
+    return rows
+
+
+def _masked_features(pairs, k):
+    """Modal features of ``pairs`` with mode ``k`` (0-based; None: none) missing in both tests (NaN columns)."""
+    from learn.features import modal_features, with_missing_modes
+
+    m = pairs.beam.n_modes
+    keep = [j for j in range(m) if j != k]
+    lam, vec = with_missing_modes(pairs.eigenvalues[..., keep], pairs.eigenvectors[..., keep], keep, m)
+    X = modal_features(lam, vec, m, pairs.beam.test)
+    held = np.isin(np.arange(X.shape[1]) % m, keep)
+    return np.where(held & ~np.isfinite(X), 0.0, X)             # as features() reads a dataset
+
+
+def sweep(train_dirs, test_dirs, probabilities, epochs: int = 60, seed: int = 0) -> list[dict]:
+    """Modal networks trained as ``train`` trains them (same split and seed) with each probability of a mode
+    missing, scored on held-out pairs per missing mode: element accuracy, detection, false alarms, AUC."""
+    from learn.estimator import DamageClassifier
+    from learn.evaluate import metrics
+    from learn.features import feature_modes, features, load_pairs, split_by_specimen
+    from learn.model_dir import sensitivity_of
+    from learn.training import _nominal_root_spring, targets
+    from learn.verdict import network_output
+
+    pairs, test = load_pairs(train_dirs, frfs=()), load_pairs(test_dirs, frfs=())
+    y, _ = targets(pairs)
+    _, truth = targets(test)
+    tr, _, _ = split_by_specimen(pairs.groups, (0.85, 0.0, 0.15), seed=seed)
+    sens = sensitivity_of(pairs.beam, _nominal_root_spring(pairs.source), pairs.source[0].get("truth_beam"),
+                          pairs.source[0].get("config"))
+    X = features(pairs, "modal")
+    rows = []
+    m = pairs.beam.n_modes
+    for p in probabilities:
+        params = dict(epochs=epochs, random_state=seed, feature_modes=feature_modes(X.shape[1], m),
+                      missing_mode_probability=p)
+        if pairs.beam.test is not None:
+            params["zone_edges"] = [float(v) for v in pairs.beam.zone_edges_m / pairs.beam.length_m]
+        est = DamageClassifier(**params).fit(X[tr], y[tr], pairs.groups[tr])
+        for k in [None, *range(m)]:
+            r = metrics(network_output(est, _masked_features(test, k), sens)[0], truth, None, "all", test.beam)
+            rows.append({"p": p, "case": "none" if k is None else f"mode {test.beam.modes[k]}", "auc": r.roc_auc,
+                         "detection": r.detection_rate, "false_alarms": r.false_alarm_rate,
+                         "element_accuracy": r.element_accuracy})
     return rows
 
 
@@ -191,6 +233,18 @@ def catalogue_beam(name: str, pairs_dir: Path, model, before, tree, out: Path) -
     return rows
 
 
+def sweep_markdown(rows: list[dict]) -> str:
+    cases = list(dict.fromkeys(r["case"] for r in rows))
+    lines = ["Probability of a mode missing in training (held-out pairs, network element accuracy / false alarms):",
+             "", "| p | " + " | ".join(f"{c} missing" for c in cases) + " |",
+             "| --- |" + " --- |" * len(cases)]
+    for p in dict.fromkeys(r["p"] for r in rows):
+        cells = [next(r for r in rows if r["p"] == p and r["case"] == c) for c in cases]
+        lines.append(f"| {p:g} | " + " | ".join(f"{_pct(r['element_accuracy'])} / {100 * r['false_alarms']:.1f}%"
+                                               for r in cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def markdown(held: list[dict], sim: list[dict], beam: list[dict], beam_name: str | None = None) -> str:
     lines = []
     if held:
@@ -232,6 +286,9 @@ def main(argv=None) -> int:
     ap.add_argument("--beam-pairs", help="directory written by 'python -m experiments.second_sim beams --only NAME'")
     ap.add_argument("--beam-model", help="model trained on that beam's beam.toml (this checkout)")
     ap.add_argument("--beam-before", help="the same, trained by the --before-tree checkout")
+    ap.add_argument("--sweep", nargs="*", default=[], metavar="TRAIN_DIR",
+                    help="train modal networks on these datasets with each --probabilities and score them on --data")
+    ap.add_argument("--probabilities", type=float, nargs="+", default=[0.0, 0.05, 0.15, 0.3])
     ap.add_argument("--out", default="out/missing")
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--docs", action="store_true", help="write the tables into docs/classifier.md")
@@ -246,9 +303,10 @@ def main(argv=None) -> int:
             if a.beam else [])
     from physics.io import atomic_write_text
 
-    text = markdown(held, sim, beam, a.beam)
+    swept = sweep(a.sweep, a.data, a.probabilities) if a.sweep else []
+    text = markdown(held, sim, beam, a.beam) + ("\n" + sweep_markdown(swept) if swept else "")
     atomic_write_text(out / "missing_modes.json", json.dumps({"held_out": held, "simulator": sim, "beam": beam,
-                                                              "args": vars(a)}, indent=1))
+                                                              "sweep": swept, "args": vars(a)}, indent=1))
     atomic_write_text(out / "missing_modes.md", text)
     print(json.dumps({"held_out": held, "simulator": sim, "beam": beam}, indent=1) if a.json else text)
     if a.docs:
