@@ -237,10 +237,11 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
             return X, np.ones((X.shape[0], 0), bool)
         cm = np.asarray(self.feature_modes, int)
         present = np.stack([~nan[:, cm == r].any(axis=1) for r in range(self.n_modes_)], axis=1)
-        few = np.flatnonzero(present.sum(axis=1) < self.min_modes)
+        need = min(self.min_modes, self.n_modes_)                        # a model of fewer modes: all of them
+        few = np.flatnonzero(present.sum(axis=1) < need)
         if few.size:
             raise BeamDamageError(f"row {few[0]} of X holds {int(present[few[0]].sum())} of {self.n_modes_} modes; "
-                                  f"the network answers on {self.min_modes} or more")
+                                  f"the network answers on {need} or more")
         return X, present
 
     def _standardised(self, X) -> tuple[np.ndarray, np.ndarray]:
