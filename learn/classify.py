@@ -8,7 +8,8 @@ from dataclasses import replace
 import numpy as np
 
 from learn.classical import FREQUENCY_METHODS, run_classical
-from learn.features import feature_names, frf_features, frequency_features, map_frf_to_grid, modal_features
+from learn.features import (feature_names, frf_features, frequency_features, map_frf_to_grid, modal_features,
+                            real_shapes, sign_aligned, with_missing_modes)
 from learn.hypotheses import FREQUENCY_CHANGE_STD, NO_EXPLANATION, SHAPE_CHANGE_STD, explain_many
 from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows, identification_band_hz,
                             identify_modes, identify_test, modal_pair, mode_checks, nominal_ratio_range)
@@ -20,8 +21,8 @@ from physics.errors import BeamDamageError
 from physics.layout import SYMMETRIC_SUPPORTS
 from physics.io import MeasuredFRF
 
-__all__ = ["DEFAULT_FALSE_ALARM_RATE", "DISTANCE_TERMS", "classify", "classify_many", "distance_terms",
-           "distance_text", "identification_warning"]
+__all__ = ["DEFAULT_FALSE_ALARM_RATE", "DISTANCE_TERMS", "MIN_PAIRING_MAC", "classify", "classify_many",
+           "distance_terms", "distance_text", "identification_warning", "network_reads", "shape_pairing_reasons"]
 
 
 #: False-alarm rate of the test against a measured normal variation (``classify --false-alarm-rate``).
@@ -58,17 +59,20 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     describes); the modal-route network and every classical method read those modes. A model on an FRF route
     reads the FRFs themselves (any frequency lines, mapped onto its grid).
 
-    A pair whose tests do not both hold modes 1-4 (a band that stops below mode 4, a mode lost in the noise
-    floor) is classified on the modes both hold (:func:`modal_pair`) by every classical method; the modal
-    network, trained on 4 modes, gives no answer for it (``network`` None). Fewer than 2 common modes are refused
-    when the modal network would have to read them.
+    A pair whose tests do not both hold every mode of the model (a band that stops below the last, a mode at a
+    node of the reference DOF or the sensors, a mode lost in the noise floor) is classified on the modes both hold
+    (:func:`modal_pair`) by every classical method and by the modal or frequency network, which answers on any
+    2 or more of its modes (the missing ones' features NaN: :func:`learn.features.with_missing_modes`); a network
+    of a format-3 model needs every mode and gives no answer for it (``network`` None). Fewer than 2 common modes
+    are refused when a modal or frequency network would have to read them.
 
     Returns
     -------
     list of dict, one verdict per current input. The verdict keys (``damaged``, ``location_*``,
     ``hinge_flexibility*``...) are the network's answer when the pair lies inside the training data
-    (``in_distribution``: its Mahalanobis distance within the :data:`IN_DISTRIBUTION_PERCENTILE` percentile of
-    the training pairs', its modes 1-4 all present, in their training ranges and paired), else the classical
+    (``in_distribution``: its Mahalanobis distance on the features it holds within the
+    :data:`IN_DISTRIBUTION_PERCENTILE` percentile of the training pairs' on the same features, its modes in their
+    training ranges and paired), else the classical
     method's (``verdict_from``); ``network`` and ``classical`` hold both answers, ``classical_methods`` every
     method's.
     """
@@ -107,7 +111,9 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
         reasons = list(mode_reasons[i])
         if net is None:
             reasons.append("; ".join(p.missing) + f": the network needs modes {modes_text(model.beam.modes)}")
-        elif pct[i] > IN_DISTRIBUTION_PERCENTILE and not _like_baseline_pairs(dist[i], normal):
+        elif p is not None and not p.complete:
+            reasons += shape_pairing_reasons(p, model.beam)
+        if net is not None and pct[i] > IN_DISTRIBUTION_PERCENTILE and not _like_baseline_pairs(dist[i], normal):
             reasons.insert(0, f"Mahalanobis distance {dist[i]:.3g} from the training data, beyond "
                               f"{pct[i]:.2f}% of training pairs"
                               + (f" and the baseline tests' own pairs (at most "
@@ -351,16 +357,18 @@ DISTANCE_TERMS = 6
 def distance_terms(est, X, route: str, beam, top: int = DISTANCE_TERMS) -> list[list[dict]]:
     """Per row of ``X``: the features that make up most of its squared Mahalanobis distance, largest first.
 
-    Each entry: ``feature`` (:func:`learn.features.feature_names`), ``value`` (the pair's feature),
+    Each entry (features of a missing mode left out): ``feature`` (:func:`learn.features.feature_names`),
+    ``value`` (the pair's feature),
     ``training_std`` (how many training standard deviations it lies from the training mean) and ``share``
     (its term ``z_i (P z)_i`` over the squared distance; the shares of all features sum to 1).
     """
     terms, Z = est.distance_terms(X)
     names = feature_names(route, beam)
-    total = np.maximum(terms.sum(axis=1), 1e-300)
+    total = np.maximum(np.nansum(terms, axis=1), 1e-300)
     out = []
     for r in range(terms.shape[0]):
-        order = np.argsort(-terms[r])[:top]
+        held = np.flatnonzero(np.isfinite(terms[r]))                      # a missing mode's features have no term
+        order = held[np.argsort(-terms[r, held])][:top]
         out.append([{"feature": names[j], "value": float(np.asarray(X)[r, j]), "training_std": float(Z[r, j]),
                      "share": float(terms[r, j] / total[r])} for j in order])
     return out
@@ -381,6 +389,8 @@ def _chosen_verdict(net, cl, p, reasons: list, warnings: list, sens, depth, beam
         w.append(f"the network gives no answer for this pair (it needs modes {modes_text(beam.modes)}): the verdict "
                  f"is the classical method's ({cl['method']}) on modes {found}")
         return classical_verdict(cl, sens, depth, beam), False, w
+    if p is not None and not p.complete:
+        w.append("; ".join(p.missing) + f": the network and the classical methods answer on modes {found}")
     if inside or cl is None:
         if not inside:
             w.append("the pair lies outside the training data (" + "; ".join(reasons) + ") and no classical "
@@ -498,13 +508,44 @@ def _classical_answers(model: TrainedModel, pairs, n: int, sens):
     return answers, reasons, mode_sens
 
 
+def network_reads(est, pair) -> bool:
+    """Whether the modal or frequency network ``est`` answers ``pair``: it holds every mode of the model, or the
+    network answers missing modes (``est.answers_missing_modes``) and the pair holds ``est.min_modes`` or more."""
+    return pair.complete or (est.answers_missing_modes and pair.modes.size >= est.min_modes)
+
+
+def _on_model_modes(pairs: list, rows: list, n_modes: int):
+    """Eigen-data of ``pairs[rows]`` on the model's modes, NaN for those a pair lacks (stacked)."""
+    parts = [with_missing_modes(pairs[i].eigenvalues[None], pairs[i].eigenvectors[None], pairs[i].modes, n_modes)
+             for i in rows]
+    return np.concatenate([a for a, _ in parts]), np.concatenate([b for _, b in parts])
+
+
+#: Smallest MAC between a mode of the baseline and of the measured test for a pair the network reads
+#: (:func:`learn.measured.mode_checks`).
+MIN_PAIRING_MAC = 0.8
+
+
+def shape_pairing_reasons(pair, beam) -> list[str]:
+    """Reasons a pair with missing modes lies outside what the network was trained on: a mode whose baseline and
+    measured shapes do not pair (MAC below :data:`MIN_PAIRING_MAC`; none without shapes). Its modes lie within the
+    pairing tolerance of the nominal beam's by construction (:func:`learn.measured.modal_pair`)."""
+    if pair.frequency_only or pair.eigenvectors.shape[1] < 2:
+        return []
+    u = real_shapes(pair.eigenvectors)
+    m = np.sum(sign_aligned(u[1], u[0]) * u[0], axis=0) ** 2        # unit-norm real shapes: the MAC
+    return [f"mode {beam.modes[j]} of the baseline and the measured test do not pair (MAC {v:.2f} < "
+            f"{MIN_PAIRING_MAC})" for j, v in zip(pair.modes, m) if v < MIN_PAIRING_MAC]
+
+
 def _network_inputs(model: TrainedModel, baseline, currents: list, pairs, identified: bool, warnings: list,
                     methods=None):
     """Route, feature rows and the pairs they belong to: ``(route, X, rows)``.
 
     ``X`` are the FRF-route features of every pair when the model reads FRFs and the inputs are FRF files, else
-    the modal features of the pairs whose tests both hold modes 1-4 (``rows``: their indices; ``X`` None when
-    there are none). Warnings are appended to ``warnings``.
+    the modal (or, without shapes, frequency) features of the pairs the network reads (:func:`network_reads`;
+    NaN in the columns of a mode a pair lacks; ``rows``: their indices; ``X`` None when there are none).
+    Warnings are appended to ``warnings``.
     """
     if identified and model.route in ("measured", "updated"):
         X = _frf_route_features(model, baseline, currents, warnings)
@@ -513,21 +554,19 @@ def _network_inputs(model: TrainedModel, baseline, currents: list, pairs, identi
     if pairs is None:
         raise BeamDamageError(f"the files hold neither the FRFs the model's {model.route} route reads "
                               "nor identifiable modes")
+    m = model.beam.n_modes
     if any(p.frequency_only for p in pairs):
         if "frequency" not in model.networks:
             raise BeamDamageError("natural frequencies without mode shapes need a model with a frequency-route "
                                   "network: re-create it with 'beam-damage train'")
-        rows = [i for i, p in enumerate(pairs) if p.complete]
-        X = frequency_features(np.stack([pairs[i].eigenvalues for i in rows]), model.beam.n_modes) if rows else None
+        rows = [i for i, p in enumerate(pairs) if network_reads(model.networks["frequency"], p)]
+        X = frequency_features(_on_model_modes(pairs, rows, m)[0], m) if rows else None
         return "frequency", X, rows
     if "modal" not in model.networks:
         raise BeamDamageError("this model has no modal-route network; give FRF files holding receptances at "
                               f"{', '.join(model.beam.dofs)} driven at {model.beam.dofs[model.beam.drive_row]}")
-    rows = [i for i, p in enumerate(pairs) if p.complete]
-    X = None
-    if rows:
-        X = modal_features(np.stack([pairs[i].eigenvalues for i in rows]),
-                           np.stack([pairs[i].eigenvectors for i in rows]), model.beam.n_modes, model.beam.test)
+    rows = [i for i, p in enumerate(pairs) if network_reads(model.networks["modal"], p)]
+    X = modal_features(*_on_model_modes(pairs, rows, m), m, model.beam.test) if rows else None
     w = identification_warning(model, identified, methods)
     if w:
         warnings.append(w)

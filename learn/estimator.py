@@ -9,6 +9,20 @@ head's spread so that one standard deviation covers 68 % of the sizes of the val
 Targets ``y`` have three columns: damaged (0/1), ``x / L`` of the damage (NaN if
 intact) and its size (:func:`learn.features.labels`: a slit's hinge flexibility ``EI / (k_theta L)``, a mass
 change's signed mass ratio; 0 if intact), learned through the kind's :class:`SizeTransform`.
+
+Missing modes
+-------------
+Given ``feature_modes`` (the mode of each feature column, the modal and frequency inputs), the network answers
+on any subset of the modes with at least ``min_modes`` present. A missing mode's features are NaN in ``X``; the
+network reads the standardised features with those of missing modes set to 0 (the training mean) and one
+presence indicator per mode. During training each mode of each pair in each batch is missing with probability
+``missing_mode_probability`` (never fewer than ``min_modes`` present: the ``min_modes`` modes of largest draw are
+kept), so every subset is trained on and about half the pairs a batch holds are complete. The detection threshold
+is set per number of missing modes on the validation intact pairs with that many modes drawn missing. The
+Mahalanobis distance of a pair with missing modes is the marginal one of its present features (the inverse of
+the training covariance's sub-block of those features: the distance of the training distribution's marginal),
+and its training percentile is taken among training pairs with the same features removed
+(:meth:`DamageClassifier.training_percentile`).
 """
 
 from __future__ import annotations
@@ -45,6 +59,8 @@ class DamagePrediction:
     hinge_flexibility_std: np.ndarray
     logit: np.ndarray                      # calibrated detection logit
     probability_support_change: np.ndarray  # supports changed beyond re-clamping (NaN: a model not trained on it)
+    threshold: np.ndarray                  # the verdict's detection threshold of each pair (its missing modes')
+    modes_present: np.ndarray              # (n, n_modes) bool, the modes each pair was answered on ((n, 0): no modes)
 
 
 #: Bound of the network's raw outputs (far beyond any trained value), so that no exp of them overflows.
@@ -52,6 +68,12 @@ RAW_LIMIT = 1e3
 #: Bound of the log of the size (hinge flexibility from e^-30 to e^30) and of its log-std (a factor e^5).
 LOG_SIZE_LIMIT = 30.0
 MAX_SIZE_LOG_STD = 5.0
+#: Training rows kept (in training standard deviations) as the reference of the Mahalanobis distances of pairs
+#: with missing modes: 5000 rows put the 99.9th percentile between the 5th and 6th largest.
+REFERENCE_ROWS = 5000
+#: Copies of the validation intact pairs, each with its own missing modes, that set a threshold per number of
+#: missing modes.
+THRESHOLD_COPIES = 4
 
 
 def lognormal_std(median, log_std):
@@ -192,14 +214,25 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
     size_transform : str
         What the size head learns (:class:`SizeTransform`): ``"log"`` (a slit's positive hinge flexibility) or
         ``"asinh:<scale>"`` (a signed size: a mass change); the damage kind's ``size_transform``.
+    feature_modes : sequence of int or None
+        The 0-based mode of each feature column: the network then answers pairs with missing modes (NaN
+        features; module docstring). None: every feature always present (the FRF inputs).
+    missing_mode_probability : float
+        Probability that a mode of a training pair is missing in a batch (with ``feature_modes``).
+    min_modes : int
+        Fewest modes present the network answers on (with ``feature_modes``).
     """
 
     def __init__(self, n_bins=80, hidden=128, depth=3, dropout=0.05, epochs=60, batch_size=256, lr=2e-3,
                  weight_decay=1e-4, loc_sigma_bins=1.0, val_fraction=0.15, false_alarm_target=0.005, random_state=0,
-                 device=None, n_threads=1, verbose=False, zone_edges=None, size_transform="log"):
+                 device=None, n_threads=1, verbose=False, zone_edges=None, size_transform="log", feature_modes=None,
+                 missing_mode_probability=0.15, min_modes=2):
         self.n_bins = n_bins
         self.size_transform = size_transform
         self.zone_edges = zone_edges
+        self.feature_modes = feature_modes
+        self.missing_mode_probability = missing_mode_probability
+        self.min_modes = min_modes
         self.hidden = hidden
         self.depth = depth
         self.dropout = dropout
@@ -233,23 +266,49 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         return (damaged.astype(np.float32), soft.astype(np.float32), log_size.astype(np.float32),
                 support.astype(np.float32))
 
-    def _check_X(self, X) -> np.ndarray:
-        """Fitted, and ``X`` a finite (n, n_features_in_) matrix (scikit-learn's conventions), else a ValueError."""
+    @property
+    def answers_missing_modes(self) -> bool:
+        """Whether the network answers pairs with missing modes (``feature_modes`` given)."""
+        return self.feature_modes is not None
+
+    def _check_X(self, X) -> tuple[np.ndarray, np.ndarray]:
+        """Fitted, and ``X`` an (n, n_features_in_) matrix (scikit-learn's conventions), else a BeamDamageError;
+        returns ``X`` and the modes each row holds, (n, n_modes_) bool (a mode is missing where any of its
+        features is NaN; (n, 0) for a network without ``feature_modes``)."""
         check_is_fitted(self, "model_")
         X = np.asarray(X, float)
         if X.ndim != 2 or X.shape[1] != self.n_features_in_:
             raise BeamDamageError(f"X has {X.shape[-1] if X.ndim else 0} features (shape {X.shape}), but "
                                   f"DamageClassifier is expecting {self.n_features_in_} features as input")
-        if not np.all(np.isfinite(X)):
-            raise BeamDamageError("X must be finite (no NaN or inf)")
-        return X
+        nan = np.isnan(X)
+        if np.isinf(X).any() or (nan.any() and not self.answers_missing_modes):
+            raise BeamDamageError("X must be finite (no NaN or inf)" if not self.answers_missing_modes else
+                                  "X must be finite or NaN (a missing mode's features), not inf")
+        if not self.answers_missing_modes:
+            return X, np.ones((X.shape[0], 0), bool)
+        cm = np.asarray(self.feature_modes, int)
+        present = np.stack([~nan[:, cm == r].any(axis=1) for r in range(self.n_modes_)], axis=1)
+        need = min(self.min_modes, self.n_modes_)                        # a model of fewer modes: all of them
+        few = np.flatnonzero(present.sum(axis=1) < need)
+        if few.size:
+            raise BeamDamageError(f"row {few[0]} of X holds {int(present[few[0]].sum())} of {self.n_modes_} modes; "
+                                  f"the network answers on {need} or more")
+        return X, present
 
-    def _tensor(self, X):
-        Z = (self._check_X(X) - self.mean_) / self.scale_
-        return torch.as_tensor(Z, dtype=torch.float32, device=self.device_)
+    def _standardised(self, X) -> tuple[np.ndarray, np.ndarray]:
+        """Rows in training standard deviations (0 for a missing mode's features) and the modes they hold."""
+        X, present = self._check_X(X)
+        Z = (X - self.mean_) / self.scale_
+        if self.answers_missing_modes:
+            Z = np.where(present[:, self.feature_modes], Z, 0.0)
+        return Z, present
 
-    def _raw(self, X, batch=8192) -> dict:
-        T = self._tensor(X)
+    def _inputs(self, Z, present) -> np.ndarray:
+        """The network's input: the standardised features, then one presence indicator per mode."""
+        return np.concatenate([Z, present.astype(float)], axis=1) if self.answers_missing_modes else Z
+
+    def _forward(self, A, batch=8192) -> dict:
+        T = torch.as_tensor(A, dtype=torch.float32, device=self.device_)
         self.model_.eval()
         outs = []
         with torch.no_grad(), torch_threads(self.n_threads):
@@ -260,6 +319,15 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         # float64, and finite: inputs far outside the training data can drive float32 outputs to +-inf
         return {k: np.clip(np.nan_to_num(np.concatenate([o[k] for o in outs]).astype(float), nan=0.0),
                            -RAW_LIMIT, RAW_LIMIT) for k in outs[0]}
+
+    def _raw(self, X) -> tuple[dict, np.ndarray]:
+        Z, present = self._standardised(X)
+        return self._forward(self._inputs(Z, present)), present
+
+    def _thresholds_of(self, present) -> np.ndarray:
+        """The detection threshold of each row: that of its number of missing modes."""
+        missing = self.n_modes_ - present.sum(axis=1) if present.shape[1] else np.zeros(present.shape[0], int)
+        return np.asarray(self.thresholds_, float)[missing]
 
     # ------------------------------------------------------------------ fit
     def fit(self, X, y, groups=None):
@@ -273,29 +341,45 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
             raise BeamDamageError("X must be a finite 2-D feature matrix")
         if self.zone_edges is None and self.n_bins % 4:
             raise BeamDamageError(f"n_bins must be a multiple of 4 (the thesis's elements), got {self.n_bins}")
+        self.n_modes_ = 0
+        if self.answers_missing_modes:
+            cm = np.asarray(self.feature_modes, int)
+            if cm.shape != (X.shape[1],) or cm.min() < 0:
+                raise BeamDamageError(f"feature_modes must give a 0-based mode for each of the {X.shape[1]} features")
+            if not 0.0 <= self.missing_mode_probability < 1.0 or self.min_modes < 1:
+                raise BeamDamageError("missing_mode_probability must lie in [0, 1) and min_modes be >= 1, got "
+                                      f"{self.missing_mode_probability} and {self.min_modes}")
+            self.n_modes_ = int(cm.max()) + 1
         t0 = time.perf_counter()
+        rng = np.random.default_rng(self.random_state)
         groups = np.arange(X.shape[0]) if groups is None else np.asarray(groups)
         tr, va, _ = split_by_specimen(groups, (1 - self.val_fraction, self.val_fraction, 0.0), seed=self.random_state)
         self.mean_ = X[tr].mean(axis=0)
         self.scale_ = X[tr].std(axis=0) + 1e-8
         Z = (X[tr] - self.mean_) / self.scale_
-        self.precision_ = np.linalg.pinv(np.cov(Z, rowvar=False) + 1e-3 * np.eye(X.shape[1]))
+        self.covariance_ = np.atleast_2d(np.cov(Z, rowvar=False)) + 1e-3 * np.eye(X.shape[1])
+        self.precision_ = np.linalg.pinv(self.covariance_)
         self.reference_distances_ = np.sort(self._distances(Z))
+        self.reference_features_ = (Z[np.sort(rng.choice(len(Z), min(REFERENCE_ROWS, len(Z)), replace=False))]
+                                    .astype(np.float32) if self.answers_missing_modes else None)
         self.n_features_in_ = X.shape[1]
         self.classes_ = np.array([0, 1])
         self.device_ = _device(self.device)
         torch.manual_seed(self.random_state)
         gen = torch.Generator().manual_seed(self.random_state)
-        self.model_ = DamageNet(X.shape[1], self.n_bins, self.hidden, self.depth, self.dropout).to(self.device_)
+        self.model_ = DamageNet(X.shape[1] + self.n_modes_, self.n_bins, self.hidden, self.depth,
+                                self.dropout).to(self.device_)
         d, soft, ls, sup = self._targets(y)
         self.support_trained_ = bool(sup[tr].any())
-        Xt = self._tensor(X[tr])
+        Xt = torch.as_tensor(Z, dtype=torch.float32, device=self.device_)
         tgt = [torch.as_tensor(a[tr], device=self.device_) for a in (d, soft, ls)]
         if self.support_trained_:
             tgt.append(torch.as_tensor(sup[tr], device=self.device_))
         opt = torch.optim.AdamW(self.model_.parameters(), lr=self.lr, weight_decay=self.weight_decay)
         steps = self.epochs * int(np.ceil(len(tr) / self.batch_size))
         sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=self.lr, total_steps=max(steps, 1))
+        cols = torch.as_tensor(np.asarray(self.feature_modes if self.answers_missing_modes else [], int),
+                               device=self.device_)
         history = []
         epochs = range(self.epochs)
         if self.verbose:
@@ -304,10 +388,16 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         for _ in epochs:
             self.model_.train()
             perm = torch.randperm(len(tr), generator=gen).to(self.device_)
+            if self.answers_missing_modes:   # each pair's modes drawn missing anew every epoch
+                present = torch.as_tensor(self._draw_present(len(tr), rng), dtype=torch.float32, device=self.device_)
             tot = 0.0
             for i in range(0, len(tr), self.batch_size):
                 b = perm[i:i + self.batch_size]
-                terms = loss_terms(self.model_(Xt[b]), *(t[b] for t in tgt))
+                xb = Xt[b]
+                if self.answers_missing_modes:
+                    pb = present[b]
+                    xb = torch.cat([xb * pb[:, cols], pb], dim=1)
+                terms = loss_terms(self.model_(xb), *(t[b] for t in tgt))
                 loss = terms["detect"] + terms["locate"] + 0.5 * terms["size"] + terms["support"]
                 opt.zero_grad()
                 loss.backward()
@@ -316,49 +406,128 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
                 tot += float(loss.detach()) * len(b)
             history.append(tot / len(tr))
         self.loss_history_ = history
-        self.temperature_, self.bias_, self.threshold_, self.size_std_scale_ = 1.0, 0.0, 0.5, 1.0
+        self.temperature_, self.bias_, self.size_std_scale_ = 1.0, 0.0, 1.0
+        self.thresholds_ = [0.5] * (1 + max(self.n_modes_ - self.min_modes, 0) * self.answers_missing_modes)
         if len(va):
-            raw = self._raw(X[va])
-            self.temperature_, self.bias_ = fit_calibration(raw["detect"], d[va])
-            p = expit(raw["detect"] / self.temperature_ + self.bias_)
-            if (d[va] < 0.5).any():
-                self.threshold_ = float(max(0.5, np.quantile(p[d[va] < 0.5], 1 - self.false_alarm_target)))
-            # sizes are reported for pairs called damaged: the spread is scaled on those
-            dmg = (d[va] > 0.5) & (p >= self.threshold_)
-            if dmg.sum() >= 10:
-                tf = SizeTransform.parse(self.size_transform)
-                mu = raw["size_mean"][dmg]
-                self.size_std_scale_ = fit_size_std_scale(tf.inverse(ls[va][dmg]), tf.inverse(mu),
-                                                          np.exp(raw["size_log_std"][dmg]),
-                                                          spread=lambda t_std: tf.std(mu, t_std))
+            self._calibrate(X[va], d[va], ls[va], rng)
+        self.threshold_ = self.thresholds_[0]
         self.train_seconds_ = time.perf_counter() - t0
         self.n_train_, self.n_val_ = len(tr), len(va)
         return self
 
+    def _draw_present(self, n: int, rng, missing: int | None = None) -> np.ndarray:
+        """Modes present in ``n`` rows, (n, n_modes_) bool: each missing with ``missing_mode_probability`` and
+        the ``min_modes`` of largest draw always present; or exactly ``missing`` modes missing per row."""
+        u = rng.random((n, self.n_modes_))
+        rank = np.argsort(np.argsort(-u, axis=1), axis=1)               # 0 = the largest draw
+        if missing is not None:
+            return rank < self.n_modes_ - missing
+        return (u >= self.missing_mode_probability) | (rank < self.min_modes)
+
+    def _calibrate(self, Xv, dv, lsv, rng) -> None:
+        """Temperature and bias, the detection thresholds (one per number of missing modes) and the size spread's
+        factor on validation pairs (their modes drawn missing as in training)."""
+        Zv = (Xv - self.mean_) / self.scale_
+        present = (self._draw_present(len(Zv), rng) if self.answers_missing_modes
+                   else np.ones((len(Zv), 0), bool))
+
+        def raw(P):
+            return self._forward(self._inputs(np.where(P[:, self.feature_modes], Zv, 0.0)
+                                              if self.answers_missing_modes else Zv, P))
+
+        mixed = raw(present)
+        self.temperature_, self.bias_ = fit_calibration(mixed["detect"], dv)
+
+        def prob(r):
+            return expit(r["detect"] / self.temperature_ + self.bias_)
+
+        intact = dv < 0.5
+        if intact.any():
+            full = raw(np.ones_like(present))
+            self.thresholds_[0] = float(max(0.5, np.quantile(prob(full)[intact], 1 - self.false_alarm_target)))
+            for k in range(1, len(self.thresholds_)):          # copies of the intact pairs, k modes missing each
+                Zi = np.tile(Zv[intact], (THRESHOLD_COPIES, 1))
+                P = self._draw_present(len(Zi), rng, missing=k)
+                p = expit(self._forward(self._inputs(np.where(P[:, self.feature_modes], Zi, 0.0), P))["detect"]
+                          / self.temperature_ + self.bias_)
+                self.thresholds_[k] = float(max(0.5, np.quantile(p, 1 - self.false_alarm_target)))
+        # sizes are reported for pairs called damaged: the spread is scaled on those
+        dmg = (dv > 0.5) & (prob(mixed) >= self._thresholds_of(present))
+        if dmg.sum() >= 10:
+            tf = SizeTransform.parse(self.size_transform)
+            mu = mixed["size_mean"][dmg]
+            self.size_std_scale_ = fit_size_std_scale(tf.inverse(lsv[dmg]), tf.inverse(mu),
+                                                      np.exp(mixed["size_log_std"][dmg]),
+                                                      spread=lambda t_std: tf.std(mu, t_std))
+
     # ------------------------------------------------------------------ predict
+    def _marginal(self, present_row) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The features a row with the modes ``present_row`` holds, (d,) bool; the marginal precision of those
+        features (the inverse of the training covariance's sub-block); and the training pairs' sorted distances
+        under it."""
+        if not present_row.size or present_row.all():
+            return np.ones(self.n_features_in_, bool), self.precision_, self.reference_distances_
+        key = present_row.tobytes()
+        cache = self.__dict__.setdefault("_marginals", {})
+        if key not in cache:
+            cols = present_row[np.asarray(self.feature_modes, int)]
+            P = np.linalg.pinv(self.covariance_[np.ix_(cols, cols)])
+            R = self.reference_features_[:, cols].astype(float)
+            cache[key] = cols, P, np.sort(np.sqrt(np.maximum(np.einsum("ni,ij,nj->n", R, P, R), 0.0)))
+        return cache[key]
+
+    def _by_pattern(self, present):
+        """``(rows, marginal)`` for each distinct set of present modes among the rows."""
+        if not present.shape[1]:
+            yield np.arange(present.shape[0]), self._marginal(np.ones(0, bool))
+            return
+        patterns, inverse = np.unique(present, axis=0, return_inverse=True)
+        for k, pattern in enumerate(patterns):
+            yield np.flatnonzero(inverse.reshape(-1) == k), self._marginal(pattern)
+
+    def training_percentile(self, X) -> tuple[np.ndarray, np.ndarray]:
+        """Mahalanobis distance of each row to the training features and the percentage of training pairs at or
+        below it, shapes (n,). A row with missing modes is measured on its present features with the marginal
+        precision of the training features, against the training pairs' distances on the same features."""
+        Z, present = self._standardised(X)
+        dist, pct = np.empty(len(Z)), np.empty(len(Z))
+        for rows, (cols, P, ref) in self._by_pattern(present):
+            Zc = Z[np.ix_(rows, cols)]
+            dist[rows] = np.sqrt(np.maximum(np.einsum("ni,ij,nj->n", Zc, P, Zc), 0.0))
+            pct[rows] = np.searchsorted(ref, dist[rows], side="right") / ref.size * 100
+        return dist, pct
+
     def mahalanobis(self, X):
-        """Mahalanobis distance of feature rows to the training features (out-of-distribution score)."""
-        return self._distances((self._check_X(X) - self.mean_) / self.scale_)
+        """Mahalanobis distance of feature rows to the training features (out-of-distribution score; on the present
+        features of a row with missing modes, :meth:`training_percentile`)."""
+        return self.training_percentile(X)[0]
 
     def distance_terms(self, X):
         """Each feature's term of the squared Mahalanobis distance, ``z_i (P z)_i`` with ``z`` the row in training
-        standard deviations and ``P`` the training features' precision: shape (n, p), each row summing to the
-        squared distance of :meth:`mahalanobis` (a term may be negative where correlated features offset)."""
-        Z = (self._check_X(X) - self.mean_) / self.scale_
-        return Z * (Z @ self.precision_), Z
+        standard deviations and ``P`` the training features' precision (the marginal precision of the present
+        features of a row with missing modes): shape (n, p), each row summing to the squared distance of
+        :meth:`mahalanobis` (a term may be negative where correlated features offset); NaN, in both returned
+        arrays, for a missing mode's features."""
+        Z, present = self._standardised(X)
+        terms = np.full(Z.shape, np.nan)
+        for rows, (cols, P, _) in self._by_pattern(present):
+            Zc = Z[np.ix_(rows, cols)]
+            terms[np.ix_(rows, cols)] = Zc * (Zc @ P)
+        return terms, np.where(np.isnan(terms), np.nan, Z)
 
     def _distances(self, Z):
         return np.sqrt(np.maximum(np.einsum("ni,ij,nj->n", Z, self.precision_, Z), 0.0))
 
     def decision_function(self, X):
-        return self._raw(X)["detect"] / self.temperature_ + self.bias_
+        return self._raw(X)[0]["detect"] / self.temperature_ + self.bias_
 
     def predict_proba(self, X):
         p = expit(self.decision_function(X))
         return np.stack([1 - p, p], axis=1)
 
     def predict(self, X):
-        return (self.predict_proba(X)[:, 1] >= self.threshold_).astype(int)
+        d = self.predict_details(X)
+        return (d.probability_damaged >= d.threshold).astype(int)
 
     def score(self, X, y, sample_weight=None) -> float:
         """Accuracy of the damaged / intact verdict; ``y`` is the (n, 3) target of :meth:`fit` or its first column."""
@@ -369,7 +538,7 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         return float(accuracy_score(damaged.astype(int), self.predict(X), sample_weight=sample_weight))
 
     def predict_details(self, X) -> DamagePrediction:
-        raw = self._raw(X)
+        raw, present = self._raw(X)
         z = raw["detect"] / self.temperature_ + self.bias_
         logits = raw["locate"]
         p = np.exp(logits - logits.max(axis=1, keepdims=True))
@@ -389,7 +558,8 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
                              MAX_SIZE_LOG_STD)
         sd = tf.std(raw["size_mean"], log_std)
         sup = expit(raw["support"]) if self.support_trained_ else np.full(len(z), np.nan)
-        return DamagePrediction(expit(z), p, mean, std, el, np.argmax(el, axis=1) + 1, med, sd, z, sup)
+        return DamagePrediction(expit(z), p, mean, std, el, np.argmax(el, axis=1) + 1, med, sd, z, sup,
+                                self._thresholds_of(present), present)
 
     # ------------------------------------------------------------------ persistence (no pickle)
     def get_state(self) -> tuple[dict, dict]:
@@ -399,8 +569,12 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         tensors["norm.scale"] = torch.as_tensor(self.scale_)
         tensors["ood.precision"] = torch.as_tensor(self.precision_)
         tensors["ood.reference"] = torch.as_tensor(self.reference_distances_)
+        tensors["ood.covariance"] = torch.as_tensor(self.covariance_)
+        if self.answers_missing_modes:
+            tensors["ood.reference_features"] = torch.as_tensor(self.reference_features_)
         meta = {"params": self.get_params(), "temperature": self.temperature_, "bias": self.bias_,
-                "threshold": self.threshold_, "size_std_scale": self.size_std_scale_,
+                "threshold": self.threshold_, "thresholds": list(self.thresholds_),
+                "size_std_scale": self.size_std_scale_,
                 "n_features": int(self.n_features_in_), "support_trained": self.support_trained_,
                 "train_seconds": self.train_seconds_, "loss_history": self.loss_history_,
                 "n_train": int(self.n_train_), "n_val": int(self.n_val_)}
@@ -417,8 +591,13 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         est.n_features_in_ = int(meta["n_features"])
         est.precision_ = tensors["ood.precision"].numpy().astype(float)
         est.reference_distances_ = tensors["ood.reference"].numpy().astype(float)
+        est.covariance_ = (tensors["ood.covariance"].numpy().astype(float) if "ood.covariance" in tensors
+                           else np.linalg.pinv(est.precision_))
+        est.reference_features_ = (tensors["ood.reference_features"].numpy() if est.answers_missing_modes else None)
+        est.n_modes_ = int(max(est.feature_modes)) + 1 if est.answers_missing_modes else 0
         est.classes_ = np.array([0, 1])
-        est.model_ = DamageNet(est.n_features_in_, est.n_bins, est.hidden, est.depth, est.dropout).to(est.device_)
+        est.model_ = DamageNet(est.n_features_in_ + est.n_modes_, est.n_bins, est.hidden, est.depth,
+                               est.dropout).to(est.device_)
         est.support_trained_ = bool(meta.get("support_trained", False))
         net = {k[4:]: v for k, v in tensors.items() if k.startswith("net.")}
         if not est.support_trained_:   # tensors without a support head: it keeps its initial weights, never read
@@ -427,6 +606,7 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         est.temperature_ = float(meta["temperature"])
         est.bias_ = float(meta.get("bias", 0.0))
         est.threshold_ = float(meta.get("threshold", 0.5))
+        est.thresholds_ = [float(v) for v in meta.get("thresholds", [est.threshold_])]
         est.size_std_scale_ = float(meta.get("size_std_scale", 1.0))
         est.train_seconds_ = float(meta.get("train_seconds", float("nan")))
         est.loss_history_ = list(meta.get("loss_history", []))

@@ -45,9 +45,9 @@ from physics.fem import constrained_dofs
 from physics.layout import Layout
 
 __all__ = ["BeamSpec", "DOFS", "as_spec", "GRID_RAD_S", "Pairs", "ROUTES", "beam_of_manifest", "curvature_points",
-           "curvatures", "feature_names", "features", "frequency_features", "frf_features", "grid_weights", "labels",
-           "layout_curvatures", "load_pairs", "manifest_checksum", "map_frf_to_grid", "modal_features", "real_shapes",
-           "sign_aligned", "split_by_specimen"]
+           "curvatures", "feature_modes", "feature_names", "features", "frequency_features", "frf_features",
+           "grid_weights", "labels", "layout_curvatures", "load_pairs", "manifest_checksum", "map_frf_to_grid",
+           "modal_features", "real_shapes", "sign_aligned", "split_by_specimen", "with_missing_modes"]
 
 ROUTES = ("modal", "updated", "measured", "frequency")
 
@@ -423,6 +423,7 @@ def modal_features(eigenvalues, eigenvectors, n_modes: int = 4, test: Layout | N
     Returns
     -------
     ndarray, shape (n, 9 n_modes)
+        NaN in the columns of a mode whose eigen-data are NaN (:func:`with_missing_modes`).
         Per mode: relative frequency shift (percent); then the shape changes
         (4 DOFs x modes) and curvature changes (clamp and nodes 2..4 x modes),
         times 10. Only changes between the two tests: nothing of the baseline
@@ -433,7 +434,8 @@ def modal_features(eigenvalues, eigenvectors, n_modes: int = 4, test: Layout | N
     lam = np.asarray(eigenvalues, complex)[..., :n_modes]
     f = np.abs(lam) / (2 * np.pi)
     shift = 100 * (f[:, 1] / f[:, 0] - 1)
-    u = real_shapes(np.asarray(eigenvectors, complex)[..., :n_modes])
+    with np.errstate(invalid="ignore"):                              # NaN modes (with_missing_modes) stay NaN
+        u = real_shapes(np.asarray(eigenvectors, complex)[..., :n_modes])
     u1 = sign_aligned(u[:, 1], u[:, 0])                              # the current shape's sign follows the baseline's
     du = u1 - u[:, 0]
     curv = curvatures if test is None else (lambda v: layout_curvatures(v, test))
@@ -461,6 +463,33 @@ def feature_names(route: str, beam) -> list[str]:
         points = xp[1:-1] if xp.size >= 3 else xp[:0]
     names += [f"dkappa x={x:.4g} m m{r}" for x in points for r in modes]
     return names
+
+
+def feature_modes(n_features: int, n_modes: int) -> list[int]:
+    """The 0-based mode of each column of the modal or frequency features (blocks of ``n_modes`` columns, one per
+    mode: :func:`feature_names`)."""
+    return [j % n_modes for j in range(n_features)]
+
+
+def with_missing_modes(eigenvalues, eigenvectors, modes, n_modes: int):
+    """Eigen-data of pairs on all ``n_modes`` of a model, NaN for the modes a pair lacks: the features of
+    :func:`modal_features` and :func:`frequency_features` are then NaN exactly in the columns of those modes.
+
+    Parameters
+    ----------
+    eigenvalues : ndarray, complex, shape (n, 2, c)
+    eigenvectors : ndarray, complex, shape (n, 2, S, c)
+    modes : array of int, shape (c,)   0-based model modes the ``c`` columns are
+
+    Returns
+    -------
+    (ndarray (n, 2, n_modes), ndarray (n, 2, S, n_modes))
+    """
+    lam, vec = np.asarray(eigenvalues, complex), np.asarray(eigenvectors, complex)
+    full_lam = np.full(lam.shape[:-1] + (n_modes,), np.nan, complex)
+    full_vec = np.full(vec.shape[:-1] + (n_modes,), np.nan, complex)
+    full_lam[..., modes], full_vec[..., modes] = lam, vec
+    return full_lam, full_vec
 
 
 def frequency_features(eigenvalues, n_modes: int = 4):

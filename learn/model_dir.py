@@ -13,6 +13,11 @@ Model directory
 
 A model trained on an FRF input also carries a modal-input network, used for inputs that are modal data only
 (the thesis's measured data).
+
+Format 4 (:data:`MODEL_FORMAT`): the modal- and frequency-input networks answer pairs with missing modes (their
+estimator parameters record ``feature_modes``; the weights hold the training covariance and reference rows of the
+out-of-distribution check on the present features). A format-3 directory (:data:`READ_FORMATS`) is read and
+behaves as it did: its networks answer pairs holding every mode of the model, the others get the classical verdict.
 """
 
 from __future__ import annotations
@@ -35,15 +40,17 @@ from physics.errors import BeamDamageError, FileFormatError
 from physics.io import atomic_write_bytes, atomic_write_text, read_json
 from physics.properties import beam_preset
 
-__all__ = ["DEFAULT_ROUTE", "MODEL_FORMAT", "REFERENCE_WIDTH_M", "TrainedModel", "json_default", "load_model",
-           "save_model", "sensitivity_of"]
+__all__ = ["DEFAULT_ROUTE", "MODEL_FORMAT", "READ_FORMATS", "REFERENCE_WIDTH_M", "TrainedModel", "json_default",
+           "load_model", "save_model", "sensitivity_of"]
 
 
 #: Input route used by default (the winner of ``python -m experiments.bench_learn``).
 DEFAULT_ROUTE = "modal"
 #: Width assumed when a hinge flexibility is turned into a slit depth (m): middle of the training widths.
 REFERENCE_WIDTH_M = 0.0055
-MODEL_FORMAT = "beam-damage-model/3"
+MODEL_FORMAT = "beam-damage-model/4"
+#: Formats :func:`load_model` reads: format 3 differs only in networks that need every mode.
+READ_FORMATS = ("beam-damage-model/3", MODEL_FORMAT)
 
 
 @dataclass
@@ -132,7 +139,7 @@ def load_model(model_dir, device=None) -> TrainedModel:
     if not cfg_path.is_file():
         raise FileFormatError(f"{path}: not a model directory (no config.json); create one with 'beam-damage train'")
     config = read_json(cfg_path)
-    if config.get("format") != MODEL_FORMAT:
+    if config.get("format") not in READ_FORMATS:
         raise FileFormatError(f"{cfg_path}: field 'format' is {config.get('format')!r}, expected {MODEL_FORMAT!r} "
                               "(fields and features differ between formats): re-create the model with "
                               "'beam-damage train'")

@@ -15,14 +15,15 @@ from datagen.store import package_version
 from learn.classical import run_classical
 from learn.estimator import DamageClassifier
 from learn.evaluate import figures, metrics, table_rows
-from learn.features import ROUTES, Pairs, features, labels, load_pairs, split_by_specimen
+from learn.features import ROUTES, Pairs, feature_modes, features, labels, load_pairs, split_by_specimen
 from learn.model_dir import (DEFAULT_ROUTE, MODEL_FORMAT, REFERENCE_WIDTH_M, TrainedModel, json_default, save_model,
                              sensitivity_of)
 from learn.verdict import detectability_threshold, network_output
 from physics.errors import BeamDamageError
 from physics.io import atomic_write_text
 
-__all__ = ["DAY_CHANGES", "damping_ratio_range", "dataset_frfs", "day_changes", "evaluate", "targets", "train"]
+__all__ = ["DAY_CHANGES", "MODE_ROUTES", "damping_ratio_range", "dataset_frfs", "day_changes", "evaluate",
+           "targets", "train"]
 
 
 def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
@@ -137,14 +138,20 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
             "test_metrics": config["test_metrics"], "warnings": warnings}
 
 
+#: Classifier inputs whose features are per mode: their networks answer pairs with missing modes.
+MODE_ROUTES = ("modal", "frequency")
+
+
 def _fit_networks(pairs: Pairs, routes: list, y, split: tuple, sens, params: dict):
     """One network per classifier input fitted on the training split and scored on the test split: the networks,
-    their test outputs and fit seconds (``{input: DamageClassifier}``, list of MethodOutput, ``{input: s}``)."""
+    their test outputs and fit seconds (``{input: DamageClassifier}``, list of MethodOutput, ``{input: s}``). The
+    networks of :data:`MODE_ROUTES` answer pairs with missing modes (``DamageClassifier.feature_modes``)."""
     tr, te = split
     networks, outputs, fit_s = {}, [], {}
     for r in routes:
         X = features(pairs, r)
-        est = DamageClassifier(**params)
+        masked = {"feature_modes": feature_modes(X.shape[1], pairs.beam.n_modes)} if r in MODE_ROUTES else {}
+        est = DamageClassifier(**params, **masked)
         est.fit(X[tr], y[tr], pairs.groups[tr])
         networks[r] = est
         fit_s[r] = est.train_seconds_

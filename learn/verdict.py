@@ -30,7 +30,7 @@ def network_output(est: DamageClassifier, X, sens, name="network") -> tuple[Meth
     """Network answers as a :class:`MethodOutput` plus the full :class:`learn.estimator.DamagePrediction`."""
     d = est.predict_details(X)
     detectable = sens.largest_drop(d.x_over_L, d.hinge_flexibility) >= detectability_threshold()
-    out = MethodOutput(name, d.probability_damaged, d.probability_damaged >= est.threshold_, d.x_over_L,
+    out = MethodOutput(name, d.probability_damaged, d.probability_damaged >= d.threshold, d.x_over_L,
                        d.hinge_flexibility,
                        probability=d.probability_damaged, x_std_over_L=d.x_std_over_L,
                        hinge_flexibility_std=d.hinge_flexibility_std, detectable=detectable)
@@ -40,9 +40,9 @@ def network_output(est: DamageClassifier, X, sens, name="network") -> tuple[Meth
 
 def ood_percentile(est: DamageClassifier, X) -> tuple[np.ndarray, np.ndarray]:
     """Mahalanobis distances of feature rows to the training features, and the percentage of training pairs
-    at or below each distance: arrays of shape (n,)."""
-    d = est.mahalanobis(X)
-    return d, np.searchsorted(est.reference_distances_, d, side="right") / est.reference_distances_.size * 100
+    at or below each distance: arrays of shape (n,) (on the present features of a row with missing modes,
+    :meth:`learn.estimator.DamageClassifier.training_percentile`)."""
+    return est.training_percentile(X)
 
 
 
@@ -193,8 +193,10 @@ def verdict_text(res: dict) -> str:
     """The verdict as a reader sees it: the answer, where it comes from, both methods, the caveats."""
     net, cl = res["network"], res["classical"]
     modes = res["identification"].get("modes_classified") or []
+    partial = bool(modes) and len(modes) < res["identification"].get("n_modes", 4)
+    on = f" on modes {', '.join(map(str, modes))}" if partial else ""
     if res["verdict_from"] == "network":
-        head = "Verdict (network): " + _network_sentence(net) + "."
+        head = f"Verdict (network{on}): " + _network_sentence(net) + "."
     elif net is None:
         need = modes_text(res["identification"].get("modes_model", [1, 2, 3, 4]))
         head = (f"Verdict (classical method on modes {', '.join(map(str, modes))}, the network needs modes {need}): "

@@ -33,6 +33,34 @@ def modal_model(tiny):
     return tiny / "modal"
 
 
+def format_3_copy(model_dir: Path, out: Path) -> Path:
+    """The model directory as format 3 wrote it: networks that read every mode (the presence inputs folded into the
+    first layer's bias, all present: the same answers on complete pairs), no covariance, one threshold."""
+    import shutil
+
+    import torch
+
+    shutil.copytree(model_dir, out, dirs_exist_ok=True)
+    cfg = json.loads((out / "config.json").read_text())
+    cfg["format"] = "beam-damage-model/3"
+    for route, meta in cfg["networks"].items():
+        n_modes = 0
+        if meta["params"].get("feature_modes") is not None:
+            n_modes = max(meta["params"]["feature_modes"]) + 1
+        for key in ("feature_modes", "missing_mode_probability", "min_modes"):
+            meta["params"].pop(key, None)
+        meta.pop("thresholds", None)
+        t = torch.load(out / f"weights-{route}.pt", weights_only=True)
+        t.pop("ood.covariance", None)
+        t.pop("ood.reference_features", None)
+        if n_modes:
+            W, b = t["net.trunk.0.weight"], t["net.trunk.0.bias"]
+            t["net.trunk.0.weight"], t["net.trunk.0.bias"] = W[:, :-n_modes], b + W[:, -n_modes:].sum(dim=1)
+        torch.save(t, out / f"weights-{route}.pt")
+    (out / "config.json").write_text(json.dumps(cfg))
+    return out
+
+
 def test_train_writes_a_complete_model_directory(tiny):
     cfg = json.loads((tiny / "model" / "config.json").read_text())
     assert cfg["route"] == "measured" and set(cfg["networks"]) == {"measured", "modal", "frequency"}
@@ -285,14 +313,27 @@ def _beam_frfs(tmp, loss, element, fmax_hz, names=("base", "cur")):
     return paths
 
 
-def test_a_band_below_mode_4_gets_the_classical_verdict_on_the_modes_found(tiny, modal_model, capsys):
-    """Files of 2-500 Hz (modes 1-3) and 2-250 Hz (modes 1-2): every classical method answers on those modes,
-    the modal network (trained on 4) does not; a slit in element 2 of 4 (1.2-1.6 % drops) is found there, a
-    uniform 0.1 % EI change (temperature) is not called damage."""
+def test_a_band_below_mode_4_gets_the_network_beside_the_classical_methods_on_the_modes_found(tiny, modal_model,
+                                                                                             capsys):
+    """Files of 2-500 Hz (modes 1-3) and 2-250 Hz (modes 1-2): the network and every classical method answer on
+    those modes; a slit in element 2 of 4 (1.2-1.6 % drops) is found there by the classical method, a uniform 0.1 %
+    EI change (temperature) is not called damage. A format-3 model's network needs modes 1-4: the classical
+    verdict."""
     base, cur = _beam_frfs(tiny, 0.5, 14, 500.0)
     assert main(["classify", "--model", str(modal_model), "--baseline", base, cur, "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
     assert tuple(res) == KEYS
+    assert res["network"] is not None and res["identification"]["modes_classified"] == [1, 2, 3]
+    assert np.isfinite(res["mahalanobis_distance"]) and 0 <= res["training_percentile"] <= 100
+    assert all("4" not in t["feature"].split(" m")[-1] for t in res["distance_terms"])   # mode 4 has no term
+    assert (f"mode 4 not identified in {base} (LSCF/LSFD found 3 modes in 2-500 Hz); mode 4 not identified in {cur} "
+            "(LSCF/LSFD found 3 modes in 2-500 Hz): the network and the classical methods answer on modes 1, 2, 3"
+            in res["warnings"])
+    assert res["classical"]["damaged"] and res["classical"]["location_element"] == 2
+    assert res["verdict_from"] == ("network" if res["in_distribution"] else "classical")
+    old = format_3_copy(modal_model, tiny / "modal-format3")
+    assert main(["classify", "--model", str(old), "--baseline", base, cur, "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
     assert res["verdict_from"] == "classical" and res["network"] is None and res["in_distribution"] is False
     assert res["mahalanobis_distance"] is None and res["training_percentile"] is None
     assert res["out_of_distribution_reasons"] == [
@@ -305,23 +346,33 @@ def test_a_band_below_mode_4_gets_the_classical_verdict_on_the_modes_found(tiny,
     assert (res["damaged"], res["location_x_m"]) == (res["classical"]["damaged"], res["classical"]["location_x_m"])
     assert {c["method"] for c in res["classical_methods"]} == {"Cawley-Adams", "DLAC", "MDLAC",
                                                                 "sensitivity updating"}
-    assert main(["classify", "--model", str(modal_model), "--baseline", base, cur, "--out", str(tiny / "cut")]) == 0
+    assert main(["classify", "--model", str(old), "--baseline", base, cur, "--out", str(tiny / "cut")]) == 0
     text = capsys.readouterr().out
     assert "Verdict (classical method on modes 1, 2, 3, the network needs modes 1-4): " in text
     assert "Network: no answer" in text
     assert json.loads((tiny / "cut" / "verdict.json").read_text())["network"] is None
     assert (tiny / "cut" / "classify.png").stat().st_size > 0
+    # on complete pairs the format-3 copy answers as the model itself
+    full = _beam_frfs(tiny, 0.5, 14, 800.0, ("fbase", "fcur"))
+    got = [json.loads(capsys.readouterr().out) for m in (modal_model, old)
+           if main(["classify", "--model", str(m), "--baseline", *full, "--json"]) == 0]
+    assert got[0]["network"]["probability_damaged"] == pytest.approx(got[1]["network"]["probability_damaged"],
+                                                                     rel=1e-4)
+    assert got[0]["mahalanobis_distance"] == pytest.approx(got[1]["mahalanobis_distance"], rel=1e-6)
     # a model reading FRFs answers such a pair itself; the classical answer is on modes 1-3
     assert main(["classify", "--model", str(tiny / "model"), "--baseline", base, cur, "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
     assert res["input_route"] == "measured" and res["network"] is not None
     assert res["identification"]["modes_classified"] == [1, 2, 3] and res["classical"]["location_element"] == 2
-    # two modes: still an answer
+    # two modes: still an answer, from both
     base2, cur2 = _beam_frfs(tiny, 0.5, 14, 250.0, ("base2", "cur2"))
     assert main(["classify", "--model", str(modal_model), "--baseline", base2, cur2, "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
-    assert res["identification"]["modes_classified"] == [1, 2] and res["network"] is None
-    assert res["damaged"] and res["verdict_from"] == "classical"
+    assert res["identification"]["modes_classified"] == [1, 2] and res["network"] is not None
+    assert res["classical"]["damaged"]
+    assert main(["classify", "--model", str(old), "--baseline", base2, cur2, "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["network"] is None and res["damaged"] and res["verdict_from"] == "classical"
     # intact: a uniform 0.1 % EI change of the whole beam between the tests
     base3, cur3 = _beam_frfs(tiny, 0.0, 14, 500.0, ("base3", "cur3"))
     from physics.io import read_frf, write_uff58
@@ -329,26 +380,31 @@ def test_a_band_below_mode_4_gets_the_classical_verdict_on_the_modes_found(tiny,
     warm = read_frf(cur3)
     write_uff58(cur3, MeasuredFRF(warm.frequency_hz * np.sqrt(0.999), warm.frf / 0.999, warm.response_dofs,
                                   warm.reference_dofs))
-    assert main(["classify", "--model", str(modal_model), "--baseline", base3, cur3, "--json"]) == 0
+    assert main(["classify", "--model", str(old), "--baseline", base3, cur3, "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
     assert res["verdict_from"] == "classical" and not res["damaged"]
     assert not any(c["damaged"] for c in res["classical_methods"])
 
 
-def test_several_files_complete_pairs_go_to_the_network_the_others_to_the_classical_methods(tiny, modal_model,
-                                                                                           capsys):
+def test_several_files_complete_and_incomplete_pairs_in_one_call(tiny, modal_model, capsys):
     base, full = _beam_frfs(tiny, 0.5, 14, 800.0, ("mbase", "mfull"))
     _, cut = _beam_frfs(tiny, 0.5, 14, 500.0, ("mbase-cut", "mcut"))
     assert main(["classify", "--model", str(modal_model), "--baseline", base, full, cut, "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
     assert [r["identification"]["modes_classified"] for r in res] == [[1, 2, 3, 4], [1, 2, 3]]
     assert res[0]["network"] is not None and res[0]["training_percentile"] is not None
-    assert res[1]["network"] is None and res[1]["verdict_from"] == "classical"
+    assert res[1]["network"] is not None and res[1]["training_percentile"] is not None
+    assert res[1]["classical"]["location_element"] == 2
+    # a format-3 model: the complete pair to the network, the other to the classical methods
+    old = format_3_copy(modal_model, tiny / "modal-format3")
+    assert main(["classify", "--model", str(old), "--baseline", base, full, cut, "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res[0]["network"] is not None and res[1]["network"] is None and res[1]["verdict_from"] == "classical"
     assert res[1]["out_of_distribution_reasons"] == [
         f"mode 4 not identified in {cut} (LSCF/LSFD found 3 modes in 2-500 Hz): the network needs modes 1-4"]
     assert res[1]["location_element"] == 2
     # the baseline cut below mode 4: every pair falls back; verdicts.json is written
-    assert main(["classify", "--model", str(modal_model), "--baseline", str(tiny / "mbase-cut.uff"), full, cut,
+    assert main(["classify", "--model", str(old), "--baseline", str(tiny / "mbase-cut.uff"), full, cut,
                  "--out", str(tiny / "many")]) == 0
     many = json.loads((tiny / "many" / "verdicts.json").read_text())
     assert [r["network"] for r in many] == [None, None] and [r["location_element"] for r in many] == [2, 2]
@@ -356,8 +412,8 @@ def test_several_files_complete_pairs_go_to_the_network_the_others_to_the_classi
 
 
 def test_a_missing_middle_mode_and_a_single_mode(tiny, capsys):
-    """Modal data of a slit in element 1 of 4 whose current test misses mode 3: classified on modes 1, 2 and 4;
-    a test holding mode 1 alone is refused in one line."""
+    """Modal data of a slit in element 1 of 4 whose current test misses mode 3: classified on modes 1, 2 and 4 by
+    the network and the classical methods; a test holding mode 1 alone is refused in one line."""
     base, cur = _modal_files(tiny, 0.5)
     obj = json.loads(open(cur).read())
     keep = [0, 1, 3]
@@ -367,10 +423,12 @@ def test_a_missing_middle_mode_and_a_single_mode(tiny, capsys):
     assert main(["classify", "--model", str(tiny / "model"), "--baseline", base, str(tiny / "no3.json"),
                  "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
-    assert res["identification"]["modes_classified"] == [1, 2, 4] and res["network"] is None
-    assert res["out_of_distribution_reasons"] == [f"mode 3 not identified in {tiny / 'no3.json'} (it holds 3 modes): "
-                                                  "the network needs modes 1-4"]
-    assert res["damaged"] and res["location_element"] == 1
+    assert res["identification"]["modes_classified"] == [1, 2, 4] and res["network"] is not None
+    assert res["input_route"] == "modal" and np.isfinite(res["mahalanobis_distance"])
+    assert not any("MAC" in r for r in res["out_of_distribution_reasons"])      # the three modes pair
+    assert (f"mode 3 not identified in {tiny / 'no3.json'} (it holds 3 modes): the network and the classical "
+            "methods answer on modes 1, 2, 4") in res["warnings"]
+    assert res["classical"]["damaged"] and res["classical"]["location_element"] == 1
     obj["eigenvalues"], obj["eigenvectors"] = obj["eigenvalues"][:1], [row[:1] for row in obj["eigenvectors"]]
     (tiny / "one.json").write_text(json.dumps(obj))
     assert main(["classify", "--model", str(tiny / "model"), "--baseline", base, str(tiny / "one.json")]) == 2

@@ -389,3 +389,79 @@ def test_a_baseline_damped_far_outside_the_training_is_named():
     assert "mode(s) 2 (2 %)" in text and "specimen.damping_ratios" in text
     assert damping_warning(model, [pair([0.0, 0.0, 0.0, 0.0])]) is None
     assert damping_warning(TrainedModel(path="m", config={"beam": beam.to_dict()}), [pair([0.1] * 4)]) is None
+
+
+def _slits_of_beam5(n, rng, noise=5e-4):
+    """Pairs of first-order slit shifts of beam 5 (the project's sensitivities; sizes 0.005-0.1) and 0.05 % noise
+    per mode: the frequency features of a slit, labelled."""
+    sens = beam_sensitivity("beam5", 948.7)
+    damaged = rng.random(n) < 0.6
+    x = rng.uniform(0.0, 0.8, n)
+    s = np.exp(rng.uniform(np.log(0.005), np.log(0.1), n))
+    df = np.where(damaged[:, None], sens.frequency[:, sens.element_of(x)].T * s[:, None], 0.0)
+    X = 100 * (df + noise * rng.standard_normal(df.shape))
+    return X, np.stack([damaged, np.where(damaged, x, np.nan), np.where(damaged, s, 0.0)], axis=1)
+
+
+@pytest.fixture(scope="module")
+def masked_net():
+    """A frequency-input network trained with modes drawn missing (p = 0.15, at least 2 present)."""
+    X, y = _slits_of_beam5(2500, np.random.default_rng(1))
+    return DamageClassifier(hidden=64, depth=2, epochs=25, n_bins=40, random_state=0,
+                            feature_modes=[0, 1, 2, 3]).fit(X, y), X
+
+
+def _second_sim_shifts(x_over_L, width_m=0.006, loss=0.6):
+    """Relative frequency shifts (percent) of modes 1-4 of beam 5 by a slit, from the independent simulator."""
+    from experiments.second_sim.fem import Beam, Slit, assemble, modes
+
+    L, EI, M = 0.6095, 26.9, 0.15792 / 1.219
+
+    def f_hz(*slits):
+        return modes(assemble(Beam(L, EI, M, root_k_theta_Nm_rad=948.7 * EI / L, slits=slits))).frequencies_hz[:4]
+
+    return 100 * (f_hz(Slit(x_over_L * L, width_m, loss)) / f_hz() - 1)
+
+
+def test_a_network_trained_with_modes_missing_places_a_slit_of_the_independent_simulator_with_any_mode_missing(
+        masked_net):
+    """A slit at x = 0.3 L (zone 2 of 4; hinge flexibility 0.015, drops of 0.3-1.2 %) computed by the independent
+    simulator: the network calls it damaged in zone 2 on all four modes and with each mode missing (NaN)."""
+    est, _ = masked_net
+    df = _second_sim_shifts(0.3)
+    rows = np.tile(df, (5, 1))
+    rows[np.arange(1, 5), np.arange(4)] = np.nan
+    d = est.predict_details(rows)
+    np.testing.assert_array_equal(d.modes_present.sum(axis=1), [4, 3, 3, 3, 3])
+    assert (d.probability_damaged >= d.threshold).all(), d.probability_damaged
+    np.testing.assert_array_equal(d.element, 2)
+    assert np.all(np.abs(d.x_over_L - 0.3) < 0.125), d.x_over_L                # within half a zone
+    np.testing.assert_array_equal(d.threshold, np.asarray(est.thresholds_)[[0, 1, 1, 1, 1]])
+    with pytest.raises(BeamDamageError, match="holds 1 of 4 modes; the network answers on 2 or more"):
+        est.predict_details(np.array([[np.nan, np.nan, np.nan, -1.0]]))
+    with pytest.raises(BeamDamageError, match="must be finite"):               # a network that needs every mode
+        DamageClassifier(hidden=8, depth=1, epochs=0, n_bins=40).fit(*_slits_of_beam5(50, np.random.default_rng(0))) \
+            .predict_details(rows)
+
+
+def test_the_out_of_distribution_check_with_a_mode_missing_is_the_marginal_distance(masked_net):
+    """With mode 3 missing the distance is the Mahalanobis distance of the other features against their own
+    training statistics: that of a network fitted on those columns alone (same split), the same percentiles; an
+    in-range slit of the independent simulator lies inside, a pair 20 times beyond the training's shifts outside."""
+    est, X = masked_net
+    keep = [0, 1, 3]
+    alone = DamageClassifier(hidden=8, depth=1, epochs=0, n_bins=40, random_state=0).fit(
+        X[:, keep], _slits_of_beam5(len(X), np.random.default_rng(1))[1])
+    rows = np.stack([_second_sim_shifts(0.3), 20 * _second_sim_shifts(0.5)])
+    masked = rows.copy()
+    masked[:, 2] = np.nan
+    dist, pct = est.training_percentile(masked)
+    ref_dist, ref_pct = alone.training_percentile(rows[:, keep])
+    np.testing.assert_allclose(dist, ref_dist, rtol=1e-9)
+    np.testing.assert_allclose(pct, ref_pct)
+    assert pct[0] < 99.9 and pct[1] == 100.0
+    terms, Z = est.distance_terms(masked)
+    assert np.isnan(terms[:, 2]).all() and np.isnan(Z[:, 2]).all()
+    np.testing.assert_allclose(np.nansum(terms, axis=1), dist**2, rtol=1e-9)
+    # the full pair: the distance of all four features, unchanged by the masks
+    np.testing.assert_allclose(est.mahalanobis(rows), est._distances((rows - est.mean_) / est.scale_), rtol=1e-12)
