@@ -254,16 +254,14 @@ def _modal_conditions(series: Path, modal: list, path: Path) -> Path:
 
 
 def _cached(path: Path, compute):
-    """``(alarm, score)`` or an error text of one method on one series, computed once and kept in ``path``."""
+    """``(alarm, score)`` of one method on one series, computed once and kept in ``path``, or an error text."""
     if path.is_file():
         d = json.loads(path.read_text())
-        return d["error"] if "error" in d else (np.array(d["alarm"], float), np.array(d["score"], float))
+        return np.array(d["alarm"], float), np.array(d["score"], float)
     from physics.io import atomic_write_text
 
     v = compute()
-    if isinstance(v, str):
-        if "usage error" not in v:                      # a command this checkout lacks is retried next run
-            atomic_write_text(path, json.dumps({"error": v}))
+    if isinstance(v, str):                              # an error is not kept: the next run tries again
         return v
     atomic_write_text(path, json.dumps({"alarm": [None if not np.isfinite(x) else x for x in v[0]],
                                         "score": [None if not np.isfinite(x) else x for x in v[1]]}))
