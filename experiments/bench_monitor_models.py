@@ -23,6 +23,8 @@ import numpy as np
 from experiments.cli import main as cli_main
 from learn.monitor import NORMAL_MODELS
 
+__all__ = ["main", "run_monitor", "score", "write_series"]
+
 SIZES = ("small", "medium", "large")
 
 

@@ -139,51 +139,87 @@ def _write(out_dir, results, extras, base, cur, model):
     atomic_write_text(out / "verdict.json", json.dumps(to_jsonable(results[0]), indent=1))
 
 
+#: Axis label of each FRF kind.
+FRF_UNITS = {"receptance": "|H| (m/N)", "mobility": "|H| ((m/s)/N)", "accelerance": "|H| ((m/s2)/N)"}
+
+
 def _figure(res, extra, base, cur, beam) -> bytes:
-    """PNG: baseline and measured FRF (or FRF synthesised from modes), and the beam (supports, sensors, zones) under
-    the network's location distribution."""
-    import matplotlib
+    """PNG of one verdict: the two tests' FRFs in the file's kind with the identified modes marked; each mode's
+    measured frequency change beside the competing explanations' predictions; the beam (supports, sensors, zones)
+    under the location of the verdict's own source (none when the verdict is undamaged)."""
+    import matplotlib  # heavy: loaded only when a figure is written
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7, 6.5))
-    for name, d in (("baseline", base), ("measured", cur)):
+    fig, (a1, a2, a3) = plt.subplots(3, 1, figsize=(7.5, 9.5))
+    label = _file_labels(res)
+    ident = res["identification"]
+    kind = "receptance"
+    for (name, d), colour, found in zip((("baseline", base), ("measured", cur)), ("tab:blue", "tab:orange"),
+                                        (ident["baseline_frequencies_hz"], ident["measured_frequencies_hz"])):
         if isinstance(d, MeasuredFRF):
-            h = d.to_kind("receptance") if d.frequency_hz[0] > 0 else d
-            a1.semilogy(h.frequency_hz, np.abs(h.frf[-1, 0]),
-                        label=f"{name} {h.response_dofs[-1]}/{h.reference_dofs[0]}")
+            kind = d.kind
+            a1.semilogy(d.frequency_hz, np.abs(d.frf[-1, 0]), color=colour,
+                        label=f"{name}: {label(d.response_dofs[-1])} / {label(d.reference_dofs[0])}")
         else:
             w = np.linspace(1.0, 1.15 * np.abs(d.eigenvalues).max(), 4000)
             H = receptance_modal(d.eigenvalues, d.eigenvectors, w, response=[-1], reference=[0])[0, 0]
-            a1.semilogy(w / (2 * np.pi), np.abs(H), label=f"{name} (synthesised from modes, unscaled)")
-    a1.set(xlabel="frequency (Hz)", ylabel="|H| (m/N)", title="Baseline vs measured")
+            a1.semilogy(w / (2 * np.pi), np.abs(H), color=colour, label=f"{name} (synthesised from its modes, "
+                                                                        "unscaled)")
+        for f in found:
+            a1.axvline(f, color=colour, ls=":", lw=0.8)
+    a1.set(xlabel="frequency (Hz)", ylabel=FRF_UNITS.get(kind, "|H|"),
+           title=f"The two tests ({kind}); dotted: the modes identified")
     a1.legend(fontsize=7)
-    length_m = beam.length_m
-    dist = extra["location_distribution"]
-    if dist is not None:
-        edges = np.linspace(0, length_m, dist.size + 1)
-        a2.bar(edges[:-1], dist, width=np.diff(edges), align="edge", color="tab:red", alpha=0.7,
-               label="network's location distribution")
-    if res["classical"] and res["classical"]["damaged"]:
-        a2.axvline(res["classical"]["location_x_m"], color="k", ls="--",
-                   label=f"{res['classical']['method']}: x = {res['classical']['location_x_m']:.3f} m")
-    for x in beam.zone_edges_m[1:-1]:
-        a2.axvline(x, color="grey", ls=":")
-    _draw_beam(a2, beam)
-    if a2.get_legend_handles_labels()[0]:
+    modes, change = extra.get("modes") or [], extra.get("frequency_change_pct")
+    if change is not None and len(modes):
+        x = np.arange(len(modes))
+        a2.bar(x, change, width=0.5, color="0.6", label="measured")
+        for h, marker in zip((res.get("hypotheses") or [])[:3], ("o", "s", "^")):
+            a2.plot(x, h["predicted_change_pct"], marker, ls="none",
+                    label=f"{h['name']} ({h['probability']:.2f})")
+        a2.axhline(0, color="k", lw=0.6)
+        a2.set_xticks(x, [f"mode {m}" for m in modes])
         a2.legend(fontsize=7)
-    net = res["network"]
-    modes = ", ".join(map(str, res["identification"].get("modes_classified") or []))
-    a2.set(xlabel="x (m)", ylabel="probability",
-           title=(f"Network: P(damaged) = {net['probability_damaged']:.2f}" if net else
-                  "Network: no answer (it needs more modes)") + f"; verdict from the {res['verdict_from']}"
-           + ("" if net else f" method on modes {modes}"))
+    a2.set(ylabel="frequency change (%)", title="Each mode's change and what the explanations predict")
+    _location(a3, res, extra, beam)
     buf = io.BytesIO()
     fig.tight_layout()
     fig.savefig(buf, format="png", dpi=110)
     plt.close(fig)
     return buf.getvalue()
+
+
+def _file_labels(res):
+    """Model DOF -> ``"x = 0.61 m (file DOF 5:+Y)"`` from the measured test's DOF positions (the model DOF where
+    the file gave none)."""
+    d = (res.get("dof_positions") or {}).get("measured") or {}
+    where = {m: (f, x) for f, m, x in zip(d.get("dofs", ()), d.get("model_dofs", ()), d.get("positions_m", ()))}
+    return lambda dof: (f"x = {where[dof][1]:.3g} m ({where[dof][0]})" if dof in where else dof)
+
+
+def _location(ax, res, extra, beam) -> None:
+    """Where the verdict's source places the damage: the network's distribution, or the classical method's place;
+    nothing when the verdict is undamaged."""
+    source = res["verdict_from"]
+    if res["damaged"]:
+        dist = extra["location_distribution"]
+        if source == "network" and dist is not None:
+            edges = np.linspace(0, beam.length_m, dist.size + 1)
+            ax.bar(edges[:-1], dist, width=np.diff(edges), align="edge", color="tab:red", alpha=0.7,
+                   label="the network's location distribution")
+        else:
+            ax.axvline(res["location_x_m"], color="k", ls="--",
+                       label=f"{res['classical']['method']}: x = {res['location_x_m']:.3f} m")
+        title = f"Verdict ({source}): damaged near x = {res['location_x_m']:.3f} m"
+    else:
+        title = f"Verdict ({source}): no damage detected, so no location"
+    for x in beam.zone_edges_m[1:-1]:
+        ax.axvline(x, color="grey", ls=":")
+    _draw_beam(ax, beam)
+    ax.legend(fontsize=7)
+    ax.set(xlabel="x (m)", ylabel="probability", title=title)
 
 
 def _draw_beam(ax, beam) -> None:

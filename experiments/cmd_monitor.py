@@ -150,7 +150,7 @@ def _write(out_dir, out: dict, res) -> dict:
         f"normal variation: {nv['model']}; threshold {thr['value']:.4g} for a false-alarm rate of "
         f"{out['false_alarm_rate']:g} (held-out baseline rate {thr['held_out_false_alarm_rate']:.3g}).",
         f"{len(alarms)} alarms after the baseline period"
-        + (f"; the first: {first['file']} (time {first['time']})." if first else "."),
+        + (f"; the first: {first['file']}{_when(first)}." if first else "."),
         f"{out['n_not_identified']} tests not identified (see the table)." if out["n_not_identified"] else ""))
     modes = Table("Reference modes of the baseline period and their normal variation",
                   ("mode", "frequency (Hz)", "std (%)", "tracking tolerance (%)", "presence"),
@@ -211,6 +211,10 @@ def _figure(res) -> bytes:
     return buf.getvalue()
 
 
+def _when(first: dict) -> str:
+    return f" (test {first['index'] + 1}" + (f", time {first['time']})" if first["time"] is not None else ")")
+
+
 def _print(out: dict, res) -> None:
     thr = out["threshold"]
     nv = res.normal_variation
@@ -225,7 +229,7 @@ def _print(out: dict, res) -> None:
             print(f"  {r['file']}: not used: {r['error']}")
     alarms = [r for r in out["tests"] if r["alarm"] and not r["baseline"]]
     print(f"{len(alarms)} alarms after the baseline period"
-          + (f"; first {out['first_alarm']['file']} (time {out['first_alarm']['time']})" if alarms else ""))
+          + (f"; first {out['first_alarm']['file']}{_when(out['first_alarm'])}" if alarms else ""))
     for r in alarms[:10]:
         v = r["verdict"]
         print(f"  {r['file']}: novelty {r['novelty']:.4g}: {v['summary']}")
@@ -233,8 +237,9 @@ def _print(out: dict, res) -> None:
             print(f"    {v['hypotheses_summary']}")
         if v.get("network"):
             n = v["network"]
-            print(f"    network (against {v['network_baseline']}): damaged {n['damaged']}, "
-                  f"P = {n['probability_damaged']}")
+            against = (f"{v['network_baselines']} baseline tests" if v["network_baselines"] != 1
+                       else v["network_baseline"])
+            print(f"    network (against {against}): damaged {n['damaged']}, P = {n['probability_damaged']}")
     if len(alarms) > 10:
         print(f"  ... {len(alarms) - 10} more in monitor.json")
     for name, p in out.get("outputs", {}).items():

@@ -132,9 +132,20 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
             "agreement": agreement(verdict, net, cl, (explained[i] or NO_EXPLANATION)["hypotheses"],
                                    "network" if from_network else "classical"),
             "warnings": w,
-            "_extra": {"location_distribution": where[i]},
+            "_extra": {"location_distribution": where[i], "frequency_change_pct": _change_pct(p, nv_i),
+                       "modes": [] if p is None else [model.beam.modes[j] for j in p.modes]},
         })
     return results
+
+
+def _change_pct(pair, normal: dict):
+    """Each classified mode's frequency change (%) as the explanations weigh it: against the baselines' mean when
+    several baselines were measured, else against the baseline; None without a pair."""
+    if pair is None:
+        return None
+    if "frequency_change_pct" in normal:
+        return np.array([normal["frequency_change_pct"][j] for j in pair.modes], float)
+    return 100 * (np.abs(pair.eigenvalues[1]) / np.abs(pair.eigenvalues[0]) - 1)
 
 
 def mirrored(beam, pair) -> bool:

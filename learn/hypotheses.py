@@ -455,9 +455,6 @@ def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD, shape_sigma=SHA
     ``shape_sigma``: the std of a unit-norm shape entry's change, one or per sensor and model mode (S, m) (a
     normal variation measured on several baselines). ``frequency_change_std`` and ``shape_change_std`` of each
     result are then lists over the pair's modes (and sensors)."""
-    if np.ndim(sigma) and np.shape(sigma) != (len(model.beam.modes),):
-        raise BeamDamageError(f"sigma: one std per mode of the model ({len(model.beam.modes)}), got shape "
-                              f"{np.shape(sigma)}")
     from datagen.damage.slit import hinge_flexibility
     from learn.model_dir import sensitivity_of
     from physics.properties import beam_preset

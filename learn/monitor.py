@@ -35,9 +35,9 @@ from physics.io import MODAL, atomic_write_text, format_complex, modal_or_frf, r
 __all__ = ["CACHE_FORMAT", "DEFAULT_LATENT", "MAC_MIN", "MIN_PRESENCE", "NORMAL_MODELS", "PCA_EXPLAINED",
            "alarm_verdicts", "cached_identification", "check_series", "FactorRemoval", "held_out_novelty",
            "identification_settings", "IdentificationSettings", "IdentifiedModes", "identify_test",
-           "minimum_baseline", "Mixture", "monitor_series", "PCARemoval", "read_conditions", "reference_modes",
-           "ReferenceModes", "Regression", "SeriesInput", "SeriesResult", "Threshold", "threshold", "track_modes",
-           "write_cache"]
+           "minimum_baseline", "missing_evidence", "Mixture", "monitor_series", "PCARemoval", "read_conditions",
+           "reference_modes", "ReferenceModes", "Regression", "SeriesInput", "SeriesResult", "Threshold", "threshold",
+           "track_modes", "write_cache"]
 
 #: Format tag of a cache entry (a change of the identification or of the entry's fields changes it).
 CACHE_FORMAT = "beam-damage-monitor-cache/1"
@@ -618,9 +618,11 @@ class PCARemoval:
     """PCA of the baseline features with the ``k`` leading components (the environment's factors) removed (Yan et
     al. 2005); the index is the squared Mahalanobis distance in the remaining ``p - k`` components.
 
-    ``k=None``: the fewest leading components that explain :data:`PCA_EXPLAINED` of the baseline's variance (at
-    most ``p - 1``): the environment's factors dominate a baseline period's variation, the identification noise and
-    what is left are the rest."""
+    ``k=None``: the fewest leading components that explain :data:`PCA_EXPLAINED` of the baseline's variance, leaving
+    at least two (one with two features): the environment's factors dominate a baseline period's variation, the
+    identification noise and what is left are the rest, and a change is told from them by its pattern over at least
+    two remaining directions (docs/monitoring.md: on the output-only series one direction left found 1 of 31
+    damaged tests, two 10)."""
 
     name = "pca"
 
@@ -632,11 +634,11 @@ class PCARemoval:
         lam, V = np.linalg.eigh(self.cov_)
         order = np.argsort(lam)[::-1]
         self.var_, self.components_ = lam[order], V[:, order]
-        k = self.k
+        k, p = self.k, X0.shape[1]
         if k is None:
             share = np.cumsum(self.var_) / max(self.var_.sum(), 1e-300)
-            k = int(np.searchsorted(share, PCA_EXPLAINED) + 1)
-        self.k_ = min(k, X0.shape[1] - 1)
+            k = min(int(np.searchsorted(share, PCA_EXPLAINED) + 1), p - 2 if p >= 3 else p - 1)
+        self.k_ = min(k, p - 1)
         self.dof_ = X0.shape[1] - self.k_
         return self
 
@@ -771,16 +773,29 @@ def _folds(n: int):
     return [np.arange(k, n, N_FOLDS) for k in range(N_FOLDS)]
 
 
+def missing_evidence(X, X_train) -> np.ndarray:
+    """``-2 ln P`` of each test's missing modes (NaN features of ``X``, (n, p)) under the training tests' share
+    missing them (``(count + 1) / (n_train + 2)`` per mode, independent): a mode the baseline period always held adds
+    ``2 ln(n_train + 2)`` to the index when a test lacks it, a mode often lost adds little. The features of the
+    missing modes are filled from the others (:func:`_impute`), so the index would otherwise never see a mode
+    that a change has moved beyond its tracking tolerance."""
+    miss = ~np.isfinite(np.asarray(X, float))
+    train = ~np.isfinite(np.asarray(X_train, float))
+    log_p = np.log((train.sum(axis=0) + 1.0) / (train.shape[0] + 2.0))        # (p,)
+    return -2.0 * (miss * log_p).sum(axis=1)
+
+
 def held_out_novelty(make_model, X, C=None) -> np.ndarray:
-    """Every baseline test's novelty index by a model fitted on the other baseline tests (leave-one-out up to
-    :data:`LOO_MAX` tests, else :data:`N_FOLDS` interleaved folds): the index of a test is never computed by a
-    model that saw it."""
+    """Every baseline test's novelty index (plus :func:`missing_evidence`) by a model fitted on the other
+    baseline tests (leave-one-out up to :data:`LOO_MAX` tests, else :data:`N_FOLDS` interleaved folds): the index of
+    a test is never computed by a model that saw it."""
     X = np.asarray(X, float)
     out = np.empty(len(X))
     for held in _folds(len(X)):
         train = np.setdiff1d(np.arange(len(X)), held)
         model = make_model().fit(X[train], None if C is None else C[train])
-        out[held] = model.novelty(X[held], None if C is None else C[held])
+        out[held] = (model.novelty(X[held], None if C is None else C[held])
+                     + missing_evidence(X[held], X[train]))
     return out
 
 
@@ -788,24 +803,28 @@ def held_out_novelty(make_model, X, C=None) -> np.ndarray:
 class Threshold:
     """The novelty threshold of a false-alarm rate and how it was set.
 
-    ``value = scale * F.ppf(1 - rate; dof_num, dof_den)``: the held-out indices follow ``scale * F(dof_num,
-    dof_den)`` (the exact law of a held-out squared Mahalanobis distance with Gaussian residuals, Hotelling's
-    prediction region, up to the scale), the scale fitted to them by maximum likelihood.
+    ``value = max(law_value, empirical_quantile)``: ``law_value = scale * F.ppf(1 - rate; dof_num, dof_den)``,
+    the held-out indices taken to follow ``scale * F(dof_num, dof_den)`` (the exact law of a held-out squared
+    Mahalanobis distance with Gaussian residuals, Hotelling's prediction region, up to the scale) with the scale
+    fitted to them by maximum likelihood; ``empirical_quantile`` the held-out indices' own ``1 - rate`` quantile
+    (linear interpolation).
     """
 
     value: float
     rate: float
+    law_value: float
     scale: float
     dof_num: int
     dof_den: int
-    held_out_rate: float
     empirical_quantile: float
+    held_out_rate: float
 
     def to_dict(self) -> dict:
-        return {"value": self.value, "false_alarm_rate": self.rate, "method": "scaled F fitted to the held-out "
-                "indices (maximum likelihood)", "scale": self.scale, "dof": [self.dof_num, self.dof_den],
-                "held_out_false_alarm_rate": self.held_out_rate,
-                "empirical_quantile_of_held_out": self.empirical_quantile}
+        return {"value": self.value, "false_alarm_rate": self.rate,
+                "method": "the larger of a scaled F law fitted to the held-out baseline indices (maximum likelihood) "
+                          "and their empirical quantile", "law_value": self.law_value, "scale": self.scale,
+                "dof": [self.dof_num, self.dof_den], "empirical_quantile_of_held_out": self.empirical_quantile,
+                "held_out_false_alarm_rate": self.held_out_rate}
 
 
 def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: int = 0) -> Threshold:
@@ -816,7 +835,10 @@ def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: i
     trust it); the F law of a held-out squared Mahalanobis distance, ``d (n+1)(n-1) / (n (n-d)) F(d, n-d)`` for
     ``d`` features and ``n`` training tests, extrapolates its tail from all of them. Its scale is fitted to the
     held-out indices (one parameter: a residual that is not Gaussian, or a model that leaves some variation,
-    widens it) rather than taken from the formula.
+    widens it) rather than taken from the formula. The law's tail is that of Gaussian residuals; an environment
+    whose effect is bounded but not linear (a mass re-placed along a curved mode shape) gives held-out indices
+    with a heavier tail, which their own quantile shows: the threshold is the larger of the two (on a baseline of
+    fewer than ``1 / rate`` tests that quantile lies between its two largest indices).
     """
     s = np.asarray(held_out, float)
     s = s[np.isfinite(s)]
@@ -829,11 +851,11 @@ def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: i
         return -np.sum(law.logpdf(pos / math.exp(log_c))) + pos.size * log_c
 
     start = math.log(max(np.median(pos) / law.median(), 1e-300))
-    log_c = optimize.minimize_scalar(nll, bracket=(start - 1, start + 1)).x
-    c = math.exp(log_c)
-    value = float(c * law.ppf(1 - rate))
-    return Threshold(value, rate, c, d1, d2, float(np.mean(s > value)),
-                     float(np.quantile(s, 1 - rate)) if s.size else math.nan)
+    c = math.exp(optimize.minimize_scalar(nll, bracket=(start - 1, start + 1)).x)
+    law_value = float(c * law.ppf(1 - rate))
+    empirical = float(np.quantile(s, 1 - rate)) if s.size else math.nan
+    value = max(law_value, empirical) if s.size else law_value
+    return Threshold(value, rate, law_value, c, d1, d2, empirical, float(np.mean(s > value)))
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -951,7 +973,8 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     rest = np.flatnonzero(ok)
     rest = rest[rest >= n_baseline]
     if rest.size:
-        novelty[rest] = model.novelty(X[rest], None if Cq is None else Cq[rest])
+        novelty[rest] = (model.novelty(X[rest], None if Cq is None else Cq[rest])
+                         + missing_evidence(X[rest], X[b_idx]))
     novelty[b_idx] = held
     # per-mode normal variation: the residual about what the model explains (conditions, removed factors)
     Xb = X[b_idx]
@@ -1052,12 +1075,12 @@ def alarm_verdicts(result: SeriesResult, model=None, beam_x_m=None) -> dict:
     """Per alarmed test after the baseline period (row index -> dict): what changed mode by mode against the
     baseline population (``what_changed``, ``summary``), and with a trained model the competing explanations
     weighed with the measured per-mode scatter (``hypotheses``, ``hypotheses_summary``, ``frequency_change_std``)
-    and the network's verdict against the baseline test nearest the baseline median (``network``)."""
+    and the network's verdict against the baseline period (``network``, :func:`_network_verdicts`)."""
     alarms = [i for i, r in enumerate(result.rows) if r["alarm"] and not r["baseline"]]
     out = {i: {"what_changed": what_changed(result.rows[i], result.sigma),
                "summary": changed_text(what_changed(result.rows[i], result.sigma)),
                "hypotheses": None, "hypotheses_summary": None, "frequency_change_std": None, "network": None,
-               "network_baseline": None, "network_error": None} for i in alarms}
+               "network_baselines": None, "network_baseline": None, "network_error": None} for i in alarms}
     if model is None or not alarms:
         return out
     from learn.hypotheses import FREQUENCY_CHANGE_STD, explain_many
@@ -1094,11 +1117,15 @@ def alarm_verdicts(result: SeriesResult, model=None, beam_x_m=None) -> dict:
 
 
 def _network_verdicts(result: SeriesResult, model, beam_x_m, alarms: list, out: dict) -> dict:
+    """The network's verdicts of the alarms (``network``) by :func:`learn.classify.classify_many` against the
+    whole baseline period (its scatter the normal variation; ``network_baselines``: how many tests), else, when
+    classify refuses that, against the baseline test nearest the baseline median (``network_baseline``)."""
     from learn.classify import classify_many
     from learn.measured import on_model_dofs
 
-    b = baseline_nearest_median(result)
-    if b is None:
+    base = [i for i, r in enumerate(result.rows) if r["baseline"] and r["identified"]]
+    nearest = baseline_nearest_median(result)
+    if not base:
         return out
 
     def md(i):
@@ -1109,21 +1136,25 @@ def _network_verdicts(result: SeriesResult, model, beam_x_m, alarms: list, out: 
     keys = ("damaged", "probability_damaged", "location_x_m", "location_zone", "hinge_flexibility", "depth_m",
             "verdict_from", "in_distribution", "out_of_distribution_reasons", "hypotheses_summary", "warnings")
     methods = [None if t is None else t.method if t.method in ("lscf", "ssi") else None for t in result.tests]
-    name_b = result.rows[b]["file"]
+    rate = result.threshold.rate
 
-    def run(group):
-        vs = classify_many(model, md(b), [md(i) for i in group], names=[name_b] + [result.rows[i]["file"]
-                                                                                  for i in group],
-                           methods=[methods[b]] + [methods[i] for i in group])
+    def run(group, baselines):
+        names = [result.rows[i]["file"] for i in (*baselines, *group)]
+        vs = classify_many(model, [md(i) for i in baselines], [md(i) for i in group], names=names,
+                           methods=[methods[i] for i in (*baselines, *group)], false_alarm_rate=rate)
         for i, v in zip(group, vs):
-            out[i].update(network={k: v.get(k) for k in keys}, network_baseline=name_b)
+            out[i].update(network={k: v.get(k) for k in keys}, network_baselines=len(baselines),
+                          network_baseline=result.rows[baselines[0]]["file"] if len(baselines) == 1 else None)
 
-    try:
-        run(alarms)                                          # one network call for every alarm
-    except BeamDamageError:
-        for i in alarms:                                     # one alarm's error apart
-            try:
-                run([i])
-            except BeamDamageError as exc:
-                out[i].update(network_error=str(exc), network_baseline=name_b)
+    for baselines in (base, [nearest]):
+        try:
+            run(alarms, baselines)                           # one network call for every alarm
+            return out
+        except BeamDamageError:
+            pass
+    for i in alarms:                                         # one alarm's error apart
+        try:
+            run([i], [nearest])
+        except BeamDamageError as exc:
+            out[i].update(network_error=str(exc), network_baseline=result.rows[nearest]["file"])
     return out
