@@ -254,16 +254,14 @@ def _modal_conditions(series: Path, modal: list, path: Path) -> Path:
 
 
 def _cached(path: Path, compute):
-    """``(alarm, score)`` or an error text of one method on one series, computed once and kept in ``path``."""
+    """``(alarm, score)`` of one method on one series, computed once and kept in ``path``, or an error text."""
     if path.is_file():
         d = json.loads(path.read_text())
-        return d["error"] if "error" in d else (np.array(d["alarm"], float), np.array(d["score"], float))
+        return np.array(d["alarm"], float), np.array(d["score"], float)
     from physics.io import atomic_write_text
 
     v = compute()
-    if isinstance(v, str):
-        if "usage error" not in v:                      # a command this checkout lacks is retried next run
-            atomic_write_text(path, json.dumps({"error": v}))
+    if isinstance(v, str):                              # an error is not kept: the next run tries again
         return v
     atomic_write_text(path, json.dumps({"alarm": [None if not np.isfinite(x) else x for x in v[0]],
                                         "score": [None if not np.isfinite(x) else x for x in v[1]]}))
@@ -302,13 +300,14 @@ def run_series(series: Path, model: Path | None, a, out: Path) -> dict:
     inputs = modal if modal is not None else files
     idx = [k for k in range(1, len(inputs)) if inputs[k] is not None]
 
-    def classify(baselines):
+    def classify(baselines, first=1):
+        tested = [k for k in idx if k >= first]
         try:
-            v = _classify(model, [inputs[k] for k in idx], baselines)
+            v = _classify(model, [inputs[k] for k in tested], baselines)
         except RuntimeError as exc:
             return str(exc).splitlines()[0][:300]
         alarm, score = np.full(len(files), np.nan), np.full(len(files), np.nan)
-        for k, r in zip(idx, v):
+        for k, r in zip(tested, v):
             if "damaged" in r:
                 alarm[k] = float(bool(r["damaged"]))     # the classical verdict has no probability: its call
                 score[k] = alarm[k] if r.get("probability_damaged") is None else float(r["probability_damaged"])
@@ -323,9 +322,9 @@ def run_series(series: Path, model: Path | None, a, out: Path) -> dict:
 
     if model is not None and inputs[0] is not None:
         res["classify, 1 baseline"] = _cached(cache / "classify-1.json", lambda: classify([inputs[0]]))
-        if classify_takes_several_baselines():
+        if classify_takes_several_baselines():              # the tests after the baseline period only
             res["classify, N baselines"] = _cached(cache / "classify-n.json", lambda: classify(
-                [p for p in inputs[:n_b] if p is not None]))
+                [p for p in inputs[:n_b] if p is not None], first=n_b))
         else:
             res["classify, N baselines"] = "not run: this checkout's classify takes one --baseline"
     if (cache / "frequencies.json").is_file():

@@ -23,7 +23,7 @@ _API = {
     "write_pairs": "pairs",
     "CATALOGUE": "beams", "CatalogueBeam": "beams", "simulate_beam_pairs": "beams", "write_beam_pairs": "beams",
     "SeriesConfig": "series", "SeriesTest": "series", "SLIT_SIZES": "series", "simulate_series": "series",
-    "write_series": "series",
+    "slit_frequency_drop": "series", "write_series": "series",
     "EffectCase": "effects", "effect_cases": "effects", "write_effect_cases": "effects",
     "bolted_beam": "bolted", "bolted_test": "bolted", "write_bolted_test": "bolted",
 }
