@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from datagen.band_cholesky import band_cholesky, band_cholesky_solve
 from physics.modal import undamped_modes
 
 __all__ = ["BANDWIDTH", "light_damping_modes", "ritz_modes"]
@@ -37,6 +36,8 @@ def ritz_modes(M, K, start, iterations):
     omega2 : ndarray, shape (..., p)   ascending (rad^2/s^2 for SI K, M)
     phi : ndarray, shape (..., n, p)   ``phi^T M phi = I``
     """
+    from datagen.band_cholesky import band_cholesky, band_cholesky_solve  # numba: only where truth modes are solved
+
     V = np.broadcast_to(start, K.shape[:-2] + start.shape)
     n = K.shape[-1]
     Kf = np.ascontiguousarray(K).reshape(-1, n, n)

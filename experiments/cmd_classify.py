@@ -28,7 +28,7 @@ KEYS = ("measured", "damaged", "probability_damaged", "location_x_over_L", "loca
 
 
 def add_parser(sub):
-    p = sub.add_parser("classify", help="classify measured beams against their baseline with a trained model",
+    p = sub.add_parser("classify",
                        description=f"BASELINE and each MEASURED are files of {accepted(FRF, MODAL)}. FRFs: "
                                    "receptances, mobilities or accelerances at the model's DOFs; modal data: as "
                                    "'update' accepts. FRF files are identified by LSCF/LSFD over the model's band for "

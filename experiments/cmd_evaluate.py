@@ -6,7 +6,7 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub):
-    p = sub.add_parser("evaluate", help="score a trained classifier and the classical methods on datasets",
+    p = sub.add_parser("evaluate",
                        description="Detection ROC AUC and accuracy, false alarms on intact pairs, element accuracy "
                                    "(thesis 4-element grid), within-one-element, location error (mm), size error, "
                                    "expected calibration error; broken down by noise level, size and position (tip "

@@ -17,7 +17,7 @@ __all__ = ["CALIBRATED_KEYS", "add_parser", "recorded_calibration", "run"]
 
 def add_parser(subparsers):
     p = subparsers.add_parser(
-        "generate", help="generate a dataset of specimens tested twice (baseline, current), updated models",
+        "generate",
         description="Simulate N specimens, each tested on two days (baseline, then current: damage of the "
                     "config's damage.kind (slits, or point masses added or lost), temperature, "
                     "re-clamping), measure their modes and FRFs with noise, update damping and stiffness by "

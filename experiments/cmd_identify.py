@@ -214,8 +214,7 @@ def method_help() -> str:
 
 def add_parser(sub):
     p = sub.add_parser(
-        "identify", help="identify natural frequencies, damping and complex modes from measured FRFs or, "
-                         "output-only, from response records",
+        "identify",
         description="Modal identification from an FRF file, or output-only from response time records without "
                     f"a force. Methods (--method): {method_help()}. "
                     "Shapes are unit-modal-A scaled when a driving-point FRF is present; output-only shapes are "

@@ -6,7 +6,7 @@ __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub):
-    p = sub.add_parser("train", help="train the damage classifier (detect, localise, size damage) on datasets",
+    p = sub.add_parser("train",
                        description="Train the network on pairs (baseline, current) of one or more datasets written by "
                                    "'beam-damage generate --config training --n N --out DIR' (intact and damaged "
                                    "specimens, temperature and re-clamping between the test days), split by specimen "

@@ -183,7 +183,7 @@ def run(args) -> dict:
 
 
 def add_parser(sub):
-    p = sub.add_parser("update", help="identify C and update K from measured complex modes (Lancaster/Pilkey)",
+    p = sub.add_parser("update",
                        description="Identify the damping matrix by Pilkey's iteration of Lancaster's formula "
                                    "(eqs. 1.10, 1.11) and update the stiffness matrix (eq. 1.12) from measured "
                                    "complex modes and the beam's reduced or lumped mass matrix.")

@@ -368,7 +368,7 @@ def _report_sections(vsum, checks, thesis_sections, measured, disc, data, traine
 
 
 def add_parser(sub):
-    p = sub.add_parser("demo", help="run the main job: thesis, discrepancy, dataset, classifier, beam 5, report",
+    p = sub.add_parser("demo",
                        description="The mission end to end on embedded defaults: reproduce the thesis, name what "
                                    "beam 5's model lacks and calibrate it, generate data from the calibrated beam, "
                                    "train and evaluate the classifier against the classical methods, classify the "

@@ -43,7 +43,6 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from scipy.special import log_ndtr
 
 from physics.errors import BeamDamageError
 
@@ -192,6 +191,8 @@ def _loglik(g, y, s, half: float, model_error: float):
     integral in closed form), and the most likely ``a``: shapes (n, ...) for every pair's measured changes ``y``
     (n, m) and every predicted change ``g`` (..., m), relative std ``s`` (m,) and the model error on ``g``.
     ``half = 0``: no nuisance."""
+    from scipy.special import log_ndtr  # scipy.special: 0.2 s to import, only where explanations are weighed
+
     var = s**2 + (model_error * g) ** 2                                  # (..., m)
     r = g - y.reshape(y.shape[:1] + (1,) * (g.ndim - 1) + y.shape[-1:])  # (n, ..., m)
     s0, s1, s2 = np.sum(r**2 / var, -1), np.sum(r / var, -1), np.sum(1.0 / var, -1)

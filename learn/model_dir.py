@@ -23,9 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import torch
 
-from learn.estimator import DamageClassifier
 from learn.features import BeamSpec
 from learn.sensitivity import beam_sensitivity
 from learn.verdict import verdict_text
@@ -111,6 +109,8 @@ class TrainedModel:
 
 def save_model(out_dir, config: dict, networks: dict) -> None:
     """Write the model directory atomically file by file (temp file, then rename)."""
+    import torch  # torch: the weights file
+
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     for route, est in networks.items():
@@ -125,6 +125,10 @@ def save_model(out_dir, config: dict, networks: dict) -> None:
 
 def load_model(model_dir, device=None) -> TrainedModel:
     """Read a model directory (weights with ``torch.load(..., weights_only=True)``)."""
+    import torch  # torch: the networks
+
+    from learn.estimator import DamageClassifier  # torch: the networks
+
     path = Path(model_dir)
     cfg_path = path / "config.json"
     if cfg_path.exists() or cfg_path.is_symlink():  # there, but perhaps a device, a FIFO or a dangling link

@@ -6,7 +6,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg import eigh
-from scipy.optimize import linear_sum_assignment
 
 from physics import effects as fx
 from physics.beam import Beam
@@ -135,6 +134,8 @@ def aligned(a, b):
 def pair_modes_by_mac(meas: Measurement, pred: Prediction) -> np.ndarray:
     """Model mode index paired with each measured mode: the assignment of largest MAC when the measurement has
     shapes, else of smallest log-frequency distance after the median frequency ratio."""
+    from scipy.optimize import linear_sum_assignment  # scipy.optimize: 0.4 s to import, only where modes are paired
+
     if meas.shapes is not None:
         cost = -mac(meas.shapes, pred.shapes)
     else:

@@ -13,8 +13,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import fft as sfft
-from scipy import signal
 
 from physics.errors import ConvergenceError, ShapeError
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
@@ -63,6 +61,8 @@ def cross_spectra(signals, sampling_frequency_hz, n_per_segment, frames_per_chun
     G : ndarray, complex, shape (n_lines, n_channels, n_channels)
         One-sided spectral density (unit^2/Hz).
     """
+    from scipy import fft as sfft, signal  # scipy.fft, scipy.signal: 1 s to import, only output-only identification
+
     y = signals if isinstance(signals, np.ndarray) else np.asarray(signals, dtype=np.float64)
     n_ch, n = y.shape
     L, hop = int(n_per_segment), int(n_per_segment) // 2
@@ -90,6 +90,8 @@ def cross_spectra(signals, sampling_frequency_hz, n_per_segment, frames_per_chun
 def _efdd(f_hz, s1, u1, peak, mac_bell, fs, n_per_segment):
     """Natural frequency and damping ratio of one peak from its SDOF bell (inverse FFT, zero crossings, log
     decrement); NaN when the bell's correlation does not decay over at least two extrema."""
+    from scipy import fft as sfft, signal  # scipy.fft, scipy.signal: 1 s to import, only output-only identification
+
     m = np.abs(u1.conj() @ u1[peak]) ** 2
     lo, hi = peak, peak
     while lo > 0 and m[lo - 1] >= mac_bell:
@@ -142,6 +144,8 @@ def identify_fdd(signals, sampling_frequency_hz, band_hz=None, n_modes=None, res
     -------
     FDDIdentification
     """
+    from scipy import signal  # scipy.signal: about 1 s to import, only for output-only identification
+
     fs = float(sampling_frequency_hz)
     if not (np.isfinite(fs) and fs > 0):
         raise ShapeError(f"{where}: sampling rate {fs:g} Hz must be finite and > 0")

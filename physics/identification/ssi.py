@@ -15,8 +15,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import fft as sfft
-from scipy import signal
 
 from physics.errors import ConvergenceError, ShapeError
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
@@ -114,6 +112,8 @@ def output_correlations(signals, sampling_frequency_hz, n_lags, references=None,
     ShapeError
         NaN samples, a constant or clipped channel, a band above the Nyquist frequency, too short a record.
     """
+    from scipy import fft as sfft, signal  # scipy.fft, scipy.signal: 1 s to import, only output-only identification
+
     y = signals if isinstance(signals, np.ndarray) else np.asarray(signals, dtype=np.float64)
     if y.ndim != 2 or y.shape[0] < 1:
         raise ShapeError(f"{where}: signals must be (n_channels, n_samples)")
