@@ -33,6 +33,7 @@ import hashlib
 import json
 import os
 import shutil
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -126,7 +127,6 @@ ROW_GROUP = 65536
 
 
 def package_version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
     try:
         return version("beam-damage")
     except PackageNotFoundError:

@@ -13,7 +13,8 @@ from learn.classify import classify_many
 from learn.measured import on_model_dofs
 from learn.model_dir import load_model
 from physics.frf import receptance_modal
-from physics.io import FRF, MODAL, MeasuredFRF, accepted, atomic_write_bytes, atomic_write_text, modal_or_frf, read
+from physics.io import (FRF, MODAL, MeasuredFRF, accepted, atomic_write_bytes, atomic_write_text, modal_or_frf, read,
+                        read_json)
 
 __all__ = ["KEYS", "add_parser", "run"]
 
@@ -64,8 +65,6 @@ def read_input(path):
 
 def identification_method(path) -> str | None:
     """The ``method`` a modal-data JSON file names (``identify --out`` writes it for output-only modes), else None."""
-    from physics.io import read_json
-
     if modal_or_frf(path) != MODAL or not str(path).lower().endswith(".json"):
         return None
     obj = read_json(path, require_object=False)

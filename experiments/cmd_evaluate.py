@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from experiments.args import check_out_dir
+from learn.model_dir import load_model
+
 __all__ = ["add_parser", "run"]
 
 
@@ -20,9 +23,7 @@ def add_parser(sub):
 
 
 def run(args) -> dict:
-    from experiments.args import check_out_dir
-    from learn.model_dir import load_model
-    from learn.training import evaluate
+    from learn.training import evaluate  # torch: the network
 
     if args.out:
         check_out_dir(args.out)

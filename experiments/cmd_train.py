@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from experiments.args import check_out_dir
+from physics.errors import BeamDamageError
+
 __all__ = ["add_parser", "run"]
 
 
@@ -28,9 +31,7 @@ def add_parser(sub):
 
 
 def run(args) -> dict:
-    from experiments.args import check_out_dir
-    from learn.training import train
-    from physics.errors import BeamDamageError
+    from learn.training import train  # torch: the network
 
     if args.epochs < 1:
         raise BeamDamageError(f"--epochs must be >= 1, got {args.epochs}")

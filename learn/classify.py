@@ -15,8 +15,10 @@ from learn.model_dir import TrainedModel
 from learn.verdict import (IN_DISTRIBUTION_PERCENTILE, classical_answer, classical_verdict, equivalent_depth,
                            modes_text, network_answer, network_output, ood_percentile)
 from physics.errors import BeamDamageError
+from physics.identification import METHODS
 from physics.layout import SYMMETRIC_SUPPORTS
 from physics.io import MeasuredFRF
+from physics.modal import modal_parameters
 
 __all__ = ["DISTANCE_TERMS", "classify", "classify_many", "distance_terms", "distance_text", "identification_warning"]
 
@@ -178,7 +180,6 @@ def damping_warning(model: TrainedModel, pairs: list) -> str | None:
     pair = next((p for p in pairs if p is not None and p.modes.size), None)
     if pair is None or not trained:
         return None
-    from physics.modal import modal_parameters
 
     lo, hi = np.asarray(trained, float)[pair.modes].T
     zeta = modal_parameters(pair.eigenvalues[0])[1]
@@ -408,8 +409,6 @@ def _network_inputs(model: TrainedModel, baseline, currents: list, pairs, identi
 
 
 def _output_only(method) -> bool:
-    from physics.identification import METHODS
-
     return method in METHODS and METHODS[method].data == "records"
 
 

@@ -44,7 +44,16 @@ from functools import lru_cache
 
 import numpy as np
 
+from datagen.damage.slit import hinge_flexibility
+from datagen.pipeline import suspension_unit_stiffness
+from learn.features import real_shapes, sign_aligned
+from learn.model_dir import sensitivity_of
+from physics.effects import hermite_row
 from physics.errors import BeamDamageError
+from physics.fem import beam_model
+from physics.layout import RIGID_BODY_MODES
+from physics.modal import undamped_modes
+from physics.properties import beam_preset
 
 __all__ = ["FREQUENCY_CHANGE_STD", "HYPOTHESES", "MODEL_ERROR", "NO_EXPLANATION", "PRIOR", "SEPARATE",
            "SHAPE_CHANGE_STD", "SIZE_SCALE_STD", "Hypothesis", "explain", "explain_many", "shape_changes", "summary",
@@ -138,13 +147,6 @@ def support_curve(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_spring_
     ``ln_factors`` (G,): ``ln(k / k_0)`` of the clamp springs or the suspension; for pinned ends ``log10`` of the
     bearing spring ``k L / EI`` added to none.
     """
-    from datagen.pipeline import suspension_unit_stiffness
-    from learn.features import real_shapes, sign_aligned
-    from physics.effects import hermite_row
-    from physics.fem import beam_model
-    from physics.layout import RIGID_BODY_MODES
-    from physics.modal import undamped_modes
-
     test = beam.test
     bc = "clamped-free" if test is None else test.bc
     L = beam.length_m
@@ -401,8 +403,6 @@ def shape_changes(eigenvectors) -> np.ndarray:
     """Changes of the real unit-norm shapes between the two tests, the current shape's sign following the
     baseline's (as the modal features take them): ``eigenvectors`` (n, 2, S, m) complex -> (n, S m), sensor-major
     as :attr:`learn.sensitivity.Sensitivity.shape`."""
-    from learn.features import real_shapes, sign_aligned
-
     u = real_shapes(np.asarray(eigenvectors, complex))                   # (n, 2, S, m)
     return (sign_aligned(u[:, 1], u[:, 0]) - u[:, 0]).reshape(u.shape[0], -1)
 
@@ -420,10 +420,6 @@ def explain(model, pair, sigma=FREQUENCY_CHANGE_STD) -> dict:
 
 def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD) -> list[dict]:
     """:func:`explain` of every pair, the pairs holding the same modes weighed in one batch."""
-    from datagen.damage.slit import hinge_flexibility
-    from learn.model_dir import sensitivity_of
-    from physics.properties import beam_preset
-
     beam, cfg = model.beam, model.config
     truth = cfg.get("truth_beam") or {}
     if "EI_Nm2" in truth:

@@ -30,7 +30,9 @@ import numpy as np
 from learn.features import real_shapes, sign_aligned
 from datagen.damage import damage_model
 from datagen.pipeline import suspension_unit_stiffness
+from physics.effects import hermite_row
 from physics.fem import beam_model, element_mass, element_stiffness
+from physics.layout import RIGID_BODY_MODES
 from physics.modal import undamped_modes
 from physics.properties import beam_preset
 
@@ -143,9 +145,6 @@ def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7,
 
 def _layout_sensitivity(preset, root_spring_relative, n_elements, step, perturbs, test) -> Sensitivity:
     """:func:`beam_sensitivity` of any test (:class:`physics.layout.Layout`): shapes at the sensors."""
-    from physics.effects import hermite_row
-    from physics.layout import RIGID_BODY_MODES
-
     L, EI, m = _beam_numbers(preset)
     le = L / n_elements
     clamp = test.bc == "clamped-free" and root_spring_relative is not None

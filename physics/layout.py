@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from physics.effects import interpolation_matrix
 from physics.errors import ConfigError
 
 __all__ = ["DEFAULT_BAND_HZ", "MIN_VISIBLE", "SYMMETRIC_SUPPORTS", "Layout", "nominal_modes", "layout_of"]
@@ -130,7 +131,6 @@ def nominal_modes(beam, n_elements: int = NOMINAL_ELEMENTS):
     frequencies_hz : ndarray, shape (r,)
     shape_at : callable   ``shape_at(x_m)`` -> ndarray (len(x_m), r) of mass-normalised translations
     """
-    from physics.effects import interpolation_matrix
     from scipy.linalg import eigh
 
     model = beam.fe_model(n_elements)
