@@ -1,7 +1,7 @@
 """Start-up of the command line: ``beam-damage --help``, every command's ``--help`` and ``classify`` of one
 UFF pair, each in fresh processes (median of several runs), and the imports that cost the most.
 
-Run: ``.venv/bin/python -m experiments.bench_startup [--runs 5] [--before CHECKOUT] [--offenders] [--json]``
+Run: ``.venv/bin/python -m experiments.bench_startup [--runs 5] [--before CHECKOUT] [--offenders] [--docs] [--json]``
 
 Each case runs ``python -m experiments.cli ...`` in a new process with ``PYTHONPATH`` set to a checkout (this
 one, and with ``--before`` another, e.g. a worktree of an older commit); the runs of the two checkouts alternate,
@@ -13,8 +13,9 @@ The one-pair case needs a model and a pair: ``--model DIR --pair BASELINE CURREN
 under ``out/bench_startup`` (``generate --config training --n 400``, ``train --epochs 3`` and a pair of the
 independent simulator, ``python -m experiments.second_sim pairs --set easy``).
 
-``--offenders`` lists, for ``classify --help`` and the one-pair run, the third-party packages whose import
+``--offenders`` lists, for ``classify --help`` and the one-pair run, the third-party modules whose import
 took longest (``python -X importtime``, cumulative) and the module of the project that imported each first.
+``--docs`` writes the table into ``docs/performance.md`` (block ``startup``).
 """
 
 from __future__ import annotations
@@ -30,8 +31,9 @@ import time
 from pathlib import Path
 
 from experiments.cli import COMMANDS
+from experiments.doc_tables import write_table
 
-__all__ = ["GOALS", "PROJECT", "cases", "main", "offenders", "time_case"]
+__all__ = ["GOALS", "PROJECT", "cases", "docs_table", "main", "offenders", "time_case"]
 
 ROOT = Path(__file__).resolve().parents[1]
 #: Top-level packages of the project (everything else an import names is a library or the standard library).
@@ -67,8 +69,8 @@ def cases(model: Path, baseline: Path, current: Path) -> dict:
 
 
 def offenders(argv: list[str], checkout: Path, top: int = 8) -> list[dict]:
-    """The ``top`` third-party modules imported by the project (or the interpreter's start-up: None), by cumulative
-    import time (s) in ``python -X importtime``, each with the project module that imported it first."""
+    """The ``top`` third-party modules imported by the project, by cumulative import time (s) in ``python -X
+    importtime``, each with the project module that imported it first (None: a function, or the interpreter)."""
     proc = subprocess.run([sys.executable, "-X", "importtime", "-m", "experiments.cli", *argv], env=_env(checkout),
                           cwd=checkout, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     rows = []
@@ -89,6 +91,20 @@ def offenders(argv: list[str], checkout: Path, top: int = 8) -> list[dict]:
         entry = found.setdefault(key, {"module": key, "seconds": 0.0, "imported_by": parent})
         entry["seconds"] += seconds
     return sorted(found.values(), key=lambda e: -e["seconds"])[:top]
+
+
+def docs_table(result: dict) -> str:
+    """The Markdown table of :func:`main`'s result: median wall / CPU seconds per case, before and after."""
+    before = "before" in result["checkouts"]
+    head = "| case | " + ("before: wall / CPU (s) | " if before else "") + "wall / CPU (s) | goal (s) |"
+    lines = [head, "| --- |" + (" ---: |" if before else "") + " ---: | ---: |"]
+    for r in result["cases"]:
+        cells = [f"`{r['case']}`"]
+        if before:
+            cells.append(f"{r['before_wall_s']:.2f} / {r['before_cpu_s']:.2f}")
+        cells += [f"{r['after_wall_s']:.2f} / {r['after_cpu_s']:.2f}", f"{r['goal_s']:.1f}"]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
 
 
 def _fixtures(out: Path) -> tuple[Path, Path, Path]:
@@ -113,6 +129,7 @@ def main(argv=None) -> int:
     ap.add_argument("--pair", type=Path, nargs=2, metavar=("BASELINE", "CURRENT"), help="UFF pair to classify")
     ap.add_argument("--out", type=Path, default=ROOT / "out" / "bench_startup", help="where fixtures are made")
     ap.add_argument("--offenders", action="store_true", help="list the slowest third-party imports")
+    ap.add_argument("--docs", action="store_true", help="write the table into docs/performance.md")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
     if args.model and args.pair:
@@ -140,6 +157,8 @@ def main(argv=None) -> int:
                                for name, case in cases(model, baseline, current).items()
                                if name in ("classify --help", "classify (1 pair)")
                                for label, checkout in checkouts.items()}
+    if args.docs:
+        write_table("performance.md", "startup", docs_table(result))
     if args.json:
         print(json.dumps(result, indent=1))
         return 0
@@ -159,7 +178,8 @@ def main(argv=None) -> int:
     for name, rows in result.get("offenders", {}).items():
         print(f"\nslowest imports, {name}:")
         for e in rows:
-            print(f"  {e['seconds']:6.2f} s  {e['module']:16s} imported by {e['imported_by'] or '(start-up)'}")
+            print(f"  {e['seconds']:6.2f} s  {e['module']:16s} imported by "
+                  f"{e['imported_by'] or '(a function, or the interpreter)'}")
     return 0
 
 
