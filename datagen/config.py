@@ -12,6 +12,7 @@ Ranges ``[lo, hi]`` are sampled uniformly (``root_spring_relative`` log-uniforml
 from __future__ import annotations
 
 import copy
+import json
 import math
 import tomllib
 from pathlib import Path
@@ -370,8 +371,6 @@ def modal_noise_calibration() -> dict:
     """Per-mode coefficients of the calibrated modal noise, std ``sqrt((c level)^2 + (g floor)^2 + e^2)`` of the
     FRF noise level and floor: ``c`` under "frequency", "damping", "shape", ``g`` under "<quantity>_per_floor",
     ``e`` under "<quantity>_floor" (0 when the file has none)."""
-    import json
-
     calib = json.loads((Path(__file__).parent / "configs" / "modal_noise.json").read_text())
     return {**{f"{q}{s}": [0.0] * 4 for q in ("frequency", "damping", "shape") for s in ("_floor", "_per_floor")},
             **calib}

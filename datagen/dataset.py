@@ -10,14 +10,17 @@ one-line error. Format 1 datasets (FRFs stored in the shards) are read
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from datagen.store import (ARRAYS, ARRAYS_V1, DERIVED, DATASET_FORMAT_V1, OPTIONAL, damaged_file, file_sha256,
                            foreign_shard, read_manifest)
 from datagen.synth import DATASET_FRFS, SOURCES, line_index, synthesise
 from physics.errors import FileFormatError
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["Dataset", "load_torch"]
 
@@ -106,6 +109,7 @@ class Dataset:
 
     def table(self, columns=None) -> pd.DataFrame:
         """Samples table, optionally only ``columns`` (read column by column from parquet)."""
+        import pandas as pd  # pandas, pyarrow: only where the samples table is read
         import pyarrow.parquet as pq
 
         cols = None if columns is None else list(columns)

@@ -24,6 +24,7 @@ from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from datagen.config import validate
 from datagen.lock import LOCK_NAME, LockedError, dataset_lock
@@ -50,8 +51,6 @@ def compute_shard(cfg_json: str, seed: int, index: int, first_id: int, n: int):
     table : pandas.DataFrame
     arrays : dict of ndarray
     """
-    from threadpoolctl import threadpool_limits
-
     cfg = json.loads(cfg_json)
     setup = get_setup(cfg)
     with threadpool_limits(1):  # one BLAS thread per process: shards are the parallel unit

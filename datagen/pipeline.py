@@ -50,10 +50,12 @@ from datagen.damage import DamageModel, damage_model
 from datagen.solvers import light_damping_modes, ritz_modes
 from datagen.specimen import BeamPreset, SectionLayout, draw_specimens
 from datagen.synth import measured_peak
+from physics.beam import preset_beam
+from physics.effects import hermite_row
 from physics.errors import ConfigError
 from physics.properties import beam_preset
 from datagen.truth_beam import as_preset, load_truth_beam, point_effects, shear_parameters, unit_elements
-from physics.fem import assemble, constrained_dofs, dof_names
+from physics.fem import assemble, constrained_dofs, dof_names, element_mass, element_stiffness
 from physics.frf import poles_and_residues
 from physics.layout import RIGID_BODY_MODES, Layout, layout_of
 from physics.modal import eigenvalues_from_modal, modal_parameters, undamped_modes
@@ -233,8 +235,6 @@ def _unit_matrices(shear_flexibility, rho_i_over_m_m2, length_m, n_elements, tim
 
 def truth_beam_of(cfg: dict):
     """The beam of a configuration: the beam file of config key ``beam``, or the preset as a beam."""
-    from physics.beam import preset_beam
-
     return load_truth_beam(cfg["beam"]) if cfg["beam"] else preset_beam(cfg["preset"])
 
 
@@ -255,8 +255,6 @@ def aligned_elements(test: Layout, n_min: int) -> tuple[int, bool]:
 
 def sensor_rows(x_m, node_x_m, keep) -> np.ndarray:
     """Interpolation rows (S, n) of the translations at ``x_m`` over the kept DOFs (Hermite cubics)."""
-    from physics.effects import hermite_row
-
     return np.array([hermite_row(float(x), node_x_m)[0][keep] for x in x_m])
 
 
@@ -266,8 +264,6 @@ def analyst_unit_mass(test: Layout, mass_model: str, per_span: int = 4, suspensi
     the ends and the sensors, ``per_span`` elements between neighbours, reduced to the sensors' translations
     (:func:`physics.updating.reduced_mass`), the supports as the test's (a free-free model on the suspension
     ``suspension_unit`` (1/m^3, for unit EI; default that of :func:`suspension_unit_stiffness`))."""
-    from physics.fem import element_mass, element_stiffness
-
     L = test.length_m
     xs = np.sort(np.asarray(test.sensors_x_m))
     knots = np.unique(np.concatenate([[0.0, L], xs]))

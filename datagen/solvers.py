@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from datagen.band_cholesky import band_cholesky, band_cholesky_solve
 from physics.modal import undamped_modes
 
 __all__ = ["BANDWIDTH", "light_damping_modes", "ritz_modes"]
@@ -38,6 +37,8 @@ def ritz_modes(M, K, start, iterations):
     phi : ndarray, shape (..., n, p)   ``phi^T M phi = I``; each mode's sign makes its projection on its
                                        starting vector positive (the same on every LAPACK build)
     """
+    from datagen.band_cholesky import band_cholesky, band_cholesky_solve  # numba: only where truth modes are solved
+
     V = np.broadcast_to(start, K.shape[:-2] + start.shape)
     n = K.shape[-1]
     Kf = np.ascontiguousarray(K).reshape(-1, n, n)

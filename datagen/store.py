@@ -33,10 +33,11 @@ import hashlib
 import json
 import os
 import shutil
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from datagen.config import OUTPUT_ONLY_VARIABLES, REPEATABILITY
 from datagen.damage import DamageModel, element4_index
@@ -44,6 +45,9 @@ from datagen.synth import DATASET_FRFS, synthesise
 from physics.errors import DISK_FULL_ERRNOS, DiskFullError, FileFormatError
 from physics.io import atomic_write_text, read_json
 from physics.modal import modal_parameters
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["ARRAYS", "ARRAYS_V1", "COLUMN_UNITS", "DATASET_FORMAT", "DATASET_FORMAT_V1", "DERIVED", "OPTIONAL",
            "NO_EFFECT_DROP", "ROW_GROUP", "STATES", "STATUS", "column_units", "damaged_file", "dataset_identity",
@@ -124,7 +128,6 @@ ROW_GROUP = 65536
 
 
 def package_version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
     try:
         return version("beam-damage")
     except PackageNotFoundError:
@@ -233,6 +236,8 @@ def sample_table(labels: dict, outputs: dict, shard: int, first_id: int, length_
     status = sample_status(labels, outputs)
     cols["converged"] = cols["converged_base"] & cols["converged_cur"] & np.isin(status, ("ok", "no_damage_effect"))
     cols["status"] = status
+    import pandas as pd  # pandas: only where a samples table is built
+
     return pd.DataFrame(cols)
 
 

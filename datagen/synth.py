@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from datagen.noise_kernels import noise_kernel, noisy_pole_residue_kernel
 from physics.frf import pole_residue, receptance_state_space
 
 __all__ = ["DATASET_FRFS", "SOURCES", "add_noise", "line_index", "log_magnitude_map", "measured_frf", "measured_peak",
@@ -51,6 +50,8 @@ def state_seeds(noise_seed):
 
 def add_noise(H, noise_seed, noise_level, noise_floor, out=None):
     """Measured FRFs from noise-free ones (n, 2, S, F), with the sample's (n,) noise seed, level and floor."""
+    from datagen.noise_kernels import noise_kernel  # numba: only where noise is drawn
+
     n, _, S, F = H.shape
     out = np.empty(H.shape, complex) if out is None else out
     rep = lambda a: np.ascontiguousarray(np.repeat(np.asarray(a, float)[:, None], 2, 1).reshape(-1))  # noqa: E731
@@ -111,6 +112,8 @@ def measured_frf(a: dict, omega_rad_s, dtype=np.complex64, out=None, lines=None)
     synthesised on all lines where a floor needs it).
     ``out``: optional C-contiguous complex array of shape (n, 2, 4, L) to write into (returned).
     """
+    from datagen.noise_kernels import noisy_pole_residue_kernel  # numba: only where noise is drawn
+
     lam, R = _measured_inputs(a)
     n2, S, _ = R.shape
     w = np.ascontiguousarray(omega_rad_s, dtype=float)

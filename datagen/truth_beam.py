@@ -43,19 +43,27 @@ Slits (damage kind "slit") are flexibility-exact on the truth elements (:mod:`da
 under ``shear_deformation`` they add bending compliance to the Timoshenko
 element and keep its shear compliance. The Pilkey
 analyst's mass model (``updating.mass_model``) knows the beam's mass per length
-only, not an added mass. ``physics.beam`` is the discrepancy workflow's module:
-it is imported only when a beam is given.
+only, not an added mass.
 """
 
 from __future__ import annotations
 
+from dataclasses import fields
+
 import numpy as np
 
+from physics.beam import beam_from_dict
+from physics.effects import (
+    dashpot_matrix,
+    effect_of,
+    instances,
+    point_mass_matrix,
+    timoshenko_mass,
+    timoshenko_stiffness,
+)
 from physics.errors import ConfigError
 from physics.fem import element_mass, element_stiffness
 from physics.properties import BeamPreset
-from physics.effects import (dashpot_matrix, effect_of, instances, point_mass_matrix, timoshenko_mass,
-                             timoshenko_stiffness)
 
 __all__ = ["APPLIED_EFFECTS", "as_preset", "beam_mapping", "load_truth_beam", "point_effects", "shear_parameters",
            "unit_elements"]
@@ -69,11 +77,6 @@ APPLIED_EFFECTS = ("shear_deformation", "rotary_inertia", "root_flexibility", "c
 
 def load_truth_beam(mapping: dict):
     """Validated :class:`physics.beam.Beam` of config key ``beam`` (the beam-file mapping)."""
-    try:
-        from physics.beam import beam_from_dict
-    except ImportError:
-        raise ConfigError("config key 'beam' needs physics.beam (the beam-file module), which this "
-                          "installation lacks") from None
     beam = beam_from_dict(dict(mapping), "config key 'beam'")
     other = [name for name in dict.fromkeys(map(effect_of, beam.effects)) if name not in APPLIED_EFFECTS]
     if other:
@@ -84,8 +87,6 @@ def load_truth_beam(mapping: dict):
 
 def beam_mapping(beam) -> dict:
     """The beam-file mapping of a Beam (every field explicit, JSON/TOML-ready): what the manifest records."""
-    from dataclasses import fields
-
     out = {}
     for f in fields(beam):
         v = getattr(beam, f.name)

@@ -1,7 +1,8 @@
 """The ``beam-damage`` command line: parse, call, print.
 
-Each sub-command lives in its own module exposing ``add_parser(subparsers)``,
-which registers the parser and sets ``func`` to a callable ``run(args) -> dict``
+Each sub-command is a row of :data:`COMMANDS` (its module and its one-line help) and lives in that module,
+which exposes ``add_parser(subparsers)``: it registers the parser (``subparsers.add_parser(name,
+description=...)``, the help line coming from the row) and sets ``func`` to a callable ``run(args) -> dict``
 and, optionally, ``flags``: a mapping from library parameter names to its
 options (``{"n_elements": "--elements"}``), so that an error about a parameter
 (:attr:`physics.errors.BeamDamageError.parameter`) is reported with the flag.
@@ -25,32 +26,53 @@ import signal
 import sys
 import threading
 import warnings
+from importlib.metadata import PackageNotFoundError, version
+from typing import NamedTuple
 
 from threadpoolctl import threadpool_limits
 
 from experiments.jsonable import to_jsonable
 from physics.errors import BeamDamageError
 
-__all__ = ["build_parser", "main"]
+__all__ = ["COMMANDS", "Command", "build_parser", "main"]
 
 
-#: Sub-command name -> module registering it (``add_parser``), in the order ``--help`` lists them.
+class Command(NamedTuple):
+    """A sub-command: the module registering its parser (``add_parser(subparsers)``) and its one-line help."""
+
+    module: str
+    help: str
+
+
+#: Sub-command name -> its module and help line, in the order ``--help`` lists them. The top ``--help`` reads
+#: only this table and a command imports only its own module (start-up pays for no other command's imports).
 COMMANDS = {
-    "validate": "experiments.validate",
-    "model": "experiments.cmd_model",
-    "update": "experiments.cmd_update",
-    "identify": "experiments.cmd_identify",
-    "estimate": "experiments.cmd_estimate",
-    "demo": "experiments.demo",
-    "generate": "experiments.cmd_generate",
-    "inspect": "experiments.cmd_inspect",
-    "experiment": "experiments.cmd_experiment",
-    "export": "experiments.cmd_export",
-    "discrepancy": "experiments.cmd_discrepancy",
-    "train": "experiments.cmd_train",
-    "evaluate": "experiments.cmd_evaluate",
-    "classify": "experiments.cmd_classify",
-    "monitor": "experiments.cmd_monitor",
+    "validate": Command("experiments.validate", "reproduce the thesis's examples and tables, check by check"),
+    "model": Command("experiments.cmd_model", "FE matrices and natural frequencies of a preset beam or beam file"),
+    "update": Command("experiments.cmd_update",
+                      "identify C and update K from measured complex modes (Lancaster/Pilkey)"),
+    "identify": Command("experiments.cmd_identify", "identify natural frequencies, damping and complex modes from "
+                                                    "measured FRFs or, output-only, from response records"),
+    "estimate": Command("experiments.cmd_estimate",
+                        "estimate FRFs (H1/H2/Hv, coherence) from force and response time records"),
+    "demo": Command("experiments.demo",
+                    "run the main job: thesis, discrepancy, dataset, classifier, beam 5, report"),
+    "generate": Command("experiments.cmd_generate",
+                        "generate a dataset of specimens tested twice (baseline, current), updated models"),
+    "inspect": Command("experiments.cmd_inspect",
+                       "summarise a generated dataset and plot labels, shift-vs-position and FRF overlays"),
+    "experiment": Command("experiments.cmd_experiment", "run a study and write its report (HTML + Markdown)"),
+    "export": Command("experiments.cmd_export", "write chosen samples' FRFs (synthesised) as measurement files"),
+    "discrepancy": Command("experiments.cmd_discrepancy",
+                           "find where the model misses measured data and name the missing effect"),
+    "train": Command("experiments.cmd_train",
+                     "train the damage classifier (detect, localise, size damage) on datasets"),
+    "evaluate": Command("experiments.cmd_evaluate",
+                        "score a trained classifier and the classical methods on datasets"),
+    "classify": Command("experiments.cmd_classify",
+                        "classify measured beams against their baseline with a trained model"),
+    "monitor": Command("experiments.cmd_monitor", "monitor a series of tests: normal variation learnt on a baseline "
+                                                  "period, alarms at a chosen false-alarm rate"),
 }
 
 EXIT_USAGE = 2
@@ -82,27 +104,33 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(EXIT_USAGE)
 
 
+class _Commands(argparse._SubParsersAction):
+    """The sub-parsers: a command's help line is its :data:`COMMANDS` row's (its module does not repeat it)."""
+
+    def add_parser(self, name, **kwargs):
+        return super().add_parser(name, help=COMMANDS[name].help, **kwargs)
+
+
 def build_parser(argv=None) -> argparse.ArgumentParser:
-    """The ``beam-damage`` parser; when ``argv`` names a command, only that command's module is imported (a
-    command's start-up does not pay for every other command's imports), else all of them (``--help``)."""
+    """The ``beam-damage`` parser for ``argv``: the command ``argv`` names gets its module's parser (only that
+    module is imported); every other command is listed by its :data:`COMMANDS` help line."""
     parser = _Parser(
         prog="beam-damage",
         description="Vibration-based model updating and damage detection of beams.",
     )
-    from importlib.metadata import PackageNotFoundError, version
-
     try:
         ver = version("beam-damage")
     except PackageNotFoundError:  # running from a source tree
         ver = "unknown"
     parser.add_argument("--version", action="version", version=f"beam-damage {ver}")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser, action=_Commands)
     sub.required = True
     first = next((a for a in (argv or []) if not a.startswith("-")), None)
-    for name, module in COMMANDS.items():
-        if first in COMMANDS and name != first:
-            continue
-        importlib.import_module(module).add_parser(sub)
+    for name, command in COMMANDS.items():
+        if name == first:
+            importlib.import_module(command.module).add_parser(sub)
+        else:
+            sub.add_parser(name)
     return parser
 
 

@@ -15,8 +15,18 @@ from learn.measured import differences_from_model, on_model_dofs
 from learn.model_dir import load_model
 from physics.errors import BeamDamageError
 from physics.frf import receptance_modal
-from physics.io import (FRF, MODAL, MeasuredFRF, accepted, atomic_write_bytes, atomic_write_text, modal_or_frf,
-                        parse_dof, read)
+from physics.io import (
+    FRF,
+    MODAL,
+    MeasuredFRF,
+    accepted,
+    atomic_write_bytes,
+    atomic_write_text,
+    modal_or_frf,
+    parse_dof,
+    read,
+    read_json,
+)
 
 __all__ = ["KEYS", "add_parser", "run"]
 
@@ -31,7 +41,7 @@ KEYS = ("measured", "damaged", "probability_damaged", "location_x_over_L", "loca
 
 
 def add_parser(sub):
-    p = sub.add_parser("classify", help="classify measured beams against their baseline with a trained model",
+    p = sub.add_parser("classify",
                        description=f"BASELINE and each MEASURED are files of {accepted(FRF, MODAL)}. FRFs: "
                                    "receptances, mobilities or accelerances at the model's DOFs; modal data: as "
                                    "'update' accepts. FRF files are identified by LSCF/LSFD over the model's band as "
@@ -114,8 +124,6 @@ def measured_test_warnings(model, files, raw, mapped) -> list[str]:
 
 def identification_method(path) -> str | None:
     """The ``method`` a modal-data JSON file names (``identify --out`` writes it for output-only modes), else None."""
-    from physics.io import read_json
-
     if modal_or_frf(path) != MODAL or not str(path).lower().endswith(".json"):
         return None
     obj = read_json(path, require_object=False)

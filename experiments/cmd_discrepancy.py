@@ -124,7 +124,7 @@ def _print(out, res: dsc.DiscrepancyResult, recal: dsc.ModeResiduals):
 
 def add_parser(sub):
     p = sub.add_parser(
-        "discrepancy", help="find where the model misses measured data and name the missing effect",
+        "discrepancy",
         description="Pair measured and model modes, recalibrate EI (and mass with FRFs), "
                     "then fit each candidate effect of the beam's supports (shear deformation, rotary inertia, "
                     "added mass, local damping, and the supports' own: root flexibility of a clamped-free beam, "

@@ -50,7 +50,7 @@ def run(args) -> dict:
 
 
 def add_parser(sub):
-    p = sub.add_parser("estimate", help="estimate FRFs (H1/H2/Hv, coherence) from force and response time records",
+    p = sub.add_parser("estimate",
                        description="Read the time records (dataset 58, function type 1) of a force and "
                                    "responses and estimate FRFs. Random excitation: Welch averaging of overlapped "
                                    "windowed segments. Impact tests: the record is cut into --averages blocks, "

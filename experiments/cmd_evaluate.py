@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+from experiments.args import check_out_dir
+from learn.model_dir import load_model
+
 __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub):
-    p = sub.add_parser("evaluate", help="score a trained classifier and the classical methods on datasets",
+    p = sub.add_parser("evaluate",
                        description="Detection ROC AUC and accuracy, false alarms on intact pairs, element accuracy "
                                    "(thesis 4-element grid), within-one-element, location error (mm), size error, "
                                    "expected calibration error; broken down by noise level, size and position (tip "
@@ -20,9 +23,7 @@ def add_parser(sub):
 
 
 def run(args) -> dict:
-    from experiments.args import check_out_dir
-    from learn.model_dir import load_model
-    from learn.training import evaluate
+    from learn.training import evaluate  # torch: the network
 
     if args.out:
         check_out_dir(args.out)

@@ -45,7 +45,7 @@ def run(args) -> dict:
 
 
 def add_parser(sub):
-    p = sub.add_parser("experiment", help="run a study and write its report (HTML + Markdown)",
+    p = sub.add_parser("experiment",
                        description="Run one of the studies and write report.md and a self-contained report.html "
                                    f"with its tables and figures. Studies: {', '.join(STUDIES)}.")
     p.add_argument("name", choices=sorted(STUDIES), help="the study to run")

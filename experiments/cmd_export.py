@@ -19,8 +19,7 @@ __all__ = ["add_parser", "run"]
 def add_parser(subparsers):
     writers = writable(FRF)
     p = subparsers.add_parser(
-        "export", help="write chosen samples' FRFs (synthesised) as "
-                       f"{'/'.join(f.name.upper() for f in writers.values())} files",
+        "export",
         description="Synthesise the FRFs of the chosen samples (measured: truth + noise; updated: the Pilkey-updated "
                     "model) and write one file per sample, state (baseline, current) and kind, named "
                     "sample-ID_STATE_KIND.EXT, receptance (m/N), responses at the measured DOFs, drive at the first.")

@@ -5,11 +5,17 @@ from __future__ import annotations
 
 import os
 import sys
+from pathlib import Path
 
 from datagen.config import load_config, merge, named_configs
 from datagen.generation import generate
+from datagen.pipeline import generated_test
 from datagen.truth_beam import APPLIED_EFFECTS, beam_mapping
+from learn.noise_calibration import calibrate_test
+from learn.output_only_calibration import calibrate_output_only
+from physics.beam import load_beam
 from physics.errors import BeamDamageError
+from physics.io import read_json
 from physics.properties import PRESETS
 
 __all__ = ["CALIBRATED_KEYS", "add_parser", "recorded_calibration", "run"]
@@ -17,7 +23,7 @@ __all__ = ["CALIBRATED_KEYS", "add_parser", "recorded_calibration", "run"]
 
 def add_parser(subparsers):
     p = subparsers.add_parser(
-        "generate", help="generate a dataset of specimens tested twice (baseline, current), updated models",
+        "generate",
         description="Simulate N specimens, each tested on two days (baseline, then current: damage of the "
                     "config's damage.kind (slits, or masses added or lost), temperature, "
                     "re-clamping), measure their modes and FRFs with noise, update damping and stiffness by "
@@ -63,13 +69,6 @@ def run(args) -> dict:
         args.preset, beam = beam, None
     cfg = load_config(args.config, preset=args.preset)
     if beam is not None:
-        try:
-            from physics.beam import load_beam
-        except ImportError:
-            raise BeamDamageError("--beam FILE needs physics.beam (beam files), which this installation lacks") \
-                from None
-        from datagen.pipeline import generated_test
-
         truth = load_beam(beam)
         test = generated_test(truth, beam)      # the test it describes, refused here naming the file
         cfg = merge({"beam": beam_mapping(truth)}, base=cfg)
@@ -108,10 +107,6 @@ CALIBRATED_KEYS = ("modal_noise",) + tuple(f"{q}{s}" for q in ("frequency", "dam
 def recorded_calibration(out, cfg: dict, mode: str) -> dict | None:
     """The ``measurement`` keys of the calibration recorded in ``out/manifest.json``, when that dataset's config is
     ``cfg`` calibrated the same way (``modal_noise == mode``), else None: a resumed run reuses its calibration."""
-    from pathlib import Path
-
-    from physics.io import read_json
-
     try:
         stored = read_json(Path(out) / "manifest.json").get("config")
         meas = {k: stored["measurement"][k] for k in CALIBRATED_KEYS}
@@ -129,13 +124,9 @@ def _calibrated(cfg: dict, out, mode: str, message: str) -> dict:
     if meas is not None:
         print(f"{out}: reusing the modal-noise calibration recorded in its manifest", file=sys.stderr)
     elif mode == "output-only":
-        from learn.output_only_calibration import calibrate_output_only
-
         print(message, file=sys.stderr)
         meas = calibrate_output_only(cfg)
     else:
-        from learn.noise_calibration import calibrate_test
-
         print(message, file=sys.stderr)
         meas = calibrate_test(cfg)
     return merge({"measurement": meas}, base=cfg)

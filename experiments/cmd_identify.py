@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import warnings
 from pathlib import Path
 
@@ -12,7 +13,8 @@ from physics.identification import (DEFAULT_OUTPUT_ONLY, METHODS, Identification
                                     holds_response_records, identify_file, identify_records,
                                     read_response_records, reconstruction_error_db)
 from physics.identification.output_only import SCALING, merge_setups
-from physics.io import FRF, TIME, MeasuredFRF, NodeGeometry, accepted, format_complex, measured_positions
+from physics.io import (FRF, TIME, MeasuredFRF, NodeGeometry, accepted, format_complex, measured_positions, read,
+                        atomic_write_text, modal_data_to_dict)
 from physics.modal import mac
 
 __all__ = ["add_parser", "run"]
@@ -154,7 +156,6 @@ def _output_only_records(path, method):
     if method is not None and not holds_response_records(path):
         raise ConfigError(f"--method {method}: identifies response records output-only, but {path} holds FRFs; "
                           f"time records as {accepted(TIME)}")
-    from physics.io import read
 
     if method is None and read(path, TIME).forces:
         return None                                   # force and responses: FRFs estimated first (H1)
@@ -178,10 +179,6 @@ def _run_output_only(args, records, band) -> dict:
                    dropped_modes_hz=list(merged.dropped_hz), **positions_report_dofs(merged.dofs, records.metadata))
     out["warnings"] = [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
     if args.out:
-        import json
-
-        from physics.io import atomic_write_text, modal_data_to_dict
-
         Path(args.out).mkdir(parents=True, exist_ok=True)
         obj = {**modal_data_to_dict(modal_data), "scaling": SCALING, "method": method,
                "frequency_std_hz": [m["frequency_std_hz"] for m in out["modes"]],
@@ -217,8 +214,7 @@ def method_help() -> str:
 
 def add_parser(sub):
     p = sub.add_parser(
-        "identify", help="identify natural frequencies, damping and complex modes from measured FRFs or, "
-                         "output-only, from response records",
+        "identify",
         description="Modal identification from an FRF file, or output-only from response time records without "
                     f"a force. Methods (--method): {method_help()}. "
                     "Shapes are unit-modal-A scaled when a driving-point FRF is present; output-only shapes are "

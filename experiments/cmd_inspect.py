@@ -9,7 +9,7 @@ __all__ = ["add_parser", "run"]
 
 def add_parser(subparsers):
     p = subparsers.add_parser(
-        "inspect", help="summarise a generated dataset and plot labels, shift-vs-position and FRF overlays",
+        "inspect",
         description="Summary of a dataset directory (counts, convergence, label ranges), label histograms, the "
                     "frequency shift of each mode versus slit position against the mode's curvature squared "
                     "(single-slit samples of slit datasets), and FRF overlays of the current state vs the baseline.")

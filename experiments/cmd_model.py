@@ -67,7 +67,7 @@ def run(args) -> dict:
 
 
 def add_parser(sub):
-    p = sub.add_parser("model", help="FE matrices and natural frequencies of a preset beam or beam file",
+    p = sub.add_parser("model",
                        description="Assemble a preset beam (Table 4.1) or a TOML beam file with Euler-Bernoulli "
                                    "elements (eqs. 3.8, 3.9; Timoshenko elements and the other effects of a beam "
                                    "file applied), optionally reduce it to the translational DOFs (Guyan, IRS, "

@@ -15,14 +15,17 @@ from learn.monitor import (DEFAULT_LATENT, NORMAL_MODELS, SeriesInput, alarm_ver
                            monitor_series, read_conditions)
 from physics.errors import ConfigError
 from physics.io import FRF, MODAL, TIME, accepted, atomic_write_bytes, atomic_write_text
+from datagen.store import package_version
+from learn.model_dir import load_model
+from physics.beam import load_beam
+from experiments.report import Section, Table, figure, write_report
 
 __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub):
     p = sub.add_parser(
-        "monitor", help="monitor a series of tests: normal variation learnt on a baseline period, alarms at a "
-                        "chosen false-alarm rate",
+        "monitor",
         description="Each TEST (FRF file: " + accepted(FRF) + "; response records without a force: "
                     + accepted(TIME) + "; modal data: " + accepted(MODAL) + ") is identified once (LSCF/LSFD for "
                     "FRFs, SSI-cov for response records; cached in DIR/cache), its modes tracked across the tests by "
@@ -69,7 +72,6 @@ def _series(args) -> SeriesInput:
 
 
 def run(args) -> dict:
-    from datagen.store import package_version
 
     if args.band and not (np.all(np.isfinite(args.band)) and 0 <= args.band[0] < args.band[1]):
         raise ConfigError(f"--band {args.band[0]:g} {args.band[1]:g}: F0 and F1 must be finite with 0 <= F0 < F1")
@@ -80,12 +82,10 @@ def run(args) -> dict:
     series = _series(args)
     model = beam = beam_x_m = None
     if args.model:
-        from learn.model_dir import load_model
 
         model = load_model(args.model)
         _, beam_x_m = model.measured_beam(args.beam)
     elif args.beam:
-        from physics.beam import load_beam
 
         beam = load_beam(args.beam)
     settings = identification_settings(args.band, beam, model)
@@ -131,8 +131,6 @@ def _csv(out: dict, m: int) -> str:
 
 def _write(out_dir, out: dict, res) -> dict:
     """monitor.png, monitor.csv, monitor.json and report.html (report.md beside it), each written atomically."""
-    from experiments.report import Section, Table, figure, write_report
-
     root = Path(out_dir)
     root.mkdir(parents=True, exist_ok=True)
     paths = {k: str(root / k) for k in ("monitor.png", "monitor.csv", "monitor.json")}

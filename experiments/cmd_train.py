@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+from experiments.args import check_out_dir
+from physics.errors import BeamDamageError
+
 __all__ = ["add_parser", "run"]
 
 
 def add_parser(sub):
-    p = sub.add_parser("train", help="train the damage classifier (detect, localise, size damage) on datasets",
+    p = sub.add_parser("train",
                        description="Train the network on pairs (baseline, current) of one or more datasets written by "
                                    "'beam-damage generate --config training --n N --out DIR' (intact and damaged "
                                    "specimens, temperature and re-clamping between the test days), split by specimen "
@@ -28,9 +31,7 @@ def add_parser(sub):
 
 
 def run(args) -> dict:
-    from experiments.args import check_out_dir
-    from learn.training import train
-    from physics.errors import BeamDamageError
+    from learn.training import train  # torch: the network
 
     if args.epochs < 1:
         raise BeamDamageError(f"--epochs must be >= 1, got {args.epochs}")

@@ -8,7 +8,8 @@ from experiments.args import add_beam_argument
 from physics import modal, updating
 from physics.beam import Beam, load_beam
 from physics.errors import BeamDamageError, ConfigError, ConvergenceError, FileFormatError, OverdampedError
-from physics.io import FRF, MODAL, TIME, accepted, dof_positions_text, modal_or_frf, prepare_measured, read
+from physics.identification import holds_response_records, identify_file
+from physics.io import FRF, MODAL, TIME, accepted, dof_positions_text, modal_or_frf, prepare_measured, read, read_json
 
 __all__ = ["add_parser", "run"]
 
@@ -21,7 +22,6 @@ def load_modal(modal_file, n_modes: int):
     if modal_or_frf(modal_file) == MODAL:
         _refuse_unscaled(modal_file)
         return prepare_measured(read(modal_file, MODAL)).data, None
-    from physics.identification import holds_response_records, identify_file
 
     if holds_response_records(modal_file) and not read(modal_file, TIME).forces:
         raise FileFormatError(f"{modal_file}: response records without a force: output-only shapes are unscaled "
@@ -34,8 +34,6 @@ def load_modal(modal_file, n_modes: int):
 
 def _refuse_unscaled(modal_file) -> None:
     """Refuse a modal-data JSON that says its shapes are unscaled (output-only identification), in one line."""
-    from physics.io import read_json
-
     try:
         obj = read_json(modal_file, require_object=False)
     except FileNotFoundError:
@@ -183,7 +181,7 @@ def run(args) -> dict:
 
 
 def add_parser(sub):
-    p = sub.add_parser("update", help="identify C and update K from measured complex modes (Lancaster/Pilkey)",
+    p = sub.add_parser("update",
                        description="Identify the damping matrix by Pilkey's iteration of Lancaster's formula "
                                    "(eqs. 1.10, 1.11) and update the stiffness matrix (eq. 1.12) from measured "
                                    "complex modes and the beam's reduced or lumped mass matrix.")

@@ -23,13 +23,20 @@ import sys
 import time
 from pathlib import Path
 
-
+from datagen.config import load_config, merge
+from datagen.generation import generate
+from datagen.truth_beam import beam_mapping
 from experiments import study_discrepancy, study_thesis, validate
 from experiments.jsonable import to_jsonable
 from experiments.report import Section, Table, figure, write_report
+from learn.classify import classify
+from learn.model_dir import MODEL_FORMAT, load_model
+from learn.verdict import explained_text, noise_text
 from physics import modal, properties, thesis, updating
+from physics.beam import load_beam
 from physics.errors import BeamDamageError
-from physics.io import atomic_write_text, modal_data_from_dict, write_modal_json
+from physics.identification import identify_frf
+from physics.io import atomic_write_text, modal_data_from_dict, read_frf, read_modal_json, write_modal_json, write_uff58
 
 __all__ = ["add_parser", "run"]
 
@@ -57,9 +64,7 @@ def _step(out: Path, name: str, force: bool, key: dict, fn):
 
 def measured_data_step(out: Path) -> dict:
     """Simulated beam-5 test -> UFF58 -> LSCF/LSFD identification -> Pilkey updating."""
-    from experiments.plots_identify import write_outputs
-    from physics.identification import identify_frf
-    from physics.io import read_frf, read_modal_json, write_uff58
+    from experiments.plots_identify import write_outputs  # matplotlib: the identification's figures
 
     frf, exact = thesis.simulated_beam5_test(noise=0.01, damping="thesis")
     out.mkdir(parents=True, exist_ok=True)
@@ -80,11 +85,6 @@ def measured_data_step(out: Path) -> dict:
 
 def dataset_step(out: Path, beam_file: str, n: int, seed: int, workers: int) -> dict:
     """A ``training``-config dataset with the calibrated beam as truth."""
-    from datagen.config import load_config, merge
-    from datagen.generation import generate
-    from datagen.truth_beam import beam_mapping
-    from physics.beam import load_beam
-
     if out.exists():   # a dataset of another size or beam: start again (resume only continues the same run)
         shutil.rmtree(out)
     cfg = merge({"beam": beam_mapping(load_beam(beam_file))}, base=load_config("training"))
@@ -95,9 +95,6 @@ def dataset_step(out: Path, beam_file: str, n: int, seed: int, workers: int) -> 
 
 def classify_step(out: Path, model_dir: Path) -> dict:
     """Beam 5 (Tables 4.5/4.6 as modal JSON) through the trained model."""
-    from learn.classify import classify
-    from learn.model_dir import load_model
-
     out.mkdir(parents=True, exist_ok=True)
     b5 = thesis.load("beams")["beams"]["5"]
     data, paths = {}, {}
@@ -210,7 +207,6 @@ def _summary_section(checks, disc: dict, evaluated: dict, verdict: dict, length_
     caveat = (f"Caveat: the thesis cut its slit at x = {slit_m:.3f} m, on the boundary of elements 1 and 2"
               + (f"; this answer lies {1000 * abs(verdict['location_x_m'] - slit_m):.0f} mm from it."
                  if verdict["damaged"] else "; this answer misses it."))
-    from learn.verdict import explained_text, noise_text
 
     explained = (f" Explanations of the {explained_text(verdict)} ({noise_text(verdict)}, equal priors): "
                  f"{verdict['hypotheses_summary']}." if verdict.get("hypotheses") else "")
@@ -265,25 +261,22 @@ def run(args) -> dict:
     beam_file = disc["beam_file"]
 
     # 4: data, training, evaluation
-    from datagen.config import load_config
     config = hashlib.sha256(json.dumps(load_config("training"), sort_keys=True).encode()).hexdigest()[:16]
     key = {"beam": beam_file, "n_train": n_train, "n_test": n_test, "training_config": config}
     data = _step(out, "dataset", force, key, lambda: {
         "train": dataset_step(out / "dataset", beam_file, n_train, 0, args.workers),
         "test": dataset_step(out / "testset", beam_file, n_test, 1, args.workers)})
     force_model = force or not (out / "model").exists()
-    from learn.model_dir import MODEL_FORMAT
     key = {**key, "epochs": epochs, "model_format": MODEL_FORMAT}   # a model of another format is retrained
 
     def train_model():
-        from learn.training import train
+        from learn.training import train  # torch: the network
         return train(out / "dataset", out / "model", epochs=epochs, seed=0, progress=True)
 
     trained = _step(out, "train", force_model, key, train_model)
 
     def evaluate_model():
-        from learn.model_dir import load_model
-        from learn.training import evaluate
+        from learn.training import evaluate  # torch: the network
         res = evaluate(load_model(out / "model"), out / "testset", out / "evaluate", progress=True)
         return {"rows": [r for r in res["rows"] if r["subset"] == "all"], "figures": res["figures"],
                 "pairs": res["pairs"]}
@@ -367,7 +360,7 @@ def _report_sections(vsum, checks, thesis_sections, measured, disc, data, traine
 
 
 def add_parser(sub):
-    p = sub.add_parser("demo", help="run the main job: thesis, discrepancy, dataset, classifier, beam 5, report",
+    p = sub.add_parser("demo",
                        description="The mission end to end on embedded defaults: reproduce the thesis, name what "
                                    "beam 5's model lacks and calibrate it, generate data from the calibrated beam, "
                                    "train and evaluate the classifier against the classical methods, classify the "

@@ -298,7 +298,7 @@ def run(args) -> dict:
 
 def add_parser(sub):
     p = sub.add_parser(
-        "validate", help="reproduce the thesis's examples and tables, check by check",
+        "validate",
         description="Run every reproduction check of the thesis (Examples 1 and 2, beam 5 reduction, "
                     "identification, model frequencies, mode-shape example) and print a table of relative "
                     "errors and tolerances. Exit 0 only if all pass.")

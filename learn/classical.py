@@ -203,7 +203,7 @@ class GradientBoosting:
 
     @property
     def _transform(self):
-        from learn.estimator import SizeTransform
+        from learn.estimator import SizeTransform  # torch: learn.estimator loads the network
 
         return SizeTransform.parse(self.size_transform)
 

@@ -18,8 +18,10 @@ from learn.normal_variation import measure, model_modes
 from learn.verdict import (IN_DISTRIBUTION_PERCENTILE, agreement, classical_answer, classical_verdict,
                            equivalent_depth, modes_text, network_answer, network_output, ood_percentile)
 from physics.errors import BeamDamageError
+from physics.identification import METHODS
 from physics.layout import SYMMETRIC_SUPPORTS
 from physics.io import MeasuredFRF
+from physics.modal import modal_parameters
 
 __all__ = ["DEFAULT_FALSE_ALARM_RATE", "DISTANCE_TERMS", "MIN_PAIRING_MAC", "classify", "classify_many",
            "distance_terms", "distance_text", "identification_warning", "network_reads", "shape_pairing_reasons"]
@@ -308,7 +310,6 @@ def damping_warning(model: TrainedModel, pairs: list) -> str | None:
     pair = next((p for p in pairs if p is not None and p.modes.size), None)
     if pair is None or not trained:
         return None
-    from physics.modal import modal_parameters
 
     lo, hi = np.asarray(trained, float)[pair.modes].T
     zeta = modal_parameters(pair.eigenvalues[0])[1]
@@ -574,8 +575,6 @@ def _network_inputs(model: TrainedModel, baseline, currents: list, pairs, identi
 
 
 def _output_only(method) -> bool:
-    from physics.identification import METHODS
-
     return method in METHODS and METHODS[method].data == "records"
 
 

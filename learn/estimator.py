@@ -27,6 +27,7 @@ and its training percentile is taken among training pairs with the same features
 
 from __future__ import annotations
 
+import inspect
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -34,8 +35,6 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 from scipy.special import expit
-from sklearn.base import BaseEstimator, ClassifierMixin
-from sklearn.utils.validation import check_is_fitted
 
 from learn.features import split_by_specimen
 from learn.models import DamageNet, loss_terms
@@ -182,8 +181,11 @@ def fit_calibration(logits, y) -> tuple[float, float]:
     return float(np.exp(res.x[0])), float(res.x[1])
 
 
-class DamageClassifier(ClassifierMixin, BaseEstimator):
+class DamageClassifier:
     """Detect, localise and size damage from pair features.
+
+    A scikit-learn estimator (``get_params``, ``set_params``, ``clone``, its tags and checks) that does not import
+    scikit-learn: that import (about 1 s) would be paid by every ``classify``.
 
     Parameters
     ----------
@@ -248,6 +250,35 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         self.n_threads = n_threads
         self.verbose = verbose
 
+    # ------------------------------------------------------------------ scikit-learn's estimator protocol
+    @classmethod
+    def _get_param_names(cls) -> list[str]:
+        return sorted(p for p in inspect.signature(cls.__init__).parameters if p != "self")
+
+    def get_params(self, deep=True) -> dict:
+        """The constructor's parameters (no nested estimators: ``deep`` changes nothing)."""
+        return {name: getattr(self, name) for name in self._get_param_names()}
+
+    def set_params(self, **params) -> "DamageClassifier":
+        names = self._get_param_names()
+        for name, value in params.items():
+            if name not in names:
+                raise ValueError(f"Invalid parameter {name!r} for estimator {type(self).__name__}. Valid parameters "
+                                 f"are: {names!r}.")
+            setattr(self, name, value)
+        return self
+
+    def __repr__(self) -> str:
+        defaults = {n: p.default for n, p in inspect.signature(type(self).__init__).parameters.items()}
+        changed = [f"{k}={v!r}" for k, v in self.get_params().items() if repr(v) != repr(defaults[k])]
+        return f"{type(self).__name__}({', '.join(changed)})"
+
+    def __sklearn_tags__(self):
+        from sklearn.utils import ClassifierTags, Tags, TargetTags  # sklearn: asked only by scikit-learn itself
+
+        return Tags(estimator_type="classifier", target_tags=TargetTags(required=True), transformer_tags=None,
+                    regressor_tags=None, classifier_tags=ClassifierTags())
+
     # ------------------------------------------------------------------ helpers
     def _targets(self, y):
         y = np.asarray(y, float)
@@ -275,7 +306,11 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
         """Fitted, and ``X`` an (n, n_features_in_) matrix (scikit-learn's conventions), else a BeamDamageError;
         returns ``X`` and the modes each row holds, (n, n_modes_) bool (a mode is missing where any of its
         features is NaN; (n, 0) for a network without ``feature_modes``)."""
-        check_is_fitted(self, "model_")
+        if not hasattr(self, "model_"):
+            from sklearn.exceptions import NotFittedError  # sklearn: its error, raised only before fit
+
+            raise NotFittedError(f"This {type(self).__name__} instance is not fitted yet. Call 'fit' with "
+                                 "appropriate arguments before using this estimator.")
         X = np.asarray(X, float)
         if X.ndim != 2 or X.shape[1] != self.n_features_in_:
             raise BeamDamageError(f"X has {X.shape[-1] if X.ndim else 0} features (shape {X.shape}), but "
@@ -531,11 +566,9 @@ class DamageClassifier(ClassifierMixin, BaseEstimator):
 
     def score(self, X, y, sample_weight=None) -> float:
         """Accuracy of the damaged / intact verdict; ``y`` is the (n, 3) target of :meth:`fit` or its first column."""
-        from sklearn.metrics import accuracy_score
-
         y = np.asarray(y, float)
         damaged = (y[:, 0] if y.ndim == 2 else y) > 0.5
-        return float(accuracy_score(damaged.astype(int), self.predict(X), sample_weight=sample_weight))
+        return float(np.average(self.predict(X) == damaged, weights=sample_weight))
 
     def predict_details(self, X) -> DamagePrediction:
         raw, present = self._raw(X)

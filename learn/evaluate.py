@@ -16,7 +16,9 @@ Definitions
 
 from __future__ import annotations
 
+import io
 from dataclasses import asdict, dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -187,7 +189,6 @@ def figures(outputs, truth, out_dir, length_m: float, n_bins: int = 15) -> list[
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from pathlib import Path
 
     spec = as_spec(length_m)
     length_m = spec.length_m
@@ -251,8 +252,6 @@ def figures(outputs, truth, out_dir, length_m: float, n_bins: int = 15) -> list[
 
 
 def _save(fig, path) -> str:
-    import io
-
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
     import matplotlib.pyplot as plt

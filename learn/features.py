@@ -31,11 +31,12 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from physics.errors import BeamDamageError, FileFormatError
 from datagen.dataset import Dataset
@@ -43,6 +44,9 @@ from datagen.store import DATASET_FORMAT, read_manifest
 from datagen.synth import log_magnitude_map
 from physics.fem import constrained_dofs
 from physics.layout import Layout
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["BeamSpec", "DOFS", "as_spec", "GRID_RAD_S", "Pairs", "ROUTES", "beam_of_manifest", "curvature_points",
            "curvatures", "feature_modes", "feature_names", "features", "frequency_features", "frf_features",
@@ -235,7 +239,7 @@ def load_pairs(roots, frfs=("measured", "updated"), chunk: int = 1024, workers: 
     FileFormatError
         A directory is not a complete format-2 dataset, or datasets of different beams are mixed.
     """
-    from concurrent.futures import ThreadPoolExecutor
+    import pandas as pd  # pandas: only where datasets are read
 
     roots = [roots] if isinstance(roots, (str, Path)) else list(roots)
     if not roots:

@@ -47,9 +47,17 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from scipy.special import log_ndtr
 
+from datagen.damage.slit import hinge_flexibility
+from datagen.pipeline import suspension_unit_stiffness
+from learn.features import real_shapes, sign_aligned
+from learn.model_dir import sensitivity_of
+from physics.effects import hermite_row
 from physics.errors import BeamDamageError
+from physics.fem import beam_model
+from physics.layout import RIGID_BODY_MODES
+from physics.modal import undamped_modes
+from physics.properties import beam_preset
 
 __all__ = ["FIT_LIMIT", "FREQUENCY_CHANGE_STD", "HYPOTHESES", "MODEL_ERROR", "NO_EXPLANATION", "PRIOR", "SEPARATE",
            "SHAPE_CHANGE_STD", "SIZE_SCALE_STD", "Hypothesis", "explain", "explain_many", "shape_changes", "summary",
@@ -157,13 +165,6 @@ def support_curve(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_spring_
     ``ln_factors`` (G,): ``ln(k / k_0)`` of the clamp springs or the suspension; for pinned ends ``log10`` of the
     bearing spring ``k L / EI`` added to none.
     """
-    from datagen.pipeline import suspension_unit_stiffness
-    from learn.features import real_shapes, sign_aligned
-    from physics.effects import hermite_row
-    from physics.fem import beam_model
-    from physics.layout import RIGID_BODY_MODES
-    from physics.modal import undamped_modes
-
     test = beam.test
     bc = "clamped-free" if test is None else test.bc
     L = beam.length_m
@@ -210,6 +211,8 @@ def _loglik(g, y, s, half: float, model_error: float):
     integral in closed form), and the most likely ``a``: shapes (n, ...) for every pair's measured changes ``y``
     (n, m) and every predicted change ``g`` (..., m), relative std ``s`` (m,) and the model error on ``g``.
     ``half = 0``: no nuisance."""
+    from scipy.special import log_ndtr  # scipy.special: 0.2 s to import, only where explanations are weighed
+
     var = s**2 + (model_error * g) ** 2                                  # (..., m)
     r = g - y.reshape(y.shape[:1] + (1,) * (g.ndim - 1) + y.shape[-1:])  # (n, ..., m)
     s0, s1, s2 = np.sum(r**2 / var, -1), np.sum(r / var, -1), np.sum(1.0 / var, -1)
@@ -431,8 +434,6 @@ def shape_changes(eigenvectors) -> np.ndarray:
     """Changes of the real unit-norm shapes between the two tests, the current shape's sign following the
     baseline's (as the modal features take them): ``eigenvectors`` (n, 2, S, m) complex -> (n, S m), sensor-major
     as :attr:`learn.sensitivity.Sensitivity.shape`."""
-    from learn.features import real_shapes, sign_aligned
-
     u = real_shapes(np.asarray(eigenvectors, complex))                   # (n, 2, S, m)
     return (sign_aligned(u[:, 1], u[:, 0]) - u[:, 0]).reshape(u.shape[0], -1)
 
@@ -455,10 +456,6 @@ def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD, shape_sigma=SHA
     ``shape_sigma``: the std of a unit-norm shape entry's change, one or per sensor and model mode (S, m) (a
     normal variation measured on several baselines). ``frequency_change_std`` and ``shape_change_std`` of each
     result are then lists over the pair's modes (and sensors)."""
-    from datagen.damage.slit import hinge_flexibility
-    from learn.model_dir import sensitivity_of
-    from physics.properties import beam_preset
-
     beam, cfg = model.beam, model.config
     truth = cfg.get("truth_beam") or {}
     if "EI_Nm2" in truth:

@@ -28,9 +28,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import torch
 
-from learn.estimator import DamageClassifier
 from learn.features import BeamSpec
 from learn.sensitivity import beam_sensitivity
 from learn.verdict import verdict_text
@@ -39,6 +37,7 @@ from physics.io.inputs import check_input_file
 from physics.errors import BeamDamageError, FileFormatError
 from physics.io import atomic_write_bytes, atomic_write_text, read_json
 from physics.properties import beam_preset
+from physics.effects import effect_of
 
 __all__ = ["DEFAULT_ROUTE", "MODEL_FORMAT", "READ_FORMATS", "REFERENCE_WIDTH_M", "TrainedModel", "json_default",
            "load_model", "save_model", "sensitivity_of"]
@@ -118,6 +117,8 @@ class TrainedModel:
 
 def save_model(out_dir, config: dict, networks: dict) -> None:
     """Write the model directory atomically file by file (temp file, then rename)."""
+    import torch  # torch: the weights file
+
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     for route, est in networks.items():
@@ -132,6 +133,10 @@ def save_model(out_dir, config: dict, networks: dict) -> None:
 
 def load_model(model_dir, device=None) -> TrainedModel:
     """Read a model directory (weights with ``torch.load(..., weights_only=True)``)."""
+    import torch  # torch: the networks
+
+    from learn.estimator import DamageClassifier  # torch: the networks
+
     path = Path(model_dir)
     cfg_path = path / "config.json"
     if cfg_path.exists() or cfg_path.is_symlink():  # there, but perhaps a device, a FIFO or a dangling link
@@ -186,7 +191,6 @@ def sensitivity_of(beam: BeamSpec, config_root_spring=None, truth_beam: dict | N
     (slits when it records none)."""
     kind = ((generator_config or {}).get("damage") or {}).get("kind", "slit")
     if truth_beam and "EI_Nm2" in truth_beam:
-        from physics.effects import effect_of
 
         effects = ((generator_config or {}).get("beam") or {}).get("effects") or {}   # the beam file's
         masses = tuple((float(p.get("x_m", truth_beam["length_m"])), float(p["mass_kg"]))

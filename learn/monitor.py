@@ -19,18 +19,30 @@ Steps, one function each:
 
 from __future__ import annotations
 
+import csv
 import hashlib
 import json
 import math
 import warnings
 from dataclasses import dataclass, field
+from datetime import datetime
 from pathlib import Path
 
 import numpy as np
-from scipy import optimize, stats
 
+from learn.classify import classify_many
+from learn.hypotheses import FREQUENCY_CHANGE_STD, explain_many
+from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, identify_modes, modal_pair, on_model_dofs,
+                            pair_modes_by_frequency)
 from physics.errors import BeamDamageError, ConfigError
-from physics.io import MODAL, atomic_write_text, format_complex, modal_or_frf, read
+from physics.identification import (DEFAULT_OUTPUT_ONLY, holds_response_records, identify_records,
+                                    read_response_records)
+from physics.identification.measured import read_measured_frf
+from physics.io import (MODAL, TIME, ModalData, atomic_write_text, format_complex, modal_or_frf, prepare_measured,
+                        read)
+from physics.io.inputs import check_input_file
+from physics.layout import RIGID_BODY_MODES
+from physics.modal import eigenvalues_from_modal, modal_parameters, undamped_modes
 
 __all__ = ["CACHE_FORMAT", "DEFAULT_LATENT", "MAC_MIN", "MIN_PRESENCE", "NORMAL_MODELS", "PCA_EXPLAINED",
            "alarm_verdicts", "cached_identification", "check_series", "FactorRemoval", "held_out_novelty",
@@ -130,8 +142,6 @@ def identification_settings(band_hz=None, beam=None, model=None) -> Identificati
     or up to :data:`learn.measured.IDENTIFICATION_BAND_FACTOR` times its nominal mode 4, the 4 lowest modes: what
     ``classify`` identifies); else a beam's (:class:`physics.beam.Beam`: its ``band_hz``, or the same rule on its
     nominal modes); else every mode LSCF finds over each file's band."""
-    from learn.measured import IDENTIFICATION, IDENTIFICATION_BAND_FACTOR
-
     if band_hz is not None:
         return IdentificationSettings(tuple(float(b) for b in band_hz))
     if model is not None:
@@ -144,8 +154,6 @@ def identification_settings(band_hz=None, beam=None, model=None) -> Identificati
     if beam is not None:
         if beam.band_hz is not None:
             return IdentificationSettings(tuple(beam.band_hz))
-        from physics.layout import RIGID_BODY_MODES
-        from physics.modal import undamped_modes
 
         fe = beam.fe_model(40)
         w = undamped_modes(np.asarray(fe.M), np.asarray(fe.K))[0]
@@ -155,7 +163,6 @@ def identification_settings(band_hz=None, beam=None, model=None) -> Identificati
 
 
 def _modes_of(eigenvalues, shapes):
-    from physics.modal import modal_parameters
 
     lam = np.asarray(eigenvalues, complex)
     f, z = modal_parameters(lam)
@@ -170,10 +177,6 @@ def identify_test(path, settings: IdentificationSettings) -> IdentifiedModes:
 
     Raises :class:`BeamDamageError` (one line naming the file) when the file cannot be read or identified.
     """
-    from physics.identification import (DEFAULT_OUTPUT_ONLY, holds_response_records, identify_records,
-                                        read_response_records)
-    from physics.identification.measured import read_measured_frf
-    from physics.io import TIME, prepare_measured
 
     path = str(path)
     if modal_or_frf(path) == MODAL:
@@ -194,7 +197,6 @@ def identify_test(path, settings: IdentificationSettings) -> IdentifiedModes:
         f, z, shapes = _modes_of(ident.estimate.eigenvalues, ident.estimate.shapes)
         return IdentifiedModes("response records", DEFAULT_OUTPUT_ONLY, f, z, shapes, tuple(rec.dofs), (),
                          (0.0, fs / 2), fs / rec.signals.shape[1])
-    from learn.measured import identify_modes
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -227,8 +229,6 @@ def cached_identification(path, settings: IdentificationSettings, cache_dir=None
     ``cache_dir/<key>.json`` (:func:`file_key`) or, once identified, written there atomically; with ``pending`` (a
     list) the entry to write is appended to it as ``(path, text)`` instead (written when the series is accepted).
     """
-    from physics.io.inputs import check_input_file
-
     try:
         check_input_file(path, "npz", BeamDamageError, "a test file")
         key = file_key(path, settings) if cache_dir else None
@@ -298,7 +298,6 @@ class SeriesInput:
 
 
 def _time_value(text: str, where: str):
-    from datetime import datetime
 
     try:
         return float(text), False
@@ -315,10 +314,6 @@ def _time_value(text: str, where: str):
 def read_conditions(csv_path) -> SeriesInput:
     """A series from a CSV file: columns ``file`` (relative to the CSV or absolute), ``time`` (an ISO date or a
     number) and any measured conditions (numbers, e.g. ``temperature_c``); rows sorted by time (stable)."""
-    import csv
-
-    from physics.io.inputs import check_input_file
-
     path = check_input_file(csv_path, "csv", BeamDamageError, "a CSV of file,time[,condition...]")
     with open(path, newline="", encoding="utf-8") as fh:
         rows = list(csv.DictReader(fh))
@@ -840,6 +835,8 @@ def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: i
     with a heavier tail, which their own quantile shows: the threshold is the larger of the two (on a baseline of
     fewer than ``1 / rate`` tests that quantile lies between its two largest indices).
     """
+    from scipy import optimize, stats  # scipy.stats/optimize: heavy, only where a threshold is fitted
+
     s = np.asarray(held_out, float)
     s = s[np.isfinite(s)]
     d1 = max(int(dof_num), 1)
@@ -1036,8 +1033,6 @@ def changed_text(changes: list[dict], top: int = 3) -> str:
 # ---------------------------------------------------------------------------------------------------------------
 
 def _modal_data(freqs_hz, damping, shapes, dofs):
-    from physics.io import ModalData
-    from physics.modal import eigenvalues_from_modal
 
     keep = np.isfinite(freqs_hz)
     z = np.where(np.isfinite(damping), damping, 0.01)[keep]
@@ -1083,8 +1078,6 @@ def alarm_verdicts(result: SeriesResult, model=None, beam_x_m=None) -> dict:
                "network_baselines": None, "network_baseline": None, "network_error": None} for i in alarms}
     if model is None or not alarms:
         return out
-    from learn.hypotheses import FREQUENCY_CHANGE_STD, explain_many
-    from learn.measured import modal_pair, on_model_dofs, pair_modes_by_frequency
 
     ref = result.reference
     sens = model.sensitivity
@@ -1120,8 +1113,6 @@ def _network_verdicts(result: SeriesResult, model, beam_x_m, alarms: list, out: 
     """The network's verdicts of the alarms (``network``) by :func:`learn.classify.classify_many` against the
     whole baseline period (its scatter the normal variation; ``network_baselines``: how many tests), else, when
     classify refuses that, against the baseline test nearest the baseline median (``network_baseline``)."""
-    from learn.classify import classify_many
-    from learn.measured import on_model_dofs
 
     base = [i for i, r in enumerate(result.rows) if r["baseline"] and r["identified"]]
     nearest = baseline_nearest_median(result)

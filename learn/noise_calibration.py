@@ -16,9 +16,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from datagen.config import merge
+from datagen.pipeline import draw_batch, get_setup, per_mode, simulate_batch
+from datagen.synth import measured_frf
 from learn.measured import identify_test, pair_modes_by_frequency
 from physics.errors import BeamDamageError
 from physics.io import MeasuredFRF
+from physics.modal import modal_parameters
 
 __all__ = ["FLOORS", "LEVELS", "QUANTITIES", "calibrate_std", "calibrate_test", "fit_coefficients",
            "identification_errors", "mode_errors", "on_nominal_modes", "robust_std"]
@@ -59,10 +63,6 @@ def identification_errors(cfg: dict, level: float, floor: float, specimens: int,
     """Errors of ``classify``'s identification on ``specimens`` specimens of ``cfg`` (both test days) at one FRF
     noise level and floor: relative frequency and damping errors (N, m) and shape errors relative to each mode's
     largest entry (N, S, m), NaN where a mode was not found; N = 2 specimens."""
-    from datagen.config import merge
-    from datagen.pipeline import draw_batch, get_setup, simulate_batch
-    from datagen.synth import measured_frf
-
     setup = get_setup(merge({"measurement": {"frf_noise": level, "frf_noise_floor": floor}}, base=cfg))
     test = setup.test
     inp = draw_batch(np.random.default_rng(seed), specimens, setup)
@@ -110,8 +110,6 @@ def mode_errors(lam_e, psi_e, lam_t, psi_t, unscaled: bool = False):
     ``unscaled`` ones (output-only, unit norm) are first scaled onto the truth by the complex least-squares factor,
     and the errors multiplied by ``sqrt(S / (S - 1))`` for the one complex direction that factor absorbs (so that
     circular errors of a given std, as a dataset draws them, measure that std)."""
-    from physics.modal import modal_parameters
-
     fe, ze = modal_parameters(lam_e)
     ft, zt = modal_parameters(lam_t)
     scale = np.max(np.abs(psi_t), axis=-2, keepdims=True)
@@ -132,8 +130,6 @@ def fit_coefficients(xs, ys, errors, default: dict | None = None) -> dict:
     :func:`calibrate_std` to the robust stds of ``errors`` (one :func:`mode_errors` triple per condition
     ``(xs[k], ys[k])``); a mode without data takes its index's value of those keys in ``default`` (a
     ``measurement`` section), else NaN."""
-    from datagen.pipeline import per_mode
-
     m = errors[0][0].shape[-1]
     suffixes = ("_noise", "_noise_per_floor", "_noise_floor")
     out = {}

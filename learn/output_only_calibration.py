@@ -22,9 +22,14 @@ variables of :func:`datagen.config.output_only_variables`. Deterministic for a c
 from __future__ import annotations
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
+from datagen.pipeline import draw_batch, get_setup, simulate_batch
 from learn.noise_calibration import fit_coefficients, mode_errors, on_nominal_modes
 from physics.errors import BeamDamageError
+from physics.frf import pole_residue
+from physics.identification import identify_records
+from physics.io.timedata import TimeRecords
 
 __all__ = ["RECORD_LENGTHS_S", "SAMPLING_FACTOR", "SENSOR_NOISES", "calibrate_output_only", "drive_row",
            "output_only_errors", "response_records"]
@@ -71,7 +76,6 @@ def response_records(poles, shapes, drive: int, sampling_frequency_hz: float, n_
     """
     from scipy import fft
 
-    from physics.frf import pole_residue
 
     w_rad_s = 2 * np.pi * fft.rfftfreq(n_samples, 1.0 / sampling_frequency_hz)
     force = fft.rfft(rng.standard_normal(n_samples))
@@ -89,10 +93,7 @@ def output_only_errors(setup, sim: dict, sensor_noise: float, record_length_s: f
     N = 2 x specimens; a record holds the next fast FFT length of samples from ``record_length_s``. ``seed``:
     anything :func:`numpy.random.default_rng` takes; record ``i`` draws from ``[*seed, i]``."""
     from scipy.fft import next_fast_len
-    from threadpoolctl import threadpool_limits
 
-    from physics.identification import identify_records
-    from physics.io.timedata import TimeRecords
 
     test, used, S = setup.test, setup.modes_idx, setup.n_meas
     poles = sim["truth_poles"].reshape(-1, sim["truth_poles"].shape[-1])
@@ -120,8 +121,6 @@ def calibrate_output_only(cfg: dict, specimens: int = 8, seed: int = 0) -> dict:
     """``measurement`` overrides of ``cfg`` for output-only modal noise: ``modal_noise = "output-only"`` and the
     per-mode coefficients fitted on its test (module docstring); a mode no record found takes each coefficient's
     largest value over the modes found."""
-    from datagen.pipeline import draw_batch, get_setup, simulate_batch
-
     setup = get_setup(cfg)
     if setup.test is None:
         raise BeamDamageError("the output-only calibration needs the config's test (sensors, band, modes)")

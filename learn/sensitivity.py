@@ -27,15 +27,16 @@ from functools import lru_cache
 
 import numpy as np
 
-from learn.features import real_shapes, sign_aligned
 from datagen.damage import damage_model
 from datagen.pipeline import suspension_unit_stiffness
+from learn.features import real_shapes, sign_aligned
+from physics.effects import hermite_row, point_mass_matrix
 from physics.fem import beam_model, element_mass, element_stiffness
+from physics.layout import RIGID_BODY_MODES
 from physics.modal import undamped_modes
 from physics.properties import beam_preset
 
 __all__ = ["Sensitivity", "beam_sensitivity"]
-
 
 @dataclass(frozen=True)
 class Sensitivity:
@@ -81,7 +82,6 @@ class Sensitivity:
         e = self.element_of(np.nan_to_num(x_over_L))
         return np.max(np.abs(self.frequency[:, e]), axis=0) * np.abs(np.asarray(hinge_flexibility, float))
 
-
 def _beam_numbers(preset) -> tuple[float, float, float, tuple]:
     """``(length_m, EI_Nm2, mass_per_length_kg_m, added masses)`` of a preset name or of such a tuple (the added
     masses ``((x_m, mass_kg), ...)`` optional, none for a preset)."""
@@ -91,19 +91,16 @@ def _beam_numbers(preset) -> tuple[float, float, float, tuple]:
     L, EI, m, *rest = preset
     return float(L), float(EI), float(m), tuple(rest[0]) if rest else ()
 
-
 def _with_masses(models, masses, length_m: float, n_elements: int):
     """``models`` (a batch of one beam's FE models) with the point masses ``((x_m, mass_kg), ...)`` added to M."""
     if not masses:
         return models
-    from physics.effects import point_mass_matrix
 
     node_x = np.linspace(0.0, length_m, n_elements + 1)
     names = [f"{n}:{d}" for n in range(1, n_elements + 2) for d in ("y", "rz")]
     keep = [names.index(d) for d in models.dofs]
     dM = sum(point_mass_matrix(node_x, mk, x) for x, mk in masses)[np.ix_(keep, keep)]
     return replace(models, M=np.asarray(models.M) + dM)
-
 
 @lru_cache(maxsize=16)
 def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7, n_elements: int = 40,
@@ -158,12 +155,8 @@ def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7,
     return Sensitivity((np.arange(n_elements) + 0.5) / n_elements, L, EI, dlnf,
                        np.transpose(du, (1, 2, 0)).reshape(4 * n_modes, n_elements), w0[:n_modes] / (2 * np.pi))
 
-
 def _layout_sensitivity(preset, root_spring_relative, n_elements, step, perturbs, test) -> Sensitivity:
     """:func:`beam_sensitivity` of any test (:class:`physics.layout.Layout`): shapes at the sensors."""
-    from physics.effects import hermite_row
-    from physics.layout import RIGID_BODY_MODES
-
     L, EI, m, masses = _beam_numbers(preset)
     le = L / n_elements
     clamp = test.bc == "clamped-free" and root_spring_relative is not None

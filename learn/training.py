@@ -21,6 +21,7 @@ from learn.model_dir import (DEFAULT_ROUTE, MODEL_FORMAT, REFERENCE_WIDTH_M, Tra
 from learn.verdict import detectability_threshold, network_output
 from physics.errors import BeamDamageError
 from physics.io import atomic_write_text
+from physics.modal import modal_parameters
 
 __all__ = ["DAY_CHANGES", "MODE_ROUTES", "damping_ratio_range", "dataset_frfs", "day_changes", "evaluate",
            "targets", "train"]
@@ -37,8 +38,6 @@ def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
 def damping_ratio_range(eigenvalues, coverage: float = 0.99) -> list[list[float]]:
     """Per mode, the central ``coverage`` range ``[lo, hi]`` of the measured baseline damping ratios of training
     pairs (``eigenvalues`` (n, 2, m)): what ``classify`` compares a test's damping with."""
-    from physics.modal import modal_parameters
-
     zeta = modal_parameters(np.asarray(eigenvalues)[:, 0])[1]
     q = np.nanquantile(zeta, [(1 - coverage) / 2, (1 + coverage) / 2], axis=0)
     return [[float(a), float(b)] for a, b in q.T]

@@ -3,15 +3,19 @@ and the verdict as a reader sees it."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from datagen.config import DEFAULTS
 from datagen.damage.slit import equivalent_depth as slit_depth
 from learn.classical import MethodOutput
-from learn.estimator import DamageClassifier
 from learn.evaluate import MIN_DROP
 from learn.features import as_spec
 from physics.io import dof_positions_text
+
+if TYPE_CHECKING:  # torch: the network is loaded only where one runs
+    from learn.estimator import DamageClassifier
 
 __all__ = ["DAMAGE_EXPLANATIONS", "IN_DISTRIBUTION_PERCENTILE", "agreement", "classical_answer", "classical_verdict",
            "detectability_threshold", "equivalent_depth", "network_answer", "network_output", "noise_text",

@@ -19,9 +19,10 @@ The names below are the public API other packages (``datagen``, ``learn``,
 ``experiments``) import; ``io`` and ``identification`` are used as modules.
 """
 
-from physics import errors, fem, frf, modal, properties, reduction, thesis, updating
+from physics import errors, estimation, fem, frf, modal, properties, reduction, thesis, updating
 from physics.errors import (BeamDamageError, ConfigError, ConvergenceError, FileFormatError, OverdampedError,
                             ShapeError)
+from physics.estimation import FRFEstimate, estimate_frf
 from physics.fem import BOUNDARY_CONDITIONS, FEModel, KeptDofs, beam_model, kept_dofs, lumped_mass
 from physics.frf import (FRF_KINDS, FRF_UNITS, PoleResidues, convert_frf, pole_residue, poles_and_residues,
                          receptance, receptance_modal, receptance_state_space)
@@ -54,21 +55,3 @@ __all__ = [
     # updating
     "MASS_MODELS", "UpdateResult", "analyst_mass", "lancaster_direct", "mass_model_name", "pilkey", "reduced_mass",
 ]
-
-#: Names loaded on first use: ``estimation`` imports scipy.signal (about 1 s), which dataset workers never need.
-_LAZY = {"estimation": None, "FRFEstimate": "estimation", "estimate_frf": "estimation"}
-
-
-def __getattr__(name):
-    if name not in _LAZY:
-        raise AttributeError(f"module 'physics' has no attribute {name!r}")
-    import importlib
-
-    module = importlib.import_module("physics.estimation")
-    value = module if _LAZY[name] is None else getattr(module, name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_LAZY))

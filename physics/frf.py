@@ -129,7 +129,7 @@ def pole_residue(eigenvalues, residues, omega_rad_s, *, lower_residual=None, upp
         gc = 1.0 / (s - np.conj(lam)[..., :, None])
         H = R @ g + np.conj(R) @ gc
     elif backend == "numba":
-        from physics.frf_kernels import pole_residue_kernel
+        from physics.frf_kernels import pole_residue_kernel  # numba: compiled on first use of this backend
 
         n = int(np.prod(batch, dtype=int))
         lam2 = np.ascontiguousarray(np.broadcast_to(lam, batch + (m,)).reshape(n, m))

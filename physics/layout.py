@@ -32,7 +32,9 @@ from functools import lru_cache
 
 import numpy as np
 
+from physics.effects import interpolation_matrix
 from physics.errors import ConfigError
+from physics.beam import beam_from_dict
 
 __all__ = ["DEFAULT_BAND_HZ", "MIN_VISIBLE", "SYMMETRIC_SUPPORTS", "Layout", "layout_of", "nominal_modes",
            "relative_amplitude", "uniform_shapes"]
@@ -132,7 +134,6 @@ def nominal_modes(beam, n_elements: int = NOMINAL_ELEMENTS):
     frequencies_hz : ndarray, shape (r,)
     shape_at : callable   ``shape_at(x_m)`` -> ndarray (len(x_m), r) of mass-normalised translations
     """
-    from physics.effects import interpolation_matrix
     from scipy.linalg import eigh
 
     model = beam.fe_model(n_elements)
@@ -164,7 +165,6 @@ def uniform_shapes(test: Layout, x_m) -> np.ndarray:
 
 @lru_cache(maxsize=16)
 def _uniform_shape_at(bc: str, length_m: float):
-    from physics.beam import beam_from_dict
 
     beam = beam_from_dict({"name": "uniform", "bc": bc, "length_m": length_m, "width_m": 0.01,
                            "thickness_m": 0.01, "EI_Nm2": 1.0, "mass_per_length_kg_m": 1.0,

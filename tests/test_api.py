@@ -2,10 +2,17 @@
 
 import ast
 import importlib
+import json
+import os
 import pkgutil
+import re
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
+
+from experiments.cli import COMMANDS
 
 ROOT = Path(__file__).resolve().parents[1]
 LAYERS = ["physics", "datagen", "learn", "experiments"]
@@ -64,3 +71,69 @@ def test_every_public_module_declares_existing_names(name):
     assert isinstance(getattr(mod, "__all__", None), list), f"{name} has no __all__ list"
     assert [n for n in mod.__all__ if not hasattr(mod, n)] == []
     assert len(set(mod.__all__)) == len(mod.__all__)
+
+
+#: Libraries that take from a tenth of a second to over a second to import (optional ones among them). A module
+#: imports them at its head only if every use of the module needs them; otherwise in the functions that use them.
+HEAVY = ("torch", "sklearn", "scipy", "matplotlib", "pandas", "pyarrow", "numba", "pyuff", "tqdm", "distributed",
+         "pyoma2", "sdypy")
+#: The only libraries a command's start-up (its parser, ``--help``) imports.
+AT_START_UP = ("numpy", "threadpoolctl")
+
+
+def _command_line_and_library_modules():
+    yield from (p for layer in LAYERS[:-1] for p in sorted((ROOT / layer).rglob("*.py")))
+    for module in ["experiments.cli", "experiments.args", "experiments.jsonable",
+                   *(c.module for c in COMMANDS.values())]:
+        yield ROOT / (module.replace(".", "/") + ".py")
+
+
+def test_imports_inside_functions_are_heavy_libraries_only():
+    """physics, datagen, learn and the command line import at the head of each module; an import inside a function
+    is of a heavy library (:data:`HEAVY`) or of a project module that imports one, named in its comment
+    (``from learn.training import train  # torch: the network``)."""
+    bad = []
+    for path in _command_line_and_library_modules():
+        source = path.read_text()
+        lines = source.splitlines()
+        for fn in ast.walk(ast.parse(source, str(path))):
+            if not isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                continue
+            for node in ast.walk(fn):
+                if isinstance(node, ast.Import):
+                    names = [a.name for a in node.names]
+                elif isinstance(node, ast.ImportFrom) and node.level == 0:
+                    names = [node.module]
+                else:
+                    continue
+                comment = lines[node.end_lineno - 1].partition("#")[2]
+                heavy = all(n.split(".")[0] in HEAVY for n in names)
+                if not (heavy or re.search(rf"\b({'|'.join(HEAVY)})\b", comment)):
+                    bad.append(f"{path.relative_to(ROOT)}:{node.lineno} imports {', '.join(names)}")
+    assert bad == []
+
+
+def test_no_command_start_up_imports_a_heavy_library():
+    """``beam-damage --help`` imports no command module; a command's parser (its ``--help``) imports its own module
+    and no library but :data:`AT_START_UP` (a fresh interpreter builds every command's parser in turn)."""
+    code = f"""
+import json, sys
+from experiments.cli import COMMANDS, build_parser
+allowed = {AT_START_UP!r} + ("physics", "datagen", "learn", "experiments")
+modules = {{c.module for c in COMMANDS.values()}}
+def loaded(before, own=None):
+    libraries = {{m.split(".")[0] for m in sys.modules if not m.startswith("_")}} - set(sys.stdlib_module_names)
+    return sorted((modules & set(sys.modules)) - before - {{own}}) + sorted(libraries - set(allowed))
+build_parser(["--help"])
+out = {{"--help": loaded(set())}}
+for name, command in COMMANDS.items():
+    before = set(sys.modules)
+    sub = next(a for a in build_parser([name, "--help"])._actions if a.dest == "command")
+    assert len(sub.choices[name]._actions) > 1 and len(sub.choices) == len(COMMANDS)   # its own parser, all listed
+    out[name] = loaded(before, command.module)
+print(json.dumps(out))
+"""
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
+                          env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout) == {name: [] for name in ["--help", *COMMANDS]}

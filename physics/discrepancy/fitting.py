@@ -9,17 +9,27 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.optimize import OptimizeResult, least_squares
 
 from physics import effects as fx
 from physics.beam import Beam
 from physics.discrepancy.candidates import Param, effect_params, has_position, shear_in_section_terms
 from physics.discrepancy.measurement import Measurement, has_complex_shapes
+from physics.discrepancy.model import (
+    ModeResiduals,
+    Prediction,
+    aligned,
+    dashpot_damping_per_c,
+    mode_residuals,
+    predict,
+    rayleigh_fit,
+)
 from physics.frf import magnitude_db
-from physics.discrepancy.model import (ModeResiduals, Prediction, aligned, dashpot_damping_per_c, mode_residuals,
-                                       predict, rayleigh_fit)
+
+if TYPE_CHECKING:
+    from scipy.optimize import OptimizeResult
 
 __all__ = ["BLOCKS", "Fit", "MAX_JOINT_INSTANCES", "Problem", "as_fit", "candidate_fit", "fit_model", "lomo_error",
            "model_params", "with_rayleigh"]
@@ -252,6 +262,8 @@ JACOBIAN_STEP = 1e-6
 def _solve(fun, u0, lo, hi, max_nfev):
     """Bounded least squares of ``fun`` from ``u0`` with forward differences of step :data:`JACOBIAN_STEP`
     times ``max(1, |u|)``."""
+    from scipy.optimize import least_squares  # scipy.optimize: 0.4 s to import, only where a model is fitted
+
     last = {}
 
     def f(u):

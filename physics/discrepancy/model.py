@@ -5,8 +5,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import eigh
-from scipy.optimize import linear_sum_assignment
 
 from physics import effects as fx
 from physics.beam import Beam
@@ -38,6 +36,8 @@ def bending_modes(beam: Beam, model, n: int) -> tuple[np.ndarray, np.ndarray]:
     on the suspension, are left out (:data:`physics.layout.RIGID_BODY_MODES`): the measured modes are bending
     modes. Fewer than ``n`` when the model has fewer DOFs.
     """
+    from scipy.linalg import eigh  # scipy.linalg: 0.2-0.4 s to import, only where modes are solved
+
     first = RIGID_BODY_MODES[beam.bc]
     last = min(first + n, len(model.dofs)) - 1
     return eigh(model.K, model.M, subset_by_index=[first, last])
@@ -135,6 +135,8 @@ def aligned(a, b):
 def pair_modes_by_mac(meas: Measurement, pred: Prediction) -> np.ndarray:
     """Model mode index paired with each measured mode: the assignment of largest MAC when the measurement has
     shapes, else of smallest log-frequency distance after the median frequency ratio."""
+    from scipy.optimize import linear_sum_assignment  # scipy.optimize: 0.4 s to import, only where modes are paired
+
     if meas.shapes is not None:
         cost = -mac(meas.shapes, pred.shapes)
     else:

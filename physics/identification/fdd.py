@@ -19,8 +19,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import fft as sfft
-from scipy import ndimage, signal
 
 from physics.errors import ConvergenceError, ShapeError
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
@@ -70,6 +68,9 @@ def cross_spectra(signals, sampling_frequency_hz, n_per_segment, frames_per_chun
     G : ndarray, complex, shape (n_lines, n_channels, n_channels)
         One-sided spectral density (unit^2/Hz).
     """
+    from scipy import fft as sfft  # scipy.fft/signal/ndimage: about 1 s to import, only output-only identification
+    from scipy import signal  # scipy.fft/signal/ndimage: about 1 s to import, only output-only identification
+
     fs = float(sampling_frequency_hz)
     if mean is None:
         checked = check_records(signals, fs, where=where)
@@ -132,6 +133,8 @@ class SingularValueSpectrum:
 
 def _running_floor(f, s1, df):
     """Running median of ``10 log10 s1`` over +-max(FLOOR_HALF_WIDTH f, FLOOR_MIN_LINES df), as s1's unit."""
+    from scipy import ndimage  # scipy.fft/signal/ndimage: about 1 s to import, only output-only identification
+
     fc = FLOOR_MIN_LINES * df / FLOOR_HALF_WIDTH                   # below fc the window is FLOOR_MIN_LINES lines
 
     def u(x):                                                       # the window is +-1 in u everywhere
@@ -199,6 +202,8 @@ def clear_peaks(sv: SingularValueSpectrum, band_hz=None) -> ClearPeaks:
     """The clear peaks of the first singular value within ``band_hz`` (default the spectrum's band): local maxima
     :data:`CLEAR_PEAK_DB` above the floor and :data:`PEAK_PROMINENCE_DB` above the valleys either side, at or
     above :attr:`SingularValueSpectrum.lowest_hz`."""
+    from scipy import signal  # scipy.fft/signal/ndimage: about 1 s to import, only output-only identification
+
     band = sv.band_hz if band_hz is None else band_hz
     f = sv.frequency_hz
     idx = np.nonzero(np.isfinite(sv.floor) & (f >= max(band[0], sv.lowest_hz)) & (f <= band[1]))[0]
@@ -272,6 +277,9 @@ def _bell(sv: SingularValueSpectrum, peak, valleys, mac_bell):
 def _efdd(sv: SingularValueSpectrum, lo, hi, fs, n_per_segment):
     """Natural frequency and damping ratio of one SDOF bell (inverse FFT, zero crossings, log decrement); NaN when
     the bell's correlation does not decay over at least two extrema."""
+    from scipy import fft as sfft  # scipy.fft/signal/ndimage: about 1 s to import, only output-only identification
+    from scipy import signal  # scipy.fft/signal/ndimage: about 1 s to import, only output-only identification
+
     bell = np.zeros(n_per_segment // 2 + 1)
     bell[lo:hi + 1] = sv.singular_values[lo:hi + 1, 0]
     r = sfft.irfft(bell, n_per_segment)[:n_per_segment // 2]

@@ -7,6 +7,7 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from physics.errors import BeamDamageError, ConvergenceError, ShapeError
 from physics.frf import check_frf_kind, convert_frf
@@ -381,8 +382,6 @@ def identify_lscf(frequency_hz, frf, n_modes=None, drive=None, max_order=40, sel
     -------
     LSCFIdentification
     """
-
-    from threadpoolctl import threadpool_limits
 
     with threadpool_limits(1):  # small dense products and eigenproblems: one BLAS thread is fastest
         return _identify_lscf(frequency_hz, frf, n_modes, drive, max_order, select, kind, weighting, margin,

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -14,7 +15,9 @@ from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.poles import StabilisationDiagram
 from physics.io import FRF, ModalData, TIME, format_of, read
 from physics.io.timedata import TimeRecords
+from physics.io.uff58 import UffFile
 from physics.modal import eigenvalues_from_modal
+import zipfile
 
 __all__ = ["DEFAULT_OUTPUT_ONLY", "SCALING", "MergedSetups", "RecordsIdentification", "holds_response_records",
            "identify_records", "merge_setups", "read_response_records"]
@@ -55,19 +58,14 @@ SNIFF_LINES, SNIFF_LINE_CHARS = 200, 1 << 16
 def holds_response_records(path) -> bool:
     """Whether a file holds time records rather than FRFs: a universal file with time records and no FRF, an
     ``.npz`` with a ``signals`` field, or a CSV whose header starts with ``time_s``."""
-    from pathlib import Path
-
     if not Path(path).is_file():
         return False                                  # the FRF reader names what is missing
     fmt = format_of(path, FRF, TIME)
     check_input_file(path, fmt.name if fmt.name in MAX_BYTES else "csv")
     if fmt.name == "uff":
-        from physics.io.uff58 import UffFile
-
         types = UffFile(path).function_types
         return 1 in types and 4 not in types
     if fmt.name == "npz":
-        import zipfile
 
         try:
             with zipfile.ZipFile(path) as zf:

@@ -17,15 +17,18 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import fft as sfft
-from scipy import signal
 
 from physics.errors import ConvergenceError, ShapeError
-from physics.identification.fdd import (ClearPeaks, clear_peaks, peak_text, singular_value_spectrum,
-                                        unexplained_peaks, unit_shapes)
+from physics.identification.fdd import (
+    ClearPeaks,
+    clear_peaks,
+    peak_text,
+    singular_value_spectrum,
+    unexplained_peaks,
+    unit_shapes,
+)
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
-from physics.identification.poles import (MAX_DAMPING, StabilisationDiagram, select_poles,
-                                         stability_status)
+from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles, stability_status
 from physics.identification.record_checks import CheckedRecord, check_periods, check_records
 from physics.modal import eigenvalues_from_modal
 
@@ -98,6 +101,9 @@ def output_correlations(signals, sampling_frequency_hz, n_lags, references=None,
         A record :func:`~physics.identification.record_checks.check_records` refuses, or too short a record for
         ``n_lags``.
     """
+    from scipy import fft as sfft  # scipy.fft/signal/ndimage: about 1 s to import, only output-only identification
+    from scipy import signal  # scipy.fft/signal/ndimage: about 1 s to import, only output-only identification
+
     checked = signals if isinstance(signals, CheckedRecord) else \
         check_records(signals, sampling_frequency_hz, band_hz, where)
     y, fs, mean = checked.signals, checked.sampling_frequency_hz, checked.mean

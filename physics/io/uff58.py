@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import gc
+import re
 import warnings
 from dataclasses import dataclass
 from functools import cached_property
@@ -287,8 +288,6 @@ def _check_header_fields(path: Path, raw: bytes) -> None:
     pyuff reads a letter in an optional field (a node such as ``B``) as 0, which would silently put the
     record at node 0, and fails on one in a required field with a message that names neither.
     """
-    import re
-
     for k, m in enumerate(re.finditer(rb"(?m)^ {4}-1[ \t]*\r?\n( {4}58b?)[^\n]*\n", raw), 1):
         binary = m.group(1).endswith(b"b")
         first = raw[m.start(1):m.end()].decode("latin1").rstrip("\r\n")
@@ -319,8 +318,6 @@ def _check_context_fields(path: Path, raw: bytes) -> None:
 
     pyuff fails on a letter there with a message that names neither the field nor the line.
     """
-    import re
-
     numbers = {True: re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eEdD][+-]?\d+)?"),   # pyuff reads D exponents ...
                False: re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")}    # ... except in dataset 15
     for m in re.finditer(rb"(?m)^ {4}-1[ \t]*\r?\n *(15|2411|164)[ \t]*\r?\n", raw):

@@ -150,14 +150,13 @@ def test_demo_writes_its_report(tmp_path, capsys):
     assert code == 0
 
 
-def test_a_command_imports_only_its_own_module():
-    """``beam-damage classify`` builds only classify's sub-parser (its start-up pays for no other command's
-    imports); without a command every command is listed."""
+def test_a_command_builds_only_its_own_parser_and_lists_every_command_with_its_help_line():
+    """``beam-damage classify`` builds classify's sub-parser from its module; every command is listed with the help
+    line of its :data:`experiments.cli.COMMANDS` row (``--help`` imports no command module: tests/test_api.py)."""
     from experiments.cli import COMMANDS, build_parser
 
-    one = build_parser(["classify", "--help"])
-    sub = next(a for a in one._actions if a.dest == "command")
-    assert list(sub.choices) == ["classify"]
-    every = build_parser(["--help"])
-    sub = next(a for a in every._actions if a.dest == "command")
+    sub = next(a for a in build_parser(["classify", "--help"])._actions if a.dest == "command")
     assert list(sub.choices) == list(COMMANDS)
+    assert [a.help for a in sub._choices_actions] == [c.help for c in COMMANDS.values()]
+    assert any(a.dest == "baseline" for a in sub.choices["classify"]._actions)
+    assert [a.dest for a in sub.choices["train"]._actions] == ["help"]       # listed, not built

@@ -222,6 +222,24 @@ def test_classify_places_a_renumbered_shuffled_mm_uff_by_its_geometry(tiny, caps
     assert "103:+Y -> none (x = 0.4 m)" in err
 
 
+def test_classify_of_a_uff_pair_imports_torch_and_no_other_heavy_library(tiny):
+    """One UFF pair classified in a fresh process (the files of the test above) loads torch for the network and
+    none of scikit-learn, scipy.signal, matplotlib (no figure asked), pandas, pyarrow, numba."""
+    import os
+    import subprocess
+    import sys
+
+    uffs = [str(tiny / f"renumbered{s}.uff") for s in (0, 1)]
+    code = ("import json, sys; from experiments.cli import main; "
+            f"code = main(['classify', '--model', {str(tiny / 'model')!r}, '--baseline', *{uffs!r}, '--json']); "
+            "print(json.dumps([code, sorted(m for m in ('torch', 'sklearn', 'scipy.signal', 'matplotlib', "
+            "'pandas', 'pyarrow', 'numba') if m in sys.modules)]))")
+    root = Path(__file__).resolve().parents[2]
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=root,
+                          env={**os.environ, "PYTHONPATH": str(root)})
+    assert json.loads(proc.stdout.splitlines()[-1]) == [0, ["torch"]], proc.stderr
+
+
 def test_modal_route_model_classifies_frf_files_through_identified_modes(tiny, modal_model, capsys):
     capsys.readouterr()
     assert json.loads((modal_model / "config.json").read_text())["route"] == "modal"   # the default route

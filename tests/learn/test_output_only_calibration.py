@@ -98,12 +98,12 @@ COEF = {"modal_noise": "output-only", **{f"{q}{s}": [v] * 4 for q, v in (("frequ
 
 
 def test_generate_output_only_calibrates_once_and_reuses_it_on_resume(tmp_path, monkeypatch, capsys):
-    import learn.output_only_calibration as oc
+    import experiments.cmd_generate as cg
     from datagen.dataset import Dataset
     from experiments.cli import main
 
     calls = []
-    monkeypatch.setattr(oc, "calibrate_output_only", lambda cfg: calls.append(1) or dict(COEF))
+    monkeypatch.setattr(cg, "calibrate_output_only", lambda cfg: calls.append(1) or dict(COEF))
     cfg = tmp_path / "c.toml"
     cfg.write_text('[output]\nshard_size = 10\n[measurement]\nlines = 32\n')
     args = ["generate", "--n", "20", "--out", str(tmp_path / "ds"), "--config", str(cfg), "--modal-noise",

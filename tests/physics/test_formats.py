@@ -8,7 +8,7 @@ import pytest
 
 pytest.importorskip("pyuff")
 
-from experiments.cli import build_parser
+from experiments.cli import COMMANDS, build_parser
 from physics.errors import FileFormatError
 from physics.io import (FORMATS, FRF, MODAL, TIME, MeasuredFRF, ModalData, accepted, format_of, modal_or_frf, read,
                         read_frf, writable)
@@ -16,9 +16,9 @@ from physics.modal import eigenvalues_from_modal
 
 
 def _commands():
-    parser = build_parser()
-    sub = next(a for a in parser._actions if a.dest == "command")
-    return sub.choices
+    """Every command's parser (each built as its command line builds it)."""
+    subs = {name: next(a for a in build_parser([name])._actions if a.dest == "command") for name in COMMANDS}
+    return {name: sub.choices[name] for name, sub in subs.items()}
 
 
 def _action(command, dest):
