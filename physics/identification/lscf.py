@@ -65,11 +65,9 @@ def clear_peaks(frequency_hz, magnitude, known_hz=(), tolerance: float = CLEAR_P
     """Frequencies (Hz) of plainly visible peaks of ``magnitude`` (:data:`CLEAR_PEAK_PROMINENCE` times the median
     of the lines within +-:data:`PEAK_WINDOW`) with no frequency of ``known_hz`` within ``tolerance`` (relative),
     the band's outer 2 % left aside (a mode's skirt)."""
-    from scipy.signal import find_peaks
-
     f = np.asarray(frequency_hz, float)
     mag = np.asarray(magnitude, float)
-    idx, _ = find_peaks(mag)
+    idx = np.flatnonzero((mag[1:-1] > mag[:-2]) & (mag[1:-1] >= mag[2:])) + 1      # local maxima
     idx = idx[(f[idx] > f[0] * 1.02) & (f[idx] < f[-1] / 1.02)]
     known = np.asarray(known_hz, float)
     out = []
