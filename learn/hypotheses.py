@@ -314,6 +314,7 @@ def weigh_many(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.00
     G = np.asarray(mass_sens.frequency, float)                           # (m, E) per unit mass ratio added
     grids["mass_change"] = 1 / np.sqrt(np.maximum(1 - 2 * mu[:, None, None] * G.T[None], 1e-6)) - 1
     x_m = np.asarray(sens.x_over_L) * length_m
+    x_mass_m = np.asarray(mass_sens.x_over_L) * length_m                # the mass sensitivities' own grid
     h = 0.5 * length_m / x_m.size                                        # half an element of the grid
     out = []
     if shapes is not None:
@@ -349,7 +350,7 @@ def weigh_many(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.00
                                    "temperature_frequency_change":
                                        float(ll["support_change"][1][i][fits["support_change"][1]])},
                 "slit": _slit_parameters(fits["slit"], th, x_m, sens, h),
-                "mass_change": {"x_m": float(x_m[fits["mass_change"][1][1]]),
+                "mass_change": {"x_m": float(x_mass_m[fits["mass_change"][1][1]]),
                                 "mass_ratio": float(mu[fits["mass_change"][1][0]])},
             }
             g_best = params["global_stiffness"]["frequency_change"]
