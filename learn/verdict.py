@@ -69,7 +69,8 @@ def network_answer(d, i, out, beam, depth) -> dict:
             **zone_keys(beam, d.element[i], d.element_probabilities[i]),
             "hinge_flexibility": float(d.hinge_flexibility[i]),
             "hinge_flexibility_std": float(d.hinge_flexibility_std[i]),
-            "depth_m": depth, "detectable": bool(out.detectable[i]), **support_answer(d, i)}
+            "depth_m": depth, "detectable": bool(out.detectable[i]), "decision_threshold": float(d.threshold[i]),
+            **support_answer(d, i)}
 
 
 def support_answer(d, i) -> dict:
@@ -93,7 +94,7 @@ def classical_answer(o: MethodOutput, i, beam) -> dict:
 def classical_verdict(cl: dict, sens, depth, beam=None) -> dict:
     """The verdict keys from the classical method's answer ``cl`` (no probabilities or spreads)."""
     detectable = sens.largest_drop(np.array([cl["location_x_over_L"]]), np.array([cl["hinge_flexibility"]]))[0]
-    return {"damaged": cl["damaged"], "probability_damaged": None,
+    return {"damaged": cl["damaged"], "probability_damaged": None, "decision_threshold": None,
             "location_x_over_L": cl["location_x_over_L"], "location_x_m": cl["location_x_m"],
             "location_std_m": None, "location_element": cl["location_element"],
             "location_zone": cl["location_zone"], "zone_edges_m": cl["zone_edges_m"], "zone_probabilities": None,
@@ -122,16 +123,26 @@ def _support_sentence(a: dict) -> str:
 
 def _damage_sentence(a: dict) -> str:
     if not a["damaged"]:
-        return f"no damage detected (probability of damage {a['probability_damaged']:.1%})"
+        return f"no damage detected (probability of damage {a['probability_damaged']:.1%}{_threshold_text(a)})"
     if not a["detectable"]:
         return (f"possibly damaged (probability {a['probability_damaged']:.1%}), but not detectable here: a slit like "
                 f"the one that would explain the data, near x = {a['location_x_m']:.3f} m, changes the natural "
                 "frequencies by less than the measurement resolution")
     depth = "" if a["depth_m"] is None else f", e.g. a slit {a['depth_m'] * 1000:.2f} mm deep over 5.5 mm"
-    return (f"damaged (probability {a['probability_damaged']:.1%}): slit at x = {a['location_x_m']:.3f} m +- "
+    return (f"damaged (probability {a['probability_damaged']:.1%}{_threshold_text(a)}): slit at x = "
+            f"{a['location_x_m']:.3f} m +- "
             f"{a['location_std_m']:.3f} m (x/L = {a['location_x_over_L']:.2f}, {_zone_text(a)}), hinge flexibility "
             f"EI/(k L) = {a['hinge_flexibility']:.3g} +- {a['hinge_flexibility_std']:.2g}"
             f"{depth}")
+
+
+def _threshold_text(a: dict) -> str:
+    """How the probability compares with the decision threshold (set on intact validation pairs for the network's
+    false-alarm target), e.g. ``", below the 99.2% this model calls damage at"``."""
+    t = a.get("decision_threshold")
+    if t is None:
+        return ""
+    return f", {'below' if a['probability_damaged'] < t else 'at or above'} the {t:.1%} this model calls damage at"
 
 
 def modes_text(modes) -> str:
