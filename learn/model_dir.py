@@ -109,10 +109,15 @@ class TrainedModel:
         self.check_beam(spec, "measured beam")
         return spec, beam_x_m
 
-    @staticmethod
-    def verdict_text(result: dict) -> str:
-        """The verdict of one classified pair as a reader sees it (:func:`learn.verdict.verdict_text`)."""
-        return verdict_text(result)
+    @property
+    def damage_kind(self) -> str:
+        """The damage kind of the training data (``damage.kind`` of its generator config; a slit by default)."""
+        return ((self.config.get("generator_config") or {}).get("damage") or {}).get("kind", "slit")
+
+    def verdict_text(self, result: dict) -> str:
+        """The verdict of one classified pair as a reader sees it, in the words of the model's damage kind
+        (:func:`learn.verdict.verdict_text`)."""
+        return verdict_text(result, self.damage_kind)
 
 
 def save_model(out_dir, config: dict, networks: dict) -> None:

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from datagen.config import DEFAULTS
+from datagen.damage import DAMAGE_MODELS
 from datagen.damage.slit import equivalent_depth as slit_depth
 from learn.classical import MethodOutput
 from learn.evaluate import MIN_DROP
@@ -110,8 +111,8 @@ def equivalent_depth(hinge_flexibility: float, preset, width_m: float) -> float 
     return slit_depth(hinge_flexibility, preset, width_m, DEFAULTS["section"])
 
 
-def _network_sentence(a: dict) -> str:
-    return _damage_sentence(a) + _support_sentence(a)
+def _network_sentence(a: dict, kind: str = "slit") -> str:
+    return _damage_sentence(a, kind) + _support_sentence(a)
 
 
 def _support_sentence(a: dict) -> str:
@@ -121,7 +122,13 @@ def _support_sentence(a: dict) -> str:
             "a clamp, bearing or suspension stiffer or softer than on the baseline day)")
 
 
-def _damage_sentence(a: dict) -> str:
+def _damage_sentence(a: dict, kind: str = "slit") -> str:
+    if kind != "slit":        # the damage kind's own prose for its size (a mass change: a signed mass ratio)
+        what = DAMAGE_MODELS[kind].describe(a["location_x_m"], a["hinge_flexibility"], None)
+        if not a["damaged"]:
+            return f"no change detected (probability of a change {a['probability_damaged']:.1%}{_threshold_text(a)})"
+        return (f"changed (probability {a['probability_damaged']:.1%}{_threshold_text(a)}): {what} (location +- "
+                f"{a['location_std_m']:.3f} m, {_zone_text(a)})")
     if not a["damaged"]:
         return f"no damage detected (probability of damage {a['probability_damaged']:.1%}{_threshold_text(a)})"
     if not a["detectable"]:
@@ -159,9 +166,12 @@ def _zone_text(a: dict) -> str:
     return f"zone {z} of {len(edges) - 1}, {edges[z - 1]:.3g}-{edges[z]:.3g} m"
 
 
-def _classical_sentence(c: dict) -> str:
+def _classical_sentence(c: dict, kind: str = "slit") -> str:
     if not c["damaged"]:
         return f"{c['method']}: undamaged"
+    if kind != "slit":
+        what = DAMAGE_MODELS[kind].describe(c["location_x_m"], c["hinge_flexibility"], None)
+        return f"{c['method']}: changed, {what} ({_zone_text(c)})"
     return (f"{c['method']}: damaged, x = {c['location_x_m']:.3f} m ({_zone_text(c)}), hinge "
             f"flexibility {c['hinge_flexibility']:.3g}")
 
@@ -204,20 +214,20 @@ def agreement(verdict: dict, net, cl, hypotheses, source: str) -> dict:
     return {**votes, "agree": agree, "text": text}
 
 
-def verdict_text(res: dict) -> str:
+def verdict_text(res: dict, kind: str = "slit") -> str:
     """The verdict as a reader sees it: the answer, where it comes from, both methods, the caveats."""
     net, cl = res["network"], res["classical"]
     modes = res["identification"].get("modes_classified") or []
     partial = bool(modes) and len(modes) < res["identification"].get("n_modes", 4)
     on = f" on modes {', '.join(map(str, modes))}" if partial else ""
     if res["verdict_from"] == "network":
-        head = f"Verdict (network{on}): " + _network_sentence(net) + "."
+        head = f"Verdict (network{on}): " + _network_sentence(net, kind) + "."
     elif net is None:
         need = modes_text(res["identification"].get("modes_model", [1, 2, 3, 4]))
         head = (f"Verdict (classical method on modes {', '.join(map(str, modes))}, the network needs modes {need}): "
-                + _classical_sentence(cl) + ".")
+                + _classical_sentence(cl, kind) + ".")
     else:
-        head = ("Verdict (classical method, the pair lies outside the training data): " + _classical_sentence(cl)
+        head = ("Verdict (classical method, the pair lies outside the training data): " + _classical_sentence(cl, kind)
                 + ".")
     lines = [head[:1].upper() + head[1:]]
     if net is None:
@@ -229,9 +239,9 @@ def verdict_text(res: dict) -> str:
             what = "Element" if net.get("location_element") is not None else "Zone"
             lines.append(f"{what} probabilities (network): " + ", ".join(f"{k + 1}: {v:.2f}" for k, v in
                                                                          enumerate(net["zone_probabilities"])))
-        lines.append(f"Network: {_network_sentence(net)}.")
-    lines.append(f"Classical ({cl['method']}, the best on the training data): {_classical_sentence(cl)}." if cl else
-                 "Classical: no answer (fewer than 2 modes identified in both tests).")
+        lines.append(f"Network: {_network_sentence(net, kind)}.")
+    lines.append(f"Classical ({cl['method']}, the best on the training data): {_classical_sentence(cl, kind)}."
+                 if cl else "Classical: no answer (fewer than 2 modes identified in both tests).")
     if net is None:
         lines.append(f"Input route: {res['input_route']}; in distribution: no.")
     else:
