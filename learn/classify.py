@@ -233,13 +233,10 @@ def _normal_variation(model: TrainedModel, route: str, nv, base_mds, warnings: l
     others = [k for k in range(nv.n_baselines) if k != nv.reference]
     pairs = [modal_pair(base_mds[nv.reference], base_mds[k], model.beam, model.sensitivity.frequencies_hz)
              for k in others]
-    full = [p for p in pairs if p.complete and (route == "frequency" or not p.frequency_only)]
+    full = [i for i, p in enumerate(pairs) if p.complete and (route == "frequency" or not p.frequency_only)]
     if not full:
         return out
-    lam = np.stack([p.eigenvalues for p in full])
-    X = (frequency_features(lam, model.beam.n_modes) if route == "frequency" else
-         modal_features(lam, np.stack([p.eigenvectors for p in full]), model.beam.n_modes, model.beam.test))
-    dist, pct = ood_percentile(model.networks[route], X)
+    dist, pct = ood_percentile(model.networks[route], _mode_features(model, route, pairs, full))
     out["baseline_pairs_distance_max"] = float(dist.max())
     out["baseline_pairs_training_percentile"] = [float(v) for v in pct]
     outside = int(np.sum(pct > IN_DISTRIBUTION_PERCENTILE))
@@ -515,6 +512,16 @@ def network_reads(est, pair) -> bool:
     return pair.complete or (est.answers_missing_modes and pair.modes.size >= est.min_modes)
 
 
+def _mode_features(model: TrainedModel, route: str, pairs: list, rows: list):
+    """The ``modal`` or ``frequency`` features of ``pairs[rows]`` on the model's modes (NaN in the columns of a mode
+    a pair lacks), None for no rows."""
+    if not rows:
+        return None
+    m = model.beam.n_modes
+    lam, vecs = _on_model_modes(pairs, rows, m)
+    return frequency_features(lam, m) if route == "frequency" else modal_features(lam, vecs, m, model.beam.test)
+
+
 def _on_model_modes(pairs: list, rows: list, n_modes: int):
     """Eigen-data of ``pairs[rows]`` on the model's modes, NaN for those a pair lacks (stacked)."""
     parts = [with_missing_modes(pairs[i].eigenvalues[None], pairs[i].eigenvectors[None], pairs[i].modes, n_modes)
@@ -555,19 +562,17 @@ def _network_inputs(model: TrainedModel, baseline, currents: list, pairs, identi
     if pairs is None:
         raise BeamDamageError(f"the files hold neither the FRFs the model's {model.route} route reads "
                               "nor identifiable modes")
-    m = model.beam.n_modes
     if any(p.frequency_only for p in pairs):
         if "frequency" not in model.networks:
             raise BeamDamageError("natural frequencies without mode shapes need a model with a frequency-route "
                                   "network: re-create it with 'beam-damage train'")
         rows = [i for i, p in enumerate(pairs) if network_reads(model.networks["frequency"], p)]
-        X = frequency_features(_on_model_modes(pairs, rows, m)[0], m) if rows else None
-        return "frequency", X, rows
+        return "frequency", _mode_features(model, "frequency", pairs, rows), rows
     if "modal" not in model.networks:
         raise BeamDamageError("this model has no modal-route network; give FRF files holding receptances at "
                               f"{', '.join(model.beam.dofs)} driven at {model.beam.dofs[model.beam.drive_row]}")
     rows = [i for i, p in enumerate(pairs) if network_reads(model.networks["modal"], p)]
-    X = modal_features(*_on_model_modes(pairs, rows, m), m, model.beam.test) if rows else None
+    X = _mode_features(model, "modal", pairs, rows)
     w = identification_warning(model, identified, methods)
     if w:
         warnings.append(w)
