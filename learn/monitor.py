@@ -34,6 +34,7 @@ from learn.classify import classify_many
 from learn.hypotheses import FREQUENCY_CHANGE_STD, explain_many
 from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, identify_modes, modal_pair, on_model_dofs,
                             pair_modes_by_frequency)
+from learn.noise_calibration import robust_std
 from physics.errors import BeamDamageError, ConfigError
 from physics.identification import (DEFAULT_OUTPUT_ONLY, holds_response_records, identify_records,
                                     read_response_records)
@@ -469,7 +470,7 @@ def reference_modes(tests: list) -> ReferenceModes:
             continue
         v = logf[list(pick.values())]
         freqs.append(float(np.exp(np.median(v))))
-        stds.append(float(1.4826 * np.median(np.abs(v - np.median(v)))))
+        stds.append(robust_std(v))
         presence.append(len(pick) / n)
         rows = [_rows(tests[i], dofs) for i in pick]
         if all(r is not None for r in rows):
