@@ -1073,9 +1073,9 @@ def alarm_verdicts(result: SeriesResult, model=None, beam_x_m=None) -> dict:
     weighed with the measured per-mode scatter (``hypotheses``, ``hypotheses_summary``, ``frequency_change_std``)
     and the network's verdict against the baseline period (``network``, :func:`_network_verdicts`)."""
     alarms = [i for i, r in enumerate(result.rows) if r["alarm"] and not r["baseline"]]
-    out = {i: {"what_changed": what_changed(result.rows[i], result.sigma),
-               "summary": changed_text(what_changed(result.rows[i], result.sigma)),
-               "hypotheses": None, "hypotheses_summary": None, "frequency_change_std": None, "network": None,
+    changed = {i: what_changed(result.rows[i], result.sigma) for i in alarms}
+    out = {i: {"what_changed": changed[i], "summary": changed_text(changed[i]), "hypotheses": None,
+               "hypotheses_summary": None, "frequency_change_std": None, "network": None,
                "network_baselines": None, "network_baseline": None, "network_error": None} for i in alarms}
     if model is None or not alarms:
         return out
