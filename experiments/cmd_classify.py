@@ -14,7 +14,7 @@ from learn.classify import DEFAULT_FALSE_ALARM_RATE, classify_many
 from learn.measured import differences_from_model, on_model_dofs
 from learn.model_dir import load_model
 from physics.errors import BeamDamageError
-from physics.frf import receptance_modal
+from physics.frf import FRF_UNITS, receptance_modal
 from physics.io import (
     FRF,
     MODAL,
@@ -177,10 +177,6 @@ def _write(out_dir, results, extras, base, cur, model):
     atomic_write_text(out / "verdict.json", json.dumps(to_jsonable(results[0]), indent=1))
 
 
-#: Axis label of each FRF kind.
-FRF_UNITS = {"receptance": "|H| (m/N)", "mobility": "|H| ((m/s)/N)", "accelerance": "|H| ((m/s2)/N)"}
-
-
 def _figure(res, extra, base, cur, beam) -> bytes:
     """PNG of one verdict: the two tests' FRFs in the file's kind with the identified modes marked; each mode's
     measured frequency change beside the competing explanations' predictions; the beam (supports, sensors, zones)
@@ -207,7 +203,7 @@ def _figure(res, extra, base, cur, beam) -> bytes:
                                                                         "unscaled)")
         for f in found:
             a1.axvline(f, color=colour, ls=":", lw=0.8)
-    a1.set(xlabel="frequency (Hz)", ylabel=FRF_UNITS.get(kind, "|H|"),
+    a1.set(xlabel="frequency (Hz)", ylabel=f"|H| ({FRF_UNITS[kind]})",
            title=f"The two tests ({kind}); dotted: the modes identified")
     a1.legend(fontsize=7)
     modes, change = extra.get("modes") or [], extra.get("frequency_change_pct")
