@@ -234,7 +234,7 @@ def catalogue_beam(name: str, pairs_dir: Path, model, before, tree, out: Path, c
     """Rows per missing mode on a catalogue beam of the independent simulator: each UFF identified by
     ``identify --band`` (the beam's band), mode k left out of both tests, then ``classify``."""
     from experiments.benches.bench_foreign import cli_json
-    from experiments.studies.study_beams import score_beam
+    from experiments.benches.study_beams import score_beam
 
     meta = json.loads((pairs_dir / "truth.json").read_text())
     nominal = np.asarray(meta["nominal_frequencies_hz"], float)

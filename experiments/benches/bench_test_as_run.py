@@ -5,7 +5,7 @@ Run: ``python -m experiments.benches.bench_test_as_run --out out/test-as-run [--
 [--only NAME] [--before MAIN_CHECKOUT] [--docs] [--json]``
 
 For each beam of :data:`experiments.second_sim.beams.TEST_AS_RUN` (the independent simulator's, sharing no code
-with the package) the loop of :func:`experiments.studies.study_beams.run_beam`: the simulator writes ``beam.toml`` and
+with the package) the loop of :func:`experiments.benches.study_beams.run_beam`: the simulator writes ``beam.toml`` and
 ``--n-pairs`` UFF pairs; ``generate --beam beam.toml --config training --n TRAIN_N``; ``train``; ``classify``
 per pair. A beam file that leaves ``drive_x_m`` out (the files' geometry places the reference DOF) is run twice:
 as written (the model trained for a force at the first sensor), and as the README's loop calibrates it
@@ -111,7 +111,7 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     from experiments.benches.bench_foreign import cli_json
     from experiments.second_sim.beams import TEST_AS_RUN, excited_modes
-    from experiments.studies.study_beams import run_beam
+    from experiments.benches.study_beams import run_beam
 
     out = Path(a.out)
     table = []

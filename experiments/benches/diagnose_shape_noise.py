@@ -1,6 +1,6 @@
 """Is the identified mode shapes' noise what limits the network on a catalogue beam? Two measurements.
 
-Run: ``python -m experiments.studies.diagnose_shape_noise --beam steel-bar-ff-12s
+Run: ``python -m experiments.benches.diagnose_shape_noise --beam steel-bar-ff-12s
 --model out/beams/steel-bar-ff-12s/model-n20000-s0 [--n 40] [--seed 0] [--factors 1 8] [--identify 6]``
 
 1. ``--identify K``: the first K pairs' baseline UFF files identified by the project's path (LSCF/LSFD,
@@ -123,7 +123,7 @@ def modal_input_scores(cb, recs, modes, model_dir, factor: float, seed: int = 11
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m experiments.studies.diagnose_shape_noise",
+    ap = argparse.ArgumentParser(prog="python -m experiments.benches.diagnose_shape_noise",
                                  description=__doc__.splitlines()[0])
     ap.add_argument("--beam", required=True)
     ap.add_argument("--model", required=True, help="the beam's trained model directory (study_beams)")

@@ -1,6 +1,6 @@
 """The loop on every beam of the independent simulator's catalogue, scored per beam and per method.
 
-Run: ``python -m experiments.studies.study_beams --out out/beams [--n-pairs 40] [--train-n 20000] [--only NAME]
+Run: ``python -m experiments.benches.study_beams --out out/beams [--n-pairs 40] [--train-n 20000] [--only NAME]
 [--seed 0] [--spread KEY=VALUE ...] [--json]``
 
 For each beam of :data:`experiments.second_sim.beams.CATALOGUE` (any support, 1-12 sensors, its own band),
@@ -350,7 +350,7 @@ def _figure(rows: list[dict], path: Path) -> None:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m experiments.studies.study_beams", description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(prog="python -m experiments.benches.study_beams", description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="out/beams")
     ap.add_argument("--n-pairs", type=int, default=40, help="independent pairs per beam (default 40)")
     ap.add_argument("--train-n", type=int, default=20000, help="specimens generated per beam (default 20000)")
