@@ -9,7 +9,6 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.cli.jsonable import to_jsonable
 from learn.classify import DEFAULT_FALSE_ALARM_RATE, classify_many
 from learn.measured import differences_from_model, on_model_dofs
 from learn.model_dir import load_model
@@ -26,6 +25,7 @@ from physics.io import (
     parse_dof,
     read,
     read_json,
+    to_jsonable,
 )
 
 __all__ = ["KEYS", "add_parser", "run"]

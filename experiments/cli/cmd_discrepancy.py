@@ -1,7 +1,7 @@
 """``beam-damage discrepancy``: where a beam model misses measured data and which effect it lacks.
 
-Parses, calls :func:`experiments.studies.study_discrepancy.run_discrepancy` (which reads the
-measurement, runs :func:`physics.discrepancy.analyse` and writes the outputs) and prints.
+Parses, calls :func:`physics.discrepancy.analyse_file` (which reads the measurement, runs
+:func:`physics.discrepancy.analyse` and writes the outputs) and prints.
 """
 
 from __future__ import annotations
@@ -11,13 +11,12 @@ from pathlib import Path
 import numpy as np
 
 from experiments.cli.args import add_beam_argument
-from experiments.studies.study_discrepancy import EXAMPLE, run_discrepancy
 from physics import discrepancy as dsc
 from physics.effects import CANDIDATES, SUPPORT_EFFECTS
 from physics.errors import ConfigError
 from physics.io import FRF, MODAL, accepted, dof_positions_text
 
-__all__ = ["EXAMPLE", "add_parser", "run"]
+__all__ = ["add_parser", "run"]
 
 
 def run(args) -> dict:
@@ -33,14 +32,14 @@ def run(args) -> dict:
     if not args.json:
         def progress(s):
             print(f"  fitting {s} ...", flush=True)
-    # a noise not given is of the data or assumed (run_discrepancy), and assumed ones are scaled to the data
+    # a noise not given is of the data or assumed (analyse_file), and assumed ones are scaled to the data
     # (analyse's estimate_noise)
-    out = run_discrepancy(args.beam, args.measured, args.out, frequency_noise=args.frequency_noise,
-                          shape_noise=args.shape_noise, frf_noise_db=args.frf_noise_db, max_effects=args.max_effects,
-                          n_elements=args.elements, seed=args.seed,
-                          candidates=None if args.candidates is None else tuple(args.candidates),
-                          estimate_noise=args.frequency_noise is None and args.shape_noise is None,
-                          progress=progress)
+    out = dsc.analyse_file(args.beam, args.measured, args.out, frequency_noise=args.frequency_noise,
+                           shape_noise=args.shape_noise, frf_noise_db=args.frf_noise_db,
+                           max_effects=args.max_effects, n_elements=args.elements, seed=args.seed,
+                           candidates=None if args.candidates is None else tuple(args.candidates),
+                           estimate_noise=args.frequency_noise is None and args.shape_noise is None,
+                           progress=progress)
     res, recal = out.pop("_result")
     if not args.json:
         _print(out, res, recal)
@@ -133,7 +132,7 @@ def add_parser(sub):
                     "leave-one-mode-out check, name the winner only when significant, and repeat once. "
                     "Damping ratios are modal (one per mode, the null model): a dashpot is named only from "
                     "complex mode shapes or FRFs. "
-                    f"Example: --beam beam5 --measured {EXAMPLE.relative_to(Path(__file__).parents[2])}")
+                    f"Example: --beam beam5 --measured {dsc.EXAMPLE.relative_to(Path(__file__).resolve().parents[2])}")
     add_beam_argument(p)
     p.add_argument("--measured", required=True, metavar="FILE",
                    help=f"{accepted(MODAL, FRF)}. Modal data: natural_frequencies_hz alone, or with "

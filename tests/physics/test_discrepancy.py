@@ -172,7 +172,7 @@ def test_measurement_validation():
 
 def test_cli_on_beam5_table_4_3(tmp_path, capsys):
     from experiments.cli import main
-    from experiments.studies.study_discrepancy import EXAMPLE
+    from physics.discrepancy import EXAMPLE
     from physics.beam import load_beam as lb
 
     rc = main(["discrepancy", "--beam", "beam5", "--measured", str(EXAMPLE), "--out", str(tmp_path),
@@ -205,7 +205,7 @@ def test_cli_on_beam5_table_4_3(tmp_path, capsys):
 
 def test_cli_names_no_effect_with_max_effects_0_and_writes_every_file(tmp_path, capsys):
     from experiments.cli import main
-    from experiments.studies.study_discrepancy import EXAMPLE
+    from physics.discrepancy import EXAMPLE
 
     assert main(["discrepancy", "--measured", str(EXAMPLE), "--out", str(tmp_path), "--max-effects", "0",
                  "--elements", "12", "--json"]) == 0
@@ -347,7 +347,7 @@ def test_fits_do_not_turn_on_rounding(tmp_path):
     import json
     from dataclasses import replace
 
-    from experiments.studies.study_discrepancy import run_discrepancy
+    from physics.discrepancy import analyse_file
     from physics.beam import preset_beam
 
     path = tmp_path / "freq.json"
@@ -356,6 +356,6 @@ def test_fits_do_not_turn_on_rounding(tmp_path):
         "damping_ratios": [0.009340379380256272, 0.008793655439476864, 0.015695374958275547, 0.007268938305862167]}))
     beam = preset_beam("beam5")
     for b in (beam, replace(beam, EI_Nm2=beam.EI_Nm2 * (1 + 1e-15))):
-        res = run_discrepancy(b, str(path))
+        res = analyse_file(b, str(path))
         assert res["effects"] == ["added_mass"], res["effects"]
         assert res["gap_after"]["max_abs_frequency_error_pct"] < 0.1
