@@ -81,19 +81,18 @@ HEAVY = ("torch", "sklearn", "scipy", "matplotlib", "pandas", "pyarrow", "numba"
 AT_START_UP = ("numpy", "threadpoolctl")
 
 
-def _command_line_and_library_modules():
-    yield from (p for layer in LAYERS[:-1] for p in sorted((ROOT / layer).rglob("*.py")))
-    yield from sorted((ROOT / "experiments" / "cli").rglob("*.py"))
-    for module in (c.module for c in COMMANDS.values() if not c.module.startswith("experiments.cli.")):
-        yield ROOT / (module.replace(".", "/") + ".py")
+def _project_modules():
+    """Every module of the project: the libraries and every sub-package of ``experiments`` (the command line, the
+    studies, the benchmarks, the independent simulator)."""
+    yield from (p for layer in LAYERS for p in sorted((ROOT / layer).rglob("*.py")))
 
 
 def test_imports_inside_functions_are_heavy_libraries_only():
-    """physics, datagen, learn and the command line import at the head of each module; an import inside a function
+    """Every module of the project imports at its head; an import inside a function
     is of a heavy library (:data:`HEAVY`) or of a project module that imports one, named in its comment
     (``from learn.training import train  # torch: the network``)."""
     bad = []
-    for path in _command_line_and_library_modules():
+    for path in _project_modules():
         source = path.read_text()
         lines = source.splitlines()
         for fn in ast.walk(ast.parse(source, str(path))):

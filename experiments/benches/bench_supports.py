@@ -17,6 +17,7 @@ import time
 
 import numpy as np
 
+from experiments.studies.doc_tables import write_table
 from experiments.studies.plain_beam import plain_fe
 from physics import discrepancy as dsc
 from physics.beam import load_beam
@@ -130,8 +131,6 @@ def main(argv=None):
     table = rows(args.seeds, args.cases)
     print(f"\n{time.perf_counter() - t0:.0f} s")
     if args.docs:
-        from experiments.studies.doc_tables import write_table
-
         write_table("discrepancy.md", "supports", markdown(table, args.seeds))
 
 
