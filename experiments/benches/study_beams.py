@@ -176,11 +176,11 @@ def _step(timings: dict, key: str, done: bool, fn) -> None:
 
 
 def run_beam(cb, out: Path, n_pairs: int, train_n: int, seed: int, workers: int = 2, spread: dict | None = None,
-             tag: str = "", beam_file=None, model_tag: str = "") -> tuple[list[dict], dict]:
+             tag: str = "", beam_file=None, model_tag: str = "", config: str = "training") -> tuple[list[dict], dict]:
     """Pairs, dataset, model and verdicts of one catalogue beam (reused when present); its rows and timings.
     ``spread`` (fields of :class:`Spread`, named by ``tag``) draws the pairs from a changed distribution;
     ``beam_file`` (default: the simulator's ``beam.toml``, e.g. one ``discrepancy`` calibrated) drives ``generate``,
-    its dataset, model and verdicts named by ``model_tag``."""
+    its dataset, model and verdicts named by ``model_tag``; ``config`` is the training config ``generate`` reads."""
     d = out / cb.name
     suffix = f"-{tag}" if tag else ""
     pairs = d / f"pairs-n{n_pairs}-s{seed}{suffix}"
@@ -192,7 +192,7 @@ def run_beam(cb, out: Path, n_pairs: int, train_n: int, seed: int, workers: int 
     _step(t, pairs.name, (pairs / "truth.json").is_file(),
           lambda: write_beam_pairs(cb, simulate_beam_pairs(cb, n_pairs, seed, spread_of), pairs, seed))
     _step(t, data.name, _complete(data),
-          lambda: _cli(["generate", "--beam", str(beam_file or pairs / "beam.toml"), "--config", "training",
+          lambda: _cli(["generate", "--beam", str(beam_file or pairs / "beam.toml"), "--config", config,
                         "--n", str(train_n),
                         "--seed", str(seed + 1), "--out", str(data), "--workers", str(workers)]))
     _step(t, model.name, (model / "config.json").is_file(),
