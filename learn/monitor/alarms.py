@@ -67,39 +67,10 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     :data:`DEFAULT_LATENT`. Raises :class:`BeamDamageError` on a baseline that cannot carry the model (too few
     tests: the message names the minimum; a baseline test of another kind, band or beam).
     """
-    from tqdm import tqdm
-
     n = len(series.files)
-    if not 0 < false_alarm_rate < 0.5:
-        raise ConfigError(f"--false-alarm-rate {false_alarm_rate:g}: must lie in (0, 0.5)")
-    if not 0 < n_baseline <= n:
-        raise ConfigError(f"--baseline-tests {n_baseline}: must be between 1 and the {n} tests given")
     C = series.conditions
-    if normal_model is None:
-        normal_model = "regression" if C is not None else DEFAULT_LATENT
-    if normal_model not in NORMAL_MODELS:
-        raise ConfigError(f"normal model {normal_model!r}: expected one of {', '.join(NORMAL_MODELS)}")
-    if normal_model == "regression" and C is None:
-        raise ConfigError("the regression on measured conditions needs --conditions CSV with condition columns")
-    q = 0 if C is None or normal_model != "regression" else C.shape[1]
-    if n_baseline < minimum_baseline(1, q):
-        raise BeamDamageError(f"--baseline-tests {n_baseline}: at least {minimum_baseline(1, q)} baseline tests are "
-                              f"needed even for one mode ({minimum_baseline(1, q)} = modes + conditions + 6)")
-    if q and not np.all(np.isfinite(C[:n_baseline])):
-        bad = series.files[int(np.flatnonzero(~np.isfinite(C[:n_baseline]).all(axis=1))[0])]
-        raise BeamDamageError(f"conditions: baseline test {bad} lacks a measured condition ("
-                              f"{', '.join(series.condition_names)}); the regression needs them on every baseline "
-                              "test")
-    tests, errors, pending = [], [], []
-    bar = tqdm(series.files, desc="identify", unit="test", disable=not progress, leave=False)
-    for path in bar:
-        t, err, _ = cached_identification(path, settings, cache_dir, pending)
-        tests.append(t)
-        errors.append(err)
-    mixed = check_series(tests, n_baseline, series.files)
-    for i, why in enumerate(mixed):
-        if why:
-            tests[i], errors[i] = None, why
+    normal_model, q = _checked_request(series, n_baseline, false_alarm_rate, normal_model)
+    tests, errors, pending = _identified(series, n_baseline, settings, cache_dir, progress)
     base = [t for t in tests[:n_baseline] if t is not None]
     ref = reference_modes(tests[:n_baseline])
     m = ref.frequencies_hz.size
@@ -164,6 +135,49 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
             "conditions": None if C is None else dict(zip(series.condition_names, map(_num, C[i]))),
         })
     return SeriesResult(rows, ref, F, np.exp(expected_log), novelty, thr, model, normal, sigma, tests, series)
+
+
+def _checked_request(series: SeriesInput, n_baseline: int, false_alarm_rate: float, normal_model: str | None):
+    """``(normal model, number of conditions it regresses on)`` of a request, or the one-line error of an argument
+    or a baseline period that cannot carry it before any test is identified."""
+    n = len(series.files)
+    if not 0 < false_alarm_rate < 0.5:
+        raise ConfigError(f"--false-alarm-rate {false_alarm_rate:g}: must lie in (0, 0.5)")
+    if not 0 < n_baseline <= n:
+        raise ConfigError(f"--baseline-tests {n_baseline}: must be between 1 and the {n} tests given")
+    C = series.conditions
+    if normal_model is None:
+        normal_model = "regression" if C is not None else DEFAULT_LATENT
+    if normal_model not in NORMAL_MODELS:
+        raise ConfigError(f"normal model {normal_model!r}: expected one of {', '.join(NORMAL_MODELS)}")
+    if normal_model == "regression" and C is None:
+        raise ConfigError("the regression on measured conditions needs --conditions CSV with condition columns")
+    q = 0 if C is None or normal_model != "regression" else C.shape[1]
+    if n_baseline < minimum_baseline(1, q):
+        raise BeamDamageError(f"--baseline-tests {n_baseline}: at least {minimum_baseline(1, q)} baseline tests are "
+                              f"needed even for one mode ({minimum_baseline(1, q)} = modes + conditions + 6)")
+    if q and not np.all(np.isfinite(C[:n_baseline])):
+        bad = series.files[int(np.flatnonzero(~np.isfinite(C[:n_baseline]).all(axis=1))[0])]
+        raise BeamDamageError(f"conditions: baseline test {bad} lacks a measured condition ("
+                              f"{', '.join(series.condition_names)}); the regression needs them on every baseline "
+                              "test")
+    return normal_model, q
+
+
+def _identified(series: SeriesInput, n_baseline: int, settings: IdentificationSettings, cache_dir, progress: bool):
+    """``(tests, errors, pending cache entries)``: every test identified (or read from the cache), a test that
+    does not belong to the baseline period's series None with the reason as its error."""
+    from tqdm import tqdm
+
+    tests, errors, pending = [], [], []
+    for path in tqdm(series.files, desc="identify", unit="test", disable=not progress, leave=False):
+        t, err, _ = cached_identification(path, settings, cache_dir, pending)
+        tests.append(t)
+        errors.append(err)
+    for i, why in enumerate(check_series(tests, n_baseline, series.files)):
+        if why:
+            tests[i], errors[i] = None, why
+    return tests, errors, pending
 
 
 def _num(v):
