@@ -219,6 +219,3 @@ def write_cache(entries) -> None:
 def _error_text(exc, path) -> str:
     text = " ".join(str(getattr(exc, "strerror", None) or exc).split())
     return text if str(path) in text else f"{path}: {text}"
-
-
-# ---------------------------------------------------------------------------------------------------------------

@@ -134,6 +134,3 @@ def check_series(tests: list, n_baseline: int, files: list) -> list:
             raise BeamDamageError(f"baseline test {why}")
         out.append(why)
     return out
-
-
-# ---------------------------------------------------------------------------------------------------------------
