@@ -1,13 +1,13 @@
 """Benchmark: whether the verdict's 68 % and 95 % intervals cover the truth, per damage kind and support.
 
-Run: ``python -m experiments.bench_coverage --out out/coverage [--n-pairs 60] [--train-n 6000] [--seed 0]
+Run: ``python -m experiments.benches.bench_coverage --out out/coverage [--n-pairs 60] [--train-n 6000] [--seed 0]
 [--only SUPPORT] [--kinds slit mass_change] [--json] [--docs]``
 
 Pairs from the independent simulator (:mod:`experiments.second_sim.beams`: its own FE beam, supports as built,
 day-to-day changes, FRFs measured with noise and written as UFF; no code shared with the package), one catalogue
 beam per support, damaged pairs holding a slit (1-10 mm wide, 30-90 % EI loss) or a mass change (a point mass of
 1-20 % of the beam's mass added, or 1-8 % lost over 10-25 % of the length). Each beam and kind goes through the
-loop as a user runs it (:func:`experiments.study_beams.run_beam`: ``generate --config training`` or
+loop as a user runs it (:func:`experiments.studies.study_beams.run_beam`: ``generate --config training`` or
 ``--config mass_change``, ``train``, ``classify --baseline B C --json`` per pair). Per support, kind and source of
 intervals (the network's answer; the competing explanation of the true kind):
 
@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.study_beams import fold, run_beam
+from experiments.studies.study_beams import fold, run_beam
 
 __all__ = ["BEAMS", "CONFIGS", "cover", "main", "markdown"]
 
@@ -105,11 +105,11 @@ def markdown(rows: list[dict]) -> str:
 
 
 def main(argv=None) -> int:
-    from experiments.doc_tables import write_table
+    from experiments.studies.doc_tables import write_table
     from experiments.second_sim.beams import CATALOGUE
     from physics.io import atomic_write_text
 
-    p = argparse.ArgumentParser(prog="python -m experiments.bench_coverage", description=__doc__.split("\n")[0])
+    p = argparse.ArgumentParser(prog="python -m experiments.benches.bench_coverage", description=__doc__.split("\n")[0])
     p.add_argument("--out", type=Path, default=Path("out/coverage"))
     p.add_argument("--n-pairs", type=int, default=60)
     p.add_argument("--train-n", type=int, default=6000)
