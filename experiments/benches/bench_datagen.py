@@ -8,7 +8,7 @@ state per sample):
 
 * naive: Python loop over samples; full state-space eigen-solution of the
   truth model, :func:`physics.updating.pilkey`, measured and updated FRFs
-  computed eagerly (:func:`datagen.naive.simulate_naive`, ``modes="full"``);
+  computed eagerly (:func:`datagen.naive.simulate_naive`, ``solution="full"``);
 * generate: :func:`datagen.generation.generate` end to end on ``--workers``
   processes, including writing the shards, checksums and ``samples.parquet``;
 * read, full FRFs: real/imag float32 tensors (both states, 4 DOFs, 1024
@@ -203,9 +203,9 @@ def _naive_rates(cfg, n: int) -> dict:
     setup = get_setup(cfg)
     inp = draw_batch(np.random.default_rng(0), n, setup)
     with threadpool_limits(1):
-        simulate_naive(setup, inp.take(slice(0, 2)), modes="full")  # warm-up (numba, caches)
+        simulate_naive(setup, inp.take(slice(0, 2)), solution="full")  # warm-up (numba, caches)
         t, c = time.perf_counter(), _cpu_s()
-        simulate_naive(setup, inp, modes="full")
+        simulate_naive(setup, inp, solution="full")
         return {"naive_full_samples_per_s": n / (time.perf_counter() - t),
                 "naive_full_samples_per_cpu_s": n / (_cpu_s() - c)}
 

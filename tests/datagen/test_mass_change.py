@@ -139,7 +139,7 @@ def test_projection_and_the_drop_label_hold_with_test_day_changes():
     assert set(inp.damage) == {"mass_kg", "width_m", "point_kg", "point_x_m"}
     assert (inp.n_damages == 2).any() and (inp.n_damages == 0).any()
     out = simulate_batch(setup, inp)
-    full = simulate_naive(setup, inp, modes="full")
+    full = simulate_naive(setup, inp, solution="full")
     f_s, z_s = modal_parameters(out["truth_poles"][..., :4])
     f_f, z_f = modal_parameters(full["truth_poles"][..., :4])
     np.testing.assert_allclose(f_s, f_f, rtol=1e-4)

@@ -184,7 +184,7 @@ def test_every_effect_batched_shortcut_matches_per_sample_state_space():
     cfg["beam"] = beam_mapping(preset_beam("beam5").with_effects(ALL_EFFECTS, name="beam5-all"))
     setup = build_setup(cfg)
     inp = draw_batch(np.random.default_rng(3), 6, setup)
-    out, full = simulate_chunk(setup, inp), simulate_naive(setup, inp, modes="full")
+    out, full = simulate_chunk(setup, inp), simulate_naive(setup, inp, solution="full")
     f_s, z_s = modal_parameters(out["truth_poles"][..., :4])
     f_f, z_f = modal_parameters(full["truth_poles"][..., :4])
     np.testing.assert_allclose(f_s, f_f, rtol=1e-4)
