@@ -199,7 +199,8 @@ def _naive_rates(cfg, n: int) -> dict:
     from threadpoolctl import threadpool_limits
 
     from datagen.naive import simulate_naive
-    from datagen.pipeline import draw_batch, get_setup
+    from datagen.batch_inputs import draw_batch
+    from datagen.setup import get_setup
 
     setup = get_setup(cfg)
     inp = draw_batch(np.random.default_rng(0), n, setup)

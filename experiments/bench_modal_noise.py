@@ -123,7 +123,9 @@ def _config(level, floor, calibration=None, grid=None):
 
 def shortcut_errors(level, floor, specimens, seed, calibration=None, grid=None):
     """Errors of the modal-noise shortcut (fixed default, or calibrated with the given coefficients)."""
-    from datagen.pipeline import draw_batch, get_setup, measure_modes, simulate_batch
+    from datagen.batch_inputs import draw_batch
+    from datagen.pipeline import measure_modes, simulate_batch
+    from datagen.setup import get_setup
 
     setup = get_setup(_config(level, floor, calibration, grid))
     inp = draw_batch(np.random.default_rng(seed), specimens, setup)

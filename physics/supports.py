@@ -17,8 +17,8 @@ import numpy as np
 
 from physics.errors import ConfigError
 
-__all__ = ["ENDS", "MECHANISMS", "SUPPORTS", "THESIS_SUPPORT", "End", "Support", "add_springs", "changed_springs", "markdown_table",
-           "support", "suspension_unit_stiffness"]
+__all__ = ["ENDS", "MECHANISMS", "SUPPORTS", "THESIS_SUPPORT", "End", "Support", "add_springs", "changed_springs",
+           "markdown_table", "support", "suspension_unit_stiffness"]
 
 
 @dataclass(frozen=True)
