@@ -23,7 +23,7 @@ from physics import errors, estimation, fem, frf, modal, properties, reduction, 
 from physics.errors import (BeamDamageError, ConfigError, ConvergenceError, FileFormatError, OverdampedError,
                             ShapeError)
 from physics.estimation import FRFEstimate, estimate_frf
-from physics.fem import BOUNDARY_CONDITIONS, FEModel, KeptDofs, beam_model, kept_dofs, lumped_mass
+from physics.fem import FEModel, KeptDofs, beam_model, kept_dofs, lumped_mass
 from physics.frf import (FRF_KINDS, FRF_UNITS, PoleResidues, convert_frf, pole_residue, poles_and_residues,
                          receptance, receptance_modal, receptance_state_space)
 from physics.modal import (ComplexModes, complex_modes, eigenvalues_from_modal, mac, modal_parameters,
@@ -41,7 +41,7 @@ __all__ = [
     # errors
     "BeamDamageError", "ConfigError", "ConvergenceError", "FileFormatError", "OverdampedError", "ShapeError",
     # FE model
-    "BOUNDARY_CONDITIONS", "FEModel", "KeptDofs", "beam_model", "kept_dofs", "lumped_mass",
+    "FEModel", "KeptDofs", "beam_model", "kept_dofs", "lumped_mass",
     # supports
     "SUPPORTS", "Support", "support",
     # properties

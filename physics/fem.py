@@ -24,9 +24,9 @@ from typing import NamedTuple
 import numpy as np
 
 from physics.errors import BeamDamageError, ShapeError
-from physics.supports import SUPPORTS, THESIS_SUPPORT, add_springs, support
+from physics.supports import THESIS_SUPPORT, add_springs, support
 
-__all__ = ["BOUNDARY_CONDITIONS", "FEModel", "KeptDofs", "MAX_ELEMENTS", "assemble", "beam_model", "check_n_elements",
+__all__ = ["FEModel", "KeptDofs", "MAX_ELEMENTS", "assemble", "beam_model", "check_n_elements",
            "constrained_dofs", "dof_names", "element_mass", "element_stiffness", "kept_dofs", "lumped_mass"]
 
 
@@ -44,10 +44,6 @@ def check_n_elements(n_elements) -> int:
         raise BeamDamageError(f"n_elements must be <= {MAX_ELEMENTS} (dense matrices; {n} elements would need "
                               f"{gib:.3g} GiB), got {n}", parameter="n_elements")
     return n
-
-
-#: The supports' names (:data:`physics.supports.SUPPORTS`).
-BOUNDARY_CONDITIONS = tuple(SUPPORTS)
 
 
 # Element matrices as polynomials in the element length l: A0 + A1*l + A2*l**2.
