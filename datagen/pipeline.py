@@ -16,8 +16,9 @@ seed. FRFs are synthesised from those when read (:mod:`datagen.synth`).
 
 Truth model
 -----------
-Clamped-free Euler-Bernoulli beam of ``mesh.truth_elements`` equal elements
-(optionally with a root rotational spring), specimen ``EI`` and mass, the
+Euler-Bernoulli beam of ``mesh.truth_elements`` (or more, aligned with the sensors) equal elements on the test's
+supports (:mod:`physics.supports`; the thesis's clamped-free beam by default): clamps optionally on a drawn
+rotational spring, pins, a free beam on its suspension; specimen ``EI`` and mass, the
 damage of ``damage.kind`` as element corrections ``(dM, dK, dC)`` of the current
 state (:mod:`datagen.damage`); a beam file
 (``generate --beam FILE``) adds its effects as described in
