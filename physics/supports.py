@@ -5,8 +5,9 @@ its symbol in a figure), how many rigid-body modes the beam keeps, and its own s
 rotations of the clamps or pins, the translations of free ends), the beam-file effect that calibrates them
 (:mod:`physics.effects`), their stiffness on the nominal beam and what a support change between two tests does
 to them (:func:`changed_springs`). :func:`support` looks a name up and refuses an unknown one in one line;
-:func:`markdown_table` is the table of ``docs/beam-file.md``.
-
+:func:`markdown_table` is the table of ``docs/beam-file.md``. :func:`add_springs` is the one way springs to
+ground enter a stiffness matrix (the effects of a beam file, ``generate``'s truth mesh, the sensitivities and the
+support-change explanation).
 """
 
 from __future__ import annotations
