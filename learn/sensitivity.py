@@ -119,7 +119,8 @@ def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7,
     kind : damage kind (:data:`datagen.damage.DAMAGE_MODELS`): its ``perturbs`` says which matrix a size changes
     test : physics.layout.Layout, optional
         Another test than the thesis's: its supports, sensors (shapes interpolated there) and modes (``n_modes``
-        is then theirs; a free-free beam's rigid-body modes left out); the root spring acts on a clamp at ``x = 0``.
+        is then theirs; a free-free beam's rigid-body modes left out); the root spring acts on every clamp (as the
+        clamp springs ``generate`` draws), the default suspension holds a free-free beam (:mod:`physics.supports`).
     """
     perturbs = damage_model(kind).perturbs
     if test is not None and not test.thesis:
