@@ -114,7 +114,7 @@ MAX_MODAL_NOISE = 0.5
 #: The repeatability ranges of ``measurement`` (per-sample stds of each test's own changes, log-uniform) and
 #: their largest accepted values (docs/datasets.md, "Repeatability of the tests").
 REPEATABILITY_MAX = {"frequency_scatter": 0.01, "damping_scatter": 0.5, "shape_scatter": 0.1, "gain_scatter": 0.1}
-#: Those keys, in the order a batch draws them (:func:`datagen.pipeline.draw_batch`).
+#: Those keys, in the order a batch draws them (:func:`datagen.batch_inputs.draw_batch`).
 REPEATABILITY = tuple(REPEATABILITY_MAX)
 #: The per-sample variables of ``measurement.modal_noise = "output-only"`` (:func:`output_only_variables`).
 OUTPUT_ONLY_VARIABLES = ("sensor_noise", "record_length_s")

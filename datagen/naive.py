@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from datagen.pipeline import BatchInputs, Setup, measure_modes, projected_modes, damage_frequency_drop, \
-    truth_matrices, update_models
+from datagen.batch_inputs import BatchInputs
+from datagen.pipeline import damage_frequency_drop, measure_modes, projected_modes, truth_matrices, update_models
+from datagen.setup import Setup
 from datagen.synth import add_noise
 from physics.frf import poles_and_residues, receptance, receptance_modal, receptance_state_space
 from physics.modal import underdamped_modes, undamped_modes

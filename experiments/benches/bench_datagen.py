@@ -48,7 +48,8 @@ from datagen.config import load_config, merge
 from datagen.dataset import Dataset
 from datagen.generation import generate
 from datagen.naive import simulate_naive
-from datagen.pipeline import draw_batch, get_setup
+from datagen.batch_inputs import draw_batch
+from datagen.setup import get_setup
 from datagen.store import finalize, read_manifest
 from datagen.torchdata import make_loader
 from experiments.studies.doc_tables import write_table

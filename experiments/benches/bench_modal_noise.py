@@ -49,7 +49,9 @@ from threadpoolctl import threadpool_limits
 
 from learn.noise_calibration import calibrate_std, robust_std
 from datagen.config import CONFIG_DIR, merge
-from datagen.pipeline import draw_batch, get_setup, measure_modes, simulate_batch
+from datagen.batch_inputs import draw_batch
+from datagen.pipeline import measure_modes, simulate_batch
+from datagen.setup import get_setup
 from datagen.synth import measured_frf
 from learn.measured import IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, identify_modes
 from learn.sensitivity import beam_sensitivity

@@ -12,7 +12,8 @@ import numpy as np
 
 from experiments.cli.args import add_beam_argument
 from physics import discrepancy as dsc
-from physics.effects import CANDIDATES, SUPPORT_EFFECTS
+from physics.effects import CANDIDATES
+from physics.supports import SUPPORTS
 from physics.errors import ConfigError
 from physics.io import FRF, MODAL, accepted, dof_positions_text
 
@@ -150,8 +151,8 @@ def add_parser(sub):
     p.add_argument("--max-effects", type=int, default=2, help="most effects to name (default 2)")
     p.add_argument("--candidates", nargs="+", default=None, choices=CANDIDATES, metavar="EFFECT",
                    help="effects to test (default: all that fit the beam's supports: "
-                        + " ".join(c for c in CANDIDATES if c not in SUPPORT_EFFECTS.values())
-                        + " on every beam, plus " + ", ".join(f"{e} ({bc})" for bc, e in SUPPORT_EFFECTS.items())
+                        + " ".join(c for c in CANDIDATES if c not in {s.effect for s in SUPPORTS.values()})
+                        + " on every beam, plus " + ", ".join(f"{s.effect} ({s.name})" for s in SUPPORTS.values())
                         + "); one that does not fit the supports is refused")
     p.add_argument("--elements", type=int, default=40, help="elements of the fitted models (default 40)")
     p.add_argument("--seed", type=int, default=0, help="seed of the multi-start fits")

@@ -18,7 +18,6 @@ from physics.identification import (DEFAULT_OUTPUT_ONLY, holds_response_records,
 from physics.identification.measured import read_measured_frf
 from physics.io import MODAL, TIME, atomic_write_text, format_complex, modal_or_frf, prepare_measured, read
 from physics.io.inputs import check_input_file
-from physics.layout import RIGID_BODY_MODES
 from physics.modal import modal_parameters, undamped_modes
 
 __all__ = ["CACHE_FORMAT", "IdentificationSettings", "IdentifiedModes", "cached_identification", "file_key",
@@ -110,7 +109,7 @@ def identification_settings(band_hz=None, beam=None, model=None) -> Identificati
 
         fe = beam.fe_model(40)
         w = undamped_modes(np.asarray(fe.M), np.asarray(fe.K))[0]
-        f4 = float(np.sort(np.abs(w))[RIGID_BODY_MODES[beam.bc] + 3]) / (2 * np.pi)
+        f4 = float(np.sort(np.abs(w))[beam.support.rigid_body_modes + 3]) / (2 * np.pi)
         return IdentificationSettings((0.0, IDENTIFICATION_BAND_FACTOR * f4), IDENTIFICATION["n_modes"])
     return IdentificationSettings()
 

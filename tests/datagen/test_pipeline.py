@@ -5,7 +5,9 @@ import pytest
 
 from datagen.config import merge
 from datagen.naive import simulate_naive
-from datagen.pipeline import draw_batch, get_setup, simulate_batch
+from datagen.batch_inputs import draw_batch
+from datagen.pipeline import simulate_batch
+from datagen.setup import get_setup
 from datagen.synth import measured_frf, updated_frf
 from physics.frf import pole_residue, poles_and_residues, receptance
 from physics.modal import complex_modes, modal_parameters
