@@ -321,7 +321,9 @@ def test_detection_limit_of_a_dashpot_from_complex_shapes_per_position():
 def test_noise_scale_estimated_from_modal_data_only_with_enough_dof():
     small = dsc.Noise(NOISE.frequency / 5, NOISE.damping, NOISE.shape / 5)
     truth = _truth({"shear_deformation": {"kGA_N": 2.5e4}}, 3)
-    meas = dsc.simulate_measurement(truth, seed=3, noise=small, shapes=True, damping=False)
+    # seed 7: each block's chi^2 test at the estimated scale lies far from its 0.5 % threshold (p 0.09-0.6; seed 3
+    # put the frequencies at p = 0.005, where the fit's last digits, e.g. the BLAS thread count, flipped the test)
+    meas = dsc.simulate_measurement(truth, seed=7, noise=small, shapes=True, damping=False)
     res = dsc.analyse(BEAM, meas, NOISE, max_effects=1, n_elements=24, n_starts=2, estimate_noise=True,
                       candidates=("shear_deformation", "root_flexibility"))
     # chi^2/dof of the best round-1 fit on 26 dof: the std 5x below the assumed one, within sampling
