@@ -6,7 +6,9 @@ import pytest
 
 from experiments.second_sim.fem import Beam, PointMass, Slit, assemble, modes
 from learn.features import BeamSpec
-from learn.hypotheses import HYPOTHESES, _support_curves, summary, weigh
+from datagen.damage import damage_defaults
+from learn.features import shape_changes
+from learn.hypotheses import HYPOTHESES, _support_curves, kind_explanation, summary, weigh
 from learn.sensitivity import beam_sensitivity
 
 L, EI, M = 0.6095, 26.9, 0.15792 / 1.219
@@ -19,19 +21,25 @@ def shifts(beam: Beam) -> np.ndarray:
     return modes(assemble(beam)).frequencies_hz[:4] / f0 - 1
 
 
+#: The mass changes of these tests are point masses: the explanation's spread is none.
+POINT_MASSES = {**damage_defaults("mass_change"), "width_fraction": [0.0, 0.0]}
+
+
 @pytest.fixture(scope="module")
 def models():
     spec = BeamSpec("beam5", L, ("2:y", "3:y", "4:y", "5:y"), "iirs")
-    slit = beam_sensitivity((L, EI, M), KR_REL)
-    mass = beam_sensitivity((L, EI, M), KR_REL, kind="mass_change")
+    kinds = {"slit": kind_explanation("slit", damage_defaults("slit"), "beam5", beam_sensitivity((L, EI, M), KR_REL),
+                                      np.linspace(0.0, 0.15, 201)),
+             "mass_change": kind_explanation("mass_change", POINT_MASSES, "beam5",
+                                             beam_sensitivity((L, EI, M), KR_REL, kind="mass_change"),
+                                             np.linspace(-0.1, 0.1, 201))}
     grid, curve, what, reclamp, support_shapes = _support_curves(spec, EI, M, KR_REL, (-0.08, 0.08))
-    return slit, mass, (grid, curve, what, reclamp), support_shapes
+    return kinds, (grid, curve, what, reclamp), support_shapes
 
 
 def weighed(models, y, shapes=None):
-    slit, mass, support, support_shapes = models
-    return weigh(y, slit, mass, support, (-0.004, 0.004), theta_max=0.15, length_m=L, shapes=shapes,
-                 support_shapes=support_shapes)
+    kinds, support, support_shapes = models
+    return weigh(y, kinds, support, (-0.004, 0.004), length_m=L, shapes=shapes, support_shapes=support_shapes)
 
 
 def quarter_point_shapes(beam: Beam) -> np.ndarray:
@@ -73,8 +81,8 @@ def test_the_slit_posterior_covers_the_slit(models):
     p = best.parameters
     theta = Slit(0.2, 0.004, 0.6).hinge_flexibility(L)
     assert p["x_m_95"][0] <= 0.2 <= p["x_m_95"][1] and p["x_m_95"][1] - p["x_m_95"][0] < 0.25 * L
-    assert p["hinge_flexibility_95"][0] <= theta <= p["hinge_flexibility_95"][1]
-    assert abs(p["hinge_flexibility"] / theta - 1) < 0.15
+    assert p["size_95"][0] <= theta <= p["size_95"][1] and p["size_label"] == "hinge flexibility"
+    assert abs(p["size"] / theta - 1) < 0.15
 
 
 def test_a_mass_lost_raises_the_frequencies_and_is_named(models):
@@ -84,7 +92,7 @@ def test_a_mass_lost_raises_the_frequencies_and_is_named(models):
     y = modes(assemble(BASE)).frequencies_hz[:4] / modes(assemble(heavy)).frequencies_hz[:4] - 1
     assert np.all(y > 0)
     rows = weighed(models, y)
-    assert rows[0].name == "mass_change" and rows[0].parameters["mass_ratio"] == pytest.approx(-0.02, abs=0.004)
+    assert rows[0].name == "mass_change" and rows[0].parameters["size"] == pytest.approx(-0.02, abs=0.004)
     assert rows[0].parameters["x_m"] == pytest.approx(0.7 * L, abs=0.02)
     assert next(r for r in rows if r.name == "slit").probability < 1e-3
 
@@ -93,9 +101,9 @@ def test_two_explanations_the_modes_cannot_separate_are_said_so(models):
     """Mode 1 alone, lowered by 1 %: a slit near the clamp and a mass near the tip both fit; the summary says
     they cannot be told apart and names what would separate them. So do a slit at 0.16 m and a 3 % mass at 0.45 m
     on modes 1-4 (their frequency changes agree to 0.1 %)."""
-    slit, mass, (grid, curve, what, reclamp), _ = models
-    rows = weigh(np.array([-0.01]), slit.modes([0]), mass.modes([0]), (grid, curve[:, :1], what, reclamp[:, :1]),
-                 (-0.004, 0.004), theta_max=0.15, length_m=L)
+    kinds, (grid, curve, what, reclamp), _ = models
+    rows = weigh(np.array([-0.01]), {k: v.modes([0]) for k, v in kinds.items()},
+                 (grid, curve[:, :1], what, reclamp[:, :1]), (-0.004, 0.004), length_m=L)
     text = summary(rows, [1])
     assert "cannot be told apart" in text and "would separate them" in text
     mass = Beam(L, EI, M, root_k_theta_Nm_rad=KR_REL * EI / L, masses=(PointMass(0.45, 0.03 * M * L),))
@@ -107,9 +115,9 @@ def test_two_explanations_the_modes_cannot_separate_are_said_so(models):
 def test_pairs_weighed_in_one_batch_get_what_each_gets_alone(models):
     from learn.hypotheses import weigh_many
 
-    slit, mass, support, _ = models
+    kinds, support, _ = models
     Y = np.stack([shifts(CASES[t]) for t in ("slit", "support_change", "intact")])
-    batch = weigh_many(Y, slit, mass, support, (-0.004, 0.004), theta_max=0.15, length_m=L)
+    batch = weigh_many(Y, kinds, support, (-0.004, 0.004), length_m=L)
     for y, rows in zip(Y, batch):
         alone = weighed(models, y)
         assert [r.name for r in rows] == [r.name for r in alone]
@@ -122,19 +130,17 @@ def test_pairs_weighed_in_one_batch_get_what_each_gets_alone(models):
 def test_the_shape_changes_tell_an_added_mass_from_a_slit(models, x_over_L):
     """The same 2 % masses with the shapes of both tests (exact, from the independent simulator): the mass change
     is the most probable explanation; a slit, with its shapes, stays the most probable."""
-    from learn.hypotheses import shape_changes
-
     beam = Beam(L, EI, M, root_k_theta_Nm_rad=KR_REL * EI / L, masses=(PointMass(x_over_L * L, 0.02 * M * L),))
     du = shape_changes(np.stack([quarter_point_shapes(BASE), quarter_point_shapes(beam)])[None])[0]
     rows = weighed(models, shifts(beam), du)
     assert rows[0].name == "mass_change", [(r.name, round(r.probability, 3)) for r in rows]
-    assert rows[0].parameters["mass_ratio"] == pytest.approx(0.02, rel=0.3)
+    assert rows[0].parameters["size"] == pytest.approx(0.02, rel=0.3)
     slit = CASES["slit"]
     du = shape_changes(np.stack([quarter_point_shapes(BASE), quarter_point_shapes(slit)])[None])[0]
     assert weighed(models, shifts(slit), du)[0].name == "slit"
 
 
-def test_a_change_no_explanation_describes_is_said_and_gets_no_slit_interval(models):
+def test_a_change_no_explanation_describes_is_said_and_gets_no_damage_interval(models):
     """Mode 2 up by 1 % while modes 1, 3, 4 fall by 0.5 %: no slit, mass, support or temperature does that; the
     most likely explanation misses a mode by more than FIT_LIMIT std, the summary says no explanation fits, and
     the slit reports no interval rather than a narrow one. The true slit of CASES fits."""
@@ -143,8 +149,9 @@ def test_a_change_no_explanation_describes_is_said_and_gets_no_slit_interval(mod
     rows = weighed(models, np.array([-0.005, 0.01, -0.005, -0.005]))
     assert not rows[0].fits and rows[0].max_misfit_std > FIT_LIMIT
     assert summary(rows, [1, 2, 3, 4]).startswith("no explanation fits the change within its noise")
-    slit = next(r for r in rows if r.name == "slit")
-    assert slit.parameters["x_m_95"] is None and slit.parameters["hinge_flexibility_68"] is None
+    for kind in ("slit", "mass_change"):       # every damage kind withholds its intervals when it does not fit
+        p = next(r for r in rows if r.name == kind).parameters
+        assert p["x_m_95"] is None and p["size_68"] is None and p["size_95"] is None and np.isfinite(p["size"])
     good = weighed(models, shifts(CASES["slit"]))[0]
     assert good.fits and good.parameters["x_m_95"] is not None
     assert not summary([good, *weighed(models, shifts(CASES["slit"]))[1:]], [1, 2, 3, 4]).startswith("no expl")

@@ -197,7 +197,7 @@ def test_equivalent_depth_inverts_the_layered_section():
 def test_size_spread_factor_gives_one_sigma_coverage():
     """Sizes drawn log-normal with log-std 0.4 around the medians, a head claiming 0.1: the factor is about 4 and
     then 68 % of the truths lie within one reported standard deviation."""
-    from learn.estimator import fit_size_std_scale, lognormal_std
+    from learn.size import fit_size_std_scale, lognormal_std
 
     rng = np.random.default_rng(0)
     med = np.exp(rng.uniform(-3, 1, 20000))
@@ -212,7 +212,7 @@ def test_size_spread_factor_gives_one_sigma_coverage():
 def test_a_signed_size_transform_keeps_the_sign_and_its_spread_covers():
     """asinh(size / 0.01): signed sizes round-trip, the one-sigma interval's half width is the reported std, and the
     std factor fitted on sizes scattered by 0.3 in the transformed space covers 68 % of them (both signs)."""
-    from learn.estimator import SizeTransform, fit_size_std_scale
+    from learn.size import SizeTransform, fit_size_std_scale
 
     tf = SizeTransform.parse("asinh:0.01")
     sizes = np.array([-0.2, -0.01, -1e-4, 0.0, 0.003, 0.15])
