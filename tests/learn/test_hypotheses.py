@@ -168,3 +168,119 @@ def test_the_verdict_says_when_its_sources_disagree():
     b = agreement({"damaged": True}, net, {"damaged": True, "method": "DLAC"},
                   [{"name": "slit", "probability": 0.9, "fits": True}], "network")
     assert b["agree"] and b["text"].startswith("One story")
+
+
+def _model(damage: dict):
+    """A model's beam and config as the explanations read them: beam 5 on the default root spring, trained on data
+    of the generator config's ``damage`` section."""
+    from types import SimpleNamespace
+
+    spec = BeamSpec("beam5", L, ("2:y", "3:y", "4:y", "5:y"), "iirs")
+    return SimpleNamespace(beam=spec, config={"generator_config": {"damage": damage}, "root_spring_relative": KR_REL,
+                                              "truth_beam": {}})
+
+
+def test_the_explanations_prior_and_spread_follow_the_generator_config():
+    """The model's own kind spans the sizes its data draw (a slit's hinge flexibility of its deepest, widest slit;
+    a mass change's signed mass ratios) and averages its sensitivities over the lengths its data spread over; the
+    other kinds keep their defaults."""
+    from datagen.damage.slit import hinge_flexibility
+    from learn.hypotheses import kind_explanations, window_averaged
+
+    slit_cfg = {**damage_defaults("slit"), "ei_loss": [0.1, 0.5], "width_m": [0.002, 0.01]}
+    kinds = kind_explanations(_model(slit_cfg))
+    assert kinds["slit"].sizes[0] == 0.0
+    assert kinds["slit"].sizes[-1] == pytest.approx(float(hinge_flexibility(0.5, 0.01, L)), rel=1e-12)  # 0.0164
+    assert (kinds["mass_change"].sizes[0], kinds["mass_change"].sizes[-1]) == (-0.05, 0.05)        # its defaults
+    mass_cfg = {**damage_defaults("mass_change"), "mass_ratio": [-0.2, 0.1], "width_fraction": [0.1, 0.3]}
+    kinds = kind_explanations(_model(mass_cfg))
+    assert (kinds["mass_change"].sizes[0], kinds["mass_change"].sizes[-1]) == (-0.2, 0.1)
+    # a window 0.2 L long is 8 elements of the 40: half of each end element and the 7 between
+    point = beam_sensitivity("beam5", KR_REL, kind="mass_change").frequency
+    e = 20
+    expected = (0.5 * point[:, e - 4] + point[:, e - 3:e + 4].sum(axis=1) + 0.5 * point[:, e + 4]) / 8
+    np.testing.assert_allclose(kinds["mass_change"].sens.frequency[:, e], expected, rtol=1e-12)
+    assert not np.allclose(kinds["mass_change"].sens.frequency[:, e], point[:, e], rtol=1e-3)
+    # the slit's defaults: 0.3 mm deep into the 0.5 mm face sheet over 10 mm
+    assert kinds["slit"].sizes[-1] == pytest.approx(0.01334, rel=1e-3)
+
+
+@pytest.mark.parametrize("x_over_L, ratio", [(0.35, 0.03), (0.7, -0.02), (0.55, 0.01)])
+def test_the_mass_change_intervals_cover_a_simulated_mass(x_over_L, ratio):
+    """A point mass added (or, carried by the baseline, lost) in the independent simulator: the mass change's 95 %
+    intervals of place and signed size, from a model trained on point masses within +-5 %, hold the true ones."""
+    from learn.hypotheses import kind_explanations
+
+    kinds = kind_explanations(_model({**damage_defaults("mass_change"), "width_fraction": [0.0, 0.0]}))
+    spec = BeamSpec("beam5", L, ("2:y", "3:y", "4:y", "5:y"), "iirs")
+    grid, curve, what, reclamp, _ = _support_curves(spec, EI, M, KR_REL, (-0.08, 0.08))
+    point = (PointMass(x_over_L * L, abs(ratio) * M * L),)
+    heavy = Beam(L, EI, M, root_k_theta_Nm_rad=KR_REL * EI / L, masses=point)
+    f_base, f_cur = (modes(assemble(b)).frequencies_hz[:4] for b in ((BASE, heavy) if ratio > 0 else (heavy, BASE)))
+    rows = weigh(f_cur / f_base - 1, kinds, (grid, curve, what, reclamp), (-0.004, 0.004), length_m=L)
+    p = next(r for r in rows if r.name == "mass_change").parameters
+    assert p["size_label"] == "mass ratio"
+    assert p["x_m_95"][0] <= x_over_L * L <= p["x_m_95"][1], p
+    assert p["size_95"][0] <= ratio <= p["size_95"][1] and p["size_95"][1] - p["size_95"][0] < abs(ratio), p
+    assert p["size_68"][0] >= p["size_95"][0] and p["size_68"][1] <= p["size_95"][1]
+
+
+class _Stiffening:
+    """A throwaway damage kind (registered by the tests only): a stiffness loss like a slit's under another name."""
+
+    kind = "stiffening_test"
+    defaults = {"theta": [0.0, 0.02]}
+    size_meaning = "hinge flexibility of a test kind"
+    size_label = "test flexibility"
+    size_transform = "log"
+    perturbs = "stiffness"
+    separates = {"slit": "nothing at all (a slit by another name)"}
+
+    def size_range(self, d, beam):
+        return tuple(d["theta"])
+
+    def spread_m(self, d, length_m):
+        return 0.0
+
+    def describe(self, x_m, size, preset, section=None):
+        return f"a test stiffening at x = {x_m:.3f} m of {size:.3g}"
+
+
+@pytest.fixture
+def stiffening(monkeypatch):
+    """``DAMAGE_MODELS`` with the throwaway kind registered."""
+    from datagen.damage import DAMAGE_MODELS
+
+    monkeypatch.setitem(DAMAGE_MODELS, _Stiffening.kind, _Stiffening())
+    return _Stiffening.kind
+
+
+def test_a_kind_registered_anywhere_is_weighed_described_and_separated(stiffening):
+    """No kind is written into learn: a kind added to DAMAGE_MODELS gets its explanation (its prior from the
+    model's config, its sensitivities from its perturbs), its intervals, its separating measurement in the summary,
+    counts as damage in the verdict's agreement and speaks its own prose in the verdict."""
+    from learn.hypotheses import kind_explanations
+    from learn.verdict import DamageWords, _classical_sentence, _damage_sentence, agreement
+
+    kinds = kind_explanations(_model({"kind": stiffening, "theta": [0.0, 0.015]}))
+    assert set(kinds) >= {"slit", "mass_change", stiffening}
+    assert kinds[stiffening].perturbs == "stiffness" and kinds[stiffening].sizes[-1] == 0.015
+    spec = BeamSpec("beam5", L, ("2:y", "3:y", "4:y", "5:y"), "iirs")
+    grid, curve, what, reclamp, _ = _support_curves(spec, EI, M, KR_REL, (-0.08, 0.08))
+    rows = weigh(shifts(CASES["slit"]), kinds, (grid, curve, what, reclamp), (-0.004, 0.004), length_m=L)
+    assert {rows[0].name, rows[1].name} == {"slit", stiffening}, [(r.name, r.probability) for r in rows]
+    mine = next(r for r in rows if r.name == stiffening).parameters
+    theta = Slit(0.2, 0.004, 0.6).hinge_flexibility(L)
+    assert mine["size_label"] == "test flexibility" and mine["size_95"][0] <= theta <= mine["size_95"][1]
+    assert "nothing at all (a slit by another name) would separate them" in summary(rows, [1, 2, 3, 4])
+    best = {"name": stiffening, "probability": 0.6, "fits": True}
+    assert agreement({"damaged": True}, {"damaged": True}, None, [best], "network")["agree"]
+    a = {"damaged": True, "detectable": True, "probability_damaged": 0.97, "decision_threshold": 0.9,
+         "location_x_m": 0.2, "location_std_m": 0.02, "location_x_over_L": 0.33, "location_element": 2,
+         "size": 0.0098, "size_std": 0.002}
+    words = DamageWords(stiffening)
+    text = _damage_sentence(a, words)
+    assert "a test stiffening at x = 0.200 m of 0.0098" in text and "test flexibility +- 0.002" in text
+    assert "slit" not in text and "hinge" not in text
+    assert _classical_sentence({"method": "DLAC", **a}, words) == ("DLAC: damaged, a test stiffening at x = 0.200 m "
+                                                                   "of 0.0098 (element 2 of 4)")
