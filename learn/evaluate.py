@@ -158,7 +158,7 @@ def subsets(truth: dict, table) -> dict:
             if sel.any():
                 out[f"noise {100 * lo:g}-{100 * hi:g} %" if np.isfinite(hi) else f"noise >= {100 * lo:g} %"] = sel
     dam = truth["damaged"]
-    s = truth["size"]
+    s = np.abs(truth["size"])              # a signed size (a mass lost) by its magnitude
     if dam.sum() >= 3:
         q = np.quantile(s[dam], [1 / 3, 2 / 3])
         for name, sel in (("size small", s <= q[0]), ("size medium", (s > q[0]) & (s <= q[1])),

@@ -61,7 +61,7 @@ from physics.errors import BeamDamageError
 from physics.fem import beam_model
 from physics.layout import RIGID_BODY_MODES
 from physics.modal import undamped_modes
-from physics.properties import beam_preset
+from physics.properties import PRESETS, beam_preset
 
 __all__ = ["BASE_HYPOTHESES", "FIT_LIMIT", "FREQUENCY_CHANGE_STD", "HYPOTHESES", "KindExplanation", "MODEL_ERROR",
            "NO_EXPLANATION", "SEPARATE_BASE", "SHAPE_CHANGE_STD", "SIZE_SCALE_STD", "Hypothesis", "explain",
@@ -505,14 +505,18 @@ def kind_explanation(name: str, d: dict, beam, sens: Sensitivity, sizes=None) ->
 
 
 def _beam_mapping(model) -> dict:
-    """The truth beam's mapping of a model (its preset's fields when it records none) with the generator config's
-    ``section`` keys: what a damage kind's ``size_range`` reads."""
+    """The truth beam's mapping of a model over its preset's fields (a beam named after a preset; the preset's alone
+    when it records none), with the generator config's ``section`` keys: what a damage kind's ``size_range``
+    reads."""
     truth = model.config.get("truth_beam") or {}
-    if "EI_Nm2" not in truth:
+    base = {}
+    if model.beam.name in PRESETS:
         p = beam_preset(model.beam.name)
-        truth = {"name": p.name, "EI_Nm2": p.EI_Nm2, "mass_per_length_kg_m": p.mass_per_length_kg_m,
-                 "length_m": p.length_m, "width_m": p.width_m, "thickness_m": p.thickness_m}
-    return {**truth, **((model.config.get("generator_config") or {}).get("section") or {})}
+        base = {"name": p.name, "EI_Nm2": p.EI_Nm2, "mass_per_length_kg_m": p.mass_per_length_kg_m,
+                "length_m": p.length_m, "width_m": p.width_m, "thickness_m": p.thickness_m}
+    if "EI_Nm2" not in truth:
+        truth = {}
+    return {**base, **truth, **((model.config.get("generator_config") or {}).get("section") or {})}
 
 
 #: The verdict keys of :func:`explain`, all None for a pair without explanations.

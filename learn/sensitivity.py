@@ -27,7 +27,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from datagen.damage import damage_model
+from datagen.damage import DEFAULT_KIND, damage_model
 from datagen.pipeline import suspension_unit_stiffness
 from learn.features import real_shapes, sign_aligned
 from physics.effects import hermite_row, point_mass_matrix
@@ -104,7 +104,7 @@ def _with_masses(models, masses, length_m: float, n_elements: int):
 
 @lru_cache(maxsize=16)
 def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7, n_elements: int = 40,
-                     n_modes: int = 4, step: float = 0.01, kind: str = "slit", test=None) -> Sensitivity:
+                     n_modes: int = 4, step: float = 0.01, kind: str = DEFAULT_KIND, test=None) -> Sensitivity:
     """Sensitivities of the nominal beam (clamped, or on a root spring ``k_r L / EI``) to damage of ``kind``.
 
     Parameters
