@@ -65,8 +65,8 @@ from physics.properties import PRESETS, beam_preset
 
 __all__ = ["BASE_HYPOTHESES", "FIT_LIMIT", "FREQUENCY_CHANGE_STD", "HYPOTHESES", "KindExplanation", "MODEL_ERROR",
            "NO_EXPLANATION", "SEPARATE_BASE", "SHAPE_CHANGE_STD", "SIZE_SCALE_STD", "Hypothesis", "explain",
-           "explain_many", "kind_explanation", "kind_explanations", "separate", "summary", "support_curve", "weigh", "weigh_many",
-           "window_averaged"]
+           "explain_many", "kind_explanation", "kind_explanations", "separate", "summary", "support_curve", "weigh",
+           "weigh_many", "window_averaged"]
 
 #: Relative standard deviation of a mode's frequency change between two tests (0.1 %): modal tests repeated on
 #: the same specimen and mounting scatter 0.05-0.5 % in frequency; the training's frequency scatter and modal

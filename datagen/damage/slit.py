@@ -54,7 +54,7 @@ from __future__ import annotations
 import numpy as np
 
 from datagen.checks import value_range
-from datagen.specimen import SectionLayout
+from datagen.specimen import DEFAULT_SECTION, SectionLayout
 from physics.errors import ConfigError
 from physics.properties import beam_preset, section_ei
 
@@ -335,9 +335,7 @@ def _section_keys(beam, section: dict | None) -> dict:
         return section
     if isinstance(beam, dict) and "face_thickness_m" in beam and "core_modulus_pa" in beam:
         return beam
-    from datagen.config import DEFAULTS  # a local import: datagen.config imports the damage models
-
-    return DEFAULTS["section"]
+    return DEFAULT_SECTION
 
 
 def _layout(preset, section: dict) -> tuple[SectionLayout, float]:

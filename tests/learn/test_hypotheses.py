@@ -185,7 +185,7 @@ def test_the_explanations_prior_and_spread_follow_the_generator_config():
     a mass change's signed mass ratios) and averages its sensitivities over the lengths its data spread over; the
     other kinds keep their defaults."""
     from datagen.damage.slit import hinge_flexibility
-    from learn.hypotheses import kind_explanations, window_averaged
+    from learn.hypotheses import kind_explanations
 
     slit_cfg = {**damage_defaults("slit"), "ei_loss": [0.1, 0.5], "width_m": [0.002, 0.01]}
     kinds = kind_explanations(_model(slit_cfg))
