@@ -44,7 +44,7 @@ __all__ = ["DEFAULT_ROUTE", "MODEL_FORMAT", "READ_FORMATS", "TrainedModel", "jso
            "load_model", "save_model", "sensitivity_of"]
 
 
-#: Input route used by default (the winner of ``python -m experiments.bench_learn``).
+#: Input route used by default (the winner of ``python -m experiments.benches.bench_learn``).
 DEFAULT_ROUTE = "modal"
 MODEL_FORMAT = "beam-damage-model/4"
 #: Formats :func:`load_model` reads: format 3 differs only in networks that need every mode.
