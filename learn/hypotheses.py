@@ -13,13 +13,13 @@ explanation         predicted ``y`` (first order unless stated)                 
 ``support_change``  ``a`` plus the exact change of the support springs by a       ``ln(k / k_0)`` in +-ln 10
                     factor: clamp springs (clamped ends), bearing rotation        (a pinned end: ``k L / EI``
                     springs (pinned ends), suspension (free-free)                 in 0.01-100 from none)
-a damage kind       ``a + sqrt(1 + 2 s F_r(x)) - 1`` for a kind that perturbs the   ``x`` on the grid, ``s``
-(every row of       stiffness (``s`` its hinge flexibility, ``F`` the curvature-    (the kind's size) over the
-``DAMAGE_MODELS``)  squared sensitivities of :mod:`learn.sensitivity`), ``a + (1 -  sizes its data draw
-                    2 s G_r(x))^-1/2 - 1`` for one that perturbs the mass (``s``    (``size_range`` of the
-                    its signed mass ratio, ``G`` displacement squared): the Rayleigh  model's generator config;
-                    quotient of the nominal shapes, the sensitivities averaged over   another kind's defaults)
-                    the kind's ``spread_m`` about ``x``
+a damage kind       ``a + sqrt(1 + 2 s F_r(x)) - 1`` for a kind that perturbs    ``x`` on the grid, ``s``
+(each row of        the stiffness (``s`` its hinge flexibility, ``F`` the        (its size) over the sizes
+``DAMAGE_MODELS``)  curvature-squared sensitivities, :mod:`learn.sensitivity`);  its data draw
+                    ``a + (1 - 2 s G_r(x))^-1/2 - 1`` for one that perturbs the  (``size_range`` of the
+                    mass (``s`` its signed mass ratio, ``G`` displacement        model's generator config;
+                    squared): the Rayleigh quotient of the nominal shapes, the   another kind's defaults)
+                    sensitivities averaged over the kind's ``spread_m`` about x
 =================== ============================================================ ==========================
 
 ``a`` (the temperature nuisance, within the training's ``temperature_stiffness_change``: ``a = dEI / (2 EI)``)
@@ -27,7 +27,7 @@ enters every explanation but ``global_stiffness``. The likelihood is Gaussian wi
 ``sigma`` per mode (default :data:`FREQUENCY_CHANGE_STD`) plus :data:`MODEL_ERROR` of each predicted change
 (the sizes' intervals also hold :data:`SIZE_SCALE_STD`); each explanation's evidence is its likelihood averaged
 over its prior (a grid), so a more flexible explanation pays for the predictions it could have made. With equal
-prior probabilities (:data:`PRIOR`), the probabilities are the normalised evidences.
+prior probabilities, the probabilities are the normalised evidences.
 
 Shapes, where both tests hold them: the change of the real unit-norm shapes at the sensors
 (:func:`learn.features.real_shapes`, the current shape's sign following the baseline's) enters the same
