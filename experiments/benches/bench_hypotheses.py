@@ -168,7 +168,8 @@ def table(n: int = 24, seed: int = 0, noise: float = 7e-4, model_dir=None, shape
     # the priors span this bench's pairs: hinge flexibilities up to 0.15, masses within +-10 % of the beam's
     kinds = {"slit": kind_explanation("slit", damage_defaults("slit"), "beam5", beam_sensitivity((L, EI, M), KR_REL),
                                       np.linspace(0.0, 0.15, 201)),
-             "mass_change": kind_explanation("mass_change", damage_defaults("mass_change"), "beam5",
+             "mass_change": kind_explanation("mass_change", {**damage_defaults("mass_change"),
+                                                             "width_fraction": [0.0, 0.0]}, "beam5",   # point masses
                                              beam_sensitivity((L, EI, M), KR_REL, kind="mass_change"),
                                              np.linspace(-0.1, 0.1, 201))}
     *support, support_shapes = _support_curves(spec, EI, M, KR_REL, (-0.08, 0.08))
