@@ -30,7 +30,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from learn.features import shape_changes
+from learn.shapes import shape_changes
 from learn.sensitivity import Sensitivity
 from learn.size import SizeTransform
 

@@ -30,7 +30,7 @@ over its prior (a grid), so a more flexible explanation pays for the predictions
 prior probabilities, the probabilities are the normalised evidences.
 
 Shapes, where both tests hold them: the change of the real unit-norm shapes at the sensors
-(:func:`learn.features.real_shapes`, the current shape's sign following the baseline's) enters the same
+(:func:`learn.shapes.real_shapes`, the current shape's sign following the baseline's) enters the same
 likelihood with a standard deviation :data:`SHAPE_CHANGE_STD` per entry. A damage kind predicts the first-order
 shape change of its size at its place (the shape sensitivities of :mod:`learn.sensitivity`), a support change the
 exact change of the nominal shapes (:func:`support_curve`), the day-to-day changes and a global stiffness change
@@ -53,7 +53,7 @@ import numpy as np
 
 from datagen.damage import DAMAGE_MODELS, damage_defaults
 from datagen.pipeline import suspension_unit_stiffness
-from learn.features import real_shapes, shape_changes, sign_aligned
+from learn.shapes import real_shapes, shape_changes, sign_aligned
 from learn.model_dir import sensitivity_of
 from learn.sensitivity import Sensitivity
 from physics.effects import hermite_row
@@ -338,7 +338,7 @@ def weigh_many(shifts, kinds: dict, support: tuple, temperature_range=(-0.004, 0
     length_m : float
     model_error : float                 relative std of each predicted change (:data:`MODEL_ERROR`)
     shapes : array, shape (n, S m), optional   measured changes of the real unit-norm shapes at the sensors
-                                        (:func:`learn.features.shape_changes`; sensor-major as the kinds'
+                                        (:func:`learn.shapes.shape_changes`; sensor-major as the kinds'
                                         ``sens.shape``); without them frequencies alone are weighed
     support_shapes : array, shape (G, S m), optional   the support grid's shape changes (:func:`support_curve`)
     shape_sigma : float or array (S m,)  std of each shape entry's change (:data:`SHAPE_CHANGE_STD`)

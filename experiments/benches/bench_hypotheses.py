@@ -158,7 +158,7 @@ def table(n: int = 24, seed: int = 0, noise: float = 7e-4, model_dir=None, shape
     from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
     from learn.features import BeamSpec
     from datagen.damage import damage_defaults
-    from learn.features import shape_changes
+    from learn.shapes import shape_changes
     from learn.hypotheses import SHAPE_CHANGE_STD, _support_curves, kind_explanation, weigh
     from learn.sensitivity import beam_sensitivity
     from physics.io import modal_data_from_dict

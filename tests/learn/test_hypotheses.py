@@ -7,7 +7,7 @@ import pytest
 from experiments.second_sim.fem import Beam, PointMass, Slit, assemble, modes
 from learn.features import BeamSpec
 from datagen.damage import damage_defaults
-from learn.features import shape_changes
+from learn.shapes import shape_changes
 from learn.hypotheses import HYPOTHESES, _support_curves, kind_explanation, summary, weigh
 from learn.sensitivity import beam_sensitivity
 

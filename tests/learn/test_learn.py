@@ -11,7 +11,8 @@ from sklearn.metrics import roc_auc_score
 from learn.classical import cawley_adams, dlac, mdlac, sensitivity_updating
 from learn.estimator import DamageClassifier, fit_calibration
 from learn.evaluate import reliability, roc_auc
-from learn.features import BeamSpec, curvatures, map_frf_to_grid, real_shapes, split_by_specimen
+from learn.features import BeamSpec, curvatures, map_frf_to_grid, split_by_specimen
+from learn.shapes import real_shapes
 from learn.sensitivity import beam_sensitivity
 from learn.model_dir import MODEL_FORMAT, TrainedModel, load_model, save_model
 from physics.errors import BeamDamageError
