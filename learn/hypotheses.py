@@ -54,14 +54,13 @@ import numpy as np
 from datagen.damage import DAMAGE_MODELS, damage_defaults
 from datagen.pipeline import suspension_unit_stiffness
 from learn.shapes import real_shapes, shape_changes, sign_aligned
-from learn.model_dir import sensitivity_of
+from learn.model_dir import sensitivity_of, truth_beam_mapping
 from learn.sensitivity import Sensitivity
 from physics.effects import hermite_row
 from physics.errors import BeamDamageError
 from physics.fem import beam_model
 from physics.layout import RIGID_BODY_MODES
 from physics.modal import undamped_modes
-from physics.properties import PRESETS, beam_preset
 
 __all__ = ["BASE_HYPOTHESES", "FIT_LIMIT", "FREQUENCY_CHANGE_STD", "HYPOTHESES", "KindExplanation", "MODEL_ERROR",
            "NO_EXPLANATION", "SEPARATE_BASE", "SHAPE_CHANGE_STD", "SIZE_SCALE_STD", "Hypothesis", "explain",
@@ -484,7 +483,7 @@ def kind_explanations(model) -> dict:
     beam, cfg = model.beam, model.config
     gen = cfg.get("generator_config") or {}
     own = gen.get("damage") or {}
-    mapping = _beam_mapping(model)
+    mapping = truth_beam_mapping(model)
     out = {}
     for name in DAMAGE_MODELS:
         d = own if own.get("kind") == name else damage_defaults(name)
@@ -502,21 +501,6 @@ def kind_explanation(name: str, d: dict, beam, sens: Sensitivity, sizes=None) ->
     sizes = np.linspace(*kind.size_range(d, beam), N_SIZE) if sizes is None else np.asarray(sizes, float)
     return KindExplanation(name, kind.perturbs, sizes, window_averaged(sens, kind.spread_m(d, sens.length_m)),
                            kind.size_label)
-
-
-def _beam_mapping(model) -> dict:
-    """The truth beam's mapping of a model over its preset's fields (a beam named after a preset; the preset's alone
-    when it records none), with the generator config's ``section`` keys: what a damage kind's ``size_range``
-    reads."""
-    truth = model.config.get("truth_beam") or {}
-    base = {}
-    if model.beam.name in PRESETS:
-        p = beam_preset(model.beam.name)
-        base = {"name": p.name, "EI_Nm2": p.EI_Nm2, "mass_per_length_kg_m": p.mass_per_length_kg_m,
-                "length_m": p.length_m, "width_m": p.width_m, "thickness_m": p.thickness_m}
-    if "EI_Nm2" not in truth:
-        truth = {}
-    return {**base, **truth, **((model.config.get("generator_config") or {}).get("section") or {})}
 
 
 #: The verdict keys of :func:`explain`, all None for a pair without explanations.
@@ -538,7 +522,7 @@ def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD, shape_sigma=SHA
     normal variation measured on several baselines). ``frequency_change_std`` and ``shape_change_std`` of each
     result are then lists over the pair's modes (and sensors)."""
     beam, cfg = model.beam, model.config
-    truth = _beam_mapping(model)
+    truth = truth_beam_mapping(model)
     EI, m = float(truth["EI_Nm2"]), float(truth["mass_per_length_kg_m"])
     kinds_all = kind_explanations(model)
     days = cfg.get("day_changes") or {}

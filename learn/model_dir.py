@@ -37,11 +37,11 @@ from physics.beam import load_beam
 from physics.io.inputs import check_input_file
 from physics.errors import BeamDamageError, FileFormatError
 from physics.io import atomic_write_bytes, atomic_write_text, read_json
-from physics.properties import beam_preset
+from physics.properties import PRESETS, beam_preset
 from physics.effects import effect_of
 
 __all__ = ["DEFAULT_ROUTE", "MODEL_FORMAT", "READ_FORMATS", "TrainedModel", "json_default",
-           "load_model", "save_model", "sensitivity_of"]
+           "load_model", "save_model", "sensitivity_of", "truth_beam_mapping"]
 
 
 #: Input route used by default (the winner of ``python -m experiments.benches.bench_learn``).
@@ -118,8 +118,7 @@ class TrainedModel:
         """The verdict of one classified pair as a reader sees it, in the words of the model's damage kind
         (:func:`learn.verdict.verdict_text`: its ``describe`` on the model's truth beam and section)."""
         gen = self.config.get("generator_config") or {}
-        return verdict_text(result, DamageWords(self.damage_kind, self.config.get("truth_beam") or self.beam.name,
-                                                gen.get("section")))
+        return verdict_text(result, DamageWords(self.damage_kind, truth_beam_mapping(self), gen.get("section")))
 
 
 def save_model(out_dir, config: dict, networks: dict) -> None:
@@ -189,6 +188,21 @@ def json_default(obj):
     if isinstance(obj, (np.bool_, np.integer, np.floating)):
         return obj.item()
     raise TypeError(f"{type(obj).__name__} is not JSON serialisable")
+
+
+def truth_beam_mapping(model) -> dict:
+    """The truth beam's mapping a model (its ``beam`` and ``config``) records, over its preset's fields (a beam named
+    after a preset; the preset's alone when it records none), with the generator config's ``section`` keys: what a
+    damage kind's ``size_range`` and ``describe`` read."""
+    truth = model.config.get("truth_beam") or {}
+    base = {}
+    if model.beam.name in PRESETS:
+        p = beam_preset(model.beam.name)
+        base = {"name": p.name, "EI_Nm2": p.EI_Nm2, "mass_per_length_kg_m": p.mass_per_length_kg_m,
+                "length_m": p.length_m, "width_m": p.width_m, "thickness_m": p.thickness_m}
+    if "EI_Nm2" not in truth:
+        truth = {}
+    return {**base, **truth, **((model.config.get("generator_config") or {}).get("section") or {})}
 
 
 def sensitivity_of(beam: BeamSpec, config_root_spring=None, truth_beam: dict | None = None,

@@ -173,11 +173,11 @@ def test_the_verdict_says_when_its_sources_disagree():
 def _model(damage: dict):
     """A model's beam and config as the explanations read them: beam 5 on the default root spring, trained on data
     of the generator config's ``damage`` section."""
-    from types import SimpleNamespace
+    from learn.model_dir import TrainedModel
 
     spec = BeamSpec("beam5", L, ("2:y", "3:y", "4:y", "5:y"), "iirs")
-    return SimpleNamespace(beam=spec, config={"generator_config": {"damage": damage}, "root_spring_relative": KR_REL,
-                                              "truth_beam": {}})
+    return TrainedModel("model", {"beam": spec.to_dict(), "generator_config": {"damage": damage},
+                                  "root_spring_relative": KR_REL, "truth_beam": {}})
 
 
 def test_the_explanations_prior_and_spread_follow_the_generator_config():
