@@ -1,6 +1,6 @@
 """The mirror ambiguity of a symmetric beam: where natural frequencies alone cannot tell ``x`` from ``L - x``.
 
-On a beam whose supports are symmetric (:data:`physics.layout.SYMMETRIC_SUPPORTS`), a damage at ``x`` and at
+On a beam whose supports are symmetric (:attr:`physics.supports.Support.symmetric`), a damage at ``x`` and at
 ``L - x`` change every natural frequency alike; shapes at two or more sensors tell them apart. A verdict read on
 frequencies alone is located on the half ``x <= L / 2`` and says so.
 """
@@ -9,17 +9,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from physics.layout import SYMMETRIC_SUPPORTS
-
 __all__ = ["fold_to_half", "location_ambiguity", "mirrored"]
 
 
 def mirrored(beam, pair) -> bool:
-    """Whether a pair leaves the mirror ambiguity: a symmetric beam (:data:`physics.layout.SYMMETRIC_SUPPORTS`)
+    """Whether a pair leaves the mirror ambiguity: a symmetric beam (:attr:`physics.supports.Support.symmetric`)
     read on natural frequencies only (no shapes, or one sensor), where a damage at ``x`` and at ``L - x`` change
     every frequency alike."""
     test = beam.test
-    return (test is not None and test.bc in SYMMETRIC_SUPPORTS
+    return (test is not None and test.support.symmetric
             and (test.n_sensors == 1 or (pair is not None and pair.frequency_only)))
 
 
