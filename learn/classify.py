@@ -9,13 +9,14 @@ import numpy as np
 from datagen.damage import damage_model
 from learn.classical import FREQUENCY_METHODS, run_classical
 from learn.features import (feature_names, frf_features, frequency_features, map_frf_to_grid, modal_features,
-                            real_shapes, sign_aligned, with_missing_modes)
+                            with_missing_modes)
 from learn.hypotheses import FREQUENCY_CHANGE_STD, NO_EXPLANATION, SHAPE_CHANGE_STD, explain_many
 from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows, identification_band_hz,
                             identify_modes, identify_test, modal_pair, mode_checks, nominal_ratio_range)
 from learn.mirror import fold_to_half, location_ambiguity, mirrored
 from learn.model_dir import TrainedModel
 from learn.normal_variation import measure, model_modes
+from learn.shapes import real_shapes, sign_aligned
 from learn.verdict import (IN_DISTRIBUTION_PERCENTILE, agreement, classical_answer, classical_verdict,
                            modes_text, network_answer, network_output, ood_percentile)
 from physics.errors import BeamDamageError

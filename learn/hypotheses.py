@@ -52,9 +52,9 @@ from functools import lru_cache
 import numpy as np
 
 from datagen.damage import DAMAGE_MODELS, damage_defaults
-from learn.shapes import real_shapes, shape_changes, sign_aligned
 from learn.model_dir import sensitivity_of, truth_beam_mapping
 from learn.sensitivity import Sensitivity
+from learn.shapes import real_shapes, shape_changes, sign_aligned
 from physics.effects import hermite_row
 from physics.errors import BeamDamageError
 from physics.fem import beam_model
