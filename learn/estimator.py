@@ -38,6 +38,7 @@ import torch
 from scipy.special import expit
 
 from learn.features import split_by_specimen
+from learn.intervals import LEVELS, Z_OF_LEVEL, distribution_interval, fit_location_sharpness, softmax
 from learn.models import DamageNet, loss_terms
 from learn.size import LOG_SIZE_LIMIT, MAX_SIZE_LOG_STD, SizeTransform, fit_size_std_scale
 from physics.errors import BeamDamageError
@@ -61,6 +62,7 @@ class DamagePrediction:
     probability_support_change: np.ndarray  # supports changed beyond re-clamping (NaN: a model not trained on it)
     threshold: np.ndarray                  # the verdict's detection threshold of each pair (its missing modes')
     modes_present: np.ndarray              # (n, n_modes) bool, the modes each pair was answered on ((n, 0): no modes)
+    intervals: dict                        # "x_over_L_68", "x_over_L_95", "size_68", "size_95": (n, 2) each
 
 
 #: Bound of the network's raw outputs (far beyond any trained value), so that no exp of them overflows.
@@ -371,10 +373,10 @@ class DamageClassifier:
                 tot += float(loss.detach()) * len(b)
             history.append(tot / len(tr))
         self.loss_history_ = history
-        self.temperature_, self.bias_, self.size_std_scale_ = 1.0, 0.0, 1.0
+        self.temperature_, self.bias_, self.size_std_scale_, self.location_sharpness_ = 1.0, 0.0, 1.0, 1.0
         self.thresholds_ = [0.5] * (1 + max(self.n_modes_ - self.min_modes, 0) * self.answers_missing_modes)
         if len(va):
-            self._calibrate(X[va], d[va], ls[va], rng)
+            self._calibrate(X[va], d[va], ls[va], rng, np.asarray(y, float)[va, 1])
         self.threshold_ = self.thresholds_[0]
         self.train_seconds_ = time.perf_counter() - t0
         self.n_train_, self.n_val_ = len(tr), len(va)
@@ -389,9 +391,10 @@ class DamageClassifier:
             return rank < self.n_modes_ - missing
         return (u >= self.missing_mode_probability) | (rank < self.min_modes)
 
-    def _calibrate(self, Xv, dv, lsv, rng) -> None:
-        """Temperature and bias, the detection thresholds (one per number of missing modes) and the size spread's
-        factor on validation pairs (their modes drawn missing as in training)."""
+    def _calibrate(self, Xv, dv, lsv, rng, xv) -> None:
+        """Temperature and bias, the detection thresholds (one per number of missing modes), the size spread's
+        factor and the location's sharpness on validation pairs (their modes drawn missing as in training; ``xv``:
+        their true ``x / L``)."""
         Zv = (Xv - self.mean_) / self.scale_
         present = (self._draw_present(len(Zv), rng) if self.answers_missing_modes
                    else np.ones((len(Zv), 0), bool))
@@ -424,6 +427,7 @@ class DamageClassifier:
             self.size_std_scale_ = fit_size_std_scale(tf.inverse(lsv[dmg]), tf.inverse(mu),
                                                       np.exp(mixed["size_log_std"][dmg]),
                                                       spread=lambda t_std: tf.std(mu, t_std))
+            self.location_sharpness_ = fit_location_sharpness(mixed["locate"][dmg], xv[dmg])
 
     # ------------------------------------------------------------------ predict
     def _marginal(self, present_row) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -503,9 +507,7 @@ class DamageClassifier:
     def predict_details(self, X) -> DamagePrediction:
         raw, present = self._raw(X)
         z = raw["detect"] / self.temperature_ + self.bias_
-        logits = raw["locate"]
-        p = np.exp(logits - logits.max(axis=1, keepdims=True))
-        p /= p.sum(axis=1, keepdims=True)
+        p = softmax(raw["locate"], self.location_sharpness_)
         c = (np.arange(self.n_bins) + 0.5) / self.n_bins
         mean = p @ c
         std = np.sqrt(np.maximum(p @ c**2 - mean**2, 0.0) + 1.0 / (12 * self.n_bins**2))
@@ -521,8 +523,11 @@ class DamageClassifier:
                              MAX_SIZE_LOG_STD)
         sd = tf.std(raw["size_mean"], log_std)
         sup = expit(raw["support"]) if self.support_trained_ else np.full(len(z), np.nan)
+        iv = {**{f"x_over_L_{k}": distribution_interval(p, lv) for k, lv in LEVELS.items()},
+              **{f"size_{k}": np.stack([tf.inverse(raw["size_mean"] + s * Z_OF_LEVEL[k] * log_std)
+                                        for s in (-1, 1)], axis=1) for k in LEVELS}}
         return DamagePrediction(expit(z), p, mean, std, el, np.argmax(el, axis=1) + 1, med, sd, z, sup,
-                                self._thresholds_of(present), present)
+                                self._thresholds_of(present), present, iv)
 
     # ------------------------------------------------------------------ persistence (no pickle)
     def get_state(self) -> tuple[dict, dict]:
@@ -537,7 +542,7 @@ class DamageClassifier:
             tensors["ood.reference_features"] = torch.as_tensor(self.reference_features_)
         meta = {"params": self.get_params(), "temperature": self.temperature_, "bias": self.bias_,
                 "threshold": self.threshold_, "thresholds": list(self.thresholds_),
-                "size_std_scale": self.size_std_scale_,
+                "size_std_scale": self.size_std_scale_, "location_sharpness": self.location_sharpness_,
                 "n_features": int(self.n_features_in_), "support_trained": self.support_trained_,
                 "train_seconds": self.train_seconds_, "loss_history": self.loss_history_,
                 "n_train": int(self.n_train_), "n_val": int(self.n_val_)}
@@ -571,6 +576,7 @@ class DamageClassifier:
         est.threshold_ = float(meta.get("threshold", 0.5))
         est.thresholds_ = [float(v) for v in meta.get("thresholds", [est.threshold_])]
         est.size_std_scale_ = float(meta.get("size_std_scale", 1.0))
+        est.location_sharpness_ = float(meta.get("location_sharpness", 1.0))
         est.train_seconds_ = float(meta.get("train_seconds", float("nan")))
         est.loss_history_ = list(meta.get("loss_history", []))
         est.n_train_, est.n_val_ = int(meta.get("n_train", 0)), int(meta.get("n_val", 0))

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from learn.intervals import LEVELS, distribution_interval
+
 __all__ = ["fold_to_half", "location_ambiguity", "mirrored"]
 
 
@@ -23,7 +25,7 @@ def mirrored(beam, pair) -> bool:
 
 def fold_to_half(answer: dict, beam, distribution=None) -> dict:
     """An answer located on the half ``x <= L / 2`` (the mirror ambiguity, :func:`mirrored`): the network's
-    distribution folded onto it (mean and std of ``min(x, L - x)``), a classical ``x`` mirrored there."""
+    distribution folded onto it (mean, std and intervals of ``min(x, L - x)``), a classical ``x`` mirrored there."""
     L = beam.length_m
     out = dict(answer)
     if distribution is not None:
@@ -32,6 +34,12 @@ def fold_to_half(answer: dict, beam, distribution=None) -> dict:
         c = np.minimum(c, 1 - c)
         mean = float(p @ c)
         out["location_std_m"] = float(np.sqrt(max(p @ c**2 - mean**2, 0.0) + 1 / (12 * p.size**2)) * L)
+        h = p.size // 2
+        half = p[:h] + p[::-1][:h]                      # the bins of x and of L - x, on [0, L / 2]
+        half[-1] += p[h] if p.size % 2 else 0.0         # an odd count's middle bin straddles L / 2
+        for k, level in LEVELS.items():
+            if f"x_m_{k}" in out:
+                out[f"x_m_{k}"] = [float(v) * L for v in distribution_interval(half[None], level, 0.5)[0]]
     else:
         mean = min(answer["location_x_over_L"], 1 - answer["location_x_over_L"])
     out["location_x_over_L"], out["location_x_m"] = mean, mean * L

@@ -12,6 +12,7 @@ from datagen.damage import DAMAGE_MODELS, DEFAULT_KIND, damage_model
 from learn.classical import MethodOutput
 from learn.evaluate import MIN_DROP
 from learn.features import as_spec
+from learn.intervals import LEVELS
 from physics.io import dof_positions_text
 
 if TYPE_CHECKING:  # torch: the network is loaded only where one runs
@@ -68,9 +69,18 @@ def network_answer(d, i, out, beam) -> dict:
             "location_std_m": float(d.x_std_over_L[i] * L),
             **zone_keys(beam, d.element[i], d.element_probabilities[i]),
             "size": float(d.size[i]),
-            "size_std": float(d.size_std[i]),
+            "size_std": float(d.size_std[i]), **interval_keys(d.intervals, i, L),
             "detectable": bool(out.detectable[i]), "decision_threshold": float(d.threshold[i]),
             **support_answer(d, i)}
+
+
+def interval_keys(intervals: dict, i: int, length_m: float) -> dict:
+    """``x_m_68``, ``x_m_95``, ``size_68``, ``size_95`` of pair ``i`` (:mod:`learn.intervals`), as ``[lo, hi]``."""
+    out = {}
+    for k in LEVELS:
+        out[f"x_m_{k}"] = [float(v) * length_m for v in intervals[f"x_over_L_{k}"][i]]
+        out[f"size_{k}"] = [float(v) for v in intervals[f"size_{k}"][i]]
+    return out
 
 
 def support_answer(d, i) -> dict:
@@ -100,7 +110,7 @@ def classical_verdict(cl: dict, sens, beam=None) -> dict:
             "location_std_m": None, "location_element": cl["location_element"],
             "location_zone": cl["location_zone"], "zone_edges_m": cl["zone_edges_m"], "zone_probabilities": None,
             "element_probabilities": None, "size": cl["size"],
-            "size_std": None,
+            "size_std": None, **{f"{q}_{k}": None for q in ("x_m", "size") for k in LEVELS},
             "detectable": bool(detectable >= detectability_threshold()),
             "probability_support_change": None, "support_changed": None}
 

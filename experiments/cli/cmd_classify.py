@@ -33,8 +33,9 @@ __all__ = ["KEYS", "add_parser", "run"]
 
 KEYS = ("measured", "damaged", "probability_damaged", "decision_threshold", "location_x_over_L", "location_x_m",
         "location_std_m", "location_zone", "zone_edges_m", "zone_probabilities", "location_ambiguity",
-        "location_element", "element_probabilities", "damage_kind", "size", "size_std", "size_meaning",
-        "detectable", "probability_support_change", "support_changed", "verdict_from", "in_distribution",
+        "location_element", "element_probabilities", "damage_kind", "size", "size_std", "x_m_68", "x_m_95", "size_68",
+        "size_95", "size_meaning", "detectable", "probability_support_change", "support_changed", "verdict_from",
+        "in_distribution",
         "out_of_distribution_reasons", "mahalanobis_distance", "training_percentile", "distance_terms", "hypotheses",
         "hypotheses_summary", "frequency_change_std", "shape_change_std", "normal_variation", "agreement", "network",
         "classical", "classical_methods", "identification", "input_route", "warnings", "dof_positions")

@@ -122,6 +122,18 @@ def test_classifier_learns_a_known_synthetic_problem():
     assert np.median(np.abs(d.size[dam] / yt[dam, 2] - 1)) < 0.3
     np.testing.assert_allclose(d.element_probabilities.sum(axis=1), 1.0, atol=1e-5)
     assert 0.1 < est.temperature_ < 10
+    # the intervals: nested, about the estimate, and covering held-out truths about as often as they say
+    iv = d.intervals
+    for q, est_q in (("x_over_L", d.x_over_L), ("size", d.size)):
+        lo68, hi68, lo95, hi95 = iv[f"{q}_68"][:, 0], iv[f"{q}_68"][:, 1], iv[f"{q}_95"][:, 0], iv[f"{q}_95"][:, 1]
+        assert np.all(lo95 <= lo68) and np.all(lo68 <= hi68) and np.all(hi68 <= hi95)
+    assert np.all((iv["size_68"][:, 0] <= d.size) & (d.size <= iv["size_68"][:, 1]))
+    called = dam & (d.probability_damaged >= d.threshold)
+    for k, level in (("68", 0.68), ("95", 0.95)):
+        for q, col in (("x_over_L", 1), ("size", 2)):
+            inside = (iv[f"{q}_{k}"][called, 0] <= yt[called, col]) & (yt[called, col] <= iv[f"{q}_{k}"][called, 1])
+            assert abs(np.mean(inside) - level) < 0.12, (q, k, np.mean(inside))
+    assert 0.05 <= est.location_sharpness_ <= 20
     # scikit-learn conventions: clone keeps params, drops fitted state
     c = clone(est)
     assert c.get_params() == est.get_params() and not hasattr(c, "model_")
@@ -151,6 +163,7 @@ def test_model_directory_round_trip_with_weights_only(tmp_path):
     np.testing.assert_allclose(model.networks["modal"].predict_proba(X), est.predict_proba(X), atol=1e-6)
     np.testing.assert_allclose(model.networks["modal"].predict_details(X).size_std,
                                est.predict_details(X).size_std, rtol=1e-5)
+    assert model.networks["modal"].location_sharpness_ == est.location_sharpness_
     assert json.loads((tmp_path / "config.json").read_text())["beam"]["mass_model"] == "iirs"
 
 

@@ -1,0 +1,48 @@
+"""The network's 68 % / 95 % intervals (learn.intervals) against closed forms."""
+
+import numpy as np
+import pytest
+from scipy.stats import norm
+
+from learn.intervals import LEVELS, distribution_interval, fit_location_sharpness, softmax
+
+
+def test_a_uniform_distribution_has_the_uniform_quantiles():
+    p = np.full((1, 80), 1 / 80)
+    assert distribution_interval(p, 0.6827)[0] == pytest.approx([0.15865, 0.84135], abs=1e-12)
+    assert distribution_interval(p, 0.95, span=0.5)[0] == pytest.approx([0.0125, 0.4875], abs=1e-12)
+
+
+def test_a_binned_normal_has_the_normal_quantiles_to_a_bin():
+    B = 400
+    c = (np.arange(B) + 0.5) / B
+    mu, sd = np.array([0.3, 0.55]), np.array([0.05, 0.1])
+    p = norm.cdf((c[None] + 0.5 / B - mu[:, None]) / sd[:, None]) - norm.cdf((c[None] - 0.5 / B - mu[:, None])
+                                                                              / sd[:, None])
+    p /= p.sum(axis=1, keepdims=True)
+    for level, z in ((LEVELS["68"], 1.0), (LEVELS["95"], 1.959964)):
+        iv = distribution_interval(p, level)
+        assert iv[:, 0] == pytest.approx(mu - z * sd, abs=1 / B)
+        assert iv[:, 1] == pytest.approx(mu + z * sd, abs=1 / B)
+
+
+def test_all_mass_in_one_bin_gives_that_bin():
+    p = np.zeros((1, 10))
+    p[0, 3] = 1.0
+    lo, hi = distribution_interval(p, 0.95)[0]
+    assert 0.3 <= lo < hi <= 0.4
+
+
+def test_the_sharpness_undoes_a_distribution_too_wide_by_a_known_factor():
+    """Logits of a normal k times wider than the scatter of the true places: the fitted sharpness is k^2 (logits
+    scale as 1 / sigma^2), within the sampling of 3000 places."""
+    rng = np.random.default_rng(0)
+    B, n, sd, k = 200, 3000, 0.04, 2.5
+    c = (np.arange(B) + 0.5) / B
+    mu = rng.uniform(0.25, 0.75, n)
+    x = mu + sd * rng.standard_normal(n)
+    logits = -0.5 * ((c[None] - mu[:, None]) / (k * sd)) ** 2
+    s = fit_location_sharpness(logits, x)
+    assert s == pytest.approx(k**2, rel=0.1)
+    iv = distribution_interval(softmax(logits, s), LEVELS["95"])
+    assert np.mean((iv[:, 0] <= x) & (x <= iv[:, 1])) == pytest.approx(0.95, abs=0.015)
