@@ -113,7 +113,7 @@ def test_a_debond_whose_tips_hold_the_face_loses_far_less(pipeline_and_layered):
     short = closed & (np.array([k for _, k in CASES]) <= 0.05 * N_LAYERED)
     assert short.sum() == 3
     assert np.all(np.abs(tied[short]).max(axis=1) < 0.02 * np.abs(gen[short]).max(axis=1))
-    np.testing.assert_allclose(tied[-1], slide[-1], rtol=1e-6, atol=1e-9)
+    np.testing.assert_allclose(tied[-1], slide[-1], rtol=1e-6, atol=1e-8)
 
 
 @pytest.mark.slow  # the fixture solves 15 layered beams: 5-12 s
