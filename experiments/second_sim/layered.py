@@ -31,8 +31,10 @@ import scipy.linalg
 import scipy.sparse
 import scipy.sparse.linalg
 
-__all__ = ["Sandwich", "composite_ei", "debond_ei", "face_modulus_for", "layered_frequencies_hz", "layered_matrices",
-           "lowest_modes"]
+from experiments.second_sim.fem import Assembled
+
+__all__ = ["Sandwich", "composite_ei", "debond_ei", "face_modulus_for", "layered_assembled", "layered_frequencies_hz",
+           "layered_matrices", "lowest_modes"]
 
 
 @dataclass(frozen=True)
@@ -102,8 +104,9 @@ def _sparse(blocks, size: int):
 
 
 def layered_matrices(length_m: float, section: Sandwich, mass_per_length_kg_m: float, debonds=(),
-                     n_elements: int = 240, tied_tips: bool = True):
-    """Mass and condensed stiffness on the deflection DOFs ``(w_i, w'_i)`` of nodes 1..n (root clamped).
+                     n_elements: int = 240, tied_tips: bool = True, root_k_theta_Nm_rad: float = math.inf):
+    """Mass and condensed stiffness on the deflection DOFs ``(w_i, w'_i)`` of nodes 1..n (root clamped; with a
+    finite ``root_k_theta_Nm_rad`` the root's rotation is a DOF too, first, on that rotational spring).
 
     Parameters
     ----------
@@ -112,8 +115,8 @@ def layered_matrices(length_m: float, section: Sandwich, mass_per_length_kg_m: f
 
     Returns
     -------
-    M, K : ndarray, shape (2 n, 2 n)   (kg ..., N/m ...)
-    G : ndarray, shape (2 n, 2 n)      bending stiffness of the debonded elements for a unit rigidity (1/m^3 ...)
+    M, K : ndarray, shape (2 n, 2 n) or (2 n + 1, 2 n + 1)   (kg ..., N/m ...)
+    G : ndarray, shape as ``K``        bending stiffness of the debonded elements for a unit rigidity (1/m^3 ...)
     """
     ea_t, ei_t, ea_c, ei_c, e = section.layers()
     n, h = n_elements, length_m / n_elements
@@ -164,16 +167,34 @@ def layered_matrices(length_m: float, section: Sandwich, mass_per_length_kg_m: f
     T = scipy.sparse.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(nd, ni))
     Kr = (T.T @ K @ T).tocsc()
     # clamp: w, w' of node 0 and both layers' axial displacement there (u_t follows when tied)
+    spring = math.isfinite(root_k_theta_Nm_rad)
     keep = np.ones(ni, bool)
-    keep[[0, 1, nb]] = False
+    keep[[0, nb]] = False
+    keep[1] = spring
     if tied_tips and not tied[0]:
         keep[nb + na + np.searchsorted(free_t, 0)] = False
     Kr = Kr[keep][:, keep]
-    nw = nb - 2
+    first = 1 if spring else 2
+    nw = nb - first
     Kww, Kwu, Kuu = Kr[:nw, :nw].toarray(), Kr[:nw, nw:], Kr[nw:, nw:]
     Kc = Kww - Kwu @ scipy.sparse.linalg.splu(Kuu.tocsc()).solve(Kwu.T.toarray())
+    if spring:
+        Kc[0, 0] += root_k_theta_Nm_rad
     M = _sparse([(wd, np.broadcast_to(mass_per_length_kg_m * _hermite_mass(h), (n, 4, 4)))], nb).toarray()
-    return M[2:, 2:], 0.5 * (Kc + Kc.T), G[2:, 2:]
+    return M[first:, first:], 0.5 * (Kc + Kc.T), G[first:, first:]
+
+
+def layered_assembled(length_m: float, section: Sandwich, mass_per_length_kg_m: float, debonds=(),
+                      n_elements: int = 120, tied_tips: bool = True, root_k_theta_Nm_rad: float = math.inf):
+    """:func:`layered_matrices` as the simulator's :class:`experiments.second_sim.fem.Assembled` (no dashpots),
+    and the debonded elements' unit bending stiffness ``G``."""
+    M, K, G = layered_matrices(length_m, section, mass_per_length_kg_m, debonds, n_elements, tied_tips,
+                               root_k_theta_Nm_rad)
+    first = 2 * (n_elements + 1) - K.shape[0]
+    dof_index = np.r_[np.full(first, -1), np.arange(K.shape[0])]
+    return Assembled(M=M, K=K, C=np.zeros_like(K), dashpot_rows=np.zeros((0, K.shape[0])),
+                     dashpot_c_Ns_m=np.zeros(0), node_x_m=np.linspace(0.0, length_m, n_elements + 1),
+                     dof_index=dof_index), G
 
 
 def layered_frequencies_hz(length_m: float, section: Sandwich, mass_per_length_kg_m: float, debonds=(),
