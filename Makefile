@@ -25,8 +25,8 @@ test-all: $(STAMP)
 	$(PY) -m pytest -m ''
 
 bench: $(STAMP)
-	$(PY) -m experiments.bench_datagen
-	$(PY) -m experiments.bench_identification
+	$(PY) -m experiments.benches.bench_datagen
+	$(PY) -m experiments.benches.bench_identification
 
 clean:
 	rm -rf $(VENV) build *.egg-info

@@ -60,7 +60,8 @@ DEFAULTS: dict = {
     "measurement": {
         "modal_noise": "fixed",        # "fixed": the three stds below; "calibrated": per-mode coefficients times the
                                        # sample's FRF noise level (configs/modal_noise.json,
-                                       # experiments.bench_modal_noise); "output-only": per-mode coefficients of the
+                                       # experiments.benches.bench_modal_noise); "output-only": per-mode
+                                       # coefficients of the
                                        # sample's sensor noise and record length (SSI-cov of response records,
                                        # learn.output_only_calibration; generate --modal-noise output-only)
         "frequency_noise": 0.0005,     # relative std of natural frequencies (number, or one per mode 1..4)

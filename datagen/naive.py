@@ -3,7 +3,7 @@
 :func:`simulate_naive` runs the pipeline of :mod:`datagen.pipeline` on one
 sample at a time, from the same drawn inputs, and computes the FRFs eagerly
 as a straightforward implementation would (with the same measurement noise).
-``tests/datagen`` compares it with the batched path; ``experiments.bench_datagen``
+``tests/datagen`` compares it with the batched path; ``experiments.benches.bench_datagen``
 times it.
 """
 

@@ -718,7 +718,7 @@ def measure_modes(setup, inp, lam4, psi4):
     ("fixed"), or ``sqrt((c level)^2 + (g floor)^2 + e^2)`` of the sample's FRF
     noise level and noise floor with the coefficients ``c`` (``*_noise``), ``g``
     (``*_noise_per_floor``) and ``e`` (``*_noise_floor``): "calibrated" against
-    the identification ``classify`` runs (``experiments.bench_modal_noise``); "output-only": the same form of
+    the identification ``classify`` runs (``experiments.benches.bench_modal_noise``); "output-only": the same form of
     the sample's sensor noise and record length (:func:`datagen.config.output_only_variables`), calibrated
     against SSI-cov of response records (:mod:`learn.output_only_calibration`).
     """

@@ -1,16 +1,9 @@
-"""The ``beam-damage`` command line (``cli.py``, one ``cmd_*`` module per command), studies and benchmarks.
+"""The ``beam-damage`` command line and the project's tools around it, one sub-package each.
 
-Commands only parse arguments, call the libraries (``physics``, ``datagen``,
-``learn``) and print; nothing outside this package imports it.
+``cli``: the command line (the dispatcher, one ``cmd_*`` module per command); ``studies``: the thesis
+reproduction, the demo, the studies and their reports; ``benches``: the benchmarks behind the docs' tables;
+``second_sim``: an independent simulator sharing no code with ``physics``, ``datagen`` and ``learn``. Commands
+only parse arguments, call the libraries and print; nothing outside this package imports it.
 """
 
-__all__ = ["cli"]
-
-
-def __getattr__(name):
-    """``experiments.cli`` loads on first use, so ``python -m experiments.<tool>`` does not pay for the CLI."""
-    if name == "cli":
-        import importlib
-
-        return importlib.import_module("experiments.cli")
-    raise AttributeError(f"module 'experiments' has no attribute {name!r}")
+__all__ = []

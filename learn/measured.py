@@ -23,7 +23,7 @@ __all__ = ["IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "MIN_PAIR_MAC", "RATI
 
 #: The identification ``classify`` runs on FRF files: LSCF poles and LSFD residues, the 4 lowest modes. The
 #: training data's modal noise (``measurement.modal_noise = "calibrated"``) is calibrated against this path
-#: (``experiments.bench_modal_noise``), and the dataset records it (``measurement.identification``).
+#: (``experiments.benches.bench_modal_noise``), and the dataset records it (``measurement.identification``).
 IDENTIFICATION = {"method": "lscf", "n_modes": 4}
 #: The band identified ends at this multiple of the model's nominal mode-4 frequency (mode 5 of a cantilever
 #: lies at 1.65 times mode 4; above the band, modes act through the upper residual).

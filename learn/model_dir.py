@@ -43,7 +43,7 @@ __all__ = ["DEFAULT_ROUTE", "MODEL_FORMAT", "READ_FORMATS", "REFERENCE_WIDTH_M",
            "load_model", "save_model", "sensitivity_of"]
 
 
-#: Input route used by default (the winner of ``python -m experiments.bench_learn``).
+#: Input route used by default (the winner of ``python -m experiments.benches.bench_learn``).
 DEFAULT_ROUTE = "modal"
 #: Width assumed when a hinge flexibility is turned into a slit depth (m): middle of the training widths.
 REFERENCE_WIDTH_M = 0.0055

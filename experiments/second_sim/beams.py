@@ -271,6 +271,10 @@ class Spread:
     damaged_fraction: float = 2 / 3
     min_drop: float = 0.002
     damping_ratio: tuple | None = None     # (lo, hi) of every mode's ratio; None: the material's range
+    damage: str = "slit"                   # what a damaged pair's current test has: "slit" or "mass_change"
+    mass_added: tuple = (0.01, 0.2)        # a mass added: a point mass of this share of the beam's mass
+    mass_lost: tuple = (0.01, 0.08)        # a mass lost: this share of the beam's mass ...
+    mass_lost_length: tuple = (0.1, 0.25)  # ... taken evenly off this share of the length (at most half of it)
 
 
 #: The catalogue pairs' distribution.
@@ -292,6 +296,39 @@ class BeamPair:
 
 def _loguniform(rng, lo, hi):
     return math.exp(rng.uniform(math.log(lo), math.log(hi)))
+
+
+#: Points a lost mass is taken off at, evenly over its length.
+LOST_POINTS = 24
+
+
+def _mass_change(rng, cb: CatalogueBeam, beam: Beam, f0_hz: np.ndarray, sp: Spread) -> tuple[tuple, dict, float]:
+    """A mass added (half the draws: one point mass of ``sp.mass_added`` of the beam's mass) or lost
+    (``sp.mass_lost`` of it taken evenly off a length ``sp.mass_lost_length`` of L, at most half the beam's own
+    mass there, as :data:`LOST_POINTS` negative point masses), redrawn until some mode of the band changes by
+    ``sp.min_drop`` or more (either sign). Returns the point masses, the truth and the largest change."""
+    L = cb.length_m
+    beam_kg = beam.mass_per_length_kg_m * L
+    for _ in range(1000):
+        if rng.random() < 0.5:
+            x = rng.uniform(0.0, L)
+            ratio, width = rng.uniform(*sp.mass_added), 0.0
+            points = (PointMass(x, ratio * beam_kg),)
+        else:
+            width = rng.uniform(*sp.mass_lost_length) * L
+            x = rng.uniform(width / 2, L - width / 2)
+            ratio = -min(rng.uniform(*sp.mass_lost), 0.5 * width / L)
+            xs = x - width / 2 + (np.arange(LOST_POINTS) + 0.5) * width / LOST_POINTS
+            points = tuple(PointMass(float(p), ratio * beam_kg / LOST_POINTS) for p in xs)
+        try:
+            f = bending_frequencies_hz(replace(beam, masses=beam.masses + points), cb.bc, f0_hz.size)
+        except np.linalg.LinAlgError:      # a loss the mass matrix does not hold: drawn again
+            continue
+        change = float(np.max(np.abs(f / f0_hz - 1)))
+        if change >= sp.min_drop:
+            return points, {"mass_x_m": x, "mass_ratio": ratio, "mass_kg": ratio * beam_kg, "mass_width_m": width}, \
+                change
+    raise RuntimeError(f"{cb.name}: no mass change reached the minimum frequency change in 1000 draws")
 
 
 def _slit(rng, cb: CatalogueBeam, beam: Beam, f0_hz: np.ndarray, min_drop: float) -> tuple[Slit, float]:
@@ -355,9 +392,13 @@ def simulate_pair(cb: CatalogueBeam, pair: int, rng: np.random.Generator, sp: Sp
     damping = Damping("modal", tuple(rng.uniform(*zeta, _rigid_modes(cb.bc) + cb.n_modes + 2)))
     damaged = bool(rng.random() < sp.damaged_fraction)
     f_base = bending_frequencies_hz(specimen, cb.bc, cb.n_modes)
-    slit, drop = _slit(rng, cb, specimen, f_base, sp.min_drop) if damaged else (None, 0.0)
+    slit, drop, lost, mass = None, 0.0, (), None
+    if damaged and sp.damage == "mass_change":
+        lost, mass, drop = _mass_change(rng, cb, specimen, f_base, sp)
+    elif damaged:
+        slit, drop = _slit(rng, cb, specimen, f_base, sp.min_drop)
     current, day = _next_day(cb, specimen, rng, sp)
-    current = replace(current, slits=(slit,) if slit else ())
+    current = replace(current, slits=(slit,) if slit else (), masses=current.masses + lost)
     noise = Noise(_loguniform(rng, *sp.noise_level), sp.noise_floor, rng.uniform(0.0, sp.h1_bias))
     H, f_true = [], []
     for beam in (specimen, current):
@@ -377,6 +418,10 @@ def simulate_pair(cb: CatalogueBeam, pair: int, rng: np.random.Generator, sp: Sp
         "zone": int(np.clip(np.searchsorted(zones, slit.x_m, side="right"), 1, zones.size - 1)) if slit else None,
         "width_m": slit.width_m if slit else None, "ei_loss_fraction": slit.ei_loss_fraction if slit else None,
         "hinge_flexibility": slit.hinge_flexibility(L) if slit else 0.0,
+        "damage_kind": (sp.damage if damaged else None),
+        "damage_x_m": slit.x_m if slit else (mass["mass_x_m"] if mass else None),
+        "damage_size": slit.hinge_flexibility(L) if slit else (mass["mass_ratio"] if mass else 0.0),
+        **(mass or {}),
         "stiffness_loss_Nm3": slit.stiffness_loss_Nm3(support["EI_Nm2"]) if slit else 0.0,
         "max_frequency_drop_rel": drop, "noise_level": noise.level, "noise_floor": noise.floor,
         "h1_bias": noise.h1_bias, **day, **support, "length_m": L, "damping_ratios": list(damping.ratios),

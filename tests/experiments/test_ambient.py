@@ -3,7 +3,7 @@
 import numpy as np
 from scipy import signal
 
-from experiments.bench_oma import score
+from experiments.benches.bench_oma import score
 from experiments.second_sim.ambient import ambient_record
 from experiments.second_sim.fem import Beam
 from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from experiments.bench_foreign import markdown, score
+from experiments.benches.bench_foreign import markdown, score
 
 
 def _verdict(damaged, element=0, theta=0.0, std=0.0, detectable=True):

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from experiments.bench_monitor import frequency_shift, score_series
+from experiments.benches.bench_monitor import frequency_shift, score_series
 
 
 def test_rates_and_delay_of_a_hand_made_series():

@@ -126,7 +126,7 @@ def test_usage_errors_exit_2(capsys):
 
 def test_demo_writes_its_report(tmp_path, capsys):
     """A tiny demo run renders the report: every figure referenced exists, every table holds numbers."""
-    from experiments.report import check_report
+    from experiments.studies.report import check_report
 
     d = tmp_path / "d"
     code, out, _ = _run(capsys, "demo", "--out", str(d), "--quick", "--samples", "200", "--workers", "1", "--json")

@@ -116,7 +116,7 @@ def test_update_accepts_frf_file_and_recovers_model(capsys, beam5_files):
 
 
 def test_identify_writes_synthesised_uff_in_the_input_kind_and_reports_db_error(capsys, tmp_path):
-    from experiments.bench_identification import simulate_free_free
+    from experiments.benches.bench_identification import simulate_free_free
     from physics.identification import reconstruction_error_db
     from physics.io import read_frf
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from experiments.second_sim.bolted import write_bolted_test
-from experiments.study_discrepancy import run_discrepancy
+from experiments.studies.study_discrepancy import run_discrepancy
 from physics import discrepancy as dsc
 from physics.beam import load_beam
 

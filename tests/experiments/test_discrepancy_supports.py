@@ -5,7 +5,7 @@ import json
 
 import numpy as np
 import pytest
-from experiments.plain_beam import plain_fe
+from experiments.studies.plain_beam import plain_fe
 
 from experiments.cli import main
 

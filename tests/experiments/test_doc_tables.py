@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from experiments.doc_tables import DOCS, block_names, write_table
+from experiments.studies.doc_tables import DOCS, block_names, write_table
 from physics.errors import BeamDamageError
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -13,11 +13,11 @@ PAGES = sorted(DOCS.glob("*.md"))
 
 
 def test_every_bench_block_is_written_by_a_bench_script():
-    sources = "\n".join(p.read_text() for p in sorted((ROOT / "experiments").glob("bench_*.py")))
+    sources = "\n".join(p.read_text() for p in sorted((ROOT / "experiments" / "benches").glob("bench_*.py")))
     blocks = {name: page.name for page in PAGES for name in block_names(page.read_text())}
     assert len(blocks) >= 8, blocks                      # datasets 2, discrepancy 3, classifier 3
     orphans = sorted(f"{page}: {name}" for name, page in blocks.items() if f'"{name}"' not in sources)
-    assert not orphans, f"bench blocks no experiments/bench_*.py script writes: {orphans}"
+    assert not orphans, f"bench blocks no experiments/benches/bench_*.py script writes: {orphans}"
     for page in PAGES:
         text = page.read_text()
         for name in block_names(text):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import scipy.io
 
-from experiments.frequency_series import main, read_frequency_table
+from experiments.studies.frequency_series import main, read_frequency_table
 from physics.io.modal_json import read_modal_json
 
 

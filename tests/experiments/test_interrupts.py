@@ -10,9 +10,9 @@ import time
 
 import pytest
 
-from experiments.bench_interrupts import default_sigint
+from experiments.benches.bench_interrupts import default_sigint
 from experiments.cli import main, one_line
-from experiments.jsonable import to_jsonable
+from experiments.cli.jsonable import to_jsonable
 
 
 def _lock(path, pid):

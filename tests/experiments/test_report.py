@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from experiments import cli
-from experiments.report import Figure, Section, Table, check_report, write_report
+from experiments.studies.report import Figure, Section, Table, check_report, write_report
 
 
 def _png(path):
@@ -59,7 +59,7 @@ def test_experiment_thesis(tmp_path, capsys, monkeypatch):
 
 # --------------------------------------------------------------------------- reading the report
 def test_headers_values_and_captions_read_as_text():
-    from experiments.report import CAPTIONS, figure, format_value, header_text
+    from experiments.studies.report import CAPTIONS, figure, format_value, header_text
 
     assert header_text("median_location_error_mm") == "median location error (mm)"
     assert header_text("stiffness_loss_Nm3") == "stiffness loss (N m^3)"
@@ -76,7 +76,7 @@ def test_headers_values_and_captions_read_as_text():
 
 def _frf_figure(path):
     """The identification overlay of a two-mode receptance with noise (3 responses, 1 reference)."""
-    from experiments.plots_identify import overlay_png
+    from experiments.studies.plots_identify import overlay_png
 
     f_hz = np.linspace(1, 200, 400)
     w = 2 * np.pi * f_hz
@@ -113,7 +113,7 @@ def _evaluate_figures(out_dir):
 
 def _sample_report(tmp_path) -> dict:
     """A report with what makes a page overflow: wide tables, long headers, nested values, long text, figures."""
-    from experiments.report import figure
+    from experiments.studies.report import figure
 
     metrics = ("method", "roc_auc", "accuracy", "false_alarm_rate", "element_accuracy", "within_one_element",
                "median_location_error_mm", "median_size_error", "ece")
@@ -228,8 +228,8 @@ def _verdict(verdict_from: str) -> dict:
 
 
 def test_demo_summary_states_the_findings():
-    from experiments import demo
-    from experiments.validate import Check
+    from experiments.studies import demo
+    from experiments.studies.validate import Check
 
     checks = [Check("a", "g", 1, 1, 1e-4, 1e-3, True), Check("Beam 5: lumped M", "beam5", 1, 1, 0.0224, 0.0333, True)]
     disc = {"effects": ["shear_deformation", "local_damping"],

@@ -174,7 +174,7 @@ def _verdict(damaged, x, zone, s, s_sd=None, x_sd=None, cl=None):
 
 
 def test_scores_count_zones_places_false_alarms_sizes_and_folding():
-    from experiments.study_beams import score_beam
+    from experiments.studies.study_beams import score_beam
 
     truth = [{"damaged": True, "slit_x_m": 0.4, "hinge_flexibility": 0.02},
              {"damaged": True, "slit_x_m": 1.5, "hinge_flexibility": 0.01},
@@ -208,7 +208,7 @@ def test_scores_count_zones_places_false_alarms_sizes_and_folding():
 
 @pytest.mark.slow
 def test_the_study_runs_end_to_end_on_one_beam(tmp_path, capsys):
-    from experiments.study_beams import main
+    from experiments.studies.study_beams import main
 
     assert main(["--out", str(tmp_path), "--only", "al-strip-cf-3s", "--n-pairs", "6", "--train-n", "1500",
                  "--json"]) == 0
@@ -220,3 +220,37 @@ def test_the_study_runs_end_to_end_on_one_beam(tmp_path, capsys):
     for name in ("beams.csv", "beams.json", "beams.md", "beams.png"):
         assert (tmp_path / name).stat().st_size > 100
     assert "al-strip-cf-3s" in (tmp_path / "beams.md").read_text()
+
+
+
+def test_mass_changes_move_the_frequencies_the_way_their_mass_says():
+    """A mass added lowers every mode; a mass lost is taken evenly off its length (its points sum to the stated
+    share of the beam's mass, at most half the beam's own mass there) and raises some mode; the pairs' truth
+    names the kind, place and signed size; slit pairs draw as before (the damage field is a new branch)."""
+    cb = next(c for c in beams.CATALOGUE if c.name == "gfrp-strip-ff-4s")
+    sp = replace(beams.SPREAD, damage="mass_change")
+    nominal = beams.nominal_beam(cb)
+    f0 = beams.bending_frequencies_hz(nominal, cb.bc, cb.n_modes)
+    rng = np.random.default_rng(5)
+    beam_kg = cb.mass_per_length_kg_m * cb.length_m
+    signs = set()
+    for _ in range(8):
+        pts, t, change = beams._mass_change(rng, cb, nominal, f0, sp)
+        f1 = beams.bending_frequencies_hz(replace(nominal, masses=nominal.masses + pts), cb.bc, cb.n_modes)
+        assert sum(p.mass_kg for p in pts) == pytest.approx(t["mass_ratio"] * beam_kg)
+        assert np.max(np.abs(f1 / f0 - 1)) == pytest.approx(change) and change >= sp.min_drop
+        if t["mass_ratio"] > 0:
+            assert len(pts) == 1 and np.all(f1 < f0) and 0.01 <= t["mass_ratio"] <= 0.2
+        else:
+            assert len(pts) == beams.LOST_POINTS and np.max(f1 / f0 - 1) > 0
+            assert -t["mass_ratio"] <= 0.5 * t["mass_width_m"] / cb.length_m + 1e-12
+        signs.add(np.sign(t["mass_ratio"]))
+    assert signs == {-1.0, 1.0}
+    pairs = beams.simulate_beam_pairs(cb, 2, 3, sp)
+    for p in pairs:
+        t = p.truth
+        assert t["damage_kind"] == ("mass_change" if t["damaged"] else None)
+        assert t["damage_size"] == (t["mass_ratio"] if t["damaged"] else 0.0)
+    slits = beams.simulate_beam_pairs(cb, 1, 3)
+    assert [p.truth["slit_x_m"] for p in slits] == [p.truth["slit_x_m"] for p in beams.simulate_beam_pairs(
+        cb, 1, 3, replace(beams.SPREAD, damage="slit"))]

@@ -1,12 +1,12 @@
 """Interrupted `generate` runs: one stderr line and 130/143 on SIGINT/SIGTERM, stale temporaries and a truncated
-manifest repaired, every case resumed byte-identical (the full matrix: experiments/bench_interrupts.py)."""
+manifest repaired, every case resumed byte-identical (the full matrix: experiments/benches/bench_interrupts.py)."""
 
 import os
 from pathlib import Path
 
 import pytest
 
-from experiments.bench_interrupts import CASES, run_matrix
+from experiments.benches.bench_interrupts import CASES, run_matrix
 
 ROOT = str(Path(__file__).resolve().parents[2])
 
@@ -42,7 +42,7 @@ def test_the_whole_interrupt_matrix_resumes_byte_identical(tmp_path):
 def test_any_command_ends_with_one_line_on_a_signal(monkeypatch, capsys, tmp_path, sig, code, line):
     import signal
 
-    import experiments.cmd_inspect
+    import experiments.cli.cmd_inspect
     from experiments.cli import main
 
     def run(args):
@@ -52,7 +52,7 @@ def test_any_command_ends_with_one_line_on_a_signal(monkeypatch, capsys, tmp_pat
     # Python's Ctrl-C handler, also when the suite runs with SIGINT ignored (a background job of a plain shell)
     previous_sigint = signal.signal(signal.SIGINT, signal.default_int_handler)
     before = signal.getsignal(signal.SIGTERM)
-    monkeypatch.setattr(experiments.cmd_inspect, "inspect_dataset", lambda *a: run(a))
+    monkeypatch.setattr(experiments.cli.cmd_inspect, "inspect_dataset", lambda *a: run(a))
     try:
         assert main(["inspect", str(tmp_path)]) == code
     finally:

@@ -11,7 +11,7 @@ import pytest
 from datagen.config import load_config, merge
 from datagen.generation import generate
 from experiments.cli import main
-from experiments.cmd_classify import KEYS
+from experiments.cli.cmd_classify import KEYS
 from learn.features import map_frf_to_grid
 from physics.io import MeasuredFRF, ModalData, write_frf_npz, write_modal_json
 

@@ -98,7 +98,7 @@ COEF = {"modal_noise": "output-only", **{f"{q}{s}": [v] * 4 for q, v in (("frequ
 
 
 def test_generate_output_only_calibrates_once_and_reuses_it_on_resume(tmp_path, monkeypatch, capsys):
-    import experiments.cmd_generate as cg
+    import experiments.cli.cmd_generate as cg
     from datagen.dataset import Dataset
     from experiments.cli import main
 
@@ -144,7 +144,7 @@ def test_identification_warning_names_a_skew_in_one_line_and_is_silent_on_a_matc
 
 
 def test_classify_reads_the_method_of_an_output_only_modal_json(tmp_path):
-    from experiments.cmd_classify import identification_method
+    from experiments.cli.cmd_classify import identification_method
     from physics.io import ModalData, modal_data_to_dict
 
     md = ModalData(np.array([-0.1 + 100j]), np.array([[1.0 + 0j], [0.5 + 0j]]), ("2:+Y", "3:+Y"))

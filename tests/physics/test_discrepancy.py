@@ -3,7 +3,7 @@
 Each truth has a random global EI/mass error of a few percent, realistic noise,
 and is computed on a finer mesh (80 elements) than the fitted models (24); FRFs
 come from direct inversion of the truth's own full model. The fast subset runs
-by default; ``experiments/bench_discrepancy.py`` prints the full confusion table.
+by default; ``experiments/benches/bench_discrepancy.py`` prints the full confusion table.
 """
 
 import json
@@ -172,7 +172,7 @@ def test_measurement_validation():
 
 def test_cli_on_beam5_table_4_3(tmp_path, capsys):
     from experiments.cli import main
-    from experiments.study_discrepancy import EXAMPLE
+    from experiments.studies.study_discrepancy import EXAMPLE
     from physics.beam import load_beam as lb
 
     rc = main(["discrepancy", "--beam", "beam5", "--measured", str(EXAMPLE), "--out", str(tmp_path),
@@ -205,7 +205,7 @@ def test_cli_on_beam5_table_4_3(tmp_path, capsys):
 
 def test_cli_names_no_effect_with_max_effects_0_and_writes_every_file(tmp_path, capsys):
     from experiments.cli import main
-    from experiments.study_discrepancy import EXAMPLE
+    from experiments.studies.study_discrepancy import EXAMPLE
 
     assert main(["discrepancy", "--measured", str(EXAMPLE), "--out", str(tmp_path), "--max-effects", "0",
                  "--elements", "12", "--json"]) == 0
@@ -347,7 +347,7 @@ def test_fits_do_not_turn_on_rounding(tmp_path):
     import json
     from dataclasses import replace
 
-    from experiments.study_discrepancy import run_discrepancy
+    from experiments.studies.study_discrepancy import run_discrepancy
     from physics.beam import preset_beam
 
     path = tmp_path / "freq.json"

@@ -235,7 +235,7 @@ def test_identify_reproduces_a_realistic_free_free_impact_test():
     """
     import warnings as _w
 
-    from experiments.bench_identification import simulate_free_free
+    from experiments.benches.bench_identification import simulate_free_free
     from physics.identification import identify_frf, reconstruction_error_db
 
     frf, truth = simulate_free_free(seed=0)
@@ -265,7 +265,7 @@ def test_realistic_fit_beats_sdypy_ema_by_half():
     pytest.importorskip("sdypy.EMA")
     import warnings as _w
 
-    from experiments.bench_identification import free_free_table
+    from experiments.benches.bench_identification import free_free_table
 
     with _w.catch_warnings():
         _w.simplefilter("ignore")
@@ -410,7 +410,7 @@ def test_identify_frfs_equals_identify_frf_file_by_file():
 
 
 def test_speed_bench_file_identifies_the_modes_of_its_fe_model(tmp_path):
-    from experiments.bench_identify_speed import EI_SCALE, RAYLEIGH, write_test_file
+    from experiments.benches.bench_identify_speed import EI_SCALE, RAYLEIGH, write_test_file
     from physics.beam import preset_beam
     from physics.identification import identify_frf
     from physics.io import read_frf

@@ -1,14 +1,14 @@
 """Support effects (clamp, bearing and suspension springs) and the discrepancy search on every bc.
 
 The closed forms are the exact Euler-Bernoulli frequencies of a uniform beam with end springs
-(:func:`experiments.plain_beam.exact_beta_l`); the hidden-effect data come from a plain Hermite-element model
-(:func:`experiments.plain_beam.plain_fe`), neither of them from physics/.
+(:func:`experiments.studies.plain_beam.exact_beta_l`); the hidden-effect data come from a plain Hermite-element model
+(:func:`experiments.studies.plain_beam.plain_fe`), neither of them from physics/.
 """
 
 import numpy as np
 import pytest
 from scipy.linalg import eigh
-from experiments.plain_beam import exact_beta_l, plain_fe
+from experiments.studies.plain_beam import exact_beta_l, plain_fe
 
 from physics import discrepancy as dsc
 from physics import effects as fx

@@ -1,0 +1,274 @@
+"""``beam-damage classify``: is a measured beam damaged, where, how much."""
+
+from __future__ import annotations
+
+import glob
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+
+from experiments.cli.jsonable import to_jsonable
+from learn.classify import DEFAULT_FALSE_ALARM_RATE, classify_many
+from learn.measured import differences_from_model, on_model_dofs
+from learn.model_dir import load_model
+from physics.errors import BeamDamageError
+from physics.frf import FRF_UNITS, receptance_modal
+from physics.io import (
+    FRF,
+    MODAL,
+    MeasuredFRF,
+    accepted,
+    atomic_write_bytes,
+    atomic_write_text,
+    modal_or_frf,
+    parse_dof,
+    read,
+    read_json,
+)
+
+__all__ = ["KEYS", "add_parser", "run"]
+
+KEYS = ("measured", "damaged", "probability_damaged", "decision_threshold", "location_x_over_L", "location_x_m",
+        "location_std_m", "location_zone", "zone_edges_m", "zone_probabilities", "location_ambiguity",
+        "location_element", "element_probabilities", "hinge_flexibility", "hinge_flexibility_std", "depth_m",
+        "detectable", "probability_support_change", "support_changed", "verdict_from", "in_distribution",
+        "out_of_distribution_reasons", "mahalanobis_distance", "training_percentile", "distance_terms", "hypotheses",
+        "hypotheses_summary", "frequency_change_std", "shape_change_std", "normal_variation", "agreement", "network",
+        "classical", "classical_methods", "identification", "input_route", "warnings", "dof_positions")
+
+
+def add_parser(sub):
+    p = sub.add_parser("classify",
+                       description=f"BASELINE and each MEASURED are files of {accepted(FRF, MODAL)}. FRFs: "
+                                   "receptances, mobilities or accelerances at the model's DOFs; modal data: as "
+                                   "'update' accepts. FRF files are identified by LSCF/LSFD over the model's band as "
+                                   "'identify --band' identifies them, the identification the training data's modal "
+                                   "noise describes, and every pole is paired with the model's modes (by frequency, "
+                                   "and by shape with two or more sensors; identification.*_poles lists them). How "
+                                   "the files' test differs from the model's (reference DOF, FRF kind, band, line "
+                                   "spacing, sensors) is named in warnings. A pair "
+                                   "outside the training data gets the classical method's verdict, the network's shown"
+                                   " beside it, and the features that put it outside (distance_terms); a pair whose "
+                                   "tests do not both hold the model's modes gets the classical method's verdict on "
+                                   "the modes both hold (at least 2) and no network answer. Every verdict weighs the "
+                                   "explanations of the frequency changes (intact, global stiffness, support change, "
+                                   "slit, mass change: hypotheses), and a network trained with support changes "
+                                   "says whether the supports changed beyond re-clamping (support_changed, "
+                                   "probability_support_change). Several MEASURED files "
+                                   "give a list of verdicts; --out writes verdict.json and classify.png (one pair) or "
+                                   "verdicts.json (several).")
+    p.add_argument("--model", required=True, metavar="MODEL_DIR")
+    p.add_argument("--baseline", required=True, action="append", metavar="BASELINE",
+                   help="undamaged state (FRF file or modal JSON); repeat it, or give a quoted glob pattern such as "
+                        "'base/*.uff', for several baseline tests: their scatter is the normal variation between "
+                        "tests (measured instead of assumed) that a change must exceed")
+    p.add_argument("--false-alarm-rate", type=float, default=DEFAULT_FALSE_ALARM_RATE, metavar="ALPHA",
+                   help="false-alarm rate of the test against the normal variation measured on several baselines "
+                        f"(default {DEFAULT_FALSE_ALARM_RATE})")
+    p.add_argument("measured", nargs="+", metavar="MEASURED", help="current state(s) (same kind as BASELINE)")
+    p.add_argument("--beam", help="beam of the data: the model's preset name (default) or a beam file of the same "
+                                  "length whose measured_x_m places measured DOFs of files without node geometry "
+                                  "(else nodes 2..5 at the quarter points); another beam is refused")
+    p.add_argument("--mass", choices=("iirs", "lumped"),
+                   help="mass model of the data's updating (default: the model's)")
+    p.add_argument("--out", metavar="DIR", help="write the verdict(s) and figure here (default without --json: "
+                                                "out/classify)")
+    p.add_argument("--json", action="store_true", help="print the verdict (a list for several MEASURED) as JSON")
+    p.set_defaults(func=run)
+
+
+def baseline_files(given: list[str]) -> list[str]:
+    """The baseline files of ``--baseline`` values: each a path or a glob pattern (sorted matches), in order,
+    each file once; a pattern matching nothing is refused in one line."""
+    out = []
+    for g in given:
+        if glob.has_magic(g):
+            hits = sorted(glob.glob(g))
+            if not hits:
+                raise BeamDamageError(f"--baseline {g!r}: the pattern matches no file")
+            out += hits
+        else:
+            out.append(g)
+    return list(dict.fromkeys(out))
+
+
+def read_input(path):
+    """A modal-data file -> ModalData, an FRF file -> MeasuredFRF (:func:`physics.io.modal_or_frf`)."""
+    return read(path, modal_or_frf(path))
+
+
+def measured_test_warnings(model, files, raw, mapped) -> list[str]:
+    """One line per way the files' test differs from the model's (:func:`learn.measured.differences_from_model`), and
+    per file whose measured DOFs the model does not read."""
+    frfs = {str(f): d for f, d in zip(files, raw) if isinstance(d, MeasuredFRF)}
+    gen = (model.config.get("generator_config") or {}).get("measurement", {})
+    test = model.beam.test
+    df = None
+    if gen.get("lines") and test is not None:
+        df = (test.band_hz[1] - test.band_hz[0]) / (int(gen["lines"]) - 1)
+    out = differences_from_model(frfs, model.beam, df)
+    for f, d, (_, dof_map) in zip(files, raw, mapped):
+        if dof_map is not None and "not used" in dof_map.detail:
+            forces = ({parse_dof(x)[0] for x in d.reference_dofs} - {parse_dof(x)[0] for x in d.response_dofs}
+                      if isinstance(d, MeasuredFRF) else set())
+            unused = [x for x, m in zip(dof_map.dofs, dof_map.model_dofs) if not m and parse_dof(x)[0] not in forces]
+            if not unused:
+                continue
+            out.append(f"{f}: measured DOF{'s' * (len(unused) > 1)} {', '.join(unused)} lie at no sensor of the "
+                       f"model ({', '.join(model.beam.dofs)}): not used")
+    return out
+
+
+def identification_method(path) -> str | None:
+    """The ``method`` a modal-data JSON file names (``identify --out`` writes it for output-only modes), else None."""
+    if modal_or_frf(path) != MODAL or not str(path).lower().endswith(".json"):
+        return None
+    obj = read_json(path, require_object=False)
+    method = obj.get("method") if isinstance(obj, dict) else None
+    return method if isinstance(method, str) else None
+
+
+def run(args):
+    model = load_model(args.model)
+    _, beam_x_m = model.measured_beam(args.beam, args.mass)
+    baselines = baseline_files(args.baseline)
+    nb = len(baselines)
+    files = [*baselines, *args.measured]
+    raw = [read_input(f) for f in files]
+    mapped = [on_model_dofs(d, model.beam, beam_x_m, str(f)) for d, f in zip(raw, files)]
+    base = [m[0] for m in mapped[:nb]]
+    results = classify_many(model, base if nb > 1 else base[0], [m[0] for m in mapped[nb:]],
+                            names=[str(f) for f in files], methods=[identification_method(f) for f in files],
+                            false_alarm_rate=args.false_alarm_rate)
+    differ = measured_test_warnings(model, files, raw, mapped)
+    for r in results:
+        r["warnings"] = differ + [w for w in r["warnings"] if w not in differ]
+    ref = files.index(results[0]["normal_variation"].get("reference_baseline", files[0]))
+    base_pos = mapped[ref][1] and mapped[ref][1].to_dict()
+    extras = []
+    for r, (_, cur_map) in zip(results, mapped[nb:]):
+        r["dof_positions"] = {"baseline": base_pos, "measured": cur_map and cur_map.to_dict()}
+        extras.append(r.pop("_extra"))
+    if not args.json and not args.out:
+        args.out = "out/classify"
+    if args.out:
+        _write(args.out, results, extras, mapped[ref][0], mapped[nb][0], model)
+    if not args.json:
+        for r in results:
+            if len(results) > 1:
+                print(f"== {r['measured']}")
+            print(model.verdict_text(r))
+        if args.out:
+            print(f"{'verdict.json and classify.png' if len(results) == 1 else 'verdicts.json'} in {args.out}")
+    out = [{k: r[k] for k in KEYS} for r in results]
+    return out[0] if len(out) == 1 else out
+
+
+def _write(out_dir, results, extras, base, cur, model):
+    """verdict.json and classify.png (one pair) or verdicts.json (several), each written atomically."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    if len(results) > 1:
+        atomic_write_text(out / "verdicts.json", json.dumps(to_jsonable(results), indent=1))
+        return
+    atomic_write_bytes(out / "classify.png", _figure(results[0], extras[0], base, cur, model.beam))
+    atomic_write_text(out / "verdict.json", json.dumps(to_jsonable(results[0]), indent=1))
+
+
+def _figure(res, extra, base, cur, beam) -> bytes:
+    """PNG of one verdict: the two tests' FRFs in the file's kind with the identified modes marked; each mode's
+    measured frequency change beside the competing explanations' predictions; the beam (supports, sensors, zones)
+    under the location of the verdict's own source (none when the verdict is undamaged)."""
+    import matplotlib  # heavy: loaded only when a figure is written
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (a1, a2, a3) = plt.subplots(3, 1, figsize=(7.5, 9.5))
+    label = _file_labels(res)
+    ident = res["identification"]
+    kind = "receptance"
+    for (name, d), colour, found in zip((("baseline", base), ("measured", cur)), ("tab:blue", "tab:orange"),
+                                        (ident["baseline_frequencies_hz"], ident["measured_frequencies_hz"])):
+        if isinstance(d, MeasuredFRF):
+            kind = d.kind
+            a1.semilogy(d.frequency_hz, np.abs(d.frf[-1, 0]), color=colour,
+                        label=f"{name}: {label(d.response_dofs[-1])} / {label(d.reference_dofs[0])}")
+        else:
+            w = np.linspace(1.0, 1.15 * np.abs(d.eigenvalues).max(), 4000)
+            H = receptance_modal(d.eigenvalues, d.eigenvectors, w, response=[-1], reference=[0])[0, 0]
+            a1.semilogy(w / (2 * np.pi), np.abs(H), color=colour, label=f"{name} (synthesised from its modes, "
+                                                                        "unscaled)")
+        for f in found:
+            a1.axvline(f, color=colour, ls=":", lw=0.8)
+    a1.set(xlabel="frequency (Hz)", ylabel=f"|H| ({FRF_UNITS[kind]})",
+           title=f"The two tests ({kind}); dotted: the modes identified")
+    a1.legend(fontsize=7)
+    modes, change = extra.get("modes") or [], extra.get("frequency_change_pct")
+    if change is not None and len(modes):
+        x = np.arange(len(modes))
+        a2.bar(x, change, width=0.5, color="0.6", label="measured")
+        for h, marker in zip((res.get("hypotheses") or [])[:3], ("o", "s", "^")):
+            a2.plot(x, h["predicted_change_pct"], marker, ls="none",
+                    label=f"{h['name']} ({h['probability']:.2f})")
+        a2.axhline(0, color="k", lw=0.6)
+        a2.set_xticks(x, [f"mode {m}" for m in modes])
+        a2.legend(fontsize=7)
+    a2.set(ylabel="frequency change (%)", title="Each mode's change and what the explanations predict")
+    _location(a3, res, extra, beam)
+    buf = io.BytesIO()
+    fig.tight_layout()
+    fig.savefig(buf, format="png", dpi=110)
+    plt.close(fig)
+    return buf.getvalue()
+
+
+def _file_labels(res):
+    """Model DOF -> ``"x = 0.61 m (file DOF 5:+Y)"`` from the measured test's DOF positions (the model DOF where
+    the file gave none)."""
+    d = (res.get("dof_positions") or {}).get("measured") or {}
+    where = {m: (f, x) for f, m, x in zip(d.get("dofs", ()), d.get("model_dofs", ()), d.get("positions_m", ()))}
+    return lambda dof: (f"x = {where[dof][1]:.3g} m ({where[dof][0]})" if dof in where else dof)
+
+
+def _location(ax, res, extra, beam) -> None:
+    """Where the verdict's source places the damage: the network's distribution, or the classical method's place;
+    nothing when the verdict is undamaged."""
+    source = res["verdict_from"]
+    if res["damaged"]:
+        dist = extra["location_distribution"]
+        if source == "network" and dist is not None:
+            edges = np.linspace(0, beam.length_m, dist.size + 1)
+            ax.bar(edges[:-1], dist, width=np.diff(edges), align="edge", color="tab:red", alpha=0.7,
+                   label="the network's location distribution")
+        else:
+            ax.axvline(res["location_x_m"], color="k", ls="--",
+                       label=f"{res['classical']['method']}: x = {res['location_x_m']:.3f} m")
+        title = f"Verdict ({source}): damaged near x = {res['location_x_m']:.3f} m"
+    else:
+        title = f"Verdict ({source}): no damage detected, so no location"
+    for x in beam.zone_edges_m[1:-1]:
+        ax.axvline(x, color="grey", ls=":")
+    _draw_beam(ax, beam)
+    ax.legend(fontsize=7)
+    ax.set(xlabel="x (m)", ylabel="probability", title=title)
+
+
+def _draw_beam(ax, beam) -> None:
+    """The beam under the location axis: its supports (clamp: a wall; pin: a triangle), sensors (v) and zones."""
+    L = beam.length_m
+    bc = "clamped-free" if beam.test is None else beam.test.bc
+    ends = {"clamped-free": ("clamp", None), "free-free": (None, None), "pinned-pinned": ("pin", "pin"),
+            "clamped-clamped": ("clamp", "clamp")}[bc]
+    y = ax.get_ylim()[1] if ax.has_data() else 1.0
+    ax.plot([0, L], [-0.06 * y] * 2, color="k", lw=3, solid_capstyle="butt")
+    for x, kind in zip((0.0, L), ends):
+        if kind == "clamp":
+            ax.plot([x, x], [-0.14 * y, 0.02 * y], color="k", lw=5)
+        elif kind == "pin":
+            ax.plot([x], [-0.1 * y], marker="^", ms=10, color="k")
+    ax.plot(beam.sensors_x_m, [-0.02 * y] * len(beam.sensors_x_m), "v", color="tab:blue", ms=7,
+            label=f"sensors ({len(beam.sensors_x_m)}), {bc}")
+    ax.set_ylim(-0.18 * y, 1.05 * y)

@@ -1,0 +1,244 @@
+"""``beam-damage identify``: modal identification from a measured FRF file."""
+
+from __future__ import annotations
+
+import json
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from physics.errors import BeamDamageError, ConfigError
+from physics.identification import (DEFAULT_OUTPUT_ONLY, METHODS, Identification, RecordsIdentification,
+                                    holds_response_records, identify_file, identify_records,
+                                    read_response_records, reconstruction_error_db)
+from physics.identification.output_only import SCALING, merge_setups
+from physics.io import (FRF, TIME, MeasuredFRF, NodeGeometry, accepted, format_complex, measured_positions, read,
+                        atomic_write_text, modal_data_to_dict)
+from physics.modal import mac
+
+__all__ = ["add_parser", "run"]
+
+
+#: Highest model order accepted, and LSCF's default.
+MAX_ORDER, LSCF_MAX_ORDER = 200, 40
+
+
+def modes_list(e) -> list:
+    """One dict per identified mode of a :class:`ModalEstimate`."""
+    nan = np.full(e.eigenvalues.size, np.nan)
+    f_fit = nan if e.frequency_fit_std_hz is None else e.frequency_fit_std_hz
+    z_fit = nan if e.damping_fit_std is None else e.damping_fit_std
+    return [{"frequency_hz": float(e.natural_frequencies_hz[j]), "damping_ratio": float(e.damping_ratios[j]),
+              "frequency_std_hz": float(e.frequency_std_hz[j]), "damping_std": float(e.damping_std[j]),
+              "frequency_fit_std_hz": float(f_fit[j]), "damping_fit_std": float(z_fit[j]),
+              "eigenvalue": format_complex(e.eigenvalues[j]),
+              "weakly_stable": None if e.weakly_stable is None else bool(e.weakly_stable[j]),
+              "shape": [format_complex(z) for z in e.shapes[:, j]], "mpc": float(e.mpc[j])}
+             for j in range(e.eigenvalues.size)]
+
+
+def records_result_dict(ident: RecordsIdentification, band_hz, picked: bool) -> dict:
+    """The result of an output-only identification (no FRF, no fit error, unscaled shapes)."""
+    e, rec = ident.estimate, ident.records
+    fs = rec.sampling_frequency_hz
+    band = list(band_hz) if band_hz else [0.0, 0.4 * fs]
+    why = (f"picked {e.method}: response records without a force channel are identified output-only"
+           if picked else f"{e.method}: output-only (named by --method)")
+    return {"file": rec.metadata.get("source"), "method": e.method, "output_only": True,
+            "method_choice": why, "kind": rec.quantities[0],
+            "band_hz": [float(b) for b in band], "sampling_frequency_hz": fs,
+            "duration_s": rec.signals.shape[1] / fs, "modes": modes_list(e), "dofs": list(rec.dofs),
+            "references": [], "driving_point": None, "scaling": SCALING, "mac": mac(e.shapes).tolist(),
+            "uncertainty": dict(METHODS[e.method].uncertainty),
+            "out_of_band_poles_hz": [], **positions_report_dofs(rec.dofs, rec.metadata)}
+
+
+def positions_report_dofs(dofs, metadata) -> dict:
+    """``positions_m`` per DOF (from node geometry) and the rule used."""
+    try:
+        pos, source = measured_positions(dofs, NodeGeometry.from_metadata(metadata))
+    except (BeamDamageError, ValueError) as exc:
+        return {"positions_m": None, "positions_source": f"geometry not usable: {exc}"}
+    return {"positions_m": None if pos is None else dict(zip(dofs, pos.tolist())), "positions_source": source}
+
+
+def result_dict(ident: Identification) -> dict:
+    e = ident.estimate
+    modes = modes_list(e)
+    resid = ident.synthesised - ident.frf.frf
+    med, p90 = reconstruction_error_db(ident.frf.frf, ident.synthesised)
+    return {"file": ident.frf.metadata.get("source"), "method": e.method, "kind": ident.frf.kind,
+            "band_hz": [float(ident.frf.frequency_hz[0]), float(ident.frf.frequency_hz[-1])],
+            "modes": modes, "dofs": list(ident.frf.response_dofs),
+            "references": list(ident.frf.reference_dofs), "driving_point": ident.drive,
+            "scaling": "unit modal A" if e.scaled else "unscaled (no driving point)",
+            "mac": mac(e.shapes).tolist(),
+            "uncertainty": dict(METHODS[e.method].uncertainty),
+            "out_of_band_poles_hz": ident.out_of_band_hz.tolist(),
+            "fit_error": float(np.linalg.norm(resid) / np.linalg.norm(ident.frf.frf)),
+            "fit_error_db": {"median": med, "p90": p90},
+            "units": units_report(ident.frf), **positions_report(ident.frf)}
+
+
+def units_report(frf: MeasuredFRF) -> dict:
+    """What the file said about units and the SI units the FRFs were converted to."""
+    found = frf.metadata.get("units")
+    if found:
+        return dict(found)
+    return {"file": [f"{frf.units} ({frf.metadata.get('format', 'file')}: SI units of the declared kind)"],
+            "si": frf.units, "factor_to_si": [1.0]}
+
+
+def positions_report(frf: MeasuredFRF) -> dict:
+    """``positions_m`` per response DOF (from node geometry) and the rule used."""
+    return positions_report_dofs(frf.response_dofs, frf.metadata)
+
+
+def run(args) -> dict:
+    if args.band and not (np.all(np.isfinite(args.band)) and 0 <= args.band[0] < args.band[1]):
+        raise ConfigError(f"--band {args.band[0]:g} {args.band[1]:g}: FMIN and FMAX must be finite with "
+                          "0 <= FMIN < FMAX")
+    if args.modes is not None and args.modes < 1:
+        raise ConfigError(f"--modes {args.modes}: must be >= 1")
+    if args.max_order is not None and not 1 <= args.max_order <= MAX_ORDER:
+        raise ConfigError(f"--max-order {args.max_order}: must be between 1 and {MAX_ORDER} (the LSCF normal "
+                          "equations grow with the square of the order)")
+    if args.out and Path(args.out).exists() and not Path(args.out).is_dir():
+        raise ConfigError(f"--out {args.out}: exists and is not a directory")
+    band = tuple(args.band) if args.band else None
+    if args.method is None or METHODS[args.method].data == "records":
+        records = _output_only_records(args.file, args.method)
+        if records is not None:
+            return _run_output_only(args, records, band)
+    if getattr(args, "setup", None):
+        raise ConfigError(f"--setup: merges setups of response records (output-only); {args.file} holds FRFs")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        ident = identify_file(args.file, args.method or "lscf", band, args.modes, args.max_order or LSCF_MAX_ORDER)
+    out = result_dict(ident)
+    out["warnings"] = [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
+    if args.out:
+        from experiments.studies.plots_identify import write_outputs  # matplotlib: only when writing
+
+        out["outputs"] = write_outputs(ident, args.out)
+    if not args.json:
+        for msg in out["warnings"]:
+            print(f"warning: {msg}")
+        print(f"{out['file']}: {len(out['modes'])} modes by {out['method']} in "
+              f"{out['band_hz'][0]:g}-{out['band_hz'][1]:g} Hz ({out['scaling']}, "
+              f"fit error median {out['fit_error_db']['median']:.3g} dB, 90th percentile "
+              f"{out['fit_error_db']['p90']:.3g} dB)")
+        print(f"{'mode':>4} {'f (Hz)':>12} {'+-std':>9} {'+-fit':>9} {'zeta':>10} {'+-std':>9} "
+              f"{'+-fit':>9} {'MPC':>7}")
+        for j, m in enumerate(out["modes"], 1):
+            print(f"{j:4d} {m['frequency_hz']:12.4f} {m['frequency_std_hz']:9.2g} {m['frequency_fit_std_hz']:9.2g} "
+                  f"{m['damping_ratio']:10.5f} {m['damping_std']:9.2g} {m['damping_fit_std']:9.2g} {m['mpc']:7.4f}")
+        notes = dict(METHODS[out["method"]].uncertainty)
+        print("+-std: " + notes.get("frequency_std_hz, damping_std", "none (NaN)") + "; +-fit: "
+              + notes.get("frequency_fit_std_hz, damping_fit_std", "none (NaN)"))
+        if out["out_of_band_poles_hz"]:
+            print("poles just outside the band used by the fit (Hz): "
+                  + ", ".join(f"{x:.4g}" for x in out["out_of_band_poles_hz"]))
+        for name, p in out.get("outputs", {}).items():
+            print(f"wrote {p}")
+    return out
+
+
+def _output_only_records(path, method):
+    """The response records of a file to identify output-only, or None for the FRF path.
+
+    With no method named, a file of time records without a force channel is output-only; a named output-only
+    method takes the response channels of any time-record file (forces, if any, left out).
+    """
+    if method is None and not holds_response_records(path):
+        return None
+    if method is not None and not holds_response_records(path):
+        raise ConfigError(f"--method {method}: identifies response records output-only, but {path} holds FRFs; "
+                          f"time records as {accepted(TIME)}")
+
+    if method is None and read(path, TIME).forces:
+        return None                                   # force and responses: FRFs estimated first (H1)
+    return read_response_records(path)
+
+
+def _run_output_only(args, records, band) -> dict:
+    method = args.method or DEFAULT_OUTPUT_ONLY
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        ident = identify_records(records, method, band, args.modes, args.max_order)
+        others = [identify_records(read_response_records(f), method, band, args.modes, args.max_order)
+                  for f in getattr(args, "setup", None) or ()]
+    out = records_result_dict(ident, band, picked=args.method is None)
+    modal_data = ident.modal_data
+    if others:
+        merged = merge_setups([ident, *others])
+        modal_data = merged.modal_data
+        out.update(modes=modes_list(merged.estimate), dofs=list(merged.dofs), mac=mac(merged.estimate.shapes).tolist(),
+                   setups=[out["file"], *args.setup], setup_references=list(merged.references),
+                   dropped_modes_hz=list(merged.dropped_hz), **positions_report_dofs(merged.dofs, records.metadata))
+    out["warnings"] = [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
+    if args.out:
+        Path(args.out).mkdir(parents=True, exist_ok=True)
+        obj = {**modal_data_to_dict(modal_data), "scaling": SCALING, "method": method,
+               "frequency_std_hz": [m["frequency_std_hz"] for m in out["modes"]],
+               "damping_std": [m["damping_std"] for m in out["modes"]]}
+        path = Path(args.out) / "modal.json"
+        atomic_write_text(path, json.dumps(obj, indent=1) + "\n")
+        out["outputs"] = {"modal.json": str(path)}
+    if not args.json:
+        for msg in out["warnings"]:
+            print(f"warning: {msg}")
+        print(out["method_choice"])
+        if others:
+            print(f"{len(others) + 1} setups merged on the reference DOFs {', '.join(out['setup_references'])}"
+                  + (f"; modes not in every setup left out (Hz): {out['dropped_modes_hz']}"
+                     if out["dropped_modes_hz"] else ""))
+        print(f"{out['file']}: {len(out['modes'])} modes by {method} in {out['band_hz'][0]:g}-"
+              f"{out['band_hz'][1]:g} Hz from {len(out['dofs'])} channels x {out['duration_s']:.4g} s "
+              f"({out['scaling']})")
+        print(f"{'mode':>4} {'f (Hz)':>12} {'+-std':>9} {'zeta':>10} {'+-std':>9} {'MPC':>7}")
+        for j, m in enumerate(out["modes"], 1):
+            print(f"{j:4d} {m['frequency_hz']:12.4f} {m['frequency_std_hz']:9.2g} {m['damping_ratio']:10.5f} "
+                  f"{m['damping_std']:9.2g} {m['mpc']:7.4f}" + ("  weakly stable" if m["weakly_stable"] else ""))
+        print("+-std: " + out["uncertainty"].get("frequency_std_hz, damping_std", "none (NaN)"))
+        for name, p in out.get("outputs", {}).items():
+            print(f"wrote {p}")
+    return out
+
+
+def method_help() -> str:
+    """``name: help`` of every method of :data:`physics.identification.METHODS`, separated by semicolons."""
+    return "; ".join(f"{name}: {spec.help}" for name, spec in METHODS.items())
+
+
+def add_parser(sub):
+    p = sub.add_parser(
+        "identify",
+        description="Modal identification from an FRF file, or output-only from response time records without "
+                    f"a force. Methods (--method): {method_help()}. "
+                    "Shapes are unit-modal-A scaled when a driving-point FRF is present; output-only shapes are "
+                    "unit-norm and unscaled.")
+    p.add_argument("file", metavar="FILE", help=f"FRF file: {accepted(FRF)}; or response time records without a "
+                                                f"force (output-only): {accepted(TIME)}")
+    p.add_argument("--method", default=None, choices=list(METHODS),
+                   help="identification method (default: lscf for FRFs, "
+                        f"{DEFAULT_OUTPUT_ONLY} for response records without a force; see the methods above)")
+    p.add_argument("--setup", action="append", metavar="FILE",
+                   help="output-only: another setup's response records (repeatable); its modes are scaled onto "
+                        "FILE's on the DOFs every setup measures (fixed references) and merged into one set of shapes")
+    p.add_argument("--band", nargs=2, type=float, metavar=("FMIN", "FMAX"), help="frequency band in Hz")
+    p.add_argument("--modes", type=int, metavar="N", help="number of modes to keep (default: all found)")
+    p.add_argument("--max-order", type=int, default=None,
+                   help=f"highest model order (default {LSCF_MAX_ORDER} for lscf; ssi sizes it to the clear peaks "
+                        "of the record's spectrum; used by "
+                        f"{', '.join(m for m, spec in METHODS.items() if 'max_order' in spec.options)})")
+    p.add_argument("--out", metavar="DIR",
+                   help="write modal.json (feedable to 'beam-damage update --modal'), synthesised.uff (the "
+                        "fitted FRFs in the input's kind, units and lines of the band; synthesised.csv for a CSV "
+                        "without reference DOF), stabilisation.png "
+                        "(lscf) and overlay.png")
+    p.add_argument("--json", action="store_true",
+                   help='print one JSON object: {"modes": [{"frequency_hz", "damping_ratio", "shape", '
+                        '"mpc", ...}], "dofs": [...], ...}')
+    p.set_defaults(func=run)

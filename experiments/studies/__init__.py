@@ -1,0 +1,3 @@
+"""The thesis reproduction, the demo, the studies and their reports (``beam-damage experiment NAME``)."""
+
+__all__ = []
