@@ -23,9 +23,13 @@ rotations at the two tips, which the element corrections of :class:`datagen.dama
 banded) cannot hold; this kind is the upper bound of a debond's loss.
 
 The elements are the flexibility-exact ones of the slit (:func:`datagen.damage.slit.slit_corrections`: ``1/EI``
-rises by ``1/EI_d - 1/EI`` over the debond, exact on any mesh) and the contact's friction adds
-stiffness-proportional damping over the debond, ``Delta C_e = beta_k EI G_e`` (:func:`slit_corrections`). Mass
-is unchanged.
+rises by ``1/EI_d - 1/EI`` over the debond, exact on any mesh). The contact's friction adds damping proportional
+to the strain energy of the debonded length itself, ``beta_k`` times it (:func:`debond_damping`): ``beta omega``
+is the loss factor of the debonded length. That energy is the exact one of the element's statics, ``(1/2) int
+M(s)^2 / EI_d ds`` over the debond with the moment ``M(s) = M_2 + V_2 (l - s)`` of the element's end forces
+``(V_2, M_2) = R u`` (``R``: the node-2 rows of its stiffness), so ``Delta C_e = beta_k R^T D R`` with
+``D = int [[(l-s)^2, l-s], [l-s, 1]] ds / EI_d``: the curvature gathers in a debond's soft length, which the
+element's own (linear) curvature field does not see. Mass is unchanged.
 
 Size
 ----
@@ -38,13 +42,14 @@ from __future__ import annotations
 import numpy as np
 
 from datagen.checks import value_range
-from datagen.damage.slit import MAX_LOSS_FACTOR, hinge_flexibility, slit_corrections
+from datagen.damage.slit import MAX_LOSS_FACTOR, clamped_flexibility, expand_tip_stiffness, hinge_flexibility, \
+    slit_corrections, slit_element_weights
 from datagen.specimen import SectionLayout
 from physics.beam import PRESET_CORE_MODULUS_PA, PRESET_FACE_THICKNESS_M, beam_from_dict
 from physics.errors import ConfigError
 from physics.properties import beam_preset, section_ei
 
-__all__ = ["Debond", "debond_ei_loss", "debond_section_ei"]
+__all__ = ["Debond", "debond_damping", "debond_ei_loss", "debond_section_ei"]
 
 
 def debond_section_ei(layout: SectionLayout) -> float:
@@ -61,6 +66,36 @@ def debond_section_ei(layout: SectionLayout) -> float:
 def debond_ei_loss(layout: SectionLayout) -> float:
     """Relative rigidity loss ``r = 1 - EI_d / EI`` of a debonded section (-)."""
     return 1.0 - debond_section_ei(layout) / layout.EI
+
+
+def debond_damping(x_m, length_m, ei_debonded_Nm2, beta_s, element_stiffness, beam_length_m):
+    """Damping matrices of the debonds' contact, ``beta`` times the strain energy of each debonded length.
+
+    Parameters
+    ----------
+    x_m, length_m : ndarray, shape (B, S)
+        Centres and lengths (m) on the beam; a length of 0 adds nothing.
+    ei_debonded_Nm2, beta_s : ndarray, shape (B, S)
+        ``EI_d`` of each debonded section (N m^2) and its contact's damping coefficient (s).
+    element_stiffness : ndarray, shape (B, E, 4, 4)
+        The elements' stiffness with the debonds (their statics give the moment over each).
+    beam_length_m : float
+
+    Returns
+    -------
+    ndarray, shape (B, E, 4, 4)   (N s/m ...); debonds that overlap count each
+    """
+    n = element_stiffness.shape[-3]
+    le = beam_length_m / n
+    a, b = slit_element_weights(x_m, length_m, beam_length_m, n)          # (B, S, E)
+    ua, ub = 1.0 - a, 1.0 - b
+    w = (np.asarray(beta_s, float) / np.asarray(ei_debonded_Nm2, float))[..., None]
+    d00 = np.sum(w * le**3 * (ua**3 - ub**3) / 3, axis=1)                 # int (l-s)^2 ds / EI_d, (B, E)
+    d01 = np.sum(w * le**2 * (ua**2 - ub**2) / 2, axis=1)
+    d11 = np.sum(w * le * (b - a), axis=1)
+    D = np.stack([np.stack([d00, d01], -1), np.stack([d01, d11], -1)], -2)    # (B, E, 2, 2)
+    R = element_stiffness[..., 2:4, :]                                    # (V_2, M_2) = R u
+    return R.mT @ D @ R
 
 
 def _layout_of(beam) -> SectionLayout:
@@ -91,8 +126,8 @@ class Debond:
     """Damage kind ``"debond"``: the top face debonded from the core over a length (see the module docstring).
 
     Config keys besides the generic ones: ``n_debonds`` (range of the count per damaged sample), ``length_m``
-    (range of the debonded length, uniform) and ``debond_damping_s`` (range of the contact's extra
-    stiffness-proportional damping, s). Parameters per damage: ``length_m`` (on the beam), ``ei_loss`` (``r``)
+    (range of the debonded length, uniform) and ``debond_damping_s`` (range of the contact's damping ``beta``,
+    proportional to the debonded section's stiffness, s). Parameters per damage: ``length_m`` (on the beam), ``ei_loss`` (``r``)
     and ``beta_s``. Size: the hinge flexibility ``l r / ((1 - r) L)``.
     """
 
@@ -100,7 +135,7 @@ class Debond:
     defaults = {
         "n_debonds": [1, 1],
         "length_m": [0.006, 0.06],          # debonded length (1-10 % of beam 5's span)
-        "debond_damping_s": [0.0, 2.0e-5],  # extra stiffness-proportional damping of the contact (s)
+        "debond_damping_s": [0.0, 1.0e-4],  # the contact's damping, proportional to the debonded stiffness (s)
     }
     units = {"length_m": "m", "ei_loss": "- (relative)", "damping_s": "s"}
     sample_units: dict = {}
@@ -167,8 +202,14 @@ class Debond:
         # a debond is clipped to the beam when drawn: its centre on the beam is the middle of what lies there
         lo = np.clip(np.where(ok, x_m - params["length_m"] / 2, 0.0), 0.0, length_m)
         span = np.where(ok, params["length_m"], 0.0)
-        dK, dC = slit_corrections(lo + span / 2, span, np.where(ok, params["ei_loss"] * ei_Nm2[:, None], 0.0),
-                                  np.where(ok, params["beta_s"], 0.0), ei_Nm2, length_m, n_elements, shear_phi)
+        loss = np.where(ok, params["ei_loss"], 0.0)
+        dK, _ = slit_corrections(lo + span / 2, span, loss * ei_Nm2[:, None], np.zeros_like(span), ei_Nm2, length_m,
+                                 n_elements, shear_phi)
+        le = length_m / n_elements
+        phi = np.asarray(shear_phi, float)
+        k0 = expand_tip_stiffness(np.linalg.inv(clamped_flexibility(ei_Nm2, le, phi)), le)[:, None]   # (B, 1, 4, 4)
+        dC = debond_damping(lo + span / 2, span, (1 - loss) * ei_Nm2[:, None], np.where(ok, params["beta_s"], 0.0),
+                            k0 + dK, length_m)
         return None, dK, dC
 
     def size(self, params, x_m, ei_Nm2, mass_per_length_kg_m, length_m):

@@ -7,8 +7,8 @@ with one change:
 * ``debond``: the top face debonded from the core over 1-10 % of the length (tips on the 120-element mesh, 5.1 mm
   apart) centred in 0.05-0.9 L, on the layered model (:mod:`.layered`: faces sliding freely over it, or with
   ``tied_tips`` held at its tips), the contact's friction as stiffness-proportional damping over it
-  (``beta`` in 0-2e-5 s, added to each mode's ratio as ``beta EI phi^T G phi / (2 omega)``, ``G`` the debonded
-  elements' unit bending stiffness);
+  (``beta`` in 0-1e-4 s of the debonded section's stiffness, added to each mode's ratio as
+  ``beta EI_d phi^T G phi / (2 omega)``, ``G`` the debonded elements' unit bending stiffness);
 * ``slit``: ``EI`` lost by 30-90 % over 1-10 mm centred in 0.02-0.9 L (:class:`.fem.Slit`);
 * ``mass``: a point mass of 1-5 % of the beam's mass at 0.05-1.0 L (:class:`.fem.PointMass`);
 * ``intact``: none.
@@ -80,13 +80,13 @@ def simulate_kind_pair(change: str, pair: int, rng, modal_rng, tied_tips: bool =
         h = L / N_LAYERED
         k = int(rng.integers(round(0.01 * N_LAYERED), round(0.10 * N_LAYERED) + 1))
         start = int(np.clip(round(rng.uniform(0.05, 0.9) * N_LAYERED - k / 2), 0, N_LAYERED - k))
-        beta = rng.uniform(0.0, 2e-5)
+        beta = rng.uniform(0.0, 1e-4)
         base, _ = layered_assembled(L, sec, m, (), N_LAYERED, tied_tips, k_theta)
         cur, G = layered_assembled(L, sec, m, [(start * h, (start + k) * h)], N_LAYERED, tied_tips, k_theta)
         r = 1 - debond_ei(sec) / EI
 
         def contact(md):
-            return beta * EI * np.einsum("ir,ij,jr->r", md.phi, G, md.phi) / (2 * md.omega_rad_s)
+            return beta * debond_ei(sec) * np.einsum("ir,ij,jr->r", md.phi, G, md.phi) / (2 * md.omega_rad_s)
 
         truth.update(x_m=(start + k / 2) * h, length_m=k * h, size=k * h * r / ((1 - r) * L), ei_loss=r,
                      damping_s=beta, tied_tips=tied_tips)
