@@ -231,8 +231,11 @@ class Debond:
         """``"a face-core debond at x = 0.300 m about 40 mm long (hinge flexibility 0.012)"``.
 
         The length follows from the size and the section's loss ``r`` (``l = theta L (1 - r) / r``): the
-        config's ``section`` keys where given, else the beam's own (a preset's: 0.5 mm faces, 0.1 GPa core).
+        config's ``section`` keys where given, else the beam's own (a preset's: 0.5 mm faces, 0.1 GPa core);
+        without a beam (``preset`` None) it is left out.
         """
+        if preset is None:
+            return f"a face-core debond at x = {x_m:.3f} m (hinge flexibility {size:.3g})"
         beam = preset
         if section is not None:
             beam = _mapping(preset)

@@ -199,4 +199,6 @@ def test_describe_gives_the_length_of_that_flexibility():
     text = DAMAGE_MODELS["debond"].describe(0.3, theta, "beam5", section=DEFAULTS["section"])
     assert text == f"a face-core debond at x = 0.300 m about 40 mm long (hinge flexibility {theta:.3g})"
     assert DAMAGE_MODELS["debond"].describe(0.3, theta, "beam5") == text
+    assert DAMAGE_MODELS["debond"].describe(0.3, theta, None) == \
+        f"a face-core debond at x = 0.300 m (hinge flexibility {theta:.3g})"
     assert set(DAMAGE_MODELS["debond"].separates) >= {"slit", "mass_change", "support_change"}
