@@ -33,8 +33,9 @@ element's own (linear) curvature field does not see. Mass is unchanged.
 
 Size
 ----
-The hinge flexibility ``theta = l r / ((1 - r) L)`` of the rigidity loss (:func:`datagen.damage.slit.hinge_flexibility`),
-as for every stiffness kind: to first order in ``l`` a debond changes ``omega_r^2`` by ``-EI L theta kappa_r(x)^2``.
+The hinge flexibility ``theta = l r / ((1 - r) L)`` of the rigidity loss
+(:func:`datagen.damage.slit.hinge_flexibility`), as for every stiffness kind: to first order in ``l`` a debond
+changes ``omega_r^2`` by ``-EI L theta kappa_r(x)^2``.
 """
 
 from __future__ import annotations
@@ -127,8 +128,8 @@ class Debond:
 
     Config keys besides the generic ones: ``n_debonds`` (range of the count per damaged sample), ``length_m``
     (range of the debonded length, uniform) and ``debond_damping_s`` (range of the contact's damping ``beta``,
-    proportional to the debonded section's stiffness, s). Parameters per damage: ``length_m`` (on the beam), ``ei_loss`` (``r``)
-    and ``beta_s``. Size: the hinge flexibility ``l r / ((1 - r) L)``.
+    proportional to the debonded length's strain energy, s). Parameters per damage: ``length_m`` (on the beam),
+    ``ei_loss`` (``r``) and ``beta_s``. Size: the hinge flexibility ``l r / ((1 - r) L)``.
     """
 
     kind = "debond"

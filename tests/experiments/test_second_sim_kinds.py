@@ -10,7 +10,8 @@ from experiments.benches.bench_debond import confusion, markdown
 from experiments.second_sim.__main__ import main
 from experiments.second_sim.fem import Beam, assemble, modes
 from experiments.second_sim.kind_pairs import CORE_MODULUS_PA, FACE_THICKNESS_M, simulate_kind_pairs
-from experiments.second_sim.layered import Sandwich, composite_ei, face_modulus_for, layered_assembled
+from experiments.second_sim.layered import Sandwich, composite_ei, debond_ei, face_modulus_for, layered_assembled, \
+    layered_matrices
 from experiments.second_sim.pairs import LENGTH_M, MASS_PER_LENGTH_KG_M, THICKNESS_M, WIDTH_M
 
 
@@ -62,3 +63,23 @@ def test_confusion_counts_the_most_likely_explanation_per_change():
     assert by["debond (sliding)"]["told apart"] == 0.5 and by["debond (tied tips)"]["none fits"] == 1.0
     assert by["debond (tied tips)"]["network detected"] == 0.0 and by["slit"]["slit"] == 1.0
     assert "| debond (sliding) | 2 | 100 % | 50 % | 0 % | 50 % | 0 % | 50 % |" in markdown(rows, names)
+
+
+@pytest.mark.parametrize("tied", [True, False])
+def test_tip_deflection_of_a_debonded_cantilever_is_the_closed_form(tied):
+    """A tip load P on the clamped layered beam debonded over [a, b]. Sliding face: the moment bends the debonded
+    length with EI_d, ``P (L^3 / 3 EI + (1/EI_d - 1/EI) int_a^b (L - x)^2 dx)``. Tips tied: the face's constant
+    force carries the mean moment over the debond with the composite EI, only its variation bends with EI_d,
+    ``P (L^3 / 3 EI + (1/EI_d - 1/EI) l^3 / 12)`` (complementary energy). Both to 1e-7 (measured: 6e-9, the round-off of condensing the axial DOFs)."""
+    EI = 22.674
+    ef = face_modulus_for(EI, WIDTH_M, THICKNESS_M, FACE_THICKNESS_M, CORE_MODULUS_PA)
+    sec = Sandwich(WIDTH_M, THICKNESS_M, FACE_THICKNESS_M, ef, CORE_MODULUS_PA)
+    L, n = LENGTH_M, 120
+    a, b = 30 * L / n, 42 * L / n
+    _, K, _ = layered_matrices(L, sec, MASS_PER_LENGTH_KG_M, [(a, b)], n, tied)
+    load = np.zeros(K.shape[0])
+    load[-2] = 1.0                                            # the tip's deflection DOF
+    tip = np.linalg.solve(K, load)[-2]
+    extra = (1 / debond_ei(sec) - 1 / composite_ei(sec))
+    expected = L**3 / (3 * EI) + extra * ((b - a) ** 3 / 12 if tied else ((L - a) ** 3 - (L - b) ** 3) / 3)
+    assert tip == pytest.approx(expected, rel=1e-7)
