@@ -70,7 +70,8 @@ def test_tip_deflection_of_a_debonded_cantilever_is_the_closed_form(tied):
     """A tip load P on the clamped layered beam debonded over [a, b]. Sliding face: the moment bends the debonded
     length with EI_d, ``P (L^3 / 3 EI + (1/EI_d - 1/EI) int_a^b (L - x)^2 dx)``. Tips tied: the face's constant
     force carries the mean moment over the debond with the composite EI, only its variation bends with EI_d,
-    ``P (L^3 / 3 EI + (1/EI_d - 1/EI) l^3 / 12)`` (complementary energy). Both to 1e-7 (measured: 6e-9, the round-off of condensing the axial DOFs)."""
+    ``P (L^3 / 3 EI + (1/EI_d - 1/EI) l^3 / 12)`` (complementary energy).
+    Both to 1e-7 (measured: 6e-9, the round-off of condensing the axial DOFs)."""
     EI = 22.674
     ef = face_modulus_for(EI, WIDTH_M, THICKNESS_M, FACE_THICKNESS_M, CORE_MODULUS_PA)
     sec = Sandwich(WIDTH_M, THICKNESS_M, FACE_THICKNESS_M, ef, CORE_MODULUS_PA)
