@@ -12,9 +12,10 @@ The pairs come from :mod:`experiments.second_sim.kind_pairs` (beam 5 with a face
 model, a slit, a point mass added, or none; modal noise 0.03 % / 3 % / 0.5 %; no code shared with the
 project). Each pair's modal data is classified as a user would (``beam-damage classify --model M --baseline
 pair-K_baseline.json pair-K_current.json --json``). The confusion table counts, per true change, the most likely
-explanation (the first of the verdict's ``hypotheses``; "none fits" where it does not fit), the network's
-detections, and the pairs whose summary says the two most likely cannot be told apart on the modes measured
-(and, for a debond, what it says would separate them).
+explanation (the first of the verdict's ``hypotheses``), the share whose most likely explanation fits the change
+within its noise, the network's detections, and the pairs whose summary does not say the two most likely cannot
+be told apart on the modes measured (the summaries of debonds that cannot be told apart, with what they say
+would separate them, are printed).
 
 Writes ``debond.csv`` and ``debond.json`` in ``--out``; ``--json`` prints the rows; ``--docs`` writes the table
 into docs/datasets.md (block ``debond``).
@@ -50,26 +51,27 @@ def _change(t: dict) -> str:
 
 
 def confusion(truth: list, verdicts: list) -> tuple[list[dict], list[str]]:
-    """Rows ``{change, pairs, network detected, <explanation>: share, ..., told apart}`` and the explanations'
-    names in the order reported; ``told apart``: the share of pairs whose summary does not say the two most likely
-    cannot be told apart."""
+    """Rows ``{change, pairs, network detected, <explanation>: share, ..., fits, told apart}`` and the
+    explanations' names in the order reported; ``fits``: the share of pairs whose most likely explanation fits;
+    ``told apart``: the share whose summary does not say the two most likely cannot be told apart."""
     names: list[str] = []
     by: dict = {}
     for t, v in zip(truth, verdicts):
         hyp = v.get("hypotheses") or []
-        best = hyp[0]["name"] if hyp and hyp[0].get("fits", True) else "none fits"
+        best = hyp[0]["name"] if hyp else "none"
         for h in hyp:
             names += [h["name"]] if h["name"] not in names else []
-        g = by.setdefault(_change(t), {"n": 0, "best": Counter(), "net": 0, "apart": 0})
+        g = by.setdefault(_change(t), {"n": 0, "best": Counter(), "net": 0, "apart": 0, "fits": 0})
         g["n"] += 1
         g["best"][best] += 1
+        g["fits"] += bool(hyp and hyp[0].get("fits", True))
         g["net"] += bool((v.get("network") or {}).get("damaged", v.get("damaged")))
         g["apart"] += "cannot be told apart" not in (v.get("hypotheses_summary") or "")
-    names.append("none fits")
     rows = []
     for change, g in by.items():
         row = {"change": change, "pairs": g["n"], "network detected": g["net"] / g["n"]}
         row.update({n: g["best"][n] / g["n"] for n in names})
+        row["fits"] = g["fits"] / g["n"]
         row["told apart"] = g["apart"] / g["n"]
         rows.append(row)
     return rows, names
@@ -77,7 +79,7 @@ def confusion(truth: list, verdicts: list) -> tuple[list[dict], list[str]]:
 
 def markdown(rows: list[dict], names: list[str]) -> str:
     """The rows as the docs' table (shares in %)."""
-    cols = ["pairs", "network detected", *names, "told apart"]
+    cols = ["pairs", "network detected", *names, "fits", "told apart"]
     lines = ["| true change | " + " | ".join(cols) + " |", "| --- |" + " --- |" * len(cols)]
     for r in rows:
         cells = [str(r["pairs"])] + [f"{100 * r[c]:.0f} %" for c in cols[1:]]
@@ -102,8 +104,9 @@ def main(argv=None) -> int:
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     pd.DataFrame(rows).to_csv(out / "debond.csv", index=False)
-    summaries = [{"change": _change(t), "x_m": t["x_m"], "size": t["size"], "summary": v.get("hypotheses_summary")}
-                 for t, v in zip(truth, verdicts)]
+    summaries = [{"change": _change(t), "x_m": t["x_m"], "size": t["size"], "summary": v.get("hypotheses_summary"),
+                  "hypotheses": [{k: h.get(k) for k in ("name", "probability", "fits", "parameters")}
+                                 for h in v.get("hypotheses") or []]} for t, v in zip(truth, verdicts)]
     (out / "debond.json").write_text(json.dumps({"rows": rows, "pairs": summaries}, indent=1, default=float))
     if a.json:
         print(json.dumps(rows, indent=1, default=float))

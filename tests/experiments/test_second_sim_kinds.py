@@ -58,11 +58,12 @@ def test_confusion_counts_the_most_likely_explanation_per_change():
                 verdict("slit")]
     rows, names = confusion(truth, verdicts)
     by = {r["change"]: r for r in rows}
-    assert names == ["debond", "intact", "slit", "none fits"]
+    assert names == ["debond", "intact", "slit"]
     assert by["debond (sliding)"]["debond"] == 0.5 and by["debond (sliding)"]["slit"] == 0.5
-    assert by["debond (sliding)"]["told apart"] == 0.5 and by["debond (tied tips)"]["none fits"] == 1.0
+    assert by["debond (sliding)"]["told apart"] == 0.5 and by["debond (tied tips)"]["slit"] == 1.0
+    assert by["debond (tied tips)"]["fits"] == 0.0 and by["debond (sliding)"]["fits"] == 1.0
     assert by["debond (tied tips)"]["network detected"] == 0.0 and by["slit"]["slit"] == 1.0
-    assert "| debond (sliding) | 2 | 100 % | 50 % | 0 % | 50 % | 0 % | 50 % |" in markdown(rows, names)
+    assert "| debond (sliding) | 2 | 100 % | 50 % | 0 % | 50 % | 100 % | 50 % |" in markdown(rows, names)
 
 
 @pytest.mark.parametrize("tied", [True, False])
