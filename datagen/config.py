@@ -114,7 +114,7 @@ MAX_MODAL_NOISE = 0.5
 #: The repeatability ranges of ``measurement`` (per-sample stds of each test's own changes, log-uniform) and
 #: their largest accepted values (docs/datasets.md, "Repeatability of the tests").
 REPEATABILITY_MAX = {"frequency_scatter": 0.01, "damping_scatter": 0.5, "shape_scatter": 0.1, "gain_scatter": 0.1}
-#: Those keys, in the order a batch draws them (:func:`datagen.pipeline.draw_batch`).
+#: Those keys, in the order a batch draws them (:func:`datagen.batch_inputs.draw_batch`).
 REPEATABILITY = tuple(REPEATABILITY_MAX)
 #: The per-sample variables of ``measurement.modal_noise = "output-only"`` (:func:`output_only_variables`).
 OUTPUT_ONLY_VARIABLES = ("sensor_noise", "record_length_s")
@@ -271,11 +271,11 @@ def _check_measurement(meas: dict) -> str:
     modal noise describes (``{"method": "lscf", ...}`` of the shipped file, ``{"method": "ssi", ...}`` for
     "output-only", None for "fixed").
     """
-    mode = meas["modal_noise"]
-    if mode not in MODAL_NOISE_MODES:
+    noise_model = meas["modal_noise"]
+    if noise_model not in MODAL_NOISE_MODES:
         raise ConfigError(f"config key 'measurement.modal_noise' must be one of {', '.join(MODAL_NOISE_MODES)}, "
-                          f"got {mode!r}")
-    calib = modal_noise_calibration() if mode == "calibrated" else {}
+                          f"got {noise_model!r}")
+    calib = modal_noise_calibration() if noise_model == "calibrated" else {}
     meas["identification"] = calib.get("identification")
     for k in ("frequency_noise", "damping_noise", "shape_noise", "frequency_noise_floor", "damping_noise_floor",
               "shape_noise_floor", "frequency_noise_per_floor", "damping_noise_per_floor", "shape_noise_per_floor"):
@@ -284,8 +284,9 @@ def _check_measurement(meas: dict) -> str:
             if not 1 <= len(v) <= 100:
                 raise ConfigError(f"config key 'measurement.{k}' must be a number or one number per mode (modes 1, "
                                   f"2, ...; the last repeats beyond the list), got {v!r}")
-            meas[k] = [_num(f"measurement.{k}", x, lo=0, hi=MAX_MODAL_NOISE if mode == "fixed" else 1e4) for x in v]
-        elif mode == "output-only":
+            hi = MAX_MODAL_NOISE if noise_model == "fixed" else 1e4
+            meas[k] = [_num(f"measurement.{k}", x, lo=0, hi=hi) for x in v]
+        elif noise_model == "output-only":
             raise ConfigError(f"config key 'measurement.{k}': modal_noise 'output-only' takes one coefficient per "
                               "mode, calibrated on the test by 'beam-damage generate --modal-noise output-only'; "
                               f"got {v!r}")
@@ -294,7 +295,7 @@ def _check_measurement(meas: dict) -> str:
             meas[k] = [float(x) for x in calib[q + k.removeprefix(f"{q}_noise")]]
         else:
             meas[k] = _num(f"measurement.{k}", v, lo=0, hi=MAX_MODAL_NOISE)
-    if mode == "output-only":
+    if noise_model == "output-only":
         meas["identification"] = {"method": "ssi", "n_modes": len(meas["frequency_noise"])}
     # a number fixes the value; a range draws it per sample
     for k, lo, hi in (("frf_noise", 0.0, 0.5), ("frf_noise_floor", 0.0, 0.5), ("sensor_noise", 0.0, 0.5),
@@ -310,7 +311,7 @@ def _check_measurement(meas: dict) -> str:
     if meas["band_rad_s"][0] >= meas["band_rad_s"][1]:
         raise ConfigError("config key 'measurement.band_rad_s' must have low < high")
     meas["lines"] = _num("measurement.lines", meas["lines"], lo=2, hi=200000, integer=True)
-    return mode
+    return noise_model
 
 
 def _check_calibrated_noise(meas: dict) -> None:

@@ -211,7 +211,7 @@ class Dataset:
     @property
     def has_updated_model(self) -> bool:
         """False when the test holds fewer modes than sensors, so no updated model (nor its FRFs) exists
-        (:attr:`datagen.pipeline.Setup.n_update`); datasets that predate ``layout`` are the thesis's test."""
+        (:attr:`datagen.setup.Setup.n_update`); datasets that predate ``layout`` are the thesis's test."""
         layout = self.manifest.get("layout")
         return not layout or len(layout["modes"]) >= len(layout["sensors_x_m"])
 

@@ -28,7 +28,8 @@ from threadpoolctl import threadpool_limits
 
 from datagen.config import validate
 from datagen.lock import LOCK_NAME, LockedError, dataset_lock
-from datagen.pipeline import get_setup, simulate_shard
+from datagen.pipeline import simulate_shard
+from datagen.setup import get_setup
 from datagen.store import ARRAYS, DERIVED, DATASET_FORMAT, STATES, column_units, dataset_identity, file_sha256, \
     finalize, package_version, read_manifest, recover, sample_table, shard_arrays, write_manifest, write_shard
 from physics.errors import BeamDamageError, ConfigError, OverdampedError

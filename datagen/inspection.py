@@ -16,6 +16,7 @@ from datagen.store import STATES
 from physics.errors import FileFormatError
 from physics.io import atomic_write_text
 from physics.properties import curvature_squared
+from physics.supports import THESIS_SUPPORT
 
 __all__ = ["curvature_check", "inspect_dataset"]
 
@@ -27,7 +28,7 @@ def _single_slits(table):
     return table[table.n_damages == 1]
 
 
-def curvature_check(table, length_m, bc: str = "clamped-free", modes=(1, 2, 3, 4)):
+def curvature_check(table, length_m, bc: str = THESIS_SUPPORT, modes=(1, 2, 3, 4)):
     """Regress the truth frequency shift of single-slit samples on the curvature-squared prediction.
 
     Prediction (narrow slit of relative loss ``q = dEI/EI``, first order in its
@@ -96,7 +97,7 @@ def inspect_dataset(dataset_dir, out_dir=None) -> dict:
     preset = ds.manifest["preset"]
     length = preset.get("length_m", preset.get("length"))  # format-1 manifests: "length"
     layout = ds.manifest.get("layout", {})
-    bc, modes = layout.get("bc", "clamped-free"), tuple(layout.get("modes", (1, 2, 3, 4)))
+    bc, modes = layout.get("bc", THESIS_SUPPORT), tuple(layout.get("modes", (1, 2, 3, 4)))
     check = curvature_check(table, length, bc, modes)
     summary = _summary(ds, table, check, dataset_dir)
     _plot_labels(plt, table, out)

@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from datagen.pipeline import BatchInputs, Setup, measure_modes, projected_modes, damage_frequency_drop, \
-    truth_matrices, update_models
+from datagen.batch_inputs import BatchInputs
+from datagen.pipeline import damage_frequency_drop, measure_modes, projected_modes, truth_matrices, update_models
+from datagen.setup import Setup
 from datagen.synth import add_noise
 from physics.frf import poles_and_residues, receptance, receptance_modal, receptance_state_space
 from physics.modal import underdamped_modes, undamped_modes
@@ -20,12 +21,12 @@ from physics.modal import underdamped_modes, undamped_modes
 __all__ = ["simulate_naive"]
 
 
-def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
+def simulate_naive(setup: Setup, inp: BatchInputs, solution: str = "full") -> dict:
     """Per-sample pipeline: the outputs of :func:`datagen.pipeline.simulate_chunk` plus eager FRFs.
 
-    ``modes="full"``: exact undamped modes (for ``C_0``) and the state-space
+    ``solution="full"``: exact undamped modes (for ``C_0``) and the state-space
     complex eigen-solution of the truth model, all modes in the measured FRF
-    (state-space route). ``modes="projection"``: the batched path's shortcut,
+    (state-space route). ``solution="projection"``: the batched path's shortcut,
     called per sample, FRFs by modal superposition
     (:func:`physics.frf.receptance_modal`). Updating with
     :func:`physics.updating.pilkey` per state; updated FRFs by direct
@@ -44,7 +45,7 @@ def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
     for i in range(len(inp)):
         s = inp.take(slice(i, i + 1))
         M, Mu, K, dC, dK = truth_matrices(setup, s)
-        if modes == "full":
+        if solution == "full":
             wr, phir = undamped_modes(M[0], K[0, 0])
             p = setup.p
             d = 2 * setup.zeta * wr[:p] * s.damping_scale[0]
@@ -62,11 +63,11 @@ def simulate_naive(setup: Setup, inp: BatchInputs, modes: str = "full") -> dict:
                 H_l.append(receptance_state_space(Ms[st], C, K[0, st], w, setup.meas, [setup.meas[drive]])[:, 0, :])
             lam, psi, H = np.stack(lam_l)[None], np.stack(psi_l)[None], np.stack(H_l)[None]
             w2 = np.stack([undamped_modes(Ms[st], K[0, st])[0][:setup.p] ** 2 for st in range(2)])[None]
-        elif modes == "projection":
+        elif solution == "projection":
             lam, psi, w2 = projected_modes(setup, s, M, Mu, K, dC)
             H = receptance_modal(lam, psi, w, np.arange(S), [drive])[..., 0, :]
         else:
-            raise ValueError(f"modes must be 'full' or 'projection', got {modes!r}")
+            raise ValueError(f"solution must be 'full' or 'projection', got {solution!r}")
         lam_m, psi_m = measure_modes(setup, s, lam[..., used], psi[..., used])
         Ma = setup.analyst_mass(s.mass_per_length_kg_m)
         up = update_models(setup, Ma, lam_m[..., :S], psi_m[..., :S], batched=False)

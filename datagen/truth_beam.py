@@ -24,7 +24,7 @@ enters the generator, combined with the specimen variability as follows:
   spring ``k_theta EI / EI_file`` on the rotation of each pinned end.
 * ``suspension`` (``k_y_N_m``), free-free: translational springs
   ``k_y EI / EI_file`` at both ends replace the default suspension (bounce
-  mode at 5 % of the first bending frequency, :func:`datagen.pipeline.suspension_unit_stiffness`).
+  mode at 5 % of the first bending frequency, :func:`physics.supports.suspension_unit_stiffness`).
 * ``added_mass`` (``mass_kg``, ``x_m``, ``J_kg_m2``; any number): each point mass (fixed
   hardware, not scaled by the specimen mass band) is added to ``M`` of both
   test days through the Hermite row of :func:`physics.effects.hermite_row`.
@@ -54,6 +54,7 @@ import numpy as np
 
 from physics.beam import beam_from_dict
 from physics.effects import (
+    EFFECTS,
     dashpot_matrix,
     effect_of,
     instances,
@@ -164,12 +165,14 @@ def point_effects(beam, n_elements: int) -> dict:
     -------
     dict with ``M_added`` (kg ...) and ``C_local`` (N s/m ...), each (2 N, 2 N) or
     ``None`` (the sum of every added mass, of every dashpot); ``added_masses``, the ``(x_m, mass_kg)`` of each
-    added mass; the clamp springs ``k_theta_Nm_rad`` and ``k_y_N_m`` (``root_flexibility`` or
-    ``clamp_flexibility``), the bearing spring ``bearing_k_theta_Nm_rad``, the suspension spring
-    ``suspension_k_y_N_m`` (each ``None`` when absent) and ``rayleigh`` (``(alpha_1_s, beta_s)`` or ``None``).
+    added mass; ``support_spring``, the stiffness of the support's own springs its effect gives
+    (:attr:`physics.supports.Support.effect`: the clamp's rotational spring (N m/rad) of ``root_flexibility`` or
+    ``clamp_flexibility``, the bearing spring (N m/rad), the suspension spring (N/m)), ``clamp_k_y_N_m``, a clamp
+    effect's translational spring (N/m) (each ``None`` when absent), and ``rayleigh`` (``(alpha_1_s, beta_s)`` or
+    ``None``).
     """
-    out = {"M_added": None, "C_local": None, "added_masses": (), "k_theta_Nm_rad": None, "k_y_N_m": None,
-           "bearing_k_theta_Nm_rad": None, "suspension_k_y_N_m": None, "rayleigh": None}
+    out = {"M_added": None, "C_local": None, "added_masses": (), "support_spring": None, "clamp_k_y_N_m": None,
+           "rayleigh": None}
     if beam is None:
         return out
 
@@ -183,14 +186,11 @@ def point_effects(beam, n_elements: int) -> dict:
     dashpots = instances(eff, "local_damping")
     if dashpots:
         out["C_local"] = sum(dashpot_matrix(node_x, p["c_Ns_m"], p.get("x_m", beam.length_m)) for p in dashpots)
-    for clamp in ("root_flexibility", "clamp_flexibility"):   # the two fit different supports: one at most
-        if clamp in eff:
-            out["k_theta_Nm_rad"] = eff[clamp]["k_theta_Nm_rad"]
-            out["k_y_N_m"] = eff[clamp].get("k_y_N_m")
-    if "bearing_flexibility" in eff:
-        out["bearing_k_theta_Nm_rad"] = eff["bearing_flexibility"]["k_theta_Nm_rad"]
-    if "suspension" in eff:
-        out["suspension_k_y_N_m"] = eff["suspension"]["k_y_N_m"]
+    own = eff.get(beam.support.effect)                        # the support's own springs
+    if own is not None:
+        params = EFFECTS[beam.support.effect].params
+        out["support_spring"] = own[params[0].name]
+        out["clamp_k_y_N_m"] = own.get(params[1].name) if len(params) > 1 else None
     if "proportional_damping" in eff:
         p = eff["proportional_damping"]
         out["rayleigh"] = (p.get("alpha_1_s", 0.0), p.get("beta_s", 0.0))

@@ -19,7 +19,6 @@ from learn.verdict import (IN_DISTRIBUTION_PERCENTILE, agreement, classical_answ
                            equivalent_depth, modes_text, network_answer, network_output, ood_percentile)
 from physics.errors import BeamDamageError
 from physics.identification import METHODS
-from physics.layout import SYMMETRIC_SUPPORTS
 from physics.io import MeasuredFRF
 from physics.modal import modal_parameters
 
@@ -157,11 +156,11 @@ def _change_pct(pair, normal: dict):
 
 
 def mirrored(beam, pair) -> bool:
-    """Whether a pair leaves the mirror ambiguity: a symmetric beam (:data:`physics.layout.SYMMETRIC_SUPPORTS`)
+    """Whether a pair leaves the mirror ambiguity: a symmetric beam (:attr:`physics.supports.Support.symmetric`)
     read on natural frequencies only (no shapes, or one sensor), where a damage at ``x`` and at ``L - x`` change
     every frequency alike."""
     test = beam.test
-    return (test is not None and test.bc in SYMMETRIC_SUPPORTS
+    return (test is not None and test.support.symmetric
             and (test.n_sensors == 1 or (pair is not None and pair.frequency_only)))
 
 

@@ -24,7 +24,6 @@ import numpy as np
 
 from learn.classical import FREQUENCY_METHODS
 from learn.features import as_spec
-from physics.layout import SYMMETRIC_SUPPORTS
 from physics.io import atomic_write_bytes
 
 __all__ = ["MIN_DROP", "Metrics", "NOISE_EDGES", "TIP_ZONE", "figures", "metrics", "mirrored_method", "reliability",
@@ -102,11 +101,11 @@ def reliability(probability, outcome, n_bins: int = 15):
 
 def mirrored_method(beam, name: str) -> bool:
     """Whether a method's location on ``beam`` is the mirror-ambiguous one: a symmetric beam
-    (:data:`physics.layout.SYMMETRIC_SUPPORTS`) read with one sensor, or by a method that reads natural frequencies
+    (:attr:`physics.supports.Support.symmetric`) read with one sensor, or by a method that reads natural frequencies
     alone (the frequency route's network, Cawley-Adams, DLAC, MDLAC); such locations are scored folded onto
     ``x <= L / 2``."""
     test = as_spec(beam).test
-    if test is None or test.bc not in SYMMETRIC_SUPPORTS:
+    if test is None or not test.support.symmetric:
         return False
     return test.n_sensors == 1 or name == "network (frequency)" or name in FREQUENCY_METHODS
 

@@ -42,7 +42,6 @@ from physics.errors import BeamDamageError, FileFormatError
 from datagen.dataset import Dataset
 from datagen.store import DATASET_FORMAT, read_manifest
 from datagen.synth import log_magnitude_map
-from physics.fem import constrained_dofs
 from physics.layout import Layout
 
 if TYPE_CHECKING:
@@ -386,7 +385,7 @@ def curvature_points(test: Layout) -> tuple[np.ndarray, tuple[int, int]]:
     holds at zero when no sensor sits there; returns their positions (m) and how many ends were added (0/1, 0/1)."""
     x = np.sort(np.asarray(test.sensors_x_m, float))
     L, tol = test.length_m, 1e-9 * test.length_m
-    held = constrained_dofs(test.bc, 2)                                  # "1:y" / "2:y": an end's translation held
+    held = test.support.constrained_dofs(2)                              # "1:y" / "2:y": an end's translation held
     ends = (int("1:y" in held and x[0] > tol), int("2:y" in held and x[-1] < L - tol))
     return np.concatenate([[0.0] * ends[0], x, [L] * ends[1]]), ends
 

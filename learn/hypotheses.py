@@ -49,15 +49,14 @@ from functools import lru_cache
 import numpy as np
 
 from datagen.damage.slit import hinge_flexibility
-from datagen.pipeline import suspension_unit_stiffness
 from learn.features import real_shapes, sign_aligned
 from learn.model_dir import sensitivity_of
 from physics.effects import hermite_row
 from physics.errors import BeamDamageError
 from physics.fem import beam_model
-from physics.layout import RIGID_BODY_MODES
 from physics.modal import undamped_modes
 from physics.properties import beam_preset
+from physics.supports import THESIS_SUPPORT, add_springs, changed_springs, support
 
 __all__ = ["FIT_LIMIT", "FREQUENCY_CHANGE_STD", "HYPOTHESES", "MODEL_ERROR", "NO_EXPLANATION", "PRIOR", "SEPARATE",
            "SHAPE_CHANGE_STD", "SIZE_SCALE_STD", "Hypothesis", "explain", "explain_many", "shape_changes", "summary",
@@ -162,39 +161,27 @@ def support_curve(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_spring_
     support springs change (module docstring), the changes of their real unit-norm shapes at the sensors
     (G, S m; sensor-major as :attr:`learn.sensitivity.Sensitivity.shape`), and what the parameter means.
 
-    ``ln_factors`` (G,): ``ln(k / k_0)`` of the clamp springs or the suspension; for pinned ends ``log10`` of the
-    bearing spring ``k L / EI`` added to none.
+    ``ln_factors`` (G,): the parameter of :func:`physics.supports.changed_springs` for the test's support:
+    ``ln(k / k_0)`` of the clamp springs or the suspension; for pinned ends ``log10`` of the bearing spring
+    ``k L / EI`` added to none. An unknown support is refused in one line.
     """
     test = beam.test
-    bc = "clamped-free" if test is None else test.bc
+    sup = support(THESIS_SUPPORT if test is None else test.bc, "the model's test")
     L = beam.length_m
     g = np.asarray(ln_factors, float)
     kr0 = (1e4 if root_spring_relative is None else float(root_spring_relative)) * EI_Nm2 / L
-    base = beam_model(n_elements, L, EI_Nm2, mass_per_length_kg_m, bc="pinned-pinned" if bc == "clamped-clamped"
-                      else bc, root_spring=kr0 if bc == "clamped-free" else None)
-    K0, M = np.array(base.K), np.array(base.M)
-    names = list(base.dofs)
+    base = beam_model(n_elements, L, EI_Nm2, mass_per_length_kg_m, bc=sup.name,
+                      root_spring=kr0 if sup.clamped else None)
     last = n_elements + 1
-    K = np.repeat(K0[None], g.size + 1, axis=0)                  # row 0: the nominal support
-    scale = np.concatenate([[0.0], g])
-    if bc == "clamped-free":
-        what = "ln(k / k0) of the clamp's rotational spring"
-        K[:, names.index("1:rz"), names.index("1:rz")] += kr0 * (np.exp(scale) - 1.0)
-    elif bc == "clamped-clamped":
-        what = "ln(k / k0) of both clamps' rotational springs"
-        for d in ("1:rz", f"{last}:rz"):
-            K[:, names.index(d), names.index(d)] += kr0 * np.exp(scale)
-    elif bc == "pinned-pinned":
-        what = "log10(k L / EI) of the bearing rotational springs added at both pins"
-        for d in ("1:rz", f"{last}:rz"):
-            K[1:, names.index(d), names.index(d)] += 10.0 ** g * EI_Nm2 / L
-    else:
-        what = "ln(k / k0) of the suspension springs at both ends"
-        ks = suspension_unit_stiffness(L) * EI_Nm2
-        for d in ("1:y", f"{last}:y"):
-            K[:, names.index(d), names.index(d)] += ks * np.exp(scale)
+    own = sup.spring_dofs(last)                                  # the support's springs (module physics.supports)
+    nominal = sup.nominal_unit_stiffness(L) * EI_Nm2             # a suspension (the clamps': kr0, in base)
+    K0 = add_springs(base.K, base.dofs, own, nominal)
+    k0 = kr0 if sup.clamped else nominal
+    dk = np.concatenate([[0.0], changed_springs(sup, k0, EI_Nm2, L, g)])   # row 0: the nominal support
+    K = add_springs(np.repeat(K0[None], g.size + 1, axis=0), base.dofs, own, dk)
+    M, names, what = np.array(base.M), list(base.dofs), sup.change_meaning
     w, phi = undamped_modes(np.repeat(M[None], K.shape[0], axis=0), K)
-    idx = RIGID_BODY_MODES[bc] + np.asarray(mode_index, int)
+    idx = sup.rigid_body_modes + np.asarray(mode_index, int)
     f = w[:, idx]
     all_dofs = [f"{n}:{d}" for n in range(1, last + 1) for d in ("y", "rz")]
     keep = [all_dofs.index(d) for d in names]
@@ -420,8 +407,8 @@ def _support_curves(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_sprin
     """The support grid, its curve over all the model's modes, what it means, the re-clamping curve (or None) and
     the support's shape changes (G, S m) of a model's beam (cached: one model classifies many pairs)."""
     number = [r - 1 for r in beam.modes]
-    pinned = beam.test is not None and beam.test.bc == "pinned-pinned"
-    grid = (np.linspace(-2.0, 2.0, N_SUPPORT) if pinned
+    added = beam.test is not None and beam.test.support.change == "add"      # log10(k L / EI) of springs added
+    grid = (np.linspace(-2.0, 2.0, N_SUPPORT) if added
             else np.linspace(-SUPPORT_LN_RANGE, SUPPORT_LN_RANGE, N_SUPPORT))
     curve, shapes, what = support_curve(beam, EI_Nm2, mass_per_length_kg_m, root_spring_relative, grid, number)
     reclamp = None

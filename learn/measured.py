@@ -96,9 +96,10 @@ class ModalPair:
     ----------
     eigenvalues : ndarray, complex, shape (2, c)          baseline and current, ascending frequency
     eigenvectors : ndarray, complex, shape (2, n_dofs, c)
-    modes : ndarray, int, shape (c,)                      0-based indices of the model's modes they are
+    mode_index : ndarray, int, shape (c,)                 0-based indices of the model's modes they are
                                                           (``[0, 1, 2, 3]`` when both tests hold the 4 of the
-                                                          thesis's test)
+                                                          thesis's test; the 1-based mode numbers are
+                                                          ``beam.modes[j]``)
     missing : tuple of str                                which of the model's modes a test lacks, and why (empty
                                                           when complete)
     warnings : tuple of str
@@ -112,7 +113,7 @@ class ModalPair:
 
     eigenvalues: np.ndarray
     eigenvectors: np.ndarray
-    modes: np.ndarray
+    mode_index: np.ndarray
     missing: tuple = ()
     warnings: tuple = ()
     n_modes: int = 4
@@ -122,7 +123,12 @@ class ModalPair:
     @property
     def complete(self) -> bool:
         """Both tests hold every mode the model reads (what the modal network reads)."""
-        return self.modes.size == self.n_modes
+        return self.mode_index.size == self.n_modes
+
+    @property
+    def modes(self) -> np.ndarray:
+        """:attr:`mode_index` under the name learn/classify.py and learn/hypotheses.py read."""
+        return self.mode_index
 
 
 def pair_modes_by_frequency(frequencies_hz, nominal_hz, tolerance: float | None = None,

@@ -4,9 +4,10 @@ Model directory
 ---------------
 ``config.json``          beam it was trained for (name, length, DOF set, mass model; and the training data's
                          truth beam from its manifest), default classifier input, estimator parameters and
-                         temperature per input, training data (paths, manifest checksums, generator config
-                         with its temperature/re-clamping ranges), detection threshold, classical-method
-                         thresholds, seed, package version, training time, test metrics
+                         probability calibration (logit scale, bias) per input, training data (paths, manifest
+                         checksums, generator config with its temperature/re-clamping ranges), detection
+                         threshold, classical-method thresholds, seed, package version, training time, test
+                         metrics
 ``weights-<input>.pt``   ``torch.save`` of the network's state dict plus the input normalisation and the
                          training features' precision matrix (loaded with ``weights_only=True``)
 ``metrics.csv``          test-split metrics of the network(s) and the classical methods

@@ -2,7 +2,8 @@
 
 Heads
 -----
-``detect``   one logit of "damaged" (calibrated afterwards by temperature scaling).
+``detect``   one logit of "damaged" (calibrated afterwards by a logit scale and bias,
+             :func:`learn.estimator.fit_calibration`).
 ``locate``   logits over ``n_bins`` equal bins of ``x / L`` (a distribution along the beam).
 ``support``  one logit of "the supports changed beyond re-clamping" (an intact specimen, datasets with
              ``specimen.support_change_fraction`` > 0; untrained otherwise).

@@ -17,7 +17,9 @@ from __future__ import annotations
 import numpy as np
 
 from datagen.config import merge
-from datagen.pipeline import draw_batch, get_setup, per_mode, simulate_batch
+from datagen.batch_inputs import draw_batch
+from datagen.pipeline import per_mode, simulate_batch
+from datagen.setup import get_setup
 from datagen.synth import measured_frf
 from learn.measured import identify_test, pair_modes_by_frequency
 from physics.errors import BeamDamageError

@@ -53,12 +53,12 @@ def model_modes(data, beam, nominal_hz, name: str = "baseline"):
     m = beam.n_modes
     lnf, zeta = np.full(m, np.nan), np.full(m, np.nan)
     lam = np.asarray(pair.eigenvalues[0])
-    lnf[pair.modes] = np.log(np.abs(lam) / (2 * np.pi))
-    zeta[pair.modes] = -lam.real / np.abs(lam)
+    lnf[pair.mode_index] = np.log(np.abs(lam) / (2 * np.pi))
+    zeta[pair.mode_index] = -lam.real / np.abs(lam)
     shapes = None
     if not pair.frequency_only:
         shapes = np.full((pair.eigenvectors.shape[1], m), np.nan)
-        shapes[:, pair.modes] = real_shapes(pair.eigenvectors[0])
+        shapes[:, pair.mode_index] = real_shapes(pair.eigenvectors[0])
     return lnf, shapes, zeta
 
 
@@ -123,7 +123,7 @@ class NormalVariation:
         Returns
         -------
         dict: ``test`` (the one of smaller p-value: "hotelling" or "largest_z"), ``tests`` (those run),
-        ``modes`` (0-based model modes compared), ``z_scores`` (per
+        ``mode_index`` (0-based model modes compared), ``z_scores`` (per
         model mode, None where not compared), ``statistic``, ``threshold``, ``p_value``, ``beyond`` (bool),
         ``frequency_change_pct`` (against the baselines' mean, per model mode).
         """
@@ -162,7 +162,7 @@ class NormalVariation:
         p_value = min(1.0, share * p_value)
         with np.errstate(invalid="ignore"):
             change = 100 * np.expm1(d)
-        return {"test": kind, "tests": sorted(tests), "modes": [int(k) for k in use],
+        return {"test": kind, "tests": sorted(tests), "mode_index": [int(k) for k in use],
                 "z_scores": [float(v) if k in use else None for k, v in enumerate(z)],
                 "statistic": statistic, "threshold": threshold, "p_value": p_value,
                 "beyond": bool(p_value < false_alarm_rate),

@@ -1,7 +1,7 @@
 """The modal noise of an output-only test, calibrated against the identification ``identify`` runs on response
 records (SSI-cov), so that a dataset's modal errors are those ``classify`` then reads from its ``modal.json``.
 
-Specimens of the config are simulated as a dataset simulates them (:func:`datagen.pipeline.draw_batch`,
+Specimens of the config are simulated as a dataset simulates them (:func:`datagen.batch_inputs.draw_batch`,
 :func:`~datagen.pipeline.simulate_batch`: every projected truth mode at the sensors). Each test day becomes a
 record of accelerations at the sensors under a white random force at the sensor that excites the test's modes
 best (:func:`drive_row`), synthesised by FFT from the modes (:func:`response_records`), with Gaussian sensor
@@ -24,7 +24,9 @@ from __future__ import annotations
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from datagen.pipeline import draw_batch, get_setup, simulate_batch
+from datagen.batch_inputs import draw_batch
+from datagen.pipeline import simulate_batch
+from datagen.setup import get_setup
 from learn.noise_calibration import fit_coefficients, mode_errors, on_nominal_modes
 from physics.errors import BeamDamageError
 from physics.frf import pole_residue

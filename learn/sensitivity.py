@@ -28,13 +28,12 @@ from functools import lru_cache
 import numpy as np
 
 from datagen.damage import damage_model
-from datagen.pipeline import suspension_unit_stiffness
 from learn.features import real_shapes, sign_aligned
 from physics.effects import hermite_row, point_mass_matrix
 from physics.fem import beam_model, element_mass, element_stiffness
-from physics.layout import RIGID_BODY_MODES
 from physics.modal import undamped_modes
 from physics.properties import beam_preset
+from physics.supports import add_springs
 
 __all__ = ["Sensitivity", "beam_sensitivity"]
 
@@ -120,7 +119,8 @@ def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7,
     kind : damage kind (:data:`datagen.damage.DAMAGE_MODELS`): its ``perturbs`` says which matrix a size changes
     test : physics.layout.Layout, optional
         Another test than the thesis's: its supports, sensors (shapes interpolated there) and modes (``n_modes``
-        is then theirs; a free-free beam's rigid-body modes left out); the root spring acts on a clamp at ``x = 0``.
+        is then theirs; a free-free beam's rigid-body modes left out); the root spring acts on every clamp (as the
+        clamp springs ``generate`` draws), the default suspension holds a free-free beam (:mod:`physics.supports`).
     """
     perturbs = damage_model(kind).perturbs
     if test is not None and not test.thesis:
@@ -159,24 +159,21 @@ def _layout_sensitivity(preset, root_spring_relative, n_elements, step, perturbs
     """:func:`beam_sensitivity` of any test (:class:`physics.layout.Layout`): shapes at the sensors."""
     L, EI, m, masses = _beam_numbers(preset)
     le = L / n_elements
-    clamp = test.bc == "clamped-free" and root_spring_relative is not None
-    kr = root_spring_relative * EI / L if clamp else None
+    sup = test.support
+    kr = root_spring_relative * EI / L if sup.clamped and root_spring_relative is not None else None
     factors = np.ones((n_elements + 1, n_elements))
     key = "ei_factors" if perturbs == "stiffness" else "mass_factors"
     factors[1:] += (-step if perturbs == "stiffness" else step) * np.eye(n_elements)
     models = _with_masses(beam_model(n_elements, L, EI, m, bc=test.bc, root_spring=kr, **{key: factors}), masses, L,
                           n_elements)
-    K = np.array(models.K)
-    if test.bc == "free-free":  # a soft suspension at both ends (the rigid-body modes stay the two lowest)
-        k_s = suspension_unit_stiffness(L) * EI
-        for d in models.index(["1:y", f"{n_elements + 1}:y"]):
-            K[..., d, d] += k_s
+    # the support's nominal springs (a soft suspension: the rigid-body modes stay the two lowest)
+    K = add_springs(models.K, models.dofs, sup.spring_dofs(n_elements + 1), sup.nominal_unit_stiffness(L) * EI)
     w, phi = undamped_modes(models.M, K)
     names = [f"{n}:{d}" for n in range(1, n_elements + 2) for d in ("y", "rz")]
     keep = [names.index(d) for d in models.dofs]
     node_x = np.linspace(0.0, L, n_elements + 1)
     T = np.array([hermite_row(float(x), node_x)[0][keep] for x in sorted(test.sensors_x_m)])   # (S, n)
-    used = RIGID_BODY_MODES[test.bc] + np.asarray(test.modes) - 1
+    used = sup.rigid_body_modes + np.asarray(test.modes) - 1
     S = T.shape[0]
     u = real_shapes((T @ phi[..., used]).astype(complex))                     # (E + 1, S, m)
     du = (sign_aligned(u[1:], u[0]) - u[0]) * L / (step * le)   # (E, S, m)

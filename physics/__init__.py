@@ -19,11 +19,11 @@ The names below are the public API other packages (``datagen``, ``learn``,
 ``experiments``) import; ``io`` and ``identification`` are used as modules.
 """
 
-from physics import errors, estimation, fem, frf, modal, properties, reduction, thesis, updating
+from physics import errors, estimation, fem, frf, modal, properties, reduction, supports, thesis, updating
 from physics.errors import (BeamDamageError, ConfigError, ConvergenceError, FileFormatError, OverdampedError,
                             ShapeError)
 from physics.estimation import FRFEstimate, estimate_frf
-from physics.fem import BOUNDARY_CONDITIONS, FEModel, KeptDofs, beam_model, kept_dofs, lumped_mass
+from physics.fem import FEModel, KeptDofs, beam_model, kept_dofs, lumped_mass
 from physics.frf import (FRF_KINDS, FRF_UNITS, PoleResidues, convert_frf, pole_residue, poles_and_residues,
                          receptance, receptance_modal, receptance_state_space)
 from physics.modal import (ComplexModes, complex_modes, eigenvalues_from_modal, mac, modal_parameters,
@@ -31,16 +31,19 @@ from physics.modal import (ComplexModes, complex_modes, eigenvalues_from_modal, 
 from physics.properties import (CANTILEVER_BETA_L, PRESETS, BeamPreset, beam_preset, cantilever_curvature_squared,
                                 cantilever_frequencies_hz)
 from physics.reduction import Reduction, guyan, iirs, irs
+from physics.supports import SUPPORTS, Support, support
 from physics.updating import (MASS_MODELS, UpdateResult, analyst_mass, lancaster_direct, mass_model_name, pilkey,
                               reduced_mass)
 
 __all__ = [
     # modules
-    "errors", "estimation", "fem", "frf", "modal", "properties", "reduction", "thesis", "updating",
+    "errors", "estimation", "fem", "frf", "modal", "properties", "reduction", "supports", "thesis", "updating",
     # errors
     "BeamDamageError", "ConfigError", "ConvergenceError", "FileFormatError", "OverdampedError", "ShapeError",
     # FE model
-    "BOUNDARY_CONDITIONS", "FEModel", "KeptDofs", "beam_model", "kept_dofs", "lumped_mass",
+    "FEModel", "KeptDofs", "beam_model", "kept_dofs", "lumped_mass",
+    # supports
+    "SUPPORTS", "Support", "support",
     # properties
     "CANTILEVER_BETA_L", "PRESETS", "BeamPreset", "beam_preset", "cantilever_curvature_squared",
     "cantilever_frequencies_hz",

@@ -32,7 +32,7 @@ otherwise the keys marked * are required. Unknown keys are errors::
 
     [effects.shear_deformation]      # any of physics.effects.EFFECTS, each with its parameters
     kGA_N = 2.0e4
-    [effects.root_flexibility]       # the supports' effect follows bc (physics.effects.SUPPORT_EFFECTS)
+    [effects.root_flexibility]       # the supports' effect follows bc (physics.supports.Support.effect)
     k_theta_Nm_rad = 5.0e3
     [[effects.added_mass]]           # point effects: one [[...]] table per instance (or one [...] table)
     mass_kg = 0.035
@@ -62,11 +62,12 @@ import numpy as np
 
 from physics import effects as fx
 from physics.errors import ConfigError
-from physics.fem import BOUNDARY_CONDITIONS, FEModel
+from physics.fem import FEModel
 from physics.io import DofMap, atomic_write_text, map_frf_dofs, map_measured_dofs
 from physics.io.inputs import check_input_file
 from physics.properties import PRESETS, SECTION_KINDS, SOLID_SECTIONS, layered_ei, solid_section
 from physics.modal import state_matrix
+from physics.supports import THESIS_SUPPORT, Support, support
 
 __all__ = ["Beam", "MAX_MODEL_SPREAD", "PRESET_CORE_MODULUS_PA", "PRESET_FACE_THICKNESS_M", "beam_from_dict",
            "beam_to_toml", "load_beam", "preset_beam", "write_beam"]
@@ -95,7 +96,7 @@ class Beam:
     mass_per_length_kg_m : float
         Mass per length (kg/m).
     bc : str
-        Boundary condition (:data:`physics.fem.BOUNDARY_CONDITIONS`).
+        Boundary condition, a name of :data:`physics.supports.SUPPORTS` (its record: :attr:`support`).
     n_elements : int
         Elements of the default FE model.
     measured_x_m : tuple of float
@@ -134,7 +135,7 @@ class Beam:
     thickness_m: float
     EI_Nm2: float
     mass_per_length_kg_m: float
-    bc: str = "clamped-free"
+    bc: str = THESIS_SUPPORT
     n_elements: int = 4
     measured_x_m: tuple = ()
     face_thickness_m: float | None = None
@@ -160,6 +161,11 @@ class Beam:
         object.__setattr__(self, "effects", MappingProxyType({k: MappingProxyType(v) for k, v in eff.items()}))
         xs = self.measured_x_m or tuple(self.length_m * k / 4 for k in range(1, 5))
         object.__setattr__(self, "measured_x_m", tuple(float(x) for x in xs))
+
+    @property
+    def support(self) -> Support:
+        """The record of the beam's supports (:mod:`physics.supports`)."""
+        return support(self.bc)
 
     def fe_model(self, n_elements=None, *, EI_scale=1.0, mass_scale=1.0) -> FEModel:
         """FE model with every effect applied (:func:`physics.effects.assemble_beam`).
@@ -266,10 +272,6 @@ _SECTION_KEYS = {"sandwich": ("face_thickness_m", "core_modulus_pa", "face_modul
                  "circular": ("modulus_pa", "poisson_ratio", "density_kg_m3", "diameter_m"),
                  "given": ()}
 
-#: Supports that leave a beam free to move as a mechanism (refused with that reason).
-MECHANISMS = ("pinned-free", "free-pinned", "free-guided", "guided-free")
-
-
 def beam_from_dict(obj: dict, source: str = "beam") -> Beam:
     """Validate a beam mapping (the TOML layout of the module docstring) into a :class:`Beam`."""
     if not isinstance(obj, dict):
@@ -293,7 +295,7 @@ def beam_from_dict(obj: dict, source: str = "beam") -> Beam:
     if "effects" in obj:
         eff = fx.validate_effects(obj["effects"], source)
         vals["effects"] = {**vals.get("effects", {}), **eff}
-    fx.check_supports(vals.get("effects", {}), vals.get("bc", "clamped-free"), source)
+    fx.check_supports(vals.get("effects", {}), vals.get("bc", THESIS_SUPPORT), source)
     _check_layout(vals, source)
     beam = Beam(**vals)
     if beam.effects:
@@ -356,12 +358,7 @@ def _read_scalars(obj: dict, vals: dict, source: str) -> None:
         vals["name"] = obj["name"]
     vals.setdefault("name", Path(source).stem)
     if "bc" in obj:
-        if obj["bc"] in MECHANISMS:
-            raise ConfigError(f"{source}: 'bc' = {obj['bc']!r} leaves the beam a mechanism (it moves without "
-                              f"bending); expected one of {list(BOUNDARY_CONDITIONS)}")
-        if obj["bc"] not in BOUNDARY_CONDITIONS:
-            raise ConfigError(f"{source}: 'bc' = {obj['bc']!r} unknown; expected one of {list(BOUNDARY_CONDITIONS)}")
-        vals["bc"] = obj["bc"]
+        vals["bc"] = support(obj["bc"], source).name
     if "n_elements" in obj:
         n = obj["n_elements"]
         if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= 2000:

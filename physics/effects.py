@@ -46,7 +46,7 @@ unit in the name):
 
 Each effect is one :class:`Effect` record of :data:`EFFECTS` (its parameters, how it
 enters the model, the supports it fits, its discrepancy-fit bounds). The support effects follow
-the boundary condition (:data:`SUPPORT_EFFECTS`); an effect on supports the beam lacks is refused
+the boundary condition (:attr:`physics.supports.Support.effect`); an effect on supports the beam lacks is refused
 in one line. :func:`candidates_for` lists the candidates of a discrepancy analysis of a beam.
 :func:`assemble_beam` builds an :class:`physics.fem.FEModel` with every effect applied; :func:`interpolation_matrix`
 maps its DOFs onto the translations at arbitrary positions (measured points between nodes).
@@ -62,8 +62,9 @@ import numpy as np
 
 from physics import fem
 from physics.errors import BeamDamageError, ConfigError
+from physics.supports import ENDS, SUPPORTS, THESIS_SUPPORT, add_springs, support
 
-__all__ = ["CANDIDATES", "EFFECTS", "INSTANCE_SEP", "SUPPORT_EFFECTS", "Effect", "Parameter", "assemble_beam",
+__all__ = ["CANDIDATES", "EFFECTS", "INSTANCE_SEP", "Effect", "Parameter", "assemble_beam",
            "candidates_for", "check_supports", "dashpot_matrix", "effect_of", "hermite_row", "instance_key",
            "instances", "interpolation_matrix", "next_instance", "point_mass_matrix", "timoshenko_mass",
            "timoshenko_stiffness", "validate_effects"]
@@ -197,39 +198,27 @@ def _dashpot(parts: _Parts, p: dict) -> None:
     parts.C = parts.C + dashpot_matrix(parts.node_x, p["c_Ns_m"], p.get("x_m", parts.length_m))
 
 
-def _dof(node: int, direction: str) -> int:
-    """Index of DOF ``"node:direction"`` in the global order ``[1:y, 1:rz, 2:y, ...]``."""
-    return 2 * (node - 1) + (direction == "rz")
+def _springs(parts: _Parts, end: str, direction: str, k: float) -> None:
+    """Springs to ground of stiffness ``k`` on ``direction`` of the ends of condition ``end`` (:data:`ENDS`), their
+    DOFs kept."""
+    dofs = SUPPORTS[parts.bc].end_dofs(parts.node_x.size, end, direction)
+    parts.removed -= set(dofs)
+    parts.K = add_springs(parts.K, fem.dof_names(parts.node_x.size), dofs, k)
 
 
-def _end_nodes(parts: _Parts, kind: str) -> list[int]:
-    """Nodes (1 and/or the last) of the ends of ``parts.bc`` with support ``kind`` ("clamped", "pinned", "free")."""
-    left, right = parts.bc.split("-")
-    return [n for n, k in ((1, left), (parts.node_x.size, right)) if k == kind]
+def _support_springs(parts: _Parts, p: dict) -> None:
+    """The support's own springs (:meth:`physics.supports.Support.spring_dofs`), ``k_theta_Nm_rad`` on rotations or
+    ``k_y_N_m`` on translations, and a clamp's optional translational springs ``k_y_N_m``."""
+    end = SUPPORTS[parts.bc].spring_end
+    rotational = ENDS[end].spring == "rz"
+    _springs(parts, end, ENDS[end].spring, p["k_theta_Nm_rad"] if rotational else p["k_y_N_m"])
+    if rotational and "k_y_N_m" in p:
+        _springs(parts, end, "y", p["k_y_N_m"])
 
 
-def _springs(parts: _Parts, nodes, direction: str, k: float) -> None:
-    """Springs to ground of stiffness ``k`` on ``"node:direction"`` of each of ``nodes``, their DOFs kept."""
-    parts.K = parts.K.copy()
-    for n in nodes:
-        parts.removed.discard(f"{n}:{direction}")
-        i = _dof(n, direction)
-        parts.K[i, i] += k
-
-
-def _clamp_springs(parts: _Parts, p: dict) -> None:
-    clamps = _end_nodes(parts, "clamped")
-    _springs(parts, clamps, "rz", p["k_theta_Nm_rad"])
-    if "k_y_N_m" in p:
-        _springs(parts, clamps, "y", p["k_y_N_m"])
-
-
-def _bearing_springs(parts: _Parts, p: dict) -> None:
-    _springs(parts, _end_nodes(parts, "pinned"), "rz", p["k_theta_Nm_rad"])
-
-
-def _suspension(parts: _Parts, p: dict) -> None:
-    _springs(parts, _end_nodes(parts, "free"), "y", p["k_y_N_m"])
+def _supported_by(effect: str) -> tuple:
+    """The supports whose own springs ``effect`` calibrates (:attr:`physics.supports.Support.effect`)."""
+    return tuple(s.name for s in SUPPORTS.values() if s.effect == effect)
 
 
 #: Every effect, one record each (see the module docstring); ``assembled`` effects apply in this order.
@@ -249,23 +238,20 @@ EFFECTS: dict[str, Effect] = {e.name: e for e in (
            "assembled", _dashpot, lambda L, EI, m, rho_i, w1: {"c_Ns_m": (1e-7 * m * L * w1, 0.3 * m * L * w1)},
            repeatable=True),
     Effect("root_flexibility", (Parameter("k_theta_Nm_rad", True), Parameter("k_y_N_m", False)), "assembled",
-           _clamp_springs, lambda L, EI, m, rho_i, w1: {"k_theta_Nm_rad": (0.1 * EI / L, 1e5 * EI / L)},
-           ("clamped-free",)),
+           _support_springs, lambda L, EI, m, rho_i, w1: {"k_theta_Nm_rad": (0.1 * EI / L, 1e5 * EI / L)},
+           _supported_by("root_flexibility")),
     Effect("clamp_flexibility", (Parameter("k_theta_Nm_rad", True), Parameter("k_y_N_m", False)), "assembled",
-           _clamp_springs, lambda L, EI, m, rho_i, w1: {"k_theta_Nm_rad": (0.1 * EI / L, 1e5 * EI / L)},
-           ("clamped-clamped",)),
+           _support_springs, lambda L, EI, m, rho_i, w1: {"k_theta_Nm_rad": (0.1 * EI / L, 1e5 * EI / L)},
+           _supported_by("clamp_flexibility")),
     # from an almost ideal pin (a frequency shift of ~1e-4) to almost a clamp
-    Effect("bearing_flexibility", (Parameter("k_theta_Nm_rad", True),), "assembled", _bearing_springs,
-           lambda L, EI, m, rho_i, w1: {"k_theta_Nm_rad": (1e-3 * EI / L, 1e3 * EI / L)}, ("pinned-pinned",)),
+    Effect("bearing_flexibility", (Parameter("k_theta_Nm_rad", True),), "assembled", _support_springs,
+           lambda L, EI, m, rho_i, w1: {"k_theta_Nm_rad": (1e-3 * EI / L, 1e3 * EI / L)},
+           _supported_by("bearing_flexibility")),
     # bounce mode sqrt(2 k / (m L)) from 0.5 % to 40 % of the first measured (bending) mode
-    Effect("suspension", (Parameter("k_y_N_m", True),), "assembled", _suspension,
+    Effect("suspension", (Parameter("k_y_N_m", True),), "assembled", _support_springs,
            lambda L, EI, m, rho_i, w1: {"k_y_N_m": (0.5 * m * L * (0.005 * w1) ** 2, 0.5 * m * L * (0.4 * w1) ** 2)},
-           ("free-free",)),
+           _supported_by("suspension")),
 )}
-
-#: The effect of each boundary condition's supports (the discrepancy candidate that follows them).
-SUPPORT_EFFECTS = {"clamped-free": "root_flexibility", "clamped-clamped": "clamp_flexibility",
-                   "pinned-pinned": "bearing_flexibility", "free-free": "suspension"}
 
 #: Effects a discrepancy analysis may name on some beam (``proportional_damping`` is always calibrated); the
 #: candidates of one beam are :func:`candidates_for` its boundary condition.
@@ -278,11 +264,10 @@ def candidates_for(bc: str, section: str | None = None) -> tuple[str, ...]:
     :data:`CANDIDATES` that fit its supports and its section (None: any section).
 
     Shear deformation, added mass and local damping fit every beam, rotary inertia every section but a solid
-    one (whose ``rho I`` is known); of the support effects the one of :data:`SUPPORT_EFFECTS`.
+    one (whose ``rho I`` is known); of the support effects the one of its support
+    (:attr:`physics.supports.Support.effect`). An unknown ``bc`` is refused (:func:`physics.supports.support`).
     """
-    if bc not in SUPPORT_EFFECTS:
-        raise BeamDamageError(f"boundary condition {bc!r} unknown; expected one of {list(SUPPORT_EFFECTS)}",
-                              parameter="bc")
+    support(bc)
     return tuple(c for c in CANDIDATES if (EFFECTS[c].supports is None or bc in EFFECTS[c].supports)
                  and (section is None or EFFECTS[c].sections is None or section in EFFECTS[c].sections))
 
@@ -293,15 +278,15 @@ def check_supports(names, bc: str, source: str = "effects") -> None:
     Raises
     ------
     ConfigError
-        One line naming ``source``, the effect, the boundary condition and the support effect that fits it.
+        One line naming ``source``, the effect, the boundary condition and the support effect that fits it, or
+        the unknown boundary condition and the accepted ones.
     """
-    if bc not in SUPPORT_EFFECTS:
-        return                    # an unknown boundary condition is refused by physics.fem
+    own = support(bc, source).effect
     for name in dict.fromkeys(effect_of(n) for n in names):
         sup = EFFECTS[name].supports
         if sup is not None and bc not in sup:
             raise ConfigError(f"{source}: effect '{name}' is defined for a {' or '.join(sup)} beam, not {bc}; "
-                              f"the supports of a {bc} beam take '{SUPPORT_EFFECTS[bc]}'")
+                              f"the supports of a {bc} beam take '{own}'")
 
 
 def validate_effects(effects, source: str = "effects") -> dict:
@@ -513,7 +498,7 @@ def _in_order(eff: dict, stage: str) -> list:
     return [k for name in EFFECTS if EFFECTS[name].stage == stage for k in eff if effect_of(k) == name]
 
 
-def assemble_beam(length_m, EI_Nm2, mass_per_length_kg_m, n_elements, *, bc="clamped-free",
+def assemble_beam(length_m, EI_Nm2, mass_per_length_kg_m, n_elements, *, bc=THESIS_SUPPORT,
                   thickness_m=None, effects=None) -> fem.FEModel:
     """A uniform beam of ``n_elements`` equal elements with every effect applied.
 
@@ -523,7 +508,7 @@ def assemble_beam(length_m, EI_Nm2, mass_per_length_kg_m, n_elements, *, bc="cla
     EI_Nm2 : float  flexural rigidity (N m^2)
     mass_per_length_kg_m : float  (kg/m)
     n_elements : int
-    bc : str  one of :data:`physics.fem.BOUNDARY_CONDITIONS`
+    bc : str  one of :data:`physics.supports.SUPPORTS`
     thickness_m : float, optional
         Section depth ``h`` (m) for the default rotary inertia ``m h^2 / 12``.
     effects : mapping, optional

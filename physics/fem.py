@@ -24,8 +24,9 @@ from typing import NamedTuple
 import numpy as np
 
 from physics.errors import BeamDamageError, ShapeError
+from physics.supports import THESIS_SUPPORT, add_springs, support
 
-__all__ = ["BOUNDARY_CONDITIONS", "FEModel", "KeptDofs", "MAX_ELEMENTS", "assemble", "beam_model", "check_n_elements",
+__all__ = ["FEModel", "KeptDofs", "MAX_ELEMENTS", "assemble", "beam_model", "check_n_elements",
            "constrained_dofs", "dof_names", "element_mass", "element_stiffness", "kept_dofs", "lumped_mass"]
 
 
@@ -43,9 +44,6 @@ def check_n_elements(n_elements) -> int:
         raise BeamDamageError(f"n_elements must be <= {MAX_ELEMENTS} (dense matrices; {n} elements would need "
                               f"{gib:.3g} GiB), got {n}", parameter="n_elements")
     return n
-
-
-BOUNDARY_CONDITIONS = ("clamped-free", "free-free", "pinned-pinned", "clamped-clamped")
 
 
 # Element matrices as polynomials in the element length l: A0 + A1*l + A2*l**2.
@@ -138,24 +136,14 @@ def dof_names(n_nodes: int) -> tuple[str, ...]:
 
 
 def constrained_dofs(bc: str, n_nodes: int, root_spring: bool = False) -> tuple[str, ...]:
-    """Names of the DOFs a boundary condition removes.
+    """Names of the DOFs the supports ``bc`` (:func:`physics.supports.support`) hold at zero.
 
-    ``root_spring=True`` (clamped-free only) keeps the root rotation, which is
-    then held by a rotational spring instead of being clamped.
+    ``root_spring=True`` keeps the rotation of every clamp, which is then held by a rotational spring instead.
     """
-    last = n_nodes
-    table = {
-        "clamped-free": ("1:y",) if root_spring else ("1:y", "1:rz"),
-        "free-free": (),
-        "pinned-pinned": ("1:y", f"{last}:y"),
-        "clamped-clamped": ("1:y", "1:rz", f"{last}:y", f"{last}:rz"),
-    }
-    if bc not in table:
-        raise BeamDamageError(f"boundary condition {bc!r} unknown; expected one of {BOUNDARY_CONDITIONS}",
-                              parameter="bc")
-    if root_spring and bc != "clamped-free":
-        raise BeamDamageError("a root rotational spring is only defined for the clamped-free beam")
-    return table[bc]
+    sup = support(bc)
+    if root_spring and not sup.clamped:
+        raise BeamDamageError(f"a root rotational spring needs a clamp; a {bc} beam has none", parameter="bc")
+    return sup.constrained_dofs(n_nodes, sup.end_dofs(n_nodes, "clamped", "rz") if root_spring else ())
 
 
 class KeptDofs(NamedTuple):
@@ -173,16 +161,17 @@ class KeptDofs(NamedTuple):
     names: tuple
 
 
-def kept_dofs(n_nodes: int, bc: str = "clamped-free", root_spring: bool = False) -> KeptDofs:
+def kept_dofs(n_nodes: int, bc: str = THESIS_SUPPORT, root_spring: bool = False) -> KeptDofs:
     """Global indices and names of the DOFs a boundary condition keeps (the one DOF bookkeeping).
 
     Parameters
     ----------
     n_nodes : int
         Nodes of the beam (elements + 1).
-    bc : {"clamped-free", "free-free", "pinned-pinned", "clamped-clamped"}
+    bc : str
+        The supports (:data:`physics.supports.SUPPORTS`).
     root_spring : bool
-        Keep the root rotation of a clamped-free beam (held by a rotational spring).
+        Keep the rotation of every clamp (held by a rotational spring).
 
     Returns
     -------
@@ -244,7 +233,7 @@ def beam_model(
     ei_factors=None,
     mass_factors=None,
     damping_factors=None,
-    bc: str = "clamped-free",
+    bc: str = THESIS_SUPPORT,
     root_spring=None,
 ) -> FEModel:
     """Uniform beam of equal elements with optional per-element factors.
@@ -264,10 +253,10 @@ def beam_model(
     damping_factors : ndarray, shape (..., n_elements), optional
         Stiffness-proportional damping coefficient of each element (s):
         ``C = sum_e beta_e K_e``. Zeros give ``C = 0``.
-    bc : {"clamped-free", "free-free", "pinned-pinned", "clamped-clamped"}
+    bc : str
+        The supports (:data:`physics.supports.SUPPORTS`).
     root_spring : float or ndarray, shape (...), optional
-        Rotational stiffness at the root (N m/rad) replacing the clamp on the
-        root rotation (clamped-free only).
+        Rotational stiffness (N m/rad) replacing each clamp's hold on its rotation (supports with a clamp).
 
     Returns
     -------
@@ -287,7 +276,7 @@ def beam_model(
     n_nodes = n_el + 1
     keep, names = kept_dofs(n_nodes, bc, root_spring is not None)
     if root_spring is not None:
-        K = _with_root_spring(K, root_spring)
+        K = _with_root_spring(K, root_spring, support(bc).end_dofs(n_nodes, "clamped", "rz"), n_nodes)
     sel = np.ix_(keep, keep)
     return FEModel(
         M=M[(...,) + sel],
@@ -324,15 +313,14 @@ def _damping_matrix(damping_factors, ke, n_el: int):
     return assemble(beta[..., None, None] * ke)
 
 
-def _with_root_spring(K, root_spring):
-    """A copy of ``K`` with the checked rotational stiffness ``root_spring`` (N m/rad) added on the root rotation."""
+def _with_root_spring(K, root_spring, clamp_rotations, n_nodes: int):
+    """``K`` (over all DOFs) with the checked rotational stiffness ``root_spring`` (N m/rad) added on each of
+    ``clamp_rotations``."""
     kr = np.asarray(root_spring, dtype=float)
     if np.any(kr <= 0) or not np.all(np.isfinite(kr)):
         raise BeamDamageError("root_spring must be a positive rotational stiffness (N m/rad)",
                               parameter="root_spring")
-    K = K.copy()
-    K[..., 1, 1] += kr
-    return K
+    return add_springs(K, dof_names(n_nodes), clamp_rotations, kr)
 
 
 def lumped_mass(mass_per_length_kg_m, element_length_m, n_masters: int = 4):

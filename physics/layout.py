@@ -4,9 +4,10 @@
 ``generate``, ``train``, ``classify`` and the classical methods size themselves by. The beam-file keys:
 
 ``bc``
-    clamped-free, free-free, pinned-pinned or clamped-clamped (``physics.fem.BOUNDARY_CONDITIONS``).
+    clamped-free, free-free, pinned-pinned or clamped-clamped (:data:`physics.supports.SUPPORTS`).
     A free-free beam has two rigid-body modes (bounce and pitch, on whatever soft suspension holds it):
-    they are recognised and left out, so mode 1 is the first bending mode.
+    they are recognised and left out (:attr:`physics.supports.Support.rigid_body_modes`), so mode 1 is the
+    first bending mode.
 ``measured_x_m``
     The sensor positions (m from ``x = 0``), any number >= 1; the reference DOF's FRFs are measured there.
 ``drive_x_m``
@@ -35,8 +36,9 @@ import numpy as np
 from physics.effects import interpolation_matrix
 from physics.errors import ConfigError
 from physics.beam import beam_from_dict
+from physics.supports import THESIS_SUPPORT, Support, support
 
-__all__ = ["DEFAULT_BAND_HZ", "MIN_VISIBLE", "SYMMETRIC_SUPPORTS", "Layout", "layout_of", "nominal_modes",
+__all__ = ["DEFAULT_BAND_HZ", "MIN_VISIBLE", "Layout", "layout_of", "nominal_modes",
            "relative_amplitude", "uniform_shapes"]
 
 #: The thesis's band: 60-4800 rad/s.
@@ -44,13 +46,6 @@ DEFAULT_BAND_HZ = (60.0 / (2 * np.pi), 4800.0 / (2 * np.pi))
 
 #: A mode is seen at a point when its amplitude there is at least this fraction of its largest amplitude.
 MIN_VISIBLE = 0.02
-
-#: Rigid-body modes of each support (recognised and left out of the modes used).
-RIGID_BODY_MODES = {"clamped-free": 0, "free-free": 2, "pinned-pinned": 0, "clamped-clamped": 0}
-
-#: Supports whose beam is its own mirror image about midspan: a damage at ``x`` and at ``L - x`` change every
-#: natural frequency alike.
-SYMMETRIC_SUPPORTS = ("free-free", "pinned-pinned", "clamped-clamped")
 
 #: Elements of the mesh the nominal modes are computed on.
 NOMINAL_ELEMENTS = 120
@@ -88,6 +83,11 @@ class Layout:
     thesis: bool = False
 
     @property
+    def support(self) -> Support:
+        """The record of the test's supports (:mod:`physics.supports`)."""
+        return support(self.bc)
+
+    @property
     def n_sensors(self) -> int:
         return len(self.sensors_x_m)
 
@@ -120,7 +120,8 @@ class Layout:
 
     @classmethod
     def from_dict(cls, d: dict) -> "Layout":
-        return cls(str(d["bc"]), float(d["length_m"]), tuple(map(float, d["sensors_x_m"])), float(d["drive_x_m"]),
+        return cls(support(d["bc"], "layout").name, float(d["length_m"]), tuple(map(float, d["sensors_x_m"])),
+                   float(d["drive_x_m"]),
                    tuple(map(float, d["band_hz"])), tuple(map(float, d["zones_x_m"])), tuple(map(int, d["modes"])),
                    tuple(map(float, d["frequencies_hz"])), tuple(map(int, d.get("unseen", ()))),
                    bool(d.get("thesis", False)))
@@ -138,7 +139,7 @@ def nominal_modes(beam, n_elements: int = NOMINAL_ELEMENTS):
 
     model = beam.fe_model(n_elements)
     w2, v = eigh(model.K, model.M)
-    skip = RIGID_BODY_MODES[beam.bc]
+    skip = beam.support.rigid_body_modes
     w2, v = w2[skip:], v[:, skip:]
     f = np.sqrt(np.maximum(w2, 0.0)) / (2 * np.pi)
 
@@ -212,7 +213,7 @@ def layout_of(beam, source: str = "beam") -> Layout:
                           "expected distinct positions")
     drive = float(xs[0]) if beam.drive_x_m is None else float(beam.drive_x_m)
     quarter = xs.size == 4 and bool(np.allclose(xs, L * np.arange(1, 5) / 4, rtol=0, atol=1e-9 * L))
-    thesis = (beam.bc == "clamped-free" and quarter and drive == xs[0]
+    thesis = (beam.bc == THESIS_SUPPORT and quarter and drive == xs[0]
               and beam.band_hz is None and beam.zones_x_m is None)
     f_all, shape_at = nominal_modes(beam)
     band = DEFAULT_BAND_HZ if thesis else _default_band(f_all, xs.size) if beam.band_hz is None else \

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from physics.errors import BeamDamageError, ShapeError
+from physics.supports import ENDS, THESIS_SUPPORT, support
 
 __all__ = ["BeamPreset", "CANTILEVER_BETA_L", "PRESETS", "SECTION_KINDS", "SOLID_SECTIONS", "SolidSection",
            "StaticTest", "THESIS_BETA_L", "beam_preset", "cantilever_beta_l", "cantilever_curvature_squared",
@@ -119,7 +120,7 @@ def free_free_beta_l(n_modes: int = 4) -> np.ndarray:
     return x
 
 
-def curvature_squared(x_m, length_m: float, mode: int, bc: str = "clamped-free"):
+def curvature_squared(x_m, length_m: float, mode: int, bc: str = THESIS_SUPPORT):
     """Normalised squared curvature ``phi_r''(x)^2 / int_0^L phi_r''^2 dx`` of bending mode ``r`` of a uniform beam
     (1/m).
 
@@ -145,7 +146,7 @@ def curvature_squared(x_m, length_m: float, mode: int, bc: str = "clamped-free")
     x_m : float or ndarray      positions from the end ``x = 0`` (m), ``0 <= x <= L``
     length_m : float            beam length (m)
     mode : int                  bending-mode index from 0 (rigid-body modes of a free-free beam not counted)
-    bc : str                    clamped-free, free-free, pinned-pinned or clamped-clamped
+    bc : str                    a support of :data:`physics.supports.SUPPORTS`
 
     Returns
     -------
@@ -154,29 +155,29 @@ def curvature_squared(x_m, length_m: float, mode: int, bc: str = "clamped-free")
     mode = int(mode)
     if mode < 0:
         raise BeamDamageError(f"mode must be >= 0 (0 = first bending mode), got {mode}")
+    sup = support(bc)
     x = np.asarray(x_m, dtype=float)
-    if bc == "pinned-pinned":
+    if "pinned" in sup.ends:
         return 2.0 * np.sin((mode + 1) * np.pi * x / length_m) ** 2 / length_m
-    if bc == "clamped-free":
-        bl = CANTILEVER_BETA_L[mode] if mode < len(CANTILEVER_BETA_L) else cantilever_beta_l(mode + 1)[mode]
-    elif bc in ("free-free", "clamped-clamped"):
+    if sup.symmetric:       # both ends free or both clamped: cos(bl) cosh(bl) = 1
         bl = free_free_beta_l(mode + 1)[mode]
-    else:
-        raise BeamDamageError(f"bc {bc!r} unknown; expected clamped-free, free-free, pinned-pinned or clamped-clamped")
+    else:                   # clamped at x = 0, free at x = L: 1 + cos(bl) cosh(bl) = 0
+        bl = CANTILEVER_BETA_L[mode] if mode < len(CANTILEVER_BETA_L) else cantilever_beta_l(mode + 1)[mode]
     C, S, c, s = np.cosh(bl), np.sinh(bl), np.cos(bl), np.sin(bl)
-    if bc == "clamped-free":
-        sigma, one_minus = (C + c) / (S + s), (s - c - np.exp(-bl)) / (S + s)
-    else:
+    if sup.symmetric:
         sigma, one_minus = (C - c) / (S - s), (c - s - np.exp(-bl)) / (S - s)
+    else:
+        sigma, one_minus = (C + c) / (S + s), (s - c - np.exp(-bl)) / (S + s)
     u = bl * x / length_m
     hyper = 0.5 * (one_minus * np.exp(u) + (1.0 + sigma) * np.exp(-u))
-    trig = np.cos(u) - sigma * np.sin(u) if bc != "free-free" else -np.cos(u) + sigma * np.sin(u)
+    free_start = not ENDS[sup.ends[0]].held       # phi''(0) = 0 at a free end
+    trig = -np.cos(u) + sigma * np.sin(u) if free_start else np.cos(u) - sigma * np.sin(u)
     return (hyper + trig) ** 2 / length_m
 
 
 def cantilever_curvature_squared(x_m, length_m: float, mode: int):
     """:func:`curvature_squared` of a uniform cantilever (1/m), ``x_m`` from the clamp."""
-    return curvature_squared(x_m, length_m, mode, "clamped-free")
+    return curvature_squared(x_m, length_m, mode, THESIS_SUPPORT)
 
 
 def cantilever_frequencies_hz(EI_Nm2, mass_per_length_kg_m, length_m, beta_l=THESIS_BETA_L):

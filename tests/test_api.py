@@ -81,19 +81,18 @@ HEAVY = ("torch", "sklearn", "scipy", "matplotlib", "pandas", "pyarrow", "numba"
 AT_START_UP = ("numpy", "threadpoolctl")
 
 
-def _command_line_and_library_modules():
-    yield from (p for layer in LAYERS[:-1] for p in sorted((ROOT / layer).rglob("*.py")))
-    yield from sorted((ROOT / "experiments" / "cli").rglob("*.py"))
-    for module in (c.module for c in COMMANDS.values() if not c.module.startswith("experiments.cli.")):
-        yield ROOT / (module.replace(".", "/") + ".py")
+def _project_modules():
+    """Every module of the project: the libraries and every sub-package of ``experiments`` (the command line, the
+    studies, the benchmarks, the independent simulator)."""
+    yield from (p for layer in LAYERS for p in sorted((ROOT / layer).rglob("*.py")))
 
 
 def test_imports_inside_functions_are_heavy_libraries_only():
-    """physics, datagen, learn and the command line import at the head of each module; an import inside a function
+    """Every module of the project imports at its head; an import inside a function
     is of a heavy library (:data:`HEAVY`) or of a project module that imports one, named in its comment
     (``from learn.training import train  # torch: the network``)."""
     bad = []
-    for path in _command_line_and_library_modules():
+    for path in _project_modules():
         source = path.read_text()
         lines = source.splitlines()
         for fn in ast.walk(ast.parse(source, str(path))):
@@ -137,3 +136,32 @@ print(json.dumps(out))
                           env={**os.environ, "PYTHONPATH": str(ROOT)})
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout) == {name: [] for name in ["--help", *COMMANDS]}
+
+
+def _shipped_packages() -> tuple[set, set]:
+    """The packages of the project the wheel ships (what setuptools finds with ``pyproject.toml``'s
+    ``packages.find``) and those it does not."""
+    import tomllib
+
+    from setuptools import find_packages
+
+    find = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"]["find"]
+    shipped = set(find_packages(str(ROOT), include=find["include"], exclude=find.get("exclude", ())))
+    return shipped, set(find_packages(str(ROOT), include=[f"{layer}*" for layer in LAYERS])) - shipped
+
+
+def test_the_wheel_imports_no_source_tree_tool():
+    """The wheel ships the libraries, the command line and the studies it runs; the benchmarks and the independent
+    simulator stay in the source tree, and no shipped module imports them (at its head or in a function)."""
+    shipped, tools = _shipped_packages()
+    assert {"physics", "datagen", "learn", "experiments", "experiments.cli", "experiments.studies"} <= shipped
+    assert tools == {"experiments.benches", "experiments.second_sim"}
+    bad = []
+    for package in sorted(shipped):
+        for path in sorted((ROOT / package.replace(".", "/")).glob("*.py")):
+            for node in ast.walk(ast.parse(path.read_text(), str(path))):
+                names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                         [node.module] if isinstance(node, ast.ImportFrom) and node.level == 0 else [])
+                bad += [f"{path.relative_to(ROOT)}:{node.lineno} imports {n}" for n in names
+                        if any(n == t or n.startswith(f"{t}.") for t in tools)]
+    assert bad == []

@@ -461,7 +461,7 @@ def _cls(d, *more, model=None):
 
 
 def _measured():
-    from experiments.studies.study_discrepancy import EXAMPLE
+    from physics.discrepancy import EXAMPLE
 
     return str(EXAMPLE)
 

@@ -29,6 +29,18 @@ import time
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_limits
+
+from datagen.config import load_config
+from datagen.dataset import Dataset
+from datagen.generation import generate
+from datagen.truth_beam import beam_mapping
+from experiments.studies.doc_tables import write_table
+from learn.classify import classify_many
+from learn.model_dir import load_model
+from learn.training import train
+from physics.beam import load_beam
+from physics.io import ModalData
 
 __all__ = ["beam_toml", "main"]
 
@@ -47,12 +59,7 @@ def beam_toml(n_sensors: int, length_m: float = 1.0) -> str:
 
 
 def _generate(work: Path, S: int, n: int, workers: int, seed: int = 1) -> tuple[float, Path, dict]:
-    from datagen.config import load_config
-    from datagen.generation import generate
-
     (work / f"b{S}.toml").write_text(beam_toml(S))
-    from physics.beam import load_beam
-    from datagen.truth_beam import beam_mapping
 
     cfg = load_config("training")
     cfg["beam"] = beam_mapping(load_beam(work / f"b{S}.toml"))
@@ -63,12 +70,6 @@ def _generate(work: Path, S: int, n: int, workers: int, seed: int = 1) -> tuple[
 
 
 def _classify_rate(data: Path, model_dir: Path, n_pairs: int, epochs: int) -> tuple[float, float]:
-    from datagen.dataset import Dataset
-    from learn.classify import classify_many
-    from learn.model_dir import load_model
-    from learn.training import train
-    from physics.io import ModalData
-
     t0 = time.perf_counter()
     train(data, model_dir, epochs=epochs)
     train_s = time.perf_counter() - t0
@@ -110,7 +111,6 @@ def main(argv=None) -> int:
     p.add_argument("--json", action="store_true", help="print the table as JSON")
     p.add_argument("--docs", action="store_true", help="write the table into docs/any-beam.md")
     args = p.parse_args(argv)
-    from threadpoolctl import threadpool_limits
 
     limits = threadpool_limits(1, user_api="blas")     # as the CLI runs: one BLAS thread per process
     load = os.getloadavg()[0]
@@ -129,7 +129,6 @@ def main(argv=None) -> int:
         result = {"n": args.n, "workers": args.workers, "load": load, "rows": rows}
         if args.train:
             gen_s, data, _ = _generate(work, 8, args.train, args.workers, seed=2)
-            from learn.training import train
 
             t0 = time.perf_counter()
             summary = train(data, work / "model-train", epochs=60)
@@ -144,8 +143,6 @@ def main(argv=None) -> int:
     md = markdown(result)
     print(md, end="")
     if args.docs:
-        from experiments.studies.doc_tables import write_table
-
         write_table("any-beam.md", "beams", md)
     return 0
 

@@ -7,7 +7,7 @@ Pairs from the independent simulator (:mod:`experiments.second_sim.beams`: its o
 day-to-day changes, FRFs measured with noise and written as UFF; no code shared with the package), one catalogue
 beam per support, damaged pairs holding a slit (1-10 mm wide, 30-90 % EI loss) or a mass change (a point mass of
 1-20 % of the beam's mass added, or 1-8 % lost over 10-25 % of the length). Each beam and kind goes through the
-loop as a user runs it (:func:`experiments.studies.study_beams.run_beam`: ``generate --config training`` or
+loop as a user runs it (:func:`experiments.benches.study_beams.run_beam`: ``generate --config training`` or
 ``--config mass_change``, ``train``, ``classify --baseline B C --json`` per pair). Per support, kind and source of
 intervals (the network's answer; the competing explanation of the true kind):
 
@@ -30,7 +30,10 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.studies.study_beams import fold, run_beam
+from experiments.benches.study_beams import fold, run_beam
+from experiments.second_sim.beams import CATALOGUE
+from experiments.studies.doc_tables import write_table
+from physics.io import atomic_write_text
 
 __all__ = ["BEAMS", "CONFIGS", "cover", "main", "markdown"]
 
@@ -105,10 +108,6 @@ def markdown(rows: list[dict]) -> str:
 
 
 def main(argv=None) -> int:
-    from experiments.studies.doc_tables import write_table
-    from experiments.second_sim.beams import CATALOGUE
-    from physics.io import atomic_write_text
-
     p = argparse.ArgumentParser(prog="python -m experiments.benches.bench_coverage", description=__doc__.split("\n")[0])
     p.add_argument("--out", type=Path, default=Path("out/coverage"))
     p.add_argument("--n-pairs", type=int, default=60)

@@ -8,7 +8,7 @@ state per sample):
 
 * naive: Python loop over samples; full state-space eigen-solution of the
   truth model, :func:`physics.updating.pilkey`, measured and updated FRFs
-  computed eagerly (:func:`datagen.naive.simulate_naive`, ``modes="full"``);
+  computed eagerly (:func:`datagen.naive.simulate_naive`, ``solution="full"``);
 * generate: :func:`datagen.generation.generate` end to end on ``--workers``
   processes, including writing the shards, checksums and ``samples.parquet``;
 * read, full FRFs: real/imag float32 tensors (both states, 4 DOFs, 1024
@@ -32,13 +32,28 @@ from __future__ import annotations
 
 import argparse
 import json
+import multiprocessing
+import os
 import resource
 import shutil
 import tempfile
 import time
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_limits
+
+from datagen.config import load_config, merge
+from datagen.dataset import Dataset
+from datagen.generation import generate
+from datagen.naive import simulate_naive
+from datagen.batch_inputs import draw_batch
+from datagen.setup import get_setup
+from datagen.store import finalize, read_manifest
+from datagen.torchdata import make_loader
+from experiments.studies.doc_tables import write_table
+from learn.features import grid_weights, load_pairs
 
 __all__ = ["main"]
 
@@ -66,12 +81,8 @@ def _table_at_scale(root: str, rows: int) -> dict:
     """The samples table at ``rows`` rows: finalize streams shard tables into ``samples.parquet``, then
     two columns and one row group are read back. Runs in a fresh process (its peak memory is its own):
     the dataset's shard tables are hard-linked as many times as needed under a scratch directory."""
-    import os
-
     import pyarrow.parquet as pq
 
-    from datagen.dataset import Dataset
-    from datagen.store import finalize, read_manifest
 
     src = Path(root)
     m = read_manifest(src)
@@ -124,7 +135,6 @@ def main(argv=None):
     if a.docs and a.config not in DOCS_BLOCKS:
         ap.error("--docs: docs/datasets.md holds the tables of the default and the training config only")
 
-    from datagen.config import load_config, merge
 
     cfg = load_config(a.config) if a.config else merge({})
     res = {"config": a.config or "defaults (beam5, 20 truth elements, 1024 lines, IIRS mass)",
@@ -141,9 +151,6 @@ def main(argv=None):
                                                          / res["naive_full_samples_per_cpu_s"])
         res.update(_read_rates(tmp, root, a.n, a.workers, a.batch))
         if a.table_rows:
-            import multiprocessing
-            from concurrent.futures import ProcessPoolExecutor
-
             with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
                 res.update(pool.submit(_table_at_scale, str(root), a.table_rows).result())
     finally:
@@ -157,8 +164,6 @@ def main(argv=None):
         for k, v in res.items():
             print(f"{k:42s} {v:.1f}" if isinstance(v, float) else f"{k:42s} {v}")
     if a.docs:
-        from experiments.studies.doc_tables import write_table
-
         write_table("datasets.md", DOCS_BLOCKS[a.config], docs_table(res))
     return res
 
@@ -196,17 +201,12 @@ def docs_table(res: dict) -> str:
 
 def _naive_rates(cfg, n: int) -> dict:
     """Samples per second (wall and CPU) of the per-sample loop, ``n`` samples, one thread, after a warm-up."""
-    from threadpoolctl import threadpool_limits
-
-    from datagen.naive import simulate_naive
-    from datagen.pipeline import draw_batch, get_setup
-
     setup = get_setup(cfg)
     inp = draw_batch(np.random.default_rng(0), n, setup)
     with threadpool_limits(1):
-        simulate_naive(setup, inp.take(slice(0, 2)), modes="full")  # warm-up (numba, caches)
+        simulate_naive(setup, inp.take(slice(0, 2)), solution="full")  # warm-up (numba, caches)
         t, c = time.perf_counter(), _cpu_s()
-        simulate_naive(setup, inp, modes="full")
+        simulate_naive(setup, inp, solution="full")
         return {"naive_full_samples_per_s": n / (time.perf_counter() - t),
                 "naive_full_samples_per_cpu_s": n / (_cpu_s() - c)}
 
@@ -214,9 +214,6 @@ def _naive_rates(cfg, n: int) -> dict:
 def _generate_rates(tmp: Path, root: Path, cfg, n: int, workers: int) -> dict:
     """Samples per second (wall and CPU) and bytes per sample of ``generate`` writing ``n`` samples to ``root``,
     after a small warm-up dataset in ``tmp / "warm"`` (compile caches of the worker processes)."""
-    from datagen.config import merge
-    from datagen.generation import generate
-
     generate(tmp / "warm", merge({"output": {"shard_size": 64}}), n=64 * workers, seed=9,
              workers=workers, progress=False)  # compile caches of the worker processes
     t, c = time.perf_counter(), _cpu_s()
@@ -228,9 +225,6 @@ def _generate_rates(tmp: Path, root: Path, cfg, n: int, workers: int) -> dict:
 def _read_rates(tmp: Path, root: Path, n_samples: int, workers: int, batch: int) -> dict:
     """Samples per second (wall and CPU) reading the dataset at ``root`` back: the torch loader of FRFs and of
     grid features, and :func:`learn.features.load_pairs`, for the updated and the measured FRFs."""
-    from datagen.torchdata import make_loader
-    from learn.features import grid_weights, load_pairs
-
     res = {}
     W = grid_weights(np.load(root / "omega_rad_s.npy"))[0]
     for kind in ("updated", "measured"):

@@ -26,6 +26,7 @@ from __future__ import annotations
 import argparse
 import time
 
+from experiments.studies.doc_tables import write_table
 from experiments.studies.study_discrepancy import BEAM, SHORT, TRUTHS, confusion
 from physics.effects import candidates_for
 
@@ -56,8 +57,6 @@ def main(argv=None):
             print(f"{r['truth']:34s} {cells} {pe} {r['gap_before_pct']:6.2f} -> {r['gap_after_pct']:5.2f}")
     print(f"\n{time.perf_counter() - t0:.0f} s")
     if args.docs:
-        from experiments.studies.doc_tables import write_table
-
         write_table("discrepancy.md", "discrepancy-confusion", docs_table(rows, args.kinds, cols))
 
 

@@ -42,6 +42,12 @@ from pathlib import Path
 
 import numpy as np
 
+from experiments.cli import main as cli_main
+from experiments.second_sim import simulate_pairs, write_pairs
+from experiments.second_sim.pairs import FREQ_HZ
+from experiments.studies.doc_tables import write_table
+from physics.io import atomic_write_text
+
 __all__ = ["cli_json", "main"]
 
 SETS = ("easy", "eb", "timoshenko")
@@ -52,11 +58,9 @@ def cli_json(argv: list[str], source_tree: str | None = None) -> dict | list:
 
     A non-zero exit raises ``RuntimeError`` with the command's stderr."""
     if source_tree is None:
-        from experiments.cli import main
-
         buf, err = io.StringIO(), io.StringIO()
         with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(err):
-            code = main(argv + ["--json"])
+            code = cli_main(argv + ["--json"])
         if code != 0:
             raise RuntimeError(f"beam-damage {' '.join(argv)} exited {code}: {err.getvalue().strip()}")
         return json.loads(buf.getvalue())
@@ -76,9 +80,6 @@ def set_dir(out: Path, name: str, band_hz=None) -> Path:
 def write_sets(out: Path, sets, n: int, seed: int, band_hz=None) -> dict:
     """The independent simulator's pair sets (``truth.json`` per set); ``band_hz`` (first, last line in Hz, 0.5 Hz
     apart) replaces the simulator's default lines."""
-    from experiments.second_sim import simulate_pairs, write_pairs
-    from experiments.second_sim.pairs import FREQ_HZ
-
     freq_hz = FREQ_HZ if band_hz is None else band_hz[0] + 0.5 * np.arange(int(round((band_hz[1] - band_hz[0]) / 0.5))
                                                                           + 1)
     truths = {}
@@ -275,7 +276,6 @@ def main(argv=None):
         if timing is None and a.source_tree is None and a.input == "uff":
             timing = batch_rate(model, pairs, min(a.n, 24))
     tag = "" if a.label is None else f"-{a.label}"
-    from physics.io import atomic_write_text
 
     import pandas as pd
 
@@ -294,8 +294,6 @@ def main(argv=None):
                   f"({timing['pairs_per_second']:.1f} pairs/s); one pair in a fresh process "
                   f"{timing['one_pair_wall_seconds']:.2f} s wall")
     if a.docs:
-        from experiments.studies.doc_tables import write_table
-
         write_table("classifier.md", "classifier-independent", markdown(rows))
     return rows
 

@@ -26,8 +26,21 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import replace
 
 import numpy as np
+
+from experiments.second_sim.fem import Beam, PointMass, Slit, assemble, modes
+from experiments.second_sim.pairs import DOF_LABELS, EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M, NODE_X_M
+from experiments.second_sim.response import MODAL_NOISE, Damping, complex_modes, noisy_modal
+from experiments.second_sim.writers import modal_dict
+from experiments.studies.doc_tables import write_table
+from learn.classify import classify
+from learn.features import BeamSpec
+from learn.hypotheses import SHAPE_CHANGE_STD, _support_curves, shape_changes, weigh
+from learn.model_dir import load_model
+from learn.sensitivity import beam_sensitivity
+from physics.io import atomic_write_text, modal_data_from_dict
 
 __all__ = ["TRUTHS", "main", "pairs", "table"]
 
@@ -36,27 +49,18 @@ KR_REL = 948.7
 
 
 def _specimen(rng, L, EI, M):
-    from experiments.second_sim.fem import Beam
-
     ei = EI * (1 + rng.uniform(-0.05, 0.05))
     kr = np.exp(rng.uniform(np.log(300), np.log(3000))) * ei / L
     return Beam(L, ei, M * (1 + rng.uniform(-0.03, 0.03)), root_k_theta_Nm_rad=kr)
 
 
 def _frequencies(beam) -> np.ndarray:
-    from experiments.second_sim.fem import assemble, modes
-
     return modes(assemble(beam), n_refine=4).frequencies_hz[:4]
 
 
 def _modal(beam, ratios, rng, shape_noise=None) -> dict:
     """The simulator's modal data of one test: modes 1-4 at the quarter points, its own modal noise (the shapes'
     std relative to each mode's largest entry ``shape_noise`` instead, when given)."""
-    from experiments.second_sim.fem import assemble, modes
-    from experiments.second_sim.pairs import DOF_LABELS, NODE_X_M
-    from experiments.second_sim.response import MODAL_NOISE, Damping, complex_modes, noisy_modal
-    from experiments.second_sim.writers import modal_dict
-
     asm = assemble(beam)
     md = modes(asm, n_refine=4)
     dofs = asm.translation_dofs(NODE_X_M[1:])
@@ -69,11 +73,6 @@ def pairs(truth: str, n: int, rng, noise: float, modal_rng=None, shape_noise=Non
     """``n`` pairs of one truth: measured relative frequency changes and the truth's parameters; with a
     ``modal_rng`` also both tests' modal data (``modal``: baseline and current mappings with the simulator's own
     modal noise, drawn from that stream so that the frequency changes do not depend on it)."""
-    from dataclasses import replace
-
-    from experiments.second_sim.fem import PointMass, Slit
-    from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
-
     L, EI, M = LENGTH_M, EI_NM2, MASS_PER_LENGTH_KG_M
     out = []
     while len(out) < n:
@@ -119,10 +118,6 @@ def network_answers(model_dir, pair_list) -> list[dict]:
     """``classify`` (in this process) of each pair's modal data with the model in ``model_dir``: per pair the
     network's ``damaged``, the verdict's ``damaged`` and where it comes from, ``in_distribution``, the network's
     element, and ``support_changed`` when the model answers it."""
-    from learn.classify import classify
-    from learn.model_dir import load_model
-    from physics.io import modal_data_from_dict
-
     model = load_model(model_dir)
     out = []
     for p in pair_list:
@@ -155,12 +150,6 @@ def table(n: int = 24, seed: int = 0, noise: float = 7e-4, model_dir=None, shape
           shape_sigma=None) -> dict:
     """Every pair weighed: the confusion counts and the slits' interval cover; with ``model_dir`` also the
     network's answers on the pairs' modal data (:func:`network_table`)."""
-    from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
-    from learn.features import BeamSpec
-    from learn.hypotheses import SHAPE_CHANGE_STD, _support_curves, shape_changes, weigh
-    from learn.sensitivity import beam_sensitivity
-    from physics.io import modal_data_from_dict
-
     L, EI, M = LENGTH_M, EI_NM2, MASS_PER_LENGTH_KG_M
     spec = BeamSpec("beam5", L, ("2:y", "3:y", "4:y", "5:y"), "iirs")
     slit = beam_sensitivity((L, EI, M), KR_REL)
@@ -254,12 +243,8 @@ def main(argv=None) -> int:
     md = markdown(res)
     sys.stdout.write(md)
     if args.json:
-        from physics.io import atomic_write_text
-
         atomic_write_text(args.json, json.dumps(res, indent=1) + "\n")
     if args.docs:
-        from experiments.studies.doc_tables import write_table
-
         write_table("classifier.md", "hypotheses", md)
     return 0
 

@@ -15,13 +15,15 @@ sdypy-EMA (optional extra ``compare``) is used when installed.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import json
 import sys
 import warnings
 
 import numpy as np
 
-from physics.identification import METHODS, identify_frf
+from physics.identification import METHODS, identify_frf, lsfd, reconstruction_error_db
 from physics.io import MeasuredFRF, atomic_write_text
 from physics.modal import mac
 from physics.thesis import BEAM5_TIP, simulated_beam5_test
@@ -129,8 +131,6 @@ def run_sdypy(frf, approx_hz):
     except ImportError:
         return None
     f = frf.frequency_hz
-    import contextlib
-    import io
 
     with warnings.catch_warnings(), contextlib.redirect_stderr(io.StringIO()):
         warnings.simplefilter("ignore")
@@ -153,8 +153,6 @@ def run_sdypy_free_free(frf, approx_hz):
         from sdypy import EMA
     except ImportError:
         return None
-    import contextlib
-    import io
 
     f = frf.frequency_hz
     with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()), \
@@ -180,8 +178,6 @@ def free_free_table(seed=0, noise=0.005, floor=3e-3):
     installed (given the true in-band frequencies to pick its poles); the noise
     itself (measured against the noise-free truth).
     """
-    from physics.identification import lsfd, reconstruction_error_db
-
     frf, truth = simulate_free_free(noise, floor, seed)
     exact = truth["exact"]
     f, w = frf.frequency_hz, frf.omega_rad_s

@@ -32,8 +32,12 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
-from physics.io import MeasuredFRF, atomic_write_text
+from physics.beam import preset_beam
+from physics.frf import receptance
+from physics.identification import find_peaks_indicator, identify_frf, identify_frfs
+from physics.io import MeasuredFRF, atomic_write_text, read_frf, write_uff58
 
 __all__ = ["EI_SCALE", "RAYLEIGH", "main", "write_test_file"]
 
@@ -51,9 +55,6 @@ def simulate_file_frf(noise=0.015, seed=0, df_hz=0.5, band_hz=(2.0, 800.0)) -> M
     reference DOF the tip ``5:y``; noise of standard deviation ``noise |H|`` on each
     line, split evenly over real and imaginary parts.
     """
-    from physics.beam import preset_beam
-    from physics.frf import receptance
-
     beam = preset_beam("beam5")
     fe = beam.fe_model(8, EI_scale=EI_SCALE)
     a, b = RAYLEIGH
@@ -68,8 +69,6 @@ def simulate_file_frf(noise=0.015, seed=0, df_hz=0.5, band_hz=(2.0, 800.0)) -> M
 
 def write_test_file(path, noise=0.015, seed=0) -> Path:
     """Write :func:`simulate_file_frf` as a binary UFF 58 file; returns the path."""
-    from physics.io import write_uff58
-
     write_uff58(path, simulate_file_frf(noise, seed), binary=True)
     return Path(path)
 
@@ -94,7 +93,6 @@ def run_sdypy(frf: MeasuredFRF, n_modes=4):
         from sdypy import EMA
     except ImportError:
         return None
-    from physics.identification import find_peaks_indicator
 
     f = frf.frequency_hz
     h = np.asarray(frf.frf[:, 0, :])
@@ -113,9 +111,6 @@ def run_sdypy(frf: MeasuredFRF, n_modes=4):
 
 def bench(repeat=5, noise=0.015, seed=0, batch=8):
     """Timings (s) and frequencies of both packages on one written-and-read test file."""
-    from physics.identification import identify_frf, identify_frfs
-    from physics.io import read_frf
-
     with tempfile.TemporaryDirectory() as tmp:
         path = write_test_file(Path(tmp) / "beam5_like.uff", noise, seed)
         frf = read_frf(path)
@@ -141,7 +136,6 @@ def bench(repeat=5, noise=0.015, seed=0, batch=8):
         out["sdypy"] = None
         out["note"] = "sdypy-EMA not installed (pip install 'beam-damage[compare]'): comparison skipped"
         return out
-    from threadpoolctl import threadpool_limits
 
     run_sdypy(frf)  # warm-up
     t_default, (fs, zs) = _median_time(lambda: run_sdypy(frf), repeat)

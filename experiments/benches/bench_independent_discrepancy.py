@@ -42,7 +42,10 @@ from pathlib import Path
 
 import numpy as np
 
+from experiments.benches.bench_foreign import cli_json
+from experiments.studies.doc_tables import write_table
 from experiments.studies.study_discrepancy import SHORT
+from physics.discrepancy.limits import DetectionLimit
 from physics.io import atomic_write_text
 
 __all__ = ["below_limit", "main", "markdown", "run_cases", "run_cli", "truth_size", "verdict"]
@@ -53,8 +56,6 @@ KINDS = {"modal": "modal JSON", "frequencies": "frequencies + damping", "uff": "
 def run_cli(measured: Path, extra=()) -> dict:
     """``beam-damage discrepancy --beam beam5 --measured FILE --json [extra]`` in this process; its JSON, or
     ``{"error": ...}`` when it exits non-zero."""
-    from experiments.benches.bench_foreign import cli_json
-
     try:
         return cli_json(["discrepancy", "--beam", "beam5", "--measured", str(measured), *extra])
     except RuntimeError as exc:
@@ -127,8 +128,6 @@ def truth_size(case: dict) -> float:
 
 def below_limit(r) -> bool:
     """The unnamed truth is below the detection limit the command reported for it (or not testable)."""
-    from physics.discrepancy.limits import DetectionLimit
-
     if r["truth"] in r.get("not_tested", []):
         return True
     lim = (r.get("detection_limits") or {}).get(r["truth"])
@@ -208,8 +207,6 @@ def main(argv=None):
     print(md)
     print(f"{time.perf_counter() - t0:.0f} s")
     if args.docs:
-        from experiments.studies.doc_tables import write_table
-
         write_table("discrepancy.md", args.docs, md)
 
 

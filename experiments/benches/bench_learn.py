@@ -30,6 +30,22 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from experiments.cli import main as cli
+from experiments.studies.doc_tables import write_table
+from learn.classical import GradientBoosting, run_classical
+from learn.classify import classify
+from learn.estimator import DamageClassifier
+from learn.evaluate import figures, metrics, table_rows
+from learn.features import features, load_pairs, modal_features, split_by_specimen
+from learn.model_dir import load_model, sensitivity_of
+from learn.sensitivity import beam_sensitivity
+from learn.training import dataset_frfs, targets, train
+from learn.verdict import network_output
+from physics import thesis
+from physics.beam import preset_beam, write_beam
+from physics.frf import receptance
+from physics.io import MeasuredFRF, modal_data_from_dict
+
 __all__ = ["main"]
 
 
@@ -47,9 +63,6 @@ def datasets(n_train: int, n_test: int, n_rob: int) -> dict:
 
 def ensure_datasets(data_dir: Path, sets: dict, workers: int) -> list[str]:
     """Run the ``generate`` commands of missing datasets; returns every command line."""
-    from experiments.cli import main as cli
-    from physics.beam import preset_beam, write_beam
-
     data_dir.mkdir(parents=True, exist_ok=True)
     write_beam(data_dir / TIMOSHENKO_FILE, preset_beam("beam5").with_effects({"shear_deformation": {"kGA_N": KGA_N}}),
                comment="beam 5 (Table 4.1) with Timoshenko elements: robustness truth of "
@@ -127,8 +140,6 @@ def main(argv=None):
                                                   "rows_all": [
         r for r in test["rows"] if r["subset"] == "all"], "robustness": rob}, indent=1, default=float))
     if args.docs:
-        from experiments.studies.doc_tables import write_table
-
         test_rows = [r for r in test["rows"] if r["subset"] == "all"]
         write_table("classifier.md", "classifier-benchmark", benchmark_markdown(test_rows))
         write_table("classifier.md", "classifier-robustness", robustness_markdown(rob))
@@ -136,9 +147,6 @@ def main(argv=None):
 
 def _default_model(train_dirs, out: Path, args) -> tuple:
     """Train the default model into ``out / "model"``; returns it, the training summary and the wall time (s)."""
-    from learn.model_dir import load_model
-    from learn.training import train
-
     t0 = time.perf_counter()
     summary = train(train_dirs, out / "model", epochs=args.epochs, seed=args.seed, progress=True,
                     threads=args.threads)
@@ -160,14 +168,6 @@ def _held_out(model, train_dirs, test_dirs, out: Path, args) -> dict:
     Returns a mapping: ``rows`` (the table), ``outputs`` (the default network first), ``truth``, ``networks``,
     ``boost``, ``sens`` (sensitivities of the nominal beam), ``thresholds`` (the classical methods') and ``n``.
     """
-    from learn.classical import GradientBoosting, run_classical
-    from learn.estimator import DamageClassifier
-    from learn.evaluate import figures, table_rows
-    from learn.features import features, load_pairs, split_by_specimen
-    from learn.model_dir import sensitivity_of
-    from learn.training import dataset_frfs, targets
-    from learn.verdict import network_output
-
     route = model.route
     all_routes = ["modal", "updated", "measured"]
     need = all_routes if not args.skip_routes else list(model.networks)
@@ -224,12 +224,6 @@ def _print_held_out(test: dict) -> None:
 
 def _robustness(data_dir: Path, test_dirs, model, test: dict) -> list:
     """Metrics rows of the default network, the classical methods and gradient boosting on each robustness set."""
-    from learn.classical import run_classical
-    from learn.evaluate import metrics
-    from learn.features import features, load_pairs
-    from learn.training import dataset_frfs, targets
-    from learn.verdict import network_output
-
     print("\n== Robustness (network on the default route vs classical methods; training ranges in brackets) ==")
     route, sens = model.route, test["sens"]
     rob = []
@@ -256,13 +250,6 @@ def _robustness(data_dir: Path, test_dirs, model, test: dict) -> list:
 
 def beam5(model, out_dir) -> dict:
     """Classify the thesis's beam 5 from its measured modal data and from FRFs of its identified models."""
-    from learn.features import modal_features
-    from learn.sensitivity import beam_sensitivity
-    from learn.classify import classify
-    from physics.frf import receptance
-    from physics import thesis
-    from physics.io import MeasuredFRF, modal_data_from_dict
-
     data = thesis.load("beams")["beams"]["5"]
     dofs = ["2:y", "3:y", "4:y", "5:y"]
     md = {s: modal_data_from_dict({**data[s], "dofs": dofs}, f"beams.json beam 5 {s}")

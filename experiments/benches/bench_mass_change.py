@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 
 from experiments.benches.bench_foreign import cli_json
+from experiments.studies.doc_tables import write_table
 
 __all__ = ["classify_pairs", "main", "markdown", "score"]
 
@@ -115,8 +116,6 @@ def main(argv=None) -> int:
     else:
         print(pd.DataFrame(rows).to_string(index=False, float_format=lambda v: f"{v:.3g}"))
     if a.docs:
-        from experiments.studies.doc_tables import write_table
-
         write_table("datasets.md", "mass_change", markdown(rows))
     return 0
 

@@ -33,9 +33,23 @@ from __future__ import annotations
 
 import argparse
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+
+from experiments.benches.bench_foreign import cli_json, score, set_dir, write_sets
+from experiments.benches.study_beams import score_beam
+from experiments.studies.doc_tables import write_table
+from learn.classical import run_classical
+from learn.estimator import DamageClassifier
+from learn.evaluate import metrics
+from learn.features import feature_modes, features, load_pairs, modal_features, split_by_specimen, with_missing_modes
+from learn.measured import pair_modes_by_frequency
+from learn.model_dir import load_model, sensitivity_of
+from learn.training import _nominal_root_spring, targets
+from learn.verdict import IN_DISTRIBUTION_PERCENTILE, network_output
+from physics.io import atomic_write_text, read_modal_json, write_modal_json
 
 __all__ = ["held_out", "main", "markdown", "without_mode"]
 
@@ -46,12 +60,6 @@ def _pct(v) -> str:
 
 def held_out(model, before, data) -> list[dict]:
     """Rows per missing mode of the networks and the best classical method on held-out dataset pairs."""
-    from learn.classical import run_classical
-    from learn.evaluate import metrics
-    from learn.features import load_pairs
-    from learn.training import targets
-    from learn.verdict import IN_DISTRIBUTION_PERCENTILE, network_output
-
     pairs = load_pairs(data, frfs=())
     model.check_beam(pairs.beam, f"dataset {data}")
     beam, m = pairs.beam, pairs.beam.n_modes
@@ -84,8 +92,6 @@ def held_out(model, before, data) -> list[dict]:
 
 def _masked_features(pairs, k):
     """Modal features of ``pairs`` with mode ``k`` (0-based; None: none) missing in both tests (NaN columns)."""
-    from learn.features import modal_features, with_missing_modes
-
     m = pairs.beam.n_modes
     keep = [j for j in range(m) if j != k]
     lam, vec = with_missing_modes(pairs.eigenvalues[..., keep], pairs.eigenvectors[..., keep], keep, m)
@@ -97,13 +103,6 @@ def _masked_features(pairs, k):
 def sweep(train_dirs, test_dirs, probabilities, epochs: int = 60, seed: int = 0) -> list[dict]:
     """Modal networks trained as ``train`` trains them (same split and seed) with each probability of a mode
     missing, scored on held-out pairs per missing mode: element accuracy, detection, false alarms, AUC."""
-    from learn.estimator import DamageClassifier
-    from learn.evaluate import metrics
-    from learn.features import feature_modes, features, load_pairs, split_by_specimen
-    from learn.model_dir import sensitivity_of
-    from learn.training import _nominal_root_spring, targets
-    from learn.verdict import network_output
-
     pairs, test = load_pairs(train_dirs, frfs=()), load_pairs(test_dirs, frfs=())
     y, _ = targets(pairs)
     _, truth = targets(test)
@@ -130,11 +129,6 @@ def sweep(train_dirs, test_dirs, probabilities, epochs: int = 60, seed: int = 0)
 def without_mode(src: Path, dst: Path, mode_index: int | None, nominal_hz) -> Path:
     """Write the modal data of ``src`` to ``dst`` without the mode paired with the nominal mode ``mode_index``
     (0-based; :func:`learn.measured.pair_modes_by_frequency`; all modes when None or none pairs with it)."""
-    from dataclasses import replace
-
-    from learn.measured import pair_modes_by_frequency
-    from physics.io import read_modal_json, write_modal_json
-
     md = read_modal_json(src)
     which = pair_modes_by_frequency(np.abs(md.eigenvalues) / (2 * np.pi), nominal_hz)
     keep = np.flatnonzero(which != (-2 if mode_index is None else mode_index))
@@ -145,8 +139,6 @@ def without_mode(src: Path, dst: Path, mode_index: int | None, nominal_hz) -> Pa
 
 
 def _verdicts(model, base_files, cur_files, tree=None) -> list[dict]:
-    from experiments.benches.bench_foreign import cli_json
-
     def path(p):
         return str(Path(p).resolve())
 
@@ -198,9 +190,6 @@ def _cli_rows(case: str, score, verdicts: dict) -> list[dict]:
 def thesis_beam_sim(model, before, tree, out: Path, n: int, seed: int, checks: dict) -> list[dict]:
     """Rows per missing mode on the independent simulator's ``eb`` set through ``classify`` (``checks``: the
     agreement of measured and derived "before" verdicts, :func:`_before`)."""
-    from experiments.benches.bench_foreign import score, set_dir, write_sets
-    from learn.model_dir import load_model
-
     nominal = load_model(model).sensitivity.frequencies_hz
     truth = write_sets(out, ["eb"], n, seed)["eb"]
     d = set_dir(out, "eb")
@@ -233,9 +222,6 @@ def thesis_beam_sim(model, before, tree, out: Path, n: int, seed: int, checks: d
 def catalogue_beam(name: str, pairs_dir: Path, model, before, tree, out: Path, checks: dict) -> list[dict]:
     """Rows per missing mode on a catalogue beam of the independent simulator: each UFF identified by
     ``identify --band`` (the beam's band), mode k left out of both tests, then ``classify``."""
-    from experiments.benches.bench_foreign import cli_json
-    from experiments.studies.study_beams import score_beam
-
     meta = json.loads((pairs_dir / "truth.json").read_text())
     nominal = np.asarray(meta["nominal_frequencies_hz"], float)
     lo, hi = meta["band_hz"]
@@ -324,7 +310,6 @@ def main(argv=None) -> int:
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--docs", action="store_true", help="write the tables into docs/classifier.md")
     a = ap.parse_args(argv)
-    from learn.model_dir import load_model
 
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -333,7 +318,6 @@ def main(argv=None) -> int:
     sim = thesis_beam_sim(a.model, a.before, a.before_tree, out, a.sim_n, a.seed, checks) if a.sim_n else []
     beam = (catalogue_beam(a.beam, Path(a.beam_pairs), a.beam_model, a.beam_before, a.before_tree, out, checks)
             if a.beam else [])
-    from physics.io import atomic_write_text
 
     swept = sweep(a.sweep, a.data, a.probabilities) if a.sweep else []
     text = markdown(held, sim, beam, a.beam) + ("\n" + sweep_markdown(swept) if swept else "")
@@ -347,8 +331,6 @@ def main(argv=None) -> int:
     atomic_write_text(out / "missing_modes.md", text)
     print(json.dumps({"held_out": held, "simulator": sim, "beam": beam}, indent=1) if a.json else text)
     if a.docs:
-        from experiments.studies.doc_tables import write_table
-
         write_table("classifier.md", "missing-modes", text.strip())
     return 0
 

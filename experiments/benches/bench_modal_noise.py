@@ -45,8 +45,19 @@ from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from learn.noise_calibration import calibrate_std, robust_std
+from datagen.config import CONFIG_DIR, merge
+from datagen.batch_inputs import draw_batch
+from datagen.pipeline import measure_modes, simulate_batch
+from datagen.setup import get_setup
+from datagen.synth import measured_frf
+from learn.measured import IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, identify_modes
+from learn.sensitivity import beam_sensitivity
+from physics.errors import BeamDamageError
+from physics.io import MeasuredFRF, atomic_write_text
+from physics.modal import modal_parameters
 
 __all__ = ["main"]
 
@@ -64,8 +75,6 @@ def _ks(a, b):
 
 def _errors(lam_est, psi_est, lam_true, psi_true):
     """Errors (frequency, damping: (..., 4); shape: (..., 4 dofs, 4)) of estimated modes against the truth."""
-    from physics.modal import modal_parameters
-
     fe, ze = modal_parameters(lam_est)
     ft, zt = modal_parameters(lam_true)
     scale = np.max(np.abs(psi_true), axis=-2, keepdims=True)
@@ -85,12 +94,6 @@ def _identify(args):
     Returns (eigenvalues (4,), shapes (4 dofs, 4)) with NaN for truth modes no
     identified pole lies within 5 % of, or None when the identification fails.
     """
-    from threadpoolctl import threadpool_limits
-
-    from learn.measured import identify_modes
-    from physics.errors import BeamDamageError
-    from physics.io import MeasuredFRF
-
     f_hz, H, fmax_hz, f_true = args
     frf = MeasuredFRF(f_hz, H[:, None, :], ("2:+Y", "3:+Y", "4:+Y", "5:+Y"), ("2:+Y",))
     with threadpool_limits(1):
@@ -109,8 +112,6 @@ def _identify(args):
 
 
 def _config(level, floor, calibration=None, grid=None):
-    from datagen.config import merge
-
     meas = {"frf_noise": level, "frf_noise_floor": floor}
     if grid is not None:
         df, lo, hi = grid
@@ -123,8 +124,6 @@ def _config(level, floor, calibration=None, grid=None):
 
 def shortcut_errors(level, floor, specimens, seed, calibration=None, grid=None):
     """Errors of the modal-noise shortcut (fixed default, or calibrated with the given coefficients)."""
-    from datagen.pipeline import draw_batch, get_setup, measure_modes, simulate_batch
-
     setup = get_setup(_config(level, floor, calibration, grid))
     inp = draw_batch(np.random.default_rng(seed), specimens, setup)
     sim = simulate_batch(setup, inp)
@@ -135,10 +134,6 @@ def shortcut_errors(level, floor, specimens, seed, calibration=None, grid=None):
 def full_path_errors(level, floor, specimens, seed, pool, grid):
     """Errors of the identification ``classify`` runs on the measured FRFs a dataset synthesises, the modes it
     missed, and the errors of the fixed-default shortcut on the same draws."""
-    from datagen.synth import measured_frf
-    from learn.sensitivity import beam_sensitivity
-    from learn.measured import IDENTIFICATION_BAND_FACTOR
-
     fixed, (setup, inp, sim) = shortcut_errors(level, floor, specimens, seed, grid=grid)
     lam_t, psi_t = sim["truth_poles"][..., :4], sim["truth_shapes"][..., :4]
     H = measured_frf({**sim, "noise_seed": inp.noise_seed, "noise_level": inp.noise_level,
@@ -176,9 +171,6 @@ def main(argv=None):
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
 
-    from datagen.config import CONFIG_DIR
-    from learn.measured import IDENTIFICATION
-    from physics.io import atomic_write_text
 
     levels = [float(x) for x in a.levels.split(",")]
     floors = [float(x) for x in a.floors.split(",")]

@@ -42,12 +42,19 @@ import json
 import os
 import sys
 from pathlib import Path
+import csv
 
 # the simulator's matrices are small: one BLAS thread is fastest, and several stall on a shared machine
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
 import numpy as np  # noqa: E402
+
+from experiments.benches.bench_foreign import cli_json  # noqa: E402
+from experiments.cli import build_parser  # noqa: E402
+from experiments.second_sim.series import SERIES_KINDS, SLIT_SIZES, SeriesConfig, simulate_series, write_series  # noqa: E402
+from experiments.studies.doc_tables import write_table  # noqa: E402
+from physics.io import atomic_write_text  # noqa: E402
 
 __all__ = ["main", "markdown", "score_series"]
 
@@ -59,8 +66,6 @@ OUTPUT_ONLY_BAND_HZ = (5.0, 400.0)
 def _cli(argv: list) -> dict | list:
     """``beam-damage ARGV --json`` in this process; a refusal (also argparse's, e.g. an unknown command) raises
     ``RuntimeError``."""
-    from experiments.benches.bench_foreign import cli_json
-
     try:
         return cli_json(argv)
     except SystemExit as exc:
@@ -69,8 +74,6 @@ def _cli(argv: list) -> dict | list:
 
 def classify_takes_several_baselines() -> bool:
     """Whether this checkout's ``classify --baseline`` takes several files."""
-    from experiments.cli import build_parser
-
     sub = next(a for a in build_parser(["classify"])._actions if isinstance(a, argparse._SubParsersAction))
     action = next(a for a in sub.choices["classify"]._actions if "--baseline" in a.option_strings)
     return isinstance(action, argparse._AppendAction) or action.nargs not in (None, 1)
@@ -78,8 +81,6 @@ def classify_takes_several_baselines() -> bool:
 
 def _series(out: Path, kind: str, size: str, a) -> Path:
     """The series of one record kind and slit size (written once)."""
-    from experiments.second_sim.series import SLIT_SIZES, SeriesConfig, simulate_series, write_series
-
     d = out / "series" / f"{kind}-{size}"
     if not (d / "truth.json").is_file():
         cfg = SeriesConfig(n_tests=a.n_tests, seed=a.seed, kind=kind, damage_day=a.damage_day,
@@ -90,8 +91,6 @@ def _series(out: Path, kind: str, size: str, a) -> Path:
 
 def _model(out: Path, beam_toml: Path, damping_ratios, n_train: int, seed: int) -> Path:
     """The pair classifier trained on the series' beam file (generate with the series' damping, train); cached."""
-    from physics.io import atomic_write_text
-
     model = out / "model"
     if (model / "config.json").is_file():
         return model
@@ -242,10 +241,6 @@ def _monitor(files: list, conditions: Path | None, n_baseline: int, beam: Path, 
 
 def _modal_conditions(series: Path, modal: list, path: Path) -> Path:
     """``conditions.csv`` of the series with each record replaced by its identified modal JSON (absolute paths)."""
-    import csv
-
-    from physics.io import atomic_write_text
-
     rows = list(csv.DictReader((series / "conditions.csv").open()))
     lines = ["file,time,temperature_c"] + [f"{m.resolve()},{r['time']},{r['temperature_c']}"
                                            for r, m in zip(rows, modal) if m is not None]
@@ -258,7 +253,6 @@ def _cached(path: Path, compute):
     if path.is_file():
         d = json.loads(path.read_text())
         return np.array(d["alarm"], float), np.array(d["score"], float)
-    from physics.io import atomic_write_text
 
     v = compute()
     if isinstance(v, str):                              # an error is not kept: the next run tries again
@@ -318,7 +312,6 @@ def run_series(series: Path, model: Path | None, a, out: Path) -> dict:
             atomic_write_text(cache / "frequencies.json", json.dumps(np.where(np.isfinite(F), F, -1.0).tolist()))
         return alarm, score
 
-    from physics.io import atomic_write_text
 
     if model is not None and inputs[0] is not None:
         res["classify, 1 baseline"] = _cached(cache / "classify-1.json", lambda: classify([inputs[0]]))
@@ -404,8 +397,6 @@ def _figure(rows: list, path: Path) -> None:
 
 
 def main(argv=None) -> int:
-    from experiments.second_sim.series import SLIT_SIZES, SERIES_KINDS
-
     p = argparse.ArgumentParser(prog="python -m experiments.benches.bench_monitor", description=__doc__.split("\n")[0])
     p.add_argument("--out", default="out/monitor-bench")
     p.add_argument("--kinds", nargs="+", choices=SERIES_KINDS, default=list(SERIES_KINDS))
@@ -418,7 +409,6 @@ def main(argv=None) -> int:
     p.add_argument("--stay", type=int, default=5, help="alarms in a row that make a detection (default 5)")
     p.add_argument("--docs", action="store_true", help="write the table into docs/monitoring.md")
     a = p.parse_args(argv)
-    from physics.io import atomic_write_text
 
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -459,8 +449,6 @@ def main(argv=None) -> int:
     atomic_write_text(out / "monitor_bench.md", md)
     _figure(rows, out / "monitor_bench.png")
     if a.docs:
-        from experiments.studies.doc_tables import write_table
-
         write_table("monitoring.md", "monitor", docs_text(rows, a))
     return 0
 

@@ -22,6 +22,7 @@ import numpy as np
 
 from experiments.cli import main as cli_main
 from learn.monitor import NORMAL_MODELS
+from experiments.second_sim.series import SLIT_SIZES, SeriesConfig, simulate_series, write_series as write
 
 __all__ = ["main", "run_monitor", "score", "write_series"]
 
@@ -29,8 +30,6 @@ SIZES = ("small", "medium", "large")
 
 
 def write_series(root: Path, seed: int, size: str, n_tests: int, kind: str) -> Path:
-    from experiments.second_sim.series import SLIT_SIZES, SeriesConfig, simulate_series, write_series as write
-
     if not (root / "truth.json").is_file():
         cfg = SeriesConfig(n_tests=n_tests, seed=seed, kind=kind, slit_ei_loss=SLIT_SIZES.get(size) or float(size))
         write(cfg, simulate_series(cfg), root)

@@ -21,14 +21,19 @@ import argparse
 import json
 import logging
 import sys
+import tempfile
 import time
+import tracemalloc
 import warnings
+from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from experiments.second_sim.ambient import ambient_record
 from experiments.second_sim.fem import Beam
 from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
+from experiments.studies.doc_tables import write_table
 from physics.identification.fdd import identify_fdd
 from physics.identification.ssi import identify_ssi
 from physics.io import atomic_write_text
@@ -126,10 +131,6 @@ def table(minutes=10.0, seed=1, peer=True) -> list[dict]:
 
 def long_record_memory(minutes=60.0, seed=1) -> dict:
     """Wall time, peak allocated memory and modes of SSI-cov on a memory-mapped record of 16 channels at 2 kHz."""
-    import tempfile
-    import tracemalloc
-    from pathlib import Path
-
     beam = Beam(LENGTH_M, EI_NM2, MASS_PER_LENGTH_KG_M, n_elements=16)
     x = LENGTH_M * np.arange(1, 17) / 16
     block = int(300 * FS_HZ)
@@ -183,10 +184,6 @@ def main(argv=None) -> int:
     p.add_argument("--threads", type=int, default=1,
                    help="BLAS/FFT threads of both packages (default 1: timings on a loaded machine stay comparable)")
     args = p.parse_args(argv)
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:                                   # timings then use the BLAS default
-        return _main(args)
     with threadpool_limits(args.threads):
         return _main(args)
 
@@ -201,8 +198,6 @@ def _main(args) -> int:
         if args.json:
             atomic_write_text(args.json, json.dumps({"config": vars(args), "long_record": r}, indent=1) + "\n")
         if args.docs:
-            from experiments.studies.doc_tables import write_table
-
             write_table("identification.md", "oma-memory", memory_markdown(r, args.long_record))
         return 0
     rows = table(args.minutes, args.seed, not args.no_peer)
@@ -215,8 +210,6 @@ def _main(args) -> int:
     if args.json:
         atomic_write_text(args.json, json.dumps({"config": vars(args), "rows": rows}, indent=1) + "\n")
     if args.docs:
-        from experiments.studies.doc_tables import write_table
-
         write_table("identification.md", "oma", md)
     return 0
 

@@ -38,11 +38,15 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from experiments.benches.bench_oma import score
+from experiments.cli import main as cli
 from experiments.second_sim.ambient import ambient_record, write_npz
 from experiments.second_sim.fem import Beam, assemble, modes
 from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
+from experiments.studies.doc_tables import write_table
+from physics.io import atomic_write_text
 
 __all__ = ["CASES", "main", "run_case"]
 
@@ -84,8 +88,6 @@ def _measured(fn):
 
 
 def _ours(path):
-    from experiments.cli import main as cli
-
     buf, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(err):
         code = cli(["identify", str(path), "--json"])
@@ -178,7 +180,6 @@ def main(argv=None) -> int:
     p.add_argument("--docs", action="store_true", help="write the table into docs/identification.md")
     p.add_argument("--threads", type=int, default=1, help="BLAS/FFT threads of both packages (default 1)")
     args = p.parse_args(argv)
-    from threadpoolctl import threadpool_limits
 
     rows = []
     with threadpool_limits(args.threads), tempfile.TemporaryDirectory() as tmp:
@@ -190,12 +191,8 @@ def main(argv=None) -> int:
     md = markdown(rows)
     sys.stdout.write("\n" + md)
     if args.json:
-        from physics.io import atomic_write_text
-
         atomic_write_text(args.json, json.dumps({"config": vars(args), "rows": rows}, indent=1, default=str) + "\n")
     if args.docs:
-        from experiments.studies.doc_tables import write_table
-
         write_table("identification.md", "oma-defaults", md)
     return 0
 

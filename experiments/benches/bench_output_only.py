@@ -34,6 +34,12 @@ from pathlib import Path
 
 import numpy as np
 
+from experiments.benches.bench_foreign import classify_set, cli_json, score, write_sets
+from experiments.second_sim.ambient import ambient_record, write_npz
+from experiments.second_sim.fem import Beam, Slit
+from experiments.second_sim.pairs import NODE_X_M
+from experiments.studies.doc_tables import write_table
+
 __all__ = ["beams_of", "main"]
 
 METHODS = ("verdict", "network", "DLAC", "Cawley-Adams", "explanations")
@@ -53,8 +59,6 @@ def with_explanations(v: dict, length_m: float) -> dict:
 
 def beams_of(truth: dict):
     """The baseline and current :class:`experiments.second_sim.fem.Beam` of a pair from its truth record."""
-    from experiments.second_sim.fem import Beam, Slit
-
     L = truth["length_m"]
     base = Beam(L, truth["EI_Nm2"], truth["mass_per_length_kg_m"], root_k_theta_Nm_rad=truth["root_k_theta_Nm_rad"])
     slits = (Slit(truth["slit_x_m"], truth["width_m"], truth["ei_loss_fraction"]),) if truth["damaged"] else ()
@@ -65,10 +69,6 @@ def beams_of(truth: dict):
 
 def output_only_pairs(pair_dir: Path, truth: list, out: Path, minutes: float, seed: int) -> Path:
     """Record, write and identify both tests of every pair output-only; returns the directory of the modal JSON."""
-    from experiments.benches.bench_foreign import cli_json
-    from experiments.second_sim.ambient import ambient_record, write_npz
-    from experiments.second_sim.pairs import NODE_X_M
-
     out.mkdir(parents=True, exist_ok=True)
     for t in truth:
         k = int(t["pair"])
@@ -100,7 +100,6 @@ def main(argv=None) -> int:
                    help="the docs table written (with --docs): one model's routes, or models trained on FRF-route "
                         "against output-only modal noise")
     args = p.parse_args(argv)
-    from experiments.benches.bench_foreign import classify_set, score, write_sets
 
     out = Path(args.out)
     truth = write_sets(out, ["eb"], args.n, args.seed)["eb"]
@@ -120,8 +119,6 @@ def main(argv=None) -> int:
     sys.stdout.write(md)
     (out / "output_only.json").write_text(json.dumps({"config": vars(args), "rows": rows}, indent=1) + "\n")
     if args.docs:
-        from experiments.studies.doc_tables import write_table
-
         write_table("identification.md", args.table, md)
     return 0
 

@@ -5,7 +5,7 @@ Run: ``python -m experiments.benches.bench_test_as_run --out out/test-as-run [--
 [--only NAME] [--before MAIN_CHECKOUT] [--docs] [--json]``
 
 For each beam of :data:`experiments.second_sim.beams.TEST_AS_RUN` (the independent simulator's, sharing no code
-with the package) the loop of :func:`experiments.studies.study_beams.run_beam`: the simulator writes ``beam.toml`` and
+with the package) the loop of :func:`experiments.benches.study_beams.run_beam`: the simulator writes ``beam.toml`` and
 ``--n-pairs`` UFF pairs; ``generate --beam beam.toml --config training --n TRAIN_N``; ``train``; ``classify``
 per pair. A beam file that leaves ``drive_x_m`` out (the files' geometry places the reference DOF) is run twice:
 as written (the model trained for a force at the first sensor), and as the README's loop calibrates it
@@ -25,6 +25,12 @@ from pathlib import Path
 
 import numpy as np
 
+from experiments.benches.bench_foreign import cli_json
+from experiments.benches.study_beams import run_beam
+from experiments.second_sim.beams import TEST_AS_RUN, excited_modes
+from experiments.studies.doc_tables import write_table
+from physics.io import atomic_write_text
+
 __all__ = ["main", "modes_found"]
 
 
@@ -34,8 +40,6 @@ def modes_found(pairs: Path, meta: dict, excited=None, tolerance: float = 0.03, 
     :func:`experiments.second_sim.beams.excited_modes`) and those ``identify --band`` finds (within
     ``tolerance``, relative; ``source_tree``: another checkout's ``identify``); pooled counts and the files
     missing a mode."""
-    from experiments.benches.bench_foreign import cli_json
-
     lo, hi = meta["band_hz"]
     present = found = 0
     missing = []
@@ -109,9 +113,6 @@ def main(argv=None) -> int:
     ap.add_argument("--docs", action="store_true", help="write the table into docs/any-beam.md")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
-    from experiments.benches.bench_foreign import cli_json
-    from experiments.second_sim.beams import TEST_AS_RUN, excited_modes
-    from experiments.studies.study_beams import run_beam
 
     out = Path(a.out)
     table = []
@@ -136,7 +137,6 @@ def main(argv=None) -> int:
                                model_tag="calibrated")
             table.append(_row(cb, "discrepancy's beam file (the files' drive point)", r, info, None))
             table[-1]["beam"] = "the same"
-    from physics.io import atomic_write_text
 
     out.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out / "test-as-run.json", json.dumps({"seed": a.seed, "n_pairs": a.n_pairs,
@@ -147,8 +147,6 @@ def main(argv=None) -> int:
     md = markdown(table)
     print(md)
     if a.docs:
-        from experiments.studies.doc_tables import write_table
-
         write_table("any-beam.md", "test-as-run", md)
     return 0
 

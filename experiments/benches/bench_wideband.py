@@ -46,6 +46,13 @@ from pathlib import Path
 
 import numpy as np
 
+from experiments.cli import main as cli
+from experiments.second_sim.fem import Beam, assemble, modes
+from experiments.second_sim.response import Damping, receptance
+from experiments.second_sim.writers import convert_receptance, write_uff
+from experiments.studies.doc_tables import write_table
+from physics.io import atomic_write_text
+
 __all__ = ["CASES", "METHODS", "WideBandTest", "main", "markdown", "peak_prominence", "run_identify", "score",
            "simulate_test", "summarise"]
 
@@ -129,10 +136,6 @@ def peak_prominence(frequency_hz, frf, truth_hz) -> np.ndarray:
 
 def simulate_test(kind: str, n_sensors: int, seed: int, out_dir) -> WideBandTest:
     """Draw one cantilever and write its impact test as ``out_dir/<kind>-<n>s-<seed>.uff`` (module docstring)."""
-    from experiments.second_sim.fem import Beam, assemble, modes
-    from experiments.second_sim.response import Damping, receptance
-    from experiments.second_sim.writers import convert_receptance, write_uff
-
     rng = np.random.default_rng([seed, CASES.index((kind, n_sensors))])
     material = ("steel", "aluminium")[int(rng.integers(2))]
     E_Pa, rho_kg_m3 = MATERIALS[material]
@@ -171,8 +174,6 @@ def simulate_test(kind: str, n_sensors: int, seed: int, out_dir) -> WideBandTest
 def run_identify(path: str, method: str) -> dict:
     """``beam-damage identify PATH --method METHOD --json`` in this process: ``{"exit", "result", "stderr",
     "traceback"}`` (``traceback`` set when the command raised instead of exiting)."""
-    from experiments.cli import main as cli
-
     out, err = io.StringIO(), io.StringIO()
     try:
         with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
@@ -292,13 +293,10 @@ def main(argv=None) -> int:
     summary = summarise(rows)
     md = markdown(summary, args)
     sys.stdout.write(md)
-    from physics.io import atomic_write_text
 
     atomic_write_text(out / "wideband.json", json.dumps({"config": vars(args), "summary": summary, "rows": rows},
                                                         indent=1) + "\n")
     if args.docs:
-        from experiments.studies.doc_tables import write_table
-
         write_table("identification.md", "wideband", md)
     return 0
 

@@ -31,8 +31,8 @@ from typing import NamedTuple
 
 from threadpoolctl import threadpool_limits
 
-from experiments.cli.jsonable import to_jsonable
 from physics.errors import BeamDamageError
+from physics.io import to_jsonable
 
 __all__ = ["COMMANDS", "Command", "build_parser", "main"]
 

@@ -9,12 +9,12 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.cli.jsonable import to_jsonable
 from learn.classify import DEFAULT_FALSE_ALARM_RATE, classify_many
 from learn.measured import differences_from_model, on_model_dofs
 from learn.model_dir import load_model
 from physics.errors import BeamDamageError
 from physics.frf import FRF_UNITS, receptance_modal
+from physics.supports import THESIS_SUPPORT, support
 from physics.io import (
     FRF,
     MODAL,
@@ -26,6 +26,7 @@ from physics.io import (
     parse_dof,
     read,
     read_json,
+    to_jsonable,
 )
 
 __all__ = ["KEYS", "add_parser", "run"]
@@ -259,16 +260,11 @@ def _location(ax, res, extra, beam) -> None:
 def _draw_beam(ax, beam) -> None:
     """The beam under the location axis: its supports (clamp: a wall; pin: a triangle), sensors (v) and zones."""
     L = beam.length_m
-    bc = "clamped-free" if beam.test is None else beam.test.bc
-    ends = {"clamped-free": ("clamp", None), "free-free": (None, None), "pinned-pinned": ("pin", "pin"),
-            "clamped-clamped": ("clamp", "clamp")}[bc]
+    sup = support(THESIS_SUPPORT if beam.test is None else beam.test.bc, "the model's test")
+    bc = sup.name
     y = ax.get_ylim()[1] if ax.has_data() else 1.0
     ax.plot([0, L], [-0.06 * y] * 2, color="k", lw=3, solid_capstyle="butt")
-    for x, kind in zip((0.0, L), ends):
-        if kind == "clamp":
-            ax.plot([x, x], [-0.14 * y, 0.02 * y], color="k", lw=5)
-        elif kind == "pin":
-            ax.plot([x], [-0.1 * y], marker="^", ms=10, color="k")
+    sup.draw(ax, L, y)
     ax.plot(beam.sensors_x_m, [-0.02 * y] * len(beam.sensors_x_m), "v", color="tab:blue", ms=7,
             label=f"sensors ({len(beam.sensors_x_m)}), {bc}")
     ax.set_ylim(-0.18 * y, 1.05 * y)

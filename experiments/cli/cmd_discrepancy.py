@@ -1,7 +1,7 @@
 """``beam-damage discrepancy``: where a beam model misses measured data and which effect it lacks.
 
-Parses, calls :func:`experiments.studies.study_discrepancy.run_discrepancy` (which reads the
-measurement, runs :func:`physics.discrepancy.analyse` and writes the outputs) and prints.
+Parses, calls :func:`physics.discrepancy.analyse_file` (which reads the measurement, runs
+:func:`physics.discrepancy.analyse` and writes the outputs) and prints.
 """
 
 from __future__ import annotations
@@ -11,13 +11,13 @@ from pathlib import Path
 import numpy as np
 
 from experiments.cli.args import add_beam_argument
-from experiments.studies.study_discrepancy import EXAMPLE, run_discrepancy
 from physics import discrepancy as dsc
-from physics.effects import CANDIDATES, SUPPORT_EFFECTS
+from physics.effects import CANDIDATES
+from physics.supports import SUPPORTS
 from physics.errors import ConfigError
 from physics.io import FRF, MODAL, accepted, dof_positions_text
 
-__all__ = ["EXAMPLE", "add_parser", "run"]
+__all__ = ["add_parser", "run"]
 
 
 def run(args) -> dict:
@@ -33,14 +33,14 @@ def run(args) -> dict:
     if not args.json:
         def progress(s):
             print(f"  fitting {s} ...", flush=True)
-    # a noise not given is of the data or assumed (run_discrepancy), and assumed ones are scaled to the data
+    # a noise not given is of the data or assumed (analyse_file), and assumed ones are scaled to the data
     # (analyse's estimate_noise)
-    out = run_discrepancy(args.beam, args.measured, args.out, frequency_noise=args.frequency_noise,
-                          shape_noise=args.shape_noise, frf_noise_db=args.frf_noise_db, max_effects=args.max_effects,
-                          n_elements=args.elements, seed=args.seed,
-                          candidates=None if args.candidates is None else tuple(args.candidates),
-                          estimate_noise=args.frequency_noise is None and args.shape_noise is None,
-                          progress=progress)
+    out = dsc.analyse_file(args.beam, args.measured, args.out, frequency_noise=args.frequency_noise,
+                           shape_noise=args.shape_noise, frf_noise_db=args.frf_noise_db,
+                           max_effects=args.max_effects, n_elements=args.elements, seed=args.seed,
+                           candidates=None if args.candidates is None else tuple(args.candidates),
+                           estimate_noise=args.frequency_noise is None and args.shape_noise is None,
+                           progress=progress)
     res, recal = out.pop("_result")
     if not args.json:
         _print(out, res, recal)
@@ -133,7 +133,7 @@ def add_parser(sub):
                     "leave-one-mode-out check, name the winner only when significant, and repeat once. "
                     "Damping ratios are modal (one per mode, the null model): a dashpot is named only from "
                     "complex mode shapes or FRFs. "
-                    f"Example: --beam beam5 --measured {EXAMPLE.relative_to(Path(__file__).parents[2])}")
+                    f"Example: --beam beam5 --measured {dsc.EXAMPLE.relative_to(Path(__file__).resolve().parents[2])}")
     add_beam_argument(p)
     p.add_argument("--measured", required=True, metavar="FILE",
                    help=f"{accepted(MODAL, FRF)}. Modal data: natural_frequencies_hz alone, or with "
@@ -151,8 +151,8 @@ def add_parser(sub):
     p.add_argument("--max-effects", type=int, default=2, help="most effects to name (default 2)")
     p.add_argument("--candidates", nargs="+", default=None, choices=CANDIDATES, metavar="EFFECT",
                    help="effects to test (default: all that fit the beam's supports: "
-                        + " ".join(c for c in CANDIDATES if c not in SUPPORT_EFFECTS.values())
-                        + " on every beam, plus " + ", ".join(f"{e} ({bc})" for bc, e in SUPPORT_EFFECTS.items())
+                        + " ".join(c for c in CANDIDATES if c not in {s.effect for s in SUPPORTS.values()})
+                        + " on every beam, plus " + ", ".join(f"{s.effect} ({s.name})" for s in SUPPORTS.values())
                         + "); one that does not fit the supports is refused")
     p.add_argument("--elements", type=int, default=40, help="elements of the fitted models (default 40)")
     p.add_argument("--seed", type=int, default=0, help="seed of the multi-start fits")

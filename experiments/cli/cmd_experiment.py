@@ -23,7 +23,7 @@ STUDIES = {
                           "Discrepancy workflow: beam 5 and the hidden-effect suite"),
     "damage-study": ("experiments.studies.study_damage",
                      "Damage study: network and classical methods by noise, size and position"),
-    "benchmark": ("experiments.studies.study_benchmark", "Benchmarks: data generation, training, identification"),
+    "benchmark": ("experiments.benches.study_benchmark", "Benchmarks: data generation, training, identification"),
 }
 
 
@@ -32,7 +32,15 @@ def run_study(name: str, out_dir) -> dict:
     if name not in STUDIES:
         raise BeamDamageError(f"unknown study {name!r}; expected one of {sorted(STUDIES)}")
     module, title = STUDIES[name]
-    summary, sections = importlib.import_module(module).run(out_dir)
+    try:
+        study = importlib.import_module(module)
+    except ModuleNotFoundError as exc:
+        if not module.startswith(f"{exc.name}."):
+            raise
+        raise BeamDamageError(f"study {name!r} runs {module}, a tool of the source tree that the installed package "
+                              "does not ship; run it from a checkout (python -m experiments.cli experiment "
+                              f"{name})") from None
+    summary, sections = study.run(out_dir)
     paths = write_report(out_dir, title, sections)
     return {"study": name, "summary": summary, "report": paths}
 

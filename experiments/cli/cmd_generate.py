@@ -9,7 +9,7 @@ from pathlib import Path
 
 from datagen.config import load_config, merge, named_configs
 from datagen.generation import generate
-from datagen.pipeline import generated_test
+from datagen.setup import generated_test
 from datagen.truth_beam import APPLIED_EFFECTS, beam_mapping
 from learn.noise_calibration import calibrate_test
 from learn.output_only_calibration import calibrate_output_only

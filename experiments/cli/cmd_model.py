@@ -5,9 +5,10 @@ from __future__ import annotations
 import numpy as np
 
 from experiments.cli.args import add_beam_argument
-from physics import fem, modal, properties, reduction
+from physics import modal, properties, reduction
 from physics.beam import Beam, load_beam
 from physics.errors import BeamDamageError
+from physics.supports import SUPPORTS, THESIS_SUPPORT, support
 
 __all__ = ["add_parser", "run"]
 
@@ -23,7 +24,7 @@ def build(beam, elements: int | None, mass: str, method: str, bc: str | None = N
     """
     b = beam if isinstance(beam, Beam) else load_beam(beam)
     elements = b.n_elements if elements is None else elements
-    bc = bc or b.bc
+    bc = support(bc or b.bc, "--bc").name
     model = b.with_effects(b.effects, bc=bc).fe_model(elements)
     M, K, dofs, iterations = model.M, model.K, model.dofs, 0
     if method != "none":
@@ -38,7 +39,7 @@ def build(beam, elements: int | None, mass: str, method: str, bc: str | None = N
         M = model.M[np.ix_(idx, idx)]
     w, _ = modal.undamped_modes(M, K)
     closed = None
-    if bc == "clamped-free" and not b.effects:
+    if bc == THESIS_SUPPORT and not b.effects:                    # eq. 4.5: the uniform cantilever
         closed = properties.cantilever_frequencies_hz(
             b.EI_Nm2, b.mass_per_length_kg_m, b.length_m, properties.cantilever_beta_l(min(len(dofs), 8)))
     return {
@@ -79,8 +80,9 @@ def add_parser(sub):
                    help="consistent (reduced with K) or lumped (translation partition, eq. 4.6)")
     p.add_argument("--reduction", default="none", choices=("none",) + tuple(reduction.REDUCTIONS),
                    help="reduce to the translational DOFs (default none)")
-    p.add_argument("--bc", default=None, choices=fem.BOUNDARY_CONDITIONS,
-                   help="boundary condition (default: the beam's, clamped-free for the presets)")
+    p.add_argument("--bc", default=None, choices=tuple(SUPPORTS),
+                   help="boundary condition (default: the beam's, clamped-free for the presets): "
+                        + "; ".join(f"{s.name}: {s.help}" for s in SUPPORTS.values()))
     p.add_argument("--json", action="store_true",
                    help="print one JSON object: M, K, dofs, natural_frequencies_hz, closed_form_frequencies_hz, "
                         "iterations")

@@ -10,11 +10,10 @@ from pathlib import Path
 import numpy as np
 
 from experiments.cli.args import check_out_dir
-from experiments.cli.jsonable import to_jsonable
 from learn.monitor import (DEFAULT_LATENT, NORMAL_MODELS, SeriesInput, alarm_verdicts, identification_settings,
                            monitor_series, read_conditions)
 from physics.errors import ConfigError
-from physics.io import FRF, MODAL, TIME, accepted, atomic_write_bytes, atomic_write_text
+from physics.io import FRF, MODAL, TIME, accepted, atomic_write_bytes, atomic_write_text, to_jsonable
 from datagen.store import package_version
 from learn.model_dir import load_model
 from physics.beam import load_beam

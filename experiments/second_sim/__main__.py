@@ -7,6 +7,15 @@ import argparse
 import os
 import sys
 import time
+from pathlib import Path
+
+import numpy as np
+
+from experiments.second_sim.beams import CATALOGUE, simulate_beam_pairs, write_beam_pairs
+from experiments.second_sim.bolted import MASS_KG, write_bolted_test, write_mass_change_pairs
+from experiments.second_sim.effects import effect_cases, write_effect_cases
+from experiments.second_sim.pairs import simulate_pairs, write_pairs
+from experiments.second_sim.series import SLIT_SIZES, SeriesConfig, simulate_series, write_series
 
 __all__ = ["main"]
 
@@ -80,10 +89,6 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     try:
         if args.command == "pairs":
-            from experiments.second_sim.pairs import simulate_pairs, write_pairs
-
-            import numpy as np
-
             if args.n < 1:
                 raise ValueError(f"--n must be >= 1, got {args.n}")
             f0, f1 = args.band_hz
@@ -104,10 +109,6 @@ def main(argv=None) -> int:
             out = write_pairs(simulate_kind_pairs(args.n, args.seed, changes, args.tied_tips), args.out)
             what = f"{args.n} pairs of each of {', '.join(changes)}"
         elif args.command == "beams":
-            from pathlib import Path
-
-            from experiments.second_sim.beams import CATALOGUE, simulate_beam_pairs, write_beam_pairs
-
             names = [c.name for c in CATALOGUE]
             if args.only is not None and args.only not in names:
                 raise ValueError(f"--only: unknown beam {args.only!r}; expected one of {', '.join(names)}")
@@ -119,8 +120,6 @@ def main(argv=None) -> int:
             out = args.out
             what = f"{args.n} pairs of {len(chosen)} beam(s)"
         elif args.command == "bolted":
-            from experiments.second_sim.bolted import MASS_KG, write_bolted_test, write_mass_change_pairs
-
             if not 0 <= args.removed_kg < MASS_KG:
                 raise ValueError(f"--removed-kg must lie in [0, {MASS_KG}) kg, got {args.removed_kg}")
             if args.pairs < 0:
@@ -132,8 +131,6 @@ def main(argv=None) -> int:
                 out = write_bolted_test(args.out, args.seed, args.removed_kg, args.damage_x_m)
                 what = "the bolted cantilever"
         elif args.command == "series":
-            from experiments.second_sim.series import SLIT_SIZES, SeriesConfig, simulate_series, write_series
-
             size = SLIT_SIZES.get(args.slit_size)
             if size is None:
                 try:
@@ -150,8 +147,6 @@ def main(argv=None) -> int:
             out = write_series(cfg, simulate_series(cfg), args.out)
             what = f"a series of {args.n_tests} {args.kind} tests"
         else:
-            from experiments.second_sim.effects import effect_cases, write_effect_cases
-
             cases = effect_cases(args.seed)
             out = write_effect_cases(cases, args.out)
             what = f"{len(cases)} effect cases"

@@ -13,12 +13,15 @@ the modes above the Nyquist frequency fold into the record). Uses only this pack
 from __future__ import annotations
 
 import io
+import os
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from scipy import signal
 
 from experiments.second_sim.fem import Beam, assemble, modes
+from experiments.second_sim.writers import _atomic_target
 
 __all__ = ["AmbientRecord", "ambient_record", "write_npz"]
 
@@ -128,11 +131,6 @@ def ambient_record(beam: Beam, sensor_x_m, duration_s=600.0, sampling_frequency_
 
 def write_npz(path, rec: AmbientRecord, dofs=None) -> None:
     """The record as ``.npz`` of plain arrays (``signals``, ``sampling_frequency_hz``, ``dofs``, ``quantity``)."""
-    import os
-    from pathlib import Path
-
-    from experiments.second_sim.writers import _atomic_target
-
     path = Path(path)
     dofs = [f"{k + 2}:+Y" for k in range(rec.signals.shape[0])] if dofs is None else list(dofs)
     buf = io.BytesIO()

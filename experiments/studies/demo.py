@@ -27,16 +27,16 @@ from datagen.config import load_config, merge
 from datagen.generation import generate
 from datagen.truth_beam import beam_mapping
 from experiments.studies import study_discrepancy, study_thesis, validate
-from experiments.cli.jsonable import to_jsonable
 from experiments.studies.report import Section, Table, figure, write_report
 from learn.classify import classify
 from learn.model_dir import MODEL_FORMAT, load_model
 from learn.verdict import explained_text, noise_text
-from physics import modal, properties, thesis, updating
+from physics import discrepancy, modal, properties, thesis, updating
 from physics.beam import load_beam
 from physics.errors import BeamDamageError
 from physics.identification import identify_frf
-from physics.io import atomic_write_text, modal_data_from_dict, read_frf, read_modal_json, write_modal_json, write_uff58
+from physics.io import (atomic_write_text, modal_data_from_dict, read_frf, read_modal_json, to_jsonable,
+                        write_modal_json, write_uff58)
 
 __all__ = ["add_parser", "run"]
 
@@ -256,8 +256,8 @@ def run(args) -> dict:
 
     # 3: discrepancy -> calibrated beam file
     disc = _step(out, "discrepancy", force, {}, lambda: {
-        k: v for k, v in study_discrepancy.run_discrepancy("beam5", study_discrepancy.EXAMPLE,
-                                                           out / "discrepancy").items() if k != "_result"})
+        k: v for k, v in discrepancy.analyse_file("beam5", discrepancy.EXAMPLE, out / "discrepancy").items()
+        if k != "_result"})
     beam_file = disc["beam_file"]
 
     # 4: data, training, evaluation

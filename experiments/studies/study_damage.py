@@ -14,7 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
+from datagen.config import load_config, merge
+from datagen.generation import generate
 from experiments.studies.report import Figure, Section, Table
+from learn.model_dir import load_model
+from learn.training import evaluate, train
 
 __all__ = ["run"]
 
@@ -49,11 +53,6 @@ def _figure(rows, metric, label, path):
 
 
 def run(out_dir, model_dir="out/demo/model", n_test: int = 4000, n_train: int = 6000) -> tuple[dict, list]:
-    from datagen.config import load_config
-    from datagen.generation import generate
-    from learn.model_dir import load_model
-    from learn.training import evaluate, train
-
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     model_dir = Path(model_dir)
@@ -65,7 +64,6 @@ def run(out_dir, model_dir="out/demo/model", n_test: int = 4000, n_train: int = 
     beam = model.config.get("generator_config", {}).get("beam") or None
     cfg = load_config("training")
     if beam:   # the model's own truth beam (e.g. the calibrated one of the demo)
-        from datagen.config import merge
         cfg = merge({"beam": beam}, base=cfg)
     generate(out / "test-data", cfg, n=n_test, seed=7, workers=2, progress=True)
     res = evaluate(model, out / "test-data", out / "evaluate", progress=True)

@@ -16,6 +16,8 @@ data* is the modal superposition of Tables 4.5/4.6, the closest thing to it.
 
 from __future__ import annotations
 
+import csv
+import io
 from pathlib import Path
 
 import numpy as np
@@ -193,9 +195,6 @@ def _figures_6(out: Path, ident: dict) -> list:
 
 def _write_tables(out: Path, tables: list) -> None:
     """Each table as ``tableN.csv`` (N from 1), atomically."""
-    import csv
-    import io
-
     for i, t in enumerate(tables):
         buf = io.StringIO()
         w = csv.writer(buf)

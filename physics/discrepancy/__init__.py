@@ -56,7 +56,8 @@ Modules
 points, pairing, residuals, simulated measurements; ``candidates``  the
 parameters of each effect; ``fitting``  one candidate's fit; ``selection``  the
 score, the decision of a round, the chi^2 noise test; ``limits``  detection
-limits; ``workflow``  :func:`analyse`.
+limits; ``workflow``  :func:`analyse`; ``files``  :func:`analyse_file`, the workflow on a measurement
+file with its outputs (calibrated beam file, tables, figures).
 """
 
 from physics.discrepancy.candidates import g_core_pa
@@ -68,8 +69,12 @@ from physics.discrepancy.model import (ModeResiduals, Prediction, bending_modes,
 from physics.discrepancy.selection import (BIC_SIGNIFICANT, DISTINCT, NOISE_DOF_MIN, P_NOISE, NoiseCheck, Step,
                                            noise_check)
 from physics.discrepancy.workflow import DiscrepancyResult, analyse, check_candidates
+from physics.discrepancy.files import (EXAMPLE, analyse_file, assumed_noise, estimated_noise, load_measurement,
+                                      measured_test_notes, measurement_mesh)
 
-__all__ = ["BIC_SIGNIFICANT", "BLOCKS", "DETECTION_POWER", "DISTINCT", "DetectionLimit", "DiscrepancyResult", "Fit",
+__all__ = ["BIC_SIGNIFICANT", "BLOCKS", "DETECTION_POWER", "DISTINCT", "DetectionLimit", "DiscrepancyResult", "EXAMPLE",
+           "Fit", "analyse_file", "assumed_noise", "estimated_noise", "load_measurement", "measured_test_notes",
+           "measurement_mesh",
            "Measurement", "ModeResiduals", "NOISE_DOF_MIN", "Noise", "NoiseCheck", "P_NOISE", "Prediction", "SIZES",
            "Step", "analyse", "bending_modes", "check_candidates", "detection_limits", "frf_scatter_db", "g_core_pa",
            "has_complex_shapes", "mode_residuals", "noise_check", "pair_modes_by_mac", "predict", "rayleigh_fit",

@@ -10,7 +10,6 @@ from physics import effects as fx
 from physics.beam import Beam
 from physics.errors import BeamDamageError
 from physics.frf import convert_frf, receptance
-from physics.layout import RIGID_BODY_MODES
 from physics.modal import mac
 from physics.discrepancy.measurement import Measurement, Noise
 from physics.frf import magnitude_db
@@ -33,12 +32,12 @@ def bending_modes(beam: Beam, model, n: int) -> tuple[np.ndarray, np.ndarray]:
     """The ``n`` lowest bending modes of ``model`` (of ``beam``): ``(w^2 (rad/s)^2, mass-normalised phi)``.
 
     A free-free beam's two lowest modes, rigid-body ones or (with ``suspension``) the bounce and pitch modes
-    on the suspension, are left out (:data:`physics.layout.RIGID_BODY_MODES`): the measured modes are bending
+    on the suspension, are left out (:attr:`physics.supports.Support.rigid_body_modes`): the measured modes are bending
     modes. Fewer than ``n`` when the model has fewer DOFs.
     """
     from scipy.linalg import eigh  # scipy.linalg: 0.2-0.4 s to import, only where modes are solved
 
-    first = RIGID_BODY_MODES[beam.bc]
+    first = beam.support.rigid_body_modes
     last = min(first + n, len(model.dofs)) - 1
     return eigh(model.K, model.M, subset_by_index=[first, last])
 

@@ -9,7 +9,6 @@ import numpy as np
 
 from physics import effects as fx
 from physics.beam import Beam
-from physics.layout import RIGID_BODY_MODES
 from physics.modal import undamped_modes
 from physics.discrepancy.fitting import Fit
 from physics.discrepancy.measurement import Measurement, Noise
@@ -218,5 +217,5 @@ def _antiresonances_hz(beam: Beam, x_m: float, n_elements: int, n: int) -> np.nd
     q, _ = np.linalg.qr(np.column_stack([t, np.eye(t.size)]))
     z = q[:, 1:]
     w, _ = undamped_modes(z.T @ model.M @ z, z.T @ model.K @ z)
-    skip = max(RIGID_BODY_MODES[beam.bc] - 1, 0)   # a free-free beam held at x keeps its pitch about x
+    skip = max(beam.support.rigid_body_modes - 1, 0)   # a free-free beam held at x keeps its pitch about x
     return w[skip:skip + n] / (2 * np.pi)

@@ -12,6 +12,7 @@ One module per format, listed in one table (:data:`FORMATS`), the data types and
 * :mod:`physics.io.formats` -- the format table :data:`FORMATS` (extensions, content, sniffing, reader,
   writer, description) and :func:`read_frf` / :func:`read`, choosing a reader from the name or content,
   and :func:`modal_or_frf`, whether a file of measured data holds modal data or FRFs;
+* :mod:`physics.io.jsonable` -- :func:`to_jsonable`, JSON-ready values of results;
 * :mod:`physics.io.units` -- dataset 164 unit factors and unit labels, to SI;
 * :mod:`physics.io.geometry` -- node geometry (datasets 15/2411) and measured positions along the beam;
 * :mod:`physics.io.prepare` -- measured data made ready for a model (positive senses, DOF map, the one
@@ -29,6 +30,7 @@ from physics.io.modal_json import (modal_data_from_dict, modal_data_to_dict, num
 from physics.io.npz import read_frf_npz, write_frf_npz
 from physics.io.types import (DEFAULT_UNITS, FRF_KINDS, MeasuredFRF, ModalData, dof_label,
                               format_complex, parse_dof)
+from physics.io.jsonable import to_jsonable
 from physics.io.geometry import (QUARTER_POINT_CONVENTION, DofMap, NodeGeometry, dof_positions_text, map_frf_dofs,
                                  map_measured_dofs, match_dofs_by_position, measured_positions, positions_along_beam,
                                  reference_position_m)
@@ -45,4 +47,4 @@ __all__ = ["FORMATS", "FRF", "MODAL", "TIME", "FileFormat", "accepted", "format_
            "DofMap", "NodeGeometry", "dof_positions_text", "QUARTER_POINT_CONVENTION", "map_frf_dofs",
            "map_measured_dofs", "UnitSystem", "frf_unit_factor", "match_dofs_by_position",
            "measured_positions", "positions_along_beam", "reference_position_m", "read_uff_geometry", "Prepared",
-           "prepare_measured", "sensor_labels", "reads_by_reciprocity"]
+           "prepare_measured", "sensor_labels", "reads_by_reciprocity", "to_jsonable"]

@@ -7,7 +7,7 @@ from datagen.config import merge
 from datagen.damage import element4_index
 from datagen.damage.slit import clamped_flexibility, overlap_energy, slit_corrections, \
     stiffness_from_flexibility
-from datagen.pipeline import get_setup
+from datagen.setup import get_setup
 from physics.modal import undamped_modes
 from datagen.damage.slit import slit_section_ei
 from datagen.specimen import SectionLayout

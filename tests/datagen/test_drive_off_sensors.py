@@ -3,7 +3,9 @@
 import numpy as np
 
 from datagen.config import load_config, merge
-from datagen.pipeline import draw_batch, get_setup, projected_modes, simulate_batch, truth_matrices
+from datagen.batch_inputs import draw_batch
+from datagen.pipeline import projected_modes, simulate_batch, truth_matrices
+from datagen.setup import get_setup
 from datagen.synth import measured_frf
 
 

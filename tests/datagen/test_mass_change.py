@@ -128,7 +128,9 @@ def test_projection_and_the_drop_label_hold_with_test_day_changes():
     projection matches the per-sample state-space solution (datagen.naive, the current state on M + dM), and the
     drop label is the masses' alone (physics.fem with the root spring and the point masses, no day-to-day change)."""
     from datagen.naive import simulate_naive
-    from datagen.pipeline import draw_batch, get_setup, simulate_batch
+    from datagen.batch_inputs import draw_batch
+    from datagen.pipeline import simulate_batch
+    from datagen.setup import get_setup
     from physics.modal import modal_parameters
 
     setup = get_setup(merge({"specimen": {"temperature_stiffness_change": [-0.003, 0.003],
@@ -139,7 +141,7 @@ def test_projection_and_the_drop_label_hold_with_test_day_changes():
     assert set(inp.damage) == {"mass_kg", "width_m", "point_kg", "point_x_m"}
     assert (inp.n_damages == 2).any() and (inp.n_damages == 0).any()
     out = simulate_batch(setup, inp)
-    full = simulate_naive(setup, inp, modes="full")
+    full = simulate_naive(setup, inp, solution="full")
     f_s, z_s = modal_parameters(out["truth_poles"][..., :4])
     f_f, z_f = modal_parameters(full["truth_poles"][..., :4])
     np.testing.assert_allclose(f_s, f_f, rtol=1e-4)
@@ -174,7 +176,7 @@ def test_a_loss_beyond_what_the_beam_carries_is_refused_in_one_line():
     with pytest.raises(ConfigError) as e:
         generate_cfg = merge({"damage": {"kind": "mass_change", "mass_ratio": [-0.05, 0.0],
                                          "width_fraction": [0.0, 0.02]}})
-        from datagen.pipeline import build_setup
+        from datagen.setup import build_setup
 
         build_setup(generate_cfg)
     msg = str(e.value)
@@ -185,7 +187,8 @@ def test_a_loss_beyond_what_the_beam_carries_is_refused_in_one_line():
 def test_a_loss_from_a_bolted_mass_is_bounded_by_that_mass(tmp_path):
     """On a beam file with added masses a loss takes first from the heaviest one within its length (a point mass
     off that mass, at its position), the rest from the beam's own mass; the current mass matrix stays positive."""
-    from datagen.pipeline import draw_batch, get_setup
+    from datagen.batch_inputs import draw_batch
+    from datagen.setup import get_setup
 
     beam = {"name": "bar", "length_m": 0.38, "width_m": 0.0254, "thickness_m": 0.00475, "section": "rectangular",
             "modulus_pa": 2e11, "density_kg_m3": 7850.0,

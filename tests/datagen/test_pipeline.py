@@ -5,7 +5,9 @@ import pytest
 
 from datagen.config import merge
 from datagen.naive import simulate_naive
-from datagen.pipeline import draw_batch, get_setup, simulate_batch
+from datagen.batch_inputs import draw_batch
+from datagen.pipeline import simulate_batch
+from datagen.setup import get_setup
 from datagen.synth import measured_frf, updated_frf
 from physics.frf import pole_residue, poles_and_residues, receptance
 from physics.modal import complex_modes, modal_parameters
@@ -33,7 +35,7 @@ def _stored(inp, out):
 
 def test_batched_equals_per_sample(setup, batch):
     inp, out = batch
-    ref = simulate_naive(setup, inp, modes="projection")
+    ref = simulate_naive(setup, inp, solution="projection")
     for k in ("truth_poles", "truth_shapes", "eigenvalues_measured", "eigenvectors_measured", "M_updated",
               "C_updated", "K_updated", "updated_poles", "updated_residues", "damage_frequency_drop"):
         assert _rel(out[k], ref[k]) < 1e-8, k
@@ -50,7 +52,7 @@ def test_batched_equals_per_sample(setup, batch):
 def test_projection_shortcut_matches_full_state_space(setup, batch):
     """Stated tolerance: f 1e-4, zeta 1e-3 (relative), MAC > 1 - 1e-6, FRF 1e-3 of its peak."""
     inp, out = batch
-    full = simulate_naive(setup, inp, modes="full")
+    full = simulate_naive(setup, inp, solution="full")
     f_s, z_s = modal_parameters(out["truth_poles"][..., :4])
     f_f, z_f = modal_parameters(full["truth_poles"][..., :4])
     np.testing.assert_allclose(f_s, f_f, rtol=1e-4)
@@ -167,7 +169,7 @@ def test_projection_shortcut_with_a_shear_flexibility_per_specimen_matches_full_
     st = get_setup(cfg)
     inp = draw_batch(np.random.default_rng(3), 10, st)
     assert np.ptp(inp.shear_flexibility) > 0.003
-    out, full = simulate_batch(st, inp, chunk=4), simulate_naive(st, inp, modes="full")
+    out, full = simulate_batch(st, inp, chunk=4), simulate_naive(st, inp, solution="full")
     f_s, z_s = modal_parameters(out["truth_poles"][..., :4])
     f_f, z_f = modal_parameters(full["truth_poles"][..., :4])
     np.testing.assert_allclose(f_s, f_f, rtol=1e-4)

@@ -26,7 +26,7 @@ def test_support_effect_of_a_beam_file_is_the_truth(bc, tmp_path, capsys):
     """Nominal specimen of a beam file with its supports' effect: its baseline frequencies are the modes of
     physics.effects' model on the truth mesh (bending modes), and differ from the beam without the effect."""
     from datagen.dataset import Dataset
-    from datagen.pipeline import get_setup
+    from datagen.setup import get_setup
     from physics.beam import preset_beam, write_beam
     from physics.discrepancy import bending_modes
 
@@ -60,7 +60,7 @@ def test_the_bearing_or_suspension_spring_changes_between_the_test_days(bc, tmp_
     between the two test days: each intact specimen's current frequencies are the beam file's model with the
     spring times ``1 + c``."""
     from datagen.dataset import Dataset
-    from datagen.pipeline import get_setup
+    from datagen.setup import get_setup
     from physics.beam import preset_beam, write_beam
     from physics.discrepancy import bending_modes
 

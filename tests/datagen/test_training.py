@@ -5,7 +5,9 @@ import pytest
 
 from datagen.config import load_config, merge
 from datagen.generation import generate
-from datagen.pipeline import draw_batch, get_setup, simulate_batch
+from datagen.batch_inputs import draw_batch
+from datagen.pipeline import simulate_batch
+from datagen.setup import get_setup
 from datagen.dataset import Dataset
 from physics.errors import ConfigError
 

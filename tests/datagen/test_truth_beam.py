@@ -175,7 +175,9 @@ def test_every_effect_batched_shortcut_matches_per_sample_state_space():
     pytest.importorskip("physics.beam")
     from datagen.config import load_config
     from datagen.naive import simulate_naive
-    from datagen.pipeline import build_setup, draw_batch, simulate_chunk
+    from datagen.batch_inputs import draw_batch
+    from datagen.pipeline import simulate_chunk
+    from datagen.setup import build_setup
     from datagen.truth_beam import beam_mapping
     from physics.beam import preset_beam
     from physics.modal import modal_parameters
@@ -184,7 +186,7 @@ def test_every_effect_batched_shortcut_matches_per_sample_state_space():
     cfg["beam"] = beam_mapping(preset_beam("beam5").with_effects(ALL_EFFECTS, name="beam5-all"))
     setup = build_setup(cfg)
     inp = draw_batch(np.random.default_rng(3), 6, setup)
-    out, full = simulate_chunk(setup, inp), simulate_naive(setup, inp, modes="full")
+    out, full = simulate_chunk(setup, inp), simulate_naive(setup, inp, solution="full")
     f_s, z_s = modal_parameters(out["truth_poles"][..., :4])
     f_f, z_f = modal_parameters(full["truth_poles"][..., :4])
     np.testing.assert_allclose(f_s, f_f, rtol=1e-4)
@@ -241,7 +243,8 @@ def test_slits_in_a_solid_rectangle_cut_one_material_as_deep_as_the_section_allo
     and a loss of 95 % (depth 0.63 h) is drawn; the deepest cut leaves 5 % of the depth."""
     from datagen.damage.slit import depth_for_ei_loss
     from datagen.config import merge
-    from datagen.pipeline import SOLID_LIGAMENT_FRACTION, draw_batch, get_setup
+    from datagen.batch_inputs import draw_batch
+    from datagen.setup import SOLID_LIGAMENT_FRACTION, get_setup
 
     beam = {"name": "bar", "length_m": 0.38, "width_m": 0.0254, "thickness_m": 0.00475, "section": "rectangular",
             "modulus_pa": 2e11, "density_kg_m3": 7850.0}

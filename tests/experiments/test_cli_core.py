@@ -5,7 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from experiments import cli, validate
+from experiments import cli
+from experiments.studies import validate
 from physics import thesis
 
 

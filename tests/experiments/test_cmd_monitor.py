@@ -50,9 +50,9 @@ def test_an_frf_series_is_identified_once_and_the_slit_alarmed(tmp_path, capsys,
     rows = list(csv.DictReader(open(out / "monitor.csv")))
     assert len(rows) == 16 and rows[13]["alarm"] == "True"
     assert len(list((out / "cache").glob("*.json"))) == 16
-    import learn.monitor
+    import learn.monitor.identification
 
-    monkeypatch.setattr(learn.monitor, "identify_test", lambda *a: pytest.fail("identified again"))
+    monkeypatch.setattr(learn.monitor.identification, "identify_test", lambda *a: pytest.fail("identified again"))
     code, again, err = run_json(capsys, ["monitor", "--conditions", str(csv_path), "--baseline-tests", "12",
                                          "--out", str(out), "--json"])
     assert code == 0, err
@@ -76,9 +76,9 @@ def test_a_modal_series_writes_its_chart_table_and_report_and_reruns_from_the_ca
     assert len(rows) == 30 and rows[24]["alarm"] == "True" and float(rows[0]["temperature_c"]) == pytest.approx(
         res["tests"][0]["conditions"]["temperature_c"])
     assert len(list((out / "cache").glob("*.json"))) == 30
-    import learn.monitor
+    import learn.monitor.identification
 
-    monkeypatch.setattr(learn.monitor, "identify_test", lambda *a: pytest.fail("identified again"))
+    monkeypatch.setattr(learn.monitor.identification, "identify_test", lambda *a: pytest.fail("identified again"))
     code, again, err = run_json(capsys, argv)
     assert code == 0, err
     assert [r["novelty"] for r in again["tests"]] == [r["novelty"] for r in res["tests"]]

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from experiments.second_sim.bolted import write_bolted_test
-from experiments.studies.study_discrepancy import run_discrepancy
+from physics.discrepancy import analyse_file
 from physics import discrepancy as dsc
 from physics.beam import load_beam
 
@@ -52,7 +52,7 @@ def test_discrepancy_names_added_masses_the_beam_file_left_out(bolted):
     """Without the masses: EI/m recalibrated leaves 0.64 % at mode 1 (30 times the 0.03 % noise); point masses at
     fitted positions are named and the gap falls within the noise. With the six [[effects.added_mass]] tables the
     calibrated model is consistent with the noise and names no mass."""
-    bar = run_discrepancy(str(bolted / "bar.toml"), str(bolted / "baseline_modal.json"), max_effects=3, **NOISE)
+    bar = analyse_file(str(bolted / "bar.toml"), str(bolted / "baseline_modal.json"), max_effects=3, **NOISE)
     res, recal = bar.pop("_result")
     assert res.named_effects and all(e.startswith("added_mass") for e in res.named_effects)
     assert recal.max_abs_frequency_error_pct > 0.3
@@ -61,7 +61,7 @@ def test_discrepancy_names_added_masses_the_beam_file_left_out(bolted):
     assert len(masses) >= 2
     truth = json.loads((bolted / "truth.json").read_text())
     assert truth["bar_mass_kg"] == pytest.approx(0.3599, rel=1e-3)
-    bolted_res = run_discrepancy(str(bolted / "bolted.toml"), str(bolted / "baseline_modal.json"), max_effects=3,
+    bolted_res = analyse_file(str(bolted / "bolted.toml"), str(bolted / "baseline_modal.json"), max_effects=3,
                                  **NOISE)["_result"][0]
     assert not any(e.startswith("added_mass") for e in bolted_res.named_effects)
     assert bolted_res.noise_check.consistent

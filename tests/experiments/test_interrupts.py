@@ -12,7 +12,7 @@ import pytest
 
 from experiments.benches.bench_interrupts import default_sigint
 from experiments.cli import main, one_line
-from experiments.cli.jsonable import to_jsonable
+from physics.io import to_jsonable
 
 
 def _lock(path, pid):

@@ -174,7 +174,7 @@ def _verdict(damaged, x, zone, s, s_sd=None, x_sd=None, cl=None):
 
 
 def test_scores_count_zones_places_false_alarms_sizes_and_folding():
-    from experiments.studies.study_beams import score_beam
+    from experiments.benches.study_beams import score_beam
 
     truth = [{"damaged": True, "slit_x_m": 0.4, "hinge_flexibility": 0.02},
              {"damaged": True, "slit_x_m": 1.5, "hinge_flexibility": 0.01},
@@ -208,7 +208,7 @@ def test_scores_count_zones_places_false_alarms_sizes_and_folding():
 
 @pytest.mark.slow
 def test_the_study_runs_end_to_end_on_one_beam(tmp_path, capsys):
-    from experiments.studies.study_beams import main
+    from experiments.benches.study_beams import main
 
     assert main(["--out", str(tmp_path), "--only", "al-strip-cf-3s", "--n-pairs", "6", "--train-n", "1500",
                  "--json"]) == 0

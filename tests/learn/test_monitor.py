@@ -147,7 +147,7 @@ def test_the_cache_identifies_a_file_once_per_content_and_settings(tmp_path, mon
     path = slit[1][0]
     first = cached_identification(path, IdentificationSettings(), tmp_path)
     assert first[2] is False and len(list(tmp_path.glob("*.json"))) == 1
-    import learn.monitor as mon
+    import learn.monitor.identification as mon
 
     monkeypatch.setattr(mon, "identify_test", lambda *a: (_ for _ in ()).throw(AssertionError("identified again")))
     again = cached_identification(path, IdentificationSettings(), tmp_path)

@@ -11,7 +11,9 @@ BAR = {"name": "bar", "bc": "free-free", "length_m": 1.2, "width_m": 0.03, "thic
 
 def shortcut_shape_std(cfg, level, floor, specimens, seed):
     from datagen.config import merge
-    from datagen.pipeline import draw_batch, get_setup, measure_modes, simulate_batch
+    from datagen.batch_inputs import draw_batch
+    from datagen.pipeline import measure_modes, simulate_batch
+    from datagen.setup import get_setup
     from learn.noise_calibration import robust_std
 
     meas = {"frf_noise": level, "frf_noise_floor": floor, "modal_noise_scale": [1.0, 1.0],

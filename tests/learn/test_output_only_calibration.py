@@ -72,7 +72,8 @@ def test_unscaled_shape_errors_measure_the_std_of_circular_errors():
 
 def test_output_only_std_model_and_per_sample_draws():
     from datagen.config import calibrated_modal_std, load_config, merge, output_only_variables
-    from datagen.pipeline import draw_batch, get_setup
+    from datagen.batch_inputs import draw_batch
+    from datagen.setup import get_setup
 
     coef = {"modal_noise": "output-only", "frequency_noise": [0.1, 0.2], "frequency_noise_per_floor": [0.002, 0.001],
             "frequency_noise_floor": [1e-5, 0.0], "damping_noise": [5.0], "damping_noise_per_floor": [0.5],

@@ -148,7 +148,7 @@ def test_the_one_accelerometer_transfer_test_is_generated_classified_and_discrep
 
 
 def test_discrepancy_takes_the_drive_point_a_beam_file_leaves_out_from_the_file():
-    from experiments.studies.study_discrepancy import measurement_mesh, measured_test_notes
+    from physics.discrepancy import measurement_mesh, measured_test_notes
     from physics.discrepancy import Measurement
 
     d = {"name": "pp", "bc": "pinned-pinned", "length_m": 1.2, "width_m": 0.05, "thickness_m": 0.01,

@@ -172,7 +172,7 @@ def test_measurement_validation():
 
 def test_cli_on_beam5_table_4_3(tmp_path, capsys):
     from experiments.cli import main
-    from experiments.studies.study_discrepancy import EXAMPLE
+    from physics.discrepancy import EXAMPLE
     from physics.beam import load_beam as lb
 
     rc = main(["discrepancy", "--beam", "beam5", "--measured", str(EXAMPLE), "--out", str(tmp_path),
@@ -205,7 +205,7 @@ def test_cli_on_beam5_table_4_3(tmp_path, capsys):
 
 def test_cli_names_no_effect_with_max_effects_0_and_writes_every_file(tmp_path, capsys):
     from experiments.cli import main
-    from experiments.studies.study_discrepancy import EXAMPLE
+    from physics.discrepancy import EXAMPLE
 
     assert main(["discrepancy", "--measured", str(EXAMPLE), "--out", str(tmp_path), "--max-effects", "0",
                  "--elements", "12", "--json"]) == 0
@@ -321,7 +321,9 @@ def test_detection_limit_of_a_dashpot_from_complex_shapes_per_position():
 def test_noise_scale_estimated_from_modal_data_only_with_enough_dof():
     small = dsc.Noise(NOISE.frequency / 5, NOISE.damping, NOISE.shape / 5)
     truth = _truth({"shear_deformation": {"kGA_N": 2.5e4}}, 3)
-    meas = dsc.simulate_measurement(truth, seed=3, noise=small, shapes=True, damping=False)
+    # seed 7: each block's chi^2 test at the estimated scale lies far from its 0.5 % threshold (p 0.09-0.6; seed 3
+    # put the frequencies at p = 0.005, where the fit's last digits, e.g. the BLAS thread count, flipped the test)
+    meas = dsc.simulate_measurement(truth, seed=7, noise=small, shapes=True, damping=False)
     res = dsc.analyse(BEAM, meas, NOISE, max_effects=1, n_elements=24, n_starts=2, estimate_noise=True,
                       candidates=("shear_deformation", "root_flexibility"))
     # chi^2/dof of the best round-1 fit on 26 dof: the std 5x below the assumed one, within sampling
@@ -347,7 +349,7 @@ def test_fits_do_not_turn_on_rounding(tmp_path):
     import json
     from dataclasses import replace
 
-    from experiments.studies.study_discrepancy import run_discrepancy
+    from physics.discrepancy import analyse_file
     from physics.beam import preset_beam
 
     path = tmp_path / "freq.json"
@@ -356,6 +358,6 @@ def test_fits_do_not_turn_on_rounding(tmp_path):
         "damping_ratios": [0.009340379380256272, 0.008793655439476864, 0.015695374958275547, 0.007268938305862167]}))
     beam = preset_beam("beam5")
     for b in (beam, replace(beam, EI_Nm2=beam.EI_Nm2 * (1 + 1e-15))):
-        res = run_discrepancy(b, str(path))
+        res = analyse_file(b, str(path))
         assert res["effects"] == ["added_mass"], res["effects"]
         assert res["gap_after"]["max_abs_frequency_error_pct"] < 0.1

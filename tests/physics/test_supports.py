@@ -14,6 +14,7 @@ from physics import discrepancy as dsc
 from physics import effects as fx
 from physics.beam import beam_from_dict, load_beam
 from physics.errors import BeamDamageError, ConfigError
+from physics.supports import SUPPORTS
 
 BEAM5 = load_beam("beam5")
 L, EI, M = BEAM5.length_m, BEAM5.EI_Nm2, BEAM5.mass_per_length_kg_m
@@ -105,11 +106,11 @@ def test_support_effects_that_do_not_fit_are_refused_in_one_line():
 
 def test_candidates_follow_the_supports():
     common = {"shear_deformation", "rotary_inertia", "added_mass", "local_damping"}
-    for bc, own in fx.SUPPORT_EFFECTS.items():
-        assert set(fx.candidates_for(bc)) == common | {own}
+    for bc, sup in SUPPORTS.items():
+        assert set(fx.candidates_for(bc)) == common | {sup.effect}
     assert fx.candidates_for("clamped-free") == ("shear_deformation", "rotary_inertia", "root_flexibility",
                                                  "added_mass", "local_damping")
-    assert set(fx.CANDIDATES) == common | set(fx.SUPPORT_EFFECTS.values())
+    assert set(fx.CANDIDATES) == common | {s.effect for s in SUPPORTS.values()}
 
 
 # --------------------------------------------------------------------------- hidden effects, independent data

@@ -15,14 +15,16 @@ import os
 import time
 from pathlib import Path
 
+from datagen.config import load_config
+from datagen.generation import generate
+from experiments.benches import bench_datagen, bench_identification
 from experiments.studies.report import Section, Table
+from learn.training import train
 
 __all__ = ["run"]
 
 
 def run(out_dir, n_datagen: int = 10000, n_train: int = 6000, epochs: int = 30) -> tuple[dict, list]:
-    from experiments.benches import bench_datagen, bench_identification
-
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     load = os.getloadavg()[0]
@@ -30,9 +32,6 @@ def run(out_dir, n_datagen: int = 10000, n_train: int = 6000, epochs: int = 30) 
         dg = bench_datagen.main(["--n", str(n_datagen), "--naive", "40", "--workers", "2", "--json"])
     ident = bench_identification.table(seeds=2, damping="thesis")
 
-    from datagen.config import load_config
-    from datagen.generation import generate
-    from learn.training import train
 
     generate(out / "train-data", load_config("training"), n=n_train, seed=0, workers=2, progress=True)
     t0 = time.perf_counter()

@@ -1,6 +1,6 @@
 """The loop on every beam of the independent simulator's catalogue, scored per beam and per method.
 
-Run: ``python -m experiments.studies.study_beams --out out/beams [--n-pairs 40] [--train-n 20000] [--only NAME]
+Run: ``python -m experiments.benches.study_beams --out out/beams [--n-pairs 40] [--train-n 20000] [--only NAME]
 [--seed 0] [--spread KEY=VALUE ...] [--json]``
 
 For each beam of :data:`experiments.second_sim.beams.CATALOGUE` (any support, 1-12 sensors, its own band),
@@ -35,8 +35,14 @@ import json
 import sys
 import time
 from pathlib import Path
+from dataclasses import fields, replace
+import io
 
 import numpy as np
+
+from experiments.benches.bench_foreign import cli_json
+from experiments.second_sim.beams import CATALOGUE, SPREAD, Spread, simulate_beam_pairs, write_beam_pairs
+from physics.io import atomic_write_bytes, atomic_write_text
 
 __all__ = ["TARGETS", "fold", "main", "markdown", "parse_spread", "pooled", "run_beam", "score_beam", "targets"]
 
@@ -131,8 +137,6 @@ def score_beam(verdicts: list[dict], meta: dict) -> list[dict]:
 
 
 def _cli(argv: list[str]):
-    from experiments.benches.bench_foreign import cli_json
-
     return cli_json(argv)
 
 
@@ -149,10 +153,6 @@ def parse_spread(items: list[str]) -> tuple[dict, str]:
     """``KEY=VALUE`` items (a value with commas is a range) as :class:`Spread` fields, and their tag ('' if none).
 
     Raises ``ValueError`` naming the item and the expected form."""
-    from dataclasses import fields
-
-    from experiments.second_sim.beams import Spread
-
     names = {f.name for f in fields(Spread)}
     out = {}
     for item in items:
@@ -181,11 +181,6 @@ def run_beam(cb, out: Path, n_pairs: int, train_n: int, seed: int, workers: int 
     ``spread`` (fields of :class:`Spread`, named by ``tag``) draws the pairs from a changed distribution;
     ``beam_file`` (default: the simulator's ``beam.toml``, e.g. one ``discrepancy`` calibrated) drives ``generate``,
     its dataset, model and verdicts named by ``model_tag``; ``config`` is the training config ``generate`` reads."""
-    from dataclasses import replace
-
-    from experiments.second_sim.beams import SPREAD, simulate_beam_pairs, write_beam_pairs
-    from physics.io import atomic_write_text
-
     d = out / cb.name
     suffix = f"-{tag}" if tag else ""
     pairs = d / f"pairs-n{n_pairs}-s{seed}{suffix}"
@@ -324,7 +319,6 @@ def _figure(rows: list[dict], path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from physics.io import atomic_write_bytes
 
     tg = targets(rows)
     k = np.arange(len(tg))
@@ -341,7 +335,6 @@ def _figure(rows: list[dict], path: Path) -> None:
     ax.set_title("Independent pairs per beam: network vs best classical method")
     ax.legend(fontsize=8, loc="upper right", ncol=2)
     fig.tight_layout()
-    import io
 
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
@@ -350,7 +343,7 @@ def _figure(rows: list[dict], path: Path) -> None:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m experiments.studies.study_beams", description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(prog="python -m experiments.benches.study_beams", description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="out/beams")
     ap.add_argument("--n-pairs", type=int, default=40, help="independent pairs per beam (default 40)")
     ap.add_argument("--train-n", type=int, default=20000, help="specimens generated per beam (default 20000)")
@@ -361,7 +354,6 @@ def main(argv=None) -> int:
                     help="a field of the pairs' distribution (second_sim.beams.Spread), e.g. suspension_change=0")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
-    from experiments.second_sim.beams import CATALOGUE
 
     names = [c.name for c in CATALOGUE]
     if a.only is not None and a.only not in names:
@@ -388,7 +380,6 @@ def main(argv=None) -> int:
             infos.append(info)
             print(f"{cb.name}: " + ", ".join(f"{k} {_f(v, False)}" for k, v in info["timing_s"].items()),
                   file=sys.stderr)
-    from physics.io import atomic_write_text
 
     import pandas as pd
 

@@ -1,11 +1,11 @@
-"""JSON-ready values of command results (numpy arrays and scalars, complex numbers), for ``--json`` and the
-files commands write."""
+"""JSON-ready values of results (numpy arrays and scalars, complex numbers), for ``--json`` and the JSON files
+the workflows and commands write."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from physics.io import format_complex
+from physics.io.types import format_complex
 
 __all__ = ["to_jsonable"]
 

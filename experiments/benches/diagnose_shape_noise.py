@@ -1,6 +1,6 @@
 """Is the identified mode shapes' noise what limits the network on a catalogue beam? Two measurements.
 
-Run: ``python -m experiments.studies.diagnose_shape_noise --beam steel-bar-ff-12s
+Run: ``python -m experiments.benches.diagnose_shape_noise --beam steel-bar-ff-12s
 --model out/beams/steel-bar-ff-12s/model-n20000-s0 [--n 40] [--seed 0] [--factors 1 8] [--identify 6]``
 
 1. ``--identify K``: the first K pairs' baseline UFF files identified by the project's path (LSCF/LSFD,
@@ -23,6 +23,15 @@ from pathlib import Path
 
 import numpy as np
 
+from datagen.config import modal_noise_calibration
+from experiments.second_sim import beams
+from experiments.second_sim.beams import CATALOGUE
+from learn.classify import classify_many
+from learn.measured import identify_modes
+from learn.model_dir import load_model
+from physics.io import read_frf
+from physics.io.types import ModalData
+
 __all__ = ["main", "modal_input_scores", "shape_error_ratios"]
 
 
@@ -39,8 +48,6 @@ def _sigma(cal: dict, q: str, level: float, floor: float, m: int) -> np.ndarray:
 
 def _exact_modes(cb, n: int, seed: int):
     """The pairs of ``cb`` and, per pair and day, ``(omega_rad_s, modal damping 1/s, shapes at the sensors)``."""
-    from experiments.second_sim import beams
-
     captured = []
     receptance = beams.receptance
 
@@ -62,11 +69,6 @@ def _exact_modes(cb, n: int, seed: int):
 def shape_error_ratios(cb, recs, modes, k: int) -> np.ndarray:
     """(k', n_modes) identified-shape rms error over the training's calibrated shape std, baseline tests of the
     first ``k`` pairs (pairs whose identification misses a mode are left out)."""
-    from datagen.config import modal_noise_calibration
-    from experiments.second_sim import beams
-    from learn.measured import identify_modes
-    from physics.io import read_frf
-
     cal = modal_noise_calibration()
     out = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -89,11 +91,6 @@ def shape_error_ratios(cb, recs, modes, k: int) -> np.ndarray:
 
 def modal_input_scores(cb, recs, modes, model_dir, factor: float, seed: int = 11) -> dict:
     """The network on the pairs' exact modes with calibrated frequency noise and ``factor`` x calibrated shape noise."""
-    from datagen.config import modal_noise_calibration
-    from learn.classify import classify_many
-    from learn.model_dir import load_model
-    from physics.io.types import ModalData
-
     cal = modal_noise_calibration()
     model = load_model(model_dir)
     rng = np.random.default_rng(seed)
@@ -123,7 +120,7 @@ def modal_input_scores(cb, recs, modes, model_dir, factor: float, seed: int = 11
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m experiments.studies.diagnose_shape_noise",
+    ap = argparse.ArgumentParser(prog="python -m experiments.benches.diagnose_shape_noise",
                                  description=__doc__.splitlines()[0])
     ap.add_argument("--beam", required=True)
     ap.add_argument("--model", required=True, help="the beam's trained model directory (study_beams)")
@@ -132,7 +129,6 @@ def main(argv=None) -> int:
     ap.add_argument("--factors", type=float, nargs="+", default=[1.0, 8.0])
     ap.add_argument("--identify", type=int, default=6)
     a = ap.parse_args(argv)
-    from experiments.second_sim.beams import CATALOGUE
 
     cb = next((c for c in CATALOGUE if c.name == a.beam), None)
     if cb is None or not (Path(a.model) / "config.json").is_file():

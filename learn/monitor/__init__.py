@@ -1,0 +1,40 @@
+"""A monitoring series: many tests of one beam, the normal variation learnt on a baseline period, a novelty index
+per test with a cross-validated threshold (the library behind ``beam-damage monitor``).
+
+Steps, one module each:
+
+* :mod:`~learn.monitor.identification` -- one test's modes (FRFs by LSCF/LSFD, response records by SSI-cov,
+  modal data read), :func:`cached_identification` keeping the result per file in a JSON cache keyed by the
+  file's bytes and the settings;
+* :mod:`~learn.monitor.series` -- the tests in time order with their measured conditions, and whether each
+  belongs to the baseline period's series;
+* :mod:`~learn.monitor.tracking` -- the baseline period's modes (clustered, their median frequencies) and each
+  test's poles assigned to them by frequency (and MAC with 2 or more sensors), a mode missing in a test NaN there;
+* :mod:`~learn.monitor.normal_models` -- :data:`NORMAL_MODELS`, the normal variation of the features (log natural
+  frequencies): a regression on measured conditions, or a latent-variable model (PCA with factors removed, factor
+  analysis, a Gaussian mixture); each gives a squared Mahalanobis distance of a test's residual (the novelty index);
+* :mod:`~learn.monitor.alarm_threshold` -- every baseline test's index by a model that did not see it
+  (leave-one-out or k-fold) and the threshold of a false-alarm rate from a scaled F distribution fitted to them;
+* :mod:`~learn.monitor.alarms` -- :func:`monitor_series`, all of it on a series (:class:`SeriesResult` holds the
+  rows), and what changed at an alarm;
+* :mod:`~learn.monitor.verdicts` -- the competing explanations and the network's verdict of each alarm.
+"""
+
+from learn.monitor.alarm_threshold import (Threshold, held_out_novelty, minimum_baseline, missing_evidence,
+                                           threshold)
+from learn.monitor.alarms import SeriesResult, changed_text, monitor_series, what_changed
+from learn.monitor.identification import (CACHE_FORMAT, IdentificationSettings, IdentifiedModes,
+                                          cached_identification, file_key, identification_settings, identify_test,
+                                          write_cache)
+from learn.monitor.normal_models import (DEFAULT_LATENT, NORMAL_MODELS, PCA_EXPLAINED, FactorRemoval, Mixture,
+                                         PCARemoval, Regression)
+from learn.monitor.series import SeriesInput, check_series, read_conditions
+from learn.monitor.tracking import MAC_MIN, MIN_PRESENCE, ReferenceModes, reference_modes, track_modes
+from learn.monitor.verdicts import alarm_verdicts, baseline_nearest_median
+
+__all__ = ["CACHE_FORMAT", "DEFAULT_LATENT", "MAC_MIN", "MIN_PRESENCE", "NORMAL_MODELS", "PCA_EXPLAINED",
+           "alarm_verdicts", "baseline_nearest_median", "cached_identification", "changed_text", "check_series",
+           "FactorRemoval", "file_key", "held_out_novelty", "identification_settings", "IdentificationSettings",
+           "IdentifiedModes", "identify_test", "minimum_baseline", "missing_evidence", "Mixture", "monitor_series",
+           "PCARemoval", "read_conditions", "reference_modes", "ReferenceModes", "Regression", "SeriesInput",
+           "SeriesResult", "Threshold", "threshold", "track_modes", "what_changed", "write_cache"]

@@ -1,0 +1,122 @@
+"""The alarm statistics: every baseline test's novelty index by a model that did not see it (leave-one-out or
+k-fold), the evidence of missing modes, and the threshold of a false-alarm rate from a scaled F law fitted to the
+held-out indices."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["LOO_MAX", "N_FOLDS", "Threshold", "held_out_novelty", "minimum_baseline", "missing_evidence",
+           "threshold", "training_size"]
+
+#: Held-out indices by leave-one-out up to this many baseline tests, else by this many interleaved folds.
+LOO_MAX, N_FOLDS = 200, 20
+
+
+def minimum_baseline(n_features: int, n_conditions: int = 0) -> int:
+    """Fewest baseline tests for ``n_features`` features and ``n_conditions`` regressors: every held-out index
+    comes from a model fitted on the others, whose residual covariance then keeps at least 4 degrees of freedom
+    beyond the features (the F distribution of the index has a finite variance)."""
+    return n_features + n_conditions + 6
+
+
+def _folds(n: int):
+    if n <= LOO_MAX:
+        return [np.array([i]) for i in range(n)]
+    return [np.arange(k, n, N_FOLDS) for k in range(N_FOLDS)]
+
+
+def training_size(n: int) -> int:
+    """How many of ``n`` baseline tests a held-out model of :func:`held_out_novelty` is fitted on: ``n - 1`` by
+    leave-one-out, else ``n - n // N_FOLDS``."""
+    return n - (1 if n <= LOO_MAX else n // N_FOLDS)
+
+
+def missing_evidence(X, X_train) -> np.ndarray:
+    """``-2 ln P`` of each test's missing modes (NaN features of ``X``, (n, p)) under the training tests' share
+    missing them (``(count + 1) / (n_train + 2)`` per mode, independent): a mode the baseline period always held adds
+    ``2 ln(n_train + 2)`` to the index when a test lacks it, a mode often lost adds little. The features of the
+    missing modes are filled from the others (:mod:`learn.monitor.normal_models`), so the index would otherwise
+    never see a mode that a change has moved beyond its tracking tolerance."""
+    miss = ~np.isfinite(np.asarray(X, float))
+    train = ~np.isfinite(np.asarray(X_train, float))
+    log_p = np.log((train.sum(axis=0) + 1.0) / (train.shape[0] + 2.0))        # (p,)
+    return -2.0 * (miss * log_p).sum(axis=1)
+
+
+def held_out_novelty(make_model, X, C=None) -> np.ndarray:
+    """Every baseline test's novelty index (plus :func:`missing_evidence`) by a model fitted on the other
+    baseline tests (leave-one-out up to :data:`LOO_MAX` tests, else :data:`N_FOLDS` interleaved folds): the index of
+    a test is never computed by a model that saw it."""
+    X = np.asarray(X, float)
+    out = np.empty(len(X))
+    for held in _folds(len(X)):
+        train = np.setdiff1d(np.arange(len(X)), held)
+        model = make_model().fit(X[train], None if C is None else C[train])
+        out[held] = (model.novelty(X[held], None if C is None else C[held])
+                     + missing_evidence(X[held], X[train]))
+    return out
+
+
+@dataclass(frozen=True)
+class Threshold:
+    """The novelty threshold of a false-alarm rate and how it was set.
+
+    ``value = max(law_value, empirical_quantile)``: ``law_value = scale * F.ppf(1 - rate; dof_num, dof_den)``,
+    the held-out indices taken to follow ``scale * F(dof_num, dof_den)`` (the exact law of a held-out squared
+    Mahalanobis distance with Gaussian residuals, Hotelling's prediction region, up to the scale) with the scale
+    fitted to them by maximum likelihood; ``empirical_quantile`` the held-out indices' own ``1 - rate`` quantile
+    (linear interpolation).
+    """
+
+    value: float
+    rate: float
+    law_value: float
+    scale: float
+    dof_num: int
+    dof_den: int
+    empirical_quantile: float
+    held_out_rate: float
+
+    def to_dict(self) -> dict:
+        return {"value": self.value, "false_alarm_rate": self.rate,
+                "method": "the larger of a scaled F law fitted to the held-out baseline indices (maximum likelihood) "
+                          "and their empirical quantile", "law_value": self.law_value, "scale": self.scale,
+                "dof": [self.dof_num, self.dof_den], "empirical_quantile_of_held_out": self.empirical_quantile,
+                "held_out_false_alarm_rate": self.held_out_rate}
+
+
+def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: int = 0) -> Threshold:
+    """The threshold of the novelty index at false-alarm rate ``rate`` from the held-out indices of the baseline
+    tests (:func:`held_out_novelty`), each from a model fitted on ``n_train`` tests.
+
+    A small baseline period cannot give a 1 % quantile empirically (it needs 100 tests to reach it, and more to
+    trust it); the F law of a held-out squared Mahalanobis distance, ``d (n+1)(n-1) / (n (n-d)) F(d, n-d)`` for
+    ``d`` features and ``n`` training tests, extrapolates its tail from all of them. Its scale is fitted to the
+    held-out indices (one parameter: a residual that is not Gaussian, or a model that leaves some variation,
+    widens it) rather than taken from the formula. The law's tail is that of Gaussian residuals; an environment
+    whose effect is bounded but not linear (a mass re-placed along a curved mode shape) gives held-out indices
+    with a heavier tail, which their own quantile shows: the threshold is the larger of the two (on a baseline of
+    fewer than ``1 / rate`` tests that quantile lies between its two largest indices).
+    """
+    from scipy import optimize, stats  # scipy.stats/optimize: heavy, only where a threshold is fitted
+
+    s = np.asarray(held_out, float)
+    s = s[np.isfinite(s)]
+    d1 = max(int(dof_num), 1)
+    d2 = max(int(n_train) - d1 - int(n_conditions), 1)
+    law = stats.f(d1, d2)
+    pos = np.maximum(s, 1e-300)
+
+    def nll(log_c):
+        return -np.sum(law.logpdf(pos / math.exp(log_c))) + pos.size * log_c
+
+    start = math.log(max(np.median(pos) / law.median(), 1e-300))
+    c = math.exp(optimize.minimize_scalar(nll, bracket=(start - 1, start + 1)).x)
+    law_value = float(c * law.ppf(1 - rate))
+    empirical = float(np.quantile(s, 1 - rate)) if s.size else math.nan
+    value = max(law_value, empirical) if s.size else law_value
+    return Threshold(value, rate, law_value, c, d1, d2, empirical, float(np.mean(s > value)))

@@ -1,0 +1,202 @@
+"""A series monitored: every test identified (cached), the baseline period's modes tracked, the normal variation
+learnt on the baseline period and every test scored against the cross-validated threshold; what changed at an
+alarm, mode by mode."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from learn.monitor.identification import IdentificationSettings, cached_identification, write_cache
+from learn.monitor.normal_models import DEFAULT_LATENT, NORMAL_MODELS
+from learn.monitor.series import SeriesInput, check_series
+from learn.monitor.alarm_threshold import (Threshold, held_out_novelty, minimum_baseline, missing_evidence, threshold,
+                                     training_size)
+from learn.monitor.tracking import MIN_PRESENCE, ReferenceModes, reference_modes, track_modes
+from physics.errors import BeamDamageError, ConfigError
+
+__all__ = ["SeriesResult", "changed_text", "monitor_series", "what_changed"]
+
+
+@dataclass
+class SeriesResult:
+    """A monitored series.
+
+    Attributes
+    ----------
+    rows : list of dict              one per test (``file``, ``time``, ``baseline``, ``alarm``, ``novelty``,
+                                     ``threshold``, ``frequencies_hz``, ``mode_z_scores``, ``change_pct``,
+                                     ``identified``, ``error``, ``missing_modes``, ``conditions``)
+    reference : ReferenceModes
+    frequencies_hz : ndarray (n, m)  tracked frequencies (NaN where missing)
+    expected_hz : ndarray (n, m)     the baseline's frequencies at each test's conditions
+    novelty : ndarray (n,)           NaN for tests not identified
+    threshold : Threshold
+    model : the fitted normal-variation estimator
+    normal_variation : dict          ``model``, its factors or regression, ``per_mode_std`` (relative)
+    sigma : ndarray (m,)             per-mode relative std of the normal variation (what the explanations weigh)
+    tests : list of IdentifiedModes or None
+    """
+
+    rows: list
+    reference: ReferenceModes
+    frequencies_hz: np.ndarray
+    expected_hz: np.ndarray
+    novelty: np.ndarray
+    threshold: Threshold
+    model: object
+    normal_variation: dict
+    sigma: np.ndarray
+    tests: list = field(repr=False, default_factory=list)
+    series: SeriesInput | None = None
+
+    @property
+    def first_alarm(self) -> int | None:
+        return next((i for i, r in enumerate(self.rows) if r["alarm"] and not r["baseline"]), None)
+
+
+def monitor_series(series: SeriesInput, n_baseline: int, settings: IdentificationSettings, cache_dir=None,
+                   false_alarm_rate: float = 0.01, normal_model: str | None = None, progress: bool = True
+                   ) -> SeriesResult:
+    """Monitor a series: identify every test (cached), track the baseline period's modes, learn the normal
+    variation on the baseline period, and score every test against the cross-validated threshold.
+
+    ``normal_model``: a key of :data:`NORMAL_MODELS`; default ``"regression"`` with measured conditions, else
+    :data:`DEFAULT_LATENT`. Raises :class:`BeamDamageError` on a baseline that cannot carry the model (too few
+    tests: the message names the minimum; a baseline test of another kind, band or beam).
+    """
+    n = len(series.files)
+    C = series.conditions
+    normal_model, q = _checked_request(series, n_baseline, false_alarm_rate, normal_model)
+    tests, errors, pending = _identified(series, n_baseline, settings, cache_dir, progress)
+    base = [t for t in tests[:n_baseline] if t is not None]
+    ref = reference_modes(tests[:n_baseline])
+    m = ref.frequencies_hz.size
+    if m == 0:
+        raise BeamDamageError(f"no mode is found in at least {MIN_PRESENCE:.0%} of the {len(base)} identified "
+                              "baseline tests")
+    need = minimum_baseline(m, q)
+    if len(base) < need:
+        raise BeamDamageError(f"--baseline-tests {n_baseline}: {len(base)} identified baseline tests for {m} tracked "
+                              f"modes{f' and {q} conditions' if q else ''}; at least {need} are needed "
+                              f"(modes + conditions + 6)")
+    write_cache(pending)                                    # the series is accepted: identifications kept
+    F, Z, MAC, _ = track_modes(tests, ref)
+    X = np.log(F)
+    ok = np.array([t is not None for t in tests]) & np.isfinite(X).any(axis=1)
+    if q:
+        ok &= np.isfinite(C).all(axis=1)
+    for i in np.flatnonzero(~ok):
+        if errors[i] is None:
+            errors[i] = ("no tracked mode identified" if tests[i] is not None else "not identified") if not q or \
+                np.isfinite(C[i]).all() else "conditions not measured"
+    b_idx = np.flatnonzero(ok[:n_baseline])
+    Cq = C if q else None
+    model = NORMAL_MODELS[normal_model](m, q).fit(X[b_idx], None if Cq is None else Cq[b_idx])
+    held = held_out_novelty(model.with_choices, X[b_idx], None if Cq is None else Cq[b_idx])
+    thr = threshold(held, false_alarm_rate, model.dof_, training_size(len(b_idx)), q)
+    novelty = np.full(n, np.nan)
+    rest = np.flatnonzero(ok)
+    rest = rest[rest >= n_baseline]
+    if rest.size:
+        novelty[rest] = (model.novelty(X[rest], None if Cq is None else Cq[rest])
+                         + missing_evidence(X[rest], X[b_idx]))
+    novelty[b_idx] = held
+    # per-mode normal variation: the residual about what the model explains (conditions, removed factors)
+    Xb = X[b_idx]
+    Cf = None if Cq is None else np.where(np.isfinite(Cq), Cq, np.nanmedian(Cq[b_idx], axis=0))
+    expected_log = np.full(X.shape, np.nan)
+    have = np.isfinite(X).any(axis=1)
+    expected_log[have] = model.expected(X[have], None if Cf is None else Cf[have])
+    resid_b = Xb - expected_log[b_idx]
+    sigma = np.nanstd(resid_b, axis=0, ddof=1)
+    z = (X - expected_log) / sigma
+    change = 100 * (np.exp(X - expected_log) - 1)
+    describe = model.describe(series.condition_names)
+    normal = {**describe, "features": [f"ln f{r + 1}" for r in range(m)],
+              "per_mode_std": sigma.tolist(), "per_mode_std_pct": (100 * sigma).tolist(),
+              "reference_frequencies_hz": ref.frequencies_hz.tolist(), "tracking_tolerance": ref.tolerance.tolist(),
+              "baseline_tests_used": int(b_idx.size),
+              "missing_entries": "imputed by their conditional mean given the test's other features under the "
+                                 "baseline's Gaussian (regression: about the conditions' prediction)"}
+    rows = []
+    for i in range(n):
+        mode_missing = [r + 1 for r in range(m) if not np.isfinite(F[i, r])] if tests[i] is not None else []
+        rows.append({
+            "file": series.files[i], "time": series.times[i], "time_value": float(series.time_values[i]),
+            "baseline": i < n_baseline, "identified": bool(ok[i]), "error": errors[i],
+            "alarm": bool(ok[i] and novelty[i] > thr.value), "novelty": _num(novelty[i]), "threshold": thr.value,
+            "frequencies_hz": [_num(v) for v in F[i]], "damping_ratios": [_num(v) for v in Z[i]],
+            "mode_z_scores": [_num(v) for v in z[i]], "change_pct": [_num(v) for v in change[i]],
+            "mac": [_num(v) for v in MAC[i]] if ref.shapes is not None else None,
+            "missing_modes": mode_missing,
+            "conditions": None if C is None else dict(zip(series.condition_names, map(_num, C[i]))),
+        })
+    return SeriesResult(rows, ref, F, np.exp(expected_log), novelty, thr, model, normal, sigma, tests, series)
+
+
+def _checked_request(series: SeriesInput, n_baseline: int, false_alarm_rate: float, normal_model: str | None):
+    """``(normal model, number of conditions it regresses on)`` of a request, or the one-line error of an argument
+    or a baseline period that cannot carry it before any test is identified."""
+    n = len(series.files)
+    if not 0 < false_alarm_rate < 0.5:
+        raise ConfigError(f"--false-alarm-rate {false_alarm_rate:g}: must lie in (0, 0.5)")
+    if not 0 < n_baseline <= n:
+        raise ConfigError(f"--baseline-tests {n_baseline}: must be between 1 and the {n} tests given")
+    C = series.conditions
+    if normal_model is None:
+        normal_model = "regression" if C is not None else DEFAULT_LATENT
+    if normal_model not in NORMAL_MODELS:
+        raise ConfigError(f"normal model {normal_model!r}: expected one of {', '.join(NORMAL_MODELS)}")
+    if normal_model == "regression" and C is None:
+        raise ConfigError("the regression on measured conditions needs --conditions CSV with condition columns")
+    q = 0 if C is None or normal_model != "regression" else C.shape[1]
+    if n_baseline < minimum_baseline(1, q):
+        raise BeamDamageError(f"--baseline-tests {n_baseline}: at least {minimum_baseline(1, q)} baseline tests are "
+                              f"needed even for one mode ({minimum_baseline(1, q)} = modes + conditions + 6)")
+    if q and not np.all(np.isfinite(C[:n_baseline])):
+        bad = series.files[int(np.flatnonzero(~np.isfinite(C[:n_baseline]).all(axis=1))[0])]
+        raise BeamDamageError(f"conditions: baseline test {bad} lacks a measured condition ("
+                              f"{', '.join(series.condition_names)}); the regression needs them on every baseline "
+                              "test")
+    return normal_model, q
+
+
+def _identified(series: SeriesInput, n_baseline: int, settings: IdentificationSettings, cache_dir, progress: bool):
+    """``(tests, errors, pending cache entries)``: every test identified (or read from the cache), a test that
+    does not belong to the baseline period's series None with the reason as its error."""
+    from tqdm import tqdm
+
+    tests, errors, pending = [], [], []
+    for path in tqdm(series.files, desc="identify", unit="test", disable=not progress, leave=False):
+        t, err, _ = cached_identification(path, settings, cache_dir, pending)
+        tests.append(t)
+        errors.append(err)
+    for i, why in enumerate(check_series(tests, n_baseline, series.files)):
+        if why:
+            tests[i], errors[i] = None, why
+    return tests, errors, pending
+
+
+def _num(v):
+    v = float(v)
+    return v if math.isfinite(v) else None
+
+
+def what_changed(row: dict, sigma) -> list[dict]:
+    """An alarmed test's modes by how far they lie from the baseline population, farthest first: ``mode``
+    (1-based), ``change_pct`` and ``z`` (baseline standard deviations)."""
+    out = [{"mode": r + 1, "frequency_hz": f, "change_pct": c, "z": z, "baseline_std_pct": 100 * float(s)}
+           for r, (f, c, z, s) in enumerate(zip(row["frequencies_hz"], row["change_pct"], row["mode_z_scores"],
+                                                 sigma))]
+    return sorted(out, key=lambda d: -abs(d["z"]) if d["z"] is not None else 0.0)
+
+
+def changed_text(changes: list[dict], top: int = 3) -> str:
+    """E.g. ``mode 2 -3.1 % (-12.4 sd), mode 4 -1.0 % (-4.0 sd)``."""
+    parts = [f"mode {d['mode']} {d['change_pct']:+.2f} % ({d['z']:+.1f} sd)" for d in changes[:top]
+             if d["z"] is not None]
+    missing = [str(d["mode"]) for d in changes if d["z"] is None]
+    return ", ".join(parts) + (f"; mode(s) {', '.join(missing)} not found" if missing else "")

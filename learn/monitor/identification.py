@@ -1,0 +1,220 @@
+"""One test's modes, identified once: FRFs by LSCF/LSFD, response records by SSI-cov, modal data as read; the
+result kept per file in a JSON cache keyed by the file's bytes and the identification settings."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from learn.measured import IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, identify_modes
+from physics.errors import BeamDamageError
+from physics.identification import (DEFAULT_OUTPUT_ONLY, holds_response_records, identify_records,
+                                    read_response_records)
+from physics.identification.measured import read_measured_frf
+from physics.io import MODAL, TIME, atomic_write_text, format_complex, modal_or_frf, prepare_measured, read
+from physics.io.inputs import check_input_file
+from physics.modal import modal_parameters, undamped_modes
+
+__all__ = ["CACHE_FORMAT", "IdentificationSettings", "IdentifiedModes", "cached_identification", "file_key",
+           "identification_settings", "identify_test", "write_cache"]
+
+#: Format tag of a cache entry (a change of the identification or of the entry's fields changes it).
+CACHE_FORMAT = "beam-damage-monitor-cache/1"
+
+
+@dataclass(frozen=True)
+class IdentificationSettings:
+    """How every test of a series is identified: the band (Hz; None: the file's), the modes kept (None: all
+    found) and the highest model order of LSCF (FRFs) and of SSI-cov (response records: its state model spends
+    states on the excitation's colour and the sensor noise; on the 60-s records of the independent monitoring series
+    a 10-Hz mode at the bottom of a 5-400 Hz band is found in half of the tests at order 40, in all at 80)."""
+
+    band_hz: tuple | None = None
+    n_modes: int | None = None
+    max_order: int = 40
+    records_max_order: int = 80
+
+    def to_dict(self) -> dict:
+        return {"band_hz": None if self.band_hz is None else [float(b) for b in self.band_hz],
+                "n_modes": self.n_modes, "max_order": self.max_order, "records_max_order": self.records_max_order}
+
+
+@dataclass(frozen=True)
+class IdentifiedModes:
+    """The modes identified in one test.
+
+    Attributes
+    ----------
+    kind : str                  ``"frf"``, ``"response records"`` or ``"modal"``
+    method : str                the identification (``"lscf"``, ``"ssi"``, or ``"file"`` for modal data)
+    frequencies_hz : ndarray (k,)
+    damping_ratios : ndarray (k,)
+    shapes : ndarray complex (s, k) or None
+    dofs : tuple of str         rows of ``shapes``
+    references : tuple of str   reference DOFs of FRFs (empty otherwise)
+    band_hz : (lo, hi) or None  the frequency range of the data (FRF lines, or 0 to Nyquist of records)
+    line_hz : float or None     the spacing of the FRF lines (records: 1 / duration)
+    """
+
+    kind: str
+    method: str
+    frequencies_hz: np.ndarray
+    damping_ratios: np.ndarray
+    shapes: np.ndarray | None
+    dofs: tuple = ()
+    references: tuple = ()
+    band_hz: tuple | None = None
+    line_hz: float | None = None
+
+    def to_dict(self) -> dict:
+        return {"kind": self.kind, "method": self.method, "frequencies_hz": self.frequencies_hz.tolist(),
+                "damping_ratios": self.damping_ratios.tolist(),
+                "shapes": None if self.shapes is None else [[format_complex(z) for z in row] for row in self.shapes],
+                "dofs": list(self.dofs), "references": list(self.references),
+                "band_hz": None if self.band_hz is None else list(self.band_hz), "line_hz": self.line_hz}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "IdentifiedModes":
+        shapes = d["shapes"]
+        return cls(d["kind"], d["method"], np.asarray(d["frequencies_hz"], float),
+                   np.asarray(d["damping_ratios"], float),
+                   None if shapes is None else np.array([[complex(z) for z in row] for row in shapes], complex)
+                   .reshape(len(shapes), len(d["frequencies_hz"])),
+                   tuple(d["dofs"]), tuple(d["references"]), None if d["band_hz"] is None else tuple(d["band_hz"]),
+                   d["line_hz"])
+
+
+def identification_settings(band_hz=None, beam=None, model=None) -> IdentificationSettings:
+    """The identification of a series: over ``band_hz`` (Hz) when given; else a trained model's (its test band,
+    or up to :data:`learn.measured.IDENTIFICATION_BAND_FACTOR` times its nominal mode 4, the 4 lowest modes: what
+    ``classify`` identifies); else a beam's (:class:`physics.beam.Beam`: its ``band_hz``, or the same rule on its
+    nominal modes); else every mode LSCF finds over each file's band."""
+    if band_hz is not None:
+        return IdentificationSettings(tuple(float(b) for b in band_hz))
+    if model is not None:
+        test = model.beam.test
+        if test is not None:
+            k = model.beam.n_modes + 2                       # spare poles, as classify identifies another test
+            return IdentificationSettings(tuple(test.band_hz), k, max(40, 10 * k))
+        fmax = IDENTIFICATION_BAND_FACTOR * float(model.sensitivity.frequencies_hz[3])
+        return IdentificationSettings((0.0, fmax), IDENTIFICATION["n_modes"])
+    if beam is not None:
+        if beam.band_hz is not None:
+            return IdentificationSettings(tuple(beam.band_hz))
+
+        fe = beam.fe_model(40)
+        w = undamped_modes(np.asarray(fe.M), np.asarray(fe.K))[0]
+        f4 = float(np.sort(np.abs(w))[beam.support.rigid_body_modes + 3]) / (2 * np.pi)
+        return IdentificationSettings((0.0, IDENTIFICATION_BAND_FACTOR * f4), IDENTIFICATION["n_modes"])
+    return IdentificationSettings()
+
+
+def _modes_of(eigenvalues, shapes):
+
+    lam = np.asarray(eigenvalues, complex)
+    f, z = modal_parameters(lam)
+    order = np.argsort(f)
+    return (np.asarray(f, float)[order], np.asarray(z, float)[order],
+            None if shapes is None else np.asarray(shapes, complex)[:, order])
+
+
+def identify_test(path, settings: IdentificationSettings) -> IdentifiedModes:
+    """One test's modes: an FRF file by LSCF/LSFD (:func:`learn.measured.identify_modes`, the identification
+    ``classify`` runs), response records without a force by SSI-cov (as ``identify``), modal data as read.
+
+    Raises :class:`BeamDamageError` (one line naming the file) when the file cannot be read or identified.
+    """
+
+    path = str(path)
+    if modal_or_frf(path) == MODAL:
+        md = prepare_measured(read(path, MODAL)).data
+        f, z, shapes = _modes_of(md.eigenvalues, md.eigenvectors)
+        return IdentifiedModes("modal", "file", f, z, shapes, tuple(md.dofs or ()))
+    band = settings.band_hz
+    if holds_response_records(path) and not read(path, TIME).forces:
+        rec = read_response_records(path)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                ident = identify_records(rec, DEFAULT_OUTPUT_ONLY, band, settings.n_modes,
+                                         settings.records_max_order)
+        except (np.linalg.LinAlgError, RuntimeError, ValueError) as exc:
+            raise BeamDamageError(f"{path}: SSI-cov identification failed ({exc})") from None
+        fs = rec.sampling_frequency_hz
+        f, z, shapes = _modes_of(ident.estimate.eigenvalues, ident.estimate.shapes)
+        return IdentifiedModes("response records", DEFAULT_OUTPUT_ONLY, f, z, shapes, tuple(rec.dofs), (),
+                         (0.0, fs / 2), fs / rec.signals.shape[1])
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        frf = prepare_measured(read_measured_frf(path)).data
+    lines = np.asarray(frf.frequency_hz, float)
+    fmin, fmax = (0.0, None) if band is None else band
+    if band is not None and (lines[-1] <= fmin or lines[0] >= fmax):
+        raise BeamDamageError(f"{path}: its lines {lines[0]:g}-{lines[-1]:g} Hz miss the band {fmin:g}-{fmax:g} Hz")
+    md = identify_modes(frf, fmax, path, settings.n_modes, fmin, settings.max_order)
+    f, z, shapes = _modes_of(md.eigenvalues, md.eigenvectors)
+    line = float(np.median(np.diff(lines))) if lines.size > 1 else None
+    return IdentifiedModes("frf", "lscf", f, z, shapes, tuple(md.dofs), tuple(frf.reference_dofs),
+                     (float(lines[0]), float(lines[-1])), line)
+
+
+def file_key(path, settings: IdentificationSettings) -> str:
+    """SHA-256 of the file's bytes, the identification settings and :data:`CACHE_FORMAT`."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    h.update(json.dumps([CACHE_FORMAT, settings.to_dict()], sort_keys=True).encode())
+    return h.hexdigest()
+
+
+def cached_identification(path, settings: IdentificationSettings, cache_dir=None, pending: list | None = None):
+    """``(IdentifiedModes or None, error text or None, from_cache)`` of one test.
+
+    With ``cache_dir``, the result (or the error of a file that cannot be identified) is read from
+    ``cache_dir/<key>.json`` (:func:`file_key`) or, once identified, written there atomically; with ``pending`` (a
+    list) the entry to write is appended to it as ``(path, text)`` instead (written when the series is accepted).
+    """
+    try:
+        check_input_file(path, "npz", BeamDamageError, "a test file")
+        key = file_key(path, settings) if cache_dir else None
+    except (BeamDamageError, OSError) as exc:
+        return None, _error_text(exc, path), False
+    entry = Path(cache_dir) / f"{key}.json" if cache_dir else None
+    if entry is not None and entry.is_file():
+        try:
+            d = json.loads(entry.read_text())
+            if d.get("format") == CACHE_FORMAT:
+                return (None if d["modes"] is None else IdentifiedModes.from_dict(d["modes"])), d["error"], True
+        except (ValueError, KeyError, TypeError):
+            pass                                            # a damaged entry: identified again
+    try:
+        modes, error = identify_test(path, settings), None
+    except (BeamDamageError, OSError) as exc:
+        modes, error = None, _error_text(exc, path)
+    if entry is not None:
+        text = json.dumps({"format": CACHE_FORMAT, "file": str(path), "settings": settings.to_dict(),
+                           "modes": None if modes is None else modes.to_dict(), "error": error})
+        if pending is None:
+            write_cache([(entry, text)])
+        else:
+            pending.append((entry, text))
+    return modes, error, False
+
+
+def write_cache(entries) -> None:
+    """Write cache entries ``(path, text)`` atomically."""
+    for path, text in entries:
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(path, text)
+
+
+def _error_text(exc, path) -> str:
+    text = " ".join(str(getattr(exc, "strerror", None) or exc).split())
+    return text if str(path) in text else f"{path}: {text}"

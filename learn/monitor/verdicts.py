@@ -1,0 +1,136 @@
+"""The verdicts of a series' alarms: with a trained model, the competing explanations weighed with the measured
+per-mode scatter and the network's verdict against the baseline period."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from learn.classify import classify_many
+from learn.hypotheses import FREQUENCY_CHANGE_STD, explain_many
+from learn.measured import modal_pair, on_model_dofs, pair_modes_by_frequency
+from learn.monitor.alarms import SeriesResult, changed_text, what_changed
+from learn.monitor.tracking import shapes_at, track_modes
+from physics.errors import BeamDamageError
+from physics.io import ModalData
+from physics.modal import eigenvalues_from_modal
+
+__all__ = ["alarm_verdicts", "baseline_nearest_median"]
+
+
+def _modal_data(freqs_hz, damping, shapes, dofs):
+
+    keep = np.isfinite(freqs_hz)
+    z = np.where(np.isfinite(damping), damping, 0.01)[keep]
+    return ModalData(eigenvalues_from_modal(np.asarray(freqs_hz)[keep], z),
+                     None if shapes is None else np.asarray(shapes)[:, keep], tuple(dofs) if shapes is not None else ())
+
+
+def _test_shapes(result: SeriesResult, i: int, cols) -> np.ndarray | None:
+    ref = result.reference
+    t = result.tests[i]
+    S = shapes_at(t, ref.dofs) if (t is not None and ref.shapes is not None) else None
+    if S is None:
+        return None
+    out = np.full((S.shape[0], cols.size), np.nan + 0j)
+    have = cols >= 0
+    out[:, have] = S[:, cols[have]]
+    return out
+
+
+def baseline_nearest_median(result: SeriesResult) -> int:
+    """The baseline test whose frequencies lie nearest the baseline's (smallest sum of squared z-scores among those
+    holding every reference mode; else the one holding most)."""
+    best, key = None, None
+    for i, r in enumerate(result.rows):
+        if not (r["baseline"] and r["identified"]):
+            continue
+        z = np.array([np.nan if v is None else v for v in r["mode_z_scores"]], float)
+        k = (-int(np.isfinite(z).sum()), float(np.nansum(z**2)))
+        if key is None or k < key:
+            best, key = i, k
+    return best
+
+
+def alarm_verdicts(result: SeriesResult, model=None, beam_x_m=None) -> dict:
+    """Per alarmed test after the baseline period (row index -> dict): what changed mode by mode against the
+    baseline population (``what_changed``, ``summary``), and with a trained model the competing explanations
+    weighed with the measured per-mode scatter (``hypotheses``, ``hypotheses_summary``, ``frequency_change_std``)
+    and the network's verdict against the baseline period (``network``, :func:`_network_verdicts`)."""
+    alarms = [i for i, r in enumerate(result.rows) if r["alarm"] and not r["baseline"]]
+    changed = {i: what_changed(result.rows[i], result.sigma) for i in alarms}
+    out = {i: {"what_changed": changed[i], "summary": changed_text(changed[i]), "hypotheses": None,
+               "hypotheses_summary": None, "frequency_change_std": None, "network": None,
+               "network_baselines": None, "network_baseline": None, "network_error": None} for i in alarms}
+    if model is None or not alarms:
+        return out
+
+    ref = result.reference
+    sens = model.sensitivity
+    n_all = len(model.beam.modes)
+    which = pair_modes_by_frequency(ref.frequencies_hz, sens.frequencies_hz[:n_all])
+    sigma_model = np.full(n_all, FREQUENCY_CHANGE_STD)
+    sigma_model[which[which >= 0]] = result.sigma[which >= 0]
+    _, _, _, cols = track_modes(result.tests, ref)
+    Zb = np.array([[np.nan if v is None else v for v in r["damping_ratios"]] for r in result.rows
+                   if r["baseline"] and r["identified"]], float)
+    base = _modal_data(ref.frequencies_hz, np.nanmedian(Zb, axis=0), ref.shapes, ref.dofs)
+    try:
+        base_m = on_model_dofs(base, model.beam, beam_x_m, "the baseline median")[0]
+        pairs, idx = [], []
+        for i in alarms:
+            r = result.rows[i]
+            f = result.frequencies_hz[i] * ref.frequencies_hz / result.expected_hz[i]   # at the baseline's conditions
+            cur = _modal_data(f, np.array([np.nan if v is None else v for v in r["damping_ratios"]], float),
+                              _test_shapes(result, i, cols[i]) if ref.shapes is not None else None, ref.dofs)
+            cur_m = on_model_dofs(cur, model.beam, beam_x_m, r["file"])[0]
+            pairs.append(modal_pair(base_m, cur_m, model.beam, sens.frequencies_hz, ("baseline median", r["file"])))
+            idx.append(i)
+        for i, e in zip(idx, explain_many(model, pairs, sigma_model)):
+            out[i].update(e)
+    except BeamDamageError as exc:
+        for i in alarms:
+            out[i]["hypotheses_summary"] = f"no explanations: {exc}"
+    out = _network_verdicts(result, model, beam_x_m, alarms, out)
+    return out
+
+
+def _network_verdicts(result: SeriesResult, model, beam_x_m, alarms: list, out: dict) -> dict:
+    """The network's verdicts of the alarms (``network``) by :func:`learn.classify.classify_many` against the
+    whole baseline period (its scatter the normal variation; ``network_baselines``: how many tests), else, when
+    classify refuses that, against the baseline test nearest the baseline median (``network_baseline``)."""
+
+    base = [i for i, r in enumerate(result.rows) if r["baseline"] and r["identified"]]
+    nearest = baseline_nearest_median(result)
+    if not base:
+        return out
+
+    def md(i):
+        t = result.tests[i]
+        return on_model_dofs(_modal_data(t.frequencies_hz, t.damping_ratios, t.shapes, t.dofs), model.beam, beam_x_m,
+                             result.rows[i]["file"])[0]
+
+    keys = ("damaged", "probability_damaged", "location_x_m", "location_zone", "hinge_flexibility", "depth_m",
+            "verdict_from", "in_distribution", "out_of_distribution_reasons", "hypotheses_summary", "warnings")
+    methods = [None if t is None else t.method if t.method in ("lscf", "ssi") else None for t in result.tests]
+    rate = result.threshold.rate
+
+    def run(group, baselines):
+        names = [result.rows[i]["file"] for i in (*baselines, *group)]
+        vs = classify_many(model, [md(i) for i in baselines], [md(i) for i in group], names=names,
+                           methods=[methods[i] for i in (*baselines, *group)], false_alarm_rate=rate)
+        for i, v in zip(group, vs):
+            out[i].update(network={k: v.get(k) for k in keys}, network_baselines=len(baselines),
+                          network_baseline=result.rows[baselines[0]]["file"] if len(baselines) == 1 else None)
+
+    for baselines in (base, [nearest]):
+        try:
+            run(alarms, baselines)                           # one network call for every alarm
+            return out
+        except BeamDamageError:
+            pass
+    for i in alarms:                                         # one alarm's error apart
+        try:
+            run([i], [nearest])
+        except BeamDamageError as exc:
+            out[i].update(network_error=str(exc), network_baseline=result.rows[nearest]["file"])
+    return out
