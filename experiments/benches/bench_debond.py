@@ -31,6 +31,7 @@ from pathlib import Path
 import pandas as pd
 
 from experiments.benches.bench_foreign import cli_json
+from experiments.studies.doc_tables import write_table
 
 __all__ = ["classify_pairs", "confusion", "main", "markdown"]
 
@@ -116,8 +117,6 @@ def main(argv=None) -> int:
             if s["change"].startswith("debond") and "cannot be told apart" in (s["summary"] or ""):
                 print(f"{s['change']} at x = {s['x_m']:.3f} m, size {s['size']:.3g}: {s['summary']}")
     if a.docs:
-        from experiments.studies.doc_tables import write_table
-
         write_table("datasets.md", "debond", markdown(rows, names))
     return 0
 

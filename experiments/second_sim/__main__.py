@@ -14,6 +14,7 @@ import numpy as np
 from experiments.second_sim.beams import CATALOGUE, simulate_beam_pairs, write_beam_pairs
 from experiments.second_sim.bolted import MASS_KG, write_bolted_test, write_mass_change_pairs
 from experiments.second_sim.effects import effect_cases, write_effect_cases
+from experiments.second_sim.kind_pairs import CHANGES, simulate_kind_pairs
 from experiments.second_sim.pairs import simulate_pairs, write_pairs
 from experiments.second_sim.series import SLIT_SIZES, SeriesConfig, simulate_series, write_series
 
@@ -99,9 +100,6 @@ def main(argv=None) -> int:
             out = write_pairs(simulate_pairs(args.set_name, args.n, args.seed, freq_hz, args.mode4_drop), args.out)
             what = f"{args.n} pairs of set {args.set_name}"
         elif args.command == "kinds":
-            from experiments.second_sim.kind_pairs import CHANGES, simulate_kind_pairs
-            from experiments.second_sim.pairs import write_pairs
-
             changes = tuple(args.changes or CHANGES)
             if args.n < 1 or not set(changes) <= set(CHANGES):
                 raise ValueError(f"--n must be >= 1 and --changes some of {' '.join(CHANGES)}, got {args.n} and "

@@ -9,7 +9,9 @@ import pytest
 from datagen.config import DEFAULTS, merge
 from datagen.damage import DAMAGE_MODELS, damage_model
 from datagen.damage.debond import debond_ei_loss, debond_section_ei
-from datagen.pipeline import build_setup, draw_batch, get_setup, simulate_batch
+from datagen.batch_inputs import draw_batch
+from datagen.pipeline import simulate_batch
+from datagen.setup import build_setup, get_setup
 from datagen.specimen import SectionLayout
 from experiments.second_sim.layered import Sandwich, composite_ei, debond_ei, face_modulus_for, \
     layered_frequencies_hz, layered_matrices, lowest_modes
