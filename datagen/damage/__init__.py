@@ -57,6 +57,7 @@ from typing import Protocol
 
 import numpy as np
 
+from datagen.damage.debond import Debond
 from datagen.damage.mass_change import MassChange
 from datagen.damage.slit import Slit
 from physics.errors import ConfigError
@@ -102,6 +103,7 @@ class DamageModel(Protocol):
 DAMAGE_MODELS: dict[str, DamageModel] = {
     "slit": Slit(),
     "mass_change": MassChange(),
+    "debond": Debond(),
 }
 
 DEFAULT_KIND = "slit"

@@ -4,10 +4,11 @@ It shares no code with ``physics``, ``datagen`` or ``learn`` (only numpy, scipy,
 pyuff and the standard library): a fine-mesh Euler-Bernoulli/Timoshenko
 beam with springs at both ends (:mod:`.fem`), damping, FRFs and a measurement chain
 (:mod:`.response`), UFF/JSON writers (:mod:`.writers`), specimen pairs with
-slits (:mod:`.pairs`), hidden-effect cases (:mod:`.effects`) and a catalogue of beams on
+slits (:mod:`.pairs`), a layered sandwich beam with face-core debonds (:mod:`.layered`) and pairs with a debond, a
+slit or a mass (:mod:`.kind_pairs`), hidden-effect cases (:mod:`.effects`) and a catalogue of beams on
 every support with their own sensors and bands (:mod:`.beams`), a steel cantilever with bolted masses
 (:mod:`.bolted`) and a monitoring series of one cantilever (:mod:`.series`).
-``python -m experiments.second_sim pairs|effects|beams|bolted|series`` writes them.
+``python -m experiments.second_sim pairs|kinds|effects|beams|bolted|series`` writes them.
 
 The names below load on first use (the CLI limits BLAS threads before numpy loads).
 """
@@ -19,6 +20,8 @@ _API = {
     "assemble": "fem", "modes": "fem",
     "Damping": "response", "Noise": "response", "rayleigh_for": "response", "receptance": "response",
     "complex_modes": "response", "measure": "response",
+    "Sandwich": "layered", "layered_assembled": "layered", "layered_frequencies_hz": "layered",
+    "CHANGES": "kind_pairs", "simulate_kind_pairs": "kind_pairs",
     "PairRecord": "pairs", "PairSet": "pairs", "PAIR_SETS": "pairs", "simulate_pairs": "pairs",
     "write_pairs": "pairs",
     "CATALOGUE": "beams", "CatalogueBeam": "beams", "simulate_beam_pairs": "beams", "write_beam_pairs": "beams",

@@ -1,4 +1,4 @@
-"""``python -m experiments.second_sim pairs|effects|beams|bolted|series ...``: test files of the independent
+"""``python -m experiments.second_sim pairs|kinds|effects|beams|bolted|series ...``: test files of the independent
 simulator."""
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ import numpy as np
 from experiments.second_sim.beams import CATALOGUE, simulate_beam_pairs, write_beam_pairs
 from experiments.second_sim.bolted import MASS_KG, write_bolted_test, write_mass_change_pairs
 from experiments.second_sim.effects import effect_cases, write_effect_cases
+from experiments.second_sim.kind_pairs import CHANGES, simulate_kind_pairs
 from experiments.second_sim.pairs import simulate_pairs, write_pairs
 from experiments.second_sim.series import SLIT_SIZES, SeriesConfig, simulate_series, write_series
 
@@ -40,6 +41,15 @@ def main(argv=None) -> int:
     pp.add_argument("--mode4-drop", type=float, default=None,
                     help="timoshenko set: shear drop of mode 4 vs Euler-Bernoulli (default 0.08; 0.1475 gives "
                          "kGA ~27.5 kN and the measured beam-5 frequencies)")
+    pk = sub.add_parser("kinds", help="beam-5 pairs with a face-core debond, a slit, a mass added or none: "
+                                      "baseline/current UFF and modal JSON, truth.csv/json")
+    pk.add_argument("--n", type=int, default=10, help="pairs of each change (default 10)")
+    pk.add_argument("--seed", type=int, default=0)
+    pk.add_argument("--changes", nargs="+", default=None, metavar="CHANGE",
+                    help="some of debond slit mass intact (default: all)")
+    pk.add_argument("--tied-tips", action="store_true",
+                    help="debonds whose tips hold the face (closed debonds) instead of a face sliding over them")
+    pk.add_argument("--out", required=True)
     pe = sub.add_parser("effects", help="hidden-effect cases (modal JSON, frequency JSON, UFF) with cases.json")
     pe.add_argument("--seed", type=int, default=0)
     pe.add_argument("--out", required=True)
@@ -89,6 +99,13 @@ def main(argv=None) -> int:
             freq_hz = f0 + args.df_hz * np.arange(int(round((f1 - f0) / args.df_hz)) + 1)
             out = write_pairs(simulate_pairs(args.set_name, args.n, args.seed, freq_hz, args.mode4_drop), args.out)
             what = f"{args.n} pairs of set {args.set_name}"
+        elif args.command == "kinds":
+            changes = tuple(args.changes or CHANGES)
+            if args.n < 1 or not set(changes) <= set(CHANGES):
+                raise ValueError(f"--n must be >= 1 and --changes some of {' '.join(CHANGES)}, got {args.n} and "
+                                 f"{' '.join(changes)}")
+            out = write_pairs(simulate_kind_pairs(args.n, args.seed, changes, args.tied_tips), args.out)
+            what = f"{args.n} pairs of each of {', '.join(changes)}"
         elif args.command == "beams":
             names = [c.name for c in CATALOGUE]
             if args.only is not None and args.only not in names:

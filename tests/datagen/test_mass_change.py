@@ -99,8 +99,8 @@ def test_the_damage_section_takes_the_keys_of_its_kind():
     assert training["damage"]["kind"] == "mass_change" and "n_slits" not in training["damage"]
     with pytest.raises(ConfigError, match="'damage.n_slits'"):
         merge({"damage": {"kind": "mass_change", "n_slits": [1, 1]}})
-    with pytest.raises(ConfigError, match="'damage.kind' must be one of \\['mass_change', 'slit'\\]"):
-        merge({"damage": {"kind": "debond"}})
+    with pytest.raises(ConfigError, match="'damage.kind' must be one of \\['debond', 'mass_change', 'slit'\\]"):
+        merge({"damage": {"kind": "corrosion"}})
     with pytest.raises(ConfigError, match="'damage.mass_ratio'"):
         merge({"damage": {"kind": "mass_change", "mass_ratio": [0.1, -0.1]}})
     with pytest.raises(ConfigError, match="'damage.mass_ratio'"):
