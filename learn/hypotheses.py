@@ -52,9 +52,9 @@ from functools import lru_cache
 import numpy as np
 
 from datagen.damage import DAMAGE_MODELS, damage_defaults
+from learn.shapes import real_shapes, shape_changes, sign_aligned
 from learn.model_dir import sensitivity_of, truth_beam_mapping
 from learn.sensitivity import Sensitivity
-from learn.shapes import real_shapes, shape_changes, sign_aligned
 from physics.effects import hermite_row
 from physics.errors import BeamDamageError
 from physics.fem import beam_model
@@ -513,9 +513,9 @@ def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD, shape_sigma=SHA
     EI, m = float(truth["EI_Nm2"]), float(truth["mass_per_length_kg_m"])
     kinds_all = kind_explanations(model)
     days = cfg.get("day_changes") or {}
-    clamp = beam.test is None or beam.test.bc in ("clamped-free", "clamped-clamped")
+    clamped = (support(THESIS_SUPPORT) if beam.test is None else beam.test.support).clamped
     grid, curve_all, what, reclamp_all, shapes_all = _support_curves(
-        beam, EI, m, cfg.get("root_spring_relative"), tuple(days.get("root_spring_change") or ()) if clamp else ())
+        beam, EI, m, cfg.get("root_spring_relative"), tuple(days.get("root_spring_change") or ()) if clamped else ())
     out = [None] * len(pairs)
     groups: dict = {}
     for i, pair in enumerate(pairs):
@@ -524,7 +524,7 @@ def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD, shape_sigma=SHA
     for (key, frequency_only), members in groups.items():
         k = np.asarray(key, int)
         f = np.abs(np.stack([np.asarray(pairs[i].eigenvalues) for i in members]))         # (n, 2, m)
-        support = (grid, curve_all[:, k], what, None if reclamp_all is None else reclamp_all[:, k])
+        support_grid = (grid, curve_all[:, k], what, None if reclamp_all is None else reclamp_all[:, k])
         kinds = {name: kind.modes(k) for name, kind in kinds_all.items()}
         cols = (np.arange(shapes_all.shape[1] // n_all)[:, None] * n_all + k[None]).ravel()   # sensor-major
         shapes = None
@@ -532,7 +532,7 @@ def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD, shape_sigma=SHA
             shapes = shape_changes(np.stack([np.asarray(pairs[i].eigenvectors) for i in members]))
         s = sigma if np.ndim(sigma) == 0 else np.asarray(sigma, float)[k]
         ss = shape_sigma if np.ndim(shape_sigma) == 0 else np.asarray(shape_sigma, float)[:, k].ravel()
-        ranked = weigh_many(f[:, 1] / f[:, 0] - 1.0, kinds, support,
+        ranked = weigh_many(f[:, 1] / f[:, 0] - 1.0, kinds, support_grid,
                             days.get("temperature_stiffness_change", (-0.004, 0.004)),
                             sigma=s, length_m=beam.length_m, shapes=shapes,
                             support_shapes=shapes_all[:, cols], shape_sigma=ss)

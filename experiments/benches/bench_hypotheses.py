@@ -37,6 +37,7 @@ from experiments.second_sim.writers import modal_dict
 from datagen.damage import damage_defaults
 from experiments.studies.doc_tables import write_table
 from learn.classify import classify
+from datagen.damage import damage_defaults
 from learn.features import BeamSpec
 from learn.hypotheses import SHAPE_CHANGE_STD, _support_curves, kind_explanation, weigh
 from learn.model_dir import load_model
