@@ -34,7 +34,6 @@ from experiments.second_sim.fem import Beam, PointMass, Slit, assemble, modes
 from experiments.second_sim.pairs import DOF_LABELS, EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M, NODE_X_M
 from experiments.second_sim.response import MODAL_NOISE, Damping, complex_modes, noisy_modal
 from experiments.second_sim.writers import modal_dict
-from datagen.damage import damage_defaults
 from experiments.studies.doc_tables import write_table
 from learn.classify import classify
 from datagen.damage import damage_defaults
