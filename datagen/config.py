@@ -21,6 +21,7 @@ import numpy as np
 
 from datagen.checks import number as _num, value_range as _range
 from datagen.damage import DEFAULT_KIND, GENERIC_DEFAULTS, damage_defaults, damage_model
+from datagen.specimen import DEFAULT_SECTION
 from physics.io.inputs import check_input_file
 from physics.errors import BeamDamageError, ConfigError
 from physics.properties import PRESETS
@@ -38,10 +39,7 @@ DEFAULTS: dict = {
     "mesh": {
         "truth_elements": 20,          # multiple of 4 so nodes sit at the thesis's nodes 2..5
     },
-    "section": {
-        "face_thickness_m": 0.0005,    # each carbon-fibre face sheet (two plies)
-        "core_modulus_pa": 1.0e8,      # foam-filled honeycomb core; face modulus is solved from Table 4.1's EI
-    },
+    "section": dict(DEFAULT_SECTION),  # the sandwich's face thickness and core modulus (datagen.specimen)
     "specimen": {
         "ei_band": 0.05,
         "mass_band": 0.03,

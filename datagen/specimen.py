@@ -24,7 +24,13 @@ import numpy as np
 from physics.errors import ConfigError
 from physics.properties import BeamPreset, layered_ei
 
-__all__ = ["SectionLayout", "draw_specimens"]
+__all__ = ["DEFAULT_SECTION", "SectionLayout", "draw_specimens"]
+
+#: The layered section's keys (config section ``section``) by default.
+DEFAULT_SECTION = {
+    "face_thickness_m": 0.0005,    # each carbon-fibre face sheet (two plies)
+    "core_modulus_pa": 1.0e8,      # foam-filled honeycomb core; face modulus is solved from Table 4.1's EI
+}
 
 
 @dataclass(frozen=True)

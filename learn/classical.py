@@ -30,12 +30,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from learn.features import real_shapes
+from learn.shapes import shape_changes
 from learn.sensitivity import Sensitivity
+from learn.size import SizeTransform
 
 __all__ = ["GradientBoosting", "FREQUENCY_METHODS", "MethodOutput", "cawley_adams", "change_score", "dlac",
            "false_alarm_threshold",
-           "frequency_shifts", "mdlac", "run_classical", "sensitivity_updating", "shape_changes"]
+           "frequency_shifts", "mdlac", "run_classical", "sensitivity_updating"]
 
 
 @dataclass(frozen=True)
@@ -43,17 +44,18 @@ class MethodOutput:
     """Answers of one method for ``n`` pairs.
 
     score : higher = more likely damaged (for ROC); probability : in [0, 1] when calibrated, else None
-    damaged : bool verdict; x_over_L, hinge_flexibility : estimates (meaningful where damaged)
+    damaged : bool verdict; x_over_L, size : estimates (meaningful where damaged; the size of the model's damage kind,
+    signed: negative where the frequencies rise)
     """
 
     name: str
     score: np.ndarray
     damaged: np.ndarray
     x_over_L: np.ndarray
-    hinge_flexibility: np.ndarray
+    size: np.ndarray
     probability: np.ndarray | None = None
     x_std_over_L: np.ndarray | None = None
-    hinge_flexibility_std: np.ndarray | None = None
+    size_std: np.ndarray | None = None
     detectable: np.ndarray | None = None
 
 
@@ -61,14 +63,6 @@ def frequency_shifts(eigenvalues):
     """Relative natural-frequency changes ``f_cur / f_base - 1`` of pairs, shape (n, m)."""
     f = np.abs(np.asarray(eigenvalues, complex))
     return f[:, 1] / f[:, 0] - 1
-
-
-def shape_changes(eigenvectors):
-    """Changes of the real unit-norm shapes (sign-matched), flattened DOF-major, shape (n, 4 m)."""
-    u = real_shapes(eigenvectors)
-    sign = np.sign(np.sum(u[:, 1] * u[:, 0], axis=-2, keepdims=True))
-    du = u[:, 1] * np.where(sign == 0, 1.0, sign) - u[:, 0]
-    return du.reshape(du.shape[0], -1)
 
 
 def _single_amplitude(df, sens: Sensitivity):
@@ -143,9 +137,9 @@ def mdlac(df, sens: Sensitivity, threshold: float) -> MethodOutput:
 
 def sensitivity_updating(df, du, sens: Sensitivity, threshold: float, sigma_f: float = 5e-4,
                          sigma_shape: float = 5e-3, regularisation: float = 1e-3) -> MethodOutput:
-    """Tikhonov-regularised least squares for element hinge flexibilities from frequencies and shapes.
+    """Tikhonov-regularised least squares for element damage sizes from frequencies and shapes.
 
-    Minimises ``||W (J d - y)||^2 + mu ||d||^2`` over the hinge flexibility ``d`` of every element, with
+    Minimises ``||W (J d - y)||^2 + mu ||d||^2`` over the damage size ``d`` of every element, with
     ``y = [df; du]``, ``J`` the FE sensitivities and ``W`` the inverse noise levels; ``mu`` is
     ``regularisation`` times the mean diagonal of ``J^T W^2 J``. Reports the element of the largest change of
     either sign (a negative size: a stiffness gained or a mass lost), its size summed with its neighbours' of the
@@ -177,7 +171,7 @@ def false_alarm_threshold(score, damaged, target: float = 0.005) -> float:
 
 class GradientBoosting:
     """HistGradientBoosting on the pair features: detection, ``x / L`` and the size through ``size_transform``
-    (:class:`learn.estimator.SizeTransform`: ``ln`` of a slit's hinge flexibility, ``asinh`` of a signed size)."""
+    (:class:`learn.size.SizeTransform`: ``ln`` of a positive size, ``asinh`` of a signed one)."""
 
     def __init__(self, random_state: int = 0, max_iter: int = 300, size_transform: str = "log"):
         self.random_state = random_state
@@ -203,8 +197,6 @@ class GradientBoosting:
 
     @property
     def _transform(self):
-        from learn.estimator import SizeTransform  # torch: learn.estimator loads the network
-
         return SizeTransform.parse(self.size_transform)
 
 

@@ -2,21 +2,22 @@
 
 from __future__ import annotations
 
-import functools
 from dataclasses import replace
 
 import numpy as np
 
+from datagen.damage import damage_model
 from learn.classical import FREQUENCY_METHODS, run_classical
 from learn.features import (feature_names, frf_features, frequency_features, map_frf_to_grid, modal_features,
                             real_shapes, sign_aligned, with_missing_modes)
 from learn.hypotheses import FREQUENCY_CHANGE_STD, NO_EXPLANATION, SHAPE_CHANGE_STD, explain_many
 from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows, identification_band_hz,
                             identify_modes, identify_test, modal_pair, mode_checks, nominal_ratio_range)
+from learn.mirror import fold_to_half, location_ambiguity, mirrored
 from learn.model_dir import TrainedModel
 from learn.normal_variation import measure, model_modes
 from learn.verdict import (IN_DISTRIBUTION_PERCENTILE, agreement, classical_answer, classical_verdict,
-                           equivalent_depth, modes_text, network_answer, network_output, ood_percentile)
+                           modes_text, network_answer, network_output, ood_percentile)
 from physics.errors import BeamDamageError
 from physics.identification import METHODS
 from physics.io import MeasuredFRF
@@ -69,13 +70,12 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
 
     Returns
     -------
-    list of dict, one verdict per current input. The verdict keys (``damaged``, ``location_*``,
-    ``hinge_flexibility*``...) are the network's answer when the pair lies inside the training data
-    (``in_distribution``: its Mahalanobis distance on the features it holds within the
+    list of dict, one verdict per current input. The verdict keys (``damaged``, ``location_*``, ``size*``...;
+    ``size`` of the model's ``damage_kind``, as ``size_meaning`` says) are the network's answer when the pair lies
+    inside the training data (``in_distribution``: its Mahalanobis distance on the features it holds within the
     :data:`IN_DISTRIBUTION_PERCENTILE` percentile of the training pairs' on the same features, its modes in their
-    training ranges and paired), else the classical
-    method's (``verdict_from``); ``network`` and ``classical`` hold both answers, ``classical_methods`` every
-    method's.
+    training ranges and paired), else the classical method's (``verdict_from``); ``network`` and ``classical`` hold
+    both answers, ``classical_methods`` every method's.
     """
     baselines = list(baseline) if isinstance(baseline, (list, tuple)) else [baseline]
     nb = len(baselines)
@@ -91,9 +91,7 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     route, X, rows = _network_inputs(model, baselines[ref], currents, pairs, identified, warnings, methods)
     if route in ("modal", "frequency"):
         _require_common_modes(pairs, names, model.beam)
-    depth = functools.partial(equivalent_depth, preset=model.config.get("truth_beam") or model.beam.name,
-                              width_m=model.config["reference_width_m"])
-    nets, dist, pct, where, terms = _network_answers(model, route, X, rows, sens, len(currents), depth)
+    nets, dist, pct, where, terms = _network_answers(model, route, X, rows, sens, len(currents))
     normal = _normal_variation(model, route, nv, base_mds, warnings)
     answers, mode_reasons, mode_sens = _classical_answers(model, pairs, len(currents), sens)
     for i in range(len(currents)):
@@ -104,6 +102,8 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     explained = [None] * len(currents)
     for i, e in zip(known, _explanations(model, [pairs[i] for i in known], nv)):
         explained[i] = e
+    kind = damage_model(model.damage_kind)
+    size_keys = {"damage_kind": kind.kind, "size_meaning": kind.size_meaning}
     results = []
     for i, net in enumerate(nets):
         cl = next((a for a in answers[i] if a["method"] == model.config["best_classical"]),
@@ -120,14 +120,15 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
                               + (f" and the baseline tests' own pairs (at most "
                                  f"{normal['baseline_pairs_distance_max']:.3g})" if nv is not None else "")
                               + (f"; largest terms: {distance_text(terms[i])}" if terms[i] else ""))
-        verdict, from_network, w = _chosen_verdict(net, cl, p, reasons, warnings, mode_sens[i], depth, model.beam)
+        verdict, from_network, w = _chosen_verdict(net, cl, p, reasons, warnings, mode_sens[i], model.beam)
         nv_i = dict(normal)
         if nv is not None and cur_md is not None:
             nv_i.update(nv.test(model_modes(cur_md[i], model.beam, sens.frequencies_hz, names[i + 1])[0],
                                 false_alarm_rate), false_alarm_rate=false_alarm_rate)
             verdict, w = _within_normal_variation(verdict, nv_i, w, "network" if from_network else cl and cl["method"])
         results.append({
-            "measured": names[i + 1], **verdict, "location_ambiguity": location_ambiguity(model.beam, verdict, p),
+            "measured": names[i + 1], **verdict, **size_keys,
+            "location_ambiguity": location_ambiguity(model.beam, verdict, p),
             "verdict_from": "network" if from_network else "classical",
             "in_distribution": not reasons, "out_of_distribution_reasons": reasons,
             "mahalanobis_distance": dist[i], "training_percentile": pct[i], "distance_terms": terms[i],
@@ -153,45 +154,6 @@ def _change_pct(pair, normal: dict):
     if "frequency_change_pct" in normal:
         return np.array([normal["frequency_change_pct"][j] for j in pair.modes], float)
     return 100 * (np.abs(pair.eigenvalues[1]) / np.abs(pair.eigenvalues[0]) - 1)
-
-
-def mirrored(beam, pair) -> bool:
-    """Whether a pair leaves the mirror ambiguity: a symmetric beam (:attr:`physics.supports.Support.symmetric`)
-    read on natural frequencies only (no shapes, or one sensor), where a damage at ``x`` and at ``L - x`` change
-    every frequency alike."""
-    test = beam.test
-    return (test is not None and test.support.symmetric
-            and (test.n_sensors == 1 or (pair is not None and pair.frequency_only)))
-
-
-def fold_to_half(answer: dict, beam, distribution=None) -> dict:
-    """An answer located on the half ``x <= L / 2`` (the mirror ambiguity, :func:`mirrored`): the network's
-    distribution folded onto it (mean and std of ``min(x, L - x)``), a classical ``x`` mirrored there."""
-    L = beam.length_m
-    out = dict(answer)
-    if distribution is not None:
-        p = np.asarray(distribution, float)
-        c = (np.arange(p.size) + 0.5) / p.size
-        c = np.minimum(c, 1 - c)
-        mean = float(p @ c)
-        out["location_std_m"] = float(np.sqrt(max(p @ c**2 - mean**2, 0.0) + 1 / (12 * p.size**2)) * L)
-    else:
-        mean = min(answer["location_x_over_L"], 1 - answer["location_x_over_L"])
-    out["location_x_over_L"], out["location_x_m"] = mean, mean * L
-    z = int(beam.zone_of(mean))
-    out["location_zone"] = z
-    if out.get("location_element") is not None:
-        out["location_element"] = z
-    return out
-
-
-def location_ambiguity(beam, verdict: dict, pair) -> str | None:
-    """What frequencies alone cannot tell (:func:`mirrored`): the mirror image of the located damage, or None."""
-    if not verdict.get("damaged") or not mirrored(beam, pair):
-        return None
-    x, L = verdict["location_x_m"], beam.length_m
-    return (f"natural frequencies alone cannot tell x = {x:.3f} m from its mirror image L - x = {L - x:.3f} m on "
-            f"this symmetric {beam.test.bc} beam: both places fit the data equally")
 
 
 def _measured_pairs(model: TrainedModel, baselines: list, currents: list, names: list[str], sens, warnings: list):
@@ -330,7 +292,7 @@ def _require_common_modes(pairs: list, names: list[str], beam) -> None:
                                   + "; ".join(p.missing) + "); classify needs at least 2 common modes")
 
 
-def _network_answers(model: TrainedModel, route: str, X, rows: list, sens, n: int, depth):
+def _network_answers(model: TrainedModel, route: str, X, rows: list, sens, n: int):
     """Per input (lists of ``n``): the network's answer (None for a pair it does not read), the Mahalanobis
     distance from the training data, its training percentile, and the network's location distribution."""
     nets, dist, pct, where, terms = [None] * n, [None] * n, [None] * n, [None] * n, [None] * n
@@ -341,7 +303,7 @@ def _network_answers(model: TrainedModel, route: str, X, rows: list, sens, n: in
     distance, percentile = ood_percentile(est, X)
     named = distance_terms(est, X, route, model.beam) if route in ("modal", "frequency") else [None] * len(rows)
     for r, i in enumerate(rows):
-        nets[i] = network_answer(d, r, out, model.beam, depth(float(d.hinge_flexibility[r])))
+        nets[i] = network_answer(d, r, out, model.beam)
         dist[i], pct[i], where[i] = float(distance[r]), float(percentile[r]), d.location_distribution[r]
         terms[i] = named[r]
     return nets, dist, pct, where, terms
@@ -376,7 +338,7 @@ def distance_text(terms: list[dict], n: int = 3) -> str:
     return ", ".join(f"{t['feature']} {t['training_std']:+.1f} sd ({t['share']:.0%})" for t in terms[:n])
 
 
-def _chosen_verdict(net, cl, p, reasons: list, warnings: list, sens, depth, beam):
+def _chosen_verdict(net, cl, p, reasons: list, warnings: list, sens, beam):
     """The verdict keys (the network's inside the training data, else the classical method's), whether they are
     the network's, and the pair's warnings: ``(dict, bool, list)``."""
     w = list(warnings)
@@ -385,7 +347,7 @@ def _chosen_verdict(net, cl, p, reasons: list, warnings: list, sens, depth, beam
     if net is None:
         w.append(f"the network gives no answer for this pair (it needs modes {modes_text(beam.modes)}): the verdict "
                  f"is the classical method's ({cl['method']}) on modes {found}")
-        return classical_verdict(cl, sens, depth, beam), False, w
+        return classical_verdict(cl, sens, beam), False, w
     if p is not None and not p.complete:
         w.append("; ".join(p.missing) + f": the network and the classical methods answer on modes {found}")
     if inside or cl is None:
@@ -397,7 +359,7 @@ def _chosen_verdict(net, cl, p, reasons: list, warnings: list, sens, depth, beam
              f"classical method's ({cl['method']}"
              + ("" if p is None or p.complete else f" on modes {found}")
              + "); the network's answer is shown beside it")
-    return classical_verdict(cl, sens, depth, beam), False, w
+    return classical_verdict(cl, sens, beam), False, w
 
 
 def _identification(p, base_md, cur_md, identified: bool, beam) -> dict:

@@ -7,8 +7,9 @@ Guo et al. 2017) so that ``predict_proba`` is calibrated, and a factor on the si
 head's spread so that one standard deviation covers 68 % of the sizes of the validation pairs called damaged.
 
 Targets ``y`` have three columns: damaged (0/1), ``x / L`` of the damage (NaN if
-intact) and its size (:func:`learn.features.labels`: a slit's hinge flexibility ``EI / (k_theta L)``, a mass
-change's signed mass ratio; 0 if intact), learned through the kind's :class:`SizeTransform`.
+intact) and its size (:func:`learn.features.labels`: the size of the data's damage kind, e.g. a slit's hinge
+flexibility, a mass change's signed mass ratio; 0 if intact), learned through the kind's
+:class:`learn.size.SizeTransform`.
 
 Missing modes
 -------------
@@ -38,10 +39,10 @@ from scipy.special import expit
 
 from learn.features import split_by_specimen
 from learn.models import DamageNet, loss_terms
+from learn.size import LOG_SIZE_LIMIT, MAX_SIZE_LOG_STD, SizeTransform, fit_size_std_scale
 from physics.errors import BeamDamageError
 
-__all__ = ["DamageClassifier", "DamagePrediction", "SizeTransform", "fit_calibration", "fit_size_std_scale",
-           "lognormal_std", "torch_threads"]
+__all__ = ["DamageClassifier", "DamagePrediction", "fit_calibration", "torch_threads"]
 
 
 @dataclass(frozen=True)
@@ -54,8 +55,8 @@ class DamagePrediction:
     x_std_over_L: np.ndarray
     element_probabilities: np.ndarray      # (n, Z) zones (the thesis's 4 elements)
     element: np.ndarray                    # 1..Z, most probable zone
-    hinge_flexibility: np.ndarray         # median of the size estimate (signed for a signed kind)
-    hinge_flexibility_std: np.ndarray
+    size: np.ndarray                      # median of the size estimate (signed for a signed kind)
+    size_std: np.ndarray
     logit: np.ndarray                      # calibrated detection logit
     probability_support_change: np.ndarray  # supports changed beyond re-clamping (NaN: a model not trained on it)
     threshold: np.ndarray                  # the verdict's detection threshold of each pair (its missing modes')
@@ -64,83 +65,12 @@ class DamagePrediction:
 
 #: Bound of the network's raw outputs (far beyond any trained value), so that no exp of them overflows.
 RAW_LIMIT = 1e3
-#: Bound of the log of the size (hinge flexibility from e^-30 to e^30) and of its log-std (a factor e^5).
-LOG_SIZE_LIMIT = 30.0
-MAX_SIZE_LOG_STD = 5.0
 #: Training rows kept (in training standard deviations) as the reference of the Mahalanobis distances of pairs
 #: with missing modes: 5000 rows put the 99.9th percentile between the 5th and 6th largest.
 REFERENCE_ROWS = 5000
 #: Copies of the validation intact pairs, each with its own missing modes, that set a threshold per number of
 #: missing modes.
 THRESHOLD_COPIES = 4
-
-
-def lognormal_std(median, log_std):
-    """Standard deviation of a log-normal variable from its median and the std of its logarithm."""
-    return median * np.sqrt(np.expm1(log_std**2) * np.exp(log_std**2))
-
-
-@dataclass(frozen=True)
-class SizeTransform:
-    """How the size head learns a size: ``t = forward(size)`` is what it predicts (a mean and a log-std of ``t``).
-
-    ``"log"``: ``t = ln(size)`` (a positive size, a slit's hinge flexibility; the estimate is log-normal);
-    ``"asinh:<scale>"``: ``t = asinh(size / scale)`` (a signed size, a mass change's ratio: linear below the
-    scale, logarithmic above). Each damage kind declares its own (:mod:`datagen.damage`, ``size_transform``).
-    """
-
-    kind: str
-    scale: float = 1.0
-
-    @classmethod
-    def parse(cls, spec: str) -> "SizeTransform":
-        name, _, scale = str(spec).partition(":")
-        try:
-            if name == "log" and not scale:
-                return cls("log")
-            if name == "asinh" and float(scale) > 0:
-                return cls("asinh", float(scale))
-        except ValueError:
-            pass
-        raise BeamDamageError(f"size_transform {spec!r} unknown; expected 'log' or 'asinh:<scale>' (scale > 0)")
-
-    def forward(self, size):
-        size = np.asarray(size, float)
-        if self.kind == "log":
-            return np.log(np.maximum(size, 1e-9))
-        return np.arcsinh(size / self.scale)
-
-    def inverse(self, t):
-        t = np.clip(np.asarray(t, float), -LOG_SIZE_LIMIT, LOG_SIZE_LIMIT)
-        return np.exp(t) if self.kind == "log" else self.scale * np.sinh(t)
-
-    def std(self, t, t_std):
-        """Standard deviation of the size from the transformed mean ``t`` and std ``t_std``: log-normal for
-        ``log``, half the width of the one-sigma interval ``inverse(t +- t_std)`` for ``asinh``."""
-        t = np.clip(np.asarray(t, float), -LOG_SIZE_LIMIT, LOG_SIZE_LIMIT)
-        if self.kind == "log":
-            return lognormal_std(np.exp(t), t_std)
-        return self.scale * np.cosh(t) * np.sinh(t_std)
-
-
-def fit_size_std_scale(truth, median, log_std, coverage: float = 0.6827, spread=None) -> float:
-    """Factor ``k`` on the size head's log-std so that ``|truth - median| <= std(k log_std)`` holds for
-    ``coverage`` of the pairs (one sigma: 68.3 %); the std grows with ``k``, solved by bisection in log k.
-    ``spread(t_std)`` gives the std of each pair from its transformed std (default: log-normal about ``median``)."""
-    truth, median, log_std = (np.asarray(a, float) for a in (truth, median, log_std))
-    spread = spread or (lambda t_std: lognormal_std(median, t_std))
-
-    def covered(log_k):
-        with np.errstate(over="ignore", invalid="ignore"):   # an infinite std covers every truth
-            return np.mean(np.abs(truth - median) <= spread(np.exp(log_k) * log_std))
-
-    lo, hi = np.log(1e-3), np.log(1e2)
-    if covered(hi) < coverage:
-        return float(np.exp(hi))
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if covered(mid) < coverage else (lo, mid)
-    return float(np.exp(hi))
 
 
 def _device(name):
@@ -283,7 +213,7 @@ class DamageClassifier:
     def _targets(self, y):
         y = np.asarray(y, float)
         if y.ndim != 2 or y.shape[1] not in (3, 4):
-            raise BeamDamageError(f"y must have shape (n, 3) [damaged, x/L, hinge flexibility] or (n, 4) [..., "
+            raise BeamDamageError(f"y must have shape (n, 3) [damaged, x/L, size] or (n, 4) [..., "
                                   f"support changed], got {y.shape}")
         damaged = y[:, 0] > 0.5
         centres = (np.arange(self.n_bins) + 0.5) / self.n_bins

@@ -132,12 +132,12 @@ def metrics(out, truth: dict, mask=None, subset: str = "all", length_m: float = 
         el_true = truth["element"][det]
         if mirrored_method(spec, out.name):     # scored on the half x <= L/2, as classify answers
             x_true, x_hat = np.minimum(x_true, 1 - x_true), np.minimum(x_hat, 1 - x_hat)
-            el_true = spec.zone_of(x_true)
-        el_hat = spec.zone_of(x_hat)
+            el_true = spec.zone_of_x_over_L(x_true)
+        el_hat = spec.zone_of_x_over_L(x_hat)
         el_acc = float(np.mean(el_hat == el_true))
         within = float(np.mean(np.abs(el_hat - el_true) <= 1))
         loc = float(np.median(np.abs(x_hat - x_true)) * length_m * 1000)
-        size = float(np.median(np.abs(out.hinge_flexibility[det] / truth["hinge_flexibility"][det] - 1)))
+        size = float(np.median(np.abs(out.size[det] / truth["size"][det] - 1)))
     else:
         el_acc = within = loc = size = nan
     ece = nan
@@ -157,7 +157,7 @@ def subsets(truth: dict, table) -> dict:
             if sel.any():
                 out[f"noise {100 * lo:g}-{100 * hi:g} %" if np.isfinite(hi) else f"noise >= {100 * lo:g} %"] = sel
     dam = truth["damaged"]
-    s = truth["hinge_flexibility"]
+    s = np.abs(truth["size"])              # a signed size (a mass lost) by its magnitude
     if dam.sum() >= 3:
         q = np.quantile(s[dam], [1 / 3, 2 / 3])
         for name, sel in (("size small", s <= q[0]), ("size medium", (s > q[0]) & (s <= q[1])),
@@ -208,7 +208,7 @@ def figures(outputs, truth, out_dir, length_m: float, n_bins: int = 15) -> list[
     paths.append(_save(fig, out_dir / "roc.png"))
 
     net = outputs[0]
-    el_hat = np.where(net.damaged, spec.zone_of(np.nan_to_num(net.x_over_L)), 0)
+    el_hat = np.where(net.damaged, spec.zone_of_x_over_L(np.nan_to_num(net.x_over_L)), 0)
     k = spec.zone_edges_m.size
     cm = np.zeros((k, k), int)
     np.add.at(cm, (truth["element"], el_hat), 1)

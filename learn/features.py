@@ -42,6 +42,7 @@ from physics.errors import BeamDamageError, FileFormatError
 from datagen.dataset import Dataset
 from datagen.store import DATASET_FORMAT, read_manifest
 from datagen.synth import log_magnitude_map
+from learn.shapes import real_shapes, sign_aligned
 from physics.layout import Layout
 
 if TYPE_CHECKING:
@@ -50,7 +51,7 @@ if TYPE_CHECKING:
 __all__ = ["BeamSpec", "DOFS", "as_spec", "GRID_RAD_S", "Pairs", "ROUTES", "beam_of_manifest", "curvature_points",
            "curvatures", "feature_modes", "feature_names", "features", "frequency_features", "frf_features",
            "grid_weights", "labels", "layout_curvatures", "load_pairs", "manifest_checksum", "map_frf_to_grid",
-           "modal_features", "real_shapes", "sign_aligned", "split_by_specimen", "with_missing_modes"]
+           "modal_features", "split_by_specimen", "with_missing_modes"]
 
 ROUTES = ("modal", "updated", "measured", "frequency")
 
@@ -113,7 +114,7 @@ class BeamSpec:
         """Bending modes used (1-based)."""
         return (1, 2, 3, 4) if self.test is None else tuple(self.test.modes)
 
-    def zone_of(self, x_over_L) -> np.ndarray:
+    def zone_of_x_over_L(self, x_over_L) -> np.ndarray:
         """1-based zone of each ``x / L`` (0 where NaN)."""
         x = np.asarray(x_over_L, float)
         if self.test is None:  # the thesis's elements
@@ -303,8 +304,8 @@ def labels(table: pd.DataFrame, beam) -> dict:
     Returns
     -------
     dict of ndarray, shape (n,)
-        ``damaged`` (bool), ``x_over_L`` (NaN if intact), ``hinge_flexibility`` (the size; 0 if intact),
-        ``element`` (the zone of :meth:`BeamSpec.zone_of`, 1.., 0 if intact; the thesis's elements 1..4),
+        ``damaged`` (bool), ``x_over_L`` (NaN if intact), ``size`` (the damage kind's size; 0 if intact),
+        ``element`` (its zone, :meth:`BeamSpec.zone_of_x_over_L`, 1.., 0 if intact; the thesis's elements 1..4),
         ``max_drop`` (largest relative drop of the noise-free
         natural frequencies due to the damage alone: ``max_frequency_drop_rel``), ``n_damages``,
         ``support_changed`` (bool: supports changed beyond re-clamping; False where the table lacks the column).
@@ -325,8 +326,8 @@ def labels(table: pd.DataFrame, beam) -> dict:
         x = np.full(n, np.nan)
         size = np.zeros(n)
     x = np.where(damaged, np.clip(x, 0.0, 1.0), np.nan)
-    element = np.where(damaged, beam.zone_of(x), 0)
-    return {"damaged": damaged, "x_over_L": x, "hinge_flexibility": np.where(damaged, size, 0.0),
+    element = np.where(damaged, beam.zone_of_x_over_L(x), 0)
+    return {"damaged": damaged, "x_over_L": x, "size": np.where(damaged, size, 0.0),
             "element": element, "max_drop": table["max_frequency_drop_rel"].to_numpy(float),
             "n_damages": table["n_damages"].to_numpy(int),
             "support_changed": (table["support_changed"].to_numpy(bool) if "support_changed" in table
@@ -334,33 +335,6 @@ def labels(table: pd.DataFrame, beam) -> dict:
 
 
 # --------------------------------------------------------------------------- modal route
-def real_shapes(eigenvectors):
-    """Real, unit-norm mode shapes from complex ones (batched).
-
-    Each column is rotated so that its largest entry is real and positive, its
-    real part kept and scaled to unit Euclidean norm.
-
-    Parameters
-    ----------
-    eigenvectors : ndarray, complex, shape (..., n_dofs, m)
-
-    Returns
-    -------
-    ndarray, shape (..., n_dofs, m)
-    """
-    psi = np.asarray(eigenvectors, complex)
-    big = np.take_along_axis(psi, np.argmax(np.abs(psi), axis=-2)[..., None, :], axis=-2)
-    u = (psi * np.exp(-1j * np.angle(big))).real
-    return u / np.linalg.norm(u, axis=-2, keepdims=True)
-
-
-def sign_aligned(shapes, reference):
-    """``shapes`` (..., S, m) with each mode's sign following ``reference``'s (the sign of their dot product, MAC
-    sign; a mode orthogonal to its reference keeps its sign): what a shape change between two tests compares."""
-    sign = np.sign(np.sum(shapes * reference, axis=-2, keepdims=True))
-    return shapes * np.where(sign == 0, 1.0, sign)
-
-
 def curvatures(shapes):
     """Second differences of shapes at the clamp and nodes 2..4 (unit element length), batched.
 

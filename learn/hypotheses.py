@@ -13,12 +13,13 @@ explanation         predicted ``y`` (first order unless stated)                 
 ``support_change``  ``a`` plus the exact change of the support springs by a       ``ln(k / k_0)`` in +-ln 10
                     factor: clamp springs (clamped ends), bearing rotation        (a pinned end: ``k L / EI``
                     springs (pinned ends), suspension (free-free)                 in 0.01-100 from none)
-``slit``            ``a + sqrt(1 + 2 theta F_r(x)) - 1``: the slit sensitivities  ``x`` on the grid, ``theta``
-                    ``F`` (:mod:`learn.sensitivity`, curvature squared at ``x``)  in 0..theta_max
-                    in the Rayleigh quotient of the nominal shapes
-``mass_change``     ``a + (1 - 2 mu G_r(x))^-1/2 - 1``: a mass ``mu m L`` added   ``x`` on the grid, ``mu`` in
-                    (``mu > 0``) or lost (``mu < 0``) at ``x`` (``G``:            +-10 % of the beam's mass
-                    displacement squared there)
+a damage kind       ``a + sqrt(1 + 2 s F_r(x)) - 1`` for a kind that perturbs    ``x`` on the grid, ``s``
+(each row of        the stiffness (``s`` its hinge flexibility, ``F`` the        (its size) over the sizes
+``DAMAGE_MODELS``)  curvature-squared sensitivities, :mod:`learn.sensitivity`);  its data draw
+                    ``a + (1 - 2 s G_r(x))^-1/2 - 1`` for one that perturbs the  (``size_range`` of the
+                    mass (``s`` its signed mass ratio, ``G`` displacement        model's generator config;
+                    squared): the Rayleigh quotient of the nominal shapes, the   another kind's defaults)
+                    sensitivities averaged over the kind's ``spread_m`` about x
 =================== ============================================================ ==========================
 
 ``a`` (the temperature nuisance, within the training's ``temperature_stiffness_change``: ``a = dEI / (2 EI)``)
@@ -26,11 +27,11 @@ enters every explanation but ``global_stiffness``. The likelihood is Gaussian wi
 ``sigma`` per mode (default :data:`FREQUENCY_CHANGE_STD`) plus :data:`MODEL_ERROR` of each predicted change
 (the sizes' intervals also hold :data:`SIZE_SCALE_STD`); each explanation's evidence is its likelihood averaged
 over its prior (a grid), so a more flexible explanation pays for the predictions it could have made. With equal
-prior probabilities (:data:`PRIOR`), the probabilities are the normalised evidences.
+prior probabilities, the probabilities are the normalised evidences.
 
 Shapes, where both tests hold them: the change of the real unit-norm shapes at the sensors
-(:func:`learn.features.real_shapes`, the current shape's sign following the baseline's) enters the same
-likelihood with a standard deviation :data:`SHAPE_CHANGE_STD` per entry. A slit or a mass predicts the first-order
+(:func:`learn.shapes.real_shapes`, the current shape's sign following the baseline's) enters the same
+likelihood with a standard deviation :data:`SHAPE_CHANGE_STD` per entry. A damage kind predicts the first-order
 shape change of its size at its place (the shape sensitivities of :mod:`learn.sensitivity`), a support change the
 exact change of the nominal shapes (:func:`support_curve`), the day-to-day changes and a global stiffness change
 none. Damping changes are not weighed: the repeatability of damping ratios (5-30 % between tests) is larger than
@@ -38,40 +39,44 @@ what a slit changes.
 
 An explanation whose predicted change misses a mode's measured change by more than :data:`FIT_LIMIT` standard
 deviations (the noise and the model error) does not fit: the summary says so when the most likely does not, and a
-slit that does not fit reports no intervals.
+damage kind that does not fit reports no intervals. Every damage kind reports its most likely ``x_m`` and ``size``
+(its ``size_label``) and their 68 % / 95 % intervals. What tells two explanations apart (:func:`separate`) comes from
+the kinds' ``separates``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
 
-from datagen.damage.slit import hinge_flexibility
-from learn.features import real_shapes, sign_aligned
-from learn.model_dir import sensitivity_of
+from datagen.damage import DAMAGE_MODELS, damage_defaults
+from learn.shapes import real_shapes, shape_changes, sign_aligned
+from learn.model_dir import sensitivity_of, truth_beam_mapping
+from learn.sensitivity import Sensitivity
 from physics.effects import hermite_row
 from physics.errors import BeamDamageError
 from physics.fem import beam_model
 from physics.modal import undamped_modes
-from physics.properties import beam_preset
 from physics.supports import THESIS_SUPPORT, add_springs, changed_springs, support
 
-__all__ = ["FIT_LIMIT", "FREQUENCY_CHANGE_STD", "HYPOTHESES", "MODEL_ERROR", "NO_EXPLANATION", "PRIOR", "SEPARATE",
-           "SHAPE_CHANGE_STD", "SIZE_SCALE_STD", "Hypothesis", "explain", "explain_many", "shape_changes", "summary",
-           "support_curve", "weigh", "weigh_many"]
+__all__ = ["BASE_HYPOTHESES", "FIT_LIMIT", "FREQUENCY_CHANGE_STD", "HYPOTHESES", "KindExplanation", "MODEL_ERROR",
+           "NO_EXPLANATION", "SEPARATE_BASE", "SHAPE_CHANGE_STD", "SIZE_SCALE_STD", "Hypothesis", "explain",
+           "explain_many", "kind_explanation", "kind_explanations", "separate", "summary", "support_curve", "weigh",
+           "weigh_many", "window_averaged"]
 
 #: Relative standard deviation of a mode's frequency change between two tests (0.1 %): modal tests repeated on
 #: the same specimen and mounting scatter 0.05-0.5 % in frequency; the training's frequency scatter and modal
 #: noise put most pairs between 0.03 and 0.2 %.
 FREQUENCY_CHANGE_STD = 1e-3
 
-#: The explanations, in the order reported.
-HYPOTHESES = ("intact", "global_stiffness", "support_change", "slit", "mass_change")
+#: The explanations that are no damage kind.
+BASE_HYPOTHESES = ("intact", "global_stiffness", "support_change")
 
-#: Prior probability of each explanation (equal: the verdict states it).
-PRIOR = {h: 1.0 / len(HYPOTHESES) for h in HYPOTHESES}
+#: The explanations, in the order reported: the base ones and one per damage kind (equal prior probabilities: the
+#: verdict states it).
+HYPOTHESES = (*BASE_HYPOTHESES, *DAMAGE_MODELS)
 
 #: Relative error of each predicted change, mode by mode (3 %): the sensitivities are those of the nominal shapes.
 MODEL_ERROR = 0.03
@@ -90,9 +95,58 @@ SIZE_SCALE_STD = 0.1
 #: about 1 % over 4 modes).
 FIT_LIMIT = 3.0
 
-#: Grids of the parameters.
-N_SIZE, N_GLOBAL, N_SUPPORT = 200, 401, 121
-GLOBAL_RANGE, MASS_RANGE, SUPPORT_LN_RANGE = 0.05, 0.10, np.log(10.0)
+#: Grids of the parameters (a size grid of odd length holds 0 when its range is symmetric).
+N_SIZE, N_GLOBAL, N_SUPPORT = 201, 401, 121
+GLOBAL_RANGE, SUPPORT_LN_RANGE = 0.05, np.log(10.0)
+
+
+@dataclass(frozen=True)
+class KindExplanation:
+    """A damage kind's explanation on one beam: its size grid (the flat prior) and its sensitivities.
+
+    Attributes
+    ----------
+    name : str                  the kind (:data:`datagen.damage.DAMAGE_MODELS`)
+    perturbs : str              "stiffness" or "mass": the frequency map (module docstring)
+    sizes : ndarray, shape (K,)  the size grid over the kind's ``size_range``
+    sens : learn.sensitivity.Sensitivity   sensitivities per unit size, averaged over the kind's spread
+    size_label : str
+    """
+
+    name: str
+    perturbs: str
+    sizes: np.ndarray
+    sens: Sensitivity
+    size_label: str = "size"
+
+    def modes(self, indices) -> "KindExplanation":
+        """The explanation on the nominal modes ``indices`` (0-based) alone."""
+        return replace(self, sens=self.sens.modes(indices))
+
+    def frequency_grid(self) -> np.ndarray:
+        """Relative frequency changes (K, E, m) over the size grid and the places (the Rayleigh quotient of the
+        nominal shapes: the stiffness or the mass scaled by ``1 + 2 s F`` or ``1 - 2 s G``)."""
+        F = np.asarray(self.sens.frequency, float).T[None]              # (1, E, m), d ln f per unit size
+        s = self.sizes[:, None, None]
+        if self.perturbs == "stiffness":
+            return np.sqrt(np.maximum(1 + 2 * s * F, 1e-6)) - 1
+        return 1 / np.sqrt(np.maximum(1 - 2 * s * F, 1e-6)) - 1
+
+
+def window_averaged(sens: Sensitivity, spread_m: float) -> Sensitivity:
+    """``sens`` with each place's sensitivities averaged over a window ``spread_m`` long centred there (clipped to
+    the beam, each element weighed by its overlap); below one element the point values."""
+    E = sens.n_elements
+    le = sens.length_m / E
+    if not spread_m > le:
+        return sens
+    centres = (np.arange(E) + 0.5) * le
+    a = np.clip(centres - spread_m / 2, 0.0, sens.length_m)[:, None]   # (E centres, 1)
+    b = np.clip(centres + spread_m / 2, 0.0, sens.length_m)[:, None]
+    starts = np.arange(E)[None] * le                                    # (1, E elements)
+    W = np.clip(np.minimum(b, starts + le) - np.maximum(a, starts), 0.0, None)
+    W /= W.sum(axis=1, keepdims=True)
+    return replace(sens, frequency=np.asarray(sens.frequency) @ W.T, shape=np.asarray(sens.shape) @ W.T)
 
 
 @dataclass(frozen=True)
@@ -102,9 +156,10 @@ class Hypothesis:
     Attributes
     ----------
     name : str
-    probability : float                      posterior probability (the five sum to 1)
+    probability : float                      posterior probability (the explanations' sum to 1)
     log_evidence : float                     log of the prior-averaged likelihood (up to a common constant)
-    parameters : dict                        the most likely parameters, and for ``slit`` the 68 %/95 % intervals
+    parameters : dict                        the most likely parameters, and for a damage kind the 68 %/95 %
+                                             intervals of ``x_m`` and ``size``
     predicted : ndarray, shape (m,)          relative frequency changes at the most likely parameters
     max_abs_frequency_error_pct : float      largest |measured - predicted| change there (%)
     max_misfit_std : float                   largest |measured - predicted| change over its std (the noise and
@@ -223,17 +278,16 @@ def _loglik(g, y, s, half: float, model_error: float):
 CHUNK_PAIRS = 32
 
 
-def weigh(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.004, 0.004), theta_max: float = 0.2,
-          sigma=FREQUENCY_CHANGE_STD, length_m: float = 1.0, model_error: float = MODEL_ERROR, shapes=None,
-          support_shapes=None, shape_sigma: float = SHAPE_CHANGE_STD) -> list[Hypothesis]:
+def weigh(shifts, kinds: dict, support: tuple, temperature_range=(-0.004, 0.004), sigma=FREQUENCY_CHANGE_STD,
+          length_m: float = 1.0, model_error: float = MODEL_ERROR, shapes=None, support_shapes=None,
+          shape_sigma: float = SHAPE_CHANGE_STD) -> list[Hypothesis]:
     """Weigh the explanations of one pair's relative frequency changes (and shape changes ``shapes`` (S m,)), see
     the module docstring and :func:`weigh_many`."""
     y = np.asarray(shifts, float)
     if y.ndim != 1:
         raise BeamDamageError(f"frequency changes must be a finite 1-D array, got {y!r}")
-    return weigh_many(y[None], sens, mass_sens, support, temperature_range, theta_max, sigma, length_m,
-                      model_error, None if shapes is None else np.asarray(shapes, float)[None], support_shapes,
-                      shape_sigma)[0]
+    return weigh_many(y[None], kinds, support, temperature_range, sigma, length_m, model_error,
+                      None if shapes is None else np.asarray(shapes, float)[None], support_shapes, shape_sigma)[0]
 
 
 def _shape_loglik(shapes, grids_shapes: dict, sigma: float) -> dict:
@@ -255,31 +309,29 @@ def _shape_loglik(shapes, grids_shapes: dict, sigma: float) -> dict:
     return out
 
 
-def weigh_many(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.004, 0.004), theta_max: float = 0.2,
-               sigma=FREQUENCY_CHANGE_STD, length_m: float = 1.0, model_error: float = MODEL_ERROR, shapes=None,
-               support_shapes=None, shape_sigma: float = SHAPE_CHANGE_STD) -> list[list[Hypothesis]]:
+def weigh_many(shifts, kinds: dict, support: tuple, temperature_range=(-0.004, 0.004), sigma=FREQUENCY_CHANGE_STD,
+               length_m: float = 1.0, model_error: float = MODEL_ERROR, shapes=None, support_shapes=None,
+               shape_sigma: float = SHAPE_CHANGE_STD) -> list[list[Hypothesis]]:
     """Weigh the explanations of measured relative frequency changes of pairs holding the same modes, batched.
 
     Parameters
     ----------
     shifts : array, shape (n, m)        measured ``f_current / f_baseline - 1`` of the modes both tests hold
-    sens : learn.sensitivity.Sensitivity          slit sensitivities of those modes (``frequency`` (m, E))
-    mass_sens : learn.sensitivity.Sensitivity     mass-change sensitivities of those modes
+    kinds : dict name -> KindExplanation   the damage kinds' explanations on those modes (:func:`kind_explanations`)
     support : (ln_grid (G,), curve (G, m), what, reclamp_curve (R, m) or None)   from :func:`support_curve`
     temperature_range : (lo, hi)        relative EI change between test days (the training's)
-    theta_max : float                   largest slit hinge flexibility of the prior
     sigma : float or array (m,)         relative std of each mode's change
     length_m : float
     model_error : float                 relative std of each predicted change (:data:`MODEL_ERROR`)
     shapes : array, shape (n, S m), optional   measured changes of the real unit-norm shapes at the sensors
-                                        (:func:`shape_changes`; sensor-major as ``sens.shape``); without them
-                                        frequencies alone are weighed
+                                        (:func:`learn.shapes.shape_changes`; sensor-major as the kinds'
+                                        ``sens.shape``); without them frequencies alone are weighed
     support_shapes : array, shape (G, S m), optional   the support grid's shape changes (:func:`support_curve`)
     shape_sigma : float or array (S m,)  std of each shape entry's change (:data:`SHAPE_CHANGE_STD`)
 
     Returns
     -------
-    per pair, a list of :class:`Hypothesis`, most probable first.
+    per pair, a list of :class:`Hypothesis`, most probable first (equal prior probabilities).
     """
     Y = np.asarray(shifts, float)
     if Y.ndim != 2 or Y.shape[1] < 1 or not np.all(np.isfinite(Y)):
@@ -293,29 +345,23 @@ def weigh_many(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.00
                                             (N_GLOBAL, Y.shape[1])),
         "support_change": curve,
     }
-    th = np.linspace(0.0, theta_max, N_SIZE)
-    # Rayleigh quotient with the nominal shapes: f^2 scales by 1 + 2 theta F (F = d ln f / d theta < 0)
-    F = np.asarray(sens.frequency, float)                                # (m, E)
-    grids["slit"] = np.sqrt(np.maximum(1 + 2 * th[:, None, None] * F.T[None], 1e-6)) - 1          # (T, E, m)
-    mu = np.linspace(-MASS_RANGE, MASS_RANGE, N_SIZE + 1)
-    G = np.asarray(mass_sens.frequency, float)                           # (m, E) per unit mass ratio added
-    grids["mass_change"] = 1 / np.sqrt(np.maximum(1 - 2 * mu[:, None, None] * G.T[None], 1e-6)) - 1
-    x_m = np.asarray(sens.x_over_L) * length_m
-    x_mass_m = np.asarray(mass_sens.x_over_L) * length_m                # the mass sensitivities' own grid
-    h = 0.5 * length_m / x_m.size                                        # half an element of the grid
+    for name, k in kinds.items():
+        grids[name] = k.frequency_grid()                                  # (K, E, m)
+    names = list(grids)
+    log_prior = -np.log(len(names))
     out = []
     if shapes is not None:
+        n_shape = {np.asarray(k.sens.shape).shape[0] for k in kinds.values()}
         shapes = np.asarray(shapes, float)
-        if shapes.shape != (Y.shape[0], np.asarray(sens.shape).shape[0]) or not np.all(np.isfinite(shapes)):
-            raise BeamDamageError(f"shape changes must be a finite (pairs, sensors x modes) array of shape "
-                                  f"{(Y.shape[0], np.asarray(sens.shape).shape[0])}, got {shapes.shape}")
+        if len(n_shape) != 1 or shapes.shape != (Y.shape[0], *n_shape) or not np.all(np.isfinite(shapes)):
+            raise BeamDamageError(f"shape changes must be a finite (pairs, sensors x modes) array matching the "
+                                  f"kinds' shape sensitivities {sorted(n_shape)}, got {shapes.shape}")
         # whitened by each entry's std: the shape terms then take a unit std
         ss = np.broadcast_to(np.asarray(shape_sigma, float), shapes.shape[1:])
         shapes = shapes / ss
         grid_shapes = {"intact": None, "global_stiffness": None,
                        "support_change": None if support_shapes is None else np.asarray(support_shapes, float) / ss,
-                       "slit": (th, np.asarray(sens.shape, float) / ss[:, None]),
-                       "mass_change": (mu, np.asarray(mass_sens.shape, float) / ss[:, None])}
+                       **{name: (k.sizes, np.asarray(k.sens.shape, float) / ss[:, None]) for name, k in kinds.items()}}
     for start in range(0, Y.shape[0], CHUNK_PAIRS):
         y = Y[start:start + CHUNK_PAIRS]
         ll = {name: _loglik(g, y, s, 0.0 if name == "global_stiffness" else half, model_error)
@@ -329,61 +375,63 @@ def weigh_many(shifts, sens, mass_sens, support: tuple, temperature_range=(-0.00
                 li, ai = ll[name][0][i], ll[name][1][i]
                 j = np.unravel_index(np.argmax(li), li.shape)
                 fits[name] = (_log_mean_exp(li), j, (0.0 if name == "global_stiffness" else ai[j]) + g[j], li)
+            g_best = float(grids["global_stiffness"][fits["global_stiffness"][1]][0])
             params = {
                 "intact": {"temperature_frequency_change": float(ll["intact"][1][i][fits["intact"][1]])},
-                "global_stiffness": {"frequency_change": float(grids["global_stiffness"][fits["global_stiffness"][1]
-                                                                                        ][0])},
+                "global_stiffness": {"frequency_change": g_best, "EI_change": float((1 + g_best) ** 2 - 1)},
                 "support_change": {"parameter": what, "value": float(ln_grid[fits["support_change"][1][0]]),
                                    "temperature_frequency_change":
                                        float(ll["support_change"][1][i][fits["support_change"][1]])},
-                "slit": _slit_parameters(fits["slit"], th, x_m, sens, h),
-                "mass_change": {"x_m": float(x_mass_m[fits["mass_change"][1][1]]),
-                                "mass_ratio": float(mu[fits["mass_change"][1][0]])},
             }
-            g_best = params["global_stiffness"]["frequency_change"]
-            params["global_stiffness"]["EI_change"] = float((1 + g_best) ** 2 - 1)
-            logz = np.array([fits[n][0] + np.log(PRIOR[n]) for n in HYPOTHESES])
+            miss = {n: float(np.max(np.abs(fits[n][2] - y[i]) / np.sqrt(s**2 + (model_error * fits[n][2]) ** 2)))
+                    for n in names}
+            for name, k in kinds.items():
+                params[name] = _kind_parameters(fits[name], k, length_m, fits_noise=miss[name] <= FIT_LIMIT)
+            logz = np.array([fits[n][0] + log_prior for n in names])
             p = np.exp(logz - logz.max())
             p /= p.sum()
-            miss = {n: float(np.max(np.abs(fits[n][2] - y[i]) / np.sqrt(s**2 + (model_error * fits[n][2]) ** 2)))
-                    for n in HYPOTHESES}
-            if miss["slit"] > FIT_LIMIT:          # a slit that does not fit: no interval rather than a narrow one
-                params["slit"].update({k: None for k in ("x_m_68", "x_m_95", "hinge_flexibility_68",
-                                                         "hinge_flexibility_95")})
-            rows = [Hypothesis(n, float(p[k]), float(fits[n][0]), params[n], np.asarray(fits[n][2], float),
+            rows = [Hypothesis(n, float(p[j]), float(fits[n][0]), params[n], np.asarray(fits[n][2], float),
                                float(100 * np.max(np.abs(fits[n][2] - y[i]))), miss[n])
-                    for k, n in enumerate(HYPOTHESES)]
+                    for j, n in enumerate(names)]
             out.append(sorted(rows, key=lambda r: -r.probability))
     return out
 
 
-def _slit_parameters(fit: tuple, th, x_m, sens, h: float) -> dict:
-    """The slit's most likely place and size and their 68 % / 95 % intervals from its likelihood grid (T, E)."""
+def _kind_parameters(fit: tuple, kind: KindExplanation, length_m: float, fits_noise: bool) -> dict:
+    """A damage kind's most likely place and size and their 68 % / 95 % intervals from its likelihood grid (K, E);
+    the intervals None when the kind does not fit (no interval rather than a narrow one)."""
     _, (t, e), _, ll = fit
+    x_m = np.asarray(kind.sens.x_over_L) * length_m
+    out = {"x_m": float(x_m[e]), "x_over_L": float(kind.sens.x_over_L[e]), "size": float(kind.sizes[t]),
+           "size_label": kind.size_label}
+    keys = ("x_m_68", "x_m_95", "size_68", "size_95")
+    if not fits_noise:
+        return {**out, **dict.fromkeys(keys)}
     post = np.exp(ll - ll.max())
     px, pt = post.sum(axis=0), post.sum(axis=1)
-    return {"x_m": float(x_m[e]), "x_over_L": float(sens.x_over_L[e]), "hinge_flexibility": float(th[t]),
-            "x_m_68": _interval(x_m, px, 0.68, h), "x_m_95": _interval(x_m, px, 0.95, h),
-            "hinge_flexibility_68": _interval(*_scaled(th, pt), 0.68),
-            "hinge_flexibility_95": _interval(*_scaled(th, pt), 0.95)}
+    h = 0.5 * length_m / x_m.size                                        # half an element of the grid
+    return {**out, "x_m_68": _interval(x_m, px, 0.68, h), "x_m_95": _interval(x_m, px, 0.95, h),
+            "size_68": _interval(*_scaled(kind.sizes, pt), 0.68), "size_95": _interval(*_scaled(kind.sizes, pt), 0.95)}
 
 
-#: What would tell two explanations apart that the frequencies of these modes cannot.
-SEPARATE = {
-    frozenset({"slit", "support_change"}): "mode shapes near the support (a support change bends the beam "
-                                           "differently there, a slit changes the curvature at the slit) or a "
-                                           "higher mode",
-    frozenset({"slit", "mass_change"}): "a higher mode (a slit follows the curvature squared, a mass the "
-                                        "displacement squared) or mode shapes around the place",
-    frozenset({"support_change", "mass_change"}): "mode shapes near the support or a higher mode",
-}
-SEPARATE_DEFAULT = {"intact": "a second baseline day (the day-to-day scatter of these frequencies) or a higher mode",
-                    "global_stiffness": "the temperature of both test days, or a higher mode"}
+#: What tells an explanation that is no damage kind from any other (the damage kinds' own ``separates`` say what
+#: tells them from the others: :func:`separate`).
+SEPARATE_BASE = {"intact": "a second baseline day (the day-to-day scatter of these frequencies) or a higher mode",
+                 "global_stiffness": "the temperature of both test days, or a higher mode"}
+
+
+def separate(first: str, second: str) -> str:
+    """What measurement would tell two explanations apart that the frequencies of the measured modes cannot: a
+    damage kind's ``separates`` entry for the other (either kind's, for two kinds), else the base text of either."""
+    for a, b in ((first, second), (second, first)):
+        if a in DAMAGE_MODELS and b in DAMAGE_MODELS[a].separates:
+            return DAMAGE_MODELS[a].separates[b]
+    return next((SEPARATE_BASE[h] for h in (first, second) if h in SEPARATE_BASE), "a higher mode or mode shapes")
 
 
 def summary(rows: list[Hypothesis], modes) -> str:
     """The most likely explanation in words, and whether the next one can be told apart (Bayes factor < 3) and,
-    if not, what measurement would separate them (:data:`SEPARATE`)."""
+    if not, what measurement would separate them (:func:`separate`)."""
     best, second = rows[0], rows[1]
     text = (f"most likely explanation: {best.name} (probability {best.probability:.2f}, largest frequency misfit "
             f"{best.max_abs_frequency_error_pct:.2f} %)")
@@ -393,12 +441,9 @@ def summary(rows: list[Hypothesis], modes) -> str:
                 f"none of them describes, or a noisier test than weighed); " + text)
     if second.probability > best.probability / 3:
         gap = np.abs(best.predicted - second.predicted)
-        pair = frozenset({best.name, second.name})
-        how = SEPARATE.get(pair) or next((SEPARATE_DEFAULT[h] for h in (best.name, second.name)
-                                          if h in SEPARATE_DEFAULT), "a higher mode or mode shapes")
         text += (f"; {second.name} ({second.probability:.2f}) cannot be told apart from it on modes "
                  f"{', '.join(map(str, modes))} (their predicted changes differ by at most {100 * gap.max():.2f} %): "
-                 f"{how} would separate them")
+                 f"{separate(best.name, second.name)} would separate them")
     return text
 
 
@@ -418,12 +463,31 @@ def _support_curves(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_sprin
     return grid, curve, what, reclamp, shapes
 
 
-def shape_changes(eigenvectors) -> np.ndarray:
-    """Changes of the real unit-norm shapes between the two tests, the current shape's sign following the
-    baseline's (as the modal features take them): ``eigenvectors`` (n, 2, S, m) complex -> (n, S m), sensor-major
-    as :attr:`learn.sensitivity.Sensitivity.shape`."""
-    u = real_shapes(np.asarray(eigenvectors, complex))                   # (n, 2, S, m)
-    return (sign_aligned(u[:, 1], u[:, 0]) - u[:, 0]).reshape(u.shape[0], -1)
+def kind_explanations(model) -> dict:
+    """Each registered damage kind's explanation on the model's beam: its sizes over ``size_range`` and its
+    sensitivities averaged over ``spread_m``, both of the model's generator config for the model's own kind and of
+    the kind's defaults for the others."""
+    beam, cfg = model.beam, model.config
+    gen = cfg.get("generator_config") or {}
+    own = gen.get("damage") or {}
+    mapping = truth_beam_mapping(model)
+    out = {}
+    for name in DAMAGE_MODELS:
+        d = own if own.get("kind") == name else damage_defaults(name)
+        sens = sensitivity_of(beam, cfg.get("root_spring_relative"), cfg.get("truth_beam"),
+                              {**gen, "damage": {"kind": name}})
+        out[name] = kind_explanation(name, d, mapping, sens)
+    return out
+
+
+def kind_explanation(name: str, d: dict, beam, sens: Sensitivity, sizes=None) -> KindExplanation:
+    """The explanation of damage kind ``name`` of config section ``d`` on the truth beam ``beam`` (a preset name or
+    its mapping): ``sizes`` (default: :data:`N_SIZE` over the kind's ``size_range``) and the point sensitivities
+    ``sens`` (:func:`learn.sensitivity.beam_sensitivity` of that kind) averaged over its ``spread_m``."""
+    kind = DAMAGE_MODELS[name]
+    sizes = np.linspace(*kind.size_range(d, beam), N_SIZE) if sizes is None else np.asarray(sizes, float)
+    return KindExplanation(name, kind.perturbs, sizes, window_averaged(sens, kind.spread_m(d, sens.length_m)),
+                           kind.size_label)
 
 
 #: The verdict keys of :func:`explain`, all None for a pair without explanations.
@@ -445,22 +509,13 @@ def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD, shape_sigma=SHA
     normal variation measured on several baselines). ``frequency_change_std`` and ``shape_change_std`` of each
     result are then lists over the pair's modes (and sensors)."""
     beam, cfg = model.beam, model.config
-    truth = cfg.get("truth_beam") or {}
-    if "EI_Nm2" in truth:
-        EI, m = float(truth["EI_Nm2"]), float(truth["mass_per_length_kg_m"])
-    else:
-        p = beam_preset(beam.name)
-        EI, m = p.EI_Nm2, p.mass_per_length_kg_m
-    gen = cfg.get("generator_config") or {}
-    mass_all = sensitivity_of(beam, cfg.get("root_spring_relative"), truth, {**gen, "damage": {"kind": "mass_change"}})
+    truth = truth_beam_mapping(model)
+    EI, m = float(truth["EI_Nm2"]), float(truth["mass_per_length_kg_m"])
+    kinds_all = kind_explanations(model)
     days = cfg.get("day_changes") or {}
-    clamp = beam.test is None or beam.test.bc in ("clamped-free", "clamped-clamped")
+    clamped = (support(THESIS_SUPPORT) if beam.test is None else beam.test.support).clamped
     grid, curve_all, what, reclamp_all, shapes_all = _support_curves(
-        beam, EI, m, cfg.get("root_spring_relative"), tuple(days.get("root_spring_change") or ()) if clamp else ())
-    damage = gen.get("damage") or {}
-    theta_max = 0.2
-    if damage.get("kind", "slit") == "slit" and "ei_loss" in damage and "width_m" in damage:
-        theta_max = float(hinge_flexibility(max(damage["ei_loss"]), max(damage["width_m"]), beam.length_m))
+        beam, EI, m, cfg.get("root_spring_relative"), tuple(days.get("root_spring_change") or ()) if clamped else ())
     out = [None] * len(pairs)
     groups: dict = {}
     for i, pair in enumerate(pairs):
@@ -469,16 +524,16 @@ def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD, shape_sigma=SHA
     for (key, frequency_only), members in groups.items():
         k = np.asarray(key, int)
         f = np.abs(np.stack([np.asarray(pairs[i].eigenvalues) for i in members]))         # (n, 2, m)
-        support = (grid, curve_all[:, k], what, None if reclamp_all is None else reclamp_all[:, k])
-        sens = model.sensitivity.modes(k)
+        support_grid = (grid, curve_all[:, k], what, None if reclamp_all is None else reclamp_all[:, k])
+        kinds = {name: kind.modes(k) for name, kind in kinds_all.items()}
         cols = (np.arange(shapes_all.shape[1] // n_all)[:, None] * n_all + k[None]).ravel()   # sensor-major
         shapes = None
-        if not frequency_only and np.asarray(sens.shape).shape[0] == cols.size:
+        if not frequency_only and all(np.asarray(v.sens.shape).shape[0] == cols.size for v in kinds.values()):
             shapes = shape_changes(np.stack([np.asarray(pairs[i].eigenvectors) for i in members]))
         s = sigma if np.ndim(sigma) == 0 else np.asarray(sigma, float)[k]
         ss = shape_sigma if np.ndim(shape_sigma) == 0 else np.asarray(shape_sigma, float)[:, k].ravel()
-        ranked = weigh_many(f[:, 1] / f[:, 0] - 1.0, sens, mass_all.modes(k), support,
-                            days.get("temperature_stiffness_change", (-0.004, 0.004)), theta_max=theta_max,
+        ranked = weigh_many(f[:, 1] / f[:, 0] - 1.0, kinds, support_grid,
+                            days.get("temperature_stiffness_change", (-0.004, 0.004)),
                             sigma=s, length_m=beam.length_m, shapes=shapes,
                             support_shapes=shapes_all[:, cols], shape_sigma=ss)
         modes = [beam.modes[j] for j in key]

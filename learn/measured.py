@@ -8,7 +8,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from learn.features import BeamSpec, real_shapes
+from learn.features import BeamSpec
+from learn.shapes import real_shapes
 from physics.errors import BeamDamageError
 from physics.identification import identify_frf
 from physics.io import (MeasuredFRF, map_frf_dofs, map_measured_dofs, parse_dof, prepare_measured,

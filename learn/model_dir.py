@@ -30,24 +30,23 @@ from pathlib import Path
 
 import numpy as np
 
+from datagen.damage import DEFAULT_KIND
 from learn.features import BeamSpec
 from learn.sensitivity import beam_sensitivity
-from learn.verdict import verdict_text
+from learn.verdict import DamageWords, verdict_text
 from physics.beam import load_beam
 from physics.io.inputs import check_input_file
 from physics.errors import BeamDamageError, FileFormatError
 from physics.io import atomic_write_bytes, atomic_write_text, read_json
-from physics.properties import beam_preset
+from physics.properties import PRESETS, beam_preset
 from physics.effects import effect_of
 
-__all__ = ["DEFAULT_ROUTE", "MODEL_FORMAT", "READ_FORMATS", "REFERENCE_WIDTH_M", "TrainedModel", "json_default",
-           "load_model", "save_model", "sensitivity_of"]
+__all__ = ["DEFAULT_ROUTE", "MODEL_FORMAT", "READ_FORMATS", "TrainedModel", "json_default",
+           "load_model", "save_model", "sensitivity_of", "truth_beam_mapping"]
 
 
 #: Input route used by default (the winner of ``python -m experiments.benches.bench_learn``).
 DEFAULT_ROUTE = "modal"
-#: Width assumed when a hinge flexibility is turned into a slit depth (m): middle of the training widths.
-REFERENCE_WIDTH_M = 0.0055
 MODEL_FORMAT = "beam-damage-model/4"
 #: Formats :func:`load_model` reads: format 3 differs only in networks that need every mode.
 READ_FORMATS = ("beam-damage-model/3", MODEL_FORMAT)
@@ -112,13 +111,15 @@ class TrainedModel:
 
     @property
     def damage_kind(self) -> str:
-        """The damage kind of the training data (``damage.kind`` of its generator config; a slit by default)."""
-        return ((self.config.get("generator_config") or {}).get("damage") or {}).get("kind", "slit")
+        """The damage kind of the training data (``damage.kind`` of its generator config; the default kind when it
+        records none)."""
+        return ((self.config.get("generator_config") or {}).get("damage") or {}).get("kind", DEFAULT_KIND)
 
     def verdict_text(self, result: dict) -> str:
         """The verdict of one classified pair as a reader sees it, in the words of the model's damage kind
-        (:func:`learn.verdict.verdict_text`)."""
-        return verdict_text(result, self.damage_kind)
+        (:func:`learn.verdict.verdict_text`: its ``describe`` on the model's truth beam and section)."""
+        gen = self.config.get("generator_config") or {}
+        return verdict_text(result, DamageWords(self.damage_kind, truth_beam_mapping(self), gen.get("section")))
 
 
 def save_model(out_dir, config: dict, networks: dict) -> None:
@@ -155,7 +156,7 @@ def load_model(model_dir, device=None) -> TrainedModel:
                               "(fields and features differ between formats): re-create the model with "
                               "'beam-damage train'")
     for key, kind in (("route", str), ("networks", dict), ("beam", dict), ("classical_thresholds", dict),
-                      ("best_classical", str), ("reference_width_m", float)):
+                      ("best_classical", str)):
         if not isinstance(config.get(key), kind):
             raise FileFormatError(f"{cfg_path}: field {key!r} missing or not a {kind.__name__}; "
                                   f"re-create the model with 'beam-damage train'")
@@ -190,12 +191,27 @@ def json_default(obj):
     raise TypeError(f"{type(obj).__name__} is not JSON serialisable")
 
 
+def truth_beam_mapping(model) -> dict:
+    """The truth beam's mapping a model (its ``beam`` and ``config``) records, over its preset's fields (a beam named
+    after a preset; the preset's alone when it records none), with the generator config's ``section`` keys: what a
+    damage kind's ``size_range`` and ``describe`` read."""
+    truth = model.config.get("truth_beam") or {}
+    base = {}
+    if model.beam.name in PRESETS:
+        p = beam_preset(model.beam.name)
+        base = {"name": p.name, "EI_Nm2": p.EI_Nm2, "mass_per_length_kg_m": p.mass_per_length_kg_m,
+                "length_m": p.length_m, "width_m": p.width_m, "thickness_m": p.thickness_m}
+    if "EI_Nm2" not in truth:
+        truth = {}
+    return {**base, **truth, **((model.config.get("generator_config") or {}).get("section") or {})}
+
+
 def sensitivity_of(beam: BeamSpec, config_root_spring=None, truth_beam: dict | None = None,
                    generator_config: dict | None = None):
     """FE sensitivities of the truth beam a dataset or model records (its preset when it records none; its EI and
     mass, and the added masses of the generator config's beam file), to the damage kind of its generator config
-    (slits when it records none)."""
-    kind = ((generator_config or {}).get("damage") or {}).get("kind", "slit")
+    (the default kind when it records none)."""
+    kind = ((generator_config or {}).get("damage") or {}).get("kind", DEFAULT_KIND)
     if truth_beam and "EI_Nm2" in truth_beam:
 
         effects = ((generator_config or {}).get("beam") or {}).get("effects") or {}   # the beam file's

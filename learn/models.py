@@ -7,8 +7,8 @@ Heads
 ``locate``   logits over ``n_bins`` equal bins of ``x / L`` (a distribution along the beam).
 ``support``  one logit of "the supports changed beyond re-clamping" (an intact specimen, datasets with
              ``specimen.support_change_fraction`` > 0; untrained otherwise).
-``size``     mean and log standard deviation of ``ln`` damage size (a slit's hinge flexibility,
-             :func:`learn.features.labels`)
+``size``     mean and log standard deviation of the damage size through its kind's ``size_transform``
+             (:class:`learn.size.SizeTransform`, :func:`learn.features.labels`)
              (the mean by least squares, the spread by the Gaussian negative log-likelihood of the mean's
              residuals; damaged pairs only).
 """
@@ -76,7 +76,7 @@ def loss_terms(out: dict, damaged: torch.Tensor, loc_target: torch.Tensor, log_s
     damaged : (B,) float 0/1
     support : (B,) float 0/1, optional   supports changed beyond re-clamping (no ``support`` term without it)
     loc_target : (B, n_bins) soft target distribution (rows of intact pairs are ignored)
-    log_size : (B,) ``ln`` hinge flexibility (ignored where intact)
+    log_size : (B,) the transformed size (ignored where intact)
     """
     det = nn.functional.binary_cross_entropy_with_logits(out["detect"], damaged)
     m = damaged > 0.5

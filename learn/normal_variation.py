@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from learn.features import real_shapes, sign_aligned
+from learn.shapes import real_shapes, sign_aligned
 from learn.measured import modal_pair
 from physics.errors import BeamDamageError
 

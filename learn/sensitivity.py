@@ -1,8 +1,8 @@
 """FE sensitivities of the measured modal data to the size of a damage in each element.
 
 What a unit size changes comes from the damage model's ``perturbs``
-(:mod:`datagen.damage`). A stiffness damage (a slit: size the hinge flexibility
-``theta = EI / (k_theta L)``, :func:`datagen.damage.slit.hinge_flexibility`)
+(:mod:`datagen.damage`). A stiffness damage (size: the hinge flexibility
+``theta = EI / (k_theta L)`` its rigidity loss amounts to, e.g. a slit's)
 inside element ``e`` of length ``l_e`` of the nominal cantilever changes the
 element stiffness, to first order, by ``dK ~ -(EI L theta / l_e) K_e^1``
 (``K_e^1`` the element stiffness for ``EI = 1``, eq. 3.9), so for a
@@ -10,12 +10,12 @@ mass-normalised undamped mode ``phi_r``
 
     ``d f_r / f_r = d(omega_r^2) / (2 omega_r^2) = -EI L theta phi_r^T K_e^1 phi_r / (2 l_e omega_r^2)``,
 
-i.e. the curvature squared at the damage. A mass damage (a mass change: size
-the mass ratio ``mu = m_k / (m L)``) spread over element ``e`` adds
+i.e. the curvature squared at the damage. A mass damage (size: the signed
+mass ratio ``mu = m_k / (m L)``) spread over element ``e`` adds
 ``dM = (m L mu / l_e) M_e^1`` (``M_e^1`` the consistent element mass for unit
 mass per length, eq. 3.8), so ``d f_r / f_r = -m L mu phi_r^T M_e^1 phi_r / (2 l_e)``,
 the displacement squared there. Shape sensitivities are finite differences of the real, unit-norm shapes at the
-measured DOFs (:func:`learn.features.real_shapes`). The same numbers serve the
+measured DOFs (:func:`learn.shapes.real_shapes`). The same numbers serve the
 classical methods (Cawley-Adams, DLAC/MDLAC, sensitivity updating) and the
 classifier's "detectable here" rule.
 """
@@ -27,8 +27,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from datagen.damage import damage_model
-from learn.features import real_shapes, sign_aligned
+from datagen.damage import DEFAULT_KIND, damage_model
+from learn.shapes import real_shapes, sign_aligned
 from physics.effects import hermite_row, point_mass_matrix
 from physics.fem import beam_model, element_mass, element_stiffness
 from physics.modal import undamped_modes
@@ -75,11 +75,11 @@ class Sensitivity:
         shape = self.shape.reshape(-1, m, self.n_elements)[:, k].reshape(-1, self.n_elements)
         return replace(self, frequency=self.frequency[k], shape=shape, frequencies_hz=self.frequencies_hz[k])
 
-    def largest_drop(self, x_over_L, hinge_flexibility):
+    def largest_drop(self, x_over_L, size):
         """Largest first-order relative frequency change (either sign: a rise is a change too) of a damage of that
         signed size (batched), >= 0."""
         e = self.element_of(np.nan_to_num(x_over_L))
-        return np.max(np.abs(self.frequency[:, e]), axis=0) * np.abs(np.asarray(hinge_flexibility, float))
+        return np.max(np.abs(self.frequency[:, e]), axis=0) * np.abs(np.asarray(size, float))
 
 def _beam_numbers(preset) -> tuple[float, float, float, tuple]:
     """``(length_m, EI_Nm2, mass_per_length_kg_m, added masses)`` of a preset name or of such a tuple (the added
@@ -103,7 +103,7 @@ def _with_masses(models, masses, length_m: float, n_elements: int):
 
 @lru_cache(maxsize=16)
 def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7, n_elements: int = 40,
-                     n_modes: int = 4, step: float = 0.01, kind: str = "slit", test=None) -> Sensitivity:
+                     n_modes: int = 4, step: float = 0.01, kind: str = DEFAULT_KIND, test=None) -> Sensitivity:
     """Sensitivities of the nominal beam (clamped, or on a root spring ``k_r L / EI``) to damage of ``kind``.
 
     Parameters

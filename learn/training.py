@@ -10,13 +10,13 @@ import numpy as np
 import pandas as pd
 from tqdm.auto import tqdm
 
-from datagen.damage import damage_model
+from datagen.damage import DEFAULT_KIND, damage_model
 from datagen.store import package_version
 from learn.classical import run_classical
 from learn.estimator import DamageClassifier
 from learn.evaluate import figures, metrics, table_rows
 from learn.features import ROUTES, Pairs, feature_modes, features, labels, load_pairs, split_by_specimen
-from learn.model_dir import (DEFAULT_ROUTE, MODEL_FORMAT, REFERENCE_WIDTH_M, TrainedModel, json_default, save_model,
+from learn.model_dir import (DEFAULT_ROUTE, MODEL_FORMAT, TrainedModel, json_default, save_model,
                              sensitivity_of)
 from learn.verdict import detectability_threshold, network_output
 from physics.errors import BeamDamageError
@@ -28,10 +28,10 @@ __all__ = ["DAY_CHANGES", "MODE_ROUTES", "damping_ratio_range", "dataset_frfs", 
 
 
 def targets(pairs: Pairs) -> tuple[np.ndarray, dict]:
-    """``y`` (n, 4) = [damaged, x/L, hinge flexibility, supports changed] and the full truth dict of
+    """``y`` (n, 4) = [damaged, x/L, size, supports changed] and the full truth dict of
     :func:`labels`."""
     t = labels(pairs.table, pairs.beam)
-    return np.stack([t["damaged"].astype(float), t["x_over_L"], t["hinge_flexibility"],
+    return np.stack([t["damaged"].astype(float), t["x_over_L"], t["size"],
                      t["support_changed"].astype(float)], axis=1), t
 
 
@@ -101,7 +101,7 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
     load_s = time.perf_counter() - t0
     sens = sensitivity_of(pairs.beam, _nominal_root_spring(pairs.source), pairs.source[0].get("truth_beam"),
                           pairs.source[0].get("config"))
-    kind = ((pairs.source[0].get("config") or {}).get("damage") or {}).get("kind", "slit")
+    kind = ((pairs.source[0].get("config") or {}).get("damage") or {}).get("kind", DEFAULT_KIND)
     params = dict(epochs=epochs, random_state=seed, n_threads=threads, verbose=progress,
                   size_transform=damage_model(kind).size_transform)
     if pairs.beam.test is not None:
@@ -124,7 +124,7 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
         "root_spring_relative": _nominal_root_spring(pairs.source),
         "truth_beam": pairs.source[0]["truth_beam"], "day_changes": changes,
         "detect_min_drop": detectability_threshold(),
-        "reference_width_m": REFERENCE_WIDTH_M, "classical_thresholds": thresholds, "best_classical": best.method,
+        "classical_thresholds": thresholds, "best_classical": best.method,
         "split": {"train_pairs": int(len(tr)), "test_pairs": int(len(te)), "by": "specimen"},
         "train_seconds": fit_s, "load_seconds": load_s, "package_version": package_version(),
         "test_metrics": [m for m in rows if m["subset"] == "all"],

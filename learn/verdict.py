@@ -3,13 +3,12 @@ and the verdict as a reader sees it."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from datagen.config import DEFAULTS
-from datagen.damage import DAMAGE_MODELS
-from datagen.damage.slit import equivalent_depth as slit_depth
+from datagen.damage import DAMAGE_MODELS, DEFAULT_KIND, damage_model
 from learn.classical import MethodOutput
 from learn.evaluate import MIN_DROP
 from learn.features import as_spec
@@ -18,27 +17,27 @@ from physics.io import dof_positions_text
 if TYPE_CHECKING:  # torch: the network is loaded only where one runs
     from learn.estimator import DamageClassifier
 
-__all__ = ["DAMAGE_EXPLANATIONS", "IN_DISTRIBUTION_PERCENTILE", "agreement", "classical_answer", "classical_verdict",
-           "detectability_threshold", "equivalent_depth", "network_answer", "network_output", "noise_text",
-           "normal_variation_text", "ood_percentile", "verdict_text"]
+__all__ = ["IN_DISTRIBUTION_PERCENTILE", "DamageWords", "agreement", "classical_answer", "classical_verdict",
+           "detectability_threshold", "network_answer", "network_output", "noise_text", "normal_variation_text",
+           "ood_percentile", "verdict_text"]
 
 #: Training percentile of the Mahalanobis distance above which a pair counts as outside the training data.
 IN_DISTRIBUTION_PERCENTILE = 99.9
 
 
 def detectability_threshold() -> float:
-    """Largest first-order frequency drop below which a slit counts as not detectable (0.2 %)."""
+    """Largest first-order frequency change below which a damage counts as not detectable (0.2 %)."""
     return MIN_DROP
 
 
 def network_output(est: DamageClassifier, X, sens, name="network") -> tuple[MethodOutput, object]:
     """Network answers as a :class:`MethodOutput` plus the full :class:`learn.estimator.DamagePrediction`."""
     d = est.predict_details(X)
-    detectable = sens.largest_drop(d.x_over_L, d.hinge_flexibility) >= detectability_threshold()
+    detectable = sens.largest_drop(d.x_over_L, d.size) >= detectability_threshold()
     out = MethodOutput(name, d.probability_damaged, d.probability_damaged >= d.threshold, d.x_over_L,
-                       d.hinge_flexibility,
+                       d.size,
                        probability=d.probability_damaged, x_std_over_L=d.x_std_over_L,
-                       hinge_flexibility_std=d.hinge_flexibility_std, detectable=detectable)
+                       size_std=d.size_std, detectable=detectable)
     return out, d
 
 
@@ -61,16 +60,16 @@ def zone_keys(beam, zone: int, probabilities=None) -> dict:
             "element_probabilities": p if thesis else None}
 
 
-def network_answer(d, i, out, beam, depth) -> dict:
+def network_answer(d, i, out, beam) -> dict:
     beam = as_spec(beam)
     L = beam.length_m
     return {"damaged": bool(out.damaged[i]), "probability_damaged": float(d.probability_damaged[i]),
             "location_x_over_L": float(d.x_over_L[i]), "location_x_m": float(d.x_over_L[i] * L),
             "location_std_m": float(d.x_std_over_L[i] * L),
             **zone_keys(beam, d.element[i], d.element_probabilities[i]),
-            "hinge_flexibility": float(d.hinge_flexibility[i]),
-            "hinge_flexibility_std": float(d.hinge_flexibility_std[i]),
-            "depth_m": depth, "detectable": bool(out.detectable[i]), "decision_threshold": float(d.threshold[i]),
+            "size": float(d.size[i]),
+            "size_std": float(d.size_std[i]),
+            "detectable": bool(out.detectable[i]), "decision_threshold": float(d.threshold[i]),
             **support_answer(d, i)}
 
 
@@ -85,34 +84,48 @@ def support_answer(d, i) -> dict:
 
 def classical_answer(o: MethodOutput, i, beam) -> dict:
     beam = as_spec(beam)
-    zone = {k: v for k, v in zone_keys(beam, beam.zone_of(o.x_over_L[i])).items() if "probabilities" not in k}
+    zone = zone_keys(beam, beam.zone_of_x_over_L(o.x_over_L[i]))
+    zone = {k: v for k, v in zone.items() if "probabilities" not in k}
     return {"method": o.name, "damaged": bool(o.damaged[i]), "location_x_over_L": float(o.x_over_L[i]),
             "location_x_m": float(o.x_over_L[i] * beam.length_m), **zone,
-            "hinge_flexibility": float(o.hinge_flexibility[i]), "score": float(o.score[i])}
+            "size": float(o.size[i]), "score": float(o.score[i])}
 
 
 
-def classical_verdict(cl: dict, sens, depth, beam=None) -> dict:
+def classical_verdict(cl: dict, sens, beam=None) -> dict:
     """The verdict keys from the classical method's answer ``cl`` (no probabilities or spreads)."""
-    detectable = sens.largest_drop(np.array([cl["location_x_over_L"]]), np.array([cl["hinge_flexibility"]]))[0]
+    detectable = sens.largest_drop(np.array([cl["location_x_over_L"]]), np.array([cl["size"]]))[0]
     return {"damaged": cl["damaged"], "probability_damaged": None, "decision_threshold": None,
             "location_x_over_L": cl["location_x_over_L"], "location_x_m": cl["location_x_m"],
             "location_std_m": None, "location_element": cl["location_element"],
             "location_zone": cl["location_zone"], "zone_edges_m": cl["zone_edges_m"], "zone_probabilities": None,
-            "element_probabilities": None, "hinge_flexibility": cl["hinge_flexibility"],
-            "hinge_flexibility_std": None, "depth_m": depth(cl["hinge_flexibility"]),
+            "element_probabilities": None, "size": cl["size"],
+            "size_std": None,
             "detectable": bool(detectable >= detectability_threshold()),
             "probability_support_change": None, "support_changed": None}
 
 
 
-def equivalent_depth(hinge_flexibility: float, preset, width_m: float) -> float | None:
-    """Depth (m) of a slit ``width_m`` wide of that hinge flexibility (:func:`datagen.damage.slit.equivalent_depth`)."""
-    return slit_depth(hinge_flexibility, preset, width_m, DEFAULTS["section"])
+@dataclass(frozen=True)
+class DamageWords:
+    """How a verdict speaks of a damage: the model's damage kind's prose (``describe``) on its truth beam
+    (``preset``: a preset name or the truth beam's mapping; ``section``: the generator config's section keys)."""
+
+    kind: str = DEFAULT_KIND
+    preset: object = None
+    section: dict | None = None
+
+    @property
+    def size_label(self) -> str:
+        return damage_model(self.kind).size_label
+
+    def what(self, a: dict) -> str:
+        """The kind's description of the damage of answer ``a`` (its ``location_x_m`` and ``size``)."""
+        return damage_model(self.kind).describe(a["location_x_m"], a["size"], self.preset, self.section)
 
 
-def _network_sentence(a: dict, kind: str = "slit") -> str:
-    return _damage_sentence(a, kind) + _support_sentence(a)
+def _network_sentence(a: dict, words: DamageWords) -> str:
+    return _damage_sentence(a, words) + _support_sentence(a)
 
 
 def _support_sentence(a: dict) -> str:
@@ -122,25 +135,16 @@ def _support_sentence(a: dict) -> str:
             "a clamp, bearing or suspension stiffer or softer than on the baseline day)")
 
 
-def _damage_sentence(a: dict, kind: str = "slit") -> str:
-    if kind != "slit":        # the damage kind's own prose for its size (a mass change: a signed mass ratio)
-        what = DAMAGE_MODELS[kind].describe(a["location_x_m"], a["hinge_flexibility"], None)
-        if not a["damaged"]:
-            return f"no change detected (probability of a change {a['probability_damaged']:.1%}{_threshold_text(a)})"
-        return (f"changed (probability {a['probability_damaged']:.1%}{_threshold_text(a)}): {what} (location +- "
-                f"{a['location_std_m']:.3f} m, {_zone_text(a)})")
+def _damage_sentence(a: dict, words: DamageWords) -> str:
     if not a["damaged"]:
         return f"no damage detected (probability of damage {a['probability_damaged']:.1%}{_threshold_text(a)})"
     if not a["detectable"]:
-        return (f"possibly damaged (probability {a['probability_damaged']:.1%}), but not detectable here: a slit like "
-                f"the one that would explain the data, near x = {a['location_x_m']:.3f} m, changes the natural "
-                "frequencies by less than the measurement resolution")
-    depth = "" if a["depth_m"] is None else f", e.g. a slit {a['depth_m'] * 1000:.2f} mm deep over 5.5 mm"
-    return (f"damaged (probability {a['probability_damaged']:.1%}{_threshold_text(a)}): slit at x = "
-            f"{a['location_x_m']:.3f} m +- "
-            f"{a['location_std_m']:.3f} m (x/L = {a['location_x_over_L']:.2f}, {_zone_text(a)}), hinge flexibility "
-            f"EI/(k L) = {a['hinge_flexibility']:.3g} +- {a['hinge_flexibility_std']:.2g}"
-            f"{depth}")
+        return (f"possibly damaged (probability {a['probability_damaged']:.1%}), but not detectable here: a damage "
+                f"like the one that would explain the data ({words.what(a)}) changes the natural frequencies by less "
+                "than the measurement resolution")
+    size_std = "" if a.get("size_std") is None else f"; {words.size_label} +- {a['size_std']:.2g}"
+    return (f"damaged (probability {a['probability_damaged']:.1%}{_threshold_text(a)}): {words.what(a)} (location +- "
+            f"{a['location_std_m']:.3f} m, x/L = {a['location_x_over_L']:.2f}, {_zone_text(a)}{size_std})")
 
 
 def _threshold_text(a: dict) -> str:
@@ -166,14 +170,10 @@ def _zone_text(a: dict) -> str:
     return f"zone {z} of {len(edges) - 1}, {edges[z - 1]:.3g}-{edges[z]:.3g} m"
 
 
-def _classical_sentence(c: dict, kind: str = "slit") -> str:
+def _classical_sentence(c: dict, words: DamageWords) -> str:
     if not c["damaged"]:
         return f"{c['method']}: undamaged"
-    if kind != "slit":
-        what = DAMAGE_MODELS[kind].describe(c["location_x_m"], c["hinge_flexibility"], None)
-        return f"{c['method']}: changed, {what} ({_zone_text(c)})"
-    return (f"{c['method']}: damaged, x = {c['location_x_m']:.3f} m ({_zone_text(c)}), hinge "
-            f"flexibility {c['hinge_flexibility']:.3g}")
+    return f"{c['method']}: damaged, {words.what(c)} ({_zone_text(c)})"
 
 
 def explained_text(res: dict) -> str:
@@ -182,18 +182,15 @@ def explained_text(res: dict) -> str:
     return "frequency and shape changes" if res.get("shape_change_std") else "frequency changes"
 
 
-#: What each explanation says of damage.
-DAMAGE_EXPLANATIONS = ("slit", "mass_change")
-
-
 def agreement(verdict: dict, net, cl, hypotheses, source: str) -> dict:
     """Whether the network, the classical method and the competing explanations tell one story about damage:
     ``{"network", "classical", "explanations", "agree", "text"}`` (None for an answer not given; the
-    explanations' answer is the most likely one's name, a damage when it is a slit or a mass change)."""
+    explanations' answer is the most likely one's name, a damage when it is a damage kind of
+    :data:`datagen.damage.DAMAGE_MODELS`)."""
     best = hypotheses[0] if hypotheses else None
     votes = {"network": None if net is None else bool(net["damaged"]),
              "classical": None if cl is None else bool(cl["damaged"]),
-             "explanations": None if best is None else best["name"] in DAMAGE_EXPLANATIONS}
+             "explanations": None if best is None else best["name"] in DAMAGE_MODELS}
     given = {k: v for k, v in votes.items() if v is not None}
     agree = len(set(given.values())) <= 1
     said = {"network": f"the network {'calls it damaged' if votes['network'] else 'finds no damage'}",
@@ -214,20 +211,21 @@ def agreement(verdict: dict, net, cl, hypotheses, source: str) -> dict:
     return {**votes, "agree": agree, "text": text}
 
 
-def verdict_text(res: dict, kind: str = "slit") -> str:
-    """The verdict as a reader sees it: the answer, where it comes from, both methods, the caveats."""
+def verdict_text(res: dict, words: DamageWords = DamageWords()) -> str:
+    """The verdict as a reader sees it: the answer, where it comes from, both methods, the caveats; the damage in
+    the words of the model's damage kind (``words``)."""
     net, cl = res["network"], res["classical"]
     modes = res["identification"].get("modes_classified") or []
     partial = bool(modes) and len(modes) < res["identification"].get("n_modes", 4)
     on = f" on modes {', '.join(map(str, modes))}" if partial else ""
     if res["verdict_from"] == "network":
-        head = f"Verdict (network{on}): " + _network_sentence(net, kind) + "."
+        head = f"Verdict (network{on}): " + _network_sentence(net, words) + "."
     elif net is None:
         need = modes_text(res["identification"].get("modes_model", [1, 2, 3, 4]))
         head = (f"Verdict (classical method on modes {', '.join(map(str, modes))}, the network needs modes {need}): "
-                + _classical_sentence(cl, kind) + ".")
+                + _classical_sentence(cl, words) + ".")
     else:
-        head = ("Verdict (classical method, the pair lies outside the training data): " + _classical_sentence(cl, kind)
+        head = ("Verdict (classical method, the pair lies outside the training data): " + _classical_sentence(cl, words)
                 + ".")
     lines = [head[:1].upper() + head[1:]]
     if net is None:
@@ -239,8 +237,8 @@ def verdict_text(res: dict, kind: str = "slit") -> str:
             what = "Element" if net.get("location_element") is not None else "Zone"
             lines.append(f"{what} probabilities (network): " + ", ".join(f"{k + 1}: {v:.2f}" for k, v in
                                                                          enumerate(net["zone_probabilities"])))
-        lines.append(f"Network: {_network_sentence(net, kind)}.")
-    lines.append(f"Classical ({cl['method']}, the best on the training data): {_classical_sentence(cl, kind)}."
+        lines.append(f"Network: {_network_sentence(net, words)}.")
+    lines.append(f"Classical ({cl['method']}, the best on the training data): {_classical_sentence(cl, words)}."
                  if cl else "Classical: no answer (fewer than 2 modes identified in both tests).")
     if net is None:
         lines.append(f"Input route: {res['input_route']}; in distribution: no.")
@@ -261,7 +259,7 @@ def verdict_text(res: dict, kind: str = "slit") -> str:
                          + ", ".join(f"{p['frequency_hz']:.2f} Hz -> "
                                      + (f"mode {p['mode']}" if p["mode"] is not None else "none (unpaired)")
                                      for p in poles))
-    for name, d in res["dof_positions"].items():
+    for name, d in (res.get("dof_positions") or {}).items():
         lines.append(f"{name}: " + (dof_positions_text(d) if d else "modal data without DOF labels: rows taken as "
                                                                   "the model's DOFs"))
     if res.get("location_ambiguity"):

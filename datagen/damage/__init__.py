@@ -23,9 +23,22 @@ A damage model turns its section of the configuration (``damage``, selected by
 * ``size_transform`` is how the network's size head learns the size: ``"log"`` (a positive size)
   or ``"asinh:<scale>"`` (a signed size, ``asinh(size / scale)``), read by
   :class:`learn.estimator.DamageClassifier`;
+* ``size_label`` names the size in tables and the verdict (e.g. ``"hinge flexibility"``);
 * ``perturbs`` ("stiffness" or "mass") says which element matrix a unit size
   changes to first order, for the classical methods' sensitivities
-  (:func:`learn.sensitivity.beam_sensitivity`);
+  (:func:`learn.sensitivity.beam_sensitivity`) and the competing explanations' frequency map
+  (:mod:`learn.hypotheses`). A stiffness kind's size is the hinge flexibility
+  ``EI / (k_theta L)`` its local rigidity loss amounts to, a mass kind's the signed mass ratio
+  ``m_k / (m L)``: the first-order relative frequency change per unit size is then the same
+  curvature-squared (displacement-squared) sensitivity for every kind of that ``perturbs``;
+* ``size_range(d, beam)`` is the ``(lo, hi)`` of the sizes a dataset of section ``d`` draws on the
+  truth beam ``beam`` (a preset name, or the truth beam's mapping, which may carry the config's
+  ``section`` keys): the flat prior of the kind's competing explanation;
+* ``spread_m(d, length_m)`` is the typical length (m) such a damage spreads over: the explanation
+  averages the point sensitivities over a window of that length;
+* ``separates`` says, for another explanation (``"intact"``, ``"global_stiffness"``,
+  ``"support_change"`` or another kind), what measurement tells this kind from it when the
+  frequencies of the measured modes cannot;
 * ``describe(x_m, size, preset, section=None)`` is the verdict's prose for a
   damage of that size at ``x_m`` on a beam (``preset``: a preset name or the
   truth beam's fields; ``section``: the config's section keys).
@@ -61,8 +74,14 @@ class DamageModel(Protocol):
     units: dict
     sample_units: dict
     size_meaning: str
+    size_label: str
     size_transform: str
     perturbs: str
+    separates: dict
+
+    def size_range(self, d: dict, beam) -> tuple[float, float]: ...
+
+    def spread_m(self, d: dict, length_m: float) -> float: ...
 
     def validate(self, d: dict, cfg: dict) -> None: ...
 

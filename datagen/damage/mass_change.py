@@ -136,7 +136,17 @@ class MassChange:
     size_meaning = "signed mass ratio m / (m_per_length L): > 0 mass added, < 0 mass lost"
     #: The size head learns ``asinh(size / scale)``: signed, linear below ``scale``, logarithmic above.
     size_transform = "asinh:0.01"
+    size_label = "mass ratio"
     perturbs = "mass"
+    separates = {"support_change": "mode shapes near the support or a higher mode"}
+
+    def size_range(self, d: dict, beam) -> tuple[float, float]:
+        """The ``mass_ratio`` range (signed)."""
+        return float(d["mass_ratio"][0]), float(d["mass_ratio"][1])
+
+    def spread_m(self, d: dict, length_m: float) -> float:
+        """The middle of the lengths ``width_fraction * L`` (m)."""
+        return 0.5 * (d["width_fraction"][0] + d["width_fraction"][1]) * length_m
 
     def validate(self, d: dict, cfg: dict) -> None:
         d["n_masses"] = value_range("damage.n_masses", d["n_masses"], lo=0, hi=8, integer=True)

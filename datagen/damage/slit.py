@@ -54,7 +54,7 @@ from __future__ import annotations
 import numpy as np
 
 from datagen.checks import value_range
-from datagen.specimen import SectionLayout
+from datagen.specimen import DEFAULT_SECTION, SectionLayout
 from physics.errors import ConfigError
 from physics.properties import beam_preset, section_ei
 
@@ -328,6 +328,22 @@ def _beam_fields(preset):
     return preset["EI_Nm2"], preset["width_m"], preset["thickness_m"], preset["length_m"]
 
 
+def _section_keys(beam, section: dict | None) -> dict:
+    """``face_thickness_m`` and ``core_modulus_pa``: of ``section``, else of the truth beam's mapping, else the
+    configuration's defaults."""
+    if section is not None:
+        return section
+    if isinstance(beam, dict) and "face_thickness_m" in beam and "core_modulus_pa" in beam:
+        return beam
+    return DEFAULT_SECTION
+
+
+def _layout(preset, section: dict) -> tuple[SectionLayout, float]:
+    """The layered section matching a preset's or a truth beam's EI, and its length (m)."""
+    EI, width, thickness, length = _beam_fields(preset)
+    return SectionLayout.matching(EI, width, thickness, section["face_thickness_m"], section["core_modulus_pa"]), length
+
+
 def equivalent_depth(flexibility: float, preset, width_m: float, section: dict) -> float | None:
     """Depth (m) of a slit ``width_m`` wide whose hinge flexibility ``w r / ((1 - r) L)`` is the given one.
 
@@ -336,9 +352,8 @@ def equivalent_depth(flexibility: float, preset, width_m: float, section: dict) 
     ``core_modulus_pa``). ``preset``: a preset name or a truth beam's mapping. None when even a cut to
     mid-thickness would not be that flexible.
     """
-    EI, width, thickness, length = _beam_fields(preset)
-    lay = SectionLayout.matching(EI, width, thickness, section["face_thickness_m"], section["core_modulus_pa"])
-    depths = np.linspace(0.0, 0.999 * thickness / 2, 4000)
+    lay, length = _layout(preset, section)
+    depths = np.linspace(0.0, 0.999 * lay.thickness_m / 2, 4000)
     curve = hinge_flexibility(1.0 - slit_section_ei(lay, depths) / lay.EI, width_m, length)
     if not np.isfinite(flexibility) or flexibility > curve[-1]:
         return None
@@ -365,9 +380,30 @@ class Slit:
              "damping_s": "s"}
     sample_units = {"stiffness_loss_Nm3": "N m^3 (sum over slits of dEI * width)"}
     size_meaning = "hinge flexibility EI / (k_theta L) = w r / ((1 - r) L)"
+    size_label = "hinge flexibility"
     #: The size head learns ``log(size)``: a slit's hinge flexibility is positive.
     size_transform = "log"
     perturbs = "stiffness"
+    separates = {
+        "support_change": "mode shapes near the support (a support change bends the beam differently there, a "
+                          "slit changes the curvature at the slit) or a higher mode",
+        "mass_change": "a higher mode (a slit follows the curvature squared, a mass the displacement squared) or "
+                       "mode shapes around the place",
+    }
+
+    def size_range(self, d: dict, beam) -> tuple[float, float]:
+        """``(0, theta_max)``: the hinge flexibility of the deepest slit (its ``ei_loss`` or ``depth_m`` range's
+        top, the section of ``beam``'s mapping or the defaults) over the widest width."""
+        lay, length = _layout(beam, _section_keys(beam, None))
+        if d.get("ei_loss"):
+            loss = max(d["ei_loss"])
+        else:
+            loss = 1.0 - float(slit_section_ei(lay, max(d["depth_m"]))) / lay.EI
+        return 0.0, float(hinge_flexibility(loss, max(d["width_m"]), length))
+
+    def spread_m(self, d: dict, length_m: float) -> float:
+        """The middle of the widths (m)."""
+        return 0.5 * (d["width_m"][0] + d["width_m"][1])
 
     def validate(self, d: dict, cfg: dict) -> None:
         d["n_slits"] = value_range("damage.n_slits", d["n_slits"], lo=0, hi=8, integer=True)

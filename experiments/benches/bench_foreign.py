@@ -120,7 +120,7 @@ def classify_set(model: Path, pair_dir: Path, truth: list, source_tree: str | No
 
 
 def _answers(v: dict) -> dict:
-    """Method name -> answer dict (damaged, location_element, hinge_flexibility[, hinge_flexibility_std]), None
+    """Method name -> answer dict (damaged, location_element, size[, size_std]), None
     where the method gave no answer (the network on a pair missing some of modes 1-4)."""
     out = {"verdict": v}
     if "network" in v:
@@ -143,9 +143,8 @@ def score(verdicts: list[dict], truth: list) -> list[dict]:
         called = np.array([bool(x["damaged"]) for x in a])
         faint = called & np.array([x.get("detectable") is False for x in a])  # "possibly damaged, not detectable"
         el = np.array([int(x["location_element"]) if x.get("location_element") is not None else 0 for x in a])
-        s = np.array([float(x["hinge_flexibility"]) if x.get("hinge_flexibility") is not None else np.nan for x in a])
-        sd = np.array([float(x["hinge_flexibility_std"]) if x.get("hinge_flexibility_std") is not None else np.nan
-                       for x in a])
+        s = np.array([float(x["size"]) if x.get("size") is not None else np.nan for x in a])
+        sd = np.array([float(x["size_std"]) if x.get("size_std") is not None else np.nan for x in a])
         det = damaged & called
         err = np.abs(s[det] / size[det] - 1)
         cover = np.abs(s[det] - size[det]) <= sd[det]

@@ -36,10 +36,12 @@ from experiments.second_sim.response import MODAL_NOISE, Damping, complex_modes,
 from experiments.second_sim.writers import modal_dict
 from experiments.studies.doc_tables import write_table
 from learn.classify import classify
+from datagen.damage import damage_defaults
 from learn.features import BeamSpec
-from learn.hypotheses import SHAPE_CHANGE_STD, _support_curves, shape_changes, weigh
+from learn.hypotheses import SHAPE_CHANGE_STD, _support_curves, kind_explanation, weigh
 from learn.model_dir import load_model
 from learn.sensitivity import beam_sensitivity
+from learn.shapes import shape_changes
 from physics.io import atomic_write_text, modal_data_from_dict
 
 __all__ = ["TRUTHS", "main", "pairs", "table"]
@@ -152,8 +154,13 @@ def table(n: int = 24, seed: int = 0, noise: float = 7e-4, model_dir=None, shape
     network's answers on the pairs' modal data (:func:`network_table`)."""
     L, EI, M = LENGTH_M, EI_NM2, MASS_PER_LENGTH_KG_M
     spec = BeamSpec("beam5", L, ("2:y", "3:y", "4:y", "5:y"), "iirs")
-    slit = beam_sensitivity((L, EI, M), KR_REL)
-    mass = beam_sensitivity((L, EI, M), KR_REL, kind="mass_change")
+    # the priors span this bench's pairs: hinge flexibilities up to 0.15, masses within +-10 % of the beam's
+    kinds = {"slit": kind_explanation("slit", damage_defaults("slit"), "beam5", beam_sensitivity((L, EI, M), KR_REL),
+                                      np.linspace(0.0, 0.15, 201)),
+             "mass_change": kind_explanation("mass_change", {**damage_defaults("mass_change"),
+                                                             "width_fraction": [0.0, 0.0]}, "beam5",   # point masses
+                                             beam_sensitivity((L, EI, M), KR_REL, kind="mass_change"),
+                                             np.linspace(-0.1, 0.1, 201))}
     *support, support_shapes = _support_curves(spec, EI, M, KR_REL, (-0.08, 0.08))
     rng = np.random.default_rng(seed)
     confusion = {t: {h: 0 for h in TRUTHS} for t in TRUTHS}
@@ -165,11 +172,11 @@ def table(n: int = 24, seed: int = 0, noise: float = 7e-4, model_dir=None, shape
         plist = pairs(truth, n, rng, noise, modal_rng, shape_noise)
         answers = network_answers(model_dir, plist) if model_dir else [{}] * len(plist)
         for p, a in zip(plist, answers):
-            ranked = weigh(p["shifts"], slit, mass, tuple(support), (-0.004, 0.004), theta_max=0.15, length_m=L)
+            ranked = weigh(p["shifts"], kinds, tuple(support), (-0.004, 0.004), length_m=L)
             top = ranked[0].name
             confusion[truth][top] += 1
             tests = [modal_data_from_dict(d, truth).eigenvectors for d in p["modal"]]
-            shaped = weigh(p["shifts"], slit, mass, tuple(support), (-0.004, 0.004), theta_max=0.15, length_m=L,
+            shaped = weigh(p["shifts"], kinds, tuple(support), (-0.004, 0.004), length_m=L,
                            shapes=shape_changes(np.stack(tests)[None])[0], support_shapes=support_shapes,
                            shape_sigma=SHAPE_CHANGE_STD if shape_sigma is None else shape_sigma)
             with_shapes[truth][shaped[0].name] += 1
@@ -180,9 +187,9 @@ def table(n: int = 24, seed: int = 0, noise: float = 7e-4, model_dir=None, shape
                 q = next(r for r in ranked if r.name == "slit").parameters
                 cover["n"] += 1
                 for level in ("68", "95"):
-                    lo, hi = q[f"x_m_{level}"]
+                    lo, hi = q[f"x_m_{level}"] if q[f"x_m_{level}"] else (np.nan, np.nan)
                     cover[f"x_{level}"] += lo <= p["x_m"] <= hi
-                    lo, hi = q[f"hinge_flexibility_{level}"]
+                    lo, hi = q[f"size_{level}"] if q[f"size_{level}"] else (np.nan, np.nan)
                     cover[f"theta_{level}"] += lo <= p["hinge_flexibility"] <= hi
     res = {"n": n, "seed": seed, "noise": noise, "confusion": confusion, "confusion_with_shapes": with_shapes,
            "slit_cover": cover, "pairs": rows}

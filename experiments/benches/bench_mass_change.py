@@ -48,13 +48,13 @@ def classify_pairs(model: Path, pair_dir: Path) -> tuple[list, list]:
 
 def _answers(v: dict) -> dict:
     """Method -> (damaged, x_m, signed size, zone) of one verdict."""
-    out = {"verdict": (v["damaged"], v.get("location_x_m"), v.get("hinge_flexibility"), v.get("location_zone"))}
+    out = {"verdict": (v["damaged"], v.get("location_x_m"), v.get("size"), v.get("location_zone"))}
     net = v.get("network")
     if net:
-        out["network"] = (net["damaged"], net.get("location_x_m"), net.get("hinge_flexibility"),
+        out["network"] = (net["damaged"], net.get("location_x_m"), net.get("size"),
                           net.get("location_zone"))
     for c in v.get("classical_methods") or []:
-        out[c["method"]] = (c["damaged"], c.get("location_x_m"), c.get("hinge_flexibility"), c.get("location_zone"))
+        out[c["method"]] = (c["damaged"], c.get("location_x_m"), c.get("size"), c.get("location_zone"))
     return out
 
 

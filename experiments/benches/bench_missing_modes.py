@@ -150,8 +150,8 @@ def _classical_verdicts(verdicts: list[dict]) -> list[dict]:
     """The verdicts a checkout whose network needs every mode gives pairs with a mode missing: the classical
     method's answer as the verdict, no network (``classify`` computes that answer the same way in both)."""
     return [{**v, **{k: v["classical"][k] for k in ("damaged", "location_element", "location_zone",
-                                                      "location_x_m", "hinge_flexibility")},
-             "hinge_flexibility_std": None, "location_std_m": None, "detectable": None, "network": None,
+                                                      "location_x_m", "size")},
+             "size_std": None, "location_std_m": None, "detectable": None, "network": None,
              "verdict_from": "classical", "in_distribution": False, "training_percentile": None} for v in verdicts]
 
 

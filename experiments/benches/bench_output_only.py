@@ -53,7 +53,7 @@ def with_explanations(v: dict, length_m: float) -> dict:
     slit = top["name"] == "slit"
     answer = {"method": "explanations", "damaged": slit,
               "location_element": min(4, int(p["x_m"] // (length_m / 4)) + 1) if slit else None,
-              "hinge_flexibility": p.get("hinge_flexibility") if slit else None}
+              "size": p.get("size") if slit else None}
     return {**v, "classical_methods": [*(v.get("classical_methods") or []), answer]}
 
 

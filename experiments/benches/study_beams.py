@@ -98,8 +98,8 @@ def score_beam(verdicts: list[dict], meta: dict) -> list[dict]:
         zone = np.array([int(x["location_zone"]) if x.get("location_zone") is not None else 0 for x in a])
         x_est = np.array([_nan(x.get("location_x_m")) for x in a])
         x_sd = np.array([_nan(x.get("location_std_m")) for x in a])
-        s = np.array([_nan(x.get("hinge_flexibility")) for x in a])
-        s_sd = np.array([_nan(x.get("hinge_flexibility_std")) for x in a])
+        s = np.array([_nan(x.get("size")) for x in a])
+        s_sd = np.array([_nan(x.get("size_std")) for x in a])
         dm, im = damaged & given, ~damaged & given
         det = dm & called
         dx = np.abs(x_est[det] - x_true[det]) / L

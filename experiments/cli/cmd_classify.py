@@ -33,7 +33,7 @@ __all__ = ["KEYS", "add_parser", "run"]
 
 KEYS = ("measured", "damaged", "probability_damaged", "decision_threshold", "location_x_over_L", "location_x_m",
         "location_std_m", "location_zone", "zone_edges_m", "zone_probabilities", "location_ambiguity",
-        "location_element", "element_probabilities", "hinge_flexibility", "hinge_flexibility_std", "depth_m",
+        "location_element", "element_probabilities", "damage_kind", "size", "size_std", "size_meaning",
         "detectable", "probability_support_change", "support_changed", "verdict_from", "in_distribution",
         "out_of_distribution_reasons", "mahalanobis_distance", "training_percentile", "distance_terms", "hypotheses",
         "hypotheses_summary", "frequency_change_std", "shape_change_std", "normal_variation", "agreement", "network",
@@ -54,8 +54,8 @@ def add_parser(sub):
                                    " beside it, and the features that put it outside (distance_terms); a pair whose "
                                    "tests do not both hold the model's modes gets the classical method's verdict on "
                                    "the modes both hold (at least 2) and no network answer. Every verdict weighs the "
-                                   "explanations of the frequency changes (intact, global stiffness, support change, "
-                                   "slit, mass change: hypotheses), and a network trained with support changes "
+                                   "explanations of the frequency changes (intact, global stiffness, support change "
+                                   "and every damage kind: hypotheses), and a network trained with support changes "
                                    "says whether the supports changed beyond re-clamping (support_changed, "
                                    "probability_support_change). Several MEASURED files "
                                    "give a list of verdicts; --out writes verdict.json and classify.png (one pair) or "

@@ -106,28 +106,16 @@ def classify_step(out: Path, model_dir: Path) -> dict:
     model = load_model(model_dir)
     res = classify(model, data["undamaged"], data["damaged"])
     res.pop("_extra", None)
+    res["verdict_text"] = model.verdict_text(res)
     res["inputs"] = {k: str(v) for k, v in paths.items()}
     atomic_write_text(out / "verdict.json", json.dumps(to_jsonable(res), indent=1) + "\n")
     return res
 
 
 def _verdict_text(v: dict, length_m: float) -> str:
-    net, cl = v["network"], v["classical"]
-    if net["damaged"]:
-        net_text = (f"the network says **damaged** (probability {net['probability_damaged']:.3f}), slit at "
-                    f"x = {net['location_x_m']:.3f} +- {net['location_std_m']:.3f} m (x/L = "
-                    f"{net['location_x_over_L']:.2f}), element {net['location_element']} of 4, hinge flexibility "
-                    f"{net['hinge_flexibility']:.3g} +- {net['hinge_flexibility_std']:.2g}")
-    else:
-        net_text = f"the network says **undamaged** (probability of damage {net['probability_damaged']:.3f})"
-    cl_text = (f"{cl['method']} says **damaged**, x = {cl['location_x_m']:.3f} m (element {cl['location_element']})"
-               if cl["damaged"] else f"{cl['method']} says **undamaged**")
-    source = ("The pair lies inside the training data, so the verdict is the network's" if v["in_distribution"]
-              else f"The pair lies outside the training data (Mahalanobis distance {v['mahalanobis_distance']:.3g}, "
-                   f"beyond {v['training_percentile']:.1f}% of training pairs), so the verdict is the classical "
-                   "method's")
-    return (f"{source}: {net_text}; {cl_text}. The thesis cut its slit a quarter of the length from the fixed end: "
-            f"x = {length_m / 4:.3f} m on the 0.6095 m cantilever (the element 1/2 boundary).")
+    """The verdict's own text (:meth:`learn.model_dir.TrainedModel.verdict_text`) and where the thesis cut its slit."""
+    return (f"{v['verdict_text']}\nThe thesis cut its slit a quarter of the length from the fixed end: "
+            f"x = {length_m / 4:.3f} m on the {length_m:g} m cantilever (the element 1/2 boundary).")
 
 
 def _answers(v: dict) -> list[dict]:
@@ -139,7 +127,7 @@ def _answers(v: dict) -> list[dict]:
              "verdict taken": "yes" if name == taken else "",
              "damaged": a["damaged"], "probability of damage": a.get("probability_damaged"),
              "x_m": round(a["location_x_m"], 4), "element": a["location_element"],
-             "hinge_flexibility": float(f"{a['hinge_flexibility']:.3g}")} for name, a in methods if a]
+             "size": float(f"{a['size']:.3g}")} for name, a in methods if a]
 
 
 #: Metrics of the classifier in the summary: key, header, True when larger is better.
@@ -284,7 +272,8 @@ def run(args) -> dict:
     evaluated = _step(out, "evaluate", force_model, key, evaluate_model)
 
     # 5: classify beam 5
-    verdict = _step(out, "classify", force_model, key, lambda: classify_step(out / "classify", out / "model"))
+    verdict = _step(out, "classify", force_model, {**key, "verdict": "text"},
+                    lambda: classify_step(out / "classify", out / "model"))
 
     # 6: report
     elapsed = time.perf_counter() - t_start
@@ -309,7 +298,7 @@ def run(args) -> dict:
         for r in evaluated["rows"][:4]:
             print(f"  {r['method']:<36s} AUC {r.get('roc_auc', float('nan')):.3f}  element accuracy "
                   f"{r.get('element_accuracy', float('nan')):.3f}")
-        print(_verdict_text(verdict, 0.6095).replace("**", ""))
+        print(_verdict_text(verdict, 0.6095))
         print(f"\nReport: {paths['html']} (and {paths['markdown']}); {elapsed:.0f} s")
     result["exit_code"] = 0 if vsum["passed"] else 1
     return result
@@ -354,7 +343,7 @@ def _report_sections(vsum, checks, thesis_sections, measured, disc, data, traine
                             [_rounded(r) for r in evaluated["rows"]], metric_cols),),
         tuple(figure(f) for f in evaluated["figures"] if Path(f).exists()))
     s_class = Section("Beam 5 classified (Tables 4.5/4.6, damaged against undamaged)",
-                      (_verdict_text(verdict, 0.6095),) + tuple(f"Warning: {w}" for w in verdict.get("warnings", [])),
+                      tuple(_verdict_text(verdict, 0.6095).splitlines()),
                       (Table.from_records("The network's and every classical method's answers", _answers(verdict)),))
     return [s_validate, *thesis_sections, s_ident, s_disc, s_learn, s_class]
 

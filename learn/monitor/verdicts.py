@@ -109,7 +109,7 @@ def _network_verdicts(result: SeriesResult, model, beam_x_m, alarms: list, out: 
         return on_model_dofs(_modal_data(t.frequencies_hz, t.damping_ratios, t.shapes, t.dofs), model.beam, beam_x_m,
                              result.rows[i]["file"])[0]
 
-    keys = ("damaged", "probability_damaged", "location_x_m", "location_zone", "hinge_flexibility", "depth_m",
+    keys = ("damaged", "probability_damaged", "location_x_m", "location_zone", "size",
             "verdict_from", "in_distribution", "out_of_distribution_reasons", "hypotheses_summary", "warnings")
     methods = [None if t is None else t.method if t.method in ("lscf", "ssi") else None for t in result.tests]
     rate = result.threshold.rate

@@ -207,3 +207,17 @@ def test_each_kind_describes_its_damage_for_the_verdict():
     assert DAMAGE_MODELS["mass_change"].describe(0.3, -0.0125, "beam5") == \
         "a mass lost at x = 0.300 m of 1.25% of the beam's mass"
     assert DAMAGE_MODELS["mass_change"].describe(0.61, 0.004, "beam5").startswith("a mass added at x = 0.610 m")
+
+
+def test_equivalent_depth_inverts_the_layered_section():
+    from datagen.config import DEFAULTS
+    from datagen.damage.slit import equivalent_depth, slit_section_ei
+    from datagen.specimen import SectionLayout
+
+    p = beam_preset("beam5")
+    lay = SectionLayout.matching(p.EI_Nm2, p.width_m, p.thickness_m, DEFAULTS["section"]["face_thickness_m"],
+                                 DEFAULTS["section"]["core_modulus_pa"])
+    r = 1 - float(slit_section_ei(lay, 0.00025)) / lay.EI
+    theta = 0.005 * r / ((1 - r) * p.length_m)
+    assert equivalent_depth(theta, "beam5", 0.005, DEFAULTS["section"]) == pytest.approx(0.00025, rel=1e-3)
+    assert equivalent_depth(1e3, "beam5", 0.005, DEFAULTS["section"]) is None

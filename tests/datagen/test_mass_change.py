@@ -83,7 +83,7 @@ def test_size_is_the_signed_mass_ratio_and_labels_read_it(masses):
     np.testing.assert_allclose(t.damage0_size, t.damage0_mass_kg / (t.m_per_length_kg_m * L), rtol=1e-15)
     assert t.damage0_size.between(-0.0201, 0.0201).all() and (t.damage0_size < 0).any() and (t.damage0_size > 0).any()
     lab = labels(t, L)
-    np.testing.assert_array_equal(lab["hinge_flexibility"], t.damage0_size)
+    np.testing.assert_array_equal(lab["size"], t.damage0_size)
     np.testing.assert_allclose(lab["x_over_L"], t.damage0_x_m / L)
     assert "n_slits" not in t and "damage0_ei_loss" not in t
     # a loss is spread over at least the length whose mass carries it (90 % of the mass per length there)
@@ -227,6 +227,6 @@ def test_a_ten_percent_mass_loss_is_called_a_change_with_its_sign_by_the_classic
     outs, _ = run_classical(pairs.eigenvalues, pairs.eigenvectors, sens, {"freq": 1e-3, "upd": 1e-3})
     for o in outs:
         assert o.damaged.all(), o.name
-        assert np.all(o.hinge_flexibility < 0), (o.name, o.hinge_flexibility)
+        assert np.all(o.size < 0), (o.name, o.size)
     dlac = next(o for o in outs if o.name == "DLAC")
-    np.testing.assert_allclose(dlac.hinge_flexibility, -0.1, rtol=0.5)
+    np.testing.assert_allclose(dlac.size, -0.1, rtol=0.5)

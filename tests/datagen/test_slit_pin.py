@@ -29,8 +29,10 @@ RESIDUAL = re.compile(r"/table/residual_(base|cur)$")
 
 
 def old_name(key: str) -> str:
-    """Today's key -> the key the fixture was written with (``damage{k}_*`` was ``slit{k+1}_*``)."""
+    """Today's key -> the key the fixture was written with (``damage{k}_*`` was ``slit{k+1}_*``, the label ``size``
+    of a slit ``hinge_flexibility``)."""
     key = re.sub(r"/(table|label)/n_damages$", r"/\1/n_slits", key)
+    key = re.sub(r"/label/size$", "/label/hinge_flexibility", key)
     return re.sub(r"/table/damage(\d+)_", lambda m: f"/table/slit{int(m[1]) + 1}_", key)
 
 

@@ -6,10 +6,10 @@ from experiments.benches.bench_foreign import markdown, score
 
 
 def _verdict(damaged, element=0, theta=0.0, std=0.0, detectable=True):
-    net = {"damaged": damaged, "location_element": element, "hinge_flexibility": theta,
-           "hinge_flexibility_std": std, "detectable": detectable}
+    net = {"damaged": damaged, "location_element": element, "size": theta,
+           "size_std": std, "detectable": detectable}
     dlac = {"method": "DLAC", "damaged": damaged and detectable, "location_element": element,
-            "hinge_flexibility": theta}
+            "size": theta}
     return {**net, "network": net, "classical_methods": [dlac], "in_distribution": True, "training_percentile": 50.0}
 
 

@@ -99,7 +99,7 @@ def _evaluate_figures(out_dir):
     n = 200
     damaged = rng.random(n) < 0.7
     x = np.where(damaged, rng.random(n), np.nan)
-    truth = {"damaged": damaged, "x_over_L": x, "hinge_flexibility": np.where(damaged, 0.1, 0.0),
+    truth = {"damaged": damaged, "x_over_L": x, "size": np.where(damaged, 0.1, 0.0),
              "element": np.where(damaged, np.clip(np.floor(np.nan_to_num(x) * 4).astype(int) + 1, 1, 4), 0),
              "max_drop": np.where(damaged, 0.01, 0.0)}
     outs = []
@@ -216,10 +216,10 @@ def test_report_fits_a_1280_pixel_window_in_chromium(tmp_path):
 def _verdict(verdict_from: str) -> dict:
     """A classify result of the demo's shape (the network and DLAC answers of beam 5)."""
     net = {"damaged": True, "probability_damaged": 0.97, "location_x_m": 0.041, "location_element": 1,
-           "location_std_m": 0.019, "location_x_over_L": 0.067, "hinge_flexibility": 5.3e-5,
-           "hinge_flexibility_std": 0.086}
+           "location_std_m": 0.019, "location_x_over_L": 0.067, "size": 5.3e-5,
+           "size_std": 0.086}
     cl = {"method": "DLAC", "damaged": True, "location_x_m": 0.0838, "location_element": 1,
-          "hinge_flexibility": 0.184}
+          "size": 0.184}
     top = cl if verdict_from == "classical" else net
     return {"damaged": True, "location_x_m": top["location_x_m"], "location_element": 1,
             "verdict_from": verdict_from, "in_distribution": verdict_from == "network",

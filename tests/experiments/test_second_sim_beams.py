@@ -164,13 +164,13 @@ def test_the_beams_cli_writes_one_beam_and_refuses_an_unknown_one(tmp_path, caps
 
 
 def _verdict(damaged, x, zone, s, s_sd=None, x_sd=None, cl=None):
-    net = {"damaged": damaged, "location_x_m": x, "location_zone": zone, "hinge_flexibility": s,
-           "hinge_flexibility_std": s_sd, "location_std_m": x_sd}
+    net = {"damaged": damaged, "location_x_m": x, "location_zone": zone, "size": s,
+           "size_std": s_sd, "location_std_m": x_sd}
     return {**net, "network": net, "zone_edges_m": [0.0, 0.5, 1.0, 2.0], "input_route": "modal",
             "in_distribution": True,
             "classical_methods": [{"method": "DLAC", "damaged": cl is not None, "location_x_m": cl,
                                    "location_zone": None if cl is None else 1 + (cl >= 0.5) + (cl >= 1.0),
-                                   "hinge_flexibility": 0.01}]}
+                                   "size": 0.01}]}
 
 
 def test_scores_count_zones_places_false_alarms_sizes_and_folding():

@@ -239,7 +239,7 @@ def test_mirror_ambiguous_locations_are_scored_on_the_half_beam(sensors, method,
     spec = BeamSpec("g", 1.0, tuple(f"{k}:y" for k in range(len(sensors))), "iirs", layout_of(beam))
     x = np.array([0.05, 0.15, 0.3, 0.35, 0.45])
     truth = {"damaged": np.ones(5, bool), "max_drop": np.full(5, 0.01), "x_over_L": x,
-             "element": spec.zone_of(x), "hinge_flexibility": np.full(5, 0.01)}
+             "element": spec.zone_of_x_over_L(x), "size": np.full(5, 0.01)}
     out = MethodOutput(method, np.ones(5), np.ones(5, bool), 1 - x, np.full(5, 0.01))
     m = metrics(out, truth, length_m=spec)
     assert m.element_accuracy == (1.0 if folded else 0.0)

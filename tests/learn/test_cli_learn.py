@@ -198,7 +198,7 @@ def test_classify_places_a_renumbered_shuffled_mm_uff_by_its_geometry(tiny, caps
     assert pos["source"] == "uff geometry" and pos["dofs"] == ["104:+Y", "102:+Y", "101:+Y", "103:+Y"]
     assert pos["model_dofs"] == ["5:y", "3:y", "2:y", "4:y"]
     assert res["input_route"] == "measured" == ref["input_route"]
-    for key in ("probability_damaged", "location_x_m", "location_std_m", "hinge_flexibility"):   # UFF: 6-7 digits
+    for key in ("probability_damaged", "location_x_m", "location_std_m", "size"):   # UFF: 6-7 digits
         assert res["network"][key] == pytest.approx(ref["network"][key], rel=1e-5), key
     np.testing.assert_allclose(res["network"]["element_probabilities"], ref["network"]["element_probabilities"],
                                rtol=1e-6, atol=1e-9)
@@ -485,7 +485,7 @@ def test_roving_hammer_and_negative_senses_give_the_verdict_of_the_canonical_fil
             assert res[key] == ref[key], (variant, key)
         for key, value in ref["classical"].items():
             assert res["classical"][key] == (value if isinstance(value, str) else pytest.approx(value, rel=1e-4))
-        for key in ("probability_damaged", "location_x_m", "hinge_flexibility"):
+        for key in ("probability_damaged", "location_x_m", "size"):
             assert res[key] == pytest.approx(ref[key], rel=1e-4), (variant, key)
         np.testing.assert_allclose(res["identification"]["measured_frequencies_hz"],
                                    ref["identification"]["measured_frequencies_hz"], rtol=1e-6)
@@ -543,7 +543,7 @@ def test_a_pair_far_outside_the_training_data_gets_finite_network_numbers_and_no
     assert res["verdict_from"] == "classical" and not res["in_distribution"]
     net = res["network"]
     assert 0.0 <= net["probability_damaged"] <= 1.0
-    assert np.isfinite(net["hinge_flexibility"]) and np.isfinite(net["hinge_flexibility_std"])
+    assert np.isfinite(net["size"]) and np.isfinite(net["size_std"])
     # the estimator itself when its network's float32 outputs overflow (as a trained network's do on such pairs)
     from learn.model_dir import load_model
 
@@ -559,7 +559,7 @@ def test_a_pair_far_outside_the_training_data_gets_finite_network_numbers_and_no
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         d = est.predict_details(np.zeros((2, est.n_features_in_)))
-    for name in ("probability_damaged", "x_over_L", "hinge_flexibility", "hinge_flexibility_std"):
+    for name in ("probability_damaged", "x_over_L", "size", "size_std"):
         assert np.all(np.isfinite(getattr(d, name))), name
 
 

@@ -11,10 +11,10 @@ from sklearn.metrics import roc_auc_score
 from learn.classical import cawley_adams, dlac, mdlac, sensitivity_updating
 from learn.estimator import DamageClassifier, fit_calibration
 from learn.evaluate import reliability, roc_auc
-from learn.features import BeamSpec, curvatures, map_frf_to_grid, real_shapes, split_by_specimen
+from learn.features import BeamSpec, curvatures, map_frf_to_grid, split_by_specimen
+from learn.shapes import real_shapes
 from learn.sensitivity import beam_sensitivity
 from learn.model_dir import MODEL_FORMAT, TrainedModel, load_model, save_model
-from learn.verdict import equivalent_depth
 from physics.errors import BeamDamageError
 from physics.fem import beam_model
 from physics.modal import undamped_modes
@@ -72,7 +72,7 @@ def test_frequency_classical_methods_localise_a_slit_of_an_independent_fe_model(
         assert abs(out.x_over_L[0] - x) < 0.05, (method.__name__, out.x_over_L[0], x)
     df, _, _, s = _independent_slit(x, 0.05)    # first order holds for a small loss: the size too
     out = dlac(df[None], sens, threshold=1e-5)
-    assert out.hinge_flexibility[0] == pytest.approx(s, rel=0.1)
+    assert out.size[0] == pytest.approx(s, rel=0.1)
 
 
 def test_first_order_frequency_sensitivity_against_a_finer_mesh():
@@ -119,7 +119,7 @@ def test_classifier_learns_a_known_synthetic_problem():
     dam = yt[:, 0] > 0.5
     assert roc_auc_score(dam, d.probability_damaged) > 0.98
     assert np.median(np.abs(d.x_over_L[dam] - yt[dam, 1])) < 0.05
-    assert np.median(np.abs(d.hinge_flexibility[dam] / yt[dam, 2] - 1)) < 0.3
+    assert np.median(np.abs(d.size[dam] / yt[dam, 2] - 1)) < 0.3
     np.testing.assert_allclose(d.element_probabilities.sum(axis=1), 1.0, atol=1e-5)
     assert 0.1 < est.temperature_ < 10
     # scikit-learn conventions: clone keeps params, drops fitted state
@@ -143,14 +143,14 @@ def test_model_directory_round_trip_with_weights_only(tmp_path):
     est = DamageClassifier(hidden=32, depth=1, epochs=2, n_bins=40, random_state=0).fit(X, y)
     beam = BeamSpec("beam5", 0.6095, ("2:y", "3:y", "4:y", "5:y"), "iirs")
     cfg = {"format": MODEL_FORMAT, "route": "modal", "beam": beam.to_dict(), "classical_thresholds": {"DLAC": 1e-3},
-           "best_classical": "DLAC", "reference_width_m": 0.0055}
+           "best_classical": "DLAC"}
     save_model(tmp_path, cfg, {"modal": est})
     tensors = torch.load(tmp_path / "weights-modal.pt", weights_only=True)
     assert "norm.mean" in tensors
     model = load_model(tmp_path)
     np.testing.assert_allclose(model.networks["modal"].predict_proba(X), est.predict_proba(X), atol=1e-6)
-    np.testing.assert_allclose(model.networks["modal"].predict_details(X).hinge_flexibility_std,
-                               est.predict_details(X).hinge_flexibility_std, rtol=1e-5)
+    np.testing.assert_allclose(model.networks["modal"].predict_details(X).size_std,
+                               est.predict_details(X).size_std, rtol=1e-5)
     assert json.loads((tmp_path / "config.json").read_text())["beam"]["mass_model"] == "iirs"
 
 
@@ -180,24 +180,10 @@ def test_temperature_scaling_and_calibration_metrics():
     assert roc_auc(s + lab, lab) == pytest.approx(roc_auc_score(lab, s + lab))
 
 
-def test_equivalent_depth_inverts_the_layered_section():
-    from datagen.config import DEFAULTS
-    from datagen.damage.slit import slit_section_ei
-    from datagen.specimen import SectionLayout
-
-    p = beam_preset("beam5")
-    lay = SectionLayout.matching(p.EI_Nm2, p.width_m, p.thickness_m, DEFAULTS["section"]["face_thickness_m"],
-                                 DEFAULTS["section"]["core_modulus_pa"])
-    r = 1 - float(slit_section_ei(lay, 0.00025)) / lay.EI
-    theta = 0.005 * r / ((1 - r) * p.length_m)
-    assert equivalent_depth(theta, "beam5", 0.005) == pytest.approx(0.00025, rel=1e-3)
-    assert equivalent_depth(1e3, "beam5", 0.005) is None
-
-
 def test_size_spread_factor_gives_one_sigma_coverage():
     """Sizes drawn log-normal with log-std 0.4 around the medians, a head claiming 0.1: the factor is about 4 and
     then 68 % of the truths lie within one reported standard deviation."""
-    from learn.estimator import fit_size_std_scale, lognormal_std
+    from learn.size import fit_size_std_scale, lognormal_std
 
     rng = np.random.default_rng(0)
     med = np.exp(rng.uniform(-3, 1, 20000))
@@ -212,7 +198,7 @@ def test_size_spread_factor_gives_one_sigma_coverage():
 def test_a_signed_size_transform_keeps_the_sign_and_its_spread_covers():
     """asinh(size / 0.01): signed sizes round-trip, the one-sigma interval's half width is the reported std, and the
     std factor fitted on sizes scattered by 0.3 in the transformed space covers 68 % of them (both signs)."""
-    from learn.estimator import SizeTransform, fit_size_std_scale
+    from learn.size import SizeTransform, fit_size_std_scale
 
     tf = SizeTransform.parse("asinh:0.01")
     sizes = np.array([-0.2, -0.01, -1e-4, 0.0, 0.003, 0.15])
@@ -356,7 +342,7 @@ def test_support_head_learns_a_support_change_and_survives_the_model_directory(t
     assert not old.support_trained_ and np.isnan(old.predict_details(Xt).probability_support_change).all()
     beam = BeamSpec("beam5", 0.6095, ("2:y", "3:y", "4:y", "5:y"), "iirs")
     cfg = {"format": MODEL_FORMAT, "route": "modal", "beam": beam.to_dict(), "classical_thresholds": {"DLAC": 1e-3},
-           "best_classical": "DLAC", "reference_width_m": 0.0055}
+           "best_classical": "DLAC"}
     for e in (est, old):
         save_model(tmp_path, cfg, {"modal": e})
         back = load_model(tmp_path).networks["modal"].predict_details(Xt).probability_support_change

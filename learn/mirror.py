@@ -1,0 +1,51 @@
+"""The mirror ambiguity of a symmetric beam: where natural frequencies alone cannot tell ``x`` from ``L - x``.
+
+On a beam whose supports are symmetric (:attr:`physics.supports.Support.symmetric`), a damage at ``x`` and at
+``L - x`` change every natural frequency alike; shapes at two or more sensors tell them apart. A verdict read on
+frequencies alone is located on the half ``x <= L / 2`` and says so.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["fold_to_half", "location_ambiguity", "mirrored"]
+
+
+def mirrored(beam, pair) -> bool:
+    """Whether a pair leaves the mirror ambiguity: a symmetric beam (:attr:`physics.supports.Support.symmetric`)
+    read on natural frequencies only (no shapes, or one sensor), where a damage at ``x`` and at ``L - x`` change
+    every frequency alike."""
+    test = beam.test
+    return (test is not None and test.support.symmetric
+            and (test.n_sensors == 1 or (pair is not None and pair.frequency_only)))
+
+
+def fold_to_half(answer: dict, beam, distribution=None) -> dict:
+    """An answer located on the half ``x <= L / 2`` (the mirror ambiguity, :func:`mirrored`): the network's
+    distribution folded onto it (mean and std of ``min(x, L - x)``), a classical ``x`` mirrored there."""
+    L = beam.length_m
+    out = dict(answer)
+    if distribution is not None:
+        p = np.asarray(distribution, float)
+        c = (np.arange(p.size) + 0.5) / p.size
+        c = np.minimum(c, 1 - c)
+        mean = float(p @ c)
+        out["location_std_m"] = float(np.sqrt(max(p @ c**2 - mean**2, 0.0) + 1 / (12 * p.size**2)) * L)
+    else:
+        mean = min(answer["location_x_over_L"], 1 - answer["location_x_over_L"])
+    out["location_x_over_L"], out["location_x_m"] = mean, mean * L
+    z = int(beam.zone_of_x_over_L(mean))
+    out["location_zone"] = z
+    if out.get("location_element") is not None:
+        out["location_element"] = z
+    return out
+
+
+def location_ambiguity(beam, verdict: dict, pair) -> str | None:
+    """What frequencies alone cannot tell (:func:`mirrored`): the mirror image of the located damage, or None."""
+    if not verdict.get("damaged") or not mirrored(beam, pair):
+        return None
+    x, L = verdict["location_x_m"], beam.length_m
+    return (f"natural frequencies alone cannot tell x = {x:.3f} m from its mirror image L - x = {L - x:.3f} m on "
+            f"this symmetric {beam.test.bc} beam: both places fit the data equally")
