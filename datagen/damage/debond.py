@@ -45,8 +45,8 @@ import numpy as np
 from datagen.checks import value_range
 from datagen.damage.slit import MAX_LOSS_FACTOR, clamped_flexibility, expand_tip_stiffness, hinge_flexibility, \
     slit_corrections, slit_element_weights
-from datagen.specimen import SectionLayout
-from physics.beam import PRESET_CORE_MODULUS_PA, PRESET_FACE_THICKNESS_M, beam_from_dict
+from datagen.specimen import DEFAULT_SECTION, SectionLayout
+from physics.beam import beam_from_dict
 from physics.errors import ConfigError
 from physics.properties import beam_preset, section_ei
 
@@ -101,14 +101,15 @@ def debond_damping(x_m, length_m, ei_debonded_Nm2, beta_s, element_stiffness, be
 
 def _layout_of(beam) -> SectionLayout:
     """The face/core layout of a preset name or a truth beam's mapping (its own face and core keys, else the
-    presets')."""
+    defaults, :data:`datagen.specimen.DEFAULT_SECTION`)."""
     if isinstance(beam, str):
         p = beam_preset(beam)
         EI, width, thickness, tf, ec = p.EI_Nm2, p.width_m, p.thickness_m, None, None
     else:
         EI, width, thickness = beam["EI_Nm2"], beam["width_m"], beam["thickness_m"]
         tf, ec = beam.get("face_thickness_m"), beam.get("core_modulus_pa")
-    return SectionLayout.matching(EI, width, thickness, tf or PRESET_FACE_THICKNESS_M, ec or PRESET_CORE_MODULUS_PA)
+    return SectionLayout.matching(EI, width, thickness, tf or DEFAULT_SECTION["face_thickness_m"],
+                                  ec or DEFAULT_SECTION["core_modulus_pa"])
 
 
 def _mapping(beam) -> dict:

@@ -6,7 +6,7 @@ import pytest
 
 from experiments.second_sim.fem import Beam, PointMass, Slit, assemble, modes
 from learn.features import BeamSpec
-from datagen.damage import damage_defaults
+from datagen.damage import DAMAGE_MODELS, damage_defaults
 from learn.shapes import shape_changes
 from learn.hypotheses import BASE_HYPOTHESES, _support_curves, kind_explanation, summary, weigh
 from learn.sensitivity import beam_sensitivity
@@ -33,6 +33,9 @@ def models():
              "mass_change": kind_explanation("mass_change", POINT_MASSES, "beam5",
                                              beam_sensitivity((L, EI, M), KR_REL, kind="mass_change"),
                                              np.linspace(-0.1, 0.1, 201))}
+    for name in DAMAGE_MODELS.keys() - kinds.keys():     # every other registered kind competes on its defaults
+        kinds[name] = kind_explanation(name, damage_defaults(name), "beam5",
+                                       beam_sensitivity((L, EI, M), KR_REL, kind=name))
     grid, curve, what, reclamp, support_shapes = _support_curves(spec, EI, M, KR_REL, (-0.08, 0.08))
     return kinds, (grid, curve, what, reclamp), support_shapes
 
