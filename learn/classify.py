@@ -142,7 +142,7 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
                                    "network" if from_network else "classical"),
             "warnings": w,
             "_extra": {"location_distribution": where[i], "frequency_change_pct": _change_pct(p, nv_i),
-                       "modes": [] if p is None else [model.beam.modes[j] for j in p.modes]},
+                       "modes": [] if p is None else [model.beam.modes[j] for j in p.mode_index]},
         })
     return results
 
@@ -153,7 +153,7 @@ def _change_pct(pair, normal: dict):
     if pair is None:
         return None
     if "frequency_change_pct" in normal:
-        return np.array([normal["frequency_change_pct"][j] for j in pair.modes], float)
+        return np.array([normal["frequency_change_pct"][j] for j in pair.mode_index], float)
     return 100 * (np.abs(pair.eigenvalues[1]) / np.abs(pair.eigenvalues[0]) - 1)
 
 
@@ -231,7 +231,7 @@ def _explanations(model: TrainedModel, pairs: list, nv) -> list[dict]:
     for p in pairs:                       # the baseline's frequencies moved to the baselines' mean
         lam = np.array(p.eigenvalues)
         f = np.abs(lam[0]) / (2 * np.pi)
-        lam[0] = lam[0] * np.where(np.isfinite(mean_hz[p.modes]), mean_hz[p.modes] / f, 1.0)
+        lam[0] = lam[0] * np.where(np.isfinite(mean_hz[p.mode_index]), mean_hz[p.mode_index] / f, 1.0)
         centred.append(replace(p, eigenvalues=lam))
     shape = nv.shape_std
     shape_sigma = SHAPE_CHANGE_STD if shape is None else np.where(np.isfinite(shape), shape * np.sqrt(2),
@@ -266,17 +266,17 @@ def damping_warning(model: TrainedModel, pairs: list) -> str | None:
     else None: the modal noise the model was trained with depends on the damping (an output-only identification's
     frequency scatter grows with its square root)."""
     trained = model.config.get("damping_ratio_range")
-    pair = next((p for p in pairs if p is not None and p.modes.size), None)
+    pair = next((p for p in pairs if p is not None and p.mode_index.size), None)
     if pair is None or not trained:
         return None
 
-    lo, hi = np.asarray(trained, float)[pair.modes].T
+    lo, hi = np.asarray(trained, float)[pair.mode_index].T
     zeta = modal_parameters(pair.eigenvalues[0])[1]
     given = np.isfinite(zeta) & (zeta > 0)                                # frequencies alone carry no damping
     out = given & ((zeta < lo / DAMPING_RANGE_FACTOR) | (zeta > hi * DAMPING_RANGE_FACTOR))
     if not out.any():
         return None
-    modes = [model.beam.modes[j] for j in pair.modes[out]]
+    modes = [model.beam.modes[j] for j in pair.mode_index[out]]
     return (f"the baseline's damping ratios of mode(s) {', '.join(map(str, modes))} ("
             + ", ".join(f"{100 * z:.3g} %" for z in zeta[out]) + ") lie beyond twice the training's ("
             + ", ".join(f"{100 * a:.3g}-{100 * b:.3g} %" for a, b in zip(lo[out], hi[out]))
@@ -287,8 +287,8 @@ def damping_warning(model: TrainedModel, pairs: list) -> str | None:
 def _require_common_modes(pairs: list, names: list[str], beam) -> None:
     """Refuse a pair with fewer than 2 modes both tests hold (the modal network reads modes)."""
     for p, n in zip(pairs, names[1:]):
-        if p.modes.size < 2:
-            raise BeamDamageError(f"{n}: {p.modes.size} of modes {modes_text(beam.modes)} found in both it and "
+        if p.mode_index.size < 2:
+            raise BeamDamageError(f"{n}: {p.mode_index.size} of modes {modes_text(beam.modes)} found in both it and "
                                   f"{names[0]} ("
                                   + "; ".join(p.missing) + "); classify needs at least 2 common modes")
 
@@ -344,7 +344,7 @@ def _chosen_verdict(net, cl, p, reasons: list, warnings: list, sens, beam):
     the network's, and the pair's warnings: ``(dict, bool, list)``."""
     w = list(warnings)
     inside = not reasons
-    found = ", ".join(str(beam.modes[j]) for j in p.modes) if p is not None else ""
+    found = ", ".join(str(beam.modes[j]) for j in p.mode_index) if p is not None else ""
     if net is None:
         w.append(f"the network gives no answer for this pair (it needs modes {modes_text(beam.modes)}): the verdict "
                  f"is the classical method's ({cl['method']}) on modes {found}")
@@ -374,7 +374,7 @@ def _identification(p, base_md, cur_md, identified: bool, beam) -> dict:
         freqs, modes = np.abs(p.eigenvalues) / (2 * np.pi), list(beam.modes)
     else:
         freqs = [np.sort(np.abs(md.eigenvalues)) / (2 * np.pi) for md in (base_md, cur_md)]
-        modes = [beam.modes[int(j)] for j in p.modes]
+        modes = [beam.modes[int(j)] for j in p.mode_index]
     poles = p.poles if p is not None and p.poles else ([], [])
     return {**IDENTIFICATION, "n_modes": beam.n_modes, "modes_model": list(beam.modes),
             "source": "identified from FRFs" if identified else "modal data",
@@ -460,8 +460,8 @@ def _classical_answers(model: TrainedModel, pairs, n: int, sens):
                           if not pairs[i].frequency_only or o.name in FREQUENCY_METHODS]
             reasons[i] = why
     for i, p in enumerate(pairs):
-        if not p.complete and p.modes.size >= 2:
-            mode_sens[i] = sens.modes(p.modes)
+        if not p.complete and p.mode_index.size >= 2:
+            mode_sens[i] = sens.modes(p.mode_index)
             outs, _ = run_classical(p.eigenvalues[None], p.eigenvectors[None], mode_sens[i], thresholds)
             answers[i] = [classical_answer(o, 0, L) for o in outs
                           if not p.frequency_only or o.name in FREQUENCY_METHODS]
@@ -471,7 +471,7 @@ def _classical_answers(model: TrainedModel, pairs, n: int, sens):
 def network_reads(est, pair) -> bool:
     """Whether the modal or frequency network ``est`` answers ``pair``: it holds every mode of the model, or the
     network answers missing modes (``est.answers_missing_modes``) and the pair holds ``est.min_modes`` or more."""
-    return pair.complete or (est.answers_missing_modes and pair.modes.size >= est.min_modes)
+    return pair.complete or (est.answers_missing_modes and pair.mode_index.size >= est.min_modes)
 
 
 def _mode_features(model: TrainedModel, route: str, pairs: list, rows: list):
@@ -486,7 +486,7 @@ def _mode_features(model: TrainedModel, route: str, pairs: list, rows: list):
 
 def _on_model_modes(pairs: list, rows: list, n_modes: int):
     """Eigen-data of ``pairs[rows]`` on the model's modes, NaN for those a pair lacks (stacked)."""
-    parts = [with_missing_modes(pairs[i].eigenvalues[None], pairs[i].eigenvectors[None], pairs[i].modes, n_modes)
+    parts = [with_missing_modes(pairs[i].eigenvalues[None], pairs[i].eigenvectors[None], pairs[i].mode_index, n_modes)
              for i in rows]
     return np.concatenate([a for a, _ in parts]), np.concatenate([b for _, b in parts])
 
@@ -505,7 +505,7 @@ def shape_pairing_reasons(pair, beam) -> list[str]:
     u = real_shapes(pair.eigenvectors)
     m = np.sum(sign_aligned(u[1], u[0]) * u[0], axis=0) ** 2        # unit-norm real shapes: the MAC
     return [f"mode {beam.modes[j]} of the baseline and the measured test do not pair (MAC {v:.2f} < "
-            f"{MIN_PAIRING_MAC})" for j, v in zip(pair.modes, m) if v < MIN_PAIRING_MAC]
+            f"{MIN_PAIRING_MAC})" for j, v in zip(pair.mode_index, m) if v < MIN_PAIRING_MAC]
 
 
 def _network_inputs(model: TrainedModel, baseline, currents: list, pairs, identified: bool, warnings: list,

@@ -2,9 +2,10 @@
 
 ``fit(X, y, groups)`` standardises the features (statistics of the training
 part only), holds out a validation part by specimen (``groups``), trains the
-network, and fits a temperature on the validation logits (temperature scaling,
-Guo et al. 2017) so that ``predict_proba`` is calibrated, and a factor on the size
-head's spread so that one standard deviation covers 68 % of the sizes of the validation pairs called damaged.
+network, and fits a logit scale and bias on the validation logits (Guo et al.'s 2017 "temperature scaling"
+with Platt's bias) so that ``predict_proba`` is calibrated, a factor on the size head's spread so that one
+standard deviation covers 68 % of the sizes of the validation pairs called damaged, and the location's sharpness
+(:mod:`learn.intervals`).
 
 Targets ``y`` have three columns: damaged (0/1), ``x / L`` of the damage (NaN if
 intact) and its size (:func:`learn.features.labels`: the size of the data's damage kind, e.g. a slit's hinge
@@ -373,7 +374,7 @@ class DamageClassifier:
                 tot += float(loss.detach()) * len(b)
             history.append(tot / len(tr))
         self.loss_history_ = history
-        self.temperature_, self.bias_, self.size_std_scale_, self.location_sharpness_ = 1.0, 0.0, 1.0, 1.0
+        self.logit_scale_, self.bias_, self.size_std_scale_, self.location_sharpness_ = 1.0, 0.0, 1.0, 1.0
         self.thresholds_ = [0.5] * (1 + max(self.n_modes_ - self.min_modes, 0) * self.answers_missing_modes)
         if len(va):
             self._calibrate(X[va], d[va], ls[va], rng, np.asarray(y, float)[va, 1])
@@ -404,10 +405,10 @@ class DamageClassifier:
                                               if self.answers_missing_modes else Zv, P))
 
         mixed = raw(present)
-        self.temperature_, self.bias_ = fit_calibration(mixed["detect"], dv)
+        self.logit_scale_, self.bias_ = fit_calibration(mixed["detect"], dv)
 
         def prob(r):
-            return expit(r["detect"] / self.temperature_ + self.bias_)
+            return expit(r["detect"] / self.logit_scale_ + self.bias_)
 
         intact = dv < 0.5
         if intact.any():
@@ -417,7 +418,7 @@ class DamageClassifier:
                 Zi = np.tile(Zv[intact], (THRESHOLD_COPIES, 1))
                 P = self._draw_present(len(Zi), rng, missing=k)
                 p = expit(self._forward(self._inputs(np.where(P[:, self.feature_modes], Zi, 0.0), P))["detect"]
-                          / self.temperature_ + self.bias_)
+                          / self.logit_scale_ + self.bias_)
                 self.thresholds_[k] = float(max(0.5, np.quantile(p, 1 - self.false_alarm_target)))
         # sizes are reported for pairs called damaged: the spread is scaled on those
         dmg = (dv > 0.5) & (prob(mixed) >= self._thresholds_of(present))
@@ -488,7 +489,7 @@ class DamageClassifier:
         return np.sqrt(np.maximum(np.einsum("ni,ij,nj->n", Z, self.precision_, Z), 0.0))
 
     def decision_function(self, X):
-        return self._raw(X)[0]["detect"] / self.temperature_ + self.bias_
+        return self._raw(X)[0]["detect"] / self.logit_scale_ + self.bias_
 
     def predict_proba(self, X):
         p = expit(self.decision_function(X))
@@ -506,7 +507,7 @@ class DamageClassifier:
 
     def predict_details(self, X) -> DamagePrediction:
         raw, present = self._raw(X)
-        z = raw["detect"] / self.temperature_ + self.bias_
+        z = raw["detect"] / self.logit_scale_ + self.bias_
         p = softmax(raw["locate"], self.location_sharpness_)
         c = (np.arange(self.n_bins) + 0.5) / self.n_bins
         mean = p @ c
@@ -540,7 +541,7 @@ class DamageClassifier:
         tensors["ood.covariance"] = torch.as_tensor(self.covariance_)
         if self.answers_missing_modes:
             tensors["ood.reference_features"] = torch.as_tensor(self.reference_features_)
-        meta = {"params": self.get_params(), "temperature": self.temperature_, "bias": self.bias_,
+        meta = {"params": self.get_params(), "logit_scale": self.logit_scale_, "bias": self.bias_,
                 "threshold": self.threshold_, "thresholds": list(self.thresholds_),
                 "size_std_scale": self.size_std_scale_, "location_sharpness": self.location_sharpness_,
                 "n_features": int(self.n_features_in_), "support_trained": self.support_trained_,
@@ -571,7 +572,7 @@ class DamageClassifier:
         if not est.support_trained_:   # tensors without a support head: it keeps its initial weights, never read
             net = {**{k: v for k, v in est.model_.state_dict().items() if k.startswith("support.")}, **net}
         est.model_.load_state_dict(net)
-        est.temperature_ = float(meta["temperature"])
+        est.logit_scale_ = float(meta["logit_scale"] if "logit_scale" in meta else meta["temperature"])
         est.bias_ = float(meta.get("bias", 0.0))
         est.threshold_ = float(meta.get("threshold", 0.5))
         est.thresholds_ = [float(v) for v in meta.get("thresholds", [est.threshold_])]

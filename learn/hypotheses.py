@@ -519,7 +519,7 @@ def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD, shape_sigma=SHA
     out = [None] * len(pairs)
     groups: dict = {}
     for i, pair in enumerate(pairs):
-        groups.setdefault((tuple(int(j) for j in pair.modes), bool(pair.frequency_only)), []).append(i)
+        groups.setdefault((tuple(int(j) for j in pair.mode_index), bool(pair.frequency_only)), []).append(i)
     n_all = len(beam.modes)
     for (key, frequency_only), members in groups.items():
         k = np.asarray(key, int)

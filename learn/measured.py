@@ -126,11 +126,6 @@ class ModalPair:
         """Both tests hold every mode the model reads (what the modal network reads)."""
         return self.mode_index.size == self.n_modes
 
-    @property
-    def modes(self) -> np.ndarray:
-        """:attr:`mode_index` under the name learn/classify.py and learn/hypotheses.py read."""
-        return self.mode_index
-
 
 def pair_modes_by_frequency(frequencies_hz, nominal_hz, tolerance: float | None = None,
                             shape_mac=None) -> np.ndarray:

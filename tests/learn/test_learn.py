@@ -121,7 +121,7 @@ def test_classifier_learns_a_known_synthetic_problem():
     assert np.median(np.abs(d.x_over_L[dam] - yt[dam, 1])) < 0.05
     assert np.median(np.abs(d.size[dam] / yt[dam, 2] - 1)) < 0.3
     np.testing.assert_allclose(d.element_probabilities.sum(axis=1), 1.0, atol=1e-5)
-    assert 0.1 < est.temperature_ < 10
+    assert 0.1 < est.logit_scale_ < 10
     # the intervals: nested, about the estimate, and covering held-out truths about as often as they say
     iv = d.intervals
     for q, est_q in (("x_over_L", d.x_over_L), ("size", d.size)):
@@ -164,6 +164,9 @@ def test_model_directory_round_trip_with_weights_only(tmp_path):
     np.testing.assert_allclose(model.networks["modal"].predict_details(X).size_std,
                                est.predict_details(X).size_std, rtol=1e-5)
     assert model.networks["modal"].location_sharpness_ == est.location_sharpness_
+    tensors, meta = est.get_state()                      # a model written before the key was "logit_scale"
+    meta["temperature"] = meta.pop("logit_scale")
+    assert DamageClassifier.from_state(tensors, meta).logit_scale_ == est.logit_scale_
     assert json.loads((tmp_path / "config.json").read_text())["beam"]["mass_model"] == "iirs"
 
 
