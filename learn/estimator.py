@@ -35,12 +35,11 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
-import torch
 from scipy.special import expit
 
 from learn.features import split_by_specimen
+from learn.forward import check_weights, forward
 from learn.intervals import LEVELS, Z_OF_LEVEL, distribution_interval, fit_location_sharpness, softmax
-from learn.models import DamageNet, loss_terms
 from learn.size import LOG_SIZE_LIMIT, MAX_SIZE_LOG_STD, SizeTransform, fit_size_std_scale
 from physics.errors import BeamDamageError
 
@@ -77,6 +76,8 @@ THRESHOLD_COPIES = 4
 
 
 def _device(name):
+    import torch  # torch: training
+
     if name is not None:
         return torch.device(name)
     return torch.device("cuda" if torch.cuda.is_available() else "cpu")
@@ -85,6 +86,8 @@ def _device(name):
 @contextmanager
 def torch_threads(n):
     """Run the block with ``n`` torch CPU threads (``None``: leave torch's setting), then restore it."""
+    import torch  # torch: training
+
     before = torch.get_num_threads()
     if n is not None:
         torch.set_num_threads(int(n))
@@ -276,6 +279,13 @@ class DamageClassifier:
         return np.concatenate([Z, present.astype(float)], axis=1) if self.answers_missing_modes else Z
 
     def _forward(self, A, batch=8192) -> dict:
+        if self.model_ is None:              # a loaded model: its weights in NumPy (learn.forward)
+            if not len(A):
+                return {}
+            return {k: np.clip(np.nan_to_num(v, nan=0.0), -RAW_LIMIT, RAW_LIMIT)
+                    for k, v in forward(self.weights_, A).items()}
+        import torch  # torch: the network being trained
+
         T = torch.as_tensor(A, dtype=torch.float32, device=self.device_)
         self.model_.eval()
         outs = []
@@ -304,6 +314,10 @@ class DamageClassifier:
             return self._fit(X, y, groups)
 
     def _fit(self, X, y, groups):
+        import torch  # torch: training
+
+        from learn.models import DamageNet, loss_terms  # torch: the network
+
         X = np.asarray(X, float)
         if X.ndim != 2 or not np.all(np.isfinite(X)):
             raise BeamDamageError("X must be a finite 2-D feature matrix")
@@ -532,46 +546,48 @@ class DamageClassifier:
 
     # ------------------------------------------------------------------ persistence (no pickle)
     def get_state(self) -> tuple[dict, dict]:
-        """``(tensors, meta)``: a state dict for ``torch.save`` and JSON-ready metadata."""
-        tensors = {f"net.{k}": v.detach().cpu() for k, v in self.model_.state_dict().items()}
-        tensors["norm.mean"] = torch.as_tensor(self.mean_)
-        tensors["norm.scale"] = torch.as_tensor(self.scale_)
-        tensors["ood.precision"] = torch.as_tensor(self.precision_)
-        tensors["ood.reference"] = torch.as_tensor(self.reference_distances_)
-        tensors["ood.covariance"] = torch.as_tensor(self.covariance_)
+        """``(arrays, meta)``: the network's state dict, the input normalisation and the out-of-distribution
+        statistics as NumPy arrays (``net.*``, ``norm.*``, ``ood.*``), and JSON-ready metadata."""
+        net = (self.weights_ if self.model_ is None
+               else {k: v.detach().cpu().numpy() for k, v in self.model_.state_dict().items()})
+        arrays = {f"net.{k}": np.asarray(v) for k, v in net.items()}
+        arrays.update({"norm.mean": self.mean_, "norm.scale": self.scale_, "ood.precision": self.precision_,
+                       "ood.reference": self.reference_distances_, "ood.covariance": self.covariance_})
         if self.answers_missing_modes:
-            tensors["ood.reference_features"] = torch.as_tensor(self.reference_features_)
+            arrays["ood.reference_features"] = self.reference_features_
         meta = {"params": self.get_params(), "logit_scale": self.logit_scale_, "bias": self.bias_,
                 "threshold": self.threshold_, "thresholds": list(self.thresholds_),
                 "size_std_scale": self.size_std_scale_, "location_sharpness": self.location_sharpness_,
                 "n_features": int(self.n_features_in_), "support_trained": self.support_trained_,
                 "train_seconds": self.train_seconds_, "loss_history": self.loss_history_,
                 "n_train": int(self.n_train_), "n_val": int(self.n_val_)}
-        return tensors, meta
+        return arrays, meta
 
     @classmethod
-    def from_state(cls, tensors: dict, meta: dict, device=None) -> "DamageClassifier":
+    def from_state(cls, arrays: dict, meta: dict, device=None) -> "DamageClassifier":
+        """The estimator of :meth:`get_state`'s ``(arrays, meta)`` (or an older file's CPU tensors), answering with
+        the NumPy forward pass (:mod:`learn.forward`); ``KeyError`` / ``ValueError`` where they do not match."""
+        arrays = {k: np.asarray(v) for k, v in arrays.items()}
         params = dict(meta["params"])
         params["device"] = device
         est = cls(**params)
-        est.device_ = _device(device)
-        est.mean_ = tensors["norm.mean"].numpy().astype(float)
-        est.scale_ = tensors["norm.scale"].numpy().astype(float)
+        est.device_ = device
+        est.mean_ = arrays["norm.mean"].astype(float)
+        est.scale_ = arrays["norm.scale"].astype(float)
         est.n_features_in_ = int(meta["n_features"])
-        est.precision_ = tensors["ood.precision"].numpy().astype(float)
-        est.reference_distances_ = tensors["ood.reference"].numpy().astype(float)
-        est.covariance_ = (tensors["ood.covariance"].numpy().astype(float) if "ood.covariance" in tensors
+        est.precision_ = arrays["ood.precision"].astype(float)
+        est.reference_distances_ = arrays["ood.reference"].astype(float)
+        est.covariance_ = (arrays["ood.covariance"].astype(float) if "ood.covariance" in arrays
                            else np.linalg.pinv(est.precision_))
-        est.reference_features_ = (tensors["ood.reference_features"].numpy() if est.answers_missing_modes else None)
+        est.reference_features_ = arrays["ood.reference_features"] if est.answers_missing_modes else None
         est.n_modes_ = int(max(est.feature_modes)) + 1 if est.answers_missing_modes else 0
         est.classes_ = np.array([0, 1])
-        est.model_ = DamageNet(est.n_features_in_ + est.n_modes_, est.n_bins, est.hidden, est.depth,
-                               est.dropout).to(est.device_)
         est.support_trained_ = bool(meta.get("support_trained", False))
-        net = {k[4:]: v for k, v in tensors.items() if k.startswith("net.")}
-        if not est.support_trained_:   # tensors without a support head: it keeps its initial weights, never read
-            net = {**{k: v for k, v in est.model_.state_dict().items() if k.startswith("support.")}, **net}
-        est.model_.load_state_dict(net)
+        est.weights_ = {k[4:]: v for k, v in arrays.items() if k.startswith("net.")}
+        if not est.support_trained_:   # a support head never trained is never read
+            est.weights_ = {k: v for k, v in est.weights_.items() if not k.startswith("support.")}
+        check_weights(est.weights_, est.n_features_in_ + est.n_modes_, est.n_bins, est.hidden, est.depth)
+        est.model_ = None
         est.logit_scale_ = float(meta["logit_scale"] if "logit_scale" in meta else meta["temperature"])
         est.bias_ = float(meta.get("bias", 0.0))
         est.threshold_ = float(meta.get("threshold", 0.5))

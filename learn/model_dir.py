@@ -8,8 +8,10 @@ Model directory
                          checksums, generator config with its temperature/re-clamping ranges), detection
                          threshold, classical-method thresholds, seed, package version, training time, test
                          metrics
-``weights-<input>.pt``   ``torch.save`` of the network's state dict plus the input normalisation and the
-                         training features' precision matrix (loaded with ``weights_only=True``)
+``weights-<input>.npz``  the network's state dict plus the input normalisation and the training features'
+                         statistics, as NumPy arrays (read without pickle; the network answers in NumPy,
+                         :mod:`learn.forward`); a directory written before holds ``weights-<input>.pt``
+                         (``torch.save``, loaded with ``weights_only=True``)
 ``metrics.csv``          test-split metrics of the network(s) and the classical methods
 
 A model trained on an FRF input also carries a modal-input network, used for inputs that are modal data only
@@ -124,25 +126,43 @@ class TrainedModel:
 
 def save_model(out_dir, config: dict, networks: dict) -> None:
     """Write the model directory atomically file by file (temp file, then rename)."""
-    import torch  # torch: the weights file
-
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     for route, est in networks.items():
-        tensors, meta = est.get_state()
+        arrays, meta = est.get_state()
         buf = io.BytesIO()
-        torch.save(tensors, buf)
-        atomic_write_bytes(out / f"weights-{route}.pt", buf.getvalue())
+        np.savez(buf, **arrays)
+        atomic_write_bytes(out / f"weights-{route}.npz", buf.getvalue())
         config.setdefault("networks", {})[route] = meta
     atomic_write_text(out / "config.json", json.dumps(config, indent=1, sort_keys=True, default=json_default))
 
 
+def _weights(path: Path, route: str) -> tuple[dict, Path]:
+    """The arrays of a network's weights file and the file: ``weights-<route>.npz`` (read without pickle), or an
+    older directory's ``weights-<route>.pt`` (``torch.load(..., weights_only=True)``)."""
+    w = path / f"weights-{route}.npz"
+    if w.is_file():
+        try:
+            with np.load(io.BytesIO(w.read_bytes()), allow_pickle=False) as z:
+                return {k: z[k] for k in z.files}, w
+        except Exception as exc:  # noqa: BLE001 - any unreadable archive is a bad file
+            why = " ".join(str(exc).split())[:160]
+            raise FileFormatError(f"{w}: not a weights file readable as NumPy arrays ({why})") from None
+    w = path / f"weights-{route}.pt"
+    try:
+        import torch  # torch: an older directory's weights file
+
+        return torch.load(w, map_location="cpu", weights_only=True), w
+    except FileNotFoundError:
+        raise FileFormatError(f"{path / f'weights-{route}.npz'}: weights file missing") from None
+    except Exception as exc:  # noqa: BLE001 - any unpickling failure is a bad file
+        why = " ".join(str(exc).split())[:160]
+        raise FileFormatError(f"{w}: not a weights file readable with weights_only=True ({why})") from None
+
 
 def load_model(model_dir, device=None) -> TrainedModel:
-    """Read a model directory (weights with ``torch.load(..., weights_only=True)``)."""
-    import torch  # torch: the networks
-
-    from learn.estimator import DamageClassifier  # torch: the networks
+    """Read a model directory (:func:`_weights`); its networks answer without torch (:mod:`learn.forward`)."""
+    from learn.estimator import DamageClassifier  # scipy.special: the networks' forward pass, where a model is read
 
     path = Path(model_dir)
     cfg_path = path / "config.json"
@@ -162,16 +182,9 @@ def load_model(model_dir, device=None) -> TrainedModel:
                                   f"re-create the model with 'beam-damage train'")
     model = TrainedModel(path, config)
     for route, meta in config.get("networks", {}).items():
-        w = path / f"weights-{route}.pt"
+        arrays, w = _weights(path, route)
         try:
-            tensors = torch.load(w, map_location="cpu", weights_only=True)
-        except FileNotFoundError:
-            raise FileFormatError(f"{w}: weights file missing") from None
-        except Exception as exc:  # noqa: BLE001 - any unpickling failure is a bad file
-            why = " ".join(str(exc).split())[:160]
-            raise FileFormatError(f"{w}: not a weights file readable with weights_only=True ({why})") from None
-        try:
-            model.networks[route] = DamageClassifier.from_state(tensors, meta, device=device)
+            model.networks[route] = DamageClassifier.from_state(arrays, meta, device=device)
         except (KeyError, TypeError, ValueError, AttributeError, RuntimeError) as exc:
             why = " ".join(str(exc).split())[:160]
             raise FileFormatError(f"{w}: weights do not match the network described in {cfg_path.name} "

@@ -20,6 +20,8 @@ import math
 import torch
 from torch import nn
 
+from learn.forward import LOG_STD_MAX, LOG_STD_MIN
+
 __all__ = ["DamageNet", "LOG_STD_MAX", "LOG_STD_MIN", "SIZE_MEAN_WEIGHT", "loss_terms"]
 
 
@@ -58,9 +60,6 @@ class DamageNet(nn.Module):
                 "size_log_std": LOG_STD_MIN + (LOG_STD_MAX - LOG_STD_MIN) * torch.sigmoid(spread)}
 
 
-#: Range of the size head's log standard deviation. A smooth bound: a hard clamp has no gradient beyond it, and
-#: the large size errors of the first epochs would push the head there for good (a constant spread).
-LOG_STD_MIN, LOG_STD_MAX = -6.0, 1.0
 #: Weight of the size mean's squared ``ln`` error. The mean is fitted by least squares with this fixed weight and
 #: the spread by the Gaussian negative log-likelihood of the (detached) residuals, so that a small spread does not
 #: turn the size into the loss that shapes the shared features (``exp(-2)``: the weight at the spread ``e``).

@@ -473,7 +473,7 @@ def _dsc(*more):
 def _command_arg_cases():
     """Argument families of generate, train, classify, evaluate, export, discrepancy, inspect, demo."""
     f = lambda d: str(_csv(d / "f.txt", "x"))  # noqa: E731 - a plain file where a directory is expected
-    bad_weights = lambda m: (m / "weights-modal.pt").write_bytes(np.random.default_rng(0).bytes(300))  # noqa: E731
+    bad_weights = lambda m: (m / "weights-modal.npz").write_bytes(np.random.default_rng(0).bytes(300))  # noqa: E731
     return [(fam, name, b, expect) for fam, name, b, expect in [
         ("generate", "--seed -1", lambda d: _gen(d, "--seed", "-1"), "--seed"),
         ("generate", "--n 0", lambda d: ["generate", "--n", "0", "--out", str(d / "gen")], "--n"),
@@ -529,16 +529,16 @@ def _command_arg_cases():
             d, lambda m: ((m / "config.json").unlink(), (m / "config.json").symlink_to("/dev/zero")))),
          "character device"),
         ("classify", "weights file missing", lambda d: _cls(d, model=_model_copy(
-            d, lambda m: (m / "weights-modal.pt").unlink())), "weights-modal.pt"),
+            d, lambda m: (m / "weights-modal.npz").unlink())), "weights-modal.npz"),
         ("classify", "weights file random bytes", lambda d: _cls(d, model=_model_copy(d, bad_weights)),
-         "weights-modal.pt"),
+         "weights-modal.npz"),
         ("classify", "weights file truncated", lambda d: _cls(d, model=_model_copy(
-            d, lambda m: _cut(m / "weights-modal.pt", 0.5))), "weights-modal.pt"),
+            d, lambda m: _cut(m / "weights-modal.npz", 0.5))), "weights-modal.npz"),
         ("classify", "weights of another network (an empty dict)", lambda d: _cls(d, model=_model_copy(
-            d, lambda m: _torch_save(m / "weights-modal.pt", {}))), "weights-modal.pt"),
+            d, lambda m: np.savez(m / "weights-modal.npz"))), "weights-modal.npz"),
         ("classify", "config.json network without params", lambda d: _cls(d, model=_model_copy(
             d, lambda m: _edit_json(m / "config.json", lambda c: dict(c, networks={"modal": {}})))),
-         "weights-modal.pt"),
+         "weights-modal.npz"),
         ("classify", "missing baseline file", lambda d: ["classify", "--model", str(_tiny_model()), "--baseline",
                                                         str(d / "absent.uff"), str(_good_uff(d / "g.uff"))],
          "absent.uff"),
@@ -551,7 +551,7 @@ def _command_arg_cases():
         ("evaluate", "--data not a dataset", lambda d: ["evaluate", "--model", str(_tiny_model()), "--data", str(d)],
          "not a dataset"),
         ("evaluate", "corrupt weights", lambda d: ["evaluate", "--model", str(_model_copy(d, bad_weights)), "--data",
-                                                   str(_ds_copy(d))], "weights-modal.pt"),
+                                                   str(_ds_copy(d))], "weights-modal.npz"),
         ("evaluate", "--out is a file", lambda d: ["evaluate", "--model", str(_tiny_model()), "--data",
                                                    str(_ds_copy(d)), "--out", f(d)], "f.txt"),
         ("export", "--samples 5,x", lambda d: ["export", str(_ds_copy(d)), "--samples", "5,x", "--out",
@@ -598,12 +598,6 @@ def _command_arg_cases():
 
 def _dsc_m(path):
     return ["discrepancy", "--beam", "beam5", "--measured", str(path)]
-
-
-def _torch_save(path, obj):
-    import torch
-
-    torch.save(obj, path)
 
 
 def _edit_json(path, edit):

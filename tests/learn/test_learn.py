@@ -157,10 +157,19 @@ def test_model_directory_round_trip_with_weights_only(tmp_path):
     cfg = {"format": MODEL_FORMAT, "route": "modal", "beam": beam.to_dict(), "classical_thresholds": {"DLAC": 1e-3},
            "best_classical": "DLAC"}
     save_model(tmp_path, cfg, {"modal": est})
-    tensors = torch.load(tmp_path / "weights-modal.pt", weights_only=True)
-    assert "norm.mean" in tensors
+    with np.load(tmp_path / "weights-modal.npz", allow_pickle=False) as z:
+        assert "norm.mean" in z.files and "net.trunk.0.weight" in z.files
     model = load_model(tmp_path)
+    assert model.networks["modal"].model_ is None                      # it answers in NumPy (learn.forward)
     np.testing.assert_allclose(model.networks["modal"].predict_proba(X), est.predict_proba(X), atol=1e-6)
+    np.testing.assert_allclose(model.networks["modal"].predict_details(X).location_distribution,
+                               est.predict_details(X).location_distribution, atol=1e-6)
+    # a directory written before: weights-modal.pt (torch.save), read with weights_only=True, answers alike
+    arrays, _ = est.get_state()
+    torch.save({k: torch.as_tensor(v) for k, v in arrays.items()}, tmp_path / "weights-modal.pt")
+    (tmp_path / "weights-modal.npz").unlink()
+    np.testing.assert_allclose(load_model(tmp_path).networks["modal"].predict_proba(X), est.predict_proba(X),
+                               atol=1e-6)
     np.testing.assert_allclose(model.networks["modal"].predict_details(X).size_std,
                                est.predict_details(X).size_std, rtol=1e-5)
     assert model.networks["modal"].location_sharpness_ == est.location_sharpness_
