@@ -15,7 +15,7 @@ def add_parser(sub):
                                    "specimens, temperature and re-clamping between the test days), split by specimen "
                                    "(85%% train incl. validation, 15%% test), calibrate its probabilities (a logit "
                                    "scale and bias), score it and the classical methods on the "
-                                   "test split and write a model directory (config.json, weights-*.pt, metrics.csv).")
+                                   "test split and write a model directory (config.json, weights-*.npz, metrics.csv).")
     p.add_argument("--data", required=True, nargs="+", metavar="DIR",
                    help="dataset directories of one beam (beam-damage generate --config training)")
     p.add_argument("--out", required=True, metavar="MODEL_DIR", help="model directory to write")
