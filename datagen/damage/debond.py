@@ -43,8 +43,9 @@ from __future__ import annotations
 import numpy as np
 
 from datagen.checks import value_range
-from datagen.damage.slit import MAX_LOSS_FACTOR, clamped_flexibility, expand_tip_stiffness, hinge_flexibility, \
-    slit_corrections, slit_element_weights
+from datagen.damage.draws import check_loss_factor, draw_counts
+from datagen.damage.slit import clamped_flexibility, expand_tip_stiffness, hinge_flexibility, slit_corrections, \
+    slit_element_weights
 from datagen.specimen import DEFAULT_SECTION, SectionLayout
 from physics.beam import beam_from_dict
 from physics.errors import ConfigError
@@ -164,11 +165,7 @@ class Debond:
         d["n_debonds"] = value_range("damage.n_debonds", d["n_debonds"], lo=0, hi=8, integer=True)
         d["length_m"] = value_range("damage.length_m", d["length_m"], lo=1e-4)
         d["debond_damping_s"] = value_range("damage.debond_damping_s", d["debond_damping_s"], lo=0.0, hi=1.0)
-        top_rad_s = cfg["measurement"]["band_rad_s"][1]
-        if d["debond_damping_s"][1] * top_rad_s > MAX_LOSS_FACTOR:
-            raise ConfigError(f"config key 'damage.debond_damping_s' must keep the contact's loss factor beta*omega "
-                              f"<= {MAX_LOSS_FACTOR:g} up to the top of measurement.band_rad_s ({top_rad_s:g} rad/s): "
-                              f"beta <= {MAX_LOSS_FACTOR / top_rad_s:.3g} s, got {d['debond_damping_s']!r}")
+        check_loss_factor("debond_damping_s", d["debond_damping_s"], cfg)
         if cfg.get("beam"):
             section = beam_from_dict(dict(cfg["beam"]), "config key 'beam'").section
             if section != "sandwich":
@@ -183,12 +180,7 @@ class Debond:
     def draw(self, rng: np.random.Generator, n: int, cfg: dict, setup) -> dict:
         """Counts, centres, lengths (clipped to the beam), the layout's loss and the damping of ``n`` samples."""
         d = cfg["damage"]
-        lo, hi = d["n_debonds"]
-        smax = max(hi, 1)
-        k = rng.integers(lo, hi + 1, size=n)
-        u = rng.random((n, smax, 3))
-        k = np.where(rng.random(n) < d["intact_fraction"], 0, k)
-        present = np.arange(smax)[None, :] < k[:, None]
+        k, u, present = draw_counts(rng, n, d, "n_debonds", 3)
         (a, b), (la, lb), (ba, bb) = d["position_fraction"], d["length_m"], d["debond_damping_s"]
         L = setup.length_m
         x = (a + (b - a) * u[..., 0]) * L

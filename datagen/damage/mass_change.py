@@ -40,6 +40,7 @@ from __future__ import annotations
 import numpy as np
 
 from datagen.checks import value_range
+from datagen.damage.draws import draw_counts
 from physics.errors import ConfigError
 
 __all__ = ["MAX_LOST_FRACTION", "MassChange", "line_mass_corrections", "point_mass_corrections"]
@@ -170,12 +171,7 @@ class MassChange:
     def draw(self, rng: np.random.Generator, n: int, cfg: dict, setup) -> dict:
         """Counts, positions, lengths and signed masses of ``n`` samples (masses from the nominal beam mass)."""
         d = cfg["damage"]
-        lo, hi = d["n_masses"]
-        smax = max(hi, 1)
-        k = rng.integers(lo, hi + 1, size=n)
-        u = rng.random((n, smax, 3))
-        k = np.where(rng.random(n) < d["intact_fraction"], 0, k)
-        present = np.arange(smax)[None, :] < k[:, None]
+        k, u, present = draw_counts(rng, n, d, "n_masses", 3)
         (a, b), (ra, rb), (wa, wb) = d["position_fraction"], d["mass_ratio"], d["width_fraction"]
         L = setup.length_m
         m_per_l = setup.preset.mass_per_length_kg_m

@@ -54,17 +54,14 @@ from __future__ import annotations
 import numpy as np
 
 from datagen.checks import value_range
+from datagen.damage.draws import check_loss_factor, draw_counts
 from datagen.specimen import DEFAULT_SECTION, SectionLayout
 from physics.errors import ConfigError
 from physics.properties import beam_preset, section_ei
 
-__all__ = ["MAX_LOSS_FACTOR", "Slit", "clamped_flexibility", "curvature_basis", "depth_for_ei_loss", "draw_slits",
+__all__ = ["Slit", "clamped_flexibility", "curvature_basis", "depth_for_ei_loss", "draw_slits",
            "equivalent_depth", "expand_tip_stiffness", "hinge_flexibility", "overlap_energy", "slit_corrections",
            "slit_element_weights", "slit_section_ei", "stiffness_from_flexibility"]
-
-#: Largest loss factor ``beta * omega`` of a slit's stiffness-proportional damping over the measurement band.
-MAX_LOSS_FACTOR = 1.0
-
 
 def slit_section_ei(layout: SectionLayout, depth_m):
     """Rigidity of the section with the top ``depth_m`` removed (about its own neutral axis).
@@ -284,17 +281,12 @@ def draw_slits(rng: np.random.Generator, n: int, cfg: dict, length_m: float, lay
         absent slits are NaN.
     """
     d = cfg["damage"]
-    lo, hi = d["n_slits"]
-    smax = max(hi, 1)
-    k = rng.integers(lo, hi + 1, size=n)
-    u = rng.random((n, smax, 4))
-    k = np.where(rng.random(n) < d["intact_fraction"], 0, k)
+    k, u, present = draw_counts(rng, n, d, "n_slits", 4)
 
     def span(key, col):
         a, b = d[key]
         return a + (b - a) * u[:, :, col]
 
-    present = np.arange(smax)[None, :] < k[:, None]
     out = {"n_slits": k}
     for key, name, col, scale in (("position_fraction", "x_m", 0, length_m), ("width_m", "width_m", 1, 1.0),
                                   ("depth_m", "depth_m", 2, 1.0), ("slit_damping_s", "beta_s", 3, 1.0)):
@@ -417,11 +409,7 @@ class Slit:
                               f"samples would be labelled damaged; give an upper bound > 0 (or n_slits = [0, 0] "
                               f"for intact samples only)")
         d["slit_damping_s"] = value_range("damage.slit_damping_s", d["slit_damping_s"], lo=0.0, hi=1.0)
-        top_rad_s = cfg["measurement"]["band_rad_s"][1]
-        if d["slit_damping_s"][1] * top_rad_s > MAX_LOSS_FACTOR:
-            raise ConfigError(f"config key 'damage.slit_damping_s' must keep the slit's loss factor beta*omega <= "
-                              f"{MAX_LOSS_FACTOR:g} up to the top of measurement.band_rad_s ({top_rad_s:g} rad/s): "
-                              f"beta <= {MAX_LOSS_FACTOR / top_rad_s:.3g} s, got {d['slit_damping_s']!r}")
+        check_loss_factor("slit_damping_s", d["slit_damping_s"], cfg)
 
     def check_beam(self, d: dict, preset, section: dict, added_masses=()) -> None:
         if d["depth_m"][1] >= preset.thickness_m - section["face_thickness_m"]:
