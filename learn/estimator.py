@@ -1,16 +1,12 @@
 """``DamageClassifier``: a scikit-learn style estimator around :class:`learn.models.DamageNet`.
 
-``fit(X, y, groups)`` standardises the features (statistics of the training
-part only), holds out a validation part by specimen (``groups``), trains the
-network, and fits a logit scale and bias on the validation logits (Guo et al.'s 2017 "temperature scaling"
-with Platt's bias) so that ``predict_proba`` is calibrated, a factor on the size head's spread so that one
-standard deviation covers 68 % of the sizes of the validation pairs called damaged, and the location's sharpness
-(:mod:`learn.intervals`).
-
-Targets ``y`` have three columns: damaged (0/1), ``x / L`` of the damage (NaN if
-intact) and its size (:func:`learn.features.labels`: the size of the data's damage kind, e.g. a slit's hinge
-flexibility, a mass change's signed mass ratio; 0 if intact), learned through the kind's
-:class:`learn.size.SizeTransform`.
+``fit(X, y, groups)`` standardises the features (statistics of the training part only), holds out a validation
+part by specimen (``groups``), trains the network, and fits a logit scale and bias on the validation logits (Guo
+et al.'s 2017 "temperature scaling" with Platt's bias) so that ``predict_proba`` is calibrated, a factor on the size
+head's spread so that one standard deviation covers 68 % of the sizes of the validation pairs called damaged, and
+the location's sharpness (:mod:`learn.intervals`). Targets ``y`` have three columns: damaged (0/1), ``x / L`` of
+the damage (NaN if intact) and its size (:func:`learn.features.labels`: the size of the data's damage kind, 0 if
+intact), learned through the kind's :class:`learn.size.SizeTransform`.
 
 Missing modes
 -------------
@@ -141,9 +137,8 @@ class DamageClassifier:
     device : str or None
         ``None`` picks CUDA when present, else CPU.
     n_threads : int or None
-        torch CPU threads for ``fit`` and the predictions (``None``: torch's own setting, usually
-        one per core). One is the default: this small network trains fastest on one thread, and
-        on a machine shared with other jobs more threads were up to ten times slower.
+        torch CPU threads for ``fit`` (``None``: torch's own setting, usually one per core); one trains this
+        small network fastest, and on a shared machine more were up to ten times slower.
     verbose : bool
         Show a tqdm bar over epochs.
     zone_edges : sequence of float or None
@@ -159,13 +154,16 @@ class DamageClassifier:
         Probability that a mode of a training pair is missing in a batch (with ``feature_modes``).
     min_modes : int
         Fewest modes present the network answers on (with ``feature_modes``).
+    mirrored : bool
+        The network reads a symmetric beam's frequencies alone: its place is known up to ``x <-> L - x``, and
+        the location's sharpness is fitted on the distributions folded onto ``x <= L / 2`` (:mod:`learn.mirror`).
     """
 
     def __init__(self, n_bins=80, hidden=128, depth=3, dropout=0.05, epochs=60, batch_size=256, lr=2e-3,
                  weight_decay=1e-4, loc_sigma_bins=1.0, val_fraction=0.15, false_alarm_target=0.005, random_state=0,
                  device=None, n_threads=1, verbose=False, zone_edges=None, size_transform="log", feature_modes=None,
-                 missing_mode_probability=0.15, min_modes=2):
-        self.n_bins = n_bins
+                 missing_mode_probability=0.15, min_modes=2, mirrored=False):
+        self.n_bins, self.mirrored = n_bins, mirrored
         self.size_transform = size_transform
         self.zone_edges = zone_edges
         self.feature_modes = feature_modes
@@ -442,7 +440,7 @@ class DamageClassifier:
             self.size_std_scale_ = fit_size_std_scale(tf.inverse(lsv[dmg]), tf.inverse(mu),
                                                       np.exp(mixed["size_log_std"][dmg]),
                                                       spread=lambda t_std: tf.std(mu, t_std))
-            self.location_sharpness_ = fit_location_sharpness(mixed["locate"][dmg], xv[dmg])
+            self.location_sharpness_ = fit_location_sharpness(mixed["locate"][dmg], xv[dmg], fold=self.mirrored)
 
     # ------------------------------------------------------------------ predict
     def _marginal(self, present_row) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["LEVELS", "Z_OF_LEVEL", "distribution_interval", "fit_location_sharpness", "softmax"]
+__all__ = ["LEVELS", "Z_OF_LEVEL", "distribution_interval", "fit_location_sharpness", "folded", "softmax"]
 
 #: The intervals reported (name: level) and the standard normal quantile of each level (two-sided).
 LEVELS = {"68": 0.6827, "95": 0.95}
@@ -55,14 +55,29 @@ def distribution_interval(p, level: float, span: float = 1.0) -> np.ndarray:
     return out
 
 
-def fit_location_sharpness(logits, x_true, coverage: float = 0.6827) -> float:
+def folded(p) -> np.ndarray:
+    """Distributions over equal bins of ``[0, 1]`` (n, B) folded onto ``[0, 1/2]`` (n, B // 2): the bins of ``x``
+    and ``1 - x`` summed (an odd count's middle bin, which straddles 1/2, goes to the last)."""
+    p = np.atleast_2d(np.asarray(p, float))
+    h = p.shape[1] // 2
+    half = p[:, :h] + p[:, ::-1][:, :h]
+    if p.shape[1] % 2:
+        half[:, -1] += p[:, h]
+    return half
+
+
+def fit_location_sharpness(logits, x_true, coverage: float = 0.6827, fold: bool = False) -> float:
     """Sharpness ``s`` of the location logits (n, B) whose ``coverage`` intervals hold ``coverage`` of the true places
     ``x_true`` (n,) (``x / L``); the intervals narrow as ``s`` grows, solved by bisection in ``ln s`` over
-    [1/20, 20] (an end where even it does not reach the coverage)."""
+    [1/20, 20] (an end where even it does not reach the coverage). ``fold``: intervals and places on the half
+    ``x <= 1/2`` (:func:`folded`), as a mirrored pair reports them."""
     logits, x_true = np.asarray(logits, float), np.asarray(x_true, float)
+    if fold:
+        x_true = np.minimum(x_true, 1.0 - x_true)
 
     def covered(log_s):
-        iv = distribution_interval(softmax(logits, np.exp(log_s)), coverage)
+        p = softmax(logits, np.exp(log_s))
+        iv = distribution_interval(folded(p), coverage, 0.5) if fold else distribution_interval(p, coverage)
         return np.mean((iv[:, 0] <= x_true) & (x_true <= iv[:, 1]))
 
     lo, hi = np.log(1 / 20), np.log(20.0)

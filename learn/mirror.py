@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from learn.intervals import LEVELS, distribution_interval
+from learn.intervals import LEVELS, distribution_interval, folded
 
 __all__ = ["fold_to_half", "location_ambiguity", "mirrored"]
 
@@ -34,12 +34,9 @@ def fold_to_half(answer: dict, beam, distribution=None) -> dict:
         c = np.minimum(c, 1 - c)
         mean = float(p @ c)
         out["location_std_m"] = float(np.sqrt(max(p @ c**2 - mean**2, 0.0) + 1 / (12 * p.size**2)) * L)
-        h = p.size // 2
-        half = p[:h] + p[::-1][:h]                      # the bins of x and of L - x, on [0, L / 2]
-        half[-1] += p[h] if p.size % 2 else 0.0         # an odd count's middle bin straddles L / 2
         for k, level in LEVELS.items():
             if f"x_m_{k}" in out:
-                out[f"x_m_{k}"] = [float(v) * L for v in distribution_interval(half[None], level, 0.5)[0]]
+                out[f"x_m_{k}"] = [float(v) * L for v in distribution_interval(folded(p), level, 0.5)[0]]
     else:
         mean = min(answer["location_x_over_L"], 1 - answer["location_x_over_L"])
     out["location_x_over_L"], out["location_x_m"] = mean, mean * L

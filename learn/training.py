@@ -150,7 +150,9 @@ def _fit_networks(pairs: Pairs, routes: list, y, split: tuple, sens, params: dic
     for r in routes:
         X = features(pairs, r)
         masked = {"feature_modes": feature_modes(X.shape[1], pairs.beam.n_modes)} if r in MODE_ROUTES else {}
-        est = DamageClassifier(**params, **masked)
+        test = pairs.beam.test                 # classify folds a symmetric beam read on frequencies alone
+        mirrored = bool(test is not None and test.support.symmetric and (test.n_sensors == 1 or r == "frequency"))
+        est = DamageClassifier(**params, **masked, mirrored=mirrored)
         est.fit(X[tr], y[tr], pairs.groups[tr])
         networks[r] = est
         fit_s[r] = est.train_seconds_

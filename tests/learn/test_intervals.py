@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from learn.intervals import LEVELS, distribution_interval, fit_location_sharpness, softmax
+from learn.intervals import LEVELS, distribution_interval, fit_location_sharpness, folded, softmax
 
 
 def test_a_uniform_distribution_has_the_uniform_quantiles():
@@ -46,3 +46,23 @@ def test_the_sharpness_undoes_a_distribution_too_wide_by_a_known_factor():
     assert s == pytest.approx(k**2, rel=0.1)
     iv = distribution_interval(softmax(logits, s), LEVELS["95"])
     assert np.mean((iv[:, 0] <= x) & (x <= iv[:, 1])) == pytest.approx(0.95, abs=0.015)
+
+
+def test_a_mirrored_network_is_calibrated_on_the_folded_half():
+    """Distributions with two equal peaks at x and 1 - x, each twice as wide as the places' scatter (a symmetric
+    beam read on frequencies): folded onto x <= 1/2, the fitted sharpness undoes the width and the folded
+    intervals hold 68 % of the folded places."""
+    rng = np.random.default_rng(1)
+    B, n, sd = 200, 3000, 0.03
+    c = (np.arange(B) + 0.5) / B
+    mu = rng.uniform(0.1, 0.4, n)
+    x = np.where(rng.random(n) < 0.5, mu, 1 - mu) + sd * rng.standard_normal(n)
+    logits = np.logaddexp(-0.5 * ((c[None] - mu[:, None]) / (2 * sd)) ** 2,
+                          -0.5 * ((c[None] - 1 + mu[:, None]) / (2 * sd)) ** 2)
+    s = fit_location_sharpness(logits, x, fold=True)
+    assert s == pytest.approx(4.0, rel=0.15)                  # the peaks twice too wide: k^2 = 4
+    iv = distribution_interval(folded(softmax(logits, s)), LEVELS["68"], 0.5)
+    xf = np.minimum(x, 1 - x)
+    assert np.mean((iv[:, 0] <= xf) & (xf <= iv[:, 1])) == pytest.approx(0.6827, abs=0.01)
+    assert np.all(iv[:, 1] <= 0.5)
+    assert folded(np.full((1, 5), 0.2))[0] == pytest.approx([0.4, 0.6])
