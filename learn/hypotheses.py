@@ -51,7 +51,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from datagen.damage import DAMAGE_MODELS, damage_defaults
+from datagen.damage import DAMAGE_MODELS, applies_to, beam_section, damage_defaults
 from learn.model_dir import sensitivity_of, truth_beam_mapping
 from learn.sensitivity import Sensitivity
 from learn.shapes import real_shapes, shape_changes, sign_aligned
@@ -464,15 +464,19 @@ def _support_curves(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_sprin
 
 
 def kind_explanations(model) -> dict:
-    """Each registered damage kind's explanation on the model's beam: its sizes over ``size_range`` and its
-    sensitivities averaged over ``spread_m``, both of the model's generator config for the model's own kind and of
-    the kind's defaults for the others."""
+    """Each registered damage kind's explanation on the model's beam (the kinds its section holds,
+    :func:`datagen.damage.applies_to`): its sizes over ``size_range`` and its sensitivities averaged over
+    ``spread_m``, both of the model's generator config for the model's own kind and of the kind's defaults for the
+    others."""
     beam, cfg = model.beam, model.config
     gen = cfg.get("generator_config") or {}
     own = gen.get("damage") or {}
     mapping = truth_beam_mapping(model)
+    section = beam_section(gen.get("beam"))
     out = {}
     for name in DAMAGE_MODELS:
+        if not applies_to(name, section):       # a kind the beam's section does not hold is no explanation
+            continue
         d = own if own.get("kind") == name else damage_defaults(name)
         sens = sensitivity_of(beam, cfg.get("root_spring_relative"), cfg.get("truth_beam"),
                               {**gen, "damage": {"kind": name}})

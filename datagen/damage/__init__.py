@@ -36,6 +36,10 @@ A damage model turns its section of the configuration (``damage``, selected by
   ``section`` keys): the flat prior of the kind's competing explanation;
 * ``spread_m(d, length_m)`` is the typical length (m) such a damage spreads over: the explanation
   averages the point sensitivities over a window of that length;
+* ``sections`` names the beam sections the kind exists on (``physics.beam`` section kinds:
+  ``("sandwich",)`` for a face-core debond), None for every section: a dataset of the kind on
+  another section is refused, and its competing explanation is not offered there
+  (:func:`applies_to`);
 * ``separates`` says, for another explanation (``"intact"``, ``"global_stiffness"``,
   ``"support_change"`` or another kind), what measurement tells this kind from it when the
   frequencies of the measured modes cannot;
@@ -60,10 +64,11 @@ import numpy as np
 from datagen.damage.debond import Debond
 from datagen.damage.mass_change import MassChange
 from datagen.damage.slit import Slit
+from physics.beam import beam_from_dict
 from physics.errors import ConfigError
 
-__all__ = ["DAMAGE_MODELS", "DEFAULT_KIND", "DamageModel", "GENERIC_DEFAULTS", "damage_defaults", "damage_model",
-           "element4_index"]
+__all__ = ["DAMAGE_MODELS", "DEFAULT_KIND", "DamageModel", "GENERIC_DEFAULTS", "applies_to", "beam_section",
+           "damage_defaults", "damage_model", "element4_index"]
 
 
 class DamageModel(Protocol):
@@ -78,6 +83,7 @@ class DamageModel(Protocol):
     size_transform: str
     perturbs: str
     separates: dict
+    sections: tuple | None
 
     def size_range(self, d: dict, beam) -> tuple[float, float]: ...
 
@@ -121,6 +127,20 @@ def damage_model(kind) -> DamageModel:
     if not isinstance(kind, str) or kind not in DAMAGE_MODELS:
         raise ConfigError(f"config key 'damage.kind' must be one of {sorted(DAMAGE_MODELS)}, got {kind!r}")
     return DAMAGE_MODELS[kind]
+
+
+def beam_section(beam_mapping) -> str:
+    """The section kind of a config's truth beam (``cfg["beam"]``, a beam file's mapping; None or empty: a thesis
+    preset, a sandwich)."""
+    if not beam_mapping:
+        return "sandwich"
+    return beam_from_dict(dict(beam_mapping), "config key 'beam'").section
+
+
+def applies_to(kind, section: str) -> bool:
+    """Whether damage kind ``kind`` exists on a beam of section kind ``section`` (its ``sections``)."""
+    sections = damage_model(kind).sections
+    return sections is None or section in sections
 
 
 def damage_defaults(kind) -> dict:

@@ -147,6 +147,8 @@ class Debond:
     #: The size head learns ``log(size)``: a debond's hinge flexibility is positive.
     size_transform = "log"
     perturbs = "stiffness"
+    #: A face debonds from a core: sandwich sections only.
+    sections = ("sandwich",)
     separates = {
         "slit": "the damping of the modes (a debond's contact rubs: its damping ratios rise with the modes that bend "
                 "it), a higher mode (a long debond spreads its loss, so a higher mode whose curvature changes sign "
@@ -168,7 +170,7 @@ class Debond:
         check_loss_factor("debond_damping_s", d["debond_damping_s"], cfg)
         if cfg.get("beam"):
             section = beam_from_dict(dict(cfg["beam"]), "config key 'beam'").section
-            if section != "sandwich":
+            if section not in self.sections:
                 raise ConfigError(f"config key 'damage.kind' = 'debond' needs a sandwich section (faces on a core); "
                                   f"config key 'beam' has section = {section!r}")
 

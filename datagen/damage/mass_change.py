@@ -139,6 +139,7 @@ class MassChange:
     size_transform = "asinh:0.01"
     size_label = "mass ratio"
     perturbs = "mass"
+    sections = None                 # every section
     separates = {"support_change": "mode shapes near the support or a higher mode"}
 
     def size_range(self, d: dict, beam) -> tuple[float, float]:

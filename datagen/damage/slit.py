@@ -376,6 +376,7 @@ class Slit:
     #: The size head learns ``log(size)``: a slit's hinge flexibility is positive.
     size_transform = "log"
     perturbs = "stiffness"
+    sections = None                 # every section
     separates = {
         "support_change": "mode shapes near the support (a support change bends the beam differently there, a "
                           "slit changes the curvature at the slit) or a higher mode",

@@ -237,6 +237,7 @@ class _Stiffening:
     size_label = "test flexibility"
     size_transform = "log"
     perturbs = "stiffness"
+    sections = None
     separates = {"slit": "nothing at all (a slit by another name)"}
 
     def size_range(self, d, beam):
@@ -287,3 +288,17 @@ def test_a_kind_registered_anywhere_is_weighed_described_and_separated(stiffenin
     assert "slit" not in text and "hinge" not in text
     assert _classical_sentence({"method": "DLAC", **a}, words) == ("DLAC: damaged, a test stiffening at x = 0.200 m "
                                                                    "of 0.0098 (element 2 of 4)")
+
+
+def test_a_kind_is_offered_only_on_the_sections_it_exists_on():
+    """A face-core debond needs faces on a core: a model of a solid steel bar weighs no debond, a model of the
+    thesis's sandwich beam does; every other kind is weighed on both."""
+    from learn.hypotheses import kind_explanations
+
+    solid = _model(damage_defaults("slit"))
+    solid.config["generator_config"]["beam"] = {"name": "bar", "section": "rectangular", "length_m": L,
+                                                "width_m": 0.0254, "thickness_m": 0.00475, "modulus_pa": 2.0e11,
+                                                "density_kg_m3": 7850.0}
+    assert "debond" not in kind_explanations(solid)
+    assert {"slit", "mass_change"} <= set(kind_explanations(solid))
+    assert set(kind_explanations(_model(damage_defaults("slit")))) == set(DAMAGE_MODELS)
