@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from datagen.checks import number as _num, value_range as _range
-from datagen.damage import DEFAULT_KIND, GENERIC_DEFAULTS, damage_defaults, damage_model
+from datagen.damage import DEFAULT_KIND, GENERIC_DEFAULTS, applies_to, beam_section, damage_defaults, damage_model
 from datagen.specimen import DEFAULT_SECTION
 from physics.io.inputs import check_input_file
 from physics.errors import BeamDamageError, ConfigError
@@ -249,12 +249,17 @@ def _check_specimen(dmg: dict) -> None:
 
 
 def _check_damage(cfg: dict) -> None:
-    """Section ``damage``: kind, intact fraction, positions, then the kind's own keys (its ``validate``)."""
+    """Section ``damage``: kind, intact fraction, positions, the kind's own keys (its ``validate``), then whether the
+    truth beam's section holds the kind (its ``sections``)."""
     d = cfg["damage"]
     model = damage_model(d["kind"])
     d["position_fraction"] = _range("damage.position_fraction", d["position_fraction"], lo=0.0, hi=1.0)
     d["intact_fraction"] = _num("damage.intact_fraction", d["intact_fraction"], lo=0.0, hi=1.0)
     model.validate(d, cfg)
+    section = beam_section(cfg.get("beam"))
+    if not applies_to(d["kind"], section):
+        raise ConfigError(f"config key 'damage.kind' = {d['kind']!r} needs a {' or '.join(model.sections)} section; "
+                          f"config key 'beam' has section = {section!r}")
 
 
 #: What ``measurement.modal_noise`` may be.

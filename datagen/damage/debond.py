@@ -47,7 +47,6 @@ from datagen.damage.draws import check_loss_factor, draw_counts
 from datagen.damage.slit import clamped_flexibility, expand_tip_stiffness, hinge_flexibility, slit_corrections, \
     slit_element_weights
 from datagen.specimen import DEFAULT_SECTION, SectionLayout
-from physics.beam import beam_from_dict
 from physics.errors import ConfigError
 from physics.properties import beam_preset, section_ei
 
@@ -147,7 +146,7 @@ class Debond:
     #: The size head learns ``log(size)``: a debond's hinge flexibility is positive.
     size_transform = "log"
     perturbs = "stiffness"
-    #: A face debonds from a core: sandwich sections only.
+    #: A face debonds from a core: sandwich sections only (the config refuses another, :mod:`datagen.config`).
     sections = ("sandwich",)
     separates = {
         "slit": "the damping of the modes (a debond's contact rubs: its damping ratios rise with the modes that bend "
@@ -168,11 +167,6 @@ class Debond:
         d["length_m"] = value_range("damage.length_m", d["length_m"], lo=1e-4)
         d["debond_damping_s"] = value_range("damage.debond_damping_s", d["debond_damping_s"], lo=0.0, hi=1.0)
         check_loss_factor("debond_damping_s", d["debond_damping_s"], cfg)
-        if cfg.get("beam"):
-            section = beam_from_dict(dict(cfg["beam"]), "config key 'beam'").section
-            if section not in self.sections:
-                raise ConfigError(f"config key 'damage.kind' = 'debond' needs a sandwich section (faces on a core); "
-                                  f"config key 'beam' has section = {section!r}")
 
     def check_beam(self, d: dict, preset, section: dict, added_masses=()) -> None:
         if d["length_m"][1] >= preset.length_m:
