@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.benches.study_beams import fold, run_beam
+from experiments.benches.study_beams import fold, folded, run_beam
 from experiments.second_sim.beams import CATALOGUE
 from experiments.studies.doc_tables import write_table
 from physics.io import atomic_write_text
@@ -54,10 +54,6 @@ def _inside(interval, value) -> bool | None:
     return bool(lo <= value <= hi)
 
 
-def _folded(v: dict, truth: dict) -> bool:
-    return bool(truth["symmetric"] and (len(truth["measured_x_m"]) == 1 or v.get("input_route") == "frequency"))
-
-
 def cover(verdicts: list[dict], truth: dict, kind: str) -> list[dict]:
     """Coverage rows (one per source) of one beam's verdicts against the simulator's ``truth.json``."""
     L = float(truth["length_m"])
@@ -69,7 +65,7 @@ def cover(verdicts: list[dict], truth: dict, kind: str) -> list[dict]:
             continue
         damaged += 1
         x_true = float(t["damage_x_m"])
-        x_true = float(fold(x_true, L)) if _folded(v, truth) else x_true
+        x_true = float(fold(x_true, L)) if folded(v, truth) else x_true
         s_true = float(t["damage_size"])
         net = v.get("network") or {}
         expl = next((h for h in (v.get("hypotheses") or []) if h["name"] == kind), None)

@@ -44,7 +44,8 @@ from experiments.benches.bench_foreign import cli_json
 from experiments.second_sim.beams import CATALOGUE, SPREAD, Spread, simulate_beam_pairs, write_beam_pairs
 from physics.io import atomic_write_bytes, atomic_write_text
 
-__all__ = ["TARGETS", "fold", "main", "markdown", "parse_spread", "pooled", "run_beam", "score_beam", "targets"]
+__all__ = ["TARGETS", "fold", "folded", "main", "markdown", "parse_spread", "pooled", "run_beam", "score_beam",
+           "targets"]
 
 #: A slit is "small" when it lowers no mode of the band by this much (relative) on its own.
 SMALL_DROP = 0.005
@@ -70,7 +71,7 @@ def _answers(v: dict) -> dict:
     return out
 
 
-def _folded(v: dict, meta: dict) -> bool:
+def folded(v: dict, meta: dict) -> bool:
     """Whether classify folded this pair's locations (symmetric support read on frequencies alone)."""
     return bool(meta["symmetric"] and (len(meta["measured_x_m"]) == 1 or v.get("input_route") == "frequency"))
 
@@ -80,9 +81,9 @@ def score_beam(verdicts: list[dict], meta: dict) -> list[dict]:
     truth = meta["pairs"]
     L = float(meta["length_m"])
     damaged = np.array([bool(t["damaged"]) for t in truth])
-    folded = np.array([_folded(v, meta) for v in verdicts])
+    folded_pairs = np.array([folded(v, meta) for v in verdicts])
     x_true = np.array([_nan(t["slit_x_m"]) for t in truth])
-    x_true = np.where(folded, fold(x_true, L), x_true)
+    x_true = np.where(folded_pairs, fold(x_true, L), x_true)
     s_true = np.array([float(t["hinge_flexibility"]) for t in truth])
     edges = np.asarray(verdicts[0]["zone_edges_m"], float)
     z_true = np.where(damaged, np.clip(np.searchsorted(edges, np.nan_to_num(x_true), side="right"), 1,
@@ -107,7 +108,7 @@ def score_beam(verdicts: list[dict], meta: dict) -> list[dict]:
         rows.append({
             "beam": meta["beam"], "bc": meta["bc"], "sensors": len(meta["measured_x_m"]), "method": method,
             "pairs": len(a), "answered": int(given.sum()), "damaged_pairs": int(dm.sum()),
-            "intact_pairs": int(im.sum()), "folded": bool(folded.any()),
+            "intact_pairs": int(im.sum()), "folded": bool(folded_pairs.any()),
             "zone_accuracy": float(np.mean(det[dm] & (zone[dm] == z_true[dm]))) if dm.any() else float("nan"),
             "detection": float(np.mean(called[dm])) if dm.any() else float("nan"),
             "median_dx_over_L": float(np.median(dx)) if dx.size else float("nan"),
