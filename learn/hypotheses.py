@@ -46,13 +46,15 @@ the kinds' ``separates``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from functools import lru_cache
 
 import numpy as np
 
 from datagen.damage import DAMAGE_MODELS, applies_to, beam_section, damage_defaults
-from learn.model_dir import sensitivity_of, truth_beam_mapping
+from learn.model_dir import sensitivity_of, truth_beam_mapping, truth_numbers
+from learn.refine import (SIZE_SCALE_STD, ExactFit, ExactKind, birge_ratio, kind_parameters, local_grid, nominal_beam,
+                          refine)
 from learn.sensitivity import Sensitivity
 from learn.shapes import real_shapes, shape_changes, sign_aligned
 from physics.effects import hermite_row
@@ -87,10 +89,6 @@ MODEL_ERROR = 0.03
 #: with 0.01 against 71 % with 0.03).
 SHAPE_CHANGE_STD = 0.03
 
-#: Relative standard deviation of a size for a given change (10 %): the nominal beam's sensitivities stand for a
-#: specimen whose EI, mass and clamp differ from it by several percent; it widens the size intervals.
-SIZE_SCALE_STD = 0.1
-
 #: Largest misfit of a mode's change, in its standard deviations, of an explanation that fits (3: a chance of
 #: about 1 % over 4 modes).
 FIT_LIMIT = 3.0
@@ -111,6 +109,8 @@ class KindExplanation:
     sizes : ndarray, shape (K,)  the size grid over the kind's ``size_range``
     sens : learn.sensitivity.Sensitivity   sensitivities per unit size, averaged over the kind's spread
     size_label : str
+    exact : learn.refine.ExactKind or None   the kind's exact model on the nominal beam: the grid's best candidates
+                                refined on it (:func:`_refined`); None: the grid alone
     """
 
     name: str
@@ -118,10 +118,12 @@ class KindExplanation:
     sizes: np.ndarray
     sens: Sensitivity
     size_label: str = "size"
+    exact: ExactKind | None = None
 
     def modes(self, indices) -> "KindExplanation":
         """The explanation on the nominal modes ``indices`` (0-based) alone."""
-        return replace(self, sens=self.sens.modes(indices))
+        exact = None if self.exact is None else self.exact.modes(indices)
+        return replace(self, sens=self.sens.modes(indices), exact=exact)
 
     def frequency_grid(self) -> np.ndarray:
         """Relative frequency changes (K, E, m) over the size grid and the places (the Rayleigh quotient of the
@@ -192,24 +194,6 @@ def _log_mean_exp(v: np.ndarray) -> float:
     return top + float(np.log(np.mean(np.exp(v - top))))
 
 
-def _interval(values: np.ndarray, weights: np.ndarray, level: float, half_width: float = 0.0) -> list:
-    """Equal-tailed interval of a discrete distribution, widened by ``half_width`` on each side (the half-width of
-    a grid cell: a location grid's elements)."""
-    order = np.argsort(values, kind="stable")
-    values, weights = np.asarray(values)[order], np.asarray(weights)[order]
-    c = np.cumsum(weights) / np.sum(weights)
-    lo = values[min(np.searchsorted(c, (1 - level) / 2), values.size - 1)]
-    hi = values[min(np.searchsorted(c, 1 - (1 - level) / 2), values.size - 1)]
-    return [float(lo - half_width), float(hi + half_width)]
-
-
-def _scaled(sizes: np.ndarray, weights: np.ndarray):
-    """The size distribution times a factor ``N(1, SIZE_SCALE_STD)`` (9 points): values and weights, flattened."""
-    c = 1 + SIZE_SCALE_STD * np.linspace(-2.5, 2.5, 9)
-    w = np.exp(-0.5 * ((c - 1) / SIZE_SCALE_STD) ** 2)
-    return (sizes[:, None] * c[None]).ravel(), (weights[:, None] * w[None]).ravel()
-
-
 def support_curve(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_spring_relative, ln_factors,
                   mode_index, n_elements: int = 40) -> tuple[np.ndarray, np.ndarray, str]:
     """Relative frequency changes (G, m) of the modes ``mode_index`` (0-based bending modes) when the beam's
@@ -272,6 +256,39 @@ def _loglik(g, y, s, half: float, model_error: float):
     mass = big + np.log(-np.expm1(np.minimum(small - big, -1e-300)))
     return (-0.5 * (s0 - s1**2 / s2) + logdet + 0.5 * np.log(2 * np.pi) - np.log(root) + mass
             - np.log(2 * half)), a_best
+
+
+def _refined(k: KindExplanation, y, s, half: float, model_error: float, ll, shapes=None, ss=1.0,
+             n_starts: int = 3) -> list[dict]:
+    """Kind ``k`` refined on its exact model (:mod:`learn.refine`) for each pair of a chunk (``y`` (n, m), whitened
+    ``shapes`` (n, D) or None), from the ``n_starts`` best places of its grid log-likelihood ``ll`` (n, K, E) an
+    eighth of the beam apart (each at its best size), the best fit kept: per pair its place, size, prediction and
+    Birge ratio, the local exact grid's places, sizes and log-likelihood, and ``gain``, that grid's best
+    log-likelihood less the first-order grid's (by which the evidence moves)."""
+    n, _, E = ll.shape
+    prof, starts = ll.max(axis=1), []                                     # (n, E): the best size at each place
+    for _ in range(n_starts):
+        e = np.argmax(prof, axis=1)
+        starts.append((e, np.argmax(ll[np.arange(n), :, e], axis=1)))
+        prof = np.where(np.abs(np.arange(E)[None] - e[:, None]) < E / 8, -np.inf, prof)
+    e, t = (np.concatenate(v) for v in zip(*starts))
+    bounds, L = (float(k.sizes[0]), float(k.sizes[-1])), k.exact.nominal.length_m
+    fit = refine(k.exact, np.asarray(k.sens.x_over_L)[e] * L, k.sizes[t], np.tile(y, (n_starts, 1)), s, half,
+                 model_error, bounds, None if shapes is None else np.tile(shapes, (n_starts, 1)), ss)
+    best = np.argmin((fit.chi2_frequency + fit.chi2_shape).reshape(n_starts, n), axis=0) * n + np.arange(n)
+    fit = ExactFit(*(getattr(fit, f.name)[best] for f in fields(ExactFit)))
+    birge = birge_ratio(fit, y.shape[1], 0 if shapes is None else shapes.shape[1])
+    X, S, G, H, half_width = local_grid(k.exact, fit, bounds, birge)
+    out = []
+    for i in range(n):
+        li = _loglik(G[i], y[i:i + 1], s, half, model_error)[0][0]                      # (n n,)
+        if shapes is not None:
+            p = H[i] / ss
+            li = li + p @ shapes[i] - 0.5 * np.sum(p**2, axis=1)
+        out.append({"x_m": fit.x_m[i], "size": fit.size[i], "predicted": fit.predicted[i], "birge": birge[i],
+                    "x_values": X[i], "size_values": S[i], "loglik": li, "half_width_m": half_width[i],
+                    "gain": float(li.max() - ll[i].max())})
+    return out
 
 
 #: Pairs weighed in one array operation (memory: about 2 MB per pair and mode).
@@ -349,7 +366,7 @@ def weigh_many(shifts, kinds: dict, support: tuple, temperature_range=(-0.004, 0
         grids[name] = k.frequency_grid()                                  # (K, E, m)
     names = list(grids)
     log_prior = -np.log(len(names))
-    out = []
+    out, ss = [], 1.0
     if shapes is not None:
         n_shape = {np.asarray(k.sens.shape).shape[0] for k in kinds.values()}
         shapes = np.asarray(shapes, float)
@@ -369,12 +386,18 @@ def weigh_many(shifts, kinds: dict, support: tuple, temperature_range=(-0.004, 0
         if shapes is not None:
             extra = _shape_loglik(shapes[start:start + CHUNK_PAIRS], grid_shapes, 1.0)
             ll = {name: (v[0] + extra[name], v[1]) for name, v in ll.items()}
+        ys = None if shapes is None else shapes[start:start + CHUNK_PAIRS]
+        refined = {name: _refined(k, y, s, half, model_error, ll[name][0], ys, ss)
+                   for name, k in kinds.items() if k.exact is not None}
         for i in range(y.shape[0]):
             fits = {}
             for name, g in grids.items():
                 li, ai = ll[name][0][i], ll[name][1][i]
                 j = np.unravel_index(np.argmax(li), li.shape)
                 fits[name] = (_log_mean_exp(li), j, (0.0 if name == "global_stiffness" else ai[j]) + g[j], li)
+                if name in refined:     # the exact model's optimum; the evidence shifted by its best likelihood
+                    r = refined[name][i]
+                    fits[name] = (fits[name][0] + r["gain"], j, r["predicted"], li)
             g_best = float(grids["global_stiffness"][fits["global_stiffness"][1]][0])
             params = {
                 "intact": {"temperature_frequency_change": float(ll["intact"][1][i][fits["intact"][1]])},
@@ -383,10 +406,21 @@ def weigh_many(shifts, kinds: dict, support: tuple, temperature_range=(-0.004, 0
                                    "temperature_frequency_change":
                                        float(ll["support_change"][1][i][fits["support_change"][1]])},
             }
-            miss = {n: float(np.max(np.abs(fits[n][2] - y[i]) / np.sqrt(s**2 + (model_error * fits[n][2]) ** 2)))
-                    for n in names}
+            z = {n: (fits[n][2] - y[i]) / np.sqrt(s**2 + (model_error * fits[n][2]) ** 2) for n in names}
+            miss = {n: float(np.max(np.abs(v))) for n, v in z.items()}
             for name, k in kinds.items():
-                params[name] = _kind_parameters(fits[name], k, length_m, fits_noise=miss[name] <= FIT_LIMIT)
+                if name in refined:
+                    r = refined[name][i]
+                    params[name] = kind_parameters(r["x_m"], r["size"], length_m, k.size_label, r["x_values"],
+                                                   r["size_values"], r["loglik"], r["half_width_m"],
+                                                   miss[name] <= FIT_LIMIT, r["birge"])
+                    continue
+                (t, e), li = fits[name][1], fits[name][3]
+                x_m = np.asarray(k.sens.x_over_L) * length_m
+                birge = max(1.0, float(np.sum(z[name] ** 2)) / max(1, y.shape[1] - 3))
+                params[name] = kind_parameters(x_m[e], k.sizes[t], length_m, k.size_label, x_m[None] + 0 * li,
+                                               k.sizes[:, None] + 0 * li, li, 0.5 * length_m / x_m.size,
+                                               miss[name] <= FIT_LIMIT, birge)
             logz = np.array([fits[n][0] + log_prior for n in names])
             p = np.exp(logz - logz.max())
             p /= p.sum()
@@ -395,23 +429,6 @@ def weigh_many(shifts, kinds: dict, support: tuple, temperature_range=(-0.004, 0
                     for j, n in enumerate(names)]
             out.append(sorted(rows, key=lambda r: -r.probability))
     return out
-
-
-def _kind_parameters(fit: tuple, kind: KindExplanation, length_m: float, fits_noise: bool) -> dict:
-    """A damage kind's most likely place and size and their 68 % / 95 % intervals from its likelihood grid (K, E);
-    the intervals None when the kind does not fit (no interval rather than a narrow one)."""
-    _, (t, e), _, ll = fit
-    x_m = np.asarray(kind.sens.x_over_L) * length_m
-    out = {"x_m": float(x_m[e]), "x_over_L": float(kind.sens.x_over_L[e]), "size": float(kind.sizes[t]),
-           "size_label": kind.size_label}
-    keys = ("x_m_68", "x_m_95", "size_68", "size_95")
-    if not fits_noise:
-        return {**out, **dict.fromkeys(keys)}
-    post = np.exp(ll - ll.max())
-    px, pt = post.sum(axis=0), post.sum(axis=1)
-    h = 0.5 * length_m / x_m.size                                        # half an element of the grid
-    return {**out, "x_m_68": _interval(x_m, px, 0.68, h), "x_m_95": _interval(x_m, px, 0.95, h),
-            "size_68": _interval(*_scaled(kind.sizes, pt), 0.68), "size_95": _interval(*_scaled(kind.sizes, pt), 0.95)}
 
 
 #: What tells an explanation that is no damage kind from any other (the damage kinds' own ``separates`` say what
@@ -480,18 +497,22 @@ def kind_explanations(model) -> dict:
         d = own if own.get("kind") == name else damage_defaults(name)
         sens = sensitivity_of(beam, cfg.get("root_spring_relative"), cfg.get("truth_beam"),
                               {**gen, "damage": {"kind": name}})
-        out[name] = kind_explanation(name, d, mapping, sens)
+        exact = ExactKind(name, d, mapping, nominal_beam(truth_numbers(beam, cfg.get("truth_beam"), gen),
+                                                         cfg.get("root_spring_relative"), beam.test,
+                                                         sens.n_elements, sens.frequency.shape[0]),
+                          np.arange(sens.frequency.shape[0]))
+        out[name] = kind_explanation(name, d, mapping, sens, exact=exact)
     return out
 
 
-def kind_explanation(name: str, d: dict, beam, sens: Sensitivity, sizes=None) -> KindExplanation:
+def kind_explanation(name: str, d: dict, beam, sens: Sensitivity, sizes=None, exact=None) -> KindExplanation:
     """The explanation of damage kind ``name`` of config section ``d`` on the truth beam ``beam`` (a preset name or
     its mapping): ``sizes`` (default: :data:`N_SIZE` over the kind's ``size_range``) and the point sensitivities
     ``sens`` (:func:`learn.sensitivity.beam_sensitivity` of that kind) averaged over its ``spread_m``."""
     kind = DAMAGE_MODELS[name]
     sizes = np.linspace(*kind.size_range(d, beam), N_SIZE) if sizes is None else np.asarray(sizes, float)
     return KindExplanation(name, kind.perturbs, sizes, window_averaged(sens, kind.spread_m(d, sens.length_m)),
-                           kind.size_label)
+                           kind.size_label, exact)
 
 
 #: The verdict keys of :func:`explain`, all None for a pair without explanations.

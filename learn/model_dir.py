@@ -44,7 +44,7 @@ from physics.properties import PRESETS, beam_preset
 from physics.effects import effect_of
 
 __all__ = ["DEFAULT_ROUTE", "MODEL_FORMAT", "READ_FORMATS", "TrainedModel", "json_default",
-           "load_model", "save_model", "sensitivity_of", "truth_beam_mapping"]
+           "load_model", "save_model", "sensitivity_of", "truth_beam_mapping", "truth_numbers"]
 
 
 #: Input route used by default (the winner of ``python -m experiments.benches.bench_learn``).
@@ -221,16 +221,20 @@ def truth_beam_mapping(model) -> dict:
 
 def sensitivity_of(beam: BeamSpec, config_root_spring=None, truth_beam: dict | None = None,
                    generator_config: dict | None = None):
-    """FE sensitivities of the truth beam a dataset or model records (its preset when it records none; its EI and
-    mass, and the added masses of the generator config's beam file), to the damage kind of its generator config
-    (the default kind when it records none)."""
+    """FE sensitivities of the truth beam a dataset or model records (:func:`truth_numbers`), to the damage kind of
+    its generator config (the default kind when it records none)."""
     kind = ((generator_config or {}).get("damage") or {}).get("kind", DEFAULT_KIND)
-    if truth_beam and "EI_Nm2" in truth_beam:
+    return beam_sensitivity(truth_numbers(beam, truth_beam, generator_config), config_root_spring, kind=kind,
+                            test=beam.test)
 
+
+def truth_numbers(beam: BeamSpec, truth_beam: dict | None = None, generator_config: dict | None = None):
+    """The nominal beam a dataset or model records, as :func:`learn.sensitivity.beam_sensitivity` takes it: its
+    ``(length_m, EI_Nm2, mass_per_length_kg_m, added masses)`` (the added masses of the generator config's beam
+    file), or its preset's name when it records none."""
+    if truth_beam and "EI_Nm2" in truth_beam:
         effects = ((generator_config or {}).get("beam") or {}).get("effects") or {}   # the beam file's
         masses = tuple((float(p.get("x_m", truth_beam["length_m"])), float(p["mass_kg"]))
                        for k, p in effects.items() if effect_of(k) == "added_mass")
-        key = (truth_beam["length_m"], truth_beam["EI_Nm2"], truth_beam["mass_per_length_kg_m"], masses)
-        return beam_sensitivity(key, config_root_spring, kind=kind, test=beam.test)
-    return beam_sensitivity(beam.name, config_root_spring, kind=kind, test=beam.test)
-
+        return (truth_beam["length_m"], truth_beam["EI_Nm2"], truth_beam["mass_per_length_kg_m"], masses)
+    return beam.name

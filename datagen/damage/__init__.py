@@ -17,6 +17,12 @@ A damage model turns its section of the configuration (``damage``, selected by
 * ``size(params, x_m, ei_Nm2, mass_per_length_kg_m, length_m)`` is the
   non-dimensional size (B, S) the network learns (``damage{k}_size``) and
   ``size_meaning`` says what it is;
+* ``damage_at(d, beam, x_m, size, extent, mass_per_length_kg_m, length_m)`` is the
+  inverse of ``size``: the parameters (B, S) of damages of that size centred at ``x_m`` on
+  the nominal beam ``beam`` (as ``size_range`` takes it) of that mass per length and length,
+  their spread at ``extent`` in [0, 1] through the range section ``d`` draws (0: its
+  smallest); ``corrections`` of them is the damage the competing explanation's exact
+  refinement re-analyses (:mod:`learn.refine`);
 * ``columns(...)`` (same arguments) gives the model's own stored columns:
   per sample ``{name: (B,)}`` and per damage ``{suffix: (B, S)}`` stored as
   ``damage{k}_{suffix}``; ``sample_units`` and ``units`` give their units;
@@ -99,6 +105,8 @@ class DamageModel(Protocol):
                     shear_phi=0.0) -> tuple: ...
 
     def size(self, params: dict, x_m, ei_Nm2, mass_per_length_kg_m, length_m: float) -> np.ndarray: ...
+
+    def damage_at(self, d: dict, beam, x_m, size, extent, mass_per_length_kg_m: float, length_m: float) -> dict: ...
 
     def columns(self, params: dict, x_m, ei_Nm2, mass_per_length_kg_m, length_m: float) -> tuple[dict, dict]: ...
 

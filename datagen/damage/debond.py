@@ -205,6 +205,14 @@ class Debond:
     def size(self, params, x_m, ei_Nm2, mass_per_length_kg_m, length_m):
         return hinge_flexibility(params["ei_loss"], params["length_m"], length_m)
 
+    def damage_at(self, d, beam, x_m, size, extent, mass_per_length_kg_m, length_m):
+        """A debond of hinge flexibility ``size`` at ``x_m``: the section's loss ``r`` over the length
+        ``size L (1 - r) / r`` (within the beam; ``extent`` does not enter), no damping."""
+        r = debond_ei_loss(_layout_of(beam))
+        s = np.clip(np.asarray(size, float), 0.0, None)
+        on_beam = np.clip(s * length_m * (1 - r) / r, 1e-9, length_m) * np.ones_like(np.asarray(x_m, float))
+        return {"length_m": on_beam, "ei_loss": np.full_like(on_beam, r), "beta_s": np.zeros_like(on_beam)}
+
     def columns(self, params, x_m, ei_Nm2, mass_per_length_kg_m, length_m):
         return {}, {"length_m": params["length_m"], "ei_loss": params["ei_loss"], "damping_s": params["beta_s"]}
 

@@ -194,6 +194,15 @@ class MassChange:
     def size(self, params, x_m, ei_Nm2, mass_per_length_kg_m, length_m):
         return params["mass_kg"] / (np.asarray(mass_per_length_kg_m, float)[:, None] * length_m)
 
+    def damage_at(self, d, beam, x_m, size, extent, mass_per_length_kg_m, length_m):
+        """A signed mass ``size * m L`` at ``x_m`` over the length ``width_fraction`` at ``extent`` (0: its lower
+        bound, 1: its upper) times ``L``, a loss widened to what carries it (as drawn, no added mass taken)."""
+        (wa, wb) = d["width_fraction"]
+        x, mass = np.asarray(x_m, float), np.asarray(size, float) * mass_per_length_kg_m * length_m
+        w = (wa + (wb - wa) * np.clip(np.asarray(extent, float), 0.0, 1.0)) * length_m * np.ones_like(x)
+        point_kg, point_x, mass, w = _carried(x, w, mass, mass_per_length_kg_m, length_m, length_m, ())
+        return {"mass_kg": mass, "width_m": w, "point_kg": point_kg, "point_x_m": point_x}
+
     def columns(self, params, x_m, ei_Nm2, mass_per_length_kg_m, length_m):
         return {}, {k: params[k] for k in ("mass_kg", "width_m", "point_kg", "point_x_m")}
 

@@ -435,6 +435,14 @@ class Slit:
     def size(self, params, x_m, ei_Nm2, mass_per_length_kg_m, length_m):
         return hinge_flexibility(params["ei_loss"], params["width_m"], length_m)
 
+    def damage_at(self, d, beam, x_m, size, extent, mass_per_length_kg_m, length_m):
+        """A slit of hinge flexibility ``size`` at ``x_m``, its width ``width_m`` at ``extent`` (0: the lower bound,
+        1: the upper), its EI loss ``r`` from ``size = w r / ((1 - r) L)``, no damping."""
+        lo, hi = d["width_m"]
+        s = np.clip(np.asarray(size, float), 0.0, None)
+        w = (lo + (hi - lo) * np.clip(np.asarray(extent, float), 0.0, 1.0)) * np.ones_like(s)
+        return {"width_m": w, "ei_loss": s * length_m / (w + s * length_m), "beta_s": np.zeros_like(s)}
+
     def columns(self, params, x_m, ei_Nm2, mass_per_length_kg_m, length_m):
         loss = params["ei_loss"] * ei_Nm2[:, None] * params["width_m"]
         return ({"stiffness_loss_Nm3": np.nansum(loss, axis=1)},

@@ -249,6 +249,13 @@ class _Stiffening:
     def describe(self, x_m, size, preset, section=None):
         return f"a test stiffening at x = {x_m:.3f} m of {size:.3g}"
 
+    def damage_at(self, d, beam, x_m, size, extent, mass_per_length_kg_m, length_m):
+        return DAMAGE_MODELS["slit"].damage_at({"width_m": [0.004, 0.004]}, beam, x_m, size, extent,
+                                               mass_per_length_kg_m, length_m)
+
+    def corrections(self, params, x_m, ei_Nm2, mass_per_length_kg_m, length_m, n_elements, shear_phi=0.0):
+        return DAMAGE_MODELS["slit"].corrections(params, x_m, ei_Nm2, mass_per_length_kg_m, length_m, n_elements)
+
 
 @pytest.fixture
 def stiffening(monkeypatch):

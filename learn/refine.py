@@ -1,0 +1,305 @@
+"""Exact refinement of a damage kind's competing explanation: the nominal beam re-analysed with the kind's own damage.
+
+The explanation's grid (:mod:`learn.hypotheses`) predicts a kind's frequency changes from first-order sensitivities
+of the nominal shapes; a damage that changes the shapes (a mass of tens of percent of the beam's, a deep slit) lies
+beyond it. Here the nominal FE beam of the sensitivities (:func:`nominal_beam`: its supports, springs, added masses,
+sensors and modes) gets the element corrections of the kind's own damage (``damage_at`` then ``corrections`` of its
+row of :data:`datagen.damage.DAMAGE_MODELS`) and is solved exactly (:meth:`ExactKind.changes`). :func:`refine` fits
+the place ``x``, the size ``s``, the kind's spread ``e`` (``extent`` in [0, 1] through the lengths its config
+draws) and the temperature nuisance ``a`` to a pair's frequency (and shape) changes by bounded Levenberg-Marquardt
+steps from the grid's best candidate; :func:`local_grid` lays an exact grid in ``(x, s)`` about the optimum, as
+wide as the Laplace approximation (the Gauss-Newton covariance, widened by the Birge ratio) says, on which the
+explanation's misfit and intervals are read.
+
+The Birge ratio (:func:`birge_ratio`) ``max(1, chi2_f / max(1, m - 3), chi2_s / D)`` of the frequency block (``m``
+modes, three parameters) and the shape block (``D`` entries) tempers the likelihood of a fit whose misfit exceeds
+the noise: its intervals widen by the misfit rather than stay as narrow as the noise alone would allow.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from functools import lru_cache
+
+import numpy as np
+
+from datagen.damage import DAMAGE_MODELS
+from learn.sensitivity import _beam_numbers, _with_masses
+from learn.shapes import real_shapes, sign_aligned
+from physics.effects import hermite_row
+from physics.fem import assemble, beam_model, dof_names
+from physics.modal import undamped_modes
+from physics.supports import add_springs
+
+__all__ = ["SIZE_SCALE_STD", "ExactFit", "ExactKind", "NominalBeam", "birge_ratio", "kind_parameters", "local_grid",
+           "nominal_beam", "refine"]
+
+#: Damaged models solved in one array operation (memory: about 0.2 MB each).
+CHUNK_MODELS = 256
+
+#: Relative standard deviation of a size for a given change (10 %): the nominal beam stands for a specimen whose EI,
+#: mass and clamp differ from it by several percent; it widens the size intervals.
+SIZE_SCALE_STD = 0.1
+
+#: Levenberg-Marquardt iterations, and the points per axis of the local exact grid.
+N_ITER, N_LOCAL = 6, 11
+
+
+@dataclass(frozen=True, eq=False)
+class NominalBeam:
+    """The nominal FE beam of the sensitivities (:func:`learn.sensitivity.beam_sensitivity`).
+
+    Attributes
+    ----------
+    M, K : ndarray, shape (n, n)      over the kept DOFs (the support's springs in ``K``)
+    keep : ndarray, shape (n,)        the kept DOFs' indices among all node DOFs
+    T : ndarray, shape (S, n)         the sensors' translation rows
+    used : ndarray, shape (m,)        the modes' indices among the eigenvalues (rigid-body modes skipped)
+    length_m, EI_Nm2, mass_per_length_kg_m : float
+    n_elements : int
+    """
+
+    M: np.ndarray
+    K: np.ndarray
+    keep: np.ndarray
+    T: np.ndarray
+    used: np.ndarray
+    length_m: float
+    EI_Nm2: float
+    mass_per_length_kg_m: float
+    n_elements: int
+
+    def solve(self, dM=None, dK=None):
+        """Angular frequencies (B, m) and real unit-norm shapes at the sensors (B, S, m) of the beam plus the
+        kept-DOF blocks of full-mesh corrections ``dM``, ``dK`` (B, 2N, 2N) (None: none; no batch: the nominal)."""
+        k = self.keep[:, None], self.keep
+        M = self.M if dM is None else self.M + dM[..., k[0], k[1]]
+        K = self.K if dK is None else self.K + dK[..., k[0], k[1]]
+        M, K = np.broadcast_arrays(M, K)
+        w, phi = undamped_modes(M, K)
+        return w[..., self.used], real_shapes((self.T @ phi[..., self.used]).astype(complex))
+
+
+@lru_cache(maxsize=16)
+def nominal_beam(preset, root_spring_relative=948.7, test=None, n_elements: int = 40, n_modes: int = 4) -> NominalBeam:
+    """The nominal beam :func:`learn.sensitivity.beam_sensitivity` differentiates (same arguments): the thesis's
+    clamped beam on its root spring measured at the quarter points, or a test's supports, sensors and modes."""
+    L, EI, m, masses = _beam_numbers(preset)
+    names = list(dof_names(n_elements + 1))
+    node_x = np.linspace(0.0, L, n_elements + 1)
+    if test is None or test.thesis:
+        kr = None if root_spring_relative is None else root_spring_relative * EI / L
+        model = _with_masses(beam_model(n_elements, L, EI, m, root_spring=kr), masses, L, n_elements)
+        K, sensors, used = np.asarray(model.K), [L * q / 4 for q in range(1, 5)], np.arange(n_modes)
+    else:
+        sup = test.support
+        kr = root_spring_relative * EI / L if sup.clamped and root_spring_relative is not None else None
+        model = _with_masses(beam_model(n_elements, L, EI, m, bc=test.bc, root_spring=kr), masses, L, n_elements)
+        K = add_springs(model.K, model.dofs, sup.spring_dofs(n_elements + 1), sup.nominal_unit_stiffness(L) * EI)
+        sensors, used = sorted(test.sensors_x_m), sup.rigid_body_modes + np.asarray(test.modes) - 1
+    keep = np.array([names.index(d) for d in model.dofs])
+    T = np.array([hermite_row(float(x), node_x)[0][keep] for x in sensors])
+    return NominalBeam(np.asarray(model.M), np.asarray(K), keep, T, np.asarray(used), L, EI, m, n_elements)
+
+
+@dataclass(frozen=True, eq=False)
+class ExactKind:
+    """A damage kind's exact model on the nominal beam: the kind's name (:data:`datagen.damage.DAMAGE_MODELS`), its
+    config section ``d``, the beam as its ``size_range`` takes it, the nominal beam and the modes weighed (indices
+    into the nominal beam's ``used``)."""
+
+    name: str
+    d: dict
+    beam: object
+    nominal: NominalBeam
+    modes_index: np.ndarray
+
+    def modes(self, indices) -> "ExactKind":
+        """The model on the modes ``indices`` (0-based among its modes) alone."""
+        return replace(self, modes_index=self.modes_index[np.asarray(indices, int)])
+
+    def changes(self, x_m, size, extent):
+        """Relative frequency changes (P, m) and changes of the real unit-norm shapes at the sensors (P, S m,
+        sensor-major) of the damage of ``size`` at ``x_m`` with spread ``extent`` (each (P,)), exactly."""
+        nb, kind = self.nominal, DAMAGE_MODELS[self.name]
+        w0, u0 = (v[..., self.modes_index] for v in nb.solve())
+        x, s, e = np.broadcast_arrays(*(np.asarray(v, float).ravel() for v in (x_m, size, extent)))
+        freq, shapes = np.empty((x.size, w0.size)), np.empty((x.size, u0.size))
+        for i in range(0, x.size, CHUNK_MODELS):
+            c = slice(i, i + CHUNK_MODELS)
+            xc = np.clip(x[c], 0.0, nb.length_m)[:, None]
+            params = kind.damage_at(self.d, self.beam, xc, s[c, None], e[c, None], nb.mass_per_length_kg_m,
+                                    nb.length_m)
+            ones = np.ones(xc.shape[0])
+            dM, dK, _ = kind.corrections(params, xc, nb.EI_Nm2 * ones, nb.mass_per_length_kg_m * ones, nb.length_m,
+                                         nb.n_elements)
+            w, u = nb.solve(None if dM is None else assemble(dM), None if dK is None else assemble(dK))
+            w, u = w[..., self.modes_index], u[..., self.modes_index]
+            freq[c] = w / w0 - 1.0
+            shapes[c] = (sign_aligned(u, u0) - u0).reshape(u.shape[0], -1)
+        return freq, shapes
+
+
+@dataclass(frozen=True)
+class ExactFit:
+    """Refined fits of P candidates (:func:`refine`).
+
+    Attributes
+    ----------
+    x_m, size, extent, a : ndarray, shape (P,)
+    predicted : ndarray, shape (P, m)      ``a`` plus the exact frequency changes there
+    shapes : ndarray, shape (P, D)         the exact shape changes there (whitened by the shape std)
+    chi2_frequency, chi2_shape : ndarray, shape (P,)
+    cov : ndarray, shape (P, 2, 2)         Gauss-Newton covariance of ``(x_m, size)`` (the others marginalised)
+    """
+
+    x_m: np.ndarray
+    size: np.ndarray
+    extent: np.ndarray
+    a: np.ndarray
+    predicted: np.ndarray
+    shapes: np.ndarray
+    chi2_frequency: np.ndarray
+    chi2_shape: np.ndarray
+    cov: np.ndarray
+
+
+def _residuals(exact, p, y, sigma, model_error, ys, ss):
+    """Whitened residuals (P, m + D) at parameters ``p`` (P, 4) = (x, s, e, a), the predictions and the number of
+    frequency residuals; the extent's weak prior (``0.1 (e - 1/2)``) as one more."""
+    g, h = exact.changes(p[:, 0], p[:, 1], p[:, 2])
+    rf = (p[:, 3:4] + g - y) / np.sqrt(sigma**2 + (model_error * g) ** 2)
+    rs = np.zeros((p.shape[0], 0)) if ys is None else h / ss - ys
+    return np.concatenate([rf, rs, 0.1 * (p[:, 2:3] - 0.5)], axis=1), g, h
+
+
+def _jacobian(exact, p, r, g, y, sigma, model_error, ys, ss, lower, upper):
+    """Forward differences of the residuals in x, s and e (batched, one call), the a column exact: (P, N, 4)."""
+    P = p.shape[0]
+    step = np.array([1e-3 * upper[0], 1e-3 * max(upper[1] - lower[1], 1e-9), 0.05])
+    trial = np.repeat(p[None], 3, axis=0)                                      # (3, P, 4)
+    h = np.where(p[:, :3] + step > upper[:3], -step, step)                     # (P, 3) stay within the bounds
+    for j in range(3):
+        trial[j, :, j] += h[:, j]
+    rt = _residuals(exact, trial.reshape(3 * P, 4), np.tile(y, (3, 1)), sigma, model_error,
+                    None if ys is None else np.tile(ys, (3, 1)), ss)[0].reshape(3, P, -1)
+    J = np.zeros(r.shape + (4,))
+    J[..., :3] = np.moveaxis((rt - r[None]) / h.T[:, :, None], 0, -1)
+    J[:, :g.shape[1], 3] = 1.0 / np.sqrt(sigma**2 + (model_error * g) ** 2)
+    return J
+
+
+def refine(exact: ExactKind, x0, size0, y, sigma, half: float, model_error: float, size_bounds, shapes=None,
+           shape_sigma=1.0, n_iter: int = N_ITER) -> ExactFit:
+    """Fit ``(x, s, e, a)`` of the exact model to each candidate's measured changes by bounded Levenberg-Marquardt.
+
+    Parameters
+    ----------
+    exact : ExactKind
+    x0, size0 : array, shape (P,)        starts (the grid's best place and size)
+    y : array, shape (P, m)              measured relative frequency changes
+    sigma : array (m,)                   relative std of each change; ``model_error`` of each predicted change
+    half : float                         the temperature nuisance's bound ``|a| <= half``
+    size_bounds : (lo, hi)               the size's prior range
+    shapes : array, shape (P, D), optional   measured shape changes, whitened by ``shape_sigma`` (D,)
+    """
+    y = np.atleast_2d(np.asarray(y, float))
+    P, m = y.shape
+    lower = np.array([0.0, size_bounds[0], 0.0, -half])
+    upper = np.array([exact.nominal.length_m, size_bounds[1], 1.0, half])
+    p = np.clip(np.stack([np.asarray(x0, float), np.asarray(size0, float), np.full(P, 0.5), np.zeros(P)], 1),
+                lower, upper)
+    ss = np.asarray(shape_sigma, float)
+    r, g, h = _residuals(exact, p, y, sigma, model_error, shapes, ss)
+    chi2 = np.sum(r**2, axis=1)
+    lam = np.full(P, 1e-2)
+    for _ in range(n_iter):
+        J = _jacobian(exact, p, r, g, y, sigma, model_error, shapes, ss, lower, upper)
+        A = np.einsum("pni,pnj->pij", J, J)
+        A_damped = A + lam[:, None, None] * (np.eye(4) * np.diagonal(A, axis1=1, axis2=2)[:, None] + 1e-12 * np.eye(4))
+        step = -np.linalg.solve(A_damped, np.einsum("pni,pn->pi", J, r)[..., None])[..., 0]
+        p_try = np.clip(p + step, lower, upper)
+        r_try, g_try, h_try = _residuals(exact, p_try, y, sigma, model_error, shapes, ss)
+        chi2_try = np.sum(r_try**2, axis=1)
+        better = chi2_try < chi2
+        p, r, g, h = (np.where(better[:, None], new, old) for new, old in ((p_try, p), (r_try, r), (g_try, g),
+                                                                           (h_try, h)))
+        chi2 = np.where(better, chi2_try, chi2)
+        lam = np.where(better, lam / 3, lam * 4)
+    J = _jacobian(exact, p, r, g, y, sigma, model_error, shapes, ss, lower, upper)
+    A = np.einsum("pni,pnj->pij", J, J) + 1e-12 * np.eye(4)
+    cov = np.linalg.pinv(A)[:, :2, :2]
+    return ExactFit(p[:, 0], p[:, 1], p[:, 2], p[:, 3], p[:, 3:4] + g, h / ss if shapes is not None else h,
+                    np.sum(r[:, :m] ** 2, axis=1), np.sum(r[:, m:-1] ** 2, axis=1), cov)
+
+
+def birge_ratio(fit: ExactFit, n_modes: int, n_shape: int) -> np.ndarray:
+    """``max(1, chi2_f / max(1, m - 3), chi2_s / D)`` (P,): by how much the fits' misfit exceeds the noise (each
+    block of data its own; the three parameters ``x``, ``s``, ``a`` counted against the frequencies)."""
+    out = np.maximum(1.0, fit.chi2_frequency / max(1, n_modes - 3))
+    return np.maximum(out, fit.chi2_shape / n_shape) if n_shape else out
+
+
+def local_grid(exact: ExactKind, fit: ExactFit, size_bounds, scale, n: int = N_LOCAL):
+    """An exact grid in ``(x, s)`` about each fit: ``n`` points per axis over 4 standard deviations of the
+    Gauss-Newton covariance widened by ``scale`` (P,) (at least an element, a hundredth of the size range), within
+    the beam and the size range; at the fit's spread.
+
+    Returns
+    -------
+    x_m, size : ndarray, shape (P, n n)       the grid's places and sizes
+    freq : ndarray, shape (P, n n, m)         exact relative frequency changes (without ``a``)
+    shapes : ndarray, shape (P, n n, D)       exact shape changes
+    half_width_m : ndarray, shape (P,)        half the grid's spacing in x
+    """
+    L = exact.nominal.length_m
+    lo_s, hi_s = size_bounds
+    sd = np.sqrt(np.clip(np.diagonal(fit.cov, axis1=1, axis2=2), 0.0, None) * np.asarray(scale)[:, None])
+    ext_x = np.maximum(4 * sd[:, 0], L / exact.nominal.n_elements)
+    ext_s = np.maximum(4 * sd[:, 1], 0.01 * (hi_s - lo_s))
+    t = np.linspace(0.0, 1.0, n)
+    xa, xb = np.clip(fit.x_m - ext_x, 0.0, L), np.clip(fit.x_m + ext_x, 0.0, L)
+    sa, sb = np.clip(fit.size - ext_s, lo_s, hi_s), np.clip(fit.size + ext_s, lo_s, hi_s)
+    X = (xa[:, None] + (xb - xa)[:, None] * t)[:, :, None] * np.ones(n)                 # (P, n x, n s)
+    S = (sa[:, None] + (sb - sa)[:, None] * t)[:, None, :] * np.ones((n, 1))
+    P = X.shape[0]
+    freq, shapes = exact.changes(X.ravel(), S.ravel(), np.repeat(fit.extent, n * n))
+    return (X.reshape(P, -1), S.reshape(P, -1), freq.reshape(P, n * n, -1), shapes.reshape(P, n * n, -1),
+            (xb - xa) / (2 * (n - 1)))
+
+
+def _interval(values: np.ndarray, weights: np.ndarray, level: float, half_width: float = 0.0) -> list:
+    """Equal-tailed interval of a discrete distribution, widened by ``half_width`` on each side (the half-width of
+    a grid cell)."""
+    order = np.argsort(values, kind="stable")
+    values, weights = np.asarray(values)[order], np.asarray(weights)[order]
+    c = np.cumsum(weights) / np.sum(weights)
+    lo = values[min(np.searchsorted(c, (1 - level) / 2), values.size - 1)]
+    hi = values[min(np.searchsorted(c, 1 - (1 - level) / 2), values.size - 1)]
+    return [float(lo - half_width), float(hi + half_width)]
+
+
+def _scaled(sizes: np.ndarray, weights: np.ndarray):
+    """The size distribution times a factor ``N(1, SIZE_SCALE_STD)`` (9 points): values and weights, flattened."""
+    c = 1 + SIZE_SCALE_STD * np.linspace(-2.5, 2.5, 9)
+    w = np.exp(-0.5 * ((c - 1) / SIZE_SCALE_STD) ** 2)
+    return (np.ravel(sizes)[:, None] * c[None]).ravel(), (np.ravel(weights)[:, None] * w[None]).ravel()
+
+
+def kind_parameters(x_m: float, size: float, length_m: float, label: str, x_values, size_values, loglik,
+                    half_width_m: float, fits_noise: bool, birge: float = 1.0) -> dict:
+    """A damage kind's most likely place and size and their 68 % / 95 % intervals from its log-likelihood on a
+    grid of places ``x_values`` and sizes ``size_values`` (same shape), tempered by the Birge ratio ``birge``
+    (``exp(loglik / birge)``); the places' intervals widened by ``half_width_m`` (half a grid cell), the sizes'
+    by :data:`SIZE_SCALE_STD`. The intervals are None when the kind does not fit (no interval rather than a
+    narrow one)."""
+    out = {"x_m": float(x_m), "x_over_L": float(x_m / length_m), "size": float(size), "size_label": label,
+           "birge_ratio": float(birge)}
+    keys = ("x_m_68", "x_m_95", "size_68", "size_95")
+    if not fits_noise:
+        return {**out, **dict.fromkeys(keys)}
+    ll = np.ravel(loglik)
+    post = np.exp((ll - ll.max()) / birge)
+    x, s = np.ravel(x_values), np.ravel(size_values)
+    return {**out, "x_m_68": _interval(x, post, 0.68, half_width_m), "x_m_95": _interval(x, post, 0.95, half_width_m),
+            "size_68": _interval(*_scaled(s, post), 0.68), "size_95": _interval(*_scaled(s, post), 0.95)}
