@@ -278,13 +278,14 @@ def _refined(k: KindExplanation, y, s, half: float, model_error: float, ll, shap
     best = np.argmin((fit.chi2_frequency + fit.chi2_shape).reshape(n_starts, n), axis=0) * n + np.arange(n)
     fit = ExactFit(*(getattr(fit, f.name)[best] for f in fields(ExactFit)))
     birge = birge_ratio(fit, y.shape[1], 0 if shapes is None else shapes.shape[1])
-    X, S, G, H, half_width = local_grid(k.exact, fit, bounds, birge)
+    X, S, G, H, valid, half_width = local_grid(k.exact, fit, bounds, birge)
     out = []
     for i in range(n):
         li = _loglik(G[i], y[i:i + 1], s, half, model_error)[0][0]                      # (n n,)
         if shapes is not None:
             p = H[i] / ss
             li = li + p @ shapes[i] - 0.5 * np.sum(p**2, axis=1)
+        li = np.where(valid[i], li, -np.inf)
         out.append({"x_m": fit.x_m[i], "size": fit.size[i], "predicted": fit.predicted[i], "birge": birge[i],
                     "x_values": X[i], "size_values": S[i], "loglik": li, "half_width_m": half_width[i],
                     "gain": float(li.max() - ll[i].max())})
@@ -499,7 +500,7 @@ def kind_explanations(model) -> dict:
                               {**gen, "damage": {"kind": name}})
         exact = ExactKind(name, d, mapping, nominal_beam(truth_numbers(beam, cfg.get("truth_beam"), gen),
                                                          cfg.get("root_spring_relative"), beam.test,
-                                                         sens.n_elements, sens.frequency.shape[0]),
+                                                         n_modes=sens.frequency.shape[0]),
                           np.arange(sens.frequency.shape[0]))
         out[name] = kind_explanation(name, d, mapping, sens, exact=exact)
     return out

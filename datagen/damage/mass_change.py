@@ -196,11 +196,14 @@ class MassChange:
 
     def damage_at(self, d, beam, x_m, size, extent, mass_per_length_kg_m, length_m):
         """A signed mass ``size * m L`` at ``x_m`` over the length ``width_fraction`` at ``extent`` (0: its lower
-        bound, 1: its upper) times ``L``, a loss widened to what carries it (as drawn, no added mass taken)."""
+        bound, 1: its upper) times ``L``; a loss over the length that carries it (within the beam, as drawn: no
+        added mass taken), clipped only where the whole beam does not."""
         (wa, wb) = d["width_fraction"]
         x, mass = np.asarray(x_m, float), np.asarray(size, float) * mass_per_length_kg_m * length_m
         w = (wa + (wb - wa) * np.clip(np.asarray(extent, float), 0.0, 1.0)) * length_m * np.ones_like(x)
-        point_kg, point_x, mass, w = _carried(x, w, mass, mass_per_length_kg_m, length_m, length_m, ())
+        need = np.clip(-mass, 0.0, None) / (MAX_LOST_FRACTION * mass_per_length_kg_m)     # the length a loss needs
+        w = np.maximum.reduce([w, need, 2 * (need - x), 2 * (need - (length_m - x))])
+        point_kg, point_x, mass, w = _carried(x, w, mass, mass_per_length_kg_m, length_m, 2 * length_m, ())
         return {"mass_kg": mass, "width_m": w, "point_kg": point_kg, "point_x_m": point_x}
 
     def columns(self, params, x_m, ei_Nm2, mass_per_length_kg_m, length_m):
