@@ -41,6 +41,9 @@ CHUNK_MODELS = 256
 #: mass and clamp differ from it by several percent; it widens the size intervals.
 SIZE_SCALE_STD = 0.1
 
+#: The intervals' levels.
+LEVELS = {"68": 0.68, "95": 0.95}
+
 #: Levenberg-Marquardt iterations, and the points per axis of the local exact grid.
 N_ITER, N_LOCAL = 12, 9
 
@@ -296,9 +299,9 @@ def kind_parameters(x_m: float, size: float, length_m: float, label: str, x_valu
                     half_width_m: float, fits_noise: bool, birge: float = 1.0) -> dict:
     """A damage kind's most likely place and size and their 68 % / 95 % intervals from its log-likelihood on a
     grid of places ``x_values`` and sizes ``size_values`` (same shape), tempered by the Birge ratio ``birge``
-    (``exp(loglik / birge)``); the places' intervals widened by ``half_width_m`` (half a grid cell), the sizes'
-    by :data:`SIZE_SCALE_STD`. The intervals are None when the kind does not fit (no interval rather than a
-    narrow one)."""
+    (``exp(loglik / birge)``); the places' intervals widened by ``half_width_m`` (half a grid cell, within the
+    beam), the sizes' by :data:`SIZE_SCALE_STD`. The intervals are None when the kind does not fit (no interval
+    rather than a narrow one)."""
     out = {"x_m": float(x_m), "x_over_L": float(x_m / length_m), "size": float(size), "size_label": label,
            "birge_ratio": float(birge)}
     keys = ("x_m_68", "x_m_95", "size_68", "size_95")
@@ -307,5 +310,6 @@ def kind_parameters(x_m: float, size: float, length_m: float, label: str, x_valu
     ll = np.ravel(loglik)
     post = np.exp((ll - ll.max()) / birge)
     x, s = np.ravel(x_values), np.ravel(size_values)
-    return {**out, "x_m_68": _interval(x, post, 0.68, half_width_m), "x_m_95": _interval(x, post, 0.95, half_width_m),
-            "size_68": _interval(*_scaled(s, post), 0.68), "size_95": _interval(*_scaled(s, post), 0.95)}
+    xs = {f"x_m_{q}": [float(v) for v in np.clip(_interval(x, post, lv, half_width_m), 0.0, length_m)]
+          for q, lv in LEVELS.items()}
+    return {**out, **xs, **{f"size_{q}": _interval(*_scaled(s, post), lv) for q, lv in LEVELS.items()}}
