@@ -250,7 +250,7 @@ def birge_ratio(fit: ExactFit, n_modes: int, n_shape: int) -> np.ndarray:
 
 def local_grid(exact: ExactKind, fit: ExactFit, size_bounds, scale, n: int = N_LOCAL):
     """An exact grid in ``(x, s)`` centred on each fit: ``n`` (odd) points per axis over 4 standard deviations of the
-    Gauss-Newton covariance widened by ``scale`` (P,), at least a fortieth of the beam and a hundredth of the size
+    Gauss-Newton covariance widened by ``scale`` (P,), at least a four-hundredth of the beam and a hundredth of the size
     range, at most a quarter of either (a place the changes hardly tell: the grid spans what it can); at the fit's
     spread. Points beyond the beam or the size range are marked invalid.
 
@@ -265,7 +265,7 @@ def local_grid(exact: ExactKind, fit: ExactFit, size_bounds, scale, n: int = N_L
     L = exact.nominal.length_m
     lo_s, hi_s = size_bounds
     sd = np.sqrt(np.clip(np.diagonal(fit.cov, axis1=1, axis2=2), 0.0, None) * np.asarray(scale)[:, None])
-    ext_x = np.clip(4 * sd[:, 0], L / 40, L / 4)
+    ext_x = np.clip(4 * sd[:, 0], L / 400, L / 4)
     ext_s = np.clip(4 * sd[:, 1], 0.01 * (hi_s - lo_s), 0.25 * (hi_s - lo_s))
     t = np.linspace(-1.0, 1.0, n)
     X = (fit.x_m[:, None] + ext_x[:, None] * t)[:, :, None] * np.ones(n)                 # (P, n x, n s)
