@@ -37,6 +37,12 @@ exact change of the nominal shapes (:func:`support_curve`), the day-to-day chang
 none. Damping changes are not weighed: the repeatability of damping ratios (5-30 % between tests) is larger than
 what a slit changes.
 
+A damage kind's grid is the first pass (every pair and kind in one array operation; the evidence): each pair's three
+best places of each kind are refined on the kind's exact model, the nominal FE beam re-analysed with the kind's own
+damage (:mod:`learn.refine`), and its misfit, most likely place and size and their intervals are read there (a
+local exact grid about the refined fit, its likelihood tempered by the Birge ratio: a fit beyond the noise widens
+its intervals); its evidence moves by the exact fit's best likelihood over the grid's.
+
 An explanation whose predicted change misses a mode's measured change by more than :data:`FIT_LIMIT` standard
 deviations (the noise and the model error) does not fit: the summary says so when the most likely does not, and a
 damage kind that does not fit reports no intervals. Every damage kind reports its most likely ``x_m`` and ``size``
@@ -448,8 +454,9 @@ def separate(first: str, second: str) -> str:
 
 
 def summary(rows: list[Hypothesis], modes) -> str:
-    """The most likely explanation in words, and whether the next one can be told apart (Bayes factor < 3) and,
-    if not, what measurement would separate them (:func:`separate`)."""
+    """The most likely explanation in words (that it does not fit, or that it fits only beyond the noise and its
+    intervals are widened), and whether the next one can be told apart (Bayes factor < 3) and, if not, what
+    measurement would separate them (:func:`separate`)."""
     best, second = rows[0], rows[1]
     text = (f"most likely explanation: {best.name} (probability {best.probability:.2f}, largest frequency misfit "
             f"{best.max_abs_frequency_error_pct:.2f} %)")
@@ -457,6 +464,9 @@ def summary(rows: list[Hypothesis], modes) -> str:
         text = (f"no explanation fits the change within its noise (the most likely, {best.name}, misses a mode by "
                 f"{best.max_misfit_std:.1f} standard deviations, {best.max_abs_frequency_error_pct:.2f} %: a change "
                 f"none of them describes, or a noisier test than weighed); " + text)
+    elif best.parameters.get("birge_ratio", 1.0) > 1:
+        text += (f"; it reproduces the change only beyond the noise (misfit {best.max_misfit_std:.1f} standard "
+                 f"deviations, Birge ratio {best.parameters['birge_ratio']:.1f}): its intervals are widened by it")
     if second.probability > best.probability / 3:
         gap = np.abs(best.predicted - second.predicted)
         text += (f"; {second.name} ({second.probability:.2f}) cannot be told apart from it on modes "

@@ -1,13 +1,15 @@
 """The exact refinement of a damage kind's explanation (learn.refine) on changes computed by the independent simulator
 (experiments/second_sim), and the Birge widening of its intervals."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from datagen.damage import damage_defaults
 from experiments.second_sim.fem import Beam, PointMass, assemble, modes
 from learn.features import BeamSpec
-from learn.hypotheses import _support_curves, kind_explanation, weigh
+from learn.hypotheses import _support_curves, kind_explanation, summary, weigh
 from learn.refine import ExactKind, kind_parameters, nominal_beam
 from learn.sensitivity import beam_sensitivity
 
@@ -74,8 +76,8 @@ def test_the_birge_ratio_widens_a_gaussian_interval_by_its_root():
 def test_a_change_the_explanation_misfits_within_its_limit_gets_a_wider_interval():
     """An added point mass whose modes' changes are moved by 2 standard deviations, alternately up and down (a change
     the mass does not reproduce within its noise, yet within the fit limit): the explanation still fits, its Birge
-    ratio exceeds 2 and its place interval widens by about its root (the size's, which also holds the size scale's
-    10 %, less)."""
+    ratio exceeds 2, its place interval widens by about its root (the size's, which also holds the size scale's
+    10 %, less) and the summary says so."""
     heavy = Beam(L, EI, M, root_k_theta_Nm_rad=KR_REL * EI / L, masses=(PointMass(0.45 * L, 0.05 * M * L),))
     f0, f1 = (modes(assemble(b)).frequencies_hz[:4] for b in (BASE, heavy))
     y = f1 / f0 - 1
@@ -89,3 +91,4 @@ def test_a_change_the_explanation_misfits_within_its_limit_gets_a_wider_interval
 
     assert width(off.parameters, "x_m_68") > 1.4 * width(clean.parameters, "x_m_68")
     assert width(off.parameters, "size_68") > 1.1 * width(clean.parameters, "size_68")
+    assert "its intervals are widened by it" in summary([off, replace(clean, probability=0.0)], [1, 2, 3, 4])
