@@ -52,15 +52,15 @@ the kinds' ``separates``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
 
 from datagen.damage import DAMAGE_MODELS, applies_to, beam_section, damage_defaults
 from learn.model_dir import sensitivity_of, truth_beam_mapping, truth_numbers
-from learn.refine import (SIZE_SCALE_STD, ExactFit, ExactKind, birge_ratio, kind_parameters, local_grid, nominal_beam,
-                          refine)
+from learn.likelihood import nuisance_loglik
+from learn.refine import SIZE_SCALE_STD, ExactKind, kind_parameters, nominal_beam, refined_fits
 from learn.sensitivity import Sensitivity
 from learn.shapes import real_shapes, shape_changes, sign_aligned
 from physics.effects import hermite_row
@@ -116,7 +116,7 @@ class KindExplanation:
     sens : learn.sensitivity.Sensitivity   sensitivities per unit size, averaged over the kind's spread
     size_label : str
     exact : learn.refine.ExactKind or None   the kind's exact model on the nominal beam: the grid's best candidates
-                                refined on it (:func:`_refined`); None: the grid alone
+                                refined on it (:func:`learn.refine.refined_fits`); None: the grid alone
     """
 
     name: str
@@ -238,66 +238,6 @@ def support_curve(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_spring_
     return f[1:] / f[:1] - 1.0, du.reshape(du.shape[0], -1), what
 
 
-def _loglik(g, y, s, half: float, model_error: float):
-    """Log-likelihood of ``a + g`` averaged over the temperature nuisance ``a`` (uniform in +-``half``; a Gaussian
-    integral in closed form), and the most likely ``a``: shapes (n, ...) for every pair's measured changes ``y``
-    (n, m) and every predicted change ``g`` (..., m), relative std ``s`` (m,) and the model error on ``g``.
-    ``half = 0``: no nuisance."""
-    from scipy.special import log_ndtr  # scipy.special: 0.2 s to import, only where explanations are weighed
-
-    var = s**2 + (model_error * g) ** 2                                  # (..., m)
-    r = g - y.reshape(y.shape[:1] + (1,) * (g.ndim - 1) + y.shape[-1:])  # (n, ..., m)
-    s0, s1, s2 = np.sum(r**2 / var, -1), np.sum(r / var, -1), np.sum(1.0 / var, -1)
-    logdet = -0.5 * np.sum(np.log(var / s**2), -1)
-    centre = -s1 / s2                                                    # the a that fits best
-    a_best = np.clip(centre, -half, half)
-    if half == 0:
-        return -0.5 * s0 + logdet, a_best
-    root = np.sqrt(s2)
-    lo, hi = (-half - centre) * root, (half - centre) * root
-    # log P(lo < z < hi), from the tail the interval lies in (no cancellation of two values near 1)
-    right = lo > 0
-    big = np.where(right, log_ndtr(-lo), log_ndtr(hi))
-    small = np.where(right, log_ndtr(-hi), log_ndtr(lo))
-    mass = big + np.log(-np.expm1(np.minimum(small - big, -1e-300)))
-    return (-0.5 * (s0 - s1**2 / s2) + logdet + 0.5 * np.log(2 * np.pi) - np.log(root) + mass
-            - np.log(2 * half)), a_best
-
-
-def _refined(k: KindExplanation, y, s, half: float, model_error: float, ll, shapes=None, ss=1.0,
-             n_starts: int = 3) -> list[dict]:
-    """Kind ``k`` refined on its exact model (:mod:`learn.refine`) for each pair of a chunk (``y`` (n, m), whitened
-    ``shapes`` (n, D) or None), from the ``n_starts`` best places of its grid log-likelihood ``ll`` (n, K, E) an
-    eighth of the beam apart (each at its best size), the best fit kept: per pair its place, size, prediction and
-    Birge ratio, the local exact grid's places, sizes and log-likelihood, and ``gain``, that grid's best
-    log-likelihood less the first-order grid's (by which the evidence moves)."""
-    n, _, E = ll.shape
-    prof, starts = ll.max(axis=1), []                                     # (n, E): the best size at each place
-    for _ in range(n_starts):
-        e = np.argmax(prof, axis=1)
-        starts.append((e, np.argmax(ll[np.arange(n), :, e], axis=1)))
-        prof = np.where(np.abs(np.arange(E)[None] - e[:, None]) < E / 8, -np.inf, prof)
-    e, t = (np.concatenate(v) for v in zip(*starts))
-    bounds, L = (float(k.sizes[0]), float(k.sizes[-1])), k.exact.nominal.length_m
-    fit = refine(k.exact, np.asarray(k.sens.x_over_L)[e] * L, k.sizes[t], np.tile(y, (n_starts, 1)), s, half,
-                 model_error, bounds, None if shapes is None else np.tile(shapes, (n_starts, 1)), ss)
-    best = np.argmin((fit.chi2_frequency + fit.chi2_shape).reshape(n_starts, n), axis=0) * n + np.arange(n)
-    fit = ExactFit(*(getattr(fit, f.name)[best] for f in fields(ExactFit)))
-    birge = birge_ratio(fit, y.shape[1], 0 if shapes is None else shapes.shape[1])
-    X, S, G, H, valid, half_width = local_grid(k.exact, fit, bounds, birge)
-    out = []
-    for i in range(n):
-        li = _loglik(G[i], y[i:i + 1], s, half, model_error)[0][0]                      # (n n,)
-        if shapes is not None:
-            p = H[i] / ss
-            li = li + p @ shapes[i] - 0.5 * np.sum(p**2, axis=1)
-        li = np.where(valid[i], li, -np.inf)
-        out.append({"x_m": fit.x_m[i], "size": fit.size[i], "predicted": fit.predicted[i], "birge": birge[i],
-                    "x_values": X[i], "size_values": S[i], "loglik": li, "half_width_m": half_width[i],
-                    "gain": float(li.max() - ll[i].max())})
-    return out
-
-
 #: Pairs weighed in one array operation (memory: about 2 MB per pair and mode).
 CHUNK_PAIRS = 32
 
@@ -388,13 +328,13 @@ def weigh_many(shifts, kinds: dict, support: tuple, temperature_range=(-0.004, 0
                        **{name: (k.sizes, np.asarray(k.sens.shape, float) / ss[:, None]) for name, k in kinds.items()}}
     for start in range(0, Y.shape[0], CHUNK_PAIRS):
         y = Y[start:start + CHUNK_PAIRS]
-        ll = {name: _loglik(g, y, s, 0.0 if name == "global_stiffness" else half, model_error)
+        ll = {name: nuisance_loglik(g, y, s, 0.0 if name == "global_stiffness" else half, model_error)
               for name, g in grids.items()}
         if shapes is not None:
             extra = _shape_loglik(shapes[start:start + CHUNK_PAIRS], grid_shapes, 1.0)
             ll = {name: (v[0] + extra[name], v[1]) for name, v in ll.items()}
         ys = None if shapes is None else shapes[start:start + CHUNK_PAIRS]
-        refined = {name: _refined(k, y, s, half, model_error, ll[name][0], ys, ss)
+        refined = {name: refined_fits(k, y, s, half, model_error, ll[name][0], ys, ss)
                    for name, k in kinds.items() if k.exact is not None}
         for i in range(y.shape[0]):
             fits = {}
@@ -420,7 +360,7 @@ def weigh_many(shifts, kinds: dict, support: tuple, temperature_range=(-0.004, 0
                     r = refined[name][i]
                     params[name] = kind_parameters(r["x_m"], r["size"], length_m, k.size_label, r["x_values"],
                                                    r["size_values"], r["loglik"], r["half_width_m"],
-                                                   miss[name] <= FIT_LIMIT, r["birge"])
+                                                   miss[name] <= FIT_LIMIT, r["birge"], r["log_area"])
                     continue
                 (t, e), li = fits[name][1], fits[name][3]
                 x_m = np.asarray(k.sens.x_over_L) * length_m

@@ -18,12 +18,13 @@ the noise: its intervals widen by the misfit rather than stay as narrow as the n
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from functools import lru_cache
 
 import numpy as np
 
 from datagen.damage import DAMAGE_MODELS
+from learn.likelihood import nuisance_loglik
 from learn.sensitivity import _beam_numbers, _with_masses
 from learn.shapes import real_shapes, sign_aligned
 from physics.effects import hermite_row
@@ -31,8 +32,8 @@ from physics.fem import assemble, beam_model, dof_names
 from physics.modal import undamped_modes
 from physics.supports import add_springs
 
-__all__ = ["SIZE_SCALE_STD", "ExactFit", "ExactKind", "NominalBeam", "birge_ratio", "kind_parameters", "local_grid",
-           "nominal_beam", "refine"]
+__all__ = ["KEEP_CHI2", "SIZE_SCALE_STD", "ExactFit", "ExactKind", "NominalBeam", "birge_ratio", "kind_parameters",
+           "local_grid", "nominal_beam", "refine", "refined_fits"]
 
 #: Damaged models solved in one array operation (memory: about 0.2 MB each).
 CHUNK_MODELS = 256
@@ -296,20 +297,100 @@ def _scaled(sizes: np.ndarray, weights: np.ndarray):
 
 
 def kind_parameters(x_m: float, size: float, length_m: float, label: str, x_values, size_values, loglik,
-                    half_width_m: float, fits_noise: bool, birge: float = 1.0) -> dict:
+                    half_width_m: float, fits_noise: bool, birge: float = 1.0, log_area=0.0) -> dict:
     """A damage kind's most likely place and size and their 68 % / 95 % intervals from its log-likelihood on a
     grid of places ``x_values`` and sizes ``size_values`` (same shape), tempered by the Birge ratio ``birge``
-    (``exp(loglik / birge)``); the places' intervals widened by ``half_width_m`` (half a grid cell, within the
-    beam), the sizes' by :data:`SIZE_SCALE_STD`. The intervals are None when the kind does not fit (no interval
-    rather than a narrow one)."""
+    (``exp(loglik / birge)``, times ``exp(log_area)``: each point's cell); the places' intervals widened by
+    ``half_width_m`` (half a grid cell, within the beam), the sizes' by :data:`SIZE_SCALE_STD`. The intervals are
+    None when the kind does not fit (no interval rather than a narrow one)."""
     out = {"x_m": float(x_m), "x_over_L": float(x_m / length_m), "size": float(size), "size_label": label,
            "birge_ratio": float(birge)}
     keys = ("x_m_68", "x_m_95", "size_68", "size_95")
     if not fits_noise:
         return {**out, **dict.fromkeys(keys)}
-    ll = np.ravel(loglik)
-    post = np.exp((ll - ll.max()) / birge)
+    z = np.ravel(loglik) / birge + np.ravel(log_area)                    # a point's weight: its cell's area
+    post = np.exp(z - z.max())
     x, s = np.ravel(x_values), np.ravel(size_values)
     xs = {f"x_m_{q}": [float(v) for v in np.clip(_interval(x, post, lv, half_width_m), 0.0, length_m)]
           for q, lv in LEVELS.items()}
     return {**out, **xs, **{f"size_{q}": _interval(*_scaled(s, post), lv) for q, lv in LEVELS.items()}}
+
+
+#: A refined fit joins the posterior when its chi-square, over the Birge ratio, is within this of the best's (its
+#: peak at least a thousandth of the best's): the mirror place of a symmetric beam, another place the modes cannot
+#: tell apart.
+KEEP_CHI2 = 2 * np.log(1000.0)
+
+
+def refined_fits(kind, y, sigma, half: float, model_error: float, grid_loglik, shapes=None, shape_sigma=1.0,
+                 n_starts: int = 3) -> list[dict]:
+    """A damage kind's explanation (a :class:`learn.hypotheses.KindExplanation` holding its ``exact`` model)
+    refined for each pair of a chunk, with its intervals' posterior.
+
+    The ``n_starts`` best places of its grid log-likelihood ``grid_loglik`` (n, K, E), an eighth of the beam apart
+    (each at its best size), are refined (:func:`refine`); the best fit gives the place, size, prediction and Birge
+    ratio; every distinct fit within :data:`KEEP_CHI2` of it (over the Birge ratio; a twentieth of the beam apart)
+    gets a local exact grid (:func:`local_grid`), and the grids together, each point weighed by its cell's area,
+    are the posterior of the place and size.
+
+    Parameters
+    ----------
+    y : array, shape (n, m)    measured relative frequency changes; ``sigma`` (m,), ``half``, ``model_error`` as
+                               :func:`learn.likelihood.nuisance_loglik` takes them
+    shapes : array, shape (n, D), optional   measured shape changes whitened by ``shape_sigma``
+
+    Returns
+    -------
+    per pair a dict: ``x_m``, ``size``, ``predicted`` (m,), ``birge``, ``x_values``, ``size_values``, ``loglik``,
+    ``log_area`` (the posterior's points), ``half_width_m`` and ``gain``, the exact fit's best log-likelihood less
+    the grid's (by which the evidence moves).
+    """
+    n, _, E = grid_loglik.shape
+    prof, starts = grid_loglik.max(axis=1), []                           # (n, E): the best size at each place
+    for _ in range(n_starts):
+        e = np.argmax(prof, axis=1)
+        starts.append((e, np.argmax(grid_loglik[np.arange(n), :, e], axis=1)))
+        prof = np.where(np.abs(np.arange(E)[None] - e[:, None]) < E / 8, -np.inf, prof)
+    e, t = (np.concatenate(v) for v in zip(*starts))                     # start-major: candidate j n + i
+    bounds, L = (float(kind.sizes[0]), float(kind.sizes[-1])), kind.exact.nominal.length_m
+    fit = refine(kind.exact, np.asarray(kind.sens.x_over_L)[e] * L, kind.sizes[t], np.tile(y, (n_starts, 1)), sigma,
+                 half, model_error, bounds, None if shapes is None else np.tile(shapes, (n_starts, 1)), shape_sigma)
+    chi2 = (fit.chi2_frequency + fit.chi2_shape).reshape(n_starts, n)
+    order = np.argsort(chi2, axis=0, kind="stable")                     # (n_starts, n) best first
+    birge = birge_ratio(_rows(fit, order[0] * n + np.arange(n)), y.shape[1], 0 if shapes is None else shapes.shape[1])
+    keep = []                                                            # (candidate, pair) of the posterior
+    for i in range(n):
+        kept = []
+        for j in order[:, i]:
+            c = j * n + i
+            if (chi2[j, i] - chi2[order[0, i], i]) / birge[i] <= KEEP_CHI2 and all(
+                    abs(fit.x_m[c] - fit.x_m[k]) > L / 20 for k in kept):
+                kept.append(c)
+        keep += [(c, i) for c in kept]
+    cand = np.array([c for c, _ in keep])
+    sub = _rows(fit, cand)
+    X, S, G, H, valid, half_width = local_grid(kind.exact, sub, bounds, birge[[i for _, i in keep]])
+    area = np.log(np.ptp(X, axis=1) * np.ptp(S, axis=1) + 1e-300)       # the grid's extent: its cells' area
+    per_pair: dict = {}
+    for r, (c, i) in enumerate(keep):
+        li = nuisance_loglik(G[r], y[i:i + 1], sigma, half, model_error)[0][0]             # (n n,)
+        if shapes is not None:
+            p = H[r] / shape_sigma
+            li = li + p @ shapes[i] - 0.5 * np.sum(p**2, axis=1)
+        per_pair.setdefault(i, []).append((c, np.where(valid[r], li, -np.inf), X[r], S[r], area[r], half_width[r]))
+    out = []
+    for i in range(n):
+        parts = per_pair[i]
+        c0 = parts[0][0]
+        li = np.concatenate([p[1] for p in parts])
+        out.append({"x_m": fit.x_m[c0], "size": fit.size[c0], "predicted": fit.predicted[c0], "birge": birge[i],
+                    "x_values": np.concatenate([p[2] for p in parts]),
+                    "size_values": np.concatenate([p[3] for p in parts]), "loglik": li,
+                    "log_area": np.concatenate([np.full(p[1].size, p[4]) for p in parts]),
+                    "half_width_m": parts[0][5], "gain": float(parts[0][1].max() - grid_loglik[i].max())})
+    return out
+
+
+def _rows(fit: ExactFit, index) -> ExactFit:
+    """The fits ``index`` of ``fit``."""
+    return ExactFit(*(getattr(fit, f.name)[index] for f in fields(ExactFit)))
