@@ -46,7 +46,7 @@ SIZE_SCALE_STD = 0.1
 LEVELS = {"68": 0.68, "95": 0.95}
 
 #: Levenberg-Marquardt iterations, and the points per axis of the local exact grid.
-N_ITER, N_LOCAL = 12, 9
+N_ITER, N_LOCAL = 12, 11
 
 #: Elements of the exact model (Hermite cubics: the first six modes' frequencies within 1e-5 of a 40-element mesh's
 #: on 20, at an eighth of its cost).
@@ -250,7 +250,7 @@ def birge_ratio(fit: ExactFit, n_modes: int, n_shape: int) -> np.ndarray:
 
 
 def local_grid(exact: ExactKind, fit: ExactFit, size_bounds, scale, n: int = N_LOCAL):
-    """An exact grid in ``(x, s)`` centred on each fit: ``n`` (odd) points per axis over 4 standard deviations of the
+    """An exact grid in ``(x, s)`` centred on each fit: ``n`` (odd) points per axis over 6 standard deviations of the
     Gauss-Newton covariance widened by ``scale`` (P,), at least a four-hundredth of the beam and a hundredth of the size
     range, at most a quarter of either (a place the changes hardly tell: the grid spans what it can); at the fit's
     spread. Points beyond the beam or the size range are marked invalid.
@@ -266,8 +266,8 @@ def local_grid(exact: ExactKind, fit: ExactFit, size_bounds, scale, n: int = N_L
     L = exact.nominal.length_m
     lo_s, hi_s = size_bounds
     sd = np.sqrt(np.clip(np.diagonal(fit.cov, axis1=1, axis2=2), 0.0, None) * np.asarray(scale)[:, None])
-    ext_x = np.clip(4 * sd[:, 0], L / 400, L / 4)
-    ext_s = np.clip(4 * sd[:, 1], 0.01 * (hi_s - lo_s), 0.25 * (hi_s - lo_s))
+    ext_x = np.clip(6 * sd[:, 0], L / 400, L / 4)
+    ext_s = np.clip(6 * sd[:, 1], 0.01 * (hi_s - lo_s), 0.25 * (hi_s - lo_s))
     t = np.linspace(-1.0, 1.0, n)
     X = (fit.x_m[:, None] + ext_x[:, None] * t)[:, :, None] * np.ones(n)                 # (P, n x, n s)
     S = (fit.size[:, None] + ext_s[:, None] * t)[:, None, :] * np.ones((n, 1))
