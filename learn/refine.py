@@ -7,9 +7,11 @@ sensors and modes) gets the element corrections of the kind's own damage (``dama
 row of :data:`datagen.damage.DAMAGE_MODELS`) and is solved exactly (:meth:`ExactKind.changes`). :func:`refine` fits
 the place ``x``, the size ``s``, the kind's spread ``e`` (``extent`` in [0, 1] through the lengths its config
 draws) and the temperature nuisance ``a`` to a pair's frequency (and shape) changes by bounded Levenberg-Marquardt
-steps from the grid's best candidate; :func:`local_grid` lays an exact grid in ``(x, s)`` about the optimum, as
-wide as the Laplace approximation (the Gauss-Newton covariance, widened by the Birge ratio) says, on which the
-explanation's misfit and intervals are read.
+steps from the grid's best candidates; :func:`local_grid` lays an exact grid in ``(x, s)`` about a refined fit, as
+wide as the Laplace approximation (the Gauss-Newton covariance, widened by the Birge ratio) says, read finer by
+interpolating the exact changes. :func:`refined_fits` does both for a chunk of pairs: the best fit gives the
+explanation's misfit, the local grids of every distinct fit nearly as good (a symmetric beam's mirror place) its
+intervals (:func:`kind_parameters`).
 
 The Birge ratio (:func:`birge_ratio`) ``max(1, chi2_f / max(1, m - 3), chi2_s / D)`` of the frequency block (``m``
 modes, three parameters) and the shape block (``D`` entries) tempers the likelihood of a fit whose misfit exceeds
@@ -175,8 +177,8 @@ class ExactFit:
 
 
 def _residuals(exact, p, y, sigma, model_error, ys, ss):
-    """Whitened residuals (P, m + D) at parameters ``p`` (P, 4) = (x, s, e, a), the predictions and the number of
-    frequency residuals; the extent's weak prior (``0.1 (e - 1/2)``) as one more."""
+    """Whitened residuals (P, m + D + 1) at parameters ``p`` (P, 4) = (x, s, e, a): the frequencies', the shapes'
+    and the extent's weak prior (``0.1 (e - 1/2)``); and the exact frequency and shape changes there."""
     g, h = exact.changes(p[:, 0], p[:, 1], p[:, 2])
     rf = (p[:, 3:4] + g - y) / np.sqrt(sigma**2 + (model_error * g) ** 2)
     rs = np.zeros((p.shape[0], 0)) if ys is None else h / ss - ys
