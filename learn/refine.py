@@ -31,7 +31,6 @@ from learn.sensitivity import _beam_numbers, _with_masses
 from learn.shapes import real_shapes, sign_aligned
 from physics.effects import hermite_row
 from physics.fem import assemble, beam_model, dof_names
-from physics.modal import undamped_modes
 from physics.supports import add_springs
 
 __all__ = ["KEEP_CHI2", "SIZE_SCALE_STD", "ExactFit", "ExactKind", "NominalBeam", "birge_ratio", "kind_parameters",
@@ -50,6 +49,9 @@ LEVELS = {"68": 0.68, "95": 0.95}
 #: Levenberg-Marquardt iterations, the points per axis of the local exact grid, and how much finer the grid the
 #: likelihood is read on (the exact changes linearly interpolated between the exact grid's points).
 N_ITER, N_LOCAL, UPSAMPLE = 12, 11, 4
+
+#: Levenberg-Marquardt iterations between two finite-difference Jacobians (Broyden's updates in between).
+JACOBIAN_EVERY = 2
 
 #: Elements of the exact model (Hermite cubics: the first six modes' frequencies within 1e-5 of a 40-element mesh's
 #: on 20, at an eighth of its cost).
@@ -82,13 +84,23 @@ class NominalBeam:
 
     def solve(self, dM=None, dK=None):
         """Angular frequencies (B, m) and real unit-norm shapes at the sensors (B, S, m) of the beam plus the
-        kept-DOF blocks of full-mesh corrections ``dM``, ``dK`` (B, 2N, 2N) (None: none; no batch: the nominal)."""
+        kept-DOF blocks of full-mesh corrections ``dM``, ``dK`` (B, 2N, 2N) (None: none; no batch: the nominal).
+
+        As :func:`physics.modal.undamped_modes`, with the inverse Cholesky factor of the mass formed once (the
+        nominal's, when the mass does not change) and applied by products: ``L^-1 K L^-T`` is symmetric."""
         k = self.keep[:, None], self.keep
-        M = self.M if dM is None else self.M + dM[..., k[0], k[1]]
         K = self.K if dK is None else self.K + dK[..., k[0], k[1]]
-        M, K = np.broadcast_arrays(M, K)
-        w, phi = undamped_modes(M, K)
-        return w[..., self.used], real_shapes((self.T @ phi[..., self.used]).astype(complex))
+        Linv = (self.mass_factor_inverse if dM is None
+                else np.linalg.inv(np.linalg.cholesky(self.M + dM[..., k[0], k[1]])))
+        A = Linv @ K @ np.swapaxes(Linv, -1, -2)
+        w2, v = np.linalg.eigh(0.5 * (A + np.swapaxes(A, -1, -2)))
+        phi = np.swapaxes(Linv, -1, -2) @ v[..., self.used]
+        return np.sqrt(np.clip(w2[..., self.used], 0.0, None)), real_shapes((self.T @ phi).astype(complex))
+
+    @property
+    def mass_factor_inverse(self) -> np.ndarray:
+        """``L^-1`` of the nominal mass ``M = L L^T`` (n, n)."""
+        return np.linalg.inv(np.linalg.cholesky(self.M))
 
 
 @lru_cache(maxsize=16)
@@ -203,7 +215,8 @@ def _jacobian(exact, p, r, g, y, sigma, model_error, ys, ss, lower, upper):
 
 def refine(exact: ExactKind, x0, size0, y, sigma, half: float, model_error: float, size_bounds, shapes=None,
            shape_sigma=1.0, n_iter: int = N_ITER) -> ExactFit:
-    """Fit ``(x, s, e, a)`` of the exact model to each candidate's measured changes by bounded Levenberg-Marquardt.
+    """Fit ``(x, s, e, a)`` of the exact model to each candidate's measured changes by bounded Levenberg-Marquardt
+    (a finite-difference Jacobian every :data:`JACOBIAN_EVERY` steps, Broyden's rank-one updates in between).
 
     Parameters
     ----------
@@ -225,14 +238,18 @@ def refine(exact: ExactKind, x0, size0, y, sigma, half: float, model_error: floa
     r, g, h = _residuals(exact, p, y, sigma, model_error, shapes, ss)
     chi2 = np.sum(r**2, axis=1)
     lam = np.full(P, 1e-3)
-    for _ in range(n_iter):
-        J = _jacobian(exact, p, r, g, y, sigma, model_error, shapes, ss, lower, upper)
+    for it in range(n_iter):
+        if it % JACOBIAN_EVERY == 0:       # in between, Broyden's rank-one updates
+            J = _jacobian(exact, p, r, g, y, sigma, model_error, shapes, ss, lower, upper)
         A = np.einsum("pni,pnj->pij", J, J)
         A_damped = A + lam[:, None, None] * (np.eye(4) * np.diagonal(A, axis1=1, axis2=2)[:, None] + 1e-12 * np.eye(4))
         step = -np.linalg.solve(A_damped, np.einsum("pni,pn->pi", J, r)[..., None])[..., 0]
         p_try = np.clip(p + step, lower, upper)
         r_try, g_try, h_try = _residuals(exact, p_try, y, sigma, model_error, shapes, ss)
         chi2_try = np.sum(r_try**2, axis=1)
+        d = p_try - p
+        J = J + np.einsum("pn,pi->pni", r_try - r - np.einsum("pni,pi->pn", J, d), d) / np.maximum(
+            np.sum(d**2, axis=1), 1e-300)[:, None, None]
         better = chi2_try < chi2
         p, r, g, h = (np.where(better[:, None], new, old) for new, old in ((p_try, p), (r_try, r), (g_try, g),
                                                                            (h_try, h)))
