@@ -141,7 +141,8 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
             "agreement": agreement(verdict, net, cl, (explained[i] or NO_EXPLANATION)["hypotheses"],
                                    "network" if from_network else "classical"),
             "warnings": w,
-            "_extra": {"location_distribution": where[i], "frequency_change_pct": _change_pct(p, nv_i),
+            "_extra": {"location_distribution": where[i] and where[i]["68"],
+                       "frequency_change_pct": _change_pct(p, nv_i),
                        "modes": [] if p is None else [model.beam.modes[j] for j in p.mode_index]},
         })
     return results
@@ -295,7 +296,8 @@ def _require_common_modes(pairs: list, names: list[str], beam) -> None:
 
 def _network_answers(model: TrainedModel, route: str, X, rows: list, sens, n: int):
     """Per input (lists of ``n``): the network's answer (None for a pair it does not read), the Mahalanobis
-    distance from the training data, its training percentile, and the network's location distribution."""
+    distance from the training data, its training percentile, and the network's location distributions (level ->
+    (B,))."""
     nets, dist, pct, where, terms = [None] * n, [None] * n, [None] * n, [None] * n, [None] * n
     if not rows:
         return nets, dist, pct, where, terms
@@ -305,7 +307,8 @@ def _network_answers(model: TrainedModel, route: str, X, rows: list, sens, n: in
     named = distance_terms(est, X, route, model.beam) if route in ("modal", "frequency") else [None] * len(rows)
     for r, i in enumerate(rows):
         nets[i] = network_answer(d, r, out, model.beam)
-        dist[i], pct[i], where[i] = float(distance[r]), float(percentile[r]), d.location_distribution[r]
+        dist[i], pct[i] = float(distance[r]), float(percentile[r])
+        where[i] = {k: v[r] for k, v in d.level_distributions.items()}
         terms[i] = named[r]
     return nets, dist, pct, where, terms
 

@@ -1,12 +1,12 @@
 """``DamageClassifier``: a scikit-learn style estimator around :class:`learn.models.DamageNet`.
 
-``fit(X, y, groups)`` standardises the features (statistics of the training part only), holds out a validation
-part by specimen (``groups``), trains the network, and fits a logit scale and bias on the validation logits (Guo
-et al.'s 2017 "temperature scaling" with Platt's bias) so that ``predict_proba`` is calibrated, a factor on the size
-head's spread so that one standard deviation covers 68 % of the sizes of the validation pairs called damaged, and
-the location's sharpness (:mod:`learn.intervals`). Targets ``y`` have three columns: damaged (0/1), ``x / L`` of
-the damage (NaN if intact) and its size (:func:`learn.features.labels`: the size of the data's damage kind, 0 if
-intact), learned through the kind's :class:`learn.size.SizeTransform`.
+``fit(X, y, groups)`` standardises the features (statistics of the training part only), holds out a validation part
+by specimen (``groups``), trains the network, and fits a logit scale and bias on the validation logits (Guo et al.'s
+2017 "temperature scaling" with Platt's bias) so that ``predict_proba`` is calibrated, a factor on the size head's
+spread per level so that its 68 % and 95 % intervals cover as they say on the validation pairs called damaged
+(:mod:`learn.size`), and the location's sharpness per level and spread (:mod:`learn.intervals`). Targets ``y`` have
+three columns: damaged (0/1), ``x / L`` of the damage (NaN if intact) and its size (:func:`learn.features.labels`:
+the size of the data's damage kind, 0 if intact), learned through the kind's :class:`learn.size.SizeTransform`.
 
 Missing modes
 -------------
@@ -35,8 +35,8 @@ from scipy.special import expit
 
 from learn.features import split_by_specimen
 from learn.forward import check_weights, forward
-from learn.intervals import LEVELS, Z_OF_LEVEL, distribution_interval, fit_location_sharpness, softmax
-from learn.size import LOG_SIZE_LIMIT, MAX_SIZE_LOG_STD, SizeTransform, fit_size_std_scale
+from learn.intervals import LEVELS, Z_OF_LEVEL, fit_curves, level_distributions, level_intervals, read_curves
+from learn.size import LOG_SIZE_LIMIT, MAX_SIZE_LOG_STD, SizeTransform, fit_size_scales, read_size_scales
 from physics.errors import BeamDamageError
 
 __all__ = ["DamageClassifier", "DamagePrediction", "fit_calibration", "torch_threads"]
@@ -59,6 +59,7 @@ class DamagePrediction:
     threshold: np.ndarray                  # the verdict's detection threshold of each pair (its missing modes')
     modes_present: np.ndarray              # (n, n_modes) bool, the modes each pair was answered on ((n, 0): no modes)
     intervals: dict                        # "x_over_L_68", "x_over_L_95", "size_68", "size_95": (n, 2) each
+    level_distributions: dict              # "68", "95": (n, n_bins), the distribution each interval is read from
 
 
 #: Bound of the network's raw outputs (far beyond any trained value), so that no exp of them overflows.
@@ -300,10 +301,13 @@ class DamageClassifier:
         Z, present = self._standardised(X)
         return self._forward(self._inputs(Z, present)), present
 
+    def _missing(self, present) -> np.ndarray:
+        """The number of missing modes of each row (n,)."""
+        return self.n_modes_ - present.sum(axis=1) if present.shape[1] else np.zeros(present.shape[0], int)
+
     def _thresholds_of(self, present) -> np.ndarray:
         """The detection threshold of each row: that of its number of missing modes."""
-        missing = self.n_modes_ - present.sum(axis=1) if present.shape[1] else np.zeros(present.shape[0], int)
-        return np.asarray(self.thresholds_, float)[missing]
+        return np.asarray(self.thresholds_, float)[self._missing(present)]
 
     # ------------------------------------------------------------------ fit
     def fit(self, X, y, groups=None):
@@ -386,7 +390,8 @@ class DamageClassifier:
                 tot += float(loss.detach()) * len(b)
             history.append(tot / len(tr))
         self.loss_history_ = history
-        self.logit_scale_, self.bias_, self.size_std_scale_, self.location_sharpness_ = 1.0, 0.0, 1.0, 1.0
+        self.logit_scale_, self.bias_, self.size_std_scale_ = 1.0, 0.0, read_size_scales(1.0)
+        self.location_sharpness_ = read_curves(1.0)
         self.thresholds_ = [0.5] * (1 + max(self.n_modes_ - self.min_modes, 0) * self.answers_missing_modes)
         if len(va):
             self._calibrate(X[va], d[va], ls[va], rng, np.asarray(y, float)[va, 1])
@@ -405,42 +410,36 @@ class DamageClassifier:
         return (u >= self.missing_mode_probability) | (rank < self.min_modes)
 
     def _calibrate(self, Xv, dv, lsv, rng, xv) -> None:
-        """Temperature and bias, the detection thresholds (one per number of missing modes), the size spread's
-        factor and the location's sharpness on validation pairs (their modes drawn missing as in training; ``xv``:
-        their true ``x / L``)."""
+        """Logit scale and bias (modes drawn missing as in training), then per number ``k`` of missing modes (all
+        pairs, or ``THRESHOLD_COPIES`` copies with ``k`` drawn missing): the detection threshold on the intact pairs,
+        and on the damaged pairs called damaged the size spread's factors and the location's sharpness curves
+        (``xv``: their x / L), as classify answers a pair holding that many modes."""
         Zv = (Xv - self.mean_) / self.scale_
-        present = (self._draw_present(len(Zv), rng) if self.answers_missing_modes
-                   else np.ones((len(Zv), 0), bool))
 
-        def raw(P):
-            return self._forward(self._inputs(np.where(P[:, self.feature_modes], Zv, 0.0)
-                                              if self.answers_missing_modes else Zv, P))
+        def raw(rows, P):
+            return self._forward(self._inputs(np.where(P[:, self.feature_modes], Zv[rows], 0.0)
+                                              if self.answers_missing_modes else Zv[rows], P))
 
-        mixed = raw(present)
+        every = np.arange(len(Zv))
+        n_modes = self.n_modes_ if self.answers_missing_modes else 0
+        mixed = raw(every, self._draw_present(len(Zv), rng) if n_modes else np.ones((len(Zv), 0), bool))
         self.logit_scale_, self.bias_ = fit_calibration(mixed["detect"], dv)
-
-        def prob(r):
-            return expit(r["detect"] / self.logit_scale_ + self.bias_)
-
-        intact = dv < 0.5
-        if intact.any():
-            full = raw(np.ones_like(present))
-            self.thresholds_[0] = float(max(0.5, np.quantile(prob(full)[intact], 1 - self.false_alarm_target)))
-            for k in range(1, len(self.thresholds_)):          # copies of the intact pairs, k modes missing each
-                Zi = np.tile(Zv[intact], (THRESHOLD_COPIES, 1))
-                P = self._draw_present(len(Zi), rng, missing=k)
-                p = expit(self._forward(self._inputs(np.where(P[:, self.feature_modes], Zi, 0.0), P))["detect"]
-                          / self.logit_scale_ + self.bias_)
-                self.thresholds_[k] = float(max(0.5, np.quantile(p, 1 - self.false_alarm_target)))
-        # sizes are reported for pairs called damaged: the spread is scaled on those
-        dmg = (dv > 0.5) & (prob(mixed) >= self._thresholds_of(present))
-        if dmg.sum() >= 10:
-            tf = SizeTransform.parse(self.size_transform)
-            mu = mixed["size_mean"][dmg]
-            self.size_std_scale_ = fit_size_std_scale(tf.inverse(lsv[dmg]), tf.inverse(mu),
-                                                      np.exp(mixed["size_log_std"][dmg]),
-                                                      spread=lambda t_std: tf.std(mu, t_std))
-            self.location_sharpness_ = fit_location_sharpness(mixed["locate"][dmg], xv[dmg], fold=self.mirrored)
+        self.size_std_scale_, self.location_sharpness_ = read_size_scales(1.0), read_curves(1.0)
+        for k in range(len(self.thresholds_)):
+            rows = np.tile(every, THRESHOLD_COPIES) if k else every
+            r = raw(rows, self._draw_present(len(rows), rng, missing=k) if k else np.ones((len(rows), n_modes), bool))
+            p = expit(r["detect"] / self.logit_scale_ + self.bias_)
+            if (dv[rows] < 0.5).any():
+                self.thresholds_[k] = float(max(0.5, np.quantile(p[dv[rows] < 0.5], 1 - self.false_alarm_target)))
+            called = (dv[rows] > 0.5) & (p >= self.thresholds_[k])          # intervals are reported for these
+            scales, curves = self.size_std_scale_[-1], self.location_sharpness_[-1]
+            if called.sum() >= 10:
+                t_std = np.exp(np.minimum(r["size_log_std"][called], LOG_SIZE_LIMIT))
+                scales = fit_size_scales(lsv[rows][called], r["size_mean"][called], t_std)
+                curves = fit_curves(r["locate"][called], xv[rows][called], self.mirrored)
+            self.size_std_scale_.append(scales)
+            self.location_sharpness_.append(curves)
+        del self.size_std_scale_[0], self.location_sharpness_[0]
 
     # ------------------------------------------------------------------ predict
     def _marginal(self, present_row) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -520,7 +519,9 @@ class DamageClassifier:
     def predict_details(self, X) -> DamagePrediction:
         raw, present = self._raw(X)
         z = raw["detect"] / self.logit_scale_ + self.bias_
-        p = softmax(raw["locate"], self.location_sharpness_)
+        missing = np.minimum(self._missing(present), len(self.location_sharpness_) - 1)
+        dists = level_distributions(self.location_sharpness_, raw["locate"], self.mirrored, missing)
+        p = dists["68"]
         c = (np.arange(self.n_bins) + 0.5) / self.n_bins
         mean = p @ c
         std = np.sqrt(np.maximum(p @ c**2 - mean**2, 0.0) + 1.0 / (12 * self.n_bins**2))
@@ -532,15 +533,15 @@ class DamageClassifier:
             el = p @ (zone[:, None] == np.arange(edges.size - 1)[None]).astype(float)
         tf = SizeTransform.parse(self.size_transform)
         med = tf.inverse(raw["size_mean"])
-        log_std = np.minimum(self.size_std_scale_ * np.exp(np.minimum(raw["size_log_std"], LOG_SIZE_LIMIT)),
-                             MAX_SIZE_LOG_STD)
-        sd = tf.std(raw["size_mean"], log_std)
+        head = np.exp(np.minimum(raw["size_log_std"], LOG_SIZE_LIMIT))
+        t_std = {k: np.minimum([self.size_std_scale_[m][k] for m in missing] * head, MAX_SIZE_LOG_STD) for k in LEVELS}
+        sd = tf.std(raw["size_mean"], t_std["68"])
         sup = expit(raw["support"]) if self.support_trained_ else np.full(len(z), np.nan)
-        iv = {**{f"x_over_L_{k}": distribution_interval(p, lv) for k, lv in LEVELS.items()},
-              **{f"size_{k}": np.stack([tf.inverse(raw["size_mean"] + s * Z_OF_LEVEL[k] * log_std)
+        iv = {**{f"x_over_L_{k}": v for k, v in level_intervals(dists).items()},
+              **{f"size_{k}": np.stack([tf.inverse(raw["size_mean"] + s * Z_OF_LEVEL[k] * t_std[k])
                                         for s in (-1, 1)], axis=1) for k in LEVELS}}
         return DamagePrediction(expit(z), p, mean, std, el, np.argmax(el, axis=1) + 1, med, sd, z, sup,
-                                self._thresholds_of(present), present, iv)
+                                self._thresholds_of(present), present, iv, dists)
 
     # ------------------------------------------------------------------ persistence (no pickle)
     def get_state(self) -> tuple[dict, dict]:
@@ -590,8 +591,8 @@ class DamageClassifier:
         est.bias_ = float(meta.get("bias", 0.0))
         est.threshold_ = float(meta.get("threshold", 0.5))
         est.thresholds_ = [float(v) for v in meta.get("thresholds", [est.threshold_])]
-        est.size_std_scale_ = float(meta.get("size_std_scale", 1.0))
-        est.location_sharpness_ = float(meta.get("location_sharpness", 1.0))
+        est.size_std_scale_ = read_size_scales(meta.get("size_std_scale", 1.0))
+        est.location_sharpness_ = read_curves(meta.get("location_sharpness", 1.0))
         est.train_seconds_ = float(meta.get("train_seconds", float("nan")))
         est.loss_history_ = list(meta.get("loss_history", []))
         est.n_train_, est.n_val_ = int(meta.get("n_train", 0)), int(meta.get("n_val", 0))

@@ -2,11 +2,18 @@
 
 The location head gives a distribution over ``n_bins`` equal bins of ``x / L`` (softmax of its logits); its
 interval at ``level`` is the equal-tailed one, ``[Q((1 - level) / 2), Q((1 + level) / 2)]`` of the distribution's
-quantile function ``Q`` (linear within a bin: each bin's probability spread evenly over it). The logits are
-multiplied by a sharpness ``s`` fitted on the validation pairs (:func:`fit_location_sharpness`) so that the 68 %
-interval holds 68 % of their true places: the soft location targets of training (a Gaussian of
-``loc_sigma_bins``) widen the distribution beyond what the data leave uncertain, and a damage a network cannot
-place should widen it. The size's interval is ``inverse(t -+ z sigma_t)`` of its transform
+quantile function ``Q`` (linear within a bin: each bin's probability spread evenly over it).
+
+Each level has its own sharpness ``s``, the logits' factor that makes its interval hold that share of the true
+places on the validation pairs: the soft location targets of training (a Gaussian of ``loc_sigma_bins``) widen the
+distribution beyond what the data leave uncertain, and the errors are not Gaussian (most pairs placed far better
+than the distribution says, a few on a wrong peak), so one factor cannot make both levels cover. The sharpness also
+depends on how hard a pair is to place: the validation pairs are split into :data:`SHARPNESS_GROUPS` groups by the
+spread (std) of their raw distribution, a sharpness is fitted per group, and a pair's sharpness is interpolated in
+``ln`` between the groups' median spreads (:func:`fit_sharpness_curve`, :func:`sharpness_at`); one factor for all
+leaves the well-placed pairs' intervals too wide and the hard ones' too narrow.
+
+The size's interval is ``inverse(t -+ z sigma_t)`` of its transform
 (:class:`learn.size.SizeTransform`, monotone), with ``z`` the normal quantile of the level; its ``sigma_t`` is
 scaled on the validation pairs (:func:`learn.size.fit_size_std_scale`).
 """
@@ -15,16 +22,24 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["LEVELS", "Z_OF_LEVEL", "distribution_interval", "fit_location_sharpness", "folded", "softmax"]
+__all__ = ["LEVELS", "SHARPNESS_GROUPS", "Z_OF_LEVEL", "constant_curve", "distribution_interval", "fit_curves",
+           "fit_location_sharpness", "fit_sharpness_curve", "folded", "level_distributions", "level_intervals",
+           "read_curves",
+           "sharpness_at", "softmax", "spread"]
 
 #: The intervals reported (name: level) and the standard normal quantile of each level (two-sided).
 LEVELS = {"68": 0.6827, "95": 0.95}
 Z_OF_LEVEL = {"68": 1.0, "95": 1.959964}
 
+#: Groups of validation pairs, by the spread of their raw distribution, each with its own sharpness, and the
+#: fewest pairs a group holds (fewer groups where the pairs are fewer).
+SHARPNESS_GROUPS, MIN_GROUP_PAIRS = 3, 40
 
-def softmax(logits, sharpness: float = 1.0) -> np.ndarray:
-    """Row-wise softmax of ``sharpness * logits`` (n, B)."""
-    z = np.asarray(logits, float) * sharpness
+
+def softmax(logits, sharpness=1.0) -> np.ndarray:
+    """Row-wise softmax of ``sharpness * logits`` (n, B); ``sharpness`` a scalar or one per row (n,)."""
+    s = np.asarray(sharpness, float)
+    z = np.asarray(logits, float) * (s[:, None] if s.ndim == 1 else s)
     p = np.exp(z - z.max(axis=1, keepdims=True))
     return p / p.sum(axis=1, keepdims=True)
 
@@ -89,3 +104,89 @@ def fit_location_sharpness(logits, x_true, coverage: float = 0.6827, fold: bool 
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if covered(mid) >= coverage else (lo, mid)
     return float(np.exp(lo))
+
+
+def spread(logits, fold: bool = False) -> np.ndarray:
+    """Std (n,) of the raw distributions ``softmax(logits)`` over ``x / L`` (folded onto ``x <= 1/2`` with
+    ``fold``), a bin's width included: how hard the network finds each pair to place."""
+    p = softmax(logits)
+    p = folded(p) if fold else p
+    c = (np.arange(p.shape[1]) + 0.5) / p.shape[1] * (0.5 if fold else 1.0)
+    mean = p @ c
+    return np.sqrt(np.maximum(p @ c**2 - mean**2, 0.0) + (c[0] * 2) ** 2 / 12)
+
+
+def fit_sharpness_curve(logits, x_true, coverage: float = 0.6827, fold: bool = False,
+                        groups: int = SHARPNESS_GROUPS) -> dict:
+    """The sharpness of the location logits (n, B) as a function of their raw :func:`spread`, fitted so that the
+    ``coverage`` intervals of each group of pairs (equal counts by spread, at least :data:`MIN_GROUP_PAIRS` each)
+    hold ``coverage`` of its true places ``x_true`` (n,).
+
+    Returns
+    -------
+    dict: ``ln_spread`` (G,), the median log spread of each group (increasing), and ``ln_sharpness`` (G,), its
+    fitted log sharpness; :func:`sharpness_at` interpolates between them.
+    """
+    logits, x_true = np.asarray(logits, float), np.asarray(x_true, float)
+    g = int(max(1, min(groups, len(x_true) // MIN_GROUP_PAIRS)))
+    ln_w = np.log(spread(logits, fold))
+    order = np.argsort(ln_w, kind="stable")
+    parts = np.array_split(order, g)
+    return {"ln_spread": [float(np.median(ln_w[i])) for i in parts],
+            "ln_sharpness": [float(np.log(fit_location_sharpness(logits[i], x_true[i], coverage, fold)))
+                             for i in parts]}
+
+
+def constant_curve(sharpness: float) -> dict:
+    """A sharpness curve that gives every pair ``sharpness``."""
+    return {"ln_spread": [0.0], "ln_sharpness": [float(np.log(sharpness))]}
+
+
+def sharpness_at(curve: dict, logits, fold: bool = False) -> np.ndarray:
+    """Each row's sharpness (n,) from a curve of :func:`fit_sharpness_curve`: ``ln s`` interpolated linearly in the
+    log spread between the groups, constant beyond the first and last."""
+    return np.exp(np.interp(np.log(spread(logits, fold)), curve["ln_spread"], curve["ln_sharpness"]))
+
+
+def fit_curves(logits, x_true, fold: bool = False) -> dict:
+    """One sharpness curve per level of :data:`LEVELS` (:func:`fit_sharpness_curve`)."""
+    return {k: fit_sharpness_curve(logits, x_true, level, fold) for k, level in LEVELS.items()}
+
+
+def read_curves(saved) -> list:
+    """The curves of :func:`fit_curves` as a model file holds them: a list (one per number of missing modes) of
+    level -> curve; one such dict, or a single number (one sharpness for every pair and level), read as one."""
+    if isinstance(saved, list):
+        return [read_curves(v)[0] for v in saved]
+    if np.isscalar(saved):
+        return [{k: constant_curve(float(saved)) for k in LEVELS}]
+    return [{k: {"ln_spread": [float(v) for v in saved[k]["ln_spread"]],
+                 "ln_sharpness": [float(v) for v in saved[k]["ln_sharpness"]]} for k in LEVELS}]
+
+
+def level_distributions(curves: list, logits, fold: bool = False, group=None) -> dict:
+    """Each level's distributions (n, B): ``softmax`` of the logits (n, B) at each row's sharpness of that level,
+    from the curves (level -> curve) ``curves[group[i]]`` of row ``i`` (``group`` (n,) int; default all 0)."""
+    logits = np.atleast_2d(np.asarray(logits, float))
+    group = np.zeros(len(logits), int) if group is None else np.asarray(group, int)
+    s = {k: np.ones(len(logits)) for k in LEVELS}
+    for g in np.unique(group):
+        rows = group == g
+        for k in LEVELS:
+            s[k][rows] = sharpness_at(curves[g][k], logits[rows], fold)
+    return {k: softmax(logits, s[k]) for k in LEVELS}
+
+
+def level_intervals(distributions: dict, fold: bool = False) -> dict:
+    """Each level's interval (n, 2) of ``x / L`` from its own distributions (level -> (n, B)), on the half
+    ``x <= 1/2`` with ``fold`` (:func:`folded`); a wider level's interval holds every narrower one's (each level's
+    sharpness is its own, so nesting is not given otherwise)."""
+    out = {}
+    for k, level in sorted(LEVELS.items(), key=lambda kv: kv[1]):
+        p = folded(distributions[k]) if fold else np.atleast_2d(np.asarray(distributions[k], float))
+        iv = distribution_interval(p, level, 0.5 if fold else 1.0)
+        if out:
+            inner = out[max(out, key=LEVELS.get)]
+            iv = np.stack([np.minimum(iv[:, 0], inner[:, 0]), np.maximum(iv[:, 1], inner[:, 1])], axis=1)
+        out[k] = iv
+    return out

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from learn.intervals import LEVELS, distribution_interval, folded
+from learn.intervals import level_intervals
 
 __all__ = ["fold_to_half", "location_ambiguity", "mirrored"]
 
@@ -23,20 +23,22 @@ def mirrored(beam, pair) -> bool:
             and (test.n_sensors == 1 or (pair is not None and pair.frequency_only)))
 
 
-def fold_to_half(answer: dict, beam, distribution=None) -> dict:
+def fold_to_half(answer: dict, beam, distributions=None) -> dict:
     """An answer located on the half ``x <= L / 2`` (the mirror ambiguity, :func:`mirrored`): the network's
-    distribution folded onto it (mean, std and intervals of ``min(x, L - x)``), a classical ``x`` mirrored there."""
+    distributions (level -> (B,), :attr:`learn.estimator.DamagePrediction.level_distributions`) folded onto it
+    (mean and std of ``min(x, L - x)`` from the 68 % one, each interval from its own), a classical ``x`` mirrored
+    there."""
     L = beam.length_m
     out = dict(answer)
-    if distribution is not None:
-        p = np.asarray(distribution, float)
+    if distributions is not None:
+        p = np.asarray(distributions["68"], float)
         c = (np.arange(p.size) + 0.5) / p.size
         c = np.minimum(c, 1 - c)
         mean = float(p @ c)
         out["location_std_m"] = float(np.sqrt(max(p @ c**2 - mean**2, 0.0) + 1 / (12 * p.size**2)) * L)
-        for k, level in LEVELS.items():
+        for k, iv in level_intervals(distributions, fold=True).items():
             if f"x_m_{k}" in out:
-                out[f"x_m_{k}"] = [float(v) * L for v in distribution_interval(folded(p), level, 0.5)[0]]
+                out[f"x_m_{k}"] = [float(v) * L for v in iv[0]]
     else:
         mean = min(answer["location_x_over_L"], 1 - answer["location_x_over_L"])
     out["location_x_over_L"], out["location_x_m"] = mean, mean * L

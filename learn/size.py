@@ -2,8 +2,8 @@
 
 A damage kind declares its ``size_transform`` (:mod:`datagen.damage`): ``"log"`` for a positive size (a slit's hinge
 flexibility), ``"asinh:<scale>"`` for a signed one (a mass change's ratio). :class:`SizeTransform` turns sizes into
-what a regression head predicts and back, with the spread of an estimate; :func:`fit_size_std_scale` scales that
-spread so that one standard deviation covers 68 % of validation sizes.
+what a regression head predicts and back, with the spread of an estimate; :func:`fit_size_scales` scales that
+spread so that each level's interval covers its share of the validation sizes.
 """
 
 from __future__ import annotations
@@ -12,9 +12,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from learn.intervals import LEVELS, Z_OF_LEVEL
 from physics.errors import BeamDamageError
 
-__all__ = ["LOG_SIZE_LIMIT", "MAX_SIZE_LOG_STD", "SizeTransform", "fit_size_std_scale", "lognormal_std"]
+__all__ = ["LOG_SIZE_LIMIT", "MAX_SIZE_LOG_STD", "SizeTransform", "fit_size_scales", "lognormal_std",
+           "read_size_scales"]
 
 #: Bound of the log of the size (from e^-30 to e^30) and of its log-std (a factor e^5).
 LOG_SIZE_LIMIT = 30.0
@@ -69,21 +71,18 @@ class SizeTransform:
         return self.scale * np.cosh(t) * np.sinh(t_std)
 
 
-def fit_size_std_scale(truth, median, log_std, coverage: float = 0.6827, spread=None) -> float:
-    """Factor ``k`` on the size head's log-std so that ``|truth - median| <= std(k log_std)`` holds for
-    ``coverage`` of the pairs (one sigma: 68.3 %); the std grows with ``k``, solved by bisection in log k.
-    ``spread(t_std)`` gives the std of each pair from its transformed std (default: log-normal about ``median``)."""
-    truth, median, log_std = (np.asarray(a, float) for a in (truth, median, log_std))
-    spread = spread or (lambda t_std: lognormal_std(median, t_std))
+def fit_size_scales(t_true, t_mean, t_std) -> dict:
+    """Factor ``k`` per level of :data:`learn.intervals.LEVELS` on the size head's transformed std so that the
+    interval ``inverse(t_mean -+ z k t_std)`` (``z`` the level's normal quantile) holds the level's share of the
+    true sizes: the level's quantile of ``|t_true - t_mean| / (z t_std)`` (all arrays (n,), transformed sizes).
+    Each level has its own factor: the errors are not Gaussian (most sizes closer than the head says, a few far)."""
+    r = np.abs(np.asarray(t_true, float) - np.asarray(t_mean, float)) / np.asarray(t_std, float)
+    return {k: float(np.quantile(r, level) / Z_OF_LEVEL[k]) for k, level in LEVELS.items()}
 
-    def covered(log_k):
-        with np.errstate(over="ignore", invalid="ignore"):   # an infinite std covers every truth
-            return np.mean(np.abs(truth - median) <= spread(np.exp(log_k) * log_std))
 
-    lo, hi = np.log(1e-3), np.log(1e2)
-    if covered(hi) < coverage:
-        return float(np.exp(hi))
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if covered(mid) < coverage else (lo, mid)
-    return float(np.exp(hi))
+def read_size_scales(saved) -> list:
+    """The factors of :func:`fit_size_scales` as a model file holds them: a list (one per number of missing modes)
+    of level -> factor; one such dict, or one number (every level's), read as one."""
+    if isinstance(saved, list):
+        return [read_size_scales(v)[0] for v in saved]
+    return [{k: float(saved) for k in LEVELS} if np.isscalar(saved) else {k: float(saved[k]) for k in LEVELS}]

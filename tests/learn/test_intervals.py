@@ -4,7 +4,19 @@ import numpy as np
 import pytest
 from scipy.stats import norm
 
-from learn.intervals import LEVELS, distribution_interval, fit_location_sharpness, folded, softmax
+from learn.intervals import (
+    LEVELS,
+    distribution_interval,
+    fit_curves,
+    fit_location_sharpness,
+    folded,
+    level_distributions,
+    level_intervals,
+    read_curves,
+    sharpness_at,
+    softmax,
+    spread,
+)
 
 
 def test_a_uniform_distribution_has_the_uniform_quantiles():
@@ -66,3 +78,66 @@ def test_a_mirrored_network_is_calibrated_on_the_folded_half():
     assert np.mean((iv[:, 0] <= xf) & (xf <= iv[:, 1])) == pytest.approx(0.6827, abs=0.01)
     assert np.all(iv[:, 1] <= 0.5)
     assert folded(np.full((1, 5), 0.2))[0] == pytest.approx([0.4, 0.6])
+
+
+def _normal_logits(mu, width, B=200):
+    c = (np.arange(B) + 0.5) / B
+    return -0.5 * ((c[None] - mu[:, None]) / width[:, None]) ** 2
+
+
+def test_the_sharpness_follows_the_spread_where_one_factor_cannot_cover_both_kinds_of_pair():
+    """Two kinds of pair: distributions 3 times too wide for places scattered 0.01 (sharpness 9 undoes them) and
+    distributions as wide as the scatter of 0.06 (sharpness 1). One sharpness for all over-covers one kind and
+    under-covers the other; the curve over the spread covers each about as the level says."""
+    rng = np.random.default_rng(2)
+    n = 4000
+    hard = rng.random(n) < 0.5
+    sd = np.where(hard, 0.06, 0.01)
+    mu = rng.uniform(0.3, 0.7, n)
+    x = mu + sd * rng.standard_normal(n)
+    logits = _normal_logits(mu, np.where(hard, 1.0, 3.0) * sd)
+
+    def coverage(p, level):
+        iv = distribution_interval(p, level)
+        inside = (iv[:, 0] <= x) & (x <= iv[:, 1])
+        return inside[~hard].mean(), inside[hard].mean()
+
+    one = coverage(softmax(logits, fit_location_sharpness(logits, x)), LEVELS["68"])
+    assert one[0] > 0.8 and one[1] < 0.6
+    curves = fit_curves(logits, x)
+    assert np.exp(curves["68"]["ln_sharpness"][0]) == pytest.approx(9.0, rel=0.15)
+    assert np.exp(curves["68"]["ln_sharpness"][-1]) == pytest.approx(1.0, rel=0.15)
+    dists = level_distributions([curves], logits)
+    for k, level in LEVELS.items():
+        assert coverage(dists[k], level) == pytest.approx((level, level), abs=0.035)
+
+
+def test_each_level_has_its_own_sharpness_when_the_errors_have_heavy_tails():
+    """Places 0.01 from the distribution's centre for 90 % of the pairs and anywhere on the beam for 10 %: the
+    68 % level needs a sharper distribution than the 95 %, and each level's interval covers as it says; the 95 %
+    interval holds the 68 % one."""
+    rng = np.random.default_rng(3)
+    n = 3000
+    mu = rng.uniform(0.2, 0.8, n)
+    x = np.where(rng.random(n) < 0.9, mu + 0.01 * rng.standard_normal(n), rng.uniform(0, 1, n))
+    logits = _normal_logits(mu, np.full(n, 0.05))
+    curves = fit_curves(logits, x)
+    assert curves["68"]["ln_sharpness"][0] > curves["95"]["ln_sharpness"][0] + 1.0
+    iv = level_intervals(level_distributions([curves], logits))
+    for k, level in LEVELS.items():
+        assert np.mean((iv[k][:, 0] <= x) & (x <= iv[k][:, 1])) == pytest.approx(level, abs=0.02)
+    assert np.all(iv["95"][:, 0] <= iv["68"][:, 0]) and np.all(iv["68"][:, 1] <= iv["95"][:, 1])
+
+
+def test_a_saved_single_sharpness_reads_as_constant_curves():
+    (curves,) = read_curves(2.5)
+    logits = _normal_logits(np.array([0.3, 0.5]), np.array([0.01, 0.2]))
+    for k in LEVELS:
+        assert sharpness_at(curves[k], logits) == pytest.approx([2.5, 2.5])
+    one = {k: {"ln_spread": [0.0, 1.0], "ln_sharpness": [1.0, 0.0]} for k in LEVELS}
+    assert read_curves(one) == [one] and read_curves([one, one]) == [one, one]
+    # a row answers on the curves of its group (its number of missing modes)
+    d = level_distributions(read_curves([1.0, 4.0]), np.vstack([logits[:1], logits[:1]]), group=[0, 1])
+    assert d["68"][1] == pytest.approx(softmax(logits[:1], 4.0)[0])
+    assert d["95"][0] == pytest.approx(softmax(logits[:1], 1.0)[0])
+    assert spread(np.zeros((1, 80)))[0] == pytest.approx(np.sqrt(1 / 12), rel=1e-9)      # a uniform one
