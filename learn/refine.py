@@ -26,8 +26,9 @@ from functools import lru_cache
 import numpy as np
 
 from datagen.damage import DAMAGE_MODELS
+from learn.intervals import LEVELS
 from learn.likelihood import nuisance_loglik
-from learn.sensitivity import _beam_numbers, _with_masses
+from learn.sensitivity import beam_numbers, with_masses
 from learn.shapes import real_shapes, sign_aligned
 from physics.effects import hermite_row
 from physics.fem import assemble, beam_model, dof_names
@@ -42,9 +43,6 @@ CHUNK_MODELS = 256
 #: Relative standard deviation of a size for a given change (10 %): the nominal beam stands for a specimen whose EI,
 #: mass and clamp differ from it by several percent; it widens the size intervals.
 SIZE_SCALE_STD = 0.1
-
-#: The intervals' levels.
-LEVELS = {"68": 0.68, "95": 0.95}
 
 #: Levenberg-Marquardt iterations, the points per axis of the local exact grid, and how much finer the grid the
 #: likelihood is read on (the exact changes linearly interpolated between the exact grid's points).
@@ -108,17 +106,17 @@ def nominal_beam(preset, root_spring_relative=948.7, test=None, n_elements: int 
                  n_modes: int = 4) -> NominalBeam:
     """The nominal beam :func:`learn.sensitivity.beam_sensitivity` differentiates (same arguments): the thesis's
     clamped beam on its root spring measured at the quarter points, or a test's supports, sensors and modes."""
-    L, EI, m, masses = _beam_numbers(preset)
+    L, EI, m, masses = beam_numbers(preset)
     names = list(dof_names(n_elements + 1))
     node_x = np.linspace(0.0, L, n_elements + 1)
     if test is None or test.thesis:
         kr = None if root_spring_relative is None else root_spring_relative * EI / L
-        model = _with_masses(beam_model(n_elements, L, EI, m, root_spring=kr), masses, L, n_elements)
+        model = with_masses(beam_model(n_elements, L, EI, m, root_spring=kr), masses, L, n_elements)
         K, sensors, used = np.asarray(model.K), [L * q / 4 for q in range(1, 5)], np.arange(n_modes)
     else:
         sup = test.support
         kr = root_spring_relative * EI / L if sup.clamped and root_spring_relative is not None else None
-        model = _with_masses(beam_model(n_elements, L, EI, m, bc=test.bc, root_spring=kr), masses, L, n_elements)
+        model = with_masses(beam_model(n_elements, L, EI, m, bc=test.bc, root_spring=kr), masses, L, n_elements)
         K = add_springs(model.K, model.dofs, sup.spring_dofs(n_elements + 1), sup.nominal_unit_stiffness(L) * EI)
         sensors, used = sorted(test.sensors_x_m), sup.rigid_body_modes + np.asarray(test.modes) - 1
     keep = np.array([names.index(d) for d in model.dofs])

@@ -35,7 +35,7 @@ from physics.modal import undamped_modes
 from physics.properties import beam_preset
 from physics.supports import add_springs
 
-__all__ = ["Sensitivity", "beam_sensitivity"]
+__all__ = ["Sensitivity", "beam_numbers", "beam_sensitivity", "with_masses"]
 
 @dataclass(frozen=True)
 class Sensitivity:
@@ -81,7 +81,7 @@ class Sensitivity:
         e = self.element_of(np.nan_to_num(x_over_L))
         return np.max(np.abs(self.frequency[:, e]), axis=0) * np.abs(np.asarray(size, float))
 
-def _beam_numbers(preset) -> tuple[float, float, float, tuple]:
+def beam_numbers(preset) -> tuple[float, float, float, tuple]:
     """``(length_m, EI_Nm2, mass_per_length_kg_m, added masses)`` of a preset name or of such a tuple (the added
     masses ``((x_m, mass_kg), ...)`` optional, none for a preset)."""
     if isinstance(preset, str):
@@ -90,7 +90,8 @@ def _beam_numbers(preset) -> tuple[float, float, float, tuple]:
     L, EI, m, *rest = preset
     return float(L), float(EI), float(m), tuple(rest[0]) if rest else ()
 
-def _with_masses(models, masses, length_m: float, n_elements: int):
+
+def with_masses(models, masses, length_m: float, n_elements: int):
     """``models`` (a batch of one beam's FE models) with the point masses ``((x_m, mass_kg), ...)`` added to M."""
     if not masses:
         return models
@@ -125,7 +126,7 @@ def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7,
     perturbs = damage_model(kind).perturbs
     if test is not None and not test.thesis:
         return _layout_sensitivity(preset, root_spring_relative, n_elements, step, perturbs, test)
-    L, EI, m, masses = _beam_numbers(preset)
+    L, EI, m, masses = beam_numbers(preset)
     le = L / n_elements
     kr = None if root_spring_relative is None else root_spring_relative * EI / L
     factors = np.ones((n_elements + 1, n_elements))
@@ -135,13 +136,13 @@ def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7,
     else:
         factors[1:] += step * np.eye(n_elements)
         models = beam_model(n_elements, L, EI, m, mass_factors=factors, root_spring=kr)
-    models = _with_masses(models, masses, L, n_elements)
+    models = with_masses(models, masses, L, n_elements)
     w, phi = undamped_modes(models.M, models.K)
     meas = models.index([f"{1 + n_elements // 4 * q}:y" for q in range(1, 5)])
     u = real_shapes(phi[:, meas, :n_modes].astype(complex))
     du = (sign_aligned(u[1:], u[0]) - u[0]) * L / (step * le)   # (E, 4, m) per unit size (step le / L per step)
     # exact first-order frequency sensitivities from the element energies
-    nominal = _with_masses(beam_model(n_elements, L, EI, m, root_spring=kr), masses, L, n_elements)
+    nominal = with_masses(beam_model(n_elements, L, EI, m, root_spring=kr), masses, L, n_elements)
     w0, phi0 = undamped_modes(nominal.M, nominal.K)
     full = np.zeros((2 * (n_elements + 1), n_modes))
     names = [f"{n}:{d}" for n in range(1, n_elements + 2) for d in ("y", "rz")]
@@ -157,14 +158,14 @@ def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7,
 
 def _layout_sensitivity(preset, root_spring_relative, n_elements, step, perturbs, test) -> Sensitivity:
     """:func:`beam_sensitivity` of any test (:class:`physics.layout.Layout`): shapes at the sensors."""
-    L, EI, m, masses = _beam_numbers(preset)
+    L, EI, m, masses = beam_numbers(preset)
     le = L / n_elements
     sup = test.support
     kr = root_spring_relative * EI / L if sup.clamped and root_spring_relative is not None else None
     factors = np.ones((n_elements + 1, n_elements))
     key = "ei_factors" if perturbs == "stiffness" else "mass_factors"
     factors[1:] += (-step if perturbs == "stiffness" else step) * np.eye(n_elements)
-    models = _with_masses(beam_model(n_elements, L, EI, m, bc=test.bc, root_spring=kr, **{key: factors}), masses, L,
+    models = with_masses(beam_model(n_elements, L, EI, m, bc=test.bc, root_spring=kr, **{key: factors}), masses, L,
                           n_elements)
     # the support's nominal springs (a soft suspension: the rigid-body modes stay the two lowest)
     K = add_springs(models.K, models.dofs, sup.spring_dofs(n_elements + 1), sup.nominal_unit_stiffness(L) * EI)
