@@ -424,7 +424,8 @@ class DamageClassifier:
         n_modes = self.n_modes_ if self.answers_missing_modes else 0
         mixed = raw(every, self._draw_present(len(Zv), rng) if n_modes else np.ones((len(Zv), 0), bool))
         self.logit_scale_, self.bias_ = fit_calibration(mixed["detect"], dv)
-        self.size_std_scale_, self.location_sharpness_ = read_size_scales(1.0), read_curves(1.0)
+        (scales,), (curves,) = read_size_scales(1.0), read_curves(1.0)      # where too few pairs: the previous count's
+        self.size_std_scale_, self.location_sharpness_ = [], []
         for k in range(len(self.thresholds_)):
             rows = np.tile(every, THRESHOLD_COPIES) if k else every
             r = raw(rows, self._draw_present(len(rows), rng, missing=k) if k else np.ones((len(rows), n_modes), bool))
@@ -432,14 +433,12 @@ class DamageClassifier:
             if (dv[rows] < 0.5).any():
                 self.thresholds_[k] = float(max(0.5, np.quantile(p[dv[rows] < 0.5], 1 - self.false_alarm_target)))
             called = (dv[rows] > 0.5) & (p >= self.thresholds_[k])          # intervals are reported for these
-            scales, curves = self.size_std_scale_[-1], self.location_sharpness_[-1]
             if called.sum() >= 10:
                 t_std = np.exp(np.minimum(r["size_log_std"][called], LOG_SIZE_LIMIT))
                 scales = fit_size_scales(lsv[rows][called], r["size_mean"][called], t_std)
                 curves = fit_curves(r["locate"][called], xv[rows][called], self.mirrored)
             self.size_std_scale_.append(scales)
             self.location_sharpness_.append(curves)
-        del self.size_std_scale_[0], self.location_sharpness_[0]
 
     # ------------------------------------------------------------------ predict
     def _marginal(self, present_row) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

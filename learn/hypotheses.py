@@ -60,7 +60,7 @@ import numpy as np
 from datagen.damage import DAMAGE_MODELS, applies_to, beam_section, damage_defaults
 from learn.model_dir import sensitivity_of, truth_beam_mapping, truth_numbers
 from learn.likelihood import nuisance_loglik
-from learn.refine import SIZE_SCALE_STD, ExactKind, kind_parameters, nominal_beam, refined_fits
+from learn.refine import SIZE_SCALE_STD, ExactKind, birge_ratio, kind_parameters, nominal_beam, refined_fits
 from learn.sensitivity import Sensitivity
 from learn.shapes import real_shapes, shape_changes, sign_aligned
 from physics.effects import hermite_row
@@ -364,10 +364,11 @@ def weigh_many(shifts, kinds: dict, support: tuple, temperature_range=(-0.004, 0
                     continue
                 (t, e), li = fits[name][1], fits[name][3]
                 x_m = np.asarray(k.sens.x_over_L) * length_m
-                birge = max(1.0, float(np.sum(z[name] ** 2)) / max(1, y.shape[1] - 3))
-                params[name] = kind_parameters(x_m[e], k.sizes[t], length_m, k.size_label, x_m[None] + 0 * li,
-                                               k.sizes[:, None] + 0 * li, li, 0.5 * length_m / x_m.size,
-                                               miss[name] <= FIT_LIMIT, birge)
+                params[name] = kind_parameters(x_m[e], k.sizes[t], length_m, k.size_label,
+                                               np.broadcast_to(x_m[None], li.shape),
+                                               np.broadcast_to(k.sizes[:, None], li.shape), li,
+                                               0.5 * length_m / x_m.size, miss[name] <= FIT_LIMIT,
+                                               float(birge_ratio(np.sum(z[name] ** 2), y.shape[1])))
             logz = np.array([fits[n][0] + log_prior for n in names])
             p = np.exp(logz - logz.max())
             p /= p.sum()

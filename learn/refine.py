@@ -21,7 +21,7 @@ the noise: its intervals widen by the misfit rather than stay as narrow as the n
 from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 
@@ -95,10 +95,15 @@ class NominalBeam:
         phi = np.swapaxes(Linv, -1, -2) @ v[..., self.used]
         return np.sqrt(np.clip(w2[..., self.used], 0.0, None)), real_shapes((self.T @ phi).astype(complex))
 
-    @property
+    @cached_property
     def mass_factor_inverse(self) -> np.ndarray:
         """``L^-1`` of the nominal mass ``M = L L^T`` (n, n)."""
         return np.linalg.inv(np.linalg.cholesky(self.M))
+
+    @cached_property
+    def nominal_modes(self) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`solve` of the nominal beam: its angular frequencies (m,) and shapes at the sensors (S, m)."""
+        return self.solve()
 
 
 @lru_cache(maxsize=16)
@@ -144,7 +149,7 @@ class ExactKind:
         """Relative frequency changes (P, m) and changes of the real unit-norm shapes at the sensors (P, S m,
         sensor-major) of the damage of ``size`` at ``x_m`` with spread ``extent`` (each (P,)), exactly."""
         nb, kind = self.nominal, DAMAGE_MODELS[self.name]
-        w0, u0 = (v[..., self.modes_index] for v in nb.solve())
+        w0, u0 = (v[..., self.modes_index] for v in nb.nominal_modes)
         x, s, e = np.broadcast_arrays(*(np.asarray(v, float).ravel() for v in (x_m, size, extent)))
         freq, shapes = np.empty((x.size, w0.size)), np.empty((x.size, u0.size))
         for i in range(0, x.size, CHUNK_MODELS):
@@ -260,11 +265,12 @@ def refine(exact: ExactKind, x0, size0, y, sigma, half: float, model_error: floa
                     np.sum(r[:, :m] ** 2, axis=1), np.sum(r[:, m:-1] ** 2, axis=1), cov)
 
 
-def birge_ratio(fit: ExactFit, n_modes: int, n_shape: int) -> np.ndarray:
-    """``max(1, chi2_f / max(1, m - 3), chi2_s / D)`` (P,): by how much the fits' misfit exceeds the noise (each
-    block of data its own; the three parameters ``x``, ``s``, ``a`` counted against the frequencies)."""
-    out = np.maximum(1.0, fit.chi2_frequency / max(1, n_modes - 3))
-    return np.maximum(out, fit.chi2_shape / n_shape) if n_shape else out
+def birge_ratio(chi2_frequency, n_modes: int, chi2_shape=0.0, n_shape: int = 0) -> np.ndarray:
+    """``max(1, chi2_f / max(1, m - 3), chi2_s / D)``: by how much fits' misfit (chi-squares, any shape) exceeds
+    the noise (each block of data its own; the three parameters ``x``, ``s``, ``a`` counted against the ``m``
+    frequencies, ``D`` the shape entries, none: no shape block)."""
+    out = np.maximum(1.0, np.asarray(chi2_frequency, float) / max(1, n_modes - 3))
+    return np.maximum(out, np.asarray(chi2_shape, float) / n_shape) if n_shape else out
 
 
 def local_grid(exact: ExactKind, fit: ExactFit, size_bounds, scale, n: int = N_LOCAL):
@@ -390,7 +396,9 @@ def refined_fits(kind, y, sigma, half: float, model_error: float, grid_loglik, s
                  half, model_error, bounds, None if shapes is None else np.tile(shapes, (n_starts, 1)), shape_sigma)
     chi2 = (fit.chi2_frequency + fit.chi2_shape).reshape(n_starts, n)
     order = np.argsort(chi2, axis=0, kind="stable")                     # (n_starts, n) best first
-    birge = birge_ratio(_rows(fit, order[0] * n + np.arange(n)), y.shape[1], 0 if shapes is None else shapes.shape[1])
+    best = order[0] * n + np.arange(n)
+    birge = birge_ratio(fit.chi2_frequency[best], y.shape[1], fit.chi2_shape[best],
+                        0 if shapes is None else shapes.shape[1])
     keep = []                                                            # (candidate, pair) of the posterior
     for i in range(n):
         kept = []
