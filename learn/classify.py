@@ -18,7 +18,7 @@ from learn.model_dir import TrainedModel
 from learn.normal_variation import measure, model_modes
 from learn.shapes import real_shapes, sign_aligned
 from learn.verdict import (IN_DISTRIBUTION_PERCENTILE, agreement, classical_answer, classical_verdict,
-                           modes_text, network_answer, network_output, ood_percentile)
+                           modes_text, network_answer, network_output, ood_percentile, place_keys)
 from physics.errors import BeamDamageError
 from physics.identification import METHODS
 from physics.io import MeasuredFRF
@@ -96,9 +96,11 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
     normal = _normal_variation(model, route, nv, base_mds, warnings)
     answers, mode_reasons, mode_sens = _classical_answers(model, pairs, len(currents), sens)
     for i in range(len(currents)):
-        if mirrored(model.beam, pairs[i] if pairs else None):
+        mirror = mirrored(model.beam, pairs[i] if pairs else None)
+        if mirror:
             nets[i] = nets[i] and fold_to_half(nets[i], model.beam, where[i])
             answers[i] = [fold_to_half(a, model.beam) for a in answers[i]]
+        nets[i] = nets[i] and {**nets[i], **place_keys(nets[i], model.beam, mirror)}
     known = [i for i in range(len(currents)) if pairs and pairs[i] is not None]
     explained = [None] * len(currents)
     for i, e in zip(known, _explanations(model, [pairs[i] for i in known], nv)):

@@ -63,15 +63,17 @@ from learn.likelihood import nuisance_loglik
 from learn.refine import SIZE_SCALE_STD, ExactKind, birge_ratio, kind_parameters, nominal_beam, refined_fits
 from learn.sensitivity import Sensitivity
 from learn.shapes import real_shapes, shape_changes, sign_aligned
+from learn.verdict import explanation_label
 from physics.effects import hermite_row
 from physics.errors import BeamDamageError
 from physics.fem import beam_model
 from physics.modal import undamped_modes
 from physics.supports import THESIS_SUPPORT, add_springs, changed_springs, support
 
-__all__ = ["BASE_HYPOTHESES", "FIT_LIMIT", "FREQUENCY_CHANGE_STD", "HYPOTHESES", "KindExplanation", "MODEL_ERROR",
-           "NO_EXPLANATION", "SEPARATE_BASE", "SHAPE_CHANGE_STD", "SIZE_SCALE_STD", "Hypothesis", "explain",
-           "explain_many", "kind_explanation", "kind_explanations", "separate", "summary", "support_curve", "weigh",
+__all__ = ["BASE_HYPOTHESES", "FIT_LIMIT", "FREQUENCY_CHANGE_STD", "HYPOTHESES", "KindExplanation",
+           "MODEL_ERROR", "NO_EXPLANATION", "SEPARATE_BASE", "SHAPE_CHANGE_STD", "SIZE_SCALE_STD", "Hypothesis",
+           "explain", "explain_many", "kind_explanation", "kind_explanations", "separate",
+           "summary", "support_curve", "weigh",
            "weigh_many", "window_averaged"]
 
 #: Relative standard deviation of a mode's frequency change between two tests (0.1 %): modal tests repeated on
@@ -399,18 +401,19 @@ def summary(rows: list[Hypothesis], modes) -> str:
     intervals are widened), and whether the next one can be told apart (Bayes factor < 3) and, if not, what
     measurement would separate them (:func:`separate`)."""
     best, second = rows[0], rows[1]
-    text = (f"most likely explanation: {best.name} (probability {best.probability:.2f}, largest frequency misfit "
-            f"{best.max_abs_frequency_error_pct:.2f} %)")
+    text = (f"most likely explanation: {explanation_label(best.name)} (probability {best.probability:.2f}, largest "
+            f"frequency misfit {best.max_abs_frequency_error_pct:.2f} %)")
     if not best.fits:
-        text = (f"no explanation fits the change within its noise (the most likely, {best.name}, misses a mode by "
-                f"{best.max_misfit_std:.1f} standard deviations, {best.max_abs_frequency_error_pct:.2f} %: a change "
-                f"none of them describes, or a noisier test than weighed); " + text)
+        text = (f"no explanation fits the change within its noise (the most likely, {explanation_label(best.name)}, "
+                f"misses a mode by {best.max_misfit_std:.1f} standard deviations, "
+                f"{best.max_abs_frequency_error_pct:.2f} %: a change none of them describes, or a noisier test than "
+                "weighed); " + text)
     elif best.parameters.get("birge_ratio", 1.0) > 1:
         text += (f"; it reproduces the change only beyond the noise (misfit {best.max_misfit_std:.1f} standard "
                  f"deviations, Birge ratio {best.parameters['birge_ratio']:.1f}): its intervals are widened by it")
     if second.probability > best.probability / 3:
         gap = np.abs(best.predicted - second.predicted)
-        text += (f"; {second.name} ({second.probability:.2f}) cannot be told apart from it on modes "
+        text += (f"; {explanation_label(second.name)} ({second.probability:.2f}) cannot be told apart from it on modes "
                  f"{', '.join(map(str, modes))} (their predicted changes differ by at most {100 * gap.max():.2f} %): "
                  f"{separate(best.name, second.name)} would separate them")
     return text

@@ -50,8 +50,9 @@ def fold_to_half(answer: dict, beam, distributions=None) -> dict:
 
 
 def location_ambiguity(beam, verdict: dict, pair) -> str | None:
-    """What frequencies alone cannot tell (:func:`mirrored`): the mirror image of the located damage, or None."""
-    if not verdict.get("damaged") or not mirrored(beam, pair):
+    """What frequencies alone cannot tell (:func:`mirrored`): the mirror image of the located damage, or None (also
+    for a verdict whose place is undetermined: its text names the mirror zones)."""
+    if not verdict.get("damaged") or verdict.get("place_determined") is False or not mirrored(beam, pair):
         return None
     x, L = verdict["location_x_m"], beam.length_m
     return (f"natural frequencies alone cannot tell x = {x:.3f} m from its mirror image L - x = {L - x:.3f} m on "

@@ -18,9 +18,20 @@ from physics.io import dof_positions_text
 if TYPE_CHECKING:  # torch: the network is loaded only where one runs
     from learn.estimator import DamageClassifier
 
-__all__ = ["IN_DISTRIBUTION_PERCENTILE", "DamageWords", "agreement", "classical_answer", "classical_verdict",
-           "detectability_threshold", "network_answer", "network_output", "noise_text", "normal_variation_text",
-           "ood_percentile", "verdict_text"]
+__all__ = ["BASE_LABELS", "IN_DISTRIBUTION_PERCENTILE", "PLACE_MASS", "PLACE_PEAK", "DamageWords", "agreement",
+           "classical_answer", "classical_verdict", "detectability_threshold", "explanation_label", "network_answer",
+           "network_output", "noise_text", "normal_variation_text", "ood_percentile", "place_keys", "verdict_text"]
+
+#: How the prose names the explanations that are no damage kind (a damage kind's ``label`` names it).
+BASE_LABELS = {"intact": "intact", "global_stiffness": "a stiffness change of the whole beam",
+               "support_change": "a support change"}
+
+
+def explanation_label(name: str) -> str:
+    """An explanation's name in prose: ``"a mass change"`` for ``"mass_change"``, ``"a stiffness change of the whole
+    beam"`` for ``"global_stiffness"`` (:data:`BASE_LABELS`)."""
+    return DAMAGE_MODELS[name].label if name in DAMAGE_MODELS else BASE_LABELS[name]
+
 
 #: Training percentile of the Mahalanobis distance above which a pair counts as outside the training data.
 IN_DISTRIBUTION_PERCENTILE = 99.9
@@ -49,6 +60,58 @@ def ood_percentile(est: DamageClassifier, X) -> tuple[np.ndarray, np.ndarray]:
     :meth:`learn.estimator.DamageClassifier.training_percentile`)."""
     return est.training_percentile(X)
 
+
+
+#: The network's zone probabilities hold a place when its best zone and that zone's neighbours hold this share of
+#: them (with its mirror zones on a beam read on frequencies alone) ...
+PLACE_MASS = 0.5
+#: ... and its best zone at least this many times the share of a uniform spread.
+PLACE_PEAK = 2.0
+
+
+def _zone_span(edges, z: int) -> str:
+    return f"zone {z} of {len(edges) - 1}, {edges[z - 1]:.3g}-{edges[z]:.3g} m"
+
+
+def place_keys(answer: dict, beam, mirror: bool = False) -> dict:
+    """Whether an answer's zone probabilities hold one place (:data:`PLACE_MASS`, :data:`PLACE_PEAK`), and its
+    zone read from its ``x`` so that the two always agree.
+
+    Returns ``{"place_determined", "place_text", "location_zone"[, "location_element"]}``: ``place_text`` says why
+    the place is undetermined (a flat spread, or two separate peaks: "zone 1 ... or zone 6 ..., its mirror"), None
+    when it is determined or the answer carries no probabilities (a classical method's). ``mirror``: the beam is
+    read on frequencies alone where ``x`` and ``L - x`` fit alike (:func:`learn.mirror.mirrored`): a zone and its
+    mirror count as one place.
+    """
+    beam = as_spec(beam)
+    edges = np.asarray(beam.zone_edges_m, float)
+    z = int(beam.zone_of_x_over_L(answer["location_x_over_L"]))
+    out = {"place_determined": True, "place_text": None, "location_zone": z}
+    if answer.get("location_element") is not None:
+        out["location_element"] = z
+    p = answer.get("zone_probabilities")
+    if not answer.get("damaged") or p is None:
+        return out
+    p = np.asarray(p, float)
+    n = p.size
+    near = np.abs(np.arange(n)[:, None] - np.arange(n)[None, :]) <= 1          # (n, n) a zone and its neighbours
+    L = beam.length_m
+    centres = 0.5 * (edges[:-1] + edges[1:])
+    twin = np.argmin(np.abs(centres[None, :] - (L - centres)[:, None]), axis=1)   # each zone's mirror zone
+    held = near | (near[twin] if mirror else False)
+    best = int(np.argmax(p))
+    if p[held[best]].sum() >= PLACE_MASS and p[best] >= PLACE_PEAK / n:
+        return out
+    far = ~near[best]
+    other = int(np.argmax(np.where(far, p, -1.0))) if far.any() else best
+    head = f"{_zone_span(edges, best + 1)} ({p[best]:.2f})"
+    if other != best and p[other] >= 1.0 / n and p[other] >= 0.5 * p[best]:
+        text = f"{head} or {_zone_span(edges, other + 1)} ({p[other]:.2f})" + (
+            ", its mirror" if twin[best] == other else "")
+    else:
+        text = f"the zone probabilities are flat (largest {head}, against {1 / n:.2f} each if uniform)"
+    out.update(place_determined=False, place_text="place undetermined: " + text)
+    return out
 
 
 def zone_keys(beam, zone: int, probabilities=None) -> dict:
@@ -109,6 +172,7 @@ def classical_verdict(cl: dict, sens, beam=None) -> dict:
             "location_x_over_L": cl["location_x_over_L"], "location_x_m": cl["location_x_m"],
             "location_std_m": None, "location_element": cl["location_element"],
             "location_zone": cl["location_zone"], "zone_edges_m": cl["zone_edges_m"], "zone_probabilities": None,
+            "place_determined": True, "place_text": None,
             "element_probabilities": None, "size": cl["size"],
             "size_std": None, **{f"{q}_{k}": None for q in ("x_m", "size") for k in LEVELS},
             "detectable": bool(detectable >= detectability_threshold()),
@@ -153,6 +217,9 @@ def _damage_sentence(a: dict, words: DamageWords) -> str:
                 f"like the one that would explain the data ({words.what(a)}) changes the natural frequencies by less "
                 "than the measurement resolution")
     size_std = "" if a.get("size_std") is None else f"; {words.size_label} +- {a['size_std']:.2g}"
+    if a.get("place_determined") is False:
+        return (f"damaged (probability {a['probability_damaged']:.1%}{_threshold_text(a)}): "
+                f"{words.what({**a, 'location_x_m': None})}; {a['place_text']}{size_std}")
     return (f"damaged (probability {a['probability_damaged']:.1%}{_threshold_text(a)}): {words.what(a)} (location +- "
             f"{a['location_std_m']:.3f} m, x/L = {a['location_x_over_L']:.2f}, {_zone_text(a)}{size_std})")
 
@@ -177,7 +244,7 @@ def _zone_text(a: dict) -> str:
     edges, z = a.get("zone_edges_m"), a.get("location_zone")
     if a.get("location_element") is not None:
         return f"element {a['location_element']} of 4"
-    return f"zone {z} of {len(edges) - 1}, {edges[z - 1]:.3g}-{edges[z]:.3g} m"
+    return _zone_span(edges, z)
 
 
 def _classical_sentence(c: dict, words: DamageWords) -> str:
@@ -205,7 +272,8 @@ def agreement(verdict: dict, net, cl, hypotheses, source: str) -> dict:
     agree = len(set(given.values())) <= 1
     said = {"network": f"the network {'calls it damaged' if votes['network'] else 'finds no damage'}",
             "classical": f"{cl['method'] if cl else ''} {'calls it damaged' if votes['classical'] else 'finds none'}",
-            "explanations": (f"the most likely explanation is {best['name']} ({best['probability']:.2f}"
+            "explanations": (f"the most likely explanation is {explanation_label(best['name'])} "
+                             f"({best['probability']:.2f}"
                              + ("" if best.get("fits", True) else ", not fitting") + ")") if best else ""}
     parts = [said[k] for k in given]
     if agree:
@@ -215,8 +283,8 @@ def agreement(verdict: dict, net, cl, hypotheses, source: str) -> dict:
                 f"is the {source}'s")
         if best is not None and votes["explanations"] != bool(verdict["damaged"]):
             text += (": the explanations find the change within the noise they weigh" if best["name"] == "intact"
-                     else f": the explanations weigh the change against its noise and find {best['name']} more "
-                          "probable")
+                     else ": the explanations weigh the change against its noise and find "
+                          f"{explanation_label(best['name'])} more probable")
         text += "."
     return {**votes, "agree": agree, "text": text}
 
@@ -280,7 +348,7 @@ def verdict_text(res: dict, words: DamageWords = DamageWords()) -> str:
         lines.append(res["agreement"]["text"])
     if res.get("hypotheses"):
         lines.append(f"Explanations of the {explained_text(res)} (equal priors, {noise_text(res)}): "
-                     + ", ".join(f"{h['name']} {h['probability']:.2f}" for h in res["hypotheses"])
+                     + ", ".join(f"{explanation_label(h['name'])} {h['probability']:.2f}" for h in res["hypotheses"])
                      + f"; {res['hypotheses_summary']}.")
     lines += [f"warning: {w}" for w in res["warnings"]]
     return "\n".join(lines)

@@ -30,6 +30,7 @@ A damage model turns its section of the configuration (``damage``, selected by
   or ``"asinh:<scale>"`` (a signed size, ``asinh(size / scale)``), read by
   :class:`learn.estimator.DamageClassifier`;
 * ``size_label`` names the size in tables and the verdict (e.g. ``"hinge flexibility"``);
+* ``label`` names the kind in the verdict's prose (e.g. ``"a mass change"``);
 * ``perturbs`` ("stiffness" or "mass") says which element matrix a unit size
   changes to first order, for the classical methods' sensitivities
   (:func:`learn.sensitivity.beam_sensitivity`) and the competing explanations' frequency map
@@ -50,7 +51,7 @@ A damage model turns its section of the configuration (``damage``, selected by
   ``"support_change"`` or another kind), what measurement tells this kind from it when the
   frequencies of the measured modes cannot;
 * ``describe(x_m, size, preset, section=None)`` is the verdict's prose for a
-  damage of that size at ``x_m`` on a beam (``preset``: a preset name or the
+  damage of that size at ``x_m`` (no place for ``x_m`` None) on a beam (``preset``: a preset name or the
   truth beam's fields; ``section``: the config's section keys).
 
 Generic keys of the section: ``kind``, ``intact_fraction`` (share of samples
@@ -86,6 +87,7 @@ class DamageModel(Protocol):
     sample_units: dict
     size_meaning: str
     size_label: str
+    label: str
     size_transform: str
     perturbs: str
     separates: dict

@@ -143,6 +143,7 @@ class Debond:
     sample_units: dict = {}
     size_meaning = "hinge flexibility EI / (k_theta L) = l r / ((1 - r) L) of the debonded length l"
     size_label = "hinge flexibility"
+    label = "a face-core debond"
     #: The size head learns ``log(size)``: a debond's hinge flexibility is positive.
     size_transform = "log"
     perturbs = "stiffness"
@@ -230,14 +231,15 @@ class Debond:
 
         The length follows from the size and the section's loss ``r`` (``l = theta L (1 - r) / r``): the
         config's ``section`` keys where given, else the beam's own (a preset's: 0.5 mm faces, 0.1 GPa core);
-        without a beam (``preset`` None) it is left out.
+        without a beam (``preset`` None) it is left out. No place for ``x_m`` None.
         """
+        at = "" if x_m is None else f" at x = {x_m:.3f} m"
         if preset is None:
-            return f"a face-core debond at x = {x_m:.3f} m (hinge flexibility {size:.3g})"
+            return f"a face-core debond{at} (hinge flexibility {size:.3g})"
         beam = preset
         if section is not None:
             beam = _mapping(preset)
             beam.update({k: section[k] for k in ("face_thickness_m", "core_modulus_pa") if k in section})
         r = debond_ei_loss(_layout_of(beam))
         length_mm = 1000 * size * _beam_length_m(beam) * (1 - r) / r
-        return f"a face-core debond at x = {x_m:.3f} m about {length_mm:.0f} mm long (hinge flexibility {size:.3g})"
+        return f"a face-core debond{at} about {length_mm:.0f} mm long (hinge flexibility {size:.3g})"

@@ -138,6 +138,7 @@ class MassChange:
     #: The size head learns ``asinh(size / scale)``: signed, linear below ``scale``, logarithmic above.
     size_transform = "asinh:0.01"
     size_label = "mass ratio"
+    label = "a mass change"
     perturbs = "mass"
     sections = None                 # every section
     separates = {"support_change": "mode shapes near the support or a higher mode"}
@@ -210,8 +211,10 @@ class MassChange:
         return {}, {k: params[k] for k in ("mass_kg", "width_m", "point_kg", "point_x_m")}
 
     def describe(self, x_m: float, size: float, preset, section: dict | None = None) -> str:
-        """``"a mass added at x = 0.300 m of 1.2 % of the beam's mass"`` (or lost, for a negative size)."""
-        return f"a mass {'added' if size >= 0 else 'lost'} at x = {x_m:.3f} m of {abs(size):.2%} of the beam's mass"
+        """``"a mass added at x = 0.300 m of 1.2 % of the beam's mass"`` (or lost, for a negative size; no place for
+        ``x_m`` None)."""
+        at = "" if x_m is None else f" at x = {x_m:.3f} m"
+        return f"a mass {'added' if size >= 0 else 'lost'}{at} of {abs(size):.2%} of the beam's mass"
 
 
 def _carried(x, w, mass, m_per_l, L, w_max, added_masses):

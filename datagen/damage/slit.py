@@ -373,6 +373,7 @@ class Slit:
     sample_units = {"stiffness_loss_Nm3": "N m^3 (sum over slits of dEI * width)"}
     size_meaning = "hinge flexibility EI / (k_theta L) = w r / ((1 - r) L)"
     size_label = "hinge flexibility"
+    label = "a slit"
     #: The size head learns ``log(size)``: a slit's hinge flexibility is positive.
     size_transform = "log"
     perturbs = "stiffness"
@@ -456,9 +457,10 @@ class Slit:
         """``"a slit at x = 0.152 m of hinge flexibility EI/(k L) = 0.0123 (e.g. 0.25 mm deep over 5.5 mm)"``.
 
         The depth example (:func:`equivalent_depth`, :attr:`reference_width_m` wide) needs the config's
-        ``section``; without it, or when no cut is that flexible, it is left out.
+        ``section``; without it, or when no cut is that flexible, it is left out. No place for ``x_m`` None.
         """
         width_m = self.reference_width_m
         depth = None if section is None else equivalent_depth(size, preset, width_m, section)
         eg = "" if depth is None else f" (e.g. {depth * 1000:.2f} mm deep over {width_m * 1000:.1f} mm)"
-        return f"a slit at x = {x_m:.3f} m of hinge flexibility EI/(k L) = {size:.3g}{eg}"
+        at = "" if x_m is None else f" at x = {x_m:.3f} m"
+        return f"a slit{at} of hinge flexibility EI/(k L) = {size:.3g}{eg}"

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from learn.classify import DEFAULT_FALSE_ALARM_RATE, classify_many
+from learn.verdict import explanation_label
 from learn.measured import differences_from_model, on_model_dofs
 from learn.model_dir import load_model
 from physics.errors import BeamDamageError
@@ -32,7 +33,8 @@ from physics.io import (
 __all__ = ["KEYS", "add_parser", "run"]
 
 KEYS = ("measured", "damaged", "probability_damaged", "decision_threshold", "location_x_over_L", "location_x_m",
-        "location_std_m", "location_zone", "zone_edges_m", "zone_probabilities", "location_ambiguity",
+        "location_std_m", "location_zone", "zone_edges_m", "zone_probabilities", "place_determined", "place_text",
+        "location_ambiguity",
         "location_element", "element_probabilities", "damage_kind", "size", "size_std", "x_m_68", "x_m_95", "size_68",
         "size_95", "size_meaning", "detectable", "probability_support_change", "support_changed", "verdict_from",
         "in_distribution",
@@ -214,7 +216,7 @@ def _figure(res, extra, base, cur, beam) -> bytes:
         a2.bar(x, change, width=0.5, color="0.6", label="measured")
         for h, marker in zip((res.get("hypotheses") or [])[:3], ("o", "s", "^")):
             a2.plot(x, h["predicted_change_pct"], marker, ls="none",
-                    label=f"{h['name']} ({h['probability']:.2f})")
+                    label=f"{explanation_label(h['name'])} ({h['probability']:.2f})")
         a2.axhline(0, color="k", lw=0.6)
         a2.set_xticks(x, [f"mode {m}" for m in modes])
         a2.legend(fontsize=7)

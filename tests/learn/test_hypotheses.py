@@ -235,6 +235,7 @@ class _Stiffening:
     defaults = {"theta": [0.0, 0.02]}
     size_meaning = "hinge flexibility of a test kind"
     size_label = "test flexibility"
+    label = "a test stiffening"
     size_transform = "log"
     perturbs = "stiffness"
     sections = None
