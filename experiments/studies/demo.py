@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import shutil
 import sys
 import time
@@ -27,10 +28,11 @@ from datagen.config import load_config, merge
 from datagen.generation import generate
 from datagen.truth_beam import beam_mapping
 from experiments.studies import study_discrepancy, study_thesis, validate
+from experiments.studies.doc_tables import DOCS, write_table
 from experiments.studies.report import Section, Table, figure, write_report
 from learn.classify import classify
 from learn.model_dir import MODEL_FORMAT, load_model
-from learn.verdict import explained_text, noise_text
+from learn.verdict import explained_text, explanation_label, noise_text
 from physics import discrepancy, modal, properties, thesis, updating
 from physics.beam import load_beam
 from physics.errors import BeamDamageError
@@ -221,6 +223,50 @@ def _summary_section(checks, disc: dict, evaluated: dict, verdict: dict, length_
                                        table_rows),))
 
 
+def _metric(row: dict | None, key: str, fmt: str, scale: float = 1.0) -> str:
+    v = None if row is None else row.get(key)
+    return "-" if v is None else format(scale * v, fmt)
+
+
+def doc_blocks(result: dict) -> dict:
+    """The demo's numbers as README.md and docs/demo.md show them: ``{(page, block name): markdown}``
+    (:func:`experiments.studies.doc_tables.write_table` writes them with ``--docs``).
+
+    The ``demo-numbers`` blocks hold what the run computes (deterministic for a seed); ``demo-timings`` the
+    seconds of the machine that ran it, dated.
+    """
+    disc, verdict, rows = result["discrepancy"], result["classify"], result["evaluate"]
+    net = next((r for r in rows if r["method"].startswith("network")), None)
+    best = _best_classical(rows)
+    gb, ga = disc["gap_before"], disc["gap_after"]
+    effects = " then ".join(e.replace("_", " ") for e in disc["effects"]) or "no effect"
+    called = (f"called damaged, {verdict['location_x_m']:.3f} m from the clamp (element "
+              f"{verdict['location_element']}), by the {verdict['verdict_from']}" if verdict["damaged"]
+              else f"called undamaged by the {verdict['verdict_from']}")
+    hyp = verdict.get("hypotheses") or []
+    explained = ("; its explanations: " + ", ".join(f"{explanation_label(h['name'])} {h['probability']:.2f}"
+                                                     for h in hyp[:3]) if hyp else "")
+    numbers = (f"{result['validate_passed_count']} of {result['checks']} thesis checks pass; {effects} named, largest "
+               f"frequency error {gb['max_abs_frequency_error_pct']:.2f} % -> "
+               f"{ga['max_abs_frequency_error_pct']:.2f} %; "
+               f"on the {result['test_pairs']} held-out specimens of the calibrated beam the network reaches ROC AUC "
+               f"{_metric(net, 'roc_auc', '.3f')}, element accuracy {_metric(net, 'element_accuracy', '.1f', 100)} %, "
+               f"median location error {_metric(net, 'median_location_error_mm', '.1f')} mm, median size error "
+               f"{_metric(net, 'median_size_error', '.0f', 100)} %, "
+               f"{_metric(net, 'false_alarm_rate', '.1f', 100)} % false alarms"
+               + (f" ({best['method']}, the best classical method: ROC AUC {_metric(best, 'roc_auc', '.3f')}, element "
+                  f"accuracy {_metric(best, 'element_accuracy', '.1f', 100)} %, "
+                  f"{_metric(best, 'false_alarm_rate', '.1f', 100)} % false alarms)" if best else "")
+               + f"; beam 5 is {called}{explained}.")
+    t = result["step_seconds"]
+    timings = (f"On {result['machine']} ({time.strftime('%Y-%m-%d', time.gmtime())}) the steps took: identification "
+               f"{t['identify']:.1f} s, discrepancy {t['discrepancy']:.1f} s, datasets {t['dataset']:.1f} s, training "
+               f"{t['train']:.0f} s (one torch thread), evaluation {t['evaluate']:.1f} s; the whole run "
+               f"{result['seconds']:.0f} s after the install.")
+    return {("demo.md", "demo-numbers"): numbers, ("demo.md", "demo-timings"): timings,
+            (str(DOCS.parent / "README.md"), "demo-numbers"): numbers}
+
+
 def run(args) -> dict:
     if args.samples is not None and args.samples < 200:
         raise BeamDamageError(f"samples must be >= 200 (training pairs), got {args.samples}", parameter="samples")
@@ -282,12 +328,20 @@ def run(args) -> dict:
     paths = write_report(out, "beam-damage: from the thesis to a damage classifier for beam 5", sections,
                          summary=_summary_section(checks, disc, evaluated, verdict, 0.6095))
     result = {
-        "validate_passed": vsum["passed"], "checks": len(checks),
+        "validate_passed": vsum["passed"], "validate_passed_count": sum(c.passed for c in checks),
+        "checks": len(checks),
         "thesis": thesis_summary, "measured_data": measured,
         "discrepancy": {k: disc[k] for k in ("named_effect", "effects", "gap_before", "gap_after", "beam_file")},
         "dataset": data, "train": {k: trained.get(k) for k in ("route", "train_pairs", "test_pairs", "train_seconds")},
-        "evaluate": evaluated["rows"], "classify": verdict, "report": paths, "seconds": elapsed,
+        "evaluate": evaluated["rows"], "test_pairs": evaluated.get("pairs"), "classify": verdict, "report": paths,
+        "seconds": elapsed, "machine": f"{os.cpu_count()} cores",
+        "step_seconds": {k: v.get("seconds", float("nan")) for k, v in
+                         (("identify", measured), ("discrepancy", disc), ("dataset", data), ("train", trained),
+                          ("evaluate", evaluated))},
     }
+    if args.docs:
+        for (page, name), text in doc_blocks(result).items():
+            write_table(page, name, text)
     if not args.json:
         gb, ga = disc["gap_before"], disc["gap_after"]
         print(f"\nvalidate: {sum(c.passed for c in checks)} of {len(checks)} thesis checks pass")
@@ -361,4 +415,6 @@ def add_parser(sub):
                    help=f"training specimens (default {SIZES['full'][0]}, {SIZES['quick'][0]} with --quick)")
     p.add_argument("--workers", type=int, default=2, help="processes for the datasets (default 2)")
     p.add_argument("--json", action="store_true", help="print a JSON summary")
+    p.add_argument("--docs", action="store_true",
+                   help="write the run's numbers and timings into README.md and docs/demo.md (their demo-* blocks)")
     p.set_defaults(func=run, flags={"samples": "--samples", "workers": "--workers"})
