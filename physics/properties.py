@@ -20,10 +20,10 @@ import numpy as np
 from physics.errors import BeamDamageError, ShapeError
 from physics.supports import ENDS, THESIS_SUPPORT, support
 
-__all__ = ["BeamPreset", "CANTILEVER_BETA_L", "PRESETS", "SECTION_KINDS", "SOLID_SECTIONS", "SolidSection",
-           "StaticTest", "THESIS_BETA_L", "beam_preset", "cantilever_beta_l", "cantilever_curvature_squared",
-           "cantilever_frequencies_hz", "curvature_squared", "equivalent_ei", "free_free_beta_l", "layered_ei",
-           "section_ei", "solid_section"]
+__all__ = ["BeamPreset", "CANTILEVER_BETA_L", "CURVATURE_FORMS", "PRESETS", "SECTION_KINDS", "SOLID_SECTIONS",
+           "SolidSection", "StaticTest", "THESIS_BETA_L", "beam_preset", "cantilever_beta_l",
+           "cantilever_curvature_squared", "cantilever_frequencies_hz", "clamped_pinned_beta_l", "curvature_squared",
+           "equivalent_ei", "free_free_beta_l", "layered_ei", "section_ei", "solid_section"]
 
 
 #: ``beta_l`` of a clamped-free beam as printed in the thesis (Chapter Four).
@@ -120,26 +120,58 @@ def free_free_beta_l(n_modes: int = 4) -> np.ndarray:
     return x
 
 
+def clamped_pinned_beta_l(n_modes: int = 4) -> np.ndarray:
+    """Roots of ``tan(bl) = tanh(bl)`` above 0 (clamped-pinned bending modes), by Newton's method from
+    ``(k + 5/4) pi`` on ``sin(bl) cosh(bl) - cos(bl) sinh(bl) = 0``."""
+    x = (np.arange(n_modes) + 1.25) * np.pi
+    for _ in range(100):
+        step = (np.sin(x) * np.cosh(x) - np.cos(x) * np.sinh(x)) / (2.0 * np.sin(x) * np.sinh(x))
+        x = x - step
+        if np.all(np.abs(step) <= 4 * np.finfo(float).eps * x):
+            break
+    return x
+
+
+def _beta_l_cantilever(mode: int) -> float:
+    return CANTILEVER_BETA_L[mode] if mode < len(CANTILEVER_BETA_L) else float(cantilever_beta_l(mode + 1)[mode])
+
+
+#: The closed forms of :func:`curvature_squared` by the support's ends ``(x = 0, x = L)``: ``beta_l_r`` of mode ``r``
+#: (from 0) and ``sigma``'s family (``"+"``: ``(C + c) / (S + s)``, ``"-"``: ``(C - c) / (S - s)``), or
+#: ``"sine"`` for a beam pinned at both ends. A support whose ends are the mirror image of a pair here is read
+#: from the other end; any other pair has no closed form here and is refused.
+CURVATURE_FORMS = {
+    ("clamped", "free"): (_beta_l_cantilever, "+"),
+    ("free", "free"): (lambda r: float(free_free_beta_l(r + 1)[r]), "-"),
+    ("clamped", "clamped"): (lambda r: float(free_free_beta_l(r + 1)[r]), "-"),
+    ("clamped", "pinned"): (lambda r: float(clamped_pinned_beta_l(r + 1)[r]), "-"),
+    ("pinned", "pinned"): (lambda r: (r + 1) * np.pi, "sine"),
+}
+
+
 def curvature_squared(x_m, length_m: float, mode: int, bc: str = THESIS_SUPPORT):
     """Normalised squared curvature ``phi_r''(x)^2 / int_0^L phi_r''^2 dx`` of bending mode ``r`` of a uniform beam
     (1/m).
 
-    With ``b = beta_l_r / L``, ``u = b x`` and ``C, S, c, s = cosh, sinh, cos, sin`` of ``beta_l_r``:
+    With ``b = beta_l_r / L``, ``u = b x`` and ``C, S, c, s = cosh, sinh, cos, sin`` of ``beta_l_r``
+    (:data:`CURVATURE_FORMS`):
 
-    ============== ============================== ======================================
-    bc             ``phi''(x) / b^2``             ``sigma``
-    ============== ============================== ======================================
-    clamped-free   ``cosh u + cos u - sigma (sinh u + sin u)``  ``(C + c) / (S + s)``
-    free-free      ``cosh u - cos u - sigma (sinh u - sin u)``  ``(C - c) / (S - s)``
-    clamped-clamped ``cosh u + cos u - sigma (sinh u + sin u)`` ``(C - c) / (S - s)``
-    pinned-pinned  ``-sin(r pi x / L)``            (``beta_l_r = r pi``)
-    ============== ============================== ======================================
+    =============== =============================================== ======================== =====================
+    ends            ``phi''(x) / b^2``                              ``sigma``                ``beta_l_r``
+    =============== =============================================== ======================== =====================
+    clamped-free    ``cosh u + cos u - sigma (sinh u + sin u)``     ``(C + c) / (S + s)``    ``cos cosh = -1``
+    free-free       ``cosh u - cos u - sigma (sinh u - sin u)``     ``(C - c) / (S - s)``    ``cos cosh = 1``
+    clamped-clamped ``cosh u + cos u - sigma (sinh u + sin u)``     ``(C - c) / (S - s)``    ``cos cosh = 1``
+    clamped-pinned  ``cosh u + cos u - sigma (sinh u + sin u)``     ``(C - c) / (S - s)``    ``tan = tanh``
+    pinned-pinned   ``-sin(r pi x / L)``                                                     ``r pi``
+    =============== =============================================== ======================== =====================
 
-    For every one of these supports ``int phi''^2 = b^4 int phi^2`` (integration by parts twice), which is
-    ``b^4 L`` (``b^4 L / 2`` pinned-pinned). ``cosh u - sigma sinh u`` is evaluated as
-    ``((1 - sigma) e^u + (1 + sigma) e^-u) / 2`` with ``1 - sigma`` in closed form, exact at high modes where
-    the two terms cancel. By first-order perturbation, a loss ``dEI`` over a short length ``w`` at ``x`` shifts
-    mode ``r`` by ``df_r/f_r = -(1/2) (dEI/EI) w`` times this value.
+    A support whose ends are a pair's mirror image (pinned-clamped, free-clamped) is read from ``L - x``. For every
+    one of these supports ``int phi''^2 = b^4 int phi^2`` (integration by parts twice: the end terms vanish at
+    clamped, pinned and free ends), which is ``b^4 L`` (``b^4 L / 2`` pinned-pinned). ``cosh u - sigma sinh u`` is
+    evaluated as ``((1 - sigma) e^u + (1 + sigma) e^-u) / 2`` with ``1 - sigma`` in closed form, exact at high
+    modes where the two terms cancel. By first-order perturbation, a loss ``dEI`` over a short length ``w`` at
+    ``x`` shifts mode ``r`` by ``df_r/f_r = -(1/2) (dEI/EI) w`` times this value.
 
     Parameters
     ----------
@@ -151,26 +183,36 @@ def curvature_squared(x_m, length_m: float, mode: int, bc: str = THESIS_SUPPORT)
     Returns
     -------
     ndarray, shape like ``x_m``   (1/m)
+
+    Raises
+    ------
+    BeamDamageError
+        A negative mode, or a support whose ends have no closed form in :data:`CURVATURE_FORMS`.
     """
     mode = int(mode)
     if mode < 0:
         raise BeamDamageError(f"mode must be >= 0 (0 = first bending mode), got {mode}")
     sup = support(bc)
     x = np.asarray(x_m, dtype=float)
-    if "pinned" in sup.ends:
-        return 2.0 * np.sin((mode + 1) * np.pi * x / length_m) ** 2 / length_m
-    if sup.symmetric:       # both ends free or both clamped: cos(bl) cosh(bl) = 1
-        bl = free_free_beta_l(mode + 1)[mode]
-    else:                   # clamped at x = 0, free at x = L: 1 + cos(bl) cosh(bl) = 0
-        bl = CANTILEVER_BETA_L[mode] if mode < len(CANTILEVER_BETA_L) else cantilever_beta_l(mode + 1)[mode]
+    ends = tuple(sup.ends)
+    if ends not in CURVATURE_FORMS and ends[::-1] in CURVATURE_FORMS:
+        ends, x = ends[::-1], length_m - x
+    if ends not in CURVATURE_FORMS:
+        raise BeamDamageError(f"support {sup.name!r}: no closed-form curvature for ends {ends[0]}-{ends[1]}; "
+                              f"expected ends among {', '.join('-'.join(e) for e in CURVATURE_FORMS)} "
+                              "(or their mirror images)", parameter="bc")
+    beta_l, family = CURVATURE_FORMS[ends]
+    bl = beta_l(mode)
+    if family == "sine":
+        return 2.0 * np.sin(bl * x / length_m) ** 2 / length_m
     C, S, c, s = np.cosh(bl), np.sinh(bl), np.cos(bl), np.sin(bl)
-    if sup.symmetric:
+    if family == "-":
         sigma, one_minus = (C - c) / (S - s), (c - s - np.exp(-bl)) / (S - s)
     else:
         sigma, one_minus = (C + c) / (S + s), (s - c - np.exp(-bl)) / (S + s)
     u = bl * x / length_m
     hyper = 0.5 * (one_minus * np.exp(u) + (1.0 + sigma) * np.exp(-u))
-    free_start = not ENDS[sup.ends[0]].held       # phi''(0) = 0 at a free end
+    free_start = not ENDS[ends[0]].held       # phi''(0) = 0 at a free end
     trig = -np.cos(u) + sigma * np.sin(u) if free_start else np.cos(u) - sigma * np.sin(u)
     return (hyper + trig) ** 2 / length_m
 
