@@ -72,7 +72,7 @@ from physics.supports import THESIS_SUPPORT, add_springs, changed_springs, suppo
 
 __all__ = ["BASE_HYPOTHESES", "FIT_LIMIT", "FREQUENCY_CHANGE_STD", "HYPOTHESES", "KindExplanation",
            "MODEL_ERROR", "NO_EXPLANATION", "SEPARATE_BASE", "SHAPE_CHANGE_STD", "SIZE_SCALE_STD", "Hypothesis",
-           "explain", "explain_many", "kind_explanation", "kind_explanations", "separate",
+           "explain_many", "kind_explanation", "kind_explanations", "separate",
            "summary", "support_curve", "weigh",
            "weigh_many", "window_averaged"]
 
@@ -470,19 +470,15 @@ def kind_explanation(name: str, d: dict, beam, sens: Sensitivity, sizes=None, ex
                            kind.size_label, exact)
 
 
-#: The verdict keys of :func:`explain`, all None for a pair without explanations.
+#: The verdict keys of :func:`explain_many`, all None for a pair without explanations.
 NO_EXPLANATION = {"hypotheses": None, "hypotheses_summary": None, "frequency_change_std": None,
                   "shape_change_std": None}
 
 
-def explain(model, pair, sigma=FREQUENCY_CHANGE_STD) -> dict:
-    """The explanations of one classified pair (a :class:`learn.measured.ModalPair`) on the model's beam:
-    ``{"hypotheses": [row, ...], "hypotheses_summary": str, "frequency_change_std": sigma}``."""
-    return explain_many(model, [pair], sigma)[0]
-
-
 def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD, shape_sigma=SHAPE_CHANGE_STD) -> list[dict]:
-    """:func:`explain` of every pair, the pairs holding the same modes weighed in one batch.
+    """The explanations of each classified pair (a :class:`learn.measured.ModalPair`) on the model's beam,
+    ``{"hypotheses": [row, ...], "hypotheses_summary": str, "frequency_change_std": sigma, "shape_change_std"}``,
+    the pairs holding the same modes weighed in one batch.
 
     ``sigma``: the relative std of a frequency change, one for every mode or one per model mode (m,);
     ``shape_sigma``: the std of a unit-norm shape entry's change, one or per sensor and model mode (S, m) (a

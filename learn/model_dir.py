@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from datagen.damage import DEFAULT_KIND
+from datagen.damage import kind_of
 from learn.features import BeamSpec
 from learn.sensitivity import beam_sensitivity
 from learn.verdict import DamageWords, verdict_text
@@ -115,7 +115,7 @@ class TrainedModel:
     def damage_kind(self) -> str:
         """The damage kind of the training data (``damage.kind`` of its generator config; the default kind when it
         records none)."""
-        return ((self.config.get("generator_config") or {}).get("damage") or {}).get("kind", DEFAULT_KIND)
+        return kind_of(self.config.get("generator_config"))
 
     def verdict_text(self, result: dict) -> str:
         """The verdict of one classified pair as a reader sees it, in the words of the model's damage kind
@@ -223,8 +223,8 @@ def sensitivity_of(beam: BeamSpec, config_root_spring=None, truth_beam: dict | N
                    generator_config: dict | None = None):
     """FE sensitivities of the truth beam a dataset or model records (:func:`truth_numbers`), to the damage kind of
     its generator config (the default kind when it records none)."""
-    kind = ((generator_config or {}).get("damage") or {}).get("kind", DEFAULT_KIND)
-    return beam_sensitivity(truth_numbers(beam, truth_beam, generator_config), config_root_spring, kind=kind,
+    return beam_sensitivity(truth_numbers(beam, truth_beam, generator_config), config_root_spring,
+                            kind=kind_of(generator_config),
                             test=beam.test)
 
 

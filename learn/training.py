@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 from tqdm.auto import tqdm
 
-from datagen.damage import DEFAULT_KIND, damage_model
+from datagen.damage import damage_model, kind_of
 from datagen.store import package_version
 from learn.classical import run_classical
 from learn.estimator import DamageClassifier
@@ -101,7 +101,7 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
     load_s = time.perf_counter() - t0
     sens = sensitivity_of(pairs.beam, _nominal_root_spring(pairs.source), pairs.source[0].get("truth_beam"),
                           pairs.source[0].get("config"))
-    kind = ((pairs.source[0].get("config") or {}).get("damage") or {}).get("kind", DEFAULT_KIND)
+    kind = kind_of(pairs.source[0].get("config"))
     params = dict(epochs=epochs, random_state=seed, n_threads=threads, verbose=progress,
                   size_transform=damage_model(kind).size_transform)
     if pairs.beam.test is not None:
