@@ -152,13 +152,13 @@ def _vertex(logp, lines, half_span):
 
 def _half_power_half_width(power, lines, grid_hz):
     """Half the distance (Hz) between the first -3 dB crossings either side of each peak line (linear
-    interpolation); NaN where the spectrum ends first."""
+    interpolation); NaN where the spectrum ends first or a higher line lies between them (not a peak's top)."""
     out = np.full(lines.size, np.nan)
     for j, k in enumerate(lines):                       # one search per mode, each over its peak's flanks
         half = power[k] / 2
         right = k + np.argmax(power[k:] < half)
         left = k - np.argmax(power[k::-1] < half)
-        if power[right] >= half or power[left] >= half or max(power[left:right + 1].max(), 0) > power[k]:
+        if power[right] >= half or power[left] >= half or power[left:right + 1].max() > power[k]:
             continue
         fr = right - (half - power[right]) / (power[right - 1] - power[right])
         fl = left + (half - power[left]) / (power[left + 1] - power[left])
@@ -168,7 +168,7 @@ def _half_power_half_width(power, lines, grid_hz):
 
 def fft_peaks(signals, sampling_frequency_hz, frequencies_hz, tolerance_hz, window="auto", pad=PAD,
               where="record") -> FFTPeaks:
-    """Peaks of the zero-padded FFT magnitude nearest given frequencies (see the module docstring).
+    """Peaks of the zero-padded FFT magnitude near given frequencies (see the module docstring).
 
     Parameters
     ----------
