@@ -11,6 +11,7 @@ Modules (each name below is re-exported here):
 ``measured``  :func:`identify_frf` on a :class:`~physics.io.MeasuredFRF` or an FRF file, by a method of the table
 ``ssi``       output-only: covariance-driven stochastic subspace identification of response records
 ``fdd``       output-only: frequency-domain decomposition and enhanced FDD of response records
+``fft_peak``  output-only baseline: peaks of the zero-padded FFT of the whole record (method ``fftpeak``)
 ``output_only`` :func:`identify_records` on response records (no force) by an output-only method of the table
 
 Conventions: FRF arrays are ``(n_responses, n_references, n_lines)`` receptances

@@ -16,6 +16,7 @@ import numpy as np
 from physics.errors import ShapeError
 from physics.frf import convert_frf, pole_residue
 from physics.identification.fdd import identify_fdd
+from physics.identification.fft_peak import identify_fft_peaks
 from physics.identification.lscf import identify_lscf
 from physics.identification.sdof import circle_fit, peak_picking
 from physics.identification.ssi import identify_ssi
@@ -91,6 +92,10 @@ def _fit_fdd(signals, fs, band_hz, n_modes, where, enhanced):
     return identify_fdd(signals, fs, band_hz, n_modes, enhanced=enhanced, where=where).estimate, None
 
 
+def _fit_fft_peak(signals, fs, band_hz, n_modes, where):
+    return identify_fft_peaks(signals, fs, band_hz, n_modes, where=where)[0], None
+
+
 #: Identification methods by name.
 METHODS: dict[str, MethodSpec] = {
     "lscf": MethodSpec(
@@ -127,5 +132,11 @@ METHODS: dict[str, MethodSpec] = {
     "efdd": MethodSpec(
         partial(_fit_fdd, enhanced=True),
         "output-only: enhanced FDD (damping from the log decrement of each peak's SDOF bell in the time domain)",
+        (("frequency_std_hz, damping_std", "none (NaN)"),), yields_uncertainty=False, data="records"),
+    "fftpeak": MethodSpec(
+        _fit_fft_peak,
+        "output-only baseline: peaks of the zero-padded FFT of the whole record (no window on a free decay, Hann "
+        "on a stationary one), parabolic interpolation of the log magnitude; half-power damping where the peak is "
+        "wider than the window's",
         (("frequency_std_hz, damping_std", "none (NaN)"),), yields_uncertainty=False, data="records"),
 }

@@ -1,0 +1,299 @@
+"""The plainest frequency estimator, the baseline every identification method is compared with: the peaks of the
+zero-padded FFT magnitude of the whole record.
+
+For a record ``y`` of ``n_channels`` channels and ``n`` samples, the spectrum is the sum over channels of
+``|FFT(w y_c)|^2`` on ``pad x n`` points (zero padding interpolates the DTFT; it adds no information, it only
+samples the same transform more finely). Each peak is the local maximum of that power on the fine grid, refined by
+the vertex of the parabola fitted (least squares) to the log magnitude over the peak's top (+-
+:data:`TOP_FRACTION` of its half-power half-width, at least the maximum and its two neighbours): near its top the
+log of a peak is close to a parabola, so the vertex lies far below the grid spacing from the peak, and fitting the
+whole top rather than three lines keeps a wide peak's noise ripple from moving it. A peak's asymmetry (the
+negative-frequency image, the flanks of other modes) moves the vertex by about ``b^2 / (2 f)`` for a half-power
+half-width ``b``: the same on every test of a structure, so a bias, not a scatter.
+
+The window (``window="auto"``):
+
+* **none** (rectangular) for a *free decay* (the RMS of the record's last tenth is under :data:`DECAY_RATIO` times
+  its first tenth's): the decay is its own taper; a Hann window would weight the first, most informative samples by
+  nearly zero and widen the peak.
+* **Hann** for a *stationary* record (ambient response): its -31 dB side lobes (against -13 dB) keep a strong
+  mode's leakage from moving a weak neighbour's peak.
+
+The peaks are found either near given frequencies (the highest local maximum within a tolerance) or at the clear
+peaks (:func:`~physics.identification.fdd.clear_peaks`, the peaks every output-only method answers for) of the
+record's spectrum: for a free decay, the whole record's FFT power averaged over three lines; for a stationary
+record, the averaged singular-value spectrum FDD reads. Each is refined on the fine grid. A free decay's spectrum
+peaks at the *damped* frequency ``f_d``; where the half-power width gives a damping ratio, the natural frequency
+reported is ``f_d / sqrt(1 - zeta^2)``. The damping ratio is the half-power (-3 dB) half-width over the
+frequency, NaN where that width is under :data:`MIN_WIDTH_LOBES` times the window's own half-power half-width
+(:data:`WINDOW_HALF_WIDTH` over the record's length: the peak is then the window's, not the mode's). The shapes
+are the complex FFT values of each channel at the peak's line, unit norm.
+
+This is a frequency estimator, not a modal model: no poles, no residues, and on a stationary record the raw
+periodogram is not averaged (its peak scatters by a fraction of the half-power width however long the record).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from physics.errors import ConvergenceError, ShapeError
+from physics.identification.fdd import (CLEAR_PEAK_DB, SingularValueSpectrum, _running_floor, clear_peaks,
+                                        singular_value_spectrum, unit_shapes)
+from physics.identification.modes import ModalEstimate, modal_phase_collinearity
+from physics.identification.record_checks import check_periods, check_records
+from physics.modal import eigenvalues_from_modal
+
+__all__ = ["MIN_WIDTH_LOBES", "PAD", "TOP_FRACTION", "WINDOW_HALF_WIDTH", "FFTPeaks", "fft_peaks", "identify_fft_peaks",
+           "is_free_decay", "padded_spectrum"]
+
+#: Zero padding: the FFT length is the next power of two of at least ``PAD`` times the record's samples.
+PAD = 8
+#: The window's half-power half-width of its main lobe, in units of ``1 / T`` (record length ``T``).
+WINDOW_HALF_WIDTH = {"none": 0.443, "hann": 0.72}
+#: The parabola through the log magnitude is fitted over +- this fraction of the peak's half-power half-width (at
+#: least one line either side): a wide peak spans many lines of the padded grid, and the three lines around its
+#: highest one follow the noise's ripple rather than the peak.
+TOP_FRACTION = 0.5
+#: A half-power width under this many times the window's is the window's (damping NaN).
+MIN_WIDTH_LOBES = 2.0
+#: A record whose last tenth has an RMS below this fraction of its first tenth's is a free decay.
+DECAY_RATIO = 0.3
+
+
+@dataclass(frozen=True)
+class FFTPeaks:
+    """Peaks of a record's zero-padded FFT.
+
+    Attributes
+    ----------
+    frequency_hz : ndarray, shape (n_peaks,)
+        Peak frequency (the parabola's vertex); NaN where no local maximum lies within the tolerance.
+    natural_frequencies_hz : ndarray, shape (n_peaks,)
+        ``frequency_hz / sqrt(1 - zeta^2)`` where the damping ratio is finite, else ``frequency_hz``.
+    damping_ratios : ndarray, shape (n_peaks,)
+        Half-power half-width over the frequency; NaN where the width is the window's.
+    values : ndarray, complex, shape (n_channels, n_peaks)
+        Each channel's FFT value at the peak's line (unit^2 summed over channels is the peak's power).
+    window : str
+        ``"none"`` or ``"hann"``.
+    resolution_hz : float
+        ``fs / n``: the record's own resolution (``1 / T``).
+    grid_hz : float
+        Line spacing of the zero-padded FFT.
+    """
+
+    frequency_hz: np.ndarray
+    natural_frequencies_hz: np.ndarray
+    damping_ratios: np.ndarray
+    values: np.ndarray
+    window: str
+    resolution_hz: float
+    grid_hz: float
+
+
+def is_free_decay(y) -> bool:
+    """Whether a record ``(n_channels, n_samples)`` decays: its last tenth's RMS (all channels) is under
+    :data:`DECAY_RATIO` times its first tenth's."""
+    m = max(1, y.shape[1] // 10)
+    y0 = y - y.mean(axis=1, keepdims=True)
+    return bool(np.sqrt(np.mean(y0[:, -m:] ** 2)) < DECAY_RATIO * np.sqrt(np.mean(y0[:, :m] ** 2)))
+
+
+def padded_spectrum(y, sampling_frequency_hz, window="auto", pad=PAD):
+    """The zero-padded FFT of every channel and the summed power.
+
+    Parameters
+    ----------
+    y : ndarray, shape (n_channels, n_samples)
+        Mean removed by the caller (or not: the 0 Hz line is never a peak).
+    sampling_frequency_hz : float
+    window : {"auto", "none", "hann"}
+    pad : int
+
+    Returns
+    -------
+    frequency_hz : ndarray, shape (n_fft // 2 + 1,)
+    X : ndarray, complex, shape (n_channels, n_fft // 2 + 1)
+    power : ndarray, shape (n_fft // 2 + 1,)
+    window : str
+        The window used.
+    """
+    from scipy import fft as sfft  # scipy.fft: about 1 s to import, only output-only identification
+
+    n = y.shape[1]
+    if window == "auto":
+        window = "none" if is_free_decay(y) else "hann"
+    if window not in WINDOW_HALF_WIDTH:
+        raise ShapeError(f"window {window!r}: expected one of auto, {', '.join(WINDOW_HALF_WIDTH)}")
+    w = np.ones(n) if window == "none" else 0.5 - 0.5 * np.cos(2 * np.pi * np.arange(n) / n)
+    n_fft = int(2 ** np.ceil(np.log2(max(pad, 1) * n)))
+    X = sfft.rfft(y * w, n_fft, axis=1)
+    return np.arange(n_fft // 2 + 1) * sampling_frequency_hz / n_fft, X, np.sum(np.abs(X) ** 2, axis=0), window
+
+
+def _vertex(logp, lines, half_span):
+    """Vertex (in lines) of the least-squares parabola through ``logp`` on ``line +- half_span`` of each peak line;
+    the three-point parabola where the fit is not concave or its vertex leaves the span."""
+    out = np.empty(lines.size)
+    for j, (k, m) in enumerate(zip(lines, half_span)):    # one small fit per mode
+        m = int(min(m, k, logp.size - 1 - k))
+        x = np.arange(-m, m + 1, dtype=np.float64)
+        c2, c1, _ = np.polyfit(x, logp[k - m:k + m + 1], 2)
+        p = -c1 / (2 * c2) if c2 < 0 else np.inf
+        if not abs(p) <= m:
+            a, b, c = logp[k - 1], logp[k], logp[k + 1]
+            p = 0.5 * (a - c) / (a - 2 * b + c) if a - 2 * b + c < 0 else 0.0
+        out[j] = k + p
+    return out
+
+
+def _half_power_half_width(power, lines, grid_hz):
+    """Half the distance (Hz) between the first -3 dB crossings either side of each peak line (linear
+    interpolation); NaN where the spectrum ends first or a higher line lies between them (not a peak's top)."""
+    out = np.full(lines.size, np.nan)
+    for j, k in enumerate(lines):                       # one search per mode, each over its peak's flanks
+        half = power[k] / 2
+        right = k + np.argmax(power[k:] < half)
+        left = k - np.argmax(power[k::-1] < half)
+        if power[right] >= half or power[left] >= half or power[left:right + 1].max() > power[k]:
+            continue
+        fr = right - (half - power[right]) / (power[right - 1] - power[right])
+        fl = left + (half - power[left]) / (power[left + 1] - power[left])
+        out[j] = 0.5 * (fr - fl) * grid_hz
+    return out
+
+
+def fft_peaks(signals, sampling_frequency_hz, frequencies_hz, tolerance_hz, window="auto", pad=PAD,
+              where="record") -> FFTPeaks:
+    """Peaks of the zero-padded FFT magnitude near given frequencies (see the module docstring).
+
+    Parameters
+    ----------
+    signals : array_like, shape (n_channels, n_samples)
+    sampling_frequency_hz : float
+    frequencies_hz : array_like, shape (n_peaks,)
+        Where to look.
+    tolerance_hz : float or array_like, shape (n_peaks,)
+        Half-width of the window around each frequency in which the highest local maximum of the FFT power is
+        the peak (the highest, not the nearest: on a stationary record's unaveraged periodogram the nearest
+        maximum is often a ripple on the resonance's flank); none there: NaN.
+    window : {"auto", "none", "hann"}
+    pad : int
+        Zero-padding factor (FFT length: next power of two of ``pad x n_samples``).
+    where : str
+
+    Returns
+    -------
+    FFTPeaks
+    """
+    checked = check_records(signals, sampling_frequency_hz, where=where)
+    fs = checked.sampling_frequency_hz
+    y = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
+    f, X, power, window = padded_spectrum(y, fs, window, pad)
+    df = float(f[1])
+    target = np.atleast_1d(np.asarray(frequencies_hz, dtype=np.float64))
+    tol = np.broadcast_to(np.asarray(tolerance_hz, dtype=np.float64), target.shape)
+    logp = np.log(np.maximum(power, np.finfo(float).tiny))
+    maxima = np.nonzero((logp[1:-1] > logp[:-2]) & (logp[1:-1] >= logp[2:]))[0] + 1
+    lo = np.searchsorted(f[maxima], target - tol, side="left")
+    hi = np.searchsorted(f[maxima], target + tol, side="right")
+    k = np.array([maxima[a + np.argmax(logp[maxima[a:b]])] if b > a else 1 for a, b in zip(lo, hi)], int)
+    found = hi > lo                                     # one slice per peak: the highest maximum in its window
+    hw = _half_power_half_width(power, k, df)
+    width = np.where(np.isfinite(hw), hw, WINDOW_HALF_WIDTH[window] * fs / y.shape[1])
+    half_span = np.maximum(1, np.floor(TOP_FRACTION * width / df)).astype(int)
+    fp = np.where(found, _vertex(logp, k, half_span) * df, np.nan)
+    zeta = hw / np.where(found, fp, np.nan)
+    zeta = np.where(hw >= MIN_WIDTH_LOBES * WINDOW_HALF_WIDTH[window] * fs / y.shape[1], zeta, np.nan)
+    fn = np.where(np.isfinite(zeta), fp / np.sqrt(1 - np.minimum(np.nan_to_num(zeta), 0.5) ** 2), fp)
+    values = np.where(found[None, :], X[:, k], np.nan)
+    return FFTPeaks(fp, fn, zeta, values, window, fs / y.shape[1], df)
+
+
+def _decay_spectrum(y, checked) -> SingularValueSpectrum:
+    """The spectrum whose clear peaks a free decay's modes are: the summed power of the whole record's FFT (no
+    window, no padding) averaged over three adjacent lines, with the running floor FDD uses.
+
+    Welch frames would miss a fast-decaying mode: it lives at the start of the first frame, where a Hann window is
+    nearly zero. Three lines take a noise line's power from an exponential law to a Gamma(3) one, so a noise
+    line stands 10 dB above the floor with probability ~1e-9 instead of 1e-3.
+    """
+    from scipy import fft as sfft  # scipy.fft/ndimage: about 1 s to import, only output-only identification
+    from scipy import ndimage  # scipy.fft/ndimage: about 1 s to import, only output-only identification
+
+    fs, band, n = checked.sampling_frequency_hz, checked.band_hz, y.shape[1]
+    X = sfft.rfft(y, axis=1)
+    f = np.arange(X.shape[1]) * fs / n
+    power = ndimage.uniform_filter1d(np.sum(np.abs(X) ** 2, axis=0), 3, mode="nearest") / (fs * n)
+    s = np.zeros((f.size, y.shape[0]))
+    s[:, 0] = power
+    vectors = (X / np.maximum(np.linalg.norm(X, axis=0), np.finfo(float).tiny)).T
+    inband = (f >= band[0]) & (f <= band[1]) & (f > 0)
+    floor = np.full(f.size, np.nan)
+    floor[inband] = _running_floor(f[inband], power[inband], f[1])
+    return SingularValueSpectrum(f, s, vectors, floor, band, max(3 * f[1], 10 / checked.duration_s, band[0]))
+
+
+def identify_fft_peaks(signals, sampling_frequency_hz, band_hz=None, n_modes=None, window="auto", pad=PAD,
+                       where="record") -> tuple[ModalEstimate, FFTPeaks]:
+    """Modes at the clear peaks of a record's singular-value spectrum, each frequency refined on the zero-padded
+    FFT of the whole record (see the module docstring).
+
+    Parameters
+    ----------
+    signals : array_like, shape (n_channels, n_samples)
+    sampling_frequency_hz : float
+    band_hz : (float, float), optional
+        Default: 0 to 0.4 of the sampling rate.
+    n_modes : int, optional
+        Keep the ``n_modes`` highest clear peaks (default: every clear peak).
+    window : {"auto", "none", "hann"}
+    pad : int
+    where : str
+
+    Returns
+    -------
+    estimate : ModalEstimate
+        Method ``"fftpeak"``; unit-norm, unscaled shapes; no residues; no uncertainty (NaN).
+    peaks : FFTPeaks
+
+    Raises
+    ------
+    ShapeError
+        A record :func:`~physics.identification.record_checks.check_records` refuses, or shorter than ten periods
+        of its lowest peak.
+    ConvergenceError
+        No clear peak, or none with a local maximum of the FFT within its tolerance.
+    """
+    checked = check_records(signals, sampling_frequency_hz, band_hz, where)
+    y = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
+    decay = window == "none" or (window == "auto" and is_free_decay(y))
+    sv = _decay_spectrum(y, checked) if decay else singular_value_spectrum(checked, where=where)
+    band = checked.band_hz
+    peaks = clear_peaks(sv)
+    if peaks.lines.size == 0:
+        raise ConvergenceError(f"{where}: no peak of the first singular value stands {CLEAR_PEAK_DB:g} dB above "
+                               f"its floor in {band[0]:g}-{band[1]:g} Hz")
+    check_periods(checked.duration_s, peaks.frequency_hz[0], "the lowest peak", where)
+    keep = np.sort(np.argsort(-peaks.height_db, kind="stable")[:n_modes]) if n_modes is not None \
+        else np.arange(peaks.lines.size)
+    res = fft_peaks(checked.signals, checked.sampling_frequency_hz, peaks.frequency_hz[keep],
+                    peaks.tolerance_hz[keep], window, pad, where)
+    ok = np.isfinite(res.frequency_hz)
+    _, first = np.unique(np.where(ok, res.frequency_hz, -1.0), return_index=True)
+    ok &= np.isin(np.arange(ok.size), first)            # two clear peaks refined to one FFT peak: one mode
+    if not np.any(ok):
+        raise ConvergenceError(f"{where}: no local maximum of the FFT lies within the tolerance of the clear peaks "
+                               f"at {', '.join(f'{v:.4g}' for v in peaks.frequency_hz[keep])} Hz")
+    order = np.argsort(res.natural_frequencies_hz[ok])
+    fn = res.natural_frequencies_hz[ok][order]
+    zeta = res.damping_ratios[ok][order]
+    shapes = unit_shapes(res.values[:, ok][:, order])
+    nan = np.full(fn.size, np.nan)
+    est = ModalEstimate(fn, zeta, eigenvalues_from_modal(fn, np.nan_to_num(zeta)), shapes,
+                        np.zeros((shapes.shape[0], 0, fn.size), complex), nan, nan,
+                        modal_phase_collinearity(shapes), "fftpeak", False)
+    return est, res
