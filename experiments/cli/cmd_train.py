@@ -43,8 +43,6 @@ def run(args) -> dict:
     out = train(args.data, args.out, epochs=args.epochs, seed=args.seed, route=args.route, progress=True,
                 threads=args.threads)
     if not args.json:
-        for w in out["warnings"]:
-            print(f"warning: {w}")
         m = out["test_metrics"][0]
         print(f"{args.out}: {out['route']} route, {out['train_pairs']} training pairs, "
               f"{sum(out['train_seconds'].values()):.0f} s of training; test split ({out['test_pairs']} pairs): "

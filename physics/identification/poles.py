@@ -2,15 +2,15 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from physics.errors import ConvergenceError
 from physics.modal import eigenvalues_from_modal
 
-__all__ = ["MAX_DAMPING", "STABILITY_CODES", "SelectedPoles", "StabilisationDiagram", "select_poles",
-           "stability_status"]
+__all__ = ["MAX_DAMPING", "STABILITY_CODES", "SelectedPoles", "StabilisationDiagram", "MissedModes", "missed_modes",
+           "select_poles", "stability_status"]
 
 #: Largest damping ratio of a physical pole (LSCF and SSI-cov poles, peaks of peak picking and the circle fit): a
 #: broader one is a computational pole or a bump of the noise floor.
@@ -101,6 +101,16 @@ class SelectedPoles:
     participation : ndarray, complex, shape (n_modes, n_ref)
     weakly_stable : ndarray of bool, shape (n_modes,)
         Stable over fewer orders than the selection asks, kept because a clear spectral peak lies at its frequency.
+    missed_frequencies_hz : ndarray, shape (n_missed,)
+        Median frequencies of the clusters the stabilisation shows but the selection drops: stable over at least
+        ``weak_min_count`` orders, fewer than ``min_count``, with no clear peak at them and no selected pole within
+        ``freq_tol`` (by frequency).
+    missed_counts : ndarray of int, shape (n_missed,)
+        Orders of each missed cluster.
+    min_count : int
+        Orders a cluster needs to be selected without a clear peak.
+    n_orders : int
+        Orders of the diagram that hold a pole.
     """
 
     eigenvalues: np.ndarray
@@ -111,6 +121,10 @@ class SelectedPoles:
     count: np.ndarray
     participation: np.ndarray
     weakly_stable: np.ndarray
+    missed_frequencies_hz: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    missed_counts: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    min_count: int = 0
+    n_orders: int = 0
 
 
 def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq_tol=0.01,
@@ -130,6 +144,8 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
     4. A cluster left with fewer members but at least ``weak_min_count``, within ``peak_tol_hz`` of one of
        ``peaks_hz`` (clear spectral peaks) and ``freq_tol`` of no cluster taken, is kept *weakly stable*.
     5. With ``n_modes``, the ``n_modes`` largest clusters are kept (weakly stable ones last).
+    6. The clusters left with at least ``weak_min_count`` members and ``freq_tol`` from every pole kept are
+       returned as *missed* (``missed_frequencies_hz``): modes the diagram shows that the rules above drop.
 
     Parameters
     ----------
@@ -178,12 +194,78 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
         return ok
 
     weak = _take_clusters(clusters, weak_min_count, used, at_a_peak) if peaks.size else []
+
+    def apart(mem):
+        f = np.median(d.natural_frequencies_hz[mem])
+        ok = all(abs(f - g) > freq_tol * g for g in taken_hz)
+        if ok:
+            taken_hz.append(f)
+        return ok
+
+    missed = _take_clusters(clusters, weak_min_count, used, apart)
     flags = [False] * len(chosen) + [True] * len(weak)
     chosen = (chosen + weak)[:n_modes]
     if not chosen:
         raise ConvergenceError("no pole is stable over enough model orders: raise max_order, widen the "
                                "band or relax the selection tolerances")
-    return _summarise_clusters(d, chosen, flags[:len(chosen)])
+    sel = _summarise_clusters(d, chosen, flags[:len(chosen)])
+    f_missed = np.array([np.median(d.natural_frequencies_hz[m]) for m in missed])
+    o = np.argsort(f_missed)
+    return replace(sel, missed_frequencies_hz=f_missed[o], missed_counts=np.array([m.size for m in missed], int)[o],
+                   min_count=int(min_count), n_orders=int(orders.size))
+
+
+#: A missed cluster is named when it is stable over at least this share of the orders a cluster needs.
+MISSED_SHARE = 1 / 3
+
+
+@dataclass(frozen=True)
+class MissedModes:
+    """Clusters of stable poles that no pass of an identification kept (:func:`missed_modes`), by frequency.
+
+    Attributes
+    ----------
+    frequency_hz : ndarray, shape (n,)
+    counts, n_orders, min_count : ndarray of int, shape (n,)
+        Orders the cluster is stable in, orders of its diagram, orders its selection asked for.
+    """
+
+    frequency_hz: np.ndarray
+    counts: np.ndarray
+    n_orders: np.ndarray
+    min_count: np.ndarray
+
+    def text(self, heights_db=None) -> str:
+        """``"1.23 Hz (12 of 40 orders, 7.1 dB above the floor), ..."`` (heights: one per mode, optional)."""
+        h = [None] * self.frequency_hz.size if heights_db is None else heights_db
+        return ", ".join(f"{f:.4g} Hz ({c} of {n} orders" + ("" if x is None else f", {x:.3g} dB above the floor")
+                         + ")" for f, c, n, x in zip(self.frequency_hz, self.counts, self.n_orders, h))
+
+
+def missed_modes(selections, kept_hz, freq_tol=0.01, share=MISSED_SHARE) -> MissedModes:
+    """The missed clusters of one or more selections (passes) that no kept mode explains.
+
+    A cluster is kept if stable over at least ``share`` of its selection's ``min_count`` orders (and its
+    ``weak_min_count``) and farther than ``freq_tol`` (relative) from every frequency of ``kept_hz``; of clusters
+    within ``2 freq_tol`` of each other (passes seeing one mode), the one of most orders.
+
+    Parameters
+    ----------
+    selections : sequence of SelectedPoles
+    kept_hz : array_like
+        Frequencies of the modes finally kept (Hz).
+    """
+    rows = [(f, c, s.n_orders, s.min_count) for s in selections
+            for f, c in zip(s.missed_frequencies_hz, s.missed_counts) if c >= np.ceil(share * s.min_count)]
+    kept = np.asarray(kept_hz, float)
+    rows = [r for r in rows if not np.any(np.abs(kept - r[0]) <= freq_tol * r[0])]
+    out = []
+    for r in sorted(rows, key=lambda r: (-r[1], r[0])):
+        if all(abs(r[0] - o[0]) > 2 * freq_tol * r[0] for o in out):
+            out.append(r)
+    out.sort()
+    cols = np.array(out, float).reshape(-1, 4).T
+    return MissedModes(cols[0], *(c.astype(int) for c in cols[1:]))
 
 
 def _seed_clusters(d: StabilisationDiagram, cand, seeds, freq_tol, damping_tol):

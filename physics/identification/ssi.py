@@ -20,15 +20,18 @@ import numpy as np
 
 from physics.errors import ConvergenceError, ShapeError
 from physics.identification.fdd import (
+    CLEAR_PEAK_DB,
     ClearPeaks,
     clear_peaks,
+    height_db,
     peak_text,
     singular_value_spectrum,
     unexplained_peaks,
     unit_shapes,
 )
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
-from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles, stability_status
+from physics.identification.poles import (MAX_DAMPING, StabilisationDiagram, missed_modes, select_poles,
+                                         stability_status)
 from physics.identification.record_checks import CheckedRecord, check_periods, check_records
 from physics.modal import eigenvalues_from_modal
 
@@ -414,12 +417,13 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     tol_hz = peaks.tolerance_hz
     # modes: (f, zeta, weakly stable, count, shape, f_seg, z_seg, provisional: weakly stable or its pass's lags
     # short of MIN_LAG_PERIODS of it, so that a sub-band pass identifies it again)
-    passes, modes = [], []
+    passes, modes, selections = [], [], []
     hi = band[1]
     for k in range(MAX_PASSES):
         this, sel, seg = _ssi_pass(checked, (band[0], hi), peaks, tol_hz, max_order, block_rows, references,
                                    n_segments, max_damping, chunk_samples, where)
         passes.append(this)
+        selections += [sel] if sel is not None else []
         lag_s = 2 * this.block_rows / this.correlations.sampling_frequency_hz
         wanted = unexplained_peaks(peaks, [m[0] for m in modes if not m[7]])
         for j, f in enumerate(sel.natural_frequencies_hz if sel is not None else ()):
@@ -474,6 +478,12 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         warnings.warn(f"{where}: clear spectral peak(s) without an identified mode: {peak_text(peaks, unexplained)} "
                       f"above the floor; a harmonic, or a mode to look for with --band around it or --method efdd",
                       UserWarning, stacklevel=2)
+    missed = missed_modes(selections, fn)
+    if missed.frequency_hz.size:
+        warnings.warn(f"{where}: stable poles the selection left out: {missed.text(height_db(sv, missed.frequency_hz))}"
+                      f"; stable over fewer model orders than the selection asks, and no peak of the spectrum "
+                      f"{CLEAR_PEAK_DB:g} dB above its floor there: a mode to look for with --band around it, or "
+                      "noise", UserWarning, stacklevel=2)
     est = ModalEstimate(fn, zeta, eigenvalues_from_modal(fn, zeta), shapes,
                         np.zeros((shapes.shape[0], 0, fn.size), complex), f_std, z_std,
                         modal_phase_collinearity(shapes), "ssi", False, weakly_stable=weak)
