@@ -213,9 +213,12 @@ def _check_references(idents, refs, groups, macs, by_position, min_mac):
         f = [np.mean([idents[t].estimate.natural_frequencies_hz[k] for t, k in groups[j].items()]) for j in rows]
         first = names[min(groups[rows[0]])]
         if np.median(m) < min_mac:
+            agree = _agreeing_references(idents, refs, groups, rows, s, min_mac)
             raise ShapeError(f"{names[s]}: the reference DOFs {', '.join(refs)}{how} do not hold the shapes they hold "
                              f"in {first}: MAC " + ", ".join(f"{x:.3g} at {y:.4g} Hz" for x, y in zip(m, f))
                              + f" (the same sensors give >= {min_mac:g}); "
+                             + (f"only {', '.join(agree[0])} agree (MAC >= {agree[1]:.3g} on every mode); "
+                                if agree else "")
                              + ("label the channels (field 'dofs') so that the references share their labels"
                                 if by_position else "check that these DOFs are the sensors left in place"))
         low = m < min_mac
@@ -224,6 +227,34 @@ def _check_references(idents, refs, groups, macs, by_position, min_mac):
                           + ", ".join(f"{y:.4g} Hz (MAC {x:.3g})" for x, y in zip(m[low], np.array(f)[low]))
                           + f" disagrees with {first}'s on the reference DOFs {', '.join(refs)}{how}: the merged "
                           "shape is doubtful there", UserWarning, stacklevel=3)
+
+
+#: Most reference DOFs whose subsets are searched for the ones that agree (2^n subsets).
+MAX_SUBSET_DOFS = 12
+
+
+def _agreeing_references(idents, refs, groups, rows, s, min_mac):
+    """The largest set (2 or more) of the reference DOFs whose part of every mode in ``rows`` has MAC >=
+    ``min_mac`` between setup ``s`` and the mode's first setup, and its least MAC; None if there is none."""
+    n = len(refs)
+    if n < 3 or n > MAX_SUBSET_DOFS:
+        return None
+    a = [[list(i.records.dofs).index(d) for d in refs] for i in idents]
+    r0 = np.array([idents[min(groups[j])].estimate.shapes[a[min(groups[j])], groups[j][min(groups[j])]]
+                   for j in rows])                                               # (n_modes, n_ref)
+    rs = np.array([idents[s].estimate.shapes[a[s], groups[j][s]] for j in rows])
+    subsets = (np.arange(1, 2 ** n)[:, None] >> np.arange(n)[None, :]) & 1      # (2^n - 1, n_ref)
+    subsets = subsets[subsets.sum(axis=1) >= 2].astype(float)
+    cross = np.abs(subsets @ (rs.conj() * r0).T) ** 2
+    m = cross / ((subsets @ (np.abs(rs) ** 2).T) * (subsets @ (np.abs(r0) ** 2).T))
+    least = m.min(axis=1)
+    ok = np.nonzero(least >= min_mac)[0]
+    if ok.size == 0:
+        return None
+    best = ok[np.lexsort((-least[ok], -subsets[ok].sum(axis=1)))[0]]
+    if subsets[best].sum() == n:
+        return None
+    return tuple(d for d, k in zip(refs, subsets[best]) if k), float(least[best])
 
 
 def merge_setups(idents, freq_tol=0.02, min_reference_mac=REFERENCE_MAC) -> MergedSetups:
