@@ -217,7 +217,7 @@ def setups_report(merged: MergedSetups, files) -> dict:
     return {"setups": [str(f) for f in files], "setup_references": list(merged.references),
             "references_by_position": merged.by_position,
             "reference_mac": [[None if np.isnan(x) else float(x) for x in row] for row in rm],
-            "partial_modes": [{"mode": j + 1, "frequency_hz": float(merged.estimate.natural_frequencies_hz[j]),
+            "partial_modes": [{"mode": int(j) + 1, "frequency_hz": float(merged.estimate.natural_frequencies_hz[j]),
                                "setups": [str(files[s]) for s in merged.found_in[j]]}
                               for j in np.nonzero(merged.partial)[0]]}
 

@@ -57,4 +57,4 @@ def test_identify_names_the_low_building_modes_the_selection_drops(tmp_path, cap
     f = np.array([float(n[0]) for n in named])
     assert np.any(np.abs(f - 1.29) < 0.01) and np.any(np.abs(f - 1.45) < 0.01)
     assert all(int(n[2]) == 40 and 5 <= int(n[1]) < 14 and float(n[3]) < 10 for n in named)
-    assert "warning" not in cap.out
+    assert "warning:" not in cap.out
