@@ -12,7 +12,8 @@ from physics.errors import BeamDamageError, ConfigError
 from physics.identification import (DEFAULT_OUTPUT_ONLY, METHODS, Identification, RecordsIdentification,
                                     holds_response_records, identify_file, identify_records,
                                     read_response_records, reconstruction_error_db)
-from physics.identification.output_only import SCALING, MergedSetups, finite_mac, merge_setups
+from physics.identification.output_only import SCALING
+from physics.identification.setups import MergedSetups, finite_mac, merge_setups
 from physics.io import (FRF, TIME, MeasuredFRF, NodeGeometry, accepted, format_complex, measured_positions, read,
                         atomic_write_text, modal_data_to_dict)
 from physics.modal import mac

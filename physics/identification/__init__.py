@@ -12,6 +12,7 @@ Modules (each name below is re-exported here):
 ``ssi``       output-only: covariance-driven stochastic subspace identification of response records
 ``fdd``       output-only: frequency-domain decomposition and enhanced FDD of response records
 ``output_only`` :func:`identify_records` on response records (no force) by an output-only method of the table
+``setups``    output-only: several setups (roving sensors, fixed references) merged into one set of shapes
 
 Conventions: FRF arrays are ``(n_responses, n_references, n_lines)`` receptances
 (m/N) unless stated; frequencies carry ``_hz`` or ``_rad_s`` in their names.

@@ -137,7 +137,7 @@ def test_one_mode_whose_reference_part_disagrees_is_named_in_a_warning():
 
 
 def test_finite_mac_compares_partial_modes_on_the_rows_both_hold():
-    from physics.identification.output_only import finite_mac
+    from physics.identification.setups import finite_mac
 
     phi = PHI[:, :3].astype(complex)
     phi[[2, 5], 1] = np.nan
