@@ -255,7 +255,10 @@ def add_parser(sub):
                         f"{DEFAULT_OUTPUT_ONLY} for response records without a force; see the methods above)")
     p.add_argument("--setup", action="append", metavar="FILE",
                    help="output-only: another setup's response records (repeatable); its modes are scaled onto "
-                        "FILE's on the DOFs every setup measures (fixed references) and merged into one set of shapes")
+                        "FILE's on the DOFs every setup measures (fixed references; by position for files without "
+                        "DOF labels), checked by the MAC of each mode's reference part (a setup below 0.9 is "
+                        "refused) and merged into one set of shapes; a mode of some setups only is kept, 'partial', "
+                        "its other DOFs empty (null)")
     p.add_argument("--band", nargs=2, type=float, metavar=("FMIN", "FMAX"), help="frequency band in Hz")
     p.add_argument("--modes", type=int, metavar="N", help="number of modes to keep (default: all found)")
     p.add_argument("--max-order", type=int, default=None,
