@@ -15,6 +15,7 @@ from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows
                             identify_modes, identify_test, modal_pair, mode_checks, nominal_ratio_range)
 from learn.mirror import fold_to_half, location_ambiguity, mirrored
 from learn.model_dir import TrainedModel
+from learn.mode_count import mode_count_problem
 from learn.normal_variation import measure, model_modes
 from learn.shapes import real_shapes, sign_aligned
 from learn.verdict import (IN_DISTRIBUTION_PERCENTILE, agreement, classical_answer, classical_verdict,
@@ -288,12 +289,13 @@ def damping_warning(model: TrainedModel, pairs: list) -> str | None:
 
 
 def _require_common_modes(pairs: list, names: list[str], beam) -> None:
-    """Refuse a pair with fewer than 2 modes both tests hold (the modal network reads modes)."""
+    """Refuse a pair with fewer modes both tests hold than :func:`learn.mode_count.mode_count_problem` asks (the
+    modal network reads modes)."""
     for p, n in zip(pairs, names[1:]):
-        if p.mode_index.size < 2:
-            raise BeamDamageError(f"{n}: {p.mode_index.size} of modes {modes_text(beam.modes)} found in both it and "
-                                  f"{names[0]} ("
-                                  + "; ".join(p.missing) + "); classify needs at least 2 common modes")
+        found = f"{n}: {p.mode_index.size} of modes {modes_text(beam.modes)} found in both it and {names[0]} ("
+        problem = mode_count_problem(p.mode_index.size, found + "; ".join(p.missing) + ")")
+        if problem:
+            raise BeamDamageError(problem)
 
 
 def _network_answers(model: TrainedModel, route: str, X, rows: list, sens, n: int):

@@ -10,10 +10,11 @@ options (``{"n_elements": "--elements"}``), so that an error about a parameter
 human-readable view itself (only when ``args.json`` is false). Errors derived
 from :class:`physics.errors.BeamDamageError` (and ``OSError`` on user files)
 become one line on stderr and exit code 2; warnings raised while a command runs are dropped when it fails
-(the error line is the whole story) and otherwise printed after it, one line each
-(``beam-damage COMMAND: warning: ...``). Commands run with one BLAS thread: their matrices are small
-(at most a few hundred DOFs, batched), where more threads only add overhead and, on a shared machine,
-slow a command down many times; parallel work uses processes (``generate --workers``) or torch threads.
+(the error line is the whole story) and otherwise printed on stderr after it, one line each
+(``beam-damage COMMAND: warning: ...``), with, in text mode, those its result lists under ``"warnings"`` (a
+command does not print them itself; with ``--json`` they stay in the JSON). Commands run with one BLAS thread:
+their matrices are small (at most a few hundred DOFs, batched), where more threads only add overhead and, on a
+shared machine, slow a command down many times; parallel work uses processes (``generate --workers``) or torch threads.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from threadpoolctl import threadpool_limits
 from physics.errors import BeamDamageError
 from physics.io import to_jsonable
 
-__all__ = ["COMMANDS", "Command", "build_parser", "main"]
+__all__ = ["COMMANDS", "Command", "build_parser", "main", "result_warnings"]
 
 
 class Command(NamedTuple):
@@ -134,6 +135,12 @@ def build_parser(argv=None) -> argparse.ArgumentParser:
     return parser
 
 
+def result_warnings(result) -> list[str]:
+    """The ``"warnings"`` a command's result holds (a dict, or a list of dicts: one per input), in order."""
+    items = result if isinstance(result, list) else [result]
+    return [str(w) for r in items if isinstance(r, dict) for w in r.get("warnings") or ()]
+
+
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser(argv)
@@ -166,7 +173,8 @@ def main(argv=None) -> int:
     finally:
         if threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGTERM, previous)
-    for message in dict.fromkeys(" ".join(str(w.message).split()) for w in caught):
+    messages = [str(w.message) for w in caught] + ([] if getattr(args, "json", False) else result_warnings(result))
+    for message in dict.fromkeys(" ".join(m.split()) for m in messages):
         sys.stderr.write(one_line(f"beam-damage {args.command}: warning: {message}") + "\n")
     exit_code = int(result.pop("exit_code", 0)) if isinstance(result, dict) else 0
     if getattr(args, "json", False):

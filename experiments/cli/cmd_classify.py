@@ -163,7 +163,7 @@ def run(args):
         for r in results:
             if len(results) > 1:
                 print(f"== {r['measured']}")
-            print(model.verdict_text(r))
+            print(model.verdict_text({**r, "warnings": []}))      # warnings: on stderr (experiments.cli.main)
         if args.out:
             print(f"{'verdict.json and classify.png' if len(results) == 1 else 'verdicts.json'} in {args.out}")
     out = [{k: r[k] for k in KEYS} for r in results]

@@ -9,8 +9,9 @@ from pathlib import Path
 
 from datagen.config import load_config, merge, named_configs
 from datagen.generation import generate
-from datagen.setup import generated_test
+from datagen.setup import generated_test, truth_beam_of
 from datagen.truth_beam import APPLIED_EFFECTS, beam_mapping
+from learn.mode_count import require_test_modes
 from learn.noise_calibration import calibrate_test
 from learn.output_only_calibration import calibrate_output_only
 from physics.beam import load_beam
@@ -76,6 +77,9 @@ def run(args) -> dict:
             cfg = _calibrated(cfg, args.out, "calibrated", f"{beam}: calibrating the modal noise on this test "
                                                            f"({test.n_sensors} sensors, modes "
                                                            f"{', '.join(map(str, test.modes))})")
+    source = beam or ("config key 'beam'" if cfg["beam"] else f"preset {cfg['preset']!r}")
+    test = generated_test(truth_beam_of(cfg), source) if beam is None else test
+    require_test_modes(None if test.thesis else test, source)     # before hours of samples classify cannot read
     if args.modal_noise == "output-only":
         cfg = _calibrated(cfg, args.out, "output-only", f"{beam or cfg['preset']}: calibrating the modal noise on "
                                                         "this test's output-only identification (SSI-cov)")

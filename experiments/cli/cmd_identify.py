@@ -12,7 +12,8 @@ from physics.errors import BeamDamageError, ConfigError
 from physics.identification import (DEFAULT_OUTPUT_ONLY, METHODS, Identification, RecordsIdentification,
                                     holds_response_records, identify_file, identify_records,
                                     read_response_records, reconstruction_error_db)
-from physics.identification.output_only import SCALING, merge_setups
+from physics.identification.output_only import SCALING
+from physics.identification.setups import MergedSetups, finite_mac, merge_setups
 from physics.io import (FRF, TIME, MeasuredFRF, NodeGeometry, accepted, format_complex, measured_positions, read,
                         atomic_write_text, modal_data_to_dict)
 from physics.modal import mac
@@ -25,7 +26,8 @@ MAX_ORDER, LSCF_MAX_ORDER = 200, 40
 
 
 def modes_list(e) -> list:
-    """One dict per identified mode of a :class:`ModalEstimate`."""
+    """One dict per identified mode of a :class:`ModalEstimate` (a shape entry NaN, a DOF the mode was not
+    measured at, as None)."""
     nan = np.full(e.eigenvalues.size, np.nan)
     f_fit = nan if e.frequency_fit_std_hz is None else e.frequency_fit_std_hz
     z_fit = nan if e.damping_fit_std is None else e.damping_fit_std
@@ -34,7 +36,8 @@ def modes_list(e) -> list:
               "frequency_fit_std_hz": float(f_fit[j]), "damping_fit_std": float(z_fit[j]),
               "eigenvalue": format_complex(e.eigenvalues[j]),
               "weakly_stable": None if e.weakly_stable is None else bool(e.weakly_stable[j]),
-              "shape": [format_complex(z) for z in e.shapes[:, j]], "mpc": float(e.mpc[j])}
+              "shape": [format_complex(z) if np.isfinite(z) else None for z in e.shapes[:, j]],
+              "mpc": float(e.mpc[j])}
              for j in range(e.eigenvalues.size)]
 
 
@@ -123,8 +126,6 @@ def run(args) -> dict:
 
         out["outputs"] = write_outputs(ident, args.out)
     if not args.json:
-        for msg in out["warnings"]:
-            print(f"warning: {msg}")
         print(f"{out['file']}: {len(out['modes'])} modes by {out['method']} in "
               f"{out['band_hz'][0]:g}-{out['band_hz'][1]:g} Hz ({out['scaling']}, "
               f"fit error median {out['fit_error_db']['median']:.3g} dB, 90th percentile "
@@ -172,39 +173,67 @@ def _run_output_only(args, records, band) -> dict:
     out = records_result_dict(ident, band, picked=args.method is None)
     modal_data = ident.modal_data
     if others:
-        merged = merge_setups([ident, *others])
+        with warnings.catch_warnings(record=True) as merging:
+            warnings.simplefilter("always")
+            merged = merge_setups([ident, *others])
+        caught += merging
         modal_data = merged.modal_data
-        out.update(modes=modes_list(merged.estimate), dofs=list(merged.dofs), mac=mac(merged.estimate.shapes).tolist(),
-                   setups=[out["file"], *args.setup], setup_references=list(merged.references),
-                   dropped_modes_hz=list(merged.dropped_hz), **positions_report_dofs(merged.dofs, records.metadata))
+        out.update(modes=modes_list(merged.estimate), dofs=list(merged.dofs),
+                   mac=finite_mac(merged.estimate.shapes).tolist(), **setups_report(merged, [out["file"], *args.setup]),
+                   **positions_report_dofs(merged.dofs, records.metadata))
     out["warnings"] = [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
     if args.out:
         Path(args.out).mkdir(parents=True, exist_ok=True)
         obj = {**modal_data_to_dict(modal_data), "scaling": SCALING, "method": method,
                "frequency_std_hz": [m["frequency_std_hz"] for m in out["modes"]],
-               "damping_std": [m["damping_std"] for m in out["modes"]]}
+               "damping_std": [m["damping_std"] for m in out["modes"]],
+               **({"partial_modes": out["partial_modes"]} if others else {})}
         path = Path(args.out) / "modal.json"
         atomic_write_text(path, json.dumps(obj, indent=1) + "\n")
         out["outputs"] = {"modal.json": str(path)}
     if not args.json:
-        for msg in out["warnings"]:
-            print(f"warning: {msg}")
         print(out["method_choice"])
         if others:
-            print(f"{len(others) + 1} setups merged on the reference DOFs {', '.join(out['setup_references'])}"
-                  + (f"; modes not in every setup left out (Hz): {out['dropped_modes_hz']}"
-                     if out["dropped_modes_hz"] else ""))
+            print(setups_text(out))
         print(f"{out['file']}: {len(out['modes'])} modes by {method} in {out['band_hz'][0]:g}-"
               f"{out['band_hz'][1]:g} Hz from {len(out['dofs'])} channels x {out['duration_s']:.4g} s "
               f"({out['scaling']})")
         print(f"{'mode':>4} {'f (Hz)':>12} {'+-std':>9} {'zeta':>10} {'+-std':>9} {'MPC':>7}")
+        partial = {p["mode"] for p in out.get("partial_modes", ())}
         for j, m in enumerate(out["modes"], 1):
             print(f"{j:4d} {m['frequency_hz']:12.4f} {m['frequency_std_hz']:9.2g} {m['damping_ratio']:10.5f} "
-                  f"{m['damping_std']:9.2g} {m['mpc']:7.4f}" + ("  weakly stable" if m["weakly_stable"] else ""))
+                  f"{m['damping_std']:9.2g} {m['mpc']:7.4f}" + ("  weakly stable" if m["weakly_stable"] else "")
+                  + ("  partial" if j in partial else ""))
         print("+-std: " + out["uncertainty"].get("frequency_std_hz, damping_std", "none (NaN)"))
         for name, p in out.get("outputs", {}).items():
             print(f"wrote {p}")
     return out
+
+
+def setups_report(merged: MergedSetups, files) -> dict:
+    """What a multi-setup merge used and found: the setups, their reference DOFs (and whether assumed by position),
+    each mode's reference MAC per setup (None where the setup does not hold it) and the partial modes (1-based,
+    with the setups that hold them)."""
+    rm = merged.reference_mac
+    return {"setups": [str(f) for f in files], "setup_references": list(merged.references),
+            "references_by_position": merged.by_position,
+            "reference_mac": [[None if np.isnan(x) else float(x) for x in row] for row in rm],
+            "partial_modes": [{"mode": int(j) + 1, "frequency_hz": float(merged.estimate.natural_frequencies_hz[j]),
+                               "setups": [str(files[s]) for s in merged.found_in[j]]}
+                              for j in np.nonzero(merged.partial)[0]]}
+
+
+def setups_text(out: dict) -> str:
+    """One line on a merge: setups, references, the least reference MAC, the partial modes."""
+    rm = np.array([[np.nan if x is None else x for x in row] for row in out["reference_mac"]], float)
+    shared = rm[np.sum(np.isfinite(rm), axis=1) > 1]
+    least = f"; reference MAC across setups >= {np.nanmin(shared):.3g}" if shared.size else ""
+    partial = out["partial_modes"]
+    return (f"{len(out['setups'])} setups merged on the reference DOFs {', '.join(out['setup_references'])}"
+            + (" (assumed by position: no DOF labels)" if out["references_by_position"] else "") + least
+            + ("; partial modes (found in some setups only, the others' DOFs empty): "
+               + ", ".join(f"{p['frequency_hz']:.4g} Hz ({len(p['setups'])} of {len(out['setups'])})"
+                           for p in partial) if partial else ""))
 
 
 def method_help() -> str:
@@ -226,7 +255,10 @@ def add_parser(sub):
                         f"{DEFAULT_OUTPUT_ONLY} for response records without a force; see the methods above)")
     p.add_argument("--setup", action="append", metavar="FILE",
                    help="output-only: another setup's response records (repeatable); its modes are scaled onto "
-                        "FILE's on the DOFs every setup measures (fixed references) and merged into one set of shapes")
+                        "FILE's on the DOFs every setup measures (fixed references; by position for files without "
+                        "DOF labels), checked by the MAC of each mode's reference part (a setup below 0.9 is "
+                        "refused) and merged into one set of shapes; a mode of some setups only is kept, 'partial', "
+                        "its other DOFs empty (null)")
     p.add_argument("--band", nargs=2, type=float, metavar=("FMIN", "FMAX"), help="frequency band in Hz")
     p.add_argument("--modes", type=int, metavar="N", help="number of modes to keep (default: all found)")
     p.add_argument("--max-order", type=int, default=None,

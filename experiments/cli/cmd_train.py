@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from experiments.cli.args import check_out_dir
 from physics.errors import BeamDamageError
+from datagen.store import read_manifest
+from learn.mode_count import require_test_modes
 
 __all__ = ["add_parser", "run"]
 
@@ -40,11 +42,11 @@ def run(args) -> dict:
     if args.threads < 1:
         raise BeamDamageError(f"--threads must be >= 1, got {args.threads}")
     check_out_dir(args.out)
+    for root in args.data:
+        _check_test_modes(root)
     out = train(args.data, args.out, epochs=args.epochs, seed=args.seed, route=args.route, progress=True,
                 threads=args.threads)
     if not args.json:
-        for w in out["warnings"]:
-            print(f"warning: {w}")
         m = out["test_metrics"][0]
         print(f"{args.out}: {out['route']} route, {out['train_pairs']} training pairs, "
               f"{sum(out['train_seconds'].values()):.0f} s of training; test split ({out['test_pairs']} pairs): "
@@ -52,3 +54,15 @@ def run(args) -> dict:
               f"median location error {m['median_location_error_mm']:.1f} mm, "
               f"false alarms {m['false_alarm_rate']:.3f}; best classical method {out['best_classical']}")
     return out
+
+
+def _check_test_modes(root) -> None:
+    """Refuse, before reading the samples, a dataset whose test band holds fewer modes than classify needs
+    (:func:`learn.mode_count.require_test_modes`); a directory that is not a dataset is left to ``train``."""
+    from learn.features import beam_of_manifest  # pandas: only here
+
+    try:
+        test = beam_of_manifest(read_manifest(root)).test
+    except (BeamDamageError, OSError, KeyError, TypeError, ValueError):
+        return
+    require_test_modes(test, f"{root} (its manifest's layout)")

@@ -13,6 +13,7 @@ Modules (each name below is re-exported here):
 ``fdd``       output-only: frequency-domain decomposition and enhanced FDD of response records
 ``fft_peak``  output-only baseline: peaks of the zero-padded FFT of the whole record (method ``fftpeak``)
 ``output_only`` :func:`identify_records` on response records (no force) by an output-only method of the table
+``setups``    output-only: several setups (roving sensors, fixed references) merged into one set of shapes
 
 Conventions: FRF arrays are ``(n_responses, n_references, n_lines)`` receptances
 (m/N) unless stated; frequencies carry ``_hz`` or ``_rad_s`` in their names.

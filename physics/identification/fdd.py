@@ -26,7 +26,7 @@ from physics.identification.record_checks import CheckedRecord, check_periods, c
 from physics.modal import eigenvalues_from_modal
 
 __all__ = ["CLEAR_PEAK_DB", "PEAK_PROMINENCE_DB", "ClearPeaks", "FDDIdentification", "SingularValueSpectrum",
-           "clear_peaks", "cross_spectra", "identify_fdd", "singular_value_spectrum", "unexplained_peaks",
+           "clear_peaks", "cross_spectra", "height_db", "identify_fdd", "singular_value_spectrum", "unexplained_peaks",
            "unit_shapes"]
 
 #: Least height (dB) of a clear spectral peak above the smoothed floor of the first singular value.
@@ -230,6 +230,17 @@ def unexplained_peaks(peaks: ClearPeaks, frequencies_hz) -> np.ndarray:
     if fn.size == 0:
         return np.ones(peaks.lines.size, bool)
     return np.abs(peaks.frequency_hz[:, None] - fn[None, :]).min(axis=1) > peaks.tolerance_hz
+
+
+def height_db(sv: SingularValueSpectrum, frequencies_hz, tol=0.01) -> np.ndarray:
+    """Height (dB) of the first singular value over its floor: the largest within ``tol`` (relative, at least one
+    line) of each frequency; NaN outside the spectrum's band."""
+    f = sv.frequency_hz
+    over = 10 * np.log10(np.maximum(sv.singular_values[:, 0], np.finfo(float).tiny) / sv.floor)
+    fq = np.asarray(frequencies_hz, float)
+    near = np.abs(f[None, :] - fq[:, None]) <= np.maximum(tol * fq, sv.resolution_hz)[:, None]
+    near &= np.isfinite(over)[None, :]
+    return np.where(near.any(axis=1), np.max(np.where(near, over[None, :], -np.inf), axis=1), np.nan)
 
 
 def peak_text(peaks: ClearPeaks, mask) -> str:

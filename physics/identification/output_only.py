@@ -6,17 +6,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
 from physics.io.inputs import MAX_BYTES, check_input_file
-from physics.errors import ConfigError, FileFormatError, ShapeError
+from physics.errors import ConfigError, FileFormatError
 from physics.identification.methods import METHODS
-from physics.identification.modes import ModalEstimate, modal_phase_collinearity
+from physics.identification.modes import ModalEstimate
 from physics.identification.poles import StabilisationDiagram
 from physics.io import FRF, ModalData, TIME, format_of, read
 from physics.io.timedata import TimeRecords
 from physics.io.uff58 import UffFile
-from physics.modal import eigenvalues_from_modal
+from physics.identification.setups import MergedSetups, merge_setups   # the multi-setup merge
 import zipfile
 
 __all__ = ["DEFAULT_OUTPUT_ONLY", "SCALING", "MergedSetups", "RecordsIdentification", "holds_response_records",
@@ -125,99 +123,3 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
     est, diagram = spec.fit(records.signals, records.sampling_frequency_hz, band_hz, n_modes, where,
                             **{k: options[k] for k in spec.options})
     return RecordsIdentification(records, est, diagram)
-
-
-@dataclass(frozen=True)
-class MergedSetups:
-    """Modes of several setups (roving sensors, fixed reference sensors) merged into one set of shapes.
-
-    Attributes
-    ----------
-    estimate : ModalEstimate
-        Frequencies and damping ratios: means over the setups; one sigma: the spread over the setups divided by
-        sqrt(their number) (with one setup per mode, that setup's own); unit-norm shapes over ``dofs``.
-    dofs : tuple of str
-        The first setup's DOFs, then each later setup's new DOFs in its order.
-    references : tuple of str
-        DOFs measured in every setup (they scale each setup's shapes onto the first's).
-    dropped_hz : tuple of float
-        Frequencies of the first setup's modes not found in every setup (left out).
-    """
-
-    estimate: ModalEstimate
-    dofs: tuple
-    references: tuple
-    dropped_hz: tuple
-
-    @property
-    def modal_data(self) -> ModalData:
-        return ModalData(self.estimate.eigenvalues, self.estimate.shapes, self.dofs)
-
-
-def merge_setups(idents, freq_tol=0.02) -> MergedSetups:
-    """Merge the output-only identifications of several setups that share reference DOFs.
-
-    Each mode of the first setup is matched in every other setup by the nearest frequency within ``freq_tol``
-    (relative); the other setup's shape is scaled onto the first's by the complex least-squares factor on the
-    reference DOFs, whose entries are then averaged over the setups.
-
-    Parameters
-    ----------
-    idents : sequence of RecordsIdentification
-    freq_tol : float
-
-    Returns
-    -------
-    MergedSetups
-
-    Raises
-    ------
-    ShapeError
-        No DOF is measured in every setup, or no mode is found in every setup.
-    """
-    dof_sets = [list(i.records.dofs) for i in idents]
-    refs = [d for d in dof_sets[0] if all(d in ds for ds in dof_sets[1:])]
-    if not refs:
-        raise ShapeError("setups " + ", ".join(str(i.records.metadata.get("source", "?")) for i in idents)
-                         + ": no DOF is measured in every setup; reference sensors must stay in place")
-    dofs = list(dof_sets[0])
-    for ds in dof_sets[1:]:
-        dofs += [d for d in ds if d not in dofs]
-    e0 = idents[0].estimate
-    rows, fns, zetas, kept, dropped = [], [], [], [], []
-    for j, f in enumerate(e0.natural_frequencies_hz):
-        picks = []
-        for i in idents[1:]:
-            fi = i.estimate.natural_frequencies_hz
-            k = int(np.argmin(np.abs(fi - f))) if fi.size else -1
-            picks.append(k if k >= 0 and abs(fi[k] - f) <= freq_tol * f else -1)
-        if min(picks, default=0) < 0:
-            dropped.append(float(f))
-            continue
-        shape = np.zeros(len(dofs), complex)
-        count = np.zeros(len(dofs))
-        ref0 = e0.shapes[[dof_sets[0].index(d) for d in refs], j]
-        for i, k in zip(idents, [j, *picks]):
-            psi = i.estimate.shapes[:, k]
-            rs = psi[[list(i.records.dofs).index(d) for d in refs]]
-            alpha = np.vdot(rs, ref0) / np.vdot(rs, rs)
-            idx = [dofs.index(d) for d in i.records.dofs]
-            shape[idx] += alpha * psi
-            count[idx] += 1
-        rows.append(shape / count)
-        fns.append([i.estimate.natural_frequencies_hz[k] for i, k in zip(idents, [j, *picks])])
-        zetas.append([i.estimate.damping_ratios[k] for i, k in zip(idents, [j, *picks])])
-        kept.append(j)
-    if not kept:
-        raise ShapeError("no mode of the first setup is found in every setup (within "
-                         f"{100 * freq_tol:g} % in frequency)")
-    F, Z = np.array(fns), np.array(zetas)
-    n = F.shape[1]
-    f_std = F.std(axis=1, ddof=1) / np.sqrt(n) if n > 1 else e0.frequency_std_hz[kept]
-    z_std = Z.std(axis=1, ddof=1) / np.sqrt(n) if n > 1 else e0.damping_std[kept]
-    phi = np.array(rows).T
-    phi = phi / np.linalg.norm(phi, axis=0)
-    fn, zeta = F.mean(axis=1), Z.mean(axis=1)
-    est = ModalEstimate(fn, zeta, eigenvalues_from_modal(fn, zeta), phi, np.zeros((len(dofs), 0, fn.size), complex),
-                        f_std, z_std, modal_phase_collinearity(phi), e0.method, False)
-    return MergedSetups(est, tuple(dofs), tuple(refs), tuple(dropped))

@@ -9,8 +9,8 @@ import numpy as np
 from physics.errors import ConvergenceError
 from physics.modal import eigenvalues_from_modal
 
-__all__ = ["MAX_DAMPING", "STABILITY_CODES", "SelectedPoles", "StabilisationDiagram", "select_poles",
-           "stability_status"]
+__all__ = ["MAX_DAMPING", "MISSED_SHARE", "STABILITY_CODES", "MissedModes", "SelectedPoles", "StabilisationDiagram",
+           "missed_clusters", "missed_modes", "select_poles", "stability_status"]
 
 #: Largest damping ratio of a physical pole (LSCF and SSI-cov poles, peaks of peak picking and the circle fit): a
 #: broader one is a computational pole or a bump of the noise floor.
@@ -131,6 +131,8 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
        ``peaks_hz`` (clear spectral peaks) and ``freq_tol`` of no cluster taken, is kept *weakly stable*.
     5. With ``n_modes``, the ``n_modes`` largest clusters are kept (weakly stable ones last).
 
+    The clusters these rules leave are :func:`missed_clusters`.
+
     Parameters
     ----------
     diagram : StabilisationDiagram
@@ -155,7 +157,21 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
     ConvergenceError
         If no pole is stable enough.
     """
-    d = diagram
+    chosen, weak, _, _ = _selection(diagram, min_status, freq_tol, damping_tol, min_count, seed_orders, peaks_hz,
+                                    peak_tol_hz, weak_min_count)
+    flags = [False] * len(chosen) + [True] * len(weak)
+    chosen = (chosen + weak)[:n_modes]
+    if not chosen:
+        raise ConvergenceError("no pole is stable over enough model orders: raise max_order, widen the "
+                               "band or relax the selection tolerances")
+    return _summarise_clusters(diagram, chosen, flags[:len(chosen)])
+
+
+def _selection(d: StabilisationDiagram, min_status, freq_tol, damping_tol, min_count, seed_orders, peaks_hz,
+               peak_tol_hz, weak_min_count):
+    """The rules of :func:`select_poles` (before ``n_modes``): the clusters chosen, those kept weakly stable and
+    those left with at least ``weak_min_count`` members, ``freq_tol`` from every cluster kept (member index arrays),
+    and ``min_count``."""
     cand = np.nonzero(d.status >= min_status)[0]
     cand = cand[np.argsort(d.order[cand], kind="stable")]
     orders = np.unique(d.order)
@@ -170,20 +186,83 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
     tol = freq_tol * peaks if peak_tol_hz is None else np.asarray(peak_tol_hz, float)
     taken_hz = [np.median(d.natural_frequencies_hz[m]) for m in chosen]
 
-    def at_a_peak(mem):
+    def apart(mem, at_peak=False):
         f = np.median(d.natural_frequencies_hz[mem])
-        ok = np.any(np.abs(peaks - f) <= tol) and all(abs(f - g) > freq_tol * g for g in taken_hz)
+        ok = (not at_peak or np.any(np.abs(peaks - f) <= tol)) and all(abs(f - g) > freq_tol * g for g in taken_hz)
         if ok:
             taken_hz.append(f)
         return ok
 
-    weak = _take_clusters(clusters, weak_min_count, used, at_a_peak) if peaks.size else []
-    flags = [False] * len(chosen) + [True] * len(weak)
-    chosen = (chosen + weak)[:n_modes]
-    if not chosen:
-        raise ConvergenceError("no pole is stable over enough model orders: raise max_order, widen the "
-                               "band or relax the selection tolerances")
-    return _summarise_clusters(d, chosen, flags[:len(chosen)])
+    weak = _take_clusters(clusters, weak_min_count, used, lambda m: apart(m, True)) if peaks.size else []
+    left = _take_clusters(clusters, weak_min_count, used, apart)
+    return chosen, weak, left, min_count
+
+
+#: A cluster left out is named when stable over at least this share of the orders a cluster needs.
+MISSED_SHARE = 1 / 3
+
+
+@dataclass(frozen=True)
+class MissedModes:
+    """Clusters of stable poles the selection leaves out (:func:`missed_clusters`), by frequency.
+
+    Attributes
+    ----------
+    frequency_hz : ndarray, shape (n,)
+        Median frequency of each cluster.
+    counts, n_orders, min_count : ndarray of int, shape (n,)
+        Orders the cluster is stable in, orders of its diagram, orders its selection asked for.
+    """
+
+    frequency_hz: np.ndarray
+    counts: np.ndarray
+    n_orders: np.ndarray
+    min_count: np.ndarray
+
+    def text(self, heights_db=None) -> str:
+        """``"1.23 Hz (12 of 40 orders, 7.1 dB above the floor), ..."`` (heights: one per mode, optional)."""
+        h = [None] * self.frequency_hz.size if heights_db is None else heights_db
+        return ", ".join(f"{f:.4g} Hz ({c} of {n} orders" + ("" if x is None else f", {x:.3g} dB above the floor")
+                         + ")" for f, c, n, x in zip(self.frequency_hz, self.counts, self.n_orders, h))
+
+
+def missed_clusters(diagram: StabilisationDiagram, peaks_hz=(), peak_tol_hz=None, share=MISSED_SHARE, min_status=4,
+                    freq_tol=0.01, damping_tol=0.25, min_count=None, seed_orders=0.25,
+                    weak_min_count=3) -> MissedModes:
+    """The clusters the rules of :func:`select_poles` (same parameters) leave out that the stabilisation diagram
+    still shows: stable over at least ``weak_min_count`` orders and ``share`` of ``min_count``, without a clear
+    peak, farther than ``freq_tol`` from every cluster kept."""
+    d = diagram
+    _, _, left, need = _selection(d, min_status, freq_tol, damping_tol, min_count, seed_orders, peaks_hz,
+                                  peak_tol_hz, weak_min_count)
+    left = [m for m in left if m.size >= share * need]
+    f = np.array([np.median(d.natural_frequencies_hz[m]) for m in left])
+    o = np.argsort(f)
+    n = np.unique(d.order).size
+    return MissedModes(f[o], np.array([m.size for m in left], int)[o], np.full(f.size, n), np.full(f.size, need))
+
+
+def missed_modes(parts, kept_hz, freq_tol=0.01) -> MissedModes:
+    """The missed clusters of one or more passes (:class:`MissedModes`) that no mode kept explains.
+
+    A cluster within ``freq_tol`` (relative) of a frequency of ``kept_hz`` is dropped; of clusters within
+    ``2 freq_tol`` of each other (passes seeing one mode), the one of most orders is kept.
+
+    Parameters
+    ----------
+    parts : sequence of MissedModes
+    kept_hz : array_like
+        Frequencies of the modes finally kept (Hz).
+    """
+    rows = [r for p in parts for r in zip(p.frequency_hz, p.counts, p.n_orders, p.min_count)]
+    kept = np.asarray(kept_hz, float)
+    rows = [r for r in rows if not np.any(np.abs(kept - r[0]) <= freq_tol * r[0])]
+    out = []
+    for r in sorted(rows, key=lambda r: (-r[1], r[0])):
+        if all(abs(r[0] - o[0]) > 2 * freq_tol * r[0] for o in out):
+            out.append(r)
+    cols = np.array(sorted(out), float).reshape(-1, 4).T
+    return MissedModes(cols[0], *(c.astype(int) for c in cols[1:]))
 
 
 def _seed_clusters(d: StabilisationDiagram, cand, seeds, freq_tol, damping_tol):

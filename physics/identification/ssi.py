@@ -20,15 +20,18 @@ import numpy as np
 
 from physics.errors import ConvergenceError, ShapeError
 from physics.identification.fdd import (
+    CLEAR_PEAK_DB,
     ClearPeaks,
     clear_peaks,
+    height_db,
     peak_text,
     singular_value_spectrum,
     unexplained_peaks,
     unit_shapes,
 )
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
-from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles, stability_status
+from physics.identification.poles import (MAX_DAMPING, StabilisationDiagram, missed_clusters, missed_modes,
+                                         select_poles, stability_status)
 from physics.identification.record_checks import CheckedRecord, check_periods, check_records
 from physics.modal import eigenvalues_from_modal
 
@@ -371,7 +374,8 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     span fewer than :data:`MIN_LAG_PERIODS` of its periods is identified again so, and replaced by the sub-band's
     estimate when that one is stable. A cluster of poles stable over
     fewer orders than the selection asks but at a clear peak is kept, flagged ``weakly_stable``. A clear peak left
-    without a mode is named in a warning.
+    without a mode is named in a warning, and so is a cluster of stable poles no pass kept
+    (:func:`~physics.identification.poles.missed_clusters`), with its height above the spectrum's floor.
 
     Parameters
     ----------
@@ -414,12 +418,14 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     tol_hz = peaks.tolerance_hz
     # modes: (f, zeta, weakly stable, count, shape, f_seg, z_seg, provisional: weakly stable or its pass's lags
     # short of MIN_LAG_PERIODS of it, so that a sub-band pass identifies it again)
-    passes, modes = [], []
+    passes, modes, missed = [], [], []
     hi = band[1]
     for k in range(MAX_PASSES):
         this, sel, seg = _ssi_pass(checked, (band[0], hi), peaks, tol_hz, max_order, block_rows, references,
                                    n_segments, max_damping, chunk_samples, where)
         passes.append(this)
+        at = (peaks.frequency_hz >= this.band_hz[0]) & (peaks.frequency_hz <= this.band_hz[1])
+        missed.append(missed_clusters(this.diagram, peaks.frequency_hz[at], tol_hz[at]))   # as select_poles saw it
         lag_s = 2 * this.block_rows / this.correlations.sampling_frequency_hz
         wanted = unexplained_peaks(peaks, [m[0] for m in modes if not m[7]])
         for j, f in enumerate(sel.natural_frequencies_hz if sel is not None else ()):
@@ -474,6 +480,12 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         warnings.warn(f"{where}: clear spectral peak(s) without an identified mode: {peak_text(peaks, unexplained)} "
                       f"above the floor; a harmonic, or a mode to look for with --band around it or --method efdd",
                       UserWarning, stacklevel=2)
+    missed = missed_modes(missed, fn)
+    if missed.frequency_hz.size:
+        warnings.warn(f"{where}: stable poles the selection left out: {missed.text(height_db(sv, missed.frequency_hz))}"
+                      f"; stable over fewer model orders than the selection asks, and no peak of the spectrum "
+                      f"{CLEAR_PEAK_DB:g} dB above its floor there: a mode to look for with --band around it, or "
+                      "noise", UserWarning, stacklevel=2)
     est = ModalEstimate(fn, zeta, eigenvalues_from_modal(fn, zeta), shapes,
                         np.zeros((shapes.shape[0], 0, fn.size), complex), f_std, z_std,
                         modal_phase_collinearity(shapes), "ssi", False, weakly_stable=weak)

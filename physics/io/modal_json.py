@@ -8,6 +8,10 @@ One object with the keys of a beam state in the thesis fixture ``beams.json``::
      "eigenvectors": [["0.72+15.0j", ...], ...],     # rows = measured DOFs, cols = modes
      "dofs": ["2:y", "3:y", ...]}                    # optional labels of the rows
 
+An eigenvector entry ``null`` is a DOF not measured for that mode (a mode of ``identify --setup`` found in only
+some setups, listed in ``partial_modes``): it is written so, and refused on reading, naming the row and column
+(updating and classification need every mode at every DOF; drop the mode's column or the DOF's row).
+
 Eigenvalues follow the package's conjugate-pair convention: one eigenvalue of
 each pair, ``lambda_j = -zeta_j*omega_j + i*omega_j*sqrt(1 - zeta_j**2)``; the
 partner is its complex conjugate with the conjugate eigenvector. When only
@@ -46,6 +50,12 @@ def _complex_array(values, path, key, ndim):
         form = "a list of lists (one per measured DOF) of complex strings such as \"0.72+15.0j\"" if ndim == 2 \
             else "a list of complex strings such as \"-0.22+135.3j\""
         raise FileFormatError(f"{path}: field '{key}' {where}; expected {form}")
+    gap = next(((r, c) for r, row in enumerate(rows) for c, v in enumerate(row) if v is None), None)
+    if gap is not None:
+        where = f"row {gap[0] + 1}, column {gap[1] + 1}" if ndim == 2 else f"entry {gap[1] + 1}"
+        raise FileFormatError(f"{path}: field '{key}' {where} is null: a DOF not measured for that mode (a mode "
+                              "found in only some setups of 'identify --setup'); drop the mode's column or the "
+                              "DOF's row to use the file here")
     try:
         arr = np.array(
             [[complex(str(v).replace(" ", "").replace("i", "j")) for v in row] for row in values]
@@ -184,8 +194,9 @@ def read_modal_json(path) -> ModalData:
 
 
 def modal_data_to_dict(data: ModalData) -> dict:
-    """Inverse of :func:`modal_data_from_dict` (complex values as strings)."""
-    fmt = format_complex
+    """Inverse of :func:`modal_data_from_dict` (complex values as strings; a NaN eigenvector entry as null)."""
+    def fmt(z):
+        return format_complex(z) if np.isfinite(z) else None
     out = {
         "natural_frequencies_hz": data.natural_frequencies_hz.tolist(),
         "damping_ratios": data.damping_ratios.tolist(),

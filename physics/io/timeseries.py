@@ -1,7 +1,8 @@
 """Response time series as ``.npz`` (plain arrays) or CSV text, read as :class:`~physics.io.timedata.TimeRecords`.
 
 NPZ keys: ``signals`` (n_channels, n_samples) real, ``sampling_frequency_hz`` (scalar), optional ``dofs``
-(``"NODE:+DIR"`` per channel) and ``quantity`` (``"displacement"``, ``"velocity"`` or ``"acceleration"``, SI
+(``"NODE:+DIR"`` per channel; without it the channels are ``1:+Z, 2:+Z, ...`` and the metadata's ``dof_labels`` is
+``"by position"``) and ``quantity`` (``"displacement"``, ``"velocity"`` or ``"acceleration"``, SI
 units; default acceleration). CSV: a header ``time_s,<dof>,<dof>,...`` and one row per sample at a uniform time
 step (the sampling rate is read from the time column); an optional comment line ``# quantity: velocity`` sets the
 quantity.
@@ -33,12 +34,13 @@ def _records(path, signals, fs, dofs, quantity) -> TimeRecords:
         raise FileFormatError(f"{path}: field 'sampling_frequency_hz' must be a finite number > 0, got {fs:g}")
     if quantity not in _QUANTITIES:
         raise FileFormatError(f"{path}: field 'quantity' {quantity!r} must be one of {', '.join(_QUANTITIES)}")
+    labels = {} if dofs is not None else {"dof_labels": "by position"}     # channels 1:+Z, 2:+Z, ... in order
     dofs = tuple(dofs) if dofs is not None else tuple(f"{k + 1}:+Z" for k in range(signals.shape[0]))
     if len(dofs) != signals.shape[0]:
         raise FileFormatError(f"{path}: field 'dofs' has {len(dofs)} labels for {signals.shape[0]} channels")
     check_dof_labels(dofs, f"{path}: field 'dofs'")
     return TimeRecords(1.0 / fs, np.asarray(signals, dtype=np.float64), dofs, (quantity,) * len(dofs),
-                       {"source": str(path), "format": Path(path).suffix.lstrip(".")})
+                       {"source": str(path), "format": Path(path).suffix.lstrip("."), **labels})
 
 
 def read_time_npz(path) -> TimeRecords:

@@ -152,3 +152,46 @@ def test_a_run_failing_on_its_config_names_the_cause_and_leaves_nothing(tmp_path
     assert err.count("\n") == 1 and "measured natural frequencies to <= 0" in err and "frequency_noise 0.5" in err
     assert "conjugate pairs" not in err
     assert not out.exists()
+
+
+BAR_ONE_MODE = """name = "steel-bar"
+bc = "free-free"
+length_m = 1.0
+width_m = 0.04
+thickness_m = 0.01
+EI_Nm2 = 700.0
+mass_per_length_kg_m = 3.14
+measured_x_m = [0.8, 0.0, 0.2, 0.4, 0.6, 1.0]
+drive_x_m = 0.0
+band_hz = [20.0, 100.0]
+"""
+
+
+def test_a_band_holding_fewer_modes_than_classify_needs_is_refused_up_front(tmp_path, capsys):
+    """The free-free bar's first bending mode is (4.7300)^2 sqrt(EI/m) / (2 pi L^2) = 53.17 Hz, its second
+    146.6 Hz: a 20-100 Hz band holds one; generate refuses before simulating, and train refuses such a dataset
+    before reading it, with classify's rule (learn.mode_count)."""
+    from learn.mode_count import MIN_MODES
+
+    (tmp_path / "bar.toml").write_text(BAR_ONE_MODE)
+    f1 = 4.7300 ** 2 * np.sqrt(700.0 / 3.14) / (2 * np.pi)
+    rc = main(["generate", "--beam", str(tmp_path / "bar.toml"), "--n", "4", "--out", str(tmp_path / "ds")])
+    cap = capsys.readouterr()
+    assert rc == 2 and cap.out == "" and cap.err.count("\n") == 1 and not (tmp_path / "ds").exists()
+    assert (f"'band_hz' [20, 100] holds 1 mode(s) the sensors see (mode(s) 1 at {f1:.4g} Hz); classify needs at "
+            f"least {MIN_MODES} common modes") in cap.err
+    # a dataset whose manifest records such a test (the thesis's, its layout cut to mode 1) is refused by train
+    cfg = tmp_path / "c.toml"
+    cfg.write_text('[output]\nshard_size = 20\n[measurement]\nlines = 32\n')
+    assert main(["generate", "--n", "20", "--out", str(tmp_path / "th"), "--config", str(cfg), "--json"]) == 0
+    capsys.readouterr()
+    path = tmp_path / "th" / "manifest.json"
+    m = json.loads(path.read_text())
+    lay = m["layout"]
+    lay.update(thesis=False, modes=[1], modes_idx=[0], frequencies_hz=lay["frequencies_hz"][:1], band_hz=[5.0, 60.0])
+    path.write_text(json.dumps(m))
+    rc = main(["train", "--data", str(tmp_path / "th"), "--out", str(tmp_path / "model"), "--epochs", "1"])
+    cap = capsys.readouterr()
+    assert rc == 2 and cap.out == "" and cap.err.count("\n") == 1 and not (tmp_path / "model").exists()
+    assert "'band_hz' [5, 60] holds 1 mode(s) the sensors see (mode(s) 1 at 19.93 Hz); classify needs at least" \
+        in cap.err

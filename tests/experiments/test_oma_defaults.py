@@ -61,7 +61,8 @@ def test_a_clear_peak_without_a_mode_is_named_in_a_warning(capsys, tmp_path):
     named = [float(x) for x in re.findall(r"([0-9.]+) Hz \(", warned[0])]
     assert len(named) == 1 and named[0] == pytest.approx(1.9 * F1_HZ, rel=0.01), warned
     assert main(["identify", str(tmp_path / "rec.npz")]) == 0                  # the text output prints it too
-    assert f"warning: {warned[0]}" in capsys.readouterr().out
+    cap = capsys.readouterr()
+    assert f"warning: {warned[0]}" in cap.err and "warning:" not in cap.out     # on stderr, one line each
 
 
 def test_efdd_reports_one_peak_per_mode_on_one_channel(capsys, tmp_path):

@@ -520,8 +520,11 @@ def test_the_printed_verdict_the_json_and_the_written_file_are_one_verdict(tiny,
     res = json.loads(capsys.readouterr().out)
     out = tiny / f"pin-{kind.replace(' ', '-')}"
     assert main([*args, "--out", str(out)]) == 0
-    text = capsys.readouterr().out
-    assert text == load_model(tiny / "model").verdict_text(res) + f"\nverdict.json and classify.png in {out}\n"
+    cap = capsys.readouterr()
+    text = cap.out                                   # the verdict's warnings go to stderr (experiments.cli.main)
+    assert text == load_model(tiny / "model").verdict_text({**res, "warnings": []}) \
+        + f"\nverdict.json and classify.png in {out}\n"
+    assert all(f"beam-damage classify: warning: {w}" in cap.err for w in res["warnings"])
     assert json.loads((out / "verdict.json").read_text()) == res
     assert res["input_route"] == ("modal" if kind == "modal json" else "measured")
     assert text.startswith(f"Verdict ({res['verdict_from']}")
