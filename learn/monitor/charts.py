@@ -1,0 +1,176 @@
+"""Memory: EWMA charts of the detector's whitened statistics, so that a small lasting change accumulates evidence
+over the tests after it, with limits held out on the baseline period and its autocorrelation, and the onset of a
+change dated.
+
+Each chart smooths the whitened coordinates ``z_t`` (d per test) of one statistic of
+:mod:`learn.monitor.statistics` (the residual's, the environmental scores', the common shift's), in time order:
+``e_t = (1 - lam) e_{t-1} + lam z_t`` (``e_0 = 0``; a test not scored leaves it as it was), and charts
+``c_t = |e_t|^2 / (lam / (2 - lam))`` (the multivariate EWMA of Lowry et al. 1992; ``lam / (2 - lam)`` is the
+variance of ``e`` for independent unit ``z``).
+
+The baseline tests' ``z`` (each from a model that did not see it) are autocorrelated (an environment that the
+normal model leaves partly, a slow drift, a daily cycle), which widens ``e`` beyond that variance. The limit is set
+by an AR(1) sieve bootstrap: ``z_t = phi z_{t-1} + u_t`` fitted per coordinate on the baseline sequence, series of
+the model simulated with the fitted innovations ``u`` resampled (whole rows, keeping their cross-correlation and
+tails), the chart run on them, and the limit their ``1 - rate`` quantile after a burn-in: in control, a share
+``rate`` of the tests lie above it. The charts of a series are combined at the Šidák rate, as the statistics are.
+
+:func:`onset` dates a change: at an alarm, the start ``tau`` of the window ending there that maximises
+``|sum z|^2 / length`` (the likelihood ratio of a lasting shift of unknown size in independent unit ``z``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from learn.monitor.statistics import sidak_rate
+
+__all__ = ["CHARTS", "LAMBDA", "Chart", "Charts", "chart_limit", "ewma_chart", "fit_ar1", "onset", "run_charts"]
+
+#: The memory charts ``monitor`` offers (``--chart``).
+CHARTS = ("ewma", "none")
+#: EWMA weight of the newest test (an effective memory of about ``2 / lam - 1`` tests).
+LAMBDA = 0.05
+#: Largest AR(1) coefficient fitted (a baseline that drifts more than this is taken as this).
+PHI_MAX = 0.98
+#: Simulated in-control tests behind a limit: at least this many, and 200 / rate.
+N_SIMULATED = 100_000
+
+
+def _finite_rows(Z):
+    Z = np.asarray(Z, float)
+    if Z.ndim == 1:
+        Z = Z[:, None]
+    return Z, np.isfinite(Z).all(axis=1)
+
+
+def ewma_chart(Z, lam: float = LAMBDA) -> np.ndarray:
+    """The chart ``c_t`` (n,) of the whitened coordinates ``Z`` (n, d) or (n,) in time order (module docstring);
+    NaN where a row of ``Z`` is not finite (the EWMA holds its value there)."""
+    from scipy.signal import lfilter
+
+    Z, ok = _finite_rows(Z)
+    out = np.full(len(Z), np.nan)
+    if ok.any():
+        E = lfilter([lam], [1.0, lam - 1.0], Z[ok], axis=0)
+        out[ok] = np.sum(E**2, axis=1) / (lam / (2.0 - lam))
+    return out
+
+
+def fit_ar1(Z) -> tuple:
+    """``(phi (d,), innovations (n - 1, d))`` of ``z_t = phi z_{t-1} + u_t`` per coordinate on the finite rows of
+    ``Z`` in order: ``phi`` the lag-1 autocorrelation clipped to ``[0, PHI_MAX]``, the innovations centred."""
+    Z, ok = _finite_rows(Z)
+    Z = Z[ok] - Z[ok].mean(axis=0)
+    a, b = Z[:-1], Z[1:]
+    den = np.sum(a * a, axis=0)
+    phi = np.clip(np.sum(a * b, axis=0) / np.where(den > 0, den, 1.0), 0.0, PHI_MAX)
+    U = b - phi * a
+    return phi, U - U.mean(axis=0)
+
+
+def chart_limit(Zb, rate: float, lam: float = LAMBDA, seed: int = 0) -> tuple:
+    """``(limit, phi, mean in-control run length in tests)`` of the chart of the baseline's whitened coordinates
+    ``Zb`` (time order) at the in-control share ``rate`` of tests above the limit (the AR(1) sieve bootstrap of
+    the module docstring). The run length: tests from a stationary start to the first above the limit."""
+    from scipy.signal import lfilter
+
+    phi, U = fit_ar1(Zb)
+    if len(U) < 2:
+        raise ValueError("a chart limit needs at least 3 scored baseline tests")
+    rng = np.random.default_rng([seed, 77])
+    burn = int(math.ceil(5.0 / lam + 5.0 / (1.0 - float(phi.max()))))
+    length = max(2000, 4 * burn)
+    reps = max(int(math.ceil(max(N_SIMULATED, 200.0 / rate) / length)), 8)
+    Ue = U[rng.integers(0, len(U), (reps, burn + length))]                       # (reps, T, d)
+    # a stationary start: z_0 of the AR(1) variance (innovation variance / (1 - phi^2)) scaled Gaussian
+    z0 = rng.standard_normal((reps, U.shape[1])) * U.std(axis=0) / np.sqrt(1.0 - phi**2)
+    Zs = np.empty_like(Ue)
+    for j in range(U.shape[1]):
+        Zs[:, :, j], _ = lfilter([1.0], [1.0, -phi[j]], Ue[:, :, j], axis=1, zi=(phi[j] * z0[:, j])[:, None])
+    E = lfilter([lam], [1.0, lam - 1.0], Zs, axis=1)
+    c = np.sum(E[:, burn:] ** 2, axis=2) / (lam / (2.0 - lam))                 # (reps, length)
+    limit = float(np.quantile(c, 1.0 - rate))
+    above = c > limit
+    first = np.where(above.any(axis=1), above.argmax(axis=1) + 1, length)
+    return limit, phi, float(first.mean())
+
+
+def onset(Z, t: int, window: int) -> int:
+    """The estimated first test of a lasting change seen at test ``t``: the start ``tau`` in
+    ``[t - window + 1, t]`` maximising ``|sum_{tau..t} z|^2 / (t - tau + 1)`` over the rows of ``Z`` (n, d) (NaN rows
+    skipped: they add nothing)."""
+    Z, ok = _finite_rows(Z)
+    lo = max(0, t - window + 1)
+    seg = np.where(ok[lo:t + 1, None], Z[lo:t + 1], 0.0)
+    counts = np.cumsum(ok[lo:t + 1][::-1])[::-1]                                 # scored tests from tau to t
+    S = np.cumsum(seg[::-1], axis=0)[::-1]                                       # sums from tau to t
+    score = np.sum(S**2, axis=1) / np.maximum(counts, 1)
+    score[~ok[lo:t + 1]] = -np.inf                                               # a change starts on a scored test
+    return lo + int(np.argmax(score))
+
+
+@dataclass(frozen=True)
+class Chart:
+    """One statistic's EWMA chart on a series: ``values`` (n,), its ``limit`` at ``rate`` (per test), the AR(1)
+    coefficients ``phi`` fitted on the baseline and the simulated in-control ``run_length_tests``."""
+
+    name: str
+    lam: float
+    rate: float
+    limit: float
+    phi: np.ndarray
+    run_length_tests: float
+    values: np.ndarray
+
+    def to_dict(self) -> dict:
+        return {"statistic": self.name, "lambda": self.lam, "limit": self.limit, "rate": self.rate,
+                "ar1_phi": self.phi.tolist(), "in_control_run_length_tests": self.run_length_tests}
+
+
+@dataclass(frozen=True)
+class Charts:
+    """The charts of a series: ``alarm`` (n,) where any chart lies above its limit, ``onset`` (n,) the estimated
+    first test of the change behind each alarm (-1 without an alarm), ``rate`` family-wise."""
+
+    charts: tuple
+    rate: float
+    alarm: np.ndarray
+    onset: np.ndarray
+
+    def to_dict(self) -> dict:
+        return {"kind": "ewma", "false_alarm_rate": self.rate,
+                "limits": "AR(1) sieve bootstrap of the held-out baseline statistics, the Sidak rate per chart",
+                "charts": [c.to_dict() for c in self.charts]}
+
+
+def run_charts(vectors: dict, b_idx, rate: float, lam: float = LAMBDA, seed: int = 0) -> Charts:
+    """EWMA charts of every statistic's whitened coordinates (``vectors``: name -> (n, d), NaN rows not scored,
+    the series in time order) with limits from the baseline rows ``b_idx`` at the Šidák rate of ``rate``; an
+    alarm episode's onset dated by :func:`onset` on the chart that crossed its limit first."""
+    names = [nm for nm, v in vectors.items() if v is not None]
+    each = sidak_rate(rate, len(names))
+    charts, ratios = [], []
+    for k, nm in enumerate(names):
+        Z = vectors[nm]
+        limit, phi, arl = chart_limit(Z[b_idx], each, lam, seed + k)
+        vals = ewma_chart(Z, lam)
+        charts.append(Chart(nm, lam, each, limit, phi, arl, vals))
+        ratios.append(vals / limit)
+    n = len(next(iter(vectors.values()))) if vectors else 0
+    R = np.stack(ratios, axis=1) if ratios else np.full((n, 1), np.nan)
+    alarm = np.nan_to_num(R, nan=0.0).max(axis=1) > 1.0
+    first_chart = np.argmax(np.nan_to_num(R, nan=0.0) > 1.0, axis=1)
+    out = np.full(n, -1)
+    window = int(math.ceil(6.0 / lam))
+    start = np.flatnonzero(alarm & ~np.r_[False, alarm[:-1]])
+    ends = np.r_[start[1:], n]
+    for s, e in zip(start, ends):
+        tau = onset(vectors[names[first_chart[s]]], int(s), window)
+        run = np.arange(s, e)
+        run = run[alarm[run]]
+        out[run] = tau
+    return Charts(tuple(charts), rate, alarm, out)
