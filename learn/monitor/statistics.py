@@ -29,7 +29,7 @@ import numpy as np
 from learn.monitor.alarm_threshold import Threshold, _folds, missing_evidence, threshold, training_size
 from learn.monitor.normal_models import PCARemoval, Regression, _impute
 
-__all__ = ["STATISTICS", "Detection", "detect", "held_out_statistics", "sidak_rate", "test_statistics"]
+__all__ = ["STATISTICS", "Detection", "detect", "held_out_statistics", "sidak_rate", "statistics_of"]
 
 #: The detector's statistics (module docstring).
 STATISTICS = ("residual", "environment", "shift")
@@ -55,7 +55,7 @@ def _centre_and_cov(model, X, C):
     return np.broadcast_to(model.mean_, X.shape), model.cov_
 
 
-def test_statistics(model, X, C=None) -> dict:
+def statistics_of(model, X, C=None) -> dict:
     """Each statistic of :data:`STATISTICS` that ``model`` (fitted) supports for the tests ``X`` (n, p) of log
     frequencies (NaN: missing, imputed as the model does), ``{name: (index (n,), vectors (n, d) or None)}``.
 
@@ -105,14 +105,14 @@ def shift_fraction(model, X, C=None) -> np.ndarray:
 
 
 def held_out_statistics(make_model, X, C=None) -> dict:
-    """:func:`test_statistics` of every baseline test by a model fitted on the other baseline tests (the folds of
+    """:func:`statistics_of` of every baseline test by a model fitted on the other baseline tests (the folds of
     :func:`~learn.monitor.alarm_threshold.held_out_novelty`), the residual index with its missing-mode evidence."""
     X = np.asarray(X, float)
     out: dict = {}
     for held in _folds(len(X)):
         train = np.setdiff1d(np.arange(len(X)), held)
         model = make_model().fit(X[train], None if C is None else C[train])
-        stats = test_statistics(model, X[held], None if C is None else C[held])
+        stats = statistics_of(model, X[held], None if C is None else C[held])
         stats["residual"] = (stats["residual"][0] + missing_evidence(X[held], X[train]), stats["residual"][1])
         for name, (value, vec) in stats.items():
             if name not in out:
@@ -137,7 +137,7 @@ class Detection:
     rate_each : float                     Šidák's per-statistic rate
     ratio : ndarray (n,)                  ``max_k values / threshold_k`` (> 1: alarm)
     alarm : ndarray of bool (n,)
-    vectors : dict                        name -> (n, d) whitened coordinates (see :func:`test_statistics`)
+    vectors : dict                        name -> (n, d) whitened coordinates (see :func:`statistics_of`)
     shift_pct : ndarray (n,)              the weighted mean relative frequency change, %
     """
 
@@ -172,7 +172,7 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
     n = len(X)
     Cb = None if C is None else C[b_idx]
     held = held_out_statistics(make_model, X[b_idx], Cb)
-    now = test_statistics(model, X[rest], None if C is None else C[rest]) if len(rest) else {}
+    now = statistics_of(model, X[rest], None if C is None else C[rest]) if len(rest) else {}
     names = tuple(nm for nm in statistics if nm in held)
     each = sidak_rate(rate, len(names))
     values = np.full((n, len(names)), np.nan)
