@@ -342,7 +342,8 @@ class FrequencySeriesConfig:
 @dataclass(frozen=True)
 class FrequencySeries:
     """A simulated frequency series: ``day`` (n,), the true and measured temperatures (n,) in degC, the identified
-    frequencies ``frequencies_hz`` (n, m), the beam's ``true_hz`` (n, m) before the step, ``damaged`` (n,)."""
+    frequencies ``frequencies_hz`` (n, m), the beam's ``true_hz`` (n, m) before the step, ``damaged`` (n,), and each
+    test's ``ei_factor``, ``root_spring_factor`` and ``mass_x_m`` (n,)."""
 
     day: np.ndarray
     temperature_c: np.ndarray
@@ -350,6 +351,9 @@ class FrequencySeries:
     frequencies_hz: np.ndarray
     true_hz: np.ndarray
     damaged: np.ndarray
+    ei_factor: np.ndarray
+    root_spring_factor: np.ndarray
+    mass_x_m: np.ndarray
 
 
 def _cubic_terms(P):
@@ -409,7 +413,7 @@ def frequency_series(cfg: FrequencySeriesConfig) -> FrequencySeries:
         F[damaged] *= np.exp(uniform_stiffness_pattern(b) * math.log1p(-cfg.step_fraction))
     else:
         F[np.ix_(damaged, np.asarray(cfg.step_modes) - 1)] *= 1.0 - cfg.step_fraction
-    return FrequencySeries(day, t_true, t_meas, F, true_hz, damaged)
+    return FrequencySeries(day, t_true, t_meas, F, true_hz, damaged, ei, root, mass_x)
 
 
 def uniform_stiffness_pattern(cfg: SeriesConfig) -> np.ndarray:
