@@ -9,11 +9,13 @@ Each chart smooths the whitened coordinates ``z_t`` (d per test) of one statisti
 variance of ``e`` for independent unit ``z``).
 
 The baseline tests' ``z`` (each from a model that did not see it) are autocorrelated (an environment that the
-normal model leaves partly, a slow drift, a daily cycle), which widens ``e`` beyond that variance. The limit is set
-by an AR(1) sieve bootstrap: ``z_t = phi z_{t-1} + u_t`` fitted per coordinate on the baseline sequence, series of
-the model simulated with the fitted innovations ``u`` resampled (whole rows, keeping their cross-correlation and
-tails), the chart run on them, and the limit their ``1 - rate`` quantile after a burn-in: in control, a share
-``rate`` of the tests lie above it. The charts of a series are combined at the Šidák rate, as the statistics are.
+normal model leaves partly, a clamp re-made every week, a daily cycle), which widens ``e`` beyond that variance.
+Each coordinate of the baseline sequence is fitted as an AR(1) plus white noise, ``z_t = sqrt(a) s_t +
+sqrt(1 - a) w_t`` with ``s`` a unit AR(1) of coefficient ``phi`` (autocorrelation ``a phi^L`` at lag ``L >= 1``,
+fitted to the baseline's by least squares; ``a = 1`` an AR(1), ``a = 0`` white noise), Gaussian series of the
+model are simulated from a stationary start, the chart run on them, and the limit is their ``1 - rate`` quantile
+after the EWMA's burn-in, or the baseline's own chart's quantile if larger: in control, a share ``rate`` of the
+tests lie above it. The charts of a series are combined at the Šidák rate, as the statistics are.
 
 :func:`onset` dates a change: at an alarm, the start ``tau`` of the window ending there that maximises
 ``|sum z|^2 / length`` (the likelihood ratio of a lasting shift of unknown size in independent unit ``z``).
@@ -28,14 +30,15 @@ import numpy as np
 
 from learn.monitor.statistics import sidak_rate
 
-__all__ = ["CHARTS", "LAMBDA", "Chart", "Charts", "chart_limit", "ewma_chart", "fit_ar1", "onset", "run_charts"]
+__all__ = ["CHARTS", "LAMBDA", "Chart", "Charts", "chart_limit", "ewma_chart", "fit_ar1_noise", "onset",
+           "run_charts"]
 
 #: The memory charts ``monitor`` offers (``--chart``).
 CHARTS = ("ewma", "none")
 #: EWMA weight of the newest test (an effective memory of about ``2 / lam - 1`` tests).
 LAMBDA = 0.05
 #: Largest AR(1) coefficient fitted (a baseline that drifts more than this is taken as this).
-PHI_MAX = 0.98
+PHI_MAX = 0.999
 #: Simulated in-control tests behind a limit: at least this many, and 200 / rate.
 N_SIMULATED = 100_000
 
@@ -60,40 +63,57 @@ def ewma_chart(Z, lam: float = LAMBDA) -> np.ndarray:
     return out
 
 
-def fit_ar1(Z) -> tuple:
-    """``(phi (d,), innovations (n - 1, d))`` of ``z_t = phi z_{t-1} + u_t`` per coordinate on the finite rows of
-    ``Z`` in order: ``phi`` the lag-1 autocorrelation clipped to ``[0, PHI_MAX]``, the innovations centred."""
+def fit_ar1_noise(Z, max_lag: int = 500) -> tuple:
+    """``(a (d,), phi (d,))`` of ``z = sqrt(a) AR(1; phi) + sqrt(1 - a) white`` per coordinate of the finite rows
+    of ``Z`` (time order): the autocorrelation ``a phi^L`` fitted to the sample's at lags ``1..L_max`` (``L_max``
+    the smaller of ``max_lag`` and a quarter of the rows) by least squares over a grid of ``phi`` up to
+    :data:`PHI_MAX` (``a`` in closed form for each)."""
     Z, ok = _finite_rows(Z)
     Z = Z[ok] - Z[ok].mean(axis=0)
-    a, b = Z[:-1], Z[1:]
-    den = np.sum(a * a, axis=0)
-    phi = np.clip(np.sum(a * b, axis=0) / np.where(den > 0, den, 1.0), 0.0, PHI_MAX)
-    U = b - phi * a
-    return phi, U - U.mean(axis=0)
+    n = len(Z)
+    lags = np.arange(1, max(2, min(max_lag, n // 4)) + 1)
+    nfft = 1 << int(math.ceil(math.log2(2 * n)))
+    spec = np.fft.rfft(Z, nfft, axis=0)
+    acov = np.fft.irfft(spec * np.conj(spec), nfft, axis=0)[:lags[-1] + 1] / n         # (L + 1, d)
+    rho = acov[lags] / np.maximum(acov[0], 1e-300)                                      # (L, d)
+    grid = 1.0 - np.geomspace(1.0, 1.0 - PHI_MAX, 200)                                  # 0 .. PHI_MAX
+    P = grid[:, None] ** lags[None, :]                                                  # (g, L)
+    a = np.clip((P @ rho) / np.maximum(np.sum(P * P, axis=1), 1e-300)[:, None], 0.0, 1.0)   # (g, d)
+    sse = np.sum(rho**2, axis=0)[None] - 2 * a * (P @ rho) + a**2 * np.sum(P * P, axis=1)[:, None]
+    best = np.argmin(sse, axis=0)
+    d = np.arange(Z.shape[1])
+    return a[best, d], grid[best]
 
 
 def chart_limit(Zb, rate: float, lam: float = LAMBDA, seed: int = 0) -> tuple:
     """``(limit, phi, mean in-control run length in tests)`` of the chart of the baseline's whitened coordinates
-    ``Zb`` (time order) at the in-control share ``rate`` of tests above the limit (the AR(1) sieve bootstrap of
-    the module docstring). The run length: tests from a stationary start to the first above the limit."""
+    ``Zb`` (time order) at the in-control share ``rate`` of tests above the limit (the AR(1)-plus-noise model of
+    the module docstring, or the baseline chart's own quantile if larger). The run length: tests from a
+    stationary start to the first above the limit, of the model."""
     from scipy.signal import lfilter
 
-    phi, U = fit_ar1(Zb)
-    if len(U) < 2:
-        raise ValueError("a chart limit needs at least 3 scored baseline tests")
+    Zb, ok = _finite_rows(Zb)
+    if ok.sum() < 8:
+        raise ValueError("a chart limit needs at least 8 scored baseline tests")
+    a, phi = fit_ar1_noise(Zb)
+    sd = Zb[ok].std(axis=0)
     rng = np.random.default_rng([seed, 77])
-    burn = int(math.ceil(5.0 / lam + 5.0 / (1.0 - float(phi.max()))))
-    length = max(2000, 4 * burn)
+    burn = int(math.ceil(5.0 / lam))                                   # z starts stationary, the EWMA at 0
+    length = max(2000, 4 * burn, min(int(20.0 / (1.0 - float(phi.max()))), 50_000))
     reps = max(int(math.ceil(max(N_SIMULATED, 200.0 / rate) / length)), 8)
-    Ue = U[rng.integers(0, len(U), (reps, burn + length))]                       # (reps, T, d)
-    # a stationary start: z_0 of the AR(1) variance (innovation variance / (1 - phi^2)) scaled Gaussian
-    z0 = rng.standard_normal((reps, U.shape[1])) * U.std(axis=0) / np.sqrt(1.0 - phi**2)
-    Zs = np.empty_like(Ue)
-    for j in range(U.shape[1]):
-        Zs[:, :, j], _ = lfilter([1.0], [1.0, -phi[j]], Ue[:, :, j], axis=1, zi=(phi[j] * z0[:, j])[:, None])
+    d = Zb.shape[1]
+    S = np.empty((reps, burn + length, d))
+    for j in range(d):
+        e = rng.standard_normal((reps, burn + length)) * math.sqrt(1.0 - phi[j] ** 2)
+        S[:, :, j], _ = lfilter([1.0], [1.0, -phi[j]], e, axis=1, zi=phi[j] * rng.standard_normal((reps, 1)))
+    Zs = (np.sqrt(a) * S + np.sqrt(1.0 - a) * rng.standard_normal(S.shape)) * sd
     E = lfilter([lam], [1.0, lam - 1.0], Zs, axis=1)
-    c = np.sum(E[:, burn:] ** 2, axis=2) / (lam / (2.0 - lam))                 # (reps, length)
+    c = np.sum(E[:, burn:] ** 2, axis=2) / (lam / (2.0 - lam))                        # (reps, length)
     limit = float(np.quantile(c, 1.0 - rate))
+    own = ewma_chart(Zb, lam)[burn:]
+    own = own[np.isfinite(own)]
+    if own.size:
+        limit = max(limit, float(np.quantile(own, 1.0 - rate)))
     above = c > limit
     first = np.where(above.any(axis=1), above.argmax(axis=1) + 1, length)
     return limit, phi, float(first.mean())
