@@ -46,10 +46,10 @@ import numpy as np  # noqa: E402
 
 from experiments.second_sim.series import (FrequencySeriesConfig, SeriesConfig, frequency_series,  # noqa: E402
                                            uniform_stiffness_pattern)
-from learn.monitor.alarm_threshold import threshold, training_size  # noqa: E402
+from learn.monitor.alarm_threshold import TAIL_SHARE, threshold, training_size  # noqa: E402
 from learn.monitor.charts import run_charts  # noqa: E402
 from learn.monitor.normal_models import NORMAL_MODELS  # noqa: E402
-from learn.monitor.statistics import detect  # noqa: E402
+from learn.monitor.statistics import detect, environmental  # noqa: E402
 from physics.io import atomic_write_text  # noqa: E402
 
 __all__ = ["CASES", "main", "methods_on", "plain_tests"]
@@ -99,7 +99,8 @@ def methods_on(F, C, nb: int, model_name: str, rate: float, seed: int = 0) -> di
     out = {}
     for k, nm in enumerate(det.names):
         dof = model.dof_ if nm == "residual" else det.vectors[nm].shape[1]
-        alone = threshold(det.values[b_idx, k], rate, dof, training_size(nb), q)
+        alone = threshold(det.values[b_idx, k], rate, dof, training_size(nb), q,
+                          TAIL_SHARE if environmental(model, nm) else 1.0)
         out[nm] = det.values[:, k] > alone.value
     out["combined"] = det.alarm
     out["chart"] = run_charts(det.vectors, b_idx, rate, seed=seed).alarm

@@ -14,7 +14,7 @@ from learn.monitor.normal_models import DEFAULT_LATENT, NORMAL_MODELS
 from learn.monitor.series import SeriesInput, check_series
 from learn.monitor.alarm_threshold import Threshold, minimum_baseline
 from learn.monitor.charts import CHARTS, Charts, run_charts
-from learn.monitor.statistics import Detection, detect, residual_threshold
+from learn.monitor.statistics import STATISTICS, Detection, detect, residual_threshold
 from learn.monitor.tracking import MIN_PRESENCE, ReferenceModes, reference_modes, track_modes
 from physics.errors import BeamDamageError, ConfigError
 
@@ -62,20 +62,21 @@ class SeriesResult:
 
 def monitor_series(series: SeriesInput, n_baseline: int, settings: IdentificationSettings, cache_dir=None,
                    false_alarm_rate: float = 0.01, normal_model: str | None = None, progress: bool = True,
-                   chart: str = "ewma") -> SeriesResult:
+                   chart: str = "ewma", statistics=STATISTICS) -> SeriesResult:
     """Monitor a series: identify every test (cached), track the baseline period's modes, learn the normal
     variation on the baseline period, and score every test against the cross-validated threshold.
 
     ``normal_model``: a key of :data:`NORMAL_MODELS`; default ``"regression"`` with measured conditions, else
     :data:`DEFAULT_LATENT`. A test alarms when any statistic of :mod:`learn.monitor.statistics` exceeds its
     threshold (``novelty`` and ``threshold`` of a row: the residual's); ``chart="ewma"`` adds the memory charts of
-    :mod:`learn.monitor.charts` (``chart_alarm`` and ``onset`` of a row). Raises :class:`BeamDamageError` on a
+    :mod:`learn.monitor.charts` (``chart_alarm`` and ``onset`` of a row); ``statistics``: those combined (the
+    residual always). Raises :class:`BeamDamageError` on a
     baseline that cannot carry the model (too few tests: the message names the minimum; a baseline test of another
     kind, band or beam).
     """
     n = len(series.files)
     C = series.conditions
-    normal_model, q = _checked_request(series, n_baseline, false_alarm_rate, normal_model, chart)
+    normal_model, q = _checked_request(series, n_baseline, false_alarm_rate, normal_model, chart, statistics)
     tests, errors, pending = _identified(series, n_baseline, settings, cache_dir, progress)
     base = [t for t in tests[:n_baseline] if t is not None]
     ref = reference_modes(tests[:n_baseline])
@@ -103,7 +104,7 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     model = NORMAL_MODELS[normal_model](m, q).fit(X[b_idx], None if Cq is None else Cq[b_idx])
     rest = np.flatnonzero(ok)
     rest = rest[rest >= n_baseline]
-    det = detect(model, model.with_choices, X, Cq, b_idx, rest, false_alarm_rate, q)
+    det = detect(model, model.with_choices, X, Cq, b_idx, rest, false_alarm_rate, q, ("residual", *statistics))
     thr = residual_threshold(det)
     novelty = det.values[:, det.names.index("residual")]
     charts = run_charts(det.vectors, b_idx, false_alarm_rate) if chart == "ewma" else None
@@ -153,7 +154,7 @@ def _detector_fields(det: Detection, charts: Charts | None, i: int, ok: bool) ->
 
 
 def _checked_request(series: SeriesInput, n_baseline: int, false_alarm_rate: float, normal_model: str | None,
-                     chart: str = "ewma"):
+                     chart: str = "ewma", statistics=STATISTICS):
     """``(normal model, number of conditions it regresses on)`` of a request, or the one-line error of an argument
     or a baseline period that cannot carry it before any test is identified."""
     n = len(series.files)
@@ -161,6 +162,8 @@ def _checked_request(series: SeriesInput, n_baseline: int, false_alarm_rate: flo
         raise ConfigError(f"--false-alarm-rate {false_alarm_rate:g}: must lie in (0, 0.5)")
     if chart not in CHARTS:
         raise ConfigError(f"--chart {chart}: expected one of {', '.join(CHARTS)}")
+    if set(statistics) - set(STATISTICS):
+        raise ConfigError(f"--statistics {' '.join(statistics)}: expected some of {', '.join(STATISTICS)}")
     if not 0 < n_baseline <= n:
         raise ConfigError(f"--baseline-tests {n_baseline}: must be between 1 and the {n} tests given")
     C = series.conditions

@@ -170,7 +170,8 @@ class Charts:
 def run_charts(vectors: dict, b_idx, rate: float, lam: float = LAMBDA, seed: int = 0) -> Charts:
     """EWMA charts of every statistic's whitened coordinates (``vectors``: name -> (n, d), NaN rows not scored,
     the series in time order) with limits from the baseline rows ``b_idx`` at the Šidák rate of ``rate``; an
-    alarm episode's onset dated by :func:`onset` on the chart that crossed its limit first."""
+    alarm episode's onset dated by :func:`onset` on the coordinates of the first chart (in
+    ``vectors`` order) above its limit at the episode's first alarm."""
     names = [nm for nm, v in vectors.items() if v is not None]
     each = sidak_rate(rate, len(names))
     charts, ratios = [], []

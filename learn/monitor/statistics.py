@@ -15,8 +15,9 @@ distribution, combined family-wise at the chosen false-alarm rate.
 
 Each index is a squared Mahalanobis distance of some part of the residual; its threshold is
 :func:`~learn.monitor.alarm_threshold.threshold` of the held-out baseline indices (a scaled F law and their empirical
-quantile) at the Šidák rate ``1 - (1 - rate)^(1/K)`` of the ``K`` statistics used, so that a test of the normal
-variation alarms on any of them with probability at most ``rate``.
+quantile; for the statistics of the environment itself the law fitted to their tail) at the Šidák rate
+``1 - (1 - rate)^(1/K)`` of the ``K`` statistics used, so that a test of the normal variation alarms on any of them
+with probability at most ``rate``.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from learn.monitor.alarm_threshold import Threshold, _folds, missing_evidence, threshold, training_size
+from learn.monitor.alarm_threshold import TAIL_SHARE, Threshold, _folds, missing_evidence, threshold, training_size
 from learn.monitor.normal_models import PCARemoval, Regression, _impute
 
 __all__ = ["STATISTICS", "Detection", "detect", "held_out_statistics", "sidak_rate", "statistics_of"]
@@ -173,7 +174,7 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
     Cb = None if C is None else C[b_idx]
     held = held_out_statistics(make_model, X[b_idx], Cb)
     now = statistics_of(model, X[rest], None if C is None else C[rest]) if len(rest) else {}
-    names = tuple(nm for nm in statistics if nm in held)
+    names = tuple(nm for nm in STATISTICS if nm in held and nm in statistics)
     each = sidak_rate(rate, len(names))
     values = np.full((n, len(names)), np.nan)
     vectors, thresholds = {}, []
@@ -191,7 +192,8 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
                 vec[rest] = now[nm][1]
             vectors[nm] = vec
         dof = model.dof_ if nm == "residual" else (hvec.shape[1] if hvec is not None else 1)
-        thresholds.append(threshold(hv, each, dof, training_size(len(b_idx)), n_conditions))
+        thresholds.append(threshold(hv, each, dof, training_size(len(b_idx)), n_conditions,
+                                    TAIL_SHARE if environmental(model, nm) else 1.0))
     r = values / np.array([t.value for t in thresholds]) if names else np.full((n, 1), np.nan)
     ratio = np.where(np.isnan(r), -np.inf, r).max(axis=1)
     ratio[~np.isfinite(ratio)] = np.nan
@@ -200,6 +202,14 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
     shift[scored] = shift_fraction(model, X[scored], None if C is None else C[scored])
     return Detection(names, values, tuple(thresholds), rate, each, ratio, np.nan_to_num(ratio) > 1.0, vectors,
                      100 * shift)
+
+
+def environmental(model, name: str) -> bool:
+    """Whether statistic ``name`` of ``model`` measures the environment itself (the removed components' scores, a
+    shift about the baseline mean), whose bounded distribution gets a threshold law fitted to its tail
+    (:func:`~learn.monitor.alarm_threshold.threshold`'s ``tail_share``), rather than a residual about what the
+    normal variation explains."""
+    return name == "environment" or (name == "shift" and not isinstance(model, Regression))
 
 
 def residual_threshold(det: Detection) -> Threshold:
