@@ -5,6 +5,7 @@ alarm, mode by mode."""
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -14,7 +15,7 @@ from learn.monitor.normal_models import DEFAULT_LATENT, NORMAL_MODELS
 from learn.monitor.series import SeriesInput, check_series
 from learn.monitor.alarm_threshold import Threshold, minimum_baseline
 from learn.monitor.charts import CHARTS, Charts, run_charts
-from learn.monitor.statistics import STATISTICS, Detection, detect, residual_threshold
+from learn.monitor.statistics import STATISTICS, Detection, detect, residual_threshold, season_warning
 from learn.monitor.tracking import MIN_PRESENCE, ReferenceModes, reference_modes, track_modes
 from physics.errors import BeamDamageError, ConfigError
 
@@ -106,6 +107,8 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     rest = rest[rest >= n_baseline]
     det = detect(model, model.with_choices, X, Cq, b_idx, rest, false_alarm_rate, q, ("residual", *statistics))
     thr = residual_threshold(det)
+    if (why := season_warning(series.times, series.time_values, n_baseline, det.names if not q else ())):
+        warnings.warn(why)
     novelty = det.values[:, det.names.index("residual")]
     charts = run_charts(det.vectors, b_idx, false_alarm_rate) if chart == "ewma" else None
     # per-mode normal variation: the residual about what the model explains (conditions, removed factors)

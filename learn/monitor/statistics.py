@@ -30,7 +30,8 @@ import numpy as np
 from learn.monitor.alarm_threshold import TAIL_SHARE, Threshold, _folds, missing_evidence, threshold, training_size
 from learn.monitor.normal_models import PCARemoval, Regression, _impute
 
-__all__ = ["STATISTICS", "Detection", "detect", "held_out_statistics", "sidak_rate", "statistics_of"]
+__all__ = ["STATISTICS", "Detection", "detect", "environmental", "held_out_statistics", "season_warning",
+           "sidak_rate", "statistics_of"]
 
 #: The detector's statistics (module docstring).
 STATISTICS = ("residual", "environment", "shift")
@@ -210,6 +211,33 @@ def environmental(model, name: str) -> bool:
     (:func:`~learn.monitor.alarm_threshold.threshold`'s ``tail_share``), rather than a residual about what the
     normal variation explains."""
     return name == "environment" or (name == "shift" and not isinstance(model, Regression))
+
+
+#: A baseline period of dated tests shorter than this (days) does not cover the seasons.
+SEASONS_DAYS = 330.0
+
+
+def season_warning(times, time_values, n_baseline: int, names) -> str | None:
+    """The warning for environmental statistics judged against a baseline period of dated tests (``times`` ISO
+    dates, ``time_values`` days) that spans less than :data:`SEASONS_DAYS` while later tests lie beyond it: the
+    seasons it did not see move the environmental scores and the shift about the baseline mean as a change would
+    (None otherwise)."""
+    from datetime import datetime
+
+    env = [nm for nm in names if nm in ("environment", "shift")]
+    if not env or times is None or not len(times) or times[0] is None:
+        return None
+    try:
+        datetime.fromisoformat(str(times[0]).strip())
+    except ValueError:
+        return None
+    t = np.asarray(time_values, float)
+    span = float(t[n_baseline - 1] - t[0])
+    if span >= SEASONS_DAYS or t[-1] - t[0] <= span:
+        return None
+    return (f"the baseline period spans {span:.0f} days: the {' and '.join(env)} statistics judge the environment "
+            "against it, and the seasons it did not see will alarm; cover a year, give the conditions "
+            "(--conditions) or leave them out (--statistics residual)")
 
 
 def residual_threshold(det: Detection) -> Threshold:

@@ -106,3 +106,15 @@ def test_monitor_rows_carry_the_statistics_the_chart_and_the_onset(tmp_path):
     assert abs(row["onset"] - 35) <= 2
     assert row["statistics"]["residual"] == pytest.approx(row["novelty"])
     assert not any(r["chart_alarm"] for r in res.rows[30:35])
+
+
+def test_environmental_statistics_on_a_baseline_shorter_than_the_seasons_are_warned_of():
+    from learn.monitor.statistics import season_warning
+
+    days = np.arange(400.0)
+    dates = ["2026-01-01T10:00"] * 400                     # dated tests (only the first is parsed)
+    why = season_warning(dates, days, 120, ("residual", "environment", "shift"))
+    assert "spans 119 days" in why and "--statistics residual" in why
+    assert season_warning(dates, days, 360, ("residual", "environment", "shift")) is None   # a year covered
+    assert season_warning(dates, days, 120, ("residual",)) is None
+    assert season_warning(["1", "2"] * 200, days, 120, ("residual", "shift")) is None     # test numbers, no dates
