@@ -44,7 +44,8 @@ from experiments.second_sim.response import Damping, Noise, measure, receptance
 from experiments.second_sim.writers import write_csv, write_json, write_text_atomic, write_uff
 
 __all__ = ["SERIES_KINDS", "SLIT_SIZES", "FrequencySeries", "FrequencySeriesConfig", "SeriesConfig", "SeriesTest",
-           "frequency_series", "nominal_series_beam", "uniform_stiffness_pattern", "series_beam_toml",
+           "frequency_series", "mass_loss_pattern", "nominal_series_beam",
+           "uniform_stiffness_pattern", "series_beam_toml",
            "simulate_series", "slit_frequency_drop", "test_beam", "write_series"]
 
 #: The ways a test is recorded.
@@ -423,4 +424,14 @@ def uniform_stiffness_pattern(cfg: SeriesConfig) -> np.ndarray:
     f0, f1 = (modes(assemble(replace(nominal, EI_Nm2=cfg.EI_Nm2 * e)), n_refine=cfg.n_modes).frequencies_hz[
         :cfg.n_modes] for e in (1.0, 0.99))
     d = np.log(f0 / f1)
+    return d / d.mean()
+
+
+def mass_loss_pattern(cfg: SeriesConfig, loss: float = 0.5) -> np.ndarray:
+    """Each mode's ``d ln f`` of losing the share ``loss`` of the bolted mass relative to their mean (m,): positive,
+    the modes rise, those with a large amplitude at the mass most."""
+    nominal = nominal_series_beam(cfg)
+    lighter = replace(nominal, masses=(PointMass(cfg.mass_x_over_L * cfg.length_m, cfg.mass_kg * (1 - loss)),))
+    f0, f1 = (modes(assemble(b), n_refine=cfg.n_modes).frequencies_hz[:cfg.n_modes] for b in (nominal, lighter))
+    d = np.log(f1 / f0)
     return d / d.mean()
