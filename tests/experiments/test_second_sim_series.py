@@ -133,3 +133,20 @@ def test_a_frequency_series_is_the_fem_at_each_test_and_its_steps_are_exact():
     assert one.damaged.sum() == 16
     # a rigid clamp: f ~ sqrt(EI) for every mode, so a uniform EI loss drops every mode alike
     np.testing.assert_allclose(uniform_stiffness_pattern(replace(beam, root_k_L_over_EI=math.inf)), 1.0, atol=1e-6)
+
+
+def test_a_mass_loss_raises_the_modes_as_the_rayleigh_quotient_says():
+    from experiments.second_sim.series import mass_loss_pattern
+
+    cfg = SeriesConfig(n_tests=2, **STILL)
+    nominal = nominal_series_beam(cfg)
+    asm = assemble(nominal)
+    md = modes(asm, n_refine=4)
+    keep = asm.dof_index >= 0
+    full = np.zeros((keep.size, 4))
+    full[keep] = md.phi[:, :4]
+    d, N = point_row(nominal, cfg.mass_x_over_L * cfg.length_m)
+    phi2 = (N @ full[d]) ** 2                                   # mass-normalised shapes squared at the mass
+    # first order: losing dm raises ln f by dm phi(x)^2 / 2; the pattern is that over its mean
+    pattern = mass_loss_pattern(cfg, loss=0.02)
+    np.testing.assert_allclose(pattern, phi2 / phi2.mean(), rtol=0.03)
