@@ -52,6 +52,14 @@ def add_parser(sub):
     p.add_argument("--normal-model", choices=list(NORMAL_MODELS), default=None,
                    help="normal-variation model (default: regression with measured conditions, else "
                         f"{DEFAULT_LATENT}; docs/monitoring.md compares them)")
+    p.add_argument("--chart", choices=("ewma", "none"), default="ewma",
+                   help="memory chart of the statistics (EWMA; limits held out on the baseline period with its "
+                        "autocorrelation): chart_alarm and onset of each test (default %(default)s)")
+    p.add_argument("--statistics", nargs="+", choices=("residual", "environment", "shift"),
+                   default=["residual", "environment", "shift"], metavar="NAME",
+                   help="statistics combined at the false-alarm rate (residual, environment, shift; the residual "
+                        "always): leave environment and shift out when the baseline period does not cover the "
+                        "conditions the tests meet (default: all)")
     p.add_argument("--out", metavar="DIR", help="outputs and the identification cache (default without --json: "
                                                 "out/monitor)")
     p.add_argument("--json", action="store_true",
@@ -90,7 +98,8 @@ def run(args) -> dict:
     settings = identification_settings(args.band, beam, model)
     cache = Path(args.out) / "cache" if args.out else None
     res = monitor_series(series, args.baseline_tests, settings, cache, args.false_alarm_rate, args.normal_model,
-                         progress=not args.json)
+                         progress=not args.json, chart=getattr(args, "chart", "ewma"),
+                         statistics=tuple(getattr(args, "statistics", None) or ("residual", "environment", "shift")))
     verdicts = alarm_verdicts(res, model, beam_x_m)
     for i, v in verdicts.items():
         res.rows[i]["verdict"] = v
@@ -99,6 +108,7 @@ def run(args) -> dict:
            "normal_variation": res.normal_variation, "threshold": res.threshold.to_dict(),
            "first_alarm": None if first is None else {"index": first, "file": res.rows[first]["file"],
                                                       "time": res.rows[first]["time"]},
+           "detector": res.detection.to_dict(), "charts": None if res.charts is None else res.charts.to_dict(),
            "n_alarms_after_baseline": sum(r["alarm"] for r in res.rows if not r["baseline"]),
            "n_not_identified": sum(not r["identified"] for r in res.rows),
            "version": package_version(),

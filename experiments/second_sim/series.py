@@ -21,6 +21,10 @@ the accelerometers from a hammer at ``hammer_x_over_L``, noise on the acceleranc
 state of the beam, the true frequencies) and the nominal beam's ``beam.toml`` (project format; the root spring and
 the mass at their nominal values, ``EI`` at the mean temperature).
 
+:func:`frequency_series` draws long series of identified frequencies alone (a test every 30 min over two years,
+a daily temperature cycle and the weather, the clamp and the mass re-made every week, identification scatter and
+an imposed lasting drop of one or every mode), the FEM interpolated over the environment's parameters.
+
 Uses only this package's :mod:`.fem`, :mod:`.response`, :mod:`.ambient` and :mod:`.writers`, numpy, scipy and
 pyuff.
 """
@@ -39,7 +43,9 @@ from experiments.second_sim.fem import N_ELEMENTS, Beam, PointMass, Slit, assemb
 from experiments.second_sim.response import Damping, Noise, measure, receptance
 from experiments.second_sim.writers import write_csv, write_json, write_text_atomic, write_uff
 
-__all__ = ["SERIES_KINDS", "SLIT_SIZES", "SeriesConfig", "SeriesTest", "nominal_series_beam", "series_beam_toml",
+__all__ = ["SERIES_KINDS", "SLIT_SIZES", "FrequencySeries", "FrequencySeriesConfig", "SeriesConfig", "SeriesTest",
+           "frequency_series", "mass_loss_pattern", "nominal_series_beam",
+           "uniform_stiffness_pattern", "series_beam_toml",
            "simulate_series", "slit_frequency_drop", "test_beam", "write_series"]
 
 #: The ways a test is recorded.
@@ -307,3 +313,125 @@ def write_series(cfg: SeriesConfig, tests: list[SeriesTest], out_dir) -> Path:
         "first_damaged_test": next((r["test"] for r in rows if r["damaged"]), None),
         "first_damaged_day": damaged[0] if damaged else None, "tests": rows})
     return out
+
+
+@dataclass(frozen=True)
+class FrequencySeriesConfig:
+    """A long series of identified natural frequencies (no records written): the beam and environment of ``beam``
+    (its seasonal and day-to-day temperature, clamp and mass), ``tests_per_day`` tests a day over ``days``, a
+    daily temperature cycle and a weather anomaly (AR(1), correlation time ``weather_days``), the clamp re-made and
+    the mass re-placed every ``remount_every_days`` (None: before every test), each identified frequency scattered
+    by ``frequency_noise`` (relative std, one value or one per mode), and from ``step_day`` on a lasting relative
+    drop ``step_fraction`` of the modes ``step_modes`` (1-based), or with ``step_modes=None`` of every mode in the
+    pattern of a uniform loss of ``EI`` (:func:`uniform_stiffness_pattern`: the direction the temperature moves the
+    modes too), ``step_fraction`` their mean drop."""
+
+    beam: SeriesConfig = SeriesConfig(damage_day=None, n_tests=2)
+    days: float = 730.0
+    tests_per_day: int = 48
+    seed: int = 0
+    daily_amplitude_c: float = 4.0
+    weather_sd_c: float = 3.0
+    weather_days: float = 3.0
+    remount_every_days: float | None = 7.0
+    frequency_noise: float | tuple = 1e-3
+    step_day: float | None = None
+    step_fraction: float = 0.0
+    step_modes: tuple | None = None
+
+
+@dataclass(frozen=True)
+class FrequencySeries:
+    """A simulated frequency series: ``day`` (n,), the true and measured temperatures (n,) in degC, the identified
+    frequencies ``frequencies_hz`` (n, m), the beam's ``true_hz`` (n, m) before the step, ``damaged`` (n,), and each
+    test's ``ei_factor``, ``root_spring_factor`` and ``mass_x_m`` (n,)."""
+
+    day: np.ndarray
+    temperature_c: np.ndarray
+    measured_temperature_c: np.ndarray
+    frequencies_hz: np.ndarray
+    true_hz: np.ndarray
+    damaged: np.ndarray
+    ei_factor: np.ndarray
+    root_spring_factor: np.ndarray
+    mass_x_m: np.ndarray
+
+
+def _cubic_terms(P):
+    """Every monomial of degree <= 3 of the columns of ``P`` (n, 3) in [-1, 1]: (n, 20)."""
+    import itertools
+
+    cols = [np.ones(len(P))]
+    for deg in (1, 2, 3):
+        cols += [np.prod(P[:, list(c)], axis=1) for c in itertools.combinations_with_replacement(range(3), deg)]
+    return np.stack(cols, axis=1)
+
+
+def _frequency_surface(cfg: SeriesConfig, ei, root, mass_x):
+    """``ln`` of the first ``cfg.n_modes`` frequencies at each ``(EI factor, root-spring factor, mass place)``: the
+    FEM on a 5 x 5 x 5 grid spanning the draws, a cubic polynomial in the three parameters fitted to it by least
+    squares (125 eigen-solutions instead of one per test; within 1e-5 of the FEM, far below the identification
+    scatter)."""
+    V = np.c_[ei, root, mass_x]
+    lo, hi = V.min(axis=0) - 1e-6, V.max(axis=0) + 1e-6
+    grid = np.stack(np.meshgrid(*(np.linspace(-1, 1, 5),) * 3, indexing="ij"), axis=-1).reshape(-1, 3)
+    nominal = nominal_series_beam(cfg)
+    logF = []
+    for g in grid:
+        e, r, x = lo + (g + 1) / 2 * (hi - lo)
+        beam = replace(nominal, EI_Nm2=cfg.EI_Nm2 * e, root_k_theta_Nm_rad=nominal.root_k_theta_Nm_rad * r,
+                       masses=(PointMass(x, cfg.mass_kg),))
+        logF.append(np.log(modes(assemble(beam), n_refine=cfg.n_modes).frequencies_hz[:cfg.n_modes]))
+    coef = np.linalg.lstsq(_cubic_terms(grid), np.asarray(logF), rcond=None)[0]
+    return _cubic_terms(2 * (V - lo) / (hi - lo) - 1) @ coef
+
+
+def frequency_series(cfg: FrequencySeriesConfig) -> FrequencySeries:
+    """The series of ``cfg`` (:class:`FrequencySeriesConfig`), reproducible from ``cfg.seed``; the environment's
+    draws do not depend on the step, so two series differing only in their step share their intact tests."""
+    b = cfg.beam
+    rng = np.random.default_rng([cfg.seed, 97])
+    n = int(round(cfg.days * cfg.tests_per_day))
+    day = np.arange(n) / cfg.tests_per_day
+    phi = math.exp(-1.0 / (cfg.weather_days * cfg.tests_per_day))
+    from scipy.signal import lfilter
+
+    weather = lfilter([math.sqrt(1 - phi**2)], [1.0, -phi], rng.standard_normal(n)) * cfg.weather_sd_c
+    t_true = (b.temperature_mean_c - b.temperature_amplitude_c * np.cos(2 * math.pi * (day - b.coldest_day) / 365.0)
+              - cfg.daily_amplitude_c * np.cos(2 * math.pi * (day % 1.0 - 0.125)) + weather)
+    t_meas = t_true + b.temperature_sensor_sd_c * rng.standard_normal(n)
+    epoch = (np.arange(n) if cfg.remount_every_days is None
+             else np.floor(day / cfg.remount_every_days).astype(int))              # the mounting of each test
+    k = int(epoch.max()) + 1
+    root = (1 + rng.uniform(-b.remount, b.remount, k))[epoch]
+    mass_x = (b.mass_x_over_L * b.length_m + rng.uniform(-b.mass_shift_m, b.mass_shift_m, k))[epoch]
+    ei = 1 + b.ei_per_c * (t_true - b.temperature_mean_c)
+    true_hz = np.exp(_frequency_surface(b, ei, root, mass_x))
+    noise = np.broadcast_to(np.asarray(cfg.frequency_noise, float), (b.n_modes,))
+    F = true_hz * np.exp(noise * rng.standard_normal((n, b.n_modes)))
+    damaged = np.zeros(n, bool) if cfg.step_day is None else day >= cfg.step_day
+    if cfg.step_modes is None:
+        F[damaged] *= np.exp(uniform_stiffness_pattern(b) * math.log1p(-cfg.step_fraction))
+    else:
+        F[np.ix_(damaged, np.asarray(cfg.step_modes) - 1)] *= 1.0 - cfg.step_fraction
+    return FrequencySeries(day, t_true, t_meas, F, true_hz, damaged, ei, root, mass_x)
+
+
+def uniform_stiffness_pattern(cfg: SeriesConfig) -> np.ndarray:
+    """Each mode's ``d ln f`` of a uniform loss of ``EI`` over the nominal beam relative to their mean (m,): about
+    one each, mode 1 less (its root spring does not soften)."""
+    nominal = nominal_series_beam(cfg)
+    f0, f1 = (modes(assemble(replace(nominal, EI_Nm2=cfg.EI_Nm2 * e)), n_refine=cfg.n_modes).frequencies_hz[
+        :cfg.n_modes] for e in (1.0, 0.99))
+    d = np.log(f0 / f1)
+    return d / d.mean()
+
+
+def mass_loss_pattern(cfg: SeriesConfig, loss: float = 0.5) -> np.ndarray:
+    """Each mode's ``d ln f`` of losing the share ``loss`` of the bolted mass relative to their mean (m,): positive,
+    the modes rise, those with a large amplitude at the mass most."""
+    nominal = nominal_series_beam(cfg)
+    lighter = replace(nominal, masses=(PointMass(cfg.mass_x_over_L * cfg.length_m, cfg.mass_kg * (1 - loss)),))
+    f0, f1 = (modes(assemble(b), n_refine=cfg.n_modes).frequencies_hz[:cfg.n_modes] for b in (nominal, lighter))
+    d = np.log(f1 / f0)
+    return d / d.mean()

@@ -15,6 +15,10 @@ Steps, one module each:
   analysis, a Gaussian mixture); each gives a squared Mahalanobis distance of a test's residual (the novelty index);
 * :mod:`~learn.monitor.alarm_threshold` -- every baseline test's index by a model that did not see it
   (leave-one-out or k-fold) and the threshold of a false-alarm rate from a scaled F distribution fitted to them;
+* :mod:`~learn.monitor.statistics` -- the detector: the residual index, the environmental scores' ``T^2`` and the
+  signed common shift, each held out and thresholded, combined at the Šidák rate (:func:`detect`);
+* :mod:`~learn.monitor.charts` -- memory: EWMA charts of the statistics with limits from the baseline's
+  autocorrelation, and the onset of a change (:func:`run_charts`);
 * :mod:`~learn.monitor.alarms` -- :func:`monitor_series`, all of it on a series (:class:`SeriesResult` holds the
   rows), and what changed at an alarm;
 * :mod:`~learn.monitor.verdicts` -- the competing explanations and the network's verdict of each alarm.
@@ -23,16 +27,19 @@ Steps, one module each:
 from learn.monitor.alarm_threshold import (Threshold, held_out_novelty, minimum_baseline, missing_evidence,
                                            threshold)
 from learn.monitor.alarms import SeriesResult, changed_text, monitor_series, what_changed
+from learn.monitor.charts import CHARTS, Charts, run_charts
 from learn.monitor.identification import (CACHE_FORMAT, IdentificationSettings, IdentifiedModes,
                                           cached_identification, file_key, identification_settings, identify_test,
                                           write_cache)
 from learn.monitor.normal_models import (DEFAULT_LATENT, NORMAL_MODELS, PCA_EXPLAINED, FactorRemoval, Mixture,
                                          PCARemoval, Regression)
 from learn.monitor.series import SeriesInput, check_series, read_conditions
+from learn.monitor.statistics import STATISTICS, Detection, detect
 from learn.monitor.tracking import MAC_MIN, MIN_PRESENCE, ReferenceModes, reference_modes, track_modes
 from learn.monitor.verdicts import alarm_verdicts, baseline_nearest_median
 
-__all__ = ["CACHE_FORMAT", "DEFAULT_LATENT", "MAC_MIN", "MIN_PRESENCE", "NORMAL_MODELS", "PCA_EXPLAINED",
+__all__ = ["CACHE_FORMAT", "CHARTS", "Charts", "DEFAULT_LATENT", "Detection", "STATISTICS", "detect", "run_charts",
+           "MAC_MIN", "MIN_PRESENCE", "NORMAL_MODELS", "PCA_EXPLAINED",
            "alarm_verdicts", "baseline_nearest_median", "cached_identification", "changed_text", "check_series",
            "FactorRemoval", "file_key", "held_out_novelty", "identification_settings", "IdentificationSettings",
            "IdentifiedModes", "identify_test", "minimum_baseline", "missing_evidence", "Mixture", "monitor_series",

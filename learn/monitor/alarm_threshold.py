@@ -14,6 +14,9 @@ __all__ = ["LOO_MAX", "N_FOLDS", "Threshold", "held_out_novelty", "minimum_basel
 
 #: Held-out indices by leave-one-out up to this many baseline tests, else by this many interleaved folds.
 LOO_MAX, N_FOLDS = 200, 20
+#: For a statistic of the environment the law's scale is fitted to the largest held-out indices: this share of
+#: them, and at least ``TAIL_MIN`` (:func:`threshold`'s ``tail_share``).
+TAIL_SHARE, TAIL_MIN = 0.25, 10
 
 
 def minimum_baseline(n_features: int, n_conditions: int = 0) -> int:
@@ -68,8 +71,8 @@ class Threshold:
     ``value = max(law_value, empirical_quantile)``: ``law_value = scale * F.ppf(1 - rate; dof_num, dof_den)``,
     the held-out indices taken to follow ``scale * F(dof_num, dof_den)`` (the exact law of a held-out squared
     Mahalanobis distance with Gaussian residuals, Hotelling's prediction region, up to the scale) with the scale
-    fitted to them by maximum likelihood; ``empirical_quantile`` the held-out indices' own ``1 - rate`` quantile
-    (linear interpolation).
+    fitted to them (or to their largest share, the law truncated below) by maximum likelihood;
+    ``empirical_quantile`` the held-out indices' own ``1 - rate`` quantile (linear interpolation).
     """
 
     value: float
@@ -89,7 +92,8 @@ class Threshold:
                 "held_out_false_alarm_rate": self.held_out_rate}
 
 
-def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: int = 0) -> Threshold:
+def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: int = 0,
+              tail_share: float = 1.0) -> Threshold:
     """The threshold of the novelty index at false-alarm rate ``rate`` from the held-out indices of the baseline
     tests (:func:`held_out_novelty`), each from a model fitted on ``n_train`` tests.
 
@@ -97,10 +101,13 @@ def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: i
     trust it); the F law of a held-out squared Mahalanobis distance, ``d (n+1)(n-1) / (n (n-d)) F(d, n-d)`` for
     ``d`` features and ``n`` training tests, extrapolates its tail from all of them. Its scale is fitted to the
     held-out indices (one parameter: a residual that is not Gaussian, or a model that leaves some variation,
-    widens it) rather than taken from the formula. The law's tail is that of Gaussian residuals; an environment
-    whose effect is bounded but not linear (a mass re-placed along a curved mode shape) gives held-out indices
-    with a heavier tail, which their own quantile shows: the threshold is the larger of the two (on a baseline of
-    fewer than ``1 / rate`` tests that quantile lies between its two largest indices).
+    widens it) rather than taken from the formula. A statistic of the environment itself (its scores, a common
+    shift about the baseline mean) is not Gaussian: a season or a mass re-placed within a few cm is bounded, with a
+    lighter tail than a Gaussian fit to the bulk; ``tail_share < 1`` fits the scale to the largest ``tail_share``
+    of the indices (at least :data:`TAIL_MIN`), the tail that the threshold extrapolates. The threshold is the
+    larger of the law's and the indices' own quantile (an effect that is not linear gives a heavier tail, which
+    the quantile shows; on a baseline of fewer than ``1 / rate`` tests that quantile lies between its two largest
+    indices).
     """
     from scipy import optimize, stats  # scipy.stats/optimize: heavy, only where a threshold is fitted
 
@@ -109,10 +116,14 @@ def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: i
     d1 = max(int(dof_num), 1)
     d2 = max(int(n_train) - d1 - int(n_conditions), 1)
     law = stats.f(d1, d2)
-    pos = np.maximum(s, 1e-300)
+    pos = np.sort(np.maximum(s, 1e-300))
+    n_tail = min(pos.size, max(TAIL_MIN, int(math.ceil(tail_share * pos.size))))
+    u = pos[-n_tail - 1] if n_tail < pos.size else 0.0                      # the tail: the indices above u
+    tail = pos[pos.size - n_tail:]
 
     def nll(log_c):
-        return -np.sum(law.logpdf(pos / math.exp(log_c))) + pos.size * log_c
+        c = math.exp(log_c)
+        return -np.sum(law.logpdf(tail / c)) + tail.size * log_c + (tail.size * law.logsf(u / c) if u > 0 else 0.0)
 
     start = math.log(max(np.median(pos) / law.median(), 1e-300))
     c = math.exp(optimize.minimize_scalar(nll, bracket=(start - 1, start + 1)).x)

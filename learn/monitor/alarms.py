@@ -5,6 +5,7 @@ alarm, mode by mode."""
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -12,8 +13,9 @@ import numpy as np
 from learn.monitor.identification import IdentificationSettings, cached_identification, write_cache
 from learn.monitor.normal_models import DEFAULT_LATENT, NORMAL_MODELS
 from learn.monitor.series import SeriesInput, check_series
-from learn.monitor.alarm_threshold import (Threshold, held_out_novelty, minimum_baseline, missing_evidence, threshold,
-                                     training_size)
+from learn.monitor.alarm_threshold import Threshold, minimum_baseline
+from learn.monitor.charts import CHARTS, Charts, run_charts
+from learn.monitor.statistics import STATISTICS, Detection, detect, residual_threshold, season_warning
 from learn.monitor.tracking import MIN_PRESENCE, ReferenceModes, reference_modes, track_modes
 from physics.errors import BeamDamageError, ConfigError
 
@@ -51,6 +53,8 @@ class SeriesResult:
     sigma: np.ndarray
     tests: list = field(repr=False, default_factory=list)
     series: SeriesInput | None = None
+    detection: Detection | None = None
+    charts: Charts | None = None
 
     @property
     def first_alarm(self) -> int | None:
@@ -58,18 +62,22 @@ class SeriesResult:
 
 
 def monitor_series(series: SeriesInput, n_baseline: int, settings: IdentificationSettings, cache_dir=None,
-                   false_alarm_rate: float = 0.01, normal_model: str | None = None, progress: bool = True
-                   ) -> SeriesResult:
+                   false_alarm_rate: float = 0.01, normal_model: str | None = None, progress: bool = True,
+                   chart: str = "ewma", statistics=STATISTICS) -> SeriesResult:
     """Monitor a series: identify every test (cached), track the baseline period's modes, learn the normal
     variation on the baseline period, and score every test against the cross-validated threshold.
 
     ``normal_model``: a key of :data:`NORMAL_MODELS`; default ``"regression"`` with measured conditions, else
-    :data:`DEFAULT_LATENT`. Raises :class:`BeamDamageError` on a baseline that cannot carry the model (too few
-    tests: the message names the minimum; a baseline test of another kind, band or beam).
+    :data:`DEFAULT_LATENT`. A test alarms when any statistic of :mod:`learn.monitor.statistics` exceeds its
+    threshold (``novelty`` and ``threshold`` of a row: the residual's); ``chart="ewma"`` adds the memory charts of
+    :mod:`learn.monitor.charts` (``chart_alarm`` and ``onset`` of a row); ``statistics``: those combined (the
+    residual always). Raises :class:`BeamDamageError` on a
+    baseline that cannot carry the model (too few tests: the message names the minimum; a baseline test of another
+    kind, band or beam).
     """
     n = len(series.files)
     C = series.conditions
-    normal_model, q = _checked_request(series, n_baseline, false_alarm_rate, normal_model)
+    normal_model, q = _checked_request(series, n_baseline, false_alarm_rate, normal_model, chart, statistics)
     tests, errors, pending = _identified(series, n_baseline, settings, cache_dir, progress)
     base = [t for t in tests[:n_baseline] if t is not None]
     ref = reference_modes(tests[:n_baseline])
@@ -95,15 +103,14 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     b_idx = np.flatnonzero(ok[:n_baseline])
     Cq = C if q else None
     model = NORMAL_MODELS[normal_model](m, q).fit(X[b_idx], None if Cq is None else Cq[b_idx])
-    held = held_out_novelty(model.with_choices, X[b_idx], None if Cq is None else Cq[b_idx])
-    thr = threshold(held, false_alarm_rate, model.dof_, training_size(len(b_idx)), q)
-    novelty = np.full(n, np.nan)
     rest = np.flatnonzero(ok)
     rest = rest[rest >= n_baseline]
-    if rest.size:
-        novelty[rest] = (model.novelty(X[rest], None if Cq is None else Cq[rest])
-                         + missing_evidence(X[rest], X[b_idx]))
-    novelty[b_idx] = held
+    det = detect(model, model.with_choices, X, Cq, b_idx, rest, false_alarm_rate, q, ("residual", *statistics))
+    thr = residual_threshold(det)
+    if (why := season_warning(series.times, series.time_values, n_baseline, det.names if not q else ())):
+        warnings.warn(why)
+    novelty = det.values[:, det.names.index("residual")]
+    charts = run_charts(det.vectors, b_idx, false_alarm_rate) if chart == "ewma" else None
     # per-mode normal variation: the residual about what the model explains (conditions, removed factors)
     Xb = X[b_idx]
     Cf = None if Cq is None else np.where(np.isfinite(Cq), Cq, np.nanmedian(Cq[b_idx], axis=0))
@@ -127,22 +134,39 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
         rows.append({
             "file": series.files[i], "time": series.times[i], "time_value": float(series.time_values[i]),
             "baseline": i < n_baseline, "identified": bool(ok[i]), "error": errors[i],
-            "alarm": bool(ok[i] and novelty[i] > thr.value), "novelty": _num(novelty[i]), "threshold": thr.value,
+            "alarm": bool(ok[i] and det.alarm[i]), "novelty": _num(novelty[i]), "threshold": thr.value,
             "frequencies_hz": [_num(v) for v in F[i]], "damping_ratios": [_num(v) for v in Z[i]],
             "mode_z_scores": [_num(v) for v in z[i]], "change_pct": [_num(v) for v in change[i]],
             "mac": [_num(v) for v in MAC[i]] if ref.shapes is not None else None,
             "missing_modes": mode_missing,
             "conditions": None if C is None else dict(zip(series.condition_names, map(_num, C[i]))),
         })
-    return SeriesResult(rows, ref, F, np.exp(expected_log), novelty, thr, model, normal, sigma, tests, series)
+        rows[-1].update(_detector_fields(det, charts, i, bool(ok[i])))
+    return SeriesResult(rows, ref, F, np.exp(expected_log), novelty, thr, model, normal, sigma, tests, series, det,
+                        charts)
 
 
-def _checked_request(series: SeriesInput, n_baseline: int, false_alarm_rate: float, normal_model: str | None):
+def _detector_fields(det: Detection, charts: Charts | None, i: int, ok: bool) -> dict:
+    """A row's detector fields: each statistic (``statistics``), those alarmed
+    (``alarmed_by``), the weighted mean frequency change (``shift_pct``), the charts' ``chart_alarm`` and the
+    ``onset`` (test index) of the change behind it."""
+    return {"statistics": {nm: _num(det.values[i, k]) for k, nm in enumerate(det.names)},
+            "alarmed_by": det.alarmed_by(i) if ok else [], "shift_pct": _num(det.shift_pct[i]),
+            "chart_alarm": None if charts is None else bool(ok and charts.alarm[i]),
+            "onset": None if charts is None or charts.onset[i] < 0 else int(charts.onset[i])}
+
+
+def _checked_request(series: SeriesInput, n_baseline: int, false_alarm_rate: float, normal_model: str | None,
+                     chart: str = "ewma", statistics=STATISTICS):
     """``(normal model, number of conditions it regresses on)`` of a request, or the one-line error of an argument
     or a baseline period that cannot carry it before any test is identified."""
     n = len(series.files)
     if not 0 < false_alarm_rate < 0.5:
         raise ConfigError(f"--false-alarm-rate {false_alarm_rate:g}: must lie in (0, 0.5)")
+    if chart not in CHARTS:
+        raise ConfigError(f"--chart {chart}: expected one of {', '.join(CHARTS)}")
+    if set(statistics) - set(STATISTICS):
+        raise ConfigError(f"--statistics {' '.join(statistics)}: expected some of {', '.join(STATISTICS)}")
     if not 0 < n_baseline <= n:
         raise ConfigError(f"--baseline-tests {n_baseline}: must be between 1 and the {n} tests given")
     C = series.conditions

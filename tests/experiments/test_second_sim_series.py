@@ -109,3 +109,44 @@ def test_bad_series_configurations_are_refused():
         SeriesConfig(kind="strain")
     with pytest.raises(ValueError, match="n_tests"):
         SeriesConfig(n_tests=1)
+
+
+def test_a_frequency_series_is_the_fem_at_each_test_and_its_steps_are_exact():
+    from experiments.second_sim.series import FrequencySeriesConfig, frequency_series, uniform_stiffness_pattern
+
+    beam = SeriesConfig(n_tests=2, damage_day=None, min_elements=24)
+    cfg = FrequencySeriesConfig(beam=beam, days=14, tests_per_day=4, seed=3, frequency_noise=0.0)
+    fs = frequency_series(cfg)
+    assert fs.frequencies_hz.shape == (56, 4) and not fs.damaged.any()
+    assert np.unique(fs.root_spring_factor[fs.day < 7]).size == 1            # re-mounted weekly
+    assert np.unique(fs.root_spring_factor).size == 2
+    nominal = nominal_series_beam(beam)
+    for i in (0, 17, 55):                                                    # the surrogate against the FEM
+        b = replace(nominal, EI_Nm2=beam.EI_Nm2 * fs.ei_factor[i],
+                    root_k_theta_Nm_rad=nominal.root_k_theta_Nm_rad * fs.root_spring_factor[i],
+                    masses=(replace(nominal.masses[0], x_m=fs.mass_x_m[i]),))
+        np.testing.assert_allclose(fs.true_hz[i], modes(assemble(b), n_refine=4).frequencies_hz[:4], rtol=1e-4)
+    one = frequency_series(replace(cfg, step_day=10.0, step_fraction=0.01, step_modes=(1,)))
+    ratio = one.frequencies_hz / fs.frequencies_hz
+    np.testing.assert_allclose(ratio[one.damaged], [[0.99, 1, 1, 1]] * int(one.damaged.sum()))
+    np.testing.assert_allclose(ratio[~one.damaged], 1.0)
+    assert one.damaged.sum() == 16
+    # a rigid clamp: f ~ sqrt(EI) for every mode, so a uniform EI loss drops every mode alike
+    np.testing.assert_allclose(uniform_stiffness_pattern(replace(beam, root_k_L_over_EI=math.inf)), 1.0, atol=1e-6)
+
+
+def test_a_mass_loss_raises_the_modes_as_the_rayleigh_quotient_says():
+    from experiments.second_sim.series import mass_loss_pattern
+
+    cfg = SeriesConfig(n_tests=2, **STILL)
+    nominal = nominal_series_beam(cfg)
+    asm = assemble(nominal)
+    md = modes(asm, n_refine=4)
+    keep = asm.dof_index >= 0
+    full = np.zeros((keep.size, 4))
+    full[keep] = md.phi[:, :4]
+    d, N = point_row(nominal, cfg.mass_x_over_L * cfg.length_m)
+    phi2 = (N @ full[d]) ** 2                                   # mass-normalised shapes squared at the mass
+    # first order: losing dm raises ln f by dm phi(x)^2 / 2; the pattern is that over its mean
+    pattern = mass_loss_pattern(cfg, loss=0.02)
+    np.testing.assert_allclose(pattern, phi2 / phi2.mean(), rtol=0.03)

@@ -1,0 +1,206 @@
+"""Benchmark: the detector's statistics, their combination and the memory chart against the plainest tests, on
+long frequency series of the independent simulator.
+
+Run: ``python -m experiments.benches.bench_detection [--out out/bench_detection] [--seeds 0 1] [--rate 0.01]
+[--cases daily 30min lab] [--docs]``
+
+Series (:func:`experiments.second_sim.series.frequency_series`: the monitoring cantilever's first four modes under
+a seasonal, daily and weather temperature, its clamp re-made and its bolted mass re-placed, each frequency
+identified with a relative scatter):
+
+* ``daily``: a test a day over two years, clamp and mass re-made before every test, 0.03 % identification scatter;
+  the first year the baseline period;
+* ``30min``: a test every 30 min over two years, clamp and mass re-made weekly, 0.1 % identification scatter;
+  the first year the baseline period;
+* ``lab``: 100 tests of a lab beam (temperature 20 +- 1.5 degC), clamp and mass re-made before every test,
+  0.03 % scatter; the first 35 tests the baseline period; ``lab6``: the same with six modes.
+
+Each gets a lasting drop from day 500 (test 50 of ``lab``) of 0.25 to 2 % in mode 1 alone, or of every mode in the
+pattern of a uniform loss of EI (the size their mean drop; the direction the temperature also moves the modes),
+or a rise of every mode in the pattern of losing part of the bolted mass (the size their mean rise), imposed on
+the same intact draws. Normal models: ``pca`` (no
+conditions) and ``regression`` on the measured temperature. Methods, each at ``--rate`` on the same baseline:
+
+* ``residual``, ``environment``, ``shift``: each statistic of :mod:`learn.monitor.statistics` alone at the rate;
+* ``combined``: any statistic above its threshold at the Šidák rate (``monitor``'s alarm);
+* ``chart``: the EWMA charts of :mod:`learn.monitor.charts` (``monitor``'s ``chart_alarm``);
+* ``plain shift``: the mean relative change of the frequencies from their baseline medians, alarmed below the
+  baseline's own ``rate`` quantile (one-sided: it is told the change's sign, above the ``1 - rate`` quantile for the
+  mass loss);
+* ``plain per mode``: each mode's relative change, alarmed beyond the baseline's ``rate / m`` quantile of that mode
+  (on the change's side).
+
+False alarms: the share of the intact series' monitoring tests alarmed (the plain tests: on the drop side).
+Detected: the share of the damaged tests alarmed (the chart from one day after the onset: ``30min`` 48 tests,
+``daily`` 1 test). Delay: tests from the onset to the first alarm on a damaged test.
+Writes ``detection.json`` and ``detection.md`` in ``--out``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+from pathlib import Path
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
+
+from experiments.second_sim.series import (FrequencySeriesConfig, SeriesConfig, frequency_series,  # noqa: E402
+                                           mass_loss_pattern, uniform_stiffness_pattern)
+from learn.monitor.alarm_threshold import TAIL_SHARE, threshold, training_size  # noqa: E402
+from learn.monitor.charts import run_charts  # noqa: E402
+from learn.monitor.normal_models import NORMAL_MODELS  # noqa: E402
+from learn.monitor.statistics import detect, environmental  # noqa: E402
+from physics.io import atomic_write_text  # noqa: E402
+
+__all__ = ["CASES", "main", "methods_on", "plain_tests"]
+
+SIZES_PCT = (0.25, 0.5, 1.0, 1.5, 2.0)
+DAMAGES = {"mode 1": (1,), "uniform EI": "stiffness", "mass loss": "mass"}
+METHODS = ("residual", "environment", "shift", "combined", "chart", "plain shift", "plain per mode")
+
+
+def _case(name: str, seed: int) -> tuple:
+    """``(config, n_baseline, onset test, tests a day)`` of a named case."""
+    if name == "daily":
+        cfg = FrequencySeriesConfig(days=730, tests_per_day=1, seed=seed, remount_every_days=None,
+                                    frequency_noise=3e-4, daily_amplitude_c=0.0)
+        return cfg, 365, 500, 1
+    if name == "30min":
+        cfg = FrequencySeriesConfig(days=730, tests_per_day=48, seed=seed, frequency_noise=1e-3)
+        return cfg, 365 * 48, 500 * 48, 48
+    if name in ("lab", "lab6"):
+        beam = SeriesConfig(damage_day=None, n_tests=2, temperature_mean_c=20.0, temperature_amplitude_c=0.0,
+                            temperature_daily_sd_c=1.5, n_modes=6 if name == "lab6" else 4)
+        cfg = FrequencySeriesConfig(beam=beam, days=100, tests_per_day=1, seed=seed, remount_every_days=None,
+                                    frequency_noise=3e-4, daily_amplitude_c=0.0, weather_sd_c=0.0)
+        return cfg, 35, 50, 1
+    raise ValueError(f"unknown case {name!r}")
+
+
+CASES = ("daily", "30min", "lab", "lab6")
+
+
+def plain_tests(F, nb: int, rate: float, sign: float = 1.0) -> dict:
+    """The plainest tests' alarms (n,): the mean relative change from the baseline medians below the baseline's
+    ``rate`` quantile, and any mode's relative change below its baseline ``rate / m`` quantile (``sign=-1``: a
+    rise above the ``1 - rate`` quantiles, told that the change raises the frequencies)."""
+    rel = sign * (F / np.nanmedian(F[:nb], axis=0) - 1.0)
+    mean = np.nanmean(rel, axis=1)
+    per = np.nanquantile(rel[:nb], rate / F.shape[1], axis=0)
+    return {"plain shift": mean < np.nanquantile(mean[:nb], rate), "plain per mode": (rel < per).any(axis=1)}
+
+
+def methods_on(F, C, nb: int, model_name: str, rate: float, seed: int = 0, sign: float = 1.0) -> dict:
+    """Every method's alarms (n,) on one series (baseline: the first ``nb`` tests)."""
+    X = np.log(F)
+    q = 0 if C is None else C.shape[1]
+    model = NORMAL_MODELS[model_name](X.shape[1], q).fit(X[:nb], None if C is None else C[:nb])
+    b_idx, rest = np.arange(nb), np.arange(nb, len(X))
+    det = detect(model, model.with_choices, X, C, b_idx, rest, rate, q)
+    out = {}
+    for k, nm in enumerate(det.names):
+        dof = model.dof_ if nm == "residual" else det.vectors[nm].shape[1]
+        alone = threshold(det.values[b_idx, k], rate, dof, training_size(nb), q,
+                          TAIL_SHARE if environmental(model, nm) else 1.0)
+        out[nm] = det.values[:, k] > alone.value
+    out["combined"] = det.alarm
+    out["chart"] = run_charts(det.vectors, b_idx, rate, seed=seed).alarm
+    out.update(plain_tests(F, nb, rate, sign))
+    return out
+
+
+def _scores(alarms: dict, damaged, nb: int, onset: int, per_day: int) -> dict:
+    out = {}
+    for m, a in alarms.items():
+        late = damaged & (np.arange(len(a)) >= onset + (per_day if m == "chart" else 0))
+        hits = np.flatnonzero(a & damaged)
+        out[m] = {"detected": float(a[late].mean()), "delay_tests": int(hits[0] - onset) if hits.size else None}
+    return out
+
+
+def run_case(name: str, seed: int, rate: float) -> list:
+    cfg, nb, onset, per_day = _case(name, seed)
+    fs = frequency_series(cfg)
+    rows = []
+    for model_name, C in (("pca", None), ("regression", fs.measured_temperature_c[:, None])):
+        intact = methods_on(fs.frequencies_hz, C, nb, model_name, rate, seed)
+        fa = {m: float(a[nb:].mean()) for m, a in intact.items()}
+        rows.append({"case": name, "seed": seed, "model": model_name, "damage": "none", "size_pct": 0.0,
+                     "false_alarms": fa, "n_monitoring": len(fs.day) - nb})
+        damaged = np.arange(len(fs.day)) >= onset
+        for damage, which in DAMAGES.items():
+            pattern = np.zeros(fs.frequencies_hz.shape[1])
+            if which == "stiffness":
+                pattern[:] = uniform_stiffness_pattern(cfg.beam)
+            elif which == "mass":
+                pattern[:] = -mass_loss_pattern(cfg.beam)               # the modes rise
+            else:
+                pattern[np.asarray(which) - 1] = 1.0
+            for size in SIZES_PCT:
+                F = fs.frequencies_hz.copy()
+                F[damaged] *= np.exp(pattern * np.log1p(-size / 100))
+                res = _scores(methods_on(F, C, nb, model_name, rate, seed, -1.0 if which == "mass" else 1.0),
+                              damaged, nb, onset, per_day)
+                rows.append({"case": name, "seed": seed, "model": model_name, "damage": damage, "size_pct": size,
+                             "scores": res})
+                print(json.dumps({k: v for k, v in rows[-1].items() if k != "scores"}
+                                 | {m: round(s["detected"], 3) for m, s in res.items()}), flush=True)
+    return rows
+
+
+def markdown(rows: list, rate: float) -> str:
+    """The table: per case, model and damage, each method's detection (%) averaged over the seeds, false alarms
+    in the first row of each model."""
+    head = ("| case | model | damage | " + " | ".join(METHODS) + " | delay combined / chart (tests) |\n"
+            + "| --- | --- | --- | " + " | ".join("---" for _ in METHODS) + " | --- |")
+    lines = [head]
+    keys = list(dict.fromkeys((r["case"], r["model"]) for r in rows))
+    for case, model in keys:
+        mine = [r for r in rows if (r["case"], r["model"]) == (case, model)]
+        fa = [r["false_alarms"] for r in mine if r["damage"] == "none"]
+        lines.append(f"| {case} | {model} | false alarms (intact) | "
+                     + " | ".join(f"{100 * np.mean([f[m] for f in fa if m in f]):.2f} %"
+                                  if any(m in f for f in fa) else "-" for m in METHODS) + " | |")
+        for damage in DAMAGES:
+            for size in SIZES_PCT:
+                sel = [r["scores"] for r in mine if r["damage"] == damage and r["size_pct"] == size]
+                cells = [f"{100 * np.mean([s[m]['detected'] for s in sel]):.0f}" if all(m in s for s in sel)
+                         else "-" for m in METHODS]
+                d = [[s[m]["delay_tests"] for s in sel] for m in ("combined", "chart")]
+                delay = " / ".join("never" if any(v is None for v in x) else f"{np.median(x):g}" for x in d)
+                sign = "+" if DAMAGES[damage] == "mass" else "-"
+                lines.append(f"| | | {damage} {sign}{size:g} % | " + " | ".join(cells) + f" | {delay} |")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--out", default="out/bench_detection")
+    p.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
+    p.add_argument("--rate", type=float, default=0.01)
+    p.add_argument("--cases", nargs="+", choices=CASES, default=list(CASES))
+    p.add_argument("--docs", action="store_true", help="write the table into docs/monitoring.md")
+    a = p.parse_args(argv)
+    rows = [r for case in a.cases for seed in a.seeds for r in run_case(case, seed, a.rate)]
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    md = markdown(rows, a.rate)
+    atomic_write_text(out / "detection.json", json.dumps({"config": vars(a), "rows": rows}, indent=1))
+    atomic_write_text(out / "detection.md", md + "\n")
+    print(md)
+    if a.docs:
+        from experiments.studies.doc_tables import write_table
+
+        cmd = ("`python -m experiments.benches.bench_detection --seeds " + " ".join(map(str, a.seeds))
+               + f" --rate {a.rate:g} --docs`")
+        write_table("monitoring.md", "detection", md + f"\n\nDetection in % of the damaged tests, averaged over "
+                    f"{len(a.seeds)} seeds; false alarms in % of the intact series' monitoring tests. {cmd}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,120 @@
+"""The detector's statistics (learn.monitor.statistics) and memory charts (learn.monitor.charts) against closed
+forms: Hotelling's law of T^2, the family-wise rate of the combination, the stationary variance of an EWMA of
+AR(1) data, and the onset of a step."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+from scipy.signal import lfilter
+
+from learn.monitor import IdentificationSettings, read_conditions
+from learn.monitor.alarms import monitor_series
+from learn.monitor.charts import chart_limit, ewma_chart, onset, run_charts
+from learn.monitor.normal_models import PCARemoval
+from learn.monitor.statistics import detect, sidak_rate, statistics_of
+from monitor_series import write_modal_series
+
+
+def _gaussian(rng, n, sd=(3.0, 2.0, 1.0, 0.5)):
+    return rng.standard_normal((n, len(sd))) * np.asarray(sd)
+
+
+def test_environmental_t2_of_new_gaussian_tests_follows_hotelling():
+    """A new test's T^2 in k components of n baseline tests: k (n+1)(n-1) / (n (n-k)) F(k, n-k)."""
+    rng = np.random.default_rng(11)
+    n, k = 200, 2
+    rates = []
+    for _ in range(10):
+        model = PCARemoval(k).fit(_gaussian(rng, n))
+        t2 = statistics_of(model, _gaussian(rng, 5000))["environment"][0]
+        law = k * (n + 1) * (n - 1) / (n * (n - k)) * stats.f(k, n - k).ppf(0.95)
+        rates.append(np.mean(t2 > law))
+    assert 0.04 < np.mean(rates) < 0.06
+
+
+def _detected(X, nb, rate, make=lambda: PCARemoval(2)):
+    model = make().fit(X[:nb])
+    return detect(model, make, X, None, np.arange(nb), np.arange(nb, len(X)), rate)
+
+
+def test_the_combination_holds_the_family_wise_rate_on_null_data():
+    rng = np.random.default_rng(12)
+    rates, alone = [], []
+    for _ in range(6):
+        det = _detected(_gaussian(rng, 2300), 300, 0.05)
+        assert det.names == ("residual", "environment", "shift")
+        assert det.rate_each == pytest.approx(1 - 0.95 ** (1 / 3))
+        rates.append(det.alarm[300:].mean())
+        alone.append((det.values[300:] > np.array([t.value for t in det.thresholds])).mean(axis=0))
+    assert 0.025 < np.mean(rates) <= 0.06                       # any of three at Sidak's 1.7 % each: 5 %
+    np.testing.assert_array_less(np.mean(alone, axis=0), 0.025)
+
+
+def test_a_shift_along_the_top_environmental_component_is_seen_by_the_combination_not_the_residual():
+    rng = np.random.default_rng(13)
+    X = _gaussian(rng, 600)
+    X[300:, 0] += 6 * 3.0                                       # 6 sd along the first (removed) component
+    det = _detected(X, 300, 0.01)
+    residual = det.values[300:, 0] > det.thresholds[0].value
+    assert det.alarm[300:].mean() > 0.9
+    assert residual.mean() < 0.03
+
+
+def test_the_ewma_limit_is_the_closed_form_of_ar1_data_and_gives_its_rate_and_run_length():
+    """EWMA of a stationary AR(1) of unit variance: var e = lam/(2-lam) (1 + phi(1-lam)) / (1 - phi(1-lam))."""
+    rng = np.random.default_rng(14)
+    phi, lam, rate = 0.6, 0.1, 0.01
+
+    def ar1(n):
+        return lfilter([math.sqrt(1 - phi**2)], [1, -phi], rng.standard_normal(n))
+
+    limit, phis, run_length = chart_limit(ar1(3000)[:, None], rate, lam, seed=1)
+    inflation = (1 + phi * (1 - lam)) / (1 - phi * (1 - lam))
+    assert phis[0] == pytest.approx(phi, abs=0.05)
+    assert limit == pytest.approx(inflation * stats.chi2(1).ppf(1 - rate), rel=0.12)
+    fresh = ewma_chart(ar1(400_000), lam)[200:]
+    assert 0.6 * rate < np.mean(fresh > limit) < 1.5 * rate
+    above = np.flatnonzero(fresh > limit)
+    starts = above[np.r_[True, np.diff(above) > 1]]            # the first test of each excursion
+    measured = np.mean(np.diff(starts))                         # in-control tests between excursions
+    assert 0.6 * run_length < measured < 1.6 * run_length
+
+
+def test_the_onset_of_a_lasting_shift_is_dated_within_a_few_tests():
+    rng = np.random.default_rng(15)
+    errors = []
+    for _ in range(10):
+        Z = rng.standard_normal((900, 3))
+        Z[600:, 1] += 1.0                                       # one sd from test 600 on
+        charts = run_charts({"residual": Z}, np.arange(400), 0.01, lam=0.1)
+        first = 600 + int(np.argmax(charts.alarm[600:]))
+        assert charts.alarm[first]
+        errors.append(charts.onset[first] - 600)
+        assert onset(Z, first, 60) == charts.onset[first]
+    assert np.median(np.abs(errors)) <= 3
+    assert sidak_rate(0.01, 1) == pytest.approx(0.01)
+
+
+def test_monitor_rows_carry_the_statistics_the_chart_and_the_onset(tmp_path):
+    csv_path, _, _ = write_modal_series(tmp_path, 50, slit_day=35, seed=4)
+    res = monitor_series(read_conditions(csv_path), 30, IdentificationSettings(), progress=False)
+    assert res.detection.names == ("residual", "shift")       # regression on the temperature: no removed components
+    row = res.rows[40]
+    assert row["alarm"] and "residual" in row["alarmed_by"] and row["chart_alarm"]
+    assert abs(row["onset"] - 35) <= 2
+    assert row["statistics"]["residual"] == pytest.approx(row["novelty"])
+    assert not any(r["chart_alarm"] for r in res.rows[30:35])
+
+
+def test_environmental_statistics_on_a_baseline_shorter_than_the_seasons_are_warned_of():
+    from learn.monitor.statistics import season_warning
+
+    days = np.arange(400.0)
+    dates = ["2026-01-01T10:00"] * 400                     # dated tests (only the first is parsed)
+    why = season_warning(dates, days, 120, ("residual", "environment", "shift"))
+    assert "spans 119 days" in why and "--statistics residual" in why
+    assert season_warning(dates, days, 360, ("residual", "environment", "shift")) is None   # a year covered
+    assert season_warning(dates, days, 120, ("residual",)) is None
+    assert season_warning(["1", "2"] * 200, days, 120, ("residual", "shift")) is None     # test numbers, no dates
