@@ -55,6 +55,7 @@ from learn.monitor.charts import run_charts  # noqa: E402
 from learn.monitor.normal_models import NORMAL_MODELS  # noqa: E402
 from learn.monitor.statistics import detect, environmental  # noqa: E402
 from physics.io import atomic_write_text  # noqa: E402
+from experiments.studies.doc_tables import write_table  # noqa: E402
 
 __all__ = ["CASES", "main", "methods_on", "plain_tests"]
 
@@ -193,7 +194,6 @@ def main(argv=None) -> int:
     atomic_write_text(out / "detection.md", md + "\n")
     print(md)
     if a.docs:
-        from experiments.studies.doc_tables import write_table
 
         cmd = ("`python -m experiments.benches.bench_detection --seeds " + " ".join(map(str, a.seeds))
                + f" --rate {a.rate:g} --docs`")

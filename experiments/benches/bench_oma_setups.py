@@ -21,6 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
+from experiments.cli import main
+
+__all__ = ["building_shapes", "record", "run"]
+
 FREQUENCIES_HZ = np.array([1.23, 1.29, 1.45, 3.87, 4.25, 5.39])
 N_SENSORS, FS_HZ, SECONDS, ZETA, NOISE = 22, 40.0, 330.0, 0.015, 0.02
 
@@ -50,7 +54,6 @@ def record(phi, seed):
 
 
 def run(seed=20) -> dict:
-    from experiments.cli import main
 
     phi = building_shapes()
     channels = [list(range(2 + 5 * s, 7 + 5 * s)) + [0, 1] for s in range(4)]

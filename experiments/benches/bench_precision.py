@@ -55,6 +55,13 @@ from pathlib import Path
 import numpy as np
 
 from experiments.studies.doc_tables import write_table
+from physics.identification.methods import METHODS
+from physics.errors import BeamDamageError
+from physics.identification.fft_peak import identify_fft_peaks
+from physics.estimation import estimate_frf
+from physics.identification.lscf import identify_lscf
+from physics.io import atomic_write_bytes
+import io
 
 __all__ = ["AMBIENT", "DECAY", "Case", "ambient_records", "crb_ambient_hz", "crb_decay_hz", "decay_records",
            "identify_modes", "main", "match_modes", "markdown", "record_methods", "run_case", "summarise"]
@@ -205,7 +212,6 @@ def crb_ambient_hz(duration_s: float) -> np.ndarray:
 
 def record_methods() -> list[str]:
     """The output-only methods of :data:`METHODS`, ``fftpeak`` first."""
-    from physics.identification.methods import METHODS
 
     names = [n for n, s in METHODS.items() if s.data == "records"]
     return sorted(names, key=lambda n: n != "fftpeak")
@@ -213,8 +219,6 @@ def record_methods() -> list[str]:
 
 def identify_modes(method: str, signals, fs, truth_hz):
     """Natural frequencies (Hz) of ``method`` nearest each truth mode within :data:`MATCH` (NaN: not found)."""
-    from physics.errors import BeamDamageError
-    from physics.identification.methods import METHODS
 
     spec = METHODS[method]
     try:
@@ -343,8 +347,6 @@ def _scatter_rows(set_name, tests, freqs_by_method, reference, by):
 
 def _reference_modes(method, signals, fs, n_max=6):
     """The modes the others are matched to: ``method``'s on one test (its ``n_max`` most prominent for fftpeak)."""
-    from physics.identification.fft_peak import identify_fft_peaks
-    from physics.identification.methods import METHODS
 
     if method == "fftpeak":
         return identify_fft_peaks(signals, fs, n_modes=n_max)[0].natural_frequencies_hz
@@ -356,9 +358,6 @@ def _reference_modes(method, signals, fs, n_max=6):
 
 
 def _pyfrf_rows(path):
-    from physics.errors import BeamDamageError
-    from physics.estimation import estimate_frf
-    from physics.identification.lscf import identify_lscf
 
     d = np.load(path)
     fs, force, resp = float(d["sampling_frequency_hz"]), d["force"], d["response"]
@@ -393,7 +392,6 @@ def convert_real(pyfrf_dir, hct_dir, out_dir=REAL_DIR) -> list[Path]:
     ``pyfrf_dir`` holds ``measurements_1.npy`` ... ``measurements_5.npy`` (rows: time (s), excitation, response);
     ``hct_dir`` holds ``dherita1.asc`` ... ``dherita4.asc`` (one column per channel, 40 Hz). Either may be None.
     """
-    from physics.io import atomic_write_bytes
 
     out_dir = Path(out_dir)
     written = []
@@ -414,7 +412,6 @@ def convert_real(pyfrf_dir, hct_dir, out_dir=REAL_DIR) -> list[Path]:
 
 
 def _write_npz(path, write, **arrays):
-    import io
 
     buf = io.BytesIO()
     np.savez_compressed(buf, **arrays)

@@ -42,6 +42,7 @@ from experiments.second_sim.ambient import ambient_record, write_npz
 from experiments.second_sim.fem import N_ELEMENTS, Beam, PointMass, Slit, assemble, mesh_elements, modes
 from experiments.second_sim.response import Damping, Noise, measure, receptance
 from experiments.second_sim.writers import write_csv, write_json, write_text_atomic, write_uff
+import itertools
 
 __all__ = ["SERIES_KINDS", "SLIT_SIZES", "FrequencySeries", "FrequencySeriesConfig", "SeriesConfig", "SeriesTest",
            "frequency_series", "mass_loss_pattern", "nominal_series_beam",
@@ -359,7 +360,6 @@ class FrequencySeries:
 
 def _cubic_terms(P):
     """Every monomial of degree <= 3 of the columns of ``P`` (n, 3) in [-1, 1]: (n, 20)."""
-    import itertools
 
     cols = [np.ones(len(P))]
     for deg in (1, 2, 3):

@@ -29,6 +29,7 @@ import numpy as np
 
 from learn.monitor.alarm_threshold import TAIL_SHARE, Threshold, _folds, missing_evidence, threshold, training_size
 from learn.monitor.normal_models import PCARemoval, Regression, _impute
+from datetime import datetime
 
 __all__ = ["STATISTICS", "Detection", "detect", "environmental", "held_out_statistics", "season_warning",
            "sidak_rate", "statistics_of"]
@@ -222,7 +223,6 @@ def season_warning(times, time_values, n_baseline: int, names) -> str | None:
     dates, ``time_values`` days) that spans less than :data:`SEASONS_DAYS` while later tests lie beyond it: the
     seasons it did not see move the environmental scores and the shift about the baseline mean as a change would
     (None otherwise)."""
-    from datetime import datetime
 
     env = [nm for nm in names if nm in ("environment", "shift")]
     if not env or times is None or not len(times) or times[0] is None:
