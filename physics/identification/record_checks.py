@@ -52,8 +52,8 @@ def check_periods(duration_s, frequency_hz, what, where="record"):
     """Refuse a record shorter than :data:`MIN_PERIODS` periods of ``frequency_hz`` (``what`` names it)."""
     if frequency_hz > 0 and duration_s < MIN_PERIODS / frequency_hz:
         raise ShapeError(f"{where}: {duration_s:.3g} s is shorter than ten periods of {what} "
-                         f"({frequency_hz:.4g} Hz): modes below {MIN_PERIODS / duration_s:.3g} Hz cannot be "
-                         "identified")
+                         f"({frequency_hz:.4g} Hz): it needs at least {MIN_PERIODS / frequency_hz:.3g} s; modes below "
+                         f"{MIN_PERIODS / duration_s:.3g} Hz cannot be identified from it")
 
 
 def check_records(signals, sampling_frequency_hz, band_hz=None, where="record", chunk_values=2**22) -> CheckedRecord:
