@@ -27,7 +27,7 @@ from physics.identification.fdd import clear_peaks, singular_value_spectrum, uni
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles
 from physics.identification.record_checks import CheckedRecord, check_periods, check_records
-from physics.identification.ssi import MIN_MAX_ORDER, ORDERS_PER_PEAK, SUB_BAND_PEAK_RATIO, subspace_diagram
+from physics.identification.ssi import MIN_MAX_ORDER, ORDERS_PER_PEAK, subspace_diagram
 
 __all__ = ["Decays", "ERAIdentification", "FreeResponse", "find_decays", "free_response", "identify_era"]
 
@@ -35,6 +35,11 @@ __all__ = ["Decays", "ERAIdentification", "FreeResponse", "find_decays", "free_r
 PREDICTOR_ORDER = 24
 #: A hit: a sample whose innovation, over the channels, exceeds this many robust standard deviations.
 HIT_SIGMA = 8.0
+#: A hit seen as a rise: the first differences' energy over the next window at least this many times that over the
+#: window before ...
+HIT_RISE = 4.0
+#: ... and at least this fraction of the loudest window's.
+HIT_LEVEL = 0.05
 #: A free response: its decays' energy falls by at least this much from their first to their last quarter (dB) ...
 FREE_DROP_DB = 6.0
 #: ... or, for a record without a hit (a decay under way when the record starts), by this much.
@@ -114,27 +119,55 @@ def _innovations(x):
 
 
 def _quarter_drop_db(x, a, b):
-    """Energy of the first quarter of samples ``a:b`` over that of the last quarter (dB)."""
+    """Energy (about the samples' own mean) of the first quarter of samples ``a:b`` over that of the last (dB)."""
     k = max(1, (b - a) // 4)
-    first, last = np.sum(x[:, a:a + k] ** 2), np.sum(x[:, b - k:b] ** 2)
+    seg = x[:, a:b] - x[:, a:b].mean(axis=1, keepdims=True)
+    first, last = np.sum(seg[:, :k] ** 2), np.sum(seg[:, -k:] ** 2)
     return float(10 * np.log10(max(first, np.finfo(float).tiny) / max(last, np.finfo(float).tiny)))
+
+
+def _rises(x, innovation, p):
+    """Hits seen as a sharp rise of the energy of the first differences (the channels each scaled to unit
+    variance): the energy over the next window at least :data:`HIT_RISE` times that over the window before and
+    :data:`HIT_LEVEL` of the loudest window's, the window about one period of the loudest channel's oscillation.
+    Each hit is placed at the largest innovation within the window of its rise: ``(first, last)`` sample arrays."""
+    n = x.shape[1]
+    loud = int(np.argmax(np.sum(x ** 2, axis=1)))
+    crossings = np.count_nonzero(np.diff(np.signbit(x[loud])))
+    w = int(np.clip(round(2 * n / max(crossings, 1)), 4, max(4, n // 50)))
+    d = np.diff(x, axis=1)
+    e = np.concatenate([[0.0], np.sum(d ** 2 / np.maximum(d.var(axis=1, keepdims=True), np.finfo(float).tiny),
+                                      axis=0)])
+    c = np.concatenate([[0.0], np.cumsum(e)])
+    k = np.arange(w, n - w)
+    before, after = c[k] - c[k - w], c[k + w] - c[k]
+    rise = (after >= HIT_RISE * before) & (after >= HIT_LEVEL * after.max(initial=0.0))
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], rise.astype(int), [0]])))
+    onsets = k[edges[0::2]] if edges.size else np.zeros(0, int)
+    at = np.array([o + int(np.argmax(innovation[o:o + w + 1])) for o in onsets], int)
+    return at, np.minimum(at + p // 4, n - 1)
 
 
 def find_decays(checked: CheckedRecord, min_samples=None) -> Decays:
     """The hits and free decays of a checked record (see the module docstring).
 
     A hit is a run of samples whose innovation (the one-step prediction error of a linear predictor of each
-    channel, which a free response does not have) exceeds :data:`HIT_SIGMA` robust standard deviations; runs
-    closer than the predictor's order are one hit. Each decay runs from the sample after a hit to the sample
-    before the next one (or the record's end); the part before the first hit (or the whole record, without a hit)
-    from its loudest sample on is a decay when its energy falls :data:`FREE_DROP_NO_HIT_DB` from its first to its
-    last quarter. Decays shorter than ``min_samples`` (default four times the predictor's order) are left out.
+    channel, which a free response does not have) exceeds :data:`HIT_SIGMA` robust standard deviations, or a
+    sharp rise of the record's energy (:data:`HIT_RISE`; an impulse on a displacement or strain record, or a
+    release, shows only a small innovation) placed at the largest innovation near it; hits closer than the
+    predictor's order are one. Each decay runs from the sample after a hit to the sample before the next one (or
+    the record's end); the part before the first hit (or the whole record, without a hit) from its loudest sample
+    on is a decay when its energy falls :data:`FREE_DROP_NO_HIT_DB` from its first to its last quarter. Decays
+    shorter than ``min_samples`` (default four times the predictor's order) are left out.
     """
     x = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
     n_ch, n = x.shape
     p = int(min(PREDICTOR_ORDER, max(2, n // 20)))
     least = 4 * p if min_samples is None else int(min_samples)
-    over = np.flatnonzero(_innovations(x) > HIT_SIGMA ** 2 * n_ch)
+    innovation = _innovations(x)
+    over = np.flatnonzero(innovation > HIT_SIGMA ** 2 * n_ch)
+    r_first, r_last = _rises(x, innovation, p)
+    over = np.unique(np.concatenate([over, r_first, r_last]))
     if over.size:
         gaps = np.flatnonzero(np.diff(over) > p)
         firsts, lasts = over[np.concatenate([[0], gaps + 1])], over[np.concatenate([gaps, [over.size - 1]])]
@@ -220,8 +253,9 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     signals : array_like, shape (n_channels, n_samples), or CheckedRecord
     sampling_frequency_hz : float
     band_hz : (float, float), optional
-        Modes kept (Hz); the decays are decimated to it. Default: 0 to 0.4 of the sampling rate, decimated to
-        :data:`~physics.identification.ssi.SUB_BAND_PEAK_RATIO` times the highest clear peak of the spectrum.
+        Modes kept (Hz); the decays are decimated to it. Default: 0 to 0.4 of the sampling rate, the decays
+        decimated so that the Hankel's :data:`MAX_HANKEL_ROWS` rows span about one period of the lowest clear
+        peak of the spectrum (the band then ends at 0.4 of the decimated rate).
     n_modes : int, optional
         Modes to keep (default: every stable cluster; with it, the steadiest).
     max_order : int, optional
@@ -251,14 +285,15 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         raise ShapeError(f"{where}: no free decay found (no hit followed by enough samples, nor a decaying "
                          "record); identify a stationary response with --method ssi")
     peaks = clear_peaks(singular_value_spectrum(checked, where=where))
-    hi = band[1]
-    if band_hz is None and peaks.frequency_hz.size:
-        hi = min(hi, SUB_BAND_PEAK_RATIO * peaks.frequency_hz.max())
-    q = max(1, int(fs // (2.5 * hi)))
+    rows_wanted = MAX_HANKEL_ROWS // n_ch
+    q = max(1, int(fs // (2.5 * band[1])))
+    if band_hz is None and peaks.frequency_hz.size:     # oversampled: rows span one period of the lowest peak
+        q = max(1, int(fs // (peaks.frequency_hz[0] * rows_wanted)))
+    hi = min(band[1], fs / (2.5 * q))
     fs_dec = fs / q
     parts = _decimated(checked, q, decays)
     shortest = min((p.shape[1] for p in parts), default=0)
-    rows = min(MAX_HANKEL_ROWS // n_ch, shortest // MIN_DECAY_ROWS)
+    rows = min(rows_wanted, shortest // MIN_DECAY_ROWS)
     longest = max((p.shape[1] for p in parts), default=0)
     if rows < 2:
         need = MIN_DECAY_ROWS * 2 * q + 8 * q
