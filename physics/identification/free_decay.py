@@ -29,7 +29,8 @@ from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, sele
 from physics.identification.record_checks import CheckedRecord, check_periods, check_records
 from physics.identification.ssi import MIN_MAX_ORDER, ORDERS_PER_PEAK, subspace_diagram
 
-__all__ = ["Decays", "ERAIdentification", "FreeResponse", "find_decays", "free_response", "identify_era"]
+__all__ = ["Decays", "ERAIdentification", "FreeResponse", "find_decays", "free_response", "identify_era",
+           "mode_snr"]
 
 #: Order of the linear predictor (per channel) whose innovations mark the hits.
 PREDICTOR_ORDER = 24
@@ -42,10 +43,15 @@ HIT_RISE = 4.0
 HIT_LEVEL = 0.05
 #: A free response: its decays' energy falls by at least this much from their first to their last quarter (dB) ...
 FREE_DROP_DB = 6.0
+#: ... or the first decay after a hit is this much louder than the record before the hit (dB) ...
+FREE_LEAD_DB = 10.0
 #: ... or, for a record without a hit (a decay under way when the record starts), by this much.
 FREE_DROP_NO_HIT_DB = 10.0
 #: Largest block Hankel dimension (block rows x channels) of the ERA.
 MAX_HANKEL_ROWS = 160
+#: A refined pole is kept when its energy over the decays is at least this many noise variances (:func:`mode_snr`;
+#: a pole fitted to white noise alone reaches about 2 ln(n_samples)).
+MIN_MODE_SNR = 50.0
 #: A decay holds at least this many times the Hankel's block rows (shorter decays are left out).
 MIN_DECAY_ROWS = 3
 
@@ -63,12 +69,16 @@ class Decays:
     drop_db : float
         Energy of the decays' first quarters over that of their last quarters (dB, a length-weighted mean; NaN
         without a decay).
+    lead_db : float
+        Mean energy of the first decay after a hit over that of the samples before the first hit (dB; NaN
+        without a hit, or with fewer samples before it than the least decay).
     """
 
     hits: np.ndarray
     starts: np.ndarray
     stops: np.ndarray
     drop_db: float
+    lead_db: float = np.nan
 
 
 @dataclass(frozen=True)
@@ -92,8 +102,9 @@ class FreeResponse:
         if not d.starts.size:
             return f"not a free response: {hits}, no decay"
         what = "a free response" if self.free else "not a free response"
+        lead = f", {d.lead_db:.0f} dB louder than the record before the first hit" if np.isfinite(d.lead_db) else ""
         return (f"{what}: {hits}, {d.starts.size} decay{'s' if d.starts.size != 1 else ''} whose energy falls "
-                f"{d.drop_db:.0f} dB from their first to their last quarter")
+                f"{d.drop_db:.0f} dB from their first to their last quarter{lead}")
 
 
 def _innovations(x):
@@ -182,15 +193,23 @@ def find_decays(checked: CheckedRecord, min_samples=None) -> Decays:
         if head - s0 >= least and _quarter_drop_db(x, s0, head) >= FREE_DROP_NO_HIT_DB:
             spans, drop = [(s0, head), *spans], [_quarter_drop_db(x, s0, head), *drop]
     drop_db = float(np.average(drop, weights=[b - a for a, b in spans])) if spans else np.nan
+    lead_db = np.nan
+    after = [(a, b) for a, b in spans if a > head]
+    if head >= least and after:
+        seg = x[:, after[0][0]:after[0][1]]
+        lead_db = float(10 * np.log10(max(np.mean(seg.var(axis=1)), np.finfo(float).tiny)
+                                      / max(np.mean(x[:, :head].var(axis=1)), np.finfo(float).tiny)))
     return Decays(lasts.astype(int), np.array([a for a, _ in spans], int), np.array([b for _, b in spans], int),
-                  drop_db)
+                  drop_db, lead_db)
 
 
 def free_response(checked: CheckedRecord) -> FreeResponse:
     """Whether a checked record is a free response: it holds a decay, and its decays' energy falls by
-    :data:`FREE_DROP_DB` from their first to their last quarter (a length-weighted mean in dB)."""
+    :data:`FREE_DROP_DB` from their first to their last quarter (a length-weighted mean in dB), or the first decay
+    after a hit is :data:`FREE_LEAD_DB` louder than the record before the hit (a pre-trigger: lightly damped decays
+    fall little within a record)."""
     decays = find_decays(checked)
-    free = decays.starts.size > 0 and decays.drop_db >= FREE_DROP_DB
+    free = decays.starts.size > 0 and (decays.drop_db >= FREE_DROP_DB or decays.lead_db >= FREE_LEAD_DB)
     return FreeResponse(bool(free), decays)
 
 
@@ -242,6 +261,16 @@ def _hankel_basis(parts, rows):
     ev, U = np.linalg.eigh(G)
     order = np.argsort(ev)[::-1]
     return U[:, order], np.sqrt(np.maximum(ev[order], 0))
+
+
+def mode_snr(fit: DampedSinusoidFit, lengths, sampling_frequency_hz) -> np.ndarray:
+    """Each fitted mode's energy over the decays (of ``lengths`` samples) and channels, in units of each channel's
+    noise variance, shape (n_modes,): about 2 per decay and channel for a pole fitted to noise alone."""
+    sigma = -fit.eigenvalues.real
+    decay = np.array([np.sum(np.exp(-2 * np.outer(np.arange(n) / sampling_frequency_hz, sigma)), axis=0)
+                      for n in lengths])                                    # (n_decays, n_modes)
+    amp2 = np.abs(fit.amplitudes) ** 2 / np.maximum(fit.noise_std, np.finfo(float).tiny)[None, :, None] ** 2
+    return 0.5 * np.einsum("dcm,dm->m", amp2, decay)
 
 
 def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max_order=None, max_damping=MAX_DAMPING,
@@ -318,7 +347,8 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
                                "max_order, widen the band, or try --method ssi") from None
     fit = fit_damped_sinusoids(parts, fs_dec, sel.eigenvalues)
     keep = (fit.natural_frequencies_hz >= band[0]) & (fit.natural_frequencies_hz <= hi) \
-        & (fit.damping_ratios > 0) & (fit.damping_ratios < max_damping)
+        & (fit.damping_ratios > 0) & (fit.damping_ratios < max_damping) \
+        & (mode_snr(fit, [p.shape[1] for p in parts], fs_dec) >= MIN_MODE_SNR)
     idx = np.flatnonzero(keep)
     if n_modes is not None:
         rank = sorted(idx, key=lambda j: (bool(sel.weakly_stable[j]), -int(sel.count[j])))
