@@ -45,6 +45,8 @@ class DampedSinusoidFit:
     noise_std : ndarray, shape (n_channels,)
         Residual standard deviation of each channel.
     iterations : int
+    residuals : tuple of ndarray, each shape (n_channels, n_samples_d)
+        Each decay less the fitted model (the channel's units).
     """
 
     eigenvalues: np.ndarray
@@ -56,6 +58,7 @@ class DampedSinusoidFit:
     amplitudes: np.ndarray
     noise_std: np.ndarray
     iterations: int
+    residuals: tuple = ()
 
 
 def _basis(t, sigma, omega):
@@ -171,4 +174,5 @@ def fit_damped_sinusoids(decays, sampling_frequency_hz, eigenvalues) -> DampedSi
     z_std = np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", g_z, cov, g_z), 0))
     amps = np.array([(C[:m] - 1j * C[m:2 * m]).T / weights[:, None] for C in coef])      # (n_decays, n_ch, m)
     noise = np.sqrt(sum(np.sum(r ** 2, axis=0) for r in res) / (n_values / n_ch)) / weights
-    return DampedSinusoidFit(-sigma + 1j * omega, fn, zeta, f_std, z_std, cov, amps, noise, it)
+    return DampedSinusoidFit(-sigma + 1j * omega, fn, zeta, f_std, z_std, cov, amps, noise, it,
+                             tuple((r / weights[None, :]).T for r in res))

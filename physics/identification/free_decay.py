@@ -52,6 +52,9 @@ MAX_HANKEL_ROWS = 160
 #: A refined pole is kept when its energy over the decays is at least this many noise variances (:func:`mode_snr`;
 #: a pole fitted to white noise alone reaches about 2 ln(n_samples)).
 MIN_MODE_SNR = 50.0
+#: A decay is cut where the fit's residual energy rises this many times over a window (a hit the segmentation
+#: missed; a cut in a free decay costs only its amplitudes), and fitted again; at most this many rounds.
+SPLIT_RISE, MAX_SPLIT_ROUNDS = 4.0, 2
 #: A decay holds at least this many times the Hankel's block rows (shorter decays are left out).
 MIN_DECAY_ROWS = 3
 
@@ -228,6 +231,8 @@ class ERAIdentification:
         In samples of the record as given.
     decimation : int
     block_rows : int
+    n_fitted : int
+        Decays fitted: those of ``decays`` long enough, split where the fit's residual showed a hit they missed.
     """
 
     estimate: ModalEstimate
@@ -236,6 +241,7 @@ class ERAIdentification:
     decays: Decays
     decimation: int
     block_rows: int
+    n_fitted: int = 0
 
 
 def _decimated(checked, q, decays):
@@ -261,6 +267,28 @@ def _hankel_basis(parts, rows):
     ev, U = np.linalg.eigh(G)
     order = np.argsort(ev)[::-1]
     return U[:, order], np.sqrt(np.maximum(ev[order], 0))
+
+
+def _split_missed_hits(parts, residuals, window):
+    """The decays cut where the fit's residual rises sharply (a hit the segmentation missed): the residual's
+    energy (channels scaled by their median) over the next ``window`` samples :data:`SPLIT_RISE` times that over
+    the window before and than the quietest tenth of the windows; the cut at the first sample past that level."""
+    out = []
+    for y, r in zip(parts, residuals):
+        e = np.sum(r ** 2 / np.maximum(np.median(r ** 2, axis=1, keepdims=True), np.finfo(float).tiny), axis=0)
+        c = np.concatenate([[0.0], np.cumsum(e)]) / window
+        k = np.arange(window, e.size - window)
+        before, after = c[k] - c[k - window], c[k + window] - c[k]
+        floor = np.percentile(c[window:] - c[:-window], 10) if e.size > window else 0.0
+        rise = np.flatnonzero((after >= SPLIT_RISE * before) & (after >= SPLIT_RISE * floor))
+        if not rise.size:
+            out.append(y)
+            continue
+        t = k[rise[0]]
+        loud = np.flatnonzero(e[t:t + window] >= SPLIT_RISE * floor)
+        cut = t + (int(loud[0]) if loud.size else window // 2)
+        out += [y[:, :cut], y[:, cut + 2:]]
+    return out
 
 
 def mode_snr(fit: DampedSinusoidFit, lengths, sampling_frequency_hz) -> np.ndarray:
@@ -328,27 +356,32 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         need = MIN_DECAY_ROWS * 2 * q + 8 * q
         raise ShapeError(f"{where}: its longest decay holds {longest * q} samples at {fs:g} Hz; a decay needs at "
                          f"least {need} samples ({need / fs:.3g} s) for a free-decay model")
-    parts = [p for p in parts if p.shape[1] >= MIN_DECAY_ROWS * rows]
     p_max = max_order or max(MIN_MAX_ORDER, ORDERS_PER_PEAK * peaks.frequency_hz.size)
     p_max = 2 * (min(p_max, (rows - 1) * n_ch) // 2)
     if p_max < 2:
         raise ShapeError(f"{where}: the decays are too short for a model of order 2 ({rows} block rows of "
                          f"{n_ch} channel(s))")
-    U, s = _hankel_basis(parts, rows)
-    orders = np.arange(2, p_max + 1, 2)
     inside = (peaks.frequency_hz >= band[0]) & (peaks.frequency_hz <= hi)
-    diagram = subspace_diagram(U, s, n_ch, orders, fs_dec, (0.0, hi), max_damping)
-    try:
-        sel = select_poles(diagram, peaks_hz=peaks.frequency_hz[inside], peak_tol_hz=peaks.tolerance_hz[inside])
-    except ConvergenceError:
-        lowest = np.min(diagram.natural_frequencies_hz, initial=np.inf)
-        check_periods(checked.duration_s, lowest, "the lowest pole", where)
-        raise ConvergenceError(f"{where}: no pole of the free decays is stable over enough model orders: raise "
-                               "max_order, widen the band, or try --method ssi") from None
-    fit = fit_damped_sinusoids(parts, fs_dec, sel.eigenvalues)
+    for _ in range(1 + MAX_SPLIT_ROUNDS):
+        parts = [p for p in parts if p.shape[1] >= MIN_DECAY_ROWS * rows]
+        U, s = _hankel_basis(parts, rows)
+        diagram = subspace_diagram(U, s, n_ch, np.arange(2, p_max + 1, 2), fs_dec, (0.0, hi), max_damping)
+        try:
+            sel = select_poles(diagram, peaks_hz=peaks.frequency_hz[inside],
+                               peak_tol_hz=peaks.tolerance_hz[inside])
+        except ConvergenceError:
+            lowest = np.min(diagram.natural_frequencies_hz, initial=np.inf)
+            check_periods(checked.duration_s, lowest, "the lowest pole", where)
+            raise ConvergenceError(f"{where}: no pole of the free decays is stable over enough model orders: raise "
+                                   "max_order, widen the band, or try --method ssi") from None
+        fit, fitted = fit_damped_sinusoids(parts, fs_dec, sel.eigenvalues), parts
+        split = _split_missed_hits(parts, fit.residuals, rows)
+        if len(split) == len(parts):
+            break
+        parts = split
     keep = (fit.natural_frequencies_hz >= band[0]) & (fit.natural_frequencies_hz <= hi) \
         & (fit.damping_ratios > 0) & (fit.damping_ratios < max_damping) \
-        & (mode_snr(fit, [p.shape[1] for p in parts], fs_dec) >= MIN_MODE_SNR)
+        & (mode_snr(fit, [p.shape[1] for p in fitted], fs_dec) >= MIN_MODE_SNR)
     idx = np.flatnonzero(keep)
     if n_modes is not None:
         rank = sorted(idx, key=lambda j: (bool(sel.weakly_stable[j]), -int(sel.count[j])))
@@ -366,4 +399,4 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     est = ModalEstimate(fn, zeta, fit.eigenvalues[idx], shapes, np.zeros((n_ch, 0, idx.size), complex),
                         fit.frequency_std_hz[idx], fit.damping_std[idx], modal_phase_collinearity(shapes), "era",
                         False, weakly_stable=np.asarray(sel.weakly_stable, bool)[idx])
-    return ERAIdentification(est, diagram, fit, decays, q, rows)
+    return ERAIdentification(est, diagram, fit, decays, q, rows, len(fitted))

@@ -176,3 +176,20 @@ def test_a_flat_topped_record_is_refused_with_the_run_named():
     assert "\n" not in str(err.value)
     y, fs = _quantised_decay(2)
     check_records(y[None], fs)                             # the same record unclipped passes
+
+
+def test_identify_prints_the_free_decay_choice_and_writes_its_modes(capsys, tmp_path):
+    from experiments.cli import main
+
+    y = _frame(3)
+    path = tmp_path / "frame.npz"
+    np.savez(path, signals=y, sampling_frequency_hz=np.array(FRAME_FS),
+             dofs=np.array(["1:+X", "2:+X", "3:+X", "4:+X"]), quantity=np.array("acceleration"))
+    assert main(["identify", str(path), "--out", str(tmp_path / "id")]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("picked era: response records without a force channel, a free response: 3 hits")
+    assert "4 modes by era" in out
+    import json
+
+    saved = json.loads((tmp_path / "id" / "modal.json").read_text())
+    assert saved["method"] == "era" and len(saved["frequency_std_hz"]) == 4
