@@ -38,6 +38,8 @@ from physics.io.timedata import TimeRecords
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests"))
 from impact_records import crb_frequency_std_hz, fft_peak_hz, impact_record, poles  # noqa: E402
 
+__all__ = ["decay_case", "frame_case", "main", "scope_case"]
+
 
 def _quiet(fn, *args, **kwargs):
     with warnings.catch_warnings():
@@ -60,9 +62,9 @@ def decay_case(draws):
     for seed in range(draws):
         y, _, sd = impact_record(fs, n, fn, zeta, shape, [t0], 0.05, seed)
         e = _quiet(identify_era, y, fs).estimate
-        era.append(_nearest(e.natural_frequencies_hz, fn))
-        era_std.append(_nearest(e.natural_frequencies_hz, fn) * 0 + e.frequency_std_hz[
-            np.argmin(np.abs(e.natural_frequencies_hz[:, None] - fn[None, :]), axis=0)])
+        nearest = np.argmin(np.abs(e.natural_frequencies_hz[:, None] - fn[None, :]), axis=0)
+        era.append(e.natural_frequencies_hz[nearest])
+        era_std.append(e.frequency_std_hz[nearest])
         fft.append(fft_peak_hz(y[0], fs, fn))
         try:
             ssi.append(_nearest(_quiet(identify_ssi, y, fs).estimate.natural_frequencies_hz, fn))
