@@ -41,6 +41,8 @@ HIT_SIGMA = 8.0
 HIT_RISE = 4.0
 #: ... and at least this fraction of the loudest window's.
 HIT_LEVEL = 0.05
+#: A record of more values (channels x samples) is not searched for hits (read whole): a stationary response.
+MAX_FREE_VALUES = 2 ** 24
 #: A free response: its decays' energy falls by at least this much from their first to their last quarter (dB) ...
 FREE_DROP_DB = 6.0
 #: ... or the first decay after a hit is this much louder than the record before the hit (dB) ...
@@ -92,13 +94,18 @@ class FreeResponse:
     ----------
     free : bool
     decays : Decays
+    note : str
+        Why the record was not searched for hits (empty when it was).
     """
 
     free: bool
     decays: Decays
+    note: str = ""
 
     @property
     def text(self) -> str:
+        if self.note:
+            return f"not a free response: {self.note}"
         d = self.decays
         n = d.hits.size
         hits = f"{n} hit{'s' if n != 1 else ''}" if n else "no hit"
@@ -207,10 +214,15 @@ def find_decays(checked: CheckedRecord, min_samples=None) -> Decays:
 
 
 def free_response(checked: CheckedRecord) -> FreeResponse:
-    """Whether a checked record is a free response: it holds a decay, and its decays' energy falls by
+    """Whether a checked record is a free response (a record of more than :data:`MAX_FREE_VALUES` values is
+    not, unread): it holds a decay, and its decays' energy falls by
     :data:`FREE_DROP_DB` from their first to their last quarter (a length-weighted mean in dB), or the first decay
     after a hit is :data:`FREE_LEAD_DB` louder than the record before the hit (a pre-trigger: lightly damped decays
     fall little within a record)."""
+    if checked.signals.size > MAX_FREE_VALUES:
+        none = np.zeros(0, int)
+        return FreeResponse(False, Decays(none, none, none, np.nan), f"{checked.signals.shape[1]} samples: longer "
+                            "than a free response's capture, not searched for hits")
     decays = find_decays(checked)
     free = decays.starts.size > 0 and (decays.drop_db >= FREE_DROP_DB or decays.lead_db >= FREE_LEAD_DB)
     return FreeResponse(bool(free), decays)

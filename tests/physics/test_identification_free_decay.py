@@ -193,3 +193,29 @@ def test_identify_prints_the_free_decay_choice_and_writes_its_modes(capsys, tmp_
 
     saved = json.loads((tmp_path / "id" / "modal.json").read_text())
     assert saved["method"] == "era" and len(saved["frequency_std_hz"]) == 4
+
+
+def test_a_record_too_long_for_a_capture_is_not_searched_for_hits(monkeypatch):
+    import physics.identification.free_decay as fd
+
+    monkeypatch.setattr(fd, "MAX_FREE_VALUES", 4 * FRAME_N - 1)
+    res = free_response(check_records(_frame(0), FRAME_FS))
+    assert not res.free and res.text == ("not a free response: 4096 samples: longer than a free response's capture, "
+                                         "not searched for hits")
+
+
+def test_when_the_picked_method_finds_no_mode_the_other_is_tried_and_named(monkeypatch):
+    from dataclasses import replace
+
+    from physics.errors import ConvergenceError
+    from physics.identification.methods import METHODS
+
+    def no_mode(*args, **kwargs):
+        raise ConvergenceError("test.npz: no pole of the free decays is stable over enough model orders")
+
+    monkeypatch.setitem(METHODS, "era", replace(METHODS["era"], fit=no_mode))
+    res = _quiet(identify_records, _records(_frame(0), FRAME_FS))
+    assert res.estimate.method == "ssi"
+    assert res.method_choice.startswith("picked era: response records without a force channel, a free response")
+    assert res.method_choice.endswith("era found no mode (test.npz: no pole of the free decays is stable over enough "
+                                      "model orders), so ssi")
