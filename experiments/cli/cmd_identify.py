@@ -12,7 +12,7 @@ from physics.errors import BeamDamageError, ConfigError
 from physics.identification import (DEFAULT_OUTPUT_ONLY, METHODS, Identification, RecordsIdentification,
                                     holds_response_records, identify_file, identify_records,
                                     read_response_records, reconstruction_error_db)
-from physics.identification.output_only import SCALING
+from physics.identification.output_only import FREE_RESPONSE_METHOD, SCALING, STATIONARY_METHOD
 from physics.identification.setups import MergedSetups, finite_mac, merge_setups
 from physics.io import (FRF, TIME, MeasuredFRF, NodeGeometry, accepted, format_complex, measured_positions, read,
                         atomic_write_text, modal_data_to_dict)
@@ -46,8 +46,8 @@ def records_result_dict(ident: RecordsIdentification, band_hz, picked: bool) -> 
     e, rec = ident.estimate, ident.records
     fs = rec.sampling_frequency_hz
     band = list(band_hz) if band_hz else [0.0, 0.4 * fs]
-    why = (f"picked {e.method}: response records without a force channel are identified output-only"
-           if picked else f"{e.method}: output-only (named by --method)")
+    why = (ident.method_choice or f"picked {e.method}: response records without a force channel are identified "
+           "output-only") if picked else f"{e.method}: output-only (named by --method)"
     return {"file": rec.metadata.get("source"), "method": e.method, "output_only": True,
             "method_choice": why, "kind": rec.quantities[0],
             "band_hz": [float(b) for b in band], "sampling_frequency_hz": fs,
@@ -168,6 +168,7 @@ def _run_output_only(args, records, band) -> dict:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         ident = identify_records(records, method, band, args.modes, args.max_order)
+        method = ident.estimate.method                # the method picked: every setup by the same
         others = [identify_records(read_response_records(f), method, band, args.modes, args.max_order)
                   for f in getattr(args, "setup", None) or ()]
     out = records_result_dict(ident, band, picked=args.method is None)
@@ -251,8 +252,9 @@ def add_parser(sub):
     p.add_argument("file", metavar="FILE", help=f"FRF file: {accepted(FRF)}; or response time records without a "
                                                 f"force (output-only): {accepted(TIME)}")
     p.add_argument("--method", default=None, choices=list(METHODS),
-                   help="identification method (default: lscf for FRFs, "
-                        f"{DEFAULT_OUTPUT_ONLY} for response records without a force; see the methods above)")
+                   help="identification method (default: lscf for FRFs; for response records without a force "
+                        f"{FREE_RESPONSE_METHOD} for a free response (decays after hits), {STATIONARY_METHOD} "
+                        "otherwise; see the methods above)")
     p.add_argument("--setup", action="append", metavar="FILE",
                    help="output-only: another setup's response records (repeatable); its modes are scaled onto "
                         "FILE's on the DOFs every setup measures (fixed references; by position for files without "
@@ -262,8 +264,8 @@ def add_parser(sub):
     p.add_argument("--band", nargs=2, type=float, metavar=("FMIN", "FMAX"), help="frequency band in Hz")
     p.add_argument("--modes", type=int, metavar="N", help="number of modes to keep (default: all found)")
     p.add_argument("--max-order", type=int, default=None,
-                   help=f"highest model order (default {LSCF_MAX_ORDER} for lscf; ssi sizes it to the clear peaks "
-                        "of the record's spectrum; used by "
+                   help=f"highest model order (default {LSCF_MAX_ORDER} for lscf; ssi and era size it to the "
+                        "clear peaks of the record's spectrum; used by "
                         f"{', '.join(m for m, spec in METHODS.items() if 'max_order' in spec.options)})")
     p.add_argument("--out", metavar="DIR",
                    help="write modal.json (feedable to 'beam-damage update --modal'), synthesised.uff (the "

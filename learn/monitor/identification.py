@@ -147,7 +147,7 @@ def identify_test(path, settings: IdentificationSettings) -> IdentifiedModes:
             raise BeamDamageError(f"{path}: SSI-cov identification failed ({exc})") from None
         fs = rec.sampling_frequency_hz
         f, z, shapes = _modes_of(ident.estimate.eigenvalues, ident.estimate.shapes)
-        return IdentifiedModes("response records", DEFAULT_OUTPUT_ONLY, f, z, shapes, tuple(rec.dofs), (),
+        return IdentifiedModes("response records", ident.estimate.method, f, z, shapes, tuple(rec.dofs), (),
                          (0.0, fs / 2), fs / rec.signals.shape[1])
 
     with warnings.catch_warnings():

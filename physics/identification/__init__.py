@@ -12,8 +12,11 @@ Modules (each name below is re-exported here):
 ``ssi``       output-only: covariance-driven stochastic subspace identification of response records
 ``fdd``       output-only: frequency-domain decomposition and enhanced FDD of response records
 ``fft_peak``  output-only baseline: peaks of the zero-padded FFT of the whole record (method ``fftpeak``)
-``output_only`` :func:`identify_records` on response records (no force) by an output-only method of the table
 ``setups``    output-only: several setups (roving sensors, fixed references) merged into one set of shapes
+``free_decay`` output-only, free responses: the decays after hits, ERA and the least-squares refinement
+``damped_sinusoids`` variable-projection fit of damped sinusoids common to free decays (one sigma of the poles)
+``output_only`` :func:`identify_records` on response records (no force) by an output-only method of the table, or
+              the one it picks (free response: ``era``; otherwise ``ssi``)
 
 Conventions: FRF arrays are ``(n_responses, n_references, n_lines)`` receptances
 (m/N) unless stated; frequencies carry ``_hz`` or ``_rad_s`` in their names.

@@ -17,6 +17,7 @@ from physics.errors import ShapeError
 from physics.frf import convert_frf, pole_residue
 from physics.identification.fdd import identify_fdd
 from physics.identification.fft_peak import identify_fft_peaks
+from physics.identification.free_decay import identify_era
 from physics.identification.lscf import identify_lscf
 from physics.identification.sdof import circle_fit, peak_picking
 from physics.identification.ssi import identify_ssi
@@ -88,6 +89,11 @@ def _fit_ssi(signals, fs, band_hz, n_modes, where, max_order):
     return res.estimate, res.diagram
 
 
+def _fit_era(signals, fs, band_hz, n_modes, where, max_order):
+    res = identify_era(signals, fs, band_hz, n_modes, max_order=max_order, where=where)
+    return res.estimate, res.diagram
+
+
 def _fit_fdd(signals, fs, band_hz, n_modes, where, enhanced):
     return identify_fdd(signals, fs, band_hz, n_modes, enhanced=enhanced, where=where).estimate, None
 
@@ -123,6 +129,14 @@ METHODS: dict[str, MethodSpec] = {
         "automatic stabilisation-diagram selection",
         (("frequency_std_hz, damping_std", "standard error from the spread of the mode over segments of the "
                                            "record (divided by sqrt of their number)"),),
+        yields_uncertainty=True, options=("max_order",), data="records"),
+    "era": MethodSpec(
+        _fit_era,
+        "output-only, free responses (impacts or plucks without the force): the decays after the hits by the "
+        "Eigensystem Realisation Algorithm with automatic stabilisation-diagram selection, the poles refined by a "
+        "nonlinear least-squares fit of damped sinusoids to the samples",
+        (("frequency_std_hz, damping_std", "one sigma from the least-squares fit of the decays (covariance of the "
+                                           "poles with the amplitudes unknown; white noise)"),),
         yields_uncertainty=True, options=("max_order",), data="records"),
     "fdd": MethodSpec(
         partial(_fit_fdd, enhanced=False),

@@ -7,21 +7,27 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from physics.io.inputs import MAX_BYTES, check_input_file
-from physics.errors import ConfigError, FileFormatError
+from physics.errors import ConfigError, ConvergenceError, FileFormatError, ShapeError
+from physics.identification.free_decay import free_response
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate
 from physics.identification.poles import StabilisationDiagram
+from physics.identification.record_checks import check_records
 from physics.io import FRF, ModalData, TIME, format_of, read
 from physics.io.timedata import TimeRecords
 from physics.io.uff58 import UffFile
 from physics.identification.setups import MergedSetups, merge_setups   # the multi-setup merge
 import zipfile
 
-__all__ = ["DEFAULT_OUTPUT_ONLY", "SCALING", "MergedSetups", "RecordsIdentification", "holds_response_records",
+__all__ = ["DEFAULT_OUTPUT_ONLY", "FREE_RESPONSE_METHOD", "SCALING", "STATIONARY_METHOD", "MergedSetups",
+           "RecordsIdentification", "holds_response_records",
            "identify_records", "merge_setups", "read_response_records"]
 
-#: The method ``identify`` picks for a file of response records without a force channel.
-DEFAULT_OUTPUT_ONLY = "ssi"
+#: The method ``identify`` takes for a file of response records without a force channel: ``"auto"`` picks
+#: :data:`FREE_RESPONSE_METHOD` for a free response (decays after hits,
+#: :func:`~physics.identification.free_decay.free_response`), :data:`STATIONARY_METHOD` otherwise.
+DEFAULT_OUTPUT_ONLY = "auto"
+FREE_RESPONSE_METHOD, STATIONARY_METHOD = "era", "ssi"
 #: What modal.json says of output-only shapes.
 SCALING = "unscaled (output-only: no force measured, so no modal mass)"
 
@@ -37,11 +43,14 @@ class RecordsIdentification:
     estimate : ModalEstimate
         Unit-norm, unscaled shapes over ``records.dofs``.
     diagram : StabilisationDiagram or None
+    method_choice : str
+        Which method was picked and why (``"auto"``); empty for a method named by the caller.
     """
 
     records: TimeRecords
     estimate: ModalEstimate
     diagram: StabilisationDiagram | None
+    method_choice: str = ""
 
     @property
     def modal_data(self) -> ModalData:
@@ -101,25 +110,49 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
     records : TimeRecords
         Response channels only (see :func:`read_response_records`).
     method : str
-        A key of :data:`METHODS` with ``data == "records"``.
+        A key of :data:`METHODS` with ``data == "records"``, or ``"auto"``: :data:`FREE_RESPONSE_METHOD` for a
+        free response (:func:`~physics.identification.free_decay.free_response`: decays after hits),
+        :data:`STATIONARY_METHOD` otherwise; when the picked method finds no mode, the other is tried, and
+        :attr:`RecordsIdentification.method_choice` says so.
     band_hz : (float, float), optional
     n_modes : int, optional
     max_order : int, optional
-        Highest SSI model order (state dimension; default sized to the record's spectrum).
+        Highest model order of SSI/ERA (state dimension; default sized to the record's spectrum).
 
     Returns
     -------
     RecordsIdentification
     """
-    spec = METHODS.get(method)
-    if spec is None or spec.data != "records":
-        names = [n for n, s in METHODS.items() if s.data == "records"]
+    names = [n for n, spec in METHODS.items() if spec.data == "records"]
+    if method != "auto" and (method not in METHODS or METHODS[method].data != "records"):
         raise ConfigError(f"method {method!r}: response records without a force are identified output-only, by "
-                          f"{', '.join(names)}")
+                          f"{', '.join(names)} (or auto)")
     if band_hz is not None and not band_hz[0] < band_hz[1]:
         raise ConfigError(f"band_hz ({band_hz[0]}, {band_hz[1]}): the lower bound must be below the upper")
     where = str(records.metadata.get("source", "records"))
-    options = {"max_order": max_order}
-    est, diagram = spec.fit(records.signals, records.sampling_frequency_hz, band_hz, n_modes, where,
-                            **{k: options[k] for k in spec.options})
-    return RecordsIdentification(records, est, diagram)
+    fs = records.sampling_frequency_hz
+
+    def fit(name):
+        spec = METHODS[name]
+        options = {"max_order": max_order}
+        return spec.fit(records.signals, fs, band_hz, n_modes, where, **{k: options[k] for k in spec.options})
+
+    if method != "auto":
+        est, diagram = fit(method)
+        return RecordsIdentification(records, est, diagram)
+    verdict = free_response(check_records(records.signals, fs, band_hz, where))
+    picked = FREE_RESPONSE_METHOD if verdict.free else STATIONARY_METHOD
+    why = (f"picked {picked}: response records without a force channel, {verdict.text}"
+           + ("" if verdict.free else " (identified as a stationary response)"))
+    try:
+        est, diagram = fit(picked)
+    except (ConvergenceError, ShapeError) as first:
+        other = STATIONARY_METHOD if verdict.free else FREE_RESPONSE_METHOD
+        if other == FREE_RESPONSE_METHOD and not verdict.decays.starts.size:
+            raise
+        try:
+            est, diagram = fit(other)
+        except (ConvergenceError, ShapeError):
+            raise first from None
+        why = f"{why}; {picked} found no mode ({first}), so {other}"
+    return RecordsIdentification(records, est, diagram, why)

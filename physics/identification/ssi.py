@@ -35,7 +35,8 @@ from physics.identification.poles import (MAX_DAMPING, StabilisationDiagram, mis
 from physics.identification.record_checks import CheckedRecord, check_periods, check_records
 from physics.modal import eigenvalues_from_modal
 
-__all__ = ["OutputCorrelations", "SSIIdentification", "SSIPass", "identify_ssi", "output_correlations", "ssi_poles"]
+__all__ = ["OutputCorrelations", "SSIIdentification", "SSIPass", "identify_ssi", "output_correlations", "ssi_poles",
+           "subspace_diagram"]
 
 @dataclass(frozen=True)
 class OutputCorrelations:
@@ -198,10 +199,35 @@ def ssi_poles(R, sampling_frequency_hz, block_rows, orders, band_hz, max_damping
         unit-norm mode shapes (the vector the stability test compares).
     """
     U, s = _svd(R, block_rows)
-    rows = [_poles_of_order(U, s, R.shape[1], p, sampling_frequency_hz, max_damping, band_hz) for p in orders]
+    return subspace_diagram(U, s, R.shape[1], orders, sampling_frequency_hz, band_hz, max_damping, freq_tol,
+                            damping_tol, mac_tol)
+
+
+def subspace_diagram(U, s, n_out, orders, sampling_frequency_hz, band_hz, max_damping=MAX_DAMPING, freq_tol=0.01,
+                     damping_tol=0.05, mac_tol=0.98) -> StabilisationDiagram:
+    """Stabilisation diagram of the shift-invariant models of the given orders of one column space.
+
+    Parameters
+    ----------
+    U : ndarray, shape (n_out * block_rows, k)
+        Left singular vectors of a block Hankel/Toeplitz matrix whose block rows are successive samples (``n_out``
+        rows each), most significant first.
+    s : ndarray, shape (k,)
+        Their singular values.
+    n_out : int
+        Outputs (rows of a block).
+    orders, sampling_frequency_hz, band_hz, max_damping, freq_tol, damping_tol, mac_tol
+        As :func:`ssi_poles`.
+
+    Returns
+    -------
+    StabilisationDiagram
+        As :func:`ssi_poles`.
+    """
+    rows = [_poles_of_order(U, s, n_out, p, sampling_frequency_hz, max_damping, band_hz) for p in orders]
     order = np.concatenate([np.full(r[0].size, p // 2) for p, r in zip(orders, rows)])
     fn, zeta, lam = (np.concatenate([r[k] for r in rows]) for k in range(3))
-    phi = np.concatenate([r[3] for r in rows], axis=0) if rows else np.zeros((0, R.shape[1]), complex)
+    phi = np.concatenate([r[3] for r in rows], axis=0) if rows else np.zeros((0, n_out), complex)
     status = stability_status(order, fn, zeta, phi, freq_tol, damping_tol, mac_tol)
     return StabilisationDiagram(order, lam, fn, zeta, phi, status, tuple(float(b) for b in band_hz))
 
@@ -252,6 +278,8 @@ MAX_TOEPLITZ_ROWS = 160
 MIN_BLOCK_ROWS, MIN_MAX_ORDER = 30, 40
 #: The automatic highest model order (state dimension) is at least this many per clear peak of the pass's band.
 ORDERS_PER_PEAK = 8
+#: Fewest block rows of a pass: a (decimated) record shorter than eight times this is not identified in that band.
+MIN_SUPPORTED_ROWS = 4
 #: Most passes (the whole band, then lower sub-bands decimated further).
 MAX_PASSES = 4
 #: A mode whose pass's correlation lags span fewer of its periods is identified again in a sub-band.
@@ -322,13 +350,14 @@ class SSIIdentification:
 
 
 def _pass_sizes(fs_dec, n_dec, lowest_hz, n_peaks, n_ch, n_ref, max_order, block_rows):
-    """Block rows and highest model order of a pass (the given ones, or sized to its band)."""
+    """Block rows and highest model order of a pass (the given ones, or sized to its band and to the record: at
+    most ``n_dec // 8`` block rows, so that the ``2 i`` correlation lags are a quarter of the decimated samples)."""
     if block_rows:
         i = int(block_rows)
     else:
         least = max(MIN_BLOCK_ROWS, int(np.ceil((max_order or 0) / n_ref)) + 1)
         want = int(np.ceil(BLOCK_ROW_PERIODS * fs_dec / lowest_hz)) if lowest_hz else least
-        i = max(least, min(want, MAX_TOEPLITZ_ROWS // n_ch, n_dec // 8))
+        i = min(max(least, min(want, MAX_TOEPLITZ_ROWS // n_ch)), n_dec // 8)
     p = max_order or min(max(MIN_MAX_ORDER, ORDERS_PER_PEAK * n_peaks), i * min(n_ref, n_ch))
     return i, 2 * (p // 2)
 
@@ -342,8 +371,12 @@ def _ssi_pass(checked, band, peaks, tol_hz, max_order, block_rows, references, n
     q = max(1, int(fs // (2.5 * band[1])))
     inside = (peaks.frequency_hz >= band[0]) & (peaks.frequency_hz <= band[1])
     lowest = peaks.frequency_hz[inside][0] if inside.any() else None
-    i, p = _pass_sizes(fs / q, checked.signals.shape[1] // q, lowest, int(inside.sum()), n_ch, n_ref, max_order,
-                       block_rows)
+    n_dec = checked.signals.shape[1] // q
+    i, p = _pass_sizes(fs / q, n_dec, lowest, int(inside.sum()), n_ch, n_ref, max_order, block_rows)
+    if i < MIN_SUPPORTED_ROWS or p < 2:
+        raise ShapeError(f"{where}: {checked.signals.shape[1]} samples at {fs:g} Hz, decimated to {n_dec} for the "
+                         f"band up to {band[1]:.4g} Hz, hold too few samples for an SSI-cov model (at least "
+                         f"{8 * MIN_SUPPORTED_ROWS * q} samples, {8 * MIN_SUPPORTED_ROWS * q / fs:.3g} s)")
     if p > i * min(n_ref, n_ch):
         raise ShapeError(f"{where}: max_order {p} exceeds block_rows x channels = {i * min(n_ref, n_ch)}")
     cor = output_correlations(checked, fs, 2 * i, references, band, n_segments, chunk_samples, where)
@@ -421,8 +454,13 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     passes, modes, missed = [], [], []
     hi = band[1]
     for k in range(MAX_PASSES):
-        this, sel, seg = _ssi_pass(checked, (band[0], hi), peaks, tol_hz, max_order, block_rows, references,
-                                   n_segments, max_damping, chunk_samples, where)
+        try:
+            this, sel, seg = _ssi_pass(checked, (band[0], hi), peaks, tol_hz, max_order, block_rows, references,
+                                       n_segments, max_damping, chunk_samples, where)
+        except ShapeError:
+            if not k:
+                raise
+            break                              # a sub-band the (decimated) record is too short for: not identified
         passes.append(this)
         at = (peaks.frequency_hz >= this.band_hz[0]) & (peaks.frequency_hz <= this.band_hz[1])
         missed.append(missed_clusters(this.diagram, peaks.frequency_hz[at], tol_hz[at]))   # as select_poles saw it

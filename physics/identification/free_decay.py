@@ -1,0 +1,414 @@
+"""Output-only identification of free responses: the decays after impacts (or plucks) recorded without the force.
+
+:func:`find_decays` segments a record into decays: a hit is a run of samples a free response cannot predict (large
+one-step prediction errors of a linear predictor of each channel); each decay runs from just after its hit to the
+next hit (or the record's end). :func:`free_response` tells a free response from a
+stationary one: its decays' energy falls from their start to their end.
+
+:func:`identify_era` identifies the decays jointly (common poles, amplitudes of each decay its own): the
+Eigensystem Realisation Algorithm (Kung's shift invariance) on the block Hankel matrix of the decay samples of all
+channels gives a model of every order from one eigen-decomposition, the stabilisation diagram's physical poles
+are selected by :func:`~physics.identification.poles.select_poles` (as for SSI-cov and LSCF), then refined by the
+nonlinear least-squares fit of damped sinusoids to the samples
+(:func:`~physics.identification.damped_sinusoids.fit_damped_sinusoids`), whose covariance gives the one-sigma
+frequency and damping. Shapes: the dominant direction of each mode's complex amplitudes over the decays,
+unit-norm and unscaled (no force measured).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from physics.errors import ConvergenceError, ShapeError
+from physics.identification.damped_sinusoids import DampedSinusoidFit, fit_damped_sinusoids
+from physics.identification.fdd import clear_peaks, singular_value_spectrum, unit_shapes
+from physics.identification.modes import ModalEstimate, modal_phase_collinearity
+from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles
+from physics.identification.record_checks import CheckedRecord, check_periods, check_records
+from physics.identification.ssi import MIN_MAX_ORDER, ORDERS_PER_PEAK, subspace_diagram
+
+__all__ = ["Decays", "ERAIdentification", "FreeResponse", "find_decays", "free_response", "identify_era",
+           "mode_snr"]
+
+#: Order of the linear predictor (per channel) whose innovations mark the hits.
+PREDICTOR_ORDER = 24
+#: A hit: a sample whose innovation, over the channels, exceeds this many robust standard deviations.
+HIT_SIGMA = 8.0
+#: A hit seen as a rise: the first differences' energy over the next window at least this many times that over the
+#: window before ...
+HIT_RISE = 4.0
+#: ... and at least this fraction of the loudest window's.
+HIT_LEVEL = 0.05
+#: A record of more values (channels x samples) is not searched for hits (read whole): a stationary response.
+MAX_FREE_VALUES = 2 ** 24
+#: A free response: its decays' energy falls by at least this much from their first to their last quarter (dB) ...
+FREE_DROP_DB = 6.0
+#: ... or the first decay after a hit is this much louder than the record before the hit (dB) ...
+FREE_LEAD_DB = 10.0
+#: ... or, for a record without a hit (a decay under way when the record starts), by this much.
+FREE_DROP_NO_HIT_DB = 10.0
+#: Largest block Hankel dimension (block rows x channels) of the ERA.
+MAX_HANKEL_ROWS = 160
+#: A refined pole is kept when its energy over the decays is at least this many noise variances (:func:`mode_snr`;
+#: a pole fitted to white noise alone reaches about 2 ln(n_samples)).
+MIN_MODE_SNR = 50.0
+#: A decay is cut where the fit's residual energy rises this many times over a window (a hit the segmentation
+#: missed; a cut in a free decay costs only its amplitudes), and fitted again; at most this many rounds.
+SPLIT_RISE, MAX_SPLIT_ROUNDS = 4.0, 2
+#: A decay holds at least this many times the Hankel's block rows (shorter decays are left out).
+MIN_DECAY_ROWS = 3
+
+
+@dataclass(frozen=True)
+class Decays:
+    """The free decays of a record.
+
+    Attributes
+    ----------
+    hits : ndarray of int, shape (n_hits,)
+        Last sample of each hit (a run of samples the free response cannot predict).
+    starts, stops : ndarray of int, shape (n_decays,)
+        First sample and one past the last of each decay.
+    drop_db : float
+        Energy of the decays' first quarters over that of their last quarters (dB, a length-weighted mean; NaN
+        without a decay).
+    lead_db : float
+        Mean energy of the first decay after a hit over that of the samples before the first hit (dB; NaN
+        without a hit, or with fewer samples before it than the least decay).
+    """
+
+    hits: np.ndarray
+    starts: np.ndarray
+    stops: np.ndarray
+    drop_db: float
+    lead_db: float = np.nan
+
+
+@dataclass(frozen=True)
+class FreeResponse:
+    """Whether a record is a free response, and why (see :func:`free_response`).
+
+    Attributes
+    ----------
+    free : bool
+    decays : Decays
+    note : str
+        Why the record was not searched for hits (empty when it was).
+    """
+
+    free: bool
+    decays: Decays
+    note: str = ""
+
+    @property
+    def text(self) -> str:
+        if self.note:
+            return f"not a free response: {self.note}"
+        d = self.decays
+        n = d.hits.size
+        hits = f"{n} hit{'s' if n != 1 else ''}" if n else "no hit"
+        if not d.starts.size:
+            return f"not a free response: {hits}, no decay"
+        what = "a free response" if self.free else "not a free response"
+        lead = f", {d.lead_db:.0f} dB louder than the record before the first hit" if np.isfinite(d.lead_db) else ""
+        return (f"{what}: {hits}, {d.starts.size} decay{'s' if d.starts.size != 1 else ''} whose energy falls "
+                f"{d.drop_db:.0f} dB from their first to their last quarter{lead}")
+
+
+def _innovations(x):
+    """Squared one-step prediction errors of each channel's own linear predictor (Yule-Walker, order
+    :data:`PREDICTOR_ORDER`), in robust standard deviations, summed over the channels: shape (n_samples,)."""
+    from scipy import fft as sfft  # scipy.fft/signal/ndimage: about 1 s to import, only output-only identification
+    from scipy import linalg, signal  # scipy: only output-only identification
+
+    n_ch, n = x.shape
+    p = int(min(PREDICTOR_ORDER, max(2, n // 20)))
+    nfft = sfft.next_fast_len(2 * n, real=True)
+    r = sfft.irfft(np.abs(sfft.rfft(x, nfft, axis=1)) ** 2, nfft, axis=1)[:, :p + 1]
+    total = np.zeros(n)
+    for c in range(n_ch):
+        if r[c, 0] <= 0:
+            continue
+        a = linalg.solve_toeplitz(r[c, :p] + 1e-9 * r[c, 0] * (np.arange(p) == 0), r[c, 1:p + 1])
+        e = signal.lfilter(np.concatenate([[1.0], -a]), [1.0], x[c])
+        e[:p] = 0.0                                    # no prediction before p samples
+        scale = 1.4826 * np.median(np.abs(e[p:] - np.median(e[p:])))
+        total += (e / max(scale, 1e-12 * np.sqrt(r[c, 0] / n))) ** 2
+    return total
+
+
+def _quarter_drop_db(x, a, b):
+    """Energy (about the samples' own mean) of the first quarter of samples ``a:b`` over that of the last (dB)."""
+    k = max(1, (b - a) // 4)
+    seg = x[:, a:b] - x[:, a:b].mean(axis=1, keepdims=True)
+    first, last = np.sum(seg[:, :k] ** 2), np.sum(seg[:, -k:] ** 2)
+    return float(10 * np.log10(max(first, np.finfo(float).tiny) / max(last, np.finfo(float).tiny)))
+
+
+def _rises(x, innovation, p):
+    """Hits seen as a sharp rise of the energy of the first differences (the channels each scaled to unit
+    variance): the energy over the next window at least :data:`HIT_RISE` times that over the window before and
+    :data:`HIT_LEVEL` of the loudest window's, the window about one period of the loudest channel's oscillation.
+    Each hit is placed at the largest innovation within the window of its rise: ``(first, last)`` sample arrays."""
+    n = x.shape[1]
+    loud = int(np.argmax(np.sum(x ** 2, axis=1)))
+    crossings = np.count_nonzero(np.diff(np.signbit(x[loud])))
+    w = int(np.clip(round(2 * n / max(crossings, 1)), 4, max(4, n // 50)))
+    d = np.diff(x, axis=1)
+    e = np.concatenate([[0.0], np.sum(d ** 2 / np.maximum(d.var(axis=1, keepdims=True), np.finfo(float).tiny),
+                                      axis=0)])
+    c = np.concatenate([[0.0], np.cumsum(e)])
+    k = np.arange(w, n - w)
+    before, after = c[k] - c[k - w], c[k + w] - c[k]
+    rise = (after >= HIT_RISE * before) & (after >= HIT_LEVEL * after.max(initial=0.0))
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], rise.astype(int), [0]])))
+    onsets = k[edges[0::2]] if edges.size else np.zeros(0, int)
+    at = np.array([o + int(np.argmax(innovation[o:o + w + 1])) for o in onsets], int)
+    return at, np.minimum(at + p // 4, n - 1)
+
+
+def find_decays(checked: CheckedRecord, min_samples=None) -> Decays:
+    """The hits and free decays of a checked record (see the module docstring).
+
+    A hit is a run of samples whose innovation (the one-step prediction error of a linear predictor of each
+    channel, which a free response does not have) exceeds :data:`HIT_SIGMA` robust standard deviations, or a
+    sharp rise of the record's energy (:data:`HIT_RISE`; an impulse on a displacement or strain record, or a
+    release, shows only a small innovation) placed at the largest innovation near it; hits closer than the
+    predictor's order are one. Each decay runs from the sample after a hit to the sample before the next one (or
+    the record's end); the part before the first hit (or the whole record, without a hit) from its loudest sample
+    on is a decay when its energy falls :data:`FREE_DROP_NO_HIT_DB` from its first to its last quarter. Decays
+    shorter than ``min_samples`` (default four times the predictor's order) are left out.
+    """
+    x = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
+    n_ch, n = x.shape
+    p = int(min(PREDICTOR_ORDER, max(2, n // 20)))
+    least = 4 * p if min_samples is None else int(min_samples)
+    innovation = _innovations(x)
+    over = np.flatnonzero(innovation > HIT_SIGMA ** 2 * n_ch)
+    r_first, r_last = _rises(x, innovation, p)
+    over = np.unique(np.concatenate([over, r_first, r_last]))
+    if over.size:
+        gaps = np.flatnonzero(np.diff(over) > p)
+        firsts, lasts = over[np.concatenate([[0], gaps + 1])], over[np.concatenate([gaps, [over.size - 1]])]
+    else:
+        firsts = lasts = np.zeros(0, int)
+    spans = [(int(last) + 1, int(nxt)) for last, nxt in zip(lasts, [*firsts[1:], n])]
+    spans = [(a, b) for a, b in spans if b - a >= least]
+    drop = [_quarter_drop_db(x, a, b) for a, b in spans]
+    head = int(firsts[0]) if firsts.size else n
+    if head >= least:
+        s0 = int(np.argmax(np.sum(x[:, :head] ** 2, axis=0)))
+        if head - s0 >= least and _quarter_drop_db(x, s0, head) >= FREE_DROP_NO_HIT_DB:
+            spans, drop = [(s0, head), *spans], [_quarter_drop_db(x, s0, head), *drop]
+    drop_db = float(np.average(drop, weights=[b - a for a, b in spans])) if spans else np.nan
+    lead_db = np.nan
+    after = [(a, b) for a, b in spans if a > head]
+    if head >= least and after:
+        seg = x[:, after[0][0]:after[0][1]]
+        lead_db = float(10 * np.log10(max(np.mean(seg.var(axis=1)), np.finfo(float).tiny)
+                                      / max(np.mean(x[:, :head].var(axis=1)), np.finfo(float).tiny)))
+    return Decays(lasts.astype(int), np.array([a for a, _ in spans], int), np.array([b for _, b in spans], int),
+                  drop_db, lead_db)
+
+
+def free_response(checked: CheckedRecord) -> FreeResponse:
+    """Whether a checked record is a free response (a record of more than :data:`MAX_FREE_VALUES` values is
+    not, unread): it holds a decay, and its decays' energy falls by
+    :data:`FREE_DROP_DB` from their first to their last quarter (a length-weighted mean in dB), or the first decay
+    after a hit is :data:`FREE_LEAD_DB` louder than the record before the hit (a pre-trigger: lightly damped decays
+    fall little within a record)."""
+    if checked.signals.size > MAX_FREE_VALUES:
+        none = np.zeros(0, int)
+        return FreeResponse(False, Decays(none, none, none, np.nan), f"{checked.signals.shape[1]} samples: longer "
+                            "than a free response's capture, not searched for hits")
+    decays = find_decays(checked)
+    free = decays.starts.size > 0 and (decays.drop_db >= FREE_DROP_DB or decays.lead_db >= FREE_LEAD_DB)
+    return FreeResponse(bool(free), decays)
+
+
+@dataclass(frozen=True)
+class ERAIdentification:
+    """A free-decay identification (see the module docstring).
+
+    Attributes
+    ----------
+    estimate : ModalEstimate
+        Unit-norm, unscaled shapes; ``frequency_std_hz``/``damping_std`` from the least-squares fit.
+    diagram : StabilisationDiagram
+    fit : DampedSinusoidFit
+        The refinement of every selected pole (the estimate keeps those in the band).
+    decays : Decays
+        In samples of the record as given.
+    decimation : int
+    block_rows : int
+    n_fitted : int
+        Decays fitted: those of ``decays`` long enough, split where the fit's residual showed a hit they missed.
+    """
+
+    estimate: ModalEstimate
+    diagram: StabilisationDiagram
+    fit: DampedSinusoidFit
+    decays: Decays
+    decimation: int
+    block_rows: int
+    n_fitted: int = 0
+
+
+def _decimated(checked, q, decays):
+    """Each decay low-pass filtered (zero phase) and decimated by ``q``: a list of (n_channels, n_d) arrays."""
+    x = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
+    if q == 1:
+        return [x[:, a:b] for a, b in zip(decays.starts, decays.stops)]
+    from scipy import signal  # scipy.fft/signal/ndimage: about 1 s to import, only output-only identification
+
+    x = signal.sosfiltfilt(signal.butter(8, 0.8 / q, output="sos"), x, axis=1)
+    margin = 4 * q                                   # the filter's response to the hit, decimated samples
+    return [x[:, a + margin:b:q] for a, b in zip(decays.starts, decays.stops) if b - a > margin]
+
+
+def _hankel_basis(parts, rows):
+    """Left singular vectors and values of the block Hankel matrix of the decays (``rows`` samples per column)."""
+    n_ch = parts[0].shape[0]
+    G = np.zeros((rows * n_ch, rows * n_ch))
+    for y in parts:
+        H = np.lib.stride_tricks.sliding_window_view(y, rows, axis=1)       # (n_ch, n_cols, rows)
+        H = H.transpose(1, 2, 0).reshape(H.shape[1], rows * n_ch)
+        G += H.T @ H
+    ev, U = np.linalg.eigh(G)
+    order = np.argsort(ev)[::-1]
+    return U[:, order], np.sqrt(np.maximum(ev[order], 0))
+
+
+def _split_missed_hits(parts, residuals, window):
+    """The decays cut where the fit's residual rises sharply (a hit the segmentation missed): the residual's
+    energy (channels scaled by their median) over the next ``window`` samples :data:`SPLIT_RISE` times that over
+    the window before and than the quietest tenth of the windows; the cut at the first sample past that level."""
+    out = []
+    for y, r in zip(parts, residuals):
+        e = np.sum(r ** 2 / np.maximum(np.median(r ** 2, axis=1, keepdims=True), np.finfo(float).tiny), axis=0)
+        c = np.concatenate([[0.0], np.cumsum(e)]) / window
+        k = np.arange(window, e.size - window)
+        before, after = c[k] - c[k - window], c[k + window] - c[k]
+        floor = np.percentile(c[window:] - c[:-window], 10) if e.size > window else 0.0
+        rise = np.flatnonzero((after >= SPLIT_RISE * before) & (after >= SPLIT_RISE * floor))
+        if not rise.size:
+            out.append(y)
+            continue
+        t = k[rise[0]]
+        loud = np.flatnonzero(e[t:t + window] >= SPLIT_RISE * floor)
+        cut = t + (int(loud[0]) if loud.size else window // 2)
+        out += [y[:, :cut], y[:, cut + 2:]]
+    return out
+
+
+def mode_snr(fit: DampedSinusoidFit, lengths, sampling_frequency_hz) -> np.ndarray:
+    """Each fitted mode's energy over the decays (of ``lengths`` samples) and channels, in units of each channel's
+    noise variance, shape (n_modes,): about 2 per decay and channel for a pole fitted to noise alone."""
+    sigma = -fit.eigenvalues.real
+    decay = np.array([np.sum(np.exp(-2 * np.outer(np.arange(n) / sampling_frequency_hz, sigma)), axis=0)
+                      for n in lengths])                                    # (n_decays, n_modes)
+    amp2 = np.abs(fit.amplitudes) ** 2 / np.maximum(fit.noise_std, np.finfo(float).tiny)[None, :, None] ** 2
+    return 0.5 * np.einsum("dcm,dm->m", amp2, decay)
+
+
+def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max_order=None, max_damping=MAX_DAMPING,
+                 where="record") -> ERAIdentification:
+    """Free-decay identification of a record of impact (or pluck) responses (see the module docstring).
+
+    Parameters
+    ----------
+    signals : array_like, shape (n_channels, n_samples), or CheckedRecord
+    sampling_frequency_hz : float
+    band_hz : (float, float), optional
+        Modes kept (Hz); the decays are decimated to it. Default: 0 to 0.4 of the sampling rate, the decays
+        decimated so that the Hankel's :data:`MAX_HANKEL_ROWS` rows span about one period of the lowest clear
+        peak of the spectrum (the band then ends at 0.4 of the decimated rate).
+    n_modes : int, optional
+        Modes to keep (default: every stable cluster; with it, the steadiest).
+    max_order : int, optional
+        Highest model order (state dimension; default :data:`ORDERS_PER_PEAK` per clear peak, at least
+        :data:`MIN_MAX_ORDER`, at most the Hankel's rows less one block).
+    max_damping : float
+    where : str
+
+    Returns
+    -------
+    ERAIdentification
+
+    Raises
+    ------
+    ShapeError
+        A record :func:`~physics.identification.record_checks.check_records` refuses, no decay, or decays too short
+        for a model; shorter than ten periods of the lowest mode.
+    ConvergenceError
+        No stable pole, or a singular fit.
+    """
+    checked = signals if isinstance(signals, CheckedRecord) else \
+        check_records(signals, sampling_frequency_hz, band_hz, where)
+    fs, band = checked.sampling_frequency_hz, checked.band_hz
+    n_ch = checked.signals.shape[0]
+    decays = find_decays(checked)
+    if decays.starts.size == 0:
+        raise ShapeError(f"{where}: no free decay found (no hit followed by enough samples, nor a decaying "
+                         "record); identify a stationary response with --method ssi")
+    peaks = clear_peaks(singular_value_spectrum(checked, where=where))
+    rows_wanted = MAX_HANKEL_ROWS // n_ch
+    q = max(1, int(fs // (2.5 * band[1])))
+    if band_hz is None and peaks.frequency_hz.size:     # oversampled: rows span one period of the lowest peak
+        q = max(1, int(fs // (peaks.frequency_hz[0] * rows_wanted)))
+    hi = min(band[1], fs / (2.5 * q))
+    fs_dec = fs / q
+    parts = _decimated(checked, q, decays)
+    shortest = min((p.shape[1] for p in parts), default=0)
+    rows = min(rows_wanted, shortest // MIN_DECAY_ROWS)
+    longest = max((p.shape[1] for p in parts), default=0)
+    if rows < 2:
+        need = MIN_DECAY_ROWS * 2 * q + 8 * q
+        raise ShapeError(f"{where}: its longest decay holds {longest * q} samples at {fs:g} Hz; a decay needs at "
+                         f"least {need} samples ({need / fs:.3g} s) for a free-decay model")
+    p_max = max_order or max(MIN_MAX_ORDER, ORDERS_PER_PEAK * peaks.frequency_hz.size)
+    p_max = 2 * (min(p_max, (rows - 1) * n_ch) // 2)
+    if p_max < 2:
+        raise ShapeError(f"{where}: the decays are too short for a model of order 2 ({rows} block rows of "
+                         f"{n_ch} channel(s))")
+    inside = (peaks.frequency_hz >= band[0]) & (peaks.frequency_hz <= hi)
+    for _ in range(1 + MAX_SPLIT_ROUNDS):
+        parts = [p for p in parts if p.shape[1] >= MIN_DECAY_ROWS * rows]
+        U, s = _hankel_basis(parts, rows)
+        diagram = subspace_diagram(U, s, n_ch, np.arange(2, p_max + 1, 2), fs_dec, (0.0, hi), max_damping)
+        try:
+            sel = select_poles(diagram, peaks_hz=peaks.frequency_hz[inside],
+                               peak_tol_hz=peaks.tolerance_hz[inside])
+        except ConvergenceError:
+            lowest = np.min(diagram.natural_frequencies_hz, initial=np.inf)
+            check_periods(checked.duration_s, lowest, "the lowest pole", where)
+            raise ConvergenceError(f"{where}: no pole of the free decays is stable over enough model orders: raise "
+                                   "max_order, widen the band, or try --method ssi") from None
+        fit, fitted = fit_damped_sinusoids(parts, fs_dec, sel.eigenvalues), parts
+        split = _split_missed_hits(parts, fit.residuals, rows)
+        if len(split) == len(parts):
+            break
+        parts = split
+    keep = (fit.natural_frequencies_hz >= band[0]) & (fit.natural_frequencies_hz <= hi) \
+        & (fit.damping_ratios > 0) & (fit.damping_ratios < max_damping) \
+        & (mode_snr(fit, [p.shape[1] for p in fitted], fs_dec) >= MIN_MODE_SNR)
+    idx = np.flatnonzero(keep)
+    if n_modes is not None:
+        rank = sorted(idx, key=lambda j: (bool(sel.weakly_stable[j]), -int(sel.count[j])))
+        idx = np.sort(np.array(rank[:n_modes], int))
+    if idx.size == 0:
+        raise ConvergenceError(f"{where}: no refined pole of the free decays lies in {band[0]:g}-{hi:.4g} Hz")
+    check_periods(checked.duration_s, fit.natural_frequencies_hz[idx[0]], "the lowest mode", where)
+    # shapes: the dominant direction of each mode's amplitudes over the decays
+    shapes = np.empty((n_ch, idx.size), complex)
+    for c, j in enumerate(idx):
+        u, _, _ = np.linalg.svd(fit.amplitudes[:, :, j].T, full_matrices=False)
+        shapes[:, c] = u[:, 0]
+    shapes = unit_shapes(shapes)
+    fn, zeta = fit.natural_frequencies_hz[idx], fit.damping_ratios[idx]
+    est = ModalEstimate(fn, zeta, fit.eigenvalues[idx], shapes, np.zeros((n_ch, 0, idx.size), complex),
+                        fit.frequency_std_hz[idx], fit.damping_std[idx], modal_phase_collinearity(shapes), "era",
+                        False, weakly_stable=np.asarray(sel.weakly_stable, bool)[idx])
+    return ERAIdentification(est, diagram, fit, decays, q, rows, len(fitted))

@@ -1,0 +1,221 @@
+"""Free-decay identification (era) against closed-form damped sinusoids, the automatic choice of the output-only
+method, SSI-cov on short records, and the clipping rule."""
+
+import warnings
+
+import numpy as np
+import pytest
+from impact_records import crb_frequency_std_hz, fft_peak_hz, impact_record, poles
+from oma_records import chain_record
+
+from physics.errors import BeamDamageError, ShapeError
+from physics.identification import identify_records
+from physics.identification.free_decay import find_decays, free_response, identify_era
+from physics.identification.record_checks import check_records
+from physics.identification.ssi import identify_ssi
+from physics.io.timedata import TimeRecords
+from physics.modal import mac
+
+#: A two-storey frame's four accelerometers: 8 s at 500 Hz (4096 samples), three hits, no force channel.
+FRAME_FS, FRAME_N = 500.0, 4096
+FRAME_FN, FRAME_ZETA = np.array([4.2, 13.0, 30.0, 45.0]), np.array([0.02, 0.015, 0.02, 0.02])
+FRAME_PHI = np.array([[0.4, 1.0, 0.8, -0.5], [0.7, 0.6, -0.9, 1.0], [1.0, -0.5, 0.3, -0.8], [0.9, -0.9, -0.6, 0.4]])
+FRAME_HITS = [0.3, 2.9, 5.6]
+
+
+def _frame(seed, hits=FRAME_HITS, noise=0.02):
+    return impact_record(FRAME_FS, FRAME_N, FRAME_FN, FRAME_ZETA, FRAME_PHI, hits, noise, seed,
+                         hit_gains=[1.0, -0.7, 1.3][:len(hits)])[0]
+
+
+def _records(y, fs):
+    return TimeRecords(1 / fs, y, tuple(f"{k + 1}:+X" for k in range(y.shape[0])), ("acceleration",) * y.shape[0],
+                       {"source": "test.npz"})
+
+
+def _quiet(fn, *args, **kwargs):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return fn(*args, **kwargs)
+
+
+def test_ssi_identifies_a_short_multichannel_impact_record_whose_sub_band_it_cannot_support():
+    """4096 samples at 500 Hz: the sub-band pass for the 4.2 Hz mode is decimated by 18 (227 samples), too few
+    for 30 block rows (60 lags need 240); the pass is sized to what the record holds instead of failing."""
+    y = impact_record(FRAME_FS, FRAME_N, FRAME_FN, FRAME_ZETA, FRAME_PHI, [0.2], 0.01, 1)[0]
+    res = _quiet(identify_ssi, y, FRAME_FS)
+    assert len(res.passes) >= 2 and res.passes[1].correlations.decimation >= 18
+    assert 2 * res.passes[1].block_rows * 4 <= res.passes[1].correlations.n_samples
+    f = res.estimate.natural_frequencies_hz
+    np.testing.assert_allclose(f[np.argmin(np.abs(f[:, None] - FRAME_FN), axis=0)], FRAME_FN, rtol=3e-3)
+
+
+def test_the_decays_start_just_after_each_hit_and_end_before_the_next():
+    y = _frame(0)
+    d = find_decays(check_records(y, FRAME_FS))
+    true = np.ceil(np.array(FRAME_HITS) * FRAME_FS).astype(int)
+    assert d.hits.size == 3 and np.all((d.hits >= true) & (d.hits <= true + 10))
+    np.testing.assert_array_equal(d.starts, d.hits + 1)
+    assert np.all(d.stops[:-1] <= true[1:] + 1) and np.all(d.stops[:-1] >= true[1:] - 12) and d.stops[-1] == FRAME_N
+
+
+def test_a_free_response_is_told_from_a_stationary_one():
+    free = free_response(check_records(_frame(0), FRAME_FS))
+    assert free.free and free.text.startswith("a free response: 3 hits, 3 decays")
+    y, fs, *_ = chain_record(seconds=120, seed=3)
+    ambient = free_response(check_records(y, fs))
+    assert not ambient.free and ambient.text.startswith("not a free response")
+
+
+def test_era_identifies_the_frame_from_three_hits_with_its_shapes_and_one_sigma():
+    res = _quiet(identify_era, _frame(1), FRAME_FS)
+    e = res.estimate
+    np.testing.assert_allclose(e.natural_frequencies_hz, FRAME_FN, rtol=1e-3)
+    np.testing.assert_allclose(e.damping_ratios, FRAME_ZETA, rtol=0.05)
+    assert np.all(np.diag(mac(FRAME_PHI, e.shapes)) > 0.999)
+    np.testing.assert_allclose(np.linalg.norm(e.shapes, axis=0), 1.0)
+    assert e.method == "era" and not e.scaled and res.decays.starts.size == 3
+    assert np.all((e.frequency_std_hz > 0) & (np.abs(e.natural_frequencies_hz - FRAME_FN) < 4 * e.frequency_std_hz))
+
+
+def _decay_scatter(n_draws):
+    """Frequencies of era and of a zero-padded FFT peak over seeded noise draws of one 3-mode free decay, and the
+    Cramer-Rao bound of the natural frequencies (one channel, 2 s at 1 kHz, a hit at 0.1 s)."""
+    fs, n, t0 = 1000.0, 2000, 0.1
+    fn, zeta = np.array([23.0, 61.0, 97.0]), np.array([0.01, 0.02, 0.015])
+    shape = np.array([[1.0, -0.6, 0.4]])
+    era, fft = [], []
+    for seed in range(n_draws):
+        y, clean, sd = impact_record(fs, n, fn, zeta, shape, [t0], 0.05, seed)
+        f = _quiet(identify_era, y, fs).estimate.natural_frequencies_hz
+        assert f.size == 3
+        era.append(f)
+        fft.append(fft_peak_hz(y[0], fs, fn))
+    lam = poles(fn, zeta)
+    k0 = int(np.ceil(t0 * fs))                       # the decay's amplitudes at its first sample
+    amp = shape[0] / (1j * lam.imag) * np.exp(lam * (k0 / fs - t0))
+    crb = crb_frequency_std_hz(fs, n - k0, fn, zeta, amp, sd)
+    return np.array(era), np.array(fft), crb, fn
+
+
+def _assert_near_the_bound(era, fft, crb, fn):
+    std = era.std(axis=0, ddof=1)
+    assert np.all(std <= 2 * crb), (std, crb)
+    assert np.all(np.abs(era.mean(axis=0) - fn) <= 3 * crb), (era.mean(axis=0) - fn, crb)
+    assert np.all(std <= fft.std(axis=0, ddof=1)), (std, fft.std(axis=0, ddof=1))
+
+
+def test_era_frequency_scatter_is_near_the_cramer_rao_bound_and_below_an_fft_peak():
+    _assert_near_the_bound(*_decay_scatter(12))
+
+
+@pytest.mark.slow
+def test_era_frequency_scatter_over_fifty_draws_is_within_twice_the_cramer_rao_bound():
+    _assert_near_the_bound(*_decay_scatter(50))
+
+
+def test_a_one_channel_8_bit_scope_capture_of_a_tap_is_identified_by_the_automatic_choice():
+    """4 s at 5 kHz, a tap at 0.2 s, quantised to 8 bits over 1.25 times the peak: a handful of samples at the
+    extremes (not clipped); era picked, its 48 Hz frequency within 1e-4 Hz (SSI-cov scatters ten times more)."""
+    fs, n = 5000.0, 20000
+    fn, zeta = np.array([48.0, 301.0]), np.array([0.005, 0.008])
+    y = impact_record(fs, n, fn, zeta, [[1.0, 0.5]], [0.2], 0.002, 4)[0]
+    full = 1.25 * np.abs(y).max()
+    y = np.round(y / full * 127) / 127 * full
+    res = _quiet(identify_records, _records(y, fs))
+    assert res.method_choice.startswith("picked era: response records without a force channel, a free response")
+    e = res.estimate
+    assert e.method == "era" and e.natural_frequencies_hz.size == 2
+    assert abs(e.natural_frequencies_hz[0] - 48.0) < 1e-4 and abs(e.natural_frequencies_hz[1] - 301.0) < 0.1
+    assert 0 < e.frequency_std_hz[0] < 2e-4
+
+
+def test_the_automatic_choice_picks_ssi_for_a_stationary_response():
+    y, fs, fn, *_ = chain_record(seconds=120, seed=3)
+    res = _quiet(identify_records, _records(y, fs), band_hz=(1, 60), max_order=30)
+    assert res.estimate.method == "ssi" and res.method_choice.startswith("picked ssi: response records without")
+    np.testing.assert_allclose(res.estimate.natural_frequencies_hz, fn, rtol=1e-2)
+    assert identify_records(_records(y, fs), "ssi", band_hz=(1, 60), max_order=30).method_choice == ""
+
+
+def test_a_record_too_short_for_its_lowest_mode_says_what_it_needs():
+    y = _frame(0, hits=[0.05])[:, :400]                  # 0.8 s: three periods of 4.2 Hz
+    with pytest.raises(BeamDamageError, match=r"ten periods .* needs at least [0-9.]+ s") as err:
+        _quiet(identify_records, _records(y, FRAME_FS), band_hz=(3, 60))
+    assert "\n" not in str(err.value)
+
+
+def _quantised_decay(seed, clip=None):
+    """One channel, 4 s of a 2500-point scope capture (625 Hz, 10 % pre-trigger): a tap's lightly damped 12 Hz
+    decay (43 periods, its energy falling 2.5 dB) quantised to integer levels, its peak about 60 levels, 0.4 level
+    of noise; optionally clipped at +-``clip`` levels."""
+    fs, n = 625.0, 2500
+    y = impact_record(fs, n, [12.0, 71.0], [0.001, 0.005], [[1.0, 0.3]], [0.4], 0.0, seed)[0][0]
+    y = 60 * y / np.abs(y).max() + 0.4 * np.random.default_rng(seed).standard_normal(n)
+    return np.round(y if clip is None else np.clip(y, -clip, clip)), fs
+
+
+@pytest.mark.parametrize("seed", [0, 2, 4, 9, 16])
+def test_quantised_unclipped_decays_with_a_few_samples_at_the_extremes_pass_and_are_identified(seed):
+    y, fs = _quantised_decay(seed)
+    at = np.sum((y == y.max()) | (y == y.min()))
+    assert 1e-3 * y.size + 2 < at <= 10                  # more than a count of samples at the extremes allowed
+    check_records(y[None], fs)
+    res = _quiet(identify_records, _records(y[None], fs))
+    assert res.estimate.method == "era" and abs(res.estimate.natural_frequencies_hz[0] - 12.0) < 2e-3
+
+
+def test_a_flat_topped_record_is_refused_with_the_run_named():
+    y, fs = _quantised_decay(2, clip=45)
+    top = np.flatnonzero(y == 45)
+    runs = np.split(top, np.flatnonzero(np.diff(top) > 1) + 1)
+    longest = max(runs, key=len)
+    with pytest.raises(ShapeError, match=rf"channel 0 is clipped: samples {longest[0]}-{longest[-1]} "
+                                         rf"\({longest.size} in a row\) are held at its highest value 45,") as err:
+        check_records(y[None], fs)
+    assert "\n" not in str(err.value)
+    y, fs = _quantised_decay(2)
+    check_records(y[None], fs)                             # the same record unclipped passes
+
+
+def test_identify_prints_the_free_decay_choice_and_writes_its_modes(capsys, tmp_path):
+    from experiments.cli import main
+
+    y = _frame(3)
+    path = tmp_path / "frame.npz"
+    np.savez(path, signals=y, sampling_frequency_hz=np.array(FRAME_FS),
+             dofs=np.array(["1:+X", "2:+X", "3:+X", "4:+X"]), quantity=np.array("acceleration"))
+    assert main(["identify", str(path), "--out", str(tmp_path / "id")]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("picked era: response records without a force channel, a free response: 3 hits")
+    assert "4 modes by era" in out
+    import json
+
+    saved = json.loads((tmp_path / "id" / "modal.json").read_text())
+    assert saved["method"] == "era" and len(saved["frequency_std_hz"]) == 4
+
+
+def test_a_record_too_long_for_a_capture_is_not_searched_for_hits(monkeypatch):
+    import physics.identification.free_decay as fd
+
+    monkeypatch.setattr(fd, "MAX_FREE_VALUES", 4 * FRAME_N - 1)
+    res = free_response(check_records(_frame(0), FRAME_FS))
+    assert not res.free and res.text == ("not a free response: 4096 samples: longer than a free response's capture, "
+                                         "not searched for hits")
+
+
+def test_when_the_picked_method_finds_no_mode_the_other_is_tried_and_named(monkeypatch):
+    from dataclasses import replace
+
+    from physics.errors import ConvergenceError
+    from physics.identification.methods import METHODS
+
+    def no_mode(*args, **kwargs):
+        raise ConvergenceError("test.npz: no pole of the free decays is stable over enough model orders")
+
+    monkeypatch.setitem(METHODS, "era", replace(METHODS["era"], fit=no_mode))
+    res = _quiet(identify_records, _records(_frame(0), FRAME_FS))
+    assert res.estimate.method == "ssi"
+    assert res.method_choice.startswith("picked era: response records without a force channel, a free response")
+    assert res.method_choice.endswith("era found no mode (test.npz: no pole of the free decays is stable over enough "
+                                      "model orders), so ssi")
