@@ -12,13 +12,22 @@ from learn.monitor.identification import IdentifiedModes
 from learn.noise_calibration import robust_std
 from physics.modal import mac
 
-__all__ = ["CLUSTER_GAP", "MAC_MIN", "MIN_PRESENCE", "ReferenceModes", "reference_modes", "shapes_at",
+__all__ = ["CLUSTER_GAP", "MAC_MIN", "MIN_COUNT", "MIN_PRESENCE", "ReferenceModes", "reference_modes", "shapes_at",
            "track_modes"]
 
-#: A reference mode is a cluster of baseline poles found in at least this share of the baseline tests.
-MIN_PRESENCE = 0.5
 #: Baseline poles closer than this (relative) in frequency fall into one cluster.
 CLUSTER_GAP = 0.05
+#: A cluster is a reference mode when at least this share of the baseline tests, and at least :data:`MIN_COUNT`
+#: of them, hold a pole within ``CORE`` (relative, half the cluster gap) of its centre. A mode that a test's
+#: identification finds one time in four or five (a weakly excited mode, one near a node of the sensors) is then
+#: tracked as itself, its presence reported, and keeps its poles out of its neighbours' slots; random spurious
+#: poles, 1-2 per test spread over the band, put a pole in one 5 %-wide window in 4-8 % of the tests
+#: (docs/monitoring.md).
+MIN_PRESENCE = 0.15
+#: The fewest baseline tests holding a reference mode: ``learn.monitor.alarm_threshold.minimum_baseline(1)``, the
+#: fewest on which one feature's normal variation is learnt with its held-out index of finite variance.
+MIN_COUNT = 7
+CORE = math.log1p(CLUSTER_GAP / 2)
 #: A pole is assigned to a reference mode within ``max(TOLERANCE_SIGMAS * std, MIN_TOLERANCE)`` of it in log
 #: frequency (std: the baseline's robust scatter of the mode), never beyond ``NEIGHBOUR_SHARE`` of the log gap to
 #: the next reference mode.
@@ -60,9 +69,17 @@ def reference_modes(tests: list) -> ReferenceModes:
     """Reference modes from the baseline tests (identified ones; None entries skipped).
 
     The baseline poles' ``ln f`` are pooled and split where consecutive ones lie more than :data:`CLUSTER_GAP`
-    apart (a cluster holding on average 1.5 poles per test or more is split again at its widest gap); a cluster
-    found in at least :data:`MIN_PRESENCE` of the tests is a reference mode, its frequency the median of each
-    test's pole nearest the cluster's median.
+    apart (a cluster holding on average 1.5 poles per test or more is split again at its widest gap). In each
+    cluster, the densest window ``+-CORE`` (its centre the median of the poles within :data:`CORE`, three
+    fixed-point steps), then the densest among the poles outside it, and so on, is a core while it holds poles of at
+    least :data:`MIN_PRESENCE` of the tests and of at least :data:`MIN_COUNT` of them (half of them on a baseline
+    of fewer than ``2 MIN_COUNT`` tests) beyond the background: the poles of the clusters held by fewer than half
+    of the tests spread evenly over the poles' ``ln f`` span, as many as a window ``2 CORE`` wide holds. Two or
+    more cores in a cluster are as many reference modes (each pole to the nearest); a cluster holding poles of
+    half of the tests is one, centred on its core or else its median; a single core of a cluster held by fewer is
+    one, its poles within ``CORE``: a mode found in a quarter of the tests among spurious poles is tracked as
+    itself. A mode's frequency is the median of each test's pole nearest
+    its centre; ``presence`` the share of the tests holding a pole in it.
     """
     tests = [t for t in tests if t is not None]
     n = len(tests)
@@ -83,17 +100,30 @@ def reference_modes(tests: list) -> ReferenceModes:
         else:
             done.append((a, b))
     done.sort()
+    sparse = sum(b - a for a, b in done if np.unique(who[a:b]).size < 0.5 * n)
+    span = float(logf[-1] - logf[0]) if logf.size > 1 else 0.0
+    background = sparse * 2 * CORE / span if span > 0 else 0.0     # poles of a window where no mode lies
+    need = max(MIN_PRESENCE * n, min(MIN_COUNT, 0.5 * n)) + background
+    groups = []                                 # (members, centre) of each reference mode
+    for a, b in done:
+        idx = np.arange(a, b)
+        centres = _cores(logf[idx], who[idx], need)
+        if len(centres) > 1:                    # modes a gap of less than CLUSTER_GAP joined: each pole to its nearest
+            near = np.argmin(np.abs(logf[idx, None] - np.asarray(centres)[None]), axis=1)
+            groups += [(idx[near == k], c) for k, c in enumerate(centres)]
+        elif np.unique(who[idx]).size >= 0.5 * n:
+            groups.append((idx, centres[0] if centres else float(np.median(logf[idx]))))
+        elif centres:
+            groups.append((idx[np.abs(logf[idx] - centres[0]) <= CORE], centres[0]))
+    groups.sort(key=lambda g: g[1])
     dofs = tests[0].dofs if n else ()
     freqs, stds, presence, shapes = [], [], [], []
-    for a, b in done:
-        centre = np.median(logf[a:b])
+    for members, centre in groups:
         pick = {}
-        for j in range(a, b):
+        for j in members:
             i = int(who[j])
             if i not in pick or abs(logf[j] - centre) < abs(logf[pick[i]] - centre):
-                pick[i] = j
-        if len(pick) < MIN_PRESENCE * n:
-            continue
+                pick[i] = int(j)
         v = logf[list(pick.values())]
         freqs.append(float(np.exp(np.median(v))))
         stds.append(robust_std(v))
@@ -115,6 +145,35 @@ def reference_modes(tests: list) -> ReferenceModes:
     with_shapes = bool(shapes) and all(x is not None for x in shapes)
     return ReferenceModes(f, s, tol, np.stack(shapes, axis=1) if with_shapes else None,
                           tuple(dofs) if with_shapes else (), np.asarray(presence, float))
+
+
+def _cores(logf, who, need: float) -> list:
+    """Centres of the dense windows ``+-CORE`` of sorted ``logf`` holding poles of at least ``need`` tests
+    (``who``: each pole's test), densest first: the window holding most poles, then the densest of the poles
+    left outside it, while one holds enough tests."""
+    left = np.arange(logf.size)
+    centres = []
+    while left.size:
+        x = logf[left]
+        count = np.searchsorted(x, x + CORE, "right") - np.searchsorted(x, x - CORE, "left")
+        centre = _core_centre(x, float(x[int(np.argmax(count))]))
+        inside = np.abs(x - centre) <= CORE
+        if np.unique(who[left[inside]]).size < need:
+            break
+        centres.append(centre)
+        left = left[~inside]
+    return centres
+
+
+def _core_centre(logf, centre: float) -> float:
+    """The centre of the densest part of sorted ``logf`` near ``centre``: three times the median of the values
+    within :data:`CORE` of the last centre."""
+    for _ in range(3):
+        near = logf[np.abs(logf - centre) <= CORE]
+        if near.size == 0:
+            break
+        centre = float(np.median(near))
+    return centre
 
 
 def track_modes(tests: list, ref: ReferenceModes):
