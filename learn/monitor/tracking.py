@@ -8,12 +8,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from learn.monitor.identification import IdentifiedModes
+from learn.monitor.identification import (IdentificationSettings, IdentifiedModes, cached_identification,
+                                          with_narrow_band_poles)
 from learn.noise_calibration import robust_std
 from physics.modal import mac
 
-__all__ = ["CLUSTER_GAP", "MAC_MIN", "MIN_COUNT", "MIN_PRESENCE", "ReferenceModes", "reference_modes", "shapes_at",
-           "track_modes"]
+__all__ = ["CLUSTER_GAP", "MAC_MIN", "MIN_COUNT", "MIN_PRESENCE", "ReferenceModes", "identified_by", "narrow_bands_hz",
+           "reference_modes", "refit_missing", "shapes_at", "track_modes"]
 
 #: Baseline poles closer than this (relative) in frequency fall into one cluster.
 CLUSTER_GAP = 0.05
@@ -207,3 +208,53 @@ def track_modes(tests: list, ref: ReferenceModes):
         if macs is not None:
             M[i, c] = macs[r, c]
     return F, Z, M, cols
+
+
+def narrow_bands_hz(ref: ReferenceModes) -> np.ndarray:
+    """Each reference mode's tracking band ``f_ref exp(-+tolerance)`` (Hz), shape (m, 2): the band of its
+    narrow-band re-identification."""
+    return ref.frequencies_hz[:, None] * np.exp(np.outer(ref.tolerance, [-1.0, 1.0]))
+
+
+def refit_missing(tests: list, files: list, ref: ReferenceModes, settings: IdentificationSettings, cache_dir=None,
+                  pending: list | None = None) -> list:
+    """``tests`` with the modes the identification over the series' band missed found again around them.
+
+    For each test of FRFs or response records (modal data are read as they are) and each reference mode
+    :func:`track_modes` leaves untracked there, the file is identified again over the mode's band alone
+    (:func:`narrow_bands_hz`, within the file's lines; the same method, every mode found there:
+    :func:`learn.monitor.identification.identify_test`, cached like the first identification); the pole of that
+    identification nearest the mode within its tolerance (and, with shapes of 2 or more sensors, MAC >=
+    :data:`MAC_MIN`) is added to the test (its ``narrow_band_hz`` says so). A spurious pole of the first pass never
+    took the mode's place (the assignment is one to one and stops at the tolerance), so a mode missed there is
+    looked for where it lies, not filled from elsewhere.
+    """
+    F = track_modes(tests, ref)[0]
+    bands = narrow_bands_hz(ref)
+    out = list(tests)
+    for i, t in enumerate(tests):
+        if t is None or t.kind == "modal":
+            continue
+        for r in np.flatnonzero(np.isnan(F[i])):
+            lo, hi = bands[r]
+            if t.band_hz is not None:
+                lo, hi = max(lo, t.band_hz[0]), min(hi, t.band_hz[1])
+            if not hi > lo:
+                continue
+            found, _, _ = cached_identification(files[i], settings, cache_dir, pending, (lo, hi))
+            if found is None or found.frequencies_hz.size == 0:
+                continue
+            d = np.abs(np.log(found.frequencies_hz / ref.frequencies_hz[r]))
+            ok = d <= ref.tolerance[r]
+            S = shapes_at(found, ref.dofs) if ref.shapes is not None else None
+            if S is not None:
+                ok &= mac(S, ref.shapes[:, [r]])[:, 0] >= MAC_MIN
+            if ok.any():
+                out[i] = with_narrow_band_poles(out[i], found, [int(np.argmin(np.where(ok, d, np.inf)))])
+    return out
+
+
+def identified_by(tests: list, cols) -> list:
+    """Per test, per reference mode, how its tracked pole was found (:meth:`IdentifiedModes.identified_by`), None
+    where the mode is missing; ``cols`` the poles' columns from :func:`track_modes`."""
+    return [[None if t is None or c < 0 else t.identified_by(int(c)) for c in row] for t, row in zip(tests, cols)]
