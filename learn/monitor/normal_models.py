@@ -45,12 +45,42 @@ def _start(X):
 
 
 def _filled(X, passes: int = 2):
-    """``(X filled, mean, cov)``: the missing entries at their column median, then ``passes`` times at their
-    conditional mean under the Gaussian of the filled rows (:func:`_impute`)."""
+    """``(X filled, mean, cov)``: the missing entries at their column median, then at their conditional mean under
+    the Gaussian of the filled rows (:func:`_impute`), ``passes`` times; without missing entries, their plain mean
+    and covariance. With them, the covariance is that of expectation-maximisation (the filled rows' covariance
+    plus each row's conditional covariance of its missing entries), iterated to convergence: the filled rows' own
+    covariance shrank the variance of a mode found in a quarter of the tests about three times, and a test holding
+    it alarmed 6.4 % of the time for 1 % targeted (3.2 % with this covariance; docs/monitoring.md)."""
     X0 = _start(X)
-    for _ in range(passes):
-        X0 = _impute(X, X0.mean(axis=0), _cov(X0))
-    return X0, X0.mean(axis=0), _cov(X0)
+    miss = ~np.isfinite(np.asarray(X, float))
+    if not miss.any():
+        return X0, X0.mean(axis=0), _cov(X0)
+    mean, cov = X0.mean(axis=0), _cov(X0)
+    for k in range(max(passes, EM_PASSES)):
+        X0 = _impute(X, mean, cov)
+        mean, previous = X0.mean(axis=0), cov
+        cov = _cov(X0) + _missing_cov(miss, cov) / max(len(X0) - 1, 1)
+        if k >= passes and np.allclose(cov, previous, rtol=1e-4, atol=0.0):
+            break
+    return X0, mean, cov
+
+
+#: Most passes of the expectation-maximisation of :func:`_filled` (it stops when the covariance settles).
+EM_PASSES = 50
+
+
+def _missing_cov(miss, cov):
+    """Sum over the rows of the conditional covariance of their missing entries (``miss`` (n, p) bool) given the
+    observed ones under ``N(., cov)``, shape (p, p)."""
+    out = np.zeros_like(cov)
+    patterns, counts = np.unique(miss[miss.any(axis=1)], axis=0, return_counts=True)
+    for mk, c in zip(patterns, counts):
+        o = ~mk
+        block = cov[np.ix_(mk, mk)]
+        if o.any():
+            block = block - cov[np.ix_(mk, o)] @ np.linalg.pinv(cov[np.ix_(o, o)]) @ cov[np.ix_(o, mk)]
+        out[np.ix_(mk, mk)] += c * block
+    return out
 
 
 def _cov(X):
