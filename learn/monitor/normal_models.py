@@ -103,11 +103,17 @@ class Regression:
         self.n_conditions = C.shape[1]
         A = np.c_[np.ones(len(C)), C]
         X0 = _start(X)
-        for _ in range(2):                                  # missing entries: conditional mean, refitted once
+        miss = ~np.isfinite(np.asarray(X, float))
+        d, cov = max(len(X0) - A.shape[1], 1), None
+        for _ in range(EM_PASSES if miss.any() else 1):    # missing entries: expectation-maximisation (_filled)
             self.coef_ = np.linalg.lstsq(A, X0, rcond=None)[0]
             R = X0 - A @ self.coef_
-            self.cov_ = R.T @ R / max(len(X0) - A.shape[1], 1)
-            X0 = _impute(X, A @ self.coef_, self.cov_)
+            new = R.T @ R / d + (0.0 if cov is None else _missing_cov(miss, cov) / d)
+            settled = cov is not None and np.allclose(new, cov, rtol=1e-4, atol=0.0)
+            cov = self.cov_ = new
+            X0 = _impute(X, A @ self.coef_, cov)
+            if settled:
+                break
         tot = np.var(X0, axis=0)
         self.r2_ = 1 - np.var(X0 - A @ self.coef_, axis=0) / np.where(tot > 0, tot, np.nan)
         self.dof_ = X0.shape[1]
