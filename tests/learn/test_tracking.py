@@ -92,18 +92,3 @@ def test_the_narrow_band_refit_finds_a_mode_the_broad_pass_missed(three_mode_frf
     assert identified_by([found], cols)[0] == ["lscf", f"lscf, narrow band {lo:.4g}-{hi:.4g} Hz", "lscf"]
     assert len(pending) == 1                                        # one refit, cached with the series
 
-
-def test_a_mode_found_in_a_quarter_of_the_tests_keeps_its_variance_in_the_normal_variation():
-    """Features of 3 correlated modes (the temperature moves all alike) and one independent; mode 1 found in 25 %
-    of 400 tests. The covariance the latent models learn (expectation-maximisation over the missing entries) is the
-    generating one; the filled rows' own covariance shrank mode 1's variance about three times."""
-    from learn.monitor import PCARemoval
-
-    rng = np.random.default_rng(7)
-    n = 400
-    cov = 1e-4 * np.array([[1.0, 0.9, 0.9, 0.0], [0.9, 1.0, 0.9, 0.0], [0.9, 0.9, 1.0, 0.0], [0.0, 0.0, 0.0, 0.5]])
-    X = rng.multivariate_normal(np.zeros(4), cov, n)
-    X[rng.permutation(n) >= n // 4, 0] = np.nan
-    fitted = PCARemoval(0).fit(X).cov_
-    np.testing.assert_allclose(np.diag(fitted), np.diag(cov), rtol=0.2)
-    assert fitted[0, 1] == pytest.approx(cov[0, 1], rel=0.2)
