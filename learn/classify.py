@@ -12,7 +12,8 @@ from learn.features import (feature_names, frf_features, frequency_features, map
                             with_missing_modes)
 from learn.hypotheses import FREQUENCY_CHANGE_STD, NO_EXPLANATION, SHAPE_CHANGE_STD, explain_many
 from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows, identification_band_hz,
-                            identify_modes, identify_test, modal_pair, mode_checks, nominal_ratio_range)
+                            identify_modes, identify_test, modal_pair, mode_checks, nominal_ratio_range,
+                            refit_missing_modes)
 from learn.mirror import fold_to_half, location_ambiguity, mirrored
 from learn.model_dir import TrainedModel
 from learn.normal_variation import measure, model_modes
@@ -173,6 +174,16 @@ def _measured_pairs(model: TrainedModel, baselines: list, currents: list, names:
         return None, None, identified, None, None, None
     found = found or [None] * len(names)
     nv = measure(mds[:nb], model.beam, sens.frequencies_hz, names[:nb]) if nb > 1 else None
+    if nv is not None and identified:          # a mode of the baselines missed: identified again over its band
+        target_hz, band = nv.targets
+        again = [refit_missing_modes(d, md, target_hz, band, nv.counts > 0, n)
+                 for d, md, n in zip([*baselines, *currents], mds, names)]
+        if any(t for _, t in again):
+            mds = [md for md, _ in again]
+            found = [f if not t else f"{f}; " + ", ".join(f"mode {model.beam.modes[j]} at {hz:.5g} Hz by LSCF over "
+                                                          f"{lo:.5g}-{hi:.5g} Hz" for j, hz, lo, hi in t)
+                     for f, (_, t) in zip(found, again)]
+            nv = measure(mds[:nb], model.beam, sens.frequencies_hz, names[:nb])
     r = 0 if nv is None else nv.reference
     base_md = mds[r]
     target_hz, band = (sens.frequencies_hz, None) if nv is None else nv.targets

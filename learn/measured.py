@@ -20,7 +20,7 @@ from physics.modal import mac
 __all__ = ["BASELINE_PAIR_BAND", "IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "MIN_PAIR_MAC", "RATIO_TOLERANCE",
            "ModalPair", "differences_from_model", "frf_rows", "identification_band_hz", "identify_modes",
            "identify_test", "modal_pair", "mode_checks", "nominal_ratio_range", "on_model_dofs",
-           "pair_modes_by_frequency", "pairing_bands", "unexcited_modes"]
+           "pair_modes_by_frequency", "pairing_bands", "refit_missing_modes", "unexcited_modes"]
 
 #: The identification ``classify`` runs on FRF files: LSCF poles and LSFD residues, the 4 lowest modes. The
 #: training data's modal noise (``measurement.modal_noise = "calibrated"``) is calibrated against this path
@@ -365,6 +365,47 @@ def identify_test(frf, band_hz, where: str = "FRF file"):
     except (np.linalg.LinAlgError, RuntimeError) as exc:
         raise BeamDamageError(f"{where}: LSCF/LSFD identification failed ({exc})") from None
     return ident.modal_data
+
+
+def refit_missing_modes(frf, md, target_hz, band, wanted=None, where: str = "FRF file"):
+    """``(ModalData, found)``: ``md`` (identified from ``frf``) with the modes no pole of it pairs with found again
+    over their own band.
+
+    For each mode ``j`` of ``target_hz`` (those ``wanted``, a bool mask; default all) that no pole of ``md`` pairs
+    with (:func:`pair_modes_by_frequency` within ``band``), ``frf`` is identified again over ``f_j / (1 + b_j)`` to
+    ``f_j (1 + b_j)`` (:func:`pairing_bands`, within the file's lines; :func:`identify_test`), and the pole nearest
+    ``f_j`` within that band, if any, is added. ``found``: ``(j, frequency Hz, lo, hi)`` per mode found so.
+    """
+    target = np.asarray(target_hz, float)
+    tol = pairing_bands(target, band)
+    f = np.abs(np.asarray(md.eigenvalues)) / (2 * np.pi)
+    which = pair_modes_by_frequency(f, target, band)
+    lines = np.asarray(frf.frequency_hz, float)
+    lines = lines[lines > 0]
+    lams, vecs, texts = [], [], []
+    for j in range(target.size):
+        if j in which or (wanted is not None and not wanted[j]) or md.eigenvectors is None:
+            continue
+        lo, hi = max(target[j] / (1 + tol[j]), lines[0]), min(target[j] * (1 + tol[j]), lines[-1])
+        if not hi > lo:
+            continue
+        try:
+            found = identify_test(frf, (lo, hi), where)
+        except (BeamDamageError, ValueError):
+            continue
+        fn = np.abs(np.asarray(found.eigenvalues)) / (2 * np.pi)
+        d = np.abs(np.log(fn / target[j]))
+        if found.eigenvectors is None or not np.any(d <= np.log1p(tol[j])) or \
+                found.eigenvectors.shape[0] != md.eigenvectors.shape[0]:
+            continue
+        k = int(np.argmin(d))
+        lams.append(found.eigenvalues[k])
+        vecs.append(found.eigenvectors[:, k])
+        texts.append((j, float(fn[k]), float(lo), float(hi)))
+    if not lams:
+        return md, []
+    return replace(md, eigenvalues=np.r_[md.eigenvalues, lams],
+                   eigenvectors=np.c_[md.eigenvectors, np.stack(vecs, axis=1)]), texts
 
 
 def unexcited_modes(test, drive_x_m: float) -> tuple:
