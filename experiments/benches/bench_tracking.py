@@ -20,8 +20,12 @@ import argparse
 
 import numpy as np
 
+from learn.monitor import NORMAL_MODELS, held_out_novelty, missing_evidence, threshold
+from learn.monitor.alarm_threshold import training_size
 from learn.monitor.identification import IdentifiedModes
 from learn.monitor.tracking import reference_modes, track_modes
+
+__all__ = ["main", "rare_mode_alarms", "run", "series"]
 
 MODES_HZ = np.array([3.0, 3.49, 4.17, 6.3, 7.5])
 PRESENCE = np.array([0.24, 0.40, 0.9, 1.0, 1.0])
@@ -67,9 +71,6 @@ def run(n: int, k: int, seed: int) -> dict:
 def rare_mode_alarms(share: float, model: str, reps: int = 5, seed: int = 0) -> tuple:
     """False-alarm rates at 1 % targeted of new tests holding and lacking a mode found in ``share`` of the tests:
     4 features (one common factor, 1 % and 0.1 % std), 150 baseline tests, ``reps`` x 2000 new tests."""
-    from learn.monitor import NORMAL_MODELS, held_out_novelty, missing_evidence, threshold
-    from learn.monitor.alarm_threshold import training_size
-
     rng = np.random.default_rng(seed)
 
     def draw(n):
