@@ -12,7 +12,8 @@ from learn.features import (feature_names, frf_features, frequency_features, map
                             with_missing_modes)
 from learn.hypotheses import FREQUENCY_CHANGE_STD, NO_EXPLANATION, SHAPE_CHANGE_STD, explain_many
 from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows, identification_band_hz,
-                            identify_modes, identify_test, modal_pair, mode_checks, nominal_ratio_range)
+                            identify_modes, identify_test, modal_pair, mode_checks, nominal_ratio_range,
+                            refit_missing_modes)
 from learn.mirror import fold_to_half, location_ambiguity, mirrored
 from learn.model_dir import TrainedModel
 from learn.mode_count import mode_count_problem
@@ -127,7 +128,8 @@ def classify_many(model: TrainedModel, baseline, currents: list, names: list[str
         verdict, from_network, w = _chosen_verdict(net, cl, p, reasons, warnings, mode_sens[i], model.beam)
         nv_i = dict(normal)
         if nv is not None and cur_md is not None:
-            nv_i.update(nv.test(model_modes(cur_md[i], model.beam, sens.frequencies_hz, names[i + 1])[0],
+            target_hz, band = nv.targets
+            nv_i.update(nv.test(model_modes(cur_md[i], model.beam, target_hz, names[i + 1], band)[0],
                                 false_alarm_rate), false_alarm_rate=false_alarm_rate)
             verdict, w = _within_normal_variation(verdict, nv_i, w, "network" if from_network else cl and cl["method"])
         results.append({
@@ -175,9 +177,20 @@ def _measured_pairs(model: TrainedModel, baselines: list, currents: list, names:
         return None, None, identified, None, None, None
     found = found or [None] * len(names)
     nv = measure(mds[:nb], model.beam, sens.frequencies_hz, names[:nb]) if nb > 1 else None
+    if nv is not None and identified:          # a mode of the baselines missed: identified again over its band
+        target_hz, band = nv.targets
+        again = [refit_missing_modes(d, md, target_hz, band, nv.counts > 0, n)
+                 for d, md, n in zip([*baselines, *currents], mds, names)]
+        if any(t for _, t in again):
+            mds = [md for md, _ in again]
+            found = [f if not t else f"{f}; " + ", ".join(f"mode {model.beam.modes[j]} at {hz:.5g} Hz by LSCF over "
+                                                          f"{lo:.5g}-{hi:.5g} Hz" for j, hz, lo, hi in t)
+                     for f, (_, t) in zip(found, again)]
+            nv = measure(mds[:nb], model.beam, sens.frequencies_hz, names[:nb])
     r = 0 if nv is None else nv.reference
     base_md = mds[r]
-    pairs = [modal_pair(base_md, c, model.beam, sens.frequencies_hz, (names[r], n), (found[r], f))
+    target_hz, band = (sens.frequencies_hz, None) if nv is None else nv.targets
+    pairs = [modal_pair(base_md, c, model.beam, target_hz, (names[r], n), (found[r], f), band)
              for c, n, f in zip(mds[nb:], names[nb:], found[nb:])]
     warnings += list(dict.fromkeys(w for p in pairs for w in p.warnings))
     w = damping_warning(model, pairs)
@@ -197,8 +210,8 @@ def _normal_variation(model: TrainedModel, route: str, nv, base_mds, warnings: l
     if route not in ("modal", "frequency"):
         return out
     others = [k for k in range(nv.n_baselines) if k != nv.reference]
-    pairs = [modal_pair(base_mds[nv.reference], base_mds[k], model.beam, model.sensitivity.frequencies_hz)
-             for k in others]
+    target_hz, band = nv.targets
+    pairs = [modal_pair(base_mds[nv.reference], base_mds[k], model.beam, target_hz, tolerance=band) for k in others]
     full = [i for i, p in enumerate(pairs) if p.complete and (route == "frequency" or not p.frequency_only)]
     if not full:
         return out

@@ -17,10 +17,10 @@ from physics.io import (MeasuredFRF, map_frf_dofs, map_measured_dofs, parse_dof,
 from physics.layout import MIN_VISIBLE, uniform_shapes
 from physics.modal import mac
 
-__all__ = ["IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "MIN_PAIR_MAC", "RATIO_TOLERANCE",
+__all__ = ["BASELINE_PAIR_BAND", "IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "MIN_PAIR_MAC", "RATIO_TOLERANCE",
            "ModalPair", "differences_from_model", "frf_rows", "identification_band_hz", "identify_modes",
            "identify_test", "modal_pair", "mode_checks", "nominal_ratio_range", "on_model_dofs",
-           "pair_modes_by_frequency", "unexcited_modes"]
+           "pair_modes_by_frequency", "pairing_bands", "refit_missing_modes", "unexcited_modes"]
 
 #: The identification ``classify`` runs on FRF files: LSCF poles and LSFD residues, the 4 lowest modes. The
 #: training data's modal noise (``measurement.modal_noise = "calibrated"``) is calibrated against this path
@@ -35,6 +35,13 @@ IDENTIFICATION_BAND_FACTOR = 1.4
 #: another stiffness, root or shear flexibility (shear lowers f4/f1 by about 10 %), narrow against a missing or
 #: spurious mode (which moves a ratio by a factor of 2.6 or more).
 RATIO_TOLERANCE = 0.35
+
+#: With several baseline tests, a test's pole pairs with a mode only within this relative distance of the
+#: baselines' median frequency of that mode (narrowed to half the log gap to its neighbours): the baselines measure
+#: the beam itself, so what remains is the normal variation (0.1-1 %) and the damage; a pole farther away is the
+#: mode moved or lost, never the mode (on a one-accelerometer cantilever a spurious pole 6 % above mode 5 otherwise
+#: took mode 5's place, a false alarm).
+BASELINE_PAIR_BAND = 0.05
 
 #: Least MAC between an identified shape and a nominal mode's shape at the sensors for the two to pair (two or
 #: more sensors): a slit or a support change leaves the MAC of a mode with its nominal shape above 0.9; a
@@ -143,8 +150,9 @@ def pair_modes_by_frequency(frequencies_hz, nominal_hz, tolerance: float | None 
     Parameters
     ----------
     frequencies_hz : array, shape (k,)     identified natural frequencies (Hz), any order
-    nominal_hz : array, shape (m,)         the nominal beam's natural frequencies (Hz), ascending
-    tolerance : float, optional            default :data:`RATIO_TOLERANCE`
+    nominal_hz : array, shape (m,)         the nominal beam's natural frequencies (Hz), ascending (or the
+                                           baselines' modes: :attr:`learn.normal_variation.NormalVariation.targets`)
+    tolerance : float or array (m,), optional   per mode; default :data:`RATIO_TOLERANCE`
     shape_mac : array, shape (k, m), optional   MAC of each identified shape against each nominal shape
 
     Returns
@@ -154,16 +162,13 @@ def pair_modes_by_frequency(frequencies_hz, nominal_hz, tolerance: float | None 
     f = np.asarray(frequencies_hz, float)
     nominal = np.asarray(nominal_hz, float)
     order = np.argsort(f)
-    tol = np.full(nominal.size, RATIO_TOLERANCE if tolerance is None else tolerance)
-    if nominal.size > 1:
-        gap = np.log(nominal[1:] / nominal[:-1])                      # (m - 1,) log spacing of neighbours
-        half = np.minimum(np.r_[np.inf, gap], np.r_[gap, np.inf]) / 2
-        tol = np.minimum(tol, np.expm1(half))
+    raw = np.asarray(RATIO_TOLERANCE if tolerance is None else tolerance, float)
+    skip = float(np.log1p(np.max(raw, initial=0.0)) ** 2)            # an identified mode left unpaired
+    tol = pairing_bands(nominal, raw)
     cost = np.log(f[order, None] / nominal[None]) ** 2                 # (k, m)
     cost = np.where(cost > np.log1p(tol)[None] ** 2, np.inf, cost)
     if shape_mac is not None:
         cost = np.where(np.asarray(shape_mac, float)[order] < MIN_PAIR_MAC, np.inf, cost)
-    skip = np.log1p(RATIO_TOLERANCE if tolerance is None else tolerance) ** 2
     k, m = cost.shape
     total = np.full((k + 1, m + 1), np.inf)                            # order-preserving alignment, O(k m)
     total[0, :] = 0.0
@@ -188,14 +193,28 @@ def pair_modes_by_frequency(frequencies_hz, nominal_hz, tolerance: float | None 
     return out
 
 
+def pairing_bands(nominal_hz, tolerance=RATIO_TOLERANCE) -> np.ndarray:
+    """Each mode's pairing band (relative, shape (m,)): ``tolerance`` (float or per mode) narrowed to the geometric
+    midpoint between the mode and its nearest neighbour in ``nominal_hz`` (ascending)."""
+    nominal = np.asarray(nominal_hz, float)
+    tol = np.broadcast_to(np.asarray(tolerance, float), nominal.shape)
+    if nominal.size > 1:
+        gap = np.log(nominal[1:] / nominal[:-1])                      # (m - 1,) log spacing of neighbours
+        half = np.minimum(np.r_[np.inf, gap], np.r_[gap, np.inf]) / 2
+        tol = np.minimum(tol, np.expm1(half))
+    return np.array(tol, float)
+
+
 def modal_pair(baseline, current, beam: BeamSpec, nominal_hz, names=("baseline", "measured"),
-               found=None) -> ModalPair:
+               found=None, tolerance=None) -> ModalPair:
     """The modes two :class:`physics.io.ModalData` of the model's DOFs both hold.
 
     Two tests of 4 or more modes give their 4 lowest. When either holds fewer, each test's modes are paired with
-    the nominal beam's (:func:`pair_modes_by_frequency`, against ``nominal_hz``) and the modes both hold are
-    kept; ``found`` (one text per test, e.g. ``"LSCF/LSFD found 2 modes in 2-500 Hz"``) says in
-    :attr:`ModalPair.missing` where the others went.
+    the nominal beam's (:func:`pair_modes_by_frequency`, against ``nominal_hz`` within ``tolerance``; with several
+    baselines, their modes and bands: :attr:`learn.normal_variation.NormalVariation.targets`) and the modes both
+    hold are kept; ``found`` (one text per test, e.g. ``"LSCF/LSFD found 2 modes in 2-500 Hz"``) says in
+    :attr:`ModalPair.missing` where the others went (with ``tolerance``, also the nearest pole left unpaired: the
+    mode moved beyond its band, or lost).
     """
     warnings = []
     lams, vecs = [], []
@@ -222,22 +241,41 @@ def modal_pair(baseline, current, beam: BeamSpec, nominal_hz, names=("baseline",
     if beam.test is None and all(x.size == m for x in lams):
         return ModalPair(np.stack(lams), np.stack(vecs), np.arange(m), (), tuple(warnings), m, shapeless)
     found = [how or f"it holds {x.size} mode{'s' * (x.size != 1)}" for how, x in zip(found or (None, None), lams)]
-    which = [pair_modes_by_frequency(np.abs(x) / (2 * np.pi), nominal_hz[:m],
+    tol = None if tolerance is None else np.asarray(tolerance, float)[:m]
+    which = [pair_modes_by_frequency(np.abs(x) / (2 * np.pi), nominal_hz[:m], tol,
                                      shape_mac=None if shapeless else _nominal_mac(v, beam))
              for x, v in zip(lams, vecs)]
     common = np.intersect1d(*which)
     common = common[common >= 0]
     missing = []
-    for name, how, k in zip(names, found, which):
-        absent = [beam.modes[j] for j in range(m) if j not in k]
+    for name, how, k, x in zip(names, found, which, lams):
+        absent = [j for j in range(m) if j not in k]
         if absent:
-            missing.append(f"mode{'s' * (len(absent) > 1)} {', '.join(map(str, absent))} not identified in {name} "
-                           f"({how})")
+            missing.append(f"mode{'s' * (len(absent) > 1)} {', '.join(str(beam.modes[j]) for j in absent)} not "
+                           f"identified in {name} ({how}"
+                           + ("" if tol is None else _beyond_band(np.abs(x[k < 0]) / (2 * np.pi), nominal_hz[:m],
+                                                                  pairing_bands(nominal_hz[:m], tol), absent,
+                                                                  beam.modes)) + ")")
     take = [[int(np.flatnonzero(k == j)[0]) for j in common] for k in which]
     poles = tuple([{"frequency_hz": float(abs(lam) / (2 * np.pi)), "mode": beam.modes[j] if j >= 0 else None}
                    for lam, j in zip(x, k)] for x, k in zip(lams, which))
     return ModalPair(np.stack([x[t] for x, t in zip(lams, take)]), np.stack([v[:, t] for v, t in zip(vecs, take)]),
                      common, tuple(missing), tuple(warnings), m, shapeless, poles)
+
+
+def _beyond_band(free_hz, target_hz, tol, absent, modes) -> str:
+    """``"; mode 5: the nearest pole left unpaired 1230 Hz, +6.0 % from the baselines' 1160 Hz, beyond its 5 %
+    band"`` for the absent modes with an unpaired pole within twice their band (empty otherwise)."""
+    out = []
+    for j in absent:
+        if free_hz.size == 0:
+            break
+        near = free_hz[int(np.argmin(np.abs(np.log(free_hz / target_hz[j]))))]
+        shift = near / target_hz[j] - 1
+        if abs(np.log1p(shift)) <= 2 * np.log1p(tol[j]):
+            out.append(f"mode {modes[j]}: the nearest pole left unpaired {near:.5g} Hz, {100 * shift:+.1f} % from the "
+                       f"baselines' {target_hz[j]:.5g} Hz, beyond its {100 * tol[j]:.2g} % band (moved or lost)")
+    return "".join(f"; {t}" for t in out)
 
 
 def _nominal_mac(shapes, beam: BeamSpec):
@@ -327,6 +365,47 @@ def identify_test(frf, band_hz, where: str = "FRF file"):
     except (np.linalg.LinAlgError, RuntimeError) as exc:
         raise BeamDamageError(f"{where}: LSCF/LSFD identification failed ({exc})") from None
     return ident.modal_data
+
+
+def refit_missing_modes(frf, md, target_hz, band, wanted=None, where: str = "FRF file"):
+    """``(ModalData, found)``: ``md`` (identified from ``frf``) with the modes no pole of it pairs with found again
+    over their own band.
+
+    For each mode ``j`` of ``target_hz`` (those ``wanted``, a bool mask; default all) that no pole of ``md`` pairs
+    with (:func:`pair_modes_by_frequency` within ``band``), ``frf`` is identified again over ``f_j / (1 + b_j)`` to
+    ``f_j (1 + b_j)`` (:func:`pairing_bands`, within the file's lines; :func:`identify_test`), and the pole nearest
+    ``f_j`` within that band, if any, is added. ``found``: ``(j, frequency Hz, lo, hi)`` per mode found so.
+    """
+    target = np.asarray(target_hz, float)
+    tol = pairing_bands(target, band)
+    f = np.abs(np.asarray(md.eigenvalues)) / (2 * np.pi)
+    which = pair_modes_by_frequency(f, target, band)
+    lines = np.asarray(frf.frequency_hz, float)
+    lines = lines[lines > 0]
+    lams, vecs, texts = [], [], []
+    for j in range(target.size):
+        if j in which or (wanted is not None and not wanted[j]) or md.eigenvectors is None:
+            continue
+        lo, hi = max(target[j] / (1 + tol[j]), lines[0]), min(target[j] * (1 + tol[j]), lines[-1])
+        if not hi > lo:
+            continue
+        try:
+            found = identify_test(frf, (lo, hi), where)
+        except (BeamDamageError, ValueError):
+            continue
+        fn = np.abs(np.asarray(found.eigenvalues)) / (2 * np.pi)
+        d = np.abs(np.log(fn / target[j]))
+        if found.eigenvectors is None or not np.any(d <= np.log1p(tol[j])) or \
+                found.eigenvectors.shape[0] != md.eigenvectors.shape[0]:
+            continue
+        k = int(np.argmin(d))
+        lams.append(found.eigenvalues[k])
+        vecs.append(found.eigenvectors[:, k])
+        texts.append((j, float(fn[k]), float(lo), float(hi)))
+    if not lams:
+        return md, []
+    return replace(md, eigenvalues=np.r_[md.eigenvalues, lams],
+                   eigenvectors=np.c_[md.eigenvectors, np.stack(vecs, axis=1)]), texts
 
 
 def unexcited_modes(test, drive_x_m: float) -> tuple:

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from learn.shapes import real_shapes, sign_aligned
-from learn.measured import modal_pair
+from learn.measured import BASELINE_PAIR_BAND, RATIO_TOLERANCE, modal_pair
 from physics.errors import BeamDamageError
 
 __all__ = ["FREQUENCY_STD_FLOOR", "HOTELLING_MIN_EXTRA", "SHAPE_STD_FLOOR", "NormalVariation", "measure",
@@ -46,10 +46,11 @@ SHAPE_STD_FLOOR = 1e-3
 HOTELLING_MIN_EXTRA = 4
 
 
-def model_modes(data, beam, nominal_hz, name: str = "baseline"):
+def model_modes(data, beam, nominal_hz, name: str = "baseline", tolerance=None):
     """One test's modes on the model's modes: ``(ln f (m,), real unit-norm shapes (S, m) or None, damping ratios
-    (m,))``, NaN where the test lacks a mode; the pairing of :func:`learn.measured.modal_pair`."""
-    pair = modal_pair(data, data, beam, nominal_hz, (name, name))
+    (m,))``, NaN where the test lacks a mode; the pairing of :func:`learn.measured.modal_pair` (against
+    ``nominal_hz`` within ``tolerance``: with several baselines, :attr:`NormalVariation.targets`)."""
+    pair = modal_pair(data, data, beam, nominal_hz, (name, name), tolerance=tolerance)
     m = beam.n_modes
     lnf, zeta = np.full(m, np.nan), np.full(m, np.nan)
     lam = np.asarray(pair.eigenvalues[0])
@@ -74,6 +75,11 @@ class NormalVariation:
     damping_ratio : ndarray, shape (N, m)
     reference : int                          the baseline nearest the population's centre: the one the pair
                                              methods (network, classical, explanations' shapes) compare with
+    pairing_hz : ndarray, shape (m,)         what every test's poles are paired with: the baselines' median
+                                             frequency of each mode they hold (the nominal beam's elsewhere)
+    pairing_band : ndarray, shape (m,)       relative: :data:`learn.measured.BASELINE_PAIR_BAND` where the
+                                             baselines hold the mode, :data:`learn.measured.RATIO_TOLERANCE` elsewhere
+                                             (both narrowed to half the gap to the neighbours when paired)
     """
 
     names: tuple
@@ -81,6 +87,14 @@ class NormalVariation:
     shapes: np.ndarray | None
     damping_ratio: np.ndarray
     reference: int
+    pairing_hz: np.ndarray | None = None
+    pairing_band: np.ndarray | None = None
+
+    @property
+    def targets(self) -> tuple:
+        """``(frequencies Hz (m,), tolerance (m,))`` to pair a test's poles with (``modal_pair(..., nominal_hz,
+        ..., tolerance=)``)."""
+        return self.pairing_hz, self.pairing_band
 
     @property
     def n_baselines(self) -> int:
@@ -186,13 +200,25 @@ class NormalVariation:
 def measure(baselines: list, beam, nominal_hz, names=None) -> NormalVariation:
     """The normal variation of several baseline tests (:class:`physics.io.ModalData` on the model's DOFs).
 
-    The reference baseline is the one holding the most modes whose frequencies lie nearest the baselines'
+    Each baseline's poles are paired with the nominal beam's modes (:func:`learn.measured.modal_pair`, within
+    :data:`learn.measured.RATIO_TOLERANCE`), then again with the baselines' median frequency of each mode, within
+    :data:`learn.measured.BASELINE_PAIR_BAND` (:attr:`NormalVariation.targets`, the pairing of every later test):
+    a spurious pole that the wide nominal rule paired in a baseline lacking the mode leaves that baseline without
+    it. The reference baseline is the one holding the most modes whose frequencies lie nearest the baselines'
     medians (the sum of squared z-scores over the modes it holds).
     """
     names = tuple(names) if names else tuple(f"baseline {k + 1}" for k in range(len(baselines)))
     if len(baselines) < 2:
         raise BeamDamageError(f"the normal variation needs at least 2 baseline tests, got {len(baselines)}")
-    per = [model_modes(b, beam, nominal_hz, n) for b, n in zip(baselines, names)]
+    first = np.stack([model_modes(b, beam, nominal_hz, n)[0] for b, n in zip(baselines, names)])
+    m = first.shape[1]
+    held = np.isfinite(first).any(axis=0)
+    target_hz = np.asarray(nominal_hz, float)[:m].copy()
+    poles = [np.log(np.abs(np.asarray(b.eigenvalues)) / (2 * np.pi)) for b in baselines]
+    for j in np.flatnonzero(held):
+        target_hz[j] = _baselines_mode_hz(poles, first[:, j])
+    band = np.where(held, BASELINE_PAIR_BAND, RATIO_TOLERANCE)
+    per = [model_modes(b, beam, target_hz, n, band) for b, n in zip(baselines, names)]
     lnf = np.stack([p[0] for p in per])
     zeta = np.stack([p[2] for p in per])
     held = np.sum(np.isfinite(lnf), axis=1)
@@ -207,7 +233,32 @@ def measure(baselines: list, beam, nominal_hz, names=None) -> NormalVariation:
         u = np.stack([p[1] for p in per])                                  # (N, S, m)
         anchor = np.nan_to_num(u[ref])
         shapes = np.where(np.isfinite(u), sign_aligned(np.nan_to_num(u), anchor[None]), np.nan)
-    return NormalVariation(names, lnf, shapes, zeta, ref)
+    return NormalVariation(names, lnf, shapes, zeta, ref, target_hz, band)
+
+
+def _baselines_mode_hz(poles: list, paired) -> float:
+    """The baselines' frequency of one mode (Hz): among their poles within the nominal rule's reach of the mode
+    (as far from the median of ``paired``, each baseline's ``ln f`` the nominal rule paired, NaN where none, as the
+    farthest of them), the window ``+-BASELINE_PAIR_BAND / 2`` holding poles of the most baselines (the nearest to
+    that median among equals); the median of each such baseline's pole nearest the window's centre. A spurious pole
+    nearer the nominal frequency than the mode, which the nominal rule pairs in the baselines holding it, is
+    outnumbered by the mode every baseline holds."""
+    centre = float(np.nanmedian(paired))
+    reach = float(np.nanmax(np.abs(paired - centre))) + BASELINE_PAIR_BAND
+    x = np.concatenate(poles)
+    who = np.concatenate([np.full(p.size, k) for k, p in enumerate(poles)])
+    near = np.abs(x - centre) <= reach
+    x, who = x[near], who[near]
+    half = np.log1p(BASELINE_PAIR_BAND) / 2
+    held = np.array([np.unique(who[np.abs(x - c) <= half]).size for c in x])
+    best = held == held.max()
+    c = float(x[best][np.argmin(np.abs(x[best] - centre))])
+    inside = np.abs(x - c) <= half
+    pick = []
+    for k in np.unique(who[inside]):
+        xs = x[inside & (who == k)]
+        pick.append(xs[np.argmin(np.abs(xs - c))])
+    return float(np.exp(np.median(pick)))
 
 
 def _nanmean(a: np.ndarray) -> np.ndarray:

@@ -160,9 +160,12 @@ def _write(out_dir, out: dict, res) -> dict:
         + (f"; the first: {first['file']}{_when(first)}." if first else "."),
         f"{out['n_not_identified']} tests not identified (see the table)." if out["n_not_identified"] else ""))
     modes = Table("Reference modes of the baseline period and their normal variation",
-                  ("mode", "frequency (Hz)", "std (%)", "tracking tolerance (%)", "presence"),
+                  ("mode", "frequency (Hz)", "std (%)", "tracking tolerance (%)", "presence",
+                   "tests where a narrow-band re-identification found it"),
                   tuple((r + 1, res.reference.frequencies_hz[r], 100 * res.sigma[r],
-                         100 * (np.exp(res.reference.tolerance[r]) - 1), res.reference.presence[r])
+                         100 * (np.exp(res.reference.tolerance[r]) - 1), res.reference.presence[r],
+                         sum("narrow band" in (t["identified_by"][r] or "") for t in out["tests"]
+                             if t.get("identified_by")))
                         for r in range(m)))
     alarm_rows = tuple((r["file"], r["time"], r["novelty"], r["verdict"]["summary"],
                         r["verdict"].get("hypotheses_summary") or "–") for r in alarms[:50])

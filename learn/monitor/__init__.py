@@ -8,8 +8,10 @@ Steps, one module each:
   file's bytes and the settings;
 * :mod:`~learn.monitor.series` -- the tests in time order with their measured conditions, and whether each
   belongs to the baseline period's series;
-* :mod:`~learn.monitor.tracking` -- the baseline period's modes (clustered, their median frequencies) and each
-  test's poles assigned to them by frequency (and MAC with 2 or more sensors), a mode missing in a test NaN there;
+* :mod:`~learn.monitor.tracking` -- the baseline period's modes (clustered; a mode found in 15 % of the tests and 7
+  of them is one, its presence reported) and each test's poles assigned to them one to one within each mode's band
+  by frequency (and MAC with 2 or more sensors), a mode the identification missed identified again over its band
+  (:func:`refit_missing`), a mode missing in a test NaN there;
 * :mod:`~learn.monitor.normal_models` -- :data:`NORMAL_MODELS`, the normal variation of the features (log natural
   frequencies): a regression on measured conditions, or a latent-variable model (PCA with factors removed, factor
   analysis, a Gaussian mixture); each gives a squared Mahalanobis distance of a test's residual (the novelty index);
@@ -30,18 +32,20 @@ from learn.monitor.alarms import SeriesResult, changed_text, monitor_series, wha
 from learn.monitor.charts import CHARTS, Charts, run_charts
 from learn.monitor.identification import (CACHE_FORMAT, IdentificationSettings, IdentifiedModes,
                                           cached_identification, file_key, identification_settings, identify_test,
-                                          write_cache)
+                                          with_narrow_band_poles, write_cache)
 from learn.monitor.normal_models import (DEFAULT_LATENT, NORMAL_MODELS, PCA_EXPLAINED, FactorRemoval, Mixture,
                                          PCARemoval, Regression)
 from learn.monitor.series import SeriesInput, check_series, read_conditions
 from learn.monitor.statistics import STATISTICS, Detection, detect
-from learn.monitor.tracking import MAC_MIN, MIN_PRESENCE, ReferenceModes, reference_modes, track_modes
+from learn.monitor.tracking import (MAC_MIN, MIN_COUNT, MIN_PRESENCE, ReferenceModes, identified_by, narrow_bands_hz,
+                                   reference_modes, refit_missing, track_modes)
 from learn.monitor.verdicts import alarm_verdicts, baseline_nearest_median
 
-__all__ = ["CACHE_FORMAT", "CHARTS", "Charts", "DEFAULT_LATENT", "Detection", "STATISTICS", "detect", "run_charts",
-           "MAC_MIN", "MIN_PRESENCE", "NORMAL_MODELS", "PCA_EXPLAINED",
-           "alarm_verdicts", "baseline_nearest_median", "cached_identification", "changed_text", "check_series",
-           "FactorRemoval", "file_key", "held_out_novelty", "identification_settings", "IdentificationSettings",
-           "IdentifiedModes", "identify_test", "minimum_baseline", "missing_evidence", "Mixture", "monitor_series",
-           "PCARemoval", "read_conditions", "reference_modes", "ReferenceModes", "Regression", "SeriesInput",
-           "SeriesResult", "Threshold", "threshold", "track_modes", "what_changed", "write_cache"]
+__all__ = ["CACHE_FORMAT", "CHARTS", "Charts", "DEFAULT_LATENT", "Detection", "MAC_MIN", "MIN_COUNT", "MIN_PRESENCE",
+           "NORMAL_MODELS", "PCA_EXPLAINED", "STATISTICS", "alarm_verdicts", "baseline_nearest_median",
+           "cached_identification", "changed_text", "check_series", "detect", "FactorRemoval", "file_key",
+           "held_out_novelty", "identification_settings", "IdentificationSettings", "IdentifiedModes", "identified_by",
+           "identify_test", "minimum_baseline", "missing_evidence", "Mixture", "monitor_series", "narrow_bands_hz",
+           "PCARemoval", "read_conditions", "reference_modes", "ReferenceModes", "refit_missing", "Regression",
+           "run_charts", "SeriesInput", "SeriesResult", "Threshold", "threshold", "track_modes", "what_changed",
+           "with_narrow_band_poles", "write_cache"]

@@ -16,7 +16,8 @@ from learn.monitor.series import SeriesInput, check_series
 from learn.monitor.alarm_threshold import Threshold, minimum_baseline
 from learn.monitor.charts import CHARTS, Charts, run_charts
 from learn.monitor.statistics import STATISTICS, Detection, detect, residual_threshold, season_warning
-from learn.monitor.tracking import MIN_PRESENCE, ReferenceModes, reference_modes, track_modes
+from learn.monitor.tracking import (MIN_PRESENCE, ReferenceModes, identified_by, reference_modes, refit_missing,
+                                   track_modes)
 from physics.errors import BeamDamageError, ConfigError
 
 __all__ = ["SeriesResult", "changed_text", "monitor_series", "what_changed"]
@@ -30,7 +31,8 @@ class SeriesResult:
     ----------
     rows : list of dict              one per test (``file``, ``time``, ``baseline``, ``alarm``, ``novelty``,
                                      ``threshold``, ``frequencies_hz``, ``mode_z_scores``, ``change_pct``,
-                                     ``identified``, ``error``, ``missing_modes``, ``conditions``)
+                                     ``identified``, ``error``, ``missing_modes``, ``identified_by``: per mode
+                                     the method that found its pole, ``conditions``)
     reference : ReferenceModes
     frequencies_hz : ndarray (n, m)  tracked frequencies (NaN where missing)
     expected_hz : ndarray (n, m)     the baseline's frequencies at each test's conditions
@@ -90,8 +92,10 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
         raise BeamDamageError(f"--baseline-tests {n_baseline}: {len(base)} identified baseline tests for {m} tracked "
                               f"modes{f' and {q} conditions' if q else ''}; at least {need} are needed "
                               f"(modes + conditions + 6)")
+    tests = refit_missing(tests, series.files, ref, settings, cache_dir, pending)
     write_cache(pending)                                    # the series is accepted: identifications kept
-    F, Z, MAC, _ = track_modes(tests, ref)
+    F, Z, MAC, cols = track_modes(tests, ref)
+    how = identified_by(tests, cols)
     X = np.log(F)
     ok = np.array([t is not None for t in tests]) & np.isfinite(X).any(axis=1)
     if q:
@@ -125,6 +129,7 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     normal = {**describe, "features": [f"ln f{r + 1}" for r in range(m)],
               "per_mode_std": sigma.tolist(), "per_mode_std_pct": (100 * sigma).tolist(),
               "reference_frequencies_hz": ref.frequencies_hz.tolist(), "tracking_tolerance": ref.tolerance.tolist(),
+              "reference_presence": ref.presence.tolist(),
               "baseline_tests_used": int(b_idx.size),
               "missing_entries": "imputed by their conditional mean given the test's other features under the "
                                  "baseline's Gaussian (regression: about the conditions' prediction)"}
@@ -138,7 +143,7 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
             "frequencies_hz": [_num(v) for v in F[i]], "damping_ratios": [_num(v) for v in Z[i]],
             "mode_z_scores": [_num(v) for v in z[i]], "change_pct": [_num(v) for v in change[i]],
             "mac": [_num(v) for v in MAC[i]] if ref.shapes is not None else None,
-            "missing_modes": mode_missing,
+            "missing_modes": mode_missing, "identified_by": how[i],
             "conditions": None if C is None else dict(zip(series.condition_names, map(_num, C[i]))),
         })
         rows[-1].update(_detector_fields(det, charts, i, bool(ok[i])))

@@ -6,7 +6,7 @@ from __future__ import annotations
 import hashlib
 import json
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -21,7 +21,7 @@ from physics.io.inputs import check_input_file
 from physics.modal import modal_parameters, undamped_modes
 
 __all__ = ["CACHE_FORMAT", "IdentificationSettings", "IdentifiedModes", "cached_identification", "file_key",
-           "identification_settings", "identify_test", "write_cache"]
+           "identification_settings", "identify_test", "with_narrow_band_poles", "write_cache"]
 
 #: Format tag of a cache entry (a change of the identification or of the entry's fields changes it).
 CACHE_FORMAT = "beam-damage-monitor-cache/1"
@@ -59,6 +59,9 @@ class IdentifiedModes:
     references : tuple of str   reference DOFs of FRFs (empty otherwise)
     band_hz : (lo, hi) or None  the frequency range of the data (FRF lines, or 0 to Nyquist of records)
     line_hz : float or None     the spacing of the FRF lines (records: 1 / duration)
+    narrow_band_hz : tuple      per pole, None for a pole of the identification over the series' band, ``(lo, hi)``
+                                (Hz) for one that a narrow-band re-identification around a reference mode found
+                                (:func:`with_narrow_band_poles`); empty: every pole of the first
     """
 
     kind: str
@@ -70,13 +73,20 @@ class IdentifiedModes:
     references: tuple = ()
     band_hz: tuple | None = None
     line_hz: float | None = None
+    narrow_band_hz: tuple = ()
+
+    def identified_by(self, k: int) -> str:
+        """How pole ``k`` was found, e.g. ``"lscf"`` or ``"lscf, narrow band 3.21-3.79 Hz"``."""
+        band = self.narrow_band_hz[k] if self.narrow_band_hz else None
+        return self.method if band is None else f"{self.method}, narrow band {band[0]:.4g}-{band[1]:.4g} Hz"
 
     def to_dict(self) -> dict:
         return {"kind": self.kind, "method": self.method, "frequencies_hz": self.frequencies_hz.tolist(),
                 "damping_ratios": self.damping_ratios.tolist(),
                 "shapes": None if self.shapes is None else [[format_complex(z) for z in row] for row in self.shapes],
                 "dofs": list(self.dofs), "references": list(self.references),
-                "band_hz": None if self.band_hz is None else list(self.band_hz), "line_hz": self.line_hz}
+                "band_hz": None if self.band_hz is None else list(self.band_hz), "line_hz": self.line_hz,
+                "narrow_band_hz": [None if b is None else list(b) for b in self.narrow_band_hz]}
 
     @classmethod
     def from_dict(cls, d: dict) -> "IdentifiedModes":
@@ -86,7 +96,7 @@ class IdentifiedModes:
                    None if shapes is None else np.array([[complex(z) for z in row] for row in shapes], complex)
                    .reshape(len(shapes), len(d["frequencies_hz"])),
                    tuple(d["dofs"]), tuple(d["references"]), None if d["band_hz"] is None else tuple(d["band_hz"]),
-                   d["line_hz"])
+                   d["line_hz"], tuple(None if b is None else tuple(b) for b in d.get("narrow_band_hz", ())))
 
 
 def identification_settings(band_hz=None, beam=None, model=None) -> IdentificationSettings:
@@ -123,9 +133,13 @@ def _modes_of(eigenvalues, shapes):
             None if shapes is None else np.asarray(shapes, complex)[:, order])
 
 
-def identify_test(path, settings: IdentificationSettings) -> IdentifiedModes:
+def identify_test(path, settings: IdentificationSettings, narrow_hz=None) -> IdentifiedModes:
     """One test's modes: an FRF file by LSCF/LSFD (:func:`learn.measured.identify_modes`, the identification
     ``classify`` runs), response records without a force by SSI-cov (as ``identify``), modal data as read.
+
+    With ``narrow_hz`` (lo, hi) (Hz), the same method over that band alone and every mode it finds there (no
+    ``settings.n_modes``): the narrow-band re-identification around a reference mode that the identification over
+    the series' band missed (its poles' ``narrow_band_hz`` that band; modal data are read as they are).
 
     Raises :class:`BeamDamageError` (one line naming the file) when the file cannot be read or identified.
     """
@@ -135,20 +149,20 @@ def identify_test(path, settings: IdentificationSettings) -> IdentifiedModes:
         md = prepare_measured(read(path, MODAL)).data
         f, z, shapes = _modes_of(md.eigenvalues, md.eigenvectors)
         return IdentifiedModes("modal", "file", f, z, shapes, tuple(md.dofs or ()))
-    band = settings.band_hz
+    band = settings.band_hz if narrow_hz is None else tuple(float(b) for b in narrow_hz)
+    n_modes = settings.n_modes if narrow_hz is None else None
     if holds_response_records(path) and not read(path, TIME).forces:
         rec = read_response_records(path)
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                ident = identify_records(rec, DEFAULT_OUTPUT_ONLY, band, settings.n_modes,
-                                         settings.records_max_order)
+                ident = identify_records(rec, DEFAULT_OUTPUT_ONLY, band, n_modes, settings.records_max_order)
         except (np.linalg.LinAlgError, RuntimeError, ValueError) as exc:
             raise BeamDamageError(f"{path}: SSI-cov identification failed ({exc})") from None
         fs = rec.sampling_frequency_hz
         f, z, shapes = _modes_of(ident.estimate.eigenvalues, ident.estimate.shapes)
         return IdentifiedModes("response records", ident.estimate.method, f, z, shapes, tuple(rec.dofs), (),
-                         (0.0, fs / 2), fs / rec.signals.shape[1])
+                               (0.0, fs / 2), fs / rec.signals.shape[1], _narrow(narrow_hz, f.size))
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -157,25 +171,53 @@ def identify_test(path, settings: IdentificationSettings) -> IdentifiedModes:
     fmin, fmax = (0.0, None) if band is None else band
     if band is not None and (lines[-1] <= fmin or lines[0] >= fmax):
         raise BeamDamageError(f"{path}: its lines {lines[0]:g}-{lines[-1]:g} Hz miss the band {fmin:g}-{fmax:g} Hz")
-    md = identify_modes(frf, fmax, path, settings.n_modes, fmin, settings.max_order)
+    md = identify_modes(frf, fmax, path, n_modes, fmin, settings.max_order)
     f, z, shapes = _modes_of(md.eigenvalues, md.eigenvectors)
     line = float(np.median(np.diff(lines))) if lines.size > 1 else None
     return IdentifiedModes("frf", "lscf", f, z, shapes, tuple(md.dofs), tuple(frf.reference_dofs),
-                     (float(lines[0]), float(lines[-1])), line)
+                           (float(lines[0]), float(lines[-1])), line, _narrow(narrow_hz, f.size))
 
 
-def file_key(path, settings: IdentificationSettings) -> str:
-    """SHA-256 of the file's bytes, the identification settings and :data:`CACHE_FORMAT`."""
+def _narrow(narrow_hz, k: int) -> tuple:
+    return () if narrow_hz is None else (tuple(float(b) for b in narrow_hz),) * k
+
+
+def with_narrow_band_poles(test: IdentifiedModes, found: IdentifiedModes, keep) -> IdentifiedModes:
+    """``test`` with the poles ``keep`` (indices) of a narrow-band re-identification ``found`` added (frequency
+    order); shapes kept when both carry them on the same DOFs, else dropped."""
+    keep = np.asarray(keep, int)
+    if keep.size == 0:
+        return test
+    f = np.r_[test.frequencies_hz, found.frequencies_hz[keep]]
+    z = np.r_[test.damping_ratios, found.damping_ratios[keep]]
+    bands = (test.narrow_band_hz or (None,) * test.frequencies_hz.size) + tuple(found.narrow_band_hz[k]
+                                                                                 for k in keep)
+    shapes = None
+    if test.shapes is not None and found.shapes is not None and tuple(found.dofs) == tuple(test.dofs):
+        shapes = np.c_[test.shapes, found.shapes[:, keep]]
+    order = np.argsort(f, kind="stable")
+    return replace(test, frequencies_hz=f[order], damping_ratios=z[order],
+                   shapes=None if shapes is None else shapes[:, order],
+                   dofs=test.dofs if shapes is not None else (), narrow_band_hz=tuple(bands[k] for k in order))
+
+
+def file_key(path, settings: IdentificationSettings, narrow_hz=None) -> str:
+    """SHA-256 of the file's bytes, the identification settings (and the narrow band) and :data:`CACHE_FORMAT`."""
     h = hashlib.sha256()
     with open(path, "rb") as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
             h.update(block)
-    h.update(json.dumps([CACHE_FORMAT, settings.to_dict()], sort_keys=True).encode())
+    what = [CACHE_FORMAT, settings.to_dict()]
+    if narrow_hz is not None:
+        what.append([float(b) for b in narrow_hz])
+    h.update(json.dumps(what, sort_keys=True).encode())
     return h.hexdigest()
 
 
-def cached_identification(path, settings: IdentificationSettings, cache_dir=None, pending: list | None = None):
-    """``(IdentifiedModes or None, error text or None, from_cache)`` of one test.
+def cached_identification(path, settings: IdentificationSettings, cache_dir=None, pending: list | None = None,
+                          narrow_hz=None):
+    """``(IdentifiedModes or None, error text or None, from_cache)`` of one test (with ``narrow_hz``: its
+    narrow-band re-identification, :func:`identify_test`).
 
     With ``cache_dir``, the result (or the error of a file that cannot be identified) is read from
     ``cache_dir/<key>.json`` (:func:`file_key`) or, once identified, written there atomically; with ``pending`` (a
@@ -183,7 +225,7 @@ def cached_identification(path, settings: IdentificationSettings, cache_dir=None
     """
     try:
         check_input_file(path, "npz", BeamDamageError, "a test file")
-        key = file_key(path, settings) if cache_dir else None
+        key = file_key(path, settings, narrow_hz) if cache_dir else None
     except (BeamDamageError, OSError) as exc:
         return None, _error_text(exc, path), False
     entry = Path(cache_dir) / f"{key}.json" if cache_dir else None
@@ -195,11 +237,12 @@ def cached_identification(path, settings: IdentificationSettings, cache_dir=None
         except (ValueError, KeyError, TypeError):
             pass                                            # a damaged entry: identified again
     try:
-        modes, error = identify_test(path, settings), None
+        modes, error = identify_test(path, settings, narrow_hz), None
     except (BeamDamageError, OSError) as exc:
         modes, error = None, _error_text(exc, path)
     if entry is not None:
         text = json.dumps({"format": CACHE_FORMAT, "file": str(path), "settings": settings.to_dict(),
+                           "narrow_band_hz": None if narrow_hz is None else [float(b) for b in narrow_hz],
                            "modes": None if modes is None else modes.to_dict(), "error": error})
         if pending is None:
             write_cache([(entry, text)])

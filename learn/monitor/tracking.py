@@ -8,17 +8,27 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from learn.monitor.identification import IdentifiedModes
+from learn.monitor.identification import (IdentificationSettings, IdentifiedModes, cached_identification,
+                                          with_narrow_band_poles)
 from learn.noise_calibration import robust_std
 from physics.modal import mac
 
-__all__ = ["CLUSTER_GAP", "MAC_MIN", "MIN_PRESENCE", "ReferenceModes", "reference_modes", "shapes_at",
-           "track_modes"]
+__all__ = ["CLUSTER_GAP", "MAC_MIN", "MIN_COUNT", "MIN_PRESENCE", "ReferenceModes", "identified_by", "narrow_bands_hz",
+           "reference_modes", "refit_missing", "shapes_at", "track_modes"]
 
-#: A reference mode is a cluster of baseline poles found in at least this share of the baseline tests.
-MIN_PRESENCE = 0.5
 #: Baseline poles closer than this (relative) in frequency fall into one cluster.
 CLUSTER_GAP = 0.05
+#: A cluster is a reference mode when at least this share of the baseline tests, and at least :data:`MIN_COUNT`
+#: of them, hold a pole within ``CORE`` (relative, half the cluster gap) of its centre. A mode that a test's
+#: identification finds one time in four or five (a weakly excited mode, one near a node of the sensors) is then
+#: tracked as itself, its presence reported, and keeps its poles out of its neighbours' slots; random spurious
+#: poles, 1-2 per test spread over the band, put a pole in one 5 %-wide window in 4-8 % of the tests
+#: (docs/monitoring.md).
+MIN_PRESENCE = 0.15
+#: The fewest baseline tests holding a reference mode: ``learn.monitor.alarm_threshold.minimum_baseline(1)``, the
+#: fewest on which one feature's normal variation is learnt with its held-out index of finite variance.
+MIN_COUNT = 7
+CORE = math.log1p(CLUSTER_GAP / 2)
 #: A pole is assigned to a reference mode within ``max(TOLERANCE_SIGMAS * std, MIN_TOLERANCE)`` of it in log
 #: frequency (std: the baseline's robust scatter of the mode), never beyond ``NEIGHBOUR_SHARE`` of the log gap to
 #: the next reference mode.
@@ -60,9 +70,17 @@ def reference_modes(tests: list) -> ReferenceModes:
     """Reference modes from the baseline tests (identified ones; None entries skipped).
 
     The baseline poles' ``ln f`` are pooled and split where consecutive ones lie more than :data:`CLUSTER_GAP`
-    apart (a cluster holding on average 1.5 poles per test or more is split again at its widest gap); a cluster
-    found in at least :data:`MIN_PRESENCE` of the tests is a reference mode, its frequency the median of each
-    test's pole nearest the cluster's median.
+    apart (a cluster holding on average 1.5 poles per test or more is split again at its widest gap). In each
+    cluster, the densest window ``+-CORE`` (its centre the median of the poles within :data:`CORE`, three
+    fixed-point steps), then the densest among the poles outside it, and so on, is a core while it holds poles of at
+    least :data:`MIN_PRESENCE` of the tests and of at least :data:`MIN_COUNT` of them (half of them on a baseline
+    of fewer than ``2 MIN_COUNT`` tests) beyond the background: the poles of the clusters held by fewer than half
+    of the tests spread evenly over the poles' ``ln f`` span, as many as a window ``2 CORE`` wide holds. Two or
+    more cores in a cluster are as many reference modes (each pole to the nearest); a cluster holding poles of
+    half of the tests is one, centred on its core or else its median; a single core of a cluster held by fewer is
+    one, its poles within ``CORE``: a mode found in a quarter of the tests among spurious poles is tracked as
+    itself. A mode's frequency is the median of each test's pole nearest
+    its centre; ``presence`` the share of the tests holding a pole in it.
     """
     tests = [t for t in tests if t is not None]
     n = len(tests)
@@ -83,17 +101,30 @@ def reference_modes(tests: list) -> ReferenceModes:
         else:
             done.append((a, b))
     done.sort()
+    sparse = sum(b - a for a, b in done if np.unique(who[a:b]).size < 0.5 * n)
+    span = float(logf[-1] - logf[0]) if logf.size > 1 else 0.0
+    background = sparse * 2 * CORE / span if span > 0 else 0.0     # poles of a window where no mode lies
+    need = max(MIN_PRESENCE * n, min(MIN_COUNT, 0.5 * n)) + background
+    groups = []                                 # (members, centre) of each reference mode
+    for a, b in done:
+        idx = np.arange(a, b)
+        centres = _cores(logf[idx], who[idx], need)
+        if len(centres) > 1:                    # modes a gap of less than CLUSTER_GAP joined: each pole to its nearest
+            near = np.argmin(np.abs(logf[idx, None] - np.asarray(centres)[None]), axis=1)
+            groups += [(idx[near == k], c) for k, c in enumerate(centres)]
+        elif np.unique(who[idx]).size >= 0.5 * n:
+            groups.append((idx, centres[0] if centres else float(np.median(logf[idx]))))
+        elif centres:
+            groups.append((idx[np.abs(logf[idx] - centres[0]) <= CORE], centres[0]))
+    groups.sort(key=lambda g: g[1])
     dofs = tests[0].dofs if n else ()
     freqs, stds, presence, shapes = [], [], [], []
-    for a, b in done:
-        centre = np.median(logf[a:b])
+    for members, centre in groups:
         pick = {}
-        for j in range(a, b):
+        for j in members:
             i = int(who[j])
             if i not in pick or abs(logf[j] - centre) < abs(logf[pick[i]] - centre):
-                pick[i] = j
-        if len(pick) < MIN_PRESENCE * n:
-            continue
+                pick[i] = int(j)
         v = logf[list(pick.values())]
         freqs.append(float(np.exp(np.median(v))))
         stds.append(robust_std(v))
@@ -115,6 +146,35 @@ def reference_modes(tests: list) -> ReferenceModes:
     with_shapes = bool(shapes) and all(x is not None for x in shapes)
     return ReferenceModes(f, s, tol, np.stack(shapes, axis=1) if with_shapes else None,
                           tuple(dofs) if with_shapes else (), np.asarray(presence, float))
+
+
+def _cores(logf, who, need: float) -> list:
+    """Centres of the dense windows ``+-CORE`` of sorted ``logf`` holding poles of at least ``need`` tests
+    (``who``: each pole's test), densest first: the window holding most poles, then the densest of the poles
+    left outside it, while one holds enough tests."""
+    left = np.arange(logf.size)
+    centres = []
+    while left.size:
+        x = logf[left]
+        count = np.searchsorted(x, x + CORE, "right") - np.searchsorted(x, x - CORE, "left")
+        centre = _core_centre(x, float(x[int(np.argmax(count))]))
+        inside = np.abs(x - centre) <= CORE
+        if np.unique(who[left[inside]]).size < need:
+            break
+        centres.append(centre)
+        left = left[~inside]
+    return centres
+
+
+def _core_centre(logf, centre: float) -> float:
+    """The centre of the densest part of sorted ``logf`` near ``centre``: three times the median of the values
+    within :data:`CORE` of the last centre."""
+    for _ in range(3):
+        near = logf[np.abs(logf - centre) <= CORE]
+        if near.size == 0:
+            break
+        centre = float(np.median(near))
+    return centre
 
 
 def track_modes(tests: list, ref: ReferenceModes):
@@ -148,3 +208,53 @@ def track_modes(tests: list, ref: ReferenceModes):
         if macs is not None:
             M[i, c] = macs[r, c]
     return F, Z, M, cols
+
+
+def narrow_bands_hz(ref: ReferenceModes) -> np.ndarray:
+    """Each reference mode's tracking band ``f_ref exp(-+tolerance)`` (Hz), shape (m, 2): the band of its
+    narrow-band re-identification."""
+    return ref.frequencies_hz[:, None] * np.exp(np.outer(ref.tolerance, [-1.0, 1.0]))
+
+
+def refit_missing(tests: list, files: list, ref: ReferenceModes, settings: IdentificationSettings, cache_dir=None,
+                  pending: list | None = None) -> list:
+    """``tests`` with the modes the identification over the series' band missed found again around them.
+
+    For each test of FRFs or response records (modal data are read as they are) and each reference mode
+    :func:`track_modes` leaves untracked there, the file is identified again over the mode's band alone
+    (:func:`narrow_bands_hz`, within the file's lines; the same method, every mode found there:
+    :func:`learn.monitor.identification.identify_test`, cached like the first identification); the pole of that
+    identification nearest the mode within its tolerance (and, with shapes of 2 or more sensors, MAC >=
+    :data:`MAC_MIN`) is added to the test (its ``narrow_band_hz`` says so). A spurious pole of the first pass never
+    took the mode's place (the assignment is one to one and stops at the tolerance), so a mode missed there is
+    looked for where it lies, not filled from elsewhere.
+    """
+    F = track_modes(tests, ref)[0]
+    bands = narrow_bands_hz(ref)
+    out = list(tests)
+    for i, t in enumerate(tests):
+        if t is None or t.kind == "modal":
+            continue
+        for r in np.flatnonzero(np.isnan(F[i])):
+            lo, hi = bands[r]
+            if t.band_hz is not None:
+                lo, hi = max(lo, t.band_hz[0]), min(hi, t.band_hz[1])
+            if not hi > lo:
+                continue
+            found, _, _ = cached_identification(files[i], settings, cache_dir, pending, (lo, hi))
+            if found is None or found.frequencies_hz.size == 0:
+                continue
+            d = np.abs(np.log(found.frequencies_hz / ref.frequencies_hz[r]))
+            ok = d <= ref.tolerance[r]
+            S = shapes_at(found, ref.dofs) if ref.shapes is not None else None
+            if S is not None:
+                ok &= mac(S, ref.shapes[:, [r]])[:, 0] >= MAC_MIN
+            if ok.any():
+                out[i] = with_narrow_band_poles(out[i], found, [int(np.argmin(np.where(ok, d, np.inf)))])
+    return out
+
+
+def identified_by(tests: list, cols) -> list:
+    """Per test, per reference mode, how its tracked pole was found (:meth:`IdentifiedModes.identified_by`), None
+    where the mode is missing; ``cols`` the poles' columns from :func:`track_modes`."""
+    return [[None if t is None or c < 0 else t.identified_by(int(c)) for c in row] for t, row in zip(tests, cols)]
