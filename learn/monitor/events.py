@@ -1,0 +1,232 @@
+"""Events of a monitored series: consecutive flagged tests after the baseline period (alarms, and tests whose modes
+could not be identified) grouped into one event each, with what changed (the modes that moved, their mean size and
+direction); and whether the tests that could not be identified are more than the baseline period's share says
+(a binomial test): a change after which tests stop being identifiable is a change, not "no alarm"."""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from scipy import stats
+
+__all__ = ["MAX_GAP", "SPLIT_P", "Z_MOVED", "Event", "group_events", "identification_change", "unidentified_p_value"]
+
+#: Tests without a flag (judged, no alarm) an event may hold between two flagged tests: an index running along
+#: the threshold alarms on some of its tests, one event all the same.
+MAX_GAP = 2
+#: Chance that a test of the event's state starts a new event: an alarm whose change (its z-scores, with the
+#: baseline's correlation between modes) lies beyond the chi-square quantile ``1 - SPLIT_P`` about the event's mean
+#: change starts a new event (a graded damage: one event per state).
+SPLIT_P = 1e-3
+#: A mode moved in an event when its mean z-score (baseline standard deviations) reaches this.
+Z_MOVED = 3.0
+
+FLAGGED = ("alarm", "not identified")
+
+
+@dataclass(frozen=True)
+class Event:
+    """Consecutive flagged tests after the baseline period.
+
+    Attributes
+    ----------
+    first, last : int             row indices of its first and last flagged test
+    first_file, last_file : str
+    first_time, last_time         as the series gives them
+    n_tests : int                 judged or not-identified tests from first to last
+    n_alarms, n_not_identified, n_extrapolated : int
+    modes : list of dict          per mode: ``mode`` (1-based), ``change_pct`` and ``z`` (means over the alarms),
+                                  ``moved`` (``|z| >=`` :data:`Z_MOVED`)
+    moved : list of int           the modes that moved, farthest first
+    size_pct : float or None      mean ``|change_pct|`` of the moved modes over the event's alarms
+    size_first_pct, size_last_pct : float or None    the same of its first and last alarm alone
+    direction : str               ``down``, ``up``, ``mixed`` (the moved modes' signs) or ``none``
+    unidentified_p_value : float or None     P(as many tests not identified | the baseline period's share)
+    change : bool                 alarms, or more tests not identified than the false-alarm rate allows
+    text : str
+    verdict : dict or None        the explanations and the network's verdict (with a trained model)
+    """
+
+    first: int
+    last: int
+    first_file: str
+    last_file: str
+    first_time: object
+    last_time: object
+    n_tests: int
+    n_alarms: int
+    n_not_identified: int
+    n_extrapolated: int
+    modes: list
+    moved: list
+    size_pct: float | None
+    size_first_pct: float | None
+    size_last_pct: float | None
+    direction: str
+    unidentified_p_value: float | None
+    change: bool
+    text: str
+    members: tuple = ()
+    verdict: dict | None = None
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["members"] = list(self.members)
+        return d
+
+
+def _vec(row, key):
+    return np.array([np.nan if v is None else v for v in row[key]], float)
+
+
+def _baseline_counts(rows) -> tuple[int, int]:
+    """``(tests not identified, tests of the series)`` in the baseline period."""
+    base = [r for r in rows if r["baseline"] and r["status"] != "not judged"]
+    return sum(r["status"] == "not identified" for r in base), len(base)
+
+
+def unidentified_p_value(k: int, n: int, u_base: int, n_base: int) -> float:
+    """P(X >= k) for X ~ Binomial(n, p0), ``p0 = (u_base + 1) / (n_base + 2)`` (the baseline period's share of
+    tests not identified, Laplace's rule: a baseline that identified all its tests still allows a few failures)."""
+    if k <= 0:
+        return 1.0
+    p0 = (u_base + 1) / (n_base + 2)
+    return float(stats.binom.sf(k - 1, n, p0))
+
+
+def identification_change(rows: list, false_alarm_rate: float) -> dict:
+    """The tests not identified after the baseline period against the baseline period's share (binomial test):
+    ``baseline`` / ``later`` (``not_identified``, ``tests``), ``p_value``, ``change`` (``p_value <
+    false_alarm_rate``) and ``text``."""
+    ub, nb = _baseline_counts(rows)
+    later = [r for r in rows if not r["baseline"] and r["status"] != "not judged"]
+    u = sum(r["status"] == "not identified" for r in later)
+    p = unidentified_p_value(u, len(later), ub, nb)
+    change = bool(u and p < false_alarm_rate)
+    text = (f"{u} of {len(later)} later tests not identified against {ub} of {nb} in the baseline period "
+            f"(binomial p = {p:.2g})" + (": identification lost, reported as a change" if change else ""))
+    return {"baseline": {"not_identified": ub, "tests": nb}, "later": {"not_identified": u, "tests": len(later)},
+            "p_value": p, "change": change, "text": text}
+
+
+def _pattern(rows, baseline):
+    """Inverse covariance of the baseline tests' z-scores (modes correlate: one environment moves several)."""
+    Z = np.array([_vec(rows[i], "mode_z_scores") for i in baseline], float)
+    Z = Z[np.isfinite(Z).all(axis=1)] if len(Z) else Z
+    if len(Z) < 3:
+        return None
+    return np.cov(Z, rowvar=False).reshape(Z.shape[1], Z.shape[1])
+
+
+def _jumps(cov, zs: list, z) -> bool:
+    """Whether the alarm ``z`` lies beyond the chi-square quantile ``1 - SPLIT_P`` about the mean of ``zs`` (the
+    event's alarms so far): a new state."""
+    if cov is None or not zs:
+        return False
+    mean = np.nanmean(np.array(zs), axis=0)
+    keep = np.isfinite(mean) & np.isfinite(z)
+    if not keep.any():
+        return False
+    S = cov[np.ix_(keep, keep)] * (1 + 1 / len(zs))
+    dof = max(int(np.linalg.matrix_rank(S, tol=1e-9 * max(np.abs(S).max(), 1e-300))), 1)
+    r = (z - mean)[keep]
+    d2 = float(r @ np.linalg.pinv(S, rcond=1e-9) @ r)
+    return d2 > stats.chi2.ppf(1 - SPLIT_P, dof)
+
+
+def _size(change, moved):
+    if not moved:
+        return None
+    return float(np.nanmean(np.abs(change[np.asarray(moved) - 1])))
+
+
+def _event(rows, members: list, ub: int, nb: int, false_alarm_rate: float) -> Event:
+    first, last = members[0], members[-1]
+    span = [i for i in range(first, last + 1) if rows[i]["status"] != "not judged"]
+    alarms = [i for i in members if rows[i]["status"] == "alarm"]
+    u = sum(rows[i]["status"] == "not identified" for i in members)
+    m = len(rows[first]["mode_z_scores"])
+    if alarms:
+        C = np.array([_vec(rows[i], "change_pct") for i in alarms])
+        Z = np.array([_vec(rows[i], "mode_z_scores") for i in alarms])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)         # a mode missing in every alarm: None
+            c, z = np.nanmean(C, axis=0), np.nanmean(Z, axis=0)
+    else:
+        c = z = np.full(m, np.nan)
+    modes = [{"mode": r + 1, "change_pct": _num(c[r]), "z": _num(z[r]),
+              "moved": bool(np.isfinite(z[r]) and abs(z[r]) >= Z_MOVED)} for r in range(m)]
+    moved = [d["mode"] for d in sorted(modes, key=lambda d: -abs(d["z"]) if d["z"] is not None else 0.0)
+             if d["moved"]]
+    signs = {np.sign(c[k - 1]) for k in moved}
+    direction = "none" if not moved else "down" if signs == {-1.0} else "up" if signs == {1.0} else "mixed"
+    p = unidentified_p_value(u, len(span), ub, nb) if u else None
+    change = bool(alarms) or (p is not None and p < false_alarm_rate)
+    size = _size(c, moved)
+    first_size = _size(_vec(rows[alarms[0]], "change_pct"), moved) if alarms else None
+    last_size = _size(_vec(rows[alarms[-1]], "change_pct"), moved) if alarms else None
+    n_ext = sum(bool(rows[i].get("extrapolated")) for i in members)
+    where = (f"test {first + 1}" if first == last else f"tests {first + 1}-{last + 1}")
+    times = rows[first]["time"], rows[last]["time"]
+    if times[0] is not None:
+        where += f" ({times[0]}" + (f" to {times[1]})" if last != first else ")")
+    parts = [f"{len(alarms)} alarm{'s' * (len(alarms) != 1)}"]
+    if u:
+        parts.append(f"{u} not identified (p = {p:.2g} at the baseline's share"
+                     + ("; identification lost)" if p < false_alarm_rate else ")"))
+    if len(span) > len(members):
+        parts.append(f"{len(span) - len(members)} without an alarm between")
+    what = ""
+    if moved:
+        what = (f"; modes {', '.join(map(str, moved))} {direction}, mean size {size:.3g} % ("
+                + ", ".join(f"mode {k} {c[k - 1]:+.3g} %" for k in moved) + ")")
+    elif alarms:
+        what = "; no mode moved 3 baseline standard deviations on average"
+    ext = f"; {n_ext} of {len(members)} extrapolated beyond the baseline's conditions" if n_ext else ""
+    text = f"{where}: " + ", ".join(parts) + what + ext + ("" if change else "; not a change")
+    return Event(first, last, rows[first]["file"], rows[last]["file"], times[0], times[1], len(span), len(alarms), u,
+                 n_ext, modes, moved, size, first_size, last_size, direction, p, change, text, tuple(members))
+
+
+def _num(v):
+    v = float(v)
+    return v if np.isfinite(v) else None
+
+
+def group_events(rows: list, false_alarm_rate: float = 0.01, max_gap: int = MAX_GAP) -> list[Event]:
+    """The events of a monitored series' rows (``status``, ``baseline``, ``mode_z_scores``, ``change_pct``,
+    ``file``, ``time``; ``extrapolated`` if present), in time order.
+
+    An event starts at a flagged test after the baseline period (``status`` ``alarm`` or ``not identified``) and
+    takes every following flagged test until more than ``max_gap`` judged tests without an alarm pass, or until an
+    alarm's change departs from the event's mean change beyond chance (:data:`SPLIT_P`: a new state). Tests that
+    cannot be judged against the baseline (``not judged``) are skipped. An event whose tests were not identified
+    is a change when so many failures are unlikely at the baseline period's share
+    (:func:`unidentified_p_value` below ``false_alarm_rate``).
+    """
+    ub, nb = _baseline_counts(rows)
+    base = [i for i, r in enumerate(rows) if r["baseline"] and r["status"] in ("alarm", "no alarm")]
+    cov = _pattern(rows, base)
+    events, members, zs, gap = [], [], [], 0
+    for i, r in enumerate(rows):
+        if r["baseline"] or r["status"] == "not judged":
+            continue
+        if r["status"] in FLAGGED:
+            z = _vec(r, "mode_z_scores") if r["status"] == "alarm" else None
+            if members and (gap > max_gap or (z is not None and _jumps(cov, zs, z))):
+                events.append(_event(rows, members, ub, nb, false_alarm_rate))
+                members, zs = [], []
+            members.append(i)
+            if z is not None:
+                zs.append(z)
+            gap = 0
+        elif members:
+            gap += 1
+            if gap > max_gap:
+                events.append(_event(rows, members, ub, nb, false_alarm_rate))
+                members, zs = [], []
+    if members:
+        events.append(_event(rows, members, ub, nb, false_alarm_rate))
+    return events
