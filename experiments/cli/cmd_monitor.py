@@ -23,7 +23,7 @@ from learn.model_dir import load_model
 from physics.beam import load_beam
 from experiments.studies.report import Section, Table, figure, write_report
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "chart", "judged", "run"]
 
 
 def add_parser(sub):
@@ -127,7 +127,8 @@ def judged(res, false_alarm_rate: float, model=None, beam_x_m=None) -> dict:
         if rows[i]["extrapolated"]:
             v["summary"] += f"; extrapolated: {rows[i]['extrapolated_because']}"
         rows[i]["verdict"] = v
-    events = group_events(rows, false_alarm_rate)
+    events = group_events(rows, false_alarm_rate,
+                          against="residual" if res.normal_variation["model"] == "regression" else "before")
     for k, (ev, v) in enumerate(zip(events, event_verdicts(res, events, model, beam_x_m))):
         for i in ev.members:
             if "verdict" in rows[i]:
@@ -233,8 +234,21 @@ def _write(out_dir, out: dict, res) -> dict:
 
 
 def _figure(res) -> bytes:
-    """PNG: each mode's frequency relative to its baseline median and the novelty index over the tests, with the
-    threshold, the baseline period shaded and the alarms marked."""
+    """PNG of :func:`chart`."""
+    import matplotlib.pyplot as plt
+
+    fig = chart(res)
+    buf = io.BytesIO()
+    fig.tight_layout()
+    fig.savefig(buf, format="png", dpi=110)
+    plt.close(fig)
+    return buf.getvalue()
+
+
+def chart(res):
+    """The control chart (a matplotlib figure): each mode's frequency relative to its baseline median and the
+    novelty index over the tests, with the threshold, the baseline period shaded, the alarms circled, the
+    extrapolated tests boxed and the tests not identified crossed at the top edge of the index's panel."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -270,11 +284,7 @@ def _figure(res) -> bytes:
         for ax in (a1, a2):
             ax.axvspan(t[base].min(), hi, color="tab:green", alpha=0.1, lw=0)
         a1.text(t[base].min(), 1.0, " baseline period", transform=a1.get_xaxis_transform(), va="top", fontsize=7)
-    buf = io.BytesIO()
-    fig.tight_layout()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    return buf.getvalue()
+    return fig
 
 
 def _scatter_text(sc: dict) -> str:

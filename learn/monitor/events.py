@@ -11,7 +11,8 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy import stats
 
-__all__ = ["MAX_GAP", "SPLIT_P", "Z_MOVED", "Event", "group_events", "identification_change", "unidentified_p_value"]
+__all__ = ["AGAINST", "MAX_GAP", "SPLIT_P", "STEP_BEFORE", "Z_MOVED", "Event", "group_events", "identification_change",
+           "unidentified_p_value"]
 
 #: Tests without a flag (judged, no alarm) an event may hold between two flagged tests: an index running along
 #: the threshold alarms on some of its tests, one event all the same.
@@ -22,6 +23,13 @@ MAX_GAP = 2
 SPLIT_P = 1e-3
 #: A mode moved in an event when its mean z-score (baseline standard deviations) reaches this.
 Z_MOVED = 3.0
+#: Tests without an alarm before an event that its step is measured against.
+STEP_BEFORE = 10
+#: What an event's change is measured against: the normal model's prediction for each alarm (its residual: the
+#: conditions' prediction of a regression), or the tests without an alarm just before the event (a latent model's
+#: residual is blind along the environment's factors, which absorb the part of a damage along them: a slit that
+#: lowers three modes by 0.7-0.85 % reads as mode 2 +0.6 % after removing a factor that moves every mode alike).
+AGAINST = ("residual", "before")
 
 FLAGGED = ("alarm", "not identified")
 
@@ -37,8 +45,9 @@ class Event:
     first_time, last_time         as the series gives them
     n_tests : int                 judged or not-identified tests from first to last
     n_alarms, n_not_identified, n_extrapolated : int
-    modes : list of dict          per mode: ``mode`` (1-based), ``change_pct`` and ``z`` (means over the alarms),
-                                  ``moved`` (``|z| >=`` :data:`Z_MOVED`)
+    modes : list of dict          per mode: ``mode`` (1-based), ``change_pct`` and ``z`` (means over the alarms,
+                                  ``against`` what), ``step_pct`` (the alarms' mean against the ``n_before`` tests
+                                  without an alarm before the event), ``moved`` (``|z| >=`` :data:`Z_MOVED`)
     moved : list of int           the modes that moved, farthest first
     size_pct : float or None      mean ``|change_pct|`` of the moved modes over the event's alarms
     size_first_pct, size_last_pct : float or None    the same of its first and last alarm alone
@@ -46,6 +55,9 @@ class Event:
     unidentified_p_value : float or None     P(as many tests not identified | the baseline period's share)
     change : bool                 alarms, or more tests not identified than the false-alarm rate allows
     text : str
+    against : str                 what the change is measured against
+    n_before : int                tests without an alarm before the event its ``step_pct`` is measured against
+    members : tuple of int        row indices of its flagged tests
     verdict : dict or None        the explanations and the network's verdict (with a trained model)
     """
 
@@ -68,6 +80,8 @@ class Event:
     unidentified_p_value: float | None
     change: bool
     text: str
+    against: str = ""
+    n_before: int = 0
     members: tuple = ()
     verdict: dict | None = None
 
@@ -142,21 +156,48 @@ def _size(change, moved):
     return float(np.nanmean(np.abs(change[np.asarray(moved) - 1])))
 
 
-def _event(rows, members: list, ub: int, nb: int, false_alarm_rate: float) -> Event:
+def _lnf(rows, idx) -> np.ndarray:
+    F = np.array([_vec(rows[i], "frequencies_hz") for i in idx], float).reshape(len(idx), -1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.log(F)
+
+
+def _day_to_day(rows, baseline) -> np.ndarray:
+    """Per mode, the standard deviation of ``ln f`` from one baseline test to the next, over sqrt 2 (the scatter of
+    one test about its neighbours: a slow drift of the environment left out)."""
+    X = _lnf(rows, baseline)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return np.nanstd(np.diff(X, axis=0), axis=0, ddof=1) / np.sqrt(2)
+
+
+def _event(rows, members: list, ctx: dict) -> Event:
+    ub, nb, false_alarm_rate = ctx["ub"], ctx["nb"], ctx["rate"]
     first, last = members[0], members[-1]
     span = [i for i in range(first, last + 1) if rows[i]["status"] != "not judged"]
     alarms = [i for i in members if rows[i]["status"] == "alarm"]
     u = sum(rows[i]["status"] == "not identified" for i in members)
     m = len(rows[first]["mode_z_scores"])
-    if alarms:
-        C = np.array([_vec(rows[i], "change_pct") for i in alarms])
-        Z = np.array([_vec(rows[i], "mode_z_scores") for i in alarms])
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)         # a mode missing in every alarm: None
-            c, z = np.nanmean(C, axis=0), np.nanmean(Z, axis=0)
-    else:
-        c = z = np.full(m, np.nan)
+    before = [i for i in range(first) if rows[i]["status"] == "no alarm"][-STEP_BEFORE:]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)         # a mode missing in every alarm: NaN, then None
+        steps = _lnf(rows, alarms) - np.nanmean(_lnf(rows, before), axis=0) if alarms and before else None
+        if not alarms:
+            C = np.full((1, m), np.nan)
+            c = z = np.full(m, np.nan)
+        elif ctx["against"] == "before" and steps is not None:
+            C = 100 * np.expm1(steps)
+            c = 100 * np.expm1(np.nanmean(steps, axis=0))
+            z = np.nanmean(steps, axis=0) / (ctx["day_sd"] * np.sqrt(1 / len(alarms) + 1 / len(before)))
+        else:
+            C = np.array([_vec(rows[i], "change_pct") for i in alarms])
+            c, z = np.nanmean(C, axis=0), np.nanmean(np.array([_vec(rows[i], "mode_z_scores") for i in alarms]),
+                                                     axis=0)
+        step = None if steps is None else 100 * np.expm1(np.nanmean(steps, axis=0))
+    against = ("the " + (f"{len(before)} tests without an alarm before it" if ctx["against"] == "before"
+                         and steps is not None else "normal model's prediction"))
     modes = [{"mode": r + 1, "change_pct": _num(c[r]), "z": _num(z[r]),
+              "step_pct": None if step is None else _num(step[r]),
               "moved": bool(np.isfinite(z[r]) and abs(z[r]) >= Z_MOVED)} for r in range(m)]
     moved = [d["mode"] for d in sorted(modes, key=lambda d: -abs(d["z"]) if d["z"] is not None else 0.0)
              if d["moved"]]
@@ -165,8 +206,8 @@ def _event(rows, members: list, ub: int, nb: int, false_alarm_rate: float) -> Ev
     p = unidentified_p_value(u, len(span), ub, nb) if u else None
     change = bool(alarms) or (p is not None and p < false_alarm_rate)
     size = _size(c, moved)
-    first_size = _size(_vec(rows[alarms[0]], "change_pct"), moved) if alarms else None
-    last_size = _size(_vec(rows[alarms[-1]], "change_pct"), moved) if alarms else None
+    first_size = _size(C[0], moved) if alarms else None
+    last_size = _size(C[-1], moved) if alarms else None
     n_ext = sum(bool(rows[i].get("extrapolated")) for i in members)
     where = (f"test {first + 1}" if first == last else f"tests {first + 1}-{last + 1}")
     times = rows[first]["time"], rows[last]["time"]
@@ -181,13 +222,14 @@ def _event(rows, members: list, ub: int, nb: int, false_alarm_rate: float) -> Ev
     what = ""
     if moved:
         what = (f"; modes {', '.join(map(str, moved))} {direction}, mean size {size:.3g} % ("
-                + ", ".join(f"mode {k} {c[k - 1]:+.3g} %" for k in moved) + ")")
+                + ", ".join(f"mode {k} {c[k - 1]:+.3g} %" for k in moved) + f"; against {against})")
     elif alarms:
         what = "; no mode moved 3 baseline standard deviations on average"
     ext = f"; {n_ext} of {len(members)} extrapolated beyond the baseline's conditions" if n_ext else ""
     text = f"{where}: " + ", ".join(parts) + what + ext + ("" if change else "; not a change")
     return Event(first, last, rows[first]["file"], rows[last]["file"], times[0], times[1], len(span), len(alarms), u,
-                 n_ext, modes, moved, size, first_size, last_size, direction, p, change, text, tuple(members))
+                 n_ext, modes, moved, size, first_size, last_size, direction, p, change, text, against,
+                 len(before), tuple(members))
 
 
 def _num(v):
@@ -195,7 +237,8 @@ def _num(v):
     return v if np.isfinite(v) else None
 
 
-def group_events(rows: list, false_alarm_rate: float = 0.01, max_gap: int = MAX_GAP) -> list[Event]:
+def group_events(rows: list, false_alarm_rate: float = 0.01, max_gap: int = MAX_GAP, against: str = "residual"
+                 ) -> list[Event]:
     """The events of a monitored series' rows (``status``, ``baseline``, ``mode_z_scores``, ``change_pct``,
     ``file``, ``time``; ``extrapolated`` if present), in time order.
 
@@ -204,11 +247,16 @@ def group_events(rows: list, false_alarm_rate: float = 0.01, max_gap: int = MAX_
     alarm's change departs from the event's mean change beyond chance (:data:`SPLIT_P`: a new state). Tests that
     cannot be judged against the baseline (``not judged``) are skipped. An event whose tests were not identified
     is a change when so many failures are unlikely at the baseline period's share
-    (:func:`unidentified_p_value` below ``false_alarm_rate``).
+    (:func:`unidentified_p_value` below ``false_alarm_rate``). ``against`` (:data:`AGAINST`): what the event's
+    change, its modes that moved (``|z| >=`` :data:`Z_MOVED`, ``z`` in the baseline's day-to-day scatter for
+    ``"before"``) and its size are measured against.
     """
+    if against not in AGAINST:
+        raise ValueError(f"against must be one of {', '.join(AGAINST)}, got {against!r}")
     ub, nb = _baseline_counts(rows)
     base = [i for i, r in enumerate(rows) if r["baseline"] and r["status"] in ("alarm", "no alarm")]
     cov = _pattern(rows, base)
+    ctx = {"ub": ub, "nb": nb, "rate": false_alarm_rate, "against": against, "day_sd": _day_to_day(rows, base)}
     events, members, zs, gap = [], [], [], 0
     for i, r in enumerate(rows):
         if r["baseline"] or r["status"] == "not judged":
@@ -216,7 +264,7 @@ def group_events(rows: list, false_alarm_rate: float = 0.01, max_gap: int = MAX_
         if r["status"] in FLAGGED:
             z = _vec(r, "mode_z_scores") if r["status"] == "alarm" else None
             if members and (gap > max_gap or (z is not None and _jumps(cov, zs, z))):
-                events.append(_event(rows, members, ub, nb, false_alarm_rate))
+                events.append(_event(rows, members, ctx))
                 members, zs = [], []
             members.append(i)
             if z is not None:
@@ -225,8 +273,8 @@ def group_events(rows: list, false_alarm_rate: float = 0.01, max_gap: int = MAX_
         elif members:
             gap += 1
             if gap > max_gap:
-                events.append(_event(rows, members, ub, nb, false_alarm_rate))
+                events.append(_event(rows, members, ctx))
                 members, zs = [], []
     if members:
-        events.append(_event(rows, members, ub, nb, false_alarm_rate))
+        events.append(_event(rows, members, ctx))
     return events
