@@ -23,7 +23,8 @@ MAX_GAP = 2
 SPLIT_P = 1e-3
 #: A mode moved in an event when its mean z-score (baseline standard deviations) reaches this.
 Z_MOVED = 3.0
-#: Tests without an alarm before an event that its step is measured against.
+#: Tests without an alarm before an event (before the series' first change, for the events after it) that its
+#: step is measured against.
 STEP_BEFORE = 10
 #: What an event's change is measured against: the normal model's prediction for each alarm (its residual: the
 #: conditions' prediction of a regression), or the tests without an alarm just before the event (a latent model's
@@ -49,7 +50,8 @@ class Event:
                                   ``against`` what), ``step_pct`` (the alarms' mean against the ``n_before`` tests
                                   without an alarm before the event), ``moved`` (``|z| >=`` :data:`Z_MOVED`)
     moved : list of int           the modes that moved, farthest first
-    size_pct : float or None      mean ``|change_pct|`` of the moved modes over the event's alarms
+    size_pct : float or None      root mean square over the modes of the event's mean change (%): one magnitude
+                                  comparable between events, whichever modes moved
     size_first_pct, size_last_pct : float or None    the same of its first and last alarm alone
     direction : str               ``down``, ``up``, ``mixed`` (the moved modes' signs) or ``none``
     unidentified_p_value : float or None     P(as many tests not identified | the baseline period's share)
@@ -150,10 +152,10 @@ def _jumps(cov, zs: list, z) -> bool:
     return d2 > stats.chi2.ppf(1 - SPLIT_P, dof)
 
 
-def _size(change, moved):
-    if not moved:
-        return None
-    return float(np.nanmean(np.abs(change[np.asarray(moved) - 1])))
+def _size(change):
+    """Root mean square over the modes of a change (%): one magnitude that compares events whatever modes moved."""
+    change = np.asarray(change, float)
+    return float(np.sqrt(np.nanmean(change**2))) if np.isfinite(change).any() else None
 
 
 def _lnf(rows, idx) -> np.ndarray:
@@ -178,7 +180,8 @@ def _event(rows, members: list, ctx: dict) -> Event:
     alarms = [i for i in members if rows[i]["status"] == "alarm"]
     u = sum(rows[i]["status"] == "not identified" for i in members)
     m = len(rows[first]["mode_z_scores"])
-    before = [i for i in range(first) if rows[i]["status"] == "no alarm"][-STEP_BEFORE:]
+    end = first if ctx["first_change"] is None else min(first, ctx["first_change"])
+    before = [i for i in range(end) if rows[i]["status"] == "no alarm"][-STEP_BEFORE:]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)         # a mode missing in every alarm: NaN, then None
         steps = _lnf(rows, alarms) - np.nanmean(_lnf(rows, before), axis=0) if alarms and before else None
@@ -205,9 +208,9 @@ def _event(rows, members: list, ctx: dict) -> Event:
     direction = "none" if not moved else "down" if signs == {-1.0} else "up" if signs == {1.0} else "mixed"
     p = unidentified_p_value(u, len(span), ub, nb) if u else None
     change = bool(alarms) or (p is not None and p < false_alarm_rate)
-    size = _size(c, moved)
-    first_size = _size(C[0], moved) if alarms else None
-    last_size = _size(C[-1], moved) if alarms else None
+    size = _size(c) if alarms else None
+    first_size = _size(C[0]) if alarms else None
+    last_size = _size(C[-1]) if alarms else None
     n_ext = sum(bool(rows[i].get("extrapolated")) for i in members)
     where = (f"test {first + 1}" if first == last else f"tests {first + 1}-{last + 1}")
     times = rows[first]["time"], rows[last]["time"]
@@ -221,10 +224,13 @@ def _event(rows, members: list, ctx: dict) -> Event:
         parts.append(f"{len(span) - len(members)} without an alarm between")
     what = ""
     if moved:
-        what = (f"; modes {', '.join(map(str, moved))} {direction}, mean size {size:.3g} % ("
-                + ", ".join(f"mode {k} {c[k - 1]:+.3g} %" for k in moved) + f"; against {against})")
+        what = (f"; modes {', '.join(map(str, moved))} {direction} ("
+                + ", ".join(f"mode {k} {c[k - 1]:+.3g} %" for k in moved) + f"), size {size:.3g} % (rms over "
+                f"the modes; against {against})")
     elif alarms:
-        what = "; no mode moved 3 baseline standard deviations on average"
+        lead = int(np.nanargmax(np.abs(np.where(np.isfinite(z), z, 0.0))))
+        what = (f"; no mode moved {Z_MOVED:g} standard deviations on average (the most: mode {lead + 1} "
+                f"{c[lead]:+.3g} %, {z[lead]:+.1f} sd), size {size:.3g} % (rms over the modes; against {against})")
     ext = f"; {n_ext} of {len(members)} extrapolated beyond the baseline's conditions" if n_ext else ""
     text = f"{where}: " + ", ".join(parts) + what + ext + ("" if change else "; not a change")
     return Event(first, last, rows[first]["file"], rows[last]["file"], times[0], times[1], len(span), len(alarms), u,
@@ -257,14 +263,14 @@ def group_events(rows: list, false_alarm_rate: float = 0.01, max_gap: int = MAX_
     base = [i for i, r in enumerate(rows) if r["baseline"] and r["status"] in ("alarm", "no alarm")]
     cov = _pattern(rows, base)
     ctx = {"ub": ub, "nb": nb, "rate": false_alarm_rate, "against": against, "day_sd": _day_to_day(rows, base)}
-    events, members, zs, gap = [], [], [], 0
+    groups, members, zs, gap = [], [], [], 0
     for i, r in enumerate(rows):
         if r["baseline"] or r["status"] == "not judged":
             continue
         if r["status"] in FLAGGED:
             z = _vec(r, "mode_z_scores") if r["status"] == "alarm" else None
             if members and (gap > max_gap or (z is not None and _jumps(cov, zs, z))):
-                events.append(_event(rows, members, ctx))
+                groups.append(members)
                 members, zs = [], []
             members.append(i)
             if z is not None:
@@ -273,8 +279,14 @@ def group_events(rows: list, false_alarm_rate: float = 0.01, max_gap: int = MAX_
         elif members:
             gap += 1
             if gap > max_gap:
-                events.append(_event(rows, members, ctx))
+                groups.append(members)
                 members, zs = [], []
     if members:
+        groups.append(members)
+    events = []
+    ctx["first_change"] = None
+    for members in groups:
         events.append(_event(rows, members, ctx))
+        if events[-1].change and ctx["first_change"] is None:
+            ctx["first_change"] = members[0]
     return events
