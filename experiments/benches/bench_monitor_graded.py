@@ -8,8 +8,8 @@ temperature, the re-mounting and the re-placed mass changing) holds three damage
 slit at 0.15 L of size ``small`` from day 150, ``medium`` from day 240 and ``large`` from day 300 (the same tests
 before each state: :func:`simulate_series` draws the environment independently of the damage). ``monitor`` runs
 with the measured temperatures (regression) and without (``pca``); per event it prints the tests, the modes that
-moved, the mean size, and with ``--model`` the most likely explanation and its size; and per state the simulator's
-own mean drop of the modes that moved.
+moved, the size (the root mean square over the modes of the event's mean change), and with ``--model`` the most
+likely explanation and its size; beside it the simulator's own size (the same of the slit's frequency drops).
 """
 
 from __future__ import annotations
@@ -94,8 +94,7 @@ def main(argv=None) -> dict:
             rows.append({"first_day": days[0], "last_day": days[-1], "alarms": e["n_alarms"],
                          "slit_ei_loss": states, "moved": e["moved"], "direction": e["direction"],
                          "size_pct": e["size_pct"], "against": e["against"],
-                         "truth_pct": float(np.mean([drops[_size_name(s)][k - 1] for s in states if s
-                                                     for k in e["moved"]])) if e["moved"] and any(states) else None,
+                         "truth_pct": _truth(drops, truth, e["members"]),
                          "explanation": h.get("name"), "explanation_size": (h.get("parameters") or {}).get("size")})
         result[label] = rows
         print(f"{label}: {res['counts']['alarm']} alarms after the baseline, {len(rows)} events")
@@ -111,6 +110,13 @@ def main(argv=None) -> dict:
             for r in rows:
                 w.writerow([label, *r.values()])
     return result
+
+
+def _truth(drops: dict, truth: dict, members) -> float | None:
+    """The simulator's own size of an event: the root mean square over the modes of its alarms' mean slit drop."""
+    d = [drops[_size_name(truth["tests"][i]["slit_size"])] if truth["tests"][i]["slit_size"] else np.zeros(4)
+         for i in members]
+    return float(np.sqrt(np.mean(np.mean(d, axis=0) ** 2)))
 
 
 def _pct(v) -> str:

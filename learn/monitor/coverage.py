@@ -12,9 +12,8 @@ import numpy as np
 __all__ = ["SCATTER_RATIO_WARN", "Coverage", "Scatter", "baseline_scatter", "coverage", "environment_coordinates",
            "series_coverage"]
 
-#: Ratio of the later healthy-looking tests' residual scatter to the baseline's above which the baseline period is
-#: named as too narrow (a correct baseline gives about 1: the later tests' residuals are out of sample, by
-#: ``sqrt(1 + 1/n)``, and the alarms' removal trims their tail).
+#: Ratio of the later healthy-looking tests' scatter to the baseline's above which the baseline period is named as
+#: too narrow (a baseline that saw the normal variation gives about 1: both are held-out indices below the threshold).
 SCATTER_RATIO_WARN = 1.3
 #: Fewest later non-alarmed tests the scatter ratio is computed from.
 MIN_LATER = 5
@@ -113,10 +112,10 @@ class Scatter:
 
     Attributes
     ----------
-    ratio : float or None           root-mean-square z-score (per mode, baseline standard deviations) of the later
-                                    non-alarmed tests over the baseline tests'; None with fewer than
-                                    :data:`MIN_LATER` such tests
-    per_mode : list                 the same ratio per mode
+    ratio : float or None           square root of the later non-alarmed tests' mean novelty index over the
+                                    baseline's non-alarmed held-out one; None with fewer than :data:`MIN_LATER`
+                                    such tests
+    per_mode : list                 per mode, the ratio of their root-mean-square z-scores
     n_later : int                   later non-alarmed tests used
     baseline_days, series_days : float or None      the spans of the baseline period and of the series (times)
     warning : str or None
@@ -136,35 +135,39 @@ class Scatter:
 
 
 def baseline_scatter(rows: list, has_times: bool = False) -> Scatter:
-    """:class:`Scatter` of a monitored series' rows (``mode_z_scores``, ``baseline``, ``status``, ``time_value``):
-    the root-mean-square z-score of the later tests that look healthy (judged, no alarm) over the baseline tests',
-    per mode and over all modes; a warning naming the ratio when it exceeds :data:`SCATTER_RATIO_WARN` (the
-    baseline period saw less of the normal variation than the later tests show)."""
+    """:class:`Scatter` of a monitored series' rows (``novelty``, ``mode_z_scores``, ``baseline``, ``status``,
+    ``time_value``): the scatter of the later tests that look healthy (judged, no alarm) against the baseline
+    tests', the square root of the ratio of their mean novelty indices (each baseline test's held out, so both are
+    indices of tests the model did not see, and both without the alarms: the same truncation at the threshold), and
+    per mode the ratio of their root-mean-square z-scores (the baseline's in sample: smaller out of sample after a
+    latent model's removed factors, information only); a warning naming the ratio when it exceeds
+    :data:`SCATTER_RATIO_WARN` (the baseline period saw less of the normal variation than the later tests show)."""
 
     def z(sel):
         Z = np.array([[np.nan if v is None else v for v in r["mode_z_scores"]] for r in sel], float)
         return Z.reshape(len(sel), -1)
 
-    base = [r for r in rows if r["baseline"] and r["status"] in ("alarm", "no alarm")]
-    later = [r for r in rows if not r["baseline"] and r["status"] == "no alarm"]
+    base = [r for r in rows if r["baseline"] and r["status"] == "no alarm" and r["novelty"] is not None]
+    later = [r for r in rows if not r["baseline"] and r["status"] == "no alarm" and r["novelty"] is not None]
     t = np.array([r["time_value"] for r in rows], float)
     tb = np.array([r["time_value"] for r in rows if r["baseline"]], float)
     spans = (float(np.ptp(tb)), float(np.ptp(t))) if has_times and tb.size else (None, None)
-    if len(later) < MIN_LATER or not base:
+    if len(later) < MIN_LATER or len(base) < 2:
         return Scatter(None, [], len(later), *spans, None)
+    ratio = float(np.sqrt(np.mean([r["novelty"] for r in later]) / np.mean([r["novelty"] for r in base])))
     zb, zl = z(base), z(later)
-    ms_b, ms_l = np.nanmean(zb**2, axis=0), np.nanmean(zl**2, axis=0)
-    per_mode = np.sqrt(ms_l / ms_b)
-    ratio = float(np.sqrt(np.nanmean(ms_l) / np.nanmean(ms_b)))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        per_mode = np.sqrt(np.nanmean(zl**2, axis=0) / np.nanmean(zb**2, axis=0))
     warning = None
     if ratio > SCATTER_RATIO_WARN:
         span = (f"; the baseline period spans {spans[0]:.3g} of the series' {spans[1]:.3g} days"
                 if spans[0] is not None else "")
         warning = (f"the {len(later)} later tests without an alarm scatter {ratio:.2f} times as much as the "
-                   f"{len(base)} baseline tests about the normal model (mode by mode "
-                   + ", ".join(f"{v:.2f}" for v in per_mode) + f"){span}: the baseline period saw less of the normal "
-                   "variation than the later tests show (too short, or one session); alarms may be normal "
-                   "variation the baseline did not see (docs/monitoring.md: choosing a baseline period)")
+                   f"{len(base)} baseline tests about the normal model (root of the ratio of their mean novelty "
+                   f"indices; z-scores mode by mode " + ", ".join(f"{v:.2f}" for v in per_mode) + f"){span}: the "
+                   "baseline period saw less of the normal variation than the later tests show (too short, or one "
+                   "session); alarms may be normal variation the baseline did not see (docs/monitoring.md: choosing "
+                   "a baseline period)")
     return Scatter(ratio, [float(v) for v in per_mode], len(later), *spans, warning)
 
 

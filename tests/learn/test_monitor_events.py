@@ -17,6 +17,7 @@ from monitor_series import write_modal_series
 def _row(status, z=None, baseline=False, t=0.0, change=None):
     z = [0.0] * 4 if z is None else list(z)
     return {"file": f"t{t:g}", "time": t, "time_value": t, "baseline": baseline, "status": status,
+            "novelty": float(np.sum(np.square(z))) if status in ("alarm", "no alarm") else None,
             "frequencies_hz": [100.0 * (k + 1) * (1 + 1e-3 * v) for k, v in enumerate(z)]
             if status in ("alarm", "no alarm") else [None] * 4,
             "mode_z_scores": z if status in ("alarm", "no alarm") else [None] * 4,
@@ -96,7 +97,9 @@ def test_the_later_tests_scatter_is_compared_with_the_baselines():
     later = [_row("no alarm", z, t=40 + k) for k, z in enumerate(wide)]
     zb = np.array([r["mode_z_scores"] for r in rows])
     sc = baseline_scatter(rows + later, has_times=True)
+    # the root of the ratio of the mean indices (here the sums of the squared z-scores)
     assert sc.ratio == pytest.approx(np.sqrt(np.mean(wide**2) / np.mean(zb**2)), rel=1e-12)
+    np.testing.assert_allclose(sc.per_mode, np.sqrt(np.mean(wide**2, axis=0) / np.mean(zb**2, axis=0)), rtol=1e-12)
     assert 1.7 < sc.ratio < 2.3 and "scatter" in sc.warning and f"{sc.ratio:.2f} times" in sc.warning
     assert "spans 39 of the series' 99 days" in sc.warning
     same = [_row("no alarm", z, t=40 + k) for k, z in enumerate(rng.standard_normal((60, 4)))]
