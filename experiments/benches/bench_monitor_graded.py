@@ -90,19 +90,27 @@ def main(argv=None) -> dict:
         for e in res["events"]:
             days = [truth["tests"][i]["day"] for i in e["members"]]
             states = sorted({truth["tests"][i]["slit_size"] for i in e["members"]})
-            h = ((e.get("verdict") or {}).get("hypotheses") or [{}])[0]
+            hyps = (e.get("verdict") or {}).get("hypotheses") or [{}]
+            h = hyps[0]
+            slit = next((x for x in hyps if x.get("name") == "slit"), {})
             rows.append({"first_day": days[0], "last_day": days[-1], "alarms": e["n_alarms"],
                          "slit_ei_loss": states, "moved": e["moved"], "direction": e["direction"],
                          "size_pct": e["size_pct"], "against": e["against"],
                          "truth_pct": _truth(drops, truth, e["members"]),
-                         "explanation": h.get("name"), "explanation_size": (h.get("parameters") or {}).get("size")})
+                         "explanation": h.get("name"), "explanation_size": (h.get("parameters") or {}).get("size"),
+                         "slit_x_m": (slit.get("parameters") or {}).get("x_m"),
+                         "slit_size": (slit.get("parameters") or {}).get("size"),
+                         "slit_size_truth": float(np.mean([_hinge(truth["tests"][i]["slit_size"]) for i in
+                                                           e["members"]]))})
         result[label] = rows
         print(f"{label}: {res['counts']['alarm']} alarms after the baseline, {len(rows)} events")
         for r in rows:
             print(f"  days {r['first_day']:.0f}-{r['last_day']:.0f}: {r['alarms']} alarms, slit EI loss "
                   f"{r['slit_ei_loss']}, modes {r['moved']} {r['direction']}, size {_pct(r['size_pct'])} % "
                   f"(simulator {_pct(r['truth_pct'])} %; against {r['against']})"
-                  + (f"; explanation {r['explanation']} size {r['explanation_size']}" if r["explanation"] else ""))
+                  + (f"; most likely {r['explanation']} (size {_pct(r['explanation_size'])}); slit at "
+                     f"{_pct(r['slit_x_m'])} m, hinge flexibility {_pct(r['slit_size'])} (the simulator's "
+                     f"{_pct(r['slit_size_truth'])})" if r["explanation"] else ""))
     with open(out / "graded.csv", "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["model", *result["regression"][0].keys()] if result["regression"] else ["model"])
@@ -117,6 +125,11 @@ def _truth(drops: dict, truth: dict, members) -> float | None:
     d = [drops[_size_name(truth["tests"][i]["slit_size"])] if truth["tests"][i]["slit_size"] else np.zeros(4)
          for i in members]
     return float(np.sqrt(np.mean(np.mean(d, axis=0) ** 2)))
+
+
+def _hinge(ei_loss: float, width_m: float = 0.004, length_m: float = 0.8) -> float:
+    """A slit's hinge flexibility ``w r / ((1 - r) L)`` (:mod:`datagen.damage`) of its EI loss ``r``."""
+    return width_m * ei_loss / ((1 - ei_loss) * length_m)
 
 
 def _pct(v) -> str:

@@ -17,12 +17,19 @@ Steps, one module each:
   (leave-one-out or k-fold) and the threshold of a false-alarm rate from a scaled F distribution fitted to them;
 * :mod:`~learn.monitor.alarms` -- :func:`monitor_series`, all of it on a series (:class:`SeriesResult` holds the
   rows), and what changed at an alarm;
-* :mod:`~learn.monitor.verdicts` -- the competing explanations and the network's verdict of each alarm.
+* :mod:`~learn.monitor.coverage` -- whether a later test lies beyond the baseline's conditions (extrapolated) and
+  whether the later healthy-looking tests scatter more than the baseline's (a baseline period too narrow);
+* :mod:`~learn.monitor.events` -- consecutive alarms and tests not identified grouped into events (the modes that
+  moved, size, direction), and the tests not identified against the baseline's share (a binomial test);
+* :mod:`~learn.monitor.verdicts` -- the competing explanations and the network's verdict of each event (or alarm);
+* :mod:`~learn.monitor.workers` -- the tests identified over worker processes (results independent of their number).
 """
 
 from learn.monitor.alarm_threshold import (Threshold, held_out_novelty, minimum_baseline, missing_evidence,
                                            threshold)
-from learn.monitor.alarms import SeriesResult, changed_text, monitor_series, what_changed
+from learn.monitor.alarms import STATUSES, SeriesResult, changed_text, monitor_series, what_changed
+from learn.monitor.coverage import Coverage, Scatter, baseline_scatter, coverage, series_coverage
+from learn.monitor.events import Event, group_events, identification_change
 from learn.monitor.identification import (CACHE_FORMAT, IdentificationSettings, IdentifiedModes,
                                           cached_identification, file_key, identification_settings, identify_test,
                                           write_cache)
@@ -30,9 +37,12 @@ from learn.monitor.normal_models import (DEFAULT_LATENT, NORMAL_MODELS, PCA_EXPL
                                          PCARemoval, Regression)
 from learn.monitor.series import SeriesInput, check_series, read_conditions
 from learn.monitor.tracking import MAC_MIN, MIN_PRESENCE, ReferenceModes, reference_modes, track_modes
-from learn.monitor.verdicts import alarm_verdicts, baseline_nearest_median
+from learn.monitor.verdicts import alarm_verdicts, baseline_nearest_median, event_verdicts
+from learn.monitor.workers import identify_files
 
-__all__ = ["CACHE_FORMAT", "DEFAULT_LATENT", "MAC_MIN", "MIN_PRESENCE", "NORMAL_MODELS", "PCA_EXPLAINED",
+__all__ = ["CACHE_FORMAT", "DEFAULT_LATENT", "MAC_MIN", "MIN_PRESENCE", "NORMAL_MODELS", "PCA_EXPLAINED", "STATUSES",
+           "baseline_scatter", "Coverage", "coverage", "Event", "event_verdicts", "group_events",
+           "identification_change", "identify_files", "Scatter", "series_coverage",
            "alarm_verdicts", "baseline_nearest_median", "cached_identification", "changed_text", "check_series",
            "FactorRemoval", "file_key", "held_out_novelty", "identification_settings", "IdentificationSettings",
            "IdentifiedModes", "identify_test", "minimum_baseline", "missing_evidence", "Mixture", "monitor_series",

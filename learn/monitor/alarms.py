@@ -28,7 +28,8 @@ class SeriesResult:
     ----------
     rows : list of dict              one per test (``file``, ``time``, ``baseline``, ``alarm``, ``novelty``,
                                      ``threshold``, ``frequencies_hz``, ``mode_z_scores``, ``change_pct``,
-                                     ``identified``, ``error``, ``missing_modes``, ``conditions``)
+                                     ``identified``, ``status`` (:data:`STATUSES`), ``error``, ``missing_modes``,
+                                     ``conditions``)
     reference : ReferenceModes
     frequencies_hz : ndarray (n, m)  tracked frequencies (NaN where missing)
     expected_hz : ndarray (n, m)     the baseline's frequencies at each test's conditions
