@@ -60,6 +60,8 @@ class Event:
     against : str                 what the change is measured against
     n_before : int                tests without an alarm before the event its ``step_pct`` is measured against
     members : tuple of int        row indices of its flagged tests
+    before : tuple of int         row indices of the tests its change is measured against (empty: the normal
+                                  model's prediction)
     verdict : dict or None        the explanations and the network's verdict (with a trained model)
     """
 
@@ -85,11 +87,13 @@ class Event:
     against: str = ""
     n_before: int = 0
     members: tuple = ()
+    before: tuple = ()
     verdict: dict | None = None
 
     def to_dict(self) -> dict:
         d = asdict(self)
         d["members"] = list(self.members)
+        d["before"] = list(self.before)
         return d
 
 
@@ -235,7 +239,7 @@ def _event(rows, members: list, ctx: dict) -> Event:
     text = f"{where}: " + ", ".join(parts) + what + ext + ("" if change else "; not a change")
     return Event(first, last, rows[first]["file"], rows[last]["file"], times[0], times[1], len(span), len(alarms), u,
                  n_ext, modes, moved, size, first_size, last_size, direction, p, change, text, against,
-                 len(before), tuple(members))
+                 len(before), tuple(members), tuple(before) if against.endswith("before it") else ())
 
 
 def _num(v):

@@ -109,9 +109,12 @@ def _explain(result: SeriesResult, model, beam_x_m, items: list, out: dict) -> N
 
 def event_verdicts(result: SeriesResult, events: list, model, beam_x_m=None) -> list:
     """Per event with alarms (:func:`learn.monitor.events.group_events`; None for the others): the competing
-    explanations of the event's change, its alarms' mean frequencies brought to the baseline's conditions
-    against the baseline medians (the shapes and damping of its ``representative`` alarm, the one whose change
-    lies nearest the event's mean), weighed with the measured per-mode scatter; and the network's verdict of the
+    explanations of the event's change, weighed with the measured per-mode scatter: its alarms' mean frequencies
+    brought to the baseline's conditions against the baseline medians, or, for an event measured against the tests
+    before it (a latent model, whose expected frequencies hold the part of a damage along the removed factors),
+    its alarms' mean step from those tests, applied to the baseline medians (a uniform part of it is what every
+    explanation's temperature nuisance takes); the shapes and damping of its ``representative`` alarm, the one
+    whose change lies nearest the event's mean; and the network's verdict of the
     representative alarm against the baseline period (:func:`_network_verdicts`). One explanation per event, not
     per alarm: an event's alarms are one state, their mean the better measure of it."""
     empty = {"representative": None, "hypotheses": None, "hypotheses_summary": None, "frequency_change_std": None,
@@ -124,10 +127,16 @@ def event_verdicts(result: SeriesResult, events: list, model, beam_x_m=None) -> 
         Z = np.array([_vec(result.rows[i]["mode_z_scores"]) for i in alarms])
         mean = np.nanmean(Z, axis=0)
         rep = alarms[int(np.argmin(np.nansum((Z - mean) ** 2, axis=1) - 1e3 * np.isfinite(Z).sum(axis=1)))]
-        at_base = result.frequencies_hz[alarms] * result.reference.frequencies_hz / result.expected_hz[alarms]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)        # a mode missing in every alarm stays NaN
-            f = np.nanmean(at_base, axis=0)
+            if ev.before:      # against the tests before: the raw step (its uniform part the explanations' nuisance)
+                lnf = np.log(result.frequencies_hz)
+                f = result.reference.frequencies_hz * np.exp(np.nanmean(lnf[alarms], axis=0)
+                                                             - np.nanmean(lnf[list(ev.before)], axis=0))
+            else:
+                at_base = (result.frequencies_hz[alarms] * result.reference.frequencies_hz
+                           / result.expected_hz[alarms])
+                f = np.nanmean(at_base, axis=0)
         reps[k] = rep
         items.append((rep, f, _vec(result.rows[rep]["damping_ratios"]), rep))
     by_rep = {rep: {**empty, "representative": result.rows[rep]["file"]} for rep in reps.values()}
