@@ -9,10 +9,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from learn.monitor.baseline_state import held_out_cached
 from learn.monitor.identification import IdentificationSettings, write_cache
 from learn.monitor.normal_models import DEFAULT_LATENT, NORMAL_MODELS
 from learn.monitor.series import SeriesInput, check_series
-from learn.monitor.alarm_threshold import (Threshold, held_out_novelty, minimum_baseline, missing_evidence, threshold,
+from learn.monitor.alarm_threshold import (Threshold, minimum_baseline, missing_evidence, threshold,
                                      training_size)
 from learn.monitor.tracking import MIN_PRESENCE, ReferenceModes, reference_modes, track_modes
 from physics.errors import BeamDamageError, ConfigError
@@ -97,7 +98,7 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     b_idx = np.flatnonzero(ok[:n_baseline])
     Cq = C if q else None
     model = NORMAL_MODELS[normal_model](m, q).fit(X[b_idx], None if Cq is None else Cq[b_idx])
-    held = held_out_novelty(model.with_choices, X[b_idx], None if Cq is None else Cq[b_idx])
+    held = held_out_cached(model, X[b_idx], None if Cq is None else Cq[b_idx], cache_dir)   # kept beside the cache
     thr = threshold(held, false_alarm_rate, model.dof_, training_size(len(b_idx)), q)
     novelty = np.full(n, np.nan)
     rest = np.flatnonzero(ok)

@@ -183,3 +183,25 @@ def test_two_workers_give_the_json_of_one(tmp_path, capsys, slit_series):
     assert main(["monitor", "--conditions", str(csv_path), "--baseline-tests", "18", "--workers", "0",
                  "--json"]) == 2
     assert "--workers 0" in capsys.readouterr()[1]
+
+
+def test_a_test_appended_is_judged_with_the_saved_baseline_state(tmp_path, monkeypatch, slit_series):
+    """The baseline's held-out indices are saved beside the cache; a rerun with a test appended reuses them (no
+    held-out fit), a changed baseline refits."""
+    import learn.monitor.baseline_state as state
+    from learn.monitor import IdentificationSettings, SeriesInput, monitor_series, read_conditions
+
+    full = read_conditions(slit_series[0])
+
+    def part(n):
+        return SeriesInput(full.files[:n], full.times[:n], full.time_values[:n], full.conditions[:n],
+                           full.condition_names)
+
+    first = monitor_series(part(34), 18, IdentificationSettings(), tmp_path, progress=False)
+    assert len(list((tmp_path / "baseline").glob("*.json"))) == 1
+    monkeypatch.setattr(state, "held_out_novelty", lambda *a: pytest.fail("refitted"))
+    again = monitor_series(part(36), 18, IdentificationSettings(), tmp_path, progress=False)
+    assert [r["novelty"] for r in again.rows[:34]] == [r["novelty"] for r in first.rows]
+    assert again.threshold.value == first.threshold.value and again.rows[35]["alarm"]
+    with pytest.raises(pytest.fail.Exception, match="refitted"):
+        monitor_series(part(36), 20, IdentificationSettings(), tmp_path, progress=False)
