@@ -201,8 +201,10 @@ def _event(rows, members: list, ctx: dict) -> Event:
             c, z = np.nanmean(C, axis=0), np.nanmean(np.array([_vec(rows[i], "mode_z_scores") for i in alarms]),
                                                      axis=0)
         step = None if steps is None else 100 * np.expm1(np.nanmean(steps, axis=0))
-    against = ("the " + (f"{len(before)} tests without an alarm before it" if ctx["against"] == "before"
-                         and steps is not None else "normal model's prediction"))
+    stepped = ctx["against"] == "before" and steps is not None
+    against = ((f"the {len(before)} tests without an alarm before "
+                + ("it" if end == first else f"the first change (test {end + 1})")) if stepped
+               else "the normal model's prediction")
     modes = [{"mode": r + 1, "change_pct": _num(c[r]), "z": _num(z[r]),
               "step_pct": None if step is None else _num(step[r]),
               "moved": bool(np.isfinite(z[r]) and abs(z[r]) >= Z_MOVED)} for r in range(m)]
@@ -239,7 +241,7 @@ def _event(rows, members: list, ctx: dict) -> Event:
     text = f"{where}: " + ", ".join(parts) + what + ext + ("" if change else "; not a change")
     return Event(first, last, rows[first]["file"], rows[last]["file"], times[0], times[1], len(span), len(alarms), u,
                  n_ext, modes, moved, size, first_size, last_size, direction, p, change, text, against,
-                 len(before), tuple(members), tuple(before) if against.endswith("before it") else ())
+                 len(before), tuple(members), tuple(before) if stepped else ())
 
 
 def _num(v):

@@ -130,7 +130,8 @@ def test_tests_not_identified_are_counted_charted_and_a_run_of_them_is_a_change(
         (22, 26, 5, 0, True), (30, 35, 0, 6, True)]
     assert ev[0]["unidentified_p_value"] == pytest.approx((1 / 20) ** 5, rel=1e-9)   # 0 of 18 baseline tests
     # pca: against the 10 tests before the first change (the lost identification); the slit lowers modes 1, 3, 4
-    assert ev[1]["against"] == "the 10 tests without an alarm before it" and ev[1]["before"] == list(range(12, 22))
+    assert ev[1]["against"] == "the 10 tests without an alarm before the first change (test 23)"
+    assert ev[1]["before"] == list(range(12, 22))
     assert all(ev[1]["modes"][k]["change_pct"] < -0.15 for k in (0, 2, 3))
     assert all(r["verdict"]["event"] == 1 for r in res["tests"][30:])
 
