@@ -22,7 +22,9 @@ Steps, one module each:
 * :mod:`~learn.monitor.events` -- consecutive alarms and tests not identified grouped into events (the modes that
   moved, size, direction), and the tests not identified against the baseline's share (a binomial test);
 * :mod:`~learn.monitor.verdicts` -- the competing explanations and the network's verdict of each event (or alarm);
-* :mod:`~learn.monitor.workers` -- the tests identified over worker processes (results independent of their number).
+* :mod:`~learn.monitor.workers` -- the tests identified over worker processes (results independent of their number);
+* :mod:`~learn.monitor.baseline_state` -- the baseline's held-out indices kept beside the cache and reused while the
+  baseline and the normal model are unchanged.
 """
 
 from learn.monitor.alarm_threshold import (Threshold, held_out_novelty, minimum_baseline, missing_evidence,
