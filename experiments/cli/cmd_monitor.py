@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -12,14 +13,18 @@ import numpy as np
 from experiments.cli.args import check_out_dir
 from learn.monitor import (DEFAULT_LATENT, NORMAL_MODELS, SeriesInput, alarm_verdicts, identification_settings,
                            monitor_series, read_conditions)
+from learn.monitor.coverage import baseline_scatter, series_coverage
+from learn.monitor.events import group_events, identification_change
+from learn.monitor.verdicts import event_verdicts
 from physics.errors import ConfigError
 from physics.io import FRF, MODAL, TIME, accepted, atomic_write_bytes, atomic_write_text, to_jsonable
 from datagen.store import package_version
 from learn.model_dir import load_model
 from physics.beam import load_beam
 from experiments.studies.report import Section, Table, figure, write_report
+import warnings
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "chart", "judged", "run"]
 
 
 def add_parser(sub):
@@ -32,9 +37,12 @@ def add_parser(sub):
                     "variation of the log natural frequencies is learnt there (a regression on the measured "
                     "conditions of --conditions, else a latent-variable model), and each test's novelty index (a "
                     "squared Mahalanobis distance of its residual) is compared with a threshold set by cross-"
-                    "validation on the baseline period for the false-alarm rate. An alarm says what changed mode by "
-                    "mode, and with --model weighs the competing explanations with the measured scatter and gives "
-                    "the network's verdict. Writes monitor.json, monitor.csv, monitor.png and report.html in DIR.")
+                    "validation on the baseline period for the false-alarm rate. A test that could not be identified "
+                    "is counted beside the alarms (a run of them, beyond the baseline's share, is a change); a test "
+                    "beyond the baseline's conditions is flagged extrapolated. Consecutive alarms are grouped into "
+                    "events that say which modes moved, by how much and which way; with --model each event weighs "
+                    "the competing explanations with the measured scatter and gives the network's verdict. Writes "
+                    "monitor.json, monitor.csv, monitor.png and report.html in DIR.")
     p.add_argument("tests", nargs="*", metavar="TEST", help="test files in time order (or --conditions)")
     p.add_argument("--baseline-tests", type=int, required=True, metavar="N",
                    help="the first N tests are the baseline period (intact beam)")
@@ -60,12 +68,15 @@ def add_parser(sub):
                    help="statistics combined at the false-alarm rate (residual, environment, shift; the residual "
                         "always): leave environment and shift out when the baseline period does not cover the "
                         "conditions the tests meet (default: all)")
+    p.add_argument("--workers", type=int, default=1, metavar="N",
+                   help="processes identifying the tests (default 1; the results do not depend on it)")
     p.add_argument("--out", metavar="DIR", help="outputs and the identification cache (default without --json: "
                                                 "out/monitor)")
     p.add_argument("--json", action="store_true",
-                   help='print {"tests": [...], "baseline_tests", "false_alarm_rate", "normal_variation", '
-                        '"first_alarm", "version", "config"}')
-    p.set_defaults(func=run, flags={"n_baseline": "--baseline-tests"})
+                   help='print {"tests": [...], "events": [...], "counts", "identification_change", '
+                        '"baseline_scatter", "coverage", "baseline_tests", "false_alarm_rate", "normal_variation", '
+                        '"detector", "charts", "first_alarm", "version", "config"}')
+    p.set_defaults(func=run, flags={"n_baseline": "--baseline-tests", "workers": "--workers"})
 
 
 def _series(args) -> SeriesInput:
@@ -98,23 +109,15 @@ def run(args) -> dict:
     settings = identification_settings(args.band, beam, model)
     cache = Path(args.out) / "cache" if args.out else None
     res = monitor_series(series, args.baseline_tests, settings, cache, args.false_alarm_rate, args.normal_model,
-                         progress=not args.json, chart=getattr(args, "chart", "ewma"),
-                         statistics=tuple(getattr(args, "statistics", None) or ("residual", "environment", "shift")))
-    verdicts = alarm_verdicts(res, model, beam_x_m)
-    for i, v in verdicts.items():
-        res.rows[i]["verdict"] = v
-    first = res.first_alarm
-    out = {"tests": res.rows, "baseline_tests": args.baseline_tests, "false_alarm_rate": args.false_alarm_rate,
-           "normal_variation": res.normal_variation, "threshold": res.threshold.to_dict(),
-           "first_alarm": None if first is None else {"index": first, "file": res.rows[first]["file"],
-                                                      "time": res.rows[first]["time"]},
-           "detector": res.detection.to_dict(), "charts": None if res.charts is None else res.charts.to_dict(),
-           "n_alarms_after_baseline": sum(r["alarm"] for r in res.rows if not r["baseline"]),
-           "n_not_identified": sum(not r["identified"] for r in res.rows),
-           "version": package_version(),
-           "config": {"identification": settings.to_dict(), "conditions": args.conditions,
-                      "condition_names": list(res.series.condition_names), "beam": args.beam, "model": args.model,
-                      "normal_model": res.normal_variation["model"], "seed": 0}}
+                         progress=not args.json, chart=args.chart, statistics=tuple(args.statistics),
+                         workers=args.workers)
+    out = judged(res, args.false_alarm_rate, model, beam_x_m)
+    out.update(baseline_tests=args.baseline_tests, false_alarm_rate=args.false_alarm_rate, version=package_version(),
+               detector=res.detection.to_dict(), charts=None if res.charts is None else res.charts.to_dict(),
+               config={"identification": settings.to_dict(), "conditions": args.conditions,
+                       "condition_names": list(res.series.condition_names), "beam": args.beam, "model": args.model,
+                       "normal_model": res.normal_variation["model"], "chart": args.chart,
+                       "statistics": list(args.statistics), "seed": 0})
     if args.out:
         out["outputs"] = _write(args.out, out, res)
     if not args.json:
@@ -122,7 +125,54 @@ def run(args) -> dict:
     return out
 
 
-CSV_COLUMNS = ("file", "time", "baseline", "identified", "alarm", "novelty", "threshold", "error")
+def judged(res, false_alarm_rate: float, model=None, beam_x_m=None) -> dict:
+    """A monitored series judged: every row's coverage (``extrapolated``), its alarm's ``verdict`` (what changed,
+    the event it belongs to; ``extrapolated`` in its summary), the ``events``, the ``counts`` of every status, the
+    test of the tests not identified against the baseline's share and the scatter of the later healthy-looking tests
+    against the baseline's; with a trained model each event's explanations and the network's verdict. Warnings
+    (``warnings.warn``) for a lost identification and a baseline period narrower than the later tests."""
+
+    rows = res.rows
+    cov = series_coverage(res)
+    for i, v in alarm_verdicts(res).items():
+        if rows[i]["extrapolated"]:
+            v["summary"] += f"; extrapolated: {rows[i]['extrapolated_because']}"
+        rows[i]["verdict"] = v
+    events = group_events(rows, false_alarm_rate,
+                          against="residual" if res.normal_variation["model"] == "regression" else "before")
+    for k, (ev, v) in enumerate(zip(events, event_verdicts(res, events, model, beam_x_m))):
+        for i in ev.members:
+            if "verdict" in rows[i]:
+                rows[i]["verdict"]["event"] = k
+        if v is not None:
+            events[k] = replace(ev, verdict=v)
+    ident = identification_change(rows, false_alarm_rate)
+    scatter = baseline_scatter(rows, res.series.times[0] is not None)
+    if ident["change"]:
+        warnings.warn(ident["text"])
+    if scatter.warning:
+        warnings.warn(scatter.warning)
+    later = [r for r in rows if not r["baseline"]]
+    counts = {s: sum(r["status"] == s for r in later) for s in ("alarm", "no alarm", "not identified", "not judged")}
+    counts.update(extrapolated=sum(r["extrapolated"] for r in later), events=len(events),
+                  changes=sum(e.change for e in events))
+    first = res.first_alarm
+    return {"tests": rows, "events": [e.to_dict() for e in events], "counts": counts,
+            "identification_change": ident, "baseline_scatter": scatter.to_dict(),
+            "coverage": None if cov is None else {"coordinates": list(cov.names), "low": cov.low.tolist(),
+                                                  "high": cov.high.tolist(),
+                                                  "mahalanobis_max": None if not np.isfinite(cov.mahalanobis_max)
+                                                  else cov.mahalanobis_max},
+            "normal_variation": res.normal_variation, "threshold": res.threshold.to_dict(),
+            "first_alarm": None if first is None else {"index": first, "file": rows[first]["file"],
+                                                       "time": rows[first]["time"]},
+            "n_alarms_after_baseline": counts["alarm"],
+            "n_not_identified": sum(r["status"] == "not identified" for r in rows),
+            "n_not_judged": sum(r["status"] == "not judged" for r in rows)}
+
+
+CSV_COLUMNS = ("file", "time", "baseline", "status", "identified", "alarm", "extrapolated", "novelty", "threshold",
+               "error")
 
 
 def _csv(out: dict, m: int) -> str:
@@ -150,15 +200,20 @@ def _write(out_dir, out: dict, res) -> dict:
     atomic_write_text(root / "monitor.json", json.dumps(to_jsonable({**out, "outputs": paths}), indent=1))
     nv = res.normal_variation
     thr = out["threshold"]
-    alarms = [r for r in out["tests"] if r["alarm"] and not r["baseline"]]
     first = out["first_alarm"]
+    cnt = out["counts"]
+    later = len(out["tests"]) - out["baseline_tests"]
     summary = Section("Summary", paragraphs=(
         f"{len(out['tests'])} tests, the first {out['baseline_tests']} the baseline period; {m} modes tracked; "
         f"normal variation: {nv['model']}; threshold {thr['value']:.4g} for a false-alarm rate of "
         f"{out['false_alarm_rate']:g} (held-out baseline rate {thr['held_out_false_alarm_rate']:.3g}).",
-        f"{len(alarms)} alarms after the baseline period"
-        + (f"; the first: {first['file']}{_when(first)}." if first else "."),
-        f"{out['n_not_identified']} tests not identified (see the table)." if out["n_not_identified"] else ""))
+        f"Of the {later} later tests: {cnt['alarm']} alarms, {cnt['not identified']} not identified, "
+        f"{cnt['no alarm']} without an alarm, {cnt['not judged']} not judged (another kind, band or beam; conditions "
+        f"not measured); {cnt['extrapolated']} lie beyond the baseline's conditions (extrapolated). "
+        f"{cnt['events']} events, {cnt['changes']} of them changes"
+        + (f"; the first alarm: {first['file']}{_when(first)}." if first else "."),
+        out["identification_change"]["text"] + ".",
+        out["baseline_scatter"]["warning"] or _scatter_text(out["baseline_scatter"])))
     modes = Table("Reference modes of the baseline period and their normal variation",
                   ("mode", "frequency (Hz)", "std (%)", "tracking tolerance (%)", "presence",
                    "tests where a narrow-band re-identification found it"),
@@ -167,26 +222,47 @@ def _write(out_dir, out: dict, res) -> dict:
                          sum("narrow band" in (t["identified_by"][r] or "") for t in out["tests"]
                              if t.get("identified_by")))
                         for r in range(m)))
-    alarm_rows = tuple((r["file"], r["time"], r["novelty"], r["verdict"]["summary"],
-                        r["verdict"].get("hypotheses_summary") or "–") for r in alarms[:50])
     tables = [modes]
     if "r2" in nv:
         tables.append(Table("Regression on the measured conditions", ("mode", "R^2", *nv["conditions"]),
                             tuple((r + 1, nv["r2"][r], *nv["slope_per_condition"][r]) for r in range(m))))
-    if alarm_rows:
-        tables.append(Table("Alarms (first 50): what changed against the baseline population",
-                            ("file", "time", "novelty", "changed", "explanations"), alarm_rows))
-    bad = tuple((r["file"], r["error"]) for r in out["tests"] if not r["identified"])
+    events = out["events"]
+    if events:
+        tables.append(Table(f"Events ({len(events)}; first 50): consecutive alarms and tests not identified",
+                            ("first", "last", "tests", "alarms", "not identified", "modes moved", "direction",
+                             "mean size (%)", "first / last alarm (%)", "extrapolated", "change", "explanations"),
+                            tuple((e["first_file"], e["last_file"], e["n_tests"], e["n_alarms"],
+                                   e["n_not_identified"], ", ".join(map(str, e["moved"])) or "–", e["direction"],
+                                   "–" if e["size_pct"] is None else f"{e['size_pct']:.3g}",
+                                   "–" if e["size_first_pct"] is None else
+                                   f"{e['size_first_pct']:.3g} / {e['size_last_pct']:.3g}",
+                                   e["n_extrapolated"], "yes" if e["change"] else "no",
+                                   ((e["verdict"] or {}).get("hypotheses_summary") or "–"))
+                                  for e in events[:50])))
+    bad = tuple((r["file"], r["status"], r["error"]) for r in out["tests"] if not r["identified"])
     if bad:
-        tables.append(Table("Tests not identified", ("file", "error"), bad, collapsed=True))
+        tables.append(Table("Tests not identified or not judged", ("file", "status", "error"), bad, collapsed=True))
     section = Section("Control chart", figures=(figure(root / "monitor.png"),), tables=tuple(tables))
     written = write_report(root, "Monitoring series", (section,), summary)
     return {**paths, "report.html": written["html"], "report.md": written["markdown"]}
 
 
 def _figure(res) -> bytes:
-    """PNG: each mode's frequency relative to its baseline median and the novelty index over the tests, with the
-    threshold, the baseline period shaded and the alarms marked."""
+    """PNG of :func:`chart`."""
+    import matplotlib.pyplot as plt
+
+    fig = chart(res)
+    buf = io.BytesIO()
+    fig.tight_layout()
+    fig.savefig(buf, format="png", dpi=110)
+    plt.close(fig)
+    return buf.getvalue()
+
+
+def chart(res):
+    """The control chart (a matplotlib figure): each mode's frequency relative to its baseline median and the
+    novelty index over the tests, with the threshold, the baseline period shaded, the alarms circled, the
+    extrapolated tests boxed and the tests not identified crossed at the top edge of the index's panel."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -204,6 +280,14 @@ def _figure(res) -> bytes:
     nov = res.novelty
     a2.semilogy(t, np.maximum(nov, 1e-3), ".", color="k", ms=4, label="novelty index")
     a2.semilogy(t[alarm], np.maximum(nov[alarm], 1e-3), "o", mfc="none", color="tab:red", ms=7, label="alarm")
+    ext = np.array([bool(r.get("extrapolated")) for r in res.rows])
+    if ext.any():
+        a2.semilogy(t[ext], np.maximum(nov[ext], 1e-3), "s", mfc="none", color="tab:purple", ms=9,
+                    label=f"extrapolated ({ext.sum()}: beyond the baseline's conditions)")
+    lost = np.array([r.get("status") == "not identified" for r in res.rows])
+    if lost.any():                                  # no index: drawn at the top edge, counted in the legend
+        a2.plot(t[lost], np.full(lost.sum(), 0.96), "x", color="tab:orange", ms=7, mew=1.5,
+                transform=a2.get_xaxis_transform(), label=f"not identified ({lost.sum()})")
     a2.axhline(res.threshold.value, color="tab:red", ls="--",
                label=f"threshold ({100 * res.threshold.rate:g} % false alarms)")
     a2.set(xlabel="time (days)" if res.series.times[0] is not None else "test", ylabel="novelty index",
@@ -214,11 +298,14 @@ def _figure(res) -> bytes:
         for ax in (a1, a2):
             ax.axvspan(t[base].min(), hi, color="tab:green", alpha=0.1, lw=0)
         a1.text(t[base].min(), 1.0, " baseline period", transform=a1.get_xaxis_transform(), va="top", fontsize=7)
-    buf = io.BytesIO()
-    fig.tight_layout()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    return buf.getvalue()
+    return fig
+
+
+def _scatter_text(sc: dict) -> str:
+    if sc["ratio"] is None:
+        return f"Too few later tests without an alarm ({sc['n_later']}) to compare their scatter with the baseline's."
+    return (f"The {sc['n_later']} later tests without an alarm scatter {sc['ratio']:.2f} times as much as the baseline "
+            f"tests about the normal model (a baseline period too narrow is named above {sc['warn_above']:g}).")
 
 
 def _when(first: dict) -> str:
@@ -236,22 +323,26 @@ def _print(out: dict, res) -> None:
           f"false alarms (held-out baseline: {thr['held_out_false_alarm_rate']:.3g})")
     for r in out["tests"]:
         if r["error"]:
-            print(f"  {r['file']}: not used: {r['error']}")
-    alarms = [r for r in out["tests"] if r["alarm"] and not r["baseline"]]
-    print(f"{len(alarms)} alarms after the baseline period"
-          + (f"; first {out['first_alarm']['file']}{_when(out['first_alarm'])}" if alarms else ""))
-    for r in alarms[:10]:
-        v = r["verdict"]
-        print(f"  {r['file']}: novelty {r['novelty']:.4g}: {v['summary']}")
+            print(f"  {r['file']}: {r['status']}: {r['error']}")
+    cnt = out["counts"]
+    print(f"after the baseline period: {cnt['alarm']} alarms, {cnt['not identified']} not identified, "
+          f"{cnt['no alarm']} without an alarm, {cnt['not judged']} not judged; {cnt['extrapolated']} extrapolated"
+          + (f"; first alarm {out['first_alarm']['file']}{_when(out['first_alarm'])}" if out["first_alarm"] else ""))
+    print(out["identification_change"]["text"])
+    print(f"{cnt['events']} events, {cnt['changes']} changes:")
+    for e in out["events"][:10]:
+        print(f"  {e['text']}")
+        v = e["verdict"] or {}
         if v.get("hypotheses_summary"):
             print(f"    {v['hypotheses_summary']}")
         if v.get("network"):
             n = v["network"]
             against = (f"{v['network_baselines']} baseline tests" if v["network_baselines"] != 1
                        else v["network_baseline"])
-            print(f"    network (against {against}): damaged {n['damaged']}, P = {n['probability_damaged']}")
-    if len(alarms) > 10:
-        print(f"  ... {len(alarms) - 10} more in monitor.json")
+            print(f"    network ({v['representative']} against {against}): damaged {n['damaged']}, "
+                  f"P = {n['probability_damaged']}")
+    if len(out["events"]) > 10:
+        print(f"  ... {len(out['events']) - 10} more in monitor.json")
     for name, p in out.get("outputs", {}).items():
         print(f"wrote {p}")
 

@@ -23,13 +23,22 @@ Steps, one module each:
   autocorrelation, and the onset of a change (:func:`run_charts`);
 * :mod:`~learn.monitor.alarms` -- :func:`monitor_series`, all of it on a series (:class:`SeriesResult` holds the
   rows), and what changed at an alarm;
-* :mod:`~learn.monitor.verdicts` -- the competing explanations and the network's verdict of each alarm.
+* :mod:`~learn.monitor.coverage` -- whether a later test lies beyond the baseline's conditions (extrapolated) and
+  whether the later healthy-looking tests scatter more than the baseline's (a baseline period too narrow);
+* :mod:`~learn.monitor.events` -- consecutive alarms and tests not identified grouped into events (the modes that
+  moved, size, direction), and the tests not identified against the baseline's share (a binomial test);
+* :mod:`~learn.monitor.verdicts` -- the competing explanations and the network's verdict of each event (or alarm);
+* :mod:`~learn.monitor.workers` -- the tests identified over worker processes (results independent of their number);
+* :mod:`~learn.monitor.baseline_state` -- the baseline's held-out indices kept beside the cache and reused while the
+  baseline and the normal model are unchanged.
 """
 
 from learn.monitor.alarm_threshold import (Threshold, held_out_novelty, minimum_baseline, missing_evidence,
                                            threshold)
-from learn.monitor.alarms import SeriesResult, changed_text, monitor_series, what_changed
+from learn.monitor.alarms import STATUSES, SeriesResult, changed_text, monitor_series, what_changed
 from learn.monitor.charts import CHARTS, Charts, run_charts
+from learn.monitor.coverage import Coverage, Scatter, baseline_scatter, coverage, series_coverage
+from learn.monitor.events import Event, group_events, identification_change
 from learn.monitor.identification import (CACHE_FORMAT, IdentificationSettings, IdentifiedModes,
                                           cached_identification, file_key, identification_settings, identify_test,
                                           with_narrow_band_poles, write_cache)
@@ -39,13 +48,16 @@ from learn.monitor.series import SeriesInput, check_series, read_conditions
 from learn.monitor.statistics import STATISTICS, Detection, detect
 from learn.monitor.tracking import (MAC_MIN, MIN_COUNT, MIN_PRESENCE, ReferenceModes, identified_by, narrow_bands_hz,
                                    reference_modes, refit_missing, track_modes)
-from learn.monitor.verdicts import alarm_verdicts, baseline_nearest_median
+from learn.monitor.verdicts import alarm_verdicts, baseline_nearest_median, event_verdicts
+from learn.monitor.workers import identify_files
 
-__all__ = ["CACHE_FORMAT", "CHARTS", "Charts", "DEFAULT_LATENT", "Detection", "MAC_MIN", "MIN_COUNT", "MIN_PRESENCE",
-           "NORMAL_MODELS", "PCA_EXPLAINED", "STATISTICS", "alarm_verdicts", "baseline_nearest_median",
-           "cached_identification", "changed_text", "check_series", "detect", "FactorRemoval", "file_key",
-           "held_out_novelty", "identification_settings", "IdentificationSettings", "IdentifiedModes", "identified_by",
-           "identify_test", "minimum_baseline", "missing_evidence", "Mixture", "monitor_series", "narrow_bands_hz",
-           "PCARemoval", "read_conditions", "reference_modes", "ReferenceModes", "refit_missing", "Regression",
-           "run_charts", "SeriesInput", "SeriesResult", "Threshold", "threshold", "track_modes", "what_changed",
+__all__ = ["CACHE_FORMAT", "CHARTS", "Charts", "Coverage", "DEFAULT_LATENT", "Detection", "Event", "MAC_MIN",
+           "MIN_COUNT", "MIN_PRESENCE", "NORMAL_MODELS", "PCA_EXPLAINED", "STATISTICS", "STATUSES", "Scatter",
+           "alarm_verdicts", "baseline_nearest_median", "baseline_scatter", "cached_identification", "changed_text",
+           "check_series", "coverage", "detect", "event_verdicts", "FactorRemoval", "file_key", "group_events",
+           "held_out_novelty", "identification_change", "identification_settings", "IdentificationSettings",
+           "IdentifiedModes", "identified_by", "identify_files", "identify_test", "minimum_baseline",
+           "missing_evidence", "Mixture", "monitor_series", "narrow_bands_hz", "PCARemoval", "read_conditions",
+           "reference_modes", "ReferenceModes", "refit_missing", "Regression", "run_charts", "SeriesInput",
+           "SeriesResult", "series_coverage", "Threshold", "threshold", "track_modes", "what_changed",
            "with_narrow_band_poles", "write_cache"]

@@ -10,7 +10,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from learn.monitor.identification import IdentificationSettings, cached_identification, write_cache
+from learn.monitor.baseline_state import held_out_cached
+from learn.monitor.identification import IdentificationSettings, write_cache
 from learn.monitor.normal_models import DEFAULT_LATENT, NORMAL_MODELS
 from learn.monitor.series import SeriesInput, check_series
 from learn.monitor.alarm_threshold import Threshold, minimum_baseline
@@ -19,8 +20,9 @@ from learn.monitor.statistics import STATISTICS, Detection, detect, residual_thr
 from learn.monitor.tracking import (MIN_PRESENCE, ReferenceModes, identified_by, reference_modes, refit_missing,
                                    track_modes)
 from physics.errors import BeamDamageError, ConfigError
+from learn.monitor.workers import identify_files
 
-__all__ = ["SeriesResult", "changed_text", "monitor_series", "what_changed"]
+__all__ = ["STATUSES", "SeriesResult", "changed_text", "monitor_series", "what_changed"]
 
 
 @dataclass
@@ -31,8 +33,8 @@ class SeriesResult:
     ----------
     rows : list of dict              one per test (``file``, ``time``, ``baseline``, ``alarm``, ``novelty``,
                                      ``threshold``, ``frequencies_hz``, ``mode_z_scores``, ``change_pct``,
-                                     ``identified``, ``error``, ``missing_modes``, ``identified_by``: per mode
-                                     the method that found its pole, ``conditions``)
+                                     ``identified``, ``status`` (:data:`STATUSES`), ``error``, ``missing_modes``,
+                                     ``identified_by``: per mode the method that found its pole, ``conditions``)
     reference : ReferenceModes
     frequencies_hz : ndarray (n, m)  tracked frequencies (NaN where missing)
     expected_hz : ndarray (n, m)     the baseline's frequencies at each test's conditions
@@ -65,7 +67,7 @@ class SeriesResult:
 
 def monitor_series(series: SeriesInput, n_baseline: int, settings: IdentificationSettings, cache_dir=None,
                    false_alarm_rate: float = 0.01, normal_model: str | None = None, progress: bool = True,
-                   chart: str = "ewma", statistics=STATISTICS) -> SeriesResult:
+                   chart: str = "ewma", statistics=STATISTICS, workers: int = 1) -> SeriesResult:
     """Monitor a series: identify every test (cached), track the baseline period's modes, learn the normal
     variation on the baseline period, and score every test against the cross-validated threshold.
 
@@ -73,14 +75,14 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     :data:`DEFAULT_LATENT`. A test alarms when any statistic of :mod:`learn.monitor.statistics` exceeds its
     threshold (``novelty`` and ``threshold`` of a row: the residual's); ``chart="ewma"`` adds the memory charts of
     :mod:`learn.monitor.charts` (``chart_alarm`` and ``onset`` of a row); ``statistics``: those combined (the
-    residual always). Raises :class:`BeamDamageError` on a
-    baseline that cannot carry the model (too few tests: the message names the minimum; a baseline test of another
-    kind, band or beam).
+    residual always). ``workers``: processes identifying the tests (:func:`learn.monitor.workers.identify_files`;
+    the result does not depend on it). Raises :class:`BeamDamageError` on a baseline that cannot carry the model
+    (too few tests: the message names the minimum; a baseline test of another kind, band or beam).
     """
     n = len(series.files)
     C = series.conditions
     normal_model, q = _checked_request(series, n_baseline, false_alarm_rate, normal_model, chart, statistics)
-    tests, errors, pending = _identified(series, n_baseline, settings, cache_dir, progress)
+    tests, errors, pending, foreign = _identified(series, n_baseline, settings, cache_dir, progress, workers)
     base = [t for t in tests[:n_baseline] if t is not None]
     ref = reference_modes(tests[:n_baseline])
     m = ref.frequencies_hz.size
@@ -107,9 +109,11 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     b_idx = np.flatnonzero(ok[:n_baseline])
     Cq = C if q else None
     model = NORMAL_MODELS[normal_model](m, q).fit(X[b_idx], None if Cq is None else Cq[b_idx])
+    held = held_out_cached(model, X[b_idx], None if Cq is None else Cq[b_idx], cache_dir)   # kept beside the cache
     rest = np.flatnonzero(ok)
     rest = rest[rest >= n_baseline]
-    det = detect(model, model.with_choices, X, Cq, b_idx, rest, false_alarm_rate, q, ("residual", *statistics))
+    det = detect(model, model.with_choices, X, Cq, b_idx, rest, false_alarm_rate, q, ("residual", *statistics),
+                 held=held)
     thr = residual_threshold(det)
     if (why := season_warning(series.times, series.time_values, n_baseline, det.names if not q else ())):
         warnings.warn(why)
@@ -139,6 +143,8 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
         rows.append({
             "file": series.files[i], "time": series.times[i], "time_value": float(series.time_values[i]),
             "baseline": i < n_baseline, "identified": bool(ok[i]), "error": errors[i],
+            "status": _status(bool(ok[i]), bool(ok[i] and det.alarm[i]),
+                              i in foreign or errors[i] == "conditions not measured"),
             "alarm": bool(ok[i] and det.alarm[i]), "novelty": _num(novelty[i]), "threshold": thr.value,
             "frequencies_hz": [_num(v) for v in F[i]], "damping_ratios": [_num(v) for v in Z[i]],
             "mode_z_scores": [_num(v) for v in z[i]], "change_pct": [_num(v) for v in change[i]],
@@ -193,20 +199,31 @@ def _checked_request(series: SeriesInput, n_baseline: int, false_alarm_rate: flo
     return normal_model, q
 
 
-def _identified(series: SeriesInput, n_baseline: int, settings: IdentificationSettings, cache_dir, progress: bool):
-    """``(tests, errors, pending cache entries)``: every test identified (or read from the cache), a test that
-    does not belong to the baseline period's series None with the reason as its error."""
-    from tqdm import tqdm
+def _identified(series: SeriesInput, n_baseline: int, settings: IdentificationSettings, cache_dir, progress: bool,
+                workers: int = 1):
+    """``(tests, errors, pending cache entries, foreign)``: every test identified (or read from the cache), a test
+    that does not belong to the baseline period's series None with the reason as its error (its index in the set
+    ``foreign``)."""
 
-    tests, errors, pending = [], [], []
-    for path in tqdm(series.files, desc="identify", unit="test", disable=not progress, leave=False):
-        t, err, _ = cached_identification(path, settings, cache_dir, pending)
-        tests.append(t)
-        errors.append(err)
+    tests, errors, pending = identify_files(series.files, settings, cache_dir, workers, progress)
+    foreign = set()
     for i, why in enumerate(check_series(tests, n_baseline, series.files)):
         if why:
             tests[i], errors[i] = None, why
-    return tests, errors, pending
+            foreign.add(i)
+    return tests, errors, pending, foreign
+
+
+#: What a row's ``status`` says: judged and alarmed; judged and within the normal variation; a test of the series
+#: whose modes could not be identified (a change may be why: counted beside the alarms); a test that cannot be
+#: judged against this baseline (another kind, band or beam; its conditions not measured).
+STATUSES = ("alarm", "no alarm", "not identified", "not judged")
+
+
+def _status(judged: bool, alarm: bool, foreign: bool) -> str:
+    if judged:
+        return "alarm" if alarm else "no alarm"
+    return "not judged" if foreign else "not identified"
 
 
 def _num(v):

@@ -167,14 +167,16 @@ class Detection:
 
 
 def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int = 0,
-           statistics=STATISTICS) -> Detection:
+           statistics=STATISTICS, held=None) -> Detection:
     """The detector on a series: ``model`` fitted on the baseline tests ``X[b_idx]`` (``make_model()`` an unfitted
     copy for the held-out fits), the monitoring tests ``rest`` (indices) scored by it, the baseline tests held
-    out; every statistic of ``statistics`` that the model supports, thresholded at the Šidák rate of ``rate``."""
+    out (``held``: their :func:`held_out_statistics`, computed when None); every statistic of ``statistics`` that
+    the model supports, thresholded at the Šidák rate of ``rate``."""
     X = np.asarray(X, float)
     n = len(X)
     Cb = None if C is None else C[b_idx]
-    held = held_out_statistics(make_model, X[b_idx], Cb)
+    if held is None:
+        held = held_out_statistics(make_model, X[b_idx], Cb)
     now = statistics_of(model, X[rest], None if C is None else C[rest]) if len(rest) else {}
     names = tuple(nm for nm in STATISTICS if nm in held and nm in statistics)
     each = sidak_rate(rate, len(names))

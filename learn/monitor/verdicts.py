@@ -3,6 +3,8 @@ per-mode scatter and the network's verdict against the baseline period."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from learn.classify import classify_many
@@ -14,7 +16,7 @@ from physics.errors import BeamDamageError
 from physics.io import ModalData
 from physics.modal import eigenvalues_from_modal
 
-__all__ = ["alarm_verdicts", "baseline_nearest_median"]
+__all__ = ["alarm_verdicts", "baseline_nearest_median", "event_verdicts"]
 
 
 def _modal_data(freqs_hz, damping, shapes, dofs):
@@ -64,6 +66,21 @@ def alarm_verdicts(result: SeriesResult, model=None, beam_x_m=None) -> dict:
     if model is None or not alarms:
         return out
 
+    items = [(i, result.frequencies_hz[i] * result.reference.frequencies_hz / result.expected_hz[i],
+              _vec(result.rows[i]["damping_ratios"]), i) for i in alarms]
+    _explain(result, model, beam_x_m, items, out)
+    out = _network_verdicts(result, model, beam_x_m, alarms, out)
+    return out
+
+
+def _vec(values) -> np.ndarray:
+    return np.array([np.nan if v is None else v for v in values], float)
+
+
+def _explain(result: SeriesResult, model, beam_x_m, items: list, out: dict) -> None:
+    """``out[key]`` updated with the competing explanations (:func:`learn.hypotheses.explain_many`, the measured
+    per-mode scatter as each mode's standard deviation) of each item ``(key, frequencies at the baseline's
+    conditions (m,), damping ratios (m,), row whose shapes to use)`` against the baseline medians."""
     ref = result.reference
     sens = model.sensitivity
     n_all = len(model.beam.modes)
@@ -71,27 +88,62 @@ def alarm_verdicts(result: SeriesResult, model=None, beam_x_m=None) -> dict:
     sigma_model = np.full(n_all, FREQUENCY_CHANGE_STD)
     sigma_model[which[which >= 0]] = result.sigma[which >= 0]
     _, _, _, cols = track_modes(result.tests, ref)
-    Zb = np.array([[np.nan if v is None else v for v in r["damping_ratios"]] for r in result.rows
-                   if r["baseline"] and r["identified"]], float)
+    Zb = np.array([_vec(r["damping_ratios"]) for r in result.rows if r["baseline"] and r["identified"]], float)
     base = _modal_data(ref.frequencies_hz, np.nanmedian(Zb, axis=0), ref.shapes, ref.dofs)
     try:
         base_m = on_model_dofs(base, model.beam, beam_x_m, "the baseline median")[0]
-        pairs, idx = [], []
-        for i in alarms:
-            r = result.rows[i]
-            f = result.frequencies_hz[i] * ref.frequencies_hz / result.expected_hz[i]   # at the baseline's conditions
-            cur = _modal_data(f, np.array([np.nan if v is None else v for v in r["damping_ratios"]], float),
-                              _test_shapes(result, i, cols[i]) if ref.shapes is not None else None, ref.dofs)
-            cur_m = on_model_dofs(cur, model.beam, beam_x_m, r["file"])[0]
-            pairs.append(modal_pair(base_m, cur_m, model.beam, sens.frequencies_hz, ("baseline median", r["file"])))
-            idx.append(i)
-        for i, e in zip(idx, explain_many(model, pairs, sigma_model)):
-            out[i].update(e)
+        pairs, keys = [], []
+        for key, f, zeta, row in items:
+            name = result.rows[row]["file"]
+            cur = _modal_data(f, zeta, _test_shapes(result, row, cols[row]) if ref.shapes is not None else None,
+                              ref.dofs)
+            cur_m = on_model_dofs(cur, model.beam, beam_x_m, name)[0]
+            pairs.append(modal_pair(base_m, cur_m, model.beam, sens.frequencies_hz, ("baseline median", name)))
+            keys.append(key)
+        for key, e in zip(keys, explain_many(model, pairs, sigma_model)):
+            out[key].update(e)
     except BeamDamageError as exc:
-        for i in alarms:
-            out[i]["hypotheses_summary"] = f"no explanations: {exc}"
-    out = _network_verdicts(result, model, beam_x_m, alarms, out)
-    return out
+        for key, *_ in items:
+            out[key]["hypotheses_summary"] = f"no explanations: {exc}"
+
+
+def event_verdicts(result: SeriesResult, events: list, model, beam_x_m=None) -> list:
+    """Per event with alarms (:func:`learn.monitor.events.group_events`; None for the others): the competing
+    explanations of the event's change, weighed with the measured per-mode scatter: its alarms' mean frequencies
+    brought to the baseline's conditions against the baseline medians, or, for an event measured against the tests
+    before it (a latent model, whose expected frequencies hold the part of a damage along the removed factors),
+    its alarms' mean step from those tests, applied to the baseline medians (a uniform part of it is what every
+    explanation's temperature nuisance takes); the shapes and damping of its ``representative`` alarm, the one
+    whose change lies nearest the event's mean; and the network's verdict of the
+    representative alarm against the baseline period (:func:`_network_verdicts`). One explanation per event, not
+    per alarm: an event's alarms are one state, their mean the better measure of it."""
+    empty = {"representative": None, "hypotheses": None, "hypotheses_summary": None, "frequency_change_std": None,
+             "network": None, "network_baselines": None, "network_baseline": None, "network_error": None}
+    reps, items = {}, []
+    for k, ev in enumerate(events):
+        alarms = [i for i in ev.members if result.rows[i]["status"] == "alarm"]
+        if not alarms:
+            continue
+        Z = np.array([_vec(result.rows[i]["mode_z_scores"]) for i in alarms])
+        mean = np.nanmean(Z, axis=0)
+        rep = alarms[int(np.argmin(np.nansum((Z - mean) ** 2, axis=1) - 1e3 * np.isfinite(Z).sum(axis=1)))]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)        # a mode missing in every alarm stays NaN
+            if ev.before:      # against the tests before: the raw step (its uniform part the explanations' nuisance)
+                lnf = np.log(result.frequencies_hz)
+                f = result.reference.frequencies_hz * np.exp(np.nanmean(lnf[alarms], axis=0)
+                                                             - np.nanmean(lnf[list(ev.before)], axis=0))
+            else:
+                at_base = (result.frequencies_hz[alarms] * result.reference.frequencies_hz
+                           / result.expected_hz[alarms])
+                f = np.nanmean(at_base, axis=0)
+        reps[k] = rep
+        items.append((rep, f, _vec(result.rows[rep]["damping_ratios"]), rep))
+    by_rep = {rep: {**empty, "representative": result.rows[rep]["file"]} for rep in reps.values()}
+    if model is not None and items:
+        _explain(result, model, beam_x_m, items, by_rep)
+        by_rep = _network_verdicts(result, model, beam_x_m, list(by_rep), by_rep)
+    return [by_rep[reps[k]] if k in reps else None for k in range(len(events))]
 
 
 def _network_verdicts(result: SeriesResult, model, beam_x_m, alarms: list, out: dict) -> dict:

@@ -126,7 +126,10 @@ def test_an_alarm_gets_the_explanations_with_the_measured_scatter_and_the_networ
     code, res, err = run_json(capsys, ["monitor", "--conditions", str(csv_path), "--baseline-tests", "18",
                                        "--model", str(tmp_path / "model"), "--json"])
     assert code == 0, err
-    v = res["tests"][24]["verdict"]
+    (k, ev), = [(k, e) for k, e in enumerate(res["events"]) if 24 in e["members"]]
+    assert res["tests"][24]["verdict"]["event"] == k and ev["first"] == 24 and ev["n_alarms"] == 6
+    v = ev["verdict"]                                   # one explanation per event, on its alarms' mean change
+    assert v["representative"] in [res["tests"][i]["file"] for i in ev["members"]]
     sigma = v["frequency_change_std"]
     np.testing.assert_allclose(sigma, res["normal_variation"]["per_mode_std"], rtol=1e-12)
     assert [h["name"] for h in v["hypotheses"]][0] != "intact"
