@@ -158,7 +158,8 @@ def identify_test(path, settings: IdentificationSettings, narrow_hz=None) -> Ide
                 warnings.simplefilter("ignore")
                 ident = identify_records(rec, DEFAULT_OUTPUT_ONLY, band, n_modes, settings.records_max_order)
         except (np.linalg.LinAlgError, RuntimeError, ValueError) as exc:
-            raise BeamDamageError(f"{path}: SSI-cov identification failed ({exc})") from None
+            raise BeamDamageError(f"{path}: output-only identification ({DEFAULT_OUTPUT_ONLY}: era for a free "
+                                  f"response, else ssi) failed ({exc})") from None
         fs = rec.sampling_frequency_hz
         f, z, shapes = _modes_of(ident.estimate.eigenvalues, ident.estimate.shapes)
         return IdentifiedModes("response records", ident.estimate.method, f, z, shapes, tuple(rec.dofs), (),
