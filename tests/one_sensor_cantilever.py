@@ -36,7 +36,7 @@ def truth_beam(EI_scale: float = 1.0) -> Beam:
                 masses=(PointMass(SENSOR_X_M, ACCELEROMETER_KG),))
 
 
-def one_sensor_test(seed: int = 0, EI_scale: float = 1.0, floor: float = 3e-3) -> tuple[np.ndarray, np.ndarray,
+def one_sensor_test(seed: int = 0, EI_scale: float = 1.0, floor: float = 0.2) -> tuple[np.ndarray, np.ndarray,
                                                                                          np.ndarray]:
     """``(lines Hz, accelerance (1, n_lines) m/s^2/N noisy, undamped frequencies Hz of modes 1-6)``.
 
