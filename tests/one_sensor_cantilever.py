@@ -17,7 +17,8 @@ from experiments.second_sim.response import Damping, receptance
 from experiments.second_sim.writers import convert_receptance, write_uff
 
 __all__ = ["DENSITY", "EI_NM2", "LENGTH_M", "MASS_PER_LENGTH", "SENSOR_X_M", "HAMMER_X_M", "beam_toml",
-           "one_sensor_test", "write_one_sensor_test"]
+           "one_sensor_test", "truth_frequencies_hz",
+           "write_one_sensor_test"]
 
 LENGTH_M = 0.475
 WIDTH_M, THICKNESS_M, MODULUS_PA, DENSITY = 0.025, 0.006, 2.1e11, 7850.0
@@ -34,6 +35,11 @@ LINES_HZ = np.arange(1, 3201) * 0.5
 def truth_beam(EI_scale: float = 1.0) -> Beam:
     return Beam(LENGTH_M, EI_NM2 * EI_scale, MASS_PER_LENGTH, n_elements=N_ELEMENTS,
                 masses=(PointMass(SENSOR_X_M, ACCELEROMETER_KG),))
+
+
+def truth_frequencies_hz(EI_scale: float = 1.0) -> np.ndarray:
+    """Undamped frequencies (Hz) of the truth's 6 lowest modes."""
+    return modes(assemble(truth_beam(EI_scale))).frequencies_hz[:6]
 
 
 def one_sensor_test(seed: int = 0, EI_scale: float = 1.0, floor: float = 0.2) -> tuple[np.ndarray, np.ndarray,

@@ -183,7 +183,10 @@ def test_cli_on_beam5_table_4_3(tmp_path, capsys):
                         "indistinguishable_from", "separating_measurement", "gap_before", "gap_after",
                         "assumed_noise", "estimated_noise", "chi2_per_dof", "noise_consistent", "noise_check",
                         "not_tested", "detection_limits", "candidates", "beam_file", "dof_positions", "notes",
-                        "drive_x_m_from_file"}
+                        "drive_x_m_from_file", "pairing", "pairing_notes", "stopped", "causes"}
+    # classify's pairing rule: Table 4.3's four modes are the model's 1-4, 8.1 % apart at most
+    assert [p["model_mode"] for p in out["pairing"]] == [1, 2, 3, 4] and out["pairing_notes"] == []
+    assert out["stopped"] is None and out["causes"] == []
     assert out["assumed_noise"]["frequency"] == 0.003 and "default" in out["assumed_noise"]["frequency_source"]
     assert out["evidence"] == {"shear_deformation": "frequencies"}
     # modal damping fits Table 4.3's four ratios: no damping effect is named from them
