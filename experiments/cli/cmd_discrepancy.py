@@ -13,6 +13,7 @@ import numpy as np
 
 from experiments.cli import one_line
 from experiments.cli.args import add_beam_argument
+from learn.measured import pair_modes_by_frequency  # classify's pairing rule
 from physics import discrepancy as dsc
 from physics.effects import CANDIDATES
 from physics.supports import SUPPORTS
@@ -37,8 +38,6 @@ def run(args) -> dict:
             print(f"  fitting {s} ...", flush=True)
     # a noise not given is of the data or assumed (analyse_file), and assumed ones are scaled to the data
     # (analyse's estimate_noise)
-    from learn.measured import pair_modes_by_frequency  # classify's pairing rule
-
     try:
         out = dsc.analyse_file(args.beam, args.measured, args.out, frequency_noise=args.frequency_noise,
                                shape_noise=args.shape_noise, frf_noise_db=args.frf_noise_db,
