@@ -83,8 +83,9 @@ def test_a_noise_check_failed_by_orders_of_magnitude_names_the_worst_mode():
 
 
 def test_one_sensor_separating_measurement_and_simulation(beam):
-    """One measured position compares no shape: the measurement that separates two models compares shapes at the
-    quarter points, and a one-sensor simulation gives frequencies (shapes refused in one line)."""
+    """One measured position compares no shape: a one-row shape is held as none, the measurement that separates two
+    models compares shapes at the quarter points, and a one-sensor simulation gives frequencies (shapes refused in
+    one line)."""
     meas = dsc.Measurement(np.array([22.2, 138.8, 386.3]))
     a = SimpleNamespace(beam=beam)
     b = SimpleNamespace(beam=beam.with_effects({**beam.effects_dict(), "root_flexibility": {"k_theta_Nm_rad": 2e3}}))
@@ -93,6 +94,10 @@ def test_one_sensor_separating_measurement_and_simulation(beam):
     precise = _separating_measurement(a, b, meas, dsc.Noise(0.003, 0.1, 0.001), 24)
     assert precise == ("mode shapes at the quarter points (more sensors than the one measured) (largest normalised "
                        "difference 0.14)")
+    one = dsc.Measurement(np.array([22.2, 138.8]), shapes=np.ones((1, 2)), shape_x_m=(0.1,))
+    assert one.shapes is None and one.shape_x_m == ()
+    with pytest.raises(ShapeError, match=r"measured shapes must be \(n_points, n_modes = 2\)"):
+        dsc.Measurement(np.array([22.2, 138.8]), shapes=np.ones((2, 2)), shape_x_m=(0.1,))
     sim = dsc.simulate_measurement(beam, 3, damping=False)
     assert sim.shapes is None and sim.frequencies_hz[0] == pytest.approx(22.21, rel=0.01)
     with pytest.raises(ShapeError, match="at least 2 measured positions, the beam has 1"):
