@@ -6,11 +6,14 @@ Parses, calls :func:`physics.discrepancy.analyse_file` (which reads the measurem
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
 
+from experiments.cli import one_line
 from experiments.cli.args import add_beam_argument
+from learn.measured import pair_modes_by_frequency  # classify's pairing rule
 from physics import discrepancy as dsc
 from physics.effects import CANDIDATES
 from physics.supports import SUPPORTS
@@ -35,16 +38,28 @@ def run(args) -> dict:
             print(f"  fitting {s} ...", flush=True)
     # a noise not given is of the data or assumed (analyse_file), and assumed ones are scaled to the data
     # (analyse's estimate_noise)
-    out = dsc.analyse_file(args.beam, args.measured, args.out, frequency_noise=args.frequency_noise,
-                           shape_noise=args.shape_noise, frf_noise_db=args.frf_noise_db,
-                           max_effects=args.max_effects, n_elements=args.elements, seed=args.seed,
-                           candidates=None if args.candidates is None else tuple(args.candidates),
-                           estimate_noise=args.frequency_noise is None and args.shape_noise is None,
-                           progress=progress)
+    try:
+        out = dsc.analyse_file(args.beam, args.measured, args.out, frequency_noise=args.frequency_noise,
+                               shape_noise=args.shape_noise, frf_noise_db=args.frf_noise_db,
+                               max_effects=args.max_effects, n_elements=args.elements, seed=args.seed,
+                               candidates=None if args.candidates is None else tuple(args.candidates),
+                               estimate_noise=args.frequency_noise is None and args.shape_noise is None,
+                               progress=progress, pairing=pair_modes_by_frequency)
+    except dsc.ImplausibleTest as exc:   # before any fit: the result is the pairing and its causes
+        _stop(exc.result["stopped"])
+        return {**exc.result, "beam_file": None, "exit_code": 2}
     res, recal = out.pop("_result")
     if not args.json:
         _print(out, res, recal)
+    if out["stopped"]:
+        _stop(out["stopped"])
+        out["exit_code"] = 2
     return out
+
+
+def _stop(message: str) -> None:
+    """The one line of a stop (exit code 2, nothing written), on stderr (with ``--json`` too)."""
+    sys.stderr.write(one_line(f"beam-damage discrepancy: error: {message}") + "\n")
 
 
 def _print(out, res: dsc.DiscrepancyResult, recal: dsc.ModeResiduals):
@@ -120,6 +135,8 @@ def _print(out, res: dsc.DiscrepancyResult, recal: dsc.ModeResiduals):
              else ""))
     if out["beam_file"]:
         print(f"wrote {out['beam_file']} and tables/figures beside it")
+    for line in out["pairing_notes"]:
+        print(f"pairing: {line}")
 
 
 def add_parser(sub):
@@ -160,5 +177,9 @@ def add_parser(sub):
                    help="print one JSON object: named_effect, effects, evidence, parameters, parameter_std, "
                         "indistinguishable_from, separating_measurement, gap_before, gap_after, assumed_noise, "
                         "estimated_noise, chi2_per_dof, noise_consistent, noise_check, not_tested, "
-                        "detection_limits, candidates, beam_file, notes, drive_x_m_from_file")
+                        "detection_limits, candidates, beam_file, notes, drive_x_m_from_file, pairing, "
+                        "pairing_notes, stopped, causes. Exit code 2 with one line on stderr (and stopped, causes, "
+                        "pairing in the JSON), nothing written, when a measured mode pairs with no model mode "
+                        "(classify's rule: frequency order, never beyond 35 %%) or the calibrated model's chi2/dof "
+                        f"exceeds {dsc.STOP_CHI2_PER_DOF:g}")
     p.set_defaults(func=run, flags={"n_elements": "--elements"})

@@ -2,7 +2,9 @@
 
 Workflow (:func:`analyse`)
 --------------------------
-1. Pair measured and model modes (MAC when shapes exist, else frequency) and
+1. Pair measured and model modes by the rule given (``beam-damage discrepancy``: ``classify``'s, frequency order
+   kept and never beyond 35 %, MAC >= 0.5 with two or more sensors; else MAC when shapes exist, else frequency)
+   and stop before any fit when a measured mode pairs with none (:func:`pair_measured`); then
    form residuals: frequency error (%), damping ratio error, MAC, and FRF error
    per band (dB) when FRFs are given (:func:`mode_residuals`). Measured modes are
    bending modes: a free-free model's two lowest modes (rigid-body, or bounce and
@@ -46,7 +48,8 @@ Workflow (:func:`analyse`)
 6. The named effect joins the model and the search repeats (at most
    ``max_effects`` effects); it stops when nothing significant remains.
 7. The final model's chi^2 is tested against its degrees of freedom
-   (:func:`noise_check`): is the residual consistent with the assumed noise?
+   (:func:`noise_check`): is the residual consistent with the assumed noise? Above
+   :data:`STOP_CHI2_PER_DOF` nothing is written (:func:`failed_noise_check` names the likely cause).
 8. Every candidate not named gets a detection limit (:func:`detection_limits`):
    the size it would need to be named with these data and this noise.
 
@@ -56,7 +59,8 @@ Modules
 points, pairing, residuals, simulated measurements; ``candidates``  the
 parameters of each effect; ``fitting``  one candidate's fit; ``selection``  the
 score, the decision of a round, the chi^2 noise test; ``limits``  detection
-limits; ``workflow``  :func:`analyse`; ``files``  :func:`analyse_file`, the workflow on a measurement
+limits; ``pairing``  which model mode each measured mode is, and when to stop; ``workflow``  :func:`analyse`;
+``files``  :func:`analyse_file`, the workflow on a measurement
 file with its outputs (calibrated beam file, tables, figures).
 """
 
@@ -68,12 +72,15 @@ from physics.discrepancy.model import (ModeResiduals, Prediction, bending_modes,
                                        predict, rayleigh_fit, simulate_measurement)
 from physics.discrepancy.selection import (BIC_SIGNIFICANT, DISTINCT, NOISE_DOF_MIN, P_NOISE, NoiseCheck, Step,
                                            noise_check)
+from physics.discrepancy.pairing import (STOP_CHI2_PER_DOF, ImplausibleTest, Pairing, failed_noise_check,
+                                         pair_measured)
 from physics.discrepancy.workflow import DiscrepancyResult, analyse, check_candidates
 from physics.discrepancy.files import (EXAMPLE, analyse_file, assumed_noise, estimated_noise, load_measurement,
                                       measured_test_notes, measurement_mesh)
 
 __all__ = ["BIC_SIGNIFICANT", "BLOCKS", "DETECTION_POWER", "DISTINCT", "DetectionLimit", "DiscrepancyResult", "EXAMPLE",
-           "Fit", "analyse_file", "assumed_noise", "estimated_noise", "load_measurement", "measured_test_notes",
+           "Fit", "ImplausibleTest", "Pairing", "STOP_CHI2_PER_DOF", "analyse_file", "failed_noise_check",
+           "pair_measured", "assumed_noise", "estimated_noise", "load_measurement", "measured_test_notes",
            "measurement_mesh",
            "Measurement", "ModeResiduals", "NOISE_DOF_MIN", "Noise", "NoiseCheck", "P_NOISE", "Prediction", "SIZES",
            "Step", "analyse", "bending_modes", "check_candidates", "detection_limits", "frf_scatter_db", "g_core_pa",

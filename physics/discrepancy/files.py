@@ -22,14 +22,15 @@ import numpy as np
 from physics.beam import Beam, beam_to_toml, load_beam
 from physics.discrepancy.measurement import Measurement, Noise, frf_scatter_db
 from physics.discrepancy.model import ModeResiduals, predict
+from physics.discrepancy.pairing import failed_noise_check
 from physics.discrepancy.workflow import DiscrepancyResult, analyse, check_candidates
 from physics.errors import ConfigError, FileFormatError
 from physics.identification import identify_frf
 from physics.io import (MODAL, atomic_write_bytes, modal_data_from_dict, modal_or_frf, number_list, prepare_measured,
                         read_frf, read_json, reference_position_m, sensor_labels, to_jsonable)
 
-__all__ = ["EXAMPLE", "analyse_file", "assumed_noise", "estimated_noise", "load_measurement", "measured_test_notes",
-           "measurement_mesh"]
+__all__ = ["EXAMPLE", "MIN_LINE_SNR", "NOISE_LINES", "analyse_file", "assumed_noise", "estimated_noise",
+           "lines_above_noise", "load_measurement", "measured_test_notes", "measurement_mesh"]
 
 #: The thesis's beam 5 measured frequencies (Table 4.3): the example of ``beam-damage discrepancy --help``.
 EXAMPLE = Path(__file__).resolve().parents[1] / "data" / "thesis" / "beam5_table_4_3.json"
@@ -40,6 +41,10 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[Measurement, objec
 
     Measured DOFs are placed at the nodes of the beam's mesh by :meth:`physics.beam.Beam.map_dofs` (file
     geometry, else the beam file's measured_x_m, else the quarter-point convention).
+
+    An FRF file is identified over the beam file's ``band_hz`` (all its lines without one), as ``classify``
+    identifies a beam file's test, and compared over that band on the lines above its noise
+    (:func:`lines_above_noise`).
 
     One sensor (one shape row) gives frequencies, damping ratios and, from an FRF file, the FRF: one entry per
     mode compares no shape. A force where no sensor is (a hammer away from the accelerometer) is placed by the file's
@@ -82,7 +87,8 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[Measurement, objec
     frf = read_frf(path)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        ident = identify_frf(frf, n_modes=n_modes)
+        # as classify identifies a beam file's test (learn.measured.identify_test): LSCF over its band_hz
+        ident = identify_frf(frf, n_modes=n_modes, band_hz=beam.band_hz)
     est = ident.estimate
     rec = ident.frf  # receptance, band-limited as identified
     # the sensors placed (a driving point's reference is where its response is); a force where no sensor is does
@@ -102,10 +108,31 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[Measurement, objec
     ref = tuple(x[d] for d in rec.reference_dofs)
     order = np.argsort(est.natural_frequencies_hz)
     shapes = est.shapes[rows][:, order] if len(resp) >= 2 else None   # one sensor: frequencies and the FRF
+    keep = lines_above_noise(rec.frf, ident.synthesised)
     meas = Measurement(est.natural_frequencies_hz[order], est.damping_ratios[order], shapes,
-                           resp if shapes is not None else (), rec.frf[rows], rec.frequency_hz, resp, ref, rec.kind)
+                       resp if shapes is not None else (), rec.frf[rows][..., keep], rec.frequency_hz[keep], resp, ref,
+                       rec.kind)
     rel_std = np.asarray(est.frequency_std_hz)[order] / meas.frequencies_hz
     return meas, rel_std, dof_map
+
+
+#: FRF lines compared: the identified model's magnitude at least this many times the noise around the line (the
+#: measured FRF's departure from the identified model, running median over :data:`NOISE_LINES` lines). Where noise
+#: dominates, the magnitude in dB is biased upwards (``|H + n|^2`` averages ``|H|^2 + sigma^2``: +0.46 dB at this
+#: ratio, +3 dB where the two are equal), and a band mean over a noise floor would pull the fitted mass down.
+MIN_LINE_SNR = 3.0
+NOISE_LINES = 11
+
+
+def lines_above_noise(frf, synthesised) -> np.ndarray:
+    """``(n_lines,)`` bool: the lines of the measured ``frf`` (n_resp, n_ref, n_lines) where the identified model
+    ``synthesised`` (same shape) stands :data:`MIN_LINE_SNR` times over the noise (RMS over the FRFs of both)."""
+    from scipy.ndimage import median_filter  # scipy.ndimage: only where an FRF file is compared
+
+    h = np.asarray(synthesised).reshape(-1, np.shape(frf)[-1])
+    noise = np.sqrt(np.mean(np.abs(np.asarray(frf).reshape(h.shape) - h) ** 2, axis=0))
+    level = np.sqrt(np.mean(np.abs(h) ** 2, axis=0))
+    return level >= MIN_LINE_SNR * median_filter(noise, size=NOISE_LINES, mode="nearest")
 
 
 def measurement_mesh(beam: Beam, most: int = 400) -> Beam:
@@ -246,7 +273,7 @@ def estimated_noise(meas: Measurement, res: DiscrepancyResult) -> dict:
 
 def analyse_file(beam_spec, measured, out_dir=None, *, frequency_noise=None, shape_noise=None, frf_noise_db=None,
                     max_effects=2, n_elements=40, seed=0, candidates=None, estimate_noise=False,
-                    progress=None) -> dict:
+                    progress=None, pairing=None) -> dict:
     """The discrepancy workflow on a measurement file: the JSON result of ``beam-damage discrepancy`` and its
     ``"_result"`` (the :class:`DiscrepancyResult` and the residuals of the model with EI/m recalibrated only); with
     ``out_dir``, the calibrated ``beam.toml``, ``residuals.csv/json``, ``candidates.csv/json``, ``summary.json``
@@ -260,6 +287,12 @@ def analyse_file(beam_spec, measured, out_dir=None, *, frequency_noise=None, sha
     ``frequency_noise``, ``shape_noise`` and ``frf_noise_db`` are the noise stds given (None: not given;
     :func:`_noise_for`). ``estimate_noise`` (modal JSON only; FRF input takes its noise from the identification
     and the FRF's scatter) scales an assumed noise to the data (:func:`physics.discrepancy.analyse`).
+    ``pairing`` is the rule that pairs the measured modes with the model's (:func:`physics.discrepancy.analyse`;
+    the beam's ``band_hz`` names a model mode below it).
+
+    Nothing is written when the pairing is implausible (:class:`ImplausibleTest` raised before any fit) or the
+    calibrated model's chi^2/dof exceeds :data:`STOP_CHI2_PER_DOF`: then ``"stopped"`` holds one line naming
+    the likely cause and ``"causes"`` each of them (else ``"stopped"`` is None).
     """
     beam = beam_spec if isinstance(beam_spec, Beam) else load_beam(beam_spec)
     try:
@@ -273,14 +306,19 @@ def analyse_file(beam_spec, measured, out_dir=None, *, frequency_noise=None, sha
         if out_dir.exists() and not out_dir.is_dir():
             raise ConfigError(f"--out {out_dir}: exists and is not a directory")
     res = analyse(beam, meas, noise, candidates=candidates, max_effects=max_effects, n_elements=n_elements,
-                      seed=seed, estimate_noise=estimate_noise and meas.frf is None, progress=progress)
+                      seed=seed, estimate_noise=estimate_noise and meas.frf is None, progress=progress,
+                      pairing=pairing, band_hz=beam.band_hz)
     first = res.steps[0] if res.steps else None
     cand = _candidate_rows(res)
     check = res.noise_check.to_dict()
     out = _result_json(res, meas, noise, sources, dof_map, cand, check)
     out["notes"], out["drive_x_m_from_file"] = measured_test_notes(beam, meas, measured)
     recal = first.base.residuals if first else res.final.residuals
-    if out_dir is not None:
+    stop = failed_noise_check(res.noise_check, res.final.residuals, res.pairing)
+    out["stopped"], out["causes"] = (stop["stopped"], stop["causes"]) if stop else (None, [])
+    out["pairing"] = res.pairing.to_list() if res.pairing is not None else []
+    out["pairing_notes"] = list(res.pairing.skipped) if res.pairing is not None else []
+    if out_dir is not None and stop is None:
         before_frf = after_frf = None
         if meas.frf is not None:
             before_frf = predict(beam, meas, n_elements).frf

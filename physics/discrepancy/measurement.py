@@ -46,7 +46,7 @@ class Measurement:
     frequencies_hz : ndarray, shape (n_modes,)
     damping_ratios : ndarray, shape (n_modes,) or None
     shapes : ndarray, complex, shape (n_points, n_modes) or None
-        Mode shapes at ``shape_x_m``.
+        Mode shapes at ``shape_x_m``; one point (one sensor) compares no shape and is held as None.
     shape_x_m : tuple of float
         Positions (m) of the shape rows.
     frf : ndarray, complex, shape (n_resp, n_ref, n_lines) or None
@@ -78,9 +78,12 @@ class Measurement:
             object.__setattr__(self, "damping_ratios", z)
         if self.shapes is not None:
             s = np.asarray(self.shapes, dtype=complex)
-            if s.ndim != 2 or s.shape[1] != f.size or s.shape[0] != len(self.shape_x_m) or s.shape[0] < 2:
-                raise ShapeError(f"measured shapes must be (n_points >= 2, n_modes = {f.size}) with one "
-                                 "position per row")
+            if s.ndim != 2 or s.shape[1] != f.size or s.shape[0] != len(self.shape_x_m):
+                raise ShapeError(f"measured shapes must be (n_points, n_modes = {f.size}) with one position per "
+                                 "row")
+            if s.shape[0] < 2:   # one entry per mode compares no shape (its MAC is 1): no shape residual
+                s, xs = None, ()
+                object.__setattr__(self, "shape_x_m", xs)
             object.__setattr__(self, "shapes", s)
         if self.frf is not None:
             h = np.asarray(self.frf, dtype=complex)

@@ -8,7 +8,7 @@ import numpy as np
 
 from physics import effects as fx
 from physics.beam import Beam
-from physics.errors import BeamDamageError
+from physics.errors import BeamDamageError, ShapeError
 from physics.frf import convert_frf, receptance
 from physics.modal import mac
 from physics.discrepancy.measurement import Measurement, Noise
@@ -231,7 +231,11 @@ def simulate_measurement(truth: Beam, n_modes: int = 4, noise: Noise | None = No
     noise = noise or Noise(0.002, 0.05, 0.01, 0.5)
     rng = np.random.default_rng(seed)
     xs = truth.measured_x_m
-    probe = Measurement(np.ones(n_modes), shapes=np.zeros((len(xs), n_modes)), shape_x_m=xs)
+    if shapes and len(xs) < 2:
+        raise ShapeError(f"simulate_measurement: mode shapes need at least 2 measured positions, the beam has "
+                         f"{len(xs)}")
+    probe = (Measurement(np.ones(n_modes), shapes=np.zeros((len(xs), n_modes)), shape_x_m=xs) if len(xs) >= 2 else
+             Measurement(np.ones(n_modes)))
     pred = predict(truth, probe, n_elements, n_modes)
     sf = np.broadcast_to(np.asarray(noise.frequency, dtype=float), (n_modes,))
     f = pred.frequencies_hz * (1 + sf * rng.standard_normal(n_modes))

@@ -15,7 +15,7 @@ from physics.discrepancy.measurement import Measurement, Noise
 from physics.discrepancy.model import aligned, predict
 
 __all__ = ["BIC_SIGNIFICANT", "DISTINCT", "NOISE_DOF_MIN", "NoiseCheck", "P_NOISE", "Step", "decide",
-           "estimate_noise_scale", "noise_check"]
+           "estimate_noise_scale", "noise_check", "shape_positions"]
 
 
 #: BIC drop that counts as significant ("strong evidence", Kass & Raftery 1995).
@@ -186,9 +186,13 @@ def decide(ctx: dict, base: Fit, fits: list, scale2: float) -> "Step":
 
 
 def _separating_measurement(a: Fit, b: Fit, meas: Measurement, noise: Noise, n_elements: int) -> str:
-    """The measurement where the two fitted models differ most, relative to its noise."""
+    """The measurement where the two fitted models differ most, relative to its noise.
+
+    Mode shapes are compared at the beam's measured positions, or at its quarter points when it has fewer than
+    two (one sensor compares no shape)."""
     n = meas.n_modes
-    probe = replace(meas, shapes=np.zeros((len(a.beam.measured_x_m), n)), shape_x_m=a.beam.measured_x_m, frf=None,
+    xs, where = shape_positions(a.beam)
+    probe = replace(meas, shapes=np.zeros((len(xs), n)), shape_x_m=xs, frf=None,
                     frf_frequency_hz=None, frf_response_x_m=(), frf_reference_x_m=())
     pa = predict(a.beam, probe, n_elements, n + 1)
     pb = predict(b.beam, probe, n_elements, n + 1)
@@ -198,14 +202,21 @@ def _separating_measurement(a: Fit, b: Fit, meas: Measurement, noise: Noise, n_e
     options.append((dn / sf, f"natural frequency of mode {n + 1} ({100 * dn:.2g} % apart: "
                              f"{pa.frequencies_hz[n]:.1f} vs {pb.frequencies_hz[n]:.1f} Hz)"))
     ds = max(np.max(np.abs(aligned(pa.shapes[:, j], pb.shapes[:, j]))) for j in range(n))
-    options.append((ds / noise.shape, f"mode shapes at the measured points (largest normalised difference "
-                                      f"{ds:.2g})"))
+    options.append((ds / noise.shape, f"mode shapes at {where} (largest normalised difference {ds:.2g})"))
     x_ref = a.beam.measured_x_m[0]
     anti = [_antiresonances_hz(f.beam, x_ref, n_elements, n - 1) for f in (a, b)]
     da = float(np.max(np.abs(anti[0] / anti[1] - 1)))
     options.append((da / sf, f"antiresonances of the driving-point FRF at x = {x_ref:.4g} m "
                              f"(up to {100 * da:.2g} % apart)"))
     return max(options)[1]
+
+
+def shape_positions(beam: Beam) -> tuple[tuple, str]:
+    """Positions (m) where two models' mode shapes are compared, and how to name them: the beam's measured
+    positions, or its quarter points when it has fewer than two."""
+    if len(beam.measured_x_m) >= 2:
+        return tuple(beam.measured_x_m), "the measured points"
+    return tuple(beam.length_m * k / 4 for k in range(1, 5)), "the quarter points (more sensors than the one measured)"
 
 
 def _antiresonances_hz(beam: Beam, x_m: float, n_elements: int, n: int) -> np.ndarray:

@@ -14,7 +14,8 @@ from physics.errors import BeamDamageError
 from physics.discrepancy.fitting import Fit, candidate_fit, fit_model
 from physics.discrepancy.limits import detection_limits
 from physics.discrepancy.measurement import Measurement, Noise, has_complex_shapes
-from physics.discrepancy.model import ModeResiduals, mode_residuals, pair_modes_by_mac, predict
+from physics.discrepancy.model import ModeResiduals, mode_residuals, predict
+from physics.discrepancy.pairing import Pairing, PairingRule, implausible_pairing, pair_measured
 from physics.discrepancy.selection import NoiseCheck, decide, estimate_noise_scale, noise_check
 
 __all__ = ["DiscrepancyResult", "analyse", "check_candidates"]
@@ -50,6 +51,8 @@ class DiscrepancyResult:
         Degrees of freedom of that estimate (0: not estimated).
     noise_scale_from : str
         The model the estimate comes from, or why there is none.
+    pairing : Pairing or None
+        The measured modes paired with the nominal model's (:func:`physics.discrepancy.pairing.pair_measured`).
     """
 
     nominal: ModeResiduals
@@ -65,11 +68,13 @@ class DiscrepancyResult:
     noise_scale: float = 1.0
     noise_scale_dof: int = 0
     noise_scale_from: str = ""
+    pairing: Pairing | None = None
 
 
 def analyse(beam: Beam, meas: Measurement, noise: Noise | None = None, *, candidates=None,
             max_effects: int = 2, n_elements: int = 40, n_starts: int = 4, seed: int = 0,
-            estimate_noise: bool = False, progress=None) -> DiscrepancyResult:
+            estimate_noise: bool = False, progress=None, pairing: PairingRule | None = None,
+            band_hz=None) -> DiscrepancyResult:
     """Name the effects ``beam`` lacks to explain ``meas`` (module docstring).
 
     Parameters
@@ -102,15 +107,31 @@ def analyse(beam: Beam, meas: Measurement, noise: Noise | None = None, *, candid
         scaled noise is inflated as usual.
     progress : callable, optional
         Called with a short text before each candidate fit.
+    pairing : callable, optional
+        The rule that pairs the measured modes with the nominal model's (:data:`physics.discrepancy.pairing.
+        PairingRule`; ``beam-damage discrepancy`` passes ``classify``'s); None: largest MAC, else nearest frequency
+        after the median ratio, every measured mode paired.
+    band_hz : (lo, hi), optional
+        The band the modes were measured in (Hz), to name a model mode below it.
 
     Returns
     -------
     DiscrepancyResult
+
+    Raises
+    ------
+    ImplausibleTest
+        Before any fit, when a measured mode pairs with no model mode under ``pairing`` or fewer than 2 pair
+        (:func:`physics.discrepancy.pairing.pair_measured`): one line naming the causes.
     """
     with threadpool_limits(1):   # small dense eigenproblems: one BLAS thread is fastest
-        return _analyse(beam, meas, noise or Noise(), check_candidates(candidates, beam.bc, beam.section),
-                        max_effects,
-                        n_elements, n_starts, seed, estimate_noise, progress)
+        names = check_candidates(candidates, beam.bc, beam.section)
+        nominal_pred = predict(beam, meas, n_elements)
+        paired = pair_measured(meas, nominal_pred, pairing, band_hz)
+        if not paired.plausible:
+            raise implausible_pairing(paired)
+        return _analyse(beam, meas, noise or Noise(), names, max_effects, n_elements, n_starts, seed, estimate_noise,
+                        progress, nominal_pred, paired)
 
 
 def check_candidates(candidates, bc: str, section: str | None = None) -> tuple[str, ...]:
@@ -166,12 +187,12 @@ def _solid_shear_shift(beam: Beam, meas: Measurement, n_elements: int) -> float:
     return float(np.max(np.abs(f.frequencies_hz[:n] / base.frequencies_hz[:n] - 1)))
 
 
-def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, seed, estimate_noise, progress):
+def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, seed, estimate_noise, progress,
+             nominal_pred, pairing):
     fit_mass = meas.frf is not None
     names = list(candidates)
     untestable = _untestable(names, meas, beam, noise, n_elements)
-    nominal_pred = predict(beam, meas, n_elements)
-    pairs = pair_modes_by_mac(meas, nominal_pred)
+    pairs = pairing.model_index
     fixed = {k: dict(v) for k, v in beam.effects.items() if k != "proportional_damping"}
     say = progress or (lambda s: None)
     say("globals only")
@@ -207,7 +228,7 @@ def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, s
                               positions=positions, n_elements=n_elements, pairs=pairs)
     return DiscrepancyResult(mode_residuals(meas, nominal_pred, pairs), tuple(steps), base, tuple(named), noise,
                              untestable, evidence, drops, noise_check(base), limits, math.sqrt(scale[0]),
-                             scale[1], scale[2])
+                             scale[1], scale[2], pairing)
 
 
 def _todo(names, named, fixed) -> list:

@@ -51,10 +51,18 @@ SUBBAND_STEP = 0.25
 #: the median magnitude of the lines within +-:data:`PEAK_WINDOW` (relative) of it.
 PEAK_PROMINENCE = 3.0
 PEAK_WINDOW = 0.15
-#: A peak of the FRFs this many times the median of the lines within +-:data:`PEAK_WINDOW` of it is one a person
-#: sees (:func:`clear_peaks`): a noise floor's Rayleigh-distributed magnitudes exceed it with a probability of 3e-8
-#: per line.
+#: A peak of the FRFs this many times the median of the lines within a factor :data:`CLEAR_PEAK_WINDOW` of it is one
+#: a person sees (:func:`clear_peaks`): a noise floor's Rayleigh-distributed magnitudes exceed it with a probability
+#: of 3e-8 per line.
 CLEAR_PEAK_PROMINENCE = 5.0
+#: The floor of a clear peak is the median of the lines within this factor of it (an octave either side). A
+#: resonance's own skirt falls as ``zeta f / |f - f_r|``: over +-15 % its median is a quarter of a 2 %-damped peak,
+#: so a narrower window would hide every mode damped above 1.5 %, however high it stands over the noise.
+CLEAR_PEAK_WINDOW = 2.0
+#: A clear peak also stands this many dB above the lowest line between it and a higher peak on either side (its
+#: topographic prominence, as :data:`physics.identification.fdd.PEAK_PROMINENCE_DB`): a ripple of the noise on a
+#: resonance's flank, high above the octave's median, is no peak of its own.
+CLEAR_PEAK_VALLEY_DB = 6.0
 #: A clear peak that no selected pole explains is fitted again over the band within this factor of it.
 CLEAR_PEAK_BAND = 1.25
 #: A pole explains a peak within this relative distance.
@@ -62,23 +70,25 @@ CLEAR_PEAK_TOLERANCE = 0.02
 
 
 def clear_peaks(frequency_hz, magnitude, known_hz=(), tolerance: float = CLEAR_PEAK_TOLERANCE) -> np.ndarray:
-    """Frequencies (Hz) of plainly visible peaks of ``magnitude`` (:data:`CLEAR_PEAK_PROMINENCE` times the median
-    of the lines within +-:data:`PEAK_WINDOW`) with no frequency of ``known_hz`` within ``tolerance`` (relative),
-    the band's outer 2 % left aside (a mode's skirt)."""
+    """Frequencies (Hz) of plainly visible peaks of ``magnitude``: local maxima :data:`CLEAR_PEAK_PROMINENCE` times
+    the median of the lines within a factor :data:`CLEAR_PEAK_WINDOW` (at least 5 lines) and
+    :data:`CLEAR_PEAK_VALLEY_DB` above the valleys on either side, with no frequency of ``known_hz`` within
+    ``tolerance`` (relative), the band's outer 2 % left aside (a mode's skirt)."""
+    from scipy.signal import find_peaks  # scipy.signal: 0.3 s to import, only where peaks are searched
+
     f = np.asarray(frequency_hz, float)
     mag = np.asarray(magnitude, float)
-    idx = np.flatnonzero((mag[1:-1] > mag[:-2]) & (mag[1:-1] >= mag[2:])) + 1      # local maxima
+    db = 20 * np.log10(np.maximum(mag, np.finfo(float).tiny))
+    idx, _ = find_peaks(db, prominence=CLEAR_PEAK_VALLEY_DB)
     idx = idx[(f[idx] > f[0] * 1.02) & (f[idx] < f[-1] / 1.02)]
+    lo = np.searchsorted(f, f[idx] / CLEAR_PEAK_WINDOW, side="left")       # window [f/w, f w] of each peak
+    hi = np.searchsorted(f, f[idx] * CLEAR_PEAK_WINDOW, side="right")
+    floor = np.array([np.median(mag[a:b]) if b - a >= 5 else np.inf for a, b in zip(lo, hi)])
+    idx = idx[mag[idx] >= CLEAR_PEAK_PROMINENCE * floor]
     known = np.asarray(known_hz, float)
-    out = []
-    for i in idx:
-        window = mag[(f >= f[i] * (1 - PEAK_WINDOW)) & (f <= f[i] * (1 + PEAK_WINDOW))]
-        if window.size < 5 or mag[i] < CLEAR_PEAK_PROMINENCE * np.median(window):
-            continue
-        if known.size and np.min(np.abs(known / f[i] - 1)) <= tolerance:
-            continue
-        out.append(f[i])
-    return np.array(out)
+    if known.size and idx.size:
+        idx = idx[np.min(np.abs(known[None, :] / f[idx, None] - 1), axis=1) > tolerance]
+    return f[idx]
 
 
 def visible_peak(frequency_hz, magnitude, fn_hz) -> np.ndarray:
@@ -163,7 +173,12 @@ def _with_peak_poles(f, h, rec, poles, max_order, margin, select, lscf_options):
     """``poles`` plus, for each clear peak of the FRFs ``h`` (:func:`clear_peaks`, in the kind measured) that no
     pole explains, the pole nearest to it (within :data:`CLEAR_PEAK_TOLERANCE`) of an LSCF fit of the band within a
     factor :data:`CLEAR_PEAK_BAND` of the peak: one model over a wide band can spend its order on the many modes
-    above a low first mode and leave that mode out."""
+    above a low first mode and leave that mode out.
+
+    The peak itself shows the mode, so its pole needs no stability over the whole range of orders: the cluster
+    nearest the peak is taken from poles stable in frequency to :data:`CLEAR_PEAK_TOLERANCE` (the few lines around
+    a low, well-damped mode under a noise floor move its pole by 1-2 % from one order to the next) over at least 3
+    orders (:func:`select_poles` with the peak as ``peaks_hz``)."""
     missed = clear_peaks(f, np.sqrt(np.mean(np.abs(h) ** 2, axis=(0, 1))), poles.natural_frequencies_hz)
     found = [poles]
     n_o, n_i = rec.shape[0], rec.shape[1]
@@ -176,7 +191,9 @@ def _with_peak_poles(f, h, rec, poles, max_order, margin, select, lscf_options):
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
                 sub = select_poles(lscf(f[sel], rec[..., sel], max_order=order, margin=margin, **lscf_options),
-                                   **(select or {}))
+                                   **{**(select or {}), "min_status": 1, "freq_tol": CLEAR_PEAK_TOLERANCE,
+                                      "peaks_hz": [fp], "peak_tol_hz": [CLEAR_PEAK_TOLERANCE * fp],
+                                      "weak_min_count": 3})
         except BeamDamageError:
             continue
         near = np.abs(sub.natural_frequencies_hz / fp - 1)

@@ -183,7 +183,10 @@ def test_cli_on_beam5_table_4_3(tmp_path, capsys):
                         "indistinguishable_from", "separating_measurement", "gap_before", "gap_after",
                         "assumed_noise", "estimated_noise", "chi2_per_dof", "noise_consistent", "noise_check",
                         "not_tested", "detection_limits", "candidates", "beam_file", "dof_positions", "notes",
-                        "drive_x_m_from_file"}
+                        "drive_x_m_from_file", "pairing", "pairing_notes", "stopped", "causes"}
+    # classify's pairing rule: Table 4.3's four modes are the model's 1-4, 8.1 % apart at most
+    assert [p["model_mode"] for p in out["pairing"]] == [1, 2, 3, 4] and out["pairing_notes"] == []
+    assert out["stopped"] is None and out["causes"] == []
     assert out["assumed_noise"]["frequency"] == 0.003 and "default" in out["assumed_noise"]["frequency_source"]
     assert out["evidence"] == {"shear_deformation": "frequencies"}
     # modal damping fits Table 4.3's four ratios: no damping effect is named from them
@@ -204,11 +207,20 @@ def test_cli_on_beam5_table_4_3(tmp_path, capsys):
 
 
 def test_cli_names_no_effect_with_max_effects_0_and_writes_every_file(tmp_path, capsys):
+    """Beam 5's own frequencies 1 % up: EI alone fits them and every file is written. Table 4.3 with EI alone
+    leaves mode 4 8.3 % off (chi2/dof 506 at the assumed 0.3 %): exit code 2, nothing written, the cause named."""
     from experiments.cli import main
     from physics.discrepancy import EXAMPLE
 
-    assert main(["discrepancy", "--measured", str(EXAMPLE), "--out", str(tmp_path), "--max-effects", "0",
-                 "--elements", "12", "--json"]) == 0
+    assert main(["discrepancy", "--measured", str(EXAMPLE), "--out", str(tmp_path / "t43"), "--max-effects", "0",
+                 "--elements", "12", "--json"]) == 2
+    stop = json.loads(capsys.readouterr().out)
+    assert stop["chi2_per_dof"] == pytest.approx(506, rel=0.01) and stop["beam_file"] is None
+    assert "measured mode 4 (634.1 Hz) stays +8.30 % off" in stop["stopped"] and not (tmp_path / "t43").exists()
+    f = dsc.predict(BEAM, dsc.Measurement(np.ones(4)), 12).frequencies_hz[:4] * 1.01
+    (tmp_path / "own.json").write_text(json.dumps({"natural_frequencies_hz": f.tolist()}))
+    assert main(["discrepancy", "--measured", str(tmp_path / "own.json"), "--out", str(tmp_path), "--max-effects",
+                 "0", "--elements", "12", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["effects"] == [] and out["candidates"] == []
     assert (tmp_path / "candidates.csv").read_text() == ("effect,score,max_abs_frequency_error_pct,round,lomo,"

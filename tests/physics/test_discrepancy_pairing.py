@@ -1,0 +1,116 @@
+"""The discrepancy workflow's pairing (classify's rule, learn.measured.pair_modes_by_frequency), its stop before any
+fit, the stop on a failed noise check, and one sensor (shapes optional) on the one-accelerometer cantilever of
+tests/one_sensor_cantilever.py (nominal modes 22.21, 138.8, 386.3, 757.9, 1261 Hz, the accelerometer's 5 g in the
+beam file)."""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import one_sensor_cantilever as osc
+from learn.measured import pair_modes_by_frequency
+from physics import discrepancy as dsc
+from physics.beam import load_beam
+from physics.errors import ShapeError
+from physics.discrepancy.selection import _separating_measurement
+
+
+@pytest.fixture(scope="module")
+def beam(tmp_path_factory):
+    p = tmp_path_factory.mktemp("one") / "beam.toml"
+    p.write_text(osc.beam_toml((30.0, 1600.0)))
+    return load_beam(p)
+
+
+def _pairing(beam, f_hz, rule=pair_modes_by_frequency):
+    meas = dsc.Measurement(np.asarray(f_hz, float))
+    return dsc.pair_measured(meas, dsc.predict(beam, meas, 40), rule, beam.band_hz)
+
+
+def test_a_test_without_the_first_mode_pairs_138_hz_with_mode_2(beam):
+    """The four modes above 22 Hz: the median-ratio rule pairs 138.8 Hz with model mode 1 (-84 %), classify's rule
+    with mode 2 (within 0.05 %), and names mode 1 as below the band 30-1600 Hz."""
+    f = [138.8, 386.3, 757.9, 1261.2]
+    old = _pairing(beam, f, None)
+    assert old.model_index.tolist() == [0, 1, 2, 3]
+    assert 100 * (old.model_hz[0] / 138.8 - 1) == pytest.approx(-84.0, abs=0.1)
+    p = _pairing(beam, f)
+    assert p.model_index.tolist() == [1, 2, 3, 4] and p.plausible
+    assert max(abs(r["error_pct"]) for r in p.to_list()) < 0.05
+    assert p.skipped == ("model mode 1 (22.21 Hz) lies below the band 30-1600 Hz",)
+
+
+def test_a_spurious_pole_and_a_missed_mode(beam):
+    """A pole at 1150 Hz next to mode 5 (1261 Hz) pairs with nothing and stops; a test without mode 4 pairs the
+    others and names mode 4 as missed."""
+    p = _pairing(beam, [22.2, 138.8, 386.3, 757.9, 1150.0, 1261.2])
+    assert p.model_index.tolist() == [0, 1, 2, 3, -1, 4] and not p.plausible
+    assert p.unpaired[0].startswith("measured mode at 1150 Hz pairs with no model mode (nearest: model mode 5 at "
+                                    "1261 Hz, +9.7 %, is the measured mode at 1261 Hz")
+    err = dsc.pairing.implausible_pairing(p)
+    assert "a spurious pole" in str(err) and err.result["pairing"][4]["model_mode"] is None
+    q = _pairing(beam, [22.2, 138.8, 386.3, 1261.2])
+    assert q.model_index.tolist() == [0, 1, 2, 4] and q.plausible
+    assert q.skipped[0].startswith("model mode 4 (757.9 Hz) has no measured mode: missed")
+
+
+def test_an_implausible_pairing_stops_before_any_fit(beam):
+    """analyse raises before its first fit (no progress message) with the cause in one line."""
+    said = []
+    with pytest.raises(dsc.ImplausibleTest, match=r"measured mode at 60 Hz pairs with no model mode") as exc:
+        dsc.analyse(beam, dsc.Measurement(np.array([60.0, 138.8, 386.3])), pairing=pair_modes_by_frequency,
+                    band_hz=beam.band_hz, progress=said.append)
+    assert said == [] and "\n" not in str(exc.value)
+    assert "model mode 1 (22.21 Hz) lies below the band" in str(exc.value)
+
+
+def test_a_noise_check_failed_by_orders_of_magnitude_names_the_worst_mode():
+    """chi2/dof 131 (FRF block 260) stops and names the FRF band of the worst mode; 50 does not stop."""
+    r = SimpleNamespace(measured_hz=np.array([22.2, 138.8]), frequency_error_pct=np.array([0.05, -0.1]),
+                        frf_band_error_db=np.array([28.7, 2.9]), mac=None)
+    chk = SimpleNamespace(chi2_per_dof=131.0, blocks={"frequencies": {"chi2_per_dof": 1.66},
+                                                      "FRF": {"chi2_per_dof": 260.0}})
+    pairing = SimpleNamespace(skipped=("model mode 1 (22.21 Hz) lies below the band 30-1600 Hz",))
+    stop = dsc.failed_noise_check(chk, r, pairing)
+    assert stop["stopped"].startswith("the calibrated model fails its own noise check by orders of magnitude "
+                                      "(chi2/dof 131 > 100), no beam file written; likely cause: model mode 1")
+    assert stop["causes"][1].startswith("the FRF's level around measured mode 1 (22.2 Hz) differs from the model's "
+                                        "by 28.7 dB rms")
+    assert dsc.failed_noise_check(SimpleNamespace(chi2_per_dof=50.0, blocks={}), r, pairing) is None
+    freq = SimpleNamespace(chi2_per_dof=400.0, blocks={"frequencies": {"chi2_per_dof": 400.0}})
+    assert "measured mode 2 (138.8 Hz) stays -0.10 % off" in dsc.failed_noise_check(freq, r, None)["stopped"]
+
+
+def test_one_sensor_separating_measurement_and_simulation(beam):
+    """One measured position compares no shape: a one-row shape is held as none, the measurement that separates two
+    models compares shapes at the quarter points, and a one-sensor simulation gives frequencies (shapes refused in
+    one line)."""
+    meas = dsc.Measurement(np.array([22.2, 138.8, 386.3]))
+    a = SimpleNamespace(beam=beam)
+    b = SimpleNamespace(beam=beam.with_effects({**beam.effects_dict(), "root_flexibility": {"k_theta_Nm_rad": 2e3}}))
+    assert _separating_measurement(a, b, meas, dsc.Noise(), 24) == ("natural frequency of mode 4 (8.8 % apart: "
+                                                                    "757.9 vs 696.4 Hz)")
+    precise = _separating_measurement(a, b, meas, dsc.Noise(0.003, 0.1, 0.001), 24)
+    assert precise == ("mode shapes at the quarter points (more sensors than the one measured) (largest normalised "
+                       "difference 0.14)")
+    one = dsc.Measurement(np.array([22.2, 138.8]), shapes=np.ones((1, 2)), shape_x_m=(0.1,))
+    assert one.shapes is None and one.shape_x_m == ()
+    with pytest.raises(ShapeError, match=r"measured shapes must be \(n_points, n_modes = 2\)"):
+        dsc.Measurement(np.array([22.2, 138.8]), shapes=np.ones((2, 2)), shape_x_m=(0.1,))
+    sim = dsc.simulate_measurement(beam, 3, damping=False)
+    assert sim.shapes is None and sim.frequencies_hz[0] == pytest.approx(22.21, rel=0.01)
+    with pytest.raises(ShapeError, match="at least 2 measured positions, the beam has 1"):
+        dsc.simulate_measurement(beam, 3, damping=False, shapes=True)
+
+
+def test_one_sensor_frequencies_calibrate_ei_with_the_added_mass(beam):
+    """Frequencies alone of a truth with EI 10 % above the beam file's (the independent simulator, the 5 g
+    accelerometer on it), the beam file's added mass kept: the globals-only fit recovers EI 103.95 N m^2 within
+    0.3 %; the modes pair 1-5."""
+    f = np.sqrt(1.1) * osc.truth_frequencies_hz()[:5]
+    res = dsc.analyse(beam, dsc.Measurement(f), candidates=(), n_elements=24, pairing=pair_modes_by_frequency,
+                      band_hz=(10.0, 1600.0))
+    assert res.pairing.model_index.tolist() == [0, 1, 2, 3, 4]
+    assert res.final.parameters["EI_Nm2"] == pytest.approx(1.1 * osc.EI_NM2, rel=0.003)
+    assert res.final.beam.effects["added_mass"]["mass_kg"] == pytest.approx(0.005)
