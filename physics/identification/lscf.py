@@ -15,7 +15,7 @@ from physics.identification.lsfd import LSFDResult, lsfd
 from physics.identification.modes import ModalEstimate, _estimate, _frf3
 from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles, stability_status
 
-__all__ = ["LSCFIdentification", "identify_lscf", "lscf"]
+__all__ = ["LSCFIdentification", "identify_lscf", "lscf", "prominent_peaks"]
 
 
 #: (frequency lines, dt, columns) -> (X, Q) of :func:`_lscf_basis`, the 4 most recent.
@@ -69,17 +69,31 @@ CLEAR_PEAK_BAND = 1.25
 CLEAR_PEAK_TOLERANCE = 0.02
 
 
+def prominent_peaks(db, min_prominence_db: float) -> np.ndarray:
+    """Indices of the local maxima of ``db`` (n,) whose topographic prominence is at least ``min_prominence_db``:
+    on either side, the lowest line between the peak and the first higher line (or the end) lies that far below it
+    (the definition of :func:`scipy.signal.peak_prominences`, without importing scipy.signal on the FRF path)."""
+    db = np.asarray(db, float)
+    top = np.flatnonzero((db[1:-1] > db[:-2]) & (db[1:-1] >= db[2:])) + 1
+    keep = np.zeros(top.size, bool)
+    for k, p in enumerate(top):                 # local maxima only; each side read up to its first higher line
+        bases = []
+        for side in (db[p - 1::-1], db[p + 1:]):
+            higher = np.flatnonzero(side > db[p])
+            bases.append(side[:higher[0]].min() if higher.size else side.min())
+        keep[k] = db[p] - max(bases) >= min_prominence_db
+    return top[keep]
+
+
 def clear_peaks(frequency_hz, magnitude, known_hz=(), tolerance: float = CLEAR_PEAK_TOLERANCE) -> np.ndarray:
     """Frequencies (Hz) of plainly visible peaks of ``magnitude``: local maxima :data:`CLEAR_PEAK_PROMINENCE` times
     the median of the lines within a factor :data:`CLEAR_PEAK_WINDOW` (at least 5 lines) and
     :data:`CLEAR_PEAK_VALLEY_DB` above the valleys on either side, with no frequency of ``known_hz`` within
     ``tolerance`` (relative), the band's outer 2 % left aside (a mode's skirt)."""
-    from scipy.signal import find_peaks  # scipy.signal: 0.3 s to import, only where peaks are searched
-
     f = np.asarray(frequency_hz, float)
     mag = np.asarray(magnitude, float)
     db = 20 * np.log10(np.maximum(mag, np.finfo(float).tiny))
-    idx, _ = find_peaks(db, prominence=CLEAR_PEAK_VALLEY_DB)
+    idx = prominent_peaks(db, CLEAR_PEAK_VALLEY_DB)
     idx = idx[(f[idx] > f[0] * 1.02) & (f[idx] < f[-1] / 1.02)]
     lo = np.searchsorted(f, f[idx] / CLEAR_PEAK_WINDOW, side="left")       # window [f/w, f w] of each peak
     hi = np.searchsorted(f, f[idx] * CLEAR_PEAK_WINDOW, side="right")
