@@ -372,8 +372,9 @@ def season_warning(times, time_values, n_baseline: int, names) -> str | None:
     if span >= SEASONS_DAYS or t[-1] - t[0] <= span:
         return None
     return (f"the baseline period spans {span:.0f} days: the {' and '.join(env)} statistics judge the environment "
-            "against it, and the seasons it did not see will alarm; cover a year, give the conditions "
-            "(--conditions) or leave them out (--statistics residual)")
+            "against it, and the seasons it did not see move them as a change would (reported as 'change or unseen "
+            "conditions' beyond the baseline's environment); cover a year, give the conditions (--conditions) or "
+            "leave them out (--statistics residual)")
 
 
 def residual_threshold(det: Detection) -> Threshold:
