@@ -24,9 +24,9 @@ conditions) and ``regression`` on the measured temperature. Methods, each at ``-
 * ``residual``, ``environment``, ``shift``: each statistic of :mod:`learn.monitor.statistics` alone at the rate
   (the shift signed: a drop and a rise at half the rate each);
 * ``combined``: any statistic above its threshold at the rate calibrated on their joint held-out distribution
-  (the detector's alarm); ``combined, Šidák``: at the Šidák rate; ``monitor``: ``monitor``'s alarm, the combination
-  less the tests beyond the baseline's environment alarmed by its statistics alone (status ``change or unseen
-  conditions``);
+  (``monitor``'s alarm with a baseline period of a year); ``combined, Šidák``: at the Šidák rate; ``extrapolated
+  apart``: the combination less the tests beyond the baseline's environment alarmed by its environmental statistics
+  alone (``monitor --extrapolated-alarms separate``: status ``change or unseen conditions``);
 * ``chart``: the EWMA charts of :mod:`learn.monitor.charts` (``monitor``'s ``chart_alarm``);
 * ``plain shift``: the mean relative change of the frequencies from their baseline medians, alarmed below the
   baseline's own ``rate`` quantile (one-sided: it is told the change's sign, above the ``1 - rate`` quantile for the
@@ -65,8 +65,8 @@ __all__ = ["CASES", "main", "methods_on", "plain_tests"]
 
 SIZES_PCT = (0.25, 0.5, 1.0, 1.5, 2.0)
 DAMAGES = {"mode 1": (1,), "uniform EI": "stiffness", "mass loss": "mass"}
-METHODS = ("residual", "environment", "shift", "combined", "combined, Šidák", "monitor", "chart", "plain shift",
-           "plain shift, both signs", "plain per mode")
+METHODS = ("residual", "environment", "shift", "combined", "combined, Šidák", "extrapolated apart", "chart",
+           "plain shift", "plain shift, both signs", "plain per mode")
 
 
 def _case(name: str, seed: int) -> tuple:
@@ -117,12 +117,12 @@ def methods_on(F, C, nb: int, model_name: str, rate: float, seed: int = 0, sign:
     out["combined"] = det.alarm
     out["combined, Šidák"] = detect(model, model.with_choices, X, C, b_idx, rest, rate, q, held=held,
                                     combination="sidak").alarm
-    names, E = environment_coordinates(model, X, C)
-    out["monitor"] = det.alarm.copy()
+    names, E = environment_coordinates(model, X, C, tuple(f"condition {j + 1}" for j in range(q)))
+    out["extrapolated apart"] = det.alarm.copy()
     if E is not None and E.shape[1]:
         own = [k for k, nm in enumerate(det.names) if not environmental(model, nm)]
         env_only = ~(det.ratios[:, own] > 1.0).any(axis=1)
-        out["monitor"] &= ~(coverage(names, E, b_idx, rest).extrapolated & env_only)
+        out["extrapolated apart"] &= ~(coverage(names, E, b_idx, rest).extrapolated & env_only)
     out["chart"] = run_charts(det.vectors, b_idx, rate, seed=seed).alarm
     out.update(plain_tests(F, nb, rate, sign))
     return out

@@ -69,10 +69,11 @@ def add_parser(sub):
                    help="statistics combined at the false-alarm rate (residual, environment, shift; the residual "
                         "always): leave environment and shift out when the baseline period does not cover the "
                         "conditions the tests meet (default: all)")
-    p.add_argument("--extrapolated-alarms", choices=EXTRAPOLATED_ALARMS, default="separate",
+    p.add_argument("--extrapolated-alarms", choices=EXTRAPOLATED_ALARMS, default="auto",
                    help="a later test beyond the baseline's environment alarmed only by the environment or the shift "
-                        f"about the baseline mean: 'separate' (default) reports it as '{EXTRAPOLATED}', beside the "
-                        "alarms; 'alarm' keeps it an alarm")
+                        f"about the baseline mean: 'separate' reports it as '{EXTRAPOLATED}', beside the alarms; "
+                        "'alarm' keeps it an alarm; 'auto' (default) keeps it an alarm when the baseline period is "
+                        "known to cover the seasons (dated tests over at least 330 days), else separates it")
     p.add_argument("--workers", type=int, default=1, metavar="N",
                    help="processes identifying the tests (default 1; the results do not depend on it)")
     p.add_argument("--out", metavar="DIR", help="outputs and the identification cache (default without --json: "

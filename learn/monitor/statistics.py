@@ -35,7 +35,7 @@ from learn.monitor.normal_models import PCARemoval, Regression, _impute
 from datetime import datetime
 
 __all__ = ["PATTERN_MIN", "STATISTICS", "Detection", "detect", "environmental", "held_out_statistics",
-           "joint_rate", "season_warning", "sidak_rate", "statistics_of"]
+           "covers_seasons", "joint_rate", "season_warning", "sidak_rate", "statistics_of"]
 
 #: The detector's statistics (module docstring).
 STATISTICS = ("residual", "environment", "shift")
@@ -375,6 +375,19 @@ def season_warning(times, time_values, n_baseline: int, names) -> str | None:
             "against it, and the seasons it did not see move them as a change would (reported as 'change or unseen "
             "conditions' beyond the baseline's environment); cover a year, give the conditions (--conditions) or "
             "leave them out (--statistics residual)")
+
+
+def covers_seasons(times, time_values, n_baseline: int) -> bool:
+    """Whether the baseline period is known to cover the seasons: dated tests (``times`` ISO dates, ``time_values``
+    days) whose first ``n_baseline`` span at least :data:`SEASONS_DAYS`."""
+    if times is None or not len(times) or times[0] is None:
+        return False
+    try:
+        datetime.fromisoformat(str(times[0]).strip())
+    except ValueError:
+        return False
+    t = np.asarray(time_values, float)
+    return bool(t[n_baseline - 1] - t[0] >= SEASONS_DAYS)
 
 
 def residual_threshold(det: Detection) -> Threshold:

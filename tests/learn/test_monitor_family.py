@@ -3,6 +3,9 @@ joint held-out distribution against the closed form of the largest of two correl
 rate and the power against Šidák's on dependent null data, the signed shift's two sides, the thresholds per set
 of modes found, and the status of an environmental alarm on an extrapolated test."""
 
+import warnings
+from datetime import date, timedelta
+
 import numpy as np
 import pytest
 from scipy import optimize, stats
@@ -86,12 +89,18 @@ def test_thresholds_per_set_of_modes_found_give_each_set_its_rate():
 
 def test_an_environmental_alarm_on_an_extrapolated_test_has_its_own_status(tmp_path):
     """A baseline of the warm half of the temperature cycle, then the cold half, no conditions (pca): the tests
-    alarmed only by the environment or the shift and beyond the baseline's environment are reported apart."""
+    alarmed only by the environment or the shift and beyond the baseline's environment are reported apart
+    (``separate``; ``auto`` unless dated tests show a baseline period of the seasons), kept alarms otherwise."""
     csv_path, _, _ = write_modal_series(tmp_path, 60, seed=5)
     series = read_conditions(csv_path)
-    kept = monitor_series(series, 30, IdentificationSettings(), normal_model="pca", progress=False,
-                          extrapolated_alarms="alarm")
-    apart = monitor_series(series, 30, IdentificationSettings(), normal_model="pca", progress=False)
+
+    def run(how, s=series):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return monitor_series(s, 30, IdentificationSettings(), normal_model="pca", progress=False,
+                                  extrapolated_alarms=how)
+
+    kept, apart = run("alarm"), run("separate")
     moved = [i for i, r in enumerate(kept.rows) if r["alarm"] and r["extrapolated"]
              and set(r["alarmed_by"]) <= {"environment", "shift"}]
     assert moved
@@ -100,4 +109,14 @@ def test_an_environmental_alarm_on_an_extrapolated_test_has_its_own_status(tmp_p
             assert b["status"] == EXTRAPOLATED and not b["alarm"] and b["alarmed_by"] == a["alarmed_by"]
         else:
             assert b["status"] == a["status"] and b["alarm"] == a["alarm"]
-    assert apart.first_alarm != kept.first_alarm or not moved
+    assert [r["status"] for r in run("auto").rows] == [r["status"] for r in apart.rows]     # undated: separated
+    lines = csv_path.read_text().splitlines()
+
+    def dated(days_per_test):
+        rows = [",".join([f, (date(2026, 1, 1) + timedelta(days=days_per_test * int(t))).isoformat(), c])
+                for f, t, c in (line.split(",") for line in lines[1:])]
+        csv_path.write_text("\n".join([lines[0], *rows]) + "\n")
+        return [r["status"] for r in run("auto", read_conditions(csv_path)).rows]
+
+    assert dated(1) == [r["status"] for r in apart.rows]        # 29 days of baseline: separated
+    assert dated(13) == [r["status"] for r in kept.rows]        # 377 days: the seasons covered, kept alarms
