@@ -21,12 +21,16 @@ or a rise of every mode in the pattern of losing part of the bolted mass (the si
 the same intact draws. Normal models: ``pca`` (no
 conditions) and ``regression`` on the measured temperature. Methods, each at ``--rate`` on the same baseline:
 
-* ``residual``, ``environment``, ``shift``: each statistic of :mod:`learn.monitor.statistics` alone at the rate;
-* ``combined``: any statistic above its threshold at the Šidák rate (``monitor``'s alarm);
+* ``residual``, ``environment``, ``shift``: each statistic of :mod:`learn.monitor.statistics` alone at the rate
+  (the shift signed: a drop and a rise at half the rate each);
+* ``combined``: any statistic above its threshold at the rate calibrated on their joint held-out distribution
+  (``monitor``'s alarm with a baseline period of a year); ``combined, Šidák``: at the Šidák rate; ``extrapolated
+  apart``: the combination less the tests beyond the baseline's environment alarmed by its environmental statistics
+  alone (``monitor --extrapolated-alarms separate``: status ``change or unseen conditions``);
 * ``chart``: the EWMA charts of :mod:`learn.monitor.charts` (``monitor``'s ``chart_alarm``);
 * ``plain shift``: the mean relative change of the frequencies from their baseline medians, alarmed below the
   baseline's own ``rate`` quantile (one-sided: it is told the change's sign, above the ``1 - rate`` quantile for the
-  mass loss);
+  mass loss); ``plain shift, both signs``: below its ``rate / 2`` or above its ``1 - rate / 2`` quantile;
 * ``plain per mode``: each mode's relative change, alarmed beyond the baseline's ``rate / m`` quantile of that mode
   (on the change's side).
 
@@ -50,10 +54,10 @@ import numpy as np  # noqa: E402
 
 from experiments.second_sim.series import (FrequencySeriesConfig, SeriesConfig, frequency_series,  # noqa: E402
                                            mass_loss_pattern, uniform_stiffness_pattern)
-from learn.monitor.alarm_threshold import TAIL_SHARE, threshold, training_size  # noqa: E402
 from learn.monitor.charts import run_charts  # noqa: E402
 from learn.monitor.normal_models import NORMAL_MODELS  # noqa: E402
-from learn.monitor.statistics import detect, environmental  # noqa: E402
+from learn.monitor.coverage import coverage, environment_coordinates  # noqa: E402
+from learn.monitor.statistics import detect, environmental, held_out_statistics  # noqa: E402
 from physics.io import atomic_write_text  # noqa: E402
 from experiments.studies.doc_tables import write_table  # noqa: E402
 
@@ -61,7 +65,8 @@ __all__ = ["CASES", "main", "methods_on", "plain_tests"]
 
 SIZES_PCT = (0.25, 0.5, 1.0, 1.5, 2.0)
 DAMAGES = {"mode 1": (1,), "uniform EI": "stiffness", "mass loss": "mass"}
-METHODS = ("residual", "environment", "shift", "combined", "chart", "plain shift", "plain per mode")
+METHODS = ("residual", "environment", "shift", "combined", "combined, Šidák", "extrapolated apart", "chart",
+           "plain shift", "plain shift, both signs", "plain per mode")
 
 
 def _case(name: str, seed: int) -> tuple:
@@ -92,7 +97,9 @@ def plain_tests(F, nb: int, rate: float, sign: float = 1.0) -> dict:
     rel = sign * (F / np.nanmedian(F[:nb], axis=0) - 1.0)
     mean = np.nanmean(rel, axis=1)
     per = np.nanquantile(rel[:nb], rate / F.shape[1], axis=0)
-    return {"plain shift": mean < np.nanquantile(mean[:nb], rate), "plain per mode": (rel < per).any(axis=1)}
+    lo, hi = np.nanquantile(mean[:nb], [rate / 2, 1 - rate / 2])
+    return {"plain shift": mean < np.nanquantile(mean[:nb], rate), "plain shift, both signs": (mean < lo) | (mean > hi),
+            "plain per mode": (rel < per).any(axis=1)}
 
 
 def methods_on(F, C, nb: int, model_name: str, rate: float, seed: int = 0, sign: float = 1.0) -> dict:
@@ -101,14 +108,21 @@ def methods_on(F, C, nb: int, model_name: str, rate: float, seed: int = 0, sign:
     q = 0 if C is None else C.shape[1]
     model = NORMAL_MODELS[model_name](X.shape[1], q).fit(X[:nb], None if C is None else C[:nb])
     b_idx, rest = np.arange(nb), np.arange(nb, len(X))
-    det = detect(model, model.with_choices, X, C, b_idx, rest, rate, q)
+    held = held_out_statistics(model.with_choices, X[:nb], None if C is None else C[:nb])
+    det = detect(model, model.with_choices, X, C, b_idx, rest, rate, q, held=held)
     out = {}
     for k, nm in enumerate(det.names):
-        dof = model.dof_ if nm == "residual" else det.vectors[nm].shape[1]
-        alone = threshold(det.values[b_idx, k], rate, dof, training_size(nb), q,
-                          TAIL_SHARE if environmental(model, nm) else 1.0)
-        out[nm] = det.values[:, k] > alone.value
+        alone = detect(model, model.with_choices, X, C, b_idx, rest, rate, q, (nm,), held={nm: held[nm]})
+        out[nm] = alone.alarm
     out["combined"] = det.alarm
+    out["combined, Šidák"] = detect(model, model.with_choices, X, C, b_idx, rest, rate, q, held=held,
+                                    combination="sidak").alarm
+    names, E = environment_coordinates(model, X, C, tuple(f"condition {j + 1}" for j in range(q)))
+    out["extrapolated apart"] = det.alarm.copy()
+    if E is not None and E.shape[1]:
+        own = [k for k, nm in enumerate(det.names) if not environmental(model, nm)]
+        env_only = ~(det.ratios[:, own] > 1.0).any(axis=1)
+        out["extrapolated apart"] &= ~(coverage(names, E, b_idx, rest).extrapolated & env_only)
     out["chart"] = run_charts(det.vectors, b_idx, rate, seed=seed).alarm
     out.update(plain_tests(F, nb, rate, sign))
     return out

@@ -13,6 +13,7 @@ import numpy as np
 from experiments.cli.args import check_out_dir
 from learn.monitor import (DEFAULT_LATENT, NORMAL_MODELS, SeriesInput, alarm_verdicts, identification_settings,
                            monitor_series, read_conditions)
+from learn.monitor.alarms import EXTRAPOLATED, EXTRAPOLATED_ALARMS, STATUSES
 from learn.monitor.coverage import baseline_scatter, series_coverage
 from learn.monitor.events import group_events, identification_change
 from learn.monitor.verdicts import event_verdicts
@@ -68,6 +69,11 @@ def add_parser(sub):
                    help="statistics combined at the false-alarm rate (residual, environment, shift; the residual "
                         "always): leave environment and shift out when the baseline period does not cover the "
                         "conditions the tests meet (default: all)")
+    p.add_argument("--extrapolated-alarms", choices=EXTRAPOLATED_ALARMS, default="auto",
+                   help="a later test beyond the baseline's environment alarmed only by the environment or the shift "
+                        f"about the baseline mean: 'separate' reports it as '{EXTRAPOLATED}', beside the alarms; "
+                        "'alarm' keeps it an alarm; 'auto' (default) keeps it an alarm when the baseline period is "
+                        "known to cover the seasons (dated tests over at least 330 days), else separates it")
     p.add_argument("--workers", type=int, default=1, metavar="N",
                    help="processes identifying the tests (default 1; the results do not depend on it)")
     p.add_argument("--out", metavar="DIR", help="outputs and the identification cache (default without --json: "
@@ -110,14 +116,15 @@ def run(args) -> dict:
     cache = Path(args.out) / "cache" if args.out else None
     res = monitor_series(series, args.baseline_tests, settings, cache, args.false_alarm_rate, args.normal_model,
                          progress=not args.json, chart=args.chart, statistics=tuple(args.statistics),
-                         workers=args.workers)
+                         workers=args.workers, extrapolated_alarms=args.extrapolated_alarms)
     out = judged(res, args.false_alarm_rate, model, beam_x_m)
     out.update(baseline_tests=args.baseline_tests, false_alarm_rate=args.false_alarm_rate, version=package_version(),
                detector=res.detection.to_dict(), charts=None if res.charts is None else res.charts.to_dict(),
                config={"identification": settings.to_dict(), "conditions": args.conditions,
                        "condition_names": list(res.series.condition_names), "beam": args.beam, "model": args.model,
                        "normal_model": res.normal_variation["model"], "chart": args.chart,
-                       "statistics": list(args.statistics), "seed": 0})
+                       "statistics": list(args.statistics), "extrapolated_alarms": args.extrapolated_alarms,
+                       "seed": 0})
     if args.out:
         out["outputs"] = _write(args.out, out, res)
     if not args.json:
@@ -153,7 +160,7 @@ def judged(res, false_alarm_rate: float, model=None, beam_x_m=None) -> dict:
     if scatter.warning:
         warnings.warn(scatter.warning)
     later = [r for r in rows if not r["baseline"]]
-    counts = {s: sum(r["status"] == s for r in later) for s in ("alarm", "no alarm", "not identified", "not judged")}
+    counts = {s: sum(r["status"] == s for r in later) for s in STATUSES}
     counts.update(extrapolated=sum(r["extrapolated"] for r in later), events=len(events),
                   changes=sum(e.change for e in events))
     first = res.first_alarm
@@ -209,7 +216,8 @@ def _write(out_dir, out: dict, res) -> dict:
         f"{out['false_alarm_rate']:g} (held-out baseline rate {thr['held_out_false_alarm_rate']:.3g}).",
         f"Of the {later} later tests: {cnt['alarm']} alarms, {cnt['not identified']} not identified, "
         f"{cnt['no alarm']} without an alarm, {cnt['not judged']} not judged (another kind, band or beam; conditions "
-        f"not measured); {cnt['extrapolated']} lie beyond the baseline's conditions (extrapolated). "
+        f"not measured), {cnt[EXTRAPOLATED]} {EXTRAPOLATED} (extrapolated, alarmed by the environmental statistics "
+        f"alone); {cnt['extrapolated']} lie beyond the baseline's conditions (extrapolated). "
         f"{cnt['events']} events, {cnt['changes']} of them changes"
         + (f"; the first alarm: {first['file']}{_when(first)}." if first else "."),
         out["identification_change"]["text"] + ".",
@@ -326,7 +334,8 @@ def _print(out: dict, res) -> None:
             print(f"  {r['file']}: {r['status']}: {r['error']}")
     cnt = out["counts"]
     print(f"after the baseline period: {cnt['alarm']} alarms, {cnt['not identified']} not identified, "
-          f"{cnt['no alarm']} without an alarm, {cnt['not judged']} not judged; {cnt['extrapolated']} extrapolated"
+          f"{cnt['no alarm']} without an alarm, {cnt['not judged']} not judged, {cnt[EXTRAPOLATED]} {EXTRAPOLATED}; "
+          f"{cnt['extrapolated']} extrapolated"
           + (f"; first alarm {out['first_alarm']['file']}{_when(out['first_alarm'])}" if out["first_alarm"] else ""))
     print(out["identification_change"]["text"])
     print(f"{cnt['events']} events, {cnt['changes']} changes:")

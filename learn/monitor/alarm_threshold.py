@@ -93,7 +93,7 @@ class Threshold:
 
 
 def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: int = 0,
-              tail_share: float = 1.0) -> Threshold:
+              tail_share: float = 1.0, side_share: float = 1.0) -> Threshold:
     """The threshold of the novelty index at false-alarm rate ``rate`` from the held-out indices of the baseline
     tests (:func:`held_out_novelty`), each from a model fitted on ``n_train`` tests.
 
@@ -108,6 +108,11 @@ def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: i
     larger of the law's and the indices' own quantile (an effect that is not linear gives a heavier tail, which
     the quantile shows; on a baseline of fewer than ``1 / rate`` tests that quantile lies between its two largest
     indices).
+
+    ``side_share < 1``: one side of a signed statistic (``held_out`` its squares on that side only, this share of all
+    the baseline tests): the law, fitted to that side's squares (the same law as both sides' for a symmetric
+    statistic), is read at ``1 - rate / side_share`` and so is their quantile, so that a test of the normal
+    variation lies beyond the side's threshold with probability ``rate``.
     """
     from scipy import optimize, stats  # scipy.stats/optimize: heavy, only where a threshold is fitted
 
@@ -127,7 +132,8 @@ def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: i
 
     start = math.log(max(np.median(pos) / law.median(), 1e-300))
     c = math.exp(optimize.minimize_scalar(nll, bracket=(start - 1, start + 1)).x)
-    law_value = float(c * law.ppf(1 - rate))
-    empirical = float(np.quantile(s, 1 - rate)) if s.size else math.nan
+    level = 1 - min(rate / max(side_share, 1e-12), 0.5)
+    law_value = float(c * law.ppf(level))
+    empirical = float(np.quantile(s, level)) if s.size else math.nan
     value = max(law_value, empirical) if s.size else law_value
-    return Threshold(value, rate, law_value, c, d1, d2, empirical, float(np.mean(s > value)))
+    return Threshold(value, rate, law_value, c, d1, d2, empirical, float(side_share * np.mean(s > value)))

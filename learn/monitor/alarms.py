@@ -16,13 +16,16 @@ from learn.monitor.normal_models import DEFAULT_LATENT, NORMAL_MODELS
 from learn.monitor.series import SeriesInput, check_series
 from learn.monitor.alarm_threshold import Threshold, minimum_baseline
 from learn.monitor.charts import CHARTS, Charts, run_charts
-from learn.monitor.statistics import STATISTICS, Detection, detect, residual_threshold, season_warning
+from learn.monitor.statistics import (STATISTICS, Detection, covers_seasons, detect, environmental, residual_threshold,
+                                     season_warning)
+from learn.monitor.coverage import series_coverage
 from learn.monitor.tracking import (MIN_PRESENCE, ReferenceModes, identified_by, reference_modes, refit_missing,
                                    track_modes)
 from physics.errors import BeamDamageError, ConfigError
 from learn.monitor.workers import identify_files
 
-__all__ = ["STATUSES", "SeriesResult", "changed_text", "monitor_series", "what_changed"]
+__all__ = ["EXTRAPOLATED", "EXTRAPOLATED_ALARMS", "STATUSES", "SeriesResult", "changed_text", "monitor_series",
+           "what_changed"]
 
 
 @dataclass
@@ -67,7 +70,8 @@ class SeriesResult:
 
 def monitor_series(series: SeriesInput, n_baseline: int, settings: IdentificationSettings, cache_dir=None,
                    false_alarm_rate: float = 0.01, normal_model: str | None = None, progress: bool = True,
-                   chart: str = "ewma", statistics=STATISTICS, workers: int = 1) -> SeriesResult:
+                   chart: str = "ewma", statistics=STATISTICS, workers: int = 1,
+                   extrapolated_alarms: str = "auto") -> SeriesResult:
     """Monitor a series: identify every test (cached), track the baseline period's modes, learn the normal
     variation on the baseline period, and score every test against the cross-validated threshold.
 
@@ -76,12 +80,21 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     threshold (``novelty`` and ``threshold`` of a row: the residual's); ``chart="ewma"`` adds the memory charts of
     :mod:`learn.monitor.charts` (``chart_alarm`` and ``onset`` of a row); ``statistics``: those combined (the
     residual always). ``workers``: processes identifying the tests (:func:`learn.monitor.workers.identify_files`;
-    the result does not depend on it). Raises :class:`BeamDamageError` on a baseline that cannot carry the model
-    (too few tests: the message names the minimum; a baseline test of another kind, band or beam).
+    the result does not depend on it). ``extrapolated_alarms``: ``separate`` gives a later test beyond the
+    baseline's environment (:func:`learn.monitor.coverage.series_coverage`) alarmed only by the statistics of the
+    environment itself (:func:`learn.monitor.statistics.environmental`) the status :data:`EXTRAPOLATED` instead of
+    an alarm; ``alarm`` keeps it an alarm; ``auto`` (default) keeps them alarms when the baseline period is known
+    to cover the seasons (:func:`learn.monitor.statistics.covers_seasons`: dated tests, a baseline period of at
+    least :data:`~learn.monitor.statistics.SEASONS_DAYS` days), else separates them. Raises
+    :class:`BeamDamageError` on a baseline that cannot carry the model (too few tests: the message names the
+    minimum; a baseline test of another kind, band or beam).
     """
     n = len(series.files)
     C = series.conditions
     normal_model, q = _checked_request(series, n_baseline, false_alarm_rate, normal_model, chart, statistics)
+    if extrapolated_alarms not in EXTRAPOLATED_ALARMS:
+        raise ConfigError(f"--extrapolated-alarms {extrapolated_alarms}: expected one of "
+                          f"{', '.join(EXTRAPOLATED_ALARMS)}")
     tests, errors, pending, foreign = _identified(series, n_baseline, settings, cache_dir, progress, workers)
     base = [t for t in tests[:n_baseline] if t is not None]
     ref = reference_modes(tests[:n_baseline])
@@ -153,8 +166,16 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
             "conditions": None if C is None else dict(zip(series.condition_names, map(_num, C[i]))),
         })
         rows[-1].update(_detector_fields(det, charts, i, bool(ok[i])))
-    return SeriesResult(rows, ref, F, np.exp(expected_log), novelty, thr, model, normal, sigma, tests, series, det,
-                        charts)
+    res = SeriesResult(rows, ref, F, np.exp(expected_log), novelty, thr, model, normal, sigma, tests, series, det,
+                       charts)
+    series_coverage(res)                                    # every row's ``extrapolated``
+    separate = extrapolated_alarms == "separate" or (
+        extrapolated_alarms == "auto" and not covers_seasons(series.times, series.time_values, n_baseline))
+    for r in rows:
+        if (separate and r["status"] == "alarm" and r["extrapolated"]
+                and all(environmental(model, nm) for nm in r["alarmed_by"])):
+            r["status"], r["alarm"] = EXTRAPOLATED, False
+    return res
 
 
 def _detector_fields(det: Detection, charts: Charts | None, i: int, ok: bool) -> dict:
@@ -214,10 +235,16 @@ def _identified(series: SeriesInput, n_baseline: int, settings: IdentificationSe
     return tests, errors, pending, foreign
 
 
+#: The status of a later test beyond the baseline's environment alarmed only by the statistics of the environment
+#: itself (the removed components' scores, the shift about the baseline mean): a change, or conditions the baseline
+#: period did not see, which those statistics cannot tell apart (docs/monitoring.md: extrapolated tests).
+EXTRAPOLATED = "change or unseen conditions"
 #: What a row's ``status`` says: judged and alarmed; judged and within the normal variation; a test of the series
 #: whose modes could not be identified (a change may be why: counted beside the alarms); a test that cannot be
-#: judged against this baseline (another kind, band or beam; its conditions not measured).
-STATUSES = ("alarm", "no alarm", "not identified", "not judged")
+#: judged against this baseline (another kind, band or beam; its conditions not measured); :data:`EXTRAPOLATED`.
+STATUSES = ("alarm", "no alarm", "not identified", "not judged", EXTRAPOLATED)
+#: ``monitor_series``'s choices for an alarm of the environmental statistics on an extrapolated test.
+EXTRAPOLATED_ALARMS = ("auto", "separate", "alarm")
 
 
 def _status(judged: bool, alarm: bool, foreign: bool) -> str:

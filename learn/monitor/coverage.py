@@ -177,7 +177,7 @@ def series_coverage(result) -> Coverage | None:
     ``extrapolated_because`` (text or None); None (and every row ``extrapolated: False``) for a model without an
     environment."""
     rows = result.rows
-    judged = np.array([r["status"] in ("alarm", "no alarm") for r in rows])
+    judged = np.array([r["status"] not in ("not identified", "not judged") for r in rows])
     base = np.flatnonzero(judged & np.array([r["baseline"] for r in rows]))
     later = np.flatnonzero(judged & ~np.array([r["baseline"] for r in rows]))
     C = result.series.conditions

@@ -15,15 +15,18 @@ distribution, combined family-wise at the chosen false-alarm rate.
 
 Each index is a squared Mahalanobis distance of some part of the residual; its threshold is
 :func:`~learn.monitor.alarm_threshold.threshold` of the held-out baseline indices (a scaled F law and their empirical
-quantile; for the statistics of the environment itself the law fitted to their tail) at the Šidák rate
-``1 - (1 - rate)^(1/K)`` of the ``K`` statistics used, so that a test of the normal variation alarms on any of them
-with probability at most ``rate``.
+quantile; for the statistics of the environment itself the law fitted to their tail), the shift's on each side of
+its sign (a drop, a rise) at half the per-statistic rate. The per-statistic rate is calibrated on the statistics'
+joint held-out distribution (:func:`joint_rate`: strongly dependent statistics cost little of the rate, independent
+ones Šidák's ``1 - (1 - rate)^(1/K)``), so that a test of the normal variation alarms on any of them with
+probability ``rate``. A test whose set of modes found the baseline does not hold throughout is judged against the
+thresholds of that set (:func:`held_out_statistics` with its ``pattern``).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -31,16 +34,11 @@ from learn.monitor.alarm_threshold import TAIL_SHARE, Threshold, _folds, missing
 from learn.monitor.normal_models import PCARemoval, Regression, _impute
 from datetime import datetime
 
-__all__ = ["STATISTICS", "Detection", "detect", "environmental", "held_out_statistics", "season_warning",
-           "sidak_rate", "statistics_of"]
+__all__ = ["PATTERN_MIN", "STATISTICS", "Detection", "detect", "environmental", "held_out_statistics",
+           "covers_seasons", "joint_rate", "season_warning", "sidak_rate", "statistics_of"]
 
 #: The detector's statistics (module docstring).
 STATISTICS = ("residual", "environment", "shift")
-
-
-def sidak_rate(rate: float, k: int) -> float:
-    """Per-statistic rate of ``k`` statistics whose union alarms at most at ``rate`` (exact for independent ones)."""
-    return 1.0 - (1.0 - rate) ** (1.0 / max(int(k), 1))
 
 
 def _inv_sqrt(cov):
@@ -107,16 +105,33 @@ def shift_fraction(model, X, C=None) -> np.ndarray:
     return (_impute(X, centre, cov) - centre) @ w
 
 
-def held_out_statistics(make_model, X, C=None) -> dict:
+def held_out_statistics(make_model, X, C=None, pattern=None) -> dict:
     """:func:`statistics_of` of every baseline test by a model fitted on the other baseline tests (the folds of
-    :func:`~learn.monitor.alarm_threshold.held_out_novelty`), the residual index with its missing-mode evidence."""
+    :func:`~learn.monitor.alarm_threshold.held_out_novelty`), the residual index with its missing-mode evidence.
+
+    ``pattern`` (bool (p,)): the indices of a set of modes found instead, without the evidence: each baseline test
+    whose missing modes lie within ``pattern`` (all of them when fewer than :data:`PATTERN_MIN` do) scored with the
+    modes of ``pattern`` dropped (NaN where the test was not scored); the models are those of the folds above."""
     X = np.asarray(X, float)
     out: dict = {}
+    rows = np.ones(len(X), bool)
+    if pattern is not None:
+        pattern = np.asarray(pattern, bool)
+        rows = ~(~np.isfinite(X) & ~pattern).any(axis=1)
+        if rows.sum() < PATTERN_MIN:
+            rows[:] = True
     for held in _folds(len(X)):
         train = np.setdiff1d(np.arange(len(X)), held)
+        held = held[rows[held]]
+        if not held.size:
+            continue
         model = make_model().fit(X[train], None if C is None else C[train])
-        stats = statistics_of(model, X[held], None if C is None else C[held])
-        stats["residual"] = (stats["residual"][0] + missing_evidence(X[held], X[train]), stats["residual"][1])
+        Xh = X[held].copy()
+        if pattern is not None:
+            Xh[:, pattern] = np.nan
+        stats = statistics_of(model, Xh, None if C is None else C[held])
+        if pattern is None:
+            stats["residual"] = (stats["residual"][0] + missing_evidence(Xh, X[train]), stats["residual"][1])
         for name, (value, vec) in stats.items():
             if name not in out:
                 out[name] = (np.full(len(X), np.nan),
@@ -127,6 +142,42 @@ def held_out_statistics(make_model, X, C=None) -> dict:
     return out
 
 
+#: Fewest baseline tests whose missing modes lie within a test's that calibrate its pattern's thresholds on their
+#: own (:func:`held_out_statistics`); below it, every baseline test with the test's missing modes dropped.
+PATTERN_MIN = 10
+#: Draws of the Gaussian copula that :func:`joint_rate` reads its quantile from.
+COPULA_DRAWS = 200_000
+
+
+def sidak_rate(rate: float, k: int) -> float:
+    """Per-statistic rate of ``k`` statistics whose union alarms at most at ``rate`` (exact for independent ones)."""
+    return 1.0 - (1.0 - rate) ** (1.0 / max(int(k), 1))
+
+
+def joint_rate(held, rate: float, seed: int = 0) -> float:
+    """The per-statistic rate at which a test of the normal variation alarms on any of the statistics with
+    probability ``rate``, calibrated on their joint held-out distribution: ``held`` (n, K) the baseline tests'
+    held-out indices; each column's ranks turned to normal scores ``Phi^-1((rank - 1/2) / n)``, their correlation
+    ``R``; the rate ``1 - Phi(t)``, ``t`` the ``1 - rate`` quantile of the largest of ``K`` standard normals
+    correlated by ``R`` (a Gaussian copula, :data:`COPULA_DRAWS` draws, seeded). Independent statistics give
+    Šidák's rate, identical ones ``rate``; the result is kept between the two."""
+    from scipy import stats  # scipy.stats: ranks and the normal law, only where the family is calibrated
+
+    H = np.asarray(held, float)
+    H = H[np.isfinite(H).all(axis=1)]
+    k = H.shape[1]
+    low = sidak_rate(rate, k)
+    if k < 2 or len(H) < 10:
+        return rate if k < 2 else low
+    S = stats.norm.ppf((stats.rankdata(H, axis=0) - 0.5) / len(H))
+    R = np.corrcoef(S, rowvar=False)
+    lam, V = np.linalg.eigh(np.nan_to_num(R))
+    L = V * np.sqrt(np.maximum(lam, 0.0))
+    G = np.random.default_rng(seed).standard_normal((COPULA_DRAWS, k)) @ L.T
+    t = np.quantile(G.max(axis=1), 1 - rate)
+    return float(np.clip(stats.norm.sf(t), low, rate))
+
+
 @dataclass(frozen=True)
 class Detection:
     """The detector's verdict on every test of a series.
@@ -135,13 +186,21 @@ class Detection:
     ----------
     names : tuple of str                  the statistics used (a subset of :data:`STATISTICS`, in that order)
     values : ndarray (n, K)               each statistic's index per test (NaN: not scored); baseline tests held out
-    thresholds : tuple of Threshold       each statistic's threshold at ``rate_each``
+    thresholds : tuple of Threshold       each statistic's threshold at ``rate_each`` for the tests holding every
+                                          mode (the shift's: its drop side, ``shift_rise`` the other)
     rate : float                          the family-wise false-alarm rate
-    rate_each : float                     Šidák's per-statistic rate
-    ratio : ndarray (n,)                  ``max_k values / threshold_k`` (> 1: alarm)
+    rate_each : float                     the per-statistic rate (:func:`joint_rate`, or Šidák's)
+    ratio : ndarray (n,)                  ``max_k ratios`` (> 1: alarm)
     alarm : ndarray of bool (n,)
     vectors : dict                        name -> (n, d) whitened coordinates (see :func:`statistics_of`)
     shift_pct : ndarray (n,)              the weighted mean relative frequency change, %
+    ratios : ndarray (n, K)               each index over its threshold for the test's set of modes found (the
+                                          shift's on the side of its sign)
+    combination : str                     ``joint`` or ``sidak``
+    shift_rise : Threshold or None        the shift's rise side
+    patterns : dict                       missing modes (1-based, text) -> per statistic ``[Threshold]`` (the
+                                          shift's drop and rise), for each set of modes found that the baseline
+                                          period does not hold throughout
     """
 
     names: tuple
@@ -153,25 +212,84 @@ class Detection:
     alarm: np.ndarray
     vectors: dict
     shift_pct: np.ndarray
+    ratios: np.ndarray | None = None
+    combination: str = "joint"
+    shift_rise: Threshold | None = None
+    patterns: dict = field(default_factory=dict)
 
     def alarmed_by(self, i: int) -> list:
         """Names of the statistics above their thresholds on test ``i``."""
-        return [nm for k, nm in enumerate(self.names) if self.values[i, k] > self.thresholds[k].value]
+        return [nm for k, nm in enumerate(self.names) if self.ratios[i, k] > 1.0]
 
     def to_dict(self) -> dict:
+        how = ("the per-statistic rate calibrated on the baseline's joint held-out statistics (a Gaussian copula of "
+               "their ranks) so that any statistic alarms at the rate" if self.combination == "joint"
+               else "the Sidak rate 1 - (1 - rate)^(1/K) of the K statistics")
+        th = {nm: t.to_dict() for nm, t in zip(self.names, self.thresholds)}
+        if self.shift_rise is not None:
+            th["shift"] = {"drop": th["shift"], "rise": self.shift_rise.to_dict(),
+                           "signed": "a drop and a rise each at half the per-statistic rate"}
         return {"statistics": list(self.names), "false_alarm_rate": self.rate,
                 "rate_per_statistic": self.rate_each,
-                "combination": "an alarm when any statistic exceeds its threshold at the Sidak rate "
-                               "1 - (1 - rate)^(1/K) of the K statistics",
-                "thresholds": {nm: t.to_dict() for nm, t in zip(self.names, self.thresholds)}}
+                "combination": "an alarm when any statistic exceeds its threshold at " + how,
+                "thresholds": th,
+                "per_set_of_modes_found": {key: {nm: [t.to_dict() for t in ts] for nm, ts in v.items()}
+                                           for key, v in self.patterns.items()}}
+
+
+def _thresholds(model, held, names, each, n_train, n_conditions, missing=0, evidence=0.0):
+    """Per statistic of ``names``, its thresholds ``[Threshold]`` at ``each`` from the held-out statistics
+    ``held``: one, or the shift's drop and rise sides at ``each / 2`` (a side with fewer than 2 held-out tests: the
+    two-sided threshold for both). ``missing``: modes dropped (the residual's degrees of freedom less by as many);
+    ``evidence``: added to the residual's threshold (the missing-mode evidence of a set of modes found that the
+    baseline period holds often: a normal set)."""
+    out = {}
+    for nm in names:
+        hv, hvec = held[nm]
+        tail = TAIL_SHARE if environmental(model, nm) else 1.0
+        if nm == "residual":
+            t = threshold(hv, each, max(model.dof_ - missing, 1), n_train, n_conditions, tail)
+            out[nm] = [replace(t, value=t.value + evidence, law_value=t.law_value + evidence,
+                               empirical_quantile=t.empirical_quantile + evidence)]
+        elif nm == "environment":
+            out[nm] = [threshold(hv, each, hvec.shape[1], n_train, n_conditions, tail)]
+        else:
+            z = hvec[:, 0][np.isfinite(hvec[:, 0])]
+            sides = []
+            for sign in (-1.0, 1.0):
+                y = (sign * z)[sign * z > 0] ** 2
+                if y.size < 2:
+                    sides = [threshold(z**2, each, 1, n_train, n_conditions, tail)] * 2
+                    break
+                sides.append(threshold(y, each / 2, 1, n_train, n_conditions, tail, y.size / z.size))
+            out[nm] = sides
+    return out
+
+
+def _ratios(values, z, ths, names):
+    """``values`` (n, K) over the thresholds ``ths`` (name -> [Threshold]); the shift's on the side of ``z``."""
+    R = np.empty_like(values)
+    for k, nm in enumerate(names):
+        t = ths[nm]
+        if nm == "shift":
+            R[:, k] = values[:, k] / np.where(z < 0, t[0].value, t[1].value)
+        else:
+            R[:, k] = values[:, k] / t[0].value
+    return R
 
 
 def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int = 0,
-           statistics=STATISTICS, held=None) -> Detection:
+           statistics=STATISTICS, held=None, combination: str = "joint") -> Detection:
     """The detector on a series: ``model`` fitted on the baseline tests ``X[b_idx]`` (``make_model()`` an unfitted
     copy for the held-out fits), the monitoring tests ``rest`` (indices) scored by it, the baseline tests held
     out (``held``: their :func:`held_out_statistics`, computed when None); every statistic of ``statistics`` that
-    the model supports, thresholded at the Šidák rate of ``rate``."""
+    the model supports, thresholded at the per-statistic rate of ``combination``: ``joint`` (:func:`joint_rate`
+    of the held-out statistics) or ``sidak``; the shift signed, its drop and its rise each at half that rate.
+
+    A test whose set of modes found differs from some baseline test's is judged against thresholds of its own
+    set: :func:`held_out_statistics` with its missing modes dropped (``pattern``); the residual's missing-mode
+    evidence is added to its index, and to its threshold only for a set the baseline period holds in at least
+    :data:`PATTERN_MIN` tests (a mode the baseline always held, lost, still raises the index)."""
     X = np.asarray(X, float)
     n = len(X)
     Cb = None if C is None else C[b_idx]
@@ -179,9 +297,8 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
         held = held_out_statistics(make_model, X[b_idx], Cb)
     now = statistics_of(model, X[rest], None if C is None else C[rest]) if len(rest) else {}
     names = tuple(nm for nm in STATISTICS if nm in held and nm in statistics)
-    each = sidak_rate(rate, len(names))
     values = np.full((n, len(names)), np.nan)
-    vectors, thresholds = {}, []
+    vectors = {}
     for k, nm in enumerate(names):
         hv, hvec = held[nm]
         values[b_idx, k] = hv
@@ -195,17 +312,34 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
             if len(rest):
                 vec[rest] = now[nm][1]
             vectors[nm] = vec
-        dof = model.dof_ if nm == "residual" else (hvec.shape[1] if hvec is not None else 1)
-        thresholds.append(threshold(hv, each, dof, training_size(len(b_idx)), n_conditions,
-                                    TAIL_SHARE if environmental(model, nm) else 1.0))
-    r = values / np.array([t.value for t in thresholds]) if names else np.full((n, 1), np.nan)
-    ratio = np.where(np.isnan(r), -np.inf, r).max(axis=1)
+    each = (joint_rate(values[b_idx], rate) if combination == "joint" else sidak_rate(rate, len(names)))
+    n_train = training_size(len(b_idx))
+    ths = _thresholds(model, held, names, each, n_train, n_conditions)
+    z = vectors["shift"][:, 0] if "shift" in vectors else np.zeros(n)
+    R = np.full((n, max(len(names), 1)), np.nan)
+    if names:
+        R = _ratios(values, z, ths, names)
+    miss = ~np.isfinite(X)
+    scored = np.r_[b_idx, rest].astype(int)
+    base_miss = miss[b_idx]
+    patterns = {}
+    for pat in {tuple(r) for r in miss[scored]}:
+        P = np.asarray(pat, bool)
+        if not names or (base_miss == P).all() or P.all():
+            continue
+        rows = scored[(miss[scored] == P).all(axis=1)]
+        hp = held_out_statistics(make_model, X[b_idx], Cb, pattern=P)
+        normal = (base_miss == P).all(axis=1).sum() >= PATTERN_MIN
+        ev = float(missing_evidence(np.where(P, np.nan, 0.0)[None], X[b_idx])[0]) if normal else 0.0
+        tp = _thresholds(model, hp, names, each, n_train, n_conditions, int(P.sum()), ev)
+        R[rows] = _ratios(values[rows], z[rows], tp, names)
+        patterns[", ".join(str(j + 1) for j in np.flatnonzero(P)) or "none"] = tp
+    ratio = np.where(np.isnan(R), -np.inf, R).max(axis=1)
     ratio[~np.isfinite(ratio)] = np.nan
     shift = np.full(n, np.nan)
-    scored = np.r_[b_idx, rest].astype(int)
     shift[scored] = shift_fraction(model, X[scored], None if C is None else C[scored])
-    return Detection(names, values, tuple(thresholds), rate, each, ratio, np.nan_to_num(ratio) > 1.0, vectors,
-                     100 * shift)
+    return Detection(names, values, tuple(ths[nm][0] for nm in names), rate, each, ratio, np.nan_to_num(ratio) > 1.0,
+                     vectors, 100 * shift, R, combination, ths["shift"][1] if "shift" in ths else None, patterns)
 
 
 def environmental(model, name: str) -> bool:
@@ -238,8 +372,22 @@ def season_warning(times, time_values, n_baseline: int, names) -> str | None:
     if span >= SEASONS_DAYS or t[-1] - t[0] <= span:
         return None
     return (f"the baseline period spans {span:.0f} days: the {' and '.join(env)} statistics judge the environment "
-            "against it, and the seasons it did not see will alarm; cover a year, give the conditions "
-            "(--conditions) or leave them out (--statistics residual)")
+            "against it, and the seasons it did not see move them as a change would (reported as 'change or unseen "
+            "conditions' beyond the baseline's environment); cover a year, give the conditions (--conditions) or "
+            "leave them out (--statistics residual)")
+
+
+def covers_seasons(times, time_values, n_baseline: int) -> bool:
+    """Whether the baseline period is known to cover the seasons: dated tests (``times`` ISO dates, ``time_values``
+    days) whose first ``n_baseline`` span at least :data:`SEASONS_DAYS`."""
+    if times is None or not len(times) or times[0] is None:
+        return False
+    try:
+        datetime.fromisoformat(str(times[0]).strip())
+    except ValueError:
+        return False
+    t = np.asarray(time_values, float)
+    return bool(t[n_baseline - 1] - t[0] >= SEASONS_DAYS)
 
 
 def residual_threshold(det: Detection) -> Threshold:
