@@ -41,6 +41,8 @@ HIT_SIGMA = 8.0
 HIT_RISE = 4.0
 #: ... and at least this fraction of the loudest window's.
 HIT_LEVEL = 0.05
+#: A hit adds energy: the record's energy after it at least this many times that before it (:func:`_adds_energy`).
+HIT_GAIN = 2.0
 #: A record of more values (channels x samples) is not searched for hits (read whole): a stationary response.
 MAX_FREE_VALUES = 2 ** 24
 #: A free response: its decays' energy falls by at least this much from their first to their last quarter (dB) ...
@@ -169,6 +171,18 @@ def _rises(x, innovation, p):
     return at, np.minimum(at + p // 4, n - 1)
 
 
+def _adds_energy(x, firsts, lasts, p):
+    """Whether each hit (its first and last samples) adds energy: the record's energy over the ``4 p`` samples after
+    it at least :data:`HIT_GAIN` times that over the ``4 p`` samples before it (per sample, where fewer precede it).
+    A prediction error within a decay (its first milliseconds, which the record's one linear predictor fits worst,
+    or its tail in the noise) is no new hit."""
+    e = np.concatenate([[0.0], np.cumsum(np.sum(x ** 2, axis=0))])
+    n, w = x.shape[1], 4 * p
+    before = e[firsts] - e[np.maximum(firsts - w, 0)]
+    after = e[np.minimum(lasts + 1 + w, n)] - e[np.minimum(lasts + 1, n)]
+    return after * np.clip(np.minimum(w, firsts), 1, None) >= HIT_GAIN * before * w
+
+
 def find_decays(checked: CheckedRecord, min_samples=None) -> Decays:
     """The hits and free decays of a checked record (see the module docstring).
 
@@ -176,7 +190,8 @@ def find_decays(checked: CheckedRecord, min_samples=None) -> Decays:
     channel, which a free response does not have) exceeds :data:`HIT_SIGMA` robust standard deviations, or a
     sharp rise of the record's energy (:data:`HIT_RISE`; an impulse on a displacement or strain record, or a
     release, shows only a small innovation) placed at the largest innovation near it; hits closer than the
-    predictor's order are one. Each decay runs from the sample after a hit to the sample before the next one (or
+    predictor's order are one, and a hit that adds no energy (:func:`_adds_energy`) is none. Each decay runs from
+    the sample after a hit to the sample before the next one (or
     the record's end); the part before the first hit (or the whole record, without a hit) from its loudest sample
     on is a decay when its energy falls :data:`FREE_DROP_NO_HIT_DB` from its first to its last quarter. Decays
     shorter than ``min_samples`` (default four times the predictor's order) are left out.
@@ -192,6 +207,8 @@ def find_decays(checked: CheckedRecord, min_samples=None) -> Decays:
     if over.size:
         gaps = np.flatnonzero(np.diff(over) > p)
         firsts, lasts = over[np.concatenate([[0], gaps + 1])], over[np.concatenate([gaps, [over.size - 1]])]
+        keep = _adds_energy(x, firsts, lasts, p)
+        firsts, lasts = firsts[keep], lasts[keep]
     else:
         firsts = lasts = np.zeros(0, int)
     spans = [(int(last) + 1, int(nxt)) for last, nxt in zip(lasts, [*firsts[1:], n])]
@@ -400,6 +417,7 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         idx = np.sort(np.array(rank[:n_modes], int))
     if idx.size == 0:
         raise ConvergenceError(f"{where}: no refined pole of the free decays lies in {band[0]:g}-{hi:.4g} Hz")
+    idx = idx[np.argsort(fit.natural_frequencies_hz[idx], kind="stable")]     # the refinement may reorder poles
     check_periods(checked.duration_s, fit.natural_frequencies_hz[idx[0]], "the lowest mode", where)
     # shapes: the dominant direction of each mode's amplitudes over the decays
     shapes = np.empty((n_ch, idx.size), complex)

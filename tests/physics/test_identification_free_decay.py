@@ -219,3 +219,23 @@ def test_when_the_picked_method_finds_no_mode_the_other_is_tried_and_named(monke
     assert res.method_choice.startswith("picked era: response records without a force channel, a free response")
     assert res.method_choice.endswith("era found no mode (test.npz: no pole of the free decays is stable over enough "
                                       "model orders), so ssi")
+
+
+def test_a_prediction_error_inside_a_decay_is_no_hit(monkeypatch):
+    """One hit at 0.3 s and two one-sample glitches at 1.0 and 1.5 s (a tenth of the record's peak, well above the
+    predictor's error threshold) while the structure still rings: the glitches add no energy, so the record holds one
+    hit and one decay to its end; counting every prediction error as a hit (HIT_GAIN 0) cuts it into three. The
+    glitches stay inside the decay: modes 1-3 are identified through them."""
+    import physics.identification.free_decay as fd
+
+    y = impact_record(FRAME_FS, FRAME_N, FRAME_FN, FRAME_ZETA, FRAME_PHI, [0.3], 0.01, 3)[0]
+    peak = np.abs(y).max()
+    for t in (1.0, 1.5):
+        y[:, int(t * FRAME_FS)] += 0.1 * peak
+    d = find_decays(check_records(y, FRAME_FS))
+    assert d.hits.size == 1 and 150 <= d.hits[0] <= 170 and d.stops[-1] == FRAME_N
+    f = _quiet(identify_era, y, FRAME_FS).estimate.natural_frequencies_hz      # the glitches stay in the decay:
+    near = f[np.argmin(np.abs(f[:, None] - FRAME_FN[:3]), axis=0)]               # modes 1-3 are kept to 1 %
+    np.testing.assert_allclose(near, FRAME_FN[:3], rtol=1e-2)
+    monkeypatch.setattr(fd, "HIT_GAIN", 0.0)
+    assert find_decays(check_records(y, FRAME_FS)).hits.size == 3
