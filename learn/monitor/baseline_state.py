@@ -46,7 +46,8 @@ def held_out_cached(model, Xb, Cb=None, cache_dir=None) -> dict:
         try:
             d = json.loads(path.read_text())
             if d.get("format") == STATE_FORMAT and d.get("baseline_tests") == len(Xb):
-                return {nm: (_array(v["values"]), None if v["vectors"] is None else _array(v["vectors"]))
+                return {nm: (np.array(v["values"], float),
+                             None if v["vectors"] is None else np.array(v["vectors"], float))
                         for nm, v in d["held_out"].items()}
         except (ValueError, KeyError, TypeError, AttributeError):
             pass                                        # a damaged state: computed again
@@ -61,10 +62,6 @@ def held_out_cached(model, Xb, Cb=None, cache_dir=None) -> dict:
 
 
 def _list(a) -> list:
+    """An array as JSON lists, non-finite entries as NaN."""
     a = np.asarray(a, float)
     return np.where(np.isfinite(a), a, np.nan).tolist() if a.ndim else float(a)
-
-
-def _array(v) -> np.ndarray:
-    return np.array([[np.nan if x is None else x for x in r] if isinstance(r, list) else
-                     (np.nan if r is None else r) for r in v], float)

@@ -361,15 +361,8 @@ def season_warning(times, time_values, n_baseline: int, names) -> str | None:
     (None otherwise)."""
 
     env = [nm for nm in names if nm in ("environment", "shift")]
-    if not env or times is None or not len(times) or times[0] is None:
-        return None
-    try:
-        datetime.fromisoformat(str(times[0]).strip())
-    except ValueError:
-        return None
-    t = np.asarray(time_values, float)
-    span = float(t[n_baseline - 1] - t[0])
-    if span >= SEASONS_DAYS or t[-1] - t[0] <= span:
+    span = _baseline_span_days(times, time_values, n_baseline) if env else None
+    if span is None or span >= SEASONS_DAYS or time_values[-1] - time_values[0] <= span:
         return None
     return (f"the baseline period spans {span:.0f} days: the {' and '.join(env)} statistics judge the environment "
             "against it, and the seasons it did not see move them as a change would (reported as 'change or unseen "
@@ -380,14 +373,20 @@ def season_warning(times, time_values, n_baseline: int, names) -> str | None:
 def covers_seasons(times, time_values, n_baseline: int) -> bool:
     """Whether the baseline period is known to cover the seasons: dated tests (``times`` ISO dates, ``time_values``
     days) whose first ``n_baseline`` span at least :data:`SEASONS_DAYS`."""
+    span = _baseline_span_days(times, time_values, n_baseline)
+    return span is not None and span >= SEASONS_DAYS
+
+
+def _baseline_span_days(times, time_values, n_baseline: int) -> float | None:
+    """Days between the first and the last baseline test of a dated series (``times`` ISO dates, ``time_values``
+    days); None for a series without dates."""
     if times is None or not len(times) or times[0] is None:
-        return False
+        return None
     try:
         datetime.fromisoformat(str(times[0]).strip())
     except ValueError:
-        return False
-    t = np.asarray(time_values, float)
-    return bool(t[n_baseline - 1] - t[0] >= SEASONS_DAYS)
+        return None
+    return float(time_values[n_baseline - 1] - time_values[0])
 
 
 def residual_threshold(det: Detection) -> Threshold:
