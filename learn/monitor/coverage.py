@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from learn.monitor.normal_models import FactorRemoval, PCARemoval, Regression, _impute
+from learn.monitor.normal_models import FactorRemoval, PCARemoval, Regression, _cov, _impute, _mahalanobis
 
 __all__ = ["SCATTER_RATIO_WARN", "Coverage", "Scatter", "baseline_scatter", "coverage", "environment_coordinates",
            "series_coverage"]
@@ -69,10 +69,7 @@ def _held_out_mahalanobis(E):
     form by Sherman-Morrison: ``d_(i) = (n / (n - 1))^2 (n - 2) a / (1 - n a / (n - 1))``, ``a = d_i / (n - 1)``
     with ``d_i`` the full fit's distance)."""
     n = len(E)
-    R = E - E.mean(axis=0)
-    P = np.linalg.pinv(np.cov(E, rowvar=False).reshape(E.shape[1], E.shape[1]))
-    d = np.einsum("ij,jk,ik->i", R, P, R)
-    a = d / (n - 1)
+    a = _mahalanobis(E - E.mean(axis=0), _cov(E)) / (n - 1)
     return (n / (n - 1)) ** 2 * (n - 2) * a / np.maximum(1 - n * a / (n - 1), 1e-12)
 
 
@@ -88,9 +85,7 @@ def coverage(names, E, baseline, later) -> Coverage:
     maha = np.full(n, np.nan)
     mmax = np.nan
     if k >= 2 and len(Eb) > k + 2:
-        R = E - Eb.mean(axis=0)
-        P = np.linalg.pinv(np.cov(Eb, rowvar=False))
-        maha = np.einsum("ij,jk,ik->i", R, P, R)
+        maha = _mahalanobis(E - Eb.mean(axis=0), _cov(Eb))
         mmax = float(np.max(_held_out_mahalanobis(Eb)))
     flag = np.zeros(n, bool)
     reasons = [None] * n
