@@ -18,7 +18,7 @@ from physics.errors import BeamDamageError, ConvergenceError, FileFormatError, O
 from physics.identification import holds_response_records, identify_file
 from physics.io import MODAL, TIME, modal_or_frf, prepare_measured, read, read_json
 
-__all__ = ["BeamUpdate", "load_modal", "model_modes", "unstable_mode_warnings", "update_beam"]
+__all__ = ["BeamUpdate", "load_modal", "unstable_mode_warnings", "update_beam", "updated_model_modes"]
 
 
 @dataclass(frozen=True)
@@ -103,7 +103,7 @@ def unstable_mode_warnings(eigenvalues, real_eigenvalues=()) -> list:
                   "oscillating); the measured modes are inconsistent with the mass" for r in real_eigenvalues if r >= 0]
 
 
-def model_modes(M, C, K, paired_eigenvalues, where) -> tuple:
+def updated_model_modes(M, C, K, paired_eigenvalues, where) -> tuple:
     """Natural frequencies (Hz), damping ratios and warnings of the updated model ``(M, C, K)``.
 
     A model of ``n`` conjugate pairs gives its complex modes; one with real eigenvalues (overdamped or
@@ -182,7 +182,7 @@ def update_beam(beam, modal_file, mass: str = "iirs", tol: float = 1e-10, max_it
         warnings.append(f"the updated model reproduces the measured eigenvalues only to {errors[worst]:.2%} "
                         f"(mode {worst + 1}; tolerance {updating.REPRODUCTION_TOL:.0%}): the measured modes are "
                         "not consistent with the trusted mass")
-    f_hz, zeta, more = model_modes(M, res.C, res.K, model_lam, modal_file)
+    f_hz, zeta, more = updated_model_modes(M, res.C, res.K, model_lam, modal_file)
     warnings += more
     return BeamUpdate(
         beam=beam, mass=mass, dofs=list(b.masters), dof_positions=dof_map.to_dict(), M=M, C=res.C, K=res.K,

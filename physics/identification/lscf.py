@@ -15,7 +15,7 @@ from physics.identification.lsfd import LSFDResult, lsfd
 from physics.identification.modes import ModalEstimate, _estimate, _frf3
 from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles, stability_status
 
-__all__ = ["LSCFIdentification", "identify_lscf", "lscf", "prominent_peaks"]
+__all__ = ["LSCFIdentification", "identify_lscf", "lscf", "octave_median_peaks", "prominent_peaks"]
 
 
 #: (frequency lines, dt, columns) -> (X, Q) of :func:`_lscf_basis`, the 4 most recent.
@@ -52,8 +52,8 @@ SUBBAND_STEP = 0.25
 PEAK_PROMINENCE = 3.0
 PEAK_WINDOW = 0.15
 #: A peak of the FRFs this many times the median of the lines within a factor :data:`CLEAR_PEAK_WINDOW` of it is one
-#: a person sees (:func:`clear_peaks`): a noise floor's Rayleigh-distributed magnitudes exceed it with a probability
-#: of 3e-8 per line.
+#: a person sees (:func:`octave_median_peaks`): a noise floor's Rayleigh-distributed magnitudes exceed it with a
+#: probability of 3e-8 per line.
 CLEAR_PEAK_PROMINENCE = 5.0
 #: The floor of a clear peak is the median of the lines within this factor of it (an octave either side). A
 #: resonance's own skirt falls as ``zeta f / |f - f_r|``: over +-15 % its median is a quarter of a 2 %-damped peak,
@@ -85,7 +85,7 @@ def prominent_peaks(db, min_prominence_db: float) -> np.ndarray:
     return top[keep]
 
 
-def clear_peaks(frequency_hz, magnitude, known_hz=(), tolerance: float = CLEAR_PEAK_TOLERANCE) -> np.ndarray:
+def octave_median_peaks(frequency_hz, magnitude, known_hz=(), tolerance: float = CLEAR_PEAK_TOLERANCE) -> np.ndarray:
     """Frequencies (Hz) of plainly visible peaks of ``magnitude``: local maxima :data:`CLEAR_PEAK_PROMINENCE` times
     the median of the lines within a factor :data:`CLEAR_PEAK_WINDOW` (at least 5 lines) and
     :data:`CLEAR_PEAK_VALLEY_DB` above the valleys on either side, with no frequency of ``known_hz`` within
@@ -184,7 +184,7 @@ def _with_refit_poles(f, rec, poles, max_order, margin, select, lscf_options, we
 
 
 def _with_peak_poles(f, h, rec, poles, max_order, margin, select, lscf_options):
-    """``poles`` plus, for each clear peak of the FRFs ``h`` (:func:`clear_peaks`, in the kind measured) that no
+    """``poles`` plus, for each clear peak of the FRFs ``h`` (:func:`octave_median_peaks`, in the kind measured) that no
     pole explains, the pole nearest to it (within :data:`CLEAR_PEAK_TOLERANCE`) of an LSCF fit of the band within a
     factor :data:`CLEAR_PEAK_BAND` of the peak: one model over a wide band can spend its order on the many modes
     above a low first mode and leave that mode out.
@@ -193,7 +193,7 @@ def _with_peak_poles(f, h, rec, poles, max_order, margin, select, lscf_options):
     nearest the peak is taken from poles stable in frequency to :data:`CLEAR_PEAK_TOLERANCE` (the few lines around
     a low, well-damped mode under a noise floor move its pole by 1-2 % from one order to the next) over at least 3
     orders (:func:`select_poles` with the peak as ``peaks_hz``)."""
-    missed = clear_peaks(f, np.sqrt(np.mean(np.abs(h) ** 2, axis=(0, 1))), poles.natural_frequencies_hz)
+    missed = octave_median_peaks(f, np.sqrt(np.mean(np.abs(h) ** 2, axis=(0, 1))), poles.natural_frequencies_hz)
     found = [poles]
     n_o, n_i = rec.shape[0], rec.shape[1]
     for fp in missed:

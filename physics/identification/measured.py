@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from physics.errors import ConfigError
-from physics.identification.lscf import CLEAR_PEAK_PROMINENCE, clear_peaks
+from physics.identification.lscf import CLEAR_PEAK_PROMINENCE, octave_median_peaks
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate
 from physics.identification.poles import StabilisationDiagram
@@ -68,9 +68,9 @@ class Identification:
 
 def peaks_left_out(frf: MeasuredFRF, identified_hz, tolerance: float = 0.02) -> np.ndarray:
     """Frequencies (Hz) of plainly visible peaks of the FRFs' RMS magnitude with no identified mode within
-    ``tolerance`` (relative) (:func:`physics.identification.lscf.clear_peaks`)."""
+    ``tolerance`` (relative) (:func:`physics.identification.lscf.octave_median_peaks`)."""
     mag = np.sqrt(np.mean(np.abs(np.asarray(frf.frf)) ** 2, axis=(0, 1)))
-    return clear_peaks(frf.frequency_hz, mag, identified_hz, tolerance)
+    return octave_median_peaks(frf.frequency_hz, mag, identified_hz, tolerance)
 
 
 def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, max_order=40) -> Identification:

@@ -22,7 +22,7 @@ def test_the_low_peak_is_a_clear_peak_and_no_flank_ripple_is(tests):
     """The clear peaks are the five modes' lines (the octave's median is the floor, not the 2 % mode's own skirt,
     whose median over +-15 % is a quarter of its peak); a ripple of the noise on the 1261 Hz mode's flank is none."""
     for f, a, fn in tests:
-        peaks = lscf.clear_peaks(f, np.abs(a[0]))
+        peaks = lscf.octave_median_peaks(f, np.abs(a[0]))
         assert peaks.size == 5
         np.testing.assert_allclose(peaks, fn[:5], rtol=0.015)
 
