@@ -15,6 +15,7 @@ import copy
 import json
 import math
 import tomllib
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -28,8 +29,9 @@ from physics.properties import PRESETS
 from physics.updating import mass_model_name
 
 __all__ = ["CONFIG_DIR", "DEFAULTS", "MAX_MODAL_NOISE", "MAX_SHEAR_FLEXIBILITY", "MIN_ROOT_SPRING_RELATIVE",
-           "MODAL_NOISE_MODES", "OUTPUT_ONLY_VARIABLES", "REPEATABILITY", "REPEATABILITY_MAX", "calibrated_modal_std",
-           "load_config", "merge", "modal_noise_calibration", "named_configs", "output_only_variables", "validate"]
+           "MODAL_NOISE_MODES", "OUTPUT_ONLY_VARIABLES", "REPEATABILITY", "REPEATABILITY_MAX", "RecordedConfig",
+           "calibrated_modal_std", "load_config", "merge", "modal_noise_calibration", "named_configs",
+           "output_only_variables", "recorded_config", "validate"]
 
 
 #: Default configuration (SI units). See docs/datasets.md.
@@ -121,6 +123,37 @@ OUTPUT_ONLY_VARIABLES = ("sensor_noise", "record_length_s")
 #: Largest specimen shear flexibility ``EI / (kGA L^2)``: mode 4 of a cantilever then lies about half
 #: below its Euler-Bernoulli frequency.
 MAX_SHEAR_FLEXIBILITY = 0.02
+
+
+@dataclass(frozen=True)
+class RecordedConfig:
+    """What the readers of a dataset or model take from the generator config it records (:func:`recorded_config`).
+
+    Attributes
+    ----------
+    kind : str               ``damage.kind`` (:data:`datagen.damage.DEFAULT_KIND` for a config that names none)
+    damage : dict            section ``damage`` ({} when none)
+    section : dict or None   section ``section`` (the sandwich's keys)
+    beam : dict or None      section ``beam`` (a beam file's mapping; None when empty)
+    effects : dict           the beam file's ``effects`` ({} when none)
+    specimen : dict          section ``specimen`` ({} when none)
+    """
+
+    kind: str
+    damage: dict
+    section: dict | None
+    beam: dict | None
+    effects: dict
+    specimen: dict
+
+
+def recorded_config(config: dict | None) -> RecordedConfig:
+    """The :class:`RecordedConfig` view of a recorded generator config (``None``: a dataset or model recording
+    none)."""
+    c = config or {}
+    damage, beam = c.get("damage") or {}, c.get("beam") or None
+    return RecordedConfig(damage.get("kind", DEFAULT_KIND), damage, c.get("section"), beam,
+                          (beam or {}).get("effects") or {}, c.get("specimen") or {})
 
 
 def calibrated_modal_std(meas: dict, level, floor) -> dict:

@@ -57,6 +57,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from datagen.config import recorded_config
 from datagen.damage import DAMAGE_MODELS, applies_to, beam_section, damage_defaults
 from learn.model_dir import sensitivity_of, truth_beam_mapping, truth_numbers
 from learn.likelihood import nuisance_loglik
@@ -442,14 +443,14 @@ def kind_explanations(model) -> dict:
     others."""
     beam, cfg = model.beam, model.config
     gen = cfg.get("generator_config") or {}
-    own = gen.get("damage") or {}
+    recorded = recorded_config(gen)
     mapping = truth_beam_mapping(model)
-    section = beam_section(gen.get("beam"))
+    section = beam_section(recorded.beam)
     out = {}
     for name in DAMAGE_MODELS:
         if not applies_to(name, section):       # a kind the beam's section does not hold is no explanation
             continue
-        d = own if own.get("kind") == name else damage_defaults(name)
+        d = recorded.damage if recorded.damage.get("kind") == name else damage_defaults(name)
         sens = sensitivity_of(beam, cfg.get("root_spring_relative"), cfg.get("truth_beam"),
                               {**gen, "damage": {"kind": name}})
         exact = ExactKind(name, d, mapping, nominal_beam(truth_numbers(beam, cfg.get("truth_beam"), gen),

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from datagen.damage import kind_of
+from datagen.config import recorded_config
 from learn.features import BeamSpec
 from learn.sensitivity import beam_sensitivity
 from learn.verdict import DamageWords, verdict_text
@@ -115,13 +115,13 @@ class TrainedModel:
     def damage_kind(self) -> str:
         """The damage kind of the training data (``damage.kind`` of its generator config; the default kind when it
         records none)."""
-        return kind_of(self.config.get("generator_config"))
+        return recorded_config(self.config.get("generator_config")).kind
 
     def verdict_text(self, result: dict) -> str:
         """The verdict of one classified pair as a reader sees it, in the words of the model's damage kind
         (:func:`learn.verdict.verdict_text`: its ``describe`` on the model's truth beam and section)."""
-        gen = self.config.get("generator_config") or {}
-        return verdict_text(result, DamageWords(self.damage_kind, truth_beam_mapping(self), gen.get("section")))
+        gen = recorded_config(self.config.get("generator_config"))
+        return verdict_text(result, DamageWords(gen.kind, truth_beam_mapping(self), gen.section))
 
 
 def save_model(out_dir, config: dict, networks: dict) -> None:
@@ -216,7 +216,7 @@ def truth_beam_mapping(model) -> dict:
                 "length_m": p.length_m, "width_m": p.width_m, "thickness_m": p.thickness_m}
     if "EI_Nm2" not in truth:
         truth = {}
-    return {**base, **truth, **((model.config.get("generator_config") or {}).get("section") or {})}
+    return {**base, **truth, **(recorded_config(model.config.get("generator_config")).section or {})}
 
 
 def sensitivity_of(beam: BeamSpec, config_root_spring=None, truth_beam: dict | None = None,
@@ -224,8 +224,7 @@ def sensitivity_of(beam: BeamSpec, config_root_spring=None, truth_beam: dict | N
     """FE sensitivities of the truth beam a dataset or model records (:func:`truth_numbers`), to the damage kind of
     its generator config (the default kind when it records none)."""
     return beam_sensitivity(truth_numbers(beam, truth_beam, generator_config), config_root_spring,
-                            kind=kind_of(generator_config),
-                            test=beam.test)
+                            kind=recorded_config(generator_config).kind, test=beam.test)
 
 
 def truth_numbers(beam: BeamSpec, truth_beam: dict | None = None, generator_config: dict | None = None):
@@ -233,8 +232,7 @@ def truth_numbers(beam: BeamSpec, truth_beam: dict | None = None, generator_conf
     ``(length_m, EI_Nm2, mass_per_length_kg_m, added masses)`` (the added masses of the generator config's beam
     file), or its preset's name when it records none."""
     if truth_beam and "EI_Nm2" in truth_beam:
-        effects = ((generator_config or {}).get("beam") or {}).get("effects") or {}   # the beam file's
-        masses = tuple((float(p.get("x_m", truth_beam["length_m"])), float(p["mass_kg"]))
-                       for k, p in effects.items() if effect_of(k) == "added_mass")
+        masses = tuple((float(p.get("x_m", truth_beam["length_m"])), float(p["mass_kg"]))    # the beam file's
+                       for k, p in recorded_config(generator_config).effects.items() if effect_of(k) == "added_mass")
         return (truth_beam["length_m"], truth_beam["EI_Nm2"], truth_beam["mass_per_length_kg_m"], masses)
     return beam.name

@@ -10,7 +10,8 @@ import numpy as np
 import pandas as pd
 from tqdm.auto import tqdm
 
-from datagen.damage import damage_model, kind_of
+from datagen.config import recorded_config
+from datagen.damage import damage_model
 from datagen.store import package_version
 from learn.classical import run_classical
 from learn.estimator import DamageClassifier
@@ -54,13 +55,12 @@ DAY_CHANGES = ("temperature_stiffness_change", "root_spring_change")
 
 def day_changes(source: list) -> dict:
     """Temperature and re-clamping ranges of the first dataset's generator config."""
-    spec = source[0]["config"]["specimen"]
-    return {k: spec[k] for k in DAY_CHANGES}
+    return {k: recorded_config(source[0]["config"]).specimen[k] for k in DAY_CHANGES}
 
 
 
 def _nominal_root_spring(source: list):
-    r = source[0]["config"]["specimen"]["root_spring_relative"]
+    r = recorded_config(source[0]["config"]).specimen["root_spring_relative"]
     return float(np.sqrt(r[0] * r[1])) if r else None
 
 
@@ -101,7 +101,7 @@ def train(data, out_dir, *, epochs: int = 60, seed: int = 0, route: str | None =
     load_s = time.perf_counter() - t0
     sens = sensitivity_of(pairs.beam, _nominal_root_spring(pairs.source), pairs.source[0].get("truth_beam"),
                           pairs.source[0].get("config"))
-    kind = kind_of(pairs.source[0].get("config"))
+    kind = recorded_config(pairs.source[0].get("config")).kind
     params = dict(epochs=epochs, random_state=seed, n_threads=threads, verbose=progress,
                   size_transform=damage_model(kind).size_transform)
     if pairs.beam.test is not None:

@@ -75,7 +75,7 @@ from physics.beam import beam_from_dict
 from physics.errors import ConfigError
 
 __all__ = ["DAMAGE_MODELS", "DEFAULT_KIND", "DamageModel", "GENERIC_DEFAULTS", "applies_to", "beam_section",
-           "damage_defaults", "damage_model", "element4_index", "kind_of"]
+           "damage_defaults", "damage_model", "element4_index"]
 
 
 class DamageModel(Protocol):
@@ -130,12 +130,6 @@ GENERIC_DEFAULTS = {
     "intact_fraction": 0.0,              # share of samples without damage
     "position_fraction": [0.03, 0.97],   # x / L range of the damage centres
 }
-
-
-def kind_of(config: dict | None) -> str:
-    """The damage kind a generator config names (``damage.kind``; :data:`DEFAULT_KIND` for a config, or none, that
-    names no kind)."""
-    return ((config or {}).get("damage") or {}).get("kind", DEFAULT_KIND)
 
 
 def damage_model(kind) -> DamageModel:
