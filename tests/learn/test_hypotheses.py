@@ -6,7 +6,7 @@ import pytest
 
 from experiments.second_sim.fem import Beam, PointMass, Slit, assemble, modes
 from learn.features import BeamSpec
-from datagen.damage import DAMAGE_MODELS, damage_defaults
+from datagen.damage import DAMAGE_MODELS, applies_to, damage_defaults
 from learn.shapes import shape_changes
 from learn.hypotheses import BASE_HYPOTHESES, _support_curves, kind_explanation, summary, weigh
 from learn.sensitivity import beam_sensitivity
@@ -23,19 +23,19 @@ def shifts(beam: Beam) -> np.ndarray:
 
 #: The mass changes of these tests are point masses: the explanation's spread is none.
 POINT_MASSES = {**damage_defaults("mass_change"), "width_fraction": [0.0, 0.0]}
+#: The config sections and size grids these tests give two kinds; every other registered kind competes on its
+#: defaults and its own size range.
+OWN = {"slit": (damage_defaults("slit"), np.linspace(0.0, 0.15, 201)),
+       "mass_change": (POINT_MASSES, np.linspace(-0.1, 0.1, 201))}
 
 
 @pytest.fixture(scope="module")
 def models():
     spec = BeamSpec("beam5", L, ("2:y", "3:y", "4:y", "5:y"), "iirs")
-    kinds = {"slit": kind_explanation("slit", damage_defaults("slit"), "beam5", beam_sensitivity((L, EI, M), KR_REL),
-                                      np.linspace(0.0, 0.15, 201)),
-             "mass_change": kind_explanation("mass_change", POINT_MASSES, "beam5",
-                                             beam_sensitivity((L, EI, M), KR_REL, kind="mass_change"),
-                                             np.linspace(-0.1, 0.1, 201))}
-    for name in DAMAGE_MODELS.keys() - kinds.keys():     # every other registered kind competes on its defaults
-        kinds[name] = kind_explanation(name, damage_defaults(name), "beam5",
-                                       beam_sensitivity((L, EI, M), KR_REL, kind=name))
+    kinds = {}
+    for name in DAMAGE_MODELS:
+        d, sizes = OWN.get(name, (damage_defaults(name), None))
+        kinds[name] = kind_explanation(name, d, "beam5", beam_sensitivity((L, EI, M), KR_REL, kind=name), sizes)
     grid, curve, what, reclamp, support_shapes = _support_curves(spec, EI, M, KR_REL, (-0.08, 0.08))
     return kinds, (grid, curve, what, reclamp), support_shapes
 
@@ -308,5 +308,5 @@ def test_a_kind_is_offered_only_on_the_sections_it_exists_on():
                                                 "width_m": 0.0254, "thickness_m": 0.00475, "modulus_pa": 2.0e11,
                                                 "density_kg_m3": 7850.0}
     assert "debond" not in kind_explanations(solid)
-    assert {"slit", "mass_change"} <= set(kind_explanations(solid))
+    assert set(kind_explanations(solid)) == {k for k in DAMAGE_MODELS if applies_to(k, "rectangular")}
     assert set(kind_explanations(_model(damage_defaults("slit")))) == set(DAMAGE_MODELS)
