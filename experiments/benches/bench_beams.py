@@ -20,7 +20,6 @@ growth of the time per sample relative to the 4-sensor beam. Targets (issue 23):
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import shutil
@@ -35,7 +34,7 @@ from datagen.config import load_config
 from datagen.dataset import Dataset
 from datagen.generation import generate
 from datagen.truth_beam import beam_mapping
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, table, write_table
 from learn.classify import classify_many
 from learn.model_dir import load_model
 from learn.training import train
@@ -86,11 +85,10 @@ def _classify_rate(data: Path, model_dir: Path, n_pairs: int, epochs: int) -> tu
 
 def markdown(result: dict) -> str:
     """The speed table (and the training line) as markdown."""
-    lines = ["| sensors | modes | elements | generate (samples/s) | classify (pairs/s) | cost per sample vs 1st |",
-             "| --- | --- | --- | --- | --- | --- |"]
-    lines += [f"| {r['sensors']} | {r['modes']} | {r['truth_elements']} | {r['generate_samples_per_s']:.0f} | "
-              f"{r['classify_pairs_per_s']:.0f} | {r['cost_per_sample_vs_first']:.2f} |" for r in result["rows"]]
-    text = "\n".join(lines) + "\n"
+    head = ["sensors", "modes", "elements", "generate (samples/s)", "classify (pairs/s)", "cost per sample vs 1st"]
+    text = table(head, [[r["sensors"], r["modes"], r["truth_elements"], f"{r['generate_samples_per_s']:.0f}",
+                         f"{r['classify_pairs_per_s']:.0f}", f"{r['cost_per_sample_vs_first']:.2f}"]
+                        for r in result["rows"]]) + "\n"
     if "train" in result:
         t = result["train"]
         text += (f"\n8 sensors, {t['samples']} samples: generate {t['generate_s']:.1f} s, train {t['train_s']:.1f} s "
@@ -100,16 +98,13 @@ def markdown(result: dict) -> str:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m experiments.benches.bench_beams", description=__doc__.split("\n")[0])
+    p = parser(__file__, __doc__, docs="any-beam.md", json=True, workers=2)
     p.add_argument("--n", type=int, default=6000, help="samples generated per beam (default 6000)")
     p.add_argument("--sensors", type=int, nargs="+", default=[4, 8, 16], help="sensor counts (default 4 8 16)")
-    p.add_argument("--workers", type=int, default=2, help="generate processes (default 2)")
     p.add_argument("--pairs", type=int, default=400, help="pairs classified per beam (default 400)")
     p.add_argument("--epochs", type=int, default=20, help="epochs of the model classify uses (default 20)")
     p.add_argument("--train", type=int, default=0, metavar="N", help="also generate N samples of the 8-sensor beam "
                    "and time train on them (default: off)")
-    p.add_argument("--json", action="store_true", help="print the table as JSON")
-    p.add_argument("--docs", action="store_true", help="write the table into docs/any-beam.md")
     args = p.parse_args(argv)
 
     limits = threadpool_limits(1, user_api="blas")     # as the CLI runs: one BLAS thread per process

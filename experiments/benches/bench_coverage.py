@@ -23,7 +23,6 @@ An interval that covers holds the truth about as often as it says (68 / 95 %, wi
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from pathlib import Path
@@ -32,7 +31,7 @@ import numpy as np
 
 from experiments.benches.study_beams import fold, folded, run_beam
 from experiments.second_sim.beams import CATALOGUE
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, table, write_table
 from physics.io import atomic_write_text
 
 __all__ = ["BEAMS", "CONFIGS", "cover", "main", "markdown"]
@@ -93,53 +92,48 @@ def _pct(v) -> str:
 
 
 def markdown(rows: list[dict]) -> str:
-    lines = ["| support | kind | intervals of | answered / damaged | x 68 | x 95 | size 68 | size 95 | "
-             "+-2 s.e. (68 / 95) |", "| --- " * 9 + "|"]
-    for r in rows:
-        n = r["answered"]
-        se = "-" if not n else f"{200 * np.sqrt(0.68 * 0.32 / n):.0f} / {200 * np.sqrt(0.95 * 0.05 / n):.0f} %"
-        lines.append(f"| {r['support']} | {r['kind']} | {r['source']} | {n} / {r['damaged_pairs']} | "
-                     f"{_pct(r['x_68'])} | {_pct(r['x_95'])} | {_pct(r['size_68'])} | {_pct(r['size_95'])} | {se} |")
-    return "\n".join(lines) + "\n"
+    def se(n):
+        return "-" if not n else f"{200 * np.sqrt(0.68 * 0.32 / n):.0f} / {200 * np.sqrt(0.95 * 0.05 / n):.0f} %"
+    return table(["support", "kind", "intervals of", "answered / damaged", "x 68", "x 95", "size 68", "size 95",
+                  "+-2 s.e. (68 / 95)"],
+                 [[r["support"], r["kind"], r["source"], f"{r['answered']} / {r['damaged_pairs']}",
+                   *(_pct(r[k]) for k in ("x_68", "x_95", "size_68", "size_95")), se(r["answered"])]
+                  for r in rows]) + "\n"
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m experiments.benches.bench_coverage", description=__doc__.split("\n")[0])
-    p.add_argument("--out", type=Path, default=Path("out/coverage"))
+    p = parser(__file__, __doc__, docs="classifier.md", json=True, out="out/coverage", seed=0, workers=2)
     p.add_argument("--n-pairs", type=int, default=60)
     p.add_argument("--train-n", type=int, default=6000)
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--workers", type=int, default=2)
     p.add_argument("--only", choices=sorted(BEAMS), action="append", help="a support (repeatable; default all)")
     p.add_argument("--kinds", nargs="+", choices=sorted(CONFIGS), default=sorted(CONFIGS))
-    p.add_argument("--json", action="store_true", help="print the rows as JSON")
-    p.add_argument("--docs", action="store_true", help="write the table into docs/classifier.md")
     a = p.parse_args(argv)
+    out = Path(a.out)
     by_name = {c.name: c for c in CATALOGUE}
     rows = []
     for support in a.only or BEAMS:
         cb = by_name[BEAMS[support]]
         for kind in a.kinds:
             spread = {"damage": kind} if kind != "slit" else None
-            run_beam(cb, a.out, a.n_pairs, a.train_n, a.seed, a.workers, spread=spread,
+            run_beam(cb, out, a.n_pairs, a.train_n, a.seed, a.workers, spread=spread,
                      tag="" if spread is None else f"damage={kind}", model_tag="" if kind == "slit" else kind,
                      config=CONFIGS[kind])
-            d = a.out / cb.name
+            d = out / cb.name
             suffix = "" if spread is None else f"-damage={kind}"
             mt = "" if kind == "slit" else f"-{kind}"
             truth = json.loads((d / f"pairs-n{a.n_pairs}-s{a.seed}{suffix}" / "truth.json").read_text())
             verdicts = json.loads((d / f"verdicts-n{a.n_pairs}-s{a.seed}-t{a.train_n}{suffix}{mt}.json").read_text())
             rows += cover(verdicts, truth, kind)
-    a.out.mkdir(parents=True, exist_ok=True)
+    out.mkdir(parents=True, exist_ok=True)
     md = markdown(rows)
     meta = {"n_pairs": a.n_pairs, "train_n": a.train_n, "seed": a.seed, "beams": BEAMS, "configs": CONFIGS}
-    atomic_write_text(a.out / "coverage.json", json.dumps({**meta, "rows": rows}, indent=1) + "\n")
+    atomic_write_text(out / "coverage.json", json.dumps({**meta, "rows": rows}, indent=1) + "\n")
     keys = list(rows[0]) if rows else []
-    atomic_write_text(a.out / "coverage.csv", "\n".join([",".join(keys)] + [",".join(str(r[k]) for k in keys)
+    atomic_write_text(out / "coverage.csv", "\n".join([",".join(keys)] + [",".join(str(r[k]) for k in keys)
                                                                             for r in rows]) + "\n")
-    atomic_write_text(a.out / "coverage.md", md)
+    atomic_write_text(out / "coverage.md", md)
     if a.docs:
-        write_table(Path("docs/classifier.md"), "coverage", md)
+        write_table("classifier.md", "coverage", md)
     print(json.dumps(rows, indent=1) if a.json else md)
     return 0
 

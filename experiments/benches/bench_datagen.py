@@ -30,7 +30,6 @@ runs the classifier's training configuration instead of the defaults.
 
 from __future__ import annotations
 
-import argparse
 import json
 import multiprocessing
 import os
@@ -52,7 +51,7 @@ from datagen.batch_inputs import draw_batch
 from datagen.setup import get_setup
 from datagen.store import finalize, read_manifest
 from datagen.torchdata import make_loader
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, write_table
 from learn.features import grid_weights, load_pairs
 
 __all__ = ["main"]
@@ -118,19 +117,15 @@ def _table_at_scale(root: str, rows: int) -> dict:
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = parser(__file__, __doc__, docs="datasets.md (default config or --config training)", json=True, workers=2)
     ap.add_argument("--n", type=int, default=20000, help="samples generated end to end and read back")
     ap.add_argument("--naive", type=int, default=60, help="samples for the per-sample loop")
-    ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--batch", type=int, default=512, help="read batch size")
     ap.add_argument("--keep", help="directory to keep the generated dataset in (default: a temporary one)")
     ap.add_argument("--config", default=None, help="named generator config (default: the built-in defaults)")
     ap.add_argument("--table-rows", type=int, default=0,
                     help="also build the samples table at this many rows (e.g. 10000000) from the generated "
                          "shards' tables and time column and row-group reads")
-    ap.add_argument("--json", action="store_true")
-    ap.add_argument("--docs", action="store_true", help="write the table into docs/datasets.md (default config or "
-                                                        "--config training)")
     a = ap.parse_args(argv)
     if a.docs and a.config not in DOCS_BLOCKS:
         ap.error("--docs: docs/datasets.md holds the tables of the default and the training config only")

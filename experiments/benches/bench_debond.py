@@ -23,7 +23,6 @@ into docs/datasets.md (block ``debond``).
 
 from __future__ import annotations
 
-import argparse
 import json
 from collections import Counter
 from pathlib import Path
@@ -31,7 +30,7 @@ from pathlib import Path
 import pandas as pd
 
 from experiments.benches.bench_foreign import cli_json
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, table, write_table
 
 __all__ = ["classify_pairs", "confusion", "main", "markdown"]
 
@@ -81,20 +80,14 @@ def confusion(truth: list, verdicts: list) -> tuple[list[dict], list[str]]:
 def markdown(rows: list[dict], names: list[str]) -> str:
     """The rows as the docs' table (shares in %)."""
     cols = ["pairs", "network detected", *names, "fits", "told apart"]
-    lines = ["| true change | " + " | ".join(cols) + " |", "| --- |" + " --- |" * len(cols)]
-    for r in rows:
-        cells = [str(r["pairs"])] + [f"{100 * r[c]:.0f} %" for c in cols[1:]]
-        lines.append(f"| {r['change']} | " + " | ".join(cells) + " |")
-    return "\n".join(lines) + "\n"
+    return table(["true change", *cols], [[r["change"], r["pairs"], *(f"{100 * r[c]:.0f} %" for c in cols[1:])]
+                                          for r in rows]) + "\n"
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m experiments.benches.bench_debond", description=__doc__.splitlines()[0])
+    ap = parser(__file__, __doc__, docs="datasets.md", json=True, out="out/debond-bench")
     ap.add_argument("--model", required=True)
     ap.add_argument("--pairs", required=True, nargs="+", help="directories of second_sim kinds")
-    ap.add_argument("--out", default="out/debond-bench")
-    ap.add_argument("--json", action="store_true")
-    ap.add_argument("--docs", action="store_true", help="write the table into docs/datasets.md (block debond)")
     a = ap.parse_args(argv)
     truth, verdicts = [], []
     for d in a.pairs:

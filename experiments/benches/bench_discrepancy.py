@@ -23,10 +23,9 @@ inertia is large enough to be seen.
 
 from __future__ import annotations
 
-import argparse
 import time
 
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, table, write_table
 from experiments.studies.study_discrepancy import BEAM, SHORT, TRUTHS, confusion
 from physics.effects import candidates_for
 
@@ -34,12 +33,11 @@ __all__ = ["main"]
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = parser(__file__, __doc__, docs="discrepancy.md")
     ap.add_argument("--seeds", type=int, default=3, help="random truths per case (default 3)")
     ap.add_argument("--kinds", nargs="+", default=["freq", "shapes"], choices=["freq", "shapes"])
     ap.add_argument("--truths", nargs="+", default=list(TRUTHS), choices=list(TRUTHS), metavar="TRUTH",
                     help="subset of the truths (default all)")
-    ap.add_argument("--docs", action="store_true", help="write the confusion table into docs/discrepancy.md")
     ap.add_argument("--estimate-noise", action="store_true",
                     help="scale the given noise to the data (physics.discrepancy.analyse's estimate_noise)")
     args = ap.parse_args(argv)
@@ -68,11 +66,9 @@ def docs_table(rows, kinds, cols) -> str:
         named = sorted((c for c in cols if r[c]), key=lambda c: -int(str(r[c]).rstrip("~")))
         return ", ".join(f"{c} {r[c]}" for c in named)
 
-    lines = ["| truth | " + " | ".join(head[k] for k in kinds) + " |", "| --- |" + " --- |" * len(kinds)]
-    for truth in dict.fromkeys(r["truth"] for r in rows):
-        by_kind = {r["kind"]: r for r in rows if r["truth"] == truth}
-        lines.append(f"| {truth} | " + " | ".join(cell(by_kind[k]) for k in kinds) + " |")
-    return "\n".join(lines) + "\n"
+    by = {(r["truth"], r["kind"]): r for r in rows}
+    return table(["truth", *(head[k] for k in kinds)], [[truth, *(cell(by[truth, k]) for k in kinds)]
+                                                         for truth in dict.fromkeys(r["truth"] for r in rows)]) + "\n"
 
 
 if __name__ == "__main__":

@@ -30,7 +30,6 @@ of the pairs against the training percentiles) in ``--out``; ``--json`` prints t
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import io
 import json
@@ -45,7 +44,7 @@ import numpy as np
 from experiments.cli import main as cli_main
 from experiments.second_sim import simulate_pairs, write_pairs
 from experiments.second_sim.pairs import FREQ_HZ
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, write_table
 from physics.io import atomic_write_text
 
 __all__ = ["cli_json", "main"]
@@ -237,15 +236,13 @@ def _figure(verdicts_by_set: dict, path: Path) -> None:
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = parser(__file__, __doc__, docs="classifier.md", json=True, out="out/foreign", seed=100)
     ap.add_argument("--model", help="model directory used for every set (else --loop)")
     ap.add_argument("--sets", default=",".join(SETS))
     ap.add_argument("--n", type=int, default=24, help="pairs per set")
-    ap.add_argument("--seed", type=int, default=100)
     ap.add_argument("--band-hz", type=float, nargs=2, metavar=("F_MIN", "F_MAX"),
                     help="first and last frequency line of the simulated files (Hz, 0.5 Hz apart; default the "
                          "simulator's 2 800); a band stopping below mode 4 leaves the network without an answer")
-    ap.add_argument("--out", default="out/foreign")
     ap.add_argument("--loop", action="store_true", help="calibrate, generate and train per set first")
     ap.add_argument("--train-n", type=int, default=60000, help="specimens generated per set by --loop")
     ap.add_argument("--source-tree", help="run classify of this checkout (subprocess)")
@@ -253,8 +250,6 @@ def main(argv=None):
     ap.add_argument("--input", choices=("uff", "modal"), default="uff",
                     help="classify the UFF files (default) or the simulator's modal-data JSON files (its own modal "
                          "noise: 0.03 %% on frequencies, 0.5 %% on shapes)")
-    ap.add_argument("--json", action="store_true")
-    ap.add_argument("--docs", action="store_true", help="write the table into docs/classifier.md")
     a = ap.parse_args(argv)
     if not a.model and not a.loop:
         ap.error("give --model or --loop")

@@ -23,7 +23,6 @@ flexibility lie inside the 68 % and 95 % intervals.
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from dataclasses import replace
@@ -34,7 +33,7 @@ from experiments.second_sim.fem import Beam, PointMass, Slit, assemble, modes
 from experiments.second_sim.pairs import DOF_LABELS, EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M, NODE_X_M
 from experiments.second_sim.response import MODAL_NOISE, Damping, complex_modes, noisy_modal
 from experiments.second_sim.writers import modal_dict
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, write_table
 from learn.classify import classify
 from datagen.damage import damage_defaults
 from learn.features import BeamSpec
@@ -231,12 +230,9 @@ def markdown(res: dict) -> str:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m experiments.benches.bench_hypotheses",
-                                description=__doc__.split("\n")[0])
+    p = parser(__file__, __doc__, docs="classifier.md", json="FILE", seed=0)
     p.add_argument("--n", type=int, default=24, help="pairs per truth (default 24)")
-    p.add_argument("--seed", type=int, default=0)
     p.add_argument("--noise", type=float, default=7e-4, help="relative frequency noise per mode and test")
-    p.add_argument("--json", metavar="FILE", help="write every pair's probabilities as JSON")
     p.add_argument("--shape-noise", type=float, default=None,
                    help="std of the modal data's shapes per test, relative to each mode's largest entry (default: "
                         "the simulator's 0.5 %%)")
@@ -244,7 +240,6 @@ def main(argv=None) -> int:
                    help="std of a shape entry's change the explanations assume (default learn.hypotheses."
                         "SHAPE_CHANGE_STD)")
     p.add_argument("--model", metavar="MODEL_DIR", help="also classify every pair's modal data with this model")
-    p.add_argument("--docs", action="store_true", help="write the table into docs/classifier.md")
     args = p.parse_args(argv)
     res = table(args.n, args.seed, args.noise, args.model, args.shape_noise, args.shape_sigma)
     md = markdown(res)

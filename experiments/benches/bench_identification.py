@@ -14,7 +14,6 @@ sdypy-EMA (optional extra ``compare``) is used when installed.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import io
 import json
@@ -23,6 +22,7 @@ import warnings
 
 import numpy as np
 
+from experiments.benches.harness import parser
 from physics.identification import METHODS, identify_frf, lsfd, reconstruction_error_db
 from physics.io import MeasuredFRF, atomic_write_text
 from physics.modal import mac
@@ -278,7 +278,7 @@ def format_table(out) -> str:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = parser(__file__, __doc__, json="FILE")
     p.add_argument("--seeds", type=int, default=5)
     p.add_argument("--noise", type=float, default=0.01)
     p.add_argument("--damping", choices=("heavy", "thesis"), default="heavy",
@@ -288,7 +288,6 @@ def main(argv=None) -> int:
                         "impact test (accelerance, 0.01-0.06 %% damping, rigid-body mass line, a mode just "
                         "above the band) against the previous fit and sdypy-EMA")
     p.add_argument("--csv")
-    p.add_argument("--json")
     a = p.parse_args(argv)
     if a.case == "free-free":
         with warnings.catch_warnings():

@@ -21,7 +21,6 @@ Run ``python -m experiments.benches.bench_identify_speed [--repeat N] [--noise X
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import io
 import json
@@ -34,6 +33,7 @@ from pathlib import Path
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from experiments.benches.harness import parser
 from physics.beam import preset_beam
 from physics.frf import receptance
 from physics.identification import find_peaks_indicator, identify_frf, identify_frfs
@@ -173,12 +173,10 @@ def format_bench(out) -> str:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = parser(__file__, __doc__, json="FILE", seed=0)
     p.add_argument("--repeat", type=int, default=5)
     p.add_argument("--noise", type=float, default=0.015)
-    p.add_argument("--seed", type=int, default=0)
     p.add_argument("--batch", type=int, default=8, help="files in the identify_frfs timing")
-    p.add_argument("--json")
     p.add_argument("--csv")
     a = p.parse_args(argv)
     out = bench(a.repeat, a.noise, a.seed, a.batch)

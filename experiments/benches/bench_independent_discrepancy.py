@@ -32,7 +32,6 @@ kinds are counted separately in the table.
 
 from __future__ import annotations
 
-import argparse
 import csv
 import io
 import json
@@ -43,7 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from experiments.benches.bench_foreign import cli_json
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, table, write_table
 from experiments.studies.study_discrepancy import SHORT
 from physics.discrepancy.limits import DetectionLimit
 from physics.io import atomic_write_text
@@ -146,38 +145,29 @@ def verdict(r) -> str:
 
 
 def markdown(rows, kinds) -> str:
-    labels = list(dict.fromkeys(r["truth_label"] for r in rows))
     n_dirs = len({r["dir"] for r in rows})
-    lines = [f"| truth ({n_dirs} seed{'s' if n_dirs > 1 else ''}) | " + " | ".join(KINDS[k] for k in kinds) + " |",
-             "| --- |" + " --- |" * len(kinds)]
-    for lab in labels:
-        lines.append(f"| {lab} | " + " | ".join(cell([r for r in rows if r["truth_label"] == lab and r["kind"] == k])
-                                               for k in kinds) + " |")
+    by_kind = [[r for r in rows if r["kind"] == k] for k in kinds]
+    body = [[lab, *(cell([r for r in rk if r["truth_label"] == lab]) for rk in by_kind)]
+            for lab in dict.fromkeys(r["truth_label"] for r in rows)]
     for what, title in (("right", "**right (or tied with the truth), nothing else**"),
                         ("undetectable", "right but undetectable (none named, truth below the reported limit)"),
                         ("wrong", "wrong")):
-        tot = []
-        for k in kinds:
-            rk = [r for r in rows if r["kind"] == k]
-            tot.append(f"{sum(verdict(r) == what for r in rk)}/{len(rk)}")
-        lines.append(f"| {title} | " + " | ".join(tot) + " |")
+        body.append([title, *(f"{sum(verdict(r) == what for r in rk)}/{len(rk)}" for rk in by_kind)])
     chi = []
-    for k in kinds:
-        rk = [r for r in rows if r["kind"] == k and r["named"] != "error" and np.isfinite(r["chi2_per_dof"])]
+    for rk in ([r for r in rk if r["named"] != "error" and np.isfinite(r["chi2_per_dof"])] for rk in by_kind):
         q = np.percentile([r["chi2_per_dof"] for r in rk], [10, 50, 90]) if rk else [np.nan] * 3
         chi.append(f"{q[1]:.2g} ({q[0]:.2g}-{q[2]:.2g}); consistent {sum(r['noise_consistent'] for r in rk)}/{len(rk)}")
-    lines.append("| chi^2/dof after, median (10-90 %) | " + " | ".join(chi) + " |")
+    body.append(["chi^2/dof after, median (10-90 %)", *chi])
     sc = []
-    for k in kinds:
-        v = [r["estimated_noise_scale"] for r in rows if r["kind"] == k and "estimated_noise_scale" in r]
+    for v in ([r["estimated_noise_scale"] for r in rk if "estimated_noise_scale" in r] for rk in by_kind):
         q = np.percentile(v, [10, 50, 90]) if v else [np.nan] * 3
         sc.append(f"{q[1]:.2g} ({q[0]:.2g}-{q[2]:.2g})")
-    lines.append("| noise scale used for the selection (x the assumed), median (10-90 %) | " + " | ".join(sc) + " |")
-    return "\n".join(lines) + "\n"
+    body.append(["noise scale used for the selection (x the assumed), median (10-90 %)", *sc])
+    return table([f"truth ({n_dirs} seed{'s' if n_dirs > 1 else ''})", *(KINDS[k] for k in kinds)], body) + "\n"
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = parser(__file__, __doc__)
     ap.add_argument("dirs", nargs="+", help="directories written by 'python -m experiments.second_sim effects'")
     ap.add_argument("--out", required=True, help="directory for independent_confusion.csv/json/md")
     ap.add_argument("--kinds", nargs="+", default=list(KINDS), choices=list(KINDS))

@@ -18,7 +18,6 @@ leftover temporaries, no lock). Prints one row per case and the number that pass
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import signal
@@ -27,6 +26,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from experiments.benches.harness import parser
 
 __all__ = ["CASES", "default_sigint", "main", "run_case", "run_matrix", "tree"]
 
@@ -135,9 +136,8 @@ def run_matrix(cases=CASES, work: Path | None = None) -> list[dict]:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = parser(__file__, __doc__, json=True)
     ap.add_argument("--cases", default="all", help=f"comma-separated cases of {', '.join(CASES)} (default all)")
-    ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
     cases = CASES if a.cases == "all" else tuple(a.cases.split(","))
     env_path = os.environ.get("PYTHONPATH", "")

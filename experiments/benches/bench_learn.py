@@ -31,7 +31,7 @@ import numpy as np
 import pandas as pd
 
 from experiments.cli import main as cli
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, write_table
 from learn.classical import GradientBoosting, run_classical
 from learn.classify import classify
 from learn.estimator import DamageClassifier
@@ -98,19 +98,16 @@ def print_table(rows, title, subset="all"):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = parser(__file__, __doc__, docs="classifier.md", out="out/learn/bench", seed=0, description=__doc__,
+                formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--data-dir", default="out/learn/data")
-    ap.add_argument("--out", default="out/learn/bench")
     ap.add_argument("--epochs", type=int, default=60)
-    ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--n-train", type=int, default=24000, help="training pairs generated (85 %% used for training)")
     ap.add_argument("--n-test", type=int, default=6000, help="held-out test specimens (other seed)")
     ap.add_argument("--n-rob", type=int, default=3000, help="pairs per robustness set")
     ap.add_argument("--workers", type=int, default=2, help="generate's local processes")
     ap.add_argument("--threads", type=int, default=1, help="torch CPU threads (1 is fastest on a shared machine)")
     ap.add_argument("--skip-routes", action="store_true", help="do not train the networks of the other routes")
-    ap.add_argument("--docs", action="store_true", help="write the benchmark and robustness tables into "
-                                                        "docs/classifier.md")
     args = ap.parse_args(argv)
 
     data_dir, out = Path(args.data_dir), Path(args.out)

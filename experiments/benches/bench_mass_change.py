@@ -25,7 +25,6 @@ the table into docs/datasets.md (block ``mass_change``).
 
 from __future__ import annotations
 
-import argparse
 import json
 from pathlib import Path
 
@@ -33,7 +32,7 @@ import numpy as np
 import pandas as pd
 
 from experiments.benches.bench_foreign import cli_json
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, table, write_table
 
 __all__ = ["classify_pairs", "main", "markdown", "score"]
 
@@ -86,23 +85,16 @@ def markdown(rows: list[dict]) -> str:
     def pct(v):
         return "-" if v != v else f"{100 * v:.0f} %"
 
-    lines = ["| change | method | pairs | detected | sign right | zone right | size err. |",
-             "| --- | --- | --- | --- | --- | --- | --- |"]
-    for r in sorted(rows, key=lambda r: ("added", "lost", "intact").index(r["change"])):
-        err = "-" if r["size err."] != r["size err."] else f"{r['size err.']:.3f}"
-        lines.append(f"| {r['change']} | {r['method']} | {r['pairs']} | {pct(r['detected'])} | "
-                     f"{pct(r['sign right'])} | {pct(r['zone right'])} | {err} |")
-    return "\n".join(lines) + "\n"
+    return table(["change", "method", "pairs", "detected", "sign right", "zone right", "size err."],
+                 [[r["change"], r["method"], r["pairs"], pct(r["detected"]), pct(r["sign right"]), pct(r["zone right"]),
+                   "-" if r["size err."] != r["size err."] else f"{r['size err.']:.3f}"]
+                  for r in sorted(rows, key=lambda r: ("added", "lost", "intact").index(r["change"]))]) + "\n"
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m experiments.benches.bench_mass_change",
-                                 description=__doc__.splitlines()[0])
+    ap = parser(__file__, __doc__, docs="datasets.md", json=True, out="out/mass_change")
     ap.add_argument("--model", required=True)
     ap.add_argument("--pairs", required=True, help="directory of second_sim bolted --pairs")
-    ap.add_argument("--out", default="out/mass_change")
-    ap.add_argument("--json", action="store_true")
-    ap.add_argument("--docs", action="store_true", help="write the table into docs/datasets.md (block mass_change)")
     a = ap.parse_args(argv)
     pair_dir = Path(a.pairs)
     truth, verdicts = classify_pairs(Path(a.model), pair_dir)

@@ -31,7 +31,6 @@ Writes ``missing_modes.json`` and ``missing_modes.md`` in ``--out``; ``--docs`` 
 
 from __future__ import annotations
 
-import argparse
 import json
 from dataclasses import replace
 from pathlib import Path
@@ -40,7 +39,7 @@ import numpy as np
 
 from experiments.benches.bench_foreign import cli_json, score, set_dir, write_sets
 from experiments.benches.study_beams import score_beam
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, write_table
 from learn.classical import run_classical
 from learn.estimator import DamageClassifier
 from learn.evaluate import metrics
@@ -291,14 +290,12 @@ def markdown(held: list[dict], sim: list[dict], beam: list[dict], beam_name: str
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m experiments.benches.bench_missing_modes",
-                                 description=__doc__.split("\n")[0])
+    ap = parser(__file__, __doc__, docs="classifier.md", json=True, out="out/missing", seed=400)
     ap.add_argument("--model", required=True, help="model directory of this checkout")
     ap.add_argument("--before", help="model directory of the checkout whose network needs every mode")
     ap.add_argument("--before-tree", help="that checkout (its classify runs in a subprocess)")
     ap.add_argument("--data", nargs="*", default=[], help="held-out dataset directories of the model's beam")
     ap.add_argument("--sim-n", type=int, default=24, help="pairs of the simulator's eb set (0: none)")
-    ap.add_argument("--seed", type=int, default=400)
     ap.add_argument("--beam", help="a catalogue beam of experiments.second_sim (its pairs in --beam-pairs)")
     ap.add_argument("--beam-pairs", help="directory written by 'python -m experiments.second_sim beams --only NAME'")
     ap.add_argument("--beam-model", help="model trained on that beam's beam.toml (this checkout)")
@@ -306,9 +303,6 @@ def main(argv=None) -> int:
     ap.add_argument("--sweep", nargs="*", default=[], metavar="TRAIN_DIR",
                     help="train modal networks on these datasets with each --probabilities and score them on --data")
     ap.add_argument("--probabilities", type=float, nargs="+", default=[0.0, 0.05, 0.15, 0.3])
-    ap.add_argument("--out", default="out/missing")
-    ap.add_argument("--json", action="store_true")
-    ap.add_argument("--docs", action="store_true", help="write the tables into docs/classifier.md")
     a = ap.parse_args(argv)
 
     out = Path(a.out)

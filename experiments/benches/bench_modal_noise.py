@@ -38,7 +38,6 @@ distributions, full path vs calibrated shortcut).
 
 from __future__ import annotations
 
-import argparse
 import json
 from concurrent.futures import ProcessPoolExecutor
 from multiprocessing import get_context
@@ -47,6 +46,7 @@ from pathlib import Path
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from experiments.benches.harness import parser
 from learn.noise_calibration import calibrate_std, robust_std
 from datagen.config import CONFIG_DIR, merge
 from datagen.batch_inputs import draw_batch
@@ -159,16 +159,12 @@ def _pooled(parts):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = parser(__file__, __doc__, json=True, out="out/modal_noise", seed=0, workers=2)
     ap.add_argument("--specimens", type=int, default=8, help="specimens per condition and line layout (2 tests each)")
     ap.add_argument("--levels", default="0.001,0.003,0.01,0.03", help="FRF noise levels (relative to |H|)")
     ap.add_argument("--floors", default="0,0.0003,0.001", help="FRF noise floors (relative to each FRF's peak)")
-    ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--out", default="out/modal_noise")
     ap.add_argument("--write-calibration", action="store_true",
                     help="store the fitted coefficients in datagen/configs/modal_noise.json")
-    ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
 
 

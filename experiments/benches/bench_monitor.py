@@ -53,7 +53,7 @@ import numpy as np  # noqa: E402
 from experiments.benches.bench_foreign import cli_json  # noqa: E402
 from experiments.cli import build_parser  # noqa: E402
 from experiments.second_sim.series import SERIES_KINDS, SLIT_SIZES, SeriesConfig, simulate_series, write_series  # noqa: E402
-from experiments.studies.doc_tables import write_table  # noqa: E402
+from experiments.benches.harness import parser, write_table  # noqa: E402
 from physics.io import atomic_write_text  # noqa: E402
 
 __all__ = ["main", "markdown", "score_series"]
@@ -397,17 +397,14 @@ def _figure(rows: list, path: Path) -> None:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m experiments.benches.bench_monitor", description=__doc__.split("\n")[0])
-    p.add_argument("--out", default="out/monitor-bench")
+    p = parser(__file__, __doc__, docs="monitoring.md", out="out/monitor-bench", seed=0)
     p.add_argument("--kinds", nargs="+", choices=SERIES_KINDS, default=list(SERIES_KINDS))
     p.add_argument("--sizes", nargs="+", choices=list(SLIT_SIZES), default=list(SLIT_SIZES))
     p.add_argument("--n-tests", type=int, default=240, help="tests over the year (default 240)")
     p.add_argument("--baseline-tests", type=int, default=80, help="tests of the baseline period (default 80)")
     p.add_argument("--damage-day", type=float, default=270.0)
     p.add_argument("--n-train", type=int, default=12000, help="pairs generated for the classifier (default 12000)")
-    p.add_argument("--seed", type=int, default=0)
     p.add_argument("--stay", type=int, default=5, help="alarms in a row that make a detection (default 5)")
-    p.add_argument("--docs", action="store_true", help="write the table into docs/monitoring.md")
     a = p.parse_args(argv)
 
     out = Path(a.out)

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import contextlib
 import io
-import argparse
 import csv
 import json
 import os
@@ -28,6 +27,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
+from experiments.benches.harness import parser  # noqa: E402
 from experiments.second_sim.series import (SLIT_SIZES, SeriesConfig, simulate_series, slit_frequency_drop,  # noqa: E402
                                            write_series)
 from experiments.cli import main as cli  # noqa: E402
@@ -64,8 +64,7 @@ def _cli(argv) -> dict:
 
 
 def main(argv=None) -> dict:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--out", default="out/bench_monitor_graded")
+    p = parser(__file__, __doc__, out="out/bench_monitor_graded")
     p.add_argument("--n-tests", type=int, default=120)
     p.add_argument("--baseline-tests", type=int, default=40)
     p.add_argument("--model", help="trained model directory: the explanations of each event")

@@ -12,7 +12,6 @@ model after the first costs only its fits.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import io
 import json
@@ -20,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from experiments.benches.harness import parser
 from experiments.cli import main as cli_main
 from learn.monitor import NORMAL_MODELS
 from experiments.second_sim.series import SLIT_SIZES, SeriesConfig, simulate_series, write_series as write
@@ -71,8 +71,7 @@ def score(result: dict, truth: dict, n_baseline: int) -> dict:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--out", default="out/bench_monitor_models")
+    p = parser(__file__, __doc__, out="out/bench_monitor_models")
     p.add_argument("--n-tests", type=int, default=240)
     p.add_argument("--baseline-tests", type=int, default=80)
     p.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])

@@ -14,7 +14,6 @@ extrapolated, the scatter ratio of the later tests without an alarm against the 
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import io
 import json
@@ -22,6 +21,7 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+from experiments.benches.harness import parser
 from experiments.cli import main as cli
 
 __all__ = ["main", "session_series"]
@@ -47,8 +47,7 @@ def session_series(out: Path, offset: float, seed: int, n_base: int = 30, sessio
 
 def main(argv=None) -> list:
 
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--out", default="out/bench_monitor_sessions")
+    p = parser(__file__, __doc__, out="out/bench_monitor_sessions")
     p.add_argument("--offsets", type=float, nargs="+", default=[0.0, 3e-4, 6e-4, 1e-3, 3e-3])
     p.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3])
     a = p.parse_args(argv)

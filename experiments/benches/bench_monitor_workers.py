@@ -11,7 +11,6 @@ cache entries' JSON text) and prints records per second of each and their ratio.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import time
@@ -20,6 +19,7 @@ from pathlib import Path
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
+from experiments.benches.harness import parser  # noqa: E402
 from experiments.second_sim.series import SeriesConfig, simulate_series, write_series  # noqa: E402
 from learn.monitor.identification import IdentificationSettings  # noqa: E402
 from learn.monitor.workers import identify_files  # noqa: E402
@@ -37,11 +37,9 @@ def _files(out: Path, n: int, kind: str) -> list:
 
 
 def main(argv=None) -> dict:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--out", default="out/bench_monitor_workers")
+    p = parser(__file__, __doc__, out="out/bench_monitor_workers", workers=2)
     p.add_argument("--n-tests", type=int, default=40)
     p.add_argument("--kind", choices=("frf", "output-only"), default="frf")
-    p.add_argument("--workers", type=int, default=2)
     a = p.parse_args(argv)
     out = Path(a.out)
     files = _files(out, a.n_tests, a.kind)

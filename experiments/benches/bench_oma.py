@@ -17,7 +17,6 @@ simulated blocks) to a temporary directory and reports the wall time and the pea
 
 from __future__ import annotations
 
-import argparse
 import json
 import logging
 import sys
@@ -33,7 +32,7 @@ from threadpoolctl import threadpool_limits
 from experiments.second_sim.ambient import ambient_record
 from experiments.second_sim.fem import Beam
 from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, write_table
 from physics.identification.fdd import identify_fdd
 from physics.identification.ssi import identify_ssi
 from physics.io import atomic_write_text
@@ -173,12 +172,9 @@ def markdown(rows) -> str:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = parser(__file__, __doc__, docs="identification.md", json="FILE", seed=1)
     p.add_argument("--minutes", type=float, default=10.0, help="record length of the long cases (default 10)")
-    p.add_argument("--seed", type=int, default=1)
     p.add_argument("--no-peer", action="store_true", help="leave pyOMA2 out")
-    p.add_argument("--json", metavar="FILE", help="write the rows as JSON")
-    p.add_argument("--docs", action="store_true", help="write the table into docs/identification.md")
     p.add_argument("--long-record", type=float, metavar="MINUTES",
                    help="report the memory and time of SSI-cov on a memory-mapped record of this length instead")
     p.add_argument("--threads", type=int, default=1,

@@ -25,7 +25,6 @@ Run ``python -m experiments.benches.bench_oma_defaults [--minutes 5] [--seed 1] 
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import io
 import json
@@ -45,7 +44,7 @@ from experiments.cli import main as cli
 from experiments.second_sim.ambient import ambient_record, write_npz
 from experiments.second_sim.fem import Beam, assemble, modes
 from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, write_table
 from physics.io import atomic_write_text
 
 __all__ = ["CASES", "main", "run_case"]
@@ -171,13 +170,10 @@ def markdown(rows) -> str:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = parser(__file__, __doc__, docs="identification.md", json="FILE", seed=1)
     p.add_argument("--minutes", type=float, default=5.0, help="record length (default 5)")
-    p.add_argument("--seed", type=int, default=1)
     p.add_argument("--case", action="append", choices=list(CASES), help="run only these cases (repeatable)")
     p.add_argument("--no-peer", action="store_true", help="leave pyOMA2 out")
-    p.add_argument("--json", metavar="FILE", help="write the rows as JSON")
-    p.add_argument("--docs", action="store_true", help="write the table into docs/identification.md")
     p.add_argument("--threads", type=int, default=1, help="BLAS/FFT threads of both packages (default 1)")
     args = p.parse_args(argv)
 

@@ -12,7 +12,6 @@ Run ``python -m experiments.benches.bench_oma_setups [--seed 20]``.
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import io
 import json
@@ -21,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from experiments.benches.harness import parser
 from experiments.cli import main
 
 __all__ = ["building_shapes", "record", "run"]
@@ -99,6 +99,5 @@ def run(seed=20) -> dict:
 
 
 if __name__ == "__main__":
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seed", type=int, default=20)
+    ap = parser(__file__, __doc__, seed=20)
     print(json.dumps(run(ap.parse_args().seed), indent=1))

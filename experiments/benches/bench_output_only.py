@@ -26,7 +26,6 @@ verdict warns that the modes were identified otherwise than the model's training
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from dataclasses import replace
@@ -38,7 +37,7 @@ from experiments.benches.bench_foreign import classify_set, cli_json, score, wri
 from experiments.second_sim.ambient import ambient_record, write_npz
 from experiments.second_sim.fem import Beam, Slit
 from experiments.second_sim.pairs import NODE_X_M
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, write_table
 
 __all__ = ["beams_of", "main"]
 
@@ -87,15 +86,11 @@ def output_only_pairs(pair_dir: Path, truth: list, out: Path, minutes: float, se
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m experiments.benches.bench_output_only",
-                                description=__doc__.split("\n")[0])
+    p = parser(__file__, __doc__, docs="identification.md", out="out/output-only", seed=500)
     p.add_argument("--model", required=True, metavar="MODEL_DIR", action="append",
                    help="a trained model (repeatable: each is scored on the same pairs)")
     p.add_argument("--n", type=int, default=24, help="pairs (default 24)")
-    p.add_argument("--seed", type=int, default=500)
     p.add_argument("--minutes", type=float, default=5.0, help="record length of each test (default 5)")
-    p.add_argument("--out", default="out/output-only")
-    p.add_argument("--docs", action="store_true", help="write the table into docs/identification.md")
     p.add_argument("--table", choices=("output-only-classify", "output-only-noise"), default="output-only-classify",
                    help="the docs table written (with --docs): one model's routes, or models trained on FRF-route "
                         "against output-only modal noise")

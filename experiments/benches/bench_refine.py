@@ -12,12 +12,12 @@ Run ``python -m experiments.benches.bench_refine [--n-pairs 64] [--seed 0] [--js
 
 from __future__ import annotations
 
-import argparse
 import json
 import time
 
 import numpy as np
 
+from experiments.benches.harness import parser
 from datagen.damage import damage_defaults
 from experiments.second_sim.fem import Beam, PointMass, assemble, modes
 from learn.features import BeamSpec
@@ -54,10 +54,8 @@ def _kinds(exact: bool) -> dict:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m experiments.benches.bench_refine", description=__doc__.split("\n")[0])
+    p = parser(__file__, __doc__, json=True, seed=0)
     p.add_argument("--n-pairs", type=int, default=64)
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--json", action="store_true", help="print the rows as JSON")
     a = p.parse_args(argv)
     y, x, ratio = simulated_pairs(a.n_pairs, a.seed)
     spec = BeamSpec("beam5", L, ("2:y", "3:y", "4:y", "5:y"), "iirs")

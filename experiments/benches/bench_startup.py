@@ -21,7 +21,6 @@ took longest (``python -X importtime``, cumulative) and the module of the projec
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import resource
@@ -32,7 +31,7 @@ import time
 from pathlib import Path
 
 from experiments.cli import COMMANDS
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, write_table
 
 __all__ = ["GOALS", "PROJECT", "cases", "docs_table", "main", "offenders", "time_case"]
 
@@ -123,15 +122,13 @@ def _fixtures(out: Path) -> tuple[Path, Path, Path]:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = parser(__file__, __doc__, docs="performance.md", json=True)
     ap.add_argument("--runs", type=int, default=5, help="fresh processes per case and checkout (median)")
     ap.add_argument("--before", type=Path, help="another checkout to time alike (before / after)")
     ap.add_argument("--model", type=Path, help="model directory for the one-pair case")
     ap.add_argument("--pair", type=Path, nargs=2, metavar=("BASELINE", "CURRENT"), help="UFF pair to classify")
     ap.add_argument("--out", type=Path, default=ROOT / "out" / "bench_startup", help="where fixtures are made")
     ap.add_argument("--offenders", action="store_true", help="list the slowest third-party imports")
-    ap.add_argument("--docs", action="store_true", help="write the table into docs/performance.md")
-    ap.add_argument("--json", action="store_true")
     args = ap.parse_args(argv)
     if args.model and args.pair:
         model, baseline, current = args.model, *args.pair

@@ -12,12 +12,11 @@ named right and the median max |frequency error| after the EI recalibration -> a
 
 from __future__ import annotations
 
-import argparse
 import time
 
 import numpy as np
 
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, write_table
 from experiments.studies.plain_beam import plain_fe
 from physics import discrepancy as dsc
 from physics.beam import load_beam
@@ -122,10 +121,9 @@ def markdown(table: list[dict], seeds: int) -> str:
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = parser(__file__, __doc__, docs="discrepancy.md")
     ap.add_argument("--seeds", type=int, default=3, help="random truths per case (default 3)")
     ap.add_argument("--cases", nargs="+", default=list(CASES), choices=list(CASES), metavar="CASE")
-    ap.add_argument("--docs", action="store_true", help="write the table into docs/discrepancy.md")
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
     print(f"{'truth':44s} {'data':7s} {'named (over seeds)':40s} {'param err':>9s} {'gap %':>15s}")

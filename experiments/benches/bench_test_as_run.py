@@ -18,7 +18,6 @@ another checkout's).
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from pathlib import Path
@@ -28,7 +27,7 @@ import numpy as np
 from experiments.benches.bench_foreign import cli_json
 from experiments.benches.study_beams import run_beam
 from experiments.second_sim.beams import TEST_AS_RUN, excited_modes
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, write_table
 from physics.io import atomic_write_text
 
 __all__ = ["main", "modes_found"]
@@ -100,18 +99,12 @@ def _row(cb, label: str, r: list[dict], info: dict, ident: dict | None) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m experiments.benches.bench_test_as_run",
-                                 description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default="out/test-as-run")
+    ap = parser(__file__, __doc__, docs="any-beam.md", json=True, out="out/test-as-run", seed=0, workers=2)
     ap.add_argument("--n-pairs", type=int, default=36)
     ap.add_argument("--train-n", type=int, default=10000)
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--only", default=None)
     ap.add_argument("--before", default=None, metavar="DIR",
                     help="another checkout (e.g. main) whose 'identify' is scored beside this one's")
-    ap.add_argument("--docs", action="store_true", help="write the table into docs/any-beam.md")
-    ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
 
     out = Path(a.out)

@@ -17,10 +17,10 @@ found (the detector's).
 
 from __future__ import annotations
 
-import argparse
 
 import numpy as np
 
+from experiments.benches.harness import parser
 from learn.monitor import NORMAL_MODELS, held_out_novelty, missing_evidence, threshold
 from learn.monitor.alarm_threshold import training_size
 from learn.monitor.identification import IdentifiedModes
@@ -100,7 +100,7 @@ def rare_mode_alarms(share: float, model: str, reps: int = 5, seed: int = 0) -> 
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = parser(__file__, __doc__)
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--alarms", action="store_true", help="the false alarms of tests holding or lacking a rare mode")
     args = ap.parse_args(argv)

@@ -33,7 +33,6 @@ is **spurious**. Frequency and damping errors are medians over the modes found w
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import io
 import json
@@ -50,7 +49,7 @@ from experiments.cli import main as cli
 from experiments.second_sim.fem import Beam, assemble, modes
 from experiments.second_sim.response import Damping, receptance
 from experiments.second_sim.writers import convert_receptance, write_uff
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, write_table
 from physics.io import atomic_write_text
 
 __all__ = ["CASES", "METHODS", "WideBandTest", "main", "markdown", "peak_prominence", "run_identify", "score",
@@ -269,11 +268,8 @@ def markdown(summary: list[dict], args) -> str:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m experiments.benches.bench_wideband", description=__doc__.split("\n")[0])
+    p = parser(__file__, __doc__, docs="identification.md", out="out/wideband", seed=0)
     p.add_argument("--seeds", type=int, default=5, help="files per case (default 5)")
-    p.add_argument("--seed", type=int, default=0, help="first seed (default 0)")
-    p.add_argument("--out", default="out/wideband", help="directory of the files and results")
-    p.add_argument("--docs", action="store_true", help="write the table into docs/identification.md")
     args = p.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -15,7 +15,6 @@ Run: ``python -m experiments.benches.diagnose_shape_noise --beam steel-bar-ff-12
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import tempfile
@@ -23,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from experiments.benches.harness import parser
 from datagen.config import modal_noise_calibration
 from experiments.second_sim import beams
 from experiments.second_sim.beams import CATALOGUE
@@ -120,12 +120,10 @@ def modal_input_scores(cb, recs, modes, model_dir, factor: float, seed: int = 11
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m experiments.benches.diagnose_shape_noise",
-                                 description=__doc__.splitlines()[0])
+    ap = parser(__file__, __doc__, seed=0)
     ap.add_argument("--beam", required=True)
     ap.add_argument("--model", required=True, help="the beam's trained model directory (study_beams)")
     ap.add_argument("--n", type=int, default=40)
-    ap.add_argument("--seed", type=int, default=0, help="the study's seed (the same pairs)")
     ap.add_argument("--factors", type=float, nargs="+", default=[1.0, 8.0])
     ap.add_argument("--identify", type=int, default=6)
     a = ap.parse_args(argv)

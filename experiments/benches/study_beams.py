@@ -30,7 +30,6 @@ the outputs named ``beams-KEY=VALUE...``.
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import time
@@ -40,6 +39,7 @@ import io
 
 import numpy as np
 
+from experiments.benches.harness import parser
 from experiments.benches.bench_foreign import cli_json
 from experiments.second_sim.beams import CATALOGUE, SPREAD, Spread, simulate_beam_pairs, write_beam_pairs
 from physics.io import atomic_write_bytes, atomic_write_text
@@ -344,16 +344,12 @@ def _figure(rows: list[dict], path: Path) -> None:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m experiments.benches.study_beams", description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default="out/beams")
+    ap = parser(__file__, __doc__, json=True, out="out/beams", seed=0, workers=2)
     ap.add_argument("--n-pairs", type=int, default=40, help="independent pairs per beam (default 40)")
     ap.add_argument("--train-n", type=int, default=20000, help="specimens generated per beam (default 20000)")
     ap.add_argument("--only", default=None, help="one catalogue beam by name")
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--spread", action="append", default=[], metavar="KEY=VALUE",
                     help="a field of the pairs' distribution (second_sim.beams.Spread), e.g. suspension_change=0")
-    ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
 
     names = [c.name for c in CATALOGUE]

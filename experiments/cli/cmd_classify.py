@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import glob
-import io
 import json
 from pathlib import Path
 
 import numpy as np
 
+from experiments.studies.report import figure_png
 from learn.classify import DEFAULT_FALSE_ALARM_RATE, classify_many
 from learn.verdict import explanation_label
 from learn.measured import differences_from_model, on_model_dofs
@@ -222,11 +222,8 @@ def _figure(res, extra, base, cur, beam) -> bytes:
         a2.legend(fontsize=7)
     a2.set(ylabel="frequency change (%)", title="Each mode's change and what the explanations predict")
     _location(a3, res, extra, beam)
-    buf = io.BytesIO()
     fig.tight_layout()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    return buf.getvalue()
+    return figure_png(fig)
 
 
 def _file_labels(res):

@@ -22,7 +22,7 @@ from physics.io import FRF, MODAL, TIME, accepted, atomic_write_bytes, atomic_wr
 from datagen.store import package_version
 from learn.model_dir import load_model
 from physics.beam import load_beam
-from experiments.studies.report import Section, Table, figure, write_report
+from experiments.studies.report import Section, Table, figure, figure_png, write_report
 import warnings
 
 __all__ = ["add_parser", "chart", "judged", "run"]
@@ -257,14 +257,9 @@ def _write(out_dir, out: dict, res) -> dict:
 
 def _figure(res) -> bytes:
     """PNG of :func:`chart`."""
-    import matplotlib.pyplot as plt
-
     fig = chart(res)
-    buf = io.BytesIO()
     fig.tight_layout()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    return buf.getvalue()
+    return figure_png(fig)
 
 
 def chart(res):

@@ -6,8 +6,6 @@ Figures are rendered to PNG bytes, then every file is written atomically.
 
 from __future__ import annotations
 
-import io
-
 import matplotlib
 
 matplotlib.use("Agg")
@@ -17,6 +15,7 @@ import numpy as np  # noqa: E402
 import json  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+from experiments.studies.report import figure_png  # noqa: E402
 from physics.errors import ConfigError  # noqa: E402
 from physics.identification import STABILITY_CODES, Identification, mode_indicator  # noqa: E402
 from physics.io import MeasuredFRF, atomic_write_bytes, modal_data_to_dict, write_frf_csv, write_uff58  # noqa: E402
@@ -26,13 +25,6 @@ __all__ = ["overlay_png", "stabilisation_png", "synthesised_frf", "write_outputs
 
 _MARKERS = {0: ("o", "0.7", "new"), 1: ("x", "tab:orange", "f"), 2: ("^", "tab:blue", "f+d"),
             3: ("v", "tab:purple", "f+v"), 4: ("s", "tab:green", "stable")}
-
-
-def _png(fig) -> bytes:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    return buf.getvalue()
 
 
 def stabilisation_png(diagram, frequency_hz, frf, selected_hz=()) -> bytes:
@@ -56,7 +48,7 @@ def stabilisation_png(diagram, frequency_hz, frf, selected_hz=()) -> bytes:
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=5, fontsize=7, frameon=False)
     ax.set_title("LSCF stabilisation diagram")
     fig.tight_layout()
-    return _png(fig)
+    return figure_png(fig)
 
 
 def overlay_png(frequency_hz, measured, synthesised, labels, kind="receptance", units="m/N", max_curves=6) -> bytes:
@@ -91,7 +83,7 @@ def overlay_png(frequency_hz, measured, synthesised, labels, kind="receptance", 
     ax2.yaxis.set_major_locator(MultipleLocator(90 if span_deg <= 720 else 180))
     ax2.grid(alpha=0.3)
     fig.tight_layout()
-    return _png(fig)
+    return figure_png(fig)
 
 
 def synthesised_frf(ident: Identification) -> MeasuredFRF:

@@ -1,0 +1,63 @@
+"""What every bench shares: its command line, its Markdown tables and the docs block its ``--docs`` rewrites.
+
+A bench is ``experiments/benches/bench_<name>.py`` with ``main(argv=None) -> int``::
+
+    p = parser(__file__, __doc__, docs="identification.md", out="out/name", seed=0)
+    p.add_argument("--seeds", type=int, default=5)          # its own arguments
+    args = p.parse_args(argv)
+    ...
+    md = table(["case", "error (%)"], [[r["case"], f"{r['error']:.2f}"] for r in rows])
+    if args.docs:
+        write_table("identification.md", "name", md)        # the page's <!-- bench:name --> block
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from experiments.studies.doc_tables import write_table
+
+__all__ = ["parser", "table", "write_table"]
+
+
+def parser(file: str, doc: str, *, docs: str | None = None, json: bool | str = False, out: str | None = None,
+           seed: int | None = None, workers: int | None = None, **kwargs) -> argparse.ArgumentParser:
+    """The argument parser of the bench in ``file`` (its ``__file__``): ``prog`` the ``python -m`` command that runs
+    it, the description the first paragraph of ``doc``, and the arguments common to benches that it asks for.
+
+    Parameters
+    ----------
+    docs : str, optional
+        ``--docs``: write the table into this page of ``docs/``.
+    json : bool or str, optional
+        True: ``--json`` prints the rows as JSON; a string: ``--json FILE`` writes them there.
+    out : str, optional
+        ``--out DIR`` (a string, so that ``vars(args)`` stays JSON) with this default.
+    seed, workers : int, optional
+        ``--seed N``, ``--workers N`` with these defaults.
+    **kwargs
+        Passed to :class:`argparse.ArgumentParser` (e.g. ``description``, ``formatter_class``).
+    """
+    kwargs.setdefault("description", doc.split("\n\n")[0])
+    p = argparse.ArgumentParser(prog=f"python -m experiments.benches.{Path(file).stem}", **kwargs)
+    if out is not None:
+        p.add_argument("--out", default=out, help=f"output directory (default {out})")
+    if seed is not None:
+        p.add_argument("--seed", type=int, default=seed, help=f"first random seed (default {seed})")
+    if workers is not None:
+        p.add_argument("--workers", type=int, default=workers, help=f"processes (default {workers})")
+    if json is True:
+        p.add_argument("--json", action="store_true", help="print the rows as JSON")
+    elif json:
+        p.add_argument("--json", metavar=json, help="write the rows as JSON into this file")
+    if docs is not None:
+        p.add_argument("--docs", action="store_true", help=f"write the table into docs/{docs}")
+    return p
+
+
+def table(header, rows, align=None) -> str:
+    """A Markdown table: the ``header`` cells, the alignment row (``align``: one of ``---``, ``---:`` per column;
+    default ``---`` each), then one line per row of ``rows`` (cells formatted by ``str``); no final newline."""
+    lines = [header, align or ["---"] * len(header), *rows]
+    return "\n".join("| " + " | ".join(str(c) for c in line) + " |" for line in lines)
