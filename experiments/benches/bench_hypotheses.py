@@ -33,7 +33,7 @@ from experiments.second_sim.fem import Beam, PointMass, Slit, assemble, modes
 from experiments.second_sim.pairs import DOF_LABELS, EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M, NODE_X_M
 from experiments.second_sim.response import MODAL_NOISE, Damping, complex_modes, noisy_modal
 from experiments.second_sim.writers import modal_dict
-from experiments.benches.harness import parser, write_table
+from experiments.benches.harness import parser, table, write_table
 from learn.classify import classify
 from datagen.damage import damage_defaults
 from learn.features import BeamSpec
@@ -43,7 +43,7 @@ from learn.sensitivity import beam_sensitivity
 from learn.shapes import shape_changes
 from physics.io import atomic_write_text, modal_data_from_dict
 
-__all__ = ["TRUTHS", "main", "pairs", "table"]
+__all__ = ["TRUTHS", "main", "pairs", "run"]
 
 TRUTHS = ("intact", "slit", "support_change", "mass_change", "global_stiffness")
 KR_REL = 948.7
@@ -147,7 +147,7 @@ def network_table(rows: list[dict]) -> dict:
     return res
 
 
-def table(n: int = 24, seed: int = 0, noise: float = 7e-4, model_dir=None, shape_noise=None,
+def run(n: int = 24, seed: int = 0, noise: float = 7e-4, model_dir=None, shape_noise=None,
           shape_sigma=None) -> dict:
     """Every pair weighed: the confusion counts and the slits' interval cover; with ``model_dir`` also the
     network's answers on the pairs' modal data (:func:`network_table`)."""
@@ -199,12 +199,9 @@ def table(n: int = 24, seed: int = 0, noise: float = 7e-4, model_dir=None, shape
 
 
 def _confusion_lines(confusion: dict) -> list[str]:
-    lines = ["| truth \\ most probable | " + " | ".join(TRUTHS) + " | right |", "| --- " * (len(TRUTHS) + 2) + "|"]
-    for t in TRUTHS:
-        row = confusion[t]
-        total = sum(row.values())
-        lines.append(f"| {t} | " + " | ".join(str(row[h]) for h in TRUTHS) + f" | {row[t] / total:.0%} |")
-    return lines
+    return [table(["truth \\ most probable", *TRUTHS, "right"],
+                  [[t, *(confusion[t][h] for h in TRUTHS), f"{confusion[t][t] / sum(confusion[t].values()):.0%}"]
+                   for t in TRUTHS])]
 
 
 def markdown(res: dict) -> str:
@@ -220,12 +217,11 @@ def markdown(res: dict) -> str:
     if "network" in res:
         lines += ["", f"The network ({res['model']}) on the same pairs' modal data (modes 1-4 at the quarter points, "
                   "the simulator's own modal noise):", "",
-                  "| truth | pairs | network: damaged | verdict: damaged | inside the training data | "
-                  "support change named | slit in the right element |", "| --- " * 7 + "|"]
-        for t, r in res["network"].items():
-            right = f"{r['element_right']}" if t == "slit" else "-"
-            lines.append(f"| {t} | {r['n']} | {r['network_damaged']} | {r['verdict_damaged']} | "
-                         f"{r['in_distribution']} | {r['support_changed']} | {right} |")
+                  table(["truth", "pairs", "network: damaged", "verdict: damaged", "inside the training data",
+                         "support change named", "slit in the right element"],
+                        [[t, r["n"], r["network_damaged"], r["verdict_damaged"], r["in_distribution"],
+                          r["support_changed"], r["element_right"] if t == "slit" else "-"]
+                         for t, r in res["network"].items()])]
     return "\n".join(lines) + "\n"
 
 
@@ -241,7 +237,7 @@ def main(argv=None) -> int:
                         "SHAPE_CHANGE_STD)")
     p.add_argument("--model", metavar="MODEL_DIR", help="also classify every pair's modal data with this model")
     args = p.parse_args(argv)
-    res = table(args.n, args.seed, args.noise, args.model, args.shape_noise, args.shape_sigma)
+    res = run(args.n, args.seed, args.noise, args.model, args.shape_noise, args.shape_sigma)
     md = markdown(res)
     sys.stdout.write(md)
     if args.json:

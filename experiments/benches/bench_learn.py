@@ -31,7 +31,7 @@ import numpy as np
 import pandas as pd
 
 from experiments.cli import main as cli
-from experiments.benches.harness import parser, write_table
+from experiments.benches.harness import parser, table, write_table
 from learn.classical import GradientBoosting, run_classical
 from learn.classify import classify
 from learn.estimator import DamageClassifier
@@ -283,19 +283,14 @@ def beam5(model, out_dir) -> dict:
     return out
 
 
-def _md_row(cells) -> str:
-    return "| " + " | ".join(cells) + " |"
-
-
 def benchmark_markdown(rows) -> str:
     """Markdown table of every method on the held-out test pairs (subset ``all``) for docs/classifier.md."""
     cols = (("ROC AUC", "roc_auc", 4), ("accuracy", "accuracy", 3), ("false alarms", "false_alarm_rate", 4),
             ("element acc.", "element_accuracy", 3), ("within 1 el.", "within_one_element", 3),
             ("location err. (mm)", "median_location_error_mm", 2), ("size err.", "median_size_error", 3),
             ("ECE", "ece", 3))
-    lines = [_md_row(["method", *(c[0] for c in cols)]), _md_row(["---"] * (len(cols) + 1))]
-    lines += [_md_row([r["method"], *(fmt(r[k], nd) for _, k, nd in cols)]) for r in rows]
-    return "\n".join(lines) + "\n"
+    return table(["method", *(c[0] for c in cols)], [[r["method"], *(fmt(r[k], nd) for _, k, nd in cols)]
+                                                      for r in rows]) + "\n"
 
 
 def robustness_markdown(rob, methods=("DLAC", "gradient boosting")) -> str:
@@ -303,12 +298,12 @@ def robustness_markdown(rob, methods=("DLAC", "gradient boosting")) -> str:
     cols = (("AUC", "roc_auc", 3), ("false alarms", "false_alarm_rate", 3), ("detection", "detection_rate", 3),
             ("element acc.", "element_accuracy", 3), ("location (mm)", "median_location_error_mm", 1),
             ("size err.", "median_size_error", 2))
-    lines = [_md_row(["set", "method", *(c[0] for c in cols)]), _md_row(["---"] * (len(cols) + 2))]
+    body = []
     for name in dict.fromkeys(r["subset"] for r in rob):
         keep = [r for r in rob if r["subset"] == name and (r["method"].startswith("network") or r["method"] in methods)]
-        lines += [_md_row([name if k == 0 else "", r["method"], *(fmt(r[c], nd) for _, c, nd in cols)])
-                  for k, r in enumerate(keep)]
-    return "\n".join(lines) + "\n"
+        body += [[name if k == 0 else "", r["method"], *(fmt(r[c], nd) for _, c, nd in cols)]
+                 for k, r in enumerate(keep)]
+    return table(["set", "method", *(c[0] for c in cols)], body) + "\n"
 
 
 if __name__ == "__main__":

@@ -39,7 +39,7 @@ import numpy as np
 
 from experiments.benches.bench_foreign import cli_json, score, set_dir, write_sets
 from experiments.benches.study_beams import score_beam
-from experiments.benches.harness import parser, write_table
+from experiments.benches.harness import parser, table, write_table
 from learn.classical import run_classical
 from learn.estimator import DamageClassifier
 from learn.evaluate import metrics
@@ -250,25 +250,21 @@ def catalogue_beam(name: str, pairs_dir: Path, model, before, tree, out: Path, c
 
 def sweep_markdown(rows: list[dict]) -> str:
     cases = list(dict.fromkeys(r["case"] for r in rows))
-    lines = ["Probability of a mode missing in training (held-out pairs, network element accuracy / false alarms):",
-             "", "| p | " + " | ".join(f"{c} missing" for c in cases) + " |",
-             "| --- |" + " --- |" * len(cases)]
-    for p in dict.fromkeys(r["p"] for r in rows):
-        cells = [next(r for r in rows if r["p"] == p and r["case"] == c) for c in cases]
-        lines.append(f"| {p:g} | " + " | ".join(f"{_pct(r['element_accuracy'])} / {100 * r['false_alarms']:.1f}%"
-                                               for r in cells) + " |")
-    return "\n".join(lines) + "\n"
+    by = {(r["p"], r["case"]): r for r in rows}
+    return ("Probability of a mode missing in training (held-out pairs, network element accuracy / false alarms):\n\n"
+            + table(["p", *(f"{c} missing" for c in cases)],
+                    [[f"{p:g}", *(f"{_pct(by[p, c]['element_accuracy'])} / {100 * by[p, c]['false_alarms']:.1f}%"
+                                  for c in cases)] for p in dict.fromkeys(r["p"] for r in rows)]) + "\n")
 
 
 def markdown(held: list[dict], sim: list[dict], beam: list[dict], beam_name: str | None = None) -> str:
     lines = []
     if held:
         lines += ["Held-out pairs (`generate --config training`, another seed):", "",
-                  "| missing | method | AUC | detection | false alarms | element acc. | in distribution |",
-                  "| --- | --- | --- | --- | --- | --- | --- |"]
-        lines += [f"| {r['case']} | {r['method']} | {r['auc']:.3f} | {_pct(r['detection'])} | "
-                  f"{100 * r['false_alarms']:.1f}% | {_pct(r['element_accuracy'])} | {_pct(r['in_distribution'])} |"
-                  for r in held]
+                  table(["missing", "method", "AUC", "detection", "false alarms", "element acc.", "in distribution"],
+                        [[r["case"], r["method"], f"{r['auc']:.3f}", _pct(r["detection"]),
+                          f"{100 * r['false_alarms']:.1f}%", _pct(r["element_accuracy"]), _pct(r["in_distribution"])]
+                         for r in held])]
     for title, rows, acc in ((("Independent simulator, thesis beam (`eb` set)"), sim, "element acc."),
                              (f"Independent simulator, {beam_name}", beam, "zone acc.")):
         if not rows:

@@ -32,13 +32,13 @@ from threadpoolctl import threadpool_limits
 from experiments.second_sim.ambient import ambient_record
 from experiments.second_sim.fem import Beam
 from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
-from experiments.benches.harness import parser, write_table
+from experiments.benches.harness import parser, table, write_table
 from physics.identification.fdd import identify_fdd
 from physics.identification.ssi import identify_ssi
 from physics.io import atomic_write_text
 from physics.modal import mac
 
-__all__ = ["CASES", "main", "score", "table"]
+__all__ = ["CASES", "main", "run", "score"]
 
 FS_HZ = 2000.0
 DAMPING = (0.01, 0.008, 0.006, 0.005)
@@ -112,7 +112,7 @@ def _peer(rec):
     return out
 
 
-def table(minutes=10.0, seed=1, peer=True) -> list[dict]:
+def run(minutes=10.0, seed=1, peer=True) -> list[dict]:
     """One row per case and method (see the module docstring)."""
     beam = Beam(LENGTH_M, EI_NM2, MASS_PER_LENGTH_KG_M, n_elements=16)
     rows = []
@@ -163,12 +163,10 @@ def memory_markdown(r, minutes) -> str:
 
 
 def markdown(rows) -> str:
-    head = ("| record | method | modes found | max freq. error | max damping error | min MAC | time |\n"
-            "| --- | --- | --- | --- | --- | --- | --- |\n")
-    return head + "".join(
-        f"| {r['case']}, {r['minutes']:g} min | {r['method']} | {r['found']} of {r['of']} | "
-        f"{r['max_freq_err_pct']:.3f} % | {r['max_damping_err_pct']:.1f} % | {r['min_mac']:.5f} | "
-        f"{r['wall_s']:.2f} s |\n" for r in rows)
+    return table(["record", "method", "modes found", "max freq. error", "max damping error", "min MAC", "time"],
+                 [[f"{r['case']}, {r['minutes']:g} min", r["method"], f"{r['found']} of {r['of']}",
+                   f"{r['max_freq_err_pct']:.3f} %", f"{r['max_damping_err_pct']:.1f} %", f"{r['min_mac']:.5f}",
+                   f"{r['wall_s']:.2f} s"] for r in rows]) + "\n"
 
 
 def main(argv=None) -> int:
@@ -196,7 +194,7 @@ def _main(args) -> int:
         if args.docs:
             write_table("identification.md", "oma-memory", memory_markdown(r, args.long_record))
         return 0
-    rows = table(args.minutes, args.seed, not args.no_peer)
+    rows = run(args.minutes, args.seed, not args.no_peer)
     md = markdown(rows)
     sys.stdout.write(md)
     ours = {r["case"]: r["wall_s"] for r in rows if r["method"].startswith("SSI-cov")}

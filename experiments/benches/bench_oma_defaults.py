@@ -44,7 +44,7 @@ from experiments.cli import main as cli
 from experiments.second_sim.ambient import ambient_record, write_npz
 from experiments.second_sim.fem import Beam, assemble, modes
 from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
-from experiments.benches.harness import parser, write_table
+from experiments.benches.harness import parser, table, write_table
 from physics.io import atomic_write_text
 
 __all__ = ["CASES", "main", "run_case"]
@@ -160,13 +160,13 @@ def markdown(rows) -> str:
     def n(v, fmt):
         return "-" if v is None or (isinstance(v, float) and not np.isfinite(v)) else format(v, fmt)
 
-    head = ("| record | method | found | extra | warned | weak | max freq. error | max damping error | min MAC | "
-            "time | peak memory |\n| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n")
-    return head + "".join(
-        f"| {r['case']} ({r['fs_hz']:g} Hz, {r['channels']} ch) | {r['method']} | "
-        f"{r['found']} of {r['of']}{' (failed)' if r['error'] else ''} | {r['extra']} | {n(r['warned'], 'd')} | "
-        f"{n(r['weak'], 'd')} | {n(r['max_freq_err_pct'], '.3f')} % | {n(r['max_damping_err_pct'], '.1f')} % | "
-        f"{n(r['min_mac'], '.4f')} | {r['wall_s']:.2f} s | {r['peak_mib']:.0f} MiB |\n" for r in rows)
+    head = ["record", "method", "found", "extra", "warned", "weak", "max freq. error", "max damping error", "min MAC",
+            "time", "peak memory"]
+    return table(head, [[f"{r['case']} ({r['fs_hz']:g} Hz, {r['channels']} ch)", r["method"],
+                         f"{r['found']} of {r['of']}{' (failed)' if r['error'] else ''}", r["extra"],
+                         n(r["warned"], "d"), n(r["weak"], "d"), f"{n(r['max_freq_err_pct'], '.3f')} %",
+                         f"{n(r['max_damping_err_pct'], '.1f')} %", n(r["min_mac"], ".4f"), f"{r['wall_s']:.2f} s",
+                         f"{r['peak_mib']:.0f} MiB"] for r in rows], ["---"] * 2 + ["---:"] * 9) + "\n"
 
 
 def main(argv=None) -> int:

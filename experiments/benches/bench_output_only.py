@@ -37,7 +37,7 @@ from experiments.benches.bench_foreign import classify_set, cli_json, score, wri
 from experiments.second_sim.ambient import ambient_record, write_npz
 from experiments.second_sim.fem import Beam, Slit
 from experiments.second_sim.pairs import NODE_X_M
-from experiments.benches.harness import parser, write_table
+from experiments.benches.harness import parser, table, write_table
 
 __all__ = ["beams_of", "main"]
 
@@ -122,14 +122,12 @@ def markdown(rows: list[dict], args) -> str:
     def pct(v):
         return "-" if v is None or not np.isfinite(v) else f"{v:.0%}"
 
-    lines = ["| model | route | method | element acc. | detection | false alarms | size err. | 1-sigma cover | "
-             "inside | skew warned |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
-    lines += [f"| `{r['model']}` | {r['route']} | {r['method']} | {pct(r['element_accuracy'])} | "
-              f"{pct(r['detection'])} | {r['false_alarms']} of {r['intact_pairs']} | {pct(r['median_size_error'])} | "
-              f"{pct(r['size_one_sigma_cover'])} | {pct(r.get('in_distribution'))} | {r['skew_warned']} |"
-              for r in rows]
-    return "\n".join(lines) + f"\n\n{args.n} pairs of the `eb` set, seed {args.seed}.\n"
+    head = ["model", "route", "method", "element acc.", "detection", "false alarms", "size err.", "1-sigma cover",
+            "inside", "skew warned"]
+    return table(head, [[f"`{r['model']}`", r["route"], r["method"], pct(r["element_accuracy"]), pct(r["detection"]),
+                         f"{r['false_alarms']} of {r['intact_pairs']}", pct(r["median_size_error"]),
+                         pct(r["size_one_sigma_cover"]), pct(r.get("in_distribution")), r["skew_warned"]]
+                        for r in rows]) + f"\n\n{args.n} pairs of the `eb` set, seed {args.seed}.\n"
 
 
 if __name__ == "__main__":

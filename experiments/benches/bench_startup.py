@@ -31,7 +31,7 @@ import time
 from pathlib import Path
 
 from experiments.cli import COMMANDS
-from experiments.benches.harness import parser, write_table
+from experiments.benches.harness import parser, table, write_table
 
 __all__ = ["GOALS", "PROJECT", "cases", "docs_table", "main", "offenders", "time_case"]
 
@@ -96,15 +96,10 @@ def offenders(argv: list[str], checkout: Path, top: int = 8) -> list[dict]:
 def docs_table(result: dict) -> str:
     """The Markdown table of :func:`main`'s result: median wall / CPU seconds per case, before and after."""
     before = "before" in result["checkouts"]
-    head = "| case | " + ("before: wall / CPU (s) | " if before else "") + "wall / CPU (s) | goal (s) |"
-    lines = [head, "| --- |" + (" ---: |" if before else "") + " ---: | ---: |"]
-    for r in result["cases"]:
-        cells = [f"`{r['case']}`"]
-        if before:
-            cells.append(f"{r['before_wall_s']:.2f} / {r['before_cpu_s']:.2f}")
-        cells += [f"{r['after_wall_s']:.2f} / {r['after_cpu_s']:.2f}", f"{r['goal_s']:.1f}"]
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines) + "\n"
+    return table(["case", *["before: wall / CPU (s)"] * before, "wall / CPU (s)", "goal (s)"],
+                 [[f"`{r['case']}`", *[f"{r['before_wall_s']:.2f} / {r['before_cpu_s']:.2f}"] * before,
+                   f"{r['after_wall_s']:.2f} / {r['after_cpu_s']:.2f}", f"{r['goal_s']:.1f}"] for r in result["cases"]],
+                 ["---", *["---:"] * before, "---:", "---:"]) + "\n"
 
 
 def _fixtures(out: Path) -> tuple[Path, Path, Path]:

@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from experiments.benches.harness import parser, write_table
+from experiments.benches.harness import parser, table, write_table
 from experiments.studies.plain_beam import plain_fe
 from physics import discrepancy as dsc
 from physics.beam import load_beam
@@ -108,16 +108,14 @@ def _err(r: dict) -> str:
     return "-" if r["param_error"] is None else f"{100 * r['param_error']:.1f} %"
 
 
-def markdown(table: list[dict], seeds: int) -> str:
+def markdown(rows: list[dict], seeds: int) -> str:
     """The docs table of :func:`rows`."""
-    lines = [f"Hidden support effects, {seeds} seeds per truth (`python -m experiments.benches.bench_supports "
-             f"--seeds {seeds} --docs`; truths from the plain Hermite FE of `experiments/studies/plain_beam.py`, "
-             "not physics/):",
-             "", "| truth | data | named | parameter error | max \\|f error\\| % recal. -> named |",
-             "| --- | --- | --- | --- | --- |"]
-    lines += [f"| {r['truth']} | {r['data']} | {_named(r)} | {_err(r)} | "
-              f"{r['gap_pct'][0]:.2f} -> {r['gap_pct'][1]:.2f} |" for r in table]
-    return "\n".join(lines)
+    return (f"Hidden support effects, {seeds} seeds per truth (`python -m experiments.benches.bench_supports "
+            f"--seeds {seeds} --docs`; truths from the plain Hermite FE of `experiments/studies/plain_beam.py`, "
+            "not physics/):\n\n"
+            + table(["truth", "data", "named", "parameter error", "max \\|f error\\| % recal. -> named"],
+                    [[r["truth"], r["data"], _named(r), _err(r), f"{r['gap_pct'][0]:.2f} -> {r['gap_pct'][1]:.2f}"]
+                     for r in rows]))
 
 
 def main(argv=None):
@@ -127,10 +125,10 @@ def main(argv=None):
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
     print(f"{'truth':44s} {'data':7s} {'named (over seeds)':40s} {'param err':>9s} {'gap %':>15s}")
-    table = rows(args.seeds, args.cases)
+    found = rows(args.seeds, args.cases)
     print(f"\n{time.perf_counter() - t0:.0f} s")
     if args.docs:
-        write_table("discrepancy.md", "supports", markdown(table, args.seeds))
+        write_table("discrepancy.md", "supports", markdown(found, args.seeds))
 
 
 if __name__ == "__main__":

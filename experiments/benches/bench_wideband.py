@@ -49,7 +49,7 @@ from experiments.cli import main as cli
 from experiments.second_sim.fem import Beam, assemble, modes
 from experiments.second_sim.response import Damping, receptance
 from experiments.second_sim.writers import convert_receptance, write_uff
-from experiments.benches.harness import parser, write_table
+from experiments.benches.harness import parser, table, write_table
 from physics.io import atomic_write_text
 
 __all__ = ["CASES", "METHODS", "WideBandTest", "main", "markdown", "peak_prominence", "run_identify", "score",
@@ -253,15 +253,12 @@ def markdown(summary: list[dict], args) -> str:
     def pct(v, digits):
         return "-" if not np.isfinite(v) else f"{100 * v:.{digits}f} %"
 
-    lines = ["| method | kind | sensors | present (5x) | found 1 % | found 0.1 % | missed, warned | "
-             "missed, silent (5x) | spurious | median freq. error | median damping error | exit != 0 |",
-             "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
-    lines += [f"| {s['method']} | {s['kind']} | {s['n_sensors']} | {s['present']} ({s['loud']}) | {s['found']} | "
-              f"{s['found_01']} | {s['warned']} | {s['silent']} ({s['silent_loud']}) | {s['spurious']} | "
-              f"{pct(s['median_freq_err'], 3)} | "
-              f"{pct(s['median_zeta_err'], 0)} | {s['failed']}{crashed(s)} |"
-              for s in summary]
-    return "\n".join(lines) + (
+    head = ["method", "kind", "sensors", "present (5x)", "found 1 %", "found 0.1 %", "missed, warned",
+            "missed, silent (5x)", "spurious", "median freq. error", "median damping error", "exit != 0"]
+    return table(head, [[s["method"], s["kind"], s["n_sensors"], f"{s['present']} ({s['loud']})", s["found"],
+                         s["found_01"], s["warned"], f"{s['silent']} ({s['silent_loud']})", s["spurious"],
+                         pct(s["median_freq_err"], 3), pct(s["median_zeta_err"], 0), f"{s['failed']}{crashed(s)}"]
+                        for s in summary], ["---"] * 2 + ["---:"] * 10) + (
         f"\n\n{args.seeds} files per case (seeds {args.seed}-{args.seed + args.seeds - 1}), counts summed over "
         "them; `python -m experiments.benches.bench_wideband` (module docstring: the simulator, the artefacts and the "
         "counting rules).\n")
