@@ -18,8 +18,8 @@ from physics.layout import MIN_VISIBLE, uniform_shapes
 from physics.modal import mac
 
 __all__ = ["BASELINE_PAIR_BAND", "IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "MIN_PAIR_MAC", "RATIO_TOLERANCE",
-           "ModalPair", "differences_from_model", "frf_rows", "identification_band_hz", "identify_modes",
-           "identify_test", "modal_pair", "mode_checks", "nominal_ratio_range", "on_model_dofs",
+           "ModalPair", "differences_from_model", "frf_rows", "identification_band_hz", "identify_band",
+           "identify_modes", "modal_pair", "mode_checks", "nominal_ratio_range", "on_model_dofs",
            "pair_modes_by_frequency", "pairing_bands", "refit_missing_modes", "unexcited_modes"]
 
 #: The identification ``classify`` runs on FRF files: LSCF poles and LSFD residues, the 4 lowest modes. The
@@ -347,7 +347,7 @@ def identify_modes(frf, fmax_hz: float | None = None, where: str = "FRF file", n
 
 
 
-def identify_test(frf, band_hz, where: str = "FRF file"):
+def identify_band(frf, band_hz, where: str = "FRF file"):
     """Modal data of one FRF file of a beam-file test, identified as ``beam-damage identify FILE --band LO HI``
     identifies it (:func:`physics.identification.identify_frf`: LSCF over the band, every stable pole inside it,
     its default model order, a clear peak no pole explains fitted again around it). ``classify`` and the modal-noise
@@ -367,45 +367,33 @@ def identify_test(frf, band_hz, where: str = "FRF file"):
     return ident.modal_data
 
 
-def refit_missing_modes(frf, md, target_hz, band, wanted=None, where: str = "FRF file"):
-    """``(ModalData, found)``: ``md`` (identified from ``frf``) with the modes no pole of it pairs with found again
-    over their own band.
+def refit_missing_modes(missing, target_hz, log_tol, bands_hz, lines_hz, identify, accept=None) -> list:
+    """The narrow-band re-identification of the modes a test's identification over its whole band missed (of
+    ``classify`` with several baselines, :func:`learn.pair_inputs.refit_frf_modes`, and of ``monitor``,
+    :func:`learn.monitor.tracking.refit_missing`).
 
-    For each mode ``j`` of ``target_hz`` (those ``wanted``, a bool mask; default all) that no pole of ``md`` pairs
-    with (:func:`pair_modes_by_frequency` within ``band``), ``frf`` is identified again over ``f_j / (1 + b_j)`` to
-    ``f_j (1 + b_j)`` (:func:`pairing_bands`, within the file's lines; :func:`identify_test`), and the pole nearest
-    ``f_j`` within that band, if any, is added. ``found``: ``(j, frequency Hz, lo, hi)`` per mode found so.
+    For each mode ``j`` of ``missing``, the test is identified again over ``bands_hz[j]`` (Hz, within
+    ``lines_hz``, its ``(lo, hi)`` or None) by ``identify(lo, hi)`` -> ``(found, frequencies Hz)`` or None, and
+    the pole of ``found`` nearest ``target_hz[j]`` within ``log_tol[j]`` in ``|ln f|`` (and where
+    ``accept(found, j)``, a bool or one per pole, holds) is kept.
+
+    Returns
+    -------
+    list of ``(j, found, k, lo, hi)``: the mode, the narrow-band identification, its pole kept and the band.
     """
-    target = np.asarray(target_hz, float)
-    tol = pairing_bands(target, band)
-    f = np.abs(np.asarray(md.eigenvalues)) / (2 * np.pi)
-    which = pair_modes_by_frequency(f, target, band)
-    lines = np.asarray(frf.frequency_hz, float)
-    lines = lines[lines > 0]
-    lams, vecs, texts = [], [], []
-    for j in range(target.size):
-        if j in which or (wanted is not None and not wanted[j]) or md.eigenvectors is None:
+    out = []
+    for j in missing:
+        lo, hi = bands_hz[j]
+        if lines_hz is not None:
+            lo, hi = max(lo, lines_hz[0]), min(hi, lines_hz[1])
+        got = identify(lo, hi) if hi > lo else None
+        if got is None or got[1].size == 0:
             continue
-        lo, hi = max(target[j] / (1 + tol[j]), lines[0]), min(target[j] * (1 + tol[j]), lines[-1])
-        if not hi > lo:
-            continue
-        try:
-            found = identify_test(frf, (lo, hi), where)
-        except (BeamDamageError, ValueError):
-            continue
-        fn = np.abs(np.asarray(found.eigenvalues)) / (2 * np.pi)
-        d = np.abs(np.log(fn / target[j]))
-        if found.eigenvectors is None or not np.any(d <= np.log1p(tol[j])) or \
-                found.eigenvectors.shape[0] != md.eigenvectors.shape[0]:
-            continue
-        k = int(np.argmin(d))
-        lams.append(found.eigenvalues[k])
-        vecs.append(found.eigenvectors[:, k])
-        texts.append((j, float(fn[k]), float(lo), float(hi)))
-    if not lams:
-        return md, []
-    return replace(md, eigenvalues=np.r_[md.eigenvalues, lams],
-                   eigenvectors=np.c_[md.eigenvectors, np.stack(vecs, axis=1)]), texts
+        d = np.abs(np.log(got[1] / target_hz[j]))
+        ok = (d <= log_tol[j]) & (True if accept is None else accept(got[0], j))
+        if np.any(ok):
+            out.append((j, got[0], int(np.argmin(np.where(ok, d, np.inf))), lo, hi))
+    return out
 
 
 def unexcited_modes(test, drive_x_m: float) -> tuple:
