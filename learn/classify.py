@@ -17,7 +17,7 @@ from learn.normal_variation import model_modes
 from learn.pair_inputs import PairInputs, mode_features, pair_inputs
 from learn.shapes import real_shapes, sign_aligned
 from learn.verdict import (IN_DISTRIBUTION_PERCENTILE, Verdict, agreement, classical_answer, classical_verdict,
-                           modes_text, network_answer, network_output, ood_percentile, place_keys)
+                           modes_text, network_answer, network_output, place_keys)
 
 __all__ = ["DEFAULT_FALSE_ALARM_RATE", "DISTANCE_TERMS", "KEYS", "MIN_PAIRING_MAC", "Answers", "ClassifiedPair",
            "classify", "classify_many", "classify_pairs", "distance_terms", "distance_text", "pair_answers",
@@ -52,7 +52,7 @@ class Answers:
     distance_terms: list | None = None
     location_distributions: dict | None = None
     classical: dict | None = None
-    classical_methods: tuple = ()
+    classical_methods: list | tuple = ()
     mode_reasons: tuple = ()
     sensitivity: object = None
 
@@ -61,8 +61,8 @@ class Answers:
 class ClassifiedPair:
     """The last stage: one pair's verdict, the answers it was chosen from, the competing explanations
     (``explanations``: ``hypotheses``, ``hypotheses_summary``, ``frequency_change_std``, ``shape_change_std``) and
-    what the figure of ``classify`` draws (``modes``: 1-based modes classified, ``frequency_change_pct``: their
-    changes as the explanations weigh them, ``location_distribution``: the network's 68 % one)."""
+    what the figure of ``classify`` draws besides (``modes``: 1-based modes classified, ``frequency_change_pct``:
+    their changes as the explanations weigh them)."""
 
     measured: str
     verdict: Verdict
@@ -72,12 +72,7 @@ class ClassifiedPair:
     verdict_from: str
     in_distribution: bool
     out_of_distribution_reasons: list
-    mahalanobis_distance: float | None
-    training_percentile: float | None
-    distance_terms: list | None
-    network: dict | None
-    classical: dict | None
-    classical_methods: list
+    answers: Answers
     identification: dict
     explanations: dict
     input_route: str
@@ -86,12 +81,11 @@ class ClassifiedPair:
     warnings: list
     modes: list
     frequency_change_pct: object = None
-    location_distribution: object = None
     dof_positions: dict | None = None
 
     def to_dict(self) -> dict:
         """The pair as ``classify --json`` prints it (:data:`KEYS`)."""
-        d = {**asdict(self), **asdict(self.verdict), **self.explanations}
+        d = {**asdict(self.answers), **asdict(self), **asdict(self.verdict), **self.explanations}
         return {k: d[k] for k in KEYS}
 
 
@@ -173,7 +167,7 @@ def pair_answers(model: TrainedModel, inputs: PairInputs) -> tuple:
         net = net and {**net, **place_keys(net, model.beam, mirror)}
         best = next((c for c in methods if c["method"] == model.config["best_classical"]),
                     methods[0] if methods else None)
-        out.append(replace(a, network=net, classical=best, classical_methods=tuple(methods)))
+        out.append(replace(a, network=net, classical=best, classical_methods=methods))
     return tuple(out)
 
 
@@ -204,11 +198,10 @@ def _classified(model: TrainedModel, inputs: PairInputs, i: int, a: Answers, exp
     kind = damage_model(model.damage_kind)
     return ClassifiedPair(
         inputs.names[i + 1], verdict, kind.kind, kind.size_meaning, location_ambiguity(beam, asdict(verdict), p),
-        source, not reasons, reasons, dist, pct, terms, net, cl, list(a.classical_methods),
+        source, not reasons, reasons, a,
         _identification(p, inputs.baseline, inputs.currents[i] if inputs.currents else None, inputs.identified, beam),
         explained, inputs.route, nv_i, agreement(verdict.damaged, net, cl, explained["hypotheses"], source), w,
-        [] if p is None else [beam.modes[j] for j in p.mode_index], _change_pct(p, nv_i),
-        a.location_distributions and a.location_distributions["68"])
+        [] if p is None else [beam.modes[j] for j in p.mode_index], _change_pct(p, nv_i))
 
 
 def _change_pct(pair, normal: dict):
@@ -239,7 +232,7 @@ def _normal_variation(model: TrainedModel, inputs: PairInputs, warnings: list) -
     full = [i for i, p in enumerate(pairs) if p.complete and (route == "frequency" or not p.frequency_only)]
     if not full:
         return out
-    dist, pct = ood_percentile(model.networks[route], mode_features(model, route, pairs, full))
+    dist, pct = model.networks[route].training_percentile(mode_features(model, route, pairs, full))
     out["baseline_pairs_distance_max"] = float(dist.max())
     out["baseline_pairs_training_percentile"] = [float(v) for v in pct]
     outside = int(np.sum(pct > IN_DISTRIBUTION_PERCENTILE))
@@ -264,29 +257,23 @@ def _explanations(model: TrainedModel, inputs: PairInputs) -> list[dict]:
     without one): with the assumed noise, or with the normal variation measured on several baselines (each
     frequency against the baselines' mean, std ``s sqrt(1 + 1/n)``; each shape entry against the reference
     baseline's, std ``s sqrt(2)``)."""
-    known = [i for i in range(len(inputs.names) - 1) if inputs.pair(i) is not None]
-    out = [NO_EXPLANATION] * (len(inputs.names) - 1)
-    for i, e in zip(known, _explain(model, [inputs.pairs[i] for i in known], inputs.normal_variation)):
+    out, nv = [NO_EXPLANATION] * (len(inputs.names) - 1), inputs.normal_variation
+    known = [i for i in range(len(out)) if inputs.pair(i) is not None]
+    pairs, noise = [inputs.pairs[i] for i in known], ()
+    if nv is not None and pairs:
+        mean_hz, counts, shape = nv.frequency_mean_hz, nv.counts, nv.shape_std
+        noise = (np.where(counts >= 2, nv.frequency_std_rel * np.sqrt(1 + 1 / np.maximum(counts, 1)),
+                          FREQUENCY_CHANGE_STD),
+                 SHAPE_CHANGE_STD if shape is None else np.where(np.isfinite(shape), shape * np.sqrt(2),
+                                                                 SHAPE_CHANGE_STD))
+        for k, p in enumerate(pairs):                  # the baseline's frequencies moved to the baselines' mean
+            lam = np.array(p.eigenvalues)
+            f = np.abs(lam[0]) / (2 * np.pi)
+            lam[0] = lam[0] * np.where(np.isfinite(mean_hz[p.mode_index]), mean_hz[p.mode_index] / f, 1.0)
+            pairs[k] = replace(p, eigenvalues=lam)
+    for i, e in zip(known, explain_many(model, pairs, *noise)):
         out[i] = e
     return out
-
-
-def _explain(model: TrainedModel, pairs: list, nv) -> list[dict]:
-    if nv is None or not pairs:
-        return explain_many(model, pairs)
-    mean_hz, counts = nv.frequency_mean_hz, nv.counts
-    sigma = np.where(counts >= 2, nv.frequency_std_rel * np.sqrt(1 + 1 / np.maximum(counts, 1)),
-                     FREQUENCY_CHANGE_STD)
-    centred = []
-    for p in pairs:                       # the baseline's frequencies moved to the baselines' mean
-        lam = np.array(p.eigenvalues)
-        f = np.abs(lam[0]) / (2 * np.pi)
-        lam[0] = lam[0] * np.where(np.isfinite(mean_hz[p.mode_index]), mean_hz[p.mode_index] / f, 1.0)
-        centred.append(replace(p, eigenvalues=lam))
-    shape = nv.shape_std
-    shape_sigma = SHAPE_CHANGE_STD if shape is None else np.where(np.isfinite(shape), shape * np.sqrt(2),
-                                                                   SHAPE_CHANGE_STD)
-    return explain_many(model, centred, sigma, shape_sigma)
 
 
 def _within_normal_variation(verdict: Verdict, normal: dict, warnings: list, source) -> tuple[Verdict, list]:
@@ -314,7 +301,7 @@ def _network_answers(model: TrainedModel, inputs: PairInputs) -> list[Answers]:
         return out
     est = model.networks[route]
     o, d = network_output(est, X, model.sensitivity)
-    distance, percentile = ood_percentile(est, X)
+    distance, percentile = est.training_percentile(X)     # Mahalanobis distances, training percentiles
     named = distance_terms(est, X, route, model.beam) if route in ("modal", "frequency") else [None] * len(rows)
     for r, i in enumerate(rows):
         out[i] = Answers(network_answer(d, r, o, model.beam), float(distance[r]), float(percentile[r]), named[r],
@@ -395,7 +382,6 @@ def _identification(p, base_md, cur_md, identified: bool, beam) -> dict:
             "baseline_frequencies_hz": [float(x) for x in freqs[0]],
             "measured_frequencies_hz": [float(x) for x in freqs[1]], "modes_classified": modes,
             "baseline_poles": list(poles[0]), "measured_poles": list(poles[1])}
-
 
 
 def _classical_answers(model: TrainedModel, pairs, parts: list[Answers]) -> list[Answers]:

@@ -309,7 +309,6 @@ def frf_rows(frf, beam: BeamSpec):
     return np.stack([f.frf[resp.index(d), j] for d in beam.dofs]), f
 
 
-
 def identification_band_hz(frf, fmax_hz: float | None = None, fmin_hz: float = 0.0) -> tuple[float, float]:
     """Band (Hz) :func:`identify_modes` fits: the file's lines from the first above ``fmin_hz`` (and 0 Hz) up to
     ``fmax_hz``."""
@@ -336,15 +335,7 @@ def identify_modes(frf, fmax_hz: float | None = None, where: str = "FRF file", n
     band = None
     if (fmax_hz is not None and frf.frequency_hz[-1] > fmax_hz) or fmin_hz > frf.frequency_hz[0]:
         band = identification_band_hz(frf, fmax_hz, fmin_hz)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            ident = identify_frf(frf, method=IDENTIFICATION["method"], n_modes=n_modes, band_hz=band,
-                                 max_order=max_order)
-    except (np.linalg.LinAlgError, RuntimeError) as exc:
-        raise BeamDamageError(f"{where}: LSCF/LSFD identification failed ({exc})") from None
-    return ident.modal_data
-
+    return _lscf(frf, where, n_modes=n_modes, band_hz=band, max_order=max_order)
 
 
 def identify_band(frf, band_hz, where: str = "FRF file"):
@@ -358,13 +349,17 @@ def identify_band(frf, band_hz, where: str = "FRF file"):
     -------
     :class:`physics.io.ModalData` of every mode found in ``band_hz`` (Hz).
     """
+    return _lscf(frf, where, band_hz=tuple(map(float, band_hz)))
+
+
+def _lscf(frf, where: str, **options):
+    """:data:`IDENTIFICATION`'s method on ``frf`` (:func:`physics.identification.identify_frf` ``options``)."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            ident = identify_frf(frf, method=IDENTIFICATION["method"], band_hz=tuple(map(float, band_hz)))
+            return identify_frf(frf, method=IDENTIFICATION["method"], **options).modal_data
     except (np.linalg.LinAlgError, RuntimeError) as exc:
         raise BeamDamageError(f"{where}: LSCF/LSFD identification failed ({exc})") from None
-    return ident.modal_data
 
 
 def refit_missing_modes(missing, target_hz, log_tol, bands_hz, lines_hz, identify, accept=None) -> list:

@@ -20,8 +20,7 @@ if TYPE_CHECKING:  # torch: the network is loaded only where one runs
 
 __all__ = ["BASE_LABELS", "IN_DISTRIBUTION_PERCENTILE", "PLACE_MASS", "PLACE_PEAK", "DamageWords", "Verdict",
            "agreement", "classical_answer", "classical_verdict", "detectability_threshold", "explanation_label",
-           "network_answer", "network_output", "noise_text", "normal_variation_text", "ood_percentile", "place_keys",
-           "verdict_text"]
+           "network_answer", "network_output", "noise_text", "normal_variation_text", "place_keys", "verdict_text"]
 
 #: How the prose names the explanations that are no damage kind (a damage kind's ``label`` names it).
 BASE_LABELS = {"intact": "intact", "global_stiffness": "a stiffness change of the whole beam",
@@ -52,15 +51,6 @@ def network_output(est: DamageClassifier, X, sens, name="network") -> tuple[Meth
                        probability=d.probability_damaged, x_std_over_L=d.x_std_over_L,
                        size_std=d.size_std, detectable=detectable)
     return out, d
-
-
-
-def ood_percentile(est: DamageClassifier, X) -> tuple[np.ndarray, np.ndarray]:
-    """Mahalanobis distances of feature rows to the training features, and the percentage of training pairs
-    at or below each distance: arrays of shape (n,) (on the present features of a row with missing modes,
-    :meth:`learn.estimator.DamageClassifier.training_percentile`)."""
-    return est.training_percentile(X)
-
 
 
 #: The network's zone probabilities hold a place when its best zone and that zone's neighbours hold this share of
@@ -165,7 +155,6 @@ def classical_answer(o: MethodOutput, i, beam) -> dict:
             "size": float(o.size[i]), "score": float(o.score[i])}
 
 
-
 @dataclass(frozen=True)
 class Verdict:
     """A classified pair's verdict: the network's answer (:func:`network_answer` with :func:`place_keys`) or the
@@ -208,7 +197,6 @@ def classical_verdict(cl: dict, sens, beam=None) -> Verdict:
     return Verdict.of({**dict.fromkeys(f.name for f in fields(Verdict)), **{k: cl[k] for k in (
         "damaged", "location_x_over_L", "location_x_m", "location_element", "location_zone", "zone_edges_m",
         "size")}, "place_determined": True, "detectable": bool(detectable >= detectability_threshold())})
-
 
 
 @dataclass(frozen=True)

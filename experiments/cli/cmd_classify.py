@@ -208,7 +208,7 @@ def _figure(res, pair, base, cur, beam) -> bytes:
         a2.set_xticks(x, [f"mode {m}" for m in modes])
         a2.legend(fontsize=7)
     a2.set(ylabel="frequency change (%)", title="Each mode's change and what the explanations predict")
-    _location(a3, res, pair.location_distribution, beam)
+    _location(a3, res, (pair.answers.location_distributions or {}).get("68"), beam)
     buf = io.BytesIO()
     fig.tight_layout()
     fig.savefig(buf, format="png", dpi=110)
