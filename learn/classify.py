@@ -182,7 +182,8 @@ def _classified(model: TrainedModel, inputs: PairInputs, i: int, a: Answers, exp
     elif p is not None and not p.complete:
         reasons += shape_pairing_reasons(p, beam)
     dist, pct, terms = a.mahalanobis_distance, a.training_percentile, a.distance_terms
-    if net is not None and pct > IN_DISTRIBUTION_PERCENTILE and not _like_baseline_pairs(dist, normal):
+    top = normal.get("baseline_pairs_distance_max")            # the baseline tests' own pairs lie as far
+    if net is not None and pct > IN_DISTRIBUTION_PERCENTILE and not (top is not None and dist <= top):
         reasons.insert(0, f"Mahalanobis distance {dist:.3g} from the training data, beyond {pct:.2f}% of training "
                           "pairs" + (f" and the baseline tests' own pairs (at most "
                                      f"{normal['baseline_pairs_distance_max']:.3g})" if nv is not None else "")
@@ -244,12 +245,6 @@ def _normal_variation(model: TrainedModel, inputs: PairInputs, warnings: list) -
                         "rests on the measured variation, and a model trained with measurement.frequency_scatter "
                         "covering it would answer better")
     return out
-
-
-def _like_baseline_pairs(distance: float, normal: dict) -> bool:
-    """Whether a pair lies no farther from the training data than the baseline tests' own pairs."""
-    top = normal.get("baseline_pairs_distance_max")
-    return top is not None and distance <= top
 
 
 def _explanations(model: TrainedModel, inputs: PairInputs) -> list[dict]:

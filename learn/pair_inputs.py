@@ -62,7 +62,8 @@ class PairInputs:
 def pair_inputs(model: TrainedModel, baseline, currents: list, names: list[str] | None = None,
                 methods: list | None = None) -> PairInputs:
     """The first stage of :func:`classify_pairs`: the inputs' modes (identified from FRF files), their pairs and
-    the network's feature rows; a pair with too few common modes for a modal or frequency network is refused."""
+    the network's feature rows; a pair with fewer common modes than a modal or frequency network reads is refused
+    (:func:`learn.mode_count.mode_count_problem`)."""
     baselines = list(baseline) if isinstance(baseline, (list, tuple)) else [baseline]
     nb = len(baselines)
     names = (list(names) if names else
@@ -71,8 +72,12 @@ def pair_inputs(model: TrainedModel, baseline, currents: list, names: list[str] 
     inputs = _measured_pairs(model, baselines, currents, names)
     ref = 0 if inputs.normal_variation is None else inputs.normal_variation.reference
     inputs = _network_inputs(model, inputs, baselines[ref], currents, methods)
-    if inputs.route in ("modal", "frequency"):
-        _require_common_modes(inputs.pairs, inputs.names, model.beam)
+    for p, n in zip(inputs.pairs if inputs.route in ("modal", "frequency") else (), inputs.names[1:]):
+        found = (f"{n}: {p.mode_index.size} of modes {modes_text(model.beam.modes)} found in both it and "
+                 f"{inputs.names[0]} (" + "; ".join(p.missing) + ")")
+        problem = mode_count_problem(p.mode_index.size, found)
+        if problem:
+            raise BeamDamageError(problem)
     return inputs
 
 
@@ -138,16 +143,6 @@ def damping_warning(model: TrainedModel, pairs: list) -> str | None:
               "specimen.damping_ratios set to the test's")
 
 
-def _require_common_modes(pairs: list, names: list[str], beam) -> None:
-    """Refuse a pair with fewer modes both tests hold than :func:`learn.mode_count.mode_count_problem` asks (the
-    modal network reads modes)."""
-    for p, n in zip(pairs, names[1:]):
-        found = f"{n}: {p.mode_index.size} of modes {modes_text(beam.modes)} found in both it and {names[0]} ("
-        problem = mode_count_problem(p.mode_index.size, found + "; ".join(p.missing) + ")")
-        if problem:
-            raise BeamDamageError(problem)
-
-
 def _modal_inputs(model: TrainedModel, inputs: list, names: list[str], sens):
     """Modal data of every input: ``(list of ModalData, identified, found)``, ``found`` one text per input on the
     modes it holds (e.g. "LSCF/LSFD found 2 modes in 2-500 Hz")."""
@@ -211,15 +206,10 @@ def mode_features(model: TrainedModel, route: str, pairs: list, rows: list):
     if not rows:
         return None
     m = model.beam.n_modes
-    lam, vecs = _on_model_modes(pairs, rows, m)
-    return frequency_features(lam, m) if route == "frequency" else modal_features(lam, vecs, m, model.beam.test)
-
-
-def _on_model_modes(pairs: list, rows: list, n_modes: int):
-    """Eigen-data of ``pairs[rows]`` on the model's modes, NaN for those a pair lacks (stacked)."""
-    parts = [with_missing_modes(pairs[i].eigenvalues[None], pairs[i].eigenvectors[None], pairs[i].mode_index, n_modes)
+    parts = [with_missing_modes(pairs[i].eigenvalues[None], pairs[i].eigenvectors[None], pairs[i].mode_index, m)
              for i in rows]
-    return np.concatenate([a for a, _ in parts]), np.concatenate([b for _, b in parts])
+    lam, vecs = np.concatenate([a for a, _ in parts]), np.concatenate([b for _, b in parts])
+    return frequency_features(lam, m) if route == "frequency" else modal_features(lam, vecs, m, model.beam.test)
 
 
 def _network_inputs(model: TrainedModel, inputs: PairInputs, baseline, currents: list, methods=None) -> PairInputs:

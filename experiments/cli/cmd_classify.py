@@ -88,11 +88,6 @@ def baseline_files(given: list[str]) -> list[str]:
     return list(dict.fromkeys(out))
 
 
-def read_input(path):
-    """A modal-data file -> ModalData, an FRF file -> MeasuredFRF (:func:`physics.io.modal_or_frf`)."""
-    return read(path, modal_or_frf(path))
-
-
 def measured_test_warnings(model, files, raw, mapped) -> list[str]:
     """One line per way the files' test differs from the model's (:func:`learn.measured.differences_from_model`), and
     per file whose measured DOFs the model does not read."""
@@ -130,7 +125,7 @@ def run(args):
     baselines = baseline_files(args.baseline)
     nb = len(baselines)
     files = [*baselines, *args.measured]
-    raw = [read_input(f) for f in files]
+    raw = [read(f, modal_or_frf(f)) for f in files]                 # ModalData or MeasuredFRF
     mapped = [on_model_dofs(d, model.beam, beam_x_m, str(f)) for d, f in zip(raw, files)]
     base = [m[0] for m in mapped[:nb]]
     pairs = classify_pairs(model, base if nb > 1 else base[0], [m[0] for m in mapped[nb:]],
@@ -187,13 +182,14 @@ def _figure(res, pair, base, cur, beam) -> bytes:
             kind = d.kind
             a1.semilogy(d.frequency_hz, np.abs(d.frf[-1, 0]), color=colour,
                         label=f"{name}: {label(d.response_dofs[-1])} / {label(d.reference_dofs[0])}")
-        else:
+        elif d.eigenvectors is not None:
             w = np.linspace(1.0, 1.15 * np.abs(d.eigenvalues).max(), 4000)
             H = receptance_modal(d.eigenvalues, d.eigenvectors, w, response=[-1], reference=[0])[0, 0]
             a1.semilogy(w / (2 * np.pi), np.abs(H), color=colour, label=f"{name} (synthesised from its modes, "
                                                                         "unscaled)")
-        for f in found:
-            a1.axvline(f, color=colour, ls=":", lw=0.8)
+        alone = getattr(d, "eigenvectors", 0) is None                    # natural frequencies without shapes
+        for k, f in enumerate(found):
+            a1.axvline(f, color=colour, ls=":", lw=0.8, label=None if k or not alone else f"{name}: frequencies")
     a1.set(xlabel="frequency (Hz)", ylabel=f"|H| ({FRF_UNITS[kind]})",
            title=f"The two tests ({kind}); dotted: the modes identified")
     a1.legend(fontsize=7)
