@@ -18,8 +18,8 @@ from physics.layout import MIN_VISIBLE, uniform_shapes
 from physics.modal import mac
 
 __all__ = ["BASELINE_PAIR_BAND", "IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "MIN_PAIR_MAC", "RATIO_TOLERANCE",
-           "ModalPair", "differences_from_model", "frf_rows", "identification_band_hz", "identify_modes",
-           "identify_test", "modal_pair", "mode_checks", "nominal_ratio_range", "on_model_dofs",
+           "ModalPair", "differences_from_model", "frf_rows", "identification_band_hz", "identify_band",
+           "identify_modes", "modal_pair", "mode_checks", "nominal_ratio_range", "on_model_dofs",
            "pair_modes_by_frequency", "pairing_bands", "refit_missing_modes", "unexcited_modes"]
 
 #: The identification ``classify`` runs on FRF files: LSCF poles and LSFD residues, the 4 lowest modes. The
@@ -309,7 +309,6 @@ def frf_rows(frf, beam: BeamSpec):
     return np.stack([f.frf[resp.index(d), j] for d in beam.dofs]), f
 
 
-
 def identification_band_hz(frf, fmax_hz: float | None = None, fmin_hz: float = 0.0) -> tuple[float, float]:
     """Band (Hz) :func:`identify_modes` fits: the file's lines from the first above ``fmin_hz`` (and 0 Hz) up to
     ``fmax_hz``."""
@@ -336,18 +335,10 @@ def identify_modes(frf, fmax_hz: float | None = None, where: str = "FRF file", n
     band = None
     if (fmax_hz is not None and frf.frequency_hz[-1] > fmax_hz) or fmin_hz > frf.frequency_hz[0]:
         band = identification_band_hz(frf, fmax_hz, fmin_hz)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            ident = identify_frf(frf, method=IDENTIFICATION["method"], n_modes=n_modes, band_hz=band,
-                                 max_order=max_order)
-    except (np.linalg.LinAlgError, RuntimeError) as exc:
-        raise BeamDamageError(f"{where}: LSCF/LSFD identification failed ({exc})") from None
-    return ident.modal_data
+    return _lscf(frf, where, n_modes=n_modes, band_hz=band, max_order=max_order)
 
 
-
-def identify_test(frf, band_hz, where: str = "FRF file"):
+def identify_band(frf, band_hz, where: str = "FRF file"):
     """Modal data of one FRF file of a beam-file test, identified as ``beam-damage identify FILE --band LO HI``
     identifies it (:func:`physics.identification.identify_frf`: LSCF over the band, every stable pole inside it,
     its default model order, a clear peak no pole explains fitted again around it). ``classify`` and the modal-noise
@@ -358,54 +349,46 @@ def identify_test(frf, band_hz, where: str = "FRF file"):
     -------
     :class:`physics.io.ModalData` of every mode found in ``band_hz`` (Hz).
     """
+    return _lscf(frf, where, band_hz=tuple(map(float, band_hz)))
+
+
+def _lscf(frf, where: str, **options):
+    """:data:`IDENTIFICATION`'s method on ``frf`` (:func:`physics.identification.identify_frf` ``options``)."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            ident = identify_frf(frf, method=IDENTIFICATION["method"], band_hz=tuple(map(float, band_hz)))
+            return identify_frf(frf, method=IDENTIFICATION["method"], **options).modal_data
     except (np.linalg.LinAlgError, RuntimeError) as exc:
         raise BeamDamageError(f"{where}: LSCF/LSFD identification failed ({exc})") from None
-    return ident.modal_data
 
 
-def refit_missing_modes(frf, md, target_hz, band, wanted=None, where: str = "FRF file"):
-    """``(ModalData, found)``: ``md`` (identified from ``frf``) with the modes no pole of it pairs with found again
-    over their own band.
+def refit_missing_modes(missing, target_hz, log_tol, bands_hz, lines_hz, identify, accept=None) -> list:
+    """The narrow-band re-identification of the modes a test's identification over its whole band missed (of
+    ``classify`` with several baselines, :func:`learn.pair_inputs.refit_frf_modes`, and of ``monitor``,
+    :func:`learn.monitor.tracking.refit_missing`).
 
-    For each mode ``j`` of ``target_hz`` (those ``wanted``, a bool mask; default all) that no pole of ``md`` pairs
-    with (:func:`pair_modes_by_frequency` within ``band``), ``frf`` is identified again over ``f_j / (1 + b_j)`` to
-    ``f_j (1 + b_j)`` (:func:`pairing_bands`, within the file's lines; :func:`identify_test`), and the pole nearest
-    ``f_j`` within that band, if any, is added. ``found``: ``(j, frequency Hz, lo, hi)`` per mode found so.
+    For each mode ``j`` of ``missing``, the test is identified again over ``bands_hz[j]`` (Hz, within
+    ``lines_hz``, its ``(lo, hi)`` or None) by ``identify(lo, hi)`` -> ``(found, frequencies Hz)`` or None, and
+    the pole of ``found`` nearest ``target_hz[j]`` within ``log_tol[j]`` in ``|ln f|`` (and where
+    ``accept(found, j)``, a bool or one per pole, holds) is kept.
+
+    Returns
+    -------
+    list of ``(j, found, k, lo, hi)``: the mode, the narrow-band identification, its pole kept and the band.
     """
-    target = np.asarray(target_hz, float)
-    tol = pairing_bands(target, band)
-    f = np.abs(np.asarray(md.eigenvalues)) / (2 * np.pi)
-    which = pair_modes_by_frequency(f, target, band)
-    lines = np.asarray(frf.frequency_hz, float)
-    lines = lines[lines > 0]
-    lams, vecs, texts = [], [], []
-    for j in range(target.size):
-        if j in which or (wanted is not None and not wanted[j]) or md.eigenvectors is None:
+    out = []
+    for j in missing:
+        lo, hi = bands_hz[j]
+        if lines_hz is not None:
+            lo, hi = max(lo, lines_hz[0]), min(hi, lines_hz[1])
+        got = identify(lo, hi) if hi > lo else None
+        if got is None or got[1].size == 0:
             continue
-        lo, hi = max(target[j] / (1 + tol[j]), lines[0]), min(target[j] * (1 + tol[j]), lines[-1])
-        if not hi > lo:
-            continue
-        try:
-            found = identify_test(frf, (lo, hi), where)
-        except (BeamDamageError, ValueError):
-            continue
-        fn = np.abs(np.asarray(found.eigenvalues)) / (2 * np.pi)
-        d = np.abs(np.log(fn / target[j]))
-        if found.eigenvectors is None or not np.any(d <= np.log1p(tol[j])) or \
-                found.eigenvectors.shape[0] != md.eigenvectors.shape[0]:
-            continue
-        k = int(np.argmin(d))
-        lams.append(found.eigenvalues[k])
-        vecs.append(found.eigenvectors[:, k])
-        texts.append((j, float(fn[k]), float(lo), float(hi)))
-    if not lams:
-        return md, []
-    return replace(md, eigenvalues=np.r_[md.eigenvalues, lams],
-                   eigenvectors=np.c_[md.eigenvectors, np.stack(vecs, axis=1)]), texts
+        d = np.abs(np.log(got[1] / target_hz[j]))
+        ok = (d <= log_tol[j]) & (True if accept is None else accept(got[0], j))
+        if np.any(ok):
+            out.append((j, got[0], int(np.argmin(np.where(ok, d, np.inf))), lo, hi))
+    return out
 
 
 def unexcited_modes(test, drive_x_m: float) -> tuple:

@@ -7,7 +7,7 @@ A dataset's measured modal data are the truth modes plus random errors whose sta
 identifies differently: more sensors, modes that a sensor barely sees, higher modes, another band and model order.
 :func:`calibrate_test` measures it on the test itself: specimens of the config are simulated, their FRFs
 synthesised as a dataset synthesises them at :data:`LEVELS` x :data:`FLOORS`, identified exactly as ``classify``
-identifies a file of that model (:func:`learn.measured.identify_test`: as ``identify --band`` over the test's band,
+identifies a file of that model (:func:`learn.measured.identify_band`: as ``identify --band`` over the test's band,
 modes paired by frequency), and ``c``, ``g``, ``e`` of every mode fitted to the
 robust standard deviations of the errors (:func:`calibrate_std`). Deterministic for a config and seed.
 """
@@ -21,7 +21,7 @@ from datagen.batch_inputs import draw_batch
 from datagen.pipeline import per_mode, simulate_batch
 from datagen.setup import get_setup
 from datagen.synth import measured_frf
-from learn.measured import identify_test, pair_modes_by_frequency
+from learn.measured import identify_band, pair_modes_by_frequency
 from physics.errors import BeamDamageError
 from physics.io import MeasuredFRF
 from physics.modal import modal_parameters
@@ -83,7 +83,7 @@ def identification_errors(cfg: dict, level: float, floor: float, specimens: int,
     for i, Hs in enumerate(H.reshape(2 * specimens, S, -1)):
         frf = MeasuredFRF(f_hz, Hs[:, None, :], dofs[:S], (dofs[setup.drive_row],))
         try:
-            md = identify_test(frf, (fmin, fmax), "calibration")
+            md = identify_band(frf, (fmin, fmax), "calibration")
         except BeamDamageError:
             continue
         lam_e[i], psi_e[i] = on_nominal_modes(md.eigenvalues, md.eigenvectors, nominal)

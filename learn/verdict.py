@@ -3,7 +3,7 @@ and the verdict as a reader sees it."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -18,9 +18,9 @@ from physics.io import dof_positions_text
 if TYPE_CHECKING:  # torch: the network is loaded only where one runs
     from learn.estimator import DamageClassifier
 
-__all__ = ["BASE_LABELS", "IN_DISTRIBUTION_PERCENTILE", "PLACE_MASS", "PLACE_PEAK", "DamageWords", "agreement",
-           "classical_answer", "classical_verdict", "detectability_threshold", "explanation_label", "network_answer",
-           "network_output", "noise_text", "normal_variation_text", "ood_percentile", "place_keys", "verdict_text"]
+__all__ = ["BASE_LABELS", "IN_DISTRIBUTION_PERCENTILE", "PLACE_MASS", "PLACE_PEAK", "DamageWords", "Verdict",
+           "agreement", "classical_answer", "classical_verdict", "detectability_threshold", "explanation_label",
+           "network_answer", "network_output", "noise_text", "normal_variation_text", "place_keys", "verdict_text"]
 
 #: How the prose names the explanations that are no damage kind (a damage kind's ``label`` names it).
 BASE_LABELS = {"intact": "intact", "global_stiffness": "a stiffness change of the whole beam",
@@ -51,15 +51,6 @@ def network_output(est: DamageClassifier, X, sens, name="network") -> tuple[Meth
                        probability=d.probability_damaged, x_std_over_L=d.x_std_over_L,
                        size_std=d.size_std, detectable=detectable)
     return out, d
-
-
-
-def ood_percentile(est: DamageClassifier, X) -> tuple[np.ndarray, np.ndarray]:
-    """Mahalanobis distances of feature rows to the training features, and the percentage of training pairs
-    at or below each distance: arrays of shape (n,) (on the present features of a row with missing modes,
-    :meth:`learn.estimator.DamageClassifier.training_percentile`)."""
-    return est.training_percentile(X)
-
 
 
 #: The network's zone probabilities hold a place when its best zone and that zone's neighbours hold this share of
@@ -164,20 +155,48 @@ def classical_answer(o: MethodOutput, i, beam) -> dict:
             "size": float(o.size[i]), "score": float(o.score[i])}
 
 
+@dataclass(frozen=True)
+class Verdict:
+    """A classified pair's verdict: the network's answer (:func:`network_answer` with :func:`place_keys`) or the
+    classical method's (:func:`classical_verdict`: no probabilities, spreads or intervals, None there). Lengths in
+    m; ``size`` of the model's damage kind; ``zone_edges_m`` (z + 1,), ``*_probabilities`` (z,) or None,
+    ``x_m_68`` ... ``size_95`` ``[lo, hi]`` or None."""
 
-def classical_verdict(cl: dict, sens, beam=None) -> dict:
-    """The verdict keys from the classical method's answer ``cl`` (no probabilities or spreads)."""
+    damaged: bool
+    probability_damaged: float | None
+    decision_threshold: float | None
+    location_x_over_L: float
+    location_x_m: float
+    location_std_m: float | None
+    location_zone: int
+    zone_edges_m: list
+    zone_probabilities: list | None
+    place_determined: bool
+    place_text: str | None
+    location_element: int | None
+    element_probabilities: list | None
+    size: float
+    size_std: float | None
+    x_m_68: list | None
+    x_m_95: list | None
+    size_68: list | None
+    size_95: list | None
+    detectable: bool
+    probability_support_change: float | None
+    support_changed: bool | None
+
+    @classmethod
+    def of(cls, answer: dict) -> "Verdict":
+        """The verdict of an answer holding every field (the network's)."""
+        return cls(**{f.name: answer[f.name] for f in fields(cls)})
+
+
+def classical_verdict(cl: dict, sens, beam=None) -> Verdict:
+    """The verdict from the classical method's answer ``cl`` (no probabilities or spreads)."""
     detectable = sens.largest_drop(np.array([cl["location_x_over_L"]]), np.array([cl["size"]]))[0]
-    return {"damaged": cl["damaged"], "probability_damaged": None, "decision_threshold": None,
-            "location_x_over_L": cl["location_x_over_L"], "location_x_m": cl["location_x_m"],
-            "location_std_m": None, "location_element": cl["location_element"],
-            "location_zone": cl["location_zone"], "zone_edges_m": cl["zone_edges_m"], "zone_probabilities": None,
-            "place_determined": True, "place_text": None,
-            "element_probabilities": None, "size": cl["size"],
-            "size_std": None, **{f"{q}_{k}": None for q in ("x_m", "size") for k in LEVELS},
-            "detectable": bool(detectable >= detectability_threshold()),
-            "probability_support_change": None, "support_changed": None}
-
+    return Verdict.of({**dict.fromkeys(f.name for f in fields(Verdict)), **{k: cl[k] for k in (
+        "damaged", "location_x_over_L", "location_x_m", "location_element", "location_zone", "zone_edges_m",
+        "size")}, "place_determined": True, "detectable": bool(detectable >= detectability_threshold())})
 
 
 @dataclass(frozen=True)
@@ -259,7 +278,7 @@ def explained_text(res: dict) -> str:
     return "frequency and shape changes" if res.get("shape_change_std") else "frequency changes"
 
 
-def agreement(verdict: dict, net, cl, hypotheses, source: str) -> dict:
+def agreement(damaged: bool, net, cl, hypotheses, source: str) -> dict:
     """Whether the network, the classical method and the competing explanations tell one story about damage:
     ``{"network", "classical", "explanations", "agree", "text"}`` (None for an answer not given; the
     explanations' answer is the most likely one's name, a damage when it is a damage kind of
@@ -279,9 +298,9 @@ def agreement(verdict: dict, net, cl, hypotheses, source: str) -> dict:
     if agree:
         text = "One story: " + "; ".join(parts) + "."
     else:
-        text = (f"They disagree: {'; '.join(parts)}. The verdict ({'damaged' if verdict['damaged'] else 'undamaged'}) "
+        text = (f"They disagree: {'; '.join(parts)}. The verdict ({'damaged' if damaged else 'undamaged'}) "
                 f"is the {source}'s")
-        if best is not None and votes["explanations"] != bool(verdict["damaged"]):
+        if best is not None and votes["explanations"] != bool(damaged):
             text += (": the explanations find the change within the noise they weigh" if best["name"] == "intact"
                      else ": the explanations weigh the change against its noise and find "
                           f"{explanation_label(best['name'])} more probable")

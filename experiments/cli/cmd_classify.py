@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import glob
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from experiments.studies.report import figure_png
-from learn.classify import DEFAULT_FALSE_ALARM_RATE, classify_many
+from learn.classify import DEFAULT_FALSE_ALARM_RATE, KEYS, classify_pairs
 from learn.verdict import explanation_label
 from learn.measured import differences_from_model, on_model_dofs
 from learn.model_dir import load_model
@@ -31,17 +32,6 @@ from physics.io import (
 )
 
 __all__ = ["KEYS", "add_parser", "run"]
-
-KEYS = ("measured", "damaged", "probability_damaged", "decision_threshold", "location_x_over_L", "location_x_m",
-        "location_std_m", "location_zone", "zone_edges_m", "zone_probabilities", "place_determined", "place_text",
-        "location_ambiguity",
-        "location_element", "element_probabilities", "damage_kind", "size", "size_std", "x_m_68", "x_m_95", "size_68",
-        "size_95", "size_meaning", "detectable", "probability_support_change", "support_changed", "verdict_from",
-        "in_distribution",
-        "out_of_distribution_reasons", "mahalanobis_distance", "training_percentile", "distance_terms", "hypotheses",
-        "hypotheses_summary", "frequency_change_std", "shape_change_std", "normal_variation", "agreement", "network",
-        "classical", "classical_methods", "identification", "input_route", "warnings", "dof_positions")
-
 
 def add_parser(sub):
     p = sub.add_parser("classify",
@@ -98,11 +88,6 @@ def baseline_files(given: list[str]) -> list[str]:
     return list(dict.fromkeys(out))
 
 
-def read_input(path):
-    """A modal-data file -> ModalData, an FRF file -> MeasuredFRF (:func:`physics.io.modal_or_frf`)."""
-    return read(path, modal_or_frf(path))
-
-
 def measured_test_warnings(model, files, raw, mapped) -> list[str]:
     """One line per way the files' test differs from the model's (:func:`learn.measured.differences_from_model`), and
     per file whose measured DOFs the model does not read."""
@@ -140,25 +125,23 @@ def run(args):
     baselines = baseline_files(args.baseline)
     nb = len(baselines)
     files = [*baselines, *args.measured]
-    raw = [read_input(f) for f in files]
+    raw = [read(f, modal_or_frf(f)) for f in files]                 # ModalData or MeasuredFRF
     mapped = [on_model_dofs(d, model.beam, beam_x_m, str(f)) for d, f in zip(raw, files)]
     base = [m[0] for m in mapped[:nb]]
-    results = classify_many(model, base if nb > 1 else base[0], [m[0] for m in mapped[nb:]],
-                            names=[str(f) for f in files], methods=[identification_method(f) for f in files],
-                            false_alarm_rate=args.false_alarm_rate)
+    pairs = classify_pairs(model, base if nb > 1 else base[0], [m[0] for m in mapped[nb:]],
+                           names=[str(f) for f in files], methods=[identification_method(f) for f in files],
+                           false_alarm_rate=args.false_alarm_rate)
     differ = measured_test_warnings(model, files, raw, mapped)
-    for r in results:
-        r["warnings"] = differ + [w for w in r["warnings"] if w not in differ]
-    ref = files.index(results[0]["normal_variation"].get("reference_baseline", files[0]))
+    ref = files.index(pairs[0].normal_variation.get("reference_baseline", files[0]))
     base_pos = mapped[ref][1] and mapped[ref][1].to_dict()
-    extras = []
-    for r, (_, cur_map) in zip(results, mapped[nb:]):
-        r["dof_positions"] = {"baseline": base_pos, "measured": cur_map and cur_map.to_dict()}
-        extras.append(r.pop("_extra"))
+    pairs = [replace(c, warnings=differ + [w for w in c.warnings if w not in differ],
+                     dof_positions={"baseline": base_pos, "measured": cur_map and cur_map.to_dict()})
+             for c, (_, cur_map) in zip(pairs, mapped[nb:])]
+    results = [c.to_dict() for c in pairs]
     if not args.json and not args.out:
         args.out = "out/classify"
     if args.out:
-        _write(args.out, results, extras, mapped[ref][0], mapped[nb][0], model)
+        _write(args.out, results, pairs[0], mapped[ref][0], mapped[nb][0], model)
     if not args.json:
         for r in results:
             if len(results) > 1:
@@ -166,22 +149,21 @@ def run(args):
             print(model.verdict_text({**r, "warnings": []}))      # warnings: on stderr (experiments.cli.main)
         if args.out:
             print(f"{'verdict.json and classify.png' if len(results) == 1 else 'verdicts.json'} in {args.out}")
-    out = [{k: r[k] for k in KEYS} for r in results]
-    return out[0] if len(out) == 1 else out
+    return results[0] if len(results) == 1 else results
 
 
-def _write(out_dir, results, extras, base, cur, model):
+def _write(out_dir, results, pair, base, cur, model):
     """verdict.json and classify.png (one pair) or verdicts.json (several), each written atomically."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     if len(results) > 1:
         atomic_write_text(out / "verdicts.json", json.dumps(to_jsonable(results), indent=1))
         return
-    atomic_write_bytes(out / "classify.png", _figure(results[0], extras[0], base, cur, model.beam))
+    atomic_write_bytes(out / "classify.png", _figure(results[0], pair, base, cur, model.beam))
     atomic_write_text(out / "verdict.json", json.dumps(to_jsonable(results[0]), indent=1))
 
 
-def _figure(res, extra, base, cur, beam) -> bytes:
+def _figure(res, pair, base, cur, beam) -> bytes:
     """PNG of one verdict: the two tests' FRFs in the file's kind with the identified modes marked; each mode's
     measured frequency change beside the competing explanations' predictions; the beam (supports, sensors, zones)
     under the location of the verdict's own source (none when the verdict is undamaged)."""
@@ -200,17 +182,18 @@ def _figure(res, extra, base, cur, beam) -> bytes:
             kind = d.kind
             a1.semilogy(d.frequency_hz, np.abs(d.frf[-1, 0]), color=colour,
                         label=f"{name}: {label(d.response_dofs[-1])} / {label(d.reference_dofs[0])}")
-        else:
+        elif d.eigenvectors is not None:
             w = np.linspace(1.0, 1.15 * np.abs(d.eigenvalues).max(), 4000)
             H = receptance_modal(d.eigenvalues, d.eigenvectors, w, response=[-1], reference=[0])[0, 0]
             a1.semilogy(w / (2 * np.pi), np.abs(H), color=colour, label=f"{name} (synthesised from its modes, "
                                                                         "unscaled)")
-        for f in found:
-            a1.axvline(f, color=colour, ls=":", lw=0.8)
+        alone = getattr(d, "eigenvectors", 0) is None                    # natural frequencies without shapes
+        for k, f in enumerate(found):
+            a1.axvline(f, color=colour, ls=":", lw=0.8, label=None if k or not alone else f"{name}: frequencies")
     a1.set(xlabel="frequency (Hz)", ylabel=f"|H| ({FRF_UNITS[kind]})",
            title=f"The two tests ({kind}); dotted: the modes identified")
     a1.legend(fontsize=7)
-    modes, change = extra.get("modes") or [], extra.get("frequency_change_pct")
+    modes, change = pair.modes, pair.frequency_change_pct
     if change is not None and len(modes):
         x = np.arange(len(modes))
         a2.bar(x, change, width=0.5, color="0.6", label="measured")
@@ -221,7 +204,7 @@ def _figure(res, extra, base, cur, beam) -> bytes:
         a2.set_xticks(x, [f"mode {m}" for m in modes])
         a2.legend(fontsize=7)
     a2.set(ylabel="frequency change (%)", title="Each mode's change and what the explanations predict")
-    _location(a3, res, extra, beam)
+    _location(a3, res, (pair.answers.location_distributions or {}).get("68"), beam)
     fig.tight_layout()
     return figure_png(fig)
 
@@ -234,12 +217,11 @@ def _file_labels(res):
     return lambda dof: (f"x = {where[dof][1]:.3g} m ({where[dof][0]})" if dof in where else dof)
 
 
-def _location(ax, res, extra, beam) -> None:
+def _location(ax, res, dist, beam) -> None:
     """Where the verdict's source places the damage: the network's distribution, or the classical method's place;
     nothing when the verdict is undamaged."""
     source = res["verdict_from"]
     if res["damaged"]:
-        dist = extra["location_distribution"]
         if source == "network" and dist is not None:
             edges = np.linspace(0, beam.length_m, dist.size + 1)
             ax.bar(edges[:-1], dist, width=np.diff(edges), align="edge", color="tab:red", alpha=0.7,

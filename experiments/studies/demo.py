@@ -107,7 +107,6 @@ def classify_step(out: Path, model_dir: Path) -> dict:
         write_modal_json(paths[state], data[state])
     model = load_model(model_dir)
     res = classify(model, data["undamaged"], data["damaged"])
-    res.pop("_extra", None)
     res["verdict_text"] = model.verdict_text(res)
     res["inputs"] = {k: str(v) for k, v in paths.items()}
     atomic_write_text(out / "verdict.json", json.dumps(to_jsonable(res), indent=1) + "\n")

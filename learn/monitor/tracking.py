@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from learn.measured import refit_missing_modes
 from learn.monitor.identification import (IdentificationSettings, IdentifiedModes, cached_identification,
                                           with_narrow_band_poles)
 from learn.noise_calibration import robust_std
@@ -225,32 +226,28 @@ def refit_missing(tests: list, files: list, ref: ReferenceModes, settings: Ident
     (:func:`narrow_bands_hz`, within the file's lines; the same method, every mode found there:
     :func:`learn.monitor.identification.identify_test`, cached like the first identification); the pole of that
     identification nearest the mode within its tolerance (and, with shapes of 2 or more sensors, MAC >=
-    :data:`MAC_MIN`) is added to the test (its ``narrow_band_hz`` says so). A spurious pole of the first pass never
-    took the mode's place (the assignment is one to one and stops at the tolerance), so a mode missed there is
-    looked for where it lies, not filled from elsewhere.
+    :data:`MAC_MIN`) is added to the test (its ``narrow_band_hz`` says so), by
+    :func:`learn.measured.refit_missing_modes`. A spurious pole of the first pass never took the mode's place (the
+    assignment is one to one and stops at the tolerance), so a mode missed there is looked for where it lies, not
+    filled from elsewhere.
     """
     F = track_modes(tests, ref)[0]
-    bands = narrow_bands_hz(ref)
     out = list(tests)
     for i, t in enumerate(tests):
         if t is None or t.kind == "modal":
             continue
-        for r in np.flatnonzero(np.isnan(F[i])):
-            lo, hi = bands[r]
-            if t.band_hz is not None:
-                lo, hi = max(lo, t.band_hz[0]), min(hi, t.band_hz[1])
-            if not hi > lo:
-                continue
-            found, _, _ = cached_identification(files[i], settings, cache_dir, pending, (lo, hi))
-            if found is None or found.frequencies_hz.size == 0:
-                continue
-            d = np.abs(np.log(found.frequencies_hz / ref.frequencies_hz[r]))
-            ok = d <= ref.tolerance[r]
+
+        def identify(lo, hi, i=i):
+            found = cached_identification(files[i], settings, cache_dir, pending, (lo, hi))[0]
+            return None if found is None else (found, found.frequencies_hz)
+
+        def accept(found, r):
             S = shapes_at(found, ref.dofs) if ref.shapes is not None else None
-            if S is not None:
-                ok &= mac(S, ref.shapes[:, [r]])[:, 0] >= MAC_MIN
-            if ok.any():
-                out[i] = with_narrow_band_poles(out[i], found, [int(np.argmin(np.where(ok, d, np.inf)))])
+            return True if S is None else mac(S, ref.shapes[:, [r]])[:, 0] >= MAC_MIN
+
+        for _, found, k, _, _ in refit_missing_modes(np.flatnonzero(np.isnan(F[i])), ref.frequencies_hz,
+                                                     ref.tolerance, narrow_bands_hz(ref), t.band_hz, identify, accept):
+            out[i] = with_narrow_band_poles(out[i], found, [k])
     return out
 
 

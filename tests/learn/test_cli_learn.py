@@ -431,6 +431,22 @@ def test_several_files_complete_and_incomplete_pairs_in_one_call(tiny, modal_mod
     assert capsys.readouterr().out.count("Verdict (classical method on modes 1, 2, 3") == 2
 
 
+def test_natural_frequencies_alone_get_a_figure_of_their_frequencies(tiny, capsys):
+    """Modal data without shapes: the verdict and classify.png are written (the first panel marks each test's
+    frequencies, no FRF is synthesised without shapes)."""
+    paths = []
+    for p in _modal_files(tiny, 0.5):
+        obj = json.loads(open(p).read())
+        del obj["eigenvectors"], obj["dofs"]
+        paths.append(str(tiny / f"alone-{Path(p).name}"))
+        Path(paths[-1]).write_text(json.dumps(obj))
+    assert main(["classify", "--model", str(tiny / "model"), "--baseline", *paths, "--out", str(tiny / "alone")]) == 0
+    assert "natural frequencies without mode shapes" in capsys.readouterr().err
+    res = json.loads((tiny / "alone" / "verdict.json").read_text())
+    assert res["input_route"] == "frequency" and tuple(res) == KEYS
+    assert (tiny / "alone" / "classify.png").stat().st_size > 0
+
+
 def test_a_missing_middle_mode_and_a_single_mode(tiny, capsys):
     """Modal data of a slit in element 1 of 4 whose current test misses mode 3: classified on modes 1, 2 and 4 by
     the network and the classical methods; a test holding mode 1 alone is refused in one line."""

@@ -165,10 +165,10 @@ def test_the_verdict_says_when_its_sources_disagree():
 
     net, cl = {"damaged": True}, {"damaged": False, "method": "DLAC"}
     hyp = [{"name": "intact", "probability": 0.51, "fits": True}]
-    a = agreement({"damaged": True}, net, cl, hyp, "network")
+    a = agreement(True, net, cl, hyp, "network")
     assert (a["network"], a["classical"], a["explanations"], a["agree"]) == (True, False, False, False)
     assert a["text"].startswith("They disagree") and "within the noise they weigh" in a["text"]
-    b = agreement({"damaged": True}, net, {"damaged": True, "method": "DLAC"},
+    b = agreement(True, net, {"damaged": True, "method": "DLAC"},
                   [{"name": "slit", "probability": 0.9, "fits": True}], "network")
     assert b["agree"] and b["text"].startswith("One story")
 
@@ -286,7 +286,7 @@ def test_a_kind_registered_anywhere_is_weighed_described_and_separated(stiffenin
     assert mine["size_label"] == "test flexibility" and mine["size_95"][0] <= theta <= mine["size_95"][1]
     assert "nothing at all (a slit by another name) would separate them" in summary(rows, [1, 2, 3, 4])
     best = {"name": stiffening, "probability": 0.6, "fits": True}
-    assert agreement({"damaged": True}, {"damaged": True}, None, [best], "network")["agree"]
+    assert agreement(True, {"damaged": True}, None, [best], "network")["agree"]
     a = {"damaged": True, "detectable": True, "probability_damaged": 0.97, "decision_threshold": 0.9,
          "location_x_m": 0.2, "location_std_m": 0.02, "location_x_over_L": 0.33, "location_element": 2,
          "size": 0.0098, "size_std": 0.002}

@@ -384,7 +384,7 @@ def test_support_head_learns_a_support_change_and_survives_the_model_directory(t
 def test_a_baseline_damped_far_outside_the_training_is_named():
     """The model records the central 99 % of its training pairs' baseline damping ratios; a test damped beyond twice
     that range gets one warning naming the modes, and a test without damping (frequencies only) none."""
-    from learn.classify import damping_warning
+    from learn.pair_inputs import damping_warning
     from learn.measured import ModalPair
     from learn.training import damping_ratio_range
     from physics.modal import eigenvalues_from_modal

@@ -131,7 +131,7 @@ def model_of(identification):
 
 
 def test_identification_warning_names_a_skew_in_one_line_and_is_silent_on_a_match():
-    from learn.classify import identification_warning
+    from learn.pair_inputs import identification_warning
     from learn.measured import IDENTIFICATION
 
     frf, oma, fixed = model_of(dict(IDENTIFICATION)), model_of({"method": "ssi", "n_modes": 4}), model_of(None)

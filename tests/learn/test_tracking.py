@@ -5,7 +5,10 @@ import numpy as np
 import pytest
 
 from learn.monitor import IdentificationSettings, IdentifiedModes, identify_test, reference_modes, track_modes
+from learn.measured import identify_modes
 from learn.monitor.tracking import MIN_COUNT, identified_by, narrow_bands_hz, refit_missing
+from learn.pair_inputs import refit_frf_modes
+from physics.identification.measured import read_measured_frf
 from physics.io import MeasuredFRF
 from physics.io.npz import write_frf_npz
 
@@ -95,21 +98,19 @@ def test_the_narrow_band_refit_finds_a_mode_the_broad_pass_missed(three_mode_frf
 
 
 def test_classify_identifies_a_baseline_mode_again_over_its_own_band(three_mode_frf):
-    """``classify``'s refit with several baselines (learn.measured.refit_missing_modes): the FRF's 25-Hz mode, left
+    """``classify``'s refit with several baselines (learn.pair_inputs.refit_frf_modes): the FRF's 25-Hz mode, left
     out of an identification keeping two modes, is found within 5 % of the baselines' 25 Hz; a mode the baselines
     do not hold is not looked for."""
-    from learn.measured import identify_modes, refit_missing_modes
-    from physics.identification.measured import read_measured_frf
 
     frf = read_measured_frf(str(three_mode_frf))
     md = identify_modes(frf, 60.0, n_modes=2, fmin_hz=2.0)
     np.testing.assert_allclose(np.sort(np.abs(md.eigenvalues)) / (2 * np.pi), [10.0, 40.0], rtol=1e-3)
     target = np.array([10.0, 25.0, 40.0])
-    out, found = refit_missing_modes(frf, md, target, 0.05)
+    out, found = refit_frf_modes(frf, md, target, 0.05)
     f = np.sort(np.abs(out.eigenvalues)) / (2 * np.pi)
     np.testing.assert_allclose(f, target, rtol=1e-3)
     [(j, hz, lo, hi)] = found
     assert j == 1 and lo == pytest.approx(25 / 1.05) and hi == pytest.approx(25 * 1.05)
     assert out.eigenvectors.shape == (1, 3)
-    same, none = refit_missing_modes(frf, md, target, 0.05, np.array([True, False, True]))
+    same, none = refit_frf_modes(frf, md, target, 0.05, np.array([True, False, True]))
     assert same is md and none == []
