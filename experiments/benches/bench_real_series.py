@@ -1,8 +1,8 @@
 """Benchmark: ``monitor`` against the plainest tests on real repeated-test series (the public sets in
 ``/work/realdata``, kept outside the repository; a set that is absent is skipped).
 
-Run: ``python -m experiments.benches.bench_real_series [--data /work/realdata] [--sets dropbear ds5-shock
-ds5-impedance bridge] [--quick] [--rate 0.01] [--out out/bench_real_series] [--docs]``
+Run: ``python -m experiments.benches.bench_real_series [--data /work/realdata] [--sets dropbear dropbear-2ch
+ds5-shock ds5-impedance bridge] [--quick] [--rate 0.01] [--out out/bench_real_series] [--docs]``
 
 Each set becomes a monitoring series: a baseline period (the first ``n_baseline`` tests) and later tests, each a
 group (intact, a change of a known size, or a block of later shocks of unknown damage). Every test's record is
@@ -12,9 +12,9 @@ SSI-cov, the modes tracked, the normal model and the detector at ``--rate`` fals
 cached in ``--out``/cache, so a second run takes seconds). Beside it, on the same records, the plainest tests on
 the FFT peaks (:mod:`physics.identification.fft_peak`): the baseline's modes are the clusters
 (:func:`learn.monitor.tracking.reference_modes`) of the clear peaks :func:`identify_fft_peaks` finds in the baseline
-records; every test's frequency of a mode is the highest FFT peak (:func:`fft_peaks`) in the mode's window (from
-the geometric mean with the mode below, or the band's lower edge, to the one with the mode above, or the band's
-upper edge). On those frequencies (:func:`plain_alarms`):
+records; every test's frequency of a mode is the highest FFT peak (:func:`fft_peaks`) in the mode's window (half
+the smaller log gap to its neighbouring modes either side, within the band). On those frequencies
+(:func:`plain_alarms`):
 
 * ``plain shift``: the mean relative change of the modes from their baseline medians, alarmed below the baseline's
   ``rate / 2`` quantile or above its ``1 - rate / 2`` quantile (signed, both sides);
@@ -36,6 +36,7 @@ import time
 import traceback
 import warnings
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
@@ -88,27 +89,37 @@ class RealSeries:
     how: str
 
 
-def _dropbear(path: Path, quick: bool) -> RealSeries:
+#: DROPBEAR: mode 1's mean FFT-peak change of each support state from state 0 (the set's description: 25.99,
+#: 28.09, 30.79, 33.87, 37.60, 41.88 Hz).
+DROPBEAR_MODE1_PCT = (8.1, 18.5, 30.3, 44.7, 61.1)
+
+
+def _dropbear(path: Path, quick: bool, channels: int = 1) -> RealSeries:
     """DROPBEAR (roller support moved in 5 steps): baseline the state-0 dwells of tests 0-5, later the state-0 dwells
     of tests 6-10 (intact) and every dwell of states 1-5 (the changes). Each dwell's first 2842 samples (0.568 s,
-    the shortest dwell) of the two accelerometers."""
+    the shortest dwell) of the low-g accelerometer, band 20-600 Hz (at a 300-Hz upper edge SSI-cov decimates the
+    record to 59 block rows, fewer than ``monitor``'s model order 80); ``channels=2``: with the shock accelerometer
+    too (unscaled voltages: it reads mostly its own noise, far above the low-g channel's level in the quiet dwells),
+    band 20-300 Hz."""
     z = np.load(path)
     fs = float(z["sampling_frequency_hz"])
     st, test, start = z["segment_state"], z["segment_test"], z["segment_start"]
     n = int((z["segment_stop"] - start).min())
     base = np.flatnonzero((st == 0) & (test <= 5))
     intact = np.flatnonzero((st == 0) & (test > 5))
-    later = [(f"state {s}", np.flatnonzero(st == s)) for s in range(1, 6)]
+    later = [(f"state {s} (mode 1 +{DROPBEAR_MODE1_PCT[s - 1]:g} %)", np.flatnonzero(st == s)) for s in range(1, 6)]
     if quick:
         intact = intact[::2]
         later = [(g, i[::3]) for g, i in later]
     order = [(i, "baseline") for i in base] + [(i, "intact") for i in intact] + [(i, g) for g, ii in later
                                                                                   for i in ii]
-    recs = [z["records"][test[i], :2, start[i]:start[i] + n] for i, _ in order]
-    return RealSeries("dropbear", recs, np.full(len(recs), fs), base.size, tuple(g for _, g in order), (20.0, 300.0),
+    recs = [z["records"][test[i], :channels, start[i]:start[i] + n] for i, _ in order]
+    name, band = ("dropbear", (20.0, 600.0)) if channels == 1 else ("dropbear-2ch", (20.0, 300.0))
+    return RealSeries(name, recs, np.full(len(recs), fs), base.size, tuple(g for _, g in order), band,
                       tuple(f"test {test[i]} dwell {i % 11} state {st[i]}" for i, _ in order), True,
                       f"baseline: the {base.size} state-0 dwells of tests 0-5; intact: the state-0 dwells of tests "
-                      "6-10; changes: every dwell of states 1-5 (roller moved); 2 accelerometers, 0.568 s each")
+                      "6-10; changes: every dwell of states 1-5 (roller moved); "
+                      + ("the low-g accelerometer" if channels == 1 else "both accelerometers") + ", 0.568 s each")
 
 
 def _ds5_shock(path: Path, quick: bool, n_baseline: int = 15) -> RealSeries:
@@ -122,7 +133,7 @@ def _ds5_shock(path: Path, quick: bool, n_baseline: int = 15) -> RealSeries:
         idx = np.r_[idx[:n_baseline], idx[n_baseline::2]]
     groups = tuple("baseline" if k < n_baseline else _block(k, n_baseline, 12, y.shape[0]) for k in idx)
     return RealSeries("ds5-shock", [y[k][None] for k in idx], fs[idx], n_baseline, groups, (500.0, 5500.0),
-                      tuple(f"trial {z['trial_number'][k]}" for k in idx), False,
+                      tuple(f"shock {k + 1} (a{z['trial_number'][k]})" for k in idx), False,
                       f"baseline: shocks 1-{n_baseline}; later: shocks {n_baseline + 1}-{y.shape[0]} in blocks "
                       "(damage accumulates, unlabelled); PCB channel after the clipped shock, 0.1 s")
 
@@ -141,8 +152,10 @@ def _ds5_impedance(path: Path, quick: bool, n_baseline: int = 10) -> RealSeries:
         a = int(np.argmax(np.abs(y))) + 20
         recs.append(y[None, a:a + 8192])
     num = z["test_number"][keep]
-    groups = tuple("baseline" if j < n_baseline else f"tests {8 * ((t - 1) // 8) + 1}-{8 * ((t - 1) // 8) + 8}"
-                   for j, t in enumerate(num))
+    block = (num - 1) // 8
+    span = {b: f"tests {num[(block == b) & later].min()}-{num[(block == b) & later].max()}"
+            for later in [np.arange(num.size) >= n_baseline] for b in np.unique(block[later])}
+    groups = tuple("baseline" if j < n_baseline else span[b] for j, b in enumerate(block))
     return RealSeries("ds5-impedance", recs, np.full(len(recs), fs), n_baseline, groups, (3800.0, 6600.0),
                       tuple(f"test {t}" for t in num), False,
                       f"baseline: tests 1-{num[n_baseline - 1]}; later: tests {num[n_baseline]}-{num[-1]} (17 and 24 "
@@ -172,6 +185,7 @@ def _block(k: int, start: int, size: int, total: int) -> str:
 
 #: Each set: its file in ``--data`` and the function making its series (``quick``: fewer later tests).
 LOADERS = {"dropbear": ("dropbear_roller_steps.npz", _dropbear),
+           "dropbear-2ch": ("dropbear_roller_steps.npz", partial(_dropbear, channels=2)),
            "ds5-shock": ("ds5_pcb_repeated_shock.npz", _ds5_shock),
            "ds5-impedance": ("ds5_pcb_shock_impedance.npz", _ds5_impedance),
            "bridge": ("usc_bridge_a_impacts.npz", _bridge)}
@@ -200,11 +214,14 @@ def reference_fft_modes(records, sampling_frequency_hz, band_hz) -> np.ndarray:
 
 
 def mode_windows_hz(reference_hz, band_hz) -> np.ndarray:
-    """``(m, 2)`` window of each mode: from the geometric mean with the mode below (the band's lower edge for the
-    lowest) to the one with the mode above (the upper edge for the highest)."""
+    """``(m, 2)`` window of each mode (Hz): ``f exp(-+w)``, ``w`` half the smaller log gap to its neighbouring modes
+    (the band for a single mode), within the band."""
     f = np.asarray(reference_hz, float)
-    mid = np.sqrt(f[:-1] * f[1:])
-    return np.c_[np.r_[band_hz[0], mid], np.r_[mid, band_hz[1]]]
+    if f.size == 1:
+        return np.array([[float(band_hz[0]), float(band_hz[1])]])
+    gap = np.diff(np.log(f))
+    w = 0.5 * np.minimum(np.r_[gap[0], gap], np.r_[gap, gap[-1]])
+    return np.c_[np.maximum(f * np.exp(-w), band_hz[0]), np.minimum(f * np.exp(w), band_hz[1])]
 
 
 def fft_frequencies(records, sampling_frequency_hz, windows_hz) -> np.ndarray:
@@ -288,7 +305,7 @@ def _guarded(path, settings: IdentificationSettings, cache: Path, crashes: list,
     """:func:`cached_identification` of one file; an exception it lets through (a crash of the identification on a
     real record) is kept in the cache as the file's error, so that ``monitor`` counts the test as not identified."""
     try:
-        return cached_identification(path, settings, cache, None, narrow_hz)[:2]
+        modes, error, _ = cached_identification(path, settings, cache, None, narrow_hz)
     except Exception as exc:                    # a crash is a result to report, not to stop the bench
         error = f"{path}: {_crash_text(exc)}"
         crashes.append(error)
@@ -297,12 +314,15 @@ def _guarded(path, settings: IdentificationSettings, cache: Path, crashes: list,
                       json.dumps({"format": CACHE_FORMAT, "file": str(path), "settings": settings.to_dict(),
                                   "narrow_band_hz": nb, "modes": None, "error": error}))])
         return None, error
+    if error and ": crashed: " in error:        # a crash kept in the cache by an earlier run
+        crashes.append(error)
+    return modes, error
 
 
 def identify_series(files, n_baseline: int, settings: IdentificationSettings, cache: Path) -> tuple:
     """``(tests, errors, crashes)``: every file identified as ``monitor`` does (cached), and the narrow-band
     re-identifications its :func:`learn.monitor.tracking.refit_missing` will ask for, each crash kept in the cache
-    as the file's error (``crashes``: their texts)."""
+    as the file's error (``crashes``: their texts, both passes)."""
     crashes: list = []
     out = [_guarded(f, settings, cache, crashes) for f in files]
     tests = [t for t, _ in out]
@@ -382,12 +402,16 @@ def run_set(series: RealSeries, out: Path, rate: float) -> dict:
     return {"set": series.name, "how": series.how, "band_hz": list(series.band_hz), "n": len(files),
             "n_baseline": nb, "monitor_error": mon_error, "monitor_reference_hz": mon_ref,
             "monitor_on_fft_error": fft_error, "identification_crashes": crashes,
-            "monitor_on_fft_reference_hz": fft_ref,
+            "monitor_on_fft_reference_hz": fft_ref, "monitor_on_fft_status": fft_status,
             "fft_reference_hz": ref.tolist(), "status": status, "errors": errors, "identified_hz":
                 [None if t is None else [float(v) for v in t.frequencies_hz] for t in tests],
             "labels": list(series.labels), "groups": list(series.groups), "fft_frequencies_hz": F.tolist(),
             "flags": {k: v.tolist() for k, v in flags.items()}, "rows": rows, "seconds": time.perf_counter() - t0,
             "monitor_seconds": t_mon}
+
+
+def _no_answer(error: str) -> str:
+    return "failed" if error.startswith("crashed") else "refused"
 
 
 def _pct(v) -> str:
@@ -399,8 +423,8 @@ METHODS = ("monitor", "monitor on FFT peaks", "plain shift", "plain per mode")
 
 def markdown(results: list, rate: float) -> str:
     """The docs table: per set and group, the tests identified, each method's share flagged and monitor's misses
-    (``refused``: monitor refused the series, the note under the table says why)."""
-    head = ["set", "tests", "n", "mode 1 change (FFT)", "identified: monitor / FFT", *METHODS,
+    (``refused``: monitor refused the series, ``failed``: it crashed; the notes under the table say why)."""
+    head = ["set", "tests", "n", "first mode's change (FFT, median)", "identified: monitor / FFT", *METHODS,
             "monitor misses: not identified / below threshold"]
     lines = []
     for res in results:
@@ -408,21 +432,21 @@ def markdown(results: list, rate: float) -> str:
         for k, r in enumerate(res["rows"]):
             name = res["set"] if k == 0 else ""
             if r["group"] == "first flagged later test":
-                cells = ["refused" if refused.get(m) else res["labels"][r[m]] if r[m] is not None else "never"
-                         for m in METHODS]
+                cells = [_no_answer(refused[m]) if refused.get(m) else res["labels"][r[m]] if r[m] is not None
+                         else "never" for m in METHODS]
                 lines.append([name, "first flagged later test", "", "", "", *cells, ""])
                 continue
             base = r["group"] == "baseline"
             size = "" if base or "mode 1 change %" not in r else f"{r['mode 1 change %']:+.2f} %"
-            cells = ["refused" if refused.get(m) else "-" if base and m.startswith("plain") else _pct(r[m])
-                     for m in METHODS]
+            cells = [_no_answer(refused[m]) if refused.get(m) else "-" if base and m.startswith("plain")
+                     else _pct(r[m]) for m in METHODS]
             miss = "" if base or refused["monitor"] else f"{r['missed, not identified']} / " \
                                                           f"{r['missed, below threshold']}"
             lines.append([name, "baseline (held out)" if base else r["group"], r["n"], size,
                           f"{r['identified']} / {r.get('fft found', 0)}", *cells, miss])
-    notes = [f"{res['set']}: monitor refused: {res['monitor_error']}" for res in results if res["monitor_error"]]
-    notes += [f"{res['set']}: monitor on FFT peaks refused: {res['monitor_on_fft_error']}" for res in results
-              if res["monitor_on_fft_error"]]
+    notes = [f"{res['set']}: {what} {'failed' if res[key].startswith('crashed') else 'refused'}: {res[key]}"
+             for res in results for what, key in (("monitor", "monitor_error"),
+                                                  ("monitor on FFT peaks", "monitor_on_fft_error")) if res[key]]
     return table(head, lines) + "".join(f"\n\n{n}" for n in notes) + (
         f"\n\nShare of each group's tests flagged at {rate:g} false alarms (`intact`: false alarms; baseline: "
         "monitor's held-out alarms). `python -m experiments.benches.bench_real_series --docs`")

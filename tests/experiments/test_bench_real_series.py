@@ -27,7 +27,9 @@ def test_the_fft_modes_of_a_series_of_decays_are_its_frequencies_and_a_moved_mod
     ref = reference_fft_modes(recs[:8], fs[:8], (5.0, 200.0))
     np.testing.assert_allclose(ref, [20.0 * 1.0035, 90.0], rtol=3e-3)
     w = mode_windows_hz(ref, (5.0, 200.0))
-    np.testing.assert_allclose(w, [[5.0, np.sqrt(ref[0] * ref[1])], [np.sqrt(ref[0] * ref[1]), 200.0]])
+    g = np.sqrt(ref[1] / ref[0])                            # half the log gap, either side of each mode
+    np.testing.assert_allclose(w, [[ref[0] / g, ref[0] * g], [ref[1] / g, ref[1] * g]])
+    np.testing.assert_allclose(mode_windows_hz([50.0], (5.0, 200.0)), [[5.0, 200.0]])     # one mode: the band
     F = fft_frequencies(recs, fs, w)
     # the peak of a decay lies at the damped frequency, within a fraction of the 0.25 Hz resolution
     np.testing.assert_allclose(F, np.sqrt(1 - 0.01 ** 2) * np.array(base + moved), rtol=2e-3)
