@@ -21,6 +21,11 @@ the smaller log gap to its neighbouring modes either side, within the band). On 
 * ``plain per mode``: any mode's relative change beyond its baseline ``rate / (2 m)`` or ``1 - rate / (2 m)``
   quantile.
 
+``monitor on FFT peaks`` is ``monitor`` fed those FFT-peak frequencies as modal data (``natural_frequencies_hz``
+files): its detector without its identification. A crash of ``monitor``'s identification on a record (an exception
+it lets through) is kept in the cache as the test's error (:func:`identify_series`), so that the series is still
+judged with the test not identified; a crash of ``monitor`` itself is reported as the set's result.
+
 ``monitor`` counts a test as flagged when its status is ``alarm`` or ``change or unseen conditions`` (the series are
 undated, so an extrapolated test alarmed by the environmental statistics alone gets that status); a test it could
 not identify is not flagged (its status ``not identified`` is reported apart). Where ``monitor`` misses a test a
@@ -470,7 +475,8 @@ def main(argv=None) -> int:
             continue
         res = run_set(load(path, a.quick), out, a.rate)
         print(f"{name}: {res['n']} tests, {res['seconds']:.0f} s (monitor {res['monitor_seconds']:.0f} s)"
-              + (f"; monitor refused: {res['monitor_error']}" if res["monitor_error"] else ""), flush=True)
+              + (f"; monitor {_no_answer(res['monitor_error'])}: {res['monitor_error']}" if res["monitor_error"]
+                 else ""), flush=True)
         results.append(res)
     for file, why in NOT_SERIES.items():
         if (Path(a.data) / file).is_file():
