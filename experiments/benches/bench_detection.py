@@ -2,7 +2,8 @@
 long frequency series of the independent simulator.
 
 Run: ``python -m experiments.benches.bench_detection [--out out/bench_detection] [--seeds 0 1] [--rate 0.01]
-[--cases daily 30min lab] [--docs]``
+[--cases daily 30min lab] [--shares residual=1 environment=0.25 shift=2] [--docs]`` (``--shares``: the
+``combined`` column's shares instead of :data:`~learn.monitor.statistics.SHARES`)
 
 Series (:func:`experiments.second_sim.series.frequency_series`: the monitoring cantilever's first four modes under
 a seasonal, daily and weather temperature, its clamp re-made and its bolted mass re-placed, each frequency
@@ -29,7 +30,8 @@ conditions) and ``regression`` on the measured temperature. Methods, each at ``-
   Šidák rate; ``extrapolated
   apart``: the combination less the tests beyond the baseline's environment alarmed by its environmental statistics
   alone (``monitor --extrapolated-alarms separate``: status ``change or unseen conditions``);
-* ``chart``: the EWMA charts of :mod:`learn.monitor.charts` (``monitor``'s ``chart_alarm``);
+* ``chart``: the EWMA charts of :mod:`learn.monitor.charts` (``monitor``'s ``chart_alarm``); ``chart, Šidák``:
+  the charts at Šidák's split instead of their joint calibration;
 * ``plain shift``: the mean relative change of the frequencies from their baseline medians, alarmed below the
   baseline's own ``rate`` quantile (one-sided: it is told the change's sign, above the ``1 - rate`` quantile for the
   mass loss); ``plain shift, both signs``: below its ``rate / 2`` or above its ``1 - rate / 2`` quantile;
@@ -60,7 +62,7 @@ from experiments.second_sim.series import (FrequencySeriesConfig, SeriesConfig, 
 from learn.monitor.charts import run_charts  # noqa: E402
 from learn.monitor.normal_models import NORMAL_MODELS  # noqa: E402
 from learn.monitor.coverage import coverage, environment_coordinates  # noqa: E402
-from learn.monitor.statistics import detect, environmental, held_out_statistics  # noqa: E402
+from learn.monitor.statistics import SHARES, detect, environmental, held_out_statistics  # noqa: E402
 from physics.io import atomic_write_text  # noqa: E402
 from experiments.studies.doc_tables import write_table  # noqa: E402
 
@@ -69,7 +71,7 @@ __all__ = ["CASES", "main", "methods_on", "plain_tests"]
 SIZES_PCT = (0.25, 0.5, 1.0, 1.5, 2.0)
 DAMAGES = {"mode 1": (1,), "uniform EI": "stiffness", "mass loss": "mass"}
 METHODS = ("residual", "environment", "shift", "combined", "combined, equal shares", "combined, Šidák",
-           "extrapolated apart", "chart",
+           "extrapolated apart", "chart", "chart, Šidák",
            "plain shift", "plain shift, both signs", "plain per mode")
 
 
@@ -106,16 +108,18 @@ def plain_tests(F, nb: int, rate: float, sign: float = 1.0) -> dict:
             "plain per mode": (rel < per).any(axis=1)}
 
 
-def methods_on(F, C, nb: int, model_name: str, rate: float, seed: int = 0, sign: float = 1.0, held=None) -> dict:
+def methods_on(F, C, nb: int, model_name: str, rate: float, seed: int = 0, sign: float = 1.0, held=None,
+               shares=None) -> dict:
     """Every method's alarms (n,) on one series (baseline: the first ``nb`` tests; ``held``: their
-    :func:`~learn.monitor.statistics.held_out_statistics`, computed when None)."""
+    :func:`~learn.monitor.statistics.held_out_statistics`, computed when None; ``shares``: the ``combined``
+    method's, :data:`~learn.monitor.statistics.SHARES` when None)."""
     X = np.log(F)
     q = 0 if C is None else C.shape[1]
     model = NORMAL_MODELS[model_name](X.shape[1], q).fit(X[:nb], None if C is None else C[:nb])
     b_idx, rest = np.arange(nb), np.arange(nb, len(X))
     if held is None:
         held = held_out_statistics(model.with_choices, X[:nb], None if C is None else C[:nb])
-    det = detect(model, model.with_choices, X, C, b_idx, rest, rate, q, held=held)
+    det = detect(model, model.with_choices, X, C, b_idx, rest, rate, q, held=held, shares=shares)
     out = {}
     for k, nm in enumerate(det.names):
         alone = detect(model, model.with_choices, X, C, b_idx, rest, rate, q, (nm,), held={nm: held[nm]})
@@ -132,6 +136,7 @@ def methods_on(F, C, nb: int, model_name: str, rate: float, seed: int = 0, sign:
         env_only = ~(det.ratios[:, own] > 1.0).any(axis=1)
         out["extrapolated apart"] &= ~(coverage(names, E, b_idx, rest).extrapolated & env_only)
     out["chart"] = run_charts(det.vectors, b_idx, rate, seed=seed).alarm
+    out["chart, Šidák"] = run_charts(det.vectors, b_idx, rate, seed=seed, combination="sidak").alarm
     out.update(plain_tests(F, nb, rate, sign))
     return out
 
@@ -139,13 +144,13 @@ def methods_on(F, C, nb: int, model_name: str, rate: float, seed: int = 0, sign:
 def _scores(alarms: dict, damaged, nb: int, onset: int, per_day: int) -> dict:
     out = {}
     for m, a in alarms.items():
-        late = damaged & (np.arange(len(a)) >= onset + (per_day if m == "chart" else 0))
+        late = damaged & (np.arange(len(a)) >= onset + (per_day if m.startswith("chart") else 0))
         hits = np.flatnonzero(a & damaged)
         out[m] = {"detected": float(a[late].mean()), "delay_tests": int(hits[0] - onset) if hits.size else None}
     return out
 
 
-def run_case(name: str, seed: int, rate: float) -> list:
+def run_case(name: str, seed: int, rate: float, shares=None) -> list:
     cfg, nb, onset, per_day = _case(name, seed)
     fs = frequency_series(cfg)
     rows = []
@@ -155,7 +160,7 @@ def run_case(name: str, seed: int, rate: float) -> list:
         Cb = None if C is None else C[:nb]
         base = NORMAL_MODELS[model_name](X.shape[1], q).fit(X, Cb)
         held = held_out_statistics(base.with_choices, X, Cb)                   # the baseline is never damaged
-        intact = methods_on(fs.frequencies_hz, C, nb, model_name, rate, seed, held=held)
+        intact = methods_on(fs.frequencies_hz, C, nb, model_name, rate, seed, held=held, shares=shares)
         fa = {m: float(a[nb:].mean()) for m, a in intact.items()}
         rows.append({"case": name, "seed": seed, "model": model_name, "damage": "none", "size_pct": 0.0,
                      "false_alarms": fa, "n_monitoring": len(fs.day) - nb})
@@ -172,7 +177,7 @@ def run_case(name: str, seed: int, rate: float) -> list:
                 F = fs.frequencies_hz.copy()
                 F[damaged] *= np.exp(pattern * np.log1p(-size / 100))
                 res = _scores(methods_on(F, C, nb, model_name, rate, seed, -1.0 if which == "mass" else 1.0,
-                                         held), damaged, nb, onset, per_day)
+                                         held, shares), damaged, nb, onset, per_day)
                 rows.append({"case": name, "seed": seed, "model": model_name, "damage": damage, "size_pct": size,
                              "scores": res})
                 print(json.dumps({k: v for k, v in rows[-1].items() if k != "scores"}
@@ -206,7 +211,7 @@ def markdown(rows: list, rate: float) -> str:
 
 
 #: The methods whose false alarms :func:`false_alarm_table` lists per seed.
-FA_METHODS = ("combined", "combined, equal shares", "combined, Šidák", "chart", "plain shift",
+FA_METHODS = ("combined", "combined, equal shares", "combined, Šidák", "chart", "chart, Šidák", "plain shift",
               "plain shift, both signs", "plain per mode")
 
 
@@ -228,9 +233,21 @@ def main(argv=None) -> int:
     p.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
     p.add_argument("--rate", type=float, default=0.01)
     p.add_argument("--cases", nargs="+", choices=CASES, default=list(CASES))
+    p.add_argument("--shares", nargs="+", metavar="NAME=WEIGHT",
+                   help="the combined column's share of each statistic (default: learn.monitor.statistics.SHARES)")
     p.add_argument("--docs", action="store_true", help="write the table into docs/monitoring.md")
     a = p.parse_args(argv)
-    rows = [r for case in a.cases for seed in a.seeds for r in run_case(case, seed, a.rate)]
+    shares = None
+    if a.shares:
+        shares = dict(SHARES)
+        for item in a.shares:
+            name, _, w = item.partition("=")
+            if name not in SHARES or not w:
+                p.error(f"--shares {item}: expected NAME=WEIGHT with NAME one of {', '.join(SHARES)}")
+            shares[name] = float(w)
+    if a.docs and shares:
+        p.error("--docs writes the table of monitor's shares: leave --shares out")
+    rows = [r for case in a.cases for seed in a.seeds for r in run_case(case, seed, a.rate, shares)]
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     md = markdown(rows, a.rate) + "\n\nFalse alarms (%) of each seed's intact series:\n\n" + false_alarm_table(rows)

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from learn.monitor.statistics import joint_rates
+from learn.monitor.statistics import joint_rates, sidak_rate
 
 __all__ = ["CHARTS", "LAMBDA", "Chart", "Charts", "chart_limit", "ewma_chart", "fit_ar1_noise", "onset",
            "run_charts"]
@@ -171,17 +171,20 @@ class Charts:
                 "charts": [c.to_dict() for c in self.charts]}
 
 
-def run_charts(vectors: dict, b_idx, rate: float, lam: float = LAMBDA, seed: int = 0) -> Charts:
+def run_charts(vectors: dict, b_idx, rate: float, lam: float = LAMBDA, seed: int = 0,
+               combination: str = "joint") -> Charts:
     """EWMA charts of every statistic's whitened coordinates (``vectors``: name -> (n, d), NaN rows not scored,
     the series in time order) with limits from the baseline rows ``b_idx``, each at an equal share of ``rate``
-    calibrated on the baseline charts' joint distribution after the burn-in (:func:`joint_rates`); an
+    calibrated on the baseline charts' joint distribution after the burn-in (:func:`joint_rates`; ``combination``
+    ``sidak``: Šidák's split); an
     alarm episode's onset dated by :func:`onset` on the coordinates of the first chart (in
     ``vectors`` order) above its limit at the episode's first alarm."""
     names = [nm for nm, v in vectors.items() if v is not None]
     values = [ewma_chart(vectors[nm], lam) for nm in names]
     burn = int(math.ceil(5.0 / lam))
     own = np.column_stack([v[b_idx][burn:] for v in values]) if names else np.zeros((0, 0))
-    each = float(joint_rates(own, rate)[0]) if names else rate
+    each = rate if not names else (sidak_rate(rate, len(names)) if combination == "sidak"
+                                   else float(joint_rates(own, rate)[0]))
     charts, ratios = [], []
     for k, (nm, vals) in enumerate(zip(names, values)):
         limit, phi, arl = chart_limit(vectors[nm][b_idx], each, lam, seed + k)

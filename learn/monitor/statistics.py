@@ -205,11 +205,12 @@ def joint_rate(held, rate: float, seed: int = 0) -> float:
     return float(joint_rates(held, rate, None, seed)[0])
 
 
-def family_rates(held, rate: float, names, combination: str = "joint") -> np.ndarray:
+def family_rates(held, rate: float, names, combination: str = "joint", shares=None) -> np.ndarray:
     """Per-statistic rates (K,) of ``names`` (their held-out indices ``held`` (n, K)) by ``combination``
-    (:data:`COMBINATIONS`)."""
+    (:data:`COMBINATIONS`; ``joint`` with ``shares``, name -> weight, :data:`SHARES` when None)."""
     if combination == "joint":
-        return joint_rates(held, rate, [SHARES[nm] for nm in names])
+        shares = SHARES if shares is None else shares
+        return joint_rates(held, rate, [shares[nm] for nm in names])
     if combination == "equal":
         return joint_rates(held, rate)
     if combination == "sidak":
@@ -238,6 +239,7 @@ class Detection:
                                           shift's on the side of its sign)
     combination : str                     one of :data:`COMBINATIONS`
     shift_rise : Threshold or None        the shift's rise side
+    shares : dict                         name -> the statistic's share of the rate (``joint``)
     patterns : dict                       missing modes (1-based, text) -> per statistic ``[Threshold]`` (the
                                           shift's drop and rise), for each set of modes found that the baseline
                                           period does not hold throughout
@@ -256,14 +258,15 @@ class Detection:
     combination: str = "joint"
     shift_rise: Threshold | None = None
     patterns: dict = field(default_factory=dict)
+    shares: dict = field(default_factory=dict)
 
     def alarmed_by(self, i: int) -> list:
         """Names of the statistics above their thresholds on test ``i``."""
         return [nm for k, nm in enumerate(self.names) if self.ratios[i, k] > 1.0]
 
     def to_dict(self) -> dict:
-        how = {"joint": "per-statistic rates shared by " + ", ".join(f"{nm} {SHARES[nm]:g}" for nm in self.names)
-                        + " (one share per one-sided test) and calibrated on the baseline's joint held-out statistics "
+        how = {"joint": "per-statistic rates shared by " + ", ".join(f"{nm} {w:g}" for nm, w in self.shares.items())
+                        + " and calibrated on the baseline's joint held-out statistics "
                         "(a Gaussian copula of their ranks) so that any statistic alarms at the rate",
                "equal": "equal per-statistic rates calibrated on the baseline's joint held-out statistics (a Gaussian "
                         "copula of their ranks) so that any statistic alarms at the rate",
@@ -322,13 +325,13 @@ def _ratios(values, z, ths, names):
 
 
 def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int = 0,
-           statistics=STATISTICS, held=None, combination: str = "joint") -> Detection:
+           statistics=STATISTICS, held=None, combination: str = "joint", shares=None) -> Detection:
     """The detector on a series: ``model`` fitted on the baseline tests ``X[b_idx]`` (``make_model()`` an unfitted
     copy for the held-out fits), the monitoring tests ``rest`` (indices) scored by it, the baseline tests held
     out (``held``: their :func:`held_out_statistics`, computed when None); every statistic of ``statistics`` that
     the model supports, thresholded at its rate of ``combination`` (:func:`family_rates`: ``joint`` the shares
-    :data:`SHARES` calibrated on the held-out statistics, ``equal``, ``sidak``); the shift signed, its drop and its
-    rise each at half its rate.
+    :data:`SHARES`, or ``shares``, calibrated on the held-out statistics, ``equal``, ``sidak``); the shift signed,
+    its drop and its rise each at half its rate.
 
     A test whose set of modes found differs from some baseline test's is judged against thresholds of its own
     set: :func:`held_out_statistics` with its missing modes dropped (``pattern``); the residual's missing-mode
@@ -356,7 +359,7 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
             if len(rest):
                 vec[rest] = now[nm][1]
             vectors[nm] = vec
-    rates = family_rates(values[b_idx], rate, names, combination) if names else np.zeros(0)
+    rates = family_rates(values[b_idx], rate, names, combination, shares) if names else np.zeros(0)
     each = dict(zip(names, rates))
     n_train = training_size(len(b_idx))
     ths = _thresholds(model, held, names, each, n_train, n_conditions)
@@ -384,7 +387,8 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
     shift = np.full(n, np.nan)
     shift[scored] = shift_fraction(model, X[scored], None if C is None else C[scored])
     return Detection(names, values, tuple(ths[nm][0] for nm in names), rate, rates, ratio, np.nan_to_num(ratio) > 1.0,
-                     vectors, 100 * shift, R, combination, ths["shift"][1] if "shift" in ths else None, patterns)
+                     vectors, 100 * shift, R, combination, ths["shift"][1] if "shift" in ths else None, patterns,
+                     {nm: (SHARES if shares is None else shares)[nm] for nm in names} if combination == "joint" else {})
 
 
 def environmental(model, name: str) -> bool:

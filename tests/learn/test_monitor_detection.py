@@ -122,3 +122,18 @@ def test_environmental_statistics_on_a_baseline_shorter_than_the_seasons_are_war
     assert season_warning(dates, days, 360, ("residual", "environment", "shift")) is None   # a year covered
     assert season_warning(dates, days, 120, ("residual",)) is None
     assert season_warning(["1", "2"] * 200, days, 120, ("residual", "shift")) is None     # test numbers, no dates
+
+
+def test_the_charts_share_the_rate_by_their_joint_baseline_distribution():
+    """Two charts of one statistic cost nothing (each at the rate), of two independent ones Sidak's split; the
+    ``sidak`` combination always the split."""
+    rng = np.random.default_rng(16)
+    Z = rng.standard_normal((1500, 1))
+    b_idx = np.arange(1000)
+    same = run_charts({"a": Z, "b": Z.copy()}, b_idx, 0.01, lam=0.1)
+    apart = run_charts({"a": Z, "b": rng.standard_normal((1500, 1))}, b_idx, 0.01, lam=0.1)
+    split = run_charts({"a": Z, "b": Z.copy()}, b_idx, 0.01, lam=0.1, combination="sidak")
+    assert [c.rate for c in same.charts] == pytest.approx([0.01, 0.01])
+    assert apart.charts[0].rate == pytest.approx(sidak_rate(0.01, 2), rel=0.15)
+    assert split.charts[0].rate == pytest.approx(sidak_rate(0.01, 2))
+    assert split.charts[0].limit > same.charts[0].limit

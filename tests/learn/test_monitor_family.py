@@ -3,6 +3,7 @@ joint held-out distribution against the closed form of the largest of two correl
 rate and the power against Šidák's on dependent null data, the signed shift's two sides, the thresholds per set
 of modes found, and the status of an environmental alarm on an extrapolated test."""
 
+import math
 import warnings
 from datetime import date, timedelta
 
@@ -13,7 +14,7 @@ from scipy import optimize, stats
 from learn.monitor import IdentificationSettings, read_conditions
 from learn.monitor.alarms import EXTRAPOLATED, monitor_series
 from learn.monitor.normal_models import PCARemoval
-from learn.monitor.statistics import detect, joint_rate, joint_rates, sidak_rate
+from learn.monitor.statistics import SHARES, STATISTICS, detect, joint_rate, joint_rates, sidak_rate
 from monitor_series import write_modal_series
 
 
@@ -145,3 +146,19 @@ def test_an_environmental_alarm_on_an_extrapolated_test_has_its_own_status(tmp_p
 
     assert dated(1) == [r["status"] for r in apart.rows]        # 29 days of baseline: separated
     assert dated(13) == [r["status"] for r in kept.rows]        # 377 days: the seasons covered, kept alarms
+
+
+def test_the_shares_give_the_family_rate_on_a_large_new_gaussian_sample():
+    """Three statistics (residual independent, environment and shift correlated 0.7) at SHARES: thresholds from
+    5000 held-out draws put 200 000 new draws of the same law beyond any of them at the rate, within binomial
+    tolerance, each at its own rate, the shift at twice the residual's."""
+    rng = np.random.default_rng(25)
+    cov = np.array([[1, 0, 0], [0, 1, 0.7], [0, 0.7, 1]])
+    held = rng.multivariate_normal(np.zeros(3), cov, 5000)
+    r = joint_rates(np.c_[held[:, 0] ** 3, np.exp(held[:, 1]), held[:, 2]], 0.01, [SHARES[nm] for nm in STATISTICS])
+    new = rng.multivariate_normal(np.zeros(3), cov, 200_000)
+    beyond = new > stats.norm.isf(r)
+    sd = math.sqrt(0.01 * 0.99 / len(new))
+    assert abs(beyond.any(axis=1).mean() - 0.01) < 4 * sd + 5e-4          # 5e-4: the copula's 200 000 draws
+    np.testing.assert_allclose(beyond.mean(axis=0), r, rtol=0.1)
+    assert r[2] == pytest.approx(2 * r[0], rel=0.01) and r[1] == pytest.approx(r[0] / 4, rel=0.01)
