@@ -1,7 +1,7 @@
 """Benchmark: the detector's statistics, their combination and the memory chart against the plainest tests, on
 long frequency series of the independent simulator.
 
-Run: ``python -m experiments.benches.bench_detection [--out out/bench_detection] [--seeds 0 1] [--rate 0.01]
+Run: ``python -m experiments.benches.bench_detection [--out out/bench_detection] [--seeds 0 1 2 3] [--rate 0.01]
 [--cases daily 30min lab] [--shares residual=1 environment=0.25 shift=2] [--docs]`` (``--shares``: the
 ``combined`` column's shares instead of :data:`~learn.monitor.statistics.SHARES`)
 
@@ -230,7 +230,7 @@ def false_alarm_table(rows: list) -> str:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--out", default="out/bench_detection")
-    p.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
+    p.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3])
     p.add_argument("--rate", type=float, default=0.01)
     p.add_argument("--cases", nargs="+", choices=CASES, default=list(CASES))
     p.add_argument("--shares", nargs="+", metavar="NAME=WEIGHT",
