@@ -1,8 +1,9 @@
 """Benchmark: the detector's statistics, their combination and the memory chart against the plainest tests, on
 long frequency series of the independent simulator.
 
-Run: ``python -m experiments.benches.bench_detection [--out out/bench_detection] [--seeds 0 1] [--rate 0.01]
-[--cases daily 30min lab] [--docs]``
+Run: ``python -m experiments.benches.bench_detection [--out out/bench_detection] [--seeds 0 1 2 3] [--rate 0.01]
+[--cases daily 30min lab] [--shares residual=1 environment=0.25 shift=2] [--docs]`` (``--shares``: the
+``combined`` column's shares instead of :data:`~learn.monitor.statistics.SHARES`)
 
 Series (:func:`experiments.second_sim.series.frequency_series`: the monitoring cantilever's first four modes under
 a seasonal, daily and weather temperature, its clamp re-made and its bolted mass re-placed, each frequency
@@ -23,18 +24,22 @@ conditions) and ``regression`` on the measured temperature. Methods, each at ``-
 
 * ``residual``, ``environment``, ``shift``: each statistic of :mod:`learn.monitor.statistics` alone at the rate
   (the shift signed: a drop and a rise at half the rate each);
-* ``combined``: any statistic above its threshold at the rate calibrated on their joint held-out distribution
-  (``monitor``'s alarm with a baseline period of a year); ``combined, Šidák``: at the Šidák rate; ``extrapolated
+* ``combined``: any statistic above its threshold, the rate shared by :data:`~learn.monitor.statistics.SHARES`
+  and calibrated on their joint held-out distribution (``monitor``'s alarm with a baseline period of a year);
+  ``combined, equal shares``: the same calibration with equal shares; ``combined, Šidák``: equal shares at the
+  Šidák rate; ``extrapolated
   apart``: the combination less the tests beyond the baseline's environment alarmed by its environmental statistics
   alone (``monitor --extrapolated-alarms separate``: status ``change or unseen conditions``);
-* ``chart``: the EWMA charts of :mod:`learn.monitor.charts` (``monitor``'s ``chart_alarm``);
+* ``chart``: the EWMA charts of :mod:`learn.monitor.charts` (``monitor``'s ``chart_alarm``); ``chart, Šidák``:
+  the charts at Šidák's split instead of their joint calibration;
 * ``plain shift``: the mean relative change of the frequencies from their baseline medians, alarmed below the
   baseline's own ``rate`` quantile (one-sided: it is told the change's sign, above the ``1 - rate`` quantile for the
   mass loss); ``plain shift, both signs``: below its ``rate / 2`` or above its ``1 - rate / 2`` quantile;
 * ``plain per mode``: each mode's relative change, alarmed beyond the baseline's ``rate / m`` quantile of that mode
   (on the change's side).
 
-False alarms: the share of the intact series' monitoring tests alarmed (the plain tests: on the drop side).
+False alarms: the share of the intact series' monitoring tests alarmed (the plain tests: on the drop side), the
+mean over the seeds in the table and each seed's under it.
 Detected: the share of the damaged tests alarmed (the chart from one day after the onset: ``30min`` 48 tests,
 ``daily`` 1 test). Delay: tests from the onset to the first alarm on a damaged test.
 Writes ``detection.json`` and ``detection.md`` in ``--out``.
@@ -57,7 +62,7 @@ from experiments.second_sim.series import (FrequencySeriesConfig, SeriesConfig, 
 from learn.monitor.charts import run_charts  # noqa: E402
 from learn.monitor.normal_models import NORMAL_MODELS  # noqa: E402
 from learn.monitor.coverage import coverage, environment_coordinates  # noqa: E402
-from learn.monitor.statistics import detect, environmental, held_out_statistics  # noqa: E402
+from learn.monitor.statistics import SHARES, detect, environmental, held_out_statistics  # noqa: E402
 from physics.io import atomic_write_text  # noqa: E402
 from experiments.studies.doc_tables import write_table  # noqa: E402
 
@@ -65,7 +70,8 @@ __all__ = ["CASES", "main", "methods_on", "plain_tests"]
 
 SIZES_PCT = (0.25, 0.5, 1.0, 1.5, 2.0)
 DAMAGES = {"mode 1": (1,), "uniform EI": "stiffness", "mass loss": "mass"}
-METHODS = ("residual", "environment", "shift", "combined", "combined, Šidák", "extrapolated apart", "chart",
+METHODS = ("residual", "environment", "shift", "combined", "combined, equal shares", "combined, Šidák",
+           "extrapolated apart", "chart", "chart, Šidák",
            "plain shift", "plain shift, both signs", "plain per mode")
 
 
@@ -102,19 +108,25 @@ def plain_tests(F, nb: int, rate: float, sign: float = 1.0) -> dict:
             "plain per mode": (rel < per).any(axis=1)}
 
 
-def methods_on(F, C, nb: int, model_name: str, rate: float, seed: int = 0, sign: float = 1.0) -> dict:
-    """Every method's alarms (n,) on one series (baseline: the first ``nb`` tests)."""
+def methods_on(F, C, nb: int, model_name: str, rate: float, seed: int = 0, sign: float = 1.0, held=None,
+               shares=None) -> dict:
+    """Every method's alarms (n,) on one series (baseline: the first ``nb`` tests; ``held``: their
+    :func:`~learn.monitor.statistics.held_out_statistics`, computed when None; ``shares``: the ``combined``
+    method's, :data:`~learn.monitor.statistics.SHARES` when None)."""
     X = np.log(F)
     q = 0 if C is None else C.shape[1]
     model = NORMAL_MODELS[model_name](X.shape[1], q).fit(X[:nb], None if C is None else C[:nb])
     b_idx, rest = np.arange(nb), np.arange(nb, len(X))
-    held = held_out_statistics(model.with_choices, X[:nb], None if C is None else C[:nb])
-    det = detect(model, model.with_choices, X, C, b_idx, rest, rate, q, held=held)
+    if held is None:
+        held = held_out_statistics(model.with_choices, X[:nb], None if C is None else C[:nb])
+    det = detect(model, model.with_choices, X, C, b_idx, rest, rate, q, held=held, shares=shares)
     out = {}
     for k, nm in enumerate(det.names):
         alone = detect(model, model.with_choices, X, C, b_idx, rest, rate, q, (nm,), held={nm: held[nm]})
         out[nm] = alone.alarm
     out["combined"] = det.alarm
+    out["combined, equal shares"] = detect(model, model.with_choices, X, C, b_idx, rest, rate, q, held=held,
+                                           combination="equal").alarm
     out["combined, Šidák"] = detect(model, model.with_choices, X, C, b_idx, rest, rate, q, held=held,
                                     combination="sidak").alarm
     names, E = environment_coordinates(model, X, C, tuple(f"condition {j + 1}" for j in range(q)))
@@ -124,6 +136,7 @@ def methods_on(F, C, nb: int, model_name: str, rate: float, seed: int = 0, sign:
         env_only = ~(det.ratios[:, own] > 1.0).any(axis=1)
         out["extrapolated apart"] &= ~(coverage(names, E, b_idx, rest).extrapolated & env_only)
     out["chart"] = run_charts(det.vectors, b_idx, rate, seed=seed).alarm
+    out["chart, Šidák"] = run_charts(det.vectors, b_idx, rate, seed=seed, combination="sidak").alarm
     out.update(plain_tests(F, nb, rate, sign))
     return out
 
@@ -131,18 +144,23 @@ def methods_on(F, C, nb: int, model_name: str, rate: float, seed: int = 0, sign:
 def _scores(alarms: dict, damaged, nb: int, onset: int, per_day: int) -> dict:
     out = {}
     for m, a in alarms.items():
-        late = damaged & (np.arange(len(a)) >= onset + (per_day if m == "chart" else 0))
+        late = damaged & (np.arange(len(a)) >= onset + (per_day if m.startswith("chart") else 0))
         hits = np.flatnonzero(a & damaged)
         out[m] = {"detected": float(a[late].mean()), "delay_tests": int(hits[0] - onset) if hits.size else None}
     return out
 
 
-def run_case(name: str, seed: int, rate: float) -> list:
+def run_case(name: str, seed: int, rate: float, shares=None) -> list:
     cfg, nb, onset, per_day = _case(name, seed)
     fs = frequency_series(cfg)
     rows = []
     for model_name, C in (("pca", None), ("regression", fs.measured_temperature_c[:, None])):
-        intact = methods_on(fs.frequencies_hz, C, nb, model_name, rate, seed)
+        X = np.log(fs.frequencies_hz[:nb])
+        q = 0 if C is None else C.shape[1]
+        Cb = None if C is None else C[:nb]
+        base = NORMAL_MODELS[model_name](X.shape[1], q).fit(X, Cb)
+        held = held_out_statistics(base.with_choices, X, Cb)                   # the baseline is never damaged
+        intact = methods_on(fs.frequencies_hz, C, nb, model_name, rate, seed, held=held, shares=shares)
         fa = {m: float(a[nb:].mean()) for m, a in intact.items()}
         rows.append({"case": name, "seed": seed, "model": model_name, "damage": "none", "size_pct": 0.0,
                      "false_alarms": fa, "n_monitoring": len(fs.day) - nb})
@@ -158,8 +176,8 @@ def run_case(name: str, seed: int, rate: float) -> list:
             for size in SIZES_PCT:
                 F = fs.frequencies_hz.copy()
                 F[damaged] *= np.exp(pattern * np.log1p(-size / 100))
-                res = _scores(methods_on(F, C, nb, model_name, rate, seed, -1.0 if which == "mass" else 1.0),
-                              damaged, nb, onset, per_day)
+                res = _scores(methods_on(F, C, nb, model_name, rate, seed, -1.0 if which == "mass" else 1.0,
+                                         held, shares), damaged, nb, onset, per_day)
                 rows.append({"case": name, "seed": seed, "model": model_name, "damage": damage, "size_pct": size,
                              "scores": res})
                 print(json.dumps({k: v for k, v in rows[-1].items() if k != "scores"}
@@ -192,27 +210,58 @@ def markdown(rows: list, rate: float) -> str:
     return "\n".join(lines)
 
 
+#: The methods whose false alarms :func:`false_alarm_table` lists per seed.
+FA_METHODS = ("combined", "combined, equal shares", "combined, Šidák", "chart", "chart, Šidák", "plain shift",
+              "plain shift, both signs", "plain per mode")
+
+
+def false_alarm_table(rows: list) -> str:
+    """Per case and model, each seed's false alarms (%) of :data:`FA_METHODS` and their mean."""
+    lines = ["| case | model | seeds | " + " | ".join(FA_METHODS) + " |",
+             "| --- | --- | --- | " + " | ".join("---" for _ in FA_METHODS) + " |"]
+    for case, model in dict.fromkeys((r["case"], r["model"]) for r in rows):
+        mine = [r for r in rows if (r["case"], r["model"]) == (case, model) and r["damage"] == "none"]
+        cells = [" / ".join(f"{100 * r['false_alarms'][m]:.2f}" for r in mine)
+                 + f" (mean {100 * np.mean([r['false_alarms'][m] for r in mine]):.2f})" for m in FA_METHODS]
+        lines.append(f"| {case} | {model} | {' '.join(str(r['seed']) for r in mine)} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--out", default="out/bench_detection")
-    p.add_argument("--seeds", type=int, nargs="+", default=[0, 1])
+    p.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3])
     p.add_argument("--rate", type=float, default=0.01)
     p.add_argument("--cases", nargs="+", choices=CASES, default=list(CASES))
+    p.add_argument("--shares", nargs="+", metavar="NAME=WEIGHT",
+                   help="the combined column's share of each statistic (default: learn.monitor.statistics.SHARES)")
     p.add_argument("--docs", action="store_true", help="write the table into docs/monitoring.md")
     a = p.parse_args(argv)
-    rows = [r for case in a.cases for seed in a.seeds for r in run_case(case, seed, a.rate)]
+    shares = None
+    if a.shares:
+        shares = dict(SHARES)
+        for item in a.shares:
+            name, _, w = item.partition("=")
+            if name not in SHARES or not w:
+                p.error(f"--shares {item}: expected NAME=WEIGHT with NAME one of {', '.join(SHARES)}")
+            shares[name] = float(w)
+    if a.docs and shares:
+        p.error("--docs writes the table of monitor's shares: leave --shares out")
+    rows = [r for case in a.cases for seed in a.seeds for r in run_case(case, seed, a.rate, shares)]
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
-    md = markdown(rows, a.rate)
+    md = markdown(rows, a.rate) + "\n\nFalse alarms (%) of each seed's intact series:\n\n" + false_alarm_table(rows)
     atomic_write_text(out / "detection.json", json.dumps({"config": vars(a), "rows": rows}, indent=1))
     atomic_write_text(out / "detection.md", md + "\n")
     print(md)
     if a.docs:
 
+        cases = "" if list(a.cases) == list(CASES) else " --cases " + " ".join(a.cases)
         cmd = ("`python -m experiments.benches.bench_detection --seeds " + " ".join(map(str, a.seeds))
-               + f" --rate {a.rate:g} --docs`")
+               + f" --rate {a.rate:g}{cases} --docs`")
         write_table("monitoring.md", "detection", md + f"\n\nDetection in % of the damaged tests, averaged over "
-                    f"{len(a.seeds)} seeds; false alarms in % of the intact series' monitoring tests. {cmd}")
+                    f"{len(a.seeds)} seeds; false alarms in % of the intact series' monitoring tests (the table: "
+                    f"their mean over the seeds). Written by {cmd}.")
     return 0
 
 

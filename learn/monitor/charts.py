@@ -15,7 +15,9 @@ sqrt(1 - a) w_t`` with ``s`` a unit AR(1) of coefficient ``phi`` (autocorrelatio
 fitted to the baseline's by least squares; ``a = 1`` an AR(1), ``a = 0`` white noise), Gaussian series of the
 model are simulated from a stationary start, the chart run on them, and the limit is their ``1 - rate`` quantile
 after the EWMA's burn-in, or the baseline's own chart's quantile if larger: in control, a share ``rate`` of the
-tests lie above it. The charts of a series are combined at the Šidák rate, as the statistics are.
+tests lie above it. The charts of a series share the family-wise rate equally, calibrated on the joint
+distribution of the baseline's own charts after the burn-in (:func:`~learn.monitor.statistics.joint_rates`: the
+charts of dependent statistics cost little of the rate, independent ones Šidák's split).
 
 :func:`onset` dates a change: at an alarm, the start ``tau`` of the window ending there that maximises
 ``|sum z|^2 / length`` (the likelihood ratio of a lasting shift of unknown size in independent unit ``z``).
@@ -28,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from learn.monitor.statistics import sidak_rate
+from learn.monitor.statistics import joint_rates, sidak_rate
 
 __all__ = ["CHARTS", "LAMBDA", "Chart", "Charts", "chart_limit", "ewma_chart", "fit_ar1_noise", "onset",
            "run_charts"]
@@ -163,22 +165,29 @@ class Charts:
 
     def to_dict(self) -> dict:
         return {"kind": "ewma", "false_alarm_rate": self.rate,
-                "limits": "AR(1) sieve bootstrap of the held-out baseline statistics, the Sidak rate per chart",
+                "limits": "AR(1)-plus-noise simulation of the held-out baseline statistics, each chart at an "
+                          "equal rate calibrated on the baseline charts' joint distribution (Gaussian copula)",
+                "rate_per_chart": {c.name: c.rate for c in self.charts},
                 "charts": [c.to_dict() for c in self.charts]}
 
 
-def run_charts(vectors: dict, b_idx, rate: float, lam: float = LAMBDA, seed: int = 0) -> Charts:
+def run_charts(vectors: dict, b_idx, rate: float, lam: float = LAMBDA, seed: int = 0,
+               combination: str = "joint") -> Charts:
     """EWMA charts of every statistic's whitened coordinates (``vectors``: name -> (n, d), NaN rows not scored,
-    the series in time order) with limits from the baseline rows ``b_idx`` at the Šidák rate of ``rate``; an
+    the series in time order) with limits from the baseline rows ``b_idx``, each at an equal share of ``rate``
+    calibrated on the baseline charts' joint distribution after the burn-in (:func:`joint_rates`; ``combination``
+    ``sidak``: Šidák's split); an
     alarm episode's onset dated by :func:`onset` on the coordinates of the first chart (in
     ``vectors`` order) above its limit at the episode's first alarm."""
     names = [nm for nm, v in vectors.items() if v is not None]
-    each = sidak_rate(rate, len(names))
+    values = [ewma_chart(vectors[nm], lam) for nm in names]
+    burn = int(math.ceil(5.0 / lam))
+    own = np.column_stack([v[b_idx][burn:] for v in values]) if names else np.zeros((0, 0))
+    each = rate if not names else (sidak_rate(rate, len(names)) if combination == "sidak"
+                                   else float(joint_rates(own, rate)[0]))
     charts, ratios = [], []
-    for k, nm in enumerate(names):
-        Z = vectors[nm]
-        limit, phi, arl = chart_limit(Z[b_idx], each, lam, seed + k)
-        vals = ewma_chart(Z, lam)
+    for k, (nm, vals) in enumerate(zip(names, values)):
+        limit, phi, arl = chart_limit(vectors[nm][b_idx], each, lam, seed + k)
         charts.append(Chart(nm, lam, each, limit, phi, arl, vals))
         ratios.append(vals / limit)
     n = len(next(iter(vectors.values()))) if vectors else 0

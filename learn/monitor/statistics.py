@@ -16,11 +16,13 @@ distribution, combined family-wise at the chosen false-alarm rate.
 Each index is a squared Mahalanobis distance of some part of the residual; its threshold is
 :func:`~learn.monitor.alarm_threshold.threshold` of the held-out baseline indices (a scaled F law and their empirical
 quantile; for the statistics of the environment itself the law fitted to their tail), the shift's on each side of
-its sign (a drop, a rise) at half the per-statistic rate. The per-statistic rate is calibrated on the statistics'
-joint held-out distribution (:func:`joint_rate`: strongly dependent statistics cost little of the rate, independent
-ones Šidák's ``1 - (1 - rate)^(1/K)``), so that a test of the normal variation alarms on any of them with
-probability ``rate``. A test whose set of modes found the baseline does not hold throughout is judged against the
-thresholds of that set (:func:`held_out_statistics` with its ``pattern``).
+its sign (a drop, a rise). The family-wise rate is shared by :data:`SHARES` (one share per one-sided test: the
+residual one, the shift's drop and rise one each, the environmental ``T^2``, which holds the shift's direction among
+its own, a quarter) and calibrated on the statistics' joint held-out distribution (:func:`joint_rates`: strongly
+dependent statistics cost little of the rate, independent ones the weighted Šidák split), so that a test of the
+normal variation alarms on any of them with probability ``rate``. A test whose set of modes found the baseline
+does not hold throughout is judged against the thresholds of that set (:func:`held_out_statistics` with its
+``pattern``).
 """
 
 from __future__ import annotations
@@ -34,8 +36,9 @@ from learn.monitor.alarm_threshold import TAIL_SHARE, Threshold, _folds, missing
 from learn.monitor.normal_models import PCARemoval, Regression, _impute
 from datetime import datetime
 
-__all__ = ["PATTERN_MIN", "STATISTICS", "Detection", "detect", "environmental", "held_out_statistics",
-           "covers_seasons", "joint_rate", "season_warning", "sidak_rate", "statistics_of"]
+__all__ = ["COMBINATIONS", "PATTERN_MIN", "SHARES", "STATISTICS", "Detection", "detect", "environmental",
+           "held_out_statistics", "covers_seasons", "family_rates", "joint_rate", "joint_rates", "season_warning",
+           "sidak_rate", "statistics_of"]
 
 #: The detector's statistics (module docstring).
 STATISTICS = ("residual", "environment", "shift")
@@ -154,28 +157,65 @@ def sidak_rate(rate: float, k: int) -> float:
     return 1.0 - (1.0 - rate) ** (1.0 / max(int(k), 1))
 
 
-def joint_rate(held, rate: float, seed: int = 0) -> float:
-    """The per-statistic rate at which a test of the normal variation alarms on any of the statistics with
-    probability ``rate``, calibrated on their joint held-out distribution: ``held`` (n, K) the baseline tests'
-    held-out indices; each column's ranks turned to normal scores ``Phi^-1((rank - 1/2) / n)``, their correlation
-    ``R``; the rate ``1 - Phi(t)``, ``t`` the ``1 - rate`` quantile of the largest of ``K`` standard normals
-    correlated by ``R`` (a Gaussian copula, :data:`COPULA_DRAWS` draws, seeded). Independent statistics give
-    Šidák's rate, identical ones ``rate``; the result is kept between the two."""
+#: Each statistic's share of the family-wise rate (relative weights, :func:`joint_rates`): one per one-sided test.
+#: The residual's index is one test, the signed shift two (a drop, a rise: the plainest tests of a change common to
+#: the modes, of either sign); the environmental ``T^2`` of the removed components holds the shift's direction
+#: among its own (for a common change it is the weaker test of the same evidence) and keeps a quarter share, for a
+#: change along a removed direction that leaves the modes' mean.
+SHARES = {"residual": 1.0, "environment": 0.25, "shift": 2.0}
+#: How :func:`detect` shares the rate: ``joint`` (:data:`SHARES`, calibrated on the joint held-out distribution),
+#: ``equal`` (equal shares, so calibrated), ``sidak`` (equal shares, independent statistics assumed).
+COMBINATIONS = ("joint", "equal", "sidak")
+
+
+def joint_rates(held, rate: float, weights=None, seed: int = 0) -> np.ndarray:
+    """Per-statistic rates ``r_k`` (K,) at which a test of the normal variation alarms on any of the statistics with
+    probability ``rate``, shared by ``weights`` (K,) (relative; None: equal) and calibrated on the statistics' joint
+    held-out distribution: ``held`` (n, K) the baseline tests' held-out indices; each column's ranks turned to
+    normal scores ``Phi^-1((rank - 1/2) / n)``, their correlation ``R``; ``r_k = 1 - (1 - s)^(v_k)``,
+    ``v_k = w_k / max w``, with ``s`` the ``rate`` quantile over :data:`COPULA_DRAWS` seeded draws of ``K`` standard
+    normals correlated by ``R`` (a Gaussian copula) of ``min_k 1 - (1 - Phi(-g_k))^(1/v_k)`` (the draw alarms on
+    some statistic at ``s`` exactly when that is below ``s``). Independent statistics give the weighted Šidák split
+    ``prod (1 - r_k) = 1 - rate``, identical ones ``max r_k = rate``; ``s`` is kept between the two. Equal weights:
+    :func:`joint_rate` for each."""
     from scipy import stats  # scipy.stats: ranks and the normal law, only where the family is calibrated
 
     H = np.asarray(held, float)
     H = H[np.isfinite(H).all(axis=1)]
     k = H.shape[1]
-    low = sidak_rate(rate, k)
-    if k < 2 or len(H) < 10:
-        return rate if k < 2 else low
-    S = stats.norm.ppf((stats.rankdata(H, axis=0) - 0.5) / len(H))
-    R = np.corrcoef(S, rowvar=False)
-    lam, V = np.linalg.eigh(np.nan_to_num(R))
-    L = V * np.sqrt(np.maximum(lam, 0.0))
-    G = np.random.default_rng(seed).standard_normal((COPULA_DRAWS, k)) @ L.T
-    t = np.quantile(G.max(axis=1), 1 - rate)
-    return float(np.clip(stats.norm.sf(t), low, rate))
+    w = np.ones(k) if weights is None else np.asarray(weights, float)
+    v = w / w.max()
+    low = 1.0 - (1.0 - rate) ** (1.0 / v.sum())
+    s = rate if k < 2 else low
+    if k >= 2 and len(H) >= 10:
+        S = stats.norm.ppf((stats.rankdata(H, axis=0) - 0.5) / len(H))
+        R = np.corrcoef(S, rowvar=False)
+        lam, V = np.linalg.eigh(np.nan_to_num(R))
+        L = V * np.sqrt(np.maximum(lam, 0.0))
+        G = np.random.default_rng(seed).standard_normal((COPULA_DRAWS, k)) @ L.T
+        P = stats.norm.sf(G)                                            # each draw's p-value per statistic
+        first = np.min(-np.expm1(np.log1p(-P) / v), axis=1)            # the s at which the draw alarms
+        s = float(np.clip(np.quantile(first, rate), low, rate))
+    return -np.expm1(v * math.log1p(-s))
+
+
+def joint_rate(held, rate: float, seed: int = 0) -> float:
+    """The per-statistic rate of equal shares (:func:`joint_rates` with equal weights): between Šidák's
+    ``1 - (1 - rate)^(1/K)`` (independent statistics) and ``rate`` (one statistic repeated)."""
+    return float(joint_rates(held, rate, None, seed)[0])
+
+
+def family_rates(held, rate: float, names, combination: str = "joint", shares=None) -> np.ndarray:
+    """Per-statistic rates (K,) of ``names`` (their held-out indices ``held`` (n, K)) by ``combination``
+    (:data:`COMBINATIONS`; ``joint`` with ``shares``, name -> weight, :data:`SHARES` when None)."""
+    if combination == "joint":
+        shares = SHARES if shares is None else shares
+        return joint_rates(held, rate, [shares[nm] for nm in names])
+    if combination == "equal":
+        return joint_rates(held, rate)
+    if combination == "sidak":
+        return np.full(len(names), sidak_rate(rate, len(names)))
+    raise ValueError(f"combination {combination!r}: expected one of {', '.join(COMBINATIONS)}")
 
 
 @dataclass(frozen=True)
@@ -186,18 +226,20 @@ class Detection:
     ----------
     names : tuple of str                  the statistics used (a subset of :data:`STATISTICS`, in that order)
     values : ndarray (n, K)               each statistic's index per test (NaN: not scored); baseline tests held out
-    thresholds : tuple of Threshold       each statistic's threshold at ``rate_each`` for the tests holding every
-                                          mode (the shift's: its drop side, ``shift_rise`` the other)
+    thresholds : tuple of Threshold       each statistic's threshold at its rate of ``rate_each`` for the tests
+                                          holding every mode (the shift's: its drop side, ``shift_rise`` the other)
     rate : float                          the family-wise false-alarm rate
-    rate_each : float                     the per-statistic rate (:func:`joint_rate`, or Šidák's)
+    rate_each : ndarray (K,)              each statistic's rate (:func:`family_rates`; the shift's two sides
+                                          together)
     ratio : ndarray (n,)                  ``max_k ratios`` (> 1: alarm)
     alarm : ndarray of bool (n,)
     vectors : dict                        name -> (n, d) whitened coordinates (see :func:`statistics_of`)
     shift_pct : ndarray (n,)              the weighted mean relative frequency change, %
     ratios : ndarray (n, K)               each index over its threshold for the test's set of modes found (the
                                           shift's on the side of its sign)
-    combination : str                     ``joint`` or ``sidak``
+    combination : str                     one of :data:`COMBINATIONS`
     shift_rise : Threshold or None        the shift's rise side
+    shares : dict                         name -> the statistic's share of the rate (``joint``)
     patterns : dict                       missing modes (1-based, text) -> per statistic ``[Threshold]`` (the
                                           shift's drop and rise), for each set of modes found that the baseline
                                           period does not hold throughout
@@ -207,7 +249,7 @@ class Detection:
     values: np.ndarray
     thresholds: tuple
     rate: float
-    rate_each: float
+    rate_each: np.ndarray
     ratio: np.ndarray
     alarm: np.ndarray
     vectors: dict
@@ -216,21 +258,25 @@ class Detection:
     combination: str = "joint"
     shift_rise: Threshold | None = None
     patterns: dict = field(default_factory=dict)
+    shares: dict = field(default_factory=dict)
 
     def alarmed_by(self, i: int) -> list:
         """Names of the statistics above their thresholds on test ``i``."""
         return [nm for k, nm in enumerate(self.names) if self.ratios[i, k] > 1.0]
 
     def to_dict(self) -> dict:
-        how = ("the per-statistic rate calibrated on the baseline's joint held-out statistics (a Gaussian copula of "
-               "their ranks) so that any statistic alarms at the rate" if self.combination == "joint"
-               else "the Sidak rate 1 - (1 - rate)^(1/K) of the K statistics")
+        how = {"joint": "per-statistic rates shared by " + ", ".join(f"{nm} {w:g}" for nm, w in self.shares.items())
+                        + " and calibrated on the baseline's joint held-out statistics "
+                        "(a Gaussian copula of their ranks) so that any statistic alarms at the rate",
+               "equal": "equal per-statistic rates calibrated on the baseline's joint held-out statistics (a Gaussian "
+                        "copula of their ranks) so that any statistic alarms at the rate",
+               "sidak": "the Sidak rate 1 - (1 - rate)^(1/K) of the K statistics"}[self.combination]
         th = {nm: t.to_dict() for nm, t in zip(self.names, self.thresholds)}
         if self.shift_rise is not None:
             th["shift"] = {"drop": th["shift"], "rise": self.shift_rise.to_dict(),
-                           "signed": "a drop and a rise each at half the per-statistic rate"}
+                           "signed": "a drop and a rise each at half the shift's rate"}
         return {"statistics": list(self.names), "false_alarm_rate": self.rate,
-                "rate_per_statistic": self.rate_each,
+                "rate_per_statistic": {nm: float(r) for nm, r in zip(self.names, self.rate_each)},
                 "combination": "an alarm when any statistic exceeds its threshold at " + how,
                 "thresholds": th,
                 "per_set_of_modes_found": {key: {nm: [t.to_dict() for t in ts] for nm, ts in v.items()}
@@ -238,30 +284,30 @@ class Detection:
 
 
 def _thresholds(model, held, names, each, n_train, n_conditions, missing=0, evidence=0.0):
-    """Per statistic of ``names``, its thresholds ``[Threshold]`` at ``each`` from the held-out statistics
-    ``held``: one, or the shift's drop and rise sides at ``each / 2`` (a side with fewer than 2 held-out tests: the
-    two-sided threshold for both). ``missing``: modes dropped (the residual's degrees of freedom less by as many);
-    ``evidence``: added to the residual's threshold (the missing-mode evidence of a set of modes found that the
-    baseline period holds often: a normal set)."""
+    """Per statistic of ``names``, its thresholds ``[Threshold]`` at its rate ``each[name]`` from the held-out
+    statistics ``held``: one, or the shift's drop and rise sides at half its rate (a side with fewer than 2
+    held-out tests: the two-sided threshold for both). ``missing``: modes dropped (the residual's degrees of
+    freedom less by as many); ``evidence``: added to the residual's threshold (the missing-mode evidence of a set of
+    modes found that the baseline period holds often: a normal set)."""
     out = {}
     for nm in names:
         hv, hvec = held[nm]
         tail = TAIL_SHARE if environmental(model, nm) else 1.0
         if nm == "residual":
-            t = threshold(hv, each, max(model.dof_ - missing, 1), n_train, n_conditions, tail)
+            t = threshold(hv, each[nm], max(model.dof_ - missing, 1), n_train, n_conditions, tail)
             out[nm] = [replace(t, value=t.value + evidence, law_value=t.law_value + evidence,
                                empirical_quantile=t.empirical_quantile + evidence)]
         elif nm == "environment":
-            out[nm] = [threshold(hv, each, hvec.shape[1], n_train, n_conditions, tail)]
+            out[nm] = [threshold(hv, each[nm], hvec.shape[1], n_train, n_conditions, tail)]
         else:
             z = hvec[:, 0][np.isfinite(hvec[:, 0])]
             sides = []
             for sign in (-1.0, 1.0):
                 y = (sign * z)[sign * z > 0] ** 2
                 if y.size < 2:
-                    sides = [threshold(z**2, each, 1, n_train, n_conditions, tail)] * 2
+                    sides = [threshold(z**2, each[nm], 1, n_train, n_conditions, tail)] * 2
                     break
-                sides.append(threshold(y, each / 2, 1, n_train, n_conditions, tail, y.size / z.size))
+                sides.append(threshold(y, each[nm] / 2, 1, n_train, n_conditions, tail, y.size / z.size))
             out[nm] = sides
     return out
 
@@ -279,12 +325,13 @@ def _ratios(values, z, ths, names):
 
 
 def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int = 0,
-           statistics=STATISTICS, held=None, combination: str = "joint") -> Detection:
+           statistics=STATISTICS, held=None, combination: str = "joint", shares=None) -> Detection:
     """The detector on a series: ``model`` fitted on the baseline tests ``X[b_idx]`` (``make_model()`` an unfitted
     copy for the held-out fits), the monitoring tests ``rest`` (indices) scored by it, the baseline tests held
     out (``held``: their :func:`held_out_statistics`, computed when None); every statistic of ``statistics`` that
-    the model supports, thresholded at the per-statistic rate of ``combination``: ``joint`` (:func:`joint_rate`
-    of the held-out statistics) or ``sidak``; the shift signed, its drop and its rise each at half that rate.
+    the model supports, thresholded at its rate of ``combination`` (:func:`family_rates`: ``joint`` the shares
+    :data:`SHARES`, or ``shares``, calibrated on the held-out statistics, ``equal``, ``sidak``); the shift signed,
+    its drop and its rise each at half its rate.
 
     A test whose set of modes found differs from some baseline test's is judged against thresholds of its own
     set: :func:`held_out_statistics` with its missing modes dropped (``pattern``); the residual's missing-mode
@@ -312,7 +359,8 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
             if len(rest):
                 vec[rest] = now[nm][1]
             vectors[nm] = vec
-    each = (joint_rate(values[b_idx], rate) if combination == "joint" else sidak_rate(rate, len(names)))
+    rates = family_rates(values[b_idx], rate, names, combination, shares) if names else np.zeros(0)
+    each = dict(zip(names, rates))
     n_train = training_size(len(b_idx))
     ths = _thresholds(model, held, names, each, n_train, n_conditions)
     z = vectors["shift"][:, 0] if "shift" in vectors else np.zeros(n)
@@ -338,8 +386,9 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
     ratio[~np.isfinite(ratio)] = np.nan
     shift = np.full(n, np.nan)
     shift[scored] = shift_fraction(model, X[scored], None if C is None else C[scored])
-    return Detection(names, values, tuple(ths[nm][0] for nm in names), rate, each, ratio, np.nan_to_num(ratio) > 1.0,
-                     vectors, 100 * shift, R, combination, ths["shift"][1] if "shift" in ths else None, patterns)
+    return Detection(names, values, tuple(ths[nm][0] for nm in names), rate, rates, ratio, np.nan_to_num(ratio) > 1.0,
+                     vectors, 100 * shift, R, combination, ths["shift"][1] if "shift" in ths else None, patterns,
+                     {nm: (SHARES if shares is None else shares)[nm] for nm in names} if combination == "joint" else {})
 
 
 def environmental(model, name: str) -> bool:

@@ -13,7 +13,7 @@ from learn.monitor import IdentificationSettings, read_conditions
 from learn.monitor.alarms import monitor_series
 from learn.monitor.charts import chart_limit, ewma_chart, onset, run_charts
 from learn.monitor.normal_models import PCARemoval
-from learn.monitor.statistics import detect, sidak_rate, statistics_of
+from learn.monitor.statistics import SHARES, detect, sidak_rate, statistics_of
 from monitor_series import write_modal_series
 
 
@@ -41,15 +41,19 @@ def _detected(X, nb, rate, make=lambda: PCARemoval(2)):
 
 def test_the_combination_holds_the_family_wise_rate_on_null_data():
     rng = np.random.default_rng(12)
-    rates, alone = [], []
+    rates, alone, each = [], [], []
     for _ in range(6):
         det = _detected(_gaussian(rng, 2300), 300, 0.05)
         assert det.names == ("residual", "environment", "shift")
-        assert sidak_rate(0.05, 3) <= det.rate_each < 0.025     # between Sidak's 1.7 % and the rate
+        v = np.array([SHARES[nm] for nm in det.names]) / max(SHARES[nm] for nm in det.names)
+        s = -np.expm1(np.log1p(-det.rate_each) / v)             # r_k = 1 - (1 - s)^(v_k): one s for all
+        assert np.ptp(s) < 1e-12
+        assert 1 - 0.95 ** (1 / v.sum()) <= s[0] <= 0.05        # between the weighted Sidak split and the rate
         rates.append(det.alarm[300:].mean())
         alone.append((det.ratios[300:] > 1).mean(axis=0))
+        each.append(det.rate_each)
     assert 0.025 < np.mean(rates) <= 0.06                       # any of three: 5 %
-    np.testing.assert_array_less(np.mean(alone, axis=0), 0.025)
+    np.testing.assert_array_less(np.mean(alone, axis=0), 1.3 * np.mean(each, axis=0))
 
 
 def test_a_shift_along_the_top_environmental_component_is_seen_by_the_combination_not_the_residual():
@@ -118,3 +122,18 @@ def test_environmental_statistics_on_a_baseline_shorter_than_the_seasons_are_war
     assert season_warning(dates, days, 360, ("residual", "environment", "shift")) is None   # a year covered
     assert season_warning(dates, days, 120, ("residual",)) is None
     assert season_warning(["1", "2"] * 200, days, 120, ("residual", "shift")) is None     # test numbers, no dates
+
+
+def test_the_charts_share_the_rate_by_their_joint_baseline_distribution():
+    """Two charts of one statistic cost nothing (each at the rate), of two independent ones Sidak's split; the
+    ``sidak`` combination always the split."""
+    rng = np.random.default_rng(16)
+    Z = rng.standard_normal((1500, 1))
+    b_idx = np.arange(1000)
+    same = run_charts({"a": Z, "b": Z.copy()}, b_idx, 0.01, lam=0.1)
+    apart = run_charts({"a": Z, "b": rng.standard_normal((1500, 1))}, b_idx, 0.01, lam=0.1)
+    split = run_charts({"a": Z, "b": Z.copy()}, b_idx, 0.01, lam=0.1, combination="sidak")
+    assert [c.rate for c in same.charts] == pytest.approx([0.01, 0.01])
+    assert apart.charts[0].rate == pytest.approx(sidak_rate(0.01, 2), rel=0.15)
+    assert split.charts[0].rate == pytest.approx(sidak_rate(0.01, 2))
+    assert split.charts[0].limit > same.charts[0].limit
