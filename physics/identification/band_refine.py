@@ -35,7 +35,7 @@ import numpy as np
 from physics.errors import ConvergenceError
 from physics.identification.damped_sinusoids import levenberg_marquardt, pole_statistics
 
-__all__ = ["BACKGROUND_ORDER", "BAND_LINES", "BAND_WIDTHS", "MERGE_FACTOR", "BandFit", "mode_bands",
+__all__ = ["BACKGROUND_ORDER", "BAND_LINES", "BAND_WIDTHS", "MERGE_FACTOR", "SWEEPS", "BandFit", "mode_bands",
            "refine_in_bands"]
 
 #: A mode's band spans this many of its half-power half-widths either side of it ...
@@ -44,8 +44,12 @@ BAND_WIDTHS = 6.0
 BAND_LINES = 8
 #: Modes whose bands, each grown by this factor about its mode, overlap are fitted together.
 MERGE_FACTOR = 2.0
-#: Order of the complex polynomial (in frequency across the band) that models the background.
-BACKGROUND_ORDER = 2
+#: Order of the complex polynomial (in frequency across the band) that models the background: a level and a slope,
+#: the first terms of a far mode's tail and of the hit's smooth spectrum.
+BACKGROUND_ORDER = 1
+#: Sweeps over the bands: from the second on, each band's data less the transforms of the modes the other bands
+#: fitted (their closed form, exact), so the background takes only what no band models.
+SWEEPS = 2
 
 
 @dataclass(frozen=True)
@@ -124,6 +128,15 @@ def _band_data(spectra, lengths, fs, band_hz):
         k = np.arange(max(1, int(np.ceil(band_hz[0] * n / fs))), min((n - 1) // 2, int(band_hz[1] * n / fs)) + 1)
         out.append((k, np.exp(-2j * np.pi * k / n), Y[:, k] / np.sqrt(n), n) if k.size >= BAND_LINES else None)
     return out
+
+
+def _modes_on_lines(w, n, fs, eigenvalues, amplitudes):
+    """The transform ``(a/2) G(z) + conj(a/2) G(conj z)`` of modes ``Re(a z^t)`` of one decay of ``n`` samples on
+    lines ``w_k``, summed over the modes: shape (n_channels, L); ``amplitudes`` shape (n_channels, m)."""
+    z = np.exp(np.asarray(eigenvalues, complex) / fs)[None, :]
+    w = w[:, None]
+    g, gc = (1.0 - z ** n) / (1.0 - z * w), (1.0 - np.conj(z) ** n) / (1.0 - np.conj(z) * w)
+    return (0.5 * amplitudes) @ g.T + (0.5 * np.conj(amplitudes)) @ gc.T
 
 
 def _columns(w, n, sigma, omega, fs, centre_hz, half_hz, k, order):
@@ -209,33 +222,41 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
     amps = np.zeros((len(decays), n_ch, m_all), complex)
     converged = np.zeros(m_all, bool)
     n_lines = 0
-    for g in np.unique(group):
-        idx = np.flatnonzero(group == g)
-        m, band = idx.size, bands[idx[0]]
-        data = _band_data(spectra, lengths, fs, band)
-        used = [j for j, d in enumerate(data) if d is not None]
-        n_values = n_ch * sum(2 * data[j][0].size for j in used)
-        n_params = 2 * m + len(used) * n_ch * (2 * m + 2 * (background_order + 1))
-        if n_values <= 2 * n_params:
-            continue
+    for sweep in range(SWEEPS):
+        known = converged.copy()                        # the modes whose transform the other bands subtract
+        lam_known, amps_known = lam.copy(), amps.copy()
+        n_lines = 0
+        for g in np.unique(group):
+            idx = np.flatnonzero(group == g)
+            m, band = idx.size, bands[idx[0]]
+            others = np.flatnonzero(known & (group != g))
+            data = [None if d is None else
+                    (d[0], d[1], d[2] - _modes_on_lines(d[1], d[3], fs, lam_known[others], amps_known[j][:, others])
+                     / np.sqrt(d[3]), d[3])
+                    for j, d in enumerate(_band_data(spectra, lengths, fs, band))]
+            used = [j for j, d in enumerate(data) if d is not None]
+            n_values = n_ch * sum(2 * data[j][0].size for j in used)
+            n_params = 2 * m + len(used) * n_ch * (2 * m + 2 * (background_order + 1))
+            if n_values <= 2 * n_params:
+                continue
 
-        def project(sigma, omega, weights, data=data, band=band):
-            return _projected_band(data, fs, sigma, omega, weights, band, background_order)
+            def project(sigma, omega, weights, data=data, band=band):
+                return _projected_band(data, fs, sigma, omega, weights, band, background_order)
 
-        try:
-            sigma, omega, cov, _, coef, weights, _ = levenberg_marquardt(project, -lam0[idx].real, lam0[idx].imag,
-                                                                         n_ch, n_values, n_params, decaying=True)
-        except ConvergenceError:
-            continue
-        f_new = omega / (2 * np.pi)
-        if np.any(sigma <= 0) or np.any(f_new < band[0]) or np.any(f_new > band[1]):
-            continue
-        _, _, f_std[idx], z_std[idx] = pole_statistics(sigma, omega, cov)
-        lam[idx] = -sigma + 1j * omega
-        converged[idx] = True
-        n_lines += n_values // (2 * n_ch)
-        for j, C in zip(used, coef):
-            c = (C[0:2 * m:2] + 1j * C[1:2 * m:2]).T / weights[:, None]        # (n_ch, m): c = a / 2, scaled
-            amps[j][:, idx] = 2 * c * np.sqrt(lengths[j])
+            try:
+                sigma, omega, cov, _, coef, weights, _ = levenberg_marquardt(
+                    project, -lam[idx].real, lam[idx].imag, n_ch, n_values, n_params, decaying=True)
+            except ConvergenceError:
+                continue
+            f_new = omega / (2 * np.pi)
+            if np.any(sigma <= 0) or np.any(f_new < band[0]) or np.any(f_new > band[1]):
+                continue
+            _, _, f_std[idx], z_std[idx] = pole_statistics(sigma, omega, cov)
+            lam[idx] = -sigma + 1j * omega
+            converged[idx] = True
+            n_lines += n_values // (2 * n_ch)
+            for j, C in zip(used, coef):
+                c = (C[0:2 * m:2] + 1j * C[1:2 * m:2]).T / weights[:, None]    # (n_ch, m): c = a / 2, scaled
+                amps[j][:, idx] = 2 * c * np.sqrt(lengths[j])
     wn = np.abs(lam)
     return BandFit(lam, wn / (2 * np.pi), -lam.real / wn, f_std, z_std, amps, bands, group, converged, n_lines)

@@ -147,8 +147,12 @@ def levenberg_marquardt(project, sigma, omega, n_channels, n_values, n_params, d
             step = np.linalg.solve(N + mu * np.eye(2 * m), g / scale) / scale
             trial = theta + step
             if np.all(trial[m:] > 0) and (not decaying or np.all(trial[:m] > 0)):
-                out = project(trial[:m], trial[m:], weights)
-                c = sum(np.sum(x ** 2) for x in out[0])
+                try:                                     # a growing pole overflows over a long decay: no step
+                    with np.errstate(over="ignore", invalid="ignore"):
+                        out = project(trial[:m], trial[m:], weights)
+                    c = sum(np.sum(x ** 2) for x in out[0])
+                except np.linalg.LinAlgError:
+                    c = np.inf
                 if c <= cost:
                     theta, cost, (res, coef, jac) = trial, c, out
                     mu, accepted = max(mu / 10, 1e-12), True
