@@ -28,8 +28,7 @@ import numpy as np
 from physics.errors import ConvergenceError, ShapeError
 from physics.identification.band_refine import BandFit, refine_in_bands
 from physics.identification.damped_sinusoids import DampedSinusoidFit, fit_damped_sinusoids
-from physics.identification.fdd import (SingularValueSpectrum, _running_floor, clear_peaks, singular_value_spectrum,
-                                        unit_shapes)
+from physics.identification.fdd import SingularValueSpectrum, _running_floor, clear_peaks, unit_shapes
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles
 from physics.identification.record_checks import CheckedRecord, check_periods, check_records
@@ -388,8 +387,8 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     band_hz : (float, float), optional
         Modes kept (Hz); the decays are decimated to it. Default: 0 to 0.4 of the sampling rate, the decays
         decimated so that the Hankel's :data:`MAX_HANKEL_ROWS` rows span about one period of the lowest clear
-        peak of the spectrum, but no further than keeps the highest clear peak (of the averaged spectrum or of the
-        whole record's, :func:`decay_spectrum`) below 0.4 of the decimated rate (where the band then ends).
+        peak of the spectrum, but no further than keeps the highest clear peak below 0.4 of the decimated rate
+        (where the band then ends).
     n_modes : int, optional
         Modes to keep (default: every stable cluster; with it, the steadiest).
     max_order : int, optional
@@ -417,15 +416,13 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     if decays.starts.size == 0:
         raise ShapeError(f"{where}: no free decay found (no hit followed by enough samples, nor a decaying "
                          "record); identify a stationary response with --method ssi")
-    peaks = clear_peaks(singular_value_spectrum(checked, where=where))
-    peak_hz, peak_tol_hz = peaks.frequency_hz, peaks.tolerance_hz
-    # the highest clear peak, also of the whole record's spectrum (a mode dying within the first Welch frame)
-    top_hz = max(peak_hz.max(initial=0.0), clear_peaks(decay_spectrum(checked)).frequency_hz.max(initial=0.0))
+    peaks = clear_peaks(decay_spectrum(checked))
     rows_wanted = MAX_HANKEL_ROWS // n_ch
     q = max(1, int(fs // (2.5 * band[1])))
-    if band_hz is None and peak_hz.size:     # oversampled: rows span one period of the lowest peak, and every
-        q = max(1, min(int(fs // (peak_hz[0] * rows_wanted)),           # clear peak stays in the band
-                       int(fs // (2.5 * min(top_hz, band[1]))) if top_hz > 0 else q))
+    if band_hz is None and peaks.frequency_hz.size:     # oversampled: rows span one period of the lowest peak,
+        q = max(1, min(int(fs // (peaks.frequency_hz[0] * rows_wanted)),      # every clear peak kept in the band
+                       int(fs // (2.5 * peaks.frequency_hz[peaks.frequency_hz <= band[1]].max(initial=0.0)))
+                       if np.any(peaks.frequency_hz <= band[1]) else fs))
     hi = min(band[1], fs / (2.5 * q))
     fs_dec = fs / q
     parts, spans = _decimated(checked, q, decays)
@@ -436,19 +433,20 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         need = MIN_DECAY_ROWS * 2 * q + 8 * q
         raise ShapeError(f"{where}: its longest decay holds {longest * q} samples at {fs:g} Hz; a decay needs at "
                          f"least {need} samples ({need / fs:.3g} s) for a free-decay model")
-    p_max = max_order or max(MIN_MAX_ORDER, ORDERS_PER_PEAK * peak_hz.size)
+    p_max = max_order or max(MIN_MAX_ORDER, ORDERS_PER_PEAK * peaks.frequency_hz.size)
     p_max = 2 * (min(p_max, (rows - 1) * n_ch) // 2)
     if p_max < 2:
         raise ShapeError(f"{where}: the decays are too short for a model of order 2 ({rows} block rows of "
                          f"{n_ch} channel(s))")
-    inside = (peak_hz >= band[0]) & (peak_hz <= hi)
+    inside = (peaks.frequency_hz >= band[0]) & (peaks.frequency_hz <= hi)
     for _ in range(1 + MAX_SPLIT_ROUNDS):
         long_enough = [j for j, p in enumerate(parts) if p.shape[1] >= MIN_DECAY_ROWS * rows]
         parts, spans = [parts[j] for j in long_enough], [spans[j] for j in long_enough]
         U, s = _hankel_basis(parts, rows)
         diagram = subspace_diagram(U, s, n_ch, np.arange(2, p_max + 1, 2), fs_dec, (0.0, hi), max_damping)
         try:
-            sel = select_poles(diagram, peaks_hz=peak_hz[inside], peak_tol_hz=peak_tol_hz[inside])
+            sel = select_poles(diagram, peaks_hz=peaks.frequency_hz[inside],
+                               peak_tol_hz=peaks.tolerance_hz[inside])
         except ConvergenceError:
             lowest = np.min(diagram.natural_frequencies_hz, initial=np.inf)
             check_periods(checked.duration_s, lowest, "the lowest pole", where)
