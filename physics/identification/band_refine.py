@@ -17,7 +17,9 @@ Levenberg-Marquardt steps (:func:`~physics.identification.damped_sinusoids.leven
 A band spans :data:`BAND_WIDTHS` half-power half-widths ``sigma / (2 pi)`` of its mode either side, and at least
 :data:`BAND_LINES` lines ``1 / T`` of the longest decay (a lightly damped mode's peak is the truncation's, ``1 / T``
 wide). Modes whose bands, grown by :data:`MERGE_FACTOR`, overlap are one group fitted in the union of their bands:
-a neighbour that close is no smooth background.
+a neighbour that close is no smooth background. The bands are swept :data:`SWEEPS` times: from the second sweep on,
+each band's data are less the closed-form transforms of the modes the other bands fitted, so the background takes
+only what no band models (modes no model holds, the hit).
 
 White noise in time is white over the lines of each decay's transform (variance ``N s^2`` per line, real and
 imaginary parts independent): each decay's lines are weighted by ``1 / sqrt(N)``, each channel by the inverse of
