@@ -306,3 +306,13 @@ def test_band_refinement_leaves_the_hit_to_its_background():
     crb = crb_frequency_std_hz(fs, n, fn, zeta, amp, noise)
     res = refine_in_bands([y], fs, poles(fn, zeta))
     assert np.all(np.abs(res.natural_frequencies_hz - fn) < 4 * crb), (res.natural_frequencies_hz - fn, crb)
+
+
+def test_a_checked_record_is_checked_once():
+    # identify_records checks a record, tells a free response, then hands the checked record to the method
+    c = check_records(_frame(0), FRAME_FS)
+    assert check_records(c, FRAME_FS) is c
+    banded = check_records(c, FRAME_FS, (1.0, 60.0))
+    assert banded is not c and banded.band_hz == (1.0, 60.0) and banded.signals is c.signals
+    with pytest.raises(ShapeError, match="Nyquist"):
+        check_records(c, FRAME_FS, (1.0, 300.0))
