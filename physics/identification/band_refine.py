@@ -18,8 +18,9 @@ A band spans :data:`BAND_WIDTHS` half-power half-widths ``sigma / (2 pi)`` of it
 :data:`BAND_LINES` lines ``1 / T`` of the longest decay (a lightly damped mode's peak is the truncation's, ``1 / T``
 wide). Modes whose bands, grown by :data:`MERGE_FACTOR`, overlap are one group fitted in the union of their bands:
 a neighbour that close is no smooth background. The bands are swept :data:`SWEEPS` times: from the second sweep on,
-each band's data are less the closed-form transforms of the modes the other bands fitted, so the background takes
-only what no band models (modes no model holds, the hit).
+each band is that of the refined pole (its half-power width, not the starting pole's), and its data are less the
+closed-form transforms of the modes the other bands fitted, so the background takes only what no band models
+(modes no model holds, the hit).
 
 White noise in time is white over the lines of each decay's transform (variance ``N s^2`` per line, real and
 imaginary parts independent): each decay's lines are weighted by ``1 / sqrt(N)``, each channel by the inverse of
@@ -225,6 +226,8 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
     converged = np.zeros(m_all, bool)
     n_lines = 0
     for sweep in range(SWEEPS):
+        if sweep:                                       # the bands of the refined poles' half-power widths
+            bands, group = mode_bands(np.where(converged, lam, lam0), max(lengths) / fs, fs / 2)
         known = converged.copy()                        # the modes whose transform the other bands subtract
         lam_known, amps_known = lam.copy(), amps.copy()
         n_lines = 0
