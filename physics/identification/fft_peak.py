@@ -13,8 +13,9 @@ half-width ``b``: the same on every test of a structure, so a bias, not a scatte
 
 The window (``window="auto"``):
 
-* **none** (rectangular) for a *free decay* (the RMS of the record's last tenth is under :data:`DECAY_RATIO` times
-  its first tenth's): the decay is its own taper; a Hann window would weight the first, most informative samples by
+* **none** (rectangular) for a *free response* (decays after hits,
+  :func:`~physics.identification.free_decay.free_response`, the rule ``identify`` picks ERA by): the decay is its
+  own taper; a Hann window would weight the first, most informative samples by
   nearly zero and widen the peak.
 * **Hann** for a *stationary* record (ambient response): its -31 dB side lobes (against -13 dB) keep a strong
   mode's leakage from moving a weak neighbour's peak.
@@ -40,14 +41,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from physics.errors import ConvergenceError, ShapeError
-from physics.identification.fdd import (CLEAR_PEAK_DB, SingularValueSpectrum, _running_floor, clear_peaks,
-                                        singular_value_spectrum, unit_shapes)
+from physics.identification.fdd import CLEAR_PEAK_DB, clear_peaks, singular_value_spectrum, unit_shapes
+from physics.identification.free_decay import decay_spectrum, free_response
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.record_checks import check_periods, check_records
 from physics.modal import eigenvalues_from_modal
 
 __all__ = ["MIN_WIDTH_LOBES", "PAD", "TOP_FRACTION", "WINDOW_HALF_WIDTH", "FFTPeaks", "fft_peaks", "identify_fft_peaks",
-           "is_free_decay", "padded_spectrum"]
+           "padded_spectrum"]
 
 #: Zero padding: the FFT length is the next power of two of at least ``PAD`` times the record's samples.
 PAD = 8
@@ -59,8 +60,6 @@ WINDOW_HALF_WIDTH = {"none": 0.443, "hann": 0.72}
 TOP_FRACTION = 0.5
 #: A half-power width under this many times the window's is the window's (damping NaN).
 MIN_WIDTH_LOBES = 2.0
-#: A record whose last tenth has an RMS below this fraction of its first tenth's is a free decay.
-DECAY_RATIO = 0.3
 
 
 @dataclass(frozen=True)
@@ -94,12 +93,12 @@ class FFTPeaks:
     grid_hz: float
 
 
-def is_free_decay(y) -> bool:
-    """Whether a record ``(n_channels, n_samples)`` decays: its last tenth's RMS (all channels) is under
-    :data:`DECAY_RATIO` times its first tenth's."""
-    m = max(1, y.shape[1] // 10)
-    y0 = y - y.mean(axis=1, keepdims=True)
-    return bool(np.sqrt(np.mean(y0[:, -m:] ** 2)) < DECAY_RATIO * np.sqrt(np.mean(y0[:, :m] ** 2)))
+def _window(checked, window):
+    """``window``, ``"auto"`` resolved: ``"none"`` for a free response
+    (:func:`~physics.identification.free_decay.free_response`), ``"hann"`` otherwise."""
+    if window != "auto":
+        return window
+    return "none" if free_response(checked).free else "hann"
 
 
 def padded_spectrum(y, sampling_frequency_hz, window="auto", pad=PAD):
@@ -111,6 +110,7 @@ def padded_spectrum(y, sampling_frequency_hz, window="auto", pad=PAD):
         Mean removed by the caller (or not: the 0 Hz line is never a peak).
     sampling_frequency_hz : float
     window : {"auto", "none", "hann"}
+        ``"auto"``: none for a free response (:func:`_window`), Hann otherwise.
     pad : int
 
     Returns
@@ -124,8 +124,7 @@ def padded_spectrum(y, sampling_frequency_hz, window="auto", pad=PAD):
     from scipy import fft as sfft  # scipy.fft: about 1 s to import, only output-only identification
 
     n = y.shape[1]
-    if window == "auto":
-        window = "none" if is_free_decay(y) else "hann"
+    window = _window(check_records(y, sampling_frequency_hz), window)
     if window not in WINDOW_HALF_WIDTH:
         raise ShapeError(f"window {window!r}: expected one of auto, {', '.join(WINDOW_HALF_WIDTH)}")
     w = np.ones(n) if window == "none" else 0.5 - 0.5 * np.cos(2 * np.pi * np.arange(n) / n)
@@ -192,7 +191,7 @@ def fft_peaks(signals, sampling_frequency_hz, frequencies_hz, tolerance_hz, wind
     checked = check_records(signals, sampling_frequency_hz, where=where)
     fs = checked.sampling_frequency_hz
     y = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
-    f, X, power, window = padded_spectrum(y, fs, window, pad)
+    f, X, power, window = padded_spectrum(y, fs, _window(checked, window), pad)
     df = float(f[1])
     target = np.atleast_1d(np.asarray(frequencies_hz, dtype=np.float64))
     tol = np.broadcast_to(np.asarray(tolerance_hz, dtype=np.float64), target.shape)
@@ -211,30 +210,6 @@ def fft_peaks(signals, sampling_frequency_hz, frequencies_hz, tolerance_hz, wind
     fn = np.where(np.isfinite(zeta), fp / np.sqrt(1 - np.minimum(np.nan_to_num(zeta), 0.5) ** 2), fp)
     values = np.where(found[None, :], X[:, k], np.nan)
     return FFTPeaks(fp, fn, zeta, values, window, fs / y.shape[1], df)
-
-
-def _decay_spectrum(y, checked) -> SingularValueSpectrum:
-    """The spectrum whose clear peaks a free decay's modes are: the summed power of the whole record's FFT (no
-    window, no padding) averaged over three adjacent lines, with the running floor FDD uses.
-
-    Welch frames would miss a fast-decaying mode: it lives at the start of the first frame, where a Hann window is
-    nearly zero. Three lines take a noise line's power from an exponential law to a Gamma(3) one, so a noise
-    line stands 10 dB above the floor with probability ~1e-9 instead of 1e-3.
-    """
-    from scipy import fft as sfft  # scipy.fft/ndimage: about 1 s to import, only output-only identification
-    from scipy import ndimage  # scipy.fft/ndimage: about 1 s to import, only output-only identification
-
-    fs, band, n = checked.sampling_frequency_hz, checked.band_hz, y.shape[1]
-    X = sfft.rfft(y, axis=1)
-    f = np.arange(X.shape[1]) * fs / n
-    power = ndimage.uniform_filter1d(np.sum(np.abs(X) ** 2, axis=0), 3, mode="nearest") / (fs * n)
-    s = np.zeros((f.size, y.shape[0]))
-    s[:, 0] = power
-    vectors = (X / np.maximum(np.linalg.norm(X, axis=0), np.finfo(float).tiny)).T
-    inband = (f >= band[0]) & (f <= band[1]) & (f > 0)
-    floor = np.full(f.size, np.nan)
-    floor[inband] = _running_floor(f[inband], power[inband], f[1])
-    return SingularValueSpectrum(f, s, vectors, floor, band, max(3 * f[1], 10 / checked.duration_s, band[0]))
 
 
 def identify_fft_peaks(signals, sampling_frequency_hz, band_hz=None, n_modes=None, window="auto", pad=PAD,
@@ -269,9 +244,9 @@ def identify_fft_peaks(signals, sampling_frequency_hz, band_hz=None, n_modes=Non
         No clear peak, or none with a local maximum of the FFT within its tolerance.
     """
     checked = check_records(signals, sampling_frequency_hz, band_hz, where)
-    y = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
-    decay = window == "none" or (window == "auto" and is_free_decay(y))
-    sv = _decay_spectrum(y, checked) if decay else singular_value_spectrum(checked, where=where)
+    window = _window(checked, window)
+    decay = window == "none"
+    sv = decay_spectrum(checked) if decay else singular_value_spectrum(checked, where=where)
     band = checked.band_hz
     peaks = clear_peaks(sv)
     if peaks.lines.size == 0:
@@ -280,8 +255,8 @@ def identify_fft_peaks(signals, sampling_frequency_hz, band_hz=None, n_modes=Non
     check_periods(checked.duration_s, peaks.frequency_hz[0], "the lowest peak", where)
     keep = np.sort(np.argsort(-peaks.height_db, kind="stable")[:n_modes]) if n_modes is not None \
         else np.arange(peaks.lines.size)
-    res = fft_peaks(checked.signals, checked.sampling_frequency_hz, peaks.frequency_hz[keep],
-                    peaks.tolerance_hz[keep], window, pad, where)
+    res = fft_peaks(checked if band_hz is None else checked.signals, checked.sampling_frequency_hz,
+                    peaks.frequency_hz[keep], peaks.tolerance_hz[keep], window, pad, where)
     ok = np.isfinite(res.frequency_hz)
     _, first = np.unique(np.where(ok, res.frequency_hz, -1.0), return_index=True)
     ok &= np.isin(np.arange(ok.size), first)            # two clear peaks refined to one FFT peak: one mode

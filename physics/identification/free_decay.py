@@ -10,27 +10,32 @@ Eigensystem Realisation Algorithm (Kung's shift invariance) on the block Hankel 
 channels gives a model of every order from one eigen-decomposition, the stabilisation diagram's physical poles
 are selected by :func:`~physics.identification.poles.select_poles` (as for SSI-cov and LSCF), then refined by the
 nonlinear least-squares fit of damped sinusoids to the samples
-(:func:`~physics.identification.damped_sinusoids.fit_damped_sinusoids`), whose covariance gives the one-sigma
-frequency and damping. Shapes: the dominant direction of each mode's complex amplitudes over the decays,
-unit-norm and unscaled (no force measured).
+(:func:`~physics.identification.damped_sinusoids.fit_damped_sinusoids`; it splits decays where a missed hit
+shows and decides which poles carry energy). Each kept pole is then refined in its own narrow band of the decays'
+Fourier transforms at the record's rate, from each hit's onset
+(:func:`~physics.identification.band_refine.refine_in_bands`: the closed-form transform of truncated damped
+exponentials and a smooth background, close modes together), so that the other modes, the unmodelled ones and the
+hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. Shapes: the
+dominant direction of each mode's complex amplitudes over the decays, unit-norm and unscaled (no force measured).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from physics.errors import ConvergenceError, ShapeError
+from physics.identification.band_refine import BandFit, refine_in_bands
 from physics.identification.damped_sinusoids import DampedSinusoidFit, fit_damped_sinusoids
-from physics.identification.fdd import clear_peaks, singular_value_spectrum, unit_shapes
+from physics.identification.fdd import SingularValueSpectrum, _running_floor, clear_peaks, unit_shapes
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles
 from physics.identification.record_checks import CheckedRecord, check_periods, check_records
 from physics.identification.ssi import MIN_MAX_ORDER, ORDERS_PER_PEAK, subspace_diagram
 
-__all__ = ["Decays", "ERAIdentification", "FreeResponse", "find_decays", "free_response", "identify_era",
-           "mode_snr"]
+__all__ = ["Decays", "ERAIdentification", "FreeResponse", "decay_spectrum", "find_decays", "free_response",
+           "identify_era", "mode_snr"]
 
 #: Order of the linear predictor (per channel) whose innovations mark the hits.
 PREDICTOR_ORDER = 24
@@ -79,6 +84,10 @@ class Decays:
     lead_db : float
         Mean energy of the first decay after a hit over that of the samples before the first hit (dB; NaN
         without a hit, or with fewer samples before it than the least decay).
+    onsets : ndarray of int, shape (n_decays,)
+        First sample of each decay's free response: the first sample of its hit (0 for the decay under way when
+        the record starts). The samples from it to ``starts`` hold the hit, and the first milliseconds of the
+        decay that the record's predictor fits worst.
     """
 
     hits: np.ndarray
@@ -86,6 +95,7 @@ class Decays:
     stops: np.ndarray
     drop_db: float
     lead_db: float = np.nan
+    onsets: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
 
 
 @dataclass(frozen=True)
@@ -211,23 +221,23 @@ def find_decays(checked: CheckedRecord, min_samples=None) -> Decays:
         firsts, lasts = firsts[keep], lasts[keep]
     else:
         firsts = lasts = np.zeros(0, int)
-    spans = [(int(last) + 1, int(nxt)) for last, nxt in zip(lasts, [*firsts[1:], n])]
-    spans = [(a, b) for a, b in spans if b - a >= least]
-    drop = [_quarter_drop_db(x, a, b) for a, b in spans]
+    spans = [(int(last) + 1, int(nxt), int(first)) for first, last, nxt in zip(firsts, lasts, [*firsts[1:], n])]
+    spans = [(a, b, o) for a, b, o in spans if b - a >= least]
+    drop = [_quarter_drop_db(x, a, b) for a, b, _ in spans]
     head = int(firsts[0]) if firsts.size else n
     if head >= least:
         s0 = int(np.argmax(np.sum(x[:, :head] ** 2, axis=0)))
         if head - s0 >= least and _quarter_drop_db(x, s0, head) >= FREE_DROP_NO_HIT_DB:
-            spans, drop = [(s0, head), *spans], [_quarter_drop_db(x, s0, head), *drop]
-    drop_db = float(np.average(drop, weights=[b - a for a, b in spans])) if spans else np.nan
+            spans, drop = [(s0, head, 0), *spans], [_quarter_drop_db(x, s0, head), *drop]
+    drop_db = float(np.average(drop, weights=[b - a for a, b, _ in spans])) if spans else np.nan
     lead_db = np.nan
-    after = [(a, b) for a, b in spans if a > head]
+    after = [(a, b) for a, b, _ in spans if a > head]
     if head >= least and after:
         seg = x[:, after[0][0]:after[0][1]]
         lead_db = float(10 * np.log10(max(np.mean(seg.var(axis=1)), np.finfo(float).tiny)
                                       / max(np.mean(x[:, :head].var(axis=1)), np.finfo(float).tiny)))
-    return Decays(lasts.astype(int), np.array([a for a, _ in spans], int), np.array([b for _, b in spans], int),
-                  drop_db, lead_db)
+    return Decays(lasts.astype(int), np.array([a for a, _, _ in spans], int), np.array([b for _, b, _ in spans], int),
+                  drop_db, lead_db, np.array([o for _, _, o in spans], int))
 
 
 def free_response(checked: CheckedRecord) -> FreeResponse:
@@ -262,6 +272,9 @@ class ERAIdentification:
     block_rows : int
     n_fitted : int
         Decays fitted: those of ``decays`` long enough, split where the fit's residual showed a hit they missed.
+    bands : BandFit or None
+        The narrow-band refinement of the poles kept (before ``n_modes``), on the fitted decays at the record's
+        rate from their onsets; the estimate holds its poles where it converged, the time-domain fit's elsewhere.
     """
 
     estimate: ModalEstimate
@@ -271,18 +284,23 @@ class ERAIdentification:
     decimation: int
     block_rows: int
     n_fitted: int = 0
+    bands: BandFit | None = None
 
 
 def _decimated(checked, q, decays):
-    """Each decay low-pass filtered (zero phase) and decimated by ``q``: a list of (n_channels, n_d) arrays."""
+    """Each decay low-pass filtered (zero phase) and decimated by ``q``: a list of (n_channels, n_d) arrays, and
+    each one's ``(onset, first, stop)`` in samples of the record (its free response's first sample, the sample of
+    its own first one, one past its last)."""
     x = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
+    spans = list(zip(decays.onsets.tolist(), decays.starts.tolist(), decays.stops.tolist()))
     if q == 1:
-        return [x[:, a:b] for a, b in zip(decays.starts, decays.stops)]
+        return [x[:, a:b] for _, a, b in spans], spans
     from scipy import signal  # scipy.fft/signal/ndimage: about 1 s to import, only output-only identification
 
     x = signal.sosfiltfilt(signal.butter(8, 0.8 / q, output="sos"), x, axis=1)
     margin = 4 * q                                   # the filter's response to the hit, decimated samples
-    return [x[:, a + margin:b:q] for a, b in zip(decays.starts, decays.stops) if b - a > margin]
+    spans = [(o, a + margin, b) for o, a, b in spans if b - a > margin]
+    return [x[:, a:b:q] for _, a, b in spans], spans
 
 
 def _hankel_basis(parts, rows):
@@ -298,12 +316,13 @@ def _hankel_basis(parts, rows):
     return U[:, order], np.sqrt(np.maximum(ev[order], 0))
 
 
-def _split_missed_hits(parts, residuals, window):
+def _split_missed_hits(parts, spans, q, residuals, window):
     """The decays cut where the fit's residual rises sharply (a hit the segmentation missed): the residual's
     energy (channels scaled by their median) over the next ``window`` samples :data:`SPLIT_RISE` times that over
-    the window before and than the quietest tenth of the windows; the cut at the first sample past that level."""
-    out = []
-    for y, r in zip(parts, residuals):
+    the window before and than the quietest tenth of the windows; the cut at the first sample past that level.
+    The parts and their spans (as :func:`_decimated` gives them; ``q`` the decimation)."""
+    out, out_spans = [], []
+    for y, (o, a, b), r in zip(parts, spans, residuals):
         e = np.sum(r ** 2 / np.maximum(np.median(r ** 2, axis=1, keepdims=True), np.finfo(float).tiny), axis=0)
         c = np.concatenate([[0.0], np.cumsum(e)]) / window
         k = np.arange(window, e.size - window)
@@ -312,12 +331,14 @@ def _split_missed_hits(parts, residuals, window):
         rise = np.flatnonzero((after >= SPLIT_RISE * before) & (after >= SPLIT_RISE * floor))
         if not rise.size:
             out.append(y)
+            out_spans.append((o, a, b))
             continue
         t = k[rise[0]]
         loud = np.flatnonzero(e[t:t + window] >= SPLIT_RISE * floor)
         cut = t + (int(loud[0]) if loud.size else window // 2)
         out += [y[:, :cut], y[:, cut + 2:]]
-    return out
+        out_spans += [(o, a, a + cut * q), (a + cut * q, a + (cut + 2) * q, b)]
+    return out, out_spans
 
 
 def mode_snr(fit: DampedSinusoidFit, lengths, sampling_frequency_hz) -> np.ndarray:
@@ -328,6 +349,31 @@ def mode_snr(fit: DampedSinusoidFit, lengths, sampling_frequency_hz) -> np.ndarr
                       for n in lengths])                                    # (n_decays, n_modes)
     amp2 = np.abs(fit.amplitudes) ** 2 / np.maximum(fit.noise_std, np.finfo(float).tiny)[None, :, None] ** 2
     return 0.5 * np.einsum("dcm,dm->m", amp2, decay)
+
+
+def decay_spectrum(checked: CheckedRecord) -> SingularValueSpectrum:
+    """The spectrum whose clear peaks a free response's modes are: the summed power of the whole record's FFT (no
+    window, no padding, mean removed) averaged over three adjacent lines, with the running floor FDD uses.
+
+    Welch frames would miss a fast-decaying mode: it lives at the start of the first frame, where a Hann window is
+    nearly zero. Three lines take a noise line's power from an exponential law to a Gamma(3) one, so a noise
+    line stands 10 dB above the floor with probability ~1e-9 instead of 1e-3.
+    """
+    from scipy import fft as sfft  # scipy.fft/ndimage: about 1 s to import, only output-only identification
+    from scipy import ndimage  # scipy.fft/ndimage: about 1 s to import, only output-only identification
+
+    y = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
+    fs, band, n = checked.sampling_frequency_hz, checked.band_hz, y.shape[1]
+    X = sfft.rfft(y, axis=1)
+    f = np.arange(X.shape[1]) * fs / n
+    power = ndimage.uniform_filter1d(np.sum(np.abs(X) ** 2, axis=0), 3, mode="nearest") / (fs * n)
+    s = np.zeros((f.size, y.shape[0]))
+    s[:, 0] = power
+    vectors = (X / np.maximum(np.linalg.norm(X, axis=0), np.finfo(float).tiny)).T
+    inband = (f >= band[0]) & (f <= band[1]) & (f > 0)
+    floor = np.full(f.size, np.nan)
+    floor[inband] = _running_floor(f[inband], power[inband], f[1])
+    return SingularValueSpectrum(f, s, vectors, floor, band, max(3 * f[1], 10 / checked.duration_s, band[0]))
 
 
 def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max_order=None, max_damping=MAX_DAMPING,
@@ -341,7 +387,8 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     band_hz : (float, float), optional
         Modes kept (Hz); the decays are decimated to it. Default: 0 to 0.4 of the sampling rate, the decays
         decimated so that the Hankel's :data:`MAX_HANKEL_ROWS` rows span about one period of the lowest clear
-        peak of the spectrum (the band then ends at 0.4 of the decimated rate).
+        peak of the spectrum, but no further than keeps the highest clear peak below 0.4 of the decimated rate
+        (where the band then ends).
     n_modes : int, optional
         Modes to keep (default: every stable cluster; with it, the steadiest).
     max_order : int, optional
@@ -362,22 +409,23 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     ConvergenceError
         No stable pole, or a singular fit.
     """
-    checked = signals if isinstance(signals, CheckedRecord) else \
-        check_records(signals, sampling_frequency_hz, band_hz, where)
+    checked = check_records(signals, sampling_frequency_hz, band_hz, where)
     fs, band = checked.sampling_frequency_hz, checked.band_hz
     n_ch = checked.signals.shape[0]
     decays = find_decays(checked)
     if decays.starts.size == 0:
         raise ShapeError(f"{where}: no free decay found (no hit followed by enough samples, nor a decaying "
                          "record); identify a stationary response with --method ssi")
-    peaks = clear_peaks(singular_value_spectrum(checked, where=where))
+    peaks = clear_peaks(decay_spectrum(checked))
     rows_wanted = MAX_HANKEL_ROWS // n_ch
     q = max(1, int(fs // (2.5 * band[1])))
-    if band_hz is None and peaks.frequency_hz.size:     # oversampled: rows span one period of the lowest peak
-        q = max(1, int(fs // (peaks.frequency_hz[0] * rows_wanted)))
+    if band_hz is None and peaks.frequency_hz.size:     # oversampled: rows span one period of the lowest peak,
+        q = max(1, min(int(fs // (peaks.frequency_hz[0] * rows_wanted)),      # every clear peak kept in the band
+                       int(fs // (2.5 * peaks.frequency_hz[peaks.frequency_hz <= band[1]].max(initial=0.0)))
+                       if np.any(peaks.frequency_hz <= band[1]) else fs))
     hi = min(band[1], fs / (2.5 * q))
     fs_dec = fs / q
-    parts = _decimated(checked, q, decays)
+    parts, spans = _decimated(checked, q, decays)
     shortest = min((p.shape[1] for p in parts), default=0)
     rows = min(rows_wanted, shortest // MIN_DECAY_ROWS)
     longest = max((p.shape[1] for p in parts), default=0)
@@ -392,7 +440,8 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
                          f"{n_ch} channel(s))")
     inside = (peaks.frequency_hz >= band[0]) & (peaks.frequency_hz <= hi)
     for _ in range(1 + MAX_SPLIT_ROUNDS):
-        parts = [p for p in parts if p.shape[1] >= MIN_DECAY_ROWS * rows]
+        long_enough = [j for j, p in enumerate(parts) if p.shape[1] >= MIN_DECAY_ROWS * rows]
+        parts, spans = [parts[j] for j in long_enough], [spans[j] for j in long_enough]
         U, s = _hankel_basis(parts, rows)
         diagram = subspace_diagram(U, s, n_ch, np.arange(2, p_max + 1, 2), fs_dec, (0.0, hi), max_damping)
         try:
@@ -403,30 +452,39 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
             check_periods(checked.duration_s, lowest, "the lowest pole", where)
             raise ConvergenceError(f"{where}: no pole of the free decays is stable over enough model orders: raise "
                                    "max_order, widen the band, or try --method ssi") from None
-        fit, fitted = fit_damped_sinusoids(parts, fs_dec, sel.eigenvalues), parts
-        split = _split_missed_hits(parts, fit.residuals, rows)
+        fit, fitted, fitted_spans = fit_damped_sinusoids(parts, fs_dec, sel.eigenvalues), parts, spans
+        split, split_spans = _split_missed_hits(parts, spans, q, fit.residuals, rows)
         if len(split) == len(parts):
             break
-        parts = split
+        parts, spans = split, split_spans
     keep = (fit.natural_frequencies_hz >= band[0]) & (fit.natural_frequencies_hz <= hi) \
         & (fit.damping_ratios > 0) & (fit.damping_ratios < max_damping) \
         & (mode_snr(fit, [p.shape[1] for p in fitted], fs_dec) >= MIN_MODE_SNR)
     idx = np.flatnonzero(keep)
-    if n_modes is not None:
-        rank = sorted(idx, key=lambda j: (bool(sel.weakly_stable[j]), -int(sel.count[j])))
-        idx = np.sort(np.array(rank[:n_modes], int))
     if idx.size == 0:
         raise ConvergenceError(f"{where}: no refined pole of the free decays lies in {band[0]:g}-{hi:.4g} Hz")
-    idx = idx[np.argsort(fit.natural_frequencies_hz[idx], kind="stable")]     # the refinement may reorder poles
-    check_periods(checked.duration_s, fit.natural_frequencies_hz[idx[0]], "the lowest mode", where)
+    x = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
+    bands = refine_in_bands([x[:, o:b] for o, _, b in fitted_spans], fs, fit.eigenvalues[idx])
+    ok = bands.converged
+    lam = np.where(ok, bands.eigenvalues, fit.eigenvalues[idx])
+    f_std = np.where(ok, bands.frequency_std_hz, fit.frequency_std_hz[idx])
+    z_std = np.where(ok, bands.damping_std, fit.damping_std[idx])
+    amps = np.where(ok[None, None, :], bands.amplitudes, fit.amplitudes[:, :, idx])
+    sub = np.arange(idx.size)
+    if n_modes is not None:
+        rank = sorted(sub, key=lambda j: (bool(sel.weakly_stable[idx[j]]), -int(sel.count[idx[j]])))
+        sub = np.sort(np.array(rank[:n_modes], int))
+    sub = sub[np.argsort(np.abs(lam[sub]), kind="stable")]     # the refinements may reorder poles
+    wn = np.abs(lam[sub])
+    check_periods(checked.duration_s, wn[0] / (2 * np.pi), "the lowest mode", where)
     # shapes: the dominant direction of each mode's amplitudes over the decays
-    shapes = np.empty((n_ch, idx.size), complex)
-    for c, j in enumerate(idx):
-        u, _, _ = np.linalg.svd(fit.amplitudes[:, :, j].T, full_matrices=False)
+    shapes = np.empty((n_ch, sub.size), complex)
+    for c, j in enumerate(sub):
+        u, _, _ = np.linalg.svd(amps[:, :, j].T, full_matrices=False)
         shapes[:, c] = u[:, 0]
     shapes = unit_shapes(shapes)
-    fn, zeta = fit.natural_frequencies_hz[idx], fit.damping_ratios[idx]
-    est = ModalEstimate(fn, zeta, fit.eigenvalues[idx], shapes, np.zeros((n_ch, 0, idx.size), complex),
-                        fit.frequency_std_hz[idx], fit.damping_std[idx], modal_phase_collinearity(shapes), "era",
-                        False, weakly_stable=np.asarray(sel.weakly_stable, bool)[idx])
-    return ERAIdentification(est, diagram, fit, decays, q, rows, len(fitted))
+    est = ModalEstimate(wn / (2 * np.pi), -lam[sub].real / wn, lam[sub], shapes,
+                        np.zeros((n_ch, 0, sub.size), complex), f_std[sub], z_std[sub],
+                        modal_phase_collinearity(shapes), "era", False,
+                        weakly_stable=np.asarray(sel.weakly_stable, bool)[idx[sub]])
+    return ERAIdentification(est, diagram, fit, decays, q, rows, len(fitted), bands)

@@ -134,9 +134,11 @@ METHODS: dict[str, MethodSpec] = {
         _fit_era,
         "output-only, free responses (impacts or plucks without the force): the decays after the hits by the "
         "Eigensystem Realisation Algorithm with automatic stabilisation-diagram selection, the poles refined by a "
-        "nonlinear least-squares fit of damped sinusoids to the samples",
-        (("frequency_std_hz, damping_std", "one sigma from the least-squares fit of the decays (covariance of the "
-                                           "poles with the amplitudes unknown; white noise)"),),
+        "nonlinear least-squares fit of damped sinusoids to the samples, then each in its own narrow band of the "
+        "decays' Fourier transforms",
+        (("frequency_std_hz, damping_std", "one sigma from the narrow-band fit of the decays (covariance of the "
+                                           "poles with the amplitudes and background unknown; noise white over "
+                                           "the band)"),),
         yields_uncertainty=True, options=("max_order",), data="records"),
     "fdd": MethodSpec(
         partial(_fit_fdd, enhanced=False),

@@ -132,26 +132,27 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
     where = str(records.metadata.get("source", "records"))
     fs = records.sampling_frequency_hz
 
-    def fit(name):
+    def fit(name, signals=records.signals):
         spec = METHODS[name]
         options = {"max_order": max_order}
-        return spec.fit(records.signals, fs, band_hz, n_modes, where, **{k: options[k] for k in spec.options})
+        return spec.fit(signals, fs, band_hz, n_modes, where, **{k: options[k] for k in spec.options})
 
     if method != "auto":
         est, diagram = fit(method)
         return RecordsIdentification(records, est, diagram)
-    verdict = free_response(check_records(records.signals, fs, band_hz, where))
+    checked = check_records(records.signals, fs, band_hz, where)     # read once: the methods take it as checked
+    verdict = free_response(checked)
     picked = FREE_RESPONSE_METHOD if verdict.free else STATIONARY_METHOD
     why = (f"picked {picked}: response records without a force channel, {verdict.text}"
            + ("" if verdict.free else " (identified as a stationary response)"))
     try:
-        est, diagram = fit(picked)
+        est, diagram = fit(picked, checked)
     except (ConvergenceError, ShapeError) as first:
         other = STATIONARY_METHOD if verdict.free else FREE_RESPONSE_METHOD
         if other == FREE_RESPONSE_METHOD and not verdict.decays.starts.size:
             raise
         try:
-            est, diagram = fit(other)
+            est, diagram = fit(other, checked)
         except (ConvergenceError, ShapeError):
             raise first from None
         why = f"{why}; {picked} found no mode ({first}), so {other}"

@@ -87,7 +87,18 @@ def check_records(signals, sampling_frequency_hz, band_hz=None, where="record", 
     ------
     ShapeError
         One line naming the record, the channel and what is wrong.
+
+    Notes
+    -----
+    A :class:`CheckedRecord` of the same sampling rate and band (``band_hz`` None: the default band) is returned
+    as it is: a record is read once however many steps check it.
     """
+    if isinstance(signals, CheckedRecord):
+        fs_ = float(sampling_frequency_hz)
+        band_ = (0.0, 0.4 * fs_) if band_hz is None else (float(band_hz[0]), float(band_hz[1]))
+        if signals.sampling_frequency_hz == fs_ and tuple(signals.band_hz) == band_:
+            return signals
+        signals = signals.signals
     y = signals if isinstance(signals, np.ndarray) else np.asarray(signals, dtype=np.float64)
     if y.ndim != 2 or y.shape[0] < 1 or y.shape[1] < 2 or not np.issubdtype(y.dtype, np.number) \
             or np.iscomplexobj(y):

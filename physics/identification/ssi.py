@@ -32,7 +32,7 @@ from physics.identification.fdd import (
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.poles import (MAX_DAMPING, StabilisationDiagram, missed_clusters, missed_modes,
                                          select_poles, stability_status)
-from physics.identification.record_checks import CheckedRecord, check_periods, check_records
+from physics.identification.record_checks import check_periods, check_records
 from physics.modal import eigenvalues_from_modal
 
 __all__ = ["OutputCorrelations", "SSIIdentification", "SSIPass", "identify_ssi", "output_correlations", "ssi_poles",
@@ -108,8 +108,7 @@ def output_correlations(signals, sampling_frequency_hz, n_lags, references=None,
     from scipy import fft as sfft  # scipy.fft/signal/ndimage: about 1 s to import, only output-only identification
     from scipy import signal  # scipy.fft/signal/ndimage: about 1 s to import, only output-only identification
 
-    checked = signals if isinstance(signals, CheckedRecord) else \
-        check_records(signals, sampling_frequency_hz, band_hz, where)
+    checked = check_records(signals, sampling_frequency_hz, band_hz, where)
     y, fs, mean = checked.signals, checked.sampling_frequency_hz, checked.mean
     n_ch, n_raw = y.shape
     ref = np.arange(n_ch) if references is None else np.asarray(references, int)

@@ -1,0 +1,267 @@
+"""Narrow-band refinement of free-decay poles: each mode fitted in its own band of the decays' discrete Fourier
+transform, by the closed-form transform of truncated damped exponentials and a smooth background.
+
+A decay ``y[n] = Re(a z^n)``, ``n = 0 .. N-1``, ``z = exp(lambda / fs)``, ``lambda = -sigma + i omega`` (rad/s),
+has the discrete Fourier transform (lines ``k``, ``w_k = exp(-2 pi i k / N)``, ``w_k^N = 1``)
+
+    Y_k = c G(z, k) + conj(c) G(conj(z), k),   G(z, k) = (1 - z^N) / (1 - z w_k),   c = a / 2,
+
+exact for a record of any length (the truncation and the aliasing are in ``G``). Within a band of lines around
+one mode (or a group of close modes, fitted together) the decay's transform is that sum over the band's poles plus
+a background: the tails of the modes outside the band, and the response during the hit (a few samples, whose
+spectrum is smooth), both smooth across a band narrow beside their distance; it is modelled by a complex
+polynomial of order :data:`BACKGROUND_ORDER` in frequency. The amplitudes ``c`` of every decay and channel and
+the background enter linearly and are projected out (variable projection); the poles are refined by
+Levenberg-Marquardt steps (:func:`~physics.identification.damped_sinusoids.levenberg_marquardt`).
+
+A band spans :data:`BAND_WIDTHS` half-power half-widths ``sigma / (2 pi)`` of its mode either side, and at least
+:data:`BAND_LINES` lines ``1 / T`` of the longest decay (a lightly damped mode's peak is the truncation's, ``1 / T``
+wide). Modes whose bands, grown by :data:`MERGE_FACTOR`, overlap are one group fitted in the union of their bands:
+a neighbour that close is no smooth background. The bands are swept :data:`SWEEPS` times: from the second sweep on,
+each band is that of the refined pole (its half-power width, not the starting pole's), and its data are less the
+closed-form transforms of the modes the other bands fitted, so the background takes only what no band models
+(modes no model holds, the hit).
+
+White noise in time is white over the lines of each decay's transform (variance ``N s^2`` per line, real and
+imaginary parts independent): each decay's lines are weighted by ``1 / sqrt(N)``, each channel by the inverse of
+its residual's standard deviation in the bands, and ``s^2 (J^T J)^-1`` of the projected Jacobian is the
+covariance of the poles, the amplitudes and background unknown. Only the lines near a mode inform it; the rest of
+the record's spectrum (other modes, unmodelled ones, the hit) does not enter its fit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from physics.errors import ConvergenceError
+from physics.identification.damped_sinusoids import levenberg_marquardt, pole_statistics
+
+__all__ = ["BACKGROUND_ORDER", "BAND_LINES", "BAND_WIDTHS", "MERGE_FACTOR", "SWEEPS", "BandFit", "mode_bands",
+           "refine_in_bands"]
+
+#: A mode's band spans this many of its half-power half-widths either side of it ...
+BAND_WIDTHS = 6.0
+#: ... and at least this many lines (``1 / T`` of the longest decay) either side.
+BAND_LINES = 8
+#: Modes whose bands, each grown by this factor about its mode, overlap are fitted together.
+MERGE_FACTOR = 2.0
+#: Order of the complex polynomial (in frequency across the band) that models the background: a level and a slope,
+#: the first terms of a far mode's tail and of the hit's smooth spectrum.
+BACKGROUND_ORDER = 1
+#: Sweeps over the bands: from the second on, each band's data less the transforms of the modes the other bands
+#: fitted (their closed form, exact), so the background takes only what no band models.
+SWEEPS = 2
+
+
+@dataclass(frozen=True)
+class BandFit:
+    """Poles refined in their bands (see the module docstring).
+
+    Attributes
+    ----------
+    eigenvalues : ndarray, complex, shape (n_modes,)
+        ``-sigma + i omega`` (rad/s), in the order given.
+    natural_frequencies_hz, damping_ratios : ndarray, shape (n_modes,)
+    frequency_std_hz, damping_std : ndarray, shape (n_modes,)
+        One sigma from each group's covariance.
+    amplitudes : ndarray, complex, shape (n_decays, n_channels, n_modes)
+        ``a`` of ``Re(a z^n)`` of each decay, channel and mode (the channel's units) at the decay's first sample.
+    bands_hz : ndarray, shape (n_modes, 2)
+        The band each mode was fitted in (its group's).
+    group : ndarray of int, shape (n_modes,)
+        The group each mode was fitted with.
+    converged : ndarray of bool, shape (n_modes,)
+        False where the group's fit failed (singular, or a pole left its band or lost its damping): the mode keeps
+        its starting pole, with NaN standard deviations.
+    n_lines : int
+        Lines fitted, over every decay and group (per channel).
+    """
+
+    eigenvalues: np.ndarray
+    natural_frequencies_hz: np.ndarray
+    damping_ratios: np.ndarray
+    frequency_std_hz: np.ndarray
+    damping_std: np.ndarray
+    amplitudes: np.ndarray
+    bands_hz: np.ndarray
+    group: np.ndarray
+    converged: np.ndarray
+    n_lines: int
+
+
+def mode_bands(eigenvalues, longest_s, nyquist_hz):
+    """Each pole's band and group (see the module docstring).
+
+    Parameters
+    ----------
+    eigenvalues : array_like, complex, shape (n_modes,)
+        ``-sigma + i omega`` (rad/s).
+    longest_s : float
+        Length of the longest decay (s).
+    nyquist_hz : float
+
+    Returns
+    -------
+    bands_hz : ndarray, shape (n_modes, 2)
+        The group's band of each mode (Hz), within ``(0, nyquist_hz)``.
+    group : ndarray of int, shape (n_modes,)
+    """
+    lam = np.asarray(eigenvalues, complex)
+    f = lam.imag / (2 * np.pi)
+    half = np.maximum(BAND_WIDTHS * np.abs(lam.real) / (2 * np.pi), BAND_LINES / longest_s)
+    order = np.argsort(f, kind="stable")
+    fs_, hs = f[order], half[order]
+    apart = fs_[1:] - MERGE_FACTOR * hs[1:] > fs_[:-1] + MERGE_FACTOR * hs[:-1]
+    g_sorted = np.concatenate([[0], np.cumsum(apart)])
+    group = np.empty(f.size, int)
+    group[order] = g_sorted
+    lo = np.array([np.min((f - half)[group == g]) for g in range(g_sorted[-1] + 1 if f.size else 0)])
+    hi = np.array([np.max((f + half)[group == g]) for g in range(g_sorted[-1] + 1 if f.size else 0)])
+    bands = np.stack([np.clip(lo, 0.0, nyquist_hz), np.clip(hi, 0.0, nyquist_hz)], axis=1)
+    return bands[group] if f.size else np.zeros((0, 2)), group
+
+
+def _band_data(spectra, lengths, fs, band_hz):
+    """Each decay's transform on the band's lines: a list of (lines ``k``, ``w_k``, ``Y / sqrt(N)`` (n_ch, L),
+    ``N``), None for a decay with fewer than :data:`BAND_LINES` lines in the band."""
+    out = []
+    for Y, n in zip(spectra, lengths):
+        k = np.arange(max(1, int(np.ceil(band_hz[0] * n / fs))), min((n - 1) // 2, int(band_hz[1] * n / fs)) + 1)
+        out.append((k, np.exp(-2j * np.pi * k / n), Y[:, k] / np.sqrt(n), n) if k.size >= BAND_LINES else None)
+    return out
+
+
+def _modes_on_lines(w, n, fs, eigenvalues, amplitudes):
+    """The transform ``(a/2) G(z) + conj(a/2) G(conj z)`` of modes ``Re(a z^t)`` of one decay of ``n`` samples on
+    lines ``w_k``, summed over the modes: shape (n_channels, L); ``amplitudes`` shape (n_channels, m)."""
+    z = np.exp(np.asarray(eigenvalues, complex) / fs)[None, :]
+    w = w[:, None]
+    g, gc = (1.0 - z ** n) / (1.0 - z * w), (1.0 - np.conj(z) ** n) / (1.0 - np.conj(z) * w)
+    return (0.5 * amplitudes) @ g.T + (0.5 * np.conj(amplitudes)) @ gc.T
+
+
+def _columns(w, n, sigma, omega, fs, centre_hz, half_hz, k, order):
+    """Real-stacked basis (2L, 2m + 2(order+1)) and its pole derivatives (2L, 2m, 2): for each mode the columns of
+    ``Re c`` and ``Im c``, then the background's; derivatives by ``(sigma_j, omega_j)`` of the mode's two columns."""
+    lam = -sigma + 1j * omega
+    z, zc = np.exp(lam / fs), np.exp(np.conj(lam) / fs)
+    w = w[:, None]
+
+    def g_and_dg(z):
+        zn = z ** n
+        den = 1.0 - z * w
+        g = (1.0 - zn) / den
+        dg_dz = (-n * zn / z * den + (1.0 - zn) * w) / den ** 2
+        return g, dg_dz * z / fs                       # d G / d lambda
+
+    g, dg = g_and_dg(z)
+    gc, dgc = g_and_dg(zc)
+    a, b = g + gc, 1j * (g - gc)                        # columns of Re c and Im c
+    da_ds, da_dw = -(dg + dgc), 1j * (dg - dgc)
+    db_ds, db_dw = 1j * (-dg + dgc), -(dg + dgc)
+    x = ((k * fs / n) - centre_hz) / half_hz
+    powers = x[:, None] ** np.arange(order + 1)
+    cols = np.concatenate([np.stack([a, b], axis=2).reshape(a.shape[0], -1), powers, 1j * powers], axis=1)
+    d = np.stack([np.stack([da_ds, db_ds], axis=2), np.stack([da_dw, db_dw], axis=2)], axis=1)   # (L, 2, m, 2)
+    real = np.concatenate([cols.real, cols.imag], axis=0)
+    d_real = np.concatenate([d.real, d.imag], axis=0)    # (2L, 2 (sigma/omega), m, 2 (column))
+    return real, d_real
+
+
+def _projected_band(data, fs, sigma, omega, weights, band_hz, order):
+    """Residuals, coefficients and Kaufman Jacobian blocks of every decay's band (as
+    :func:`~physics.identification.damped_sinusoids.levenberg_marquardt` takes them)."""
+    m = sigma.size
+    centre, half = 0.5 * (band_hz[0] + band_hz[1]), max(0.5 * (band_hz[1] - band_hz[0]), np.finfo(float).tiny)
+    res, coef, jac = [], [], []
+    for item in data:
+        if item is None:
+            continue
+        k, w, Y, n = item
+        Phi, dPhi = _columns(w, n, sigma, omega, fs, centre, half, k, order)
+        Yr = np.concatenate([Y.T.real, Y.T.imag], axis=0) * weights[None, :]
+        norm = np.maximum(np.linalg.norm(Phi, axis=0), np.finfo(float).tiny)
+        G_inv = np.linalg.pinv((Phi.T @ Phi) / np.outer(norm, norm), hermitian=True) / np.outer(norm, norm)
+        C = G_inv @ (Phi.T @ Yr)                                            # (p, n_ch)
+        R = Yr - Phi @ C
+        Cm = C[:2 * m].reshape(m, 2, -1)                                     # (m, 2 columns, n_ch)
+        D = np.einsum("eqmc,mch->eqmh", dPhi, Cm).reshape(Phi.shape[0], 2 * m, -1)   # (2L, 2m, n_ch)
+        D = D - np.einsum("ek,kph->eph", Phi, np.einsum("kl,el,eph->kph", G_inv, Phi, D, optimize=True))
+        res.append(R)
+        coef.append(C)
+        jac.append(D.transpose(0, 2, 1).reshape(-1, 2 * m))
+    return res, coef, jac
+
+
+def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order=BACKGROUND_ORDER) -> BandFit:
+    """Refine free-decay poles, each group of close modes in its own band of the decays' transforms (see the
+    module docstring).
+
+    Parameters
+    ----------
+    decays : sequence of ndarray, each shape (n_channels, n_samples_d)
+        The decays, each from its own start (time 0 at its first sample), mean removed.
+    sampling_frequency_hz : float
+    eigenvalues : array_like, complex, shape (n_modes,)
+        Starting poles ``-sigma + i omega`` (rad/s, Im > 0, Re < 0).
+    background_order : int
+
+    Returns
+    -------
+    BandFit
+    """
+    fs = float(sampling_frequency_hz)
+    lam0 = np.asarray(eigenvalues, complex)
+    m_all = lam0.size
+    decays = [np.asarray(y, dtype=np.float64) for y in decays]
+    n_ch = decays[0].shape[0]
+    lengths = [y.shape[1] for y in decays]
+    spectra = [np.fft.rfft(y, axis=1) for y in decays]
+    bands, group = mode_bands(lam0, max(lengths) / fs, fs / 2)
+    lam = lam0.copy()
+    f_std, z_std = np.full(m_all, np.nan), np.full(m_all, np.nan)
+    amps = np.zeros((len(decays), n_ch, m_all), complex)
+    converged = np.zeros(m_all, bool)
+    n_lines = 0
+    for sweep in range(SWEEPS):
+        if sweep:                                       # the bands of the refined poles' half-power widths
+            bands, group = mode_bands(np.where(converged, lam, lam0), max(lengths) / fs, fs / 2)
+        known = converged.copy()                        # the modes whose transform the other bands subtract
+        lam_known, amps_known = lam.copy(), amps.copy()
+        n_lines = 0
+        for g in np.unique(group):
+            idx = np.flatnonzero(group == g)
+            m, band = idx.size, bands[idx[0]]
+            others = np.flatnonzero(known & (group != g))
+            data = [None if d is None else
+                    (d[0], d[1], d[2] - _modes_on_lines(d[1], d[3], fs, lam_known[others], amps_known[j][:, others])
+                     / np.sqrt(d[3]), d[3])
+                    for j, d in enumerate(_band_data(spectra, lengths, fs, band))]
+            used = [j for j, d in enumerate(data) if d is not None]
+            n_values = n_ch * sum(2 * data[j][0].size for j in used)
+            n_params = 2 * m + len(used) * n_ch * (2 * m + 2 * (background_order + 1))
+            if n_values <= 2 * n_params:
+                continue
+
+            def project(sigma, omega, weights, data=data, band=band):
+                return _projected_band(data, fs, sigma, omega, weights, band, background_order)
+
+            try:
+                sigma, omega, cov, _, coef, weights, _ = levenberg_marquardt(
+                    project, -lam[idx].real, lam[idx].imag, n_ch, n_values, n_params, decaying=True)
+            except ConvergenceError:
+                continue
+            f_new = omega / (2 * np.pi)
+            if np.any(sigma <= 0) or np.any(f_new < band[0]) or np.any(f_new > band[1]):
+                continue
+            _, _, f_std[idx], z_std[idx] = pole_statistics(sigma, omega, cov)
+            lam[idx] = -sigma + 1j * omega
+            converged[idx] = True
+            n_lines += n_values // (2 * n_ch)
+            for j, C in zip(used, coef):
+                c = (C[0:2 * m:2] + 1j * C[1:2 * m:2]).T / weights[:, None]    # (n_ch, m): c = a / 2, scaled
+                amps[j][:, idx] = 2 * c * np.sqrt(lengths[j])
+    wn = np.abs(lam)
+    return BandFit(lam, wn / (2 * np.pi), -lam.real / wn, f_std, z_std, amps, bands, group, converged, n_lines)
