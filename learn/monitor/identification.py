@@ -30,7 +30,7 @@ __all__ = ["CACHE_FORMAT", "PER_RECORD_ERRORS", "IdentificationSettings", "Ident
 PER_RECORD_ERRORS = (np.linalg.LinAlgError, ValueError, ArithmeticError, IndexError, RuntimeError)
 
 #: Format tag of a cache entry (a change of the identification or of the entry's fields changes it).
-CACHE_FORMAT = "beam-damage-monitor-cache/1"
+CACHE_FORMAT = "beam-damage-monitor-cache/2"
 
 
 @dataclass(frozen=True)

@@ -37,8 +37,6 @@ PEAK_PROMINENCE_DB = 6.0
 FLOOR_HALF_WIDTH, FLOOR_MIN_LINES = 0.15, 5
 #: Values (complex) a chunk of Welch frames may hold.
 CHUNK_VALUES = 2**21
-#: Fewest spectral lines of a band that a singular-value spectrum is formed over (a peak and its two sides).
-MIN_BAND_LINES = 3
 
 
 def unit_shapes(phi):
@@ -145,8 +143,8 @@ def _running_floor(f, s1, df):
                         fc / (FLOOR_MIN_LINES * df) + np.log(np.maximum(x, fc) / fc) / FLOOR_HALF_WIDTH)
 
     uf = u(f)
-    if uf.size < 2:
-        return np.asarray(s1, float).copy()
+    if uf.size == 0:                                                # a band narrower than the line spacing
+        return np.zeros(0)
     grid = np.arange(uf[0], uf[-1] + 1 / 16, 1 / 16)
     db = np.interp(grid, uf, 10 * np.log10(np.maximum(s1, np.finfo(float).tiny)))
     return 10 ** (np.interp(uf, grid, ndimage.median_filter(db, size=33, mode="nearest")) / 10)
@@ -161,6 +159,8 @@ def singular_value_spectrum(checked: CheckedRecord, resolution_hz=None, where="r
     resolution_hz : float, optional
         Line spacing (default: the band's upper limit / 2400, coarser if the record holds fewer than 15
         half-overlapping frames of that length).
+        A band narrower than the spacing holds no line: no floor and no clear peak there (a method sized by the
+        peaks then runs unguided).
     where : str
     """
     fs, band = checked.sampling_frequency_hz, checked.band_hz
@@ -172,10 +172,6 @@ def singular_value_spectrum(checked: CheckedRecord, resolution_hz=None, where="r
     f, G = cross_spectra(checked.signals, fs, L, mean=checked.mean, where=where)
     U, S, _ = np.linalg.svd(G)
     inband = (f >= band[0]) & (f <= band[1]) & (f > 0)
-    if inband.sum() < MIN_BAND_LINES:
-        raise ShapeError(f"{where}: the band {band[0]:.4g}-{band[1]:.4g} Hz holds {int(inband.sum())} spectral lines "
-                         f"of {f[1]:.3g} Hz (frames of {L} samples from {n} at {fs:g} Hz); a peak needs at least "
-                         f"{MIN_BAND_LINES}: a wider band or a longer record")
     floor = np.full(f.size, np.nan)
     floor[inband] = _running_floor(f[inband], S[inband, 0], f[1])
     lowest = max(3 * f[1], 10 / checked.duration_s, band[0])

@@ -10,8 +10,8 @@ from scipy import stats
 from learn.monitor import identification as ident_mod
 from learn.monitor.alarm_threshold import LAW_MIN, threshold
 from learn.monitor.identification import IdentificationSettings, cached_identification, identify_test
-from physics.errors import BeamDamageError, ShapeError
-from physics.identification.fdd import singular_value_spectrum
+from physics.errors import BeamDamageError, ConvergenceError, ShapeError
+from physics.identification.fdd import clear_peaks, identify_fdd, singular_value_spectrum
 from physics.identification.record_checks import check_records
 from physics.identification.ssi import identify_ssi
 
@@ -66,13 +66,21 @@ def _decay(fs_hz, n, f_hz=(40.0, 110.0), seed=0):
     return (y + 1e-3 * rng.standard_normal(n))[None, :]
 
 
-def test_a_band_without_spectral_lines_is_refused_in_one_line():
+def test_a_band_narrower_than_the_spectral_lines_is_identified_without_peaks():
     """A 0.5-s record at 1 kHz has Welch lines 31.25 Hz apart (frames of 32 samples, a power of 2 below n / 8): the
-    band 101-102 Hz holds none."""
-    checked = check_records(_decay(1000.0, 500), 1000.0, (101.0, 102.0), "rec.npz")
-    with pytest.raises(ShapeError, match=r"^rec\.npz: the band 101-102 Hz holds 0 spectral lines of 31.2 Hz") as e:
-        singular_value_spectrum(checked, where="rec.npz")
+    band 101-119 Hz holds none. The spectrum has no floor and no clear peak there; SSI still runs in the band (its
+    steadiest pole the 110-Hz mode), FDD answers in one line."""
+    checked = check_records(_decay(1000.0, 500), 1000.0, (101.0, 119.0))
+    sv = singular_value_spectrum(checked)
+    assert sv.resolution_hz == pytest.approx(31.25) and np.isnan(sv.floor).all()
+    assert clear_peaks(sv).lines.size == 0
+    with pytest.raises(ConvergenceError, match=r"steadiest poles \(frequency and shape\): 110 Hz") as e, \
+            warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        identify_ssi(_decay(1000.0, 500), 1000.0, (101.0, 119.0))
     assert "\n" not in str(e.value)
+    with pytest.raises(ConvergenceError, match="no peak of the first singular value"):
+        identify_fdd(_decay(1000.0, 500), 1000.0, (101.0, 119.0))
     wide = singular_value_spectrum(check_records(_decay(1000.0, 500), 1000.0, (20.0, 200.0)))
     inband = (wide.frequency_hz >= 20.0) & (wide.frequency_hz <= 200.0)
     assert inband.sum() == 6 and np.isfinite(wide.floor[inband]).all()     # 31.25 ... 187.5 Hz
