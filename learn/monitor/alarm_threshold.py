@@ -17,6 +17,15 @@ LOO_MAX, N_FOLDS = 200, 20
 #: For a statistic of the environment the law's scale is fitted to the largest held-out indices: this share of
 #: them, and at least ``TAIL_MIN`` (:func:`threshold`'s ``tail_share``).
 TAIL_SHARE, TAIL_MIN = 0.25, 10
+#: Held-out indices at most this share of the largest are exact zeros (a test its model predicts exactly, e.g. a
+#: frequency on the same FFT line or a statistic that a test's modes leave at zero): a point mass of the statistic,
+#: kept out of the law's fit (:func:`threshold`).
+RESOLUTION = 1e-12
+#: Fewest held-out indices above zero that the law's scale is fitted to; with fewer the threshold is their
+#: empirical quantile (at least the resolution).
+LAW_MIN = 3
+#: The law's log scale is searched within this many e-folds of its median estimate.
+LOG_SCALE_SPAN = 30.0
 
 
 def minimum_baseline(n_features: int, n_conditions: int = 0) -> int:
@@ -73,6 +82,11 @@ class Threshold:
     Mahalanobis distance with Gaussian residuals, Hotelling's prediction region, up to the scale) with the scale
     fitted to them (or to their largest share, the law truncated below) by maximum likelihood;
     ``empirical_quantile`` the held-out indices' own ``1 - rate`` quantile (linear interpolation).
+    ``zero_share``: the share of the held-out indices that are exact zeros (at most :data:`RESOLUTION` times the
+    largest), a point mass the law is not fitted to; the law is fitted to the others and read at
+    ``1 - rate / (1 - zero_share)``. With fewer than :data:`LAW_MIN` indices above zero the law is degenerate
+    (``scale = law_value = 0``) and the threshold is the empirical quantile (at least the resolution, and above
+    zero).
     """
 
     value: float
@@ -83,13 +97,14 @@ class Threshold:
     dof_den: int
     empirical_quantile: float
     held_out_rate: float
+    zero_share: float = 0.0
 
     def to_dict(self) -> dict:
         return {"value": self.value, "false_alarm_rate": self.rate,
                 "method": "the larger of a scaled F law fitted to the held-out baseline indices (maximum likelihood) "
                           "and their empirical quantile", "law_value": self.law_value, "scale": self.scale,
                 "dof": [self.dof_num, self.dof_den], "empirical_quantile_of_held_out": self.empirical_quantile,
-                "held_out_false_alarm_rate": self.held_out_rate}
+                "held_out_false_alarm_rate": self.held_out_rate, "zero_share_of_held_out": self.zero_share}
 
 
 def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: int = 0,
@@ -113,6 +128,12 @@ def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: i
     the baseline tests): the law, fitted to that side's squares (the same law as both sides' for a symmetric
     statistic), is read at ``1 - rate / side_share`` and so is their quantile, so that a test of the normal
     variation lies beyond the side's threshold with probability ``rate``.
+
+    Exact zeros among the held-out indices (a test its model predicts exactly) are a point mass that no scaled F
+    law has (its density diverges at zero for one degree of freedom, dragging the fitted scale to zero): the law is
+    fitted to the indices above zero and read at ``1 - rate / (side_share * share above zero)``, so that a test lies
+    beyond the threshold with probability ``rate`` overall; with fewer than :data:`LAW_MIN` of them above zero, the
+    empirical quantile (see :class:`Threshold`).
     """
     from scipy import optimize, stats  # scipy.stats/optimize: heavy, only where a threshold is fitted
 
@@ -121,7 +142,15 @@ def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: i
     d1 = max(int(dof_num), 1)
     d2 = max(int(n_train) - d1 - int(n_conditions), 1)
     law = stats.f(d1, d2)
-    pos = np.sort(np.maximum(s, 1e-300))
+    resolution = RESOLUTION * float(np.max(np.abs(s))) if s.size else 0.0
+    pos = np.sort(s[s > resolution])
+    positive_share = pos.size / s.size if s.size else 0.0
+    level = 1 - min(rate / max(side_share, 1e-12), 0.5)
+    empirical = float(np.quantile(s, level)) if s.size else math.nan
+    if pos.size < LAW_MIN:                       # a point mass at zero: the law's scale fits to 0
+        value = max(empirical, resolution, np.finfo(float).tiny) if s.size else math.inf
+        return Threshold(value, rate, 0.0, 0.0, d1, d2, empirical,
+                         float(side_share * np.mean(s > value)) if s.size else 0.0, 1.0 - positive_share)
     n_tail = min(pos.size, max(TAIL_MIN, int(math.ceil(tail_share * pos.size))))
     u = pos[-n_tail - 1] if n_tail < pos.size else 0.0                      # the tail: the indices above u
     tail = pos[pos.size - n_tail:]
@@ -130,10 +159,10 @@ def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: i
         c = math.exp(log_c)
         return -np.sum(law.logpdf(tail / c)) + tail.size * log_c + (tail.size * law.logsf(u / c) if u > 0 else 0.0)
 
-    start = math.log(max(np.median(pos) / law.median(), 1e-300))
-    c = math.exp(optimize.minimize_scalar(nll, bracket=(start - 1, start + 1)).x)
-    level = 1 - min(rate / max(side_share, 1e-12), 0.5)
-    law_value = float(c * law.ppf(level))
-    empirical = float(np.quantile(s, level)) if s.size else math.nan
-    value = max(law_value, empirical) if s.size else law_value
-    return Threshold(value, rate, law_value, c, d1, d2, empirical, float(side_share * np.mean(s > value)))
+    start = math.log(np.median(pos) / law.median())
+    c = math.exp(optimize.minimize_scalar(nll, bounds=(start - LOG_SCALE_SPAN, start + LOG_SCALE_SPAN),
+                                          method="bounded").x)
+    law_value = float(c * law.ppf(1 - min(rate / max(side_share * positive_share, 1e-12), 0.5)))
+    value = max(law_value, empirical)
+    return Threshold(value, rate, law_value, c, d1, d2, empirical, float(side_share * np.mean(s > value)),
+                     1.0 - positive_share)

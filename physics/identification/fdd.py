@@ -143,6 +143,8 @@ def _running_floor(f, s1, df):
                         fc / (FLOOR_MIN_LINES * df) + np.log(np.maximum(x, fc) / fc) / FLOOR_HALF_WIDTH)
 
     uf = u(f)
+    if uf.size == 0:                                                # a band narrower than the line spacing
+        return np.zeros(0)
     grid = np.arange(uf[0], uf[-1] + 1 / 16, 1 / 16)
     db = np.interp(grid, uf, 10 * np.log10(np.maximum(s1, np.finfo(float).tiny)))
     return 10 ** (np.interp(uf, grid, ndimage.median_filter(db, size=33, mode="nearest")) / 10)
@@ -157,6 +159,8 @@ def singular_value_spectrum(checked: CheckedRecord, resolution_hz=None, where="r
     resolution_hz : float, optional
         Line spacing (default: the band's upper limit / 2400, coarser if the record holds fewer than 15
         half-overlapping frames of that length).
+        A band narrower than the spacing holds no line: no floor and no clear peak there (a method sized by the
+        peaks then runs unguided).
     where : str
     """
     fs, band = checked.sampling_frequency_hz, checked.band_hz

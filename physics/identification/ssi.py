@@ -350,7 +350,9 @@ class SSIIdentification:
 
 def _pass_sizes(fs_dec, n_dec, lowest_hz, n_peaks, n_ch, n_ref, max_order, block_rows):
     """Block rows and highest model order of a pass (the given ones, or sized to its band and to the record: at
-    most ``n_dec // 8`` block rows, so that the ``2 i`` correlation lags are a quarter of the decimated samples)."""
+    most ``n_dec // 8`` block rows, so that the ``2 i`` correlation lags are a quarter of the decimated samples).
+    With automatic block rows a given ``max_order`` is an upper bound: at most ``i * min(n_ref, n_ch)``, the rank
+    of the Toeplitz matrix the record allows."""
     if block_rows:
         i = int(block_rows)
     else:
@@ -358,6 +360,8 @@ def _pass_sizes(fs_dec, n_dec, lowest_hz, n_peaks, n_ch, n_ref, max_order, block
         want = int(np.ceil(BLOCK_ROW_PERIODS * fs_dec / lowest_hz)) if lowest_hz else least
         i = min(max(least, min(want, MAX_TOEPLITZ_ROWS // n_ch)), n_dec // 8)
     p = max_order or min(max(MIN_MAX_ORDER, ORDERS_PER_PEAK * n_peaks), i * min(n_ref, n_ch))
+    if max_order and not block_rows:
+        p = min(p, i * min(n_ref, n_ch))
     return i, 2 * (p // 2)
 
 
@@ -372,6 +376,10 @@ def _ssi_pass(checked, band, peaks, tol_hz, max_order, block_rows, references, n
     lowest = peaks.frequency_hz[inside][0] if inside.any() else None
     n_dec = checked.signals.shape[1] // q
     i, p = _pass_sizes(fs / q, n_dec, lowest, int(inside.sum()), n_ch, n_ref, max_order, block_rows)
+    if max_order and p < 2 * (int(max_order) // 2) and p >= 2:
+        warnings.warn(f"{where}: model orders up to {p}, not max_order {int(max_order)}: {i} block rows x "
+                      f"{min(n_ref, n_ch)} channel(s) are what {n_dec} samples decimated for the band up to "
+                      f"{band[1]:.4g} Hz allow", stacklevel=3)
     if i < MIN_SUPPORTED_ROWS or p < 2:
         raise ShapeError(f"{where}: {checked.signals.shape[1]} samples at {fs:g} Hz, decimated to {n_dec} for the "
                          f"band up to {band[1]:.4g} Hz, hold too few samples for an SSI-cov model (at least "
@@ -419,7 +427,8 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     n_modes : int, optional
         Modes to keep (default: every stable cluster; with it, the steadiest).
     max_order : int, optional
-        Highest model order (state dimension; even orders from 2) of every pass (default: sized per pass).
+        Highest model order (state dimension; even orders from 2) of every pass (default: sized per pass); with
+        automatic block rows, at most block rows x channels (a warning says so).
     block_rows : int, optional
         Block rows ``i`` of the Toeplitz matrix of every pass (default: sized per pass).
     references : sequence of int, optional
