@@ -63,7 +63,7 @@ DEFAULTS: dict = {
                                        # experiments.benches.bench_modal_noise); "output-only": per-mode
                                        # coefficients of the
                                        # sample's sensor noise and record length (SSI-cov of response records,
-                                       # learn.output_only_calibration; generate --modal-noise output-only)
+                                       # learn.pairs.output_only_calibration; generate --modal-noise output-only)
         "frequency_noise": 0.0005,     # relative std of natural frequencies (number, or one per mode 1..4)
         "damping_noise": 0.02,         # relative std of damping ratios
         "shape_noise": 0.002,          # complex std relative to the largest entry of each mode

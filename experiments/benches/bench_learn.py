@@ -10,7 +10,7 @@
    ``--config training --beam beam5-timoshenko.toml`` (a Timoshenko truth, kGA = 27,100 N, beam file
    written here with :func:`physics.beam.write_beam`). Temperature, re-clamping and per-sample noise
    come from the generator.
-2. Trains the default model (``learn.training.train``; its time is the training time), a network on
+2. Trains the default model (``learn.network.training.train``; its time is the training time), a network on
    each other input route on the same pairs, and gradient boosting on the default route's features.
 3. Scores network(s) and every classical method on the held-out test dataset, prints the table with the
    issue's targets and the breakdowns (noise level, size, position).
@@ -32,15 +32,15 @@ import pandas as pd
 
 from experiments.cli import main as cli
 from experiments.benches.harness import parser, table, write_table
-from learn.classical import GradientBoosting, run_classical
-from learn.classify import classify
-from learn.estimator import DamageClassifier
-from learn.evaluate import figures, metrics, table_rows
-from learn.features import features, load_pairs, modal_features, split_by_specimen
-from learn.model_dir import load_model, sensitivity_of
-from learn.sensitivity import beam_sensitivity
-from learn.training import dataset_frfs, targets, train
-from learn.verdict import network_output
+from learn.explanations.classical import GradientBoosting, run_classical
+from learn.pairs.classify import classify
+from learn.network.estimator import DamageClassifier
+from learn.network.evaluate import figures, metrics, table_rows
+from learn.network.features import features, load_pairs, modal_features, split_by_specimen
+from learn.network.model_dir import load_model, sensitivity_of
+from learn.explanations.sensitivity import beam_sensitivity
+from learn.network.training import dataset_frfs, targets, train
+from learn.pairs.verdict import network_output
 from physics import thesis
 from physics.beam import preset_beam, write_beam
 from physics.frf import receptance

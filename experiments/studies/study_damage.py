@@ -4,7 +4,7 @@ Evaluates a trained classifier (``--model``-style directory; by default the demo
 ``out/demo/model``, trained on a small ``training``-config dataset when absent) and every
 classical method on the same held-out test pairs (``generate --config training``, other
 seed), and draws one figure per metric with the breakdowns of
-:func:`learn.evaluate.subsets` (FRF noise level, damage-size tercile, element of the
+:func:`learn.network.evaluate.subsets` (FRF noise level, damage-size tercile, element of the
 4-element grid with the tip zone x/L >= 0.85 apart) and one line per method.
 """
 
@@ -17,8 +17,8 @@ import numpy as np
 from datagen.config import load_config, merge, recorded_config
 from datagen.generation import generate
 from experiments.studies.report import Figure, Section, Table
-from learn.model_dir import load_model
-from learn.training import evaluate, train
+from learn.network.model_dir import load_model
+from learn.network.training import evaluate, train
 
 __all__ = ["run"]
 

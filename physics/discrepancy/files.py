@@ -87,7 +87,7 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[Measurement, objec
     frf = read_frf(path)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        # as classify identifies a beam file's test (learn.measured.identify_band): LSCF over its band_hz
+        # as classify identifies a beam file's test (learn.pairs.measured.identify_band): LSCF over its band_hz
         ident = identify_frf(frf, n_modes=n_modes, band_hz=beam.band_hz)
     est = ident.estimate
     rec = ident.frf  # receptance, band-limited as identified

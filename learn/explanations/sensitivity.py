@@ -15,7 +15,7 @@ mass ratio ``mu = m_k / (m L)``) spread over element ``e`` adds
 ``dM = (m L mu / l_e) M_e^1`` (``M_e^1`` the consistent element mass for unit
 mass per length, eq. 3.8), so ``d f_r / f_r = -m L mu phi_r^T M_e^1 phi_r / (2 l_e)``,
 the displacement squared there. Shape sensitivities are finite differences of the real, unit-norm shapes at the
-measured DOFs (:func:`learn.shapes.real_shapes`). The same numbers serve the
+measured DOFs (:func:`learn.explanations.shapes.real_shapes`). The same numbers serve the
 classical methods (Cawley-Adams, DLAC/MDLAC, sensitivity updating) and the
 classifier's "detectable here" rule.
 """
@@ -28,7 +28,7 @@ from functools import lru_cache
 import numpy as np
 
 from datagen.damage import DEFAULT_KIND, damage_model
-from learn.shapes import real_shapes, sign_aligned
+from learn.explanations.shapes import real_shapes, sign_aligned
 from physics.effects import hermite_row, point_mass_matrix
 from physics.fem import beam_model, element_mass, element_stiffness
 from physics.modal import undamped_modes
