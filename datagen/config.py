@@ -137,6 +137,7 @@ class RecordedConfig:
     beam : dict or None      section ``beam`` (a beam file's mapping; None when empty)
     effects : dict           the beam file's ``effects`` ({} when none)
     specimen : dict          section ``specimen`` ({} when none)
+    measurement : dict       section ``measurement`` ({} when none)
     """
 
     kind: str
@@ -145,6 +146,7 @@ class RecordedConfig:
     beam: dict | None
     effects: dict
     specimen: dict
+    measurement: dict
 
 
 def recorded_config(config: dict | None) -> RecordedConfig:
@@ -153,7 +155,7 @@ def recorded_config(config: dict | None) -> RecordedConfig:
     c = config or {}
     damage, beam = c.get("damage") or {}, c.get("beam") or None
     return RecordedConfig(damage.get("kind", DEFAULT_KIND), damage, c.get("section"), beam,
-                          (beam or {}).get("effects") or {}, c.get("specimen") or {})
+                          (beam or {}).get("effects") or {}, c.get("specimen") or {}, c.get("measurement") or {})
 
 
 def calibrated_modal_std(meas: dict, level, floor) -> dict:

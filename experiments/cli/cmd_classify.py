@@ -92,7 +92,7 @@ def measured_test_warnings(model, files, raw, mapped) -> list[str]:
     """One line per way the files' test differs from the model's (:func:`learn.pairs.measured.differences_from_model`),
     and per file whose measured DOFs the model does not read."""
     frfs = {str(f): d for f, d in zip(files, raw) if isinstance(d, MeasuredFRF)}
-    gen = (model.config.get("generator_config") or {}).get("measurement", {})
+    gen = model.recorded.measurement
     test = model.beam.test
     df = None
     if gen.get("lines") and test is not None:

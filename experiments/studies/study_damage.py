@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from datagen.config import load_config, merge, recorded_config
+from datagen.config import load_config, merge
 from datagen.generation import generate
 from experiments.studies.report import Figure, Section, Table
 from learn.network.model_dir import load_model
@@ -61,7 +61,7 @@ def run(out_dir, model_dir="out/demo/model", n_test: int = 4000, n_train: int = 
         model_dir = out / "model"
         train(out / "train-data", model_dir, epochs=30, seed=0, progress=True)
     model = load_model(model_dir)
-    beam = recorded_config(model.config.get("generator_config")).beam
+    beam = model.recorded.beam
     cfg = load_config("training")
     if beam:   # the model's own truth beam (e.g. the calibrated one of the demo)
         cfg = merge({"beam": beam}, base=cfg)

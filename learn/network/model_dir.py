@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from datagen.config import recorded_config
+from datagen.config import RecordedConfig, recorded_config
 from learn.network.features import BeamSpec
 from learn.explanations.sensitivity import beam_sensitivity
 from learn.pairs.verdict import DamageWords, verdict_text
@@ -112,15 +112,14 @@ class TrainedModel:
         return spec, beam_x_m
 
     @property
-    def damage_kind(self) -> str:
-        """The damage kind of the training data (``damage.kind`` of its generator config; the default kind when it
-        records none)."""
-        return recorded_config(self.config.get("generator_config")).kind
+    def recorded(self) -> RecordedConfig:
+        """The generator config of the training data (:func:`datagen.config.recorded_config`)."""
+        return recorded_config(self.config.get("generator_config"))
 
     def verdict_text(self, result: dict) -> str:
         """The verdict of one classified pair as a reader sees it, in the words of the model's damage kind
         (:func:`learn.pairs.verdict.verdict_text`: its ``describe`` on the model's truth beam and section)."""
-        gen = recorded_config(self.config.get("generator_config"))
+        gen = self.recorded
         return verdict_text(result, DamageWords(gen.kind, truth_beam_mapping(self), gen.section))
 
 

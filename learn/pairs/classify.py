@@ -196,7 +196,7 @@ def _classified(model: TrainedModel, inputs: PairInputs, i: int, a: Answers, exp
                             false_alarm_rate), false_alarm_rate=false_alarm_rate)
         verdict, w = _within_normal_variation(verdict, nv_i, w, "network" if from_network else cl and cl["method"])
     source = "network" if from_network else "classical"
-    kind = damage_model(model.damage_kind)
+    kind = damage_model(model.recorded.kind)
     return ClassifiedPair(
         inputs.names[i + 1], verdict, kind.kind, kind.size_meaning, location_ambiguity(beam, asdict(verdict), p),
         source, not reasons, reasons, a,

@@ -260,7 +260,7 @@ def identification_warning(model: TrainedModel, identified: bool, methods=None) 
     that produced them (None: unknown, nothing said). Output-only inputs (SSI-cov, FDD) against FRF-route or
     fixed modal noise, and FRF-route inputs against output-only modal noise, are named.
     """
-    trained = (model.config.get("generator_config") or {}).get("measurement", {}).get("identification")
+    trained = model.recorded.measurement.get("identification")
     trained_oo = _output_only((trained or {}).get("method"))
     used = sorted({m for m in (methods or ()) if m is not None})
     oo = [m for m in used if _output_only(m)]

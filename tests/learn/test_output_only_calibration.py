@@ -3,11 +3,11 @@ mode says, shape errors measured as a dataset draws them, the std model, a calib
 resume, and the one-line warning when the modes were identified otherwise than the training data assumes."""
 
 import json
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+from learn.network.model_dir import TrainedModel
 from learn.pairs.noise_calibration import mode_errors, robust_std
 
 
@@ -127,7 +127,7 @@ def test_generate_output_only_calibrates_once_and_reuses_it_on_resume(tmp_path, 
 
 
 def model_of(identification):
-    return SimpleNamespace(config={"generator_config": {"measurement": {"identification": identification}}})
+    return TrainedModel("m", {"generator_config": {"measurement": {"identification": identification}}})
 
 
 def test_identification_warning_names_a_skew_in_one_line_and_is_silent_on_a_match():
