@@ -56,7 +56,7 @@ from datagen.synth import measured_frf
 from learn.pairs.measured import IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, identify_modes
 from learn.explanations.sensitivity import beam_sensitivity
 from physics.errors import BeamDamageError
-from physics.io import MeasuredFRF, atomic_write_text
+from physics.io import MeasuredFRF, atomic_write_bytes, atomic_write_text, figure_png
 from physics.modal import modal_parameters
 
 __all__ = ["main"]
@@ -265,8 +265,7 @@ def _figure(path: Path, runs: dict, conditions) -> None:
                 ax.set_ylabel("cumulative fraction")
     axs[0, 0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    atomic_write_bytes(path, figure_png(fig))
 
 
 def _print(calib: dict, table: list) -> None:

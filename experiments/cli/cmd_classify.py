@@ -9,7 +9,6 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.studies.report import figure_png
 from learn.pairs.classify import DEFAULT_FALSE_ALARM_RATE, KEYS, classify_pairs
 from learn.pairs.verdict import explanation_label
 from learn.pairs.measured import differences_from_model, on_model_dofs
@@ -24,6 +23,7 @@ from physics.io import (
     accepted,
     atomic_write_bytes,
     atomic_write_text,
+    figure_png,
     modal_or_frf,
     parse_dof,
     read,

@@ -19,6 +19,7 @@ from datagen.generation import generate
 from experiments.studies.report import Figure, Section, Table
 from learn.network.model_dir import load_model
 from learn.network.training import evaluate, train
+from physics.io import atomic_write_bytes, figure_png
 
 __all__ = ["run"]
 
@@ -46,10 +47,7 @@ def _figure(rows, metric, label, path):
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp, dpi=110)
-    plt.close(fig)
-    tmp.replace(path)
+    atomic_write_bytes(path, figure_png(fig))
 
 
 def run(out_dir, model_dir="out/demo/model", n_test: int = 4000, n_train: int = 6000) -> tuple[dict, list]:

@@ -16,7 +16,6 @@ Definitions
 
 from __future__ import annotations
 
-import io
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -24,7 +23,7 @@ import numpy as np
 
 from learn.explanations.classical import FREQUENCY_METHODS
 from learn.network.features import as_spec
-from physics.io import atomic_write_bytes
+from physics.io import atomic_write_bytes, figure_png
 
 __all__ = ["MIN_DROP", "Metrics", "NOISE_EDGES", "TIP_ZONE", "figures", "metrics", "mirrored_method", "reliability",
            "roc_auc", "roc_curve", "subsets", "table_rows"]
@@ -252,10 +251,5 @@ def figures(outputs, truth, out_dir, length_m: float, n_bins: int = 15) -> list[
 
 
 def _save(fig, path) -> str:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
-    atomic_write_bytes(path, buf.getvalue())
+    atomic_write_bytes(path, figure_png(fig, bbox_inches="tight"))
     return str(path)
