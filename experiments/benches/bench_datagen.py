@@ -63,10 +63,6 @@ def _cpu_s() -> float:
     return a.ru_utime + a.ru_stime + b.ru_utime + b.ru_stime
 
 
-def _dir_bytes(root: Path) -> int:
-    return sum(p.stat().st_size for p in root.rglob("*") if p.is_file())
-
-
 def _vm_hwm_mb() -> float:
     """This process's peak resident memory (MB) from /proc (``ru_maxrss`` of a spawned process carries its
     parent's peak over the exec)."""
@@ -214,7 +210,8 @@ def _generate_rates(tmp: Path, root: Path, cfg, n: int, workers: int) -> dict:
     t, c = time.perf_counter(), _cpu_s()
     generate(root, cfg, n=n, seed=1, workers=workers, progress=False)
     return {"generate_samples_per_s": n / (time.perf_counter() - t),
-            "generate_samples_per_cpu_s": n / (_cpu_s() - c), "bytes_per_sample": _dir_bytes(root) / n}
+            "generate_samples_per_cpu_s": n / (_cpu_s() - c),
+            "bytes_per_sample": sum(p.stat().st_size for p in root.rglob("*") if p.is_file()) / n}
 
 
 def _read_rates(tmp: Path, root: Path, n_samples: int, workers: int, batch: int) -> dict:

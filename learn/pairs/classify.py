@@ -20,7 +20,7 @@ from learn.pairs.verdict import (IN_DISTRIBUTION_PERCENTILE, Verdict, agreement,
                            modes_text, network_answer, network_output, place_keys)
 
 __all__ = ["DEFAULT_FALSE_ALARM_RATE", "DISTANCE_TERMS", "KEYS", "MIN_PAIRING_MAC", "Answers", "ClassifiedPair",
-           "classify", "classify_many", "classify_pairs", "distance_terms", "distance_text", "pair_answers",
+           "classify", "classify_many", "classify_pairs", "distance_terms", "pair_answers",
            "shape_pairing_reasons"]
 
 
@@ -187,7 +187,8 @@ def _classified(model: TrainedModel, inputs: PairInputs, i: int, a: Answers, exp
         reasons.insert(0, f"Mahalanobis distance {dist:.3g} from the training data, beyond {pct:.2f}% of training "
                           "pairs" + (f" and the baseline tests' own pairs (at most "
                                      f"{normal['baseline_pairs_distance_max']:.3g})" if nv is not None else "")
-                       + (f"; largest terms: {distance_text(terms)}" if terms else ""))
+                       + ("; largest terms: " + ", ".join(f"{t['feature']} {t['training_std']:+.1f} sd "
+                                                          f"({t['share']:.0%})" for t in terms[:3]) if terms else ""))
     verdict, from_network, w = _chosen_verdict(net, cl, p, reasons, warnings, a.sensitivity, beam)
     nv_i = dict(normal)
     if nv is not None and inputs.currents is not None:
@@ -326,11 +327,6 @@ def distance_terms(est, X, route: str, beam, top: int = DISTANCE_TERMS) -> list[
         out.append([{"feature": names[j], "value": float(np.asarray(X)[r, j]), "training_std": float(Z[r, j]),
                      "share": float(terms[r, j] / total[r])} for j in order])
     return out
-
-
-def distance_text(terms: list[dict], n: int = 3) -> str:
-    """The largest terms in words, e.g. ``df1 (%) -7.1 sd (62 %), dphi 2:y m1 +3.0 sd (12 %)``."""
-    return ", ".join(f"{t['feature']} {t['training_std']:+.1f} sd ({t['share']:.0%})" for t in terms[:n])
 
 
 def _chosen_verdict(net, cl, p, reasons: list, warnings: list, sens, beam):
