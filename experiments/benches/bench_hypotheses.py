@@ -34,7 +34,7 @@ from experiments.second_sim.pairs import DOF_LABELS, EI_NM2, LENGTH_M, MASS_PER_
 from experiments.second_sim.response import MODAL_NOISE, Damping, complex_modes, noisy_modal
 from experiments.second_sim.writers import modal_dict
 from experiments.benches.harness import parser, table, write_table
-from learn.pairs.classify import classify
+from learn.pairs.classify import classify_many
 from datagen.damage import damage_defaults
 from learn.network.features import BeamSpec
 from learn.explanations.hypotheses import SHAPE_CHANGE_STD, _support_curves, kind_explanation, weigh
@@ -123,7 +123,7 @@ def network_answers(model_dir, pair_list) -> list[dict]:
     out = []
     for p in pair_list:
         base, cur = (modal_data_from_dict(d, f"{p['truth']} pair") for d in p["modal"])
-        v = classify(model, base, cur)
+        v = classify_many(model, base, [cur])[0]
         net = v.get("network") or {}
         out.append({"network_damaged": bool(net.get("damaged")), "verdict_damaged": bool(v["damaged"]),
                     "verdict_from": v["verdict_from"], "in_distribution": bool(v["in_distribution"]),

@@ -30,7 +30,7 @@ from datagen.truth_beam import beam_mapping
 from experiments.studies import study_discrepancy, study_thesis, validate
 from experiments.studies.doc_tables import DOCS, write_table
 from experiments.studies.report import Section, Table, figure, write_report
-from learn.pairs.classify import classify
+from learn.pairs.classify import classify_many
 from learn.network.model_dir import MODEL_FORMAT, load_model
 from learn.pairs.verdict import explained_text, explanation_label, noise_text
 from physics import discrepancy, modal, properties, thesis, updating
@@ -106,7 +106,7 @@ def classify_step(out: Path, model_dir: Path) -> dict:
         paths[state] = out / f"beam5_{state}.json"
         write_modal_json(paths[state], data[state])
     model = load_model(model_dir)
-    res = classify(model, data["undamaged"], data["damaged"])
+    res = classify_many(model, data["undamaged"], [data["damaged"]])[0]
     res["verdict_text"] = model.verdict_text(res)
     res["inputs"] = {k: str(v) for k, v in paths.items()}
     atomic_write_text(out / "verdict.json", json.dumps(to_jsonable(res), indent=1) + "\n")

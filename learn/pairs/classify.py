@@ -20,7 +20,7 @@ from learn.pairs.verdict import (IN_DISTRIBUTION_PERCENTILE, Verdict, agreement,
                            modes_text, network_answer, network_output, place_keys)
 
 __all__ = ["DEFAULT_FALSE_ALARM_RATE", "DISTANCE_TERMS", "KEYS", "MIN_PAIRING_MAC", "Answers", "ClassifiedPair",
-           "classify", "classify_many", "classify_pairs", "distance_terms", "pair_answers",
+           "classify_many", "classify_pairs", "distance_terms", "pair_answers",
            "shape_pairing_reasons"]
 
 
@@ -87,11 +87,6 @@ class ClassifiedPair:
         """The pair as ``classify --json`` prints it (:data:`KEYS`)."""
         d = {**asdict(self.answers), **asdict(self), **asdict(self.verdict), **self.explanations}
         return {k: d[k] for k in KEYS}
-
-
-def classify(model: TrainedModel, baseline, current) -> dict:
-    """Verdict for one measured pair: :func:`classify_many` with one current input."""
-    return classify_many(model, baseline, [current])[0]
 
 
 def classify_many(model: TrainedModel, baseline, currents: list, names: list[str] | None = None,
