@@ -18,7 +18,7 @@ from learn.network.estimator import DamageClassifier
 from learn.network.evaluate import figures, metrics, table_rows
 from learn.network.features import ROUTES, Pairs, feature_modes, features, labels, load_pairs, split_by_specimen
 from learn.network.model_dir import (DEFAULT_ROUTE, MODEL_FORMAT, TrainedModel, json_default, save_model,
-                             sensitivity_of)
+                                     sensitivity_of)
 from learn.pairs.verdict import detectability_threshold, network_output
 from physics.errors import BeamDamageError
 from physics.io import atomic_write_text

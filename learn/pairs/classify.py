@@ -17,7 +17,7 @@ from learn.pairs.normal_variation import model_modes
 from learn.pairs.inputs import PairInputs, mode_features, pair_inputs
 from learn.explanations.shapes import real_shapes, sign_aligned
 from learn.pairs.verdict import (IN_DISTRIBUTION_PERCENTILE, Verdict, agreement, classical_answer, classical_verdict,
-                           modes_text, network_answer, network_output, place_keys)
+                                 modes_text, network_answer, network_output, place_keys)
 
 __all__ = ["DEFAULT_FALSE_ALARM_RATE", "DISTANCE_TERMS", "KEYS", "MIN_PAIRING_MAC", "Answers", "ClassifiedPair",
            "classify_many", "classify_pairs", "distance_terms", "pair_answers",

@@ -9,8 +9,8 @@ import numpy as np
 
 from learn.network.features import frf_features, frequency_features, map_frf_to_grid, modal_features, with_missing_modes
 from learn.pairs.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows, identification_band_hz,
-                            identify_band, identify_modes, modal_pair, pair_modes_by_frequency, pairing_bands,
-                            refit_missing_modes)
+                                  identify_band, identify_modes, modal_pair, pair_modes_by_frequency, pairing_bands,
+                                  refit_missing_modes)
 from learn.network.model_dir import TrainedModel
 from learn.network.mode_count import mode_count_problem
 from learn.pairs.normal_variation import measure
