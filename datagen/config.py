@@ -63,7 +63,7 @@ DEFAULTS: dict = {
                                        # experiments.benches.bench_modal_noise); "output-only": per-mode
                                        # coefficients of the
                                        # sample's sensor noise and record length (SSI-cov of response records,
-                                       # learn.output_only_calibration; generate --modal-noise output-only)
+                                       # learn.pairs.output_only_calibration; generate --modal-noise output-only)
         "frequency_noise": 0.0005,     # relative std of natural frequencies (number, or one per mode 1..4)
         "damping_noise": 0.02,         # relative std of damping ratios
         "shape_noise": 0.002,          # complex std relative to the largest entry of each mode
@@ -137,6 +137,7 @@ class RecordedConfig:
     beam : dict or None      section ``beam`` (a beam file's mapping; None when empty)
     effects : dict           the beam file's ``effects`` ({} when none)
     specimen : dict          section ``specimen`` ({} when none)
+    measurement : dict       section ``measurement`` ({} when none)
     """
 
     kind: str
@@ -145,6 +146,7 @@ class RecordedConfig:
     beam: dict | None
     effects: dict
     specimen: dict
+    measurement: dict
 
 
 def recorded_config(config: dict | None) -> RecordedConfig:
@@ -153,7 +155,7 @@ def recorded_config(config: dict | None) -> RecordedConfig:
     c = config or {}
     damage, beam = c.get("damage") or {}, c.get("beam") or None
     return RecordedConfig(damage.get("kind", DEFAULT_KIND), damage, c.get("section"), beam,
-                          (beam or {}).get("effects") or {}, c.get("specimen") or {})
+                          (beam or {}).get("effects") or {}, c.get("specimen") or {}, c.get("measurement") or {})
 
 
 def calibrated_modal_std(meas: dict, level, floor) -> dict:

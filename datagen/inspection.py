@@ -14,7 +14,7 @@ import numpy as np
 from datagen.dataset import Dataset
 from datagen.store import STATES
 from physics.errors import FileFormatError
-from physics.io import atomic_write_text
+from physics.io import atomic_write_bytes, atomic_write_text, figure_png
 from physics.properties import curvature_squared
 from physics.supports import THESIS_SUPPORT
 
@@ -136,8 +136,7 @@ def _plot_labels(plt, table, out: Path) -> None:
         ax.hist(v[np.isfinite(v)], bins=30)     # a rigid clamp's root spring is inf
         ax.set_title(c, fontsize=9)
     fig.tight_layout()
-    fig.savefig(out / "labels.png", dpi=110)
-    plt.close(fig)
+    atomic_write_bytes(out / "labels.png", figure_png(fig))
 
 
 def _plot_shift_vs_position(plt, table, length_m: float, bc: str, modes, check: dict, out: Path) -> list[str]:
@@ -164,8 +163,7 @@ def _plot_shift_vs_position(plt, table, length_m: float, bc: str, modes, check: 
         ax.legend(fontsize=7)
         rows.append(f"{number},{c['slope']},{c['r2']},{c['n']}")
     fig.tight_layout()
-    fig.savefig(out / "shift_vs_position.png", dpi=110)
-    plt.close(fig)
+    atomic_write_bytes(out / "shift_vs_position.png", figure_png(fig))
     return rows
 
 
@@ -189,5 +187,4 @@ def _plot_frf_overlay(plt, ds: Dataset, out: Path) -> None:
         ax.legend()
     axs[-1, 0].set_xlabel("frequency (Hz)")
     fig.tight_layout()
-    fig.savefig(out / "frf_overlay.png", dpi=110)
-    plt.close(fig)
+    atomic_write_bytes(out / "frf_overlay.png", figure_png(fig))

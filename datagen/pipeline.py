@@ -195,7 +195,7 @@ def measure_modes(setup, inp, lam4, psi4):
     (``*_noise_per_floor``) and ``e`` (``*_noise_floor``): "calibrated" against
     the identification ``classify`` runs (``experiments.benches.bench_modal_noise``); "output-only": the same form of
     the sample's sensor noise and record length (:func:`datagen.config.output_only_variables`), calibrated
-    against SSI-cov of response records (:mod:`learn.output_only_calibration`).
+    against SSI-cov of response records (:mod:`learn.pairs.output_only_calibration`).
     """
     mcfg = setup.cfg["measurement"]
     if mcfg["modal_noise"] in ("calibrated", "output-only"):

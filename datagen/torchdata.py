@@ -53,7 +53,7 @@ class FRFDataset(torch.utils.data.Dataset):
     features : see :func:`frf_to_real`
     dtype : torch dtype of the FRF features (default float32)
     weights : optional array (G, F)
-        A linear map of ``log10 |H|`` over the F lines (e.g. ``learn.features.grid_weights``: the
+        A linear map of ``log10 |H|`` over the F lines (e.g. ``learn.network.features.grid_weights``: the
         classifier's log-frequency grid); only the lines it uses are synthesised
         (:func:`datagen.synth.log_magnitude_map`). Needs ``features="log_magnitude"``.
 

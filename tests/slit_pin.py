@@ -5,7 +5,7 @@
 for a bitwise comparison between two versions of the code.
 
 Keys are ``{config}/table/{column}`` and ``{config}/array/{name}`` and
-``{config}/label/{name}`` (:func:`learn.features.labels`). Column names are those of
+``{config}/label/{name}`` (:func:`learn.network.features.labels`). Column names are those of
 the damage plug-ins (``n_damages``, ``damage{k}_*`` with ``k`` from 0).
 """
 
@@ -22,7 +22,7 @@ from datagen.config import load_config, merge
 from datagen.dataset import Dataset
 from datagen.generation import generate
 from datagen.store import ARRAYS
-from learn.features import labels
+from learn.network.features import labels
 
 #: Configurations pinned: (name, overrides, n, seed).
 CASES = (("default", None, 6, 11), ("training", "training", 8, 5))

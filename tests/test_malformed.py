@@ -345,7 +345,7 @@ def _tiny_dataset():
 def _tiny_model():
     """A classifier trained one epoch on :func:`_tiny_dataset` (modal route, about 3 s)."""
     def build(out):
-        from learn.training import train
+        from learn.network.training import train
 
         train(_tiny_dataset(), out, epochs=1, seed=0)
     return _shared("model", build)

@@ -22,19 +22,19 @@ A damage model turns its section of the configuration (``damage``, selected by
   the nominal beam ``beam`` (as ``size_range`` takes it) of that mass per length and length,
   their spread at ``extent`` in [0, 1] through the range section ``d`` draws (0: its
   smallest); ``corrections`` of them is the damage the competing explanation's exact
-  refinement re-analyses (:mod:`learn.refine`);
+  refinement re-analyses (:mod:`learn.explanations.refine`);
 * ``columns(...)`` (same arguments) gives the model's own stored columns:
   per sample ``{name: (B,)}`` and per damage ``{suffix: (B, S)}`` stored as
   ``damage{k}_{suffix}``; ``sample_units`` and ``units`` give their units;
 * ``size_transform`` is how the network's size head learns the size: ``"log"`` (a positive size)
   or ``"asinh:<scale>"`` (a signed size, ``asinh(size / scale)``), read by
-  :class:`learn.estimator.DamageClassifier`;
+  :class:`learn.network.estimator.DamageClassifier`;
 * ``size_label`` names the size in tables and the verdict (e.g. ``"hinge flexibility"``);
 * ``label`` names the kind in the verdict's prose (e.g. ``"a mass change"``);
 * ``perturbs`` ("stiffness" or "mass") says which element matrix a unit size
   changes to first order, for the classical methods' sensitivities
-  (:func:`learn.sensitivity.beam_sensitivity`) and the competing explanations' frequency map
-  (:mod:`learn.hypotheses`). A stiffness kind's size is the hinge flexibility
+  (:func:`learn.explanations.sensitivity.beam_sensitivity`) and the competing explanations' frequency map
+  (:mod:`learn.explanations.hypotheses`). A stiffness kind's size is the hinge flexibility
   ``EI / (k_theta L)`` its local rigidity loss amounts to, a mass kind's the signed mass ratio
   ``m_k / (m L)``: the first-order relative frequency change per unit size is then the same
   curvature-squared (displacement-squared) sensitivity for every kind of that ``perturbs``;

@@ -8,7 +8,7 @@ driven at the tip, and a band from 2 Hz to just above its ``S``-th bending mode,
 
 * generate: :func:`datagen.generation.generate` end to end (``--config training``, ``--workers`` processes,
   shards, checksums and ``samples.parquet`` written), samples per second of wall clock;
-* classify: :func:`learn.classify.classify_many` of ``--pairs`` modal-data pairs against one baseline (a model
+* classify: :func:`learn.pairs.classify.classify_many` of ``--pairs`` modal-data pairs against one baseline (a model
   trained on the dataset for ``--epochs``), pairs per second;
 * with ``--train N`` (the 8-sensor beam only): ``generate`` of N samples and ``train`` on them, seconds.
 
@@ -35,9 +35,9 @@ from datagen.dataset import Dataset
 from datagen.generation import generate
 from datagen.truth_beam import beam_mapping
 from experiments.benches.harness import parser, table, write_table
-from learn.classify import classify_many
-from learn.model_dir import load_model
-from learn.training import train
+from learn.pairs.classify import classify_many
+from learn.network.model_dir import load_model
+from learn.network.training import train
 from physics.beam import load_beam
 from physics.io import ModalData
 

@@ -16,7 +16,7 @@ state per sample):
   worker processes, synthesised on read, for the updated and the measured FRFs;
 * read, classifier features: ``log10 |H|`` on the classifier's 96-point
   log-frequency grid, both states, 4 DOFs, synthesised only on the 168 lines
-  the grid interpolates from: :func:`learn.features.load_pairs` (what ``train``
+  the grid interpolates from: :func:`learn.network.features.load_pairs` (what ``train``
   reads; ``--workers`` threads, the whole call including the table and modal
   arrays) and the ``DataLoader`` with ``weights`` (``--workers`` processes).
 
@@ -52,7 +52,7 @@ from datagen.setup import get_setup
 from datagen.store import finalize, read_manifest
 from datagen.torchdata import make_loader
 from experiments.benches.harness import parser, write_table
-from learn.features import grid_weights, load_pairs
+from learn.network.features import grid_weights, load_pairs
 
 __all__ = ["main"]
 
@@ -61,10 +61,6 @@ def _cpu_s() -> float:
     """CPU seconds (user + system) of this process and its terminated children so far."""
     a, b = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
     return a.ru_utime + a.ru_stime + b.ru_utime + b.ru_stime
-
-
-def _dir_bytes(root: Path) -> int:
-    return sum(p.stat().st_size for p in root.rglob("*") if p.is_file())
 
 
 def _vm_hwm_mb() -> float:
@@ -214,12 +210,13 @@ def _generate_rates(tmp: Path, root: Path, cfg, n: int, workers: int) -> dict:
     t, c = time.perf_counter(), _cpu_s()
     generate(root, cfg, n=n, seed=1, workers=workers, progress=False)
     return {"generate_samples_per_s": n / (time.perf_counter() - t),
-            "generate_samples_per_cpu_s": n / (_cpu_s() - c), "bytes_per_sample": _dir_bytes(root) / n}
+            "generate_samples_per_cpu_s": n / (_cpu_s() - c),
+            "bytes_per_sample": sum(p.stat().st_size for p in root.rglob("*") if p.is_file()) / n}
 
 
 def _read_rates(tmp: Path, root: Path, n_samples: int, workers: int, batch: int) -> dict:
     """Samples per second (wall and CPU) reading the dataset at ``root`` back: the torch loader of FRFs and of
-    grid features, and :func:`learn.features.load_pairs`, for the updated and the measured FRFs."""
+    grid features, and :func:`learn.network.features.load_pairs`, for the updated and the measured FRFs."""
     res = {}
     W = grid_weights(np.load(root / "omega_rad_s.npy"))[0]
     for kind in ("updated", "measured"):

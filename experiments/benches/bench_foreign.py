@@ -45,7 +45,7 @@ from experiments.cli import main as cli_main
 from experiments.second_sim import simulate_pairs, write_pairs
 from experiments.second_sim.pairs import FREQ_HZ
 from experiments.benches.harness import parser, write_table
-from physics.io import atomic_write_text
+from physics.io import atomic_write_bytes, atomic_write_text, figure_png
 
 __all__ = ["cli_json", "main"]
 
@@ -231,8 +231,7 @@ def _figure(verdicts_by_set: dict, path: Path) -> None:
     ax.set_title("Independent pairs against the training distribution")
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    atomic_write_bytes(path, figure_png(fig))
 
 
 def main(argv=None):

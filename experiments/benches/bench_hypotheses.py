@@ -15,9 +15,9 @@ spring ``k_r L / EI`` log-uniform in 300-3000, tested twice with the day-to-day 
 * ``mass_change``: a point mass of 1-5 % of the beam's mass at 5-100 % of L, added or (half of them) removed;
 * ``global_stiffness``: EI 1-4 % higher or lower.
 
-Each pair's relative frequency changes of modes 1-4 are weighed by :func:`learn.hypotheses.weigh` on the nominal
-beam's sensitivities (the second simulator's nominal EI and mass, root spring 948.7). Printed: the confusion table
-of the most probable explanation against the truth, and for the slits the share whose position and hinge
+Each pair's relative frequency changes of modes 1-4 are weighed by :func:`learn.explanations.hypotheses.weigh` on the
+nominal beam's sensitivities (the second simulator's nominal EI and mass, root spring 948.7). Printed: the confusion
+table of the most probable explanation against the truth, and for the slits the share whose position and hinge
 flexibility lie inside the 68 % and 95 % intervals.
 """
 
@@ -34,13 +34,13 @@ from experiments.second_sim.pairs import DOF_LABELS, EI_NM2, LENGTH_M, MASS_PER_
 from experiments.second_sim.response import MODAL_NOISE, Damping, complex_modes, noisy_modal
 from experiments.second_sim.writers import modal_dict
 from experiments.benches.harness import parser, table, write_table
-from learn.classify import classify
+from learn.pairs.classify import classify_many
 from datagen.damage import damage_defaults
-from learn.features import BeamSpec
-from learn.hypotheses import SHAPE_CHANGE_STD, _support_curves, kind_explanation, weigh
-from learn.model_dir import load_model
-from learn.sensitivity import beam_sensitivity
-from learn.shapes import shape_changes
+from learn.network.features import BeamSpec
+from learn.explanations.hypotheses import SHAPE_CHANGE_STD, _support_curves, kind_explanation, weigh
+from learn.network.model_dir import load_model
+from learn.explanations.sensitivity import beam_sensitivity
+from learn.explanations.shapes import shape_changes
 from physics.io import atomic_write_text, modal_data_from_dict
 
 __all__ = ["TRUTHS", "main", "pairs", "run"]
@@ -123,7 +123,7 @@ def network_answers(model_dir, pair_list) -> list[dict]:
     out = []
     for p in pair_list:
         base, cur = (modal_data_from_dict(d, f"{p['truth']} pair") for d in p["modal"])
-        v = classify(model, base, cur)
+        v = classify_many(model, base, [cur])[0]
         net = v.get("network") or {}
         out.append({"network_damaged": bool(net.get("damaged")), "verdict_damaged": bool(v["damaged"]),
                     "verdict_from": v["verdict_from"], "in_distribution": bool(v["in_distribution"]),
@@ -233,7 +233,7 @@ def main(argv=None) -> int:
                    help="std of the modal data's shapes per test, relative to each mode's largest entry (default: "
                         "the simulator's 0.5 %%)")
     p.add_argument("--shape-sigma", type=float, default=None,
-                   help="std of a shape entry's change the explanations assume (default learn.hypotheses."
+                   help="std of a shape entry's change the explanations assume (default learn.explanations.hypotheses."
                         "SHAPE_CHANGE_STD)")
     p.add_argument("--model", metavar="MODEL_DIR", help="also classify every pair's modal data with this model")
     args = p.parse_args(argv)

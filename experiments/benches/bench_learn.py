@@ -10,7 +10,7 @@
    ``--config training --beam beam5-timoshenko.toml`` (a Timoshenko truth, kGA = 27,100 N, beam file
    written here with :func:`physics.beam.write_beam`). Temperature, re-clamping and per-sample noise
    come from the generator.
-2. Trains the default model (``learn.training.train``; its time is the training time), a network on
+2. Trains the default model (``learn.network.training.train``; its time is the training time), a network on
    each other input route on the same pairs, and gradient boosting on the default route's features.
 3. Scores network(s) and every classical method on the held-out test dataset, prints the table with the
    issue's targets and the breakdowns (noise level, size, position).
@@ -32,15 +32,15 @@ import pandas as pd
 
 from experiments.cli import main as cli
 from experiments.benches.harness import parser, table, write_table
-from learn.classical import GradientBoosting, run_classical
-from learn.classify import classify
-from learn.estimator import DamageClassifier
-from learn.evaluate import figures, metrics, table_rows
-from learn.features import features, load_pairs, modal_features, split_by_specimen
-from learn.model_dir import load_model, sensitivity_of
-from learn.sensitivity import beam_sensitivity
-from learn.training import dataset_frfs, targets, train
-from learn.verdict import network_output
+from learn.explanations.classical import GradientBoosting, run_classical
+from learn.pairs.classify import classify_many
+from learn.network.estimator import DamageClassifier
+from learn.network.evaluate import figures, metrics, table_rows
+from learn.network.features import features, load_pairs, modal_features, split_by_specimen
+from learn.network.model_dir import load_model, sensitivity_of
+from learn.explanations.sensitivity import beam_sensitivity
+from learn.network.training import dataset_frfs, targets, train
+from learn.pairs.verdict import network_output
 from physics import thesis
 from physics.beam import preset_beam, write_beam
 from physics.frf import receptance
@@ -251,7 +251,7 @@ def beam5(model, out_dir) -> dict:
     dofs = ["2:y", "3:y", "4:y", "5:y"]
     md = {s: modal_data_from_dict({**data[s], "dofs": dofs}, f"beams.json beam 5 {s}")
           for s in ("undamaged", "damaged")}
-    res = classify(model, md["undamaged"], md["damaged"])
+    res = classify_many(model, md["undamaged"], [md["damaged"]])[0]
     f0, f1 = md["undamaged"].natural_frequencies_hz, md["damaged"].natural_frequencies_hz
     out = {"measured_frequency_shift_percent": list(100 * (f1 / f0 - 1)),
            "modal_data_verdict": res}
@@ -263,7 +263,7 @@ def beam5(model, out_dir) -> dict:
         M = np.array(data["identified_models"]["undamaged"]["reduced_mass"]["M"])   # printed once, for both states
         H = receptance(M, np.array(m["C"]), np.array(m["K"]), w, [0, 1, 2, 3], [0])
         frfs.append(MeasuredFRF(w / (2 * np.pi), H, ("2:+Y", "3:+Y", "4:+Y", "5:+Y"), ("2:+Y",)))
-    r2 = classify(model, frfs[0], frfs[1])
+    r2 = classify_many(model, frfs[0], [frfs[1]])[0]
     out["identified_model_frf_verdict"] = r2
     # what the FE model predicts for the thesis's statement under both readings of "length"
     sens = beam_sensitivity(model.beam.name, model.config["root_spring_relative"])

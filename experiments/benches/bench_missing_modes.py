@@ -12,9 +12,9 @@ CLI rows; without it the CLI rows have no "before" column). Three tables, each w
 (none, then mode k of the model's modes):
 
 * **held-out pairs** (``TEST_DIR``: ``generate --config training`` with another seed): the modes of every pair
-  with mode k removed from both tests, fed to the networks (``learn.features.with_missing_modes``) and to the
+  with mode k removed from both tests, fed to the networks (``learn.network.features.with_missing_modes``) and to the
   model's best classical method on the remaining modes (what ``classify`` answers with when the network cannot):
-  AUC, detection, false alarms and element accuracy as :func:`learn.evaluate.metrics` counts them, and the share
+  AUC, detection, false alarms and element accuracy as :func:`learn.network.evaluate.metrics` counts them, and the share
   of pairs inside the training data (Mahalanobis distance on the present features within the 99.9th percentile);
 * **independent simulator, thesis beam** (``experiments.second_sim pairs --set eb``): through ``classify``: the
   simulator's modal data (``pair-K_*.json``, frequencies 0.03 %, shapes 0.5 % noise) with mode k left out of both
@@ -40,14 +40,15 @@ import numpy as np
 from experiments.benches.bench_foreign import cli_json, score, set_dir, write_sets
 from experiments.benches.study_beams import score_beam
 from experiments.benches.harness import parser, table, write_table
-from learn.classical import run_classical
-from learn.estimator import DamageClassifier
-from learn.evaluate import metrics
-from learn.features import feature_modes, features, load_pairs, modal_features, split_by_specimen, with_missing_modes
-from learn.measured import pair_modes_by_frequency
-from learn.model_dir import load_model, sensitivity_of
-from learn.training import _nominal_root_spring, targets
-from learn.verdict import IN_DISTRIBUTION_PERCENTILE, network_output
+from learn.explanations.classical import run_classical
+from learn.network.estimator import DamageClassifier
+from learn.network.evaluate import metrics
+from learn.network.features import (feature_modes, features, load_pairs, modal_features, split_by_specimen,
+                                    with_missing_modes)
+from learn.pairs.measured import pair_modes_by_frequency
+from learn.network.model_dir import load_model, sensitivity_of
+from learn.network.training import _nominal_root_spring, targets
+from learn.pairs.verdict import IN_DISTRIBUTION_PERCENTILE, network_output
 from physics.io import atomic_write_text, read_modal_json, write_modal_json
 
 __all__ = ["held_out", "main", "markdown", "without_mode"]
@@ -127,7 +128,7 @@ def sweep(train_dirs, test_dirs, probabilities, epochs: int = 60, seed: int = 0)
 
 def without_mode(src: Path, dst: Path, mode_index: int | None, nominal_hz) -> Path:
     """Write the modal data of ``src`` to ``dst`` without the mode paired with the nominal mode ``mode_index``
-    (0-based; :func:`learn.measured.pair_modes_by_frequency`; all modes when None or none pairs with it)."""
+    (0-based; :func:`learn.pairs.measured.pair_modes_by_frequency`; all modes when None or none pairs with it)."""
     md = read_modal_json(src)
     which = pair_modes_by_frequency(np.abs(md.eigenvalues) / (2 * np.pi), nominal_hz)
     keep = np.flatnonzero(which != (-2 if mode_index is None else mode_index))

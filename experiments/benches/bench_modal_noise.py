@@ -7,7 +7,7 @@ A dataset's measured modal data come from a shortcut: the truth modes plus
 random errors (:func:`datagen.pipeline.measure_modes`). ``classify`` identifies
 them from the FRF files. Here specimens of the default configuration (both test
 days) go through exactly what ``classify`` runs on a file
-(:func:`learn.measured.identify_modes`: LSCF poles, LSFD residues with the
+(:func:`learn.pairs.measured.identify_modes`: LSCF poles, LSFD residues with the
 estimated noise weighting, the 4 modes below 1.4 times the nominal mode 4),
 on FRFs synthesised as a dataset does, for every combination of an FRF noise
 level, a noise floor (relative to each FRF's peak) and three line layouts
@@ -24,7 +24,7 @@ are compared with the shortcut's: the fixed default model
 (``measurement.modal_noise = "fixed"``) and the calibrated one
 (``"calibrated"``: per mode, standard deviation ``sqrt((c level)^2 + (g floor)^2 + e^2)``
 of the sample's FRF noise level and floor). The calibration fits ``c``, ``g``
-and ``e`` (:func:`learn.noise_calibration.calibrate_std`) to the full path's robust standard deviation
+and ``e`` (:func:`learn.pairs.noise_calibration.calibrate_std`) to the full path's robust standard deviation
 in each condition (1.4826 MAD for real errors, ``sqrt(median|e|^2 / ln 2)`` for
 circular complex errors). ``--write-calibration`` stores them in
 ``datagen/configs/modal_noise.json`` (what ``"calibrated"`` uses) with the
@@ -47,16 +47,16 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from experiments.benches.harness import parser
-from learn.noise_calibration import calibrate_std, robust_std
+from learn.pairs.noise_calibration import calibrate_std, robust_std
 from datagen.config import CONFIG_DIR, merge
 from datagen.batch_inputs import draw_batch
 from datagen.pipeline import measure_modes, simulate_batch
 from datagen.setup import get_setup
 from datagen.synth import measured_frf
-from learn.measured import IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, identify_modes
-from learn.sensitivity import beam_sensitivity
+from learn.pairs.measured import IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, identify_modes
+from learn.explanations.sensitivity import beam_sensitivity
 from physics.errors import BeamDamageError
-from physics.io import MeasuredFRF, atomic_write_text
+from physics.io import MeasuredFRF, atomic_write_bytes, atomic_write_text, figure_png
 from physics.modal import modal_parameters
 
 __all__ = ["main"]
@@ -184,9 +184,9 @@ def main(argv=None):
     if a.write_calibration:
         note = ("per mode 1..4: std of the identification error = sqrt((c level)^2 + (g floor)^2 + e^2) of the FRF "
                 "noise level and floor, c under 'frequency', 'damping', 'shape', g under '<quantity>_per_floor', e "
-                f"under '<quantity>_floor', fitted to robust stds of learn.measured.identify_modes on the default "
-                f"config, {a.specimens} specimens x 2 states x line layouts {list(GRIDS)} x levels {levels} x floors "
-                f"{floors}; written by experiments.benches.bench_modal_noise")
+                f"under '<quantity>_floor', fitted to robust stds of learn.pairs.measured.identify_modes on the "
+                f"default config, {a.specimens} specimens x 2 states x line layouts {list(GRIDS)} x levels {levels} "
+                f"x floors {floors}; written by experiments.benches.bench_modal_noise")
         atomic_write_text(CONFIG_DIR / "modal_noise.json",
                           json.dumps({**calib, "identification": IDENTIFICATION, "note": note}, indent=1) + "\n")
     _figure(out / "modal_noise.png", runs, conditions)
@@ -265,8 +265,7 @@ def _figure(path: Path, runs: dict, conditions) -> None:
                 ax.set_ylabel("cumulative fraction")
     axs[0, 0].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    atomic_write_bytes(path, figure_png(fig))
 
 
 def _print(calib: dict, table: list) -> None:

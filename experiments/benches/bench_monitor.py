@@ -54,7 +54,7 @@ from experiments.benches.bench_foreign import cli_json  # noqa: E402
 from experiments.cli import build_parser  # noqa: E402
 from experiments.second_sim.series import SERIES_KINDS, SLIT_SIZES, SeriesConfig, simulate_series, write_series  # noqa: E402
 from experiments.benches.harness import parser, write_table  # noqa: E402
-from physics.io import atomic_write_text  # noqa: E402
+from physics.io import atomic_write_bytes, atomic_write_text, figure_png  # noqa: E402
 
 __all__ = ["main", "markdown", "score_series"]
 
@@ -392,8 +392,7 @@ def _figure(rows: list, path: Path) -> None:
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=3, fontsize=8)
     fig.tight_layout(rect=(0, 0.08, 1, 1))
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    atomic_write_bytes(path, figure_png(fig))
 
 
 def main(argv=None) -> int:

@@ -121,7 +121,8 @@ def main(argv=None) -> dict:
 
 def _truth(drops: dict, truth: dict, members) -> float | None:
     """The simulator's own size of an event: the root mean square over the modes of its alarms' mean slit drop."""
-    d = [drops[_size_name(truth["tests"][i]["slit_size"])] if truth["tests"][i]["slit_size"] else np.zeros(4)
+    name = {v: k for k, v in SLIT_SIZES.items()}
+    d = [drops[name[truth["tests"][i]["slit_size"]]] if truth["tests"][i]["slit_size"] else np.zeros(4)
          for i in members]
     return float(np.sqrt(np.mean(np.mean(d, axis=0) ** 2)))
 
@@ -133,10 +134,6 @@ def _hinge(ei_loss: float, width_m: float = 0.004, length_m: float = 0.8) -> flo
 
 def _pct(v) -> str:
     return "–" if v is None else f"{v:.3g}"
-
-
-def _size_name(ei_loss: float) -> str:
-    return next(k for k, v in SLIT_SIZES.items() if v == ei_loss)
 
 
 if __name__ == "__main__":

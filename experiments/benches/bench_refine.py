@@ -2,10 +2,11 @@
 
 Pairs of the independent simulator (:mod:`experiments.second_sim.fem`: the thesis's 0.6095 m cantilever on its root
 spring, modes 1-4), each a point mass of 1-20 % of the beam's mass added at a uniform place in 0.05-1 L; the slit
-and mass-change explanations (a mass change's sizes -10 % to +25 %) weighed by :func:`learn.hypotheses.weigh_many`
-on the frequency changes alone, first on the first-order grid alone, then refined on the kinds' exact models
-(:mod:`learn.refine`), in one run. Printed per variant: seconds per pair, the pairs the mass change fits, and the
-share whose true place and size lie in its 95 % intervals; and the ratio of the times.
+and mass-change explanations (a mass change's sizes -10 % to +25 %) weighed by
+:func:`learn.explanations.hypotheses.weigh_many` on the frequency changes alone, first on the first-order grid alone,
+then refined on the kinds' exact models (:mod:`learn.explanations.refine`), in one run. Printed per variant: seconds per
+pair, the pairs the mass change fits, and the share whose true place and size lie in its 95 % intervals; and the ratio
+of the times.
 
 Run ``python -m experiments.benches.bench_refine [--n-pairs 64] [--seed 0] [--json]``.
 """
@@ -20,10 +21,10 @@ import numpy as np
 from experiments.benches.harness import parser
 from datagen.damage import damage_defaults
 from experiments.second_sim.fem import Beam, PointMass, assemble, modes
-from learn.features import BeamSpec
-from learn.hypotheses import _support_curves, kind_explanation, weigh_many
-from learn.refine import ExactKind, nominal_beam
-from learn.sensitivity import beam_sensitivity
+from learn.network.features import BeamSpec
+from learn.explanations.hypotheses import _support_curves, kind_explanation, weigh_many
+from learn.explanations.refine import ExactKind, nominal_beam
+from learn.explanations.sensitivity import beam_sensitivity
 
 __all__ = ["main", "simulated_pairs"]
 

@@ -4,7 +4,7 @@ Run: ``python -m experiments.benches.diagnose_shape_noise --beam steel-bar-ff-12
 --model out/beams/steel-bar-ff-12s/model-n20000-s0 [--n 40] [--seed 0] [--factors 1 8] [--identify 6]``
 
 1. ``--identify K``: the first K pairs' baseline UFF files identified by the project's path (LSCF/LSFD,
-   :func:`learn.measured.identify_modes`); per mode, the rms error of the shape against the simulator's exact one
+   :func:`learn.pairs.measured.identify_modes`); per mode, the rms error of the shape against the simulator's exact one
    (relative to its largest entry, after the best complex scale) over the shape noise the training data draws for
    that FRF noise level and floor (``datagen/configs/modal_noise.json``, calibrated on the thesis's 4-sensor test;
    modes beyond 4 take mode 4's coefficients), before the training's ``modal_noise_scale`` of 0.5-4.
@@ -26,9 +26,9 @@ from experiments.benches.harness import parser
 from datagen.config import modal_noise_calibration
 from experiments.second_sim import beams
 from experiments.second_sim.beams import CATALOGUE
-from learn.classify import classify_many
-from learn.measured import identify_modes
-from learn.model_dir import load_model
+from learn.pairs.classify import classify_many
+from learn.pairs.measured import identify_modes
+from learn.network.model_dir import load_model
 from physics.io import read_frf
 from physics.io.types import ModalData
 

@@ -35,14 +35,13 @@ import sys
 import time
 from pathlib import Path
 from dataclasses import fields, replace
-import io
 
 import numpy as np
 
 from experiments.benches.harness import parser
 from experiments.benches.bench_foreign import cli_json
 from experiments.second_sim.beams import CATALOGUE, SPREAD, Spread, simulate_beam_pairs, write_beam_pairs
-from physics.io import atomic_write_bytes, atomic_write_text
+from physics.io import atomic_write_bytes, atomic_write_text, figure_png
 
 __all__ = ["TARGETS", "fold", "folded", "main", "markdown", "parse_spread", "pooled", "run_beam", "score_beam",
            "targets"]
@@ -337,10 +336,7 @@ def _figure(rows: list[dict], path: Path) -> None:
     ax.legend(fontsize=8, loc="upper right", ncol=2)
     fig.tight_layout()
 
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    atomic_write_bytes(path, buf.getvalue())
+    atomic_write_bytes(path, figure_png(fig))
 
 
 def main(argv=None) -> int:

@@ -19,7 +19,7 @@ from datagen.config import load_config
 from datagen.generation import generate
 from experiments.benches import bench_datagen, bench_identification
 from experiments.studies.report import Section, Table
-from learn.training import train
+from learn.network.training import train
 
 __all__ = ["run"]
 

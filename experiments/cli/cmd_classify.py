@@ -9,11 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.studies.report import figure_png
-from learn.classify import DEFAULT_FALSE_ALARM_RATE, KEYS, classify_pairs
-from learn.verdict import explanation_label
-from learn.measured import differences_from_model, on_model_dofs
-from learn.model_dir import load_model
+from learn.pairs.classify import DEFAULT_FALSE_ALARM_RATE, KEYS, classify_pairs
+from learn.pairs.verdict import explanation_label
+from learn.pairs.measured import differences_from_model, on_model_dofs
+from learn.network.model_dir import load_model
 from physics.errors import BeamDamageError
 from physics.frf import FRF_UNITS, receptance_modal
 from physics.supports import THESIS_SUPPORT, support
@@ -24,6 +23,7 @@ from physics.io import (
     accepted,
     atomic_write_bytes,
     atomic_write_text,
+    figure_png,
     modal_or_frf,
     parse_dof,
     read,
@@ -89,10 +89,10 @@ def baseline_files(given: list[str]) -> list[str]:
 
 
 def measured_test_warnings(model, files, raw, mapped) -> list[str]:
-    """One line per way the files' test differs from the model's (:func:`learn.measured.differences_from_model`), and
-    per file whose measured DOFs the model does not read."""
+    """One line per way the files' test differs from the model's (:func:`learn.pairs.measured.differences_from_model`),
+    and per file whose measured DOFs the model does not read."""
     frfs = {str(f): d for f, d in zip(files, raw) if isinstance(d, MeasuredFRF)}
-    gen = (model.config.get("generator_config") or {}).get("measurement", {})
+    gen = model.recorded.measurement
     test = model.beam.test
     df = None
     if gen.get("lines") and test is not None:

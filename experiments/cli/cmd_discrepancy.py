@@ -13,7 +13,7 @@ import numpy as np
 
 from experiments.cli import one_line
 from experiments.cli.args import add_beam_argument
-from learn.measured import pair_modes_by_frequency  # classify's pairing rule
+from learn.pairs.measured import pair_modes_by_frequency  # classify's pairing rule
 from physics import discrepancy as dsc
 from physics.effects import CANDIDATES
 from physics.supports import SUPPORTS

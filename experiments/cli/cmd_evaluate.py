@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from experiments.cli.args import check_out_dir
-from learn.model_dir import load_model
+from learn.network.model_dir import load_model
 
 __all__ = ["add_parser", "run"]
 
@@ -23,7 +23,7 @@ def add_parser(sub):
 
 
 def run(args) -> dict:
-    from learn.training import evaluate  # torch: the network
+    from learn.network.training import evaluate  # torch: the network
 
     if args.out:
         check_out_dir(args.out)

@@ -11,9 +11,9 @@ from datagen.config import load_config, merge, named_configs
 from datagen.generation import generate
 from datagen.setup import generated_test, truth_beam_of
 from datagen.truth_beam import APPLIED_EFFECTS, beam_mapping
-from learn.mode_count import require_test_modes
-from learn.noise_calibration import calibrate_test
-from learn.output_only_calibration import calibrate_output_only
+from learn.network.mode_count import require_test_modes
+from learn.pairs.noise_calibration import calibrate_test
+from learn.pairs.output_only_calibration import calibrate_output_only
 from physics.beam import load_beam
 from physics.errors import BeamDamageError
 from physics.io import read_json
@@ -51,13 +51,14 @@ def add_parser(subparsers):
     p.add_argument("--modal-noise", choices=("test", "shipped", "output-only"), default="test",
                    help="the training pairs' modal noise: 'test' (default) with a beam file whose test is not the "
                         "thesis's and the calibrated modal noise calibrates it on that test first "
-                        "(learn.noise_calibration: LSCF/LSFD of 144 simulated FRF files, about 15-60 s), 'shipped' "
-                        "keeps the thesis test's coefficients, 'output-only' calibrates it on the test's output-only "
-                        "identification instead (learn.output_only_calibration: SSI-cov of 144 simulated response "
-                        "records under white random force, sensor noise 0.5-3 %% of the RMS, 2-15 min; about "
-                        "1 min) and draws each sample's sensor noise and record length (measurement.sensor_noise, "
-                        "record_length_s), for tests that 'classify' reads as the modal.json of 'identify' on "
-                        "response records. A calibration is recorded in the dataset's config and reused on resume")
+                        "(learn.pairs.noise_calibration: LSCF/LSFD of 144 simulated FRF files, about 15-60 s), "
+                        "'shipped' keeps the thesis test's coefficients, 'output-only' calibrates it on the test's "
+                        "output-only identification instead (learn.pairs.output_only_calibration: SSI-cov of 144 "
+                        "simulated response records under white random force, sensor noise 0.5-3 %% of the RMS, "
+                        "2-15 min; about 1 min) and draws each sample's sensor noise and record length "
+                        "(measurement.sensor_noise, record_length_s), for tests that 'classify' reads as the "
+                        "modal.json of 'identify' on response records. A calibration is recorded in the dataset's "
+                        "config and reused on resume")
     p.add_argument("--json", action="store_true", help="print the manifest summary as JSON")
     p.set_defaults(func=run, flags={"n": "--n", "seed": "--seed", "workers": "--workers", "scheduler": "--scheduler"})
 

@@ -81,7 +81,7 @@ def result_dict(ident: Identification) -> dict:
             "out_of_band_poles_hz": ident.out_of_band_hz.tolist(),
             "fit_error": float(np.linalg.norm(resid) / np.linalg.norm(ident.frf.frf)),
             "fit_error_db": {"median": med, "p90": p90},
-            "units": units_report(ident.frf), **positions_report(ident.frf)}
+            "units": units_report(ident.frf), **positions_report_dofs(ident.frf.response_dofs, ident.frf.metadata)}
 
 
 def units_report(frf: MeasuredFRF) -> dict:
@@ -91,11 +91,6 @@ def units_report(frf: MeasuredFRF) -> dict:
         return dict(found)
     return {"file": [f"{frf.units} ({frf.metadata.get('format', 'file')}: SI units of the declared kind)"],
             "si": frf.units, "factor_to_si": [1.0]}
-
-
-def positions_report(frf: MeasuredFRF) -> dict:
-    """``positions_m`` per response DOF (from node geometry) and the rule used."""
-    return positions_report_dofs(frf.response_dofs, frf.metadata)
 
 
 def run(args) -> dict:
@@ -237,16 +232,11 @@ def setups_text(out: dict) -> str:
                            for p in partial) if partial else ""))
 
 
-def method_help() -> str:
-    """``name: help`` of every method of :data:`physics.identification.METHODS`, separated by semicolons."""
-    return "; ".join(f"{name}: {spec.help}" for name, spec in METHODS.items())
-
-
 def add_parser(sub):
     p = sub.add_parser(
         "identify",
         description="Modal identification from an FRF file, or output-only from response time records without "
-                    f"a force. Methods (--method): {method_help()}. "
+                    f"a force. Methods (--method): {'; '.join(f'{n}: {s.help}' for n, s in METHODS.items())}. "
                     "Shapes are unit-modal-A scaled when a driving-point FRF is present; output-only shapes are "
                     "unit-norm and unscaled.")
     p.add_argument("file", metavar="FILE", help=f"FRF file: {accepted(FRF)}; or response time records without a "

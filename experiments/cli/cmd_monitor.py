@@ -18,11 +18,11 @@ from learn.monitor.coverage import baseline_scatter, series_coverage
 from learn.monitor.events import group_events, identification_change
 from learn.monitor.verdicts import event_verdicts
 from physics.errors import ConfigError
-from physics.io import FRF, MODAL, TIME, accepted, atomic_write_bytes, atomic_write_text, to_jsonable
+from physics.io import FRF, MODAL, TIME, accepted, atomic_write_bytes, atomic_write_text, figure_png, to_jsonable
 from datagen.store import package_version
-from learn.model_dir import load_model
+from learn.network.model_dir import load_model
 from physics.beam import load_beam
-from experiments.studies.report import Section, Table, figure, figure_png, write_report
+from experiments.studies.report import Section, Table, figure, write_report
 import warnings
 
 __all__ = ["add_parser", "chart", "judged", "run"]

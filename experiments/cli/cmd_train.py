@@ -5,7 +5,7 @@ from __future__ import annotations
 from experiments.cli.args import check_out_dir
 from physics.errors import BeamDamageError
 from datagen.store import read_manifest
-from learn.mode_count import require_test_modes
+from learn.network.mode_count import require_test_modes
 
 __all__ = ["add_parser", "run"]
 
@@ -24,7 +24,7 @@ def add_parser(sub):
     p.add_argument("--epochs", type=int, default=60, help="training epochs (default 60)")
     p.add_argument("--seed", type=int, default=0, help="random seed of split, augmentation and network (default 0)")
     p.add_argument("--route", choices=("modal", "updated", "measured"), default=None,
-                   help="input route (default: the benchmark's winner, learn.model_dir.DEFAULT_ROUTE)")
+                   help="input route (default: the benchmark's winner, learn.network.model_dir.DEFAULT_ROUTE)")
     p.add_argument("--threads", type=int, default=1,
                    help="torch CPU threads of the networks (default 1: fastest for this small network, and more "
                         "threads were up to 10x slower on a machine shared with other jobs)")
@@ -33,7 +33,7 @@ def add_parser(sub):
 
 
 def run(args) -> dict:
-    from learn.training import train  # torch: the network
+    from learn.network.training import train  # torch: the network
 
     if args.epochs < 1:
         raise BeamDamageError(f"--epochs must be >= 1, got {args.epochs}")
@@ -58,8 +58,8 @@ def run(args) -> dict:
 
 def _check_test_modes(root) -> None:
     """Refuse, before reading the samples, a dataset whose test band holds fewer modes than classify needs
-    (:func:`learn.mode_count.require_test_modes`); a directory that is not a dataset is left to ``train``."""
-    from learn.features import beam_of_manifest  # pandas: only here
+    (:func:`learn.network.mode_count.require_test_modes`); a directory that is not a dataset is left to ``train``."""
+    from learn.network.features import beam_of_manifest  # pandas: only here
 
     try:
         test = beam_of_manifest(read_manifest(root)).test

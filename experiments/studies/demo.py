@@ -30,9 +30,9 @@ from datagen.truth_beam import beam_mapping
 from experiments.studies import study_discrepancy, study_thesis, validate
 from experiments.studies.doc_tables import DOCS, write_table
 from experiments.studies.report import Section, Table, figure, write_report
-from learn.classify import classify
-from learn.model_dir import MODEL_FORMAT, load_model
-from learn.verdict import explained_text, explanation_label, noise_text
+from learn.pairs.classify import classify_many
+from learn.network.model_dir import MODEL_FORMAT, load_model
+from learn.pairs.verdict import explained_text, explanation_label, noise_text
 from physics import discrepancy, modal, properties, thesis, updating
 from physics.beam import load_beam
 from physics.errors import BeamDamageError
@@ -106,7 +106,7 @@ def classify_step(out: Path, model_dir: Path) -> dict:
         paths[state] = out / f"beam5_{state}.json"
         write_modal_json(paths[state], data[state])
     model = load_model(model_dir)
-    res = classify(model, data["undamaged"], data["damaged"])
+    res = classify_many(model, data["undamaged"], [data["damaged"]])[0]
     res["verdict_text"] = model.verdict_text(res)
     res["inputs"] = {k: str(v) for k, v in paths.items()}
     atomic_write_text(out / "verdict.json", json.dumps(to_jsonable(res), indent=1) + "\n")
@@ -114,7 +114,8 @@ def classify_step(out: Path, model_dir: Path) -> dict:
 
 
 def _verdict_text(v: dict, length_m: float) -> str:
-    """The verdict's own text (:meth:`learn.model_dir.TrainedModel.verdict_text`) and where the thesis cut its slit."""
+    """The verdict's own text (:meth:`learn.network.model_dir.TrainedModel.verdict_text`) and where the thesis cut its
+    slit."""
     return (f"{v['verdict_text']}\nThe thesis cut its slit a quarter of the length from the fixed end: "
             f"x = {length_m / 4:.3f} m on the {length_m:g} m cantilever (the element 1/2 boundary).")
 
@@ -303,13 +304,13 @@ def run(args) -> dict:
     key = {**key, "epochs": epochs, "model_format": MODEL_FORMAT}   # a model of another format is retrained
 
     def train_model():
-        from learn.training import train  # torch: the network
+        from learn.network.training import train  # torch: the network
         return train(out / "dataset", out / "model", epochs=epochs, seed=0, progress=True)
 
     trained = _step(out, "train", force_model, key, train_model)
 
     def evaluate_model():
-        from learn.training import evaluate  # torch: the network
+        from learn.network.training import evaluate  # torch: the network
         res = evaluate(load_model(out / "model"), out / "testset", out / "evaluate", progress=True)
         return {"rows": [r for r in res["rows"] if r["subset"] == "all"], "figures": res["figures"],
                 "pairs": res["pairs"]}

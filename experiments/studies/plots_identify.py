@@ -15,10 +15,10 @@ import numpy as np  # noqa: E402
 import json  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-from experiments.studies.report import figure_png  # noqa: E402
 from physics.errors import ConfigError  # noqa: E402
 from physics.identification import STABILITY_CODES, Identification, mode_indicator  # noqa: E402
-from physics.io import MeasuredFRF, atomic_write_bytes, modal_data_to_dict, write_frf_csv, write_uff58  # noqa: E402
+from physics.io import (MeasuredFRF, atomic_write_bytes, figure_png, modal_data_to_dict, write_frf_csv,  # noqa: E402
+                        write_uff58)
 from physics.io.types import UNNAMED_REFERENCE  # noqa: E402
 
 __all__ = ["overlay_png", "stabilisation_png", "synthesised_frf", "write_outputs"]

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import base64
 import html
-import io
 import math
 import re
 from dataclasses import dataclass, field
@@ -23,7 +22,7 @@ from pathlib import Path
 from physics.io import atomic_write_text
 
 __all__ = ["Table", "Figure", "Section", "CAPTIONS", "figure", "figure_caption", "write_report", "check_report",
-           "figure_png", "format_value", "header_text"]
+           "format_value", "header_text"]
 
 #: Caption of each figure the tools write, by file name without suffix.
 CAPTIONS = {
@@ -82,16 +81,6 @@ class Figure:
 
     caption: str
     path: str
-
-
-def figure_png(fig) -> bytes:
-    """The PNG (110 dpi) of a matplotlib figure, which is then closed."""
-    import matplotlib.pyplot as plt
-
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    return buf.getvalue()
 
 
 def figure(path, caption: str | None = None) -> Figure:

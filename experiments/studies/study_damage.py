@@ -4,7 +4,7 @@ Evaluates a trained classifier (``--model``-style directory; by default the demo
 ``out/demo/model``, trained on a small ``training``-config dataset when absent) and every
 classical method on the same held-out test pairs (``generate --config training``, other
 seed), and draws one figure per metric with the breakdowns of
-:func:`learn.evaluate.subsets` (FRF noise level, damage-size tercile, element of the
+:func:`learn.network.evaluate.subsets` (FRF noise level, damage-size tercile, element of the
 4-element grid with the tip zone x/L >= 0.85 apart) and one line per method.
 """
 
@@ -14,11 +14,12 @@ from pathlib import Path
 
 import numpy as np
 
-from datagen.config import load_config, merge, recorded_config
+from datagen.config import load_config, merge
 from datagen.generation import generate
 from experiments.studies.report import Figure, Section, Table
-from learn.model_dir import load_model
-from learn.training import evaluate, train
+from learn.network.model_dir import load_model
+from learn.network.training import evaluate, train
+from physics.io import atomic_write_bytes, figure_png
 
 __all__ = ["run"]
 
@@ -46,10 +47,7 @@ def _figure(rows, metric, label, path):
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp, dpi=110)
-    plt.close(fig)
-    tmp.replace(path)
+    atomic_write_bytes(path, figure_png(fig))
 
 
 def run(out_dir, model_dir="out/demo/model", n_test: int = 4000, n_train: int = 6000) -> tuple[dict, list]:
@@ -61,7 +59,7 @@ def run(out_dir, model_dir="out/demo/model", n_test: int = 4000, n_train: int = 
         model_dir = out / "model"
         train(out / "train-data", model_dir, epochs=30, seed=0, progress=True)
     model = load_model(model_dir)
-    beam = recorded_config(model.config.get("generator_config")).beam
+    beam = model.recorded.beam
     cfg = load_config("training")
     if beam:   # the model's own truth beam (e.g. the calibrated one of the demo)
         cfg = merge({"beam": beam}, base=cfg)

@@ -25,7 +25,7 @@ import numpy as np
 from experiments.studies.report import Figure, Section, Table
 from experiments.studies.validate import frob_rel, thesis_fixture
 from physics import fem, frf, modal, properties, reduction, updating
-from physics.io import atomic_write_text, modal_data_from_dict
+from physics.io import atomic_write_bytes, atomic_write_text, figure_png, modal_data_from_dict
 
 __all__ = ["run"]
 
@@ -65,10 +65,7 @@ def _frf_figure(path: Path, title: str, curves) -> None:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp, dpi=110)
-    plt.close(fig)
-    tmp.replace(path)
+    atomic_write_bytes(path, figure_png(fig))
 
 
 def run(out_dir) -> tuple[dict, list]:

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from learn.measured import IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, identify_modes
+from learn.pairs.measured import IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, identify_modes
 from physics.errors import BeamDamageError
 from physics.identification import (DEFAULT_OUTPUT_ONLY, holds_response_records, identify_records,
                                     read_response_records)
@@ -107,7 +107,7 @@ class IdentifiedModes:
 
 def identification_settings(band_hz=None, beam=None, model=None) -> IdentificationSettings:
     """The identification of a series: over ``band_hz`` (Hz) when given; else a trained model's (its test band,
-    or up to :data:`learn.measured.IDENTIFICATION_BAND_FACTOR` times its nominal mode 4, the 4 lowest modes: what
+    or up to :data:`learn.pairs.measured.IDENTIFICATION_BAND_FACTOR` times its nominal mode 4, the 4 lowest modes: what
     ``classify`` identifies); else a beam's (:class:`physics.beam.Beam`: its ``band_hz``, or the same rule on its
     nominal modes); else every mode LSCF finds over each file's band."""
     if band_hz is not None:
@@ -140,7 +140,7 @@ def _modes_of(eigenvalues, shapes):
 
 
 def identify_test(path, settings: IdentificationSettings, narrow_hz=None) -> IdentifiedModes:
-    """One test's modes: an FRF file by LSCF/LSFD (:func:`learn.measured.identify_modes`, the identification
+    """One test's modes: an FRF file by LSCF/LSFD (:func:`learn.pairs.measured.identify_modes`, the identification
     ``classify`` runs), response records without a force by SSI-cov (as ``identify``), modal data as read.
 
     With ``narrow_hz`` (lo, hi) (Hz), the same method over that band alone and every mode it finds there (no

@@ -8,10 +8,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from learn.measured import refit_missing_modes
+from learn.pairs.measured import refit_missing_modes
 from learn.monitor.identification import (IdentificationSettings, IdentifiedModes, cached_identification,
                                           with_narrow_band_poles)
-from learn.noise_calibration import robust_std
+from learn.pairs.noise_calibration import robust_std
 from physics.modal import mac
 
 __all__ = ["CLUSTER_GAP", "MAC_MIN", "MIN_COUNT", "MIN_PRESENCE", "ReferenceModes", "identified_by", "narrow_bands_hz",
@@ -227,7 +227,7 @@ def refit_missing(tests: list, files: list, ref: ReferenceModes, settings: Ident
     :func:`learn.monitor.identification.identify_test`, cached like the first identification); the pole of that
     identification nearest the mode within its tolerance (and, with shapes of 2 or more sensors, MAC >=
     :data:`MAC_MIN`) is added to the test (its ``narrow_band_hz`` says so), by
-    :func:`learn.measured.refit_missing_modes`. A spurious pole of the first pass never took the mode's place (the
+    :func:`learn.pairs.measured.refit_missing_modes`. A spurious pole of the first pass never took the mode's place (the
     assignment is one to one and stops at the tolerance), so a mode missed there is looked for where it lies, not
     filled from elsewhere.
     """

@@ -7,9 +7,9 @@ import warnings
 
 import numpy as np
 
-from learn.classify import classify_many
-from learn.hypotheses import FREQUENCY_CHANGE_STD, explain_many
-from learn.measured import modal_pair, on_model_dofs, pair_modes_by_frequency
+from learn.pairs.classify import classify_many
+from learn.explanations.hypotheses import FREQUENCY_CHANGE_STD, explain_many
+from learn.pairs.measured import modal_pair, on_model_dofs, pair_modes_by_frequency
 from learn.monitor.alarms import SeriesResult, changed_text, what_changed
 from learn.monitor.tracking import shapes_at, track_modes
 from physics.errors import BeamDamageError
@@ -78,8 +78,8 @@ def _vec(values) -> np.ndarray:
 
 
 def _explain(result: SeriesResult, model, beam_x_m, items: list, out: dict) -> None:
-    """``out[key]`` updated with the competing explanations (:func:`learn.hypotheses.explain_many`, the measured
-    per-mode scatter as each mode's standard deviation) of each item ``(key, frequencies at the baseline's
+    """``out[key]`` updated with the competing explanations (:func:`learn.explanations.hypotheses.explain_many`, the
+    measured per-mode scatter as each mode's standard deviation) of each item ``(key, frequencies at the baseline's
     conditions (m,), damping ratios (m,), row whose shapes to use)`` against the baseline medians."""
     ref = result.reference
     sens = model.sensitivity
@@ -147,7 +147,7 @@ def event_verdicts(result: SeriesResult, events: list, model, beam_x_m=None) -> 
 
 
 def _network_verdicts(result: SeriesResult, model, beam_x_m, alarms: list, out: dict) -> dict:
-    """The network's verdicts of the alarms (``network``) by :func:`learn.classify.classify_many` against the
+    """The network's verdicts of the alarms (``network``) by :func:`learn.pairs.classify.classify_many` against the
     whole baseline period (its scatter the normal variation; ``network_baselines``: how many tests), else, when
     classify refuses that, against the baseline test nearest the baseline median (``network_baseline``)."""
 

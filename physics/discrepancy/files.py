@@ -26,8 +26,8 @@ from physics.discrepancy.pairing import failed_noise_check
 from physics.discrepancy.workflow import DiscrepancyResult, analyse, check_candidates
 from physics.errors import ConfigError, FileFormatError
 from physics.identification import identify_frf
-from physics.io import (MODAL, atomic_write_bytes, modal_data_from_dict, modal_or_frf, number_list, prepare_measured,
-                        read_frf, read_json, reference_position_m, sensor_labels, to_jsonable)
+from physics.io import (MODAL, atomic_write_bytes, figure_png, modal_data_from_dict, modal_or_frf, number_list,
+                        prepare_measured, read_frf, read_json, reference_position_m, sensor_labels, to_jsonable)
 
 __all__ = ["EXAMPLE", "MIN_LINE_SNR", "NOISE_LINES", "analyse_file", "assumed_noise", "estimated_noise",
            "lines_above_noise", "load_measurement", "measured_test_notes", "measurement_mesh"]
@@ -87,7 +87,7 @@ def load_measurement(path, beam: Beam, n_modes=None) -> tuple[Measurement, objec
     frf = read_frf(path)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        # as classify identifies a beam file's test (learn.measured.identify_band): LSCF over its band_hz
+        # as classify identifies a beam file's test (learn.pairs.measured.identify_band): LSCF over its band_hz
         ident = identify_frf(frf, n_modes=n_modes, band_hz=beam.band_hz)
     est = ident.estimate
     rec = ident.frf  # receptance, band-limited as identified
@@ -200,12 +200,6 @@ def _figures(res: DiscrepancyResult, recal: ModeResiduals, meas: Measurement,
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    def png(fig):
-        buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=110)
-        plt.close(fig)
-        return buf.getvalue()
-
     out = {}
     fig, ax = plt.subplots(figsize=(7, 4))
     modes = np.arange(1, meas.n_modes + 1)
@@ -222,7 +216,7 @@ def _figures(res: DiscrepancyResult, recal: ModeResiduals, meas: Measurement,
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    out["frequency_error.png"] = png(fig)
+    out["frequency_error.png"] = figure_png(fig)
     if meas.frf is not None:
         n_resp, n_ref = meas.frf.shape[:2]
         fig, axes = plt.subplots(n_resp, n_ref, figsize=(4 + 3 * n_ref, 2.2 * n_resp), squeeze=False, sharex=True)
@@ -239,7 +233,7 @@ def _figures(res: DiscrepancyResult, recal: ModeResiduals, meas: Measurement,
         for ax in axes[-1]:
             ax.set_xlabel("frequency (Hz)")
         fig.tight_layout()
-        out["frf_overlay.png"] = png(fig)
+        out["frf_overlay.png"] = figure_png(fig)
     return out
 
 

@@ -2,7 +2,7 @@
 with its likely cause (a spurious pole, a mode below the band, a mode missed) instead of a calibration fitted to it.
 
 The rule that pairs is given (:data:`PairingRule`): ``beam-damage discrepancy`` passes the one ``classify`` uses,
-:func:`learn.measured.pair_modes_by_frequency` (frequency order kept, a pairing beyond a factor 1.35 never kept, a
+:func:`learn.pairs.measured.pair_modes_by_frequency` (frequency order kept, a pairing beyond a factor 1.35 never kept, a
 MAC below 0.5 never kept with two or more sensors); without one, :func:`physics.discrepancy.model.pair_modes_by_mac`
 pairs every measured mode (largest MAC, else nearest frequency after the median ratio).
 """

@@ -10,13 +10,14 @@ removed and the target is left as it was; a full disk (ENOSPC, EDQUOT) becomes a
 from __future__ import annotations
 
 import contextlib
+import io
 import os
 import tempfile
 from pathlib import Path
 
 from physics.errors import DISK_FULL_ERRNOS, DiskFullError
 
-__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text"]
+__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "figure_png"]
 
 
 def _umask() -> int:
@@ -73,3 +74,13 @@ def atomic_write_bytes(path, data: bytes) -> None:
 def atomic_write_text(path, text: str) -> None:
     """Text version of :func:`atomic_write_bytes` (UTF-8)."""
     atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def figure_png(fig, **savefig) -> bytes:
+    """The PNG (110 dpi; ``savefig`` passed on, e.g. ``bbox_inches="tight"``) of a matplotlib figure, then closed."""
+    import matplotlib.pyplot as plt
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110, **savefig)
+    plt.close(fig)
+    return buf.getvalue()

@@ -9,7 +9,7 @@ from datagen.config import load_config, merge
 from datagen.damage import DAMAGE_MODELS
 from datagen.dataset import Dataset
 from datagen.generation import generate
-from learn.features import labels
+from learn.network.features import labels
 from physics.effects import point_mass_matrix
 from physics.errors import ConfigError
 from physics.fem import beam_model
@@ -113,7 +113,7 @@ def test_the_damage_section_takes_the_keys_of_its_kind():
 def test_mass_sensitivities_are_the_displacement_squared_of_the_cantilever_modes():
     """beam_sensitivity(kind="mass_change") on a rigid clamp: ``d ln f_r / d mu = -(1/2) W_r(x)^2`` to first
     order, averaged over each element (the mass of a unit size spreads over it; 5-point Gauss)."""
-    from learn.sensitivity import beam_sensitivity
+    from learn.explanations.sensitivity import beam_sensitivity
 
     sens = beam_sensitivity("beam5", None, kind="mass_change")
     L, E = sens.length_m, sens.n_elements
@@ -216,9 +216,9 @@ def test_a_loss_from_a_bolted_mass_is_bounded_by_that_mass(tmp_path):
 def test_a_ten_percent_mass_loss_is_called_a_change_with_its_sign_by_the_classical_methods(tmp_path):
     """Every frequency rises: DLAC, MDLAC and sensitivity updating (mass sensitivities) report a negative size, a
     mass lost, above their detection threshold, instead of 'undamaged'."""
-    from learn.classical import run_classical
-    from learn.features import load_pairs
-    from learn.sensitivity import beam_sensitivity
+    from learn.explanations.classical import run_classical
+    from learn.network.features import load_pairs
+    from learn.explanations.sensitivity import beam_sensitivity
 
     root = tmp_path / "loss"
     generate(root, merge({**QUIET, "damage": {"kind": "mass_change", "mass_ratio": [-0.1, -0.1],

@@ -149,7 +149,7 @@ def test_a_subset_of_lines_has_exactly_the_values_of_the_full_frf(tmp_path):
 
 def test_loader_maps_log_magnitudes_onto_a_grid_from_the_lines_it_needs(reference):
     from datagen.torchdata import make_loader
-    from learn.features import grid_weights
+    from learn.network.features import grid_weights
 
     ds = Dataset(reference)
     W = grid_weights(ds.omega_rad_s, np.geomspace(60.0, 4800.0, 20))[0]

@@ -170,8 +170,8 @@ band_hz = [20.0, 100.0]
 def test_a_band_holding_fewer_modes_than_classify_needs_is_refused_up_front(tmp_path, capsys):
     """The free-free bar's first bending mode is (4.7300)^2 sqrt(EI/m) / (2 pi L^2) = 53.17 Hz, its second
     146.6 Hz: a 20-100 Hz band holds one; generate refuses before simulating, and train refuses such a dataset
-    before reading it, with classify's rule (learn.mode_count)."""
-    from learn.mode_count import MIN_MODES
+    before reading it, with classify's rule (learn.network.mode_count)."""
+    from learn.network.mode_count import MIN_MODES
 
     (tmp_path / "bar.toml").write_text(BAR_ONE_MODE)
     f1 = 4.7300 ** 2 * np.sqrt(700.0 / 3.14) / (2 * np.pi)

@@ -103,7 +103,7 @@ def test_the_accelerance_uff_is_compared_in_the_band_above_its_noise(test_files)
     around the antiresonances left out): EI/m within 0.1 % of the truth's (frequencies), EI and mass each within
     2.5 % and two of their stds (the one sensor's FRF levels; +1.3 %, -1.8 %, +1.7 % on seeds 0-2, std 1.5 %;
     with the floor's lines compared both came out 6 % low) and chi2/dof below 1.5."""
-    from learn.measured import pair_modes_by_frequency
+    from learn.pairs.measured import pair_modes_by_frequency
     from physics import discrepancy as dsc
     from physics.beam import load_beam
 

@@ -91,9 +91,9 @@ def _frf_figure(path):
 
 
 def _evaluate_figures(out_dir):
-    """learn.evaluate.figures of two methods on 200 synthetic pairs."""
-    from learn.classical import MethodOutput
-    from learn.evaluate import figures
+    """learn.network.evaluate.figures of two methods on 200 synthetic pairs."""
+    from learn.explanations.classical import MethodOutput
+    from learn.network.evaluate import figures
 
     rng = np.random.default_rng(1)
     n = 200

@@ -38,7 +38,7 @@ def bar(tmp_path_factory):
 
 def test_a_free_free_bar_is_simulated_on_its_own_test(bar):
     from datagen.dataset import Dataset
-    from learn.features import beam_of_manifest, labels
+    from learn.network.features import beam_of_manifest, labels
 
     ds = Dataset(bar / "data")
     lay = ds.manifest["layout"]
@@ -182,8 +182,8 @@ def test_a_pair_outside_the_training_data_names_the_features_that_put_it_there(b
     """Modal data of an intact pair whose mode-2 frequency rises 10 % alone (no slit or day change of the training
     does that): outside, with df2 the largest term of the squared distance; the terms of every feature sum to it."""
     from datagen.dataset import Dataset
-    from learn.features import feature_names, modal_features
-    from learn.model_dir import load_model
+    from learn.network.features import feature_names, modal_features
+    from learn.network.model_dir import load_model
     from physics.io import ModalData, write_modal_json
 
     ds = Dataset(bar / "data")
@@ -228,9 +228,9 @@ def test_a_complete_dataset_of_a_beam_file_with_a_band_resumes(bar, capsys):
 def test_mirror_ambiguous_locations_are_scored_on_the_half_beam(sensors, method, folded):
     """On a pinned-pinned beam every answer at the mirror image L - x of the truth: right for a method that reads
     frequencies alone or one sensor (scored folded, as classify answers), wrong for the network reading shapes."""
-    from learn.classical import MethodOutput
-    from learn.evaluate import metrics
-    from learn.features import BeamSpec
+    from learn.explanations.classical import MethodOutput
+    from learn.network.evaluate import metrics
+    from learn.network.features import BeamSpec
     from physics.beam import beam_from_dict
     from physics.layout import layout_of
 

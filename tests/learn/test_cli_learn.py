@@ -12,7 +12,7 @@ from datagen.config import load_config, merge
 from datagen.generation import generate
 from experiments.cli import main
 from experiments.cli.cmd_classify import KEYS
-from learn.features import map_frf_to_grid
+from learn.network.features import map_frf_to_grid
 from physics.io import MeasuredFRF, ModalData, write_frf_npz, write_modal_json
 
 
@@ -76,7 +76,7 @@ def test_train_writes_a_complete_model_directory(tiny):
 
 def test_load_pairs_reads_format_2_in_chunks(tiny):
     from datagen.dataset import Dataset
-    from learn.features import GRID_RAD_S, labels, load_pairs
+    from learn.network.features import GRID_RAD_S, labels, load_pairs
 
     ds = Dataset(tiny / "data")
     pairs = load_pairs(tiny / "data", frfs=("measured",), chunk=7)       # chunks straddle the 100-sample shards
@@ -518,7 +518,7 @@ def test_the_printed_verdict_the_json_and_the_written_file_are_one_verdict(tiny,
     from systems import write_renumbered_uff
 
     from datagen.dataset import Dataset
-    from learn.model_dir import load_model
+    from learn.network.model_dir import load_model
 
     if kind == "modal json":
         files = _modal_files(tiny, 0.4)
@@ -566,9 +566,9 @@ def test_a_pair_far_outside_the_training_data_gets_finite_network_numbers_and_no
     assert 0.0 <= net["probability_damaged"] <= 1.0
     assert np.isfinite(net["size"]) and np.isfinite(net["size_std"])
     # the estimator itself when its network's outputs overflow (as a network's may on such pairs)
-    import learn.estimator
-    from learn.forward import forward
-    from learn.model_dir import load_model
+    import learn.network.estimator
+    from learn.network.forward import forward
+    from learn.network.model_dir import load_model
 
     est = load_model(modal_model).networks["modal"]
 
@@ -576,7 +576,7 @@ def test_a_pair_far_outside_the_training_data_gets_finite_network_numbers_and_no
         with np.errstate(over="ignore", invalid="ignore"):
             return {k: v * 1e308 * 10 for k, v in forward(weights, x).items()}   # +-inf (and NaN where 0 * inf)
 
-    monkeypatch.setattr(learn.estimator, "forward", overflowing)
+    monkeypatch.setattr(learn.network.estimator, "forward", overflowing)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         d = est.predict_details(np.zeros((2, est.n_features_in_)))

@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 
 from experiments.second_sim.fem import Beam, PointMass, Slit, assemble, modes
-from learn.features import BeamSpec
+from learn.network.features import BeamSpec
 from datagen.damage import DAMAGE_MODELS, applies_to, damage_defaults
-from learn.shapes import shape_changes
-from learn.hypotheses import BASE_HYPOTHESES, _support_curves, kind_explanation, summary, weigh
-from learn.sensitivity import beam_sensitivity
+from learn.explanations.shapes import shape_changes
+from learn.explanations.hypotheses import BASE_HYPOTHESES, _support_curves, kind_explanation, summary, weigh
+from learn.explanations.sensitivity import beam_sensitivity
 
 L, EI, M = 0.6095, 26.9, 0.15792 / 1.219
 KR_REL = 948.7                                     # k_r L / EI of the nominal root spring (the models' default)
@@ -116,7 +116,7 @@ def test_two_explanations_the_modes_cannot_separate_are_said_so(models):
 
 
 def test_pairs_weighed_in_one_batch_get_what_each_gets_alone(models):
-    from learn.hypotheses import weigh_many
+    from learn.explanations.hypotheses import weigh_many
 
     kinds, support, _ = models
     Y = np.stack([shifts(CASES[t]) for t in ("slit", "support_change", "intact")])
@@ -147,7 +147,7 @@ def test_a_change_no_explanation_describes_is_said_and_gets_no_damage_interval(m
     """Mode 2 up by 1 % while modes 1, 3, 4 fall by 0.5 %: no slit, mass, support or temperature does that; the
     most likely explanation misses a mode by more than FIT_LIMIT std, the summary says no explanation fits, and
     the slit reports no interval rather than a narrow one. The true slit of CASES fits."""
-    from learn.hypotheses import FIT_LIMIT
+    from learn.explanations.hypotheses import FIT_LIMIT
 
     rows = weighed(models, np.array([-0.005, 0.01, -0.005, -0.005]))
     assert not rows[0].fits and rows[0].max_misfit_std > FIT_LIMIT
@@ -161,7 +161,7 @@ def test_a_change_no_explanation_describes_is_said_and_gets_no_damage_interval(m
 
 
 def test_the_verdict_says_when_its_sources_disagree():
-    from learn.verdict import agreement
+    from learn.pairs.verdict import agreement
 
     net, cl = {"damaged": True}, {"damaged": False, "method": "DLAC"}
     hyp = [{"name": "intact", "probability": 0.51, "fits": True}]
@@ -176,7 +176,7 @@ def test_the_verdict_says_when_its_sources_disagree():
 def _model(damage: dict):
     """A model's beam and config as the explanations read them: beam 5 on the default root spring, trained on data
     of the generator config's ``damage`` section."""
-    from learn.model_dir import TrainedModel
+    from learn.network.model_dir import TrainedModel
 
     spec = BeamSpec("beam5", L, ("2:y", "3:y", "4:y", "5:y"), "iirs")
     return TrainedModel("model", {"beam": spec.to_dict(), "generator_config": {"damage": damage},
@@ -188,7 +188,7 @@ def test_the_explanations_prior_and_spread_follow_the_generator_config():
     a mass change's signed mass ratios) and averages its sensitivities over the lengths its data spread over; the
     other kinds keep their defaults."""
     from datagen.damage.slit import hinge_flexibility
-    from learn.hypotheses import kind_explanations
+    from learn.explanations.hypotheses import kind_explanations
 
     slit_cfg = {**damage_defaults("slit"), "ei_loss": [0.1, 0.5], "width_m": [0.002, 0.01]}
     kinds = kind_explanations(_model(slit_cfg))
@@ -212,7 +212,7 @@ def test_the_explanations_prior_and_spread_follow_the_generator_config():
 def test_the_mass_change_intervals_cover_a_simulated_mass(x_over_L, ratio):
     """A point mass added (or, carried by the baseline, lost) in the independent simulator: the mass change's 95 %
     intervals of place and signed size, from a model trained on point masses within +-5 %, hold the true ones."""
-    from learn.hypotheses import kind_explanations
+    from learn.explanations.hypotheses import kind_explanations
 
     kinds = kind_explanations(_model({**damage_defaults("mass_change"), "width_fraction": [0.0, 0.0]}))
     spec = BeamSpec("beam5", L, ("2:y", "3:y", "4:y", "5:y"), "iirs")
@@ -271,8 +271,8 @@ def test_a_kind_registered_anywhere_is_weighed_described_and_separated(stiffenin
     """No kind is written into learn: a kind added to DAMAGE_MODELS gets its explanation (its prior from the
     model's config, its sensitivities from its perturbs), its intervals, its separating measurement in the summary,
     counts as damage in the verdict's agreement and speaks its own prose in the verdict."""
-    from learn.hypotheses import kind_explanations
-    from learn.verdict import DamageWords, _classical_sentence, _damage_sentence, agreement
+    from learn.explanations.hypotheses import kind_explanations
+    from learn.pairs.verdict import DamageWords, _classical_sentence, _damage_sentence, agreement
 
     kinds = kind_explanations(_model({"kind": stiffening, "theta": [0.0, 0.015]}))
     assert set(kinds) >= {"slit", "mass_change", stiffening}
@@ -301,7 +301,7 @@ def test_a_kind_registered_anywhere_is_weighed_described_and_separated(stiffenin
 def test_a_kind_is_offered_only_on_the_sections_it_exists_on():
     """A face-core debond needs faces on a core: a model of a solid steel bar weighs no debond, a model of the
     thesis's sandwich beam does; every other kind is weighed on both."""
-    from learn.hypotheses import kind_explanations
+    from learn.explanations.hypotheses import kind_explanations
 
     solid = _model(damage_defaults("slit"))
     solid.config["generator_config"]["beam"] = {"name": "bar", "section": "rectangular", "length_m": L,

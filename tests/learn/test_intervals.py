@@ -1,10 +1,10 @@
-"""The network's 68 % / 95 % intervals (learn.intervals) against closed forms."""
+"""The network's 68 % / 95 % intervals (learn.network.intervals) against closed forms."""
 
 import numpy as np
 import pytest
 from scipy.stats import norm
 
-from learn.intervals import (
+from learn.network.intervals import (
     LEVELS,
     distribution_interval,
     fit_curves,

@@ -8,13 +8,13 @@ import torch
 from sklearn.base import clone
 from sklearn.metrics import roc_auc_score
 
-from learn.classical import cawley_adams, dlac, mdlac, sensitivity_updating
-from learn.estimator import DamageClassifier, fit_calibration
-from learn.evaluate import reliability, roc_auc
-from learn.features import BeamSpec, curvatures, map_frf_to_grid, split_by_specimen
-from learn.shapes import real_shapes
-from learn.sensitivity import beam_sensitivity
-from learn.model_dir import MODEL_FORMAT, TrainedModel, load_model, save_model
+from learn.explanations.classical import cawley_adams, dlac, mdlac, sensitivity_updating
+from learn.network.estimator import DamageClassifier, fit_calibration
+from learn.network.evaluate import reliability, roc_auc
+from learn.network.features import BeamSpec, curvatures, map_frf_to_grid, split_by_specimen
+from learn.explanations.shapes import real_shapes
+from learn.explanations.sensitivity import beam_sensitivity
+from learn.network.model_dir import MODEL_FORMAT, TrainedModel, load_model, save_model
 from physics.errors import BeamDamageError
 from physics.fem import beam_model
 from physics.modal import undamped_modes
@@ -163,7 +163,7 @@ def test_model_directory_round_trip_with_weights_only(tmp_path):
     with np.load(tmp_path / "weights-modal.npz", allow_pickle=False) as z:
         assert "norm.mean" in z.files and "net.trunk.0.weight" in z.files
     model = load_model(tmp_path)
-    assert model.networks["modal"].model_ is None                      # it answers in NumPy (learn.forward)
+    assert model.networks["modal"].model_ is None                      # it answers in NumPy (learn.network.forward)
     np.testing.assert_allclose(model.networks["modal"].predict_proba(X), est.predict_proba(X), atol=1e-6)
     np.testing.assert_allclose(model.networks["modal"].predict_details(X).location_distribution,
                                est.predict_details(X).location_distribution, atol=1e-6)
@@ -212,7 +212,7 @@ def test_size_spread_factors_give_each_level_its_coverage():
     """Transformed sizes scattered about the head's means with heavy tails (a std of 0.4 for 90 % of the pairs, 2.0
     for 10 %), a head claiming 0.1: each level's factor makes its interval hold its share, the 95 % factor larger
     than a Gaussian's (1.96 / 1.0 times the 68 % one)."""
-    from learn.size import fit_size_scales, read_size_scales
+    from learn.network.size import fit_size_scales, read_size_scales
 
     rng = np.random.default_rng(0)
     mu = rng.uniform(-3, 1, 20000)
@@ -227,7 +227,7 @@ def test_size_spread_factors_give_each_level_its_coverage():
 def test_a_signed_size_transform_keeps_the_sign_and_its_spread_covers():
     """asinh(size / 0.01): signed sizes round-trip, the one-sigma interval's half width is the reported std, and the
     std factor fitted on sizes scattered by 0.3 in the transformed space covers 68 % of them (both signs)."""
-    from learn.size import SizeTransform, fit_size_scales
+    from learn.network.size import SizeTransform, fit_size_scales
 
     tf = SizeTransform.parse("asinh:0.01")
     sizes = np.array([-0.2, -0.01, -1e-4, 0.0, 0.003, 0.15])
@@ -250,7 +250,7 @@ def test_a_signed_size_transform_keeps_the_sign_and_its_spread_covers():
 def test_modal_features_ignore_a_global_stiffness_or_mass_scale():
     """A global EI (or mass) factor moves every frequency by one factor and no shift, shape or curvature: the
     features of an independent FE pair are the same for EI x 1.2."""
-    from learn.features import modal_features
+    from learn.network.features import modal_features
 
     p = beam_preset("beam5")
     feats = []
@@ -270,7 +270,7 @@ def test_modal_features_ignore_a_global_stiffness_or_mass_scale():
 def test_a_missing_mode_or_unpaired_shapes_put_a_pair_outside_the_training_data():
     """Mode 2 missed (modes 1, 3, 4, 5 taken as 1..4): a frequency ratio far from the nominal beam's; swapped
     shapes: MAC below 0.8. A clean pair of the nominal beam gives no reason."""
-    from learn.measured import mode_checks, nominal_ratio_range
+    from learn.pairs.measured import mode_checks, nominal_ratio_range
 
     sens = beam_sensitivity("beam5", 948.7)
     p = beam_preset("beam5")
@@ -315,7 +315,7 @@ def test_damage_classifier_follows_scikit_learn_conventions():
 def test_modes_are_paired_with_the_nominal_beam_by_frequency():
     """Modes 1, 2, 4 of a beam 5 % stiffer than nominal with shear (mode 4 8 % low) -> [0, 1, 3]; a spurious
     pole between modes 1 and 2 pairs with none; the order of the input is kept; a band cut -> [0, 1]."""
-    from learn.measured import pair_modes_by_frequency
+    from learn.pairs.measured import pair_modes_by_frequency
 
     nominal = beam_sensitivity("beam5", 948.7).frequencies_hz        # 19.9, 125, 349, 684 Hz
     f = nominal * np.sqrt(1.05) * np.array([1.0, 1.0, 1.0, 0.92])
@@ -335,7 +335,7 @@ def test_modes_are_paired_with_the_nominal_beam_by_frequency():
 def test_every_classical_method_localises_a_slit_on_three_of_the_four_modes(modes):
     """run_classical on the modes present (the sensitivities of those modes alone) places slits of an independent
     finer mesh in the right element, and a pair without change gives the smallest scores."""
-    from learn.classical import run_classical
+    from learn.explanations.classical import run_classical
 
     sens = beam_sensitivity("beam5", 948.7)
     sub = sens.modes(modes)
@@ -384,9 +384,9 @@ def test_support_head_learns_a_support_change_and_survives_the_model_directory(t
 def test_a_baseline_damped_far_outside_the_training_is_named():
     """The model records the central 99 % of its training pairs' baseline damping ratios; a test damped beyond twice
     that range gets one warning naming the modes, and a test without damping (frequencies only) none."""
-    from learn.pair_inputs import damping_warning
-    from learn.measured import ModalPair
-    from learn.training import damping_ratio_range
+    from learn.pairs.inputs import damping_warning
+    from learn.pairs.measured import ModalPair
+    from learn.network.training import damping_ratio_range
     from physics.modal import eigenvalues_from_modal
 
     rng = np.random.default_rng(0)

@@ -200,22 +200,22 @@ def test_regression_r2_is_one_on_a_noise_free_linear_drift():
 def test_explanations_weigh_the_measured_scatter_mode_by_mode(monkeypatch):
     """A 1 % change of mode 2 alone: beyond 0.1 % noise it is no intact pair; with mode 2 measured to scatter 1.5 %
     between baseline tests it is."""
-    from learn.features import BeamSpec
-    from learn.hypotheses import explain_many
-    from learn.measured import ModalPair
-    from learn.sensitivity import beam_sensitivity
+    from learn.network.features import BeamSpec
+    from learn.explanations.hypotheses import explain_many
+    from learn.pairs.measured import ModalPair
+    from learn.explanations.sensitivity import beam_sensitivity
 
     import functools
 
-    import learn.hypotheses
-    import learn.model_dir
+    import learn.explanations.hypotheses
+    import learn.network.model_dir
 
-    coarse = functools.partial(learn.hypotheses.support_curve, n_elements=8)
-    monkeypatch.setattr(learn.hypotheses, "support_curve", coarse)
-    learn.hypotheses._support_curves.cache_clear()
+    coarse = functools.partial(learn.explanations.hypotheses.support_curve, n_elements=8)
+    monkeypatch.setattr(learn.explanations.hypotheses, "support_curve", coarse)
+    learn.explanations.hypotheses._support_curves.cache_clear()
     L, EI, M, KR = 0.6095, 26.9, 0.15792 / 1.219, 948.7
     sens = beam_sensitivity((L, EI, M), KR, n_elements=8)
-    monkeypatch.setattr(learn.model_dir, "sensitivity_of", lambda beam, kr, truth, gen: beam_sensitivity(
+    monkeypatch.setattr(learn.network.model_dir, "sensitivity_of", lambda beam, kr, truth, gen: beam_sensitivity(
         (L, EI, M), KR, n_elements=8, kind=gen["damage"]["kind"]))        # a coarse grid: a fast test
     model = SimpleNamespace(beam=BeamSpec("beam5", L, ("2:y", "3:y", "4:y", "5:y"), "iirs"), sensitivity=sens,
                             config={"root_spring_relative": KR, "truth_beam": {"EI_Nm2": EI, "length_m": L,
@@ -229,7 +229,7 @@ def test_explanations_weigh_the_measured_scatter_mode_by_mode(monkeypatch):
     assert assumed["hypotheses"][0]["name"] != "intact"
     assert measured["hypotheses"][0]["name"] == "intact"
     assert measured["frequency_change_std"] == [0.001, 0.015, 0.001, 0.001]
-    learn.hypotheses._support_curves.cache_clear()
+    learn.explanations.hypotheses._support_curves.cache_clear()
 
 
 def test_pca_removes_the_factors_that_explain_95_percent_and_keeps_them_in_every_held_out_fit():

@@ -14,7 +14,7 @@ def shortcut_shape_std(cfg, level, floor, specimens, seed):
     from datagen.batch_inputs import draw_batch
     from datagen.pipeline import measure_modes, simulate_batch
     from datagen.setup import get_setup
-    from learn.noise_calibration import robust_std
+    from learn.pairs.noise_calibration import robust_std
 
     meas = {"frf_noise": level, "frf_noise_floor": floor, "modal_noise_scale": [1.0, 1.0],
             **{f"{q}_scatter": [0.0, 0.0] for q in ("frequency", "damping", "shape", "gain")}}
@@ -31,7 +31,7 @@ def shortcut_shape_std(cfg, level, floor, specimens, seed):
 @pytest.mark.slow
 def test_calibrated_shape_noise_matches_the_identification_of_the_test():
     from datagen.config import load_config, merge
-    from learn.noise_calibration import calibrate_test, identification_errors, robust_std
+    from learn.pairs.noise_calibration import calibrate_test, identification_errors, robust_std
 
     cfg = merge({"beam": BAR}, base=load_config("training"))
     calibrated = merge({"measurement": calibrate_test(cfg, specimens=8)}, base=cfg)

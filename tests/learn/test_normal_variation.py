@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from experiments.second_sim.fem import Beam, PointMass, assemble, modes
-from learn.features import BeamSpec
-from learn.normal_variation import FREQUENCY_STD_FLOOR, NormalVariation, measure
+from learn.network.features import BeamSpec
+from learn.pairs.normal_variation import FREQUENCY_STD_FLOOR, NormalVariation, measure
 from physics.errors import BeamDamageError
 from physics.io import ModalData
 
@@ -110,7 +110,7 @@ def test_a_spurious_pole_6_percent_above_mode_5_of_a_one_accelerometer_cantileve
     a spurious pole at 1230 Hz besides mode 5, 4 hold it instead of mode 5. The nominal rule (35 %, half the gap to
     mode 4) pairs 1230 Hz, nearer 1251 Hz, with mode 5 in 24 of them; against the baselines' own mode 5 (the
     median of the 31 that hold it, computed here) no pole more than 5 % from it is paired."""
-    from learn.measured import BASELINE_PAIR_BAND, modal_pair
+    from learn.pairs.measured import BASELINE_PAIR_BAND, modal_pair
     from physics.layout import Layout
 
     layout = Layout("clamped-free", 0.6, (0.6,), 0.6, (5.0, 1400.0), (0.0, 0.3, 0.6), (1, 2, 3, 4, 5),

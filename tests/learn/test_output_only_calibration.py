@@ -3,18 +3,18 @@ mode says, shape errors measured as a dataset draws them, the std model, a calib
 resume, and the one-line warning when the modes were identified otherwise than the training data assumes."""
 
 import json
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from learn.noise_calibration import mode_errors, robust_std
+from learn.network.model_dir import TrainedModel
+from learn.pairs.noise_calibration import mode_errors, robust_std
 
 
 def ssi_scatter(record_length_s, records=16, f_hz=20.0, zeta=0.01, fs_hz=128.0, noise=0.01):
     """Relative frequency and damping errors of SSI-cov on ``records`` two-channel records of one mode (NaN where
     no pole was stable)."""
-    from learn.output_only_calibration import response_records
+    from learn.pairs.output_only_calibration import response_records
     from physics.errors import ConvergenceError
     from physics.identification import identify_records
     from physics.io.timedata import TimeRecords
@@ -127,12 +127,12 @@ def test_generate_output_only_calibrates_once_and_reuses_it_on_resume(tmp_path, 
 
 
 def model_of(identification):
-    return SimpleNamespace(config={"generator_config": {"measurement": {"identification": identification}}})
+    return TrainedModel("m", {"generator_config": {"measurement": {"identification": identification}}})
 
 
 def test_identification_warning_names_a_skew_in_one_line_and_is_silent_on_a_match():
-    from learn.pair_inputs import identification_warning
-    from learn.measured import IDENTIFICATION
+    from learn.pairs.inputs import identification_warning
+    from learn.pairs.measured import IDENTIFICATION
 
     frf, oma, fixed = model_of(dict(IDENTIFICATION)), model_of({"method": "ssi", "n_modes": 4}), model_of(None)
     assert identification_warning(oma, False, ["ssi", "ssi"]) is None
@@ -158,7 +158,7 @@ def test_classify_reads_the_method_of_an_output_only_modal_json(tmp_path):
 @pytest.mark.slow
 def test_calibrated_output_only_noise_falls_with_record_length_on_the_thesis_test():
     from datagen.config import calibrated_modal_std, load_config, merge, output_only_variables
-    from learn.output_only_calibration import calibrate_output_only
+    from learn.pairs.output_only_calibration import calibrate_output_only
 
     cfg = load_config("training")
     meas = merge({"measurement": calibrate_output_only(cfg, specimens=4)}, base=cfg)["measurement"]

@@ -1,5 +1,5 @@
-"""The exact refinement of a damage kind's explanation (learn.refine) on changes computed by the independent simulator
-(experiments/second_sim), and the Birge widening of its intervals."""
+"""The exact refinement of a damage kind's explanation (learn.explanations.refine) on changes computed by the
+independent simulator (experiments/second_sim), and the Birge widening of its intervals."""
 
 from dataclasses import replace
 
@@ -8,10 +8,10 @@ import pytest
 
 from datagen.damage import damage_defaults
 from experiments.second_sim.fem import Beam, PointMass, assemble, modes
-from learn.features import BeamSpec
-from learn.hypotheses import _support_curves, kind_explanation, summary, weigh
-from learn.refine import ExactKind, kind_parameters, nominal_beam
-from learn.sensitivity import beam_sensitivity
+from learn.network.features import BeamSpec
+from learn.explanations.hypotheses import _support_curves, kind_explanation, summary, weigh
+from learn.explanations.refine import ExactKind, kind_parameters, nominal_beam
+from learn.explanations.sensitivity import beam_sensitivity
 
 L, EI, M = 0.6095, 26.9, 0.15792 / 1.219
 KR_REL = 948.7

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from experiments.cli import main
-from learn.features import BeamSpec
-from learn.measured import on_model_dofs, pair_modes_by_frequency, differences_from_model, unexcited_modes
+from learn.network.features import BeamSpec
+from learn.pairs.measured import on_model_dofs, pair_modes_by_frequency, differences_from_model, unexcited_modes
 from physics.beam import beam_from_dict
 from physics.io import MeasuredFRF
 from physics.layout import layout_of

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from learn.monitor import IdentificationSettings, IdentifiedModes, identify_test, reference_modes, track_modes
-from learn.measured import identify_modes
+from learn.pairs.measured import identify_modes
 from learn.monitor.tracking import MIN_COUNT, identified_by, narrow_bands_hz, refit_missing
-from learn.pair_inputs import refit_frf_modes
+from learn.pairs.inputs import refit_frf_modes
 from physics.identification.measured import read_measured_frf
 from physics.io import MeasuredFRF
 from physics.io.npz import write_frf_npz
@@ -98,7 +98,7 @@ def test_the_narrow_band_refit_finds_a_mode_the_broad_pass_missed(three_mode_frf
 
 
 def test_classify_identifies_a_baseline_mode_again_over_its_own_band(three_mode_frf):
-    """``classify``'s refit with several baselines (learn.pair_inputs.refit_frf_modes): the FRF's 25-Hz mode, left
+    """``classify``'s refit with several baselines (learn.pairs.inputs.refit_frf_modes): the FRF's 25-Hz mode, left
     out of an identification keeping two modes, is found within 5 % of the baselines' 25 Hz; a mode the baselines
     do not hold is not looked for."""
 

@@ -4,8 +4,8 @@ from dataclasses import replace
 
 import pytest
 
-from learn.hypotheses import support_curve
-from learn.features import BeamSpec
+from learn.explanations.hypotheses import support_curve
+from learn.network.features import BeamSpec
 from physics.beam import load_beam
 from physics.errors import ConfigError
 from physics.layout import layout_of

@@ -3,7 +3,7 @@ a mass added or lost, a slit a slit of a hinge flexibility."""
 
 import numpy as np
 
-from learn.verdict import DamageWords, _classical_sentence, _damage_sentence
+from learn.pairs.verdict import DamageWords, _classical_sentence, _damage_sentence
 
 
 def _answer(damaged, size):
@@ -39,7 +39,7 @@ def _six_zone_beam():
     """A 1.2 m beam of six 0.2 m zones (only what the place rule reads of a test: its zone edges)."""
     from types import SimpleNamespace
 
-    from learn.features import BeamSpec
+    from learn.network.features import BeamSpec
 
     return BeamSpec("pp", 1.2, (), "", SimpleNamespace(zones_x_m=(0.0, 0.2, 0.4, 0.6, 0.8, 1.0, 1.2)))
 
@@ -54,7 +54,7 @@ def test_a_flat_or_two_peaked_place_distribution_names_no_place():
     """Zone probabilities 0.25/0.14/0.14/0.14/0.12/0.22 (a pinned-pinned beam missing modes 3 and 6): the best zone
     and its neighbour hold 0.39 < PLACE_MASS and the best zone 0.25 < 2/6; the verdict names zones 1 and 6 (mirror
     images), no x, and the zone it reports is x's own."""
-    from learn.verdict import place_keys
+    from learn.pairs.verdict import place_keys
 
     beam = _six_zone_beam()
     a = _network([0.25, 0.14, 0.14, 0.14, 0.12, 0.22])
@@ -72,7 +72,7 @@ def test_a_flat_or_two_peaked_place_distribution_names_no_place():
 
 def test_a_peaked_place_distribution_keeps_its_place_and_zone_of_x():
     """0.05/0.55/0.25/0.05/0.05/0.05: zones 1-3 hold 0.85 and zone 2 is 3.3 times uniform: the place is x's."""
-    from learn.verdict import place_keys
+    from learn.pairs.verdict import place_keys
 
     a = _network([0.05, 0.55, 0.25, 0.05, 0.05, 0.05], x_over_L=0.25)
     keys = place_keys(a, _six_zone_beam())
@@ -84,7 +84,7 @@ def test_a_peaked_place_distribution_keeps_its_place_and_zone_of_x():
 def test_mirror_zones_count_as_one_place_on_a_beam_read_on_frequencies_alone():
     """0.42/0.05/0.03/0.03/0.05/0.42: two separate peaks, undetermined in general; on a symmetric beam read on
     frequencies alone a zone and its mirror are one place (0.94 held)."""
-    from learn.verdict import place_keys
+    from learn.pairs.verdict import place_keys
 
     a = _network([0.42, 0.05, 0.03, 0.03, 0.05, 0.42], x_over_L=0.08)
     assert place_keys(a, _six_zone_beam())["place_determined"] is False
@@ -94,8 +94,8 @@ def test_mirror_zones_count_as_one_place_on_a_beam_read_on_frequencies_alone():
 def test_the_explanations_are_named_in_words():
     """Registry keys never reach the prose: each kind's label, and the base explanations' words."""
     from datagen.damage import DAMAGE_MODELS
-    from learn.hypotheses import BASE_HYPOTHESES
-    from learn.verdict import explanation_label
+    from learn.explanations.hypotheses import BASE_HYPOTHESES
+    from learn.pairs.verdict import explanation_label
 
     assert explanation_label("mass_change") == "a mass change"
     assert explanation_label("global_stiffness") == "a stiffness change of the whole beam"

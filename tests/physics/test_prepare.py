@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from learn.features import BeamSpec
-from learn.measured import on_model_dofs
+from learn.network.features import BeamSpec
+from learn.pairs.measured import on_model_dofs
 from physics.io import MeasuredFRF, ModalData, prepare_measured, reads_by_reciprocity
 
 QUARTERS = ("2:+Y", "3:+Y", "4:+Y", "5:+Y")

@@ -9,14 +9,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from datagen.damage import DAMAGE_MODELS, DEFAULT_KIND, damage_model
-from learn.classical import MethodOutput
-from learn.evaluate import MIN_DROP
-from learn.features import as_spec
-from learn.intervals import LEVELS
+from learn.explanations.classical import MethodOutput
+from learn.network.evaluate import MIN_DROP
+from learn.network.features import as_spec
+from learn.network.intervals import LEVELS
 from physics.io import dof_positions_text
 
 if TYPE_CHECKING:  # torch: the network is loaded only where one runs
-    from learn.estimator import DamageClassifier
+    from learn.network.estimator import DamageClassifier
 
 __all__ = ["BASE_LABELS", "IN_DISTRIBUTION_PERCENTILE", "PLACE_MASS", "PLACE_PEAK", "DamageWords", "Verdict",
            "agreement", "classical_answer", "classical_verdict", "detectability_threshold", "explanation_label",
@@ -43,7 +43,7 @@ def detectability_threshold() -> float:
 
 
 def network_output(est: DamageClassifier, X, sens, name="network") -> tuple[MethodOutput, object]:
-    """Network answers as a :class:`MethodOutput` plus the full :class:`learn.estimator.DamagePrediction`."""
+    """Network answers as a :class:`MethodOutput` plus the full :class:`learn.network.estimator.DamagePrediction`."""
     d = est.predict_details(X)
     detectable = sens.largest_drop(d.x_over_L, d.size) >= detectability_threshold()
     out = MethodOutput(name, d.probability_damaged, d.probability_damaged >= d.threshold, d.x_over_L,
@@ -71,8 +71,8 @@ def place_keys(answer: dict, beam, mirror: bool = False) -> dict:
     Returns ``{"place_determined", "place_text", "location_zone"[, "location_element"]}``: ``place_text`` says why
     the place is undetermined (a flat spread, or two separate peaks: "zone 1 ... or zone 6 ..., its mirror"), None
     when it is determined or the answer carries no probabilities (a classical method's). ``mirror``: the beam is
-    read on frequencies alone where ``x`` and ``L - x`` fit alike (:func:`learn.mirror.mirrored`): a zone and its
-    mirror count as one place.
+    read on frequencies alone where ``x`` and ``L - x`` fit alike (:func:`learn.explanations.mirror.mirrored`): a zone
+    and its mirror count as one place.
     """
     beam = as_spec(beam)
     edges = np.asarray(beam.zone_edges_m, float)
@@ -129,7 +129,8 @@ def network_answer(d, i, out, beam) -> dict:
 
 
 def interval_keys(intervals: dict, i: int, length_m: float) -> dict:
-    """``x_m_68``, ``x_m_95``, ``size_68``, ``size_95`` of pair ``i`` (:mod:`learn.intervals`), as ``[lo, hi]``."""
+    """``x_m_68``, ``x_m_95``, ``size_68``, ``size_95`` of pair ``i`` (:mod:`learn.network.intervals`), as
+    ``[lo, hi]``."""
     out = {}
     for k in LEVELS:
         out[f"x_m_{k}"] = [float(v) * length_m for v in intervals[f"x_over_L_{k}"][i]]

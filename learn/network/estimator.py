@@ -1,12 +1,13 @@
-"""``DamageClassifier``: a scikit-learn style estimator around :class:`learn.models.DamageNet`.
+"""``DamageClassifier``: a scikit-learn style estimator around :class:`learn.network.models.DamageNet`.
 
 ``fit(X, y, groups)`` standardises the features (statistics of the training part only), holds out a validation part
 by specimen (``groups``), trains the network, and fits a logit scale and bias on the validation logits (Guo et al.'s
 2017 "temperature scaling" with Platt's bias) so that ``predict_proba`` is calibrated, a factor on the size head's
 spread per level so that its 68 % and 95 % intervals cover as they say on the validation pairs called damaged
-(:mod:`learn.size`), and the location's sharpness per level and spread (:mod:`learn.intervals`). Targets ``y`` have
-three columns: damaged (0/1), ``x / L`` of the damage (NaN if intact) and its size (:func:`learn.features.labels`:
-the size of the data's damage kind, 0 if intact), learned through the kind's :class:`learn.size.SizeTransform`.
+(:mod:`learn.network.size`), and the location's sharpness per level and spread (:mod:`learn.network.intervals`). Targets
+``y`` have three columns: damaged (0/1), ``x / L`` of the damage (NaN if intact) and its size
+(:func:`learn.network.features.labels`: the size of the data's damage kind, 0 if intact), learned through the kind's
+:class:`learn.network.size.SizeTransform`.
 
 Missing modes
 -------------
@@ -33,10 +34,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import expit
 
-from learn.features import split_by_specimen
-from learn.forward import check_weights, forward
-from learn.intervals import LEVELS, Z_OF_LEVEL, fit_curves, level_distributions, level_intervals, read_curves
-from learn.size import LOG_SIZE_LIMIT, MAX_SIZE_LOG_STD, SizeTransform, fit_size_scales, read_size_scales
+from learn.network.features import split_by_specimen
+from learn.network.forward import check_weights, forward
+from learn.network.intervals import LEVELS, Z_OF_LEVEL, fit_curves, level_distributions, level_intervals, read_curves
+from learn.network.size import LOG_SIZE_LIMIT, MAX_SIZE_LOG_STD, SizeTransform, fit_size_scales, read_size_scales
 from physics.errors import BeamDamageError
 
 __all__ = ["DamageClassifier", "DamagePrediction", "fit_calibration", "torch_threads"]
@@ -124,7 +125,7 @@ class DamageClassifier:
     ----------
     n_bins : int
         Location bins over ``x / L``.
-    hidden, depth, dropout : network size (:class:`learn.models.DamageNet`)
+    hidden, depth, dropout : network size (:class:`learn.network.models.DamageNet`)
     epochs, batch_size, lr, weight_decay : optimisation (AdamW, cosine schedule)
     loc_sigma_bins : float
         Standard deviation (in bins) of the Gaussian soft location target.
@@ -157,7 +158,8 @@ class DamageClassifier:
         Fewest modes present the network answers on (with ``feature_modes``).
     mirrored : bool
         The network reads a symmetric beam's frequencies alone: its place is known up to ``x <-> L - x``, and
-        the location's sharpness is fitted on the distributions folded onto ``x <= L / 2`` (:mod:`learn.mirror`).
+        the location's sharpness is fitted on the distributions folded onto ``x <= L / 2``
+        (:mod:`learn.explanations.mirror`).
     """
 
     def __init__(self, n_bins=80, hidden=128, depth=3, dropout=0.05, epochs=60, batch_size=256, lr=2e-3,
@@ -278,7 +280,7 @@ class DamageClassifier:
         return np.concatenate([Z, present.astype(float)], axis=1) if self.answers_missing_modes else Z
 
     def _forward(self, A, batch=8192) -> dict:
-        if self.model_ is None:              # a loaded model: its weights in NumPy (learn.forward)
+        if self.model_ is None:              # a loaded model: its weights in NumPy (learn.network.forward)
             if not len(A):
                 return {}
             return {k: np.clip(np.nan_to_num(v, nan=0.0), -RAW_LIMIT, RAW_LIMIT)
@@ -318,7 +320,7 @@ class DamageClassifier:
     def _fit(self, X, y, groups):
         import torch  # torch: training
 
-        from learn.models import DamageNet, loss_terms  # torch: the network
+        from learn.network.models import DamageNet, loss_terms  # torch: the network
 
         X = np.asarray(X, float)
         if X.ndim != 2 or not np.all(np.isfinite(X)):
@@ -564,7 +566,7 @@ class DamageClassifier:
     @classmethod
     def from_state(cls, arrays: dict, meta: dict, device=None) -> "DamageClassifier":
         """The estimator of :meth:`get_state`'s ``(arrays, meta)`` (or an older file's CPU tensors), answering with
-        the NumPy forward pass (:mod:`learn.forward`); ``KeyError`` / ``ValueError`` where they do not match."""
+        the NumPy forward pass (:mod:`learn.network.forward`); ``KeyError`` / ``ValueError`` where they do not match."""
         arrays = {k: np.asarray(v) for k, v in arrays.items()}
         params = dict(meta["params"])
         params["device"] = device

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from learn.intervals import LEVELS, Z_OF_LEVEL
+from learn.network.intervals import LEVELS, Z_OF_LEVEL
 from physics.errors import BeamDamageError
 
 __all__ = ["LOG_SIZE_LIMIT", "MAX_SIZE_LOG_STD", "SizeTransform", "fit_size_scales", "lognormal_std",
@@ -72,7 +72,7 @@ class SizeTransform:
 
 
 def fit_size_scales(t_true, t_mean, t_std) -> dict:
-    """Factor ``k`` per level of :data:`learn.intervals.LEVELS` on the size head's transformed std so that the
+    """Factor ``k`` per level of :data:`learn.network.intervals.LEVELS` on the size head's transformed std so that the
     interval ``inverse(t_mean -+ z k t_std)`` (``z`` the level's normal quantile) holds the level's share of the
     true sizes: the level's quantile of ``|t_true - t_mean| / (z t_std)`` (all arrays (n,), transformed sizes).
     Each level has its own factor: the errors are not Gaussian (most sizes closer than the head says, a few far)."""

@@ -9,7 +9,7 @@ noise of a fraction of each channel's RMS, sampled at :data:`SAMPLING_FACTOR` ti
 Records of :data:`RECORD_LENGTHS_S` at :data:`SENSOR_NOISES` are identified exactly as ``identify`` identifies a
 file of records (:func:`physics.identification.identify_records`, SSI-cov over the test's band, default order),
 the modes paired by frequency with the test's nominal modes as the FRF calibration pairs them, and the errors of
-frequency, damping and shape measured as :func:`learn.noise_calibration.mode_errors` measures unscaled shapes.
+frequency, damping and shape measured as :func:`learn.pairs.noise_calibration.mode_errors` measures unscaled shapes.
 
 Per mode and quantity the robust std is fitted by ``std^2 = ((c n)^2 + g^2) / T + e^2`` of the sensor noise
 ``n`` and the record length ``T`` (s): the estimation errors of an output-only identification fall as
@@ -27,7 +27,7 @@ from threadpoolctl import threadpool_limits
 from datagen.batch_inputs import draw_batch
 from datagen.pipeline import simulate_batch
 from datagen.setup import get_setup
-from learn.noise_calibration import fit_coefficients, mode_errors, on_nominal_modes
+from learn.pairs.noise_calibration import fit_coefficients, mode_errors, on_nominal_modes
 from physics.errors import BeamDamageError
 from physics.frf import pole_residue
 from physics.identification import identify_records
@@ -91,7 +91,7 @@ def response_records(poles, shapes, drive: int, sampling_frequency_hz: float, n_
 def output_only_errors(setup, sim: dict, sensor_noise: float, record_length_s: float, seed):
     """Errors of SSI-cov on the records of every test in ``sim`` (:func:`datagen.pipeline.simulate_batch` of
     ``setup``) at one sensor noise and record length: relative frequency and damping errors (N, m) and shape
-    errors (N, S, m) (:func:`learn.noise_calibration.mode_errors`, unscaled), NaN where a mode was not found;
+    errors (N, S, m) (:func:`learn.pairs.noise_calibration.mode_errors`, unscaled), NaN where a mode was not found;
     N = 2 x specimens; a record holds the next fast FFT length of samples from ``record_length_s``. ``seed``:
     anything :func:`numpy.random.default_rng` takes; record ``i`` draws from ``[*seed, i]``."""
     from scipy.fft import next_fast_len

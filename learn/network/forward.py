@@ -1,9 +1,9 @@
 """The trained network's forward pass in NumPy: what ``classify`` runs on a loaded model.
 
-Training needs torch (:class:`learn.models.DamageNet`, :mod:`learn.estimator`); answering does not: a model
-directory's ``weights-<input>.npz`` holds the same state dict, and :func:`forward` evaluates it as the torch module
-does in evaluation mode (dropout off): ``depth`` layers ``h <- GELU(h W^T + b)`` (the exact, erf-based GELU), then
-the four heads. In float64: the answers agree with torch's float32 ones to about 1e-6.
+Training needs torch (:class:`learn.network.models.DamageNet`, :mod:`learn.network.estimator`); answering does not: a
+model directory's ``weights-<input>.npz`` holds the same state dict, and :func:`forward` evaluates it as the torch
+module does in evaluation mode (dropout off): ``depth`` layers ``h <- GELU(h W^T + b)`` (the exact, erf-based GELU),
+then the four heads. In float64: the answers agree with torch's float32 ones to about 1e-6.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ LOG_STD_MIN, LOG_STD_MAX = -6.0, 1.0
 
 
 def forward(weights: dict, x) -> dict:
-    """Outputs of the network ``weights`` (a state dict of :class:`learn.models.DamageNet` as arrays) for inputs
+    """Outputs of the network ``weights`` (a state dict of :class:`learn.network.models.DamageNet` as arrays) for inputs
     ``x`` (n, d): ``detect`` (n,), ``support`` (n,; 0 without a support head), ``locate`` (n, n_bins),
     ``size_mean`` and ``size_log_std`` (n,)."""
     h = np.asarray(x, float)

@@ -10,7 +10,7 @@ Model directory
                          metrics
 ``weights-<input>.npz``  the network's state dict plus the input normalisation and the training features'
                          statistics, as NumPy arrays (read without pickle; the network answers in NumPy,
-                         :mod:`learn.forward`); a directory written before holds ``weights-<input>.pt``
+                         :mod:`learn.network.forward`); a directory written before holds ``weights-<input>.pt``
                          (``torch.save``, loaded with ``weights_only=True``)
 ``metrics.csv``          test-split metrics of the network(s) and the classical methods
 
@@ -32,10 +32,10 @@ from pathlib import Path
 
 import numpy as np
 
-from datagen.config import recorded_config
-from learn.features import BeamSpec
-from learn.sensitivity import beam_sensitivity
-from learn.verdict import DamageWords, verdict_text
+from datagen.config import RecordedConfig, recorded_config
+from learn.network.features import BeamSpec
+from learn.explanations.sensitivity import beam_sensitivity
+from learn.pairs.verdict import DamageWords, verdict_text
 from physics.beam import load_beam
 from physics.io.inputs import check_input_file
 from physics.errors import BeamDamageError, FileFormatError
@@ -112,15 +112,14 @@ class TrainedModel:
         return spec, beam_x_m
 
     @property
-    def damage_kind(self) -> str:
-        """The damage kind of the training data (``damage.kind`` of its generator config; the default kind when it
-        records none)."""
-        return recorded_config(self.config.get("generator_config")).kind
+    def recorded(self) -> RecordedConfig:
+        """The generator config of the training data (:func:`datagen.config.recorded_config`)."""
+        return recorded_config(self.config.get("generator_config"))
 
     def verdict_text(self, result: dict) -> str:
         """The verdict of one classified pair as a reader sees it, in the words of the model's damage kind
-        (:func:`learn.verdict.verdict_text`: its ``describe`` on the model's truth beam and section)."""
-        gen = recorded_config(self.config.get("generator_config"))
+        (:func:`learn.pairs.verdict.verdict_text`: its ``describe`` on the model's truth beam and section)."""
+        gen = self.recorded
         return verdict_text(result, DamageWords(gen.kind, truth_beam_mapping(self), gen.section))
 
 
@@ -161,8 +160,8 @@ def _weights(path: Path, route: str) -> tuple[dict, Path]:
 
 
 def load_model(model_dir, device=None) -> TrainedModel:
-    """Read a model directory (:func:`_weights`); its networks answer without torch (:mod:`learn.forward`)."""
-    from learn.estimator import DamageClassifier  # scipy.special: the networks' forward pass, where a model is read
+    """Read a model directory (:func:`_weights`); its networks answer without torch (:mod:`learn.network.forward`)."""
+    from learn.network.estimator import DamageClassifier  # scipy.special: the networks' forward pass
 
     path = Path(model_dir)
     cfg_path = path / "config.json"
@@ -228,8 +227,8 @@ def sensitivity_of(beam: BeamSpec, config_root_spring=None, truth_beam: dict | N
 
 
 def truth_numbers(beam: BeamSpec, truth_beam: dict | None = None, generator_config: dict | None = None):
-    """The nominal beam a dataset or model records, as :func:`learn.sensitivity.beam_sensitivity` takes it: its
-    ``(length_m, EI_Nm2, mass_per_length_kg_m, added masses)`` (the added masses of the generator config's beam
+    """The nominal beam a dataset or model records, as :func:`learn.explanations.sensitivity.beam_sensitivity` takes it:
+    its ``(length_m, EI_Nm2, mass_per_length_kg_m, added masses)`` (the added masses of the generator config's beam
     file), or its preset's name when it records none."""
     if truth_beam and "EI_Nm2" in truth_beam:
         masses = tuple((float(p.get("x_m", truth_beam["length_m"])), float(p["mass_kg"]))    # the beam file's

@@ -38,6 +38,6 @@ def sign_aligned(shapes, reference):
 def shape_changes(eigenvectors) -> np.ndarray:
     """Changes of the real unit-norm shapes between the two tests of pairs, the current shape's sign following the
     baseline's (:func:`sign_aligned`, as the modal features take them): ``eigenvectors`` (n, 2, S, m) complex ->
-    (n, S m), sensor-major as :attr:`learn.sensitivity.Sensitivity.shape`."""
+    (n, S m), sensor-major as :attr:`learn.explanations.sensitivity.Sensitivity.shape`."""
     u = real_shapes(np.asarray(eigenvectors, complex))                   # (n, 2, S, m)
     return (sign_aligned(u[:, 1], u[:, 0]) - u[:, 0]).reshape(u.shape[0], -1)

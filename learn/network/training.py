@@ -13,13 +13,13 @@ from tqdm.auto import tqdm
 from datagen.config import recorded_config
 from datagen.damage import damage_model
 from datagen.store import package_version
-from learn.classical import run_classical
-from learn.estimator import DamageClassifier
-from learn.evaluate import figures, metrics, table_rows
-from learn.features import ROUTES, Pairs, feature_modes, features, labels, load_pairs, split_by_specimen
-from learn.model_dir import (DEFAULT_ROUTE, MODEL_FORMAT, TrainedModel, json_default, save_model,
-                             sensitivity_of)
-from learn.verdict import detectability_threshold, network_output
+from learn.explanations.classical import run_classical
+from learn.network.estimator import DamageClassifier
+from learn.network.evaluate import figures, metrics, table_rows
+from learn.network.features import ROUTES, Pairs, feature_modes, features, labels, load_pairs, split_by_specimen
+from learn.network.model_dir import (DEFAULT_ROUTE, MODEL_FORMAT, TrainedModel, json_default, save_model,
+                                     sensitivity_of)
+from learn.pairs.verdict import detectability_threshold, network_output
 from physics.errors import BeamDamageError
 from physics.io import atomic_write_text
 from physics.modal import modal_parameters

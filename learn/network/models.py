@@ -3,12 +3,12 @@
 Heads
 -----
 ``detect``   one logit of "damaged" (calibrated afterwards by a logit scale and bias,
-             :func:`learn.estimator.fit_calibration`).
+             :func:`learn.network.estimator.fit_calibration`).
 ``locate``   logits over ``n_bins`` equal bins of ``x / L`` (a distribution along the beam).
 ``support``  one logit of "the supports changed beyond re-clamping" (an intact specimen, datasets with
              ``specimen.support_change_fraction`` > 0; untrained otherwise).
 ``size``     mean and log standard deviation of the damage size through its kind's ``size_transform``
-             (:class:`learn.size.SizeTransform`, :func:`learn.features.labels`)
+             (:class:`learn.network.size.SizeTransform`, :func:`learn.network.features.labels`)
              (the mean by least squares, the spread by the Gaussian negative log-likelihood of the mean's
              residuals; damaged pairs only).
 """
@@ -20,7 +20,7 @@ import math
 import torch
 from torch import nn
 
-from learn.forward import LOG_STD_MAX, LOG_STD_MIN
+from learn.network.forward import LOG_STD_MAX, LOG_STD_MIN
 
 __all__ = ["DamageNet", "LOG_STD_MAX", "LOG_STD_MIN", "SIZE_MEAN_WEIGHT", "loss_terms"]
 

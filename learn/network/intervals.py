@@ -14,8 +14,8 @@ spread (std) of their raw distribution, a sharpness is fitted per group, and a p
 leaves the well-placed pairs' intervals too wide and the hard ones' too narrow.
 
 The size's interval is ``inverse(t -+ z sigma_t)`` of its transform
-(:class:`learn.size.SizeTransform`, monotone), with ``z`` the normal quantile of the level; its ``sigma_t`` is
-scaled on the validation pairs (:func:`learn.size.fit_size_std_scale`).
+(:class:`learn.network.size.SizeTransform`, monotone), with ``z`` the normal quantile of the level; its ``sigma_t`` is
+scaled on the validation pairs (:func:`learn.network.size.fit_size_std_scale`).
 """
 
 from __future__ import annotations

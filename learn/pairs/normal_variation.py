@@ -1,7 +1,7 @@
 """The normal variation between tests of the intact beam, measured on several baseline tests.
 
 Each baseline test's modes are placed on the model's modes by the rule every pair of ``classify`` follows
-(:func:`learn.measured.modal_pair`). Across the ``N`` baselines that hold a mode ``k``:
+(:func:`learn.pairs.measured.modal_pair`). Across the ``N`` baselines that hold a mode ``k``:
 
 - ``frequency_std_rel[k]``: the sample standard deviation of ``ln f_k`` (a relative frequency scatter);
 - ``shape_std[:, k]``: the sample standard deviation of each entry of the real unit-norm shape at the sensors
@@ -30,8 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from learn.shapes import real_shapes, sign_aligned
-from learn.measured import BASELINE_PAIR_BAND, RATIO_TOLERANCE, modal_pair
+from learn.explanations.shapes import real_shapes, sign_aligned
+from learn.pairs.measured import BASELINE_PAIR_BAND, RATIO_TOLERANCE, modal_pair
 from physics.errors import BeamDamageError
 
 __all__ = ["FREQUENCY_STD_FLOOR", "HOTELLING_MIN_EXTRA", "SHAPE_STD_FLOOR", "NormalVariation", "measure",
@@ -48,7 +48,7 @@ HOTELLING_MIN_EXTRA = 4
 
 def model_modes(data, beam, nominal_hz, name: str = "baseline", tolerance=None):
     """One test's modes on the model's modes: ``(ln f (m,), real unit-norm shapes (S, m) or None, damping ratios
-    (m,))``, NaN where the test lacks a mode; the pairing of :func:`learn.measured.modal_pair` (against
+    (m,))``, NaN where the test lacks a mode; the pairing of :func:`learn.pairs.measured.modal_pair` (against
     ``nominal_hz`` within ``tolerance``: with several baselines, :attr:`NormalVariation.targets`)."""
     pair = modal_pair(data, data, beam, nominal_hz, (name, name), tolerance=tolerance)
     m = beam.n_modes
@@ -77,9 +77,9 @@ class NormalVariation:
                                              methods (network, classical, explanations' shapes) compare with
     pairing_hz : ndarray, shape (m,)         what every test's poles are paired with: the baselines' median
                                              frequency of each mode they hold (the nominal beam's elsewhere)
-    pairing_band : ndarray, shape (m,)       relative: :data:`learn.measured.BASELINE_PAIR_BAND` where the
-                                             baselines hold the mode, :data:`learn.measured.RATIO_TOLERANCE` elsewhere
-                                             (both narrowed to half the gap to the neighbours when paired)
+    pairing_band : ndarray, shape (m,)       relative: :data:`learn.pairs.measured.BASELINE_PAIR_BAND` where the
+                                             baselines hold the mode, :data:`learn.pairs.measured.RATIO_TOLERANCE`
+                                             elsewhere (both narrowed to half the gap to the neighbours when paired)
     """
 
     names: tuple
@@ -200,9 +200,9 @@ class NormalVariation:
 def measure(baselines: list, beam, nominal_hz, names=None) -> NormalVariation:
     """The normal variation of several baseline tests (:class:`physics.io.ModalData` on the model's DOFs).
 
-    Each baseline's poles are paired with the nominal beam's modes (:func:`learn.measured.modal_pair`, within
-    :data:`learn.measured.RATIO_TOLERANCE`), then again with the baselines' median frequency of each mode, within
-    :data:`learn.measured.BASELINE_PAIR_BAND` (:attr:`NormalVariation.targets`, the pairing of every later test):
+    Each baseline's poles are paired with the nominal beam's modes (:func:`learn.pairs.measured.modal_pair`, within
+    :data:`learn.pairs.measured.RATIO_TOLERANCE`), then again with the baselines' median frequency of each mode, within
+    :data:`learn.pairs.measured.BASELINE_PAIR_BAND` (:attr:`NormalVariation.targets`, the pairing of every later test):
     a spurious pole that the wide nominal rule paired in a baseline lacking the mode leaves that baseline without
     it. The reference baseline is the one holding the most modes whose frequencies lie nearest the baselines'
     medians (the sum of squared z-scores over the modes it holds).

@@ -42,7 +42,7 @@ from physics.errors import BeamDamageError, FileFormatError
 from datagen.dataset import Dataset
 from datagen.store import DATASET_FORMAT, read_manifest
 from datagen.synth import log_magnitude_map
-from learn.shapes import real_shapes, sign_aligned
+from learn.explanations.shapes import real_shapes, sign_aligned
 from physics.layout import Layout
 
 if TYPE_CHECKING:

@@ -8,8 +8,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from learn.features import BeamSpec
-from learn.shapes import real_shapes
+from learn.network.features import BeamSpec
+from learn.explanations.shapes import real_shapes
 from physics.errors import BeamDamageError
 from physics.identification import identify_frf
 from physics.io import (MeasuredFRF, map_frf_dofs, map_measured_dofs, parse_dof, prepare_measured,
@@ -151,7 +151,8 @@ def pair_modes_by_frequency(frequencies_hz, nominal_hz, tolerance: float | None 
     ----------
     frequencies_hz : array, shape (k,)     identified natural frequencies (Hz), any order
     nominal_hz : array, shape (m,)         the nominal beam's natural frequencies (Hz), ascending (or the
-                                           baselines' modes: :attr:`learn.normal_variation.NormalVariation.targets`)
+                                           baselines' modes:
+                                           :attr:`learn.pairs.normal_variation.NormalVariation.targets`)
     tolerance : float or array (m,), optional   per mode; default :data:`RATIO_TOLERANCE`
     shape_mac : array, shape (k, m), optional   MAC of each identified shape against each nominal shape
 
@@ -211,7 +212,7 @@ def modal_pair(baseline, current, beam: BeamSpec, nominal_hz, names=("baseline",
 
     Two tests of 4 or more modes give their 4 lowest. When either holds fewer, each test's modes are paired with
     the nominal beam's (:func:`pair_modes_by_frequency`, against ``nominal_hz`` within ``tolerance``; with several
-    baselines, their modes and bands: :attr:`learn.normal_variation.NormalVariation.targets`) and the modes both
+    baselines, their modes and bands: :attr:`learn.pairs.normal_variation.NormalVariation.targets`) and the modes both
     hold are kept; ``found`` (one text per test, e.g. ``"LSCF/LSFD found 2 modes in 2-500 Hz"``) says in
     :attr:`ModalPair.missing` where the others went (with ``tolerance``, also the nearest pole left unpaired: the
     mode moved beyond its band, or lost).
@@ -364,7 +365,7 @@ def _lscf(frf, where: str, **options):
 
 def refit_missing_modes(missing, target_hz, log_tol, bands_hz, lines_hz, identify, accept=None) -> list:
     """The narrow-band re-identification of the modes a test's identification over its whole band missed (of
-    ``classify`` with several baselines, :func:`learn.pair_inputs.refit_frf_modes`, and of ``monitor``,
+    ``classify`` with several baselines, :func:`learn.pairs.inputs.refit_frf_modes`, and of ``monitor``,
     :func:`learn.monitor.tracking.refit_missing`).
 
     For each mode ``j`` of ``missing``, the test is identified again over ``bands_hz[j]`` (Hz, within

@@ -1,4 +1,4 @@
-"""The first stage of ``classify`` (:func:`learn.classify.classify_pairs`): the inputs' modes, identified from FRF
+"""The first stage of ``classify`` (:func:`learn.pairs.classify.classify_pairs`): the inputs' modes, identified from FRF
 files, the (baseline, current) pairs they form and the feature rows the network reads."""
 
 from __future__ import annotations
@@ -7,14 +7,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from learn.features import frf_features, frequency_features, map_frf_to_grid, modal_features, with_missing_modes
-from learn.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows, identification_band_hz,
-                            identify_band, identify_modes, modal_pair, pair_modes_by_frequency, pairing_bands,
-                            refit_missing_modes)
-from learn.model_dir import TrainedModel
-from learn.mode_count import mode_count_problem
-from learn.normal_variation import measure
-from learn.verdict import modes_text
+from learn.network.features import frf_features, frequency_features, map_frf_to_grid, modal_features, with_missing_modes
+from learn.pairs.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows, identification_band_hz,
+                                  identify_band, identify_modes, modal_pair, pair_modes_by_frequency, pairing_bands,
+                                  refit_missing_modes)
+from learn.network.model_dir import TrainedModel
+from learn.network.mode_count import mode_count_problem
+from learn.pairs.normal_variation import measure
+from learn.pairs.verdict import modes_text
 from physics.errors import BeamDamageError
 from physics.identification import METHODS
 from physics.io import MeasuredFRF
@@ -35,8 +35,8 @@ class PairInputs:
     warnings : tuple of str        shared by every pair
     baseline : ModalData or None   the reference baseline's modes (None: the FRFs could not be identified)
     currents, baselines : tuple of ModalData or None
-    pairs : tuple of :class:`learn.measured.ModalPair` or None, one per current input
-    normal_variation : :class:`learn.normal_variation.NormalVariation` or None (one baseline)
+    pairs : tuple of :class:`learn.pairs.measured.ModalPair` or None, one per current input
+    normal_variation : :class:`learn.pairs.normal_variation.NormalVariation` or None (one baseline)
     route : str                    the network's input route
     features : ndarray (r, p) or None   the rows the network reads (:func:`pair_inputs`)
     rows : tuple of int            the inputs those rows belong to
@@ -63,7 +63,7 @@ def pair_inputs(model: TrainedModel, baseline, currents: list, names: list[str] 
                 methods: list | None = None) -> PairInputs:
     """The first stage of :func:`classify_pairs`: the inputs' modes (identified from FRF files), their pairs and
     the network's feature rows; a pair with fewer common modes than a modal or frequency network reads is refused
-    (:func:`learn.mode_count.mode_count_problem`)."""
+    (:func:`learn.network.mode_count.mode_count_problem`)."""
     baselines = list(baseline) if isinstance(baseline, (list, tuple)) else [baseline]
     nb = len(baselines)
     names = (list(names) if names else
@@ -260,7 +260,7 @@ def identification_warning(model: TrainedModel, identified: bool, methods=None) 
     that produced them (None: unknown, nothing said). Output-only inputs (SSI-cov, FDD) against FRF-route or
     fixed modal noise, and FRF-route inputs against output-only modal noise, are named.
     """
-    trained = (model.config.get("generator_config") or {}).get("measurement", {}).get("identification")
+    trained = model.recorded.measurement.get("identification")
     trained_oo = _output_only((trained or {}).get("method"))
     used = sorted({m for m in (methods or ()) if m is not None})
     oo = [m for m in used if _output_only(m)]
@@ -281,7 +281,7 @@ def identification_warning(model: TrainedModel, identified: bool, methods=None) 
 
 def refit_frf_modes(frf, md, target_hz, band, wanted=None, where: str = "FRF file"):
     """``(ModalData, found)``: ``md`` (identified from ``frf``) with the modes no pole of it pairs with found again
-    over their own band (:func:`learn.measured.refit_missing_modes`).
+    over their own band (:func:`learn.pairs.measured.refit_missing_modes`).
 
     The modes are those of ``target_hz`` (Hz; those ``wanted``, a bool mask; default all) that no pole of ``md``
     pairs with (:func:`pair_modes_by_frequency` within ``band``); each is looked for from ``f_j / (1 + b_j)`` to

@@ -1,7 +1,7 @@
 """Metrics of damage detection, location and sizing, with breakdowns and figures.
 
 All methods (network and classical methods) are scored by :func:`metrics` from the same
-truth labels (:func:`learn.features.labels`) and a :class:`learn.classical.MethodOutput`.
+truth labels (:func:`learn.network.features.labels`) and a :class:`learn.explanations.classical.MethodOutput`.
 
 Definitions
 -----------
@@ -16,15 +16,14 @@ Definitions
 
 from __future__ import annotations
 
-import io
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 
-from learn.classical import FREQUENCY_METHODS
-from learn.features import as_spec
-from physics.io import atomic_write_bytes
+from learn.explanations.classical import FREQUENCY_METHODS
+from learn.network.features import as_spec
+from physics.io import atomic_write_bytes, figure_png
 
 __all__ = ["MIN_DROP", "Metrics", "NOISE_EDGES", "TIP_ZONE", "figures", "metrics", "mirrored_method", "reliability",
            "roc_auc", "roc_curve", "subsets", "table_rows"]
@@ -112,8 +111,9 @@ def mirrored_method(beam, name: str) -> bool:
 
 def metrics(out, truth: dict, mask=None, subset: str = "all", length_m: float = 0.6095,
             min_drop: float = MIN_DROP) -> Metrics:
-    """Scores of ``out`` (:class:`learn.classical.MethodOutput`) against ``truth`` on rows ``mask``; ``length_m``
-    the beam's length or its :class:`learn.features.BeamSpec` (whose zones the element accuracy counts)."""
+    """Scores of ``out`` (:class:`learn.explanations.classical.MethodOutput`) against ``truth`` on rows ``mask``;
+    ``length_m`` the beam's length or its :class:`learn.network.features.BeamSpec` (whose zones the element accuracy
+    counts)."""
     spec = as_spec(length_m)
     length_m = spec.length_m
     n = len(truth["damaged"])
@@ -183,7 +183,7 @@ def table_rows(outputs, truth, table, length_m) -> list[dict]:
 # --------------------------------------------------------------------------- figures
 def figures(outputs, truth, out_dir, length_m: float, n_bins: int = 15) -> list[str]:
     """ROC, confusion matrix (zones, network), location error vs position, reliability (PNG, Agg); ``length_m`` the
-    beam's length or its :class:`learn.features.BeamSpec`."""
+    beam's length or its :class:`learn.network.features.BeamSpec`."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -251,10 +251,5 @@ def figures(outputs, truth, out_dir, length_m: float, n_bins: int = 15) -> list[
 
 
 def _save(fig, path) -> str:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
-    atomic_write_bytes(path, buf.getvalue())
+    atomic_write_bytes(path, figure_png(fig, bbox_inches="tight"))
     return str(path)

@@ -15,7 +15,7 @@ explanation         predicted ``y`` (first order unless stated)                 
                     springs (pinned ends), suspension (free-free)                 in 0.01-100 from none)
 a damage kind       ``a + sqrt(1 + 2 s F_r(x)) - 1`` for a kind that perturbs    ``x`` on the grid, ``s``
 (each row of        the stiffness (``s`` its hinge flexibility, ``F`` the        (its size) over the sizes
-``DAMAGE_MODELS``)  curvature-squared sensitivities, :mod:`learn.sensitivity`);  its data draw
+``DAMAGE_MODELS``)  curvature-squared sensitivities, :mod:`learn.explanations.sensitivity`);  its data draw
                     ``a + (1 - 2 s G_r(x))^-1/2 - 1`` for one that perturbs the  (``size_range`` of the
                     mass (``s`` its signed mass ratio, ``G`` displacement        model's generator config;
                     squared): the Rayleigh quotient of the nominal shapes, the   another kind's defaults)
@@ -30,17 +30,17 @@ over its prior (a grid), so a more flexible explanation pays for the predictions
 prior probabilities, the probabilities are the normalised evidences.
 
 Shapes, where both tests hold them: the change of the real unit-norm shapes at the sensors
-(:func:`learn.shapes.real_shapes`, the current shape's sign following the baseline's) enters the same
+(:func:`learn.explanations.shapes.real_shapes`, the current shape's sign following the baseline's) enters the same
 likelihood with a standard deviation :data:`SHAPE_CHANGE_STD` per entry. A damage kind predicts the first-order
-shape change of its size at its place (the shape sensitivities of :mod:`learn.sensitivity`), a support change the
-exact change of the nominal shapes (:func:`support_curve`), the day-to-day changes and a global stiffness change
-none. Damping changes are not weighed: the repeatability of damping ratios (5-30 % between tests) is larger than
+shape change of its size at its place (the shape sensitivities of :mod:`learn.explanations.sensitivity`), a support
+change the exact change of the nominal shapes (:func:`support_curve`), the day-to-day changes and a global stiffness
+change none. Damping changes are not weighed: the repeatability of damping ratios (5-30 % between tests) is larger than
 what a slit changes.
 
 A damage kind's grid is the first pass (every pair and kind in one array operation; the evidence): each pair's three
 best places of each kind are refined on the kind's exact model, the nominal FE beam re-analysed with the kind's own
-damage (:mod:`learn.refine`), and its misfit, most likely place and size and their intervals are read there (a
-local exact grid about the refined fit, its likelihood tempered by the Birge ratio: a fit beyond the noise widens
+damage (:mod:`learn.explanations.refine`), and its misfit, most likely place and size and their intervals are read there
+(a local exact grid about the refined fit, its likelihood tempered by the Birge ratio: a fit beyond the noise widens
 its intervals); its evidence moves by the exact fit's best likelihood over the grid's.
 
 An explanation whose predicted change misses a mode's measured change by more than :data:`FIT_LIMIT` standard
@@ -59,12 +59,13 @@ import numpy as np
 
 from datagen.config import recorded_config
 from datagen.damage import DAMAGE_MODELS, applies_to, beam_section, damage_defaults
-from learn.model_dir import sensitivity_of, truth_beam_mapping, truth_numbers
-from learn.likelihood import nuisance_loglik
-from learn.refine import SIZE_SCALE_STD, ExactKind, birge_ratio, kind_parameters, nominal_beam, refined_fits
-from learn.sensitivity import Sensitivity
-from learn.shapes import real_shapes, shape_changes, sign_aligned
-from learn.verdict import explanation_label
+from learn.network.model_dir import sensitivity_of, truth_beam_mapping, truth_numbers
+from learn.explanations.likelihood import nuisance_loglik
+from learn.explanations.refine import (SIZE_SCALE_STD, ExactKind, birge_ratio, kind_parameters, nominal_beam,
+                                       refined_fits)
+from learn.explanations.sensitivity import Sensitivity
+from learn.explanations.shapes import real_shapes, shape_changes, sign_aligned
+from learn.pairs.verdict import explanation_label
 from physics.effects import hermite_row
 from physics.errors import BeamDamageError
 from physics.fem import beam_model
@@ -116,10 +117,11 @@ class KindExplanation:
     name : str                  the kind (:data:`datagen.damage.DAMAGE_MODELS`)
     perturbs : str              "stiffness" or "mass": the frequency map (module docstring)
     sizes : ndarray, shape (K,)  the size grid over the kind's ``size_range``
-    sens : learn.sensitivity.Sensitivity   sensitivities per unit size, averaged over the kind's spread
+    sens : learn.explanations.sensitivity.Sensitivity   sensitivities per unit size, averaged over the kind's spread
     size_label : str
-    exact : learn.refine.ExactKind or None   the kind's exact model on the nominal beam: the grid's best candidates
-                                refined on it (:func:`learn.refine.refined_fits`); None: the grid alone
+    exact : learn.explanations.refine.ExactKind or None   the kind's exact model on the nominal beam: the grid's best
+                                candidates refined on it (:func:`learn.explanations.refine.refined_fits`); None: the
+                                grid alone
     """
 
     name: str
@@ -207,7 +209,7 @@ def support_curve(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_spring_
                   mode_index, n_elements: int = 40) -> tuple[np.ndarray, np.ndarray, str]:
     """Relative frequency changes (G, m) of the modes ``mode_index`` (0-based bending modes) when the beam's
     support springs change (module docstring), the changes of their real unit-norm shapes at the sensors
-    (G, S m; sensor-major as :attr:`learn.sensitivity.Sensitivity.shape`), and what the parameter means.
+    (G, S m; sensor-major as :attr:`learn.explanations.sensitivity.Sensitivity.shape`), and what the parameter means.
 
     ``ln_factors`` (G,): the parameter of :func:`physics.supports.changed_springs` for the test's support:
     ``ln(k / k_0)`` of the clamp springs or the suspension; for pinned ends ``log10`` of the bearing spring
@@ -291,7 +293,7 @@ def weigh_many(shifts, kinds: dict, support: tuple, temperature_range=(-0.004, 0
     length_m : float
     model_error : float                 relative std of each predicted change (:data:`MODEL_ERROR`)
     shapes : array, shape (n, S m), optional   measured changes of the real unit-norm shapes at the sensors
-                                        (:func:`learn.shapes.shape_changes`; sensor-major as the kinds'
+                                        (:func:`learn.explanations.shapes.shape_changes`; sensor-major as the kinds'
                                         ``sens.shape``); without them frequencies alone are weighed
     support_shapes : array, shape (G, S m), optional   the support grid's shape changes (:func:`support_curve`)
     shape_sigma : float or array (S m,)  std of each shape entry's change (:data:`SHAPE_CHANGE_STD`)
@@ -464,7 +466,7 @@ def kind_explanations(model) -> dict:
 def kind_explanation(name: str, d: dict, beam, sens: Sensitivity, sizes=None, exact=None) -> KindExplanation:
     """The explanation of damage kind ``name`` of config section ``d`` on the truth beam ``beam`` (a preset name or
     its mapping): ``sizes`` (default: :data:`N_SIZE` over the kind's ``size_range``) and the point sensitivities
-    ``sens`` (:func:`learn.sensitivity.beam_sensitivity` of that kind) averaged over its ``spread_m``."""
+    ``sens`` (:func:`learn.explanations.sensitivity.beam_sensitivity` of that kind) averaged over its ``spread_m``."""
     kind = DAMAGE_MODELS[name]
     sizes = np.linspace(*kind.size_range(d, beam), N_SIZE) if sizes is None else np.asarray(sizes, float)
     return KindExplanation(name, kind.perturbs, sizes, window_averaged(sens, kind.spread_m(d, sens.length_m)),
@@ -477,7 +479,7 @@ NO_EXPLANATION = {"hypotheses": None, "hypotheses_summary": None, "frequency_cha
 
 
 def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD, shape_sigma=SHAPE_CHANGE_STD) -> list[dict]:
-    """The explanations of each classified pair (a :class:`learn.measured.ModalPair`) on the model's beam,
+    """The explanations of each classified pair (a :class:`learn.pairs.measured.ModalPair`) on the model's beam,
     ``{"hypotheses": [row, ...], "hypotheses_summary": str, "frequency_change_std": sigma, "shape_change_std"}``,
     the pairs holding the same modes weighed in one batch.
 

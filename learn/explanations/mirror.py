@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from learn.intervals import level_intervals
+from learn.network.intervals import level_intervals
 
 __all__ = ["fold_to_half", "location_ambiguity", "mirrored"]
 
@@ -25,7 +25,7 @@ def mirrored(beam, pair) -> bool:
 
 def fold_to_half(answer: dict, beam, distributions=None) -> dict:
     """An answer located on the half ``x <= L / 2`` (the mirror ambiguity, :func:`mirrored`): the network's
-    distributions (level -> (B,), :attr:`learn.estimator.DamagePrediction.level_distributions`) folded onto it
+    distributions (level -> (B,), :attr:`learn.network.estimator.DamagePrediction.level_distributions`) folded onto it
     (mean and std of ``min(x, L - x)`` from the 68 % one, each interval from its own), a classical ``x`` mirrored
     there."""
     L = beam.length_m

@@ -15,7 +15,7 @@ mass ratio ``mu = m_k / (m L)``) spread over element ``e`` adds
 ``dM = (m L mu / l_e) M_e^1`` (``M_e^1`` the consistent element mass for unit
 mass per length, eq. 3.8), so ``d f_r / f_r = -m L mu phi_r^T M_e^1 phi_r / (2 l_e)``,
 the displacement squared there. Shape sensitivities are finite differences of the real, unit-norm shapes at the
-measured DOFs (:func:`learn.shapes.real_shapes`). The same numbers serve the
+measured DOFs (:func:`learn.explanations.shapes.real_shapes`). The same numbers serve the
 classical methods (Cawley-Adams, DLAC/MDLAC, sensitivity updating) and the
 classifier's "detectable here" rule.
 """
@@ -28,9 +28,9 @@ from functools import lru_cache
 import numpy as np
 
 from datagen.damage import DEFAULT_KIND, damage_model
-from learn.shapes import real_shapes, sign_aligned
+from learn.explanations.shapes import real_shapes, sign_aligned
 from physics.effects import hermite_row, point_mass_matrix
-from physics.fem import beam_model, element_mass, element_stiffness
+from physics.fem import beam_model, dof_names, element_mass, element_stiffness
 from physics.modal import undamped_modes
 from physics.properties import beam_preset
 from physics.supports import add_springs
@@ -141,20 +141,24 @@ def beam_sensitivity(preset="beam5", root_spring_relative: float | None = 948.7,
     meas = models.index([f"{1 + n_elements // 4 * q}:y" for q in range(1, 5)])
     u = real_shapes(phi[:, meas, :n_modes].astype(complex))
     du = (sign_aligned(u[1:], u[0]) - u[0]) * L / (step * le)   # (E, 4, m) per unit size (step le / L per step)
-    # exact first-order frequency sensitivities from the element energies
     nominal = with_masses(beam_model(n_elements, L, EI, m, root_spring=kr), masses, L, n_elements)
     w0, phi0 = undamped_modes(nominal.M, nominal.K)
-    full = np.zeros((2 * (n_elements + 1), n_modes))
-    names = [f"{n}:{d}" for n in range(1, n_elements + 2) for d in ("y", "rz")]
-    full[[names.index(d) for d in nominal.dofs]] = phi0[:, :n_modes]
+    dlnf = _energy_sensitivity(phi0[:, :n_modes], nominal.dofs, w0[:n_modes], L, EI, m, n_elements, perturbs)
+    return Sensitivity((np.arange(n_elements) + 0.5) / n_elements, L, EI, dlnf,
+                       np.transpose(du, (1, 2, 0)).reshape(4 * n_modes, n_elements), w0[:n_modes] / (2 * np.pi))
+
+def _energy_sensitivity(phi0, dofs, w0, L, EI, m, n_elements, perturbs) -> np.ndarray:
+    """Exact first-order ``d ln f`` per unit size of each element ``(m, E)`` from the element energies of the nominal
+    modes ``phi0`` (on ``dofs`` of the mesh, (n, m)) at ``w0`` (rad/s, (m,)): stiffness or mass as ``perturbs``."""
+    le = L / n_elements
+    full = np.zeros((2 * (n_elements + 1), phi0.shape[1]))
+    full[[dof_names(n_elements + 1).index(d) for d in dofs]] = phi0
     ends = np.stack([full[2 * e:2 * e + 4] for e in range(n_elements)])    # (E, 4, m)
     if perturbs == "stiffness":
         energy = np.einsum("eim,ij,ejm->me", ends, element_stiffness(1.0, le), ends)
-        dlnf = -EI * L * energy / (2 * le * w0[:n_modes, None] ** 2)
-    else:
-        dlnf = -m * L * np.einsum("eim,ij,ejm->me", ends, element_mass(1.0, le), ends) / (2 * le)
-    return Sensitivity((np.arange(n_elements) + 0.5) / n_elements, L, EI, dlnf,
-                       np.transpose(du, (1, 2, 0)).reshape(4 * n_modes, n_elements), w0[:n_modes] / (2 * np.pi))
+        return -EI * L * energy / (2 * le * w0[:, None] ** 2)
+    return -m * L * np.einsum("eim,ij,ejm->me", ends, element_mass(1.0, le), ends) / (2 * le)
+
 
 def _layout_sensitivity(preset, root_spring_relative, n_elements, step, perturbs, test) -> Sensitivity:
     """:func:`beam_sensitivity` of any test (:class:`physics.layout.Layout`): shapes at the sensors."""
@@ -170,22 +174,14 @@ def _layout_sensitivity(preset, root_spring_relative, n_elements, step, perturbs
     # the support's nominal springs (a soft suspension: the rigid-body modes stay the two lowest)
     K = add_springs(models.K, models.dofs, sup.spring_dofs(n_elements + 1), sup.nominal_unit_stiffness(L) * EI)
     w, phi = undamped_modes(models.M, K)
-    names = [f"{n}:{d}" for n in range(1, n_elements + 2) for d in ("y", "rz")]
-    keep = [names.index(d) for d in models.dofs]
+    keep = [dof_names(n_elements + 1).index(d) for d in models.dofs]
     node_x = np.linspace(0.0, L, n_elements + 1)
     T = np.array([hermite_row(float(x), node_x)[0][keep] for x in sorted(test.sensors_x_m)])   # (S, n)
     used = sup.rigid_body_modes + np.asarray(test.modes) - 1
     S = T.shape[0]
     u = real_shapes((T @ phi[..., used]).astype(complex))                     # (E + 1, S, m)
     du = (sign_aligned(u[1:], u[0]) - u[0]) * L / (step * le)   # (E, S, m)
-    w0, phi0 = w[0][used], phi[0][:, used]
-    full = np.zeros((2 * (n_elements + 1), used.size))
-    full[keep] = phi0
-    ends = np.stack([full[2 * e:2 * e + 4] for e in range(n_elements)])     # (E, 4, m)
-    if perturbs == "stiffness":
-        energy = np.einsum("eim,ij,ejm->me", ends, element_stiffness(1.0, le), ends)
-        dlnf = -EI * L * energy / (2 * le * w0[:, None] ** 2)
-    else:
-        dlnf = -m * L * np.einsum("eim,ij,ejm->me", ends, element_mass(1.0, le), ends) / (2 * le)
+    w0 = w[0][used]
+    dlnf = _energy_sensitivity(phi[0][:, used], models.dofs, w0, L, EI, m, n_elements, perturbs)
     return Sensitivity((np.arange(n_elements) + 0.5) / n_elements, L, EI, dlnf,
                        np.transpose(du, (1, 2, 0)).reshape(S * used.size, n_elements), w0 / (2 * np.pi))

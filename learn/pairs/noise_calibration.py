@@ -7,8 +7,8 @@ A dataset's measured modal data are the truth modes plus random errors whose sta
 identifies differently: more sensors, modes that a sensor barely sees, higher modes, another band and model order.
 :func:`calibrate_test` measures it on the test itself: specimens of the config are simulated, their FRFs
 synthesised as a dataset synthesises them at :data:`LEVELS` x :data:`FLOORS`, identified exactly as ``classify``
-identifies a file of that model (:func:`learn.measured.identify_band`: as ``identify --band`` over the test's band,
-modes paired by frequency), and ``c``, ``g``, ``e`` of every mode fitted to the
+identifies a file of that model (:func:`learn.pairs.measured.identify_band`: as ``identify --band`` over the test's
+band, modes paired by frequency), and ``c``, ``g``, ``e`` of every mode fitted to the
 robust standard deviations of the errors (:func:`calibrate_std`). Deterministic for a config and seed.
 """
 
@@ -21,7 +21,7 @@ from datagen.batch_inputs import draw_batch
 from datagen.pipeline import per_mode, simulate_batch
 from datagen.setup import get_setup
 from datagen.synth import measured_frf
-from learn.measured import identify_band, pair_modes_by_frequency
+from learn.pairs.measured import identify_band, pair_modes_by_frequency
 from physics.errors import BeamDamageError
 from physics.io import MeasuredFRF
 from physics.modal import modal_parameters
@@ -92,7 +92,7 @@ def identification_errors(cfg: dict, level: float, floor: float, specimens: int,
 
 def on_nominal_modes(eigenvalues, shapes, nominal_hz):
     """Identified poles (k,) and shapes (S, k) placed on the nominal modes they pair with by frequency
-    (:func:`learn.measured.pair_modes_by_frequency`): (m,) and (S, m), NaN where no identified mode pairs."""
+    (:func:`learn.pairs.measured.pair_modes_by_frequency`): (m,) and (S, m), NaN where no identified mode pairs."""
     lam = np.asarray(eigenvalues)
     psi = np.asarray(shapes)
     which = pair_modes_by_frequency(np.abs(lam) / (2 * np.pi), nominal_hz)

@@ -7,20 +7,20 @@ from dataclasses import asdict, dataclass, replace
 import numpy as np
 
 from datagen.damage import damage_model
-from learn.classical import FREQUENCY_METHODS, run_classical
-from learn.features import feature_names
-from learn.hypotheses import FREQUENCY_CHANGE_STD, NO_EXPLANATION, SHAPE_CHANGE_STD, explain_many
-from learn.measured import IDENTIFICATION, mode_checks, modal_pair, nominal_ratio_range
-from learn.mirror import fold_to_half, location_ambiguity, mirrored
-from learn.model_dir import TrainedModel
-from learn.normal_variation import model_modes
-from learn.pair_inputs import PairInputs, mode_features, pair_inputs
-from learn.shapes import real_shapes, sign_aligned
-from learn.verdict import (IN_DISTRIBUTION_PERCENTILE, Verdict, agreement, classical_answer, classical_verdict,
-                           modes_text, network_answer, network_output, place_keys)
+from learn.explanations.classical import FREQUENCY_METHODS, run_classical
+from learn.network.features import feature_names
+from learn.explanations.hypotheses import FREQUENCY_CHANGE_STD, NO_EXPLANATION, SHAPE_CHANGE_STD, explain_many
+from learn.pairs.measured import IDENTIFICATION, mode_checks, modal_pair, nominal_ratio_range
+from learn.explanations.mirror import fold_to_half, location_ambiguity, mirrored
+from learn.network.model_dir import TrainedModel
+from learn.pairs.normal_variation import model_modes
+from learn.pairs.inputs import PairInputs, mode_features, pair_inputs
+from learn.explanations.shapes import real_shapes, sign_aligned
+from learn.pairs.verdict import (IN_DISTRIBUTION_PERCENTILE, Verdict, agreement, classical_answer, classical_verdict,
+                                 modes_text, network_answer, network_output, place_keys)
 
 __all__ = ["DEFAULT_FALSE_ALARM_RATE", "DISTANCE_TERMS", "KEYS", "MIN_PAIRING_MAC", "Answers", "ClassifiedPair",
-           "classify", "classify_many", "classify_pairs", "distance_terms", "distance_text", "pair_answers",
+           "classify_many", "classify_pairs", "distance_terms", "pair_answers",
            "shape_pairing_reasons"]
 
 
@@ -89,11 +89,6 @@ class ClassifiedPair:
         return {k: d[k] for k in KEYS}
 
 
-def classify(model: TrainedModel, baseline, current) -> dict:
-    """Verdict for one measured pair: :func:`classify_many` with one current input."""
-    return classify_many(model, baseline, [current])[0]
-
-
 def classify_many(model: TrainedModel, baseline, currents: list, names: list[str] | None = None,
                   methods: list | None = None, false_alarm_rate: float = DEFAULT_FALSE_ALARM_RATE) -> list[dict]:
     """:func:`classify_pairs`, each pair serialised (:meth:`ClassifiedPair.to_dict`)."""
@@ -110,7 +105,7 @@ def classify_pairs(model: TrainedModel, baseline, currents: list, names: list[st
     ----------
     baseline : :class:`physics.io.ModalData` or :class:`physics.io.MeasuredFRF`, or a list of them
         The undamaged state, on the model's DOFs (:func:`on_model_dofs`). Several baseline tests measure the
-        normal variation between tests (:mod:`learn.normal_variation`): it decides whether a change is more than
+        normal variation between tests (:mod:`learn.pairs.normal_variation`): it decides whether a change is more than
         that variation, and it replaces the assumed noise in the competing explanations and the distance check;
         the pair methods compare each test with the baseline nearest the baselines' centre.
     currents : list of the same kind as ``baseline``
@@ -131,9 +126,9 @@ def classify_pairs(model: TrainedModel, baseline, currents: list, names: list[st
     A pair whose tests do not both hold every mode of the model (a band that stops below the last, a mode at a
     node of the reference DOF or the sensors, a mode lost in the noise floor) is classified on the modes both hold
     (:func:`modal_pair`) by every classical method and by the modal or frequency network, which answers on any
-    2 or more of its modes (the missing ones' features NaN: :func:`learn.features.with_missing_modes`); a network
-    of a format-3 model needs every mode and gives no answer for it (``network`` None). Fewer than 2 common modes
-    are refused when a modal or frequency network would have to read them.
+    2 or more of its modes (the missing ones' features NaN: :func:`learn.network.features.with_missing_modes`); a
+    network of a format-3 model needs every mode and gives no answer for it (``network`` None). Fewer than 2 common
+    modes are refused when a modal or frequency network would have to read them.
 
     Returns
     -------
@@ -156,7 +151,7 @@ def classify_pairs(model: TrainedModel, baseline, currents: list, names: list[st
 def pair_answers(model: TrainedModel, inputs: PairInputs) -> tuple:
     """The second stage of :func:`classify_pairs`: the network's and every classical method's answers per pair
     (:class:`Answers`), located on the half beam where frequencies alone leave the mirror ambiguity
-    (:func:`learn.mirror.mirrored`)."""
+    (:func:`learn.explanations.mirror.mirrored`)."""
     out = []
     for i, a in enumerate(_classical_answers(model, inputs.pairs, _network_answers(model, inputs))):
         net, methods = a.network, list(a.classical_methods)
@@ -187,7 +182,8 @@ def _classified(model: TrainedModel, inputs: PairInputs, i: int, a: Answers, exp
         reasons.insert(0, f"Mahalanobis distance {dist:.3g} from the training data, beyond {pct:.2f}% of training "
                           "pairs" + (f" and the baseline tests' own pairs (at most "
                                      f"{normal['baseline_pairs_distance_max']:.3g})" if nv is not None else "")
-                       + (f"; largest terms: {distance_text(terms)}" if terms else ""))
+                       + ("; largest terms: " + ", ".join(f"{t['feature']} {t['training_std']:+.1f} sd "
+                                                          f"({t['share']:.0%})" for t in terms[:3]) if terms else ""))
     verdict, from_network, w = _chosen_verdict(net, cl, p, reasons, warnings, a.sensitivity, beam)
     nv_i = dict(normal)
     if nv is not None and inputs.currents is not None:
@@ -196,7 +192,7 @@ def _classified(model: TrainedModel, inputs: PairInputs, i: int, a: Answers, exp
                             false_alarm_rate), false_alarm_rate=false_alarm_rate)
         verdict, w = _within_normal_variation(verdict, nv_i, w, "network" if from_network else cl and cl["method"])
     source = "network" if from_network else "classical"
-    kind = damage_model(model.damage_kind)
+    kind = damage_model(model.recorded.kind)
     return ClassifiedPair(
         inputs.names[i + 1], verdict, kind.kind, kind.size_meaning, location_ambiguity(beam, asdict(verdict), p),
         source, not reasons, reasons, a,
@@ -311,7 +307,7 @@ DISTANCE_TERMS = 6
 def distance_terms(est, X, route: str, beam, top: int = DISTANCE_TERMS) -> list[list[dict]]:
     """Per row of ``X``: the features that make up most of its squared Mahalanobis distance, largest first.
 
-    Each entry (features of a missing mode left out): ``feature`` (:func:`learn.features.feature_names`),
+    Each entry (features of a missing mode left out): ``feature`` (:func:`learn.network.features.feature_names`),
     ``value`` (the pair's feature),
     ``training_std`` (how many training standard deviations it lies from the training mean) and ``share``
     (its term ``z_i (P z)_i`` over the squared distance; the shares of all features sum to 1).
@@ -326,11 +322,6 @@ def distance_terms(est, X, route: str, beam, top: int = DISTANCE_TERMS) -> list[
         out.append([{"feature": names[j], "value": float(np.asarray(X)[r, j]), "training_std": float(Z[r, j]),
                      "share": float(terms[r, j] / total[r])} for j in order])
     return out
-
-
-def distance_text(terms: list[dict], n: int = 3) -> str:
-    """The largest terms in words, e.g. ``df1 (%) -7.1 sd (62 %), dphi 2:y m1 +3.0 sd (12 %)``."""
-    return ", ".join(f"{t['feature']} {t['training_std']:+.1f} sd ({t['share']:.0%})" for t in terms[:n])
 
 
 def _chosen_verdict(net, cl, p, reasons: list, warnings: list, sens, beam):
@@ -412,14 +403,14 @@ def _classical_answers(model: TrainedModel, pairs, parts: list[Answers]) -> list
 
 
 #: Smallest MAC between a mode of the baseline and of the measured test for a pair the network reads
-#: (:func:`learn.measured.mode_checks`).
+#: (:func:`learn.pairs.measured.mode_checks`).
 MIN_PAIRING_MAC = 0.8
 
 
 def shape_pairing_reasons(pair, beam) -> list[str]:
     """Reasons a pair with missing modes lies outside what the network was trained on: a mode whose baseline and
     measured shapes do not pair (MAC below :data:`MIN_PAIRING_MAC`; none without shapes). Its modes lie within the
-    pairing tolerance of the nominal beam's by construction (:func:`learn.measured.modal_pair`)."""
+    pairing tolerance of the nominal beam's by construction (:func:`learn.pairs.measured.modal_pair`)."""
     if pair.frequency_only or pair.eigenvectors.shape[1] < 2:
         return []
     u = real_shapes(pair.eigenvectors)

@@ -1,7 +1,7 @@
 """Classical damage detection on the same pairs the network sees.
 
 Every method takes the measured modal data of the pairs and the FE
-sensitivities of the nominal beam (:mod:`learn.sensitivity`) and returns a
+sensitivities of the nominal beam (:mod:`learn.explanations.sensitivity`) and returns a
 :class:`MethodOutput`:
 
 * :func:`cawley_adams` - frequency-shift ratios (Cawley & Adams 1979): the
@@ -30,9 +30,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from learn.shapes import shape_changes
-from learn.sensitivity import Sensitivity
-from learn.size import SizeTransform
+from learn.explanations.shapes import shape_changes
+from learn.explanations.sensitivity import Sensitivity
+from learn.network.size import SizeTransform
 
 __all__ = ["GradientBoosting", "FREQUENCY_METHODS", "MethodOutput", "cawley_adams", "change_score", "dlac",
            "false_alarm_threshold",
@@ -171,7 +171,7 @@ def false_alarm_threshold(score, damaged, target: float = 0.005) -> float:
 
 class GradientBoosting:
     """HistGradientBoosting on the pair features: detection, ``x / L`` and the size through ``size_transform``
-    (:class:`learn.size.SizeTransform`: ``ln`` of a positive size, ``asinh`` of a signed one)."""
+    (:class:`learn.network.size.SizeTransform`: ``ln`` of a positive size, ``asinh`` of a signed one)."""
 
     def __init__(self, random_state: int = 0, max_iter: int = 300, size_transform: str = "log"):
         self.random_state = random_state

@@ -1,5 +1,5 @@
 """The competing explanations' likelihood of relative frequency changes: Gaussian, with a model error on each
-predicted change and the temperature nuisance integrated over its flat prior (:mod:`learn.hypotheses`)."""
+predicted change and the temperature nuisance integrated over its flat prior (:mod:`learn.explanations.hypotheses`)."""
 
 from __future__ import annotations
 

@@ -1,10 +1,10 @@
 """Exact refinement of a damage kind's competing explanation: the nominal beam re-analysed with the kind's own damage.
 
-The explanation's grid (:mod:`learn.hypotheses`) predicts a kind's frequency changes from first-order sensitivities
-of the nominal shapes; a damage that changes the shapes (a mass of tens of percent of the beam's, a deep slit) lies
-beyond it. Here the nominal FE beam of the sensitivities (:func:`nominal_beam`: its supports, springs, added masses,
-sensors and modes) gets the element corrections of the kind's own damage (``damage_at`` then ``corrections`` of its
-row of :data:`datagen.damage.DAMAGE_MODELS`) and is solved exactly (:meth:`ExactKind.changes`). :func:`refine` fits
+The explanation's grid (:mod:`learn.explanations.hypotheses`) predicts a kind's frequency changes from first-order
+sensitivities of the nominal shapes; a damage that changes the shapes (a mass of tens of percent of the beam's, a deep
+slit) lies beyond it. Here the nominal FE beam of the sensitivities (:func:`nominal_beam`: its supports, springs, added
+masses, sensors and modes) gets the element corrections of the kind's own damage (``damage_at`` then ``corrections`` of
+its row of :data:`datagen.damage.DAMAGE_MODELS`) and is solved exactly (:meth:`ExactKind.changes`). :func:`refine` fits
 the place ``x``, the size ``s``, the kind's spread ``e`` (``extent`` in [0, 1] through the lengths its config
 draws) and the temperature nuisance ``a`` to a pair's frequency (and shape) changes by bounded Levenberg-Marquardt
 steps from the grid's best candidates; :func:`local_grid` lays an exact grid in ``(x, s)`` about a refined fit, as
@@ -26,10 +26,10 @@ from functools import cached_property, lru_cache
 import numpy as np
 
 from datagen.damage import DAMAGE_MODELS
-from learn.intervals import LEVELS
-from learn.likelihood import nuisance_loglik
-from learn.sensitivity import beam_numbers, with_masses
-from learn.shapes import real_shapes, sign_aligned
+from learn.network.intervals import LEVELS
+from learn.explanations.likelihood import nuisance_loglik
+from learn.explanations.sensitivity import beam_numbers, with_masses
+from learn.explanations.shapes import real_shapes, sign_aligned
 from physics.effects import hermite_row
 from physics.fem import assemble, beam_model, dof_names
 from physics.supports import add_springs
@@ -58,7 +58,7 @@ N_ELEMENTS = 20
 
 @dataclass(frozen=True, eq=False)
 class NominalBeam:
-    """The nominal FE beam of the sensitivities (:func:`learn.sensitivity.beam_sensitivity`).
+    """The nominal FE beam of the sensitivities (:func:`learn.explanations.sensitivity.beam_sensitivity`).
 
     Attributes
     ----------
@@ -109,8 +109,8 @@ class NominalBeam:
 @lru_cache(maxsize=16)
 def nominal_beam(preset, root_spring_relative=948.7, test=None, n_elements: int = N_ELEMENTS,
                  n_modes: int = 4) -> NominalBeam:
-    """The nominal beam :func:`learn.sensitivity.beam_sensitivity` differentiates (same arguments): the thesis's
-    clamped beam on its root spring measured at the quarter points, or a test's supports, sensors and modes."""
+    """The nominal beam :func:`learn.explanations.sensitivity.beam_sensitivity` differentiates (same arguments): the
+    thesis's clamped beam on its root spring measured at the quarter points, or a test's supports, sensors and modes."""
     L, EI, m, masses = beam_numbers(preset)
     names = list(dof_names(n_elements + 1))
     node_x = np.linspace(0.0, L, n_elements + 1)
@@ -363,8 +363,8 @@ KEEP_CHI2 = 2 * np.log(1000.0)
 
 def refined_fits(kind, y, sigma, half: float, model_error: float, grid_loglik, shapes=None, shape_sigma=1.0,
                  n_starts: int = 3) -> list[dict]:
-    """A damage kind's explanation (a :class:`learn.hypotheses.KindExplanation` holding its ``exact`` model)
-    refined for each pair of a chunk, with its intervals' posterior.
+    """A damage kind's explanation (a :class:`learn.explanations.hypotheses.KindExplanation` holding its ``exact``
+    model) refined for each pair of a chunk, with its intervals' posterior.
 
     The ``n_starts`` best places of its grid log-likelihood ``grid_loglik`` (n, K, E), an eighth of the beam apart
     (each at its best size), are refined (:func:`refine`); the best fit gives the place, size, prediction and Birge
@@ -375,7 +375,7 @@ def refined_fits(kind, y, sigma, half: float, model_error: float, grid_loglik, s
     Parameters
     ----------
     y : array, shape (n, m)    measured relative frequency changes; ``sigma`` (m,), ``half``, ``model_error`` as
-                               :func:`learn.likelihood.nuisance_loglik` takes them
+                               :func:`learn.explanations.likelihood.nuisance_loglik` takes them
     shapes : array, shape (n, D), optional   measured shape changes whitened by ``shape_sigma``
 
     Returns
