@@ -1,7 +1,7 @@
-"""Benchmark: ``monitor`` against the plainest tests on real repeated-test series (the public sets in
-``/work/realdata``, kept outside the repository; a set that is absent is skipped).
+"""Benchmark: ``monitor`` against the plainest tests on real repeated-test series (the public sets of
+``experiments/data/real/README.md``, kept outside the repository's commits; a set that is absent is skipped).
 
-Run: ``python -m experiments.benches.bench_real_series [--data /work/realdata] [--sets dropbear dropbear-2ch
+Run: ``python -m experiments.benches.bench_real_series [--data experiments/data/real] [--sets dropbear dropbear-2ch
 ds5-shock ds5-impedance bridge] [--quick] [--rate 0.01] [--out out/bench_real_series] [--docs]``
 
 Each set becomes a monitoring series: a baseline period (the first ``n_baseline`` tests) and later tests, each a
@@ -63,7 +63,7 @@ from physics.io import atomic_write_text  # noqa: E402
 __all__ = ["LOADERS", "METHODS", "RealSeries", "fft_frequencies", "group_scores", "identify_series", "main",
            "mode_windows_hz", "plain_alarms", "reference_fft_modes"]
 
-DATA = "/work/realdata"
+DATA = str(Path(__file__).resolve().parents[1] / "data" / "real")
 
 
 @dataclass(frozen=True)
