@@ -40,14 +40,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from physics.errors import ConvergenceError, ShapeError
-from physics.identification.fdd import (CLEAR_PEAK_DB, SingularValueSpectrum, _running_floor, clear_peaks,
+from physics.identification.fdd import (CLEAR_PEAK_DB, ClearPeaks, SingularValueSpectrum, _running_floor, clear_peaks,
                                         singular_value_spectrum, unit_shapes)
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
-from physics.identification.record_checks import check_periods, check_records
+from physics.identification.record_checks import CheckedRecord, check_periods, check_records
 from physics.modal import eigenvalues_from_modal
 
-__all__ = ["MIN_WIDTH_LOBES", "PAD", "TOP_FRACTION", "WINDOW_HALF_WIDTH", "FFTPeaks", "fft_peaks", "identify_fft_peaks",
-           "is_free_decay", "padded_spectrum"]
+__all__ = ["FALSE_PEAKS", "MIN_WIDTH_LOBES", "PAD", "TOP_FRACTION", "WINDOW_HALF_WIDTH", "FFTPeaks",
+           "clear_decay_peaks",
+           "fft_peaks", "identify_fft_peaks", "is_free_decay", "noise_line_db", "padded_spectrum"]
 
 #: Zero padding: the FFT length is the next power of two of at least ``PAD`` times the record's samples.
 PAD = 8
@@ -61,6 +62,8 @@ TOP_FRACTION = 0.5
 MIN_WIDTH_LOBES = 2.0
 #: A record whose last tenth has an RMS below this fraction of its first tenth's is a free decay.
 DECAY_RATIO = 0.3
+#: Expected number of noise lines of a free decay's band standing out as prominent peaks (:func:`_decay_peaks`).
+FALSE_PEAKS = 0.01
 
 
 @dataclass(frozen=True)
@@ -237,6 +240,35 @@ def _decay_spectrum(y, checked) -> SingularValueSpectrum:
     return SingularValueSpectrum(f, s, vectors, floor, band, max(3 * f[1], 10 / checked.duration_s, band[0]))
 
 
+def noise_line_db(n_lines, false_peaks=FALSE_PEAKS) -> float:
+    """Height (dB) over the running median of the three-line power average of white noise that its lines pass with
+    probability ``false_peaks / n_lines``: a line's power is exponential, the mean of three Gamma(3) (the
+    channels, seeing one structure, counted as one)."""
+    from scipy import special  # scipy: only output-only identification
+
+    p = min(0.5, false_peaks / max(int(n_lines), 1))
+    return float(10 * np.log10(special.gammainccinv(3, p) / special.gammainccinv(3, 0.5)))
+
+
+def _decay_peaks(sv: SingularValueSpectrum) -> ClearPeaks:
+    """The clear peaks of a free decay's spectrum: :data:`CLEAR_PEAK_DB` above the running floor, or
+    :data:`CLEAR_PEAK_DB` above the valleys either side and above the level a noise line passes with probability
+    :data:`FALSE_PEAKS` over the band's lines (:func:`noise_line_db`). Where modes are dense (a bridge, a plate) the
+    running median rides on their flanks, so a mode clear to the eye stands less than :data:`CLEAR_PEAK_DB` above
+    it; its prominence over the valleys tells it from the flanks, and its height over the floor from the noise."""
+    f = sv.frequency_hz
+    n_lines = int(np.count_nonzero((f >= max(sv.band_hz[0], sv.lowest_hz)) & (f <= sv.band_hz[1])))
+    return clear_peaks(sv, prominent_above_db=noise_line_db(n_lines))
+
+
+def clear_decay_peaks(y, sampling_frequency_hz, band_hz) -> ClearPeaks:
+    """The clear peaks in ``band_hz`` of a free decay's spectrum (:func:`_decay_spectrum`, :func:`_decay_peaks`):
+    the modes of a decay ``y`` of shape (n_channels, n_samples), its mean removed."""
+    y = np.asarray(y, dtype=np.float64)
+    checked = CheckedRecord(y, float(sampling_frequency_hz), tuple(band_hz), np.zeros(y.shape[0]))
+    return _decay_peaks(_decay_spectrum(y, checked))
+
+
 def identify_fft_peaks(signals, sampling_frequency_hz, band_hz=None, n_modes=None, window="auto", pad=PAD,
                        where="record") -> tuple[ModalEstimate, FFTPeaks]:
     """Modes at the clear peaks of a record's singular-value spectrum, each frequency refined on the zero-padded
@@ -273,7 +305,7 @@ def identify_fft_peaks(signals, sampling_frequency_hz, band_hz=None, n_modes=Non
     decay = window == "none" or (window == "auto" and is_free_decay(y))
     sv = _decay_spectrum(y, checked) if decay else singular_value_spectrum(checked, where=where)
     band = checked.band_hz
-    peaks = clear_peaks(sv)
+    peaks = _decay_peaks(sv) if decay else clear_peaks(sv)
     if peaks.lines.size == 0:
         raise ConvergenceError(f"{where}: no peak of the first singular value stands {CLEAR_PEAK_DB:g} dB above "
                                f"its floor in {band[0]:g}-{band[1]:g} Hz")
