@@ -141,7 +141,7 @@ def load_sets(directory=None) -> list[RealSet]:
 
 def identify_frequencies(method, signals, fs, band_hz=None) -> np.ndarray:
     """Natural frequencies (Hz) ``method`` identifies in one record (``"auto"``: ``identify``'s choice); a
-    refusal: none."""
+    refusal (or a crash, so that a report of an older code state completes): none."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -152,8 +152,8 @@ def identify_frequencies(method, signals, fs, band_hz=None) -> np.ndarray:
             spec = METHODS[method]
             est, _ = spec.fit(signals, fs, band_hz, None, "record", **{k: None for k in spec.options})
             return est.natural_frequencies_hz
-    except BeamDamageError:
-        return np.zeros(0)
+    except (BeamDamageError, np.linalg.LinAlgError, IndexError, ValueError):   # a crash of an older code state
+        return np.zeros(0)                                                      # counts as a refusal
 
 
 def group_scatter(real: RealSet, group: RealGroup, method, band_hz=None) -> np.ndarray:

@@ -50,7 +50,9 @@ MAX_FREE_VALUES = 2 ** 24
 FREE_DROP_DB = 6.0
 #: ... or the first decay after a hit is this much louder than the record before the hit (dB) ...
 FREE_LEAD_DB = 10.0
-#: ... or, for a record without a hit (a decay under way when the record starts), by this much.
+#: ... or, for a record without a hit (a decay under way when the record starts), by this much, or by
+#: :data:`FREE_DROP_DB` with every quarter's energy below the one before (an exponential envelope falls steadily; a
+#: stationary response's quarters rise and fall at random, all three in order by chance one time in six).
 FREE_DROP_NO_HIT_DB = 10.0
 #: Largest block Hankel dimension (block rows x channels) of the ERA.
 MAX_HANKEL_ROWS = 160
@@ -154,6 +156,17 @@ def _quarter_drop_db(x, a, b):
     return float(10 * np.log10(max(first, np.finfo(float).tiny) / max(last, np.finfo(float).tiny)))
 
 
+def _decays_without_hit(x, a, b):
+    """Whether samples ``a:b`` (no hit among them) are a decay: their energy (about their mean) falls
+    :data:`FREE_DROP_NO_HIT_DB` from the first quarter to the last, or :data:`FREE_DROP_DB` with each quarter below
+    the one before."""
+    k = max(1, (b - a) // 4)
+    seg = x[:, a:a + 4 * k] - x[:, a:b].mean(axis=1, keepdims=True)
+    quarters = np.sum(seg.reshape(seg.shape[0], 4, k) ** 2, axis=(0, 2))
+    drop = _quarter_drop_db(x, a, b)
+    return bool(drop >= FREE_DROP_NO_HIT_DB or (drop >= FREE_DROP_DB and np.all(np.diff(quarters) < 0)))
+
+
 def _rises(x, innovation, p):
     """Hits seen as a sharp rise of the energy of the first differences (the channels each scaled to unit
     variance): the energy over the next window at least :data:`HIT_RISE` times that over the window before and
@@ -207,7 +220,7 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
     predictor's order are one, and a hit that adds no energy (:func:`_adds_energy`) is none. Each decay runs from
     the sample after a hit to the sample before the next one (or
     the record's end); the part before the first hit (or the whole record, without a hit) from its loudest sample
-    on is a decay when its energy falls :data:`FREE_DROP_NO_HIT_DB` from its first to its last quarter. Decays
+    on is a decay when its energy falls steadily (:func:`_decays_without_hit`). Decays
     shorter than ``min_samples`` (default four times the predictor's order) are left out.
     """
     x = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
@@ -234,7 +247,7 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
     head = int(firsts[0]) if firsts.size else n
     if head >= least:
         s0 = int(np.argmax(np.sum(x[:, :head] ** 2, axis=0)))
-        if head - s0 >= least and _quarter_drop_db(x, s0, head) >= FREE_DROP_NO_HIT_DB:
+        if head - s0 >= least and _decays_without_hit(x, s0, head):
             spans, drop = [(s0, head), *spans], [_quarter_drop_db(x, s0, head), *drop]
     drop_db = float(np.average(drop, weights=[b - a for a, b in spans])) if spans else np.nan
     lead_db = np.nan
