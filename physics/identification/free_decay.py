@@ -438,7 +438,6 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         raise ShapeError(f"{where}: the decays are too short for a model of order 2 ({rows} block rows of "
                          f"{n_ch} channel(s))")
     for _ in range(1 + MAX_SPLIT_ROUNDS):
-        parts = [p for p in parts if p.shape[1] >= MIN_DECAY_ROWS * rows]
         U, s = _hankel_basis(parts, rows)
         diagram = subspace_diagram(U, s, n_ch, np.arange(2, p_max + 1, 2), fs_dec, (0.0, hi), max_damping)
         try:
@@ -456,9 +455,10 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
                                    f"stabilisation diagram's poles at {at} Hz; narrow the band or try --method ssi") \
                 from None
         split = _split_missed_hits(parts, fit.residuals, rows)
-        if len(split) == len(parts):
+        kept = [p for p in split if p.shape[1] >= MIN_DECAY_ROWS * rows]
+        if len(split) == len(parts) or not kept:       # no missed hit, or only pieces too short for the model
             break
-        parts = split
+        parts = kept
     keep = (fit.natural_frequencies_hz >= band[0]) & (fit.natural_frequencies_hz <= hi) \
         & (fit.damping_ratios > 0) & (fit.damping_ratios < max_damping) \
         & (mode_snr(fit, [p.shape[1] for p in fitted], fs_dec) >= MIN_MODE_SNR)
