@@ -240,25 +240,45 @@ def _decay_spectrum(y, checked) -> SingularValueSpectrum:
     return SingularValueSpectrum(f, s, vectors, floor, band, max(3 * f[1], 10 / checked.duration_s, band[0]))
 
 
-def noise_line_db(n_lines, false_peaks=FALSE_PEAKS) -> float:
-    """Height (dB) over the running median of the three-line power average of white noise that its lines pass with
-    probability ``false_peaks / n_lines``: a line's power is exponential, the mean of three Gamma(3) (the
-    channels, seeing one structure, counted as one)."""
+def noise_line_db(n_lines, false_peaks=FALSE_PEAKS, dof=3.0) -> float:
+    """Height (dB) over the running median that a noise line of a three-line power average passes with probability
+    ``false_peaks / n_lines``: the average of ``dof`` independent exponential line powers is Gamma(``dof``) (3 for
+    white noise: the channels, seeing one structure, counted as one)."""
     from scipy import special  # scipy: only output-only identification
 
     p = min(0.5, false_peaks / max(int(n_lines), 1))
-    return float(10 * np.log10(special.gammainccinv(3, p) / special.gammainccinv(3, 0.5)))
+    return float(10 * np.log10(special.gammainccinv(dof, p) / special.gammainccinv(dof, 0.5)))
+
+
+def _line_dof(over_db):
+    """The independent lines (1 to 3) in a three-line average whose heights over the running median (dB) spread as
+    ``over_db`` does: the interquartile range of ``10 log10`` of a Gamma(k) law, 3.6 dB for k = 3 (white noise)
+    and 6.8 dB for k = 1 (lines as correlated as a decay of a fifth of the record's length makes them). Peaks
+    widen the spread, so it errs on the side of fewer lines (a higher level)."""
+    from scipy import special  # scipy: only output-only identification
+
+    k = np.linspace(1.0, 3.0, 201)
+    iqr = 10 * np.log10(special.gammaincinv(k, 0.75) / special.gammaincinv(k, 0.25))
+    spread = float(np.subtract(*np.percentile(over_db, [75, 25]))) if over_db.size >= 8 else iqr[0]
+    return float(k[np.argmin(np.abs(iqr - spread))])
 
 
 def _decay_peaks(sv: SingularValueSpectrum) -> ClearPeaks:
     """The clear peaks of a free decay's spectrum: :data:`CLEAR_PEAK_DB` above the running floor, or
     :data:`CLEAR_PEAK_DB` above the valleys either side and above the level a noise line passes with probability
-    :data:`FALSE_PEAKS` over the band's lines (:func:`noise_line_db`). Where modes are dense (a bridge, a plate) the
-    running median rides on their flanks, so a mode clear to the eye stands less than :data:`CLEAR_PEAK_DB` above
+    :data:`FALSE_PEAKS` over the band's lines (:func:`_decay_peak_db`). Where modes are dense (a bridge, a plate)
+    the running median rides on their flanks, so a mode clear to the eye stands less than :data:`CLEAR_PEAK_DB` above
     it; its prominence over the valleys tells it from the flanks, and its height over the floor from the noise."""
+    return clear_peaks(sv, prominent_above_db=_decay_peak_db(sv))
+
+
+def _decay_peak_db(sv: SingularValueSpectrum) -> float:
+    """:func:`noise_line_db` of the lines of ``sv``'s band that may hold a peak, with the independent lines of its
+    average estimated from their spread (:func:`_line_dof`)."""
     f = sv.frequency_hz
-    n_lines = int(np.count_nonzero((f >= max(sv.band_hz[0], sv.lowest_hz)) & (f <= sv.band_hz[1])))
-    return clear_peaks(sv, prominent_above_db=noise_line_db(n_lines))
+    lines = np.flatnonzero((f >= max(sv.band_hz[0], sv.lowest_hz)) & (f <= sv.band_hz[1]) & np.isfinite(sv.floor))
+    over = 10 * np.log10(np.maximum(sv.singular_values[lines, 0], np.finfo(float).tiny) / sv.floor[lines])
+    return noise_line_db(lines.size, dof=_line_dof(over))
 
 
 def clear_decay_peaks(y, sampling_frequency_hz, band_hz) -> ClearPeaks:
@@ -306,6 +326,10 @@ def identify_fft_peaks(signals, sampling_frequency_hz, band_hz=None, n_modes=Non
     sv = _decay_spectrum(y, checked) if decay else singular_value_spectrum(checked, where=where)
     band = checked.band_hz
     peaks = _decay_peaks(sv) if decay else clear_peaks(sv)
+    if peaks.lines.size == 0 and decay:
+        raise ConvergenceError(f"{where}: no peak of the free decay's spectrum stands {CLEAR_PEAK_DB:g} dB above its "
+                               f"floor, nor {CLEAR_PEAK_DB:g} dB above its valleys and {_decay_peak_db(sv):.3g} dB "
+                               f"above its floor, in {band[0]:g}-{band[1]:g} Hz")
     if peaks.lines.size == 0:
         raise ConvergenceError(f"{where}: no peak of the first singular value stands {CLEAR_PEAK_DB:g} dB above "
                                f"its floor in {band[0]:g}-{band[1]:g} Hz")

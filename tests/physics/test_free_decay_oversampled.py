@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from impact_records import impact_record
 
-from physics.errors import ShapeError
+from physics.errors import ConvergenceError, ShapeError
 from physics.identification.fdd import clear_peaks
 from physics.identification.fft_peak import _decay_spectrum, identify_fft_peaks, noise_line_db
 from physics.identification.free_decay import find_decays, identify_era
@@ -100,3 +100,17 @@ def test_the_noise_line_level_is_passed_by_the_stated_share_of_noise_lines():
     p = rng.exponential(size=(2_000_000, 3)).mean(axis=1)
     share = np.mean(10 * np.log10(p / np.median(p)) > noise_line_db(10))
     assert share == pytest.approx(1e-3, rel=0.1)
+
+
+def test_a_decay_without_a_clear_peak_is_refused_naming_both_rules():
+    """Decaying white noise (a free decay by its envelope, no mode; 3 s time constant in 8 s): fftpeak refuses it,
+    naming the 10 dB over the floor and the prominent-peak level of its 1590 lines, above white noise's 8.05 dB
+    (the envelope correlates neighbouring lines, fewer independent ones in each average) and below 12.4 dB (one)."""
+    rng = np.random.default_rng(1)
+    t = np.arange(4000) / 500.0
+    y = (rng.standard_normal(4000) * np.exp(-t / 3.0))[None, :]
+    with pytest.raises(ConvergenceError) as err:
+        identify_fft_peaks(y, 500.0)
+    level = float(re.search(r"nor 10 dB above its valleys and ([\d.]+) dB above its floor, in 0-200 Hz",
+                            str(err.value)).group(1))
+    assert noise_line_db(1590) + 0.3 < level < noise_line_db(1590, dof=1.0)
