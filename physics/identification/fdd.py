@@ -202,10 +202,11 @@ class ClearPeaks:
     tolerance_hz: np.ndarray
 
 
-def clear_peaks(sv: SingularValueSpectrum, band_hz=None) -> ClearPeaks:
+def clear_peaks(sv: SingularValueSpectrum, band_hz=None, prominent_above_db=np.inf) -> ClearPeaks:
     """The clear peaks of the first singular value within ``band_hz`` (default the spectrum's band): local maxima
-    :data:`CLEAR_PEAK_DB` above the floor and :data:`PEAK_PROMINENCE_DB` above the valleys either side, at or
-    above :attr:`SingularValueSpectrum.lowest_hz`."""
+    :data:`CLEAR_PEAK_DB` above the floor (or, with ``prominent_above_db``, :data:`CLEAR_PEAK_DB` above the valleys
+    either side and ``prominent_above_db`` above the floor) and :data:`PEAK_PROMINENCE_DB` above the valleys either
+    side, at or above :attr:`SingularValueSpectrum.lowest_hz`."""
     from scipy import signal  # scipy.fft/signal/ndimage: about 1 s to import, only output-only identification
 
     band = sv.band_hz if band_hz is None else band_hz
@@ -215,8 +216,9 @@ def clear_peaks(sv: SingularValueSpectrum, band_hz=None) -> ClearPeaks:
         return ClearPeaks(np.zeros(0, int), np.zeros(0), np.zeros(0), np.zeros((0, 2), int), np.zeros(0))
     db = 10 * np.log10(np.maximum(sv.singular_values[idx, 0], np.finfo(float).tiny))
     over = db - 10 * np.log10(sv.floor[idx])
-    pk, _ = signal.find_peaks(db, prominence=PEAK_PROMINENCE_DB)
-    pk = pk[over[pk] >= CLEAR_PEAK_DB]
+    pk, props = signal.find_peaks(db, prominence=PEAK_PROMINENCE_DB)
+    pk = pk[(over[pk] >= CLEAR_PEAK_DB)
+            | ((props["prominences"] >= CLEAR_PEAK_DB) & (over[pk] >= prominent_above_db))]
     edges = np.concatenate([[0], pk, [idx.size - 1]])
     valleys = np.array([[a + np.argmin(db[a:p + 1]), p + np.argmin(db[p:b + 1])]
                         for a, p, b in zip(edges[:-2], pk, edges[2:])], int).reshape(-1, 2)

@@ -22,11 +22,13 @@ The window (``window="auto"``):
 
 The peaks are found either near given frequencies (the highest local maximum within a tolerance) or at the clear
 peaks (:func:`~physics.identification.fdd.clear_peaks`, the peaks every output-only method answers for) of the
-record's spectrum: for a free decay, the whole record's FFT power averaged over three lines; for a stationary
-record, the averaged singular-value spectrum FDD reads. Each is refined on the fine grid. A free decay's spectrum
-peaks at the *damped* frequency ``f_d``; where the half-power width gives a damping ratio, the natural frequency
-reported is ``f_d / sqrt(1 - zeta^2)``. The damping ratio is the half-power (-3 dB) half-width over the
-frequency, NaN where that width is under :data:`MIN_WIDTH_LOBES` times the window's own half-power half-width
+record's spectrum: for a free decay, the whole record's FFT power averaged over three lines
+(:func:`~physics.identification.free_decay.decay_spectrum`; a peak 10 dB above its valleys and above the level a
+noise line passes by chance over the band is clear too, :func:`~physics.identification.decay_peaks.decay_peaks`);
+for a stationary record, the averaged singular-value spectrum FDD reads. Each is refined on the fine grid. A free
+decay's spectrum peaks at the *damped* frequency ``f_d``; where the half-power width gives a damping ratio, the
+natural frequency reported is ``f_d / sqrt(1 - zeta^2)``. The damping ratio is the half-power (-3 dB) half-width
+over the frequency, NaN where that width is under :data:`MIN_WIDTH_LOBES` times the window's own half-power half-width
 (:data:`WINDOW_HALF_WIDTH` over the record's length: the peak is then the window's, not the mode's). The shapes
 are the complex FFT values of each channel at the peak's line, unit norm.
 
@@ -41,6 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from physics.errors import ConvergenceError, ShapeError
+from physics.identification.decay_peaks import decay_peaks, prominent_peak_db
 from physics.identification.fdd import CLEAR_PEAK_DB, clear_peaks, singular_value_spectrum, unit_shapes
 from physics.identification.free_decay import decay_spectrum, free_response
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
@@ -248,7 +251,11 @@ def identify_fft_peaks(signals, sampling_frequency_hz, band_hz=None, n_modes=Non
     decay = window == "none"
     sv = decay_spectrum(checked) if decay else singular_value_spectrum(checked, where=where)
     band = checked.band_hz
-    peaks = clear_peaks(sv)
+    peaks = decay_peaks(sv) if decay else clear_peaks(sv)
+    if peaks.lines.size == 0 and decay:
+        raise ConvergenceError(f"{where}: no peak of the free decay's spectrum stands {CLEAR_PEAK_DB:g} dB above its "
+                               f"floor, nor {CLEAR_PEAK_DB:g} dB above its valleys and {prominent_peak_db(sv):.3g} dB "
+                               f"above its floor, in {band[0]:g}-{band[1]:g} Hz")
     if peaks.lines.size == 0:
         raise ConvergenceError(f"{where}: no peak of the first singular value stands {CLEAR_PEAK_DB:g} dB above "
                                f"its floor in {band[0]:g}-{band[1]:g} Hz")

@@ -28,6 +28,7 @@ import numpy as np
 from physics.errors import ConvergenceError, ShapeError
 from physics.identification.band_refine import BandFit, refine_in_bands
 from physics.identification.damped_sinusoids import DampedSinusoidFit, fit_damped_sinusoids
+from physics.identification.decay_peaks import decay_peaks
 from physics.identification.fdd import SingularValueSpectrum, _running_floor, clear_peaks, unit_shapes
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles
@@ -54,7 +55,9 @@ MAX_FREE_VALUES = 2 ** 24
 FREE_DROP_DB = 6.0
 #: ... or the first decay after a hit is this much louder than the record before the hit (dB) ...
 FREE_LEAD_DB = 10.0
-#: ... or, for a record without a hit (a decay under way when the record starts), by this much.
+#: ... or, for a record without a hit (a decay under way when the record starts), by this much, or by
+#: :data:`FREE_DROP_DB` with every quarter's energy below the one before (an exponential envelope falls steadily; a
+#: stationary response's quarters rise and fall at random, all three in order by chance one time in six).
 FREE_DROP_NO_HIT_DB = 10.0
 #: Largest block Hankel dimension (block rows x channels) of the ERA.
 MAX_HANKEL_ROWS = 160
@@ -66,6 +69,10 @@ MIN_MODE_SNR = 50.0
 SPLIT_RISE, MAX_SPLIT_ROUNDS = 4.0, 2
 #: A decay holds at least this many times the Hankel's block rows (shorter decays are left out).
 MIN_DECAY_ROWS = 3
+#: Least stability code (:data:`~physics.identification.poles.STABILITY_CODES`) of a pole the selection clusters:
+#: stable in frequency and shape; the damping, which a real decay's noise moves from order to order more than the
+#: frequency, is the least-squares refinement's.
+MIN_STATUS = 4
 
 
 @dataclass(frozen=True)
@@ -159,6 +166,17 @@ def _quarter_drop_db(x, a, b):
     return float(10 * np.log10(max(first, np.finfo(float).tiny) / max(last, np.finfo(float).tiny)))
 
 
+def _decays_without_hit(x, a, b):
+    """Whether samples ``a:b`` (no hit among them) are a decay: their energy (about their mean) falls
+    :data:`FREE_DROP_NO_HIT_DB` from the first quarter to the last, or :data:`FREE_DROP_DB` with each quarter below
+    the one before."""
+    k = max(1, (b - a) // 4)
+    seg = x[:, a:a + 4 * k] - x[:, a:b].mean(axis=1, keepdims=True)
+    quarters = np.sum(seg.reshape(seg.shape[0], 4, k) ** 2, axis=(0, 2))
+    drop = _quarter_drop_db(x, a, b)
+    return bool(drop >= FREE_DROP_NO_HIT_DB or (drop >= FREE_DROP_DB and np.all(np.diff(quarters) < 0)))
+
+
 def _rises(x, innovation, p):
     """Hits seen as a sharp rise of the energy of the first differences (the channels each scaled to unit
     variance): the energy over the next window at least :data:`HIT_RISE` times that over the window before and
@@ -181,19 +199,28 @@ def _rises(x, innovation, p):
     return at, np.minimum(at + p // 4, n - 1)
 
 
-def _adds_energy(x, firsts, lasts, p):
-    """Whether each hit (its first and last samples) adds energy: the record's energy over the ``4 p`` samples after
-    it at least :data:`HIT_GAIN` times that over the ``4 p`` samples before it (per sample, where fewer precede it).
+def _loudest(x, firsts, lasts):
+    """The loudest sample (summed square over the channels) of each run ``firsts[i]..lasts[i]``: where the response
+    to a hit stops growing. A run of large innovations lasts as long as the decay stands far above the noise (the
+    record's one linear predictor fits a loud decay only to a fraction of its level), which is no part of the hit."""
+    e = np.sum(x ** 2, axis=0)
+    return np.array([a + int(np.argmax(e[a:b + 1])) for a, b in zip(firsts, lasts)], int)
+
+
+def _adds_energy(x, firsts, lasts, w):
+    """Whether each hit (its first and last samples) adds energy: the record's energy over the ``w`` samples after
+    it at least :data:`HIT_GAIN` times that over the ``w`` samples before it (per sample, where fewer precede it).
     A prediction error within a decay (its first milliseconds, which the record's one linear predictor fits worst,
-    or its tail in the noise) is no new hit."""
+    or its tail in the noise) is no new hit; ``w`` spans at least a period of the lowest mode, so that the phase of
+    an oscillation within its windows does not pass for a hit."""
     e = np.concatenate([[0.0], np.cumsum(np.sum(x ** 2, axis=0))])
-    n, w = x.shape[1], 4 * p
+    n = x.shape[1]
     before = e[firsts] - e[np.maximum(firsts - w, 0)]
     after = e[np.minimum(lasts + 1 + w, n)] - e[np.minimum(lasts + 1, n)]
     return after * np.clip(np.minimum(w, firsts), 1, None) >= HIT_GAIN * before * w
 
 
-def find_decays(checked: CheckedRecord, min_samples=None) -> Decays:
+def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Decays:
     """The hits and free decays of a checked record (see the module docstring).
 
     A hit is a run of samples whose innovation (the one-step prediction error of a linear predictor of each
@@ -203,7 +230,7 @@ def find_decays(checked: CheckedRecord, min_samples=None) -> Decays:
     predictor's order are one, and a hit that adds no energy (:func:`_adds_energy`) is none. Each decay runs from
     the sample after a hit to the sample before the next one (or
     the record's end); the part before the first hit (or the whole record, without a hit) from its loudest sample
-    on is a decay when its energy falls :data:`FREE_DROP_NO_HIT_DB` from its first to its last quarter. Decays
+    on is a decay when its energy falls steadily (:func:`_decays_without_hit`). Decays
     shorter than ``min_samples`` (default four times the predictor's order) are left out.
     """
     x = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
@@ -215,9 +242,12 @@ def find_decays(checked: CheckedRecord, min_samples=None) -> Decays:
     r_first, r_last = _rises(x, innovation, p)
     over = np.unique(np.concatenate([over, r_first, r_last]))
     if over.size:
-        gaps = np.flatnonzero(np.diff(over) > p)
+        cut = (np.diff(over) > p) | np.isin(over[1:], r_first)          # a run, or a rise within one, starts a hit
+        gaps = np.flatnonzero(cut)
         firsts, lasts = over[np.concatenate([[0], gaps + 1])], over[np.concatenate([gaps, [over.size - 1]])]
-        keep = _adds_energy(x, firsts, lasts, p)
+        lasts = np.minimum(lasts, _loudest(x, firsts, lasts) + p // 4)
+        w = 4 * p if lowest_hz is None else max(4 * p, int(np.ceil(checked.sampling_frequency_hz / lowest_hz)))
+        keep = _adds_energy(x, firsts, lasts, w)
         firsts, lasts = firsts[keep], lasts[keep]
     else:
         firsts = lasts = np.zeros(0, int)
@@ -227,7 +257,7 @@ def find_decays(checked: CheckedRecord, min_samples=None) -> Decays:
     head = int(firsts[0]) if firsts.size else n
     if head >= least:
         s0 = int(np.argmax(np.sum(x[:, :head] ** 2, axis=0)))
-        if head - s0 >= least and _quarter_drop_db(x, s0, head) >= FREE_DROP_NO_HIT_DB:
+        if head - s0 >= least and _decays_without_hit(x, s0, head):
             spans, drop = [(s0, head, 0), *spans], [_quarter_drop_db(x, s0, head), *drop]
     drop_db = float(np.average(drop, weights=[b - a for a, b, _ in spans])) if spans else np.nan
     lead_db = np.nan
@@ -301,6 +331,22 @@ def _decimated(checked, q, decays):
     margin = 4 * q                                   # the filter's response to the hit, decimated samples
     spans = [(o, a + margin, b) for o, a, b in spans if b - a > margin]
     return [x[:, a:b:q] for _, a, b in spans], spans
+
+
+def _model_peaks(parts, fs_dec, band, record_peaks):
+    """The modes the model must hold: frequencies (Hz) and tolerances (Hz) of the clear peaks in ``band`` of the
+    longest decimated decay's spectrum (:func:`decay_spectrum`, peaks by
+    :func:`~physics.identification.decay_peaks.decay_peaks`: close modes resolved as finely as the decays allow)
+    and of the record's (``record_peaks``, the whole record at its rate: a mode above the decimated decay's floor
+    there), each once."""
+    y = max(parts, key=lambda p: p.shape[1])
+    fine = decay_peaks(decay_spectrum(CheckedRecord(y, fs_dec, tuple(band), y.mean(axis=1))))
+    f, tol = record_peaks.frequency_hz, record_peaks.tolerance_hz
+    new = (f >= band[0]) & (f <= band[1]) & np.all(np.abs(f[:, None] - fine.frequency_hz[None, :])
+                                                    > np.maximum(tol[:, None], fine.tolerance_hz[None, :]), axis=1)
+    f, tol = np.concatenate([fine.frequency_hz, f[new]]), np.concatenate([fine.tolerance_hz, tol[new]])
+    order = np.argsort(f)
+    return f[order], tol[order]
 
 
 def _hankel_basis(parts, rows):
@@ -412,11 +458,12 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     checked = check_records(signals, sampling_frequency_hz, band_hz, where)
     fs, band = checked.sampling_frequency_hz, checked.band_hz
     n_ch = checked.signals.shape[0]
-    decays = find_decays(checked)
+    peaks = clear_peaks(decay_spectrum(checked))
+    lowest = band[0] if band[0] > 0 else (peaks.frequency_hz[0] if peaks.frequency_hz.size else None)
+    decays = find_decays(checked, lowest_hz=lowest)
     if decays.starts.size == 0:
         raise ShapeError(f"{where}: no free decay found (no hit followed by enough samples, nor a decaying "
                          "record); identify a stationary response with --method ssi")
-    peaks = clear_peaks(decay_spectrum(checked))
     rows_wanted = MAX_HANKEL_ROWS // n_ch
     q = max(1, int(fs // (2.5 * band[1])))
     if band_hz is None and peaks.frequency_hz.size:     # oversampled: rows span one period of the lowest peak,
@@ -426,37 +473,45 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     hi = min(band[1], fs / (2.5 * q))
     fs_dec = fs / q
     parts, spans = _decimated(checked, q, decays)
-    shortest = min((p.shape[1] for p in parts), default=0)
-    rows = min(rows_wanted, shortest // MIN_DECAY_ROWS)
     longest = max((p.shape[1] for p in parts), default=0)
+    rows = min(rows_wanted, longest // MIN_DECAY_ROWS)
     if rows < 2:
-        need = MIN_DECAY_ROWS * 2 * q + 8 * q
-        raise ShapeError(f"{where}: its longest decay holds {longest * q} samples at {fs:g} Hz; a decay needs at "
-                         f"least {need} samples ({need / fs:.3g} s) for a free-decay model")
-    p_max = max_order or max(MIN_MAX_ORDER, ORDERS_PER_PEAK * peaks.frequency_hz.size)
+        need = 2 * MIN_DECAY_ROWS * q + (4 * q if q > 1 else 0)
+        raise ShapeError(f"{where}: its longest decay holds {int(np.max(decays.stops - decays.starts))} samples at "
+                         f"{fs:g} Hz; a decay needs at least {need} samples ({need / fs:.3g} s) for a free-decay model")
+    long_enough = [j for j, p in enumerate(parts) if p.shape[1] >= MIN_DECAY_ROWS * rows]
+    parts, spans = [parts[j] for j in long_enough], [spans[j] for j in long_enough]   # shorter decays left out
+    peaks_hz, peak_tol_hz = _model_peaks(parts, fs_dec, (band[0], hi), peaks)
+    # orders: every mode the decays show in a band given; without one, the record's clear peaks up to ``hi`` (a
+    # default band at the full rate can hold hundreds of the decays' peaks, each a costly mode of the refinement)
+    sized = peaks_hz.size if band_hz is not None else int(np.count_nonzero(peaks.frequency_hz <= hi))
+    p_max = max_order or max(MIN_MAX_ORDER, ORDERS_PER_PEAK * sized)
     p_max = 2 * (min(p_max, (rows - 1) * n_ch) // 2)
     if p_max < 2:
         raise ShapeError(f"{where}: the decays are too short for a model of order 2 ({rows} block rows of "
                          f"{n_ch} channel(s))")
-    inside = (peaks.frequency_hz >= band[0]) & (peaks.frequency_hz <= hi)
     for _ in range(1 + MAX_SPLIT_ROUNDS):
-        long_enough = [j for j, p in enumerate(parts) if p.shape[1] >= MIN_DECAY_ROWS * rows]
-        parts, spans = [parts[j] for j in long_enough], [spans[j] for j in long_enough]
         U, s = _hankel_basis(parts, rows)
         diagram = subspace_diagram(U, s, n_ch, np.arange(2, p_max + 1, 2), fs_dec, (0.0, hi), max_damping)
         try:
-            sel = select_poles(diagram, peaks_hz=peaks.frequency_hz[inside],
-                               peak_tol_hz=peaks.tolerance_hz[inside])
+            sel = select_poles(diagram, min_status=MIN_STATUS, peaks_hz=peaks_hz, peak_tol_hz=peak_tol_hz)
         except ConvergenceError:
-            lowest = np.min(diagram.natural_frequencies_hz, initial=np.inf)
-            check_periods(checked.duration_s, lowest, "the lowest pole", where)
+            if peaks_hz.size:
+                check_periods(checked.duration_s, peaks_hz[0], "the lowest peak", where)
             raise ConvergenceError(f"{where}: no pole of the free decays is stable over enough model orders: raise "
                                    "max_order, widen the band, or try --method ssi") from None
-        fit, fitted, fitted_spans = fit_damped_sinusoids(parts, fs_dec, sel.eigenvalues), parts, spans
+        try:
+            fit, fitted, fitted_spans = fit_damped_sinusoids(parts, fs_dec, sel.eigenvalues), parts, spans
+        except np.linalg.LinAlgError:
+            at = ", ".join(f"{v:.4g}" for v in sel.natural_frequencies_hz)
+            raise ConvergenceError(f"{where}: the damped-sinusoid fit of the free decays diverged from the "
+                                   f"stabilisation diagram's poles at {at} Hz; narrow the band or try --method ssi") \
+                from None
         split, split_spans = _split_missed_hits(parts, spans, q, fit.residuals, rows)
-        if len(split) == len(parts):
+        kept = [j for j, p in enumerate(split) if p.shape[1] >= MIN_DECAY_ROWS * rows]
+        if len(split) == len(parts) or not kept:       # no missed hit, or only pieces too short for the model
             break
-        parts, spans = split, split_spans
+        parts, spans = [split[j] for j in kept], [split_spans[j] for j in kept]
     keep = (fit.natural_frequencies_hz >= band[0]) & (fit.natural_frequencies_hz <= hi) \
         & (fit.damping_ratios > 0) & (fit.damping_ratios < max_damping) \
         & (mode_snr(fit, [p.shape[1] for p in fitted], fs_dec) >= MIN_MODE_SNR)
