@@ -481,11 +481,15 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
                          f"{fs:g} Hz; a decay needs at least {need} samples ({need / fs:.3g} s) for a free-decay model")
     long_enough = [j for j, p in enumerate(parts) if p.shape[1] >= MIN_DECAY_ROWS * rows]
     parts, spans = [parts[j] for j in long_enough], [spans[j] for j in long_enough]   # shorter decays left out
-    peaks_hz, peak_tol_hz = _model_peaks(parts, fs_dec, (band[0], hi), peaks)
-    # orders: every mode the decays show in a band given; without one, the record's clear peaks up to ``hi`` (a
-    # default band at the full rate can hold hundreds of the decays' peaks, each a costly mode of the refinement)
-    sized = peaks_hz.size if band_hz is not None else int(np.count_nonzero(peaks.frequency_hz <= hi))
-    p_max = max_order or max(MIN_MAX_ORDER, ORDERS_PER_PEAK * sized)
+    # the modes the model must hold: in a band given, every mode the decays show; without one, the record's clear
+    # peaks up to ``hi`` (a default band at the full rate can hold hundreds of the decays' peaks, each a costly mode
+    # of the refinement)
+    if band_hz is not None:
+        peaks_hz, peak_tol_hz = _model_peaks(parts, fs_dec, (band[0], hi), peaks)
+    else:
+        inside = peaks.frequency_hz <= hi
+        peaks_hz, peak_tol_hz = peaks.frequency_hz[inside], peaks.tolerance_hz[inside]
+    p_max = max_order or max(MIN_MAX_ORDER, ORDERS_PER_PEAK * peaks_hz.size)
     p_max = 2 * (min(p_max, (rows - 1) * n_ch) // 2)
     if p_max < 2:
         raise ShapeError(f"{where}: the decays are too short for a model of order 2 ({rows} block rows of "
