@@ -65,6 +65,11 @@ def check_periods(duration_s, frequency_hz, what, where="record"):
                          f"{MIN_PERIODS / duration_s:.3g} Hz cannot be identified from it")
 
 
+def _band(band_hz, fs):
+    """The band of interest (Hz): ``band_hz``, by default 0 to 0.4 of the sampling rate ``fs``."""
+    return (0.0, 0.4 * fs) if band_hz is None else (float(band_hz[0]), float(band_hz[1]))
+
+
 def check_records(signals, sampling_frequency_hz, band_hz=None, where="record", chunk_values=2**22) -> CheckedRecord:
     """Check a response record for every output-only method (see the module docstring) in one pass over chunks.
 
@@ -95,8 +100,7 @@ def check_records(signals, sampling_frequency_hz, band_hz=None, where="record", 
     """
     if isinstance(signals, CheckedRecord):
         fs_ = float(sampling_frequency_hz)
-        band_ = (0.0, 0.4 * fs_) if band_hz is None else (float(band_hz[0]), float(band_hz[1]))
-        if signals.sampling_frequency_hz == fs_ and tuple(signals.band_hz) == band_:
+        if signals.sampling_frequency_hz == fs_ and tuple(signals.band_hz) == _band(band_hz, fs_):
             return signals
         signals = signals.signals
     y = signals if isinstance(signals, np.ndarray) else np.asarray(signals, dtype=np.float64)
@@ -107,7 +111,7 @@ def check_records(signals, sampling_frequency_hz, band_hz=None, where="record", 
     fs = float(sampling_frequency_hz)
     if not (np.isfinite(fs) and fs > 0):
         raise ShapeError(f"{where}: sampling rate {fs:g} Hz must be finite and > 0")
-    band = (0.0, 0.4 * fs) if band_hz is None else (float(band_hz[0]), float(band_hz[1]))
+    band = _band(band_hz, fs)
     if band[1] > fs / 2:
         raise ShapeError(f"{where}: band up to {band[1]:g} Hz is above the Nyquist frequency {fs / 2:g} Hz "
                          f"of a {fs:g} Hz sampling rate")
