@@ -15,16 +15,21 @@ deviation.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
 
 from physics.errors import ConvergenceError
 
-__all__ = ["DampedSinusoidFit", "fit_damped_sinusoids", "levenberg_marquardt", "pole_statistics"]
+__all__ = ["DampedSinusoidFit", "NormalEquations", "fit_damped_sinusoids", "levenberg_marquardt", "pole_statistics",
+           "power_sums"]
 
 #: Levenberg-Marquardt iterations at most, and the relative pole step below which the fit has converged.
 MAX_ITERATIONS, STEP_TOL = 30, 1e-10
+#: ``|n s|`` below which :func:`power_sums` takes the Taylor series, and the series' terms.
+SERIES_RADIUS, SERIES_TERMS = 1.0, 24
+_LOG_MAX = np.log(np.finfo(float).max)
 
 
 @dataclass(frozen=True)
@@ -61,37 +66,154 @@ class DampedSinusoidFit:
     residuals: tuple = ()
 
 
-def _basis(t, sigma, omega):
-    """``[exp(-sigma t) cos(omega t), exp(-sigma t) sin(omega t), 1]``, shape (n_t, 2 m + 1)."""
-    e = np.exp(-np.outer(t, sigma))
-    wt = np.outer(t, omega)
-    return np.concatenate([e * np.cos(wt), e * np.sin(wt), np.ones((t.size, 1))], axis=1)
+@dataclass(frozen=True)
+class NormalEquations:
+    """The Gauss-Newton normal equations of a projected residual: what a ``project`` callable of
+    :func:`levenberg_marquardt` may return in place of its Jacobian blocks.
+
+    Attributes
+    ----------
+    jtj : ndarray, shape (2 m, 2 m)
+        ``J^T J`` of the Kaufman Jacobian by ``(sigma, omega)``.
+    jtr : ndarray, shape (2 m,)
+        ``J^T r``, ``r`` the weighted residual.
+    """
+
+    jtj: np.ndarray
+    jtr: np.ndarray
+
+
+def _expm1(x):
+    """``exp(x) - 1`` of complex ``x``, to full relative precision near 0."""
+    a, b = x.real, x.imag
+    return np.expm1(a) * np.cos(b) - 2 * np.sin(b / 2) ** 2 + 1j * np.exp(a) * np.sin(b)
+
+
+@functools.lru_cache(maxsize=32)
+def _power_moments(n):
+    """``mu_q = sum_{k<n} (k / n)^q / n`` for ``q < SERIES_TERMS + 3``, shape (SERIES_TERMS + 3,)."""
+    u = np.arange(n) / n
+    return np.array([np.sum(u ** q) for q in range(SERIES_TERMS + 3)]) / n
+
+
+def power_sums(s, n, shift=0.0):
+    """``sum_{k<n} k^p exp(s k - shift)`` for ``p = 0, 1, 2`` in closed form (its Taylor series where ``|n s|`` is
+    below :data:`SERIES_RADIUS`); error a few units of ``eps`` of the sums of the moduli.
+
+    Parameters
+    ----------
+    s : array_like, complex
+    n : int
+    shift : array_like, float, broadcast with ``s``
+        A growing ``s`` (``Re s > 0``) over ``n`` terms overflows unless shifted by about ``Re(s) (n - 1)``.
+
+    Returns
+    -------
+    ndarray, complex, shape (3,) + s.shape
+    """
+    s = np.asarray(s, complex)
+    s = s - 2j * np.pi * np.round(s.imag / (2 * np.pi))          # k integer: the sums are 2 pi i periodic in s
+    shift = np.broadcast_to(np.asarray(shift, float), s.shape)
+    ns = n * s
+    with np.errstate(all="ignore"):                  # a growing trial pole can still overflow: an infinite cost
+        x, d, xn = np.exp(s), _expm1(s), np.exp(ns - shift)
+        s0 = np.where(ns.real < 700, _expm1(ns) * np.exp(-shift), xn - np.exp(-shift)) / d
+        s1 = (n * xn - x * s0) / d
+        s2 = (n * n * xn - x * s0 - 2 * x * s1) / d
+    out = np.stack([s0, s1, s2])
+    small = np.abs(ns) < SERIES_RADIUS
+    if np.any(small):
+        fact = np.cumprod(np.concatenate([[1.0], np.arange(1.0, SERIES_TERMS)]))
+        terms = ns[small][:, None] ** np.arange(SERIES_TERMS) / fact
+        mu = _power_moments(int(n))
+        scale = np.exp(-shift[small])
+        for p in range(3):
+            out[p][small] = float(n) ** (p + 1) * scale * (terms @ mu[p:p + SERIES_TERMS])
+    return out
+
+
+def _exponentials(lam_dt, n, shift):
+    """``exp(lam_dt k - shift)`` for ``k < n``, shape (n, m): products of a coarse and a fine table
+    (``k = b B + r``)."""
+    width = max(1, int(np.ceil(np.sqrt(n))))
+    coarse = np.exp(np.multiply.outer(np.arange(-(-n // width)) * float(width), lam_dt) - shift)
+    fine = np.exp(np.multiply.outer(np.arange(width, dtype=float), lam_dt))
+    return (coarse[:, None, :] * fine[None, :, :]).reshape(-1, lam_dt.size)[:n]
+
+
+def _grams(lam_dt, n, shift):
+    """``Phi^T diag(k^p) Phi`` for ``p = 0, 1, 2`` of ``Phi = [Re Z, Im Z, 1]``, ``Z = exp(lam_dt k - shift)``,
+    ``k < n``: shape (3, 2 m + 1, 2 m + 1), from :func:`power_sums` (no sum over samples)."""
+    m = lam_dt.size
+    both = shift[:, None] + shift[None, :]
+    pair = power_sums(lam_dt[:, None] + lam_dt[None, :], n, both)            # sum k^p z_j z_l
+    cross = power_sums(lam_dt.conj()[:, None] + lam_dt[None, :], n, both)    # sum k^p conj(z_j) z_l
+    single = power_sums(np.append(lam_dt, 0.0), n, np.append(shift, 0.0))    # sum k^p z_j, sum k^p
+    G = np.empty((3, 2 * m + 1, 2 * m + 1))
+    G[:, :m, :m] = (pair.real + cross.real) / 2                        # Re z_j Re z_l
+    G[:, m:2 * m, m:2 * m] = (cross.real - pair.real) / 2              # Im z_j Im z_l
+    G[:, :m, m:2 * m] = (pair.imag + cross.imag) / 2                   # Re z_j Im z_l
+    G[:, m:2 * m, :m] = G[:, :m, m:2 * m].transpose(0, 2, 1)
+    G[:, :m, 2 * m], G[:, m:2 * m, 2 * m] = single[:, :m].real, single[:, :m].imag
+    G[:, 2 * m, :2 * m] = G[:, :2 * m, 2 * m]
+    G[:, 2 * m, 2 * m] = single[:, m].real
+    return G
 
 
 def _projected(decays, fs, sigma, omega, weights):
-    """Residuals, coefficients and Kaufman Jacobian blocks of every decay: lists of (n_t, n_ch), (2m+1, n_ch),
-    (n_t * n_ch, 2m)."""
-    m = sigma.size
-    res, coef, jac = [], [], []
+    """Residuals and coefficients of every decay, lists of (n_t, n_ch) and (2m+1, n_ch), and the normal equations
+    of the Kaufman Jacobian (:class:`NormalEquations`).
+
+    With ``Phi_m = [cos, sin]`` the damped columns, ``T = diag(t)`` and ``C`` a channel's coefficients, the model's
+    derivative by ``(sigma, omega)`` is ``T Phi_m M`` with ``M = [[-diag(a), diag(b)], [-diag(b), -diag(a)]]``, so
+    ``J^T J = M^T (Phi_m^T T^2 Phi_m - (Phi^T T Phi_m)^T (Phi^T Phi)^+ Phi^T T Phi_m) M`` and
+    ``J^T r = M^T Phi_m^T T r``: the Gram matrices in closed form, one pass over the samples for ``Phi^T Y``, the
+    residual and ``Phi_m^T T r``.
+    """
+    m, dt = sigma.size, 1.0 / fs
+    lam_dt = (-sigma + 1j * omega) * dt
+    order = np.append(np.stack([np.arange(m), m + np.arange(m)], axis=1).ravel(), 2 * m)   # cos_1, sin_1, .. 1
+    back = np.argsort(order)
+    res, coef = [], []
+    jtj, jtr = np.zeros((2 * m, 2 * m)), np.zeros(2 * m)
     for y in decays:
-        t = np.arange(y.shape[1]) / fs
-        Phi = _basis(t, sigma, omega)
-        norm = np.maximum(np.linalg.norm(Phi, axis=0), np.finfo(float).tiny)
-        G = (Phi.T @ Phi) / np.outer(norm, norm)                          # Gram matrix of the unit columns
-        G_inv = np.linalg.pinv(G, hermitian=True) / np.outer(norm, norm)   # (Phi^T Phi)^+
+        n = y.shape[1]
+        shift = np.maximum(lam_dt.real * (n - 1), 0.0)         # columns of growing poles scaled to at most 1
+        G0, G1, G2 = _grams(lam_dt, n, shift)
+        with np.errstate(divide="ignore"):
+            if np.any(np.log(np.diag(G0)[:2 * m]) + 2 * np.tile(shift, 2) >= _LOG_MAX):
+                raise np.linalg.LinAlgError("a pole grows beyond the floating-point range over a decay")
+        with np.errstate(over="ignore", invalid="ignore"):
+            Phi = _exponentials(lam_dt, n, shift).view(float)         # (n, 2m): cos_1, sin_1, cos_2, ..
+        norm = np.sqrt(np.maximum(np.diag(G0), np.finfo(float).tiny))
+        G_inv = np.linalg.pinv(G0 / np.outer(norm, norm), hermitian=True) / np.outer(norm, norm)   # (Phi^T Phi)^+
         Yw = y.T * weights[None, :]
-        C = G_inv @ (Phi.T @ Yw)
-        R = Yw - Phi @ C
-        cos, sin = Phi[:, :m, None], Phi[:, m:2 * m, None]
-        ca, cb = C[None, :m, :], C[None, m:2 * m, :]
-        d_sigma = -t[:, None, None] * (cos * ca + sin * cb)                # (n_t, m, n_ch)
-        d_omega = t[:, None, None] * (cos * cb - sin * ca)
-        D = np.concatenate([d_sigma, d_omega], axis=1)                     # (n_t, 2m, n_ch)
-        D = D - np.einsum("tk,kpc->tpc", Phi, np.einsum("kl,tl,tpc->kpc", G_inv, Phi, D, optimize=True))
+        C = G_inv @ np.concatenate([Phi.T @ Yw, Yw.sum(axis=0)[None]])[back]
+        Ci = C[order]
+        R = Yw - Phi @ Ci[:2 * m] - Ci[2 * m]
+        H = G1[:, :2 * m] * dt                                             # Phi^T T Phi_m
+        K = G2[:2 * m, :2 * m] * dt ** 2 - H.T @ G_inv @ H
+        a, b = C[:m].T, C[m:2 * m].T                                       # (n_ch, m)
+        M = np.zeros((a.shape[0], 2 * m, 2 * m))
+        idx = np.arange(m)
+        M[:, idx, idx], M[:, m + idx, idx] = -a, -b
+        M[:, idx, m + idx], M[:, m + idx, m + idx] = b, -a
+        g = (Phi.T @ (R * (np.arange(n) * dt)[:, None]))[back[:2 * m]]    # Phi_m^T T r, (2m, n_ch)
+        MT = M.transpose(0, 2, 1)
+        jtj += np.sum(MT @ K @ M, axis=0)
+        jtr += np.sum(MT @ g.T[:, :, None], axis=0)[:, 0]
         res.append(R)
-        coef.append(C)
-        jac.append(D.transpose(0, 2, 1).reshape(-1, 2 * m))
-    return res, coef, jac
+        with np.errstate(under="ignore"):
+            coef.append(C * np.exp(-np.concatenate([shift, shift, [0.0]]))[:, None])
+    return res, coef, NormalEquations(jtj, jtr)
+
+
+def _normal_equations(jac, res):
+    """``(J^T J, J^T r)`` of Jacobian blocks and residual blocks, or of :class:`NormalEquations`."""
+    if isinstance(jac, NormalEquations):
+        return jac.jtj, jac.jtr
+    J = np.concatenate(jac, axis=0)
+    return J.T @ J, J.T @ np.concatenate([x.ravel() for x in res])
 
 
 def levenberg_marquardt(project, sigma, omega, n_channels, n_values, n_params, decaying=False):
@@ -101,7 +223,8 @@ def levenberg_marquardt(project, sigma, omega, n_channels, n_values, n_params, d
     ----------
     project : callable
         ``project(sigma, omega, weights)`` returns lists of residual blocks (each ``(n_rows, n_channels)``, weighted),
-        linear coefficients and Kaufman Jacobian blocks (each ``(n_rows * n_channels, 2 m)`` by ``(sigma, omega)``).
+        linear coefficients and Kaufman Jacobian blocks (each ``(n_rows * n_channels, 2 m)`` by ``(sigma, omega)``),
+        or in place of the blocks their :class:`NormalEquations`.
     sigma, omega : ndarray, shape (m,)
         Starting decay rates and damped angular frequencies (rad/s).
     n_channels, n_values, n_params : int
@@ -137,9 +260,7 @@ def levenberg_marquardt(project, sigma, omega, n_channels, n_values, n_params, d
     mu, it = 1e-3, 0
     theta = np.concatenate([sigma, omega])
     for it in range(1, MAX_ITERATIONS + 1):
-        J = np.concatenate(jac, axis=0)
-        r = np.concatenate([x.ravel() for x in res])
-        JtJ, g = J.T @ J, J.T @ r
+        JtJ, g = _normal_equations(jac, res)
         scale = np.sqrt(np.maximum(np.diag(JtJ), np.finfo(float).tiny))
         N = JtJ / np.outer(scale, scale)
         accepted = False
@@ -160,10 +281,9 @@ def levenberg_marquardt(project, sigma, omega, n_channels, n_values, n_params, d
             mu *= 10
         if not accepted or np.all(np.abs(step) <= STEP_TOL * np.abs(theta[m:]).max()):
             break
-    J = np.concatenate(jac, axis=0)
     s2 = cost / max(n_values - n_params, 1)
     try:
-        cov = s2 * np.linalg.inv(J.T @ J)
+        cov = s2 * np.linalg.inv(_normal_equations(jac, res)[0])
     except np.linalg.LinAlgError:
         raise ConvergenceError("the damped-sinusoid fit is singular (two poles merged, or a pole without "
                                "amplitude)") from None
