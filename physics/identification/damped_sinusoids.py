@@ -11,6 +11,10 @@ Pereyra); the poles are refined by Levenberg-Marquardt steps on the projected re
 information, so ``s^2 (J^T J)^-1`` is the covariance of the poles with the amplitudes unknown: in white noise the
 frequencies' one sigma of the Cramer-Rao bound. Channels are weighted by the inverse of their residual standard
 deviation.
+
+The basis' Gram matrices ``Phi^T diag(t^p) Phi`` (``p = 0, 1, 2``) are sums of geometric series, taken in closed form
+(:func:`power_sums`), and the Kaufman normal equations follow from them and the coefficients; each evaluation passes
+over the samples only for ``Phi^T y``, the residual and ``Phi^T diag(t) r``.
 """
 
 from __future__ import annotations
