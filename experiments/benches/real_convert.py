@@ -22,11 +22,11 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
-from physics.errors import BeamDamageError, FileFormatError
+from physics.errors import BeamDamageError, ConfigError, FileFormatError
 from physics.io import atomic_write_bytes
 
-__all__ = ["DROPBEAR_STATE_PINLOC_V", "RealSet", "SETS", "convert_set", "dropbear_dwells", "main", "read_lvm",
-           "write_npz"]
+__all__ = ["BRIDGE_TESTS", "DROPBEAR_STATE_PINLOC_V", "RealSet", "SETS", "convert_set", "dropbear_dwells", "main",
+           "read_lvm", "write_npz"]
 
 OUT = Path(__file__).resolve().parents[1] / "data" / "real"
 
@@ -80,8 +80,14 @@ def read_lvm(path) -> tuple[float, str, str, pd.DataFrame]:
     missing = [key for key in ("Delta_X", "Y_Unit_Label", "Date", "Time") if key not in head]
     if missing:
         raise FileFormatError(f"{path}: header field(s) {', '.join(missing)} missing")
-    df = pd.read_csv(io.StringIO("\n".join(lines[k:])))
+    try:
+        df = pd.read_csv(io.StringIO("\n".join(lines[k:])))
+    except ValueError as exc:                              # pandas' ParserError is one
+        raise FileFormatError(f"{path}: not a comma-separated table ({' '.join(str(exc).split())})") from None
     data = df.drop(columns=[c for c in df.columns if c in ("X_Value", "Comment")])
+    text = [c for c in data.columns if data[c].dtype.kind not in "fiu"]
+    if text:
+        raise FileFormatError(f"{path}: column(s) {', '.join(map(str, text))} hold text; expected numbers")
     return float(head["Delta_X"]), head["Y_Unit_Label"], f"{head['Date']} {head['Time'][:12]}", data
 
 
@@ -318,8 +324,11 @@ def convert_set(name: str, source, out=OUT) -> Path:
     """Convert set ``name`` of :data:`SETS` from ``source`` (a checkout of its repository at its commit) into
     ``out/<name>.npz``; returns the path written.
 
-    Raises :class:`FileFormatError` naming the first file absent (and the commit to check out) or malformed.
+    Raises :class:`ConfigError` for an unknown set, :class:`FileFormatError` naming the first file absent (and the
+    commit to check out) or malformed.
     """
+    if name not in SETS:
+        raise ConfigError(f"set {name!r}: expected one of {', '.join(SETS)}", parameter="name")
     spec = SETS[name]
     source = Path(source)
     files = [source / p for p in spec.paths]

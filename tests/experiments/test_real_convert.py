@@ -27,7 +27,7 @@ def test_every_set_of_the_registry_is_documented_and_every_documented_set_is_con
     for name, spec in SETS.items():
         text = sections[name]
         assert f"python -m experiments.benches.real_convert {name} --source DIR" in text
-        assert spec.commit in text and f"`{spec.repository}" in text
+        assert spec.commit in text and f"`{spec.repository}" in text and spec.licence.split(" (")[0] in text
         assert re.fullmatch(r"[0-9a-f]{40}", spec.commit)
 
 
@@ -180,5 +180,10 @@ def test_a_malformed_file_is_named(tmp_path):
     bad = tmp_path / SETS["usc_bridge_a_impacts"].paths[3]
     bad.write_text(bad.read_text().replace("Delta_X,0.000156", "Delta_X,0.0002"))
     with pytest.raises(FileFormatError, match=re.escape(f"{bad}: Delta_X 0.0002; expected 0.000156")):
+        convert_set("usc_bridge_a_impacts", tmp_path, tmp_path / "out")
+    lines = bad.read_text().replace("Delta_X,0.0002", "Delta_X,0.000156").splitlines()
+    lines[-1] = lines[-1].rsplit(",", 1)[0] + ",0.1x"            # a text cell in channel 2
+    bad.write_text("\n".join(lines) + "\n")
+    with pytest.raises(FileFormatError, match=re.escape(f"{bad}: column(s) Acceleration_2 hold text")):
         convert_set("usc_bridge_a_impacts", tmp_path, tmp_path / "out")
     assert not (tmp_path / "out").exists()
