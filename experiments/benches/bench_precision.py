@@ -64,8 +64,6 @@ from physics.errors import BeamDamageError
 from physics.identification.fft_peak import identify_fft_peaks
 from physics.estimation import estimate_frf
 from physics.identification.lscf import identify_lscf
-from physics.io import atomic_write_bytes
-import io
 
 __all__ = ["AMBIENT", "DECAY", "Case", "ambient_records", "crb_ambient_hz", "crb_decay_hz", "decay_records",
            "identify_modes", "main", "match_modes", "markdown", "record_methods", "run_case", "summarise"]
@@ -403,40 +401,6 @@ def _hct_rows(path):
     return _scatter_rows("HCT setups", len(setups), freqs, ref, "ssi, setup 1")
 
 
-def convert_real(pyfrf_dir, hct_dir, out_dir=REAL_DIR) -> list[Path]:
-    """Write the real sets as compressed ``.npz`` (float64, as read) from their original files.
-
-    ``pyfrf_dir`` holds ``measurements_1.npy`` ... ``measurements_5.npy`` (rows: time (s), excitation, response);
-    ``hct_dir`` holds ``dherita1.asc`` ... ``dherita4.asc`` (one column per channel, 40 Hz). Either may be None.
-    """
-
-    out_dir = Path(out_dir)
-    written = []
-    if pyfrf_dir is not None:
-        m = np.array([np.load(Path(pyfrf_dir) / f"measurements_{i}.npy") for i in range(1, 6)])
-        fs = 1.0 / float(np.mean(np.diff(m[0, 0])))
-        written.append(_write_npz(out_dir / "pyfrf_hits.npz", atomic_write_bytes, force=m[:, 1], response=m[:, 2],
-                                  sampling_frequency_hz=np.float64(round(fs, 6)),
-                                  dof_labels=np.array(["excitation", "response"])))
-    if hct_dir is not None:
-        setups = [np.loadtxt(Path(hct_dir) / f"dherita{i}.asc").T for i in range(1, 5)]
-        labels = {f"dof_labels_setup{i + 1}": np.array([f"setup{i + 1}:ch{c + 1}" for c in range(y.shape[0])])
-                  for i, y in enumerate(setups)}
-        written.append(_write_npz(out_dir / "hct_setups.npz", atomic_write_bytes,
-                                  **{f"setup{i + 1}": y for i, y in enumerate(setups)}, **labels,
-                                  sampling_frequency_hz=np.float64(40.0)))
-    return written
-
-
-def _write_npz(path, write, **arrays):
-
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    write(path, buf.getvalue())
-    return path
-
-
 def real_markdown(rows) -> str:
     """The real sets' table: per mode and method the mean and scatter over the tests, and the paired comparison
     with the FFT peak (:func:`_scatter_rows`)."""
@@ -457,13 +421,7 @@ def main(argv=None) -> int:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--real", default=str(REAL_DIR), help="folder of the real repeated-test sets ('' for none)")
     p.add_argument("--docs", action="store_true", help="write the table into docs/identification.md")
-    p.add_argument("--convert", nargs=2, metavar=("PYFRF_DIR", "HCT_DIR"),
-                   help="write the real sets' .npz into --real from their original files, then stop")
     args = p.parse_args(argv)
-    if args.convert:
-        for path in convert_real(*args.convert, out_dir=args.real or REAL_DIR):
-            print(path)
-        return 0
     from tqdm import tqdm
 
     if args.quick:

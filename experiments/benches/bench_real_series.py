@@ -22,9 +22,10 @@ the smaller log gap to its neighbouring modes either side, within the band). On 
   quantile.
 
 ``monitor on FFT peaks`` is ``monitor`` fed those FFT-peak frequencies as modal data (``natural_frequencies_hz``
-files): its detector without its identification. A crash of ``monitor``'s identification on a record (an exception
-it lets through) is kept in the cache as the test's error (:func:`identify_series`), so that the series is still
-judged with the test not identified; a crash of ``monitor`` itself is reported as the set's result.
+files): its detector without its identification. Each test's modes and error are ``monitor``'s own (its rows and
+:attr:`~learn.monitor.SeriesResult.tests`, the narrow-band re-identifications included); a refusal or a crash of
+``monitor`` is reported as the set's result, each test's modes then read from its identification cache
+(:func:`~learn.monitor.identification.cached_identification`).
 
 ``monitor`` counts a test as flagged when its status is ``alarm`` or ``change or unseen conditions`` (the series are
 undated, so an extrapolated test alarmed by the environmental statistics alone gets that status); a test it could
@@ -53,14 +54,12 @@ from experiments.benches.harness import parser, table, write_table  # noqa: E402
 from learn.monitor import (IdentificationSettings, IdentifiedModes, SeriesInput, monitor_series,  # noqa: E402
                            reference_modes)
 from learn.monitor.alarms import EXTRAPOLATED as EXTRAPOLATED_STATUS  # noqa: E402
-from learn.monitor.identification import (CACHE_FORMAT, cached_identification, file_key,  # noqa: E402
-                                          write_cache)
-from learn.monitor.tracking import narrow_bands_hz, track_modes  # noqa: E402
+from learn.monitor.identification import cached_identification  # noqa: E402
 from physics.errors import BeamDamageError  # noqa: E402
 from physics.identification.fft_peak import fft_peaks, identify_fft_peaks  # noqa: E402
 from physics.io import atomic_write_text  # noqa: E402
 
-__all__ = ["LOADERS", "METHODS", "RealSeries", "fft_frequencies", "group_scores", "identify_series", "main",
+__all__ = ["LOADERS", "METHODS", "RealSeries", "fft_frequencies", "group_scores", "main",
            "mode_windows_hz", "plain_alarms", "reference_fft_modes"]
 
 DATA = str(Path(__file__).resolve().parents[1] / "data" / "real")
@@ -306,59 +305,30 @@ def _crash_text(exc: Exception) -> str:
     return f"crashed: {type(exc).__name__}: {exc} ({Path(tb.filename).name}:{tb.lineno} {tb.name})"
 
 
-def _guarded(path, settings: IdentificationSettings, cache: Path, crashes: list, narrow_hz=None):
-    """:func:`cached_identification` of one file; an exception it lets through (a crash of the identification on a
-    real record) is kept in the cache as the file's error, so that ``monitor`` counts the test as not identified."""
-    try:
-        modes, error, _ = cached_identification(path, settings, cache, None, narrow_hz)
-    except Exception as exc:                    # a crash is a result to report, not to stop the bench
-        error = f"{path}: {_crash_text(exc)}"
-        crashes.append(error)
-        nb = None if narrow_hz is None else [float(b) for b in narrow_hz]
-        write_cache([(cache / f"{file_key(path, settings, narrow_hz)}.json",
-                      json.dumps({"format": CACHE_FORMAT, "file": str(path), "settings": settings.to_dict(),
-                                  "narrow_band_hz": nb, "modes": None, "error": error}))])
-        return None, error
-    if error and ": crashed: " in error:        # a crash kept in the cache by an earlier run
-        crashes.append(error)
-    return modes, error
-
-
-def identify_series(files, n_baseline: int, settings: IdentificationSettings, cache: Path) -> tuple:
-    """``(tests, errors, crashes)``: every file identified as ``monitor`` does (cached), and the narrow-band
-    re-identifications its :func:`learn.monitor.tracking.refit_missing` will ask for, each crash kept in the cache
-    as the file's error (``crashes``: their texts, both passes)."""
-    crashes: list = []
-    out = [_guarded(f, settings, cache, crashes) for f in files]
-    tests = [t for t, _ in out]
-    if any(t is not None for t in tests[:n_baseline]):
-        ref = reference_modes(tests[:n_baseline])
-        if ref.frequencies_hz.size:
-            F = track_modes(tests, ref)[0]
-            bands = narrow_bands_hz(ref)
-            for i, t in enumerate(tests):
-                if t is None:
-                    continue
-                for r in np.flatnonzero(np.isnan(F[i])):
-                    lo, hi = max(bands[r, 0], t.band_hz[0]), min(bands[r, 1], t.band_hz[1])
-                    if hi > lo:
-                        _guarded(files[i], settings, cache, crashes, (lo, hi))
-    return tests, [e for _, e in out], crashes
-
-
 def _monitor(files, n_baseline: int, settings: IdentificationSettings, cache, rate: float) -> tuple:
-    """``(statuses, reference frequencies (Hz), per-test errors, refusal or None)`` of ``monitor`` on ``files``."""
+    """``(statuses, reference frequencies (Hz), per-test errors, per-test modes, refusal or None)`` of ``monitor``
+    on ``files``: its rows and its tests; when it refuses or crashes, each test's identification from the cache."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             res = monitor_series(SeriesInput.from_files(files), n_baseline, settings, cache, rate, progress=False,
                                  chart="none")
     except BeamDamageError as exc:
-        return ["refused"] * len(files), [], [None] * len(files), str(exc)
+        why = str(exc)
     except Exception as exc:                    # a crash of monitor on real records is a result to report
-        return ["refused"] * len(files), [], [None] * len(files), _crash_text(exc)
-    return ([r["status"] for r in res.rows], [float(v) for v in res.reference.frequencies_hz],
-            [r["error"] for r in res.rows], None)
+        why = _crash_text(exc)
+    else:
+        return ([r["status"] for r in res.rows], [float(v) for v in res.reference.frequencies_hz],
+                [r["error"] for r in res.rows], list(res.tests), None)
+    tests, errors = [], []
+    for f in files:
+        try:
+            t, e, _ = cached_identification(f, settings, cache)
+        except Exception as exc:                # a crash of the identification on this record
+            t, e = None, f"{f}: {_crash_text(exc)}"
+        tests.append(t)
+        errors.append(e)
+    return ["refused"] * len(files), [], errors, tests, why
 
 
 def _write_modal(F, folder: Path) -> list:
@@ -382,9 +352,7 @@ def run_set(series: RealSeries, out: Path, rate: float) -> dict:
     t0 = time.perf_counter()
     files = _write_records(series, out / "records" / series.name)
     settings = IdentificationSettings(tuple(series.band_hz))
-    tests, id_errors, crashes = identify_series(files, series.n_baseline, settings, out / "cache")
-    status, mon_ref, errors, mon_error = _monitor(files, series.n_baseline, settings, out / "cache", rate)
-    errors = [e or i for e, i in zip(errors, id_errors)]
+    status, mon_ref, errors, tests, mon_error = _monitor(files, series.n_baseline, settings, out / "cache", rate)
     t_mon = time.perf_counter() - t0
     nb = series.n_baseline
     ref = reference_fft_modes(series.records[:nb], series.sampling_frequency_hz[:nb], series.band_hz)
@@ -392,7 +360,7 @@ def run_set(series: RealSeries, out: Path, rate: float) -> dict:
         if ref.size else np.full((len(files), 0), np.nan)
     plain = plain_alarms(F, nb, rate) if ref.size else {
         k: np.zeros(len(files), bool) for k in ("plain shift", "plain per mode")}
-    fft_status, fft_ref, _, fft_error = _monitor(_write_modal(F, out / "fft_modal" / series.name), nb,
+    fft_status, fft_ref, _, _, fft_error = _monitor(_write_modal(F, out / "fft_modal" / series.name), nb,
                                                  IdentificationSettings(), None, rate)
     flags = {"monitor": _flagged(status), **plain, "monitor on FFT peaks": _flagged(fft_status)}
     identified = np.array([t is not None and t.frequencies_hz.size > 0 for t in tests]) if mon_error \
@@ -406,7 +374,7 @@ def run_set(series: RealSeries, out: Path, rate: float) -> dict:
             r["fft found"] = int(np.isfinite(F[sel]).all(axis=1).sum())
     return {"set": series.name, "how": series.how, "band_hz": list(series.band_hz), "n": len(files),
             "n_baseline": nb, "monitor_error": mon_error, "monitor_reference_hz": mon_ref,
-            "monitor_on_fft_error": fft_error, "identification_crashes": crashes,
+            "monitor_on_fft_error": fft_error,
             "monitor_on_fft_reference_hz": fft_ref, "monitor_on_fft_status": fft_status,
             "fft_reference_hz": ref.tolist(), "status": status, "errors": errors, "identified_hz":
                 [None if t is None else [float(v) for v in t.frequencies_hz] for t in tests],

@@ -34,6 +34,7 @@ import numpy as np
 
 from experiments.benches.bench_precision import REAL_DIR, match_modes
 from physics.errors import BeamDamageError
+from physics.identification.failures import PER_RECORD_ERRORS
 from physics.identification.methods import METHODS
 from physics.identification.output_only import identify_records
 from physics.io.timedata import TimeRecords
@@ -141,7 +142,7 @@ def load_sets(directory=None) -> list[RealSet]:
 
 def identify_frequencies(method, signals, fs, band_hz=None) -> np.ndarray:
     """Natural frequencies (Hz) ``method`` identifies in one record (``"auto"``: ``identify``'s choice); a
-    refusal (or a crash, so that a report of an older code state completes): none."""
+    refusal (or a numerical failure on the record, :data:`~physics.identification.failures.PER_RECORD_ERRORS`): none."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -152,8 +153,8 @@ def identify_frequencies(method, signals, fs, band_hz=None) -> np.ndarray:
             spec = METHODS[method]
             est, _ = spec.fit(signals, fs, band_hz, None, "record", **{k: None for k in spec.options})
             return est.natural_frequencies_hz
-    except (BeamDamageError, np.linalg.LinAlgError, IndexError, ValueError):   # a crash of an older code state
-        return np.zeros(0)                                                      # counts as a refusal
+    except (BeamDamageError, *PER_RECORD_ERRORS):      # a numerical failure on the record counts as a refusal
+        return np.zeros(0)
 
 
 def group_scatter(real: RealSet, group: RealGroup, method, band_hz=None) -> np.ndarray:

@@ -15,19 +15,14 @@ from learn.pairs.measured import IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, ide
 from physics.errors import BeamDamageError
 from physics.identification import (DEFAULT_OUTPUT_ONLY, holds_response_records, identify_records,
                                     read_response_records)
+from physics.identification.failures import identification_failure
 from physics.identification.measured import read_measured_frf
 from physics.io import MODAL, TIME, atomic_write_text, format_complex, modal_or_frf, prepare_measured, read
 from physics.io.inputs import check_input_file
 from physics.modal import modal_parameters, undamped_modes
 
-__all__ = ["CACHE_FORMAT", "PER_RECORD_ERRORS", "IdentificationSettings", "IdentifiedModes", "cached_identification",
+__all__ = ["CACHE_FORMAT", "IdentificationSettings", "IdentifiedModes", "cached_identification",
            "file_key", "identification_settings", "identify_test", "with_narrow_band_poles", "write_cache"]
-
-#: Exceptions of an identification that make one record "not identified" (its numbers, not the program: a singular
-#: or ill-conditioned system, an overflow, an array shorter than a method's window): turned into a
-#: :class:`BeamDamageError` of one line naming the file and the exception's class. Others (TypeError, KeyError,
-#: AttributeError...) are defects of the program and are raised as they are.
-PER_RECORD_ERRORS = (np.linalg.LinAlgError, ValueError, ArithmeticError, IndexError, RuntimeError)
 
 #: Format tag of a cache entry (a change of the identification or of the entry's fields changes it).
 CACHE_FORMAT = "beam-damage-monitor-cache/2"
@@ -148,7 +143,8 @@ def identify_test(path, settings: IdentificationSettings, narrow_hz=None) -> Ide
     the series' band missed (its poles' ``narrow_band_hz`` that band; modal data are read as they are).
 
     Raises :class:`BeamDamageError` (one line naming the file) when the file cannot be read or identified,
-    including an exception of :data:`PER_RECORD_ERRORS` in the identification (named by its class).
+    including an exception of :data:`physics.identification.failures.PER_RECORD_ERRORS` in the identification (named
+    by its class; :func:`~physics.identification.failures.identification_failure`).
     """
 
     path = str(path)
@@ -160,13 +156,10 @@ def identify_test(path, settings: IdentificationSettings, narrow_hz=None) -> Ide
     n_modes = settings.n_modes if narrow_hz is None else None
     if holds_response_records(path) and not read(path, TIME).forces:
         rec = read_response_records(path)
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                ident = identify_records(rec, DEFAULT_OUTPUT_ONLY, band, n_modes, settings.records_max_order)
-        except PER_RECORD_ERRORS as exc:
-            raise BeamDamageError(f"{path}: output-only identification ({DEFAULT_OUTPUT_ONLY}: era for a free "
-                                  f"response, else ssi) failed ({_exception_text(exc)})") from None
+        with identification_failure(f"{path}: output-only identification ({DEFAULT_OUTPUT_ONLY}: era for a free "
+                                    "response, else ssi)"), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            ident = identify_records(rec, DEFAULT_OUTPUT_ONLY, band, n_modes, settings.records_max_order)
         fs = rec.sampling_frequency_hz
         f, z, shapes = _modes_of(ident.estimate.eigenvalues, ident.estimate.shapes)
         return IdentifiedModes("response records", ident.estimate.method, f, z, shapes, tuple(rec.dofs), (),
@@ -179,25 +172,12 @@ def identify_test(path, settings: IdentificationSettings, narrow_hz=None) -> Ide
     fmin, fmax = (0.0, None) if band is None else band
     if band is not None and (lines[-1] <= fmin or lines[0] >= fmax):
         raise BeamDamageError(f"{path}: its lines {lines[0]:g}-{lines[-1]:g} Hz miss the band {fmin:g}-{fmax:g} Hz")
-    try:
+    with identification_failure(f"{path}: identification of its FRFs (lscf)"):
         md = identify_modes(frf, fmax, path, n_modes, fmin, settings.max_order)
-    except BeamDamageError:
-        raise
-    except PER_RECORD_ERRORS as exc:
-        raise BeamDamageError(f"{path}: identification of its FRFs (lscf) failed ({_exception_text(exc)})") from None
     f, z, shapes = _modes_of(md.eigenvalues, md.eigenvectors)
     line = float(np.median(np.diff(lines))) if lines.size > 1 else None
     return IdentifiedModes("frf", "lscf", f, z, shapes, tuple(md.dofs), tuple(frf.reference_dofs),
                            (float(lines[0]), float(lines[-1])), line, _narrow(narrow_hz, f.size))
-
-
-def _exception_text(exc) -> str:
-    """``"IndexError: index 3 is out of bounds"``: the class (not for the project's own errors) and the message on
-    one line."""
-    text = " ".join(str(exc).split())
-    if isinstance(exc, BeamDamageError):
-        return text
-    return type(exc).__name__ + (f": {text}" if text else "")
 
 
 def _narrow(narrow_hz, k: int) -> tuple:

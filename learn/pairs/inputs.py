@@ -87,11 +87,11 @@ def _measured_pairs(model: TrainedModel, baselines: list, currents: list, names:
     alone). With several baselines the pairs compare with the reference baseline of their normal variation."""
     nb, sens = len(baselines), model.sensitivity
     mds, identified, found = _modal_inputs(model, [*baselines, *currents], names, sens)
-    if mds is None:
+    if mds is None:                            # ``found``: why the identification failed
         if nb > 1:
-            raise BeamDamageError("several baseline tests need their modes, and LSCF/LSFD identification failed")
-        return PairInputs((names[0], *names[nb:]), identified, ("LSCF/LSFD identification failed: no classical "
-                                                                "answer; the FRF-route network alone",))
+            raise BeamDamageError(f"several baseline tests need their modes, and {found}")
+        return PairInputs((names[0], *names[nb:]), identified, (f"{found}: no classical answer; the FRF-route "
+                                                                "network alone",))
     found = found or [None] * len(names)
     nv = measure(mds[:nb], model.beam, sens.frequencies_hz, names[:nb]) if nb > 1 else None
     if nv is not None and identified:          # a mode of the baselines missed: identified again over its band
@@ -145,7 +145,8 @@ def damping_warning(model: TrainedModel, pairs: list) -> str | None:
 
 def _modal_inputs(model: TrainedModel, inputs: list, names: list[str], sens):
     """Modal data of every input: ``(list of ModalData, identified, found)``, ``found`` one text per input on the
-    modes it holds (e.g. "LSCF/LSFD found 2 modes in 2-500 Hz")."""
+    modes it holds (e.g. "LSCF/LSFD found 2 modes in 2-500 Hz"); when an FRF-route model's input cannot be
+    identified, ``(None, True, why)`` (e.g. "baseline: LSCF/LSFD identification failed (LinAlgError: ...)")."""
     kinds = {isinstance(d, MeasuredFRF) for d in inputs}
     if len(kinds) > 1:
         raise BeamDamageError("BASELINE and MEASURED must all be FRF files or all modal data")
@@ -159,10 +160,10 @@ def _modal_inputs(model: TrainedModel, inputs: list, names: list[str], sens):
     try:  # the thesis's test: its 4 modes; another test: as 'identify --band' does, then paired by frequency
         ids = [identify_modes(d, fmax, n) if test is None else identify_band(d, test.band_hz, n)
                for d, n in zip(inputs, names)]
-    except BeamDamageError:
+    except BeamDamageError as exc:
         if model.route == "modal":
             raise
-        return None, True, None                # an FRF-route model classifies the FRFs without modes
+        return None, True, " ".join(str(exc).split())     # an FRF-route model classifies the FRFs without modes
     found = []
     for d, md in zip(inputs, ids):
         k = md.eigenvalues.size

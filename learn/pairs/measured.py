@@ -12,6 +12,7 @@ from learn.network.features import BeamSpec
 from learn.explanations.shapes import real_shapes
 from physics.errors import BeamDamageError
 from physics.identification import identify_frf
+from physics.identification.failures import identification_failure
 from physics.io import (MeasuredFRF, map_frf_dofs, map_measured_dofs, parse_dof, prepare_measured,
                         reference_position_m, sensor_labels)
 from physics.layout import MIN_VISIBLE, uniform_shapes
@@ -354,13 +355,12 @@ def identify_band(frf, band_hz, where: str = "FRF file"):
 
 
 def _lscf(frf, where: str, **options):
-    """:data:`IDENTIFICATION`'s method on ``frf`` (:func:`physics.identification.identify_frf` ``options``)."""
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return identify_frf(frf, method=IDENTIFICATION["method"], **options).modal_data
-    except (np.linalg.LinAlgError, RuntimeError) as exc:
-        raise BeamDamageError(f"{where}: LSCF/LSFD identification failed ({exc})") from None
+    """:data:`IDENTIFICATION`'s method on ``frf`` (:func:`physics.identification.identify_frf` ``options``); a
+    numerical failure (:data:`physics.identification.failures.PER_RECORD_ERRORS`) raised as one
+    :class:`BeamDamageError` naming ``where`` and the exception's class."""
+    with identification_failure(f"{where}: LSCF/LSFD identification"), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return identify_frf(frf, method=IDENTIFICATION["method"], **options).modal_data
 
 
 def refit_missing_modes(missing, target_hz, log_tol, bands_hz, lines_hz, identify, accept=None) -> list:
