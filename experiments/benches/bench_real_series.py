@@ -26,9 +26,11 @@ files): its detector without its identification. A crash of ``monitor``'s identi
 it lets through) is kept in the cache as the test's error (:func:`identify_series`), so that the series is still
 judged with the test not identified; a crash of ``monitor`` itself is reported as the set's result.
 
-``monitor`` counts a test as flagged when its status is ``alarm`` or ``change or unseen conditions`` (the series are
-undated, so an extrapolated test alarmed by the environmental statistics alone gets that status); a test it could
-not identify is not flagged (its status ``not identified`` is reported apart). Where ``monitor`` misses a test a
+``monitor`` counts a test as flagged when its status is one of :data:`learn.monitor.alarms.FLAGGED_STATUSES`:
+``alarm``, ``change or unseen conditions`` (the series are undated, so an extrapolated test alarmed by the
+environmental statistics alone gets that status), ``mode moved`` or ``mode lost`` (a reference mode beyond its band
+against the baseline's odds); a test it could not identify is not flagged (its status ``not identified`` is reported
+apart). Where ``monitor`` misses a test a
 plain test flags, the miss is split into ``not identified`` and ``below threshold`` (identified, judged normal).
 Writes ``real_series.json`` and ``real_series.md`` in ``--out``.
 """
@@ -52,7 +54,7 @@ import numpy as np  # noqa: E402
 from experiments.benches.harness import parser, table, write_table  # noqa: E402
 from learn.monitor import (IdentificationSettings, IdentifiedModes, SeriesInput, monitor_series,  # noqa: E402
                            reference_modes)
-from learn.monitor.alarms import EXTRAPOLATED as EXTRAPOLATED_STATUS  # noqa: E402
+from learn.monitor.alarms import FLAGGED_STATUSES  # noqa: E402
 from learn.monitor.identification import (CACHE_FORMAT, cached_identification, file_key,  # noqa: E402
                                           write_cache)
 from learn.monitor.tracking import narrow_bands_hz, track_modes  # noqa: E402
@@ -373,7 +375,7 @@ def _write_modal(F, folder: Path) -> list:
 
 
 def _flagged(status) -> np.ndarray:
-    return np.array([s in ("alarm", EXTRAPOLATED_STATUS) for s in status])
+    return np.array([s in FLAGGED_STATUSES for s in status])
 
 
 def run_set(series: RealSeries, out: Path, rate: float) -> dict:
