@@ -15,7 +15,7 @@ from learn.monitor import (DEFAULT_LATENT, NORMAL_MODELS, SeriesInput, alarm_ver
                            monitor_series, read_conditions)
 from learn.monitor.alarms import EXTRAPOLATED, EXTRAPOLATED_ALARMS, MODE_LOST, MODE_MOVED, STATUSES
 from learn.monitor.coverage import baseline_scatter, series_coverage
-from learn.monitor.events import group_events, identification_change
+from learn.monitor.events import group_events, identification_change, lost_modes_change
 from learn.monitor.verdicts import event_verdicts
 from physics.errors import ConfigError
 from physics.io import FRF, MODAL, TIME, accepted, atomic_write_bytes, atomic_write_text, figure_png, to_jsonable
@@ -80,8 +80,8 @@ def add_parser(sub):
                                                 "out/monitor)")
     p.add_argument("--json", action="store_true",
                    help='print {"tests": [...], "events": [...], "counts", "identification_change", '
-                        '"baseline_scatter", "coverage", "baseline_tests", "false_alarm_rate", "normal_variation", '
-                        '"detector", "charts", "first_alarm", "version", "config"}')
+                        '"lost_modes_change", "baseline_scatter", "coverage", "baseline_tests", "false_alarm_rate", '
+                        '"normal_variation", "detector", "charts", "first_alarm", "version", "config"}')
     p.set_defaults(func=run, flags={"n_baseline": "--baseline-tests", "workers": "--workers"})
 
 
@@ -154,6 +154,9 @@ def judged(res, false_alarm_rate: float, model=None, beam_x_m=None) -> dict:
         if v is not None:
             events[k] = replace(ev, verdict=v)
     ident = identification_change(rows, false_alarm_rate)
+    lost = lost_modes_change(rows, false_alarm_rate)
+    if lost["change"]:
+        warnings.warn(lost["text"])
     scatter = baseline_scatter(rows, res.series.times[0] is not None)
     if ident["change"]:
         warnings.warn(ident["text"])
@@ -165,7 +168,7 @@ def judged(res, false_alarm_rate: float, model=None, beam_x_m=None) -> dict:
                   changes=sum(e.change for e in events))
     first = res.first_alarm
     return {"tests": rows, "events": [e.to_dict() for e in events], "counts": counts,
-            "identification_change": ident, "baseline_scatter": scatter.to_dict(),
+            "identification_change": ident, "lost_modes_change": lost, "baseline_scatter": scatter.to_dict(),
             "coverage": None if cov is None else {"coordinates": list(cov.names), "low": cov.low.tolist(),
                                                   "high": cov.high.tolist(),
                                                   "mahalanobis_max": None if not np.isfinite(cov.mahalanobis_max)
@@ -222,6 +225,7 @@ def _write(out_dir, out: dict, res) -> dict:
         f"{cnt['events']} events, {cnt['changes']} of them changes"
         + (f"; the first alarm: {first['file']}{_when(first)}." if first else "."),
         out["identification_change"]["text"] + ".",
+        out["lost_modes_change"]["text"] + ".",
         out["baseline_scatter"]["warning"] or _scatter_text(out["baseline_scatter"])))
     modes = Table("Reference modes of the baseline period and their normal variation",
                   ("mode", "frequency (Hz)", "std (%)", "tracking tolerance (%)", "presence",
@@ -346,6 +350,7 @@ def _print(out: dict, res) -> None:
           f"{cnt['extrapolated']} extrapolated"
           + (f"; first alarm {out['first_alarm']['file']}{_when(out['first_alarm'])}" if out["first_alarm"] else ""))
     print(out["identification_change"]["text"])
+    print(out["lost_modes_change"]["text"])
     print(f"{cnt['events']} events, {cnt['changes']} changes:")
     for e in out["events"][:10]:
         print(f"  {e['text']}")

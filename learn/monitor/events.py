@@ -14,7 +14,7 @@ import numpy as np
 from learn.monitor.tracking import MODE_LOST, MODE_MOVED
 
 __all__ = ["AGAINST", "FLAGGED", "MAX_GAP", "SPLIT_P", "STEP_BEFORE", "Z_MOVED", "Event", "group_events",
-           "identification_change", "unidentified_p_value"]
+           "identification_change", "lost_modes_change", "unidentified_p_value"]
 
 #: Tests without a flag (judged, no alarm) an event may hold between two flagged tests: an index running along
 #: the threshold alarms on some of its tests, one event all the same.
@@ -141,6 +141,38 @@ def identification_change(rows: list, false_alarm_rate: float) -> dict:
             f"(binomial p = {p:.2g})" + (": identification lost, reported as a change" if change else ""))
     return {"baseline": {"not_identified": ub, "tests": nb}, "later": {"not_identified": u, "tests": len(later)},
             "p_value": p, "change": change, "text": text}
+
+
+def _lacks(row, r: int) -> bool:
+    """Whether a row lacks reference mode ``r`` (0-based) in its band: not identified, or the mode missing."""
+    return row["status"] == "not identified" or (r + 1) in (row.get("missing_modes") or [])
+
+
+def lost_modes_change(rows: list, false_alarm_rate: float) -> dict:
+    """Per reference mode, the later tests where it was lost (no pole in its band or within its reach beyond it:
+    ``beyond_band`` readings ``lost``, flagged or not) against the baseline period's share lacking it (tests not
+    identified included), by the binomial test of :func:`unidentified_p_value`; a mode whose p-value lies below
+    ``false_alarm_rate / m`` is a change (a run of losses a short baseline could not judge one by one). Returns
+    ``modes`` (per mode: ``mode``, ``baseline`` and ``later`` counts, ``p_value``, ``change``), ``change`` and
+    ``text``."""
+    base = [r for r in rows if r["baseline"] and r["status"] != "not judged"]
+    later = [r for r in rows if not r["baseline"] and r["status"] != "not judged"]
+    m = len(rows[0]["mode_z_scores"]) if rows else 0
+    modes = []
+    for r in range(m):
+        ub = sum(_lacks(row, r) for row in base)
+        k = sum(any(d["mode"] == r + 1 and d["reading"] == "lost" for d in (row.get("beyond_band") or []))
+                for row in later)
+        p = unidentified_p_value(k, len(later), ub, len(base))
+        modes.append({"mode": r + 1, "baseline": {"lacking": ub, "tests": len(base)},
+                      "later": {"lost": k, "tests": len(later)}, "p_value": p,
+                      "change": bool(k and p < false_alarm_rate / max(m, 1))})
+    lost = [d for d in modes if d["later"]["lost"]]
+    text = "; ".join(f"mode {d['mode']} lost in {d['later']['lost']} of {d['later']['tests']} later tests against "
+                     f"{d['baseline']['lacking']} of {d['baseline']['tests']} lacking it in the baseline period "
+                     f"(binomial p = {d['p_value']:.2g})" + (": reported as a change" if d["change"] else "")
+                     for d in lost) or "no mode lost in a later test"
+    return {"modes": modes, "change": any(d["change"] for d in modes), "text": text}
 
 
 def _pattern(rows, baseline):

@@ -8,7 +8,7 @@ import pytest
 
 from experiments.cli import main
 from learn.monitor import IdentifiedModes, reference_modes, track_modes
-from learn.monitor.events import group_events
+from learn.monitor.events import group_events, lost_modes_change
 from learn.monitor.tracking import MODE_LOST, MODE_MOVED, REACH_FACTOR, beyond_bands, reach_bands_hz
 
 F0 = np.array([10.0, 31.0, 62.0])
@@ -158,3 +158,23 @@ def test_monitor_flags_a_mode_moved_40_percent_beside_the_alarms(jump_series, ca
     ev = [e for e in res["events"] if e["first"] >= 27]
     assert ev and all(e["change"] and 1 in e["moved"] and e["direction"] == "up" for e in ev)
     assert any("mode 1 moved in" in e["text"] and "(median +40 %)" in e["text"] for e in ev)
+
+
+def test_a_run_of_lost_modes_after_a_short_baseline_is_a_change_a_pair_is_not():
+    from scipy import stats
+
+    def row(baseline, lost=False):
+        return {"baseline": baseline, "status": "no alarm", "mode_z_scores": [0.0] * 3,
+                "missing_modes": [2] if lost else [],
+                "beyond_band": [{"mode": 2, "reading": "lost", "frequency_hz": None, "change_pct": None,
+                                 "chance": 1 / 14, "flagged": False}] if lost else []}
+
+    rows = [row(True) for _ in range(12)] + [row(False, lost=k % 2 == 0) for k in range(16)]
+    res = lost_modes_change(rows, 0.01)
+    d = res["modes"][1]
+    assert d["baseline"] == {"lacking": 0, "tests": 12} and d["later"] == {"lost": 8, "tests": 16}
+    assert d["p_value"] == pytest.approx(stats.binom.sf(7, 16, 1 / 14), rel=1e-9) and d["change"] and res["change"]
+    assert "mode 2 lost in 8 of 16 later tests" in res["text"] and "reported as a change" in res["text"]
+    pair = [row(True) for _ in range(8)] + [row(False), row(False), row(False, True), row(False, True)]
+    d = lost_modes_change(pair, 0.01)["modes"][1]
+    assert d["p_value"] == pytest.approx(stats.binom.sf(1, 4, 1 / 10), rel=1e-9) and not d["change"]
