@@ -291,15 +291,16 @@ class BeyondBands:
     moved_hz : ndarray (n, m)      the pole that is the mode moved beyond its band (NaN elsewhere)
     moved_col : ndarray int (n, m) its column in the test (-1 elsewhere)
     lost : ndarray bool (n, m)     missing from its band with no pole within its reach, in a test with poles
-    chance : ndarray (n, m)        the baseline period's chance of that reading (NaN where neither): for a moved
-                                   mode ``q s``, ``q`` the share of the baseline tests of the series lacking the
-                                   mode in its band (not identified ones included), ``s`` the share holding a pole
-                                   no mode claims within its reach beyond its band; for a lost mode ``(u + 1) /
-                                   (n + 2)``, ``u`` of the ``n`` baseline tests lacking it (Laplace's rule, as the
-                                   index's :func:`learn.monitor.alarm_threshold.missing_evidence`); a baseline test
-                                   is read against the other baseline tests
+    chance : ndarray (n, m)        the baseline period's chance of that reading (NaN where neither), from ``u``
+                                   and ``w`` of its ``n`` tests (a baseline test's: of the other baseline tests):
+                                   ``u`` lacking the mode in its band (tests not identified included), ``w``
+                                   holding a pole no mode claims within its reach beyond its band; a lost mode
+                                   ``(u + 1) / (n + 2)`` (Laplace's rule, as the index's
+                                   :func:`learn.monitor.alarm_threshold.missing_evidence`); a moved mode
+                                   ``u / n * (w + 1) / (n + 2)``: the share lacking the mode times Laplace's chance
+                                   of a pole beyond its band (a mode the baseline found in every test gives 0)
     flagged : ndarray bool (n, m)  ``chance <= false_alarm_rate / m`` (the rate shared among the modes)
-    missing_share, beyond_share : ndarray (m,)     ``q`` and ``s`` over the whole baseline period
+    missing_share, beyond_share : ndarray (m,)     ``u / n`` and ``w / n`` over the whole baseline period
     n_baseline : int               baseline tests of the series
     reach_hz : ndarray (m, 2)      :func:`reach_bands_hz`
     """
@@ -364,9 +365,9 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
     >= :data:`MAC_MIN`), one to one (``linear_sum_assignment`` of ``(ln(f / f_ref) / reach)^2``): the mode moved,
     never a neighbour (a neighbour's band lies beyond the reach); a mode with no such pole is lost. Each reading
     is weighed by the baseline period's chance of it (:class:`BeyondBands`) and flagged at or below
-    ``false_alarm_rate / m`` (the rate shared among the modes). A moved mode is positive evidence (a pole where
-    the baseline put none, or the mode where the baseline always found it): it is flagged unless the baseline both
-    lacked the mode and held poles beyond its band often enough to make the reading ordinary. A lost mode is an
+    ``false_alarm_rate / m`` (the rate shared among the modes). A moved mode is positive evidence: one the baseline
+    found in every test is flagged; one the baseline lacked now and then only when the baseline was long enough to
+    make a pole beyond its band rare by Laplace's rule. A lost mode is an
     absence only: by Laplace's rule a single one is flagged when the baseline held the mode in nearly all of at least
     ``m / false_alarm_rate - 2`` tests (298 for 3 modes at 1 %; never one the baseline lacked in half its tests); on
     a shorter baseline it adds its evidence to the novelty index (``missing_evidence`` of
@@ -416,9 +417,8 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
     n_q = np.full((n, 1), float(base.size))
     if base.size > 1:
         n_q[base] = base.size - 1
-    laplace = (q * n_q + 1) / (n_q + 2)
     moved = np.isfinite(moved_hz)
-    chance = np.where(moved, q * s, np.where(lost, laplace, np.nan))
+    chance = np.where(moved, q * (s * n_q + 1) / (n_q + 2), np.where(lost, (q * n_q + 1) / (n_q + 2), np.nan))
     with np.errstate(invalid="ignore"):
         flagged = (moved | lost) & (chance <= false_alarm_rate / max(m, 1))
     return BeyondBands(moved_hz, moved_col, lost, chance, flagged, u / nb, w / nb, reach_bands_hz(ref), int(base.size))

@@ -88,15 +88,19 @@ def test_a_mode_the_baseline_found_in_half_its_tests_missing_is_not_flagged():
 
 
 def test_a_moved_reading_the_baseline_makes_ordinary_is_not_flagged():
-    """A mode lacking in half the baseline tests, with a spurious pole beyond its band in a third of them: a pole
-    there in a test lacking the mode has chance 1/2 * 1/3 at the baseline's shares, not flagged."""
+    """A mode lacking in half the baseline tests: a pole beyond its band in a test lacking it has chance 1/2 times
+    Laplace's chance of such a pole, (w + 1) / (n + 2): not flagged, whether the baseline held such poles (w = 4)
+    or none (a lone pole in a quiet record is no evidence on 12 tests)."""
     tests = _baseline(drop=(1, range(0, 12, 2)))
     for k in range(0, 12, 3):
         tests[k] = _modes(np.r_[tests[k].frequencies_hz, 38.0])
     tests.append(_modes([F0[0], 38.5, F0[2]]))
     ref, bb = _read(tests, 12)
     assert bb.moved_hz[12, 1] == pytest.approx(38.5) and not bb.flagged[12, 1]
-    assert bb.chance[12, 1] == pytest.approx(0.5 * 4 / 12)
+    assert bb.chance[12, 1] == pytest.approx(0.5 * 5 / 14)
+    tests = _baseline(drop=(1, range(0, 12, 2))) + [_modes([F0[0], 38.5, F0[2]])]
+    ref, bb = _read(tests, 12)
+    assert bb.chance[12, 1] == pytest.approx(0.5 / 14) and not bb.flagged[12, 1] and bb.status(12) is None
 
 
 def test_two_missing_modes_never_share_a_pole_and_a_pole_beyond_the_reach_is_no_mode():
