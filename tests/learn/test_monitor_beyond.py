@@ -5,9 +5,12 @@ import json
 
 import numpy as np
 import pytest
+from scipy import stats
 
 from experiments.cli import main
-from learn.monitor import IdentifiedModes, reference_modes, track_modes
+from experiments.cli.cmd_monitor import chart
+from learn.monitor import (IdentificationSettings, IdentifiedModes, SeriesInput, monitor_series, reference_modes,
+                           track_modes)
 from learn.monitor.events import group_events, lost_modes_change
 from learn.monitor.tracking import MODE_LOST, MODE_MOVED, REACH_FACTOR, beyond_bands, reach_bands_hz
 
@@ -165,8 +168,6 @@ def test_monitor_flags_a_mode_moved_40_percent_beside_the_alarms(jump_series, ca
 
 
 def test_a_run_of_lost_modes_after_a_short_baseline_is_a_change_a_pair_is_not():
-    from scipy import stats
-
     def row(baseline, lost=False):
         return {"baseline": baseline, "status": "no alarm", "mode_z_scores": [0.0] * 3,
                 "missing_modes": [2] if lost else [],
@@ -182,3 +183,21 @@ def test_a_run_of_lost_modes_after_a_short_baseline_is_a_change_a_pair_is_not():
     pair = [row(True) for _ in range(8)] + [row(False), row(False), row(False, True), row(False, True)]
     d = lost_modes_change(pair, 0.01)["modes"][1]
     assert d["p_value"] == pytest.approx(stats.binom.sf(1, 4, 1 / 10), rel=1e-9) and not d["change"]
+
+
+def test_the_chart_marks_the_tests_whose_mode_moved_and_draws_it_at_its_moved_frequency(jump_series):
+    import matplotlib.pyplot as plt  # matplotlib: heavy, only where a chart is drawn
+
+    res = monitor_series(SeriesInput.from_files(jump_series), 21, IdentificationSettings(), progress=False)
+    for r in res.rows:
+        r["extrapolated"] = False
+    fig = chart(res)
+    moved = [i for i, r in enumerate(res.rows) if r["status"] == MODE_MOVED]
+    line = next(ln for ln in fig.axes[1].get_lines() if ln.get_label().startswith(MODE_MOVED))
+    assert line.get_label() == f"{MODE_MOVED} beyond its band ({len(moved)})" and line.get_marker() == "^"
+    np.testing.assert_array_equal(line.get_xdata(), moved)
+    hollow = [ln for ln in fig.axes[0].get_lines() if ln.get_marker() == "o"]
+    (pts,) = hollow
+    np.testing.assert_allclose(np.asarray(pts.get_ydata())[27:], 40.0)
+    assert np.isnan(np.asarray(pts.get_ydata())[:27]).all()
+    plt.close(fig)
