@@ -185,10 +185,11 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     series_coverage(res)                                    # every row's ``extrapolated``
     separate = extrapolated_alarms == "separate" or (
         extrapolated_alarms == "auto" and not covers_seasons(series.times, series.time_values, n_baseline))
-    for r in rows:
+    for i, r in enumerate(rows):
         if (separate and r["status"] == "alarm" and r["extrapolated"]
                 and all(environmental(model, nm) for nm in r["alarmed_by"])):
-            r["status"], r["alarm"] = EXTRAPOLATED, False
+            # a mode beyond its band is no statistic of the environment: its status stands
+            r["status"], r["alarm"] = beyond.status(i) or EXTRAPOLATED, False
     return res
 
 

@@ -53,7 +53,7 @@ class Event:
     modes : list of dict          per mode: ``mode`` (1-based), ``change_pct`` and ``z`` (means over the alarms,
                                   ``against`` what), ``step_pct`` (the alarms' mean against the ``n_before`` tests
                                   without an alarm before the event), ``moved`` (``|z| >=`` :data:`Z_MOVED`)
-    moved : list of int           the modes that moved, farthest first
+    moved : list of int           the modes that moved, farthest first, then those moved beyond their bands
     size_pct : float or None      root mean square over the modes of the event's mean change (%): one magnitude
                                   comparable between events, whichever modes moved
     size_first_pct, size_last_pct : float or None    the same of its first and last alarm alone
