@@ -27,9 +27,11 @@ files): its detector without its identification. Each test's modes and error are
 ``monitor`` is reported as the set's result, each test's modes then read from its identification cache
 (:func:`~learn.monitor.identification.cached_identification`).
 
-``monitor`` counts a test as flagged when its status is ``alarm`` or ``change or unseen conditions`` (the series are
-undated, so an extrapolated test alarmed by the environmental statistics alone gets that status); a test it could
-not identify is not flagged (its status ``not identified`` is reported apart). Where ``monitor`` misses a test a
+``monitor`` counts a test as flagged when its status is one of :data:`learn.monitor.alarms.FLAGGED_STATUSES`:
+``alarm``, ``change or unseen conditions`` (the series are undated, so an extrapolated test alarmed by the
+environmental statistics alone gets that status), ``mode moved`` or ``mode lost`` (a reference mode beyond its band
+against the baseline's odds); a test it could not identify is not flagged (its status ``not identified`` is reported
+apart). Where ``monitor`` misses a test a
 plain test flags, the miss is split into ``not identified`` and ``below threshold`` (identified, judged normal).
 Writes ``real_series.json`` and ``real_series.md`` in ``--out``.
 """
@@ -53,7 +55,7 @@ import numpy as np  # noqa: E402
 from experiments.benches.harness import parser, table, write_table  # noqa: E402
 from learn.monitor import (IdentificationSettings, IdentifiedModes, SeriesInput, monitor_series,  # noqa: E402
                            reference_modes)
-from learn.monitor.alarms import EXTRAPOLATED as EXTRAPOLATED_STATUS  # noqa: E402
+from learn.monitor.alarms import FLAGGED_STATUSES  # noqa: E402
 from learn.monitor.identification import cached_identification  # noqa: E402
 from physics.errors import BeamDamageError  # noqa: E402
 from physics.identification.fft_peak import fft_peaks, identify_fft_peaks  # noqa: E402
@@ -343,7 +345,7 @@ def _write_modal(F, folder: Path) -> list:
 
 
 def _flagged(status) -> np.ndarray:
-    return np.array([s in ("alarm", EXTRAPOLATED_STATUS) for s in status])
+    return np.array([s in FLAGGED_STATUSES for s in status])
 
 
 def run_set(series: RealSeries, out: Path, rate: float) -> dict:

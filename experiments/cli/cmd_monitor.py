@@ -13,9 +13,9 @@ import numpy as np
 from experiments.cli.args import check_out_dir
 from learn.monitor import (DEFAULT_LATENT, NORMAL_MODELS, SeriesInput, alarm_verdicts, identification_settings,
                            monitor_series, read_conditions)
-from learn.monitor.alarms import EXTRAPOLATED, EXTRAPOLATED_ALARMS, STATUSES
+from learn.monitor.alarms import EXTRAPOLATED, EXTRAPOLATED_ALARMS, MODE_LOST, MODE_MOVED, STATUSES
 from learn.monitor.coverage import baseline_scatter, series_coverage
-from learn.monitor.events import group_events, identification_change
+from learn.monitor.events import group_events, identification_change, lost_modes_change
 from learn.monitor.verdicts import event_verdicts
 from physics.errors import ConfigError
 from physics.io import FRF, MODAL, TIME, accepted, atomic_write_bytes, atomic_write_text, figure_png, to_jsonable
@@ -80,8 +80,8 @@ def add_parser(sub):
                                                 "out/monitor)")
     p.add_argument("--json", action="store_true",
                    help='print {"tests": [...], "events": [...], "counts", "identification_change", '
-                        '"baseline_scatter", "coverage", "baseline_tests", "false_alarm_rate", "normal_variation", '
-                        '"detector", "charts", "first_alarm", "version", "config"}')
+                        '"lost_modes_change", "baseline_scatter", "coverage", "baseline_tests", "false_alarm_rate", '
+                        '"normal_variation", "detector", "charts", "first_alarm", "version", "config"}')
     p.set_defaults(func=run, flags={"n_baseline": "--baseline-tests", "workers": "--workers"})
 
 
@@ -154,6 +154,9 @@ def judged(res, false_alarm_rate: float, model=None, beam_x_m=None) -> dict:
         if v is not None:
             events[k] = replace(ev, verdict=v)
     ident = identification_change(rows, false_alarm_rate)
+    lost = lost_modes_change(rows, false_alarm_rate)
+    if lost["change"]:
+        warnings.warn(lost["text"])
     scatter = baseline_scatter(rows, res.series.times[0] is not None)
     if ident["change"]:
         warnings.warn(ident["text"])
@@ -165,7 +168,7 @@ def judged(res, false_alarm_rate: float, model=None, beam_x_m=None) -> dict:
                   changes=sum(e.change for e in events))
     first = res.first_alarm
     return {"tests": rows, "events": [e.to_dict() for e in events], "counts": counts,
-            "identification_change": ident, "baseline_scatter": scatter.to_dict(),
+            "identification_change": ident, "lost_modes_change": lost, "baseline_scatter": scatter.to_dict(),
             "coverage": None if cov is None else {"coordinates": list(cov.names), "low": cov.low.tolist(),
                                                   "high": cov.high.tolist(),
                                                   "mahalanobis_max": None if not np.isfinite(cov.mahalanobis_max)
@@ -214,13 +217,15 @@ def _write(out_dir, out: dict, res) -> dict:
         f"{len(out['tests'])} tests, the first {out['baseline_tests']} the baseline period; {m} modes tracked; "
         f"normal variation: {nv['model']}; threshold {thr['value']:.4g} for a false-alarm rate of "
         f"{out['false_alarm_rate']:g} (held-out baseline rate {thr['held_out_false_alarm_rate']:.3g}).",
-        f"Of the {later} later tests: {cnt['alarm']} alarms, {cnt['not identified']} not identified, "
+        f"Of the {later} later tests: {cnt['alarm']} alarms, {cnt[MODE_MOVED]} {MODE_MOVED} and {cnt[MODE_LOST]} "
+        f"{MODE_LOST} beyond their bands, {cnt['not identified']} not identified, "
         f"{cnt['no alarm']} without an alarm, {cnt['not judged']} not judged (another kind, band or beam; conditions "
         f"not measured), {cnt[EXTRAPOLATED]} {EXTRAPOLATED} (extrapolated, alarmed by the environmental statistics "
         f"alone); {cnt['extrapolated']} lie beyond the baseline's conditions (extrapolated). "
         f"{cnt['events']} events, {cnt['changes']} of them changes"
         + (f"; the first alarm: {first['file']}{_when(first)}." if first else "."),
         out["identification_change"]["text"] + ".",
+        out["lost_modes_change"]["text"] + ".",
         out["baseline_scatter"]["warning"] or _scatter_text(out["baseline_scatter"])))
     modes = Table("Reference modes of the baseline period and their normal variation",
                   ("mode", "frequency (Hz)", "std (%)", "tracking tolerance (%)", "presence",
@@ -265,7 +270,9 @@ def _figure(res) -> bytes:
 def chart(res):
     """The control chart (a matplotlib figure): each mode's frequency relative to its baseline median and the
     novelty index over the tests, with the threshold, the baseline period shaded, the alarms circled, the
-    extrapolated tests boxed and the tests not identified crossed at the top edge of the index's panel."""
+    extrapolated tests boxed, the tests whose mode moved or was lost beyond its band marked (triangles up, down)
+    and the tests not identified crossed at the top edge of the index's panel; a mode moved beyond its band is
+    drawn at its moved frequency (hollow markers)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -277,7 +284,11 @@ def chart(res):
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True)
     rel = 100 * (res.frequencies_hz / res.reference.frequencies_hz - 1)
     for r in range(rel.shape[1]):
-        a1.plot(t, rel[:, r], ".-", ms=3, lw=0.6, label=f"mode {r + 1} ({res.reference.frequencies_hz[r]:.4g} Hz)")
+        line = a1.plot(t, rel[:, r], ".-", ms=3, lw=0.6,
+                       label=f"mode {r + 1} ({res.reference.frequencies_hz[r]:.4g} Hz)")[0]
+        if res.beyond is not None and np.isfinite(res.beyond.moved_hz[:, r]).any():
+            a1.plot(t, 100 * (res.beyond.moved_hz[:, r] / res.reference.frequencies_hz[r] - 1), "o", mfc="none",
+                    ms=4, color=line.get_color())
     a1.set(ylabel="frequency - baseline median (%)", title="Natural frequencies")
     a1.legend(fontsize=7, ncol=2)
     nov = res.novelty
@@ -287,6 +298,11 @@ def chart(res):
     if ext.any():
         a2.semilogy(t[ext], np.maximum(nov[ext], 1e-3), "s", mfc="none", color="tab:purple", ms=9,
                     label=f"extrapolated ({ext.sum()}: beyond the baseline's conditions)")
+    for status, mark, color in ((MODE_MOVED, "^", "tab:red"), (MODE_LOST, "v", "tab:red")):
+        hit = np.array([r.get("status") == status for r in res.rows])
+        if hit.any():                               # no alarm of the index: drawn at the top edge, counted
+            a2.plot(t[hit], np.full(hit.sum(), 0.9), mark, color=color, ms=6, transform=a2.get_xaxis_transform(),
+                    label=f"{status} beyond its band ({hit.sum()})")
     lost = np.array([r.get("status") == "not identified" for r in res.rows])
     if lost.any():                                  # no index: drawn at the top edge, counted in the legend
         a2.plot(t[lost], np.full(lost.sum(), 0.96), "x", color="tab:orange", ms=7, mew=1.5,
@@ -328,11 +344,13 @@ def _print(out: dict, res) -> None:
         if r["error"]:
             print(f"  {r['file']}: {r['status']}: {r['error']}")
     cnt = out["counts"]
-    print(f"after the baseline period: {cnt['alarm']} alarms, {cnt['not identified']} not identified, "
+    print(f"after the baseline period: {cnt['alarm']} alarms, {cnt[MODE_MOVED]} {MODE_MOVED}, {cnt[MODE_LOST]} "
+          f"{MODE_LOST}, {cnt['not identified']} not identified, "
           f"{cnt['no alarm']} without an alarm, {cnt['not judged']} not judged, {cnt[EXTRAPOLATED]} {EXTRAPOLATED}; "
           f"{cnt['extrapolated']} extrapolated"
           + (f"; first alarm {out['first_alarm']['file']}{_when(out['first_alarm'])}" if out["first_alarm"] else ""))
     print(out["identification_change"]["text"])
+    print(out["lost_modes_change"]["text"])
     print(f"{cnt['events']} events, {cnt['changes']} changes:")
     for e in out["events"][:10]:
         print(f"  {e['text']}")

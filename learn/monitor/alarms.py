@@ -19,13 +19,13 @@ from learn.monitor.charts import CHARTS, Charts, run_charts
 from learn.monitor.statistics import (STATISTICS, Detection, covers_seasons, detect, environmental, residual_threshold,
                                      season_warning)
 from learn.monitor.coverage import series_coverage
-from learn.monitor.tracking import (MIN_PRESENCE, ReferenceModes, identified_by, reference_modes, refit_missing,
-                                   track_modes)
+from learn.monitor.tracking import (MIN_PRESENCE, MODE_LOST, MODE_MOVED, BeyondBands, ReferenceModes, beyond_bands,
+                                   identified_by, readings_text, reference_modes, refit_missing, track_modes)
 from physics.errors import BeamDamageError, ConfigError
 from learn.monitor.workers import identify_files
 
-__all__ = ["EXTRAPOLATED", "EXTRAPOLATED_ALARMS", "STATUSES", "SeriesResult", "changed_text", "monitor_series",
-           "what_changed"]
+__all__ = ["EXTRAPOLATED", "EXTRAPOLATED_ALARMS", "FLAGGED_STATUSES", "MODE_LOST", "MODE_MOVED", "STATUSES",
+           "SeriesResult", "changed_text", "monitor_series", "what_changed"]
 
 
 @dataclass
@@ -37,6 +37,8 @@ class SeriesResult:
     rows : list of dict              one per test (``file``, ``time``, ``baseline``, ``alarm``, ``novelty``,
                                      ``threshold``, ``frequencies_hz``, ``mode_z_scores``, ``change_pct``,
                                      ``identified``, ``status`` (:data:`STATUSES`), ``error``, ``missing_modes``,
+                                     ``beyond_band``: the modes missing from their bands read as moved or lost
+                                     (:meth:`learn.monitor.tracking.BeyondBands.readings`), ``beyond_band_text``,
                                      ``identified_by``: per mode the method that found its pole, ``conditions``)
     reference : ReferenceModes
     frequencies_hz : ndarray (n, m)  tracked frequencies (NaN where missing)
@@ -47,6 +49,7 @@ class SeriesResult:
     normal_variation : dict          ``model``, its factors or regression, ``per_mode_std`` (relative)
     sigma : ndarray (m,)             per-mode relative std of the normal variation (what the explanations weigh)
     tests : list of IdentifiedModes or None
+    beyond : BeyondBands or None     the modes missing from their bands, moved or lost
     """
 
     rows: list
@@ -62,6 +65,7 @@ class SeriesResult:
     series: SeriesInput | None = None
     detection: Detection | None = None
     charts: Charts | None = None
+    beyond: BeyondBands | None = None
 
     @property
     def first_alarm(self) -> int | None:
@@ -88,6 +92,12 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     least :data:`~learn.monitor.statistics.SEASONS_DAYS` days), else separates them. Raises
     :class:`BeamDamageError` on a baseline that cannot carry the model (too few tests: the message names the
     minimum; a baseline test of another kind, band or beam).
+
+    A reference mode missing from its band in a test with poles is looked for beyond it
+    (:func:`learn.monitor.tracking.beyond_bands`): moved (a pole no other mode claims within its reach) or lost,
+    each weighed by the baseline period's chance of that reading; a flagged one gives a test the detector did not
+    alarm the status :data:`MODE_MOVED` or :data:`MODE_LOST` (also a test with no mode left in its band, else
+    ``not identified``), counted beside the alarms; an alarm carries it in its row's ``beyond_band_text``.
     """
     n = len(series.files)
     C = series.conditions
@@ -150,31 +160,36 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
               "baseline_tests_used": int(b_idx.size),
               "missing_entries": "imputed by their conditional mean given the test's other features under the "
                                  "baseline's Gaussian (regression: about the conditions' prediction)"}
+    series_base = [i for i in range(n_baseline) if i not in foreign]
+    beyond = beyond_bands(tests, ref, cols, series_base, false_alarm_rate)
     rows = []
     for i in range(n):
+        readings = beyond.readings(i, ref)
         mode_missing = [r + 1 for r in range(m) if not np.isfinite(F[i, r])] if tests[i] is not None else []
         rows.append({
             "file": series.files[i], "time": series.times[i], "time_value": float(series.time_values[i]),
             "baseline": i < n_baseline, "identified": bool(ok[i]), "error": errors[i],
             "status": _status(bool(ok[i]), bool(ok[i] and det.alarm[i]),
-                              i in foreign or errors[i] == "conditions not measured"),
+                              i in foreign or errors[i] == "conditions not measured", beyond.status(i)),
             "alarm": bool(ok[i] and det.alarm[i]), "novelty": _num(novelty[i]), "threshold": thr.value,
             "frequencies_hz": [_num(v) for v in F[i]], "damping_ratios": [_num(v) for v in Z[i]],
             "mode_z_scores": [_num(v) for v in z[i]], "change_pct": [_num(v) for v in change[i]],
             "mac": [_num(v) for v in MAC[i]] if ref.shapes is not None else None,
-            "missing_modes": mode_missing, "identified_by": how[i],
+            "missing_modes": mode_missing, "beyond_band": readings,
+            "beyond_band_text": readings_text(readings, ref), "identified_by": how[i],
             "conditions": None if C is None else dict(zip(series.condition_names, map(_num, C[i]))),
         })
         rows[-1].update(_detector_fields(det, charts, i, bool(ok[i])))
     res = SeriesResult(rows, ref, F, np.exp(expected_log), novelty, thr, model, normal, sigma, tests, series, det,
-                       charts)
+                       charts, beyond)
     series_coverage(res)                                    # every row's ``extrapolated``
     separate = extrapolated_alarms == "separate" or (
         extrapolated_alarms == "auto" and not covers_seasons(series.times, series.time_values, n_baseline))
-    for r in rows:
+    for i, r in enumerate(rows):
         if (separate and r["status"] == "alarm" and r["extrapolated"]
                 and all(environmental(model, nm) for nm in r["alarmed_by"])):
-            r["status"], r["alarm"] = EXTRAPOLATED, False
+            # a mode beyond its band is no statistic of the environment: its status stands
+            r["status"], r["alarm"] = beyond.status(i) or EXTRAPOLATED, False
     return res
 
 
@@ -241,15 +256,26 @@ def _identified(series: SeriesInput, n_baseline: int, settings: IdentificationSe
 EXTRAPOLATED = "change or unseen conditions"
 #: What a row's ``status`` says: judged and alarmed; judged and within the normal variation; a test of the series
 #: whose modes could not be identified (a change may be why: counted beside the alarms); a test that cannot be
-#: judged against this baseline (another kind, band or beam; its conditions not measured); :data:`EXTRAPOLATED`.
-STATUSES = ("alarm", "no alarm", "not identified", "not judged", EXTRAPOLATED)
+#: judged against this baseline (another kind, band or beam; its conditions not measured); :data:`EXTRAPOLATED`;
+#: a test the detector did not alarm whose reference mode moved beyond its band (:data:`MODE_MOVED`) or was lost
+#: (:data:`MODE_LOST`) against the baseline period's odds (:func:`learn.monitor.tracking.beyond_bands`).
+STATUSES = ("alarm", "no alarm", "not identified", "not judged", EXTRAPOLATED, MODE_MOVED, MODE_LOST)
+#: The statuses that flag a test: a change, or conditions the baseline did not see.
+FLAGGED_STATUSES = ("alarm", EXTRAPOLATED, MODE_MOVED, MODE_LOST)
 #: ``monitor_series``'s choices for an alarm of the environmental statistics on an extrapolated test.
 EXTRAPOLATED_ALARMS = ("auto", "separate", "alarm")
 
 
-def _status(judged: bool, alarm: bool, foreign: bool) -> str:
+def _status(judged: bool, alarm: bool, foreign: bool, beyond: str | None = None) -> str:
+    """``alarm`` before a mode moved or lost beyond its band (``beyond``), then ``no alarm``, ``not judged`` and
+    ``not identified``; a test whose conditions were not measured is still read for a mode beyond its band (no
+    condition enters that reading; a test of another kind, band or beam holds no reading)."""
+    if judged and alarm:
+        return "alarm"
+    if beyond:
+        return beyond
     if judged:
-        return "alarm" if alarm else "no alarm"
+        return "no alarm"
     return "not judged" if foreign else "not identified"
 
 

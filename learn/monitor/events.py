@@ -1,17 +1,20 @@
-"""Events of a monitored series: consecutive flagged tests after the baseline period (alarms, and tests whose modes
-could not be identified) grouped into one event each, with what changed (the modes that moved, their mean size and
-direction); and whether the tests that could not be identified are more than the baseline period's share says
-(a binomial test): a change after which tests stop being identifiable is a change, not "no alarm"."""
+"""Events of a monitored series: consecutive flagged tests after the baseline period (alarms, tests whose modes
+could not be identified, tests whose mode moved or was lost beyond its band) grouped into one event each, with what
+changed (the modes that moved, their mean size and direction); and whether the tests that could not be identified
+are more than the baseline period's share says (a binomial test): a change after which tests stop being identifiable
+is a change, not "no alarm"."""
 
 from __future__ import annotations
 
 import warnings
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-__all__ = ["AGAINST", "MAX_GAP", "SPLIT_P", "STEP_BEFORE", "Z_MOVED", "Event", "group_events", "identification_change",
-           "unidentified_p_value"]
+from learn.monitor.tracking import MODE_LOST, MODE_MOVED
+
+__all__ = ["AGAINST", "FLAGGED", "MAX_GAP", "SPLIT_P", "STEP_BEFORE", "Z_MOVED", "Event", "group_events",
+           "identification_change", "lost_modes_change", "unidentified_p_value"]
 
 #: Tests without a flag (judged, no alarm) an event may hold between two flagged tests: an index running along
 #: the threshold alarms on some of its tests, one event all the same.
@@ -31,7 +34,8 @@ STEP_BEFORE = 10
 #: lowers three modes by 0.7-0.85 % reads as mode 2 +0.6 % after removing a factor that moves every mode alike).
 AGAINST = ("residual", "before")
 
-FLAGGED = ("alarm", "not identified")
+#: The statuses an event gathers: alarms, tests not identified, tests whose mode moved or was lost beyond its band.
+FLAGGED = ("alarm", "not identified", MODE_MOVED, MODE_LOST)
 
 
 @dataclass(frozen=True)
@@ -45,16 +49,18 @@ class Event:
     first_time, last_time         as the series gives them
     n_tests : int                 judged or not-identified tests from first to last
     n_alarms, n_not_identified, n_extrapolated : int
+    n_beyond : int                tests of status ``mode moved`` or ``mode lost`` (not alarmed)
     modes : list of dict          per mode: ``mode`` (1-based), ``change_pct`` and ``z`` (means over the alarms,
                                   ``against`` what), ``step_pct`` (the alarms' mean against the ``n_before`` tests
                                   without an alarm before the event), ``moved`` (``|z| >=`` :data:`Z_MOVED`)
-    moved : list of int           the modes that moved, farthest first
+    moved : list of int           the modes that moved, farthest first, then those moved beyond their bands
     size_pct : float or None      root mean square over the modes of the event's mean change (%): one magnitude
                                   comparable between events, whichever modes moved
     size_first_pct, size_last_pct : float or None    the same of its first and last alarm alone
     direction : str               ``down``, ``up``, ``mixed`` (the moved modes' signs) or ``none``
     unidentified_p_value : float or None     P(as many tests not identified | the baseline period's share)
-    change : bool                 alarms, or more tests not identified than the false-alarm rate allows
+    change : bool                 alarms, a mode moved or lost beyond its band (flagged), or more tests not
+                                  identified than the false-alarm rate allows
     text : str
     against : str                 what the change is measured against
     n_before : int                tests without an alarm before the event its ``step_pct`` is measured against
@@ -62,6 +68,9 @@ class Event:
     before : tuple of int         row indices of the tests its change is measured against (empty: the normal
                                   model's prediction)
     verdict : dict or None        the explanations and the network's verdict (with a trained model)
+    beyond_band : list of dict    per mode flagged beyond its band in the event's tests: ``mode``, ``moved`` (how
+                                  many tests), ``change_pct`` (their median, against the reference frequency),
+                                  ``lost`` (how many tests)
     """
 
     first: int
@@ -88,6 +97,8 @@ class Event:
     members: tuple = ()
     before: tuple = ()
     verdict: dict | None = None
+    n_beyond: int = 0
+    beyond_band: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
         d = asdict(self)
@@ -130,6 +141,38 @@ def identification_change(rows: list, false_alarm_rate: float) -> dict:
             f"(binomial p = {p:.2g})" + (": identification lost, reported as a change" if change else ""))
     return {"baseline": {"not_identified": ub, "tests": nb}, "later": {"not_identified": u, "tests": len(later)},
             "p_value": p, "change": change, "text": text}
+
+
+def _lacks(row, r: int) -> bool:
+    """Whether a row lacks reference mode ``r`` (0-based) in its band: not identified, or the mode missing."""
+    return row["status"] == "not identified" or (r + 1) in (row.get("missing_modes") or [])
+
+
+def lost_modes_change(rows: list, false_alarm_rate: float) -> dict:
+    """Per reference mode, the later tests where it was lost (no pole in its band or within its reach beyond it:
+    ``beyond_band`` readings ``lost``, flagged or not) against the baseline period's share lacking it (tests not
+    identified included), by the binomial test of :func:`unidentified_p_value`; a mode whose p-value lies below
+    ``false_alarm_rate / m`` is a change (a run of losses a short baseline could not judge one by one). Returns
+    ``modes`` (per mode: ``mode``, ``baseline`` and ``later`` counts, ``p_value``, ``change``), ``change`` and
+    ``text``."""
+    base = [r for r in rows if r["baseline"] and r["status"] != "not judged"]
+    later = [r for r in rows if not r["baseline"] and r["status"] != "not judged"]
+    m = len(rows[0]["mode_z_scores"]) if rows else 0
+    modes = []
+    for r in range(m):
+        ub = sum(_lacks(row, r) for row in base)
+        k = sum(any(d["mode"] == r + 1 and d["reading"] == "lost" for d in (row.get("beyond_band") or []))
+                for row in later)
+        p = unidentified_p_value(k, len(later), ub, len(base))
+        modes.append({"mode": r + 1, "baseline": {"lacking": ub, "tests": len(base)},
+                      "later": {"lost": k, "tests": len(later)}, "p_value": p,
+                      "change": bool(k and p < false_alarm_rate / max(m, 1))})
+    lost = [d for d in modes if d["later"]["lost"]]
+    text = "; ".join(f"mode {d['mode']} lost in {d['later']['lost']} of {d['later']['tests']} later tests against "
+                     f"{d['baseline']['lacking']} of {d['baseline']['tests']} lacking it in the baseline period "
+                     f"(binomial p = {d['p_value']:.2g})" + (": reported as a change" if d["change"] else "")
+                     for d in lost) or "no mode lost in a later test"
+    return {"modes": modes, "change": any(d["change"] for d in modes), "text": text}
 
 
 def _pattern(rows, baseline):
@@ -213,38 +256,66 @@ def _event(rows, members: list, ctx: dict) -> Event:
               "moved": bool(np.isfinite(z[r]) and abs(z[r]) >= Z_MOVED)} for r in range(m)]
     moved = [d["mode"] for d in sorted(modes, key=lambda d: -abs(d["z"]) if d["z"] is not None else 0.0)
              if d["moved"]]
-    signs = {np.sign(c[k - 1]) for k in moved}
-    direction = "none" if not moved else "down" if signs == {-1.0} else "up" if signs == {1.0} else "mixed"
     p = unidentified_p_value(u, len(span), ub, nb) if u else None
     change = bool(alarms) or (p is not None and p < false_alarm_rate)
     size = _size(c) if alarms else None
     first_size = _size(C[0]) if alarms else None
     last_size = _size(C[-1]) if alarms else None
     n_ext = sum(bool(rows[i].get("extrapolated")) for i in members)
+    n_beyond = sum(rows[i]["status"] in (MODE_MOVED, MODE_LOST) for i in members)
+    beyond = _beyond(rows, members)
+    change = change or bool(beyond)
+    for d in beyond:                                # a mode moved beyond its band moved, whatever its z
+        if d["moved"] and d["mode"] not in moved:
+            moved.append(d["mode"])
+            modes[d["mode"] - 1]["moved"] = True
+    signs = {np.sign(c[k - 1]) for k in moved if np.isfinite(z[k - 1]) and abs(z[k - 1]) >= Z_MOVED}
+    signs |= {np.sign(d["change_pct"]) for d in beyond if d["moved"] and d["change_pct"] is not None}
+    direction = "none" if not moved else "down" if signs == {-1.0} else "up" if signs == {1.0} else "mixed"
     where = (f"test {first + 1}" if first == last else f"tests {first + 1}-{last + 1}")
     times = rows[first]["time"], rows[last]["time"]
     if times[0] is not None:
         where += f" ({times[0]}" + (f" to {times[1]})" if last != first else ")")
     parts = [f"{len(alarms)} alarm{'s' * (len(alarms) != 1)}"]
+    if n_beyond:
+        parts.append(f"{n_beyond} with a mode moved or lost beyond its band")
     if u:
         parts.append(f"{u} not identified (p = {p:.2g} at the baseline's share"
                      + ("; identification lost)" if p < false_alarm_rate else ")"))
     if len(span) > len(members):
         parts.append(f"{len(span) - len(members)} without an alarm between")
     what = ""
-    if moved:
-        what = (f"; modes {', '.join(map(str, moved))} {direction} ("
-                + ", ".join(f"mode {k} {c[k - 1]:+.3g} %" for k in moved) + f"), size {size:.3g} % (rms over "
+    z_moved = [k for k in moved if np.isfinite(z[k - 1]) and abs(z[k - 1]) >= Z_MOVED]
+    if z_moved:
+        what = (f"; modes {', '.join(map(str, z_moved))} {direction} ("
+                + ", ".join(f"mode {k} {c[k - 1]:+.3g} %" for k in z_moved) + f"), size {size:.3g} % (rms over "
                 f"the modes; against {against})")
     elif alarms:
         lead = int(np.nanargmax(np.abs(np.where(np.isfinite(z), z, 0.0))))
         what = (f"; no mode moved {Z_MOVED:g} standard deviations on average (the most: mode {lead + 1} "
                 f"{c[lead]:+.3g} %, {z[lead]:+.1f} sd), size {size:.3g} % (rms over the modes; against {against})")
+    if beyond:
+        what += "; beyond their bands: " + ", ".join(
+            ", ".join(([f"mode {d['mode']} moved in {d['moved']} (median {d['change_pct']:+.3g} %)"]
+                       if d["moved"] else []) + ([f"mode {d['mode']} lost in {d['lost']}"] if d["lost"] else []))
+            for d in beyond)
     ext = f"; {n_ext} of {len(members)} extrapolated beyond the baseline's conditions" if n_ext else ""
     text = f"{where}: " + ", ".join(parts) + what + ext + ("" if change else "; not a change")
     return Event(first, last, rows[first]["file"], rows[last]["file"], times[0], times[1], len(span), len(alarms), u,
                  n_ext, modes, moved, size, first_size, last_size, direction, p, change, text, against,
-                 len(before), tuple(members), tuple(before) if stepped else ())
+                 len(before), tuple(members), tuple(before) if stepped else (), None, n_beyond, beyond)
+
+
+def _beyond(rows, members: list) -> list:
+    """Per mode flagged beyond its band in the members' rows (``beyond_band``): ``mode``, ``moved`` (tests),
+    ``change_pct`` (their median), ``lost`` (tests)."""
+    flagged = [d for i in members for d in (rows[i].get("beyond_band") or []) if d["flagged"]]
+    out = []
+    for k in sorted({d["mode"] for d in flagged}):
+        moved = [d["change_pct"] for d in flagged if d["mode"] == k and d["reading"] == "moved"]
+        out.append({"mode": k, "moved": len(moved), "change_pct": float(np.median(moved)) if moved else None,
+                    "lost": sum(d["mode"] == k and d["reading"] == "lost" for d in flagged)})
+    return out
 
 
 def _num(v):
@@ -255,16 +326,18 @@ def _num(v):
 def group_events(rows: list, false_alarm_rate: float = 0.01, max_gap: int = MAX_GAP, against: str = "residual"
                  ) -> list[Event]:
     """The events of a monitored series' rows (``status``, ``baseline``, ``mode_z_scores``, ``change_pct``,
-    ``file``, ``time``; ``extrapolated`` if present), in time order.
+    ``file``, ``time``; ``extrapolated`` and ``beyond_band`` if present), in time order.
 
-    An event starts at a flagged test after the baseline period (``status`` ``alarm`` or ``not identified``) and
+    An event starts at a flagged test after the baseline period (``status`` ``alarm``, ``not identified``,
+    ``mode moved`` or ``mode lost``: :data:`FLAGGED`) and
     takes every following flagged test until more than ``max_gap`` judged tests without an alarm pass, or until an
     alarm's change departs from the event's mean change beyond chance (:data:`SPLIT_P`: a new state). Tests that
     cannot be judged against the baseline (``not judged``) are skipped. An event whose tests were not identified
     is a change when so many failures are unlikely at the baseline period's share
-    (:func:`unidentified_p_value` below ``false_alarm_rate``). ``against`` (:data:`AGAINST`): what the event's
-    change, its modes that moved (``|z| >=`` :data:`Z_MOVED`, ``z`` in the baseline's day-to-day scatter for
-    ``"before"``) and its size are measured against.
+    (:func:`unidentified_p_value` below ``false_alarm_rate``); one holding a mode moved or lost beyond its band
+    (flagged in a row's ``beyond_band``) is a change, its ``beyond_band`` and text naming the modes. ``against``
+    (:data:`AGAINST`): what the event's change, its modes that moved (``|z| >=`` :data:`Z_MOVED`, ``z`` in the
+    baseline's day-to-day scatter for ``"before"``) and its size are measured against.
     """
     if against not in AGAINST:
         raise ValueError(f"against must be one of {', '.join(AGAINST)}, got {against!r}")

@@ -14,8 +14,9 @@ from learn.monitor.identification import (IdentificationSettings, IdentifiedMode
 from learn.pairs.noise_calibration import robust_std
 from physics.modal import mac
 
-__all__ = ["CLUSTER_GAP", "MAC_MIN", "MIN_COUNT", "MIN_PRESENCE", "ReferenceModes", "identified_by", "narrow_bands_hz",
-           "reference_modes", "refit_missing", "shapes_at", "track_modes"]
+__all__ = ["CLUSTER_GAP", "MAC_MIN", "MIN_COUNT", "MIN_PRESENCE", "MODE_LOST", "MODE_MOVED", "REACH_FACTOR",
+           "BeyondBands", "ReferenceModes", "beyond_bands", "identified_by", "narrow_bands_hz", "reach_bands_hz",
+           "readings_text", "reference_modes", "refit_missing", "shapes_at", "track_modes"]
 
 #: Baseline poles closer than this (relative) in frequency fall into one cluster.
 CLUSTER_GAP = 0.05
@@ -36,6 +37,13 @@ CORE = math.log1p(CLUSTER_GAP / 2)
 TOLERANCE_SIGMAS, MIN_TOLERANCE, NEIGHBOUR_SHARE = 10.0, math.log(1.15), 0.45
 #: With 2 or more sensors, a pole is assigned only when its shape's MAC with the reference shape reaches this.
 MAC_MIN = 0.6
+#: A reference mode missing from its band is looked for beyond it up to half the log gap to the neighbouring
+#: reference mode on each side (on the open side of the lowest and highest mode, half the gap on the other side),
+#: never beyond this factor in frequency (a lone mode: up to this factor either way).
+REACH_FACTOR = 2.0
+#: The statuses of a test whose reference mode moved beyond its band (:attr:`BeyondBands.flagged`), or was lost,
+#: against what the baseline period makes likely.
+MODE_MOVED, MODE_LOST = "mode moved", "mode lost"
 
 
 @dataclass(frozen=True)
@@ -255,3 +263,162 @@ def identified_by(tests: list, cols) -> list:
     """Per test, per reference mode, how its tracked pole was found (:meth:`IdentifiedModes.identified_by`), None
     where the mode is missing; ``cols`` the poles' columns from :func:`track_modes`."""
     return [[None if t is None or c < 0 else t.identified_by(int(c)) for c in row] for t, row in zip(tests, cols)]
+
+
+def reach_bands_hz(ref: ReferenceModes) -> np.ndarray:
+    """Each reference mode's reach (Hz), shape (m, 2): where a pole that no other mode claims is that mode moved
+    beyond its band: up to half the log gap to the neighbouring reference mode on each side (the open side of the
+    lowest and highest mode: half the gap on the other side), never beyond :data:`REACH_FACTOR` (a lone mode: that
+    factor either way). A neighbour's band (at most ``NEIGHBOUR_SHARE`` of the gap) never reaches into it."""
+    f = ref.frequencies_hz
+    cap = math.log(REACH_FACTOR)
+    if f.size == 0:
+        return np.zeros((0, 2))
+    if f.size == 1:
+        half = np.array([[cap, cap]])
+    else:
+        gap = 0.5 * np.diff(np.log(f))
+        half = np.minimum(np.c_[np.r_[gap[0], gap], np.r_[gap, gap[-1]]], cap)
+    return f[:, None] * np.exp(half * [-1.0, 1.0])
+
+
+@dataclass(frozen=True)
+class BeyondBands:
+    """The reference modes missing from their bands, read against the baseline period.
+
+    Attributes
+    ----------
+    moved_hz : ndarray (n, m)      the pole that is the mode moved beyond its band (NaN elsewhere)
+    moved_col : ndarray int (n, m) its column in the test (-1 elsewhere)
+    lost : ndarray bool (n, m)     missing from its band with no pole within its reach, in a test with poles
+    chance : ndarray (n, m)        the baseline period's chance of that reading (NaN where neither), from ``u``
+                                   and ``w`` of its ``n`` tests (a baseline test's: of the other baseline tests):
+                                   ``u`` lacking the mode in its band (tests not identified included), ``w``
+                                   holding a pole no mode claims within its reach beyond its band; a lost mode
+                                   ``(u + 1) / (n + 2)`` (Laplace's rule, as the index's
+                                   :func:`learn.monitor.alarm_threshold.missing_evidence`); a moved mode
+                                   ``u / n * (w + 1) / (n + 2)``: the share lacking the mode times Laplace's chance
+                                   of a pole beyond its band (a mode the baseline found in every test gives 0)
+    flagged : ndarray bool (n, m)  ``chance <= false_alarm_rate / m`` (the rate shared among the modes)
+    missing_share, beyond_share : ndarray (m,)     ``u / n`` and ``w / n`` over the whole baseline period
+    n_baseline : int               baseline tests of the series
+    reach_hz : ndarray (m, 2)      :func:`reach_bands_hz`
+    """
+
+    moved_hz: np.ndarray
+    moved_col: np.ndarray
+    lost: np.ndarray
+    chance: np.ndarray
+    flagged: np.ndarray
+    missing_share: np.ndarray
+    beyond_share: np.ndarray
+    reach_hz: np.ndarray
+    n_baseline: int = 0
+
+    def status(self, i: int) -> str | None:
+        """:data:`MODE_MOVED` when a mode of test ``i`` moved beyond its band against the baseline's odds, else
+        :data:`MODE_LOST` when one was lost so, else None."""
+        if (self.flagged[i] & np.isfinite(self.moved_hz[i])).any():
+            return MODE_MOVED
+        return MODE_LOST if (self.flagged[i] & self.lost[i]).any() else None
+
+    def readings(self, i: int, ref: ReferenceModes) -> list:
+        """Test ``i``'s modes missing from their bands: per mode ``mode`` (1-based), ``reading`` (``moved`` or
+        ``lost``), ``frequency_hz`` and ``change_pct`` (against the reference frequency) of a moved one, ``chance``
+        and ``flagged``."""
+        out = []
+        for r in np.flatnonzero(np.isfinite(self.moved_hz[i]) | self.lost[i]):
+            f = float(self.moved_hz[i, r])
+            moved = math.isfinite(f)
+            out.append({"mode": int(r) + 1, "reading": "moved" if moved else "lost",
+                        "frequency_hz": f if moved else None,
+                        "change_pct": 100 * (f / float(ref.frequencies_hz[r]) - 1) if moved else None,
+                        "chance": float(self.chance[i, r]), "flagged": bool(self.flagged[i, r])})
+        return out
+
+
+def readings_text(readings: list, ref: ReferenceModes) -> str:
+    """The flagged readings in words, e.g. ``mode 2 moved +20.8 % (193.6 Hz, beyond its band 139.3-184.3 Hz);
+    mode 3 lost (the baseline lacked it in 0 of 12 tests)``."""
+    bands = narrow_bands_hz(ref)
+    parts = []
+    for d in readings:
+        if not d["flagged"]:
+            continue
+        lo, hi = bands[d["mode"] - 1]
+        if d["reading"] == "moved":
+            parts.append(f"mode {d['mode']} moved {d['change_pct']:+.1f} % ({d['frequency_hz']:.4g} Hz, beyond its "
+                         f"band {lo:.4g}-{hi:.4g} Hz)")
+        else:
+            parts.append(f"mode {d['mode']} lost (no pole within {lo:.4g}-{hi:.4g} Hz or beyond it within its "
+                         f"reach; chance {d['chance']:.2g} at the baseline's share)")
+    return "; ".join(parts)
+
+
+def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_rate: float) -> BeyondBands:
+    """The reference modes each test lacks in their bands, looked for beyond them and read against the baseline.
+
+    ``cols``: the poles' columns from :func:`track_modes` (-1: the mode missing from its band); ``baseline``:
+    indices of the baseline tests of the series (identified or not; a test of another kind, band or beam left
+    out). In a test with poles, each missing mode takes the pole nearest it within its reach
+    (:func:`reach_bands_hz`) beyond its band that no reference mode claims (with shapes of 2 or more sensors, MAC
+    >= :data:`MAC_MIN`), one to one (``linear_sum_assignment`` of ``(ln(f / f_ref) / reach)^2``): the mode moved,
+    never a neighbour (a neighbour's band lies beyond the reach); a mode with no such pole is lost. Each reading
+    is weighed by the baseline period's chance of it (:class:`BeyondBands`) and flagged at or below
+    ``false_alarm_rate / m`` (the rate shared among the modes). A moved mode is positive evidence: one the baseline
+    found in every test is flagged; one the baseline lacked now and then only when the baseline was long enough to
+    make a pole beyond its band rare by Laplace's rule. A lost mode is an
+    absence only: by Laplace's rule a single one is flagged when the baseline held the mode in nearly all of at least
+    ``m / false_alarm_rate - 2`` tests (298 for 3 modes at 1 %; never one the baseline lacked in half its tests); on
+    a shorter baseline it adds its evidence to the novelty index (``missing_evidence`` of
+    :mod:`learn.monitor.alarm_threshold`) and is reported unflagged in the row.
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    n, m = len(tests), ref.frequencies_hz.size
+    cols = np.asarray(cols, int).reshape(n, m)
+    moved_hz, moved_col = np.full((n, m), np.nan), np.full((n, m), -1)
+    lost = np.zeros((n, m), bool)
+    beyond = np.zeros((n, m), bool)                 # a pole no mode claims within the reach beyond the band
+    ln_ref = np.log(ref.frequencies_hz)
+    reach = np.log(reach_bands_hz(ref)) - ln_ref[:, None]          # (m, 2): negative, positive
+    for i, t in enumerate(tests):
+        if t is None or t.frequencies_hz.size == 0 or m == 0:
+            continue
+        free = np.setdiff1d(np.arange(t.frequencies_hz.size), cols[i][cols[i] >= 0])
+        if free.size == 0:
+            lost[i] = cols[i] < 0
+            continue
+        d = np.log(t.frequencies_hz[free])[:, None] - ln_ref[None]                   # (k, m)
+        side = np.where(d < 0, reach[None, :, 0], reach[None, :, 1])
+        ok = (np.abs(d) > ref.tolerance[None]) & (d / side <= 1.0)
+        S = shapes_at(t, ref.dofs) if ref.shapes is not None else None
+        if S is not None:
+            ok &= mac(S[:, free], ref.shapes) >= MAC_MIN
+        beyond[i] = ok.any(axis=0)
+        miss = np.flatnonzero(cols[i] < 0)
+        if miss.size:
+            cost = np.where(ok[:, miss], (d[:, miss] / side[:, miss]) ** 2, 1e9)
+            r, c = linear_sum_assignment(cost)
+            keep = ok[:, miss][r, c]
+            moved_hz[i, miss[c[keep]]] = t.frequencies_hz[free[r[keep]]]
+            moved_col[i, miss[c[keep]]] = free[r[keep]]
+            lost[i, miss] = True
+            lost[i, miss[c[keep]]] = False
+    base = np.asarray(baseline, int)
+    lacking = np.array([[tests[i] is None or cols[i, r] < 0 for r in range(m)] for i in base], bool).reshape(-1, m)
+    nb = max(base.size, 1)
+    u, w = lacking.sum(axis=0).astype(float), beyond[base].sum(axis=0).astype(float)
+    q = np.broadcast_to(u / nb, (n, m)).copy()
+    s = np.broadcast_to(w / nb, (n, m)).copy()
+    if base.size > 1:                               # a baseline test read against the other baseline tests
+        q[base] = (u[None] - lacking) / (base.size - 1)
+        s[base] = (w[None] - beyond[base]) / (base.size - 1)
+    n_q = np.full((n, 1), float(base.size))
+    if base.size > 1:
+        n_q[base] = base.size - 1
+    moved = np.isfinite(moved_hz)
+    chance = np.where(moved, q * (s * n_q + 1) / (n_q + 2), np.where(lost, (q * n_q + 1) / (n_q + 2), np.nan))
+    with np.errstate(invalid="ignore"):
+        flagged = (moved | lost) & (chance <= false_alarm_rate / max(m, 1))
+    return BeyondBands(moved_hz, moved_col, lost, chance, flagged, u / nb, w / nb, reach_bands_hz(ref), int(base.size))

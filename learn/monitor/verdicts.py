@@ -11,12 +11,15 @@ from learn.pairs.classify import classify_many
 from learn.explanations.hypotheses import FREQUENCY_CHANGE_STD, explain_many
 from learn.pairs.measured import modal_pair, on_model_dofs, pair_modes_by_frequency
 from learn.monitor.alarms import SeriesResult, changed_text, what_changed
-from learn.monitor.tracking import shapes_at, track_modes
+from learn.monitor.tracking import MODE_LOST, MODE_MOVED, shapes_at, track_modes
 from physics.errors import BeamDamageError
 from physics.io import ModalData
 from physics.modal import eigenvalues_from_modal
 
-__all__ = ["alarm_verdicts", "baseline_nearest_median", "event_verdicts"]
+__all__ = ["BEYOND", "alarm_verdicts", "baseline_nearest_median", "event_verdicts"]
+
+#: The statuses of a test flagged for a mode beyond its band.
+BEYOND = (MODE_MOVED, MODE_LOST)
 
 
 def _modal_data(freqs_hz, damping, shapes, dofs):
@@ -54,15 +57,21 @@ def baseline_nearest_median(result: SeriesResult) -> int:
 
 
 def alarm_verdicts(result: SeriesResult, model=None, beam_x_m=None) -> dict:
-    """Per alarmed test after the baseline period (row index -> dict): what changed mode by mode against the
-    baseline population (``what_changed``, ``summary``), and with a trained model the competing explanations
-    weighed with the measured per-mode scatter (``hypotheses``, ``hypotheses_summary``, ``frequency_change_std``)
-    and the network's verdict against the baseline period (``network``, :func:`_network_verdicts`)."""
-    alarms = [i for i, r in enumerate(result.rows) if r["alarm"] and not r["baseline"]]
-    changed = {i: what_changed(result.rows[i], result.sigma) for i in alarms}
-    out = {i: {"what_changed": changed[i], "summary": changed_text(changed[i]), "hypotheses": None,
+    """Per alarmed test after the baseline period, and per test whose mode moved or was lost beyond its band
+    (status :data:`~learn.monitor.tracking.MODE_MOVED` or :data:`~learn.monitor.tracking.MODE_LOST`) (row index ->
+    dict): what changed mode by mode against the baseline population (``what_changed``, ``summary``, which names
+    the flagged modes beyond their bands too: ``beyond_band``), and for the alarms, with a trained model, the
+    competing explanations weighed with the measured per-mode scatter (``hypotheses``, ``hypotheses_summary``,
+    ``frequency_change_std``) and the network's verdict against the baseline period (``network``,
+    :func:`_network_verdicts`)."""
+    rows = result.rows
+    alarms = [i for i, r in enumerate(rows) if r["alarm"] and not r["baseline"]]
+    flagged = [i for i, r in enumerate(rows) if not r["baseline"] and (r["alarm"] or r["status"] in BEYOND)]
+    changed = {i: what_changed(rows[i], result.sigma) for i in flagged}
+    out = {i: {"what_changed": changed[i], "summary": _summary(changed[i], rows[i]), "hypotheses": None,
                "hypotheses_summary": None, "frequency_change_std": None, "network": None,
-               "network_baselines": None, "network_baseline": None, "network_error": None} for i in alarms}
+               "network_baselines": None, "network_baseline": None, "network_error": None,
+               "beyond_band": [d for d in rows[i].get("beyond_band", []) if d["flagged"]]} for i in flagged}
     if model is None or not alarms:
         return out
 
@@ -71,6 +80,14 @@ def alarm_verdicts(result: SeriesResult, model=None, beam_x_m=None) -> dict:
     _explain(result, model, beam_x_m, items, out)
     out = _network_verdicts(result, model, beam_x_m, alarms, out)
     return out
+
+
+def _summary(changed: list, row: dict) -> str:
+    """:func:`changed_text` of the modes within their bands (and those missing, unflagged), then the modes flagged
+    beyond them (``beyond_band_text``)."""
+    flagged = {d["mode"] for d in row.get("beyond_band", []) if d["flagged"]}
+    text = changed_text([d for d in changed if d["mode"] not in flagged])
+    return "; ".join(t for t in (text, row.get("beyond_band_text") or "") if t)
 
 
 def _vec(values) -> np.ndarray:
