@@ -50,10 +50,9 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from experiments.benches.bench_foreign import cli_json  # noqa: E402
 from experiments.cli import build_parser  # noqa: E402
 from experiments.second_sim.series import SERIES_KINDS, SLIT_SIZES, SeriesConfig, simulate_series, write_series  # noqa: E402
-from experiments.benches.harness import parser, write_table  # noqa: E402
+from experiments.benches.harness import cli_json, parser, write_table  # noqa: E402
 from physics.io import atomic_write_bytes, atomic_write_text, figure_png  # noqa: E402
 
 __all__ = ["main", "markdown", "score_series"]
