@@ -1,6 +1,7 @@
 """The validate, model, update and demo commands, through ``cli.main`` as a user calls them."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -21,6 +22,8 @@ def test_validate_passes_and_prints_the_documented_json(capsys):
     res = json.loads(out)
     assert code == 0 and res["passed"] is True
     assert len(res["checks"]) == 38
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    assert f"(`beam-damage validate`: {len(res['checks'])} checks)" in readme      # the README's count is this run's
     for c in res["checks"]:
         assert {"name", "thesis", "reproduced", "rel_error", "tolerance", "passed"} <= set(c)
         assert c["passed"] and c["rel_error"] <= c["tolerance"]
