@@ -41,7 +41,7 @@ import numpy as np
 from experiments.second_sim import simulate_pairs, write_pairs
 from experiments.second_sim.pairs import FREQ_HZ
 from experiments.benches.harness import cli_json, parser, write_table
-from physics.io import atomic_write_bytes, atomic_write_text, figure_png
+from physics.io import atomic_write_bytes, atomic_write_text, figure_png, pyplot
 
 __all__ = ["main"]
 
@@ -187,10 +187,7 @@ def markdown(rows: list[dict]) -> str:
 
 
 def _figure(verdicts_by_set: dict, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, ax = plt.subplots(figsize=(7, 3.5))
     for k, (name, (verdicts, truth)) in enumerate(verdicts_by_set.items()):

@@ -73,11 +73,14 @@ def table(header, rows, align=None) -> str:
 def cli_json(argv: list[str], source_tree: str | None = None) -> dict | list:
     """``beam-damage ARGV --json`` in this process (the CLI's own entry point), or in ``source_tree``'s; its JSON.
 
-    A non-zero exit raises ``RuntimeError`` with the command's stderr."""
+    A non-zero exit (a usage error's too) raises ``RuntimeError`` with the command's stderr."""
     if source_tree is None:
         buf, err = io.StringIO(), io.StringIO()
         with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(err):
-            code = cli_main(argv + ["--json"])
+            try:
+                code = cli_main(argv + ["--json"])
+            except SystemExit as exc:
+                code = exc.code
         if code != 0:
             raise RuntimeError(f"beam-damage {' '.join(argv)} exited {code}: {err.getvalue().strip()}")
         return json.loads(buf.getvalue())

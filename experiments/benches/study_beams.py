@@ -40,7 +40,7 @@ import numpy as np
 
 from experiments.benches.harness import cli_json, parser
 from experiments.second_sim.beams import CATALOGUE, SPREAD, Spread, simulate_beam_pairs, write_beam_pairs
-from physics.io import atomic_write_bytes, atomic_write_text, figure_png
+from physics.io import atomic_write_bytes, atomic_write_text, figure_png, pyplot
 
 __all__ = ["TARGETS", "fold", "folded", "main", "markdown", "parse_spread", "pooled", "run_beam", "score_beam",
            "targets"]
@@ -309,10 +309,7 @@ def pooled_markdown(rows: list[dict]) -> str:
 
 
 def _figure(rows: list[dict], path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
 
     tg = targets(rows)

@@ -18,7 +18,8 @@ from learn.monitor.coverage import baseline_scatter, series_coverage
 from learn.monitor.events import group_events, identification_change
 from learn.monitor.verdicts import event_verdicts
 from physics.errors import ConfigError
-from physics.io import FRF, MODAL, TIME, accepted, atomic_write_bytes, atomic_write_text, figure_png, to_jsonable
+from physics.io import (FRF, MODAL, TIME, accepted, atomic_write_bytes, atomic_write_text, figure_png, pyplot,
+                        to_jsonable)
 from datagen.store import package_version
 from learn.network.model_dir import load_model
 from physics.beam import load_beam
@@ -266,10 +267,7 @@ def chart(res):
     """The control chart (a matplotlib figure): each mode's frequency relative to its baseline median and the
     novelty index over the tests, with the threshold, the baseline period shaded, the alarms circled, the
     extrapolated tests boxed and the tests not identified crossed at the top edge of the index's panel."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     t = np.array([r["time_value"] for r in res.rows])
     base = np.array([r["baseline"] for r in res.rows])
