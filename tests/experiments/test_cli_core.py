@@ -136,6 +136,7 @@ def test_demo_writes_its_report(tmp_path, capsys):
     code, out, _ = _run(capsys, "demo", "--out", str(d), "--quick", "--samples", "200", "--workers", "1", "--json")
     res = json.loads(out)
     assert code == 0 and res["validate_passed"] and res["checks"] == 38
+    assert json.loads((d / "demo.json").read_text()) == res          # the run's demo.json is its --json
     m = res["measured_data"]
     np.testing.assert_allclose(m["identified_frequencies_hz"], m["exact_frequencies_hz"], rtol=1e-3)
     # the discrepancy step names shear deformation on Table 4.3 and closes the 8 % gap (issue 9)
