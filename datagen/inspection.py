@@ -14,7 +14,7 @@ import numpy as np
 from datagen.dataset import Dataset
 from datagen.store import STATES
 from physics.errors import FileFormatError
-from physics.io import atomic_write_bytes, atomic_write_text, figure_png
+from physics.io import atomic_write_bytes, atomic_write_text, figure_png, pyplot
 from physics.properties import curvature_squared
 from physics.supports import THESIS_SUPPORT
 
@@ -82,9 +82,7 @@ def inspect_dataset(dataset_dir, out_dir=None) -> dict:
         ``dir``, ``complete``, ``samples``, ``shards``, ``converged_fraction``,
         ``curvature_check`` (per mode: slope, r2, n), ``labels`` (min/max), ``figures``.
     """
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     ds = Dataset(dataset_dir)
     if not ds.shards:

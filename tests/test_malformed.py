@@ -987,6 +987,12 @@ def _params():
         yield pytest.param(*c, marks=marks, id=f"{c[0]}: {c[1]}")
 
 
+def test_the_readme_states_the_corpus_size():
+    """README.md's count of the corpus is ``len(CASES)``, the number ``python tests/test_malformed.py`` runs."""
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    assert f"malformed-input corpus ({len(CASES)} cases" in readme
+
+
 @pytest.mark.parametrize("family, name, builder, expect", list(_params()))
 def test_malformed_input_gives_one_line_and_exit_2(tmp_path, family, name, builder, expect):
     code, out, err, dt, created = run_case(builder, tmp_path / "case")

@@ -29,16 +29,16 @@ from pathlib import Path
 
 import pandas as pd
 
-from experiments.benches.bench_foreign import cli_json
-from experiments.benches.harness import parser, table, write_table
+from experiments.benches.harness import cli_json, parser, table, write_table
 
 __all__ = ["classify_pairs", "confusion", "main", "markdown"]
 
 
-def classify_pairs(model: Path, pair_dir: Path) -> tuple[list, list]:
-    """``classify --json`` of every pair of ``pair_dir`` (its ``truth.json``); returns ``(truth rows, verdicts)``."""
+def classify_pairs(model: Path, pair_dir: Path, extra=()) -> tuple[list, list]:
+    """``classify --json`` of every pair of ``pair_dir`` (its ``truth.json``; ``extra``: arguments before the pair's);
+    returns ``(truth rows, verdicts)``."""
     truth = json.loads((pair_dir / "truth.json").read_text())["pairs"]
-    verdicts = [cli_json(["classify", "--model", str(model), "--baseline", str(pair_dir / t["baseline"]),
+    verdicts = [cli_json(["classify", "--model", str(model), *extra, "--baseline", str(pair_dir / t["baseline"]),
                           str(pair_dir / t["current"])]) for t in truth]
     return truth, verdicts
 

@@ -30,10 +30,7 @@ of the pairs against the training percentiles) in ``--out``; ``--json`` prints t
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
-import os
 import subprocess
 import sys
 import time
@@ -41,34 +38,14 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.cli import main as cli_main
 from experiments.second_sim import simulate_pairs, write_pairs
 from experiments.second_sim.pairs import FREQ_HZ
-from experiments.benches.harness import parser, write_table
-from physics.io import atomic_write_bytes, atomic_write_text, figure_png
+from experiments.benches.harness import cli_json, parser, write_table
+from physics.io import atomic_write_bytes, atomic_write_text, figure_png, pyplot
 
-__all__ = ["cli_json", "main"]
+__all__ = ["main"]
 
 SETS = ("easy", "eb", "timoshenko")
-
-
-def cli_json(argv: list[str], source_tree: str | None = None) -> dict | list:
-    """``beam-damage ARGV --json`` in this process (the CLI's own entry point), or in ``source_tree``'s; its JSON.
-
-    A non-zero exit raises ``RuntimeError`` with the command's stderr."""
-    if source_tree is None:
-        buf, err = io.StringIO(), io.StringIO()
-        with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(err):
-            code = cli_main(argv + ["--json"])
-        if code != 0:
-            raise RuntimeError(f"beam-damage {' '.join(argv)} exited {code}: {err.getvalue().strip()}")
-        return json.loads(buf.getvalue())
-    env = {**os.environ, "PYTHONPATH": str(source_tree)}
-    p = subprocess.run([sys.executable, "-m", "experiments.cli", *argv, "--json"], capture_output=True, text=True,
-                       env=env, cwd=source_tree)
-    if p.returncode != 0:
-        raise RuntimeError(f"beam-damage {' '.join(argv)} ({source_tree}) exited {p.returncode}: {p.stderr.strip()}")
-    return json.loads(p.stdout)
 
 
 def set_dir(out: Path, name: str, band_hz=None) -> Path:
@@ -210,10 +187,7 @@ def markdown(rows: list[dict]) -> str:
 
 
 def _figure(verdicts_by_set: dict, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, ax = plt.subplots(figsize=(7, 3.5))
     for k, (name, (verdicts, truth)) in enumerate(verdicts_by_set.items()):

@@ -21,13 +21,13 @@ Three simulated cases, each a sum of closed-form damped sinusoids after hits plu
 
 from __future__ import annotations
 
-import argparse
 import sys
 import warnings
 from pathlib import Path
 
 import numpy as np
 
+from experiments.benches.harness import parser, table
 from physics.errors import BeamDamageError
 from physics.identification.free_decay import identify_era
 from physics.identification.output_only import identify_records
@@ -73,14 +73,12 @@ def decay_case(draws):
     lam = poles(fn, zeta)
     k0 = int(np.ceil(t0 * fs))
     crb = crb_frequency_std_hz(fs, n - k0, fn, zeta, shape[0] / (1j * lam.imag) * np.exp(lam * (k0 / fs - t0)), sd)
-    rows = ["| mode (Hz) | CRB (Hz) | era std (Hz) | era / CRB | era reported 1-sigma (Hz) | FFT peak std (Hz) | "
-            "SSI-cov std (Hz) |", "| ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
-    era, fft, ssi = np.array(era), np.array(fft), np.array(ssi)
-    for j, f in enumerate(fn):
-        s = np.nanstd(era[:, j], ddof=1)
-        rows.append(f"| {f:g} | {crb[j]:.2g} | {s:.2g} | {s / crb[j]:.2f} | {np.mean(np.array(era_std)[:, j]):.2g} | "
-                    f"{np.std(fft[:, j], ddof=1):.2g} | {np.nanstd(ssi[:, j], ddof=1):.2g} |")
-    return "\n".join(rows)
+    era, fft, ssi, s = np.array(era), np.array(fft), np.array(ssi), np.nanstd(era, axis=0, ddof=1)
+    reported, fft_std, ssi_std = np.mean(era_std, axis=0), np.std(fft, axis=0, ddof=1), np.nanstd(ssi, axis=0, ddof=1)
+    return table(["mode (Hz)", "CRB (Hz)", "era std (Hz)", "era / CRB", "era reported 1-sigma (Hz)",
+                  "FFT peak std (Hz)", "SSI-cov std (Hz)"],
+                 [[f"{f:g}", f"{crb[j]:.2g}", f"{s[j]:.2g}", f"{s[j] / crb[j]:.2f}", f"{reported[j]:.2g}",
+                   f"{fft_std[j]:.2g}", f"{ssi_std[j]:.2g}"] for j, f in enumerate(fn)], ["---:"] * 7)
 
 
 def _scope(seed):
@@ -108,10 +106,11 @@ def scope_case(seeds):
         except BeamDamageError:
             ssi.append(np.nan)
         fft.append(fft_peak_hz(y, fs, [12.0])[0])
-    return (f"| captures | called clipped (former count rule) | called clipped (run rule) | automatic choice | "
-            f"12 Hz scatter: automatic (Hz) | SSI-cov (Hz) | FFT peak (Hz) |\n| ---: | ---: | ---: | --- | ---: | ---: "
-            f"| ---: |\n| {seeds} | {old_clipped} | {new_clipped} | {', '.join(sorted(methods))} | "
-            f"{np.nanstd(auto, ddof=1):.2g} | {np.nanstd(ssi, ddof=1):.2g} | {np.std(fft, ddof=1):.2g} |")
+    return table(["captures", "called clipped (former count rule)", "called clipped (run rule)", "automatic choice",
+                  "12 Hz scatter: automatic (Hz)", "SSI-cov (Hz)", "FFT peak (Hz)"],
+                 [[seeds, old_clipped, new_clipped, ", ".join(sorted(methods)), f"{np.nanstd(auto, ddof=1):.2g}",
+                   f"{np.nanstd(ssi, ddof=1):.2g}", f"{np.std(fft, ddof=1):.2g}"]],
+                 ["---:"] * 3 + ["---"] + ["---:"] * 3)
 
 
 def frame_case(seeds):
@@ -139,14 +138,16 @@ def frame_case(seeds):
             ok_ssi += int(np.all(np.abs(_nearest(f, fn) / fn - 1) < 0.01))
         except BeamDamageError:
             pass
-    return (f"| records | every mode within 1 %: automatic choice | SSI-cov | picked |\n| ---: | ---: | ---: | --- |\n"
-            f"| {seeds} | {ok_auto} | {ok_ssi} | {', '.join(f'{k} {v}' for k, v in sorted(picked.items()))} |")
+    return table(["records", "every mode within 1 %: automatic choice", "SSI-cov", "picked"],
+                 [[seeds, ok_auto, ok_ssi, ", ".join(f"{k} {v}" for k, v in sorted(picked.items()))]],
+                 ["---:"] * 3 + ["---"])
 
 
 def main(argv=None):
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--draws", type=int, default=50)
-    p.add_argument("--seeds", type=int, default=20)
+    p = parser(__file__, __doc__)
+    p.add_argument("--draws", type=int, default=50, help="noise draws of the decay case (default 50)")
+    p.add_argument("--seeds", type=int, default=20, help="captures of the scope case, records of the frame case "
+                                                           "(default 20)")
     args = p.parse_args(argv)
     print("decay\n" + decay_case(args.draws))
     print("\nscope\n" + scope_case(args.seeds))

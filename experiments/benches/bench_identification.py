@@ -124,21 +124,31 @@ def run_ours(frf, n_modes=4):
     return {name: identify_frf(frf, name, n_modes=n_modes).estimate for name in METHODS}
 
 
-def run_sdypy(frf, approx_hz):
-    """sdypy-EMA LSCF + LSFD on the same receptances; None when not installed."""
+def sdypy_lscf(frf, approx_hz, drive: int):
+    """sdypy-EMA on the first reference's FRFs: LSCF to order 60, the poles nearest ``approx_hz`` (20 Hz window),
+    LSFD on its own poles; ``(model, reconstructed FRFs, modal constants)``, or None when sdypy-EMA is not
+    installed."""
     try:
         from sdypy import EMA
     except ImportError:
         return None
     f = frf.frequency_hz
-
-    with warnings.catch_warnings(), contextlib.redirect_stderr(io.StringIO()):
+    with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()), \
+            contextlib.redirect_stderr(io.StringIO()):
         warnings.simplefilter("ignore")
         model = EMA.Model(frf=np.asarray(frf.frf[:, 0, :]), freq=f, lower=float(f[0]), upper=float(f[-1]),
-                          pol_order_high=60, frf_form="receptance", driving_point=DRIVE)
+                          pol_order_high=60, frf_form=frf.kind, driving_point=drive)
         model.get_poles(method="lscf", show_progress=False)
         model.select_closest_poles(list(approx_hz), f_window=20)
-        model.get_constants(method="lsfd", whose_poles="own")
+        H, A = model.get_constants(method="lsfd", whose_poles="own")
+    return model, H, A
+
+
+def run_sdypy(frf, approx_hz):
+    """sdypy-EMA LSCF + LSFD on the same receptances; None when not installed."""
+    if (fit := sdypy_lscf(frf, approx_hz, DRIVE)) is None:
+        return None
+    model = fit[0]
     return {"frequency_hz": np.asarray(model.nat_freq, float), "damping_ratio": np.asarray(model.nat_xi, float),
             "shapes": np.asarray(model.phi) if hasattr(model, "phi") else None}
 
@@ -149,20 +159,10 @@ def run_sdypy_free_free(frf, approx_hz):
     Returns ``(frequency_hz, damping_ratio, shapes, reconstructed, line_mask)``; sdypy-EMA pads the axis
     to 0 Hz and drops the last line, so ``line_mask`` marks the input lines it reconstructs.
     """
-    try:
-        from sdypy import EMA
-    except ImportError:
+    if (fit := sdypy_lscf(frf, approx_hz, 0)) is None:
         return None
-
+    model, H, A = fit
     f = frf.frequency_hz
-    with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()), \
-            contextlib.redirect_stderr(io.StringIO()):
-        warnings.simplefilter("ignore")
-        model = EMA.Model(frf=np.asarray(frf.frf[:, 0, :]), freq=f, lower=float(f[0]), upper=float(f[-1]),
-                          pol_order_high=60, frf_form=frf.kind, driving_point=0)
-        model.get_poles(method="lscf", show_progress=False)
-        model.select_closest_poles(list(approx_hz), f_window=20)
-        H, A = model.get_constants(method="lsfd", whose_poles="own")
     on_ours = np.isin(np.round(model.freq, 6), np.round(f, 6))
     mask = np.isin(np.round(f, 6), np.round(model.freq, 6))
     return (np.asarray(model.nat_freq, float), np.asarray(model.nat_xi, float), np.asarray(A),

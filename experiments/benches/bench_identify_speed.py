@@ -21,8 +21,6 @@ Run ``python -m experiments.benches.bench_identify_speed [--repeat N] [--noise X
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import sys
 import tempfile
@@ -33,6 +31,7 @@ from pathlib import Path
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from experiments.benches.bench_identification import sdypy_lscf
 from experiments.benches.harness import parser
 from physics.beam import preset_beam
 from physics.frf import receptance
@@ -89,24 +88,10 @@ def run_sdypy(frf: MeasuredFRF, n_modes=4):
     (:func:`physics.identification.find_peaks_indicator`), which sdypy-EMA's
     ``select_closest_poles`` takes without user interaction.
     """
-    try:
-        from sdypy import EMA
-    except ImportError:
-        return None
-
     f = frf.frequency_hz
-    h = np.asarray(frf.frf[:, 0, :])
-    approx_hz = f[find_peaks_indicator(f, frf.frf, n_modes)]
-    drive = list(frf.response_dofs).index(frf.reference_dofs[0])
-    with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()), \
-            contextlib.redirect_stderr(io.StringIO()):
-        warnings.simplefilter("ignore")
-        model = EMA.Model(frf=h, freq=f, lower=float(f[0]), upper=float(f[-1]), pol_order_high=60,
-                          frf_form=frf.kind, driving_point=drive)
-        model.get_poles(method="lscf", show_progress=False)
-        model.select_closest_poles(list(approx_hz), f_window=20)
-        model.get_constants(method="lsfd", whose_poles="own")
-    return np.asarray(model.nat_freq, float), np.asarray(model.nat_xi, float)
+    fit = sdypy_lscf(frf, f[find_peaks_indicator(f, frf.frf, n_modes)],
+                     list(frf.response_dofs).index(frf.reference_dofs[0]))
+    return None if fit is None else (np.asarray(fit[0].nat_freq, float), np.asarray(fit[0].nat_xi, float))
 
 
 def bench(repeat=5, noise=0.015, seed=0, batch=8):

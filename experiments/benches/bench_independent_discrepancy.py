@@ -41,8 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.benches.bench_foreign import cli_json
-from experiments.benches.harness import parser, table, write_table
+from experiments.benches.harness import cli_json, parser, table, write_table
 from experiments.studies.study_discrepancy import SHORT
 from physics.discrepancy.limits import DetectionLimit
 from physics.io import atomic_write_text

@@ -31,18 +31,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from experiments.benches.bench_foreign import cli_json
+from experiments.benches.bench_debond import classify_pairs
 from experiments.benches.harness import parser, table, write_table
 
-__all__ = ["classify_pairs", "main", "markdown", "score"]
-
-
-def classify_pairs(model: Path, pair_dir: Path) -> tuple[list, list]:
-    """``classify --json`` of every pair of ``pair_dir`` (its ``truth.json``); returns ``(truth rows, verdicts)``."""
-    truth = json.loads((pair_dir / "truth.json").read_text())["pairs"]
-    verdicts = [cli_json(["classify", "--model", str(model), "--beam", str(pair_dir / "bolted.toml"), "--baseline",
-                          str(pair_dir / t["baseline"]), str(pair_dir / t["current"])]) for t in truth]
-    return truth, verdicts
+__all__ = ["main", "markdown", "score"]
 
 
 def _answers(v: dict) -> dict:
@@ -97,7 +89,7 @@ def main(argv=None) -> int:
     ap.add_argument("--pairs", required=True, help="directory of second_sim bolted --pairs")
     a = ap.parse_args(argv)
     pair_dir = Path(a.pairs)
-    truth, verdicts = classify_pairs(Path(a.model), pair_dir)
+    truth, verdicts = classify_pairs(Path(a.model), pair_dir, ["--beam", str(pair_dir / "bolted.toml")])
     rows = score(truth, verdicts, verdicts[0]["zone_edges_m"][1:-1])
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)

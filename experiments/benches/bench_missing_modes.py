@@ -37,9 +37,9 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.benches.bench_foreign import cli_json, score, set_dir, write_sets
+from experiments.benches.bench_foreign import score, set_dir, write_sets
 from experiments.benches.study_beams import score_beam
-from experiments.benches.harness import parser, table, write_table
+from experiments.benches.harness import cli_json, parser, table, write_table
 from learn.explanations.classical import run_classical
 from learn.network.estimator import DamageClassifier
 from learn.network.evaluate import metrics

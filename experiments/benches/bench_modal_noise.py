@@ -56,7 +56,7 @@ from datagen.synth import measured_frf
 from learn.pairs.measured import IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, identify_modes
 from learn.explanations.sensitivity import beam_sensitivity
 from physics.errors import BeamDamageError
-from physics.io import MeasuredFRF, atomic_write_bytes, atomic_write_text, figure_png
+from physics.io import MeasuredFRF, atomic_write_bytes, atomic_write_text, figure_png, pyplot
 from physics.modal import modal_parameters
 
 __all__ = ["main"]
@@ -244,9 +244,7 @@ def _table(runs: dict, conditions, fits_per_condition: int) -> list:
 
 def _figure(path: Path, runs: dict, conditions) -> None:
     """Cumulative distributions of |error| / FRF noise level per quantity and mode, the three paths."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, axs = plt.subplots(3, 4, figsize=(14, 9))
     for qi, q in enumerate(QUANTITIES):

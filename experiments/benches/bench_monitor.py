@@ -50,26 +50,16 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from experiments.benches.bench_foreign import cli_json  # noqa: E402
 from experiments.cli import build_parser  # noqa: E402
 from experiments.second_sim.series import SERIES_KINDS, SLIT_SIZES, SeriesConfig, simulate_series, write_series  # noqa: E402
-from experiments.benches.harness import parser, write_table  # noqa: E402
-from physics.io import atomic_write_bytes, atomic_write_text, figure_png  # noqa: E402
+from experiments.benches.harness import cli_json, parser, write_table  # noqa: E402
+from physics.io import atomic_write_bytes, atomic_write_text, figure_png, pyplot  # noqa: E402
 
 __all__ = ["main", "markdown", "score_series"]
 
 METHODS = ("monitor (temperature)", "monitor", "monitor (temperature), identify's modes", "classify, 1 baseline",
            "classify, N baselines", "frequency shift")
 OUTPUT_ONLY_BAND_HZ = (5.0, 400.0)
-
-
-def _cli(argv: list) -> dict | list:
-    """``beam-damage ARGV --json`` in this process; a refusal (also argparse's, e.g. an unknown command) raises
-    ``RuntimeError``."""
-    try:
-        return cli_json(argv)
-    except SystemExit as exc:
-        raise RuntimeError(f"beam-damage {argv[0]}: usage error (exit {exc.code})") from None
 
 
 def classify_takes_several_baselines() -> bool:
@@ -97,9 +87,9 @@ def _model(out: Path, beam_toml: Path, damping_ratios, n_train: int, seed: int) 
     cfg = out / "generate.toml"
     atomic_write_text(cfg, 'base = "training"\n[specimen]\ndamping_ratios = ['
                       + ", ".join(f"{z:g}" for z in damping_ratios) + "]\n")
-    _cli(["generate", "--beam", str(beam_toml), "--config", str(cfg), "--n", str(n_train), "--seed", str(seed),
+    cli_json(["generate", "--beam", str(beam_toml), "--config", str(cfg), "--n", str(n_train), "--seed", str(seed),
               "--out", str(out / "model-data"), "--workers", "2"])
-    _cli(["train", "--data", str(out / "model-data"), "--out", str(model)])
+    cli_json(["train", "--data", str(out / "model-data"), "--out", str(model)])
     return model
 
 
@@ -114,7 +104,7 @@ def _modal_json(cache: Path, record: Path) -> Path | None:
         return None
     work = cache / f"id-{key}"
     try:
-        _cli(["identify", str(record), "--band", *(f"{v:g}" for v in OUTPUT_ONLY_BAND_HZ), "--max-order", "120",
+        cli_json(["identify", str(record), "--band", *(f"{v:g}" for v in OUTPUT_ONLY_BAND_HZ), "--max-order", "120",
                   "--out", str(work)])
     except RuntimeError as exc:
         failed.write_text(str(exc) + "\n")
@@ -127,7 +117,7 @@ def _classify(model: Path, tests: list, baselines: list, chunk: int = 40) -> lis
     """``classify --json`` of every test against ``baselines`` (one or several): one call for every test, else
     (a test refused) calls of ``chunk`` tests, else one per test; ``{"error": ...}`` for a test it refused."""
     def run(files):
-        v = _cli(["classify", "--model", str(model), *map(str, files),
+        v = cli_json(["classify", "--model", str(model), *map(str, files),
                   *(x for b in baselines for x in ("--baseline", str(b)))])
         return v if isinstance(v, list) else [v]
 
@@ -230,7 +220,7 @@ def _monitor(files: list, conditions: Path | None, n_baseline: int, beam: Path, 
             "--baseline-tests", str(n_baseline), "--beam", str(beam), "--false-alarm-rate", "0.01", "--out", str(out)]
     if band_hz is not None:
         argv += ["--band", *(f"{v:g}" for v in band_hz)]
-    res = _cli(argv)
+    res = cli_json(argv)
     by_file = {Path(t["file"]).name: t for t in res["tests"]}
     rows = [by_file.get(Path(f).name, {}) for f in files]
     alarm = np.array([np.nan if r.get("alarm") is None else float(bool(r["alarm"])) for r in rows])
@@ -366,10 +356,7 @@ def docs_text(rows: list, a) -> str:
 
 
 def _figure(rows: list, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     kinds = sorted({r["kind"] for r in rows})
     sizes = list(dict.fromkeys(r["size"] for r in rows))

@@ -14,8 +14,6 @@ likely explanation and its size; beside it the simulator's own size (the same of
 
 from __future__ import annotations
 
-import contextlib
-import io
 import csv
 import json
 import os
@@ -27,10 +25,9 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from experiments.benches.harness import parser  # noqa: E402
+from experiments.benches.harness import cli_json, parser  # noqa: E402
 from experiments.second_sim.series import (SLIT_SIZES, SeriesConfig, simulate_series, slit_frequency_drop,  # noqa: E402
                                            write_series)
-from experiments.cli import main as cli  # noqa: E402
 
 __all__ = ["STATES", "graded_series", "main"]
 
@@ -52,17 +49,6 @@ def graded_series(out: Path, n_tests: int, seed: int = 0) -> Path:
     return out
 
 
-def _cli(argv) -> dict:
-
-
-    buf = io.StringIO()
-    with contextlib.redirect_stdout(buf):
-        code = cli(argv)
-    if code != 0:
-        raise RuntimeError(f"{' '.join(argv)}: exit {code}")
-    return json.loads(buf.getvalue())
-
-
 def main(argv=None) -> dict:
     p = parser(__file__, __doc__, out="out/bench_monitor_graded")
     p.add_argument("--n-tests", type=int, default=120)
@@ -81,10 +67,10 @@ def main(argv=None) -> dict:
     for label, extra in (("regression", ["--conditions", str(d / "conditions.csv")]),
                          ("pca", [str(d / t["file"]) for t in truth["tests"]])):
         argv = ["monitor", *extra, "--baseline-tests", str(a.baseline_tests), "--beam", str(d / "beam.toml"),
-                "--out", str(out / f"monitor-{label}"), "--json"]
+                "--out", str(out / f"monitor-{label}")]
         if a.model:
             argv += ["--model", a.model]
-        res = _cli(argv)
+        res = cli_json(argv)
         rows = []
         for e in res["events"]:
             days = [truth["tests"][i]["day"] for i in e["members"]]

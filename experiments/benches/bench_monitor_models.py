@@ -12,15 +12,12 @@ model after the first costs only its fits.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 from pathlib import Path
 
 import numpy as np
 
-from experiments.benches.harness import parser
-from experiments.cli import main as cli_main
+from experiments.benches.harness import cli_json, parser
 from learn.monitor import NORMAL_MODELS
 from experiments.second_sim.series import SLIT_SIZES, SeriesConfig, simulate_series, write_series as write
 
@@ -46,13 +43,7 @@ def run_monitor(root: Path, model: str, n_baseline: int, rate: float, conditions
     else:                                   # the files in time order, no conditions
         files = [root / line.split(",")[0] for line in csv.read_text().splitlines()[1:]]
         argv = ["monitor", *map(str, files), "--normal-model", model]
-    argv += ["--baseline-tests", str(n_baseline), "--false-alarm-rate", str(rate), "--out", str(out), "--json"]
-    buf = io.StringIO()
-    with contextlib.redirect_stdout(buf):
-        code = cli_main(argv)
-    if code != 0:
-        raise RuntimeError(f"monitor {model} on {root}: exit {code}")
-    return json.loads(buf.getvalue())
+    return cli_json(argv + ["--baseline-tests", str(n_baseline), "--false-alarm-rate", str(rate), "--out", str(out)])
 
 
 def score(result: dict, truth: dict, n_baseline: int) -> dict:

@@ -14,15 +14,12 @@ extrapolated, the scatter ratio of the later tests without an alarm against the 
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
-import warnings
 from pathlib import Path
 
 import numpy as np
-from experiments.benches.harness import parser
-from experiments.cli import main as cli
+
+from experiments.benches.harness import cli_json, parser
 
 __all__ = ["main", "session_series"]
 
@@ -57,12 +54,7 @@ def main(argv=None) -> list:
     print("| --- | --- | --- | --- | --- | --- |")
     for offset, seed in runs:
         files = session_series(Path(a.out) / f"s{offset:g}-seed{seed}", offset, seed)
-        buf = io.StringIO()
-        with contextlib.redirect_stdout(buf), warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            if cli(["monitor", *files, "--baseline-tests", "30", "--json"]) != 0:
-                raise RuntimeError(f"monitor failed on offset {offset:g}, seed {seed}")
-        d = json.loads(buf.getvalue())
+        d = cli_json(["monitor", *files, "--baseline-tests", "30"])
         sc = d["baseline_scatter"]
         row = {"offset": offset, "seed": seed, "alarms": d["counts"]["alarm"],
                "extrapolated": d["counts"]["extrapolated"], "ratio": sc["ratio"], "warned": bool(sc["warning"])}

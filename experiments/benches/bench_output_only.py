@@ -33,11 +33,11 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.benches.bench_foreign import classify_set, cli_json, score, write_sets
+from experiments.benches.bench_foreign import classify_set, score, write_sets
 from experiments.second_sim.ambient import ambient_record, write_npz
 from experiments.second_sim.fem import Beam, Slit
 from experiments.second_sim.pairs import NODE_X_M
-from experiments.benches.harness import parser, table, write_table
+from experiments.benches.harness import cli_json, parser, table, write_table
 
 __all__ = ["beams_of", "main"]
 

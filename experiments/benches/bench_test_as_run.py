@@ -24,10 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.benches.bench_foreign import cli_json
 from experiments.benches.study_beams import run_beam
 from experiments.second_sim.beams import TEST_AS_RUN, excited_modes
-from experiments.benches.harness import parser, write_table
+from experiments.benches.harness import cli_json, parser, write_table
 from physics.io import atomic_write_text
 
 __all__ = ["main", "modes_found"]

@@ -14,11 +14,18 @@ A bench is ``experiments/benches/bench_<name>.py`` with ``main(argv=None) -> int
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
+import json
+import os
+import subprocess
+import sys
 from pathlib import Path
 
+from experiments.cli import main as cli_main
 from experiments.studies.doc_tables import write_table
 
-__all__ = ["parser", "table", "write_table"]
+__all__ = ["cli_json", "parser", "table", "write_table"]
 
 
 def parser(file: str, doc: str, *, docs: str | None = None, json: bool | str = False, out: str | None = None,
@@ -61,3 +68,25 @@ def table(header, rows, align=None) -> str:
     default ``---`` each), then one line per row of ``rows`` (cells formatted by ``str``); no final newline."""
     lines = [header, align or ["---"] * len(header), *rows]
     return "\n".join("| " + " | ".join(str(c) for c in line) + " |" for line in lines)
+
+
+def cli_json(argv: list[str], source_tree: str | None = None) -> dict | list:
+    """``beam-damage ARGV --json`` in this process (the CLI's own entry point), or in ``source_tree``'s; its JSON.
+
+    A non-zero exit (a usage error's too) raises ``RuntimeError`` with the command's stderr."""
+    if source_tree is None:
+        buf, err = io.StringIO(), io.StringIO()
+        with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(err):
+            try:
+                code = cli_main(argv + ["--json"])
+            except SystemExit as exc:
+                code = exc.code
+        if code != 0:
+            raise RuntimeError(f"beam-damage {' '.join(argv)} exited {code}: {err.getvalue().strip()}")
+        return json.loads(buf.getvalue())
+    env = {**os.environ, "PYTHONPATH": str(source_tree)}
+    p = subprocess.run([sys.executable, "-m", "experiments.cli", *argv, "--json"], capture_output=True, text=True,
+                       env=env, cwd=source_tree)
+    if p.returncode != 0:
+        raise RuntimeError(f"beam-damage {' '.join(argv)} ({source_tree}) exited {p.returncode}: {p.stderr.strip()}")
+    return json.loads(p.stdout)

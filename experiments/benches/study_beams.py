@@ -38,10 +38,9 @@ from dataclasses import fields, replace
 
 import numpy as np
 
-from experiments.benches.harness import parser
-from experiments.benches.bench_foreign import cli_json
+from experiments.benches.harness import cli_json, parser
 from experiments.second_sim.beams import CATALOGUE, SPREAD, Spread, simulate_beam_pairs, write_beam_pairs
-from physics.io import atomic_write_bytes, atomic_write_text, figure_png
+from physics.io import atomic_write_bytes, atomic_write_text, figure_png, pyplot
 
 __all__ = ["TARGETS", "fold", "folded", "main", "markdown", "parse_spread", "pooled", "run_beam", "score_beam",
            "targets"]
@@ -136,10 +135,6 @@ def score_beam(verdicts: list[dict], meta: dict) -> list[dict]:
     return rows
 
 
-def _cli(argv: list[str]):
-    return cli_json(argv)
-
-
 def _complete(data: Path) -> bool:
     """A finished dataset (``generate`` refuses to resume a beam file's dataset whose config holds a tuple, so a
     finished one is reused without calling it)."""
@@ -192,11 +187,11 @@ def run_beam(cb, out: Path, n_pairs: int, train_n: int, seed: int, workers: int 
     _step(t, pairs.name, (pairs / "truth.json").is_file(),
           lambda: write_beam_pairs(cb, simulate_beam_pairs(cb, n_pairs, seed, spread_of), pairs, seed))
     _step(t, data.name, _complete(data),
-          lambda: _cli(["generate", "--beam", str(beam_file or pairs / "beam.toml"), "--config", config,
+          lambda: cli_json(["generate", "--beam", str(beam_file or pairs / "beam.toml"), "--config", config,
                         "--n", str(train_n),
                         "--seed", str(seed + 1), "--out", str(data), "--workers", str(workers)]))
     _step(t, model.name, (model / "config.json").is_file(),
-          lambda: _cli(["train", "--data", str(data), "--out", str(model)]))
+          lambda: cli_json(["train", "--data", str(data), "--out", str(model)]))
     meta = json.loads((pairs / "truth.json").read_text())
     vfile = d / f"verdicts-n{n_pairs}-s{seed}-t{train_n}{suffix}{mt}.json"
 
@@ -204,7 +199,7 @@ def run_beam(cb, out: Path, n_pairs: int, train_n: int, seed: int, workers: int 
         verdicts = []
         for p in meta["pairs"]:
             k = int(p["pair"])
-            v = _cli(["classify", "--model", str(model), "--baseline", str(pairs / f"pair-{k:03d}_baseline.uff"),
+            v = cli_json(["classify", "--model", str(model), "--baseline", str(pairs / f"pair-{k:03d}_baseline.uff"),
                       str(pairs / f"pair-{k:03d}_current.uff")])
             verdicts.append(v[0] if isinstance(v, list) else v)
         atomic_write_text(vfile, json.dumps(verdicts, indent=1))
@@ -314,10 +309,7 @@ def pooled_markdown(rows: list[dict]) -> str:
 
 
 def _figure(rows: list[dict], path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
 
     tg = targets(rows)

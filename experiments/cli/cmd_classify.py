@@ -26,6 +26,7 @@ from physics.io import (
     figure_png,
     modal_or_frf,
     parse_dof,
+    pyplot,
     read,
     read_json,
     to_jsonable,
@@ -167,10 +168,7 @@ def _figure(res, pair, base, cur, beam) -> bytes:
     """PNG of one verdict: the two tests' FRFs in the file's kind with the identified modes marked; each mode's
     measured frequency change beside the competing explanations' predictions; the beam (supports, sensors, zones)
     under the location of the verdict's own source (none when the verdict is undamaged)."""
-    import matplotlib  # heavy: loaded only when a figure is written
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, (a1, a2, a3) = plt.subplots(3, 1, figsize=(7.5, 9.5))
     label = _file_labels(res)

@@ -18,7 +18,8 @@ from learn.monitor.coverage import baseline_scatter, series_coverage
 from learn.monitor.events import group_events, identification_change, lost_modes_change
 from learn.monitor.verdicts import event_verdicts
 from physics.errors import ConfigError
-from physics.io import FRF, MODAL, TIME, accepted, atomic_write_bytes, atomic_write_text, figure_png, to_jsonable
+from physics.io import (FRF, MODAL, TIME, accepted, atomic_write_bytes, atomic_write_text, figure_png, pyplot,
+                        to_jsonable)
 from datagen.store import package_version
 from learn.network.model_dir import load_model
 from physics.beam import load_beam
@@ -273,10 +274,7 @@ def chart(res):
     extrapolated tests boxed, the tests whose mode moved or was lost beyond its band marked (triangles up, down)
     and the tests not identified crossed at the top edge of the index's panel; a mode moved beyond its band is
     drawn at its moved frequency (hollow markers)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     t = np.array([r["time_value"] for r in res.rows])
     base = np.array([r["baseline"] for r in res.rows])

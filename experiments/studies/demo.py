@@ -354,6 +354,7 @@ def run(args) -> dict:
                   f"{r.get('element_accuracy', float('nan')):.3f}")
         print(_verdict_text(verdict, 0.6095))
         print(f"\nReport: {paths['html']} (and {paths['markdown']}); {elapsed:.0f} s")
+    atomic_write_text(out / "demo.json", json.dumps(to_jsonable(result), indent=1) + "\n")   # what --json prints
     result["exit_code"] = 0 if vsum["passed"] else 1
     return result
 

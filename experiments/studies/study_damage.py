@@ -19,7 +19,7 @@ from datagen.generation import generate
 from experiments.studies.report import Figure, Section, Table
 from learn.network.model_dir import load_model
 from learn.network.training import evaluate, train
-from physics.io import atomic_write_bytes, figure_png
+from physics.io import atomic_write_bytes, figure_png, pyplot
 
 __all__ = ["run"]
 
@@ -28,10 +28,7 @@ METRICS = (("roc_auc", "detection ROC AUC"), ("element_accuracy", "element accur
 
 
 def _figure(rows, metric, label, path):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     subsets = list(dict.fromkeys(r["subset"] for r in rows))
     methods = list(dict.fromkeys(r["method"] for r in rows))

@@ -23,9 +23,9 @@ from pathlib import Path
 import numpy as np
 
 from experiments.studies.report import Figure, Section, Table
-from experiments.studies.validate import frob_rel, thesis_fixture
-from physics import fem, frf, modal, properties, reduction, updating
-from physics.io import atomic_write_bytes, atomic_write_text, figure_png, modal_data_from_dict
+from experiments.studies.validate import frob_rel
+from physics import fem, frf, modal, properties, reduction, thesis, updating
+from physics.io import atomic_write_bytes, atomic_write_text, figure_png, modal_data_from_dict, pyplot
 
 __all__ = ["run"]
 
@@ -49,10 +49,7 @@ def identified_models(b5: dict) -> dict:
 
 
 def _frf_figure(path: Path, title: str, curves) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     f_hz = OMEGA_RAD_S / (2 * np.pi)
     fig, ax = plt.subplots(figsize=(9, 4.8))
@@ -79,7 +76,7 @@ def run(out_dir) -> tuple[dict, list]:
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    b5 = thesis_fixture("beams")["beams"]["5"]
+    b5 = thesis.load("beams")["beams"]["5"]
     preset = properties.beam_preset("beam5")
     t42 = _table_4_2(b5, preset)
     t41 = _table_4_1(b5, preset)

@@ -16,7 +16,7 @@ import numpy as np
 from physics import fem, frf, identification, modal, properties, reduction, thesis, updating
 from physics.io import modal_data_from_dict
 
-__all__ = ["Check", "add_parser", "format_table", "run", "run_checks", "summary", "thesis_fixture"]
+__all__ = ["Check", "add_parser", "format_table", "run", "run_checks", "summary"]
 
 
 @dataclass(frozen=True)
@@ -31,10 +31,6 @@ class Check:
     tolerance: float
     passed: bool
     note: str = ""
-
-
-#: Old name of :func:`physics.thesis.load`.
-thesis_fixture = thesis.load
 
 
 def frob_rel(a, b) -> float:

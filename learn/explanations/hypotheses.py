@@ -72,7 +72,7 @@ from physics.fem import beam_model
 from physics.modal import undamped_modes
 from physics.supports import THESIS_SUPPORT, add_springs, changed_springs, support
 
-__all__ = ["BASE_HYPOTHESES", "FIT_LIMIT", "FREQUENCY_CHANGE_STD", "HYPOTHESES", "KindExplanation",
+__all__ = ["BASE_HYPOTHESES", "FIT_LIMIT", "FREQUENCY_CHANGE_STD", "KindExplanation",
            "MODEL_ERROR", "NO_EXPLANATION", "SEPARATE_BASE", "SHAPE_CHANGE_STD", "SIZE_SCALE_STD", "Hypothesis",
            "explain_many", "kind_explanation", "kind_explanations", "separate",
            "summary", "support_curve", "weigh",
@@ -85,10 +85,6 @@ FREQUENCY_CHANGE_STD = 1e-3
 
 #: The explanations that are no damage kind.
 BASE_HYPOTHESES = ("intact", "global_stiffness", "support_change")
-
-#: The explanations, in the order reported: the base ones and one per damage kind (equal prior probabilities: the
-#: verdict states it).
-HYPOTHESES = (*BASE_HYPOTHESES, *DAMAGE_MODELS)
 
 #: Relative error of each predicted change, mode by mode (3 %): the sensitivities are those of the nominal shapes.
 MODEL_ERROR = 0.03

@@ -23,7 +23,7 @@ import numpy as np
 
 from learn.explanations.classical import FREQUENCY_METHODS
 from learn.network.features import as_spec
-from physics.io import atomic_write_bytes, figure_png
+from physics.io import atomic_write_bytes, figure_png, pyplot
 
 __all__ = ["MIN_DROP", "Metrics", "NOISE_EDGES", "TIP_ZONE", "figures", "metrics", "mirrored_method", "reliability",
            "roc_auc", "roc_curve", "subsets", "table_rows"]
@@ -184,10 +184,7 @@ def table_rows(outputs, truth, table, length_m) -> list[dict]:
 def figures(outputs, truth, out_dir, length_m: float, n_bins: int = 15) -> list[str]:
     """ROC, confusion matrix (zones, network), location error vs position, reliability (PNG, Agg); ``length_m`` the
     beam's length or its :class:`learn.network.features.BeamSpec`."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     spec = as_spec(length_m)
     length_m = spec.length_m

@@ -26,7 +26,7 @@ from physics.discrepancy.pairing import failed_noise_check
 from physics.discrepancy.workflow import DiscrepancyResult, analyse, check_candidates
 from physics.errors import ConfigError, FileFormatError
 from physics.identification import identify_frf
-from physics.io import (MODAL, atomic_write_bytes, figure_png, modal_data_from_dict, modal_or_frf, number_list,
+from physics.io import (MODAL, atomic_write_bytes, figure_png, pyplot, modal_data_from_dict, modal_or_frf, number_list,
                         prepare_measured, read_frf, read_json, reference_position_m, sensor_labels, to_jsonable)
 
 __all__ = ["EXAMPLE", "MIN_LINE_SNR", "NOISE_LINES", "analyse_file", "assumed_noise", "estimated_noise",
@@ -195,10 +195,7 @@ def _candidate_rows(res: DiscrepancyResult) -> list[dict]:
 
 def _figures(res: DiscrepancyResult, recal: ModeResiduals, meas: Measurement,
              before_frf, after_frf) -> dict:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     out = {}
     fig, ax = plt.subplots(figsize=(7, 4))

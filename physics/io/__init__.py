@@ -21,7 +21,7 @@ One module per format, listed in one table (:data:`FORMATS`), the data types and
 Every name below is importable from ``physics.io`` directly.
 """
 
-from physics.io.atomic import atomic_path, atomic_write_bytes, atomic_write_text, figure_png
+from physics.io.atomic import atomic_path, atomic_write_bytes, atomic_write_text, figure_png, pyplot
 from physics.io.csv import read_frf_csv, write_frf_csv
 from physics.io.formats import (FORMATS, FRF, MODAL, TIME, FileFormat, accepted, format_of, modal_or_frf, read,
                                read_frf, writable)
@@ -47,4 +47,4 @@ __all__ = ["FORMATS", "FRF", "MODAL", "TIME", "FileFormat", "accepted", "format_
            "DofMap", "NodeGeometry", "dof_positions_text", "QUARTER_POINT_CONVENTION", "map_frf_dofs",
            "map_measured_dofs", "UnitSystem", "frf_unit_factor", "match_dofs_by_position",
            "measured_positions", "positions_along_beam", "reference_position_m", "read_uff_geometry", "Prepared",
-           "prepare_measured", "sensor_labels", "reads_by_reciprocity", "to_jsonable", "figure_png"]
+           "prepare_measured", "sensor_labels", "reads_by_reciprocity", "to_jsonable", "figure_png", "pyplot"]

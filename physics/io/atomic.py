@@ -17,7 +17,7 @@ from pathlib import Path
 
 from physics.errors import DISK_FULL_ERRNOS, DiskFullError
 
-__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "figure_png"]
+__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "figure_png", "pyplot"]
 
 
 def _umask() -> int:
@@ -74,6 +74,16 @@ def atomic_write_bytes(path, data: bytes) -> None:
 def atomic_write_text(path, text: str) -> None:
     """Text version of :func:`atomic_write_bytes` (UTF-8)."""
     atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def pyplot():
+    """``matplotlib.pyplot`` on the non-interactive Agg backend (a figure is written, never shown)."""
+    import matplotlib  # heavy: loaded only when a figure is drawn
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
 
 
 def figure_png(fig, **savefig) -> bytes:

@@ -1,6 +1,7 @@
 """The validate, model, update and demo commands, through ``cli.main`` as a user calls them."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -21,6 +22,8 @@ def test_validate_passes_and_prints_the_documented_json(capsys):
     res = json.loads(out)
     assert code == 0 and res["passed"] is True
     assert len(res["checks"]) == 38
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    assert f"(`beam-damage validate`: {len(res['checks'])} checks)" in readme      # the README's count is this run's
     for c in res["checks"]:
         assert {"name", "thesis", "reproduced", "rel_error", "tolerance", "passed"} <= set(c)
         assert c["passed"] and c["rel_error"] <= c["tolerance"]
@@ -133,6 +136,7 @@ def test_demo_writes_its_report(tmp_path, capsys):
     code, out, _ = _run(capsys, "demo", "--out", str(d), "--quick", "--samples", "200", "--workers", "1", "--json")
     res = json.loads(out)
     assert code == 0 and res["validate_passed"] and res["checks"] == 38
+    assert json.loads((d / "demo.json").read_text()) == res          # the run's demo.json is its --json
     m = res["measured_data"]
     np.testing.assert_allclose(m["identified_frequencies_hz"], m["exact_frequencies_hz"], rtol=1e-3)
     # the discrepancy step names shear deformation on Table 4.3 and closes the 8 % gap (issue 9)

@@ -1,11 +1,13 @@
 """The demo's numbers in README.md and docs/demo.md are the ones the demo computes (``beam-damage demo --docs``)."""
 
 import argparse
+import json
 
 import pytest
 
 from experiments.studies import demo
 from experiments.studies.doc_tables import DOCS
+from physics.io import to_jsonable
 
 
 def _block(text: str, name: str) -> str:
@@ -36,6 +38,15 @@ def test_doc_blocks_say_what_the_run_computed():
     assert numbers.endswith("by the network; its explanations: a mass change 0.43, a slit 0.43.")
     assert "training 47 s" in blocks[("demo.md", "demo-timings")]
     assert blocks[(str(DOCS.parent / "README.md"), "demo-numbers")] == numbers
+    # the run's demo.json (its --json) gives the same blocks
+    assert demo.doc_blocks(json.loads(json.dumps(to_jsonable(result)))) == blocks
+
+
+def test_demo_page_states_the_dataset_sizes_the_demo_uses():
+    (n_train, n_test, _), (n_quick, _, epochs_quick) = demo.SIZES["full"], demo.SIZES["quick"]
+    text = (DOCS / "demo.md").read_text(encoding="utf-8")
+    assert f"a {n_train:_}-specimen `training` dataset and a {n_test:_}-specimen test set".replace("_", " ") in text
+    assert f"(a {n_quick:_}-specimen dataset, {epochs_quick} epochs)".replace("_", " ") in text
 
 
 @pytest.mark.slow
@@ -44,5 +55,7 @@ def test_the_docs_hold_the_numbers_the_demo_computes(tmp_path):
     args = argparse.Namespace(out=str(tmp_path / "demo"), quick=False, force=True, samples=None, workers=2,
                               json=True, docs=False)
     numbers = demo.doc_blocks(demo.run(args))[("demo.md", "demo-numbers")]
+    saved = json.loads((tmp_path / "demo" / "demo.json").read_text(encoding="utf-8"))
+    assert demo.doc_blocks(saved)[("demo.md", "demo-numbers")] == numbers
     for page in (DOCS / "demo.md", DOCS.parent / "README.md"):
         assert _block(page.read_text(encoding="utf-8"), "demo-numbers") == numbers, page

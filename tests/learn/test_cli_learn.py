@@ -14,6 +14,7 @@ from experiments.cli import main
 from experiments.cli.cmd_classify import KEYS
 from learn.network.features import map_frf_to_grid
 from physics.io import MeasuredFRF, ModalData, write_frf_npz, write_modal_json
+from verdict_pin import _modal_files
 
 
 @pytest.fixture(scope="module")
@@ -120,27 +121,6 @@ def test_evaluate_writes_table_and_figures(tiny, capsys):
     assert {"network (measured)", "DLAC", "MDLAC", "Cawley-Adams", "sensitivity updating"} <= methods
     for f in ("metrics.csv", "roc.png", "confusion.png", "location_error.png", "reliability.png"):
         assert (tiny / "eval" / f).stat().st_size > 0
-
-
-def _modal_files(tmp, drop):
-    """Baseline and damaged modal JSON of an independent FE beam (slit = element loss)."""
-    from physics.fem import beam_model
-    from physics.modal import undamped_modes
-    from physics.properties import beam_preset
-
-    p = beam_preset("beam5")
-    f = np.ones((2, 40))
-    f[1, 8] -= drop
-    m = beam_model(40, p.length_m, p.EI_Nm2, p.mass_per_length_kg_m, ei_factors=f,
-                   root_spring=948.7 * p.EI_Nm2 / p.length_m)
-    w, phi = undamped_modes(m.M, m.K)
-    idx = m.index(["11:y", "21:y", "31:y", "41:y"])
-    paths = []
-    for s, name in ((0, "base.json"), (1, "cur.json")):
-        lam = -0.002 * w[s, :4] + 1j * w[s, :4]
-        write_modal_json(tmp / name, ModalData(lam, phi[s][idx, :4].astype(complex), ("2:y", "3:y", "4:y", "5:y")))
-        paths.append(str(tmp / name))
-    return paths
 
 
 def test_classify_modal_json_prints_exactly_the_keys(tiny, capsys):
