@@ -15,8 +15,11 @@ shows and decides which poles carry energy). Each kept pole is then refined in i
 Fourier transforms at the record's rate, from each hit's onset
 (:func:`~physics.identification.band_refine.refine_in_bands`: the closed-form transform of truncated damped
 exponentials and a smooth background, close modes together), so that the other modes, the unmodelled ones and the
-hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. Shapes: the
-dominant direction of each mode's complex amplitudes over the decays, unit-norm and unscaled (no force measured).
+hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. A clear peak of the
+record's spectrum (:func:`~physics.identification.decay_peaks.decay_peaks`, the peaks ``fftpeak`` reports) that no
+kept pole holds (a weak mode beyond the model's order, or a diagram with no pole stable enough) is started at its
+peak and refined in its band the same way (:mod:`~physics.identification.peak_seeds`). Shapes: the dominant
+direction of each mode's complex amplitudes over the decays, unit-norm and unscaled (no force measured).
 """
 
 from __future__ import annotations

@@ -60,10 +60,10 @@ def unheld_peaks(peaks: ClearPeaks, modes_hz, band_hz) -> np.ndarray:
 
 
 def seed_poles(frequency_hz, tolerance_hz, longest_s) -> np.ndarray:
-    """Starting poles ``-sigma + i omega`` (rad/s) at peaks of ``frequency_hz`` (Hz): ``sigma`` from a half-power
-    half-width of the peak's tolerance (:attr:`~physics.identification.fdd.ClearPeaks.tolerance_hz`, at least its
-    half-power half-width), and no less than one over the longest decay ``longest_s`` (a peak no wider than the
-    record's resolution: a decay that lasts the record)."""
+    """Starting poles ``-sigma + i omega`` (rad/s) at peaks of ``frequency_hz`` (Hz), ``tolerance_hz`` wide
+    (:attr:`~physics.identification.fdd.ClearPeaks.tolerance_hz`, at least the peak's half-power half-width):
+    ``sigma`` of a half-power half-width ``sigma / 2 pi`` of half the tolerance, and no less than one over the longest
+    decay ``longest_s`` (a peak no wider than the record's resolution: a decay that lasts the record)."""
     f = np.asarray(frequency_hz, dtype=np.float64)
     sigma = np.maximum(2 * np.pi * 0.5 * np.asarray(tolerance_hz, dtype=np.float64), 1.0 / longest_s)
     return -sigma + 2j * np.pi * f                  # a decay's spectrum peaks at its damped frequency
