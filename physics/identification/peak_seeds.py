@@ -9,7 +9,10 @@ stable over enough orders. The narrow-band refinement
 the truncated damped exponentials of the modes of one band and a smooth background on that band's lines alone.
 Started at the peak's frequency with the damping of its half-power width (:func:`seed_poles`), it gives the mode
 with the covariance of its fit, as it does each ERA pole; a seed is kept when its fit converged within the peak's
-tolerance, with a damping ratio in ``(0, max_damping)``, apart from every mode held (:func:`refine_seeds`).
+tolerance, with a damping ratio in ``(0, max_damping)`` and at least :data:`MIN_DECAY_SIGMAS` of its one sigma,
+apart from every mode held (:func:`refine_seeds`). A mode of a free decay decays: a peak whose fitted decay rate is
+not significantly positive is a sinusoid that lasts the record (mains hum, a quantisation product of a coarse
+capture, a noise line), which a stabilisation diagram would not hold either.
 """
 
 from __future__ import annotations
@@ -21,7 +24,10 @@ import numpy as np
 from physics.identification.band_refine import refine_in_bands
 from physics.identification.fdd import ClearPeaks
 
-__all__ = ["SeededModes", "refine_seeds", "seed_poles", "unheld_peaks"]
+__all__ = ["MIN_DECAY_SIGMAS", "SeededModes", "refine_seeds", "seed_poles", "unheld_peaks"]
+
+#: A seeded mode's damping ratio is at least this many of its one sigma (it decays within the record).
+MIN_DECAY_SIGMAS = 2.0
 
 
 @dataclass(frozen=True)
@@ -107,7 +113,7 @@ def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPe
     lam = fit.eigenvalues[j]
     fn, zeta = fit.natural_frequencies_hz[j], fit.damping_ratios[j]
     ok = fit.converged[j] & (np.abs(fn - peaks.frequency_hz[seeds]) <= peaks.tolerance_hz[seeds]) \
-        & (zeta > 0) & (zeta < max_damping)
+        & (zeta > 0) & (zeta < max_damping) & (zeta >= MIN_DECAY_SIGMAS * fit.damping_std[j])
     taken = list(np.abs(held) / (2 * np.pi))
     keep = []
     for k in np.argsort(-peaks.height_db[seeds], kind="stable"):     # the highest peak first: one mode per peak
