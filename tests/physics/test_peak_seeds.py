@@ -57,3 +57,18 @@ def test_a_seed_is_refined_to_the_exact_pole_and_a_peak_a_mode_holds_is_no_seed(
     assert both.peak_hz.tolist() == [peaks.frequency_hz[1]]
     np.testing.assert_allclose(np.abs(both.eigenvalues) / (2 * np.pi), fn[1:], rtol=1e-4)
     assert unheld_peaks(peaks, [], (30.0, 400.0)).tolist() == [1]               # the band's peaks only
+
+
+def test_a_sinusoid_that_lasts_the_record_is_no_seeded_mode():
+    """A decay of 23 and 97 Hz plus a 50-Hz sinusoid of constant amplitude (mains hum): a clear peak, which the
+    FFT peak reports as a mode; started there, its band fit's damping ratio is not twice its one sigma, so no mode."""
+    fn, zeta = np.array([23.0, 97.0]), np.array([0.01, 0.015])
+    y, clean, _ = impact_record(FS, 3000, fn, zeta, np.array([[1.0, 0.8]]), [0.0], 1e-3, 1)
+    y = y + 0.2 * clean.std() * np.sin(2 * np.pi * 50.0 * np.arange(3000) / FS)
+    peaks = decay_peaks(decay_spectrum(check_records(y, FS)))
+    hum = unheld_peaks(peaks, fn, (0.0, 400.0))
+    np.testing.assert_allclose(peaks.frequency_hz[hum], [50.0], atol=0.5)
+    fft = _quiet(identify_fft_peaks, y, FS)[0].natural_frequencies_hz
+    assert np.min(np.abs(fft - 50.0)) < 0.05
+    got = refine_seeds([y], FS, poles(fn, zeta), peaks, hum, 0.2)
+    assert got.eigenvalues.size == 0 and got.tried_hz.size == 1
