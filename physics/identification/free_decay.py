@@ -15,8 +15,11 @@ shows and decides which poles carry energy). Each kept pole is then refined in i
 Fourier transforms at the record's rate, from each hit's onset
 (:func:`~physics.identification.band_refine.refine_in_bands`: the closed-form transform of truncated damped
 exponentials and a smooth background, close modes together), so that the other modes, the unmodelled ones and the
-hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. Shapes: the
-dominant direction of each mode's complex amplitudes over the decays, unit-norm and unscaled (no force measured).
+hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. A clear peak of the
+record's spectrum (:func:`~physics.identification.decay_peaks.decay_peaks`, the peaks ``fftpeak`` reports) that no
+kept pole holds (a weak mode beyond the model's order, or a diagram with no pole stable enough) is started at its
+peak and refined in its band the same way (:mod:`~physics.identification.peak_seeds`). Shapes: the dominant
+direction of each mode's complex amplitudes over the decays, unit-norm and unscaled (no force measured).
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ from physics.identification.damped_sinusoids import DampedSinusoidFit, fit_dampe
 from physics.identification.decay_peaks import decay_peaks
 from physics.identification.fdd import SingularValueSpectrum, _running_floor, clear_peaks, unit_shapes
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
+from physics.identification.peak_seeds import SeededModes, refine_seeds, unheld_peaks
 from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles
 from physics.identification.record_checks import CheckedRecord, check_periods, check_records
 from physics.identification.ssi import MIN_MAX_ORDER, ORDERS_PER_PEAK, subspace_diagram
@@ -294,8 +298,9 @@ class ERAIdentification:
     estimate : ModalEstimate
         Unit-norm, unscaled shapes; ``frequency_std_hz``/``damping_std`` from the least-squares fit.
     diagram : StabilisationDiagram
-    fit : DampedSinusoidFit
-        The refinement of every selected pole (the estimate keeps those in the band).
+    fit : DampedSinusoidFit or None
+        The refinement of every selected pole (the estimate keeps those in the band); None when no pole of the
+        stabilisation diagram was stable enough (the estimate then holds the seeded modes alone).
     decays : Decays
         In samples of the record as given.
     decimation : int
@@ -305,16 +310,21 @@ class ERAIdentification:
     bands : BandFit or None
         The narrow-band refinement of the poles kept (before ``n_modes``), on the fitted decays at the record's
         rate from their onsets; the estimate holds its poles where it converged, the time-domain fit's elsewhere.
+    seeded : SeededModes or None
+        The modes of the record's clear peaks that no kept pole held, each started at its peak and refined in its
+        band (:func:`~physics.identification.peak_seeds.refine_seeds`); the estimate holds them too, flagged
+        ``weakly_stable``.
     """
 
     estimate: ModalEstimate
     diagram: StabilisationDiagram
-    fit: DampedSinusoidFit
+    fit: DampedSinusoidFit | None
     decays: Decays
     decimation: int
     block_rows: int
     n_fitted: int = 0
     bands: BandFit | None = None
+    seeded: SeededModes | None = None
 
 
 def _decimated(checked, q, decays):
@@ -494,6 +504,8 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     if p_max < 2:
         raise ShapeError(f"{where}: the decays are too short for a model of order 2 ({rows} block rows of "
                          f"{n_ch} channel(s))")
+    record_peaks = decay_peaks(decay_spectrum(checked))         # the peaks fftpeak reports a mode at
+    sel = fit = None
     for _ in range(1 + MAX_SPLIT_ROUNDS):
         U, s = _hankel_basis(parts, rows)
         diagram = subspace_diagram(U, s, n_ch, np.arange(2, p_max + 1, 2), fs_dec, (0.0, hi), max_damping)
@@ -502,6 +514,11 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         except ConvergenceError:
             if peaks_hz.size:
                 check_periods(checked.duration_s, peaks_hz[0], "the lowest peak", where)
+            if fit is not None:                         # a split decay's model lost its poles: the last fit stands
+                break
+            if record_peaks.frequency_hz.size:          # the clear peaks alone start the band refinement
+                fitted_spans = spans
+                break
             raise ConvergenceError(f"{where}: no pole of the free decays is stable over enough model orders: raise "
                                    "max_order, widen the band, or try --method ssi") from None
         try:
@@ -516,22 +533,39 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         if len(split) == len(parts) or not kept:       # no missed hit, or only pieces too short for the model
             break
         parts, spans = [split[j] for j in kept], [split_spans[j] for j in kept]
-    keep = (fit.natural_frequencies_hz >= band[0]) & (fit.natural_frequencies_hz <= hi) \
-        & (fit.damping_ratios > 0) & (fit.damping_ratios < max_damping) \
-        & (mode_snr(fit, [p.shape[1] for p in fitted], fs_dec) >= MIN_MODE_SNR)
-    idx = np.flatnonzero(keep)
-    if idx.size == 0:
-        raise ConvergenceError(f"{where}: no refined pole of the free decays lies in {band[0]:g}-{hi:.4g} Hz")
     x = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
-    bands = refine_in_bands([x[:, o:b] for o, _, b in fitted_spans], fs, fit.eigenvalues[idx])
-    ok = bands.converged
-    lam = np.where(ok, bands.eigenvalues, fit.eigenvalues[idx])
-    f_std = np.where(ok, bands.frequency_std_hz, fit.frequency_std_hz[idx])
-    z_std = np.where(ok, bands.damping_std, fit.damping_std[idx])
-    amps = np.where(ok[None, None, :], bands.amplitudes, fit.amplitudes[:, :, idx])
-    sub = np.arange(idx.size)
-    if n_modes is not None:
-        rank = sorted(sub, key=lambda j: (bool(sel.weakly_stable[idx[j]]), -int(sel.count[idx[j]])))
+    full = [x[:, o:b] for o, _, b in fitted_spans]           # each decay at the record's rate from its onset
+    idx, bands = np.zeros(0, int), None
+    lam = f_std = z_std = np.zeros(0)
+    amps = np.zeros((len(full), n_ch, 0), complex)
+    if fit is not None:
+        keep = (fit.natural_frequencies_hz >= band[0]) & (fit.natural_frequencies_hz <= hi) \
+            & (fit.damping_ratios > 0) & (fit.damping_ratios < max_damping) \
+            & (mode_snr(fit, [p.shape[1] for p in fitted], fs_dec) >= MIN_MODE_SNR)
+        idx = np.flatnonzero(keep)
+    if idx.size:
+        bands = refine_in_bands(full, fs, fit.eigenvalues[idx])
+        ok = bands.converged
+        lam = np.where(ok, bands.eigenvalues, fit.eigenvalues[idx])
+        f_std = np.where(ok, bands.frequency_std_hz, fit.frequency_std_hz[idx])
+        z_std = np.where(ok, bands.damping_std, fit.damping_std[idx])
+        amps = np.where(ok[None, None, :], bands.amplitudes, fit.amplitudes[:, :, idx])
+    # the clear peaks no mode holds: each started at its peak and refined in its band beside the modes held
+    seeded = refine_seeds(full, fs, lam, record_peaks, unheld_peaks(record_peaks, np.abs(lam) / (2 * np.pi), band),
+                          max_damping)
+    if idx.size + seeded.eigenvalues.size == 0:
+        raise ConvergenceError(f"{where}: no refined pole of the free decays lies in {band[0]:g}-{hi:.4g} Hz, nor "
+                               "a mode at a clear peak of their spectrum")
+    lam = np.concatenate([lam, seeded.eigenvalues])
+    f_std = np.concatenate([f_std, seeded.frequency_std_hz])
+    z_std = np.concatenate([z_std, seeded.damping_std])
+    amps = np.concatenate([amps, seeded.amplitudes], axis=2)
+    weak = np.concatenate([np.asarray(sel.weakly_stable, bool)[idx] if idx.size else np.zeros(0, bool),
+                           np.ones(seeded.eigenvalues.size, bool)])
+    sub = np.arange(lam.size)
+    if n_modes is not None:                             # ERA's steadiest clusters first, the seeded modes last
+        rank = sorted(sub, key=lambda j: (j >= idx.size, bool(weak[j]),
+                                          -int(sel.count[idx[j]]) if j < idx.size else 0))
         sub = np.sort(np.array(rank[:n_modes], int))
     sub = sub[np.argsort(np.abs(lam[sub]), kind="stable")]     # the refinements may reorder poles
     wn = np.abs(lam[sub])
@@ -544,6 +578,5 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     shapes = unit_shapes(shapes)
     est = ModalEstimate(wn / (2 * np.pi), -lam[sub].real / wn, lam[sub], shapes,
                         np.zeros((n_ch, 0, sub.size), complex), f_std[sub], z_std[sub],
-                        modal_phase_collinearity(shapes), "era", False,
-                        weakly_stable=np.asarray(sel.weakly_stable, bool)[idx[sub]])
-    return ERAIdentification(est, diagram, fit, decays, q, rows, len(fitted), bands)
+                        modal_phase_collinearity(shapes), "era", False, weakly_stable=weak[sub])
+    return ERAIdentification(est, diagram, fit, decays, q, rows, len(fitted_spans), bands, seeded)

@@ -1,0 +1,127 @@
+"""The clear peaks of a free decay's spectrum that its ERA model holds no mode at: each started at its peak and
+refined in its own band of the decays' transforms.
+
+A clear peak (:func:`~physics.identification.decay_peaks.decay_peaks`) is the evidence the zero-padded FFT peak
+(``fftpeak``) reports a mode on. The ERA model can miss such a mode: a low, weak mode under much stronger ones of
+the band (a model of order ``2 m`` holds the ``m`` strongest), or a band whose stabilisation diagram shows no pole
+stable over enough orders. The narrow-band refinement
+(:func:`~physics.identification.band_refine.refine_in_bands`) needs no model of the rest of the spectrum: it fits
+the truncated damped exponentials of the modes of one band and a smooth background on that band's lines alone.
+Started at the peak's frequency with the damping of its half-power width (:func:`seed_poles`), it gives the mode
+with the covariance of its fit, as it does each ERA pole; a seed is kept when its fit converged within the peak's
+tolerance, with a damping ratio in ``(0, max_damping)`` and at least :data:`MIN_DECAY_SIGMAS` of its one sigma,
+apart from every mode held (:func:`refine_seeds`). A mode of a free decay decays: a peak whose fitted decay rate is
+not significantly positive is a sinusoid that lasts the record (mains hum, a quantisation product of a coarse
+capture, a noise line), which a stabilisation diagram would not hold either.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from physics.identification.band_refine import refine_in_bands
+from physics.identification.fdd import ClearPeaks
+
+__all__ = ["MIN_DECAY_SIGMAS", "SeededModes", "refine_seeds", "seed_poles", "unheld_peaks"]
+
+#: A seeded mode's damping ratio is at least this many of its one sigma (it decays within the record).
+MIN_DECAY_SIGMAS = 2.0
+
+
+@dataclass(frozen=True)
+class SeededModes:
+    """Modes refined from clear peaks no model pole held (see the module docstring).
+
+    Attributes
+    ----------
+    eigenvalues : ndarray, complex, shape (n_modes,)
+        ``-sigma + i omega`` (rad/s), by frequency.
+    frequency_std_hz, damping_std : ndarray, shape (n_modes,)
+        One sigma from the band fit's covariance.
+    amplitudes : ndarray, complex, shape (n_decays, n_channels, n_modes)
+        ``a`` of ``Re(a z^n)`` of each decay, channel and mode at the decay's first sample.
+    peak_hz : ndarray, shape (n_modes,)
+        The clear peak each mode was started at.
+    tried_hz : ndarray, shape (n_tried,)
+        Every clear peak started (kept or not).
+    """
+
+    eigenvalues: np.ndarray
+    frequency_std_hz: np.ndarray
+    damping_std: np.ndarray
+    amplitudes: np.ndarray
+    peak_hz: np.ndarray
+    tried_hz: np.ndarray
+
+
+def unheld_peaks(peaks: ClearPeaks, modes_hz, band_hz) -> np.ndarray:
+    """Indices of the clear peaks within ``band_hz`` (Hz) farther than their tolerance from every one of
+    ``modes_hz``, shape (n,)."""
+    f, tol = peaks.frequency_hz, peaks.tolerance_hz
+    held = np.asarray(modes_hz, dtype=np.float64)
+    near = np.any(np.abs(f[:, None] - held[None, :]) <= tol[:, None], axis=1) if held.size else np.zeros(f.size, bool)
+    return np.flatnonzero((f >= band_hz[0]) & (f <= band_hz[1]) & ~near)
+
+
+def seed_poles(frequency_hz, tolerance_hz, longest_s) -> np.ndarray:
+    """Starting poles ``-sigma + i omega`` (rad/s) at peaks of ``frequency_hz`` (Hz), ``tolerance_hz`` wide
+    (:attr:`~physics.identification.fdd.ClearPeaks.tolerance_hz`, at least the peak's half-power half-width):
+    ``sigma`` of a half-power half-width ``sigma / 2 pi`` of half the tolerance, and no less than one over the longest
+    decay ``longest_s`` (a peak no wider than the record's resolution: a decay that lasts the record)."""
+    f = np.asarray(frequency_hz, dtype=np.float64)
+    sigma = np.maximum(2 * np.pi * 0.5 * np.asarray(tolerance_hz, dtype=np.float64), 1.0 / longest_s)
+    return -sigma + 2j * np.pi * f                  # a decay's spectrum peaks at its damped frequency
+
+
+def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPeaks, seeds, max_damping,
+                 freq_tol=0.01) -> SeededModes:
+    """The modes of the clear peaks ``seeds`` (indices into ``peaks``), each refined in its band beside the modes
+    held (see the module docstring).
+
+    Parameters
+    ----------
+    decays : sequence of ndarray, each shape (n_channels, n_samples_d)
+        The decays at the record's rate, each from its onset, mean removed.
+    sampling_frequency_hz : float
+    held_eigenvalues : array_like, complex, shape (n_held,)
+        The modes already held (rad/s): fitted beside the seeds (a close one in the seed's band, the others
+        subtracted from it), their own refinement left as it was.
+    peaks : ClearPeaks
+    seeds : array_like of int
+    max_damping : float
+    freq_tol : float
+        A seed within this relative distance of a held mode, or of a seed kept before it, is dropped.
+
+    Returns
+    -------
+    SeededModes
+    """
+    seeds = np.asarray(seeds, int)
+    held = np.asarray(held_eigenvalues, complex)
+    n_ch = decays[0].shape[0]
+    empty = SeededModes(np.zeros(0, complex), np.zeros(0), np.zeros(0), np.zeros((len(decays), n_ch, 0), complex),
+                        np.zeros(0), peaks.frequency_hz[seeds])
+    if seeds.size == 0:
+        return empty
+    fs = float(sampling_frequency_hz)
+    longest_s = max(y.shape[1] for y in decays) / fs
+    start = seed_poles(peaks.frequency_hz[seeds], peaks.tolerance_hz[seeds], longest_s)
+    fit = refine_in_bands(decays, fs, np.concatenate([held, start]))
+    j = held.size + np.arange(seeds.size)
+    lam = fit.eigenvalues[j]
+    fn, zeta = fit.natural_frequencies_hz[j], fit.damping_ratios[j]
+    ok = fit.converged[j] & (np.abs(fn - peaks.frequency_hz[seeds]) <= peaks.tolerance_hz[seeds]) \
+        & (zeta > 0) & (zeta < max_damping) & (zeta >= MIN_DECAY_SIGMAS * fit.damping_std[j])
+    taken = list(np.abs(held) / (2 * np.pi))
+    keep = []
+    for k in np.argsort(-peaks.height_db[seeds], kind="stable"):     # the highest peak first: one mode per peak
+        if ok[k] and all(abs(fn[k] - g) > freq_tol * g for g in taken):
+            keep.append(k)
+            taken.append(fn[k])
+    keep = np.array(sorted(keep, key=lambda k: fn[k]), int)
+    if keep.size == 0:
+        return empty
+    return SeededModes(lam[keep], fit.frequency_std_hz[j][keep], fit.damping_std[j][keep],
+                       fit.amplitudes[:, :, j[keep]], peaks.frequency_hz[seeds][keep], peaks.frequency_hz[seeds])
