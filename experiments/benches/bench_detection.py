@@ -94,6 +94,9 @@ def _case(name: str, seed: int) -> tuple:
 
 
 CASES = ("daily", "30min", "lab", "lab6")
+#: The plain tests' quantiles: the ``k``-th smallest of ``n`` baseline values at level ``k / (n + 1)`` (the share of
+#: new exchangeable tests below it), as :func:`~learn.monitor.alarm_threshold.threshold`'s empirical quantile.
+PLOTTING = "weibull"
 
 
 def plain_tests(F, nb: int, rate: float, sign: float = 1.0) -> dict:
@@ -102,9 +105,10 @@ def plain_tests(F, nb: int, rate: float, sign: float = 1.0) -> dict:
     rise above the ``1 - rate`` quantiles, told that the change raises the frequencies)."""
     rel = sign * (F / np.nanmedian(F[:nb], axis=0) - 1.0)
     mean = np.nanmean(rel, axis=1)
-    per = np.nanquantile(rel[:nb], rate / F.shape[1], axis=0)
-    lo, hi = np.nanquantile(mean[:nb], [rate / 2, 1 - rate / 2])
-    return {"plain shift": mean < np.nanquantile(mean[:nb], rate), "plain shift, both signs": (mean < lo) | (mean > hi),
+    per = np.nanquantile(rel[:nb], rate / F.shape[1], axis=0, method=PLOTTING)
+    lo, hi = np.nanquantile(mean[:nb], [rate / 2, 1 - rate / 2], method=PLOTTING)
+    return {"plain shift": mean < np.nanquantile(mean[:nb], rate, method=PLOTTING),
+            "plain shift, both signs": (mean < lo) | (mean > hi),
             "plain per mode": (rel < per).any(axis=1)}
 
 

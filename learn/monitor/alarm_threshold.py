@@ -146,7 +146,7 @@ def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: i
     pos = np.sort(s[s > resolution])
     positive_share = pos.size / s.size if s.size else 0.0
     level = 1 - min(rate / max(side_share, 1e-12), 0.5)
-    empirical = float(np.quantile(s, level)) if s.size else math.nan
+    empirical = float(np.quantile(s, level, method="weibull")) if s.size else math.nan
     if pos.size < LAW_MIN:                       # a point mass at zero: the law's scale fits to 0
         value = max(empirical, resolution, np.finfo(float).tiny) if s.size else math.inf
         return Threshold(value, rate, 0.0, 0.0, d1, d2, empirical,
