@@ -38,6 +38,10 @@ conditions) and ``regression`` on the measured temperature. Methods, each at ``-
 * ``plain per mode``: each mode's relative change, alarmed beyond the baseline's ``rate / m`` quantile of that mode
   (on the change's side).
 
+The plain tests' quantiles are read at the plotting position ``k / (n + 1)`` (:data:`PLOTTING`), as ``monitor``'s
+thresholds are (:func:`~learn.monitor.alarm_threshold.threshold`): a new test exchangeable with the ``n`` baseline
+values lies beyond the quantile with probability ``rate``.
+
 False alarms: the share of the intact series' monitoring tests alarmed (the plain tests: on the drop side), the
 mean over the seeds in the table and each seed's under it.
 Detected: the share of the damaged tests alarmed (the chart from one day after the onset: ``30min`` 48 tests,
