@@ -38,6 +38,10 @@ conditions) and ``regression`` on the measured temperature. Methods, each at ``-
 * ``plain per mode``: each mode's relative change, alarmed beyond the baseline's ``rate / m`` quantile of that mode
   (on the change's side).
 
+The plain tests' quantiles are read at the plotting position ``k / (n + 1)`` (:data:`PLOTTING`), as ``monitor``'s
+thresholds are (:func:`~learn.monitor.alarm_threshold.threshold`): a new test exchangeable with the ``n`` baseline
+values lies beyond the quantile with probability ``rate``.
+
 False alarms: the share of the intact series' monitoring tests alarmed (the plain tests: on the drop side), the
 mean over the seeds in the table and each seed's under it.
 Detected: the share of the damaged tests alarmed (the chart from one day after the onset: ``30min`` 48 tests,
@@ -94,6 +98,9 @@ def _case(name: str, seed: int) -> tuple:
 
 
 CASES = ("daily", "30min", "lab", "lab6")
+#: The plain tests' quantiles: the ``k``-th smallest of ``n`` baseline values at level ``k / (n + 1)`` (the share of
+#: new exchangeable tests below it), as :func:`~learn.monitor.alarm_threshold.threshold`'s empirical quantile.
+PLOTTING = "weibull"
 
 
 def plain_tests(F, nb: int, rate: float, sign: float = 1.0) -> dict:
@@ -102,9 +109,10 @@ def plain_tests(F, nb: int, rate: float, sign: float = 1.0) -> dict:
     rise above the ``1 - rate`` quantiles, told that the change raises the frequencies)."""
     rel = sign * (F / np.nanmedian(F[:nb], axis=0) - 1.0)
     mean = np.nanmean(rel, axis=1)
-    per = np.nanquantile(rel[:nb], rate / F.shape[1], axis=0)
-    lo, hi = np.nanquantile(mean[:nb], [rate / 2, 1 - rate / 2])
-    return {"plain shift": mean < np.nanquantile(mean[:nb], rate), "plain shift, both signs": (mean < lo) | (mean > hi),
+    per = np.nanquantile(rel[:nb], rate / F.shape[1], axis=0, method=PLOTTING)
+    lo, hi = np.nanquantile(mean[:nb], [rate / 2, 1 - rate / 2], method=PLOTTING)
+    return {"plain shift": mean < np.nanquantile(mean[:nb], rate, method=PLOTTING),
+            "plain shift, both signs": (mean < lo) | (mean > hi),
             "plain per mode": (rel < per).any(axis=1)}
 
 

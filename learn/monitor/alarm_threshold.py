@@ -81,7 +81,8 @@ class Threshold:
     the held-out indices taken to follow ``scale * F(dof_num, dof_den)`` (the exact law of a held-out squared
     Mahalanobis distance with Gaussian residuals, Hotelling's prediction region, up to the scale) with the scale
     fitted to them (or to their largest share, the law truncated below) by maximum likelihood;
-    ``empirical_quantile`` the held-out indices' own ``1 - rate`` quantile (linear interpolation).
+    ``empirical_quantile`` the held-out indices' own ``1 - rate`` quantile at the plotting position ``k / (n + 1)``
+    (the ``k``-th smallest of ``n``, interpolated linearly between ranks; the largest beyond ``n / (n + 1)``).
     ``zero_share``: the share of the held-out indices that are exact zeros (at most :data:`RESOLUTION` times the
     largest), a point mass the law is not fitted to; the law is fitted to the others and read at
     ``1 - rate / (1 - zero_share)``. With fewer than :data:`LAW_MIN` indices above zero the law is degenerate
@@ -121,8 +122,12 @@ def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: i
     lighter tail than a Gaussian fit to the bulk; ``tail_share < 1`` fits the scale to the largest ``tail_share``
     of the indices (at least :data:`TAIL_MIN`), the tail that the threshold extrapolates. The threshold is the
     larger of the law's and the indices' own quantile (an effect that is not linear gives a heavier tail, which
-    the quantile shows; on a baseline of fewer than ``1 / rate`` tests that quantile lies between its two largest
-    indices).
+    the quantile shows). That quantile is read at the plotting position ``k / (n + 1)``: a new test exchangeable
+    with ``n`` held-out indices exceeds their ``k``-th smallest with probability ``(n + 1 - k) / (n + 1)``, so the
+    ``1 - rate`` quantile is exceeded with probability ``rate`` (the linear interpolation of ``np.quantile``'s
+    default, at ``(k - 1) / (n - 1)``, is exceeded with ``(1 + (n - 1) rate) / (n + 1)``: 0.59 % for 0.32 % of 365
+    indices, 9.5 % for 0.5 % of 10); a rate below ``1 / (n + 1)`` gets the largest index, exceeded with
+    ``1 / (n + 1)``, unless the law's threshold lies above it.
 
     ``side_share < 1``: one side of a signed statistic (``held_out`` its squares on that side only, this share of all
     the baseline tests): the law, fitted to that side's squares (the same law as both sides' for a symmetric
@@ -146,7 +151,7 @@ def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: i
     pos = np.sort(s[s > resolution])
     positive_share = pos.size / s.size if s.size else 0.0
     level = 1 - min(rate / max(side_share, 1e-12), 0.5)
-    empirical = float(np.quantile(s, level)) if s.size else math.nan
+    empirical = float(np.quantile(s, level, method="weibull")) if s.size else math.nan
     if pos.size < LAW_MIN:                       # a point mass at zero: the law's scale fits to 0
         value = max(empirical, resolution, np.finfo(float).tiny) if s.size else math.inf
         return Threshold(value, rate, 0.0, 0.0, d1, d2, empirical,

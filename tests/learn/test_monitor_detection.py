@@ -12,6 +12,7 @@ from scipy.signal import lfilter
 from learn.monitor import IdentificationSettings, read_conditions
 from learn.monitor.alarms import monitor_series
 from learn.monitor.charts import chart_limit, ewma_chart, onset, run_charts
+from learn.monitor.alarm_threshold import threshold
 from learn.monitor.normal_models import PCARemoval
 from learn.monitor.statistics import SHARES, detect, sidak_rate, statistics_of
 from monitor_series import write_modal_series
@@ -137,3 +138,48 @@ def test_the_charts_share_the_rate_by_their_joint_baseline_distribution():
     assert apart.charts[0].rate == pytest.approx(sidak_rate(0.01, 2), rel=0.15)
     assert split.charts[0].rate == pytest.approx(sidak_rate(0.01, 2))
     assert split.charts[0].limit > same.charts[0].limit
+
+
+def test_the_empirical_threshold_is_the_order_statistic_whose_exceedance_is_the_rate():
+    """Of ``n`` held-out indices the ``k``-th smallest is exceeded by a new exchangeable test with probability
+    ``(n + 1 - k) / (n + 1)``: at rate 0.05 of 39 indices the threshold's empirical part is the 38th smallest (2 of
+    40), not the linear interpolation between the 37th and 38th (exceeded with ``(1 + (n - 1) rate) / (n + 1)`` =
+    7.4 %); on uniform indices its exceedance averages the rate."""
+    rng = np.random.default_rng(3)
+    exceed = []
+    for _ in range(60):
+        s = rng.random(39)
+        t = threshold(s, 0.05, 1, 38)
+        assert t.empirical_quantile == pytest.approx(np.sort(s)[37], rel=1e-12)
+        exceed.append(1.0 - t.empirical_quantile)
+    assert np.mean(exceed) == pytest.approx(0.05, abs=0.012)               # linear interpolation: 0.074
+    s = rng.random(39)                                                      # beyond the largest's 1 / 40: the largest
+    assert threshold(s, 0.01, 1, 38).empirical_quantile == s.max()
+
+
+@pytest.mark.slow
+def test_a_three_sigma_drift_of_one_mode_is_detected_at_the_closed_form_rate():
+    """One mode, 30 Gaussian baseline tests, 1 % false alarms: the detector (the residual and the signed shift, the
+    same statistic with one mode) alarms on a new test with ``z = (x - mean) / s`` beyond its thresholds; for a new
+    test of ``N(mu, sigma^2)`` that probability is ``Phi((mean - a s - mu) / sigma) + Phi((mu - mean - b s) / sigma)``
+    given the baseline. Averaged over baselines it is the prediction interval's closed form: 1 % on intact tests, and
+    on a 3-sigma drop the noncentral t law's ``P(T(n - 1, -3 / sqrt(1 + 1/n)) < -t(n - 1; 0.995))`` = 58.2 %."""
+    rng = np.random.default_rng(17)
+    n, sigma, rate = 30, 2e-3, 0.01
+    found, false = [], []
+    for _ in range(40):
+        X = np.r_[rng.standard_normal((n, 1)), [[0.0]]] * sigma
+        model = PCARemoval().fit(X[:n])
+        det = detect(model, model.with_choices, X, None, np.arange(n), np.array([n]), rate)
+        th = dict(zip(det.names, det.thresholds))
+        a = math.sqrt(min(th["residual"].value, th["shift"].value))
+        b = math.sqrt(min(th["residual"].value, det.shift_rise.value))
+        m, s = X[:n, 0].mean(), X[:n, 0].std(ddof=1)
+        p = lambda mu: stats.norm.cdf((m - a * s - mu) / sigma) + stats.norm.sf((m + b * s - mu) / sigma)  # noqa: E731
+        found.append(p(-3 * sigma))
+        false.append(p(0.0))
+    t = stats.t(n - 1).isf(rate / 2)
+    closed = stats.nct(n - 1, -3 / math.sqrt(1 + 1 / n)).cdf(-t)
+    assert closed == pytest.approx(0.582, abs=0.001)
+    assert np.mean(found) == pytest.approx(closed, abs=0.07)     # 40 baselines: standard error 0.03
+    assert 0.005 < np.mean(false) < 0.02
