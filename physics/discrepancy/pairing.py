@@ -102,7 +102,7 @@ def pair_measured(meas: Measurement, pred: Prediction, rule: PairingRule | None 
                 + (f", is the measured mode at {f[taken[0]]:.4g} Hz" if taken.size else ""))
         unpaired.append(f"measured mode at {f[k]:.4g} Hz pairs with no model mode (nearest: {near}; the pairing "
                         "rule keeps none beyond 35 %): a spurious pole (noise, the fixture, a torsion or in-plane "
-                        "mode) or a beam file far from the test")
+                        "mode) or a beam file far from the test" + _likelier_spurious(f, model_hz, idx, k, j))
     paired = idx[idx >= 0]
     skipped = []
     if paired.size:
@@ -117,6 +117,25 @@ def pair_measured(meas: Measurement, pred: Prediction, rule: PairingRule | None 
     if paired.size < 2 and not unpaired:
         unpaired.append(f"only {paired.size} measured mode{'s' * (paired.size != 1)} pair with the model's")
     return Pairing(idx, f, model_hz, tuple(unpaired), tuple(skipped))
+
+
+def _likelier_spurious(f, model_hz, idx, k, j) -> str:
+    """``"; ... is the likelier spurious pole"`` when model mode ``j``'s measured partner lies farther than the
+    unpaired measured mode ``k`` from ``j``'s frequency scaled by the median ratio (measured / model) of the other
+    pairs (at least 2), else ``""``."""
+    taken = np.flatnonzero(idx == j)
+    others = (idx >= 0) & (idx != j)
+    if taken.size == 0 or np.sum(others) < 2:
+        return ""
+    scale = float(np.median(f[others] / model_hz[idx[others]]))
+    t = int(taken[0])
+    dev_k, dev_t = f[k] / (scale * model_hz[j]) - 1, f[t] / (scale * model_hz[j]) - 1
+    if abs(dev_k) >= abs(dev_t):
+        return ""
+    names = ", ".join(str(int(m) + 1) for m in np.sort(idx[others]))
+    return (f"; modes {names} stand {100 * (scale - 1):+.2f} % off the model on the median, {f[k]:.4g} Hz "
+            f"{100 * dev_k:+.1f} % off mode {j + 1} so scaled, the measured mode at {f[t]:.4g} Hz "
+            f"{100 * dev_t:+.1f} %: {f[t]:.4g} Hz is the likelier spurious pole")
 
 
 def implausible_pairing(pairing: Pairing) -> ImplausibleTest:

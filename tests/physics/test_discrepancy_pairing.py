@@ -3,6 +3,7 @@ any fit, the stop on a failed noise check, and one sensor (shapes optional) on t
 tests/one_sensor_cantilever.py (nominal modes 22.21, 138.8, 386.3, 757.9, 1261 Hz, the accelerometer's 5 g in the
 beam file)."""
 
+import re
 from types import SimpleNamespace
 
 import numpy as np
@@ -114,3 +115,18 @@ def test_one_sensor_frequencies_calibrate_ei_with_the_added_mass(beam):
     assert res.pairing.model_index.tolist() == [0, 1, 2, 3, 4]
     assert res.final.parameters["EI_Nm2"] == pytest.approx(1.1 * osc.EI_NM2, rel=0.003)
     assert res.final.beam.effects["added_mass"]["mass_kg"] == pytest.approx(0.005)
+
+
+def test_the_pole_off_the_other_modes_common_ratio_is_named_the_likelier_spurious_one(beam):
+    """A test 4.65 % above the beam file on every mode (mode 5 at 1.0465 x 1261 = 1320 Hz) with a pole at 1230 Hz:
+    classify's rule pairs 1230 Hz (-2.5 %) with mode 5 and leaves 1320 Hz unpaired; the stop names 1230 Hz the
+    likelier spurious pole, 1320 Hz standing 0.0 % off the ratio modes 2-4 share (+4.65 %) and 1230 Hz 6.8 % off it."""
+    f = 1.0465 * np.array([138.81, 386.28, 757.85, 1261.21])
+    p = _pairing(beam, sorted([*f, 1230.0]))
+    assert p.model_index.tolist() == [1, 2, 3, 4, -1] and not p.plausible
+    assert re.search(r"; modes 2, 3, 4 stand \+4\.65 % off the model on the median, 1320 Hz [+-]0\.0 % off mode 5 so "
+                     r"scaled, the measured mode at 1230 Hz -6\.8 %: 1230 Hz is the likelier spurious pole$",
+                     p.unpaired[0])
+    # a pole off the common ratio itself gets no such sentence
+    q = _pairing(beam, [22.2, 138.8, 386.3, 757.9, 1150.0, 1261.2])
+    assert "likelier spurious pole" not in q.unpaired[0]
