@@ -529,7 +529,7 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     f_std = np.where(ok, bands.frequency_std_hz, fit.frequency_std_hz[idx])
     z_std = np.where(ok, bands.damping_std, fit.damping_std[idx])
     amps = np.where(ok[None, None, :], bands.amplitudes, fit.amplitudes[:, :, idx])
-    sub = np.arange(idx.size)
+    sub = np.flatnonzero(~bands.merged)                # a pole merged into a stronger one of its peak is none
     if n_modes is not None:
         rank = sorted(sub, key=lambda j: (bool(sel.weakly_stable[idx[j]]), -int(sel.count[idx[j]])))
         sub = np.sort(np.array(rank[:n_modes], int))
