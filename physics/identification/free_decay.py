@@ -12,7 +12,7 @@ are selected by :func:`~physics.identification.poles.select_poles` (as for SSI-c
 nonlinear least-squares fit of damped sinusoids to the samples
 (:func:`~physics.identification.damped_sinusoids.fit_damped_sinusoids`; it splits decays where a missed hit
 shows and decides which poles carry energy). Each kept pole is then refined in its own narrow band of the decays'
-Fourier transforms at the record's rate, from each hit's onset
+Fourier transforms at the record's rate, from each hit's onset, across the cuts of missed hits that add no energy
 (:func:`~physics.identification.band_refine.refine_in_bands`: the closed-form transform of truncated damped
 exponentials and a smooth background, close modes together), so that the other modes, the unmodelled ones and the
 hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. Shapes: the
@@ -304,7 +304,8 @@ class ERAIdentification:
         Decays fitted: those of ``decays`` long enough, split where the fit's residual showed a hit they missed.
     bands : BandFit or None
         The narrow-band refinement of the poles kept (before ``n_modes``), on the fitted decays at the record's
-        rate from their onsets; the estimate holds its poles where it converged, the time-domain fit's elsewhere.
+        rate from their hits' onsets, joined across the cuts that add no energy (:func:`_band_spans`); the estimate
+        holds its poles where it converged, the time-domain fit's elsewhere.
     """
 
     estimate: ModalEstimate
@@ -385,6 +386,23 @@ def _split_missed_hits(parts, spans, q, residuals, window):
         out += [y[:, :cut], y[:, cut + 2:]]
         out_spans += [(o, a, a + cut * q), (a + cut * q, a + (cut + 2) * q, b)]
     return out, out_spans
+
+
+def _band_spans(x, decays, fitted_spans, window):
+    """The decays the band refinement reads, a list of ``(first, stop)`` samples of the record ``x`` (mean removed):
+    each decay from its hit's onset, its fitted pieces (``fitted_spans``, as :func:`_split_missed_hits` gives them)
+    joined across every cut that adds no energy (:func:`_adds_energy` over ``window`` samples: a missed hit adds
+    energy like any hit; a cut without is the fit's misfit, and the decay runs on across it)."""
+    out = []
+    for onset, stop in zip(decays.onsets.tolist(), decays.stops.tolist()):
+        firsts = sorted(o for o, _, _ in fitted_spans if onset <= o < stop)
+        if not firsts:
+            continue
+        cuts = np.array([o for o in firsts if o > onset], int)
+        hits = cuts[_adds_energy(x, cuts, cuts, window)] if cuts.size else cuts
+        edges = [onset, *hits.tolist(), stop]
+        out += [(a, b) for a, b in zip(edges[:-1], edges[1:]) if any(a <= o < b for o in firsts)]
+    return out
 
 
 def mode_snr(fit: DampedSinusoidFit, lengths, sampling_frequency_hz) -> np.ndarray:
@@ -523,12 +541,14 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     if idx.size == 0:
         raise ConvergenceError(f"{where}: no refined pole of the free decays lies in {band[0]:g}-{hi:.4g} Hz")
     x = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
-    bands = refine_in_bands([x[:, o:b] for o, _, b in fitted_spans], fs, fit.eigenvalues[idx])
+    p = int(min(PREDICTOR_ORDER, max(2, x.shape[1] // 20)))
+    window = max(4 * p, int(np.ceil(fs / lowest))) if lowest else 4 * p        # find_decays' window
+    spans_read = _band_spans(x, decays, fitted_spans, window)
+    bands = refine_in_bands([x[:, a:b] for a, b in spans_read], fs, fit.eigenvalues[idx])
     ok = bands.converged
     lam = np.where(ok, bands.eigenvalues, fit.eigenvalues[idx])
     f_std = np.where(ok, bands.frequency_std_hz, fit.frequency_std_hz[idx])
     z_std = np.where(ok, bands.damping_std, fit.damping_std[idx])
-    amps = np.where(ok[None, None, :], bands.amplitudes, fit.amplitudes[:, :, idx])
     sub = np.flatnonzero(~bands.merged)                # a pole merged into a stronger one of its peak is none
     if n_modes is not None:
         rank = sorted(sub, key=lambda j: (bool(sel.weakly_stable[idx[j]]), -int(sel.count[idx[j]])))
@@ -539,7 +559,8 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     # shapes: the dominant direction of each mode's amplitudes over the decays
     shapes = np.empty((n_ch, sub.size), complex)
     for c, j in enumerate(sub):
-        u, _, _ = np.linalg.svd(amps[:, :, j].T, full_matrices=False)
+        amps = bands.amplitudes[:, :, j] if ok[j] else fit.amplitudes[:, :, idx[j]]      # (n_decays, n_channels)
+        u, _, _ = np.linalg.svd(amps.T, full_matrices=False)
         shapes[:, c] = u[:, 0]
     shapes = unit_shapes(shapes)
     est = ModalEstimate(wn / (2 * np.pi), -lam[sub].real / wn, lam[sub], shapes,

@@ -1,11 +1,12 @@
 """The band refinement's resolution rule: two poles of one peak, closer than their half-power widths and than the
 decay's main lobe, are one mode (the stronger, fitted alone), whose scatter over repeated decays is then below the
-zero-padded FFT peak's."""
+zero-padded FFT peak's; and the decays it reads: from each hit's onset, across the cuts that add no energy."""
 
 import numpy as np
 from impact_records import crb_frequency_std_hz, poles
 
 from physics.identification.band_refine import RESOLVED_LINES, refine_in_bands
+from physics.identification.free_decay import Decays, _band_spans
 
 FS, N, F_INF, DF, ZETA, NOISE = 1000.0, 2000, 100.0, 0.8, 0.01, 0.01
 
@@ -55,3 +56,21 @@ def test_a_resolved_close_pair_is_kept():
     assert not res.merged.any() and res.converged.all()
     crb = crb_frequency_std_hz(fs, n, fn, zeta, amp, noise)
     assert np.all(np.abs(res.natural_frequencies_hz - fn) < 4 * crb), (res.natural_frequencies_hz - fn, crb)
+
+
+def test_the_band_reads_a_decay_across_a_cut_that_adds_no_energy_and_not_across_a_missed_hit():
+    # one decay from its hit at sample 100, cut at 600 by the time-domain fit (no energy added: the decay runs on)
+    # and at 1500, where a second hit (twice the first's amplitude) the segmentation missed adds energy
+    fs, n = 1000.0, 3000
+    t = np.arange(n) / fs
+    sigma, w = 2.0, 2 * np.pi * 40.0
+
+    def ring(t0, a):
+        s = np.clip(t - t0, 0.0, None)
+        return np.where(t >= t0, a * np.exp(-sigma * s) * np.sin(w * s), 0.0)
+
+    x = (ring(0.1, 1.0) + ring(1.5, 2.0))[None]
+    decays = Decays(np.array([99]), np.array([110]), np.array([n]), 10.0, onsets=np.array([100]))
+    pieces = [(100, 110, 600), (600, 602, 1500), (1500, 1502, n)]
+    assert _band_spans(x, decays, pieces, 100) == [(100, 1500), (1500, n)]
+    assert _band_spans(x, decays, pieces[1:], 100) == [(100, 1500), (1500, n)]      # a first piece left out
