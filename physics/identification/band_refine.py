@@ -22,6 +22,12 @@ each band is that of the refined pole (its half-power width, not the starting po
 closed-form transforms of the modes the other bands fitted, so the background takes only what no band models
 (modes no model holds, the hit).
 
+Two poles of one band closer than their half-power half-widths summed and than the main lobe of the longest
+decay's transform (:data:`RESOLVED_LINES` lines) are one peak: its split between two poles (a mode whose frequency
+moves as its amplitude falls, a component the decays do not resolve) changes from decay to decay with the noise and
+moves each pole by a fraction of the peak's width. After the first sweep the weaker of such a pair (energy over the
+decays and channels) is merged into the stronger (:attr:`BandFit.merged`), which the second sweep fits alone.
+
 White noise in time is white over the lines of each decay's transform (variance ``N s^2`` per line, real and
 imaginary parts independent): each decay's lines are weighted by ``1 / sqrt(N)``, each channel by the inverse of
 its residual's standard deviation in the bands, and ``s^2 (J^T J)^-1`` of the projected Jacobian is the
@@ -38,8 +44,8 @@ import numpy as np
 from physics.errors import ConvergenceError
 from physics.identification.damped_sinusoids import levenberg_marquardt, pole_statistics
 
-__all__ = ["BACKGROUND_ORDER", "BAND_LINES", "BAND_WIDTHS", "MERGE_FACTOR", "SWEEPS", "BandFit", "mode_bands",
-           "refine_in_bands"]
+__all__ = ["BACKGROUND_ORDER", "BAND_LINES", "BAND_WIDTHS", "MERGE_FACTOR", "RESOLVED_LINES", "RESOLVED_WIDTHS",
+           "SWEEPS", "BandFit", "mode_bands", "refine_in_bands"]
 
 #: A mode's band spans this many of its half-power half-widths either side of it ...
 BAND_WIDTHS = 6.0
@@ -53,6 +59,12 @@ BACKGROUND_ORDER = 1
 #: Sweeps over the bands: from the second on, each band's data less the transforms of the modes the other bands
 #: fitted (their closed form, exact), so the background takes only what no band models.
 SWEEPS = 2
+#: Two poles of a band are resolved when they lie further apart than their half-power half-widths summed (times
+#: :data:`RESOLVED_WIDTHS`) or than the main lobe of the longest decay's transform, :data:`RESOLVED_LINES` lines
+#: ``1 / T``; closer than both, they are one peak, whose split between two poles changes from decay to decay with
+#: the noise and the peak's departure from one exponential decay: the weaker is merged into the stronger, which is
+#: then fitted alone.
+RESOLVED_WIDTHS, RESOLVED_LINES = 1.0, 2.0
 
 
 @dataclass(frozen=True)
@@ -77,6 +89,10 @@ class BandFit:
         its starting pole, with NaN standard deviations.
     n_lines : int
         Lines fitted, over every decay and group (per channel).
+    merged : ndarray of bool, shape (n_modes,)
+        True for a pole unresolved from a stronger one of its band (:data:`RESOLVED_WIDTHS`,
+        :data:`RESOLVED_LINES`): one peak, which the stronger pole, fitted alone, stands for. A merged pole is not
+        converged; its band is NaN and its group -1.
     """
 
     eigenvalues: np.ndarray
@@ -89,6 +105,7 @@ class BandFit:
     group: np.ndarray
     converged: np.ndarray
     n_lines: int
+    merged: np.ndarray
 
 
 def mode_bands(eigenvalues, longest_s, nyquist_hz):
@@ -195,6 +212,48 @@ def _projected_band(data, fs, sigma, omega, weights, band_hz, order):
     return res, coef, jac
 
 
+def _fit_band(data, fs, band, lam, n_ch, order):
+    """The variable-projection fit of poles ``lam`` in a band: ``(sigma, omega, cov, coef, weights)``, or None where
+    the band holds too few lines or the fit fails (singular, or a pole left the band or lost its damping)."""
+    used = [d for d in data if d is not None]
+    n_values = n_ch * sum(2 * d[0].size for d in used)
+    n_params = 2 * lam.size + len(used) * n_ch * (2 * lam.size + 2 * (order + 1))
+    if n_values <= 2 * n_params:
+        return None
+
+    def project(sigma, omega, weights):
+        return _projected_band(data, fs, sigma, omega, weights, band, order)
+
+    try:
+        sigma, omega, cov, _, coef, weights, _ = levenberg_marquardt(
+            project, -lam.real, lam.imag, n_ch, n_values, n_params, decaying=True)
+    except ConvergenceError:
+        return None
+    f = omega / (2 * np.pi)
+    if np.any(sigma <= 0) or np.any(f < band[0]) or np.any(f > band[1]):
+        return None
+    return sigma, omega, cov, coef, weights
+
+
+def _unresolved(lam, amps, lengths, fs, group, converged):
+    """The converged poles closer to a stronger converged pole of their group than :data:`RESOLVED_WIDTHS` times
+    their half-power half-widths summed and than :data:`RESOLVED_LINES` lines of the longest decay (energy: over
+    the decays and channels), shape (n_modes,) of bool."""
+    sigma, f = -lam.real, lam.imag / (2 * np.pi)
+    n = np.asarray(lengths, float)[:, None]
+    energy = np.sum(np.abs(amps) ** 2 * ((-np.expm1(-2 * sigma[None, :] * n / fs)) / -np.expm1(-2 * sigma / fs))
+                    [:, None, :], axis=(0, 1))
+    out = np.zeros(lam.size, bool)
+    for j in np.argsort(-energy, kind="stable"):
+        if out[j] or not converged[j]:
+            continue
+        close = converged & ~out & (group == group[j]) & (np.arange(lam.size) != j) \
+            & (np.abs(f - f[j]) < RESOLVED_WIDTHS * (sigma + sigma[j]) / (2 * np.pi)) & (energy <= energy[j]) \
+            & (np.abs(f - f[j]) < RESOLVED_LINES * fs / max(lengths))
+        out |= close
+    return out
+
+
 def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order=BACKGROUND_ORDER) -> BandFit:
     """Refine free-decay poles, each group of close modes in its own band of the decays' transforms (see the
     module docstring).
@@ -225,13 +284,19 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
     amps = np.zeros((len(decays), n_ch, m_all), complex)
     converged = np.zeros(m_all, bool)
     n_lines = 0
+    merged = np.zeros(m_all, bool)
     for sweep in range(SWEEPS):
         if sweep:                                       # the bands of the refined poles' half-power widths
-            bands, group = mode_bands(np.where(converged, lam, lam0), max(lengths) / fs, fs / 2)
+            merged |= _unresolved(lam, amps, lengths, fs, group, converged)
+            converged &= ~merged
+            live = np.flatnonzero(~merged)
+            b_live, g_live = mode_bands(np.where(converged, lam, lam0)[live], max(lengths) / fs, fs / 2)
+            bands, group = np.full((m_all, 2), np.nan), np.full(m_all, -1)
+            bands[live], group[live] = b_live, g_live
         known = converged.copy()                        # the modes whose transform the other bands subtract
         lam_known, amps_known = lam.copy(), amps.copy()
         n_lines = 0
-        for g in np.unique(group):
+        for g in np.unique(group[group >= 0]):
             idx = np.flatnonzero(group == g)
             m, band = idx.size, bands[idx[0]]
             others = np.flatnonzero(known & (group != g))
@@ -241,21 +306,10 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
                     for j, d in enumerate(_band_data(spectra, lengths, fs, band))]
             used = [j for j, d in enumerate(data) if d is not None]
             n_values = n_ch * sum(2 * data[j][0].size for j in used)
-            n_params = 2 * m + len(used) * n_ch * (2 * m + 2 * (background_order + 1))
-            if n_values <= 2 * n_params:
+            fitted = _fit_band(data, fs, band, lam[idx], n_ch, background_order)
+            if fitted is None:
                 continue
-
-            def project(sigma, omega, weights, data=data, band=band):
-                return _projected_band(data, fs, sigma, omega, weights, band, background_order)
-
-            try:
-                sigma, omega, cov, _, coef, weights, _ = levenberg_marquardt(
-                    project, -lam[idx].real, lam[idx].imag, n_ch, n_values, n_params, decaying=True)
-            except ConvergenceError:
-                continue
-            f_new = omega / (2 * np.pi)
-            if np.any(sigma <= 0) or np.any(f_new < band[0]) or np.any(f_new > band[1]):
-                continue
+            sigma, omega, cov, coef, weights = fitted
             _, _, f_std[idx], z_std[idx] = pole_statistics(sigma, omega, cov)
             lam[idx] = -sigma + 1j * omega
             converged[idx] = True
@@ -264,4 +318,5 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
                 c = (C[0:2 * m:2] + 1j * C[1:2 * m:2]).T / weights[:, None]    # (n_ch, m): c = a / 2, scaled
                 amps[j][:, idx] = 2 * c * np.sqrt(lengths[j])
     wn = np.abs(lam)
-    return BandFit(lam, wn / (2 * np.pi), -lam.real / wn, f_std, z_std, amps, bands, group, converged, n_lines)
+    return BandFit(lam, wn / (2 * np.pi), -lam.real / wn, f_std, z_std, amps, bands, group, converged, n_lines,
+                   merged)

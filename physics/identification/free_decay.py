@@ -12,7 +12,7 @@ are selected by :func:`~physics.identification.poles.select_poles` (as for SSI-c
 nonlinear least-squares fit of damped sinusoids to the samples
 (:func:`~physics.identification.damped_sinusoids.fit_damped_sinusoids`; it splits decays where a missed hit
 shows and decides which poles carry energy). Each kept pole is then refined in its own narrow band of the decays'
-Fourier transforms at the record's rate, from each hit's onset
+Fourier transforms at the record's rate, from each hit's onset, across the cuts of missed hits that add no energy
 (:func:`~physics.identification.band_refine.refine_in_bands`: the closed-form transform of truncated damped
 exponentials and a smooth background, close modes together), so that the other modes, the unmodelled ones and the
 hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. A clear peak of the
@@ -309,7 +309,8 @@ class ERAIdentification:
         Decays fitted: those of ``decays`` long enough, split where the fit's residual showed a hit they missed.
     bands : BandFit or None
         The narrow-band refinement of the poles kept (before ``n_modes``), on the fitted decays at the record's
-        rate from their onsets; the estimate holds its poles where it converged, the time-domain fit's elsewhere.
+        rate from their hits' onsets, joined across the cuts that add no energy (:func:`_band_spans`); the estimate
+        holds its poles where it converged, the time-domain fit's elsewhere.
     seeded : SeededModes or None
         The modes of the record's clear peaks that no kept pole held, each started at its peak and refined in its
         band (:func:`~physics.identification.peak_seeds.refine_seeds`); the estimate holds them too, flagged
@@ -395,6 +396,23 @@ def _split_missed_hits(parts, spans, q, residuals, window):
         out += [y[:, :cut], y[:, cut + 2:]]
         out_spans += [(o, a, a + cut * q), (a + cut * q, a + (cut + 2) * q, b)]
     return out, out_spans
+
+
+def _band_spans(x, decays, fitted_spans, window):
+    """The decays the band refinement reads, a list of ``(first, stop)`` samples of the record ``x`` (mean removed):
+    each decay from its hit's onset, its fitted pieces (``fitted_spans``, as :func:`_split_missed_hits` gives them)
+    joined across every cut that adds no energy (:func:`_adds_energy` over ``window`` samples: a missed hit adds
+    energy like any hit; a cut without is the fit's misfit, and the decay runs on across it)."""
+    out = []
+    for onset, stop in zip(decays.onsets.tolist(), decays.stops.tolist()):
+        firsts = sorted(o for o, _, _ in fitted_spans if onset <= o < stop)
+        if not firsts:
+            continue
+        cuts = np.array([o for o in firsts if o > onset], int)
+        hits = cuts[_adds_energy(x, cuts, cuts, window)] if cuts.size else cuts
+        edges = [onset, *hits.tolist(), stop]
+        out += [(a, b) for a, b in zip(edges[:-1], edges[1:]) if any(a <= o < b for o in firsts)]
+    return out
 
 
 def mode_snr(fit: DampedSinusoidFit, lengths, sampling_frequency_hz) -> np.ndarray:
@@ -534,10 +552,13 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
             break
         parts, spans = [split[j] for j in kept], [split_spans[j] for j in kept]
     x = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
-    full = [x[:, o:b] for o, _, b in fitted_spans]           # each decay at the record's rate from its onset
+    p = int(min(PREDICTOR_ORDER, max(2, x.shape[1] // 20)))
+    window = max(4 * p, int(np.ceil(fs / lowest))) if lowest else 4 * p        # find_decays' window
+    full = [x[:, a:b] for a, b in _band_spans(x, decays, fitted_spans, window)]
     idx, bands = np.zeros(0, int), None
     lam = f_std = z_std = np.zeros(0)
-    amps = np.zeros((len(full), n_ch, 0), complex)
+    amps = []                                           # each mode's amplitudes, (n_decays, n_channels)
+    merged = np.zeros(0, bool)
     if fit is not None:
         keep = (fit.natural_frequencies_hz >= band[0]) & (fit.natural_frequencies_hz <= hi) \
             & (fit.damping_ratios > 0) & (fit.damping_ratios < max_damping) \
@@ -549,20 +570,22 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         lam = np.where(ok, bands.eigenvalues, fit.eigenvalues[idx])
         f_std = np.where(ok, bands.frequency_std_hz, fit.frequency_std_hz[idx])
         z_std = np.where(ok, bands.damping_std, fit.damping_std[idx])
-        amps = np.where(ok[None, None, :], bands.amplitudes, fit.amplitudes[:, :, idx])
+        amps = [bands.amplitudes[:, :, j] if ok[j] else fit.amplitudes[:, :, i] for j, i in enumerate(idx)]
+        merged = np.asarray(bands.merged, bool)        # a pole merged into a stronger one of its peak is none
     # the clear peaks no mode holds: each started at its peak and refined in its band beside the modes held
-    seeded = refine_seeds(full, fs, lam, record_peaks, unheld_peaks(record_peaks, np.abs(lam) / (2 * np.pi), band),
+    held_hz = np.abs(lam[~merged]) / (2 * np.pi)
+    seeded = refine_seeds(full, fs, lam[~merged], record_peaks, unheld_peaks(record_peaks, held_hz, band),
                           max_damping)
-    if idx.size + seeded.eigenvalues.size == 0:
+    if idx.size - merged.sum() + seeded.eigenvalues.size == 0:
         raise ConvergenceError(f"{where}: no refined pole of the free decays lies in {band[0]:g}-{hi:.4g} Hz, nor "
                                "a mode at a clear peak of their spectrum")
     lam = np.concatenate([lam, seeded.eigenvalues])
     f_std = np.concatenate([f_std, seeded.frequency_std_hz])
     z_std = np.concatenate([z_std, seeded.damping_std])
-    amps = np.concatenate([amps, seeded.amplitudes], axis=2)
+    amps += list(np.moveaxis(seeded.amplitudes, 2, 0))
     weak = np.concatenate([np.asarray(sel.weakly_stable, bool)[idx] if idx.size else np.zeros(0, bool),
                            np.ones(seeded.eigenvalues.size, bool)])
-    sub = np.arange(lam.size)
+    sub = np.flatnonzero(np.concatenate([~merged, np.ones(seeded.eigenvalues.size, bool)]))
     if n_modes is not None:                             # ERA's steadiest clusters first, the seeded modes last
         rank = sorted(sub, key=lambda j: (j >= idx.size, bool(weak[j]),
                                           -int(sel.count[idx[j]]) if j < idx.size else 0))
@@ -573,7 +596,7 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     # shapes: the dominant direction of each mode's amplitudes over the decays
     shapes = np.empty((n_ch, sub.size), complex)
     for c, j in enumerate(sub):
-        u, _, _ = np.linalg.svd(amps[:, :, j].T, full_matrices=False)
+        u, _, _ = np.linalg.svd(amps[j].T, full_matrices=False)
         shapes[:, c] = u[:, 0]
     shapes = unit_shapes(shapes)
     est = ModalEstimate(wn / (2 * np.pi), -lam[sub].real / wn, lam[sub], shapes,
