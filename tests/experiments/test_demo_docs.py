@@ -6,13 +6,8 @@ import json
 import pytest
 
 from experiments.studies import demo
-from experiments.studies.doc_tables import DOCS
+from experiments.studies.doc_tables import DOCS, block_text
 from physics.io import to_jsonable
-
-
-def _block(text: str, name: str) -> str:
-    start, end = f"<!-- bench:{name} -->", f"<!-- /bench:{name} -->"
-    return text.split(start)[1].split(end)[0].strip()
 
 
 def test_doc_blocks_say_what_the_run_computed():
@@ -58,4 +53,4 @@ def test_the_docs_hold_the_numbers_the_demo_computes(tmp_path):
     saved = json.loads((tmp_path / "demo" / "demo.json").read_text(encoding="utf-8"))
     assert demo.doc_blocks(saved)[("demo.md", "demo-numbers")] == numbers
     for page in (DOCS / "demo.md", DOCS.parent / "README.md"):
-        assert _block(page.read_text(encoding="utf-8"), "demo-numbers") == numbers, page
+        assert block_text(page.read_text(encoding="utf-8"), "demo-numbers") == numbers, page

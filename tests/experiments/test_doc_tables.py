@@ -1,11 +1,16 @@
 """The docs' benchmark blocks: each written by a bench script, replaced alone by ``write_table``; links resolve."""
 
 import re
+import subprocess
+import sys
+import types
+from datetime import datetime, timezone
 from pathlib import Path
 
 import pytest
 
-from experiments.studies.doc_tables import DOCS, block_names, write_table
+from experiments.studies import doc_tables
+from experiments.studies.doc_tables import DOCS, STAMP, block_names, block_text, git_commit, write_table
 from physics.errors import BeamDamageError
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -33,10 +38,58 @@ def test_write_table_replaces_only_its_block(tmp_path):
     page.write_text(before)
     write_table(page, "a", "| x |\n| --- |\n| 3 |\n| 4 |\n")
     after = page.read_text()
-    assert after == before.replace("| 1 |\n", "| 3 |\n| 4 |\n")
-    write_table(page, "a", "| x |\n| --- |\n| 3 |\n| 4 |")      # same table again: same page
-    assert page.read_text() == after
+    assert STAMP.sub("", after).replace("\n\n\n", "\n") == before.replace("| 1 |\n", "| 3 |\n| 4 |\n")
+    write_table(page, "a", "| x |\n| --- |\n| 3 |\n| 4 |")      # same table again: same page but the stamp's day
+    assert STAMP.sub("", page.read_text()) == STAMP.sub("", after)
     assert block_names(after) == ["a", "b"]
+    assert block_text(after, "a") == "| x |\n| --- |\n| 3 |\n| 4 |"
+    assert block_text(after, "b") == "| y |\n| --- |\n| 2 |"
+
+
+def test_a_written_block_ends_with_its_stamp_and_a_rewrite_replaces_it(tmp_path):
+    page = tmp_path / "page.md"
+    page.write_text("Intro.\n\n<!-- bench:a -->\n| x |\n| --- |\n| 1 |\n<!-- /bench:a -->\n\nEnd.\n")
+    day = datetime.now(timezone.utc).date().isoformat()
+    write_table(page, "a", "| x |\n| --- |\n| 2 |", command="python -m experiments.benches.bench_a --docs")
+    if day not in page.read_text():                                # written just after midnight UTC
+        day = datetime.now(timezone.utc).date().isoformat()
+    commit = git_commit()
+    first = (f"<!-- bench:a -->\n| x |\n| --- |\n| 2 |\n\nWritten by `python -m experiments.benches.bench_a --docs` "
+             f"on {day} (UTC), commit {commit}.\n<!-- /bench:a -->")
+    assert page.read_text() == f"Intro.\n\n{first}\n\nEnd.\n"
+    # a rewrite (its content given with the old stamp, as read back from the page) keeps one stamp, the new one
+    write_table(page, "a", block_text(page.read_text(), "a") + "\n\n" + STAMP.findall(page.read_text())[0],
+                command="beam-damage demo --docs")
+    text = page.read_text()
+    assert len(STAMP.findall(text)) == 1 and text.count("Written by") == 1
+    assert f"Written by `beam-damage demo --docs` on {day} (UTC), commit {commit}.\n<!-- /bench:a -->" in text
+    assert block_text(text, "a") == "| x |\n| --- |\n| 2 |"
+
+
+def test_git_commit_is_the_checkouts_head(tmp_path):
+    head = subprocess.run(["git", "rev-parse", "--short=7", "HEAD"], cwd=ROOT, capture_output=True, text=True,
+                          timeout=10)
+    if head.returncode != 0:
+        pytest.skip("not a git checkout")
+    assert git_commit() == head.stdout.strip()
+    assert git_commit(tmp_path) == "unknown"                       # no .git: unknown, no error
+    (tmp_path / ".git").write_text("gitdir: nowhere\n")
+    assert git_commit(tmp_path) == "unknown"
+
+
+@pytest.mark.parametrize("spec, argv, command", [
+    ("experiments.benches.bench_learn", ["x.py", "--docs", f"{ROOT}/out/m"],
+     "python -m experiments.benches.bench_learn --docs out/m"),
+    ("experiments.cli.__main__", ["x.py", "demo", "--docs"], "beam-damage demo --docs"),
+    (None, ["/venv/bin/beam-damage", "demo", "--docs"], "beam-damage demo --docs"),
+    (None, ["tools/run.py", "a b"], "python tools/run.py 'a b'")])
+def test_the_stamp_names_the_command_as_typed(monkeypatch, spec, argv, command):
+    main = types.ModuleType("__main__")
+    main.__spec__ = types.SimpleNamespace(name=spec) if spec else None
+    monkeypatch.setitem(sys.modules, "__main__", main)
+    monkeypatch.setattr(sys, "argv", argv)
+    assert doc_tables.invoking_command() == command
+    assert STAMP.fullmatch(doc_tables.stamp())
 
 
 @pytest.mark.parametrize("text, found", [("no markers\n", "0 opening and 0 closing"),
