@@ -5,10 +5,11 @@ each chunk with the ``n_lags`` samples before it), so a long record (an array or
 bounded memory: once by the shared checks, once for the singular-value spectrum whose clear peaks size the model,
 and once per pass; a low-pass filter and decimation to the pass's band run in the same pass (filter state carried
 across chunks). One SVD of the block Toeplitz matrix of the correlations gives every model order of the stabilisation
-diagram; the physical poles are selected by :func:`~physics.identification.poles.select_poles` as for LSCF. The
-record is split into segments whose correlations are kept apart: the one-sigma frequency and damping of each mode
-are the spread of the mode over the segments divided by ``sqrt(n_segments)`` (batch estimate of the standard
-error of the full-record estimate).
+diagram, and one QR factorisation of the shifted observability matrix every order's state matrix; the physical
+poles are selected by :func:`~physics.identification.poles.select_poles` as for LSCF. The record is split into
+segments whose correlations are kept apart: the one-sigma frequency and damping of each mode are the spread of the
+mode over the segments divided by ``sqrt(n_segments)`` (batch estimate of the standard error of the full-record
+estimate).
 """
 
 from __future__ import annotations
