@@ -5,7 +5,8 @@ import pytest
 from oma_records import chain_record
 
 from physics.errors import BeamDamageError
-from physics.identification.ssi import identify_ssi, output_correlations
+from physics.identification.ssi import (MAX_QR_CONDITION, _state_matrices, _svd, identify_ssi, output_correlations,
+                                        subspace_diagram)
 from physics.modal import mac
 
 
@@ -108,3 +109,47 @@ def test_a_short_cluster_at_a_clear_peak_is_kept_weakly_stable_and_dropped_witho
     assert sel.weakly_stable.tolist() == [True, False] and sel.count[0] < sel.count[1]
     assert select_poles(d, peaks_hz=[33.0]).natural_frequencies_hz.size == 1     # 10 % away: no peak at it
     assert select_poles(d, peaks_hz=[30.2], n_modes=1).weakly_stable.tolist() == [False]   # the steadiest first
+
+
+def _direct_poles(U, s, n_out, order, fs, band_hz):
+    """One order's poles the direct way: its own least squares and eigen-decomposition (no shared factorisation)."""
+    O = U[:, :order] * np.sqrt(s[:order])
+    mu = np.linalg.eigvals(np.linalg.lstsq(O[:-n_out], O[n_out:], rcond=None)[0])
+    lam = np.log(mu.astype(complex)) * fs
+    fn = np.abs(lam) / (2 * np.pi)
+    zeta = -lam.real / np.abs(lam)
+    return np.sort_complex(lam[(lam.imag > 0) & (zeta > 0) & (zeta < 0.2) & (fn >= band_hz[0]) & (fn <= band_hz[1])])
+
+
+@pytest.mark.parametrize("n_out", [1, 3])
+def test_multi_order_diagram_equals_the_direct_ssi_of_each_order(n_out):
+    """The diagram's poles of orders 4 and 12 (one QR for all orders) equal each order's own least squares and
+    eigenvalues; at order 4 (two modes, noise-free correlations ``C A^k G``) they are the system's poles."""
+    fs, fn, zeta = 100.0, np.array([7.0, 19.0]), np.array([0.02, 0.01])
+    lam = -zeta * 2 * np.pi * fn + 2j * np.pi * fn * np.sqrt(1 - zeta ** 2)
+    mu = np.exp(np.concatenate([lam, lam.conj()]) / fs)
+    rng = np.random.default_rng(4)
+    C = rng.standard_normal((n_out, 2)) + 1j * rng.standard_normal((n_out, 2))
+    C, G = np.hstack([C, C.conj()]), np.vstack([C.T, C.T.conj()])     # real correlations
+    R = np.real(np.einsum("ck,lk,kr->lcr", C, mu[None, :] ** np.arange(24)[:, None], G))
+    R += 1e-9 * rng.standard_normal(R.shape)                          # orders above 4 fit this floor
+    U, s = _svd(R, 12)
+    d = subspace_diagram(U, s, n_out, np.arange(2, 13, 2), fs, (0.5, 45.0), max_damping=0.2)
+    for order in (4, 12):
+        got = np.sort_complex(d.eigenvalues[d.order == order // 2])
+        np.testing.assert_allclose(got, _direct_poles(U, s, n_out, order, fs, (0.5, 45.0)), rtol=1e-9)
+    np.testing.assert_allclose(np.sort_complex(d.eigenvalues[d.order == 2]), np.sort_complex(lam), rtol=1e-6)
+    np.testing.assert_allclose(np.linalg.norm(d.participation, axis=1), 1.0)
+    big = d.participation[np.arange(d.order.size), np.argmax(np.abs(d.participation), axis=1)]
+    np.testing.assert_allclose(big.imag, 0.0, atol=1e-12)
+    assert np.all(big.real > 0)
+
+
+def test_orders_the_shared_qr_cannot_take_are_solved_by_their_own_least_squares():
+    """Orders past the rows of the shifted matrix (underdetermined) or past MAX_QR_CONDITION equal lstsq."""
+    rng = np.random.default_rng(5)
+    O = rng.standard_normal((9, 12))
+    O[:, 5] = O[:, 4] + 1e-3 / MAX_QR_CONDITION * rng.standard_normal(9)     # orders >= 6 ill-conditioned
+    orders = [2, 4, 6, 8, 10]                                                 # 10 > 8 rows of O[:-1]
+    for p, A in zip(orders, _state_matrices(O, 1, orders)):
+        np.testing.assert_allclose(A, np.linalg.lstsq(O[:-1, :p], O[1:, :p], rcond=None)[0], rtol=1e-8, atol=1e-8)
