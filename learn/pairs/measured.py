@@ -21,7 +21,7 @@ from physics.modal import mac
 __all__ = ["BASELINE_PAIR_BAND", "IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "MIN_PAIR_MAC", "RATIO_TOLERANCE",
            "ModalPair", "differences_from_model", "frf_rows", "identification_band_hz", "identify_band",
            "identify_modes", "modal_pair", "mode_checks", "nominal_ratio_range", "on_model_dofs",
-           "pair_modes_by_frequency", "pairing_bands", "refit_missing_modes", "unexcited_modes"]
+           "pair_modes_by_frequency", "pairing_bands", "prefer_shared_poles", "refit_missing_modes", "unexcited_modes"]
 
 #: The identification ``classify`` runs on FRF files: LSCF poles and LSFD residues, the 4 lowest modes. The
 #: training data's modal noise (``measurement.modal_noise = "calibrated"``) is calibrated against this path
@@ -244,9 +244,10 @@ def modal_pair(baseline, current, beam: BeamSpec, nominal_hz, names=("baseline",
         return ModalPair(np.stack(lams), np.stack(vecs), np.arange(m), (), tuple(warnings), m, shapeless)
     found = [how or f"it holds {x.size} mode{'s' * (x.size != 1)}" for how, x in zip(found or (None, None), lams)]
     tol = None if tolerance is None else np.asarray(tolerance, float)[:m]
-    which = [pair_modes_by_frequency(np.abs(x) / (2 * np.pi), nominal_hz[:m], tol,
-                                     shape_mac=None if shapeless else _nominal_mac(v, beam))
-             for x, v in zip(lams, vecs)]
+    f_hz = [np.abs(x) / (2 * np.pi) for x in lams]
+    macs = [None if shapeless else _nominal_mac(v, beam) for v in vecs]
+    which = [pair_modes_by_frequency(f, nominal_hz[:m], tol, shape_mac=s) for f, s in zip(f_hz, macs)]
+    which = list(prefer_shared_poles(f_hz, which, nominal_hz[:m], tol, macs))
     common = np.intersect1d(*which)
     common = common[common >= 0]
     missing = []
@@ -263,6 +264,51 @@ def modal_pair(baseline, current, beam: BeamSpec, nominal_hz, names=("baseline",
                    for lam, j in zip(x, k)] for x, k in zip(lams, which))
     return ModalPair(np.stack([x[t] for x, t in zip(lams, take)]), np.stack([v[:, t] for v, t in zip(vecs, take)]),
                      common, tuple(missing), tuple(warnings), m, shapeless, poles)
+
+
+def prefer_shared_poles(frequencies_hz, which, nominal_hz, tolerance=None, shape_mac=(None, None)) -> tuple:
+    """Two tests' pairings (:func:`pair_modes_by_frequency`) with each mode both hold taken by the poles nearest
+    each other: the pole a test shares with the other within the mode's band, not one only it holds.
+
+    For each mode ``j`` both tests pair, the candidates of a test are its pole paired with ``j`` and its poles left
+    unpaired within ``j``'s band (:func:`pairing_bands` of ``nominal_hz`` and ``tolerance``; with ``shape_mac``, a
+    MAC of at least :data:`MIN_PAIR_MAC` with ``j``). Of the pairings that change one test's pole at most, the one
+    whose two poles lie nearest each other in ``|ln f|`` takes ``j`` (the nominal rule's pairing on a tie). Two
+    poles both left unpaired never replace the pairing: where both tests hold the same two poles in the band, the
+    nominal rule's choice stays. The bands of neighbouring modes do not overlap, so the frequency order stays.
+
+    A spurious pole in one test then takes no mode's place: a one-accelerometer cantilever's baseline holding
+    1227 Hz besides its mode 5 at 1166 Hz pairs 1227 Hz, nearer the Euler-Bernoulli model's 1257 Hz, by the nominal
+    rule; against a test whose mode 5 lies at 1169 Hz, 1166 Hz takes mode 5 (0.2 % against 4.9 %).
+
+    Parameters
+    ----------
+    frequencies_hz : 2 arrays, shapes (k0,), (k1,)   each test's poles (Hz)
+    which : 2 int arrays, shapes (k0,), (k1,)        their 0-based modes of ``nominal_hz``, -1 for none
+    nominal_hz : array, shape (m,)                   ascending (Hz)
+    tolerance : float or array (m,), optional        default :data:`RATIO_TOLERANCE`
+    shape_mac : 2 arrays (k_t, m) or None
+
+    Returns
+    -------
+    tuple of 2 int arrays, shapes (k0,), (k1,)
+    """
+    f = [np.asarray(x, float) for x in frequencies_hz]
+    out = [np.array(w, int) for w in which]
+    nominal = np.asarray(nominal_hz, float)
+    band = np.log1p(pairing_bands(nominal, RATIO_TOLERANCE if tolerance is None else tolerance))
+    inside = [(np.abs(np.log(x[:, None] / nominal[None])) <= band[None])           # (k_t, m)
+              & (True if s is None else np.asarray(s, float) >= MIN_PAIR_MAC) for x, s in zip(f, shape_mac)]
+    for j in np.intersect1d(out[0][out[0] >= 0], out[1][out[1] >= 0]):
+        now = [int(np.flatnonzero(w == j)[0]) for w in out]
+        cand = [np.r_[i, np.flatnonzero((w < 0) & ok[:, j])] for i, w, ok in zip(now, out, inside)]
+        gap = np.abs(np.log(f[0][cand[0], None] / f[1][None, cand[1]]))          # (c0, c1), [0, 0] the pairing
+        gap[1:, 1:] = np.inf                                                      # one test's pole changes at most
+        a, b = np.unravel_index(np.argmin(gap), gap.shape)
+        for w, c, pick in zip(out, cand, (a, b)):
+            w[w == j] = -1
+            w[c[pick]] = j
+    return tuple(out)
 
 
 def _beyond_band(free_hz, target_hz, tol, absent, modes) -> str:
