@@ -25,8 +25,12 @@ CLI rows; without it the CLI rows have no "before" column). Three tables, each w
   ``train`` make ``--beam-model``): each UFF identified by ``beam-damage identify --band`` (the beam file's band),
   mode k left out of both tests' ``modal.json``, then ``classify``; zone accuracy over the beam file's zones.
 
+``--sweep TRAIN_DIR ...`` trains modal networks on those datasets with each ``--probabilities`` of a mode missing
+and scores them on ``--data`` (element accuracy / false alarms per missing mode).
+
 Writes ``missing_modes.json`` and ``missing_modes.md`` in ``--out``; ``--docs`` puts the tables into
-``docs/classifier.md``.
+``docs/classifier.md``: the held-out and simulator tables into block ``missing-modes``, the sweep's into block
+``missing-modes-sweep`` (each only when this run measured it).
 """
 
 from __future__ import annotations
@@ -311,7 +315,7 @@ def main(argv=None) -> int:
             if a.beam else [])
 
     swept = sweep(a.sweep, a.data, a.probabilities) if a.sweep else []
-    text = markdown(held, sim, beam, a.beam) + ("\n" + sweep_markdown(swept) if swept else "")
+    text = markdown(held, sim, beam, a.beam)
     if any(c.get("of") for c in checks.values()):
         text += ("\n\"before\" with a mode missing: measured on the first such case of each set, derived from the "
                  "classical answer elsewhere; measured and derived agree on "
@@ -319,10 +323,14 @@ def main(argv=None) -> int:
     atomic_write_text(out / "missing_modes.json", json.dumps({"held_out": held, "simulator": sim, "beam": beam,
                                                               "sweep": swept, "before_checks": checks,
                                                               "args": vars(a)}, indent=1))
-    atomic_write_text(out / "missing_modes.md", text)
-    print(json.dumps({"held_out": held, "simulator": sim, "beam": beam}, indent=1) if a.json else text)
-    if a.docs:
+    swept_text = sweep_markdown(swept) if swept else ""
+    atomic_write_text(out / "missing_modes.md", text + ("\n" + swept_text if swept_text else ""))
+    print(json.dumps({"held_out": held, "simulator": sim, "beam": beam, "sweep": swept}, indent=1) if a.json
+          else text + ("\n" + swept_text if swept_text else ""))
+    if a.docs and (held or sim or beam):
         write_table("classifier.md", "missing-modes", text.strip())
+    if a.docs and swept:
+        write_table("classifier.md", "missing-modes-sweep", swept_text.strip())
     return 0
 
 

@@ -1,7 +1,7 @@
 """The loop on every beam of the independent simulator's catalogue, scored per beam and per method.
 
 Run: ``python -m experiments.benches.study_beams --out out/beams [--n-pairs 40] [--train-n 20000] [--only NAME]
-[--seed 0] [--spread KEY=VALUE ...] [--json]``
+[--seed 0] [--spread KEY=VALUE ...] [--json] [--before BEAMS_JSON] [--docs]``
 
 For each beam of :data:`experiments.second_sim.beams.CATALOGUE` (any support, 1-12 sensors, its own band),
 as the README's loop, through the CLI: the simulator writes ``beam.toml`` and ``--n-pairs`` (baseline, current)
@@ -23,6 +23,11 @@ median ``|dx/L|`` <= 0.03 on beams read unfolded.
 Writes ``beams.csv``, ``beams.json`` (rows, per-beam timings and training metrics, seed and config),
 ``beams.md`` and ``beams.png`` (zone accuracy, network vs best classical method, per beam) in ``--out``;
 pairs, datasets, models and verdicts stay under ``--out/NAME`` and are reused by a rerun with the same sizes.
+``--docs`` writes the per-beam summary (:func:`docs_markdown`: the network's zone accuracy, the best classical
+method's, the network's location, false alarms and size, and the pooled row) into ``docs/classifier.md``, block
+``study-beams``; ``--before BEAMS_JSON`` (the ``beams.json`` of an earlier run) adds that run's network zone
+accuracy in parentheses.
+
 ``--spread KEY=VALUE`` changes a field of the pairs' distribution (:class:`experiments.second_sim.beams.Spread`,
 e.g. ``suspension_change=0`` or ``bounce_over_f1=0.05,0.05``): new pairs, classified by the same models, and
 the outputs named ``beams-KEY=VALUE...``.
@@ -38,12 +43,12 @@ from dataclasses import fields, replace
 
 import numpy as np
 
-from experiments.benches.harness import cli_json, parser
+from experiments.benches.harness import cli_json, parser, write_table
 from experiments.second_sim.beams import CATALOGUE, SPREAD, Spread, simulate_beam_pairs, write_beam_pairs
 from physics.io import atomic_write_bytes, atomic_write_text, figure_png, pyplot
 
-__all__ = ["TARGETS", "fold", "folded", "main", "markdown", "parse_spread", "pooled", "run_beam", "score_beam",
-           "targets"]
+__all__ = ["TARGETS", "docs_markdown", "fold", "folded", "main", "markdown", "parse_spread", "pooled", "run_beam",
+           "score_beam", "targets"]
 
 #: A slit is "small" when it lowers no mode of the band by this much (relative) on its own.
 SMALL_DROP = 0.005
@@ -308,6 +313,38 @@ def pooled_markdown(rows: list[dict]) -> str:
                       f"({_f(p['false_alarm_pct'], False)} %) |\n" for p in pooled(rows)))
 
 
+def docs_markdown(rows: list[dict], infos: list[dict], before: list[dict] | None = None) -> str:
+    """The summary in ``docs/classifier.md``: per beam the network's zone accuracy of its damaged pairs (in
+    parentheses that of the ``before`` rows, an earlier run's ``rows``, where given), the best classical method's,
+    the network's median ``|dx|/L`` (``folded`` where classify folded), false alarms, median size error and size
+    1-sigma cover; then the pooled row (false alarms of the best classical methods in parentheses)."""
+    beams = {info["beam"] for info in infos}
+    net_before = {r["beam"]: r for r in before or [] if r["method"] == "network" and r["beam"] in beams}
+    head = ["beam", "support", "sensors", "modes", "network zone acc." + (" (before)" if before else ""),
+            "best classical: zone acc.", "network median abs(dx)/L", "false alarms (network)", "size err.",
+            "size 1-sigma"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for info in infos:
+        net = next(r for r in rows if r["beam"] == info["beam"] and r["method"] == "network")
+        best = next((r for r in rows if r["beam"] == info["beam"] and r["method"] == net["best_classical"]), None)
+        was = net_before.get(info["beam"])
+        dx = _f(net["median_dx_over_L"], False) if not np.isfinite(net["median_dx_over_L"]) \
+            else f"{net['median_dx_over_L']:.4f}"
+        lines.append(f"| {info['beam']} | {net['bc']} | {net['sensors']} | {len(info['modes'])} | "
+                     f"{_f(net['zone_accuracy'])} of {net['damaged_pairs']}"
+                     + (f" ({_f(was['zone_accuracy'])})" if was else "") + " | "
+                     + (f"{best['method']} {_f(best['zone_accuracy'])}" if best else "-") + " | "
+                     f"{dx}{' (folded)' if net['folded'] else ''} | {net['false_alarms']} of {net['intact_pairs']} | "
+                     f"{_f(net['median_size_error'])} | {_f(net['size_one_sigma_cover'])} |")
+    pool = {p["method"]: p for p in pooled(rows)}
+    net, cl = pool["network"], pool["best classical (per beam)"]
+    was = {p["method"]: p for p in pooled(list(net_before.values()))}.get("network") if before else None
+    lines.append(f"| all {len(infos)} | | | | {_f(net['zone_accuracy'])} of {net['damaged_pairs']}"
+                 + (f" ({_f(was['zone_accuracy'])})" if was else "") + f" | {_f(cl['zone_accuracy'])} | | "
+                 f"{net['false_alarms']} of {net['intact_pairs']} (classical {cl['false_alarms']}) | | |")
+    return "\n".join(lines)
+
+
 def _figure(rows: list[dict], path: Path) -> None:
     plt = pyplot()
 
@@ -332,12 +369,14 @@ def _figure(rows: list[dict], path: Path) -> None:
 
 
 def main(argv=None) -> int:
-    ap = parser(__file__, __doc__, json=True, out="out/beams", seed=0, workers=2)
+    ap = parser(__file__, __doc__, docs="classifier.md", json=True, out="out/beams", seed=0, workers=2)
     ap.add_argument("--n-pairs", type=int, default=40, help="independent pairs per beam (default 40)")
     ap.add_argument("--train-n", type=int, default=20000, help="specimens generated per beam (default 20000)")
     ap.add_argument("--only", default=None, help="one catalogue beam by name")
     ap.add_argument("--spread", action="append", default=[], metavar="KEY=VALUE",
                     help="a field of the pairs' distribution (second_sim.beams.Spread), e.g. suspension_change=0")
+    ap.add_argument("--before", metavar="BEAMS_JSON", help="beams.json of an earlier run: its network zone accuracy "
+                    "in parentheses in the --docs table")
     a = ap.parse_args(argv)
 
     names = [c.name for c in CATALOGUE]
@@ -354,6 +393,14 @@ def main(argv=None) -> int:
     except ValueError as exc:
         print(f"study_beams: error: {exc}", file=sys.stderr)
         return 2
+    before = None
+    if a.before is not None:
+        try:
+            before = json.loads(Path(a.before).read_text())["rows"]
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            print(f"study_beams: error: --before {a.before}: expected the beams.json of a study_beams run ({exc})",
+                  file=sys.stderr)
+            return 2
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     rows, infos = [], []
@@ -381,6 +428,8 @@ def main(argv=None) -> int:
         print(json.dumps({"config": config, "targets": targets(rows), "pooled": pooled(rows), "rows": rows}, indent=1))
     else:
         print(markdown(rows) + "\n" + pooled_markdown(rows) + "\n" + diagnosis_markdown(rows, infos))
+    if a.docs:
+        write_table("classifier.md", "study-beams", docs_markdown(rows, infos, before))
     return 0
 
 
