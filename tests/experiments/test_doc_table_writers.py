@@ -107,3 +107,12 @@ def test_bolted_row_with_the_masses_in_the_beam_file(tmp_path):
     assert r[2] == "0.332 %" and float(r[4].split()[0]) < 0.03 and r[5] == "consistent (chi2/dof 0.44)"
     block = block_text((DOCS / "discrepancy.md").read_text(), "bolted-masses").splitlines()
     assert len(block) == 4 and block[0] == bench_bolted_masses.markdown([r]).splitlines()[0]   # the page's header
+
+
+def test_study_beams_refuses_an_unreadable_before_file_in_one_line(tmp_path, capsys):
+    bad = tmp_path / "beams.json"
+    bad.write_text('{"config": {}}')
+    assert study_beams.main(["--out", str(tmp_path / "o"), "--before", str(bad), "--docs"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "--before" in err and "beams.json of a study_beams run" in err
+    assert not (tmp_path / "o").exists()                          # nothing run, nothing written
