@@ -15,7 +15,7 @@ threads, after one untimed run (imports, caches):
 Printed per record: CPU and wall seconds, samples per CPU second, the seconds spent in the variable-projection
 fit of damped sinusoids (:func:`~physics.identification.damped_sinusoids.fit_damped_sinusoids`, timed by wrapping
 the name ``free_decay`` calls) with its number of calls, and those spent in the stabilisation diagram
-(:func:`~physics.identification.ssi.subspace_diagram`, wrapped where ``free_decay`` and ``ssi`` call it).
+(:func:`~physics.identification.subspace.subspace_diagram`, wrapped where ``free_decay`` and ``ssi`` call it).
 
 Run ``python -m experiments.benches.bench_era_speed [--repeat N] [--threads N] [--hits N] [--noise X] [--seed S]
 [--no-ambient] [--json F]``.

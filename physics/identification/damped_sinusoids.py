@@ -26,8 +26,8 @@ import numpy as np
 
 from physics.errors import ConvergenceError
 
-__all__ = ["DampedSinusoidFit", "NormalEquations", "fit_damped_sinusoids", "levenberg_marquardt", "pole_statistics",
-           "power_sums"]
+__all__ = ["DampedSinusoidFit", "NormalEquations", "fit_damped_sinusoids", "levenberg_marquardt", "mode_snr",
+           "pole_statistics", "power_sums"]
 
 #: Levenberg-Marquardt iterations at most, and the relative pole step below which the fit has converged.
 MAX_ITERATIONS, STEP_TOL = 30, 1e-10
@@ -351,3 +351,13 @@ def fit_damped_sinusoids(decays, sampling_frequency_hz, eigenvalues) -> DampedSi
     noise = np.sqrt(sum(np.sum(r ** 2, axis=0) for r in res) / (n_values / n_ch)) / weights
     return DampedSinusoidFit(-sigma + 1j * omega, fn, zeta, f_std, z_std, cov, amps, noise, it,
                              tuple((r / weights[None, :]).T for r in res))
+
+
+def mode_snr(fit: DampedSinusoidFit, lengths, sampling_frequency_hz) -> np.ndarray:
+    """Each fitted mode's energy over the decays (of ``lengths`` samples) and channels, in units of each channel's
+    noise variance, shape (n_modes,): about 2 per decay and channel for a pole fitted to noise alone."""
+    sigma = -fit.eigenvalues.real
+    decay = np.array([np.sum(np.exp(-2 * np.outer(np.arange(n) / sampling_frequency_hz, sigma)), axis=0)
+                      for n in lengths])                                    # (n_decays, n_modes)
+    amp2 = np.abs(fit.amplitudes) ** 2 / np.maximum(fit.noise_std, np.finfo(float).tiny)[None, :, None] ** 2
+    return 0.5 * np.einsum("dcm,dm->m", amp2, decay)

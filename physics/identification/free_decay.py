@@ -30,17 +30,18 @@ import numpy as np
 
 from physics.errors import ConvergenceError, ShapeError
 from physics.identification.band_refine import BandFit, refine_in_bands
-from physics.identification.damped_sinusoids import DampedSinusoidFit, fit_damped_sinusoids
+from physics.identification.damped_sinusoids import DampedSinusoidFit, fit_damped_sinusoids, mode_snr
 from physics.identification.decay_peaks import decay_peaks
 from physics.identification.fdd import SingularValueSpectrum, _running_floor, clear_peaks, unit_shapes
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.peak_seeds import SeededModes, refine_seeds, unheld_peaks
 from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles
 from physics.identification.record_checks import CheckedRecord, check_periods, check_records
-from physics.identification.ssi import MIN_MAX_ORDER, ORDERS_PER_PEAK, subspace_diagram
+from physics.identification.ssi import MIN_MAX_ORDER, ORDERS_PER_PEAK
+from physics.identification.subspace import subspace_diagram
 
 __all__ = ["Decays", "ERAIdentification", "FreeResponse", "decay_spectrum", "find_decays", "free_response",
-           "identify_era", "mode_snr"]
+           "identify_era"]
 
 #: Order of the linear predictor (per channel) whose innovations mark the hits.
 PREDICTOR_ORDER = 24
@@ -65,8 +66,9 @@ FREE_LEAD_DB = 10.0
 FREE_DROP_NO_HIT_DB = 10.0
 #: Largest block Hankel dimension (block rows x channels) of the ERA.
 MAX_HANKEL_ROWS = 160
-#: A refined pole is kept when its energy over the decays is at least this many noise variances (:func:`mode_snr`;
-#: a pole fitted to white noise alone reaches about 2 ln(n_samples)).
+#: A refined pole is kept when its energy over the decays is at least this many noise variances
+#: (:func:`~physics.identification.damped_sinusoids.mode_snr`; a pole fitted to white noise alone reaches about
+#: 2 ln(n_samples)).
 MIN_MODE_SNR = 50.0
 #: A decay is cut where the fit's residual energy rises this many times over a window (a hit the segmentation
 #: missed; a cut in a free decay costs only its amplitudes), and fitted again; at most this many rounds.
@@ -413,16 +415,6 @@ def _band_spans(x, decays, fitted_spans, window):
         edges = [onset, *hits.tolist(), stop]
         out += [(a, b) for a, b in zip(edges[:-1], edges[1:]) if any(a <= o < b for o in firsts)]
     return out
-
-
-def mode_snr(fit: DampedSinusoidFit, lengths, sampling_frequency_hz) -> np.ndarray:
-    """Each fitted mode's energy over the decays (of ``lengths`` samples) and channels, in units of each channel's
-    noise variance, shape (n_modes,): about 2 per decay and channel for a pole fitted to noise alone."""
-    sigma = -fit.eigenvalues.real
-    decay = np.array([np.sum(np.exp(-2 * np.outer(np.arange(n) / sampling_frequency_hz, sigma)), axis=0)
-                      for n in lengths])                                    # (n_decays, n_modes)
-    amp2 = np.abs(fit.amplitudes) ** 2 / np.maximum(fit.noise_std, np.finfo(float).tiny)[None, :, None] ** 2
-    return 0.5 * np.einsum("dcm,dm->m", amp2, decay)
 
 
 def decay_spectrum(checked: CheckedRecord) -> SingularValueSpectrum:

@@ -31,13 +31,12 @@ from physics.identification.fdd import (
     unit_shapes,
 )
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
-from physics.identification.poles import (MAX_DAMPING, StabilisationDiagram, missed_clusters, missed_modes,
-                                         select_poles, stability_status)
+from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, missed_clusters, missed_modes, select_poles
 from physics.identification.record_checks import check_periods, check_records
+from physics.identification.subspace import poles_of_order, subspace_diagram
 from physics.modal import eigenvalues_from_modal
 
-__all__ = ["OutputCorrelations", "SSIIdentification", "SSIPass", "identify_ssi", "output_correlations", "ssi_poles",
-           "subspace_diagram"]
+__all__ = ["OutputCorrelations", "SSIIdentification", "SSIPass", "identify_ssi", "output_correlations", "ssi_poles"]
 
 @dataclass(frozen=True)
 class OutputCorrelations:
@@ -159,93 +158,6 @@ def _svd(R, block_rows):
     return U, s
 
 
-#: Largest condition number of the shifted observability matrix whose orders are solved from its one QR
-#: factorisation; an order beyond it is solved by its own least squares (as ``np.linalg.lstsq``, which drops
-#: singular values below ``eps max(m, n)`` of the largest).
-MAX_QR_CONDITION = 1e8
-
-
-def _observability(U, s, order):
-    """Observability matrix ``U_p sqrt(S_p)`` of the first ``order`` singular vectors, shape (l i, p)."""
-    return U[:, :order] * np.sqrt(s[:order])
-
-
-def _state_matrices(O, n_out, orders):
-    """State matrix of each order: the least-squares ``A_p`` of ``O_p[:-n_out] A_p = O_p[n_out:]`` with ``O_p`` the
-    first ``p`` columns of ``O``.
-
-    One QR factorisation ``O[:-n_out] = Q R`` serves every order (Döhler and Mevel 2012, fast multi-order SSI):
-    the first ``p`` columns are ``Q_p R_p`` with ``R_p`` the leading block of the triangular ``R``, so
-    ``A_p = R_p^-1 (Q^T O[n_out:])_p``. The condition number of ``R_p`` grows with ``p`` (singular values of a
-    column truncation interlace), so the orders up to the last one with a condition number below
-    :data:`MAX_QR_CONDITION` take this path and the others their own ``np.linalg.lstsq``.
-
-    Parameters
-    ----------
-    O : ndarray, shape (n_out * block_rows, k)
-    n_out : int
-    orders : sequence of int
-        Each at most ``k``.
-
-    Returns
-    -------
-    list of ndarray, shapes (p, p)
-    """
-    lo, hi = O[:-n_out], O[n_out:]
-    fast = [p for p in orders if p <= lo.shape[0]]
-    if fast:
-        Q, R = np.linalg.qr(lo[:, :max(fast)])
-        S = Q.T @ hi[:, :max(fast)]
-
-        def conditioned(p):
-            sv = np.linalg.svd(R[:p, :p], compute_uv=False)
-            return sv[-1] * MAX_QR_CONDITION > sv[0]
-
-        ok = np.array(fast)
-        if not conditioned(int(ok.max())):          # condition numbers rise with the order: bisect the last good one
-            a, b = 0, ok.size                       # ok[:a] good, ok[b:] bad
-            while a < b:
-                c = (a + b) // 2
-                a, b = (c + 1, b) if conditioned(int(ok[c])) else (a, c)
-            ok = ok[:a]
-        good = set(ok.tolist())
-    else:
-        good = set()
-    return [np.linalg.solve(R[:p, :p], S[:p, :p]) if p in good
-            else np.linalg.lstsq(lo[:, :p], hi[:, :p], rcond=None)[0] for p in orders]
-
-
-def _modal(O, n_out, A, fs):
-    """Continuous-time eigenvalues and (unnormalised) shapes ``C V`` of the state matrix ``A`` of ``O``'s first
-    ``len(A)`` columns; with one output the shapes are ones (a unit-norm shape of one entry, largest entry real
-    positive, is 1 whatever the eigenvector), and the eigenvectors are not computed."""
-    if n_out == 1:
-        return np.log(np.linalg.eigvals(A).astype(complex)) * fs, np.ones((1, A.shape[0]))
-    mu, V = np.linalg.eig(A)
-    return np.log(mu.astype(complex)) * fs, O[:n_out, :A.shape[0]] @ V
-
-
-def _physical(lam, phi, max_damping, band_hz):
-    """Frequencies (Hz), damping ratios, eigenvalues and shapes (rows; unit norm, largest entry real positive) of
-    the poles with ``Im > 0``, damping in ``(0, max_damping)`` and frequency in ``band_hz``, and the mask of those
-    poles."""
-    wn = np.abs(lam)
-    zeta = -lam.real / np.where(wn > 0, wn, 1)
-    fn = wn / (2 * np.pi)
-    keep = (lam.imag > 0) & (zeta > 0) & (zeta < max_damping) & (fn >= band_hz[0]) & (fn <= band_hz[1])
-    phi = phi[:, keep].astype(complex)
-    big = phi[np.argmax(np.abs(phi), axis=0), np.arange(phi.shape[1])]
-    phi = phi * (np.conj(big) / np.where(big != 0, np.abs(big), 1)) / np.linalg.norm(phi, axis=0)
-    return fn[keep], zeta[keep], lam[keep], phi.T, keep
-
-
-def _poles_of_order(U, s, n_out, order, fs, max_damping, band_hz):
-    """Continuous-time eigenvalues (Im > 0) and unit-norm shapes of the SSI model of one order."""
-    O = _observability(U, s, order)
-    A = np.linalg.lstsq(O[:-n_out], O[n_out:], rcond=None)[0]
-    return _physical(*_modal(O, n_out, A, fs), max_damping, band_hz)[:4]
-
-
 def ssi_poles(R, sampling_frequency_hz, block_rows, orders, band_hz, max_damping=MAX_DAMPING, freq_tol=0.01,
               damping_tol=0.05, mac_tol=0.98) -> StabilisationDiagram:
     """Stabilisation diagram of SSI-cov models of the given orders from one SVD.
@@ -274,42 +186,6 @@ def ssi_poles(R, sampling_frequency_hz, block_rows, orders, band_hz, max_damping
                             damping_tol, mac_tol)
 
 
-def subspace_diagram(U, s, n_out, orders, sampling_frequency_hz, band_hz, max_damping=MAX_DAMPING, freq_tol=0.01,
-                     damping_tol=0.05, mac_tol=0.98) -> StabilisationDiagram:
-    """Stabilisation diagram of the shift-invariant models of the given orders of one column space.
-
-    Parameters
-    ----------
-    U : ndarray, shape (n_out * block_rows, k)
-        Left singular vectors of a block Hankel/Toeplitz matrix whose block rows are successive samples (``n_out``
-        rows each), most significant first.
-    s : ndarray, shape (k,)
-        Their singular values.
-    n_out : int
-        Outputs (rows of a block).
-    orders, sampling_frequency_hz, band_hz, max_damping, freq_tol, damping_tol, mac_tol
-        As :func:`ssi_poles`.
-
-    Returns
-    -------
-    StabilisationDiagram
-        As :func:`ssi_poles`.
-    """
-    sizes = [min(int(p), U.shape[1]) for p in orders]
-    if not sizes:
-        fn = zeta = np.zeros(0)
-        order, lam, phi = np.zeros(0, int), np.zeros(0, complex), np.zeros((0, n_out), complex)
-    else:
-        O = _observability(U, s, max(sizes))
-        modal = [_modal(O, n_out, A, sampling_frequency_hz) for A in _state_matrices(O, n_out, sizes)]
-        order = np.concatenate([np.full(m[0].size, p // 2) for p, m in zip(orders, modal)])
-        fn, zeta, lam, phi, keep = _physical(np.concatenate([m[0] for m in modal]),
-                                             np.concatenate([m[1] for m in modal], axis=1), max_damping, band_hz)
-        order = order[keep]
-    status = stability_status(order, fn, zeta, phi, freq_tol, damping_tol, mac_tol)
-    return StabilisationDiagram(order, lam, fn, zeta, phi, status, tuple(float(b) for b in band_hz))
-
-
 def _segment_modes(cor, block_rows, order, band_hz, fn, shapes, max_damping):
     """Each selected mode's nearest pole (frequency within 5 %, shape MAC >= 0.8) in each segment's model."""
     f_seg = np.full((cor.sums.shape[0], fn.size), np.nan)
@@ -318,7 +194,7 @@ def _segment_modes(cor, block_rows, order, band_hz, fn, shapes, max_damping):
         return f_seg, z_seg
     for s, R in enumerate(cor.segment_correlations()):
         U, sv = _svd(R, block_rows)
-        f, z, _, phi = _poles_of_order(U, sv, R.shape[1], order, cor.sampling_frequency_hz, max_damping, band_hz)
+        f, z, _, phi = poles_of_order(U, sv, R.shape[1], order, cor.sampling_frequency_hz, max_damping, band_hz)
         if f.size == 0:
             continue
         m = np.abs(phi.conj() @ shapes) ** 2                           # (n_poles, n_modes), unit norms

@@ -5,8 +5,8 @@ import pytest
 from oma_records import chain_record
 
 from physics.errors import BeamDamageError
-from physics.identification.ssi import (MAX_QR_CONDITION, _state_matrices, _svd, identify_ssi, output_correlations,
-                                        subspace_diagram)
+from physics.identification.ssi import _svd, identify_ssi, output_correlations
+from physics.identification.subspace import MAX_QR_CONDITION, state_matrices, subspace_diagram
 from physics.modal import mac
 
 
@@ -151,5 +151,5 @@ def test_orders_the_shared_qr_cannot_take_are_solved_by_their_own_least_squares(
     O = rng.standard_normal((9, 12))
     O[:, 5] = O[:, 4] + 1e-3 / MAX_QR_CONDITION * rng.standard_normal(9)     # orders >= 6 ill-conditioned
     orders = [2, 4, 6, 8, 10]                                                 # 10 > 8 rows of O[:-1]
-    for p, A in zip(orders, _state_matrices(O, 1, orders)):
+    for p, A in zip(orders, state_matrices(O, 1, orders)):
         np.testing.assert_allclose(A, np.linalg.lstsq(O[:-1, :p], O[1:, :p], rcond=None)[0], rtol=1e-8, atol=1e-8)
