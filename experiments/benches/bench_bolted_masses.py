@@ -72,8 +72,8 @@ def noise_cell(check: dict) -> str:
     """``consistent (chi2/dof X)``, else per data block its chi2/dof (``fitted (no dof left)`` without dof)."""
     if check["noise_consistent"]:
         return f"consistent (chi2/dof {check['chi2_per_dof']:.2g})"
-    return ", ".join(f"{name} fitted (no dof left)" if b["dof"] == 0 else f"{name} chi2/dof {b['chi2_per_dof']:.2g}"
-                     for name, b in check["blocks"].items())
+    return ", ".join(f"{name} fitted (no dof left)" if b["dof"] <= 0 or not np.isfinite(b["chi2_per_dof"])
+                     else f"{name} chi2/dof {b['chi2_per_dof']:.2g}" for name, b in check["blocks"].items())
 
 
 def row(beam_file: Path, measured: Path, truth: dict) -> list[str]:
