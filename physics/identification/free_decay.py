@@ -101,6 +101,9 @@ class Decays:
         First sample of each decay's free response: the first sample of its hit (0 for the decay under way when
         the record starts). The samples from it to ``starts`` hold the hit, and the first milliseconds of the
         decay that the record's predictor fits worst.
+    energy_window : int
+        Samples over which a hit must add energy to be one (:func:`_adds_energy`): four predictor orders, at least
+        a period of the lowest mode when it is known.
     """
 
     hits: np.ndarray
@@ -109,6 +112,7 @@ class Decays:
     drop_db: float
     lead_db: float = np.nan
     onsets: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    energy_window: int = 0
 
 
 @dataclass(frozen=True)
@@ -243,6 +247,7 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
     n_ch, n = x.shape
     p = int(min(PREDICTOR_ORDER, max(2, n // 20)))
     least = 4 * p if min_samples is None else int(min_samples)
+    w = 4 * p if lowest_hz is None else max(4 * p, int(np.ceil(checked.sampling_frequency_hz / lowest_hz)))
     innovation = _innovations(x)
     over = np.flatnonzero(innovation > HIT_SIGMA ** 2 * n_ch)
     r_first, r_last = _rises(x, innovation, p)
@@ -252,7 +257,6 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
         gaps = np.flatnonzero(cut)
         firsts, lasts = over[np.concatenate([[0], gaps + 1])], over[np.concatenate([gaps, [over.size - 1]])]
         lasts = np.minimum(lasts, _loudest(x, firsts, lasts) + p // 4)
-        w = 4 * p if lowest_hz is None else max(4 * p, int(np.ceil(checked.sampling_frequency_hz / lowest_hz)))
         keep = _adds_energy(x, firsts, lasts, w)
         firsts, lasts = firsts[keep], lasts[keep]
     else:
@@ -273,7 +277,7 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
         lead_db = float(10 * np.log10(max(np.mean(seg.var(axis=1)), np.finfo(float).tiny)
                                       / max(np.mean(x[:, :head].var(axis=1)), np.finfo(float).tiny)))
     return Decays(lasts.astype(int), np.array([a for a, _, _ in spans], int), np.array([b for _, b, _ in spans], int),
-                  drop_db, lead_db, np.array([o for _, _, o in spans], int))
+                  drop_db, lead_db, np.array([o for _, _, o in spans], int), w)
 
 
 def free_response(checked: CheckedRecord) -> FreeResponse:
@@ -544,9 +548,7 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
             break
         parts, spans = [split[j] for j in kept], [split_spans[j] for j in kept]
     x = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
-    p = int(min(PREDICTOR_ORDER, max(2, x.shape[1] // 20)))
-    window = max(4 * p, int(np.ceil(fs / lowest))) if lowest else 4 * p        # find_decays' window
-    full = [x[:, a:b] for a, b in _band_spans(x, decays, fitted_spans, window)]
+    full = [x[:, a:b] for a, b in _band_spans(x, decays, fitted_spans, decays.energy_window)]
     idx, bands = np.zeros(0, int), None
     lam = f_std = z_std = np.zeros(0)
     amps = []                                           # each mode's amplitudes, (n_decays, n_channels)
