@@ -166,11 +166,8 @@ def pair_modes_by_frequency(frequencies_hz, nominal_hz, tolerance: float | None 
     order = np.argsort(f)
     raw = np.asarray(RATIO_TOLERANCE if tolerance is None else tolerance, float)
     skip = float(np.log1p(np.max(raw, initial=0.0)) ** 2)            # an identified mode left unpaired
-    tol = pairing_bands(nominal, raw)
-    cost = np.log(f[order, None] / nominal[None]) ** 2                 # (k, m)
-    cost = np.where(cost > np.log1p(tol)[None] ** 2, np.inf, cost)
-    if shape_mac is not None:
-        cost = np.where(np.asarray(shape_mac, float)[order] < MIN_PAIR_MAC, np.inf, cost)
+    cost = np.where(_admissible(f, nominal, raw, shape_mac)[order], np.log(f[order, None] / nominal[None]) ** 2,
+                    np.inf)                                            # (k, m)
     k, m = cost.shape
     total = np.full((k + 1, m + 1), np.inf)                            # order-preserving alignment, O(k m)
     total[0, :] = 0.0
@@ -193,6 +190,15 @@ def pair_modes_by_frequency(frequencies_hz, nominal_hz, tolerance: float | None 
     out = np.empty(f.size, int)
     out[order] = best
     return out
+
+
+def _admissible(frequencies_hz, nominal_hz, tolerance, shape_mac) -> np.ndarray:
+    """Which identified mode may pair with which nominal mode, bool (k, m): within the mode's pairing band
+    (:func:`pairing_bands`) and, with ``shape_mac``, a MAC of at least :data:`MIN_PAIR_MAC`."""
+    nominal = np.asarray(nominal_hz, float)
+    band = np.log1p(pairing_bands(nominal, tolerance))
+    ok = np.log(np.asarray(frequencies_hz, float)[:, None] / nominal[None]) ** 2 <= band[None] ** 2
+    return ok if shape_mac is None else ok & (np.asarray(shape_mac, float) >= MIN_PAIR_MAC)
 
 
 def pairing_bands(nominal_hz, tolerance=RATIO_TOLERANCE) -> np.ndarray:
@@ -295,10 +301,8 @@ def prefer_shared_poles(frequencies_hz, which, nominal_hz, tolerance=None, shape
     """
     f = [np.asarray(x, float) for x in frequencies_hz]
     out = [np.array(w, int) for w in which]
-    nominal = np.asarray(nominal_hz, float)
-    band = np.log1p(pairing_bands(nominal, RATIO_TOLERANCE if tolerance is None else tolerance))
-    inside = [(np.abs(np.log(x[:, None] / nominal[None])) <= band[None])           # (k_t, m)
-              & (True if s is None else np.asarray(s, float) >= MIN_PAIR_MAC) for x, s in zip(f, shape_mac)]
+    tol = RATIO_TOLERANCE if tolerance is None else tolerance
+    inside = [_admissible(x, nominal_hz, tol, s) for x, s in zip(f, shape_mac)]          # (k_t, m)
     for j in np.intersect1d(out[0][out[0] >= 0], out[1][out[1] >= 0]):
         now = [int(np.flatnonzero(w == j)[0]) for w in out]
         cand = [np.r_[i, np.flatnonzero((w < 0) & ok[:, j])] for i, w, ok in zip(now, out, inside)]
