@@ -7,7 +7,8 @@ beam with springs at both ends (:mod:`.fem`), damping, FRFs and a measurement ch
 slits (:mod:`.pairs`), a layered sandwich beam with face-core debonds (:mod:`.layered`) and pairs with a debond, a
 slit or a mass (:mod:`.kind_pairs`), hidden-effect cases (:mod:`.effects`) and a catalogue of beams on
 every support with their own sensors and bands (:mod:`.beams`), a steel cantilever with bolted masses
-(:mod:`.bolted`) and a monitoring series of one cantilever (:mod:`.series`).
+(:mod:`.bolted`), a one-accelerometer impact test of a steel cantilever (:mod:`.one_sensor`) and a monitoring
+series of one cantilever (:mod:`.series`).
 ``python -m experiments.second_sim pairs|kinds|effects|beams|bolted|series`` writes them.
 
 The names below load on first use (the CLI limits BLAS threads before numpy loads).

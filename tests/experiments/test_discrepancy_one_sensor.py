@@ -1,4 +1,4 @@
-"""``beam-damage discrepancy`` on a one-accelerometer cantilever (tests/one_sensor_cantilever.py: the independent
+"""``beam-damage discrepancy`` on a one-accelerometer cantilever (experiments/second_sim/one_sensor.py: the independent
 simulator's accelerance UFF, 0.5-1600 Hz, a noise floor rising towards low frequency; the truth's EI 10 % above the
 beam file's 94.5 N m^2, its mass as the beam file's, the accelerometer's 5 g on the beam): identify's one-sensor
 modal.json and frequencies alone calibrate EI, with the mass in the beam file or without it; an implausible pairing
@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 
-import one_sensor_cantilever as osc
+import experiments.second_sim.one_sensor as osc
 from experiments.cli import main
 
 TRUE_EI = 1.1 * osc.EI_NM2                        # 103.95 N m^2

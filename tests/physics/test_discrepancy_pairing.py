@@ -1,6 +1,6 @@
 """The discrepancy workflow's pairing (classify's rule, learn.pairs.measured.pair_modes_by_frequency), its stop before
 any fit, the stop on a failed noise check, and one sensor (shapes optional) on the one-accelerometer cantilever of
-tests/one_sensor_cantilever.py (nominal modes 22.21, 138.8, 386.3, 757.9, 1261 Hz, the accelerometer's 5 g in the
+experiments/second_sim/one_sensor.py (nominal modes 22.21, 138.8, 386.3, 757.9, 1261 Hz, the accelerometer's 5 g in the
 beam file)."""
 
 import re
@@ -9,7 +9,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-import one_sensor_cantilever as osc
+import experiments.second_sim.one_sensor as osc
 from learn.pairs.measured import pair_modes_by_frequency
 from physics import discrepancy as dsc
 from physics.beam import load_beam

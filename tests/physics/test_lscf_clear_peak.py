@@ -1,4 +1,4 @@
-"""LSCF on a one-accelerometer cantilever (tests/one_sensor_cantilever.py, the independent simulator): the 22 Hz
+"""LSCF on a one-accelerometer cantilever (experiments/second_sim/one_sensor.py, the independent simulator): the 22 Hz
 mode, 2 % damped and 24 dB below the higher modes' peaks over a floor rising towards low frequency, is plainly
 visible (10 times the floor around it) and is identified with the default band, 0.5-1600 Hz."""
 
@@ -8,7 +8,7 @@ import warnings
 import numpy as np
 import pytest
 
-import one_sensor_cantilever as osc
+import experiments.second_sim.one_sensor as osc
 
 lscf = importlib.import_module("physics.identification.lscf")
 

@@ -12,9 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.second_sim.fem import Beam, PointMass, assemble, modes
-from experiments.second_sim.response import Damping, receptance
-from experiments.second_sim.writers import convert_receptance, write_uff
+from .fem import Beam, PointMass, assemble, modes
+from .response import Damping, receptance
+from .writers import convert_receptance, write_uff
 
 __all__ = ["DENSITY", "EI_NM2", "LENGTH_M", "MASS_PER_LENGTH", "SENSOR_X_M", "HAMMER_X_M", "beam_toml",
            "one_sensor_test", "truth_frequencies_hz",
