@@ -51,7 +51,6 @@ Writes ``detection.json`` and ``detection.md`` in ``--out``.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 from pathlib import Path
@@ -61,6 +60,8 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
+from experiments.benches.harness import parser, publish  # noqa: E402
+from experiments.benches.plain_tests import plain_alarms  # noqa: E402
 from experiments.second_sim.series import (FrequencySeriesConfig, SeriesConfig, frequency_series,  # noqa: E402
                                            mass_loss_pattern, uniform_stiffness_pattern)
 from learn.monitor.charts import run_charts  # noqa: E402
@@ -68,9 +69,8 @@ from learn.monitor.normal_models import NORMAL_MODELS  # noqa: E402
 from learn.monitor.coverage import coverage, environment_coordinates  # noqa: E402
 from learn.monitor.statistics import SHARES, detect, environmental, held_out_statistics  # noqa: E402
 from physics.io import atomic_write_text  # noqa: E402
-from experiments.studies.doc_tables import write_table  # noqa: E402
 
-__all__ = ["CASES", "main", "methods_on", "plain_tests"]
+__all__ = ["CASES", "main", "methods_on"]
 
 SIZES_PCT = (0.25, 0.5, 1.0, 1.5, 2.0)
 DAMAGES = {"mode 1": (1,), "uniform EI": "stiffness", "mass loss": "mass"}
@@ -103,19 +103,6 @@ CASES = ("daily", "30min", "lab", "lab6")
 PLOTTING = "weibull"
 
 
-def plain_tests(F, nb: int, rate: float, sign: float = 1.0) -> dict:
-    """The plainest tests' alarms (n,): the mean relative change from the baseline medians below the baseline's
-    ``rate`` quantile, and any mode's relative change below its baseline ``rate / m`` quantile (``sign=-1``: a
-    rise above the ``1 - rate`` quantiles, told that the change raises the frequencies)."""
-    rel = sign * (F / np.nanmedian(F[:nb], axis=0) - 1.0)
-    mean = np.nanmean(rel, axis=1)
-    per = np.nanquantile(rel[:nb], rate / F.shape[1], axis=0, method=PLOTTING)
-    lo, hi = np.nanquantile(mean[:nb], [rate / 2, 1 - rate / 2], method=PLOTTING)
-    return {"plain shift": mean < np.nanquantile(mean[:nb], rate, method=PLOTTING),
-            "plain shift, both signs": (mean < lo) | (mean > hi),
-            "plain per mode": (rel < per).any(axis=1)}
-
-
 def methods_on(F, C, nb: int, model_name: str, rate: float, seed: int = 0, sign: float = 1.0, held=None,
                shares=None) -> dict:
     """Every method's alarms (n,) on one series (baseline: the first ``nb`` tests; ``held``: their
@@ -145,7 +132,9 @@ def methods_on(F, C, nb: int, model_name: str, rate: float, seed: int = 0, sign:
         out["extrapolated apart"] &= ~(coverage(names, E, b_idx, rest).extrapolated & env_only)
     out["chart"] = run_charts(det.vectors, b_idx, rate, seed=seed).alarm
     out["chart, Šidák"] = run_charts(det.vectors, b_idx, rate, seed=seed, combination="sidak").alarm
-    out.update(plain_tests(F, nb, rate, sign))
+    one, both = (plain_alarms(F, nb, rate, sides=s, sign=sign, method=PLOTTING) for s in (1, 2))
+    out.update({"plain shift": one["plain shift"], "plain shift, both signs": both["plain shift"],
+                "plain per mode": one["plain per mode"]})
     return out
 
 
@@ -236,14 +225,12 @@ def false_alarm_table(rows: list) -> str:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--out", default="out/bench_detection")
+    p = parser(__file__, __doc__, docs="monitoring.md", out="out/bench_detection")
     p.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3])
     p.add_argument("--rate", type=float, default=0.01)
     p.add_argument("--cases", nargs="+", choices=CASES, default=list(CASES))
     p.add_argument("--shares", nargs="+", metavar="NAME=WEIGHT",
                    help="the combined column's share of each statistic (default: learn.monitor.statistics.SHARES)")
-    p.add_argument("--docs", action="store_true", help="write the table into docs/monitoring.md")
     a = p.parse_args(argv)
     shares = None
     if a.shares:
@@ -262,14 +249,12 @@ def main(argv=None) -> int:
     atomic_write_text(out / "detection.json", json.dumps({"config": vars(a), "rows": rows}, indent=1))
     atomic_write_text(out / "detection.md", md + "\n")
     print(md)
-    if a.docs:
-
-        cases = "" if list(a.cases) == list(CASES) else " --cases " + " ".join(a.cases)
-        cmd = ("`python -m experiments.benches.bench_detection --seeds " + " ".join(map(str, a.seeds))
-               + f" --rate {a.rate:g}{cases} --docs`")
-        write_table("monitoring.md", "detection", md + f"\n\nDetection in % of the damaged tests, averaged over "
-                    f"{len(a.seeds)} seeds; false alarms in % of the intact series' monitoring tests (the table: "
-                    f"their mean over the seeds). Written by {cmd}.")
+    cases = "" if list(a.cases) == list(CASES) else " --cases " + " ".join(a.cases)
+    cmd = ("`python -m experiments.benches.bench_detection --seeds " + " ".join(map(str, a.seeds))
+           + f" --rate {a.rate:g}{cases} --docs`")
+    publish(a, "detection", md + f"\n\nDetection in % of the damaged tests, averaged over {len(a.seeds)} seeds; "
+            f"false alarms in % of the intact series' monitoring tests (the table: their mean over the seeds). "
+            f"Written by {cmd}.")
     return 0
 
 

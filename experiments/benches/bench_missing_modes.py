@@ -43,7 +43,7 @@ import numpy as np
 
 from experiments.benches.bench_foreign import score, set_dir, write_sets
 from experiments.benches.study_beams import score_beam
-from experiments.benches.harness import cli_json, parser, table, write_table
+from experiments.benches.harness import cli_json, parser, publish, table
 from learn.explanations.classical import run_classical
 from learn.network.estimator import DamageClassifier
 from learn.network.evaluate import metrics
@@ -327,10 +327,10 @@ def main(argv=None) -> int:
     atomic_write_text(out / "missing_modes.md", text + ("\n" + swept_text if swept_text else ""))
     print(json.dumps({"held_out": held, "simulator": sim, "beam": beam, "sweep": swept}, indent=1) if a.json
           else text + ("\n" + swept_text if swept_text else ""))
-    if a.docs and (held or sim or beam):
-        write_table("classifier.md", "missing-modes", text.strip())
-    if a.docs and swept:
-        write_table("classifier.md", "missing-modes-sweep", swept_text.strip())
+    if held or sim or beam:
+        publish(a, "missing-modes", text.strip())
+    if swept:
+        publish(a, "missing-modes-sweep", swept_text.strip())
     return 0
 
 

@@ -37,7 +37,7 @@ from experiments.benches.bench_foreign import classify_set, score, write_sets
 from experiments.second_sim.ambient import ambient_record, write_npz
 from experiments.second_sim.fem import Beam, Slit
 from experiments.second_sim.pairs import NODE_X_M
-from experiments.benches.harness import cli_json, parser, table, write_table
+from experiments.benches.harness import cli_json, parser, publish, table
 
 __all__ = ["beams_of", "main"]
 
@@ -113,8 +113,7 @@ def main(argv=None) -> int:
     md = markdown(rows, args)
     sys.stdout.write(md)
     (out / "output_only.json").write_text(json.dumps({"config": vars(args), "rows": rows}, indent=1) + "\n")
-    if args.docs:
-        write_table("identification.md", args.table, md)
+    publish(args, args.table, md)
     return 0
 
 

@@ -48,7 +48,6 @@ the tests whose deviation is the smaller.
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 import time
@@ -58,7 +57,7 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, publish
 from physics.identification.methods import METHODS
 from physics.errors import BeamDamageError
 from physics.identification.fft_peak import identify_fft_peaks
@@ -87,7 +86,6 @@ SENSORS = np.array([0.25, 0.5, 0.75, 1.0])
 #: An identified mode within this relative distance of a truth mode, and nearer to it than to any other, is its
 #: estimate.
 MATCH = 0.03
-DOCS_PAGE, DOCS_BLOCK = "identification.md", "precision"
 REAL_DIR = Path(__file__).resolve().parents[1] / "data" / "real"
 
 
@@ -415,12 +413,10 @@ def real_markdown(rows) -> str:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = parser(__file__, __doc__, docs="identification.md", seed=0)
     p.add_argument("--quick", action="store_true", help="a tiny run (2 cases, 3 records each)")
     p.add_argument("--reps", type=int, default=None, help="free decays per case (default 12; ambient: a third)")
-    p.add_argument("--seed", type=int, default=0)
     p.add_argument("--real", default=str(REAL_DIR), help="folder of the real repeated-test sets ('' for none)")
-    p.add_argument("--docs", action="store_true", help="write the table into docs/identification.md")
     args = p.parse_args(argv)
     from tqdm import tqdm
 
@@ -450,8 +446,7 @@ def main(argv=None) -> int:
         (f" --reps {args.reps}" if args.reps else "")
     md = markdown(rows, reps, command, real)
     print(md)
-    if args.docs:
-        write_table(DOCS_PAGE, DOCS_BLOCK, md)
+    publish(args, "precision", md)
     return 0
 
 

@@ -26,7 +26,7 @@ import numpy as np
 
 from experiments.benches.study_beams import run_beam
 from experiments.second_sim.beams import TEST_AS_RUN, excited_modes
-from experiments.benches.harness import cli_json, parser, write_table
+from experiments.benches.harness import cli_json, parser, publish
 from physics.io import atomic_write_text
 
 __all__ = ["main", "modes_found"]
@@ -138,8 +138,7 @@ def main(argv=None) -> int:
         return 0
     md = markdown(table)
     print(md)
-    if a.docs:
-        write_table("any-beam.md", "test-as-run", md)
+    publish(a, "test-as-run", md)
     return 0
 
 
