@@ -128,7 +128,7 @@ def main(argv=None):
         print(f"{r['subset']:<42}{r['method']:<24}" + "".join(f"{fmt(r[c]):>14}" for c in cols))
 
     # ---------------------------------------------------------------- beam 5
-    res5 = beam5(model, out / "beam5")
+    res5 = beam5(model)
     (out / "beam5.json").write_text(json.dumps(res5, indent=1, default=float))
     print("\n== Beam 5 (thesis Tables 4.5/4.6) ==")
     for k, v in res5.items():
@@ -243,7 +243,7 @@ def _robustness(data_dir: Path, test_dirs, model, test: dict) -> list:
     return rob
 
 
-def beam5(model, out_dir) -> dict:
+def beam5(model) -> dict:
     """Classify the thesis's beam 5 from its measured modal data and from FRFs of its identified models."""
     data = thesis.load("beams")["beams"]["5"]
     dofs = ["2:y", "3:y", "4:y", "5:y"]

@@ -66,7 +66,7 @@ def beams_of(truth: dict):
     return base, cur
 
 
-def output_only_pairs(pair_dir: Path, truth: list, out: Path, minutes: float, seed: int) -> Path:
+def output_only_pairs(truth: list, out: Path, minutes: float, seed: int) -> Path:
     """Record, write and identify both tests of every pair output-only; returns the directory of the modal JSON."""
     out.mkdir(parents=True, exist_ok=True)
     for t in truth:
@@ -99,7 +99,7 @@ def main(argv=None) -> int:
     out = Path(args.out)
     truth = write_sets(out, ["eb"], args.n, args.seed)["eb"]
     pair_dir = out / "pairs" / "eb"
-    oma_dir = output_only_pairs(pair_dir, truth, out / "output-only", args.minutes, args.seed)
+    oma_dir = output_only_pairs(truth, out / "output-only", args.minutes, args.seed)
     rows = []
     for model in args.model:
         for route, directory, ext in (("FRF (UFF, LSCF/LSFD)", pair_dir, "uff"),

@@ -1,15 +1,5 @@
-"""The plainest tests the monitoring benches set beside ``monitor``: each test's relative change of the modal
-frequencies from their baseline medians, alarmed beyond the baseline's own quantiles.
-
-* ``plain shift``: the mean relative change of the modes beyond the baseline's ``rate`` quantile;
-* ``plain per mode``: any mode's relative change beyond that mode's baseline ``rate / m`` quantile (``m`` modes).
-
-One side (``sides=1``): below the quantile, the change's sign told (``sign=-1``: a rise, above the ``1 - rate``
-quantile). Both sides (``sides=2``): the rate split between the tails, below the ``rate / 2`` or above the
-``1 - rate / 2`` quantile (per mode ``rate / (2 m)``). ``method`` is :func:`numpy.nanquantile`'s rule: ``"linear"``,
-or ``"weibull"``, the ``k``-th smallest of ``n`` values at level ``k / (n + 1)`` as
-:func:`~learn.monitor.alarm_threshold.threshold` reads its empirical quantile.
-"""
+"""The plainest tests the monitoring benches set beside ``monitor``: alarms on the modal frequencies' relative change
+from their baseline medians, beyond the baseline's own quantiles."""
 
 from __future__ import annotations
 
@@ -19,28 +9,15 @@ __all__ = ["plain_alarms"]
 
 
 def plain_alarms(F, n_baseline: int, rate: float, *, sides: int, method: str, sign: float = 1.0) -> dict:
-    """The plainest tests' alarms on frequencies ``F`` (n, m) (NaN: not found), the baseline its first
-    ``n_baseline`` rows.
+    """``"plain shift"``: the mean relative change of the modes beyond the baseline's ``rate`` quantile; ``"plain per
+    mode"``: any mode's relative change beyond its baseline ``rate / m`` quantile. Each bool (n,); a test without any
+    frequency found alarms neither.
 
-    Parameters
-    ----------
-    F : array_like (n, m)
-        Each test's frequency (Hz) of each mode.
-    n_baseline : int
-        The first tests, the baseline period.
-    rate : float
-        The false-alarm rate of each test on the baseline.
-    sides : {1, 2}
-        1: alarm below the quantile; 2: below the lower or above the upper, the rate split between them.
-    method : str
-        The quantile rule of :func:`numpy.nanquantile` (``"linear"``, ``"weibull"``).
-    sign : float
-        The relative changes are multiplied by it first (``-1``: one side reads a rise).
-
-    Returns
-    -------
-    dict
-        ``"plain shift"`` and ``"plain per mode"``: bool (n,). A test without any frequency found alarms neither.
+    ``F`` (n, m): each test's frequency (Hz) of each mode, NaN where not found; the baseline its first ``n_baseline``
+    rows. The changes are multiplied by ``sign`` first (``-1``: a rise is the alarmed side). ``sides=1``: below the
+    quantile; ``sides=2``: the rate split between the tails, below the ``rate / 2`` or above the ``1 - rate / 2``
+    quantile (per mode ``rate / (2 m)``). ``method``: :func:`numpy.nanquantile`'s rule, ``"linear"`` or ``"weibull"``
+    (the ``k``-th smallest of ``n`` at level ``k / (n + 1)``, as :func:`~learn.monitor.alarm_threshold.threshold`).
     """
     if sides not in (1, 2):
         raise ValueError(f"sides must be 1 or 2, not {sides!r}")
