@@ -235,13 +235,14 @@ def _adds_energy(x, firsts, lasts, w):
     return after * np.clip(np.minimum(w, firsts), 1, None) >= HIT_GAIN * before * w
 
 
-def _hit_runs(x, p):
+def _hit_runs(x, p, rises=True):
     """The runs of samples of ``x`` (mean removed, shape (n_channels, n_samples)) that hold a hit: the samples
-    whose innovation exceeds :data:`HIT_SIGMA` robust standard deviations and the rises (:func:`_rises`), runs
-    closer than ``p`` samples one, a rise within a run starting a new one: ``(first, last)`` sample arrays."""
+    whose innovation exceeds :data:`HIT_SIGMA` robust standard deviations and (with ``rises``) the rises
+    (:func:`_rises`), runs closer than ``p`` samples one, a rise within a run starting a new one: ``(first, last)``
+    sample arrays."""
     innovation = _innovations(x)
     over = np.flatnonzero(innovation > HIT_SIGMA ** 2 * x.shape[0])
-    r_first, r_last = _rises(x, innovation, p)
+    r_first, r_last = _rises(x, innovation, p) if rises else (np.zeros(0, int), np.zeros(0, int))
     over = np.unique(np.concatenate([over, r_first, r_last]))
     if not over.size:
         return np.zeros(0, int), np.zeros(0, int)
@@ -260,12 +261,13 @@ def _content_decimation(checked):
     return max(1, min(q, checked.signals.shape[1] // (MIN_DECIMATED_ORDERS * PREDICTOR_ORDER)))
 
 
-def _low_passed(x, q):
-    """``x`` low-pass filtered (zero phase, 8th-order Butterworth) to 0.8 of the Nyquist rate of a decimation by
-    ``q``, along its last axis."""
-    from scipy import signal  # scipy.fft/signal/ndimage: about 1 s to import, only output-only identification
-
-    return signal.sosfiltfilt(signal.butter(8, 0.8 / q, output="sos"), x, axis=-1)
+def _block_means(x, q):
+    """The means of ``x`` (shape (n_channels, n_samples)) over consecutive blocks of ``q`` samples (the last
+    partial block dropped): a decimation whose sample ``k`` holds samples ``kq`` to ``(k + 1)q - 1`` alone, so
+    that a hit it shows lies at or before ``(k + 1)q - 1``; its white noise falls by ``q`` as through an ideal
+    low-pass filter."""
+    m = x.shape[1] // q
+    return x[:, :m * q].reshape(x.shape[0], m, q).mean(axis=2)
 
 
 def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Decays:
@@ -276,10 +278,12 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
     sharp rise of the record's energy (:data:`HIT_RISE`; an impulse on a displacement or strain record, or a
     release, shows only a small innovation) placed at the largest innovation near it; hits closer than the
     predictor's order are one, and a hit that adds no energy (:func:`_adds_energy`) is none. An oversampled record
-    is searched again at :data:`CONTENT_RATE` times its highest clear peak (low-pass filtered and decimated,
-    :func:`_content_decimation`): its noise is white over the whole rate while a hit's step, spread over many
-    samples, stands out only in the band of the modes (a scope's capture, 1000 samples per period of its first
-    mode); a hit found there alone is kept, placed to the decimated sample. Each decay runs from
+    is searched again for innovations at :data:`CONTENT_RATE` times its highest clear peak (block means,
+    :func:`_content_decimation`): its noise is white over the whole rate while the response to a hit, spread over
+    many samples, stands out only in the band of the modes (a scope's capture, hundreds of samples per period of
+    its first mode). A hit found there alone starts after the block that shows it (never before the hit, at most
+    two blocks after it). Not for rises: at that rate a stationary response's own energy rises fourfold within a
+    period at random. Each decay runs from
     the sample after a hit to the sample before the next one (or
     the record's end); the part before the first hit (or the whole record, without a hit) from its loudest sample
     on is a decay when its energy falls steadily (:func:`_decays_without_hit`). Decays
@@ -293,8 +297,9 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
     firsts, lasts = _hit_runs(x, p)
     q = _content_decimation(checked)
     if q > 1:                                           # the hits only the record at its content's rate shows
-        f_dec, l_dec = _hit_runs(_low_passed(x, q)[:, ::q], int(min(PREDICTOR_ORDER, max(2, (n // q) // 20))))
-        f_dec, l_dec = f_dec * q, np.minimum(l_dec * q + q - 1, n - 1)
+        f_dec, l_dec = _hit_runs(_block_means(x, q), int(min(PREDICTOR_ORDER, max(2, (n // q) // 20))), rises=False)
+        l_dec = np.minimum(l_dec * q + q - 1, n - 1)
+        f_dec = np.minimum((f_dec + 1) * q, l_dec)      # the block before may hold the hit's first samples
         near = np.any((f_dec[:, None] <= lasts[None, :] + p) & (l_dec[:, None] >= firsts[None, :] - p), axis=1)
         order = np.argsort(np.concatenate([firsts, f_dec[~near]]), kind="stable")
         firsts = np.concatenate([firsts, f_dec[~near]])[order]
@@ -384,7 +389,9 @@ def _decimated(checked, q, decays):
     spans = list(zip(decays.onsets.tolist(), decays.starts.tolist(), decays.stops.tolist()))
     if q == 1:
         return [x[:, a:b] for _, a, b in spans], spans
-    x = _low_passed(x, q)
+    from scipy import signal  # scipy.fft/signal/ndimage: about 1 s to import, only output-only identification
+
+    x = signal.sosfiltfilt(signal.butter(8, 0.8 / q, output="sos"), x, axis=1)
     margin = 4 * q                                   # the filter's response to the hit, decimated samples
     spans = [(o, a + margin, b) for o, a, b in spans if b - a > margin]
     return [x[:, a:b:q] for _, a, b in spans], spans
