@@ -43,8 +43,8 @@ def test_modes_beyond_the_model_order_are_refined_from_their_clear_peaks():
 
 def test_a_seed_is_refined_to_the_exact_pole_and_a_peak_a_mode_holds_is_no_seed():
     """Noise-free decay of 23 and 97 Hz: with 23 Hz held, the 97-Hz peak is the one unheld; started at its peak
-    it converges to the closed-form pole. A seed at the held mode's peak is dropped (one mode per peak: the held mode
-    is subtracted, and what its band's fit finds lies within 1 % of it)."""
+    it converges to the closed-form pole. A seed at the held mode's peak is dropped (one mode per peak; its band's
+    fit of two poles at one is singular, so the 97-Hz band keeps the 23-Hz tail in its background: 1e-5 off)."""
     fn, zeta = np.array([23.0, 97.0]), np.array([0.01, 0.015])
     y = impact_record(FS, 3000, fn, zeta, np.array([[1.0, 0.8]]), [0.0], 0.0, 0)[0]
     peaks = decay_peaks(decay_spectrum(check_records(y, FS)))
@@ -55,9 +55,9 @@ def test_a_seed_is_refined_to_the_exact_pole_and_a_peak_a_mode_holds_is_no_seed(
     got = refine_seeds([y], FS, held, peaks, seeds, 0.2)
     np.testing.assert_allclose(got.eigenvalues, poles(fn[1:], zeta[1:]), rtol=1e-9)
     assert got.peak_hz.tolist() == [peaks.frequency_hz[1]]
-    both = refine_seeds([y], FS, held, peaks, [0, 1], 0.2)      # the 23-Hz seed at the held pole
+    both = refine_seeds([y], FS, held, peaks, [0, 1], 0.2)      # the 23-Hz seed and the held pole: one band
     assert both.peak_hz.tolist() == [peaks.frequency_hz[1]]
-    np.testing.assert_allclose(both.eigenvalues, poles(fn[1:], zeta[1:]), rtol=1e-9)
+    np.testing.assert_allclose(np.abs(both.eigenvalues) / (2 * np.pi), fn[1:], rtol=1e-4)
     assert unheld_peaks(peaks, [], (30.0, 400.0)).tolist() == [1]               # the band's peaks only
 
 
@@ -76,28 +76,30 @@ def test_a_sinusoid_that_lasts_the_record_is_no_seeded_mode():
     assert got.eigenvalues.size == 0 and got.tried_hz.size == 1
 
 
-def test_a_seed_in_a_held_modes_band_is_fitted_beside_it_held_fixed():
-    """A weak 63-Hz mode on the flank of a held 60-Hz one (one band): the seed is fitted with the held mode's pole
-    and amplitude fixed, which is the seed's lone band fit of the record less the held mode's decay (computed
-    here in time); the held pole is not refitted (given 0.02 Hz off, the seed's fit still sits beside it there)."""
+def test_a_seed_is_refined_in_its_own_band_the_held_modes_outside_it_fixed():
+    """A weak 63-Hz mode on the flank of a held 60-Hz one, and a held 150-Hz mode: the 60-Hz mode shares the seed's
+    band and is refitted with it (given 0.02 Hz off, the seed still comes out exact); the 150-Hz mode is held fixed
+    with the amplitude given (0.6 for 0.5): the seed is the band fit of the record less that decay (computed here in
+    time), not of the record with 150 Hz refitted."""
     n = 3000
     fn, zeta, amp = np.array([60.0, 63.0, 150.0]), np.array([0.01, 0.02, 0.01]), np.array([1.0, 0.15j, 0.5])
     lam = poles(fn, zeta)
     k = np.arange(n) / FS
     y = np.real(amp @ np.exp(np.outer(lam, k)))[None]
     held = poles([60.02, 150.0], zeta[[0, 2]])                     # 60 Hz a little off, as an estimate is
-    held_amps = np.array([[[1.0, 0.5]]], complex)
+    held_amps = np.array([[[1.0, 0.6]]], complex)                  # 150 Hz's amplitude 20 % off
     peaks = ClearPeaks(np.array([189]), np.array([63.0]), np.array([20.0]), np.array([[180, 200]]),
                        np.array([1.0]))
+    start = seed_poles(peaks.frequency_hz, peaks.tolerance_hz, n / FS)
     got = refine_seeds([y], FS, held, peaks, [0], 0.2, held_amplitudes=held_amps)
-    rest = y - np.real(held_amps[0, 0] @ np.exp(np.outer(held, k)))[None]
-    alone = refine_in_bands([rest], FS, seed_poles(peaks.frequency_hz, peaks.tolerance_hz, n / FS))
-    assert got.eigenvalues.size == 1 and alone.converged[0]
-    np.testing.assert_allclose(got.eigenvalues, alone.eigenvalues, rtol=1e-10)
-    np.testing.assert_allclose(got.amplitudes[0, 0], alone.amplitudes[0, 0], rtol=1e-8)
-    assert abs(got.eigenvalues[0] / lam[1] - 1) > 1e-4                     # the held mode's error moves it
-    exact = refine_seeds([y], FS, lam[[0, 2]], peaks, [0], 0.2, held_amplitudes=held_amps)
-    np.testing.assert_allclose(exact.eigenvalues, lam[1:2], rtol=1e-10)    # held exactly: the exact pole
+    rest = y - np.real(held_amps[0, 0, 1] * np.exp(held[1] * k))[None]
+    alone = refine_in_bands([rest], FS, np.concatenate([held[:1], start]))
+    assert got.eigenvalues.size == 1 and np.all(alone.converged)
+    np.testing.assert_allclose(got.eigenvalues, alone.eigenvalues[1:], rtol=1e-10)
+    err = abs(got.eigenvalues[0] / lam[1] - 1)          # 60 Hz held fixed 0.02 Hz off: 1e-3
+    assert 1e-7 < err < 1e-5, err                       # 60 Hz refitted; 150 Hz's amplitude error fixed: 1e-6
+    exact = refine_seeds([y], FS, held, peaks, [0], 0.2, held_amplitudes=[[[1.0, 0.5]]])
+    np.testing.assert_allclose(exact.eigenvalues, lam[1:2], rtol=1e-9)         # 150 Hz held exactly
 
 
 def test_the_amplitudes_of_fixed_poles_are_their_bands_linear_fit():
