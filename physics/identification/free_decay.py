@@ -19,8 +19,8 @@ exponentials and a smooth background, close modes together), so that the other m
 hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. A clear peak of the
 record's spectrum (:func:`~physics.identification.decay_peaks.decay_peaks`, the peaks ``fftpeak`` reports) that no
 kept pole holds (a weak mode beyond the model's order, or a diagram with no pole stable enough) is started at its
-peak and refined in its band the same way (:mod:`~physics.identification.peak_seeds`). Shapes: the dominant
-direction of each mode's complex amplitudes over the decays, unit-norm and unscaled (no force measured).
+peak and refined in its band, the kept poles held fixed (:mod:`~physics.identification.peak_seeds`). Shapes: the
+dominant direction of each mode's complex amplitudes over the decays, unit-norm and unscaled (no force measured).
 """
 
 from __future__ import annotations
@@ -613,10 +613,11 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         z_std = np.where(ok, bands.damping_std, fit.damping_std[idx])
         amps = [bands.amplitudes[:, :, j] if ok[j] else fit.amplitudes[:, :, i] for j, i in enumerate(idx)]
         merged = np.asarray(bands.merged, bool)        # a pole merged into a stronger one of its peak is none
-    # the clear peaks no mode holds: each started at its peak and refined in its band beside the modes held
+    # the clear peaks no mode holds: each started at its peak and refined in its band, the modes held fixed
     held_hz = np.abs(lam[~merged]) / (2 * np.pi)
+    held_amps = np.where(ok, bands.amplitudes, np.nan)[:, :, ~merged] if idx.size else None   # NaN: a failed fit
     seeded = refine_seeds(full, fs, lam[~merged], record_peaks, unheld_peaks(record_peaks, held_hz, band),
-                          max_damping)
+                          max_damping, held_amplitudes=held_amps)
     if idx.size - merged.sum() + seeded.eigenvalues.size == 0:
         raise ConvergenceError(f"{where}: no refined pole of the free decays lies in {band[0]:g}-{hi:.4g} Hz, nor "
                                "a mode at a clear peak of their spectrum")
