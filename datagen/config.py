@@ -254,7 +254,7 @@ def _check_beam(cfg: dict) -> None:
 
 
 #: Smallest upper bound of ``specimen.root_spring_relative`` accepted: below it most updated models are not
-#: positive definite (measured: 10 of 10 samples at 0.001, 14 of 20 at 0.003, 6 of 20 at 0.01, none of 20 at 0.03).
+#: positive definite (20 of 20 samples at 0.001, 11 at 0.003, 4 at 0.01, none at 0.03: tests/datagen/test_status.py).
 MIN_ROOT_SPRING_RELATIVE = 0.01
 
 

@@ -34,7 +34,7 @@ from datagen.config import load_config
 from datagen.dataset import Dataset
 from datagen.generation import generate
 from datagen.truth_beam import beam_mapping
-from experiments.benches.harness import parser, table, write_table
+from experiments.benches.harness import parser, publish, table
 from learn.pairs.classify import classify_many
 from learn.network.model_dir import load_model
 from learn.network.training import train
@@ -137,8 +137,7 @@ def main(argv=None) -> int:
         return 0
     md = markdown(result)
     print(md, end="")
-    if args.docs:
-        write_table("any-beam.md", "beams", md)
+    publish(args, "beams", md)
     return 0
 
 

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.benches.harness import parser, table, write_table
+from experiments.benches.harness import parser, publish, table
 from experiments.second_sim.bolted import write_bolted_test
 from physics.discrepancy import analyse_file
 
@@ -99,8 +99,7 @@ def main(argv=None) -> int:
     truth = json.loads((out / "truth.json").read_text())
     md = markdown([row(out / name, out / "baseline_modal.json", truth) for name in FILES])
     print(md)
-    if a.docs:
-        write_table("discrepancy.md", "bolted-masses", md)
+    publish(a, "bolted-masses", md)
     return 0
 
 

@@ -31,7 +31,7 @@ import numpy as np
 
 from experiments.benches.study_beams import fold, folded, run_beam
 from experiments.second_sim.beams import CATALOGUE
-from experiments.benches.harness import parser, table, write_table
+from experiments.benches.harness import parser, publish, table
 from physics.io import atomic_write_text
 
 __all__ = ["BEAMS", "CONFIGS", "cover", "main", "markdown"]
@@ -132,8 +132,7 @@ def main(argv=None) -> int:
     atomic_write_text(out / "coverage.csv", "\n".join([",".join(keys)] + [",".join(str(r[k]) for k in keys)
                                                                             for r in rows]) + "\n")
     atomic_write_text(out / "coverage.md", md)
-    if a.docs:
-        write_table("classifier.md", "coverage", md)
+    publish(a, "coverage", md)
     print(json.dumps(rows, indent=1) if a.json else md)
     return 0
 

@@ -51,7 +51,7 @@ from datagen.batch_inputs import draw_batch
 from datagen.setup import get_setup
 from datagen.store import finalize, read_manifest
 from datagen.torchdata import make_loader
-from experiments.benches.harness import parser, write_table
+from experiments.benches.harness import parser, publish
 from learn.network.features import grid_weights, load_pairs
 
 __all__ = ["main"]
@@ -113,7 +113,7 @@ def _table_at_scale(root: str, rows: int) -> dict:
 
 
 def main(argv=None):
-    ap = parser(__file__, __doc__, docs="datasets.md (default config or --config training)", json=True, workers=2)
+    ap = parser(__file__, __doc__, docs="datasets.md", json=True, workers=2)
     ap.add_argument("--n", type=int, default=20000, help="samples generated end to end and read back")
     ap.add_argument("--naive", type=int, default=60, help="samples for the per-sample loop")
     ap.add_argument("--batch", type=int, default=512, help="read batch size")
@@ -124,8 +124,7 @@ def main(argv=None):
                          "shards' tables and time column and row-group reads")
     a = ap.parse_args(argv)
     if a.docs and a.config not in DOCS_BLOCKS:
-        ap.error("--docs: docs/datasets.md holds the tables of the default and the training config only")
-
+        ap.error(f"--docs: docs/{a.docs} holds the tables of the default and the training config only")
 
     cfg = load_config(a.config) if a.config else merge({})
     res = {"config": a.config or "defaults (beam5, 20 truth elements, 1024 lines, IIRS mass)",
@@ -154,8 +153,7 @@ def main(argv=None):
     else:
         for k, v in res.items():
             print(f"{k:42s} {v:.1f}" if isinstance(v, float) else f"{k:42s} {v}")
-    if a.docs:
-        write_table("datasets.md", DOCS_BLOCKS[a.config], docs_table(res))
+    publish(a, DOCS_BLOCKS.get(a.config, ""), docs_table(res))
     return res
 
 

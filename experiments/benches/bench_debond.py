@@ -29,7 +29,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from experiments.benches.harness import cli_json, parser, table, write_table
+from experiments.benches.harness import cli_json, parser, publish, table
 
 __all__ = ["classify_pairs", "confusion", "main", "markdown"]
 
@@ -109,8 +109,7 @@ def main(argv=None) -> int:
         for s in summaries:
             if s["change"].startswith("debond") and "cannot be told apart" in (s["summary"] or ""):
                 print(f"{s['change']} at x = {s['x_m']:.3f} m, size {s['size']:.3g}: {s['summary']}")
-    if a.docs:
-        write_table("datasets.md", "debond", markdown(rows, names))
+    publish(a, "debond", markdown(rows, names))
     return 0
 
 

@@ -24,7 +24,7 @@ from datagen.batch_inputs import draw_batch
 from datagen.config import DEFAULTS, merge
 from datagen.pipeline import simulate_batch
 from datagen.setup import get_setup
-from experiments.benches.harness import parser, table, write_table
+from experiments.benches.harness import parser, publish, table
 from experiments.second_sim.layered import Sandwich, face_modulus_for, layered_frequencies_hz
 from physics.modal import modal_parameters
 from physics.properties import beam_preset
@@ -93,8 +93,7 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     md = markdown(changes())
     print(md)
-    if a.docs:
-        write_table("datasets.md", "debond-layered", md)
+    publish(a, "debond-layered", md)
     return 0
 
 

@@ -38,9 +38,10 @@ conditions) and ``regression`` on the measured temperature. Methods, each at ``-
 * ``plain per mode``: each mode's relative change, alarmed beyond the baseline's ``rate / m`` quantile of that mode
   (on the change's side).
 
-The plain tests' quantiles are read at the plotting position ``k / (n + 1)`` (:data:`PLOTTING`), as ``monitor``'s
-thresholds are (:func:`~learn.monitor.alarm_threshold.threshold`): a new test exchangeable with the ``n`` baseline
-values lies beyond the quantile with probability ``rate``.
+The plain tests (:mod:`experiments.benches.plain_tests`) read their quantiles at the plotting position
+``k / (n + 1)`` (``method="weibull"``), as ``monitor``'s thresholds are
+(:func:`~learn.monitor.alarm_threshold.threshold`): a new test exchangeable with the ``n`` baseline values lies
+beyond the quantile with probability ``rate``.
 
 False alarms: the share of the intact series' monitoring tests alarmed (the plain tests: on the drop side), the
 mean over the seeds in the table and each seed's under it.
@@ -51,7 +52,6 @@ Writes ``detection.json`` and ``detection.md`` in ``--out``.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 from pathlib import Path
@@ -61,6 +61,8 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
+from experiments.benches.harness import parser, publish, table  # noqa: E402
+from experiments.benches.plain_tests import plain_alarms  # noqa: E402
 from experiments.second_sim.series import (FrequencySeriesConfig, SeriesConfig, frequency_series,  # noqa: E402
                                            mass_loss_pattern, uniform_stiffness_pattern)
 from learn.monitor.charts import run_charts  # noqa: E402
@@ -68,9 +70,8 @@ from learn.monitor.normal_models import NORMAL_MODELS  # noqa: E402
 from learn.monitor.coverage import coverage, environment_coordinates  # noqa: E402
 from learn.monitor.statistics import SHARES, detect, environmental, held_out_statistics  # noqa: E402
 from physics.io import atomic_write_text  # noqa: E402
-from experiments.studies.doc_tables import write_table  # noqa: E402
 
-__all__ = ["CASES", "main", "methods_on", "plain_tests"]
+__all__ = ["CASES", "main", "methods_on"]
 
 SIZES_PCT = (0.25, 0.5, 1.0, 1.5, 2.0)
 DAMAGES = {"mode 1": (1,), "uniform EI": "stiffness", "mass loss": "mass"}
@@ -98,22 +99,6 @@ def _case(name: str, seed: int) -> tuple:
 
 
 CASES = ("daily", "30min", "lab", "lab6")
-#: The plain tests' quantiles: the ``k``-th smallest of ``n`` baseline values at level ``k / (n + 1)`` (the share of
-#: new exchangeable tests below it), as :func:`~learn.monitor.alarm_threshold.threshold`'s empirical quantile.
-PLOTTING = "weibull"
-
-
-def plain_tests(F, nb: int, rate: float, sign: float = 1.0) -> dict:
-    """The plainest tests' alarms (n,): the mean relative change from the baseline medians below the baseline's
-    ``rate`` quantile, and any mode's relative change below its baseline ``rate / m`` quantile (``sign=-1``: a
-    rise above the ``1 - rate`` quantiles, told that the change raises the frequencies)."""
-    rel = sign * (F / np.nanmedian(F[:nb], axis=0) - 1.0)
-    mean = np.nanmean(rel, axis=1)
-    per = np.nanquantile(rel[:nb], rate / F.shape[1], axis=0, method=PLOTTING)
-    lo, hi = np.nanquantile(mean[:nb], [rate / 2, 1 - rate / 2], method=PLOTTING)
-    return {"plain shift": mean < np.nanquantile(mean[:nb], rate, method=PLOTTING),
-            "plain shift, both signs": (mean < lo) | (mean > hi),
-            "plain per mode": (rel < per).any(axis=1)}
 
 
 def methods_on(F, C, nb: int, model_name: str, rate: float, seed: int = 0, sign: float = 1.0, held=None,
@@ -145,11 +130,13 @@ def methods_on(F, C, nb: int, model_name: str, rate: float, seed: int = 0, sign:
         out["extrapolated apart"] &= ~(coverage(names, E, b_idx, rest).extrapolated & env_only)
     out["chart"] = run_charts(det.vectors, b_idx, rate, seed=seed).alarm
     out["chart, Šidák"] = run_charts(det.vectors, b_idx, rate, seed=seed, combination="sidak").alarm
-    out.update(plain_tests(F, nb, rate, sign))
+    one, both = (plain_alarms(F, nb, rate, sides=s, sign=sign, method="weibull") for s in (1, 2))
+    out.update({"plain shift": one["plain shift"], "plain shift, both signs": both["plain shift"],
+                "plain per mode": one["plain per mode"]})
     return out
 
 
-def _scores(alarms: dict, damaged, nb: int, onset: int, per_day: int) -> dict:
+def _scores(alarms: dict, damaged, onset: int, per_day: int) -> dict:
     out = {}
     for m, a in alarms.items():
         late = damaged & (np.arange(len(a)) >= onset + (per_day if m.startswith("chart") else 0))
@@ -185,7 +172,7 @@ def run_case(name: str, seed: int, rate: float, shares=None) -> list:
                 F = fs.frequencies_hz.copy()
                 F[damaged] *= np.exp(pattern * np.log1p(-size / 100))
                 res = _scores(methods_on(F, C, nb, model_name, rate, seed, -1.0 if which == "mass" else 1.0,
-                                         held, shares), damaged, nb, onset, per_day)
+                                         held, shares), damaged, onset, per_day)
                 rows.append({"case": name, "seed": seed, "model": model_name, "damage": damage, "size_pct": size,
                              "scores": res})
                 print(json.dumps({k: v for k, v in rows[-1].items() if k != "scores"}
@@ -193,7 +180,7 @@ def run_case(name: str, seed: int, rate: float, shares=None) -> list:
     return rows
 
 
-def markdown(rows: list, rate: float) -> str:
+def markdown(rows: list) -> str:
     """The table: per case, model and damage, each method's detection (%) averaged over the seeds, false alarms
     in the first row of each model."""
     head = ("| case | model | damage | " + " | ".join(METHODS) + " | delay combined / chart (tests) |\n"
@@ -225,25 +212,22 @@ FA_METHODS = ("combined", "combined, equal shares", "combined, Šidák", "chart"
 
 def false_alarm_table(rows: list) -> str:
     """Per case and model, each seed's false alarms (%) of :data:`FA_METHODS` and their mean."""
-    lines = ["| case | model | seeds | " + " | ".join(FA_METHODS) + " |",
-             "| --- | --- | --- | " + " | ".join("---" for _ in FA_METHODS) + " |"]
+    lines = []
     for case, model in dict.fromkeys((r["case"], r["model"]) for r in rows):
         mine = [r for r in rows if (r["case"], r["model"]) == (case, model) and r["damage"] == "none"]
-        cells = [" / ".join(f"{100 * r['false_alarms'][m]:.2f}" for r in mine)
-                 + f" (mean {100 * np.mean([r['false_alarms'][m] for r in mine]):.2f})" for m in FA_METHODS]
-        lines.append(f"| {case} | {model} | {' '.join(str(r['seed']) for r in mine)} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+        lines.append([case, model, " ".join(str(r["seed"]) for r in mine),
+                      *(" / ".join(f"{100 * r['false_alarms'][m]:.2f}" for r in mine)
+                        + f" (mean {100 * np.mean([r['false_alarms'][m] for r in mine]):.2f})" for m in FA_METHODS)])
+    return table(["case", "model", "seeds", *FA_METHODS], lines)
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--out", default="out/bench_detection")
+    p = parser(__file__, __doc__, docs="monitoring.md", out="out/bench_detection")
     p.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3])
     p.add_argument("--rate", type=float, default=0.01)
     p.add_argument("--cases", nargs="+", choices=CASES, default=list(CASES))
     p.add_argument("--shares", nargs="+", metavar="NAME=WEIGHT",
                    help="the combined column's share of each statistic (default: learn.monitor.statistics.SHARES)")
-    p.add_argument("--docs", action="store_true", help="write the table into docs/monitoring.md")
     a = p.parse_args(argv)
     shares = None
     if a.shares:
@@ -258,18 +242,16 @@ def main(argv=None) -> int:
     rows = [r for case in a.cases for seed in a.seeds for r in run_case(case, seed, a.rate, shares)]
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
-    md = markdown(rows, a.rate) + "\n\nFalse alarms (%) of each seed's intact series:\n\n" + false_alarm_table(rows)
+    md = markdown(rows) + "\n\nFalse alarms (%) of each seed's intact series:\n\n" + false_alarm_table(rows)
     atomic_write_text(out / "detection.json", json.dumps({"config": vars(a), "rows": rows}, indent=1))
     atomic_write_text(out / "detection.md", md + "\n")
     print(md)
-    if a.docs:
-
-        cases = "" if list(a.cases) == list(CASES) else " --cases " + " ".join(a.cases)
-        cmd = ("`python -m experiments.benches.bench_detection --seeds " + " ".join(map(str, a.seeds))
-               + f" --rate {a.rate:g}{cases} --docs`")
-        write_table("monitoring.md", "detection", md + f"\n\nDetection in % of the damaged tests, averaged over "
-                    f"{len(a.seeds)} seeds; false alarms in % of the intact series' monitoring tests (the table: "
-                    f"their mean over the seeds). Written by {cmd}.")
+    cases = "" if list(a.cases) == list(CASES) else " --cases " + " ".join(a.cases)
+    cmd = ("`python -m experiments.benches.bench_detection --seeds " + " ".join(map(str, a.seeds))
+           + f" --rate {a.rate:g}{cases} --docs`")
+    publish(a, "detection", md + f"\n\nDetection in % of the damaged tests, averaged over {len(a.seeds)} seeds; "
+            f"false alarms in % of the intact series' monitoring tests (the table: their mean over the seeds). "
+            f"Written by {cmd}.")
     return 0
 
 

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import time
 
-from experiments.benches.harness import parser, table, write_table
+from experiments.benches.harness import parser, publish, table
 from experiments.studies.study_discrepancy import BEAM, SHORT, TRUTHS, confusion
 from physics.effects import candidates_for
 
@@ -54,8 +54,7 @@ def main(argv=None):
             pe = f"{100 * r['param_error']:8.1f}%" if r["param_error"] is not None else f"{'-':>9s}"
             print(f"{r['truth']:34s} {cells} {pe} {r['gap_before_pct']:6.2f} -> {r['gap_after_pct']:5.2f}")
     print(f"\n{time.perf_counter() - t0:.0f} s")
-    if args.docs:
-        write_table("discrepancy.md", "discrepancy-confusion", docs_table(rows, args.kinds, cols))
+    publish(args, "discrepancy-confusion", docs_table(rows, args.kinds, cols))
 
 
 def docs_table(rows, kinds, cols) -> str:

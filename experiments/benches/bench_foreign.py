@@ -40,7 +40,7 @@ import numpy as np
 
 from experiments.second_sim import simulate_pairs, write_pairs
 from experiments.second_sim.pairs import FREQ_HZ
-from experiments.benches.harness import cli_json, parser, write_table
+from experiments.benches.harness import cli_json, parser, publish
 from physics.io import atomic_write_bytes, atomic_write_text, figure_png, pyplot
 
 __all__ = ["main"]
@@ -260,8 +260,7 @@ def main(argv=None):
             print(f"classify: {timing['pairs']} pairs in one call {timing['batch_seconds']:.2f} s "
                   f"({timing['pairs_per_second']:.1f} pairs/s); one pair in a fresh process "
                   f"{timing['one_pair_wall_seconds']:.2f} s wall")
-    if a.docs:
-        write_table("classifier.md", "classifier-independent", markdown(rows))
+    publish(a, "classifier-independent", markdown(rows))
     return rows
 
 

@@ -33,7 +33,7 @@ from experiments.second_sim.fem import Beam, PointMass, Slit, assemble, modes
 from experiments.second_sim.pairs import DOF_LABELS, EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M, NODE_X_M
 from experiments.second_sim.response import MODAL_NOISE, Damping, complex_modes, noisy_modal
 from experiments.second_sim.writers import modal_dict
-from experiments.benches.harness import parser, table, write_table
+from experiments.benches.harness import parser, publish, table
 from learn.pairs.classify import classify_many
 from datagen.damage import damage_defaults
 from learn.network.features import BeamSpec
@@ -242,8 +242,7 @@ def main(argv=None) -> int:
     sys.stdout.write(md)
     if args.json:
         atomic_write_text(args.json, json.dumps(res, indent=1) + "\n")
-    if args.docs:
-        write_table("classifier.md", "hypotheses", md)
+    publish(args, "hypotheses", md)
     return 0
 
 

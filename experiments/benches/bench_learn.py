@@ -31,7 +31,7 @@ import numpy as np
 import pandas as pd
 
 from experiments.cli import main as cli
-from experiments.benches.harness import parser, table, write_table
+from experiments.benches.harness import parser, publish, table
 from learn.explanations.classical import GradientBoosting, run_classical
 from learn.pairs.classify import classify_many
 from learn.network.estimator import DamageClassifier
@@ -128,18 +128,16 @@ def main(argv=None):
         print(f"{r['subset']:<42}{r['method']:<24}" + "".join(f"{fmt(r[c]):>14}" for c in cols))
 
     # ---------------------------------------------------------------- beam 5
-    res5 = beam5(model, out / "beam5")
+    res5 = beam5(model)
     (out / "beam5.json").write_text(json.dumps(res5, indent=1, default=float))
     print("\n== Beam 5 (thesis Tables 4.5/4.6) ==")
     for k, v in res5.items():
         print(f"{k}: {json.dumps(v, default=float)}")
+    rows_all = [r for r in test["rows"] if r["subset"] == "all"]
     (out / "summary.json").write_text(json.dumps({"commands": commands, "train": summary, "train_wall_s": wall,
-                                                  "rows_all": [
-        r for r in test["rows"] if r["subset"] == "all"], "robustness": rob}, indent=1, default=float))
-    if args.docs:
-        test_rows = [r for r in test["rows"] if r["subset"] == "all"]
-        write_table("classifier.md", "classifier-benchmark", benchmark_markdown(test_rows))
-        write_table("classifier.md", "classifier-robustness", robustness_markdown(rob))
+                                                  "rows_all": rows_all, "robustness": rob}, indent=1, default=float))
+    publish(args, "classifier-benchmark", benchmark_markdown(rows_all))
+    publish(args, "classifier-robustness", robustness_markdown(rob))
 
 
 def _default_model(train_dirs, out: Path, args) -> tuple:
@@ -245,7 +243,7 @@ def _robustness(data_dir: Path, test_dirs, model, test: dict) -> list:
     return rob
 
 
-def beam5(model, out_dir) -> dict:
+def beam5(model) -> dict:
     """Classify the thesis's beam 5 from its measured modal data and from FRFs of its identified models."""
     data = thesis.load("beams")["beams"]["5"]
     dofs = ["2:y", "3:y", "4:y", "5:y"]

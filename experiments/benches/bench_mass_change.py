@@ -32,7 +32,7 @@ import numpy as np
 import pandas as pd
 
 from experiments.benches.bench_debond import classify_pairs
-from experiments.benches.harness import parser, table, write_table
+from experiments.benches.harness import parser, publish, table
 
 __all__ = ["main", "markdown", "score"]
 
@@ -99,8 +99,7 @@ def main(argv=None) -> int:
         print(json.dumps(rows, indent=1, default=float))
     else:
         print(pd.DataFrame(rows).to_string(index=False, float_format=lambda v: f"{v:.3g}"))
-    if a.docs:
-        write_table("datasets.md", "mass_change", markdown(rows))
+    publish(a, "mass_change", markdown(rows))
     return 0
 
 

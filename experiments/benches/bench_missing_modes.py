@@ -43,7 +43,7 @@ import numpy as np
 
 from experiments.benches.bench_foreign import score, set_dir, write_sets
 from experiments.benches.study_beams import score_beam
-from experiments.benches.harness import cli_json, parser, table, write_table
+from experiments.benches.harness import cli_json, parser, publish, table
 from learn.explanations.classical import run_classical
 from learn.network.estimator import DamageClassifier
 from learn.network.evaluate import metrics
@@ -274,19 +274,19 @@ def markdown(held: list[dict], sim: list[dict], beam: list[dict], beam_name: str
                              (f"Independent simulator, {beam_name}", beam, "zone acc.")):
         if not rows:
             continue
-        lines += ["", f"{title}, through `classify`:", "",
-                  f"| missing | model | network answers | network verdicts | verdict: {acc} | detection | "
-                  "false alarms | network alone: " + acc + " | detection | false alarms |",
-                  "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+        cells = []
         for case in dict.fromkeys(r["case"] for r in rows):
             for label in dict.fromkeys(r["model"] for r in rows if r["case"] == case):
                 v = next(r for r in rows if (r["case"], r["model"], r["method"]) == (case, label, "verdict"))
                 n = next((r for r in rows if (r["case"], r["model"], r["method"]) == (case, label, "network")), None)
-                net = (f"{_pct(n['accuracy'])} | {_pct(n['detection'])} | {n['false_alarms']} of {n['intact_pairs']}"
-                       if n and n["network_answers"] else "- | - | -")
-                lines.append(f"| {case} | {label} | {v['network_answers']} of {v['pairs']} | "
-                             f"{v['network_verdicts']} of {v['pairs']} | {_pct(v['accuracy'])} | "
-                             f"{_pct(v['detection'])} | {v['false_alarms']} of {v['intact_pairs']} | {net} |")
+                net = ([_pct(n["accuracy"]), _pct(n["detection"]), f"{n['false_alarms']} of {n['intact_pairs']}"]
+                       if n and n["network_answers"] else ["-"] * 3)
+                cells.append([case, label, f"{v['network_answers']} of {v['pairs']}", f"{v['network_verdicts']} of "
+                              f"{v['pairs']}", _pct(v["accuracy"]), _pct(v["detection"]),
+                              f"{v['false_alarms']} of {v['intact_pairs']}", *net])
+        lines += ["", f"{title}, through `classify`:", "",
+                  table(["missing", "model", "network answers", "network verdicts", f"verdict: {acc}", "detection",
+                         "false alarms", f"network alone: {acc}", "detection", "false alarms"], cells)]
     return "\n".join(lines) + "\n"
 
 
@@ -327,10 +327,10 @@ def main(argv=None) -> int:
     atomic_write_text(out / "missing_modes.md", text + ("\n" + swept_text if swept_text else ""))
     print(json.dumps({"held_out": held, "simulator": sim, "beam": beam, "sweep": swept}, indent=1) if a.json
           else text + ("\n" + swept_text if swept_text else ""))
-    if a.docs and (held or sim or beam):
-        write_table("classifier.md", "missing-modes", text.strip())
-    if a.docs and swept:
-        write_table("classifier.md", "missing-modes-sweep", swept_text.strip())
+    if held or sim or beam:
+        publish(a, "missing-modes", text.strip())
+    if swept:
+        publish(a, "missing-modes-sweep", swept_text.strip())
     return 0
 
 

@@ -52,7 +52,7 @@ import numpy as np  # noqa: E402
 
 from experiments.cli import build_parser  # noqa: E402
 from experiments.second_sim.series import SERIES_KINDS, SLIT_SIZES, SeriesConfig, simulate_series, write_series  # noqa: E402
-from experiments.benches.harness import cli_json, parser, write_table  # noqa: E402
+from experiments.benches.harness import cli_json, parser, publish  # noqa: E402
 from physics.io import atomic_write_bytes, atomic_write_text, figure_png, pyplot  # noqa: E402
 
 __all__ = ["main", "markdown", "score_series"]
@@ -431,8 +431,7 @@ def main(argv=None) -> int:
                                                               "series": series_out}, indent=1, default=str))
     atomic_write_text(out / "monitor_bench.md", md)
     _figure(rows, out / "monitor_bench.png")
-    if a.docs:
-        write_table("monitoring.md", "monitor", docs_text(rows, a))
+    publish(a, "monitor", docs_text(rows, a))
     return 0
 
 

@@ -32,7 +32,7 @@ from threadpoolctl import threadpool_limits
 from experiments.second_sim.ambient import ambient_record
 from experiments.second_sim.fem import Beam
 from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
-from experiments.benches.harness import parser, table, write_table
+from experiments.benches.harness import parser, publish, table
 from physics.identification.fdd import identify_fdd
 from physics.identification.ssi import identify_ssi
 from physics.io import atomic_write_text
@@ -191,8 +191,7 @@ def _main(args) -> int:
               + ", ".join(f"{f:.3f}" for f in r["frequencies_hz"]))
         if args.json:
             atomic_write_text(args.json, json.dumps({"config": vars(args), "long_record": r}, indent=1) + "\n")
-        if args.docs:
-            write_table("identification.md", "oma-memory", memory_markdown(r, args.long_record))
+        publish(args, "oma-memory", memory_markdown(r, args.long_record))
         return 0
     rows = run(args.minutes, args.seed, not args.no_peer)
     md = markdown(rows)
@@ -203,8 +202,7 @@ def _main(args) -> int:
             print(f"{r['case']}: pyOMA2 SSI-cov / ours wall time = {r['wall_s'] / ours[r['case']]:.1f}")
     if args.json:
         atomic_write_text(args.json, json.dumps({"config": vars(args), "rows": rows}, indent=1) + "\n")
-    if args.docs:
-        write_table("identification.md", "oma", md)
+    publish(args, "oma", md)
     return 0
 
 

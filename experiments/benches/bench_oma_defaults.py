@@ -25,8 +25,6 @@ Run ``python -m experiments.benches.bench_oma_defaults [--minutes 5] [--seed 1] 
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import logging
 import sys
@@ -40,11 +38,10 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from experiments.benches.bench_oma import score
-from experiments.cli import main as cli
 from experiments.second_sim.ambient import ambient_record, write_npz
 from experiments.second_sim.fem import Beam, assemble, modes
 from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
-from experiments.benches.harness import parser, table, write_table
+from experiments.benches.harness import cli_json, parser, publish, table
 from physics.io import atomic_write_text
 
 __all__ = ["CASES", "main", "run_case"]
@@ -87,12 +84,10 @@ def _measured(fn):
 
 
 def _ours(path):
-    buf, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(err):
-        code = cli(["identify", str(path), "--json"])
-    if code != 0:
-        return {"error": err.getvalue().strip()}
-    r = json.loads(buf.getvalue())
+    try:
+        r = cli_json(["identify", str(path)])
+    except RuntimeError as exc:                       # identify refused the record: a row, not the end of the bench
+        return {"error": str(exc)}
     modes = r["modes"]
     shapes = np.array([[complex(z) for z in m["shape"]] for m in modes]).T.reshape(len(r["dofs"]), len(modes))
     return {"fn": [m["frequency_hz"] for m in modes], "zeta": [m["damping_ratio"] for m in modes],
@@ -188,8 +183,7 @@ def main(argv=None) -> int:
     sys.stdout.write("\n" + md)
     if args.json:
         atomic_write_text(args.json, json.dumps({"config": vars(args), "rows": rows}, indent=1, default=str) + "\n")
-    if args.docs:
-        write_table("identification.md", "oma-defaults", md)
+    publish(args, "oma-defaults", md)
     return 0
 
 

@@ -37,7 +37,7 @@ from experiments.benches.bench_foreign import classify_set, score, write_sets
 from experiments.second_sim.ambient import ambient_record, write_npz
 from experiments.second_sim.fem import Beam, Slit
 from experiments.second_sim.pairs import NODE_X_M
-from experiments.benches.harness import cli_json, parser, table, write_table
+from experiments.benches.harness import cli_json, parser, publish, table
 
 __all__ = ["beams_of", "main"]
 
@@ -66,7 +66,7 @@ def beams_of(truth: dict):
     return base, cur
 
 
-def output_only_pairs(pair_dir: Path, truth: list, out: Path, minutes: float, seed: int) -> Path:
+def output_only_pairs(truth: list, out: Path, minutes: float, seed: int) -> Path:
     """Record, write and identify both tests of every pair output-only; returns the directory of the modal JSON."""
     out.mkdir(parents=True, exist_ok=True)
     for t in truth:
@@ -99,7 +99,7 @@ def main(argv=None) -> int:
     out = Path(args.out)
     truth = write_sets(out, ["eb"], args.n, args.seed)["eb"]
     pair_dir = out / "pairs" / "eb"
-    oma_dir = output_only_pairs(pair_dir, truth, out / "output-only", args.minutes, args.seed)
+    oma_dir = output_only_pairs(truth, out / "output-only", args.minutes, args.seed)
     rows = []
     for model in args.model:
         for route, directory, ext in (("FRF (UFF, LSCF/LSFD)", pair_dir, "uff"),
@@ -113,8 +113,7 @@ def main(argv=None) -> int:
     md = markdown(rows, args)
     sys.stdout.write(md)
     (out / "output_only.json").write_text(json.dumps({"config": vars(args), "rows": rows}, indent=1) + "\n")
-    if args.docs:
-        write_table("identification.md", args.table, md)
+    publish(args, args.table, md)
     return 0
 
 

@@ -19,7 +19,8 @@ Simulated tests, closed-form modal superposition (shares no code with ``physics`
   (4 channels, the cantilever's shapes), 1 kHz sampling, white noise of a standard deviation ``noise`` times the
   first mode's tip amplitude; records of 2, 4 and 16 s (24 to 192 periods of mode 1). **8-bit**: the 4 s capture
   quantised by an 8-bit converter whose full scale is 1.05 times the record's peak (an oscilloscope's), on top
-  of a 1e-3 analogue noise.
+  of a 1e-3 analogue noise; and the same oversampled, as a scope takes it: 10 kHz (830 samples per period of mode
+  1, each level held over several samples), the tap 0.4 s into the 4 s capture (a pre-trigger of noise).
 * **ambient**: a cantilever with modes 3 and 18.8 Hz, 1 % damping, driven at the tip by white noise, acceleration
   at the tip (1 channel) or at 1/4 to 1 of the length (4 channels), 64 Hz sampling, exact zero-order-hold
   discretisation of each mode (``scipy.signal.cont2discrete``), sensor noise 2 % of each channel's standard
@@ -48,7 +49,6 @@ the tests whose deviation is the smaller.
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 import time
@@ -58,7 +58,7 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.studies.doc_tables import write_table
+from experiments.benches.harness import parser, publish
 from physics.identification.methods import METHODS
 from physics.errors import BeamDamageError
 from physics.identification.fft_peak import identify_fft_peaks
@@ -87,7 +87,6 @@ SENSORS = np.array([0.25, 0.5, 0.75, 1.0])
 #: An identified mode within this relative distance of a truth mode, and nearer to it than to any other, is its
 #: estimate.
 MATCH = 0.03
-DOCS_PAGE, DOCS_BLOCK = "identification.md", "precision"
 REAL_DIR = Path(__file__).resolve().parents[1] / "data" / "real"
 
 
@@ -104,6 +103,10 @@ class Case:
         Decay: noise std over the first mode's tip amplitude; ambient: over each channel's std.
     bits : int
         Quantiser bits (0: none).
+    fs_hz : float
+        Decay: sampling rate (Hz).
+    pre_s : float
+        Decay: the tap's time in the record (s; noise alone before it).
     """
 
     kind: str
@@ -111,12 +114,16 @@ class Case:
     duration_s: float
     noise: float = 1e-3
     bits: int = 0
+    fs_hz: float = DECAY_FS_HZ
+    pre_s: float = 0.0
 
     @property
     def label(self) -> str:
         if self.kind == "decay":
             q = f", {self.bits}-bit" if self.bits else ""
-            return f"decay {self.noise:.0e}{q}"
+            rate = f", {self.fs_hz / 1000:g} kHz" if self.fs_hz != DECAY_FS_HZ else ""
+            tap = f", tap at {self.pre_s:g} s" if self.pre_s else ""
+            return f"decay {self.noise:.0e}{q}{rate}{tap}"
         return f"ambient {self.noise:.0%}"
 
     @property
@@ -125,7 +132,8 @@ class Case:
 
 
 DECAY = (Case("decay", 1, 2.0), Case("decay", 1, 4.0), Case("decay", 1, 16.0), Case("decay", 1, 4.0, 1e-2),
-         Case("decay", 1, 4.0, 1e-3, 8), Case("decay", 4, 4.0), Case("decay", 4, 16.0))
+         Case("decay", 1, 4.0, 1e-3, 8), Case("decay", 4, 4.0), Case("decay", 4, 16.0),
+         Case("decay", 1, 4.0, 1e-3, 8, 10000.0, 0.4))
 AMBIENT = tuple(Case("ambient", n, T, AMBIENT_NOISE) for n in (1, 4) for T in (60.0, 300.0, 1200.0))
 
 
@@ -146,8 +154,8 @@ def _positions(n_channels):
 def decay_records(case: Case, reps: int, seed: int):
     """``reps`` free decays of ``case`` (module docstring): array (reps, n_channels, n_samples)."""
     rng = np.random.default_rng(seed)
-    fs, n = DECAY_FS_HZ, int(round(case.duration_s * DECAY_FS_HZ))
-    t = np.arange(n) / fs
+    fs, n = case.fs_hz, int(round(case.duration_s * case.fs_hz))
+    t = np.maximum(np.arange(n) / fs - case.pre_s, 0.0)                         # zero before the tap
     w = 2 * np.pi * DECAY_FN_HZ
     basis = np.exp(-DECAY_ZETA[:, None] * w[:, None] * t) * np.sin(w[:, None] * np.sqrt(1 - DECAY_ZETA[:, None] ** 2)
                                                                    * t)          # (modes, n)
@@ -183,22 +191,22 @@ def ambient_records(n_channels: int, duration_s: float, reps: int, seed: int):
 def crb_decay_hz(case: Case) -> np.ndarray:
     """Cramér-Rao bound (Hz) of each mode's frequency from one nominal free decay of ``case`` (module
     docstring)."""
-    fs, n = DECAY_FS_HZ, int(round(case.duration_s * DECAY_FS_HZ))
-    t = np.arange(n) / fs
+    fs, n = case.fs_hz, int(round(case.duration_s * case.fs_hz))
+    t = np.arange(int(np.ceil(case.pre_s * fs)), n) / fs - case.pre_s          # the samples after the tap
     wd = 2 * np.pi * DECAY_FN_HZ * np.sqrt(1 - DECAY_ZETA ** 2)
     sig = DECAY_ZETA * 2 * np.pi * DECAY_FN_HZ
     amp = DECAY_AMP * cantilever_shapes(_positions(case.n_channels), 3)         # sine amplitudes b; a = 0
     n_ch, n_m = amp.shape
     env = np.exp(-sig[:, None] * t)
     c, s = env * np.cos(wd[:, None] * t), env * np.sin(wd[:, None] * t)       # (modes, n)
-    J = np.zeros((n_ch, n, 2 * n_m + 2 * n_m * n_ch))
+    J = np.zeros((n_ch, t.size, 2 * n_m + 2 * n_m * n_ch))
     for m in range(n_m):                                                       # columns, not samples
         J[:, :, m] = amp[:, m, None] * t * c[m]                                # d/d w_d of b e sin
         J[:, :, n_m + m] = -amp[:, m, None] * t * s[m]                         # d/d sigma
         for ch in range(n_ch):
             J[ch, :, 2 * n_m + 2 * (m * n_ch + ch)] = c[m]
             J[ch, :, 2 * n_m + 2 * (m * n_ch + ch) + 1] = s[m]
-    J = J.reshape(n_ch * n, -1)
+    J = J.reshape(n_ch * t.size, -1)
     var = case.noise ** 2
     if case.bits:
         full = 1.05 * np.abs(np.einsum("cm,mn->cn", amp, s)).max()
@@ -251,7 +259,7 @@ def run_case(case: Case, reps: int, seed: int, methods, records=None, progress=N
         records = decay_records(case, reps, seed) if case.kind == "decay" else \
             ambient_records(case.n_channels, case.duration_s, reps, seed)
     truth = DECAY_FN_HZ if case.kind == "decay" else AMBIENT_FN_HZ
-    fs = DECAY_FS_HZ if case.kind == "decay" else AMBIENT_FS_HZ
+    fs = case.fs_hz if case.kind == "decay" else AMBIENT_FS_HZ
     out, seconds = {}, {}
     for m in methods:
         t0 = time.perf_counter()
@@ -415,13 +423,14 @@ def real_markdown(rows) -> str:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = parser(__file__, __doc__, docs="identification.md", seed=0)
     p.add_argument("--quick", action="store_true", help="a tiny run (2 cases, 3 records each)")
     p.add_argument("--reps", type=int, default=None, help="free decays per case (default 12; ambient: a third)")
-    p.add_argument("--seed", type=int, default=0)
     p.add_argument("--real", default=str(REAL_DIR), help="folder of the real repeated-test sets ('' for none)")
-    p.add_argument("--docs", action="store_true", help="write the table into docs/identification.md")
+    p.add_argument("--only", default="", help="run only the cases whose label holds this text (e.g. '10 kHz')")
     args = p.parse_args(argv)
+    if args.only and args.docs:
+        p.error("--only writes part of the table: run --docs without it")
     from tqdm import tqdm
 
     if args.quick:
@@ -429,6 +438,7 @@ def main(argv=None) -> int:
     else:
         r = args.reps or 12
         cases, reps = DECAY + AMBIENT, {"decay": r, "ambient": max(3, r // 3)}
+    cases = tuple(c for c in cases if args.only in c.label)
     methods = record_methods()
     runs = []
     long_amb = {}
@@ -442,16 +452,15 @@ def main(argv=None) -> int:
                     long_amb[key] = ambient_records(case.n_channels, longest, reps["ambient"], args.seed + 100 + key)
                 records = long_amb[key][:, :, :int(round(case.duration_s * AMBIENT_FS_HZ))]
             else:
-                records = decay_records(case, reps["decay"], args.seed + i)
+                records = decay_records(case, reps["decay"], args.seed + (DECAY.index(case) if case in DECAY else i))
             runs.append(run_case(case, len(records), args.seed, methods, records, bar))
     rows = summarise(runs)
     real = real_rows(args.real) if args.real and not args.quick else []
     command = "python -m experiments.benches.bench_precision" + (" --quick" if args.quick else "") + \
-        (f" --reps {args.reps}" if args.reps else "")
+        (f" --reps {args.reps}" if args.reps else "") + (f" --only '{args.only}'" if args.only else "")
     md = markdown(rows, reps, command, real)
     print(md)
-    if args.docs:
-        write_table(DOCS_PAGE, DOCS_BLOCK, md)
+    publish(args, "precision", md)
     return 0
 
 

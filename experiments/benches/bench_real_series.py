@@ -14,7 +14,7 @@ the FFT peaks (:mod:`physics.identification.fft_peak`): the baseline's modes are
 (:func:`learn.monitor.tracking.reference_modes`) of the clear peaks :func:`identify_fft_peaks` finds in the baseline
 records; every test's frequency of a mode is the highest FFT peak (:func:`fft_peaks`) in the mode's window (half
 the smaller log gap to its neighbouring modes either side, within the band). On those frequencies
-(:func:`plain_alarms`):
+(:func:`~experiments.benches.plain_tests.plain_alarms`, both sides, linear quantiles):
 
 * ``plain shift``: the mean relative change of the modes from their baseline medians, alarmed below the baseline's
   ``rate / 2`` quantile or above its ``1 - rate / 2`` quantile (signed, both sides);
@@ -52,7 +52,8 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from experiments.benches.harness import parser, table, write_table  # noqa: E402
+from experiments.benches.harness import parser, publish, table  # noqa: E402
+from experiments.benches.plain_tests import plain_alarms  # noqa: E402
 from learn.monitor import (IdentificationSettings, IdentifiedModes, SeriesInput, monitor_series,  # noqa: E402
                            reference_modes)
 from learn.monitor.alarms import FLAGGED_STATUSES  # noqa: E402
@@ -62,7 +63,7 @@ from physics.identification.fft_peak import fft_peaks, identify_fft_peaks  # noq
 from physics.io import atomic_write_text  # noqa: E402
 
 __all__ = ["LOADERS", "METHODS", "RealSeries", "fft_frequencies", "group_scores", "main",
-           "mode_windows_hz", "plain_alarms", "reference_fft_modes"]
+           "mode_windows_hz", "reference_fft_modes"]
 
 DATA = str(Path(__file__).resolve().parents[1] / "data" / "real")
 
@@ -244,23 +245,6 @@ def fft_frequencies(records, sampling_frequency_hz, windows_hz) -> np.ndarray:
     return out
 
 
-def plain_alarms(F, n_baseline: int, rate: float) -> dict:
-    """The plainest tests' alarms ``(n,)`` on frequencies ``F`` (n, m) (NaN: not found), the baseline the first
-    ``n_baseline`` rows: ``plain shift``, the mean relative change from the baseline medians beyond the baseline's
-    ``rate / 2`` or ``1 - rate / 2`` quantile; ``plain per mode``, any mode's relative change beyond its baseline
-    ``rate / (2 m)`` or ``1 - rate / (2 m)`` quantile. A test without any frequency found alarms neither."""
-    F = np.asarray(F, float)
-    rel = F / np.nanmedian(F[:n_baseline], axis=0) - 1.0
-    found = np.isfinite(rel).any(axis=1)
-    mean = np.nanmean(np.where(found[:, None], rel, 0.0), axis=1)
-    lo, hi = np.nanquantile(mean[:n_baseline], [rate / 2, 1 - rate / 2])
-    q = rate / (2 * F.shape[1])
-    plo, phi = np.nanquantile(rel[:n_baseline], [q, 1 - q], axis=0)
-    with np.errstate(invalid="ignore"):
-        per = ((rel < plo) | (rel > phi)).any(axis=1)
-    return {"plain shift": found & ((mean < lo) | (mean > hi)), "plain per mode": found & per}
-
-
 def group_scores(groups, flags: dict, identified, n_baseline: int, known: bool, against=None) -> list:
     """One row per group of later tests (and one for the baseline): its size ``n``, each method's flagged share
     (``flags``: method -> bool (n,)), the tests the first method identified, and its misses of tests one of the
@@ -360,7 +344,7 @@ def run_set(series: RealSeries, out: Path, rate: float) -> dict:
     ref = reference_fft_modes(series.records[:nb], series.sampling_frequency_hz[:nb], series.band_hz)
     F = fft_frequencies(series.records, series.sampling_frequency_hz, mode_windows_hz(ref, series.band_hz)) \
         if ref.size else np.full((len(files), 0), np.nan)
-    plain = plain_alarms(F, nb, rate) if ref.size else {
+    plain = plain_alarms(F, nb, rate, sides=2, method="linear") if ref.size else {
         k: np.zeros(len(files), bool) for k in ("plain shift", "plain per mode")}
     fft_status, fft_ref, _, _, fft_error = _monitor(_write_modal(F, out / "fft_modal" / series.name), nb,
                                                  IdentificationSettings(), None, rate)
@@ -456,8 +440,7 @@ def main(argv=None) -> int:
     atomic_write_text(out / "real_series.json", json.dumps({"rate": a.rate, "quick": a.quick, "sets": results},
                                                             indent=1))
     atomic_write_text(out / "real_series.md", md + "\n")
-    if a.docs:
-        write_table("monitoring.md", "real-series", md)
+    publish(a, "real-series", md)
     return 0
 
 

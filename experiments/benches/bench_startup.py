@@ -31,7 +31,7 @@ import time
 from pathlib import Path
 
 from experiments.cli import COMMANDS
-from experiments.benches.harness import parser, table, write_table
+from experiments.benches.harness import parser, publish, table
 
 __all__ = ["GOALS", "PROJECT", "cases", "docs_table", "main", "offenders", "time_case"]
 
@@ -150,8 +150,7 @@ def main(argv=None) -> int:
                                for name, case in cases(model, baseline, current).items()
                                if name in ("classify --help", "classify (1 pair)")
                                for label, checkout in checkouts.items()}
-    if args.docs:
-        write_table("performance.md", "startup", docs_table(result))
+    publish(args, "startup", docs_table(result))
     if args.json:
         print(json.dumps(result, indent=1))
         return 0

@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from experiments.benches.harness import parser, table, write_table
+from experiments.benches.harness import parser, publish, table
 from experiments.studies.plain_beam import plain_fe
 from physics import discrepancy as dsc
 from physics.beam import load_beam
@@ -127,8 +127,7 @@ def main(argv=None):
     print(f"{'truth':44s} {'data':7s} {'named (over seeds)':40s} {'param err':>9s} {'gap %':>15s}")
     found = rows(args.seeds, args.cases)
     print(f"\n{time.perf_counter() - t0:.0f} s")
-    if args.docs:
-        write_table("discrepancy.md", "supports", markdown(found, args.seeds))
+    publish(args, "supports", markdown(found, args.seeds))
 
 
 if __name__ == "__main__":

@@ -26,7 +26,7 @@ import numpy as np
 
 from experiments.benches.study_beams import run_beam
 from experiments.second_sim.beams import TEST_AS_RUN, excited_modes
-from experiments.benches.harness import cli_json, parser, write_table
+from experiments.benches.harness import cli_json, parser, publish, table
 from physics.io import atomic_write_text
 
 __all__ = ["main", "modes_found"]
@@ -69,24 +69,24 @@ TESTS = {
 }
 
 
-def markdown(table: list[dict]) -> str:
+def markdown(rows: list[dict]) -> str:
     """The table: one row per beam and model."""
     pct = lambda x: "-" if x is None or not np.isfinite(x) else f"{x:.0%}".replace("%", " %")  # noqa: E731
-    lines = ["| test | model trained on | modes | network answers | zone acc. network / verdict / best classical | "
-             "detection network / verdict | false alarms network / verdict | modes found (before) |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
-    for t in table:
+    lines = []
+    for t in rows:
         n, v, b = t["network"], t["verdict"], t["best_classical"] or {}
         ident = t["identification"] or {}
         found = "".join(f"{ident[k]['modes_found']} of {ident[k]['modes_present']}" for k in ("this",) if k in ident)
         if "before" in ident:
             found += f" ({ident['before']['modes_found']} of {ident['before']['modes_present']})"
-        lines.append(f"| {TESTS.get(t['beam'], t['beam'])} | {t['model']} | {', '.join(map(str, t['modes']))} | "
-                     f"{t['network_answered']} of {t['pairs']} | {pct(n['zone_accuracy'])} / {pct(v['zone_accuracy'])}"
-                     f" / {pct(b.get('zone_accuracy'))} ({b.get('method', '-')}) | {pct(n['detection'])} / "
-                     f"{pct(v['detection'])} | {n['false_alarms']} / {v['false_alarms']} of {v['intact_pairs']} | "
-                     f"{found or '-'} |")
-    return "\n".join(lines)
+        lines.append([TESTS.get(t["beam"], t["beam"]), t["model"], ", ".join(map(str, t["modes"])),
+                      f"{t['network_answered']} of {t['pairs']}", f"{pct(n['zone_accuracy'])} / "
+                      f"{pct(v['zone_accuracy'])} / {pct(b.get('zone_accuracy'))} ({b.get('method', '-')})",
+                      f"{pct(n['detection'])} / {pct(v['detection'])}",
+                      f"{n['false_alarms']} / {v['false_alarms']} of {v['intact_pairs']}", found or "-"])
+    return table(["test", "model trained on", "modes", "network answers",
+                  "zone acc. network / verdict / best classical", "detection network / verdict",
+                  "false alarms network / verdict", "modes found (before)"], lines)
 
 
 def _row(cb, label: str, r: list[dict], info: dict, ident: dict | None) -> dict:
@@ -107,7 +107,7 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
 
     out = Path(a.out)
-    table = []
+    rows = []
     for cb in TEST_AS_RUN:
         if a.only not in (None, cb.name):
             continue
@@ -118,7 +118,7 @@ def main(argv=None) -> int:
         ident = {"this": modes_found(pairs, meta, excited)}
         if a.before:
             ident["before"] = modes_found(pairs, meta, excited, source_tree=a.before)
-        table.append(_row(cb, "the beam file" if cb.file_drive else "the beam file as written (a force at the first "
+        rows.append(_row(cb, "the beam file" if cb.file_drive else "the beam file as written (a force at the first "
                           "sensor)", r, info, ident))
         if not cb.file_drive:  # the README's loop: discrepancy writes the files' drive point into the beam file
             cal = out / cb.name / "calibrated"
@@ -127,19 +127,18 @@ def main(argv=None) -> int:
                           str(pairs / "pair-000_baseline.uff"), "--out", str(cal)])
             r, info = run_beam(cb, out, a.n_pairs, a.train_n, a.seed, a.workers, beam_file=cal / "beam.toml",
                                model_tag="calibrated")
-            table.append(_row(cb, "discrepancy's beam file (the files' drive point)", r, info, None))
-            table[-1]["beam"] = "the same"
+            rows.append(_row(cb, "discrepancy's beam file (the files' drive point)", r, info, None))
+            rows[-1]["beam"] = "the same"
 
     out.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out / "test-as-run.json", json.dumps({"seed": a.seed, "n_pairs": a.n_pairs,
-                                                            "train_n": a.train_n, "beams": table}, indent=1))
+                                                            "train_n": a.train_n, "beams": rows}, indent=1))
     if a.json:
-        print(json.dumps(table, indent=1))
+        print(json.dumps(rows, indent=1))
         return 0
-    md = markdown(table)
+    md = markdown(rows)
     print(md)
-    if a.docs:
-        write_table("any-beam.md", "test-as-run", md)
+    publish(a, "test-as-run", md)
     return 0
 
 

@@ -49,7 +49,7 @@ from experiments.cli import main as cli
 from experiments.second_sim.fem import Beam, assemble, modes
 from experiments.second_sim.response import Damping, receptance
 from experiments.second_sim.writers import convert_receptance, write_uff
-from experiments.benches.harness import parser, table, write_table
+from experiments.benches.harness import parser, publish, table
 from physics.io import atomic_write_text
 
 __all__ = ["CASES", "METHODS", "WideBandTest", "main", "markdown", "peak_prominence", "run_identify", "score",
@@ -289,8 +289,7 @@ def main(argv=None) -> int:
 
     atomic_write_text(out / "wideband.json", json.dumps({"config": vars(args), "summary": summary, "rows": rows},
                                                         indent=1) + "\n")
-    if args.docs:
-        write_table("identification.md", "wideband", md)
+    publish(args, "wideband", md)
     return 0
 
 

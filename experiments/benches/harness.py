@@ -7,8 +7,7 @@ A bench is ``experiments/benches/bench_<name>.py`` with ``main(argv=None) -> int
     args = p.parse_args(argv)
     ...
     md = table(["case", "error (%)"], [[r["case"], f"{r['error']:.2f}"] for r in rows])
-    if args.docs:
-        write_table("identification.md", "name", md)        # the page's <!-- bench:name --> block
+    publish(args, "name", md)           # with --docs: the <!-- bench:name --> block of docs/identification.md
 """
 
 from __future__ import annotations
@@ -25,7 +24,7 @@ from pathlib import Path
 from experiments.cli import main as cli_main
 from experiments.studies.doc_tables import write_table
 
-__all__ = ["cli_json", "parser", "table", "write_table"]
+__all__ = ["cli_json", "parser", "publish", "table", "write_table"]
 
 
 def parser(file: str, doc: str, *, docs: str | None = None, json: bool | str = False, out: str | None = None,
@@ -36,7 +35,8 @@ def parser(file: str, doc: str, *, docs: str | None = None, json: bool | str = F
     Parameters
     ----------
     docs : str, optional
-        ``--docs``: write the table into this page of ``docs/``.
+        ``--docs``: write the tables into this page of ``docs/`` (:func:`publish`); ``args.docs`` is the page
+        given ``--docs``, else None.
     json : bool or str, optional
         True: ``--json`` prints the rows as JSON; a string: ``--json FILE`` writes them there.
     out : str, optional
@@ -59,8 +59,15 @@ def parser(file: str, doc: str, *, docs: str | None = None, json: bool | str = F
     elif json:
         p.add_argument("--json", metavar=json, help="write the rows as JSON into this file")
     if docs is not None:
-        p.add_argument("--docs", action="store_true", help=f"write the table into docs/{docs}")
+        p.add_argument("--docs", action="store_const", const=docs, help=f"write the table into docs/{docs}")
     return p
+
+
+def publish(args: argparse.Namespace, name: str, markdown: str) -> None:
+    """With ``--docs`` (``args.docs``: the page the bench's :func:`parser` names), replace block ``name`` of that
+    page with ``markdown`` (:func:`~experiments.studies.doc_tables.write_table`); without it, nothing."""
+    if args.docs:
+        write_table(args.docs, name, markdown)
 
 
 def table(header, rows, align=None) -> str:

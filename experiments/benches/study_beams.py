@@ -43,7 +43,7 @@ from dataclasses import fields, replace
 
 import numpy as np
 
-from experiments.benches.harness import cli_json, parser, write_table
+from experiments.benches.harness import cli_json, parser, publish
 from experiments.second_sim.beams import CATALOGUE, SPREAD, Spread, simulate_beam_pairs, write_beam_pairs
 from physics.io import atomic_write_bytes, atomic_write_text, figure_png, pyplot
 
@@ -428,8 +428,7 @@ def main(argv=None) -> int:
         print(json.dumps({"config": config, "targets": targets(rows), "pooled": pooled(rows), "rows": rows}, indent=1))
     else:
         print(markdown(rows) + "\n" + pooled_markdown(rows) + "\n" + diagnosis_markdown(rows, infos))
-    if a.docs:
-        write_table("classifier.md", "study-beams", docs_markdown(rows, infos, before))
+    publish(a, "study-beams", docs_markdown(rows, infos, before))
     return 0
 
 

@@ -20,7 +20,10 @@ wide). Modes whose bands, grown by :data:`MERGE_FACTOR`, overlap are one group f
 a neighbour that close is no smooth background. The bands are swept :data:`SWEEPS` times: from the second sweep on,
 each band is that of the refined pole (its half-power width, not the starting pole's), and its data are less the
 closed-form transforms of the modes the other bands fitted, so the background takes only what no band models
-(modes no model holds, the hit).
+(modes no model holds, the hit). Modes held fixed (``fixed``: poles and amplitudes known, e.g. a model's modes
+while a further mode is refined beside them) are subtracted, by their closed-form transforms, from every decay's
+transform before any band is fitted, and are not refined: only the bands of the modes given are fitted
+(:func:`band_amplitudes` gives the amplitudes of fixed poles).
 
 Two poles of one band closer than their half-power half-widths summed and than the main lobe of the longest
 decay's transform (:data:`RESOLVED_LINES` lines) are one peak: its split between two poles (a mode whose frequency
@@ -41,11 +44,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from physics.errors import ConvergenceError
+from physics.errors import ConvergenceError, ShapeError
 from physics.identification.damped_sinusoids import levenberg_marquardt, pole_statistics
 
 __all__ = ["BACKGROUND_ORDER", "BAND_LINES", "BAND_WIDTHS", "MERGE_FACTOR", "RESOLVED_LINES", "RESOLVED_WIDTHS",
-           "SWEEPS", "BandFit", "mode_bands", "refine_in_bands"]
+           "SWEEPS", "BandFit", "band_amplitudes", "mode_bands", "refine_in_bands"]
 
 #: A mode's band spans this many of its half-power half-widths either side of it ...
 BAND_WIDTHS = 6.0
@@ -254,7 +257,72 @@ def _unresolved(lam, amps, lengths, fs, group, converged):
     return out
 
 
-def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order=BACKGROUND_ORDER) -> BandFit:
+def _spectra(decays, fs, fixed):
+    """Each decay's transform (all its lines), less the closed-form transforms of the ``fixed`` modes (``(eigenvalues
+    (m_f,), amplitudes (n_decays, n_channels, m_f))`` or None)."""
+    spectra = [np.fft.rfft(y, axis=1) for y in decays]
+    if fixed is None or np.size(fixed[0]) == 0:
+        return spectra
+    lam_f, amps_f = np.asarray(fixed[0], complex), np.asarray(fixed[1], complex)
+    if amps_f.shape != (len(decays), decays[0].shape[0], lam_f.size):
+        raise ShapeError(f"fixed modes: amplitudes of shape {amps_f.shape}, expected "
+                         f"{(len(decays), decays[0].shape[0], lam_f.size)} (decays, channels, modes)")
+    out = []
+    for Y, y, a in zip(spectra, decays, amps_f):
+        n = y.shape[1]
+        out.append(Y - _modes_on_lines(np.exp(-2j * np.pi * np.arange(Y.shape[1]) / n), n, fs, lam_f, a))
+    return out
+
+
+def band_amplitudes(decays, sampling_frequency_hz, eigenvalues, background_order=BACKGROUND_ORDER) -> np.ndarray:
+    """The amplitudes of poles held fixed: each group of close poles' linear least-squares fit (amplitudes and
+    background, the poles not moved) in its own band (:func:`mode_bands`), swept as :func:`refine_in_bands` sweeps
+    (from the second sweep on, each band's data less the other groups' transforms).
+
+    Parameters
+    ----------
+    decays : sequence of ndarray, each shape (n_channels, n_samples_d)
+        The decays, each from its own start, mean removed.
+    sampling_frequency_hz : float
+    eigenvalues : array_like, complex, shape (n_modes,)
+        ``-sigma + i omega`` (rad/s).
+    background_order : int
+
+    Returns
+    -------
+    ndarray, complex, shape (n_decays, n_channels, n_modes)
+        ``a`` of ``Re(a z^n)`` of each decay, channel and mode at the decay's first sample (0 where a decay holds
+        too few lines of the mode's band).
+    """
+    fs = float(sampling_frequency_hz)
+    lam = np.asarray(eigenvalues, complex)
+    decays = [np.asarray(y, dtype=np.float64) for y in decays]
+    n_ch = decays[0].shape[0]
+    lengths = [y.shape[1] for y in decays]
+    amps = np.zeros((len(decays), n_ch, lam.size), complex)
+    if lam.size == 0:
+        return amps
+    spectra = _spectra(decays, fs, None)
+    bands, group = mode_bands(lam, max(lengths) / fs, fs / 2)
+    for _ in range(SWEEPS):                             # from the second on, less the other groups' transforms
+        known = amps.copy()
+        for g in np.unique(group):
+            idx, others = np.flatnonzero(group == g), np.flatnonzero(group != g)
+            m = idx.size
+            data = [None if d is None else
+                    (d[0], d[1], d[2] - _modes_on_lines(d[1], d[3], fs, lam[others], known[j][:, others])
+                     / np.sqrt(d[3]), d[3])
+                    for j, d in enumerate(_band_data(spectra, lengths, fs, bands[idx[0]]))]
+            used = [j for j, d in enumerate(data) if d is not None]
+            _, coef, _ = _projected_band(data, fs, -lam[idx].real, lam[idx].imag, np.ones(n_ch), bands[idx[0]],
+                                         background_order)
+            for j, C in zip(used, coef):
+                amps[j][:, idx] = 2 * (C[0:2 * m:2] + 1j * C[1:2 * m:2]).T * np.sqrt(lengths[j])
+    return amps
+
+
+def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order=BACKGROUND_ORDER,
+                    fixed=None) -> BandFit:
     """Refine free-decay poles, each group of close modes in its own band of the decays' transforms (see the
     module docstring).
 
@@ -266,10 +334,21 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
     eigenvalues : array_like, complex, shape (n_modes,)
         Starting poles ``-sigma + i omega`` (rad/s, Im > 0, Re < 0).
     background_order : int
+    fixed : (ndarray, ndarray), optional
+        Modes held fixed: their poles (complex, shape (m_f,), rad/s) and amplitudes (complex, shape (n_decays,
+        n_channels, m_f), ``a`` of ``Re(a z^n)``, as :attr:`BandFit.amplitudes` or :func:`band_amplitudes` give
+        them). Their transforms are subtracted from every decay's; they are not refined, and only the bands of
+        ``eigenvalues`` are fitted.
 
     Returns
     -------
     BandFit
+        Of the modes of ``eigenvalues`` alone.
+
+    Raises
+    ------
+    ShapeError
+        ``fixed`` amplitudes of another shape than (n_decays, n_channels, m_f).
     """
     fs = float(sampling_frequency_hz)
     lam0 = np.asarray(eigenvalues, complex)
@@ -277,7 +356,7 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
     decays = [np.asarray(y, dtype=np.float64) for y in decays]
     n_ch = decays[0].shape[0]
     lengths = [y.shape[1] for y in decays]
-    spectra = [np.fft.rfft(y, axis=1) for y in decays]
+    spectra = _spectra(decays, fs, fixed)
     bands, group = mode_bands(lam0, max(lengths) / fs, fs / 2)
     lam = lam0.copy()
     f_std, z_std = np.full(m_all, np.nan), np.full(m_all, np.nan)

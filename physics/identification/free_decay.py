@@ -1,8 +1,9 @@
 """Output-only identification of free responses: the decays after impacts (or plucks) recorded without the force.
 
 :func:`find_decays` segments a record into decays: a hit is a run of samples a free response cannot predict (large
-one-step prediction errors of a linear predictor of each channel); each decay runs from just after its hit to the
-next hit (or the record's end). :func:`free_response` tells a free response from a
+one-step prediction errors of a linear predictor of each channel), sought at the record's rate and, for an
+oversampled record, at the rate of its modes; each decay runs from just after its hit to the next hit (or the
+record's end). :func:`free_response` tells a free response from a
 stationary one: its decays' energy falls from their start to their end.
 
 :func:`identify_era` identifies the decays jointly (common poles, amplitudes of each decay its own): the
@@ -18,8 +19,8 @@ exponentials and a smooth background, close modes together), so that the other m
 hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. A clear peak of the
 record's spectrum (:func:`~physics.identification.decay_peaks.decay_peaks`, the peaks ``fftpeak`` reports) that no
 kept pole holds (a weak mode beyond the model's order, or a diagram with no pole stable enough) is started at its
-peak and refined in its band the same way (:mod:`~physics.identification.peak_seeds`). Shapes: the dominant
-direction of each mode's complex amplitudes over the decays, unit-norm and unscaled (no force measured).
+peak and refined in its band, the kept poles held fixed (:mod:`~physics.identification.peak_seeds`). Shapes: the
+dominant direction of each mode's complex amplitudes over the decays, unit-norm and unscaled (no force measured).
 """
 
 from __future__ import annotations
@@ -64,6 +65,10 @@ FREE_LEAD_DB = 10.0
 #: :data:`FREE_DROP_DB` with every quarter's energy below the one before (an exponential envelope falls steadily; a
 #: stationary response's quarters rise and fall at random, all three in order by chance one time in six).
 FREE_DROP_NO_HIT_DB = 10.0
+#: An oversampled record is searched for hits at its content's rate too: this many times its highest clear peak ...
+CONTENT_RATE = 2.5
+#: ... keeping at least this many predictor orders of samples.
+MIN_DECIMATED_ORDERS = 40
 #: Largest block Hankel dimension (block rows x channels) of the ERA.
 MAX_HANKEL_ROWS = 160
 #: A refined pole is kept when its energy over the decays is at least this many noise variances
@@ -230,6 +235,41 @@ def _adds_energy(x, firsts, lasts, w):
     return after * np.clip(np.minimum(w, firsts), 1, None) >= HIT_GAIN * before * w
 
 
+def _hit_runs(x, p, rises=True):
+    """The runs of samples of ``x`` (mean removed, shape (n_channels, n_samples)) that hold a hit: the samples
+    whose innovation exceeds :data:`HIT_SIGMA` robust standard deviations and (with ``rises``) the rises
+    (:func:`_rises`), runs closer than ``p`` samples one, a rise within a run starting a new one: ``(first, last)``
+    sample arrays."""
+    innovation = _innovations(x)
+    over = np.flatnonzero(innovation > HIT_SIGMA ** 2 * x.shape[0])
+    r_first, r_last = _rises(x, innovation, p) if rises else (np.zeros(0, int), np.zeros(0, int))
+    over = np.unique(np.concatenate([over, r_first, r_last]))
+    if not over.size:
+        return np.zeros(0, int), np.zeros(0, int)
+    gaps = np.flatnonzero((np.diff(over) > p) | np.isin(over[1:], r_first))
+    return over[np.concatenate([[0], gaps + 1])], over[np.concatenate([gaps, [over.size - 1]])]
+
+
+def _content_decimation(checked):
+    """The decimation that brings a record to :data:`CONTENT_RATE` times its highest clear peak
+    (:func:`decay_spectrum`; 1 without a clear peak), keeping :data:`MIN_DECIMATED_ORDERS` predictor orders of
+    samples: the rate at which a hit stands out of the noise of an oversampled record."""
+    peaks = clear_peaks(decay_spectrum(checked)).frequency_hz
+    if not peaks.size:
+        return 1
+    q = int(checked.sampling_frequency_hz // (CONTENT_RATE * peaks.max()))
+    return max(1, min(q, checked.signals.shape[1] // (MIN_DECIMATED_ORDERS * PREDICTOR_ORDER)))
+
+
+def _block_means(x, q):
+    """The means of ``x`` (shape (n_channels, n_samples)) over consecutive blocks of ``q`` samples (the last
+    partial block dropped): a decimation whose sample ``k`` holds samples ``kq`` to ``(k + 1)q - 1`` alone, so
+    that a hit it shows lies at or before ``(k + 1)q - 1``; its white noise falls by ``q`` as through an ideal
+    low-pass filter."""
+    m = x.shape[1] // q
+    return x[:, :m * q].reshape(x.shape[0], m, q).mean(axis=2)
+
+
 def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Decays:
     """The hits and free decays of a checked record (see the module docstring).
 
@@ -237,7 +277,13 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
     channel, which a free response does not have) exceeds :data:`HIT_SIGMA` robust standard deviations, or a
     sharp rise of the record's energy (:data:`HIT_RISE`; an impulse on a displacement or strain record, or a
     release, shows only a small innovation) placed at the largest innovation near it; hits closer than the
-    predictor's order are one, and a hit that adds no energy (:func:`_adds_energy`) is none. Each decay runs from
+    predictor's order are one, and a hit that adds no energy (:func:`_adds_energy`) is none. An oversampled record
+    is searched again for innovations at :data:`CONTENT_RATE` times its highest clear peak (block means,
+    :func:`_content_decimation`): its noise is white over the whole rate while the response to a hit, spread over
+    many samples, stands out only in the band of the modes (a scope's capture, hundreds of samples per period of
+    its first mode). A hit found there alone starts after the block that shows it (never before the hit, at most
+    two blocks after it). Not for rises: at that rate a stationary response's own energy rises fourfold within a
+    period at random. Each decay runs from
     the sample after a hit to the sample before the next one (or
     the record's end); the part before the first hit (or the whole record, without a hit) from its loudest sample
     on is a decay when its energy falls steadily (:func:`_decays_without_hit`). Decays
@@ -248,19 +294,20 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
     p = int(min(PREDICTOR_ORDER, max(2, n // 20)))
     least = 4 * p if min_samples is None else int(min_samples)
     w = 4 * p if lowest_hz is None else max(4 * p, int(np.ceil(checked.sampling_frequency_hz / lowest_hz)))
-    innovation = _innovations(x)
-    over = np.flatnonzero(innovation > HIT_SIGMA ** 2 * n_ch)
-    r_first, r_last = _rises(x, innovation, p)
-    over = np.unique(np.concatenate([over, r_first, r_last]))
-    if over.size:
-        cut = (np.diff(over) > p) | np.isin(over[1:], r_first)          # a run, or a rise within one, starts a hit
-        gaps = np.flatnonzero(cut)
-        firsts, lasts = over[np.concatenate([[0], gaps + 1])], over[np.concatenate([gaps, [over.size - 1]])]
+    firsts, lasts = _hit_runs(x, p)
+    q = _content_decimation(checked)
+    if q > 1:                                           # the hits only the record at its content's rate shows
+        f_dec, l_dec = _hit_runs(_block_means(x, q), int(min(PREDICTOR_ORDER, max(2, (n // q) // 20))), rises=False)
+        l_dec = np.minimum(l_dec * q + q - 1, n - 1)
+        f_dec = np.minimum((f_dec + 1) * q, l_dec)      # the block before may hold the hit's first samples
+        near = np.any((f_dec[:, None] <= lasts[None, :] + p) & (l_dec[:, None] >= firsts[None, :] - p), axis=1)
+        order = np.argsort(np.concatenate([firsts, f_dec[~near]]), kind="stable")
+        firsts = np.concatenate([firsts, f_dec[~near]])[order]
+        lasts = np.concatenate([lasts, l_dec[~near]])[order]
+    if firsts.size:
         lasts = np.minimum(lasts, _loudest(x, firsts, lasts) + p // 4)
         keep = _adds_energy(x, firsts, lasts, w)
         firsts, lasts = firsts[keep], lasts[keep]
-    else:
-        firsts = lasts = np.zeros(0, int)
     spans = [(int(last) + 1, int(nxt), int(first)) for first, last, nxt in zip(firsts, lasts, [*firsts[1:], n])]
     spans = [(a, b, o) for a, b, o in spans if b - a >= least]
     drop = [_quarter_drop_db(x, a, b) for a, b, _ in spans]
@@ -566,10 +613,11 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         z_std = np.where(ok, bands.damping_std, fit.damping_std[idx])
         amps = [bands.amplitudes[:, :, j] if ok[j] else fit.amplitudes[:, :, i] for j, i in enumerate(idx)]
         merged = np.asarray(bands.merged, bool)        # a pole merged into a stronger one of its peak is none
-    # the clear peaks no mode holds: each started at its peak and refined in its band beside the modes held
+    # the clear peaks no mode holds: each started at its peak and refined in its band, the modes held fixed
     held_hz = np.abs(lam[~merged]) / (2 * np.pi)
+    held_amps = np.where(ok, bands.amplitudes, np.nan)[:, :, ~merged] if idx.size else None   # NaN: a failed fit
     seeded = refine_seeds(full, fs, lam[~merged], record_peaks, unheld_peaks(record_peaks, held_hz, band),
-                          max_damping)
+                          max_damping, held_amplitudes=held_amps)
     if idx.size - merged.sum() + seeded.eigenvalues.size == 0:
         raise ConvergenceError(f"{where}: no refined pole of the free decays lies in {band[0]:g}-{hi:.4g} Hz, nor "
                                "a mode at a clear peak of their spectrum")

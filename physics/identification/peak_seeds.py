@@ -8,11 +8,14 @@ stable over enough orders. The narrow-band refinement
 (:func:`~physics.identification.band_refine.refine_in_bands`) needs no model of the rest of the spectrum: it fits
 the truncated damped exponentials of the modes of one band and a smooth background on that band's lines alone.
 Started at the peak's frequency with the damping of its half-power width (:func:`seed_poles`), it gives the mode
-with the covariance of its fit, as it does each ERA pole; a seed is kept when its fit converged within the peak's
-tolerance, with a damping ratio in ``(0, max_damping)`` and at least :data:`MIN_DECAY_SIGMAS` of its one sigma,
-apart from every mode held (:func:`refine_seeds`). A mode of a free decay decays: a peak whose fitted decay rate is
-not significantly positive is a sinusoid that lasts the record (mains hum, a quantisation product of a coarse
-capture, a noise line), which a stabilisation diagram would not hold either.
+with the covariance of its fit, as it does each ERA pole, in its own band alone: the modes already held are fixed
+(subtracted by their closed-form transforms, not refined again), but for a held mode that shares the seed's band,
+which is fitted with it (a neighbour that close is no background, and its own fit took the seed's peak for
+background). A seed is kept when its fit converged within the peak's tolerance, with a damping ratio in
+``(0, max_damping)`` and at least :data:`MIN_DECAY_SIGMAS` of its one sigma, apart from every mode held
+(:func:`refine_seeds`). A mode of a free decay decays: a peak whose fitted decay rate is not significantly positive
+is a sinusoid that lasts the record (mains hum, a quantisation product of a coarse capture, a noise line), which a
+stabilisation diagram would not hold either.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from physics.identification.band_refine import refine_in_bands
+from physics.identification.band_refine import band_amplitudes, mode_bands, refine_in_bands
 from physics.identification.fdd import ClearPeaks
 
 __all__ = ["MIN_DECAY_SIGMAS", "SeededModes", "refine_seeds", "seed_poles", "unheld_peaks"]
@@ -76,9 +79,9 @@ def seed_poles(frequency_hz, tolerance_hz, longest_s) -> np.ndarray:
 
 
 def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPeaks, seeds, max_damping,
-                 freq_tol=0.01) -> SeededModes:
-    """The modes of the clear peaks ``seeds`` (indices into ``peaks``), each refined in its band beside the modes
-    held (see the module docstring).
+                 freq_tol=0.01, held_amplitudes=None) -> SeededModes:
+    """The modes of the clear peaks ``seeds`` (indices into ``peaks``), each refined in its own band with the modes
+    held fixed (see the module docstring).
 
     Parameters
     ----------
@@ -86,13 +89,19 @@ def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPe
         The decays at the record's rate, each from its onset, mean removed.
     sampling_frequency_hz : float
     held_eigenvalues : array_like, complex, shape (n_held,)
-        The modes already held (rad/s): fitted beside the seeds (a close one in the seed's band, the others
-        subtracted from it), their own refinement left as it was.
+        The modes already held (rad/s). Only the seeds' bands are fitted
+        (:func:`~physics.identification.band_refine.refine_in_bands` with ``fixed``): a held mode whose band a seed
+        shares (:func:`~physics.identification.band_refine.mode_bands`) is refitted with it (its own fit took the
+        seed's peak for background), and its refit is not returned; the others are held fixed (their closed-form
+        transforms subtracted from the decays').
     peaks : ClearPeaks
     seeds : array_like of int
     max_damping : float
     freq_tol : float
         A seed within this relative distance of a held mode, or of a seed kept before it, is dropped.
+    held_amplitudes : array_like, complex, shape (n_decays, n_channels, n_held), optional
+        The held modes' amplitudes on ``decays``; a fixed mode's that are not given (default) or NaN are each group's
+        linear fit in its band (:func:`~physics.identification.band_refine.band_amplitudes`).
 
     Returns
     -------
@@ -108,8 +117,15 @@ def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPe
     fs = float(sampling_frequency_hz)
     longest_s = max(y.shape[1] for y in decays) / fs
     start = seed_poles(peaks.frequency_hz[seeds], peaks.tolerance_hz[seeds], longest_s)
-    fit = refine_in_bands(decays, fs, np.concatenate([held, start]))
-    j = held.size + np.arange(seeds.size)
+    _, group = mode_bands(np.concatenate([held, start]), longest_s, fs / 2)
+    near = np.isin(group[:held.size], group[held.size:])    # a held mode in a seed's band: refitted with it
+    amps = np.full((len(decays), n_ch, held.size), np.nan, complex) if held_amplitudes is None else \
+        np.array(held_amplitudes, complex)
+    lone = ~near & np.any(np.isnan(amps), axis=(0, 1))  # amplitudes unknown: each group's linear fit in its band
+    if lone.any():
+        amps[:, :, lone] = band_amplitudes(decays, fs, held[lone])
+    fit = refine_in_bands(decays, fs, np.concatenate([held[near], start]), fixed=(held[~near], amps[:, :, ~near]))
+    j = near.sum() + np.arange(seeds.size)
     lam = fit.eigenvalues[j]
     fn, zeta = fit.natural_frequencies_hz[j], fit.damping_ratios[j]
     ok = fit.converged[j] & (np.abs(fn - peaks.frequency_hz[seeds]) <= peaks.tolerance_hz[seeds]) \

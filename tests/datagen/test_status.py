@@ -1,11 +1,15 @@
 """No silently wrong sample: the status column, its counts, and configs whose every sample would be degenerate."""
 
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 import pytest
 
-from datagen.config import merge, validate
+from datagen.config import MIN_ROOT_SPRING_RELATIVE, merge, validate
 from datagen.generation import generate
+from datagen.pipeline import simulate_shard
+from datagen.setup import build_setup
 from datagen.store import STATUS, sample_status
 from physics.errors import ConfigError
 
@@ -50,6 +54,19 @@ def test_soft_root_springs_are_flagged_and_counted(tmp_path):
     assert set(counts) == set(STATUS) and sum(counts.values()) == 12
     assert counts["not_positive_definite"] == int((t["status"] == "not_positive_definite").sum())
     assert m["counts"]["converged"] == int(t["converged"].sum())
+
+
+def test_below_the_refused_root_spring_most_updated_models_are_not_positive_definite():
+    """The bound MIN_ROOT_SPRING_RELATIVE (docs/datasets.md, "Status of each sample"): of 20 samples of the default
+    config (seed 0) with the root spring ``k_r L / EI`` set to each value, the updated stiffness is not positive
+    definite in 20 at 0.001, 11 at 0.003, 4 at 0.01, none at 0.03 (their smallest eigenvalues lie 5e-8 or more of
+    the largest away from 0: no rounding flips a count)."""
+    base = build_setup(merge({"measurement": {"lines": 32}}))
+    counts = []
+    for k in (0.001, 0.003, MIN_ROOT_SPRING_RELATIVE, 0.03):
+        labels, out = simulate_shard(replace(base, root_spring_relative=(k, k)), np.random.SeedSequence(0), 20)
+        counts.append(int(np.sum(sample_status(labels, out) == "not_positive_definite")))
+    assert counts == [20, 11, 4, 0]
 
 
 @pytest.mark.parametrize(("override", "key"), [

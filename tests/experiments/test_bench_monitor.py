@@ -3,6 +3,7 @@
 import numpy as np
 
 from experiments.benches.bench_monitor import frequency_shift, score_series
+from experiments.benches.plain_tests import plain_alarms
 
 
 def test_rates_and_delay_of_a_hand_made_series():
@@ -32,12 +33,12 @@ def test_no_detection_gives_no_delay_and_the_frequency_shift_alarms_on_a_drop():
 
 
 def test_the_plainest_tests_alarm_below_the_baselines_own_quantiles():
-    from experiments.benches.bench_detection import plain_tests
-
     rng = np.random.default_rng(0)
     F = np.array([10.0, 60.0]) * (1 + 1e-3 * rng.standard_normal((1001, 2)))
     F[1000] = [10.0 * 0.99, 60.0]                           # mode 1 down 1 % (10 sd), the mean 0.5 %
-    a = plain_tests(F, 1000, 0.01)
+    a = plain_alarms(F, 1000, 0.01, sides=1, method="weibull")
     assert a["plain shift"][1000] and a["plain per mode"][1000]
+    rise = plain_alarms(F, 1000, 0.01, sides=1, method="weibull", sign=-1.0)   # told of a rise: the drop not seen
+    assert not rise["plain shift"][1000] and not rise["plain per mode"][1000]
     assert 0.005 <= a["plain shift"][:1000].mean() <= 0.011   # the baseline's own 1 % quantile, one-sided
     assert 0.005 <= a["plain per mode"][:1000].mean() <= 0.011  # each mode at 0.5 %: at most 1 % together

@@ -50,3 +50,14 @@ def test_quick_run_prints_every_record_method_and_the_baseline(capsys):
     assert len(rows) == len(methods) * (3 + 2)                # decay: 3 modes, ambient: 2
     base = [r for r in rows if r.split("|")[1].strip() == "fftpeak"]
     assert all(r.split("|")[11].strip() in ("1", "-") for r in base)   # its own std ratio
+
+
+def test_the_oversampled_capture_holds_noise_before_its_tap_and_its_bound_counts_the_samples_after():
+    case = bp.DECAY[-1]
+    assert case.label == "decay 1e-03, 8-bit, 10 kHz, tap at 0.4 s"
+    y = bp.decay_records(case, 1, seed=3)[0, 0]
+    tap = int(case.pre_s * case.fs_hz)
+    step = np.diff(np.unique(y)).min()
+    assert y.size == 40000 and np.all(np.abs(y[:tap]) <= step) and np.abs(y[tap:tap + 200]).max() > 50 * step
+    after = bp.Case("decay", 1, case.duration_s - case.pre_s, case.noise, case.bits, case.fs_hz)
+    np.testing.assert_allclose(bp.crb_decay_hz(case), bp.crb_decay_hz(after), rtol=1e-9)

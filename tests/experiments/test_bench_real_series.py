@@ -3,8 +3,8 @@ tests' quantile thresholds, the per-group scores."""
 
 import numpy as np
 
-from experiments.benches.bench_real_series import (fft_frequencies, group_scores, mode_windows_hz, plain_alarms,
-                                                   reference_fft_modes)
+from experiments.benches.bench_real_series import fft_frequencies, group_scores, mode_windows_hz, reference_fft_modes
+from experiments.benches.plain_tests import plain_alarms
 
 
 def _decays(freqs_hz, fs=1000.0, n=4000, zeta=0.01, seed=0):
@@ -41,7 +41,7 @@ def test_the_plain_tests_alarm_beyond_the_baselines_own_quantiles_on_either_side
     F[2000] = [10.0 * 1.01, 60.0]       # mode 1 up 1 % (10 sd): the mean shift 0.5 % (7 sd), both tests see it
     F[2001] = [10.0 * 0.997, 60.0]      # mode 1 down 0.3 % (3 sd): beyond the per-mode 0.25 % quantile only
     F[2002] = [np.nan, np.nan]          # nothing found: no alarm
-    a = plain_alarms(F, 2000, 0.01)
+    a = plain_alarms(F, 2000, 0.01, sides=2, method="linear")
     rel = F / np.median(F[:2000], axis=0) - 1
     mean = rel.mean(axis=1)
     lo, hi = np.quantile(mean[:2000], [0.005, 0.995])

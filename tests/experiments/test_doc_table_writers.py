@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from experiments.benches import bench_bolted_masses, bench_debond_layered, bench_missing_modes, study_beams
+from experiments.benches import bench_bolted_masses, bench_debond_layered, bench_missing_modes, harness, study_beams
 from experiments.second_sim.bolted import write_bolted_test
 from experiments.studies.doc_tables import DOCS, block_names, block_text
 
@@ -53,11 +53,11 @@ def test_sweep_writes_its_own_block_and_leaves_the_others(monkeypatch, tmp_path)
              for p in (0.0, 0.15) for c, acc, fa in (("none", 0.96, 0.024), ("mode 1", 0.43 + p, 0.0))]
     written = {}
     monkeypatch.setattr(bench_missing_modes, "sweep", lambda *a, **k: swept)
-    monkeypatch.setattr(bench_missing_modes, "write_table", lambda page, name, md: written.__setitem__(name, md))
+    monkeypatch.setattr(harness, "write_table", lambda page, name, md: written.__setitem__((page, name), md))
     assert bench_missing_modes.main(["--model", "M", "--sim-n", "0", "--sweep", "T", "--data", "D",
                                      "--out", str(tmp_path), "--docs"]) == 0
-    assert list(written) == ["missing-modes-sweep"]
-    assert written["missing-modes-sweep"].splitlines()[2:] == [
+    assert list(written) == [("classifier.md", "missing-modes-sweep")]       # the page the bench's parser names
+    assert written["classifier.md", "missing-modes-sweep"].splitlines()[2:] == [
         "| p | none missing | mode 1 missing |", "| --- | --- | --- |",
         "| 0 | 96% / 2.4% | 43% / 0.0% |", "| 0.15 | 96% / 2.4% | 58% / 0.0% |"]
     assert "missing-modes-sweep" in block_names((DOCS / "classifier.md").read_text())

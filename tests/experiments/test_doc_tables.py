@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from experiments.benches.harness import parser, publish
 from experiments.studies import doc_tables
 from experiments.studies.doc_tables import DOCS, STAMP, block_names, block_text, git_commit, write_table
 from physics.errors import BeamDamageError
@@ -47,6 +48,17 @@ def test_write_table_replaces_only_its_block(tmp_path):
     assert block_names(after) == ["a", "b"]
     assert block_text(after, "a") == "| x |\n| --- |\n| 3 |\n| 4 |"
     assert block_text(after, "b") == "| y |\n| --- |\n| 2 |"
+
+
+def test_publish_writes_the_block_into_the_page_the_parser_names_with_docs_only(tmp_path):
+    page = tmp_path / "page.md"
+    page.write_text("<!-- bench:a -->\n| x |\n<!-- /bench:a -->\n")
+    p = parser("bench_a.py", "A bench.", docs=str(page))
+    publish(p.parse_args([]), "a", "| y |")
+    assert block_text(page.read_text(), "a") == "| x |"
+    args = p.parse_args(["--docs"])
+    publish(args, "a", "| y |")
+    assert args.docs == str(page) and block_text(page.read_text(), "a") == "| y |"
 
 
 def test_a_written_block_ends_with_its_stamp_and_a_rewrite_replaces_it(tmp_path):

@@ -6,10 +6,12 @@ import warnings
 import numpy as np
 from impact_records import impact_record, poles
 
+from physics.identification.band_refine import band_amplitudes, refine_in_bands
 from physics.identification.decay_peaks import decay_peaks
+from physics.identification.fdd import ClearPeaks
 from physics.identification.fft_peak import identify_fft_peaks
 from physics.identification.free_decay import decay_spectrum, identify_era
-from physics.identification.peak_seeds import refine_seeds, unheld_peaks
+from physics.identification.peak_seeds import refine_seeds, seed_poles, unheld_peaks
 from physics.identification.record_checks import check_records
 
 #: One accelerometer, 4 s at 1 kHz, a hit at 0.2 s: five modes of 1 % damping.
@@ -72,3 +74,36 @@ def test_a_sinusoid_that_lasts_the_record_is_no_seeded_mode():
     assert np.min(np.abs(fft - 50.0)) < 0.05
     got = refine_seeds([y], FS, poles(fn, zeta), peaks, hum, 0.2)
     assert got.eigenvalues.size == 0 and got.tried_hz.size == 1
+
+
+def test_a_seed_is_refined_in_its_own_band_the_held_modes_outside_it_fixed():
+    """A weak 63-Hz mode on the flank of a held 60-Hz one, and a held 150-Hz mode: the 60-Hz mode shares the seed's
+    band and is refitted with it (given 0.02 Hz off, the seed still comes out exact); the 150-Hz mode is held fixed
+    with the amplitude given (0.6 for 0.5): the seed is the band fit of the record less that decay (computed here in
+    time), not of the record with 150 Hz refitted."""
+    n = 3000
+    fn, zeta, amp = np.array([60.0, 63.0, 150.0]), np.array([0.01, 0.02, 0.01]), np.array([1.0, 0.15j, 0.5])
+    lam = poles(fn, zeta)
+    k = np.arange(n) / FS
+    y = np.real(amp @ np.exp(np.outer(lam, k)))[None]
+    held = poles([60.02, 150.0], zeta[[0, 2]])                     # 60 Hz a little off, as an estimate is
+    held_amps = np.array([[[1.0, 0.6]]], complex)                  # 150 Hz's amplitude 20 % off
+    peaks = ClearPeaks(np.array([189]), np.array([63.0]), np.array([20.0]), np.array([[180, 200]]),
+                       np.array([1.0]))
+    start = seed_poles(peaks.frequency_hz, peaks.tolerance_hz, n / FS)
+    got = refine_seeds([y], FS, held, peaks, [0], 0.2, held_amplitudes=held_amps)
+    rest = y - np.real(held_amps[0, 0, 1] * np.exp(held[1] * k))[None]
+    alone = refine_in_bands([rest], FS, np.concatenate([held[:1], start]))
+    assert got.eigenvalues.size == 1 and np.all(alone.converged)
+    np.testing.assert_allclose(got.eigenvalues, alone.eigenvalues[1:], rtol=1e-10)
+    err = abs(got.eigenvalues[0] / lam[1] - 1)          # 60 Hz held fixed 0.02 Hz off: 1e-3
+    assert 1e-7 < err < 1e-5, err                       # 60 Hz refitted; 150 Hz's amplitude error fixed: 1e-6
+    exact = refine_seeds([y], FS, held, peaks, [0], 0.2, held_amplitudes=[[[1.0, 0.5]]])
+    np.testing.assert_allclose(exact.eigenvalues, lam[1:2], rtol=1e-9)         # 150 Hz held exactly
+
+
+def test_the_amplitudes_of_fixed_poles_are_their_bands_linear_fit():
+    """Noise-free decay of 23 and 97 Hz: the band fit's amplitudes at the exact poles are the closed form's."""
+    fn, zeta, amp = np.array([23.0, 97.0]), np.array([0.01, 0.015]), np.array([1.0, 0.4j])
+    y = np.real(amp @ np.exp(np.outer(poles(fn, zeta), np.arange(3000) / FS)))[None]
+    np.testing.assert_allclose(band_amplitudes([y], FS, poles(fn, zeta))[0, 0], amp, rtol=1e-9)
