@@ -19,7 +19,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from experiments.benches.harness import cli_json, parser, table, write_table
+from experiments.benches.harness import cli_json, parser, publish, table
 from experiments.second_sim import one_sensor as osc
 from physics.io import atomic_write_text
 
@@ -113,10 +113,9 @@ def main(argv=None) -> int:
     if not args.json:
         print(f"truth EI {true_ei:.2f} N m^2 ({args.ei_scale:g} x the beam file's), mass {osc.MASS_PER_LENGTH} kg/m")
         print(md)
-    if args.docs:
-        write_table("discrepancy.md", "one-sensor" if args.ei_scale == 1 else "one-sensor-calibration",
-                    md + f"\n\nTruth EI {true_ei:.2f} N m^2 ({args.ei_scale:g} x the beam file's), seeds "
-                    f"{' '.join(map(str, args.seeds))}.")
+    publish(args, "one-sensor" if args.ei_scale == 1 else "one-sensor-calibration",
+            md + f"\n\nTruth EI {true_ei:.2f} N m^2 ({args.ei_scale:g} x the beam file's), seeds "
+            f"{' '.join(map(str, args.seeds))}.")
     return 0
 
 

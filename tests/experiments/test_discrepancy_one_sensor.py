@@ -10,7 +10,9 @@ import numpy as np
 import pytest
 
 import experiments.second_sim.one_sensor as osc
+from experiments.benches import bench_one_sensor as bench
 from experiments.cli import main
+from experiments.studies.doc_tables import DOCS, block_text
 
 TRUE_EI = 1.1 * osc.EI_NM2                        # 103.95 N m^2
 FAST = ["--candidates", "root_flexibility", "--max-effects", "1", "--elements", "24"]
@@ -132,3 +134,14 @@ def test_the_accelerance_uff_calibrates_and_writes_the_beam_file(test_files, cap
     assert out["parameters"]["EI_Nm2"] == pytest.approx(TRUE_EI, rel=0.025)
     assert out["parameters"]["mass_per_length_kg_m"] == pytest.approx(osc.MASS_PER_LENGTH, rel=0.025)
     assert out["stopped"] is None and (tmp_path / "beam.toml").exists()
+
+
+@pytest.mark.slow  # four discrepancy runs on modal data: about a minute
+def test_bench_one_sensor_rows_of_the_modal_data_are_the_pages(tmp_path):
+    """The rows of docs/discrepancy.md's one-sensor block that modal data and frequencies make, regenerated."""
+    page = block_text((DOCS / "discrepancy.md").read_text(), "one-sensor").splitlines()
+    files = bench._files(tmp_path, 0, 1.0)
+    for name in ("modal", "below-band", "spurious"):
+        row = bench.run_input(files, name, osc.EI_NM2)
+        line = "| " + " | ".join(map(str, [bench.INPUTS[name][0], 0, *bench._cell(row)])) + " |"
+        assert line in page
