@@ -23,9 +23,9 @@ variation alarms on any of them with probability ``rate``: the level of the shar
 tests alarm on some statistic at ``rate`` at the plotting position (:func:`_union_rates`,
 :mod:`learn.monitor.union_calibration`: the tails' dependence and each law's fit included), or, with fewer than
 ``1 / rate`` baseline tests, from the Gaussian copula of their ranks (:func:`joint_rates`); strongly dependent
-statistics cost little of the rate, independent ones the weighted Šidák split. A test whose set of modes found the baseline
-does not hold throughout is judged against the thresholds of that set (:func:`held_out_statistics` with its
-``pattern``).
+statistics cost little of the rate, independent ones the weighted Šidák split. A test whose set of modes found
+the baseline does not hold throughout is judged against the thresholds of that set (:func:`held_out_statistics`
+with its ``pattern``).
 """
 
 from __future__ import annotations
