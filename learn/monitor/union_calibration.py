@@ -64,8 +64,10 @@ def union_level(count, rate: float, n: int) -> float | None:
     lo, hi = rate * math.exp(-LEVEL_SPAN), 0.5
     if k < 1 or count(hi) < k + 1:
         return None
-    s_k = entry_level(count, k, lo, hi)
+    below_k, s_k = _bracket(count, k, lo, hi)
     below, s_next = _bracket(count, k + 1, s_k, hi)
+    if s_next <= s_k:                                   # the k-th and the next enter together
+        return below_k
     s = math.exp(math.log(s_k) + (t - k) * (math.log(s_next) - math.log(s_k)))
     return min(s, below)
 

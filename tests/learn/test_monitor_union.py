@@ -67,3 +67,12 @@ def test_value_at_another_rate_is_the_threshold_refitted_at_it(tail_share, side_
     for rate in (0.001, 0.004, 0.02, 0.08):
         refit = threshold(held, rate, 2, 60, tail_share=tail_share, side_share=side_share)
         assert value_at(t, held, rate, side_share) == pytest.approx(refit.value, rel=1e-6)
+
+
+def test_tests_entering_together_keep_the_level_below_them():
+    """The third and the fourth held-out tests enter at one level: ``t = 3.5`` would put the level there, where
+    four alarm; it stays below, where two do."""
+    levels = np.sort(np.r_[np.random.default_rng(6).uniform(0.05, 0.4, 345), [0.002, 0.004, 0.01, 0.01]])
+    count = lambda s: int(np.sum(levels <= s))                                  # noqa: E731
+    s = union_level(count, 0.01, 349)
+    assert count(s) == 2 and s == pytest.approx(0.01, rel=2e-5)
