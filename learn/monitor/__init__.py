@@ -19,7 +19,8 @@ Steps, one module each:
   (leave-one-out or k-fold) and the threshold of a false-alarm rate from a scaled F distribution fitted to them;
 * :mod:`~learn.monitor.statistics` -- the detector: the residual index, the environmental scores' ``T^2`` and the
   signed common shift, each held out and thresholded, the false-alarm rate shared among them (``SHARES``) and
-  calibrated on their joint held-out distribution (:func:`detect`);
+  calibrated on their joint held-out distribution (:func:`detect`; the level of the union of the held-out alarms:
+  :mod:`~learn.monitor.union_calibration`);
 * :mod:`~learn.monitor.charts` -- memory: EWMA charts of the statistics with limits from the baseline's
   autocorrelation, and the onset of a change (:func:`run_charts`);
 * :mod:`~learn.monitor.alarms` -- :func:`monitor_series`, all of it on a series (:class:`SeriesResult` holds the

@@ -18,11 +18,14 @@ Each index is a squared Mahalanobis distance of some part of the residual; its t
 quantile; for the statistics of the environment itself the law fitted to their tail), the shift's on each side of
 its sign (a drop, a rise). The family-wise rate is shared by :data:`SHARES` (one share per one-sided test: the
 residual one, the shift's drop and rise one each, the environmental ``T^2``, which holds the shift's direction among
-its own, a quarter) and calibrated on the statistics' joint held-out distribution (:func:`joint_rates`: strongly
-dependent statistics cost little of the rate, independent ones the weighted Šidák split), so that a test of the
-normal variation alarms on any of them with probability ``rate``. A test whose set of modes found the baseline
-does not hold throughout is judged against the thresholds of that set (:func:`held_out_statistics` with its
-``pattern``).
+its own, a quarter) and calibrated on the statistics' joint held-out distribution, so that a test of the normal
+variation alarms on any of them with probability ``rate``: the level of the shares at which the held-out baseline
+tests alarm on some statistic at ``rate`` at the plotting position (:func:`_union_rates`,
+:mod:`learn.monitor.union_calibration`: the tails' dependence and each law's fit included), or, with fewer than
+``1 / rate`` baseline tests, from the Gaussian copula of their ranks (:func:`joint_rates`); strongly dependent
+statistics cost little of the rate, independent ones the weighted Šidák split. A test whose set of modes found
+the baseline does not hold throughout is judged against the thresholds of that set (:func:`held_out_statistics`
+with its ``pattern``).
 """
 
 from __future__ import annotations
@@ -34,6 +37,7 @@ import numpy as np
 
 from learn.monitor.alarm_threshold import TAIL_SHARE, Threshold, _folds, missing_evidence, threshold, training_size
 from learn.monitor.normal_models import PCARemoval, Regression, _impute
+from learn.monitor.union_calibration import union_rates, value_at
 from datetime import datetime
 
 __all__ = ["COMBINATIONS", "PATTERN_MIN", "SHARES", "STATISTICS", "Detection", "detect", "environmental",
@@ -240,6 +244,9 @@ class Detection:
     combination : str                     one of :data:`COMBINATIONS`
     shift_rise : Threshold or None        the shift's rise side
     shares : dict                         name -> the statistic's share of the rate (``joint``)
+    calibration : str                     ``union``: the shares' level from the union of the held-out tests'
+                                          alarms (:func:`_union_rates`), ``copula``: from the Gaussian copula
+                                          of their ranks (:func:`joint_rates`), empty for ``sidak``
     patterns : dict                       missing modes (1-based, text) -> per statistic ``[Threshold]`` (the
                                           shift's drop and rise), for each set of modes found that the baseline
                                           period does not hold throughout
@@ -259,6 +266,7 @@ class Detection:
     shift_rise: Threshold | None = None
     patterns: dict = field(default_factory=dict)
     shares: dict = field(default_factory=dict)
+    calibration: str = "copula"
 
     def alarmed_by(self, i: int) -> list:
         """Names of the statistics above their thresholds on test ``i``."""
@@ -267,7 +275,9 @@ class Detection:
     def to_dict(self) -> dict:
         how = {"joint": "per-statistic rates shared by " + ", ".join(f"{nm} {w:g}" for nm, w in self.shares.items())
                         + " and calibrated on the baseline's joint held-out statistics "
-                        "(a Gaussian copula of their ranks) so that any statistic alarms at the rate",
+                        + ("(the union of their alarms over the held-out tests at the plotting position)"
+                           if self.calibration == "union" else "(a Gaussian copula of their ranks)")
+                        + " so that any statistic alarms at the rate",
                "equal": "equal per-statistic rates calibrated on the baseline's joint held-out statistics (a Gaussian "
                         "copula of their ranks) so that any statistic alarms at the rate",
                "sidak": "the Sidak rate 1 - (1 - rate)^(1/K) of the K statistics"}[self.combination]
@@ -360,8 +370,13 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
                 vec[rest] = now[nm][1]
             vectors[nm] = vec
     rates = family_rates(values[b_idx], rate, names, combination, shares) if names else np.zeros(0)
-    each = dict(zip(names, rates))
     n_train = training_size(len(b_idx))
+    calibration = {"joint": "copula", "equal": "copula"}.get(combination, "")
+    if combination == "joint" and len(names) > 1:
+        union = _union_rates(model, held, names, rate, rates, n_train, n_conditions, shares)
+        if union is not None:
+            rates, calibration = union, "union"
+    each = dict(zip(names, rates))
     ths = _thresholds(model, held, names, each, n_train, n_conditions)
     z = vectors["shift"][:, 0] if "shift" in vectors else np.zeros(n)
     R = np.full((n, max(len(names), 1)), np.nan)
@@ -388,7 +403,40 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
     shift[scored] = shift_fraction(model, X[scored], None if C is None else C[scored])
     return Detection(names, values, tuple(ths[nm][0] for nm in names), rate, rates, ratio, np.nan_to_num(ratio) > 1.0,
                      vectors, 100 * shift, R, combination, ths["shift"][1] if "shift" in ths else None, patterns,
-                     {nm: (SHARES if shares is None else shares)[nm] for nm in names} if combination == "joint" else {})
+                     {nm: (SHARES if shares is None else shares)[nm] for nm in names} if combination == "joint" else {},
+                     calibration)
+
+
+def _union_rates(model, held, names, rate: float, rates, n_train: int, n_conditions: int, shares=None):
+    """Per-statistic rates (K,) of ``names`` at the shares :data:`SHARES` (or ``shares``) whose union alarms on the
+    held-out baseline tests scored on every statistic (``held``: :func:`held_out_statistics`) at ``rate`` at the
+    plotting position (:func:`~learn.monitor.union_calibration.union_rates`); each statistic's threshold as
+    :func:`_thresholds` sets it (its law fitted once, at the rates ``rates``, and read at each level by
+    :func:`~learn.monitor.union_calibration.value_at`); None when the baseline holds no held-out test at the
+    rate."""
+    shares = SHARES if shares is None else shares
+    H = np.column_stack([held[nm][0] for nm in names])
+    rows = np.isfinite(H).all(axis=1)
+    z = held["shift"][1][rows, 0] if "shift" in names else np.zeros(int(rows.sum()))
+    base = _thresholds(model, held, names, dict(zip(names, rates)), n_train, n_conditions)
+    parts = {}                          # name -> [(threshold, its held-out indices, side share, share of the rate)]
+    for nm in names:
+        if nm != "shift":
+            parts[nm] = [(base[nm][0], held[nm][0], 1.0, 1.0)]
+            continue
+        zs = held[nm][1][:, 0][np.isfinite(held[nm][1][:, 0])]
+        if base[nm][0] is base[nm][1]:                      # a side with fewer than 2 tests: both sides' squares
+            parts[nm] = [(base[nm][0], zs**2, 1.0, 1.0)] * 2
+        else:
+            parts[nm] = [(t, (sign * zs)[sign * zs > 0] ** 2, float(np.mean(sign * zs > 0)), 0.5)
+                         for t, sign in zip(base[nm], (-1.0, 1.0))]
+
+    def count(r):
+        ths = {nm: [replace(t, value=value_at(t, y, f * r_k, side)) for t, y, side, f in parts[nm]]
+               for nm, r_k in zip(names, r)}
+        return int((_ratios(H[rows], z, ths, names) > 1.0).any(axis=1).sum())
+
+    return union_rates(count, [shares[nm] for nm in names], rate, int(rows.sum()))
 
 
 def environmental(model, name: str) -> bool:
