@@ -23,8 +23,8 @@ from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.poles import StabilisationDiagram
 from physics.identification.record_checks import CheckedRecord
 
-__all__ = ["FLOOR_LINES", "ChannelWeights", "noise_floor_weights", "unweighted_diagram", "unweighted_estimate",
-           "weighted_record"]
+__all__ = ["FLOOR_LINES", "ChannelWeights", "WeightedChannels", "noise_floor_weights", "unweighted_diagram",
+           "unweighted_estimate", "weighted_record"]
 
 #: Spectral lines over the band the floor is read from (fewer when the record holds fewer than eight frames of
 #: that resolution).
@@ -87,14 +87,38 @@ def noise_floor_weights(checked: CheckedRecord) -> ChannelWeights:
     return ChannelWeights(w / np.exp(np.mean(np.log(w))), floor)
 
 
+class WeightedChannels:
+    """A record's channels each multiplied by its weight, computed as its parts are read: a slice ``[rows, cols]``
+    is read from the record (an array or a ``np.memmap``, read chunk by chunk as before) and weighted; ``np.asarray``
+    weighs the whole record.
+
+    Parameters
+    ----------
+    signals : array_like, shape (n_channels, n_samples)
+    weights : ndarray, shape (n_channels,)
+    """
+
+    def __init__(self, signals, weights):
+        self._signals = signals
+        self._weights = np.broadcast_to(np.asarray(weights, float)[:, None], signals.shape)
+        self.shape, self.ndim, self.size, self.dtype = signals.shape, 2, signals.size, np.dtype(np.float64)
+
+    def __getitem__(self, key):
+        return np.asarray(self._signals[key], dtype=np.float64) * self._weights[key]
+
+    def __array__(self, dtype=None, copy=None):
+        y = np.asarray(self._signals, dtype=np.float64) * self._weights
+        return y if dtype is None else y.astype(dtype, copy=False)
+
+
 def weighted_record(checked: CheckedRecord, weights: ChannelWeights) -> CheckedRecord:
-    """The record with channel ``k`` multiplied by ``weights.weights[k]`` (its mean too); the record itself when
-    every weight is 1."""
+    """The record with channel ``k`` multiplied by ``weights.weights[k]`` (its mean too; the samples as they are
+    read, :class:`WeightedChannels`); the record itself when every weight is 1."""
     w = np.asarray(weights.weights, float)
     if np.all(w == 1.0):
         return checked
-    y = np.asarray(checked.signals, dtype=np.float64) * w[:, None]
-    return CheckedRecord(y, checked.sampling_frequency_hz, checked.band_hz, checked.mean * w)
+    return CheckedRecord(WeightedChannels(checked.signals, w), checked.sampling_frequency_hz, checked.band_hz,
+                         checked.mean * w)
 
 
 def _unweighted_rows(x, w, axis):

@@ -10,6 +10,7 @@ from physics.identification import identify_records
 from physics.identification.channel_weights import noise_floor_weights, unweighted_estimate, weighted_record
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.record_checks import check_records
+from physics.identification.ssi import MAX_TOEPLITZ_ROWS, MIN_BLOCK_ROWS, _pass_sizes
 from physics.io.timedata import TimeRecords
 
 FS_HZ, MODES_HZ, BAND_HZ = 40.0, np.array([4.0, 11.0]), (1.0, 16.0)
@@ -92,7 +93,9 @@ def test_weighting_and_unweighting_are_exact_inverses_on_the_shapes():
     checked = check_records(y, FS_HZ, BAND_HZ)
     w = noise_floor_weights(checked)
     wc = weighted_record(checked, w)
-    np.testing.assert_allclose(wc.signals, y * w.weights[:, None], rtol=1e-15)
+    np.testing.assert_allclose(np.asarray(wc.signals), y * w.weights[:, None], rtol=1e-15)
+    np.testing.assert_allclose(wc.signals[:, 10:20], y[:, 10:20] * w.weights[:, None], rtol=1e-15)
+    np.testing.assert_allclose(wc.signals[1, 5:9], y[1, 5:9] * w.weights[1], rtol=1e-15)
     np.testing.assert_allclose(wc.mean, checked.mean * w.weights, rtol=1e-15)
     # a shape measured on the weighted record is W phi: unweighted, it is phi (unit norm, largest entry real > 0)
     phi = np.array([[0.6 + 0.1j, -0.2], [0.8, 0.98j]])
@@ -106,3 +109,13 @@ def test_weighting_and_unweighting_are_exact_inverses_on_the_shapes():
     ref = ref * (np.abs(ref[k, [0, 1]]) / ref[k, [0, 1]])
     np.testing.assert_allclose(back, ref, atol=1e-12)
     np.testing.assert_allclose(unweighted_estimate(est, w).mpc, modal_phase_collinearity(ref), atol=1e-12)
+
+
+@pytest.mark.parametrize("n_ch, rows", [(1, 81), (2, 80), (4, 40), (8, 30)])
+def test_a_channel_added_does_not_shorten_the_lags_the_model_order_is_fitted_on(n_ch, rows):
+    # max_order 80 with automatic block rows: one channel needs 81 rows; more channels keep them up to the
+    # Toeplitz bound of MAX_TOEPLITZ_ROWS rows (160 / n_ch block rows), never below the rank's 80 / n_ch + 1 nor
+    # MIN_BLOCK_ROWS
+    i, p = _pass_sizes(1000.0, 100_000, None, 0, n_ch, n_ch, 80, None)
+    assert i == max(min(81, MAX_TOEPLITZ_ROWS // n_ch), 80 // n_ch + 1, MIN_BLOCK_ROWS) == rows
+    assert p == min(80, 2 * (rows * n_ch // 2))
