@@ -7,9 +7,12 @@ voltages) fills their leading singular vectors with that noise, and the modes th
 found. :func:`noise_floor_weights` gives each channel the weight ``1 / sqrt(floor)``, its floor the median over the
 band of its auto-spectral density (the level between spectral peaks: a mode's peak covers few lines), so that every
 channel's noise has the same level (the diagonal noise whitening of a maximum-likelihood fit) and a channel counts by
-how far its modes stand above its own noise, not by its units. :func:`weighted_record` applies them;
-:func:`unweighted_estimate` and :func:`unweighted_diagram` return the shapes to the record's channels. One channel
-is identified as it is (weight 1).
+how far its modes stand above its own noise, not by its units. Channels whose floors lie within
+:data:`SPREAD_DB` of each other are identified as recorded (weights 1): no channel's noise then stands above another's
+as far as a clear spectral peak stands above its floor, and a reweighting within that spread only moves the poles at
+the edge of the selection (the real 4-channel record ``MPSTD_Set001``, floors within 1.9 dB, loses its weak 141-Hz
+mode when weighted). :func:`weighted_record` applies the weights; :func:`unweighted_estimate` and
+:func:`unweighted_diagram` return the shapes to the record's channels. One channel is identified as it is.
 """
 
 from __future__ import annotations
@@ -18,14 +21,18 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from physics.identification.fdd import cross_spectra, unit_shapes
+from physics.identification.fdd import CLEAR_PEAK_DB, cross_spectra, unit_shapes
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.poles import StabilisationDiagram
 from physics.identification.record_checks import CheckedRecord
 
-__all__ = ["FLOOR_LINES", "ChannelWeights", "WeightedChannels", "noise_floor_weights", "unweighted_diagram",
+__all__ = ["FLOOR_LINES", "SPREAD_DB", "ChannelWeights", "WeightedChannels", "noise_floor_weights",
+           "unweighted_diagram",
            "unweighted_estimate", "weighted_record"]
 
+#: Channels whose floors lie within this many dB of each other are identified as recorded: the height of a clear
+#: spectral peak above its floor (:data:`~physics.identification.fdd.CLEAR_PEAK_DB`).
+SPREAD_DB = CLEAR_PEAK_DB
 #: Spectral lines over the band the floor is read from (fewer when the record holds fewer than eight frames of
 #: that resolution).
 FLOOR_LINES = 256
@@ -38,7 +45,8 @@ class ChannelWeights:
     Attributes
     ----------
     weights : ndarray, shape (n_channels,)
-        ``1 / sqrt(floor)``, scaled to a geometric mean of 1 (all ones for one channel).
+        ``1 / sqrt(floor)``, scaled to a geometric mean of 1 (all ones for one channel, and for floors within
+        :data:`SPREAD_DB` of each other).
     floor : ndarray, shape (n_channels,)
         Median auto-spectral density of each channel over the band (unit^2/Hz; NaN for one channel, not read).
     """
@@ -54,7 +62,8 @@ class ChannelWeights:
 
 
 def noise_floor_weights(checked: CheckedRecord) -> ChannelWeights:
-    """Each channel's weight ``1 / sqrt(floor)`` (see the module docstring), geometric mean 1.
+    """Each channel's weight ``1 / sqrt(floor)`` (see the module docstring), geometric mean 1; all ones when the
+    floors lie within :data:`SPREAD_DB` of each other.
 
     The floor is the median of the channel's Welch auto-spectral density (Hann, half-overlapping frames) over the
     lines of ``checked.band_hz``, at a resolution of :data:`FLOOR_LINES` lines over the band (coarser when the
@@ -83,6 +92,8 @@ def noise_floor_weights(checked: CheckedRecord) -> ChannelWeights:
     floor = np.median(P[inband], axis=0)
     floor = np.where(floor > 0, floor, P[inband].mean(axis=0))
     floor = np.maximum(floor, np.finfo(float).tiny)
+    if 10 * np.log10(floor.max() / floor.min()) <= SPREAD_DB:
+        return ChannelWeights(np.ones(n_ch), floor)
     w = 1.0 / np.sqrt(floor)
     return ChannelWeights(w / np.exp(np.mean(np.log(w))), floor)
 

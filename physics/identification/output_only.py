@@ -49,7 +49,8 @@ class RecordsIdentification:
         Which method was picked and why (``"auto"``); empty for a method named by the caller.
     weights : ChannelWeights or None
         The weight of each channel in the identification (each in units of its own noise floor,
-        :mod:`~physics.identification.channel_weights`); None when the channels were identified as recorded.
+        :mod:`~physics.identification.channel_weights`; all ones for floors within its ``SPREAD_DB``); None for one
+        channel, or ``weigh_channels=False``.
     """
 
     records: TimeRecords
@@ -125,7 +126,8 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
     max_order : int, optional
         Highest model order of SSI/ERA (state dimension; default sized to the record's spectrum).
     weigh_channels : bool
-        With several channels, identify each in units of its own noise floor over the band
+        With several channels whose noise floors over the band lie more than
+        :data:`~physics.identification.channel_weights.SPREAD_DB` apart, identify each in units of its own floor
         (:func:`~physics.identification.channel_weights.noise_floor_weights`; the shapes returned on the recorded
         channels): the choice of method and every method see a channel by how far its modes stand above its noise,
         not by its units. False: the channels as recorded.

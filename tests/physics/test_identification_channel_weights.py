@@ -7,7 +7,8 @@ import pytest
 from oma_records import modal_record
 
 from physics.identification import identify_records
-from physics.identification.channel_weights import noise_floor_weights, unweighted_estimate, weighted_record
+from physics.identification.channel_weights import (SPREAD_DB, noise_floor_weights, unweighted_estimate,
+                                                    weighted_record)
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.record_checks import check_records
 from physics.identification.ssi import MAX_TOEPLITZ_ROWS, MIN_BLOCK_ROWS, _pass_sizes
@@ -113,9 +114,24 @@ def test_weighting_and_unweighting_are_exact_inverses_on_the_shapes():
 
 @pytest.mark.parametrize("n_ch, rows", [(1, 81), (2, 80), (4, 40), (8, 30)])
 def test_a_channel_added_does_not_shorten_the_lags_the_model_order_is_fitted_on(n_ch, rows):
-    # max_order 80 with automatic block rows: one channel needs 81 rows; more channels keep them up to the
-    # Toeplitz bound of MAX_TOEPLITZ_ROWS rows (160 / n_ch block rows), never below the rank's 80 / n_ch + 1 nor
-    # MIN_BLOCK_ROWS
+    # max_order 80 with automatic block rows: one channel's rank needs 81 rows; more channels keep the 80 lags the
+    # order spans up to the Toeplitz bound of MAX_TOEPLITZ_ROWS rows (160 / n_ch block rows), never below the
+    # rank's 80 / n_ch + 1 nor MIN_BLOCK_ROWS
     i, p = _pass_sizes(1000.0, 100_000, None, 0, n_ch, n_ch, 80, None)
-    assert i == max(min(81, MAX_TOEPLITZ_ROWS // n_ch), 80 // n_ch + 1, MIN_BLOCK_ROWS) == rows
+    assert i == max(min(80, MAX_TOEPLITZ_ROWS // n_ch), 80 // n_ch + 1, MIN_BLOCK_ROWS) == rows
     assert p == min(80, 2 * (rows * n_ch // 2))
+
+
+def test_channels_whose_floors_lie_within_a_clear_peaks_height_are_identified_as_recorded():
+    quiet = _quiet_and_loud()[:1]
+    rng = np.random.default_rng(5)
+    # a second channel seeing the modes at half the amplitude, its white noise 3 times the first's: floors about
+    # 20 log10(3) = 9.5 dB apart at most (the modes' tails raise the first channel's floor)
+    noise = 0.1 * quiet.std()
+    y = np.vstack([quiet, 0.5 * quiet + 3 * noise * rng.standard_normal(quiet.shape)])
+    w = noise_floor_weights(check_records(y, FS_HZ, BAND_HZ))
+    assert 0 < w.spread_db <= SPREAD_DB
+    np.testing.assert_array_equal(w.weights, [1.0, 1.0])
+    a, b = _identify(y), _identify(y, weigh_channels=False)
+    np.testing.assert_array_equal(a.estimate.natural_frequencies_hz, b.estimate.natural_frequencies_hz)
+    np.testing.assert_array_equal(a.estimate.shapes, b.estimate.shapes)
