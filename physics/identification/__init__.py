@@ -17,6 +17,8 @@ Modules (each name below is re-exported here):
 ``damped_sinusoids`` variable-projection fit of damped sinusoids common to free decays (one sigma of the poles)
 ``output_only`` :func:`identify_records` on response records (no force) by an output-only method of the table, or
               the one it picks (free response: ``era``; otherwise ``ssi``)
+``channel_weights`` each channel of a multichannel record in units of its own noise floor before the output-only
+              methods, the shapes returned on the recorded channels
 
 Conventions: FRF arrays are ``(n_responses, n_references, n_lines)`` receptances
 (m/N) unless stated; frequencies carry ``_hz`` or ``_rad_s`` in their names.

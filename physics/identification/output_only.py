@@ -8,6 +8,8 @@ from pathlib import Path
 
 from physics.io.inputs import MAX_BYTES, check_input_file
 from physics.errors import ConfigError, ConvergenceError, FileFormatError, ShapeError
+from physics.identification.channel_weights import (ChannelWeights, noise_floor_weights, unweighted_diagram,
+                                                    unweighted_estimate, weighted_record)
 from physics.identification.free_decay import free_response
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate
@@ -45,12 +47,17 @@ class RecordsIdentification:
     diagram : StabilisationDiagram or None
     method_choice : str
         Which method was picked and why (``"auto"``); empty for a method named by the caller.
+    weights : ChannelWeights or None
+        The weight of each channel in the identification (each in units of its own noise floor,
+        :mod:`~physics.identification.channel_weights`; all ones for floors within its ``SPREAD_DB``); None for one
+        channel, or ``weigh_channels=False``.
     """
 
     records: TimeRecords
     estimate: ModalEstimate
     diagram: StabilisationDiagram | None
     method_choice: str = ""
+    weights: ChannelWeights | None = None
 
     @property
     def modal_data(self) -> ModalData:
@@ -102,7 +109,7 @@ def read_response_records(path) -> TimeRecords:
 
 
 def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=None, n_modes=None,
-                     max_order=None) -> RecordsIdentification:
+                     max_order=None, weigh_channels=True) -> RecordsIdentification:
     """Identify modes of response records by an output-only method of :data:`METHODS`.
 
     Parameters
@@ -118,6 +125,12 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
     n_modes : int, optional
     max_order : int, optional
         Highest model order of SSI/ERA (state dimension; default sized to the record's spectrum).
+    weigh_channels : bool
+        With several channels whose noise floors over the band lie more than
+        :data:`~physics.identification.channel_weights.SPREAD_DB` apart, identify each in units of its own floor
+        (:func:`~physics.identification.channel_weights.noise_floor_weights`; the shapes returned on the recorded
+        channels): the choice of method and every method see a channel by how far its modes stand above its noise,
+        not by its units. False: the channels as recorded.
 
     Returns
     -------
@@ -132,15 +145,23 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
     where = str(records.metadata.get("source", "records"))
     fs = records.sampling_frequency_hz
 
-    def fit(name, signals=records.signals):
+    def fit(name, signals):
         spec = METHODS[name]
         options = {"max_order": max_order}
         return spec.fit(signals, fs, band_hz, n_modes, where, **{k: options[k] for k in spec.options})
 
-    if method != "auto":
-        est, diagram = fit(method)
-        return RecordsIdentification(records, est, diagram)
     checked = check_records(records.signals, fs, band_hz, where)     # read once: the methods take it as checked
+    weights = noise_floor_weights(checked) if weigh_channels and checked.signals.shape[0] > 1 else None
+    if weights is not None:
+        checked = weighted_record(checked, weights)
+
+    def result(est, diagram, why=""):
+        if weights is not None:
+            est, diagram = unweighted_estimate(est, weights), unweighted_diagram(diagram, weights)
+        return RecordsIdentification(records, est, diagram, why, weights)
+
+    if method != "auto":
+        return result(*fit(method, checked))
     verdict = free_response(checked)
     picked = FREE_RESPONSE_METHOD if verdict.free else STATIONARY_METHOD
     why = (f"picked {picked}: response records without a force channel, {verdict.text}"
@@ -156,4 +177,4 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         except (ConvergenceError, ShapeError):
             raise first from None
         why = f"{why}; {picked} found no mode ({first}), so {other}"
-    return RecordsIdentification(records, est, diagram, why)
+    return result(est, diagram, why)

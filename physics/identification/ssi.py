@@ -307,11 +307,16 @@ def _pass_sizes(fs_dec, n_dec, lowest_hz, n_peaks, n_ch, n_ref, max_order, block
     """Block rows and highest model order of a pass (the given ones, or sized to its band and to the record: at
     most ``n_dec // 8`` block rows, so that the ``2 i`` correlation lags are a quarter of the decimated samples).
     With automatic block rows a given ``max_order`` is an upper bound: at most ``i * min(n_ref, n_ch)``, the rank
-    of the Toeplitz matrix the record allows."""
+    of the Toeplitz matrix the record allows; the block rows it asks are at least ``max_order``, the lags the order
+    spans in one channel, as far as :data:`MAX_TOEPLITZ_ROWS` allows (and at least the ``max_order / n_ref + 1`` the
+    rank needs): a channel added to a record does not shorten the correlation lags a mode seen by one channel is
+    fitted on."""
     if block_rows:
         i = int(block_rows)
     else:
-        least = max(MIN_BLOCK_ROWS, int(np.ceil((max_order or 0) / n_ref)) + 1)
+        rank = int(np.ceil((max_order or 0) / n_ref)) + 1
+        one_channel = min(max_order or 0, MAX_TOEPLITZ_ROWS // n_ch)
+        least = max(MIN_BLOCK_ROWS, rank, one_channel)
         want = int(np.ceil(BLOCK_ROW_PERIODS * fs_dec / lowest_hz)) if lowest_hz else least
         i = min(max(least, min(want, MAX_TOEPLITZ_ROWS // n_ch)), n_dec // 8)
     p = max_order or min(max(MIN_MAX_ORDER, ORDERS_PER_PEAK * n_peaks), i * min(n_ref, n_ch))
