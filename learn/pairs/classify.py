@@ -352,7 +352,8 @@ def _identification(p, base_md, cur_md, identified: bool, beam) -> dict:
     """The verdict's ``identification``: how the modes were found (``as``: the ``identify`` command that finds the
     same modes), the baseline and measured natural frequencies (Hz; every mode found when the pair is not complete),
     the 1-based modes classified, and every pole found in each test with the model's mode it was paired with
-    (``baseline_poles``, ``measured_poles``: ``{"frequency_hz", "mode"}``, mode None for a pole left unpaired)."""
+    (``baseline_poles``, ``measured_poles``: ``{"frequency_hz", "mode"}``, mode None for a pole left unpaired;
+    ``"choice"`` on one paired among several poles in its mode's band, why it)."""
     if p is None:
         freqs, modes = ([], []), []
     elif p.complete:

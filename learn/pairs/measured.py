@@ -10,6 +10,7 @@ import numpy as np
 
 from learn.network.features import BeamSpec
 from learn.explanations.shapes import real_shapes
+from learn.pairs.ratio_trend import choice_texts, trend_picks
 from physics.errors import BeamDamageError
 from physics.identification import identify_frf
 from physics.identification.failures import identification_failure
@@ -117,7 +118,10 @@ class ModalPair:
                                                           eigenvectors are placeholders)
     poles : tuple of 2 lists                              per test, every mode found: ``{"frequency_hz", "mode"}``
                                                           (the model's 1-based mode it was paired with, None for
-                                                          a pole left unpaired); empty on the thesis's 4 modes
+                                                          a pole left unpaired; ``"choice"`` on a pole paired
+                                                          among several in its mode's band:
+                                                          :func:`learn.pairs.ratio_trend.choice_texts`); empty on
+                                                          the thesis's 4 modes
     """
 
     eigenvalues: np.ndarray
@@ -136,7 +140,7 @@ class ModalPair:
 
 
 def pair_modes_by_frequency(frequencies_hz, nominal_hz, tolerance: float | None = None,
-                            shape_mac=None) -> np.ndarray:
+                            shape_mac=None, trend: bool = False) -> np.ndarray:
     """The nominal mode each identified mode is: 0-based indices into ``nominal_hz``, -1 for none.
 
     The identified modes and the nominal beam's are aligned in frequency order: each identified mode pairs with
@@ -148,6 +152,14 @@ def pair_modes_by_frequency(frequencies_hz, nominal_hz, tolerance: float | None 
     more than 18 % from it is not mode 6). With ``shape_mac`` (two or more sensors), a mode whose MAC against
     the nominal shape is below :data:`MIN_PAIR_MAC` is not paired with it either.
 
+    With ``trend`` (classify's pairing, :func:`modal_pair`), where a mode's band holds several poles the one
+    paired is the nearest where the measured/model frequency ratios of the modes whose band holds one pole put it
+    (:func:`learn.pairs.ratio_trend.trend_picks`: ``ln(f / f_model)`` a line in ``f_model``), not the nearest the
+    nominal frequency: an Euler-Bernoulli model's frequencies run increasingly high with the mode (shear), so on a
+    one-accelerometer cantilever a spurious pole at 1227 Hz lies nearer the model's mode 5 (1257 Hz) than mode 5
+    itself (1166 Hz), which lies nearer the 1153 Hz its modes 1-4 predict. With one pole or none in every band
+    the pairing is the same either way.
+
     Parameters
     ----------
     frequencies_hz : array, shape (k,)     identified natural frequencies (Hz), any order
@@ -156,6 +168,8 @@ def pair_modes_by_frequency(frequencies_hz, nominal_hz, tolerance: float | None 
                                            :attr:`learn.pairs.normal_variation.NormalVariation.targets`)
     tolerance : float or array (m,), optional   per mode; default :data:`RATIO_TOLERANCE`
     shape_mac : array, shape (k, m), optional   MAC of each identified shape against each nominal shape
+    trend : bool                                several poles in a band: the nearest the ratio trend, not the
+                                                nominal frequency
 
     Returns
     -------
@@ -189,6 +203,13 @@ def pair_modes_by_frequency(frequencies_hz, nominal_hz, tolerance: float | None 
             best[i] = j
     out = np.empty(f.size, int)
     out[order] = best
+    if not trend:
+        return out
+    picks, _ = trend_picks(f, nominal, _admissible(f, nominal, raw, shape_mac))
+    for j in np.flatnonzero((picks >= 0) & np.isin(np.arange(m), out)):    # several poles in the band of mode j
+        if out[picks[j]] in (-1, j):
+            out[out == j] = -1
+            out[picks[j]] = j
     return out
 
 
@@ -219,7 +240,8 @@ def modal_pair(baseline, current, beam: BeamSpec, nominal_hz, names=("baseline",
 
     Two tests of 4 or more modes give their 4 lowest. When either holds fewer, each test's modes are paired with
     the nominal beam's (:func:`pair_modes_by_frequency`, against ``nominal_hz`` within ``tolerance``; with several
-    baselines, their modes and bands: :attr:`learn.pairs.normal_variation.NormalVariation.targets`) and the modes both
+    baselines, their modes and bands: :attr:`learn.pairs.normal_variation.NormalVariation.targets`; several poles in
+    a band: the nearest the ratio trend of the others, ``trend``; then :func:`prefer_shared_poles`) and the modes both
     hold are kept; ``found`` (one text per test, e.g. ``"LSCF/LSFD found 2 modes in 2-500 Hz"``) says in
     :attr:`ModalPair.missing` where the others went (with ``tolerance``, also the nearest pole left unpaired: the
     mode moved beyond its band, or lost).
@@ -252,7 +274,7 @@ def modal_pair(baseline, current, beam: BeamSpec, nominal_hz, names=("baseline",
     tol = None if tolerance is None else np.asarray(tolerance, float)[:m]
     f_hz = [np.abs(x) / (2 * np.pi) for x in lams]
     macs = [None if shapeless else _nominal_mac(v, beam) for v in vecs]
-    which = [pair_modes_by_frequency(f, nominal_hz[:m], tol, shape_mac=s) for f, s in zip(f_hz, macs)]
+    which = [pair_modes_by_frequency(f, nominal_hz[:m], tol, shape_mac=s, trend=True) for f, s in zip(f_hz, macs)]
     which = list(prefer_shared_poles(f_hz, which, nominal_hz[:m], tol, macs))
     common = np.intersect1d(*which)
     common = common[common >= 0]
@@ -266,8 +288,12 @@ def modal_pair(baseline, current, beam: BeamSpec, nominal_hz, names=("baseline",
                                                                   pairing_bands(nominal_hz[:m], tol), absent,
                                                                   beam.modes)) + ")")
     take = [[int(np.flatnonzero(k == j)[0]) for j in common] for k in which]
-    poles = tuple([{"frequency_hz": float(abs(lam) / (2 * np.pi)), "mode": beam.modes[j] if j >= 0 else None}
-                   for lam, j in zip(x, k)] for x, k in zip(lams, which))
+    notes = [choice_texts(f, nominal_hz[:m], _admissible(f, nominal_hz[:m], RATIO_TOLERANCE if tol is None else tol, s),
+                          k, beam.modes, "the model" if tol is None else "the baselines")
+             for f, s, k in zip(f_hz, macs, which)]
+    poles = tuple([{"frequency_hz": float(abs(lam) / (2 * np.pi)), "mode": beam.modes[j] if j >= 0 else None,
+                    **({"choice": note[i]} if i in note else {})}
+                   for i, (lam, j) in enumerate(zip(x, k))] for x, k, note in zip(lams, which, notes))
     return ModalPair(np.stack([x[t] for x, t in zip(lams, take)]), np.stack([v[:, t] for v, t in zip(vecs, take)]),
                      common, tuple(missing), tuple(warnings), m, shapeless, poles)
 

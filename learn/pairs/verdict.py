@@ -356,6 +356,7 @@ def verdict_text(res: dict, words: DamageWords = DamageWords()) -> str:
             lines.append(f"{name.capitalize()} poles -> the model's modes: "
                          + ", ".join(f"{p['frequency_hz']:.2f} Hz -> "
                                      + (f"mode {p['mode']}" if p["mode"] is not None else "none (unpaired)")
+                                     + (f" ({p['choice']})" if p.get("choice") else "")
                                      for p in poles))
     for name, d in (res.get("dof_positions") or {}).items():
         lines.append(f"{name}: " + (dof_positions_text(d) if d else "modal data without DOF labels: rows taken as "
