@@ -7,20 +7,25 @@ Parses, calls :func:`physics.discrepancy.analyse_file` (which reads the measurem
 from __future__ import annotations
 
 import sys
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
 from experiments.cli import one_line
 from experiments.cli.args import add_beam_argument
-from learn.pairs.measured import pair_modes_by_frequency  # classify's pairing rule
+from learn.pairs.measured import pair_modes_by_frequency
 from physics import discrepancy as dsc
 from physics.effects import CANDIDATES
 from physics.supports import SUPPORTS
 from physics.errors import ConfigError
 from physics.io import FRF, MODAL, accepted, dof_positions_text
 
-__all__ = ["add_parser", "run"]
+__all__ = ["CLASSIFY_PAIRING", "add_parser", "run"]
+
+#: classify's pairing rule (:func:`learn.pairs.measured.modal_pair`'s): several poles in a mode's band, the one the
+#: other modes' ratio trend puts nearest
+CLASSIFY_PAIRING = partial(pair_modes_by_frequency, trend=True)
 
 
 def run(args) -> dict:
@@ -44,7 +49,7 @@ def run(args) -> dict:
                                max_effects=args.max_effects, n_elements=args.elements, seed=args.seed,
                                candidates=None if args.candidates is None else tuple(args.candidates),
                                estimate_noise=args.frequency_noise is None and args.shape_noise is None,
-                               progress=progress, pairing=pair_modes_by_frequency)
+                               progress=progress, pairing=CLASSIFY_PAIRING)
     except dsc.ImplausibleTest as exc:   # before any fit: the result is the pairing and its causes
         _stop(exc.result["stopped"])
         return {**exc.result, "beam_file": None, "exit_code": 2}

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import experiments.second_sim.one_sensor as osc
+from experiments.cli.cmd_discrepancy import CLASSIFY_PAIRING
 from learn.pairs.measured import pair_modes_by_frequency
 from physics import discrepancy as dsc
 from physics.beam import load_beam
@@ -127,6 +128,10 @@ def test_the_pole_off_the_other_modes_common_ratio_is_named_the_likelier_spuriou
     assert re.search(r"; modes 2, 3, 4 stand \+4\.65 % off the model on the median, 1320 Hz [+-]0\.0 % off mode 5 so "
                      r"scaled, the measured mode at 1230 Hz -6\.8 %: 1230 Hz is the likelier spurious pole$",
                      p.unpaired[0])
+    # the command's rule (classify's, with the ratio trend): 1320 Hz is mode 5, 1230 Hz the unpaired pole named
+    p = _pairing(beam, sorted([*f, 1230.0]), CLASSIFY_PAIRING)
+    assert p.model_index.tolist() == [1, 2, 3, -1, 4] and not p.plausible
+    assert p.unpaired[0].startswith("measured mode at 1230 Hz pairs with no model mode")
     # a pole off the common ratio itself gets no such sentence
     q = _pairing(beam, [22.2, 138.8, 386.3, 757.9, 1150.0, 1261.2])
     assert "likelier spurious pole" not in q.unpaired[0]
