@@ -13,7 +13,8 @@ uniform loss of ``EI`` of 0.25, 0.5 and 1 %, a 0.25 % drop of mode 1, a 0.25 % m
   (:mod:`learn.monitor.union_calibration`);
 * ``copula``: the same shares, their level from the Gaussian copula of the held-out statistics' ranks
   (:func:`~learn.monitor.statistics.joint_rates`);
-* ``plain shift, both signs`` and ``plain per mode``: :func:`experiments.benches.bench_detection.plain_tests`.
+* ``plain shift, both signs`` and ``plain per mode``: :func:`experiments.benches.plain_tests.plain_alarms` (Weibull
+  plotting position; the shift on both sides, per mode on the damage's side).
 
 False alarms: each seed's share of the intact series' monitoring tests alarmed (the second year), and their mean.
 Detected: the share of the damaged tests alarmed, averaged over the seeds. ``--folds contiguous``: the held-out
@@ -37,7 +38,8 @@ import numpy as np  # noqa: E402
 
 import learn.monitor.statistics as monitor_statistics  # noqa: E402
 from learn.monitor.alarm_threshold import LOO_MAX, N_FOLDS  # noqa: E402
-from experiments.benches.bench_detection import _case, plain_tests  # noqa: E402
+from experiments.benches.bench_detection import _case  # noqa: E402
+from experiments.benches.plain_tests import plain_alarms  # noqa: E402
 from experiments.second_sim.series import frequency_series, mass_loss_pattern, uniform_stiffness_pattern  # noqa: E402
 from experiments.studies.doc_tables import write_table  # noqa: E402
 from learn.monitor.normal_models import NORMAL_MODELS  # noqa: E402
@@ -104,7 +106,8 @@ def run_case(case: str, model_name: str, seed: int, rate: float, damages=DAMAGES
     def columns(F, sel, sign):
         out = {cal: float(100 * _detect(model, F, C, nb, rate, q, held, cal)[sel].mean())
                for cal in ("union", "copula")}
-        plain = plain_tests(F, nb, rate, sign)
+        one, both = (plain_alarms(F, nb, rate, sides=s, sign=sign, method="weibull") for s in (1, 2))
+        plain = {"plain shift, both signs": both["plain shift"], "plain per mode": one["plain per mode"]}
         out.update({nm: float(100 * plain[nm][sel].mean()) for nm in COLUMNS[2:]})
         return out
 
