@@ -45,7 +45,7 @@ def test_the_combination_holds_the_family_wise_rate_on_null_data():
     rates, alone, each = [], [], []
     for _ in range(6):
         det = _detected(_gaussian(rng, 2300), 300, 0.05)
-        assert det.names == ("residual", "environment", "shift", "mode")
+        assert det.names == ("residual", "environment", "shift")
         v = np.array([SHARES[nm] for nm in det.names]) / max(SHARES[nm] for nm in det.names)
         s = -np.expm1(np.log1p(-det.rate_each) / v)             # r_k = 1 - (1 - s)^(v_k): one s for all
         assert np.ptp(s) < 1e-12
@@ -53,7 +53,7 @@ def test_the_combination_holds_the_family_wise_rate_on_null_data():
         rates.append(det.alarm[300:].mean())
         alone.append((det.ratios[300:] > 1).mean(axis=0))
         each.append(det.rate_each)
-    assert 0.025 < np.mean(rates) <= 0.06                       # any of four: 5 %
+    assert 0.025 < np.mean(rates) <= 0.06                       # any of three: 5 %
     np.testing.assert_array_less(np.mean(alone, axis=0), 1.3 * np.mean(each, axis=0))
 
 
@@ -105,7 +105,7 @@ def test_the_onset_of_a_lasting_shift_is_dated_within_a_few_tests():
 def test_monitor_rows_carry_the_statistics_the_chart_and_the_onset(tmp_path):
     csv_path, _, _ = write_modal_series(tmp_path, 50, slit_day=35, seed=4)
     res = monitor_series(read_conditions(csv_path), 30, IdentificationSettings(), progress=False)
-    assert res.detection.names == ("residual", "shift", "mode")   # regression on the temperature: none removed
+    assert res.detection.names == ("residual", "shift")       # regression on the temperature: no removed components
     row = res.rows[40]
     assert row["alarm"] and "residual" in row["alarmed_by"] and row["chart_alarm"]
     assert abs(row["onset"] - 35) <= 2
@@ -159,12 +159,11 @@ def test_the_empirical_threshold_is_the_order_statistic_whose_exceedance_is_the_
 
 @pytest.mark.slow
 def test_a_three_sigma_drift_of_one_mode_is_detected_at_the_closed_form_rate():
-    """One mode, 30 Gaussian baseline tests, 1 % false alarms: the detector (the residual, the signed shift and the
-    per-mode statistic, one statistic with one mode) alarms on a new test with ``z = (x - mean) / s`` beyond its
-    thresholds; for a new test of ``N(mu, sigma^2)`` that probability is ``Phi((mean - a s - mu) / sigma) +
-    Phi((mu - mean - b s) / sigma)`` given the baseline. Averaged over baselines it is the prediction interval's
-    closed form: 1 % on intact tests, and on a 3-sigma drop the noncentral t law's
-    ``P(T(n - 1, -3 / sqrt(1 + 1/n)) < -t(n - 1; 0.995))`` = 58.2 %."""
+    """One mode, 30 Gaussian baseline tests, 1 % false alarms: the detector (the residual and the signed shift, the
+    same statistic with one mode) alarms on a new test with ``z = (x - mean) / s`` beyond its thresholds; for a new
+    test of ``N(mu, sigma^2)`` that probability is ``Phi((mean - a s - mu) / sigma) + Phi((mu - mean - b s) / sigma)``
+    given the baseline. Averaged over baselines it is the prediction interval's closed form: 1 % on intact tests, and
+    on a 3-sigma drop the noncentral t law's ``P(T(n - 1, -3 / sqrt(1 + 1/n)) < -t(n - 1; 0.995))`` = 58.2 %."""
     rng = np.random.default_rng(17)
     n, sigma, rate = 30, 2e-3, 0.01
     found, false = [], []
@@ -173,8 +172,8 @@ def test_a_three_sigma_drift_of_one_mode_is_detected_at_the_closed_form_rate():
         model = PCARemoval().fit(X[:n])
         det = detect(model, model.with_choices, X, None, np.arange(n), np.array([n]), rate)
         th = dict(zip(det.names, det.thresholds))
-        a = math.sqrt(min(th["residual"].value, th["shift"].value, th["mode"].value))
-        b = math.sqrt(min(th["residual"].value, det.shift_rise.value, th["mode"].value))
+        a = math.sqrt(min(th["residual"].value, th["shift"].value))
+        b = math.sqrt(min(th["residual"].value, det.shift_rise.value))
         m, s = X[:n, 0].mean(), X[:n, 0].std(ddof=1)
         p = lambda mu: stats.norm.cdf((m - a * s - mu) / sigma) + stats.norm.sf((m + b * s - mu) / sigma)  # noqa: E731
         found.append(p(-3 * sigma))

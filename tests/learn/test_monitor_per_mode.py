@@ -1,6 +1,6 @@
 """The detector's per-mode statistic (learn.monitor.per_mode): on Gaussian baselines its threshold is the closed
 form of a per-mode prediction interval read family-wise (Bonferroni), and new Gaussian tests exceed it at that
-closed form's rate."""
+closed form's rate; the detector combines it when chosen."""
 
 import math
 
@@ -10,7 +10,7 @@ from scipy import stats
 
 from learn.monitor.normal_models import PCARemoval
 from learn.monitor.per_mode import per_mode_index, per_mode_threshold, per_mode_z
-from learn.monitor.statistics import held_out_statistics
+from learn.monitor.statistics import DEFAULT_STATISTICS, STATISTICS, detect, held_out_statistics
 
 
 def _held_z(X):
@@ -58,3 +58,19 @@ def test_modes_not_found_are_not_judged():
     Zh[:, 1] = np.nan
     t = per_mode_threshold(Zh, 0.01, n - 1)
     assert t.law_value == pytest.approx(n / (n - 1) * stats.f(1, n - 2).isf(0.01 / 2), rel=1e-5)
+
+
+def test_the_detector_combines_it_when_chosen_and_it_alarms_on_one_mode_alone():
+    """``detect`` leaves ``mode`` out by default (:data:`DEFAULT_STATISTICS`); chosen, a jump of one of three
+    independent modes by 8 of its standard deviations is alarmed by it, and a test of the baseline's law is not."""
+    rng = np.random.default_rng(4)
+    n, sd = 30, np.array([1e-3, 3e-3, 2e-4])
+    X = np.r_[rng.standard_normal((n, 3)), [[0.0, 0.0, 0.0], [0.0, 0.0, 8.0]]] * sd
+    model = PCARemoval(0).fit(X[:n])
+    rest = np.array([n, n + 1])
+    assert detect(model, model.with_choices, X, None, np.arange(n), rest, 0.01).names == ("residual", "shift")
+    assert "mode" in STATISTICS and "mode" not in DEFAULT_STATISTICS
+    det = detect(model, model.with_choices, X, None, np.arange(n), rest, 0.01, statistics=STATISTICS)
+    assert det.names == ("residual", "shift", "mode")                 # no removed component: no environment
+    assert not det.alarm[n] and det.alarm[n + 1] and "mode" in det.alarmed_by(n + 1)
+    assert det.rate_each[2] == pytest.approx(det.rate_each[0], rel=1e-9)     # one share each
