@@ -2,7 +2,8 @@
 ``experiments/data/real/README.md``, kept outside the repository's commits; a set that is absent is skipped).
 
 Run: ``python -m experiments.benches.bench_real_series [--data experiments/data/real] [--sets dropbear dropbear-2ch
-ds5-shock ds5-impedance bridge] [--quick] [--rate 0.01] [--out out/bench_real_series] [--docs]``
+ds5-shock ds5-impedance bridge] [--quick] [--rate 0.01] [--statistics residual environment shift mode]
+[--out out/bench_real_series] [--docs]``
 
 Each set becomes a monitoring series: a baseline period (the first ``n_baseline`` tests) and later tests, each a
 group (intact, a change of a known size, or a block of later shocks of unknown damage). Every test's record is
@@ -58,6 +59,7 @@ from learn.monitor import (IdentificationSettings, IdentifiedModes, SeriesInput,
                            reference_modes)
 from learn.monitor.alarms import FLAGGED_STATUSES  # noqa: E402
 from learn.monitor.identification import cached_identification  # noqa: E402
+from learn.monitor.statistics import DEFAULT_STATISTICS, STATISTICS  # noqa: E402
 from physics.errors import BeamDamageError  # noqa: E402
 from physics.identification.fft_peak import fft_peaks, identify_fft_peaks  # noqa: E402
 from physics.io import atomic_write_text  # noqa: E402
@@ -291,14 +293,15 @@ def _crash_text(exc: Exception) -> str:
     return f"crashed: {type(exc).__name__}: {exc} ({Path(tb.filename).name}:{tb.lineno} {tb.name})"
 
 
-def _monitor(files, n_baseline: int, settings: IdentificationSettings, cache, rate: float) -> tuple:
+def _monitor(files, n_baseline: int, settings: IdentificationSettings, cache, rate: float,
+             statistics=DEFAULT_STATISTICS) -> tuple:
     """``(statuses, reference frequencies (Hz), per-test errors, per-test modes, refusal or None)`` of ``monitor``
     on ``files``: its rows and its tests; when it refuses or crashes, each test's identification from the cache."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             res = monitor_series(SeriesInput.from_files(files), n_baseline, settings, cache, rate, progress=False,
-                                 chart="none")
+                                 chart="none", statistics=statistics)
     except BeamDamageError as exc:
         why = str(exc)
     except Exception as exc:                    # a crash of monitor on real records is a result to report
@@ -332,13 +335,14 @@ def _flagged(status) -> np.ndarray:
     return np.array([s in FLAGGED_STATUSES for s in status])
 
 
-def run_set(series: RealSeries, out: Path, rate: float) -> dict:
-    """``monitor`` (on the records, and on the FFT-peak frequencies as modal data) and the plain tests on one
-    series: the per-test flags and the per-group scores."""
+def run_set(series: RealSeries, out: Path, rate: float, statistics=DEFAULT_STATISTICS) -> dict:
+    """``monitor`` (on the records, and on the FFT-peak frequencies as modal data; ``statistics`` combined) and the
+    plain tests on one series: the per-test flags and the per-group scores."""
     t0 = time.perf_counter()
     files = _write_records(series, out / "records" / series.name)
     settings = IdentificationSettings(tuple(series.band_hz))
-    status, mon_ref, errors, tests, mon_error = _monitor(files, series.n_baseline, settings, out / "cache", rate)
+    status, mon_ref, errors, tests, mon_error = _monitor(files, series.n_baseline, settings, out / "cache", rate,
+                                                         statistics)
     t_mon = time.perf_counter() - t0
     nb = series.n_baseline
     ref = reference_fft_modes(series.records[:nb], series.sampling_frequency_hz[:nb], series.band_hz)
@@ -347,7 +351,7 @@ def run_set(series: RealSeries, out: Path, rate: float) -> dict:
     plain = plain_alarms(F, nb, rate, sides=2, method="linear") if ref.size else {
         k: np.zeros(len(files), bool) for k in ("plain shift", "plain per mode")}
     fft_status, fft_ref, _, _, fft_error = _monitor(_write_modal(F, out / "fft_modal" / series.name), nb,
-                                                 IdentificationSettings(), None, rate)
+                                                 IdentificationSettings(), None, rate, statistics)
     flags = {"monitor": _flagged(status), **plain, "monitor on FFT peaks": _flagged(fft_status)}
     identified = np.array([t is not None and t.frequencies_hz.size > 0 for t in tests]) if mon_error \
         else np.array([s not in ("not identified", "not judged") for s in status])
@@ -417,6 +421,8 @@ def main(argv=None) -> int:
     p.add_argument("--sets", nargs="+", choices=list(LOADERS), default=list(LOADERS))
     p.add_argument("--quick", action="store_true", help="a third to a half of the later tests")
     p.add_argument("--rate", type=float, default=0.01, help="false-alarm rate (default 0.01)")
+    p.add_argument("--statistics", nargs="+", choices=STATISTICS, default=list(DEFAULT_STATISTICS),
+                   help="the detector's statistics (default: monitor's, residual environment shift)")
     a = p.parse_args(argv)
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -427,7 +433,7 @@ def main(argv=None) -> int:
         if not path.is_file():
             print(f"{name}: {path} absent, skipped")
             continue
-        res = run_set(load(path, a.quick), out, a.rate)
+        res = run_set(load(path, a.quick), out, a.rate, tuple(a.statistics))
         print(f"{name}: {res['n']} tests, {res['seconds']:.0f} s (monitor {res['monitor_seconds']:.0f} s)"
               + (f"; monitor {_no_answer(res['monitor_error'])}: {res['monitor_error']}" if res["monitor_error"]
                  else ""), flush=True)

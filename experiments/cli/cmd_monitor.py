@@ -65,11 +65,12 @@ def add_parser(sub):
     p.add_argument("--chart", choices=("ewma", "none"), default="ewma",
                    help="memory chart of the statistics (EWMA; limits held out on the baseline period with its "
                         "autocorrelation): chart_alarm and onset of each test (default %(default)s)")
-    p.add_argument("--statistics", nargs="+", choices=("residual", "environment", "shift"),
+    p.add_argument("--statistics", nargs="+", choices=("residual", "environment", "shift", "mode"),
                    default=["residual", "environment", "shift"], metavar="NAME",
-                   help="statistics combined at the false-alarm rate (residual, environment, shift; the residual "
-                        "always): leave environment and shift out when the baseline period does not cover the "
-                        "conditions the tests meet (default: all)")
+                   help="statistics combined at the false-alarm rate (residual, environment, shift, mode: each "
+                        "mode against its own prediction interval; the residual always): leave environment and "
+                        "shift out when the baseline period does not cover the conditions the tests meet (default: "
+                        "residual environment shift)")
     p.add_argument("--extrapolated-alarms", choices=EXTRAPOLATED_ALARMS, default="auto",
                    help="a later test beyond the baseline's environment alarmed only by the environment or the shift "
                         f"about the baseline mean: 'separate' reports it as '{EXTRAPOLATED}', beside the alarms; "

@@ -17,10 +17,10 @@ Steps, one module each:
   analysis, a Gaussian mixture); each gives a squared Mahalanobis distance of a test's residual (the novelty index);
 * :mod:`~learn.monitor.alarm_threshold` -- every baseline test's index by a model that did not see it
   (leave-one-out or k-fold) and the threshold of a false-alarm rate from a scaled F distribution fitted to them;
-* :mod:`~learn.monitor.statistics` -- the detector: the residual index, the environmental scores' ``T^2`` and the
-  signed common shift, each held out and thresholded, the false-alarm rate shared among them (``SHARES``) and
-  calibrated on their joint held-out distribution (:func:`detect`; the level of the union of the held-out alarms:
-  :mod:`~learn.monitor.union_calibration`);
+* :mod:`~learn.monitor.statistics` -- the detector: the residual index, the environmental scores' ``T^2``, the
+  signed common shift and, when chosen, the per-mode prediction interval (:mod:`~learn.monitor.per_mode`), each held
+  out and thresholded, the false-alarm rate shared among them (``SHARES``) and calibrated on their joint held-out
+  distribution (:func:`detect`; the level of the union of the held-out alarms: :mod:`~learn.monitor.union_calibration`);
 * :mod:`~learn.monitor.charts` -- memory: EWMA charts of the statistics with limits from the baseline's
   autocorrelation, and the onset of a change (:func:`run_charts`);
 * :mod:`~learn.monitor.alarms` -- :func:`monitor_series`, all of it on a series (:class:`SeriesResult` holds the

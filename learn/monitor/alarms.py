@@ -16,8 +16,8 @@ from learn.monitor.normal_models import DEFAULT_LATENT, NORMAL_MODELS
 from learn.monitor.series import SeriesInput, check_series
 from learn.monitor.alarm_threshold import Threshold, minimum_baseline
 from learn.monitor.charts import CHARTS, Charts, run_charts
-from learn.monitor.statistics import (STATISTICS, Detection, covers_seasons, detect, environmental, residual_threshold,
-                                     season_warning)
+from learn.monitor.statistics import (DEFAULT_STATISTICS, STATISTICS, Detection, covers_seasons, detect,
+                                     environmental, residual_threshold, season_warning)
 from learn.monitor.coverage import series_coverage
 from learn.monitor.tracking import (MIN_PRESENCE, MODE_LOST, MODE_MOVED, BeyondBands, ReferenceModes, beyond_bands,
                                    identified_by, readings_text, reference_modes, refit_missing, track_modes)
@@ -74,7 +74,7 @@ class SeriesResult:
 
 def monitor_series(series: SeriesInput, n_baseline: int, settings: IdentificationSettings, cache_dir=None,
                    false_alarm_rate: float = 0.01, normal_model: str | None = None, progress: bool = True,
-                   chart: str = "ewma", statistics=STATISTICS, workers: int = 1,
+                   chart: str = "ewma", statistics=DEFAULT_STATISTICS, workers: int = 1,
                    extrapolated_alarms: str = "auto") -> SeriesResult:
     """Monitor a series: identify every test (cached), track the baseline period's modes, learn the normal
     variation on the baseline period, and score every test against the cross-validated threshold.
@@ -204,7 +204,7 @@ def _detector_fields(det: Detection, charts: Charts | None, i: int, ok: bool) ->
 
 
 def _checked_request(series: SeriesInput, n_baseline: int, false_alarm_rate: float, normal_model: str | None,
-                     chart: str = "ewma", statistics=STATISTICS):
+                     chart: str = "ewma", statistics=DEFAULT_STATISTICS):
     """``(normal model, number of conditions it regresses on)`` of a request, or the one-line error of an argument
     or a baseline period that cannot carry it before any test is identified."""
     n = len(series.files)

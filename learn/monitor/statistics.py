@@ -11,21 +11,25 @@ distribution, combined family-wise at the chosen false-alarm rate.
   cannot see, judged against how far the baseline period's environment went;
 * ``shift``: the signed common shift, the mean relative frequency change weighted by the inverse of each mode's
   normal variance (about the conditions' prediction for the regression, about the baseline mean otherwise),
-  standardised by its baseline standard deviation; its square is the index (one degree of freedom).
+  standardised by its baseline standard deviation; its square is the index (one degree of freedom);
+* ``mode``: each mode's frequency against its own prediction interval, about the same centre over its normal
+  standard deviation, the largest square over the modes found (:mod:`learn.monitor.per_mode`: its threshold the
+  per-mode interval read at ``rate / m``): a change of one mode alone, which the residual spreads over its degrees
+  of freedom and the shift averages over the modes.
 
 Each index is a squared Mahalanobis distance of some part of the residual; its threshold is
-:func:`~learn.monitor.alarm_threshold.threshold` of the held-out baseline indices (a scaled F law and their empirical
-quantile; for the statistics of the environment itself the law fitted to their tail), the shift's on each side of
-its sign (a drop, a rise). The family-wise rate is shared by :data:`SHARES` (one share per one-sided test: the
-residual one, the shift's drop and rise one each, the environmental ``T^2``, which holds the shift's direction among
-its own, a quarter) and calibrated on the statistics' joint held-out distribution, so that a test of the normal
-variation alarms on any of them with probability ``rate``: the level of the shares at which the held-out baseline
-tests alarm on some statistic at ``rate`` at the plotting position (:func:`_union_rates`,
-:mod:`learn.monitor.union_calibration`: the tails' dependence and each law's fit included), or, with fewer than
-``1 / rate`` baseline tests, from the Gaussian copula of their ranks (:func:`joint_rates`); strongly dependent
-statistics cost little of the rate, independent ones the weighted Šidák split. A test whose set of modes found
-the baseline does not hold throughout is judged against the thresholds of that set (:func:`held_out_statistics`
-with its ``pattern``).
+:func:`~learn.monitor.alarm_threshold.threshold` of the held-out baseline indices (a scaled F law and their
+empirical quantile; for the statistics of the environment itself the law fitted to their tail), the shift's on each
+side of its sign (a drop, a rise). The family-wise rate is shared by :data:`SHARES` (one share per one-sided test:
+the residual one, the shift's drop and rise one each, the per-mode statistic one, the environmental ``T^2``, which
+holds the shift's direction among its own, a quarter) and calibrated on the statistics' joint held-out distribution,
+so that a test of the normal variation alarms on any of them with probability ``rate``: the level of the shares at
+which the held-out baseline tests alarm on some statistic at ``rate`` at the plotting position
+(:func:`_union_rates`, :mod:`learn.monitor.union_calibration`: the tails' dependence and each law's fit included),
+or, with fewer than ``1 / rate`` baseline tests, from the Gaussian copula of their ranks (:func:`joint_rates`);
+strongly dependent statistics cost little of the rate, independent ones the weighted Šidák split. A test whose set
+of modes found the baseline does not hold throughout is judged against the thresholds of that set
+(:func:`held_out_statistics` with its ``pattern``).
 """
 
 from __future__ import annotations
@@ -37,15 +41,20 @@ import numpy as np
 
 from learn.monitor.alarm_threshold import TAIL_SHARE, Threshold, _folds, missing_evidence, threshold, training_size
 from learn.monitor.normal_models import PCARemoval, Regression, _impute
+from learn.monitor.per_mode import per_mode_index, per_mode_threshold, per_mode_z
 from learn.monitor.union_calibration import union_rates, value_at
 from datetime import datetime
 
-__all__ = ["COMBINATIONS", "PATTERN_MIN", "SHARES", "STATISTICS", "Detection", "detect", "environmental",
-           "held_out_statistics", "covers_seasons", "family_rates", "joint_rate", "joint_rates", "season_warning",
-           "sidak_rate", "statistics_of"]
+__all__ = ["COMBINATIONS", "DEFAULT_STATISTICS", "PATTERN_MIN", "SHARES", "STATISTICS", "Detection", "detect",
+           "environmental", "held_out_statistics", "covers_seasons", "family_rates", "joint_rate", "joint_rates",
+           "season_warning", "sidak_rate", "statistics_of"]
 
 #: The detector's statistics (module docstring).
-STATISTICS = ("residual", "environment", "shift")
+STATISTICS = ("residual", "environment", "shift", "mode")
+#: Those :func:`detect` and ``monitor`` combine unless told otherwise: ``mode`` is chosen (``--statistics``), its
+#: share of the rate taken from the others costs the simulator's series 1-2 points of detection of small changes
+#: and finds one more later test on the real ones (docs/monitoring.md, real repeated-test series).
+DEFAULT_STATISTICS = ("residual", "environment", "shift")
 
 
 def _inv_sqrt(cov):
@@ -85,6 +94,8 @@ def statistics_of(model, X, C=None) -> dict:
     sd_shift = math.sqrt(max(float(w @ cov @ w), 1e-300))
     z = D @ w / sd_shift
     out["shift"] = (z**2, z[:, None])
+    Z = per_mode_z(model, X, C)
+    out["mode"] = (per_mode_index(Z), Z)
     return out
 
 
@@ -165,8 +176,9 @@ def sidak_rate(rate: float, k: int) -> float:
 #: The residual's index is one test, the signed shift two (a drop, a rise: the plainest tests of a change common to
 #: the modes, of either sign); the environmental ``T^2`` of the removed components holds the shift's direction
 #: among its own (for a common change it is the weaker test of the same evidence) and keeps a quarter share, for a
-#: change along a removed direction that leaves the modes' mean.
-SHARES = {"residual": 1.0, "environment": 0.25, "shift": 2.0}
+#: change along a removed direction that leaves the modes' mean; the per-mode statistic is one test, of a change of
+#: one mode alone.
+SHARES = {"residual": 1.0, "environment": 0.25, "shift": 2.0, "mode": 1.0}
 #: How :func:`detect` shares the rate: ``joint`` (:data:`SHARES`, calibrated on the joint held-out distribution),
 #: ``equal`` (equal shares, so calibrated), ``sidak`` (equal shares, independent statistics assumed).
 COMBINATIONS = ("joint", "equal", "sidak")
@@ -309,6 +321,8 @@ def _thresholds(model, held, names, each, n_train, n_conditions, missing=0, evid
                                empirical_quantile=t.empirical_quantile + evidence)]
         elif nm == "environment":
             out[nm] = [threshold(hv, each[nm], hvec.shape[1], n_train, n_conditions, tail)]
+        elif nm == "mode":
+            out[nm] = [per_mode_threshold(hvec, each[nm], n_train, n_conditions, tail)]
         else:
             z = hvec[:, 0][np.isfinite(hvec[:, 0])]
             sides = []
@@ -335,7 +349,7 @@ def _ratios(values, z, ths, names):
 
 
 def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int = 0,
-           statistics=STATISTICS, held=None, combination: str = "joint", shares=None) -> Detection:
+           statistics=DEFAULT_STATISTICS, held=None, combination: str = "joint", shares=None) -> Detection:
     """The detector on a series: ``model`` fitted on the baseline tests ``X[b_idx]`` (``make_model()`` an unfitted
     copy for the held-out fits), the monitoring tests ``rest`` (indices) scored by it, the baseline tests held
     out (``held``: their :func:`held_out_statistics`, computed when None); every statistic of ``statistics`` that
@@ -363,7 +377,7 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
             values[rest, k] = now[nm][0]
         if nm == "residual" and len(rest):
             values[rest, k] += missing_evidence(X[rest], X[b_idx])
-        if hvec is not None:
+        if hvec is not None and nm != "mode":          # the charts smooth whitened coordinates: not per mode
             vec = np.full((n, hvec.shape[1]), np.nan)
             vec[b_idx] = hvec
             if len(rest):
@@ -444,7 +458,7 @@ def environmental(model, name: str) -> bool:
     shift about the baseline mean), whose bounded distribution gets a threshold law fitted to its tail
     (:func:`~learn.monitor.alarm_threshold.threshold`'s ``tail_share``), rather than a residual about what the
     normal variation explains."""
-    return name == "environment" or (name == "shift" and not isinstance(model, Regression))
+    return name == "environment" or (name in ("shift", "mode") and not isinstance(model, Regression))
 
 
 #: A baseline period of dated tests shorter than this (days) does not cover the seasons.
@@ -457,7 +471,7 @@ def season_warning(times, time_values, n_baseline: int, names) -> str | None:
     seasons it did not see move the environmental scores and the shift about the baseline mean as a change would
     (None otherwise)."""
 
-    env = [nm for nm in names if nm in ("environment", "shift")]
+    env = [nm for nm in names if nm in ("environment", "shift", "mode")]
     span = _baseline_span_days(times, time_values, n_baseline) if env else None
     if span is None or span >= SEASONS_DAYS or time_values[-1] - time_values[0] <= span:
         return None
