@@ -10,7 +10,7 @@ import pytest
 from scipy import stats
 
 from learn.monitor.normal_models import PCARemoval
-from learn.monitor.statistics import SHARES, STATISTICS, detect
+from learn.monitor.statistics import DEFAULT_STATISTICS, SHARES, detect
 from learn.monitor.alarm_threshold import threshold
 from learn.monitor.union_calibration import entry_level, union_level, union_rates, value_at
 
@@ -32,7 +32,7 @@ def test_independent_statistics_give_the_weighted_sidak_split():
     ``rate`` from 40 000 tests, each rate ``1 - (1 - s)^(v_k)`` of its share."""
     n, rate = 40_000, 0.01
     P = np.random.default_rng(4).uniform(size=(n, 3))
-    w = [SHARES[nm] for nm in STATISTICS]
+    w = [SHARES[nm] for nm in DEFAULT_STATISTICS]
     r = union_rates(lambda r: int((P < r).any(axis=1).sum()), w, rate, n)
     union = 1 - np.prod(1 - r)
     assert abs(union - rate) < 4 * math.sqrt(rate * (1 - rate) / n)
@@ -50,7 +50,7 @@ def test_the_detector_holds_the_family_rate_on_new_gaussian_draws(seed):
     X = rng.standard_normal((nb + 40_000, 4)) * np.array([3.0, 1.0, 0.8, 0.6])
     model = PCARemoval(1).fit(X[:nb])
     det = detect(model, lambda: PCARemoval(1), X, None, np.arange(nb), np.arange(nb, len(X)), rate)
-    assert det.calibration == "union" and det.names == STATISTICS
+    assert det.calibration == "union" and det.names == DEFAULT_STATISTICS
     k = rate * (nb + 1)
     sd = math.sqrt(stats.beta(k, nb + 1 - k).var() + rate * (1 - rate) / (len(X) - nb))
     assert abs(det.alarm[nb:].mean() - rate) < 4 * sd
