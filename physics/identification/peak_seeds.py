@@ -18,9 +18,10 @@ is a sinusoid that lasts the record (mains hum, a quantisation product of a coar
 stabilisation diagram would not hold either. A mode re-excited within a decay (a later, softer excitation: a
 footstep on a bridge excites its low modes and adds little to the record's energy, so the segmentation misses it)
 does not decay across the record either: its energy in its own band falls, rises at the re-excitation and falls
-again, while a sinusoid's stays level. A seed whose fit shows no decay is fitted again on the decays cut where the
-energy in its band rises :data:`REEXCITE_RISE` fold (:func:`band_rises`): the pieces are decays of their own
-(their own amplitudes, the poles common), and the seed is kept if it decays there.
+again, while a sinusoid's stays level and a noise-like component's (quantisation products) rises and falls at
+random. A seed whose fit shows no decay is fitted again on the decays cut where the energy in its band rises
+:data:`REEXCITE_RISE` fold, once within a decay (:func:`band_rises`): the pieces are decays of their own (their own
+amplitudes, the poles common), and the seed is kept if it decays there.
 """
 
 from __future__ import annotations
@@ -140,11 +141,15 @@ def _seed_fit(decays, fs, held, start, held_amplitudes):
 
 
 def _cut_at_rises(decays, fs, bands_hz):
-    """The decays cut at the rises of their energy in any of ``bands_hz`` (shape (n_bands, 2), Hz;
-    :func:`band_rises`): the pieces, and the index of each decay's first piece (None where no decay is cut)."""
+    """The decays cut where their energy in one of ``bands_hz`` (shape (n_bands, 2), Hz) rises once
+    (:func:`band_rises`): the pieces, and the index of each decay's first piece (None where no decay is cut). A decay
+    re-excited once falls, rises once and falls again; a band whose energy rises more than once within a decay
+    fluctuates (a noise-like component: the quantisation products of a coarse capture, an ambient excitation) and
+    cuts nothing."""
     pieces, first = [], []
     for y in decays:
-        cuts = np.unique(np.concatenate([band_rises(y, fs, b) for b in bands_hz]))
+        rises = [band_rises(y, fs, b) for b in bands_hz]
+        cuts = np.unique(np.concatenate([r for r in rises if r.size == 1] + [np.zeros(0, int)]))
         edges = [0, *cuts.tolist(), y.shape[1]]
         first.append(len(pieces))
         pieces += [y[:, a:b] for a, b in zip(edges[:-1], edges[1:])]
