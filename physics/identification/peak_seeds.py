@@ -15,7 +15,13 @@ background). A seed is kept when its fit converged within the peak's tolerance, 
 ``(0, max_damping)`` and at least :data:`MIN_DECAY_SIGMAS` of its one sigma, apart from every mode held
 (:func:`refine_seeds`). A mode of a free decay decays: a peak whose fitted decay rate is not significantly positive
 is a sinusoid that lasts the record (mains hum, a quantisation product of a coarse capture, a noise line), which a
-stabilisation diagram would not hold either.
+stabilisation diagram would not hold either. A mode re-excited within a decay (a later, softer excitation: a
+footstep on a bridge excites its low modes and adds little to the record's energy, so the segmentation misses it)
+does not decay across the record either: its energy in its own band falls, rises at the re-excitation and falls
+again, while a sinusoid's stays level and a noise-like component's (quantisation products) rises and falls at
+random. A seed whose fit shows no decay is fitted again on the decays cut where the energy in its band rises
+:data:`REEXCITE_RISE` fold, once within a decay (:func:`band_rises`): the pieces are decays of their own (their own
+amplitudes, the poles common), and the seed is kept if it decays there.
 """
 
 from __future__ import annotations
@@ -27,10 +33,14 @@ import numpy as np
 from physics.identification.band_refine import band_amplitudes, mode_bands, refine_in_bands
 from physics.identification.fdd import ClearPeaks
 
-__all__ = ["MIN_DECAY_SIGMAS", "SeededModes", "refine_seeds", "seed_poles", "unheld_peaks"]
+__all__ = ["MIN_DECAY_SIGMAS", "REEXCITE_RISE", "SeededModes", "band_rises", "refine_seeds", "seed_poles",
+           "unheld_peaks"]
 
 #: A seeded mode's damping ratio is at least this many of its one sigma (it decays within the record).
 MIN_DECAY_SIGMAS = 2.0
+#: A re-excitation: the energy in a seed's band over the next window at least this many times that over the window
+#: before and than the quietest tenth of the windows (:func:`band_rises`).
+REEXCITE_RISE = 4.0
 
 
 @dataclass(frozen=True)
@@ -78,6 +88,74 @@ def seed_poles(frequency_hz, tolerance_hz, longest_s) -> np.ndarray:
     return -sigma + 2j * np.pi * f                  # a decay's spectrum peaks at its damped frequency
 
 
+def band_rises(decay, sampling_frequency_hz, band_hz) -> np.ndarray:
+    """Where the energy of a decay in a band rises (a re-excitation): the samples, shape (n_cuts,) of int.
+
+    The decay's transform (zero-padded to twice its length) on the lines of ``band_hz`` (Hz) alone, transformed
+    back, is the decay in the band; its
+    energy (summed over the channels) over the next window of two over the band's width (the band-limited signal's
+    time resolution) is at least :data:`REEXCITE_RISE` times that over the window before and than the quietest tenth
+    of the windows. Each run of such samples gives one cut, where that ratio is largest (the rise's middle). A free
+    decay's energy in the band of its modes falls (two modes of the band beat, at most rising back to where it was);
+    a sinusoid's stays level.
+
+    Parameters
+    ----------
+    decay : array_like, shape (n_channels, n_samples)
+    sampling_frequency_hz : float
+    band_hz : (float, float)
+    """
+    y = np.asarray(decay, dtype=np.float64)
+    fs, n = float(sampling_frequency_hz), y.shape[1]
+    w = int(np.ceil(2 * fs / max(band_hz[1] - band_hz[0], np.finfo(float).tiny)))
+    if n < 3 * w:
+        return np.zeros(0, int)
+    f = np.fft.rfftfreq(2 * n, 1.0 / fs)             # zero-padded: the loud start does not wrap onto the end
+    Y = np.fft.rfft(y, 2 * n, axis=1)
+    Y[:, (f < band_hz[0]) | (f > band_hz[1])] = 0.0
+    c = np.concatenate([[0.0], np.cumsum(np.sum(np.fft.irfft(Y, 2 * n, axis=1)[:, :n] ** 2, axis=0))])
+    k = np.arange(w, n - w + 1)
+    before, after = c[k] - c[k - w], c[k + w] - c[k]
+    floor = np.percentile(c[w:] - c[:-w], 10)
+    rise = (after >= REEXCITE_RISE * before) & (after >= REEXCITE_RISE * floor) & (after > 0)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], rise.astype(int), [0]])))
+    ratio = after / np.maximum(before, np.finfo(float).tiny)
+    return np.array([k[a + int(np.argmax(ratio[a:b]))] for a, b in zip(edges[0::2], edges[1::2])], int)
+
+
+def _seed_fit(decays, fs, held, start, held_amplitudes):
+    """The band fit of the seeds ``start`` (rad/s) with the held modes of their bands refitted and the others fixed
+    (see :func:`refine_seeds`): the :class:`~physics.identification.band_refine.BandFit` and the seeds' indices
+    into it."""
+    n_ch = decays[0].shape[0]
+    longest_s = max(y.shape[1] for y in decays) / fs
+    _, group = mode_bands(np.concatenate([held, start]), longest_s, fs / 2)
+    near = np.isin(group[:held.size], group[held.size:])    # a held mode in a seed's band: refitted with it
+    amps = np.full((len(decays), n_ch, held.size), np.nan, complex) if held_amplitudes is None else \
+        np.array(held_amplitudes, complex)
+    lone = ~near & np.any(np.isnan(amps), axis=(0, 1))  # amplitudes unknown: each group's linear fit in its band
+    if lone.any():
+        amps[:, :, lone] = band_amplitudes(decays, fs, held[lone])
+    fit = refine_in_bands(decays, fs, np.concatenate([held[near], start]), fixed=(held[~near], amps[:, :, ~near]))
+    return fit, near.sum() + np.arange(start.size)
+
+
+def _cut_at_rises(decays, fs, bands_hz):
+    """The decays cut where their energy in one of ``bands_hz`` (shape (n_bands, 2), Hz) rises once
+    (:func:`band_rises`): the pieces, and the index of each decay's first piece (None where no decay is cut). A decay
+    re-excited once falls, rises once and falls again; a band whose energy rises more than once within a decay
+    fluctuates (a noise-like component: the quantisation products of a coarse capture, an ambient excitation) and
+    cuts nothing."""
+    pieces, first = [], []
+    for y in decays:
+        rises = [band_rises(y, fs, b) for b in bands_hz]
+        cuts = np.unique(np.concatenate([r for r in rises if r.size == 1] + [np.zeros(0, int)]))
+        edges = [0, *cuts.tolist(), y.shape[1]]
+        first.append(len(pieces))
+        pieces += [y[:, a:b] for a, b in zip(edges[:-1], edges[1:])]
+    return (pieces, np.array(first, int)) if len(pieces) > len(decays) else (None, None)
+
+
 def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPeaks, seeds, max_damping,
                  freq_tol=0.01, held_amplitudes=None) -> SeededModes:
     """The modes of the clear peaks ``seeds`` (indices into ``peaks``), each refined in its own band with the modes
@@ -117,19 +195,22 @@ def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPe
     fs = float(sampling_frequency_hz)
     longest_s = max(y.shape[1] for y in decays) / fs
     start = seed_poles(peaks.frequency_hz[seeds], peaks.tolerance_hz[seeds], longest_s)
-    _, group = mode_bands(np.concatenate([held, start]), longest_s, fs / 2)
-    near = np.isin(group[:held.size], group[held.size:])    # a held mode in a seed's band: refitted with it
-    amps = np.full((len(decays), n_ch, held.size), np.nan, complex) if held_amplitudes is None else \
-        np.array(held_amplitudes, complex)
-    lone = ~near & np.any(np.isnan(amps), axis=(0, 1))  # amplitudes unknown: each group's linear fit in its band
-    if lone.any():
-        amps[:, :, lone] = band_amplitudes(decays, fs, held[lone])
-    fit = refine_in_bands(decays, fs, np.concatenate([held[near], start]), fixed=(held[~near], amps[:, :, ~near]))
-    j = near.sum() + np.arange(seeds.size)
-    lam = fit.eigenvalues[j]
-    fn, zeta = fit.natural_frequencies_hz[j], fit.damping_ratios[j]
-    ok = fit.converged[j] & (np.abs(fn - peaks.frequency_hz[seeds]) <= peaks.tolerance_hz[seeds]) \
-        & (zeta > 0) & (zeta < max_damping) & (zeta >= MIN_DECAY_SIGMAS * fit.damping_std[j])
+    fit, j = _seed_fit(decays, fs, held, start, held_amplitudes)
+    lam, conv, amps = fit.eigenvalues[j], fit.converged[j], fit.amplitudes[:, :, j]
+    f_std, z_std = fit.frequency_std_hz[j], fit.damping_std[j]
+    flat = conv & ~(fit.damping_ratios[j] >= MIN_DECAY_SIGMAS * z_std)     # no decay shown: re-excited, or a sinusoid
+    if flat.any():
+        bands_hz = mode_bands(np.concatenate([held, start]), longest_s, fs / 2)[0][held.size:][flat]
+        pieces, first = _cut_at_rises(decays, fs, bands_hz)
+        if pieces is not None:                          # the decays cut where the flat seeds' bands are re-excited
+            refit, jr = _seed_fit(pieces, fs, held, start[flat], None)
+            lam[flat], conv[flat] = refit.eigenvalues[jr], refit.converged[jr]
+            f_std[flat], z_std[flat] = refit.frequency_std_hz[jr], refit.damping_std[jr]
+            amps[:, :, flat] = refit.amplitudes[first][:, :, jr]
+    fn = np.abs(lam) / (2 * np.pi)
+    zeta = -lam.real / np.abs(lam)
+    ok = conv & (np.abs(fn - peaks.frequency_hz[seeds]) <= peaks.tolerance_hz[seeds]) \
+        & (zeta > 0) & (zeta < max_damping) & (zeta >= MIN_DECAY_SIGMAS * z_std)
     taken = list(np.abs(held) / (2 * np.pi))
     keep = []
     for k in np.argsort(-peaks.height_db[seeds], kind="stable"):     # the highest peak first: one mode per peak
@@ -139,5 +220,5 @@ def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPe
     keep = np.array(sorted(keep, key=lambda k: fn[k]), int)
     if keep.size == 0:
         return empty
-    return SeededModes(lam[keep], fit.frequency_std_hz[j][keep], fit.damping_std[j][keep],
-                       fit.amplitudes[:, :, j[keep]], peaks.frequency_hz[seeds][keep], peaks.frequency_hz[seeds])
+    return SeededModes(lam[keep], f_std[keep], z_std[keep], amps[:, :, keep], peaks.frequency_hz[seeds][keep],
+                       peaks.frequency_hz[seeds])
