@@ -300,13 +300,16 @@ class BeyondBands:
                                    ``u / n * (w + 1) / (n + 2)``: the share lacking the mode times Laplace's chance
                                    of a pole beyond its band (a mode the baseline found in every test gives 0)
     flagged : ndarray bool (n, m)  ``chance <= false_alarm_rate / m`` (the rate shared among the modes), or any
-                                   reading of a test in :attr:`unplaced`
+                                   reading of a test :attr:`unplaced` against the baseline's odds
     missing_share, beyond_share : ndarray (m,)     ``u / n`` and ``w / n`` over the whole baseline period
     n_baseline : int               baseline tests of the series
     reach_hz : ndarray (m, 2)      :func:`reach_bands_hz`
-    unplaced : ndarray bool (n,)   a test with poles none of which lies in any reference mode's band: every mode
-                                   is read moved or lost, and every reading is flagged (the detector has no feature
-                                   of it to judge)
+    unplaced : ndarray bool (n,)   a test with poles none of which lies in any reference mode's band (the
+                                   detector has no feature of it to judge)
+    unplaced_chance : ndarray (n,) the baseline period's chance of that (NaN elsewhere): ``v / n``, ``v`` of its
+                                   ``n`` tests (a baseline test's: of the other baseline tests) lacking every mode in
+                                   its band (tests not identified included); 0 when every baseline test held a mode
+    unplaced_flagged : ndarray bool (n,)   ``unplaced_chance <= false_alarm_rate``: every reading of the test flagged
     """
 
     moved_hz: np.ndarray
@@ -319,6 +322,8 @@ class BeyondBands:
     reach_hz: np.ndarray
     n_baseline: int = 0
     unplaced: np.ndarray | None = None
+    unplaced_chance: np.ndarray | None = None
+    unplaced_flagged: np.ndarray | None = None
 
     def status(self, i: int) -> str | None:
         """:data:`MODE_MOVED` when a mode of test ``i`` moved beyond its band against the baseline's odds, else
@@ -330,9 +335,10 @@ class BeyondBands:
     def readings(self, i: int, ref: ReferenceModes) -> list:
         """Test ``i``'s modes missing from their bands: per mode ``mode`` (1-based), ``reading`` (``moved`` or
         ``lost``), ``frequency_hz`` and ``change_pct`` (against the reference frequency) of a moved one, ``chance``,
-        ``flagged`` and ``unplaced`` (the test's poles all lie beyond the bands: :attr:`unplaced`)."""
+        ``flagged`` and ``unplaced`` (the test's poles all lie beyond the bands, against the baseline's odds:
+        :attr:`unplaced_flagged`)."""
         out = []
-        unplaced = bool(self.unplaced is not None and self.unplaced[i])
+        unplaced = bool(self.unplaced_flagged is not None and self.unplaced_flagged[i])
         for r in np.flatnonzero(np.isfinite(self.moved_hz[i]) | self.lost[i]):
             f = float(self.moved_hz[i, r])
             moved = math.isfinite(f)
@@ -386,8 +392,11 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
 
     A test with poles none of which lies in any reference mode's band (:attr:`BeyondBands.unplaced`) has no feature
     the detector can judge, yet its identification found modes: each mode is read moved (the pole nearest it in
-    ``ln f`` within its reach, one to one) or lost as above, and every reading is flagged, whatever the baseline's
-    odds of each alone; such a test is a mode moved or lost, never a test not identified.
+    ``ln f`` within its reach, one to one) or lost as above, and when the baseline period's share of tests lacking
+    every mode in its band is at most ``false_alarm_rate`` (none of 12: every baseline test held a reference mode)
+    every reading is flagged, whatever the baseline's odds of each alone: such a test is a mode moved or lost, not a
+    test not identified. A baseline whose tests lacked every mode now and then (FFT peaks jumping between modes)
+    makes that reading ordinary: each mode is then weighed alone.
     """
     from scipy.optimize import linear_sum_assignment
 
@@ -436,8 +445,15 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
     if base.size > 1:
         n_q[base] = base.size - 1
     moved = np.isfinite(moved_hz)
+    none = np.array([tests[i] is None or bool((cols[i] < 0).all()) for i in base], bool)
+    v = float(none.sum())
+    share = np.full(n, v / nb)
+    if base.size > 1:
+        share[base] = (v - none) / (base.size - 1)
+    unplaced_chance = np.where(unplaced, share, np.nan)
+    unplaced_flagged = unplaced & (share <= false_alarm_rate)
     chance = np.where(moved, q * (s * n_q + 1) / (n_q + 2), np.where(lost, (q * n_q + 1) / (n_q + 2), np.nan))
     with np.errstate(invalid="ignore"):
-        flagged = (moved | lost) & ((chance <= false_alarm_rate / max(m, 1)) | unplaced[:, None])
+        flagged = (moved | lost) & ((chance <= false_alarm_rate / max(m, 1)) | unplaced_flagged[:, None])
     return BeyondBands(moved_hz, moved_col, lost, chance, flagged, u / nb, w / nb, reach_bands_hz(ref), int(base.size),
-                       unplaced)
+                       unplaced, unplaced_chance, unplaced_flagged)
