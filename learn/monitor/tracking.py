@@ -353,7 +353,8 @@ class BeyondBands:
 def readings_text(readings: list, ref: ReferenceModes) -> str:
     """The flagged readings in words, e.g. ``mode 2 moved +20.8 % (193.6 Hz, beyond its band 139.3-184.3 Hz);
     mode 3 lost (no pole within 372.3-492.3 Hz or beyond it within its reach; chance 0.0033 at the baseline's
-    share)``; a test whose poles all lie beyond the bands starts with ``no mode in its band:``."""
+    share)``; a test flagged for its poles all lying beyond the bands (:attr:`BeyondBands.unplaced_flagged`) starts
+    with ``no mode in its band:``."""
     bands = narrow_bands_hz(ref)
     unplaced = any(d.get("unplaced") for d in readings)
     parts = []
