@@ -96,8 +96,10 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     A reference mode missing from its band in a test with poles is looked for beyond it
     (:func:`learn.monitor.tracking.beyond_bands`): moved (a pole no other mode claims within its reach) or lost,
     each weighed by the baseline period's chance of that reading; a flagged one gives a test the detector did not
-    alarm the status :data:`MODE_MOVED` or :data:`MODE_LOST` (also a test with no mode left in its band, else
-    ``not identified``), counted beside the alarms; an alarm carries it in its row's ``beyond_band_text``.
+    alarm the status :data:`MODE_MOVED` or :data:`MODE_LOST`, counted beside the alarms; an alarm carries it in its
+    row's ``beyond_band_text``. A test whose identification found poles, none in any reference mode's band, is
+    always flagged so (:attr:`learn.monitor.tracking.BeyondBands.unplaced`): ``not identified`` is only a test
+    without poles.
     """
     n = len(series.files)
     C = series.conditions

@@ -299,10 +299,17 @@ class BeyondBands:
                                    :func:`learn.monitor.alarm_threshold.missing_evidence`); a moved mode
                                    ``u / n * (w + 1) / (n + 2)``: the share lacking the mode times Laplace's chance
                                    of a pole beyond its band (a mode the baseline found in every test gives 0)
-    flagged : ndarray bool (n, m)  ``chance <= false_alarm_rate / m`` (the rate shared among the modes)
+    flagged : ndarray bool (n, m)  ``chance <= false_alarm_rate / m`` (the rate shared among the modes), or any
+                                   reading of a test :attr:`unplaced` against the baseline's odds
     missing_share, beyond_share : ndarray (m,)     ``u / n`` and ``w / n`` over the whole baseline period
     n_baseline : int               baseline tests of the series
     reach_hz : ndarray (m, 2)      :func:`reach_bands_hz`
+    unplaced : ndarray bool (n,)   a test with poles none of which lies in any reference mode's band (the
+                                   detector has no feature of it to judge)
+    unplaced_chance : ndarray (n,) the baseline period's chance of that (NaN elsewhere): ``v / n``, ``v`` of its
+                                   ``n`` tests (a baseline test's: of the other baseline tests) lacking every mode in
+                                   its band (tests not identified included); 0 when every baseline test held a mode
+    unplaced_flagged : ndarray bool (n,)   ``unplaced_chance <= false_alarm_rate``: every reading of the test flagged
     """
 
     moved_hz: np.ndarray
@@ -314,6 +321,9 @@ class BeyondBands:
     beyond_share: np.ndarray
     reach_hz: np.ndarray
     n_baseline: int = 0
+    unplaced: np.ndarray | None = None
+    unplaced_chance: np.ndarray | None = None
+    unplaced_flagged: np.ndarray | None = None
 
     def status(self, i: int) -> str | None:
         """:data:`MODE_MOVED` when a mode of test ``i`` moved beyond its band against the baseline's odds, else
@@ -324,23 +334,29 @@ class BeyondBands:
 
     def readings(self, i: int, ref: ReferenceModes) -> list:
         """Test ``i``'s modes missing from their bands: per mode ``mode`` (1-based), ``reading`` (``moved`` or
-        ``lost``), ``frequency_hz`` and ``change_pct`` (against the reference frequency) of a moved one, ``chance``
-        and ``flagged``."""
+        ``lost``), ``frequency_hz`` and ``change_pct`` (against the reference frequency) of a moved one, ``chance``,
+        ``flagged`` and ``unplaced`` (the test's poles all lie beyond the bands, against the baseline's odds:
+        :attr:`unplaced_flagged`)."""
         out = []
+        unplaced = bool(self.unplaced_flagged is not None and self.unplaced_flagged[i])
         for r in np.flatnonzero(np.isfinite(self.moved_hz[i]) | self.lost[i]):
             f = float(self.moved_hz[i, r])
             moved = math.isfinite(f)
             out.append({"mode": int(r) + 1, "reading": "moved" if moved else "lost",
                         "frequency_hz": f if moved else None,
                         "change_pct": 100 * (f / float(ref.frequencies_hz[r]) - 1) if moved else None,
-                        "chance": float(self.chance[i, r]), "flagged": bool(self.flagged[i, r])})
+                        "chance": float(self.chance[i, r]), "flagged": bool(self.flagged[i, r]),
+                        "unplaced": unplaced})
         return out
 
 
 def readings_text(readings: list, ref: ReferenceModes) -> str:
     """The flagged readings in words, e.g. ``mode 2 moved +20.8 % (193.6 Hz, beyond its band 139.3-184.3 Hz);
-    mode 3 lost (the baseline lacked it in 0 of 12 tests)``."""
+    mode 3 lost (no pole within 372.3-492.3 Hz or beyond it within its reach; chance 0.0033 at the baseline's
+    share)``; a test flagged for its poles all lying beyond the bands (:attr:`BeyondBands.unplaced_flagged`) starts
+    with ``no mode in its band:``."""
     bands = narrow_bands_hz(ref)
+    unplaced = any(d.get("unplaced") for d in readings)
     parts = []
     for d in readings:
         if not d["flagged"]:
@@ -350,9 +366,11 @@ def readings_text(readings: list, ref: ReferenceModes) -> str:
             parts.append(f"mode {d['mode']} moved {d['change_pct']:+.1f} % ({d['frequency_hz']:.4g} Hz, beyond its "
                          f"band {lo:.4g}-{hi:.4g} Hz)")
         else:
+            odds = "" if unplaced else f"; chance {d['chance']:.2g} at the baseline's share"
             parts.append(f"mode {d['mode']} lost (no pole within {lo:.4g}-{hi:.4g} Hz or beyond it within its "
-                         f"reach; chance {d['chance']:.2g} at the baseline's share)")
-    return "; ".join(parts)
+                         f"reach{odds})")
+    text = "; ".join(parts)
+    return f"no mode in its band: {text}" if unplaced and text else text
 
 
 def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_rate: float) -> BeyondBands:
@@ -372,6 +390,14 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
     ``m / false_alarm_rate - 2`` tests (298 for 3 modes at 1 %; never one the baseline lacked in half its tests); on
     a shorter baseline it adds its evidence to the novelty index (``missing_evidence`` of
     :mod:`learn.monitor.alarm_threshold`) and is reported unflagged in the row.
+
+    A test with poles none of which lies in any reference mode's band (:attr:`BeyondBands.unplaced`) has no feature
+    the detector can judge, yet its identification found modes: each mode is read moved (the pole nearest it in
+    ``ln f`` within its reach, one to one) or lost as above, and when the baseline period's share of tests lacking
+    every mode in its band is at most ``false_alarm_rate`` (none of 12: every baseline test held a reference mode)
+    every reading is flagged, whatever the baseline's odds of each alone: such a test is a mode moved or lost, not a
+    test not identified. A baseline whose tests lacked every mode now and then (FFT peaks jumping between modes)
+    makes that reading ordinary: each mode is then weighed alone.
     """
     from scipy.optimize import linear_sum_assignment
 
@@ -380,11 +406,13 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
     moved_hz, moved_col = np.full((n, m), np.nan), np.full((n, m), -1)
     lost = np.zeros((n, m), bool)
     beyond = np.zeros((n, m), bool)                 # a pole no mode claims within the reach beyond the band
+    unplaced = np.zeros(n, bool)                    # poles, none in any band
     ln_ref = np.log(ref.frequencies_hz)
     reach = np.log(reach_bands_hz(ref)) - ln_ref[:, None]          # (m, 2): negative, positive
     for i, t in enumerate(tests):
         if t is None or t.frequencies_hz.size == 0 or m == 0:
             continue
+        unplaced[i] = bool((cols[i] < 0).all())
         free = np.setdiff1d(np.arange(t.frequencies_hz.size), cols[i][cols[i] >= 0])
         if free.size == 0:
             lost[i] = cols[i] < 0
@@ -418,7 +446,15 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
     if base.size > 1:
         n_q[base] = base.size - 1
     moved = np.isfinite(moved_hz)
+    none = np.array([tests[i] is None or bool((cols[i] < 0).all()) for i in base], bool)
+    v = float(none.sum())
+    share = np.full(n, v / nb)
+    if base.size > 1:
+        share[base] = (v - none) / (base.size - 1)
+    unplaced_chance = np.where(unplaced, share, np.nan)
+    unplaced_flagged = unplaced & (share <= false_alarm_rate)
     chance = np.where(moved, q * (s * n_q + 1) / (n_q + 2), np.where(lost, (q * n_q + 1) / (n_q + 2), np.nan))
     with np.errstate(invalid="ignore"):
-        flagged = (moved | lost) & (chance <= false_alarm_rate / max(m, 1))
-    return BeyondBands(moved_hz, moved_col, lost, chance, flagged, u / nb, w / nb, reach_bands_hz(ref), int(base.size))
+        flagged = (moved | lost) & ((chance <= false_alarm_rate / max(m, 1)) | unplaced_flagged[:, None])
+    return BeyondBands(moved_hz, moved_col, lost, chance, flagged, u / nb, w / nb, reach_bands_hz(ref), int(base.size),
+                       unplaced, unplaced_chance, unplaced_flagged)

@@ -11,8 +11,10 @@ from experiments.cli import main
 from experiments.cli.cmd_monitor import chart
 from learn.monitor import (IdentificationSettings, IdentifiedModes, SeriesInput, monitor_series, reference_modes,
                            track_modes)
+from learn.monitor.alarms import FLAGGED_STATUSES
 from learn.monitor.events import group_events, lost_modes_change
-from learn.monitor.tracking import MODE_LOST, MODE_MOVED, REACH_FACTOR, beyond_bands, reach_bands_hz
+from learn.monitor.tracking import (MODE_LOST, MODE_MOVED, REACH_FACTOR, beyond_bands, reach_bands_hz,
+                                   readings_text)
 
 F0 = np.array([10.0, 31.0, 62.0])
 
@@ -201,3 +203,47 @@ def test_the_chart_marks_the_tests_whose_mode_moved_and_draws_it_at_its_moved_fr
     np.testing.assert_allclose(np.asarray(pts.get_ydata())[27:], 40.0)
     assert np.isnan(np.asarray(pts.get_ydata())[:27]).all()
     plt.close(fig)
+
+
+def test_a_test_whose_poles_all_lie_beyond_the_bands_is_moved_or_lost_and_flagged_never_unidentified(tmp_path):
+    """Mode 3 lacking in 2 of 12 baseline tests: alone, a pole 24 % below it is no evidence (chance 2/12 * 1/14 =
+    0.012 > 0.01 / 3). In a test whose poles all lie beyond the bands the detector has nothing to judge: each mode is
+    read moved (nearest in ln f, one pole per mode) or lost, and every reading is flagged when every baseline test
+    held a mode in its band."""
+    base = _baseline(drop=(2, [0, 6]))
+    tests = base + [_modes([47.0]), _modes([47.0, 49.0]), _modes([3.0]), _modes([F0[0], 47.0])]
+    ref, bb = _read(tests, 12)
+    np.testing.assert_array_equal(track_modes(tests, ref)[3][12:15], -1)
+    assert reach_bands_hz(ref)[1, 1] < 47.0 < ref.frequencies_hz[2] * np.exp(-ref.tolerance[2])
+    # one pole: mode 3 moved -24 % (the nearest in ln f: ln(62/47) = 0.28 against ln(47/31) = 0.42), modes 1-2 lost
+    assert bb.moved_hz[12, 2] == 47.0 and bb.lost[12, :2].all()
+    assert bb.chance[12, 2] == pytest.approx(2 / 12 / 14) and bb.chance[12, 2] > 0.01 / 3
+    assert bb.unplaced[12] and bb.unplaced_chance[12] == 0.0 and bb.flagged[12].all() and bb.status(12) == MODE_MOVED
+    d = bb.readings(12, ref)[2]
+    assert d["change_pct"] == pytest.approx(100 * (47.0 / ref.frequencies_hz[2] - 1)) and d["change_pct"] < -23
+    assert readings_text(bb.readings(12, ref), ref).startswith("no mode in its band: mode 1 lost")
+    assert "mode 3 moved -24." in readings_text(bb.readings(12, ref), ref)
+    # two poles within mode 3's reach: it takes the nearer (49 Hz); no other mode takes the other
+    assert bb.moved_hz[13, 2] == 49.0 and np.isnan(bb.moved_hz[13, :2]).all() and bb.status(13) == MODE_MOVED
+    # a pole within no mode's reach: every mode lost, flagged
+    assert reach_bands_hz(ref)[0, 0] > 3.0 and bb.lost[14].all() and bb.flagged[14].all()
+    assert bb.status(14) == MODE_LOST
+    # mode 1 in its band: the same pole is weighed by the baseline's odds alone, not flagged
+    assert not bb.unplaced[15] and bb.moved_hz[15, 2] == 47.0 and not bb.flagged[15].any() and bb.status(15) is None
+    assert not bb.unplaced[:12].any() and not bb.flagged[:12].any()
+    # a baseline with 2 of 12 tests lacking every mode (a lone pole at 3 Hz) makes it ordinary: each mode alone
+    odd = list(base)
+    odd[3] = odd[7] = _modes([3.0])
+    ref2, bb2 = _read(odd + [_modes([47.0])], 12)
+    np.testing.assert_allclose(ref2.frequencies_hz, ref.frequencies_hz, rtol=0.01)
+    assert bb2.unplaced[12] and bb2.unplaced_chance[12] == pytest.approx(2 / 12) and not bb2.flagged[12].any()
+    assert bb2.unplaced_chance[3] == pytest.approx(1 / 11) and bb2.status(3) is None and bb2.status(12) is None
+    files = []
+    for k, t in enumerate(tests[:13]):
+        path = tmp_path / f"t{k:02d}.json"
+        path.write_text(json.dumps({"natural_frequencies_hz": t.frequencies_hz.tolist()}))
+        files.append(str(path))
+    res = monitor_series(SeriesInput.from_files(files), 12, IdentificationSettings(), progress=False, chart="none")
+    row = res.rows[12]
+    assert not row["identified"] and row["status"] == MODE_MOVED and MODE_MOVED in FLAGGED_STATUSES
+    assert row["beyond_band_text"].startswith("no mode in its band:") and "mode 3 moved -24." in row["beyond_band_text"]
