@@ -1,11 +1,14 @@
 """One baseline against one test: a pole only one of them holds takes no mode's place
-(:func:`learn.pairs.measured.prefer_shared_poles`, on :func:`learn.pairs.measured.modal_pair`'s path)."""
+(:func:`learn.pairs.measured.prefer_shared_poles`, on :func:`learn.pairs.measured.modal_pair`'s path); several poles in
+one mode's band: the one paired is the nearest where the measured/model frequency ratios of the other modes put it
+(:mod:`learn.pairs.ratio_trend`, read by :func:`learn.pairs.measured.pair_modes_by_frequency`)."""
 
 import numpy as np
 import pytest
 
 from learn.network.features import BeamSpec
-from learn.pairs.measured import modal_pair, prefer_shared_poles
+from learn.pairs.measured import modal_pair, pair_modes_by_frequency, pairing_bands, prefer_shared_poles
+from learn.pairs.ratio_trend import ratio_trend, trend_picks
 from physics.io import ModalData
 from physics.layout import Layout
 
@@ -16,6 +19,7 @@ __all__ = []
 NOMINAL_HZ = np.array([22.134, 138.303, 384.877, 755.238, 1256.904])
 BASELINE_HZ = np.array([22.644, 138.850, 378.943, 724.108, 1166.203, 1226.756])   # a spurious pole at 1226.8 Hz
 INTACT_HZ = np.array([22.647, 139.182, 379.838, 725.863, 1169.035])
+TEST_HZ = np.r_[INTACT_HZ, 1230.050]                                              # the same spurious pole
 
 
 def _spec():
@@ -78,3 +82,61 @@ def test_an_unpaired_pole_takes_a_mode_only_inside_its_band_and_above_the_least_
     near = prefer_shared_poles([np.r_[BASELINE_HZ[:4], 980.0, 1226.756], np.r_[INTACT_HZ[:4], 1000.0]],
                                [np.array([0, 1, 2, 3, -1, 4]), np.arange(5)], NOMINAL_HZ)
     np.testing.assert_array_equal(near[0], [0, 1, 2, 3, 4, -1])
+
+
+def test_both_tests_holding_a_spurious_pole_nearer_the_model_than_mode_5_pair_mode_5():
+    """1226.8 and 1230.0 Hz lie 2.4 and 2.1 % below the model's 1256.9 Hz, mode 5 (1166.2, 1169.0 Hz) 7.2 and 7.0 %:
+    the nearest the model is the spurious pole in both tests, so the pole both hold is it too. The ratios of modes
+    1-4 (+2.3, +0.5, -1.5, -4.2 %: a line in f_model, slope -8.5e-5 /Hz) put mode 5 at 1153 and 1157 Hz."""
+    assert all(abs(np.log(f[5] / NOMINAL_HZ[4])) < abs(np.log(f[4] / NOMINAL_HZ[4])) for f in (BASELINE_HZ, TEST_HZ))
+    pair = modal_pair(_test(BASELINE_HZ), _test(TEST_HZ), _spec(), NOMINAL_HZ)
+    assert list(pair.mode_index) == [0, 1, 2, 3, 4]
+    np.testing.assert_allclose(_mode5_hz(pair), [1166.203, 1169.035], rtol=1e-12)
+    for poles in pair.poles:
+        assert [p["mode"] for p in poles] == [1, 2, 3, 4, 5, None]
+        assert "choice" in poles[4] and all("choice" not in p for k, p in enumerate(poles) if k != 4)
+    assert pair.poles[0][4]["choice"] == ("of 1166.2, 1226.8 Hz in its band; the ratios of modes 1, 2, 3, 4 to the "
+                                          "model put it at 1153 Hz (the model: 1257 Hz)")
+    # a test 3 % softer holding the spurious pole: its mode 5 (1134.0 Hz), not 1230 Hz (a false +5.5 % beside it)
+    soft = modal_pair(_test(BASELINE_HZ), _test(np.r_[0.97 * TEST_HZ[:5], 1230.0]), _spec(), NOMINAL_HZ)
+    np.testing.assert_allclose(_mode5_hz(soft), [1166.203, 0.97 * 1169.035], rtol=1e-12)
+
+
+def test_the_trend_is_the_least_squares_line_of_the_log_ratios_on_the_modes_holding_one_pole():
+    """Frequencies made from ln(f / f_model) = 0.02 - 8e-5 f_model: the line comes back, and mode 5 is predicted
+    where it was made; a mode with two poles is no anchor."""
+    exact = NOMINAL_HZ * np.exp(0.02 - 8e-5 * NOMINAL_HZ)
+    f = np.r_[exact, 1230.0]
+    ok = np.abs(np.log(f[:, None] / NOMINAL_HZ[None])) <= np.log1p(pairing_bands(NOMINAL_HZ))[None]
+    trend = ratio_trend(f, NOMINAL_HZ, ok)
+    np.testing.assert_array_equal(trend.anchors, [0, 1, 2, 3])
+    np.testing.assert_allclose([trend.intercept, trend.slope_per_hz], [0.02, -8e-5], rtol=1e-9)
+    np.testing.assert_allclose(trend.predicted_hz(NOMINAL_HZ), exact, rtol=1e-12)
+    picks, _ = trend_picks(f, NOMINAL_HZ, ok)
+    np.testing.assert_array_equal(picks, [-1, -1, -1, -1, 4])
+    # one anchor: a constant ratio; none: the model itself
+    one = ratio_trend([22.5, 130.0, 140.0], NOMINAL_HZ[:2], [[1, 0], [0, 1], [0, 1]])
+    assert one.slope_per_hz == 0.0 and np.isclose(one.intercept, np.log(22.5 / 22.134))
+    none = ratio_trend([130.0, 140.0], NOMINAL_HZ[:2], [[0, 1], [0, 1]])
+    assert (none.intercept, none.slope_per_hz, none.anchors.size) == (0.0, 0.0, 0)
+
+
+def test_one_pole_per_band_or_no_anchor_leaves_the_nearest_the_model_and_the_band_holds():
+    """Clean data (one pole per mode, any distance within the band) pair as the nominal rule does; without an anchor
+    the nearer the model wins; a pole beyond the 35 % band is never paired, however near the prediction."""
+    rng = np.random.default_rng(7)
+    band = pairing_bands(NOMINAL_HZ)
+    for _ in range(200):
+        f = NOMINAL_HZ * np.exp(rng.uniform(-0.99, 0.99, 5) * np.log1p(band))
+        np.testing.assert_array_equal(pair_modes_by_frequency(f, NOMINAL_HZ, trend=True), np.arange(5))
+    np.testing.assert_array_equal(pair_modes_by_frequency([130.0, 145.0], NOMINAL_HZ[:2], trend=True), [-1, 1])
+    # ln(f / f_model) = -3.29e-4 f_model on modes 1-4 (mode 4 at 0.78 times the model) puts mode 5 at 831 Hz, beyond
+    # its band (1256.9 Hz / 1.29 = 974 Hz up): of 1000 and 1200 Hz in the band the nearer the prediction, never
+    # 900 Hz (nearer still, but in mode 4's band, where mode 4's 589 Hz lies on the trend of modes 1-3 and the
+    # nominal rule would pair 900 Hz)
+    slope = np.log(0.78) / NOMINAL_HZ[3]
+    f = np.r_[NOMINAL_HZ[:4] * np.exp(slope * NOMINAL_HZ[:4]), 900.0, 1000.0, 1200.0]
+    assert NOMINAL_HZ[4] * np.exp(slope * NOMINAL_HZ[4]) < 900.0 < NOMINAL_HZ[4] / (1 + band[4]) < 1000.0
+    np.testing.assert_array_equal(pair_modes_by_frequency(f, NOMINAL_HZ, trend=True), [0, 1, 2, 3, -1, 4, -1])
+    np.testing.assert_array_equal(pair_modes_by_frequency(f, NOMINAL_HZ), [0, 1, 2, -1, 3, -1, 4])   # nominal rule
+    assert pair_modes_by_frequency(f[[0, 1, 2, 3, 6]], NOMINAL_HZ, trend=True)[4] == 4     # alone in its band
