@@ -22,7 +22,8 @@ import numpy as np
 from experiments.benches.real_sets import BRIDGE_FILE, identify_frequencies, load_sets
 from physics.identification.band_refine import mode_bands
 from physics.identification.decay_peaks import decay_peaks
-from physics.identification.free_decay import decay_spectrum, identify_era
+from physics.identification.decays import decay_spectrum
+from physics.identification.free_decay import identify_era
 from physics.identification.peak_seeds import _cut_at_rises, _seed_fit, band_rises, seed_poles
 from physics.identification.record_checks import check_records
 

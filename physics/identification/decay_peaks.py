@@ -1,4 +1,4 @@
-"""The clear peaks of a free decay's spectrum (:func:`~physics.identification.free_decay.decay_spectrum`): the
+"""The clear peaks of a free decay's spectrum (:func:`~physics.identification.decays.decay_spectrum`): the
 modes fftpeak reports for a free response and the modes ERA's model must hold.
 
 A peak is clear when it stands :data:`~physics.identification.fdd.CLEAR_PEAK_DB` above the running floor, or

@@ -14,7 +14,7 @@ half-width ``b``: the same on every test of a structure, so a bias, not a scatte
 The window (``window="auto"``):
 
 * **none** (rectangular) for a *free response* (decays after hits,
-  :func:`~physics.identification.free_decay.free_response`, the rule ``identify`` picks ERA by): the decay is its
+  :func:`~physics.identification.decays.free_response`, the rule ``identify`` picks ERA by): the decay is its
   own taper; a Hann window would weight the first, most informative samples by
   nearly zero and widen the peak.
 * **Hann** for a *stationary* record (ambient response): its -31 dB side lobes (against -13 dB) keep a strong
@@ -23,7 +23,7 @@ The window (``window="auto"``):
 The peaks are found either near given frequencies (the highest local maximum within a tolerance) or at the clear
 peaks (:func:`~physics.identification.fdd.clear_peaks`, the peaks every output-only method answers for) of the
 record's spectrum: for a free decay, the whole record's FFT power averaged over three lines
-(:func:`~physics.identification.free_decay.decay_spectrum`; a peak 10 dB above its valleys and above the level a
+(:func:`~physics.identification.decays.decay_spectrum`; a peak 10 dB above its valleys and above the level a
 noise line passes by chance over the band is clear too, :func:`~physics.identification.decay_peaks.decay_peaks`);
 for a stationary record, the averaged singular-value spectrum FDD reads. Each is refined on the fine grid. A free
 decay's spectrum peaks at the *damped* frequency ``f_d``; where the half-power width gives a damping ratio, the
@@ -45,7 +45,7 @@ import numpy as np
 from physics.errors import ConvergenceError, ShapeError
 from physics.identification.decay_peaks import decay_peaks, prominent_peak_db
 from physics.identification.fdd import CLEAR_PEAK_DB, clear_peaks, singular_value_spectrum, unit_shapes
-from physics.identification.free_decay import decay_spectrum, free_response
+from physics.identification.decays import decay_spectrum, free_response
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.record_checks import check_periods, check_records
 from physics.modal import eigenvalues_from_modal
@@ -98,7 +98,7 @@ class FFTPeaks:
 
 def _window(checked, window):
     """``window``, ``"auto"`` resolved: ``"none"`` for a free response
-    (:func:`~physics.identification.free_decay.free_response`), ``"hann"`` otherwise."""
+    (:func:`~physics.identification.decays.free_response`), ``"hann"`` otherwise."""
     if window != "auto":
         return window
     return "none" if free_response(checked).free else "hann"

@@ -10,7 +10,7 @@ from physics.io.inputs import MAX_BYTES, check_input_file
 from physics.errors import ConfigError, ConvergenceError, FileFormatError, ShapeError
 from physics.identification.channel_weights import (ChannelWeights, noise_floor_weights, unweighted_diagram,
                                                     unweighted_estimate, weighted_record)
-from physics.identification.free_decay import free_response
+from physics.identification.decays import free_response
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate
 from physics.identification.poles import StabilisationDiagram
@@ -27,7 +27,7 @@ __all__ = ["DEFAULT_OUTPUT_ONLY", "FREE_RESPONSE_METHOD", "SCALING", "STATIONARY
 
 #: The method ``identify`` takes for a file of response records without a force channel: ``"auto"`` picks
 #: :data:`FREE_RESPONSE_METHOD` for a free response (decays after hits,
-#: :func:`~physics.identification.free_decay.free_response`), :data:`STATIONARY_METHOD` otherwise.
+#: :func:`~physics.identification.decays.free_response`), :data:`STATIONARY_METHOD` otherwise.
 DEFAULT_OUTPUT_ONLY = "auto"
 FREE_RESPONSE_METHOD, STATIONARY_METHOD = "era", "ssi"
 #: What modal.json says of output-only shapes.
@@ -118,7 +118,7 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         Response channels only (see :func:`read_response_records`).
     method : str
         A key of :data:`METHODS` with ``data == "records"``, or ``"auto"``: :data:`FREE_RESPONSE_METHOD` for a
-        free response (:func:`~physics.identification.free_decay.free_response`: decays after hits),
+        free response (:func:`~physics.identification.decays.free_response`: decays after hits),
         :data:`STATIONARY_METHOD` otherwise; when the picked method finds no mode, the other is tried, and
         :attr:`RecordsIdentification.method_choice` says so.
     band_hz : (float, float), optional

@@ -6,7 +6,8 @@ import numpy as np
 from impact_records import crb_frequency_std_hz, poles
 
 from physics.identification.band_refine import RESOLVED_LINES, refine_in_bands
-from physics.identification.free_decay import Decays, _band_spans
+from physics.identification.decays import Decays
+from physics.identification.free_decay import _band_spans
 
 FS, N, F_INF, DF, ZETA, NOISE = 1000.0, 2000, 100.0, 0.8, 0.01, 0.01
 

@@ -13,7 +13,8 @@ from physics.errors import ConvergenceError, ShapeError
 from physics.identification.decay_peaks import noise_line_db
 from physics.identification.fdd import clear_peaks
 from physics.identification.fft_peak import identify_fft_peaks
-from physics.identification.free_decay import decay_spectrum, find_decays, identify_era
+from physics.identification.decays import decay_spectrum, find_decays
+from physics.identification.free_decay import identify_era
 from physics.identification.record_checks import check_records
 
 #: Three accelerometers at 2400 Hz, 200 times the first mode (12 Hz); modes 12, 17, 25 Hz in the band of interest.

@@ -11,7 +11,8 @@ from oma_records import chain_record
 from physics.errors import BeamDamageError, ShapeError
 from physics.identification import identify_records
 from physics.identification.band_refine import refine_in_bands
-from physics.identification.free_decay import find_decays, free_response, identify_era
+from physics.identification.decays import find_decays, free_response
+from physics.identification.free_decay import identify_era
 from physics.identification.record_checks import check_records
 from physics.identification.ssi import identify_ssi
 from physics.io.timedata import TimeRecords
@@ -246,7 +247,7 @@ def test_identify_prints_the_free_decay_choice_and_writes_its_modes(capsys, tmp_
 
 
 def test_a_record_too_long_for_a_capture_is_not_searched_for_hits(monkeypatch):
-    import physics.identification.free_decay as fd
+    import physics.identification.decays as fd
 
     monkeypatch.setattr(fd, "MAX_FREE_VALUES", 4 * FRAME_N - 1)
     res = free_response(check_records(_frame(0), FRAME_FS))
@@ -276,7 +277,7 @@ def test_a_prediction_error_inside_a_decay_is_no_hit(monkeypatch):
     predictor's error threshold) while the structure still rings: the glitches add no energy, so the record holds one
     hit and one decay to its end; counting every prediction error as a hit (HIT_GAIN 0) cuts it into three. The
     glitches stay inside the decay: modes 1-3 are identified through them."""
-    import physics.identification.free_decay as fd
+    import physics.identification.decays as fd
 
     y = impact_record(FRAME_FS, FRAME_N, FRAME_FN, FRAME_ZETA, FRAME_PHI, [0.3], 0.01, 3)[0]
     peak = np.abs(y).max()

@@ -10,7 +10,8 @@ from physics.identification.band_refine import band_amplitudes, refine_in_bands
 from physics.identification.decay_peaks import decay_peaks
 from physics.identification.fdd import ClearPeaks
 from physics.identification.fft_peak import identify_fft_peaks
-from physics.identification.free_decay import decay_spectrum, identify_era
+from physics.identification.decays import decay_spectrum
+from physics.identification.free_decay import identify_era
 from physics.identification.peak_seeds import band_rises, refine_seeds, seed_poles, unheld_peaks
 from physics.identification.record_checks import check_records
 
