@@ -92,8 +92,9 @@ def noise_floor_weights(checked: CheckedRecord) -> ChannelWeights:
     floor = np.median(P[inband], axis=0)
     floor = np.where(floor > 0, floor, P[inband].mean(axis=0))
     floor = np.maximum(floor, np.finfo(float).tiny)
-    if 10 * np.log10(floor.max() / floor.min()) <= SPREAD_DB:
-        return ChannelWeights(np.ones(n_ch), floor)
+    as_recorded = ChannelWeights(np.ones(n_ch), floor)
+    if as_recorded.spread_db <= SPREAD_DB:
+        return as_recorded
     w = 1.0 / np.sqrt(floor)
     return ChannelWeights(w / np.exp(np.mean(np.log(w))), floor)
 
