@@ -18,6 +18,7 @@ from physics.errors import BeamDamageError
 from physics.modal import mac
 from physics.discrepancy.measurement import Measurement
 from physics.discrepancy.model import Prediction, pair_modes_by_mac
+from physics.discrepancy.ratio_trend import trend_picks
 
 __all__ = ["ImplausibleTest", "Pairing", "PairingRule", "STOP_CHI2_PER_DOF", "failed_noise_check",
            "implausible_pairing", "pair_measured"]
@@ -81,7 +82,9 @@ class Pairing:
 
 def pair_measured(meas: Measurement, pred: Prediction, rule: PairingRule | None = None, band_hz=None) -> Pairing:
     """The pairing of ``meas`` with the nominal prediction ``pred`` by ``rule`` (module docstring), and what in it
-    cannot be right.
+    cannot be right. A measured mode left unpaired beside a model mode whose partner lies farther than it from where
+    the ratio trend of the other pairs puts that mode (:func:`physics.discrepancy.ratio_trend.trend_picks`, the rule
+    ``classify`` pairs by) names the partner the likelier spurious pole.
 
     Parameters
     ----------
@@ -100,9 +103,15 @@ def pair_measured(meas: Measurement, pred: Prediction, rule: PairingRule | None 
         taken = np.flatnonzero(idx == j)
         near = (f"model mode {j + 1} at {model_hz[j]:.4g} Hz, {100 * (model_hz[j] / f[k] - 1):+.1f} %"
                 + (f", is the measured mode at {f[taken[0]]:.4g} Hz" if taken.size else ""))
+        ok = idx[:, None] == np.arange(model_hz.size)[None]               # (k, m) the pairs, k a second pole of j
+        ok[k, j] = True
+        picks, trend = trend_picks(f, model_hz, ok)
+        spurious = (f"; {trend.basis(np.arange(1, model_hz.size + 1))} put mode {j + 1} at "
+                    f"{trend.predicted_hz(model_hz[j]):.4g} Hz: {f[taken[0]]:.4g} Hz is the likelier spurious pole"
+                    if taken.size and picks[j] == k and trend.anchors.size else "")
         unpaired.append(f"measured mode at {f[k]:.4g} Hz pairs with no model mode (nearest: {near}; the pairing "
                         "rule keeps none beyond 35 %): a spurious pole (noise, the fixture, a torsion or in-plane "
-                        "mode) or a beam file far from the test" + _likelier_spurious(f, model_hz, idx, k, j))
+                        "mode) or a beam file far from the test" + spurious)
     paired = idx[idx >= 0]
     skipped = []
     if paired.size:
@@ -117,25 +126,6 @@ def pair_measured(meas: Measurement, pred: Prediction, rule: PairingRule | None 
     if paired.size < 2 and not unpaired:
         unpaired.append(f"only {paired.size} measured mode{'s' * (paired.size != 1)} pair with the model's")
     return Pairing(idx, f, model_hz, tuple(unpaired), tuple(skipped))
-
-
-def _likelier_spurious(f, model_hz, idx, k, j) -> str:
-    """``"; ... is the likelier spurious pole"`` when model mode ``j``'s measured partner lies farther than the
-    unpaired measured mode ``k`` from ``j``'s frequency scaled by the median ratio (measured / model) of the other
-    pairs (at least 2), else ``""``."""
-    taken = np.flatnonzero(idx == j)
-    others = (idx >= 0) & (idx != j)
-    if taken.size == 0 or np.sum(others) < 2:
-        return ""
-    scale = float(np.median(f[others] / model_hz[idx[others]]))
-    t = int(taken[0])
-    dev_k, dev_t = f[k] / (scale * model_hz[j]) - 1, f[t] / (scale * model_hz[j]) - 1
-    if abs(dev_k) >= abs(dev_t):
-        return ""
-    names = ", ".join(str(int(m) + 1) for m in np.sort(idx[others]))
-    return (f"; modes {names} stand {100 * (scale - 1):+.2f} % off the model on the median, {f[k]:.4g} Hz "
-            f"{100 * dev_k:+.1f} % off mode {j + 1} so scaled, the measured mode at {f[t]:.4g} Hz "
-            f"{100 * dev_t:+.1f} %: {f[t]:.4g} Hz is the likelier spurious pole")
 
 
 def implausible_pairing(pairing: Pairing) -> ImplausibleTest:

@@ -7,7 +7,9 @@ every ``ln(f / f_model)`` alike, shear and rotary inertia (which an Euler-Bernou
 whose pairing band holds one pole (the anchors) predicts where each other mode lies. On a one-accelerometer
 cantilever (modes 22.6/139.2/379.9/725.9 Hz against the model's 22.1/138.3/384.9/755.2 Hz) it puts mode 5 at
 1158 Hz (the model's 1257 Hz): of the test's 1166 Hz (mode 5) and 1227 Hz (a spurious pole), the nearer the model
-is the spurious one, the nearer the prediction is mode 5.
+is the spurious one, the nearer the prediction is mode 5. ``classify`` pairs by it
+(:func:`learn.pairs.measured.pair_modes_by_frequency` with ``trend``); the discrepancy workflow's stop names by it
+the likelier spurious pole (:func:`physics.discrepancy.pairing.pair_measured`).
 """
 
 from __future__ import annotations
@@ -34,6 +36,15 @@ class RatioTrend:
     anchors: np.ndarray
     intercept: float
     slope_per_hz: float
+
+    def basis(self, modes, of: str = "the model") -> str:
+        """What the trend rests on: ``"the ratios of modes 1, 2, 3, 4 to the model"``, or with no anchor ``"no mode
+        holds one pole alone: the model"`` (``modes``: the 1-based mode numbers, shape (m,); ``of``: what the nominal
+        frequencies are)."""
+        if self.anchors.size == 0:
+            return f"no mode holds one pole alone: {of}"
+        names = ", ".join(str(modes[j]) for j in self.anchors)
+        return f"the ratios of mode{'s' * (self.anchors.size > 1)} {names} to {of}"
 
     def predicted_hz(self, nominal_hz) -> np.ndarray:
         """Where each mode of ``nominal_hz`` (Hz, shape (m,)) lies by the trend (Hz, shape (m,))."""
@@ -84,18 +95,15 @@ def trend_picks(frequencies_hz, nominal_hz, admissible) -> tuple[np.ndarray, Rat
 def choice_texts(frequencies_hz, nominal_hz, admissible, which, modes, of: str = "the model") -> dict[int, str]:
     """Why each pole paired with a mode whose band holds several poles is that mode, by the pole's index:
     ``"of 1166.2, 1226.8 Hz in its band; the ratios of modes 1, 2, 3, 4 to the model put it at 1153 Hz (the
-    model's 1257 Hz)"``. ``which``: each pole's 0-based mode (-1 none); ``modes``: the 1-based mode numbers (m,);
+    model: 1257 Hz)"``. ``which``: each pole's 0-based mode (-1 none); ``modes``: the 1-based mode numbers (m,);
     ``of``: what ``nominal_hz`` are (``"the baselines"``: their modes)."""
     f, nominal = np.asarray(frequencies_hz, float), np.asarray(nominal_hz, float)
     ok = np.asarray(admissible, bool).reshape(f.size, nominal.size)
     trend = ratio_trend(f, nominal, ok)
-    anchors = ", ".join(str(modes[j]) for j in trend.anchors)
-    basis = (f"the ratios of mode{'s' * (trend.anchors.size > 1)} {anchors} to {of} put it at "
-             if trend.anchors.size else f"no mode holds one pole alone: {of} put it at ")
     out = {}
     for i, j in enumerate(np.asarray(which, int)):
         if j >= 0 and ok[:, j].sum() >= 2:
             band = ", ".join(f"{x:.5g}" for x in np.sort(f[ok[:, j]]))
-            out[i] = (f"of {band} Hz in its band; {basis}{trend.predicted_hz(nominal[j]):.4g} Hz ({of}: "
-                      f"{nominal[j]:.4g} Hz)")
+            out[i] = (f"of {band} Hz in its band; {trend.basis(modes, of)} put it at "
+                      f"{trend.predicted_hz(nominal[j]):.4g} Hz ({of}: {nominal[j]:.4g} Hz)")
     return out
