@@ -82,9 +82,8 @@ class Pairing:
 
 def pair_measured(meas: Measurement, pred: Prediction, rule: PairingRule | None = None, band_hz=None) -> Pairing:
     """The pairing of ``meas`` with the nominal prediction ``pred`` by ``rule`` (module docstring), and what in it
-    cannot be right. A measured mode left unpaired beside a model mode whose partner lies farther than it from where
-    the ratio trend of the other pairs puts that mode (:func:`physics.discrepancy.ratio_trend.trend_picks`, the rule
-    ``classify`` pairs by) names the partner the likelier spurious pole.
+    cannot be right; an unpaired mode nearer than a model mode's partner to where the other pairs' ratio trend puts
+    it (:func:`physics.discrepancy.ratio_trend.trend_picks`, classify's) names the partner the likelier spurious pole.
 
     Parameters
     ----------

@@ -7,9 +7,8 @@ every ``ln(f / f_model)`` alike, shear and rotary inertia (which an Euler-Bernou
 whose pairing band holds one pole (the anchors) predicts where each other mode lies. On a one-accelerometer
 cantilever (modes 22.6/139.2/379.9/725.9 Hz against the model's 22.1/138.3/384.9/755.2 Hz) it puts mode 5 at
 1158 Hz (the model's 1257 Hz): of the test's 1166 Hz (mode 5) and 1227 Hz (a spurious pole), the nearer the model
-is the spurious one, the nearer the prediction is mode 5. ``classify`` pairs by it
-(:func:`learn.pairs.measured.pair_modes_by_frequency` with ``trend``); the discrepancy workflow's stop names by it
-the likelier spurious pole (:func:`physics.discrepancy.pairing.pair_measured`).
+is the spurious one, the nearer the prediction is mode 5. ``classify`` pairs by it, the discrepancy stop names the
+likelier spurious pole by it (:func:`learn.pairs.measured.pair_modes_by_frequency`, ``pair_measured``).
 """
 
 from __future__ import annotations
@@ -38,9 +37,8 @@ class RatioTrend:
     slope_per_hz: float
 
     def basis(self, modes, of: str = "the model") -> str:
-        """What the trend rests on: ``"the ratios of modes 1, 2, 3, 4 to the model"``, or with no anchor ``"no mode
-        holds one pole alone: the model"`` (``modes``: the 1-based mode numbers, shape (m,); ``of``: what the nominal
-        frequencies are)."""
+        """What the trend rests on, ``"the ratios of modes 1, 2, 3, 4 to {of}"`` or ``"no mode holds one pole alone:
+        {of}"`` (``modes``: the 1-based mode numbers, shape (m,); ``of``: what the nominal frequencies are)."""
         if self.anchors.size == 0:
             return f"no mode holds one pole alone: {of}"
         names = ", ".join(str(modes[j]) for j in self.anchors)
