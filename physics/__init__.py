@@ -9,6 +9,7 @@ Modules (one concept each; float64, batched over leading axes, SI units)
 ``modal``           complex and undamped modes, f/zeta <-> eigenvalue, MAC
 ``frf``             receptance by direct inversion, pole-residue and state space; FRF kinds
 ``updating``        Lancaster/Pilkey damping and stiffness updating; the analyst mass
+``ratio_trend``     where a mode lies by the measured/model frequency ratios of the others (pairing)
 ``estimation``      FRF estimation from time histories (H1, H2, Hv)
 ``identification``  modal identification from FRFs (peak picking, circle fit, LSCF/LSFD)
 ``io``              file formats (one table, ``physics.io.FORMATS``: readers, writers, sniffing) and atomic writes

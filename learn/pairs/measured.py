@@ -10,7 +10,7 @@ import numpy as np
 
 from learn.network.features import BeamSpec
 from learn.explanations.shapes import real_shapes
-from physics.discrepancy.ratio_trend import choice_texts, trend_picks
+from physics.ratio_trend import choice_texts, trend_picks
 from physics.errors import BeamDamageError
 from physics.identification import identify_frf
 from physics.identification.failures import identification_failure
@@ -120,7 +120,7 @@ class ModalPair:
                                                           (the model's 1-based mode it was paired with, None for
                                                           a pole left unpaired; ``"choice"`` on a pole paired
                                                           among several in its mode's band:
-                                                          :func:`physics.discrepancy.ratio_trend.choice_texts`);
+                                                          :func:`physics.ratio_trend.choice_texts`);
                                                           empty on the thesis's 4 modes
     """
 
@@ -154,7 +154,7 @@ def pair_modes_by_frequency(frequencies_hz, nominal_hz, tolerance: float | None 
 
     With ``trend`` (classify's pairing, :func:`modal_pair`), where a mode's band holds several poles the one
     paired is the nearest where the measured/model frequency ratios of the modes whose band holds one pole put it
-    (:func:`physics.discrepancy.ratio_trend.trend_picks`: ``ln(f / f_model)`` a line in ``f_model``), not the
+    (:func:`physics.ratio_trend.trend_picks`: ``ln(f / f_model)`` a line in ``f_model``), not the
     nearest the nominal frequency: an Euler-Bernoulli model's frequencies run increasingly high with the mode
     (shear), so on a one-accelerometer cantilever a spurious pole at 1227 Hz lies nearer the model's mode 5
     (1257 Hz) than mode 5 itself (1166 Hz), which lies nearer the 1153 Hz its modes 1-4 predict. With one pole or

@@ -59,8 +59,8 @@ Modules
 points, pairing, residuals, simulated measurements; ``candidates``  the
 parameters of each effect; ``fitting``  one candidate's fit; ``selection``  the
 score, the decision of a round, the chi^2 noise test; ``limits``  detection
-limits; ``pairing``  which model mode each measured mode is, and when to stop;
-``ratio_trend``  where a mode lies by the measured/model ratios of the others (several poles in its band);
+limits; ``pairing``  which model mode each measured mode is, and when to stop (several poles in a mode's band:
+:mod:`physics.ratio_trend`);
 ``workflow``  :func:`analyse`;
 ``files``  :func:`analyse_file`, the workflow on a measurement
 file with its outputs (calibrated beam file, tables, figures).

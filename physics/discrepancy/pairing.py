@@ -18,7 +18,7 @@ from physics.errors import BeamDamageError
 from physics.modal import mac
 from physics.discrepancy.measurement import Measurement
 from physics.discrepancy.model import Prediction, pair_modes_by_mac
-from physics.discrepancy.ratio_trend import trend_picks
+from physics.ratio_trend import trend_picks
 
 __all__ = ["ImplausibleTest", "Pairing", "PairingRule", "STOP_CHI2_PER_DOF", "failed_noise_check",
            "implausible_pairing", "pair_measured"]
@@ -83,7 +83,7 @@ class Pairing:
 def pair_measured(meas: Measurement, pred: Prediction, rule: PairingRule | None = None, band_hz=None) -> Pairing:
     """The pairing of ``meas`` with the nominal prediction ``pred`` by ``rule`` (module docstring), and what in it
     cannot be right; an unpaired mode nearer than a model mode's partner to where the other pairs' ratio trend puts
-    it (:func:`physics.discrepancy.ratio_trend.trend_picks`, classify's) names the partner the likelier spurious pole.
+    it (:func:`physics.ratio_trend.trend_picks`, classify's) names the partner the likelier spurious pole.
 
     Parameters
     ----------

@@ -1,14 +1,14 @@
 """One baseline against one test: a pole only one of them holds takes no mode's place
 (:func:`learn.pairs.measured.prefer_shared_poles`, on :func:`learn.pairs.measured.modal_pair`'s path); several poles in
 one mode's band: the one paired is the nearest where the measured/model frequency ratios of the other modes put it
-(:mod:`physics.discrepancy.ratio_trend`, read by :func:`learn.pairs.measured.pair_modes_by_frequency`)."""
+(:mod:`physics.ratio_trend`, read by :func:`learn.pairs.measured.pair_modes_by_frequency`)."""
 
 import numpy as np
 import pytest
 
 from learn.network.features import BeamSpec
 from learn.pairs.measured import modal_pair, pair_modes_by_frequency, pairing_bands, prefer_shared_poles
-from physics.discrepancy.ratio_trend import ratio_trend, trend_picks
+from physics.ratio_trend import ratio_trend, trend_picks
 from physics.io import ModalData
 from physics.layout import Layout
 
