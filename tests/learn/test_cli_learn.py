@@ -142,7 +142,9 @@ def test_classify_modal_json_prints_exactly_the_keys(tiny, capsys):
     assert (tiny / "cl" / "classify.png").stat().st_size > 0
 
 
-def test_classify_frf_on_another_grid_is_accepted(tiny, capsys):
+@pytest.fixture(scope="module")
+def frf_pair(tiny) -> list:
+    """The tiny dataset's first pair as two FRF files on another frequency grid (700 lines)."""
     from datagen.dataset import Dataset
 
     ds = Dataset(tiny / "data")
@@ -156,24 +158,41 @@ def test_classify_frf_on_another_grid_is_accepted(tiny, capsys):
         frf = MeasuredFRF(lines, h, ("2:+Y", "3:+Y", "4:+Y", "5:+Y"), ("2:+Y",))
         paths.append(str(tiny / f"frf{s}.npz"))
         write_frf_npz(paths[-1], frf)
-    assert main(["classify", "--model", str(tiny / "model"), "--baseline", paths[0], paths[1], "--json"]) == 0
-    assert json.loads(capsys.readouterr().out)["input_route"] == "measured"
+    return paths
 
 
-def test_classify_places_a_renumbered_shuffled_mm_uff_by_its_geometry(tiny, capsys):
-    """The FRFs of the test above as a test system writes them (nodes 101..104 in its own order, millimetres,
-    dataset-15 coordinates at the quarter points): the same verdict as the canonical files."""
+#: The renumbered UFF files' nodes (model node -> test node) and the test nodes' positions (mm).
+UFF_NODES, UFF_X_MM = {2: 101, 3: 102, 4: 103, 5: 104}, {101: 152.375, 102: 304.75, 103: 457.125, 104: 609.5}
+
+
+@pytest.fixture(scope="module")
+def renumbered_uffs(tiny, frf_pair) -> list:
+    """``frf_pair`` as a test system writes it: nodes 101..104 in its own order, millimetres, dataset-15
+    coordinates at the quarter points."""
     from systems import write_renumbered_uff
 
     from physics.io import read_frf
 
-    paths = [str(tiny / f"frf{s}.npz") for s in (0, 1)]                                   # written by the test above
+    return [str(write_renumbered_uff(tiny / f"renumbered{s}.uff", read_frf(p), UFF_NODES, UFF_X_MM, [3, 1, 0, 2]))
+            for s, p in enumerate(frf_pair)]
+
+
+def test_classify_frf_on_another_grid_is_accepted(tiny, frf_pair, capsys):
+    paths = frf_pair
+    assert main(["classify", "--model", str(tiny / "model"), "--baseline", paths[0], paths[1], "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["input_route"] == "measured"
+
+
+def test_classify_places_a_renumbered_shuffled_mm_uff_by_its_geometry(tiny, frf_pair, renumbered_uffs, capsys):
+    """``renumbered_uffs``: the same verdict as the canonical files."""
+    from systems import write_renumbered_uff
+
+    from physics.io import read_frf
+
+    paths, uffs, nodes, x_mm = frf_pair, renumbered_uffs, UFF_NODES, UFF_X_MM
     assert main(["classify", "--model", str(tiny / "model"), "--baseline", paths[0], paths[1], "--json"]) == 0
     ref = json.loads(capsys.readouterr().out)
     assert ref["dof_positions"]["measured"]["source"] == "quarter-point convention"
-    nodes, x_mm = {2: 101, 3: 102, 4: 103, 5: 104}, {101: 152.375, 102: 304.75, 103: 457.125, 104: 609.5}
-    uffs = [str(write_renumbered_uff(tiny / f"renumbered{s}.uff", read_frf(p), nodes, x_mm, [3, 1, 0, 2]))
-            for s, p in enumerate(paths)]
     assert main(["classify", "--model", str(tiny / "model"), "--baseline", uffs[0], uffs[1], "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
     pos = res["dof_positions"]["measured"]
@@ -204,14 +223,14 @@ def test_classify_places_a_renumbered_shuffled_mm_uff_by_its_geometry(tiny, caps
     assert "103:+Y -> none (x = 0.4 m)" in err
 
 
-def test_classify_of_a_uff_pair_imports_no_heavy_library(tiny):
-    """One UFF pair classified in a fresh process (the files of the test above) loads none of torch (the network
+def test_classify_of_a_uff_pair_imports_no_heavy_library(tiny, renumbered_uffs):
+    """One UFF pair classified in a fresh process (``renumbered_uffs``) loads none of torch (the network
     answers in NumPy), scikit-learn, scipy.signal, matplotlib (no figure asked), pandas, pyarrow, numba."""
     import os
     import subprocess
     import sys
 
-    uffs = [str(tiny / f"renumbered{s}.uff") for s in (0, 1)]
+    uffs = renumbered_uffs
     code = ("import json, sys; from experiments.cli import main; "
             f"code = main(['classify', '--model', {str(tiny / 'model')!r}, '--baseline', *{uffs!r}, '--json']); "
             "print(json.dumps([code, sorted(m for m in ('torch', 'sklearn', 'scipy.signal', 'matplotlib', "
