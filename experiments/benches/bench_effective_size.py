@@ -14,12 +14,17 @@ its table). Per seed and model:
   ``combined, n_eff``: the same with the held-out statistics scaled by the prediction factor of their effective
   sample size (:func:`~learn.monitor.effective_size.inflate_held`); ``plain shift, both signs``, ``plain per mode``
   (:func:`~experiments.benches.plain_tests.plain_alarms`, plotting position).
-* chance: the lag-1 autocorrelation of the normal scores of ``combined``'s ratio over the intact second year
-  (``rho_1``), and the AR(1) coefficient matched to its autocorrelation at one day's lag (``rho_day``, the
-  ``tests a day``-th root; the same as ``rho_1`` for the daily series); per case, for their median over the seeds,
-  the share of :func:`~learn.monitor.effective_size.false_alarm_spread`'s draws above twice the rate: a detector
-  exact at the rate (``exact``) and one whose threshold is the plotting-position quantile of a baseline year of the
-  same AR(1) series (``from baseline``).
+* chance (a model of the series): the lag-1 autocorrelation of the normal scores of ``combined``'s ratio over
+  the intact second year (``rho_1``), and the AR(1) coefficient matched to its autocorrelation at one day's lag
+  (``rho_day``, the ``tests a day``-th root; ``rho_1`` for the daily series); per case, for their median over the
+  seeds, the share of :func:`~learn.monitor.effective_size.false_alarm_spread`'s draws above twice the rate: a
+  detector exact at the rate (``exact``) and one whose threshold is the plotting-position quantile of a baseline
+  year of the same AR(1) series (``from baseline``).
+* chance (the alarms' own episodes): the sizes of ``combined``'s alarm episodes (alarms at most a day apart) on the
+  held-out baseline year and on the intact second year, pooled over the seeds; a detector exact at the rate alarms
+  on a Poisson number of episodes of those sizes (:func:`~learn.monitor.effective_size.episode_spread`;
+  ``n_eff = n E[S] / E[S^2]``), ``from baseline`` its share on the second year less its share on the first plus the
+  rate (a threshold at the first year's quantile: ``1 - F(q) = rate + F_1(q) - F(q)`` to first order).
 
 Each seed's row is cached in ``--out``/rows (delete it to run again); writes ``effective_size.json`` and
 ``effective_size.md`` in ``--out``.
@@ -44,8 +49,9 @@ from experiments.benches.bench_detection import DAMAGES, SIZES_PCT, _case  # noq
 from experiments.benches.harness import parser, table  # noqa: E402
 from experiments.benches.plain_tests import plain_alarms  # noqa: E402
 from experiments.second_sim.series import frequency_series, mass_loss_pattern, uniform_stiffness_pattern  # noqa: E402
-from learn.monitor.effective_size import (effective_size, false_alarm_spread, inflate_held,  # noqa: E402
-                                          lag1_autocorrelation, prediction_inflation)
+from learn.monitor.effective_size import (alarm_episodes, effective_size, episode_spread,  # noqa: E402
+                                          false_alarm_spread, inflate_held, lag1_autocorrelation,
+                                          prediction_inflation)
 from learn.monitor.normal_models import NORMAL_MODELS  # noqa: E402
 from learn.monitor.statistics import detect, held_out_statistics  # noqa: E402
 from physics.io import atomic_write_text  # noqa: E402
@@ -91,21 +97,23 @@ def run_case(case: str, model_name: str, seed: int, rate: float, damages: bool =
     b_idx, rest = np.arange(nb), np.arange(nb, len(fs.day))
 
     def columns(F, sel, sign):
-        out, ratio = {}, None
+        out, first = {}, None
         for col, h in (("combined", held), ("combined, n_eff", corrected)):
             det = detect(model, model.with_choices, np.log(F), C, b_idx, rest, rate, q, held=h)
             out[col] = float(100 * det.alarm[sel].mean())
-            ratio = det.ratio if ratio is None else ratio
+            first = det if first is None else first
         one, both = (plain_alarms(F, nb, rate, sides=s, sign=sign, method="weibull") for s in (1, 2))
         out["plain shift, both signs"] = float(100 * both["plain shift"][sel].mean())
         out["plain per mode"] = float(100 * one["plain per mode"][sel].mean())
-        return out, ratio
+        return out, first
 
-    fa, ratio = columns(fs.frequencies_hz, np.arange(len(fs.day)) >= nb, 1.0)
-    z = _normal_scores(ratio[nb:])
+    fa, det = columns(fs.frequencies_hz, np.arange(len(fs.day)) >= nb, 1.0)
+    z = _normal_scores(det.ratio[nb:])
     row = {"case": case, "model": model_name, "seed": seed, "n_baseline": nb, "n_monitoring": len(fs.day) - nb,
            "n_eff": n_eff, "factor": factor, "rho_1": lag1_autocorrelation(z),
-           "rho_day": max(_lag_corr(z, per_day), 0.0) ** (1.0 / per_day), "false_alarms": fa, "detected": {}}
+           "rho_day": max(_lag_corr(z, per_day), 0.0) ** (1.0 / per_day), "false_alarms": fa, "detected": {},
+           "episodes_baseline": alarm_episodes(det.alarm[:nb], per_day).tolist(),
+           "episodes_later": alarm_episodes(det.alarm[nb:], per_day).tolist()}
     damaged = np.arange(len(fs.day)) >= onset
     for name, which in (DAMAGES.items() if damages else ()):
         pattern = _pattern(cfg, which)
@@ -134,6 +142,16 @@ def chance(rows: list, rate: float, draws: int) -> list:
                         "p_above_2x_exact": float(np.mean(exact > 2 * rate)),
                         "p_above_2x_from_baseline": float(np.mean(base > 2 * rate)),
                         "sd_pct_exact": float(100 * exact.std()), "sd_pct_from_baseline": float(100 * base.std())}
+        for key in ("episodes_baseline", "episodes_later"):
+            sizes = [e for r in mine for e in r.get(key, [])]
+            if not sizes:
+                continue
+            later = episode_spread(n_m, rate, sizes, draws=20 * draws, seed=3)
+            base = episode_spread(nb, rate, sizes, draws=20 * draws, seed=4)
+            res[key] = {"episodes": len(sizes), "mean_size": float(np.mean(sizes)),
+                        "n_eff_monitoring": n_m * np.mean(sizes) / np.mean(np.square(sizes)),
+                        "p_above_2x_exact": float(np.mean(later > 2 * rate)),
+                        "p_above_2x_from_baseline": float(np.mean(later - base + rate > 2 * rate))}
         print(json.dumps(res), flush=True)
         out.append(res)
     return out
@@ -153,6 +171,11 @@ def markdown(rows: list, odds: list) -> str:
     chance_rows = [[o["case"], str(o["n_baseline"]), str(o["n_monitoring"]), k, f"{o[k]['rho']:.3f}",
                     f"{o[k]['n_eff_monitoring']:.0f}", f"{100 * o[k]['p_above_2x_exact']:.1f} %",
                     f"{100 * o[k]['p_above_2x_from_baseline']:.1f} %"] for o in odds for k in ("rho_1", "rho_day")]
+    chance_rows += [[o["case"], str(o["n_baseline"]), str(o["n_monitoring"]),
+                     f"{o[k]['episodes']} {k.split('_')[1]} episodes (mean {o[k]['mean_size']:.1f} tests)", "",
+                     f"{o[k]['n_eff_monitoring']:.0f}", f"{100 * o[k]['p_above_2x_exact']:.1f} %",
+                     f"{100 * o[k]['p_above_2x_from_baseline']:.1f} %"]
+                    for o in odds for k in ("episodes_baseline", "episodes_later") if k in o]
     return md + "\n\n" + table(["case", "baseline tests", "later tests", "AR(1) from", "rho", "n_eff (later)",
                                 "P(FA > 2 rate), exact", "P(FA > 2 rate), threshold from a baseline year"],
                                chance_rows)
@@ -189,7 +212,7 @@ def main(argv=None) -> int:
     for case in a.cases:
         for model in a.models:
             for seed in a.seeds:
-                path = out / "rows" / f"{case}_{model}_{seed}_{a.rate:g}{'_fa' if a.false_alarms_only else ''}.json"
+                path = out / "rows" / f"{case}_{model}_{seed}_{a.rate:g}{'_fa' if a.false_alarms_only else ''}_v2.json"
                 if path.is_file():
                     rows.append(json.loads(path.read_text()))
                     continue

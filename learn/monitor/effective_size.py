@@ -9,6 +9,9 @@ variance of their mean is that of ``n_eff = n (1 - rho) / (1 + rho)`` independen
   Gaussian AR(1) series alarms on a share of ``n`` tests whose mean is ``rate`` and whose variance grows with
   ``rho`` (:func:`alarm_count_variance`, exact: the indicators' covariances from the bivariate normal law);
   :func:`false_alarm_spread` draws it, with the threshold exact or read from a baseline of the same series.
+  Without a model of the series: the alarms come in episodes (:func:`alarm_episodes`), and a detector at the rate
+  alarms on a Poisson number of episodes of the sizes seen (:func:`episode_spread`, a compound Poisson count whose
+  variance is the binomial's times ``E[S^2] / E[S]``).
 * The held-out statistics: a baseline test held out by a model fitted on its neighbours (interleaved folds,
   leave-one-out) is partly in-sample: its deviation from the training centre has the variance
   ``sigma^2 (1 - 1 / n_eff + 2 / n)`` (its neighbours' share of the centre moves with it), a test of a later period
@@ -25,8 +28,8 @@ import numpy as np
 
 from learn.monitor.per_mode import per_mode_index
 
-__all__ = ["alarm_count_variance", "effective_size", "false_alarm_spread", "inflate_held", "lag1_autocorrelation",
-           "prediction_inflation"]
+__all__ = ["alarm_count_variance", "alarm_episodes", "effective_size", "episode_spread", "false_alarm_spread",
+           "inflate_held", "lag1_autocorrelation", "prediction_inflation"]
 
 
 def lag1_autocorrelation(x) -> float:
@@ -132,3 +135,25 @@ def false_alarm_spread(n_tests: int, rate: float, rho: float, n_baseline: int = 
             q = np.full(m, exact)
         out[start:start + m] = np.mean(x[:, n_baseline:] > q[:, None], axis=1)
     return out
+
+
+def alarm_episodes(alarm, gap: int = 1) -> np.ndarray:
+    """The sizes (number of alarmed tests) of the episodes of ``alarm`` (bool (n,)): alarmed tests at most ``gap``
+    tests after the previous alarmed one belong to its episode."""
+    idx = np.flatnonzero(np.asarray(alarm, bool))
+    if not idx.size:
+        return np.zeros(0, int)
+    starts = np.r_[0, np.flatnonzero(np.diff(idx) > gap) + 1]
+    return np.diff(np.r_[starts, idx.size])
+
+
+def episode_spread(n_tests: int, rate: float, sizes, draws: int = 20000, seed: int = 0) -> np.ndarray:
+    """``draws`` shares of false alarms (draws,) over ``n_tests`` tests of a detector exact at ``rate`` whose alarms
+    come in episodes of the sizes ``sizes`` (drawn with replacement): a Poisson number of episodes of mean
+    ``rate n_tests / mean(sizes)``. Seeded."""
+    sizes = np.asarray(sizes, float)
+    rng = np.random.default_rng(seed)
+    counts = rng.poisson(rate * n_tests / sizes.mean(), draws)
+    picks = rng.choice(sizes, counts.sum())
+    totals = np.bincount(np.repeat(np.arange(draws), counts), weights=picks, minlength=draws)
+    return totals / n_tests

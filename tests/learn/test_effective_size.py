@@ -5,8 +5,9 @@ import numpy as np
 import pytest
 from scipy import signal, stats
 
-from learn.monitor.effective_size import (alarm_count_variance, effective_size, false_alarm_spread, inflate_held,
-                                          lag1_autocorrelation, prediction_inflation)
+from learn.monitor.effective_size import (alarm_count_variance, alarm_episodes, effective_size, episode_spread,
+                                          false_alarm_spread, inflate_held, lag1_autocorrelation,
+                                          prediction_inflation)
 
 
 def _ar1(rho, n, seed):
@@ -70,3 +71,20 @@ def test_false_alarm_spread_independent_is_binomial_and_beta_binomial():
     # a baseline of 399: the threshold is its 4th largest, exceeded with a Beta(4, 396) share
     base = false_alarm_spread(200, 0.01, 0.0, n_baseline=399, draws=10_000, seed=2)
     assert np.mean(base > 0.02) == pytest.approx(stats.betabinom.sf(4, 200, 4, 396), abs=0.012)
+
+
+def test_alarm_episodes():
+    a = np.zeros(20, bool)
+    a[[2, 3, 5, 9, 10, 11, 19]] = True
+    np.testing.assert_array_equal(alarm_episodes(a, 1), [2, 1, 3, 1])
+    np.testing.assert_array_equal(alarm_episodes(a, 2), [3, 3, 1])
+    assert alarm_episodes(np.zeros(5, bool)).size == 0
+
+
+def test_episode_spread_single_tests_is_poisson_and_pairs_double_the_variance():
+    single = episode_spread(365, 0.01, [1], draws=40_000, seed=3)
+    assert np.mean(single > 0.02) == pytest.approx(stats.poisson.sf(7, 3.65), abs=0.004)
+    pairs = episode_spread(365, 0.01, [2], draws=40_000, seed=4)                 # 2 x Poisson(1.825)
+    assert np.mean(pairs) == pytest.approx(0.01, abs=2e-4)
+    assert np.var(pairs * 365) == pytest.approx(2 * 3.65, rel=0.03)
+    assert np.mean(pairs > 0.02) == pytest.approx(stats.poisson.sf(3, 1.825), abs=0.005)
