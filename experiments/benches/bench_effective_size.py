@@ -1,5 +1,5 @@
 """Benchmark: how much of the long series' false-alarm excess is chance, and the held-out statistics corrected for
-the baseline's autocorrelation (:mod:`learn.monitor.effective_size`), beside the plain tests.
+the baseline's autocorrelation (:mod:`experiments.benches.effective_size`), beside the plain tests.
 
 Run: ``python -m experiments.benches.bench_effective_size [--cases daily 30min] [--models pca] [--seeds 0 1 2 3]
 [--rate 0.01] [--draws 2000] [--false-alarms-only] [--out out/bench_effective_size]``; ``python -m
@@ -12,17 +12,18 @@ its table). Per seed and model:
 
 * ``combined``: ``monitor``'s alarm (:func:`~learn.monitor.statistics.detect`, the union's level);
   ``combined, n_eff``: the same with the held-out statistics scaled by the prediction factor of their effective
-  sample size (:func:`~learn.monitor.effective_size.inflate_held`); ``plain shift, both signs``, ``plain per mode``
+  sample size (:func:`~experiments.benches.effective_size.inflate_held`); ``plain shift, both signs``,
+  ``plain per mode``
   (:func:`~experiments.benches.plain_tests.plain_alarms`, plotting position).
 * chance (a model of the series): the lag-1 autocorrelation of the normal scores of ``combined``'s ratio over
   the intact second year (``rho_1``), and the AR(1) coefficient matched to its autocorrelation at one day's lag
   (``rho_day``, the ``tests a day``-th root; ``rho_1`` for the daily series); per case, for their median over the
-  seeds, the share of :func:`~learn.monitor.effective_size.false_alarm_spread`'s draws above twice the rate: a
+  seeds, the share of :func:`~experiments.benches.effective_size.false_alarm_spread`'s draws above twice the rate: a
   detector exact at the rate (``exact``) and one whose threshold is the plotting-position quantile of a baseline
   year of the same AR(1) series (``from baseline``).
 * chance (the alarms' own episodes): the sizes of ``combined``'s alarm episodes (alarms at most a day apart) on the
   held-out baseline year and on the intact second year, pooled over the seeds; a detector exact at the rate alarms
-  on a Poisson number of episodes of those sizes (:func:`~learn.monitor.effective_size.episode_spread`;
+  on a Poisson number of episodes of those sizes (:func:`~experiments.benches.effective_size.episode_spread`;
   ``n_eff = n E[S] / E[S^2]``), ``from baseline`` its share on the second year less its share on the first plus the
   rate (a threshold at the first year's quantile: ``1 - F(q) = rate + F_1(q) - F(q)`` to first order).
 
@@ -49,7 +50,7 @@ from experiments.benches.bench_detection import DAMAGES, SIZES_PCT, _case  # noq
 from experiments.benches.harness import parser, table  # noqa: E402
 from experiments.benches.plain_tests import plain_alarms  # noqa: E402
 from experiments.second_sim.series import frequency_series, mass_loss_pattern, uniform_stiffness_pattern  # noqa: E402
-from learn.monitor.effective_size import (alarm_episodes, effective_size, episode_spread,  # noqa: E402
+from experiments.benches.effective_size import (alarm_episodes, effective_size, episode_spread,  # noqa: E402
                                           false_alarm_spread, inflate_held, lag1_autocorrelation,
                                           prediction_inflation)
 from learn.monitor.normal_models import NORMAL_MODELS  # noqa: E402
@@ -128,7 +129,8 @@ def run_case(case: str, model_name: str, seed: int, rate: float, damages: bool =
 
 def chance(rows: list, rate: float, draws: int) -> list:
     """Per case: the median ``rho_1`` and ``rho_day`` over the seeds and, for each, the share of draws of
-    :func:`~learn.monitor.effective_size.false_alarm_spread` above twice the rate (exact; from a baseline year)."""
+    :func:`~experiments.benches.effective_size.false_alarm_spread` above twice the rate (exact; from a baseline
+    year)."""
     out = []
     for case in dict.fromkeys(r["case"] for r in rows):
         mine = [r for r in rows if r["case"] == case]
@@ -183,7 +185,7 @@ def markdown(rows: list, odds: list) -> str:
 
 def real_series_corrected(argv) -> int:
     """:func:`experiments.benches.bench_real_series.main` on ``argv`` with ``monitor``'s held-out statistics
-    scaled by :func:`~learn.monitor.effective_size.inflate_held`."""
+    scaled by :func:`~experiments.benches.effective_size.inflate_held`."""
     cached = monitor_alarms.held_out_cached
     monitor_alarms.held_out_cached = lambda *a, **k: inflate_held(cached(*a, **k))
     try:

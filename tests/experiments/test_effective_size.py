@@ -1,11 +1,11 @@
 """The effective sample size of an autocorrelated series, the spread of its false alarms and the held-out
-statistics' prediction factor (learn.monitor.effective_size) against closed forms."""
+statistics' prediction factor (experiments.benches.effective_size) against closed forms."""
 
 import numpy as np
 import pytest
 from scipy import signal, stats
 
-from learn.monitor.effective_size import (alarm_count_variance, alarm_episodes, effective_size, episode_spread,
+from experiments.benches.effective_size import (alarm_count_variance, alarm_episodes, effective_size, episode_spread,
                                           false_alarm_spread, inflate_held, lag1_autocorrelation,
                                           prediction_inflation)
 
