@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import learn.monitor.workers as workers
+from experiments.cli import main as cli_main
 from learn.monitor import IdentificationSettings, IdentifiedModes, SeriesInput, monitor_series, reference_modes
 from learn.monitor.estimator_choice import FFT_PEAK, MIN_HALF, choose_estimators, choose_frequencies
 from learn.monitor.tracking import track_modes
@@ -137,3 +138,19 @@ def test_modal_data_keep_their_frequencies(tmp_path):
     assert res.frequency_choice is None and res.normal_variation["frequency_estimators"] is None
     read = np.array([json.loads(open(f).read())["natural_frequencies_hz"] for f in files])
     np.testing.assert_allclose(np.array([r["frequencies_hz"] for r in res.rows], float), read, rtol=1e-12)
+
+
+def test_the_cli_reports_the_choice_in_its_summary_and_json(tmp_path, monkeypatch):
+    """``monitor --out DIR``: the summary of report.md names each mode's estimator with both scatters;
+    ``monitor.json`` holds the choice and the request's ``--frequency-estimator``."""
+    files, tests, *_ = _series(tmp_path)
+    by_file = dict(zip(files, tests))
+    monkeypatch.setattr(workers, "cached_identification", lambda path, *a, **k: (by_file[str(path)], None, False))
+    out = tmp_path / "out"
+    assert cli_main(["monitor", *files, "--baseline-tests", "14", "--chart", "none", "--out", str(out)]) == 0
+    report = (out / "report.md").read_text()
+    assert "Frequency estimators over the baseline period: mode 1: era, scatter " in report
+    assert "mode 2: FFT peak, scatter " in report
+    saved = json.loads((out / "monitor.json").read_text())
+    assert saved["config"]["frequency_estimator"] == "choose"
+    assert saved["normal_variation"]["frequency_estimators"]["estimators"] == ["era", FFT_PEAK]
