@@ -40,7 +40,8 @@ class SeriesResult:
                                      ``identified``, ``status`` (:data:`STATUSES`), ``error``, ``missing_modes``,
                                      ``beyond_band``: the modes missing from their bands read as moved or lost
                                      (:meth:`learn.monitor.tracking.BeyondBands.readings`), ``beyond_band_text``,
-                                     ``identified_by``: per mode the method that found its pole, ``conditions``)
+                                     ``identified_by``: per mode the method that found its pole (or its
+                                     frequency: ``fftpeak (the pole tracked: era)``), ``conditions``)
     reference : ReferenceModes
     frequencies_hz : ndarray (n, m)  tracked frequencies (NaN where missing)
     expected_hz : ndarray (n, m)     the baseline's frequencies at each test's conditions
@@ -137,7 +138,8 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     if frequency_estimator == "choose":
         choice = choose_frequencies(tests, series.files, ref, F, cols,
                                     [i for i in range(n_baseline) if i not in foreign])
-        F = F if choice is None else choice.frequencies_hz
+        if choice is not None:
+            F, how = choice.frequencies_hz, choice.identified_by(how)
     X = np.log(F)
     ok = np.array([t is not None for t in tests]) & np.isfinite(X).any(axis=1)
     if q:

@@ -92,6 +92,14 @@ class FrequencyChoice:
                            f"the {n} baseline tests (halves {hd1:.3g} / {hd2:.3g} against {hf1:.3g} / {hf2:.3g} Hz)")
         return out
 
+    def identified_by(self, how: list) -> list:
+        """Per test, per mode, how its frequency was found: ``how`` (:func:`learn.monitor.tracking.identified_by`)
+        with a chosen mode's entry ``fftpeak (the pole tracked: era)``, None where its FFT peak is missing."""
+        chosen = self.chosen
+        return [[h if h is None or not chosen[r] else
+                 (f"{FFT_PEAK} (the pole tracked: {h})" if np.isfinite(self.frequencies_hz[i, r]) else None)
+                 for r, h in enumerate(row)] for i, row in enumerate(how)]
+
     def to_dict(self) -> dict:
         return {"default": self.default, "estimators": list(self.estimators),
                 "scatter_hz": [{self.default: _num(d), FFT_PEAK: _num(f)} for d, f in self.scatter_hz],

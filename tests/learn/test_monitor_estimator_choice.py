@@ -115,6 +115,7 @@ def test_monitor_takes_the_chosen_frequencies_and_reports_the_choice(tmp_path, m
     rows = np.array([r["frequencies_hz"] for r in res.rows], float)
     np.testing.assert_allclose(rows[:, 1], f2, atol=5e-3)
     assert res.normal_variation["frequency_estimators"]["estimators"] == ["era", FFT_PEAK]
+    assert [r["identified_by"] for r in res.rows] == [["era", "fftpeak (the pole tracked: era)"]] * len(files)
     json.dumps(res.normal_variation["frequency_estimators"])
     one = monitor_series(series, 14, IdentificationSettings(), None, progress=False, chart="none",
                          frequency_estimator="identification")
