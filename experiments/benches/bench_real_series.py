@@ -23,10 +23,13 @@ the smaller log gap to its neighbouring modes either side, within the band). On 
   quantile.
 
 ``monitor on FFT peaks`` is ``monitor`` fed those FFT-peak frequencies as modal data (``natural_frequencies_hz``
-files): its detector without its identification. Each test's modes and error are ``monitor``'s own (its rows and
-:attr:`~learn.monitor.SeriesResult.tests`, the narrow-band re-identifications included); a refusal or a crash of
-``monitor`` is reported as the set's result, each test's modes then read from its identification cache
-(:func:`~learn.monitor.identification.cached_identification`).
+files): its detector without its identification. ``monitor`` estimates each mode's frequency by the more repeatable
+over the baseline period of its identification and the record's FFT peak (:mod:`learn.monitor.estimator_choice`;
+the choice is printed under the table); ``monitor, identification alone`` is ``monitor`` with every frequency its
+identification's (``frequency_estimator="identification"``). Each test's modes and error are ``monitor``'s own
+(its rows and :attr:`~learn.monitor.SeriesResult.tests`, the narrow-band re-identifications included); a refusal
+or a crash of ``monitor`` is reported as the set's result, each test's modes then read from its identification
+cache (:func:`~learn.monitor.identification.cached_identification`).
 
 ``monitor`` counts a test as flagged when its status is one of :data:`learn.monitor.alarms.FLAGGED_STATUSES`:
 ``alarm``, ``change or unseen conditions`` (the series are undated, so an extrapolated test alarmed by the
@@ -64,7 +67,7 @@ from physics.errors import BeamDamageError  # noqa: E402
 from physics.identification.fft_peak import fft_peaks, identify_fft_peaks  # noqa: E402
 from physics.io import atomic_write_text  # noqa: E402
 
-__all__ = ["LOADERS", "METHODS", "RealSeries", "fft_frequencies", "group_scores", "main",
+__all__ = ["LOADERS", "METHODS", "ONE_ESTIMATOR", "RealSeries", "fft_frequencies", "group_scores", "main",
            "mode_windows_hz", "reference_fft_modes"]
 
 DATA = str(Path(__file__).resolve().parents[1] / "data" / "real")
@@ -294,21 +297,23 @@ def _crash_text(exc: Exception) -> str:
 
 
 def _monitor(files, n_baseline: int, settings: IdentificationSettings, cache, rate: float,
-             statistics=DEFAULT_STATISTICS) -> tuple:
-    """``(statuses, reference frequencies (Hz), per-test errors, per-test modes, refusal or None)`` of ``monitor``
-    on ``files``: its rows and its tests; when it refuses or crashes, each test's identification from the cache."""
+             statistics=DEFAULT_STATISTICS, frequency_estimator: str = "choose") -> tuple:
+    """``(statuses, reference frequencies (Hz), per-test errors, per-test modes, refusal or None, choice)`` of
+    ``monitor`` on ``files``: its rows, its tests and its frequency estimators (a dict, or None); when it refuses or
+    crashes, each test's identification from the cache."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             res = monitor_series(SeriesInput.from_files(files), n_baseline, settings, cache, rate, progress=False,
-                                 chart="none", statistics=statistics)
+                                 chart="none", statistics=statistics, frequency_estimator=frequency_estimator)
     except BeamDamageError as exc:
         why = str(exc)
     except Exception as exc:                    # a crash of monitor on real records is a result to report
         why = _crash_text(exc)
     else:
         return ([r["status"] for r in res.rows], [float(v) for v in res.reference.frequencies_hz],
-                [r["error"] for r in res.rows], list(res.tests), None)
+                [r["error"] for r in res.rows], list(res.tests), None,
+                None if res.frequency_choice is None else res.frequency_choice.to_dict())
     tests, errors = [], []
     for f in files:
         try:
@@ -317,7 +322,7 @@ def _monitor(files, n_baseline: int, settings: IdentificationSettings, cache, ra
             t, e = None, f"{f}: {_crash_text(exc)}"
         tests.append(t)
         errors.append(e)
-    return ["refused"] * len(files), [], errors, tests, why
+    return ["refused"] * len(files), [], errors, tests, why, None
 
 
 def _write_modal(F, folder: Path) -> list:
@@ -341,18 +346,21 @@ def run_set(series: RealSeries, out: Path, rate: float, statistics=DEFAULT_STATI
     t0 = time.perf_counter()
     files = _write_records(series, out / "records" / series.name)
     settings = IdentificationSettings(tuple(series.band_hz))
-    status, mon_ref, errors, tests, mon_error = _monitor(files, series.n_baseline, settings, out / "cache", rate,
-                                                         statistics)
+    status, mon_ref, errors, tests, mon_error, choice = _monitor(files, series.n_baseline, settings, out / "cache",
+                                                                 rate, statistics)
     t_mon = time.perf_counter() - t0
+    one_status, _, _, _, one_error, _ = _monitor(files, series.n_baseline, settings, out / "cache", rate, statistics,
+                                                 "identification")
     nb = series.n_baseline
     ref = reference_fft_modes(series.records[:nb], series.sampling_frequency_hz[:nb], series.band_hz)
     F = fft_frequencies(series.records, series.sampling_frequency_hz, mode_windows_hz(ref, series.band_hz)) \
         if ref.size else np.full((len(files), 0), np.nan)
     plain = plain_alarms(F, nb, rate, sides=2, method="linear") if ref.size else {
         k: np.zeros(len(files), bool) for k in ("plain shift", "plain per mode")}
-    fft_status, fft_ref, _, _, fft_error = _monitor(_write_modal(F, out / "fft_modal" / series.name), nb,
+    fft_status, fft_ref, _, _, fft_error, _ = _monitor(_write_modal(F, out / "fft_modal" / series.name), nb,
                                                  IdentificationSettings(), None, rate, statistics)
-    flags = {"monitor": _flagged(status), **plain, "monitor on FFT peaks": _flagged(fft_status)}
+    flags = {"monitor": _flagged(status), **plain, "monitor on FFT peaks": _flagged(fft_status),
+             ONE_ESTIMATOR: _flagged(one_status)}
     identified = np.array([t is not None and t.frequencies_hz.size > 0 for t in tests]) if mon_error \
         else np.array([s not in ("not identified", "not judged") for s in status])
     rows = group_scores(series.groups, flags, identified, nb, series.known, against=("plain shift", "plain per mode"))
@@ -364,6 +372,8 @@ def run_set(series: RealSeries, out: Path, rate: float, statistics=DEFAULT_STATI
             r["fft found"] = int(np.isfinite(F[sel]).all(axis=1).sum())
     return {"set": series.name, "how": series.how, "band_hz": list(series.band_hz), "n": len(files),
             "n_baseline": nb, "monitor_error": mon_error, "monitor_reference_hz": mon_ref,
+            "frequency_estimators": choice, "identification_alone_error": one_error,
+            "identification_alone_status": one_status,
             "monitor_on_fft_error": fft_error,
             "monitor_on_fft_reference_hz": fft_ref, "monitor_on_fft_status": fft_status,
             "fft_reference_hz": ref.tolist(), "status": status, "errors": errors, "identified_hz":
@@ -381,7 +391,9 @@ def _pct(v) -> str:
     return "-" if v is None else f"{100 * v:.0f} %"
 
 
-METHODS = ("monitor", "monitor on FFT peaks", "plain shift", "plain per mode")
+#: ``monitor`` with every mode's frequency by the identification (``frequency_estimator="identification"``).
+ONE_ESTIMATOR = "monitor, identification alone"
+METHODS = ("monitor", ONE_ESTIMATOR, "monitor on FFT peaks", "plain shift", "plain per mode")
 
 
 def markdown(results: list, rate: float) -> str:
@@ -391,7 +403,8 @@ def markdown(results: list, rate: float) -> str:
             "monitor misses: not identified / below threshold"]
     lines = []
     for res in results:
-        refused = {"monitor": res["monitor_error"], "monitor on FFT peaks": res["monitor_on_fft_error"]}
+        refused = {"monitor": res["monitor_error"], "monitor on FFT peaks": res["monitor_on_fft_error"],
+                   ONE_ESTIMATOR: res["identification_alone_error"]}
         for k, r in enumerate(res["rows"]):
             name = res["set"] if k == 0 else ""
             if r["group"] == "first flagged later test":
@@ -410,6 +423,8 @@ def markdown(results: list, rate: float) -> str:
     notes = [f"{res['set']}: {what} {'failed' if res[key].startswith('crashed') else 'refused'}: {res[key]}"
              for res in results for what, key in (("monitor", "monitor_error"),
                                                   ("monitor on FFT peaks", "monitor_on_fft_error")) if res[key]]
+    notes += [f"{res['set']}: " + "; ".join(res["frequency_estimators"]["texts"]) for res in results
+              if res.get("frequency_estimators")]
     return table(head, lines) + "".join(f"\n\n{n}" for n in notes) + (
         f"\n\nShare of each group's tests flagged at {rate:g} false alarms (`intact`: false alarms; baseline: "
         "monitor's held-out alarms). `python -m experiments.benches.bench_real_series --docs`")

@@ -19,6 +19,7 @@ from learn.monitor.charts import CHARTS, Charts, run_charts
 from learn.monitor.statistics import (DEFAULT_STATISTICS, STATISTICS, Detection, covers_seasons, detect,
                                      environmental, residual_threshold, season_warning)
 from learn.monitor.coverage import series_coverage
+from learn.monitor.estimator_choice import FREQUENCY_ESTIMATORS, FrequencyChoice, choose_frequencies
 from learn.monitor.tracking import (MIN_PRESENCE, MODE_LOST, MODE_MOVED, BeyondBands, ReferenceModes, beyond_bands,
                                    identified_by, readings_text, reference_modes, refit_missing, track_modes)
 from physics.errors import BeamDamageError, ConfigError
@@ -39,7 +40,8 @@ class SeriesResult:
                                      ``identified``, ``status`` (:data:`STATUSES`), ``error``, ``missing_modes``,
                                      ``beyond_band``: the modes missing from their bands read as moved or lost
                                      (:meth:`learn.monitor.tracking.BeyondBands.readings`), ``beyond_band_text``,
-                                     ``identified_by``: per mode the method that found its pole, ``conditions``)
+                                     ``identified_by``: per mode the method that found its pole (or its
+                                     frequency: ``fftpeak (the pole tracked: era)``), ``conditions``)
     reference : ReferenceModes
     frequencies_hz : ndarray (n, m)  tracked frequencies (NaN where missing)
     expected_hz : ndarray (n, m)     the baseline's frequencies at each test's conditions
@@ -50,6 +52,8 @@ class SeriesResult:
     sigma : ndarray (m,)             per-mode relative std of the normal variation (what the explanations weigh)
     tests : list of IdentifiedModes or None
     beyond : BeyondBands or None     the modes missing from their bands, moved or lost
+    frequency_choice : FrequencyChoice or None    each mode's frequency estimator chosen over the baseline period
+                                     (response records; :mod:`learn.monitor.estimator_choice`)
     """
 
     rows: list
@@ -66,6 +70,7 @@ class SeriesResult:
     detection: Detection | None = None
     charts: Charts | None = None
     beyond: BeyondBands | None = None
+    frequency_choice: FrequencyChoice | None = None
 
     @property
     def first_alarm(self) -> int | None:
@@ -75,7 +80,7 @@ class SeriesResult:
 def monitor_series(series: SeriesInput, n_baseline: int, settings: IdentificationSettings, cache_dir=None,
                    false_alarm_rate: float = 0.01, normal_model: str | None = None, progress: bool = True,
                    chart: str = "ewma", statistics=DEFAULT_STATISTICS, workers: int = 1,
-                   extrapolated_alarms: str = "auto") -> SeriesResult:
+                   extrapolated_alarms: str = "auto", frequency_estimator: str = "choose") -> SeriesResult:
     """Monitor a series: identify every test (cached), track the baseline period's modes, learn the normal
     variation on the baseline period, and score every test against the cross-validated threshold.
 
@@ -89,7 +94,10 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     environment itself (:func:`learn.monitor.statistics.environmental`) the status :data:`EXTRAPOLATED` instead of
     an alarm; ``alarm`` keeps it an alarm; ``auto`` (default) keeps them alarms when the baseline period is known
     to cover the seasons (:func:`learn.monitor.statistics.covers_seasons`: dated tests, a baseline period of at
-    least :data:`~learn.monitor.statistics.SEASONS_DAYS` days), else separates them. Raises
+    least :data:`~learn.monitor.statistics.SEASONS_DAYS` days), else separates them. ``frequency_estimator``:
+    ``choose`` (default) estimates each mode's frequency of response records by the more repeatable over the
+    baseline period of the identification and the record's FFT peak (:mod:`learn.monitor.estimator_choice`; the
+    choice in ``normal_variation["frequency_estimators"]``), ``identification`` always by the identification. Raises
     :class:`BeamDamageError` on a baseline that cannot carry the model (too few tests: the message names the
     minimum; a baseline test of another kind, band or beam).
 
@@ -104,6 +112,9 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     n = len(series.files)
     C = series.conditions
     normal_model, q = _checked_request(series, n_baseline, false_alarm_rate, normal_model, chart, statistics)
+    if frequency_estimator not in FREQUENCY_ESTIMATORS:
+        raise ConfigError(f"--frequency-estimator {frequency_estimator}: expected one of "
+                          f"{', '.join(FREQUENCY_ESTIMATORS)}")
     if extrapolated_alarms not in EXTRAPOLATED_ALARMS:
         raise ConfigError(f"--extrapolated-alarms {extrapolated_alarms}: expected one of "
                           f"{', '.join(EXTRAPOLATED_ALARMS)}")
@@ -123,6 +134,12 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     write_cache(pending)                                    # the series is accepted: identifications kept
     F, Z, MAC, cols = track_modes(tests, ref)
     how = identified_by(tests, cols)
+    choice = None
+    if frequency_estimator == "choose":
+        choice = choose_frequencies(tests, series.files, ref, F, cols,
+                                    [i for i in range(n_baseline) if i not in foreign])
+        if choice is not None:
+            F, how = choice.frequencies_hz, choice.identified_by(how)
     X = np.log(F)
     ok = np.array([t is not None for t in tests]) & np.isfinite(X).any(axis=1)
     if q:
@@ -160,6 +177,7 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
               "reference_frequencies_hz": ref.frequencies_hz.tolist(), "tracking_tolerance": ref.tolerance.tolist(),
               "reference_presence": ref.presence.tolist(),
               "baseline_tests_used": int(b_idx.size),
+              "frequency_estimators": None if choice is None else choice.to_dict(),
               "missing_entries": "imputed by their conditional mean given the test's other features under the "
                                  "baseline's Gaussian (regression: about the conditions' prediction)"}
     series_base = [i for i in range(n_baseline) if i not in foreign]
@@ -183,7 +201,7 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
         })
         rows[-1].update(_detector_fields(det, charts, i, bool(ok[i])))
     res = SeriesResult(rows, ref, F, np.exp(expected_log), novelty, thr, model, normal, sigma, tests, series, det,
-                       charts, beyond)
+                       charts, beyond, choice)
     series_coverage(res)                                    # every row's ``extrapolated``
     separate = extrapolated_alarms == "separate" or (
         extrapolated_alarms == "auto" and not covers_seasons(series.times, series.time_values, n_baseline))

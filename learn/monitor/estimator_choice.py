@@ -1,0 +1,187 @@
+"""Each reference mode's frequency estimated by the more repeatable of two estimators over the baseline period: the
+series' identification (``era`` or ``ssi`` of response records) or the zero-padded FFT peak of the same record
+(:func:`physics.identification.fft_peak.fft_peaks`), chosen on one half of the baseline tests and confirmed on the
+other.
+
+The baseline period is repeated tests of an unchanged structure, so the scatter of a mode's frequency over it is
+the precision of its estimator on these records. A modal identification resolves close modes and gives damping and
+shapes; the FFT peak of a single dominant resonance can scatter less (a free decay's peak is read off the whole
+record's transform, no model order or stabilisation enters it). Which one is the more precise depends on the
+records, so the series decides it: per mode, over the baseline tests where both estimators read the mode, the
+robust scatter (1.4826 MAD of ``ln f``) of each; the FFT peak is chosen when its scatter is the smaller on each
+half of those tests (the odd and the even ones in time order: chosen on one half, confirmed on the other), each half
+holding at least :data:`MIN_HALF` tests, and when it reads the mode in every baseline test the identification does.
+Damping, shapes, tracking and the readings beyond the bands stay the identification's: a chosen mode's frequency
+is the FFT peak only in a test where the identification tracked the mode (elsewhere it is missing, as it was).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from learn.monitor.tracking import ReferenceModes, narrow_bands_hz
+from learn.pairs.noise_calibration import robust_std
+from physics.errors import BeamDamageError
+from physics.identification import read_response_records
+from physics.identification.fft_peak import fft_peaks
+
+__all__ = ["FFT_PEAK", "FREQUENCY_ESTIMATORS", "MIN_HALF", "FrequencyChoice", "choose_estimators", "choose_frequencies",
+           "fft_peak_frequencies"]
+
+#: The name of the FFT-peak estimator (the key of :data:`physics.identification.methods.METHODS`).
+FFT_PEAK = "fftpeak"
+#: ``monitor_series``'s choices: each mode's frequency by the more repeatable estimator over the baseline period, or
+#: always by the series' identification.
+FREQUENCY_ESTIMATORS = ("choose", "identification")
+#: The fewest baseline tests in each half holding both estimates for the FFT peak to be chosen (a MAD of 3 values).
+MIN_HALF = 3
+
+
+@dataclass(frozen=True)
+class FrequencyChoice:
+    """Each reference mode's frequency estimator, chosen over the baseline period.
+
+    Attributes
+    ----------
+    default : str                 the series' identification (e.g. ``"era"``; ``"era/ssi"`` when the tests differ)
+    estimators : tuple of str     per mode, ``default`` or :data:`FFT_PEAK`
+    scatter_hz : ndarray (m, 2)   robust scatter (Hz: ``f_ref`` times the 1.4826 MAD of ``ln f``) of the default
+                                  estimator and of the FFT peak over the baseline tests holding both (NaN: none)
+    halves_hz : ndarray (m, 2, 2) the same over each half (axis 1: odd, even tests; axis 2: default, FFT peak)
+    n_tests : ndarray int (m,)    baseline tests holding both estimates
+    complete : ndarray bool (m,)  the FFT peak read the mode in every baseline test the identification did
+    fft_hz : ndarray (n, m)       each test's FFT peak in each mode's tracking band (NaN: none, or not records)
+    frequencies_hz : ndarray (n, m)   the tracked frequencies with each chosen mode's replaced by its FFT peak
+    """
+
+    default: str
+    estimators: tuple
+    scatter_hz: np.ndarray
+    halves_hz: np.ndarray
+    n_tests: np.ndarray
+    complete: np.ndarray
+    fft_hz: np.ndarray
+    frequencies_hz: np.ndarray
+
+    @property
+    def chosen(self) -> np.ndarray:
+        """bool (m,): the modes whose frequency is the FFT peak."""
+        return np.array([e == FFT_PEAK for e in self.estimators], bool)
+
+    def texts(self) -> list:
+        """Per mode, the choice in words, e.g. ``mode 3: FFT peak, scatter 2.6 Hz against era 9.28 Hz over the 15
+        baseline tests (halves 2.52 / 2.1 against 8.83 / 9.1 Hz)``."""
+        out = []
+        for r, est in enumerate(self.estimators):
+            d, f = self.scatter_hz[r]
+            (hd1, hf1), (hd2, hf2) = self.halves_hz[r]
+            n = int(self.n_tests[r])
+            if est == FFT_PEAK:
+                out.append(f"mode {r + 1}: FFT peak, scatter {f:.3g} Hz against {self.default} {d:.3g} Hz over the "
+                           f"{n} baseline tests (halves {hf1:.3g} / {hf2:.3g} against {hd1:.3g} / {hd2:.3g} Hz)")
+            elif not self.complete[r]:
+                out.append(f"mode {r + 1}: {self.default}, the FFT peak missing it in a baseline test where "
+                           f"{self.default} read it")
+            elif n < 2 * MIN_HALF:
+                out.append(f"mode {r + 1}: {self.default}, {n} baseline tests holding both estimates (fewer than "
+                           f"{2 * MIN_HALF})")
+            else:
+                out.append(f"mode {r + 1}: {self.default}, scatter {d:.3g} Hz against the FFT peak {f:.3g} Hz over "
+                           f"the {n} baseline tests (halves {hd1:.3g} / {hd2:.3g} against {hf1:.3g} / {hf2:.3g} Hz)")
+        return out
+
+    def identified_by(self, how: list) -> list:
+        """Per test, per mode, how its frequency was found: ``how`` (:func:`learn.monitor.tracking.identified_by`)
+        with a chosen mode's entry ``fftpeak (the pole tracked: era)``, None where its FFT peak is missing."""
+        chosen = self.chosen
+        return [[h if h is None or not chosen[r] else
+                 (f"{FFT_PEAK} (the pole tracked: {h})" if np.isfinite(self.frequencies_hz[i, r]) else None)
+                 for r, h in enumerate(row)] for i, row in enumerate(how)]
+
+    def to_dict(self) -> dict:
+        return {"default": self.default, "estimators": list(self.estimators),
+                "scatter_hz": [{self.default: _num(d), FFT_PEAK: _num(f)} for d, f in self.scatter_hz],
+                "halves_hz": [[{self.default: _num(d), FFT_PEAK: _num(f)} for d, f in h] for h in self.halves_hz],
+                "baseline_tests": self.n_tests.tolist(), "fft_complete": self.complete.tolist(),
+                "texts": self.texts()}
+
+
+def _num(v):
+    v = float(v)
+    return v if np.isfinite(v) else None
+
+
+def fft_peak_frequencies(tests: list, files: list, ref: ReferenceModes) -> np.ndarray:
+    """``(n, m)``: each test's zero-padded FFT peak (Hz) in each reference mode's tracking band
+    (:func:`learn.monitor.tracking.narrow_bands_hz`): the highest local maximum of the record's FFT power there
+    (:func:`physics.identification.fft_peak.fft_peaks`, its window chosen by the record); NaN where none lies there,
+    for a test that is not response records, or one whose record is refused."""
+    bands = narrow_bands_hz(ref)
+    centre, half = bands.mean(axis=1), 0.5 * (bands[:, 1] - bands[:, 0])
+    out = np.full((len(tests), ref.frequencies_hz.size), np.nan)
+    if centre.size == 0:
+        return out
+    for i, (t, path) in enumerate(zip(tests, files)):
+        if t is None or t.kind != "response records":
+            continue
+        try:
+            rec = read_response_records(path)
+            out[i] = fft_peaks(rec.signals, rec.sampling_frequency_hz, centre, half, where=str(path)).frequency_hz
+        except (BeamDamageError, OSError):
+            pass
+    return out
+
+
+def choose_estimators(F, G, baseline, reference_hz):
+    """The choice over the baseline period (module docstring) from the default estimates ``F`` (n, m) and the FFT
+    peaks ``G`` (n, m) (Hz; NaN: missing); ``baseline``: indices of the baseline tests in time order.
+
+    Returns ``(chosen bool (m,), scatter_hz (m, 2), halves_hz (m, 2, 2), n_tests int (m,), complete bool (m,))``.
+    """
+    F, G = np.asarray(F, float), np.asarray(G, float)
+    base = np.asarray(baseline, int)
+    f_ref = np.asarray(reference_hz, float)
+    m = F.shape[1]
+    scatter, halves = np.full((m, 2), np.nan), np.full((m, 2, 2), np.nan)
+    n_tests, complete, chosen = np.zeros(m, int), np.zeros(m, bool), np.zeros(m, bool)
+    for r in range(m):
+        fb, gb = F[base, r], G[base, r]
+        complete[r] = bool(np.all(np.isfinite(gb[np.isfinite(fb)])))
+        both = np.flatnonzero(np.isfinite(fb) & np.isfinite(gb))
+        n_tests[r] = both.size
+        if both.size == 0:
+            continue
+        est = np.log(np.stack([fb[both], gb[both]], axis=1))            # (k, 2)
+        scatter[r] = [f_ref[r] * robust_std(est[:, j]) for j in range(2)]
+        for h, part in enumerate((both[0::2], both[1::2])):
+            sel = np.isin(both, part)
+            halves[r, h] = [f_ref[r] * robust_std(est[sel, j]) for j in range(2)]
+        chosen[r] = (complete[r] and both[1::2].size >= MIN_HALF
+                     and bool(np.all(halves[r, :, 1] < halves[r, :, 0])))
+    return chosen, scatter, halves, n_tests, complete
+
+
+def choose_frequencies(tests: list, files: list, ref: ReferenceModes, F, cols, baseline) -> FrequencyChoice | None:
+    """Each reference mode's frequency by the more repeatable estimator over the baseline period (module docstring).
+
+    ``tests``: each test's :class:`~learn.monitor.identification.IdentifiedModes` (None: not identified);
+    ``files``: their paths; ``F`` (n, m) and ``cols`` (n, m): the tracked frequencies and the poles' columns of
+    :func:`learn.monitor.tracking.track_modes`; ``baseline``: indices of the baseline tests. None when the baseline
+    tests are not response records (FRFs, modal data: their frequencies stay as identified).
+    """
+    base = [int(i) for i in baseline]
+    kinds = {tests[i].kind for i in base if tests[i] is not None}
+    if kinds != {"response records"}:
+        return None
+    F = np.asarray(F, float)
+    cols = np.asarray(cols, int)
+    G = fft_peak_frequencies(tests, files, ref)
+    chosen, scatter, halves, n_tests, complete = choose_estimators(F, G, base, ref.frequencies_hz)
+    names = sorted({tests[i].method for i in base if tests[i] is not None})
+    default = "/".join(names)
+    out = F.copy()
+    out[:, chosen] = np.where(cols[:, chosen] >= 0, G[:, chosen], np.nan)
+    return FrequencyChoice(default, tuple(FFT_PEAK if c else default for c in chosen), scatter, halves, n_tests,
+                           complete, G, out)

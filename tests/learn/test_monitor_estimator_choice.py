@@ -1,0 +1,157 @@
+"""Each mode's frequency by the more repeatable of the identification and the FFT peak over the baseline period
+(learn/monitor/estimator_choice.py)."""
+
+import json
+
+import numpy as np
+import pytest
+
+import learn.monitor.workers as workers
+from experiments.cli import main as cli_main
+from learn.monitor import IdentificationSettings, IdentifiedModes, SeriesInput, monitor_series, reference_modes
+from learn.monitor.estimator_choice import FFT_PEAK, MIN_HALF, choose_estimators, choose_frequencies
+from learn.monitor.tracking import track_modes
+from physics.errors import ConfigError
+
+FS_HZ, N_SAMPLES, ZETA = 1000.0, 4000, 0.002
+
+
+def _mad_hz(f_hz, f_ref_hz):
+    """1.4826 MAD of ``ln f`` times ``f_ref``, computed here by hand."""
+    x = np.log(np.asarray(f_hz, float))
+    return f_ref_hz * 1.4826 * np.median(np.abs(x - np.median(x)))
+
+
+def _decay(f_hz, seed):
+    """A free decay of the modes ``f_hz`` (damped frequencies) with white noise 1e-3 of the first amplitude."""
+    t = np.arange(N_SAMPLES) / FS_HZ
+    y = sum(np.exp(-ZETA * 2 * np.pi * f * t) * np.sin(2 * np.pi * f * t) for f in f_hz)
+    return (y + 1e-3 * np.random.default_rng(seed).standard_normal(N_SAMPLES))[None, :]
+
+
+def _series(tmp_path, n=20, seed=0):
+    """``n`` records of a 40-Hz mode (unchanged) and a 110-Hz mode scattering 0.05 Hz from test to test; the
+    identification reads mode 1 within 0.4 micro-Hz (the FFT peak scatters 5 micro-Hz there with the records'
+    noise) and mode 2 with 1 Hz of extra scatter."""
+    rng = np.random.default_rng(seed)
+    f2 = 110.0 + 0.05 * rng.standard_normal(n)
+    ident1 = 40.0 * (1 + 1e-8 * rng.standard_normal(n))
+    ident2 = f2 + 1.0 * rng.standard_normal(n)
+    files, tests = [], []
+    for i in range(n):
+        path = tmp_path / f"test_{i:02d}.npz"
+        np.savez(path, signals=_decay((40.0, f2[i]), seed + 1 + i), sampling_frequency_hz=np.array(FS_HZ),
+                 dofs=np.array(["1:+Z"]))
+        files.append(str(path))
+        tests.append(IdentifiedModes("response records", "era", np.array([ident1[i], ident2[i]]), np.full(2, ZETA),
+                                     None, ("1:+Z",), (), (0.0, FS_HZ / 2), FS_HZ / N_SAMPLES))
+    return files, tests, f2, ident1, ident2
+
+
+def test_the_fft_peak_is_chosen_for_the_mode_the_identification_scatters_and_not_for_the_other(tmp_path):
+    """Mode 1, read by the identification 10 times steadier than by the FFT peak, keeps it; mode 2, read with 1 Hz
+    of extra scatter, takes the FFT peak, whose scatter over the baseline is the records' own 0.05 Hz (the peak is
+    read within 5 mHz of each record's frequency), 20 times smaller."""
+    files, tests, f2, ident1, ident2 = _series(tmp_path)
+    base = np.arange(14)
+    ref = reference_modes([tests[i] for i in base])
+    F, _, _, cols = track_modes(tests, ref)
+    choice = choose_frequencies(tests, files, ref, F, cols, base)
+    assert choice.default == "era" and choice.estimators == ("era", FFT_PEAK)
+    np.testing.assert_allclose(choice.fft_hz[:, 1], f2, atol=5e-3)
+    np.testing.assert_array_equal(choice.frequencies_hz[:, 0], ident1)
+    np.testing.assert_array_equal(choice.frequencies_hz[:, 1], choice.fft_hz[:, 1])
+    f_ref = ref.frequencies_hz
+    assert choice.scatter_hz[0, 0] == pytest.approx(_mad_hz(ident1[base], f_ref[0]), rel=1e-12)
+    assert 0.0 < choice.scatter_hz[0, 0] < 0.1 * choice.scatter_hz[0, 1]
+    assert choice.scatter_hz[1, 0] == pytest.approx(_mad_hz(ident2[base], f_ref[1]), rel=1e-12)
+    assert choice.scatter_hz[1, 1] == pytest.approx(_mad_hz(choice.fft_hz[base, 1], f_ref[1]), rel=1e-12)
+    assert choice.scatter_hz[1, 1] == pytest.approx(_mad_hz(f2[base], f_ref[1]), rel=0.1)
+    assert choice.scatter_hz[1, 0] > 10 * choice.scatter_hz[1, 1]
+    np.testing.assert_allclose(choice.halves_hz[1, :, 1], [_mad_hz(choice.fft_hz[base[0::2], 1], f_ref[1]),
+                                                           _mad_hz(choice.fft_hz[base[1::2], 1], f_ref[1])])
+    assert choice.texts()[1].startswith("mode 2: FFT peak, scatter ") and "against era" in choice.texts()[1]
+    assert choice.to_dict()["estimators"] == ["era", FFT_PEAK]
+
+
+def _spread(k, scale, phase=0.0):
+    """``k`` deterministic values of robust scatter proportional to ``scale`` about 100 Hz."""
+    return 100.0 * np.exp(scale * np.sin(np.arange(k) * 2.39996 + phase))
+
+
+def test_the_fft_peak_must_be_smaller_on_each_half_and_read_every_baseline_test():
+    """Over 12 baseline tests: the FFT peak smaller on both halves is chosen; smaller over all 12 but larger on the
+    odd half is not; smaller on both halves but missing one test the identification read is not."""
+    k = 12
+    odd, even = np.arange(0, k, 2), np.arange(1, k, 2)
+    F = np.empty((k, 3))
+    G = np.empty((k, 3))
+    F[:, 0], G[:, 0] = _spread(k, 1e-3), _spread(k, 1e-4, 1.0)                   # FFT 10 times steadier
+    F[odd, 1], F[even, 1] = _spread(6, 1e-4), _spread(6, 1e-2, 0.5)              # steady on the odd tests only
+    G[:, 1] = _spread(k, 3e-4, 1.0)
+    F[:, 2], G[:, 2] = F[:, 0], G[:, 0]
+    G[3, 2] = np.nan                                                             # the FFT misses one test
+    chosen, scatter, halves, n_tests, complete = choose_estimators(F, G, np.arange(k), np.full(3, 100.0))
+    np.testing.assert_array_equal(chosen, [True, False, False])
+    assert scatter[1, 1] < scatter[1, 0]                                         # smaller over all 12 ...
+    assert halves[1, 0, 1] > halves[1, 0, 0]                                     # ... not on the odd half
+    np.testing.assert_array_equal(complete, [True, True, False])
+    np.testing.assert_array_equal(n_tests, [12, 12, 11])
+    np.testing.assert_allclose(halves[0, 0], [_mad_hz(F[odd, 0], 100.0), _mad_hz(G[odd, 0], 100.0)])
+    few = choose_estimators(F[:2 * MIN_HALF - 1], G[:2 * MIN_HALF - 1], np.arange(2 * MIN_HALF - 1),
+                            np.full(3, 100.0))[0]
+    assert not few.any()                                                         # 5 tests: halves of 3 and 2
+
+
+def test_monitor_takes_the_chosen_frequencies_and_reports_the_choice(tmp_path, monkeypatch):
+    """``monitor_series`` on records (their identification given): mode 2's frequency in every row is its FFT peak,
+    the choice in ``normal_variation``; with ``frequency_estimator="identification"`` the identification's."""
+    files, tests, f2, ident1, ident2 = _series(tmp_path)
+    by_file = dict(zip(files, tests))
+    monkeypatch.setattr(workers, "cached_identification", lambda path, *a, **k: (by_file[str(path)], None, False))
+    series = SeriesInput.from_files(files)
+    res = monitor_series(series, 14, IdentificationSettings(), None, progress=False, chart="none")
+    assert res.frequency_choice.estimators == ("era", FFT_PEAK)
+    rows = np.array([r["frequencies_hz"] for r in res.rows], float)
+    np.testing.assert_allclose(rows[:, 1], f2, atol=5e-3)
+    assert res.normal_variation["frequency_estimators"]["estimators"] == ["era", FFT_PEAK]
+    assert [r["identified_by"] for r in res.rows] == [["era", "fftpeak (the pole tracked: era)"]] * len(files)
+    json.dumps(res.normal_variation["frequency_estimators"])
+    one = monitor_series(series, 14, IdentificationSettings(), None, progress=False, chart="none",
+                         frequency_estimator="identification")
+    assert one.frequency_choice is None and one.normal_variation["frequency_estimators"] is None
+    np.testing.assert_array_equal(np.array([r["frequencies_hz"] for r in one.rows], float)[:, 1], ident2)
+    with pytest.raises(ConfigError, match="--frequency-estimator fft: expected one of choose, identification"):
+        monitor_series(series, 14, IdentificationSettings(), None, progress=False, frequency_estimator="fft")
+
+
+def test_modal_data_keep_their_frequencies(tmp_path):
+    """A series of modal data (no record to read an FFT of) has no choice; its frequencies are as read."""
+    rng = np.random.default_rng(3)
+    files = []
+    for i in range(12):
+        path = tmp_path / f"m{i:02d}.json"
+        path.write_text(json.dumps({"natural_frequencies_hz": [40.0 + 0.01 * rng.standard_normal(),
+                                                               110.0 + 0.02 * rng.standard_normal()]}))
+        files.append(str(path))
+    res = monitor_series(SeriesInput.from_files(files), 10, IdentificationSettings(), None, progress=False,
+                         chart="none")
+    assert res.frequency_choice is None and res.normal_variation["frequency_estimators"] is None
+    read = np.array([json.loads(open(f).read())["natural_frequencies_hz"] for f in files])
+    np.testing.assert_allclose(np.array([r["frequencies_hz"] for r in res.rows], float), read, rtol=1e-12)
+
+
+def test_the_cli_reports_the_choice_in_its_summary_and_json(tmp_path, monkeypatch):
+    """``monitor --out DIR``: the summary of report.md names each mode's estimator with both scatters;
+    ``monitor.json`` holds the choice and the request's ``--frequency-estimator``."""
+    files, tests, *_ = _series(tmp_path)
+    by_file = dict(zip(files, tests))
+    monkeypatch.setattr(workers, "cached_identification", lambda path, *a, **k: (by_file[str(path)], None, False))
+    out = tmp_path / "out"
+    assert cli_main(["monitor", *files, "--baseline-tests", "14", "--chart", "none", "--out", str(out)]) == 0
+    report = (out / "report.md").read_text()
+    assert "Frequency estimators over the baseline period: mode 1: era, scatter " in report
+    assert "mode 2: FFT peak, scatter " in report
+    saved = json.loads((out / "monitor.json").read_text())
+    assert saved["config"]["frequency_estimator"] == "choose"
+    assert saved["normal_variation"]["frequency_estimators"]["estimators"] == ["era", FFT_PEAK]
