@@ -26,6 +26,7 @@ from experiments.benches.harness import parser
 from physics.identification import METHODS, identify_frf, lsfd, reconstruction_error_db
 from physics.io import MeasuredFRF, atomic_write_text
 from physics.modal import mac
+from physics.properties import free_free_beta_l
 from physics.thesis import BEAM5_TIP, simulated_beam5_test
 
 __all__ = ["free_free_table", "main", "simulate_free_free", "table"]
@@ -46,14 +47,6 @@ def simulate(noise=0.01, seed=0, df_hz=0.5, fmax_hz=800.0, damping="heavy"):
 #: the driving point at the struck end) and modal damping ratios of the elastic modes 1..12.
 FREE_FREE_X = (0.0, 0.37, 0.71)
 FREE_FREE_ZETA = (6e-4, 1e-4, 3e-4, 2e-4, 4e-4, 1.5e-4, 5e-4, 3e-4, 3e-4, 3e-4, 3e-4, 3e-4)
-
-
-def free_free_beta_l(n_modes):
-    """Roots ``beta L`` of ``cos(beta L) cosh(beta L) = 1`` (free-free Euler-Bernoulli beam), ascending."""
-    from scipy.optimize import brentq
-
-    x0 = (2 * np.arange(1, n_modes + 1) + 1) * np.pi / 2
-    return np.array([brentq(lambda x: np.cos(x) - 1 / np.cosh(x), a - 0.3, a + 0.3) for a in x0])
 
 
 def free_free_shapes(beta_l, x_over_l):
