@@ -27,8 +27,8 @@ def identify_files(files: list, settings: IdentificationSettings, cache_dir=None
     """``(modes, errors, pending cache entries)`` of every file, in the order of ``files``.
 
     ``workers`` processes identify them (:func:`~datagen.warm_pool.run_warm_pool`: ``workers - 1`` spawned ones and
-    this one, which computes a file itself whenever no worker's result is waiting). Cache entries are returned, not written (the caller writes them once the series is
-    accepted).
+    this one, which computes a file itself whenever no worker's result is waiting). Cache entries are returned, not
+    written (the caller writes them once the series is accepted).
     """
     if not isinstance(workers, int) or isinstance(workers, bool) or workers < 1:
         raise ConfigError(f"--workers {workers!r}: must be an integer >= 1")
