@@ -113,8 +113,9 @@ def simulate_free_free(noise=0.005, floor=3e-3, seed=0, f1_hz=40.5, mass_kg=2.0,
 
 
 def run_ours(frf, n_modes=4):
-    """The :class:`ModalEstimate` of every method of :data:`physics.identification.METHODS`, by name."""
-    return {name: identify_frf(frf, name, n_modes=n_modes).estimate for name in METHODS}
+    """The :class:`ModalEstimate` of every FRF method of :data:`physics.identification.METHODS`, by name."""
+    return {name: identify_frf(frf, name, n_modes=n_modes).estimate for name, spec in METHODS.items()
+            if spec.data == "frf"}
 
 
 def sdypy_lscf(frf, approx_hz, drive: int):
