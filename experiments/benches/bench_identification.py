@@ -16,13 +16,12 @@ from __future__ import annotations
 
 import contextlib
 import io
-import json
 import sys
 import warnings
 
 import numpy as np
 
-from experiments.benches.harness import parser
+from experiments.benches.harness import emit_json, parser
 from physics.identification import METHODS, identify_frf, lsfd, reconstruction_error_db
 from physics.io import MeasuredFRF, atomic_write_text
 from physics.modal import mac
@@ -291,8 +290,7 @@ def main(argv=None) -> int:
     else:
         out = method_errors(a.seeds, a.noise, a.damping)
         print(format_table(out))
-    if a.json:
-        atomic_write_text(a.json, json.dumps(out, indent=1) + "\n")
+    emit_json(a, out)
     if a.csv and a.case == "beam5":
         rows = ["method,mode,frequency_error_pct_rms,damping_error_pct_rms,mac_mean"]
         for name, m in out["methods"].items():
