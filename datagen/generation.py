@@ -14,13 +14,8 @@ import errno
 import io
 import json
 import math
-import os
-import signal
 import shutil
 import sys
-from collections import deque
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +25,7 @@ from datagen.config import validate
 from datagen.lock import LOCK_NAME, LockedError, dataset_lock
 from datagen.pipeline import simulate_shard
 from datagen.setup import get_setup
+from datagen.warm_pool import run_warm_pool
 from datagen.store import ARRAYS, DERIVED, DATASET_FORMAT, STATES, column_units, dataset_identity, file_sha256, \
     finalize, package_version, read_manifest, recover, sample_table, shard_arrays, write_manifest, write_shard
 from physics.errors import BeamDamageError, ConfigError, OverdampedError
@@ -64,57 +60,6 @@ def compute_shard(cfg_json: str, seed: int, index: int, first_id: int, n: int):
                               f"{meas['frequency_noise']}, modal_noise_scale {meas['modal_noise_scale']}); lower "
                               f"measurement.frequency_noise or modal_noise_scale") from None
     return sample_table(labels, out, index, first_id, setup.length_m, setup.damage), shard_arrays(labels, out)
-
-
-def _init_worker():
-    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    # Ctrl-C reaches the whole process group: the parent alone reports it and stops the workers
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
-def _stop_workers(pool) -> None:
-    """Cancel queued shards and end the workers at once (an interrupted run resumes from the written shards)."""
-    pool.shutdown(wait=False, cancel_futures=True)
-    for proc in list((getattr(pool, "_processes", None) or {}).values()):
-        proc.terminate()
-
-
-def _run_local_pool(todo, workers, record, cfg_json, seed):
-    """Compute shards in ``workers - 1`` spawned processes and in this one, which also writes them.
-
-    The calling process is warm (imports, compiled kernels) while a spawned
-    worker needs seconds to start, so it computes shards itself whenever no
-    worker result is waiting: no core idles during start-up, and writing
-    shards overlaps the workers' computation. Shard contents do not depend on
-    which process computed them.
-    """
-    pending = deque(todo)
-    with ProcessPoolExecutor(max_workers=workers - 1, mp_context=get_context("spawn"),
-                             initializer=_init_worker) as pool:
-        futs = {}
-
-        def top_up():
-            while pending and len(futs) < 2 * (workers - 1):
-                i, f, k = pending.popleft()
-                futs[pool.submit(compute_shard, cfg_json, seed, i, f, k)] = i
-
-        try:
-            top_up()
-            while futs or pending:
-                ready = [fut for fut in futs if fut.done()]
-                for fut in ready:
-                    record(futs.pop(fut), *fut.result())
-                top_up()
-                if ready:
-                    continue
-                if pending:
-                    i, f, k = pending.pop()  # from the end: the workers keep the front of the queue
-                    record(i, *compute_shard(cfg_json, seed, i, f, k))
-                else:
-                    wait(futs, return_when=FIRST_COMPLETED)
-        except BaseException:
-            _stop_workers(pool)
-            raise
 
 
 def _schema() -> dict:
@@ -390,11 +335,9 @@ def _generate(root, cfg, n, seed, workers, client, progress, max_new_shards) -> 
                 table, arrays = fut.result()
                 record(futs[fut], table, arrays)
                 fut.release()
-        elif workers == 1 or len(todo) <= 1:
-            for i, f, k in todo:
-                record(i, *compute_shard(cfg_json, seed, i, f, k))
         else:
-            _run_local_pool(todo, workers, record, cfg_json, seed)
+            run_warm_pool(compute_shard, [(i, (cfg_json, seed, i, f, k)) for i, f, k in todo], workers,
+                          lambda i, shard: record(i, *shard))
     finally:
         bar.close()
     if len(manifest["shards"]) == manifest["n_shards"] and not _finalized(root, manifest):

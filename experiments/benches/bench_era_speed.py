@@ -24,7 +24,6 @@ Run ``python -m experiments.benches.bench_era_speed [--repeat N] [--threads N] [
 from __future__ import annotations
 
 import contextlib
-import json
 import sys
 import time
 import warnings
@@ -35,12 +34,11 @@ from threadpoolctl import threadpool_limits
 
 import physics.identification.free_decay as free_decay
 import physics.identification.ssi as ssi
-from experiments.benches.harness import parser, table
+from experiments.benches.harness import emit_json, parser, table
 from experiments.second_sim.ambient import ambient_record
 from experiments.second_sim.fem import Beam
 from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
 from physics.identification.methods import METHODS
-from physics.io import atomic_write_text
 
 __all__ = ["PYFRF", "ambient_case", "main", "simulated_hit"]
 
@@ -142,8 +140,7 @@ def main(argv=None) -> int:
                   f"{r['samples_per_cpu_s']:.0f}", f"{r['fit_s']:.2f} ({r['fit_calls']})",
                   f"{r['diagram_s']:.3f} ({r['diagram_calls']})"] for r in rows],
                 ["---", "---:", "---:", "---:", "---:", "---:", "---:", "---:"]))
-    if args.json:
-        atomic_write_text(args.json, json.dumps({"args": vars(args), "rows": rows}, indent=1))
+    emit_json(args, {"args": vars(args), "rows": rows})
     return 0
 
 

@@ -26,7 +26,6 @@ table into docs/monitoring.md (block ``family-calibration``).
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 from pathlib import Path
@@ -39,9 +38,9 @@ import numpy as np  # noqa: E402
 import learn.monitor.statistics as monitor_statistics  # noqa: E402
 from learn.monitor.alarm_threshold import LOO_MAX, N_FOLDS  # noqa: E402
 from experiments.benches.bench_detection import _case  # noqa: E402
+from experiments.benches.harness import parser, publish, table  # noqa: E402
 from experiments.benches.plain_tests import plain_alarms  # noqa: E402
 from experiments.second_sim.series import frequency_series, mass_loss_pattern, uniform_stiffness_pattern  # noqa: E402
-from experiments.studies.doc_tables import write_table  # noqa: E402
 from learn.monitor.normal_models import NORMAL_MODELS  # noqa: E402
 from physics.io import atomic_write_text  # noqa: E402
 
@@ -124,22 +123,20 @@ def run_case(case: str, model_name: str, seed: int, rate: float, damages=DAMAGES
 
 def markdown(rows: list) -> str:
     """Per case and model: each seed's false alarms, then each damage's detection averaged over the seeds."""
-    lines = ["| case | model | row | " + " | ".join(COLUMNS) + " |", "| --- | --- | --- | " + " | ".join(
-        "---" for _ in COLUMNS) + " |"]
+    body = []
     for case, model in dict.fromkeys((r["case"], r["model"]) for r in rows):
         mine = [r for r in rows if (r["case"], r["model"]) == (case, model)]
         seeds = " ".join(str(r["seed"]) for r in mine)
-        lines.append(f"| {case} | {model} | false alarms, seeds {seeds} (%) | " + " | ".join(
+        body.append([case, model, f"false alarms, seeds {seeds} (%)", *(
             " / ".join(f"{r['false_alarms'][c]:.2f}" for r in mine)
-            + f" (mean {np.mean([r['false_alarms'][c] for r in mine]):.2f})" for c in COLUMNS) + " |")
-        for damage in mine[0]["detected"] if mine else ():
-            lines.append(f"| | | {damage} (%) | " + " | ".join(
-                f"{np.mean([r['detected'][damage][c] for r in mine]):.1f}" for c in COLUMNS) + " |")
-    return "\n".join(lines)
+            + f" (mean {np.mean([r['false_alarms'][c] for r in mine]):.2f})" for c in COLUMNS)])
+        body += [["", "", f"{damage} (%)", *(f"{np.mean([r['detected'][damage][c] for r in mine]):.1f}"
+                                             for c in COLUMNS)] for damage in mine[0]["detected"]]
+    return table(["case", "model", "row", *COLUMNS], body)
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = parser(__file__, __doc__, docs="monitoring.md", out="out/bench_family_calibration")
     p.add_argument("--cases", nargs="+", choices=("daily", "30min"), default=["daily", "30min"])
     p.add_argument("--models", nargs="+", choices=("pca", "regression"), default=["pca", "regression"])
     p.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3])
@@ -147,8 +144,6 @@ def main(argv=None) -> int:
     p.add_argument("--false-alarms-only", action="store_true", help="the intact series alone (no damage)")
     p.add_argument("--folds", choices=("interleaved", "contiguous"), default="interleaved",
                    help="the held-out statistics' folds (monitor's: interleaved)")
-    p.add_argument("--out", default="out/bench_family_calibration")
-    p.add_argument("--docs", action="store_true", help="write the table into docs/monitoring.md")
     a = p.parse_args(argv)
     if a.docs and (a.false_alarms_only or a.folds != "interleaved"):
         p.error("--docs writes the table of monitor's detector: leave --false-alarms-only and --folds out")
@@ -159,9 +154,8 @@ def main(argv=None) -> int:
     atomic_write_text(out / "calibration.json", json.dumps({"config": vars(a), "rows": rows}, indent=1))
     md = markdown(rows)
     print(md)
-    if a.docs:
-        write_table("monitoring.md", "family-calibration", md + f"\n\nFalse alarms and detection in % at the rate "
-                    f"{a.rate:g}; detection averaged over {len(a.seeds)} seeds.")
+    publish(a, "family-calibration", md + f"\n\nFalse alarms and detection in % at the rate {a.rate:g}; detection "
+            f"averaged over {len(a.seeds)} seeds.")
     return 0
 
 

@@ -40,7 +40,7 @@ import numpy as np
 
 from experiments.second_sim import simulate_pairs, write_pairs
 from experiments.second_sim.pairs import FREQ_HZ
-from experiments.benches.harness import cli_json, parser, publish
+from experiments.benches.harness import cli_json, parser, publish, table
 from physics.io import atomic_write_bytes, atomic_write_text, figure_png, pyplot
 
 __all__ = ["main"]
@@ -174,16 +174,14 @@ def _false_alarms(r: dict) -> str:
 
 
 def markdown(rows: list[dict]) -> str:
-    head = ("| set | model | method | element acc. | detection | false alarms | size err. | 1-sigma cover | "
-            "in distribution |\n|---|---|---|---|---|---|---|---|---|\n")
+    def f(v):
+        return "-" if v is None or (isinstance(v, float) and not np.isfinite(v)) else f"{v:.0%}"
 
-    def f(v, pct=True):
-        return "-" if v is None or (isinstance(v, float) and not np.isfinite(v)) else (f"{v:.0%}" if pct else f"{v}")
-
-    return head + "".join(
-        f"| {r['set']} | {r['model']} | {_method_label(r)} | {f(r['element_accuracy'])} | {f(r['detection'])} | "
-        f"{_false_alarms(r)} | {f(r['median_size_error'])} | "
-        f"{f(r['size_one_sigma_cover'])} | {f(r.get('in_distribution'))} |\n" for r in rows)
+    return table(["set", "model", "method", "element acc.", "detection", "false alarms", "size err.", "1-sigma cover",
+                  "in distribution"],
+                 [[r["set"], r["model"], _method_label(r), f(r["element_accuracy"]), f(r["detection"]),
+                   _false_alarms(r), f(r["median_size_error"]), f(r["size_one_sigma_cover"]),
+                   f(r.get("in_distribution"))] for r in rows]) + "\n"
 
 
 def _figure(verdicts_by_set: dict, path: Path) -> None:

@@ -23,7 +23,6 @@ flexibility lie inside the 68 % and 95 % intervals.
 
 from __future__ import annotations
 
-import json
 import sys
 from dataclasses import replace
 
@@ -33,7 +32,7 @@ from experiments.second_sim.fem import Beam, PointMass, Slit, assemble, modes
 from experiments.second_sim.pairs import DOF_LABELS, EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M, NODE_X_M
 from experiments.second_sim.response import MODAL_NOISE, Damping, complex_modes, noisy_modal
 from experiments.second_sim.writers import modal_dict
-from experiments.benches.harness import parser, publish, table
+from experiments.benches.harness import emit_json, parser, publish, table
 from learn.pairs.classify import classify_many
 from datagen.damage import damage_defaults
 from learn.network.features import BeamSpec
@@ -41,7 +40,7 @@ from learn.explanations.hypotheses import SHAPE_CHANGE_STD, _support_curves, kin
 from learn.network.model_dir import load_model
 from learn.explanations.sensitivity import beam_sensitivity
 from learn.explanations.shapes import shape_changes
-from physics.io import atomic_write_text, modal_data_from_dict
+from physics.io import modal_data_from_dict
 
 __all__ = ["TRUTHS", "main", "pairs", "run"]
 
@@ -240,8 +239,7 @@ def main(argv=None) -> int:
     res = run(args.n, args.seed, args.noise, args.model, args.shape_noise, args.shape_sigma)
     md = markdown(res)
     sys.stdout.write(md)
-    if args.json:
-        atomic_write_text(args.json, json.dumps(res, indent=1) + "\n")
+    emit_json(args, res)
     publish(args, "hypotheses", md)
     return 0
 

@@ -16,19 +16,19 @@ from __future__ import annotations
 
 import contextlib
 import io
-import json
 import sys
 import warnings
 
 import numpy as np
 
-from experiments.benches.harness import parser
+from experiments.benches.harness import emit_json, parser
 from physics.identification import METHODS, identify_frf, lsfd, reconstruction_error_db
 from physics.io import MeasuredFRF, atomic_write_text
 from physics.modal import mac
+from physics.properties import free_free_beta_l
 from physics.thesis import BEAM5_TIP, simulated_beam5_test
 
-__all__ = ["free_free_table", "main", "simulate_free_free", "table"]
+__all__ = ["free_free_table", "main", "method_errors", "simulate_free_free"]
 
 DRIVE = BEAM5_TIP  # tip DOF 5:+Y
 
@@ -46,14 +46,6 @@ def simulate(noise=0.01, seed=0, df_hz=0.5, fmax_hz=800.0, damping="heavy"):
 #: the driving point at the struck end) and modal damping ratios of the elastic modes 1..12.
 FREE_FREE_X = (0.0, 0.37, 0.71)
 FREE_FREE_ZETA = (6e-4, 1e-4, 3e-4, 2e-4, 4e-4, 1.5e-4, 5e-4, 3e-4, 3e-4, 3e-4, 3e-4, 3e-4)
-
-
-def free_free_beta_l(n_modes):
-    """Roots ``beta L`` of ``cos(beta L) cosh(beta L) = 1`` (free-free Euler-Bernoulli beam), ascending."""
-    from scipy.optimize import brentq
-
-    x0 = (2 * np.arange(1, n_modes + 1) + 1) * np.pi / 2
-    return np.array([brentq(lambda x: np.cos(x) - 1 / np.cosh(x), a - 0.3, a + 0.3) for a in x0])
 
 
 def free_free_shapes(beta_l, x_over_l):
@@ -120,8 +112,9 @@ def simulate_free_free(noise=0.005, floor=3e-3, seed=0, f1_hz=40.5, mass_kg=2.0,
 
 
 def run_ours(frf, n_modes=4):
-    """The :class:`ModalEstimate` of every method of :data:`physics.identification.METHODS`, by name."""
-    return {name: identify_frf(frf, name, n_modes=n_modes).estimate for name in METHODS}
+    """The :class:`ModalEstimate` of every FRF method of :data:`physics.identification.METHODS`, by name."""
+    return {name: identify_frf(frf, name, n_modes=n_modes).estimate for name, spec in METHODS.items()
+            if spec.data == "frf"}
 
 
 def sdypy_lscf(frf, approx_hz, drive: int):
@@ -227,7 +220,7 @@ def format_free_free(out) -> str:
     return "\n".join(lines)
 
 
-def table(seeds=1, noise=0.01, damping="heavy"):
+def method_errors(seeds=1, noise=0.01, damping="heavy"):
     """Rows of per-mode errors for each method, averaged (RMS) over ``seeds`` noise realisations."""
     rows = {}
     notes = set()
@@ -294,14 +287,11 @@ def main(argv=None) -> int:
             warnings.simplefilter("ignore")
             out = free_free_table()
         print(format_free_free(out))
-        if a.json:
-            atomic_write_text(a.json, json.dumps(out, indent=1) + "\n")
-        return 0
-    out = table(a.seeds, a.noise, a.damping)
-    print(format_table(out))
-    if a.json:
-        atomic_write_text(a.json, json.dumps(out, indent=1) + "\n")
-    if a.csv:
+    else:
+        out = method_errors(a.seeds, a.noise, a.damping)
+        print(format_table(out))
+    emit_json(a, out)
+    if a.csv and a.case == "beam5":
         rows = ["method,mode,frequency_error_pct_rms,damping_error_pct_rms,mac_mean"]
         for name, m in out["methods"].items():
             for j in range(len(m["mac_mean"])):

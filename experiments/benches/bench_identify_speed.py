@@ -21,7 +21,6 @@ Run ``python -m experiments.benches.bench_identify_speed [--repeat N] [--noise X
 
 from __future__ import annotations
 
-import json
 import sys
 import tempfile
 import time
@@ -32,7 +31,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from experiments.benches.bench_identification import sdypy_lscf
-from experiments.benches.harness import parser
+from experiments.benches.harness import emit_json, parser
 from physics.beam import preset_beam
 from physics.frf import receptance
 from physics.identification import find_peaks_indicator, identify_frf, identify_frfs
@@ -166,8 +165,7 @@ def main(argv=None) -> int:
     a = p.parse_args(argv)
     out = bench(a.repeat, a.noise, a.seed, a.batch)
     print(format_bench(out))
-    if a.json:
-        atomic_write_text(a.json, json.dumps(out, indent=1) + "\n")
+    emit_json(a, out)
     if a.csv:
         rows = ["package,seconds,mode,frequency_hz,damping_ratio"]
         for name in ("ours", "sdypy"):

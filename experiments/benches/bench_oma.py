@@ -17,7 +17,6 @@ simulated blocks) to a temporary directory and reports the wall time and the pea
 
 from __future__ import annotations
 
-import json
 import logging
 import sys
 import tempfile
@@ -32,10 +31,9 @@ from threadpoolctl import threadpool_limits
 from experiments.second_sim.ambient import ambient_record
 from experiments.second_sim.fem import Beam
 from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
-from experiments.benches.harness import parser, publish, table
+from experiments.benches.harness import emit_json, parser, publish, table
 from physics.identification.fdd import identify_fdd
 from physics.identification.ssi import identify_ssi
-from physics.io import atomic_write_text
 from physics.modal import mac
 
 __all__ = ["CASES", "main", "run", "score"]
@@ -189,8 +187,7 @@ def _main(args) -> int:
               f"{r['file_bytes'] / 2**20:.0f} MiB, memory-mapped): {r['wall_s']:.1f} s, peak allocated "
               f"{r['peak_alloc_bytes'] / 2**20:.0f} MiB; modes (Hz) "
               + ", ".join(f"{f:.3f}" for f in r["frequencies_hz"]))
-        if args.json:
-            atomic_write_text(args.json, json.dumps({"config": vars(args), "long_record": r}, indent=1) + "\n")
+        emit_json(args, {"config": vars(args), "long_record": r})
         publish(args, "oma-memory", memory_markdown(r, args.long_record))
         return 0
     rows = run(args.minutes, args.seed, not args.no_peer)
@@ -200,8 +197,7 @@ def _main(args) -> int:
     for r in rows:
         if r["method"].startswith("pyOMA2 SSI"):
             print(f"{r['case']}: pyOMA2 SSI-cov / ours wall time = {r['wall_s'] / ours[r['case']]:.1f}")
-    if args.json:
-        atomic_write_text(args.json, json.dumps({"config": vars(args), "rows": rows}, indent=1) + "\n")
+    emit_json(args, {"config": vars(args), "rows": rows})
     publish(args, "oma", md)
     return 0
 

@@ -25,7 +25,6 @@ Run ``python -m experiments.benches.bench_oma_defaults [--minutes 5] [--seed 1] 
 
 from __future__ import annotations
 
-import json
 import logging
 import sys
 import tempfile
@@ -41,8 +40,7 @@ from experiments.benches.bench_oma import score
 from experiments.second_sim.ambient import ambient_record, write_npz
 from experiments.second_sim.fem import Beam, assemble, modes
 from experiments.second_sim.pairs import EI_NM2, LENGTH_M, MASS_PER_LENGTH_KG_M
-from experiments.benches.harness import cli_json, parser, publish, table
-from physics.io import atomic_write_text
+from experiments.benches.harness import cli_json, emit_json, parser, publish, table
 
 __all__ = ["CASES", "main", "run_case"]
 
@@ -181,8 +179,7 @@ def main(argv=None) -> int:
             rows += new
     md = markdown(rows)
     sys.stdout.write("\n" + md)
-    if args.json:
-        atomic_write_text(args.json, json.dumps({"config": vars(args), "rows": rows}, indent=1, default=str) + "\n")
+    emit_json(args, {"config": vars(args), "rows": rows}, default=str)
     publish(args, "oma-defaults", md)
     return 0
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from experiments.benches.harness import cli_json, parser, publish, table
+from experiments.benches.harness import cli_json, emit_json, parser, publish, table
 from experiments.second_sim import one_sensor as osc
 from physics.io import atomic_write_text
 
@@ -104,8 +104,7 @@ def main(argv=None) -> int:
         files = _files(out, seed, args.ei_scale)
         for name in args.inputs:
             rows.append({"seed": seed, **run_input(files, name, true_ei)})
-    if args.json:
-        print(json.dumps({"config": vars(args), "true_EI_Nm2": true_ei, "rows": rows}, indent=1))
+    emit_json(args, {"config": vars(args), "true_EI_Nm2": true_ei, "rows": rows})
     md = table(["input", "seed", "model modes paired (largest nominal gap)", "EI N m^2 (vs truth)",
                 "mass kg/m (vs truth)", "named effects", "chi2/dof",
                 "beam file", "pairing notes / stop"],

@@ -58,7 +58,7 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.benches.harness import parser, publish
+from experiments.benches.harness import parser, publish, table
 from physics.identification.methods import METHODS
 from physics.errors import BeamDamageError
 from physics.identification.fft_peak import identify_fft_peaks
@@ -306,16 +306,13 @@ def _std(v):
 
 def markdown(rows: list[dict], reps: dict, command: str, real: list[dict] | None = None) -> str:
     """The precision table (and the real sets' tables) as Markdown."""
-    head = ("| method | case | ch | length | mode | std (Hz) | std / f | bias (Hz) | CRB (Hz) | std / CRB | "
-            "std / FFT-peak std | failures |\n|---|---|---|---|---|---|---|---|---|---|---|---|")
-    lines = [head]
-    for r in sorted(rows, key=lambda r: (r["order"], r["mode"], r["method"] != "fftpeak", r["method"])):
-        lines.append(f"| {r['method']} | {r['case']} | {r['channels']} | {r['length']} | {r['mode']} "
-                     f"({r['truth_hz']:.4g} Hz) | {_std(r['std_hz'])} | {_g(r['std_rel'])} | {_g(r['bias_hz'])} | "
-                     f"{_g(r['crb_hz'])} | {_g(r['std_over_crb'])} | {_g(r['std_over_fft'])} | "
-                     f"{r['failures']}/{r['records']} |")
-    text = "\n".join(lines) + (f"\n\n{reps['decay']} free decays and {reps['ambient']} ambient records per case, "
-                               f"seeded; `{command}`.\n")
+    body = [[r["method"], r["case"], r["channels"], r["length"], f"{r['mode']} ({r['truth_hz']:.4g} Hz)",
+             _std(r["std_hz"]), _g(r["std_rel"]), _g(r["bias_hz"]), _g(r["crb_hz"]), _g(r["std_over_crb"]),
+             _g(r["std_over_fft"]), f"{r['failures']}/{r['records']}"]
+            for r in sorted(rows, key=lambda r: (r["order"], r["mode"], r["method"] != "fftpeak", r["method"]))]
+    text = table(["method", "case", "ch", "length", "mode", "std (Hz)", "std / f", "bias (Hz)", "CRB (Hz)",
+                  "std / CRB", "std / FFT-peak std", "failures"], body) + (
+        f"\n\n{reps['decay']} free decays and {reps['ambient']} ambient records per case, seeded; `{command}`.\n")
     if real:
         text += "\n" + real_markdown(real)
     return text
@@ -412,14 +409,12 @@ def _hct_rows(path):
 def real_markdown(rows) -> str:
     """The real sets' table: per mode and method the mean and scatter over the tests, and the paired comparison
     with the FFT peak (:func:`_scatter_rows`)."""
-    lines = ["| set | method | mode: reference (Hz) | mean (Hz) | std over tests (Hz) | std / fftpeak std | "
-             "correlation with fftpeak | closer than fftpeak | found |", "|---|---|---|---|---|---|---|---|---|"]
-    for r in sorted(rows, key=lambda r: (r["set"], r["mode"], r["method"] != "fftpeak")):
-        closer = f"{r['closer']}/{r['paired']}" if r.get("paired") else "-"
-        lines.append(f"| {r['set']} | {r['method']} | {r['mode']}: {r['reference_hz']:.5g} ({r['by']}) | "
-                     f"{_g(r['mean_hz'], 6)} | {_std(r['std_hz'])} | {_g(r.get('std_over_fft', math.nan))} | "
-                     f"{_g(r.get('corr_fft', math.nan))} | {closer} | {r['found']}/{r['tests']} |")
-    return "\n".join(lines) + "\n"
+    body = [[r["set"], r["method"], f"{r['mode']}: {r['reference_hz']:.5g} ({r['by']})", _g(r["mean_hz"], 6),
+             _std(r["std_hz"]), _g(r.get("std_over_fft", math.nan)), _g(r.get("corr_fft", math.nan)),
+             f"{r['closer']}/{r['paired']}" if r.get("paired") else "-", f"{r['found']}/{r['tests']}"]
+            for r in sorted(rows, key=lambda r: (r["set"], r["mode"], r["method"] != "fftpeak"))]
+    return table(["set", "method", "mode: reference (Hz)", "mean (Hz)", "std over tests (Hz)", "std / fftpeak std",
+                  "correlation with fftpeak", "closer than fftpeak", "found"], body) + "\n"
 
 
 def main(argv=None) -> int:

@@ -6,11 +6,11 @@
 
 from __future__ import annotations
 
-import argparse
 import warnings
 
 import numpy as np
 
+from experiments.benches.harness import parser
 from experiments.benches.bench_precision import match_modes
 from physics.identification.fft_peak import identify_fft_peaks
 from physics.identification.free_decay import identify_era
@@ -49,9 +49,8 @@ def crb_hz(pair_hz) -> np.ndarray:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = parser(__file__, __doc__, seed=0)
     p.add_argument("--reps", type=int, default=12)
-    p.add_argument("--seed", type=int, default=0)
     p.add_argument("--pair", type=float, nargs=2, default=(3909.0, 4768.0), help="the close pair (Hz)")
     args = p.parse_args(argv)
     truth = _modes(args.pair)[0]

@@ -8,12 +8,12 @@ the three-pole fit's residual against the pre-trigger noise, and shock 1's pole 
 
 from __future__ import annotations
 
-import argparse
 import warnings
 from pathlib import Path
 
 import numpy as np
 
+from experiments.benches.harness import parser
 from experiments.benches.bench_precision import match_modes
 from physics.identification.band_refine import refine_in_bands
 from physics.identification.fft_peak import identify_fft_peaks
@@ -117,11 +117,11 @@ def models(start=520):
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--start", type=int, default=520, help="first sample of each record (default 520)")
-    parser.add_argument("--brief", action="store_true", help="the summary only")
-    parser.add_argument("--models", action="store_true", help="other models of the band 3.6-5.1 kHz (no era run)")
-    args = parser.parse_args(argv)
+    p = parser(__file__, __doc__)
+    p.add_argument("--start", type=int, default=520, help="first sample of each record (default 520)")
+    p.add_argument("--brief", action="store_true", help="the summary only")
+    p.add_argument("--models", action="store_true", help="other models of the band 3.6-5.1 kHz (no era run)")
+    args = p.parse_args(argv)
     if args.models:
         models(args.start)
         return 0

@@ -13,12 +13,12 @@ Run: ``python -m experiments.benches.diag_usc_seeds [DIR] [--default-band]`` (ab
 
 from __future__ import annotations
 
-import argparse
 import sys
 import warnings
 
 import numpy as np
 
+from experiments.benches.harness import parser
 from experiments.benches.real_sets import BRIDGE_FILE, identify_frequencies, load_sets
 from physics.identification.band_refine import mode_bands
 from physics.identification.decay_peaks import decay_peaks
@@ -70,7 +70,7 @@ def record_rows(signals, fs, band_hz):
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = parser(__file__, __doc__)
     p.add_argument("directory", nargs="?", default=None, help="folder of the .npz sets (as real_sets)")
     p.add_argument("--default-band", action="store_true", help="identify in the default band (not 5-40 Hz)")
     args = p.parse_args(argv)

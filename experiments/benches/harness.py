@@ -23,8 +23,9 @@ from pathlib import Path
 
 from experiments.cli import main as cli_main
 from experiments.studies.doc_tables import write_table
+from physics.io import atomic_write_text
 
-__all__ = ["cli_json", "parser", "publish", "table", "write_table"]
+__all__ = ["cli_json", "emit_json", "parser", "publish", "table", "write_table"]
 
 
 def parser(file: str, doc: str, *, docs: str | None = None, json: bool | str = False, out: str | None = None,
@@ -68,6 +69,16 @@ def publish(args: argparse.Namespace, name: str, markdown: str) -> None:
     page with ``markdown`` (:func:`~experiments.studies.doc_tables.write_table`); without it, nothing."""
     if args.docs:
         write_table(args.docs, name, markdown)
+
+
+def emit_json(args: argparse.Namespace, obj, **dumps) -> None:
+    """With ``--json`` (as the bench's :func:`parser` declares it): ``obj`` as indented JSON, printed (``json=True``)
+    or written atomically into the file given (``json="FILE"``); without it, nothing. ``dumps`` go to
+    :func:`json.dumps` (e.g. ``default=float``)."""
+    if args.json is True:
+        print(json.dumps(obj, indent=1, **dumps))
+    elif args.json:
+        atomic_write_text(args.json, json.dumps(obj, indent=1, **dumps) + "\n")
 
 
 def table(header, rows, align=None) -> str:

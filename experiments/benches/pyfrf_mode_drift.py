@@ -21,12 +21,12 @@ Then each column's standard deviation over the hits and its ratio to the FFT pea
 
 from __future__ import annotations
 
-import argparse
 import warnings
 from pathlib import Path
 
 import numpy as np
 
+from experiments.benches.harness import parser, table
 from physics.identification.band_refine import refine_in_bands
 from physics.identification.fft_peak import identify_fft_peaks
 from physics.identification.free_decay import identify_era
@@ -82,19 +82,17 @@ def mode_drift(path, mode_hz=900.0, neighbour_hz=906.0, beats=3) -> list[dict]:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = parser(__file__, __doc__)
     p.add_argument("--data", default=str(DATA), help="pyfrf_hits.npz")
     p.add_argument("--mode-hz", type=float, default=900.0)
     p.add_argument("--neighbour-hz", type=float, default=906.0)
     args = p.parse_args(argv)
     rows = mode_drift(args.data, args.mode_hz, args.neighbour_hz)
     cols = ["era", "fftpeak", "1 pole", "2 poles"]
-    print("| hit | " + " | ".join(f"{c} (Hz)" for c in cols) + " | neighbour (Hz) | amplitude | "
-          + " | ".join(f"f (Hz) @ envelope, beat {k + 1}" for k in range(len(rows[0]["beats"]))) + " |")
-    print("|---" * (len(cols) + 3 + len(rows[0]["beats"])) + "|")
-    for i, r in enumerate(rows):
-        print(f"| {i + 1} | " + " | ".join(f"{r[c]:.4f}" for c in cols) + f" | {r['neighbour']:.2f} | "
-              f"{r['amplitude']:.1f} | " + " | ".join(f"{f:.3f} @ {a:.1f}" for f, a in r["beats"]) + " |")
+    print(table(["hit", *(f"{c} (Hz)" for c in cols), "neighbour (Hz)", "amplitude",
+                 *(f"f (Hz) @ envelope, beat {k + 1}" for k in range(len(rows[0]["beats"])))],
+                [[i + 1, *(f"{r[c]:.4f}" for c in cols), f"{r['neighbour']:.2f}", f"{r['amplitude']:.1f}",
+                  *(f"{f:.3f} @ {a:.1f}" for f, a in r["beats"])] for i, r in enumerate(rows)]))
     base = np.std([r["fftpeak"] for r in rows], ddof=1)
     amp = np.array([r["amplitude"] for r in rows])
     for c in cols:

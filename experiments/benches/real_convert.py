@@ -11,7 +11,6 @@ its entry (``paths``, relative to ``DIR``) as they are (float64 as written, no s
 
 from __future__ import annotations
 
-import argparse
 import io
 import re
 import sys
@@ -22,6 +21,7 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
+from experiments.benches.harness import parser
 from physics.errors import BeamDamageError, ConfigError, FileFormatError
 from physics.io import atomic_write_bytes
 
@@ -344,10 +344,9 @@ def convert_set(name: str, source, out=OUT) -> Path:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m experiments.benches.real_convert", description=__doc__.splitlines()[0])
+    p = parser(__file__, __doc__, out=str(OUT))
     p.add_argument("sets", nargs="+", choices=list(SETS), metavar="SET", help=f"one of {', '.join(SETS)}")
     p.add_argument("--source", required=True, help="checkout of the set's repository at the commit of its entry")
-    p.add_argument("--out", default=str(OUT), help=f"folder of the .npz (default {OUT})")
     args = p.parse_args(argv)
     try:
         for name in args.sets:

@@ -22,7 +22,6 @@ group's reference (:func:`experiments.benches.bench_precision.match_modes`).
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 import time
@@ -32,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from experiments.benches.harness import parser
 from experiments.benches.bench_precision import REAL_DIR, match_modes
 from physics.errors import BeamDamageError
 from physics.identification.failures import PER_RECORD_ERRORS
@@ -201,7 +201,7 @@ def report(sets, methods=REPORT_METHODS, banded=False, groups=None, out=sys.stdo
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = parser(__file__, __doc__)
     p.add_argument("directory", nargs="?", default=None, help="folder of the .npz sets (default: /work/realdata, "
                    "else experiments/data/real)")
     p.add_argument("--report", action="store_true", help="identify every group by every method and print the "

@@ -1,7 +1,7 @@
 """Study ``benchmark``: the datagen throughput ratio, training time and identification accuracy in one run.
 
 Runs :mod:`experiments.benches.bench_datagen` (10 000 samples against the naive per-sample loop),
-:func:`experiments.benches.bench_identification.table` (simulated beam-5 FRFs, thesis damping,
+:func:`experiments.benches.bench_identification.method_errors` (simulated beam-5 FRFs, thesis damping,
 1 % noise) and a timed training of the default classifier on a ``training``-config
 dataset. Every number is measured in this run on this machine; the load average at the
 start is reported beside them.
@@ -30,7 +30,7 @@ def run(out_dir, n_datagen: int = 10000, n_train: int = 6000, epochs: int = 30) 
     load = os.getloadavg()[0]
     with contextlib.redirect_stdout(io.StringIO()):
         dg = bench_datagen.main(["--n", str(n_datagen), "--naive", "40", "--workers", "2", "--json"])
-    ident = bench_identification.table(seeds=2, damping="thesis")
+    ident = bench_identification.method_errors(seeds=2, damping="thesis")
 
 
     generate(out / "train-data", load_config("training"), n=n_train, seed=0, workers=2, progress=True)

@@ -67,7 +67,7 @@ def bolted_beam(masses_kg=None) -> Beam:
                 masses=tuple(PointMass(x, m) for x, m in zip(MASS_X_M, masses_kg)))
 
 
-def _modal(beam: Beam, damping: Damping, rng):
+def _modal(beam: Beam, damping: Damping):
     asm = assemble(beam)
     md = modes(asm)
     lam, psi = complex_modes(asm, md, damping, asm.translation_dofs(SENSOR_X_M), 4)
@@ -83,7 +83,7 @@ def bolted_test(seed: int = 0, removed_kg: float = 0.005, damage_x_m: float = 0.
     after[j] -= removed_kg
     out = {}
     for state, beam in (("baseline", bolted_beam()), ("current", bolted_beam(after))):
-        lam, psi, f_hz = _modal(beam, damping, rng)
+        lam, psi, f_hz = _modal(beam, damping)
         lam_n, psi_n = noisy_modal(lam, psi, rng)
         out[state] = {"modal": modal_dict(lam_n, psi_n, DOF_LABELS),
                       "frequencies": modal_dict(lam_n, psi_n, DOF_LABELS, with_shapes=False),
@@ -168,7 +168,7 @@ def mass_change_pairs(n: int, seed: int = 0) -> list[dict]:
 
         pair = {}
         for state, bm in (("baseline", beam(masses)), ("current", beam(now, extra, 1 + rng.uniform(-0.001, 0.001)))):
-            lam, psi, _ = _modal(bm, damping, rng)
+            lam, psi, _ = _modal(bm, damping)
             pair[state] = modal_dict(*noisy_modal(lam, psi, rng), DOF_LABELS)
         pair["truth"] = {"pair": k, "damaged": kind != "intact", "change": kind, "mass_ratio": ratio,
                          "x_m": x, "x_over_L": x / LENGTH_M, "bar_mass_kg": bar_kg}

@@ -323,8 +323,7 @@ def run(args) -> dict:
 
     # 6: report
     elapsed = time.perf_counter() - t_start
-    sections = _report_sections(vsum, checks, thesis_sections, measured, disc, data, trained, evaluated, verdict,
-                                out)
+    sections = _report_sections(checks, thesis_sections, measured, disc, data, trained, evaluated, verdict, out)
     paths = write_report(out, "beam-damage: from the thesis to a damage classifier for beam 5", sections,
                          summary=_summary_section(checks, disc, evaluated, verdict, 0.6095))
     result = {
@@ -359,7 +358,7 @@ def run(args) -> dict:
     return result
 
 
-def _report_sections(vsum, checks, thesis_sections, measured, disc, data, trained, evaluated, verdict, out):
+def _report_sections(checks, thesis_sections, measured, disc, data, trained, evaluated, verdict, out):
     """The detail sections after the summary, in the order of the steps."""
     rows = [{"check": c.name, "group": c.group, "relative error": c.rel_error, "tolerance": c.tolerance,
              "share of tolerance": c.rel_error / c.tolerance if c.tolerance else None, "passed": c.passed}

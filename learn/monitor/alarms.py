@@ -4,7 +4,6 @@ alarm, mode by mode."""
 
 from __future__ import annotations
 
-import math
 import warnings
 from dataclasses import dataclass, field
 
@@ -20,6 +19,7 @@ from learn.monitor.statistics import (DEFAULT_STATISTICS, STATISTICS, Detection,
                                      environmental, residual_threshold, season_warning)
 from learn.monitor.coverage import series_coverage
 from learn.monitor.estimator_choice import FREQUENCY_ESTIMATORS, FrequencyChoice, choose_frequencies
+from learn.monitor.events import _num
 from learn.monitor.tracking import (MIN_PRESENCE, MODE_LOST, MODE_MOVED, BeyondBands, ReferenceModes, beyond_bands,
                                    identified_by, readings_text, reference_modes, refit_missing, track_modes)
 from physics.errors import BeamDamageError, ConfigError
@@ -297,11 +297,6 @@ def _status(judged: bool, alarm: bool, foreign: bool, beyond: str | None = None)
     if judged:
         return "no alarm"
     return "not judged" if foreign else "not identified"
-
-
-def _num(v):
-    v = float(v)
-    return v if math.isfinite(v) else None
 
 
 def what_changed(row: dict, sigma) -> list[dict]:

@@ -107,8 +107,9 @@ class Event:
         return d
 
 
-def _vec(row, key):
-    return np.array([np.nan if v is None else v for v in row[key]], float)
+def _vec(values) -> np.ndarray:
+    """The JSON row's list as floats, NaN for None."""
+    return np.array([np.nan if v is None else v for v in values], float)
 
 
 def _baseline_counts(rows) -> tuple[int, int]:
@@ -177,7 +178,7 @@ def lost_modes_change(rows: list, false_alarm_rate: float) -> dict:
 
 def _pattern(rows, baseline):
     """Inverse covariance of the baseline tests' z-scores (modes correlate: one environment moves several)."""
-    Z = np.array([_vec(rows[i], "mode_z_scores") for i in baseline], float)
+    Z = np.array([_vec(rows[i]["mode_z_scores"]) for i in baseline], float)
     Z = Z[np.isfinite(Z).all(axis=1)] if len(Z) else Z
     if len(Z) < 3:
         return None
@@ -209,7 +210,7 @@ def _size(change):
 
 
 def _lnf(rows, idx) -> np.ndarray:
-    F = np.array([_vec(rows[i], "frequencies_hz") for i in idx], float).reshape(len(idx), -1)
+    F = np.array([_vec(rows[i]["frequencies_hz"]) for i in idx], float).reshape(len(idx), -1)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.log(F)
 
@@ -243,8 +244,8 @@ def _event(rows, members: list, ctx: dict) -> Event:
             c = 100 * np.expm1(np.nanmean(steps, axis=0))
             z = np.nanmean(steps, axis=0) / (ctx["day_sd"] * np.sqrt(1 / len(alarms) + 1 / len(before)))
         else:
-            C = np.array([_vec(rows[i], "change_pct") for i in alarms])
-            c, z = np.nanmean(C, axis=0), np.nanmean(np.array([_vec(rows[i], "mode_z_scores") for i in alarms]),
+            C = np.array([_vec(rows[i]["change_pct"]) for i in alarms])
+            c, z = np.nanmean(C, axis=0), np.nanmean(np.array([_vec(rows[i]["mode_z_scores"]) for i in alarms]),
                                                      axis=0)
         step = None if steps is None else 100 * np.expm1(np.nanmean(steps, axis=0))
     stepped = ctx["against"] == "before" and steps is not None
@@ -319,6 +320,7 @@ def _beyond(rows, members: list) -> list:
 
 
 def _num(v):
+    """A finite float, None for NaN or inf (JSON)."""
     v = float(v)
     return v if np.isfinite(v) else None
 
@@ -350,7 +352,7 @@ def group_events(rows: list, false_alarm_rate: float = 0.01, max_gap: int = MAX_
         if r["baseline"] or r["status"] == "not judged":
             continue
         if r["status"] in FLAGGED:
-            z = _vec(r, "mode_z_scores") if r["status"] == "alarm" else None
+            z = _vec(r["mode_z_scores"]) if r["status"] == "alarm" else None
             if members and (gap > max_gap or (z is not None and _jumps(cov, zs, z))):
                 groups.append(members)
                 members, zs = [], []

@@ -11,6 +11,7 @@ from learn.pairs.classify import classify_many
 from learn.explanations.hypotheses import FREQUENCY_CHANGE_STD, explain_many
 from learn.pairs.measured import modal_pair, on_model_dofs, pair_modes_by_frequency
 from learn.monitor.alarms import SeriesResult, changed_text, what_changed
+from learn.monitor.events import _vec
 from learn.monitor.tracking import MODE_LOST, MODE_MOVED, shapes_at, track_modes
 from physics.errors import BeamDamageError
 from physics.io import ModalData
@@ -88,10 +89,6 @@ def _summary(changed: list, row: dict) -> str:
     flagged = {d["mode"] for d in row.get("beyond_band", []) if d["flagged"]}
     text = changed_text([d for d in changed if d["mode"] not in flagged])
     return "; ".join(t for t in (text, row.get("beyond_band_text") or "") if t)
-
-
-def _vec(values) -> np.ndarray:
-    return np.array([np.nan if v is None else v for v in values], float)
 
 
 def _explain(result: SeriesResult, model, beam_x_m, items: list, out: dict) -> None:

@@ -4,12 +4,9 @@ files finish (results are kept by the file's place in the series)."""
 
 from __future__ import annotations
 
-from collections import deque
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-from multiprocessing import get_context
-
 from threadpoolctl import threadpool_limits
 
+from datagen.warm_pool import run_warm_pool
 from learn.monitor.identification import IdentificationSettings, cached_identification
 from physics.errors import ConfigError
 
@@ -29,54 +26,22 @@ def identify_files(files: list, settings: IdentificationSettings, cache_dir=None
                    progress: bool = False) -> tuple[list, list, list]:
     """``(modes, errors, pending cache entries)`` of every file, in the order of ``files``.
 
-    ``workers`` processes identify them: ``workers - 1`` spawned ones and this one, which computes a file itself
-    whenever no worker's result is waiting (a spawned worker needs seconds to import; :mod:`datagen.generation`
-    runs its shards alike). Cache entries are returned, not written (the caller writes them once the series is
-    accepted).
+    ``workers`` processes identify them (:func:`~datagen.warm_pool.run_warm_pool`: ``workers - 1`` spawned ones and
+    this one, which computes a file itself whenever no worker's result is waiting). Cache entries are returned, not
+    written (the caller writes them once the series is accepted).
     """
     if not isinstance(workers, int) or isinstance(workers, bool) or workers < 1:
         raise ConfigError(f"--workers {workers!r}: must be an integer >= 1")
     from tqdm import tqdm
 
-    n = len(files)
-    results: list = [None] * n
-    bar = tqdm(total=n, desc="identify", unit="test", disable=not progress, leave=False)
-    if workers == 1 or n <= 1:
-        for i, path in enumerate(files):
-            results[i] = _one(path, settings, cache_dir)
-            bar.update()
-    else:
-        from datagen.generation import _init_worker, _stop_workers  # numba: the generator's pipeline
+    results: list = [None] * len(files)
+    bar = tqdm(total=len(files), desc="identify", unit="test", disable=not progress, leave=False)
 
-        todo = deque(range(n))
-        with ProcessPoolExecutor(max_workers=workers - 1, mp_context=get_context("spawn"),
-                                 initializer=_init_worker) as pool:
-            futs = {}
+    def record(i, result):
+        results[i] = result
+        bar.update()
 
-            def top_up():
-                while todo and len(futs) < 2 * (workers - 1):
-                    i = todo.popleft()
-                    futs[pool.submit(_one, files[i], settings, cache_dir)] = i
-
-            try:
-                top_up()
-                while futs or todo:
-                    ready = [f for f in futs if f.done()]
-                    for f in ready:
-                        results[futs.pop(f)] = f.result()
-                        bar.update()
-                    top_up()
-                    if ready:
-                        continue
-                    if todo:
-                        i = todo.pop()                   # from the end: the workers keep the front of the queue
-                        results[i] = _one(files[i], settings, cache_dir)
-                        bar.update()
-                    else:
-                        wait(futs, return_when=FIRST_COMPLETED)
-            except BaseException:
-                _stop_workers(pool)
-                raise
+    run_warm_pool(_one, [(i, (path, settings, cache_dir)) for i, path in enumerate(files)], workers, record)
     bar.close()
     modes = [r[0] for r in results]
     errors = [r[1] for r in results]

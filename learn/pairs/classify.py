@@ -333,7 +333,7 @@ def _chosen_verdict(net, cl, p, reasons: list, warnings: list, sens, beam):
     if net is None:
         w.append(f"the network gives no answer for this pair (it needs modes {modes_text(beam.modes)}): the verdict "
                  f"is the classical method's ({cl['method']}) on modes {found}")
-        return classical_verdict(cl, sens, beam), False, w
+        return classical_verdict(cl, sens), False, w
     if p is not None and not p.complete:
         w.append("; ".join(p.missing) + f": the network and the classical methods answer on modes {found}")
     if inside or cl is None:
@@ -345,7 +345,7 @@ def _chosen_verdict(net, cl, p, reasons: list, warnings: list, sens, beam):
              f"classical method's ({cl['method']}"
              + ("" if p is None or p.complete else f" on modes {found}")
              + "); the network's answer is shown beside it")
-    return classical_verdict(cl, sens, beam), False, w
+    return classical_verdict(cl, sens), False, w
 
 
 def _identification(p, base_md, cur_md, identified: bool, beam) -> dict:

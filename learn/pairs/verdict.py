@@ -192,7 +192,7 @@ class Verdict:
         return cls(**{f.name: answer[f.name] for f in fields(cls)})
 
 
-def classical_verdict(cl: dict, sens, beam=None) -> Verdict:
+def classical_verdict(cl: dict, sens) -> Verdict:
     """The verdict from the classical method's answer ``cl`` (no probabilities or spreads)."""
     detectable = sens.largest_drop(np.array([cl["location_x_over_L"]]), np.array([cl["size"]]))[0]
     return Verdict.of({**dict.fromkeys(f.name for f in fields(Verdict)), **{k: cl[k] for k in (

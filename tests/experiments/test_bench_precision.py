@@ -44,7 +44,7 @@ def test_simulated_records_hold_the_truth_frequencies():
 def test_quick_run_prints_every_record_method_and_the_baseline(capsys):
     assert bp.main(["--quick", "--real", ""]) == 0
     out = capsys.readouterr().out
-    rows = [r for r in out.splitlines() if r.startswith("| ") and not r.startswith("| method")]
+    rows = [r for r in out.splitlines() if r.startswith("| ") and not r.startswith(("| method", "| ---"))]
     methods = {r.split("|")[1].strip() for r in rows}
     assert methods == set(bp.record_methods()) and "fftpeak" in methods
     assert len(rows) == len(methods) * (3 + 2)                # decay: 3 modes, ambient: 2
