@@ -19,10 +19,10 @@ from learn.monitor.statistics import (DEFAULT_STATISTICS, STATISTICS, Detection,
                                      environmental, residual_threshold, season_warning)
 from learn.monitor.coverage import series_coverage
 from learn.monitor.estimator_choice import FREQUENCY_ESTIMATORS, FrequencyChoice, choose_frequencies
-from learn.monitor.events import _num
 from learn.monitor.tracking import (MIN_PRESENCE, MODE_LOST, MODE_MOVED, BeyondBands, ReferenceModes, beyond_bands,
                                    identified_by, readings_text, reference_modes, refit_missing, track_modes)
 from physics.errors import BeamDamageError, ConfigError
+from physics.io import finite_or_none
 from learn.monitor.workers import identify_files
 
 __all__ = ["EXTRAPOLATED", "EXTRAPOLATED_ALARMS", "FLAGGED_STATUSES", "MODE_LOST", "MODE_MOVED", "STATUSES",
@@ -191,13 +191,13 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
             "baseline": i < n_baseline, "identified": bool(ok[i]), "error": errors[i],
             "status": _status(bool(ok[i]), bool(ok[i] and det.alarm[i]),
                               i in foreign or errors[i] == "conditions not measured", beyond.status(i)),
-            "alarm": bool(ok[i] and det.alarm[i]), "novelty": _num(novelty[i]), "threshold": thr.value,
-            "frequencies_hz": [_num(v) for v in F[i]], "damping_ratios": [_num(v) for v in Z[i]],
-            "mode_z_scores": [_num(v) for v in z[i]], "change_pct": [_num(v) for v in change[i]],
-            "mac": [_num(v) for v in MAC[i]] if ref.shapes is not None else None,
+            "alarm": bool(ok[i] and det.alarm[i]), "novelty": finite_or_none(novelty[i]), "threshold": thr.value,
+            "frequencies_hz": [finite_or_none(v) for v in F[i]], "damping_ratios": [finite_or_none(v) for v in Z[i]],
+            "mode_z_scores": [finite_or_none(v) for v in z[i]], "change_pct": [finite_or_none(v) for v in change[i]],
+            "mac": [finite_or_none(v) for v in MAC[i]] if ref.shapes is not None else None,
             "missing_modes": mode_missing, "beyond_band": readings,
             "beyond_band_text": readings_text(readings, ref), "identified_by": how[i],
-            "conditions": None if C is None else dict(zip(series.condition_names, map(_num, C[i]))),
+            "conditions": None if C is None else dict(zip(series.condition_names, map(finite_or_none, C[i]))),
         })
         rows[-1].update(_detector_fields(det, charts, i, bool(ok[i])))
     res = SeriesResult(rows, ref, F, np.exp(expected_log), novelty, thr, model, normal, sigma, tests, series, det,
@@ -217,8 +217,8 @@ def _detector_fields(det: Detection, charts: Charts | None, i: int, ok: bool) ->
     """A row's detector fields: each statistic (``statistics``), those alarmed
     (``alarmed_by``), the weighted mean frequency change (``shift_pct``), the charts' ``chart_alarm`` and the
     ``onset`` (test index) of the change behind it."""
-    return {"statistics": {nm: _num(det.values[i, k]) for k, nm in enumerate(det.names)},
-            "alarmed_by": det.alarmed_by(i) if ok else [], "shift_pct": _num(det.shift_pct[i]),
+    return {"statistics": {nm: finite_or_none(det.values[i, k]) for k, nm in enumerate(det.names)},
+            "alarmed_by": det.alarmed_by(i) if ok else [], "shift_pct": finite_or_none(det.shift_pct[i]),
             "chart_alarm": None if charts is None else bool(ok and charts.alarm[i]),
             "onset": None if charts is None or charts.onset[i] < 0 else int(charts.onset[i])}
 

@@ -24,6 +24,7 @@ import numpy as np
 from learn.monitor.tracking import ReferenceModes, narrow_bands_hz
 from learn.pairs.noise_calibration import robust_std
 from physics.errors import BeamDamageError
+from physics.io import finite_or_none
 from physics.identification import read_response_records
 from physics.identification.fft_peak import fft_peaks
 
@@ -100,17 +101,16 @@ class FrequencyChoice:
                  (f"{FFT_PEAK} (the pole tracked: {h})" if np.isfinite(self.frequencies_hz[i, r]) else None)
                  for r, h in enumerate(row)] for i, row in enumerate(how)]
 
+    def _pair(self, scatter_hz) -> dict:
+        """``{default: Hz, "fftpeak": Hz}`` of one ``(default, FFT peak)`` pair of scatters (None for NaN)."""
+        return {self.default: finite_or_none(scatter_hz[0]), FFT_PEAK: finite_or_none(scatter_hz[1])}
+
     def to_dict(self) -> dict:
         return {"default": self.default, "estimators": list(self.estimators),
-                "scatter_hz": [{self.default: _num(d), FFT_PEAK: _num(f)} for d, f in self.scatter_hz],
-                "halves_hz": [[{self.default: _num(d), FFT_PEAK: _num(f)} for d, f in h] for h in self.halves_hz],
+                "scatter_hz": [self._pair(p) for p in self.scatter_hz],
+                "halves_hz": [[self._pair(p) for p in h] for h in self.halves_hz],
                 "baseline_tests": self.n_tests.tolist(), "fft_complete": self.complete.tolist(),
                 "texts": self.texts()}
-
-
-def _num(v):
-    v = float(v)
-    return v if np.isfinite(v) else None
 
 
 def fft_peak_frequencies(tests: list, files: list, ref: ReferenceModes) -> np.ndarray:

@@ -12,6 +12,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from learn.monitor.tracking import MODE_LOST, MODE_MOVED
+from physics.io import finite_or_none, floats_or_nan
 
 __all__ = ["AGAINST", "FLAGGED", "MAX_GAP", "SPLIT_P", "STEP_BEFORE", "Z_MOVED", "Event", "group_events",
            "identification_change", "lost_modes_change", "unidentified_p_value"]
@@ -107,11 +108,6 @@ class Event:
         return d
 
 
-def _vec(values) -> np.ndarray:
-    """The JSON row's list as floats, NaN for None."""
-    return np.array([np.nan if v is None else v for v in values], float)
-
-
 def _baseline_counts(rows) -> tuple[int, int]:
     """``(tests not identified, tests of the series)`` in the baseline period."""
     base = [r for r in rows if r["baseline"] and r["status"] != "not judged"]
@@ -178,7 +174,7 @@ def lost_modes_change(rows: list, false_alarm_rate: float) -> dict:
 
 def _pattern(rows, baseline):
     """Inverse covariance of the baseline tests' z-scores (modes correlate: one environment moves several)."""
-    Z = np.array([_vec(rows[i]["mode_z_scores"]) for i in baseline], float)
+    Z = np.array([floats_or_nan(rows[i]["mode_z_scores"]) for i in baseline], float)
     Z = Z[np.isfinite(Z).all(axis=1)] if len(Z) else Z
     if len(Z) < 3:
         return None
@@ -210,7 +206,7 @@ def _size(change):
 
 
 def _lnf(rows, idx) -> np.ndarray:
-    F = np.array([_vec(rows[i]["frequencies_hz"]) for i in idx], float).reshape(len(idx), -1)
+    F = np.array([floats_or_nan(rows[i]["frequencies_hz"]) for i in idx], float).reshape(len(idx), -1)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.log(F)
 
@@ -244,16 +240,16 @@ def _event(rows, members: list, ctx: dict) -> Event:
             c = 100 * np.expm1(np.nanmean(steps, axis=0))
             z = np.nanmean(steps, axis=0) / (ctx["day_sd"] * np.sqrt(1 / len(alarms) + 1 / len(before)))
         else:
-            C = np.array([_vec(rows[i]["change_pct"]) for i in alarms])
-            c, z = np.nanmean(C, axis=0), np.nanmean(np.array([_vec(rows[i]["mode_z_scores"]) for i in alarms]),
-                                                     axis=0)
+            C = np.array([floats_or_nan(rows[i]["change_pct"]) for i in alarms])
+            Z = np.array([floats_or_nan(rows[i]["mode_z_scores"]) for i in alarms])
+            c, z = np.nanmean(C, axis=0), np.nanmean(Z, axis=0)
         step = None if steps is None else 100 * np.expm1(np.nanmean(steps, axis=0))
     stepped = ctx["against"] == "before" and steps is not None
     against = ((f"the {len(before)} tests without an alarm before "
                 + ("it" if end == first else f"the first change (test {end + 1})")) if stepped
                else "the normal model's prediction")
-    modes = [{"mode": r + 1, "change_pct": _num(c[r]), "z": _num(z[r]),
-              "step_pct": None if step is None else _num(step[r]),
+    modes = [{"mode": r + 1, "change_pct": finite_or_none(c[r]), "z": finite_or_none(z[r]),
+              "step_pct": None if step is None else finite_or_none(step[r]),
               "moved": bool(np.isfinite(z[r]) and abs(z[r]) >= Z_MOVED)} for r in range(m)]
     moved = [d["mode"] for d in sorted(modes, key=lambda d: -abs(d["z"]) if d["z"] is not None else 0.0)
              if d["moved"]]
@@ -319,12 +315,6 @@ def _beyond(rows, members: list) -> list:
     return out
 
 
-def _num(v):
-    """A finite float, None for NaN or inf (JSON)."""
-    v = float(v)
-    return v if np.isfinite(v) else None
-
-
 def group_events(rows: list, false_alarm_rate: float = 0.01, max_gap: int = MAX_GAP, against: str = "residual"
                  ) -> list[Event]:
     """The events of a monitored series' rows (``status``, ``baseline``, ``mode_z_scores``, ``change_pct``,
@@ -352,7 +342,7 @@ def group_events(rows: list, false_alarm_rate: float = 0.01, max_gap: int = MAX_
         if r["baseline"] or r["status"] == "not judged":
             continue
         if r["status"] in FLAGGED:
-            z = _vec(r["mode_z_scores"]) if r["status"] == "alarm" else None
+            z = floats_or_nan(r["mode_z_scores"]) if r["status"] == "alarm" else None
             if members and (gap > max_gap or (z is not None and _jumps(cov, zs, z))):
                 groups.append(members)
                 members, zs = [], []

@@ -11,10 +11,10 @@ from learn.pairs.classify import classify_many
 from learn.explanations.hypotheses import FREQUENCY_CHANGE_STD, explain_many
 from learn.pairs.measured import modal_pair, on_model_dofs, pair_modes_by_frequency
 from learn.monitor.alarms import SeriesResult, changed_text, what_changed
-from learn.monitor.events import _vec
 from learn.monitor.tracking import MODE_LOST, MODE_MOVED, shapes_at, track_modes
 from physics.errors import BeamDamageError
 from physics.io import ModalData
+from physics.io import floats_or_nan
 from physics.modal import eigenvalues_from_modal
 
 __all__ = ["BEYOND", "alarm_verdicts", "baseline_nearest_median", "event_verdicts"]
@@ -77,7 +77,7 @@ def alarm_verdicts(result: SeriesResult, model=None, beam_x_m=None) -> dict:
         return out
 
     items = [(i, result.frequencies_hz[i] * result.reference.frequencies_hz / result.expected_hz[i],
-              _vec(result.rows[i]["damping_ratios"]), i) for i in alarms]
+              floats_or_nan(result.rows[i]["damping_ratios"]), i) for i in alarms]
     _explain(result, model, beam_x_m, items, out)
     out = _network_verdicts(result, model, beam_x_m, alarms, out)
     return out
@@ -102,7 +102,7 @@ def _explain(result: SeriesResult, model, beam_x_m, items: list, out: dict) -> N
     sigma_model = np.full(n_all, FREQUENCY_CHANGE_STD)
     sigma_model[which[which >= 0]] = result.sigma[which >= 0]
     _, _, _, cols = track_modes(result.tests, ref)
-    Zb = np.array([_vec(r["damping_ratios"]) for r in result.rows if r["baseline"] and r["identified"]], float)
+    Zb = np.array([floats_or_nan(r["damping_ratios"]) for r in result.rows if r["baseline"] and r["identified"]], float)
     base = _modal_data(ref.frequencies_hz, np.nanmedian(Zb, axis=0), ref.shapes, ref.dofs)
     try:
         base_m = on_model_dofs(base, model.beam, beam_x_m, "the baseline median")[0]
@@ -138,7 +138,7 @@ def event_verdicts(result: SeriesResult, events: list, model, beam_x_m=None) -> 
         alarms = [i for i in ev.members if result.rows[i]["status"] == "alarm"]
         if not alarms:
             continue
-        Z = np.array([_vec(result.rows[i]["mode_z_scores"]) for i in alarms])
+        Z = np.array([floats_or_nan(result.rows[i]["mode_z_scores"]) for i in alarms])
         mean = np.nanmean(Z, axis=0)
         rep = alarms[int(np.argmin(np.nansum((Z - mean) ** 2, axis=1) - 1e3 * np.isfinite(Z).sum(axis=1)))]
         with warnings.catch_warnings():
@@ -152,7 +152,7 @@ def event_verdicts(result: SeriesResult, events: list, model, beam_x_m=None) -> 
                            / result.expected_hz[alarms])
                 f = np.nanmean(at_base, axis=0)
         reps[k] = rep
-        items.append((rep, f, _vec(result.rows[rep]["damping_ratios"]), rep))
+        items.append((rep, f, floats_or_nan(result.rows[rep]["damping_ratios"]), rep))
     by_rep = {rep: {**empty, "representative": result.rows[rep]["file"]} for rep in reps.values()}
     if model is not None and items:
         _explain(result, model, beam_x_m, items, by_rep)

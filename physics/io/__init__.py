@@ -30,7 +30,7 @@ from physics.io.modal_json import (modal_data_from_dict, modal_data_to_dict, num
 from physics.io.npz import read_frf_npz, write_frf_npz
 from physics.io.types import (DEFAULT_UNITS, FRF_KINDS, MeasuredFRF, ModalData, dof_label,
                               format_complex, parse_dof)
-from physics.io.jsonable import to_jsonable
+from physics.io.jsonable import finite_or_none, floats_or_nan, to_jsonable
 from physics.io.geometry import (QUARTER_POINT_CONVENTION, DofMap, NodeGeometry, dof_positions_text, map_frf_dofs,
                                  map_measured_dofs, match_dofs_by_position, measured_positions, positions_along_beam,
                                  reference_position_m)
@@ -47,4 +47,5 @@ __all__ = ["FORMATS", "FRF", "MODAL", "TIME", "FileFormat", "accepted", "format_
            "DofMap", "NodeGeometry", "dof_positions_text", "QUARTER_POINT_CONVENTION", "map_frf_dofs",
            "map_measured_dofs", "UnitSystem", "frf_unit_factor", "match_dofs_by_position",
            "measured_positions", "positions_along_beam", "reference_position_m", "read_uff_geometry", "Prepared",
-           "prepare_measured", "sensor_labels", "reads_by_reciprocity", "to_jsonable", "figure_png", "pyplot"]
+           "prepare_measured", "sensor_labels", "reads_by_reciprocity", "to_jsonable", "finite_or_none",
+           "floats_or_nan", "figure_png", "pyplot"]

@@ -7,7 +7,7 @@ import numpy as np
 
 from physics.io.types import format_complex
 
-__all__ = ["to_jsonable"]
+__all__ = ["finite_or_none", "floats_or_nan", "to_jsonable"]
 
 
 def to_jsonable(obj):
@@ -32,6 +32,16 @@ def to_jsonable(obj):
     if isinstance(obj, np.integer):
         return int(obj)
     if isinstance(obj, (float, np.floating)):
-        v = float(obj)
-        return v if np.isfinite(v) else None
+        return finite_or_none(obj)
     return obj
+
+
+def finite_or_none(v) -> float | None:
+    """``v`` as a float, None for NaN or inf (JSON has neither)."""
+    v = float(v)
+    return v if np.isfinite(v) else None
+
+
+def floats_or_nan(values) -> np.ndarray:
+    """A JSON list of numbers back as floats (shape (k,)), NaN for None: the inverse of :func:`finite_or_none`."""
+    return np.array([np.nan if v is None else v for v in values], float)
