@@ -81,8 +81,9 @@ def reference_modes(tests: list) -> ReferenceModes:
 
     The baseline poles' ``ln f`` are pooled and split where consecutive ones lie more than :data:`CLUSTER_GAP`
     apart (a cluster holding on average 1.5 poles per test or more is split again at its widest gap). In each
-    cluster, the densest window ``+-CORE`` (its centre the median of the poles within :data:`CORE`, three
-    fixed-point steps), then the densest among the poles outside it, and so on, is a core while it holds poles of at
+    cluster, the window ``+-CORE`` holding poles of the most tests (:func:`learn.densest_window.densest_window`;
+    its centre then the median of the poles within :data:`CORE`, three fixed-point steps), then the same among the
+    poles outside it, and so on, is a core while it holds poles of at
     least :data:`MIN_PRESENCE` of the tests and of at least :data:`MIN_COUNT` of them (half of them on a baseline
     of fewer than ``2 MIN_COUNT`` tests) beyond the background: the poles of the clusters held by fewer than half
     of the tests spread evenly over the poles' ``ln f`` span, as many as a window ``2 CORE`` wide holds. Two or
