@@ -20,9 +20,14 @@ def densest_window(logf, who, half: float, prior: float | None = None) -> float:
                           (default: the median of ``logf``)
     """
     x = np.asarray(logf, float)
-    inside = (np.abs(x[:, None] - x[None]) <= half).astype(np.int64)                 # (p, p)
-    test = np.unique(np.asarray(who), return_inverse=True)[1].reshape(-1)
-    held = np.count_nonzero(inside @ np.eye(test.max() + 1, dtype=np.int64)[test], axis=1)     # tests per window
+    order = np.argsort(x, kind="stable")
+    xs = x[order]
+    test = np.unique(np.asarray(who), return_inverse=True)[1].reshape(-1)[order]
+    lo, hi = np.searchsorted(xs, xs - half, "left"), np.searchsorted(xs, xs + half, "right")
+    upto = np.zeros((test.max() + 1, x.size + 1), np.int32)                 # (tests, p + 1) poles of each test so far
+    upto[:, 1:] = np.cumsum(test[None] == np.arange(test.max() + 1)[:, None], axis=1)
+    held = np.empty(x.size, int)
+    held[order] = np.count_nonzero(upto[:, hi] - upto[:, lo], axis=0)      # tests in each pole's window
     best = np.flatnonzero(held == held.max())
     k = best[np.argmin(np.abs(x[best] - (np.median(x) if prior is None else prior)))]
     return float(x[k])

@@ -23,3 +23,13 @@ def test_among_equally_held_windows_the_one_nearest_the_prior():
     assert densest_window(logf[::-1], who[::-1], half, np.log(10.12)) == np.log(10.1)
     # a fourth test at 10.15: the lower clump's windows hold 4 tests, the one nearest the poles' median (10.2) wins
     assert densest_window(np.r_[logf, np.log(10.15)], np.r_[who, 3], half) == np.log(10.2)
+
+
+def test_the_window_agrees_with_a_direct_count_of_each_window_s_tests():
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        logf, who = rng.normal(0.0, 0.05, rng.integers(1, 40)), rng.integers(0, 6, 40)
+        who = who[:logf.size]
+        held = np.array([np.unique(who[np.abs(logf - c) <= 0.03]).size for c in logf])
+        best = logf[held == held.max()]
+        assert densest_window(logf, who, 0.03, 0.01) == best[np.argmin(np.abs(best - 0.01))]
