@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from learn.densest_window import densest_window
 from learn.pairs.measured import refit_missing_modes
 from learn.monitor.identification import (IdentificationSettings, IdentifiedModes, cached_identification,
                                           with_narrow_band_poles)
@@ -80,8 +81,9 @@ def reference_modes(tests: list) -> ReferenceModes:
 
     The baseline poles' ``ln f`` are pooled and split where consecutive ones lie more than :data:`CLUSTER_GAP`
     apart (a cluster holding on average 1.5 poles per test or more is split again at its widest gap). In each
-    cluster, the densest window ``+-CORE`` (its centre the median of the poles within :data:`CORE`, three
-    fixed-point steps), then the densest among the poles outside it, and so on, is a core while it holds poles of at
+    cluster, the window ``+-CORE`` holding poles of the most tests (:func:`learn.densest_window.densest_window`;
+    its centre then the median of the poles within :data:`CORE`, three fixed-point steps), then the same among the
+    poles outside it, and so on, is a core while it holds poles of at
     least :data:`MIN_PRESENCE` of the tests and of at least :data:`MIN_COUNT` of them (half of them on a baseline
     of fewer than ``2 MIN_COUNT`` tests) beyond the background: the poles of the clusters held by fewer than half
     of the tests spread evenly over the poles' ``ln f`` span, as many as a window ``2 CORE`` wide holds. Two or
@@ -158,15 +160,15 @@ def reference_modes(tests: list) -> ReferenceModes:
 
 
 def _cores(logf, who, need: float) -> list:
-    """Centres of the dense windows ``+-CORE`` of sorted ``logf`` holding poles of at least ``need`` tests
-    (``who``: each pole's test), densest first: the window holding most poles, then the densest of the poles
-    left outside it, while one holds enough tests."""
+    """Centres of the dense windows ``+-CORE`` of sorted ``logf`` holding poles of at least ``need`` tests (``who``:
+    each pole's test), densest first: the window of :func:`learn.densest_window.densest_window` centred on the
+    median of its poles (:func:`_core_centre`), then the same among the poles left outside it, while one holds
+    enough tests."""
     left = np.arange(logf.size)
     centres = []
     while left.size:
         x = logf[left]
-        count = np.searchsorted(x, x + CORE, "right") - np.searchsorted(x, x - CORE, "left")
-        centre = _core_centre(x, float(x[int(np.argmax(count))]))
+        centre = _core_centre(x, densest_window(x, who[left], CORE))
         inside = np.abs(x - centre) <= CORE
         if np.unique(who[left[inside]]).size < need:
             break
@@ -177,7 +179,8 @@ def _cores(logf, who, need: float) -> list:
 
 def _core_centre(logf, centre: float) -> float:
     """The centre of the densest part of sorted ``logf`` near ``centre``: three times the median of the values
-    within :data:`CORE` of the last centre."""
+    within :data:`CORE` of the last centre. A core's window then holds a mode's scattered poles evenly on both
+    sides, so the poles left outside it are too few to make a second core."""
     for _ in range(3):
         near = logf[np.abs(logf - centre) <= CORE]
         if near.size == 0:

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from learn.densest_window import densest_window
 from learn.explanations.shapes import real_shapes, sign_aligned
 from learn.pairs.measured import BASELINE_PAIR_BAND, RATIO_TOLERANCE, modal_pair
 from physics.errors import BeamDamageError
@@ -240,9 +241,9 @@ def _baselines_mode_hz(poles: list, paired) -> float:
     """The baselines' frequency of one mode (Hz): among their poles within the nominal rule's reach of the mode
     (as far from the median of ``paired``, each baseline's ``ln f`` the nominal rule paired, NaN where none, as the
     farthest of them), the window ``+-BASELINE_PAIR_BAND / 2`` holding poles of the most baselines (the nearest to
-    that median among equals); the median of each such baseline's pole nearest the window's centre. A spurious pole
-    nearer the nominal frequency than the mode, which the nominal rule pairs in the baselines holding it, is
-    outnumbered by the mode every baseline holds."""
+    that median among equals: :func:`learn.densest_window.densest_window`); the median of each such baseline's pole
+    nearest the window's centre. A spurious pole nearer the nominal frequency than the mode, which the nominal rule
+    pairs in the baselines holding it, is outnumbered by the mode every baseline holds."""
     centre = float(np.nanmedian(paired))
     reach = float(np.nanmax(np.abs(paired - centre))) + BASELINE_PAIR_BAND
     x = np.concatenate(poles)
@@ -250,9 +251,7 @@ def _baselines_mode_hz(poles: list, paired) -> float:
     near = np.abs(x - centre) <= reach
     x, who = x[near], who[near]
     half = np.log1p(BASELINE_PAIR_BAND) / 2
-    held = np.array([np.unique(who[np.abs(x - c) <= half]).size for c in x])
-    best = held == held.max()
-    c = float(x[best][np.argmin(np.abs(x[best] - centre))])
+    c = densest_window(x, who, half, centre)
     inside = np.abs(x - c) <= half
     pick = []
     for k in np.unique(who[inside]):
