@@ -17,6 +17,9 @@ decay's transform weighted by ``1 / sqrt(N)``, the same background (a complex po
 form). The amplitude ``A exp(i phi)`` and the background enter linearly and are projected out; ``(f0, c, sigma)``
 are fitted by :func:`scipy.optimize.least_squares`, and ``s^2 (J^T J)^-1`` of the projected residual's Jacobian is
 their covariance. ``c`` is significant when ``|c|`` exceeds :data:`SIGNIFICANT_SIGMAS` of its standard deviations.
+Components of the band that the background cannot take (a weaker mode beside this one) can be fitted with it as
+damped exponentials (``neighbours``: their poles refined too, their amplitudes projected out, their transforms the
+closed form :func:`~physics.identification.band_refine.refine_in_bands` uses).
 """
 
 from __future__ import annotations
@@ -27,7 +30,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from physics.errors import ConfigError, ConvergenceError, ShapeError
-from physics.identification.band_refine import BACKGROUND_ORDER, _band_data, mode_bands
+from physics.identification.band_refine import BACKGROUND_ORDER, _band_data, _modes_on_lines, mode_bands
 
 __all__ = ["SIGNIFICANT_SIGMAS", "Backbone", "fit_backbone"]
 
@@ -62,6 +65,8 @@ class Backbone:
         The band fitted (Hz).
     n_lines : int
         Lines of the transform fitted.
+    neighbours : ndarray, complex, shape (n_neighbours,)
+        The refined poles of the neighbours fitted with the mode (rad/s).
     """
 
     frequency_hz: float
@@ -76,6 +81,7 @@ class Backbone:
     significant: bool
     band_hz: np.ndarray
     n_lines: int
+    neighbours: np.ndarray
 
 
 def _basis(p, n, fs, k):
@@ -90,15 +96,20 @@ def _basis(p, n, fs, k):
 
 
 def _projected(p, k, n, fs, Y, background, rows):
-    """Residual (2L,) of the band's lines after projecting out the amplitude and background, and the coefficients."""
-    phi = np.concatenate([_basis(p, n, fs, k), background], axis=1)
+    """Residual (2L,) of the band's lines after projecting out the amplitudes and background, and the coefficients;
+    ``p = (f0, c, sigma, sigma_1, omega_1, ...)``, the neighbours' poles after the mode's parameters."""
+    lam = -p[3::2] + 1j * p[4::2]
+    w = np.exp(-2j * np.pi * k / n)
+    unit = np.kron(np.eye(lam.size), [1.0, 1j])                           # (m, 2 m): Re a and Im a of each pole
+    near = _modes_on_lines(w, n, fs, lam, unit.T).T / np.sqrt(n) if lam.size else np.zeros((k.size, 0))
+    phi = np.concatenate([_basis(p[:3], n, fs, k), near, background], axis=1)
     real = np.concatenate([phi.real, phi.imag], axis=0)
     coef, *_ = np.linalg.lstsq(real, rows, rcond=None)
     return rows - real @ coef, coef
 
 
-def fit_backbone(decay, sampling_frequency_hz, eigenvalue, band_hz=None,
-                 background_order=BACKGROUND_ORDER) -> Backbone:
+def fit_backbone(decay, sampling_frequency_hz, eigenvalue, band_hz=None, background_order=BACKGROUND_ORDER,
+                 neighbours=()) -> Backbone:
     """Fit one mode's decay with its frequency linear in its envelope (see the module docstring).
 
     Parameters
@@ -111,6 +122,8 @@ def fit_backbone(decay, sampling_frequency_hz, eigenvalue, band_hz=None,
     band_hz : (float, float), optional
         Lines fitted (Hz); default the band :func:`~physics.identification.band_refine.mode_bands` gives the pole.
     background_order : int
+    neighbours : array_like, complex, shape (n_neighbours,)
+        Starting poles (rad/s) of further components in the band, fitted as damped exponentials with the mode.
 
     Returns
     -------
@@ -132,34 +145,39 @@ def fit_backbone(decay, sampling_frequency_hz, eigenvalue, band_hz=None,
     lam = complex(eigenvalue)
     if not (lam.real < 0 < lam.imag < np.pi * fs):
         raise ConfigError(f"eigenvalue: expected -sigma + i omega with sigma > 0 and 0 < omega < pi fs, got {lam}")
+    near = np.atleast_1d(np.asarray(neighbours, complex))
+    if near.ndim != 1 or not np.all((near.real < 0) & (near.imag > 0)):
+        raise ConfigError(f"neighbours: expected poles -sigma + i omega with sigma, omega > 0, got {near}")
     n = x.size
     band = mode_bands([lam], n / fs, fs / 2)[0][0] if band_hz is None else np.asarray(band_hz, float)
     data = _band_data([np.fft.rfft(x)[None]], [n], fs, band)[0]
     order = int(background_order)
-    if data is None or data[0].size * 2 <= 2 * (5 + 2 * (order + 1)):
+    n_params = 3 + 2 + 4 * near.size + 2 * (order + 1)
+    if data is None or data[0].size * 2 <= 2 * n_params:
         raise ShapeError(f"decay: band {band[0]:.4g}-{band[1]:.4g} Hz holds too few lines of a {n}-sample record")
     k, _, Y, _ = data
     centre, half = 0.5 * (band[0] + band[1]), max(0.5 * (band[1] - band[0]), np.finfo(float).tiny)
     powers = ((k * fs / n - centre) / half)[:, None] ** np.arange(order + 1)
     background = np.concatenate([powers, 1j * powers], axis=1)
     rows = np.concatenate([Y[0].real, Y[0].imag])
-    p0 = np.array([lam.imag / (2 * np.pi), 0.0, -lam.real])
+    p0 = np.concatenate([[lam.imag / (2 * np.pi), 0.0, -lam.real], np.stack([-near.real, near.imag], 1).ravel()])
     h = max(-lam.real / (2 * np.pi), fs / n)            # the peak's half-power half-width or one line (Hz)
-    scale = np.array([h, h, 2 * np.pi * h])
+    scale = np.concatenate([[h, h], np.full(1 + 2 * near.size, 2 * np.pi * h)])
+    lower = np.concatenate([[band[0], -np.inf, 1e-9 * fs], np.tile([1e-9 * fs, 2 * np.pi * band[0]], near.size)])
+    upper = np.concatenate([[band[1], np.inf, np.inf], np.tile([np.inf, 2 * np.pi * band[1]], near.size)])
 
     def residual(p):
         return _projected(p, k, n, fs, Y, background, rows)[0]
 
     try:
         fit = least_squares(residual, p0, jac="3-point", x_scale=scale, method="trf",
-                            bounds=([band[0], -np.inf, 1e-9 * fs], [band[1], np.inf, np.inf]),
+                            bounds=(lower, upper),
                             xtol=1e-12, ftol=1e-12, gtol=1e-12)
     except (ValueError, np.linalg.LinAlgError) as exc:
         raise ConvergenceError(f"backbone fit: {exc}") from None
     if not fit.success:
         raise ConvergenceError(f"backbone fit: {fit.message}")
     r, coef = _projected(fit.x, k, n, fs, Y, background, rows)
-    n_params = 3 + 2 + 2 * (order + 1)
     s2 = float(r @ r) / max(r.size - n_params, 1)
     J = fit.jac
     try:
@@ -167,8 +185,8 @@ def fit_backbone(decay, sampling_frequency_hz, eigenvalue, band_hz=None,
     except np.linalg.LinAlgError:
         raise ConvergenceError("backbone fit: singular Jacobian") from None
     std = np.sqrt(np.maximum(np.diag(cov), 0.0))
-    f0, c, sigma = (float(v) for v in fit.x)
+    f0, c, sigma = (float(v) for v in fit.x[:3])
     return Backbone(f0, float(np.hypot(f0, sigma / (2 * np.pi))), c, sigma, float(std[0]), float(std[1]), float(std[2]),
                     float(cov[0, 1] / (std[0] * std[1])) if std[0] * std[1] > 0 else np.nan,
                     complex(coef[0], coef[1]), bool(abs(c) > SIGNIFICANT_SIGMAS * std[1]),
-                    band.copy(), int(k.size))
+                    band.copy(), int(k.size), -fit.x[3::2] + 1j * fit.x[4::2])
