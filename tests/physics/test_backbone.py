@@ -68,3 +68,16 @@ def test_bad_input_is_refused_in_one_line():
         fit_backbone(np.zeros((2, 100)), FS, -SIGMA + 2j * np.pi * F0)
     with pytest.raises(ConfigError, match="eigenvalue"):
         fit_backbone(_decay(1.0, 0.0), FS, SIGMA + 2j * np.pi * F0)
+
+
+def test_a_neighbour_in_the_band_fitted_beside_the_mode_leaves_its_zero_amplitude_frequency():
+    t = np.arange(N) / FS
+    f_nb, sigma_nb = F0 + 1.5, 1.2 * SIGMA                  # 20 dB down, inside the mode's band
+    x = _decay(2.0, K_HZ) + 0.2 * np.exp(-sigma_nb * t) * np.cos(2 * np.pi * f_nb * t + 1.0)
+    lam, _, _ = _linear(_decay(2.0, K_HZ))
+    alone = fit_backbone(x, FS, lam)
+    assert abs(alone.frequency_hz - F0) > 100 * 2e-4 * K_HZ              # the neighbour pulls the fit of one mode
+    b = fit_backbone(x, FS, lam, neighbours=[-SIGMA + 2j * np.pi * (f_nb + 0.3)])
+    assert abs(b.frequency_hz - F0) < 2e-4 * K_HZ * 2.0
+    np.testing.assert_allclose(b.shift_hz, 2 * K_HZ, rtol=2e-3)
+    np.testing.assert_allclose(b.neighbours[0], -sigma_nb + 2j * np.pi * f_nb, rtol=1e-7)
