@@ -62,6 +62,7 @@ def hits(path, cache=None) -> list[dict]:
         out.append({"era_re": lam.real.tolist(), "era_im": lam.imag.tolist(), "onset": int(era.decays.onsets[0]),
                     "fftpeak": np.asarray(fft, float).tolist()})
     if cache:
+        Path(cache).parent.mkdir(parents=True, exist_ok=True)
         atomic_write_text(cache, json.dumps(out))
     return out
 
