@@ -109,6 +109,10 @@ def run(args) -> dict:
         records = _output_only_records(args.file, args.method)
         if records is not None:
             return _run_output_only(args, records, band)
+    if args.method is not None and holds_response_records(args.file) and not read(args.file, TIME).forces:
+        names = ", ".join(n for n, spec in METHODS.items() if spec.data == "records")
+        raise ConfigError(f"--method {args.method}: fits FRFs, but {args.file} holds response records without a force "
+                          f"channel; identify them output-only: --method {names}, or no --method")
     if getattr(args, "setup", None):
         raise ConfigError(f"--setup: merges setups of response records (output-only); {args.file} holds FRFs")
     with warnings.catch_warnings(record=True) as caught:

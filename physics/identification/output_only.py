@@ -151,7 +151,7 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         return spec.fit(signals, fs, band_hz, n_modes, where, **{k: options[k] for k in spec.options})
 
     checked = check_records(records.signals, fs, band_hz, where)     # read once: the methods take it as checked
-    weights = noise_floor_weights(checked) if weigh_channels and checked.signals.shape[0] > 1 else None
+    weights = noise_floor_weights(checked, where) if weigh_channels and checked.signals.shape[0] > 1 else None
     if weights is not None:
         checked = weighted_record(checked, weights)
 
