@@ -5,6 +5,8 @@ import numpy as np
 import pytest
 
 from experiments.cli import main
+from physics.errors import FileFormatError
+from physics.io.npz import read_frf_npz
 
 FS_HZ = 1000.0
 
@@ -55,3 +57,22 @@ def test_a_multichannel_record_too_short_for_the_channel_floors_names_the_file(c
     assert (code, out) == (2, "")
     assert err == (f"beam-damage identify: error: {path}: 20 samples are fewer than two frames of 16 (a 62.5 Hz "
                    "resolution): too short a record for this resolution\n")
+
+
+def test_an_npz_of_neither_form_names_both_forms(capsys, tmp_path):
+    path = tmp_path / "x.npz"
+    np.savez(path, records=np.zeros((2, 3, 100)), fs=np.array(FS_HZ))
+    code, out, err = _run(capsys, ["identify", str(path)])
+    assert (code, out) == (2, "")
+    assert err == (f"beam-damage identify: error: {path}: missing array(s) frequency_hz, frf, response_dofs, "
+                   "reference_dofs; expected frequency_hz, frf, response_dofs, reference_dofs, kind, units, "
+                   "metadata_json; or, for response time series, signals and sampling_frequency_hz\n")
+
+
+def test_the_frf_reader_refuses_response_time_series_naming_the_way_to_modal_data(tmp_path):
+    path = _npz(tmp_path / "r.npz", np.random.default_rng(3).standard_normal((2, 400)))
+    with pytest.raises(FileFormatError) as exc:
+        read_frf_npz(path)
+    assert str(exc.value) == (f"{path}: holds response time series (array 'signals'), not FRFs (arrays "
+                              "frequency_hz, frf, response_dofs, reference_dofs); identify its modes first "
+                              "(beam-damage identify FILE --out DIR) and give DIR/modal.json")
