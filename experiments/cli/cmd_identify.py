@@ -12,7 +12,9 @@ from physics.errors import BeamDamageError, ConfigError
 from physics.identification import (DEFAULT_OUTPUT_ONLY, METHODS, Identification, RecordsIdentification,
                                     holds_response_records, identify_file, identify_records,
                                     read_response_records, reconstruction_error_db)
-from physics.identification.output_only import FREE_RESPONSE_METHOD, SCALING, STATIONARY_METHOD
+from physics.identification.decays import free_response
+from physics.identification.output_only import FREE_RESPONSE_METHOD, SCALING, STATIONARY_METHOD, STATIONARY_METHODS
+from physics.identification.record_checks import check_records
 from physics.identification.setups import MergedSetups, finite_mac, merge_setups
 from physics.io import (FRF, TIME, MeasuredFRF, NodeGeometry, accepted, format_complex, measured_positions, read,
                         atomic_write_text, modal_data_to_dict)
@@ -162,10 +164,22 @@ def _output_only_records(path, method):
     return read_response_records(path)
 
 
+def _warn_if_free(records, method, band) -> None:
+    """Warn when ``method``, one of :data:`STATIONARY_METHODS` named by the user, is given a free response."""
+    where = str(records.metadata.get("source", "records"))
+    verdict = free_response(check_records(records.signals, records.sampling_frequency_hz, band, where))
+    if verdict.free:
+        warnings.warn(f"{where}: {verdict.text}; {method} assumes a stationary response: its spectra or "
+                      "correlations averaged over the whole record dilute the decays, so modes may be missed and "
+                      "damping overestimated; --method era or fftpeak read free decays", UserWarning, stacklevel=2)
+
+
 def _run_output_only(args, records, band) -> dict:
     method = args.method or DEFAULT_OUTPUT_ONLY
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
+        if method in STATIONARY_METHODS:
+            _warn_if_free(records, method, band)
         ident = identify_records(records, method, band, args.modes, args.max_order)
         method = ident.estimate.method                # the method picked: every setup by the same
         others = [identify_records(read_response_records(f), method, band, args.modes, args.max_order)

@@ -21,8 +21,8 @@ from physics.io.uff58 import UffFile
 from physics.identification.setups import MergedSetups, merge_setups   # the multi-setup merge
 import zipfile
 
-__all__ = ["DEFAULT_OUTPUT_ONLY", "FREE_RESPONSE_METHOD", "SCALING", "STATIONARY_METHOD", "MergedSetups",
-           "RecordsIdentification", "holds_response_records",
+__all__ = ["DEFAULT_OUTPUT_ONLY", "FREE_RESPONSE_METHOD", "SCALING", "STATIONARY_METHOD", "STATIONARY_METHODS",
+           "MergedSetups", "RecordsIdentification", "holds_response_records",
            "identify_records", "merge_setups", "read_response_records"]
 
 #: The method ``identify`` takes for a file of response records without a force channel: ``"auto"`` picks
@@ -30,6 +30,8 @@ __all__ = ["DEFAULT_OUTPUT_ONLY", "FREE_RESPONSE_METHOD", "SCALING", "STATIONARY
 #: :func:`~physics.identification.decays.free_response`), :data:`STATIONARY_METHOD` otherwise.
 DEFAULT_OUTPUT_ONLY = "auto"
 FREE_RESPONSE_METHOD, STATIONARY_METHOD = "era", "ssi"
+#: The output-only methods that assume a stationary response (warned of when named for a free response).
+STATIONARY_METHODS = ("ssi", "fdd", "efdd")
 #: What modal.json says of output-only shapes.
 SCALING = "unscaled (output-only: no force measured, so no modal mass)"
 

@@ -76,3 +76,33 @@ def test_the_frf_reader_refuses_response_time_series_naming_the_way_to_modal_dat
     assert str(exc.value) == (f"{path}: holds response time series (array 'signals'), not FRFs (arrays "
                               "frequency_hz, frf, response_dofs, reference_dofs); identify its modes first "
                               "(beam-damage identify FILE --out DIR) and give DIR/modal.json")
+
+
+def _hits(seed=4):
+    """Two channels: three hits 2.5 s apart exciting 25 and 60 Hz decays (damping ratio 0.01), little noise."""
+    t = np.arange(int(8 * FS_HZ)) / FS_HZ
+    y = np.zeros((2, t.size))
+    for t0 in (0.5, 3.0, 5.5):
+        tau = np.clip(t - t0, 0, None)
+        on = t >= t0
+        for f, phi in ((25.0, (1.0, 0.6)), (60.0, (0.5, -0.8))):
+            w = 2 * np.pi * f
+            y += np.outer(phi, on * np.exp(-0.01 * w * tau) * np.sin(w * np.sqrt(1 - 1e-4) * tau))
+    return y + 1e-3 * np.random.default_rng(seed).standard_normal(y.shape)
+
+
+@pytest.mark.parametrize("method", ["fdd", "efdd", "ssi"])
+def test_a_stationary_method_named_for_a_free_response_is_warned_of(capsys, tmp_path, method):
+    path = _npz(tmp_path / "hits.npz", _hits())
+    code, out, err = _run(capsys, ["identify", str(path), "--method", method, "--band", "10", "100"])
+    assert code == 0
+    warned = [line for line in err.splitlines() if "assumes a stationary response" in line]
+    assert len(warned) == 1 and warned[0].startswith(f"beam-damage identify: warning: {path}: a free response: 3 hits")
+    assert warned[0].endswith(f"; {method} assumes a stationary response: its spectra or correlations averaged over "
+                              "the whole record dilute the decays, so modes may be missed and damping overestimated; "
+                              "--method era or fftpeak read free decays")
+    code, out, err = _run(capsys, ["identify", str(path), "--method", "era", "--band", "10", "100"])
+    assert code == 0 and "assumes a stationary response" not in err
+    stationary = _npz(tmp_path / "ambient.npz", np.random.default_rng(5).standard_normal((2, 8000)))
+    code, out, err = _run(capsys, ["identify", str(stationary), "--method", method])
+    assert "assumes a stationary response" not in err
