@@ -89,7 +89,7 @@ def holds_response_records(path) -> bool:
         except (zipfile.BadZipFile, OSError, EOFError, ValueError):
             return False                              # the FRF reader names what is wrong
     if fmt.name == "csv":
-        with open(path, encoding="utf-8", errors="replace") as fh:
+        with open(path, encoding="utf-8-sig", errors="replace") as fh:
             lines = (fh.readline(SNIFF_LINE_CHARS) for _ in range(SNIFF_LINES))   # bounded: no newline in 2 GB
             first = next((s.strip() for s in lines if s.strip() and not s.lstrip().startswith("#")), "")
         return first.lower().startswith("time_s")

@@ -1,6 +1,8 @@
 """``beam-damage identify`` on response-record files of the wrong form or with a method that does not fit them: one
 line naming the file and what to do, exit code 2."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -106,3 +108,40 @@ def test_a_stationary_method_named_for_a_free_response_is_warned_of(capsys, tmp_
     stationary = _npz(tmp_path / "ambient.npz", np.random.default_rng(5).standard_normal((2, 8000)))
     code, out, err = _run(capsys, ["identify", str(stationary), "--method", method])
     assert "assumes a stationary response" not in err
+
+
+def _csv_rows(n=3000):
+    y = _hits()[:, :n]
+    return ["time_s,1:+Z,2:+Z"] + [f"{k / FS_HZ:.9g},{y[0, k]:.9g},{y[1, k]:.9g}" for k in range(n)]
+
+
+def test_a_csv_time_series_with_a_byte_order_mark_reads_as_without(capsys, tmp_path):
+    rows = _csv_rows()
+    plain, bom = tmp_path / "plain.csv", tmp_path / "bom.csv"
+    plain.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    bom.write_text("\n".join(rows) + "\n", encoding="utf-8-sig")
+    results = [_run(capsys, ["identify", str(p), "--method", "fftpeak", "--band", "10", "100", "--json"])
+               for p in (plain, bom)]
+    assert [r[0] for r in results] == [0, 0]
+    freqs = [[m["frequency_hz"] for m in json.loads(r[1])["modes"]] for r in results]
+    assert freqs[0] == freqs[1]
+    np.testing.assert_allclose(freqs[0], [25.0, 60.0], rtol=5e-3)
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda r: r[:200] + [r[200].rsplit(",", 1)[0]] + r[201:], "line 201: 2 fields, expected 3 like the header "
+                                                               "(truncated file?)"),
+    (lambda r: r[:100] + [r[100].split(",")[0] + ",nan," + r[100].split(",")[2]] + r[101:], "line 101: NaN or inf "
+                                                                                             "value"),
+    (lambda r: r[:100] + [r[100].split(",")[0] + ",," + r[100].split(",")[2]] + r[101:], "line 101: non-numeric "
+                                                                                          "field; expected 3 numbers"),
+    (lambda r: [x.replace(",", ";") for x in r], "line 1: header 'time_s;1:+Z;2:+Z' has no comma; columns must be "
+                                                 "separated by commas, not ';'"),
+    (lambda r: ["time_ms" + r[0][6:]] + r[1:], "line 1: a time series' first column must be 'time_s' (seconds), got "
+                                               "'time_ms'"),
+])
+def test_a_bad_csv_time_series_names_its_line(capsys, tmp_path, edit, message):
+    path = tmp_path / "bad.csv"
+    path.write_text("\n".join(edit(_csv_rows(600))) + "\n")
+    code, out, err = _run(capsys, ["identify", str(path)])
+    assert (code, out, err) == (2, "", f"beam-damage identify: error: {path}: {message}\n")
