@@ -6,6 +6,8 @@ import json
 import numpy as np
 import pytest
 
+from systems import write_time_uff
+
 from experiments.cli import main
 from physics.errors import FileFormatError
 from physics.io.npz import read_frf_npz
@@ -145,3 +147,17 @@ def test_a_bad_csv_time_series_names_its_line(capsys, tmp_path, edit, message):
     path.write_text("\n".join(edit(_csv_rows(600))) + "\n")
     code, out, err = _run(capsys, ["identify", str(path)])
     assert (code, out, err) == (2, "", f"beam-damage identify: error: {path}: {message}\n")
+
+
+def test_frfs_estimated_from_time_records_that_give_no_pole_name_the_file_and_the_impact_estimate(capsys, tmp_path):
+    pytest.importorskip("pyuff")
+    rng = np.random.default_rng(6)
+    t = np.arange(4000) / FS_HZ
+    path = write_time_uff(tmp_path / "run.uff", t, [(1, rng.standard_normal(t.size), 13, "N"),
+                                                    (2, rng.standard_normal(t.size), 12, "m/s^2")])
+    code, out, err = _run(capsys, ["identify", str(path)])
+    assert (code, out) == (2, "")
+    assert err.startswith(f"beam-damage identify: error: {path}: no pole is stable over enough model orders")
+    assert err.endswith("; FRFs estimated as H1 of random excitation, hann window, 8 averages, 50% overlap, 1.126 Hz "
+                        "lines: for a hammer test, 'beam-damage estimate --excitation impact' first\n")
+    assert err.count("\n") == 1
