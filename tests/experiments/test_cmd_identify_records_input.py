@@ -161,3 +161,20 @@ def test_frfs_estimated_from_time_records_that_give_no_pole_name_the_file_and_th
     assert err.endswith("; FRFs estimated as H1 of random excitation, hann window, 8 averages, 50% overlap, 1.126 Hz "
                         "lines: for a hammer test, 'beam-damage estimate --excitation impact' first\n")
     assert err.count("\n") == 1
+
+
+def test_estimate_writes_the_format_its_out_extension_names(capsys, tmp_path):
+    pytest.importorskip("pyuff")
+    rng = np.random.default_rng(7)
+    t = np.arange(4000) / FS_HZ
+    force = rng.standard_normal(t.size)
+    path = write_time_uff(tmp_path / "run.uff", t, [(1, force, 13, "N"), (2, 2.0 * force, 12, "m/s^2")])
+    code, out, err = _run(capsys, ["estimate", str(path), "--out", str(tmp_path / "frf.npz")])
+    assert code == 0, err
+    frf = read_frf_npz(tmp_path / "frf.npz")
+    np.testing.assert_allclose(frf.frf, 2.0, rtol=1e-9)          # H1 of a response twice the force
+    code, out, err = _run(capsys, ["estimate", str(path), "--out", str(tmp_path / "frf.mat")])
+    assert (code, out) == (2, "")
+    assert err == (f"beam-damage estimate: error: --out {tmp_path / 'frf.mat'}: the extension names the format to "
+                   "write, one of UFF (.uff/.unv/.uf/.58/.58b), NPZ (.npz) or CSV (.csv/.txt)\n")
+    assert not (tmp_path / "frf.mat").exists()
