@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from physics.errors import ConfigError
-from physics.io import TIME, accepted, read, write_uff58
+from physics.io import FRF, TIME, accepted, read, writable
 from physics.time_records import ESTIMATORS, EXCITATIONS, estimate_from_records
 
 __all__ = ["add_parser", "run"]
@@ -20,6 +22,13 @@ def run(args) -> dict:
         raise ConfigError(f"--decay {args.decay:g}: must be in (0, 1]")
     if args.fmax is not None and not args.fmax > 0:
         raise ConfigError(f"--fmax {args.fmax:g}: must be > 0")
+    writer = None
+    if args.out:
+        ext = Path(args.out).suffix.lower()
+        writer = next((f.writer for f in writable(FRF).values() if ext in f.extensions), None)
+        if writer is None:
+            raise ConfigError(f"--out {args.out}: the extension names the format to write, one of "
+                              f"{accepted(FRF)}")
     records = read(args.file, TIME)
     est = estimate_from_records(records, args.reference, args.estimator, args.excitation, args.averages,
                                 args.overlap, args.window, args.decay, args.fmax)
@@ -35,7 +44,7 @@ def run(args) -> dict:
         out["double_hits"] = list(est.hits.double_hits)
         out["overloads"] = [{"block": b, "dof": d} for b, d in est.hits.overloads]
     if args.out:
-        write_uff58(args.out, est.frf)
+        writer(args.out, est.frf)
         out["outputs"] = {"frf": str(args.out)}
     if not args.json:
         print(f"{args.file}: {est.description}")
@@ -67,6 +76,7 @@ def add_parser(sub):
     p.add_argument("--decay", type=float, default=0.01,
                    help="impact: exponential window value at the block end (default 0.01; 1 = none)")
     p.add_argument("--fmax", type=float, help="highest line to keep (Hz)")
-    p.add_argument("--out", metavar="FRF.uff", help="write the FRFs as UFF dataset 58 (function type 4)")
+    p.add_argument("--out", metavar="FILE", help="write the FRFs in the format its extension names: "
+                                                 f"{accepted(FRF)} (UFF: dataset 58, function type 4)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)

@@ -12,8 +12,11 @@ from physics.errors import BeamDamageError, ConfigError
 from physics.identification import (DEFAULT_OUTPUT_ONLY, METHODS, Identification, RecordsIdentification,
                                     holds_response_records, identify_file, identify_records,
                                     read_response_records, reconstruction_error_db)
-from physics.identification.output_only import FREE_RESPONSE_METHOD, SCALING, STATIONARY_METHOD
+from physics.identification.decays import free_response
+from physics.identification.output_only import FREE_RESPONSE_METHOD, SCALING, STATIONARY_METHOD, STATIONARY_METHODS
+from physics.identification.record_checks import check_records
 from physics.identification.setups import MergedSetups, finite_mac, merge_setups
+from physics.identification.split_modes import split_pairs, split_text
 from physics.io import (FRF, TIME, MeasuredFRF, NodeGeometry, accepted, format_complex, measured_positions, read,
                         atomic_write_text, modal_data_to_dict)
 from physics.modal import mac
@@ -109,11 +112,16 @@ def run(args) -> dict:
         records = _output_only_records(args.file, args.method)
         if records is not None:
             return _run_output_only(args, records, band)
+    if args.method is not None and holds_response_records(args.file) and not read(args.file, TIME).forces:
+        names = ", ".join(n for n, spec in METHODS.items() if spec.data == "records")
+        raise ConfigError(f"--method {args.method}: fits FRFs, but {args.file} holds response records without a force "
+                          f"channel; identify them output-only: --method {names}, or no --method")
     if getattr(args, "setup", None):
         raise ConfigError(f"--setup: merges setups of response records (output-only); {args.file} holds FRFs")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         ident = identify_file(args.file, args.method or "lscf", band, args.modes, args.max_order or LSCF_MAX_ORDER)
+        _warn_split(args.file, ident.estimate)
     out = result_dict(ident)
     out["warnings"] = [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
     if args.out:
@@ -158,11 +166,31 @@ def _output_only_records(path, method):
     return read_response_records(path)
 
 
+def _warn_split(path, estimate) -> None:
+    """Warn of adjacent modes the fit most likely split in two (:func:`split_pairs`)."""
+    pairs = split_pairs(estimate.natural_frequencies_hz, estimate.damping_ratios, estimate.shapes)
+    if pairs.size:
+        warnings.warn(split_text(path, estimate.natural_frequencies_hz, pairs), UserWarning, stacklevel=2)
+
+
+def _warn_if_free(records, method, band) -> None:
+    """Warn when ``method``, one of :data:`STATIONARY_METHODS` named by the user, is given a free response."""
+    where = str(records.metadata.get("source", "records"))
+    verdict = free_response(check_records(records.signals, records.sampling_frequency_hz, band, where))
+    if verdict.free:
+        warnings.warn(f"{where}: {verdict.text}; {method} assumes a stationary response: its spectra or "
+                      "correlations averaged over the whole record dilute the decays, so modes may be missed and "
+                      "damping overestimated; --method era or fftpeak read free decays", UserWarning, stacklevel=2)
+
+
 def _run_output_only(args, records, band) -> dict:
     method = args.method or DEFAULT_OUTPUT_ONLY
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
+        if method in STATIONARY_METHODS:
+            _warn_if_free(records, method, band)
         ident = identify_records(records, method, band, args.modes, args.max_order)
+        _warn_split(args.file, ident.estimate)
         method = ident.estimate.method                # the method picked: every setup by the same
         others = [identify_records(read_response_records(f), method, band, args.modes, args.max_order)
                   for f in getattr(args, "setup", None) or ()]

@@ -35,7 +35,8 @@ def add_parser(sub):
         "monitor",
         description="Each TEST (FRF file: " + accepted(FRF) + "; response records without a force: "
                     + accepted(TIME) + "; modal data: " + accepted(MODAL) + ") is identified once (LSCF/LSFD for "
-                    "FRFs, SSI-cov for response records; cached in DIR/cache), its modes tracked across the tests by "
+                    "FRFs; for response records as identify picks: ERA for a free response, else SSI-cov; cached in "
+                    "DIR/cache), its modes tracked across the tests by "
                     "frequency and MAC. The first N tests (--baseline-tests) are the baseline period: the normal "
                     "variation of the log natural frequencies is learnt there (a regression on the measured "
                     "conditions of --conditions, else a latent-variable model), and each test's novelty index (a "

@@ -186,7 +186,9 @@ def _jumps(cov, zs: list, z) -> bool:
     event's alarms so far): a new state."""
     if cov is None or not zs:
         return False
-    mean = np.nanmean(np.array(zs), axis=0)
+    Z = np.array(zs, float)
+    n = np.isfinite(Z).sum(axis=0)
+    mean = np.where(n > 0, np.nansum(Z, axis=0) / np.maximum(n, 1), np.nan)     # a mode missing in every alarm: NaN
     keep = np.isfinite(mean) & np.isfinite(z)
     if not keep.any():
         return False
@@ -288,9 +290,11 @@ def _event(rows, members: list, ctx: dict) -> Event:
                 + ", ".join(f"mode {k} {c[k - 1]:+.3g} %" for k in z_moved) + f"), size {size:.3g} % (rms over "
                 f"the modes; against {against})")
     elif alarms:
-        lead = int(np.nanargmax(np.abs(np.where(np.isfinite(z), z, 0.0))))
+        lead = int(np.argmax(np.abs(np.where(np.isfinite(z), z, 0.0)))) if np.isfinite(z).any() \
+            else int(np.argmax(np.abs(np.where(np.isfinite(c), c, 0.0))))
+        sd = f"{z[lead]:+.1f} sd" if np.isfinite(z[lead]) else "no baseline scatter to scale it by"
         what = (f"; no mode moved {Z_MOVED:g} standard deviations on average (the most: mode {lead + 1} "
-                f"{c[lead]:+.3g} %, {z[lead]:+.1f} sd), size {size:.3g} % (rms over the modes; against {against})")
+                f"{c[lead]:+.3g} %, {sd}), size {size:.3g} % (rms over the modes; against {against})")
     if beyond:
         what += "; beyond their bands: " + ", ".join(
             ", ".join(([f"mode {d['mode']} moved in {d['moved']} (median {d['change_pct']:+.3g} %)"]

@@ -139,10 +139,10 @@ def event_verdicts(result: SeriesResult, events: list, model, beam_x_m=None) -> 
         if not alarms:
             continue
         Z = np.array([floats_or_nan(result.rows[i]["mode_z_scores"]) for i in alarms])
-        mean = np.nanmean(Z, axis=0)
-        rep = alarms[int(np.argmin(np.nansum((Z - mean) ** 2, axis=1) - 1e3 * np.isfinite(Z).sum(axis=1)))]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)        # a mode missing in every alarm stays NaN
+            mean = np.nanmean(Z, axis=0)
+            rep = alarms[int(np.argmin(np.nansum((Z - mean) ** 2, axis=1) - 1e3 * np.isfinite(Z).sum(axis=1)))]
             if ev.before:      # against the tests before: the raw step (its uniform part the explanations' nuisance)
                 lnf = np.log(result.frequencies_hz)
                 f = result.reference.frequencies_hz * np.exp(np.nanmean(lnf[alarms], axis=0)

@@ -61,7 +61,7 @@ class ChannelWeights:
         return 0.0 if f.size < 2 or not np.all(np.isfinite(f)) else float(10 * np.log10(f.max() / f.min()))
 
 
-def noise_floor_weights(checked: CheckedRecord) -> ChannelWeights:
+def noise_floor_weights(checked: CheckedRecord, where="record") -> ChannelWeights:
     """Each channel's weight ``1 / sqrt(floor)`` (see the module docstring), geometric mean 1; all ones when the
     floors lie within :data:`SPREAD_DB` of each other.
 
@@ -73,6 +73,8 @@ def noise_floor_weights(checked: CheckedRecord) -> ChannelWeights:
     Parameters
     ----------
     checked : CheckedRecord
+    where : str
+        Name of the record in error messages.
 
     Returns
     -------
@@ -84,7 +86,7 @@ def noise_floor_weights(checked: CheckedRecord) -> ChannelWeights:
     fs, (lo, hi) = checked.sampling_frequency_hz, checked.band_hz
     L = int(2 ** np.ceil(np.log2(fs * FLOOR_LINES / max(hi - lo, fs / n))))
     L = max(16, min(L, int(2 ** np.floor(np.log2(max(n / 8, 16))))))
-    f, G = cross_spectra(checked.signals, fs, L, mean=checked.mean)
+    f, G = cross_spectra(checked.signals, fs, L, mean=checked.mean, where=where)
     P = np.real(np.diagonal(G, axis1=1, axis2=2))                      # (n_lines, n_channels)
     inband = (f >= lo) & (f <= hi) & (f > 0)
     if not inband.any():                                                # a band narrower than a line

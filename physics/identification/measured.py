@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from physics.errors import ConfigError
+from physics.errors import ConfigError, ConvergenceError
 from physics.identification.lscf import CLEAR_PEAK_PROMINENCE, octave_median_peaks
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate
@@ -152,7 +152,15 @@ def identify_file(path, method="lscf", band_hz=None, n_modes=None, max_order=40)
     first (:func:`physics.time_records.estimate_from_records`, H1, random
     excitation defaults), with a warning that says so.
     """
-    return identify_frf(read_measured_frf(path), method, band_hz, n_modes, max_order)
+    frf = read_measured_frf(path)
+    try:
+        return identify_frf(frf, method, band_hz, n_modes, max_order)
+    except ConvergenceError as exc:
+        if str(exc).startswith(str(path)):
+            raise
+        hint = (f"; FRFs estimated as {frf.metadata['estimated']}: for a hammer test, 'beam-damage estimate "
+                "--excitation impact' first" if "random excitation" in frf.metadata.get("estimated", "") else "")
+        raise ConvergenceError(f"{path}: {exc}{hint}", parameter=exc.parameter) from None
 
 
 def read_measured_frf(path) -> MeasuredFRF:

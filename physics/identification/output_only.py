@@ -21,8 +21,8 @@ from physics.io.uff58 import UffFile
 from physics.identification.setups import MergedSetups, merge_setups   # the multi-setup merge
 import zipfile
 
-__all__ = ["DEFAULT_OUTPUT_ONLY", "FREE_RESPONSE_METHOD", "SCALING", "STATIONARY_METHOD", "MergedSetups",
-           "RecordsIdentification", "holds_response_records",
+__all__ = ["DEFAULT_OUTPUT_ONLY", "FREE_RESPONSE_METHOD", "SCALING", "STATIONARY_METHOD", "STATIONARY_METHODS",
+           "MergedSetups", "RecordsIdentification", "holds_response_records",
            "identify_records", "merge_setups", "read_response_records"]
 
 #: The method ``identify`` takes for a file of response records without a force channel: ``"auto"`` picks
@@ -30,6 +30,8 @@ __all__ = ["DEFAULT_OUTPUT_ONLY", "FREE_RESPONSE_METHOD", "SCALING", "STATIONARY
 #: :func:`~physics.identification.decays.free_response`), :data:`STATIONARY_METHOD` otherwise.
 DEFAULT_OUTPUT_ONLY = "auto"
 FREE_RESPONSE_METHOD, STATIONARY_METHOD = "era", "ssi"
+#: The output-only methods that assume a stationary response (warned of when named for a free response).
+STATIONARY_METHODS = ("ssi", "fdd", "efdd")
 #: What modal.json says of output-only shapes.
 SCALING = "unscaled (output-only: no force measured, so no modal mass)"
 
@@ -87,7 +89,7 @@ def holds_response_records(path) -> bool:
         except (zipfile.BadZipFile, OSError, EOFError, ValueError):
             return False                              # the FRF reader names what is wrong
     if fmt.name == "csv":
-        with open(path, encoding="utf-8", errors="replace") as fh:
+        with open(path, encoding="utf-8-sig", errors="replace") as fh:
             lines = (fh.readline(SNIFF_LINE_CHARS) for _ in range(SNIFF_LINES))   # bounded: no newline in 2 GB
             first = next((s.strip() for s in lines if s.strip() and not s.lstrip().startswith("#")), "")
         return first.lower().startswith("time_s")
@@ -151,7 +153,7 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         return spec.fit(signals, fs, band_hz, n_modes, where, **{k: options[k] for k in spec.options})
 
     checked = check_records(records.signals, fs, band_hz, where)     # read once: the methods take it as checked
-    weights = noise_floor_weights(checked) if weigh_channels and checked.signals.shape[0] > 1 else None
+    weights = noise_floor_weights(checked, where) if weigh_channels and checked.signals.shape[0] > 1 else None
     if weights is not None:
         checked = weighted_record(checked, weights)
 

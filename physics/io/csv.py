@@ -77,7 +77,7 @@ def _csv_lines(path: Path) -> tuple:
     as ``[(line number, text), ...]`` of a CSV file; blank lines skipped."""
     check_input_file(path, "csv", what="a CSV file")
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise FileFormatError(f"{path}: file not found") from None
     except UnicodeDecodeError:
@@ -105,6 +105,9 @@ def _csv_lines(path: Path) -> tuple:
 
 def _header_pairs(path: Path, header: list, header_line: int) -> list:
     """``[(response DOF, reference DOF), ...]`` of the header's ``re(...)``/``im(...)`` column pairs."""
+    if header[0].lower().startswith("time"):
+        raise FileFormatError(f"{path}: line {header_line}: a time series' first column must be 'time_s' (seconds), "
+                              f"got {header[0]!r}")
     if header[0].lower() not in ("frequency_hz", "frequency", "freq_hz", "f_hz") or len(header) < 3 \
             or len(header) % 2 != 1:
         raise FileFormatError(f"{path}: line {header_line}: header must be {_HEADER_FORM} (a frequency column "

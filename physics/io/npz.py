@@ -94,8 +94,13 @@ def read_frf_npz(path, kind=None) -> MeasuredFRF:
     """
     arrays = read_npz_arrays(path, "an .npz of a MeasuredFRF")
     missing = [k for k in _NPZ_KEYS[:4] if k not in arrays]
+    if missing and "signals" in arrays:
+        raise FileFormatError(f"{path}: holds response time series (array 'signals'), not FRFs (arrays "
+                              f"{', '.join(_NPZ_KEYS[:4])}); identify its modes first (beam-damage identify FILE "
+                              "--out DIR) and give DIR/modal.json")
     if missing:
-        raise FileFormatError(f"{path}: missing array(s) {', '.join(missing)}; expected {', '.join(_NPZ_KEYS)}")
+        raise FileFormatError(f"{path}: missing array(s) {', '.join(missing)}; expected {', '.join(_NPZ_KEYS)}; "
+                              "or, for response time series, signals and sampling_frequency_hz")
     for key in ("response_dofs", "reference_dofs"):
         a = arrays[key]
         if a.ndim != 1 or a.dtype.kind != "U":

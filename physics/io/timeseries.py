@@ -10,11 +10,11 @@ quantity.
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import numpy as np
 
+from physics.io.csv import _csv_values
 from physics.io.inputs import check_input_file
 from physics.errors import FileFormatError
 from physics.io.npz import read_npz_arrays
@@ -29,7 +29,8 @@ _QUANTITIES = ("displacement", "velocity", "acceleration")
 def _records(path, signals, fs, dofs, quantity) -> TimeRecords:
     if signals.ndim != 2 or signals.shape[1] < 2 or not np.issubdtype(signals.dtype, np.number) \
             or np.iscomplexobj(signals):
-        raise FileFormatError(f"{path}: field 'signals' must be a real (n_channels, n_samples) array")
+        raise FileFormatError(f"{path}: field 'signals' must be a real (n_channels, n_samples) array, got "
+                              f"{signals.dtype} of shape {signals.shape}")
     if not (np.isfinite(fs) and fs > 0):
         raise FileFormatError(f"{path}: field 'sampling_frequency_hz' must be a finite number > 0, got {fs:g}")
     if quantity not in _QUANTITIES:
@@ -56,33 +57,39 @@ def read_time_npz(path) -> TimeRecords:
         raise FileFormatError(f"{path}: field 'sampling_frequency_hz' must be one real number (Hz)")
     dofs = [str(d) for d in z["dofs"].reshape(-1)] if "dofs" in z else None
     quantity = str(z["quantity"]) if "quantity" in z else "acceleration"
-    return _records(path, z["signals"], float(rate[0]), dofs, quantity)
+    signals = z["signals"]
+    if signals.ndim == 2 and signals.shape[0] > signals.shape[1]:
+        raise FileFormatError(f"{path}: field 'signals' of shape {signals.shape} holds more channels than samples; "
+                              "expected (n_channels, n_samples), one row per channel (transposed?)")
+    return _records(path, signals, float(rate[0]), dofs, quantity)
 
 
 def read_time_csv(path) -> TimeRecords:
-    """Read response time series from CSV text (see module docstring)."""
-    text = check_input_file(path, "csv", what="a CSV time series").read_text(encoding="utf-8", errors="replace")
-    lines = text.splitlines()
+    """Read response time series from CSV text (see module docstring); a UTF-8 byte-order mark (spreadsheets write
+    one) is skipped, and a bad row is named by its line number."""
+    text = check_input_file(path, "csv", what="a CSV time series").read_text(encoding="utf-8-sig", errors="replace")
     quantity = "acceleration"
     body = []
-    for line in lines:
+    for lineno, line in enumerate(text.splitlines(), 1):
         s = line.strip()
         if s.startswith("#"):
             if s[1:].strip().lower().startswith("quantity:"):
                 quantity = s.split(":", 1)[1].strip().lower()
             continue
         if s:
-            body.append(s)
-    if not body or not body[0].lower().startswith("time_s"):
+            body.append((lineno, s))
+    if not body or not body[0][1].lower().startswith("time_s"):
         raise FileFormatError(f"{path}: expected a header 'time_s,<dof>,...' (a time column in s, then one "
                               "column per channel)")
-    dofs = [c.strip() for c in body[0].split(",")[1:]]
-    try:
-        data = np.loadtxt(io.StringIO("\n".join(body[1:])), delimiter=",", ndmin=2)
-    except ValueError as exc:
-        raise FileFormatError(f"{path}: rows must hold {len(dofs) + 1} numbers ({exc})") from None
-    if data.shape[1] != len(dofs) + 1 or data.shape[0] < 2:
-        raise FileFormatError(f"{path}: rows must hold {len(dofs) + 1} numbers (time_s and one per channel)")
+    if "," not in body[0][1]:
+        sep = next((c for c in ";\t " if c in body[0][1]), None)
+        raise FileFormatError(f"{path}: line {body[0][0]}: header {body[0][1][:60]!r} has no comma; columns must be "
+                              "separated by commas" + (f", not {sep!r}" if sep else ""))
+    dofs = [c.strip() for c in body[0][1].split(",")[1:]]
+    if len(body) < 3:
+        raise FileFormatError(f"{path}: rows must hold {len(dofs) + 1} numbers (time_s and one per channel), at "
+                              "least two rows")
+    data = _csv_values(path, body[1:], len(dofs) + 1)
     dt = np.diff(data[:, 0])
     if not (np.all(dt > 0) and np.allclose(dt, dt[0], rtol=1e-6)):
         raise FileFormatError(f"{path}: column 'time_s' must increase by one uniform step (the sampling rate)")

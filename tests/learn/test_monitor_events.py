@@ -3,6 +3,7 @@ change), tests beyond the baseline's conditions (extrapolated), the later tests'
 events grouped from consecutive alarms, and identification over worker processes."""
 
 import json
+import warnings
 
 import numpy as np
 import pytest
@@ -206,3 +207,18 @@ def test_a_test_appended_is_judged_with_the_saved_baseline_state(tmp_path, monke
     assert again.threshold.value == first.threshold.value and again.rows[35]["alarm"]
     with pytest.raises(pytest.fail.Exception, match="refitted"):
         monitor_series(part(36), 20, IdentificationSettings(), tmp_path, progress=False)
+
+
+def test_alarms_missing_a_mode_group_without_a_numpy_warning_and_an_unscaled_change_says_so():
+    """A mode absent from every alarm of an event (its z NaN) splits nothing and warns nothing; an alarm whose
+    z-scores are all NaN names its largest change without a 'nan sd'."""
+    rows = _baseline(40, seed=2)
+    a = _row("alarm", [np.nan, -9.0, 0, 0], t=40)
+    b = _row("alarm", [np.nan, -9.5, 0, 0], t=41)
+    c = {**_row("alarm", [0.0] * 4, t=42), "mode_z_scores": [np.nan] * 4, "change_pct": [3.0, np.nan, -1.0, np.nan]}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        events = group_events(rows + [a, b], 0.01)
+        lone = group_events(rows + [c], 0.01)[0]
+    assert [list(e.members) for e in events] == [[40, 41]]
+    assert "(the most: mode 1 +3 %, no baseline scatter to scale it by)" in lone.text
