@@ -40,7 +40,7 @@ def run(args) -> dict:
     progress = None
     if not args.json:
         def progress(s):
-            print(f"  fitting {s} ...", flush=True)
+            print(f"  fitting {s} ...", file=sys.stderr, flush=True)
     # a noise not given is of the data or assumed (analyse_file), and assumed ones are scaled to the data
     # (analyse's estimate_noise)
     try:
