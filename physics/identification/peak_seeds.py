@@ -337,9 +337,13 @@ def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPe
         pieces, first = _cut_at_jumps(decays, fs, zones, lam[decaying])
         if pieces is not None:
             refit, jr = _seed_fit(pieces, fs, held, lam[decaying], None)
-            better = np.zeros(lam.size, bool)
-            better[decaying] = refit.converged[jr]
-            jr = jr[refit.converged[jr]]
+            lam_r, zeta_r = refit.eigenvalues[jr], refit.damping_ratios[jr]
+            better = np.zeros(lam.size, bool)           # the pieces' fit where it is still a mode of the peak
+            better[decaying] = refit.converged[jr] & (zeta_r > 0) & (zeta_r < max_damping) \
+                & (zeta_r >= MIN_DECAY_SIGMAS * refit.damping_std[jr]) \
+                & (np.abs(np.abs(lam_r) / (2 * np.pi) - peaks.frequency_hz[seeds][decaying])
+                   <= peaks.tolerance_hz[seeds][decaying])
+            jr = jr[better[decaying]]
             lam[better], f_std[better], z_std[better] = refit.eigenvalues[jr], refit.frequency_std_hz[jr], \
                 refit.damping_std[jr]
             amps[:, :, better] = refit.amplitudes[first][:, :, jr]
