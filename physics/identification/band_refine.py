@@ -17,7 +17,10 @@ Levenberg-Marquardt steps (:func:`~physics.identification.damped_sinusoids.leven
 A band spans :data:`BAND_WIDTHS` half-power half-widths ``sigma / (2 pi)`` of its mode either side, and at least
 :data:`BAND_LINES` lines ``1 / T`` of the longest decay (a lightly damped mode's peak is the truncation's, ``1 / T``
 wide). Modes whose bands, grown by :data:`MERGE_FACTOR`, overlap are one group fitted in the union of their bands:
-a neighbour that close is no smooth background. The bands are swept :data:`SWEEPS` times: from the second sweep on,
+a neighbour that close is no smooth background. Each band then reaches into the spectrum free of other modes up to
+:data:`REACH` times its half-width (never into another group's zone nor a fixed mode's): the wider the band beside
+the mode's peak, the less of the mode's information the background's level and slope take. The bands are swept
+:data:`SWEEPS` times: from the second sweep on,
 each band is that of the refined pole (its half-power width, not the starting pole's), and its data are less the
 closed-form transforms of the modes the other bands fitted, so the background takes only what no band models
 (modes no model holds, the hit). Modes held fixed (``fixed``: poles and amplitudes known, e.g. a model's modes

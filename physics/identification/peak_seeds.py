@@ -21,7 +21,12 @@ does not decay across the record either: its energy in its own band falls, rises
 again, while a sinusoid's stays level and a noise-like component's (quantisation products) rises and falls at
 random. A seed whose fit shows no decay is fitted again on the decays cut where the energy in its band rises
 :data:`REEXCITE_RISE` fold, once within a decay (:func:`band_rises`): the pieces are decays of their own (their own
-amplitudes, the poles common), and the seed is kept if it decays there.
+amplitudes, the poles common), and the seed is kept if it decays there. The cut is placed where the band's
+amplitude, the fitted decay divided out, steps (:func:`band_jump`). A mode re-excited before its first decay died
+out still decays across the record, but its fit there is biased (the band's energy need not rise at all: the
+re-excitation may come in any phase); a seed that decays, alone in its band, is cut where its band's amplitude steps
+by :data:`REEXCITE_JUMP` times the step's noise, and its fit on the pieces replaces the whole record's where it is
+still a mode of its peak.
 """
 
 from __future__ import annotations
