@@ -32,7 +32,7 @@ from physics.identification.decay_peaks import decay_peaks
 from physics.identification.decays import Decays, _adds_energy, decay_spectrum, find_decays
 from physics.identification.fdd import clear_peaks, unit_shapes
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
-from physics.identification.peak_seeds import SeededModes, refine_seeds, refit_re_excited, unheld_peaks
+from physics.identification.peak_seeds import SeededModes, refine_seeds, unheld_peaks
 from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles
 from physics.identification.record_checks import CheckedRecord, check_periods, check_records
 from physics.identification.ssi import MIN_MAX_ORDER, ORDERS_PER_PEAK
@@ -300,11 +300,10 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     if idx.size:
         bands = refine_in_bands(full, fs, fit.eigenvalues[idx])
         ok = bands.converged
-        lam_b, f_std_b, z_std_b, amps_b, _ = refit_re_excited(full, fs, bands, max_damping)
-        lam = np.where(ok, lam_b, fit.eigenvalues[idx])
-        f_std = np.where(ok, f_std_b, fit.frequency_std_hz[idx])
-        z_std = np.where(ok, z_std_b, fit.damping_std[idx])
-        amps = [amps_b[:, :, j] if ok[j] else fit.amplitudes[:, :, i] for j, i in enumerate(idx)]
+        lam = np.where(ok, bands.eigenvalues, fit.eigenvalues[idx])
+        f_std = np.where(ok, bands.frequency_std_hz, fit.frequency_std_hz[idx])
+        z_std = np.where(ok, bands.damping_std, fit.damping_std[idx])
+        amps = [bands.amplitudes[:, :, j] if ok[j] else fit.amplitudes[:, :, i] for j, i in enumerate(idx)]
         merged = np.asarray(bands.merged, bool)        # a pole merged into a stronger one of its peak is none
     # the clear peaks no mode holds: each started at its peak and refined in its band, the modes held fixed
     held_hz = np.abs(lam[~merged]) / (2 * np.pi)

@@ -35,12 +35,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from physics.identification.band_refine import MERGE_FACTOR, BandFit, band_amplitudes, mode_bands, refine_in_bands
+from physics.identification.band_refine import MERGE_FACTOR, band_amplitudes, mode_bands, refine_in_bands
 from physics.identification.fdd import ClearPeaks
 
 __all__ = ["JUMP_SAMPLES_PER_CORRELATION", "JUMP_SEARCH_LINES", "JUMP_SEARCH_STEPS", "JUMP_SIGMA_OCTAVES",
            "MIN_DECAY_SIGMAS", "REEXCITE_JUMP", "REEXCITE_RISE", "REEXCITE_STEP", "BandJump", "SeededModes",
-           "band_jump", "band_rises", "refine_seeds", "refit_re_excited", "seed_poles", "unheld_peaks"]
+           "band_jump", "band_rises", "refine_seeds", "seed_poles", "unheld_peaks"]
 
 #: A seeded mode's damping ratio is at least this many of its one sigma (it decays within the record).
 MIN_DECAY_SIGMAS = 2.0
@@ -285,62 +285,6 @@ def _cut_at_jumps(decays, fs, bands_hz, eigenvalues):
         first.append(len(pieces))
         pieces += [y[:, a:b] for a, b in zip(edges[:-1], edges[1:])]
     return (pieces, np.array(first, int)) if len(pieces) > len(decays) else (None, None)
-
-
-def refit_re_excited(decays, sampling_frequency_hz, bands: BandFit, max_damping):
-    """The band fits of modes re-excited before their first decay died out, refitted on the decays cut at the step of
-    their band's amplitude (:func:`band_jump`, a score of at least :data:`REEXCITE_JUMP`): each converged mode alone
-    in its group, its zone of :data:`MERGE_FACTOR` half-widths either side searched; the other modes held fixed (their
-    amplitudes on the pieces their bands' linear fit). A refit replaces the whole decays' fit where it converged with a
-    damping ratio in ``(0, max_damping)`` and at least :data:`MIN_DECAY_SIGMAS` of its one sigma.
-
-    Parameters
-    ----------
-    decays : sequence of ndarray, each shape (n_channels, n_samples_d)
-        The decays ``bands`` was fitted on.
-    sampling_frequency_hz : float
-    bands : BandFit
-    max_damping : float
-
-    Returns
-    -------
-    eigenvalues, frequency_std_hz, damping_std : ndarray, shape (n_modes,)
-        ``bands``'s, the refitted modes' replaced.
-    amplitudes : ndarray, complex, shape (n_decays, n_channels, n_modes)
-        At each decay's first sample (its first piece's for a refitted mode).
-    refitted : ndarray of bool, shape (n_modes,)
-    """
-    fs = float(sampling_frequency_hz)
-    lam, f_std, z_std = bands.eigenvalues.copy(), bands.frequency_std_hz.copy(), bands.damping_std.copy()
-    amps = bands.amplitudes.copy()
-    refitted = np.zeros(lam.size, bool)
-    live = bands.converged & ~np.asarray(bands.merged, bool)
-    if not live.any():
-        return lam, f_std, z_std, amps, refitted
-    longest_s = max(y.shape[1] for y in decays) / fs
-    zone_bands, group = mode_bands(lam[live], longest_s, fs / 2)
-    alone = np.zeros(lam.size, bool)
-    alone[live] = np.bincount(group)[group] == 1
-    cand = np.flatnonzero(alone & (bands.damping_ratios >= MIN_DECAY_SIGMAS * bands.damping_std))
-    if cand.size == 0:
-        return lam, f_std, z_std, amps, refitted
-    half = MERGE_FACTOR * 0.5 * (zone_bands[:, 1] - zone_bands[:, 0])
-    half_all = np.zeros(lam.size)
-    half_all[live] = half
-    f_d = lam.imag / (2 * np.pi)
-    zones = np.stack([np.maximum(f_d - half_all, 0.0), np.minimum(f_d + half_all, fs / 2)], axis=1)[cand]
-    pieces, first = _cut_at_jumps(decays, fs, zones, lam[cand])
-    if pieces is None:
-        return lam, f_std, z_std, amps, refitted
-    others = np.setdiff1d(np.flatnonzero(live), cand)
-    refit, jr = _seed_fit(pieces, fs, lam[others], lam[cand], None)
-    z = refit.damping_ratios[jr]
-    good = refit.converged[jr] & (z > 0) & (z < max_damping) & (z >= MIN_DECAY_SIGMAS * refit.damping_std[jr])
-    c, jr = cand[good], jr[good]
-    lam[c], f_std[c], z_std[c] = refit.eigenvalues[jr], refit.frequency_std_hz[jr], refit.damping_std[jr]
-    amps[:, :, c] = refit.amplitudes[first][:, :, jr]
-    refitted[c] = True
-    return lam, f_std, z_std, amps, refitted
 
 
 def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPeaks, seeds, max_damping,

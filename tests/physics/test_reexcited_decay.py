@@ -10,7 +10,6 @@ from impact_records import impact_record, poles
 from physics.identification.band_refine import MERGE_FACTOR, mode_bands
 from physics.identification.decay_peaks import decay_peaks
 from physics.identification.decays import decay_spectrum
-from physics.identification.free_decay import identify_era
 from physics.identification.peak_seeds import REEXCITE_JUMP, band_jump, refine_seeds, unheld_peaks
 from physics.identification.record_checks import check_records
 
@@ -87,15 +86,3 @@ def test_a_band_reaches_into_the_free_spectrum_up_to_the_next_zone():
     off, _ = mode_bands(lam, T, 312.5, reach=2.0, avoid=poles([63.5], [0.001]))
     np.testing.assert_allclose(off[0], [63.5 + MERGE_FACTOR * 8 / T, 71.0 + 2 * half], atol=2e-3)
 
-
-def test_a_mode_the_era_model_holds_is_cut_at_its_step_too():
-    """Records whose 61-Hz mode the ERA model holds (no seed): its band fit across the re-excitation is 10, 0.6 and
-    9.6 of its sigmas off; refitted on the decay cut at its band's step, within 2 (0.7, -1.1, 0.1)."""
-    for seed in (0, 1, 4):
-        y, _ = _record(seed, 0.5)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            est = identify_era(y, FS).estimate
-        j = int(np.argmin(np.abs(est.natural_frequencies_hz - FN[1])))
-        assert not est.weakly_stable[j]
-        assert abs(est.natural_frequencies_hz[j] - FN[1]) < 2 * est.frequency_std_hz[j], (seed, est.frequency_std_hz[j])
