@@ -21,7 +21,12 @@ does not decay across the record either: its energy in its own band falls, rises
 again, while a sinusoid's stays level and a noise-like component's (quantisation products) rises and falls at
 random. A seed whose fit shows no decay is fitted again on the decays cut where the energy in its band rises
 :data:`REEXCITE_RISE` fold, once within a decay (:func:`band_rises`): the pieces are decays of their own (their own
-amplitudes, the poles common), and the seed is kept if it decays there.
+amplitudes, the poles common), and the seed is kept if it decays there. The cut is placed where the band's
+amplitude, the fitted decay divided out, steps (:func:`band_jump`). A mode re-excited before its first decay died
+out still decays across the record, but its fit there is biased (the band's energy need not rise at all: the
+re-excitation may come in any phase); a seed that decays, alone in its band, is cut where its band's amplitude steps
+by :data:`REEXCITE_JUMP` times the step's noise, and its fit on the pieces replaces the whole record's where it is
+still a mode of its peak.
 """
 
 from __future__ import annotations
@@ -30,17 +35,35 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from physics.identification.band_refine import band_amplitudes, mode_bands, refine_in_bands
+from physics.identification.band_refine import MERGE_FACTOR, band_amplitudes, mode_bands, refine_in_bands
 from physics.identification.fdd import ClearPeaks
 
-__all__ = ["MIN_DECAY_SIGMAS", "REEXCITE_RISE", "SeededModes", "band_rises", "refine_seeds", "seed_poles",
-           "unheld_peaks"]
+__all__ = ["JUMP_SAMPLES_PER_CORRELATION", "JUMP_SEARCH_LINES", "JUMP_SEARCH_STEPS", "JUMP_SIGMA_OCTAVES",
+           "MIN_DECAY_SIGMAS", "REEXCITE_JUMP", "REEXCITE_RISE", "REEXCITE_STEP", "BandJump", "SeededModes",
+           "band_jump", "band_rises", "refine_seeds", "seed_poles", "unheld_peaks"]
 
 #: A seeded mode's damping ratio is at least this many of its one sigma (it decays within the record).
 MIN_DECAY_SIGMAS = 2.0
 #: A re-excitation: the energy in a seed's band over the next window at least this many times that over the window
 #: before and than the quietest tenth of the windows (:func:`band_rises`).
 REEXCITE_RISE = 4.0
+#: A re-excitation of a seed that decays: the decay's amplitude in the seed's band, the fitted decay divided out,
+#: jumps once by this many times the jump's noise (:func:`band_jump`; white noise alone passes 25 with probability
+#: about ``n_windows exp(-25)``).
+REEXCITE_JUMP = 25.0
+#: The jump is sought with the fitted pole's frequency moved by up to this many lines ``1 / T`` either side, in
+#: this many steps each way (a re-excitation biases the fit across it: 0.13 Hz, half a line of 4 s, at half
+#: amplitude).
+JUMP_SEARCH_LINES, JUMP_SEARCH_STEPS = 2.0, 20
+#: ... and changes the amplitude by at least this fraction of the amplitude before it (a single decay's band filter,
+#: rung by its sharp start, steps by under a tenth: 0.08-0.1 on the precision bench's decays, scored up to 93; a
+#: re-excitation at half amplitude, 0.8-1.1).
+REEXCITE_STEP = 0.25
+#: ... and its decay rate by up to this many octaves either side, in quarter octaves (a re-excitation slows the
+#: decay fitted across it: 0.0018 for 0.003).
+JUMP_SIGMA_OCTAVES = 2
+#: The band's signal is read this many times per correlation length (its time resolution).
+JUMP_SAMPLES_PER_CORRELATION = 8
 
 
 @dataclass(frozen=True)
@@ -86,6 +109,90 @@ def seed_poles(frequency_hz, tolerance_hz, longest_s) -> np.ndarray:
     f = np.asarray(frequency_hz, dtype=np.float64)
     sigma = np.maximum(2 * np.pi * 0.5 * np.asarray(tolerance_hz, dtype=np.float64), 1.0 / longest_s)
     return -sigma + 2j * np.pi * f                  # a decay's spectrum peaks at its damped frequency
+
+
+@dataclass(frozen=True)
+class BandJump:
+    """The likeliest single jump of a decay's amplitude in a band (see :func:`band_jump`).
+
+    Attributes
+    ----------
+    sample : int
+        First sample after the jump.
+    score : float
+        The two amplitudes' weighted squared difference over its noise (0: no sample to test).
+    step : float
+        The amplitude's change at the jump over its amplitude before (the decay divided out; channels summed in
+        quadrature).
+    """
+
+    sample: int
+    score: float
+    step: float = 0.0
+
+
+def band_jump(decay, sampling_frequency_hz, band_hz, eigenvalue) -> BandJump:
+    """Where the amplitude of a decay in a band, the decay of pole ``eigenvalue`` divided out, jumps (a
+    re-excitation of the mode while its first decay still rings): the likeliest single change point.
+
+    The decay's transform (zero-padded to twice its length) on the positive-frequency lines of ``band_hz`` alone,
+    transformed back, is the band's complex (analytic) signal ``b(t)``; a free decay of the pole ``lambda`` is
+    ``b(t) = c exp(lambda t)``, so ``s(t) = b(t) exp(-lambda t)`` is constant, its noise's variance growing as
+    ``exp(2 sigma t)``. A re-excitation at ``t_h`` adds ``d exp(lambda (t - t_h))`` from ``t_h`` on: ``s`` steps
+    from ``c`` to ``c + d exp(-lambda t_h)``, whatever the re-excitation's phase (the band's energy, which a
+    half-amplitude re-excitation of a decay that has fallen to half may not raise at all, is the modulus). Each
+    split of ``s`` (weights ``exp(-2 sigma t)``) into two parts of their own weighted means reduces the squared
+    residual by ``W1 W2 / W |m1 - m2|^2``; the largest, over the residual's noise variance per sample times the
+    band-limited signal's correlation length ``fs / width`` (white noise: an exponential variable of mean 1 at
+    each split), is the score. The first and last correlation lengths (the band filter's response to the decay's
+    start and end) are left out.
+
+    Parameters
+    ----------
+    decay : array_like, shape (n_channels, n_samples)
+    sampling_frequency_hz : float
+    band_hz : (float, float)
+    eigenvalue : complex
+        The decay's fitted pole ``-sigma + i omega`` (rad/s).
+
+    Returns
+    -------
+    BandJump
+    """
+    y = np.asarray(decay, dtype=np.float64)
+    fs, n = float(sampling_frequency_hz), y.shape[1]
+    corr = int(np.ceil(fs / max(band_hz[1] - band_hz[0], np.finfo(float).tiny)))
+    if n < 4 * corr:
+        return BandJump(0, 0.0, 0.0)
+    f = np.fft.fftfreq(2 * n, 1.0 / fs)
+    Y = np.fft.fft(y, 2 * n, axis=1)
+    Y[:, (f < band_hz[0]) | (f > band_hz[1])] = 0.0
+    hop = max(1, corr // JUMP_SAMPLES_PER_CORRELATION)     # s(t) varies over a correlation length: read it on a hop
+    t = np.arange(corr, n - corr, hop)
+    b = np.fft.ifft(Y, axis=1)[:, t]
+    lam = complex(eigenvalue)
+    shifts = 2j * np.pi * JUMP_SEARCH_LINES * fs / n * np.linspace(-1.0, 1.0, 2 * JUMP_SEARCH_STEPS + 1)
+    sigmas = -lam.real * 2.0 ** np.linspace(-JUMP_SIGMA_OCTAVES, JUMP_SIGMA_OCTAVES, 4 * JUMP_SIGMA_OCTAVES + 1)
+    poles = (-sigmas[:, None] + 1j * lam.imag + shifts[None, :]).ravel()     # the poles tried
+    decay_t = np.exp(np.outer(poles, t) / fs)                                # (poles, samples)
+    w = np.abs(decay_t) ** 2                            # the weights of s = b / decay_t, and w s = b conj(decay_t)
+    ws = b[None, :, :] * np.conj(decay_t)[:, None, :]                        # (poles, channels, samples)
+    tiny = np.finfo(float).tiny
+    W1 = np.maximum(np.cumsum(w, axis=1)[:, :-1], tiny)
+    S1 = np.cumsum(ws, axis=2)[:, :, :-1]
+    total_w = np.sum(w, axis=1)
+    total_s = np.sum(ws, axis=2)
+    W2 = np.maximum(total_w[:, None] - W1, tiny)
+    S2 = total_s[:, :, None] - S1
+    gain = np.sum(np.abs(S1 * W2[:, None, :] - S2 * W1[:, None, :]) ** 2, axis=1) / (W1 * W2 * total_w[:, None])
+    gain[np.minimum(W1, W2) < 1e-9 * total_w[:, None]] = 0.0      # a part of no weight: its mean is rounding
+    one = np.sum(np.abs(b) ** 2) - np.sum(np.abs(total_s) ** 2, axis=1) / total_w
+    two = one[:, None] - gain                           # the squared residual of one decay, of two parts
+    i, k = np.unravel_index(int(np.argmin(two)), two.shape)
+    noise = max(two[i, k] / t.size * corr / hop, tiny)
+    m1, m2 = S1[i, :, k] / W1[i, k], S2[i, :, k] / W2[i, k]
+    step = np.linalg.norm(m2 - m1) / max(np.linalg.norm(m1), tiny)
+    return BandJump(int(t[k + 1]), float((one.min() - two[i, k]) / noise), float(step))
 
 
 def band_rises(decay, sampling_frequency_hz, band_hz) -> np.ndarray:
@@ -140,16 +247,40 @@ def _seed_fit(decays, fs, held, start, held_amplitudes):
     return fit, near.sum() + np.arange(start.size)
 
 
-def _cut_at_rises(decays, fs, bands_hz):
+def _cut_at_rises(decays, fs, bands_hz, eigenvalues):
     """The decays cut where their energy in one of ``bands_hz`` (shape (n_bands, 2), Hz) rises once
     (:func:`band_rises`): the pieces, and the index of each decay's first piece (None where no decay is cut). A decay
     re-excited once falls, rises once and falls again; a band whose energy rises more than once within a decay
     fluctuates (a noise-like component: the quantisation products of a coarse capture, an ambient excitation) and
-    cuts nothing."""
+    cuts nothing. The cut is placed at the band's amplitude jump (:func:`band_jump`, the decay of the band's pole of
+    ``eigenvalues`` divided out) where it lies within the rise's window of the rise: the rise's own place is only
+    as fine as that window (two over the band's width)."""
     pieces, first = [], []
     for y in decays:
-        rises = [band_rises(y, fs, b) for b in bands_hz]
-        cuts = np.unique(np.concatenate([r for r in rises if r.size == 1] + [np.zeros(0, int)]))
+        cuts = []
+        for b, lam in zip(bands_hz, eigenvalues):
+            rise = band_rises(y, fs, b)
+            if rise.size == 1:
+                jump = band_jump(y, fs, b, lam)
+                near = abs(jump.sample - rise[0]) <= 2 * fs / max(b[1] - b[0], np.finfo(float).tiny)
+                cuts.append(jump.sample if near and jump.score >= REEXCITE_JUMP else int(rise[0]))
+        cuts = np.unique(np.array(cuts, int))
+        edges = [0, *cuts.tolist(), y.shape[1]]
+        first.append(len(pieces))
+        pieces += [y[:, a:b] for a, b in zip(edges[:-1], edges[1:])]
+    return (pieces, np.array(first, int)) if len(pieces) > len(decays) else (None, None)
+
+
+def _cut_at_jumps(decays, fs, bands_hz, eigenvalues):
+    """The decays cut where the amplitude in one of ``bands_hz`` (shape (n_bands, 2), Hz), the decay of its pole
+    ``eigenvalues`` divided out, jumps (:func:`band_jump`, a score of at least :data:`REEXCITE_JUMP` and a step of
+    :data:`REEXCITE_STEP`): the pieces,
+    and the index of each decay's first piece (None where no decay is cut)."""
+    pieces, first = [], []
+    for y in decays:
+        jumps = [band_jump(y, fs, b, lam) for b, lam in zip(bands_hz, eigenvalues)]
+        cuts = np.unique(np.array([j.sample for j in jumps if j.score >= REEXCITE_JUMP and j.step >= REEXCITE_STEP],
+                                  int))
         edges = [0, *cuts.tolist(), y.shape[1]]
         first.append(len(pieces))
         pieces += [y[:, a:b] for a, b in zip(edges[:-1], edges[1:])]
@@ -201,12 +332,32 @@ def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPe
     flat = conv & ~(fit.damping_ratios[j] >= MIN_DECAY_SIGMAS * z_std)     # no decay shown: re-excited, or a sinusoid
     if flat.any():
         bands_hz = mode_bands(np.concatenate([held, start]), longest_s, fs / 2)[0][held.size:][flat]
-        pieces, first = _cut_at_rises(decays, fs, bands_hz)
+        pieces, first = _cut_at_rises(decays, fs, bands_hz, start[flat])
         if pieces is not None:                          # the decays cut where the flat seeds' bands are re-excited
             refit, jr = _seed_fit(pieces, fs, held, start[flat], None)
             lam[flat], conv[flat] = refit.eigenvalues[jr], refit.converged[jr]
             f_std[flat], z_std[flat] = refit.frequency_std_hz[jr], refit.damping_std[jr]
             amps[:, :, flat] = refit.amplitudes[first][:, :, jr]
+    bands_hz, group = mode_bands(np.concatenate([held, lam]), longest_s, fs / 2)
+    alone = np.bincount(group)[group[held.size:]] == 1                  # no other mode in the seed's band
+    decaying = conv & ~flat & alone
+    if decaying.any():                                  # re-excited before the first decay died out: one jump
+        half = MERGE_FACTOR * 0.5 * (bands_hz[held.size:, 1] - bands_hz[held.size:, 0])
+        f_d = lam.imag / (2 * np.pi)
+        zones = np.stack([np.maximum(f_d - half, 0.0), np.minimum(f_d + half, fs / 2)], axis=1)[decaying]
+        pieces, first = _cut_at_jumps(decays, fs, zones, lam[decaying])
+        if pieces is not None:
+            refit, jr = _seed_fit(pieces, fs, held, lam[decaying], None)
+            lam_r, zeta_r = refit.eigenvalues[jr], refit.damping_ratios[jr]
+            better = np.zeros(lam.size, bool)           # the pieces' fit where it is still a mode of the peak
+            better[decaying] = refit.converged[jr] & (zeta_r > 0) & (zeta_r < max_damping) \
+                & (zeta_r >= MIN_DECAY_SIGMAS * refit.damping_std[jr]) \
+                & (np.abs(np.abs(lam_r) / (2 * np.pi) - peaks.frequency_hz[seeds][decaying])
+                   <= peaks.tolerance_hz[seeds][decaying])
+            jr = jr[better[decaying]]
+            lam[better], f_std[better], z_std[better] = refit.eigenvalues[jr], refit.frequency_std_hz[jr], \
+                refit.damping_std[jr]
+            amps[:, :, better] = refit.amplitudes[first][:, :, jr]
     fn = np.abs(lam) / (2 * np.pi)
     zeta = -lam.real / np.abs(lam)
     ok = conv & (np.abs(fn - peaks.frequency_hz[seeds]) <= peaks.tolerance_hz[seeds]) \
