@@ -106,9 +106,11 @@ class FreeResponse:
         if not d.starts.size:
             return f"not a free response: {hits}, no decay"
         what = "a free response" if self.free else "not a free response"
-        lead = f", {d.lead_db:.0f} dB louder than the record before the first hit" if np.isfinite(d.lead_db) else ""
-        return (f"{what}: {hits}, {d.starts.size} decay{'s' if d.starts.size != 1 else ''} whose energy falls "
-                f"{d.drop_db:.0f} dB from their first to their last quarter{lead}")
+        lead = (f", {round(d.lead_db)} dB louder than the record before the first hit" if d.lead_db >= 0.5
+                else ", no louder than the record before the first hit" if np.isfinite(d.lead_db) else "")
+        falls = f"falls {round(d.drop_db)} dB" if d.drop_db >= 0.5 else f"does not fall ({round(d.drop_db):+d} dB)"
+        return (f"{what}: {hits}, {d.starts.size} decay{'s' if d.starts.size != 1 else ''} whose energy {falls} "
+                f"from their first to their last quarter{lead}")
 
 
 def _innovations(x):

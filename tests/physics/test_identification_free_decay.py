@@ -11,7 +11,7 @@ from oma_records import chain_record
 from physics.errors import BeamDamageError, ShapeError
 from physics.identification import identify_records
 from physics.identification.band_refine import refine_in_bands
-from physics.identification.decays import find_decays, free_response
+from physics.identification.decays import Decays, FreeResponse, find_decays, free_response
 from physics.identification.free_decay import identify_era
 from physics.identification.record_checks import check_records
 from physics.identification.ssi import identify_ssi
@@ -364,3 +364,15 @@ def test_a_checked_record_is_checked_once():
     assert banded is not c and banded.band_hz == (2.0, 60.0) and banded.signals is c.signals
     with pytest.raises(ShapeError, match="Nyquist"):
         check_records(c, FRAME_FS, (2.0, 300.0))
+
+
+def test_the_free_response_text_never_reads_a_negative_zero():
+    """A drop or a lead of a fraction of a dB below zero reads as no fall, not "-0 dB"."""
+    d = Decays(np.array([100]), np.array([110]), np.array([900]), drop_db=-0.2, lead_db=-0.3)
+    text = FreeResponse(False, d).text
+    assert "-0" not in text
+    assert text == ("not a free response: 1 hit, 1 decay whose energy does not fall (+0 dB) from their first to their "
+                    "last quarter, no louder than the record before the first hit")
+    d = Decays(np.array([100]), np.array([110]), np.array([900]), drop_db=9.4, lead_db=12.6)
+    assert FreeResponse(True, d).text == ("a free response: 1 hit, 1 decay whose energy falls 9 dB from their first "
+                                            "to their last quarter, 13 dB louder than the record before the first hit")
