@@ -177,7 +177,9 @@ def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPe
     max_damping : float
     freq_tol : float
         A seed within this relative distance of a held mode, or of a seed kept before it, is dropped (within its
-        peak's tolerance, when that is the smaller: two clear peaks closer than ``freq_tol`` are two modes).
+        peak's tolerance, when that is the smaller: two clear peaks closer than ``freq_tol`` are two modes). Each
+        seed starts (:func:`seed_poles`) as wide as the larger of its peak's tolerance and ``freq_tol`` of its
+        frequency.
     held_amplitudes : array_like, complex, shape (n_decays, n_channels, n_held), optional
         The held modes' amplitudes on ``decays``; a fixed mode's that are not given (default) or NaN are each group's
         linear fit in its band (:func:`~physics.identification.band_refine.band_amplitudes`).
