@@ -192,7 +192,9 @@ class ClearPeaks:
         Lowest line between each peak and its neighbour (or the band's edge) on either side.
     tolerance_hz : ndarray, shape (n_peaks,)
         How far a mode may lie from the peak and still explain it: the larger of 1 % of its frequency, 1.5 lines
-        and the peak's half-power (-3 dB) half-width.
+        and the peak's half-power (-3 dB) half-width, bounded by half the gap to the nearest neighbouring clear
+        peak (a mode at one peak explains no other clear peak, and a search within the tolerance stops at the
+        midpoint to the neighbour).
     """
 
     lines: np.ndarray
@@ -227,6 +229,8 @@ def clear_peaks(sv: SingularValueSpectrum, band_hz=None, prominent_above_db=np.i
         bases = (np.full(pk.size, 3.0), np.ascontiguousarray(valleys[:, 0]), np.ascontiguousarray(valleys[:, 1]))
         half = signal.peak_widths(db, pk, rel_height=1.0, prominence_data=bases)[0] / 2
     tol = np.maximum.reduce([0.01 * f[idx[pk]], np.full(pk.size, 1.5 * sv.resolution_hz), half * sv.resolution_hz])
+    gap = np.diff(f[idx[pk]])
+    tol = np.minimum(tol, 0.5 * np.minimum(np.r_[np.inf, gap], np.r_[gap, np.inf]))    # half the gap to a neighbour
     return ClearPeaks(idx[pk], f[idx[pk]], over[pk], idx[valleys] if pk.size else valleys, tol)
 
 

@@ -262,10 +262,8 @@ def identify_fft_peaks(signals, sampling_frequency_hz, band_hz=None, n_modes=Non
     check_periods(checked.duration_s, peaks.frequency_hz[0], "the lowest peak", where)
     keep = np.sort(np.argsort(-peaks.height_db, kind="stable")[:n_modes]) if n_modes is not None \
         else np.arange(peaks.lines.size)
-    gap = np.diff(peaks.frequency_hz)          # no window past the midpoint to a neighbour: its higher top would be
-    half_gap = 0.5 * np.minimum(np.r_[np.inf, gap], np.r_[gap, np.inf])           # taken for this peak's
     res = fft_peaks(checked if band_hz is None else checked.signals, checked.sampling_frequency_hz,
-                    peaks.frequency_hz[keep], np.minimum(peaks.tolerance_hz, half_gap)[keep], window, pad, where)
+                    peaks.frequency_hz[keep], peaks.tolerance_hz[keep], window, pad, where)
     ok = np.isfinite(res.frequency_hz)
     _, first = np.unique(np.where(ok, res.frequency_hz, -1.0), return_index=True)
     ok &= np.isin(np.arange(ok.size), first)            # two clear peaks refined to one FFT peak: one mode

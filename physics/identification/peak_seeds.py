@@ -307,7 +307,10 @@ def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPe
     seeds : array_like of int
     max_damping : float
     freq_tol : float
-        A seed within this relative distance of a held mode, or of a seed kept before it, is dropped.
+        A seed within this relative distance of a held mode, or of a seed kept before it, is dropped (within its
+        peak's tolerance, when that is the smaller: two clear peaks closer than ``freq_tol`` are two modes). Each
+        seed starts (:func:`seed_poles`) as wide as the larger of its peak's tolerance and ``freq_tol`` of its
+        frequency.
     held_amplitudes : array_like, complex, shape (n_decays, n_channels, n_held), optional
         The held modes' amplitudes on ``decays``; a fixed mode's that are not given (default) or NaN are each group's
         linear fit in its band (:func:`~physics.identification.band_refine.band_amplitudes`).
@@ -325,7 +328,8 @@ def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPe
         return empty
     fs = float(sampling_frequency_hz)
     longest_s = max(y.shape[1] for y in decays) / fs
-    start = seed_poles(peaks.frequency_hz[seeds], peaks.tolerance_hz[seeds], longest_s)
+    f_seed = peaks.frequency_hz[seeds]
+    start = seed_poles(f_seed, np.maximum(peaks.tolerance_hz[seeds], freq_tol * f_seed), longest_s)
     fit, j = _seed_fit(decays, fs, held, start, held_amplitudes)
     lam, conv, amps = fit.eigenvalues[j], fit.converged[j], fit.amplitudes[:, :, j]
     f_std, z_std = fit.frequency_std_hz[j], fit.damping_std[j]
@@ -363,9 +367,10 @@ def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPe
     ok = conv & (np.abs(fn - peaks.frequency_hz[seeds]) <= peaks.tolerance_hz[seeds]) \
         & (zeta > 0) & (zeta < max_damping) & (zeta >= MIN_DECAY_SIGMAS * z_std)
     taken = list(np.abs(held) / (2 * np.pi))
+    apart = peaks.tolerance_hz[seeds]
     keep = []
     for k in np.argsort(-peaks.height_db[seeds], kind="stable"):     # the highest peak first: one mode per peak
-        if ok[k] and all(abs(fn[k] - g) > freq_tol * g for g in taken):
+        if ok[k] and all(abs(fn[k] - g) > min(freq_tol * g, apart[k]) for g in taken):
             keep.append(k)
             taken.append(fn[k])
     keep = np.array(sorted(keep, key=lambda k: fn[k]), int)
