@@ -63,8 +63,7 @@ import numpy as np  # noqa: E402
 
 from experiments.benches.harness import parser, publish, table  # noqa: E402
 from experiments.benches.plain_tests import plain_alarms  # noqa: E402
-from experiments.second_sim.series import (FrequencySeriesConfig, SeriesConfig, frequency_series,  # noqa: E402
-                                           mass_loss_pattern, uniform_stiffness_pattern)
+from experiments.second_sim.series import FrequencySeriesConfig, SeriesConfig, drop_pattern, frequency_series  # noqa: E402
 from learn.monitor.charts import run_charts  # noqa: E402
 from learn.monitor.normal_models import NORMAL_MODELS  # noqa: E402
 from learn.monitor.coverage import coverage, environment_coordinates  # noqa: E402
@@ -161,13 +160,7 @@ def run_case(name: str, seed: int, rate: float, shares=None) -> list:
                      "false_alarms": fa, "n_monitoring": len(fs.day) - nb})
         damaged = np.arange(len(fs.day)) >= onset
         for damage, which in DAMAGES.items():
-            pattern = np.zeros(fs.frequencies_hz.shape[1])
-            if which == "stiffness":
-                pattern[:] = uniform_stiffness_pattern(cfg.beam)
-            elif which == "mass":
-                pattern[:] = -mass_loss_pattern(cfg.beam)               # the modes rise
-            else:
-                pattern[np.asarray(which) - 1] = 1.0
+            pattern = drop_pattern(cfg.beam, which)
             for size in SIZES_PCT:
                 F = fs.frequencies_hz.copy()
                 F[damaged] *= np.exp(pattern * np.log1p(-size / 100))

@@ -49,7 +49,7 @@ from experiments.benches import bench_real_series  # noqa: E402
 from experiments.benches.bench_detection import DAMAGES, SIZES_PCT, _case  # noqa: E402
 from experiments.benches.harness import parser, table  # noqa: E402
 from experiments.benches.plain_tests import plain_alarms  # noqa: E402
-from experiments.second_sim.series import frequency_series, mass_loss_pattern, uniform_stiffness_pattern  # noqa: E402
+from experiments.second_sim.series import drop_pattern, frequency_series  # noqa: E402
 from experiments.benches.effective_size import (alarm_episodes, effective_size, episode_spread,  # noqa: E402
                                           false_alarm_spread, inflate_held, lag1_autocorrelation,
                                           prediction_inflation)
@@ -60,16 +60,6 @@ from physics.io import atomic_write_text  # noqa: E402
 __all__ = ["COLUMNS", "main", "run_case"]
 
 COLUMNS = ("combined", "combined, n_eff", "plain shift, both signs", "plain per mode")
-
-
-def _pattern(cfg, which) -> np.ndarray:
-    if which == "stiffness":
-        return uniform_stiffness_pattern(cfg.beam)
-    if which == "mass":
-        return -mass_loss_pattern(cfg.beam)
-    p = np.zeros(cfg.beam.n_modes)
-    p[np.asarray(which) - 1] = 1.0
-    return p
 
 
 def _normal_scores(x) -> np.ndarray:
@@ -117,7 +107,7 @@ def run_case(case: str, model_name: str, seed: int, rate: float, damages: bool =
            "episodes_later": alarm_episodes(det.alarm[nb:], per_day).tolist()}
     damaged = np.arange(len(fs.day)) >= onset
     for name, which in (DAMAGES.items() if damages else ()):
-        pattern = _pattern(cfg, which)
+        pattern = drop_pattern(cfg.beam, which)
         for size in SIZES_PCT:
             F = fs.frequencies_hz.copy()
             F[damaged] *= np.exp(pattern * np.log1p(-size / 100))

@@ -40,7 +40,7 @@ from learn.monitor.alarm_threshold import LOO_MAX, N_FOLDS  # noqa: E402
 from experiments.benches.bench_detection import _case  # noqa: E402
 from experiments.benches.harness import parser, publish, table  # noqa: E402
 from experiments.benches.plain_tests import plain_alarms  # noqa: E402
-from experiments.second_sim.series import frequency_series, mass_loss_pattern, uniform_stiffness_pattern  # noqa: E402
+from experiments.second_sim.series import drop_pattern, frequency_series  # noqa: E402
 from learn.monitor.normal_models import NORMAL_MODELS  # noqa: E402
 from physics.io import atomic_write_text  # noqa: E402
 
@@ -51,16 +51,6 @@ __all__ = ["COLUMNS", "DAMAGES", "main", "run_case"]
 DAMAGES = (("uniform EI", "stiffness", 0.25), ("uniform EI", "stiffness", 0.5), ("uniform EI", "stiffness", 1.0),
            ("mode 1", (1,), 0.25), ("mass loss", "mass", 0.25))
 COLUMNS = ("union", "copula", "plain shift, both signs", "plain per mode")
-
-
-def _pattern(cfg, which) -> np.ndarray:
-    if which == "stiffness":
-        return uniform_stiffness_pattern(cfg.beam)
-    if which == "mass":
-        return -mass_loss_pattern(cfg.beam)
-    p = np.zeros(cfg.beam.n_modes)
-    p[np.asarray(which) - 1] = 1.0
-    return p
 
 
 def _detect(model, F, C, nb, rate, q, held, calibration):
@@ -114,7 +104,7 @@ def run_case(case: str, model_name: str, seed: int, rate: float, damages=DAMAGES
            "false_alarms": columns(fs.frequencies_hz, np.arange(len(fs.day)) >= nb, 1.0), "detected": {}}
     for name, which, size in damages:
         F = fs.frequencies_hz.copy()
-        F[damaged] *= np.exp(_pattern(cfg, which) * np.log1p(-size / 100))
+        F[damaged] *= np.exp(drop_pattern(cfg.beam, which) * np.log1p(-size / 100))
         row["detected"][f"{name} {'+' if which == 'mass' else '-'}{size:g} %"] = columns(
             F, damaged, -1.0 if which == "mass" else 1.0)
     print(json.dumps(row), flush=True)

@@ -45,7 +45,7 @@ from experiments.second_sim.writers import write_csv, write_json, write_text_ato
 import itertools
 
 __all__ = ["SERIES_KINDS", "SLIT_SIZES", "FrequencySeries", "FrequencySeriesConfig", "SeriesConfig", "SeriesTest",
-           "frequency_series", "mass_loss_pattern", "nominal_series_beam",
+           "drop_pattern", "frequency_series", "mass_loss_pattern", "nominal_series_beam",
            "uniform_stiffness_pattern", "series_beam_toml",
            "simulate_series", "slit_frequency_drop", "test_beam", "write_series"]
 
@@ -425,6 +425,19 @@ def uniform_stiffness_pattern(cfg: SeriesConfig) -> np.ndarray:
         :cfg.n_modes] for e in (1.0, 0.99))
     d = np.log(f0 / f1)
     return d / d.mean()
+
+
+def drop_pattern(cfg: SeriesConfig, which) -> np.ndarray:
+    """The ``d ln f`` per unit drop of each mode (m,) of a damage: ``"stiffness"`` a uniform loss of ``EI``
+    (:func:`uniform_stiffness_pattern`), ``"mass"`` a mass loss (:func:`mass_loss_pattern`, negated: the modes
+    rise), a tuple the modes (1-based) that drop alone (1 each, 0 elsewhere)."""
+    if which == "stiffness":
+        return uniform_stiffness_pattern(cfg)
+    if which == "mass":
+        return -mass_loss_pattern(cfg)
+    p = np.zeros(cfg.n_modes)
+    p[np.asarray(which) - 1] = 1.0
+    return p
 
 
 def mass_loss_pattern(cfg: SeriesConfig, loss: float = 0.5) -> np.ndarray:

@@ -150,3 +150,14 @@ def test_a_mass_loss_raises_the_modes_as_the_rayleigh_quotient_says():
     # first order: losing dm raises ln f by dm phi(x)^2 / 2; the pattern is that over its mean
     pattern = mass_loss_pattern(cfg, loss=0.02)
     np.testing.assert_allclose(pattern, phi2 / phi2.mean(), rtol=0.03)
+
+
+def test_drop_pattern_reads_the_kind_named():
+    """``drop_pattern``: a tuple drops the modes named alone, ``stiffness`` and ``mass`` are the closed patterns
+    (the mass negated: the modes rise)."""
+    from experiments.second_sim.series import SeriesConfig, drop_pattern, mass_loss_pattern, uniform_stiffness_pattern
+
+    beam = SeriesConfig(n_modes=4)
+    np.testing.assert_array_equal(drop_pattern(beam, (1, 3)), [1.0, 0.0, 1.0, 0.0])
+    np.testing.assert_array_equal(drop_pattern(beam, "stiffness"), uniform_stiffness_pattern(beam))
+    np.testing.assert_array_equal(drop_pattern(beam, "mass"), -mass_loss_pattern(beam))
