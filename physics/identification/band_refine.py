@@ -17,10 +17,7 @@ Levenberg-Marquardt steps (:func:`~physics.identification.damped_sinusoids.leven
 A band spans :data:`BAND_WIDTHS` half-power half-widths ``sigma / (2 pi)`` of its mode either side, and at least
 :data:`BAND_LINES` lines ``1 / T`` of the longest decay (a lightly damped mode's peak is the truncation's, ``1 / T``
 wide). Modes whose bands, grown by :data:`MERGE_FACTOR`, overlap are one group fitted in the union of their bands:
-a neighbour that close is no smooth background. Each band then reaches into the spectrum free of other modes up to
-:data:`REACH` times its half-width (never into another group's zone nor a fixed mode's): the wider the band beside
-the mode's peak, the less of the mode's information the background's level and slope take. The bands are swept
-:data:`SWEEPS` times: from the second sweep on,
+a neighbour that close is no smooth background. The bands are swept :data:`SWEEPS` times: from the second sweep on,
 each band is that of the refined pole (its half-power width, not the starting pole's), and its data are less the
 closed-form transforms of the modes the other bands fitted, so the background takes only what no band models
 (modes no model holds, the hit). Modes held fixed (``fixed``: poles and amplitudes known, e.g. a model's modes
@@ -50,8 +47,8 @@ import numpy as np
 from physics.errors import ConvergenceError, ShapeError
 from physics.identification.damped_sinusoids import levenberg_marquardt, pole_statistics
 
-__all__ = ["BACKGROUND_ORDER", "BAND_LINES", "BAND_WIDTHS", "MERGE_FACTOR", "REACH", "RESOLVED_LINES",
-           "RESOLVED_WIDTHS", "SWEEPS", "BandFit", "band_amplitudes", "mode_bands", "refine_in_bands"]
+__all__ = ["BACKGROUND_ORDER", "BAND_LINES", "BAND_WIDTHS", "MERGE_FACTOR", "RESOLVED_LINES", "RESOLVED_WIDTHS",
+           "SWEEPS", "BandFit", "band_amplitudes", "mode_bands", "refine_in_bands"]
 
 #: A mode's band spans this many of its half-power half-widths either side of it ...
 BAND_WIDTHS = 6.0
@@ -59,10 +56,6 @@ BAND_WIDTHS = 6.0
 BAND_LINES = 8
 #: Modes whose bands, each grown by this factor about its mode, overlap are fitted together.
 MERGE_FACTOR = 2.0
-#: A band reaches into the spectrum free of other modes up to this many times its half-width
-#: (:func:`mode_bands`): the background's level and slope take less of the mode's information the wider the band
-#: (a mode of a half-power half-width of 1.3 lines: 1.42 times the Cramer-Rao bound at 6 half-widths, 1.19 at 12).
-REACH = 2.0
 #: Order of the complex polynomial (in frequency across the band) that models the background: a level and a slope,
 #: the first terms of a far mode's tail and of the hit's smooth spectrum.
 BACKGROUND_ORDER = 1
@@ -118,7 +111,7 @@ class BandFit:
     merged: np.ndarray
 
 
-def mode_bands(eigenvalues, longest_s, nyquist_hz, reach=1.0, avoid=None):
+def mode_bands(eigenvalues, longest_s, nyquist_hz):
     """Each pole's band and group (see the module docstring).
 
     Parameters
@@ -128,13 +121,6 @@ def mode_bands(eigenvalues, longest_s, nyquist_hz, reach=1.0, avoid=None):
     longest_s : float
         Length of the longest decay (s).
     nyquist_hz : float
-    reach : float
-        Each mode's half-width (:data:`BAND_WIDTHS`, :data:`BAND_LINES`) grown up to this factor into the spectrum
-        free of other modes: no further than the edge of another group's zone (its modes' half-widths times
-        :data:`MERGE_FACTOR`, the zone within which a mode would have joined it), nor of ``avoid``'s. The groups are
-        those of the half-widths (``reach`` 1).
-    avoid : array_like, complex, shape (n_avoid,), optional
-        Further poles (rad/s) whose zones the bands stay out of (modes held fixed, subtracted from the data).
 
     Returns
     -------
@@ -144,35 +130,17 @@ def mode_bands(eigenvalues, longest_s, nyquist_hz, reach=1.0, avoid=None):
     """
     lam = np.asarray(eigenvalues, complex)
     f = lam.imag / (2 * np.pi)
-    half = _half_widths(lam, longest_s)
+    half = np.maximum(BAND_WIDTHS * np.abs(lam.real) / (2 * np.pi), BAND_LINES / longest_s)
     order = np.argsort(f, kind="stable")
     fs_, hs = f[order], half[order]
     apart = fs_[1:] - MERGE_FACTOR * hs[1:] > fs_[:-1] + MERGE_FACTOR * hs[:-1]
     g_sorted = np.concatenate([[0], np.cumsum(apart)])
     group = np.empty(f.size, int)
     group[order] = g_sorted
-    n_groups = g_sorted[-1] + 1 if f.size else 0
-    lo = np.array([np.min((f - half)[group == g]) for g in range(n_groups)])
-    hi = np.array([np.max((f + half)[group == g]) for g in range(n_groups)])
-    if reach > 1.0 and n_groups:
-        lam_a = np.asarray([] if avoid is None else avoid, complex)
-        f_z = np.concatenate([f, lam_a.imag / (2 * np.pi)])
-        h_z = MERGE_FACTOR * np.concatenate([half, _half_widths(lam_a, longest_s)])
-        g_z = np.concatenate([group, np.full(lam_a.size, -1)])
-        for g in range(n_groups):
-            mine = group == g
-            out = g_z != g
-            below, above = out & (f_z < lo[g]), out & (f_z > hi[g])
-            lo[g] = min(lo[g], max(np.min((f - reach * half)[mine]), np.max(f_z[below] + h_z[below], initial=-np.inf)))
-            hi[g] = max(hi[g], min(np.max((f + reach * half)[mine]), np.min(f_z[above] - h_z[above], initial=np.inf)))
+    lo = np.array([np.min((f - half)[group == g]) for g in range(g_sorted[-1] + 1 if f.size else 0)])
+    hi = np.array([np.max((f + half)[group == g]) for g in range(g_sorted[-1] + 1 if f.size else 0)])
     bands = np.stack([np.clip(lo, 0.0, nyquist_hz), np.clip(hi, 0.0, nyquist_hz)], axis=1)
     return bands[group] if f.size else np.zeros((0, 2)), group
-
-
-def _half_widths(lam, longest_s):
-    """Each pole's band half-width (Hz): :data:`BAND_WIDTHS` half-power half-widths, at least :data:`BAND_LINES`
-    lines ``1 / longest_s``."""
-    return np.maximum(BAND_WIDTHS * np.abs(np.asarray(lam, complex).real) / (2 * np.pi), BAND_LINES / longest_s)
 
 
 def _band_data(spectra, lengths, fs, band_hz):
@@ -389,8 +357,7 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
     n_ch = decays[0].shape[0]
     lengths = [y.shape[1] for y in decays]
     spectra = _spectra(decays, fs, fixed)
-    avoid = None if fixed is None else np.ravel(np.asarray(fixed[0], complex))
-    bands, group = mode_bands(lam0, max(lengths) / fs, fs / 2, REACH, avoid)
+    bands, group = mode_bands(lam0, max(lengths) / fs, fs / 2)
     lam = lam0.copy()
     f_std, z_std = np.full(m_all, np.nan), np.full(m_all, np.nan)
     amps = np.zeros((len(decays), n_ch, m_all), complex)
@@ -402,8 +369,7 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
             merged |= _unresolved(lam, amps, lengths, fs, group, converged)
             converged &= ~merged
             live = np.flatnonzero(~merged)
-            b_live, g_live = mode_bands(np.where(converged, lam, lam0)[live], max(lengths) / fs, fs / 2,
-                                        REACH, avoid)
+            b_live, g_live = mode_bands(np.where(converged, lam, lam0)[live], max(lengths) / fs, fs / 2)
             bands, group = np.full((m_all, 2), np.nan), np.full(m_all, -1)
             bands[live], group[live] = b_live, g_live
         known = converged.copy()                        # the modes whose transform the other bands subtract

@@ -42,9 +42,7 @@ def test_two_poles_of_one_peak_are_one_mode_no_less_precise_than_the_fft_peak():
         fft_hz.append(_fft_peak_hz(y))
     band_std, fft_std = np.std(band_hz, ddof=1), np.std(fft_hz, ddof=1)
     assert band_std <= 0.5 * fft_std, (band_std, fft_std)
-    # the peak the FFT reads, within a quarter of a line (0.104 Hz): the band fit weighs the loud start, where the
-    # mode is softer, more than the FFT peak does (test_band_refine_stiffening), the more the wider its band
-    assert abs(np.mean(band_hz) - np.mean(fft_hz)) < 0.125
+    assert abs(np.mean(band_hz) - np.mean(fft_hz)) < 0.1          # the peak the FFT reads, within a tenth of a line
 
 
 def test_a_resolved_close_pair_is_kept():

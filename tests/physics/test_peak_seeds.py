@@ -125,8 +125,7 @@ def test_a_seed_is_refined_in_its_own_band_the_held_modes_outside_it_fixed():
     start = seed_poles(peaks.frequency_hz, peaks.tolerance_hz, n / FS)
     got = refine_seeds([y], FS, held, peaks, [0], 0.2, held_amplitudes=held_amps)
     rest = y - np.real(held_amps[0, 0, 1] * np.exp(held[1] * k))[None]
-    alone = refine_in_bands([rest], FS, np.concatenate([held[:1], start]),          # its band kept off 150 Hz
-                            fixed=(held[1:], np.zeros((1, 1, 1), complex)))
+    alone = refine_in_bands([rest], FS, np.concatenate([held[:1], start]))
     assert got.eigenvalues.size == 1 and np.all(alone.converged)
     np.testing.assert_allclose(got.eigenvalues, alone.eigenvalues[1:], rtol=1e-10)
     err = abs(got.eigenvalues[0] / lam[1] - 1)          # 60 Hz held fixed 0.02 Hz off: 1e-3

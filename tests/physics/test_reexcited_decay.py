@@ -7,7 +7,6 @@ import warnings
 import numpy as np
 from impact_records import impact_record, poles
 
-from physics.identification.band_refine import MERGE_FACTOR, mode_bands
 from physics.identification.decay_peaks import decay_peaks
 from physics.identification.decays import decay_spectrum
 from physics.identification.peak_seeds import REEXCITE_JUMP, band_jump, refine_seeds, unheld_peaks
@@ -67,22 +66,3 @@ def test_a_seed_re_excited_at_half_amplitude_is_unbiased_and_a_single_decay_is_n
     assert abs(z_err.mean()) < 1.0, z_err
     single = np.array([_seed_errors(s, 0.0, 0.03) for s in range(3)])
     assert np.all(np.abs(single) < 2.5), single
-
-
-def test_a_band_reaches_into_the_free_spectrum_up_to_the_next_zone():
-    """Half-widths: 6 half-power half-widths, at least 8 lines of 1/T. An isolated 0.5 %-damped 71-Hz mode of a 3.6-s
-    decay (half-width max(6 x 0.355, 8 / 3.6) = 2.22 Hz) reaches twice as far, short of the zone (MERGE_FACTOR
-    half-widths) of a mode of another group; a pole to avoid (a mode held fixed) stops it at its zone."""
-    lam = poles([71.0], [0.005])
-    T = 3.6
-    half = max(6 * 0.005 * 71.0, 8 / T)
-    band, _ = mode_bands(lam, T, 312.5)
-    np.testing.assert_allclose(band[0], [71.0 - half, 71.0 + half], atol=1e-3)
-    wide, _ = mode_bands(lam, T, 312.5, reach=2.0)
-    np.testing.assert_allclose(wide[0], [71.0 - 2 * half, 71.0 + 2 * half], atol=1e-3)
-    near = poles([71.0, 80.0], [0.005, 0.001])                  # a group of its own: its zone starts at 75.56 Hz
-    both, g = mode_bands(near, T, 312.5, reach=2.0)
-    assert g.tolist() == [0, 1] and both[0, 1] < 80.0 - MERGE_FACTOR * 8 / T
-    off, _ = mode_bands(lam, T, 312.5, reach=2.0, avoid=poles([63.5], [0.001]))
-    np.testing.assert_allclose(off[0], [63.5 + MERGE_FACTOR * 8 / T, 71.0 + 2 * half], atol=2e-3)
-
