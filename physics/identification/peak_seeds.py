@@ -255,20 +255,16 @@ def _cut_at_rises(decays, fs, bands_hz, eigenvalues):
     cuts nothing. The cut is placed at the band's amplitude jump (:func:`band_jump`, the decay of the band's pole of
     ``eigenvalues`` divided out) where it lies within the rise's window of the rise: the rise's own place is only
     as fine as that window (two over the band's width)."""
-    pieces, first = [], []
+    cuts = []
     for y in decays:
-        cuts = []
+        cuts.append([])
         for b, lam in zip(bands_hz, eigenvalues):
             rise = band_rises(y, fs, b)
             if rise.size == 1:
                 jump = band_jump(y, fs, b, lam)
                 near = abs(jump.sample - rise[0]) <= 2 * fs / max(b[1] - b[0], np.finfo(float).tiny)
-                cuts.append(jump.sample if near and jump.score >= REEXCITE_JUMP else int(rise[0]))
-        cuts = np.unique(np.array(cuts, int))
-        edges = [0, *cuts.tolist(), y.shape[1]]
-        first.append(len(pieces))
-        pieces += [y[:, a:b] for a, b in zip(edges[:-1], edges[1:])]
-    return (pieces, np.array(first, int)) if len(pieces) > len(decays) else (None, None)
+                cuts[-1].append(jump.sample if near and jump.score >= REEXCITE_JUMP else int(rise[0]))
+    return _pieces(decays, cuts)
 
 
 def _cut_at_jumps(decays, fs, bands_hz, eigenvalues):
@@ -276,15 +272,29 @@ def _cut_at_jumps(decays, fs, bands_hz, eigenvalues):
     ``eigenvalues`` divided out, jumps (:func:`band_jump`, a score of at least :data:`REEXCITE_JUMP` and a step of
     :data:`REEXCITE_STEP`): the pieces,
     and the index of each decay's first piece (None where no decay is cut)."""
+    cuts = [[j.sample for j in (band_jump(y, fs, b, lam) for b, lam in zip(bands_hz, eigenvalues))
+             if j.score >= REEXCITE_JUMP and j.step >= REEXCITE_STEP] for y in decays]
+    return _pieces(decays, cuts)
+
+
+def _pieces(decays, cuts):
+    """The decays cut at their ``cuts`` (one list of samples per decay): the pieces, and the index of each decay's
+    first piece; ``(None, None)`` where no decay is cut."""
     pieces, first = [], []
-    for y in decays:
-        jumps = [band_jump(y, fs, b, lam) for b, lam in zip(bands_hz, eigenvalues)]
-        cuts = np.unique(np.array([j.sample for j in jumps if j.score >= REEXCITE_JUMP and j.step >= REEXCITE_STEP],
-                                  int))
-        edges = [0, *cuts.tolist(), y.shape[1]]
+    for y, c in zip(decays, cuts):
+        edges = [0, *np.unique(np.array(c, int)).tolist(), y.shape[1]]
         first.append(len(pieces))
         pieces += [y[:, a:b] for a, b in zip(edges[:-1], edges[1:])]
     return (pieces, np.array(first, int)) if len(pieces) > len(decays) else (None, None)
+
+
+def _mode_of_peak(converged, eigenvalues, damping_std, peak_hz, tolerance_hz, max_damping) -> np.ndarray:
+    """Which fitted seeds are modes of their peaks: converged within the peak's tolerance (Hz), damped in
+    ``(0, max_damping)`` and by at least :data:`MIN_DECAY_SIGMAS` of the damping's one sigma (shape (n_seeds,))."""
+    lam = np.asarray(eigenvalues, complex)
+    fn, zeta = np.abs(lam) / (2 * np.pi), -lam.real / np.abs(lam)
+    return converged & (np.abs(fn - peak_hz) <= tolerance_hz) & (zeta > 0) & (zeta < max_damping) \
+        & (zeta >= MIN_DECAY_SIGMAS * damping_std)
 
 
 def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPeaks, seeds, max_damping,
@@ -352,20 +362,16 @@ def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPe
         pieces, first = _cut_at_jumps(decays, fs, zones, lam[decaying])
         if pieces is not None:
             refit, jr = _seed_fit(pieces, fs, held, lam[decaying], None)
-            lam_r, zeta_r = refit.eigenvalues[jr], refit.damping_ratios[jr]
             better = np.zeros(lam.size, bool)           # the pieces' fit where it is still a mode of the peak
-            better[decaying] = refit.converged[jr] & (zeta_r > 0) & (zeta_r < max_damping) \
-                & (zeta_r >= MIN_DECAY_SIGMAS * refit.damping_std[jr]) \
-                & (np.abs(np.abs(lam_r) / (2 * np.pi) - peaks.frequency_hz[seeds][decaying])
-                   <= peaks.tolerance_hz[seeds][decaying])
+            better[decaying] = _mode_of_peak(refit.converged[jr], refit.eigenvalues[jr], refit.damping_std[jr],
+                                             peaks.frequency_hz[seeds][decaying],
+                                             peaks.tolerance_hz[seeds][decaying], max_damping)
             jr = jr[better[decaying]]
             lam[better], f_std[better], z_std[better] = refit.eigenvalues[jr], refit.frequency_std_hz[jr], \
                 refit.damping_std[jr]
             amps[:, :, better] = refit.amplitudes[first][:, :, jr]
     fn = np.abs(lam) / (2 * np.pi)
-    zeta = -lam.real / np.abs(lam)
-    ok = conv & (np.abs(fn - peaks.frequency_hz[seeds]) <= peaks.tolerance_hz[seeds]) \
-        & (zeta > 0) & (zeta < max_damping) & (zeta >= MIN_DECAY_SIGMAS * z_std)
+    ok = _mode_of_peak(conv, lam, z_std, peaks.frequency_hz[seeds], peaks.tolerance_hz[seeds], max_damping)
     taken = list(np.abs(held) / (2 * np.pi))
     apart = peaks.tolerance_hz[seeds]
     keep = []
