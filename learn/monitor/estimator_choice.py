@@ -155,9 +155,8 @@ def choose_estimators(F, G, baseline, reference_hz):
             continue
         est = np.log(np.stack([fb[both], gb[both]], axis=1))            # (k, 2)
         scatter[r] = [f_ref[r] * robust_std(est[:, j]) for j in range(2)]
-        for h, part in enumerate((both[0::2], both[1::2])):
-            sel = np.isin(both, part)
-            halves[r, h] = [f_ref[r] * robust_std(est[sel, j]) for j in range(2)]
+        for h in range(2):                                              # the odd and the even tests
+            halves[r, h] = [f_ref[r] * robust_std(est[h::2, j]) for j in range(2)]
         chosen[r] = (complete[r] and both[1::2].size >= MIN_HALF
                      and bool(np.all(halves[r, :, 1] < halves[r, :, 0])))
     return chosen, scatter, halves, n_tests, complete
