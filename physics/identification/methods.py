@@ -55,6 +55,9 @@ class MethodSpec:
         ``"frf"``, or ``"records"`` for an output-only method: then ``fit(signals, sampling_frequency_hz,
         band_hz, n_modes, where, **options)`` on response records ``(n_channels, n_samples)`` returns
         ``(estimate, diagram)`` with unscaled, unit-norm shapes.
+    stationary : bool
+        An output-only method that assumes a stationary response (its spectra or correlations averaged over the
+        whole record): ``identify`` warns when it is named for a free response.
     """
 
     fit: Callable
@@ -63,6 +66,7 @@ class MethodSpec:
     yields_uncertainty: bool
     options: tuple[str, ...] = ()
     data: str = "frf"
+    stationary: bool = False
 
 
 def _fit_lscf(frf: MeasuredFRF, drive, n_modes, max_order):
@@ -129,7 +133,7 @@ METHODS: dict[str, MethodSpec] = {
         "automatic stabilisation-diagram selection",
         (("frequency_std_hz, damping_std", "standard error from the spread of the mode over segments of the "
                                            "record (divided by sqrt of their number)"),),
-        yields_uncertainty=True, options=("max_order",), data="records"),
+        yields_uncertainty=True, options=("max_order",), data="records", stationary=True),
     "era": MethodSpec(
         _fit_era,
         "output-only, free responses (impacts or plucks without the force): the decays after the hits by the "
@@ -144,11 +148,13 @@ METHODS: dict[str, MethodSpec] = {
         partial(_fit_fdd, enhanced=False),
         "output-only: frequency-domain decomposition (peaks of the first singular value of the output "
         "cross-spectra; no damping)",
-        (("frequency_std_hz, damping_std", "none (NaN)"),), yields_uncertainty=False, data="records"),
+        (("frequency_std_hz, damping_std", "none (NaN)"),), yields_uncertainty=False, data="records",
+        stationary=True),
     "efdd": MethodSpec(
         partial(_fit_fdd, enhanced=True),
         "output-only: enhanced FDD (damping from the log decrement of each peak's SDOF bell in the time domain)",
-        (("frequency_std_hz, damping_std", "none (NaN)"),), yields_uncertainty=False, data="records"),
+        (("frequency_std_hz, damping_std", "none (NaN)"),), yields_uncertainty=False, data="records",
+        stationary=True),
     "fftpeak": MethodSpec(
         _fit_fft_peak,
         "output-only baseline: peaks of the zero-padded FFT of the whole record (no window on a free decay, Hann "

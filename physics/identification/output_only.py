@@ -31,7 +31,7 @@ __all__ = ["DEFAULT_OUTPUT_ONLY", "FREE_RESPONSE_METHOD", "SCALING", "STATIONARY
 DEFAULT_OUTPUT_ONLY = "auto"
 FREE_RESPONSE_METHOD, STATIONARY_METHOD = "era", "ssi"
 #: The output-only methods that assume a stationary response (warned of when named for a free response).
-STATIONARY_METHODS = ("ssi", "fdd", "efdd")
+STATIONARY_METHODS = tuple(name for name, spec in METHODS.items() if spec.stationary)
 #: What modal.json says of output-only shapes.
 SCALING = "unscaled (output-only: no force measured, so no modal mass)"
 
