@@ -140,11 +140,11 @@ def remove_window_decay(eigenvalues, tau_s, damping_std=None, noise_share=NOISE_
         j = bad[np.argmin(sigma[bad] + allowance[bad])]
         raise ConfigError(
             f"exponential window tau_s {tau:.4g} s adds {rate:.4g} 1/s to every decay rate, but mode {j + 1} "
-            f"({w_n[j] / (2 * np.pi):.5g} Hz) decays at {-lam.real[j]:.4g} 1/s (damping ratio "
-            f"{-lam.real[j] / w_n[j]:.4g}): its corrected damping ratio would be {sigma[j] / w_n[j]:.3g}, below zero "
-            f"by {-sigma[j]:.3g} 1/s, more than the noise ({allowance[j]:.2g} 1/s)"
-            + (f" of {bad.size} such modes" if bad.size > 1 else "")
-            + "; the window's tau is shorter than the one applied, or these FRFs were not windowed",
+            f"({w_n[j] / (2 * np.pi):.5g} Hz" + (f", the farthest of {bad.size} such modes" if bad.size > 1 else "")
+            + f") decays at {-lam.real[j]:.4g} 1/s (damping ratio {-lam.real[j] / w_n[j]:.4g}): its corrected "
+            f"damping ratio would be {sigma[j] / w_n[j]:.3g}, below zero by {-sigma[j]:.3g} 1/s, more than the noise "
+            f"({allowance[j]:.2g} 1/s); the window's tau is shorter than the one applied, or these FRFs were not "
+            "windowed",
             parameter="tau_s")
     at_zero = sigma < 0
     corrected = np.where(at_zero, 0.0, -sigma) + 1j * lam.imag
