@@ -143,3 +143,12 @@ def test_identify_refuses_a_window_on_output_only_records(capsys, tmp_path):
     write_time_uff(path, np.arange(rec.signals[0].size) * rec.time_step_s, [("2", rec.signals[1], 8, "m")])
     code, out, err = _run(capsys, ["identify", str(path), "--exp-window-tau", "1"])
     assert code == 2 and err.count("\n") == 1 and "response records identified output-only" in err, err
+
+
+def test_identify_unreadable_1858_record_exit_2_one_line(capsys, windowed, tmp_path):
+    d, _ = windowed
+    path = tmp_path / "bad.uff"
+    path.write_text(QUALIFIERS_1858.replace("     0     6     0", "     0    xx     0") + (d / "w.uff").read_text())
+    code, out, err = _run(capsys, ["identify", str(path)])
+    assert code == 2 and err.count("\n") == 1
+    assert f"{path}: cannot read the dataset 1858 (dataset 58 qualifiers) records" in err, err
