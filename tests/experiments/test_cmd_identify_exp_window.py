@@ -135,6 +135,8 @@ def test_estimate_impact_npz_carries_tau_and_identify_removes_it(capsys, tmp_pat
                                    "--out", str(tmp_path / "frf.uff")])
     assert code == 0, err
     assert f"'beam-damage identify --exp-window-tau {tau:.6g}' removes its decay" in out
+    code, out, err = _run(capsys, ["identify", str(path), "--band", "20", "200", "--exp-window-tau", "0.2"])
+    assert code == 2 and err.count("\n") == 1 and "estimated here with a Hann window" in err, err
 
 
 def test_identify_refuses_a_window_on_output_only_records(capsys, tmp_path):
