@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +23,7 @@ def run(args) -> dict:
         raise ConfigError(f"--decay {args.decay:g}: must be in (0, 1]")
     if args.fmax is not None and not args.fmax > 0:
         raise ConfigError(f"--fmax {args.fmax:g}: must be > 0")
-    writer = None
+    writer, ext = None, ""
     if args.out:
         ext = Path(args.out).suffix.lower()
         writer = next((f.writer for f in writable(FRF).values() if ext in f.extensions), None)
@@ -33,18 +34,21 @@ def run(args) -> dict:
     est = estimate_from_records(records, args.reference, args.estimator, args.excitation, args.averages,
                                 args.overlap, args.window, args.decay, args.fmax)
     coh = est.coherence
+    tau = 1.0 / est.added_decay_rate_1_s if est.added_decay_rate_1_s > 0 else None
+    frf = est.frf if tau is None else replace(est.frf, metadata={
+        **est.frf.metadata, "exponential_window": {"tau_s": tau, "end_value": args.decay}})
     out = {"file": str(args.file), "estimator": est.estimator, "excitation": est.excitation,
            "description": est.description, "n_averages": est.n_averages,
            "reference": est.frf.reference_dofs[0], "dofs": list(est.frf.response_dofs), "kind": est.frf.kind,
            "units": est.frf.units, "lines": int(est.frf.frequency_hz.size),
            "band_hz": [float(est.frf.frequency_hz[0]), float(est.frf.frequency_hz[-1])],
            "coherence_median": np.median(coh, axis=-1)[:, 0].tolist(),
-           "added_decay_rate_1_s": est.added_decay_rate_1_s}
+           "added_decay_rate_1_s": est.added_decay_rate_1_s, "exp_window_tau_s": tau}
     if est.hits is not None:
         out["double_hits"] = list(est.hits.double_hits)
         out["overloads"] = [{"block": b, "dof": d} for b, d in est.hits.overloads]
     if args.out:
-        writer(args.out, est.frf)
+        writer(args.out, frf)
         out["outputs"] = {"frf": str(args.out)}
     if not args.json:
         print(f"{args.file}: {est.description}")
@@ -53,6 +57,10 @@ def run(args) -> dict:
         if est.hits is not None and (est.hits.double_hits or est.hits.overloads):
             print(f"  left out: double hits in blocks {out['double_hits']}, overloads "
                   + ", ".join(f"{o['dof']} in block {o['block']}" for o in out["overloads"]))
+        if tau is not None:
+            print(f"  exponential window tau {tau:.6g} s: " + (
+                "stored in the file; 'beam-damage identify' removes its decay from the modes" if ext == ".npz"
+                else f"'beam-damage identify --exp-window-tau {tau:.6g}' removes its decay from the modes"))
         if args.out:
             print(f"wrote {args.out}")
     return out
@@ -77,6 +85,8 @@ def add_parser(sub):
                    help="impact: exponential window value at the block end (default 0.01; 1 = none)")
     p.add_argument("--fmax", type=float, help="highest line to keep (Hz)")
     p.add_argument("--out", metavar="FILE", help="write the FRFs in the format its extension names: "
-                                                 f"{accepted(FRF)} (UFF: dataset 58, function type 4)")
+                                                 f"{accepted(FRF)} (UFF: dataset 58, function type 4); .npz "
+                                                 "keeps the exponential window's tau, which 'identify' then "
+                                                 "removes from the modes' damping")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=run)

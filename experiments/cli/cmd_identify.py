@@ -4,15 +4,17 @@ from __future__ import annotations
 
 import json
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-from physics.errors import BeamDamageError, ConfigError
+from physics.errors import BeamDamageError, ConfigError, FileFormatError
 from physics.identification import (DEFAULT_OUTPUT_ONLY, METHODS, Identification, RecordsIdentification,
                                     holds_response_records, identify_file, identify_records,
                                     read_response_records, reconstruction_error_db)
 from physics.identification.decays import free_response
+from physics.identification.exponential_window import remove_window_decay, tau_from_end_value
 from physics.identification.output_only import FREE_RESPONSE_METHOD, SCALING, STATIONARY_METHOD, STATIONARY_METHODS
 from physics.identification.record_checks import check_records
 from physics.identification.setups import MergedSetups, finite_mac, merge_setups
@@ -107,10 +109,14 @@ def run(args) -> dict:
                           "equations grow with the square of the order)")
     if args.out and Path(args.out).exists() and not Path(args.out).is_dir():
         raise ConfigError(f"--out {args.out}: exists and is not a directory")
+    window_flag = _check_window_options(args)
     band = tuple(args.band) if args.band else None
     if args.method is None or METHODS[args.method].data == "records":
         records = _output_only_records(args.file, args.method)
         if records is not None:
+            if window_flag:
+                raise ConfigError(f"{window_flag}: removes an exponential window's decay from the modes of impact "
+                                  f"FRFs, but {args.file} holds response records identified output-only")
             return _run_output_only(args, records, band)
     if args.method is not None and holds_response_records(args.file) and not read(args.file, TIME).forces:
         names = ", ".join(n for n, spec in METHODS.items() if spec.data == "records")
@@ -122,7 +128,9 @@ def run(args) -> dict:
         warnings.simplefilter("always")
         ident = identify_file(args.file, args.method or "lscf", band, args.modes, args.max_order or LSCF_MAX_ORDER)
         _warn_split(args.file, ident.estimate)
+        ident, window = _remove_window(args, ident, window_flag)
     out = result_dict(ident)
+    out["exponential_window"] = window
     out["warnings"] = [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
     if args.out:
         from experiments.studies.plots_identify import write_outputs  # matplotlib: only when writing
@@ -141,12 +149,109 @@ def run(args) -> dict:
         notes = dict(METHODS[out["method"]].uncertainty)
         print("+-std: " + notes.get("frequency_std_hz, damping_std", "none (NaN)") + "; +-fit: "
               + notes.get("frequency_fit_std_hz, damping_fit_std", "none (NaN)"))
+        if window is not None:
+            print(window_text(window))
         if out["out_of_band_poles_hz"]:
             print("poles just outside the band used by the fit (Hz): "
                   + ", ".join(f"{x:.4g}" for x in out["out_of_band_poles_hz"]))
         for name, p in out.get("outputs", {}).items():
             print(f"wrote {p}")
     return out
+
+
+def _check_window_options(args) -> str | None:
+    """Check ``--exp-window-tau`` / ``--exp-window-end`` (at most one; a finite tau > 0, an end value in (0, 1));
+    returns the flag given, or None."""
+    tau, end = getattr(args, "exp_window_tau", None), getattr(args, "exp_window_end", None)
+    if tau is not None and end is not None:
+        raise ConfigError("--exp-window-tau and --exp-window-end name the same window: give one")
+    if tau is not None and not (np.isfinite(tau) and tau > 0):
+        raise ConfigError(f"--exp-window-tau {tau:g}: the window's time constant must be finite and > 0 (s)")
+    if end is not None and not 0 < end < 1:
+        raise ConfigError(f"--exp-window-end {end:g}: the window's value at the record end must be in (0, 1) "
+                          "(0.01: it decays to 1 %)")
+    return "--exp-window-tau" if tau is not None else "--exp-window-end" if end is not None else None
+
+
+def _stored_tau(frf: MeasuredFRF) -> float | None:
+    """The exponential window's tau_s that 'beam-damage estimate --excitation impact' stored in the FRFs' metadata
+    (``.npz``), or None."""
+    stored = frf.metadata.get("exponential_window")
+    if stored is None:
+        return None
+    tau = stored.get("tau_s") if isinstance(stored, dict) else None
+    if isinstance(tau, bool) or not isinstance(tau, (int, float)) or not (np.isfinite(tau) and tau > 0):
+        raise FileFormatError(f"{frf.metadata.get('source')}: metadata exponential_window.tau_s {tau!r} must be a "
+                              "finite number > 0 (s)")
+    return float(tau)
+
+
+def _record_length_s(frf: MeasuredFRF) -> float:
+    """``1 / df`` of FRF lines equally spaced ``df`` apart: the length of the record the window spans."""
+    df = np.diff(frf.frequency_hz)
+    if df.size == 0 or np.ptp(df) > 1e-6 * df.mean():
+        raise ConfigError(f"--exp-window-end: {frf.metadata.get('source')} has no equally spaced frequency lines, "
+                          "so the record length 1/df is unknown; give the time constant with --exp-window-tau")
+    return 1.0 / df.mean()
+
+
+def _remove_window(args, ident: Identification, flag) -> tuple:
+    """``(ident, report)``: the identification with the exponential window's decay removed from its modes when a
+    window is known (the options, else the tau 'estimate' stored in the file), and the ``exponential_window``
+    report (None: no window known). A window the file's dataset 1858 names is reported and warned about, not
+    removed: the format leaves the unit of its damping factor undefined."""
+    frf, est = ident.frf, ident.estimate
+    stored = _stored_tau(frf)
+    if flag is None and stored is None:
+        named = [w for w in frf.metadata.get("windows", ()) if w["window_type"] in (4, 6)]
+        if not named:
+            return ident, None
+        text = "; ".join(f"{w['window']} (damping factor {w['exponential_window_damping_factor']:.4g}, "
+                         f"{w['records']} record(s))" for w in named)
+        warnings.warn(f"{args.file}: its dataset 1858 records name an exponential window: {text}; the format does "
+                      "not define the damping factor's unit, so the window's decay is not removed: the damping "
+                      "ratios include it; remove it with --exp-window-tau S or --exp-window-end FRACTION",
+                      UserWarning, stacklevel=2)
+        return ident, {"tau_s": None, "added_decay_rate_1_s": None, "source": "dataset 1858 (not removed: unit of "
+                       "the damping factor undefined)", "file_windows": named, "identified": None, "at_zero": []}
+    if "time records" in frf.metadata.get("format", ""):
+        raise ConfigError(f"{flag}: {args.file} holds time records whose FRFs are estimated here with a Hann "
+                          "window (random excitation), no exponential window; for an impact test estimate them "
+                          "with 'beam-damage estimate --excitation impact --out FRF.npz' and identify that")
+    tau_opt, end_opt = getattr(args, "exp_window_tau", None), getattr(args, "exp_window_end", None)
+    if tau_opt is not None:
+        tau, source = tau_opt, "--exp-window-tau"
+    elif end_opt is not None:
+        length = _record_length_s(frf)
+        tau = tau_from_end_value(length, end_opt)
+        source = f"--exp-window-end {end_opt:g} over the record length 1/df = {length:.6g} s"
+    else:
+        tau, source = stored, f"{args.file}: stored by 'beam-damage estimate' (impact, exponential window)"
+    if flag and stored is not None and not np.isclose(tau, stored, rtol=1e-6):
+        warnings.warn(f"{args.file}: stores an exponential window of tau {stored:.6g} s; {flag} ({tau:.6g} s) is "
+                      "removed instead", UserWarning, stacklevel=2)
+    fix = remove_window_decay(est.eigenvalues, tau, est.damping_std)
+    if fix.at_zero.any():
+        modes = ", ".join(f"{j + 1} ({est.natural_frequencies_hz[j]:.5g} Hz)" for j in np.nonzero(fix.at_zero)[0])
+        warnings.warn(f"exponential window: mode(s) {modes} set to zero damping: their identified decay rates lie "
+                      f"within the noise of the window's {fix.added_decay_rate_1_s:.4g} 1/s", UserWarning,
+                      stacklevel=2)
+    report = {"tau_s": fix.tau_s, "added_decay_rate_1_s": fix.added_decay_rate_1_s, "source": source,
+              "file_windows": list(frf.metadata.get("windows", ())),
+              "identified": [{"frequency_hz": float(f), "damping_ratio": float(z)}
+                             for f, z in zip(est.natural_frequencies_hz, est.damping_ratios)],
+              "at_zero": [int(j) + 1 for j in np.nonzero(fix.at_zero)[0]]}
+    est = replace(est, eigenvalues=fix.eigenvalues, natural_frequencies_hz=fix.natural_frequencies_hz,
+                  damping_ratios=fix.damping_ratios)
+    return replace(ident, estimate=est), report
+
+
+def window_text(window: dict) -> str:
+    """One line on the exponential window removed (or named by the file and not removed)."""
+    if window["tau_s"] is None:
+        return f"exponential window named by the file, not removed ({window['source']})"
+    return (f"exponential window removed: tau {window['tau_s']:.4g} s ({window['source']}): "
+            f"{window['added_decay_rate_1_s']:.4g} 1/s off every mode's decay rate")
 
 
 def _output_only_records(path, method):
@@ -285,8 +390,18 @@ def add_parser(sub):
                    help=f"highest model order (default {LSCF_MAX_ORDER} for lscf; ssi and era size it to the "
                         "clear peaks of the record's spectrum; used by "
                         f"{', '.join(m for m, spec in METHODS.items() if 'max_order' in spec.options)})")
+    p.add_argument("--exp-window-tau", type=float, metavar="S",
+                   help="FRFs of an impact test estimated with an exponential window exp(-t/S) on the response: "
+                        "remove the 1/S (1/s) it adds to every mode's decay rate sigma = zeta omega_n (omega_d is "
+                        "kept; omega_n and zeta recomputed); reported as exponential_window in the JSON. FRFs from "
+                        "'beam-damage estimate --excitation impact --out FILE.npz' carry their S and are corrected "
+                        "without it")
+    p.add_argument("--exp-window-end", type=float, metavar="FRACTION",
+                   help="as --exp-window-tau, the window given by its value at the record end (0.01: it decays to "
+                        "1 %%): S = T / ln(1/FRACTION), T = 1/df the record length of the FRF lines")
     p.add_argument("--out", metavar="DIR",
-                   help="write modal.json (feedable to 'beam-damage update --modal'), synthesised.uff (the "
+                   help="write modal.json (feedable to 'beam-damage update --modal'; an exponential window's decay "
+                        "removed), synthesised.uff (the "
                         "fitted FRFs in the input's kind, units and lines of the band; synthesised.csv for a CSV "
                         "without reference DOF), stabilisation.png "
                         "(lscf) and overlay.png")

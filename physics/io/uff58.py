@@ -18,7 +18,7 @@ from physics.io.geometry import geometry_from_uff_sets
 from physics.io.types import DEFAULT_UNITS, MeasuredFRF, dof_label, frf_matrix, parse_dof
 from physics.io.units import UnitSystem, frf_unit_factor
 
-__all__ = ["UffFile", "read_uff58", "read_uff_context", "read_uff_geometry", "write_uff58"]
+__all__ = ["UFF_WINDOW_TYPES", "UffFile", "read_uff58", "read_uff_context", "read_uff_geometry", "write_uff58"]
 
 
 #: UFF specific data types of dataset 58 ordinates, and the FRF kind they give.
@@ -35,8 +35,11 @@ _UFF_FUNCTION_NAMES = {0: "general/unknown", 1: "time response", 2: "auto spectr
                        24: "shock response spectrum", 25: "finite impulse response filter",
                        26: "multiple coherence", 27: "order function"}
 _UFF_SET_NAMES = {15: "nodes", 55: "data at nodes (modes)", 58: "function at nodal DOF",
-                  82: "trace lines", 151: "header", 164: "units", 2411: "nodes",
+                  82: "trace lines", 151: "header", 164: "units", 1858: "dataset 58 qualifiers", 2411: "nodes",
                   2412: "elements", 2414: "analysis data", 2420: "coordinate systems"}
+#: Window types of dataset 1858 (record 2, field 2).
+UFF_WINDOW_TYPES = {0: "none or unknown", 1: "Hanning narrow", 2: "Hanning broad", 3: "flattop", 4: "exponential",
+                    5: "impact", 6: "impact and exponential"}
 
 
 def _check_uff_complete(path: Path, raw: bytes) -> None:
@@ -105,6 +108,8 @@ def read_uff58(path, kind=None) -> MeasuredFRF:
                       "unit_system": system.description}}
     if geometry is not None:
         meta["geometry"] = {"source": geometry.source, "nodes_m": geometry.to_dict()}
+    if uf.windows:
+        meta["windows"] = uf.windows
     try:
         return MeasuredFRF(freq, frf, tuple(resp), tuple(refs), kind=file_kind, metadata=meta)
     except ShapeError as exc:
@@ -238,7 +243,7 @@ def _file_kind(path: Path, ordinates: set, kind) -> str:
 
 
 #: Dataset types read as context of the FRFs (header, units, coordinate systems, nodes, trace lines, elements).
-_CONTEXT_SETS = {58, 151, 164, 15, 18, 82, 2411, 2412, 2420}
+_CONTEXT_SETS = {58, 151, 164, 15, 18, 82, 1858, 2411, 2412, 2420}
 #: Dataset 164 unit codes.
 _UNIT_CODES = {1: "SI: m (N)", 2: "BG: ft (lbf)", 3: "MG: m (kgf)", 4: "BA: ft (poundal)", 5: "MM: mm (mN)",
                6: "CM: cm (cN)", 7: "IN: in (lbf)", 8: "GM: mm (kgf)", 9: "user defined"}
@@ -397,6 +402,26 @@ class UffFile:
     def function_types(self) -> set:
         """Function types of the dataset 58 records (1 time response, 4 FRF, ...)."""
         return {int(s.get("func_type", -1)) for _, s in self.records58}
+
+    @cached_property
+    def windows(self) -> list:
+        """The distinct windows the dataset 1858 records (qualifiers of the dataset 58 records) name:
+        ``[{"window_type": code, "window": name, "exponential_window_damping_factor": value, "records": n}, ...]``
+        (empty without dataset 1858). The format does not define the damping factor's unit; it is passed on as
+        written."""
+        idx = [i for i, t in enumerate(self.types) if t == 1858]
+        if not idx:
+            return []
+        try:
+            sets = self.uff.read_sets(idx)
+            rows = [(int(s["window_type"]), float(s["exponential_window_damping_factor"]))
+                    for s in ([sets] if isinstance(sets, dict) else sets)]
+        except Exception as exc:  # pyuff raises bare Exception
+            raise FileFormatError(f"{self.path}: cannot read the dataset 1858 (dataset 58 qualifiers) records "
+                                  f"({_short(exc)})") from None
+        return [{"window_type": code, "window": UFF_WINDOW_TYPES.get(code, f"code {code}"),
+                 "exponential_window_damping_factor": factor, "records": rows.count((code, factor))}
+                for code, factor in dict.fromkeys(rows)]
 
     @cached_property
     def context(self) -> tuple:
