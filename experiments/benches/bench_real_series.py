@@ -449,14 +449,14 @@ def matched_markdown(results: list, rate: float) -> str:
             cells = [_no_answer(refused[c]) if refused.get(c) else _pct(r[c]) for c in MATCHED]
             lines.append([name, "baseline (held out)" if r["group"] == "baseline" else r["group"], r["n"], *cells])
         th = m["p_thresholds"]
-        notes.append(f"{res['set']}: monitor flags {m['monitor_flagged']} of the {m['healthy']} held-out healthy "
+        notes.append(f"{res['set']}: monitor flags {m['monitor_flagged']} of the {m['healthy']} healthy "
                      "tests; matched: p below " + ", ".join(
                          f"{'all' if v is None else f'{v:.3g}'} ({k})" for k, v in th.items()))
     return table(head, lines) + "\n\n" + "; ".join(notes) + (
         f"\n\nThe plain tests held to a rate: Gaussian prediction intervals of the FFT peaks' `ln f` (the shift: the "
         f"mean over the modes; per mode: Bonferroni over the modes), two-sided, each baseline test held out; `at "
-        f"the rate`: p below {rate:g}; `matched`: p below the threshold that flags as many healthy tests (the held-out "
-        "baseline and `intact`) as `monitor` does.")
+        f"the rate`: p below {rate:g}; `matched`: p below the largest threshold that flags no more healthy tests "
+        "(the held-out baseline and `intact`) than `monitor` does.")
 
 
 def markdown(results: list, rate: float) -> str:
