@@ -22,6 +22,15 @@ the smaller log gap to its neighbouring modes either side, within the band). On 
 * ``plain per mode``: any mode's relative change beyond its baseline ``rate / (2 m)`` or ``1 - rate / (2 m)``
   quantile.
 
+On the baseline rows each baseline test is judged against the thresholds of the other baseline tests
+(:func:`~experiments.benches.plain_tests.held_out_plain_alarms`), as ``monitor``'s baseline rows are held out: a
+quantile of 8-15 tests at ``rate / 2`` is their extreme, which a new healthy test passes far more often than
+``rate``. The second table holds the same two tests to a false-alarm rate
+(:func:`~experiments.benches.plain_tests.plain_p_values`: Gaussian prediction intervals of ``ln f``, each baseline
+test held out) and reads them at ``--rate`` (``at the rate``) and at the threshold that flags as many of the
+healthy tests (the held-out baseline and ``intact``) as ``monitor`` does (``matched``,
+:func:`~experiments.benches.plain_tests.matched_alarms`: a point of their ROC curve at ``monitor``'s false alarms).
+
 ``monitor on FFT peaks`` is ``monitor`` fed those FFT-peak frequencies as modal data (``natural_frequencies_hz``
 files): its detector without its identification. ``monitor`` estimates each mode's frequency by the more repeatable
 over the baseline period of its identification and the record's FFT peak (:mod:`learn.monitor.estimator_choice`;
@@ -57,7 +66,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 
 from experiments.benches.harness import parser, publish, table  # noqa: E402
-from experiments.benches.plain_tests import plain_alarms  # noqa: E402
+from experiments.benches.plain_tests import held_out_plain_alarms, matched_alarms, plain_p_values  # noqa: E402
 from learn.monitor import (IdentificationSettings, IdentifiedModes, SeriesInput, monitor_series,  # noqa: E402
                            reference_modes)
 from learn.monitor.alarms import FLAGGED_STATUSES  # noqa: E402
@@ -67,8 +76,8 @@ from physics.errors import BeamDamageError  # noqa: E402
 from physics.identification.fft_peak import fft_peaks, identify_fft_peaks  # noqa: E402
 from physics.io import atomic_write_text  # noqa: E402
 
-__all__ = ["LOADERS", "METHODS", "ONE_ESTIMATOR", "RealSeries", "fft_frequencies", "group_scores", "main",
-           "mode_windows_hz", "reference_fft_modes"]
+__all__ = ["LOADERS", "MATCHED", "METHODS", "ONE_ESTIMATOR", "RealSeries", "fft_frequencies", "group_scores", "main",
+           "matched_markdown", "mode_windows_hz", "reference_fft_modes"]
 
 DATA = str(Path(__file__).resolve().parents[1] / "data" / "real")
 
@@ -355,8 +364,8 @@ def run_set(series: RealSeries, out: Path, rate: float, statistics=DEFAULT_STATI
     ref = reference_fft_modes(series.records[:nb], series.sampling_frequency_hz[:nb], series.band_hz)
     F = fft_frequencies(series.records, series.sampling_frequency_hz, mode_windows_hz(ref, series.band_hz)) \
         if ref.size else np.full((len(files), 0), np.nan)
-    plain = plain_alarms(F, nb, rate, sides=2, method="linear") if ref.size else {
-        k: np.zeros(len(files), bool) for k in ("plain shift", "plain per mode")}
+    none = {k: np.zeros(len(files), bool) for k in ("plain shift", "plain per mode")}
+    plain = held_out_plain_alarms(F, nb, rate, sides=2, method="linear") if ref.size else none
     fft_status, fft_ref, _, _, fft_error, _ = _monitor(_write_modal(F, out / "fft_modal" / series.name), nb,
                                                  IdentificationSettings(), None, rate, statistics)
     flags = {"monitor": _flagged(status), **plain, "monitor on FFT peaks": _flagged(fft_status),
@@ -364,6 +373,14 @@ def run_set(series: RealSeries, out: Path, rate: float, statistics=DEFAULT_STATI
     identified = np.array([t is not None and t.frequencies_hz.size > 0 for t in tests]) if mon_error \
         else np.array([s not in ("not identified", "not judged") for s in status])
     rows = group_scores(series.groups, flags, identified, nb, series.known, against=("plain shift", "plain per mode"))
+    healthy = np.isin(np.asarray(series.groups), ("baseline", "intact"))
+    allowed = int(flags["monitor"][healthy].sum())
+    p = plain_p_values(F, nb) if ref.size else {k: np.full(len(files), np.nan) for k in none}
+    fair = {"monitor": flags["monitor"], "monitor on FFT peaks": flags["monitor on FFT peaks"],
+            **{f"{k} at the rate": v < rate for k, v in p.items()},
+            **{f"{k}, matched": matched_alarms(v, healthy, allowed) for k, v in p.items()}}
+    fair_rows = group_scores(series.groups, fair, identified, nb, series.known, against=())
+    thresholds = {k: _nth_smallest(v[healthy], allowed) for k, v in p.items()}
     base_med = np.nanmedian(F[:nb], axis=0) if ref.size else np.zeros(0)
     for r in rows:
         if r["group"] in series.groups and ref.size:
@@ -379,8 +396,18 @@ def run_set(series: RealSeries, out: Path, rate: float, statistics=DEFAULT_STATI
             "fft_reference_hz": ref.tolist(), "status": status, "errors": errors, "identified_hz":
                 [None if t is None else [float(v) for v in t.frequencies_hz] for t in tests],
             "labels": list(series.labels), "groups": list(series.groups), "fft_frequencies_hz": F.tolist(),
-            "flags": {k: v.tolist() for k, v in flags.items()}, "rows": rows, "seconds": time.perf_counter() - t0,
+            "flags": {k: v.tolist() for k, v in flags.items()}, "rows": rows,
+            "plain_p_values": {k: v.tolist() for k, v in p.items()}, "matched": {
+                "healthy": int(healthy.sum()), "monitor_flagged": allowed, "p_thresholds": thresholds,
+                "flags": {k: v.tolist() for k, v in fair.items()}, "rows": fair_rows},
+            "seconds": time.perf_counter() - t0,
             "monitor_seconds": t_mon}
+
+
+def _nth_smallest(p, k: int):
+    """The ``k + 1``-th smallest finite value of ``p``, or None: the p-value below which a matched test alarms."""
+    h = np.sort(p[np.isfinite(p)])
+    return float(h[k]) if k < h.size else None
 
 
 def _no_answer(error: str) -> str:
@@ -394,6 +421,42 @@ def _pct(v) -> str:
 #: ``monitor`` with every mode's frequency by the identification (``frequency_estimator="identification"``).
 ONE_ESTIMATOR = "monitor, identification alone"
 METHODS = ("monitor", ONE_ESTIMATOR, "monitor on FFT peaks", "plain shift", "plain per mode")
+
+
+#: The second table's methods: ``monitor`` beside the plain tests held to a false-alarm rate
+#: (:func:`~experiments.benches.plain_tests.plain_p_values`): at ``--rate``, and matched to ``monitor``'s alarms on
+#: the held-out healthy tests (:func:`~experiments.benches.plain_tests.matched_alarms`).
+MATCHED = ("monitor", "monitor on FFT peaks", "plain shift at the rate", "plain per mode at the rate",
+           "plain shift, matched", "plain per mode, matched")
+
+
+def matched_markdown(results: list, rate: float) -> str:
+    """The second docs table: per set and group, ``monitor`` and the plain tests at matched false alarms (baseline
+    rows: every method's held-out alarms), with each set's healthy tests, ``monitor``'s alarms among them and the
+    matched p-value thresholds under it."""
+    head = ["set", "tests", "n", *MATCHED]
+    lines, notes = [], []
+    for res in results:
+        m = res["matched"]
+        refused = {"monitor": res["monitor_error"], "monitor on FFT peaks": res["monitor_on_fft_error"]}
+        for k, r in enumerate(m["rows"]):
+            name = res["set"] if k == 0 else ""
+            if r["group"] == "first flagged later test":
+                cells = [_no_answer(refused[c]) if refused.get(c) else res["labels"][r[c]] if r[c] is not None
+                         else "never" for c in MATCHED]
+                lines.append([name, "first flagged later test", "", *cells])
+                continue
+            cells = [_no_answer(refused[c]) if refused.get(c) else _pct(r[c]) for c in MATCHED]
+            lines.append([name, "baseline (held out)" if r["group"] == "baseline" else r["group"], r["n"], *cells])
+        th = m["p_thresholds"]
+        notes.append(f"{res['set']}: monitor flags {m['monitor_flagged']} of the {m['healthy']} healthy "
+                     "tests; matched: p below " + ", ".join(
+                         f"{'all' if v is None else f'{v:.3g}'} ({k})" for k, v in th.items()))
+    return table(head, lines) + "\n\n" + "; ".join(notes) + (
+        f"\n\nThe plain tests held to a rate: Gaussian prediction intervals of the FFT peaks' `ln f` (the shift: the "
+        f"mean over the modes; per mode: Bonferroni over the modes), two-sided, each baseline test held out; `at "
+        f"the rate`: p below {rate:g}; `matched`: p below the largest threshold that flags no more healthy tests "
+        "(the held-out baseline and `intact`) than `monitor` does.")
 
 
 def markdown(results: list, rate: float) -> str:
@@ -414,8 +477,7 @@ def markdown(results: list, rate: float) -> str:
                 continue
             base = r["group"] == "baseline"
             size = "" if base or "mode 1 change %" not in r else f"{r['mode 1 change %']:+.2f} %"
-            cells = [_no_answer(refused[m]) if refused.get(m) else "-" if base and m.startswith("plain")
-                     else _pct(r[m]) for m in METHODS]
+            cells = [_no_answer(refused[m]) if refused.get(m) else _pct(r[m]) for m in METHODS]
             miss = "" if base or refused["monitor"] else f"{r['missed, not identified']} / " \
                                                           f"{r['missed, below threshold']}"
             lines.append([name, "baseline (held out)" if base else r["group"], r["n"], size,
@@ -427,7 +489,9 @@ def markdown(results: list, rate: float) -> str:
               if res.get("frequency_estimators")]
     return table(head, lines) + "".join(f"\n\n{n}" for n in notes) + (
         f"\n\nShare of each group's tests flagged at {rate:g} false alarms (`intact`: false alarms; baseline: "
-        "monitor's held-out alarms). `python -m experiments.benches.bench_real_series --docs`")
+        "each method's held-out alarms, each baseline test judged against the others).\n\n"
+        "Plain tests at matched false alarms:\n\n" + matched_markdown(results, rate)
+        + "\n\n`python -m experiments.benches.bench_real_series --docs`")
 
 
 def main(argv=None) -> int:

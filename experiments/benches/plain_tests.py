@@ -1,11 +1,15 @@
 """The plainest tests the monitoring benches set beside ``monitor``: alarms on the modal frequencies' relative change
-from their baseline medians, beyond the baseline's own quantiles."""
+from their baseline medians, beyond the baseline's own quantiles (:func:`plain_alarms`; held out on the baseline:
+:func:`held_out_plain_alarms`), and the same two tests calibrated to hold a false-alarm rate: Gaussian prediction
+intervals (:func:`plain_p_values`) read at the rate or at the threshold that flags as many held-out healthy tests as
+another detector does (:func:`matched_alarms`, a point of their ROC curve)."""
 
 from __future__ import annotations
 
 import numpy as np
+from scipy import special
 
-__all__ = ["plain_alarms"]
+__all__ = ["held_out_plain_alarms", "matched_alarms", "plain_alarms", "plain_p_values"]
 
 
 def plain_alarms(F, n_baseline: int, rate: float, *, sides: int, method: str, sign: float = 1.0) -> dict:
@@ -34,3 +38,81 @@ def plain_alarms(F, n_baseline: int, rate: float, *, sides: int, method: str, si
             shift |= mean > hi
             per |= (rel > phi).any(axis=1)
     return {"plain shift": found & shift, "plain per mode": found & per}
+
+
+def held_out_plain_alarms(F, n_baseline: int, rate: float, **kwargs) -> dict:
+    """:func:`plain_alarms` with each baseline test judged against the thresholds of the other ``n_baseline - 1``
+    (the later tests against the whole baseline, as :func:`plain_alarms`): its baseline rows are out-of-sample
+    false alarms. ``kwargs``: :func:`plain_alarms`' keywords."""
+    F = np.asarray(F, float)
+    out = plain_alarms(F, n_baseline, rate, **kwargs)
+    for i in range(n_baseline):
+        order = np.r_[np.delete(np.arange(n_baseline), i), i]
+        one = plain_alarms(F[order], n_baseline - 1, rate, **kwargs)
+        for k in out:
+            out[k][i] = one[k][-1]
+    return out
+
+
+def _nanmean(a, axis: int) -> np.ndarray:
+    """Mean over ``axis`` (kept, of length 1) of the finite values, NaN where there are none."""
+    ok = np.isfinite(a)
+    n = ok.sum(axis=axis, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(n > 0, np.where(ok, a, 0.0).sum(axis=axis, keepdims=True) / n, np.nan)
+
+
+def _prediction_p(x, train) -> np.ndarray:
+    """Two-sided p-value of each ``x`` (..., k, m) against the Gaussian prediction interval of the columns of
+    ``train`` (..., n, m; NaN ignored): ``t = (x - mean) / (s sqrt(1 + 1 / n))`` on ``t(n - 1)``; NaN where ``x``
+    is NaN or a column has fewer than 2 values or none of spread."""
+    n = np.isfinite(train).sum(axis=-2, keepdims=True)
+    mean = _nanmean(train, axis=-2)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        s = np.sqrt(np.nansum((train - mean) ** 2, axis=-2, keepdims=True) / (n - 1))
+        t = (x - mean) / (s * np.sqrt(1 + 1 / n))
+        p = 2 * special.stdtr(np.maximum(n - 1, 1), -np.abs(t))
+    return np.where((n >= 2) & (s > 0), p, np.nan)
+
+
+def _scores(x, train) -> tuple:
+    """``(shift p (..., k), per-mode p (..., k))`` of log frequencies ``x`` (..., k, m) against ``train``
+    (..., n, m)."""
+    m = x.shape[-1]
+    centre = _nanmean(train, axis=-2)
+    shift = _prediction_p(_nanmean(x - centre, axis=-1), _nanmean(train - centre, axis=-1))[..., 0]
+    per = _prediction_p(x, train)
+    found = np.isfinite(per).any(axis=-1)
+    with np.errstate(invalid="ignore"):
+        low = np.where(np.isfinite(per), per, 1.0).min(axis=-1)
+    return shift, np.where(found, np.minimum(1.0, m * low), np.nan)
+
+
+def plain_p_values(F, n_baseline: int) -> dict:
+    """The plain tests as Gaussian prediction intervals: ``"plain shift"``, the two-sided p-value of the mean over
+    the modes found of ``ln f`` less its baseline mean, against the baseline's such means; ``"plain per mode"``, the
+    smallest over the modes of each mode's two-sided p-value of ``ln f`` against its baseline values, times ``m``
+    (Bonferroni, at most 1). Each (n,), NaN for a test without any mode found. The p-value of ``x`` against ``k``
+    values of mean ``xbar`` and standard deviation ``s`` is that of ``t = (x - xbar) / (s sqrt(1 + 1 / k))`` on
+    Student's ``t(k - 1)``: for a new test exchangeable with Gaussian baseline tests ``P(p < a) = a`` exactly (the
+    shift; the per-mode p at most ``a``). Each baseline test is scored against the other ``n_baseline - 1``
+    (held out), every later test against the whole baseline.
+
+    ``F`` (n, m): each test's frequency (Hz) of each mode, NaN where not found; the baseline its first
+    ``n_baseline`` rows."""
+    x = np.log(np.asarray(F, float))
+    shift, per = np.full(x.shape[0], np.nan), np.full(x.shape[0], np.nan)
+    shift[n_baseline:], per[n_baseline:] = _scores(x[n_baseline:], x[:n_baseline])
+    others = np.array([np.delete(np.arange(n_baseline), i) for i in range(n_baseline)]).reshape(n_baseline, -1)
+    held = _scores(x[:n_baseline, None, :], x[others])
+    shift[:n_baseline], per[:n_baseline] = held[0][:, 0], held[1][:, 0]
+    return {"plain shift": shift, "plain per mode": per}
+
+
+def matched_alarms(p, healthy, n_allowed: int) -> np.ndarray:
+    """Flags ``p < threshold`` (bool, (n,)), the threshold the largest that flags at most ``n_allowed`` of the
+    ``healthy`` tests (bool mask, (n,)): the ``n_allowed + 1``-th smallest healthy p-value (NaN read as 1, never
+    flagged). ``n_allowed`` at least the healthy tests: every finite p flagged."""
+    p = np.where(np.isfinite(p), p, np.inf)
+    h = np.sort(p[np.asarray(healthy, bool)])
+    return p < (h[n_allowed] if n_allowed < h.size else np.inf)

@@ -4,7 +4,7 @@ tests' quantile thresholds, the per-group scores."""
 import numpy as np
 
 from experiments.benches.bench_real_series import fft_frequencies, group_scores, mode_windows_hz, reference_fft_modes
-from experiments.benches.plain_tests import plain_alarms
+from experiments.benches.plain_tests import held_out_plain_alarms, matched_alarms, plain_alarms, plain_p_values
 
 
 def _decays(freqs_hz, fs=1000.0, n=4000, zeta=0.01, seed=0):
@@ -65,3 +65,47 @@ def test_group_scores_count_each_groups_flags_and_split_the_first_methods_misses
     assert by["change"]["missed, not identified"] == 1 and by["change"]["missed, below threshold"] == 1
     assert by["change"]["identified"] == 3
     assert by["first flagged later test"] == {"group": "first flagged later test", "monitor": 6, "plain": 4}
+
+
+def test_the_held_out_plain_tests_judge_each_baseline_test_against_the_others_extremes():
+    F = np.array([[10.0], [10.2], [10.3], [10.4], [11.0], [9.0], [10.25]])
+    a = held_out_plain_alarms(F, 5, 0.01, sides=2, method="linear")
+    # held out, 10.0 lies below the 0.5 % quantile of the other four (10.2 + 0.015 * 0.1) and 11.0 above theirs;
+    # the inner three within: the baseline's extremes alarm, as a new test beyond the baseline's range would
+    np.testing.assert_array_equal(a["plain shift"], [True, False, False, False, True, True, False])
+    np.testing.assert_array_equal(a["plain per mode"], a["plain shift"])
+    whole = plain_alarms(F, 5, 0.01, sides=2, method="linear")
+    # in sample the extremes pass their own linear quantiles too (10.004 and 10.988)
+    np.testing.assert_array_equal(whole["plain shift"][:5], [True, False, False, False, True])
+    np.testing.assert_array_equal(whole["plain shift"][5:], a["plain shift"][5:])
+
+
+def test_the_plain_p_values_are_the_gaussian_prediction_intervals_and_hold_their_rate():
+    x = np.exp(np.array([[-1.0], [0.0], [1.0], [2.0], [np.nan]]))
+    p = plain_p_values(x, 3)
+    t = 2.0 / np.sqrt(4.0 / 3.0)            # mean 0, s 1 of 3 tests; on t(2) P(T > t) = (1 - t / sqrt(t^2 + 2)) / 2
+    np.testing.assert_allclose(p["plain shift"][3], 1 - t / np.sqrt(t ** 2 + 2), rtol=1e-12)
+    np.testing.assert_allclose(p["plain per mode"][3], p["plain shift"][3], rtol=1e-12)   # one mode: one test
+    assert np.isnan(p["plain shift"][4]) and np.isnan(p["plain per mode"][4])             # nothing found
+    # held out: -1 against (0, 1): mean 0.5, s 0.707, t = -1.5 / (0.707 sqrt(1.5)) on t(1)
+    t0 = 1.5 / (np.sqrt(0.5) * np.sqrt(1.5))
+    np.testing.assert_allclose(p["plain shift"][0], 1 - 2 / np.pi * np.arctan(t0), rtol=1e-12)
+    # exchangeable Gaussian tests: a held-out baseline test and a new one each below 0.1 in 10 % of 800 series
+    rng = np.random.default_rng(2)
+    hits = np.zeros((2, 2))
+    for _ in range(800):
+        F = np.exp(1e-3 * rng.standard_normal((9, 2)) + np.log([10.0, 60.0]))
+        q = plain_p_values(F, 8)
+        hits += [[q["plain shift"][0] < 0.1, q["plain shift"][8] < 0.1],
+                 [q["plain per mode"][0] < 0.1, q["plain per mode"][8] < 0.1]]
+    shares, sd = hits / 800, np.sqrt(0.1 * 0.9 / 800)
+    assert np.all(np.abs(shares[0] - 0.1) < 3 * sd)                      # the shift: exactly the rate
+    assert np.all((shares[1] > 0.1 - 0.02 - 3 * sd) & (shares[1] < 0.1 + 3 * sd))    # Bonferroni: at most, near it
+
+
+def test_the_matched_threshold_flags_as_many_healthy_tests_as_allowed():
+    p = np.array([0.5, 0.02, 0.3, np.nan, 0.01, 0.025, 0.2, np.nan])
+    healthy = np.array([1, 1, 1, 1, 0, 0, 0, 0], bool)
+    np.testing.assert_array_equal(matched_alarms(p, healthy, 0), [0, 0, 0, 0, 1, 0, 0, 0])
+    np.testing.assert_array_equal(matched_alarms(p, healthy, 1), [0, 1, 0, 0, 1, 1, 1, 0])
+    np.testing.assert_array_equal(matched_alarms(p, healthy, 4), [1, 1, 1, 0, 1, 1, 1, 0])    # every finite p
