@@ -21,7 +21,7 @@ dominant direction of each mode's complex amplitudes over the decays, unit-norm 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -33,6 +33,7 @@ from physics.identification.decays import Decays, _adds_energy, decay_spectrum, 
 from physics.identification.fdd import clear_peaks, unit_shapes
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.peak_seeds import SeededModes, refine_seeds, unheld_peaks
+from physics.identification.peak_warning import warn_unexplained_peaks
 from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles
 from physics.identification.record_checks import CheckedRecord, check_periods, check_records
 from physics.identification.ssi import MIN_MAX_ORDER, ORDERS_PER_PEAK
@@ -85,6 +86,8 @@ class ERAIdentification:
         The modes of the record's clear peaks that no kept pole held, each started at its peak and refined in its
         band (:func:`~physics.identification.peak_seeds.refine_seeds`); the estimate holds them too, flagged
         ``weakly_stable``.
+    unexplained_hz : ndarray, shape (n_unexplained,)
+        The record's clear peaks that no mode of the estimate explains (named in a warning).
     """
 
     estimate: ModalEstimate
@@ -96,6 +99,7 @@ class ERAIdentification:
     n_fitted: int = 0
     bands: BandFit | None = None
     seeded: SeededModes | None = None
+    unexplained_hz: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 def _decimated(checked, q, decays):
@@ -336,4 +340,9 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     est = ModalEstimate(wn / (2 * np.pi), -lam[sub].real / wn, lam[sub], shapes,
                         np.zeros((n_ch, 0, sub.size), complex), f_std[sub], z_std[sub],
                         modal_phase_collinearity(shapes), "era", False, weakly_stable=weak[sub])
-    return ERAIdentification(est, diagram, fit, decays, q, rows, len(fitted_spans), bands, seeded)
+    unexplained = warn_unexplained_peaks(
+        record_peaks, est.natural_frequencies_hz, where,
+        "a sinusoid that does not decay (mains hum, a harmonic), or a mode to look for with --band around it"
+        + (" or more --modes" if n_modes is not None else " or a higher --max-order"))
+    return ERAIdentification(est, diagram, fit, decays, q, rows, len(fitted_spans), bands, seeded,
+                             record_peaks.frequency_hz[unexplained])
