@@ -15,8 +15,12 @@ exponentials and a smooth background, close modes together), so that the other m
 hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. A clear peak of the
 record's spectrum (:func:`~physics.identification.decay_peaks.decay_peaks`, the peaks ``fftpeak`` reports) that no
 kept pole holds (a weak mode beyond the model's order, or a diagram with no pole stable enough) is started at its
-peak and refined in its band, the kept poles held fixed (:mod:`~physics.identification.peak_seeds`). Shapes: the
-dominant direction of each mode's complex amplitudes over the decays, unit-norm and unscaled (no force measured).
+peak and refined in its band, the kept poles held fixed (:mod:`~physics.identification.peak_seeds`). A peak still
+without a mode then that is clear by SSI-cov's rule (:func:`~physics.identification.fdd.clear_peaks`: 10 dB above the
+running floor) is named in a warning, as SSI-cov names its own
+(:func:`~physics.identification.peak_warning.warn_unexplained_peaks`): a sinusoid that does not decay, a mode whose
+seed's fit failed, or one ``n_modes`` left out. Shapes: the dominant direction of each mode's complex amplitudes over
+the decays, unit-norm and unscaled (no force measured).
 """
 
 from __future__ import annotations
@@ -87,7 +91,8 @@ class ERAIdentification:
         band (:func:`~physics.identification.peak_seeds.refine_seeds`); the estimate holds them too, flagged
         ``weakly_stable``.
     unexplained_hz : ndarray, shape (n_unexplained,)
-        The record's clear peaks that no mode of the estimate explains (named in a warning).
+        The clear peaks of the record's spectrum (SSI-cov's rule,
+        :func:`~physics.identification.fdd.clear_peaks`) that no mode of the estimate explains (named in a warning).
     """
 
     estimate: ModalEstimate
@@ -225,7 +230,8 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     checked = check_records(signals, sampling_frequency_hz, band_hz, where)
     fs, band = checked.sampling_frequency_hz, checked.band_hz
     n_ch = checked.signals.shape[0]
-    peaks = clear_peaks(decay_spectrum(checked))
+    sv = decay_spectrum(checked)
+    peaks = clear_peaks(sv)                                     # as SSI-cov's clear peaks
     lowest = band[0] if band[0] > 0 else (peaks.frequency_hz[0] if peaks.frequency_hz.size else None)
     decays = find_decays(checked, lowest_hz=lowest)
     if decays.starts.size == 0:
@@ -261,7 +267,7 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     if p_max < 2:
         raise ShapeError(f"{where}: the decays are too short for a model of order 2 ({rows} block rows of "
                          f"{n_ch} channel(s))")
-    record_peaks = decay_peaks(decay_spectrum(checked))         # the peaks fftpeak reports a mode at
+    record_peaks = decay_peaks(sv)                              # the peaks fftpeak reports a mode at
     sel = fit = None
     for _ in range(1 + MAX_SPLIT_ROUNDS):
         U, s = _hankel_basis(parts, rows)
@@ -341,8 +347,8 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
                         np.zeros((n_ch, 0, sub.size), complex), f_std[sub], z_std[sub],
                         modal_phase_collinearity(shapes), "era", False, weakly_stable=weak[sub])
     unexplained = warn_unexplained_peaks(
-        record_peaks, est.natural_frequencies_hz, where,
+        peaks, est.natural_frequencies_hz, where,
         "a sinusoid that does not decay (mains hum, a harmonic), or a mode to look for with --band around it"
         + (" or more --modes" if n_modes is not None else " or a higher --max-order"))
     return ERAIdentification(est, diagram, fit, decays, q, rows, len(fitted_spans), bands, seeded,
-                             record_peaks.frequency_hz[unexplained])
+                             peaks.frequency_hz[unexplained])
