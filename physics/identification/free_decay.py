@@ -15,13 +15,17 @@ exponentials and a smooth background, close modes together), so that the other m
 hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. A clear peak of the
 record's spectrum (:func:`~physics.identification.decay_peaks.decay_peaks`, the peaks ``fftpeak`` reports) that no
 kept pole holds (a weak mode beyond the model's order, or a diagram with no pole stable enough) is started at its
-peak and refined in its band, the kept poles held fixed (:mod:`~physics.identification.peak_seeds`). Shapes: the
-dominant direction of each mode's complex amplitudes over the decays, unit-norm and unscaled (no force measured).
+peak and refined in its band, the kept poles held fixed (:mod:`~physics.identification.peak_seeds`). A peak still
+without a mode then that is clear by SSI-cov's rule (:func:`~physics.identification.fdd.clear_peaks`: 10 dB above the
+running floor) is named in a warning, as SSI-cov names its own
+(:func:`~physics.identification.peak_warning.warn_unexplained_peaks`): a sinusoid that does not decay, a mode whose
+seed's fit failed, or one ``n_modes`` left out. Shapes: the dominant direction of each mode's complex amplitudes over
+the decays, unit-norm and unscaled (no force measured).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -33,6 +37,7 @@ from physics.identification.decays import Decays, _adds_energy, decay_spectrum, 
 from physics.identification.fdd import clear_peaks, unit_shapes
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.peak_seeds import SeededModes, refine_seeds, unheld_peaks
+from physics.identification.peak_warning import warn_unexplained_peaks
 from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles
 from physics.identification.record_checks import CheckedRecord, check_periods, check_records
 from physics.identification.ssi import MIN_MAX_ORDER, ORDERS_PER_PEAK
@@ -85,6 +90,9 @@ class ERAIdentification:
         The modes of the record's clear peaks that no kept pole held, each started at its peak and refined in its
         band (:func:`~physics.identification.peak_seeds.refine_seeds`); the estimate holds them too, flagged
         ``weakly_stable``.
+    unexplained_hz : ndarray, shape (n_unexplained,)
+        The clear peaks of the record's spectrum (SSI-cov's rule,
+        :func:`~physics.identification.fdd.clear_peaks`) that no mode of the estimate explains (named in a warning).
     """
 
     estimate: ModalEstimate
@@ -96,6 +104,7 @@ class ERAIdentification:
     n_fitted: int = 0
     bands: BandFit | None = None
     seeded: SeededModes | None = None
+    unexplained_hz: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 def _decimated(checked, q, decays):
@@ -221,7 +230,8 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     checked = check_records(signals, sampling_frequency_hz, band_hz, where)
     fs, band = checked.sampling_frequency_hz, checked.band_hz
     n_ch = checked.signals.shape[0]
-    peaks = clear_peaks(decay_spectrum(checked))
+    sv = decay_spectrum(checked)
+    peaks = clear_peaks(sv)                                     # as SSI-cov's clear peaks
     lowest = band[0] if band[0] > 0 else (peaks.frequency_hz[0] if peaks.frequency_hz.size else None)
     decays = find_decays(checked, lowest_hz=lowest)
     if decays.starts.size == 0:
@@ -257,7 +267,7 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     if p_max < 2:
         raise ShapeError(f"{where}: the decays are too short for a model of order 2 ({rows} block rows of "
                          f"{n_ch} channel(s))")
-    record_peaks = decay_peaks(decay_spectrum(checked))         # the peaks fftpeak reports a mode at
+    record_peaks = decay_peaks(sv)                              # the peaks fftpeak reports a mode at
     sel = fit = None
     for _ in range(1 + MAX_SPLIT_ROUNDS):
         U, s = _hankel_basis(parts, rows)
@@ -336,4 +346,9 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     est = ModalEstimate(wn / (2 * np.pi), -lam[sub].real / wn, lam[sub], shapes,
                         np.zeros((n_ch, 0, sub.size), complex), f_std[sub], z_std[sub],
                         modal_phase_collinearity(shapes), "era", False, weakly_stable=weak[sub])
-    return ERAIdentification(est, diagram, fit, decays, q, rows, len(fitted_spans), bands, seeded)
+    unexplained = warn_unexplained_peaks(
+        peaks, est.natural_frequencies_hz, where,
+        "a sinusoid that does not decay (mains hum, a harmonic), or a mode to look for with --band around it"
+        + (" or more --modes" if n_modes is not None else " or a higher --max-order"))
+    return ERAIdentification(est, diagram, fit, decays, q, rows, len(fitted_spans), bands, seeded,
+                             peaks.frequency_hz[unexplained])

@@ -25,12 +25,12 @@ from physics.identification.fdd import (
     ClearPeaks,
     clear_peaks,
     height_db,
-    peak_text,
     singular_value_spectrum,
     unexplained_peaks,
     unit_shapes,
 )
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
+from physics.identification.peak_warning import warn_unexplained_peaks
 from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, missed_clusters, missed_modes, select_poles
 from physics.identification.record_checks import check_periods, check_records
 from physics.identification.subspace import poles_of_order, subspace_diagram
@@ -477,15 +477,12 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
             / np.sqrt(np.maximum(n_seen, 1))
         z_std = np.where(n_seen >= 2, np.nanstd(np.where(n_seen >= 2, z_seg, 0), axis=0, ddof=1), np.nan) \
             / np.sqrt(np.maximum(n_seen, 1))
-    unexplained = unexplained_peaks(peaks, fn)
     if weak.any():
         warnings.warn(f"{where}: mode(s) at {', '.join(f'{f:.4g} Hz' for f in fn[weak])} weakly stable (stable "
                       "over fewer model orders than the selection asks), kept because a clear spectral peak lies "
                       "there", UserWarning, stacklevel=2)
-    if unexplained.any():
-        warnings.warn(f"{where}: clear spectral peak(s) without an identified mode: {peak_text(peaks, unexplained)} "
-                      f"above the floor; a harmonic, or a mode to look for with --band around it or --method efdd",
-                      UserWarning, stacklevel=2)
+    unexplained = warn_unexplained_peaks(peaks, fn, where, "a harmonic, or a mode to look for with --band around "
+                                         "it or --method efdd")
     missed = missed_modes(missed, fn)
     if missed.frequency_hz.size:
         warnings.warn(f"{where}: stable poles the selection left out: {missed.text(height_db(sv, missed.frequency_hz))}"
