@@ -2,13 +2,14 @@
 repeated set draw the warning (``clear spectral peak(s) without an identified mode``), and at which peaks.
 
 Run: ``python -m experiments.benches.bench_era_unexplained [--data DIR] [--sets pyfrf bridge ds5 dropbear]
-[--banded] [--every N]``
+[--banded] [--every N] [--docs]``
 
 Each record is identified as ``identify --method era FILE`` does (:func:`~physics.identification.identify_records`,
 no band unless ``--banded``, no number of modes): the pyFRF hits' responses (5), the USC bridge's impacts (12, 3
 channels), the DS5 PCB shocks from 20 samples after the clipped peak (51, as ``bench_real_series`` cuts them), the
 DROPBEAR dwell segments of the low-g channel (121). The peaks named are gathered over a set's records into groups
-within 1 % of each other: frequency range, records naming it, height range above the floor (dB).
+within 1 % of each other: frequency range, records naming it, height range above the floor (dB). ``--docs`` writes
+the table into ``docs/identification.md``, block ``era-unexplained`` (``era-unexplained-banded`` with ``--banded``).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from experiments.benches.bench_precision import REAL_DIR
-from experiments.benches.harness import parser
+from experiments.benches.harness import parser, publish, table
 from experiments.benches.real_sets import BRIDGE_BAND_HZ, DROPBEAR_BAND_HZ, dropbear_roller, usc_bridge
 from physics.errors import BeamDamageError
 from physics.identification.failures import PER_RECORD_ERRORS
@@ -93,7 +94,7 @@ def peak_groups(rows) -> list[tuple]:
 
 
 def main(argv=None) -> int:
-    p = parser(__file__, __doc__)
+    p = parser(__file__, __doc__, docs="identification.md")
     p.add_argument("--data", default=str(REAL_DIR), help=f"folder of the sets' .npz (default {REAL_DIR})")
     p.add_argument("--sets", nargs="+", choices=list(SETS), default=list(SETS), help="sets to run (default all)")
     p.add_argument("--banded", action="store_true", help="each set in the band of its reference modes")
@@ -109,11 +110,12 @@ def main(argv=None) -> int:
         rows = run_set(name, set_records(name, path)[::args.every], band)
         groups = "; ".join(f"{lo:.4g}" + (f"-{hi:.4g}" if hi > lo else "") + f" Hz in {n} ({d0:.0f}"
                            + (f"-{d1:.0f}" if d1 > d0 else "") + " dB)" for lo, hi, n, d0, d1 in peak_groups(rows))
-        summary.append(f"| {name} | {band or 'default'} | {len(rows)} | {sum(bool(r['refused']) for r in rows)} | "
-                       f"{sum(bool(r['warned']) for r in rows)} | {groups or '-'} |")
-    print("| set | band (Hz) | records | refused | warned | peaks named (records, height above the floor) |")
-    print("| --- | --- | --- | --- | --- | --- |")
-    print("\n".join(summary))
+        summary.append([name, band or "default", len(rows), sum(bool(r["refused"]) for r in rows),
+                        sum(bool(r["warned"]) for r in rows), groups or "-"])
+    md = table(["set", "band (Hz)", "records", "refused", "warned",
+                "peaks named (records, height above the floor)"], summary)
+    print(md)
+    publish(args, "era-unexplained-banded" if args.banded else "era-unexplained", md)
     return 0
 
 
