@@ -40,7 +40,7 @@ from physics.identification.fdd import ClearPeaks
 
 __all__ = ["JUMP_SAMPLES_PER_CORRELATION", "JUMP_SEARCH_LINES", "JUMP_SEARCH_STEPS", "JUMP_SIGMA_OCTAVES",
            "MIN_DECAY_SIGMAS", "REEXCITE_JUMP", "REEXCITE_RISE", "REEXCITE_STEP", "BandJump", "SeededModes",
-           "band_jump", "band_rises", "refine_seeds", "seed_poles", "unheld_peaks"]
+           "band_jump", "band_rises", "cut_at_rises", "refine_seeds", "seed_fit", "seed_poles", "unheld_peaks"]
 
 #: A seeded mode's damping ratio is at least this many of its one sigma (it decays within the record).
 MIN_DECAY_SIGMAS = 2.0
@@ -230,10 +230,11 @@ def band_rises(decay, sampling_frequency_hz, band_hz) -> np.ndarray:
     return np.array([k[a + int(np.argmax(ratio[a:b]))] for a, b in zip(edges[0::2], edges[1::2])], int)
 
 
-def _seed_fit(decays, fs, held, start, held_amplitudes):
-    """The band fit of the seeds ``start`` (rad/s) with the held modes of their bands refitted and the others fixed
-    (see :func:`refine_seeds`): the :class:`~physics.identification.band_refine.BandFit` and the seeds' indices
-    into it."""
+def seed_fit(decays, fs, held, start, held_amplitudes):
+    """The band fit of the seeds ``start`` (complex (n_seeds,), rad/s) on ``decays`` (each (n_channels, n_samples),
+    at ``fs`` Hz) with the modes ``held`` (complex (n_held,), rad/s) of their bands refitted and the others fixed at
+    ``held_amplitudes`` (see :func:`refine_seeds`): the :class:`~physics.identification.band_refine.BandFit` and
+    the seeds' indices into it, shape (n_seeds,)."""
     n_ch = decays[0].shape[0]
     longest_s = max(y.shape[1] for y in decays) / fs
     _, group = mode_bands(np.concatenate([held, start]), longest_s, fs / 2)
@@ -247,7 +248,7 @@ def _seed_fit(decays, fs, held, start, held_amplitudes):
     return fit, near.sum() + np.arange(start.size)
 
 
-def _cut_at_rises(decays, fs, bands_hz, eigenvalues):
+def cut_at_rises(decays, fs, bands_hz, eigenvalues):
     """The decays cut where their energy in one of ``bands_hz`` (shape (n_bands, 2), Hz) rises once
     (:func:`band_rises`): the pieces, and the index of each decay's first piece (None where no decay is cut). A decay
     re-excited once falls, rises once and falls again; a band whose energy rises more than once within a decay
@@ -340,15 +341,15 @@ def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPe
     longest_s = max(y.shape[1] for y in decays) / fs
     f_seed = peaks.frequency_hz[seeds]
     start = seed_poles(f_seed, np.maximum(peaks.tolerance_hz[seeds], freq_tol * f_seed), longest_s)
-    fit, j = _seed_fit(decays, fs, held, start, held_amplitudes)
+    fit, j = seed_fit(decays, fs, held, start, held_amplitudes)
     lam, conv, amps = fit.eigenvalues[j], fit.converged[j], fit.amplitudes[:, :, j]
     f_std, z_std = fit.frequency_std_hz[j], fit.damping_std[j]
     flat = conv & ~(fit.damping_ratios[j] >= MIN_DECAY_SIGMAS * z_std)     # no decay shown: re-excited, or a sinusoid
     if flat.any():
         bands_hz = mode_bands(np.concatenate([held, start]), longest_s, fs / 2)[0][held.size:][flat]
-        pieces, first = _cut_at_rises(decays, fs, bands_hz, start[flat])
+        pieces, first = cut_at_rises(decays, fs, bands_hz, start[flat])
         if pieces is not None:                          # the decays cut where the flat seeds' bands are re-excited
-            refit, jr = _seed_fit(pieces, fs, held, start[flat], None)
+            refit, jr = seed_fit(pieces, fs, held, start[flat], None)
             lam[flat], conv[flat] = refit.eigenvalues[jr], refit.converged[jr]
             f_std[flat], z_std[flat] = refit.frequency_std_hz[jr], refit.damping_std[jr]
             amps[:, :, flat] = refit.amplitudes[first][:, :, jr]
@@ -361,7 +362,7 @@ def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPe
         zones = np.stack([np.maximum(f_d - half, 0.0), np.minimum(f_d + half, fs / 2)], axis=1)[decaying]
         pieces, first = _cut_at_jumps(decays, fs, zones, lam[decaying])
         if pieces is not None:
-            refit, jr = _seed_fit(pieces, fs, held, lam[decaying], None)
+            refit, jr = seed_fit(pieces, fs, held, lam[decaying], None)
             better = np.zeros(lam.size, bool)           # the pieces' fit where it is still a mode of the peak
             better[decaying] = _mode_of_peak(refit.converged[jr], refit.eigenvalues[jr], refit.damping_std[jr],
                                              peaks.frequency_hz[seeds][decaying],
