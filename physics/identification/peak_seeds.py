@@ -131,6 +131,18 @@ class BandJump:
     step: float = 0.0
 
 
+def _in_band(y, fs, band_hz, analytic=False) -> np.ndarray:
+    """The decays ``y`` (n_channels, n) on the lines of ``band_hz`` (Hz) alone, transformed back from their
+    transform zero-padded to ``2 n`` samples (the loud start does not wrap onto the end): real, or with ``analytic``
+    the complex signal of the positive-frequency lines; shape (n_channels, 2 n)."""
+    fft, ifft, lines = (np.fft.fft, np.fft.ifft, np.fft.fftfreq) if analytic else \
+        (np.fft.rfft, np.fft.irfft, np.fft.rfftfreq)
+    f = lines(2 * y.shape[1], 1.0 / fs)
+    Y = fft(y, 2 * y.shape[1], axis=1)
+    Y[:, (f < band_hz[0]) | (f > band_hz[1])] = 0.0
+    return ifft(Y, 2 * y.shape[1], axis=1)
+
+
 def band_jump(decay, sampling_frequency_hz, band_hz, eigenvalue) -> BandJump:
     """Where the amplitude of a decay in a band, the decay of pole ``eigenvalue`` divided out, jumps (a
     re-excitation of the mode while its first decay still rings): the likeliest single change point.
@@ -164,12 +176,9 @@ def band_jump(decay, sampling_frequency_hz, band_hz, eigenvalue) -> BandJump:
     corr = int(np.ceil(fs / max(band_hz[1] - band_hz[0], np.finfo(float).tiny)))
     if n < 4 * corr:
         return BandJump(0, 0.0, 0.0)
-    f = np.fft.fftfreq(2 * n, 1.0 / fs)
-    Y = np.fft.fft(y, 2 * n, axis=1)
-    Y[:, (f < band_hz[0]) | (f > band_hz[1])] = 0.0
     hop = max(1, corr // JUMP_SAMPLES_PER_CORRELATION)     # s(t) varies over a correlation length: read it on a hop
     t = np.arange(corr, n - corr, hop)
-    b = np.fft.ifft(Y, axis=1)[:, t]
+    b = _in_band(y, fs, band_hz, analytic=True)[:, t]
     lam = complex(eigenvalue)
     shifts = 2j * np.pi * JUMP_SEARCH_LINES * fs / n * np.linspace(-1.0, 1.0, 2 * JUMP_SEARCH_STEPS + 1)
     sigmas = -lam.real * 2.0 ** np.linspace(-JUMP_SIGMA_OCTAVES, JUMP_SIGMA_OCTAVES, 4 * JUMP_SIGMA_OCTAVES + 1)
@@ -217,10 +226,7 @@ def band_rises(decay, sampling_frequency_hz, band_hz) -> np.ndarray:
     w = int(np.ceil(2 * fs / max(band_hz[1] - band_hz[0], np.finfo(float).tiny)))
     if n < 3 * w:
         return np.zeros(0, int)
-    f = np.fft.rfftfreq(2 * n, 1.0 / fs)             # zero-padded: the loud start does not wrap onto the end
-    Y = np.fft.rfft(y, 2 * n, axis=1)
-    Y[:, (f < band_hz[0]) | (f > band_hz[1])] = 0.0
-    c = np.concatenate([[0.0], np.cumsum(np.sum(np.fft.irfft(Y, 2 * n, axis=1)[:, :n] ** 2, axis=0))])
+    c = np.concatenate([[0.0], np.cumsum(np.sum(_in_band(y, fs, band_hz)[:, :n] ** 2, axis=0))])
     k = np.arange(w, n - w + 1)
     before, after = c[k] - c[k - w], c[k + w] - c[k]
     floor = np.percentile(c[w:] - c[:-w], 10)
