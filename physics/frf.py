@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from physics.errors import BeamDamageError, ShapeError
-from physics.modal import _upper_half, state_matrix
+from physics.modal import upper_half, state_matrix
 
 __all__ = ["FRF_KINDS", "FRF_UNITS", "PoleResidues", "check_frf_kind", "convert_frf", "magnitude_db", "phase_deg",
            "pole_residue", "poles_and_residues", "receptance", "receptance_modal", "receptance_state_space"]
@@ -225,7 +225,7 @@ def _state_space_eig(M, C, K, response, reference):
 
 def _pairs(mu, res, n):
     """Upper-half poles (N, n), their residues (N, S, n) and which members are ``n`` conjugate pairs."""
-    upper = _upper_half(mu)
+    upper = upper_half(mu)
     order = np.argsort(np.where(upper, mu.imag, np.inf), axis=-1)[:, :n]
     return (np.take_along_axis(mu, order, axis=-1), np.take_along_axis(res, order[:, None, :], axis=-1),
             upper.sum(axis=-1) == n)

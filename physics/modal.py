@@ -28,7 +28,7 @@ import numpy as np
 from physics.errors import OverdampedError, ShapeError
 
 __all__ = ["ComplexModes", "EigenvalueParameters", "check_square", "complex_modes", "eigenvalues_from_modal", "mac",
-           "modal_parameters", "normalize_modes", "state_matrix", "undamped_modes", "underdamped_modes"]
+           "modal_parameters", "normalize_modes", "state_matrix", "undamped_modes", "underdamped_modes", "upper_half"]
 
 
 class EigenvalueParameters:
@@ -98,7 +98,7 @@ def normalize_modes(eigenvalues, eigenvectors, M, C):
     return phi / np.sqrt(h)[..., None, :]
 
 
-def _upper_half(evals):
+def upper_half(evals):
     """Mask of the eigenvalues with ``Im > 0`` (relative to the largest modulus), shape like ``evals``."""
     scale = np.max(np.abs(evals), axis=-1, keepdims=True)
     return evals.imag > 1e-9 * scale
@@ -106,7 +106,7 @@ def _upper_half(evals):
 
 def _lowest_upper(evals, evecs, n, m):
     """The ``m`` upper-half eigenvalues of smallest ``Im`` and their displacement parts."""
-    upper = _upper_half(evals)
+    upper = upper_half(evals)
     order = np.argsort(np.where(upper, evals.imag, np.inf), axis=-1)[..., :m]
     lam = np.take_along_axis(evals, order, axis=-1)
     vec = np.take_along_axis(evecs[..., :n, :], order[..., None, :], axis=-1)

@@ -23,6 +23,7 @@ from physics.updating import mass_model_name
 from physics.frf import receptance
 from physics.io import MeasuredFRF
 from physics.modal import complex_modes
+from physics.noise import complex_normal
 
 __all__ = ["BEAM5_DOFS", "BEAM5_TIP", "FIXTURES", "beam5_reduced_model", "beam_state", "identified_model", "load",
            "simulated_beam5_test"]
@@ -118,7 +119,7 @@ def simulated_beam5_test(noise: float = 0.01, seed: int = 0, df_hz: float = 0.5,
     f = np.arange(df_hz, fmax_hz + df_hz / 2, df_hz)
     H = receptance(M, C, K, 2 * np.pi * f, reference=[BEAM5_TIP])
     rng = np.random.default_rng(seed)
-    H = H + noise * np.abs(H) * (rng.normal(size=H.shape) + 1j * rng.normal(size=H.shape)) / np.sqrt(2)
+    H = H + complex_normal(rng, H.shape, noise * np.abs(H))
     frf = MeasuredFRF(f, H, BEAM5_DOFS, (BEAM5_DOFS[BEAM5_TIP],),
                       metadata={"source": f"simulated beam5 seed {seed}"})
     return frf, complex_modes(M, C, K)

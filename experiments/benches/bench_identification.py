@@ -25,6 +25,7 @@ from experiments.benches.harness import emit_json, parser
 from physics.identification import METHODS, identify_frf, lsfd, reconstruction_error_db
 from physics.io import MeasuredFRF, atomic_write_text
 from physics.modal import mac
+from physics.noise import complex_normal
 from physics.properties import free_free_beta_l
 from physics.thesis import BEAM5_TIP, simulated_beam5_test
 
@@ -102,7 +103,7 @@ def simulate_free_free(noise=0.005, floor=3e-3, seed=0, f1_hz=40.5, mass_kg=2.0,
     exact = (-(w**2) * receptance)[:, None, :]
     rng = np.random.default_rng(seed)
     sd = noise * np.abs(exact) + floor * np.median(np.abs(exact), axis=-1, keepdims=True)
-    noisy = exact + sd * (rng.normal(size=exact.shape) + 1j * rng.normal(size=exact.shape)) / np.sqrt(2)
+    noisy = exact + complex_normal(rng, exact.shape, sd)
     dofs = tuple(f"{k + 1}:+Y" for k in range(x.size))
     frf = MeasuredFRF(f, noisy, dofs, (dofs[r],), kind="accelerance",
                       metadata={"source": f"simulated free-free impact test seed {seed}"})

@@ -36,6 +36,7 @@ from physics.beam import preset_beam
 from physics.frf import receptance
 from physics.identification import find_peaks_indicator, identify_frf, identify_frfs
 from physics.io import MeasuredFRF, atomic_write_text, read_frf, write_uff58
+from physics.noise import complex_normal
 
 __all__ = ["EI_SCALE", "RAYLEIGH", "main", "write_test_file"]
 
@@ -60,7 +61,7 @@ def simulate_file_frf(noise=0.015, seed=0, df_hz=0.5, band_hz=(2.0, 800.0)) -> M
     f = np.arange(band_hz[0], band_hz[1] + df_hz / 2, df_hz)
     H = receptance(fe.M, a * fe.M + b * fe.K, fe.K, 2 * np.pi * f, response=idx, reference=idx[-1:])
     rng = np.random.default_rng(seed)
-    H = H + noise * np.abs(H) * (rng.normal(size=H.shape) + 1j * rng.normal(size=H.shape)) / np.sqrt(2)
+    H = H + complex_normal(rng, H.shape, noise * np.abs(H))
     dofs = tuple(d.replace(":y", ":+Y") for d in beam.masters)
     return MeasuredFRF(f, H, dofs, (dofs[-1],), metadata={"source": f"beam5-like cantilever, seed {seed}"})
 

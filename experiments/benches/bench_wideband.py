@@ -47,7 +47,7 @@ import numpy as np
 
 from experiments.cli import main as cli
 from experiments.second_sim.fem import Beam, assemble, modes
-from experiments.second_sim.response import Damping, receptance
+from experiments.second_sim.response import Damping, complex_normal, receptance
 from experiments.second_sim.writers import convert_receptance, write_uff
 from experiments.benches.harness import parser, publish, table
 from physics.io import atomic_write_text
@@ -154,12 +154,9 @@ def simulate_test(kind: str, n_sensors: int, seed: int, out_dir) -> WideBandTest
     a, dt = rng.uniform(0.05, 0.3), rng.uniform(0.5e-3, 3e-3)
     X = X * (1 + a * np.exp(-1j * w * dt))
     peak = np.abs(X).max()
-
-    def cn():
-        return (rng.standard_normal(X.shape) + 1j * rng.standard_normal(X.shape)) / math.sqrt(2)
-
     floor = _loguniform(rng, 3e-5, 3e-4) * peak * (1 + (rng.uniform(3.0, 15.0) / f) ** 2)
-    X = X + 0.01 * np.abs(X) * cn() + floor * cn() + rng.uniform(1e-3, 5e-3) * peak
+    X = X + 0.01 * np.abs(X) * complex_normal(rng, X.shape) + floor * complex_normal(rng, X.shape) \
+        + rng.uniform(1e-3, 5e-3) * peak
     path = Path(out_dir) / f"{kind}-{n_sensors}s-{seed:03d}.uff"
     write_uff(path, f, X / convert_receptance(np.ones(1), f, kind), x_m, list(range(1, n_sensors + 1)), 1, kind,
               description=f"{material} cantilever {L:.3f} m, impact at the tip, seed {seed}")

@@ -24,7 +24,7 @@ from physics.identification.band_refine import mode_bands
 from physics.identification.decay_peaks import decay_peaks
 from physics.identification.decays import decay_spectrum
 from physics.identification.free_decay import identify_era
-from physics.identification.peak_seeds import _cut_at_rises, _seed_fit, band_rises, seed_poles
+from physics.identification.peak_seeds import band_rises, cut_at_rises, seed_fit, seed_poles
 from physics.identification.record_checks import check_records
 
 __all__ = ["main", "record_rows"]
@@ -58,13 +58,13 @@ def record_rows(signals, fs, band_hz):
         k = int(np.argmin(np.abs(peaks.frequency_hz - f0)))
         start = seed_poles(peaks.frequency_hz[[k]], peaks.tolerance_hz[[k]], longest_s)
         band = mode_bands(np.concatenate([held, start]), longest_s, fs / 2)[0][-1]
-        fit, j = _seed_fit(full, fs, held, start, None)
+        fit, j = seed_fit(full, fs, held, start, None)
         rises = [np.round(band_rises(d, fs, band) / fs, 2).tolist() for d in full]
         lines.append(f"  seed {f0:.2f} Hz, band {band[0]:.2f}-{band[1]:.2f} Hz: whole decay {_fit_text(fit, j[0])}; "
                      f"band rises (s after onset) {rises}")
-        pieces, _ = _cut_at_rises(full, fs, band[None])
+        pieces, _ = cut_at_rises(full, fs, band[None], start)
         if pieces is not None:
-            fit, j = _seed_fit(pieces, fs, held, start, None)
+            fit, j = seed_fit(pieces, fs, held, start, None)
             lines.append(f"    cut there: {_fit_text(fit, j[0])}")
     return lines
 

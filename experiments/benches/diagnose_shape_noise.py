@@ -31,6 +31,7 @@ from learn.pairs.measured import identify_modes
 from learn.network.model_dir import load_model
 from physics.io import read_frf
 from physics.io.types import ModalData
+from physics.noise import complex_normal
 
 __all__ = ["main", "modal_input_scores", "shape_error_ratios"]
 
@@ -105,7 +106,7 @@ def modal_input_scores(cb, recs, modes, model_dir, factor: float, seed: int = 11
             w = w * (1 + sf * rng.standard_normal(m))
             lam = -d / 2 + 1j * np.sqrt(w ** 2 - d ** 2 / 4)
             phi = phi[order]
-            noise = (rng.standard_normal(phi.shape) + 1j * rng.standard_normal(phi.shape)) / np.sqrt(2)
+            noise = complex_normal(rng, phi.shape)
             data.append(ModalData(lam, phi + np.abs(phi).max(axis=0) * ss * noise, ()))
         v = classify_many(model, data[0], [data[1]])[0]
         called.append(bool((v.get("network") or {}).get("damaged")))

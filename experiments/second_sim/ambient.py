@@ -21,7 +21,7 @@ import numpy as np
 from scipy import signal
 
 from experiments.second_sim.fem import Beam, assemble, modes
-from experiments.second_sim.writers import _atomic_target
+from experiments.second_sim.writers import atomic_target
 
 __all__ = ["AmbientRecord", "ambient_record", "write_npz"]
 
@@ -136,7 +136,7 @@ def write_npz(path, rec: AmbientRecord, dofs=None) -> None:
     buf = io.BytesIO()
     np.savez(buf, signals=rec.signals, sampling_frequency_hz=np.array(rec.sampling_frequency_hz),
              dofs=np.array(dofs), quantity=np.array(rec.quantity))
-    tmp = _atomic_target(path)
+    tmp = atomic_target(path)
     try:
         tmp.write_bytes(buf.getvalue())
         os.replace(tmp, path)

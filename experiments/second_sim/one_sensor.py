@@ -7,13 +7,12 @@ rises towards low frequency as an accelerometer's does (its acceleration noise o
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
 
 from .fem import Beam, PointMass, assemble, modes
-from .response import Damping, receptance
+from .response import Damping, complex_normal, receptance
 from .writers import convert_receptance, write_uff
 
 __all__ = ["DENSITY", "EI_NM2", "LENGTH_M", "MASS_PER_LENGTH", "SENSOR_X_M", "HAMMER_X_M", "beam_toml",
@@ -55,11 +54,8 @@ def one_sensor_test(seed: int = 0, EI_scale: float = 1.0, floor: float = 0.2) ->
                    int(asm.translation_dofs([HAMMER_X_M])[0]))
     A = convert_receptance(H, LINES_HZ, "accelerance")
     rng = np.random.default_rng(seed)
-
-    def cn():
-        return (rng.standard_normal(A.shape) + 1j * rng.standard_normal(A.shape)) / math.sqrt(2)
-
-    A = A + 0.01 * np.abs(A) * cn() + floor * (1 + (50.0 / LINES_HZ) ** 2) * cn()
+    relative = 0.01 * np.abs(A) * complex_normal(rng, A.shape)
+    A = A + relative + floor * (1 + (50.0 / LINES_HZ) ** 2) * complex_normal(rng, A.shape)
     return LINES_HZ, A, md.frequencies_hz[:6]
 
 

@@ -18,7 +18,8 @@ import numpy as np
 
 from experiments.second_sim.fem import Assembled, Modes
 
-__all__ = ["MODAL_NOISE", "Damping", "Noise", "complex_modes", "measure", "noisy_modal", "rayleigh_for", "receptance"]
+__all__ = ["MODAL_NOISE", "Damping", "Noise", "complex_modes", "complex_normal", "measure", "noisy_modal",
+           "rayleigh_for", "receptance"]
 
 
 @dataclass(frozen=True)
@@ -150,18 +151,21 @@ class Noise:
     h1_bias: float = 0.0
 
 
+def complex_normal(rng: np.random.Generator, shape, scale=None) -> np.ndarray:
+    """``scale (x + i y) / sqrt(2)``, ``x`` and ``y`` standard normal (every real part drawn before every imaginary
+    part): complex noise of variance ``scale^2`` (1 without ``scale``), shape ``shape``."""
+    z = rng.standard_normal(shape) + 1j * rng.standard_normal(shape)
+    return (z if scale is None else scale * z) / math.sqrt(2)
+
+
 def measure(H: np.ndarray, noise: Noise, rng: np.random.Generator) -> np.ndarray:
     """One noisy measurement of ``H`` (n_resp, n_lines)."""
     mag = np.abs(H)
     peak = mag.max(axis=-1, keepdims=True)
     out = H / (1.0 + noise.h1_bias * mag / peak) if noise.h1_bias else H.copy()
-
-    def cn():
-        return (rng.standard_normal(H.shape) + 1j * rng.standard_normal(H.shape)) / math.sqrt(2)
-
-    out = out + noise.level * mag * cn()
+    out = out + noise.level * mag * complex_normal(rng, H.shape)
     if noise.floor:
-        out = out + noise.floor * peak * cn()
+        out = out + noise.floor * peak * complex_normal(rng, H.shape)
     return out
 
 
@@ -176,5 +180,5 @@ def noisy_modal(lam: np.ndarray, psi: np.ndarray, rng: np.random.Generator, nois
     z = (-lam.real / np.abs(lam)) * (1 + sz * rng.standard_normal(lam.size))
     lam_n = -z * w + 1j * w * np.sqrt(1 - z ** 2)
     scale = np.abs(psi).max(axis=0, keepdims=True)
-    psi_n = psi + sp * scale * (rng.standard_normal(psi.shape) + 1j * rng.standard_normal(psi.shape)) / math.sqrt(2)
+    psi_n = psi + complex_normal(rng, psi.shape, sp * scale)
     return lam_n, psi_n

@@ -12,15 +12,16 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["KINDS", "complex_text", "convert_receptance", "modal_dict", "write_csv", "write_json", "write_text_atomic",
-           "write_uff"]
+__all__ = ["KINDS", "atomic_target", "complex_text", "convert_receptance", "modal_dict", "write_csv", "write_json",
+           "write_text_atomic", "write_uff"]
 
 
 #: dataset-58 ordinate specific data type and unit label of each FRF kind (SI).
 KINDS = {"receptance": (8, "m"), "mobility": (11, "m/s"), "accelerance": (12, "m/s^2")}
 
 
-def _atomic_target(path: Path):
+def atomic_target(path: Path) -> Path:
+    """A new empty temporary file beside ``path`` (its folder made), to be renamed onto it once written."""
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
@@ -30,7 +31,7 @@ def _atomic_target(path: Path):
 def write_text_atomic(path, text: str) -> None:
     """Write ``text`` to ``path`` through a temporary file in the same directory and a rename."""
     path = Path(path)
-    tmp = _atomic_target(path)
+    tmp = atomic_target(path)
     try:
         tmp.write_text(text, encoding="utf-8")
         os.replace(tmp, path)
@@ -97,7 +98,7 @@ def write_uff(path, freq_hz, H, node_x_m, resp_nodes, ref_node: int, kind: str =
             orddenom_temp_unit_exp=0, orddenom_axis_units_lab="N", z_axis_spec_data_type=0,
             z_axis_len_unit_exp=0, z_axis_force_unit_exp=0, z_axis_temp_unit_exp=0, z_axis_axis_units_lab="NONE",
             data=np.ascontiguousarray(data[k]), x=f))
-    tmp = _atomic_target(path)
+    tmp = atomic_target(path)
     try:
         tmp.unlink()
         pyuff.UFF(str(tmp)).write_sets(sets, mode="add")

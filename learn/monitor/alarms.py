@@ -137,7 +137,7 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     choice = None
     if frequency_estimator == "choose":
         choice = choose_frequencies(tests, series.files, ref, F, cols,
-                                    [i for i in range(n_baseline) if i not in foreign])
+                                    [i for i in range(n_baseline) if i not in foreign], cache_dir, workers)
         if choice is not None:
             F, how = choice.frequencies_hz, choice.identified_by(how)
     X = np.log(F)

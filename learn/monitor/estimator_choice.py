@@ -22,11 +22,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from learn.monitor.tracking import ReferenceModes, narrow_bands_hz
+from learn.monitor.workers import fft_peaks_of_files
 from learn.pairs.noise_calibration import robust_std
-from physics.errors import BeamDamageError
 from physics.io import finite_or_none
-from physics.identification import read_response_records
-from physics.identification.fft_peak import fft_peaks
 
 __all__ = ["FFT_PEAK", "FREQUENCY_ESTIMATORS", "MIN_HALF", "FrequencyChoice", "choose_estimators", "choose_frequencies",
            "fft_peak_frequencies"]
@@ -113,24 +111,16 @@ class FrequencyChoice:
                 "texts": self.texts()}
 
 
-def fft_peak_frequencies(tests: list, files: list, ref: ReferenceModes) -> np.ndarray:
+def fft_peak_frequencies(tests: list, files: list, ref: ReferenceModes, cache_dir=None, workers: int = 1) -> np.ndarray:
     """``(n, m)``: each test's zero-padded FFT peak (Hz) in each reference mode's tracking band
     (:func:`learn.monitor.tracking.narrow_bands_hz`): the highest local maximum of the record's FFT power there
-    (:func:`physics.identification.fft_peak.fft_peaks`, its window chosen by the record); NaN where none lies there,
-    for a test that is not response records, or one whose record is refused."""
-    bands = narrow_bands_hz(ref)
-    centre, half = bands.mean(axis=1), 0.5 * (bands[:, 1] - bands[:, 0])
+    (:func:`learn.monitor.identification.cached_fft_peaks`, kept in ``cache_dir`` beside the identifications; over
+    ``workers`` processes); NaN where none lies there, for a test that is not response records, or one whose
+    record is refused."""
     out = np.full((len(tests), ref.frequencies_hz.size), np.nan)
-    if centre.size == 0:
-        return out
-    for i, (t, path) in enumerate(zip(tests, files)):
-        if t is None or t.kind != "response records":
-            continue
-        try:
-            rec = read_response_records(path)
-            out[i] = fft_peaks(rec.signals, rec.sampling_frequency_hz, centre, half, where=str(path)).frequency_hz
-        except (BeamDamageError, OSError):
-            pass
+    rows = [i for i, t in enumerate(tests) if t is not None and t.kind == "response records"]
+    if out.size and rows:
+        out[rows] = fft_peaks_of_files([files[i] for i in rows], narrow_bands_hz(ref), cache_dir, workers)
     return out
 
 
@@ -162,13 +152,15 @@ def choose_estimators(F, G, baseline, reference_hz):
     return chosen, scatter, halves, n_tests, complete
 
 
-def choose_frequencies(tests: list, files: list, ref: ReferenceModes, F, cols, baseline) -> FrequencyChoice | None:
+def choose_frequencies(tests: list, files: list, ref: ReferenceModes, F, cols, baseline, cache_dir=None,
+                       workers: int = 1) -> FrequencyChoice | None:
     """Each reference mode's frequency by the more repeatable estimator over the baseline period (module docstring).
 
     ``tests``: each test's :class:`~learn.monitor.identification.IdentifiedModes` (None: not identified);
     ``files``: their paths; ``F`` (n, m) and ``cols`` (n, m): the tracked frequencies and the poles' columns of
-    :func:`learn.monitor.tracking.track_modes`; ``baseline``: indices of the baseline tests. None when the baseline
-    tests are not response records (FRFs, modal data: their frequencies stay as identified).
+    :func:`learn.monitor.tracking.track_modes`; ``baseline``: indices of the baseline tests; ``cache_dir`` and
+    ``workers``: :func:`fft_peak_frequencies`'. None when the baseline tests are not response records (FRFs, modal
+    data: their frequencies stay as identified).
     """
     base = [int(i) for i in baseline]
     kinds = {tests[i].kind for i in base if tests[i] is not None}
@@ -176,7 +168,7 @@ def choose_frequencies(tests: list, files: list, ref: ReferenceModes, F, cols, b
         return None
     F = np.asarray(F, float)
     cols = np.asarray(cols, int)
-    G = fft_peak_frequencies(tests, files, ref)
+    G = fft_peak_frequencies(tests, files, ref, cache_dir, workers)
     chosen, scatter, halves, n_tests, complete = choose_estimators(F, G, base, ref.frequencies_hz)
     names = sorted({tests[i].method for i in base if tests[i] is not None})
     default = "/".join(names)

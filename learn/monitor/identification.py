@@ -1,5 +1,6 @@
 """One test's modes, identified once: FRFs by LSCF/LSFD, response records by SSI-cov, modal data as read; the
-result kept per file in a JSON cache keyed by the file's bytes and the identification settings."""
+result kept per file in a JSON cache keyed by the file's bytes and the identification settings, beside the record's
+FFT peaks in the reference modes' bands (:func:`cached_fft_peaks`)."""
 
 from __future__ import annotations
 
@@ -16,12 +17,14 @@ from physics.errors import BeamDamageError
 from physics.identification import (DEFAULT_OUTPUT_ONLY, holds_response_records, identify_records,
                                     read_response_records)
 from physics.identification.failures import identification_failure
+from physics.identification.fft_peak import fft_peaks
 from physics.identification.measured import read_measured_frf
-from physics.io import MODAL, TIME, atomic_write_text, format_complex, modal_or_frf, prepare_measured, read
+from physics.io import (MODAL, TIME, atomic_write_text, finite_or_none, format_complex, modal_or_frf, prepare_measured,
+                        read)
 from physics.io.inputs import check_input_file
 from physics.modal import modal_parameters, undamped_modes
 
-__all__ = ["CACHE_FORMAT", "IdentificationSettings", "IdentifiedModes", "cached_identification",
+__all__ = ["CACHE_FORMAT", "IdentificationSettings", "IdentifiedModes", "cached_fft_peaks", "cached_identification",
            "file_key", "identification_settings", "identify_test", "with_narrow_band_poles", "write_cache"]
 
 #: Format tag of a cache entry (a change of the identification or of the entry's fields changes it).
@@ -203,15 +206,16 @@ def with_narrow_band_poles(test: IdentifiedModes, found: IdentifiedModes, keep) 
                    dofs=test.dofs if shapes is not None else (), narrow_band_hz=tuple(bands[k] for k in order))
 
 
-def file_key(path, settings: IdentificationSettings, narrow_hz=None) -> str:
-    """SHA-256 of the file's bytes, the identification settings (and the narrow band) and :data:`CACHE_FORMAT`."""
+def file_key(path, settings: IdentificationSettings | None, extra=None) -> str:
+    """SHA-256 of the file's bytes, the identification settings (None: an entry no setting changes), ``extra`` (a
+    JSON value: the narrow band, the FFT peaks' bands) and :data:`CACHE_FORMAT`."""
     h = hashlib.sha256()
     with open(path, "rb") as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
             h.update(block)
-    what = [CACHE_FORMAT, settings.to_dict()]
-    if narrow_hz is not None:
-        what.append([float(b) for b in narrow_hz])
+    what = [CACHE_FORMAT, None if settings is None else settings.to_dict()]
+    if extra is not None:
+        what.append(extra)
     h.update(json.dumps(what, sort_keys=True).encode())
     return h.hexdigest()
 
@@ -227,17 +231,16 @@ def cached_identification(path, settings: IdentificationSettings, cache_dir=None
     """
     try:
         check_input_file(path, "npz", BeamDamageError, "a test file")
-        key = file_key(path, settings, narrow_hz) if cache_dir else None
+        key = file_key(path, settings, None if narrow_hz is None else [float(b) for b in narrow_hz]) \
+            if cache_dir else None
     except (BeamDamageError, OSError) as exc:
         return None, _error_text(exc, path), False
     entry = Path(cache_dir) / f"{key}.json" if cache_dir else None
-    if entry is not None and entry.is_file():
-        try:
-            d = json.loads(entry.read_text())
-            if d.get("format") == CACHE_FORMAT:
-                return (None if d["modes"] is None else IdentifiedModes.from_dict(d["modes"])), d["error"], True
-        except (ValueError, KeyError, TypeError):
-            pass                                            # a damaged entry: identified again
+    try:
+        if (d := _entry(entry)) is not None:
+            return (None if d["modes"] is None else IdentifiedModes.from_dict(d["modes"])), d["error"], True
+    except (ValueError, KeyError, TypeError):
+        pass                                                # a damaged entry: identified again
     try:
         modes, error = identify_test(path, settings, narrow_hz), None
     except (BeamDamageError, OSError) as exc:
@@ -251,6 +254,43 @@ def cached_identification(path, settings: IdentificationSettings, cache_dir=None
         else:
             pending.append((entry, text))
     return modes, error, False
+
+
+def cached_fft_peaks(path, bands_hz, cache_dir=None) -> np.ndarray:
+    """Shape (m,): a response record's zero-padded FFT peak (Hz) in each of ``bands_hz`` ((m, 2), Hz), the highest
+    local maximum of its FFT power there (:func:`physics.identification.fft_peak.fft_peaks`, its window chosen by
+    the record); NaN where none lies there, or for a record that is refused.
+
+    With ``cache_dir``, read from ``cache_dir/<key>.json`` (:func:`file_key` of the file and the bands) or, once
+    computed, written there atomically.
+    """
+    bands = np.asarray(bands_hz, float).reshape(-1, 2)
+    entry = None
+    try:
+        if cache_dir:
+            entry = Path(cache_dir) / f"{file_key(path, None, {'fftpeak_bands_hz': bands.tolist()})}.json"
+        if (d := _entry(entry)) is not None:
+            return np.array([np.nan if v is None else v for v in d["fft_hz"]], float)
+    except (OSError, ValueError, KeyError, TypeError):
+        pass                                                # no file (refused below), or a damaged entry
+    try:
+        rec = read_response_records(path)
+        out = fft_peaks(rec.signals, rec.sampling_frequency_hz, bands.mean(axis=1), 0.5 * (bands[:, 1] - bands[:, 0]),
+                        where=str(path)).frequency_hz
+    except (BeamDamageError, OSError):
+        out = np.full(bands.shape[0], np.nan)
+    if entry is not None:
+        write_cache([(entry, json.dumps({"format": CACHE_FORMAT, "file": str(path), "fftpeak_bands_hz": bands.tolist(),
+                                         "fft_hz": [finite_or_none(v) for v in out]}))])
+    return out
+
+
+def _entry(path) -> dict | None:
+    """The cache entry at ``path`` (None: no cache, no entry, or one of another :data:`CACHE_FORMAT`)."""
+    if path is None or not path.is_file():
+        return None
+    d = json.loads(path.read_text())
+    return d if d.get("format") == CACHE_FORMAT else None
 
 
 def write_cache(entries) -> None:

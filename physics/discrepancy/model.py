@@ -11,6 +11,7 @@ from physics.beam import Beam
 from physics.errors import BeamDamageError, ShapeError
 from physics.frf import convert_frf, receptance
 from physics.modal import mac
+from physics.noise import complex_normal
 from physics.discrepancy.measurement import Measurement, Noise
 from physics.frf import magnitude_db
 
@@ -248,7 +249,7 @@ def simulate_measurement(truth: Beam, n_modes: int = 4, noise: Noise | None = No
     sh = None
     if shapes:
         sh = pred.shapes / np.max(np.abs(pred.shapes), axis=0)
-        sh = sh + noise.shape * (rng.standard_normal(sh.shape) + 1j * rng.standard_normal(sh.shape)) / np.sqrt(2)
+        sh = sh + complex_normal(rng, sh.shape, noise.shape)
     kw = {}
     if frf_lines:
         model = truth.fe_model(n_elements)

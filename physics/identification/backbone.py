@@ -30,7 +30,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from physics.errors import ConfigError, ConvergenceError, ShapeError
-from physics.identification.band_refine import BACKGROUND_ORDER, _band_data, _modes_on_lines, mode_bands
+from physics.identification.band_refine import BACKGROUND_ORDER, band_data, mode_bands, modes_on_lines
 
 __all__ = ["SIGNIFICANT_SIGMAS", "Backbone", "fit_backbone"]
 
@@ -101,7 +101,7 @@ def _projected(p, k, n, fs, Y, background, rows):
     lam = -p[3::2] + 1j * p[4::2]
     w = np.exp(-2j * np.pi * k / n)
     unit = np.kron(np.eye(lam.size), [1.0, 1j])                           # (m, 2 m): Re a and Im a of each pole
-    near = _modes_on_lines(w, n, fs, lam, unit.T).T / np.sqrt(n) if lam.size else np.zeros((k.size, 0))
+    near = modes_on_lines(w, n, fs, lam, unit.T).T / np.sqrt(n) if lam.size else np.zeros((k.size, 0))
     phi = np.concatenate([_basis(p[:3], n, fs, k), near, background], axis=1)
     real = np.concatenate([phi.real, phi.imag], axis=0)
     coef, *_ = np.linalg.lstsq(real, rows, rcond=None)
@@ -150,7 +150,7 @@ def fit_backbone(decay, sampling_frequency_hz, eigenvalue, band_hz=None, backgro
         raise ConfigError(f"neighbours: expected poles -sigma + i omega with sigma, omega > 0, got {near}")
     n = x.size
     band = mode_bands([lam], n / fs, fs / 2)[0][0] if band_hz is None else np.asarray(band_hz, float)
-    data = _band_data([np.fft.rfft(x)[None]], [n], fs, band)[0]
+    data = band_data([np.fft.rfft(x)[None]], [n], fs, band)[0]
     order = int(background_order)
     n_params = 3 + 2 + 4 * near.size + 2 * (order + 1)
     if data is None or data[0].size * 2 <= 2 * n_params:

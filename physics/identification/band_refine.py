@@ -48,7 +48,7 @@ from physics.errors import ConvergenceError, ShapeError
 from physics.identification.damped_sinusoids import levenberg_marquardt, pole_statistics
 
 __all__ = ["BACKGROUND_ORDER", "BAND_LINES", "BAND_WIDTHS", "MERGE_FACTOR", "RESOLVED_LINES", "RESOLVED_WIDTHS",
-           "SWEEPS", "BandFit", "band_amplitudes", "mode_bands", "refine_in_bands"]
+           "SWEEPS", "BandFit", "band_amplitudes", "band_data", "mode_bands", "modes_on_lines", "refine_in_bands"]
 
 #: A mode's band spans this many of its half-power half-widths either side of it ...
 BAND_WIDTHS = 6.0
@@ -143,9 +143,10 @@ def mode_bands(eigenvalues, longest_s, nyquist_hz):
     return bands[group] if f.size else np.zeros((0, 2)), group
 
 
-def _band_data(spectra, lengths, fs, band_hz):
-    """Each decay's transform on the band's lines: a list of (lines ``k``, ``w_k``, ``Y / sqrt(N)`` (n_ch, L),
-    ``N``), None for a decay with fewer than :data:`BAND_LINES` lines in the band."""
+def band_data(spectra, lengths, fs, band_hz):
+    """Each decay's transform ``Y`` (``spectra``: its rFFT, (n_ch, N // 2 + 1); ``lengths``: its samples ``N`` at
+    ``fs`` Hz) on the lines of ``band_hz`` (Hz): a list of (lines ``k``, ``w_k = exp(-2 pi i k / N)``, ``Y / sqrt(N)``
+    (n_ch, L), ``N``), None for a decay with fewer than :data:`BAND_LINES` lines in the band."""
     out = []
     for Y, n in zip(spectra, lengths):
         k = np.arange(max(1, int(np.ceil(band_hz[0] * n / fs))), min((n - 1) // 2, int(band_hz[1] * n / fs)) + 1)
@@ -153,7 +154,7 @@ def _band_data(spectra, lengths, fs, band_hz):
     return out
 
 
-def _modes_on_lines(w, n, fs, eigenvalues, amplitudes):
+def modes_on_lines(w, n, fs, eigenvalues, amplitudes):
     """The transform ``(a/2) G(z) + conj(a/2) G(conj z)`` of modes ``Re(a z^t)`` of one decay of ``n`` samples on
     lines ``w_k``, summed over the modes: shape (n_channels, L); ``amplitudes`` shape (n_channels, m)."""
     z = np.exp(np.asarray(eigenvalues, complex) / fs)[None, :]
@@ -270,7 +271,7 @@ def _spectra(decays, fs, fixed):
     out = []
     for Y, y, a in zip(spectra, decays, amps_f):
         n = y.shape[1]
-        out.append(Y - _modes_on_lines(np.exp(-2j * np.pi * np.arange(Y.shape[1]) / n), n, fs, lam_f, a))
+        out.append(Y - modes_on_lines(np.exp(-2j * np.pi * np.arange(Y.shape[1]) / n), n, fs, lam_f, a))
     return out
 
 
@@ -310,9 +311,9 @@ def band_amplitudes(decays, sampling_frequency_hz, eigenvalues, background_order
             idx, others = np.flatnonzero(group == g), np.flatnonzero(group != g)
             m = idx.size
             data = [None if d is None else
-                    (d[0], d[1], d[2] - _modes_on_lines(d[1], d[3], fs, lam[others], known[j][:, others])
+                    (d[0], d[1], d[2] - modes_on_lines(d[1], d[3], fs, lam[others], known[j][:, others])
                      / np.sqrt(d[3]), d[3])
-                    for j, d in enumerate(_band_data(spectra, lengths, fs, bands[idx[0]]))]
+                    for j, d in enumerate(band_data(spectra, lengths, fs, bands[idx[0]]))]
             used = [j for j, d in enumerate(data) if d is not None]
             _, coef, _ = _projected_band(data, fs, -lam[idx].real, lam[idx].imag, np.ones(n_ch), bands[idx[0]],
                                          background_order)
@@ -380,9 +381,9 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
             m, band = idx.size, bands[idx[0]]
             others = np.flatnonzero(known & (group != g))
             data = [None if d is None else
-                    (d[0], d[1], d[2] - _modes_on_lines(d[1], d[3], fs, lam_known[others], amps_known[j][:, others])
+                    (d[0], d[1], d[2] - modes_on_lines(d[1], d[3], fs, lam_known[others], amps_known[j][:, others])
                      / np.sqrt(d[3]), d[3])
-                    for j, d in enumerate(_band_data(spectra, lengths, fs, band))]
+                    for j, d in enumerate(band_data(spectra, lengths, fs, band))]
             used = [j for j, d in enumerate(data) if d is not None]
             n_values = n_ch * sum(2 * data[j][0].size for j in used)
             fitted = _fit_band(data, fs, band, lam[idx], n_ch, background_order)

@@ -14,10 +14,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from physics.identification.fdd import SingularValueSpectrum, _running_floor, clear_peaks
+from physics.identification.fdd import SingularValueSpectrum, running_floor, clear_peaks
 from physics.identification.record_checks import CheckedRecord
 
-__all__ = ["Decays", "FreeResponse", "decay_spectrum", "find_decays", "free_response"]
+__all__ = ["Decays", "FreeResponse", "adds_energy", "decay_spectrum", "find_decays", "free_response"]
 
 #: Order of the linear predictor (per channel) whose innovations mark the hits.
 PREDICTOR_ORDER = 24
@@ -28,7 +28,7 @@ HIT_SIGMA = 8.0
 HIT_RISE = 4.0
 #: ... and at least this fraction of the loudest window's.
 HIT_LEVEL = 0.05
-#: A hit adds energy: the record's energy after it at least this many times that before it (:func:`_adds_energy`).
+#: A hit adds energy: the record's energy after it at least this many times that before it (:func:`adds_energy`).
 HIT_GAIN = 2.0
 #: A record of more values (channels x samples) is not searched for hits (read whole): a stationary response.
 MAX_FREE_VALUES = 2 ** 24
@@ -67,7 +67,7 @@ class Decays:
         the record starts). The samples from it to ``starts`` hold the hit, and the first milliseconds of the
         decay that the record's predictor fits worst.
     energy_window : int
-        Samples over which a hit must add energy to be one (:func:`_adds_energy`): four predictor orders, at least
+        Samples over which a hit must add energy to be one (:func:`adds_energy`): four predictor orders, at least
         a period of the lowest mode when it is known.
     """
 
@@ -184,7 +184,7 @@ def _loudest(x, firsts, lasts):
     return np.array([a + int(np.argmax(e[a:b + 1])) for a, b in zip(firsts, lasts)], int)
 
 
-def _adds_energy(x, firsts, lasts, w):
+def adds_energy(x, firsts, lasts, w):
     """Whether each hit (its first and last samples) adds energy: the record's energy over the ``w`` samples after
     it at least :data:`HIT_GAIN` times that over the ``w`` samples before it (per sample, where fewer precede it).
     A prediction error within a decay (its first milliseconds, which the record's one linear predictor fits worst,
@@ -239,7 +239,7 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
     channel, which a free response does not have) exceeds :data:`HIT_SIGMA` robust standard deviations, or a
     sharp rise of the record's energy (:data:`HIT_RISE`; an impulse on a displacement or strain record, or a
     release, shows only a small innovation) placed at the largest innovation near it; hits closer than the
-    predictor's order are one, and a hit that adds no energy (:func:`_adds_energy`) is none. An oversampled record
+    predictor's order are one, and a hit that adds no energy (:func:`adds_energy`) is none. An oversampled record
     is searched again for innovations at :data:`CONTENT_RATE` times its highest clear peak (block means,
     :func:`_content_decimation`): its noise is white over the whole rate while the response to a hit, spread over
     many samples, stands out only in the band of the modes (a scope's capture, hundreds of samples per period of
@@ -268,7 +268,7 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
         lasts = np.concatenate([lasts, l_dec[~near]])[order]
     if firsts.size:
         lasts = np.minimum(lasts, _loudest(x, firsts, lasts) + p // 4)
-        keep = _adds_energy(x, firsts, lasts, w)
+        keep = adds_energy(x, firsts, lasts, w)
         firsts, lasts = firsts[keep], lasts[keep]
     spans = [(int(last) + 1, int(nxt), int(first)) for first, last, nxt in zip(firsts, lasts, [*firsts[1:], n])]
     spans = [(a, b, o) for a, b, o in spans if b - a >= least]
@@ -325,5 +325,5 @@ def decay_spectrum(checked: CheckedRecord) -> SingularValueSpectrum:
     vectors = (X / np.maximum(np.linalg.norm(X, axis=0), np.finfo(float).tiny)).T
     inband = (f >= band[0]) & (f <= band[1]) & (f > 0)
     floor = np.full(f.size, np.nan)
-    floor[inband] = _running_floor(f[inband], power[inband], f[1])
+    floor[inband] = running_floor(f[inband], power[inband], f[1])
     return SingularValueSpectrum(f, s, vectors, floor, band, max(3 * f[1], 10 / checked.duration_s, band[0]))

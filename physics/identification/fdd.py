@@ -26,8 +26,8 @@ from physics.identification.record_checks import CheckedRecord, check_periods, c
 from physics.modal import eigenvalues_from_modal
 
 __all__ = ["CLEAR_PEAK_DB", "PEAK_PROMINENCE_DB", "ClearPeaks", "FDDIdentification", "SingularValueSpectrum",
-           "clear_peaks", "cross_spectra", "height_db", "identify_fdd", "singular_value_spectrum", "unexplained_peaks",
-           "unit_shapes"]
+           "clear_peaks", "cross_spectra", "height_db", "identify_fdd", "running_floor", "singular_value_spectrum",
+           "unexplained_peaks", "unit_shapes"]
 
 #: Least height (dB) of a clear spectral peak above the smoothed floor of the first singular value.
 CLEAR_PEAK_DB = 10.0
@@ -131,7 +131,7 @@ class SingularValueSpectrum:
         return float(self.frequency_hz[1])
 
 
-def _running_floor(f, s1, df):
+def running_floor(f, s1, df):
     """Running median of ``10 log10 s1`` over +-max(FLOOR_HALF_WIDTH f, FLOOR_MIN_LINES df), as s1's unit."""
     from scipy import ndimage  # scipy.fft/signal/ndimage: about 1 s to import, only output-only identification
 
@@ -173,7 +173,7 @@ def singular_value_spectrum(checked: CheckedRecord, resolution_hz=None, where="r
     U, S, _ = np.linalg.svd(G)
     inband = (f >= band[0]) & (f <= band[1]) & (f > 0)
     floor = np.full(f.size, np.nan)
-    floor[inband] = _running_floor(f[inband], S[inband, 0], f[1])
+    floor[inband] = running_floor(f[inband], S[inband, 0], f[1])
     lowest = max(3 * f[1], 10 / checked.duration_s, band[0])
     return SingularValueSpectrum(f, S, U[:, :, 0], floor, band, lowest)
 

@@ -33,7 +33,7 @@ from physics.errors import ConvergenceError, ShapeError
 from physics.identification.band_refine import BandFit, refine_in_bands
 from physics.identification.damped_sinusoids import DampedSinusoidFit, fit_damped_sinusoids, mode_snr
 from physics.identification.decay_peaks import decay_peaks
-from physics.identification.decays import Decays, _adds_energy, decay_spectrum, find_decays
+from physics.identification.decays import Decays, adds_energy, decay_spectrum, find_decays
 from physics.identification.fdd import clear_peaks, unit_shapes
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.peak_seeds import SeededModes, refine_seeds, unheld_peaks
@@ -180,7 +180,7 @@ def _split_missed_hits(parts, spans, q, residuals, window):
 def _band_spans(x, decays, fitted_spans, window):
     """The decays the band refinement reads, a list of ``(first, stop)`` samples of the record ``x`` (mean removed):
     each decay from its hit's onset, its fitted pieces (``fitted_spans``, as :func:`_split_missed_hits` gives them)
-    joined across every cut that adds no energy (:func:`_adds_energy` over ``window`` samples: a missed hit adds
+    joined across every cut that adds no energy (:func:`adds_energy` over ``window`` samples: a missed hit adds
     energy like any hit; a cut without is the fit's misfit, and the decay runs on across it)."""
     out = []
     for onset, stop in zip(decays.onsets.tolist(), decays.stops.tolist()):
@@ -188,7 +188,7 @@ def _band_spans(x, decays, fitted_spans, window):
         if not firsts:
             continue
         cuts = np.array([o for o in firsts if o > onset], int)
-        hits = cuts[_adds_energy(x, cuts, cuts, window)] if cuts.size else cuts
+        hits = cuts[adds_energy(x, cuts, cuts, window)] if cuts.size else cuts
         edges = [onset, *hits.tolist(), stop]
         out += [(a, b) for a, b in zip(edges[:-1], edges[1:]) if any(a <= o < b for o in firsts)]
     return out

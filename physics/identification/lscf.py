@@ -12,7 +12,7 @@ from threadpoolctl import threadpool_limits
 from physics.errors import BeamDamageError, ConvergenceError, ShapeError
 from physics.frf import check_frf_kind, convert_frf
 from physics.identification.lsfd import LSFDResult, lsfd
-from physics.identification.modes import ModalEstimate, _estimate, _frf3
+from physics.identification.modes import ModalEstimate, checked_frf, modal_estimate
 from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles, stability_status
 
 __all__ = ["LSCFIdentification", "identify_lscf", "lscf", "octave_median_peaks", "prominent_peaks"]
@@ -269,7 +269,7 @@ def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_to
     -------
     StabilisationDiagram
     """
-    f, h = _frf3(frequency_hz, frf)
+    f, h = checked_frf(frequency_hz, frf)
     n_o, n_i, N = h.shape
     if max_order < min_order or min_order < 1:
         raise ShapeError("lscf needs 1 <= min_order <= max_order")
@@ -418,7 +418,7 @@ def identify_lscf(frequency_hz, frf, n_modes=None, drive=None, max_order=40, sel
 
 
 def _identify_lscf(frequency_hz, frf, n_modes, drive, max_order, select, kind, weighting, margin, lscf_options):
-    f, h = _frf3(frequency_hz, frf)
+    f, h = checked_frf(frequency_hz, frf)
     rec = convert_frf(h, 2 * np.pi * f, check_frf_kind(kind), "receptance")
     weight = None if "line_weight" in lscf_options or kind == "receptance" else kind_weight(f, kind)
     diagram = lscf(f, rec, max_order=max_order, margin=margin, **lscf_options)
@@ -441,7 +441,7 @@ def _identify_lscf(frequency_hz, frf, n_modes, drive, max_order, select, kind, w
     use = np.r_[inside, outside]
     fit = lsfd(f, h, poles.eigenvalues[use], kind=kind, weighting=weighting)
     k = np.arange(inside.size)
-    est = _estimate(fn[inside], poles.damping_ratios[inside], fit.residues[..., k], drive, "lscf",
+    est = modal_estimate(fn[inside], poles.damping_ratios[inside], fit.residues[..., k], drive, "lscf",
                     poles.frequency_std_hz[inside], poles.damping_std[inside], fit.lower_residual,
                     fit.upper_residual, fit.frequency_std_hz[k], fit.damping_std[k])
     return LSCFIdentification(est, diagram, fit, np.abs(fit.eigenvalues[inside.size:]) / (2 * np.pi))

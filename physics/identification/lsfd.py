@@ -9,7 +9,7 @@ import numpy as np
 
 from physics.errors import ShapeError
 from physics.frf import FRF_KINDS, check_frf_kind
-from physics.identification.modes import _frf3
+from physics.identification.modes import checked_frf
 
 __all__ = ["ESTIMATION_PASSES", "LSFDResult", "WEIGHTINGS", "estimate_noise_model", "lsfd"]
 
@@ -223,7 +223,7 @@ def lsfd(frequency_hz, frf, eigenvalues, lower_residual=True, upper_residual=Tru
         Residues in the receptance convention whatever ``kind``; ``synthesised`` in ``kind``.
     """
 
-    f, h = _frf3(frequency_hz, frf)
+    f, h = checked_frf(frequency_hz, frf)
     power = FRF_KINDS.index(check_frf_kind(kind))
     lam = np.asarray(eigenvalues, dtype=complex).ravel()
     if (lower_residual or power == 0) and f[0] <= 0:

@@ -155,9 +155,7 @@ def identify_file(path, method="lscf", band_hz=None, n_modes=None, max_order=40)
     frf = read_measured_frf(path)
     try:
         return identify_frf(frf, method, band_hz, n_modes, max_order)
-    except ConvergenceError as exc:
-        if str(exc).startswith(str(path)):
-            raise
+    except ConvergenceError as exc:                 # identify_frf knows no file: the path is named here, once
         hint = (f"; FRFs estimated as {frf.metadata['estimated']}: for a hammer test, 'beam-damage estimate "
                 "--excitation impact' first" if "random excitation" in frf.metadata.get("estimated", "") else "")
         raise ConvergenceError(f"{path}: {exc}{hint}", parameter=exc.parameter) from None

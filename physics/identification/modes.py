@@ -9,10 +9,10 @@ import numpy as np
 from physics.errors import ShapeError
 from physics.modal import eigenvalues_from_modal
 
-__all__ = ["ModalEstimate", "modal_phase_collinearity", "shapes_from_residues"]
+__all__ = ["ModalEstimate", "checked_frf", "modal_estimate", "modal_phase_collinearity", "shapes_from_residues"]
 
 
-def _frf3(frequency_hz, frf):
+def checked_frf(frequency_hz, frf):
     """Checked ``(frequency_hz, frf)`` as float64 (n_lines,) and complex128 (n_resp, n_ref, n_lines)."""
     f = np.asarray(frequency_hz, dtype=np.float64)
     h = np.asarray(frf, dtype=np.complex128)
@@ -119,8 +119,12 @@ class ModalEstimate:
     weakly_stable: np.ndarray | None = None
 
 
-def _estimate(f_hz, zeta, residues, drive, method, f_std=None, z_std=None, lower=None, upper=None,
-              f_fit_std=None, z_fit_std=None):
+def modal_estimate(f_hz, zeta, residues, drive, method, f_std=None, z_std=None, lower=None, upper=None,
+                   f_fit_std=None, z_fit_std=None) -> ModalEstimate:
+    """The :class:`ModalEstimate` of modes ``f_hz`` (Hz), ``zeta`` and ``residues`` (..., n_modes) by ``method``,
+    in frequency order (shapes from the residues at the driving point ``drive``, None: unscaled); ``f_std``,
+    ``z_std`` (None: NaN), the residual terms ``lower``, ``upper`` and the fit's one sigmas as the class holds
+    them."""
     f_hz, zeta = np.asarray(f_hz, float), np.asarray(zeta, float)
     order = np.argsort(f_hz)
     nan = np.full(f_hz.size, np.nan)

@@ -40,7 +40,7 @@ from physics.identification.fdd import ClearPeaks
 
 __all__ = ["JUMP_SAMPLES_PER_CORRELATION", "JUMP_SEARCH_LINES", "JUMP_SEARCH_STEPS", "JUMP_SIGMA_OCTAVES",
            "MIN_DECAY_SIGMAS", "REEXCITE_JUMP", "REEXCITE_RISE", "REEXCITE_STEP", "BandJump", "SeededModes",
-           "band_jump", "band_rises", "refine_seeds", "seed_poles", "unheld_peaks"]
+           "band_jump", "band_rises", "cut_at_rises", "refine_seeds", "seed_fit", "seed_poles", "unheld_peaks"]
 
 #: A seeded mode's damping ratio is at least this many of its one sigma (it decays within the record).
 MIN_DECAY_SIGMAS = 2.0
@@ -131,6 +131,18 @@ class BandJump:
     step: float = 0.0
 
 
+def _in_band(y, fs, band_hz, analytic=False) -> np.ndarray:
+    """The decays ``y`` (n_channels, n) on the lines of ``band_hz`` (Hz) alone, transformed back from their
+    transform zero-padded to ``2 n`` samples (the loud start does not wrap onto the end): real, or with ``analytic``
+    the complex signal of the positive-frequency lines; shape (n_channels, 2 n)."""
+    fft, ifft, lines = (np.fft.fft, np.fft.ifft, np.fft.fftfreq) if analytic else \
+        (np.fft.rfft, np.fft.irfft, np.fft.rfftfreq)
+    f = lines(2 * y.shape[1], 1.0 / fs)
+    Y = fft(y, 2 * y.shape[1], axis=1)
+    Y[:, (f < band_hz[0]) | (f > band_hz[1])] = 0.0
+    return ifft(Y, 2 * y.shape[1], axis=1)
+
+
 def band_jump(decay, sampling_frequency_hz, band_hz, eigenvalue) -> BandJump:
     """Where the amplitude of a decay in a band, the decay of pole ``eigenvalue`` divided out, jumps (a
     re-excitation of the mode while its first decay still rings): the likeliest single change point.
@@ -164,12 +176,9 @@ def band_jump(decay, sampling_frequency_hz, band_hz, eigenvalue) -> BandJump:
     corr = int(np.ceil(fs / max(band_hz[1] - band_hz[0], np.finfo(float).tiny)))
     if n < 4 * corr:
         return BandJump(0, 0.0, 0.0)
-    f = np.fft.fftfreq(2 * n, 1.0 / fs)
-    Y = np.fft.fft(y, 2 * n, axis=1)
-    Y[:, (f < band_hz[0]) | (f > band_hz[1])] = 0.0
     hop = max(1, corr // JUMP_SAMPLES_PER_CORRELATION)     # s(t) varies over a correlation length: read it on a hop
     t = np.arange(corr, n - corr, hop)
-    b = np.fft.ifft(Y, axis=1)[:, t]
+    b = _in_band(y, fs, band_hz, analytic=True)[:, t]
     lam = complex(eigenvalue)
     shifts = 2j * np.pi * JUMP_SEARCH_LINES * fs / n * np.linspace(-1.0, 1.0, 2 * JUMP_SEARCH_STEPS + 1)
     sigmas = -lam.real * 2.0 ** np.linspace(-JUMP_SIGMA_OCTAVES, JUMP_SIGMA_OCTAVES, 4 * JUMP_SIGMA_OCTAVES + 1)
@@ -217,10 +226,7 @@ def band_rises(decay, sampling_frequency_hz, band_hz) -> np.ndarray:
     w = int(np.ceil(2 * fs / max(band_hz[1] - band_hz[0], np.finfo(float).tiny)))
     if n < 3 * w:
         return np.zeros(0, int)
-    f = np.fft.rfftfreq(2 * n, 1.0 / fs)             # zero-padded: the loud start does not wrap onto the end
-    Y = np.fft.rfft(y, 2 * n, axis=1)
-    Y[:, (f < band_hz[0]) | (f > band_hz[1])] = 0.0
-    c = np.concatenate([[0.0], np.cumsum(np.sum(np.fft.irfft(Y, 2 * n, axis=1)[:, :n] ** 2, axis=0))])
+    c = np.concatenate([[0.0], np.cumsum(np.sum(_in_band(y, fs, band_hz)[:, :n] ** 2, axis=0))])
     k = np.arange(w, n - w + 1)
     before, after = c[k] - c[k - w], c[k + w] - c[k]
     floor = np.percentile(c[w:] - c[:-w], 10)
@@ -230,10 +236,11 @@ def band_rises(decay, sampling_frequency_hz, band_hz) -> np.ndarray:
     return np.array([k[a + int(np.argmax(ratio[a:b]))] for a, b in zip(edges[0::2], edges[1::2])], int)
 
 
-def _seed_fit(decays, fs, held, start, held_amplitudes):
-    """The band fit of the seeds ``start`` (rad/s) with the held modes of their bands refitted and the others fixed
-    (see :func:`refine_seeds`): the :class:`~physics.identification.band_refine.BandFit` and the seeds' indices
-    into it."""
+def seed_fit(decays, fs, held, start, held_amplitudes):
+    """The band fit of the seeds ``start`` (complex (n_seeds,), rad/s) on ``decays`` (each (n_channels, n_samples),
+    at ``fs`` Hz) with the modes ``held`` (complex (n_held,), rad/s) of their bands refitted and the others fixed at
+    ``held_amplitudes`` (see :func:`refine_seeds`): the :class:`~physics.identification.band_refine.BandFit` and
+    the seeds' indices into it, shape (n_seeds,)."""
     n_ch = decays[0].shape[0]
     longest_s = max(y.shape[1] for y in decays) / fs
     _, group = mode_bands(np.concatenate([held, start]), longest_s, fs / 2)
@@ -247,7 +254,7 @@ def _seed_fit(decays, fs, held, start, held_amplitudes):
     return fit, near.sum() + np.arange(start.size)
 
 
-def _cut_at_rises(decays, fs, bands_hz, eigenvalues):
+def cut_at_rises(decays, fs, bands_hz, eigenvalues):
     """The decays cut where their energy in one of ``bands_hz`` (shape (n_bands, 2), Hz) rises once
     (:func:`band_rises`): the pieces, and the index of each decay's first piece (None where no decay is cut). A decay
     re-excited once falls, rises once and falls again; a band whose energy rises more than once within a decay
@@ -340,15 +347,15 @@ def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPe
     longest_s = max(y.shape[1] for y in decays) / fs
     f_seed = peaks.frequency_hz[seeds]
     start = seed_poles(f_seed, np.maximum(peaks.tolerance_hz[seeds], freq_tol * f_seed), longest_s)
-    fit, j = _seed_fit(decays, fs, held, start, held_amplitudes)
+    fit, j = seed_fit(decays, fs, held, start, held_amplitudes)
     lam, conv, amps = fit.eigenvalues[j], fit.converged[j], fit.amplitudes[:, :, j]
     f_std, z_std = fit.frequency_std_hz[j], fit.damping_std[j]
     flat = conv & ~(fit.damping_ratios[j] >= MIN_DECAY_SIGMAS * z_std)     # no decay shown: re-excited, or a sinusoid
     if flat.any():
         bands_hz = mode_bands(np.concatenate([held, start]), longest_s, fs / 2)[0][held.size:][flat]
-        pieces, first = _cut_at_rises(decays, fs, bands_hz, start[flat])
+        pieces, first = cut_at_rises(decays, fs, bands_hz, start[flat])
         if pieces is not None:                          # the decays cut where the flat seeds' bands are re-excited
-            refit, jr = _seed_fit(pieces, fs, held, start[flat], None)
+            refit, jr = seed_fit(pieces, fs, held, start[flat], None)
             lam[flat], conv[flat] = refit.eigenvalues[jr], refit.converged[jr]
             f_std[flat], z_std[flat] = refit.frequency_std_hz[jr], refit.damping_std[jr]
             amps[:, :, flat] = refit.amplitudes[first][:, :, jr]
@@ -361,7 +368,7 @@ def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPe
         zones = np.stack([np.maximum(f_d - half, 0.0), np.minimum(f_d + half, fs / 2)], axis=1)[decaying]
         pieces, first = _cut_at_jumps(decays, fs, zones, lam[decaying])
         if pieces is not None:
-            refit, jr = _seed_fit(pieces, fs, held, lam[decaying], None)
+            refit, jr = seed_fit(pieces, fs, held, lam[decaying], None)
             better = np.zeros(lam.size, bool)           # the pieces' fit where it is still a mode of the peak
             better[decaying] = _mode_of_peak(refit.converged[jr], refit.eigenvalues[jr], refit.damping_std[jr],
                                              peaks.frequency_hz[seeds][decaying],

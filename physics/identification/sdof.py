@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from physics.errors import ShapeError
-from physics.identification.modes import _estimate, _frf3
+from physics.identification.modes import checked_frf, modal_estimate
 from physics.identification.poles import MAX_DAMPING
 from physics.modal import eigenvalues_from_modal
 
@@ -108,7 +108,7 @@ def find_peaks_indicator(frequency_hz, frf, n_modes=None, prominence=0.2):
     """
     from scipy.signal import find_peaks
 
-    f, h = _frf3(frequency_hz, frf)
+    f, h = checked_frf(frequency_hz, frf)
     mif = np.log10(mode_indicator(h) + np.finfo(float).tiny)
     idx, props = find_peaks(mif, prominence=prominence)
     if n_modes is not None:
@@ -148,7 +148,7 @@ def peak_picking(frequency_hz, frf, n_modes=None, peaks=None, drive=None, promin
         No uncertainty (NaN). Only the driving-point column is identified; its
         residues are repeated for every reference.
     """
-    f, h = _frf3(frequency_hz, frf)
+    f, h = checked_frf(frequency_hz, frf)
     idx = find_peaks_indicator(f, h, n_modes, prominence) if peaks is None else np.asarray(peaks, int)
     idx = idx[(idx > 0) & (idx < f.size - 1)]
     mif = mode_indicator(h)
@@ -191,7 +191,7 @@ def peak_picking(frequency_hz, frf, n_modes=None, peaks=None, drive=None, promin
     psi = np.sqrt(lam) * Psi  # eq. 3.27 scaling -> unit modal A
     # only the driving-point column is identified; it is repeated for every reference
     residues = np.repeat((psi * psi[s])[:, None, :], h.shape[1], axis=1)
-    return _estimate(fn, zeta, residues, drive, "peak")
+    return modal_estimate(fn, zeta, residues, drive, "peak")
 
 
 def _fit_circle(z):
@@ -318,7 +318,7 @@ def circle_fit(frequency_hz, frf, n_modes=None, peaks=None, drive=None, bandwidt
     -------
     ModalEstimate
     """
-    f, h = _frf3(frequency_hz, frf)
+    f, h = checked_frf(frequency_hz, frf)
     pk = peak_picking(f, h, n_modes, peaks, drive)
     idx = np.array([np.argmin(np.abs(f - x)) for x in pk.natural_frequencies_hz])
     mob = 2j * np.pi * f * h
@@ -370,6 +370,6 @@ def circle_fit(frequency_hz, frf, n_modes=None, peaks=None, drive=None, bandwidt
         f_mode, z_mode, f_std, z_std, A = (a[..., ~broad] for a in (f_mode, z_mode, f_std, z_std, A))
     wd = 2 * np.pi * f_mode * np.sqrt(1 - z_mode**2)
     residues = A / (2j * wd)
-    return _estimate(f_mode, z_mode, residues, drive, "circle", f_std, z_std)
+    return modal_estimate(f_mode, z_mode, residues, drive, "circle", f_std, z_std)
 
 

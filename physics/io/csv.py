@@ -11,7 +11,7 @@ from physics.errors import FileFormatError, ShapeError
 from physics.io.atomic import atomic_write_text
 from physics.io.types import FRF_KINDS, UNNAMED_REFERENCE, MeasuredFRF, check_dof_labels, frf_matrix
 
-__all__ = ["read_frf_csv", "write_frf_csv"]
+__all__ = ["csv_values", "read_frf_csv", "write_frf_csv"]
 
 
 _CSV_MAGIC = "# beam-damage FRF csv v1"
@@ -51,7 +51,7 @@ def read_frf_csv(path, kind=None) -> MeasuredFRF:
     path = Path(path)
     meta, header, header_line, rows = _csv_lines(path)
     pairs = _header_pairs(path, header, header_line)
-    values = _csv_values(path, rows, len(header))
+    values = csv_values(path, rows, len(header))
     f = values[:, 0]
     if np.any(np.diff(f) <= 0):
         raise FileFormatError(f"{path}: column 'frequency_hz' must be strictly increasing")
@@ -127,8 +127,10 @@ def _header_pairs(path: Path, header: list, header_line: int) -> list:
     return pairs
 
 
-def _csv_values(path: Path, rows: list, ncol: int) -> np.ndarray:
-    """The data rows as a finite ``(n_rows, ncol)`` float array; the first bad line is named."""
+def csv_values(path: Path, rows: list, ncol: int) -> np.ndarray:
+    """The data rows ``[(line number, text), ...]`` of a CSV file as a finite float64 array ``(n_rows, ncol)``
+    (the FRF and the time-series readers' parser); raises :class:`~physics.errors.FileFormatError` naming ``path``
+    and the first row with another field count, a non-numeric field or a NaN or inf value."""
     counts = [r[1].count(",") + 1 for r in rows]
     bad = next((i for i, c in enumerate(counts) if c != ncol), None)
     if bad is not None:

@@ -9,7 +9,7 @@ import numpy as np
 from physics.errors import FileFormatError
 from physics.io.types import MAX_MAGNITUDE, dof_label
 from physics.io.units import parse_force_unit, parse_response_unit
-from physics.io.uff58 import _UFF_FUNCTION_NAMES, UffFile
+from physics.io.uff58 import UFF_FUNCTION_NAMES, UffFile
 
 __all__ = ["QUANTITIES", "TimeRecords", "read_uff_time_records"]
 
@@ -75,7 +75,7 @@ def read_uff_time_records(path) -> TimeRecords:
     if not recs:
         found = sorted(uf.function_types)
         raise FileFormatError(f"{path}: no time record (dataset 58, function type 1); function types found: "
-                              + (", ".join(f"{f} ({_UFF_FUNCTION_NAMES.get(f, 'unknown')})" for f in found)
+                              + (", ".join(f"{f} ({UFF_FUNCTION_NAMES.get(f, 'unknown')})" for f in found)
                                  or "none"))
     dt, n_pts = None, None
     signals, dofs, quantities, labels = [], [], [], []

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from physics.io.csv import _csv_values
+from physics.io.csv import csv_values
 from physics.io.inputs import check_input_file
 from physics.errors import FileFormatError
 from physics.io.npz import read_npz_arrays
@@ -89,7 +89,7 @@ def read_time_csv(path) -> TimeRecords:
     if len(body) < 3:
         raise FileFormatError(f"{path}: rows must hold {len(dofs) + 1} numbers (time_s and one per channel), at "
                               "least two rows")
-    data = _csv_values(path, body[1:], len(dofs) + 1)
+    data = csv_values(path, body[1:], len(dofs) + 1)
     dt = np.diff(data[:, 0])
     if not (np.all(dt > 0) and np.allclose(dt, dt[0], rtol=1e-6)):
         raise FileFormatError(f"{path}: column 'time_s' must increase by one uniform step (the sampling rate)")

@@ -18,13 +18,15 @@ from physics.io.geometry import geometry_from_uff_sets
 from physics.io.types import DEFAULT_UNITS, MeasuredFRF, dof_label, frf_matrix, parse_dof
 from physics.io.units import UnitSystem, frf_unit_factor
 
-__all__ = ["UFF_WINDOW_TYPES", "UffFile", "read_uff58", "read_uff_context", "read_uff_geometry", "write_uff58"]
+__all__ = ["UFF_FUNCTION_NAMES", "UFF_WINDOW_TYPES", "UffFile", "read_uff58", "read_uff_context", "read_uff_geometry",
+           "write_uff58"]
 
 
 #: UFF specific data types of dataset 58 ordinates, and the FRF kind they give.
 _UFF_ORDINATE_KIND = {8: "receptance", 11: "mobility", 12: "accelerance"}
 _UFF_KIND_ORDINATE = {v: k for k, v in _UFF_ORDINATE_KIND.items()}
-_UFF_FUNCTION_NAMES = {0: "general/unknown", 1: "time response", 2: "auto spectrum",
+#: UFF function types (dataset 58 field 1 of record 6) by number, named in messages.
+UFF_FUNCTION_NAMES = {0: "general/unknown", 1: "time response", 2: "auto spectrum",
                        3: "cross spectrum", 4: "frequency response function", 5: "transmissibility",
                        6: "coherence", 7: "auto correlation", 8: "cross correlation",
                        9: "power spectral density", 10: "energy spectral density",
@@ -143,13 +145,13 @@ def _frf_records(uf: "UffFile") -> tuple:
         else:
             skipped[ft] = skipped.get(ft, 0) + 1
     if not frfs:
-        found = ", ".join(f"{ft} ({_UFF_FUNCTION_NAMES.get(ft, 'unknown')}) x{c}" for ft, c in skipped.items())
+        found = ", ".join(f"{ft} ({UFF_FUNCTION_NAMES.get(ft, 'unknown')}) x{c}" for ft, c in skipped.items())
         hint = "; time records need a force channel: estimate FRFs with 'beam-damage estimate'" \
             if set(skipped) == {1} else ""
         raise FileFormatError(f"{path}: dataset 58 records hold no FRF (function type 4); function types "
                               f"found: {found}{hint}")
     if skipped:
-        found = ", ".join(f"{ft} ({_UFF_FUNCTION_NAMES.get(ft, 'unknown')})" for ft in skipped)
+        found = ", ".join(f"{ft} ({UFF_FUNCTION_NAMES.get(ft, 'unknown')})" for ft in skipped)
         warnings.warn(f"{path}: skipped {sum(skipped.values())} dataset 58 record(s) that are not FRFs: "
                       f"function type(s) {found}", stacklevel=3)
     return frfs, bool(uf.records58[0][1].get("binary", 0))

@@ -6,11 +6,13 @@ import json
 import numpy as np
 import pytest
 
+import learn.monitor.identification as identification
 import learn.monitor.workers as workers
 from experiments.cli import main as cli_main
 from learn.monitor import IdentificationSettings, IdentifiedModes, SeriesInput, monitor_series, reference_modes
 from learn.monitor.estimator_choice import FFT_PEAK, MIN_HALF, choose_estimators, choose_frequencies
-from learn.monitor.tracking import track_modes
+from learn.monitor.tracking import narrow_bands_hz, track_modes
+from physics.identification.fft_peak import fft_peaks
 from physics.errors import ConfigError
 
 FS_HZ, N_SAMPLES, ZETA = 1000.0, 4000, 0.002
@@ -155,3 +157,26 @@ def test_the_cli_reports_the_choice_in_its_summary_and_json(tmp_path, monkeypatc
     saved = json.loads((out / "monitor.json").read_text())
     assert saved["config"]["frequency_estimator"] == "choose"
     assert saved["normal_variation"]["frequency_estimators"]["estimators"] == ["era", FFT_PEAK]
+
+
+def test_the_fft_peaks_are_cached_beside_the_identifications(tmp_path, monkeypatch):
+    """With a cache folder, each record's FFT peaks are computed once: a second choice reads them from the cache
+    (no record read), equal to the bit, and equal to :func:`fft_peaks` of the record in the modes' bands."""
+    files, tests, *_ = _series(tmp_path)
+    base = np.arange(14)
+    ref = reference_modes([tests[i] for i in base])
+    F, _, _, cols = track_modes(tests, ref)
+    first = choose_frequencies(tests, files, ref, F, cols, base, tmp_path / "cache")
+    bands = narrow_bands_hz(ref)
+    rec = np.load(files[3])
+    direct = fft_peaks(rec["signals"], FS_HZ, bands.mean(axis=1), 0.5 * (bands[:, 1] - bands[:, 0])).frequency_hz
+    np.testing.assert_array_equal(first.fft_hz[3], direct)
+    assert len(list((tmp_path / "cache").glob("*.json"))) == len(files)
+
+    def refuse(path):
+        raise AssertionError(f"{path} read again")
+
+    monkeypatch.setattr(identification, "read_response_records", refuse)
+    again = choose_frequencies(tests, files, ref, F, cols, base, tmp_path / "cache")
+    np.testing.assert_array_equal(again.fft_hz, first.fft_hz)
+    assert again.estimators == first.estimators == ("era", FFT_PEAK)
