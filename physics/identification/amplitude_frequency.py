@@ -34,8 +34,8 @@ from physics.identification.backbone import Backbone, fit_backbone
 from physics.identification.band_refine import BACKGROUND_ORDER, MERGE_FACTOR, RESOLVED_LINES, RESOLVED_WIDTHS, \
     mode_bands
 
-__all__ = ["MAX_NEIGHBOURS", "MAX_NEIGHBOUR_WIDTH", "AmplitudeFrequency", "backbone_with_neighbours",
-           "frequency_at_amplitude"]
+__all__ = ["MAX_NEIGHBOURS", "MAX_NEIGHBOUR_WIDTH", "MIN_RESIDUAL_DROP", "AmplitudeFrequency",
+           "backbone_with_neighbours", "frequency_at_amplitude", "read_at_amplitude"]
 
 #: Most neighbours fitted beside the mode.
 MAX_NEIGHBOURS = 1
@@ -65,6 +65,13 @@ class AmplitudeFrequency:
     frequency_std_hz: float
     reference_amplitude: float
     backbone: Backbone
+
+
+def _reference(amplitude) -> float:
+    a_ref = float(amplitude)
+    if not (np.isfinite(a_ref) and a_ref >= 0):
+        raise ConfigError(f"reference_amplitude: expected a finite amplitude >= 0, got {amplitude}")
+    return a_ref
 
 
 def _rss(b: Backbone) -> float:
@@ -141,9 +148,31 @@ def backbone_with_neighbours(decay, sampling_frequency_hz, eigenvalue, max_neigh
     return best if best.neighbours.size else own
 
 
+def read_at_amplitude(backbone: Backbone, reference_amplitude=0.0) -> AmplitudeFrequency:
+    """A fitted backbone's undamped natural frequency at the envelope amplitude ``reference_amplitude``.
+
+    Parameters
+    ----------
+    backbone : Backbone
+    reference_amplitude : float
+        ``a_ref >= 0``, the decay's units; 0 the zero-amplitude limit.
+
+    Returns
+    -------
+    AmplitudeFrequency
+    """
+    a_ref, b = _reference(reference_amplitude), backbone
+    r = a_ref / max(abs(b.amplitude), np.finfo(float).tiny)
+    f = b.frequency_hz + b.shift_hz * r
+    var = b.frequency_std_hz ** 2 + (r * b.shift_std_hz) ** 2 \
+        + 2 * r * np.nan_to_num(b.correlation) * b.frequency_std_hz * b.shift_std_hz
+    return AmplitudeFrequency(float(np.hypot(f, b.decay_rate / (2 * np.pi))), float(np.sqrt(max(var, 0.0))), a_ref, b)
+
+
 def frequency_at_amplitude(decay, sampling_frequency_hz, eigenvalue, reference_amplitude=0.0,
                            max_neighbours=MAX_NEIGHBOURS) -> AmplitudeFrequency:
-    """One mode's undamped natural frequency at the envelope amplitude ``reference_amplitude`` (module docstring).
+    """One mode's undamped natural frequency at the envelope amplitude ``reference_amplitude`` (module docstring):
+    :func:`read_at_amplitude` of :func:`backbone_with_neighbours`.
 
     Parameters
     ----------
@@ -160,12 +189,5 @@ def frequency_at_amplitude(decay, sampling_frequency_hz, eigenvalue, reference_a
     -------
     AmplitudeFrequency
     """
-    a_ref = float(reference_amplitude)
-    if not (np.isfinite(a_ref) and a_ref >= 0):
-        raise ConfigError(f"reference_amplitude: expected a finite amplitude >= 0, got {reference_amplitude}")
-    b = backbone_with_neighbours(decay, sampling_frequency_hz, eigenvalue, max_neighbours)
-    r = a_ref / max(abs(b.amplitude), np.finfo(float).tiny)
-    f = b.frequency_hz + b.shift_hz * r
-    var = b.frequency_std_hz ** 2 + (r * b.shift_std_hz) ** 2 \
-        + 2 * r * np.nan_to_num(b.correlation) * b.frequency_std_hz * b.shift_std_hz
-    return AmplitudeFrequency(float(np.hypot(f, b.decay_rate / (2 * np.pi))), float(np.sqrt(max(var, 0.0))), a_ref, b)
+    a_ref = _reference(reference_amplitude)                              # refused before any fit
+    return read_at_amplitude(backbone_with_neighbours(decay, sampling_frequency_hz, eigenvalue, max_neighbours), a_ref)
