@@ -67,6 +67,13 @@ class Backbone:
         Lines of the transform fitted.
     neighbours : ndarray, complex, shape (n_neighbours,)
         The refined poles of the neighbours fitted with the mode (rad/s).
+    lines_hz : ndarray, shape (n_lines,)
+        The frequencies of the lines fitted (Hz).
+    residual : ndarray, complex, shape (n_lines,)
+        The decay's transform on those lines less the fitted model (mode, neighbours and background), over
+        ``sqrt(N)``.
+    n_parameters : int
+        Real parameters fitted: the nonlinear ones and the amplitudes and background projected out.
     """
 
     frequency_hz: float
@@ -82,6 +89,9 @@ class Backbone:
     band_hz: np.ndarray
     n_lines: int
     neighbours: np.ndarray
+    lines_hz: np.ndarray
+    residual: np.ndarray
+    n_parameters: int
 
 
 def _basis(p, n, fs, k):
@@ -189,4 +199,5 @@ def fit_backbone(decay, sampling_frequency_hz, eigenvalue, band_hz=None, backgro
     return Backbone(f0, float(np.hypot(f0, sigma / (2 * np.pi))), c, sigma, float(std[0]), float(std[1]), float(std[2]),
                     float(cov[0, 1] / (std[0] * std[1])) if std[0] * std[1] > 0 else np.nan,
                     complex(coef[0], coef[1]), bool(abs(c) > SIGNIFICANT_SIGMAS * std[1]),
-                    band.copy(), int(k.size), -fit.x[3::2] + 1j * fit.x[4::2])
+                    band.copy(), int(k.size), -fit.x[3::2] + 1j * fit.x[4::2], k * fs / n,
+                    r[:k.size] + 1j * r[k.size:], n_params)
