@@ -28,13 +28,16 @@ from __future__ import annotations
 import io
 import json
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
 
 from datagen.config import RecordedConfig, recorded_config
 from learn.network.features import BeamSpec
-from learn.explanations.sensitivity import beam_sensitivity
+from datagen.damage import DAMAGE_MODELS, applies_to, beam_section
+from learn.explanations.refine import NominalBeam, nominal_beam
+from learn.explanations.sensitivity import Sensitivity, beam_sensitivity
 from learn.pairs.verdict import DamageWords, verdict_text
 from physics.beam import load_beam
 from physics.io.inputs import check_input_file
@@ -62,7 +65,7 @@ class TrainedModel:
     config: dict
     networks: dict = field(default_factory=dict)   # route -> DamageClassifier
 
-    @property
+    @cached_property
     def beam(self) -> BeamSpec:
         return BeamSpec.from_dict(self.config["beam"])
 
@@ -78,12 +81,36 @@ class TrainedModel:
                                   f"DOFs {', '.join(self.beam.dofs)}, {self.beam.mass_model} mass); the {what} has "
                                   + "; ".join(diff))
 
-
-    @property
-    def sensitivity(self):
+    @cached_property
+    def sensitivity(self) -> Sensitivity:
         """FE sensitivities of the truth beam the model records (:func:`sensitivity_of`)."""
         return sensitivity_of(self.beam, self.config.get("root_spring_relative"), self.config.get("truth_beam"),
                               self.config.get("generator_config"))
+
+    @cached_property
+    def truth(self) -> dict:
+        """The truth beam's mapping (:func:`truth_beam_mapping`): what a damage kind's ``size_range`` and
+        ``describe`` read."""
+        return truth_beam_mapping(self)
+
+    @cached_property
+    def kind_sensitivities(self) -> dict:
+        """Damage kind -> FE sensitivities of the truth beam to it (:func:`sensitivity_of`), for each registered kind
+        the beam's section holds (:func:`datagen.damage.applies_to`): what the competing explanations weigh."""
+        gen = self.config.get("generator_config") or {}
+        section = beam_section(self.recorded.beam)
+        return {name: sensitivity_of(self.beam, self.config.get("root_spring_relative"),
+                                     self.config.get("truth_beam"), {**gen, "damage": {"kind": name}})
+                for name in DAMAGE_MODELS if applies_to(name, section)}
+
+    @cached_property
+    def nominal(self) -> NominalBeam:
+        """The nominal FE beam of the sensitivities (:func:`learn.explanations.refine.nominal_beam`), on which the
+        explanations' damage kinds are fitted exactly."""
+        cfg = self.config
+        return nominal_beam(truth_numbers(self.beam, cfg.get("truth_beam"), cfg.get("generator_config")),
+                            cfg.get("root_spring_relative"), self.beam.test,
+                            n_modes=self.sensitivity.frequency.shape[0])
 
     def measured_beam(self, beam: str | None = None, mass_model: str | None = None):
         """The beam spec of measured data and the sensor positions a beam file gives: ``(BeamSpec, x_m or None)``.
@@ -111,7 +138,7 @@ class TrainedModel:
         self.check_beam(spec, "measured beam")
         return spec, beam_x_m
 
-    @property
+    @cached_property
     def recorded(self) -> RecordedConfig:
         """The generator config of the training data (:func:`datagen.config.recorded_config`)."""
         return recorded_config(self.config.get("generator_config"))
@@ -120,7 +147,7 @@ class TrainedModel:
         """The verdict of one classified pair as a reader sees it, in the words of the model's damage kind
         (:func:`learn.pairs.verdict.verdict_text`: its ``describe`` on the model's truth beam and section)."""
         gen = self.recorded
-        return verdict_text(result, DamageWords(gen.kind, truth_beam_mapping(self), gen.section))
+        return verdict_text(result, DamageWords(gen.kind, self.truth, gen.section))
 
 
 def save_model(out_dir, config: dict, networks: dict) -> None:
