@@ -35,7 +35,7 @@ import numpy as np
 
 from physics.effects import interpolation_matrix
 from physics.errors import ConfigError
-from physics.beam import beam_from_dict
+from physics.beam import Beam
 from physics.supports import THESIS_SUPPORT, Support, support
 
 __all__ = ["DEFAULT_BAND_HZ", "MIN_VISIBLE", "Layout", "layout_of", "nominal_modes",
@@ -167,9 +167,8 @@ def uniform_shapes(test: Layout, x_m) -> np.ndarray:
 @lru_cache(maxsize=16)
 def _uniform_shape_at(bc: str, length_m: float):
 
-    beam = beam_from_dict({"name": "uniform", "bc": bc, "length_m": length_m, "width_m": 0.01,
-                           "thickness_m": 0.01, "EI_Nm2": 1.0, "mass_per_length_kg_m": 1.0,
-                           "measured_x_m": [length_m]}, "uniform beam")
+    beam = Beam("uniform", length_m, length_m, 0.01, 0.01, EI_Nm2=1.0, mass_per_length_kg_m=1.0, bc=bc,
+                measured_x_m=(length_m,))
     return nominal_modes(beam)[1]
 
 
