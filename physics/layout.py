@@ -29,7 +29,7 @@ mode, a sensor at a node of every mode used (it measures nothing), a reference D
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 
@@ -86,6 +86,12 @@ class Layout:
     def support(self) -> Support:
         """The record of the test's supports (:mod:`physics.supports`)."""
         return support(self.bc)
+
+    @cached_property
+    def sensor_shapes(self) -> np.ndarray:
+        """Shapes (S, m) of the test's modes at its sensors in ascending ``x`` for a uniform beam on its supports
+        (:func:`uniform_shapes`): what an identified shape is paired against."""
+        return uniform_shapes(self, sorted(self.sensors_x_m))
 
     @property
     def n_sensors(self) -> int:

@@ -288,9 +288,9 @@ def modal_pair(baseline, current, beam: BeamSpec, nominal_hz, names=("baseline",
                                                                   pairing_bands(nominal_hz[:m], tol), absent,
                                                                   beam.modes)) + ")")
     take = [[int(np.flatnonzero(k == j)[0]) for j in common] for k in which]
-    notes = [choice_texts(f, nominal_hz[:m], _admissible(f, nominal_hz[:m], RATIO_TOLERANCE if tol is None else tol, s),
-                          k, beam.modes, "the model" if tol is None else "the baselines")
-             for f, s, k in zip(f_hz, macs, which)]
+    inside = [_admissible(f, nominal_hz[:m], RATIO_TOLERANCE if tol is None else tol, s) for f, s in zip(f_hz, macs)]
+    notes = [choice_texts(f, nominal_hz[:m], ok, k, beam.modes, "the model" if tol is None else "the baselines")
+             for f, ok, k in zip(f_hz, inside, which)]
     poles = tuple([{"frequency_hz": float(abs(lam) / (2 * np.pi)), "mode": beam.modes[j] if j >= 0 else None,
                     **({"choice": note[i]} if i in note else {})}
                    for i, (lam, j) in enumerate(zip(x, k))] for x, k, note in zip(lams, which, notes))
@@ -362,7 +362,7 @@ def _nominal_mac(shapes, beam: BeamSpec):
     test = beam.test
     if test is None or test.n_sensors < 2:
         return None
-    ref = uniform_shapes(test, beam.sensors_x_m)                      # (S, m)
+    ref = test.sensor_shapes                                          # (S, m)
     u = np.asarray(shapes)
     num = np.abs(u.conj().T @ ref) ** 2
     den = np.sum(np.abs(u) ** 2, axis=0)[:, None] * np.sum(ref ** 2, axis=0)[None]
