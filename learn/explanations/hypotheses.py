@@ -473,9 +473,9 @@ def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD, shape_sigma=SHA
     EI, m = float(truth["EI_Nm2"]), float(truth["mass_per_length_kg_m"])
     kinds_all = kind_explanations(model)
     days = cfg.get("day_changes") or {}
-    clamped = (support(THESIS_SUPPORT) if beam.test is None else beam.test.support).clamped
     grid, curve_all, what, reclamp_all, shapes_all = _support_curves(
-        beam, EI, m, cfg.get("root_spring_relative"), tuple(days.get("root_spring_change") or ()) if clamped else ())
+        beam, EI, m, cfg.get("root_spring_relative"),
+        tuple(days.get("root_spring_change") or ()) if model.support.clamped else ())
     out = [None] * len(pairs)
     groups: dict = {}
     for i, pair in enumerate(pairs):

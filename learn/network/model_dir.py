@@ -45,6 +45,7 @@ from physics.errors import BeamDamageError, FileFormatError
 from physics.io import atomic_write_bytes, atomic_write_text, read_json
 from physics.properties import PRESETS, beam_preset
 from physics.effects import effect_of
+from physics.supports import THESIS_SUPPORT, Support, support
 
 __all__ = ["DEFAULT_ROUTE", "MODEL_FORMAT", "READ_FORMATS", "TrainedModel", "json_default",
            "load_model", "save_model", "sensitivity_of", "truth_beam_mapping", "truth_numbers"]
@@ -92,6 +93,17 @@ class TrainedModel:
         """The truth beam's mapping (:func:`truth_beam_mapping`): what a damage kind's ``size_range`` and
         ``describe`` read."""
         return truth_beam_mapping(self)
+
+    @cached_property
+    def support(self) -> Support:
+        """The record of the supports of the model's test (the thesis's clamp without one)."""
+        return support(THESIS_SUPPORT if self.beam.test is None else self.beam.test.bc, "the model's test")
+
+    @cached_property
+    def words(self) -> DamageWords:
+        """The words of the model's damage kind on its truth beam and section, in which its verdicts are told."""
+        gen = self.recorded
+        return DamageWords(gen.kind, self.truth, gen.section)
 
     @cached_property
     def kind_sensitivities(self) -> dict:
@@ -145,9 +157,8 @@ class TrainedModel:
 
     def verdict_text(self, result: dict) -> str:
         """The verdict of one classified pair as a reader sees it, in the words of the model's damage kind
-        (:func:`learn.pairs.verdict.verdict_text`: its ``describe`` on the model's truth beam and section)."""
-        gen = self.recorded
-        return verdict_text(result, DamageWords(gen.kind, self.truth, gen.section))
+        (:func:`learn.pairs.verdict.verdict_text` in its :attr:`words`)."""
+        return verdict_text(result, self.words)
 
 
 def save_model(out_dir, config: dict, networks: dict) -> None:

@@ -21,8 +21,9 @@ from physics.modal import mac
 
 __all__ = ["BASELINE_PAIR_BAND", "IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "MIN_PAIR_MAC", "RATIO_TOLERANCE",
            "ModalPair", "differences_from_model", "frf_rows", "identification_band_hz", "identify_band",
-           "identify_modes", "modal_pair", "mode_checks", "nominal_ratio_range", "on_model_dofs",
-           "pair_modes_by_frequency", "pairing_bands", "prefer_shared_poles", "refit_missing_modes", "unexcited_modes"]
+           "identify_modes", "measured_test_differences", "modal_pair", "mode_checks", "nominal_ratio_range",
+           "on_model_dofs", "pair_modes_by_frequency", "pairing_bands", "prefer_shared_poles", "refit_missing_modes",
+           "unexcited_modes"]
 
 #: The identification ``classify`` runs on FRF files: LSCF poles and LSFD residues, the 4 lowest modes. The
 #: training data's modal noise (``measurement.modal_noise = "calibrated"``) is calibrated against this path
@@ -536,6 +537,24 @@ def differences_from_model(frfs: dict, beam: BeamSpec, line_spacing_hz: float | 
         if line_spacing_hz and df and df > 2.0 * line_spacing_hz:
             out.append(f"{n}: line spacing {df:.4g} Hz, coarser than the training data's {line_spacing_hz:.4g} Hz: "
                        "the modal noise the model was trained with describes the identification on finer lines")
+    return out
+
+
+def measured_test_differences(files, raw, mapped, beam: BeamSpec, line_spacing_hz: float | None = None) -> list[str]:
+    """One line per way the files' test differs from the model's (:func:`differences_from_model` of the FRF files
+    ``raw``), and per file whose measured DOFs the model does not read (``mapped``: each file's
+    :func:`on_model_dofs`; a DOF at an FRF file's force alone is no sensor left out)."""
+    frfs = {str(f): d for f, d in zip(files, raw) if isinstance(d, MeasuredFRF)}
+    out = differences_from_model(frfs, beam, line_spacing_hz)
+    for f, d, (_, dof_map) in zip(files, raw, mapped):
+        if dof_map is not None and "not used" in dof_map.detail:
+            forces = ({parse_dof(x)[0] for x in d.reference_dofs} - {parse_dof(x)[0] for x in d.response_dofs}
+                      if isinstance(d, MeasuredFRF) else set())
+            unused = [x for x, m in zip(dof_map.dofs, dof_map.model_dofs) if not m and parse_dof(x)[0] not in forces]
+            if not unused:
+                continue
+            out.append(f"{f}: measured DOF{'s' * (len(unused) > 1)} {', '.join(unused)} lie at no sensor of the "
+                       f"model ({', '.join(beam.dofs)}): not used")
     return out
 
 
