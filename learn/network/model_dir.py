@@ -48,7 +48,7 @@ from physics.effects import effect_of
 from physics.supports import THESIS_SUPPORT, Support, support
 
 __all__ = ["DEFAULT_ROUTE", "MODEL_FORMAT", "READ_FORMATS", "TrainedModel", "json_default",
-           "load_model", "save_model", "sensitivity_of", "truth_beam_mapping", "truth_numbers"]
+           "load_model", "save_model", "sensitivity_of", "truth_numbers"]
 
 
 #: Input route used by default (the winner of ``python -m experiments.benches.bench_learn``).
@@ -90,9 +90,15 @@ class TrainedModel:
 
     @cached_property
     def truth(self) -> dict:
-        """The truth beam's mapping (:func:`truth_beam_mapping`): what a damage kind's ``size_range`` and
-        ``describe`` read."""
-        return truth_beam_mapping(self)
+        """The truth beam's mapping the model records, over its preset's fields (a beam named after a preset; the
+        preset's alone when it records none), with the generator config's ``section`` keys: what a damage kind's
+        ``size_range`` and ``describe`` read."""
+        truth, base = self.config.get("truth_beam") or {}, {}
+        if self.beam.name in PRESETS:
+            p = beam_preset(self.beam.name)
+            base = {"name": p.name, "EI_Nm2": p.EI_Nm2, "mass_per_length_kg_m": p.mass_per_length_kg_m,
+                    "length_m": p.length_m, "width_m": p.width_m, "thickness_m": p.thickness_m}
+        return {**base, **(truth if "EI_Nm2" in truth else {}), **(self.recorded.section or {})}
 
     @cached_property
     def support(self) -> Support:
@@ -239,21 +245,6 @@ def json_default(obj):
     if isinstance(obj, (np.bool_, np.integer, np.floating)):
         return obj.item()
     raise TypeError(f"{type(obj).__name__} is not JSON serialisable")
-
-
-def truth_beam_mapping(model) -> dict:
-    """The truth beam's mapping a model (its ``beam`` and ``config``) records, over its preset's fields (a beam named
-    after a preset; the preset's alone when it records none), with the generator config's ``section`` keys: what a
-    damage kind's ``size_range`` and ``describe`` read."""
-    truth = model.config.get("truth_beam") or {}
-    base = {}
-    if model.beam.name in PRESETS:
-        p = beam_preset(model.beam.name)
-        base = {"name": p.name, "EI_Nm2": p.EI_Nm2, "mass_per_length_kg_m": p.mass_per_length_kg_m,
-                "length_m": p.length_m, "width_m": p.width_m, "thickness_m": p.thickness_m}
-    if "EI_Nm2" not in truth:
-        truth = {}
-    return {**base, **truth, **(recorded_config(model.config.get("generator_config")).section or {})}
 
 
 def sensitivity_of(beam: BeamSpec, config_root_spring=None, truth_beam: dict | None = None,
