@@ -108,8 +108,7 @@ class TrainedModel:
     @cached_property
     def words(self) -> DamageWords:
         """The words of the model's damage kind on its truth beam and section, in which its verdicts are told."""
-        gen = self.recorded
-        return DamageWords(gen.kind, self.truth, gen.section)
+        return DamageWords(self.recorded.kind, self.truth, self.recorded.section)
 
     @cached_property
     def kind_sensitivities(self) -> dict:
@@ -125,10 +124,9 @@ class TrainedModel:
     def nominal(self) -> NominalBeam:
         """The nominal FE beam of the sensitivities (:func:`learn.explanations.refine.nominal_beam`), on which the
         explanations' damage kinds are fitted exactly."""
-        cfg = self.config
+        cfg, n_modes = self.config, self.sensitivity.frequency.shape[0]
         return nominal_beam(truth_numbers(self.beam, cfg.get("truth_beam"), cfg.get("generator_config")),
-                            cfg.get("root_spring_relative"), self.beam.test,
-                            n_modes=self.sensitivity.frequency.shape[0])
+                            cfg.get("root_spring_relative"), self.beam.test, n_modes=n_modes)
 
     def measured_beam(self, beam: str | None = None, mass_model: str | None = None):
         """The beam spec of measured data and the sensor positions a beam file gives: ``(BeamSpec, x_m or None)``.
