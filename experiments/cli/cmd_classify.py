@@ -104,9 +104,9 @@ def run(args):
     files = [*baselines, *args.measured]
     raw = [read(f, modal_or_frf(f)) for f in files]                 # ModalData or MeasuredFRF
     methods = [identification_method(f) for f in files]
-    gen, test = model.recorded.measurement, model.beam.test
-    df = (test.band_hz[1] - test.band_hz[0]) / (int(gen["lines"]) - 1) if gen.get("lines") and test is not None \
-        else None
+    test = model.beam.test
+    lines = model.recorded.measurement.get("lines") if test is not None else None
+    df = (test.band_hz[1] - test.band_hz[0]) / (int(lines) - 1) if lines else None      # the training's lines
     mapped = [on_model_dofs(d, model.beam, beam_x_m, str(f)) for d, f in zip(raw, files)]
     differ = measured_test_differences(files, raw, mapped, model.beam, df)
     base = [m[0] for m in mapped[:nb]]
