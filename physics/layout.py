@@ -29,13 +29,13 @@ mode, a sensor at a node of every mode used (it measures nothing), a reference D
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 
 from physics.effects import interpolation_matrix
 from physics.errors import ConfigError
-from physics.beam import beam_from_dict
+from physics.beam import Beam
 from physics.supports import THESIS_SUPPORT, Support, support
 
 __all__ = ["DEFAULT_BAND_HZ", "MIN_VISIBLE", "Layout", "layout_of", "nominal_modes",
@@ -86,6 +86,12 @@ class Layout:
     def support(self) -> Support:
         """The record of the test's supports (:mod:`physics.supports`)."""
         return support(self.bc)
+
+    @cached_property
+    def sensor_shapes(self) -> np.ndarray:
+        """Shapes (S, m) of the test's modes at its sensors in ascending ``x`` for a uniform beam on its supports
+        (:func:`uniform_shapes`): what an identified shape is paired against."""
+        return uniform_shapes(self, sorted(self.sensors_x_m))
 
     @property
     def n_sensors(self) -> int:
@@ -167,9 +173,8 @@ def uniform_shapes(test: Layout, x_m) -> np.ndarray:
 @lru_cache(maxsize=16)
 def _uniform_shape_at(bc: str, length_m: float):
 
-    beam = beam_from_dict({"name": "uniform", "bc": bc, "length_m": length_m, "width_m": 0.01,
-                           "thickness_m": 0.01, "EI_Nm2": 1.0, "mass_per_length_kg_m": 1.0,
-                           "measured_x_m": [length_m]}, "uniform beam")
+    beam = Beam("uniform", length_m, length_m, 0.01, 0.01, EI_Nm2=1.0, mass_per_length_kg_m=1.0, bc=bc,
+                measured_x_m=(length_m,))
     return nominal_modes(beam)[1]
 
 

@@ -10,12 +10,11 @@ from pathlib import Path
 import numpy as np
 
 from learn.pairs.classify import DEFAULT_FALSE_ALARM_RATE, KEYS, classify_pairs
-from learn.pairs.verdict import explanation_label
-from learn.pairs.measured import differences_from_model, on_model_dofs
+from learn.pairs.verdict import explanation_label, verdict_text
+from learn.pairs.measured import on_model_dofs, measured_test_differences
 from learn.network.model_dir import load_model
 from physics.errors import BeamDamageError
 from physics.frf import FRF_UNITS, receptance_modal
-from physics.supports import THESIS_SUPPORT, support
 from physics.io import (
     FRF,
     MODAL,
@@ -25,7 +24,6 @@ from physics.io import (
     atomic_write_text,
     figure_png,
     modal_or_frf,
-    parse_dof,
     pyplot,
     read,
     read_json,
@@ -89,28 +87,6 @@ def baseline_files(given: list[str]) -> list[str]:
     return list(dict.fromkeys(out))
 
 
-def measured_test_warnings(model, files, raw, mapped) -> list[str]:
-    """One line per way the files' test differs from the model's (:func:`learn.pairs.measured.differences_from_model`),
-    and per file whose measured DOFs the model does not read."""
-    frfs = {str(f): d for f, d in zip(files, raw) if isinstance(d, MeasuredFRF)}
-    gen = model.recorded.measurement
-    test = model.beam.test
-    df = None
-    if gen.get("lines") and test is not None:
-        df = (test.band_hz[1] - test.band_hz[0]) / (int(gen["lines"]) - 1)
-    out = differences_from_model(frfs, model.beam, df)
-    for f, d, (_, dof_map) in zip(files, raw, mapped):
-        if dof_map is not None and "not used" in dof_map.detail:
-            forces = ({parse_dof(x)[0] for x in d.reference_dofs} - {parse_dof(x)[0] for x in d.response_dofs}
-                      if isinstance(d, MeasuredFRF) else set())
-            unused = [x for x, m in zip(dof_map.dofs, dof_map.model_dofs) if not m and parse_dof(x)[0] not in forces]
-            if not unused:
-                continue
-            out.append(f"{f}: measured DOF{'s' * (len(unused) > 1)} {', '.join(unused)} lie at no sensor of the "
-                       f"model ({', '.join(model.beam.dofs)}): not used")
-    return out
-
-
 def identification_method(path) -> str | None:
     """The ``method`` a modal-data JSON file names (``identify --out`` writes it for output-only modes), else None."""
     if modal_or_frf(path) != MODAL or not str(path).lower().endswith(".json"):
@@ -127,12 +103,15 @@ def run(args):
     nb = len(baselines)
     files = [*baselines, *args.measured]
     raw = [read(f, modal_or_frf(f)) for f in files]                 # ModalData or MeasuredFRF
+    methods = [identification_method(f) for f in files]
+    test = model.beam.test
+    lines = model.recorded.measurement.get("lines") if test is not None else None
+    df = (test.band_hz[1] - test.band_hz[0]) / (int(lines) - 1) if lines else None      # the training's lines
     mapped = [on_model_dofs(d, model.beam, beam_x_m, str(f)) for d, f in zip(raw, files)]
+    differ = measured_test_differences(files, raw, mapped, model.beam, df)
     base = [m[0] for m in mapped[:nb]]
     pairs = classify_pairs(model, base if nb > 1 else base[0], [m[0] for m in mapped[nb:]],
-                           names=[str(f) for f in files], methods=[identification_method(f) for f in files],
-                           false_alarm_rate=args.false_alarm_rate)
-    differ = measured_test_warnings(model, files, raw, mapped)
+                           names=[str(f) for f in files], methods=methods, false_alarm_rate=args.false_alarm_rate)
     ref = files.index(pairs[0].normal_variation.get("reference_baseline", files[0]))
     base_pos = mapped[ref][1] and mapped[ref][1].to_dict()
     pairs = [replace(c, warnings=differ + [w for w in c.warnings if w not in differ],
@@ -147,7 +126,7 @@ def run(args):
         for r in results:
             if len(results) > 1:
                 print(f"== {r['measured']}")
-            print(model.verdict_text({**r, "warnings": []}))      # warnings: on stderr (experiments.cli.main)
+            print(verdict_text({**r, "warnings": []}, model.words))   # warnings: on stderr (experiments.cli.main)
         if args.out:
             print(f"{'verdict.json and classify.png' if len(results) == 1 else 'verdicts.json'} in {args.out}")
     return results[0] if len(results) == 1 else results
@@ -160,11 +139,11 @@ def _write(out_dir, results, pair, base, cur, model):
     if len(results) > 1:
         atomic_write_text(out / "verdicts.json", json.dumps(to_jsonable(results), indent=1))
         return
-    atomic_write_bytes(out / "classify.png", _figure(results[0], pair, base, cur, model.beam))
+    atomic_write_bytes(out / "classify.png", _figure(results[0], pair, base, cur, model.beam, model.support))
     atomic_write_text(out / "verdict.json", json.dumps(to_jsonable(results[0]), indent=1))
 
 
-def _figure(res, pair, base, cur, beam) -> bytes:
+def _figure(res, pair, base, cur, beam, sup) -> bytes:
     """PNG of one verdict: the two tests' FRFs in the file's kind with the identified modes marked; each mode's
     measured frequency change beside the competing explanations' predictions; the beam (supports, sensors, zones)
     under the location of the verdict's own source (none when the verdict is undamaged)."""
@@ -202,7 +181,7 @@ def _figure(res, pair, base, cur, beam) -> bytes:
         a2.set_xticks(x, [f"mode {m}" for m in modes])
         a2.legend(fontsize=7)
     a2.set(ylabel="frequency change (%)", title="Each mode's change and what the explanations predict")
-    _location(a3, res, (pair.answers.location_distributions or {}).get("68"), beam)
+    _location(a3, res, (pair.answers.location_distributions or {}).get("68"), beam, sup)
     fig.tight_layout()
     return figure_png(fig)
 
@@ -215,7 +194,7 @@ def _file_labels(res):
     return lambda dof: (f"x = {where[dof][1]:.3g} m ({where[dof][0]})" if dof in where else dof)
 
 
-def _location(ax, res, dist, beam) -> None:
+def _location(ax, res, dist, beam, sup) -> None:
     """Where the verdict's source places the damage: the network's distribution, or the classical method's place;
     nothing when the verdict is undamaged."""
     source = res["verdict_from"]
@@ -232,15 +211,15 @@ def _location(ax, res, dist, beam) -> None:
         title = f"Verdict ({source}): no damage detected, so no location"
     for x in beam.zone_edges_m[1:-1]:
         ax.axvline(x, color="grey", ls=":")
-    _draw_beam(ax, beam)
+    _draw_beam(ax, beam, sup)
     ax.legend(fontsize=7)
     ax.set(xlabel="x (m)", ylabel="probability", title=title)
 
 
-def _draw_beam(ax, beam) -> None:
-    """The beam under the location axis: its supports (clamp: a wall; pin: a triangle), sensors (v) and zones."""
+def _draw_beam(ax, beam, sup) -> None:
+    """The beam under the location axis: its supports ``sup`` (clamp: a wall; pin: a triangle), sensors (v) and
+    zones."""
     L = beam.length_m
-    sup = support(THESIS_SUPPORT if beam.test is None else beam.test.bc, "the model's test")
     bc = sup.name
     y = ax.get_ylim()[1] if ax.has_data() else 1.0
     ax.plot([0, L], [-0.06 * y] * 2, color="k", lw=3, solid_capstyle="butt")

@@ -57,12 +57,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from datagen.config import recorded_config
-from datagen.damage import DAMAGE_MODELS, applies_to, beam_section, damage_defaults
-from learn.network.model_dir import sensitivity_of, truth_beam_mapping, truth_numbers
+from datagen.damage import DAMAGE_MODELS, damage_defaults
 from learn.explanations.likelihood import nuisance_loglik
-from learn.explanations.refine import (SIZE_SCALE_STD, ExactKind, birge_ratio, kind_parameters, nominal_beam,
-                                       refined_fits)
+from learn.explanations.refine import (SIZE_SCALE_STD, ExactKind, birge_ratio, kind_parameters, refined_fits)
 from learn.explanations.sensitivity import Sensitivity
 from learn.explanations.shapes import real_shapes, shape_changes, sign_aligned
 from learn.pairs.verdict import explanation_label
@@ -435,26 +432,15 @@ def _support_curves(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_sprin
 
 
 def kind_explanations(model) -> dict:
-    """Each registered damage kind's explanation on the model's beam (the kinds its section holds,
-    :func:`datagen.damage.applies_to`): its sizes over ``size_range`` and its sensitivities averaged over
-    ``spread_m``, both of the model's generator config for the model's own kind and of the kind's defaults for the
-    others."""
-    beam, cfg = model.beam, model.config
-    gen = cfg.get("generator_config") or {}
-    recorded = recorded_config(gen)
-    mapping = truth_beam_mapping(model)
-    section = beam_section(recorded.beam)
+    """Each registered damage kind's explanation on the model's beam (the kinds its section holds:
+    :attr:`learn.network.model_dir.TrainedModel.kind_sensitivities`): its sizes over ``size_range`` and its
+    sensitivities averaged over ``spread_m``, both of the model's generator config for the model's own kind and of
+    the kind's defaults for the others; fitted exactly on the model's nominal beam."""
+    recorded, mapping, nominal = model.recorded, model.truth, model.nominal
     out = {}
-    for name in DAMAGE_MODELS:
-        if not applies_to(name, section):       # a kind the beam's section does not hold is no explanation
-            continue
+    for name, sens in model.kind_sensitivities.items():
         d = recorded.damage if recorded.damage.get("kind") == name else damage_defaults(name)
-        sens = sensitivity_of(beam, cfg.get("root_spring_relative"), cfg.get("truth_beam"),
-                              {**gen, "damage": {"kind": name}})
-        exact = ExactKind(name, d, mapping, nominal_beam(truth_numbers(beam, cfg.get("truth_beam"), gen),
-                                                         cfg.get("root_spring_relative"), beam.test,
-                                                         n_modes=sens.frequency.shape[0]),
-                          np.arange(sens.frequency.shape[0]))
+        exact = ExactKind(name, d, mapping, nominal, np.arange(sens.frequency.shape[0]))
         out[name] = kind_explanation(name, d, mapping, sens, exact=exact)
     return out
 
@@ -483,14 +469,13 @@ def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD, shape_sigma=SHA
     ``shape_sigma``: the std of a unit-norm shape entry's change, one or per sensor and model mode (S, m) (a
     normal variation measured on several baselines). ``frequency_change_std`` and ``shape_change_std`` of each
     result are then lists over the pair's modes (and sensors)."""
-    beam, cfg = model.beam, model.config
-    truth = truth_beam_mapping(model)
+    beam, cfg, truth = model.beam, model.config, model.truth
     EI, m = float(truth["EI_Nm2"]), float(truth["mass_per_length_kg_m"])
     kinds_all = kind_explanations(model)
     days = cfg.get("day_changes") or {}
-    clamped = (support(THESIS_SUPPORT) if beam.test is None else beam.test.support).clamped
     grid, curve_all, what, reclamp_all, shapes_all = _support_curves(
-        beam, EI, m, cfg.get("root_spring_relative"), tuple(days.get("root_spring_change") or ()) if clamped else ())
+        beam, EI, m, cfg.get("root_spring_relative"),
+        tuple(days.get("root_spring_change") or ()) if model.support.clamped else ())
     out = [None] * len(pairs)
     groups: dict = {}
     for i, pair in enumerate(pairs):

@@ -28,13 +28,16 @@ from __future__ import annotations
 import io
 import json
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
 
 from datagen.config import RecordedConfig, recorded_config
 from learn.network.features import BeamSpec
-from learn.explanations.sensitivity import beam_sensitivity
+from datagen.damage import DAMAGE_MODELS, applies_to, beam_section
+from learn.explanations.refine import NominalBeam, nominal_beam
+from learn.explanations.sensitivity import Sensitivity, beam_sensitivity
 from learn.pairs.verdict import DamageWords, verdict_text
 from physics.beam import load_beam
 from physics.io.inputs import check_input_file
@@ -42,9 +45,10 @@ from physics.errors import BeamDamageError, FileFormatError
 from physics.io import atomic_write_bytes, atomic_write_text, read_json
 from physics.properties import PRESETS, beam_preset
 from physics.effects import effect_of
+from physics.supports import THESIS_SUPPORT, Support, support
 
 __all__ = ["DEFAULT_ROUTE", "MODEL_FORMAT", "READ_FORMATS", "TrainedModel", "json_default",
-           "load_model", "save_model", "sensitivity_of", "truth_beam_mapping", "truth_numbers"]
+           "load_model", "save_model", "sensitivity_of", "truth_numbers"]
 
 
 #: Input route used by default (the winner of ``python -m experiments.benches.bench_learn``).
@@ -62,7 +66,7 @@ class TrainedModel:
     config: dict
     networks: dict = field(default_factory=dict)   # route -> DamageClassifier
 
-    @property
+    @cached_property
     def beam(self) -> BeamSpec:
         return BeamSpec.from_dict(self.config["beam"])
 
@@ -78,12 +82,51 @@ class TrainedModel:
                                   f"DOFs {', '.join(self.beam.dofs)}, {self.beam.mass_model} mass); the {what} has "
                                   + "; ".join(diff))
 
-
-    @property
-    def sensitivity(self):
+    @cached_property
+    def sensitivity(self) -> Sensitivity:
         """FE sensitivities of the truth beam the model records (:func:`sensitivity_of`)."""
         return sensitivity_of(self.beam, self.config.get("root_spring_relative"), self.config.get("truth_beam"),
                               self.config.get("generator_config"))
+
+    @cached_property
+    def truth(self) -> dict:
+        """The truth beam's mapping the model records, over its preset's fields (a beam named after a preset; the
+        preset's alone when it records none), with the generator config's ``section`` keys: what a damage kind's
+        ``size_range`` and ``describe`` read."""
+        truth, base = self.config.get("truth_beam") or {}, {}
+        if self.beam.name in PRESETS:
+            p = beam_preset(self.beam.name)
+            base = {"name": p.name, "EI_Nm2": p.EI_Nm2, "mass_per_length_kg_m": p.mass_per_length_kg_m,
+                    "length_m": p.length_m, "width_m": p.width_m, "thickness_m": p.thickness_m}
+        return {**base, **(truth if "EI_Nm2" in truth else {}), **(self.recorded.section or {})}
+
+    @cached_property
+    def support(self) -> Support:
+        """The record of the supports of the model's test (the thesis's clamp without one)."""
+        return support(THESIS_SUPPORT if self.beam.test is None else self.beam.test.bc, "the model's test")
+
+    @cached_property
+    def words(self) -> DamageWords:
+        """The words of the model's damage kind on its truth beam and section, in which its verdicts are told."""
+        return DamageWords(self.recorded.kind, self.truth, self.recorded.section)
+
+    @cached_property
+    def kind_sensitivities(self) -> dict:
+        """Damage kind -> FE sensitivities of the truth beam to it (:func:`sensitivity_of`), for each registered kind
+        the beam's section holds (:func:`datagen.damage.applies_to`): what the competing explanations weigh."""
+        gen = self.config.get("generator_config") or {}
+        section = beam_section(self.recorded.beam)
+        return {name: sensitivity_of(self.beam, self.config.get("root_spring_relative"),
+                                     self.config.get("truth_beam"), {**gen, "damage": {"kind": name}})
+                for name in DAMAGE_MODELS if applies_to(name, section)}
+
+    @cached_property
+    def nominal(self) -> NominalBeam:
+        """The nominal FE beam of the sensitivities (:func:`learn.explanations.refine.nominal_beam`), on which the
+        explanations' damage kinds are fitted exactly."""
+        cfg, n_modes = self.config, self.sensitivity.frequency.shape[0]
+        return nominal_beam(truth_numbers(self.beam, cfg.get("truth_beam"), cfg.get("generator_config")),
+                            cfg.get("root_spring_relative"), self.beam.test, n_modes=n_modes)
 
     def measured_beam(self, beam: str | None = None, mass_model: str | None = None):
         """The beam spec of measured data and the sensor positions a beam file gives: ``(BeamSpec, x_m or None)``.
@@ -111,16 +154,15 @@ class TrainedModel:
         self.check_beam(spec, "measured beam")
         return spec, beam_x_m
 
-    @property
+    @cached_property
     def recorded(self) -> RecordedConfig:
         """The generator config of the training data (:func:`datagen.config.recorded_config`)."""
         return recorded_config(self.config.get("generator_config"))
 
     def verdict_text(self, result: dict) -> str:
         """The verdict of one classified pair as a reader sees it, in the words of the model's damage kind
-        (:func:`learn.pairs.verdict.verdict_text`: its ``describe`` on the model's truth beam and section)."""
-        gen = self.recorded
-        return verdict_text(result, DamageWords(gen.kind, truth_beam_mapping(self), gen.section))
+        (:func:`learn.pairs.verdict.verdict_text` in its :attr:`words`)."""
+        return verdict_text(result, self.words)
 
 
 def save_model(out_dir, config: dict, networks: dict) -> None:
@@ -201,21 +243,6 @@ def json_default(obj):
     if isinstance(obj, (np.bool_, np.integer, np.floating)):
         return obj.item()
     raise TypeError(f"{type(obj).__name__} is not JSON serialisable")
-
-
-def truth_beam_mapping(model) -> dict:
-    """The truth beam's mapping a model (its ``beam`` and ``config``) records, over its preset's fields (a beam named
-    after a preset; the preset's alone when it records none), with the generator config's ``section`` keys: what a
-    damage kind's ``size_range`` and ``describe`` read."""
-    truth = model.config.get("truth_beam") or {}
-    base = {}
-    if model.beam.name in PRESETS:
-        p = beam_preset(model.beam.name)
-        base = {"name": p.name, "EI_Nm2": p.EI_Nm2, "mass_per_length_kg_m": p.mass_per_length_kg_m,
-                "length_m": p.length_m, "width_m": p.width_m, "thickness_m": p.thickness_m}
-    if "EI_Nm2" not in truth:
-        truth = {}
-    return {**base, **truth, **(recorded_config(model.config.get("generator_config")).section or {})}
 
 
 def sensitivity_of(beam: BeamSpec, config_root_spring=None, truth_beam: dict | None = None,

@@ -10,11 +10,11 @@ from datagen.damage import damage_model
 from learn.explanations.classical import FREQUENCY_METHODS, run_classical
 from learn.network.features import feature_names
 from learn.explanations.hypotheses import FREQUENCY_CHANGE_STD, NO_EXPLANATION, SHAPE_CHANGE_STD, explain_many
-from learn.pairs.measured import IDENTIFICATION, mode_checks, modal_pair, nominal_ratio_range
+from learn.pairs.measured import IDENTIFICATION, mode_checks, nominal_ratio_range
 from learn.explanations.mirror import fold_to_half, location_ambiguity, mirrored
 from learn.network.model_dir import TrainedModel
 from learn.pairs.normal_variation import model_modes
-from learn.pairs.inputs import PairInputs, mode_features, pair_inputs
+from learn.pairs.inputs import PairInputs, pair_inputs
 from learn.explanations.shapes import real_shapes, sign_aligned
 from learn.pairs.verdict import (IN_DISTRIBUTION_PERCENTILE, Verdict, agreement, classical_answer, classical_verdict,
                                  modes_text, network_answer, network_output, place_keys)
@@ -214,28 +214,22 @@ def _change_pct(pair, normal: dict):
 def _normal_variation(model: TrainedModel, inputs: PairInputs, warnings: list) -> dict:
     """The verdicts' ``normal_variation`` shared by all pairs: assumed (one baseline) or measured, with the
     Mahalanobis distances of the baseline tests' own pairs (reference against each other baseline) from the
-    training data; one warning when most of those pairs lie outside it."""
+    training data (:attr:`learn.pairs.inputs.PairInputs.baseline_features`); one warning when most of those pairs
+    lie outside it."""
     nv, route = inputs.normal_variation, inputs.route
     if nv is None:
         return {"n_baselines": 1, "measured": False, "frequency_std_pct": 100 * FREQUENCY_CHANGE_STD,
                 "baseline_pairs_distance_max": None, "baseline_pairs_training_percentile": None}
     out = {**nv.summary(), "baseline_pairs_distance_max": None, "baseline_pairs_training_percentile": None}
-    if route not in ("modal", "frequency"):
+    if inputs.baseline_features is None:
         return out
-    others = [k for k in range(nv.n_baselines) if k != nv.reference]
-    target_hz, band = nv.targets
-    base = inputs.baselines
-    pairs = [modal_pair(base[nv.reference], base[k], model.beam, target_hz, tolerance=band) for k in others]
-    full = [i for i, p in enumerate(pairs) if p.complete and (route == "frequency" or not p.frequency_only)]
-    if not full:
-        return out
-    dist, pct = model.networks[route].training_percentile(mode_features(model, route, pairs, full))
+    dist, pct = model.networks[route].training_percentile(inputs.baseline_features)
     out["baseline_pairs_distance_max"] = float(dist.max())
     out["baseline_pairs_training_percentile"] = [float(v) for v in pct]
     outside = int(np.sum(pct > IN_DISTRIBUTION_PERCENTILE))
-    if 2 * outside > len(full):
+    if 2 * outside > len(pct):
         scatter = max(v for v in out["frequency_std_pct"] if v is not None)
-        warnings.append(f"{outside} of the {len(full)} pairs of baseline tests lie outside the training data (beyond "
+        warnings.append(f"{outside} of the {len(pct)} pairs of baseline tests lie outside the training data (beyond "
                         f"{IN_DISTRIBUTION_PERCENTILE}% of its pairs; measured frequency scatter up to {scatter:.2g} % "
                         "per mode): the network was trained for a smaller variation between tests; the verdict "
                         "rests on the measured variation, and a model trained with measurement.frequency_scatter "

@@ -37,9 +37,12 @@ class PairInputs:
     currents, baselines : tuple of ModalData or None
     pairs : tuple of :class:`learn.pairs.measured.ModalPair` or None, one per current input
     normal_variation : :class:`learn.pairs.normal_variation.NormalVariation` or None (one baseline)
+    baseline_pairs : tuple of ModalPair or None   the reference baseline paired with each other baseline
     route : str                    the network's input route
     features : ndarray (r, p) or None   the rows the network reads (:func:`pair_inputs`)
     rows : tuple of int            the inputs those rows belong to
+    baseline_features : ndarray (k, p) or None   the modal or frequency network's rows of the baseline pairs that
+                                   hold every mode (None: none, or another route)
     """
 
     names: tuple
@@ -50,9 +53,11 @@ class PairInputs:
     baselines: tuple | None = None
     pairs: tuple | None = None
     normal_variation: object = None
+    baseline_pairs: tuple | None = None
     route: str = ""
     features: object = None
     rows: tuple = ()
+    baseline_features: object = None
 
     def pair(self, i: int):
         """The ``i``-th pair, None without modes."""
@@ -109,10 +114,12 @@ def _measured_pairs(model: TrainedModel, baselines: list, currents: list, names:
     target_hz, band = (sens.frequencies_hz, None) if nv is None else nv.targets
     pairs = [modal_pair(base_md, c, model.beam, target_hz, (names[r], n), (found[r], f), band)
              for c, n, f in zip(mds[nb:], names[nb:], found[nb:])]
+    own = None if nv is None else tuple(modal_pair(base_md, mds[k], model.beam, target_hz, tolerance=band)
+                                        for k in range(nb) if k != r)
     warnings = list(dict.fromkeys(w for p in pairs for w in p.warnings))
     w = damping_warning(model, pairs)
     return PairInputs((names[r], *names[nb:]), identified, tuple(warnings + [w] * bool(w)), base_md,
-                      tuple(mds[nb:]), tuple(mds[:nb]), tuple(pairs), nv)
+                      tuple(mds[nb:]), tuple(mds[:nb]), tuple(pairs), nv, own)
 
 
 #: How far outside the training's damping ratios a baseline may lie before :func:`damping_warning` speaks (factor).
@@ -223,7 +230,11 @@ def _network_inputs(model: TrainedModel, inputs: PairInputs, baseline, currents:
     pairs, warnings = inputs.pairs, list(inputs.warnings)
 
     def given(route, X, rows):
-        return replace(inputs, route=route, features=X, rows=tuple(rows), warnings=tuple(warnings))
+        own = inputs.baseline_pairs or ()
+        full = [i for i, p in enumerate(own) if p.complete and (route == "frequency" or not p.frequency_only)]
+        return replace(inputs, route=route, features=X, rows=tuple(rows), warnings=tuple(warnings),
+                       baseline_features=mode_features(model, route, own, full) if route in ("modal", "frequency")
+                       else None)
 
     if inputs.identified and model.route in ("measured", "updated"):
         X = _frf_route_features(model, baseline, currents, warnings)

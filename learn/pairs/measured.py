@@ -21,8 +21,9 @@ from physics.modal import mac
 
 __all__ = ["BASELINE_PAIR_BAND", "IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "MIN_PAIR_MAC", "RATIO_TOLERANCE",
            "ModalPair", "differences_from_model", "frf_rows", "identification_band_hz", "identify_band",
-           "identify_modes", "modal_pair", "mode_checks", "nominal_ratio_range", "on_model_dofs",
-           "pair_modes_by_frequency", "pairing_bands", "prefer_shared_poles", "refit_missing_modes", "unexcited_modes"]
+           "identify_modes", "measured_test_differences", "modal_pair", "mode_checks", "nominal_ratio_range",
+           "on_model_dofs", "pair_modes_by_frequency", "pairing_bands", "prefer_shared_poles", "refit_missing_modes",
+           "unexcited_modes"]
 
 #: The identification ``classify`` runs on FRF files: LSCF poles and LSFD residues, the 4 lowest modes. The
 #: training data's modal noise (``measurement.modal_noise = "calibrated"``) is calibrated against this path
@@ -288,9 +289,9 @@ def modal_pair(baseline, current, beam: BeamSpec, nominal_hz, names=("baseline",
                                                                   pairing_bands(nominal_hz[:m], tol), absent,
                                                                   beam.modes)) + ")")
     take = [[int(np.flatnonzero(k == j)[0]) for j in common] for k in which]
-    notes = [choice_texts(f, nominal_hz[:m], _admissible(f, nominal_hz[:m], RATIO_TOLERANCE if tol is None else tol, s),
-                          k, beam.modes, "the model" if tol is None else "the baselines")
-             for f, s, k in zip(f_hz, macs, which)]
+    inside = [_admissible(f, nominal_hz[:m], RATIO_TOLERANCE if tol is None else tol, s) for f, s in zip(f_hz, macs)]
+    notes = [choice_texts(f, nominal_hz[:m], ok, k, beam.modes, "the model" if tol is None else "the baselines")
+             for f, ok, k in zip(f_hz, inside, which)]
     poles = tuple([{"frequency_hz": float(abs(lam) / (2 * np.pi)), "mode": beam.modes[j] if j >= 0 else None,
                     **({"choice": note[i]} if i in note else {})}
                    for i, (lam, j) in enumerate(zip(x, k))] for x, k, note in zip(lams, which, notes))
@@ -362,7 +363,7 @@ def _nominal_mac(shapes, beam: BeamSpec):
     test = beam.test
     if test is None or test.n_sensors < 2:
         return None
-    ref = uniform_shapes(test, beam.sensors_x_m)                      # (S, m)
+    ref = test.sensor_shapes                                          # (S, m)
     u = np.asarray(shapes)
     num = np.abs(u.conj().T @ ref) ** 2
     den = np.sum(np.abs(u) ** 2, axis=0)[:, None] * np.sum(ref ** 2, axis=0)[None]
@@ -536,6 +537,24 @@ def differences_from_model(frfs: dict, beam: BeamSpec, line_spacing_hz: float | 
         if line_spacing_hz and df and df > 2.0 * line_spacing_hz:
             out.append(f"{n}: line spacing {df:.4g} Hz, coarser than the training data's {line_spacing_hz:.4g} Hz: "
                        "the modal noise the model was trained with describes the identification on finer lines")
+    return out
+
+
+def measured_test_differences(files, raw, mapped, beam: BeamSpec, line_spacing_hz: float | None = None) -> list[str]:
+    """One line per way the files' test differs from the model's (:func:`differences_from_model` of the FRF files
+    ``raw``), and per file whose measured DOFs the model does not read (``mapped``: each file's
+    :func:`on_model_dofs`; a DOF at an FRF file's force alone is no sensor left out)."""
+    frfs = {str(f): d for f, d in zip(files, raw) if isinstance(d, MeasuredFRF)}
+    out = differences_from_model(frfs, beam, line_spacing_hz)
+    for f, d, (_, dof_map) in zip(files, raw, mapped):
+        if dof_map is not None and "not used" in dof_map.detail:
+            forces = ({parse_dof(x)[0] for x in d.reference_dofs} - {parse_dof(x)[0] for x in d.response_dofs}
+                      if isinstance(d, MeasuredFRF) else set())
+            unused = [x for x, m in zip(dof_map.dofs, dof_map.model_dofs) if not m and parse_dof(x)[0] not in forces]
+            if not unused:
+                continue
+            out.append(f"{f}: measured DOF{'s' * (len(unused) > 1)} {', '.join(unused)} lie at no sensor of the "
+                       f"model ({', '.join(beam.dofs)}): not used")
     return out
 
 

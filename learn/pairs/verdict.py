@@ -11,7 +11,6 @@ import numpy as np
 from datagen.damage import DAMAGE_MODELS, DEFAULT_KIND, damage_model
 from learn.explanations.classical import MethodOutput
 from learn.network.evaluate import MIN_DROP
-from learn.network.features import as_spec
 from learn.network.intervals import LEVELS
 from physics.io import dof_positions_text
 
@@ -74,7 +73,6 @@ def place_keys(answer: dict, beam, mirror: bool = False) -> dict:
     read on frequencies alone where ``x`` and ``L - x`` fit alike (:func:`learn.explanations.mirror.mirrored`): a zone
     and its mirror count as one place.
     """
-    beam = as_spec(beam)
     edges = np.asarray(beam.zone_edges_m, float)
     z = int(beam.zone_of_x_over_L(answer["location_x_over_L"]))
     out = {"place_determined": True, "place_text": None, "location_zone": z}
@@ -116,7 +114,6 @@ def zone_keys(beam, zone: int, probabilities=None) -> dict:
 
 
 def network_answer(d, i, out, beam) -> dict:
-    beam = as_spec(beam)
     L = beam.length_m
     return {"damaged": bool(out.damaged[i]), "probability_damaged": float(d.probability_damaged[i]),
             "location_x_over_L": float(d.x_over_L[i]), "location_x_m": float(d.x_over_L[i] * L),
@@ -148,7 +145,6 @@ def support_answer(d, i) -> dict:
 
 
 def classical_answer(o: MethodOutput, i, beam) -> dict:
-    beam = as_spec(beam)
     zone = zone_keys(beam, beam.zone_of_x_over_L(o.x_over_L[i]))
     zone = {k: v for k, v in zone.items() if "probabilities" not in k}
     return {"method": o.name, "damaged": bool(o.damaged[i]), "location_x_over_L": float(o.x_over_L[i]),

@@ -3,7 +3,6 @@ tests/monitor_series.py) and on closed forms."""
 
 import json
 import math
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -217,10 +216,11 @@ def test_explanations_weigh_the_measured_scatter_mode_by_mode(monkeypatch):
     sens = beam_sensitivity((L, EI, M), KR, n_elements=8)
     monkeypatch.setattr(learn.network.model_dir, "sensitivity_of", lambda beam, kr, truth, gen: beam_sensitivity(
         (L, EI, M), KR, n_elements=8, kind=gen["damage"]["kind"]))        # a coarse grid: a fast test
-    model = SimpleNamespace(beam=BeamSpec("beam5", L, ("2:y", "3:y", "4:y", "5:y"), "iirs"), sensitivity=sens,
-                            config={"root_spring_relative": KR, "truth_beam": {"EI_Nm2": EI, "length_m": L,
-                                                                               "mass_per_length_kg_m": M},
-                                    "generator_config": {}, "day_changes": {}})
+    model = learn.network.model_dir.TrainedModel("model", {
+        "beam": BeamSpec("beam5", L, ("2:y", "3:y", "4:y", "5:y"), "iirs").to_dict(), "root_spring_relative": KR,
+        "truth_beam": {"EI_Nm2": EI, "length_m": L, "mass_per_length_kg_m": M}, "generator_config": {},
+        "day_changes": {}})
+    model.sensitivity = sens
     f = np.array(sens.frequencies_hz[:4])
     lam = 2j * np.pi * np.stack([f, f * [1.0, 1.01, 1.0, 1.0]])
     pair = ModalPair(lam, np.ones((2, 4, 4), complex), np.arange(4), frequency_only=True)
