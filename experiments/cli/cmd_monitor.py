@@ -80,8 +80,9 @@ def add_parser(sub):
                         "known to cover the seasons (dated tests over at least 330 days), else separates it")
     p.add_argument("--frequency-estimator", choices=FREQUENCY_ESTIMATORS, default="choose",
                    help="response records: 'choose' (default) estimates each mode's frequency by the more repeatable "
-                        "over the baseline period of the identification and the record's FFT peak (chosen on one half "
-                        "of the baseline tests, confirmed on the other; damping and shapes stay the identification's); "
+                        "over the baseline period of the identification and the record's FFT peak (the identification "
+                        "kept where its scatter is the smaller, else the FFT peak where it reads every baseline test; "
+                        "damping and shapes stay the identification's); "
                         "'identification' always by the identification")
     p.add_argument("--workers", type=int, default=1, metavar="N",
                    help="processes identifying the tests (default 1; the results do not depend on it)")

@@ -13,8 +13,8 @@ Steps, one module each:
   by frequency (and MAC with 2 or more sensors), a mode the identification missed identified again over its band
   (:func:`refit_missing`), a mode missing in a test NaN there;
 * :mod:`~learn.monitor.estimator_choice` -- each reference mode's frequency of response records by the more repeatable
-  over the baseline period of the identification and the record's zero-padded FFT peak (chosen on one half of the
-  baseline tests, confirmed on the other);
+  over the baseline period of the identification and the record's zero-padded FFT peak (the identification kept
+  where its scatter over the baseline is the smaller);
 * :mod:`~learn.monitor.normal_models` -- :data:`NORMAL_MODELS`, the normal variation of the features (log natural
   frequencies): a regression on measured conditions, or a latent-variable model (PCA with factors removed, factor
   analysis, a Gaussian mixture); each gives a squared Mahalanobis distance of a test's residual (the novelty index);

@@ -1,16 +1,19 @@
 """Each reference mode's frequency estimated by the more repeatable of two estimators over the baseline period: the
 series' identification (``era`` or ``ssi`` of response records) or the zero-padded FFT peak of the same record
-(:func:`physics.identification.fft_peak.fft_peaks`), chosen on one half of the baseline tests and confirmed on the
-other.
+(:func:`physics.identification.fft_peak.fft_peaks`), the identification kept only where it is the steadier.
 
 The baseline period is repeated tests of an unchanged structure, so the scatter of a mode's frequency over it is
 the precision of its estimator on these records. A modal identification resolves close modes and gives damping and
 shapes; the FFT peak of a single dominant resonance can scatter less (a free decay's peak is read off the whole
 record's transform, no model order or stabilisation enters it). Which one is the more precise depends on the
 records, so the series decides it: per mode, over the baseline tests where both estimators read the mode, the
-robust scatter (1.4826 MAD of ``ln f``) of each; the FFT peak is chosen when its scatter is the smaller on each
-half of those tests (the odd and the even ones in time order: chosen on one half, confirmed on the other), each half
-holding at least :data:`MIN_HALF` tests, and when it reads the mode in every baseline test the identification does.
+robust scatter (1.4826 MAD of ``ln f``) of each. The burden of proof is on the more complex estimator: the
+identification's frequency is kept where its scatter over those tests is the smaller; elsewhere the FFT peak is
+chosen, when it reads the mode in every baseline test the identification does and at least ``2 MIN_HALF`` tests hold
+both (:data:`MIN_HALF` in each half). The scatter over each half of those tests (the odd and the even ones in time
+order) is reported beside it, how steady the comparison is (a MAD of ``n`` Gaussian values scatters by about
+``1.17 / sqrt(n)`` of itself); it does not enter the choice, which would otherwise go to whichever estimator is the
+default wherever the halves split, however the whole baseline compares them.
 Damping, shapes, tracking and the readings beyond the bands stay the identification's: a chosen mode's frequency
 is the FFT peak only in a test where the identification tracked the mode (elsewhere it is missing, as it was).
 """
@@ -34,7 +37,8 @@ FFT_PEAK = "fftpeak"
 #: ``monitor_series``'s choices: each mode's frequency by the more repeatable estimator over the baseline period, or
 #: always by the series' identification.
 FREQUENCY_ESTIMATORS = ("choose", "identification")
-#: The fewest baseline tests in each half holding both estimates for the FFT peak to be chosen (a MAD of 3 values).
+#: The fewest baseline tests in each half holding both estimates for the FFT peak to be chosen (``2 MIN_HALF`` in all;
+#: a half's MAD of 3 values).
 MIN_HALF = 3
 
 
@@ -147,8 +151,8 @@ def choose_estimators(F, G, baseline, reference_hz):
         scatter[r] = [f_ref[r] * robust_std(est[:, j]) for j in range(2)]
         for h in range(2):                                              # the odd and the even tests
             halves[r, h] = [f_ref[r] * robust_std(est[h::2, j]) for j in range(2)]
-        chosen[r] = (complete[r] and both[1::2].size >= MIN_HALF
-                     and bool(np.all(halves[r, :, 1] < halves[r, :, 0])))
+        chosen[r] = (complete[r] and both[1::2].size >= MIN_HALF        # the identification kept where steadier
+                     and not bool(scatter[r, 0] < scatter[r, 1]))
     return chosen, scatter, halves, n_tests, complete
 
 

@@ -81,27 +81,39 @@ def _spread(k, scale, phase=0.0):
     return 100.0 * np.exp(scale * np.sin(np.arange(k) * 2.39996 + phase))
 
 
-def test_the_fft_peak_must_be_smaller_on_each_half_and_read_every_baseline_test():
-    """Over 12 baseline tests: the FFT peak smaller on both halves is chosen; smaller over all 12 but larger on the
-    odd half is not; smaller on both halves but missing one test the identification read is not."""
+def test_the_identification_is_kept_only_where_it_is_the_steadier_over_the_baseline():
+    """Over 12 baseline tests (each scatter the 1.4826 MAD by hand): the FFT peak 10 times steadier is chosen; where
+    the halves split, the whole baseline decides: the identification steady on the odd tests only (smaller there,
+    larger on the even ones and over all 12) gives way to the FFT peak, and the FFT peak steady on the odd tests only
+    (larger over all 12) to the identification; the FFT peak steadier but missing one test the identification read
+    is not chosen."""
     k = 12
     odd, even = np.arange(0, k, 2), np.arange(1, k, 2)
-    F = np.empty((k, 3))
-    G = np.empty((k, 3))
+    F = np.empty((k, 4))
+    G = np.empty((k, 4))
     F[:, 0], G[:, 0] = _spread(k, 1e-3), _spread(k, 1e-4, 1.0)                   # FFT 10 times steadier
     F[odd, 1], F[even, 1] = _spread(6, 1e-4), _spread(6, 1e-2, 0.5)              # steady on the odd tests only
     G[:, 1] = _spread(k, 3e-4, 1.0)
     F[:, 2], G[:, 2] = F[:, 0], G[:, 0]
     G[3, 2] = np.nan                                                             # the FFT misses one test
-    chosen, scatter, halves, n_tests, complete = choose_estimators(F, G, np.arange(k), np.full(3, 100.0))
-    np.testing.assert_array_equal(chosen, [True, False, False])
-    assert scatter[1, 1] < scatter[1, 0]                                         # smaller over all 12 ...
-    assert halves[1, 0, 1] > halves[1, 0, 0]                                     # ... not on the odd half
-    np.testing.assert_array_equal(complete, [True, True, False])
-    np.testing.assert_array_equal(n_tests, [12, 12, 11])
-    np.testing.assert_allclose(halves[0, 0], [_mad_hz(F[odd, 0], 100.0), _mad_hz(G[odd, 0], 100.0)])
+    F[:, 3] = _spread(k, 1e-3, 2.0)
+    G[odd, 3], G[even, 3] = _spread(6, 1e-4, 1.5), _spread(6, 1e-2, 0.3)          # FFT steady on the odd tests only
+    chosen, scatter, halves, n_tests, complete = choose_estimators(F, G, np.arange(k), np.full(4, 100.0))
+    np.testing.assert_array_equal(chosen, [True, True, False, False])
+    for r in (0, 1, 3):
+        np.testing.assert_allclose(scatter[r], [_mad_hz(F[:, r], 100.0), _mad_hz(G[:, r], 100.0)], rtol=1e-12)
+        for h, half in enumerate((odd, even)):
+            np.testing.assert_allclose(halves[r, h], [_mad_hz(F[half, r], 100.0), _mad_hz(G[half, r], 100.0)],
+                                       rtol=1e-12)
+    np.testing.assert_allclose(scatter[1], [0.0554, 0.0298], atol=1e-4)          # FFT smaller over all 12 ...
+    np.testing.assert_allclose(halves[1], [[0.0090, 0.0290], [0.8187, 0.0298]], atol=1e-4)   # ... the halves split
+    np.testing.assert_allclose(scatter[3], [0.1038, 0.2077], atol=1e-4)          # identification smaller over all
+    np.testing.assert_allclose(halves[3], [[0.0346, 0.0083], [0.0871, 0.6559]], atol=1e-4)   # ... the halves split
+    assert scatter[2, 1] < scatter[2, 0]                                         # steadier, but incomplete
+    np.testing.assert_array_equal(complete, [True, True, False, True])
+    np.testing.assert_array_equal(n_tests, [12, 12, 11, 12])
     few = choose_estimators(F[:2 * MIN_HALF - 1], G[:2 * MIN_HALF - 1], np.arange(2 * MIN_HALF - 1),
-                            np.full(3, 100.0))[0]
+                            np.full(4, 100.0))[0]
     assert not few.any()                                                         # 5 tests: halves of 3 and 2
 
 
