@@ -124,11 +124,16 @@ class BandJump:
     step : float
         The amplitude's change at the jump over its amplitude before (the decay divided out; channels summed in
         quadrature).
+    over_ramp : float
+        The squared residual the jump leaves over the one the likeliest linear change of the amplitude leaves (each
+        with its own pole of the search): a fraction for a step (a re-excitation), about 1 or more for a smooth
+        change (two modes beating, a frequency drifting with the amplitude, a component no model holds).
     """
 
     sample: int
     score: float
     step: float = 0.0
+    over_ramp: float = 1.0
 
 
 def band_jump(decay, sampling_frequency_hz, band_hz, eigenvalue) -> BandJump:
@@ -145,7 +150,8 @@ def band_jump(decay, sampling_frequency_hz, band_hz, eigenvalue) -> BandJump:
     residual by ``W1 W2 / W |m1 - m2|^2``; the largest, over the residual's noise variance per sample times the
     band-limited signal's correlation length ``fs / width`` (white noise: an exponential variable of mean 1 at
     each split), is the score. The first and last correlation lengths (the band filter's response to the decay's
-    start and end) are left out.
+    start and end) are left out. The same residual of a linear change ``s = a + c (t - t_mean)`` (weighted alike,
+    its own pole searched) is the smooth alternative the jump is compared with (:attr:`BandJump.over_ramp`).
 
     Parameters
     ----------
@@ -163,7 +169,7 @@ def band_jump(decay, sampling_frequency_hz, band_hz, eigenvalue) -> BandJump:
     fs, n = float(sampling_frequency_hz), y.shape[1]
     corr = int(np.ceil(fs / max(band_hz[1] - band_hz[0], np.finfo(float).tiny)))
     if n < 4 * corr:
-        return BandJump(0, 0.0, 0.0)
+        return BandJump(0, 0.0, 0.0, 1.0)
     f = np.fft.fftfreq(2 * n, 1.0 / fs)
     Y = np.fft.fft(y, 2 * n, axis=1)
     Y[:, (f < band_hz[0]) | (f > band_hz[1])] = 0.0
@@ -192,7 +198,11 @@ def band_jump(decay, sampling_frequency_hz, band_hz, eigenvalue) -> BandJump:
     noise = max(two[i, k] / t.size * corr / hop, tiny)
     m1, m2 = S1[i, :, k] / W1[i, k], S2[i, :, k] / W2[i, k]
     step = np.linalg.norm(m2 - m1) / max(np.linalg.norm(m1), tiny)
-    return BandJump(int(t[k + 1]), float((one.min() - two[i, k]) / noise), float(step))
+    dt = t[None, :] / fs - (w @ (t / fs) / np.maximum(total_w, tiny))[:, None]     # (poles, samples)
+    slope = np.sum(ws * dt[:, None, :], axis=2)                                     # sum w s dt, (poles, channels)
+    ramp = one - np.sum(np.abs(slope) ** 2, axis=1) / np.maximum(np.sum(w * dt ** 2, axis=1), tiny)
+    over_ramp = two[i, k] / max(ramp.min(), tiny)
+    return BandJump(int(t[k + 1]), float((one.min() - two[i, k]) / noise), float(step), float(over_ramp))
 
 
 def band_rises(decay, sampling_frequency_hz, band_hz) -> np.ndarray:
