@@ -35,10 +35,9 @@ def _re_excited(seed, gain):
 
 
 def test_a_held_mode_re_excited_within_its_decay_is_refitted_on_the_pieces_unbiased():
-    """Across the re-excitation (half and a quarter of the first amplitude) the 61-Hz band fit is off by up to 7 of
-    its sigmas (0.08-0.23 Hz, 6.4-7.2 sigmas); cut at the step, within 2 of its own sigmas and 4e-4 Hz of the truth (bounds
-    3 sigmas, 2e-3 Hz). The 23-Hz mode
-    is not cut."""
+    """Across the re-excitation (half and a quarter of the first amplitude) the 61-Hz band fit is off by 0.08-0.23
+    Hz, 6.4-7.2 of its sigmas; cut at the step, by at most 4e-4 Hz and 1.9 of its own sigmas (bounds: 2e-3 Hz, 3
+    sigmas). The 23-Hz mode is not cut."""
     before, after = [], []
     for seed, gain in [(0, 0.5), (3, 0.5), (7, 0.5), (0, 0.25), (3, 0.25)]:
         bands, got = _refit(_re_excited(seed, gain))
