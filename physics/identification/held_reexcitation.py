@@ -12,8 +12,9 @@ of 30, a step of 0.38 of the amplitude; on the DS5 board's 2394-Hz mode 26-44 an
 the mode by several Hz. What tells a re-excitation from a smooth change is the step itself: the amplitude is
 constant either side of it, so the step leaves a fraction of the residual the likeliest *linear* change of the
 amplitude leaves (:attr:`~physics.identification.peak_seeds.BandJump.over_ramp`: 0.16-0.25 on simulated
-re-excitations at 1e-3 to 3e-2 noise), while a smooth change leaves both alike (0.57-0.96 on every real record's
-held modes the step rules pass: the pyFRF hits, the USC bridge, the DS5 shocks, the DROPBEAR dwells). A held mode
+re-excitations at half the first amplitude and 1e-3 to 3e-2 noise, 0.24-0.39 at a quarter), while a smooth change
+leaves both alike (0.71-0.96 on the held modes alone in their bands the step rules pass on the real sets, the pyFRF
+hits, the USC bridge, the DS5 shocks and the DROPBEAR dwells; 0.56 the lowest of any scoring 25). A held mode
 alone in its band whose band's amplitude steps by at least :data:`~physics.identification.peak_seeds.REEXCITE_JUMP`
 times the step's noise, by :data:`~physics.identification.peak_seeds.REEXCITE_STEP` of the amplitude, and leaves at
 most :data:`REEXCITE_OVER_RAMP` of the linear change's residual is refitted on its decays cut there (the pieces'
@@ -33,8 +34,8 @@ from physics.identification.peak_seeds import (MIN_DECAY_SIGMAS, REEXCITE_JUMP, 
 __all__ = ["REEXCITE_OVER_RAMP", "HeldRefit", "refit_held_re_excited"]
 
 #: A held mode's band amplitude steps at a re-excitation when the step leaves at most this fraction of the squared
-#: residual the likeliest linear change of the amplitude leaves (simulated re-excitations 0.16-0.25, real held modes
-#: that are not re-excited 0.57-0.96).
+#: residual the likeliest linear change of the amplitude leaves (simulated re-excitations 0.16-0.39, the real sets'
+#: held modes scoring :data:`~physics.identification.peak_seeds.REEXCITE_JUMP` 0.56-0.96).
 REEXCITE_OVER_RAMP = 0.5
 
 
