@@ -35,6 +35,7 @@ from physics.identification.damped_sinusoids import DampedSinusoidFit, fit_dampe
 from physics.identification.decay_peaks import decay_peaks
 from physics.identification.decays import Decays, adds_energy, decay_spectrum, find_decays
 from physics.identification.fdd import clear_peaks, unit_shapes
+from physics.identification.held_reexcitation import refit_held_re_excited
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.peak_seeds import SeededModes, refine_seeds, unheld_peaks
 from physics.identification.peak_warning import warn_unexplained_peaks
@@ -310,14 +311,16 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     if idx.size:
         bands = refine_in_bands(full, fs, fit.eigenvalues[idx])
         ok = bands.converged
-        lam = np.where(ok, bands.eigenvalues, fit.eigenvalues[idx])
-        f_std = np.where(ok, bands.frequency_std_hz, fit.frequency_std_hz[idx])
-        z_std = np.where(ok, bands.damping_std, fit.damping_std[idx])
-        amps = [bands.amplitudes[:, :, j] if ok[j] else fit.amplitudes[:, :, i] for j, i in enumerate(idx)]
+        held = refit_held_re_excited(full, fs, bands, max_damping)     # re-excited within a decay: cut at the step
+        lam = np.where(ok, held.eigenvalues, fit.eigenvalues[idx])
+        f_std = np.where(ok, held.frequency_std_hz, fit.frequency_std_hz[idx])
+        z_std = np.where(ok, held.damping_std, fit.damping_std[idx])
+        amps = [held.amplitudes[:, :, j] if ok[j] else fit.amplitudes[:, :, i] for j, i in enumerate(idx)]
         merged = np.asarray(bands.merged, bool)        # a pole merged into a stronger one of its peak is none
     # the clear peaks no mode holds: each started at its peak and refined in its band, the modes held fixed
     held_hz = np.abs(lam[~merged]) / (2 * np.pi)
-    held_amps = np.where(ok, bands.amplitudes, np.nan)[:, :, ~merged] if idx.size else None   # NaN: a failed fit
+    held_amps = np.where(ok & ~held.refitted, bands.amplitudes, np.nan)[:, :, ~merged] if idx.size else None   # NaN:
+    # a failed fit, or a refit on cut decays (its first piece's amplitudes do not hold past the re-excitation)
     seeded = refine_seeds(full, fs, lam[~merged], record_peaks, unheld_peaks(record_peaks, held_hz, band),
                           max_damping, held_amplitudes=held_amps)
     if idx.size - merged.sum() + seeded.eigenvalues.size == 0:

@@ -40,7 +40,8 @@ from physics.identification.fdd import ClearPeaks
 
 __all__ = ["JUMP_SAMPLES_PER_CORRELATION", "JUMP_SEARCH_LINES", "JUMP_SEARCH_STEPS", "JUMP_SIGMA_OCTAVES",
            "MIN_DECAY_SIGMAS", "REEXCITE_JUMP", "REEXCITE_RISE", "REEXCITE_STEP", "BandJump", "SeededModes",
-           "band_jump", "band_rises", "cut_at_rises", "refine_seeds", "seed_fit", "seed_poles", "unheld_peaks"]
+           "band_jump", "band_rises", "cut_at_rises", "decay_pieces", "refine_seeds", "seed_fit", "seed_poles",
+           "unheld_peaks"]
 
 #: A seeded mode's damping ratio is at least this many of its one sigma (it decays within the record).
 MIN_DECAY_SIGMAS = 2.0
@@ -124,11 +125,16 @@ class BandJump:
     step : float
         The amplitude's change at the jump over its amplitude before (the decay divided out; channels summed in
         quadrature).
+    over_ramp : float
+        The squared residual the jump leaves over the one the likeliest linear change of the amplitude leaves (each
+        with its own pole of the search): a fraction for a step (a re-excitation), about 1 or more for a smooth
+        change (two modes beating, a frequency drifting with the amplitude, a component no model holds).
     """
 
     sample: int
     score: float
     step: float = 0.0
+    over_ramp: float = 1.0
 
 
 def _in_band(y, fs, band_hz, analytic=False) -> np.ndarray:
@@ -157,7 +163,8 @@ def band_jump(decay, sampling_frequency_hz, band_hz, eigenvalue) -> BandJump:
     residual by ``W1 W2 / W |m1 - m2|^2``; the largest, over the residual's noise variance per sample times the
     band-limited signal's correlation length ``fs / width`` (white noise: an exponential variable of mean 1 at
     each split), is the score. The first and last correlation lengths (the band filter's response to the decay's
-    start and end) are left out.
+    start and end) are left out. The same residual of a linear change ``s = a + c (t - t_mean)`` (weighted alike,
+    its own pole searched) is the smooth alternative the jump is compared with (:attr:`BandJump.over_ramp`).
 
     Parameters
     ----------
@@ -175,7 +182,7 @@ def band_jump(decay, sampling_frequency_hz, band_hz, eigenvalue) -> BandJump:
     fs, n = float(sampling_frequency_hz), y.shape[1]
     corr = int(np.ceil(fs / max(band_hz[1] - band_hz[0], np.finfo(float).tiny)))
     if n < 4 * corr:
-        return BandJump(0, 0.0, 0.0)
+        return BandJump(0, 0.0, 0.0, 1.0)
     hop = max(1, corr // JUMP_SAMPLES_PER_CORRELATION)     # s(t) varies over a correlation length: read it on a hop
     t = np.arange(corr, n - corr, hop)
     b = _in_band(y, fs, band_hz, analytic=True)[:, t]
@@ -201,7 +208,11 @@ def band_jump(decay, sampling_frequency_hz, band_hz, eigenvalue) -> BandJump:
     noise = max(two[i, k] / t.size * corr / hop, tiny)
     m1, m2 = S1[i, :, k] / W1[i, k], S2[i, :, k] / W2[i, k]
     step = np.linalg.norm(m2 - m1) / max(np.linalg.norm(m1), tiny)
-    return BandJump(int(t[k + 1]), float((one.min() - two[i, k]) / noise), float(step))
+    dt = t[None, :] / fs - (w @ (t / fs) / np.maximum(total_w, tiny))[:, None]     # (poles, samples)
+    slope = np.sum(ws * dt[:, None, :], axis=2)                                     # sum w s dt, (poles, channels)
+    ramp = one - np.sum(np.abs(slope) ** 2, axis=1) / np.maximum(np.sum(w * dt ** 2, axis=1), tiny)
+    over_ramp = two[i, k] / max(ramp.min(), tiny)
+    return BandJump(int(t[k + 1]), float((one.min() - two[i, k]) / noise), float(step), float(over_ramp))
 
 
 def band_rises(decay, sampling_frequency_hz, band_hz) -> np.ndarray:
@@ -271,7 +282,7 @@ def cut_at_rises(decays, fs, bands_hz, eigenvalues):
                 jump = band_jump(y, fs, b, lam)
                 near = abs(jump.sample - rise[0]) <= 2 * fs / max(b[1] - b[0], np.finfo(float).tiny)
                 cuts[-1].append(jump.sample if near and jump.score >= REEXCITE_JUMP else int(rise[0]))
-    return _pieces(decays, cuts)
+    return decay_pieces(decays, cuts)
 
 
 def _cut_at_jumps(decays, fs, bands_hz, eigenvalues):
@@ -281,10 +292,10 @@ def _cut_at_jumps(decays, fs, bands_hz, eigenvalues):
     and the index of each decay's first piece (None where no decay is cut)."""
     cuts = [[j.sample for j in (band_jump(y, fs, b, lam) for b, lam in zip(bands_hz, eigenvalues))
              if j.score >= REEXCITE_JUMP and j.step >= REEXCITE_STEP] for y in decays]
-    return _pieces(decays, cuts)
+    return decay_pieces(decays, cuts)
 
 
-def _pieces(decays, cuts):
+def decay_pieces(decays, cuts):
     """The decays cut at their ``cuts`` (one list of samples per decay): the pieces, and the index of each decay's
     first piece; ``(None, None)`` where no decay is cut."""
     pieces, first = [], []
