@@ -139,7 +139,7 @@ def _write(out_dir, results, pair, base, cur, model):
     if len(results) > 1:
         atomic_write_text(out / "verdicts.json", json.dumps(to_jsonable(results), indent=1))
         return
-    atomic_write_bytes(out / "classify.png", _figure(results[0], pair, base, cur, model.beam, model.support))
+    atomic_write_bytes(out / "classify.png", _figure(results[0], pair, base, cur, model.beam, model.beam.support))
     atomic_write_text(out / "verdict.json", json.dumps(to_jsonable(results[0]), indent=1))
 
 

@@ -67,7 +67,7 @@ from physics.effects import hermite_row
 from physics.errors import BeamDamageError
 from physics.fem import beam_model
 from physics.modal import undamped_modes
-from physics.supports import THESIS_SUPPORT, add_springs, changed_springs, support
+from physics.supports import add_springs, changed_springs
 
 __all__ = ["BASE_HYPOTHESES", "FIT_LIMIT", "FREQUENCY_CHANGE_STD", "KindExplanation",
            "MODEL_ERROR", "NO_EXPLANATION", "SEPARATE_BASE", "SHAPE_CHANGE_STD", "SIZE_SCALE_STD", "Hypothesis",
@@ -208,8 +208,7 @@ def support_curve(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_spring_
     ``ln(k / k_0)`` of the clamp springs or the suspension; for pinned ends ``log10`` of the bearing spring
     ``k L / EI`` added to none. An unknown support is refused in one line.
     """
-    test = beam.test
-    sup = support(THESIS_SUPPORT if test is None else test.bc, "the model's test")
+    sup = beam.support
     L = beam.length_m
     g = np.asarray(ln_factors, float)
     kr0 = (1e4 if root_spring_relative is None else float(root_spring_relative)) * EI_Nm2 / L
@@ -229,8 +228,7 @@ def support_curve(beam, EI_Nm2: float, mass_per_length_kg_m: float, root_spring_
     all_dofs = [f"{n}:{d}" for n in range(1, last + 1) for d in ("y", "rz")]
     keep = [all_dofs.index(d) for d in names]
     node_x = np.linspace(0.0, L, last)
-    sensors = np.arange(1, 5) * L / 4 if test is None else sorted(test.sensors_x_m)
-    T = np.array([hermite_row(float(x), node_x)[0][keep] for x in sensors])          # (S, n)
+    T = np.array([hermite_row(float(x), node_x)[0][keep] for x in beam.sensors_x_m])          # (S, n)
     u = real_shapes((T @ phi[..., idx]).astype(complex))                               # (G + 1, S, m)
     du = sign_aligned(u[1:], u[:1]) - u[:1]
     return f[1:] / f[:1] - 1.0, du.reshape(du.shape[0], -1), what
@@ -475,7 +473,7 @@ def explain_many(model, pairs: list, sigma=FREQUENCY_CHANGE_STD, shape_sigma=SHA
     days = cfg.get("day_changes") or {}
     grid, curve_all, what, reclamp_all, shapes_all = _support_curves(
         beam, EI, m, cfg.get("root_spring_relative"),
-        tuple(days.get("root_spring_change") or ()) if model.support.clamped else ())
+        tuple(days.get("root_spring_change") or ()) if model.beam.support.clamped else ())
     out = [None] * len(pairs)
     groups: dict = {}
     for i, pair in enumerate(pairs):

@@ -44,6 +44,7 @@ from datagen.store import DATASET_FORMAT, read_manifest
 from datagen.synth import log_magnitude_map
 from learn.explanations.shapes import real_shapes, sign_aligned
 from physics.layout import Layout
+from physics.supports import THESIS_SUPPORT, Support, support
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -79,6 +80,11 @@ class BeamSpec:
     @property
     def n_modes(self) -> int:
         return 4 if self.test is None else self.test.n_modes
+
+    @property
+    def support(self) -> Support:
+        """The record of the test's supports (:mod:`physics.supports`): the thesis's clamp without a test."""
+        return support(THESIS_SUPPORT if self.test is None else self.test.bc, "the model's test")
 
     @property
     def grid_rad_s(self) -> np.ndarray:

@@ -45,7 +45,6 @@ from physics.errors import BeamDamageError, FileFormatError
 from physics.io import atomic_write_bytes, atomic_write_text, read_json
 from physics.properties import PRESETS, beam_preset
 from physics.effects import effect_of
-from physics.supports import THESIS_SUPPORT, Support, support
 
 __all__ = ["DEFAULT_ROUTE", "MODEL_FORMAT", "READ_FORMATS", "TrainedModel", "json_default",
            "load_model", "save_model", "sensitivity_of", "truth_numbers"]
@@ -99,11 +98,6 @@ class TrainedModel:
             base = {"name": p.name, "EI_Nm2": p.EI_Nm2, "mass_per_length_kg_m": p.mass_per_length_kg_m,
                     "length_m": p.length_m, "width_m": p.width_m, "thickness_m": p.thickness_m}
         return {**base, **(truth if "EI_Nm2" in truth else {}), **(self.recorded.section or {})}
-
-    @cached_property
-    def support(self) -> Support:
-        """The record of the supports of the model's test (the thesis's clamp without one)."""
-        return support(THESIS_SUPPORT if self.beam.test is None else self.beam.test.bc, "the model's test")
 
     @cached_property
     def words(self) -> DamageWords:

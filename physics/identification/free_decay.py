@@ -319,8 +319,8 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         merged = np.asarray(bands.merged, bool)        # a pole merged into a stronger one of its peak is none
     # the clear peaks no mode holds: each started at its peak and refined in its band, the modes held fixed
     held_hz = np.abs(lam[~merged]) / (2 * np.pi)
-    held_amps = np.where(ok & ~held.refitted, bands.amplitudes, np.nan)[:, :, ~merged] if idx.size else None   # NaN:
-    # a failed fit, or a refit on cut decays (its first piece's amplitudes do not hold past the re-excitation)
+    # NaN: a failed fit, or a refit on cut decays (its first piece's amplitudes do not hold past the re-excitation)
+    held_amps = np.where(ok & ~held.refitted, bands.amplitudes, np.nan)[:, :, ~merged] if idx.size else None
     seeded = refine_seeds(full, fs, lam[~merged], record_peaks, unheld_peaks(record_peaks, held_hz, band),
                           max_damping, held_amplitudes=held_amps)
     if idx.size - merged.sum() + seeded.eigenvalues.size == 0:
