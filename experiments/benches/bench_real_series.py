@@ -66,7 +66,8 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 
 from experiments.benches.harness import parser, publish, table  # noqa: E402
-from experiments.benches.plain_tests import held_out_plain_alarms, matched_alarms, plain_p_values  # noqa: E402
+from experiments.benches.plain_tests import (held_out_plain_alarms, matched_alarms, matched_threshold,  # noqa: E402
+                                             plain_p_values)
 from learn.monitor import (IdentificationSettings, IdentifiedModes, SeriesInput, monitor_series,  # noqa: E402
                            reference_modes)
 from learn.monitor.alarms import FLAGGED_STATUSES  # noqa: E402
@@ -74,7 +75,7 @@ from learn.monitor.identification import cached_identification  # noqa: E402
 from learn.monitor.statistics import DEFAULT_STATISTICS, STATISTICS  # noqa: E402
 from physics.errors import BeamDamageError  # noqa: E402
 from physics.identification.fft_peak import fft_peaks, identify_fft_peaks  # noqa: E402
-from physics.io import atomic_write_text  # noqa: E402
+from physics.io import atomic_write_text, finite_or_none  # noqa: E402
 
 __all__ = ["LOADERS", "MATCHED", "METHODS", "ONE_ESTIMATOR", "RealSeries", "fft_frequencies", "group_scores", "main",
            "matched_markdown", "mode_windows_hz", "reference_fft_modes"]
@@ -380,7 +381,7 @@ def run_set(series: RealSeries, out: Path, rate: float, statistics=DEFAULT_STATI
             **{f"{k} at the rate": v < rate for k, v in p.items()},
             **{f"{k}, matched": matched_alarms(v, healthy, allowed) for k, v in p.items()}}
     fair_rows = group_scores(series.groups, fair, identified, nb, series.known, against=())
-    thresholds = {k: _nth_smallest(v[healthy], allowed) for k, v in p.items()}
+    thresholds = {k: finite_or_none(matched_threshold(v, healthy, allowed)) for k, v in p.items()}
     base_med = np.nanmedian(F[:nb], axis=0) if ref.size else np.zeros(0)
     for r in rows:
         if r["group"] in series.groups and ref.size:
@@ -402,12 +403,6 @@ def run_set(series: RealSeries, out: Path, rate: float, statistics=DEFAULT_STATI
                 "flags": {k: v.tolist() for k, v in fair.items()}, "rows": fair_rows},
             "seconds": time.perf_counter() - t0,
             "monitor_seconds": t_mon}
-
-
-def _nth_smallest(p, k: int):
-    """The ``k + 1``-th smallest finite value of ``p``, or None: the p-value below which a matched test alarms."""
-    h = np.sort(p[np.isfinite(p)])
-    return float(h[k]) if k < h.size else None
 
 
 def _no_answer(error: str) -> str:

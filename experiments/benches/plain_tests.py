@@ -2,14 +2,14 @@
 from their baseline medians, beyond the baseline's own quantiles (:func:`plain_alarms`; held out on the baseline:
 :func:`held_out_plain_alarms`), and the same two tests calibrated to hold a false-alarm rate: Gaussian prediction
 intervals (:func:`plain_p_values`) read at the rate or at the threshold that flags as many held-out healthy tests as
-another detector does (:func:`matched_alarms`, a point of their ROC curve)."""
+another detector does (:func:`matched_threshold`, :func:`matched_alarms`: a point of their ROC curve)."""
 
 from __future__ import annotations
 
 import numpy as np
 from scipy import special
 
-__all__ = ["held_out_plain_alarms", "matched_alarms", "plain_alarms", "plain_p_values"]
+__all__ = ["held_out_plain_alarms", "matched_alarms", "matched_threshold", "plain_alarms", "plain_p_values"]
 
 
 def plain_alarms(F, n_baseline: int, rate: float, *, sides: int, method: str, sign: float = 1.0) -> dict:
@@ -109,10 +109,16 @@ def plain_p_values(F, n_baseline: int) -> dict:
     return {"plain shift": shift, "plain per mode": per}
 
 
+def matched_threshold(p, healthy, n_allowed: int) -> float:
+    """The largest p-value threshold that flags at most ``n_allowed`` of the ``healthy`` tests (bool mask, (n,)):
+    the ``n_allowed + 1``-th smallest healthy p-value (NaN read as 1, never flagged); ``inf`` (every finite p
+    flagged) when ``n_allowed`` is at least the healthy tests with a finite p."""
+    h = np.sort(np.asarray(p, float)[np.asarray(healthy, bool)])
+    h = h[np.isfinite(h)]
+    return float(h[n_allowed]) if n_allowed < h.size else np.inf
+
+
 def matched_alarms(p, healthy, n_allowed: int) -> np.ndarray:
-    """Flags ``p < threshold`` (bool, (n,)), the threshold the largest that flags at most ``n_allowed`` of the
-    ``healthy`` tests (bool mask, (n,)): the ``n_allowed + 1``-th smallest healthy p-value (NaN read as 1, never
-    flagged). ``n_allowed`` at least the healthy tests: every finite p flagged."""
-    p = np.where(np.isfinite(p), p, np.inf)
-    h = np.sort(p[np.asarray(healthy, bool)])
-    return p < (h[n_allowed] if n_allowed < h.size else np.inf)
+    """Flags ``p <`` :func:`matched_threshold` (bool, (n,); NaN never flagged)."""
+    p = np.asarray(p, float)
+    return np.isfinite(p) & (p < matched_threshold(p, healthy, n_allowed))
