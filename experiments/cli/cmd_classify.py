@@ -139,11 +139,11 @@ def _write(out_dir, results, pair, base, cur, model):
     if len(results) > 1:
         atomic_write_text(out / "verdicts.json", json.dumps(to_jsonable(results), indent=1))
         return
-    atomic_write_bytes(out / "classify.png", _figure(results[0], pair, base, cur, model.beam, model.beam.support))
+    atomic_write_bytes(out / "classify.png", _figure(results[0], pair, base, cur, model.beam))
     atomic_write_text(out / "verdict.json", json.dumps(to_jsonable(results[0]), indent=1))
 
 
-def _figure(res, pair, base, cur, beam, sup) -> bytes:
+def _figure(res, pair, base, cur, beam) -> bytes:
     """PNG of one verdict: the two tests' FRFs in the file's kind with the identified modes marked; each mode's
     measured frequency change beside the competing explanations' predictions; the beam (supports, sensors, zones)
     under the location of the verdict's own source (none when the verdict is undamaged)."""
@@ -181,7 +181,7 @@ def _figure(res, pair, base, cur, beam, sup) -> bytes:
         a2.set_xticks(x, [f"mode {m}" for m in modes])
         a2.legend(fontsize=7)
     a2.set(ylabel="frequency change (%)", title="Each mode's change and what the explanations predict")
-    _location(a3, res, (pair.answers.location_distributions or {}).get("68"), beam, sup)
+    _location(a3, res, (pair.answers.location_distributions or {}).get("68"), beam)
     fig.tight_layout()
     return figure_png(fig)
 
@@ -194,7 +194,7 @@ def _file_labels(res):
     return lambda dof: (f"x = {where[dof][1]:.3g} m ({where[dof][0]})" if dof in where else dof)
 
 
-def _location(ax, res, dist, beam, sup) -> None:
+def _location(ax, res, dist, beam) -> None:
     """Where the verdict's source places the damage: the network's distribution, or the classical method's place;
     nothing when the verdict is undamaged."""
     source = res["verdict_from"]
@@ -211,15 +211,15 @@ def _location(ax, res, dist, beam, sup) -> None:
         title = f"Verdict ({source}): no damage detected, so no location"
     for x in beam.zone_edges_m[1:-1]:
         ax.axvline(x, color="grey", ls=":")
-    _draw_beam(ax, beam, sup)
+    _draw_beam(ax, beam)
     ax.legend(fontsize=7)
     ax.set(xlabel="x (m)", ylabel="probability", title=title)
 
 
-def _draw_beam(ax, beam, sup) -> None:
-    """The beam under the location axis: its supports ``sup`` (clamp: a wall; pin: a triangle), sensors (v) and
-    zones."""
-    L = beam.length_m
+def _draw_beam(ax, beam) -> None:
+    """The beam under the location axis: its supports (:attr:`learn.network.features.BeamSpec.support`; clamp: a
+    wall; pin: a triangle), sensors (v) and zones."""
+    L, sup = beam.length_m, beam.support
     bc = sup.name
     y = ax.get_ylim()[1] if ax.has_data() else 1.0
     ax.plot([0, L], [-0.06 * y] * 2, color="k", lw=3, solid_capstyle="butt")
