@@ -5,19 +5,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_runs import run_cli
 from systems import write_time_uff
 
-from experiments.cli import main
 from physics.io import read_frf
 
 pyuff = pytest.importorskip("pyuff")
 DATA = Path(__file__).resolve().parents[1] / "data"
-
-
-def _run(capsys, argv):
-    code = main(argv)
-    cap = capsys.readouterr()
-    return code, cap.out, cap.err
 
 
 @pytest.fixture(scope="module")
@@ -38,8 +32,8 @@ def impact_file(tmp_path_factory):
 
 def test_estimate_impact_file_flags_hits_and_writes_frf(capsys, impact_file, tmp_path):
     path, rec, (m, c, k), scale = impact_file
-    code, out, err = _run(capsys, ["estimate", str(path), "--excitation", "impact", "--averages", "6",
-                                   "--out", str(tmp_path / "frf.uff"), "--json"])
+    code, out, err = run_cli(capsys, ["estimate", str(path), "--excitation", "impact", "--averages", "6",
+                                      "--out", str(tmp_path / "frf.uff"), "--json"])
     assert code == 0, err
     res = json.loads(out)
     assert res["double_hits"] == [2] and res["overloads"] == [{"block": 4, "dof": "2:+Z"}]
@@ -53,7 +47,7 @@ def test_estimate_impact_file_flags_hits_and_writes_frf(capsys, impact_file, tmp
 
 def test_identify_accepts_time_records_by_estimating_first_and_says_so(capsys, impact_file):
     path, *_ = impact_file
-    code, out, err = _run(capsys, ["identify", str(path), "--band", "20", "200", "--json"])
+    code, out, err = run_cli(capsys, ["identify", str(path), "--band", "20", "200", "--json"])
     assert code == 0, err
     res = json.loads(out)
     assert any("holds time records, not FRFs: estimated H1" in w for w in res["warnings"])
@@ -64,8 +58,8 @@ def test_identify_accepts_time_records_by_estimating_first_and_says_so(capsys, i
 
 @pytest.mark.parametrize("command", ["estimate"])   # identify runs them output-only (test_cmd_identify_output_only)
 def test_real_time_records_without_force_give_one_line(capsys, command, tmp_path):
-    code, out, err = _run(capsys, [command, str(DATA / "MPSTD_Set001_2024_10_08_10_27_07.uff"),
-                                   *(["--out", str(tmp_path / "x.uff")] if command == "estimate" else [])])
+    code, out, err = run_cli(capsys, [command, str(DATA / "MPSTD_Set001_2024_10_08_10_27_07.uff"),
+                                      *(["--out", str(tmp_path / "x.uff")] if command == "estimate" else [])])
     assert code == 2 and out == "" and err.count("\n") == 1
     assert "MPSTD_Set001" in err and "4 time records" in err and "no force channel" in err
     assert not (tmp_path / "x.uff").exists()

@@ -4,8 +4,9 @@ import json
 
 import numpy as np
 import pytest
+from cli_runs import run_cli
 
-from experiments.cli import build_parser, main
+from experiments.cli import build_parser
 from physics.identification import METHODS
 from physics.io import MeasuredFRF, read_modal_json, write_frf_csv, write_frf_npz, write_uff58
 from physics.thesis import beam5_reduced_model, simulated_beam5_test
@@ -21,16 +22,10 @@ def beam5_files(tmp_path_factory):
     return d, exact
 
 
-def _run(capsys, argv):
-    code = main(argv)
-    cap = capsys.readouterr()
-    return code, cap.out, cap.err
-
-
 @pytest.mark.parametrize("name", ["beam5.uff", "beam5.csv", "beam5.npz"])
 def test_identify_json_recovers_exact_modes(capsys, beam5_files, name):
     d, exact = beam5_files
-    code, out, err = _run(capsys, ["identify", str(d / name), "--modes", "4", "--json"])
+    code, out, err = run_cli(capsys, ["identify", str(d / name), "--modes", "4", "--json"])
     assert code == 0, err
     res = json.loads(out)
     f = np.array([m["frequency_hz"] for m in res["modes"]])
@@ -48,8 +43,8 @@ def test_identify_json_recovers_exact_modes(capsys, beam5_files, name):
 @pytest.mark.parametrize("method", [n for n, spec in METHODS.items() if spec.data == "frf"])
 def test_identify_every_method_in_a_band(capsys, beam5_files, method):
     d, exact = beam5_files
-    code, out, err = _run(capsys, ["identify", str(d / "beam5.uff"), "--method", method, "--band", "80", "500",
-                                   "--json"])
+    code, out, err = run_cli(capsys, ["identify", str(d / "beam5.uff"), "--method", method, "--band", "80", "500",
+                                      "--json"])
     assert code == 0, err
     res = json.loads(out)
     f = np.array([m["frequency_hz"] for m in res["modes"]])
@@ -71,7 +66,7 @@ def test_identify_method_choices_and_help_are_the_method_table():
 
 def test_identify_out_dir_feeds_update(capsys, beam5_files, tmp_path):
     d, exact = beam5_files
-    code, out, err = _run(capsys, ["identify", str(d / "beam5.uff"), "--out", str(tmp_path / "id")])
+    code, out, err = run_cli(capsys, ["identify", str(d / "beam5.uff"), "--out", str(tmp_path / "id")])
     assert code == 0, err
     assert sorted(p.name for p in (tmp_path / "id").iterdir()) == ["modal.json", "overlay.png",
                                                                    "stabilisation.png", "synthesised.uff"]
@@ -85,11 +80,11 @@ def test_identify_bad_files_one_line_exit_2(capsys, tmp_path, beam5_files):
     d, _ = beam5_files
     raw = (d / "beam5.uff").read_bytes()
     (tmp_path / "cut.uff").write_bytes(raw[: len(raw) // 2 + 5])
-    code, out, err = _run(capsys, ["identify", str(tmp_path / "cut.uff")])
+    code, out, err = run_cli(capsys, ["identify", str(tmp_path / "cut.uff")])
     assert code == 2 and err.count("\n") == 1 and "truncated universal file" in err
-    code, out, err = _run(capsys, ["identify", str(tmp_path / "missing.csv")])
+    code, out, err = run_cli(capsys, ["identify", str(tmp_path / "missing.csv")])
     assert code == 2 and "not found" in err
-    code, out, err = _run(capsys, ["identify", str(d / "beam5.uff"), "--band", "500", "100"])
+    code, out, err = run_cli(capsys, ["identify", str(d / "beam5.uff"), "--band", "500", "100"])
     assert code == 2 and "FMIN" in err
     assert not (tmp_path / "out").exists()
 
@@ -98,14 +93,14 @@ def test_identify_without_driving_point_warns_unscaled(capsys, tmp_path):
     frf, _ = simulated_beam5_test(noise=0.0, seed=0, damping="heavy")
     other = MeasuredFRF(frf.frequency_hz, frf.frf[:3], frf.response_dofs[:3], frf.reference_dofs)
     write_frf_npz(tmp_path / "x.npz", other)
-    code, out, err = _run(capsys, ["identify", str(tmp_path / "x.npz"), "--modes", "4", "--json"])
+    code, out, err = run_cli(capsys, ["identify", str(tmp_path / "x.npz"), "--modes", "4", "--json"])
     res = json.loads(out)
     assert code == 0 and res["scaling"].startswith("unscaled") and "driving point" in res["warnings"][0]
 
 
 def test_update_accepts_frf_file_and_recovers_model(capsys, beam5_files):
     d, exact = beam5_files
-    code, out, err = _run(capsys, ["update", "--modal", str(d / "beam5.uff"), "--json"])
+    code, out, err = run_cli(capsys, ["update", "--modal", str(d / "beam5.uff"), "--json"])
     assert code == 0, err
     res = json.loads(out)
     np.testing.assert_allclose(res["measured_natural_frequencies_hz"], exact.natural_frequencies_hz, rtol=5e-4)
@@ -122,7 +117,7 @@ def test_identify_writes_synthesised_uff_in_the_input_kind_and_reports_db_error(
 
     frf, truth = simulate_free_free(seed=2)
     write_uff58(tmp_path / "ff.uff", frf, binary=True)
-    code, out, err = _run(capsys, ["identify", str(tmp_path / "ff.uff"), "--json", "--out", str(tmp_path / "o")])
+    code, out, err = run_cli(capsys, ["identify", str(tmp_path / "ff.uff"), "--json", "--out", str(tmp_path / "o")])
     assert code == 0, err
     res = json.loads(out)
     synth = read_frf(tmp_path / "o" / "synthesised.uff")
@@ -155,7 +150,7 @@ def test_identify_json_reports_units_and_positions_from_the_file(capsys, tmp_pat
                                      abscissa_spacing=1, abscissa_spec_data_type=18, ordinate_spec_data_type=8,
                                      orddenom_spec_data_type=13))
     pyuff.UFF(str(tmp_path / "mm.uff")).write_sets(sets, mode="add")
-    code, out, err = _run(capsys, ["identify", str(tmp_path / "mm.uff"), "--modes", "4", "--json"])
+    code, out, err = run_cli(capsys, ["identify", str(tmp_path / "mm.uff"), "--modes", "4", "--json"])
     assert code == 0, err
     res = json.loads(out)
     assert res["units"]["si"] == "m/N" and res["units"]["factor_to_si"] == [pytest.approx(1e-3)]
@@ -164,7 +159,7 @@ def test_identify_json_reports_units_and_positions_from_the_file(capsys, tmp_pat
     assert "geometry" in res["positions_source"]
     # the CSV of the same FRFs has no geometry: the quarter-point convention is named
     write_frf_csv(tmp_path / "b.csv", frf)
-    code, out, err = _run(capsys, ["identify", str(tmp_path / "b.csv"), "--modes", "4", "--json"])
+    code, out, err = run_cli(capsys, ["identify", str(tmp_path / "b.csv"), "--modes", "4", "--json"])
     res = json.loads(out)
     assert res["positions_m"] is None and "quarter points" in res["positions_source"]
     assert res["units"]["si"] == "m/N"

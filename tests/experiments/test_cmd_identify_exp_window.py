@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_runs import run_cli
 from systems import write_time_uff
 
-from experiments.cli import main
 from physics.io import read_modal_json, write_uff58
 from physics.modal import eigenvalues_from_modal, modal_parameters
 
@@ -25,12 +25,6 @@ QUALIFIERS_1858 = ("    -1\n  1858\n           1           0           1        
                    + "  0.0000000E+00" * 5 + "\nZ+    Z+\nNONE\n    -1\n")
 
 
-def _run(capsys, argv):
-    code = main(argv)
-    cap = capsys.readouterr()
-    return code, cap.out, cap.err
-
-
 @pytest.fixture(scope="module")
 def windowed(tmp_path_factory):
     d = tmp_path_factory.mktemp("w")
@@ -44,7 +38,7 @@ def windowed(tmp_path_factory):
 def test_identify_removes_the_window_decay(capsys, windowed, option):
     d, tau = windowed
     option = [o.replace("TAU", repr(float(tau))) for o in option]
-    code, out, err = _run(capsys, ["identify", str(d / "w.uff"), "--json", *option])
+    code, out, err = run_cli(capsys, ["identify", str(d / "w.uff"), "--json", *option])
     assert code == 0, err
     res = json.loads(out)
     win = res["exponential_window"]
@@ -62,7 +56,7 @@ def test_identify_removes_the_window_decay(capsys, windowed, option):
 @pytest.mark.slow
 def test_identify_out_writes_the_corrected_modes_for_update(capsys, windowed, tmp_path):
     d, _ = windowed
-    code, out, err = _run(capsys, ["identify", str(d / "w.uff"), "--out", str(tmp_path), "--exp-window-end", "0.01"])
+    code, out, err = run_cli(capsys, ["identify", str(d / "w.uff"), "--out", str(tmp_path), "--exp-window-end", "0.01"])
     assert code == 0, err
     modal = read_modal_json(tmp_path / "modal.json")
     np.testing.assert_allclose(modal.damping_ratios, ZETA, rtol=1e-6)
@@ -71,7 +65,7 @@ def test_identify_out_writes_the_corrected_modes_for_update(capsys, windowed, tm
 
 def test_identify_text_says_what_window_it_removed(capsys, windowed):
     d, _ = windowed
-    code, out, err = _run(capsys, ["identify", str(d / "w.uff"), "--exp-window-end", "0.01"])
+    code, out, err = run_cli(capsys, ["identify", str(d / "w.uff"), "--exp-window-end", "0.01"])
     assert code == 0, err
     assert ("exponential window removed: tau 1.737 s (--exp-window-end 0.01 over the record length 1/df = 8 s): "
             "0.5756 1/s off every mode's decay rate") in out
@@ -88,14 +82,14 @@ def test_identify_text_says_what_window_it_removed(capsys, windowed):
 ])
 def test_identify_bad_window_exit_2_one_line(capsys, windowed, argv, message):
     d, _ = windowed
-    code, out, err = _run(capsys, ["identify", str(d / "w.uff"), *argv])
+    code, out, err = run_cli(capsys, ["identify", str(d / "w.uff"), *argv])
     assert code == 2 and out == ""
     assert err.count("\n") == 1 and message in err, err
 
 
 def test_identify_reports_a_1858_exponential_window_without_removing_it(capsys, windowed):
     d, _ = windowed
-    code, out, err = _run(capsys, ["identify", str(d / "w1858.uff"), "--json"])
+    code, out, err = run_cli(capsys, ["identify", str(d / "w1858.uff"), "--json"])
     assert code == 0, err
     res = json.loads(out)
     win = res["exponential_window"]
@@ -105,7 +99,7 @@ def test_identify_reports_a_1858_exponential_window_without_removing_it(capsys, 
     assert any("dataset 1858 records name an exponential window" in w for w in res["warnings"])
     assert not any("skipped" in w for w in res["warnings"])
     assert res["modes"][0]["damping_ratio"] == pytest.approx(0.00658, rel=1e-3)      # the window's, as fitted
-    code, out, err = _run(capsys, ["identify", str(d / "w1858.uff"), "--json", "--exp-window-end", "0.01"])
+    code, out, err = run_cli(capsys, ["identify", str(d / "w1858.uff"), "--json", "--exp-window-end", "0.01"])
     assert code == 0, err
     res = json.loads(out)
     assert res["exponential_window"]["file_windows"][0]["window_type"] == 6
@@ -117,12 +111,12 @@ def test_estimate_impact_npz_carries_tau_and_identify_removes_it(capsys, tmp_pat
     path = tmp_path / "impact.uff"
     write_time_uff(path, np.arange(rec.signals[0].size) * rec.time_step_s,
                    [("1", rec.signals[0], 13, "N"), ("2", rec.signals[1], 8, "m")])
-    code, out, err = _run(capsys, ["estimate", str(path), "--excitation", "impact", "--averages", "6",
-                                   "--out", str(tmp_path / "frf.npz"), "--json"])
+    code, out, err = run_cli(capsys, ["estimate", str(path), "--excitation", "impact", "--averages", "6",
+                                      "--out", str(tmp_path / "frf.npz"), "--json"])
     assert code == 0, err
     tau = json.loads(out)["exp_window_tau_s"]
     assert tau == pytest.approx((2048 - 1) / 2048 / np.log(100), rel=1e-5)      # 1 s blocks, to 1 % at the last
-    code, out, err = _run(capsys, ["identify", str(tmp_path / "frf.npz"), "--band", "20", "200", "--json"])
+    code, out, err = run_cli(capsys, ["identify", str(tmp_path / "frf.npz"), "--band", "20", "200", "--json"])
     assert code == 0, err
     res = json.loads(out)
     win = res["exponential_window"]
@@ -131,11 +125,11 @@ def test_estimate_impact_npz_carries_tau_and_identify_removes_it(capsys, tmp_pat
     assert win["identified"][0]["damping_ratio"] == pytest.approx(zeta_true + 1 / (tau * 2 * np.pi * 50), rel=0.01)
     assert res["modes"][0]["damping_ratio"] == pytest.approx(zeta_true, rel=0.01)
     assert res["modes"][0]["frequency_hz"] == pytest.approx(50.0, rel=1e-4)
-    code, out, err = _run(capsys, ["estimate", str(path), "--excitation", "impact", "--averages", "6",
-                                   "--out", str(tmp_path / "frf.uff")])
+    code, out, err = run_cli(capsys, ["estimate", str(path), "--excitation", "impact", "--averages", "6",
+                                      "--out", str(tmp_path / "frf.uff")])
     assert code == 0, err
     assert f"'beam-damage identify --exp-window-tau {tau:.6g}' removes its decay" in out
-    code, out, err = _run(capsys, ["identify", str(path), "--band", "20", "200", "--exp-window-tau", "0.2"])
+    code, out, err = run_cli(capsys, ["identify", str(path), "--band", "20", "200", "--exp-window-tau", "0.2"])
     assert code == 2 and err.count("\n") == 1 and "estimated here with a Hann window" in err, err
 
 
@@ -143,7 +137,7 @@ def test_identify_refuses_a_window_on_output_only_records(capsys, tmp_path):
     rec, _, _ = _impact_test()
     path = tmp_path / "resp.uff"
     write_time_uff(path, np.arange(rec.signals[0].size) * rec.time_step_s, [("2", rec.signals[1], 8, "m")])
-    code, out, err = _run(capsys, ["identify", str(path), "--exp-window-tau", "1"])
+    code, out, err = run_cli(capsys, ["identify", str(path), "--exp-window-tau", "1"])
     assert code == 2 and err.count("\n") == 1 and "response records identified output-only" in err, err
 
 
@@ -151,6 +145,6 @@ def test_identify_unreadable_1858_record_exit_2_one_line(capsys, windowed, tmp_p
     d, _ = windowed
     path = tmp_path / "bad.uff"
     path.write_text(QUALIFIERS_1858.replace("     0     6     0", "     0    xx     0") + (d / "w.uff").read_text())
-    code, out, err = _run(capsys, ["identify", str(path)])
+    code, out, err = run_cli(capsys, ["identify", str(path)])
     assert code == 2 and err.count("\n") == 1
     assert f"{path}: cannot read the dataset 1858 (dataset 58 qualifiers) records" in err, err

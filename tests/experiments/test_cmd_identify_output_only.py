@@ -5,19 +5,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_runs import run_cli
 from oma_records import chain_record
 from systems import write_time_uff
 
-from experiments.cli import main
 from physics.modal import mac
 
 DATA = Path(__file__).resolve().parents[1] / "data"
-
-
-def _run(capsys, argv):
-    code = main(argv)
-    cap = capsys.readouterr()
-    return code, cap.out, cap.err
 
 
 @pytest.fixture(scope="module")
@@ -37,8 +31,8 @@ def test_identify_picks_ssi_for_a_universal_file_of_responses_and_writes_unscale
     y, fs, fn, zeta, phi = chain
     path = write_time_uff(tmp_path / "ambient.uff", np.arange(y.shape[1]) / fs,
                           [(k + 1, y[k], 8, "m") for k in range(3)])
-    code, out, err = _run(capsys, ["identify", str(path), "--band", "1", "60", "--max-order", "30",
-                                   "--out", str(tmp_path / "id"), "--json"])
+    code, out, err = run_cli(capsys, ["identify", str(path), "--band", "1", "60", "--max-order", "30",
+                                      "--out", str(tmp_path / "id"), "--json"])
     assert code == 0, err
     res = json.loads(out)
     assert res["method"] == "ssi" and res["output_only"] and res["method_choice"].startswith("picked ssi")
@@ -53,16 +47,16 @@ def test_identify_picks_ssi_for_a_universal_file_of_responses_and_writes_unscale
     assert np.all(np.diag(mac(phi, shapes)) > 0.999)
     np.testing.assert_allclose(np.linalg.norm(shapes, axis=0), 1.0)
     # update refuses the unscaled shapes in one line, and the records themselves too
-    code, out, err = _run(capsys, ["update", "--beam", "beam5", "--modal", str(tmp_path / "id" / "modal.json")])
+    code, out, err = run_cli(capsys, ["update", "--beam", "beam5", "--modal", str(tmp_path / "id" / "modal.json")])
     assert code == 2 and "unscaled" in err and "mass-normalise" in err and err.count("\n") == 1
-    code, out, err = _run(capsys, ["update", "--beam", "beam5", "--modal", str(path)])
+    code, out, err = run_cli(capsys, ["update", "--beam", "beam5", "--modal", str(path)])
     assert code == 2 and "output-only shapes are unscaled" in err and err.count("\n") == 1
 
 
 def test_identify_npz_and_csv_time_series_by_a_named_method(capsys, chain, tmp_path):
     y, fs, fn, *_ = chain
-    code, out, err = _run(capsys, ["identify", str(_npz(tmp_path / "a.npz", y, fs)), "--method", "efdd",
-                                   "--band", "1", "60", "--json"])
+    code, out, err = run_cli(capsys, ["identify", str(_npz(tmp_path / "a.npz", y, fs)), "--method", "efdd",
+                                      "--band", "1", "60", "--json"])
     assert code == 0, err
     res = json.loads(out)
     assert res["method"] == "efdd" and "named by --method" in res["method_choice"]
@@ -70,21 +64,21 @@ def test_identify_npz_and_csv_time_series_by_a_named_method(capsys, chain, tmp_p
     n = y.shape[1]
     rows = "\n".join(",".join(f"{v:.9g}" for v in (k / fs, *y[:, k])) for k in range(n))
     (tmp_path / "a.csv").write_text("# quantity: displacement\ntime_s,1:+Z,2:+Z,3:+Z\n" + rows + "\n")
-    code, out, err = _run(capsys, ["identify", str(tmp_path / "a.csv"), "--band", "1", "60", "--max-order", "30"])
+    code, out, err = run_cli(capsys, ["identify", str(tmp_path / "a.csv"), "--band", "1", "60", "--max-order", "30"])
     assert code == 0, err
     assert out.startswith("picked ssi") and "3 modes by ssi" in out
 
 
 def test_identify_the_real_four_channel_acceleration_file_output_only(capsys):
     pytest.importorskip("pyuff")
-    code, out, err = _run(capsys, ["identify", str(DATA / "MPSTD_Set001_2024_10_08_10_27_07.uff"), "--band", "100",
-                                   "400", "--json"])
+    code, out, err = run_cli(capsys, ["identify", str(DATA / "MPSTD_Set001_2024_10_08_10_27_07.uff"), "--band", "100",
+                                      "400", "--json"])
     assert code == 0, err
     res = json.loads(out)
     assert res["method"] == "ssi" and res["sampling_frequency_hz"] == 3200 and res["kind"] == "acceleration"
     assert res["duration_s"] == pytest.approx(222400 / 3200)
     assert any(abs(m["frequency_hz"] - 141) < 2 for m in res["modes"])   # the 141 Hz mode of its FDD and SSI
-    code, out, err = _run(capsys, ["identify", str(DATA / "MPSTD_Set001_2024_10_08_10_27_07.uff"), "--json"])
+    code, out, err = run_cli(capsys, ["identify", str(DATA / "MPSTD_Set001_2024_10_08_10_27_07.uff"), "--json"])
     assert code == 0, err                        # with the defaults: the 182.3 Hz mode the docs name
     assert any(abs(m["frequency_hz"] - 182.3) < 0.5 for m in json.loads(out)["modes"])
 
@@ -118,7 +112,7 @@ def test_bad_records_get_one_line_and_exit_2_from_every_output_only_method(capsy
 
         f = np.linspace(1, 50, 100)
         write_frf_npz(path, MeasuredFRF(f, np.ones((1, 1, 100), complex) / (1 + f * 1j), ("1:+Z",), ("1:+Z",)))
-    code, out, err = _run(capsys, ["identify", str(path), "--method", method, *argv_extra])
+    code, out, err = run_cli(capsys, ["identify", str(path), "--method", method, *argv_extra])
     assert code == 2 and message in err and err.count("\n") == 1, err
 
 
@@ -139,13 +133,14 @@ def test_output_only_modes_feed_discrepancy_like_the_true_modes(capsys, tmp_path
         y = y + np.outer(phi[:, r], signal.lfilter(b.ravel(), a, phi[3, r] * force))
     y = y + 0.02 * y.std(axis=1, keepdims=True) * rng.standard_normal(y.shape)
     np.savez(tmp_path / "b5.npz", signals=y, sampling_frequency_hz=np.array(fs), dofs=np.array(BEAM5_DOFS))
-    code, out, err = _run(capsys, ["identify", str(tmp_path / "b5.npz"), "--band", "5", "800", "--out",
-                                   str(tmp_path / "id")])
+    code, out, err = run_cli(capsys, ["identify", str(tmp_path / "b5.npz"), "--band", "5", "800", "--out",
+                                      str(tmp_path / "id")])
     assert code == 0, err
     (tmp_path / "true.json").write_text(json.dumps({"natural_frequencies_hz": (wn / (2 * np.pi)).tolist()}))
     gaps = []
     for name in ("id/modal.json", "true.json"):
-        code, out, err = _run(capsys, ["discrepancy", "--beam", "beam5", "--measured", str(tmp_path / name), "--json"])
+        code, out, err = run_cli(capsys, ["discrepancy", "--beam", "beam5", "--measured", str(tmp_path / name),
+                                          "--json"])
         assert code == 0, err
         gaps.append(json.loads(out)["gap_before"]["max_abs_frequency_error_pct"])
     assert gaps[0] == pytest.approx(gaps[1], abs=0.1)
@@ -158,12 +153,12 @@ def test_identify_merges_setups_with_a_fixed_reference(capsys, tmp_path):
              dofs=np.array(["3:+Z", "1:+Z"]), quantity=np.array("displacement"))
     np.savez(tmp_path / "s2.npz", signals=3 * y2[[1, 2]], sampling_frequency_hz=np.array(fs),
              dofs=np.array(["2:+Z", "3:+Z"]), quantity=np.array("displacement"))
-    code, out, err = _run(capsys, ["identify", str(tmp_path / "s1.npz"), "--setup", str(tmp_path / "s2.npz"),
-                                   "--band", "1", "60", "--max-order", "30", "--json"])
+    code, out, err = run_cli(capsys, ["identify", str(tmp_path / "s1.npz"), "--setup", str(tmp_path / "s2.npz"),
+                                      "--band", "1", "60", "--max-order", "30", "--json"])
     assert code == 0, err
     res = json.loads(out)
     assert res["dofs"] == ["3:+Z", "1:+Z", "2:+Z"] and res["setup_references"] == ["3:+Z"]
     shapes = np.array([[complex(z) for z in m["shape"]] for m in res["modes"]]).T
     assert np.all(np.diag(mac(phi[[2, 0, 1]], shapes)) > 0.999)
-    code, out, err = _run(capsys, ["identify", str(tmp_path / "s1.npz"), "--setup", str(DATA / "nothing.npz")])
+    code, out, err = run_cli(capsys, ["identify", str(tmp_path / "s1.npz"), "--setup", str(DATA / "nothing.npz")])
     assert code == 2 and err.count("\n") == 1

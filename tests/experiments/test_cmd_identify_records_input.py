@@ -5,20 +5,14 @@ import json
 
 import numpy as np
 import pytest
+from cli_runs import run_cli
 
 from systems import write_time_uff
 
-from experiments.cli import main
 from physics.errors import FileFormatError
 from physics.io.npz import read_frf_npz
 
 FS_HZ = 1000.0
-
-
-def _run(capsys, argv):
-    code = main(argv)
-    cap = capsys.readouterr()
-    return code, cap.out, cap.err
 
 
 def _npz(path, y):
@@ -30,7 +24,7 @@ def _npz(path, y):
 def test_an_frf_method_on_response_records_names_the_output_only_methods(capsys, tmp_path, method):
     y = np.random.default_rng(0).standard_normal((2, 4000))
     path = _npz(tmp_path / "r.npz", y)
-    code, out, err = _run(capsys, ["identify", str(path), "--method", method])
+    code, out, err = run_cli(capsys, ["identify", str(path), "--method", method])
     assert (code, out) == (2, "")
     assert err == (f"beam-damage identify: error: --method {method}: fits FRFs, but {path} holds response records "
                    "without a force channel; identify them output-only: --method ssi, era, fdd, efdd, fftpeak, or no "
@@ -40,7 +34,7 @@ def test_an_frf_method_on_response_records_names_the_output_only_methods(capsys,
 def test_transposed_signals_are_refused_naming_the_shape(capsys, tmp_path):
     y = np.random.default_rng(1).standard_normal((4000, 3))
     path = _npz(tmp_path / "t.npz", y)
-    code, out, err = _run(capsys, ["identify", str(path)])
+    code, out, err = run_cli(capsys, ["identify", str(path)])
     assert (code, out) == (2, "")
     assert err == (f"beam-damage identify: error: {path}: field 'signals' of shape (4000, 3) holds more channels than "
                    "samples; expected (n_channels, n_samples), one row per channel (transposed?)\n")
@@ -48,7 +42,7 @@ def test_transposed_signals_are_refused_naming_the_shape(capsys, tmp_path):
 
 def test_a_one_dimensional_signals_field_is_refused_with_its_shape(capsys, tmp_path):
     path = _npz(tmp_path / "v.npz", np.arange(100.0))
-    code, out, err = _run(capsys, ["identify", str(path)])
+    code, out, err = run_cli(capsys, ["identify", str(path)])
     assert (code, out) == (2, "")
     assert err == (f"beam-damage identify: error: {path}: field 'signals' must be a real (n_channels, n_samples) "
                    "array, got float64 of shape (100,)\n")
@@ -57,7 +51,7 @@ def test_a_one_dimensional_signals_field_is_refused_with_its_shape(capsys, tmp_p
 def test_a_multichannel_record_too_short_for_the_channel_floors_names_the_file(capsys, tmp_path):
     """The channel-weighting step's spectra (two frames of 16 samples) refuse 20 samples naming the file."""
     path = _npz(tmp_path / "s.npz", np.random.default_rng(2).standard_normal((3, 20)))
-    code, out, err = _run(capsys, ["identify", str(path), "--method", "ssi"])
+    code, out, err = run_cli(capsys, ["identify", str(path), "--method", "ssi"])
     assert (code, out) == (2, "")
     assert err == (f"beam-damage identify: error: {path}: 20 samples are fewer than two frames of 16 (a 62.5 Hz "
                    "resolution): too short a record for this resolution\n")
@@ -66,7 +60,7 @@ def test_a_multichannel_record_too_short_for_the_channel_floors_names_the_file(c
 def test_an_npz_of_neither_form_names_both_forms(capsys, tmp_path):
     path = tmp_path / "x.npz"
     np.savez(path, records=np.zeros((2, 3, 100)), fs=np.array(FS_HZ))
-    code, out, err = _run(capsys, ["identify", str(path)])
+    code, out, err = run_cli(capsys, ["identify", str(path)])
     assert (code, out) == (2, "")
     assert err == (f"beam-damage identify: error: {path}: missing array(s) frequency_hz, frf, response_dofs, "
                    "reference_dofs; expected frequency_hz, frf, response_dofs, reference_dofs, kind, units, "
@@ -98,17 +92,17 @@ def _hits(seed=4):
 @pytest.mark.parametrize("method", ["fdd", "efdd", "ssi"])
 def test_a_stationary_method_named_for_a_free_response_is_warned_of(capsys, tmp_path, method):
     path = _npz(tmp_path / "hits.npz", _hits())
-    code, out, err = _run(capsys, ["identify", str(path), "--method", method, "--band", "10", "100"])
+    code, out, err = run_cli(capsys, ["identify", str(path), "--method", method, "--band", "10", "100"])
     assert code == 0
     warned = [line for line in err.splitlines() if "assumes a stationary response" in line]
     assert len(warned) == 1 and warned[0].startswith(f"beam-damage identify: warning: {path}: a free response: 3 hits")
     assert warned[0].endswith(f"; {method} assumes a stationary response: its spectra or correlations averaged over "
                               "the whole record dilute the decays, so modes may be missed and damping overestimated; "
                               "--method era or fftpeak read free decays")
-    code, out, err = _run(capsys, ["identify", str(path), "--method", "era", "--band", "10", "100"])
+    code, out, err = run_cli(capsys, ["identify", str(path), "--method", "era", "--band", "10", "100"])
     assert code == 0 and "assumes a stationary response" not in err
     stationary = _npz(tmp_path / "ambient.npz", np.random.default_rng(5).standard_normal((2, 8000)))
-    code, out, err = _run(capsys, ["identify", str(stationary), "--method", method])
+    code, out, err = run_cli(capsys, ["identify", str(stationary), "--method", method])
     assert "assumes a stationary response" not in err
 
 
@@ -122,7 +116,7 @@ def test_a_csv_time_series_with_a_byte_order_mark_reads_as_without(capsys, tmp_p
     plain, bom = tmp_path / "plain.csv", tmp_path / "bom.csv"
     plain.write_text("\n".join(rows) + "\n", encoding="utf-8")
     bom.write_text("\n".join(rows) + "\n", encoding="utf-8-sig")
-    results = [_run(capsys, ["identify", str(p), "--method", "fftpeak", "--band", "10", "100", "--json"])
+    results = [run_cli(capsys, ["identify", str(p), "--method", "fftpeak", "--band", "10", "100", "--json"])
                for p in (plain, bom)]
     assert [r[0] for r in results] == [0, 0]
     freqs = [[m["frequency_hz"] for m in json.loads(r[1])["modes"]] for r in results]
@@ -145,7 +139,7 @@ def test_a_csv_time_series_with_a_byte_order_mark_reads_as_without(capsys, tmp_p
 def test_a_bad_csv_time_series_names_its_line(capsys, tmp_path, edit, message):
     path = tmp_path / "bad.csv"
     path.write_text("\n".join(edit(_csv_rows(600))) + "\n")
-    code, out, err = _run(capsys, ["identify", str(path)])
+    code, out, err = run_cli(capsys, ["identify", str(path)])
     assert (code, out, err) == (2, "", f"beam-damage identify: error: {path}: {message}\n")
 
 
@@ -155,7 +149,7 @@ def test_frfs_estimated_from_time_records_that_give_no_pole_name_the_file_and_th
     t = np.arange(4000) / FS_HZ
     path = write_time_uff(tmp_path / "run.uff", t, [(1, rng.standard_normal(t.size), 13, "N"),
                                                     (2, rng.standard_normal(t.size), 12, "m/s^2")])
-    code, out, err = _run(capsys, ["identify", str(path)])
+    code, out, err = run_cli(capsys, ["identify", str(path)])
     assert (code, out) == (2, "")
     assert err.startswith(f"beam-damage identify: error: {path}: no pole is stable over enough model orders")
     assert err.endswith("; FRFs estimated as H1 of random excitation, hann window, 8 averages, 50% overlap, 1.126 Hz "
@@ -169,11 +163,11 @@ def test_estimate_writes_the_format_its_out_extension_names(capsys, tmp_path):
     t = np.arange(4000) / FS_HZ
     force = rng.standard_normal(t.size)
     path = write_time_uff(tmp_path / "run.uff", t, [(1, force, 13, "N"), (2, 2.0 * force, 12, "m/s^2")])
-    code, out, err = _run(capsys, ["estimate", str(path), "--out", str(tmp_path / "frf.npz")])
+    code, out, err = run_cli(capsys, ["estimate", str(path), "--out", str(tmp_path / "frf.npz")])
     assert code == 0, err
     frf = read_frf_npz(tmp_path / "frf.npz")
     np.testing.assert_allclose(frf.frf, 2.0, rtol=1e-9)          # H1 of a response twice the force
-    code, out, err = _run(capsys, ["estimate", str(path), "--out", str(tmp_path / "frf.mat")])
+    code, out, err = run_cli(capsys, ["estimate", str(path), "--out", str(tmp_path / "frf.mat")])
     assert (code, out) == (2, "")
     assert err == (f"beam-damage estimate: error: --out {tmp_path / 'frf.mat'}: the extension names the format to "
                    "write, one of UFF (.uff/.unv/.uf/.58/.58b), NPZ (.npz) or CSV (.csv/.txt)\n")

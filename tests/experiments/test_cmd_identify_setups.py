@@ -4,22 +4,16 @@ import json
 
 import numpy as np
 import pytest
+from cli_runs import run_cli
 from oma_records import modal_record
 from scipy import linalg
 
-from experiments.cli import main
 from physics.modal import mac
 
 #: The closed-form 3-mass chain of tests/oma_records.chain_record.
 K = 1e4 * np.array([[2.0, -1, 0], [-1, 2, -1], [0, -1, 1]])
 W2, PHI = linalg.eigh(K)
 FN, ZETA = np.sqrt(W2) / (2 * np.pi), np.array([0.01, 0.015, 0.02])
-
-
-def _run(capsys, argv):
-    code = main(argv)
-    cap = capsys.readouterr()
-    return code, cap.out, cap.err
 
 
 def _npz(path, channels, seed, labelled=True, amplitudes=None):
@@ -41,7 +35,7 @@ def setups(tmp_path_factory):
 
 def test_a_mode_missing_from_a_setup_is_kept_partial_with_its_dofs_empty(capsys, setups):
     argv = ["identify", setups["s1"], "--setup", setups["s2"], "--band", "1", "60", "--max-order", "30"]
-    code, out, err = _run(capsys, [*argv, "--json", "--out", str(setups["tmp"] / "out")])
+    code, out, err = run_cli(capsys, [*argv, "--json", "--out", str(setups["tmp"] / "out")])
     assert code == 0, err
     res = json.loads(out)
     assert res["dofs"] == ["3:+Z", "1:+Z", "2:+Z"] and res["setup_references"] == ["3:+Z"]
@@ -62,14 +56,14 @@ def test_a_mode_missing_from_a_setup_is_kept_partial_with_its_dofs_empty(capsys,
     with pytest.raises(FileFormatError, match="field 'eigenvectors' row 3, column 3 is null"):
         read_modal_json(setups["tmp"] / "out" / "modal.json")
     # text: the merge line names the partial mode; warnings (none expected here) would be on stderr only
-    code, out, err = _run(capsys, argv)
+    code, out, err = run_cli(capsys, argv)
     assert code == 0 and "partial modes (found in some setups only, the others' DOFs empty): " in out
     assert out.count("  partial") == 1 and "warning:" not in out
 
 
 def test_unlabelled_setups_whose_positions_hold_other_sensors_are_refused(capsys, setups):
     argv = ["identify", setups["u1"], "--setup", setups["u2"], "--band", "1", "60", "--max-order", "30"]
-    code, out, err = _run(capsys, argv)
+    code, out, err = run_cli(capsys, argv)
     assert code == 2 and out == "" and err.count("\n") == 1
     assert "the reference DOFs 1:+Z, 2:+Z (assumed by position" in err
     # the MAC of each mode's reference part: setup 1's channels (sensors 1, 3) against setup 2's (3, 2)
@@ -88,11 +82,11 @@ def test_warnings_go_to_stderr_in_text_mode_and_into_the_json(capsys, setups, tm
     a = _npz(tmp_path / "a.npz", [2, 0], 5, labelled=False)
     b = _npz(tmp_path / "b.npz", [2, 0, 1], 6, labelled=False)
     argv = ["identify", a, "--setup", b, "--band", "1", "60", "--max-order", "30"]
-    code, out, err = _run(capsys, argv)
+    code, out, err = run_cli(capsys, argv)
     assert code == 0, err
     assert "warning:" not in out and "beam-damage identify: warning: " in err and "assumed by position" in err
     assert "(assumed by position: no DOF labels)" in out
-    code, out, err = _run(capsys, [*argv, "--json"])
+    code, out, err = run_cli(capsys, [*argv, "--json"])
     res = json.loads(out)
     assert any("assumed by position" in w for w in res["warnings"]) and "assumed by position" not in err
     assert res["setup_references"] == ["1:+Z", "2:+Z"] and res["references_by_position"]
