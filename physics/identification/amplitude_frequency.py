@@ -103,13 +103,11 @@ def backbone_with_neighbours(decay, sampling_frequency_hz, eigenvalue, max_neigh
 
     Parameters
     ----------
-    decay : array_like, shape (n_samples,)
-        One channel's decay, time 0 at its first sample, mean removed.
-    sampling_frequency_hz : float
+    decay, sampling_frequency_hz, background_order
+        As :func:`~physics.identification.backbone.fit_backbone` takes them.
     eigenvalue : complex
         Starting pole ``-sigma + i omega`` (rad/s), e.g. the linear fit's; the band is grown about it.
     max_neighbours : int
-    background_order : int
 
     Returns
     -------
@@ -181,14 +179,10 @@ def frequency_at_amplitude(decay, sampling_frequency_hz, eigenvalue, reference_a
 
     Parameters
     ----------
-    decay : array_like, shape (n_samples,)
-        One channel's decay, time 0 at its first sample, mean removed.
-    sampling_frequency_hz : float
-    eigenvalue : complex
-        Starting pole ``-sigma + i omega`` (rad/s).
+    decay, sampling_frequency_hz, eigenvalue, max_neighbours
+        As :func:`backbone_with_neighbours` takes them.
     reference_amplitude : float
-        ``a_ref >= 0``, the decay's units; 0 the zero-amplitude limit.
-    max_neighbours : int
+        As :func:`read_at_amplitude` takes it.
 
     Returns
     -------
