@@ -77,8 +77,8 @@ from physics.errors import BeamDamageError  # noqa: E402
 from physics.identification.fft_peak import fft_peaks, identify_fft_peaks  # noqa: E402
 from physics.io import atomic_write_text, finite_or_none  # noqa: E402
 
-__all__ = ["LOADERS", "MATCHED", "METHODS", "ONE_ESTIMATOR", "RealSeries", "fft_frequencies", "group_scores", "main",
-           "matched_markdown", "mode_windows_hz", "reference_fft_modes"]
+__all__ = ["DS11_LENGTH", "DS11_SKIP", "LOADERS", "MATCHED", "METHODS", "ONE_ESTIMATOR", "RealSeries",
+           "fft_frequencies", "group_scores", "main", "matched_markdown", "mode_windows_hz", "reference_fft_modes"]
 
 DATA = str(Path(__file__).resolve().parents[1] / "data" / "real")
 
