@@ -2,8 +2,8 @@
 ``experiments/data/real/README.md``, kept outside the repository's commits; a set that is absent is skipped).
 
 Run: ``python -m experiments.benches.bench_real_series [--data experiments/data/real] [--sets dropbear dropbear-2ch
-ds5-shock ds5-impedance bridge] [--quick] [--rate 0.01] [--statistics residual environment shift mode]
-[--out out/bench_real_series] [--docs]``
+ds5-shock ds5-impedance bridge ds11-b4.3 ds11-b4.4 ds11-b4.6] [--quick] [--rate 0.01] [--statistics residual
+environment shift mode] [--out out/bench_real_series] [--docs]``
 
 Each set becomes a monitoring series: a baseline period (the first ``n_baseline`` tests) and later tests, each a
 group (intact, a change of a known size, or a block of later shocks of unknown damage). Every test's record is
@@ -77,8 +77,8 @@ from physics.errors import BeamDamageError  # noqa: E402
 from physics.identification.fft_peak import fft_peaks, identify_fft_peaks  # noqa: E402
 from physics.io import atomic_write_text, finite_or_none  # noqa: E402
 
-__all__ = ["LOADERS", "MATCHED", "METHODS", "ONE_ESTIMATOR", "RealSeries", "fft_frequencies", "group_scores", "main",
-           "matched_markdown", "mode_windows_hz", "reference_fft_modes"]
+__all__ = ["DS11_LENGTH", "DS11_SKIP", "LOADERS", "MATCHED", "METHODS", "ONE_ESTIMATOR", "RealSeries",
+           "fft_frequencies", "group_scores", "main", "matched_markdown", "mode_windows_hz", "reference_fft_modes"]
 
 DATA = str(Path(__file__).resolve().parents[1] / "data" / "real")
 
@@ -200,6 +200,43 @@ def _bridge(path: Path, quick: bool, n_baseline: int = 8) -> RealSeries:
                       f"intact); 3 channels, {n / fs:.1f} s each")
 
 
+#: Dataset-11: samples (of 200 kHz) skipped after the board channel's largest deviation, and the samples kept.
+DS11_SKIP, DS11_LENGTH = 200, 14000
+
+
+def _ds11(path: Path, quick: bool, board: str = "4.6", n_baseline: int = 15, block: int = 15) -> RealSeries:
+    """Dataset-11, one board's impacts to failure: the board channel from 1 ms after its largest deviation, 70 ms
+    (a record without room for that, ``_00`` and board 4.6's ``_01`` with no hit before 75 ms, left out); baseline
+    the first 15 impacts kept, later blocks of 15 impacts (damage accumulates, unlabelled) and the last impact, at
+    which the resistor's circuit opened."""
+    z = np.load(path)
+    sel = np.flatnonzero(z["board"] == board)
+    y = z["records"][sel, 1]
+    peak = np.argmax(np.abs(y - y[:, :1]), axis=1)
+    keep = np.flatnonzero(peak + DS11_SKIP + DS11_LENGTH <= y.shape[1])
+    num, failed = z["impact_number"][sel], z["open_circuit"][sel]
+    last = num[keep][~failed[keep]].max()
+    if quick:
+        keep = np.r_[keep[:n_baseline], keep[n_baseline:-1][::2], keep[-1:]]
+
+    def group(j: int, k: int) -> str:
+        if j < n_baseline:
+            return "baseline"
+        if failed[k]:
+            return f"impact {num[k]} (circuit open)"
+        a = int(num[keep[n_baseline]]) + block * ((int(num[k]) - int(num[keep[n_baseline]])) // block)
+        return f"impacts {a}-{min(a + block - 1, last)}"
+
+    recs = [y[k][None, peak[k] + DS11_SKIP:peak[k] + DS11_SKIP + DS11_LENGTH] for k in keep]
+    fs = float(z["sampling_frequency_hz"])
+    return RealSeries(f"ds11-b{board}", recs, np.full(len(recs), fs), n_baseline,
+                      tuple(group(j, k) for j, k in enumerate(keep)), (400.0, 6000.0),
+                      tuple(f"board {board} impact {num[k]}" for k in keep), False,
+                      f"baseline: impacts {num[keep[0]]}-{num[keep[n_baseline - 1]]}; later: impacts "
+                      f"{num[keep[n_baseline]]}-{last} in blocks (damage accumulates, unlabelled) and impact "
+                      f"{num[keep[-1]]}, the circuit open; board channel from 1 ms after the hit, 70 ms")
+
+
 def _block(k: int, start: int, size: int, total: int) -> str:
     a = start + size * ((k - start) // size)
     return f"shocks {a + 1}-{min(a + size, total)}"
@@ -210,7 +247,9 @@ LOADERS = {"dropbear": ("dropbear_roller_steps.npz", _dropbear),
            "dropbear-2ch": ("dropbear_roller_steps.npz", partial(_dropbear, channels=2)),
            "ds5-shock": ("ds5_pcb_repeated_shock.npz", _ds5_shock),
            "ds5-impedance": ("ds5_pcb_shock_impedance.npz", _ds5_impedance),
-           "bridge": ("usc_bridge_a_impacts.npz", _bridge)}
+           "bridge": ("usc_bridge_a_impacts.npz", _bridge),
+           **{f"ds11-b{b}": ("ds11_pcb_impacts_to_failure.npz", partial(_ds11, board=b))
+              for b in ("4.3", "4.4", "4.6")}}
 #: Sets held but not monitored, and why.
 NOT_SERIES = {"pyfrf_hits.npz": "5 hammer hits: fewer than the 7 tests a baseline of one mode needs, none left "
                                 "to judge",

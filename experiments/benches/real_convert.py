@@ -25,8 +25,8 @@ from experiments.benches.harness import parser
 from physics.errors import BeamDamageError, ConfigError, FileFormatError
 from physics.io import atomic_write_bytes
 
-__all__ = ["BRIDGE_TESTS", "DROPBEAR_STATE_PINLOC_V", "RealSet", "SETS", "convert_set", "dropbear_dwells", "main",
-           "read_lvm", "write_npz"]
+__all__ = ["BRIDGE_TESTS", "DROPBEAR_STATE_PINLOC_V", "DS11_BOARDS", "DS11_OPEN_CIRCUIT_OHM", "RealSet", "SETS",
+           "convert_set", "dropbear_dwells", "main", "read_lvm", "write_npz"]
 
 OUT = Path(__file__).resolve().parents[1] / "data" / "real"
 
@@ -279,6 +279,40 @@ def _ds5_shock(files) -> dict:
             "trial_number": np.asarray(trials, np.int64), "units": np.array("g")}
 
 
+#: Dataset-11: (board, number of files ``_00`` ... ) of each board converted (the repository's boards 4.3, 4.4, 4.6).
+DS11_BOARDS = (("4.3", 50), ("4.4", 58), ("4.6", 78))
+DS11_DT_S = 5e-6
+#: A resistance above this (ohm) is an open circuit (LabVIEW writes 9.9e37): the resistor's joint has failed.
+DS11_OPEN_CIRCUIT_OHM = 1e3
+
+
+def _ds11(files) -> dict:
+    """Dataset-11 impacts to failure: each ``.lvm`` tab-separated, no header: time (s, 5 us step), two channels, and
+    on the first line only a fourth value, the resistance (ohm) of the monitored resistor."""
+    recs, res = [], []
+    for f in files:
+        text = _text(f)
+        first, _, rest = text.partition("\n")
+        try:
+            head = [float(v) for v in first.split("\t")]
+        except ValueError:
+            head = []
+        if len(head) != 4:
+            raise FileFormatError(f"{f}: first line {first[:60]!r}; expected 4 tab-separated numbers: time, two "
+                                  "channels, resistance")
+        x = np.r_[np.array(head[:3])[None], _columns(f, rest, 0, 3)]
+        if not np.allclose(np.diff(x[:, 0]), DS11_DT_S, rtol=0, atol=1e-6):
+            raise FileFormatError(f"{f}: time column not on a {DS11_DT_S:g} s step")
+        recs.append(x[:, 1:].T)
+        res.append(head[3])
+    res = np.asarray(res, float)
+    return {"records": _same_length(files, recs, "records"), "sampling_frequency_hz": np.float64(1 / DS11_DT_S),
+            "dof_labels": np.array(["channel_1", "board_accel"]),
+            "board": np.array([Path(f).parent.name.removeprefix("Board ") for f in files]),
+            "impact_number": np.array([int(re.search(r"_(\d+)\.lvm$", str(f)).group(1)) for f in files], np.int64),
+            "resistance_ohm": res, "open_circuit": res > DS11_OPEN_CIRCUIT_OHM}
+
+
 _D8 = "data/Slow Postional Displacement/trial data/10steps"
 _DS1 = "data/dataset-1/data-1/PCB repeated shock trials"
 _DS5_TRIALS = tuple(n for n in range(53) if n not in (44, 51))
@@ -307,6 +341,11 @@ SETS = {s.name: s for s in (
     RealSet("ds5_pcb_shock_impedance", "High-Rate-SHM-Working-Group/Dataset-5-Extended-Impact-Testing",
             "1bbfcf17dfd78a09790aa092a5dc07e6a6bae628",
             tuple(f"data/dataset-2/data-1/Test_{i:03d}.lvm" for i in range(1, 33)), _CC_BY_SA, _ds5_impedance),
+    RealSet("ds11_pcb_impacts_to_failure",
+            "High-Rate-SHM-Working-Group/Dataset-11-rectangular-electronic-SMD-assembly-under-repeated-5-kg-impacts",
+            "364cb81e7ea5c570a6419182c70c9e2131bd4303",
+            tuple(f"Data/Board {b}/HM4_b0{b[-1]}_100mO_#8_12in_16thflt_wR2841_{i:02d}.lvm" for b, n in DS11_BOARDS
+                  for i in range(n)), "CC BY-SA 4.0 (README; LICENSE: CC0 1.0)", _ds11),
 )}
 
 

@@ -1,9 +1,10 @@
 """The real-series bench's pure functions on a synthetic series: the FFT peaks in each mode's window, the plain
-tests' quantile thresholds, the per-group scores."""
+tests' quantile thresholds, the per-group scores; the Dataset-11 series cut from a synthetic converted file."""
 
 import numpy as np
 
-from experiments.benches.bench_real_series import fft_frequencies, group_scores, mode_windows_hz, reference_fft_modes
+from experiments.benches.bench_real_series import (DS11_LENGTH, DS11_SKIP, LOADERS, fft_frequencies, group_scores,
+                                                   mode_windows_hz, reference_fft_modes)
 from experiments.benches.plain_tests import held_out_plain_alarms, matched_alarms, plain_alarms, plain_p_values
 
 
@@ -109,3 +110,32 @@ def test_the_matched_threshold_flags_as_many_healthy_tests_as_allowed():
     np.testing.assert_array_equal(matched_alarms(p, healthy, 0), [0, 0, 0, 0, 1, 0, 0, 0])
     np.testing.assert_array_equal(matched_alarms(p, healthy, 1), [0, 1, 0, 0, 1, 1, 1, 0])
     np.testing.assert_array_equal(matched_alarms(p, healthy, 4), [1, 1, 1, 0, 1, 1, 1, 0])    # every finite p
+
+
+def test_the_dataset_11_series_cuts_each_impact_after_its_hit_and_leaves_out_a_record_without_room(tmp_path):
+    """One board of 9 files (``_00`` its hit at 0.09 s, too late for 70 ms after it) and another board's file; the
+    board channel's hit (largest deviation from the first sample) at a known sample of each."""
+    n = 20000
+    hit = {0: 18000, **{k: 300 + 40 * k for k in range(1, 9)}}
+    recs = np.zeros((10, 2, n))
+    for k, a in hit.items():
+        recs[k, 1] = 5.0 + np.arange(n) * 1e-6                 # an offset: the deviation is from the first sample
+        recs[k, 1, a] = -900.0 - k
+    recs[9, 1, 100] = 1e4                                       # board 4.4's: not read
+    z = {"records": recs, "sampling_frequency_hz": np.float64(2e5), "board": np.array(["4.6"] * 9 + ["4.4"]),
+         "impact_number": np.r_[np.arange(9), 0], "open_circuit": np.arange(10) == 8}
+    path = tmp_path / "ds11.npz"
+    np.savez(path, **z)
+    file, load = LOADERS["ds11-b4.6"]
+    assert file == "ds11_pcb_impacts_to_failure.npz"
+    s = load.func(path, False, board="4.6", n_baseline=3, block=2)
+    q = load.func(path, True, board="4.6", n_baseline=3, block=2)
+    assert s.n_baseline == 3 and s.known is False and s.band_hz == (400.0, 6000.0)
+    assert s.labels == tuple(f"board 4.6 impact {k}" for k in range(1, 9))
+    assert s.groups == ("baseline",) * 3 + ("impacts 4-5", "impacts 4-5", "impacts 6-7", "impacts 6-7",
+                                            "impact 8 (circuit open)")
+    for k, y in zip(range(1, 9), s.records):
+        a = hit[k] + DS11_SKIP
+        np.testing.assert_array_equal(y, recs[k, 1:2, a:a + DS11_LENGTH])
+    np.testing.assert_array_equal(s.sampling_frequency_hz, np.full(8, 2e5))
+    assert q.labels == tuple(f"board 4.6 impact {k}" for k in (1, 2, 3, 4, 6, 8))   # later tests halved, the last kept

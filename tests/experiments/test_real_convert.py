@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from experiments.benches.real_convert import (BRIDGE_TESTS, DROPBEAR_STATE_PINLOC_V, SETS, convert_set,
-                                              dropbear_dwells, main)
+from experiments.benches.real_convert import (BRIDGE_TESTS, DROPBEAR_STATE_PINLOC_V, DS11_BOARDS, SETS,
+                                              convert_set, dropbear_dwells, main)
 from physics.errors import FileFormatError
 
 README = Path(__file__).resolve().parents[2] / "experiments" / "data" / "real" / "README.md"
@@ -126,7 +126,27 @@ def _synthetic(name: str, src: Path) -> dict:
                 "base_records": np.stack([y[:8] for y in values["base"]]), "trial_number": trials,
                 "pcb_original_length": lengths["pcb"], "base_original_length": lengths["base"],
                 "pcb_sampling_frequency_hz": np.full(half, 5e4), "base_sampling_frequency_hz": np.full(half, 4e4)}
+    if name == "ds11_pcb_impacts_to_failure":
+        recs = np.round(rng.standard_normal((len(files), 6, 2)) * 1e3, 6)
+        res = np.round(rng.uniform(0.27, 0.30, len(files)), 6)
+        last = np.cumsum([n for _, n in DS11_BOARDS]) - 1
+        res[last] = 9.9e37
+        for f, x, r in zip(files, recs, res):
+            _ds11_file(f, x, r)
+        return {"records": recs.transpose(0, 2, 1), "resistance_ohm": res,
+                "open_circuit": np.isin(np.arange(186), last),
+                "board": np.repeat(["4.3", "4.4", "4.6"], [50, 58, 78]), "sampling_frequency_hz": 2e5,
+                "impact_number": np.r_[np.arange(50), np.arange(58), np.arange(78)]}
     raise AssertionError(name)
+
+
+def _ds11_file(path: Path, x: np.ndarray, resistance: float, dt: float = 5e-6) -> None:
+    """A Dataset-11 impact file: tab-separated time, two channels; the resistance on the first line, the later
+    lines ending in a tab (as the repository's)."""
+    t = np.arange(x.shape[0]) * dt
+    lines = [f"{t[0]:.6f}\t{x[0, 0]:.6f}\t{x[0, 1]:.6f}\t{resistance:.6E}"]
+    lines += [f"{ti:.6E}\t{a:.6f}\t{b:.6f}\t" for ti, (a, b) in zip(t[1:], x[1:])]
+    path.write_text("\n".join(lines) + "\n")
 
 
 @pytest.mark.parametrize("name", list(SETS))
@@ -186,4 +206,18 @@ def test_a_malformed_file_is_named(tmp_path):
     bad.write_text("\n".join(lines) + "\n")
     with pytest.raises(FileFormatError, match=re.escape(f"{bad}: column(s) Acceleration_2 hold text")):
         convert_set("usc_bridge_a_impacts", tmp_path, tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_dataset_11_file_without_its_resistance_or_off_the_time_step_is_named(tmp_path):
+    _synthetic("ds11_pcb_impacts_to_failure", tmp_path)
+    bad = tmp_path / SETS["ds11_pcb_impacts_to_failure"].paths[60]
+    good = bad.read_text()
+    bad.write_text(good.split("\n", 1)[0].rsplit("\t", 1)[0] + "\n" + good.split("\n", 1)[1])
+    with pytest.raises(FileFormatError, match=re.escape(f"{bad}: first line '0.000000\\t") + r".*expected 4 "
+                                              r"tab-separated numbers: time, two channels, resistance"):
+        convert_set("ds11_pcb_impacts_to_failure", tmp_path, tmp_path / "out")
+    _ds11_file(bad, np.zeros((6, 2)), 0.28, dt=1e-5)
+    with pytest.raises(FileFormatError, match=re.escape(f"{bad}: time column not on a 5e-06 s step")):
+        convert_set("ds11_pcb_impacts_to_failure", tmp_path, tmp_path / "out")
     assert not (tmp_path / "out").exists()
