@@ -193,8 +193,15 @@ def judged(res, false_alarm_rate: float, model=None, beam_x_m=None) -> dict:
             "n_not_judged": sum(r["status"] == "not judged" for r in rows)}
 
 
-CSV_COLUMNS = ("file", "time", "baseline", "status", "identified", "alarm", "extrapolated", "novelty", "threshold",
-               "error")
+CSV_COLUMNS = ("file", "time", "baseline", "status", "identified", "alarm", "alarmed_by", "extrapolated", "novelty",
+               "threshold", "shift_pct", "error")
+
+
+def _csv_cell(value):
+    """A CSV cell: empty for None, ``+``-joined for a list (``alarmed_by``: ``residual+shift``)."""
+    if value is None:
+        return ""
+    return "+".join(map(str, value)) if isinstance(value, list) else value
 
 
 def _csv(out: dict, m: int) -> str:
@@ -205,7 +212,7 @@ def _csv(out: dict, m: int) -> str:
                 *(f"change{r + 1}_pct" for r in range(m))])
     for r in out["tests"]:
         c = r["conditions"] or {}
-        w.writerow([*("" if r[k] is None else r[k] for k in CSV_COLUMNS), *(c.get(k) for k in conds),
+        w.writerow([*(_csv_cell(r.get(k)) for k in CSV_COLUMNS), *(c.get(k) for k in conds),
                     *r["frequencies_hz"], *r["mode_z_scores"], *r["change_pct"]])
     return buf.getvalue()
 

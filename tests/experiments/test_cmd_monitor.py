@@ -75,6 +75,9 @@ def test_a_modal_series_writes_its_chart_table_and_report_and_reruns_from_the_ca
     rows = list(csv.DictReader(open(out / "monitor.csv")))
     assert len(rows) == 30 and rows[24]["alarm"] == "True" and float(rows[0]["temperature_c"]) == pytest.approx(
         res["tests"][0]["conditions"]["temperature_c"])
+    assert [row["alarmed_by"] for row in rows] == ["+".join(r["alarmed_by"]) for r in res["tests"]]
+    assert rows[24]["alarmed_by"] != "" and rows[17]["alarmed_by"] == ""
+    assert float(rows[24]["shift_pct"]) == pytest.approx(res["tests"][24]["shift_pct"])
     assert len(list((out / "cache").glob("*.json"))) == 30
     import learn.monitor.identification
 
