@@ -14,7 +14,9 @@ from experiments.cli.args import check_out_dir
 from learn.monitor import (DEFAULT_LATENT, NORMAL_MODELS, SeriesInput, alarm_verdicts, identification_settings,
                            monitor_series, read_conditions)
 from learn.monitor.alarms import EXTRAPOLATED, EXTRAPOLATED_ALARMS, MODE_LOST, MODE_MOVED, STATUSES
+from learn.monitor.baseline_trend import series_baseline_trend
 from learn.monitor.coverage import baseline_scatter, series_coverage
+from learn.monitor.statistics import covers_seasons
 from learn.monitor.estimator_choice import FREQUENCY_ESTIMATORS
 from learn.monitor.events import group_events, identification_change, lost_modes_change
 from learn.monitor.verdicts import event_verdicts
@@ -90,8 +92,9 @@ def add_parser(sub):
                                                 "out/monitor)")
     p.add_argument("--json", action="store_true",
                    help='print {"tests": [...], "events": [...], "counts", "identification_change", '
-                        '"lost_modes_change", "baseline_scatter", "coverage", "baseline_tests", "false_alarm_rate", '
-                        '"normal_variation", "detector", "charts", "first_alarm", "version", "config"}')
+                        '"lost_modes_change", "baseline_scatter", "baseline_trend", "coverage", "baseline_tests", '
+                        '"false_alarm_rate", "normal_variation", "detector", "charts", "first_alarm", "version", '
+                        '"config"}')
     p.set_defaults(func=run, flags={"n_baseline": "--baseline-tests", "workers": "--workers"})
 
 
@@ -174,6 +177,11 @@ def judged(res, false_alarm_rate: float, model=None, beam_x_m=None) -> dict:
         warnings.warn(ident["text"])
     if scatter.warning:
         warnings.warn(scatter.warning)
+    trend = series_baseline_trend(rows, res.normal_variation["model"],
+                                  covers_seasons(res.series.times, res.series.time_values,
+                                                 sum(r["baseline"] for r in rows)))
+    if trend.warning:
+        warnings.warn(trend.warning)
     later = [r for r in rows if not r["baseline"]]
     counts = {s: sum(r["status"] == s for r in later) for s in STATUSES}
     counts.update(extrapolated=sum(r["extrapolated"] for r in later), events=len(events),
@@ -181,6 +189,7 @@ def judged(res, false_alarm_rate: float, model=None, beam_x_m=None) -> dict:
     first = res.first_alarm
     return {"tests": rows, "events": [e.to_dict() for e in events], "counts": counts,
             "identification_change": ident, "lost_modes_change": lost, "baseline_scatter": scatter.to_dict(),
+            "baseline_trend": trend.to_dict(),
             "coverage": None if cov is None else {"coordinates": list(cov.names), "low": cov.low.tolist(),
                                                   "high": cov.high.tolist(),
                                                   "mahalanobis_max": None if not np.isfinite(cov.mahalanobis_max)
@@ -253,6 +262,7 @@ def _write(out_dir, out: dict, res) -> dict:
         out["identification_change"]["text"] + ".",
         out["lost_modes_change"]["text"] + ".",
         out["baseline_scatter"]["warning"] or _scatter_text(out["baseline_scatter"]),
+        *((out["baseline_trend"]["warning"],) if out["baseline_trend"]["warning"] else ()),
         *_estimator_texts(nv)))
     modes = Table("Reference modes of the baseline period and their normal variation",
                   ("mode", "frequency (Hz)", "std (%)", "tracking tolerance (%)", "presence",
