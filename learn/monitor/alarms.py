@@ -11,6 +11,7 @@ import numpy as np
 
 from learn.monitor.baseline_state import held_out_cached
 from learn.monitor.identification import IdentificationSettings, write_cache
+from learn.monitor.pole_confirmation import confirm_far_poles
 from learn.monitor.normal_models import DEFAULT_LATENT, NORMAL_MODELS
 from learn.monitor.series import SeriesInput, check_series
 from learn.monitor.alarm_threshold import Threshold, minimum_baseline
@@ -131,6 +132,7 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
                               f"modes{f' and {q} conditions' if q else ''}; at least {need} are needed "
                               f"(modes + conditions + 6)")
     tests = refit_missing(tests, series.files, ref, settings, cache_dir, pending)
+    tests = confirm_far_poles(tests, series.files, ref, settings, cache_dir, pending)
     write_cache(pending)                                    # the series is accepted: identifications kept
     F, Z, MAC, cols = track_modes(tests, ref)
     how = identified_by(tests, cols)

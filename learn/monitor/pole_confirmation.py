@@ -1,0 +1,80 @@
+"""A tracked pole far from its reference mode confirmed by the narrow-band re-identification around the mode.
+
+The assignment of :func:`learn.monitor.tracking.track_modes` gives a reference mode the pole of the identification
+over the series' band nearest it within its band. Where the band is wider than the baseline's scatter of the mode
+(its floor of 15 %, :data:`~learn.monitor.tracking.MIN_TOLERANCE`, kept so that a mode a change moves by 5 % stays
+that mode), a spurious pole can take the mode's place: a mode the identification split into two poles either side
+of it, one of them in the band. Such a pole, beyond ``TOLERANCE_SIGMAS`` robust standard deviations of the mode's
+baseline scatter, is checked by identifying the record again over the mode's band alone (the re-identification
+of :func:`learn.monitor.tracking.refit_missing`, the same band and cache entry): a pole of that identification
+nearer the tracked pole than the reference frequency confirms it (a moved mode stays moved); where none does, the
+pole of that identification nearest the reference within the band is added to the test and takes the mode's place
+in the one-to-one assignment (the tracked pole stays in the test, unassigned).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from learn.monitor.identification import IdentificationSettings, cached_identification, with_narrow_band_poles
+from learn.monitor.tracking import (MAC_MIN, TOLERANCE_SIGMAS, ReferenceModes, narrow_bands_hz, shapes_at,
+                                    track_modes)
+from physics.modal import mac
+
+__all__ = ["far_from_reference", "confirm_far_poles"]
+
+
+def far_from_reference(F, ref: ReferenceModes) -> np.ndarray:
+    """Shape (n, m) bool: the tracked frequencies ``F`` (Hz, (n, m), NaN where missing) beyond
+    ``TOLERANCE_SIGMAS`` robust standard deviations of their reference mode's baseline scatter in ``ln f`` (the
+    width the band has where that scatter sets it)."""
+    with np.errstate(invalid="ignore"):
+        d = np.abs(np.log(np.asarray(F, float) / ref.frequencies_hz[None]))
+    return np.nan_to_num(d, nan=0.0) > TOLERANCE_SIGMAS * ref.log_std[None]
+
+
+def confirm_far_poles(tests: list, files: list, ref: ReferenceModes, settings: IdentificationSettings,
+                      cache_dir=None, pending: list | None = None) -> list:
+    """``tests`` with each tracked pole far from its reference mode (:func:`far_from_reference`) checked by the
+    narrow-band re-identification over the mode's band (:func:`learn.monitor.tracking.narrow_bands_hz`, within the
+    record's lines; cached as :func:`learn.monitor.identification.cached_identification`, ``pending`` as there).
+
+    A pole of that identification nearer the tracked pole than the reference frequency (in ``ln f``; with shapes
+    of 2 or more sensors, MAC >= :data:`MAC_MIN` with the reference shape) confirms it; where none does, the one
+    nearest the reference within the mode's tolerance (and MAC), when nearer it than the tracked pole, is added to
+    the test
+    (:func:`~learn.monitor.identification.with_narrow_band_poles`), so that the assignment gives it the mode.
+    A tracked pole that a narrow-band identification found already, a test of modal data, and a re-identification
+    that fails or finds nothing leave the test as it is.
+    """
+    F, _, _, cols = track_modes(tests, ref)
+    far = far_from_reference(F, ref)
+    bands = narrow_bands_hz(ref)
+    ln_ref = np.log(ref.frequencies_hz)
+    out = list(tests)
+    for i in np.flatnonzero(far.any(axis=1)):
+        t = tests[i]
+        if t is None or t.kind == "modal":
+            continue
+        add = []
+        for j in np.flatnonzero(far[i]):
+            if t.narrow_band_hz and t.narrow_band_hz[cols[i, j]] is not None:
+                continue
+            lo, hi = bands[j]
+            if t.band_hz is not None:
+                lo, hi = max(lo, t.band_hz[0]), min(hi, t.band_hz[1])
+            found = cached_identification(files[i], settings, cache_dir, pending, (lo, hi))[0] if hi > lo else None
+            if found is None or found.frequencies_hz.size == 0:
+                continue
+            lg = np.log(found.frequencies_hz)
+            S = shapes_at(found, ref.dofs) if ref.shapes is not None else None
+            shape_ok = np.ones(lg.size, bool) if S is None else mac(S, ref.shapes[:, [j]])[:, 0] >= MAC_MIN
+            if np.any(shape_ok & (np.abs(lg - np.log(F[i, j])) < np.abs(lg - ln_ref[j]))):
+                continue                                    # the narrow band sees the tracked pole: kept
+            d = np.abs(lg - ln_ref[j])
+            ok = shape_ok & (d <= ref.tolerance[j]) & (d < abs(np.log(F[i, j]) - ln_ref[j]))
+            if ok.any():
+                add.append((found, int(np.argmin(np.where(ok, d, np.inf)))))
+        for found, k in add:
+            out[i] = with_narrow_band_poles(out[i], found, [k])
+    return out
