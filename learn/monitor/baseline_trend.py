@@ -16,7 +16,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import spearmanr
 
 __all__ = ["MIN_SIZE_SD", "MIN_TESTS", "TREND_RATE", "Trend", "baseline_trend", "series_baseline_trend"]
 
@@ -71,6 +70,8 @@ def baseline_trend(log_values, about: str = "frequencies", rate: float = TREND_R
     rate : float
         Family-wise level over the modes.
     """
+    from scipy.stats import spearmanr  # scipy.stats: heavy, only where a baseline is tested
+
     X = np.asarray(log_values, float)
     X = X.reshape(X.shape[0], -1)
     m = X.shape[1]
