@@ -9,6 +9,7 @@ import learn.monitor.workers as workers
 from learn.monitor import IdentificationSettings, IdentifiedModes, SeriesInput, monitor_series
 from learn.monitor.estimator_choice import FFT_PEAK
 from learn.monitor.fft_beyond import beyond_windows_hz
+from learn.monitor.identification import cached_fft_peaks
 from learn.monitor.tracking import MODE_MOVED, narrow_bands_hz, reach_bands_hz
 
 FS_HZ, N_SAMPLES, ZETA = 1000.0, 4000, 0.01
@@ -122,3 +123,19 @@ def test_without_the_fft_choice_the_same_series_reads_the_identifications_poles_
                          chart="none", frequency_estimator="identification")
     assert all(r["beyond_band"] == [] for r in res.rows[:N_BASELINE + 7])
     assert res.beyond.by_fft is not None and not res.beyond.by_fft.any()
+
+
+def test_the_peak_lines_are_cached_apart_from_the_vertices(tmp_path):
+    """``cached_fft_peaks(..., line=True)``: the local maximum's line of the padded grid (a multiple of its spacing,
+    within one line of the peak of the record's closed-form transform), kept in its own cache entry beside the
+    vertices'."""
+    files, _, f1 = _series(tmp_path)
+    bands = np.array([[95.0, 105.0], [145.0, 155.0]])
+    vertex = cached_fft_peaks(files[0], bands, tmp_path / "cache")
+    line = cached_fft_peaks(files[0], bands, tmp_path / "cache", line=True)
+    assert len(list((tmp_path / "cache").glob("*.json"))) == 2
+    np.testing.assert_allclose(line / GRID_HZ, np.round(line / GRID_HZ), atol=1e-9)
+    peaks = [_dtft_peak_hz([(f1[0], 1.0), (150.0, 10.0)], lo, hi) for lo, hi in bands]
+    np.testing.assert_allclose(line, peaks, atol=GRID_HZ)                # the grid's highest line at the peak
+    assert np.all(line != vertex) and np.all(np.abs(vertex - line) < 0.1)
+    np.testing.assert_array_equal(cached_fft_peaks(files[0], bands, tmp_path / "cache", line=True), line)
