@@ -20,6 +20,7 @@ from learn.monitor.statistics import (DEFAULT_STATISTICS, STATISTICS, Detection,
                                      environmental, residual_threshold, season_warning)
 from learn.monitor.coverage import series_coverage
 from learn.monitor.estimator_choice import FREQUENCY_ESTIMATORS, FrequencyChoice, choose_frequencies
+from learn.monitor.fft_beyond import fft_peaks_beyond
 from learn.monitor.tracking import (MIN_PRESENCE, MODE_LOST, MODE_MOVED, BeyondBands, ReferenceModes, beyond_bands,
                                    identified_by, readings_text, reference_modes, refit_missing, track_modes)
 from physics.errors import BeamDamageError, ConfigError
@@ -103,12 +104,13 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     minimum; a baseline test of another kind, band or beam).
 
     A reference mode missing from its band in a test with poles is looked for beyond it
-    (:func:`learn.monitor.tracking.beyond_bands`): moved (a pole no other mode claims within its reach) or lost,
-    each weighed by the baseline period's chance of that reading; a flagged one gives a test the detector did not
-    alarm the status :data:`MODE_MOVED` or :data:`MODE_LOST`, counted beside the alarms; an alarm carries it in its
-    row's ``beyond_band_text``. A test whose identification found poles, none in any reference mode's band, is
-    always flagged so (:attr:`learn.monitor.tracking.BeyondBands.unplaced`): ``not identified`` is only a test
-    without poles.
+    (:func:`learn.monitor.tracking.beyond_bands`): moved (a pole no other mode claims within its reach; for a mode
+    whose frequency is the FFT peak and which has none in its band, the FFT peak beyond it within its reach:
+    :mod:`learn.monitor.fft_beyond`) or lost, each weighed by the baseline period's chance of that reading; a
+    flagged one gives a test the detector did not alarm the status :data:`MODE_MOVED` or :data:`MODE_LOST`, counted
+    beside the alarms; an alarm carries it in its row's ``beyond_band_text``. A test whose identification found
+    poles, none in any reference mode's band, is always flagged so
+    (:attr:`learn.monitor.tracking.BeyondBands.unplaced`): ``not identified`` is only a test without poles.
     """
     n = len(series.files)
     C = series.conditions
@@ -136,12 +138,13 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     write_cache(pending)                                    # the series is accepted: identifications kept
     F, Z, MAC, cols = track_modes(tests, ref)
     how = identified_by(tests, cols)
-    choice = None
+    choice = fft = None
     if frequency_estimator == "choose":
         choice = choose_frequencies(tests, series.files, ref, F, cols,
                                     [i for i in range(n_baseline) if i not in foreign], cache_dir, workers)
         if choice is not None:
             F, how = choice.frequencies_hz, choice.identified_by(how)
+            fft = fft_peaks_beyond(tests, series.files, ref, choice.chosen, choice.fft_hz, cache_dir, workers)
     X = np.log(F)
     ok = np.array([t is not None for t in tests]) & np.isfinite(X).any(axis=1)
     if q:
@@ -183,7 +186,7 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
               "missing_entries": "imputed by their conditional mean given the test's other features under the "
                                  "baseline's Gaussian (regression: about the conditions' prediction)"}
     series_base = [i for i in range(n_baseline) if i not in foreign]
-    beyond = beyond_bands(tests, ref, cols, series_base, false_alarm_rate)
+    beyond = beyond_bands(tests, ref, cols, series_base, false_alarm_rate, fft)
     rows = []
     for i in range(n):
         readings = beyond.readings(i, ref)

@@ -256,31 +256,35 @@ def cached_identification(path, settings: IdentificationSettings, cache_dir=None
     return modes, error, False
 
 
-def cached_fft_peaks(path, bands_hz, cache_dir=None) -> np.ndarray:
+def cached_fft_peaks(path, bands_hz, cache_dir=None, line: bool = False) -> np.ndarray:
     """Shape (m,): a response record's zero-padded FFT peak (Hz) in each of ``bands_hz`` ((m, 2), Hz), the highest
     local maximum of its FFT power there (:func:`physics.identification.fft_peak.fft_peaks`, its window chosen by
-    the record); NaN where none lies there, or for a record that is refused.
+    the record): its fitted vertex, or with ``line`` the local maximum's line of the padded grid
+    (:attr:`~physics.identification.fft_peak.FFTPeaks.line_hz`, where the peak lies); NaN where none lies there, or
+    for a record that is refused.
 
-    With ``cache_dir``, read from ``cache_dir/<key>.json`` (:func:`file_key` of the file and the bands) or, once
-    computed, written there atomically.
+    With ``cache_dir``, read from ``cache_dir/<key>.json`` (:func:`file_key` of the file, the bands and ``line``) or,
+    once computed, written there atomically.
     """
     bands = np.asarray(bands_hz, float).reshape(-1, 2)
+    what = "fftpeak_line_bands_hz" if line else "fftpeak_bands_hz"
     entry = None
     try:
         if cache_dir:
-            entry = Path(cache_dir) / f"{file_key(path, None, {'fftpeak_bands_hz': bands.tolist()})}.json"
+            entry = Path(cache_dir) / f"{file_key(path, None, {what: bands.tolist()})}.json"
         if (d := _entry(entry)) is not None:
             return np.array([np.nan if v is None else v for v in d["fft_hz"]], float)
     except (OSError, ValueError, KeyError, TypeError):
         pass                                                # no file (refused below), or a damaged entry
     try:
         rec = read_response_records(path)
-        out = fft_peaks(rec.signals, rec.sampling_frequency_hz, bands.mean(axis=1), 0.5 * (bands[:, 1] - bands[:, 0]),
-                        where=str(path)).frequency_hz
+        peaks = fft_peaks(rec.signals, rec.sampling_frequency_hz, bands.mean(axis=1),
+                          0.5 * (bands[:, 1] - bands[:, 0]), where=str(path))
+        out = peaks.line_hz if line else peaks.frequency_hz
     except (BeamDamageError, OSError):
         out = np.full(bands.shape[0], np.nan)
     if entry is not None:
-        write_cache([(entry, json.dumps({"format": CACHE_FORMAT, "file": str(path), "fftpeak_bands_hz": bands.tolist(),
+        write_cache([(entry, json.dumps({"format": CACHE_FORMAT, "file": str(path), what: bands.tolist(),
                                          "fft_hz": [finite_or_none(v) for v in out]}))])
     return out
 

@@ -313,6 +313,10 @@ class BeyondBands:
                                    ``n`` tests (a baseline test's: of the other baseline tests) lacking every mode in
                                    its band (tests not identified included); 0 when every baseline test held a mode
     unplaced_flagged : ndarray bool (n,)   ``unplaced_chance <= false_alarm_rate``: every reading of the test flagged
+    by_fft : ndarray bool (n, m)   a moved mode read by its FFT peak beyond its band (an FFT-peak-read mode,
+                                   :mod:`learn.monitor.fft_beyond`; ``moved_col`` -1), its ``u`` and ``w`` the FFT
+                                   peak's: baseline tests without an FFT peak in the band, with one beyond it within
+                                   the reach
     """
 
     moved_hz: np.ndarray
@@ -327,6 +331,7 @@ class BeyondBands:
     unplaced: np.ndarray | None = None
     unplaced_chance: np.ndarray | None = None
     unplaced_flagged: np.ndarray | None = None
+    by_fft: np.ndarray | None = None
 
     def status(self, i: int) -> str | None:
         """:data:`MODE_MOVED` when a mode of test ``i`` moved beyond its band against the baseline's odds, else
@@ -376,7 +381,8 @@ def readings_text(readings: list, ref: ReferenceModes) -> str:
     return f"no mode in its band: {text}" if unplaced and text else text
 
 
-def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_rate: float) -> BeyondBands:
+def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_rate: float,
+                 fft=None) -> BeyondBands:
     """The reference modes each test lacks in their bands, looked for beyond them and read against the baseline.
 
     ``cols``: the poles' columns from :func:`track_modes` (-1: the mode missing from its band); ``baseline``:
@@ -406,9 +412,13 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
 
     n, m = len(tests), ref.frequencies_hz.size
     cols = np.asarray(cols, int).reshape(n, m)
+    chosen = np.zeros(m, bool) if fft is None else np.asarray(fft.chosen, bool)
+    fft_miss = np.zeros((n, m), bool) if fft is None else chosen[None] & ~np.asarray(fft.in_band, bool)
     moved_hz, moved_col = np.full((n, m), np.nan), np.full((n, m), -1)
+    by_fft = np.zeros((n, m), bool)                 # moved: the FFT peak beyond the band of an FFT-peak-read mode
     lost = np.zeros((n, m), bool)
     beyond = np.zeros((n, m), bool)                 # a pole no mode claims within the reach beyond the band
+    beyond_fft = np.zeros((n, m), bool)             # an FFT peak within the reach beyond the band
     unplaced = np.zeros(n, bool)                    # poles, none in any band
     ln_ref = np.log(ref.frequencies_hz)
     reach = np.log(reach_bands_hz(ref)) - ln_ref[:, None]          # (m, 2): negative, positive
@@ -417,37 +427,47 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
             continue
         unplaced[i] = bool((cols[i] < 0).all())
         free = np.setdiff1d(np.arange(t.frequencies_hz.size), cols[i][cols[i] >= 0])
-        if free.size == 0:
+        peaks = np.zeros((0, 2)) if fft is None else np.asarray(fft.lines_hz[i], float)          # (m, 2)
+        owner, _ = np.nonzero(np.isfinite(peaks))
+        f = np.r_[t.frequencies_hz[free], peaks[np.isfinite(peaks)]]   # the free poles, then the FFT peaks
+        if f.size == 0:
             lost[i] = cols[i] < 0
             continue
-        d = np.log(t.frequencies_hz[free])[:, None] - ln_ref[None]                   # (k, m)
+        is_fft = np.r_[np.zeros(free.size, bool), np.ones(owner.size, bool)]
+        d = np.log(f)[:, None] - ln_ref[None]                                       # (k, m)
         side = np.where(d < 0, reach[None, :, 0], reach[None, :, 1])
         ok = (np.abs(d) > ref.tolerance[None]) & (d / side <= 1.0)
         S = shapes_at(t, ref.dofs) if ref.shapes is not None else None
         if S is not None:
-            ok &= mac(S[:, free], ref.shapes) >= MAC_MIN
-        beyond[i] = ok.any(axis=0)
-        miss = np.flatnonzero(cols[i] < 0)
+            ok[:free.size] &= mac(S[:, free], ref.shapes) >= MAC_MIN
+        ok[free.size:] &= owner[:, None] == np.arange(m)[None]      # an FFT peak of its own mode's windows only
+        beyond[i] = ok[:free.size].any(axis=0)
+        beyond_fft[i] = ok[free.size:].any(axis=0)
+        # an FFT-peak-read mode without a peak in its band is read by its FFT peak beyond it, else as the
+        # identification reads it (a pole beyond the band where the identification lacks the mode in its band)
+        ok[:free.size] &= ((cols[i] < 0) & ~(fft_miss[i] & beyond_fft[i]))[None]
+        ok[free.size:] &= fft_miss[i][None]
+        miss = np.flatnonzero((cols[i] < 0) | fft_miss[i])
         if miss.size:
             cost = np.where(ok[:, miss], (d[:, miss] / side[:, miss]) ** 2, 1e9)
             r, c = linear_sum_assignment(cost)
             keep = ok[:, miss][r, c]
-            moved_hz[i, miss[c[keep]]] = t.frequencies_hz[free[r[keep]]]
-            moved_col[i, miss[c[keep]]] = free[r[keep]]
-            lost[i, miss] = True
-            lost[i, miss[c[keep]]] = False
+            r, c = r[keep], miss[c[keep]]
+            moved_hz[i, c] = f[r]
+            by_fft[i, c] = is_fft[r]
+            pole = ~is_fft[r]
+            moved_col[i, c[pole]] = free[r[pole]]
+            lost[i] = cols[i] < 0
+            lost[i, c] = False
     base = np.asarray(baseline, int)
     lacking = np.array([[tests[i] is None or cols[i, r] < 0 for r in range(m)] for i in base], bool).reshape(-1, m)
+    lacking_fft = np.array([[tests[i] is None or fft_miss[i, r] for r in range(m)] for i in base],
+                           bool).reshape(-1, m)
     nb = max(base.size, 1)
     u, w = lacking.sum(axis=0).astype(float), beyond[base].sum(axis=0).astype(float)
-    q = np.broadcast_to(u / nb, (n, m)).copy()
-    s = np.broadcast_to(w / nb, (n, m)).copy()
-    if base.size > 1:                               # a baseline test read against the other baseline tests
-        q[base] = (u[None] - lacking) / (base.size - 1)
-        s[base] = (w[None] - beyond[base]) / (base.size - 1)
-    n_q = np.full((n, 1), float(base.size))
-    if base.size > 1:
-        n_q[base] = base.size - 1
+    q, s, n_q = _baseline_shares(lacking, beyond[base], base, n)
+    q_fft, s_fft, _ = _baseline_shares(lacking_fft, beyond_fft[base], base, n)
+    q, s = np.where(by_fft, q_fft, q), np.where(by_fft, s_fft, s)
     moved = np.isfinite(moved_hz)
     none = np.array([tests[i] is None or bool((cols[i] < 0).all()) for i in base], bool)
     v = float(none.sum())
@@ -460,4 +480,21 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
     with np.errstate(invalid="ignore"):
         flagged = (moved | lost) & ((chance <= false_alarm_rate / max(m, 1)) | unplaced_flagged[:, None])
     return BeyondBands(moved_hz, moved_col, lost, chance, flagged, u / nb, w / nb, reach_bands_hz(ref), int(base.size),
-                       unplaced, unplaced_chance, unplaced_flagged)
+                       unplaced, unplaced_chance, unplaced_flagged, by_fft)
+
+
+def _baseline_shares(lacking, beyond, base, n: int):
+    """``(q, s, n_q)``: per test (n, m) the baseline period's share of tests lacking the mode in its band
+    (``lacking``, (b, m)) and holding a peak within its reach beyond it (``beyond``, (b, m)), each baseline test's
+    of the other baseline tests, and the tests they count (n, 1)."""
+    b, m = lacking.shape[0], lacking.shape[1]
+    nb = max(b, 1)
+    u, w = lacking.sum(axis=0).astype(float), beyond.sum(axis=0).astype(float)
+    q = np.broadcast_to(u / nb, (n, m)).copy()
+    s = np.broadcast_to(w / nb, (n, m)).copy()
+    n_q = np.full((n, 1), float(b))
+    if b > 1:                                       # a baseline test read against the other baseline tests
+        q[base] = (u[None] - lacking) / (b - 1)
+        s[base] = (w[None] - beyond) / (b - 1)
+        n_q[base] = b - 1
+    return q, s, n_q

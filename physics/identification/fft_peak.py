@@ -85,6 +85,9 @@ class FFTPeaks:
         ``fs / n``: the record's own resolution (``1 / T``).
     grid_hz : float
         Line spacing of the zero-padded FFT.
+    line_hz : ndarray, shape (n_peaks,)
+        The local maximum's line of the zero-padded grid (Hz), where the peak lies before its vertex is fitted;
+        NaN where none lies within the tolerance.
     """
 
     frequency_hz: np.ndarray
@@ -94,6 +97,7 @@ class FFTPeaks:
     window: str
     resolution_hz: float
     grid_hz: float
+    line_hz: np.ndarray | None = None
 
 
 def _window(checked, window):
@@ -212,7 +216,7 @@ def fft_peaks(signals, sampling_frequency_hz, frequencies_hz, tolerance_hz, wind
     zeta = np.where(hw >= MIN_WIDTH_LOBES * WINDOW_HALF_WIDTH[window] * fs / y.shape[1], zeta, np.nan)
     fn = np.where(np.isfinite(zeta), fp / np.sqrt(1 - np.minimum(np.nan_to_num(zeta), 0.5) ** 2), fp)
     values = np.where(found[None, :], X[:, k], np.nan)
-    return FFTPeaks(fp, fn, zeta, values, window, fs / y.shape[1], df)
+    return FFTPeaks(fp, fn, zeta, values, window, fs / y.shape[1], df, np.where(found, k * df, np.nan))
 
 
 def identify_fft_peaks(signals, sampling_frequency_hz, band_hz=None, n_modes=None, window="auto", pad=PAD,
