@@ -70,11 +70,11 @@ def add_parser(sub):
                    help="memory chart of the statistics (EWMA; limits held out on the baseline period with its "
                         "autocorrelation): chart_alarm and onset of each test (default %(default)s)")
     p.add_argument("--statistics", nargs="+", choices=("residual", "environment", "shift", "mode"),
-                   default=["residual", "environment", "shift"], metavar="NAME",
+                   default=["residual", "environment", "shift", "mode"], metavar="NAME",
                    help="statistics combined at the false-alarm rate (residual, environment, shift, mode: each "
-                        "mode against its own prediction interval; the residual always): leave environment and "
-                        "shift out when the baseline period does not cover the conditions the tests meet (default: "
-                        "residual environment shift)")
+                        "mode against its own prediction interval about the removed components, with the PCA; the "
+                        "residual always): leave environment and shift out when the baseline period does not cover "
+                        "the conditions the tests meet (default: residual environment shift mode)")
     p.add_argument("--extrapolated-alarms", choices=EXTRAPOLATED_ALARMS, default="auto",
                    help="a later test beyond the baseline's environment alarmed only by the environment or the shift "
                         f"about the baseline mean: 'separate' reports it as '{EXTRAPOLATED}', beside the alarms; "

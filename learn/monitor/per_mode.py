@@ -4,12 +4,16 @@ over the modes found, judged family-wise over them.
 A change of one mode alone (a crack near one mode's curvature peak, a drift of one mode) moves one coordinate of the
 features; the residual index spreads it over the remaining components' degrees of freedom and the signed shift
 averages it over the modes. ``mode`` (:func:`per_mode_z`, :func:`per_mode_threshold`) reads each mode on its own:
-its log frequency about the centre the shift is measured about (the conditions' prediction for the regression, the
-baseline mean otherwise) over that mode's normal standard deviation, held out like every statistic; the index is the
-largest square over the modes found. Its threshold is a Gaussian prediction interval per mode read family-wise: the
-scaled ``F(1, n_train - 1 - q)`` law (``t^2`` of a new test against ``n_train`` tests: the small-baseline correction)
-fitted to every mode's held-out squares and read at ``rate / m`` (Bonferroni over the ``m`` modes found), and at
-least the held-out maxima's own ``1 - rate`` quantile.
+its log frequency about what the normal model explains (for the PCA, with which the detector combines it, the
+baseline mean plus the removed components' part, the environment's factors; the conditions' prediction for the
+regression; the baseline mean otherwise) over that mode's standard deviation about it (the diagonal of the residual
+covariance: for the PCA the remaining components' part of the baseline covariance), held out like every statistic;
+the index is the largest square over the modes found. A change of one mode that the removed components do not
+explain is judged against that mode's scatter about them, not against the environment's range (which, for the PCA,
+the environmental ``T^2`` judges). Its threshold is a Gaussian prediction interval per mode read family-wise: the
+scaled ``F(1, n_train - 1 - q)`` law (``t^2`` of a new test against ``n_train`` tests: the small-baseline
+correction) fitted to every mode's held-out squares and read at ``rate / m`` (Bonferroni over the ``m`` modes
+found), and at least the held-out maxima's own ``1 - rate`` quantile.
 """
 
 from __future__ import annotations
@@ -19,22 +23,34 @@ from dataclasses import replace
 import numpy as np
 
 from learn.monitor.alarm_threshold import Threshold, threshold
-from learn.monitor.normal_models import Regression
+from learn.monitor.normal_models import PCARemoval, Regression
 
-__all__ = ["per_mode_index", "per_mode_threshold", "per_mode_z"]
+__all__ = ["per_mode_index", "per_mode_threshold", "per_mode_z", "residual_covariance"]
+
+
+def residual_covariance(model) -> np.ndarray:
+    """``(m, m)`` the baseline covariance of the features about what ``model`` (fitted) explains: the residual
+    covariance of the regression, the remaining components' part ``V_r diag(var_r) V_r^T`` of the PCA's, the
+    baseline covariance of the other models."""
+    if isinstance(model, PCARemoval):
+        V = model.components_[:, model.k_:]
+        return (V * model.var_[model.k_:]) @ V.T
+    return model.cov_
 
 
 def per_mode_z(model, X, C=None) -> np.ndarray:
-    """``(n, m)`` each test's log frequency of each mode about the model's centre (the conditions' prediction for
-    the regression, the baseline mean otherwise) over the mode's normal standard deviation (the square root of the
-    diagonal of the residual covariance for the regression, of the baseline covariance otherwise); NaN where the
-    test lacks the mode. ``X`` (n, m) log frequencies, ``model`` fitted."""
+    """``(n, m)`` each test's log frequency of each mode about what the model explains (the conditions' prediction
+    for the regression, the mean plus the removed components' part for the PCA, the baseline mean otherwise) over
+    the mode's standard deviation about it (the square root of the diagonal of :func:`residual_covariance`); NaN
+    where the test lacks the mode. ``X`` (n, m) log frequencies, ``model`` fitted."""
     X = np.asarray(X, float)
     if isinstance(model, Regression):
         centre = model.expected(X, C)
+    elif isinstance(model, PCARemoval):
+        centre = model.expected(X)
     else:
         centre = np.broadcast_to(model.mean_, X.shape)
-    sd = np.sqrt(np.maximum(np.diag(model.cov_), 1e-300))
+    sd = np.sqrt(np.maximum(np.diag(residual_covariance(model)), 1e-300))
     return (X - centre) / sd
 
 

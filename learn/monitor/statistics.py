@@ -12,24 +12,25 @@ distribution, combined family-wise at the chosen false-alarm rate.
 * ``shift``: the signed common shift, the mean relative frequency change weighted by the inverse of each mode's
   normal variance (about the conditions' prediction for the regression, about the baseline mean otherwise),
   standardised by its baseline standard deviation; its square is the index (one degree of freedom);
-* ``mode``: each mode's frequency against its own prediction interval, about the same centre over its normal
-  standard deviation, the largest square over the modes found (:mod:`learn.monitor.per_mode`: its threshold the
-  per-mode interval read at ``rate / m``): a change of one mode alone, which the residual spreads over its degrees
-  of freedom and the shift averages over the modes.
+* ``mode``: with a PCA that removes components, each mode's frequency against its own prediction interval: its
+  deviation from what the removed components explain over its scatter about them (the diagonal of the remaining
+  components' covariance), the largest square over the modes found (:mod:`learn.monitor.per_mode`: its threshold
+  the per-mode interval read at ``rate / m``): a change of one mode alone, which the residual spreads over its
+  degrees of freedom and the shift averages over the modes.
 
 Each index is a squared Mahalanobis distance of some part of the residual; its threshold is
 :func:`~learn.monitor.alarm_threshold.threshold` of the held-out baseline indices (a scaled F law and their
 empirical quantile; for the statistics of the environment itself the law fitted to their tail), the shift's on each
 side of its sign (a drop, a rise). The family-wise rate is shared by :data:`SHARES` (one share per one-sided test:
-the residual one, the shift's drop and rise one each, the per-mode statistic one, the environmental ``T^2``, which
-holds the shift's direction among its own, a quarter) and calibrated on the statistics' joint held-out distribution,
-so that a test of the normal variation alarms on any of them with probability ``rate``: the level of the shares at
-which the held-out baseline tests alarm on some statistic at ``rate`` at the plotting position
-(:func:`_union_rates`, :mod:`learn.monitor.union_calibration`: the tails' dependence and each law's fit included),
-or, with fewer than ``1 / rate`` baseline tests, from the Gaussian copula of their ranks (:func:`joint_rates`);
-strongly dependent statistics cost little of the rate, independent ones the weighted Šidák split. A test whose set
-of modes found the baseline does not hold throughout is judged against the thresholds of that set
-(:func:`held_out_statistics` with its ``pattern``).
+the residual one, the shift's drop and rise one each; the environmental ``T^2``, which holds the shift's direction
+among its own, and the per-mode statistic, which reads the residual's coordinates, a quarter each) and calibrated on
+the statistics' joint held-out distribution, so that a test of the normal variation alarms on any of them with
+probability ``rate``: the level of the shares at which the held-out baseline tests alarm on some statistic at
+``rate`` at the plotting position (:func:`_union_rates`, :mod:`learn.monitor.union_calibration`: the tails'
+dependence and each law's fit included), or, with fewer than ``1 / rate`` baseline tests, from the Gaussian copula
+of their ranks (:func:`joint_rates`); strongly dependent statistics cost little of the rate, independent ones the
+weighted Šidák split. A test whose set of modes found the baseline does not hold throughout is judged against the
+thresholds of that set (:func:`held_out_statistics` with its ``pattern``).
 """
 
 from __future__ import annotations
@@ -51,10 +52,9 @@ __all__ = ["COMBINATIONS", "DEFAULT_STATISTICS", "PATTERN_MIN", "SHARES", "STATI
 
 #: The detector's statistics (module docstring).
 STATISTICS = ("residual", "environment", "shift", "mode")
-#: Those :func:`detect` and ``monitor`` combine unless told otherwise: ``mode`` is chosen (``--statistics``), its
-#: share of the rate taken from the others costs the simulator's series 1-2 points of detection of small changes
-#: and finds one more later test on the real ones (docs/monitoring.md, real repeated-test series).
-DEFAULT_STATISTICS = ("residual", "environment", "shift")
+#: Those :func:`detect` and ``monitor`` combine unless told otherwise (each where the model supports it: the
+#: environment and the per-mode statistic with a PCA that removes components).
+DEFAULT_STATISTICS = ("residual", "environment", "shift", "mode")
 
 
 def _inv_sqrt(cov):
@@ -94,8 +94,9 @@ def statistics_of(model, X, C=None) -> dict:
     sd_shift = math.sqrt(max(float(w @ cov @ w), 1e-300))
     z = D @ w / sd_shift
     out["shift"] = (z**2, z[:, None])
-    Z = per_mode_z(model, X, C)
-    out["mode"] = (per_mode_index(Z), Z)
+    if isinstance(model, PCARemoval) and model.k_ > 0:
+        Z = per_mode_z(model, X, C)
+        out["mode"] = (per_mode_index(Z), Z)
     return out
 
 
@@ -172,13 +173,15 @@ def sidak_rate(rate: float, k: int) -> float:
     return 1.0 - (1.0 - rate) ** (1.0 / max(int(k), 1))
 
 
-#: Each statistic's share of the family-wise rate (relative weights, :func:`joint_rates`): one per one-sided test.
-#: The residual's index is one test, the signed shift two (a drop, a rise: the plainest tests of a change common to
-#: the modes, of either sign); the environmental ``T^2`` of the removed components holds the shift's direction
-#: among its own (for a common change it is the weaker test of the same evidence) and keeps a quarter share, for a
-#: change along a removed direction that leaves the modes' mean; the per-mode statistic is one test, of a change of
-#: one mode alone.
-SHARES = {"residual": 1.0, "environment": 0.25, "shift": 2.0, "mode": 1.0}
+#: Each statistic's share of the family-wise rate (relative weights, :func:`joint_rates`): one per one-sided test,
+#: a quarter for a statistic that re-reads evidence another one holds. The residual's index is one test, the signed
+#: shift two (a drop, a rise: the plainest tests of a change common to the modes, of either sign); the environmental
+#: ``T^2`` of the removed components holds the shift's direction among its own (for a common change it is the
+#: weaker test of the same evidence) and keeps a quarter share, for a change along a removed direction that leaves
+#: the modes' mean; the per-mode statistic reads each coordinate of the residual about the removed components (for a
+#: change of several modes the residual is the stronger test of the same evidence) and keeps a quarter share, for a
+#: change of one mode alone, which the residual spreads over its degrees of freedom.
+SHARES = {"residual": 1.0, "environment": 0.25, "shift": 2.0, "mode": 0.25}
 #: How :func:`detect` shares the rate: ``joint`` (:data:`SHARES`, calibrated on the joint held-out distribution),
 #: ``equal`` (equal shares, so calibrated), ``sidak`` (equal shares, independent statistics assumed).
 COMBINATIONS = ("joint", "equal", "sidak")
@@ -454,11 +457,12 @@ def _union_rates(model, held, names, rate: float, rates, n_train: int, n_conditi
 
 
 def environmental(model, name: str) -> bool:
-    """Whether statistic ``name`` of ``model`` measures the environment itself (the removed components' scores, a
-    shift about the baseline mean), whose bounded distribution gets a threshold law fitted to its tail
+    """Whether statistic ``name`` of ``model`` measures the environment itself (the removed components' scores, a shift
+    about the baseline mean; not the per-mode statistic, a residual about the removed components' part), whose
+    bounded distribution gets a threshold law fitted to its tail
     (:func:`~learn.monitor.alarm_threshold.threshold`'s ``tail_share``), rather than a residual about what the
     normal variation explains."""
-    return name == "environment" or (name in ("shift", "mode") and not isinstance(model, Regression))
+    return name == "environment" or (name == "shift" and not isinstance(model, Regression))
 
 
 #: A baseline period of dated tests shorter than this (days) does not cover the seasons.
@@ -471,7 +475,7 @@ def season_warning(times, time_values, n_baseline: int, names) -> str | None:
     seasons it did not see move the environmental scores and the shift about the baseline mean as a change would
     (None otherwise)."""
 
-    env = [nm for nm in names if nm in ("environment", "shift", "mode")]
+    env = [nm for nm in names if nm in ("environment", "shift")]
     span = _baseline_span_days(times, time_values, n_baseline) if env else None
     if span is None or span >= SEASONS_DAYS or time_values[-1] - time_values[0] <= span:
         return None

@@ -45,7 +45,7 @@ def test_the_combination_holds_the_family_wise_rate_on_null_data():
     rates, alone, each = [], [], []
     for _ in range(6):
         det = _detected(_gaussian(rng, 2300), 300, 0.05)
-        assert det.names == ("residual", "environment", "shift")
+        assert det.names == ("residual", "environment", "shift", "mode")
         v = np.array([SHARES[nm] for nm in det.names]) / max(SHARES[nm] for nm in det.names)
         s = -np.expm1(np.log1p(-det.rate_each) / v)             # r_k = 1 - (1 - s)^(v_k): one s for all
         assert np.ptp(s) < 1e-12
@@ -54,7 +54,7 @@ def test_the_combination_holds_the_family_wise_rate_on_null_data():
         rates.append(det.alarm[300:].mean())
         alone.append((det.ratios[300:] > 1).mean(axis=0))
         each.append(det.rate_each)
-    assert 0.025 < np.mean(rates) <= 0.06                       # any of three: 5 %
+    assert 0.025 < np.mean(rates) <= 0.06                       # any of four: 5 %
     np.testing.assert_array_less(np.mean(alone, axis=0), 1.3 * np.mean(each, axis=0))
 
 

@@ -128,7 +128,7 @@ def test_an_environmental_alarm_on_an_extrapolated_test_has_its_own_status(tmp_p
 
     kept, apart = run("alarm"), run("separate")
     moved = [i for i, r in enumerate(kept.rows) if r["alarm"] and r["extrapolated"]
-             and set(r["alarmed_by"]) <= {"environment", "shift", "mode"}]
+             and set(r["alarmed_by"]) <= {"environment", "shift"}]
     assert moved
     for i, (a, b) in enumerate(zip(kept.rows, apart.rows)):
         if i in moved:

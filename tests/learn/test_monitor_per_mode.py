@@ -1,6 +1,7 @@
 """The detector's per-mode statistic (learn.monitor.per_mode): on Gaussian baselines its threshold is the closed
 form of a per-mode prediction interval read family-wise (Bonferroni), and new Gaussian tests exceed it at that
-closed form's rate; the detector combines it when chosen."""
+closed form's rate; each mode is read about the PCA's removed components' part over its scatter about them (the
+closed form of one common factor); the detector combines it where the PCA removes components."""
 
 import math
 
@@ -8,13 +9,15 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from learn.monitor.normal_models import PCARemoval
-from learn.monitor.per_mode import per_mode_index, per_mode_threshold, per_mode_z
-from learn.monitor.statistics import DEFAULT_STATISTICS, STATISTICS, detect, held_out_statistics
+from learn.monitor.normal_models import PCARemoval, Regression
+from learn.monitor.per_mode import per_mode_index, per_mode_threshold, per_mode_z, residual_covariance
+from learn.monitor.statistics import DEFAULT_STATISTICS, STATISTICS, detect
 
 
 def _held_z(X):
-    return held_out_statistics(lambda: PCARemoval(0), X)["mode"][1]
+    """Each test's per-mode ``z`` by the model of the other tests (no component removed: about their mean)."""
+    rows = np.arange(len(X))
+    return np.vstack([per_mode_z(PCARemoval(0).fit(X[rows != i]), X[i:i + 1]) for i in rows])
 
 
 @pytest.mark.parametrize("n, m", [(10, 1), (15, 3), (40, 5)])
@@ -60,17 +63,56 @@ def test_modes_not_found_are_not_judged():
     assert t.law_value == pytest.approx(n / (n - 1) * stats.f(1, n - 2).isf(0.01 / 2), rel=1e-5)
 
 
-def test_the_detector_combines_it_when_chosen_and_it_alarms_on_one_mode_alone():
-    """``detect`` leaves ``mode`` out by default (:data:`DEFAULT_STATISTICS`); chosen, a jump of one of three
-    independent modes by 8 of its standard deviations is alarmed by it, and a test of the baseline's law is not."""
+def _one_factor(rng, n, loading, noise):
+    """``n`` tests of ``m`` log frequencies: one common factor (unit variance) along ``loading`` plus independent
+    noise of standard deviation ``noise``."""
+    return rng.standard_normal((n, 1)) * loading + rng.standard_normal((n, loading.size)) * noise
+
+
+def test_each_mode_is_read_about_the_removed_components_over_its_scatter_about_them():
+    """One common factor (the environment, 0.1-0.3 % per mode) over independent noise of 0.002 %: the PCA removes
+    it, the residual covariance is ``sigma^2 (I - u u^T)`` (``u`` the factor's direction) and a jump ``d`` of mode
+    ``j`` alone reads ``z_j = d sqrt(1 - u_j^2) / sigma`` (and each other mode ``-d u_j u_k / (sigma sqrt(1 -
+    u_k^2))``); about the baseline mean over the whole scatter it would
+    read ``d / sqrt(a_j^2 + sigma^2)``, 100 times less."""
+    rng = np.random.default_rng(6)
+    a, sigma = np.array([1e-3, 2e-3, 3e-3, 1.5e-3]), 2e-5
+    X = _one_factor(rng, 4000, a, sigma)
+    model = PCARemoval(1).fit(X)
+    u = a / np.linalg.norm(a)
+    R = np.cov((X - X.mean(axis=0)) @ (np.eye(4) - np.outer(u, u)), rowvar=False)        # an independent residual
+    np.testing.assert_allclose(residual_covariance(model), R, rtol=0.02, atol=1e-3 * sigma**2)
+    np.testing.assert_allclose(np.diag(residual_covariance(model)), sigma**2 * (1 - u**2), rtol=0.06)
+    d = 8 * sigma
+    x = model.mean_ + 0.7 * a                                   # the environment 0.7 of its sd away
+    x[1] += d
+    z = per_mode_z(model, x[None])[0]
+    closed = -d * u[1] * u / (sigma * np.sqrt(1 - u**2))        # the others: -u_k u_j d over sigma sqrt(1 - u_k^2)
+    closed[1] = d * math.sqrt(1 - u[1] ** 2) / sigma
+    np.testing.assert_allclose(z, closed, rtol=0.05)
+    assert abs((x[1] - model.mean_[1]) / math.sqrt(model.cov_[1, 1])) < 1.0       # within the environment's range
+
+
+def test_the_detector_combines_it_where_the_pca_removes_components_and_it_alarms_on_one_mode_alone():
+    """``mode`` is a default statistic (:data:`DEFAULT_STATISTICS`) of a PCA that removes components, not of the
+    regression nor of a PCA that removes none; on 30 baseline tests of one common factor, a jump of one mode by 8
+    of its noise standard deviations, inside the environment's range, is alarmed by it, a test of the baseline's
+    law is not."""
     rng = np.random.default_rng(4)
-    n, sd = 30, np.array([1e-3, 3e-3, 2e-4])
-    X = np.r_[rng.standard_normal((n, 3)), [[0.0, 0.0, 0.0], [0.0, 0.0, 8.0]]] * sd
-    model = PCARemoval(0).fit(X[:n])
+    n, a, sigma = 30, np.array([1e-3, 2e-3, 3e-3, 1.5e-3]), 2e-5
+    X = _one_factor(rng, n + 2, a, sigma)
+    X[n + 1, 0] += 8 * sigma
+    model = PCARemoval(1).fit(X[:n])
     rest = np.array([n, n + 1])
-    assert detect(model, model.with_choices, X, None, np.arange(n), rest, 0.01).names == ("residual", "shift")
-    assert "mode" in STATISTICS and "mode" not in DEFAULT_STATISTICS
-    det = detect(model, model.with_choices, X, None, np.arange(n), rest, 0.01, statistics=STATISTICS)
-    assert det.names == ("residual", "shift", "mode")                 # no removed component: no environment
+    assert "mode" in STATISTICS and "mode" in DEFAULT_STATISTICS
+    det = detect(model, model.with_choices, X, None, np.arange(n), rest, 0.01)
+    assert det.names == ("residual", "environment", "shift", "mode")
     assert not det.alarm[n] and det.alarm[n + 1] and "mode" in det.alarmed_by(n + 1)
-    assert det.rate_each[2] == pytest.approx(det.rate_each[0], rel=1e-9)     # one share each
+    assert det.rate_each[3] == pytest.approx(det.rate_each[1], rel=1e-9)     # a quarter share, as the environment
+    assert math.log1p(-det.rate_each[3]) / math.log1p(-det.rate_each[0]) == pytest.approx(0.25, rel=1e-9)
+    none = PCARemoval(0).fit(X[:n])
+    assert detect(none, none.with_choices, X, None, np.arange(n), rest, 0.01, statistics=STATISTICS).names == (
+        "residual", "shift")
+    C = rng.standard_normal((n + 2, 1))
+    reg = Regression().fit(X[:n], C[:n])
+    assert detect(reg, Regression, X, C, np.arange(n), rest, 0.01, 1).names == ("residual", "shift")

@@ -27,16 +27,17 @@ def test_the_level_is_the_plotting_position_quantile_of_the_entry_levels():
 
 
 def test_independent_statistics_give_the_weighted_sidak_split():
-    """Three independent uniform p-values per held-out test at shares 1 : 0.25 : 2: the union alarms on a test
+    """Four independent uniform p-values per held-out test at shares 1 : 0.25 : 2 : 0.25: the union alarms on a test
     when some ``p_k < r_k``; the level's rates satisfy ``prod (1 - r_k) = 1 - rate`` within the binomial error of
     ``rate`` from 40 000 tests, each rate ``1 - (1 - s)^(v_k)`` of its share."""
     n, rate = 40_000, 0.01
-    P = np.random.default_rng(4).uniform(size=(n, 3))
+    P = np.random.default_rng(4).uniform(size=(n, 4))
     w = [SHARES[nm] for nm in DEFAULT_STATISTICS]
+    assert w == [1.0, 0.25, 2.0, 0.25]
     r = union_rates(lambda r: int((P < r).any(axis=1).sum()), w, rate, n)
     union = 1 - np.prod(1 - r)
     assert abs(union - rate) < 4 * math.sqrt(rate * (1 - rate) / n)
-    np.testing.assert_allclose(np.log1p(-r) / np.log1p(-r[2]), [0.5, 0.125, 1.0], rtol=1e-9)   # 1 - (1 - s)^(v_k)
+    np.testing.assert_allclose(np.log1p(-r) / np.log1p(-r[2]), [0.5, 0.125, 1.0, 0.125], rtol=1e-9)  # 1 - (1 - s)^v_k
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
