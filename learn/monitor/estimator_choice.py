@@ -9,8 +9,13 @@ record's transform, no model order or stabilisation enters it). Which one is the
 records, so the series decides it: per mode, over the baseline tests where both estimators read the mode, the
 robust scatter (1.4826 MAD of ``ln f``) of each. The burden of proof is on the more complex estimator: the
 identification's frequency is kept where its scatter over those tests is the smaller; elsewhere the FFT peak is
-chosen, when it reads the mode in every baseline test the identification does and at least ``2 MIN_HALF`` tests hold
-both (:data:`MIN_HALF` in each half). The scatter over each half of those tests (the odd and the even ones in time
+chosen, when it reads the mode in every baseline test the identification does, at least ``2 MIN_HALF`` tests hold
+both (:data:`MIN_HALF` in each half) and it holds no more gross readings than the identification: readings more than
+:data:`GROSS` of the estimator's own robust scatters from its median over those tests (a neighbouring peak or pole
+read instead of the mode; Gaussian scatter puts one reading in 1.7 million there). The MAD does not see a few gross
+readings, the detector does: its normal model and held-out thresholds are Gaussian, and a gross reading of a steady
+estimator, held out against the others' small scatter, sets a threshold (:func:`gross_readings`).
+The scatter over each half of those tests (the odd and the even ones in time
 order) is reported beside it, how steady the comparison is (a MAD of ``n`` Gaussian values scatters by about
 ``1.17 / sqrt(n)`` of itself); it does not enter the choice, which would otherwise go to whichever estimator is the
 default wherever the halves split, however the whole baseline compares them.
@@ -31,8 +36,8 @@ from learn.monitor.workers import fft_peaks_of_files
 from learn.pairs.noise_calibration import robust_std
 from physics.io import finite_or_none
 
-__all__ = ["FFT_PEAK", "FREQUENCY_ESTIMATORS", "MIN_HALF", "FrequencyChoice", "choose_estimators", "choose_frequencies",
-           "fft_peak_frequencies"]
+__all__ = ["FFT_PEAK", "FREQUENCY_ESTIMATORS", "GROSS", "MIN_HALF", "FrequencyChoice", "choose_estimators",
+           "choose_frequencies", "fft_peak_frequencies", "gross_readings"]
 
 #: The name of the FFT-peak estimator (the key of :data:`physics.identification.methods.METHODS`).
 FFT_PEAK = "fftpeak"
@@ -42,6 +47,9 @@ FREQUENCY_ESTIMATORS = ("choose", "identification")
 #: The fewest baseline tests in each half holding both estimates for the FFT peak to be chosen (``2 MIN_HALF`` in all;
 #: a half's MAD of 3 values).
 MIN_HALF = 3
+#: A reading more than this many of its estimator's robust scatters (1.4826 MAD of ``ln f``) from the estimator's
+#: median over the baseline is gross (:func:`gross_readings`).
+GROSS = 5.0
 
 
 @dataclass(frozen=True)
@@ -59,6 +67,8 @@ class FrequencyChoice:
     complete : ndarray bool (m,)  the FFT peak read the mode in every baseline test the identification did
     fft_hz : ndarray (n, m)       each test's FFT peak in each mode's tracking band (NaN: none, or not records)
     frequencies_hz : ndarray (n, m)   the tracked frequencies with each chosen mode's replaced by its FFT peak
+    gross : ndarray int (m, 2)    gross readings (:func:`gross_readings`) of the default estimator and of the FFT
+                                  peak over the baseline tests holding both (None: not counted)
     """
 
     default: str
@@ -69,6 +79,7 @@ class FrequencyChoice:
     complete: np.ndarray
     fft_hz: np.ndarray
     frequencies_hz: np.ndarray
+    gross: np.ndarray | None = None
 
     @property
     def chosen(self) -> np.ndarray:
@@ -92,6 +103,10 @@ class FrequencyChoice:
             elif n < 2 * MIN_HALF:
                 out.append(f"mode {r + 1}: {self.default}, {n} baseline tests holding both estimates (fewer than "
                            f"{2 * MIN_HALF})")
+            elif self.gross is not None and f <= d and self.gross[r, 1] > self.gross[r, 0]:
+                out.append(f"mode {r + 1}: {self.default}, the FFT peak's scatter {f:.3g} Hz against {d:.3g} Hz over "
+                           f"the {n} baseline tests but {self.gross[r, 1]} of its readings more than {GROSS:g} "
+                           f"scatters from its median ({self.default}: {self.gross[r, 0]})")
             else:
                 out.append(f"mode {r + 1}: {self.default}, scatter {d:.3g} Hz against the FFT peak {f:.3g} Hz over "
                            f"the {n} baseline tests (halves {hd1:.3g} / {hd2:.3g} against {hf1:.3g} / {hf2:.3g} Hz)")
@@ -114,6 +129,8 @@ class FrequencyChoice:
                 "scatter_hz": [self._pair(p) for p in self.scatter_hz],
                 "halves_hz": [[self._pair(p) for p in h] for h in self.halves_hz],
                 "baseline_tests": self.n_tests.tolist(), "fft_complete": self.complete.tolist(),
+                "gross_readings": None if self.gross is None else
+                [{self.default: int(a), FFT_PEAK: int(b)} for a, b in self.gross],
                 "texts": self.texts()}
 
 
@@ -130,11 +147,24 @@ def fft_peak_frequencies(tests: list, files: list, ref: ReferenceModes, cache_di
     return out
 
 
+def gross_readings(est_hz) -> int:
+    """How many of the readings ``est_hz`` (k,) (Hz; NaN ignored) lie more than :data:`GROSS` robust scatters
+    (1.4826 MAD of ``ln f``) from their median: an estimator reading a neighbouring peak or pole now and then (with
+    a scatter of zero, every reading off the median)."""
+    x = np.log(np.asarray(est_hz, float))
+    x = x[np.isfinite(x)]
+    if x.size == 0:
+        return 0
+    dev = np.abs(x - np.median(x))
+    return int(np.sum(dev > GROSS * robust_std(x)))
+
+
 def choose_estimators(F, G, baseline, reference_hz):
     """The choice over the baseline period (module docstring) from the default estimates ``F`` (n, m) and the FFT
     peaks ``G`` (n, m) (Hz; NaN: missing); ``baseline``: indices of the baseline tests in time order.
 
-    Returns ``(chosen bool (m,), scatter_hz (m, 2), halves_hz (m, 2, 2), n_tests int (m,), complete bool (m,))``.
+    Returns ``(chosen bool (m,), scatter_hz (m, 2), halves_hz (m, 2, 2), n_tests int (m,), complete bool (m,),
+    gross int (m, 2))``.
     """
     F, G = np.asarray(F, float), np.asarray(G, float)
     base = np.asarray(baseline, int)
@@ -142,6 +172,7 @@ def choose_estimators(F, G, baseline, reference_hz):
     m = F.shape[1]
     scatter, halves = np.full((m, 2), np.nan), np.full((m, 2, 2), np.nan)
     n_tests, complete, chosen = np.zeros(m, int), np.zeros(m, bool), np.zeros(m, bool)
+    gross = np.zeros((m, 2), int)
     for r in range(m):
         fb, gb = F[base, r], G[base, r]
         complete[r] = bool(np.all(np.isfinite(gb[np.isfinite(fb)])))
@@ -151,11 +182,12 @@ def choose_estimators(F, G, baseline, reference_hz):
             continue
         est = np.log(np.stack([fb[both], gb[both]], axis=1))            # (k, 2)
         scatter[r] = [f_ref[r] * robust_std(est[:, j]) for j in range(2)]
+        gross[r] = [gross_readings(np.exp(est[:, j])) for j in range(2)]
         for h in range(2):                                              # the odd and the even tests
             halves[r, h] = [f_ref[r] * robust_std(est[h::2, j]) for j in range(2)]
         chosen[r] = (complete[r] and both[1::2].size >= MIN_HALF        # the identification kept where steadier
-                     and not bool(scatter[r, 0] < scatter[r, 1]))
-    return chosen, scatter, halves, n_tests, complete
+                     and not bool(scatter[r, 0] < scatter[r, 1]) and gross[r, 1] <= gross[r, 0])
+    return chosen, scatter, halves, n_tests, complete, gross
 
 
 def choose_frequencies(tests: list, files: list, ref: ReferenceModes, F, cols, baseline, cache_dir=None,
@@ -175,10 +207,10 @@ def choose_frequencies(tests: list, files: list, ref: ReferenceModes, F, cols, b
     F = np.asarray(F, float)
     cols = np.asarray(cols, int)
     G = fft_peak_frequencies(tests, files, ref, cache_dir, workers)
-    chosen, scatter, halves, n_tests, complete = choose_estimators(F, G, base, ref.frequencies_hz)
+    chosen, scatter, halves, n_tests, complete, gross = choose_estimators(F, G, base, ref.frequencies_hz)
     names = sorted({tests[i].method for i in base if tests[i] is not None})
     default = "/".join(names)
     out = F.copy()
     out[:, chosen] = np.where(cols[:, chosen] >= 0, G[:, chosen], np.nan)
     return FrequencyChoice(default, tuple(FFT_PEAK if c else default for c in chosen), scatter, halves, n_tests,
-                           complete, G, out)
+                           complete, G, out, gross)

@@ -10,7 +10,8 @@ import learn.monitor.identification as identification
 import learn.monitor.workers as workers
 from experiments.cli import main as cli_main
 from learn.monitor import IdentificationSettings, IdentifiedModes, SeriesInput, monitor_series, reference_modes
-from learn.monitor.estimator_choice import FFT_PEAK, MIN_HALF, choose_estimators, choose_frequencies
+from learn.monitor.estimator_choice import (FFT_PEAK, GROSS, MIN_HALF, FrequencyChoice, choose_estimators,
+                                           choose_frequencies, gross_readings)
 from learn.monitor.tracking import narrow_bands_hz, track_modes
 from physics.identification.fft_peak import fft_peaks
 from physics.errors import ConfigError
@@ -98,7 +99,8 @@ def test_the_identification_is_kept_only_where_it_is_the_steadier_over_the_basel
     G[3, 2] = np.nan                                                             # the FFT misses one test
     F[:, 3] = _spread(k, 1e-3, 2.0)
     G[odd, 3], G[even, 3] = _spread(6, 1e-4, 1.5), _spread(6, 1e-2, 0.3)          # FFT steady on the odd tests only
-    chosen, scatter, halves, n_tests, complete = choose_estimators(F, G, np.arange(k), np.full(4, 100.0))
+    chosen, scatter, halves, n_tests, complete, gross = choose_estimators(F, G, np.arange(k), np.full(4, 100.0))
+    np.testing.assert_array_equal(gross, [[0, 0], [4, 0], [0, 0], [0, 0]])       # the even tests gross
     np.testing.assert_array_equal(chosen, [True, True, False, False])
     for r in (0, 1, 3):
         np.testing.assert_allclose(scatter[r], [_mad_hz(F[:, r], 100.0), _mad_hz(G[:, r], 100.0)], rtol=1e-12)
@@ -115,6 +117,36 @@ def test_the_identification_is_kept_only_where_it_is_the_steadier_over_the_basel
     few = choose_estimators(F[:2 * MIN_HALF - 1], G[:2 * MIN_HALF - 1], np.arange(2 * MIN_HALF - 1),
                             np.full(4, 100.0))[0]
     assert not few.any()                                                         # 5 tests: halves of 3 and 2
+
+
+def test_an_fft_peak_with_gross_readings_is_not_chosen_over_an_identification_without():
+    """A mode read by two neighbouring peaks (board 4.4's third mode, docs/monitoring.md Dataset-11): over 10
+    baseline tests the FFT peak reads one peak within 1.5 Hz at 4784 Hz and the other, 12 and 17 Hz lower, in tests
+    1 and 6; the identification scatters 7 Hz about 4764 Hz without a gross reading. The MAD ignores the two gross
+    readings (1.55 against 7.05 Hz) and would take the FFT peak; they lie 7.5 and 10.8 of its scatters from its
+    median, so the identification is kept. Without them the FFT peak is chosen."""
+    f_era = np.array([4771.0, 4772.3, 4764.2, 4763.6, 4762.3, 4782.8, 4759.5, 4759.2, 4779.9, 4764.0])
+    f_fft = np.array([4772.2, 4780.6, 4782.8, 4783.9, 4784.1, 4767.1, 4785.6, 4783.8, 4784.8, 4784.9])
+    f_ref = 4764.24
+    chosen, scatter, _, n_tests, complete, gross = choose_estimators(f_era[:, None], f_fft[:, None], np.arange(10),
+                                                                     [f_ref])
+    np.testing.assert_allclose(scatter[0], [_mad_hz(f_era, f_ref), _mad_hz(f_fft, f_ref)], rtol=1e-12)
+    np.testing.assert_allclose(scatter[0], [7.05, 1.55], atol=0.01)              # the FFT peak the steadier by MAD
+    x = np.log(f_fft)
+    by_hand = np.abs(x - np.median(x)) / (_mad_hz(f_fft, f_ref) / f_ref)
+    np.testing.assert_allclose(np.sort(by_hand)[-2:], [7.49, 10.78], atol=0.01)   # tests 1 and 6
+    assert np.sort(by_hand)[-3] < GROSS
+    np.testing.assert_array_equal(gross, [[0, 2]])
+    assert gross_readings(f_fft) == 2 and gross_readings(f_era) == 0
+    assert not chosen[0] and complete[0] and n_tests[0] == 10
+    keep = np.setdiff1d(np.arange(10), [0, 5])
+    assert choose_estimators(f_era[keep, None], f_fft[keep, None], np.arange(8), [f_ref])[0][0]
+    choice = FrequencyChoice("era", ("era",), scatter, np.full((1, 2, 2), 1.0), n_tests, complete,
+                             f_fft[:, None], f_era[:, None], gross)
+    assert choice.texts() == ["mode 1: era, the FFT peak's scatter 1.55 Hz against 7.05 Hz over the 10 baseline "
+                              "tests but 2 of its readings more than 5 scatters from its median (era: 0)"]
+    assert choice.to_dict()["gross_readings"] == [{"era": 0, FFT_PEAK: 2}]
+    assert gross_readings([100.0] * 9 + [100.1]) == 1 and gross_readings([np.nan]) == 0
 
 
 def test_monitor_takes_the_chosen_frequencies_and_reports_the_choice(tmp_path, monkeypatch):
