@@ -5,7 +5,8 @@ With a short baseline period the threshold of a small false-alarm rate is the la
 record started during the hit, a first test before the structure settled) sets it. The rule: the largest held-out
 residual index of the ``n`` baseline tests is compared with the threshold of the family-wise rate over the baseline,
 ``rate / n`` (Bonferroni), of the scaled F law fitted to the *other* ``n - 1`` indices (the candidate left out, so
-that it does not widen its own yardstick); beyond it, the test is an outlier of its baseline. It is left out, the
+that it does not widen its own yardstick), read as a prediction from a scale fitted to ``n - 1`` indices
+(:func:`largest_outlier`); beyond it, the test is an outlier of its baseline. It is left out, the
 normal model fitted again and every remaining test's index held out again, and the rule applied again, up to
 :data:`OUTLIER_SHARE` of the baseline period and never below the fewest baseline tests the model needs.
 
@@ -102,10 +103,15 @@ class BaselineOutliers:
 
 def largest_outlier(held_out, rate: float, dof_num: int, n_conditions: int = 0) -> tuple:
     """``(position, its index, its threshold)`` of the largest finite held-out index of ``held_out`` (n,) and the
-    threshold at ``rate / n`` (:func:`~learn.monitor.alarm_threshold.threshold`, ``dof_num`` the index's degrees of
-    freedom, models fitted on :func:`~learn.monitor.alarm_threshold.training_size` of ``n`` tests) of the scaled F
-    law fitted to the other indices; the test is an outlier when its index exceeds that threshold. ``(None, nan,
-    nan)`` with fewer than 3 finite indices."""
+    threshold at ``rate / n`` of the scaled F law fitted to the other indices (the scale and the degrees of freedom
+    ``(d1, d2)`` of :func:`~learn.monitor.alarm_threshold.threshold`, ``dof_num`` the index's, models fitted on
+    :func:`~learn.monitor.alarm_threshold.training_size` of ``n`` tests), read as a prediction: the scale is
+    estimated from ``m`` indices, so the candidate over the fitted scale follows ``F(d1, d2')`` with ``1 / d2' =
+    1 / d2 + 1 / (m d1)`` (the fitted scale's own chi-square scatter, ``m d1`` degrees of freedom, pooled with the
+    law's denominator, as a Student prediction interval widens a normal one); the test is an outlier when its index
+    exceeds that threshold. ``(None, nan, nan)`` with fewer than 3 finite indices."""
+    from scipy import stats  # scipy.stats: heavy, only where a threshold is read
+
     s = np.asarray(held_out, float)
     finite = np.flatnonzero(np.isfinite(s))
     if finite.size < 3:
@@ -114,7 +120,12 @@ def largest_outlier(held_out, rate: float, dof_num: int, n_conditions: int = 0) 
     i = int(finite[np.argmax(s[finite])])
     others = np.delete(s, i)
     t = threshold(others, rate / n, dof_num, training_size(n), n_conditions)
-    return i, float(s[i]), float(t.value)
+    if t.scale <= 0:                                           # a point mass at zero: the empirical threshold
+        return i, float(s[i]), float(t.value)
+    m = int(np.sum(np.isfinite(others))) * (1.0 - t.zero_share)
+    d2 = 1.0 / (1.0 / t.dof_den + 1.0 / max(m * t.dof_num, 1.0))
+    level = 1.0 - min(rate / n / max(1.0 - t.zero_share, 1e-12), 0.5)
+    return i, float(s[i]), float(t.scale * stats.f.ppf(level, t.dof_num, d2))
 
 
 def exclude_baseline_outliers(fitted, b_idx, rate: float, minimum: int, n_conditions: int = 0,

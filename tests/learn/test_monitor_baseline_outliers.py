@@ -61,12 +61,16 @@ def test_the_candidate_is_judged_by_the_law_fitted_without_it():
     s[4] = 400.0
     i, value, limit = largest_outlier(s, RATE, 3)
     assert (i, value) == (4, 400.0)
-    alone = threshold(np.delete(s, 4), RATE / 15, 3, training_size(15)).value
-    assert limit == alone and limit < threshold(s, RATE / 15, 3, training_size(15)).value
-    # a larger index has a lower leave-out threshold: only the largest can exceed its own
-    t = [threshold(np.delete(s, j), RATE / 15, 3, training_size(15)).value for j in range(15)]
+    t = threshold(np.delete(s, 4), RATE / 15, 3, training_size(15))     # the scale fitted without the candidate
+    assert t.dof_num == 3 and t.dof_den == 14 - 3
+    d2 = 1.0 / (1.0 / 11 + 1.0 / (14 * 3))                       # the scale's own scatter from 14 indices
+    assert limit == pytest.approx(t.scale * stats.f(3, d2).ppf(1 - RATE / 15), rel=1e-12)
+    assert limit > t.scale * stats.f(3, 11).ppf(1 - RATE / 15)
+    assert limit < threshold(s, RATE / 15, 3, training_size(15)).scale * stats.f(3, d2).ppf(1 - RATE / 15)
+    # the fitted scale grows with every index: a larger index has the smaller scale without it
+    scales = [threshold(np.delete(s, j), RATE / 15, 3, training_size(15)).scale for j in range(15)]
     order = np.argsort(s)
-    assert np.all(np.diff(np.asarray(t)[order]) <= 1e-9 * max(t))
+    assert np.all(np.diff(np.asarray(scales)[order]) <= 1e-9 * max(scales))
 
 
 def test_the_cap_and_the_minimum_leave_a_further_outlier_in():
