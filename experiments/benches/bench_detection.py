@@ -64,6 +64,8 @@ import numpy as np  # noqa: E402
 from experiments.benches.harness import parser, publish, table  # noqa: E402
 from experiments.benches.plain_tests import plain_alarms  # noqa: E402
 from experiments.second_sim.series import FrequencySeriesConfig, SeriesConfig, drop_pattern, frequency_series  # noqa: E402
+from learn.monitor.alarm_threshold import minimum_baseline  # noqa: E402
+from learn.monitor.baseline_outliers import exclude_baseline_outliers  # noqa: E402
 from learn.monitor.charts import run_charts  # noqa: E402
 from learn.monitor.normal_models import NORMAL_MODELS  # noqa: E402
 from learn.monitor.coverage import coverage, environment_coordinates  # noqa: E402
@@ -101,16 +103,19 @@ CASES = ("daily", "30min", "lab", "lab6")
 
 
 def methods_on(F, C, nb: int, model_name: str, rate: float, seed: int = 0, sign: float = 1.0, held=None,
-               shares=None) -> dict:
-    """Every method's alarms (n,) on one series (baseline: the first ``nb`` tests; ``held``: their
+               shares=None, b_idx=None) -> dict:
+    """Every method's alarms (n,) on one series (baseline period: the first ``nb`` tests; ``b_idx``: those the
+    normal model learns from, all of them when None; ``held``: their
     :func:`~learn.monitor.statistics.held_out_statistics`, computed when None; ``shares``: the ``combined``
-    method's, :data:`~learn.monitor.statistics.SHARES` when None)."""
+    method's, :data:`~learn.monitor.statistics.SHARES` when None). The plain tests take every test of the baseline
+    period."""
     X = np.log(F)
     q = 0 if C is None else C.shape[1]
-    model = NORMAL_MODELS[model_name](X.shape[1], q).fit(X[:nb], None if C is None else C[:nb])
-    b_idx, rest = np.arange(nb), np.arange(nb, len(X))
+    b_idx = np.arange(nb) if b_idx is None else np.asarray(b_idx, int)
+    model = NORMAL_MODELS[model_name](X.shape[1], q).fit(X[b_idx], None if C is None else C[b_idx])
+    rest = np.arange(nb, len(X))
     if held is None:
-        held = held_out_statistics(model.with_choices, X[:nb], None if C is None else C[:nb])
+        held = held_out_statistics(model.with_choices, X[b_idx], None if C is None else C[b_idx])
     det = detect(model, model.with_choices, X, C, b_idx, rest, rate, q, held=held, shares=shares)
     out = {}
     for k, nm in enumerate(det.names):
@@ -144,20 +149,31 @@ def _scores(alarms: dict, damaged, onset: int, per_day: int) -> dict:
     return out
 
 
-def run_case(name: str, seed: int, rate: float, shares=None) -> list:
+def run_case(name: str, seed: int, rate: float, shares=None, keep_outliers: bool = False) -> list:
+    """Every model, damage and size of case ``name`` (seed ``seed``); the baseline's outliers
+    (:mod:`learn.monitor.baseline_outliers`, as ``monitor`` names them) left out of the normal model's baseline
+    unless ``keep_outliers``."""
     cfg, nb, onset, per_day = _case(name, seed)
     fs = frequency_series(cfg)
     rows = []
     for model_name, C in (("pca", None), ("regression", fs.measured_temperature_c[:, None])):
         X = np.log(fs.frequencies_hz[:nb])
         q = 0 if C is None else C.shape[1]
-        Cb = None if C is None else C[:nb]
-        base = NORMAL_MODELS[model_name](X.shape[1], q).fit(X, Cb)
-        held = held_out_statistics(base.with_choices, X, Cb)                   # the baseline is never damaged
-        intact = methods_on(fs.frequencies_hz, C, nb, model_name, rate, seed, held=held, shares=shares)
+
+        def fitted(rows_, X=X, C=C, q=q, model_name=model_name):
+            Cb = None if C is None else C[rows_]
+            mdl = NORMAL_MODELS[model_name](X.shape[1], q).fit(X[rows_], Cb)
+            return mdl, held_out_statistics(mdl.with_choices, X[rows_], Cb)     # the baseline is never damaged
+        b_idx, base, held, found = exclude_baseline_outliers(fitted, np.arange(nb), rate,
+                                                             minimum_baseline(X.shape[1], q), q, keep_outliers)
+        intact = methods_on(fs.frequencies_hz, C, nb, model_name, rate, seed, held=held, shares=shares,
+                            b_idx=b_idx)
         fa = {m: float(a[nb:].mean()) for m, a in intact.items()}
         rows.append({"case": name, "seed": seed, "model": model_name, "damage": "none", "size_pct": 0.0,
-                     "false_alarms": fa, "n_monitoring": len(fs.day) - nb})
+                     "false_alarms": fa, "n_monitoring": len(fs.day) - nb,
+                     "baseline_outliers": found.indices})
+        print(json.dumps({"case": name, "seed": seed, "model": model_name, "baseline_outliers": found.indices,
+                          "excluded": found.excluded}), flush=True)
         damaged = np.arange(len(fs.day)) >= onset
         for damage, which in DAMAGES.items():
             pattern = drop_pattern(cfg.beam, which)
@@ -165,7 +181,7 @@ def run_case(name: str, seed: int, rate: float, shares=None) -> list:
                 F = fs.frequencies_hz.copy()
                 F[damaged] *= np.exp(pattern * np.log1p(-size / 100))
                 res = _scores(methods_on(F, C, nb, model_name, rate, seed, -1.0 if which == "mass" else 1.0,
-                                         held, shares), damaged, onset, per_day)
+                                         held, shares, b_idx), damaged, onset, per_day)
                 rows.append({"case": name, "seed": seed, "model": model_name, "damage": damage, "size_pct": size,
                              "scores": res})
                 print(json.dumps({k: v for k, v in rows[-1].items() if k != "scores"}
@@ -221,6 +237,9 @@ def main(argv=None) -> int:
     p.add_argument("--cases", nargs="+", choices=CASES, default=list(CASES))
     p.add_argument("--shares", nargs="+", metavar="NAME=WEIGHT",
                    help="the combined column's share of each statistic (default: learn.monitor.statistics.SHARES)")
+    p.add_argument("--keep-baseline-outliers", action="store_true",
+                   help="the normal model learns from every baseline test (default: monitor's, the baseline's "
+                        "outliers left out)")
     a = p.parse_args(argv)
     shares = None
     if a.shares:
@@ -232,7 +251,8 @@ def main(argv=None) -> int:
             shares[name] = float(w)
     if a.docs and shares:
         p.error("--docs writes the table of monitor's shares: leave --shares out")
-    rows = [r for case in a.cases for seed in a.seeds for r in run_case(case, seed, a.rate, shares)]
+    rows = [r for case in a.cases for seed in a.seeds
+            for r in run_case(case, seed, a.rate, shares, a.keep_baseline_outliers)]
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     md = markdown(rows) + "\n\nFalse alarms (%) of each seed's intact series:\n\n" + false_alarm_table(rows)

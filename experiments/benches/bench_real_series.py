@@ -70,7 +70,7 @@ from experiments.benches.plain_tests import (held_out_plain_alarms, matched_alar
                                              plain_p_values)
 from learn.monitor import (IdentificationSettings, IdentifiedModes, SeriesInput, monitor_series,  # noqa: E402
                            reference_modes)
-from learn.monitor.alarms import FLAGGED_STATUSES  # noqa: E402
+from learn.monitor.alarms import BASELINE_OUTLIER, FLAGGED_STATUSES  # noqa: E402
 from learn.monitor.identification import cached_identification  # noqa: E402
 from learn.monitor.statistics import DEFAULT_STATISTICS, STATISTICS  # noqa: E402
 from physics.errors import BeamDamageError  # noqa: E402
@@ -521,6 +521,13 @@ def markdown(results: list, rate: float) -> str:
                                                   ("monitor on FFT peaks", "monitor_on_fft_error")) if res[key]]
     notes += [f"{res['set']}: " + "; ".join(res["frequency_estimators"]["texts"]) for res in results
               if res.get("frequency_estimators")]
+    for res in results:
+        left = {what: [res["labels"][i] for i, st in enumerate(res[key] or []) if st == BASELINE_OUTLIER]
+                for what, key in (("monitor", "status"), (ONE_ESTIMATOR, "identification_alone_status"),
+                                  ("monitor on FFT peaks", "monitor_on_fft_status"))}
+        if any(left.values()):
+            notes.append(f"{res['set']}: baseline outliers left out: "
+                         + "; ".join(f"{what} {', '.join(v) or 'none'}" for what, v in left.items()))
     return table(head, lines) + "".join(f"\n\n{n}" for n in notes) + (
         f"\n\nShare of each group's tests flagged at {rate:g} false alarms (`intact`: false alarms; baseline: "
         "each method's held-out alarms, each baseline test judged against the others).\n\n"

@@ -86,6 +86,10 @@ def add_parser(sub):
                         "kept where its scatter is the smaller, else the FFT peak where it reads every baseline test; "
                         "damping and shapes stay the identification's); "
                         "'identification' always by the identification")
+    p.add_argument("--keep-baseline-outliers", action="store_true",
+                   help="keep a baseline test whose held-out novelty lies beyond the baseline's family-wise threshold "
+                        "(rate / n, the law fitted without it) in the baseline period (default: named, left out, "
+                        "status 'baseline outlier')")
     p.add_argument("--workers", type=int, default=1, metavar="N",
                    help="processes identifying the tests (default 1; the results do not depend on it)")
     p.add_argument("--out", metavar="DIR", help="outputs and the identification cache (default without --json: "
@@ -130,7 +134,8 @@ def run(args) -> dict:
     res = monitor_series(series, args.baseline_tests, settings, cache, args.false_alarm_rate, args.normal_model,
                          progress=not args.json, chart=args.chart, statistics=tuple(args.statistics),
                          workers=args.workers, extrapolated_alarms=args.extrapolated_alarms,
-                         frequency_estimator=args.frequency_estimator)
+                         frequency_estimator=args.frequency_estimator,
+                         keep_baseline_outliers=args.keep_baseline_outliers)
     out = judged(res, args.false_alarm_rate, model, beam_x_m)
     out.update(baseline_tests=args.baseline_tests, false_alarm_rate=args.false_alarm_rate, version=package_version(),
                detector=res.detection.to_dict(), charts=None if res.charts is None else res.charts.to_dict(),
@@ -139,6 +144,7 @@ def run(args) -> dict:
                        "normal_model": res.normal_variation["model"], "chart": args.chart,
                        "statistics": list(args.statistics), "extrapolated_alarms": args.extrapolated_alarms,
                        "frequency_estimator": args.frequency_estimator,
+                       "keep_baseline_outliers": args.keep_baseline_outliers,
                        "seed": 0})
     if args.out:
         out["outputs"] = _write(args.out, out, res)

@@ -21,6 +21,8 @@ Steps, one module each:
   analysis, a Gaussian mixture); each gives a squared Mahalanobis distance of a test's residual (the novelty index);
 * :mod:`~learn.monitor.alarm_threshold` -- every baseline test's index by a model that did not see it
   (leave-one-out or k-fold) and the threshold of a false-alarm rate from a scaled F distribution fitted to them;
+* :mod:`~learn.monitor.baseline_outliers` -- a baseline test whose held-out index lies beyond the baseline's
+  family-wise threshold (``rate / n``, the law fitted without it) named and left out of the baseline period;
 * :mod:`~learn.monitor.statistics` -- the detector: the residual index, the environmental scores' ``T^2``, the
   signed common shift and, when chosen, the per-mode prediction interval (:mod:`~learn.monitor.per_mode`), each held
   out and thresholded, the false-alarm rate shared among them (``SHARES``) and calibrated on their joint held-out

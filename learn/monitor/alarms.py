@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from learn.monitor.baseline_outliers import BASELINE_OUTLIER, exclude_baseline_outliers, outlier_novelty
 from learn.monitor.baseline_state import held_out_cached
 from learn.monitor.identification import IdentificationSettings, write_cache
 from learn.monitor.pole_confirmation import confirm_far_poles
@@ -27,8 +28,8 @@ from physics.errors import BeamDamageError, ConfigError
 from physics.io import finite_or_none
 from learn.monitor.workers import identify_files
 
-__all__ = ["EXTRAPOLATED", "EXTRAPOLATED_ALARMS", "FLAGGED_STATUSES", "MODE_LOST", "MODE_MOVED", "STATUSES",
-           "SeriesResult", "changed_text", "monitor_series", "what_changed"]
+__all__ = ["BASELINE_OUTLIER", "EXTRAPOLATED", "EXTRAPOLATED_ALARMS", "FLAGGED_STATUSES", "MODE_LOST", "MODE_MOVED",
+           "STATUSES", "SeriesResult", "changed_text", "monitor_series", "what_changed"]
 
 
 @dataclass
@@ -82,7 +83,8 @@ class SeriesResult:
 def monitor_series(series: SeriesInput, n_baseline: int, settings: IdentificationSettings, cache_dir=None,
                    false_alarm_rate: float = 0.01, normal_model: str | None = None, progress: bool = True,
                    chart: str = "ewma", statistics=DEFAULT_STATISTICS, workers: int = 1,
-                   extrapolated_alarms: str = "auto", frequency_estimator: str = "choose") -> SeriesResult:
+                   extrapolated_alarms: str = "auto", frequency_estimator: str = "choose",
+                   keep_baseline_outliers: bool = False) -> SeriesResult:
     """Monitor a series: identify every test (cached), track the baseline period's modes, learn the normal
     variation on the baseline period, and score every test against the cross-validated threshold.
 
@@ -111,6 +113,11 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     beside the alarms; an alarm carries it in its row's ``beyond_band_text``. A test whose identification found
     poles, none in any reference mode's band, is always flagged so
     (:attr:`learn.monitor.tracking.BeyondBands.unplaced`): ``not identified`` is only a test without poles.
+
+    A baseline test whose held-out residual index lies beyond the baseline's family-wise threshold
+    (:mod:`learn.monitor.baseline_outliers`) is left out of the baseline period: status
+    :data:`~learn.monitor.baseline_outliers.BASELINE_OUTLIER` (its ``novelty`` by the model fitted without it), a
+    warning, ``normal_variation["baseline_outliers"]``; ``keep_baseline_outliers`` names it and keeps it.
     """
     n = len(series.files)
     C = series.conditions
@@ -155,8 +162,16 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
                 np.isfinite(C[i]).all() else "conditions not measured"
     b_idx = np.flatnonzero(ok[:n_baseline])
     Cq = C if q else None
-    model = NORMAL_MODELS[normal_model](m, q).fit(X[b_idx], None if Cq is None else Cq[b_idx])
-    held = held_out_cached(model, X[b_idx], None if Cq is None else Cq[b_idx], cache_dir)   # kept beside the cache
+
+    def fitted(rows):
+        mdl = NORMAL_MODELS[normal_model](m, q).fit(X[rows], None if Cq is None else Cq[rows])
+        return mdl, held_out_cached(mdl, X[rows], None if Cq is None else Cq[rows], cache_dir)  # kept beside the cache
+
+    b_idx, model, held, outliers = exclude_baseline_outliers(fitted, b_idx, false_alarm_rate, need, q,
+                                                             keep_baseline_outliers)
+    if (why := outliers.warning(series.files)):
+        warnings.warn(why)
+    out_idx = np.array(outliers.indices if outliers.excluded else [], int)
     rest = np.flatnonzero(ok)
     rest = rest[rest >= n_baseline]
     det = detect(model, model.with_choices, X, Cq, b_idx, rest, false_alarm_rate, q, ("residual", *statistics),
@@ -165,6 +180,7 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     if (why := season_warning(series.times, series.time_values, n_baseline, det.names if not q else ())):
         warnings.warn(why)
     novelty = det.values[:, det.names.index("residual")]
+    novelty[out_idx] = outlier_novelty(model, X, b_idx, out_idx, Cq)    # held out: the model did not see them
     charts = run_charts(det.vectors, b_idx, false_alarm_rate) if chart == "ewma" else None
     # per-mode normal variation: the residual about what the model explains (conditions, removed factors)
     Xb = X[b_idx]
@@ -181,7 +197,7 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
               "per_mode_std": sigma.tolist(), "per_mode_std_pct": (100 * sigma).tolist(),
               "reference_frequencies_hz": ref.frequencies_hz.tolist(), "tracking_tolerance": ref.tolerance.tolist(),
               "reference_presence": ref.presence.tolist(),
-              "baseline_tests_used": int(b_idx.size),
+              "baseline_tests_used": int(b_idx.size), "baseline_outliers": outliers.to_dict(series.files),
               "frequency_estimators": None if choice is None else choice.to_dict(),
               "missing_entries": "imputed by their conditional mean given the test's other features under the "
                                  "baseline's Gaussian (regression: about the conditions' prediction)"}
@@ -205,6 +221,8 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
             "conditions": None if C is None else dict(zip(series.condition_names, map(finite_or_none, C[i]))),
         })
         rows[-1].update(_detector_fields(det, charts, i, bool(ok[i])))
+        if i in out_idx:
+            rows[-1]["status"] = BASELINE_OUTLIER
     res = SeriesResult(rows, ref, F, np.exp(expected_log), novelty, thr, model, normal, sigma, tests, series, det,
                        charts, beyond, choice)
     series_coverage(res)                                    # every row's ``extrapolated``
@@ -283,8 +301,10 @@ EXTRAPOLATED = "change or unseen conditions"
 #: whose modes could not be identified (a change may be why: counted beside the alarms); a test that cannot be
 #: judged against this baseline (another kind, band or beam; its conditions not measured); :data:`EXTRAPOLATED`;
 #: a test the detector did not alarm whose reference mode moved beyond its band (:data:`MODE_MOVED`) or was lost
-#: (:data:`MODE_LOST`) against the baseline period's odds (:func:`learn.monitor.tracking.beyond_bands`).
-STATUSES = ("alarm", "no alarm", "not identified", "not judged", EXTRAPOLATED, MODE_MOVED, MODE_LOST)
+#: (:data:`MODE_LOST`) against the baseline period's odds (:func:`learn.monitor.tracking.beyond_bands`); a baseline
+#: test left out of the baseline period as its outlier (:data:`BASELINE_OUTLIER`).
+STATUSES = ("alarm", "no alarm", "not identified", "not judged", EXTRAPOLATED, MODE_MOVED, MODE_LOST,
+            BASELINE_OUTLIER)
 #: The statuses that flag a test: a change, or conditions the baseline did not see.
 FLAGGED_STATUSES = ("alarm", EXTRAPOLATED, MODE_MOVED, MODE_LOST)
 #: ``monitor_series``'s choices for an alarm of the environmental statistics on an extrapolated test.

@@ -8,6 +8,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from learn.monitor.baseline_outliers import BASELINE_OUTLIER
 from learn.monitor.normal_models import FactorRemoval, PCARemoval, Regression, _cov, _impute, _mahalanobis
 
 __all__ = ["SCATTER_RATIO_WARN", "Coverage", "Scatter", "baseline_scatter", "coverage", "environment_coordinates",
@@ -172,7 +174,7 @@ def series_coverage(result) -> Coverage | None:
     ``extrapolated_because`` (text or None); None (and every row ``extrapolated: False``) for a model without an
     environment."""
     rows = result.rows
-    judged = np.array([r["status"] not in ("not identified", "not judged") for r in rows])
+    judged = np.array([r["status"] not in ("not identified", "not judged", BASELINE_OUTLIER) for r in rows])
     base = np.flatnonzero(judged & np.array([r["baseline"] for r in rows]))
     later = np.flatnonzero(judged & ~np.array([r["baseline"] for r in rows]))
     C = result.series.conditions

@@ -1,0 +1,86 @@
+"""Benchmark: how often the baseline-outlier rule (:mod:`learn.monitor.baseline_outliers`) leaves a test out of an
+outlier-free Gaussian baseline, and how often it finds one planted outlier.
+
+Run: ``python -m experiments.benches.bench_baseline_outliers [--draws 300] [--rate 0.01] [--out
+out/bench_baseline_outliers]``
+
+Each draw: ``n`` baseline tests of ``m`` log frequencies, one common factor (0.3 %, a temperature) plus independent
+0.1 % scatter; ``pca`` (no conditions) and ``regression`` on the factor measured. Null: the share of draws that lose
+a test (family-wise ``rate`` targeted). Planted: one test's mode 2 read ``k`` percent high; the share of draws that
+name that test (and only it).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
+
+from experiments.benches.harness import parser, table  # noqa: E402
+from learn.monitor.alarm_threshold import held_out_novelty, minimum_baseline  # noqa: E402
+from learn.monitor.baseline_outliers import exclude_baseline_outliers  # noqa: E402
+from learn.monitor.normal_models import NORMAL_MODELS  # noqa: E402
+from physics.io import atomic_write_text  # noqa: E402
+
+__all__ = ["CASES", "draw", "main"]
+
+#: ``(baseline tests, modes)``.
+CASES = ((15, 3), (35, 4))
+#: Planted outliers: mode 2 read this many percent high.
+PLANTED_PCT = (0.0, 1.0)
+
+
+def draw(n: int, m: int, seed: int, planted_pct: float = 0.0):
+    """``(X (n, m) log frequencies, C (n, 1) the measured factor)``; test 0 with mode 2 ``planted_pct`` high."""
+    rng = np.random.default_rng(seed)
+    C = rng.standard_normal((n, 1))
+    X = np.log(10.0 * np.arange(1, m + 1) ** 2) + 3e-3 * C + 1e-3 * rng.standard_normal((n, m))
+    X[0, 1] += np.log1p(planted_pct / 100)
+    return X, C
+
+
+def _named(X, C, model_name: str, rate: float) -> list:
+    n, m = X.shape
+    q = 1 if model_name == "regression" else 0
+
+    def fitted(rows):
+        Cr = C[rows] if q else None
+        model = NORMAL_MODELS[model_name](m, q).fit(X[rows], Cr)
+        return model, {"residual": (held_out_novelty(model.with_choices, X[rows], Cr), None)}
+    return exclude_baseline_outliers(fitted, np.arange(n), rate, minimum_baseline(m, q), q)[3].indices
+
+
+def main(argv=None) -> int:
+    p = parser(__file__, __doc__, docs=None, out="out/bench_baseline_outliers")
+    p.add_argument("--draws", type=int, default=300)
+    p.add_argument("--rate", type=float, default=0.01)
+    a = p.parse_args(argv)
+    rows, lines = [], []
+    for n, m in CASES:
+        for model_name in ("pca", "regression"):
+            for k in PLANTED_PCT:
+                named = [_named(*draw(n, m, 10_000 + s, k), model_name, a.rate) for s in range(a.draws)]
+                any_ = float(np.mean([bool(v) for v in named]))
+                exact = float(np.mean([v == [0] for v in named]))
+                rows.append({"n": n, "modes": m, "model": model_name, "planted_pct": k, "any": any_,
+                             "only_the_planted": exact, "draws": a.draws})
+                lines.append([n, m, model_name, f"{k:g} %" if k else "none", f"{100 * any_:.1f} %",
+                              f"{100 * exact:.1f} %" if k else "-"])
+                print(json.dumps(rows[-1]), flush=True)
+    md = table(["baseline tests", "modes", "model", "planted (mode 2 high)", "draws losing a test",
+                "naming only the planted test"], lines)
+    out = Path(a.out)
+    out.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(out / "baseline_outliers.json", json.dumps({"config": vars(a), "rows": rows}, indent=1))
+    atomic_write_text(out / "baseline_outliers.md", md + "\n")
+    print(md)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
