@@ -10,7 +10,7 @@ from physics.errors import ConvergenceError
 from physics.modal import eigenvalues_from_modal
 
 __all__ = ["MAX_DAMPING", "MISSED_SHARE", "STABILITY_CODES", "MissedModes", "SelectedPoles", "StabilisationDiagram",
-           "missed_clusters", "missed_modes", "select_poles", "stability_status"]
+           "damping_resolution", "missed_clusters", "missed_modes", "select_poles", "stability_status"]
 
 #: Largest damping ratio of a physical pole (LSCF and SSI-cov poles, peaks of peak picking and the circle fit): a
 #: broader one is a computational pole or a bump of the noise floor.
@@ -20,6 +20,15 @@ MAX_DAMPING = 0.2
 #: Stability codes of poles in a stabilisation diagram.
 STABILITY_CODES = {0: "new", 1: "stable frequency", 2: "stable frequency and damping",
                    3: "stable frequency and vector", 4: "stable"}
+
+
+def damping_resolution(natural_frequencies_hz, duration_s):
+    """The least damping ratio a record of ``duration_s`` seconds resolves at each frequency (Hz):
+    ``1 / (2 pi f T)``, the damping whose envelope ``exp(-zeta 2 pi f t)`` falls by a factor e over the record.
+    A lighter damping decays too little within the record for its value to be measured, so the record cannot tell
+    it from zero; an infinite duration resolves every damping (0)."""
+    f = np.asarray(natural_frequencies_hz, float)
+    return np.zeros_like(f) if not np.isfinite(duration_s) else 1.0 / (2 * np.pi * f * float(duration_s))
 
 
 @dataclass(frozen=True)
@@ -36,6 +45,9 @@ class StabilisationDiagram:
     status : ndarray of int, shape (n_poles,)
         See :data:`STABILITY_CODES`; compared with the previous order.
     band_hz : (float, float)
+    duration_s : float
+        Duration of the record the poles come from (s; infinite where unknown): a damping change is judged against
+        at least :func:`damping_resolution` of it, by the status and by the selection's clusters.
     """
 
     order: np.ndarray
@@ -45,9 +57,10 @@ class StabilisationDiagram:
     participation: np.ndarray
     status: np.ndarray
     band_hz: tuple
+    duration_s: float = float("inf")
 
 def stability_status(order, natural_frequencies_hz, damping_ratios, participation, freq_tol=0.01, damping_tol=0.05,
-                     mpf_tol=0.98):
+                     mpf_tol=0.98, duration_s=float("inf")):
     """Stability code (:data:`STABILITY_CODES`) of each pole against the nearest pole of the previous order.
 
     Parameters
@@ -57,9 +70,12 @@ def stability_status(order, natural_frequencies_hz, damping_ratios, participatio
     participation : ndarray, complex, shape (n_poles, n_ref)
         Unit-norm participation vectors.
     freq_tol, damping_tol : float
-        Relative change of frequency / damping below which they are stable.
+        Relative change of frequency / damping below which they are stable; the damping's change relative to the
+        larger of the damping and the record's :func:`damping_resolution` at the pole's frequency.
     mpf_tol : float
         MAC between participation vectors above which the vector is stable (always with one reference).
+    duration_s : float
+        Duration of the record (s); infinite: the damping's change relative to the damping alone.
 
     Returns
     -------
@@ -67,6 +83,7 @@ def stability_status(order, natural_frequencies_hz, damping_ratios, participatio
         0 for the poles of the lowest order and of an order whose previous order holds none.
     """
     fn, zeta, mpf = natural_frequencies_hz, damping_ratios, participation
+    floor = damping_resolution(fn, duration_s)
     status = np.zeros(fn.size, int)
     for p in np.unique(order)[1:]:
         cur = np.nonzero(order == p)[0]
@@ -76,7 +93,7 @@ def stability_status(order, natural_frequencies_hz, damping_ratios, participatio
         d = np.abs(fn[cur][:, None] - fn[prev][None, :])
         near = prev[np.argmin(d, axis=1)]
         f_ok = np.abs(fn[cur] - fn[near]) <= freq_tol * fn[cur]
-        d_ok = np.abs(zeta[cur] - zeta[near]) <= damping_tol * zeta[cur]
+        d_ok = np.abs(zeta[cur] - zeta[near]) <= damping_tol * np.maximum(zeta[cur], floor[cur])
         v_ok = (np.abs(np.sum(mpf[cur].conj() * mpf[near], axis=1)) ** 2 >= mpf_tol) if mpf.shape[1] > 1 \
             else np.ones(cur.size, bool)
         status[cur] = np.where(f_ok, np.where(d_ok & v_ok, 4, np.where(v_ok, 3, np.where(d_ok, 2, 1))), 0)
@@ -280,8 +297,9 @@ def _seed_clusters(d: StabilisationDiagram, cand, seeds, freq_tol, damping_tol):
     dist = np.abs(f_tab[None] - d.natural_frequencies_hz[seeds][:, None, None])  # (n_seeds, n_orders, width)
     near = by_order[np.arange(c_orders.size)[None, :], np.argmin(dist, axis=2)]  # (n_seeds, n_orders)
     fs, zs = d.natural_frequencies_hz[seeds][:, None], d.damping_ratios[seeds][:, None]
+    zr = np.maximum(zs, damping_resolution(fs, d.duration_s))           # at least the damping the record resolves
     ok = (np.abs(d.natural_frequencies_hz[near] - fs) <= freq_tol * fs) \
-        & (np.abs(d.damping_ratios[near] - zs) <= damping_tol * zs)
+        & (np.abs(d.damping_ratios[near] - zs) <= damping_tol * zr)
     clusters = [(sd, near[k][ok[k]]) for k, sd in enumerate(seeds)]
     clusters.sort(key=lambda c: (-c[1].size, -d.order[c[0]]))
     return clusters

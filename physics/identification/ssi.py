@@ -159,7 +159,7 @@ def _svd(R, block_rows):
 
 
 def ssi_poles(R, sampling_frequency_hz, block_rows, orders, band_hz, max_damping=MAX_DAMPING, freq_tol=0.01,
-              damping_tol=0.05, mac_tol=0.98) -> StabilisationDiagram:
+              damping_tol=0.05, mac_tol=0.98, duration_s=float("inf")) -> StabilisationDiagram:
     """Stabilisation diagram of SSI-cov models of the given orders from one SVD.
 
     Parameters
@@ -174,6 +174,9 @@ def ssi_poles(R, sampling_frequency_hz, block_rows, orders, band_hz, max_damping
     band_hz : (float, float)
     max_damping, freq_tol, damping_tol, mac_tol : float
         Pole filter and stability tolerances (see :func:`~physics.identification.poles.stability_status`).
+    duration_s : float
+        Duration of the record (s): a damping change is judged against at least the damping it resolves
+        (:func:`~physics.identification.poles.damping_resolution`); infinite: against the damping alone.
 
     Returns
     -------
@@ -183,7 +186,7 @@ def ssi_poles(R, sampling_frequency_hz, block_rows, orders, band_hz, max_damping
     """
     U, s = _svd(R, block_rows)
     return subspace_diagram(U, s, R.shape[1], orders, sampling_frequency_hz, band_hz, max_damping, freq_tol,
-                            damping_tol, mac_tol)
+                            damping_tol, mac_tol, duration_s)
 
 
 def _segment_modes(cor, block_rows, order, band_hz, fn, shapes, max_damping):
@@ -348,7 +351,8 @@ def _ssi_pass(checked, band, peaks, tol_hz, max_order, block_rows, references, n
         raise ShapeError(f"{where}: max_order {p} exceeds block_rows x channels = {i * min(n_ref, n_ch)}")
     cor = output_correlations(checked, fs, 2 * i, references, band, n_segments, chunk_samples, where)
     orders = np.arange(2, p + 1, 2)
-    diagram = ssi_poles(cor.correlations, cor.sampling_frequency_hz, i, orders, band, max_damping)
+    diagram = ssi_poles(cor.correlations, cor.sampling_frequency_hz, i, orders, band, max_damping,
+                        duration_s=cor.n_samples / cor.sampling_frequency_hz)
     this = SSIPass(band, i, orders, diagram, cor)
     try:
         sel = select_poles(diagram, peaks_hz=peaks.frequency_hz[inside], peak_tol_hz=tol_hz[inside])

@@ -102,7 +102,7 @@ def poles_of_order(U, s, n_out, order, fs, max_damping, band_hz):
 
 
 def subspace_diagram(U, s, n_out, orders, sampling_frequency_hz, band_hz, max_damping=MAX_DAMPING, freq_tol=0.01,
-                     damping_tol=0.05, mac_tol=0.98) -> StabilisationDiagram:
+                     damping_tol=0.05, mac_tol=0.98, duration_s=float("inf")) -> StabilisationDiagram:
     """Stabilisation diagram of the shift-invariant models of the given orders of one column space.
 
     Parameters
@@ -114,7 +114,7 @@ def subspace_diagram(U, s, n_out, orders, sampling_frequency_hz, band_hz, max_da
         Their singular values.
     n_out : int
         Outputs (rows of a block).
-    orders, sampling_frequency_hz, band_hz, max_damping, freq_tol, damping_tol, mac_tol
+    orders, sampling_frequency_hz, band_hz, max_damping, freq_tol, damping_tol, mac_tol, duration_s
         As :func:`~physics.identification.ssi.ssi_poles`.
 
     Returns
@@ -133,5 +133,5 @@ def subspace_diagram(U, s, n_out, orders, sampling_frequency_hz, band_hz, max_da
         fn, zeta, lam, phi, keep = _physical(np.concatenate([m[0] for m in modal]),
                                              np.concatenate([m[1] for m in modal], axis=1), max_damping, band_hz)
         order = order[keep]
-    status = stability_status(order, fn, zeta, phi, freq_tol, damping_tol, mac_tol)
-    return StabilisationDiagram(order, lam, fn, zeta, phi, status, tuple(float(b) for b in band_hz))
+    status = stability_status(order, fn, zeta, phi, freq_tol, damping_tol, mac_tol, duration_s)
+    return StabilisationDiagram(order, lam, fn, zeta, phi, status, tuple(float(b) for b in band_hz), float(duration_s))
