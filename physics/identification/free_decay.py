@@ -58,8 +58,7 @@ SPLIT_RISE, MAX_SPLIT_ROUNDS = 4.0, 2
 #: A decay holds at least this many times the Hankel's block rows (shorter decays are left out).
 MIN_DECAY_ROWS = 3
 #: Least stability code (:data:`~physics.identification.poles.STABILITY_CODES`) of a pole the selection clusters:
-#: stable in frequency and shape; the damping, which a real decay's noise moves from order to order more than the
-#: frequency, is the least-squares refinement's.
+#: stable in frequency, damping and shape (the damping is then refined by the least-squares fit).
 MIN_STATUS = 4
 
 
