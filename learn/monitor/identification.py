@@ -28,7 +28,7 @@ __all__ = ["CACHE_FORMAT", "IdentificationSettings", "IdentifiedModes", "cached_
            "file_key", "identification_settings", "identify_test", "with_narrow_band_poles", "write_cache"]
 
 #: Format tag of a cache entry (a change of the identification or of the entry's fields changes it).
-CACHE_FORMAT = "beam-damage-monitor-cache/7"
+CACHE_FORMAT = "beam-damage-monitor-cache/8"
 
 
 @dataclass(frozen=True)
@@ -162,7 +162,8 @@ def identify_test(path, settings: IdentificationSettings, narrow_hz=None) -> Ide
         with identification_failure(f"{path}: output-only identification ({DEFAULT_OUTPUT_ONLY}: era for a free "
                                     "response, else ssi)"), warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            ident = identify_records(rec, DEFAULT_OUTPUT_ONLY, band, n_modes, settings.records_max_order)
+            ident = identify_records(rec, DEFAULT_OUTPUT_ONLY, band, n_modes, settings.records_max_order,
+                                     mode_in_band=narrow_hz is not None)
         fs = rec.sampling_frequency_hz
         f, z, shapes = _modes_of(ident.estimate.eigenvalues, ident.estimate.shapes)
         return IdentifiedModes("response records", ident.estimate.method, f, z, shapes, tuple(rec.dofs), (),

@@ -111,7 +111,7 @@ def read_response_records(path) -> TimeRecords:
 
 
 def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=None, n_modes=None,
-                     max_order=None, weigh_channels=True) -> RecordsIdentification:
+                     max_order=None, weigh_channels=True, mode_in_band=False) -> RecordsIdentification:
     """Identify modes of response records by an output-only method of :data:`METHODS`.
 
     Parameters
@@ -133,6 +133,9 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         (:func:`~physics.identification.channel_weights.noise_floor_weights`; the shapes returned on the recorded
         channels): the choice of method and every method see a channel by how far its modes stand above its noise,
         not by its units. False: the channels as recorded.
+    mode_in_band : bool
+        SSI-cov: a mode is known to lie in the band (a reference mode re-identified in its own band); see
+        :func:`~physics.identification.ssi.identify_ssi`.
 
     Returns
     -------
@@ -149,7 +152,7 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
 
     def fit(name, signals):
         spec = METHODS[name]
-        options = {"max_order": max_order}
+        options = {"max_order": max_order, "mode_in_band": mode_in_band}
         return spec.fit(signals, fs, band_hz, n_modes, where, **{k: options[k] for k in spec.options})
 
     checked = check_records(records.signals, fs, band_hz, where)     # read once: the methods take it as checked

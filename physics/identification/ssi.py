@@ -329,7 +329,7 @@ def _pass_sizes(fs_dec, n_dec, lowest_hz, n_peaks, n_ch, n_ref, max_order, block
 
 
 def _ssi_pass(checked, band, peaks, tol_hz, max_order, block_rows, references, n_segments, max_damping,
-              chunk_samples, where):
+              chunk_samples, where, mode_in_band=False):
     """One pass over ``band``: the pass, its selected poles (or None) and their segment frequencies/damping."""
     fs = checked.sampling_frequency_hz
     n_ch = checked.signals.shape[0]
@@ -352,7 +352,7 @@ def _ssi_pass(checked, band, peaks, tol_hz, max_order, block_rows, references, n
     cor = output_correlations(checked, fs, 2 * i, references, band, n_segments, chunk_samples, where)
     orders = np.arange(2, p + 1, 2)
     diagram = ssi_poles(cor.correlations, cor.sampling_frequency_hz, i, orders, band, max_damping,
-                        duration_s=cor.n_samples / cor.sampling_frequency_hz)
+                        duration_s=cor.n_samples / cor.sampling_frequency_hz if mode_in_band else float("inf"))
     this = SSIPass(band, i, orders, diagram, cor)
     try:
         sel = select_poles(diagram, peaks_hz=peaks.frequency_hz[inside], peak_tol_hz=tol_hz[inside])
@@ -365,7 +365,7 @@ def _ssi_pass(checked, band, peaks, tol_hz, max_order, block_rows, references, n
 
 def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max_order=None, block_rows=None,
                  references=None, n_segments=8, max_damping=MAX_DAMPING, chunk_samples=8192,
-                 where="record") -> SSIIdentification:
+                 where="record", mode_in_band=False) -> SSIIdentification:
     """SSI-cov identification of a multichannel response record (output-only), sized to the record's spectrum.
 
     The clear peaks of the record's singular-value spectrum (:func:`~physics.identification.fdd.clear_peaks`)
@@ -403,6 +403,12 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     chunk_samples : int
     where : str
         Name of the record in error messages.
+    mode_in_band : bool
+        A mode is known to lie in the band (a series' reference mode, re-identified in its own band): a damping
+        change is judged against at least the damping the record resolves
+        (:func:`~physics.identification.poles.damping_resolution`), so that a lightly damped mode of a short
+        record is stable. Without it, against the damping alone: a harmonic of the excitation, whose damping is
+        zero within the noise, is then unstable and stays a clear peak without a mode.
 
     Returns
     -------
@@ -428,7 +434,7 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     for k in range(MAX_PASSES):
         try:
             this, sel, seg = _ssi_pass(checked, (band[0], hi), peaks, tol_hz, max_order, block_rows, references,
-                                       n_segments, max_damping, chunk_samples, where)
+                                       n_segments, max_damping, chunk_samples, where, mode_in_band)
         except ShapeError:
             if not k:
                 raise
