@@ -14,6 +14,7 @@ from learn.monitor.alarm_threshold import held_out_novelty, threshold, training_
 from learn.monitor.baseline_outliers import (BASELINE_OUTLIER, OUTLIER_SHARE, exclude_baseline_outliers,
                                              largest_outlier)
 from learn.monitor.statistics import held_out_statistics
+from modal_files import write_modal_series
 
 RATE = 0.01
 P = 4                                            # features: log frequencies of four modes
@@ -132,12 +133,7 @@ def outlier_series(tmp_path_factory):
     rng = np.random.default_rng(11)
     F = np.array([10.0, 31.0, 62.0]) * (1 + 0.002 * rng.standard_normal((23, 3)))
     F[3, 1] *= 1.04
-    files = []
-    for k, f in enumerate(F):
-        path = root / f"t{k:02d}.json"
-        path.write_text(json.dumps({"natural_frequencies_hz": f.tolist()}))
-        files.append(str(path))
-    return files
+    return write_modal_series(root, F)
 
 
 def test_monitor_names_the_baseline_outlier_leaves_it_out_and_can_keep_it(outlier_series, capsys):

@@ -15,6 +15,7 @@ from learn.monitor.alarms import FLAGGED_STATUSES
 from learn.monitor.events import group_events, lost_modes_change
 from learn.monitor.tracking import (MODE_LOST, MODE_MOVED, REACH_FACTOR, beyond_bands, reach_bands_hz,
                                    readings_text)
+from modal_files import write_modal_series
 
 F0 = np.array([10.0, 31.0, 62.0])
 
@@ -143,12 +144,7 @@ def jump_series(tmp_path_factory):
     base = F0 * (1 + 0.003 * np.stack([rng.permutation(steps) for _ in F0], axis=1))
     later = F0 * (1 + 0.003 * rng.standard_normal((12, 3)))
     later[6:, 0] = 1.4 * F0[0]
-    files = []
-    for k, f in enumerate(np.r_[base, later]):
-        path = root / f"t{k:02d}.json"
-        path.write_text(json.dumps({"natural_frequencies_hz": f.tolist()}))
-        files.append(str(path))
-    return files
+    return write_modal_series(root, np.r_[base, later])
 
 
 def test_monitor_flags_a_mode_moved_40_percent_beside_the_alarms(jump_series, capsys):
