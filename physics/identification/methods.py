@@ -88,9 +88,8 @@ def _fit_receptance(estimator, frf: MeasuredFRF, drive, n_modes):
     return est, synth, None, np.zeros(0)
 
 
-def _fit_ssi(signals, fs, band_hz, n_modes, where, max_order, mode_in_band=None):
-    res = identify_ssi(signals, fs, band_hz, n_modes, max_order=max_order, where=where,
-                       mode_in_band=bool(mode_in_band))
+def _fit_ssi(signals, fs, band_hz, n_modes, where, max_order, mode_in_band=False):
+    res = identify_ssi(signals, fs, band_hz, n_modes, max_order=max_order, where=where, mode_in_band=mode_in_band)
     return res.estimate, res.diagram
 
 
@@ -134,7 +133,7 @@ METHODS: dict[str, MethodSpec] = {
         "automatic stabilisation-diagram selection",
         (("frequency_std_hz, damping_std", "standard error from the spread of the mode over segments of the "
                                            "record (divided by sqrt of their number)"),),
-        yields_uncertainty=True, options=("max_order", "mode_in_band"), data="records", stationary=True),
+        yields_uncertainty=True, options=("max_order",), data="records", stationary=True),
     "era": MethodSpec(
         _fit_era,
         "output-only, free responses (impacts or plucks without the force): the decays after the hits by the "

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from inspect import signature
 from pathlib import Path
 
 from physics.io.inputs import MAX_BYTES, check_input_file
@@ -134,8 +135,8 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         channels): the choice of method and every method see a channel by how far its modes stand above its noise,
         not by its units. False: the channels as recorded.
     mode_in_band : bool
-        SSI-cov: a mode is known to lie in the band (a reference mode re-identified in its own band); see
-        :func:`~physics.identification.ssi.identify_ssi`.
+        A mode is known to lie in the band (a reference mode re-identified in its own band), passed to a method
+        whose fit takes it (SSI-cov: :func:`~physics.identification.ssi.identify_ssi`).
 
     Returns
     -------
@@ -152,8 +153,10 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
 
     def fit(name, signals):
         spec = METHODS[name]
-        options = {"max_order": max_order, "mode_in_band": mode_in_band}
-        return spec.fit(signals, fs, band_hz, n_modes, where, **{k: options[k] for k in spec.options})
+        options = {k: {"max_order": max_order}[k] for k in spec.options}
+        if mode_in_band and "mode_in_band" in signature(spec.fit).parameters:
+            options["mode_in_band"] = True
+        return spec.fit(signals, fs, band_hz, n_modes, where, **options)
 
     checked = check_records(records.signals, fs, band_hz, where)     # read once: the methods take it as checked
     weights = noise_floor_weights(checked, where) if weigh_channels and checked.signals.shape[0] > 1 else None
