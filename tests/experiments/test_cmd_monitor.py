@@ -49,7 +49,11 @@ def test_an_frf_series_is_identified_once_and_the_slit_alarmed(tmp_path, capsys,
     assert "data:image/png;base64," in (out / "report.html").read_text()
     rows = list(csv.DictReader(open(out / "monitor.csv")))
     assert len(rows) == 16 and rows[13]["alarm"] == "True"
-    assert len(list((out / "cache").glob("*.json"))) == 16
+    entries = [json.loads(p.read_text()) for p in (out / "cache").glob("*.json")]
+    # one entry per test, and one per narrow-band re-identification (the far-pole check of the damaged tests)
+    assert sum(e["narrow_band_hz"] is None for e in entries) == 16
+    assert ({e["file"] for e in entries if e["narrow_band_hz"] is not None}
+            <= {e["file"] for e in entries if e["narrow_band_hz"] is None})
     import learn.monitor.identification
 
     monkeypatch.setattr(learn.monitor.identification, "identify_test", lambda *a: pytest.fail("identified again"))
