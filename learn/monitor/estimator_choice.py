@@ -20,9 +20,9 @@ order) is reported beside it, how steady the comparison is (a MAD of ``n`` Gauss
 ``1.17 / sqrt(n)`` of itself); it does not enter the choice, which would otherwise go to whichever estimator is the
 default wherever the halves split, however the whole baseline compares them.
 Damping, shapes and tracking stay the identification's: a chosen mode's frequency is the FFT peak only in a test
-where the identification tracked the mode (elsewhere it is missing, as in the identification). A chosen mode with no FFT peak in its
-band is read by its FFT peak beyond the band within its reach (:mod:`learn.monitor.fft_beyond`); elsewhere the
-readings beyond the bands are the identification's.
+where the identification tracked the mode (elsewhere it is missing, as in the identification). A chosen mode with
+no FFT peak in its band is read by its FFT peak beyond the band within its reach (:mod:`learn.monitor.fft_beyond`);
+elsewhere the readings beyond the bands are the identification's.
 """
 
 from __future__ import annotations
