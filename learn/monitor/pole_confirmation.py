@@ -16,10 +16,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from learn.monitor.identification import IdentificationSettings, cached_identification, with_narrow_band_poles
-from learn.monitor.tracking import (MAC_MIN, TOLERANCE_SIGMAS, ReferenceModes, narrow_bands_hz, shapes_at,
-                                    track_modes)
-from physics.modal import mac
+from learn.monitor.identification import IdentificationSettings, with_narrow_band_poles
+from learn.monitor.tracking import (TOLERANCE_SIGMAS, ReferenceModes, narrow_bands_hz, narrow_identifier,
+                                    shape_accepts, track_modes)
+from learn.pairs.measured import refit_missing_modes
 
 __all__ = ["far_from_reference", "confirm_far_poles"]
 
@@ -49,32 +49,24 @@ def confirm_far_poles(tests: list, files: list, ref: ReferenceModes, settings: I
     """
     F, _, _, cols = track_modes(tests, ref)
     far = far_from_reference(F, ref)
-    bands = narrow_bands_hz(ref)
     ln_ref = np.log(ref.frequencies_hz)
     out = list(tests)
     for i in np.flatnonzero(far.any(axis=1)):
         t = tests[i]
         if t is None or t.kind == "modal":
             continue
-        add = []
-        for j in np.flatnonzero(far[i]):
-            if t.narrow_band_hz and t.narrow_band_hz[cols[i, j]] is not None:
-                continue
-            lo, hi = bands[j]
-            if t.band_hz is not None:
-                lo, hi = max(lo, t.band_hz[0]), min(hi, t.band_hz[1])
-            found = cached_identification(files[i], settings, cache_dir, pending, (lo, hi))[0] if hi > lo else None
-            if found is None or found.frequencies_hz.size == 0:
-                continue
-            lg = np.log(found.frequencies_hz)
-            S = shapes_at(found, ref.dofs) if ref.shapes is not None else None
-            shape_ok = np.ones(lg.size, bool) if S is None else mac(S, ref.shapes[:, [j]])[:, 0] >= MAC_MIN
-            if np.any(shape_ok & (np.abs(lg - np.log(F[i, j])) < np.abs(lg - ln_ref[j]))):
-                continue                                    # the narrow band sees the tracked pole: kept
-            d = np.abs(lg - ln_ref[j])
-            ok = shape_ok & (d <= ref.tolerance[j]) & (d < abs(np.log(F[i, j]) - ln_ref[j]))
-            if ok.any():
-                add.append((found, int(np.argmin(np.where(ok, d, np.inf)))))
-        for found, k in add:
+        narrow = t.narrow_band_hz or [None] * t.frequencies_hz.size
+        check = [j for j in np.flatnonzero(far[i]) if narrow[cols[i, j]] is None]   # a narrow band's pole: as found
+
+        def accept(found, j, i=i):
+            lg, lt = np.log(found.frequencies_hz), np.log(F[i, j])
+            ok = np.broadcast_to(shape_accepts(ref, found, j), lg.shape)
+            if np.any(ok & (np.abs(lg - lt) < np.abs(lg - ln_ref[j]))):
+                return np.zeros(lg.size, bool)              # the narrow band sees the tracked pole: kept
+            return ok & (np.abs(lg - ln_ref[j]) < abs(lt - ln_ref[j]))
+
+        for _, found, k, _, _ in refit_missing_modes(check, ref.frequencies_hz, ref.tolerance, narrow_bands_hz(ref),
+                                                     t.band_hz, narrow_identifier(files[i], settings, cache_dir,
+                                                                                  pending), accept):
             out[i] = with_narrow_band_poles(out[i], found, [k])
     return out

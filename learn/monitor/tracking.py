@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -16,8 +17,9 @@ from learn.pairs.noise_calibration import robust_std
 from physics.modal import mac
 
 __all__ = ["CLUSTER_GAP", "MAC_MIN", "MIN_COUNT", "MIN_PRESENCE", "MODE_LOST", "MODE_MOVED", "REACH_FACTOR",
-           "BeyondBands", "ReferenceModes", "beyond_bands", "identified_by", "narrow_bands_hz", "reach_bands_hz",
-           "readings_text", "reference_modes", "refit_missing", "shapes_at", "track_modes"]
+           "BeyondBands", "ReferenceModes", "beyond_bands", "identified_by", "narrow_bands_hz", "narrow_identifier",
+           "reach_bands_hz", "readings_text", "reference_modes", "refit_missing", "shape_accepts", "shapes_at",
+           "track_modes"]
 
 #: Baseline poles closer than this (relative) in frequency fall into one cluster.
 CLUSTER_GAP = 0.05
@@ -247,19 +249,31 @@ def refit_missing(tests: list, files: list, ref: ReferenceModes, settings: Ident
     for i, t in enumerate(tests):
         if t is None or t.kind == "modal":
             continue
-
-        def identify(lo, hi, i=i):
-            found = cached_identification(files[i], settings, cache_dir, pending, (lo, hi))[0]
-            return None if found is None else (found, found.frequencies_hz)
-
-        def accept(found, r):
-            S = shapes_at(found, ref.dofs) if ref.shapes is not None else None
-            return True if S is None else mac(S, ref.shapes[:, [r]])[:, 0] >= MAC_MIN
-
         for _, found, k, _, _ in refit_missing_modes(np.flatnonzero(np.isnan(F[i])), ref.frequencies_hz,
-                                                     ref.tolerance, narrow_bands_hz(ref), t.band_hz, identify, accept):
+                                                     ref.tolerance, narrow_bands_hz(ref), t.band_hz,
+                                                     narrow_identifier(files[i], settings, cache_dir, pending),
+                                                     partial(shape_accepts, ref)):
             out[i] = with_narrow_band_poles(out[i], found, [k])
     return out
+
+
+def narrow_identifier(path, settings: IdentificationSettings, cache_dir=None, pending: list | None = None):
+    """``identify(lo, hi)`` -> ``(found, frequencies Hz)`` or None: the file's narrow-band re-identification over
+    ``lo``-``hi`` Hz (:func:`learn.monitor.identification.cached_identification`, ``pending`` as there), the form
+    :func:`learn.pairs.measured.refit_missing_modes` takes."""
+
+    def identify(lo, hi):
+        found = cached_identification(path, settings, cache_dir, pending, (lo, hi))[0]
+        return None if found is None else (found, found.frequencies_hz)
+
+    return identify
+
+
+def shape_accepts(ref: ReferenceModes, found, r: int):
+    """True, or per pole of ``found`` whether its shape matches reference mode ``r``'s (MAC >= :data:`MAC_MIN`;
+    with shapes of 2 or more sensors)."""
+    S = shapes_at(found, ref.dofs) if ref.shapes is not None else None
+    return True if S is None else mac(S, ref.shapes[:, [r]])[:, 0] >= MAC_MIN
 
 
 def identified_by(tests: list, cols) -> list:
