@@ -129,16 +129,16 @@ def largest_outlier(held_out, rate: float, dof_num: int, n_conditions: int = 0) 
 
 
 def exclude_baseline_outliers(fitted, b_idx, rate: float, minimum: int, n_conditions: int = 0,
-                              keep: bool = False, first=None):
+                              keep: bool = False):
     """The baseline rows ``b_idx`` less the outliers of their baseline period (module docstring).
 
     ``fitted(rows)`` returns ``(model, held)``: the normal model fitted on the baseline rows ``rows`` and their
     held-out statistics (:func:`~learn.monitor.statistics.held_out_statistics`, the residual's under
-    ``"residual"``); ``first``: that of ``b_idx``, computed when None. ``minimum``: fewest baseline tests the model
+    ``"residual"``). ``minimum``: fewest baseline tests the model
     needs; at most ``floor(OUTLIER_SHARE * len(b_idx))`` tests are left out. ``keep``: the first round's outlier is
     named, nothing left out. Returns ``(rows, model, held, BaselineOutliers)``."""
     b_idx = np.asarray(b_idx, int)
-    model, held = fitted(b_idx) if first is None else first
+    model, held = fitted(b_idx)
     cap = int(math.floor(OUTLIER_SHARE * b_idx.size))
     named, stopped = [], None
     rows = b_idx
