@@ -12,7 +12,11 @@ shows and decides which poles carry energy). Each kept pole is then refined in i
 Fourier transforms at the record's rate, from each hit's onset, across the cuts of missed hits that add no energy
 (:func:`~physics.identification.band_refine.refine_in_bands`: the closed-form transform of truncated damped
 exponentials and a smooth background, close modes together), so that the other modes, the unmodelled ones and the
-hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. A clear peak of the
+hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. A mode fitted as one
+pole for poles of one peak that the refinement merged, whose frequency moves over its decays (refitted over their
+first and their second halves, :func:`~physics.identification.glide.mode_glide`, more than
+:data:`~physics.identification.glide.GLIDE_SIGMAS` sigma apart), is named in a warning with its glide: a mode whose
+frequency moves with its amplitude, read over the whole decay. A clear peak of the
 record's spectrum (:func:`~physics.identification.decay_peaks.decay_peaks`, the peaks ``fftpeak`` reports) that no
 kept pole holds (a weak mode beyond the model's order, or a diagram with no pole stable enough) is started at its
 peak and refined in its band, the kept poles held fixed (:mod:`~physics.identification.peak_seeds`). A peak still
