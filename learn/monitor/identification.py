@@ -28,7 +28,7 @@ __all__ = ["CACHE_FORMAT", "IdentificationSettings", "IdentifiedModes", "cached_
            "file_key", "identification_settings", "identify_test", "with_narrow_band_poles", "write_cache"]
 
 #: Format tag of a cache entry (a change of the identification or of the entry's fields changes it).
-CACHE_FORMAT = "beam-damage-monitor-cache/8"
+CACHE_FORMAT = "beam-damage-monitor-cache/9"
 
 
 @dataclass(frozen=True)

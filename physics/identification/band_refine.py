@@ -29,7 +29,8 @@ Two poles of one band closer than their half-power half-widths summed and than t
 decay's transform (:data:`RESOLVED_LINES` lines) are one peak: its split between two poles (a mode whose frequency
 moves as its amplitude falls, a component the decays do not resolve) changes from decay to decay with the noise and
 moves each pole by a fraction of the peak's width. After the first sweep the weaker of such a pair (energy over the
-decays and channels) is merged into the stronger (:attr:`BandFit.merged`), which the second sweep fits alone.
+decays and channels) is merged into the stronger (:attr:`BandFit.merged`), which the second sweep fits alone; a
+sweep that leaves such a pair (the refits move the poles) is followed by another, until none is left.
 
 White noise in time is white over the lines of each decay's transform (variance ``N s^2`` per line, real and
 imaginary parts independent): each decay's lines are weighted by ``1 / sqrt(N)``, each channel by the inverse of
@@ -95,7 +96,12 @@ class BandFit:
     merged : ndarray of bool, shape (n_modes,)
         True for a pole unresolved from a stronger one of its band (:data:`RESOLVED_WIDTHS`,
         :data:`RESOLVED_LINES`): one peak, which the stronger pole, fitted alone, stands for. A merged pole is not
-        converged; its band is NaN and its group -1.
+        converged; its band is NaN and its group -1 (its eigenvalue is the one it was merged at).
+    merged_into : ndarray of int, shape (n_modes,)
+        The stronger pole each merged pole was merged into (its index; -1 where not merged). A pole merged into
+        one that is merged later stands for the one that one was merged into (followed to the end).
+    merged_with_hz : ndarray, shape (n_modes,)
+        The natural frequency (Hz) of the stronger pole when each pole was merged into it (NaN where not merged).
     """
 
     eigenvalues: np.ndarray
@@ -109,6 +115,8 @@ class BandFit:
     converged: np.ndarray
     n_lines: int
     merged: np.ndarray
+    merged_into: np.ndarray | None = None
+    merged_with_hz: np.ndarray | None = None
 
 
 def mode_bands(eigenvalues, longest_s, nyquist_hz):
@@ -242,19 +250,19 @@ def _fit_band(data, fs, band, lam, n_ch, order):
 def _unresolved(lam, amps, lengths, fs, group, converged):
     """The converged poles closer to a stronger converged pole of their group than :data:`RESOLVED_WIDTHS` times
     their half-power half-widths summed and than :data:`RESOLVED_LINES` lines of the longest decay (energy: over
-    the decays and channels), shape (n_modes,) of bool."""
+    the decays and channels): shape (n_modes,) of int, the stronger pole's index for each (-1: none)."""
     sigma, f = -lam.real, lam.imag / (2 * np.pi)
     n = np.asarray(lengths, float)[:, None]
     energy = np.sum(np.abs(amps) ** 2 * ((-np.expm1(-2 * sigma[None, :] * n / fs)) / -np.expm1(-2 * sigma / fs))
                     [:, None, :], axis=(0, 1))
-    out = np.zeros(lam.size, bool)
+    out = np.full(lam.size, -1)
     for j in np.argsort(-energy, kind="stable"):
-        if out[j] or not converged[j]:
+        if out[j] >= 0 or not converged[j]:
             continue
-        close = converged & ~out & (group == group[j]) & (np.arange(lam.size) != j) \
+        close = converged & (out < 0) & (group == group[j]) & (np.arange(lam.size) != j) \
             & (np.abs(f - f[j]) < RESOLVED_WIDTHS * (sigma + sigma[j]) / (2 * np.pi)) & (energy <= energy[j]) \
             & (np.abs(f - f[j]) < RESOLVED_LINES * fs / max(lengths))
-        out |= close
+        out[close] = j
     return out
 
 
@@ -365,9 +373,19 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
     converged = np.zeros(m_all, bool)
     n_lines = 0
     merged = np.zeros(m_all, bool)
-    for sweep in range(SWEEPS):
+    into, with_hz = np.full(m_all, -1), np.full(m_all, np.nan)
+    for sweep in range(SWEEPS + m_all):                 # past SWEEPS: while a sweep leaves an unresolved pair
         if sweep:                                       # the bands of the refined poles' half-power widths
-            merged |= _unresolved(lam, amps, lengths, fs, group, converged)
+            stronger = _unresolved(lam, amps, lengths, fs, group, converged)
+            new = stronger >= 0
+            if sweep >= SWEEPS and not new.any():
+                break
+            with_hz[new] = np.abs(lam[stronger[new]]) / (2 * np.pi)
+            chain = np.flatnonzero(merged)              # merged before into a pole merged now: into its stronger
+            chain = chain[new[into[chain]]]
+            into[chain] = stronger[into[chain]]
+            into[new] = stronger[new]
+            merged |= new
             converged &= ~merged
             live = np.flatnonzero(~merged)
             b_live, g_live = mode_bands(np.where(converged, lam, lam0)[live], max(lengths) / fs, fs / 2)
@@ -399,4 +417,4 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
                 amps[j][:, idx] = 2 * c * np.sqrt(lengths[j])
     wn = np.abs(lam)
     return BandFit(lam, wn / (2 * np.pi), -lam.real / wn, f_std, z_std, amps, bands, group, converged, n_lines,
-                   merged)
+                   merged, into, with_hz)

@@ -12,7 +12,11 @@ shows and decides which poles carry energy). Each kept pole is then refined in i
 Fourier transforms at the record's rate, from each hit's onset, across the cuts of missed hits that add no energy
 (:func:`~physics.identification.band_refine.refine_in_bands`: the closed-form transform of truncated damped
 exponentials and a smooth background, close modes together), so that the other modes, the unmodelled ones and the
-hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. A clear peak of the
+hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. A mode fitted as one
+pole for poles of one peak that the refinement merged, whose frequency moves over its decays (refitted over their
+first and their second halves, :func:`~physics.identification.glide.mode_glide`, more than
+:data:`~physics.identification.glide.GLIDE_SIGMAS` sigma apart), is named in a warning with its glide: a mode whose
+frequency moves with its amplitude, read over the whole decay. A clear peak of the
 record's spectrum (:func:`~physics.identification.decay_peaks.decay_peaks`, the peaks ``fftpeak`` reports) that no
 kept pole holds (a weak mode beyond the model's order, or a diagram with no pole stable enough) is started at its
 peak and refined in its band, the kept poles held fixed (:mod:`~physics.identification.peak_seeds`). A peak still
@@ -25,16 +29,18 @@ the decays, unit-norm and unscaled (no force measured).
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from physics.errors import ConvergenceError, ShapeError
-from physics.identification.band_refine import BandFit, refine_in_bands
+from physics.identification.band_refine import RESOLVED_LINES, BandFit, refine_in_bands
 from physics.identification.damped_sinusoids import DampedSinusoidFit, fit_damped_sinusoids, mode_snr
 from physics.identification.decay_peaks import decay_peaks
 from physics.identification.decays import Decays, adds_energy, decay_spectrum, find_decays
 from physics.identification.fdd import clear_peaks, unit_shapes
+from physics.identification.glide import GLIDE_SIGMAS, mode_glide
 from physics.identification.held_reexcitation import refit_held_re_excited
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.peak_seeds import SeededModes, refine_seeds, unheld_peaks
@@ -194,6 +200,34 @@ def _band_spans(x, decays, fitted_spans, window):
     return out
 
 
+def _warn_gliding_merges(full, fs, bands: BandFit, live, band, hi, where):
+    """Warn of each mode in ``band[0]``-``hi`` (Hz) that stands for poles merged into it
+    (:attr:`BandFit.merged_into`) and whose frequency glides significantly over its decays
+    (:func:`~physics.identification.glide.mode_glide`, the other live poles held fixed): one peak of a mode whose
+    frequency moves with its amplitude, not a split the noise made."""
+    into = bands.merged_into
+    if into is None or not np.any(into >= 0):
+        return
+    keep = np.flatnonzero(live & ~np.asarray(bands.merged, bool))
+    for j in np.unique(into[into >= 0]):
+        f = float(bands.natural_frequencies_hz[j])
+        if j not in keep or not band[0] <= f <= hi:
+            continue
+        glide = mode_glide(full, fs, bands.eigenvalues[keep], bands.amplitudes[:, :, keep],
+                           int(np.flatnonzero(keep == j)[0]))
+        if glide is None or not glide.significant:
+            continue
+        parts = np.flatnonzero(into == j)
+        at = np.r_[bands.natural_frequencies_hz[parts], bands.merged_with_hz[parts]]
+        warnings.warn(f"{where}: era's mode at {f:.6g} Hz is one peak the fit split between poles from "
+                      f"{at.min():.6g} to {at.max():.6g} Hz (closer than their half-power half-widths summed and than "
+                      f"{RESOLVED_LINES:g} lines 1/T), fitted as one pole; its frequency glides "
+                      f"{100 * glide.relative:+.2f} % over the decay ({glide.early_hz:.6g} Hz over the first half of "
+                      f"the decays, {glide.late_hz:.6g} Hz over the second; more than {GLIDE_SIGMAS:g} sigma): a mode "
+                      "whose frequency moves with its amplitude, read over the whole decay, weighted towards its loud "
+                      "start", stacklevel=3)
+
+
 def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max_order=None, max_damping=MAX_DAMPING,
                  where="record") -> ERAIdentification:
     """Free-decay identification of a record of impact (or pluck) responses (see the module docstring).
@@ -316,6 +350,7 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         z_std = np.where(ok, held.damping_std, fit.damping_std[idx])
         amps = [held.amplitudes[:, :, j] if ok[j] else fit.amplitudes[:, :, i] for j, i in enumerate(idx)]
         merged = np.asarray(bands.merged, bool)        # a pole merged into a stronger one of its peak is none
+        _warn_gliding_merges(full, fs, bands, ok & ~held.refitted, band, hi, where)
     # the clear peaks no mode holds: each started at its peak and refined in its band, the modes held fixed
     held_hz = np.abs(lam[~merged]) / (2 * np.pi)
     # NaN: a failed fit, or a refit on cut decays (its first piece's amplitudes do not hold past the re-excitation)
