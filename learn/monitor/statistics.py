@@ -199,7 +199,7 @@ SHARES = {"residual": 1.0, "environment": 0.25, "shift": 2.0, "mode": 0.25}
 #: The drop's and the rise's shares of the shift's rate (:func:`detect`'s ``shift_sides``): half each, a change of
 #: either sign seen alike. A larger drop share finds a drop of every mode (a loss of stiffness along the
 #: temperature's direction) on more tests and a rise (a mass lost, a stiffening) on as many fewer, the family's
-#: rate unchanged (docs/monitoring.md, "The shift's two sides").
+#: rate unchanged (docs/monitoring.md, "The shift's weights and its two sides").
 SHIFT_SIDES = (0.5, 0.5)
 #: How :func:`detect` shares the rate: ``joint`` (:data:`SHARES`, calibrated on the joint held-out distribution),
 #: ``equal`` (equal shares, so calibrated), ``sidak`` (equal shares, independent statistics assumed).
