@@ -44,11 +44,12 @@ from learn.monitor.alarm_threshold import TAIL_SHARE, Threshold, _folds, missing
 from learn.monitor.normal_models import PCARemoval, Regression, _impute
 from learn.monitor.per_mode import per_mode_index, per_mode_threshold, per_mode_z
 from learn.monitor.union_calibration import union_rates, value_at
+from physics.errors import ConfigError
 from datetime import datetime
 
-__all__ = ["COMBINATIONS", "DEFAULT_STATISTICS", "PATTERN_MIN", "SHARES", "STATISTICS", "Detection", "detect",
-           "environmental", "held_out_statistics", "covers_seasons", "family_rates", "joint_rate", "joint_rates",
-           "season_warning", "sidak_rate", "statistics_of"]
+__all__ = ["COMBINATIONS", "DEFAULT_STATISTICS", "PATTERN_MIN", "SHARES", "SHIFT_SIDES", "STATISTICS", "Detection",
+           "detect", "environmental", "held_out_statistics", "covers_seasons", "family_rates", "joint_rate",
+           "joint_rates", "season_warning", "shift_weights", "sidak_rate", "statistics_of"]
 
 #: The detector's statistics (module docstring).
 STATISTICS = ("residual", "environment", "shift", "mode")
@@ -72,6 +73,21 @@ def _centre_and_cov(model, X, C):
     return np.broadcast_to(model.mean_, X.shape), model.cov_
 
 
+def shift_weights(cov) -> np.ndarray:
+    """The shift's weights (p,) of the modes' ``ln f`` changes: each mode's inverse normal variance
+    ``1 / cov_ii`` (``cov`` (p, p) the normal covariance), normalised to sum to 1, so that ``w . d`` is the relative
+    change ``d`` common to the modes and its variance under the normal variation is ``w^T cov w``.
+
+    For a common change (``d`` along ``1``) the most efficient linear weights are ``cov^-1 1`` (generalised least
+    squares); with the normal variation one common factor plus each mode's own scatter, ``cov = a 1 1^T + D``,
+    those are ``D^-1 1`` and their signal-to-noise ratio ``sqrt(s / (1 + a s))``, ``s = sum 1 / D_ii``, against
+    ``1 / sqrt(w^T cov w)`` here: equal when ``a = 0`` (``cov`` diagonal), and within a fraction of a percent when
+    the common factor dominates (the temperature: every weighting's variance is then about ``a``). The inverse
+    variances need no inverse of a covariance estimated from 8-15 baseline tests."""
+    var = np.maximum(np.diag(cov), 1e-300)
+    return (1.0 / var) / np.sum(1.0 / var)
+
+
 def statistics_of(model, X, C=None) -> dict:
     """Each statistic of :data:`STATISTICS` that ``model`` (fitted) supports for the tests ``X`` (n, p) of log
     frequencies (NaN: missing, imputed as the model does), ``{name: (index (n,), vectors (n, d) or None)}``.
@@ -89,8 +105,7 @@ def statistics_of(model, X, C=None) -> dict:
         sd = np.sqrt(np.maximum(model.var_[:model.k_], 1e-300))
         U = (_impute(X, model.mean_, model.cov_) - model.mean_) @ model.components_[:, :model.k_] / sd
         out["environment"] = (np.sum(U**2, axis=1), U)
-    var = np.maximum(np.diag(cov), 1e-300)
-    w = (1.0 / var) / np.sum(1.0 / var)
+    w = shift_weights(cov)
     sd_shift = math.sqrt(max(float(w @ cov @ w), 1e-300))
     z = D @ w / sd_shift
     out["shift"] = (z**2, z[:, None])
@@ -119,8 +134,7 @@ def shift_fraction(model, X, C=None) -> np.ndarray:
     """The weighted mean relative frequency change of each test (fraction, signed; ``ln f`` differences)."""
     X = np.asarray(X, float)
     centre, cov = _centre_and_cov(model, X, C)
-    var = np.maximum(np.diag(cov), 1e-300)
-    w = (1.0 / var) / np.sum(1.0 / var)
+    w = shift_weights(cov)
     return (_impute(X, centre, cov) - centre) @ w
 
 
@@ -182,6 +196,11 @@ def sidak_rate(rate: float, k: int) -> float:
 #: change of several modes the residual is the stronger test of the same evidence) and keeps a quarter share, for a
 #: change of one mode alone, which the residual spreads over its degrees of freedom.
 SHARES = {"residual": 1.0, "environment": 0.25, "shift": 2.0, "mode": 0.25}
+#: The drop's and the rise's shares of the shift's rate (:func:`detect`'s ``shift_sides``): half each, a change of
+#: either sign seen alike. A larger drop share finds a drop of every mode (a loss of stiffness along the
+#: temperature's direction) on more tests and a rise (a mass lost, a stiffening) on as many fewer, the family's
+#: rate unchanged (docs/monitoring.md, "The shift's weights and its two sides").
+SHIFT_SIDES = (0.5, 0.5)
 #: How :func:`detect` shares the rate: ``joint`` (:data:`SHARES`, calibrated on the joint held-out distribution),
 #: ``equal`` (equal shares, so calibrated), ``sidak`` (equal shares, independent statistics assumed).
 COMBINATIONS = ("joint", "equal", "sidak")
@@ -265,6 +284,7 @@ class Detection:
     patterns : dict                       missing modes (1-based, text) -> per statistic ``[Threshold]`` (the
                                           shift's drop and rise), for each set of modes found that the baseline
                                           period does not hold throughout
+    shift_sides : tuple                   the drop's and the rise's shares of the shift's rate
     """
 
     names: tuple
@@ -282,6 +302,7 @@ class Detection:
     patterns: dict = field(default_factory=dict)
     shares: dict = field(default_factory=dict)
     calibration: str = "copula"
+    shift_sides: tuple = SHIFT_SIDES
 
     def alarmed_by(self, i: int) -> list:
         """Names of the statistics above their thresholds on test ``i``."""
@@ -299,7 +320,8 @@ class Detection:
         th = {nm: t.to_dict() for nm, t in zip(self.names, self.thresholds)}
         if self.shift_rise is not None:
             th["shift"] = {"drop": th["shift"], "rise": self.shift_rise.to_dict(),
-                           "signed": "a drop and a rise each at half the shift's rate"}
+                           "signed": f"the drop at {self.shift_sides[0]:g} and the rise at {self.shift_sides[1]:g} "
+                                     "of the shift's rate"}
         return {"statistics": list(self.names), "false_alarm_rate": self.rate,
                 "rate_per_statistic": {nm: float(r) for nm, r in zip(self.names, self.rate_each)},
                 "combination": "an alarm when any statistic exceeds its threshold at " + how,
@@ -308,9 +330,10 @@ class Detection:
                                            for key, v in self.patterns.items()}}
 
 
-def _thresholds(model, held, names, each, n_train, n_conditions, missing=0, evidence=0.0):
+def _thresholds(model, held, names, each, n_train, n_conditions, missing=0, evidence=0.0, split=None):
     """Per statistic of ``names``, its thresholds ``[Threshold]`` at its rate ``each[name]`` from the held-out
-    statistics ``held``: one, or the shift's drop and rise sides at half its rate (a side with fewer than 2
+    statistics ``held``: one, or the shift's drop and rise sides at the shares ``split`` of its rate
+    (:data:`SHIFT_SIDES` when None; a side with fewer than 2
     held-out tests: the two-sided threshold for both). ``missing``: modes dropped (the residual's degrees of
     freedom less by as many); ``evidence``: added to the residual's threshold (the missing-mode evidence of a set of
     modes found that the baseline period holds often: a normal set)."""
@@ -329,12 +352,12 @@ def _thresholds(model, held, names, each, n_train, n_conditions, missing=0, evid
         else:
             z = hvec[:, 0][np.isfinite(hvec[:, 0])]
             sides = []
-            for sign in (-1.0, 1.0):
+            for sign, part in zip((-1.0, 1.0), SHIFT_SIDES if split is None else split):
                 y = (sign * z)[sign * z > 0] ** 2
                 if y.size < 2:
                     sides = [threshold(z**2, each[nm], 1, n_train, n_conditions, tail)] * 2
                     break
-                sides.append(threshold(y, each[nm] / 2, 1, n_train, n_conditions, tail, y.size / z.size))
+                sides.append(threshold(y, each[nm] * part, 1, n_train, n_conditions, tail, y.size / z.size))
             out[nm] = sides
     return out
 
@@ -352,18 +375,23 @@ def _ratios(values, z, ths, names):
 
 
 def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int = 0,
-           statistics=DEFAULT_STATISTICS, held=None, combination: str = "joint", shares=None) -> Detection:
+           statistics=DEFAULT_STATISTICS, held=None, combination: str = "joint", shares=None,
+           shift_sides=SHIFT_SIDES) -> Detection:
     """The detector on a series: ``model`` fitted on the baseline tests ``X[b_idx]`` (``make_model()`` an unfitted
     copy for the held-out fits), the monitoring tests ``rest`` (indices) scored by it, the baseline tests held
     out (``held``: their :func:`held_out_statistics`, computed when None); every statistic of ``statistics`` that
     the model supports, thresholded at its rate of ``combination`` (:func:`family_rates`: ``joint`` the shares
     :data:`SHARES`, or ``shares``, calibrated on the held-out statistics, ``equal``, ``sidak``); the shift signed,
-    its drop and its rise each at half its rate.
+    its drop and its rise at the shares ``shift_sides`` of its rate (:data:`SHIFT_SIDES`: half each).
 
     A test whose set of modes found differs from some baseline test's is judged against thresholds of its own
     set: :func:`held_out_statistics` with its missing modes dropped (``pattern``); the residual's missing-mode
     evidence is added to its index, and to its threshold only for a set the baseline period holds in at least
     :data:`PATTERN_MIN` tests (a mode the baseline always held, lost, still raises the index)."""
+    sides = tuple(float(v) for v in shift_sides)
+    if len(sides) != 2 or min(sides) <= 0.0 or abs(sum(sides) - 1.0) > 1e-9:
+        raise ConfigError(f"shift_sides: expected the drop's and the rise's shares of the shift's rate, two numbers "
+                          f"above 0 summing to 1, not {shift_sides!r}")
     X = np.asarray(X, float)
     n = len(X)
     Cb = None if C is None else C[b_idx]
@@ -390,11 +418,11 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
     n_train = training_size(len(b_idx))
     calibration = {"joint": "copula", "equal": "copula"}.get(combination, "")
     if combination == "joint" and len(names) > 1:
-        union = _union_rates(model, held, names, rate, rates, n_train, n_conditions, shares)
+        union = _union_rates(model, held, names, rate, rates, n_train, n_conditions, shares, sides)
         if union is not None:
             rates, calibration = union, "union"
     each = dict(zip(names, rates))
-    ths = _thresholds(model, held, names, each, n_train, n_conditions)
+    ths = _thresholds(model, held, names, each, n_train, n_conditions, split=sides)
     z = vectors["shift"][:, 0] if "shift" in vectors else np.zeros(n)
     R = np.full((n, max(len(names), 1)), np.nan)
     if names:
@@ -411,7 +439,7 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
         hp = held_out_statistics(make_model, X[b_idx], Cb, pattern=P)
         normal = (base_miss == P).all(axis=1).sum() >= PATTERN_MIN
         ev = float(missing_evidence(np.where(P, np.nan, 0.0)[None], X[b_idx])[0]) if normal else 0.0
-        tp = _thresholds(model, hp, names, each, n_train, n_conditions, int(P.sum()), ev)
+        tp = _thresholds(model, hp, names, each, n_train, n_conditions, int(P.sum()), ev, sides)
         R[rows] = _ratios(values[rows], z[rows], tp, names)
         patterns[", ".join(str(j + 1) for j in np.flatnonzero(P)) or "none"] = tp
     ratio = np.where(np.isnan(R), -np.inf, R).max(axis=1)
@@ -421,10 +449,11 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
     return Detection(names, values, tuple(ths[nm][0] for nm in names), rate, rates, ratio, np.nan_to_num(ratio) > 1.0,
                      vectors, 100 * shift, R, combination, ths["shift"][1] if "shift" in ths else None, patterns,
                      {nm: (SHARES if shares is None else shares)[nm] for nm in names} if combination == "joint" else {},
-                     calibration)
+                     calibration, sides)
 
 
-def _union_rates(model, held, names, rate: float, rates, n_train: int, n_conditions: int, shares=None):
+def _union_rates(model, held, names, rate: float, rates, n_train: int, n_conditions: int, shares=None,
+                 sides=SHIFT_SIDES):
     """Per-statistic rates (K,) of ``names`` at the shares :data:`SHARES` (or ``shares``) whose union alarms on the
     held-out baseline tests scored on every statistic (``held``: :func:`held_out_statistics`) at ``rate`` at the
     plotting position (:func:`~learn.monitor.union_calibration.union_rates`); each statistic's threshold as
@@ -435,7 +464,7 @@ def _union_rates(model, held, names, rate: float, rates, n_train: int, n_conditi
     H = np.column_stack([held[nm][0] for nm in names])
     rows = np.isfinite(H).all(axis=1)
     z = held["shift"][1][rows, 0] if "shift" in names else np.zeros(int(rows.sum()))
-    base = _thresholds(model, held, names, dict(zip(names, rates)), n_train, n_conditions)
+    base = _thresholds(model, held, names, dict(zip(names, rates)), n_train, n_conditions, split=sides)
     parts = {}                          # name -> [(threshold, its held-out indices, side share, share of the rate)]
     for nm in names:
         if nm != "shift":
@@ -445,8 +474,8 @@ def _union_rates(model, held, names, rate: float, rates, n_train: int, n_conditi
         if base[nm][0] is base[nm][1]:                      # a side with fewer than 2 tests: both sides' squares
             parts[nm] = [(base[nm][0], zs**2, 1.0, 1.0)] * 2
         else:
-            parts[nm] = [(t, (sign * zs)[sign * zs > 0] ** 2, float(np.mean(sign * zs > 0)), 0.5)
-                         for t, sign in zip(base[nm], (-1.0, 1.0))]
+            parts[nm] = [(t, (sign * zs)[sign * zs > 0] ** 2, float(np.mean(sign * zs > 0)), part)
+                         for t, sign, part in zip(base[nm], (-1.0, 1.0), sides)]
 
     def count(r):
         ths = {nm: [replace(t, value=value_at(t, y, f * r_k, side)) for t, y, side, f in parts[nm]]

@@ -14,7 +14,8 @@ from learn.monitor.alarms import monitor_series
 from learn.monitor.charts import chart_limit, ewma_chart, onset, run_charts
 from learn.monitor.alarm_threshold import threshold
 from learn.monitor.normal_models import PCARemoval
-from learn.monitor.statistics import SHARES, detect, sidak_rate, statistics_of
+from learn.monitor.statistics import SHARES, detect, shift_fraction, shift_weights, sidak_rate, statistics_of
+from physics.errors import ConfigError
 from monitor_series import write_modal_series
 
 
@@ -66,6 +67,77 @@ def test_a_shift_along_the_top_environmental_component_is_seen_by_the_combinatio
     residual = det.values[300:, 0] > det.thresholds[0].value
     assert det.alarm[300:].mean() > 0.9
     assert residual.mean() < 0.03
+
+
+def _factor_cov(a, d):
+    """``a 1 1^T + diag(d)``: a common factor (the temperature) plus each mode's own scatter."""
+    return a * np.ones((len(d), len(d))) + np.diag(d)
+
+
+def test_the_shift_weights_are_the_inverse_variances_within_a_percent_of_the_gls_bound():
+    """For a change common to the modes the generalised least squares' signal-to-noise ratio is
+    ``sqrt(1^T cov^-1 1)``, on ``cov = a 1 1^T + D`` (Sherman-Morrison) ``sqrt(s / (1 + a s))``, ``s = sum 1 / D_ii``,
+    its weights ``D^-1 1``; the shift's inverse variances ``1 / (a + D_ii)`` give ``1 / sqrt(w^T cov w)``: the bound
+    itself without the common factor, within 1 % with a dominant one (the series' temperature), and equal weights
+    fall 30 % short when one mode scatters 30 times more than the others."""
+    d = np.array([1.0, 2.0, 4.0, 30.0]) * 1e-8
+    s = np.sum(1.0 / d)
+    for a in (0.0, 1e-6, 1e-5):
+        cov = _factor_cov(a, d)
+        w = shift_weights(cov)
+        np.testing.assert_allclose(w, (1 / (a + d)) / np.sum(1 / (a + d)), rtol=1e-12)
+        gls = np.linalg.solve(cov, np.ones(4))
+        np.testing.assert_allclose(gls / gls.sum(), (1 / d) / s, rtol=1e-9)          # the direction D^-1 1
+        bound = math.sqrt(s / (1 + a * s))
+        assert math.sqrt(np.ones(4) @ np.linalg.solve(cov, np.ones(4))) == pytest.approx(bound, rel=1e-9)
+        snr = 1.0 / math.sqrt(w @ cov @ w)
+        assert snr <= bound * (1 + 1e-12)
+        assert snr == pytest.approx(bound, rel=1e-12 if a == 0 else 0.01)
+    e = np.full(4, 0.25)
+    assert 1.0 / math.sqrt(e @ np.diag(d) @ e) < 0.7 * math.sqrt(s)
+
+
+def test_the_shift_statistic_is_the_weighted_change_over_its_closed_form_sd():
+    """New Gaussian tests of ``cov`` about the baseline's mean: the shift's ``z`` is ``w . (x - mean)`` over
+    ``sqrt(w^T cov w)`` exactly (:func:`shift_fraction` its numerator), so its standard deviation is 1 within the
+    sampling error of 20 000 tests, and a common change ``delta`` of every ``ln f`` moves it by
+    ``delta / sqrt(w^T cov w)``."""
+    rng = np.random.default_rng(21)
+    cov = _factor_cov(4e-6, np.array([1.0, 2.0, 4.0, 30.0]) * 1e-8)
+    L = np.linalg.cholesky(cov)
+    model = PCARemoval().fit(rng.standard_normal((20000, 4)) @ L.T)
+    X = rng.standard_normal((20000, 4)) @ L.T
+    w = shift_weights(model.cov_)
+    sd = math.sqrt(w @ model.cov_ @ w)
+    z = statistics_of(model, X)["shift"][1][:, 0]
+    np.testing.assert_allclose(z, (X - model.mean_) @ w / sd, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(shift_fraction(model, X), (X - model.mean_) @ w, rtol=1e-10, atol=1e-15)
+    assert np.std(z) == pytest.approx(1.0, abs=0.02)                 # 20 000 draws: standard error 0.005
+    assert sd == pytest.approx(math.sqrt(shift_weights(cov) @ cov @ shift_weights(cov)), rel=0.03)
+    moved = statistics_of(model, X - 1e-3)["shift"][1][:, 0]
+    np.testing.assert_allclose(z - moved, 1e-3 / sd, rtol=1e-9)
+
+
+def test_the_shift_sides_share_its_rate_between_a_drop_and_a_rise():
+    """The shift alone at 4 % on Gaussian data, its rate split 3 : 1: new tests fall beyond the drop's threshold
+    with 3 % and beyond the rise's with 1 % (5000 held-out baseline tests: the side's quantile within 10 %; 100 000
+    new ones), and the two thresholds are the normal law's ``z`` of those rates; half each (the default) gives 2 % per
+    side. A split that is not two shares above 0 summing to 1 is refused."""
+    rng = np.random.default_rng(22)
+    X = rng.standard_normal((105000, 2)) * np.array([1e-3, 2e-3])
+    nb, rest = np.arange(5000), np.arange(5000, len(X))
+    model = PCARemoval().fit(X[nb])
+    for sides in ((0.75, 0.25), (0.5, 0.5)):
+        det = detect(model, model.with_choices, X, None, nb, rest, 0.04, 0, ("shift",), shift_sides=sides)
+        z = det.vectors["shift"][rest, 0]
+        assert np.mean(det.alarm[rest] & (z < 0)) == pytest.approx(0.04 * sides[0], rel=0.2)
+        assert np.mean(det.alarm[rest] & (z > 0)) == pytest.approx(0.04 * sides[1], rel=0.2)
+        assert math.sqrt(det.thresholds[0].value) == pytest.approx(stats.norm.isf(0.04 * sides[0]), rel=0.05)
+        assert math.sqrt(det.shift_rise.value) == pytest.approx(stats.norm.isf(0.04 * sides[1]), rel=0.05)
+        assert det.shift_sides == sides
+    for bad in ((1.0, 0.0), (0.6, 0.6), (1.0,)):
+        with pytest.raises(ConfigError, match="shift_sides"):
+            detect(model, model.with_choices, X, None, nb, rest, 0.04, 0, ("shift",), shift_sides=bad)
 
 
 def test_the_ewma_limit_is_the_closed_form_of_ar1_data_and_gives_its_rate_and_run_length():
