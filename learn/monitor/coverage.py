@@ -26,8 +26,8 @@ MIN_LATER = 5
 HULL_MAX_DIM = 4
 #: Largest share ``V / (m + 1)`` of the baseline's ``m`` tests that are vertices ``V`` of their convex hull at which
 #: :func:`coverage` judges by the hull: a new test of the normal variation lies outside it with that probability
-#: (exchangeability); a small baseline in several coordinates (35 tests, 2 to 4 factors: 20 to 60 %) puts nearly
-#: every new test outside, and the ellipse of the largest held-out distance stands for the hull.
+#: (exchangeability); a small baseline (35 tests in two coordinates: 28 to 36 %) puts a third of them outside, and
+#: the ellipse of the largest held-out distance stands for the hull.
 HULL_VERTEX_SHARE = 0.05
 #: Rows of later tests checked against the hull's facets at a time (a (rows, facets) array).
 HULL_CHUNK = 4096
