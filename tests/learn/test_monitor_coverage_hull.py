@@ -20,8 +20,8 @@ def _triangle(n, seed):
 def test_a_combination_outside_the_baselines_hull_but_inside_its_ellipse_is_extrapolated():
     """A baseline filling the triangle x + y <= 1 (mean (1/3, 1/3), variance 1/18, covariance -1/36): (0.6, 0.6) lies
     within both ranges and at squared Mahalanobis distance 0.533^2 / 2 / (1/36) = 5.12 from the mean, inside the
-    ellipse of the corners' held-out distances (about 8), but beyond the baseline's x + y <= 1: extrapolated, by
-    the hull; (0.3, 0.3) is inside; (1.2, 0) beyond the range of x."""
+    ellipse of the largest held-out distance (8.7, at a corner), but beyond the baseline's x + y <= 1: extrapolated,
+    by the hull; (0.3, 0.3) is inside; (1.2, 0) beyond the range of x."""
     Eb = _triangle(400, 3)
     E = np.r_[Eb, [[0.6, 0.6], [0.3, 0.3], [1.2, 0.0]]]
     nb = len(Eb)
