@@ -150,10 +150,10 @@ def coverage(names, E, baseline, later) -> Coverage:
     finite_b = np.isfinite(Eb).all(axis=1)
     finite_l = later[np.isfinite(E[later]).all(axis=1)] if later.size else later
     if k >= 2:
-        inside = outside_hull(Eb[finite_b], E[finite_l])
-        if inside is not None:
+        outside = outside_hull(Eb[finite_b], E[finite_l])
+        if outside is not None:
             hull = np.zeros(n, bool)
-            hull[finite_l] = inside
+            hull[finite_l] = outside
     flag = np.zeros(n, bool)
     reasons = [None] * n
     for i in later:
