@@ -278,6 +278,19 @@ def _warn_split(path, estimate) -> None:
         warnings.warn(split_text(path, estimate.natural_frequencies_hz, pairs), UserWarning, stacklevel=2)
 
 
+def _warn_duplicate_dofs(path, dofs) -> None:
+    """Warn of channels that share a DOF label (two records of one node and direction): their shape entries are kept
+    apart here, but modal data with a DOF twice are refused by 'update', 'classify' and 'discrepancy'."""
+    where = {}
+    for k, dof in enumerate(dofs, 1):
+        where.setdefault(dof, []).append(k)
+    twice = [f"{dof} (channels {', '.join(map(str, ks))})" for dof, ks in where.items() if len(ks) > 1]
+    if twice:
+        warnings.warn(f"{path}: channels share a DOF label: {'; '.join(twice)}; modal.json keeps each channel's "
+                      "row, but 'update', 'classify' and 'discrepancy' refuse a DOF measured twice: relabel or drop "
+                      "one of them", UserWarning, stacklevel=2)
+
+
 def _warn_if_free(records, method, band) -> None:
     """Warn when ``method``, one of :data:`STATIONARY_METHODS` named by the user, is given a free response."""
     where = str(records.metadata.get("source", "records"))
@@ -292,6 +305,7 @@ def _run_output_only(args, records, band) -> dict:
     method = args.method or DEFAULT_OUTPUT_ONLY
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
+        _warn_duplicate_dofs(args.file, records.dofs)
         if method in STATIONARY_METHODS:
             _warn_if_free(records, method, band)
         ident = identify_records(records, method, band, args.modes, args.max_order)
