@@ -14,6 +14,8 @@ from cli_runs import run_cli
 from experiments.cli import build_parser
 from experiments.cli.cmd_monitor import chart_axis, threshold_label, threshold_text
 from monitor_series import write_modal_series
+from physics.identification import identify_frf
+from physics.io import MeasuredFRF
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 FS_HZ = 1000.0
@@ -122,3 +124,19 @@ def test_the_monitor_help_lists_every_key_of_its_json_and_the_report_captions_it
     assert "novelty index (residual statistic) against its threshold" in report
     assert "of the residual statistic at" in report
     shutil.rmtree(out_dir)
+
+
+def test_the_stabilisation_diagram_labels_its_curve_in_the_frfs_units(monkeypatch, tmp_path):
+    """An accelerance's mode indicator is in m/s^2/N, not the receptance's m/N."""
+    import experiments.studies.plots_identify as plots
+
+    f = np.arange(20.0, 200.0, 0.25)
+    w, wn = 2 * np.pi * f, 2 * np.pi * np.array([60.0, 140.0])
+    receptance = (1 / (wn[None] ** 2 - w[:, None] ** 2 + 2j * 0.01 * wn[None] * w[:, None])).sum(axis=1)
+    frf = MeasuredFRF(f, -w ** 2 * receptance, ("2:+Z",), ("2:+Z",), kind="accelerance")
+    ident = identify_frf(frf, method="lscf")
+    figures = []
+    monkeypatch.setattr(plots, "figure_png", lambda fig: figures.append(fig) or b"")
+    plots.write_outputs(ident, tmp_path / "id")
+    labels = [ax.get_ylabel() for fig in figures for ax in fig.axes]
+    assert "sqrt(sum |H|^2) (m/s^2/N)" in labels and not any("(m/N)" in label for label in labels)
