@@ -15,7 +15,7 @@ from experiments.cli import build_parser
 from experiments.cli.cmd_monitor import chart_axis, threshold_label, threshold_text
 from monitor_series import write_modal_series
 from physics.identification import identify_frf
-from physics.io import MeasuredFRF
+from physics.io import MeasuredFRF, write_frf_npz
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 FS_HZ = 1000.0
@@ -140,3 +140,17 @@ def test_the_stabilisation_diagram_labels_its_curve_in_the_frfs_units(monkeypatc
     plots.write_outputs(ident, tmp_path / "id")
     labels = [ax.get_ylabel() for fig in figures for ax in fig.axes]
     assert "sqrt(sum |H|^2) (m/s^2/N)" in labels and not any("(m/N)" in label for label in labels)
+
+
+def test_an_frf_file_without_a_stable_pole_is_named_by_discrepancy(capsys, tmp_path):
+    """Noise alone: LSCF finds no stable pole, and the refusal says in which file."""
+    rng = np.random.default_rng(0)
+    f = np.arange(1.0, 1200.0, 0.5)
+    path = tmp_path / "noise.npz"
+    write_frf_npz(path, MeasuredFRF(f, 1e-6 * (rng.standard_normal(f.size) + 1j * rng.standard_normal(f.size)),
+                                    ("2:+Y",), ("2:+Y",), kind="receptance"))
+    code, out, err = run_cli(capsys, ["discrepancy", "--measured", str(path), "--out", str(tmp_path / "d")])
+    assert (code, out) == (2, "")
+    assert err == (f"beam-damage discrepancy: error: {path}: no pole is stable over enough model orders: raise "
+                   "max_order, widen the band or relax the selection tolerances\n")
+    assert not (tmp_path / "d").exists()
