@@ -20,7 +20,7 @@ from learn.monitor.statistics import covers_seasons
 from learn.monitor.estimator_choice import FREQUENCY_ESTIMATORS
 from learn.monitor.events import group_events, identification_change, lost_modes_change
 from learn.monitor.verdicts import event_verdicts
-from physics.errors import ConfigError
+from physics.errors import BeamDamageError, ConfigError
 from physics.io import (FRF, MODAL, TIME, accepted, atomic_write_bytes, atomic_write_text, figure_png, pyplot,
                         to_jsonable)
 from datagen.store import package_version
@@ -132,12 +132,10 @@ def run(args) -> dict:
     series = _series(args)
     model = beam = beam_x_m = None
     if args.model:
-
-        model = load_model(args.model)
-        _, beam_x_m = model.measured_beam(args.beam)
+        model = _flagged("--model", load_model, args.model)
+        _, beam_x_m = _flagged("--beam", model.measured_beam, args.beam)
     elif args.beam:
-
-        beam = load_beam(args.beam)
+        beam = _flagged("--beam", load_beam, args.beam)
     settings = identification_settings(args.band, beam, model)
     cache = Path(args.out) / "cache" if args.out else None
     res = monitor_series(series, args.baseline_tests, settings, cache, args.false_alarm_rate, args.normal_model,
@@ -160,6 +158,16 @@ def run(args) -> dict:
     if not args.json:
         _print(out, res)
     return out
+
+
+def _flagged(flag: str, load, value):
+    """``load(value)``, its refusal prefixed with ``flag`` (``--beam nosuch: neither a beam preset ...``)."""
+    try:
+        return load(value)
+    except BeamDamageError as exc:
+        text = str(exc)
+        raise ConfigError(f"{flag} {text}" if value is not None and text.startswith(str(value)) else
+                          f"{flag}: {text}") from None
 
 
 def judged(res, false_alarm_rate: float, model=None, beam_x_m=None) -> dict:

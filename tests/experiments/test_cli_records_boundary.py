@@ -154,3 +154,18 @@ def test_an_frf_file_without_a_stable_pole_is_named_by_discrepancy(capsys, tmp_p
     assert err == (f"beam-damage discrepancy: error: {path}: no pole is stable over enough model orders: raise "
                    "max_order, widen the band or relax the selection tolerances\n")
     assert not (tmp_path / "d").exists()
+
+
+@pytest.mark.parametrize("option, value, expected", [
+    ("--beam", "nosuch", "--beam nosuch: neither a beam preset (beam5, beam6, beam8) nor an existing beam file"),
+    ("--model", "no/such/dir", "--model no/such/dir: not a model directory (no config.json); create one with "
+                               "'beam-damage train'"),
+])
+def test_monitor_names_the_option_of_a_bad_beam_or_model_before_identifying(capsys, tmp_path, option, value,
+                                                                            expected):
+    tests = [str(_npz(tmp_path / f"t{k:02d}.npz", np.ones((1, 100)))) for k in range(12)]
+    code, out, err = run_cli(capsys, ["monitor", *tests, "--baseline-tests", "11", option, value, "--out",
+                                      str(tmp_path / "mon")])
+    assert (code, out) == (2, "")
+    assert err == f"beam-damage monitor: error: {expected}\n"
+    assert not (tmp_path / "mon").exists()
