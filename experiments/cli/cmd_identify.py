@@ -23,11 +23,16 @@ from physics.io import (FRF, TIME, MeasuredFRF, NodeGeometry, accepted, format_c
                         atomic_write_text, modal_data_to_dict)
 from physics.modal import mac
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "counted", "run"]
 
 
 #: Highest model order accepted, and LSCF's default.
 MAX_ORDER, LSCF_MAX_ORDER = 200, 40
+
+
+def counted(n: int, noun: str) -> str:
+    """``n`` and ``noun``, plural unless ``n`` is 1 (``1 mode``, ``3 channels``)."""
+    return f"{n} {noun}" + ("" if n == 1 else "s")
 
 
 def modes_list(e) -> list:
@@ -137,7 +142,7 @@ def run(args) -> dict:
 
         out["outputs"] = write_outputs(ident, args.out)
     if not args.json:
-        print(f"{out['file']}: {len(out['modes'])} modes by {out['method']} in "
+        print(f"{out['file']}: {counted(len(out['modes']), 'mode')} by {out['method']} in "
               f"{out['band_hz'][0]:g}-{out['band_hz'][1]:g} Hz ({out['scaling']}, "
               f"fit error median {out['fit_error_db']['median']:.3g} dB, 90th percentile "
               f"{out['fit_error_db']['p90']:.3g} dB)")
@@ -338,8 +343,8 @@ def _run_output_only(args, records, band) -> dict:
         print(out["method_choice"])
         if others:
             print(setups_text(out))
-        print(f"{out['file']}: {len(out['modes'])} modes by {method} in {out['band_hz'][0]:g}-"
-              f"{out['band_hz'][1]:g} Hz from {len(out['dofs'])} channels x {out['duration_s']:.4g} s "
+        print(f"{out['file']}: {counted(len(out['modes']), 'mode')} by {method} in {out['band_hz'][0]:g}-"
+              f"{out['band_hz'][1]:g} Hz from {counted(len(out['dofs']), 'channel')} x {out['duration_s']:.4g} s "
               f"({out['scaling']})")
         print(f"{'mode':>4} {'f (Hz)':>12} {'+-std':>9} {'zeta':>10} {'+-std':>9} {'MPC':>7}")
         partial = {p["mode"] for p in out.get("partial_modes", ())}

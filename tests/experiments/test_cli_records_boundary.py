@@ -169,3 +169,12 @@ def test_monitor_names_the_option_of_a_bad_beam_or_model_before_identifying(caps
     assert (code, out) == (2, "")
     assert err == f"beam-damage monitor: error: {expected}\n"
     assert not (tmp_path / "mon").exists()
+
+
+def test_one_mode_of_one_channel_is_said_in_the_singular(capsys, tmp_path):
+    """A 50-Hz decay (decay rate 1 /s) of one channel, 2 s at 1 kHz: '1 mode ... from 1 channel', not '1 modes'."""
+    t = np.arange(2000) / FS_HZ
+    path = _npz(tmp_path / "decay.npz", (np.sin(2 * np.pi * 50 * t) * np.exp(-t))[None])
+    code, out, err = run_cli(capsys, ["identify", str(path)])
+    assert code == 0, err
+    assert f"{path}: 1 mode by era in 0-400 Hz from 1 channel x 2 s" in out
