@@ -18,7 +18,7 @@ from learn.pairs.measured import pair_modes_by_frequency
 from physics import discrepancy as dsc
 from physics.effects import CANDIDATES
 from physics.supports import SUPPORTS
-from physics.errors import ConfigError
+from physics.errors import ConfigError, ConvergenceError
 from physics.io import FRF, MODAL, accepted, dof_positions_text
 
 __all__ = ["CLASSIFY_PAIRING", "add_parser", "run"]
@@ -53,6 +53,11 @@ def run(args) -> dict:
     except dsc.ImplausibleTest as exc:   # before any fit: the result is the pairing and its causes
         _stop(exc.result["stopped"])
         return {**exc.result, "beam_file": None, "exit_code": 2}
+    except ConvergenceError as exc:      # e.g. no stable pole in an FRF file: the file named
+        if str(args.measured) in str(exc):
+            raise
+        raise ConvergenceError(f"{args.measured}: {exc}", exc.iterations, exc.residual,
+                               parameter=exc.parameter) from None
     res, recal = out.pop("_result")
     if not args.json:
         _print(out, res, recal)

@@ -23,11 +23,16 @@ from physics.io import (FRF, TIME, MeasuredFRF, NodeGeometry, accepted, format_c
                         atomic_write_text, modal_data_to_dict)
 from physics.modal import mac
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "counted", "run"]
 
 
 #: Highest model order accepted, and LSCF's default.
 MAX_ORDER, LSCF_MAX_ORDER = 200, 40
+
+
+def counted(n: int, noun: str) -> str:
+    """``n`` and ``noun``, plural unless ``n`` is 1 (``1 mode``, ``3 channels``)."""
+    return f"{n} {noun}" + ("" if n == 1 else "s")
 
 
 def modes_list(e) -> list:
@@ -137,7 +142,7 @@ def run(args) -> dict:
 
         out["outputs"] = write_outputs(ident, args.out)
     if not args.json:
-        print(f"{out['file']}: {len(out['modes'])} modes by {out['method']} in "
+        print(f"{out['file']}: {counted(len(out['modes']), 'mode')} by {out['method']} in "
               f"{out['band_hz'][0]:g}-{out['band_hz'][1]:g} Hz ({out['scaling']}, "
               f"fit error median {out['fit_error_db']['median']:.3g} dB, 90th percentile "
               f"{out['fit_error_db']['p90']:.3g} dB)")
@@ -278,6 +283,19 @@ def _warn_split(path, estimate) -> None:
         warnings.warn(split_text(path, estimate.natural_frequencies_hz, pairs), UserWarning, stacklevel=2)
 
 
+def _warn_duplicate_dofs(path, dofs) -> None:
+    """Warn of channels that share a DOF label (two records of one node and direction): their shape entries are kept
+    apart here, but modal data with a DOF twice are refused by 'update', 'classify' and 'discrepancy'."""
+    where = {}
+    for k, dof in enumerate(dofs, 1):
+        where.setdefault(dof, []).append(k)
+    twice = [f"{dof} (channels {', '.join(map(str, ks))})" for dof, ks in where.items() if len(ks) > 1]
+    if twice:
+        warnings.warn(f"{path}: channels share a DOF label: {'; '.join(twice)}; modal.json keeps each channel's "
+                      "row, but 'update', 'classify' and 'discrepancy' refuse a DOF measured twice: relabel or drop "
+                      "one of them", UserWarning, stacklevel=2)
+
+
 def _warn_if_free(records, method, band) -> None:
     """Warn when ``method``, one of :data:`STATIONARY_METHODS` named by the user, is given a free response."""
     where = str(records.metadata.get("source", "records"))
@@ -292,6 +310,7 @@ def _run_output_only(args, records, band) -> dict:
     method = args.method or DEFAULT_OUTPUT_ONLY
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
+        _warn_duplicate_dofs(args.file, records.dofs)
         if method in STATIONARY_METHODS:
             _warn_if_free(records, method, band)
         ident = identify_records(records, method, band, args.modes, args.max_order)
@@ -324,8 +343,8 @@ def _run_output_only(args, records, band) -> dict:
         print(out["method_choice"])
         if others:
             print(setups_text(out))
-        print(f"{out['file']}: {len(out['modes'])} modes by {method} in {out['band_hz'][0]:g}-"
-              f"{out['band_hz'][1]:g} Hz from {len(out['dofs'])} channels x {out['duration_s']:.4g} s "
+        print(f"{out['file']}: {counted(len(out['modes']), 'mode')} by {method} in {out['band_hz'][0]:g}-"
+              f"{out['band_hz'][1]:g} Hz from {counted(len(out['dofs']), 'channel')} x {out['duration_s']:.4g} s "
               f"({out['scaling']})")
         print(f"{'mode':>4} {'f (Hz)':>12} {'+-std':>9} {'zeta':>10} {'+-std':>9} {'MPC':>7}")
         partial = {p["mode"] for p in out.get("partial_modes", ())}

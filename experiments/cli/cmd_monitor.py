@@ -20,7 +20,7 @@ from learn.monitor.statistics import covers_seasons
 from learn.monitor.estimator_choice import FREQUENCY_ESTIMATORS
 from learn.monitor.events import group_events, identification_change, lost_modes_change
 from learn.monitor.verdicts import event_verdicts
-from physics.errors import ConfigError
+from physics.errors import BeamDamageError, ConfigError
 from physics.io import (FRF, MODAL, TIME, accepted, atomic_write_bytes, atomic_write_text, figure_png, pyplot,
                         to_jsonable)
 from datagen.store import package_version
@@ -29,7 +29,14 @@ from physics.beam import load_beam
 from experiments.studies.report import Section, Table, figure, write_report
 import warnings
 
-__all__ = ["add_parser", "chart", "judged", "run"]
+__all__ = ["JSON_KEYS", "add_parser", "chart", "chart_axis", "judged", "run", "threshold_label", "threshold_text"]
+
+
+#: The keys of the ``--json`` result (and of monitor.json, which adds ``outputs``).
+JSON_KEYS = ("tests", "events", "counts", "identification_change", "lost_modes_change", "baseline_scatter",
+             "baseline_trend", "coverage", "normal_variation", "threshold", "first_alarm", "n_alarms_after_baseline",
+             "n_not_identified", "n_not_judged", "baseline_tests", "false_alarm_rate", "version", "detector", "charts",
+             "config")
 
 
 def add_parser(sub):
@@ -95,10 +102,8 @@ def add_parser(sub):
     p.add_argument("--out", metavar="DIR", help="outputs and the identification cache (default without --json: "
                                                 "out/monitor)")
     p.add_argument("--json", action="store_true",
-                   help='print {"tests": [...], "events": [...], "counts", "identification_change", '
-                        '"lost_modes_change", "baseline_scatter", "baseline_trend", "coverage", "baseline_tests", '
-                        '"false_alarm_rate", "normal_variation", "detector", "charts", "first_alarm", "version", '
-                        '"config"}')
+                   help="print {" + ", ".join(f'"{k}": [...]' if k in ("tests", "events") else f'"{k}"'
+                                              for k in JSON_KEYS) + '}, and "outputs" with --out')
     p.set_defaults(func=run, flags={"n_baseline": "--baseline-tests", "workers": "--workers"})
 
 
@@ -109,6 +114,10 @@ def _series(args) -> SeriesInput:
         return read_conditions(args.conditions)
     if not args.tests:
         raise ConfigError("no test: give TEST... or --conditions CSV")
+    folders = [t for t in args.tests if Path(t).is_dir()]
+    if folders:
+        raise ConfigError(f"TEST {folders[0]}: is a directory; give its test files in time order "
+                          f"({Path(folders[0]) / '*'}) or list them in --conditions CSV")
     return SeriesInput.from_files(args.tests)
 
 
@@ -123,12 +132,10 @@ def run(args) -> dict:
     series = _series(args)
     model = beam = beam_x_m = None
     if args.model:
-
-        model = load_model(args.model)
-        _, beam_x_m = model.measured_beam(args.beam)
+        model = _flagged("--model", load_model, args.model)
+        _, beam_x_m = _flagged("--beam", model.measured_beam, args.beam)
     elif args.beam:
-
-        beam = load_beam(args.beam)
+        beam = _flagged("--beam", load_beam, args.beam)
     settings = identification_settings(args.band, beam, model)
     cache = Path(args.out) / "cache" if args.out else None
     res = monitor_series(series, args.baseline_tests, settings, cache, args.false_alarm_rate, args.normal_model,
@@ -151,6 +158,16 @@ def run(args) -> dict:
     if not args.json:
         _print(out, res)
     return out
+
+
+def _flagged(flag: str, load, value):
+    """``load(value)``, its refusal prefixed with ``flag`` (``--beam nosuch: neither a beam preset ...``)."""
+    try:
+        return load(value)
+    except BeamDamageError as exc:
+        text = str(exc)
+        raise ConfigError(f"{flag} {text}" if value is not None and text.startswith(str(value)) else
+                          f"{flag}: {text}") from None
 
 
 def judged(res, false_alarm_rate: float, model=None, beam_x_m=None) -> dict:
@@ -256,8 +273,8 @@ def _write(out_dir, out: dict, res) -> dict:
     later = len(out["tests"]) - out["baseline_tests"]
     summary = Section("Summary", paragraphs=(
         f"{len(out['tests'])} tests, the first {out['baseline_tests']} the baseline period; {m} modes tracked; "
-        f"normal variation: {nv['model']}; threshold {thr['value']:.4g} for a false-alarm rate of "
-        f"{out['false_alarm_rate']:g} (held-out baseline rate {thr['held_out_false_alarm_rate']:.3g}).",
+        f"normal variation: {nv['model']}; {threshold_text(out)}; held-out baseline rate "
+        f"{thr['held_out_false_alarm_rate']:.3g}.",
         f"Of the {later} later tests: {cnt['alarm']} alarms, {cnt[MODE_MOVED]} {MODE_MOVED} and {cnt[MODE_LOST]} "
         f"{MODE_LOST} beyond their bands, {cnt['not identified']} not identified, "
         f"{cnt['no alarm']} without an alarm, {cnt['not judged']} not judged (another kind, band or beam; conditions "
@@ -298,7 +315,9 @@ def _write(out_dir, out: dict, res) -> dict:
     bad = tuple((r["file"], r["status"], r["error"]) for r in out["tests"] if not r["identified"])
     if bad:
         tables.append(Table("Tests not identified or not judged", ("file", "status", "error"), bad, collapsed=True))
-    section = Section("Control chart", figures=(figure(root / "monitor.png"),), tables=tuple(tables))
+    caption = ("Each mode's frequency relative to its baseline median (%) and the novelty index (residual "
+               "statistic) against its threshold; the baseline period shaded")
+    section = Section("Control chart", figures=(figure(root / "monitor.png", caption),), tables=tuple(tables))
     written = write_report(root, "Monitoring series", (section,), summary)
     return {**paths, "report.html": written["html"], "report.md": written["markdown"]}
 
@@ -318,7 +337,7 @@ def chart(res):
     drawn at its moved frequency (hollow markers)."""
     plt = pyplot()
 
-    t = np.array([r["time_value"] for r in res.rows])
+    t, xlabel = chart_axis(res.series.times, np.array([r["time_value"] for r in res.rows]))
     base = np.array([r["baseline"] for r in res.rows])
     alarm = np.array([r["alarm"] for r in res.rows])
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True)
@@ -347,10 +366,14 @@ def chart(res):
     if lost.any():                                  # no index: drawn at the top edge, counted in the legend
         a2.plot(t[lost], np.full(lost.sum(), 0.96), "x", color="tab:orange", ms=7, mew=1.5,
                 transform=a2.get_xaxis_transform(), label=f"not identified ({lost.sum()})")
+    det = res.detection
     a2.axhline(res.threshold.value, color="tab:red", ls="--",
-               label=f"threshold ({100 * res.threshold.rate:g} % false alarms)")
-    a2.set(xlabel="time (days)" if res.series.times[0] is not None else "test", ylabel="novelty index",
+               label=threshold_label(res.threshold.rate, det.rate if det else res.threshold.rate,
+                                     len(det.names) if det else 1))
+    a2.set(xlabel=xlabel, ylabel="novelty index (residual statistic)",
            title=f"Novelty index ({res.normal_variation['model']})")
+    if res.series.times[0] is None:
+        a2.xaxis.set_major_locator(plt.MaxNLocator(integer=True))
     a2.legend(fontsize=7)
     if base.any():
         hi = t[base].max()
@@ -358,6 +381,38 @@ def chart(res):
             ax.axvspan(t[base].min(), hi, color="tab:green", alpha=0.1, lw=0)
         a1.text(t[base].min(), 1.0, " baseline period", transform=a1.get_xaxis_transform(), va="top", fontsize=7)
     return fig
+
+
+def chart_axis(times, time_values) -> tuple:
+    """The chart's abscissa and its label: the test number from 1 (as the text and the events count them) without
+    times, else the time values, days since the first test for ISO dates, the numbers as given otherwise."""
+    if times[0] is None:
+        return np.arange(1, len(time_values) + 1, dtype=float), "test (1 = the first)"
+    try:
+        float(times[0])
+    except (TypeError, ValueError):
+        return time_values, "time (days since the first test)"
+    return time_values, "time (the time column of --conditions, its unit)"
+
+
+def threshold_label(rate: float, family_rate: float, n_statistics: int) -> str:
+    """The legend of the novelty index's threshold: its own rate and, when several statistics share the
+    false-alarm rate, the family-wise rate it is a share of."""
+    own = f"threshold ({100 * rate:.3g} % false alarms"
+    if n_statistics > 1:
+        return own + f"; {100 * family_rate:.3g} % over the {n_statistics} statistics)"
+    return own + ")"
+
+
+def threshold_text(out: dict) -> str:
+    """The novelty index's threshold in words, with its own rate and the family-wise false-alarm rate it is a share
+    of, e.g. ``threshold 581.4 of the residual statistic at 0.312 % false alarms (1 % over the 4 statistics)``."""
+    thr, names = out["threshold"], (out.get("detector") or {}).get("statistics") or ("residual",)
+    text = (f"threshold {thr['value']:.4g} of the residual statistic at {100 * thr['false_alarm_rate']:.3g} % false "
+            "alarms")
+    if len(names) > 1:
+        text += f" ({100 * out['false_alarm_rate']:.3g} % over the {len(names)} statistics)"
+    return text
 
 
 def _scatter_text(sc: dict) -> str:
@@ -378,11 +433,12 @@ def _print(out: dict, res) -> None:
           f"tracked at " + ", ".join(f"{f:.4g}" for f in res.reference.frequencies_hz) + " Hz (std "
           + ", ".join(f"{100 * s:.2g}" for s in res.sigma) + " %)")
     extra = ("; R^2 " + ", ".join(f"{v:.3f}" for v in nv["r2"])) if "r2" in nv else ""
-    print(f"normal variation: {nv['model']}{extra}; threshold {thr['value']:.4g} at {out['false_alarm_rate']:g} "
-          f"false alarms (held-out baseline: {thr['held_out_false_alarm_rate']:.3g})")
+    print(f"normal variation: {nv['model']}{extra}; {threshold_text(out)}; held-out baseline rate "
+          f"{thr['held_out_false_alarm_rate']:.3g}")
     for r in out["tests"]:
         if r["error"]:
-            print(f"  {r['file']}: {r['status']}: {r['error']}")
+            error = r["error"].removeprefix(f"{r['file']}: ")           # the file is named once
+            print(f"  {r['file']}: {r['status']}: {error}")
     cnt = out["counts"]
     print(f"after the baseline period: {cnt['alarm']} alarms, {cnt[MODE_MOVED]} {MODE_MOVED}, {cnt[MODE_LOST]} "
           f"{MODE_LOST}, {cnt['not identified']} not identified, "

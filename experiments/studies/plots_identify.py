@@ -27,8 +27,9 @@ _MARKERS = {0: ("o", "0.7", "new"), 1: ("x", "tab:orange", "f"), 2: ("^", "tab:b
             3: ("v", "tab:purple", "f+v"), 4: ("s", "tab:green", "stable")}
 
 
-def stabilisation_png(diagram, frequency_hz, frf, selected_hz=()) -> bytes:
-    """Stabilisation diagram over the log mode indicator; selected poles as vertical lines."""
+def stabilisation_png(diagram, frequency_hz, frf, selected_hz=(), units="m/N") -> bytes:
+    """Stabilisation diagram over the log mode indicator (in the FRFs' ``units``); selected poles as vertical
+    lines."""
     fig, ax = plt.subplots(figsize=(9, 5.5))
     for code, (mk, col, lab) in _MARKERS.items():
         sel = diagram.status == code
@@ -44,7 +45,7 @@ def stabilisation_png(diagram, frequency_hz, frf, selected_hz=()) -> bytes:
     ax.set_xlim(diagram.band_hz)
     ax2 = ax.twinx()
     ax2.semilogy(frequency_hz, np.sqrt(mode_indicator(frf)), color="0.3", lw=0.8)
-    ax2.set_ylabel("sqrt(sum |H|^2) (m/N)")
+    ax2.set_ylabel(f"sqrt(sum |H|^2) ({units})")
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=5, fontsize=7, frameon=False)
     ax.set_title("LSCF stabilisation diagram")
     fig.tight_layout()
@@ -115,8 +116,8 @@ def write_outputs(ident: Identification, out_dir) -> dict:
     labels = [f"{a}/{b}" for a in ident.frf.response_dofs for b in ident.frf.reference_dofs]
     files = {"modal.json": (json.dumps(modal_data_to_dict(ident.modal_data), indent=1) + "\n").encode()}
     if ident.diagram is not None:
-        files["stabilisation.png"] = stabilisation_png(ident.diagram, f, h,
-                                                             ident.estimate.natural_frequencies_hz)
+        files["stabilisation.png"] = stabilisation_png(ident.diagram, f, h, ident.estimate.natural_frequencies_hz,
+                                                       ident.frf.units)
     files["overlay.png"] = overlay_png(f, h, ident.synthesised, labels, ident.frf.kind, ident.frf.units)
     synth = synthesised_frf(ident)
     written = {}

@@ -87,8 +87,11 @@ def holds_response_records(path) -> bool:
         try:
             with zipfile.ZipFile(path) as zf:
                 return "signals.npy" in zf.namelist()
-        except (zipfile.BadZipFile, OSError, EOFError, ValueError):
-            return False                              # the FRF reader names what is wrong
+        except (zipfile.BadZipFile, OSError, EOFError, ValueError) as exc:
+            raise FileFormatError(f"{path}: not a readable .npz ({type(exc).__name__}: "
+                                  f"{' '.join(str(exc).split())[:150]}); expected an .npz of FRFs (frequency_hz, frf, "
+                                  "response_dofs, reference_dofs) or of response time series (signals, "
+                                  "sampling_frequency_hz)") from None
     if fmt.name == "csv":
         with open(path, encoding="utf-8-sig", errors="replace") as fh:
             lines = (fh.readline(SNIFF_LINE_CHARS) for _ in range(SNIFF_LINES))   # bounded: no newline in 2 GB
@@ -109,6 +112,13 @@ def read_response_records(path) -> TimeRecords:
                               "output-only shapes need one quantity over all channels")
     return TimeRecords(rec.time_step_s, rec.signals[resp], tuple(rec.dofs[i] for i in resp),
                        tuple(rec.quantities[i] for i in resp), rec.metadata)
+
+
+def _tried(error, why: str):
+    """``error`` (a :class:`ConvergenceError` or :class:`ShapeError` of the method picked) with the pick and what the
+    other method gave appended, so that the refusal names the methods tried."""
+    extra = {"iterations": error.iterations, "residual": error.residual} if isinstance(error, ConvergenceError) else {}
+    return type(error)(f"{error} ({why})", parameter=error.parameter, **extra)
 
 
 def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=None, n_modes=None,
@@ -179,10 +189,10 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
     except (ConvergenceError, ShapeError) as first:
         other = STATIONARY_METHOD if verdict.free else FREE_RESPONSE_METHOD
         if other == FREE_RESPONSE_METHOD and not verdict.decays.starts.size:
-            raise
+            raise _tried(first, f"{why}; {other} not tried: the record holds no decay") from None
         try:
             est, diagram = fit(other, checked)
         except (ConvergenceError, ShapeError):
-            raise first from None
+            raise _tried(first, f"{why}; {other} found no mode either") from None
         why = f"{why}; {picked} found no mode ({first}), so {other}"
     return result(est, diagram, why)

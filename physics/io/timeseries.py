@@ -29,8 +29,8 @@ _QUANTITIES = ("displacement", "velocity", "acceleration")
 def _records(path, signals, fs, dofs, quantity) -> TimeRecords:
     if signals.ndim != 2 or signals.shape[1] < 2 or not np.issubdtype(signals.dtype, np.number) \
             or np.iscomplexobj(signals):
-        raise FileFormatError(f"{path}: field 'signals' must be a real (n_channels, n_samples) array, got "
-                              f"{signals.dtype} of shape {signals.shape}")
+        raise FileFormatError(f"{path}: field 'signals' must be a real (n_channels, n_samples) array of at least 2 "
+                              f"samples, got {signals.dtype} of shape {signals.shape}")
     if not (np.isfinite(fs) and fs > 0):
         raise FileFormatError(f"{path}: field 'sampling_frequency_hz' must be a finite number > 0, got {fs:g}")
     if quantity not in _QUANTITIES:
@@ -58,7 +58,7 @@ def read_time_npz(path) -> TimeRecords:
     dofs = [str(d) for d in z["dofs"].reshape(-1)] if "dofs" in z else None
     quantity = str(z["quantity"]) if "quantity" in z else "acceleration"
     signals = z["signals"]
-    if signals.ndim == 2 and signals.shape[0] > signals.shape[1]:
+    if signals.ndim == 2 and signals.shape[0] > signals.shape[1] >= 2:
         raise FileFormatError(f"{path}: field 'signals' of shape {signals.shape} holds more channels than samples; "
                               "expected (n_channels, n_samples), one row per channel (transposed?)")
     return _records(path, signals, float(rate[0]), dofs, quantity)

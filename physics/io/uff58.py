@@ -146,8 +146,9 @@ def _frf_records(uf: "UffFile") -> tuple:
             skipped[ft] = skipped.get(ft, 0) + 1
     if not frfs:
         found = ", ".join(f"{ft} ({UFF_FUNCTION_NAMES.get(ft, 'unknown')}) x{c}" for ft, c in skipped.items())
-        hint = "; time records need a force channel: estimate FRFs with 'beam-damage estimate'" \
-            if set(skipped) == {1} else ""
+        hint = ("; time records need a force channel to give FRFs ('beam-damage estimate FILE --out FRF.uff'); "
+                "without one, identify the responses output-only ('beam-damage identify FILE --out DIR') and give "
+                "DIR/modal.json") if set(skipped) == {1} else ""
         raise FileFormatError(f"{path}: dataset 58 records hold no FRF (function type 4); function types "
                               f"found: {found}{hint}")
     if skipped:

@@ -45,7 +45,7 @@ def test_a_one_dimensional_signals_field_is_refused_with_its_shape(capsys, tmp_p
     code, out, err = run_cli(capsys, ["identify", str(path)])
     assert (code, out) == (2, "")
     assert err == (f"beam-damage identify: error: {path}: field 'signals' must be a real (n_channels, n_samples) "
-                   "array, got float64 of shape (100,)\n")
+                   "array of at least 2 samples, got float64 of shape (100,)\n")
 
 
 def test_a_multichannel_record_too_short_for_the_channel_floors_names_the_file(capsys, tmp_path):
