@@ -40,8 +40,9 @@ __all__ = ["CASES", "DESIGNS", "draw", "large_sample", "main"]
 CASES = ((15, 3), (35, 4))
 #: Planted outliers: mode 2 read this many percent high.
 PLANTED_PCT = (0.0, 1.0)
-#: Designs of the regression's conditions in :func:`large_sample`.
-DESIGNS = 8
+#: Designs of the regression's conditions in :func:`large_sample`, whose held-out indices are computed this many
+#: baselines at a time.
+DESIGNS, CHUNK = 8, 2000
 
 
 def draw(n: int, m: int, seed: int, planted_pct: float = 0.0):
@@ -78,11 +79,13 @@ def large_sample(n: int, m: int, model_name: str, draws: int, rate: float, plant
         X[:, 0, 1] += np.log1p(planted_pct / 100)
         if model_name == "regression":
             model = NORMAL_MODELS["regression"](m, 1).fit(X[0], C[0])
-            res, h = held_out_regression(X, C[0]), held_out_leverage(C[0])
+            res = np.concatenate([held_out_regression(X[j:j + CHUNK], C[0]) for j in range(0, b, CHUNK)])
+            h = held_out_leverage(C[0])
             d2, critical = n - 1 - m - 1, simulated_critical_ratio(model, n, rate, C[0])
         else:
             model = NORMAL_MODELS["pca"](m, 0).fit(X[0])
-            res, h = held_out_pca(X, model.k_)[0], 0.0
+            res = np.concatenate([held_out_pca(X[j:j + CHUNK], model.k_)[0] for j in range(0, b, CHUNK)])
+            h = 0.0
             d2, critical = n - 1 - model.dof_, simulated_critical_ratio(model, n, rate)
         d1 = model.dof_
         bonferroni = stats.f.ppf(1 - rate / n, d1, 1 / (1 / d2 + 1 / ((n - 1) * d1)))
@@ -101,7 +104,7 @@ def main(argv=None) -> int:
     p.add_argument("--rate", type=float, default=0.01)
     a = p.parse_args(argv)
     rows, lines = [], []
-    for n, m in CASES:
+    for n, m in CASES if a.draws else ():
         for model_name in ("pca", "regression"):
             for k in PLANTED_PCT:
                 named = [_named(*draw(n, m, 10_000 + s, k), model_name, a.rate) for s in range(a.draws)]

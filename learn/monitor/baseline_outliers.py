@@ -39,8 +39,10 @@ import numpy as np
 from learn.monitor.alarm_threshold import LOG_SCALE_SPAN, LOO_MAX, missing_evidence, threshold, training_size
 from learn.monitor.normal_models import PCARemoval, Regression
 
-__all__ = ["BASELINE_OUTLIER", "OUTLIER_SHARE", "BaselineOutliers", "Outlier", "exclude_baseline_outliers",
-           "held_out_leverage", "largest_outlier", "outlier_novelty"]
+__all__ = ["BASELINE_OUTLIER", "BISECTIONS", "OUTLIER_SHARE", "SIMULATIONS", "SIMULATION_CHUNK",
+           "SIMULATION_CONFIDENCE", "SIMULATION_SEED", "BaselineOutliers", "Outlier", "candidate_ratio",
+           "exclude_baseline_outliers", "f_scale", "held_out_leverage", "held_out_pca", "held_out_regression",
+           "largest_outlier", "outlier_novelty", "simulated_critical_ratio"]
 
 #: The status of a baseline test named an outlier of its baseline period and left out of it.
 BASELINE_OUTLIER = "baseline outlier"
