@@ -246,7 +246,7 @@ def simulated_critical_ratio(model, n: int, rate: float, conditions=None, draws:
 
 
 def largest_outlier(held_out, rate: float, dof_num: int, n_conditions: int = 0, leverage=None,
-                    critical: float | None = None) -> tuple:
+                    critical=None) -> tuple:
     """``(position, its index, its threshold)`` of the largest finite held-out index of ``held_out`` (n,), each over
     its own widening ``1 + leverage`` (:func:`held_out_leverage`; None: all alike), and its threshold: the scale of
     ``F(d1, d2)`` fitted to the other indices so reduced (the degrees of freedom of
@@ -307,7 +307,8 @@ def exclude_baseline_outliers(fitted, b_idx, rate: float, minimum: int, n_condit
     while True:
         Cr = None if conditions is None else np.asarray(conditions, float)[rows]
         lev = None if Cr is None else held_out_leverage(Cr)
-        critical = partial(simulated_critical_ratio, model, rows.size, rate, Cr)
+        critical = partial(simulated_critical_ratio, model, rows.size, rate, Cr) \
+            if isinstance(model, (PCARemoval, Regression)) else None
         pos, value, limit = largest_outlier(held["residual"][0], rate, model.dof_, n_conditions, lev, critical)
         if pos is None or not value > limit:
             break
