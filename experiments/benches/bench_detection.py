@@ -175,7 +175,7 @@ def run_case(name: str, seed: int, rate: float, shares=None, keep_outliers: bool
             mdl = NORMAL_MODELS[model_name](X.shape[1], q).fit(X[rows_], Cb)
             return mdl, held_out_statistics(mdl.with_choices, X[rows_], Cb)     # the baseline is never damaged
         b_idx, base, held, found = exclude_baseline_outliers(fitted, np.arange(nb), rate,
-                                                             minimum_baseline(X.shape[1], q), q, keep_outliers)
+                                                             minimum_baseline(X.shape[1], q), q, keep_outliers, C)
         intact = methods_on(fs.frequencies_hz, C, nb, model_name, rate, seed, held=held, shares=shares,
                             b_idx=b_idx)
         fa = {m: float(a[nb:].mean()) for m, a in intact.items()}

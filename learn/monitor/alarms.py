@@ -168,7 +168,7 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
         return mdl, held_out_cached(mdl, X[rows], None if Cq is None else Cq[rows], cache_dir)  # kept beside the cache
 
     b_idx, model, held, outliers = exclude_baseline_outliers(fitted, b_idx, false_alarm_rate, need, q,
-                                                             keep_baseline_outliers)
+                                                             keep_baseline_outliers, Cq)
     if (why := outliers.warning(series.files)):
         warnings.warn(why)
     out_idx = np.array(outliers.indices if outliers.excluded else [], int)

@@ -3,43 +3,65 @@
 With a short baseline period the threshold of a small false-alarm rate is the largest held-out index (a rate below
 ``1 / (n + 1)``: :func:`~learn.monitor.alarm_threshold.threshold`), so one baseline test far from the others (a
 record started during the hit, a first test before the structure settled) sets it. The rule: the largest held-out
-residual index of the ``n`` baseline tests is compared with the threshold of the family-wise rate over the baseline,
-``rate / n`` (Bonferroni), of the scaled F law fitted to the *other* ``n - 1`` indices (the candidate left out, so
-that it does not widen its own yardstick), read as a prediction from a scale fitted to ``n - 1`` indices
-(:func:`largest_outlier`); beyond it, the test is an outlier of its baseline. It is left out, the
-normal model fitted again and every remaining test's index held out again, and the rule applied again, up to
-:data:`OUTLIER_SHARE` of the baseline period and never below the fewest baseline tests the model needs.
+residual index of the ``n`` baseline tests (a regression's each over its own widening ``1 + h``, ``h`` its
+conditions' leverage, :func:`held_out_leverage`) over the scale of the scaled F law fitted to the *other* ``n - 1``
+(:func:`f_scale`; the candidate left out, so that it does not widen its own yardstick) is compared with the critical
+ratio of the family-wise rate over the baseline: the ratio that outlier-free Gaussian baselines of ``n`` tests
+under the fitted normal model exceed at that rate, by a seeded simulation of the same statistic
+(:func:`simulated_critical_ratio`: the held-out indices of a regression on the baseline's conditions, or of a PCA
+with the fitted components' variances and the same components removed, leave-one-out in closed form). Beyond it,
+the test is an outlier of its baseline (:func:`largest_outlier`). It is left out, the normal model fitted again and
+every remaining test's index held out again, and the rule applied again, up to :data:`OUTLIER_SHARE` of the
+baseline period and never below the fewest baseline tests the model needs. Where the simulation does not apply (a
+factor or mixture model, folds beyond :data:`~learn.monitor.alarm_threshold.LOO_MAX` tests, exact zeros among the
+indices) the critical ratio is the law's prediction quantile at ``rate / n`` (Bonferroni).
 
-Only the largest index is a candidate in each round: the fitted scale grows with each index it is fitted to, so a
-larger index has the lower leave-out threshold, and if the largest does not exceed its own none exceeds theirs. Only
-the residual (the frequencies' pattern the normal variation does not produce) names an outlier: a test far along
-the environment's directions (a re-made clamp, a re-placed mass) is the normal variation the baseline period must
-hold, and the statistics of the environment judge it.
+The largest of ``n`` held-out indices is not one index of the law: the indices share their models' training tests
+and the fitted scale scatters, so a Bonferroni read of the law at ``rate / n`` leaves a test out of 1.4 % (``pca``)
+and 1.35 % (``regression``) of outlier-free Gaussian baselines of 15 tests at 1 % targeted (docs/monitoring.md);
+the simulated ratio holds the rate for the statistic the rule reads.
+
+Only the largest (reduced) index is a candidate in each round: the fitted scale grows with each index it is fitted
+to, so a larger index has the lower leave-out threshold, and if the largest does not exceed its own none exceeds
+theirs. Only the residual (the frequencies' pattern the normal variation does not produce) names an outlier: a test
+far along the environment's directions (a re-made clamp, a re-placed mass) is the normal variation the baseline
+period must hold, and the statistics of the environment judge it.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
-from learn.monitor.alarm_threshold import missing_evidence, threshold, training_size
+from learn.monitor.alarm_threshold import LOG_SCALE_SPAN, LOO_MAX, missing_evidence, threshold, training_size
+from learn.monitor.normal_models import PCARemoval, Regression
 
-__all__ = ["BASELINE_OUTLIER", "OUTLIER_SHARE", "BaselineOutliers", "Outlier", "exclude_baseline_outliers",
-           "largest_outlier", "outlier_novelty"]
+__all__ = ["BASELINE_OUTLIER", "BISECTIONS", "OUTLIER_SHARE", "SIMULATIONS", "SIMULATION_CHUNK",
+           "SIMULATION_CONFIDENCE", "SIMULATION_SEED", "BaselineOutliers", "Outlier", "candidate_ratio",
+           "exclude_baseline_outliers", "f_scale", "held_out_leverage", "held_out_pca", "held_out_regression",
+           "largest_outlier", "outlier_novelty", "simulated_critical_ratio"]
 
 #: The status of a baseline test named an outlier of its baseline period and left out of it.
 BASELINE_OUTLIER = "baseline outlier"
 #: At most this share of the baseline period is left out as outliers (``floor``).
 OUTLIER_SHARE = 0.25
+#: Outlier-free Gaussian baselines drawn to read the critical ratio (:func:`simulated_critical_ratio`), in chunks of
+#: this many, from this seed.
+SIMULATIONS, SIMULATION_CHUNK, SIMULATION_SEED = 2000, 500, 0
+#: The critical ratio's simulated exceedance is below the rate with this confidence (:func:`simulated_critical_ratio`).
+SIMULATION_CONFIDENCE = 0.75
+#: Bisection steps of :func:`f_scale` over ``2 LOG_SCALE_SPAN`` e-folds (a relative precision below 1e-13).
+BISECTIONS = 50
 
 
 @dataclass(frozen=True)
 class Outlier:
     """One baseline test named an outlier: ``index`` (position in the series), its held-out residual index
-    ``novelty`` among the ``n_baseline`` baseline tests of round ``round`` (1-based), and ``threshold``, the threshold
-    at ``rate / n_baseline`` of the law fitted to the other held-out indices."""
+    ``novelty`` among the ``n_baseline`` baseline tests of round ``round`` (1-based), and ``threshold``, its threshold
+    at the family-wise rate over them (:func:`largest_outlier`)."""
 
     index: int
     novelty: float
@@ -59,7 +81,7 @@ class BaselineOutliers:
 
     ``outliers``: those named, in the order named; ``excluded``: whether they were left out of the baseline
     (``False``: kept on request, named only, the first round's alone); ``rate``: the family-wise rate over the
-    baseline (each round's threshold at ``rate / n``); ``cap``: most tests that may be left out; ``stopped``: a test
+    baseline (each round's threshold at it); ``cap``: most tests that may be left out; ``stopped``: a test
     beyond its threshold left in because the cap or the fewest baseline tests was reached (its :class:`Outlier`), or
     None."""
 
@@ -74,9 +96,11 @@ class BaselineOutliers:
         return [o.index for o in self.outliers]
 
     def to_dict(self, files=None) -> dict:
-        return {"rule": "the largest held-out residual index of the n baseline tests beyond the threshold at rate / n "
-                        "of the scaled F law fitted to the other n - 1 (Bonferroni over the baseline); left out, the "
-                        "model refitted and the rule applied again, at most a quarter of the baseline period",
+        return {"rule": "the largest held-out residual index of the n baseline tests (a regression's over 1 + its "
+                        "leverage) over the scaled F law's scale fitted to the other n - 1, beyond the ratio that "
+                        "outlier-free Gaussian baselines under the fitted model exceed at the family-wise rate "
+                        "(seeded simulation); left out, the model refitted and the rule applied again, at most a "
+                        "quarter of the baseline period",
                 "family_wise_rate": self.rate, "excluded": self.excluded, "cap": self.cap,
                 "outliers": [o.to_dict(files) for o in self.outliers],
                 "left_in_at_cap": None if self.stopped is None else self.stopped.to_dict(files)}
@@ -101,49 +125,191 @@ class BaselineOutliers:
         return text
 
 
-def largest_outlier(held_out, rate: float, dof_num: int, n_conditions: int = 0) -> tuple:
-    """``(position, its index, its threshold)`` of the largest finite held-out index of ``held_out`` (n,) and the
-    threshold at ``rate / n`` of the scaled F law fitted to the other indices (the scale and the degrees of freedom
-    ``(d1, d2)`` of :func:`~learn.monitor.alarm_threshold.threshold`, ``dof_num`` the index's, models fitted on
-    :func:`~learn.monitor.alarm_threshold.training_size` of ``n`` tests), read as a prediction: the scale is
-    estimated from ``m`` indices, so the candidate over the fitted scale follows ``F(d1, d2')`` with ``1 / d2' =
-    1 / d2 + 1 / (m d1)`` (the fitted scale's own chi-square scatter, ``m d1`` degrees of freedom, pooled with the
-    law's denominator, as a Student prediction interval widens a normal one); the test is an outlier when its index
-    exceeds that threshold. ``(None, nan, nan)`` with fewer than 3 finite indices."""
+def held_out_leverage(conditions) -> np.ndarray:
+    """Each baseline test's leverage ``h`` (n,) in the regression on its ``conditions`` (n, q) fitted on the other
+    tests: ``h = a' (A' A)^-1 a`` of its row ``a = [1, c]`` against the other rows ``A``, by leave-one-out
+    ``H / (1 - H)`` of the baseline's own hat-matrix diagonal ``H`` (Sherman-Morrison). Its held-out residual has
+    ``(1 + h)`` times the normal variation's covariance, so its held-out index follows ``(1 + h)`` times the scaled
+    F law (Hotelling's prediction region): a test of far conditions widens its own."""
+    A = np.c_[np.ones(len(conditions)), np.asarray(conditions, float).reshape(len(conditions), -1)]
+    H = np.einsum("ij,jk,ik->i", A, np.linalg.pinv(A.T @ A), A)
+    return H / np.maximum(1.0 - H, 1e-12)
+
+
+def f_scale(Z, d1: float, d2: float) -> np.ndarray:
+    """The maximum-likelihood scale ``c`` of ``c F(d1, d2)`` fitted to each row of ``Z`` (..., m), all above zero:
+    the root of ``mean(u / (1 + u)) = d1 / (d1 + d2)``, ``u = d1 z / (d2 c)`` (the score of ``log c``), found by
+    bisection on ``log c`` (vectorised over the rows; the likelihood of
+    :func:`~learn.monitor.alarm_threshold.threshold` with every index in its fit)."""
+    Z = np.asarray(Z, float)
+    target = d1 / (d1 + d2)
+    mid = np.log(np.median(Z, axis=-1))
+    lo, hi = mid - LOG_SCALE_SPAN, mid + LOG_SCALE_SPAN
+    for _ in range(BISECTIONS):
+        c = 0.5 * (lo + hi)
+        u = (d1 / d2) * Z / np.exp(c)[..., None]
+        high = np.mean(u / (1.0 + u), axis=-1) > target           # the scale too small
+        lo, hi = np.where(high, c, lo), np.where(high, hi, c)
+    return np.exp(0.5 * (lo + hi))
+
+
+def candidate_ratio(Z, d1: float, d2: float) -> tuple:
+    """``(position, ratio)`` of each row of ``Z`` (..., n): its largest index over :func:`f_scale` of the others."""
+    Z = np.asarray(Z, float)
+    i = np.argmax(Z, axis=-1)
+    top = np.take_along_axis(Z, i[..., None], axis=-1)[..., 0]
+    keep = np.arange(Z.shape[-1]) != i[..., None]
+    others = Z[keep].reshape(*Z.shape[:-1], Z.shape[-1] - 1)
+    return i, top / f_scale(others, d1, d2)
+
+
+def held_out_pca(X, k: int) -> tuple:
+    """``(residual, environment)`` (..., n): every test's held-out indices (leave-one-out) by a PCA of the other
+    tests of ``X`` (..., n, p), complete, with ``k`` leading components removed: the squared scores on the remaining
+    (environmental) components over their variances, as :class:`~learn.monitor.normal_models.PCARemoval` and
+    :func:`~learn.monitor.statistics.statistics_of` give them; the other tests' mean and covariance by the
+    rank-one downdate of the whole set's."""
+    X = np.asarray(X, float)
+    n = X.shape[-2]
+    D = X - X.mean(axis=-2, keepdims=True)
+    S = np.einsum("...ni,...nj->...ij", D, D)                                   # (..., p, p)
+    Si = (S[..., None, :, :] - (n / (n - 1.0)) * D[..., :, None] * D[..., None, :]) / (n - 2.0)
+    lam, V = np.linalg.eigh(Si)                                                  # ascending: the removed last
+    scores = np.einsum("...nij,...ni->...nj", V, (n / (n - 1.0)) * D)
+    sq = scores**2 / np.maximum(lam, 1e-300)
+    p = X.shape[-1]
+    return sq[..., :p - k].sum(axis=-1), sq[..., p - k:].sum(axis=-1)
+
+
+def held_out_regression(X, conditions) -> np.ndarray:
+    """Every test's held-out residual index (leave-one-out, (..., n)) by the regression of ``X`` (..., n, p),
+    complete, on ``conditions`` (n, q) fitted on the other tests, as
+    :class:`~learn.monitor.normal_models.Regression` gives it: the held-out error ``e / (1 - H)`` and the other
+    tests' residual covariance ``(R'R - e e' / (1 - H)) / (n - 1 - (q + 1))`` (``H`` the hat-matrix diagonal)."""
+    X = np.asarray(X, float)
+    n = X.shape[-2]
+    A = np.c_[np.ones(n), np.asarray(conditions, float).reshape(n, -1)]
+    P = A @ np.linalg.pinv(A)
+    H = np.diag(P)
+    E = X - P @ X                                                               # (..., n, p)
+    RSS = np.einsum("...ni,...nj->...ij", E, E)
+    Ec = E / (1.0 - H)[:, None]
+    Si = (RSS[..., None, :, :] - (E / np.sqrt(1.0 - H)[:, None])[..., :, None]
+          * (E / np.sqrt(1.0 - H)[:, None])[..., None, :]) / max(n - 1 - A.shape[1], 1)
+    sol = np.linalg.solve(Si, Ec[..., None])[..., 0]
+    return np.einsum("...ni,...ni->...n", Ec, sol)
+
+
+def simulated_critical_ratio(model, n: int, rate: float, conditions=None, draws: int | None = None,
+                             seed: int = SIMULATION_SEED) -> float | None:
+    """The critical ratio of the family-wise ``rate``: :func:`candidate_ratio` of the held-out residual indices
+    (a regression's over ``1 + h``, :func:`held_out_leverage`) of ``draws`` outlier-free Gaussian baselines of
+    ``n`` tests under ``model``'s normal variation, seeded, read at the order statistic that ``rate`` of all such
+    baselines exceed at most, with :data:`SIMULATION_CONFIDENCE` (of 2000 draws at 1 %, the 17th largest: its
+    exceedance is below 1 % with probability 0.78, 0.85 % on average). None when ``model`` is not a
+    :class:`~learn.monitor.normal_models.PCARemoval` nor a :class:`~learn.monitor.normal_models.Regression` with its
+    ``conditions`` (n, q), or ``n`` lies outside ``[4, LOO_MAX]``
+    (:data:`~learn.monitor.alarm_threshold.LOO_MAX`: beyond it the held-out indices come from folds).
+
+    The ratio is free of the normal variation's scale and orientation (a regression's residual covariance, a PCA's
+    components): the regression's baselines are standard normal residuals on the baseline's conditions (their
+    leverages), the PCA's are drawn with the fitted variances of its components (their spread sets how far the
+    removed components' estimation leaks into the residual of a test far along them), the same ``k`` removed. The
+    held-out indices are those of :func:`held_out_pca` and :func:`held_out_regression` (the models' own on
+    complete tests)."""
+    from scipy import stats  # scipy.stats: heavy, only where a threshold is read
+
+    draws = SIMULATIONS if draws is None else int(draws)
+    if n > LOO_MAX or n < 4:
+        return None
+    rng = np.random.default_rng(seed)
+    ratios = []
+    for start in range(0, draws, SIMULATION_CHUNK):
+        b = min(SIMULATION_CHUNK, draws - start)
+        if isinstance(model, PCARemoval):
+            p, k = model.var_.size, model.k_
+            X = rng.standard_normal((b, n, p)) * np.sqrt(np.maximum(model.var_, 1e-300 * model.var_.max()))
+            res, h = held_out_pca(X, k)[0], 0.0
+            d2 = max(n - 1 - (p - k), 1)
+        elif isinstance(model, Regression) and conditions is not None:
+            p = model.cov_.shape[0]
+            res = held_out_regression(rng.standard_normal((b, n, p)), conditions)
+            h = held_out_leverage(conditions)
+            d2 = max(n - 1 - p - model.n_conditions, 1)
+        else:
+            return None
+        ratios.append(candidate_ratio(res / (1.0 + h), model.dof_, d2)[1])
+    above = max(int(stats.binom.ppf(1.0 - SIMULATION_CONFIDENCE, draws, rate)) - 1, 0)
+    while above > 0 and stats.binom.cdf(above, draws, rate) > 1.0 - SIMULATION_CONFIDENCE:
+        above -= 1
+    return float(np.sort(np.concatenate(ratios))[draws - 1 - above])
+
+
+def largest_outlier(held_out, rate: float, dof_num: int, n_conditions: int = 0, leverage=None,
+                    critical=None) -> tuple:
+    """``(position, its index, its threshold)`` of the largest finite held-out index of ``held_out`` (n,), each over
+    its own widening ``1 + leverage`` (:func:`held_out_leverage`; None: all alike), and its threshold: the scale of
+    ``F(d1, d2)`` fitted to the other indices so reduced (the degrees of freedom of
+    :func:`~learn.monitor.alarm_threshold.threshold`, ``d1 = dof_num``, models fitted on
+    :func:`~learn.monitor.alarm_threshold.training_size` of ``n`` tests) times ``critical`` (the ratio of the
+    family-wise rate, :func:`simulated_critical_ratio`) when given (a callable returning it or None is called only
+    for a candidate beyond the law's prediction quantile at ``rate`` itself, below which no family-wise ratio lies,
+    that quantile the threshold returned below it; None: the law below); else times the law's quantile at ``rate / n``
+    (Bonferroni) read as a prediction: the scale is estimated from ``m`` indices, so the candidate over the fitted
+    scale follows ``F(d1, d2')`` with ``1 / d2' = 1 / d2 + 1 / (m d1)`` (the fitted scale's own chi-square scatter,
+    ``m d1`` degrees of freedom, pooled with the law's denominator, as a Student prediction interval widens a normal
+    one). The threshold returned is that times the candidate's own ``1 + leverage``; the test is an outlier when its
+    index exceeds it. ``(None, nan, nan)`` with fewer than 3 finite indices."""
     from scipy import stats  # scipy.stats: heavy, only where a threshold is read
 
     s = np.asarray(held_out, float)
-    finite = np.flatnonzero(np.isfinite(s))
+    w = np.ones(s.size) if leverage is None else 1.0 + np.asarray(leverage, float)
+    z = s / w
+    finite = np.flatnonzero(np.isfinite(z))
     if finite.size < 3:
         return None, math.nan, math.nan
     n = finite.size
-    i = int(finite[np.argmax(s[finite])])
-    others = np.delete(s, i)
+    i = int(finite[np.argmax(z[finite])])
+    others = np.delete(z, i)
     t = threshold(others, rate / n, dof_num, training_size(n), n_conditions)
     if t.scale <= 0:                                           # a point mass at zero: the empirical threshold
-        return i, float(s[i]), float(t.value)
+        return i, float(s[i]), float(t.value * w[i])
     m = int(np.sum(np.isfinite(others))) * (1.0 - t.zero_share)
     d2 = 1.0 / (1.0 / t.dof_den + 1.0 / max(m * t.dof_num, 1.0))
+    if critical is not None and t.zero_share == 0:
+        scale = float(f_scale(others[np.isfinite(others)], t.dof_num, t.dof_den))
+        if callable(critical):
+            floor = float(stats.f.ppf(1.0 - rate, t.dof_num, d2))
+            critical = critical() if z[i] > scale * floor else floor
+        if critical is not None:
+            return i, float(s[i]), float(w[i] * scale * critical)
     level = 1.0 - min(rate / n / max(1.0 - t.zero_share, 1e-12), 0.5)
-    return i, float(s[i]), float(t.scale * stats.f.ppf(level, t.dof_num, d2))
+    return i, float(s[i]), float(w[i] * t.scale * stats.f.ppf(level, t.dof_num, d2))
 
 
 def exclude_baseline_outliers(fitted, b_idx, rate: float, minimum: int, n_conditions: int = 0,
-                              keep: bool = False):
+                              keep: bool = False, conditions=None):
     """The baseline rows ``b_idx`` less the outliers of their baseline period (module docstring).
 
     ``fitted(rows)`` returns ``(model, held)``: the normal model fitted on the baseline rows ``rows`` and their
     held-out statistics (:func:`~learn.monitor.statistics.held_out_statistics`, the residual's under
     ``"residual"``). ``minimum``: fewest baseline tests the model
     needs; at most ``floor(OUTLIER_SHARE * len(b_idx))`` tests are left out. ``keep``: the first round's outlier is
-    named, nothing left out. Returns ``(rows, model, held, BaselineOutliers)``."""
+    named, nothing left out. ``conditions`` (n_series, q): the regression's measured conditions (indexed as
+    ``b_idx``), whose leverage widens each held-out index (:func:`held_out_leverage`) and whose design the critical
+    ratio is simulated on (:func:`simulated_critical_ratio`; without them a regression's is the law's).
+    Returns ``(rows, model, held, BaselineOutliers)``."""
     b_idx = np.asarray(b_idx, int)
     model, held = fitted(b_idx)
     cap = int(math.floor(OUTLIER_SHARE * b_idx.size))
     named, stopped = [], None
     rows = b_idx
     while True:
-        pos, value, limit = largest_outlier(held["residual"][0], rate, model.dof_, n_conditions)
+        Cr = None if conditions is None else np.asarray(conditions, float)[rows]
+        lev = None if Cr is None else held_out_leverage(Cr)
+        critical = partial(simulated_critical_ratio, model, rows.size, rate, Cr) \
+            if isinstance(model, (PCARemoval, Regression)) else None
+        pos, value, limit = largest_outlier(held["residual"][0], rate, model.dof_, n_conditions, lev, critical)
         if pos is None or not value > limit:
             break
         o = Outlier(int(rows[pos]), value, limit, int(rows.size), len(named) + 1)
