@@ -76,9 +76,8 @@ CLEAR_PEAK_BANDWIDTHS = 3.0
 #: ... or this many frequency lines (the peak's line lies up to half a line off the resonance, and a mode narrower
 #: than a line shows no measurable bandwidth), whichever is wider ...
 CLEAR_PEAK_LINES = 3.0
-#: ... and never farther than this relative distance, nor than halfway to the nearest other clear peak (a pole at one
-#: peak explains no other): a mode damped 0.33 % or more reaches this cap (3 bandwidths of ``2 zeta f``), one damped
-#: 0.05 % at 4 kHz with 1 Hz lines is explained only within 12 Hz (0.3 %).
+#: ... and never farther than this relative distance: a mode damped 0.33 % or more reaches this cap (3 bandwidths of
+#: ``2 zeta f``), one damped 0.05 % at 4 kHz with 1 Hz lines is explained only within 12 Hz (0.3 %).
 CLEAR_PEAK_TOLERANCE = 0.02
 
 
@@ -144,12 +143,6 @@ def clear_peak_reach_hz(frequency_hz, magnitude, idx, tolerance: float = CLEAR_P
     return np.minimum(reach, tolerance * f[idx])
 
 
-def _halfway_to_neighbours_hz(f_hz) -> np.ndarray:
-    """Half the distance from each of the ascending frequencies ``f_hz`` (n,) to the nearest other (inf alone)."""
-    gaps = np.diff(f_hz)
-    return 0.5 * np.minimum(np.r_[np.inf, gaps], np.r_[gaps, np.inf])
-
-
 def _clear_peak_lines(f, mag) -> np.ndarray:
     """Indices of the clear peaks of :func:`octave_median_peaks`, before any is explained."""
     db = 20 * np.log10(np.maximum(mag, np.finfo(float).tiny))
@@ -163,12 +156,11 @@ def _clear_peak_lines(f, mag) -> np.ndarray:
 
 def unexplained_peaks(frequency_hz, magnitude, known_hz=(), tolerance: float = CLEAR_PEAK_TOLERANCE):
     """``(frequency_hz, reach_hz)``, each shape (n,), of the clear peaks of :func:`octave_median_peaks` with no
-    frequency of ``known_hz`` within their reach (:func:`clear_peak_reach_hz`, capped at ``tolerance`` relative and
-    at half the distance to the nearest other clear peak)."""
+    frequency of ``known_hz`` within their reach (:func:`clear_peak_reach_hz`, capped at ``tolerance`` relative)."""
     f = np.asarray(frequency_hz, float)
     mag = np.asarray(magnitude, float)
     idx = _clear_peak_lines(f, mag)
-    reach = np.minimum(clear_peak_reach_hz(f, mag, idx, tolerance), _halfway_to_neighbours_hz(f[idx]))
+    reach = clear_peak_reach_hz(f, mag, idx, tolerance)
     known = np.asarray(known_hz, float)
     if known.size and idx.size:
         keep = np.min(np.abs(known[None, :] - f[idx, None]), axis=1) > reach
@@ -181,8 +173,7 @@ def octave_median_peaks(frequency_hz, magnitude, known_hz=(), tolerance: float =
     the median of the lines within a factor :data:`CLEAR_PEAK_WINDOW` (at least 5 lines) and
     :data:`CLEAR_PEAK_VALLEY_DB` above the valleys on either side, the band's outer 2 % left aside (a mode's skirt),
     with no frequency of ``known_hz`` within the peak's reach: :data:`CLEAR_PEAK_BANDWIDTHS` half-power bandwidths or
-    :data:`CLEAR_PEAK_LINES` lines, at most ``tolerance`` (relative) (:func:`clear_peak_reach_hz`) and halfway to
-    the nearest other clear peak."""
+    :data:`CLEAR_PEAK_LINES` lines, at most ``tolerance`` (relative) (:func:`clear_peak_reach_hz`)."""
     return unexplained_peaks(frequency_hz, magnitude, known_hz, tolerance)[0]
 
 
