@@ -15,7 +15,8 @@ from physics.identification.lsfd import LSFDResult, lsfd
 from physics.identification.modes import ModalEstimate, checked_frf, modal_estimate
 from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles, stability_status
 
-__all__ = ["LSCFIdentification", "identify_lscf", "lscf", "octave_median_peaks", "prominent_peaks"]
+__all__ = ["LSCFIdentification", "clear_peak_reach_hz", "half_power_bandwidth_hz", "identify_lscf", "lscf",
+           "octave_median_peaks", "prominent_peaks", "unexplained_peaks"]
 
 
 #: (frequency lines, dt, columns) -> (X, Q) of :func:`_lscf_basis`, the 4 most recent.
@@ -63,9 +64,20 @@ CLEAR_PEAK_WINDOW = 2.0
 #: topographic prominence, as :data:`physics.identification.fdd.PEAK_PROMINENCE_DB`): a ripple of the noise on a
 #: resonance's flank, high above the octave's median, is no peak of its own.
 CLEAR_PEAK_VALLEY_DB = 6.0
-#: A clear peak that no selected pole explains is fitted again over the band within this factor of it.
-CLEAR_PEAK_BAND = 1.25
-#: A pole explains a peak within this relative distance.
+#: A clear peak that no selected pole explains is fitted again over the band within the first of these factors of
+#: it, then the next, until a fit places a pole within the peak's reach (:func:`clear_peak_reach_hz`). The second
+#: band, +-2 %, holds every pole that may explain the peak and few neighbours: over +-25 % (and +-10 %) one model
+#: spends its order on a stronger mode nearby (the pyFRF hit's 4164 Hz peak, 36 Hz above the 4128 Hz mode, gets its
+#: pole over +-2 % only).
+CLEAR_PEAK_BANDS = (1.25, 1.02)
+#: A pole explains a clear peak within this many of the peak's own half-power bandwidths
+#: (:func:`half_power_bandwidth_hz`; ``2 zeta f`` for a lone light mode) ...
+CLEAR_PEAK_BANDWIDTHS = 3.0
+#: ... or this many frequency lines (the peak's line lies up to half a line off the resonance, and a mode narrower
+#: than a line shows no measurable bandwidth), whichever is wider ...
+CLEAR_PEAK_LINES = 3.0
+#: ... and never farther than this relative distance: a mode damped 0.33 % or more reaches this cap (3 bandwidths of
+#: ``2 zeta f``), one damped 0.05 % at 4 kHz with 1 Hz lines is explained only within 12 Hz (0.3 %).
 CLEAR_PEAK_TOLERANCE = 0.02
 
 
@@ -85,24 +97,84 @@ def prominent_peaks(db, min_prominence_db: float) -> np.ndarray:
     return top[keep]
 
 
-def octave_median_peaks(frequency_hz, magnitude, known_hz=(), tolerance: float = CLEAR_PEAK_TOLERANCE) -> np.ndarray:
-    """Frequencies (Hz) of plainly visible peaks of ``magnitude``: local maxima :data:`CLEAR_PEAK_PROMINENCE` times
-    the median of the lines within a factor :data:`CLEAR_PEAK_WINDOW` (at least 5 lines) and
-    :data:`CLEAR_PEAK_VALLEY_DB` above the valleys on either side, with no frequency of ``known_hz`` within
-    ``tolerance`` (relative), the band's outer 2 % left aside (a mode's skirt)."""
+def half_power_bandwidth_hz(frequency_hz, magnitude, idx) -> np.ndarray:
+    """Half-power bandwidth (Hz) of each peak ``idx`` of ``magnitude``: the distance between the first lines either
+    side at which the magnitude falls below ``1/sqrt(2)`` of the peak's, each crossing interpolated linearly between
+    its two lines (``2 zeta f_n`` for a lone lightly damped mode). A side that never falls so low within the band
+    counts as wide as the other; neither side: ``inf``.
+
+    Parameters
+    ----------
+    frequency_hz : ndarray, shape (n_lines,)
+    magnitude : ndarray, shape (n_lines,)
+    idx : sequence of int, shape (n,)
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
     f = np.asarray(frequency_hz, float)
     mag = np.asarray(magnitude, float)
+    out = np.full(np.size(idx), np.inf)
+    for k, p in enumerate(np.atleast_1d(np.asarray(idx, int))):    # per peak: each side read up to its first crossing
+        level = mag[p] / np.sqrt(2.0)
+        half = []
+        for step, side in ((-1, mag[p - 1::-1] if p > 0 else mag[:0]), (1, mag[p + 1:])):
+            below = np.flatnonzero(side < level)
+            if not below.size:
+                continue
+            j = p + step * (below[0] + 1)                        # first line below, and the line before it
+            i = j - step
+            frac = (mag[i] - level) / (mag[i] - mag[j])
+            half.append(abs(f[i] + frac * (f[j] - f[i]) - f[p]))
+        if half:
+            out[k] = 2 * half[0] if len(half) == 1 else half[0] + half[1]
+    return out
+
+
+def clear_peak_reach_hz(frequency_hz, magnitude, idx, tolerance: float = CLEAR_PEAK_TOLERANCE) -> np.ndarray:
+    """How far (Hz) from each peak ``idx`` a pole lies that explains it: :data:`CLEAR_PEAK_BANDWIDTHS` of the peak's
+    half-power bandwidths (:func:`half_power_bandwidth_hz`) or :data:`CLEAR_PEAK_LINES` frequency lines, whichever
+    is wider, at most ``tolerance`` (relative) of the peak's frequency, shape (n,)."""
+    f = np.asarray(frequency_hz, float)
+    idx = np.atleast_1d(np.asarray(idx, int))
+    line = np.diff(f)[np.clip(idx, 0, f.size - 2)] if f.size > 1 else np.zeros(idx.size)
+    reach = np.maximum(CLEAR_PEAK_BANDWIDTHS * half_power_bandwidth_hz(f, magnitude, idx), CLEAR_PEAK_LINES * line)
+    return np.minimum(reach, tolerance * f[idx])
+
+
+def _clear_peak_lines(f, mag) -> np.ndarray:
+    """Indices of the clear peaks of :func:`octave_median_peaks`, before any is explained."""
     db = 20 * np.log10(np.maximum(mag, np.finfo(float).tiny))
     idx = prominent_peaks(db, CLEAR_PEAK_VALLEY_DB)
     idx = idx[(f[idx] > f[0] * 1.02) & (f[idx] < f[-1] / 1.02)]
     lo = np.searchsorted(f, f[idx] / CLEAR_PEAK_WINDOW, side="left")       # window [f/w, f w] of each peak
     hi = np.searchsorted(f, f[idx] * CLEAR_PEAK_WINDOW, side="right")
     floor = np.array([np.median(mag[a:b]) if b - a >= 5 else np.inf for a, b in zip(lo, hi)])
-    idx = idx[mag[idx] >= CLEAR_PEAK_PROMINENCE * floor]
+    return idx[mag[idx] >= CLEAR_PEAK_PROMINENCE * floor]
+
+
+def unexplained_peaks(frequency_hz, magnitude, known_hz=(), tolerance: float = CLEAR_PEAK_TOLERANCE):
+    """``(frequency_hz, reach_hz)``, each shape (n,), of the clear peaks of :func:`octave_median_peaks` with no
+    frequency of ``known_hz`` within their reach (:func:`clear_peak_reach_hz`, capped at ``tolerance`` relative)."""
+    f = np.asarray(frequency_hz, float)
+    mag = np.asarray(magnitude, float)
+    idx = _clear_peak_lines(f, mag)
+    reach = clear_peak_reach_hz(f, mag, idx, tolerance)
     known = np.asarray(known_hz, float)
     if known.size and idx.size:
-        idx = idx[np.min(np.abs(known[None, :] / f[idx, None] - 1), axis=1) > tolerance]
-    return f[idx]
+        keep = np.min(np.abs(known[None, :] - f[idx, None]), axis=1) > reach
+        idx, reach = idx[keep], reach[keep]
+    return f[idx], reach
+
+
+def octave_median_peaks(frequency_hz, magnitude, known_hz=(), tolerance: float = CLEAR_PEAK_TOLERANCE) -> np.ndarray:
+    """Frequencies (Hz) of plainly visible peaks of ``magnitude``: local maxima :data:`CLEAR_PEAK_PROMINENCE` times
+    the median of the lines within a factor :data:`CLEAR_PEAK_WINDOW` (at least 5 lines) and
+    :data:`CLEAR_PEAK_VALLEY_DB` above the valleys on either side, the band's outer 2 % left aside (a mode's skirt),
+    with no frequency of ``known_hz`` within the peak's reach: :data:`CLEAR_PEAK_BANDWIDTHS` half-power bandwidths or
+    :data:`CLEAR_PEAK_LINES` lines, at most ``tolerance`` (relative) (:func:`clear_peak_reach_hz`)."""
+    return unexplained_peaks(frequency_hz, magnitude, known_hz, tolerance)[0]
 
 
 def visible_peak(frequency_hz, magnitude, fn_hz) -> np.ndarray:
@@ -185,34 +257,37 @@ def _with_refit_poles(f, rec, poles, max_order, margin, select, lscf_options, we
 
 def _with_peak_poles(f, h, rec, poles, max_order, margin, select, lscf_options):
     """``poles`` plus, for each clear peak of the FRFs ``h`` (:func:`octave_median_peaks`, in the kind measured) that no
-    pole explains, the pole nearest to it (within :data:`CLEAR_PEAK_TOLERANCE`) of an LSCF fit of the band within a
-    factor :data:`CLEAR_PEAK_BAND` of the peak: one model over a wide band can spend its order on the many modes
-    above a low first mode and leave that mode out.
+    pole explains (none within the peak's reach, :func:`clear_peak_reach_hz`: a few of its half-power bandwidths or
+    lines, at most :data:`CLEAR_PEAK_TOLERANCE`), the pole nearest to it (within that reach) of an LSCF fit of the
+    band within a factor of the peak, the first of :data:`CLEAR_PEAK_BANDS` whose fit has one there: one model over
+    a wide band can spend its order on the many modes above a low first mode and leave that mode out, or on a
+    stronger light mode 1 % from the peak and leave the peak's out.
 
     The peak itself shows the mode, so its pole needs no stability over the whole range of orders: the cluster
     nearest the peak is taken from poles stable in frequency to :data:`CLEAR_PEAK_TOLERANCE` (the few lines around
     a low, well-damped mode under a noise floor move its pole by 1-2 % from one order to the next) over at least 3
     orders (:func:`select_poles` with the peak as ``peaks_hz``)."""
-    missed = octave_median_peaks(f, np.sqrt(np.mean(np.abs(h) ** 2, axis=(0, 1))), poles.natural_frequencies_hz)
+    missed, reach = unexplained_peaks(f, np.sqrt(np.mean(np.abs(h) ** 2, axis=(0, 1))), poles.natural_frequencies_hz)
     found = [poles]
     n_o, n_i = rec.shape[0], rec.shape[1]
-    for fp in missed:
-        sel = (f >= fp / CLEAR_PEAK_BAND) & (f <= fp * CLEAR_PEAK_BAND)
-        order = min(max_order, sel.sum() * n_o // (n_i + 1) - 1)
-        if order < 4:
-            continue
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)
-                sub = select_poles(lscf(f[sel], rec[..., sel], max_order=order, margin=margin, **lscf_options),
-                                   **{**(select or {}), "min_status": 1, "freq_tol": CLEAR_PEAK_TOLERANCE,
-                                      "peaks_hz": [fp], "peak_tol_hz": [CLEAR_PEAK_TOLERANCE * fp],
-                                      "weak_min_count": 3})
-        except BeamDamageError:
-            continue
-        near = np.abs(sub.natural_frequencies_hz / fp - 1)
-        if near.size and near.min() <= CLEAR_PEAK_TOLERANCE:
-            found.append(_take(sub, [int(np.argmin(near))]))
+    for fp, tol_hz in zip(missed, reach):
+        for band in CLEAR_PEAK_BANDS:
+            sel = (f >= fp / band) & (f <= fp * band)
+            order = min(max_order, sel.sum() * n_o // (n_i + 1) - 1)
+            if order < 4:
+                break
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", RuntimeWarning)
+                    sub = select_poles(lscf(f[sel], rec[..., sel], max_order=order, margin=margin, **lscf_options),
+                                       **{**(select or {}), "min_status": 1, "freq_tol": CLEAR_PEAK_TOLERANCE,
+                                          "peaks_hz": [fp], "peak_tol_hz": [tol_hz], "weak_min_count": 3})
+            except BeamDamageError:
+                continue
+            near = np.abs(sub.natural_frequencies_hz - fp)
+            if near.size and near.min() <= tol_hz:
+                found.append(_take(sub, [int(np.argmin(near))]))
+                break
     return _merged(found)
 
 

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from physics.errors import ConfigError, ConvergenceError
-from physics.identification.lscf import CLEAR_PEAK_PROMINENCE, octave_median_peaks
+from physics.identification.lscf import CLEAR_PEAK_PROMINENCE, CLEAR_PEAK_TOLERANCE, octave_median_peaks
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate
 from physics.identification.poles import StabilisationDiagram
@@ -66,9 +66,11 @@ class Identification:
         return ModalData(self.estimate.eigenvalues, self.estimate.shapes, self.frf.response_dofs)
 
 
-def peaks_left_out(frf: MeasuredFRF, identified_hz, tolerance: float = 0.02) -> np.ndarray:
-    """Frequencies (Hz) of plainly visible peaks of the FRFs' RMS magnitude with no identified mode within
-    ``tolerance`` (relative) (:func:`physics.identification.lscf.octave_median_peaks`)."""
+def peaks_left_out(frf: MeasuredFRF, identified_hz, tolerance: float = CLEAR_PEAK_TOLERANCE) -> np.ndarray:
+    """Frequencies (Hz) of plainly visible peaks of the FRFs' RMS magnitude with no identified mode within their
+    reach: a few of the peak's own half-power bandwidths or frequency lines, at most ``tolerance`` (relative)
+    (:func:`physics.identification.lscf.octave_median_peaks`,
+    :func:`~physics.identification.lscf.clear_peak_reach_hz`)."""
     mag = np.sqrt(np.mean(np.abs(np.asarray(frf.frf)) ** 2, axis=(0, 1)))
     return octave_median_peaks(frf.frequency_hz, mag, identified_hz, tolerance)
 
