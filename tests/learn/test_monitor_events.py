@@ -146,7 +146,7 @@ def test_tests_not_identified_are_counted_charted_and_a_run_of_them_is_a_change(
     ax = fig.axes[1]
     line = next(ln for ln in ax.get_lines() if ln.get_label().startswith("not identified"))
     assert line.get_label() == "not identified (5)"
-    np.testing.assert_array_equal(line.get_xdata(), np.arange(22, 27))
+    np.testing.assert_array_equal(line.get_xdata(), np.arange(23, 28))          # tests counted from 1
     assert line.get_marker() == "x"
     import matplotlib.pyplot as plt
 
