@@ -190,7 +190,7 @@ def test_the_chart_marks_the_tests_whose_mode_moved_and_draws_it_at_its_moved_fr
     for r in res.rows:
         r["extrapolated"] = False
     fig = chart(res)
-    moved = [i for i, r in enumerate(res.rows) if r["status"] == MODE_MOVED]
+    moved = [i + 1 for i, r in enumerate(res.rows) if r["status"] == MODE_MOVED]          # tests counted from 1
     line = next(ln for ln in fig.axes[1].get_lines() if ln.get_label().startswith(MODE_MOVED))
     assert line.get_label() == f"{MODE_MOVED} beyond its band ({len(moved)})" and line.get_marker() == "^"
     np.testing.assert_array_equal(line.get_xdata(), moved)
