@@ -108,9 +108,16 @@ class Event:
         return d
 
 
+def _judged(rows, baseline: bool) -> list:
+    """The rows of the baseline period (or of the later tests) that say something of the structure: judged, and
+    not a test whose record is not usable (``record_problem``: unreadable, NaN samples, a dead or clipped channel)."""
+    return [r for r in rows if r["baseline"] == baseline and r["status"] != "not judged"
+            and not r.get("record_problem")]
+
+
 def _baseline_counts(rows) -> tuple[int, int]:
     """``(tests not identified, tests of the series)`` in the baseline period."""
-    base = [r for r in rows if r["baseline"] and r["status"] != "not judged"]
+    base = _judged(rows, True)
     return sum(r["status"] == "not identified" for r in base), len(base)
 
 
@@ -130,14 +137,17 @@ def identification_change(rows: list, false_alarm_rate: float) -> dict:
     ``baseline`` / ``later`` (``not_identified``, ``tests``), ``p_value``, ``change`` (``p_value <
     false_alarm_rate``) and ``text``."""
     ub, nb = _baseline_counts(rows)
-    later = [r for r in rows if not r["baseline"] and r["status"] != "not judged"]
+    later = _judged(rows, False)
     u = sum(r["status"] == "not identified" for r in later)
     p = unidentified_p_value(u, len(later), ub, nb)
     change = bool(u and p < false_alarm_rate)
+    unusable = sum(bool(r.get("record_problem")) for r in rows if r["status"] != "not judged")
     text = (f"{u} of {len(later)} later tests not identified against {ub} of {nb} in the baseline period "
-            f"(binomial p = {p:.2g})" + (": identification lost, reported as a change" if change else ""))
+            f"(binomial p = {p:.2g})" + (": identification lost, reported as a change" if change else "")
+            + (f"; {unusable} test{'s' if unusable != 1 else ''} with no usable record (unreadable, NaN samples, "
+               "a dead or clipped channel) not counted" if unusable else ""))
     return {"baseline": {"not_identified": ub, "tests": nb}, "later": {"not_identified": u, "tests": len(later)},
-            "p_value": p, "change": change, "text": text}
+            "unusable_records": unusable, "p_value": p, "change": change, "text": text}
 
 
 def _lacks(row, r: int) -> bool:
@@ -152,8 +162,7 @@ def lost_modes_change(rows: list, false_alarm_rate: float) -> dict:
     ``false_alarm_rate / m`` is a change (a run of losses a short baseline could not judge one by one). Returns
     ``modes`` (per mode: ``mode``, ``baseline`` and ``later`` counts, ``p_value``, ``change``), ``change`` and
     ``text``."""
-    base = [r for r in rows if r["baseline"] and r["status"] != "not judged"]
-    later = [r for r in rows if not r["baseline"] and r["status"] != "not judged"]
+    base, later = _judged(rows, True), _judged(rows, False)
     m = len(rows[0]["mode_z_scores"]) if rows else 0
     modes = []
     for r in range(m):
@@ -227,7 +236,8 @@ def _event(rows, members: list, ctx: dict) -> Event:
     first, last = members[0], members[-1]
     span = [i for i in range(first, last + 1) if rows[i]["status"] != "not judged"]
     alarms = [i for i in members if rows[i]["status"] == "alarm"]
-    u = sum(rows[i]["status"] == "not identified" for i in members)
+    u = sum(rows[i]["status"] == "not identified" and not rows[i].get("record_problem") for i in members)
+    unusable = sum(bool(rows[i].get("record_problem")) for i in members)
     m = len(rows[first]["mode_z_scores"])
     end = first if ctx["first_change"] is None else min(first, ctx["first_change"])
     before = [i for i in range(end) if rows[i]["status"] == "no alarm"][-STEP_BEFORE:]
@@ -255,7 +265,7 @@ def _event(rows, members: list, ctx: dict) -> Event:
               "moved": bool(np.isfinite(z[r]) and abs(z[r]) >= Z_MOVED)} for r in range(m)]
     moved = [d["mode"] for d in sorted(modes, key=lambda d: -abs(d["z"]) if d["z"] is not None else 0.0)
              if d["moved"]]
-    p = unidentified_p_value(u, len(span), ub, nb) if u else None
+    p = unidentified_p_value(u, len(span) - unusable, ub, nb) if u else None
     change = bool(alarms) or (p is not None and p < false_alarm_rate)
     size = _size(c) if alarms else None
     first_size = _size(C[0]) if alarms else None
@@ -281,6 +291,8 @@ def _event(rows, members: list, ctx: dict) -> Event:
     if u:
         parts.append(f"{u} not identified (p = {p:.2g} at the baseline's share"
                      + ("; identification lost)" if p < false_alarm_rate else ")"))
+    if unusable:
+        parts.append(f"{unusable} with no usable record (not counted)")
     if len(span) > len(members):
         parts.append(f"{len(span) - len(members)} without an alarm between")
     what = ""

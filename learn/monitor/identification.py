@@ -17,15 +17,17 @@ from physics.errors import BeamDamageError
 from physics.identification import (DEFAULT_OUTPUT_ONLY, holds_response_records, identify_records,
                                     read_response_records)
 from physics.identification.failures import identification_failure
+from physics.identification.record_checks import check_records
 from physics.identification.fft_peak import fft_peaks
 from physics.identification.measured import read_measured_frf
-from physics.io import (MODAL, TIME, atomic_write_text, finite_or_none, format_complex, modal_or_frf, prepare_measured,
-                        read)
+from physics.io import (FRF, MODAL, TIME, atomic_write_text, finite_or_none, format_complex, modal_or_frf,
+                        prepare_measured, read)
 from physics.io.inputs import check_input_file
 from physics.modal import modal_parameters, undamped_modes
 
 __all__ = ["CACHE_FORMAT", "IdentificationSettings", "IdentifiedModes", "cached_fft_peaks", "cached_identification",
-           "file_key", "identification_settings", "identify_test", "with_narrow_band_poles", "write_cache"]
+           "file_key", "identification_settings", "identify_test", "read_test", "record_problem",
+           "with_narrow_band_poles", "write_cache"]
 
 #: Format tag of a cache entry (a change of the identification or of the entry's fields changes it).
 CACHE_FORMAT = "beam-damage-monitor-cache/9"
@@ -137,6 +139,42 @@ def _modes_of(eigenvalues, shapes):
             None if shapes is None else np.asarray(shapes, complex)[:, order])
 
 
+def read_test(path) -> tuple:
+    """``(kind, data)`` of one test file as :func:`identify_test` reads it, before any identification: ``(MODAL,
+    modal data)``, ``(TIME, response records without a force)`` or ``(FRF, measured FRFs)``, each checked by its
+    reader (finite samples, a channel that varies, the fields and shapes of its format).
+
+    Raises :class:`BeamDamageError` (one line naming the file) when the file cannot be read or its record is not
+    usable (:func:`record_problem`)."""
+    path = str(path)
+    if modal_or_frf(path) == MODAL:
+        return MODAL, prepare_measured(read(path, MODAL)).data
+    if holds_response_records(path) and not read(path, TIME).forces:
+        return TIME, read_response_records(path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return FRF, prepare_measured(read_measured_frf(path)).data
+
+
+def record_problem(path) -> str | None:
+    """Why the file of a test that was not identified holds no usable record (unreadable, truncated, missing
+    fields: :func:`read_test` refuses it; response records with NaN samples, a constant or a clipped channel:
+    :func:`physics.identification.record_checks.check_records` refuses them), or None when the record reads and only
+    its identification failed. A test whose record is not usable says nothing of the structure: it is not counted
+    among the tests whose identification was lost (:func:`learn.monitor.events.identification_change`). Modal data
+    come from an identification run elsewhere: a modal file that cannot be used is that identification's failure,
+    and counts (None here)."""
+    try:
+        if modal_or_frf(path) == MODAL:
+            return None
+        kind, data = read_test(path)
+        if kind == TIME:
+            check_records(data.signals, data.sampling_frequency_hz, where=str(path))
+    except (BeamDamageError, OSError) as exc:
+        return _error_text(exc, path)
+    return None
+
+
 def identify_test(path, settings: IdentificationSettings, narrow_hz=None) -> IdentifiedModes:
     """One test's modes: an FRF file by LSCF/LSFD (:func:`learn.pairs.measured.identify_modes`, the identification
     ``classify`` runs), response records without a force by SSI-cov (as ``identify``), modal data as read.
@@ -151,14 +189,14 @@ def identify_test(path, settings: IdentificationSettings, narrow_hz=None) -> Ide
     """
 
     path = str(path)
-    if modal_or_frf(path) == MODAL:
-        md = prepare_measured(read(path, MODAL)).data
-        f, z, shapes = _modes_of(md.eigenvalues, md.eigenvectors)
-        return IdentifiedModes("modal", "file", f, z, shapes, tuple(md.dofs or ()))
+    kind, data = read_test(path)
+    if kind == MODAL:
+        f, z, shapes = _modes_of(data.eigenvalues, data.eigenvectors)
+        return IdentifiedModes("modal", "file", f, z, shapes, tuple(data.dofs or ()))
     band = settings.band_hz if narrow_hz is None else tuple(float(b) for b in narrow_hz)
     n_modes = settings.n_modes if narrow_hz is None else None
-    if holds_response_records(path) and not read(path, TIME).forces:
-        rec = read_response_records(path)
+    if kind == TIME:
+        rec = data
         with identification_failure(f"{path}: output-only identification ({DEFAULT_OUTPUT_ONLY}: era for a free "
                                     "response, else ssi)"), warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -169,9 +207,7 @@ def identify_test(path, settings: IdentificationSettings, narrow_hz=None) -> Ide
         return IdentifiedModes("response records", ident.estimate.method, f, z, shapes, tuple(rec.dofs), (),
                                (0.0, fs / 2), fs / rec.signals.shape[1], _narrow(narrow_hz, f.size))
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        frf = prepare_measured(read_measured_frf(path)).data
+    frf = data
     lines = np.asarray(frf.frequency_hz, float)
     fmin, fmax = (0.0, None) if band is None else band
     if band is not None and (lines[-1] <= fmin or lines[0] >= fmax):

@@ -12,6 +12,7 @@ from scipy import stats
 from experiments.cli import main
 from learn.monitor.coverage import _held_out_mahalanobis, baseline_scatter, coverage
 from learn.monitor.events import Z_MOVED, group_events, identification_change, unidentified_p_value
+from learn.monitor.identification import record_problem
 from monitor_series import write_modal_series
 
 
@@ -47,6 +48,43 @@ def test_a_run_of_tests_not_identified_is_a_change_at_the_binomial_tail():
                                                                                              "tests": 40}
     assert ident["p_value"] == pytest.approx(stats.binom.sf(4, 20, p0), rel=1e-9) and ident["change"]
     assert unidentified_p_value(0, 20, 0, 40) == 1.0
+
+
+def test_tests_with_no_usable_record_are_named_but_not_counted_as_identification_lost():
+    rows = _baseline(40)
+    later = ["no alarm"] * 5 + ["not identified"] * 4 + ["no alarm"] * 6 + ["not identified"] + ["no alarm"] * 4
+    rows += [_row(s, t=40 + k) for k, s in enumerate(later)]
+    for i in range(45, 49):                             # the run of 4: records that cannot be read
+        rows[i]["record_problem"] = f"t{i}: not a readable .npz"
+    events = group_events(rows, 0.01)
+    assert [(e.first, e.last, e.n_not_identified) for e in events] == [(45, 48, 0), (55, 55, 1)]
+    assert not events[0].change and "4 with no usable record (not counted)" in events[0].text
+    ident = identification_change(rows, 0.01)
+    # the one test that read but was not identified, among the 16 later tests with a usable record
+    assert ident["later"] == {"not_identified": 1, "tests": 16} and ident["unusable_records"] == 4
+    assert ident["p_value"] == pytest.approx(stats.binom.sf(0, 16, 1 / 42), rel=1e-9) and not ident["change"]
+    assert "4 tests with no usable record" in ident["text"]
+
+
+def test_record_problem_names_unusable_records_and_leaves_identification_failures_and_modal_data(tmp_path):
+    fs = 2000.0
+    t = np.arange(4000) / fs
+    good = tmp_path / "good.npz"
+    np.savez(good, signals=(np.exp(-t) * np.sin(2 * np.pi * 50 * t))[None], sampling_frequency_hz=fs,
+             dofs=np.array(["1:+Z"]))
+    cut = tmp_path / "cut.npz"
+    cut.write_bytes(good.read_bytes()[:300])
+    nan = tmp_path / "nan.npz"
+    np.savez(nan, signals=np.full((1, 4000), np.nan), sampling_frequency_hz=fs, dofs=np.array(["1:+Z"]))
+    dead = tmp_path / "dead.npz"
+    np.savez(dead, signals=np.zeros((1, 4000)), sampling_frequency_hz=fs, dofs=np.array(["1:+Z"]))
+    modal = tmp_path / "modal.json"
+    modal.write_text("{ not json")
+    assert record_problem(good) is None
+    assert "not a readable .npz" in record_problem(cut) and str(cut) in record_problem(cut)
+    assert "NaN" in record_problem(nan) and "constant" in record_problem(dead)
+    assert record_problem(tmp_path / "missing.npz").endswith("file not found; expected an .npz of a MeasuredFRF")
+    assert record_problem(modal) is None                # modal data: an outside identification's failure counts
 
 
 def test_events_group_consecutive_alarms_and_split_at_a_new_state():
