@@ -9,7 +9,7 @@ from physics import properties
 from physics.beam import Beam, load_beam
 from physics.errors import BeamDamageError
 
-__all__ = ["add_beam_argument", "beam_argument", "check_out_dir"]
+__all__ = ["add_beam_argument", "beam_argument", "check_out_dir", "counted"]
 
 
 def beam_argument(spec: str) -> Beam:
@@ -35,3 +35,8 @@ def check_out_dir(path) -> None:
             if not q.is_dir():
                 raise BeamDamageError(f"--out {path}: {q} exists and is not a directory")
             return
+
+
+def counted(n: int, noun: str) -> str:
+    """``n`` and ``noun``, plural unless ``n`` is 1 (``1 mode``, ``3 channels``, ``1 event``)."""
+    return f"{n} {noun}" + ("" if n == 1 else "s")

@@ -22,17 +22,13 @@ from physics.identification.split_modes import split_pairs, split_text
 from physics.io import (FRF, TIME, MeasuredFRF, NodeGeometry, accepted, format_complex, measured_positions, read,
                         atomic_write_text, modal_data_to_dict)
 from physics.modal import mac
+from experiments.cli.args import counted
 
-__all__ = ["add_parser", "counted", "run"]
+__all__ = ["add_parser", "run"]
 
 
 #: Highest model order accepted, and LSCF's default.
 MAX_ORDER, LSCF_MAX_ORDER = 200, 40
-
-
-def counted(n: int, noun: str) -> str:
-    """``n`` and ``noun``, plural unless ``n`` is 1 (``1 mode``, ``3 channels``)."""
-    return f"{n} {noun}" + ("" if n == 1 else "s")
 
 
 def modes_list(e) -> list:

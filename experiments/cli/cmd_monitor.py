@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from experiments.cli.args import check_out_dir
+from experiments.cli.args import check_out_dir, counted
 from learn.monitor import (DEFAULT_LATENT, NORMAL_MODELS, SeriesInput, alarm_verdicts, identification_settings,
                            monitor_series, read_conditions)
 from learn.monitor.alarms import EXTRAPOLATED, EXTRAPOLATED_ALARMS, MODE_LOST, MODE_MOVED, STATUSES
@@ -279,8 +279,8 @@ def _write(out_dir, out: dict, res) -> dict:
         f"{MODE_LOST} beyond their bands, {cnt['not identified']} not identified, "
         f"{cnt['no alarm']} without an alarm, {cnt['not judged']} not judged (another kind, band or beam; conditions "
         f"not measured), {cnt[EXTRAPOLATED]} {EXTRAPOLATED} (extrapolated, alarmed by the environmental statistics "
-        f"alone); {cnt['extrapolated']} lie beyond the baseline's conditions (extrapolated). "
-        f"{cnt['events']} events, {cnt['changes']} of them changes"
+        f"alone); {cnt['extrapolated']} beyond the baseline's conditions (extrapolated). "
+        f"{counted(cnt['events'], 'event')}, {cnt['changes']} of them changes"
         + (f"; the first alarm: {first['file']}{_when(first)}." if first else "."),
         out["identification_change"]["text"] + ".",
         out["lost_modes_change"]["text"] + ".",
@@ -447,7 +447,7 @@ def _print(out: dict, res) -> None:
           + (f"; first alarm {out['first_alarm']['file']}{_when(out['first_alarm'])}" if out["first_alarm"] else ""))
     print(out["identification_change"]["text"])
     print(out["lost_modes_change"]["text"])
-    print(f"{cnt['events']} events, {cnt['changes']} changes:")
+    print(f"{counted(cnt['events'], 'event')}, {counted(cnt['changes'], 'change')}:")
     for e in out["events"][:10]:
         print(f"  {e['text']}")
         v = e["verdict"] or {}

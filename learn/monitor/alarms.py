@@ -138,7 +138,7 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     need = minimum_baseline(m, q)
     if len(base) < need:
         raise BeamDamageError(f"--baseline-tests {n_baseline}: {len(base)} identified baseline tests for {m} tracked "
-                              f"modes{f' and {q} conditions' if q else ''}; at least {need} are needed "
+                              f"modes{f' and {q} condition' + 's' * (q != 1) if q else ''}; at least {need} are needed "
                               f"(modes + conditions + 6)")
     tests = refit_missing(tests, series.files, ref, settings, cache_dir, pending)
     tests = confirm_far_poles(tests, series.files, ref, settings, cache_dir, pending)
