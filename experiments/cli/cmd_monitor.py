@@ -13,7 +13,7 @@ import numpy as np
 from experiments.cli.args import check_out_dir, counted
 from learn.monitor import (DEFAULT_LATENT, NORMAL_MODELS, SeriesInput, alarm_verdicts, identification_settings,
                            monitor_series, read_conditions)
-from learn.monitor.alarms import EXTRAPOLATED, EXTRAPOLATED_ALARMS, MODE_LOST, MODE_MOVED, STATUSES
+from learn.monitor.alarms import BASELINE_OUTLIER, EXTRAPOLATED, EXTRAPOLATED_ALARMS, MODE_LOST, MODE_MOVED, STATUSES
 from learn.monitor.baseline_trend import series_baseline_trend
 from learn.monitor.coverage import baseline_scatter, series_coverage
 from learn.monitor.statistics import covers_seasons
@@ -332,7 +332,8 @@ def _figure(res) -> bytes:
 def chart(res):
     """The control chart (a matplotlib figure): each mode's frequency relative to its baseline median and the
     novelty index over the tests, with the threshold, the baseline period shaded, the alarms circled, the
-    extrapolated tests boxed, the tests whose mode moved or was lost beyond its band marked (triangles up, down)
+    extrapolated tests boxed, the baseline outliers left out diamonded (their index by the model fitted without
+    them), the tests whose mode moved or was lost beyond its band marked (triangles up, down)
     and the tests not identified crossed at the top edge of the index's panel; a mode moved beyond its band is
     drawn at its moved frequency (hollow markers)."""
     plt = pyplot()
@@ -353,6 +354,10 @@ def chart(res):
     nov = res.novelty
     a2.semilogy(t, np.maximum(nov, 1e-3), ".", color="k", ms=4, label="novelty index")
     a2.semilogy(t[alarm], np.maximum(nov[alarm], 1e-3), "o", mfc="none", color="tab:red", ms=7, label="alarm")
+    out = np.array([r.get("status") == BASELINE_OUTLIER for r in res.rows])
+    if out.any():                                   # its index by the model fitted without it
+        a2.semilogy(t[out], np.maximum(nov[out], 1e-3), "D", mfc="none", color="tab:gray", ms=8,
+                    label=f"baseline outlier, left out ({out.sum()})")
     ext = np.array([bool(r.get("extrapolated")) for r in res.rows])
     if ext.any():
         a2.semilogy(t[ext], np.maximum(nov[ext], 1e-3), "s", mfc="none", color="tab:purple", ms=9,

@@ -9,7 +9,8 @@ import pytest
 from scipy import stats
 
 from experiments.cli import main
-from learn.monitor import NORMAL_MODELS
+from experiments.cli.cmd_monitor import chart
+from learn.monitor import NORMAL_MODELS, IdentificationSettings, SeriesInput, monitor_series
 from learn.monitor.alarm_threshold import held_out_novelty, threshold, training_size
 from learn.monitor.baseline_outliers import (BASELINE_OUTLIER, OUTLIER_SHARE, candidate_ratio,
                                              exclude_baseline_outliers, f_scale, held_out_leverage, held_out_pca,
@@ -211,3 +212,15 @@ def test_monitor_names_the_baseline_outlier_leaves_it_out_and_can_keep_it(outlie
     kept = json.loads(out)
     assert kept["tests"][3]["status"] != BASELINE_OUTLIER and "kept in the baseline period" in err
     assert kept["tests"][0]["threshold"] > 3 * rows[0]["threshold"]
+
+
+def test_the_chart_marks_the_baseline_outlier_at_its_index(outlier_series):
+    import matplotlib.pyplot as plt  # matplotlib: heavy, only where a chart is drawn
+
+    res = monitor_series(SeriesInput.from_files(outlier_series), 15, IdentificationSettings(), progress=False)
+    fig = chart(res)
+    (line,) = [ln for ln in fig.axes[1].get_lines() if ln.get_label().startswith("baseline outlier")]
+    assert line.get_label() == "baseline outlier, left out (1)" and line.get_marker() == "D"
+    np.testing.assert_array_equal(line.get_xdata(), [4])                    # test 4, counted from 1
+    np.testing.assert_allclose(line.get_ydata(), [res.rows[3]["novelty"]], rtol=1e-12)
+    plt.close(fig)
