@@ -93,13 +93,12 @@ class BandFit:
         its starting pole, with NaN standard deviations.
     n_lines : int
         Lines fitted, over every decay and group (per channel).
-    merged : ndarray of bool, shape (n_modes,)
-        True for a pole unresolved from a stronger one of its band (:data:`RESOLVED_WIDTHS`,
-        :data:`RESOLVED_LINES`): one peak, which the stronger pole, fitted alone, stands for. A merged pole is not
-        converged; its band is NaN and its group -1 (its eigenvalue is the one it was merged at).
     merged_into : ndarray of int, shape (n_modes,)
-        The stronger pole each merged pole was merged into (its index; -1 where not merged). A pole merged into
-        one that is merged later stands for the one that one was merged into (followed to the end).
+        For a pole unresolved from a stronger one of its band (:data:`RESOLVED_WIDTHS`, :data:`RESOLVED_LINES`: one
+        peak, which the stronger pole, fitted alone, stands for), the stronger pole's index; -1 where not merged. A
+        pole merged into one that is merged later stands for the one that one was merged into (followed to the
+        end). A merged pole is not converged; its band is NaN and its group -1 (its eigenvalue is the one it was
+        merged at).
     merged_with_hz : ndarray, shape (n_modes,)
         The natural frequency (Hz) of the stronger pole when each pole was merged into it (NaN where not merged).
     """
@@ -114,9 +113,13 @@ class BandFit:
     group: np.ndarray
     converged: np.ndarray
     n_lines: int
-    merged: np.ndarray
-    merged_into: np.ndarray | None = None
-    merged_with_hz: np.ndarray | None = None
+    merged_into: np.ndarray
+    merged_with_hz: np.ndarray
+
+    @property
+    def merged(self) -> np.ndarray:
+        """Shape (n_modes,) of bool: the poles merged into a stronger one (:attr:`merged_into`)."""
+        return self.merged_into >= 0
 
 
 def mode_bands(eigenvalues, longest_s, nyquist_hz):
@@ -372,7 +375,6 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
     amps = np.zeros((len(decays), n_ch, m_all), complex)
     converged = np.zeros(m_all, bool)
     n_lines = 0
-    merged = np.zeros(m_all, bool)
     into, with_hz = np.full(m_all, -1), np.full(m_all, np.nan)
     for sweep in range(SWEEPS + m_all):                 # past SWEEPS: while a sweep leaves an unresolved pair
         if sweep:                                       # the bands of the refined poles' half-power widths
@@ -381,13 +383,12 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
             if sweep >= SWEEPS and not new.any():
                 break
             with_hz[new] = np.abs(lam[stronger[new]]) / (2 * np.pi)
-            chain = np.flatnonzero(merged)              # merged before into a pole merged now: into its stronger
+            chain = np.flatnonzero(into >= 0)           # merged before into a pole merged now: into its stronger
             chain = chain[new[into[chain]]]
             into[chain] = stronger[into[chain]]
             into[new] = stronger[new]
-            merged |= new
-            converged &= ~merged
-            live = np.flatnonzero(~merged)
+            converged &= into < 0
+            live = np.flatnonzero(into < 0)
             b_live, g_live = mode_bands(np.where(converged, lam, lam0)[live], max(lengths) / fs, fs / 2)
             bands, group = np.full((m_all, 2), np.nan), np.full(m_all, -1)
             bands[live], group[live] = b_live, g_live
@@ -417,4 +418,4 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
                 amps[j][:, idx] = 2 * c * np.sqrt(lengths[j])
     wn = np.abs(lam)
     return BandFit(lam, wn / (2 * np.pi), -lam.real / wn, f_std, z_std, amps, bands, group, converged, n_lines,
-                   merged, into, with_hz)
+                   into, with_hz)

@@ -206,9 +206,9 @@ def _warn_gliding_merges(full, fs, bands: BandFit, live, band, hi, where):
     (:func:`~physics.identification.glide.mode_glide`, the other live poles held fixed): one peak of a mode whose
     frequency moves with its amplitude, not a split the noise made."""
     into = bands.merged_into
-    if into is None or not np.any(into >= 0):
+    if not np.any(into >= 0):
         return
-    keep = np.flatnonzero(live & ~np.asarray(bands.merged, bool))
+    keep = np.flatnonzero(live & ~bands.merged)
     for j in np.unique(into[into >= 0]):
         f = float(bands.natural_frequencies_hz[j])
         if j not in keep or not band[0] <= f <= hi:
