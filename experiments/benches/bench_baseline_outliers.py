@@ -27,9 +27,10 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 
 from experiments.benches.harness import parser, table  # noqa: E402
-from learn.monitor.alarm_threshold import held_out_novelty, minimum_baseline  # noqa: E402
+from learn.monitor.alarm_threshold import (held_out_novelty, held_out_pca, held_out_regression,  # noqa: E402
+                                           minimum_baseline)
 from learn.monitor.baseline_outliers import (candidate_ratio, exclude_baseline_outliers, held_out_leverage,  # noqa: E402
-                                             held_out_pca, held_out_regression, simulated_critical_ratio)
+                                             simulated_critical_ratio)
 from scipy import stats  # noqa: E402
 from learn.monitor.normal_models import NORMAL_MODELS  # noqa: E402
 from physics.io import atomic_write_text  # noqa: E402

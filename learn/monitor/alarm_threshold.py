@@ -9,8 +9,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LOO_MAX", "N_FOLDS", "Threshold", "held_out_novelty", "minimum_baseline", "missing_evidence",
-           "threshold", "training_size"]
+from learn.monitor.normal_models import PCARemoval, Regression
+
+__all__ = ["LOO_MAX", "N_FOLDS", "Threshold", "held_out_novelty", "held_out_pca", "held_out_regression",
+           "minimum_baseline", "missing_evidence", "threshold", "training_size"]
 
 #: Held-out indices by leave-one-out up to this many baseline tests, else by this many interleaved folds.
 LOO_MAX, N_FOLDS = 200, 20
@@ -62,8 +64,17 @@ def missing_evidence(X, X_train) -> np.ndarray:
 def held_out_novelty(make_model, X, C=None) -> np.ndarray:
     """Every baseline test's novelty index (plus :func:`missing_evidence`) by a model fitted on the other
     baseline tests (leave-one-out up to :data:`LOO_MAX` tests, else :data:`N_FOLDS` interleaved folds): the index of
-    a test is never computed by a model that saw it."""
+    a test is never computed by a model that saw it. Leave-one-out on complete tests of a
+    :class:`~learn.monitor.normal_models.PCARemoval` with its components set, or of a
+    :class:`~learn.monitor.normal_models.Regression` on ``C``: the closed forms :func:`held_out_pca` and
+    :func:`held_out_regression`, the refits' indices to 1e-9."""
     X = np.asarray(X, float)
+    model = make_model()
+    if len(X) <= LOO_MAX and np.isfinite(X).all():
+        if isinstance(model, PCARemoval) and model.k is not None:
+            return held_out_pca(X, min(model.k, X.shape[1] - 1))[0]
+        if isinstance(model, Regression) and C is not None:
+            return held_out_regression(X, C)
     out = np.empty(len(X))
     for held in _folds(len(X)):
         train = np.setdiff1d(np.arange(len(X)), held)
@@ -71,6 +82,43 @@ def held_out_novelty(make_model, X, C=None) -> np.ndarray:
         out[held] = (model.novelty(X[held], None if C is None else C[held])
                      + missing_evidence(X[held], X[train]))
     return out
+
+
+def held_out_pca(X, k: int) -> tuple:
+    """``(residual, environment)`` (..., n): every test's held-out indices (leave-one-out) by a PCA of the other
+    tests of ``X`` (..., n, p), complete, with ``k`` leading components removed: the squared scores on the remaining
+    (environmental) components over their variances, as :class:`~learn.monitor.normal_models.PCARemoval` and
+    :func:`~learn.monitor.statistics.statistics_of` give them; the other tests' mean and covariance by the
+    rank-one downdate of the whole set's."""
+    X = np.asarray(X, float)
+    n = X.shape[-2]
+    D = X - X.mean(axis=-2, keepdims=True)
+    S = np.einsum("...ni,...nj->...ij", D, D)                                   # (..., p, p)
+    Si = (S[..., None, :, :] - (n / (n - 1.0)) * D[..., :, None] * D[..., None, :]) / (n - 2.0)
+    lam, V = np.linalg.eigh(Si)                                                  # ascending: the removed last
+    scores = np.einsum("...nij,...ni->...nj", V, (n / (n - 1.0)) * D)
+    sq = scores**2 / np.maximum(lam, 1e-300)
+    p = X.shape[-1]
+    return sq[..., :p - k].sum(axis=-1), sq[..., p - k:].sum(axis=-1)
+
+
+def held_out_regression(X, conditions) -> np.ndarray:
+    """Every test's held-out residual index (leave-one-out, (..., n)) by the regression of ``X`` (..., n, p),
+    complete, on ``conditions`` (n, q) fitted on the other tests, as
+    :class:`~learn.monitor.normal_models.Regression` gives it: the held-out error ``e / (1 - H)`` and the other
+    tests' residual covariance ``(R'R - e e' / (1 - H)) / (n - 1 - (q + 1))`` (``H`` the hat-matrix diagonal)."""
+    X = np.asarray(X, float)
+    n = X.shape[-2]
+    A = np.c_[np.ones(n), np.asarray(conditions, float).reshape(n, -1)]
+    P = A @ np.linalg.pinv(A)
+    H = np.diag(P)
+    E = X - P @ X                                                               # (..., n, p)
+    RSS = np.einsum("...ni,...nj->...ij", E, E)
+    Ec = E / (1.0 - H)[:, None]
+    Si = (RSS[..., None, :, :] - (E / np.sqrt(1.0 - H)[:, None])[..., :, None]
+          * (E / np.sqrt(1.0 - H)[:, None])[..., None, :]) / max(n - 1 - A.shape[1], 1)
+    sol = np.linalg.solve(Si, Ec[..., None])[..., 0]
+    return np.einsum("...ni,...ni->...n", Ec, sol)
 
 
 @dataclass(frozen=True)

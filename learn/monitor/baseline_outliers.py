@@ -36,13 +36,14 @@ from functools import partial
 
 import numpy as np
 
-from learn.monitor.alarm_threshold import LOG_SCALE_SPAN, LOO_MAX, missing_evidence, threshold, training_size
+from learn.monitor.alarm_threshold import (LOG_SCALE_SPAN, LOO_MAX, held_out_pca, held_out_regression,
+                                           missing_evidence, threshold, training_size)
 from learn.monitor.normal_models import PCARemoval, Regression
 
 __all__ = ["BASELINE_OUTLIER", "BISECTIONS", "OUTLIER_SHARE", "SIMULATIONS", "SIMULATION_CHUNK",
            "SIMULATION_CONFIDENCE", "SIMULATION_SEED", "BaselineOutliers", "Outlier", "candidate_ratio",
-           "exclude_baseline_outliers", "f_scale", "held_out_leverage", "held_out_pca", "held_out_regression",
-           "largest_outlier", "outlier_novelty", "simulated_critical_ratio"]
+           "exclude_baseline_outliers", "f_scale", "held_out_leverage", "largest_outlier", "outlier_novelty",
+           "simulated_critical_ratio"]
 
 #: The status of a baseline test named an outlier of its baseline period and left out of it.
 BASELINE_OUTLIER = "baseline outlier"
@@ -163,43 +164,6 @@ def candidate_ratio(Z, d1: float, d2: float) -> tuple:
     return i, top / f_scale(others, d1, d2)
 
 
-def held_out_pca(X, k: int) -> tuple:
-    """``(residual, environment)`` (..., n): every test's held-out indices (leave-one-out) by a PCA of the other
-    tests of ``X`` (..., n, p), complete, with ``k`` leading components removed: the squared scores on the remaining
-    (environmental) components over their variances, as :class:`~learn.monitor.normal_models.PCARemoval` and
-    :func:`~learn.monitor.statistics.statistics_of` give them; the other tests' mean and covariance by the
-    rank-one downdate of the whole set's."""
-    X = np.asarray(X, float)
-    n = X.shape[-2]
-    D = X - X.mean(axis=-2, keepdims=True)
-    S = np.einsum("...ni,...nj->...ij", D, D)                                   # (..., p, p)
-    Si = (S[..., None, :, :] - (n / (n - 1.0)) * D[..., :, None] * D[..., None, :]) / (n - 2.0)
-    lam, V = np.linalg.eigh(Si)                                                  # ascending: the removed last
-    scores = np.einsum("...nij,...ni->...nj", V, (n / (n - 1.0)) * D)
-    sq = scores**2 / np.maximum(lam, 1e-300)
-    p = X.shape[-1]
-    return sq[..., :p - k].sum(axis=-1), sq[..., p - k:].sum(axis=-1)
-
-
-def held_out_regression(X, conditions) -> np.ndarray:
-    """Every test's held-out residual index (leave-one-out, (..., n)) by the regression of ``X`` (..., n, p),
-    complete, on ``conditions`` (n, q) fitted on the other tests, as
-    :class:`~learn.monitor.normal_models.Regression` gives it: the held-out error ``e / (1 - H)`` and the other
-    tests' residual covariance ``(R'R - e e' / (1 - H)) / (n - 1 - (q + 1))`` (``H`` the hat-matrix diagonal)."""
-    X = np.asarray(X, float)
-    n = X.shape[-2]
-    A = np.c_[np.ones(n), np.asarray(conditions, float).reshape(n, -1)]
-    P = A @ np.linalg.pinv(A)
-    H = np.diag(P)
-    E = X - P @ X                                                               # (..., n, p)
-    RSS = np.einsum("...ni,...nj->...ij", E, E)
-    Ec = E / (1.0 - H)[:, None]
-    Si = (RSS[..., None, :, :] - (E / np.sqrt(1.0 - H)[:, None])[..., :, None]
-          * (E / np.sqrt(1.0 - H)[:, None])[..., None, :]) / max(n - 1 - A.shape[1], 1)
-    sol = np.linalg.solve(Si, Ec[..., None])[..., 0]
-    return np.einsum("...ni,...ni->...n", Ec, sol)
-
-
 def simulated_critical_ratio(model, n: int, rate: float, conditions=None, draws: int | None = None,
                              seed: int = SIMULATION_SEED) -> float | None:
     """The critical ratio of the family-wise ``rate``: :func:`candidate_ratio` of the held-out residual indices
@@ -215,7 +179,8 @@ def simulated_critical_ratio(model, n: int, rate: float, conditions=None, draws:
     components): the regression's baselines are standard normal residuals on the baseline's conditions (their
     leverages), the PCA's are drawn with the fitted variances of its components (their spread sets how far the
     removed components' estimation leaks into the residual of a test far along them), the same ``k`` removed. The
-    held-out indices are those of :func:`held_out_pca` and :func:`held_out_regression` (the models' own on
+    held-out indices are those of :func:`~learn.monitor.alarm_threshold.held_out_pca` and
+    :func:`~learn.monitor.alarm_threshold.held_out_regression` (the models' own on
     complete tests)."""
     from scipy import stats  # scipy.stats: heavy, only where a threshold is read
 

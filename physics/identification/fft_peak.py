@@ -46,6 +46,7 @@ from physics.errors import ConvergenceError, ShapeError
 from physics.identification.decay_peaks import decay_peaks, prominent_peak_db
 from physics.identification.fdd import CLEAR_PEAK_DB, clear_peaks, singular_value_spectrum, unit_shapes
 from physics.identification.decays import decay_spectrum, free_response
+from physics.identification.half_power import half_power_bandwidth_hz
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.record_checks import check_periods, check_records
 from physics.modal import eigenvalues_from_modal
@@ -156,22 +157,6 @@ def _vertex(logp, lines, half_span):
     return out
 
 
-def _half_power_half_width(power, lines, grid_hz):
-    """Half the distance (Hz) between the first -3 dB crossings either side of each peak line (linear
-    interpolation); NaN where the spectrum ends first or a higher line lies between them (not a peak's top)."""
-    out = np.full(lines.size, np.nan)
-    for j, k in enumerate(lines):                       # one search per mode, each over its peak's flanks
-        half = power[k] / 2
-        right = k + np.argmax(power[k:] < half)
-        left = k - np.argmax(power[k::-1] < half)
-        if power[right] >= half or power[left] >= half or power[left:right + 1].max() > power[k]:
-            continue
-        fr = right - (half - power[right]) / (power[right - 1] - power[right])
-        fl = left + (half - power[left]) / (power[left + 1] - power[left])
-        out[j] = 0.5 * (fr - fl) * grid_hz
-    return out
-
-
 def fft_peaks(signals, sampling_frequency_hz, frequencies_hz, tolerance_hz, window="auto", pad=PAD,
               where="record") -> FFTPeaks:
     """Peaks of the zero-padded FFT magnitude near given frequencies (see the module docstring).
@@ -208,7 +193,7 @@ def fft_peaks(signals, sampling_frequency_hz, frequencies_hz, tolerance_hz, wind
     hi = np.searchsorted(f[maxima], target + tol, side="right")
     k = np.array([maxima[a + np.argmax(logp[maxima[a:b]])] if b > a else 1 for a, b in zip(lo, hi)], int)
     found = hi > lo                                     # one slice per peak: the highest maximum in its window
-    hw = _half_power_half_width(power, k, df)
+    hw = half_power_bandwidth_hz(f, power, k, ratio=2.0, one_side="nan") / 2
     width = np.where(np.isfinite(hw), hw, WINDOW_HALF_WIDTH[window] * fs / y.shape[1])
     half_span = np.maximum(1, np.floor(TOP_FRACTION * width / df)).astype(int)
     fp = np.where(found, _vertex(logp, k, half_span) * df, np.nan)

@@ -11,12 +11,13 @@ from threadpoolctl import threadpool_limits
 
 from physics.errors import BeamDamageError, ConvergenceError, ShapeError
 from physics.frf import check_frf_kind, convert_frf
+from physics.identification.half_power import half_power_bandwidth_hz
 from physics.identification.lsfd import LSFDResult, lsfd
 from physics.identification.modes import ModalEstimate, checked_frf, modal_estimate
 from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles, stability_status
 
-__all__ = ["LSCFIdentification", "clear_peak_reach_hz", "half_power_bandwidth_hz", "identify_lscf", "lscf",
-           "octave_median_peaks", "prominent_peaks", "unexplained_peaks"]
+__all__ = ["LSCFIdentification", "clear_peak_reach_hz", "identify_lscf", "lscf", "octave_median_peaks",
+           "octave_median_peaks_and_reach", "prominent_peaks"]
 
 
 #: (frequency lines, dt, columns) -> (X, Q) of :func:`_lscf_basis`, the 4 most recent.
@@ -71,7 +72,7 @@ CLEAR_PEAK_VALLEY_DB = 6.0
 #: pole over +-2 % only).
 CLEAR_PEAK_BANDS = (1.25, 1.02)
 #: A pole explains a clear peak within this many of the peak's own half-power bandwidths
-#: (:func:`half_power_bandwidth_hz`; ``2 zeta f`` for a lone light mode) ...
+#: (:func:`~physics.identification.half_power.half_power_bandwidth_hz`; ``2 zeta f`` for a lone light mode) ...
 CLEAR_PEAK_BANDWIDTHS = 3.0
 #: ... or this many frequency lines (the peak's line lies up to half a line off the resonance, and a mode narrower
 #: than a line shows no measurable bandwidth), whichever is wider ...
@@ -97,45 +98,11 @@ def prominent_peaks(db, min_prominence_db: float) -> np.ndarray:
     return top[keep]
 
 
-def half_power_bandwidth_hz(frequency_hz, magnitude, idx) -> np.ndarray:
-    """Half-power bandwidth (Hz) of each peak ``idx`` of ``magnitude``: the distance between the first lines either
-    side at which the magnitude falls below ``1/sqrt(2)`` of the peak's, each crossing interpolated linearly between
-    its two lines (``2 zeta f_n`` for a lone lightly damped mode). A side that never falls so low within the band
-    counts as wide as the other; neither side: ``inf``.
-
-    Parameters
-    ----------
-    frequency_hz : ndarray, shape (n_lines,)
-    magnitude : ndarray, shape (n_lines,)
-    idx : sequence of int, shape (n,)
-
-    Returns
-    -------
-    ndarray, shape (n,)
-    """
-    f = np.asarray(frequency_hz, float)
-    mag = np.asarray(magnitude, float)
-    out = np.full(np.size(idx), np.inf)
-    for k, p in enumerate(np.atleast_1d(np.asarray(idx, int))):    # per peak: each side read up to its first crossing
-        level = mag[p] / np.sqrt(2.0)
-        half = []
-        for step, side in ((-1, mag[p - 1::-1] if p > 0 else mag[:0]), (1, mag[p + 1:])):
-            below = np.flatnonzero(side < level)
-            if not below.size:
-                continue
-            j = p + step * (below[0] + 1)                        # first line below, and the line before it
-            i = j - step
-            frac = (mag[i] - level) / (mag[i] - mag[j])
-            half.append(abs(f[i] + frac * (f[j] - f[i]) - f[p]))
-        if half:
-            out[k] = 2 * half[0] if len(half) == 1 else half[0] + half[1]
-    return out
-
-
 def clear_peak_reach_hz(frequency_hz, magnitude, idx, tolerance: float = CLEAR_PEAK_TOLERANCE) -> np.ndarray:
     """How far (Hz) from each peak ``idx`` a pole lies that explains it: :data:`CLEAR_PEAK_BANDWIDTHS` of the peak's
-    half-power bandwidths (:func:`half_power_bandwidth_hz`) or :data:`CLEAR_PEAK_LINES` frequency lines, whichever
-    is wider, at most ``tolerance`` (relative) of the peak's frequency, shape (n,)."""
+    half-power bandwidths (:func:`~physics.identification.half_power.half_power_bandwidth_hz`) or
+    :data:`CLEAR_PEAK_LINES` frequency lines, whichever is wider, at most ``tolerance`` (relative) of the peak's
+    frequency, shape (n,)."""
     f = np.asarray(frequency_hz, float)
     idx = np.atleast_1d(np.asarray(idx, int))
     line = np.diff(f)[np.clip(idx, 0, f.size - 2)] if f.size > 1 else np.zeros(idx.size)
@@ -154,9 +121,10 @@ def _clear_peak_lines(f, mag) -> np.ndarray:
     return idx[mag[idx] >= CLEAR_PEAK_PROMINENCE * floor]
 
 
-def unexplained_peaks(frequency_hz, magnitude, known_hz=(), tolerance: float = CLEAR_PEAK_TOLERANCE):
-    """``(frequency_hz, reach_hz)``, each shape (n,), of the clear peaks of :func:`octave_median_peaks` with no
-    frequency of ``known_hz`` within their reach (:func:`clear_peak_reach_hz`, capped at ``tolerance`` relative)."""
+def octave_median_peaks_and_reach(frequency_hz, magnitude, known_hz=(), tolerance: float = CLEAR_PEAK_TOLERANCE):
+    """The clear peaks of :func:`octave_median_peaks` and their reaches: ``(frequency_hz, reach_hz)``, each shape
+    (n,), of the clear peaks with no frequency of ``known_hz`` within their reach (:func:`clear_peak_reach_hz`,
+    capped at ``tolerance`` relative)."""
     f = np.asarray(frequency_hz, float)
     mag = np.asarray(magnitude, float)
     idx = _clear_peak_lines(f, mag)
@@ -174,7 +142,7 @@ def octave_median_peaks(frequency_hz, magnitude, known_hz=(), tolerance: float =
     :data:`CLEAR_PEAK_VALLEY_DB` above the valleys on either side, the band's outer 2 % left aside (a mode's skirt),
     with no frequency of ``known_hz`` within the peak's reach: :data:`CLEAR_PEAK_BANDWIDTHS` half-power bandwidths or
     :data:`CLEAR_PEAK_LINES` lines, at most ``tolerance`` (relative) (:func:`clear_peak_reach_hz`)."""
-    return unexplained_peaks(frequency_hz, magnitude, known_hz, tolerance)[0]
+    return octave_median_peaks_and_reach(frequency_hz, magnitude, known_hz, tolerance)[0]
 
 
 def visible_peak(frequency_hz, magnitude, fn_hz) -> np.ndarray:
@@ -267,7 +235,8 @@ def _with_peak_poles(f, h, rec, poles, max_order, margin, select, lscf_options):
     nearest the peak is taken from poles stable in frequency to :data:`CLEAR_PEAK_TOLERANCE` (the few lines around
     a low, well-damped mode under a noise floor move its pole by 1-2 % from one order to the next) over at least 3
     orders (:func:`select_poles` with the peak as ``peaks_hz``)."""
-    missed, reach = unexplained_peaks(f, np.sqrt(np.mean(np.abs(h) ** 2, axis=(0, 1))), poles.natural_frequencies_hz)
+    mag = np.sqrt(np.mean(np.abs(h) ** 2, axis=(0, 1)))
+    missed, reach = octave_median_peaks_and_reach(f, mag, poles.natural_frequencies_hz)
     found = [poles]
     n_o, n_i = rec.shape[0], rec.shape[1]
     for fp, tol_hz in zip(missed, reach):

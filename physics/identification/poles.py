@@ -9,14 +9,19 @@ import numpy as np
 from physics.errors import ConvergenceError
 from physics.modal import eigenvalues_from_modal
 
-__all__ = ["MAX_DAMPING", "MISSED_SHARE", "STABILITY_CODES", "MissedModes", "SelectedPoles", "StabilisationDiagram",
-           "damping_resolution", "missed_clusters", "missed_modes", "select_poles", "stability_status"]
+__all__ = ["MAX_DAMPING", "MISSED_SHARE", "NO_STABLE_POLE", "STABILITY_CODES", "MissedModes", "SelectedPoles",
+           "StabilisationDiagram", "damping_resolution", "missed_clusters", "missed_modes", "select_poles",
+           "stability_status"]
 
 #: Largest damping ratio of a physical pole (LSCF and SSI-cov poles, peaks of peak picking and the circle fit): a
 #: broader one is a computational pole or a bump of the noise floor.
 MAX_DAMPING = 0.2
 
 
+#: The refusal of a selection that found no pole, with what a user can change (the options of ``identify`` that set
+#: the highest model order and the band; ``max_order`` and ``band_hz`` in Python).
+NO_STABLE_POLE = ("no pole is stable over enough model orders: raise the highest model order or widen the band "
+                  "(beam-damage identify --max-order N --band FMIN FMAX)")
 #: Stability codes of poles in a stabilisation diagram.
 STABILITY_CODES = {0: "new", 1: "stable frequency", 2: "stable frequency and damping",
                    3: "stable frequency and vector", 4: "stable"}
@@ -179,8 +184,7 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
     flags = [False] * len(chosen) + [True] * len(weak)
     chosen = (chosen + weak)[:n_modes]
     if not chosen:
-        raise ConvergenceError("no pole is stable over enough model orders: raise max_order, widen the "
-                               "band or relax the selection tolerances")
+        raise ConvergenceError(NO_STABLE_POLE)
     return _summarise_clusters(diagram, chosen, flags[:len(chosen)])
 
 

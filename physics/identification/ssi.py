@@ -31,7 +31,8 @@ from physics.identification.fdd import (
 )
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.peak_warning import warn_unexplained_peaks
-from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, missed_clusters, missed_modes, select_poles
+from physics.identification.poles import (MAX_DAMPING, NO_STABLE_POLE, StabilisationDiagram, missed_clusters,
+                                         missed_modes, select_poles)
 from physics.identification.record_checks import check_periods, check_records
 from physics.identification.subspace import poles_of_order, subspace_diagram
 from physics.modal import eigenvalues_from_modal
@@ -469,8 +470,7 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         d = passes[0].diagram
         lowest_hz = np.min(d.natural_frequencies_hz, initial=np.inf)
         check_periods(duration_s, lowest_hz, "the lowest pole", where)
-        raise ConvergenceError(f"{where}: no pole is stable over enough model orders: raise max_order, widen the "
-                               f"band or relax the selection tolerances{steadiest_text(d)}")
+        raise ConvergenceError(f"{where}: {NO_STABLE_POLE}{steadiest_text(d)}")
     if n_modes is not None:
         modes = sorted(modes, key=lambda m: (m[2], -m[3]))[:n_modes]
     modes.sort(key=lambda m: m[0])

@@ -15,6 +15,7 @@ from experiments.cli import build_parser
 from experiments.cli.cmd_monitor import chart_axis, threshold_label, threshold_text
 from monitor_series import write_modal_series
 from physics.identification import identify_frf
+from physics.identification.poles import NO_STABLE_POLE
 from physics.io import MeasuredFRF, write_frf_npz
 
 DATA = Path(__file__).resolve().parents[1] / "data"
@@ -151,9 +152,20 @@ def test_an_frf_file_without_a_stable_pole_is_named_by_discrepancy(capsys, tmp_p
                                     ("2:+Y",), ("2:+Y",), kind="receptance"))
     code, out, err = run_cli(capsys, ["discrepancy", "--measured", str(path), "--out", str(tmp_path / "d")])
     assert (code, out) == (2, "")
-    assert err == (f"beam-damage discrepancy: error: {path}: no pole is stable over enough model orders: raise "
-                   "max_order, widen the band or relax the selection tolerances\n")
+    assert err == (f"beam-damage discrepancy: error: {path}: no pole is stable over enough model orders: raise the "
+                   "highest model order or widen the band (beam-damage identify --max-order N --band FMIN FMAX)\n")
     assert not (tmp_path / "d").exists()
+
+
+def test_the_no_stable_pole_refusal_names_options_identify_accepts():
+    """The command the refusal names (:data:`physics.identification.poles.NO_STABLE_POLE`), its placeholders filled,
+    parses: ``identify`` sets the highest model order and the band from those options."""
+    command = NO_STABLE_POLE.split("(beam-damage ")[1].rstrip(")").split()
+    values = {"N": "60", "FMIN": "10", "FMAX": "500"}
+    argv = [values.get(w, w) for w in command] + ["test.npz"]
+    assert argv[:2] == ["identify", "--max-order"] and "--band" in argv
+    args = build_parser(argv).parse_args(argv)
+    assert (args.max_order, list(args.band)) == (60, [10.0, 500.0])
 
 
 @pytest.mark.parametrize("option, value, expected", [

@@ -11,10 +11,12 @@ from scipy import stats
 from experiments.cli import main
 from experiments.cli.cmd_monitor import chart
 from learn.monitor import NORMAL_MODELS, IdentificationSettings, SeriesInput, monitor_series
-from learn.monitor.alarm_threshold import held_out_novelty, threshold, training_size
+from learn.monitor.alarm_threshold import (held_out_novelty, held_out_pca, held_out_regression, threshold,
+                                           training_size)
 from learn.monitor.baseline_outliers import (BASELINE_OUTLIER, OUTLIER_SHARE, candidate_ratio,
-                                             exclude_baseline_outliers, f_scale, held_out_leverage, held_out_pca,
-                                             held_out_regression, largest_outlier, simulated_critical_ratio)
+                                             exclude_baseline_outliers, f_scale, held_out_leverage, largest_outlier,
+                                             simulated_critical_ratio)
+from learn.monitor.normal_models import PCARemoval, Regression
 from learn.monitor.statistics import held_out_statistics
 from modal_files import write_modal_series
 
@@ -125,6 +127,18 @@ def test_the_vectorised_held_out_indices_and_leverages_are_the_models_own():
     A = np.c_[np.ones(15), C]
     direct = [A[i] @ np.linalg.inv(np.delete(A, i, 0).T @ np.delete(A, i, 0)) @ A[i] for i in range(15)]
     np.testing.assert_allclose(held_out_leverage(C), direct, rtol=1e-10)
+
+
+def test_held_out_novelty_is_each_tests_index_by_a_model_refitted_without_it():
+    """Leave-one-out on complete tests (held_out_novelty's closed forms): each index equals that of a PCA (one and no
+    component removed) or a regression fitted on the other 14 tests, to 1e-9."""
+    X, C = _bench_like((15, 3), seed=4)
+    for k in (0, 1):
+        refit = [PCARemoval(k).fit(np.delete(X, i, 0)).novelty(X[i:i + 1])[0] for i in range(15)]
+        np.testing.assert_allclose(held_out_novelty(lambda k=k: PCARemoval(k), X), refit, rtol=1e-9)
+    refit = [Regression().fit(np.delete(X, i, 0), np.delete(C, i, 0)).novelty(X[i:i + 1], C[i:i + 1])[0]
+             for i in range(15)]
+    np.testing.assert_allclose(held_out_novelty(Regression, X, C), refit, rtol=1e-9)
 
 
 def test_the_scale_is_the_maximum_likelihood_of_the_threshold_law():

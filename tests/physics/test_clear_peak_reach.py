@@ -6,6 +6,7 @@ import importlib
 import numpy as np
 import pytest
 
+from physics.identification.half_power import half_power_bandwidth_hz
 from physics.identification.measured import peaks_left_out
 from physics.identification.poles import select_poles
 from physics.io import MeasuredFRF
@@ -32,11 +33,32 @@ def test_the_half_power_bandwidth_of_a_lone_mode_is_two_zeta_f():
     for zeta in (0.001, 0.01):
         mag = np.abs(_receptance(F_HZ, F1_HZ, zeta))
         peak = [int(np.argmax(mag))]
-        assert lscf.half_power_bandwidth_hz(F_HZ, mag, peak)[0] == pytest.approx(2 * zeta * F1_HZ, rel=0.01)
+        assert half_power_bandwidth_hz(F_HZ, mag, peak)[0] == pytest.approx(2 * zeta * F1_HZ, rel=0.01)
     assert lscf.clear_peak_reach_hz(F_HZ, np.abs(_receptance(F_HZ, F1_HZ, 0.001)), peak)[0] \
         == pytest.approx(3 * 2 * 0.001 * F1_HZ, rel=0.01)
     assert lscf.clear_peak_reach_hz(F_HZ, np.abs(_receptance(F_HZ, F1_HZ, 0.01)), peak)[0] \
         == pytest.approx(0.02 * F1_HZ)
+
+
+def test_a_peak_with_one_side_cut_off_is_doubled_or_nan():
+    """The 1000 Hz mode damped 1 % (bandwidth 20 Hz) with the band cut at 1005 Hz: its power |H|^2 falls to half
+    on the left only (about 10 Hz below), so ``one_side="double"`` gives twice that distance (read off the rising
+    flank by ``np.interp``) and ``"nan"`` NaN; over the whole band the power (ratio 2) gives the bandwidth the
+    magnitude (ratio sqrt 2) does. A line above the peak before its crossing is no crossing: on lines 0..5 Hz,
+    0.5 1 2 1.8 3 0.5 read from line 2, the left side crosses 2 / sqrt 2 at 2 - (2 - sqrt 2) Hz, the right side
+    meets 3 first."""
+    power = np.abs(_receptance(F_HZ, F1_HZ, 0.01)) ** 2
+    peak = [int(np.argmax(power))]
+    cut = F_HZ <= 1005.0
+    left_hz = F_HZ[peak[0]] - np.interp(power[peak[0]] / 2, power[:peak[0] + 1], F_HZ[:peak[0] + 1])
+    assert left_hz == pytest.approx(10.0, rel=0.03)
+    assert half_power_bandwidth_hz(F_HZ[cut], power[cut], peak, ratio=2.0)[0] == pytest.approx(2 * left_hz, rel=1e-12)
+    assert np.isnan(half_power_bandwidth_hz(F_HZ[cut], power[cut], peak, ratio=2.0, one_side="nan")[0])
+    both = half_power_bandwidth_hz(F_HZ, power, peak, ratio=2.0, one_side="nan")[0]
+    assert both == pytest.approx(half_power_bandwidth_hz(F_HZ, np.sqrt(power), peak)[0], rel=1e-3)
+    lines, values = np.arange(6.0), np.array([0.5, 1.0, 2.0, 1.8, 3.0, 0.5])
+    assert half_power_bandwidth_hz(lines, values, [2])[0] == pytest.approx(2 * (2 - np.sqrt(2.0)), rel=1e-12)
+    assert np.isnan(half_power_bandwidth_hz(lines, values, [2], one_side="nan")[0])
 
 
 def test_a_mode_one_percent_from_a_fitted_one_is_named():
@@ -45,7 +67,7 @@ def test_a_mode_one_percent_from_a_fitted_one_is_named():
     took it as explained), and the other way round; identified modes 1 Hz (half a bandwidth) off each peak explain
     both."""
     frf = MeasuredFRF(F_HZ, _two_modes(), ("1:+Z",), ("1:+Z",), kind="receptance")
-    peaks, reach = lscf.unexplained_peaks(F_HZ, np.abs(frf.frf[0, 0]))
+    peaks, reach = lscf.octave_median_peaks_and_reach(F_HZ, np.abs(frf.frf[0, 0]))
     np.testing.assert_allclose(peaks, [F1_HZ, F2_HZ], atol=0.25)
     np.testing.assert_allclose(reach, [6 * ZETA * F1_HZ, 6 * ZETA * F2_HZ], rtol=0.03)
     np.testing.assert_allclose(peaks_left_out(frf, [F1_HZ]), [F2_HZ], atol=0.25)
