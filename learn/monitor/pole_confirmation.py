@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from learn.monitor.identification import IdentificationSettings, with_narrow_band_poles
-from learn.monitor.tracking import (TOLERANCE_SIGMAS, ReferenceModes, narrow_bands_hz, narrow_identifier,
+from learn.monitor.tracking import (TOLERANCE_SIGMAS, ReferenceModes, narrow_identifier, search_bands_hz,
                                     shape_accepts, track_modes)
 from learn.pairs.measured import refit_missing_modes
 
@@ -65,7 +65,7 @@ def confirm_far_poles(tests: list, files: list, ref: ReferenceModes, settings: I
                 return np.zeros(lg.size, bool)              # the narrow band sees the tracked pole: kept
             return ok & (np.abs(lg - ln_ref[j]) < abs(lt - ln_ref[j]))
 
-        for _, found, k, _, _ in refit_missing_modes(check, ref.frequencies_hz, ref.tolerance, narrow_bands_hz(ref),
+        for _, found, k, _, _ in refit_missing_modes(check, ref.frequencies_hz, ref.tolerance, search_bands_hz(ref),
                                                      t.band_hz, narrow_identifier(files[i], settings, cache_dir,
                                                                                   pending), accept):
             out[i] = with_narrow_band_poles(out[i], found, [k])
