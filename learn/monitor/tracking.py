@@ -65,7 +65,9 @@ class ReferenceModes:
     ----------
     frequencies_hz : ndarray (m,)     median over the baseline tests
     log_std : ndarray (m,)            robust std of ``ln f`` over the baseline tests (1.4826 MAD)
-    tolerance : ndarray (m,)          largest ``|ln(f / f_ref)|`` of an assigned pole
+    tolerance : ndarray (m,)          largest ``|ln(f / f_ref)|`` of an assigned pole: the tracking band
+                                      (``TOLERANCE_SIGMAS`` std, the baseline's reading furthest from ``f_ref``, at
+                                      least ``MIN_TOLERANCE``; within ``NEIGHBOUR_SHARE`` of the log gap to a neighbour)
     shapes : ndarray complex (s, m) or None    dominant shape over the baseline tests (unit norm)
     dofs : tuple of str               rows of ``shapes``
     presence : ndarray (m,)           share of the baseline tests holding the mode
