@@ -10,9 +10,10 @@ Steps, one module each:
   belongs to the baseline period's series;
 * :mod:`~learn.monitor.tracking` -- the baseline period's modes (clustered; a mode found in 15 % of the tests and 7
   of them is one, its presence reported) and each test's poles assigned to them one to one within each mode's band
-  by frequency (and MAC with 2 or more sensors), a mode the identification missed identified again over its band
-  (:func:`refit_missing`), a mode missing in a test NaN there; :mod:`~learn.monitor.pole_confirmation` -- a tracked
-  pole far beyond its mode's baseline scatter checked by that narrow band (a split mode read at the mode);
+  (from its baseline scatter) by frequency (and MAC with 2 or more sensors), a mode the identification missed
+  identified again over its search band (:func:`refit_missing`), a mode missing in a test NaN there;
+  :mod:`~learn.monitor.pole_confirmation` -- a tracked pole far beyond its mode's baseline scatter checked by that
+  narrow band (a split mode read at the mode);
 * :mod:`~learn.monitor.estimator_choice` -- each reference mode's frequency of response records by the more repeatable
   over the baseline period of the identification and the record's zero-padded FFT peak (the identification kept
   where its scatter over the baseline is the smaller);

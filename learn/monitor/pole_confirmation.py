@@ -1,15 +1,15 @@
 """A tracked pole far from its reference mode confirmed by the narrow-band re-identification around the mode.
 
 The assignment of :func:`learn.monitor.tracking.track_modes` gives a reference mode the pole of the identification
-over the series' band nearest it within its band. Where the band is wider than the baseline's scatter of the mode
-(its floor of 15 %, :data:`~learn.monitor.tracking.MIN_TOLERANCE`, kept so that a mode a change moves by 5 % stays
-that mode), a spurious pole can take the mode's place: a mode the identification split into two poles either side
-of it, one of them in the band. Such a pole, beyond ``TOLERANCE_SIGMAS`` robust standard deviations of the mode's
-baseline scatter, is checked by identifying the record again over the mode's band alone (the re-identification
-of :func:`learn.monitor.tracking.refit_missing`, the same band and cache entry): a pole of that identification
-nearer the tracked pole than the reference frequency confirms it (a moved mode stays moved); where none does, the
-pole of that identification nearest the reference within the band is added to the test and takes the mode's place
-in the one-to-one assignment (the tracked pole stays in the test, unassigned).
+over the series' band nearest it within its band. Where the band is wider than ``TOLERANCE_SIGMAS`` robust standard
+deviations of the mode's baseline scatter (its floor :data:`~learn.monitor.tracking.MIN_TOLERANCE`, the 2.5 % core
+window, or a baseline reading further off), a spurious pole can take the mode's place: a mode the identification
+split into two poles either side of it, one of them in the band. Such a pole is checked by identifying the record
+again over the mode's search band (the re-identification of :func:`learn.monitor.tracking.refit_missing`, the same
+band and cache entry, :func:`learn.monitor.tracking.search_bands_hz`): a pole of that identification nearer the
+tracked pole than the reference frequency confirms it (a moved mode stays moved); where none does, the pole of that
+identification nearest the reference within the tracking band is added to the test and takes the mode's place in
+the one-to-one assignment (the tracked pole stays in the test, unassigned).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from learn.monitor.identification import IdentificationSettings, with_narrow_band_poles
-from learn.monitor.tracking import (TOLERANCE_SIGMAS, ReferenceModes, narrow_bands_hz, narrow_identifier,
+from learn.monitor.tracking import (TOLERANCE_SIGMAS, ReferenceModes, narrow_identifier, search_bands_hz,
                                     shape_accepts, track_modes)
 from learn.pairs.measured import refit_missing_modes
 
@@ -36,8 +36,9 @@ def far_from_reference(F, ref: ReferenceModes) -> np.ndarray:
 def confirm_far_poles(tests: list, files: list, ref: ReferenceModes, settings: IdentificationSettings,
                       cache_dir=None, pending: list | None = None) -> list:
     """``tests`` with each tracked pole far from its reference mode (:func:`far_from_reference`) checked by the
-    narrow-band re-identification over the mode's band (:func:`learn.monitor.tracking.narrow_bands_hz`, within the
-    record's lines; cached as :func:`learn.monitor.identification.cached_identification`, ``pending`` as there).
+    narrow-band re-identification over the mode's search band (:func:`learn.monitor.tracking.search_bands_hz`,
+    within the record's lines; cached as :func:`learn.monitor.identification.cached_identification`, ``pending`` as
+    there).
 
     A pole of that identification nearer the tracked pole than the reference frequency (in ``ln f``; with shapes
     of 2 or more sensors, MAC >= :data:`MAC_MIN` with the reference shape) confirms it; where none does, the one
@@ -65,7 +66,7 @@ def confirm_far_poles(tests: list, files: list, ref: ReferenceModes, settings: I
                 return np.zeros(lg.size, bool)              # the narrow band sees the tracked pole: kept
             return ok & (np.abs(lg - ln_ref[j]) < abs(lt - ln_ref[j]))
 
-        for _, found, k, _, _ in refit_missing_modes(check, ref.frequencies_hz, ref.tolerance, narrow_bands_hz(ref),
+        for _, found, k, _, _ in refit_missing_modes(check, ref.frequencies_hz, ref.tolerance, search_bands_hz(ref),
                                                      t.band_hz, narrow_identifier(files[i], settings, cache_dir,
                                                                                   pending), accept):
             out[i] = with_narrow_band_poles(out[i], found, [k])

@@ -17,9 +17,10 @@ from learn.pairs.noise_calibration import robust_std
 from physics.modal import mac
 
 __all__ = ["CLUSTER_GAP", "MAC_MIN", "MIN_COUNT", "MIN_PRESENCE", "MODE_LOST", "MODE_MOVED", "REACH_FACTOR",
+           "SEARCH_MIN",
            "BeyondBands", "ReferenceModes", "beyond_bands", "identified_by", "narrow_bands_hz", "narrow_identifier",
-           "reach_bands_hz", "readings_text", "reference_modes", "refit_missing", "shape_accepts", "shapes_at",
-           "track_modes"]
+           "reach_bands_hz", "readings_text", "reference_modes", "refit_missing", "search_bands_hz", "shape_accepts",
+           "shapes_at", "track_modes"]
 
 #: Baseline poles closer than this (relative) in frequency fall into one cluster.
 CLUSTER_GAP = 0.05
@@ -34,10 +35,17 @@ MIN_PRESENCE = 0.15
 #: fewest on which one feature's normal variation is learnt with its held-out index of finite variance.
 MIN_COUNT = 7
 CORE = math.log1p(CLUSTER_GAP / 2)
-#: A pole is assigned to a reference mode within ``max(TOLERANCE_SIGMAS * std, MIN_TOLERANCE)`` of it in log
-#: frequency (std: the baseline's robust scatter of the mode), never beyond ``NEIGHBOUR_SHARE`` of the log gap to
-#: the next reference mode.
-TOLERANCE_SIGMAS, MIN_TOLERANCE, NEIGHBOUR_SHARE = 10.0, math.log(1.15), 0.45
+#: A pole is assigned to a reference mode within its tracking band: ``TOLERANCE_SIGMAS`` times the baseline's robust
+#: scatter of the mode (std) in log frequency, at least ``MIN_TOLERANCE`` (``CORE``, the window that gathered the
+#: mode's poles in the baseline) and the baseline's own reading of the mode furthest from it, never beyond
+#: ``NEIGHBOUR_SHARE`` of the log gap to the next reference mode. A pole further off is no reading of the mode in
+#: place but the mode moved (or a spurious pole): read beyond the band (:func:`beyond_bands`).
+TOLERANCE_SIGMAS, MIN_TOLERANCE, NEIGHBOUR_SHARE = 10.0, CORE, 0.45
+#: A reference mode is re-identified (:func:`refit_missing`, :mod:`learn.monitor.pole_confirmation`) over its search
+#: band, at least this wide in log frequency either way (never beyond ``NEIGHBOUR_SHARE`` of the log gap to the next
+#: reference mode), and only a pole of it within the mode's tracking band is taken: an output-only identification of a
+#: short record over a band as narrow as the tracking band finds no stable pole where one over the wider band does.
+SEARCH_MIN = math.log(1.15)
 #: With 2 or more sensors, a pole is assigned only when its shape's MAC with the reference shape reaches this.
 MAC_MIN = 0.6
 #: A reference mode missing from its band is looked for beyond it up to half the log gap to the neighbouring
@@ -57,7 +65,9 @@ class ReferenceModes:
     ----------
     frequencies_hz : ndarray (m,)     median over the baseline tests
     log_std : ndarray (m,)            robust std of ``ln f`` over the baseline tests (1.4826 MAD)
-    tolerance : ndarray (m,)          largest ``|ln(f / f_ref)|`` of an assigned pole
+    tolerance : ndarray (m,)          largest ``|ln(f / f_ref)|`` of an assigned pole: the tracking band
+                                      (``TOLERANCE_SIGMAS`` std, the baseline's reading furthest from ``f_ref``, at
+                                      least ``MIN_TOLERANCE``; within ``NEIGHBOUR_SHARE`` of the log gap to a neighbour)
     shapes : ndarray complex (s, m) or None    dominant shape over the baseline tests (unit norm)
     dofs : tuple of str               rows of ``shapes``
     presence : ndarray (m,)           share of the baseline tests holding the mode
@@ -131,7 +141,7 @@ def reference_modes(tests: list) -> ReferenceModes:
             groups.append((idx[np.abs(logf[idx] - centres[0]) <= CORE], centres[0]))
     groups.sort(key=lambda g: g[1])
     dofs = tests[0].dofs if n else ()
-    freqs, stds, presence, shapes = [], [], [], []
+    freqs, stds, extremes, presence, shapes = [], [], [], [], []
     for members, centre in groups:
         pick = {}
         for j in members:
@@ -141,6 +151,7 @@ def reference_modes(tests: list) -> ReferenceModes:
         v = logf[list(pick.values())]
         freqs.append(float(np.exp(np.median(v))))
         stds.append(robust_std(v))
+        extremes.append(float(np.max(np.abs(v - np.median(v)))) * (1 + 1e-9))   # its own reading inside, roundoff
         presence.append(len(pick) / n)
         rows = [shapes_at(tests[i], dofs) for i in pick]
         if all(r is not None for r in rows):
@@ -151,7 +162,7 @@ def reference_modes(tests: list) -> ReferenceModes:
             shapes.append(None)
     f = np.asarray(freqs, float)
     s = np.asarray(stds, float)
-    tol = np.maximum(TOLERANCE_SIGMAS * s, MIN_TOLERANCE)
+    tol = np.maximum(np.maximum(TOLERANCE_SIGMAS * s, MIN_TOLERANCE), np.asarray(extremes, float))
     if f.size > 1:
         gaps = np.diff(np.log(f))
         neighbour = np.minimum(np.r_[np.inf, gaps], np.r_[gaps, np.inf])
@@ -225,9 +236,22 @@ def track_modes(tests: list, ref: ReferenceModes):
 
 
 def narrow_bands_hz(ref: ReferenceModes) -> np.ndarray:
-    """Each reference mode's tracking band ``f_ref exp(-+tolerance)`` (Hz), shape (m, 2): the band of its
-    narrow-band re-identification."""
+    """Each reference mode's tracking band ``f_ref exp(-+tolerance)`` (Hz), shape (m, 2): where a pole (or an FFT
+    peak) is a reading of the mode in place."""
     return ref.frequencies_hz[:, None] * np.exp(np.outer(ref.tolerance, [-1.0, 1.0]))
+
+
+def search_bands_hz(ref: ReferenceModes) -> np.ndarray:
+    """Each reference mode's search band (Hz), shape (m, 2): the band of its narrow-band re-identification,
+    ``f_ref exp(-+max(tolerance, SEARCH_MIN))``, never beyond ``NEIGHBOUR_SHARE`` of the log gap to the next
+    reference mode; it holds the tracking band (:func:`narrow_bands_hz`)."""
+    f = ref.frequencies_hz
+    half = np.maximum(ref.tolerance, SEARCH_MIN)
+    if f.size > 1:
+        gaps = np.diff(np.log(f))
+        half = np.maximum(np.minimum(half, NEIGHBOUR_SHARE * np.minimum(np.r_[np.inf, gaps], np.r_[gaps, np.inf])),
+                          ref.tolerance)
+    return f[:, None] * np.exp(np.outer(half, [-1.0, 1.0]))
 
 
 def refit_missing(tests: list, files: list, ref: ReferenceModes, settings: IdentificationSettings, cache_dir=None,
@@ -235,10 +259,10 @@ def refit_missing(tests: list, files: list, ref: ReferenceModes, settings: Ident
     """``tests`` with the modes the identification over the series' band missed found again around them.
 
     For each test of FRFs or response records (modal data are read as they are) and each reference mode
-    :func:`track_modes` leaves untracked there, the file is identified again over the mode's band alone
-    (:func:`narrow_bands_hz`, within the file's lines; the same method, every mode found there:
+    :func:`track_modes` leaves untracked there, the file is identified again over the mode's search band alone
+    (:func:`search_bands_hz`, within the file's lines; the same method, every mode found there:
     :func:`learn.monitor.identification.identify_test`, cached like the first identification); the pole of that
-    identification nearest the mode within its tolerance (and, with shapes of 2 or more sensors, MAC >=
+    identification nearest the mode within its tracking band (and, with shapes of 2 or more sensors, MAC >=
     :data:`MAC_MIN`) is added to the test (its ``narrow_band_hz`` says so), by
     :func:`learn.pairs.measured.refit_missing_modes`. A spurious pole of the first pass never took the mode's place (the
     assignment is one to one and stops at the tolerance), so a mode missed there is looked for where it lies, not
@@ -250,7 +274,7 @@ def refit_missing(tests: list, files: list, ref: ReferenceModes, settings: Ident
         if t is None or t.kind == "modal":
             continue
         for _, found, k, _, _ in refit_missing_modes(np.flatnonzero(np.isnan(F[i])), ref.frequencies_hz,
-                                                     ref.tolerance, narrow_bands_hz(ref), t.band_hz,
+                                                     ref.tolerance, search_bands_hz(ref), t.band_hz,
                                                      narrow_identifier(files[i], settings, cache_dir, pending),
                                                      partial(shape_accepts, ref)):
             out[i] = with_narrow_band_poles(out[i], found, [k])

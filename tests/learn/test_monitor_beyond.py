@@ -59,7 +59,7 @@ def test_the_reach_ends_at_half_the_log_gap_to_the_neighbours_and_at_the_factor(
 def test_a_mode_that_jumps_40_percent_is_moved_by_plus_40_percent_and_flagged():
     tests = _baseline() + [_modes(F0 * [1.40, 1.0, 1.0])]
     ref, bb = _read(tests, 12)
-    assert np.isnan(track_modes(tests, ref)[0][12, 0])          # beyond its band (15 %): not tracked
+    assert np.isnan(track_modes(tests, ref)[0][12, 0])          # beyond its band: not tracked
     (d,) = bb.readings(12, ref)
     assert d["reading"] == "moved" and d["mode"] == 1 and d["flagged"]
     assert d["frequency_hz"] == pytest.approx(14.0)

@@ -10,7 +10,7 @@ from learn.monitor import IdentificationSettings, IdentifiedModes, SeriesInput, 
 from learn.monitor.estimator_choice import FFT_PEAK
 from learn.monitor.fft_beyond import beyond_windows_hz
 from learn.monitor.identification import cached_fft_peaks
-from learn.monitor.tracking import MODE_MOVED, narrow_bands_hz, reach_bands_hz
+from learn.monitor.tracking import MODE_MOVED, TOLERANCE_SIGMAS, narrow_bands_hz, reach_bands_hz
 
 FS_HZ, N_SAMPLES, ZETA = 1000.0, 4000, 0.01
 #: The zero-padded FFT's line spacing: 8 x 4000 samples padded to 32768.
@@ -43,10 +43,10 @@ def _series(tmp_path):
     """14 baseline tests of a 100-Hz mode (0.05 Hz from test to test, identified with 0.5 Hz of extra scatter: its
     FFT peak is chosen) and a 150-Hz mode ten times stronger (identified within 1e-8); then mode 1 at 84 Hz (3 tests),
     at 118 Hz (3 tests), at 100 Hz (1 test), gone (1 test). The identification reads mode 1 within its band (at
-    95 and 105 Hz) where it walked, and not at all where it is gone."""
+    97 and 103 Hz) where it walked, and not at all where it is gone."""
     rng = np.random.default_rng(0)
     f1 = np.r_[100.0 + 0.05 * rng.standard_normal(N_BASELINE), [84.0] * 3, [118.0] * 3, 100.0, np.nan]
-    ident1 = np.r_[f1[:N_BASELINE] + 0.5 * rng.standard_normal(N_BASELINE), [95.0] * 3, [105.0] * 3, 100.2, np.nan]
+    ident1 = np.r_[f1[:N_BASELINE] + 0.5 * rng.standard_normal(N_BASELINE), [97.0] * 3, [103.0] * 3, 100.2, np.nan]
     files, tests = [], []
     for i, (f, g) in enumerate(zip(f1, ident1)):
         path = tmp_path / f"test_{i:02d}.npz"
@@ -68,7 +68,8 @@ def _identified_as(tests, files, monkeypatch):
 
 
 def test_an_fft_peak_beyond_its_band_is_the_mode_moved_and_never_its_neighbours_peak(tmp_path, monkeypatch):
-    """Mode 1 (band 87.0-115.0 Hz, reach 81.6-122.5 Hz: half the log gap to 150 Hz either side) read by its FFT
+    """Mode 1 (band 95.6-104.4 Hz: 10 robust standard deviations of its identified baseline frequencies; reach
+    81.6-122.5 Hz: half the log gap to 150 Hz either side) read by its FFT
     peak: at 84 Hz its peak lies below its band, at 118 Hz above it, with no local maximum of the FFT power in the
     band; each reads ``mode moved`` at the peak (the padded grid's line, within 0.03 Hz of it), its change against
     the reference frequency, flagged at chance 0 (the FFT peak read the mode in every baseline test). Where mode 1 is
@@ -82,11 +83,13 @@ def test_an_fft_peak_beyond_its_band_is_the_mode_moved_and_never_its_neighbours_
     assert res.frequency_choice.estimators == (FFT_PEAK, "era")
     ref = res.reference
     f_ref = ref.frequencies_hz[0]
-    np.testing.assert_allclose(narrow_bands_hz(ref)[0], f_ref * np.exp([-np.log(1.15), np.log(1.15)]))
+    tol = ref.tolerance[0]
+    assert tol == pytest.approx(TOLERANCE_SIGMAS * ref.log_std[0]) and 0.03 < tol < np.log(1.05)
+    np.testing.assert_allclose(narrow_bands_hz(ref)[0], f_ref * np.exp([-tol, tol]))
     half = 0.5 * np.log(150.0 / f_ref)
     np.testing.assert_allclose(reach_bands_hz(ref)[0], f_ref * np.exp([-half, half]))
-    np.testing.assert_allclose(beyond_windows_hz(ref)[0], [[f_ref * np.exp(-half), f_ref / 1.15],
-                                                           [f_ref * 1.15, f_ref * np.exp(half)]])
+    np.testing.assert_allclose(beyond_windows_hz(ref)[0], [[f_ref * np.exp(-half), f_ref * np.exp(-tol)],
+                                                           [f_ref * np.exp(tol), f_ref * np.exp(half)]])
     for i in range(N_BASELINE + 6):
         row = res.rows[i]
         if i < N_BASELINE:
@@ -103,8 +106,9 @@ def test_an_fft_peak_beyond_its_band_is_the_mode_moved_and_never_its_neighbours_
         assert res.beyond.by_fft[i, 0] and res.beyond.moved_col[i, 0] == -1
     assert res.rows[N_BASELINE]["beyond_band"][0]["change_pct"] == pytest.approx(-16.0, abs=0.5)
     assert res.rows[N_BASELINE + 3]["beyond_band"][0]["change_pct"] == pytest.approx(18.0, abs=0.5)
-    assert res.rows[N_BASELINE]["beyond_band_text"] == ("mode 1 moved -16.1 % (83.86 Hz, beyond its band 86.89-114.9 "
-                                                        "Hz)")
+    lo, hi = narrow_bands_hz(ref)[0]
+    assert res.rows[N_BASELINE]["beyond_band_text"] == (f"mode 1 moved -16.1 % (83.86 Hz, beyond its band {lo:.4g}-"
+                                                        f"{hi:.4g} Hz)")
     intact, gone = res.rows[N_BASELINE + 6], res.rows[N_BASELINE + 7]
     assert intact["beyond_band"] == [] and intact["frequencies_hz"][0] == res.frequency_choice.fft_hz[N_BASELINE + 6, 0]
     assert intact["frequencies_hz"][0] == pytest.approx(100.0, abs=0.3)           # the vertex, in the band
@@ -115,7 +119,7 @@ def test_an_fft_peak_beyond_its_band_is_the_mode_moved_and_never_its_neighbours_
 
 
 def test_without_the_fft_choice_the_same_series_reads_the_identifications_poles_in_the_band(tmp_path, monkeypatch):
-    """With every frequency the identification's, the walked mode's poles (95 and 105 Hz) lie in its band: nothing
+    """With every frequency the identification's, the walked mode's poles (97 and 103 Hz) lie in its band: nothing
     beyond it, the FFT peaks are not read."""
     files, tests, _ = _series(tmp_path)
     _identified_as(tests, files, monkeypatch)

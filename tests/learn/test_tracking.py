@@ -6,7 +6,7 @@ import pytest
 
 from learn.monitor import IdentificationSettings, IdentifiedModes, identify_test, reference_modes, track_modes
 from learn.pairs.measured import identify_modes
-from learn.monitor.tracking import MIN_COUNT, identified_by, narrow_bands_hz, refit_missing
+from learn.monitor.tracking import MIN_COUNT, identified_by, narrow_bands_hz, refit_missing, search_bands_hz
 from learn.pairs.inputs import refit_frf_modes
 from physics.identification.measured import read_measured_frf
 from physics.io import MeasuredFRF
@@ -91,7 +91,7 @@ def test_the_narrow_band_refit_finds_a_mode_the_broad_pass_missed(three_mode_frf
     F, Z, _, cols = track_modes([found], ref)
     np.testing.assert_allclose(F[0], [10.0, 25.0, 40.0], rtol=1e-3)
     assert Z[0, 1] == pytest.approx(0.01, rel=0.05)
-    lo, hi = narrow_bands_hz(ref)[1]
+    lo, hi = search_bands_hz(ref)[1]                               # re-identified over the search band
     assert identified_by([found], cols)[0] == ["lscf", f"lscf, narrow band {lo:.4g}-{hi:.4g} Hz", "lscf"]
     assert len(pending) == 1                                        # one refit, cached with the series
 
