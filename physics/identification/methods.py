@@ -102,8 +102,8 @@ def _fit_fdd(signals, fs, band_hz, n_modes, where, enhanced):
     return identify_fdd(signals, fs, band_hz, n_modes, enhanced=enhanced, where=where).estimate, None
 
 
-def _fit_fft_peak(signals, fs, band_hz, n_modes, where):
-    return identify_fft_peaks(signals, fs, band_hz, n_modes, where=where)[0], None
+def _fit_fft_peak(signals, fs, band_hz, n_modes, where, quantity=None):
+    return identify_fft_peaks(signals, fs, band_hz, n_modes, where=where, quantity=quantity)[0], None
 
 
 #: Identification methods by name.
@@ -159,6 +159,8 @@ METHODS: dict[str, MethodSpec] = {
         _fit_fft_peak,
         "output-only baseline: peaks of the zero-padded FFT of the whole record (no window on a free decay, Hann "
         "on a stationary one), parabolic interpolation of the log magnitude; half-power damping where the peak is "
-        "wider than the window's",
+        "wider than the window's; the natural frequency is the spectrum's peak converted by the recorded quantity "
+        "(an acceleration's peaks at f_n / sqrt(1 - 2 zeta^2)), which the force's spectrum and coherent neighbours "
+        "move (era and ssi return the pole's |lambda| / 2 pi)",
         (("frequency_std_hz, damping_std", "none (NaN)"),), yields_uncertainty=False, data="records"),
 }
