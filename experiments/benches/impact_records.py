@@ -101,11 +101,11 @@ def impact_records(case: ImpactCase, n_records: int, seed: int) -> tuple[np.ndar
     force : ndarray, shape (n_records, n_samples)
     acceleration : ndarray, shape (n_records, n_samples)
     """
-    lam = case.eigenvalues
-    a_r = case.modal_constants
-    if not (lam.shape == a_r.shape and np.all(np.asarray(case.damping_ratios) < 1 / np.sqrt(2))):
+    sizes = {len(case.natural_frequencies_hz), len(case.damping_ratios), len(case.amplitudes)}
+    if not (len(sizes) == 1 and np.all(np.asarray(case.damping_ratios) < 1 / np.sqrt(2))):
         raise ShapeError("ImpactCase: natural_frequencies_hz, damping_ratios and amplitudes must be of one "
                          "length, each damping ratio below 1/sqrt(2)")
+    lam, a_r = case.eigenvalues, case.modal_constants
     t = np.arange(case.n_samples) / case.sampling_frequency_hz - case.pretrigger_s
     tau = case.pulse_s
     p = np.where((t >= 0) & (t <= tau), case.force_peak * np.sin(np.pi * np.clip(t, 0, tau) / tau), 0.0)
