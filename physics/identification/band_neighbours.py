@@ -30,9 +30,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
 
-from physics.identification.amplitude_frequency import MAX_NEIGHBOUR_WIDTH, MIN_RESIDUAL_DROP
 from physics.identification.band_refine import (RESOLVED_LINES, RESOLVED_WIDTHS, BandFit, band_data, modes_on_lines,
                                                 refine_in_bands)
 
@@ -117,6 +115,9 @@ def band_neighbour(decays, sampling_frequency_hz, eigenvalue, band_hz, fixed=Non
     -------
     BandNeighbour
     """
+    from scipy.optimize import least_squares  # scipy.optimize: about 1 s to import, only free-decay identification
+    from physics.identification.amplitude_frequency import MAX_NEIGHBOUR_WIDTH, MIN_RESIDUAL_DROP  # scipy: backbone
+
     fs = float(sampling_frequency_hz)
     decays = [np.asarray(y, dtype=np.float64) for y in decays]
     none = BandNeighbour(complex(np.nan, np.nan), complex(np.nan, np.nan), np.nan, False)

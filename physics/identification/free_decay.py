@@ -12,7 +12,13 @@ shows and decides which poles carry energy). Each kept pole is then refined in i
 Fourier transforms at the record's rate, from each hit's onset, across the cuts of missed hits that add no energy
 (:func:`~physics.identification.band_refine.refine_in_bands`: the closed-form transform of truncated damped
 exponentials and a smooth background, close modes together), so that the other modes, the unmodelled ones and the
-hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. A mode fitted as one
+hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. A narrow component
+inside a mode's band that no pole holds (a shoulder on the mode's flank, which makes neither a clear peak nor a
+stable pole and which the band's smooth background cannot take) would pull the mode towards it: each mode's band is
+tested for one (:func:`~physics.identification.band_neighbours.refine_with_neighbours`, a model-order test) and the
+mode refitted beside the component kept, which is named in :attr:`ERAIdentification.neighbours_hz` and is no mode of
+the estimate. The frequency returned is the natural frequency ``|lambda| / 2 pi`` of each mode's pole (its damped
+frequency is ``Im(lambda) / 2 pi``). A mode fitted as one
 pole for poles of one peak that the refinement merged, whose frequency moves over its decays (refitted over their
 first and their second halves, :func:`~physics.identification.glide.mode_glide`, more than
 :data:`~physics.identification.glide.GLIDE_SIGMAS` sigma apart), is named in a warning with its glide: a mode whose
