@@ -11,6 +11,19 @@ whole top rather than three lines keeps a wide peak's noise ripple from moving i
 negative-frequency image, the flanks of other modes) moves the vertex by about ``b^2 / (2 f)`` for a half-power
 half-width ``b``: the same on every test of a structure, so a bias, not a scatter.
 
+What the peak is: the peak of ``|Y(f)|``, the transform of the record as recorded. A hit's whole response has
+``Y = H_q(f) P(f)``: the FRF of the recorded quantity ``q`` (receptance, mobility or accelerance for displacement,
+velocity or acceleration) times the force's spectrum ``P``, summed over the modes. One mode's ``|H_q|`` peaks at
+``f_n (1 - 2 zeta^2)^(k / 2)`` (``k = 1, 0, -1`` for displacement, velocity, acceleration; ``f_n = |lambda| / 2 pi``,
+:data:`PEAK_EXPONENT`); its analytic decay alone (the positive-frequency term) peaks at the damped frequency
+``f_d = f_n sqrt(1 - zeta^2)``. ``P``'s slope across the peak moves it by ``b^2 d ln|P| / df`` and a neighbouring
+mode's transform, added coherently (the same phase in every hit), by up to about its level relative to the peak's
+times ``b``: a bias a zero-padded peak cannot remove without the force or a model of the neighbour
+(``experiments/benches/bench_bias.py`` measures both, ``docs/identification.md`` gives its table).
+``natural_frequencies_hz`` converts the peak by the recorded quantity's exponent where it is given (``quantity``),
+else as the damped frequency of the analytic decay, ``f_peak / sqrt(1 - zeta^2)``; both only where the half-power
+width gives a damping ratio (the correction is ``zeta^2 f`` in size: 4e-4 of the frequency at 2 % damping).
+
 The window (``window="auto"``):
 
 * **none** (rectangular) for a *free response* (decays after hits,
@@ -26,11 +39,12 @@ record's spectrum: for a free decay, the whole record's FFT power averaged over 
 (:func:`~physics.identification.decays.decay_spectrum`; a peak 10 dB above its valleys and above the level a
 noise line passes by chance over the band is clear too, :func:`~physics.identification.decay_peaks.decay_peaks`);
 for a stationary record, the averaged singular-value spectrum FDD reads. Each is refined on the fine grid. A free
-decay's spectrum peaks at the *damped* frequency ``f_d``; where the half-power width gives a damping ratio, the
-natural frequency reported is ``f_d / sqrt(1 - zeta^2)``. The damping ratio is the half-power (-3 dB) half-width
-over the frequency, NaN where that width is under :data:`MIN_WIDTH_LOBES` times the window's own half-power half-width
-(:data:`WINDOW_HALF_WIDTH` over the record's length: the peak is then the window's, not the mode's). The shapes
-are the complex FFT values of each channel at the peak's line, unit norm.
+decay's spectrum peaks near the damped frequency ``f_d`` (above: where exactly); where the half-power width gives a
+damping ratio, the natural frequency reported is the peak converted by the quantity's exponent (above). The damping
+ratio is the half-power (-3 dB) half-width over the frequency, NaN where that width is under
+:data:`MIN_WIDTH_LOBES` times the window's own half-power half-width (:data:`WINDOW_HALF_WIDTH` over the record's
+length: the peak is then the window's, not the mode's). The shapes are the complex FFT values of each channel at
+the peak's line, unit norm.
 
 This is a frequency estimator, not a modal model: no poles, no residues, and on a stationary record the raw
 periodogram is not averaged (its peak scatters by a fraction of the half-power width however long the record).
@@ -51,8 +65,8 @@ from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.record_checks import check_periods, check_records
 from physics.modal import eigenvalues_from_modal
 
-__all__ = ["MIN_WIDTH_LOBES", "PAD", "TOP_FRACTION", "WINDOW_HALF_WIDTH", "FFTPeaks", "fft_peaks", "identify_fft_peaks",
-           "padded_spectrum"]
+__all__ = ["MIN_WIDTH_LOBES", "PAD", "PEAK_EXPONENT", "TOP_FRACTION", "WINDOW_HALF_WIDTH", "FFTPeaks", "fft_peaks",
+           "identify_fft_peaks", "natural_from_peak", "padded_spectrum"]
 
 #: Zero padding: the FFT length is the next power of two of at least ``PAD`` times the record's samples.
 PAD = 8
@@ -64,6 +78,8 @@ WINDOW_HALF_WIDTH = {"none": 0.443, "hann": 0.72}
 TOP_FRACTION = 0.5
 #: A half-power width under this many times the window's is the window's (damping NaN).
 MIN_WIDTH_LOBES = 2.0
+#: One mode's ``|H|`` of the recorded quantity peaks at ``f_n (1 - 2 zeta^2)^(PEAK_EXPONENT / 2)``.
+PEAK_EXPONENT = {"displacement": 1, "velocity": 0, "acceleration": -1}
 
 
 @dataclass(frozen=True)
@@ -75,7 +91,9 @@ class FFTPeaks:
     frequency_hz : ndarray, shape (n_peaks,)
         Peak frequency (the parabola's vertex); NaN where no local maximum lies within the tolerance.
     natural_frequencies_hz : ndarray, shape (n_peaks,)
-        ``frequency_hz / sqrt(1 - zeta^2)`` where the damping ratio is finite, else ``frequency_hz``.
+        Where the damping ratio is finite, ``frequency_hz (1 - 2 zeta^2)^(-k / 2)`` for the recorded quantity's
+        exponent ``k`` (:data:`PEAK_EXPONENT`), or ``frequency_hz / sqrt(1 - zeta^2)`` (the analytic decay's damped
+        frequency) where the quantity is not given; else ``frequency_hz``.
     damping_ratios : ndarray, shape (n_peaks,)
         Half-power half-width over the frequency; NaN where the width is the window's.
     values : ndarray, complex, shape (n_channels, n_peaks)
@@ -157,8 +175,30 @@ def _vertex(logp, lines, half_span):
     return out
 
 
+def natural_from_peak(peak_hz, damping_ratio, quantity=None):
+    """The natural frequency of a mode whose record's spectrum peaks at ``peak_hz`` (module docstring):
+    ``peak_hz (1 - 2 zeta^2)^(-k / 2)`` for ``quantity`` of :data:`PEAK_EXPONENT` (``k``), ``peak_hz /
+    sqrt(1 - zeta^2)`` for None (the analytic decay's damped frequency); ``peak_hz`` where ``damping_ratio`` is NaN.
+
+    Parameters
+    ----------
+    peak_hz, damping_ratio : array_like, shape (n,)
+    quantity : {None, "displacement", "velocity", "acceleration"}
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
+    if quantity is not None and quantity not in PEAK_EXPONENT:
+        raise ShapeError(f"quantity {quantity!r}: expected one of {', '.join(PEAK_EXPONENT)} or None")
+    fp = np.asarray(peak_hz, dtype=np.float64)
+    z = np.minimum(np.nan_to_num(np.asarray(damping_ratio, dtype=np.float64)), 0.5)
+    factor = 1 / np.sqrt(1 - z ** 2) if quantity is None else (1 - 2 * z ** 2) ** (-PEAK_EXPONENT[quantity] / 2)
+    return np.where(np.isfinite(damping_ratio), fp * factor, fp)
+
+
 def fft_peaks(signals, sampling_frequency_hz, frequencies_hz, tolerance_hz, window="auto", pad=PAD,
-              where="record") -> FFTPeaks:
+              where="record", quantity=None) -> FFTPeaks:
     """Peaks of the zero-padded FFT magnitude near given frequencies (see the module docstring).
 
     Parameters
@@ -175,6 +215,8 @@ def fft_peaks(signals, sampling_frequency_hz, frequencies_hz, tolerance_hz, wind
     pad : int
         Zero-padding factor (FFT length: next power of two of ``pad x n_samples``).
     where : str
+    quantity : {None, "displacement", "velocity", "acceleration"}
+        The recorded quantity, for :attr:`FFTPeaks.natural_frequencies_hz` (:func:`natural_from_peak`).
 
     Returns
     -------
@@ -199,13 +241,13 @@ def fft_peaks(signals, sampling_frequency_hz, frequencies_hz, tolerance_hz, wind
     fp = np.where(found, _vertex(logp, k, half_span) * df, np.nan)
     zeta = hw / np.where(found, fp, np.nan)
     zeta = np.where(hw >= MIN_WIDTH_LOBES * WINDOW_HALF_WIDTH[window] * fs / y.shape[1], zeta, np.nan)
-    fn = np.where(np.isfinite(zeta), fp / np.sqrt(1 - np.minimum(np.nan_to_num(zeta), 0.5) ** 2), fp)
+    fn = natural_from_peak(fp, zeta, quantity)
     values = np.where(found[None, :], X[:, k], np.nan)
     return FFTPeaks(fp, fn, zeta, values, window, fs / y.shape[1], df, np.where(found, k * df, np.nan))
 
 
 def identify_fft_peaks(signals, sampling_frequency_hz, band_hz=None, n_modes=None, window="auto", pad=PAD,
-                       where="record") -> tuple[ModalEstimate, FFTPeaks]:
+                       where="record", quantity=None) -> tuple[ModalEstimate, FFTPeaks]:
     """Modes at the clear peaks of a record's singular-value spectrum, each frequency refined on the zero-padded
     FFT of the whole record (see the module docstring).
 
@@ -220,6 +262,8 @@ def identify_fft_peaks(signals, sampling_frequency_hz, band_hz=None, n_modes=Non
     window : {"auto", "none", "hann"}
     pad : int
     where : str
+    quantity : {None, "displacement", "velocity", "acceleration"}
+        The recorded quantity (:func:`fft_peaks`).
 
     Returns
     -------
@@ -252,7 +296,7 @@ def identify_fft_peaks(signals, sampling_frequency_hz, band_hz=None, n_modes=Non
     keep = np.sort(np.argsort(-peaks.height_db, kind="stable")[:n_modes]) if n_modes is not None \
         else np.arange(peaks.lines.size)
     res = fft_peaks(checked if band_hz is None else checked.signals, checked.sampling_frequency_hz,
-                    peaks.frequency_hz[keep], peaks.tolerance_hz[keep], window, pad, where)
+                    peaks.frequency_hz[keep], peaks.tolerance_hz[keep], window, pad, where, quantity)
     ok = np.isfinite(res.frequency_hz)
     _, first = np.unique(np.where(ok, res.frequency_hz, -1.0), return_index=True)
     ok &= np.isin(np.arange(ok.size), first)            # two clear peaks refined to one FFT peak: one mode

@@ -102,8 +102,8 @@ def _fit_fdd(signals, fs, band_hz, n_modes, where, enhanced):
     return identify_fdd(signals, fs, band_hz, n_modes, enhanced=enhanced, where=where).estimate, None
 
 
-def _fit_fft_peak(signals, fs, band_hz, n_modes, where):
-    return identify_fft_peaks(signals, fs, band_hz, n_modes, where=where)[0], None
+def _fit_fft_peak(signals, fs, band_hz, n_modes, where, quantity=None):
+    return identify_fft_peaks(signals, fs, band_hz, n_modes, where=where, quantity=quantity)[0], None
 
 
 #: Identification methods by name.
@@ -139,7 +139,8 @@ METHODS: dict[str, MethodSpec] = {
         "output-only, free responses (impacts or plucks without the force): the decays after the hits by the "
         "Eigensystem Realisation Algorithm with automatic stabilisation-diagram selection, the poles refined by a "
         "nonlinear least-squares fit of damped sinusoids to the samples, then each in its own narrow band of the "
-        "decays' Fourier transforms",
+        "decays' Fourier transforms, beside any narrow component of the band no pole holds; the natural frequency "
+        "|lambda| / 2 pi of each pole",
         (("frequency_std_hz, damping_std", "one sigma from the narrow-band fit of the decays (covariance of the "
                                            "poles with the amplitudes and background unknown; noise white over "
                                            "the band)"),),
@@ -159,6 +160,8 @@ METHODS: dict[str, MethodSpec] = {
         _fit_fft_peak,
         "output-only baseline: peaks of the zero-padded FFT of the whole record (no window on a free decay, Hann "
         "on a stationary one), parabolic interpolation of the log magnitude; half-power damping where the peak is "
-        "wider than the window's",
+        "wider than the window's; the natural frequency is the spectrum's peak converted by the recorded quantity "
+        "(an acceleration's peaks at f_n / sqrt(1 - 2 zeta^2)), which the force's spectrum and coherent neighbours "
+        "move (era and ssi return the pole's |lambda| / 2 pi)",
         (("frequency_std_hz, damping_std", "none (NaN)"),), yields_uncertainty=False, data="records"),
 }

@@ -12,6 +12,7 @@ from physics.errors import ConfigError, ConvergenceError, FileFormatError, Shape
 from physics.identification.channel_weights import (ChannelWeights, noise_floor_weights, unweighted_diagram,
                                                     unweighted_estimate, weighted_record)
 from physics.identification.decays import free_response
+from physics.identification.fft_peak import PEAK_EXPONENT
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate
 from physics.identification.poles import StabilisationDiagram
@@ -148,6 +149,10 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         A mode is known to lie in the band (a reference mode re-identified in its own band), passed to a method
         whose fit takes it (SSI-cov: :func:`~physics.identification.ssi.identify_ssi`).
 
+    The channels' common quantity (``records.quantities``: displacement, velocity or acceleration; None when they
+    differ) goes to a method whose fit takes it (``fftpeak``: the conversion of its spectral peak to the natural
+    frequency, :func:`~physics.identification.fft_peak.natural_from_peak`).
+
     Returns
     -------
     RecordsIdentification
@@ -160,12 +165,16 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         raise ConfigError(f"band_hz ({band_hz[0]}, {band_hz[1]}): the lower bound must be below the upper")
     where = str(records.metadata.get("source", "records"))
     fs = records.sampling_frequency_hz
+    kinds = set(records.quantities)
+    quantity = kinds.pop() if len(kinds) == 1 and kinds <= set(PEAK_EXPONENT) else None
 
     def fit(name, signals):
         spec = METHODS[name]
         options = {k: {"max_order": max_order}[k] for k in spec.options}
         if mode_in_band and "mode_in_band" in signature(spec.fit).parameters:
             options["mode_in_band"] = True
+        if "quantity" in signature(spec.fit).parameters:          # the peak's conversion to f_n (fftpeak)
+            options["quantity"] = quantity
         return spec.fit(signals, fs, band_hz, n_modes, where, **options)
 
     checked = check_records(records.signals, fs, band_hz, where)     # read once: the methods take it as checked

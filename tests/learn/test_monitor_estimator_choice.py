@@ -75,6 +75,12 @@ def test_the_fft_peak_is_chosen_for_the_mode_the_identification_scatters_and_not
                                                            _mad_hz(choice.fft_hz[base[1::2], 1], f_ref[1])])
     assert choice.texts()[1].startswith("mode 2: FFT peak, scatter ") and "against era" in choice.texts()[1]
     assert choice.to_dict()["estimators"] == ["era", FFT_PEAK]
+    # the two quantities' distance on the baseline, stated beside the chosen mode
+    want = [np.median(choice.fft_hz[base, r] - F[base, r]) for r in range(2)]
+    np.testing.assert_allclose(choice.offset_hz, want, rtol=1e-12)
+    assert f"{want[1]:+.3g} Hz from era's pole frequency at the baseline median" in choice.texts()[1]
+    assert "pole frequency" not in choice.texts()[0]
+    assert choice.to_dict()["offset_hz"] == pytest.approx(want)
 
 
 def _spread(k, scale, phase=0.0):

@@ -5,7 +5,8 @@ import pytest
 
 from physics.errors import ConvergenceError, ShapeError
 from physics.identification import METHODS, identify_records
-from physics.identification.fft_peak import fft_peaks, identify_fft_peaks
+from experiments.benches.impact_records import ImpactCase, impact_records
+from physics.identification.fft_peak import fft_peaks, identify_fft_peaks, natural_from_peak
 from physics.io.timedata import TimeRecords
 
 FS = 1000.0
@@ -78,3 +79,43 @@ def test_refusals_are_one_line_project_errors():
     rng = np.random.default_rng(0)
     with pytest.raises(ConvergenceError, match="no peak"):
         identify_fft_peaks(rng.standard_normal((1, 4000)), FS)   # white noise: no clear peak
+
+
+@pytest.mark.parametrize("quantity, k", [("displacement", 0), ("velocity", 1), ("acceleration", 2)])
+def test_natural_from_peak_inverts_one_mode_frf_peak(quantity, k):
+    # the peak of |(i w)^k / (w_n^2 - w^2 + 2 i zeta w_n w)| (closed form: where d|H|^2/dw = 0), converted back
+    fn, zeta = 210.6, 0.05
+    r = (1 - 2 * zeta ** 2) ** 0.5
+    peak = fn * {0: r, 1: 1.0, 2: 1 / r}[k]
+    w = 2 * np.pi * np.array([peak - 1e-4, peak, peak + 1e-4])
+    mag = np.abs((1j * w) ** k / ((2 * np.pi * fn) ** 2 - w ** 2 + 2j * zeta * 2 * np.pi * fn * w))
+    assert mag[1] > mag[0] and mag[1] > mag[2]                 # it is the peak
+    assert natural_from_peak([peak], [zeta], quantity)[0] == pytest.approx(fn, rel=1e-12)
+    assert natural_from_peak([peak], [np.nan], quantity)[0] == peak     # no damping ratio: the peak itself
+
+
+def test_acceleration_record_natural_frequency_by_its_quantity():
+    # a hammer hit's acceleration (closed form) peaks at f_n / sqrt(1 - 2 zeta^2), 0.04 Hz above f_n here; read as
+    # the analytic decay's damped frequency it is put 0.06 Hz above f_n, read as an acceleration within 0.01 Hz
+    case = ImpactCase((100.0,), (0.02,), (1.0,), sampling_frequency_hz=10_000.0, n_samples=40_000,
+                      pretrigger_s=1e-3, pulse_s=3e-4, noise_std=0.0)
+    acc = impact_records(case, 1, seed=0)[1]
+    acc_peaks = fft_peaks(acc, case.sampling_frequency_hz, [100.0], 5.0, quantity="acceleration")
+    plain = fft_peaks(acc, case.sampling_frequency_hz, [100.0], 5.0)
+    assert acc_peaks.frequency_hz[0] - 100.0 == pytest.approx(0.04, abs=0.01)
+    assert abs(acc_peaks.natural_frequencies_hz[0] - 100.0) < 0.01
+    assert plain.natural_frequencies_hz[0] - 100.0 > 0.05
+    with pytest.raises(ShapeError):
+        fft_peaks(acc, case.sampling_frequency_hz, [100.0], 5.0, quantity="strain")
+
+
+def test_identify_records_passes_the_channels_quantity():
+    case = ImpactCase((100.0,), (0.02,), (1.0,), sampling_frequency_hz=10_000.0, n_samples=40_000,
+                      pretrigger_s=1e-3, pulse_s=3e-4, noise_std=1e-4)
+    acc = impact_records(case, 1, seed=1)[1]
+    got = {}
+    for q in ("acceleration", "displacement"):
+        rec = TimeRecords(1 / case.sampling_frequency_hz, acc, ("1:+Y",), (q,), {"source": "hit"})
+        got[q] = identify_records(rec, "fftpeak").estimate.natural_frequencies_hz[0]
+    assert abs(got["acceleration"] - 100.0) < 0.01
+    assert got["displacement"] / got["acceleration"] == pytest.approx(1 / (1 - 2 * 0.02 ** 2), rel=2e-5)
