@@ -6,12 +6,16 @@ is decomposed line by line, ``G = U S U^H`` (:func:`singular_value_spectrum`). A
 (:func:`clear_peaks`) is a local maximum of the first singular value that stands :data:`CLEAR_PEAK_DB` above the
 smoothed floor (the running median of the spectrum in dB over +-15 % in frequency, at least +-5 lines) and
 :data:`PEAK_PROMINENCE_DB` above the valleys on either side (a ripple of the estimate on a resonance's flank is
-not a peak). FDD's modes are the clear peaks, their shapes the first singular vector at the peak. EFDD takes each
-peak's SDOF bell (the lines around the peak whose first singular vector has MAC >= ``mac_bell`` with the peak's,
-above the floor and not past the valley to a neighbouring peak), returns it to the time domain by inverse FFT and
-reads the damped frequency from the zero crossings and the damping from the logarithmic decrement of the extrema of
-that correlation function; a peak whose frequency falls in a more prominent peak's bell is the same mode and is
-left out (one peak per mode, also on one channel, where every line's vector is the same).
+not a peak). Where modes crowd (three within +-15 %) the running median rides on their flanks and a mode clear to
+the eye stands less than 10 dB above it; on a Welch average a peak is then clear too when its prominence (its
+height over the higher of the lowest points either side before a higher peak, scipy's ``find_peaks``
+prominence) passes the ripple the average's noise reaches (:func:`ripple_db`). FDD's modes are the clear peaks,
+their shapes the first singular vector at the peak. EFDD takes each peak's SDOF bell (the lines around the peak
+whose first singular vector has MAC >= ``mac_bell`` with the peak's, above the floor and not past the valley to a
+neighbouring peak), returns it to the time domain by inverse FFT and reads the damped frequency from the zero
+crossings and the damping from the logarithmic decrement of the extrema of that correlation function; a peak whose
+frequency falls in a more prominent peak's bell is the same mode and is left out (one peak per mode, also on one
+channel, where every line's vector is the same).
 """
 
 from __future__ import annotations
@@ -25,9 +29,9 @@ from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.record_checks import CheckedRecord, check_periods, check_records
 from physics.modal import eigenvalues_from_modal
 
-__all__ = ["CLEAR_PEAK_DB", "PEAK_PROMINENCE_DB", "ClearPeaks", "FDDIdentification", "SingularValueSpectrum",
-           "clear_peaks", "cross_spectra", "height_db", "identify_fdd", "running_floor", "singular_value_spectrum",
-           "unexplained_peaks", "unit_shapes"]
+__all__ = ["CLEAR_PEAK_DB", "FALSE_RIPPLES", "HANN_HALF_OVERLAP", "PEAK_PROMINENCE_DB", "ClearPeaks",
+           "FDDIdentification", "SingularValueSpectrum", "clear_peaks", "cross_spectra", "height_db", "identify_fdd",
+           "ripple_db", "running_floor", "singular_value_spectrum", "unexplained_peaks", "unit_shapes"]
 
 #: Least height (dB) of a clear spectral peak above the smoothed floor of the first singular value.
 CLEAR_PEAK_DB = 10.0
@@ -35,6 +39,11 @@ CLEAR_PEAK_DB = 10.0
 PEAK_PROMINENCE_DB = 6.0
 #: Half-width of the floor's running median: relative frequency, and least number of lines.
 FLOOR_HALF_WIDTH, FLOOR_MIN_LINES = 0.15, 5
+#: Expected number of noise ripples over a band's lines whose prominence passes :func:`ripple_db`.
+FALSE_RIPPLES = 0.01
+#: Variance factor of a Welch average of Hann frames overlapping by half, ``1 + 2 c^2`` with the frames' correlation
+#: ``c = 0.167``: ``n_frames / HANN_HALF_OVERLAP`` independent averages.
+HANN_HALF_OVERLAP = 1 + 2 * 0.167 ** 2
 #: Values (complex) a chunk of Welch frames may hold.
 CHUNK_VALUES = 2**21
 
@@ -117,6 +126,9 @@ class SingularValueSpectrum:
     band_hz : (float, float)
     lowest_hz : float
         Lowest frequency a peak may have: ten periods in the record, and three lines above 0 Hz.
+    averages : float
+        Independent averages of each line (a Welch average: frames / :data:`HANN_HALF_OVERLAP`); 0 for a spectrum
+        that is not such an average (no prominence rule, :func:`clear_peaks`).
     """
 
     frequency_hz: np.ndarray
@@ -125,6 +137,7 @@ class SingularValueSpectrum:
     floor: np.ndarray
     band_hz: tuple
     lowest_hz: float
+    averages: float = 0.0
 
     @property
     def resolution_hz(self) -> float:
@@ -175,7 +188,21 @@ def singular_value_spectrum(checked: CheckedRecord, resolution_hz=None, where="r
     floor = np.full(f.size, np.nan)
     floor[inband] = running_floor(f[inband], S[inband, 0], f[1])
     lowest = max(3 * f[1], 10 / checked.duration_s, band[0])
-    return SingularValueSpectrum(f, S, U[:, :, 0], floor, band, lowest)
+    n_frames = (n - L) // (L // 2) + 1
+    return SingularValueSpectrum(f, S, U[:, :, 0], floor, band, lowest, n_frames / HANN_HALF_OVERLAP)
+
+
+def ripple_db(averages, n_lines, false_ripples=FALSE_RIPPLES) -> float:
+    """Prominence (dB) that a ripple of a spectrum averaged over ``averages`` independent estimates passes with
+    probability ``false_ripples`` over ``n_lines`` lines: the ratio of the upper and lower quantiles
+    (``false_ripples / n_lines``) of a line's power, ``Gamma(averages) / averages`` times the density. The noise
+    is a factor of the density, so the bound holds on a resonance's flank as on the floor (the first singular value
+    of several channels varies less than one channel's power: the bound errs high)."""
+    from scipy import special  # scipy: only output-only identification
+
+    k = max(float(averages), 1.0)
+    p = min(0.5, false_ripples / max(int(n_lines), 1))
+    return float(10 * np.log10(special.gammainccinv(k, p) / special.gammaincinv(k, p)))
 
 
 @dataclass(frozen=True)
@@ -208,7 +235,9 @@ def clear_peaks(sv: SingularValueSpectrum, band_hz=None, prominent_above_db=np.i
     """The clear peaks of the first singular value within ``band_hz`` (default the spectrum's band): local maxima
     :data:`CLEAR_PEAK_DB` above the floor (or, with ``prominent_above_db``, :data:`CLEAR_PEAK_DB` above the valleys
     either side and ``prominent_above_db`` above the floor) and :data:`PEAK_PROMINENCE_DB` above the valleys either
-    side, at or above :attr:`SingularValueSpectrum.lowest_hz`."""
+    side, at or above :attr:`SingularValueSpectrum.lowest_hz`; on a Welch average (``sv.averages > 0``) also a local
+    maximum whose prominence passes :data:`PEAK_PROMINENCE_DB` and :func:`ripple_db` of the band's lines, at any
+    height over the floor (modes crowding within the floor's window raise it)."""
     from scipy import signal  # scipy.fft/signal/ndimage: about 1 s to import, only output-only identification
 
     band = sv.band_hz if band_hz is None else band_hz
@@ -219,8 +248,10 @@ def clear_peaks(sv: SingularValueSpectrum, band_hz=None, prominent_above_db=np.i
     db = 10 * np.log10(np.maximum(sv.singular_values[idx, 0], np.finfo(float).tiny))
     over = db - 10 * np.log10(sv.floor[idx])
     pk, props = signal.find_peaks(db, prominence=PEAK_PROMINENCE_DB)
-    pk = pk[(over[pk] >= CLEAR_PEAK_DB)
-            | ((props["prominences"] >= CLEAR_PEAK_DB) & (over[pk] >= prominent_above_db))]
+    prom = props["prominences"]
+    ripple = max(PEAK_PROMINENCE_DB, ripple_db(sv.averages, idx.size)) if sv.averages > 0 else np.inf
+    pk = pk[(over[pk] >= CLEAR_PEAK_DB) | ((prom >= CLEAR_PEAK_DB) & (over[pk] >= prominent_above_db))
+            | (prom >= ripple)]
     edges = np.concatenate([[0], pk, [idx.size - 1]])
     valleys = np.array([[a + np.argmin(db[a:p + 1]), p + np.argmin(db[p:b + 1])]
                         for a, p, b in zip(edges[:-2], pk, edges[2:])], int).reshape(-1, 2)

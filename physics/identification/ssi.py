@@ -375,11 +375,13 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     :data:`MIN_MAX_ORDER`). The first pass identifies the whole band; while a clear peak has no stable mode, a
     lower sub-band (upper limit half the last, or :data:`SUB_BAND_PEAK_RATIO` times the highest such peak) is
     decimated to and identified
-    again, keeping only modes at those peaks (:data:`MAX_PASSES` passes at most); a mode whose correlation lags
+    again, keeping the modes at those peaks (:data:`MAX_PASSES` passes at most); a mode whose correlation lags
     span fewer than :data:`MIN_LAG_PERIODS` of its periods is identified again so, and replaced by the sub-band's
-    estimate when that one is stable. A cluster of poles stable over
-    fewer orders than the selection asks but at a clear peak is kept, flagged ``weakly_stable``. A clear peak left
-    without a mode is named in a warning, and so is a cluster of stable poles no pass kept
+    estimate nearest it when that one is stable (two modes of a sub-band at one unresolved peak are both kept). A
+    sub-band's stable mode that no earlier pass's lags spanned :data:`MIN_LAG_PERIODS` periods of and no mode lies
+    within 1 % of is kept too, peak or none (a mode the whole band's model could not resolve). A cluster of poles
+    stable over fewer orders than the selection asks but at a clear peak is kept, flagged ``weakly_stable``. A clear
+    peak left without a mode is named in a warning, and so is a cluster of stable poles no pass kept
     (:func:`~physics.identification.poles.missed_clusters`), with its height above the spectrum's floor.
 
     Parameters
@@ -431,7 +433,7 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     # modes: (f, zeta, weakly stable, count, shape, f_seg, z_seg, provisional: weakly stable or its pass's lags
     # short of MIN_LAG_PERIODS of it, so that a sub-band pass identifies it again)
     passes, modes, missed = [], [], []
-    hi = band[1]
+    hi, lag_before_s = band[1], 0.0
     for k in range(MAX_PASSES):
         try:
             this, sel, seg = _ssi_pass(checked, (band[0], hi), peaks, tol_hz, max_order, block_rows, references,
@@ -445,20 +447,25 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         missed.append(missed_clusters(this.diagram, peaks.frequency_hz[at], tol_hz[at]))   # as select_poles saw it
         lag_s = 2 * this.block_rows / this.correlations.sampling_frequency_hz
         wanted = unexplained_peaks(peaks, [m[0] for m in modes if not m[7]])
-        for j, f in enumerate(sel.natural_frequencies_hz if sel is not None else ()):
+        prior = list(modes)
+        pass_hz = sel.natural_frequencies_hz if sel is not None else np.zeros(0)
+        for j, f in enumerate(pass_hz):
             weak = bool(sel.weakly_stable[j])
             entry = (f, sel.damping_ratios[j], weak, int(sel.count[j]), seg[0][:, j], seg[1][:, j], seg[2][:, j],
                      weak or lag_s * f < MIN_LAG_PERIODS)
-            if k:                              # a sub-band keeps only modes at peaks still wanted
+            if k:                              # a sub-band keeps modes at peaks still wanted, and new modes
                 at = wanted & (np.abs(peaks.frequency_hz - f) <= tol_hz)
-                if not at.any():
+                new = not entry[7] and lag_before_s * f < MIN_LAG_PERIODS \
+                    and all(abs(m[0] - f) > 0.01 * f for m in modes)
+                if not (at.any() or new):
                     continue
-                same = [m for m in modes if abs(m[0] - f) <= 0.01 * f
-                        or np.any(np.abs(m[0] - peaks.frequency_hz[at]) <= tol_hz[at])]
+                same = [m for m in prior if np.argmin(np.abs(pass_hz - m[0])) == j
+                        and (abs(m[0] - f) <= 0.01 * f or np.any(np.abs(m[0] - peaks.frequency_hz[at]) <= tol_hz[at]))]
                 if same and (entry[7] or not all(m[7] for m in same)):
                     continue
                 modes = [m for m in modes if not any(m is s for s in same)]
             modes.append(entry)
+        lag_before_s = max(lag_before_s, lag_s)
         wanted = unexplained_peaks(peaks, [m[0] for m in modes if not m[7]]) & (peaks.frequency_hz <= hi)
         if not wanted.any():
             break
@@ -496,9 +503,9 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     missed = missed_modes(missed, fn)
     if missed.frequency_hz.size:
         warnings.warn(f"{where}: stable poles the selection left out: {missed.text(height_db(sv, missed.frequency_hz))}"
-                      f"; stable over fewer model orders than the selection asks, and no peak of the spectrum "
-                      f"{CLEAR_PEAK_DB:g} dB above its floor there: a mode to look for with --band around it, or "
-                      "noise", UserWarning, stacklevel=2)
+                      f"; stable over fewer model orders than the selection asks, and no clear peak of the spectrum "
+                      f"there ({CLEAR_PEAK_DB:g} dB above its floor or prominent over its noise): a mode to look for "
+                      "with --band around it, or noise", UserWarning, stacklevel=2)
     est = ModalEstimate(fn, zeta, eigenvalues_from_modal(fn, zeta), shapes,
                         np.zeros((shapes.shape[0], 0, fn.size), complex), f_std, z_std,
                         modal_phase_collinearity(shapes), "ssi", False, weakly_stable=weak)
