@@ -53,6 +53,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections import Counter
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -79,6 +80,8 @@ __all__ = ["KINDS", "Series", "frf_peaks", "main", "plain_flags", "score_series"
 #: Cantilever eigenvalue parameters beta_m L of the first bending modes.
 BETA_L = np.array([1.87510407, 4.69409113, 7.85475744, 10.99554073, 14.13716839])
 PLAIN = ("plain shift", "plain per mode")
+#: Short names of ``monitor``'s statuses in the table.
+SHORT = {"change or unseen conditions": "unseen conditions", "not identified": "not identified"}
 
 
 @dataclass(frozen=True)
@@ -487,25 +490,28 @@ def run_series(series: Series, out: Path, rate: float) -> dict:
             "seconds": {"write": t_write, "monitor": t_mon, "total": time.perf_counter() - t0}}
 
 
-def _g(v, fmt="{:.3f}") -> str:
+def _g(v, fmt="{:.2g}") -> str:
     return "-" if v is None or not np.isfinite(v) else fmt.format(v)
 
 
 def markdown(results: list, rate: float, command: str) -> str:
     """The table (module docstring) and each series' configuration under it."""
     head = ["series", "group", "n", "all modes found: monitor / FFT", "scatter (%): monitor / FFT / CRB",
-            "monitor", *PLAIN, "loss"]
+            "monitor", "monitor's statuses", *PLAIN, "loss"]
     lines, notes = [], []
     for res in results:
         sc = res["scatter_pct"]
         scatter = "; ".join(f"{f:.4g} Hz: {_g(a)} / {_g(b)} / {_g(c)}" for f, a, b, c in
                             zip(res["truth_nominal_hz"], sc["monitor"], sc["fft"], sc["crb"]))
+        groups = np.asarray(res["groups"])
         for k, r in enumerate(res["rows"]):
             base = r["group"] == "baseline"
+            st = Counter(s for s, g in zip(res["status"], groups) if g == r["group"])
+            statuses = ", ".join(f"{SHORT.get(s, s)} {c}" for s, c in st.most_common())
             loss = ("**LOSS** (" + ", ".join(r["loss"]) + ")") if r["loss"] else ""
             lines.append([res["kind"] if k == 0 else "", "baseline (held out)" if base else r["group"], r["n"],
                           f"{r['monitor found']} / {r['fft found']}", scatter if base else "",
-                          *(f"{100 * r[c]:.0f} %" for c in ("monitor", *PLAIN)), loss])
+                          f"{100 * r['monitor']:.0f} %", statuses, *(f"{100 * r[c]:.0f} %" for c in PLAIN), loss])
         notes.append(f"{res['kind']}: {res['how']}; band {res['band_hz'][0]:.3g}-{res['band_hz'][1]:.3g} Hz; "
                      f"monitor's modes " + ", ".join(f"{v:.4g}" for v in res["monitor_reference_hz"] or [])
                      + " Hz; FFT peaks' modes " + ", ".join(f"{v:.4g}" for v in res["fft_reference_hz"]) + " Hz"
@@ -523,10 +529,14 @@ def main(argv=None) -> int:
     p.add_argument("--kinds", nargs="+", choices=list(KINDS), default=list(KINDS))
     p.add_argument("--quick", action="store_true", help="fewer tests per group (under 2 minutes)")
     p.add_argument("--rate", type=float, default=0.01, help="false-alarm rate (default 0.01)")
+    p.add_argument("--from-json", action="store_true", help="only re-write the table from OUT's unseen.json")
     a = p.parse_args(argv)
     out = Path(a.out) / (f"seed{a.seed}" + ("-quick" if a.quick else ""))
     results = []
-    for kind in a.kinds:
+    if a.from_json:
+        saved = json.loads((out / "unseen.json").read_text())
+        results = [r for r in saved["series"] if r["kind"] in a.kinds]
+    for kind in [] if a.from_json else a.kinds:
         t0 = time.perf_counter()
         series = simulate(kind, a.seed, a.quick)
         t_sim = time.perf_counter() - t0
