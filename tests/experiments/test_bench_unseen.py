@@ -40,8 +40,10 @@ def test_loss_marks_a_smaller_detection_and_more_false_alarms():
     mon = truth.copy()
     mon[5, 1] = np.nan                                           # one mode lost in one damaged test
     fft = truth * 1.05                                           # beyond the 3 % match: found in none
-    rows = {r["group"]: r for r in score_series(s, flags, mon, fft)}
-    assert rows["intact"]["loss"] == ["plain shift"]            # 50 % false alarms against 0 and 50 %
+    rows = {r["group"]: r for r in score_series(s, flags, mon, fft, 0.01)}
+    assert rows["intact"]["loss"] == ["plain shift"]            # 1 of 4 healthy tests flagged against 0 and 1
+    assert rows["intact"]["healthy flagged"]["monitor"] == 0.25
+    assert score_series(s, flags, mon, fft, 0.2)[1]["loss"] == []   # 25 % is within twice a rate of 20 %
     assert rows["d"]["loss"] == ["plain shift"]                 # 50 % detected against 75 % and 25 %
     assert (rows["d"]["monitor found"], rows["d"]["fft found"]) == (3, 0)
     assert rows["baseline"]["loss"] == []
