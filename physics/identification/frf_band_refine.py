@@ -51,8 +51,8 @@ from physics.identification.modes import checked_frf
 
 __all__ = ["BACKGROUND_ORDER", "SWEEPS", "FRFBandFit", "refine_frf_poles"]
 
-#: Order of the complex polynomial in frequency that models each FRF's background across a band: a level, a slope
-#: and a curvature (what a strong neighbour's skirt leaves after its own terms are subtracted is curved).
+#: Order of the complex polynomial in frequency that models each FRF's background across a band: a level and a
+#: slope (a curvature too costs the well-modelled modes of the beam-5 bench a third more damping error).
 BACKGROUND_ORDER = 1
 #: Sweeps over the bands; each after an LSFD fit of the residues of every pole over the whole band.
 SWEEPS = 2
@@ -65,10 +65,13 @@ MAX_SHIFT_BANDWIDTHS, MAX_SHIFT_LINES = 3.0, 3.0
 #: is no polynomial of low order and the band's fit pulls a heavily damped pole.
 MAX_RELATIVE_HALF_WIDTH = 0.1
 #: A starting pole whose squared Mahalanobis distance from its refined pole (the refit's covariance of
-#: ``(sigma, omega)``) is below this (chi-square of 2 degrees of freedom: 99.73 %, three sigma) agrees with its band:
-#: it is kept, fitted with every line of the whole band (the narrow band's fit, with a background of its own, is
-#: the less precise where the model of the whole band holds).
+#: ``(sigma, omega)``) is below this (chi-square of 2 degrees of freedom at 99.73 %: three sigma) agrees with its band
+#: and is kept: fitted with every line of the whole band, it is the more precise where the model of the whole band
+#: holds (the narrow band's fit has a background of its own). Farther, the start is biased and the refined pole
+#: replaces it, its decay rate only where the start's lies more than :data:`CONSISTENT_STDS` standard deviations from
+#: the refined one (a start off in frequency alone keeps its damping).
 CONSISTENT_CHI2 = 11.83
+CONSISTENT_STDS = 3.0
 
 
 @dataclass(frozen=True)
@@ -89,8 +92,9 @@ class FRFBandFit:
     converged : ndarray of bool, shape (n_poles,)
         True where the last sweep's fit of the pole's group succeeded.
     moved : ndarray of bool, shape (n_poles,)
-        True where the refined pole replaced the starting one: converged, and the starting pole outside its
-        confidence region (:data:`CONSISTENT_CHI2`); elsewhere :attr:`eigenvalues` holds the starting pole.
+        True where the refined pole replaced the starting one (converged, the start outside its confidence region,
+        :data:`CONSISTENT_CHI2`; its decay rate only where the start's is off by :data:`CONSISTENT_STDS`);
+        elsewhere :attr:`eigenvalues` holds the starting pole.
     """
 
     eigenvalues: np.ndarray
@@ -211,7 +215,8 @@ def refine_frf_poles(frequency_hz, frf, eigenvalues, refine=None, *, kind="recep
     f_std, z_std = np.full(m_all, np.nan), np.full(m_all, np.nan)
     bands = np.full((m_all, 2), np.nan)
     group = np.full(m_all, -1)
-    converged, biased = np.zeros(m_all, bool), np.zeros(m_all, bool)
+    converged = np.zeros(m_all, bool)
+    off_pole, off_sigma = np.zeros(m_all, bool), np.zeros(m_all, bool)
     idx_todo = np.flatnonzero(todo)
     if idx_todo.size == 0 or f.size < 2:
         return _result(lam, f_std, z_std, bands, group, converged, converged)
@@ -242,18 +247,19 @@ def refine_frf_poles(frequency_hz, frf, eigenvalues, refine=None, *, kind="recep
             new[idx] = -sigma + 1j * omega
             converged[idx] = True
             m = idx.size
-            for j in range(m):                          # each pole's 2 x 2 block of (sigma, omega)
-                c2 = cov[np.ix_([j, m + j], [j, m + j])]
-                d = np.array([-lam0[idx[j]].real - sigma[j], lam0[idx[j]].imag - omega[j]])
-                try:
-                    biased[idx[j]] = d @ np.linalg.solve(c2, d) > CONSISTENT_CHI2
-                except np.linalg.LinAlgError:
-                    biased[idx[j]] = True
+            d = np.stack([-lam0[idx].real - sigma, lam0[idx].imag - omega], axis=1)      # (m, 2)
+            blocks = cov.reshape(2, m, 2, m)                                    # (sigma|omega, pole, ...)
+            c2 = blocks[:, np.arange(m), :, np.arange(m)]                       # (m, 2, 2): each pole's block
+            try:
+                off_pole[idx] = np.einsum("mi,mi->m", d, np.linalg.solve(c2, d[:, :, None])[:, :, 0]) > CONSISTENT_CHI2
+            except np.linalg.LinAlgError:
+                off_pole[idx] = True
+            off_sigma[idx] = np.abs(d[:, 0]) > CONSISTENT_STDS * np.sqrt(np.maximum(c2[:, 0, 0], 0.0))
         lam = new
     f_std[~converged], z_std[~converged] = np.nan, np.nan
-    keep = todo & ~(converged & biased)
-    lam[keep] = lam0[keep]
-    return _result(lam, f_std, z_std, bands, group, converged, converged & biased)
+    moved = converged & off_pole
+    lam = np.where(moved & off_sigma, lam.real, lam0.real) + 1j * np.where(moved, lam.imag, lam0.imag)
+    return _result(lam, f_std, z_std, bands, group, converged, moved)
 
 
 def _result(lam, f_std, z_std, bands, group, converged, moved) -> FRFBandFit:
