@@ -459,7 +459,9 @@ def identify_lscf(frequency_hz, frf, n_modes=None, drive=None, max_order=40, sel
 
     Poles come from LSCF on the receptance (stabilisation over model orders; the whole band, again weighted as an
     FRF of ``kind``, and lower sub-bands add the poles it lacks, see :func:`_with_refit_poles`),
-    including stable poles up to ``margin`` outside the band; the residues and the
+    including stable poles up to ``margin`` outside the band; each pole inside the band is then refined by output
+    error in its own narrow band of ``frf`` where the LSCF pole disagrees with that band
+    (:func:`~physics.identification.frf_band_refine.refine_frf_poles`); the residues and the
     residual terms are then fitted to ``frf`` as given (``kind``, ``weighting``,
     see :func:`lsfd`) with every selected pole. Only modes inside the band are
     returned as modes; the others serve the fit.
