@@ -64,6 +64,8 @@ from physics.errors import BeamDamageError
 from physics.identification.fft_peak import identify_fft_peaks
 from physics.estimation import estimate_frf
 from physics.identification.lscf import identify_lscf
+from physics.io.timedata import TimeRecords
+from physics.time_records import estimate_from_records
 
 __all__ = ["AMBIENT", "DECAY", "Case", "ambient_records", "crb_ambient_hz", "crb_decay_hz", "decay_records",
            "identify_modes", "main", "match_modes", "markdown", "record_methods", "run_case", "summarise"]
@@ -324,9 +326,11 @@ def real_rows(real_dir) -> list[dict]:
     """Rows of the real repeated-test sets found in ``real_dir`` (none found: no rows).
 
     * ``pyfrf_hits.npz``: five hammer hits of one structure (force and one response, 25.6 kHz, 1 s): each output-only
-      method on the response alone, and LSCF on each hit's FRF (H1 of the hit's force and response,
-      :func:`physics.estimation.estimate_frf` with one frame of the whole record, no window); per mode (the
-      fftpeak modes of the first hit) the mean and the scatter over the five hits.
+      method on the response alone, and LSCF on each hit's FRF: H1 of the hit's force and response
+      (:func:`physics.estimation.estimate_frf` with one frame of the whole record, no window), and H1 of the
+      impact estimate ``estimate --excitation impact --averages 1 --decay 1``
+      (:func:`physics.time_records.estimate_from_records`: the force kept over its pulse, no exponential window);
+      per mode (the fftpeak modes of the first hit) the mean and the scatter over the five hits.
     * ``hct_setups.npz``: the Heritage Court Tower's four ambient setups (40 Hz): each method on each setup; per
       mode (the fftpeak modes of setup 1) the mean and the scatter over the setups.
     """
@@ -383,17 +387,20 @@ def _pyfrf_rows(path):
     fs, force, resp = float(d["sampling_frequency_hz"]), d["force"], d["response"]
     ref = _reference_modes("fftpeak", resp[0][None], fs)
     freqs = {m: np.array([identify_modes(m, r[None], fs, ref) for r in resp]) for m in record_methods()}
-    lscf = []
+    lscf, windowed = [], []
     for fo, r in zip(force, resp):
         est = estimate_frf(fo[None], r[None], fs, nperseg=fo.size, window="boxcar")
-        f = est.frequency_hz
-        band = (f > 0.9 * ref.min()) & (f < 1.1 * ref.max())
-        try:
-            got = identify_lscf(f[band], est.h1[..., band], kind="accelerance").estimate.natural_frequencies_hz
-        except BeamDamageError:                                 # a failure is counted, not raised
-            got = np.zeros(0)
-        lscf.append(match_modes(got, ref))
+        hit = TimeRecords(1.0 / fs, np.stack([fo, r]), ("1:+Z", "2:+Z"), ("force", "acceleration"))
+        impact = estimate_from_records(hit, excitation="impact", averages=1, decay=1.0).frf
+        for out, (f, h) in ((lscf, (est.frequency_hz, est.h1)), (windowed, (impact.frequency_hz, impact.frf))):
+            band = (f > 0.9 * ref.min()) & (f < 1.1 * ref.max())
+            try:
+                got = identify_lscf(f[band], h[..., band], kind="accelerance").estimate.natural_frequencies_hz
+            except BeamDamageError:                             # a failure is counted, not raised
+                got = np.zeros(0)
+            out.append(match_modes(got, ref))
     freqs["lscf (FRF)"] = np.array(lscf)
+    freqs["lscf (FRF, force window)"] = np.array(windowed)
     return _scatter_rows("pyFRF hits", resp.shape[0], freqs, ref, "fftpeak, hit 1")
 
 

@@ -11,6 +11,7 @@ from threadpoolctl import threadpool_limits
 
 from physics.errors import BeamDamageError, ConvergenceError, ShapeError
 from physics.frf import check_frf_kind, convert_frf
+from physics.identification.frf_band_refine import refine_frf_poles
 from physics.identification.half_power import half_power_bandwidth_hz
 from physics.identification.lsfd import LSFDResult, lsfd
 from physics.identification.modes import ModalEstimate, checked_frf, modal_estimate
@@ -427,7 +428,9 @@ def identify_lscf(frequency_hz, frf, n_modes=None, drive=None, max_order=40, sel
 
     Poles come from LSCF on the receptance (stabilisation over model orders; the whole band, again weighted as an
     FRF of ``kind``, and lower sub-bands add the poles it lacks, see :func:`_with_refit_poles`),
-    including stable poles up to ``margin`` outside the band; the residues and the
+    including stable poles up to ``margin`` outside the band; each pole inside the band is then refined by output
+    error in its own narrow band of ``frf`` where the LSCF pole disagrees with that band
+    (:func:`~physics.identification.frf_band_refine.refine_frf_poles`); the residues and the
     residual terms are then fitted to ``frf`` as given (``kind``, ``weighting``,
     see :func:`lsfd`) with every selected pole. Only modes inside the band are
     returned as modes; the others serve the fit.
@@ -483,9 +486,11 @@ def _identify_lscf(frequency_hz, frf, n_modes, drive, max_order, select, kind, w
         inside = np.sort(inside[np.argsort(-poles.count[inside], kind="stable")[:n_modes]])
     outside = np.nonzero((fn < f[0]) | (fn > f[-1]))[0]
     use = np.r_[inside, outside]
-    fit = lsfd(f, h, poles.eigenvalues[use], kind=kind, weighting=weighting)
     k = np.arange(inside.size)
-    est = modal_estimate(fn[inside], poles.damping_ratios[inside], fit.residues[..., k], drive, "lscf",
+    lam = refine_frf_poles(f, h, poles.eigenvalues[use], np.isin(np.arange(use.size), k), kind=kind).eigenvalues
+    fit = lsfd(f, h, lam, kind=kind, weighting=weighting)
+    fn_in, zeta_in = np.abs(lam[k]) / (2 * np.pi), -lam[k].real / np.abs(lam[k])
+    est = modal_estimate(fn_in, zeta_in, fit.residues[..., k], drive, "lscf",
                     poles.frequency_std_hz[inside], poles.damping_std[inside], fit.lower_residual,
                     fit.upper_residual, fit.frequency_std_hz[k], fit.damping_std[k])
     return LSCFIdentification(est, diagram, fit, np.abs(fit.eigenvalues[inside.size:]) / (2 * np.pi))

@@ -110,8 +110,8 @@ def _fit_fft_peak(signals, fs, band_hz, n_modes, where, quantity=None):
 METHODS: dict[str, MethodSpec] = {
     "lscf": MethodSpec(
         _fit_lscf,
-        "poly-reference LSCF poles with automatic stabilisation-diagram selection, then LSFD residues with "
-        "lower/upper residuals",
+        "poly-reference LSCF poles with automatic stabilisation-diagram selection, each refined by output error in "
+        "its own narrow band of the FRFs where the two disagree, then LSFD residues with lower/upper residuals",
         (("frequency_std_hz, damping_std", "spread of the pole over the LSCF model orders of its cluster "
                                            "(sensitivity to model order, not a confidence interval)"),
          ("frequency_fit_std_hz, damping_fit_std", "one sigma from the LSFD fit itself: variable-projection "
