@@ -122,7 +122,8 @@ class SelectedPoles:
     ----------
     eigenvalues : ndarray, complex, shape (n_modes,)
     natural_frequencies_hz, damping_ratios : ndarray, shape (n_modes,)
-        Medians over the upper half (by model order) of the cluster of stable poles.
+        Medians over the upper half (by model order) of the cluster of stable poles (a damping below zero, within
+        the record's resolution, reads 0).
     frequency_std_hz, damping_std : ndarray, shape (n_modes,)
         Standard deviation over those poles (spread across model orders, a
         measure of the estimate's sensitivity to model order, not a
