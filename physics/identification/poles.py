@@ -85,7 +85,8 @@ def stability_status(order, natural_frequencies_hz, damping_ratios, participatio
         Unit-norm participation vectors.
     freq_tol, damping_tol : float
         Relative change of frequency / damping below which they are stable; the damping's change relative to the
-        larger of the damping and the record's :func:`damping_resolution` at the pole's frequency.
+        larger of the damping and the record's :func:`damping_resolution` at the pole's frequency; two dampings both
+        within the resolution (:func:`unresolved`) are stable whatever their change.
     mpf_tol : float
         MAC between participation vectors above which the vector is stable (always with one reference).
     duration_s : float
@@ -107,7 +108,8 @@ def stability_status(order, natural_frequencies_hz, damping_ratios, participatio
         d = np.abs(fn[cur][:, None] - fn[prev][None, :])
         near = prev[np.argmin(d, axis=1)]
         f_ok = np.abs(fn[cur] - fn[near]) <= freq_tol * fn[cur]
-        d_ok = np.abs(zeta[cur] - zeta[near]) <= damping_tol * np.maximum(zeta[cur], floor[cur])
+        d_ok = (np.abs(zeta[cur] - zeta[near]) <= damping_tol * np.maximum(zeta[cur], floor[cur])) \
+            | unresolved(zeta[cur], zeta[near], floor[cur])
         v_ok = (np.abs(np.sum(mpf[cur].conj() * mpf[near], axis=1)) ** 2 >= mpf_tol) if mpf.shape[1] > 1 \
             else np.ones(cur.size, bool)
         status[cur] = np.where(f_ok, np.where(d_ok & v_ok, 4, np.where(v_ok, 3, np.where(d_ok, 2, 1))), 0)
