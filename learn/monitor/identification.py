@@ -25,12 +25,16 @@ from physics.io import (FRF, MODAL, TIME, atomic_write_text, finite_or_none, for
 from physics.io.inputs import check_input_file
 from physics.modal import modal_parameters, undamped_modes
 
-__all__ = ["CACHE_FORMAT", "IdentificationSettings", "IdentifiedModes", "cached_fft_peaks", "cached_identification",
-           "file_key", "identification_settings", "identify_test", "read_test", "record_problem",
-           "with_narrow_band_poles", "write_cache"]
+__all__ = ["CACHE_FORMAT", "NARROW_FORMAT", "IdentificationSettings", "IdentifiedModes", "cached_fft_peaks",
+           "cached_identification", "file_key", "identification_settings", "identify_test", "read_test",
+           "record_problem", "with_narrow_band_poles", "write_cache"]
 
 #: Format tag of a cache entry (a change of the identification or of the entry's fields changes it).
 CACHE_FORMAT = "beam-damage-monitor-cache/10"
+#: Format tag of a narrow-band re-identification's entry (:func:`cached_identification` with ``narrow_hz``), part of
+#: its key beside :data:`CACHE_FORMAT`: a change of the identification of a mode known to lie in its band (SSI-cov's
+#: ``mode_in_band``) changes it and re-identifies those entries alone.
+NARROW_FORMAT = 4
 
 
 @dataclass(frozen=True)
@@ -268,8 +272,8 @@ def cached_identification(path, settings: IdentificationSettings, cache_dir=None
     """
     try:
         check_input_file(path, "npz", BeamDamageError, "a test file")
-        key = file_key(path, settings, None if narrow_hz is None else [float(b) for b in narrow_hz]) \
-            if cache_dir else None
+        narrow = None if narrow_hz is None else [*(float(b) for b in narrow_hz), NARROW_FORMAT]
+        key = file_key(path, settings, narrow) if cache_dir else None
     except (BeamDamageError, OSError) as exc:
         return None, _error_text(exc, path), False
     entry = Path(cache_dir) / f"{key}.json" if cache_dir else None

@@ -48,8 +48,8 @@ from physics.errors import ConfigError
 from datetime import datetime
 
 __all__ = ["COMBINATIONS", "DEFAULT_STATISTICS", "PATTERN_MIN", "SHARES", "SHIFT_SIDES", "STATISTICS", "Detection",
-           "detect", "environmental", "held_out_statistics", "covers_seasons", "family_rates", "joint_rate",
-           "joint_rates", "season_warning", "shift_weights", "sidak_rate", "statistics_of"]
+           "detect", "environmental", "held_out_statistics", "covers_seasons", "family_rates",
+           "joint_rate", "joint_rates", "season_warning", "shift_weights", "sidak_rate", "statistics_of"]
 
 #: The detector's statistics (module docstring).
 STATISTICS = ("residual", "environment", "shift", "mode")
@@ -386,8 +386,12 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
 
     A test whose set of modes found differs from some baseline test's is judged against thresholds of its own
     set: :func:`held_out_statistics` with its missing modes dropped (``pattern``); the residual's missing-mode
-    evidence is added to its index, and to its threshold only for a set the baseline period holds in at least
-    :data:`PATTERN_MIN` tests (a mode the baseline always held, lost, still raises the index)."""
+    evidence is added to its index, and to its threshold where some baseline test lacked every one of its missing
+    modes: a set of modes the baseline period loses, together, is normal there (its statistics judged at the rate
+    against its own thresholds, as the baseline's tests of that set are), however rare each mode's loss and however
+    small the product of their shares (modes that a short record loses together). A set the baseline never lost
+    together keeps its evidence in the index alone: a mode the baseline always held, lost, raises it by
+    ``2 ln(n + 2)``."""
     sides = tuple(float(v) for v in shift_sides)
     if len(sides) != 2 or min(sides) <= 0.0 or abs(sum(sides) - 1.0) > 1e-9:
         raise ConfigError(f"shift_sides: expected the drop's and the rise's shares of the shift's rate, two numbers "
@@ -437,8 +441,8 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
             continue
         rows = scored[(miss[scored] == P).all(axis=1)]
         hp = held_out_statistics(make_model, X[b_idx], Cb, pattern=P)
-        normal = (base_miss == P).all(axis=1).sum() >= PATTERN_MIN
-        ev = float(missing_evidence(np.where(P, np.nan, 0.0)[None], X[b_idx])[0]) if normal else 0.0
+        seen = base_miss[:, P].all(axis=1).any()          # a baseline test lacked every one of these modes
+        ev = float(missing_evidence(np.where(P, np.nan, 0.0)[None], X[b_idx])[0]) if seen else 0.0
         tp = _thresholds(model, hp, names, each, n_train, n_conditions, int(P.sum()), ev, sides)
         R[rows] = _ratios(values[rows], z[rows], tp, names)
         patterns[", ".join(str(j + 1) for j in np.flatnonzero(P)) or "none"] = tp

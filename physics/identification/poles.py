@@ -11,7 +11,7 @@ from physics.modal import eigenvalues_from_modal
 
 __all__ = ["MAX_DAMPING", "MISSED_SHARE", "NO_STABLE_POLE", "STABILITY_CODES", "MissedModes", "SelectedPoles",
            "StabilisationDiagram", "damping_resolution", "missed_clusters", "missed_modes", "select_poles",
-           "stability_status"]
+           "stability_status", "unresolved"]
 
 #: Largest damping ratio of a physical pole (LSCF and SSI-cov poles, peaks of peak picking and the circle fit): a
 #: broader one is a computational pole or a bump of the noise floor.
@@ -34,6 +34,15 @@ def damping_resolution(natural_frequencies_hz, duration_s):
     it from zero; an infinite duration resolves every damping (0)."""
     f = np.asarray(natural_frequencies_hz, float)
     return np.zeros_like(f) if not np.isfinite(duration_s) else 1.0 / (2 * np.pi * f * float(duration_s))
+
+
+def unresolved(zeta_a, zeta_b, resolution):
+    """Whether two damping ratios both lie within ``+-resolution`` (:func:`damping_resolution`, finite for a record
+    of known duration): a record resolves neither from zero, so they are the same damping whatever their
+    difference (poles of a mode lighter than the record resolves, its damping estimated about zero from one model
+    order to the next). False where the resolution is 0 (an infinite duration)."""
+    r = np.asarray(resolution, float)
+    return (np.abs(zeta_a) <= r) & (np.abs(zeta_b) <= r) & (r > 0)
 
 
 @dataclass(frozen=True)
@@ -76,7 +85,8 @@ def stability_status(order, natural_frequencies_hz, damping_ratios, participatio
         Unit-norm participation vectors.
     freq_tol, damping_tol : float
         Relative change of frequency / damping below which they are stable; the damping's change relative to the
-        larger of the damping and the record's :func:`damping_resolution` at the pole's frequency.
+        larger of the damping and the record's :func:`damping_resolution` at the pole's frequency; two dampings both
+        within the resolution (:func:`unresolved`) are stable whatever their change.
     mpf_tol : float
         MAC between participation vectors above which the vector is stable (always with one reference).
     duration_s : float
@@ -98,7 +108,8 @@ def stability_status(order, natural_frequencies_hz, damping_ratios, participatio
         d = np.abs(fn[cur][:, None] - fn[prev][None, :])
         near = prev[np.argmin(d, axis=1)]
         f_ok = np.abs(fn[cur] - fn[near]) <= freq_tol * fn[cur]
-        d_ok = np.abs(zeta[cur] - zeta[near]) <= damping_tol * np.maximum(zeta[cur], floor[cur])
+        d_ok = (np.abs(zeta[cur] - zeta[near]) <= damping_tol * np.maximum(zeta[cur], floor[cur])) \
+            | unresolved(zeta[cur], zeta[near], floor[cur])
         v_ok = (np.abs(np.sum(mpf[cur].conj() * mpf[near], axis=1)) ** 2 >= mpf_tol) if mpf.shape[1] > 1 \
             else np.ones(cur.size, bool)
         status[cur] = np.where(f_ok, np.where(d_ok & v_ok, 4, np.where(v_ok, 3, np.where(d_ok, 2, 1))), 0)
@@ -113,7 +124,8 @@ class SelectedPoles:
     ----------
     eigenvalues : ndarray, complex, shape (n_modes,)
     natural_frequencies_hz, damping_ratios : ndarray, shape (n_modes,)
-        Medians over the upper half (by model order) of the cluster of stable poles.
+        Medians over the upper half (by model order) of the cluster of stable poles (a damping below zero, within
+        the record's resolution, reads 0).
     frequency_std_hz, damping_std : ndarray, shape (n_modes,)
         Standard deviation over those poles (spread across model orders, a
         measure of the estimate's sensitivity to model order, not a
@@ -303,7 +315,8 @@ def _seed_clusters(d: StabilisationDiagram, cand, seeds, freq_tol, damping_tol):
     fs, zs = d.natural_frequencies_hz[seeds][:, None], d.damping_ratios[seeds][:, None]
     zr = np.maximum(zs, damping_resolution(fs, d.duration_s))           # at least the damping the record resolves
     ok = (np.abs(d.natural_frequencies_hz[near] - fs) <= freq_tol * fs) \
-        & (np.abs(d.damping_ratios[near] - zs) <= damping_tol * zr)
+        & ((np.abs(d.damping_ratios[near] - zs) <= damping_tol * zr)
+           | unresolved(d.damping_ratios[near], zs, damping_resolution(fs, d.duration_s)))
     clusters = [(sd, near[k][ok[k]]) for k, sd in enumerate(seeds)]
     clusters.sort(key=lambda c: (-c[1].size, -d.order[c[0]]))
     return clusters
@@ -333,7 +346,7 @@ def _summarise_clusters(d: StabilisationDiagram, chosen, weak) -> SelectedPoles:
     """
     chosen = [m[d.order[m] >= np.median(d.order[m])] for m in chosen]
     fn = np.array([np.median(d.natural_frequencies_hz[m]) for m in chosen])
-    zeta = np.array([np.median(d.damping_ratios[m]) for m in chosen])
+    zeta = np.maximum([np.median(d.damping_ratios[m]) for m in chosen], 0.0)   # unresolved below 0: zero
     f_std = np.array([np.std(d.natural_frequencies_hz[m], ddof=1) for m in chosen])
     z_std = np.array([np.std(d.damping_ratios[m], ddof=1) for m in chosen])
     count = np.array([m.size for m in chosen])

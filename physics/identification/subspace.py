@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, stability_status
+from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, damping_resolution, stability_status
 
 __all__ = ["MAX_QR_CONDITION", "poles_of_order", "state_matrices", "subspace_diagram"]
 
@@ -80,14 +80,18 @@ def _modal(O, n_out, A, fs):
     return np.log(mu.astype(complex)) * fs, O[:n_out, :A.shape[0]] @ V
 
 
-def _physical(lam, phi, max_damping, band_hz):
+def _physical(lam, phi, max_damping, band_hz, duration_s=float("inf")):
     """Frequencies (Hz), damping ratios, eigenvalues and shapes (rows; unit norm, largest entry real positive) of
-    the poles with ``Im > 0``, damping in ``(0, max_damping)`` and frequency in ``band_hz``, and the mask of those
-    poles."""
+    the poles with ``Im > 0``, damping in ``(-r, max_damping)`` and frequency in ``band_hz``, and the mask of those
+    poles. ``r``: the damping a record of ``duration_s`` resolves at the pole's frequency
+    (:func:`~physics.identification.poles.damping_resolution`; 0 for an infinite duration): a mode damped less
+    than the record resolves is estimated at zero within ``+-r`` from one model order to the next, and a pole of it
+    that comes out slightly negative is the same mode, not a growing one."""
     wn = np.abs(lam)
     zeta = -lam.real / np.where(wn > 0, wn, 1)
     fn = wn / (2 * np.pi)
-    keep = (lam.imag > 0) & (zeta > 0) & (zeta < max_damping) & (fn >= band_hz[0]) & (fn <= band_hz[1])
+    keep = ((lam.imag > 0) & (zeta > -damping_resolution(fn, duration_s)) & (zeta < max_damping)
+            & (fn >= band_hz[0]) & (fn <= band_hz[1]))
     phi = phi[:, keep].astype(complex)
     big = phi[np.argmax(np.abs(phi), axis=0), np.arange(phi.shape[1])]
     phi = phi * (np.conj(big) / np.where(big != 0, np.abs(big), 1)) / np.linalg.norm(phi, axis=0)
@@ -131,7 +135,8 @@ def subspace_diagram(U, s, n_out, orders, sampling_frequency_hz, band_hz, max_da
         modal = [_modal(O, n_out, A, sampling_frequency_hz) for A in state_matrices(O, n_out, sizes)]
         order = np.concatenate([np.full(m[0].size, p // 2) for p, m in zip(orders, modal)])
         fn, zeta, lam, phi, keep = _physical(np.concatenate([m[0] for m in modal]),
-                                             np.concatenate([m[1] for m in modal], axis=1), max_damping, band_hz)
+                                             np.concatenate([m[1] for m in modal], axis=1), max_damping, band_hz,
+                                             duration_s)
         order = order[keep]
     status = stability_status(order, fn, zeta, phi, freq_tol, damping_tol, mac_tol, duration_s)
     return StabilisationDiagram(order, lam, fn, zeta, phi, status, tuple(float(b) for b in band_hz), float(duration_s))
