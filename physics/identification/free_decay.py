@@ -12,15 +12,10 @@ shows and decides which poles carry energy). Each kept pole is then refined in i
 Fourier transforms at the record's rate, from each hit's onset, across the cuts of missed hits that add no energy
 (:func:`~physics.identification.band_refine.refine_in_bands`: the closed-form transform of truncated damped
 exponentials and a smooth background, close modes together), so that the other modes, the unmodelled ones and the
-hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. A narrow component
-inside a mode's band that no pole holds (a shoulder on the mode's flank, which makes neither a clear peak nor a
-stable pole and which the band's smooth background cannot take) would pull the mode towards it: each mode's band is
-tested for one (:func:`~physics.identification.band_neighbours.refine_with_neighbours`, a model-order test) and the
-mode refitted beside the component kept, which is named in :attr:`ERAIdentification.neighbours_hz` and is no mode of
-the estimate. The frequency returned is the natural frequency ``|lambda| / 2 pi`` of each mode's pole (its damped
-frequency is ``Im(lambda) / 2 pi``). A mode fitted as one
-pole for poles of one peak that the refinement merged, whose frequency moves over its decays (refitted over their
-first and their second halves, :func:`~physics.identification.glide.mode_glide`, more than
+hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. The frequency returned
+is the natural frequency ``|lambda| / 2 pi`` of each mode's pole (its damped frequency is ``Im(lambda) / 2 pi``). A
+mode fitted as one pole for poles of one peak that the refinement merged, whose frequency moves over its decays
+(refitted over their first and their second halves, :func:`~physics.identification.glide.mode_glide`, more than
 :data:`~physics.identification.glide.GLIDE_SIGMAS` sigma apart), is named in a warning with its glide: a mode whose
 frequency moves with its amplitude, read over the whole decay. A clear peak of the
 record's spectrum (:func:`~physics.identification.decay_peaks.decay_peaks`, the peaks ``fftpeak`` reports) that no
@@ -41,7 +36,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from physics.errors import ConvergenceError, ShapeError
-from physics.identification.band_neighbours import refine_with_neighbours
 from physics.identification.band_refine import RESOLVED_LINES, BandFit, refine_in_bands
 from physics.identification.damped_sinusoids import DampedSinusoidFit, fit_damped_sinusoids, mode_snr
 from physics.identification.decay_peaks import decay_peaks
@@ -106,9 +100,6 @@ class ERAIdentification:
     unexplained_hz : ndarray, shape (n_unexplained,)
         The clear peaks of the record's spectrum (SSI-cov's rule,
         :func:`~physics.identification.fdd.clear_peaks`) that no mode of the estimate explains (named in a warning).
-    neighbours_hz : ndarray, shape (n_modes,)
-        Per mode of the estimate, the natural frequency of the component its band kept beside it and refitted it
-        with (:func:`~physics.identification.band_neighbours.refine_with_neighbours`); NaN where none.
     """
 
     estimate: ModalEstimate
@@ -121,7 +112,6 @@ class ERAIdentification:
     bands: BandFit | None = None
     seeded: SeededModes | None = None
     unexplained_hz: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    neighbours_hz: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 def _decimated(checked, q, decays):
@@ -344,7 +334,7 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     x = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
     full = [x[:, a:b] for a, b in _band_spans(x, decays, fitted_spans, decays.energy_window)]
     idx, bands = np.zeros(0, int), None
-    lam = f_std = z_std = neighbours_hz = np.zeros(0)
+    lam = f_std = z_std = np.zeros(0)
     amps = []                                           # each mode's amplitudes, (n_decays, n_channels)
     merged = np.zeros(0, bool)
     if fit is not None:
@@ -356,20 +346,16 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         bands = refine_in_bands(full, fs, fit.eigenvalues[idx])
         ok = bands.converged
         held = refit_held_re_excited(full, fs, bands, max_damping)     # re-excited within a decay: cut at the step
+        lam = np.where(ok, held.eigenvalues, fit.eigenvalues[idx])
+        f_std = np.where(ok, held.frequency_std_hz, fit.frequency_std_hz[idx])
+        z_std = np.where(ok, held.damping_std, fit.damping_std[idx])
+        amps = [held.amplitudes[:, :, j] if ok[j] else fit.amplitudes[:, :, i] for j, i in enumerate(idx)]
         merged = np.asarray(bands.merged, bool)        # a pole merged into a stronger one of its peak is none
-        near = refine_with_neighbours(full, fs, bands, ok & ~held.refitted & ~merged)   # a shoulder in a band
-        lam = np.where(ok & ~held.refitted, near.eigenvalues, np.where(ok, held.eigenvalues, fit.eigenvalues[idx]))
-        f_std = np.where(ok & ~held.refitted, near.frequency_std_hz,
-                         np.where(ok, held.frequency_std_hz, fit.frequency_std_hz[idx]))
-        z_std = np.where(ok & ~held.refitted, near.damping_std, np.where(ok, held.damping_std, fit.damping_std[idx]))
-        amps = [(near.amplitudes if not held.refitted[j] else held.amplitudes)[:, :, j] if ok[j]
-                else fit.amplitudes[:, :, i] for j, i in enumerate(idx)]
-        neighbours_hz = near.neighbours_hz
         _warn_gliding_merges(full, fs, bands, ok & ~held.refitted, band, hi, where)
     # the clear peaks no mode holds: each started at its peak and refined in its band, the modes held fixed
     held_hz = np.abs(lam[~merged]) / (2 * np.pi)
     # NaN: a failed fit, or a refit on cut decays (its first piece's amplitudes do not hold past the re-excitation)
-    held_amps = np.where(ok & ~held.refitted, near.amplitudes, np.nan)[:, :, ~merged] if idx.size else None
+    held_amps = np.where(ok & ~held.refitted, bands.amplitudes, np.nan)[:, :, ~merged] if idx.size else None
     seeded = refine_seeds(full, fs, lam[~merged], record_peaks, unheld_peaks(record_peaks, held_hz, band),
                           max_damping, held_amplitudes=held_amps)
     if idx.size - merged.sum() + seeded.eigenvalues.size == 0:
@@ -402,6 +388,5 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         peaks, est.natural_frequencies_hz, where,
         "a sinusoid that does not decay (mains hum, a harmonic), or a mode to look for with --band around it"
         + (" or more --modes" if n_modes is not None else " or a higher --max-order"))
-    near_hz = np.concatenate([neighbours_hz, np.full(seeded.eigenvalues.size, np.nan)])[sub]
     return ERAIdentification(est, diagram, fit, decays, q, rows, len(fitted_spans), bands, seeded,
-                             peaks.frequency_hz[unexplained], near_hz)
+                             peaks.frequency_hz[unexplained])

@@ -139,8 +139,7 @@ METHODS: dict[str, MethodSpec] = {
         "output-only, free responses (impacts or plucks without the force): the decays after the hits by the "
         "Eigensystem Realisation Algorithm with automatic stabilisation-diagram selection, the poles refined by a "
         "nonlinear least-squares fit of damped sinusoids to the samples, then each in its own narrow band of the "
-        "decays' Fourier transforms, beside any narrow component of the band no pole holds; the natural frequency "
-        "|lambda| / 2 pi of each pole",
+        "decays' Fourier transforms; the natural frequency |lambda| / 2 pi of each pole",
         (("frequency_std_hz, damping_std", "one sigma from the narrow-band fit of the decays (covariance of the "
                                            "poles with the amplitudes and background unknown; noise white over "
                                            "the band)"),),
