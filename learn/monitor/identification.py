@@ -30,7 +30,7 @@ __all__ = ["CACHE_FORMAT", "IdentificationSettings", "IdentifiedModes", "cached_
            "with_narrow_band_poles", "write_cache"]
 
 #: Format tag of a cache entry (a change of the identification or of the entry's fields changes it).
-CACHE_FORMAT = "beam-damage-monitor-cache/9"
+CACHE_FORMAT = "beam-damage-monitor-cache/10"
 
 
 @dataclass(frozen=True)
