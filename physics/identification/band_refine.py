@@ -26,11 +26,14 @@ transform before any band is fitted, and are not refined: only the bands of the 
 (:func:`band_amplitudes` gives the amplitudes of fixed poles).
 
 Two poles of one band closer than their half-power half-widths summed and than the main lobe of the longest
-decay's transform (:data:`RESOLVED_LINES` lines) are one peak: its split between two poles (a mode whose frequency
-moves as its amplitude falls, a component the decays do not resolve) changes from decay to decay with the noise and
-moves each pole by a fraction of the peak's width. After the first sweep the weaker of such a pair (energy over the
-decays and channels) is merged into the stronger (:attr:`BandFit.merged`), which the second sweep fits alone; a
-sweep that leaves such a pair (the refits move the poles) is followed by another, until none is left.
+decay's transform (:data:`RESOLVED_LINES` lines), or closer than the record's resolution whatever their widths
+(:data:`RESOLUTION_LINES` line ``1 / T`` of the longest decay: two lightly damped components that near are one
+peak of the record's transform), are one peak: its split between two poles (a mode whose frequency moves as its
+amplitude falls, components the decays do not resolve) changes from decay to decay with the noise and moves each
+pole by a fraction of the peak's width, where the peak itself moves far less. After the first sweep the weaker of such
+a pair (energy over the decays and channels) is merged into the stronger (:attr:`BandFit.merged`), which the second
+sweep fits alone over the peak: one equivalent pole; a sweep that leaves such a pair (the refits move the poles) is
+followed by another, until none is left.
 
 White noise in time is white over the lines of each decay's transform (variance ``N s^2`` per line, real and
 imaginary parts independent): each decay's lines are weighted by ``1 / sqrt(N)``, each channel by the inverse of
@@ -48,8 +51,9 @@ import numpy as np
 from physics.errors import ConvergenceError, ShapeError
 from physics.identification.damped_sinusoids import levenberg_marquardt, pole_statistics
 
-__all__ = ["BACKGROUND_ORDER", "BAND_LINES", "BAND_WIDTHS", "MERGE_FACTOR", "RESOLVED_LINES", "RESOLVED_WIDTHS",
-           "SWEEPS", "BandFit", "band_amplitudes", "band_data", "mode_bands", "modes_on_lines", "refine_in_bands"]
+__all__ = ["BACKGROUND_ORDER", "BAND_LINES", "BAND_WIDTHS", "MERGE_FACTOR", "RESOLUTION_LINES", "RESOLVED_LINES",
+           "RESOLVED_WIDTHS", "SWEEPS", "BandFit", "band_amplitudes", "band_data", "mode_bands", "modes_on_lines",
+           "refine_in_bands"]
 
 #: A mode's band spans this many of its half-power half-widths either side of it ...
 BAND_WIDTHS = 6.0
@@ -69,6 +73,10 @@ SWEEPS = 2
 #: the noise and the peak's departure from one exponential decay: the weaker is merged into the stronger, which is
 #: then fitted alone.
 RESOLVED_WIDTHS, RESOLVED_LINES = 1.0, 2.0
+#: Two poles of a band closer than this many lines ``1 / T`` of the longest decay are one peak whatever their
+#: damping (the record's resolution: lightly damped components that near make one peak of its transform, and their
+#: split follows the noise); the weaker is merged into the stronger, which then stands for the whole peak.
+RESOLUTION_LINES = 1.0
 
 
 @dataclass(frozen=True)
@@ -94,7 +102,8 @@ class BandFit:
     n_lines : int
         Lines fitted, over every decay and group (per channel).
     merged_into : ndarray of int, shape (n_modes,)
-        For a pole unresolved from a stronger one of its band (:data:`RESOLVED_WIDTHS`, :data:`RESOLVED_LINES`: one
+        For a pole unresolved from a stronger one of its band (:data:`RESOLVED_WIDTHS`, :data:`RESOLVED_LINES`,
+        :data:`RESOLUTION_LINES`: one
         peak, which the stronger pole, fitted alone, stands for), the stronger pole's index; -1 where not merged. A
         pole merged into one that is merged later stands for the one that one was merged into (followed to the
         end). A merged pole is not converged; its band is NaN and its group -1 (its eigenvalue is the one it was
@@ -252,19 +261,23 @@ def _fit_band(data, fs, band, lam, n_ch, order):
 
 def _unresolved(lam, amps, lengths, fs, group, converged):
     """The converged poles closer to a stronger converged pole of their group than :data:`RESOLVED_WIDTHS` times
-    their half-power half-widths summed and than :data:`RESOLVED_LINES` lines of the longest decay (energy: over
-    the decays and channels): shape (n_modes,) of int, the stronger pole's index for each (-1: none)."""
+    their half-power half-widths summed and than :data:`RESOLVED_LINES` lines of the longest decay, or than
+    :data:`RESOLUTION_LINES` lines (energy: over the decays and channels): shape (n_modes,) of int, the stronger
+    pole's index for each (-1: none)."""
     sigma, f = -lam.real, lam.imag / (2 * np.pi)
     n = np.asarray(lengths, float)[:, None]
     energy = np.sum(np.abs(amps) ** 2 * ((-np.expm1(-2 * sigma[None, :] * n / fs)) / -np.expm1(-2 * sigma / fs))
                     [:, None, :], axis=(0, 1))
     out = np.full(lam.size, -1)
+    line = fs / max(lengths)                            # 1 / T of the longest decay (Hz)
     for j in np.argsort(-energy, kind="stable"):
         if out[j] >= 0 or not converged[j]:
             continue
-        close = converged & (out < 0) & (group == group[j]) & (np.arange(lam.size) != j) \
-            & (np.abs(f - f[j]) < RESOLVED_WIDTHS * (sigma + sigma[j]) / (2 * np.pi)) & (energy <= energy[j]) \
-            & (np.abs(f - f[j]) < RESOLVED_LINES * fs / max(lengths))
+        gap = np.abs(f - f[j])
+        one_peak = ((gap < RESOLVED_WIDTHS * (sigma + sigma[j]) / (2 * np.pi)) & (gap < RESOLVED_LINES * line)) \
+            | (gap < RESOLUTION_LINES * line)
+        close = converged & (out < 0) & (group == group[j]) & (np.arange(lam.size) != j) & one_peak \
+            & (energy <= energy[j])
         out[close] = j
     return out
 

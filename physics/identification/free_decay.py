@@ -14,9 +14,10 @@ Fourier transforms at the record's rate, from each hit's onset, across the cuts 
 exponentials and a smooth background, close modes together), so that the other modes, the unmodelled ones and the
 hit itself do not enter a mode's fit; its covariance gives the one-sigma frequency and damping. The frequency returned
 is the natural frequency ``|lambda| / 2 pi`` of each mode's pole (its damped frequency is ``Im(lambda) / 2 pi``). A
-mode fitted as one pole for poles of one peak that the refinement merged, whose frequency moves over its decays
+mode fitted as one pole for poles of one peak that the refinement merged (closer than the record resolves) is named
+in a warning: one equivalent pole for the peak's unresolved components; where its frequency moves over its decays
 (refitted over their first and their second halves, :func:`~physics.identification.glide.mode_glide`, more than
-:data:`~physics.identification.glide.GLIDE_SIGMAS` sigma apart), is named in a warning with its glide: a mode whose
+:data:`~physics.identification.glide.GLIDE_SIGMAS` sigma apart), the warning names its glide: a mode whose
 frequency moves with its amplitude, read over the whole decay. A clear peak of the
 record's spectrum (:func:`~physics.identification.decay_peaks.decay_peaks`, the peaks ``fftpeak`` reports) that no
 kept pole holds (a weak mode beyond the model's order, or a diagram with no pole stable enough) is started at its
@@ -36,7 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from physics.errors import ConvergenceError, ShapeError
-from physics.identification.band_refine import RESOLVED_LINES, BandFit, refine_in_bands
+from physics.identification.band_refine import RESOLUTION_LINES, RESOLVED_LINES, BandFit, refine_in_bands
 from physics.identification.damped_sinusoids import DampedSinusoidFit, fit_damped_sinusoids, mode_snr
 from physics.identification.decay_peaks import decay_peaks
 from physics.identification.decays import Decays, adds_energy, decay_spectrum, find_decays
@@ -201,11 +202,11 @@ def _band_spans(x, decays, fitted_spans, window):
     return out
 
 
-def _warn_gliding_merges(full, fs, bands: BandFit, live, band, hi, where):
-    """Warn of each mode in ``band[0]``-``hi`` (Hz) that stands for poles merged into it
-    (:attr:`BandFit.merged_into`) and whose frequency glides significantly over its decays
-    (:func:`~physics.identification.glide.mode_glide`, the other live poles held fixed): one peak of a mode whose
-    frequency moves with its amplitude, not a split the noise made."""
+def _warn_merges(full, fs, bands: BandFit, live, band, hi, where):
+    """Warn of each mode in ``band[0]``-``hi`` (Hz) that stands for poles merged into it (:attr:`BandFit.merged_into`):
+    one peak holding components the record does not resolve, fitted as one equivalent pole. Where its frequency
+    glides significantly over its decays (:func:`~physics.identification.glide.mode_glide`, the other live poles held
+    fixed), the warning names the glide: one peak of a mode whose frequency moves with its amplitude."""
     into = bands.merged_into
     if not np.any(into >= 0):
         return
@@ -216,17 +217,20 @@ def _warn_gliding_merges(full, fs, bands: BandFit, live, band, hi, where):
             continue
         glide = mode_glide(full, fs, bands.eigenvalues[keep], bands.amplitudes[:, :, keep],
                            int(np.flatnonzero(keep == j)[0]))
-        if glide is None or not glide.significant:
-            continue
         parts = np.flatnonzero(into == j)
         at = np.r_[bands.natural_frequencies_hz[parts], bands.merged_with_hz[parts]]
-        warnings.warn(f"{where}: era's mode at {f:.6g} Hz is one peak the fit split between poles from "
-                      f"{at.min():.6g} to {at.max():.6g} Hz (closer than their half-power half-widths summed and than "
-                      f"{RESOLVED_LINES:g} lines 1/T), fitted as one pole; its frequency glides "
-                      f"{100 * glide.relative:+.2f} % over the decay ({glide.early_hz:.6g} Hz over the first half of "
-                      f"the decays, {glide.late_hz:.6g} Hz over the second; more than {GLIDE_SIGMAS:g} sigma): a mode "
-                      "whose frequency moves with its amplitude, read over the whole decay, weighted towards its loud "
-                      "start", stacklevel=3)
+        split = (f"{where}: era's mode at {f:.6g} Hz is one peak the fit split between poles from {at.min():.6g} to "
+                 f"{at.max():.6g} Hz (closer than their half-power half-widths summed and than {RESOLVED_LINES:g} "
+                 f"lines 1/T, or than {RESOLUTION_LINES:g} line 1/T), fitted as one pole")
+        if glide is None or not glide.significant:
+            warnings.warn(f"{split}: the peak holds components the record does not resolve, reported as one "
+                          "equivalent pole (the peak's frequency, not one component's)", stacklevel=3)
+            continue
+        warnings.warn(f"{split}; its frequency glides {100 * glide.relative:+.2f} % over the decay "
+                      f"({glide.early_hz:.6g} Hz over the first half of the decays, {glide.late_hz:.6g} Hz over the "
+                      f"second; more than {GLIDE_SIGMAS:g} sigma): a mode whose frequency moves with its amplitude, or "
+                      "components the record does not resolve beating, read over the whole decay, weighted towards "
+                      "its loud start", stacklevel=3)
 
 
 def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max_order=None, max_damping=MAX_DAMPING,
@@ -351,7 +355,7 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         z_std = np.where(ok, held.damping_std, fit.damping_std[idx])
         amps = [held.amplitudes[:, :, j] if ok[j] else fit.amplitudes[:, :, i] for j, i in enumerate(idx)]
         merged = np.asarray(bands.merged, bool)        # a pole merged into a stronger one of its peak is none
-        _warn_gliding_merges(full, fs, bands, ok & ~held.refitted, band, hi, where)
+        _warn_merges(full, fs, bands, ok & ~held.refitted, band, hi, where)
     # the clear peaks no mode holds: each started at its peak and refined in its band, the modes held fixed
     held_hz = np.abs(lam[~merged]) / (2 * np.pi)
     # NaN: a failed fit, or a refit on cut decays (its first piece's amplitudes do not hold past the re-excitation)
