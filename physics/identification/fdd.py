@@ -222,6 +222,10 @@ class ClearPeaks:
         and the peak's half-power (-3 dB) half-width, bounded by half the gap to the nearest neighbouring clear
         peak (a mode at one peak explains no other clear peak, and a search within the tolerance stops at the
         midpoint to the neighbour).
+    above_floor : ndarray of bool, shape (n_peaks,)
+        Clear by its height over the floor (:data:`CLEAR_PEAK_DB`), not by its prominence over the noise's ripple
+        alone: a resonance, where a ripple-prominent peak may also be a harmonic or a small feature of a long
+        average. Only such a peak keeps a pole stable over fewer orders than the selection asks (SSI-cov).
     """
 
     lines: np.ndarray
@@ -229,6 +233,7 @@ class ClearPeaks:
     height_db: np.ndarray
     valleys: np.ndarray
     tolerance_hz: np.ndarray
+    above_floor: np.ndarray
 
 
 def clear_peaks(sv: SingularValueSpectrum, band_hz=None, prominent_above_db=np.inf) -> ClearPeaks:
@@ -244,14 +249,16 @@ def clear_peaks(sv: SingularValueSpectrum, band_hz=None, prominent_above_db=np.i
     f = sv.frequency_hz
     idx = np.nonzero(np.isfinite(sv.floor) & (f >= max(band[0], sv.lowest_hz)) & (f <= band[1]))[0]
     if idx.size < 3:
-        return ClearPeaks(np.zeros(0, int), np.zeros(0), np.zeros(0), np.zeros((0, 2), int), np.zeros(0))
+        return ClearPeaks(np.zeros(0, int), np.zeros(0), np.zeros(0), np.zeros((0, 2), int), np.zeros(0),
+                          np.zeros(0, bool))
     db = 10 * np.log10(np.maximum(sv.singular_values[idx, 0], np.finfo(float).tiny))
     over = db - 10 * np.log10(sv.floor[idx])
     pk, props = signal.find_peaks(db, prominence=PEAK_PROMINENCE_DB)
     prom = props["prominences"]
     ripple = max(PEAK_PROMINENCE_DB, ripple_db(sv.averages, idx.size)) if sv.averages > 0 else np.inf
-    pk = pk[(over[pk] >= CLEAR_PEAK_DB) | ((prom >= CLEAR_PEAK_DB) & (over[pk] >= prominent_above_db))
-            | (prom >= ripple)]
+    floor_clear = (over[pk] >= CLEAR_PEAK_DB) | ((prom >= CLEAR_PEAK_DB) & (over[pk] >= prominent_above_db))
+    keep = floor_clear | (prom >= ripple)
+    pk, floor_clear = pk[keep], floor_clear[keep]
     edges = np.concatenate([[0], pk, [idx.size - 1]])
     valleys = np.array([[a + np.argmin(db[a:p + 1]), p + np.argmin(db[p:b + 1])]
                         for a, p, b in zip(edges[:-2], pk, edges[2:])], int).reshape(-1, 2)
@@ -262,7 +269,7 @@ def clear_peaks(sv: SingularValueSpectrum, band_hz=None, prominent_above_db=np.i
     tol = np.maximum.reduce([0.01 * f[idx[pk]], np.full(pk.size, 1.5 * sv.resolution_hz), half * sv.resolution_hz])
     gap = np.diff(f[idx[pk]])
     tol = np.minimum(tol, 0.5 * np.minimum(np.r_[np.inf, gap], np.r_[gap, np.inf]))    # half the gap to a neighbour
-    return ClearPeaks(idx[pk], f[idx[pk]], over[pk], idx[valleys] if pk.size else valleys, tol)
+    return ClearPeaks(idx[pk], f[idx[pk]], over[pk], idx[valleys] if pk.size else valleys, tol, floor_clear)
 
 
 def unexplained_peaks(peaks: ClearPeaks, frequencies_hz) -> np.ndarray:

@@ -356,7 +356,8 @@ def _ssi_pass(checked, band, peaks, tol_hz, max_order, block_rows, references, n
                         duration_s=cor.n_samples / cor.sampling_frequency_hz if mode_in_band else float("inf"))
     this = SSIPass(band, i, orders, diagram, cor)
     try:
-        sel = select_poles(diagram, peaks_hz=peaks.frequency_hz[inside], peak_tol_hz=tol_hz[inside])
+        rescue = inside & peaks.above_floor             # a weakly stable pole is kept at a resonance's peak only
+        sel = select_poles(diagram, peaks_hz=peaks.frequency_hz[rescue], peak_tol_hz=tol_hz[rescue])
     except ConvergenceError:
         return this, None, None
     shapes = unit_shapes(sel.participation.T)
@@ -444,6 +445,7 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
             break                              # a sub-band the (decimated) record is too short for: not identified
         passes.append(this)
         at = (peaks.frequency_hz >= this.band_hz[0]) & (peaks.frequency_hz <= this.band_hz[1])
+        at &= peaks.above_floor
         missed.append(missed_clusters(this.diagram, peaks.frequency_hz[at], tol_hz[at]))   # as select_poles saw it
         lag_s = 2 * this.block_rows / this.correlations.sampling_frequency_hz
         wanted = unexplained_peaks(peaks, [m[0] for m in modes if not m[7]])

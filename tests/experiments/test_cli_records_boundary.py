@@ -60,7 +60,7 @@ def test_when_the_picked_method_and_the_other_find_no_mode_the_refusal_names_bot
 def test_channels_sharing_a_dof_label_are_warned_of_on_stderr(capsys, tmp_path):
     """MPSTD_Set001 (a real measurement system's export) labels its channels 1 and 4 both 1:+Z."""
     code, out, err = run_cli(capsys, ["identify", str(DATA / "MPSTD_Set001_2024_10_08_10_27_07.uff")])
-    assert code == 0 and "MPSTD_Set001_2024_10_08_10_27_07.uff: 1 mode by ssi" in out and "warning" not in out
+    assert code == 0 and "MPSTD_Set001_2024_10_08_10_27_07.uff: 4 modes by ssi" in out and "warning" not in out
     assert ("MPSTD_Set001_2024_10_08_10_27_07.uff: channels share a DOF label: 1:+Z (channels 1, 4); modal.json "
             "keeps each channel's row") in err
 

@@ -121,7 +121,7 @@ def test_a_seed_is_refined_in_its_own_band_the_held_modes_outside_it_fixed():
     held = poles([60.02, 150.0], zeta[[0, 2]])                     # 60 Hz a little off, as an estimate is
     held_amps = np.array([[[1.0, 0.6]]], complex)                  # 150 Hz's amplitude 20 % off
     peaks = ClearPeaks(np.array([189]), np.array([63.0]), np.array([20.0]), np.array([[180, 200]]),
-                       np.array([1.0]))
+                       np.array([1.0]), np.array([True]))
     start = seed_poles(peaks.frequency_hz, peaks.tolerance_hz, n / FS)
     got = refine_seeds([y], FS, held, peaks, [0], 0.2, held_amplitudes=held_amps)
     rest = y - np.real(held_amps[0, 0, 1] * np.exp(held[1] * k))[None]
