@@ -322,7 +322,7 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
                 fitted_spans = spans
                 break
             raise ConvergenceError(f"{where}: no pole of the free decays is stable over enough model orders: raise "
-                                   "max_order, widen the band, or try --method ssi") from None
+                                   "--max-order, widen --band, or try --method ssi") from None
         try:
             fit, fitted, fitted_spans = fit_damped_sinusoids(parts, fs_dec, sel.eigenvalues), parts, spans
         except np.linalg.LinAlgError:
