@@ -163,10 +163,7 @@ def reference_modes(tests: list) -> ReferenceModes:
     f = np.asarray(freqs, float)
     s = np.asarray(stds, float)
     tol = np.maximum(np.maximum(TOLERANCE_SIGMAS * s, MIN_TOLERANCE), np.asarray(extremes, float))
-    if f.size > 1:
-        gaps = np.diff(np.log(f))
-        neighbour = np.minimum(np.r_[np.inf, gaps], np.r_[gaps, np.inf])
-        tol = np.minimum(tol, NEIGHBOUR_SHARE * neighbour)
+    tol = np.minimum(tol, _neighbour_cap(f))
     with_shapes = bool(shapes) and all(x is not None for x in shapes)
     return ReferenceModes(f, s, tol, np.stack(shapes, axis=1) if with_shapes else None,
                           tuple(dofs) if with_shapes else (), np.asarray(presence, float))
@@ -235,6 +232,13 @@ def track_modes(tests: list, ref: ReferenceModes):
     return F, Z, M, cols
 
 
+def _neighbour_cap(frequencies_hz) -> np.ndarray:
+    """``NEIGHBOUR_SHARE`` of each mode's log gap to its nearest neighbour, shape (m,) (inf for a lone mode): how
+    far in ``ln f`` a mode's tracking or search band may reach."""
+    gaps = np.diff(np.log(np.asarray(frequencies_hz, float)))
+    return NEIGHBOUR_SHARE * np.minimum(np.r_[np.inf, gaps], np.r_[gaps, np.inf])
+
+
 def narrow_bands_hz(ref: ReferenceModes) -> np.ndarray:
     """Each reference mode's tracking band ``f_ref exp(-+tolerance)`` (Hz), shape (m, 2): where a pole (or an FFT
     peak) is a reading of the mode in place."""
@@ -246,11 +250,7 @@ def search_bands_hz(ref: ReferenceModes) -> np.ndarray:
     ``f_ref exp(-+max(tolerance, SEARCH_MIN))``, never beyond ``NEIGHBOUR_SHARE`` of the log gap to the next
     reference mode; it holds the tracking band (:func:`narrow_bands_hz`)."""
     f = ref.frequencies_hz
-    half = np.maximum(ref.tolerance, SEARCH_MIN)
-    if f.size > 1:
-        gaps = np.diff(np.log(f))
-        half = np.maximum(np.minimum(half, NEIGHBOUR_SHARE * np.minimum(np.r_[np.inf, gaps], np.r_[gaps, np.inf])),
-                          ref.tolerance)
+    half = np.maximum(np.minimum(np.maximum(ref.tolerance, SEARCH_MIN), _neighbour_cap(f)), ref.tolerance)
     return f[:, None] * np.exp(np.outer(half, [-1.0, 1.0]))
 
 
