@@ -331,7 +331,7 @@ def _pass_sizes(fs_dec, n_dec, lowest_hz, n_peaks, n_ch, n_ref, max_order, block
 
 def _ssi_pass(checked, band, peaks, tol_hz, max_order, block_rows, references, n_segments, max_damping,
               chunk_samples, where, mode_in_band=False):
-    """One pass over ``band``: the pass, its selected poles (or None) and their segment frequencies/damping."""
+    """One pass over ``band``: the pass and its selected modes (:class:`_PassMode`; none when no pole is stable)."""
     fs = checked.sampling_frequency_hz
     n_ch = checked.signals.shape[0]
     n_ref = n_ch if references is None else len(references)
@@ -359,10 +359,80 @@ def _ssi_pass(checked, band, peaks, tol_hz, max_order, block_rows, references, n
         rescue = inside & peaks.above_floor             # a weakly stable pole is kept at a resonance's peak only
         sel = select_poles(diagram, peaks_hz=peaks.frequency_hz[rescue], peak_tol_hz=tol_hz[rescue])
     except ConvergenceError:
-        return this, None, None
+        return this, []
     shapes = unit_shapes(sel.participation.T)
-    seg = _segment_modes(cor, i, int(orders[-1]), band, sel.natural_frequencies_hz, shapes, max_damping)
-    return this, sel, (shapes, *seg)
+    f_seg, z_seg = _segment_modes(cor, i, int(orders[-1]), band, sel.natural_frequencies_hz, shapes, max_damping)
+    lag_s = 2 * i / cor.sampling_frequency_hz
+    return this, [_PassMode(f, sel.damping_ratios[j], weak, int(sel.count[j]), shapes[:, j], f_seg[:, j], z_seg[:, j],
+                            weak or bool(lag_s * f < MIN_LAG_PERIODS))
+                  for j, (f, weak) in enumerate(zip(sel.natural_frequencies_hz, sel.weakly_stable.tolist()))]
+
+
+@dataclass(frozen=True, eq=False)
+class _PassMode:
+    """A mode one pass of :func:`identify_ssi` selected.
+
+    Attributes
+    ----------
+    frequency_hz : float
+    damping_ratio : float
+    weakly_stable : bool
+        Kept on fewer model orders than the selection asks, because a clear peak lies at it.
+    count : int
+        Model orders (upper half of its cluster) in which it was found stable.
+    shape : ndarray, complex, shape (n_channels,)
+        Unit norm.
+    segment_frequencies_hz, segment_damping_ratios : ndarray, shape (n_segments,)
+        The mode in each segment of its pass (NaN where a segment did not show it).
+    provisional : bool
+        Weakly stable, or its pass's correlation lags span fewer than :data:`MIN_LAG_PERIODS` of its periods: a
+        sub-band pass identifies it again.
+    """
+
+    frequency_hz: float
+    damping_ratio: float
+    weakly_stable: bool
+    count: int
+    shape: np.ndarray
+    segment_frequencies_hz: np.ndarray
+    segment_damping_ratios: np.ndarray
+    provisional: bool
+
+
+def _merge_sub_band(modes: list, found: list, peaks: ClearPeaks, lag_before_s: float) -> list:
+    """``modes`` (of the earlier passes) with the modes ``found`` by a sub-band pass merged in.
+
+    A found mode is taken at a clear peak no settled (not provisional) earlier mode explains, or as a new mode when
+    it is settled, no earlier pass's lags (longest ``lag_before_s``, s) spanned :data:`MIN_LAG_PERIODS` of its
+    periods and no mode lies within 1 % of it. The earlier modes it is the nearest found mode of, within 1 % or at
+    its peak, it replaces when they are all provisional and it is not; otherwise it is dropped."""
+    tol_hz = peaks.tolerance_hz
+    wanted = unexplained_peaks(peaks, [m.frequency_hz for m in modes if not m.provisional])
+    found_hz = np.array([m.frequency_hz for m in found])
+    merged = list(modes)
+    for j, mode in enumerate(found):
+        f = mode.frequency_hz
+        at = wanted & (np.abs(peaks.frequency_hz - f) <= tol_hz)
+        new = not mode.provisional and lag_before_s * f < MIN_LAG_PERIODS \
+            and all(abs(m.frequency_hz - f) > 0.01 * f for m in merged)
+        if not (at.any() or new):
+            continue
+        same = [m for m in modes if np.argmin(np.abs(found_hz - m.frequency_hz)) == j
+                and (abs(m.frequency_hz - f) <= 0.01 * f
+                     or np.any(np.abs(m.frequency_hz - peaks.frequency_hz[at]) <= tol_hz[at]))]
+        if same and (mode.provisional or not all(m.provisional for m in same)):
+            continue
+        merged = [m for m in merged if not any(m is s for s in same)]
+        merged.append(mode)
+    return merged
+
+
+def _standard_error(seg: np.ndarray, n_seen: np.ndarray) -> np.ndarray:
+    """Shape (n_modes,): the spread of each mode over the ``n_seen`` segments that show it divided by
+    ``sqrt(n_seen)`` (NaN below two); ``seg`` shape (n_segments, n_modes)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(n_seen >= 2, np.nanstd(np.where(n_seen >= 2, seg, 0), axis=0, ddof=1), np.nan) \
+            / np.sqrt(np.maximum(n_seen, 1))
 
 
 def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max_order=None, block_rows=None,
@@ -431,14 +501,12 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     sv = singular_value_spectrum(checked, where=where)
     peaks = clear_peaks(sv)
     tol_hz = peaks.tolerance_hz
-    # modes: (f, zeta, weakly stable, count, shape, f_seg, z_seg, provisional: weakly stable or its pass's lags
-    # short of MIN_LAG_PERIODS of it, so that a sub-band pass identifies it again)
     passes, modes, missed = [], [], []
     hi, lag_before_s = band[1], 0.0
     for k in range(MAX_PASSES):
         try:
-            this, sel, seg = _ssi_pass(checked, (band[0], hi), peaks, tol_hz, max_order, block_rows, references,
-                                       n_segments, max_damping, chunk_samples, where, mode_in_band)
+            this, found = _ssi_pass(checked, (band[0], hi), peaks, tol_hz, max_order, block_rows, references,
+                                    n_segments, max_damping, chunk_samples, where, mode_in_band)
         except ShapeError:
             if not k:
                 raise
@@ -447,28 +515,10 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         at = (peaks.frequency_hz >= this.band_hz[0]) & (peaks.frequency_hz <= this.band_hz[1])
         at &= peaks.above_floor
         missed.append(missed_clusters(this.diagram, peaks.frequency_hz[at], tol_hz[at]))   # as select_poles saw it
-        lag_s = 2 * this.block_rows / this.correlations.sampling_frequency_hz
-        wanted = unexplained_peaks(peaks, [m[0] for m in modes if not m[7]])
-        prior = list(modes)
-        pass_hz = sel.natural_frequencies_hz if sel is not None else np.zeros(0)
-        for j, f in enumerate(pass_hz):
-            weak = bool(sel.weakly_stable[j])
-            entry = (f, sel.damping_ratios[j], weak, int(sel.count[j]), seg[0][:, j], seg[1][:, j], seg[2][:, j],
-                     weak or lag_s * f < MIN_LAG_PERIODS)
-            if k:                              # a sub-band keeps modes at peaks still wanted, and new modes
-                at = wanted & (np.abs(peaks.frequency_hz - f) <= tol_hz)
-                new = not entry[7] and lag_before_s * f < MIN_LAG_PERIODS \
-                    and all(abs(m[0] - f) > 0.01 * f for m in modes)
-                if not (at.any() or new):
-                    continue
-                same = [m for m in prior if np.argmin(np.abs(pass_hz - m[0])) == j
-                        and (abs(m[0] - f) <= 0.01 * f or np.any(np.abs(m[0] - peaks.frequency_hz[at]) <= tol_hz[at]))]
-                if same and (entry[7] or not all(m[7] for m in same)):
-                    continue
-                modes = [m for m in modes if not any(m is s for s in same)]
-            modes.append(entry)
-        lag_before_s = max(lag_before_s, lag_s)
-        wanted = unexplained_peaks(peaks, [m[0] for m in modes if not m[7]]) & (peaks.frequency_hz <= hi)
+        modes = _merge_sub_band(modes, found, peaks, lag_before_s) if k else found
+        lag_before_s = max(lag_before_s, 2 * this.block_rows / this.correlations.sampling_frequency_hz)
+        wanted = unexplained_peaks(peaks, [m.frequency_hz for m in modes if not m.provisional])
+        wanted &= peaks.frequency_hz <= hi
         if not wanted.any():
             break
         hi = min(hi / 2, SUB_BAND_PEAK_RATIO * peaks.frequency_hz[wanted].max())
@@ -481,21 +531,17 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         check_periods(duration_s, lowest_hz, "the lowest pole", where)
         raise ConvergenceError(f"{where}: {NO_STABLE_POLE}{steadiest_text(d)}")
     if n_modes is not None:
-        modes = sorted(modes, key=lambda m: (m[2], -m[3]))[:n_modes]
-    modes.sort(key=lambda m: m[0])
-    check_periods(duration_s, modes[0][0], "the lowest mode", where)
-    fn, zeta = np.array([m[0] for m in modes]), np.array([m[1] for m in modes])
-    weak = np.array([m[2] for m in modes])
-    shapes = np.array([m[4] for m in modes]).T
-    n_seg = max(m[5].size for m in modes)
-    f_seg, z_seg = (np.array([np.pad(m[c], (0, n_seg - m[c].size), constant_values=np.nan) for m in modes]).T
-                    for c in (5, 6))
+        modes = sorted(modes, key=lambda m: (m.weakly_stable, -m.count))[:n_modes]
+    modes.sort(key=lambda m: m.frequency_hz)
+    check_periods(duration_s, modes[0].frequency_hz, "the lowest mode", where)
+    fn, zeta = np.array([m.frequency_hz for m in modes]), np.array([m.damping_ratio for m in modes])
+    weak = np.array([m.weakly_stable for m in modes])
+    shapes = np.array([m.shape for m in modes]).T
+    n_seg = max(m.segment_frequencies_hz.size for m in modes)
+    f_seg, z_seg = (np.array([np.pad(s, (0, n_seg - s.size), constant_values=np.nan) for s in segs]).T
+                    for segs in ([m.segment_frequencies_hz for m in modes], [m.segment_damping_ratios for m in modes]))
     n_seen = np.sum(np.isfinite(f_seg), axis=0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        f_std = np.where(n_seen >= 2, np.nanstd(np.where(n_seen >= 2, f_seg, 0), axis=0, ddof=1), np.nan) \
-            / np.sqrt(np.maximum(n_seen, 1))
-        z_std = np.where(n_seen >= 2, np.nanstd(np.where(n_seen >= 2, z_seg, 0), axis=0, ddof=1), np.nan) \
-            / np.sqrt(np.maximum(n_seen, 1))
+    f_std, z_std = _standard_error(f_seg, n_seen), _standard_error(z_seg, n_seen)
     if weak.any():
         warnings.warn(f"{where}: mode(s) at {', '.join(f'{f:.4g} Hz' for f in fn[weak])} weakly stable (stable "
                       "over fewer model orders than the selection asks), kept because a clear spectral peak lies "
