@@ -177,6 +177,12 @@ def kind_weight(frequency_hz, kind) -> np.ndarray:
     return w / w.max()
 
 
+def _highest_order(n_lines, n_outputs, n_inputs) -> int:
+    """Highest model order :func:`lscf` takes for ``n_lines`` lines of ``n_outputs`` x ``n_inputs`` FRFs: the one
+    whose ``(order + 1) (n_inputs + 1)`` is at most ``n_lines n_outputs``."""
+    return n_lines * n_outputs // (n_inputs + 1) - 1
+
+
 def _refits(f, weight):
     """``(lines, line weight, highest frequency of a pole that joins)`` of each fit after the whole band's: the whole
     band weighted by ``weight`` (if given), then the sub-bands ``[f_min, f_max q^k]`` unweighted."""
@@ -203,7 +209,7 @@ def _with_refit_poles(f, rec, poles, max_order, margin, select, lscf_options, we
     mag = np.sqrt(np.mean(np.abs(rec) ** 2, axis=(0, 1)))
     found = [poles]
     for sel, w, hi in _refits(f, weight):
-        order = min(max_order, sel.sum() * n_o // (n_i + 1) - 1)
+        order = min(max_order, _highest_order(sel.sum(), n_o, n_i))
         if order < 4:
             break
         try:
@@ -243,7 +249,7 @@ def _with_peak_poles(f, h, rec, poles, max_order, margin, select, lscf_options):
     for fp, tol_hz in zip(missed, reach):
         for band in CLEAR_PEAK_BANDS:
             sel = (f >= fp / band) & (f <= fp * band)
-            order = min(max_order, sel.sum() * n_o // (n_i + 1) - 1)
+            order = min(max_order, _highest_order(sel.sum(), n_o, n_i))
             if order < 4:
                 break
             try:
@@ -318,7 +324,7 @@ def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_to
     n_o, n_i, N = h.shape
     if max_order < min_order or min_order < 1:
         raise ShapeError("lscf needs 1 <= min_order <= max_order")
-    if N * n_o < (max_order + 1) * (n_i + 1):
+    if max_order > _highest_order(N, n_o, n_i):
         raise ShapeError(f"lscf: {N} lines x {n_o} responses are too few for model order {max_order}")
     dt = 1.0 / (2.0 * f[-1] * (1.0 + margin))
     P = max_order + 1
