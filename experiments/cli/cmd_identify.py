@@ -12,7 +12,7 @@ import numpy as np
 from physics.errors import BeamDamageError, ConfigError, FileFormatError
 from physics.identification import (DEFAULT_OUTPUT_ONLY, METHODS, Identification, RecordsIdentification,
                                     holds_response_records, identify_file, identify_records,
-                                    read_response_records, reconstruction_error_db)
+                                    read_response_records, reconstruction_error_db, response_records)
 from physics.identification.decays import free_response
 from physics.identification.exponential_window import remove_window_decay, tau_from_end_value
 from physics.identification.output_only import FREE_RESPONSE_METHOD, SCALING, STATIONARY_METHOD, STATIONARY_METHODS
@@ -267,9 +267,10 @@ def _output_only_records(path, method):
         raise ConfigError(f"--method {method}: identifies response records output-only, but {path} holds FRFs; "
                           f"time records as {accepted(TIME)}")
 
-    if method is None and read(path, TIME).forces:
+    rec = read(path, TIME)
+    if method is None and rec.forces:
         return None                                   # force and responses: FRFs estimated first (H1)
-    return read_response_records(path)
+    return response_records(rec, path)
 
 
 def _warn_split(path, estimate) -> None:

@@ -15,7 +15,7 @@ import numpy as np
 from learn.pairs.measured import IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, identify_modes
 from physics.errors import BeamDamageError
 from physics.identification import (DEFAULT_OUTPUT_ONLY, holds_response_records, identify_records,
-                                    read_response_records)
+                                    read_response_records, response_records)
 from physics.identification.failures import identification_failure
 from physics.identification.record_checks import check_records
 from physics.identification.fft_peak import fft_peaks
@@ -153,8 +153,8 @@ def read_test(path) -> tuple:
     path = str(path)
     if modal_or_frf(path) == MODAL:
         return MODAL, prepare_measured(read(path, MODAL)).data
-    if holds_response_records(path) and not read(path, TIME).forces:
-        return TIME, read_response_records(path)
+    if holds_response_records(path) and not (rec := read(path, TIME)).forces:
+        return TIME, response_records(rec, path)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return FRF, prepare_measured(read_measured_frf(path)).data

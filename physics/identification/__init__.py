@@ -33,14 +33,14 @@ from physics.identification.measured import (Identification, identify_file, iden
 from physics.identification.methods import MAX_LSCF_VALUES, METHODS, MethodSpec
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity, shapes_from_residues
 from physics.identification.output_only import (DEFAULT_OUTPUT_ONLY, RecordsIdentification, holds_response_records,
-                                                identify_records, read_response_records)
+                                                identify_records, read_response_records, response_records)
 from physics.identification.poles import (STABILITY_CODES, SelectedPoles, StabilisationDiagram, select_poles,
                                           stability_status)
 from physics.identification.sdof import (CircleFit, circle_fit, circle_fit_sdof, complex_modes_from_driving_point,
                                          find_peaks_indicator, mode_indicator, peak_picking, real_modes_from_peaks)
 
 __all__ = ["DEFAULT_OUTPUT_ONLY", "RecordsIdentification", "holds_response_records", "identify_records",
-           "read_response_records",
+           "read_response_records", "response_records",
            "CircleFit", "ESTIMATION_PASSES", "Identification", "LSCFIdentification", "LSFDResult", "MAX_LSCF_VALUES",
            "METHODS", "MethodSpec", "ModalEstimate", "STABILITY_CODES", "SelectedPoles", "StabilisationDiagram",
            "WEIGHTINGS", "circle_fit", "circle_fit_sdof", "complex_modes_from_driving_point", "estimate_noise_model",

@@ -25,7 +25,7 @@ import zipfile
 
 __all__ = ["DEFAULT_OUTPUT_ONLY", "FREE_RESPONSE_METHOD", "SCALING", "STATIONARY_METHOD", "STATIONARY_METHODS",
            "MergedSetups", "RecordsIdentification", "holds_response_records",
-           "identify_records", "merge_setups", "read_response_records"]
+           "identify_records", "merge_setups", "read_response_records", "response_records"]
 
 #: The method ``identify`` takes for a file of response records without a force channel: ``"auto"`` picks
 #: :data:`FREE_RESPONSE_METHOD` for a free response (decays after hits,
@@ -103,7 +103,12 @@ def holds_response_records(path) -> bool:
 
 def read_response_records(path) -> TimeRecords:
     """The response channels of a time-record file (forces dropped); one quantity over all channels."""
-    rec = read(path, TIME)
+    return response_records(read(path, TIME), path)
+
+
+def response_records(rec, path) -> TimeRecords:
+    """The response channels of ``rec``, the time records read from ``path`` (forces dropped); one quantity over
+    all channels."""
     resp = rec.responses
     if not resp:
         raise FileFormatError(f"{path}: no response channel, only forces")
