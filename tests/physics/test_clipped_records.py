@@ -47,6 +47,7 @@ def test_a_decay_clipped_at_its_hit_is_identified_after_the_clipping_within_its_
     assert longest > 5 * 2 and all(k == 0 and hit <= a <= b <= at_limit[-1] for k, a, b in crop.runs)
     assert crop.first_sample == at_limit[-1] + 1 + longest
     assert checked.signals.shape == (1, N - crop.first_sample)
+    assert check_records(y[None], FS, chunk_values=777).crop == crop       # read in chunks: the same crop
     np.testing.assert_array_equal(checked.signals, y[None, crop.first_sample:])
     assert checked.mean[0] == pytest.approx(y[crop.first_sample:].mean(), abs=1e-12)
     assert crop.text.startswith("channel 0 clipped at samples ") and \
