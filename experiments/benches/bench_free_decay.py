@@ -161,7 +161,8 @@ def scope_case(seeds):
         y, fs = _scope(seed)
         old_clipped += int(np.sum((y == y.max()) | (y == y.min())) > 1e-3 * y.size + 2)
         try:
-            check_records(y[None], fs)
+            if check_records(y[None], fs).crop is not None:
+                new_clipped += 1                        # identified after its clipping
         except BeamDamageError:
             new_clipped += 1
             continue

@@ -60,7 +60,8 @@ def records_result_dict(ident: RecordsIdentification, band_hz, picked: bool) -> 
             "duration_s": rec.signals.shape[1] / fs, "modes": modes_list(e), "dofs": list(rec.dofs),
             "references": [], "driving_point": None, "scaling": SCALING, "mac": mac(e.shapes).tolist(),
             "uncertainty": dict(METHODS[e.method].uncertainty),
-            "out_of_band_poles_hz": [], **positions_report_dofs(rec.dofs, rec.metadata)}
+            "out_of_band_poles_hz": [], "record_crop": None if ident.crop is None else ident.crop.to_dict(),
+            **positions_report_dofs(rec.dofs, rec.metadata)}
 
 
 def positions_report_dofs(dofs, metadata) -> dict:
@@ -332,7 +333,8 @@ def _run_output_only(args, records, band) -> dict:
         obj = {**modal_data_to_dict(modal_data), "scaling": SCALING, "method": method,
                "frequency_std_hz": [m["frequency_std_hz"] for m in out["modes"]],
                "damping_std": [m["damping_std"] for m in out["modes"]],
-               **({"partial_modes": out["partial_modes"]} if others else {})}
+               **({"partial_modes": out["partial_modes"]} if others else {}),
+               **({"record_crop": out["record_crop"]} if out["record_crop"] else {})}
         path = Path(args.out) / "modal.json"
         atomic_write_text(path, json.dumps(obj, indent=1) + "\n")
         out["outputs"] = {"modal.json": str(path)}

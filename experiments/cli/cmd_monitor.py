@@ -175,7 +175,8 @@ def judged(res, false_alarm_rate: float, model=None, beam_x_m=None) -> dict:
     the event it belongs to; ``extrapolated`` in its summary), the ``events``, the ``counts`` of every status, the
     test of the tests not identified against the baseline's share and the scatter of the later healthy-looking tests
     against the baseline's; with a trained model each event's explanations and the network's verdict. Warnings
-    (``warnings.warn``) for a lost identification and a baseline period narrower than the later tests."""
+    (``warnings.warn``) for a lost identification, a baseline period narrower than the later tests and records
+    identified after clipping in their leading part (``record_crop``)."""
 
     rows = res.rows
     cov = series_coverage(res)
@@ -191,6 +192,11 @@ def judged(res, false_alarm_rate: float, model=None, beam_x_m=None) -> dict:
                 rows[i]["verdict"]["event"] = k
         if v is not None:
             events[k] = replace(ev, verdict=v)
+    cropped = [f"{r['file']}: {r['record_crop']}" for r in rows if r.get("record_crop")]
+    if cropped:
+        more = "; ..." if len(cropped) > 3 else ""
+        warnings.warn(f"{counted(len(cropped), 'test')} clipped in the leading part of the record, identified "
+                      f"from the samples after the clipping: {'; '.join(cropped[:3])}{more}")
     ident = identification_change(rows, false_alarm_rate)
     lost = lost_modes_change(rows, false_alarm_rate)
     if lost["change"]:

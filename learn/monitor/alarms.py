@@ -44,7 +44,9 @@ class SeriesResult:
                                      ``beyond_band``: the modes missing from their bands read as moved or lost
                                      (:meth:`learn.monitor.tracking.BeyondBands.readings`), ``beyond_band_text``,
                                      ``identified_by``: per mode the method that found its pole (or its
-                                     frequency: ``fftpeak (the pole tracked: era)``), ``conditions``)
+                                     frequency: ``fftpeak (the pole tracked: era)``), ``conditions``,
+                                     ``record_crop``: response records clipped in their leading part identified
+                                     from the samples after the clipping, which it names; None otherwise)
     reference : ReferenceModes
     frequencies_hz : ndarray (n, m)  tracked frequencies (NaN where missing)
     expected_hz : ndarray (n, m)     the baseline's frequencies at each test's conditions
@@ -211,6 +213,7 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
             "file": series.files[i], "time": series.times[i], "time_value": float(series.time_values[i]),
             "baseline": i < n_baseline, "identified": bool(ok[i]), "error": errors[i],
             "record_problem": record_problem(series.files[i]) if tests[i] is None else None,
+            "record_crop": (tests[i].record_crop or None) if tests[i] is not None else None,
             "status": _status(bool(ok[i]), bool(ok[i] and det.alarm[i]),
                               i in foreign or errors[i] == "conditions not measured", beyond.status(i)),
             "alarm": bool(ok[i] and det.alarm[i]), "novelty": finite_or_none(novelty[i]), "threshold": thr.value,

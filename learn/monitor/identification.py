@@ -30,7 +30,7 @@ __all__ = ["CACHE_FORMAT", "NARROW_FORMAT", "IdentificationSettings", "Identifie
            "record_problem", "with_narrow_band_poles", "write_cache"]
 
 #: Format tag of a cache entry (a change of the identification or of the entry's fields changes it).
-CACHE_FORMAT = "beam-damage-monitor-cache/12"
+CACHE_FORMAT = "beam-damage-monitor-cache/13"
 #: Format tag of a narrow-band re-identification's entry (:func:`cached_identification` with ``narrow_hz``), part of
 #: its key beside :data:`CACHE_FORMAT`: a change of the identification of a mode known to lie in its band (SSI-cov's
 #: ``mode_in_band``) changes it and re-identifies those entries alone.
@@ -72,6 +72,9 @@ class IdentifiedModes:
     narrow_band_hz : tuple      per pole, None for a pole of the identification over the series' band, ``(lo, hi)``
                                 (Hz) for one that a narrow-band re-identification around a reference mode found
                                 (:func:`with_narrow_band_poles`); empty: every pole of the first
+    record_crop : str           response records clipped in their leading part: the clipped runs and the first
+                                sample identified (:class:`~physics.identification.record_checks.RecordCrop`);
+                                empty when the whole record was identified
     """
 
     kind: str
@@ -84,6 +87,7 @@ class IdentifiedModes:
     band_hz: tuple | None = None
     line_hz: float | None = None
     narrow_band_hz: tuple = ()
+    record_crop: str = ""
 
     def identified_by(self, k: int) -> str:
         """How pole ``k`` was found, e.g. ``"lscf"`` or ``"lscf, narrow band 3.21-3.79 Hz"``."""
@@ -96,7 +100,8 @@ class IdentifiedModes:
                 "shapes": None if self.shapes is None else [[format_complex(z) for z in row] for row in self.shapes],
                 "dofs": list(self.dofs), "references": list(self.references),
                 "band_hz": None if self.band_hz is None else list(self.band_hz), "line_hz": self.line_hz,
-                "narrow_band_hz": [None if b is None else list(b) for b in self.narrow_band_hz]}
+                "narrow_band_hz": [None if b is None else list(b) for b in self.narrow_band_hz],
+                "record_crop": self.record_crop}
 
     @classmethod
     def from_dict(cls, d: dict) -> "IdentifiedModes":
@@ -106,7 +111,8 @@ class IdentifiedModes:
                    None if shapes is None else np.array([[complex(z) for z in row] for row in shapes], complex)
                    .reshape(len(shapes), len(d["frequencies_hz"])),
                    tuple(d["dofs"]), tuple(d["references"]), None if d["band_hz"] is None else tuple(d["band_hz"]),
-                   d["line_hz"], tuple(None if b is None else tuple(b) for b in d.get("narrow_band_hz", ())))
+                   d["line_hz"], tuple(None if b is None else tuple(b) for b in d.get("narrow_band_hz", ())),
+                   d.get("record_crop", ""))
 
 
 def identification_settings(band_hz=None, beam=None, model=None) -> IdentificationSettings:
@@ -162,12 +168,12 @@ def read_test(path) -> tuple:
 
 def record_problem(path) -> str | None:
     """Why the file of a test that was not identified holds no usable record (unreadable, truncated, missing
-    fields: :func:`read_test` refuses it; response records with NaN samples, a constant or a clipped channel:
-    :func:`physics.identification.record_checks.check_records` refuses them), or None when the record reads and only
-    its identification failed. A test whose record is not usable says nothing of the structure: it is not counted
-    among the tests whose identification was lost (:func:`learn.monitor.events.identification_change`). Modal data
-    come from an identification run elsewhere: a modal file that cannot be used is that identification's failure,
-    and counts (None here)."""
+    fields: :func:`read_test` refuses it; response records with NaN samples, a constant channel or one clipped
+    beyond its leading part: :func:`physics.identification.record_checks.check_records` refuses them), or None
+    when the record reads and only its identification failed. A test whose record is not usable says nothing of
+    the structure: it is not counted among the tests whose identification was lost
+    (:func:`learn.monitor.events.identification_change`). Modal data come from an identification run elsewhere: a
+    modal file that cannot be used is that identification's failure, and counts (None here)."""
     try:
         if modal_or_frf(path) == MODAL:
             return None
@@ -181,7 +187,8 @@ def record_problem(path) -> str | None:
 
 def identify_test(path, settings: IdentificationSettings, narrow_hz=None) -> IdentifiedModes:
     """One test's modes: an FRF file by LSCF/LSFD (:func:`learn.pairs.measured.identify_modes`, the identification
-    ``classify`` runs), response records without a force by SSI-cov (as ``identify``), modal data as read.
+    ``classify`` runs), response records without a force by SSI-cov (as ``identify``; records clipped in their
+    leading part from the samples after the clipping, ``record_crop``), modal data as read.
 
     With ``narrow_hz`` (lo, hi) (Hz), the same method over that band alone and every mode it finds there (no
     ``settings.n_modes``): the narrow-band re-identification around a reference mode that the identification over
@@ -206,10 +213,11 @@ def identify_test(path, settings: IdentificationSettings, narrow_hz=None) -> Ide
             warnings.simplefilter("ignore")
             ident = identify_records(rec, DEFAULT_OUTPUT_ONLY, band, n_modes, settings.records_max_order,
                                      mode_in_band=narrow_hz is not None)
-        fs = rec.sampling_frequency_hz
+        fs, crop = rec.sampling_frequency_hz, ident.crop
         f, z, shapes = _modes_of(ident.estimate.eigenvalues, ident.estimate.shapes)
+        n = rec.signals.shape[1] - (0 if crop is None else crop.first_sample)
         return IdentifiedModes("response records", ident.estimate.method, f, z, shapes, tuple(rec.dofs), (),
-                               (0.0, fs / 2), fs / rec.signals.shape[1], _narrow(narrow_hz, f.size))
+                               (0.0, fs / 2), fs / n, _narrow(narrow_hz, f.size), "" if crop is None else crop.text)
 
     frf = data
     lines = np.asarray(frf.frequency_hz, float)

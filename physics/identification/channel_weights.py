@@ -131,8 +131,7 @@ def weighted_record(checked: CheckedRecord, weights: ChannelWeights) -> CheckedR
     w = np.asarray(weights.weights, float)
     if np.all(w == 1.0):
         return checked
-    return CheckedRecord(WeightedChannels(checked.signals, w), checked.sampling_frequency_hz, checked.band_hz,
-                         checked.mean * w)
+    return replace(checked, signals=WeightedChannels(checked.signals, w), mean=checked.mean * w)
 
 
 def _unweighted_rows(x, w, axis):

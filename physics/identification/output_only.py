@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from inspect import signature
 from pathlib import Path
@@ -16,7 +17,7 @@ from physics.identification.fft_peak import PEAK_EXPONENT
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate
 from physics.identification.poles import StabilisationDiagram
-from physics.identification.record_checks import check_records
+from physics.identification.record_checks import RecordCrop, check_records
 from physics.io import FRF, ModalData, TIME, format_of, read
 from physics.io.timedata import TimeRecords
 from physics.io.uff58 import UffFile
@@ -55,6 +56,10 @@ class RecordsIdentification:
         The weight of each channel in the identification (each in units of its own noise floor,
         :mod:`~physics.identification.channel_weights`; all ones for floors within its ``SPREAD_DB``); None for one
         channel, or ``weigh_channels=False``.
+    crop : RecordCrop or None
+        The leading samples left out for their clipped runs
+        (:func:`~physics.identification.record_checks.check_records`): the modes are those of the samples from
+        ``crop.first_sample`` on; None when identified from the whole record.
     """
 
     records: TimeRecords
@@ -62,6 +67,7 @@ class RecordsIdentification:
     diagram: StabilisationDiagram | None
     method_choice: str = ""
     weights: ChannelWeights | None = None
+    crop: RecordCrop | None = None
 
     @property
     def modal_data(self) -> ModalData:
@@ -158,6 +164,10 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
     differ) goes to a method whose fit takes it (``fftpeak``: the conversion of its spectral peak to the natural
     frequency, :func:`~physics.identification.fft_peak.natural_from_peak`).
 
+    A record clipped in its leading part (an impact's hit) is identified, by every method, from the samples after
+    its clipped runs (:func:`~physics.identification.record_checks.check_records`), warned of and named by
+    :attr:`RecordsIdentification.crop`.
+
     Returns
     -------
     RecordsIdentification
@@ -183,6 +193,8 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         return spec.fit(signals, fs, band_hz, n_modes, where, **options)
 
     checked = check_records(records.signals, fs, band_hz, where)     # read once: the methods take it as checked
+    if checked.crop is not None:
+        warnings.warn(f"{where}: {checked.crop.text}", UserWarning, stacklevel=2)
     weights = noise_floor_weights(checked, where) if weigh_channels and checked.signals.shape[0] > 1 else None
     if weights is not None:
         checked = weighted_record(checked, weights)
@@ -190,7 +202,7 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
     def result(est, diagram, why=""):
         if weights is not None:
             est, diagram = unweighted_estimate(est, weights), unweighted_diagram(diagram, weights)
-        return RecordsIdentification(records, est, diagram, why, weights)
+        return RecordsIdentification(records, est, diagram, why, weights, checked.crop)
 
     if method != "auto":
         return result(*fit(method, checked))

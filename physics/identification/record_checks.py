@@ -3,21 +3,28 @@
 :func:`check_records` reads a record (an array or a ``np.memmap``) chunk by chunk (its range, then each channel's
 runs of equal samples near its extremes) and refuses in one line a record that no output-only method can identify:
 not ``(n_channels, n_samples)``, a sampling rate that is not a finite positive number, a band above the Nyquist
-frequency, NaN or infinite samples, a constant channel, a clipped channel (a run of samples held at its highest or
-lowest value far longer than a smooth peak stays at one level: :data:`CLIP_RUN_RATIO`) or a record shorter than
-:data:`MIN_PERIODS` periods of the lowest frequency of interest (:func:`check_periods`).
+frequency, NaN or infinite samples, a constant channel, or a record shorter than :data:`MIN_PERIODS` periods of the
+lowest frequency of interest (:func:`check_periods`).
+
+A channel is clipped where a run of its samples is held at its highest or lowest value far longer than a smooth peak
+stays at one level (:data:`CLIP_RUN_RATIO`). An impact or a pluck clips at the hit, and the decay after it is
+intact: a record whose clipping lies in its leading part is identified from the samples after it
+(:class:`RecordCrop`, :attr:`CheckedRecord.crop`): after each clipped channel's last sample at the limit it is
+clipped at (a shorter run there is a clipped peak too) and a guard as long as its longest clipped run, when at
+least :data:`CROP_MIN_FRACTION` of the record and :data:`MIN_PERIODS` periods of the band's lower limit follow. A
+record clipped later, or with too little left, is refused naming its longest clipped run and what it would need.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from physics.errors import ShapeError
 
-__all__ = ["CLIP_MIN_RUN", "CLIP_RUN_RATIO", "MIN_PERIODS", "NEAR_EXTREME", "CheckedRecord", "check_periods",
-           "check_records"]
+__all__ = ["CLIP_MIN_RUN", "CLIP_RUN_RATIO", "CROP_MIN_FRACTION", "MIN_PERIODS", "NEAR_EXTREME", "CheckedRecord",
+           "RecordCrop", "check_periods", "check_records"]
 
 #: A channel is clipped when a run of consecutive samples at its highest (lowest) value is longer than this many
 #: times the longest run at any other value within :data:`NEAR_EXTREME` of the range from that extreme (and at
@@ -30,6 +37,53 @@ NEAR_EXTREME = 0.1
 CLIP_MIN_RUN = 3
 #: Least number of periods of a mode a record must hold for the mode to be identified from it.
 MIN_PERIODS = 10
+#: A record with clipped runs is identified from the samples after them (and a guard) when at least this fraction
+#: of its samples follows: the clipping lies in its leading part (an impact's hit).
+CROP_MIN_FRACTION = 0.5
+
+
+@dataclass(frozen=True)
+class RecordCrop:
+    """The leading part of a record left out because it holds clipped runs (:func:`check_records`).
+
+    Attributes
+    ----------
+    first_sample : int
+        The first sample identified (of the record as given).
+    runs : tuple of (int, int, int)
+        Each clipped run as ``(channel, first sample, last sample)``, in order of channel and sample.
+    n_samples : int
+        Samples of the record as given.
+    sampling_frequency_hz : float
+    last_at_limit : int
+        The last sample of a clipped channel at a limit it is clipped at (the end of the last clipped run, or of a
+        shorter run at that limit after it, which a clipped peak may be too).
+    """
+
+    first_sample: int
+    runs: tuple
+    n_samples: int
+    sampling_frequency_hz: float
+    last_at_limit: int
+
+    @property
+    def text(self) -> str:
+        """E.g. ``"channel 0 clipped at samples 812-822; identified from sample 834 on (3.666 of 4 s)"``."""
+        per = {}
+        for k, a, b in self.runs:
+            per.setdefault(k, []).append((a, b))
+        chans = ", ".join(f"channel {k} clipped at samples " + (", ".join(f"{a}-{b}" for a, b in r) if len(r) <= 3
+                                                                 else f"{r[0][0]}-{r[-1][1]} ({len(r)} runs)")
+                          for k, r in per.items())
+        after = max(b for _, _, b in self.runs)
+        held = f" and at its limit up to sample {self.last_at_limit}" if self.last_at_limit > after else ""
+        fs = self.sampling_frequency_hz
+        return (f"{chans}{held}; identified from sample {self.first_sample} on "
+                f"({(self.n_samples - self.first_sample) / fs:.4g} of {self.n_samples / fs:.4g} s)")
+
+    def to_dict(self) -> dict:
+        return {"first_sample": self.first_sample, "clipped_runs": [list(r) for r in self.runs],
+                "last_at_limit": self.last_at_limit, "n_samples": self.n_samples, "text": self.text}
 
 
 @dataclass(frozen=True)
@@ -45,12 +99,16 @@ class CheckedRecord:
         The band of interest (default 0 to 0.4 of the sampling rate).
     mean : ndarray, shape (n_channels,)
         Each channel's mean.
+    crop : RecordCrop or None
+        The leading part left out for its clipped runs: ``signals`` are then the samples from
+        ``crop.first_sample`` on; None when ``signals`` are the whole record.
     """
 
     signals: np.ndarray
     sampling_frequency_hz: float
     band_hz: tuple
     mean: np.ndarray
+    crop: RecordCrop | None = None
 
     @property
     def duration_s(self) -> float:
@@ -71,7 +129,8 @@ def _band(band_hz, fs):
 
 
 def check_records(signals, sampling_frequency_hz, band_hz=None, where="record", chunk_values=2**22) -> CheckedRecord:
-    """Check a response record for every output-only method (see the module docstring) in one pass over chunks.
+    """Check a response record for every output-only method (see the module docstring) in one pass over chunks
+    (two when it is clipped in its leading part).
 
     Parameters
     ----------
@@ -87,6 +146,7 @@ def check_records(signals, sampling_frequency_hz, band_hz=None, where="record", 
     Returns
     -------
     CheckedRecord
+        The whole record, or the samples after its clipped runs (``crop``).
 
     Raises
     ------
@@ -96,13 +156,15 @@ def check_records(signals, sampling_frequency_hz, band_hz=None, where="record", 
     Notes
     -----
     A :class:`CheckedRecord` of the same sampling rate and band (``band_hz`` None: the default band) is returned
-    as it is: a record is read once however many steps check it.
+    as it is: a record is read once however many steps check it. One of another band is checked again (its
+    samples, its crop kept).
     """
     if isinstance(signals, CheckedRecord):
         fs_ = float(sampling_frequency_hz)
         if signals.sampling_frequency_hz == fs_ and tuple(signals.band_hz) == _band(band_hz, fs_):
             return signals
-        signals = signals.signals
+        again = check_records(signals.signals, fs_, band_hz, where, chunk_values)
+        return again if signals.crop is None else replace(again, crop=signals.crop)
     y = signals if isinstance(signals, np.ndarray) else np.asarray(signals, dtype=np.float64)
     if y.ndim != 2 or y.shape[0] < 1 or y.shape[1] < 2 or not np.issubdtype(y.dtype, np.number) \
             or np.iscomplexobj(y):
@@ -117,9 +179,44 @@ def check_records(signals, sampling_frequency_hz, band_hz=None, where="record", 
                          f"of a {fs:g} Hz sampling rate")
     n_ch, n = y.shape
     check_periods(n / fs, band[0], "the band's lower limit", where)
+    step = max(1, chunk_values // n_ch)
+    mean, runs, ends = _scan(y, step, where)
+    if not runs:
+        return CheckedRecord(y, fs, band, mean)
+    # after each clipped channel's last sample at a limit it is clipped at, a guard as long as its longest run
+    first = max(ends[k] + 1 + max(r for k_, _, r, *_ in runs if k_ == k) for k in ends)
+    kept = n - first
+    short = band[0] > 0 and kept / fs < MIN_PERIODS / band[0]
+    if kept < CROP_MIN_FRACTION * n or short:
+        k, a, r, value, near, side = max(runs, key=lambda run: run[2])
+        end = max(ends.values())
+        need = (f"the {kept} samples after them and the guard ({kept / fs:.3g} s from sample {first}) are shorter "
+                f"than ten periods of the band's lower limit ({band[0]:.4g} Hz): that needs "
+                f"{MIN_PERIODS / band[0]:.3g} s" if kept >= CROP_MIN_FRACTION * n else
+                f"{max(kept, 0)} samples follow them and a guard as long as the longest run (from sample {first} "
+                f"on); identified after its clipping, a record needs at least half of its {n} samples there")
+        raise ShapeError(f"{where}: channel {k} is clipped: samples {a}-{a + r - 1} ({r} in a row) are held at its "
+                         f"{side} value {value:.6g}, {r / near:.3g} times the longest run at any level near it "
+                         f"({near}); its samples at the clipped limits end at sample {end}: {need}; identify from "
+                         "unclipped records")
+    rest = y[:, first:]
+    mean, again, _ = _scan(rest, step, f"{where} (from sample {first} on, after its clipped runs)")
+    if again:
+        k, a, r, value, *_ = again[0]
+        raise ShapeError(f"{where}: channel {k} is clipped before sample {first} and after it, at samples "
+                         f"{first + a}-{first + a + r - 1} (held at {value:.6g}); identify from unclipped records")
+    crop = RecordCrop(first, tuple((k, a, a + r - 1) for k, a, r, *_ in runs), n, fs, max(ends.values()))
+    return CheckedRecord(rest, fs, band, mean, crop)
+
+
+def _scan(y, step, where) -> tuple:
+    """One pass over the record ``y`` in chunks of ``step`` samples: ``(each channel's mean, clipped runs, {channel:
+    last sample at a limit it is clipped at})``, the runs as ``(channel, first sample, length, value, longest run at
+    any level near it, "highest" or "lowest")`` in order of channel and sample. Refuses NaN or infinite samples and
+    a constant channel (``where`` names the record)."""
+    n_ch, n = y.shape
     total = np.zeros(n_ch)
     lo, hi = np.full(n_ch, np.inf), np.full(n_ch, -np.inf)
-    step = max(1, chunk_values // n_ch)
     for a in range(0, n, step):
         c = np.asarray(y[:, a:a + step], dtype=np.float64)
         finite = np.isfinite(c)
@@ -132,22 +229,24 @@ def check_records(signals, sampling_frequency_hz, band_hz=None, where="record", 
     flat = hi <= lo
     if np.any(flat):
         raise ShapeError(f"{where}: channel {int(np.argmax(flat))} is constant; nothing to identify from it")
+    runs, ends = [], {}
     for k in range(n_ch):
-        run, start, value, near = _extreme_runs(y, k, lo[k], hi[k], step)
-        if run >= CLIP_MIN_RUN and run > CLIP_RUN_RATIO * near:
-            side = "highest" if value == hi[k] else "lowest"
-            raise ShapeError(f"{where}: channel {k} is clipped: samples {start}-{start + run - 1} ({run} in a row) "
-                             f"are held at its {side} value {value:.6g}, {run / near:.3g} times the longest run at "
-                             f"any level near it ({near}); identify from unclipped records")
-    return CheckedRecord(y, fs, band, total / n)
+        starts, lengths, values, near, last = _extreme_runs(y, k, lo[k], hi[k], step)
+        clipped = lengths > CLIP_RUN_RATIO * near
+        runs += [(k, int(a), int(r), float(v), near, "highest" if v == hi[k] else "lowest")
+                 for a, r, v in zip(starts[clipped], lengths[clipped], values[clipped])]
+        if clipped.any():
+            ends[k] = max(last[v] for v in values[clipped])
+    return total / n, runs, ends
 
 
 def _extreme_runs(y, k, lo, hi, step):
-    """Longest run of consecutive equal samples of channel ``k`` at ``lo`` or ``hi``: ``(length, first sample,
-    value, longest run at any other value within NEAR_EXTREME of the range from lo or hi, at least 1)``, reading
-    the channel in chunks of ``step`` samples."""
+    """Runs of at least :data:`CLIP_MIN_RUN` consecutive equal samples of channel ``k`` at ``lo`` or ``hi``:
+    ``(first samples, lengths, values, longest run at any other value within NEAR_EXTREME of the range from lo or
+    hi (at least 1), {lo: last sample at lo, hi: last sample at hi})``, reading the channel in chunks of ``step``
+    samples."""
     margin = NEAR_EXTREME * (hi - lo)
-    best, best_start, best_value, near = 0, 0, hi, 1
+    found, near, last = [], 1, {lo: -1, hi: -1}
     open_start, open_value = 0, None
     n = y.shape[1]
     for a in range(0, n, step):
@@ -163,11 +262,14 @@ def _extreme_runs(y, k, lo, hi, step):
         done = slice(0, None) if a + v.size >= n else slice(0, -1)
         length, first, value = ends[done] - starts[done], starts[done], values[done]
         extreme = (value == lo) | (value == hi)
-        if extreme.any():
-            j = int(np.argmax(np.where(extreme, length, -1)))
-            if length[j] > best:
-                best, best_start, best_value = int(length[j]), int(first[j]), float(value[j])
+        at = extreme & (length >= CLIP_MIN_RUN)
+        found.append((first[at], length[at], value[at]))
         close = ~extreme & ((value <= lo + margin) | (value >= hi - margin))
         near = max(near, int(length[close].max(initial=1)))
         open_start, open_value = int(starts[-1]), values[-1]
-    return best, best_start, best_value, near
+        for limit in (lo, hi):
+            at_limit = np.flatnonzero(v == limit)
+            if at_limit.size:
+                last[limit] = a + int(at_limit[-1])
+    starts, lengths, values = (np.concatenate(parts) for parts in zip(*found))
+    return starts.astype(int), lengths.astype(int), values, near, last
