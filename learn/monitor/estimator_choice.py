@@ -27,6 +27,9 @@ hammer hits). The choice compares their scatters, never their values; a chosen m
 test, baseline and later alike, so its normal model and alarms compare like with like; and its text and
 :attr:`FrequencyChoice.offset_hz` state how far apart the two quantities lie on the baseline (the median of FFT peak
 less identification), so a chosen mode's frequency is not read as the pole's.
+A mode whose tracking band reaches past a neighbour told apart by shape (:data:`learn.monitor.tracking.APART_MAC`)
+keeps the identification's frequency: its FFT peak, read within the band by frequency alone, cannot tell the two
+apart, and a reading of the mode beyond that band (a close mode moved past half the gap to its neighbour) has none.
 Damping, shapes and tracking stay the identification's: a chosen mode's frequency is the FFT peak only in a test
 where the identification tracked the mode (elsewhere it is missing, as in the identification). A chosen mode with
 no FFT peak in its band is read by its FFT peak beyond the band within its reach (:mod:`learn.monitor.fft_beyond`);
@@ -80,6 +83,9 @@ class FrequencyChoice:
     offset_hz : ndarray (m,)      median over the baseline tests holding both of the FFT peak less the
                                   identification (Hz): how far the spectral peak lies from the pole's natural
                                   frequency (NaN: no such test; None: not computed)
+    by_shape : ndarray bool (m,) or None    modes told apart from a neighbour by shape (a tracking band wider than
+                                  the band by frequency alone): the identification's frequency kept (None: no such
+                                  mode)
     """
 
     default: str
@@ -92,6 +98,7 @@ class FrequencyChoice:
     frequencies_hz: np.ndarray
     gross: np.ndarray | None = None
     offset_hz: np.ndarray | None = None
+    by_shape: np.ndarray | None = None
 
     @property
     def chosen(self) -> np.ndarray:
@@ -112,6 +119,10 @@ class FrequencyChoice:
                            f"{n} baseline tests (halves {hf1:.3g} / {hf2:.3g} against {hd1:.3g} / {hd2:.3g} Hz)"
                            + (f"; its readings the record's spectral peak, {off:+.3g} Hz from {self.default}'s pole "
                               "frequency at the baseline median" if np.isfinite(off) else ""))
+            elif self.by_shape is not None and self.by_shape[r]:
+                out.append(f"mode {r + 1}: {self.default}, told apart from a neighbour by its shape, which the FFT "
+                           f"peak cannot (scatter {d:.3g} Hz against the FFT peak {f:.3g} Hz over the {n} baseline "
+                           "tests)")
             elif not self.complete[r]:
                 out.append(f"mode {r + 1}: {self.default}, the FFT peak missing it in a baseline test where "
                            f"{self.default} read it")
@@ -147,19 +158,20 @@ class FrequencyChoice:
                 "gross_readings": None if self.gross is None else
                 [{self.default: int(a), FFT_PEAK: int(b)} for a, b in self.gross],
                 "offset_hz": None if self.offset_hz is None else [finite_or_none(v) for v in self.offset_hz],
-                "texts": self.texts()}
+                **({} if self.by_shape is None else {"by_shape": self.by_shape.tolist()}), "texts": self.texts()}
 
 
 def fft_peak_frequencies(tests: list, files: list, ref: ReferenceModes, cache_dir=None, workers: int = 1) -> np.ndarray:
-    """``(n, m)``: each test's zero-padded FFT peak (Hz) in each reference mode's tracking band
-    (:func:`learn.monitor.tracking.narrow_bands_hz`): the highest local maximum of the record's FFT power there
-    (:func:`learn.monitor.identification.cached_fft_peaks`, kept in ``cache_dir`` beside the identifications; over
-    ``workers`` processes); NaN where none lies there, for a test that is not response records, or one whose
-    record is refused."""
+    """``(n, m)``: each test's zero-padded FFT peak (Hz) in each reference mode's tracking band by frequency alone
+    (:func:`learn.monitor.tracking.narrow_bands_hz`; a peak has no shape): the highest local maximum of the record's
+    FFT power there (:func:`learn.monitor.identification.cached_fft_peaks`, kept in ``cache_dir`` beside the
+    identifications; over ``workers`` processes); NaN where none lies there, for a test that is not response
+    records, or one whose record is refused."""
     out = np.full((len(tests), ref.frequencies_hz.size), np.nan)
     rows = [i for i, t in enumerate(tests) if t is not None and t.kind == "response records"]
     if out.size and rows:
-        out[rows] = fft_peaks_of_files([files[i] for i in rows], narrow_bands_hz(ref), cache_dir, workers)
+        out[rows] = fft_peaks_of_files([files[i] for i in rows], narrow_bands_hz(ref, by_frequency=True), cache_dir,
+                                       workers)
     return out
 
 
@@ -224,6 +236,9 @@ def choose_frequencies(tests: list, files: list, ref: ReferenceModes, F, cols, b
     cols = np.asarray(cols, int)
     G = fft_peak_frequencies(tests, files, ref, cache_dir, workers)
     chosen, scatter, halves, n_tests, complete, gross = choose_estimators(F, G, base, ref.frequencies_hz)
+    by_shape = ref.by_frequency < ref.tolerance
+    chosen &= ~by_shape
+    by_shape = by_shape if by_shape.any() else None
     names = sorted({tests[i].method for i in base if tests[i] is not None})
     default = "/".join(names)
     out = F.copy()
@@ -231,4 +246,4 @@ def choose_frequencies(tests: list, files: list, ref: ReferenceModes, F, cols, b
     diff = G[base] - F[base]
     offset = np.array([np.median(c[np.isfinite(c)]) if np.any(np.isfinite(c)) else np.nan for c in diff.T])
     return FrequencyChoice(default, tuple(FFT_PEAK if c else default for c in chosen), scatter, halves, n_tests,
-                           complete, G, out, gross, offset)
+                           complete, G, out, gross, offset, by_shape)

@@ -36,10 +36,10 @@ class FFTBeyond:
 
 def beyond_windows_hz(ref: ReferenceModes) -> np.ndarray:
     """``(m, 2, 2)``: each reference mode's window below (``[reach_lo, band_lo]``) and above (``[band_hi,
-    reach_hi]``) its tracking band (:func:`learn.monitor.tracking.narrow_bands_hz`) within its reach
+    reach_hi]``) its tracking band by frequency alone (:func:`learn.monitor.tracking.narrow_bands_hz`) within its reach
     (:func:`learn.monitor.tracking.reach_bands_hz`), Hz. The reaches of two neighbouring modes meet half-way between
     them, so no two modes' windows overlap and neither reaches a neighbour's band."""
-    band, reach = narrow_bands_hz(ref), reach_bands_hz(ref)
+    band, reach = narrow_bands_hz(ref, by_frequency=True), reach_bands_hz(ref)
     return np.stack([np.c_[reach[:, 0], band[:, 0]], np.c_[band[:, 1], reach[:, 1]]], axis=1)
 
 

@@ -16,11 +16,11 @@ from learn.monitor.identification import (IdentificationSettings, IdentifiedMode
 from learn.pairs.noise_calibration import robust_std
 from physics.modal import mac
 
-__all__ = ["CLUSTER_GAP", "MAC_MIN", "MIN_COUNT", "MIN_PRESENCE", "MODE_LOST", "MODE_MOVED", "REACH_FACTOR",
-           "SEARCH_MIN",
-           "BeyondBands", "ReferenceModes", "beyond_bands", "identified_by", "narrow_bands_hz", "narrow_identifier",
-           "reach_bands_hz", "readings_text", "reference_modes", "refit_missing", "search_bands_hz", "shape_accepts",
-           "shapes_at", "track_modes"]
+__all__ = ["APART_MAC", "CLUSTER_GAP", "MAC_MIN", "MIN_COUNT", "MIN_PRESENCE", "MODE_LOST", "MODE_MOVED",
+           "REACH_FACTOR", "SEARCH_MIN",
+           "BeyondBands", "ReferenceModes", "admissible", "beyond_bands", "identified_by", "narrow_bands_hz",
+           "narrow_identifier", "reach_bands_hz", "readings_text", "reference_modes", "refit_missing",
+           "search_bands_hz", "shape_accepts", "shapes_at", "track_modes"]
 
 #: Baseline poles closer than this (relative) in frequency fall into one cluster.
 CLUSTER_GAP = 0.05
@@ -48,6 +48,10 @@ TOLERANCE_SIGMAS, MIN_TOLERANCE, NEIGHBOUR_SHARE = 10.0, CORE, 0.45
 SEARCH_MIN = math.log(1.15)
 #: With 2 or more sensors, a pole is assigned only when its shape's MAC with the reference shape reaches this.
 MAC_MIN = 0.6
+#: With 2 or more sensors, two reference modes whose shapes' MAC lies below this are told apart by shape: neither
+#: narrows the other's tracking band (``NEIGHBOUR_SHARE`` of the log gap), and a pole in the band so widened is the
+#: mode's only when its MAC reaches :data:`MAC_MIN` with the mode and not with the neighbour (:func:`admissible`).
+APART_MAC = 1 - MAC_MIN
 #: A reference mode missing from its band is looked for beyond it up to half the log gap to the neighbouring
 #: reference mode on each side (on the open side of the lowest and highest mode, half the gap on the other side),
 #: never beyond this factor in frequency (a lone mode: up to this factor either way).
@@ -67,10 +71,14 @@ class ReferenceModes:
     log_std : ndarray (m,)            robust std of ``ln f`` over the baseline tests (1.4826 MAD)
     tolerance : ndarray (m,)          largest ``|ln(f / f_ref)|`` of an assigned pole: the tracking band
                                       (``TOLERANCE_SIGMAS`` std, the baseline's reading furthest from ``f_ref``, at
-                                      least ``MIN_TOLERANCE``; within ``NEIGHBOUR_SHARE`` of the log gap to a neighbour)
+                                      least ``MIN_TOLERANCE``; within ``NEIGHBOUR_SHARE`` of the log gap to a neighbour
+                                      not told apart by shape, :data:`APART_MAC`)
     shapes : ndarray complex (s, m) or None    dominant shape over the baseline tests (unit norm)
     dofs : tuple of str               rows of ``shapes``
     presence : ndarray (m,)           share of the baseline tests holding the mode
+    frequency_tolerance : ndarray (m,) or None     the tracking band by frequency alone (within ``NEIGHBOUR_SHARE``
+                                      of the log gap to every neighbour): a reading without a shape (an FFT peak) is
+                                      the mode's within it; None: ``tolerance``
     """
 
     frequencies_hz: np.ndarray
@@ -79,6 +87,12 @@ class ReferenceModes:
     shapes: np.ndarray | None
     dofs: tuple
     presence: np.ndarray
+    frequency_tolerance: np.ndarray | None = None
+
+    @property
+    def by_frequency(self) -> np.ndarray:
+        """:attr:`frequency_tolerance` (``tolerance`` where None), shape (m,)."""
+        return self.tolerance if self.frequency_tolerance is None else self.frequency_tolerance
 
 
 def shapes_at(t: IdentifiedModes, dofs: tuple):
@@ -163,10 +177,12 @@ def reference_modes(tests: list) -> ReferenceModes:
     f = np.asarray(freqs, float)
     s = np.asarray(stds, float)
     tol = np.maximum(np.maximum(TOLERANCE_SIGMAS * s, MIN_TOLERANCE), np.asarray(extremes, float))
-    tol = np.minimum(tol, _neighbour_cap(f))
     with_shapes = bool(shapes) and all(x is not None for x in shapes)
-    return ReferenceModes(f, s, tol, np.stack(shapes, axis=1) if with_shapes else None,
-                          tuple(dofs) if with_shapes else (), np.asarray(presence, float))
+    S = np.stack(shapes, axis=1) if with_shapes else None
+    by_frequency = np.minimum(tol, _neighbour_cap(f))
+    tol = np.minimum(tol, _neighbour_cap(f, _told_apart(S)))
+    return ReferenceModes(f, s, tol, S, tuple(dofs) if with_shapes else (), np.asarray(presence, float),
+                          None if np.array_equal(tol, by_frequency) else by_frequency)
 
 
 def _cores(logf, who, need: float) -> list:
@@ -199,12 +215,42 @@ def _core_centre(logf, centre: float) -> float:
     return centre
 
 
+def _told_apart(shapes) -> np.ndarray | None:
+    """Shape (m, m) bool: the pairs of reference modes told apart by shape (MAC of their reference shapes below
+    :data:`APART_MAC`), None without shapes."""
+    return None if shapes is None else mac(shapes, shapes) < APART_MAC
+
+
+def admissible(ref: ReferenceModes, frequencies_hz, macs=None) -> np.ndarray:
+    """Shape (k, m) bool: which of the poles (``frequencies_hz`` (k,), ``macs`` (k, m) with the reference shapes,
+    None without shapes of 2 or more sensors) may be each reference mode's reading: within its tracking band
+    (``tolerance``) and, with shapes, MAC >= :data:`MAC_MIN`; beyond its band by frequency alone (a band widened
+    past a neighbour told apart by shape, :data:`APART_MAC`), besides, MAC below :data:`MAC_MIN` with each such
+    neighbour whose cap the band passes."""
+    d = np.abs(np.log(np.asarray(frequencies_hz, float))[:, None] - np.log(ref.frequencies_hz)[None])
+    ok = d <= ref.tolerance[None]
+    return ok if macs is None else ok & _shape_ok(ref, d, macs)
+
+
+def _shape_ok(ref: ReferenceModes, d, macs) -> np.ndarray:
+    """Shape (k, m) bool: :func:`admissible`'s conditions on the shapes, ``d`` (k, m) the poles' ``|ln(f /
+    f_ref)|`` and ``macs`` (k, m) their MAC with the reference shapes."""
+    like = macs >= MAC_MIN
+    if ref.frequency_tolerance is None:
+        return like
+    lnf = np.log(ref.frequencies_hz)
+    passed = _told_apart(ref.shapes) & (NEIGHBOUR_SHARE * np.abs(lnf[None] - lnf[:, None])
+                                         < ref.tolerance[:, None])                   # (m, m): mode i's band passes j
+    like_passed = like.astype(float) @ passed.T.astype(float) > 0                   # (k, m): like a neighbour passed
+    return like & ~((d > ref.frequency_tolerance[None]) & like_passed)
+
+
 def track_modes(tests: list, ref: ReferenceModes):
     """Each test's poles assigned to the reference modes: ``(frequencies (n, m), damping (n, m), mac (n, m),
-    column (n, m))``, NaN (column -1) where a test holds no pole within the mode's tolerance (and, with shapes of 2
-    or more sensors, MAC >= :data:`MAC_MIN`). Poles and modes are paired one to one, minimising the sum of
-    ``(ln(f / f_ref) / tolerance)^2 + (1 - MAC) / (1 - MAC_MIN)``; a pole beyond every tolerance is never
-    assigned."""
+    column (n, m))``, NaN (column -1) where a test holds no pole admissible as the mode's reading
+    (:func:`admissible`: within its tolerance and, with shapes of 2 or more sensors, MAC >= :data:`MAC_MIN`).
+    Poles and modes are paired one to one, minimising the sum of ``(ln(f / f_ref) / tolerance)^2 + (1 - MAC) /
+    (1 - MAC_MIN)``; a pole beyond every tolerance is never assigned."""
     from scipy.optimize import linear_sum_assignment
 
     n, m = len(tests), ref.frequencies_hz.size
@@ -216,12 +262,11 @@ def track_modes(tests: list, ref: ReferenceModes):
             continue
         d = (np.log(t.frequencies_hz)[:, None] - ln_ref[None]) / ref.tolerance[None]      # (k, m)
         cost = d**2
-        ok = np.abs(d) <= 1.0
         S = shapes_at(t, ref.dofs) if ref.shapes is not None else None
         macs = mac(S, ref.shapes) if S is not None else None
         if macs is not None:
             cost = cost + (1 - macs) / (1 - MAC_MIN)
-            ok &= macs >= MAC_MIN
+        ok = admissible(ref, t.frequencies_hz, macs)
         cost = np.where(ok, cost, 1e9)
         r, c = linear_sum_assignment(cost)
         keep = ok[r, c]
@@ -232,25 +277,35 @@ def track_modes(tests: list, ref: ReferenceModes):
     return F, Z, M, cols
 
 
-def _neighbour_cap(frequencies_hz) -> np.ndarray:
+def _neighbour_cap(frequencies_hz, apart=None) -> np.ndarray:
     """``NEIGHBOUR_SHARE`` of each mode's log gap to its nearest neighbour, shape (m,) (inf for a lone mode): how
-    far in ``ln f`` a mode's tracking or search band may reach."""
-    gaps = np.diff(np.log(np.asarray(frequencies_hz, float)))
-    return NEIGHBOUR_SHARE * np.minimum(np.r_[np.inf, gaps], np.r_[gaps, np.inf])
+    far in ``ln f`` a mode's tracking or search band may reach; with ``apart`` ((m, m) bool, :func:`_told_apart`),
+    to its nearest neighbour not told apart by shape."""
+    lnf = np.log(np.asarray(frequencies_hz, float))
+    gaps = np.abs(lnf[None] - lnf[:, None])
+    np.fill_diagonal(gaps, np.inf)
+    if apart is not None:
+        gaps[apart] = np.inf
+    return NEIGHBOUR_SHARE * gaps.min(axis=1, initial=np.inf)
 
 
-def narrow_bands_hz(ref: ReferenceModes) -> np.ndarray:
-    """Each reference mode's tracking band ``f_ref exp(-+tolerance)`` (Hz), shape (m, 2): where a pole (or an FFT
-    peak) is a reading of the mode in place."""
-    return ref.frequencies_hz[:, None] * np.exp(np.outer(ref.tolerance, [-1.0, 1.0]))
+def narrow_bands_hz(ref: ReferenceModes, by_frequency: bool = False) -> np.ndarray:
+    """Each reference mode's tracking band ``f_ref exp(-+tolerance)`` (Hz), shape (m, 2): where a pole is a reading
+    of the mode in place; ``by_frequency``: the band by frequency alone (:attr:`ReferenceModes.frequency_tolerance`),
+    where a reading without a shape (an FFT peak) is."""
+    tol = ref.by_frequency if by_frequency else ref.tolerance
+    return ref.frequencies_hz[:, None] * np.exp(np.outer(tol, [-1.0, 1.0]))
 
 
 def search_bands_hz(ref: ReferenceModes) -> np.ndarray:
     """Each reference mode's search band (Hz), shape (m, 2): the band of its narrow-band re-identification,
-    ``f_ref exp(-+max(tolerance, SEARCH_MIN))``, never beyond ``NEIGHBOUR_SHARE`` of the log gap to the next
-    reference mode; it holds the tracking band (:func:`narrow_bands_hz`)."""
+    ``f_ref exp(-+max(frequency_tolerance, SEARCH_MIN))``, never beyond ``NEIGHBOUR_SHARE`` of the log gap to the
+    next reference mode; it holds the tracking band by frequency alone (:func:`narrow_bands_hz`). A close pair told
+    apart by shape keeps its search bands apart: over both modes an output-only identification of a short record
+    finds the stronger one where over the weaker one's own band it finds that one."""
     f = ref.frequencies_hz
-    half = np.maximum(np.minimum(np.maximum(ref.tolerance, SEARCH_MIN), _neighbour_cap(f)), ref.tolerance)
+    tol = ref.by_frequency
+    half = np.maximum(np.minimum(np.maximum(tol, SEARCH_MIN), _neighbour_cap(f)), tol)
     return f[:, None] * np.exp(np.outer(half, [-1.0, 1.0]))
 
 
@@ -294,10 +349,14 @@ def narrow_identifier(path, settings: IdentificationSettings, cache_dir=None, pe
 
 
 def shape_accepts(ref: ReferenceModes, found, r: int):
-    """True, or per pole of ``found`` whether its shape matches reference mode ``r``'s (MAC >= :data:`MAC_MIN`;
-    with shapes of 2 or more sensors)."""
+    """True, or per pole of ``found`` whether its shape makes it reference mode ``r``'s reading (with shapes of 2 or
+    more sensors: :func:`admissible` but for the band, MAC >= :data:`MAC_MIN` with the mode and, beyond its band by
+    frequency alone, below it with the neighbours told apart by shape that the band passes)."""
     S = shapes_at(found, ref.dofs) if ref.shapes is not None else None
-    return True if S is None else mac(S, ref.shapes[:, [r]])[:, 0] >= MAC_MIN
+    if S is None:
+        return True
+    d = np.abs(np.log(found.frequencies_hz)[:, None] - np.log(ref.frequencies_hz)[None])
+    return _shape_ok(ref, d, mac(S, ref.shapes))[:, r]
 
 
 def identified_by(tests: list, cols) -> list:

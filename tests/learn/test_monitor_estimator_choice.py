@@ -1,6 +1,7 @@
 """Each mode's frequency by the more repeatable of the identification and the FFT peak over the baseline period
 (learn/monitor/estimator_choice.py)."""
 
+import dataclasses
 import json
 
 import numpy as np
@@ -81,6 +82,30 @@ def test_the_fft_peak_is_chosen_for_the_mode_the_identification_scatters_and_not
     assert f"{want[1]:+.3g} Hz from era's pole frequency at the baseline median" in choice.texts()[1]
     assert "pole frequency" not in choice.texts()[0]
     assert choice.to_dict()["offset_hz"] == pytest.approx(want)
+
+
+def test_a_mode_told_apart_by_shape_keeps_the_identification(tmp_path):
+    """Mode 2's band widened past a neighbour told apart by shape (a tracking band twice its band by frequency):
+    its FFT peak, which would be chosen (20 times steadier), cannot tell the pair apart; the identification's
+    frequency is kept and the text says why. The FFT peaks are read within the bands by frequency alone."""
+    files, tests, f2, ident1, ident2 = _series(tmp_path)
+    base = np.arange(14)
+    ref = reference_modes([tests[i] for i in base])
+    widened = dataclasses.replace(ref, tolerance=ref.tolerance * np.array([1.0, 2.0]),
+                                  frequency_tolerance=ref.tolerance)
+    F, _, _, cols = track_modes(tests, ref)
+    plain = choose_frequencies(tests, files, ref, F, cols, base)
+    choice = choose_frequencies(tests, files, widened, F, cols, base)
+    assert plain.estimators == ("era", FFT_PEAK) and plain.by_shape is None and "by_shape" not in plain.to_dict()
+    assert choice.estimators == ("era", "era")
+    np.testing.assert_array_equal(choice.by_shape, [False, True])
+    np.testing.assert_array_equal(choice.frequencies_hz, F)
+    np.testing.assert_array_equal(choice.fft_hz, plain.fft_hz)
+    np.testing.assert_array_equal(choice.scatter_hz, plain.scatter_hz)
+    assert choice.texts()[1].startswith("mode 2: era, told apart from a neighbour by its shape, which the FFT peak "
+                                        "cannot")
+    assert choice.texts()[0] == plain.texts()[0]
+    assert choice.to_dict()["by_shape"] == [False, True]
 
 
 def _spread(k, scale, phase=0.0):
