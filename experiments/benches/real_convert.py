@@ -25,8 +25,8 @@ from experiments.benches.harness import parser
 from physics.errors import BeamDamageError, ConfigError, FileFormatError
 from physics.io import atomic_write_bytes
 
-__all__ = ["BRIDGE_TESTS", "DROPBEAR_STATE_PINLOC_V", "DS11_BOARDS", "DS11_OPEN_CIRCUIT_OHM", "RealSet", "SETS",
-           "convert_set", "dropbear_dwells", "main", "read_lvm", "write_npz"]
+__all__ = ["BRIDGE_TESTS", "DROPBEAR_STATE_PINLOC_V", "DS11_BOARDS", "DS11_MORE_BOARDS", "DS11_OPEN_CIRCUIT_OHM",
+           "RealSet", "SETS", "convert_set", "dropbear_dwells", "main", "read_lvm", "write_npz"]
 
 OUT = Path(__file__).resolve().parents[1] / "data" / "real"
 
@@ -104,9 +104,12 @@ def _same_length(files, arrays, what: str) -> np.ndarray:
     return np.asarray(arrays, float)
 
 
-def _columns(path, text: str, skiprows: int, n_columns: int) -> np.ndarray:
+def _columns(path, text: str, skiprows: int, n_columns: int, first_only: bool = False) -> np.ndarray:
+    """The table of numbers in ``text`` after ``skiprows`` lines: ``n_columns`` columns (``first_only``: the first
+    ``n_columns`` of each line, later numbers on some lines ignored)."""
     try:
-        x = np.loadtxt(io.StringIO(text), skiprows=skiprows, ndmin=2)
+        x = np.loadtxt(io.StringIO(text), skiprows=skiprows, ndmin=2,
+                       usecols=tuple(range(n_columns)) if first_only else None)
     except ValueError as exc:
         raise FileFormatError(f"{path}: not a table of numbers ({' '.join(str(exc).split())})") from None
     if x.shape[1] != n_columns or x.shape[0] < 2:
@@ -279,8 +282,18 @@ def _ds5_shock(files) -> dict:
             "trial_number": np.asarray(trials, np.int64), "units": np.array("g")}
 
 
-#: Dataset-11: (board, number of files ``_00`` ... ) of each board converted (the repository's boards 4.3, 4.4, 4.6).
-DS11_BOARDS = (("4.3", 50), ("4.4", 58), ("4.6", 78))
+#: Dataset-11: (board, file name before ``_NN.lvm``, number of files ``_00`` ...) of each board of
+#: ``ds11_pcb_impacts_to_failure`` (boards 4.3, 4.4, 4.6) and of ``ds11_more_boards`` (the repository's other seven).
+DS11_BOARDS = (("4.3", "HM4_b03_100mO_#8_12in_16thflt_wR2841", 50),
+               ("4.4", "HM4_b04_100mO_#8_12in_16thflt_wR2841", 58),
+               ("4.6", "HM4_b06_100mO_#8_12in_16thflt_wR2841", 78))
+DS11_MORE_BOARDS = (("3.4", "HM_b04_100mO_#8_12in_16thflt_wR2841", 43),
+                    ("4.1", "HM4_b01_100mO_#7_12in_16thflt_wR2841", 25),
+                    ("4.5", "HM4_b05_100mO_#8_12in_16thflt_wR2841", 83),
+                    ("4.7", "HM4_b07_100mO_#8_12in_16thflt_wR2841", 32),
+                    ("4.8", "HM4_b08_100mO_#8_12in_16thflt_wR2841", 37),
+                    ("4.9", "HM4_b09_100mO_#8_12in_16thflt_wR2841", 27),
+                    ("4.10", "HM4_b10_100mO_#8_12in_16thflt_wR2841", 39))
 DS11_DT_S = 5e-6
 #: A resistance above this (ohm) is an open circuit (LabVIEW writes 9.9e37): the resistor's joint has failed.
 DS11_OPEN_CIRCUIT_OHM = 1e3
@@ -288,7 +301,8 @@ DS11_OPEN_CIRCUIT_OHM = 1e3
 
 def _ds11(files) -> dict:
     """Dataset-11 impacts to failure: each ``.lvm`` tab-separated, no header: time (s, 5 us step), two channels, and
-    on the first line only a fourth value, the resistance (ohm) of the monitored resistor."""
+    on the first line only a fourth value, the resistance (ohm) of the monitored resistor; the files of boards
+    4.7-4.10 have a fifth column, further resistance readings on their first lines (not read)."""
     recs, res = [], []
     for f in files:
         text = _text(f)
@@ -297,10 +311,10 @@ def _ds11(files) -> dict:
             head = [float(v) for v in first.split("\t")]
         except ValueError:
             head = []
-        if len(head) != 4:
+        if len(head) not in (4, 5):
             raise FileFormatError(f"{f}: first line {first[:60]!r}; expected 4 tab-separated numbers: time, two "
-                                  "channels, resistance")
-        x = np.r_[np.array(head[:3])[None], _columns(f, rest, 0, 3)]
+                                  "channels, resistance (and a fifth, a resistance reading)")
+        x = np.r_[np.array(head[:3])[None], _columns(f, rest, 0, 3, first_only=len(head) == 5)]
         if not np.allclose(np.diff(x[:, 0]), DS11_DT_S, rtol=0, atol=1e-6):
             raise FileFormatError(f"{f}: time column not on a {DS11_DT_S:g} s step")
         recs.append(x[:, 1:].T)
@@ -313,6 +327,14 @@ def _ds11(files) -> dict:
             "resistance_ohm": res, "open_circuit": res > DS11_OPEN_CIRCUIT_OHM}
 
 
+def _ds11_paths(boards) -> tuple:
+    """The files of ``boards`` (entries of :data:`DS11_BOARDS`), board by board, each in impact order."""
+    return tuple(f"Data/Board {b}/{stem}_{i:02d}.lvm" for b, stem, n in boards for i in range(n))
+
+
+_DS11 = "High-Rate-SHM-Working-Group/Dataset-11-rectangular-electronic-SMD-assembly-under-repeated-5-kg-impacts"
+_DS11_COMMIT = "364cb81e7ea5c570a6419182c70c9e2131bd4303"
+_DS11_LICENCE = "CC BY-SA 4.0 (README; LICENSE: CC0 1.0)"
 _D8 = "data/Slow Postional Displacement/trial data/10steps"
 _DS1 = "data/dataset-1/data-1/PCB repeated shock trials"
 _DS5_TRIALS = tuple(n for n in range(53) if n not in (44, 51))
@@ -341,11 +363,8 @@ SETS = {s.name: s for s in (
     RealSet("ds5_pcb_shock_impedance", "High-Rate-SHM-Working-Group/Dataset-5-Extended-Impact-Testing",
             "1bbfcf17dfd78a09790aa092a5dc07e6a6bae628",
             tuple(f"data/dataset-2/data-1/Test_{i:03d}.lvm" for i in range(1, 33)), _CC_BY_SA, _ds5_impedance),
-    RealSet("ds11_pcb_impacts_to_failure",
-            "High-Rate-SHM-Working-Group/Dataset-11-rectangular-electronic-SMD-assembly-under-repeated-5-kg-impacts",
-            "364cb81e7ea5c570a6419182c70c9e2131bd4303",
-            tuple(f"Data/Board {b}/HM4_b0{b[-1]}_100mO_#8_12in_16thflt_wR2841_{i:02d}.lvm" for b, n in DS11_BOARDS
-                  for i in range(n)), "CC BY-SA 4.0 (README; LICENSE: CC0 1.0)", _ds11),
+    RealSet("ds11_pcb_impacts_to_failure", _DS11, _DS11_COMMIT, _ds11_paths(DS11_BOARDS), _DS11_LICENCE, _ds11),
+    RealSet("ds11_more_boards", _DS11, _DS11_COMMIT, _ds11_paths(DS11_MORE_BOARDS), _DS11_LICENCE, _ds11),
 )}
 
 

@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from experiments.benches.real_convert import (BRIDGE_TESTS, DROPBEAR_STATE_PINLOC_V, DS11_BOARDS, SETS,
-                                              convert_set, dropbear_dwells, main)
+from experiments.benches.real_convert import (BRIDGE_TESTS, DROPBEAR_STATE_PINLOC_V, DS11_BOARDS, DS11_MORE_BOARDS,
+                                              SETS, convert_set, dropbear_dwells, main)
 from physics.errors import FileFormatError
 
 README = Path(__file__).resolve().parents[2] / "experiments" / "data" / "real" / "README.md"
@@ -126,26 +126,30 @@ def _synthetic(name: str, src: Path) -> dict:
                 "base_records": np.stack([y[:8] for y in values["base"]]), "trial_number": trials,
                 "pcb_original_length": lengths["pcb"], "base_original_length": lengths["base"],
                 "pcb_sampling_frequency_hz": np.full(half, 5e4), "base_sampling_frequency_hz": np.full(half, 4e4)}
-    if name == "ds11_pcb_impacts_to_failure":
+    if name in ("ds11_pcb_impacts_to_failure", "ds11_more_boards"):
+        boards = DS11_BOARDS if name == "ds11_pcb_impacts_to_failure" else DS11_MORE_BOARDS
+        counts = [n for _, _, n in boards]
         recs = np.round(rng.standard_normal((len(files), 6, 2)) * 1e3, 6)
         res = np.round(rng.uniform(0.27, 0.30, len(files)), 6)
-        last = np.cumsum([n for _, n in DS11_BOARDS]) - 1
+        last = np.cumsum(counts) - 1
         res[last] = 9.9e37
-        for f, x, r in zip(files, recs, res):
-            _ds11_file(f, x, r)
+        board = np.repeat([b for b, _, _ in boards], counts)
+        for f, x, r, b in zip(files, recs, res, board):
+            _ds11_file(f, x, r, readings=b in ("4.7", "4.8", "4.9", "4.10"))
         return {"records": recs.transpose(0, 2, 1), "resistance_ohm": res,
-                "open_circuit": np.isin(np.arange(186), last),
-                "board": np.repeat(["4.3", "4.4", "4.6"], [50, 58, 78]), "sampling_frequency_hz": 2e5,
-                "impact_number": np.r_[np.arange(50), np.arange(58), np.arange(78)]}
+                "open_circuit": np.isin(np.arange(len(files)), last), "board": board, "sampling_frequency_hz": 2e5,
+                "impact_number": np.concatenate([np.arange(n) for n in counts])}
     raise AssertionError(name)
 
 
-def _ds11_file(path: Path, x: np.ndarray, resistance: float, dt: float = 5e-6) -> None:
+def _ds11_file(path: Path, x: np.ndarray, resistance: float, dt: float = 5e-6, readings: bool = False) -> None:
     """A Dataset-11 impact file: tab-separated time, two channels; the resistance on the first line, the later
-    lines ending in a tab (as the repository's)."""
+    lines ending in a tab (as the repository's); ``readings``: a fifth column, resistance readings, on the first
+    three lines (the second and third with an empty fourth), as boards 4.7-4.10's files."""
     t = np.arange(x.shape[0]) * dt
-    lines = [f"{t[0]:.6f}\t{x[0, 0]:.6f}\t{x[0, 1]:.6f}\t{resistance:.6E}"]
-    lines += [f"{ti:.6E}\t{a:.6f}\t{b:.6f}\t" for ti, (a, b) in zip(t[1:], x[1:])]
+    fifth = [f"\t{resistance + 1e-5 * k:.6f}" if readings and k < 3 else "" for k in range(x.shape[0])]
+    lines = [f"{t[0]:.6f}\t{x[0, 0]:.6f}\t{x[0, 1]:.6f}\t{resistance:.6E}{fifth[0]}"]
+    lines += [f"{ti:.6E}\t{a:.6f}\t{b:.6f}\t{e}" for ti, (a, b), e in zip(t[1:], x[1:], fifth[1:])]
     path.write_text("\n".join(lines) + "\n")
 
 
