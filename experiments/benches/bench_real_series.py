@@ -2,8 +2,9 @@
 ``experiments/data/real/README.md``, kept outside the repository's commits; a set that is absent is skipped).
 
 Run: ``python -m experiments.benches.bench_real_series [--data experiments/data/real] [--sets dropbear dropbear-2ch
-ds5-shock ds5-impedance bridge ds11-b4.3 ds11-b4.4 ds11-b4.6] [--quick] [--rate 0.01] [--statistics residual
-environment shift mode] [--out out/bench_real_series] [--docs]``
+ds5-shock ds5-impedance bridge ds11-b4.3 ds11-b4.4 ds11-b4.6 ds11-b3.4 ds11-b4.1 ds11-b4.5 ds11-b4.7 ds11-b4.8
+ds11-b4.9 ds11-b4.10] [--quick] [--rate 0.01] [--statistics residual environment shift mode]
+[--out out/bench_real_series] [--docs]``
 
 Each set becomes a monitoring series: a baseline period (the first ``n_baseline`` tests) and later tests, each a
 group (intact, a change of a known size, or a block of later shocks of unknown damage). Every test's record is
@@ -249,7 +250,9 @@ LOADERS = {"dropbear": ("dropbear_roller_steps.npz", _dropbear),
            "ds5-impedance": ("ds5_pcb_shock_impedance.npz", _ds5_impedance),
            "bridge": ("usc_bridge_a_impacts.npz", _bridge),
            **{f"ds11-b{b}": ("ds11_pcb_impacts_to_failure.npz", partial(_ds11, board=b))
-              for b in ("4.3", "4.4", "4.6")}}
+              for b in ("4.3", "4.4", "4.6")},
+           **{f"ds11-b{b}": ("ds11_more_boards.npz", partial(_ds11, board=b))
+              for b in ("3.4", "4.1", "4.5", "4.7", "4.8", "4.9", "4.10")}}
 #: Sets held but not monitored, and why.
 NOT_SERIES = {"pyfrf_hits.npz": "5 hammer hits: fewer than the 7 tests a baseline of one mode needs, none left "
                                 "to judge",

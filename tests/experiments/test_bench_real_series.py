@@ -6,6 +6,7 @@ import numpy as np
 from experiments.benches.bench_real_series import (DS11_LENGTH, DS11_SKIP, LOADERS, fft_frequencies, group_scores,
                                                    mode_windows_hz, reference_fft_modes)
 from experiments.benches.plain_tests import held_out_plain_alarms, matched_alarms, plain_alarms, plain_p_values
+from experiments.benches.real_convert import DS11_BOARDS, DS11_MORE_BOARDS
 
 
 def _decays(freqs_hz, fs=1000.0, n=4000, zeta=0.01, seed=0):
@@ -139,3 +140,10 @@ def test_the_dataset_11_series_cuts_each_impact_after_its_hit_and_leaves_out_a_r
         np.testing.assert_array_equal(y, recs[k, 1:2, a:a + DS11_LENGTH])
     np.testing.assert_array_equal(s.sampling_frequency_hz, np.full(8, 2e5))
     assert q.labels == tuple(f"board 4.6 impact {k}" for k in (1, 2, 3, 4, 6, 8))   # later tests halved, the last kept
+
+
+def test_every_dataset_11_board_is_one_series_by_the_same_rules_its_file_the_converters():
+    for boards, file in ((DS11_BOARDS, "ds11_pcb_impacts_to_failure.npz"), (DS11_MORE_BOARDS, "ds11_more_boards.npz")):
+        for b, _, _ in boards:
+            f, load = LOADERS[f"ds11-b{b}"]
+            assert f == file and load.keywords == {"board": b} and load.func is LOADERS["ds11-b4.6"][1].func
