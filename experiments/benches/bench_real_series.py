@@ -207,7 +207,8 @@ DS11_SKIP, DS11_LENGTH = 200, 14000
 
 def _ds11(path: Path, quick: bool, board: str = "4.6", n_baseline: int = 15, block: int = 15) -> RealSeries:
     """Dataset-11, one board's impacts to failure: the board channel from 1 ms after its largest deviation, 70 ms
-    (a record without room for that, ``_00`` and board 4.6's ``_01`` with no hit before 75 ms, left out); baseline
+    (a record without room for that left out: boards 4.3, 4.4 and 4.6's ``_00`` and 4.6's ``_01``, no hit before 75 ms;
+    a record without a hit whose largest deviation lies early stays: 3.4's ``_01``, 4.5's and 4.8's ``_00``); baseline
     the first 15 impacts kept, later blocks of 15 impacts (damage accumulates, unlabelled) and the last impact, at
     which the resistor's circuit opened."""
     z = np.load(path)
