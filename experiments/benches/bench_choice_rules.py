@@ -1,7 +1,7 @@
 """Benchmark: rules for choosing each mode's frequency estimator, judged by ``monitor``'s detection on the real series.
 
 Run: ``python -m experiments.benches.bench_choice_rules [--data experiments/data/real] [--sets ...] [--rules raw
-one-residual one-volume mode-residual] [--out out/bench_real_series]`` (``--out``: the folder of
+one-residual one-volume mode-residual short-term] [--out out/bench_real_series]`` (``--out``: the folder of
 ``bench_real_series``' records and identification cache, which this bench reuses; a minute or two from the cache).
 
 Each rule replaces :func:`learn.monitor.estimator_choice.choose_frequencies` inside ``monitor`` (patched for the run,
@@ -16,7 +16,11 @@ tests hold both, no more gross readings than the identification). The rules:
 * ``one-volume``: the same, by the generalised variance of the components the model keeps (the sum of the logs of
   their variances; the same number of components removed with either estimator, else the identification);
 * ``mode-residual``: per eligible mode, the FFT peak where that mode's held-out residual scatter is the smaller, the
-  model fitted with each estimator throughout.
+  model fitted with each estimator throughout;
+* ``short-term``: per eligible mode, the FFT peak where its short-term scatter is the smaller
+  (:func:`short_term_scatter`, over the baseline tests holding both in time order: the robust scatter of the
+  successive differences of ``ln f`` over ``sqrt 2``, in which a variation of the structure slow against the tests'
+  spacing cancels, von Neumann's successive differences).
 
 Per set and group: ``monitor``'s share flagged, and the plain tests on the FFT peaks
 (:func:`~experiments.benches.plain_tests.plain_p_values`) matched to ``monitor``'s alarms on the healthy tests
@@ -45,9 +49,9 @@ from learn.monitor.estimator_choice import (FFT_PEAK, MIN_HALF, FrequencyChoice,
 from learn.monitor.normal_models import DEFAULT_LATENT, NORMAL_MODELS  # noqa: E402
 from learn.pairs.noise_calibration import robust_std  # noqa: E402
 
-__all__ = ["RULES", "held_out_residuals", "main", "rule_choice"]
+__all__ = ["RULES", "held_out_residuals", "main", "rule_choice", "short_term_scatter"]
 
-RULES = ("raw", "one-residual", "one-volume", "mode-residual")
+RULES = ("raw", "one-residual", "one-volume", "mode-residual", "short-term")
 HEALTHY = ("baseline", "intact")
 
 
@@ -65,11 +69,25 @@ def held_out_residuals(X) -> tuple:
     return R, full.k_
 
 
+def short_term_scatter(x) -> float:
+    """The 1.4826 MAD of the successive differences of ``x`` (k,) (time order, NaN dropped) over ``sqrt 2``: the
+    standard deviation of a white error on top of a variation slow against the values' spacing; NaN below 2
+    values."""
+    x = np.asarray(x, float)
+    x = x[np.isfinite(x)]
+    return robust_std(np.diff(x)) / np.sqrt(2.0) if x.size > 1 else float("nan")
+
+
 def rule_choice(rule: str, X_id, X_fft, eligible) -> tuple:
     """``(chosen bool (m,), text)``: the modes read by the FFT peak under ``rule`` from the baseline's ``ln f`` by the
     identification ``X_id`` (n, m) and with every eligible mode's the FFT peak ``X_fft`` (n, m)."""
     el = np.asarray(eligible, bool)
     none = np.zeros_like(el)
+    if rule == "short-term":
+        both = np.isfinite(X_id) & np.isfinite(X_fft)
+        sa = np.array([short_term_scatter(X_id[both[:, r], r]) for r in range(el.size)])
+        sb = np.array([short_term_scatter(X_fft[both[:, r], r]) for r in range(el.size)])
+        return el & ~(sa < sb), "short-term scatter " + ", ".join(f"{a:.3g}/{b:.3g}" for a, b in zip(sa, sb))
     if rule == "one-volume":
         a = NORMAL_MODELS[DEFAULT_LATENT](el.size, 0).fit(X_id)
         b = NORMAL_MODELS[DEFAULT_LATENT](el.size, 0).fit(X_fft)
