@@ -15,7 +15,8 @@ from physics.identification.frf_band_refine import refine_frf_poles
 from physics.identification.half_power import half_power_bandwidth_hz
 from physics.identification.lsfd import LSFDResult, lsfd
 from physics.identification.modes import ModalEstimate, checked_frf, modal_estimate
-from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles, stability_status
+from physics.identification.poles import (MAX_DAMPING, NO_STABLE_POLE, SelectedPoles, StabilisationDiagram,
+                                          select_poles, stability_status)
 
 __all__ = ["LSCFIdentification", "clear_peak_reach_hz", "identify_lscf", "lscf", "octave_median_peaks",
            "octave_median_peaks_and_reach", "prominent_peaks"]
@@ -267,6 +268,20 @@ def _with_peak_poles(f, h, rec, poles, max_order, margin, select, lscf_options):
     return _merged(found)
 
 
+def _selected(diagram, select):
+    """:func:`select_poles` of ``diagram``, None where no pole is stable over enough orders."""
+    try:
+        return select_poles(diagram, **(select or {}))
+    except ConvergenceError:
+        return None
+
+
+def _no_poles(n_ref):
+    """An empty :class:`SelectedPoles` (``n_ref`` references)."""
+    z = np.zeros(0)
+    return SelectedPoles(z.astype(complex), z, z, z, z, z.astype(int), np.zeros((0, n_ref), complex), z.astype(bool))
+
+
 def _merged(found):
     """One set of poles, ascending in frequency, of the sets ``found`` (the first returned as it is when alone)."""
     if len(found) == 1:
@@ -433,7 +448,9 @@ def identify_lscf(frequency_hz, frf, n_modes=None, drive=None, max_order=40, sel
     """LSCF poles, automatic selection and LSFD residues/shapes in one call.
 
     Poles come from LSCF on the receptance (stabilisation over model orders; the whole band, again weighted as an
-    FRF of ``kind``, and lower sub-bands add the poles it lacks, see :func:`_with_refit_poles`),
+    FRF of ``kind``, and lower sub-bands add the poles it lacks, see :func:`_with_refit_poles`, and each clear peak
+    no pole explains is fitted in its own band, see :func:`_with_peak_poles`; where no pole of the whole band is
+    stable over enough orders, weighted or not, the poles are those of these fits alone),
     including stable poles up to ``margin`` outside the band; each pole inside the band is then refined by output
     error in its own narrow band of ``frf`` where the LSCF pole disagrees with that band
     (:func:`~physics.identification.frf_band_refine.refine_frf_poles`); the residues and the
@@ -475,19 +492,18 @@ def _identify_lscf(frequency_hz, frf, n_modes, drive, max_order, select, kind, w
     rec = convert_frf(h, 2 * np.pi * f, check_frf_kind(kind), "receptance")
     weight = None if "line_weight" in lscf_options or kind == "receptance" else kind_weight(f, kind)
     diagram = lscf(f, rec, max_order=max_order, margin=margin, **lscf_options)
-    try:
-        first = select_poles(diagram, **(select or {}))
-    except ConvergenceError:
-        if weight is None:
-            raise
+    first = _selected(diagram, select)
+    if first is None and weight is not None:
         diagram = lscf(f, rec, max_order=max_order, margin=margin, line_weight=weight, **lscf_options)
-        first, weight = select_poles(diagram, **(select or {})), None
-    poles = _with_refit_poles(f, rec, first, max_order, margin, select, lscf_options, weight)
+        first, weight = _selected(diagram, select), None
+    poles = _with_refit_poles(f, rec, _no_poles(rec.shape[1]) if first is None else first, max_order, margin, select,
+                              lscf_options, weight)
     poles = _with_peak_poles(f, h, rec, poles, max_order, margin, select, lscf_options)
     fn = poles.natural_frequencies_hz
     inside = np.nonzero((fn >= f[0]) & (fn <= f[-1]))[0]
     if inside.size == 0:
-        raise ConvergenceError("no stable pole inside the band: raise max_order or widen the band")
+        raise ConvergenceError(NO_STABLE_POLE if first is None else
+                               "no stable pole inside the band: raise max_order or widen the band")
     if n_modes is not None:
         inside = np.sort(inside[np.argsort(-poles.count[inside], kind="stable")[:n_modes]])
     outside = np.nonzero((fn < f[0]) | (fn > f[-1]))[0]

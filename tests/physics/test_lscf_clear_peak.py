@@ -37,3 +37,25 @@ def test_lscf_identifies_the_low_mode_with_the_default_band(tests):
         assert est.natural_frequencies_hz.size == 5
         np.testing.assert_allclose(est.natural_frequencies_hz, fn[:5], rtol=0.006)
         assert est.damping_ratios[0] == pytest.approx(0.02, abs=0.006)
+
+
+def test_a_whole_band_without_a_stable_pole_leaves_the_clear_peaks_to_their_own_fits(tests, monkeypatch):
+    """Where no pole of the whole band's model is stable over enough orders (unweighted and weighted as the
+    measured kind; the pyFRF hits' force-windowed H1, modes damped 0.01-0.15 %), the sub-band and clear-peak fits
+    still run: the five modes come out as with a stable whole band, not a refusal."""
+    f, a, fn = tests[0]
+    real, calls = lscf.select_poles, []
+
+    def unstable_whole_band(diagram, **kw):
+        calls.append(diagram.band_hz)
+        if len(calls) <= 2:                             # the whole band, unweighted then weighted
+            raise lscf.ConvergenceError(lscf.NO_STABLE_POLE)
+        return real(diagram, **kw)
+
+    monkeypatch.setattr(lscf, "select_poles", unstable_whole_band)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        est = lscf.identify_lscf(f, a[:, None, :], kind="accelerance").estimate
+    assert len(calls) > 2 and calls[0] == calls[1] == (f[0], f[-1])
+    assert est.natural_frequencies_hz.size == 5
+    np.testing.assert_allclose(est.natural_frequencies_hz, fn[:5], rtol=0.006)
