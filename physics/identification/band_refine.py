@@ -26,12 +26,13 @@ wide, up to :data:`WIDE_LINES` lines and half the distance to the nearest other 
 level and slope take a share of the information the band holds about the pole, the larger the narrower the band
 beside the peak (+-8 lines: 1.2-1.3x the Cramer-Rao bound of a decay that lasts the record; +-32 lines: 1.0-1.1x).
 A wider band is kept while its fit's residual is white noise's size (:func:`_wider_fits_as_well`): its mean square
-no larger than the narrower band's fit's, and on its added lines no larger than on the narrower band's, each to the
-99th percentile of the F distribution; a component no pole holds, or a decay no damped exponential follows, leaves
-a misfit there and keeps the narrower band. Modes held fixed (``fixed``: poles and amplitudes known, e.g. a model's
-modes while a further mode is refined beside them) are subtracted, by their closed-form transforms, from every decay's
-transform before any band is fitted, and are not refined: only the bands of the modes given are fitted
-(:func:`band_amplitudes` gives the amplitudes of fixed poles).
+no larger than the narrower band's fit's, and the same on its added lines as on the narrower band's, to the 1st and
+99th percentiles of the F distribution; a component no pole holds beside the band, or within it (a peak that is no
+one damped exponential: a component the record does not resolve, a mode whose frequency moves with its
+amplitude), leaves a misfit and keeps the narrower band. Modes held fixed (``fixed``: poles and amplitudes known,
+e.g. a model's modes while a further mode is refined beside them) are subtracted, by their closed-form transforms,
+from every decay's transform before any band is fitted, and are not refined: only the bands of the modes given are
+fitted (:func:`band_amplitudes` gives the amplitudes of fixed poles).
 
 Two poles of one band closer than their half-power half-widths summed and than the main lobe of the longest
 decay's transform (:data:`RESOLVED_LINES` lines), or closer than the record's resolution whatever their widths
@@ -330,21 +331,26 @@ class _BandTrial:
 
 def _wider_fits_as_well(narrow: _BandTrial, wide: _BandTrial, band_hz, fs) -> bool:
     """Whether the fit in a wider band (``wide``) leaves a residual of white noise's size beside the fit in the band
-    it holds (``narrow``, in ``band_hz``, Hz): its mean square per value no larger than the narrower fit's, and on its
-    lines outside ``band_hz`` no larger than on those inside (where the pole and amplitudes take their unknowns),
-    each to the 99th percentile of the F distribution of the ratio (white noise: one variance on every line)."""
+    it holds (``narrow``, in ``band_hz``, Hz): its mean square per value no larger than the narrower fit's, and the
+    same on its lines outside ``band_hz`` as on those inside, each to the 1st and 99th percentiles of the F
+    distribution of the ratio (white noise: one variance on every line). A misfit outside (a component no pole
+    holds) or inside (a mode's peak no damped exponential follows, a component beside it) keeps the narrower band.
+    The pole and amplitudes take their unknowns from the lines inside, the background from all in proportion."""
     from scipy import stats  # scipy: only output-only identification
 
     _, v_n, _, _ = narrow.sums_of_squares(band_hz, fs)
     w_in, v_in, w_out, v_out = wide.sums_of_squares(band_hz, fs)
     n_ch = w_in.size
-    dof_n = n_ch * (v_n - narrow.unknowns)
-    dof_w, dof_in = n_ch * (v_in + v_out - wide.unknowns), n_ch * (v_in - wide.unknowns)
-    if min(dof_n, dof_w, dof_in) <= 0 or v_out == 0:
+    background = len(wide.used) * 2 * (wide.order + 1)
+    dof_n, dof_w = n_ch * (v_n - narrow.unknowns), n_ch * (v_in + v_out - wide.unknowns)
+    dof_in = n_ch * (v_in - (wide.unknowns - background) - background * v_in / (v_in + v_out))
+    dof_out = n_ch * v_out * (1.0 - background / (v_in + v_out))
+    if min(dof_n, dof_w, dof_in, dof_out) <= 0:
         return False
     whole = np.mean(wide.mean_squares() / narrow.mean_squares())
-    outside = np.mean((w_out / (n_ch * v_out)) / (w_in / dof_in))
-    return bool(whole <= stats.f.ppf(0.99, dof_w, dof_n) and outside <= stats.f.ppf(0.99, n_ch * v_out, dof_in))
+    outside = np.mean((w_out / dof_out) / (w_in / dof_in))
+    return bool(whole <= stats.f.ppf(0.99, dof_w, dof_n)
+                and stats.f.ppf(0.01, dof_out, dof_in) <= outside <= stats.f.ppf(0.99, dof_out, dof_in))
 
 
 def _unresolved(lam, amps, lengths, fs, group, converged):
