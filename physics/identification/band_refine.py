@@ -20,10 +20,19 @@ wide). Modes whose bands, grown by :data:`MERGE_FACTOR`, overlap are one group f
 a neighbour that close is no smooth background. The bands are swept :data:`SWEEPS` times: from the second sweep on,
 each band is that of the refined pole (its half-power width, not the starting pole's), and its data are less the
 closed-form transforms of the modes the other bands fitted, so the background takes only what no band models
-(modes no model holds, the hit). Modes held fixed (``fixed``: poles and amplitudes known, e.g. a model's modes
-while a further mode is refined beside them) are subtracted, by their closed-form transforms, from every decay's
-transform before any band is fitted, and are not refined: only the bands of the modes given are fitted
-(:func:`band_amplitudes` gives the amplitudes of fixed poles).
+(modes no model holds, the hit). From the second sweep on, a lightly damped mode fitted alone (its band set by
+:data:`BAND_LINES`: six half-power half-widths are fewer lines) is also fitted in bands twice, four times ... as
+wide, up to :data:`WIDE_LINES` lines and half the distance to the nearest other pole (:func:`_wider_bands`): the
+level and slope take a share of the information the band holds about the pole, the larger the narrower the band
+beside the peak (+-8 lines: 1.2-1.3x the Cramer-Rao bound of a decay that lasts the record; +-32 lines: 1.0-1.1x).
+A wider band is kept while its fit's residual is white noise's size (:func:`_wider_fits_as_well`): its mean square
+no larger than the narrower band's fit's, and the same on its added lines as on the narrower band's, to the 1st and
+99th percentiles of the F distribution; a component no pole holds beside the band, or within it (a peak that is no
+one damped exponential: a component the record does not resolve, a mode whose frequency moves with its
+amplitude), leaves a misfit and keeps the narrower band. Modes held fixed (``fixed``: poles and amplitudes known,
+e.g. a model's modes while a further mode is refined beside them) are subtracted, by their closed-form transforms,
+from every decay's transform before any band is fitted, and are not refined: only the bands of the modes given are
+fitted (:func:`band_amplitudes` gives the amplitudes of fixed poles).
 
 Two poles of one band closer than their half-power half-widths summed and than the main lobe of the longest
 decay's transform (:data:`RESOLVED_LINES` lines), or closer than the record's resolution whatever their widths
@@ -52,8 +61,8 @@ from physics.errors import ConvergenceError, ShapeError
 from physics.identification.damped_sinusoids import levenberg_marquardt, pole_statistics
 
 __all__ = ["BACKGROUND_ORDER", "BAND_LINES", "BAND_WIDTHS", "MERGE_FACTOR", "RESOLUTION_LINES", "RESOLVED_LINES",
-           "RESOLVED_WIDTHS", "SWEEPS", "BandFit", "band_amplitudes", "band_data", "mode_bands", "modes_on_lines",
-           "refine_in_bands"]
+           "RESOLVED_WIDTHS", "SWEEPS", "WIDE_LINES", "BandFit", "band_amplitudes", "band_data", "mode_bands",
+           "modes_on_lines", "refine_in_bands"]
 
 #: A mode's band spans this many of its half-power half-widths either side of it ...
 BAND_WIDTHS = 6.0
@@ -61,6 +70,11 @@ BAND_WIDTHS = 6.0
 BAND_LINES = 8
 #: Modes whose bands, each grown by this factor about its mode, overlap are fitted together.
 MERGE_FACTOR = 2.0
+#: A lightly damped mode fitted alone in its band (from the second sweep on) is also fitted in bands twice, four
+#: times ... as wide, up to this many lines ``1 / T`` of the longest decay either side and half the distance to the
+#: nearest other pole (:func:`_wider_bands`); the widest whose residual is white noise's size is kept
+#: (:func:`_wider_fits_as_well`).
+WIDE_LINES = 32
 #: Order of the complex polynomial (in frequency across the band) that models the background: a level and a slope,
 #: the first terms of a far mode's tail and of the hit's smooth spectrum.
 BACKGROUND_ORDER = 1
@@ -93,7 +107,7 @@ class BandFit:
     amplitudes : ndarray, complex, shape (n_decays, n_channels, n_modes)
         ``a`` of ``Re(a z^n)`` of each decay, channel and mode (the channel's units) at the decay's first sample.
     bands_hz : ndarray, shape (n_modes, 2)
-        The band each mode was fitted in (its group's).
+        The band each mode was fitted in (its group's, or a lightly damped lone mode's wider band where kept).
     group : ndarray of int, shape (n_modes,)
         The group each mode was fitted with.
     converged : ndarray of bool, shape (n_modes,)
@@ -237,8 +251,9 @@ def _projected_band(data, fs, sigma, omega, weights, band_hz, order):
 
 
 def _fit_band(data, fs, band, lam, n_ch, order):
-    """The variable-projection fit of poles ``lam`` in a band: ``(sigma, omega, cov, coef, weights)``, or None where
-    the band holds too few lines or the fit fails (singular, or a pole left the band or lost its damping)."""
+    """The variable-projection fit of poles ``lam`` in a band: ``(sigma, omega, cov, coef, weights, res)``, or None
+    where the band holds too few lines or the fit fails (singular, or a pole left the band or lost its damping);
+    ``res``: the weighted residual of each decay holding the band, as :func:`_projected_band` gives it."""
     used = [d for d in data if d is not None]
     n_values = n_ch * sum(2 * d[0].size for d in used)
     n_params = 2 * lam.size + len(used) * n_ch * (2 * lam.size + 2 * (order + 1))
@@ -249,14 +264,93 @@ def _fit_band(data, fs, band, lam, n_ch, order):
         return _projected_band(data, fs, sigma, omega, weights, band, order)
 
     try:
-        sigma, omega, cov, _, coef, weights, _ = levenberg_marquardt(
+        sigma, omega, cov, res, coef, weights, _ = levenberg_marquardt(
             project, -lam.real, lam.imag, n_ch, n_values, n_params, decaying=True)
     except ConvergenceError:
         return None
     f = omega / (2 * np.pi)
     if np.any(sigma <= 0) or np.any(f < band[0]) or np.any(f > band[1]):
         return None
-    return sigma, omega, cov, coef, weights
+    return sigma, omega, cov, coef, weights, res
+
+
+def _wider_bands(pole, band_hz, others, longest_s, nyquist_hz):
+    """The wider bands a lone ``pole`` (rad/s) is also fitted in, narrowest first: its band ``band_hz`` (Hz) twice,
+    four times ... as wide about the pole, up to :data:`WIDE_LINES` lines of the longest decay (``longest_s``) and
+    half the distance to the nearest of ``others`` (poles, rad/s, shape (m,)), within ``(0, nyquist_hz)``; none where
+    that reach is within a quarter of the band's half-width. A list of arrays of shape (2,).
+
+    Only a lightly damped pole is widened: one whose six half-power half-widths (:data:`BAND_WIDTHS`) are fewer
+    than :data:`BAND_LINES` lines (none otherwise)."""
+    f = pole.imag / (2 * np.pi)
+    if BAND_WIDTHS * abs(pole.real) / (2 * np.pi) >= BAND_LINES / longest_s:
+        return []
+    half = max(f - band_hz[0], band_hz[1] - f)
+    gap = np.abs(np.asarray(others, complex).imag / (2 * np.pi) - f)
+    reach = min(WIDE_LINES / longest_s, 0.5 * gap.min() if gap.size else np.inf)
+    halves = [h for h in half * 2.0 ** np.arange(1, 8) if h < reach] + [reach]
+    return [np.clip([f - h, f + h], 0.0, nyquist_hz) for h in halves if h > 1.25 * half]
+
+
+@dataclass(frozen=True)
+class _BandTrial:
+    """One band fit of one pole (:func:`_fit_band`): its pole, covariance, coefficients, channel weights and
+    residual (each used decay's weighted residual, (2 L, n_channels), real parts of its ``L`` lines over imaginary),
+    the decays used (indices), their lines ``k`` and samples ``n``, and the background's order."""
+
+    sigma: np.ndarray
+    omega: np.ndarray
+    cov: np.ndarray
+    coef: list
+    weights: np.ndarray
+    res: list
+    used: list
+    lines: list
+    lengths: list
+    order: int
+
+    @property
+    def unknowns(self) -> float:
+        """Unknowns per channel: the pole's two (shared by the channels), each decay's amplitudes and background."""
+        return 2.0 / self.weights.size + len(self.used) * (2 + 2 * (self.order + 1))
+
+    def mean_squares(self) -> np.ndarray:
+        """The residual's mean square per value and channel (the channels' units squared), shape (n_channels,)."""
+        ss = sum(np.sum(r ** 2, axis=0) for r in self.res) / self.weights ** 2
+        return ss / (sum(2 * k.size for k in self.lines) - self.unknowns)
+
+    def sums_of_squares(self, band_hz, fs):
+        """The residual's sum of squares per channel (the channels' units) on the lines inside ``band_hz`` (Hz) and
+        outside, and the number of values (per channel) of each: ``(ss_in (n_ch,), v_in, ss_out (n_ch,), v_out)``."""
+        inside = [np.tile((k * fs / n >= band_hz[0]) & (k * fs / n <= band_hz[1]), 2)
+                  for k, n in zip(self.lines, self.lengths)]
+        ss_in = sum(np.sum(r[i] ** 2, axis=0) for r, i in zip(self.res, inside)) / self.weights ** 2
+        ss_out = sum(np.sum(r[~i] ** 2, axis=0) for r, i in zip(self.res, inside)) / self.weights ** 2
+        return ss_in, sum(int(i.sum()) for i in inside), ss_out, sum(int((~i).sum()) for i in inside)
+
+
+def _wider_fits_as_well(narrow: _BandTrial, wide: _BandTrial, band_hz, fs) -> bool:
+    """Whether the fit in a wider band (``wide``) leaves a residual of white noise's size beside the fit in the band
+    it holds (``narrow``, in ``band_hz``, Hz): its mean square per value no larger than the narrower fit's, and the
+    same on its lines outside ``band_hz`` as on those inside, each to the 1st and 99th percentiles of the F
+    distribution of the ratio (white noise: one variance on every line). A misfit outside (a component no pole
+    holds) or inside (a mode's peak no damped exponential follows, a component beside it) keeps the narrower band.
+    The pole and amplitudes take their unknowns from the lines inside, the background from all in proportion."""
+    from scipy import stats  # scipy: only output-only identification
+
+    _, v_n, _, _ = narrow.sums_of_squares(band_hz, fs)
+    w_in, v_in, w_out, v_out = wide.sums_of_squares(band_hz, fs)
+    n_ch = w_in.size
+    background = len(wide.used) * 2 * (wide.order + 1)
+    dof_n, dof_w = n_ch * (v_n - narrow.unknowns), n_ch * (v_in + v_out - wide.unknowns)
+    dof_in = n_ch * (v_in - (wide.unknowns - background) - background * v_in / (v_in + v_out))
+    dof_out = n_ch * v_out * (1.0 - background / (v_in + v_out))
+    if min(dof_n, dof_w, dof_in, dof_out) <= 0:
+        return False
+    whole = np.mean(wide.mean_squares() / narrow.mean_squares())
+    outside = np.mean((w_out / dof_out) / (w_in / dof_in))
+    return bool(whole <= stats.f.ppf(0.99, dof_w, dof_n)
+                and stats.f.ppf(0.01, dof_out, dof_in) <= outside <= stats.f.ppf(0.99, dof_out, dof_in))
 
 
 def _unresolved(lam, amps, lengths, fs, group, converged):
@@ -382,6 +476,7 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
     n_ch = decays[0].shape[0]
     lengths = [y.shape[1] for y in decays]
     spectra = _spectra(decays, fs, fixed)
+    lam_fixed = np.zeros(0, complex) if fixed is None else np.asarray(fixed[0], complex).ravel()
     bands, group = mode_bands(lam0, max(lengths) / fs, fs / 2)
     lam = lam0.copy()
     f_std, z_std = np.full(m_all, np.nan), np.full(m_all, np.nan)
@@ -412,16 +507,32 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
             idx = np.flatnonzero(group == g)
             m, band = idx.size, bands[idx[0]]
             others = np.flatnonzero(known & (group != g))
-            data = [None if d is None else
-                    (d[0], d[1], d[2] - modes_on_lines(d[1], d[3], fs, lam_known[others], amps_known[j][:, others])
-                     / np.sqrt(d[3]), d[3])
-                    for j, d in enumerate(band_data(spectra, lengths, fs, band))]
-            used = [j for j, d in enumerate(data) if d is not None]
-            n_values = n_ch * sum(2 * data[j][0].size for j in used)
-            fitted = _fit_band(data, fs, band, lam[idx], n_ch, background_order)
-            if fitted is None:
+
+            def fit_in(band, start):
+                data = [None if d is None else
+                        (d[0], d[1], d[2] - modes_on_lines(d[1], d[3], fs, lam_known[others],
+                                                           amps_known[j][:, others]) / np.sqrt(d[3]), d[3])
+                        for j, d in enumerate(band_data(spectra, lengths, fs, band))]
+                fitted = _fit_band(data, fs, band, start, n_ch, background_order)
+                used = [j for j, d in enumerate(data) if d is not None]
+                return None if fitted is None else _BandTrial(*fitted, used, [data[j][0] for j in used],
+                                                              [lengths[j] for j in used], background_order)
+
+            best = fit_in(band, lam[idx])
+            if best is None:
                 continue
-            sigma, omega, cov, coef, weights = fitted
+            if sweep and m == 1:                        # a lone mode: its wider bands, while their misfit is noise's
+                alive = np.flatnonzero(into < 0)
+                neighbours = np.concatenate([lam[alive[alive != idx[0]]], lam_fixed])
+                for wide in _wider_bands(lam[idx[0]], band, neighbours, max(lengths) / fs, fs / 2):
+                    trial = fit_in(wide, -best.sigma + 1j * best.omega)
+                    if trial is None or not _wider_fits_as_well(best, trial, band, fs):
+                        break
+                    best, band = trial, wide
+                bands[idx] = band
+            sigma, omega, cov, coef, weights, used = best.sigma, best.omega, best.cov, best.coef, best.weights, \
+                best.used
+            n_values = n_ch * sum(2 * k.size for k in best.lines)
             _, _, f_std[idx], z_std[idx] = pole_statistics(sigma, omega, cov)
             lam[idx] = -sigma + 1j * omega
             converged[idx] = True
