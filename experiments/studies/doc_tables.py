@@ -8,11 +8,13 @@ A page marks each table it shows with a named block::
 
 and the script that produces it, run with ``--docs``, replaces the text between the two markers
 (:func:`write_table`), so the numbers in the docs are the ones the code printed. The block's last line says
-which command wrote it, on which day (UTC) and at which commit of the project::
+which command wrote it, on which day (UTC), at which commit of the project and with which numpy and scipy::
 
-    Written by `python -m experiments.benches.bench_learn --docs` on 2026-11-29 (UTC), commit 53b2bf0.
+    Written by `python -m experiments.benches.bench_learn --docs` on 2026-11-29 (UTC), commit 53b2bf0, numpy 2.4.6,
+    scipy 1.17.1.
 
-(:func:`stamp`; ``unknown`` for the commit outside a git checkout). Re-writing a block replaces its stamp.
+(on one line; :func:`stamp`; ``unknown`` for the commit outside a git checkout; a stamp without versions is read
+too). Re-writing a block replaces its stamp.
 """
 
 from __future__ import annotations
@@ -21,21 +23,26 @@ import re
 import shlex
 import sys
 from datetime import datetime, timezone
+from importlib.metadata import version
 from pathlib import Path
 
 from physics.errors import BeamDamageError
 from physics.io import atomic_write_text
 
-__all__ = ["DOCS", "STAMP", "block_names", "block_text", "git_commit", "invoking_command", "stamp", "write_table"]
+__all__ = ["DOCS", "LIBRARIES", "STAMP", "block_names", "block_text", "git_commit", "invoking_command", "stamp",
+           "write_table"]
 
 #: The ``docs/`` directory of this checkout.
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 
 _BLOCK = re.compile(r"<!-- bench:([\w.-]+) -->")
 
-#: A block's stamp line: the command that wrote the block, the day (UTC) and the project's commit.
-STAMP = re.compile(r"^Written by `[^`\n]+` on \d{4}-\d{2}-\d{2} \(UTC\), commit (?:[0-9a-f]{7,40}|unknown)\.$",
-                   re.MULTILINE)
+#: A block's stamp line: the command that wrote the block, the day (UTC), the project's commit and the numerical
+#: libraries' versions (:data:`LIBRARIES`; floating-point results of the same commit can differ between versions).
+STAMP = re.compile(r"^Written by `[^`\n]+` on \d{4}-\d{2}-\d{2} \(UTC\), commit (?:[0-9a-f]{7,40}|unknown)"
+                   r"(?:, numpy [\w.+-]+, scipy [\w.+-]+)?\.$", re.MULTILINE)
+#: The numerical libraries a stamp names, with their versions.
+LIBRARIES = ("numpy", "scipy")
 
 #: Modules whose ``python -m`` run is the installed ``beam-damage`` command.
 _CLI_MODULES = ("experiments.cli", "experiments.cli.__main__")
@@ -113,7 +120,8 @@ def stamp(command: str | None = None) -> str:
     """The stamp line of a block written now by ``command`` (default :func:`invoking_command`)."""
     command = (command or invoking_command()).replace("`", "'").replace("\n", " ")
     day = datetime.now(timezone.utc).date().isoformat()
-    return f"Written by `{command}` on {day} (UTC), commit {git_commit()}."
+    versions = ", ".join(f"{name} {version(name)}" for name in LIBRARIES)
+    return f"Written by `{command}` on {day} (UTC), commit {git_commit()}, {versions}."
 
 
 def write_table(page_path, name: str, markdown: str, command: str | None = None) -> None:

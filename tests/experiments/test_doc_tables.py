@@ -5,13 +5,14 @@ import subprocess
 import sys
 import types
 from datetime import datetime, timezone
+from importlib.metadata import version
 from pathlib import Path
 
 import pytest
 
 from experiments.benches.harness import parser, publish
 from experiments.studies import doc_tables
-from experiments.studies.doc_tables import DOCS, STAMP, block_names, block_text, git_commit, write_table
+from experiments.studies.doc_tables import DOCS, LIBRARIES, STAMP, block_names, block_text, git_commit, write_table
 from physics.errors import BeamDamageError
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -68,7 +69,7 @@ def test_a_written_block_ends_with_its_stamp_and_a_rewrite_replaces_it(tmp_path)
     write_table(page, "a", "| x |\n| --- |\n| 2 |", command="python -m experiments.benches.bench_a --docs")
     if day not in page.read_text():                                # written just after midnight UTC
         day = datetime.now(timezone.utc).date().isoformat()
-    commit = git_commit()
+    commit = git_commit() + ", " + ", ".join(f"{name} {version(name)}" for name in LIBRARIES)
     first = (f"<!-- bench:a -->\n| x |\n| --- |\n| 2 |\n\nWritten by `python -m experiments.benches.bench_a --docs` "
              f"on {day} (UTC), commit {commit}.\n<!-- /bench:a -->")
     assert page.read_text() == f"Intro.\n\n{first}\n\nEnd.\n"
@@ -133,3 +134,16 @@ def test_links_between_readme_and_docs_resolve():
             if not (page.parent / target).is_file():
                 broken.append(f"{page.name} -> {target}")
     assert not broken, broken
+
+
+def test_the_stamp_names_numpy_and_scipy_and_an_older_stamp_still_reads():
+    """The stamp carries the installed numpy and scipy (the same commit's numbers can differ between their versions);
+    a stamp written without them is still recognised."""
+    import numpy
+    import scipy
+
+    line = doc_tables.stamp("python -m x --docs")
+    assert line.endswith(f", numpy {numpy.__version__}, scipy {scipy.__version__}.")
+    assert STAMP.fullmatch(line)
+    assert STAMP.fullmatch("Written by `python -m x --docs` on 2026-11-29 (UTC), commit 53b2bf0.")
+    assert not STAMP.fullmatch("Written by `python -m x --docs` on 2026-11-29 (UTC), commit 53b2bf0, numpy 2.4.6.")
