@@ -51,7 +51,7 @@ from physics.errors import ConvergenceError, ShapeError
 from physics.frf import FRF_KINDS, check_frf_kind
 from physics.identification.band_refine import mode_bands
 from physics.identification.damped_sinusoids import levenberg_marquardt, pole_statistics
-from physics.identification.lsfd import _lsfd_basis, lsfd
+from physics.identification.lsfd import lsfd, lsfd_basis
 from physics.identification.modes import checked_frf
 
 __all__ = ["BACKGROUND_ORDER", "CONSISTENT_CHI2", "CONSISTENT_STDS", "MAX_RELATIVE_HALF_WIDTH", "MAX_SHIFT_BANDWIDTHS",
@@ -237,7 +237,7 @@ def refine_frf_poles(frequency_hz, frf, eigenvalues, refine=None, *, kind="recep
             if band[1] - band[0] > MAX_RELATIVE_HALF_WIDTH * (band[0] + band[1]):
                 continue
             sel = (f >= band[0]) & (f <= band[1])
-            basis = _lsfd_basis(iw_all[sel], lam[idx], power, False, False)     # the group's modal terms
+            basis = lsfd_basis(iw_all[sel], lam[idx], power, False, False)     # the group's modal terms
             Y = rest[:, sel] + np.concatenate([R[:, idx].real, R[:, idx].imag], axis=1) @ basis.T
             fitted = _fit_group(iw_all[sel], Y, lam[idx], lam0[idx], 2 * np.pi * band, df, power, background_order)
             if fitted is None:

@@ -11,7 +11,7 @@ from physics.errors import ShapeError
 from physics.frf import FRF_KINDS, check_frf_kind
 from physics.identification.modes import checked_frf
 
-__all__ = ["ESTIMATION_PASSES", "LSFDResult", "WEIGHTINGS", "estimate_noise_model", "lsfd"]
+__all__ = ["ESTIMATION_PASSES", "LSFDResult", "WEIGHTINGS", "estimate_noise_model", "lsfd", "lsfd_basis"]
 
 
 #: Weightings of :func:`lsfd` (or pass an array of noise standard deviations).
@@ -61,8 +61,10 @@ class LSFDResult:
     weighting: str = "relative"
 
 
-def _lsfd_basis(iw, lam, power, lower, upper):
-    """Complex design matrix (n_lines, n_par): Re R, Im R per pole, then LR, UR; in the kind of ``power``."""
+def lsfd_basis(iw, lam, power, lower, upper):
+    """Complex design matrix (n_lines, n_par) of the modal terms at ``iw`` (rad/s, times i) of the poles ``lam``
+    (rad/s, (m,)): the columns of Re R of every pole, then of Im R, then the lower (``lower``) and upper (``upper``)
+    residuals; in the kind of ``power`` (``(i w)^power`` times the receptance's terms)."""
     g = 1 / (iw[:, None] - lam[None, :])
     gc = 1 / (iw[:, None] - np.conj(lam)[None, :])
     cols = [g + gc, 1j * (g - gc)]  # basis of Re R and Im R
@@ -232,7 +234,7 @@ def lsfd(frequency_hz, frf, eigenvalues, lower_residual=True, upper_residual=Tru
     n_s, n_r, N = h.shape
     hk = h.reshape(-1, N)
     n_m = lam.size
-    B = _lsfd_basis(iw, lam, power, lower_residual, upper_residual)
+    B = lsfd_basis(iw, lam, power, lower_residual, upper_residual)
     W = _fit_weights(B, h, weighting)
     x, s2, x_std, Q = _weighted_solve(B, hk, W)
     R = x[:, :n_m] + 1j * x[:, n_m:2 * n_m]
