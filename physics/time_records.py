@@ -11,6 +11,16 @@ coherence); this module prepares the records the way each test needs:
   outlast the block do not leak. The exponential window adds ``1/tau`` (1/s) to
   every pole's decay rate: a mode's damping ratio is overestimated by
   ``1/(tau omega_n)``, which is reported so that it can be subtracted.
+  By default (``decay=None``) the window is the weakest that brings every response
+  to :data:`RESPONSE_END_LEVEL` of its loudest by the block end
+  (:func:`window_end_value`), and none where the responses end there already: a
+  window weights the samples of each decay by ``exp(-2 t/tau)`` in any fit of the
+  FRF, so it leaves the later part of a record that needed none out of the estimate
+  (a mode decaying at ``sigma``, least squares under white noise: the variance of
+  its frequency grows by ``(a + 2b)^6 / ((a + 4b)^3 a^3)``, ``a = 2 sigma``,
+  ``b = 1/tau``; 2.2 for ``sigma = 5`` 1/s and a 1 % window over 1 s) and reads
+  more of its loud start, where a mode whose frequency follows its amplitude
+  differs from hit to hit.
   Blocks with a second hit (a force peak above ``double_hit`` of the first after
   the pulse has ended) or an overload (a channel flat at its extreme over three
   or more samples: clipping) are flagged and left out of the average.
@@ -27,12 +37,18 @@ from physics.estimation import estimate_frf
 from physics.io.timedata import TimeRecords
 from physics.io.types import MeasuredFRF
 
-__all__ = ["ESTIMATORS", "EXCITATIONS", "HitCheck", "TimeEstimate", "check_hits", "estimate_from_records",
-           "exponential_window", "force_window"]
+__all__ = ["ESTIMATORS", "EXCITATIONS", "LEVEL_SEGMENTS", "RESPONSE_END_LEVEL", "HitCheck", "TimeEstimate",
+           "check_hits", "estimate_from_records", "exponential_window", "force_window", "window_end_value"]
 
 ESTIMATORS = ("h1", "h2", "hv")
 EXCITATIONS = ("random", "impact")
 _KIND = {"displacement": "receptance", "velocity": "mobility", "acceleration": "accelerance"}
+#: Level (RMS, relative to its loudest) an impact block's response is brought to by the block's end: the default
+#: exponential window is the weakest that does so for every response (:func:`window_end_value`).
+RESPONSE_END_LEVEL = 0.01
+#: A block's response level is its RMS (its mean removed) over each of this many equal segments: the last segment's
+#: against the loudest's.
+LEVEL_SEGMENTS = 20
 
 
 @dataclass(frozen=True)
@@ -73,6 +89,7 @@ class TimeEstimate:
     hits: HitCheck | None
     added_decay_rate_1_s: float
     description: str
+    window_end_value: float = 1.0     # the exponential window's value at the block end (1: none)
 
 
 def force_window(n, pulse_end, margin):
@@ -88,6 +105,34 @@ def exponential_window(n, decay):
         raise ShapeError(f"exponential window decay {decay} must be in (0, 1]")
     tau = np.inf if decay == 1 else (n - 1) / -np.log(decay)
     return np.exp(-np.arange(n) / tau), tau
+
+
+def window_end_value(response_blocks, level=RESPONSE_END_LEVEL) -> float:
+    """End value of the weakest exponential window that brings every response to ``level`` of its loudest by the
+    block end; 1 (no window) where every response ends there already.
+
+    Each block's response level is its RMS, the block's mean removed, over :data:`LEVEL_SEGMENTS` equal segments;
+    ``r`` is the largest ratio of the last segment's to the loudest segment's over blocks and channels, and the window
+    falls to ``min(1, level / r)``.
+
+    Parameters
+    ----------
+    response_blocks : ndarray, shape (n_blocks, n_responses, n)
+    level : float in (0, 1]
+
+    Returns
+    -------
+    float in (0, 1]
+    """
+    x = np.asarray(response_blocks, float)
+    n = x.shape[-1] // LEVEL_SEGMENTS * LEVEL_SEGMENTS
+    if n == 0:
+        raise ShapeError(f"blocks of {x.shape[-1]} samples cannot give {LEVEL_SEGMENTS} level segments")
+    x = x - x.mean(axis=-1, keepdims=True)
+    rms = np.sqrt(np.mean(x[..., :n].reshape(*x.shape[:-1], LEVEL_SEGMENTS, -1) ** 2, axis=-1))
+    loud = rms.max(axis=-1)
+    ratio = np.max(np.where(loud > 0, rms[..., -1] / np.where(loud > 0, loud, 1.0), 0.0))
+    return 1.0 if ratio <= level else float(level / ratio)
 
 
 def check_hits(force_blocks, response_blocks, dofs, double_hit=0.2, flat=3):
@@ -135,7 +180,7 @@ def _estimate(src, *args, **kw):
 
 
 def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", excitation="random", averages=8,
-                          overlap=0.5, window="hann", decay=0.01, fmax_hz=None) -> TimeEstimate:
+                          overlap=0.5, window="hann", decay=None, fmax_hz=None) -> TimeEstimate:
     """FRFs (response over the reference force) of time records.
 
     Parameters
@@ -151,8 +196,9 @@ def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", 
         Random excitation only.
     window : str
         Random excitation only (any :func:`scipy.signal.get_window` name).
-    decay : float in (0, 1]
-        Impact: value of the exponential window at the block end (1 = none).
+    decay : float in (0, 1], optional
+        Impact: value of the exponential window at the block end (1 = none); default: the weakest window that brings
+        every response to :data:`RESPONSE_END_LEVEL` of its loudest by the block end (:func:`window_end_value`).
     fmax_hz : float, optional
         Keep lines up to this frequency.
 
@@ -170,8 +216,9 @@ def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", 
         raise ShapeError(f"averages {averages} must be an integer >= 1")
     if excitation == "random":
         est, n_avg, hits, added, what = _random_spectra(records, ref, resp, src, estimator, averages, overlap, window)
+        decay = 1.0
     else:
-        est, n_avg, hits, added, what = _impact_spectra(records, ref, resp, src, estimator, averages, decay)
+        est, n_avg, hits, added, what, decay = _impact_spectra(records, ref, resp, src, estimator, averages, decay)
     h = {"h1": est.h1, "h2": est.h2, "hv": est.hv}[estimator]
     if h is None:
         raise ShapeError("h2 needs exactly one force channel")
@@ -186,7 +233,7 @@ def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", 
                           kind=kind, metadata={"source": src, "format": "uff58 time records", "estimated": what})
     except ShapeError as exc:
         raise FileFormatError(f"{src}: the estimated FRFs: {exc}") from None
-    return TimeEstimate(frf, coh, estimator, excitation, n_avg, hits, added, what)
+    return TimeEstimate(frf, coh, estimator, excitation, n_avg, hits, added, what, decay)
 
 
 def _select_channels(records: TimeRecords, reference, src) -> tuple[int, list, str]:
@@ -244,9 +291,10 @@ def _random_spectra(records: TimeRecords, ref, resp, src, estimator, averages, o
 
 
 def _impact_spectra(records: TimeRecords, ref, resp, src, estimator, averages, decay):
-    """Spectra of ``averages`` impact blocks, bad blocks left out, force and exponential windows applied.
+    """Spectra of ``averages`` impact blocks, bad blocks left out, force and exponential windows applied (``decay``
+    None: :func:`window_end_value` of the good blocks' responses).
 
-    Returns ``(estimate, n_good_blocks, HitCheck, added decay rate 1/s, description)``.
+    Returns ``(estimate, n_good_blocks, HitCheck, added decay rate 1/s, description, window end value)``.
     """
     fs, x = records.sampling_frequency_hz, records.signals
     n = x.shape[1]
@@ -261,6 +309,9 @@ def _impact_spectra(records: TimeRecords, ref, resp, src, estimator, averages, d
                               f"(double hits in blocks {list(hits.double_hits)}, overloads "
                               f"{[f'{d} in block {b}' for b, d in hits.overloads]}, no hit in blocks "
                               f"{list(hits.missed)})")
+    chosen = decay is None
+    if chosen:
+        decay = window_end_value(blocks[good][:, resp])
     ew, tau = exponential_window(block, decay)
     fw = force_window(block, hits.pulse_samples + int(np.argmax(np.abs(blocks[0, ref]) > 0)),
                       max(hits.pulse_samples, 4))
@@ -269,6 +320,10 @@ def _impact_spectra(records: TimeRecords, ref, resp, src, estimator, averages, d
     r_t = (g[:, resp] * ew).transpose(1, 0, 2).reshape(len(resp), -1)
     est = _estimate(src, f_t, r_t, fs, block, 0, window="boxcar")
     added = 0.0 if np.isinf(tau) else fs / tau
-    what = f"{estimator.upper()} of {len(good)} impact blocks of {block} samples (force window, exponential " \
-           f"window to {decay:g}: adds {added:.4g} 1/s to every pole's decay rate), {fs / block:.4g} Hz lines"
-    return est, len(good), hits, added, what
+    why = f", the weakest bringing every response to {RESPONSE_END_LEVEL:g} of its loudest" if chosen else ""
+    win = f"exponential window to {decay:g}{why}: adds {added:.4g} 1/s to every pole's decay rate" if added > 0 else \
+        (f"no exponential window: every response ends below {RESPONSE_END_LEVEL:g} of its loudest" if chosen
+         else "no exponential window")
+    what = f"{estimator.upper()} of {len(good)} impact blocks of {block} samples (force window, {win}), " \
+           f"{fs / block:.4g} Hz lines"
+    return est, len(good), hits, added, what, float(decay)

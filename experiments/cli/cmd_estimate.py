@@ -19,7 +19,7 @@ def run(args) -> dict:
         raise ConfigError(f"--averages {args.averages}: must be >= 1")
     if not 0 <= args.overlap < 1:
         raise ConfigError(f"--overlap {args.overlap:g}: must be in [0, 1)")
-    if not 0 < args.decay <= 1:
+    if args.decay is not None and not 0 < args.decay <= 1:
         raise ConfigError(f"--decay {args.decay:g}: must be in (0, 1]")
     if args.fmax is not None and not args.fmax > 0:
         raise ConfigError(f"--fmax {args.fmax:g}: must be > 0")
@@ -36,14 +36,15 @@ def run(args) -> dict:
     coh = est.coherence
     tau = 1.0 / est.added_decay_rate_1_s if est.added_decay_rate_1_s > 0 else None
     frf = est.frf if tau is None else replace(est.frf, metadata={
-        **est.frf.metadata, "exponential_window": {"tau_s": tau, "end_value": args.decay}})
+        **est.frf.metadata, "exponential_window": {"tau_s": tau, "end_value": est.window_end_value}})
     out = {"file": str(args.file), "estimator": est.estimator, "excitation": est.excitation,
            "description": est.description, "n_averages": est.n_averages,
            "reference": est.frf.reference_dofs[0], "dofs": list(est.frf.response_dofs), "kind": est.frf.kind,
            "units": est.frf.units, "lines": int(est.frf.frequency_hz.size),
            "band_hz": [float(est.frf.frequency_hz[0]), float(est.frf.frequency_hz[-1])],
            "coherence_median": np.median(coh, axis=-1)[:, 0].tolist(),
-           "added_decay_rate_1_s": est.added_decay_rate_1_s, "exp_window_tau_s": tau}
+           "added_decay_rate_1_s": est.added_decay_rate_1_s, "exp_window_tau_s": tau,
+           "exp_window_end_value": est.window_end_value}
     if est.hits is not None:
         out["double_hits"] = list(est.hits.double_hits)
         out["overloads"] = [{"block": b, "dof": d} for b, d in est.hits.overloads]
@@ -81,8 +82,10 @@ def add_parser(sub):
     p.add_argument("--averages", type=int, default=8, help="segments (random) or impact blocks (default 8)")
     p.add_argument("--overlap", type=float, default=0.5, help="segment overlap for random excitation (default 0.5)")
     p.add_argument("--window", default="hann", help="window of random-excitation segments (default hann)")
-    p.add_argument("--decay", type=float, default=0.01,
-                   help="impact: exponential window value at the block end (default 0.01; 1 = none)")
+    p.add_argument("--decay", type=float, default=None,
+                   help="impact: exponential window value at the block end (1 = none; default: the weakest window "
+                        "that brings every response to 1 %% of its loudest by the block end, none where the "
+                        "responses end there already)")
     p.add_argument("--fmax", type=float, help="highest line to keep (Hz)")
     p.add_argument("--out", metavar="FILE", help="write the FRFs in the format its extension names: "
                                                  f"{accepted(FRF)} (UFF: dataset 58, function type 4); .npz "

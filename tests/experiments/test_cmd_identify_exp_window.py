@@ -112,7 +112,7 @@ def test_estimate_impact_npz_carries_tau_and_identify_removes_it(capsys, tmp_pat
     write_time_uff(path, np.arange(rec.signals[0].size) * rec.time_step_s,
                    [("1", rec.signals[0], 13, "N"), ("2", rec.signals[1], 8, "m")])
     code, out, err = run_cli(capsys, ["estimate", str(path), "--excitation", "impact", "--averages", "6",
-                                      "--out", str(tmp_path / "frf.npz"), "--json"])
+                                      "--decay", "0.01", "--out", str(tmp_path / "frf.npz"), "--json"])
     assert code == 0, err
     tau = json.loads(out)["exp_window_tau_s"]
     assert tau == pytest.approx((2048 - 1) / 2048 / np.log(100), rel=1e-5)      # 1 s blocks, to 1 % at the last
@@ -126,7 +126,7 @@ def test_estimate_impact_npz_carries_tau_and_identify_removes_it(capsys, tmp_pat
     assert res["modes"][0]["damping_ratio"] == pytest.approx(zeta_true, rel=0.01)
     assert res["modes"][0]["frequency_hz"] == pytest.approx(50.0, rel=1e-4)
     code, out, err = run_cli(capsys, ["estimate", str(path), "--excitation", "impact", "--averages", "6",
-                                      "--out", str(tmp_path / "frf.uff")])
+                                      "--decay", "0.01", "--out", str(tmp_path / "frf.uff")])
     assert code == 0, err
     assert f"'beam-damage identify --exp-window-tau {tau:.6g}' removes its decay" in out
     code, out, err = run_cli(capsys, ["identify", str(path), "--band", "20", "200", "--exp-window-tau", "0.2"])
