@@ -11,7 +11,7 @@ import numpy as np
 
 from learn.monitor.baseline_outliers import BASELINE_OUTLIER, exclude_baseline_outliers, outlier_novelty
 from learn.monitor.baseline_state import held_out_cached
-from learn.monitor.identification import IdentificationSettings, record_problem, write_cache
+from learn.monitor.identification import IdentificationSettings, write_cache
 from learn.monitor.pole_confirmation import confirm_far_poles
 from learn.monitor.normal_models import DEFAULT_LATENT, NORMAL_MODELS
 from learn.monitor.series import SeriesInput, check_series
@@ -212,7 +212,7 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
         rows.append({
             "file": series.files[i], "time": series.times[i], "time_value": float(series.time_values[i]),
             "baseline": i < n_baseline, "identified": bool(ok[i]), "error": errors[i],
-            "record_problem": record_problem(series.files[i]) if tests[i] is None else None,
+            "record_problem": getattr(errors[i], "record_problem", None) if tests[i] is None else None,
             "record_crop": (tests[i].record_crop or None) if tests[i] is not None else None,
             "status": _status(bool(ok[i]), bool(ok[i] and det.alarm[i]),
                               i in foreign or errors[i] == "conditions not measured", beyond.status(i)),

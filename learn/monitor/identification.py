@@ -25,12 +25,12 @@ from physics.io import (FRF, MODAL, TIME, atomic_write_text, finite_or_none, for
 from physics.io.inputs import check_input_file
 from physics.modal import modal_parameters, undamped_modes
 
-__all__ = ["CACHE_FORMAT", "NARROW_FORMAT", "IdentificationSettings", "IdentifiedModes", "cached_fft_peaks",
+__all__ = ["CACHE_FORMAT", "NARROW_FORMAT", "Failure", "IdentificationSettings", "IdentifiedModes", "cached_fft_peaks",
            "cached_identification", "file_key", "identification_settings", "identify_test", "read_test",
            "record_problem", "with_narrow_band_poles", "write_cache"]
 
 #: Format tag of a cache entry (a change of the identification or of the entry's fields changes it).
-CACHE_FORMAT = "beam-damage-monitor-cache/14"
+CACHE_FORMAT = "beam-damage-monitor-cache/15"
 #: Format tag of a narrow-band re-identification's entry (:func:`cached_identification` with ``narrow_hz``), part of
 #: its key beside :data:`CACHE_FORMAT`: a change of the identification of a mode known to lie in its band (SSI-cov's
 #: ``mode_in_band``) changes it and re-identifies those entries alone.
@@ -115,6 +115,22 @@ class IdentifiedModes:
                    d.get("record_crop", ""))
 
 
+class Failure(str):
+    """Why a test was not identified: the error text (this ``str``), and ``record_problem``, why its file holds no
+    usable record (:func:`record_problem`'s text, found while identifying it: its file is read once), or None when
+    the record reads and only its identification failed."""
+
+    record_problem: str | None
+
+    def __new__(cls, text: str, record_problem: str | None = None):
+        self = super().__new__(cls, text)
+        self.record_problem = record_problem
+        return self
+
+    def __reduce__(self):
+        return Failure, (str(self), self.record_problem)
+
+
 def identification_settings(band_hz=None, beam=None, model=None) -> IdentificationSettings:
     """The identification of a series: over ``band_hz`` (Hz) when given; else a trained model's (its test band,
     or up to :data:`learn.pairs.measured.IDENTIFICATION_BAND_FACTOR` times its nominal mode 4, the 4 lowest modes: what
@@ -154,8 +170,7 @@ def read_test(path) -> tuple:
     modal data)``, ``(TIME, response records without a force)`` or ``(FRF, measured FRFs)``, each checked by its
     reader (finite samples, a channel that varies, the fields and shapes of its format).
 
-    Raises :class:`BeamDamageError` (one line naming the file) when the file cannot be read or its record is not
-    usable (:func:`record_problem`)."""
+    Raises :class:`BeamDamageError` (one line naming the file) when the file cannot be read."""
     path = str(path)
     if modal_or_frf(path) == MODAL:
         return MODAL, prepare_measured(read(path, MODAL)).data
@@ -167,25 +182,45 @@ def read_test(path) -> tuple:
 
 
 def record_problem(path) -> str | None:
-    """Why the file of a test that was not identified holds no usable record (unreadable, truncated, missing
-    fields: :func:`read_test` refuses it; response records with NaN samples, a constant channel or one clipped
-    beyond its leading part: :func:`physics.identification.record_checks.check_records` refuses them), or None
-    when the record reads and only its identification failed. A test whose record is not usable says nothing of
-    the structure: it is not counted among the tests whose identification was lost
-    (:func:`learn.monitor.events.identification_change`). Modal data come from an identification run elsewhere: a
-    modal file that cannot be used is that identification's failure, and counts (None here)."""
+    """Why the file of a test holds no usable record (unreadable, truncated, missing fields: :func:`read_test`
+    refuses it; response records with NaN samples, a constant channel or one clipped beyond its leading part:
+    :func:`physics.identification.record_checks.check_records` refuses them), or None when the record reads (and
+    only its identification may fail). A test whose record is not usable says nothing of the structure: it is not
+    counted among the tests whose identification was lost (:func:`learn.monitor.events.identification_change`).
+    Modal data come from an identification run elsewhere: a modal file that cannot be used is that
+    identification's failure, and counts (None here). :func:`cached_identification` gives it of a file it read
+    (:attr:`Failure.record_problem`)."""
     try:
-        if modal_or_frf(path) == MODAL:
-            return None
-        kind, data = read_test(path)
-        if kind == TIME:
-            check_records(data.signals, data.sampling_frequency_hz, where=str(path))
+        test = read_test(path)
     except (BeamDamageError, OSError) as exc:
-        return _error_text(exc, path)
+        return _unreadable(exc, path).record_problem
+    return _records_problem(test, path)
+
+
+def _unreadable(exc, path) -> Failure:
+    """The failure of a test whose file :func:`read_test` refused with ``exc``: a record problem unless it is a
+    modal-data file."""
+    text = _error_text(exc, path)
+    try:
+        modal = modal_or_frf(path) == MODAL
+    except (BeamDamageError, OSError):
+        modal = False
+    return Failure(text, None if modal else text)
+
+
+def _records_problem(test, path) -> str | None:
+    """Why the response records of a test read by :func:`read_test` (``(kind, data)``) are not usable
+    (:func:`~physics.identification.record_checks.check_records` over the default band), or None."""
+    kind, data = test
+    if kind == TIME:
+        try:
+            check_records(data.signals, data.sampling_frequency_hz, where=str(path))
+        except (BeamDamageError, OSError) as exc:
+            return _error_text(exc, path)
     return None
 
 
-def identify_test(path, settings: IdentificationSettings, narrow_hz=None) -> IdentifiedModes:
+def identify_test(path, settings: IdentificationSettings, narrow_hz=None, test=None) -> IdentifiedModes:
     """One test's modes: an FRF file by LSCF/LSFD (:func:`learn.pairs.measured.identify_modes`, the identification
     ``classify`` runs), response records without a force by SSI-cov (as ``identify``; records clipped in their
     leading part from the samples after the clipping, ``record_crop``), modal data as read.
@@ -194,13 +229,15 @@ def identify_test(path, settings: IdentificationSettings, narrow_hz=None) -> Ide
     ``settings.n_modes``): the narrow-band re-identification around a reference mode that the identification over
     the series' band missed (its poles' ``narrow_band_hz`` that band; modal data are read as they are).
 
+    ``test``: ``(kind, data)`` of :func:`read_test` when the file was read already (None: read here).
+
     Raises :class:`BeamDamageError` (one line naming the file) when the file cannot be read or identified,
     including an exception of :data:`physics.identification.failures.PER_RECORD_ERRORS` in the identification (named
     by its class; :func:`~physics.identification.failures.identification_failure`).
     """
 
     path = str(path)
-    kind, data = read_test(path)
+    kind, data = read_test(path) if test is None else test
     if kind == MODAL:
         f, z, shapes = _modes_of(data.eigenvalues, data.eigenvectors)
         return IdentifiedModes("modal", "file", f, z, shapes, tuple(data.dofs or ()))
@@ -271,10 +308,11 @@ def file_key(path, settings: IdentificationSettings | None, extra=None) -> str:
 
 def cached_identification(path, settings: IdentificationSettings, cache_dir=None, pending: list | None = None,
                           narrow_hz=None):
-    """``(IdentifiedModes or None, error text or None, from_cache)`` of one test (with ``narrow_hz``: its
-    narrow-band re-identification, :func:`identify_test`).
+    """``(IdentifiedModes or None, Failure or None, from_cache)`` of one test (with ``narrow_hz``: its
+    narrow-band re-identification, :func:`identify_test`); the :class:`Failure` of a test not identified carries
+    its :func:`record_problem`, found from the file read for the identification.
 
-    With ``cache_dir``, the result (or the error of a file that cannot be identified) is read from
+    With ``cache_dir``, the result (or the failure of a file that cannot be identified) is read from
     ``cache_dir/<key>.json`` (:func:`file_key`) or, once identified, written there atomically; with ``pending`` (a
     list) the entry to write is appended to it as ``(path, text)`` instead (written when the series is accepted).
     """
@@ -283,21 +321,29 @@ def cached_identification(path, settings: IdentificationSettings, cache_dir=None
         narrow = None if narrow_hz is None else [*(float(b) for b in narrow_hz), NARROW_FORMAT]
         key = file_key(path, settings, narrow) if cache_dir else None
     except (BeamDamageError, OSError) as exc:
-        return None, _error_text(exc, path), False
+        return None, Failure(_error_text(exc, path), record_problem(path)), False
     entry = Path(cache_dir) / f"{key}.json" if cache_dir else None
     try:
         if (d := _entry(entry)) is not None:
-            return (None if d["modes"] is None else IdentifiedModes.from_dict(d["modes"])), d["error"], True
+            return (None if d["modes"] is None else IdentifiedModes.from_dict(d["modes"]),
+                    None if d["error"] is None else Failure(d["error"], d["record_problem"]), True)
     except (ValueError, KeyError, TypeError):
         pass                                                # a damaged entry: identified again
+    modes, error = None, None
     try:
-        modes, error = identify_test(path, settings, narrow_hz), None
+        test = read_test(path)
     except (BeamDamageError, OSError) as exc:
-        modes, error = None, _error_text(exc, path)
+        error = _unreadable(exc, path)
+    else:
+        try:
+            modes = identify_test(path, settings, narrow_hz, test)
+        except (BeamDamageError, OSError) as exc:
+            error = Failure(_error_text(exc, path), _records_problem(test, path))
     if entry is not None:
         text = json.dumps({"format": CACHE_FORMAT, "file": str(path), "settings": settings.to_dict(),
                            "narrow_band_hz": None if narrow_hz is None else [float(b) for b in narrow_hz],
-                           "modes": None if modes is None else modes.to_dict(), "error": error})
+                           "modes": None if modes is None else modes.to_dict(), "error": error,
+                           "record_problem": None if error is None else error.record_problem})
         if pending is None:
             write_cache([(entry, text)])
         else:

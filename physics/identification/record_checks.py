@@ -129,8 +129,9 @@ def _band(band_hz, fs):
 
 
 def check_records(signals, sampling_frequency_hz, band_hz=None, where="record", chunk_values=2**22) -> CheckedRecord:
-    """Check a response record for every output-only method (see the module docstring) in one pass over chunks
-    (two when it is clipped in its leading part).
+    """Check a response record for every output-only method (see the module docstring) in one pass over chunks;
+    a record clipped in its leading part, then once over the samples kept (their sums, and how many lie at their
+    extremes: a channel's runs are read again only where a clipped run can lie).
 
     Parameters
     ----------
@@ -180,7 +181,7 @@ def check_records(signals, sampling_frequency_hz, band_hz=None, where="record", 
     n_ch, n = y.shape
     check_periods(n / fs, band[0], "the band's lower limit", where)
     step = max(1, chunk_values // n_ch)
-    mean, runs, ends = _scan(y, step, where)
+    mean, runs, ends, extremes = _scan(y, step, where)
     if not runs:
         return CheckedRecord(y, fs, band, mean)
     # after each clipped channel's last sample at a limit it is clipped at, a guard as long as its longest run
@@ -199,24 +200,19 @@ def check_records(signals, sampling_frequency_hz, band_hz=None, where="record", 
                          f"{side} value {value:.6g}, {r / near:.3g} times the longest run at any level near it "
                          f"({near}); its samples at the clipped limits end at sample {end}: {need}; identify from "
                          "unclipped records")
-    rest = y[:, first:]
-    mean, again, _ = _scan(rest, step, f"{where} (from sample {first} on, after its clipped runs)")
-    if again:
-        k, a, r, value, *_ = again[0]
-        raise ShapeError(f"{where}: channel {k} is clipped before sample {first} and after it, at samples "
-                         f"{first + a}-{first + a + r - 1} (held at {value:.6g}); identify from unclipped records")
     crop = RecordCrop(first, tuple((k, a, a + r - 1) for k, a, r, *_ in runs), n, fs, max(ends.values()))
-    return CheckedRecord(rest, fs, band, mean, crop)
+    return CheckedRecord(y[:, first:], fs, band, _kept_mean(y, first, step, extremes, where), crop)
 
 
 def _scan(y, step, where) -> tuple:
     """One pass over the record ``y`` in chunks of ``step`` samples: ``(each channel's mean, clipped runs, {channel:
-    last sample at a limit it is clipped at})``, the runs as ``(channel, first sample, length, value, longest run at
-    any level near it, "highest" or "lowest")`` in order of channel and sample. Refuses NaN or infinite samples and
+    last sample at a limit it is clipped at}, (each chunk's lowest, each chunk's highest sample))``, the runs as
+    ``(channel, first sample, length, value, longest run at any level near it, "highest" or "lowest")`` in order of
+    channel and sample, the chunks' extremes of shape (n_chunks, n_channels). Refuses NaN or infinite samples and
     a constant channel (``where`` names the record)."""
     n_ch, n = y.shape
     total = np.zeros(n_ch)
-    lo, hi = np.full(n_ch, np.inf), np.full(n_ch, -np.inf)
+    chunk_lo, chunk_hi = [], []
     for a in range(0, n, step):
         c = np.asarray(y[:, a:a + step], dtype=np.float64)
         finite = np.isfinite(c)
@@ -225,19 +221,68 @@ def _scan(y, step, where) -> tuple:
             raise ShapeError(f"{where}: channel {k} holds NaN or inf samples (sample "
                              f"{a + int(np.argmax(~finite[k]))})")
         total += c.sum(axis=1)
-        lo, hi = np.minimum(lo, c.min(axis=1)), np.maximum(hi, c.max(axis=1))
+        chunk_lo.append(c.min(axis=1))
+        chunk_hi.append(c.max(axis=1))
+    chunk_lo, chunk_hi = np.array(chunk_lo), np.array(chunk_hi)
+    lo, hi = chunk_lo.min(axis=0), chunk_hi.max(axis=0)
+    _refuse_constant(lo, hi, where)
+    runs, ends = [], {}
+    for k in range(n_ch):
+        clipped, end = _clipped_runs(y, k, lo[k], hi[k], step)
+        runs += clipped
+        if clipped:
+            ends[k] = end
+    return total / n, runs, ends, (chunk_lo, chunk_hi)
+
+
+def _kept_mean(y, first, step, extremes, where) -> np.ndarray:
+    """Each channel's mean over the samples of ``y`` from ``first`` on (summed in chunks of ``step`` samples from
+    ``first``, as :func:`_scan` sums a record), refusing a channel constant there or clipped there too.
+
+    The kept part's extremes come from the chunks' extremes of :func:`_scan` (``extremes``) and the part of the
+    chunk holding ``first`` after it; a clipped run at one of them is longer than :data:`CLIP_RUN_RATIO` (and at
+    least :data:`CLIP_MIN_RUN`) samples, so the runs of a channel are read only when that many of its kept samples
+    lie at one of its extremes."""
+    n_ch, n = y.shape
+    kept = n - first
+    j = first // step
+    head = np.asarray(y[:, first:(j + 1) * step], dtype=np.float64)
+    lo = np.minimum(head.min(axis=1), extremes[0][j + 1:].min(axis=0, initial=np.inf))
+    hi = np.maximum(head.max(axis=1), extremes[1][j + 1:].max(axis=0, initial=-np.inf))
+    _refuse_constant(lo, hi, f"{where} (from sample {first} on, after its clipped runs)")
+    rest = y[:, first:]
+    total = np.zeros(n_ch)
+    at_lo, at_hi = np.zeros(n_ch, int), np.zeros(n_ch, int)
+    for a in range(0, kept, step):
+        c = np.asarray(rest[:, a:a + step], dtype=np.float64)
+        total += c.sum(axis=1)
+        at_lo += np.count_nonzero(c == lo[:, None], axis=1)
+        at_hi += np.count_nonzero(c == hi[:, None], axis=1)
+    shortest = max(CLIP_MIN_RUN, int(np.floor(CLIP_RUN_RATIO)) + 1)     # > CLIP_RUN_RATIO x a run of 1
+    for k in np.flatnonzero((at_lo >= shortest) | (at_hi >= shortest)):
+        clipped, _ = _clipped_runs(rest, int(k), lo[k], hi[k], step)
+        if clipped:
+            k, a, r, value, *_ = clipped[0]
+            raise ShapeError(f"{where}: channel {k} is clipped before sample {first} and after it, at samples "
+                             f"{first + a}-{first + a + r - 1} (held at {value:.6g}); identify from unclipped records")
+    return total / kept
+
+
+def _refuse_constant(lo, hi, where) -> None:
+    """Refuse a channel whose lowest sample ``lo`` is its highest ``hi`` (shape (n_channels,))."""
     flat = hi <= lo
     if np.any(flat):
         raise ShapeError(f"{where}: channel {int(np.argmax(flat))} is constant; nothing to identify from it")
-    runs, ends = [], {}
-    for k in range(n_ch):
-        starts, lengths, values, near, last = _extreme_runs(y, k, lo[k], hi[k], step)
-        clipped = lengths > CLIP_RUN_RATIO * near
-        runs += [(k, int(a), int(r), float(v), near, "highest" if v == hi[k] else "lowest")
-                 for a, r, v in zip(starts[clipped], lengths[clipped], values[clipped])]
-        if clipped.any():
-            ends[k] = max(last[v] for v in values[clipped])
-    return total / n, runs, ends
+
+
+def _clipped_runs(y, k, lo, hi, step) -> tuple:
+    """``(clipped runs of channel k, last sample at a limit it is clipped at or None)``, the runs as :func:`_scan`
+    gives them, of the channel's lowest sample ``lo`` and highest ``hi``."""
+    starts, lengths, values, near, last = _extreme_runs(y, k, lo, hi, step)
+    clipped = lengths > CLIP_RUN_RATIO * near
+    runs = [(k, int(a), int(r), float(v), near, "highest" if v == hi else "lowest")
+            for a, r, v in zip(starts[clipped], lengths[clipped], values[clipped])]
+    return runs, (max(last[v] for v in values[clipped]) if runs else None)
 
 
 def _extreme_runs(y, k, lo, hi, step):

@@ -260,3 +260,37 @@ def test_alarms_missing_a_mode_group_without_a_numpy_warning_and_an_unscaled_cha
         lone = group_events(rows + [c], 0.01)[0]
     assert [list(e.members) for e in events] == [[40, 41]]
     assert "(the most: mode 1 +3 %, no baseline scatter to scale it by)" in lone.text
+
+
+def test_a_test_not_identified_is_read_once_and_its_record_problem_comes_from_the_cache(tmp_path, monkeypatch,
+                                                                                        slit_series):
+    """A truncated .npz and response records clipped late (a run held at their highest value from sample 3000 of
+    4000) among the modal tests: each file read once by the series' identification, its row's ``record_problem``
+    that of :func:`record_problem` (which reads the file again), and the same from the cache without reading it."""
+    import pickle
+
+    import learn.monitor.identification as ident
+    from learn.monitor import IdentificationSettings, SeriesInput, monitor_series
+
+    _, files, _ = slit_series
+    clipped, cut = tmp_path / "clipped.npz", tmp_path / "cut.npz"
+    y = np.round(20 * np.random.default_rng(3).standard_normal(4000))
+    y[3000:3050] = y.max() + 1
+    np.savez(clipped, signals=y[None], sampling_frequency_hz=np.array(1000.0), dofs=np.array(["3:+Y"]))
+    cut.write_bytes(clipped.read_bytes()[:300])
+    expected = [record_problem(cut), record_problem(clipped)]
+    assert "not a readable .npz" in expected[0] and "channel 0 is clipped: samples 3000-3049" in expected[1]
+    tests = [str(f) for f in files[:22]] + [str(cut), str(clipped)] + [str(f) for f in files[24:]]
+    reads = []
+    real = ident.read_test
+    monkeypatch.setattr(ident, "read_test", lambda path: reads.append(str(path)) or real(path))
+    for _ in range(2):                                  # identified, then from the cache
+        reads.clear()
+        res = monitor_series(SeriesInput.from_files(tests), 18, IdentificationSettings(), tmp_path / "cache",
+                             progress=False)
+        assert [r["status"] for r in res.rows[22:24]] == ["not identified"] * 2
+        assert [r["record_problem"] for r in res.rows[22:24]] == expected
+        assert sorted(r for r in reads if r.endswith(".npz")) == ([str(clipped), str(cut)] if _ == 0 else [])
+    error = res.rows[23]["error"]
+    assert error.startswith(str(clipped)) and error.record_problem == expected[1]
+    assert pickle.loads(pickle.dumps(error)).record_problem == expected[1]          # across worker processes

@@ -130,3 +130,76 @@ def test_monitor_identifies_a_test_clipped_at_its_hit_and_names_the_crop(tmp_pat
     assert IdentifiedModes.from_dict(json.loads(json.dumps(modes.to_dict()))).record_crop == modes.record_crop
     assert record_problem(early) is None
     assert "channel 0 is clipped: samples" in record_problem(late) and str(late) in record_problem(late)
+
+
+def _kept_reference(y, first, step):
+    """Each channel's mean over ``y[:, first:]`` (summed in chunks of ``step`` samples, as the check sums a record),
+    or the one-line refusal of that part: constant, or clipped by the rule read plainly (the runs of each whole
+    channel at its own extremes against the longest run at any other level within 10 % of its range of them)."""
+    rest = np.asarray(y[:, first:], float)
+    lo, hi = rest.min(axis=1), rest.max(axis=1)
+    if np.any(hi <= lo):
+        return (f"record (from sample {first} on, after its clipped runs): channel {int(np.argmax(hi <= lo))} is "
+                "constant; nothing to identify from it")
+    for k, v in enumerate(rest):
+        starts = np.r_[0, np.flatnonzero(np.diff(v)) + 1]
+        lengths, values = np.diff(np.r_[starts, v.size]), v[starts]
+        extreme = (values == lo[k]) | (values == hi[k])
+        margin = 0.1 * (hi[k] - lo[k])
+        near = lengths[~extreme & ((values <= lo[k] + margin) | (values >= hi[k] - margin))].max(initial=1)
+        clipped = np.flatnonzero(extreme & (lengths >= 3) & (lengths > 5 * near))
+        if clipped.size:
+            i = clipped[0]
+            return (f"record: channel {k} is clipped before sample {first} and after it, at samples "
+                    f"{first + starts[i]}-{first + starts[i] + lengths[i] - 1} (held at {values[i]:.6g}); identify "
+                    "from unclipped records")
+    total = np.zeros(rest.shape[0])
+    for a in range(0, rest.shape[1], step):
+        total += rest[:, a:a + step].sum(axis=1)
+    return total / rest.shape[1]
+
+
+def _held_at_start(seed, n=3000, hold=(400, 20)):
+    """Two channels of integer noise (3 levels rms); channel 0 held at 50 over ``hold`` (first sample, length), far
+    above the noise: the crop starts a guard of that length after the run."""
+    rng = np.random.default_rng(seed)
+    y = np.round(3 * rng.standard_normal((2, n)))
+    a, r = hold
+    y[0, a:a + r] = 50.0
+    return y, a + 2 * r
+
+
+@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("case, outcome", [
+    ("noise", "kept"), ("held later", "clipped"), ("six held later", "clipped"), ("five held later", "kept"),
+    ("dead after", "constant"), ("coarse after", "clipped"), ("slow after", "kept")])
+@pytest.mark.parametrize("chunk_values", [2**22, 777])
+def test_the_kept_part_of_a_record_clipped_at_its_start_gives_the_plain_reading(seed, case, outcome, chunk_values):
+    """The samples after the crop: their mean to the bit, or the refusal word for word, as the plain reading of
+    the rule on that part (:func:`_kept_reference`): noise kept; a run held at 30 levels later (the kept part's
+    highest, below the record's 50) clipped, one of 6 samples too (longer than 5 runs of 1), one of 5 not; channel 1
+    dead after the crop constant; channel 1 clipped at 2 levels clipped; a slow sine quantised to 8 levels (its top
+    level held 136 samples, 2.7 times a run at the level below) kept. Levels of 0.01: the sums are rounded, and
+    their order shows in the mean."""
+    y, first = _held_at_start(seed)
+    n = y.shape[1]
+    if case.endswith("held later"):
+        y[0, 2000:2000 + {"held later": 15, "six held later": 6, "five held later": 5}[case]] = 30.0
+    elif case == "dead after":
+        y[1, 300:] = 0.0
+    elif case == "coarse after":
+        y[1, first:] = np.clip(y[1, first:], -2, 2)
+    elif case == "slow after":
+        y[1, first:] = np.round(8 * np.sin(2 * np.pi * np.arange(n - first) / 1200))
+    y = 0.01 * y
+    expected = _kept_reference(y, first, max(1, chunk_values // 2))
+    if outcome == "kept":
+        checked = check_records(y, FS, chunk_values=chunk_values)
+        assert checked.crop.first_sample == first and checked.crop.runs == ((0, 400, 419),)
+        np.testing.assert_array_equal(checked.signals, y[:, first:])
+        assert checked.mean.tobytes() == expected.tobytes()
+    else:
+        assert isinstance(expected, str) and (("constant" in expected) == (outcome == "constant"))
+        with pytest.raises(ShapeError) as e:
+            check_records(y, FS, chunk_values=chunk_values)
+        assert str(e.value) == expected
