@@ -18,8 +18,8 @@ mode decaying over a 4-s record sampled at 77 Hz, noise 1e-3 of its amplitude: i
 the Cramer-Rao bound at model order 2, 110-480 times at orders 4-30). The selected poles of a free response
 are therefore refined in their own bands of the decays' Fourier transforms, each decay from its hit's onset, as
 ``era`` refines its poles (:func:`~physics.identification.band_refine.refine_in_bands`); the one-sigma frequency
-and damping of a refined mode are the band fit's, and a pole the refinement merges into a stronger one of its peak
-is dropped.
+and damping of a refined mode are the band fit's, a pole the refinement merges into a stronger one of its peak is
+dropped, and a pole it draws out of the band keeps SSI-cov's estimate.
 """
 
 from __future__ import annotations
@@ -466,7 +466,7 @@ def _refine_free_response(checked, eigenvalues):
 
 def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max_order=None, block_rows=None,
                  references=None, n_segments=8, max_damping=MAX_DAMPING, chunk_samples=8192,
-                 where="record", mode_in_band=False) -> SSIIdentification:
+                 where="record", mode_in_band=False, refine_decays=True) -> SSIIdentification:
     """SSI-cov identification of a multichannel response record (output-only), sized to the record's spectrum.
 
     The clear peaks of the record's singular-value spectrum (:func:`~physics.identification.fdd.clear_peaks`)
@@ -513,6 +513,9 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         (:func:`~physics.identification.poles.damping_resolution`), so that a lightly damped mode of a short
         record is stable. Without it, against the damping alone: a harmonic of the excitation, whose damping is
         zero within the noise, is then unstable and stays a clear peak without a mode.
+    refine_decays : bool
+        Refine the modes of a free response in their bands of its decays (module docstring); False keeps SSI-cov's
+        poles (``identify_records``' fallback where ``era`` found no mode).
 
     Returns
     -------
@@ -573,9 +576,10 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     n_seen = np.sum(np.isfinite(f_seg), axis=0)
     f_std, z_std = _standard_error(f_seg, n_seen), _standard_error(z_seg, n_seen)
     lam = eigenvalues_from_modal(fn, zeta)
-    bands = _refine_free_response(checked, lam)
+    bands = _refine_free_response(checked, lam) if refine_decays else None
     if bands is not None:                               # a free response: each pole refined in its own band
-        ok = bands.converged
+        f_ref = bands.natural_frequencies_hz
+        ok = bands.converged & (f_ref >= band[0]) & (f_ref <= band[1])     # a pole drawn out of the band: SSI's
         lam = np.where(ok, bands.eigenvalues, lam)
         f_std, z_std = np.where(ok, bands.frequency_std_hz, f_std), np.where(ok, bands.damping_std, z_std)
         order = np.flatnonzero(~bands.merged)           # a pole merged into a stronger one of its peak is none

@@ -31,6 +31,7 @@ def test_ssi_cov_finds_the_chain_modes_with_their_damping_and_shapes():
     assert np.all(np.diag(mac(phi, e.shapes)) > 0.999)
     np.testing.assert_allclose(np.linalg.norm(e.shapes, axis=0), 1.0)
     assert not e.scaled and e.method == "ssi"
+    assert res.bands is None                                # a stationary record: SSI-cov's own poles
     # the segment spread is a standard error: the truth lies within 4 sigma, and sigma is small but not zero
     assert np.all(np.abs(e.natural_frequencies_hz - fn) < 4 * e.frequency_std_hz)
     assert np.all((e.frequency_std_hz > 0) & (e.frequency_std_hz < 2e-3 * fn))
@@ -189,3 +190,5 @@ def test_a_free_decay_is_identified_near_the_cramer_rao_bound():
     assert np.all(np.abs(np.mean(got, axis=0) - fn) < 4 * crb)
     assert np.all(np.std(got, axis=0, ddof=1) < 2.0 * crb)
     np.testing.assert_allclose(np.mean(one_sigma, axis=0), crb, rtol=0.5)   # the band fit's sigma is the bound's
+    unrefined = identify_ssi((clean + sigma * rng.standard_normal(t.size))[None], fs, refine_decays=False)
+    assert unrefined.bands is None
