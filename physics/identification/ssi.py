@@ -11,15 +11,12 @@ segments whose correlations are kept apart: the one-sigma frequency and damping 
 mode over the segments divided by ``sqrt(n_segments)`` (batch estimate of the standard error of the full-record
 estimate).
 
-A free response (decays after hits, :func:`~physics.identification.decays.free_response`) is no stationary record:
-the error of its correlations, the products of the noise with the decaying response, has the modes' own spectrum,
-so the poles a model of more than the modes' order adds sit beside each mode and move it (one 1 %-damped 12 Hz
-mode decaying over a 4-s record sampled at 77 Hz, noise 1e-3 of its amplitude: its frequency scatters 1.1-1.9 times
-the Cramer-Rao bound at model order 2, 110-480 times at orders 4-30). The selected poles of a free response
-are therefore refined in their own bands of the decays' Fourier transforms, each decay from its hit's onset, as
-``era`` refines its poles (:func:`~physics.identification.band_refine.refine_in_bands`); the one-sigma frequency
-and damping of a refined mode are the band fit's, a pole the refinement merges into a stronger one of its peak is
-dropped, and a pole it draws out of the band keeps SSI-cov's estimate.
+A free response (:func:`~physics.identification.decays.free_response`) is no stationary record: its correlations'
+error, the noise times the decaying response, has the modes' spectrum, and the poles of a model above the modes'
+order sit beside each mode and move it (a 1 %-damped 12 Hz decay over 4 s at 77 Hz, noise 1e-3: 1.1-1.9x the
+Cramer-Rao bound at order 2, 110-480x at orders 4-30). Its selected poles are refined in their bands of the decays'
+transforms as ``era``'s are (:func:`~physics.identification.band_refine.refine_in_bands`): the one sigma is the
+band fit's, a pole merged into a stronger one of its peak is dropped, one drawn out of the band keeps SSI-cov's.
 """
 
 from __future__ import annotations
@@ -578,8 +575,7 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     lam = eigenvalues_from_modal(fn, zeta)
     bands = _refine_free_response(checked, lam) if refine_decays else None
     if bands is not None:                               # a free response: each pole refined in its own band
-        f_ref = bands.natural_frequencies_hz
-        ok = bands.converged & (f_ref >= band[0]) & (f_ref <= band[1])     # a pole drawn out of the band: SSI's
+        ok = bands.converged & (bands.natural_frequencies_hz >= band[0]) & (bands.natural_frequencies_hz <= band[1])
         lam = np.where(ok, bands.eigenvalues, lam)
         f_std, z_std = np.where(ok, bands.frequency_std_hz, f_std), np.where(ok, bands.damping_std, z_std)
         order = np.flatnonzero(~bands.merged)           # a pole merged into a stronger one of its peak is none
