@@ -299,9 +299,11 @@ def _warn_if_free(records, method, band) -> None:
     where = str(records.metadata.get("source", "records"))
     verdict = free_response(check_records(records.signals, records.sampling_frequency_hz, band, where))
     if verdict.free:
+        effect = ("modes may be missed (the poles it keeps are refined in their bands of the decays, as era's are)"
+                  if method == "ssi" else "modes may be missed and damping overestimated")
         warnings.warn(f"{where}: {verdict.text}; {method} assumes a stationary response: its spectra or "
-                      "correlations averaged over the whole record dilute the decays, so modes may be missed and "
-                      "damping overestimated; --method era or fftpeak read free decays", UserWarning, stacklevel=2)
+                      f"correlations averaged over the whole record dilute the decays, so {effect}; --method era or "
+                      "fftpeak read free decays", UserWarning, stacklevel=2)
 
 
 def _run_output_only(args, records, band) -> dict:

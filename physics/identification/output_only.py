@@ -145,7 +145,8 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         A key of :data:`METHODS` with ``data == "records"``, or ``"auto"``: :data:`FREE_RESPONSE_METHOD` for a
         free response (:func:`~physics.identification.decays.free_response`: decays after hits),
         :data:`STATIONARY_METHOD` otherwise; when the picked method finds no mode, the other is tried, and
-        :attr:`RecordsIdentification.method_choice` says so.
+        :attr:`RecordsIdentification.method_choice` says so (SSI-cov tried so on a free response keeps its own
+        poles, unrefined in the decays' bands: ``identify_ssi(refine_decays=False)``).
     band_hz : (float, float), optional
     n_modes : int, optional
     max_order : int, optional
@@ -183,11 +184,13 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
     kinds = set(records.quantities)
     quantity = kinds.pop() if len(kinds) == 1 and kinds <= set(PEAK_EXPONENT) else None
 
-    def fit(name, signals):
+    def fit(name, signals, fallback=False):
         spec = METHODS[name]
         options = {k: {"max_order": max_order}[k] for k in spec.options}
         if mode_in_band and "mode_in_band" in signature(spec.fit).parameters:
             options["mode_in_band"] = True
+        if fallback and "refine_decays" in signature(spec.fit).parameters:
+            options["refine_decays"] = False        # SSI-cov's own poles where era found none (docs/identification.md)
         if "quantity" in signature(spec.fit).parameters:          # the peak's conversion to f_n (fftpeak)
             options["quantity"] = quantity
         return spec.fit(signals, fs, band_hz, n_modes, where, **options)
@@ -217,7 +220,7 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         if other == FREE_RESPONSE_METHOD and not verdict.decays.starts.size:
             raise _tried(first, f"{why}; {other} not tried: the record holds no decay") from None
         try:
-            est, diagram = fit(other, checked)
+            est, diagram = fit(other, checked, fallback=True)
         except (ConvergenceError, ShapeError):
             raise _tried(first, f"{why}; {other} found no mode either") from None
         why = f"{why}; {picked} found no mode ({first}), so {other}"

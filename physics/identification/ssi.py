@@ -10,6 +10,13 @@ poles are selected by :func:`~physics.identification.poles.select_poles` as for 
 segments whose correlations are kept apart: the one-sigma frequency and damping of each mode are the spread of the
 mode over the segments divided by ``sqrt(n_segments)`` (batch estimate of the standard error of the full-record
 estimate).
+
+A free response (:func:`~physics.identification.decays.free_response`) is no stationary record: its correlations'
+error, the noise times the decaying response, has the modes' spectrum, and the poles of a model above the modes'
+order sit beside each mode and move it (a 1 %-damped 12 Hz decay over 4 s at 77 Hz, noise 1e-3: 1.1-1.9x the
+Cramer-Rao bound at order 2, 110-480x at orders 4-30). Its selected poles are refined in their bands of the decays'
+transforms as ``era``'s are (:func:`~physics.identification.band_refine.refine_in_bands`): the one sigma is the
+band fit's, a pole merged into a stronger one of its peak is dropped, one drawn out of the band keeps SSI-cov's.
 """
 
 from __future__ import annotations
@@ -20,6 +27,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from physics.errors import ConvergenceError, ShapeError
+from physics.identification.band_refine import BandFit, refine_in_bands
+from physics.identification.decays import find_decays, free_response
 from physics.identification.fdd import (
     CLEAR_PEAK_DB,
     ClearPeaks,
@@ -284,6 +293,8 @@ class SSIIdentification:
         Clear peaks left without a mode (named in a warning).
     segment_frequencies_hz, segment_damping_ratios : ndarray, shape (n_segments, n_modes)
         Each mode in each segment of its pass (NaN where a segment did not show it).
+    bands : BandFit or None
+        For a free response, the band refinement of the selected poles (in their order before it); None otherwise.
     """
 
     estimate: ModalEstimate
@@ -292,6 +303,7 @@ class SSIIdentification:
     unexplained_hz: np.ndarray
     segment_frequencies_hz: np.ndarray
     segment_damping_ratios: np.ndarray
+    bands: BandFit | None = None
 
     @property
     def diagram(self) -> StabilisationDiagram:
@@ -435,9 +447,23 @@ def _standard_error(seg: np.ndarray, n_seen: np.ndarray) -> np.ndarray:
             / np.sqrt(np.maximum(n_seen, 1))
 
 
+def _refine_free_response(checked, eigenvalues):
+    """The band refinement of the poles of a free response (each decay from its hit's onset, a hit adding energy
+    over a period of the lowest pole, as ``era`` finds them;
+    :func:`~physics.identification.band_refine.refine_in_bands`), or None for a record that is none."""
+    if not free_response(checked).free:
+        return None
+    d = find_decays(checked, lowest_hz=float(np.min(np.abs(eigenvalues))) / (2 * np.pi))
+    if not d.onsets.size:
+        return None
+    x = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
+    return refine_in_bands([x[:, a:b] for a, b in zip(d.onsets.tolist(), d.stops.tolist())],
+                           checked.sampling_frequency_hz, eigenvalues)
+
+
 def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max_order=None, block_rows=None,
                  references=None, n_segments=8, max_damping=MAX_DAMPING, chunk_samples=8192,
-                 where="record", mode_in_band=False) -> SSIIdentification:
+                 where="record", mode_in_band=False, refine_decays=True) -> SSIIdentification:
     """SSI-cov identification of a multichannel response record (output-only), sized to the record's spectrum.
 
     The clear peaks of the record's singular-value spectrum (:func:`~physics.identification.fdd.clear_peaks`)
@@ -453,7 +479,8 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     within 1 % of is kept too, peak or none (a mode the whole band's model could not resolve). A cluster of poles
     stable over fewer orders than the selection asks but at a clear peak is kept, flagged ``weakly_stable``. A clear
     peak left without a mode is named in a warning, and so is a cluster of stable poles no pass kept
-    (:func:`~physics.identification.poles.missed_clusters`), with its height above the spectrum's floor.
+    (:func:`~physics.identification.poles.missed_clusters`), with its height above the spectrum's floor. The modes
+    of a free response are then refined in their bands of its decays, as ``era``'s are (module docstring).
 
     Parameters
     ----------
@@ -483,6 +510,9 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         (:func:`~physics.identification.poles.damping_resolution`), so that a lightly damped mode of a short
         record is stable. Without it, against the damping alone: a harmonic of the excitation, whose damping is
         zero within the noise, is then unstable and stays a clear peak without a mode.
+    refine_decays : bool
+        Refine the modes of a free response in their bands of its decays (module docstring); False keeps SSI-cov's
+        poles (``identify_records``' fallback where ``era`` found no mode).
 
     Returns
     -------
@@ -542,6 +572,17 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
                     for segs in ([m.segment_frequencies_hz for m in modes], [m.segment_damping_ratios for m in modes]))
     n_seen = np.sum(np.isfinite(f_seg), axis=0)
     f_std, z_std = _standard_error(f_seg, n_seen), _standard_error(z_seg, n_seen)
+    lam = eigenvalues_from_modal(fn, zeta)
+    bands = _refine_free_response(checked, lam) if refine_decays else None
+    if bands is not None:                               # a free response: each pole refined in its own band
+        ok = bands.converged & (bands.natural_frequencies_hz >= band[0]) & (bands.natural_frequencies_hz <= band[1])
+        lam = np.where(ok, bands.eigenvalues, lam)
+        f_std, z_std = np.where(ok, bands.frequency_std_hz, f_std), np.where(ok, bands.damping_std, z_std)
+        order = np.flatnonzero(~bands.merged)           # a pole merged into a stronger one of its peak is none
+        order = order[np.argsort(np.abs(lam[order]), kind="stable")]      # the refinement may reorder poles
+        lam, f_std, z_std, weak, shapes = lam[order], f_std[order], z_std[order], weak[order], shapes[:, order]
+        f_seg, z_seg = f_seg[:, order], z_seg[:, order]
+        fn, zeta = np.abs(lam) / (2 * np.pi), -lam.real / np.abs(lam)
     if weak.any():
         warnings.warn(f"{where}: mode(s) at {', '.join(f'{f:.4g} Hz' for f in fn[weak])} weakly stable (stable "
                       "over fewer model orders than the selection asks), kept because a clear spectral peak lies "
@@ -554,7 +595,6 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
                       f"; stable over fewer model orders than the selection asks, and no clear peak of the spectrum "
                       f"there ({CLEAR_PEAK_DB:g} dB above its floor or prominent over its noise): a mode to look for "
                       "with --band around it, or noise", UserWarning, stacklevel=2)
-    est = ModalEstimate(fn, zeta, eigenvalues_from_modal(fn, zeta), shapes,
-                        np.zeros((shapes.shape[0], 0, fn.size), complex), f_std, z_std,
+    est = ModalEstimate(fn, zeta, lam, shapes, np.zeros((shapes.shape[0], 0, fn.size), complex), f_std, z_std,
                         modal_phase_collinearity(shapes), "ssi", False, weakly_stable=weak)
-    return SSIIdentification(est, tuple(passes), peaks, peaks.frequency_hz[unexplained], f_seg, z_seg)
+    return SSIIdentification(est, tuple(passes), peaks, peaks.frequency_hz[unexplained], f_seg, z_seg, bands)

@@ -31,6 +31,7 @@ def test_ssi_cov_finds_the_chain_modes_with_their_damping_and_shapes():
     assert np.all(np.diag(mac(phi, e.shapes)) > 0.999)
     np.testing.assert_allclose(np.linalg.norm(e.shapes, axis=0), 1.0)
     assert not e.scaled and e.method == "ssi"
+    assert res.bands is None                                # a stationary record: SSI-cov's own poles
     # the segment spread is a standard error: the truth lies within 4 sigma, and sigma is small but not zero
     assert np.all(np.abs(e.natural_frequencies_hz - fn) < 4 * e.frequency_std_hz)
     assert np.all((e.frequency_std_hz > 0) & (e.frequency_std_hz < 2e-3 * fn))
@@ -153,3 +154,41 @@ def test_orders_the_shared_qr_cannot_take_are_solved_by_their_own_least_squares(
     orders = [2, 4, 6, 8, 10]                                                 # 10 > 8 rows of O[:-1]
     for p, A in zip(orders, state_matrices(O, 1, orders)):
         np.testing.assert_allclose(A, np.linalg.lstsq(O[:-1, :p], O[1:, :p], rcond=None)[0], rtol=1e-8, atol=1e-8)
+
+
+def _decay_crb_hz(t, fn, zeta, amp, sigma):
+    """Cramer-Rao bound (Hz) of each damped frequency of ``sum amp e^(-zeta w t) sin(w_d t)`` in white noise of
+    standard deviation ``sigma``: Fisher information of the damped frequencies, decay rates and cosine/sine
+    amplitudes from the model's exact Jacobian."""
+    w = 2 * np.pi * fn
+    wd, s = w * np.sqrt(1 - zeta ** 2), zeta * w
+    env = np.exp(-s[:, None] * t)
+    c, sn = env * np.cos(wd[:, None] * t), env * np.sin(wd[:, None] * t)
+    J = np.vstack([amp[:, None] * t * c, -amp[:, None] * t * sn, c, sn]).T
+    return np.sqrt(np.diag(np.linalg.inv(J.T @ J / sigma ** 2))[:fn.size]) / (2 * np.pi)
+
+
+def test_a_free_decay_is_identified_near_the_cramer_rao_bound():
+    # SSI-cov's poles of a decay's correlations scatter tens of times the bound (the correlations' error has the
+    # modes' spectrum, and a high-order model's extra poles sit beside each mode); refined in their bands they
+    # reach it, as era's do
+    fs, fn, zeta, amp, sigma = 500.0, np.array([12.0, 47.0]), np.array([0.01, 0.005]), np.array([1.0, 0.5]), 1e-3
+    t = np.arange(int(4 * fs)) / fs
+    clean = amp @ (np.exp(-zeta[:, None] * 2 * np.pi * fn[:, None] * t)
+                   * np.sin(2 * np.pi * fn[:, None] * np.sqrt(1 - zeta[:, None] ** 2) * t))
+    rng = np.random.default_rng(7)
+    got, one_sigma = [], []
+    for _ in range(8):
+        res = identify_ssi((clean + sigma * rng.standard_normal(t.size))[None], fs)
+        assert res.bands is not None                        # a free response: the band refinement ran
+        f = res.estimate.natural_frequencies_hz
+        j = np.argmin(np.abs(f[:, None] - fn[None, :]), axis=0)
+        got.append(f[j])
+        one_sigma.append(res.estimate.frequency_std_hz[j])
+    crb = _decay_crb_hz(t, fn, zeta, amp, sigma)
+    # natural frequency |lambda| / 2 pi: its scatter is the damped frequency's
+    assert np.all(np.abs(np.mean(got, axis=0) - fn) < 4 * crb)
+    assert np.all(np.std(got, axis=0, ddof=1) < 2.0 * crb)
+    np.testing.assert_allclose(np.mean(one_sigma, axis=0), crb, rtol=0.5)   # the band fit's sigma is the bound's
+    unrefined = identify_ssi((clean + sigma * rng.standard_normal(t.size))[None], fs, refine_decays=False)
+    assert unrefined.bands is None
