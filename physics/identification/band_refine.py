@@ -16,23 +16,26 @@ Levenberg-Marquardt steps (:func:`~physics.identification.damped_sinusoids.leven
 
 A band spans :data:`BAND_WIDTHS` half-power half-widths ``sigma / (2 pi)`` of its mode either side, and at least
 :data:`BAND_LINES` lines ``1 / T`` of the longest decay (a lightly damped mode's peak is the truncation's, ``1 / T``
-wide). Modes whose bands, grown by :data:`MERGE_FACTOR`, overlap are one group fitted in the union of their bands:
-a neighbour that close is no smooth background. The bands are swept :data:`SWEEPS` times: from the second sweep on,
-each band is that of the refined pole (its half-power width, not the starting pole's), and its data are less the
-closed-form transforms of the modes the other bands fitted, so the background takes only what no band models
-(modes no model holds, the hit). From the second sweep on, a lightly damped mode fitted alone (its band set by
-:data:`BAND_LINES`: six half-power half-widths are fewer lines) is also fitted in bands twice, four times ... as
-wide, up to :data:`WIDE_LINES` lines and half the distance to the nearest other pole (:func:`_wider_bands`): the
-level and slope take a share of the information the band holds about the pole, the larger the narrower the band
-beside the peak (+-8 lines: 1.2-1.3x the Cramer-Rao bound of a decay that lasts the record; +-32 lines: 1.0-1.1x).
-A wider band is kept while its fit's residual is white noise's size (:func:`_wider_fits_as_well`): its mean square
-no larger than the narrower band's fit's, and the same on its added lines as on the narrower band's, to the 1st and
-99th percentiles of the F distribution; a component no pole holds beside the band, or within it (a peak that is no
-one damped exponential: a component the record does not resolve, a mode whose frequency moves with its
-amplitude), leaves a misfit and keeps the narrower band. Modes held fixed (``fixed``: poles and amplitudes known,
-e.g. a model's modes while a further mode is refined beside them) are subtracted, by their closed-form transforms,
-from every decay's transform before any band is fitted, and are not refined: only the bands of the modes given are
-fitted (:func:`band_amplitudes` gives the amplitudes of fixed poles).
+wide). Modes whose bands, grown by :data:`MERGE_FACTOR`, overlap are one group fitted in the union of their bands: a
+neighbour that close is no smooth background. A chain of such pairs is one group: the first sweep subtracts no other
+group's modes (their amplitudes are not known yet), so a close neighbour left out of a group would be left to its
+background (:func:`mode_bands` with ``chains=False`` groups only modes every two of which are close, as the FRF
+refinement does, which subtracts every other pole's terms before each sweep). The bands are swept :data:`SWEEPS`
+times: from the second sweep on, each band is that of the refined pole (its half-power width, not the starting
+pole's), and its data are less the closed-form transforms of the modes the other bands fitted, so the background
+takes only what no band models (modes no model holds, the hit). From the second sweep on, a lightly damped mode
+fitted alone (its band set by :data:`BAND_LINES`: six half-power half-widths are fewer lines) is also fitted in
+bands twice, four times ... as wide, up to :data:`WIDE_LINES` lines and half the distance to the nearest other pole
+(:func:`_wider_bands`): the level and slope take a share of the information the band holds about the pole, the
+larger the narrower the band beside the peak (+-8 lines: 1.2-1.3x the Cramer-Rao bound of a decay that lasts the
+record; +-32 lines: 1.0-1.1x). A wider band is kept while its fit's residual is white noise's size
+(:func:`_wider_fits_as_well`): its mean square no larger than the narrower band's fit's, and the same on its added
+lines as on the narrower band's, to the 1st and 99th percentiles of the F distribution; a component no pole holds
+beside the band, or within it (a peak that is no one damped exponential: a component the record does not resolve, a
+mode whose frequency moves with its amplitude), leaves a misfit and keeps the narrower band. Modes held fixed
+(``fixed``: poles and amplitudes known, e.g. a model's modes while a further mode is refined beside them) are
+subtracted, by their closed-form transforms, from every decay's transform before any band is fitted, and are not
+refined: only the bands of the modes given are fitted (:func:`band_amplitudes` gives the amplitudes of fixed poles).
 
 Two poles of one band closer than their half-power half-widths summed and than the main lobe of the longest
 decay's transform (:data:`RESOLVED_LINES` lines), or closer than the record's resolution whatever their widths
@@ -145,8 +148,10 @@ class BandFit:
         return self.merged_into >= 0
 
 
-def mode_bands(eigenvalues, longest_s, nyquist_hz):
+def mode_bands(eigenvalues, longest_s, nyquist_hz, chains=True):
     """Each pole's band and group (see the module docstring).
+
+    Two modes are close where their bands, grown by :data:`MERGE_FACTOR` about their modes, overlap.
 
     Parameters
     ----------
@@ -155,6 +160,12 @@ def mode_bands(eigenvalues, longest_s, nyquist_hz):
     longest_s : float
         Length of the longest decay (s).
     nyquist_hz : float
+    chains : bool
+        True: a chain of close pairs is one group (single linkage). False: a group holds only modes every two of
+        which are close, groups joined nearest first (complete linkage: of neighbouring groups, those whose farthest
+        pair is the nearest, relative to the pair's half-widths summed, while that pair is close); a mode close to
+        two that are not close to each other (a weak mode between two strong ones) joins the nearer, and no group
+        stretches its band, and the one background it fits, over modes that are no neighbours.
 
     Returns
     -------
@@ -167,14 +178,36 @@ def mode_bands(eigenvalues, longest_s, nyquist_hz):
     half = np.maximum(BAND_WIDTHS * np.abs(lam.real) / (2 * np.pi), BAND_LINES / longest_s)
     order = np.argsort(f, kind="stable")
     fs_, hs = f[order], half[order]
-    apart = fs_[1:] - MERGE_FACTOR * hs[1:] > fs_[:-1] + MERGE_FACTOR * hs[:-1]
-    g_sorted = np.concatenate([[0], np.cumsum(apart)])
+    if chains:
+        apart = fs_[1:] - MERGE_FACTOR * hs[1:] > fs_[:-1] + MERGE_FACTOR * hs[:-1]
+        g_sorted = np.concatenate([[0], np.cumsum(apart)])
+    else:
+        g_sorted = _complete_groups(fs_, hs)
     group = np.empty(f.size, int)
     group[order] = g_sorted
     lo = np.array([np.min((f - half)[group == g]) for g in range(g_sorted[-1] + 1 if f.size else 0)])
     hi = np.array([np.max((f + half)[group == g]) for g in range(g_sorted[-1] + 1 if f.size else 0)])
     bands = np.stack([np.clip(lo, 0.0, nyquist_hz), np.clip(hi, 0.0, nyquist_hz)], axis=1)
     return bands[group] if f.size else np.zeros((0, 2)), group
+
+
+def _complete_groups(f_hz, half_hz):
+    """Groups (shape (m,) of int, 0, 1, ... in order) of poles sorted by frequency ``f_hz`` (Hz) with band
+    half-widths ``half_hz`` (Hz): runs of neighbours every two of which are close, joined nearest first
+    (:func:`mode_bands` with ``chains=False``)."""
+    m = f_hz.size
+    reach = np.abs(f_hz[:, None] - f_hz[None, :]) / (half_hz[:, None] + half_hz[None, :])   # close: <= MERGE_FACTOR
+    starts = list(range(m))                             # first pole of each run
+    while len(starts) > 1:
+        ends = starts[1:] + [m]
+        link = [reach[starts[i]:ends[i], starts[i + 1]:ends[i + 1]].max() for i in range(len(starts) - 1)]
+        i = int(np.argmin(link))
+        if link[i] > MERGE_FACTOR:
+            break
+        del starts[i + 1]
+    first = np.zeros(m, int)
+    first[starts[1:]] = 1
+    return np.cumsum(first)
 
 
 def band_data(spectra, lengths, fs, band_hz):

@@ -26,10 +26,15 @@ residual's standard deviation in the band.
 The bands and groups are those of :func:`~physics.identification.band_refine.mode_bands` with the record length
 ``1 / df`` of the FRF lines: :data:`~physics.identification.band_refine.BAND_WIDTHS` half-power half-widths
 ``sigma / (2 pi)`` of the mode either side, at least :data:`~physics.identification.band_refine.BAND_LINES` lines,
-and modes whose bands grown by :data:`~physics.identification.band_refine.MERGE_FACTOR` overlap fitted together in
-the union of their bands (a strong neighbour that close is no smooth background: both poles are fitted, each with
-its residues). The bands are swept :data:`SWEEPS` times, from the second on those of the refined poles; before
-each sweep the residues of every pole are fitted again over the whole band (LSFD, the poles of the sweep before),
+and modes every two of whose bands, grown by :data:`~physics.identification.band_refine.MERGE_FACTOR`, overlap
+fitted together in the union of their bands (a strong neighbour that close is no smooth background: both poles are
+fitted, each with its residues). A chain of such pairs is not one group (``mode_bands(..., chains=False)``): a weak
+mode close to two strong ones that are not close to each other joins the nearer, and the farther is fitted in its
+own band, the group's terms subtracted as every outside pole's are; one band over the chain would stretch one
+linear background over modes that are no neighbours (on the pyFRF hit 1, a weak 823.6 Hz mode chains 810 and
+851 Hz: one fit over 802-860 Hz gives 851.63 Hz against 851.55-851.57 Hz on the other hits; 851 Hz alone in its
+band, 851.58 Hz). The bands are swept :data:`SWEEPS` times, from the second on those of the refined poles; before each
+sweep the residues of every pole are fitted again over the whole band (LSFD, the poles of the sweep before),
 so each band subtracts its outside modes at their refined poles. A group is fitted only where its band is narrow
 beside its frequency (:data:`MAX_RELATIVE_HALF_WIDTH`). A group's fit that fails (singular: two poles on one peak;
 a pole that leaves its band, stops decaying or moves farther from its start than :data:`MAX_SHIFT_BANDWIDTHS` and
@@ -223,7 +228,7 @@ def refine_frf_poles(frequency_hz, frf, eigenvalues, refine=None, *, kind="recep
     iw_all = 2j * np.pi * f
     hk = h.reshape(-1, f.size)
     for _ in range(SWEEPS):                             # from the second on, the bands of the refined poles
-        b, g = mode_bands(np.where(converged, lam, lam0)[idx_todo], 1.0 / df, f[-1])
+        b, g = mode_bands(np.where(converged, lam, lam0)[idx_todo], 1.0 / df, f[-1], chains=False)
         bands[idx_todo] = np.clip(b, f[0], f[-1])
         group[idx_todo] = g
         fit = lsfd(f, h, lam, kind=kind, weighting="estimated")
