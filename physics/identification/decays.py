@@ -40,6 +40,9 @@ FREE_LEAD_DB = 10.0
 #: :data:`FREE_DROP_DB` with every quarter's energy below the one before (an exponential envelope falls steadily; a
 #: stationary response's quarters rise and fall at random, all three in order by chance one time in six).
 FREE_DROP_NO_HIT_DB = 10.0
+#: A pre-trigger shorter than the least decay is measured against the decay after it (:attr:`Decays.lead_db`) when
+#: it is white noise: its lag-one correlation within this of zero (white noise's, from 24 samples: 0 +- 0.2).
+WHITE_LAG1 = 0.5
 #: An oversampled record is searched for hits at its content's rate too: this many times its highest clear peak ...
 CONTENT_RATE = 2.5
 #: ... keeping at least this many predictor orders of samples.
@@ -61,7 +64,9 @@ class Decays:
         without a decay).
     lead_db : float
         Mean energy of the first decay after a hit over that of the samples before the first hit (dB; NaN
-        without a hit, or with fewer samples before it than the least decay).
+        without a hit, or with fewer samples before it than the least decay unless they are white noise
+        (:func:`_white`) and at least the predictor's order: the noise of a short pre-trigger, which a stationary
+        response's few samples are not).
     onsets : ndarray of int, shape (n_decays,)
         First sample of each decay's free response: the first sample of its hit (0 for the decay under way when
         the record starts). The samples from it to ``starts`` hold the hit, and the first milliseconds of the
@@ -152,6 +157,15 @@ def _decays_without_hit(x, a, b):
     quarters = np.sum(seg.reshape(seg.shape[0], 4, k) ** 2, axis=(0, 2))
     drop = _quarter_drop_db(x, a, b)
     return bool(drop >= FREE_DROP_NO_HIT_DB or (drop >= FREE_DROP_DB and np.all(np.diff(quarters) < 0)))
+
+
+def _white(seg):
+    """Whether samples ``seg`` (shape (n_channels, n_samples)) are white noise, as a pre-trigger is: the lag-one
+    correlation of their deviations from their mean, over the channels, within :data:`WHITE_LAG1` of zero (a
+    sampled response's is near one; a segment without variation, under one quantisation step, is white)."""
+    d = seg - seg.mean(axis=1, keepdims=True)
+    energy = np.sum(d ** 2)
+    return bool(energy <= 0 or abs(np.sum(d[:, 1:] * d[:, :-1])) < WHITE_LAG1 * energy)
 
 
 def _rises(x, innovation, p):
@@ -281,7 +295,7 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
     drop_db = float(np.average(drop, weights=[b - a for a, b, _ in spans])) if spans else np.nan
     lead_db = np.nan
     after = [(a, b) for a, b, _ in spans if a > head]
-    if head >= least and after:
+    if after and (head >= least or (head >= p and _white(x[:, :head]))):
         seg = x[:, after[0][0]:after[0][1]]
         lead_db = float(10 * np.log10(max(np.mean(seg.var(axis=1)), np.finfo(float).tiny)
                                       / max(np.mean(x[:, :head].var(axis=1)), np.finfo(float).tiny)))
