@@ -40,6 +40,10 @@ FREE_LEAD_DB = 10.0
 #: :data:`FREE_DROP_DB` with every quarter's energy below the one before (an exponential envelope falls steadily; a
 #: stationary response's quarters rise and fall at random, all three in order by chance one time in six).
 FREE_DROP_NO_HIT_DB = 10.0
+#: ... its loudest sample within this fraction of the part before the first hit from its start (a decay under way
+#: when the record starts is loudest near its start; a stationary response's loudest sample lies anywhere, and the
+#: part after it falls as the response returns to its level).
+NO_HIT_LOUDEST = 0.25
 #: A pre-trigger shorter than the least decay is measured against the decay after it (:attr:`Decays.lead_db`) when
 #: it is white noise: its lag-one correlation within this of zero (white noise's, from 24 samples: 0 +- 0.2).
 WHITE_LAG1 = 0.5
@@ -262,7 +266,8 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
     period at random. Each decay runs from
     the sample after a hit to the sample before the next one (or
     the record's end); the part before the first hit (or the whole record, without a hit) from its loudest sample
-    on is a decay when its energy falls steadily (:func:`_decays_without_hit`). Decays
+    on is a decay when that sample lies in its first :data:`NO_HIT_LOUDEST` and its energy falls steadily
+    (:func:`_decays_without_hit`). Decays
     shorter than ``min_samples`` (default four times the predictor's order) are left out.
     """
     x = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
@@ -290,7 +295,7 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
     head = int(firsts[0]) if firsts.size else n
     if head >= least:
         s0 = int(np.argmax(np.sum(x[:, :head] ** 2, axis=0)))
-        if head - s0 >= least and _decays_without_hit(x, s0, head):
+        if head - s0 >= least and s0 <= NO_HIT_LOUDEST * head and _decays_without_hit(x, s0, head):
             spans, drop = [(s0, head, 0), *spans], [_quarter_drop_db(x, s0, head), *drop]
     drop_db = float(np.average(drop, weights=[b - a for a, b, _ in spans])) if spans else np.nan
     lead_db = np.nan
