@@ -166,6 +166,9 @@ CASES = [
     replace(B, name="ambient, 4 ch", stationary=True, hits=(), channels=4),
     replace(B, name="ambient, light damping 0.5 %", stationary=True, hits=(), zeta=(0.005,) * 5),
     replace(B, name="ambient, 8-bit, drift", stationary=True, hits=(), bits=8, drift=0.2),
+    replace(B, name="ambient, noise 0.3", stationary=True, hits=(), noise=0.3),
+    replace(B, name="ambient, noise 1", stationary=True, hits=(), noise=1.0),
+    replace(B, name="ambient, 4 ch, noise 1", stationary=True, hits=(), channels=4, noise=1.0),
 ]
 
 

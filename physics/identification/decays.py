@@ -36,6 +36,10 @@ MAX_FREE_VALUES = 2 ** 24
 FREE_DROP_DB = 6.0
 #: ... or the first decay after a hit is this much louder than the record before the hit (dB) ...
 FREE_LEAD_DB = 10.0
+#: ... or this much louder than ``m`` samples before the hit that are white noise (:func:`_white`: a quiet
+#: pre-trigger, which a stationary response is not), plus three standard deviations of their variance's estimate
+#: (``10 log10(e) sqrt(2 / m)`` dB each: 9.1 dB from 36 samples, 8 dB from 84, 6.6 dB from 1000) ...
+FREE_QUIET_LEAD_DB = 6.0
 #: ... or, for a record without a hit (a decay under way when the record starts), by this much, or by
 #: :data:`FREE_DROP_DB` with every quarter's energy below the one before (an exponential envelope falls steadily; a
 #: stationary response's quarters rise and fall at random, all three in order by chance one time in six).
@@ -78,6 +82,9 @@ class Decays:
     energy_window : int
         Samples over which a hit must add energy to be one (:func:`adds_energy`): four predictor orders, at least
         a period of the lowest mode when it is known.
+    quiet_samples : int
+        Samples before the first hit when they are white noise (:func:`_white`), at least the predictor's order of
+        them (a pre-trigger); else 0.
     """
 
     hits: np.ndarray
@@ -87,6 +94,7 @@ class Decays:
     lead_db: float = np.nan
     onsets: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     energy_window: int = 0
+    quiet_samples: int = 0
 
 
 @dataclass(frozen=True)
@@ -300,12 +308,13 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
     drop_db = float(np.average(drop, weights=[b - a for a, b, _ in spans])) if spans else np.nan
     lead_db = np.nan
     after = [(a, b) for a, b, _ in spans if a > head]
-    if after and (head >= least or (head >= p and _white(x[:, :head]))):
+    quiet = bool(after) and head >= p and _white(x[:, :head])
+    if after and (head >= least or quiet):
         seg = x[:, after[0][0]:after[0][1]]
         lead_db = float(10 * np.log10(max(np.mean(seg.var(axis=1)), np.finfo(float).tiny)
                                       / max(np.mean(x[:, :head].var(axis=1)), np.finfo(float).tiny)))
     return Decays(lasts.astype(int), np.array([a for a, _, _ in spans], int), np.array([b for _, b, _ in spans], int),
-                  drop_db, lead_db, np.array([o for _, _, o in spans], int), w)
+                  drop_db, lead_db, np.array([o for _, _, o in spans], int), w, head if quiet else 0)
 
 
 def free_response(checked: CheckedRecord) -> FreeResponse:
@@ -313,13 +322,16 @@ def free_response(checked: CheckedRecord) -> FreeResponse:
     not, unread): it holds a decay, and its decays' energy falls by
     :data:`FREE_DROP_DB` from their first to their last quarter (a length-weighted mean in dB), or the first decay
     after a hit is :data:`FREE_LEAD_DB` louder than the record before the hit (a pre-trigger: lightly damped decays
-    fall little within a record)."""
+    fall little within a record), or :data:`FREE_QUIET_LEAD_DB` and three standard deviations of the estimate of
+    its variance louder than a record before the hit that is white noise (:attr:`Decays.quiet_samples`)."""
     if checked.signals.size > MAX_FREE_VALUES:
         none = np.zeros(0, int)
         return FreeResponse(False, Decays(none, none, none, np.nan), f"{checked.signals.shape[1]} samples: longer "
                             "than a free response's capture, not searched for hits")
     decays = find_decays(checked)
-    free = decays.starts.size > 0 and (decays.drop_db >= FREE_DROP_DB or decays.lead_db >= FREE_LEAD_DB)
+    m = decays.quiet_samples
+    lead = min(FREE_LEAD_DB, FREE_QUIET_LEAD_DB + 30 / np.log(10) * np.sqrt(2 / m)) if m else FREE_LEAD_DB
+    free = decays.starts.size > 0 and (decays.drop_db >= FREE_DROP_DB or decays.lead_db >= lead)
     return FreeResponse(bool(free), decays)
 
 
