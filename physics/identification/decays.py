@@ -36,10 +36,21 @@ MAX_FREE_VALUES = 2 ** 24
 FREE_DROP_DB = 6.0
 #: ... or the first decay after a hit is this much louder than the record before the hit (dB) ...
 FREE_LEAD_DB = 10.0
+#: ... or this much louder than ``m`` samples before the hit that are white noise (:func:`_white`: a quiet
+#: pre-trigger, which a stationary response is not), plus three standard deviations of their variance's estimate
+#: (``10 log10(e) sqrt(2 / m)`` dB each: 9.1 dB from 36 samples, 8 dB from 84, 6.6 dB from 1000) ...
+FREE_QUIET_LEAD_DB = 6.0
 #: ... or, for a record without a hit (a decay under way when the record starts), by this much, or by
 #: :data:`FREE_DROP_DB` with every quarter's energy below the one before (an exponential envelope falls steadily; a
 #: stationary response's quarters rise and fall at random, all three in order by chance one time in six).
 FREE_DROP_NO_HIT_DB = 10.0
+#: ... its loudest sample within this fraction of the part before the first hit from its start (a decay under way
+#: when the record starts is loudest near its start; a stationary response's loudest sample lies anywhere, and the
+#: part after it falls as the response returns to its level).
+NO_HIT_LOUDEST = 0.25
+#: A pre-trigger shorter than the least decay is measured against the decay after it (:attr:`Decays.lead_db`) when
+#: it is white noise: its lag-one correlation within this of zero (white noise's, from 24 samples: 0 +- 0.2).
+WHITE_LAG1 = 0.5
 #: An oversampled record is searched for hits at its content's rate too: this many times its highest clear peak ...
 CONTENT_RATE = 2.5
 #: ... keeping at least this many predictor orders of samples.
@@ -61,7 +72,9 @@ class Decays:
         without a decay).
     lead_db : float
         Mean energy of the first decay after a hit over that of the samples before the first hit (dB; NaN
-        without a hit, or with fewer samples before it than the least decay).
+        without a hit, or with fewer samples before it than the least decay unless they are white noise
+        (:func:`_white`) and at least the predictor's order: the noise of a short pre-trigger, which a stationary
+        response's few samples are not).
     onsets : ndarray of int, shape (n_decays,)
         First sample of each decay's free response: the first sample of its hit (0 for the decay under way when
         the record starts). The samples from it to ``starts`` hold the hit, and the first milliseconds of the
@@ -69,6 +82,9 @@ class Decays:
     energy_window : int
         Samples over which a hit must add energy to be one (:func:`adds_energy`): four predictor orders, at least
         a period of the lowest mode when it is known.
+    quiet_samples : int
+        Samples before the first hit when they are white noise (:func:`_white`), at least the predictor's order of
+        them (a pre-trigger); else 0.
     """
 
     hits: np.ndarray
@@ -78,6 +94,7 @@ class Decays:
     lead_db: float = np.nan
     onsets: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     energy_window: int = 0
+    quiet_samples: int = 0
 
 
 @dataclass(frozen=True)
@@ -152,6 +169,15 @@ def _decays_without_hit(x, a, b):
     quarters = np.sum(seg.reshape(seg.shape[0], 4, k) ** 2, axis=(0, 2))
     drop = _quarter_drop_db(x, a, b)
     return bool(drop >= FREE_DROP_NO_HIT_DB or (drop >= FREE_DROP_DB and np.all(np.diff(quarters) < 0)))
+
+
+def _white(seg):
+    """Whether samples ``seg`` (shape (n_channels, n_samples)) are white noise, as a pre-trigger is: the lag-one
+    correlation of their deviations from their mean, over the channels, within :data:`WHITE_LAG1` of zero (a
+    sampled response's is near one; a segment without variation, under one quantisation step, is white)."""
+    d = seg - seg.mean(axis=1, keepdims=True)
+    energy = np.sum(d ** 2)
+    return bool(energy <= 0 or abs(np.sum(d[:, 1:] * d[:, :-1])) < WHITE_LAG1 * energy)
 
 
 def _rises(x, innovation, p):
@@ -248,7 +274,8 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
     period at random. Each decay runs from
     the sample after a hit to the sample before the next one (or
     the record's end); the part before the first hit (or the whole record, without a hit) from its loudest sample
-    on is a decay when its energy falls steadily (:func:`_decays_without_hit`). Decays
+    on is a decay when that sample lies in its first :data:`NO_HIT_LOUDEST` and its energy falls steadily
+    (:func:`_decays_without_hit`). Decays
     shorter than ``min_samples`` (default four times the predictor's order) are left out.
     """
     x = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
@@ -276,17 +303,18 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
     head = int(firsts[0]) if firsts.size else n
     if head >= least:
         s0 = int(np.argmax(np.sum(x[:, :head] ** 2, axis=0)))
-        if head - s0 >= least and _decays_without_hit(x, s0, head):
+        if head - s0 >= least and s0 <= NO_HIT_LOUDEST * head and _decays_without_hit(x, s0, head):
             spans, drop = [(s0, head, 0), *spans], [_quarter_drop_db(x, s0, head), *drop]
     drop_db = float(np.average(drop, weights=[b - a for a, b, _ in spans])) if spans else np.nan
     lead_db = np.nan
     after = [(a, b) for a, b, _ in spans if a > head]
-    if head >= least and after:
+    quiet = bool(after) and head >= p and _white(x[:, :head])
+    if after and (head >= least or quiet):
         seg = x[:, after[0][0]:after[0][1]]
         lead_db = float(10 * np.log10(max(np.mean(seg.var(axis=1)), np.finfo(float).tiny)
                                       / max(np.mean(x[:, :head].var(axis=1)), np.finfo(float).tiny)))
     return Decays(lasts.astype(int), np.array([a for a, _, _ in spans], int), np.array([b for _, b, _ in spans], int),
-                  drop_db, lead_db, np.array([o for _, _, o in spans], int), w)
+                  drop_db, lead_db, np.array([o for _, _, o in spans], int), w, head if quiet else 0)
 
 
 def free_response(checked: CheckedRecord) -> FreeResponse:
@@ -294,13 +322,16 @@ def free_response(checked: CheckedRecord) -> FreeResponse:
     not, unread): it holds a decay, and its decays' energy falls by
     :data:`FREE_DROP_DB` from their first to their last quarter (a length-weighted mean in dB), or the first decay
     after a hit is :data:`FREE_LEAD_DB` louder than the record before the hit (a pre-trigger: lightly damped decays
-    fall little within a record)."""
+    fall little within a record), or :data:`FREE_QUIET_LEAD_DB` and three standard deviations of the estimate of
+    its variance louder than a record before the hit that is white noise (:attr:`Decays.quiet_samples`)."""
     if checked.signals.size > MAX_FREE_VALUES:
         none = np.zeros(0, int)
         return FreeResponse(False, Decays(none, none, none, np.nan), f"{checked.signals.shape[1]} samples: longer "
                             "than a free response's capture, not searched for hits")
     decays = find_decays(checked)
-    free = decays.starts.size > 0 and (decays.drop_db >= FREE_DROP_DB or decays.lead_db >= FREE_LEAD_DB)
+    m = decays.quiet_samples
+    lead = min(FREE_LEAD_DB, FREE_QUIET_LEAD_DB + 30 / np.log(10) * np.sqrt(2 / m)) if m else FREE_LEAD_DB
+    free = decays.starts.size > 0 and (decays.drop_db >= FREE_DROP_DB or decays.lead_db >= lead)
     return FreeResponse(bool(free), decays)
 
 

@@ -376,3 +376,42 @@ def test_the_free_response_text_never_reads_a_negative_zero():
     d = Decays(np.array([100]), np.array([110]), np.array([900]), drop_db=9.4, lead_db=12.6)
     assert FreeResponse(True, d).text == ("a free response: 1 hit, 1 decay whose energy falls 9 dB from their first "
                                             "to their last quarter, 13 dB louder than the record before the first hit")
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_lightly_damped_hit_after_a_short_pretrigger_is_a_free_response_identified_by_era(seed):
+    """0.05 % damping: the record ends long before the decay (its energy falls ~2 dB over 8 s, below the 6 dB of a
+    falling decay); a 0.17 s pre-trigger (84 samples, shorter than the least decay of four predictor orders) is
+    still long enough to read the decay's lead over the noise: at most 10 log10(decay variance / noise variance),
+    the samples before the detected hit holding the noise and at most the hit's first samples."""
+    zeta = np.full(4, 0.0005)
+    y, clean, sd = impact_record(FRAME_FS, FRAME_N, FRAME_FN, zeta, FRAME_PHI[:1], [0.167], 0.01, seed)
+    res = free_response(check_records(y, FRAME_FS))
+    d = res.decays
+    assert res.free and d.hits.size == 1 and 84 <= d.hits[0] <= 94 and d.drop_db < 6.0
+    expected = 10 * np.log10((clean[0, d.starts[0]:].var() + sd ** 2) / sd ** 2)
+    assert 30 < d.lead_db < expected + 2.0           # the noise variance read from 84 samples: +-0.7 dB
+    out = _quiet(identify_records, _records(y, FRAME_FS), "auto")
+    assert out.method_choice.startswith("picked era: response records without a force channel, a free response")
+    f = out.estimate.natural_frequencies_hz
+    np.testing.assert_allclose(f[np.argmin(np.abs(f[:, None] - FRAME_FN), axis=0)], FRAME_FN, rtol=1e-4)
+
+
+@pytest.mark.parametrize("zeta", [0.005, 0.02])
+@pytest.mark.parametrize("seed", range(12))
+def test_a_stationary_response_of_lightly_damped_modes_is_no_free_response(seed, zeta):
+    """White noise through the frame's modes (each mode's impulse-invariant two-pole filter, 8 s of warm-up
+    dropped; at 0.5 % damping the record spans one correlation time of mode 1, at 2 % four): a hit found in its
+    random rises, however early, has no quiet record before it to lead, and the fall of its envelope after its
+    loudest sample (seeds 4 and 11 at 0.5 %: from samples 2071 and 3995 on) is no decay under way at its start."""
+    from scipy import signal
+
+    rng = np.random.default_rng(seed)
+    warm = 4000
+    w = rng.standard_normal(FRAME_N + warm)
+    lam = poles(FRAME_FN, np.full(4, zeta))
+    q = np.array([signal.lfilter([0.0, 1.0], [1.0, -2 * np.exp(lm / FRAME_FS).real, abs(np.exp(lm / FRAME_FS)) ** 2],
+                                 w)[warm:] for lm in lam])
+    y = FRAME_PHI[:1] @ q
+    y += 0.01 * y.std() * rng.standard_normal(y.shape)
+    assert not free_response(check_records(y, FRAME_FS)).free
