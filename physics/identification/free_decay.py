@@ -45,7 +45,7 @@ from physics.identification.fdd import clear_peaks, unit_shapes
 from physics.identification.glide import GLIDE_SIGMAS, mode_glide
 from physics.identification.held_reexcitation import refit_held_re_excited
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
-from physics.identification.peak_seeds import SeededModes, refine_seeds, unheld_peaks
+from physics.identification.peak_seeds import SeededModes, dominant_shapes, seed_unheld_peaks
 from physics.identification.peak_warning import warn_unexplained_peaks
 from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles
 from physics.identification.record_checks import CheckedRecord, check_periods, check_records
@@ -357,11 +357,9 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         merged = np.asarray(bands.merged, bool)        # a pole merged into a stronger one of its peak is none
         _warn_merges(full, fs, bands, ok & ~held.refitted, band, hi, where)
     # the clear peaks no mode holds: each started at its peak and refined in its band, the modes held fixed
-    held_hz = np.abs(lam[~merged]) / (2 * np.pi)
     # NaN: a failed fit, or a refit on cut decays (its first piece's amplitudes do not hold past the re-excitation)
     held_amps = np.where(ok & ~held.refitted, bands.amplitudes, np.nan)[:, :, ~merged] if idx.size else None
-    seeded = refine_seeds(full, fs, lam[~merged], record_peaks, unheld_peaks(record_peaks, held_hz, band),
-                          max_damping, held_amplitudes=held_amps)
+    seeded = seed_unheld_peaks(full, fs, lam[~merged], record_peaks, band, max_damping, held_amplitudes=held_amps)
     if idx.size - merged.sum() + seeded.eigenvalues.size == 0:
         raise ConvergenceError(f"{where}: no refined pole of the free decays lies in {band[0]:g}-{hi:.4g} Hz, nor "
                                "a mode at a clear peak of their spectrum")
@@ -380,11 +378,7 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     wn = np.abs(lam[sub])
     check_periods(checked.duration_s, wn[0] / (2 * np.pi), "the lowest mode", where)
     # shapes: the dominant direction of each mode's amplitudes over the decays
-    shapes = np.empty((n_ch, sub.size), complex)
-    for c, j in enumerate(sub):
-        u, _, _ = np.linalg.svd(amps[j].T, full_matrices=False)
-        shapes[:, c] = u[:, 0]
-    shapes = unit_shapes(shapes)
+    shapes = unit_shapes(dominant_shapes(np.stack([amps[j] for j in sub], axis=2)))
     est = ModalEstimate(wn / (2 * np.pi), -lam[sub].real / wn, lam[sub], shapes,
                         np.zeros((n_ch, 0, sub.size), complex), f_std[sub], z_std[sub],
                         modal_phase_collinearity(shapes), "era", False, weakly_stable=weak[sub])

@@ -28,15 +28,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from physics.identification.band_refine import MERGE_FACTOR, BandFit, mode_bands
-from physics.identification.peak_seeds import (MIN_DECAY_SIGMAS, REEXCITE_JUMP, REEXCITE_STEP, decay_pieces, seed_fit,
-                                               band_jump)
+from physics.identification.peak_seeds import (MIN_DECAY_SIGMAS, REEXCITE_JUMP, REEXCITE_OVER_RAMP, REEXCITE_STEP,
+                                               band_jump, decay_pieces, seed_fit)
 
 __all__ = ["REEXCITE_OVER_RAMP", "HeldRefit", "refit_held_re_excited"]
-
-#: A held mode's band amplitude steps at a re-excitation when the step leaves at most this fraction of the squared
-#: residual the likeliest linear change of the amplitude leaves (simulated re-excitations 0.16-0.39, the real sets'
-#: held modes scoring :data:`~physics.identification.peak_seeds.REEXCITE_JUMP` 0.56-0.96).
-REEXCITE_OVER_RAMP = 0.5
 
 
 @dataclass(frozen=True)

@@ -25,8 +25,11 @@ amplitudes, the poles common), and the seed is kept if it decays there. The cut 
 amplitude, the fitted decay divided out, steps (:func:`band_jump`). A mode re-excited before its first decay died
 out still decays across the record, but its fit there is biased (the band's energy need not rise at all: the
 re-excitation may come in any phase); a seed that decays, alone in its band, is cut where its band's amplitude steps
-by :data:`REEXCITE_JUMP` times the step's noise, and its fit on the pieces replaces the whole record's where it is
-still a mode of its peak.
+by :data:`REEXCITE_JUMP` times the step's noise and the step is one, not a smooth change (at most
+:data:`REEXCITE_OVER_RAMP` of a linear change's residual, as for the modes a model holds,
+:mod:`~physics.identification.held_reexcitation`: the pyFRF hits' 5970-Hz mode, read 3-4 Hz low on pieces cut at
+its smooth amplitude change), and its fit on the pieces replaces the whole record's where it is still a mode of its
+peak.
 """
 
 from __future__ import annotations
@@ -39,9 +42,9 @@ from physics.identification.band_refine import MERGE_FACTOR, band_amplitudes, mo
 from physics.identification.fdd import ClearPeaks
 
 __all__ = ["JUMP_SAMPLES_PER_CORRELATION", "JUMP_SEARCH_LINES", "JUMP_SEARCH_STEPS", "JUMP_SIGMA_OCTAVES",
-           "MIN_DECAY_SIGMAS", "REEXCITE_JUMP", "REEXCITE_RISE", "REEXCITE_STEP", "BandJump", "SeededModes",
-           "band_jump", "band_rises", "cut_at_rises", "decay_pieces", "refine_seeds", "seed_fit", "seed_poles",
-           "unheld_peaks"]
+           "MIN_DECAY_SIGMAS", "REEXCITE_JUMP", "REEXCITE_OVER_RAMP", "REEXCITE_RISE", "REEXCITE_STEP", "BandJump",
+           "SeededModes", "band_jump", "band_rises", "cut_at_rises", "decay_pieces", "dominant_shapes",
+           "refine_seeds", "seed_fit", "seed_poles", "seed_unheld_peaks", "unheld_peaks"]
 
 #: A seeded mode's damping ratio is at least this many of its one sigma (it decays within the record).
 MIN_DECAY_SIGMAS = 2.0
@@ -56,6 +59,10 @@ REEXCITE_JUMP = 25.0
 #: this many steps each way (a re-excitation biases the fit across it: 0.13 Hz, half a line of 4 s, at half
 #: amplitude).
 JUMP_SEARCH_LINES, JUMP_SEARCH_STEPS = 2.0, 20
+#: ... and leaves at most this fraction of the squared residual the likeliest linear change of the amplitude leaves
+#: (:attr:`BandJump.over_ramp`; a step, not a smooth change: simulated re-excitations 0.16-0.39, the real sets' modes
+#: scoring :data:`REEXCITE_JUMP` 0.56-0.96, :mod:`~physics.identification.held_reexcitation`).
+REEXCITE_OVER_RAMP = 0.5
 #: ... and changes the amplitude by at least this fraction of the amplitude before it (a single decay's band filter,
 #: rung by its sharp start, steps by under a tenth: 0.08-0.1 on the precision bench's decays, scored up to 93; a
 #: re-excitation at half amplitude, 0.8-1.1).
@@ -100,6 +107,25 @@ def unheld_peaks(peaks: ClearPeaks, modes_hz, band_hz) -> np.ndarray:
     held = np.asarray(modes_hz, dtype=np.float64)
     near = np.any(np.abs(f[:, None] - held[None, :]) <= tol[:, None], axis=1) if held.size else np.zeros(f.size, bool)
     return np.flatnonzero((f >= band_hz[0]) & (f <= band_hz[1]) & ~near)
+
+
+def seed_unheld_peaks(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPeaks, band_hz, max_damping,
+                      held_amplitudes=None) -> SeededModes:
+    """The modes of the clear peaks within ``band_hz`` (Hz) that no held mode explains (:func:`unheld_peaks`),
+    each started at its peak and refined in its band with the held modes fixed (:func:`refine_seeds`; the
+    arguments are its)."""
+    held = np.asarray(held_eigenvalues, complex)
+    seeds = unheld_peaks(peaks, np.abs(held) / (2 * np.pi), band_hz)
+    return refine_seeds(decays, sampling_frequency_hz, held, peaks, seeds, max_damping,
+                        held_amplitudes=held_amplitudes)
+
+
+def dominant_shapes(amplitudes) -> np.ndarray:
+    """Each mode's shape: the dominant direction (first left singular vector) of its complex amplitudes over the
+    decays, ``amplitudes`` shape (n_decays, n_channels, n_modes); unit-norm, shape (n_channels, n_modes)."""
+    a = np.moveaxis(np.asarray(amplitudes, complex), 2, 0)             # (n_modes, n_decays, n_channels)
+    u = np.linalg.svd(np.swapaxes(a, 1, 2), full_matrices=False)[0]    # (n_modes, n_channels, k)
+    return u[:, :, 0].T
 
 
 def seed_poles(frequency_hz, tolerance_hz, longest_s) -> np.ndarray:
@@ -287,11 +313,12 @@ def cut_at_rises(decays, fs, bands_hz, eigenvalues):
 
 def _cut_at_jumps(decays, fs, bands_hz, eigenvalues):
     """The decays cut where the amplitude in one of ``bands_hz`` (shape (n_bands, 2), Hz), the decay of its pole
-    ``eigenvalues`` divided out, jumps (:func:`band_jump`, a score of at least :data:`REEXCITE_JUMP` and a step of
-    :data:`REEXCITE_STEP`): the pieces,
+    ``eigenvalues`` divided out, steps (:func:`band_jump`, a score of at least :data:`REEXCITE_JUMP`, a step of
+    :data:`REEXCITE_STEP` and at most :data:`REEXCITE_OVER_RAMP` of a linear change's residual): the pieces,
     and the index of each decay's first piece (None where no decay is cut)."""
     cuts = [[j.sample for j in (band_jump(y, fs, b, lam) for b, lam in zip(bands_hz, eigenvalues))
-             if j.score >= REEXCITE_JUMP and j.step >= REEXCITE_STEP] for y in decays]
+             if j.score >= REEXCITE_JUMP and j.step >= REEXCITE_STEP and j.over_ramp <= REEXCITE_OVER_RAMP]
+            for y in decays]
     return decay_pieces(decays, cuts)
 
 

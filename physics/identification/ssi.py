@@ -28,7 +28,8 @@ import numpy as np
 
 from physics.errors import ConvergenceError, ShapeError
 from physics.identification.band_refine import BandFit, refine_in_bands
-from physics.identification.decays import find_decays, free_response
+from physics.identification.decay_peaks import decay_peaks
+from physics.identification.decays import decay_spectrum, find_decays, free_response
 from physics.identification.fdd import (
     CLEAR_PEAK_DB,
     ClearPeaks,
@@ -39,6 +40,7 @@ from physics.identification.fdd import (
     unit_shapes,
 )
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
+from physics.identification.peak_seeds import SeededModes, dominant_shapes, seed_unheld_peaks
 from physics.identification.peak_warning import warn_unexplained_peaks
 from physics.identification.poles import (MAX_DAMPING, NO_STABLE_POLE, StabilisationDiagram, missed_clusters,
                                          missed_modes, select_poles)
@@ -295,6 +297,12 @@ class SSIIdentification:
         Each mode in each segment of its pass (NaN where a segment did not show it).
     bands : BandFit or None
         For a free response, the band refinement of the selected poles (in their order before it); None otherwise.
+    seeded : SeededModes or None
+        For a free response, the modes of the clear peaks of its decays' spectrum
+        (:func:`~physics.identification.decay_peaks.decay_peaks`) that no refined pole held, each started at its
+        peak and refined in its band (:func:`~physics.identification.peak_seeds.seed_unheld_peaks`); the estimate
+        holds them too (but those ``n_modes`` leaves out: the highest peaks are kept), flagged ``weakly_stable``,
+        with no segment estimates (NaN). None otherwise.
     """
 
     estimate: ModalEstimate
@@ -304,6 +312,7 @@ class SSIIdentification:
     segment_frequencies_hz: np.ndarray
     segment_damping_ratios: np.ndarray
     bands: BandFit | None = None
+    seeded: SeededModes | None = None
 
     @property
     def diagram(self) -> StabilisationDiagram:
@@ -447,18 +456,27 @@ def _standard_error(seg: np.ndarray, n_seen: np.ndarray) -> np.ndarray:
             / np.sqrt(np.maximum(n_seen, 1))
 
 
-def _refine_free_response(checked, eigenvalues):
+def _refine_free_response(checked, eigenvalues, max_damping):
     """The band refinement of the poles of a free response (each decay from its hit's onset, a hit adding energy
     over a period of the lowest pole, as ``era`` finds them;
-    :func:`~physics.identification.band_refine.refine_in_bands`), or None for a record that is none."""
+    :func:`~physics.identification.band_refine.refine_in_bands`) and the modes of the clear peaks of its decays'
+    spectrum that no refined pole holds, each started at its peak and refined in its band as ``era``'s are
+    (:func:`~physics.identification.peak_seeds.seed_unheld_peaks`); ``(None, None)`` for a record that is none."""
     if not free_response(checked).free:
-        return None
+        return None, None
     d = find_decays(checked, lowest_hz=float(np.min(np.abs(eigenvalues))) / (2 * np.pi))
     if not d.onsets.size:
-        return None
+        return None, None
     x = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
-    return refine_in_bands([x[:, a:b] for a, b in zip(d.onsets.tolist(), d.stops.tolist())],
-                           checked.sampling_frequency_hz, eigenvalues)
+    decays = [x[:, a:b] for a, b in zip(d.onsets.tolist(), d.stops.tolist())]
+    fs = checked.sampling_frequency_hz
+    bands = refine_in_bands(decays, fs, eigenvalues)
+    ok, kept = bands.converged, ~np.asarray(bands.merged, bool)
+    held = np.where(ok, bands.eigenvalues, eigenvalues)[kept]
+    amps = np.where(ok, bands.amplitudes, np.nan)[:, :, kept]       # NaN: refitted in its band with the seeds
+    seeded = seed_unheld_peaks(decays, fs, held, decay_peaks(decay_spectrum(checked)), checked.band_hz, max_damping,
+                               held_amplitudes=amps)
+    return bands, seeded
 
 
 def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max_order=None, block_rows=None,
@@ -573,13 +591,24 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     n_seen = np.sum(np.isfinite(f_seg), axis=0)
     f_std, z_std = _standard_error(f_seg, n_seen), _standard_error(z_seg, n_seen)
     lam = eigenvalues_from_modal(fn, zeta)
-    bands = _refine_free_response(checked, lam) if refine_decays else None
+    bands, seeded = _refine_free_response(checked, lam, max_damping) if refine_decays else (None, None)
     if bands is not None:                               # a free response: each pole refined in its own band
         ok = bands.converged & (bands.natural_frequencies_hz >= band[0]) & (bands.natural_frequencies_hz <= band[1])
         lam = np.where(ok, bands.eigenvalues, lam)
         f_std, z_std = np.where(ok, bands.frequency_std_hz, f_std), np.where(ok, bands.damping_std, z_std)
-        order = np.flatnonzero(~bands.merged)           # a pole merged into a stronger one of its peak is none
-        order = order[np.argsort(np.abs(lam[order]), kind="stable")]      # the refinement may reorder poles
+        keep = np.flatnonzero(~bands.merged)            # a pole merged into a stronger one of its peak is none
+        lam, f_std, z_std, weak, shapes = lam[keep], f_std[keep], z_std[keep], weak[keep], shapes[:, keep]
+        f_seg, z_seg = f_seg[:, keep], z_seg[:, keep]
+        n_seed = seeded.eigenvalues.size if n_modes is None else min(seeded.eigenvalues.size, n_modes - lam.size)
+        if n_seed > 0:                                  # the clear peaks no pole held, their highest first
+            s = np.sort(np.argsort(-height_db(sv, seeded.peak_hz), kind="stable")[:n_seed])
+            lam = np.concatenate([lam, seeded.eigenvalues[s]])
+            f_std = np.concatenate([f_std, seeded.frequency_std_hz[s]])
+            z_std = np.concatenate([z_std, seeded.damping_std[s]])
+            weak = np.concatenate([weak, np.ones(s.size, bool)])
+            shapes = np.concatenate([shapes, unit_shapes(dominant_shapes(seeded.amplitudes[:, :, s]))], axis=1)
+            f_seg, z_seg = (np.pad(a, ((0, 0), (0, s.size)), constant_values=np.nan) for a in (f_seg, z_seg))
+        order = np.argsort(np.abs(lam), kind="stable")  # the refinement may reorder poles
         lam, f_std, z_std, weak, shapes = lam[order], f_std[order], z_std[order], weak[order], shapes[:, order]
         f_seg, z_seg = f_seg[:, order], z_seg[:, order]
         fn, zeta = np.abs(lam) / (2 * np.pi), -lam.real / np.abs(lam)
@@ -597,4 +626,5 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
                       "with --band around it, or noise", UserWarning, stacklevel=2)
     est = ModalEstimate(fn, zeta, lam, shapes, np.zeros((shapes.shape[0], 0, fn.size), complex), f_std, z_std,
                         modal_phase_collinearity(shapes), "ssi", False, weakly_stable=weak)
-    return SSIIdentification(est, tuple(passes), peaks, peaks.frequency_hz[unexplained], f_seg, z_seg, bands)
+    return SSIIdentification(est, tuple(passes), peaks, peaks.frequency_hz[unexplained], f_seg, z_seg, bands,
+                             seeded)
