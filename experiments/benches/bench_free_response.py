@@ -24,10 +24,13 @@ from pathlib import Path
 
 import numpy as np
 
+from experiments.benches import bench_real_series as brs
 from experiments.benches.impact_records import ImpactCase, impact_records
 from physics.identification.channel_weights import noise_floor_weights, weighted_record
 from physics.identification.decays import free_response
+from physics.identification.output_only import identify_records
 from physics.identification.record_checks import check_records
+from physics.io.timedata import TimeRecords
 
 __all__ = ["Family", "CASES", "record", "verdict", "main"]
 
@@ -174,9 +177,6 @@ CASES = [
 
 def mode1_std_hz(fam: Family, seeds, method: str) -> float:
     """Scatter (std over ``seeds``) of mode 1's frequency identified by ``method`` (nearest to the truth)."""
-    from physics.identification.output_only import identify_records
-    from physics.io.timedata import TimeRecords
-
     f = []
     for s in seeds:
         y = record(fam, s)
@@ -195,8 +195,6 @@ def mode1_std_hz(fam: Family, seeds, method: str) -> float:
 
 def real_verdicts(directory=None):
     """``(set, n_free, n_records, truth)`` of every real set found."""
-    from experiments.benches import bench_real_series as brs
-
     directory = Path(directory or brs.DATA)
     rows = []
     for key in ("ds5-shock", "ds5-impedance", "bridge", "dropbear", "ds11-b4.6", "ds11-b3.4"):

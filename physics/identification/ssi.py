@@ -11,12 +11,7 @@ segments whose correlations are kept apart: the one-sigma frequency and damping 
 mode over the segments divided by ``sqrt(n_segments)`` (batch estimate of the standard error of the full-record
 estimate).
 
-A free response (:func:`~physics.identification.decays.free_response`) is no stationary record: its correlations'
-error, the noise times the decaying response, has the modes' spectrum, and the poles of a model above the modes'
-order sit beside each mode and move it (a 1 %-damped 12 Hz decay over 4 s at 77 Hz, noise 1e-3: 1.1-1.9x the
-Cramer-Rao bound at order 2, 110-480x at orders 4-30). Its selected poles are refined in their bands of the decays'
-transforms as ``era``'s are (:func:`~physics.identification.band_refine.refine_in_bands`): the one sigma is the
-band fit's, a pole merged into a stronger one of its peak is dropped, one drawn out of the band keeps SSI-cov's.
+A free response is refined on its decays (:mod:`physics.identification.ssi_free_response`).
 """
 
 from __future__ import annotations
@@ -27,9 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from physics.errors import ConvergenceError, ShapeError
-from physics.identification.band_refine import BandFit, refine_in_bands
-from physics.identification.decay_peaks import decay_peaks
-from physics.identification.decays import decay_spectrum, find_decays, free_response
+from physics.identification.band_refine import BandFit
 from physics.identification.fdd import (
     CLEAR_PEAK_DB,
     ClearPeaks,
@@ -40,11 +33,12 @@ from physics.identification.fdd import (
     unit_shapes,
 )
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
-from physics.identification.peak_seeds import SeededModes, dominant_shapes, seed_unheld_peaks
+from physics.identification.peak_seeds import SeededModes
 from physics.identification.peak_warning import warn_unexplained_peaks
 from physics.identification.poles import (MAX_DAMPING, NO_STABLE_POLE, StabilisationDiagram, missed_clusters,
                                          missed_modes, select_poles)
 from physics.identification.record_checks import check_periods, check_records
+from physics.identification.ssi_free_response import ModeColumns, refine_free_response
 from physics.identification.subspace import poles_of_order, subspace_diagram
 from physics.modal import eigenvalues_from_modal
 
@@ -456,29 +450,6 @@ def _standard_error(seg: np.ndarray, n_seen: np.ndarray) -> np.ndarray:
             / np.sqrt(np.maximum(n_seen, 1))
 
 
-def _refine_free_response(checked, eigenvalues, max_damping):
-    """The band refinement of the poles of a free response (each decay from its hit's onset, a hit adding energy
-    over a period of the lowest pole, as ``era`` finds them;
-    :func:`~physics.identification.band_refine.refine_in_bands`) and the modes of the clear peaks of its decays'
-    spectrum that no refined pole holds, each started at its peak and refined in its band as ``era``'s are
-    (:func:`~physics.identification.peak_seeds.seed_unheld_peaks`); ``(None, None)`` for a record that is none."""
-    if not free_response(checked).free:
-        return None, None
-    d = find_decays(checked, lowest_hz=float(np.min(np.abs(eigenvalues))) / (2 * np.pi))
-    if not d.onsets.size:
-        return None, None
-    x = np.asarray(checked.signals, dtype=np.float64) - checked.mean[:, None]
-    decays = [x[:, a:b] for a, b in zip(d.onsets.tolist(), d.stops.tolist())]
-    fs = checked.sampling_frequency_hz
-    bands = refine_in_bands(decays, fs, eigenvalues)
-    ok, kept = bands.converged, ~np.asarray(bands.merged, bool)
-    held = np.where(ok, bands.eigenvalues, eigenvalues)[kept]
-    amps = np.where(ok, bands.amplitudes, np.nan)[:, :, kept]       # NaN: refitted in its band with the seeds
-    seeded = seed_unheld_peaks(decays, fs, held, decay_peaks(decay_spectrum(checked)), checked.band_hz, max_damping,
-                               held_amplitudes=amps)
-    return bands, seeded
-
-
 def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max_order=None, block_rows=None,
                  references=None, n_segments=8, max_damping=MAX_DAMPING, chunk_samples=8192,
                  where="record", mode_in_band=False, refine_decays=True) -> SSIIdentification:
@@ -590,27 +561,12 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
                     for segs in ([m.segment_frequencies_hz for m in modes], [m.segment_damping_ratios for m in modes]))
     n_seen = np.sum(np.isfinite(f_seg), axis=0)
     f_std, z_std = _standard_error(f_seg, n_seen), _standard_error(z_seg, n_seen)
-    lam = eigenvalues_from_modal(fn, zeta)
-    bands, seeded = _refine_free_response(checked, lam, max_damping) if refine_decays else (None, None)
-    if bands is not None:                               # a free response: each pole refined in its own band
-        ok = bands.converged & (bands.natural_frequencies_hz >= band[0]) & (bands.natural_frequencies_hz <= band[1])
-        lam = np.where(ok, bands.eigenvalues, lam)
-        f_std, z_std = np.where(ok, bands.frequency_std_hz, f_std), np.where(ok, bands.damping_std, z_std)
-        keep = np.flatnonzero(~bands.merged)            # a pole merged into a stronger one of its peak is none
-        lam, f_std, z_std, weak, shapes = lam[keep], f_std[keep], z_std[keep], weak[keep], shapes[:, keep]
-        f_seg, z_seg = f_seg[:, keep], z_seg[:, keep]
-        n_seed = seeded.eigenvalues.size if n_modes is None else min(seeded.eigenvalues.size, n_modes - lam.size)
-        if n_seed > 0:                                  # the clear peaks no pole held, their highest first
-            s = np.sort(np.argsort(-height_db(sv, seeded.peak_hz), kind="stable")[:n_seed])
-            lam = np.concatenate([lam, seeded.eigenvalues[s]])
-            f_std = np.concatenate([f_std, seeded.frequency_std_hz[s]])
-            z_std = np.concatenate([z_std, seeded.damping_std[s]])
-            weak = np.concatenate([weak, np.ones(s.size, bool)])
-            shapes = np.concatenate([shapes, unit_shapes(dominant_shapes(seeded.amplitudes[:, :, s]))], axis=1)
-            f_seg, z_seg = (np.pad(a, ((0, 0), (0, s.size)), constant_values=np.nan) for a in (f_seg, z_seg))
-        order = np.argsort(np.abs(lam), kind="stable")  # the refinement may reorder poles
-        lam, f_std, z_std, weak, shapes = lam[order], f_std[order], z_std[order], weak[order], shapes[:, order]
-        f_seg, z_seg = f_seg[:, order], z_seg[:, order]
+    cols = ModeColumns(eigenvalues_from_modal(fn, zeta), f_std, z_std, weak, shapes, f_seg, z_seg)
+    bands, seeded = None, None
+    if refine_decays:
+        bands, seeded, cols = refine_free_response(checked, cols, sv, band, n_modes, max_damping)
+    lam, f_std, z_std, weak, shapes, f_seg, z_seg = cols
+    if bands is not None:                               # refined: the poles' own frequencies and damping
         fn, zeta = np.abs(lam) / (2 * np.pi), -lam.real / np.abs(lam)
     if weak.any():
         warnings.warn(f"{where}: mode(s) at {', '.join(f'{f:.4g} Hz' for f in fn[weak])} weakly stable (stable "
