@@ -17,7 +17,8 @@ leaves both alike (0.71-0.96 on the held modes alone in their bands the step rul
 hits, the USC bridge, the DS5 shocks and the DROPBEAR dwells; 0.56 the lowest of any scoring 25). A held mode
 alone in its band whose band's amplitude steps by at least :data:`~physics.identification.peak_seeds.REEXCITE_JUMP`
 times the step's noise, by :data:`~physics.identification.peak_seeds.REEXCITE_STEP` of the amplitude, and leaves at
-most :data:`REEXCITE_OVER_RAMP` of the linear change's residual is refitted on its decays cut there (the pieces'
+most :data:`~physics.identification.peak_seeds.REEXCITE_OVER_RAMP` of the linear change's residual
+(:attr:`~physics.identification.peak_seeds.BandJump.re_excitation`) is refitted on its decays cut there (the pieces'
 amplitudes their own, the pole common; the other modes held fixed).
 """
 
@@ -28,10 +29,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from physics.identification.band_refine import MERGE_FACTOR, BandFit, mode_bands
-from physics.identification.peak_seeds import (MIN_DECAY_SIGMAS, REEXCITE_JUMP, REEXCITE_OVER_RAMP, REEXCITE_STEP,
-                                               band_jump, decay_pieces, seed_fit)
+from physics.identification.peak_seeds import MIN_DECAY_SIGMAS, band_jump, decay_pieces, seed_fit
 
-__all__ = ["REEXCITE_OVER_RAMP", "HeldRefit", "refit_held_re_excited"]
+__all__ = ["HeldRefit", "refit_held_re_excited"]
 
 
 @dataclass(frozen=True)
@@ -95,7 +95,7 @@ def refit_held_re_excited(decays, sampling_frequency_hz, bands: BandFit, max_dam
     for k in np.flatnonzero(alone & decaying):
         zone = (max(f_d[k] - half[k], 0.0), min(f_d[k] + half[k], fs / 2))
         steps = [(d, j) for d, j in enumerate(band_jump(y, fs, zone, lam[live[k]]) for y in decays)
-                 if j.score >= REEXCITE_JUMP and j.step >= REEXCITE_STEP and j.over_ramp <= REEXCITE_OVER_RAMP]
+                 if j.re_excitation]
         for d, j in steps:
             cuts[d].append(j.sample)
         if steps:

@@ -162,6 +162,13 @@ class BandJump:
     step: float = 0.0
     over_ramp: float = 1.0
 
+    @property
+    def re_excitation(self) -> bool:
+        """Whether the jump is a re-excitation to cut the decay at: a score of at least :data:`REEXCITE_JUMP`, a
+        step of :data:`REEXCITE_STEP` and at most :data:`REEXCITE_OVER_RAMP` of a linear change's residual (a step,
+        not a smooth change)."""
+        return self.score >= REEXCITE_JUMP and self.step >= REEXCITE_STEP and self.over_ramp <= REEXCITE_OVER_RAMP
+
 
 def _in_band(y, fs, band_hz, analytic=False) -> np.ndarray:
     """The decays ``y`` (n_channels, n) on the lines of ``band_hz`` (Hz) alone, transformed back from their
@@ -316,8 +323,7 @@ def _cut_at_jumps(decays, fs, bands_hz, eigenvalues):
     ``eigenvalues`` divided out, steps (:func:`band_jump`, a score of at least :data:`REEXCITE_JUMP`, a step of
     :data:`REEXCITE_STEP` and at most :data:`REEXCITE_OVER_RAMP` of a linear change's residual): the pieces,
     and the index of each decay's first piece (None where no decay is cut)."""
-    cuts = [[j.sample for j in (band_jump(y, fs, b, lam) for b, lam in zip(bands_hz, eigenvalues))
-             if j.score >= REEXCITE_JUMP and j.step >= REEXCITE_STEP and j.over_ramp <= REEXCITE_OVER_RAMP]
+    cuts = [[j.sample for j in (band_jump(y, fs, b, lam) for b, lam in zip(bands_hz, eigenvalues)) if j.re_excitation]
             for y in decays]
     return decay_pieces(decays, cuts)
 

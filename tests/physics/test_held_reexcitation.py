@@ -8,7 +8,8 @@ import numpy as np
 from impact_records import impact_record, poles
 
 from physics.identification.band_refine import MERGE_FACTOR, mode_bands, refine_in_bands
-from physics.identification.held_reexcitation import REEXCITE_OVER_RAMP, refit_held_re_excited
+from physics.identification.held_reexcitation import refit_held_re_excited
+from physics.identification.peak_seeds import REEXCITE_OVER_RAMP
 from physics.identification.peak_seeds import REEXCITE_JUMP, REEXCITE_STEP, band_jump
 
 #: One accelerometer, 4 s at 1 kHz: a 1 %-damped 23-Hz mode and a 0.3 %-damped 61-Hz one, both held.
