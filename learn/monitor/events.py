@@ -1,5 +1,6 @@
-"""Events of a monitored series: consecutive flagged tests after the baseline period (alarms, tests whose modes
-could not be identified, tests whose mode moved or was lost beyond its band) grouped into one event each, with what
+"""Events of a monitored series: consecutive flagged tests after the baseline period (alarms, tests beyond the
+baseline's conditions, tests whose modes could not be identified, tests whose mode moved or was lost beyond its
+band) grouped into one event each, with what
 changed (the modes that moved, their mean size and direction); and whether the tests that could not be identified
 are more than the baseline period's share says (a binomial test): a change after which tests stop being identifiable
 is a change, not "no alarm"."""
@@ -11,6 +12,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from learn.monitor.alarms import EXTRAPOLATED
 from learn.monitor.tracking import MODE_LOST, MODE_MOVED
 from physics.io import finite_or_none, floats_or_nan
 
@@ -22,7 +24,9 @@ __all__ = ["AGAINST", "FLAGGED", "MAX_GAP", "SPLIT_P", "STEP_BEFORE", "Z_MOVED",
 MAX_GAP = 2
 #: Chance that a test of the event's state starts a new event: an alarm whose change (its z-scores, with the
 #: baseline's correlation between modes) lies beyond the chi-square quantile ``1 - SPLIT_P`` about the event's mean
-#: change starts a new event (a graded damage: one event per state).
+#: change starts a new event (a graded damage: one event per state) when the event's next alarm confirms it (lies
+#: beyond that quantile too, and within it about the new alarm); the event's last alarm needs no confirmation. An
+#: alarm that no next alarm confirms stays in the event, left out of the mean that later alarms are judged against.
 SPLIT_P = 1e-3
 #: A mode moved in an event when its mean z-score (baseline standard deviations) reaches this.
 Z_MOVED = 3.0
@@ -35,8 +39,9 @@ STEP_BEFORE = 10
 #: lowers three modes by 0.7-0.85 % reads as mode 2 +0.6 % after removing a factor that moves every mode alike).
 AGAINST = ("residual", "before")
 
-#: The statuses an event gathers: alarms, tests not identified, tests whose mode moved or was lost beyond its band.
-FLAGGED = ("alarm", "not identified", MODE_MOVED, MODE_LOST)
+#: The statuses an event gathers: alarms, tests beyond the baseline's conditions (alarmed by the environment's
+#: statistics alone), tests not identified, tests whose mode moved or was lost beyond its band.
+FLAGGED = ("alarm", EXTRAPOLATED, "not identified", MODE_MOVED, MODE_LOST)
 
 
 @dataclass(frozen=True)
@@ -271,6 +276,7 @@ def _event(rows, members: list, ctx: dict) -> Event:
     first_size = _size(C[0]) if alarms else None
     last_size = _size(C[-1]) if alarms else None
     n_ext = sum(bool(rows[i].get("extrapolated")) for i in members)
+    unseen = sum(rows[i]["status"] == EXTRAPOLATED for i in members)
     n_beyond = sum(rows[i]["status"] in (MODE_MOVED, MODE_LOST) for i in members)
     beyond = _beyond(rows, members)
     change = change or bool(beyond)
@@ -286,6 +292,8 @@ def _event(rows, members: list, ctx: dict) -> Event:
     if times[0] is not None:
         where += f" ({times[0]}" + (f" to {times[1]})" if last != first else ")")
     parts = [f"{len(alarms)} alarm{'s' * (len(alarms) != 1)}"]
+    if unseen:
+        parts.append(f"{unseen} {EXTRAPOLATED} (alarmed by the environment's statistics alone)")
     if n_beyond:
         parts.append(f"{n_beyond} with a mode moved or lost beyond its band")
     if u:
@@ -313,7 +321,8 @@ def _event(rows, members: list, ctx: dict) -> Event:
                        if d["moved"] else []) + ([f"mode {d['mode']} lost in {d['lost']}"] if d["lost"] else []))
             for d in beyond)
     ext = f"; {n_ext} of {len(members)} extrapolated beyond the baseline's conditions" if n_ext else ""
-    text = f"{where}: " + ", ".join(parts) + what + ext + ("" if change else "; not a change")
+    verdict = "" if change else f"; {EXTRAPOLATED}" if unseen else "; not a change"
+    text = f"{where}: " + ", ".join(parts) + what + ext + verdict
     return Event(first, last, rows[first]["file"], rows[last]["file"], times[0], times[1], len(span), len(alarms), u,
                  n_ext, modes, moved, size, first_size, last_size, direction, p, change, text, against,
                  len(before), tuple(members), tuple(before) if stepped else (), None, n_beyond, beyond)
@@ -339,7 +348,8 @@ def group_events(rows: list, false_alarm_rate: float = 0.01, max_gap: int = MAX_
     An event starts at a flagged test after the baseline period (``status`` ``alarm``, ``not identified``,
     ``mode moved`` or ``mode lost``: :data:`FLAGGED`) and
     takes every following flagged test until more than ``max_gap`` judged tests without an alarm pass, or until an
-    alarm's change departs from the event's mean change beyond chance (:data:`SPLIT_P`: a new state). Tests that
+    alarm's change departs from the event's mean change beyond chance and the next alarm confirms it (:data:`SPLIT_P`:
+    a new state). Tests that
     cannot be judged against the baseline (``not judged``) are skipped. An event whose tests were not identified
     is a change when so many failures are unlikely at the baseline period's share
     (:func:`unidentified_p_value` below ``false_alarm_rate``); one holding a mode moved or lost beyond its band
@@ -353,17 +363,36 @@ def group_events(rows: list, false_alarm_rate: float = 0.01, max_gap: int = MAX_
     base = [i for i, r in enumerate(rows) if r["baseline"] and r["status"] in ("alarm", "no alarm")]
     cov = _pattern(rows, base)
     ctx = {"ub": ub, "nb": nb, "rate": false_alarm_rate, "against": against, "day_sd": _day_to_day(rows, base)}
+    alarm_z = {i: floats_or_nan(r["mode_z_scores"]) for i, r in enumerate(rows)
+               if not r["baseline"] and r["status"] == "alarm"}
+    later = sorted(alarm_z)
+    following = dict(zip(later, later[1:]))                 # each alarm's next alarm in the series
+
+    def reading(i, zs):
+        """Alarm ``i`` against the event's alarms ``zs``: ``"same"`` (within chance of their mean), ``"new"`` (beyond
+        it, and so is the next alarm within the gap, within chance of ``i``; or no such next alarm) or ``"stray"``
+        (beyond it alone: a member of the event that its mean change leaves out)."""
+        if not _jumps(cov, zs, alarm_z[i]):
+            return "same"
+        j = following.get(i)
+        quiet = 0 if j is None else sum(rows[k]["status"] not in FLAGGED and rows[k]["status"] != "not judged"
+                                        for k in range(i + 1, j))
+        if j is None or quiet > max_gap:
+            return "new"
+        return "new" if _jumps(cov, zs, alarm_z[j]) and not _jumps(cov, [alarm_z[i]], alarm_z[j]) else "stray"
+
     groups, members, zs, gap = [], [], [], 0
     for i, r in enumerate(rows):
         if r["baseline"] or r["status"] == "not judged":
             continue
         if r["status"] in FLAGGED:
-            z = floats_or_nan(r["mode_z_scores"]) if r["status"] == "alarm" else None
-            if members and (gap > max_gap or (z is not None and _jumps(cov, zs, z))):
+            z = alarm_z.get(i)
+            read = "same" if z is None or not members else reading(i, zs)
+            if members and (gap > max_gap or read == "new"):
                 groups.append(members)
                 members, zs = [], []
             members.append(i)
-            if z is not None:
+            if z is not None and read != "stray":
                 zs.append(z)
             gap = 0
         elif members:

@@ -112,6 +112,25 @@ def test_events_group_consecutive_alarms_and_split_at_a_new_state():
     assert up.direction == "mixed" and up.moved == [1, 2]
 
 
+def test_one_stray_alarm_splits_no_event_and_tests_beyond_the_conditions_belong_to_it():
+    """An alarm beyond the event's mean whose next alarm lies back within it is one stray reading, not a new state;
+    tests of status 'change or unseen conditions' are flagged members of the event, not quiet tests between."""
+    rows = _baseline(40, seed=3)
+    one, far = np.array([-10.0, -5, 0, 0]), np.array([-10.0, 15, 9, 0])
+    unseen = {**_row("no alarm", [0.5, 0, 0, 0], t=43), "status": "change or unseen conditions"}
+    seq = [_row("alarm", one, t=40), _row("alarm", far, t=41), _row("alarm", one + 0.3, t=42), unseen,
+           _row("no alarm", None, t=44), _row("no alarm", None, t=45), _row("alarm", one - 0.3, t=46),
+           _row("alarm", far, t=47)]
+    events = group_events(rows + seq, 0.01)
+    # the stray alarm 41 stays; 43-45 are one flagged and two quiet tests (a gap of 2); the last alarm, far from the
+    # event and with none after it to confirm, starts its own event
+    assert [list(e.members) for e in events] == [[40, 41, 42, 43, 46], [47]]
+    assert events[0].n_alarms == 4 and events[0].n_tests == 7
+    assert "1 change or unseen conditions" in events[0].text
+    alone = group_events(rows + [unseen], 0.01)[0]
+    assert not alone.change and alone.text.endswith("; change or unseen conditions")
+
+
 def test_a_test_beyond_the_baselines_conditions_is_flagged_extrapolated():
     rng = np.random.default_rng(2)
     temp = rng.uniform(0.0, 10.0, 30)
