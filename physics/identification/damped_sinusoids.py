@@ -26,12 +26,8 @@ import numpy as np
 
 from physics.errors import ConvergenceError
 
-__all__ = ["MIN_MODE_SNR", "DampedSinusoidFit", "NormalEquations", "fit_damped_sinusoids", "levenberg_marquardt",
-           "mode_snr", "pole_statistics", "power_sums"]
-
-#: A fitted pole is a mode when its energy over the decays is at least this many noise variances (:func:`mode_snr`;
-#: a pole fitted to white noise alone reaches about 2 ln(n_samples)).
-MIN_MODE_SNR = 50.0
+__all__ = ["DampedSinusoidFit", "NormalEquations", "fit_damped_sinusoids", "levenberg_marquardt", "mode_snr",
+           "pole_statistics", "power_sums"]
 
 #: Levenberg-Marquardt iterations at most, and the relative pole step below which the fit has converged.
 MAX_ITERATIONS, STEP_TOL = 30, 1e-10

@@ -38,8 +38,7 @@ import numpy as np
 
 from physics.errors import ConvergenceError, ShapeError
 from physics.identification.band_refine import RESOLUTION_LINES, RESOLVED_LINES, BandFit, refine_in_bands
-from physics.identification.damped_sinusoids import (MIN_MODE_SNR, DampedSinusoidFit, fit_damped_sinusoids,
-                                                     mode_snr)
+from physics.identification.damped_sinusoids import DampedSinusoidFit, fit_damped_sinusoids, mode_snr
 from physics.identification.decay_peaks import decay_peaks
 from physics.identification.decays import Decays, adds_energy, decay_spectrum, find_decays
 from physics.identification.fdd import clear_peaks, unit_shapes
@@ -57,6 +56,10 @@ __all__ = ["ERAIdentification", "identify_era"]
 
 #: Largest block Hankel dimension (block rows x channels) of the ERA.
 MAX_HANKEL_ROWS = 160
+#: A refined pole is kept when its energy over the decays is at least this many noise variances
+#: (:func:`~physics.identification.damped_sinusoids.mode_snr`; a pole fitted to white noise alone reaches about
+#: 2 ln(n_samples)).
+MIN_MODE_SNR = 50.0
 #: A decay is cut where the fit's residual energy rises this many times over a window (a hit the segmentation
 #: missed; a cut in a free decay costs only its amplitudes), and fitted again; at most this many rounds.
 SPLIT_RISE, MAX_SPLIT_ROUNDS = 4.0, 2

@@ -9,7 +9,7 @@ band fit's, a pole merged into a stronger one of its peak is dropped, one drawn 
 The model's extra poles (the correlations' error, stable over many orders) fit noise in their bands: a pole whose
 amplitudes' chi-square (:attr:`~physics.identification.band_refine.BandFit.amplitude_chi2`, the increase of its
 band fit's squared residual without it, in noise variances) white noise alone exceeds with a probability above
-:data:`NOISE_POLE_PROBABILITY` (``era``'s ``MIN_MODE_SNR`` at two degrees of freedom) is dropped
+:data:`NOISE_POLE_PROBABILITY` (a chi-square of 30 at two degrees of freedom) is dropped
 (:func:`noise_poles`) and the rest refitted without it, until none is left (closed-form decays of 21, 67 and 143
 Hz, one channel, noise 1e-3: extra poles at 79.8, 100.4 and 125.4 Hz of chi-square 7-11, the modes 10^5-10^9; a
 pole that held 108 beside another noise pole of its band holds 10 refitted without it).
@@ -24,7 +24,6 @@ from typing import NamedTuple
 import numpy as np
 
 from physics.identification.band_refine import BandFit, refine_in_bands
-from physics.identification.damped_sinusoids import MIN_MODE_SNR
 from physics.identification.decay_peaks import decay_peaks
 from physics.identification.decays import decay_spectrum, find_decays, free_response
 from physics.identification.fdd import height_db, unit_shapes
@@ -33,9 +32,11 @@ from physics.identification.peak_seeds import SeededModes, dominant_shapes, seed
 __all__ = ["NOISE_POLE_PROBABILITY", "ModeColumns", "noise_poles", "refine_free_response"]
 
 #: A refined pole is a mode when white noise alone gives its amplitudes' chi-square (two degrees of freedom per decay
-#: and channel) with at most this probability: that of ``era``'s :data:`~physics.identification.damped_sinusoids.
-#: MIN_MODE_SNR` noise variances at two degrees of freedom (one decay and channel), ``exp(-25)``.
-NOISE_POLE_PROBABILITY = float(np.exp(-MIN_MODE_SNR / 2))
+#: and channel) with at most this probability: that of 30 at two degrees of freedom (one decay and channel). Measured:
+#: SSI-cov's extra poles on the precision bench's decays (96 records) and bench_free_response's free families (145)
+#: 3-17, the weakest modes they hold (noise 1e-1 of the ringing's peak) 47 and more; a pole started on noise beside a
+#: decay (600 fits, one decay and channel) 99 % below 14-29 as started at 0.1, 1 or 5 % damping, the largest 52.
+NOISE_POLE_PROBABILITY = float(np.exp(-15.0))
 
 
 class ModeColumns(NamedTuple):

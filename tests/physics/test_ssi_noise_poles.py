@@ -1,6 +1,6 @@
 """A pole whose band fit holds no more energy than noise is no mode: SSI-cov's extra poles of a free response (its
 correlations' error has the modes' spectrum, and a model above the modes' order holds poles beside them) are
-dropped after their band refinement, as ``era`` drops its own after its time-domain fit (``MIN_MODE_SNR``), against
+dropped after their band refinement (``era`` drops its own after its time-domain fit, ``MIN_MODE_SNR``), against
 closed-form decays of :mod:`impact_records`."""
 
 import warnings
@@ -11,7 +11,6 @@ from scipy import stats
 from impact_records import crb_frequency_std_hz, impact_record, poles
 
 from physics.identification.band_refine import refine_in_bands
-from physics.identification.damped_sinusoids import MIN_MODE_SNR
 from physics.identification.ssi_free_response import NOISE_POLE_PROBABILITY, noise_poles
 from physics.identification.free_decay import identify_era
 from physics.identification.ssi import identify_ssi
@@ -63,14 +62,14 @@ def test_a_pole_on_noise_beside_a_decay_holds_an_amplitude_chi_square_below_the_
     """One 67-Hz decay in white noise, refined with a second pole started at 90 Hz where the record holds noise
     alone: the decay's amplitude chi-square (one decay and channel: two degrees of freedom) is 0.3-1 times its
     energy over the noise variance (its band's lines alone, a background fitted with it), at every amplitude; the
-    pole on noise holds a chi-square of noise's few units, below the threshold ``noise_poles`` sets (50 at two
-    degrees of freedom: ``era``'s ``MIN_MODE_SNR``), on every seed, and is told from the decay."""
+    pole on noise holds a chi-square of noise's few units, below the threshold ``noise_poles`` sets (30 at two
+    degrees of freedom), on every seed, and is told from the decay."""
     lam = poles([67.0], [0.01])[0]
     n, s = 3000, 2e-6
     t = np.arange(n) / FS
     unit = np.real(np.exp(0.7j) * np.exp(lam * t))
     energy = 0.5 * np.sum(np.exp(2 * lam.real * t)) / s ** 2              # per unit amplitude squared
-    assert stats.chi2.isf(NOISE_POLE_PROBABILITY, 2) == pytest.approx(MIN_MODE_SNR)
+    assert stats.chi2.isf(NOISE_POLE_PROBABILITY, 2) == pytest.approx(30.0)
     for amplitude in (1e-3, 1e-5):
         for seed in range(12):
             y = amplitude * unit + s * np.random.default_rng(seed).standard_normal(n)
