@@ -51,11 +51,17 @@ White noise in time is white over the lines of each decay's transform (variance 
 imaginary parts independent): each decay's lines are weighted by ``1 / sqrt(N)``, each channel by the inverse of
 its residual's standard deviation in the bands, and ``s^2 (J^T J)^-1`` of the projected Jacobian is the
 covariance of the poles, the amplitudes and background unknown. Only the lines near a mode inform it; the rest of
-the record's spectrum (other modes, unmodelled ones, the hit) does not enter its fit.
+the record's spectrum (other modes, unmodelled ones, the hit) does not enter its fit. Each pole's amplitudes against
+their own covariance (the pole held, the other columns refitted: the increase of the band's squared residual were the
+pole left out, over the residual's variance) is its :attr:`BandFit.amplitude_chi2`: two degrees of freedom per decay
+and channel for a pole on white noise alone at a given pole, the likeliest pole of a band some more (a pole started
+beside a 67-Hz decay where the record holds noise alone, one decay and channel, 600 fits: median 5-7, 99th
+percentile 14-29, largest 52, a pole grown to 7.6 % damping whose band reached the decay's).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -127,6 +133,14 @@ class BandFit:
         merged at).
     merged_with_hz : ndarray, shape (n_modes,)
         The natural frequency (Hz) of the stronger pole when each pole was merged into it (NaN where not merged).
+    amplitude_chi2 : ndarray, shape (n_modes,)
+        Each mode's amplitudes (every decay's and channel's) against their own covariance, the pole held: the
+        increase of its band fit's squared residual were its columns left out (the others refitted), over the
+        residual's variance (:func:`_amplitude_chi2`); a chi-square variable of :attr:`amplitude_dof` degrees of
+        freedom for a pole on white noise alone (at a given pole; the fit's pole is the likeliest of its band). NaN
+        where not converged.
+    amplitude_dof : ndarray of int, shape (n_modes,)
+        Two per decay fitted and channel (the amplitude's real and imaginary parts); 0 where not converged.
     """
 
     eigenvalues: np.ndarray
@@ -141,6 +155,8 @@ class BandFit:
     n_lines: int
     merged_into: np.ndarray
     merged_with_hz: np.ndarray
+    amplitude_chi2: np.ndarray
+    amplitude_dof: np.ndarray
 
     @property
     def merged(self) -> np.ndarray:
@@ -329,7 +345,8 @@ def _wider_bands(pole, band_hz, others, longest_s, nyquist_hz):
 class _BandTrial:
     """One band fit of one pole (:func:`_fit_band`): its pole, covariance, coefficients, channel weights and
     residual (each used decay's weighted residual, (2 L, n_channels), real parts of its ``L`` lines over imaginary),
-    the decays used (indices), their lines ``k`` and samples ``n``, and the background's order."""
+    the decays used (indices), their lines ``k`` and samples ``n``, the background's order and each pole's
+    amplitude chi-square (:func:`_amplitude_chi2`)."""
 
     sigma: np.ndarray
     omega: np.ndarray
@@ -341,6 +358,7 @@ class _BandTrial:
     lines: list
     lengths: list
     order: int
+    chi2: np.ndarray
 
     @property
     def unknowns(self) -> float:
@@ -360,6 +378,26 @@ class _BandTrial:
         ss_in = sum(np.sum(r[i] ** 2, axis=0) for r, i in zip(self.res, inside)) / self.weights ** 2
         ss_out = sum(np.sum(r[~i] ** 2, axis=0) for r, i in zip(self.res, inside)) / self.weights ** 2
         return ss_in, sum(int(i.sum()) for i in inside), ss_out, sum(int((~i).sum()) for i in inside)
+
+
+def _amplitude_chi2(data, fs, band_hz, sigma, omega, coef, weights, order, mean_squares) -> np.ndarray:
+    """Each pole's amplitudes against their covariance, shape (m,): over the decays of ``data`` (as
+    :func:`_fit_band` took them) and the channels, ``c^T V^-1 c / s^2``, ``c`` the real and imaginary parts of the
+    pole's amplitude (``coef``, weighted by ``weights``), ``V`` their block of ``(Phi^T Phi)^-1`` (the pole's and the
+    other columns of the band's basis at the fitted poles ``sigma``, ``omega``) and ``s^2`` the channel's residual
+    mean square per value (``mean_squares``, the channels' units squared): the increase of the squared residual
+    were the pole's two columns left out and the rest refitted (the poles held), in noise variances."""
+    m = sigma.size
+    centre, half = 0.5 * (band_hz[0] + band_hz[1]), max(0.5 * (band_hz[1] - band_hz[0]), np.finfo(float).tiny)
+    out = np.zeros(m)
+    for (k, w, _, n), C in zip([d for d in data if d is not None], coef):
+        Phi, _ = _columns(w, n, sigma, omega, fs, centre, half, k, order)
+        norm = np.maximum(np.linalg.norm(Phi, axis=0), np.finfo(float).tiny)
+        G_inv = np.linalg.pinv((Phi.T @ Phi) / np.outer(norm, norm), hermitian=True) / np.outer(norm, norm)
+        c = (C[:2 * m] / weights[None, :]).reshape(m, 2, -1)              # (m, 2, n_ch), the channels' units
+        V = G_inv[:2 * m, :2 * m].reshape(m, 2, m, 2)[np.arange(m), :, np.arange(m), :]      # (m, 2, 2)
+        out += np.sum(np.einsum("mac,mac->mc", c, np.linalg.solve(V, c)) / mean_squares[None, :], axis=1)
+    return out
 
 
 def _wider_fits_as_well(narrow: _BandTrial, wide: _BandTrial, band_hz, fs) -> bool:
@@ -514,6 +552,7 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
     lam = lam0.copy()
     f_std, z_std = np.full(m_all, np.nan), np.full(m_all, np.nan)
     amps = np.zeros((len(decays), n_ch, m_all), complex)
+    chi2, dof = np.full(m_all, np.nan), np.zeros(m_all, int)
     converged = np.zeros(m_all, bool)
     n_lines = 0
     into, with_hz = np.full(m_all, -1), np.full(m_all, np.nan)
@@ -547,9 +586,14 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
                                                            amps_known[j][:, others]) / np.sqrt(d[3]), d[3])
                         for j, d in enumerate(band_data(spectra, lengths, fs, band))]
                 fitted = _fit_band(data, fs, band, start, n_ch, background_order)
+                if fitted is None:
+                    return None
                 used = [j for j, d in enumerate(data) if d is not None]
-                return None if fitted is None else _BandTrial(*fitted, used, [data[j][0] for j in used],
-                                                              [lengths[j] for j in used], background_order)
+                trial = _BandTrial(*fitted, used, [data[j][0] for j in used], [lengths[j] for j in used],
+                                   background_order, np.zeros(0))
+                chi2 = _amplitude_chi2(data, fs, band, trial.sigma, trial.omega, trial.coef, trial.weights,
+                                       background_order, trial.mean_squares())
+                return dataclasses.replace(trial, chi2=chi2)
 
             best = fit_in(band, lam[idx])
             if best is None:
@@ -567,6 +611,7 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
                 best.used
             n_values = n_ch * sum(2 * k.size for k in best.lines)
             _, _, f_std[idx], z_std[idx] = pole_statistics(sigma, omega, cov)
+            chi2[idx], dof[idx] = best.chi2, 2 * len(used) * n_ch
             lam[idx] = -sigma + 1j * omega
             converged[idx] = True
             n_lines += n_values // (2 * n_ch)
@@ -575,4 +620,4 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
                 amps[j][:, idx] = 2 * c * np.sqrt(lengths[j])
     wn = np.abs(lam)
     return BandFit(lam, wn / (2 * np.pi), -lam.real / wn, f_std, z_std, amps, bands, group, converged, n_lines,
-                   into, with_hz)
+                   into, with_hz, np.where(converged, chi2, np.nan), np.where(converged, dof, 0))
