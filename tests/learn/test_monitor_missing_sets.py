@@ -49,7 +49,7 @@ def test_a_held_out_baseline_test_carries_the_other_tests_evidence_in_its_thresh
     in 17, mode 2 in 10). Held out, each of the 3 has the evidence of its loss against the other 39 tests in its
     index (``-2 ln`` of Laplace's shares 13/41, 20/41, 3/41: 8.963), the modes it keeps explained by the factors
     (residual 0.002). Its set is normal (2 other tests lost it): its threshold is the set's residual threshold
-    (0.178) plus that same evidence, ratio 0.98. Against the evidence over all 40 tests (8.286) each alarmed, ratio
+    (0.178) plus that same evidence, ratio 0.98. Against the evidence over all 40 tests (8.286) each would alarm, ratio
     1.059: 3 of 40 held-out baseline tests at a 1 % rate."""
     from learn.monitor.alarm_threshold import missing_evidence
 
