@@ -391,7 +391,9 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
     against its own thresholds, as the baseline's tests of that set are), however rare each mode's loss and however
     small the product of their shares (modes that a short record loses together). A set the baseline never lost
     together keeps its evidence in the index alone: a mode the baseline always held, lost, raises it by
-    ``2 ln(n + 2)``."""
+    ``2 ln(n + 2)``. A baseline test's set is one the baseline period lost; held out, its index's evidence is
+    against the other baseline tests (each lost mode's count one less), and so is the evidence its threshold
+    carries."""
     sides = tuple(float(v) for v in shift_sides)
     if len(sides) != 2 or min(sides) <= 0.0 or abs(sum(sides) - 1.0) > 1e-9:
         raise ConfigError(f"shift_sides: expected the drop's and the rise's shares of the shift's rate, two numbers "
@@ -445,6 +447,15 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
         ev = float(missing_evidence(np.where(P, np.nan, 0.0)[None], X[b_idx])[0]) if seen else 0.0
         tp = _thresholds(model, hp, names, each, n_train, n_conditions, int(P.sum()), ev, sides)
         R[rows] = _ratios(values[rows], z[rows], tp, names)
+        held_rows = rows[np.isin(rows, b_idx)]
+        if "residual" in names and held_rows.size:
+            # a baseline test's set is one the baseline period lost (``seen``); held out, its index's evidence is
+            # against the other baseline tests, and so is the evidence its threshold carries (it lacks every mode
+            # of P: the others' count of each loss is one less, Laplace's (c - 1 + 1) / (n - 1 + 2))
+            cnt = base_miss.sum(axis=0)[P]
+            ev_held = float(-2.0 * np.sum(np.log(cnt / (len(b_idx) + 1.0))))
+            k = names.index("residual")
+            R[held_rows, k] = values[held_rows, k] / (tp["residual"][0].value - ev + ev_held)
         patterns[", ".join(str(j + 1) for j in np.flatnonzero(P)) or "none"] = tp
     ratio = np.where(np.isnan(R), -np.inf, R).max(axis=1)
     ratio[~np.isfinite(ratio)] = np.nan

@@ -365,20 +365,33 @@ def identified_by(tests: list, cols) -> list:
     return [[None if t is None or c < 0 else t.identified_by(int(c)) for c in row] for t, row in zip(tests, cols)]
 
 
-def reach_bands_hz(ref: ReferenceModes) -> np.ndarray:
+def reach_bands_hz(ref: ReferenceModes, by_shape: bool = False) -> np.ndarray:
     """Each reference mode's reach (Hz), shape (m, 2): where a pole that no other mode claims is that mode moved
     beyond its band: up to half the log gap to the neighbouring reference mode on each side (the open side of the
     lowest and highest mode: half the gap on the other side), never beyond :data:`REACH_FACTOR` (a lone mode: that
-    factor either way). A neighbour's band (at most ``NEIGHBOUR_SHARE`` of the gap) never reaches into it."""
+    factor either way). A neighbour's band (at most ``NEIGHBOUR_SHARE`` of the gap) never reaches into it.
+
+    ``by_shape``: with reference shapes, a neighbour told apart by shape (:data:`APART_MAC`) bounds no reach, as it
+    bounds no tracking band (:func:`reference_modes`): a pole is the mode moved only when its MAC reaches
+    :data:`MAC_MIN` with the mode (:func:`beyond_bands`), which a pole of that neighbour does not, so the reach runs
+    to half the gap to the nearest neighbour not told apart (a side without one: open). A close pair's band passes
+    the neighbour (e.g. +-4 % for modes 1.7 % apart); the reach by frequency alone, half the gap, lies inside that
+    band and holds no pole beyond it. Without shapes the reach by frequency (a reading without a shape: an FFT
+    peak)."""
     f = ref.frequencies_hz
     cap = math.log(REACH_FACTOR)
-    if f.size == 0:
+    m = f.size
+    if m == 0:
         return np.zeros((0, 2))
-    if f.size == 1:
-        half = np.array([[cap, cap]])
-    else:
-        gap = 0.5 * np.diff(np.log(f))
-        half = np.minimum(np.c_[np.r_[gap[0], gap], np.r_[gap, gap[-1]]], cap)
+    lnf = np.log(f)
+    apart = _told_apart(ref.shapes) if by_shape else None
+    bound = ~apart if apart is not None else np.ones((m, m), bool)        # (m, m): j bounds i's reach
+    np.fill_diagonal(bound, False)
+    below = np.where(bound & (lnf[None] < lnf[:, None]), lnf[:, None] - lnf[None], np.inf).min(axis=1)
+    above = np.where(bound & (lnf[None] > lnf[:, None]), lnf[None] - lnf[:, None], np.inf).min(axis=1)
+    lo = np.where(np.isfinite(below), below, above)                     # an open side: the other side's gap
+    hi = np.where(np.isfinite(above), above, below)
+    half = np.minimum(0.5 * np.c_[lo, hi], cap)                         # no neighbour at all: the factor
     return f[:, None] * np.exp(half * [-1.0, 1.0])
 
 
@@ -403,7 +416,7 @@ class BeyondBands:
                                    reading of a test :attr:`unplaced` against the baseline's odds
     missing_share, beyond_share : ndarray (m,)     ``u / n`` and ``w / n`` over the whole baseline period
     n_baseline : int               baseline tests of the series
-    reach_hz : ndarray (m, 2)      :func:`reach_bands_hz`
+    reach_hz : ndarray (m, 2)      :func:`reach_bands_hz` of a pole (``by_shape``)
     unplaced : ndarray bool (n,)   a test with poles none of which lies in any reference mode's band (the
                                    detector has no feature of it to judge)
     unplaced_chance : ndarray (n,) the baseline period's chance of that (NaN elsewhere): ``v / n``, ``v`` of its
@@ -485,9 +498,10 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
     ``cols``: the poles' columns from :func:`track_modes` (-1: the mode missing from its band); ``baseline``:
     indices of the baseline tests of the series (identified or not; a test of another kind, band or beam left
     out). In a test with poles, each missing mode takes the pole nearest it within its reach
-    (:func:`reach_bands_hz`) beyond its band that no reference mode claims (with shapes of 2 or more sensors, MAC
-    >= :data:`MAC_MIN`), one to one (``linear_sum_assignment`` of ``(ln(f / f_ref) / reach)^2``): the mode moved,
-    never a neighbour (a neighbour's band lies beyond the reach); a mode with no such pole is lost. Each reading
+    (:func:`reach_bands_hz` ``by_shape``; an FFT peak's by frequency) beyond its band that no reference mode claims
+    (with shapes of 2 or more sensors, MAC >= :data:`MAC_MIN`), one to one (``linear_sum_assignment`` of ``(ln(f /
+    f_ref) / reach)^2``): the mode moved, never a neighbour (a neighbour's band lies beyond the reach, or its shape
+    differs); a mode with no such pole is lost. Each reading
     is weighed by the baseline period's chance of it (:class:`BeyondBands`) and flagged at or below
     ``false_alarm_rate / m`` (the rate shared among the modes). A moved mode is positive evidence: one the baseline
     found in every test is flagged; one the baseline lacked now and then only when the baseline was long enough to
@@ -518,7 +532,8 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
     beyond_fft = np.zeros((n, m), bool)             # an FFT peak within the reach beyond the band
     unplaced = np.zeros(n, bool)                    # poles, none in any band
     ln_ref = np.log(ref.frequencies_hz)
-    reach = np.log(reach_bands_hz(ref)) - ln_ref[:, None]          # (m, 2): negative, positive
+    reach = np.log(reach_bands_hz(ref)) - ln_ref[:, None]          # (m, 2): negative, positive (FFT peaks)
+    reach_pole = np.log(reach_bands_hz(ref, by_shape=True)) - ln_ref[:, None]     # poles: by shape too
     for i, t in enumerate(tests):
         if t is None or t.frequencies_hz.size == 0 or m == 0:
             continue
@@ -532,7 +547,8 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
             continue
         is_fft = np.r_[np.zeros(free.size, bool), np.ones(owner.size, bool)]
         d = np.log(f)[:, None] - ln_ref[None]                                       # (k, m)
-        side = np.where(d < 0, reach[None, :, 0], reach[None, :, 1])
+        r_k = np.where(is_fft[:, None, None], reach[None], reach_pole[None])                  # (k, m, 2)
+        side = np.where(d < 0, r_k[..., 0], r_k[..., 1])
         ok = (np.abs(d) > ref.tolerance[None]) & (d / side <= 1.0)
         S = shapes_at(t, ref.dofs) if ref.shapes is not None else None
         if S is not None:
@@ -576,8 +592,9 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
     chance = np.where(moved, q * (s * n_q + 1) / (n_q + 2), np.where(lost, (q * n_q + 1) / (n_q + 2), np.nan))
     with np.errstate(invalid="ignore"):
         flagged = (moved | lost) & ((chance <= false_alarm_rate / max(m, 1)) | unplaced_flagged[:, None])
-    return BeyondBands(moved_hz, moved_col, lost, chance, flagged, u / nb, w / nb, reach_bands_hz(ref), int(base.size),
-                       unplaced, unplaced_chance, unplaced_flagged, by_fft)
+    return BeyondBands(moved_hz, moved_col, lost, chance, flagged, u / nb, w / nb,
+                       reach_bands_hz(ref, by_shape=True), int(base.size), unplaced, unplaced_chance,
+                       unplaced_flagged, by_fft)
 
 
 def _baseline_shares(lacking, beyond, base, n: int):

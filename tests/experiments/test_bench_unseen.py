@@ -64,3 +64,12 @@ def test_scope_series_is_seeded_quantised_and_written_as_csv(tmp_path):
     files = write_tests(Series(**{**a.__dict__, "data": a.data[:2]}), tmp_path)
     head = open(files[0]).read().splitlines()[:3]
     assert head[:2] == ["# quantity: acceleration", "time_s,1:+Y"] and head[2].startswith("0.000000,")
+
+
+def test_a_scope_mode_above_the_band_is_no_true_mode_of_the_series():
+    """Seed 4 draws 3 modes (33.0, 207.1, 579.8 Hz) at 1250 Hz: the band ends at 0.4 fs = 500 Hz, below the third
+    mode; the truth (what "all modes found" and the scatter count) holds the two in the band."""
+    a = scope_series(4, {"baseline": 10, "intact": 10, "damaged": 10})
+    assert a.sampling_frequency_hz == 1250.0 and a.band_hz[1] == 500.0 and "579.8" in a.how
+    assert a.truth_hz.shape == (40, 2) and a.crb_rel.shape == (2,)
+    assert np.all(a.truth_hz < a.band_hz[1]) and np.all(a.truth_hz > a.band_hz[0])

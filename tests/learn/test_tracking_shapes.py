@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from learn.monitor import IdentifiedModes, reference_modes, track_modes
-from learn.monitor.tracking import APART_MAC, CORE, MAC_MIN, NEIGHBOUR_SHARE, admissible, narrow_bands_hz
+from learn.monitor.tracking import (APART_MAC, CORE, MAC_MIN, MODE_MOVED, NEIGHBOUR_SHARE, admissible, beyond_bands,
+                                   narrow_bands_hz, reach_bands_hz)
 from physics.modal import mac
 
 F0 = np.array([100.0, 102.0])                   # 2 % apart: 45 % of the gap is 0.89 %
@@ -106,3 +107,25 @@ def test_one_channel_gives_the_assignment_by_frequency(refs):
     for got, want in zip(track_modes(tests, one), track_modes([_test(t.frequencies_hz, None) for t in tests], none)):
         np.testing.assert_array_equal(got, want)
     np.testing.assert_allclose(track_modes(tests, one)[0], [[100.8, 101.2], [99.8, np.nan]])
+
+
+def test_a_close_mode_moved_past_its_neighbour_is_read_moved_by_shape(refs):
+    """Mode 2 down 4 % (97.92 Hz, 2.1 % below mode 1), its shape intact: beyond its band (+-2.5 %), and by frequency
+    alone beyond its reach too (half the 2 % gap, 1 %), so it read as lost. Mode 1, told apart by shape, bounds no
+    reach by shape: the reach is the open side's ``REACH_FACTOR``, and the pole is mode 2 moved -4 %, flagged (the
+    baseline found mode 2 in every test). A pole of mode 1's shape there is no reading of mode 2; an FFT peak's reach
+    (no shape) stays half the gap."""
+    ref = refs["4"]
+    f = ref.frequencies_hz
+    half = 0.5 * math.log(f[1] / f[0])
+    np.testing.assert_allclose(reach_bands_hz(ref), np.outer(f, np.exp([-half, half])), rtol=1e-12)
+    np.testing.assert_allclose(reach_bands_hz(ref, by_shape=True), np.outer(f, [0.5, 2.0]), rtol=1e-12)
+    moved, other = 102.0 * 0.96, 100.0 * 0.979
+    tests = _baseline("4") + [_test([100.0, moved], PHI), _test([other, 100.0], PHI[:, [0, 0]])]
+    cols = track_modes(tests, ref)[3]
+    np.testing.assert_array_equal(cols[20:], [[0, -1], [1, -1]])          # mode 2 missing from its band in both
+    bb = beyond_bands(tests, ref, cols, range(20), 0.01)
+    assert bb.moved_hz[20, 1] == pytest.approx(moved) and bb.flagged[20, 1] and bb.status(20) == MODE_MOVED
+    assert bb.readings(20, ref)[0]["change_pct"] == pytest.approx(100 * (moved / f[1] - 1))
+    assert abs(bb.readings(20, ref)[0]["change_pct"] + 4.0) < 0.3
+    assert bb.lost[21, 1] and np.isnan(bb.moved_hz[21]).all()             # mode 1's shape: not mode 2
