@@ -12,7 +12,9 @@ band fit's squared residual without it, in noise variances) white noise alone ex
 :data:`NOISE_POLE_PROBABILITY` (a chi-square of 30 at two degrees of freedom) is dropped
 (:func:`noise_poles`) and the rest refitted without it, until none is left (closed-form decays of 21, 67 and 143
 Hz, one channel, noise 1e-3: extra poles at 79.8, 100.4 and 125.4 Hz of chi-square 7-11, the modes 10^5-10^9; a
-pole that held 108 beside another noise pole of its band holds 10 refitted without it).
+pole that held 108 beside another noise pole of its band holds 10 refitted without it). A group of close poles whose
+band fit fails has no chi-square to judge its poles by: its weakest starting pole is dropped
+(:func:`failed_group_weakest`) and the rest refitted, until every group converges or is one pole.
 The clear peaks of the decays' spectrum that no refined pole holds are started at their peak and refined in their
 bands as ``era``'s seeds are (:func:`~physics.identification.peak_seeds.seed_unheld_peaks`), flagged weakly stable.
 """
@@ -23,13 +25,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from physics.identification.band_refine import BandFit, refine_in_bands
+from physics.identification.band_refine import BandFit, band_amplitudes, refine_in_bands
 from physics.identification.decay_peaks import decay_peaks
 from physics.identification.decays import decay_spectrum, find_decays, free_response
 from physics.identification.fdd import height_db, unit_shapes
 from physics.identification.peak_seeds import SeededModes, dominant_shapes, seed_unheld_peaks
 
-__all__ = ["NOISE_POLE_PROBABILITY", "ModeColumns", "noise_poles", "refine_free_response"]
+__all__ = ["NOISE_POLE_PROBABILITY", "ModeColumns", "failed_group_weakest", "noise_poles", "refine_free_response"]
 
 #: A refined pole is a mode when white noise alone gives its amplitudes' chi-square (two degrees of freedom per decay
 #: and channel) with at most this probability: that of 30 at two degrees of freedom (one decay and channel). Measured:
@@ -77,6 +79,30 @@ def noise_poles(bands: BandFit) -> np.ndarray:
         return bands.amplitude_chi2 < stats.chi2.isf(NOISE_POLE_PROBABILITY, np.maximum(bands.amplitude_dof, 1))
 
 
+def failed_group_weakest(bands: BandFit, decays, sampling_frequency_hz) -> np.ndarray:
+    """Shape (n_modes,) of bool: in each group of two or more poles of ``bands`` whose band fit failed (a pole not
+    converged nor merged), the weakest of its starting poles: the least energy (over the decays, shape (n_channels,
+    n_samples_d) each, and the channels) of its amplitudes fitted with the poles held
+    (:func:`~physics.identification.band_refine.band_amplitudes`). Its band fit's misfit is no pole's to judge."""
+    failed = ~bands.converged & ~np.asarray(bands.merged, bool) & (bands.group >= 0)
+    out = np.zeros(failed.size, bool)
+    groups = [g for g in np.unique(bands.group[failed]) if np.count_nonzero(bands.group == g) > 1]
+    if not groups:
+        return out
+    idx = np.flatnonzero(np.isin(bands.group, groups))
+    lam = bands.eigenvalues[idx]
+    fs = float(sampling_frequency_hz)
+    amps = band_amplitudes(decays, fs, lam)                             # (n_decays, n_channels, m)
+    n = np.array([y.shape[1] for y in decays], float)[:, None]
+    sigma = -lam.real
+    energy = np.sum(np.abs(amps) ** 2 * (-np.expm1(-2 * sigma[None, :] * n / fs) / -np.expm1(-2 * sigma / fs))
+                    [:, None, :], axis=(0, 1))
+    for g in groups:
+        mine = np.flatnonzero(bands.group[idx] == g)
+        out[idx[mine[np.argmin(energy[mine])]]] = True
+    return out
+
+
 def refine_free_response(checked, modes: ModeColumns, sv, band_hz, n_modes, max_damping) \
         -> tuple[BandFit | None, SeededModes | None, ModeColumns]:
     """``(band fit, seeded modes, modes)`` of SSI-cov's ``modes`` of the checked record ``checked``: for a free
@@ -95,12 +121,12 @@ def refine_free_response(checked, modes: ModeColumns, sv, band_hz, n_modes, max_
     decays = [x[:, a:b] for a, b in zip(d.onsets.tolist(), d.stops.tolist())]
     fs = checked.sampling_frequency_hz
     bands = refine_in_bands(decays, fs, lam)
-    noise = noise_poles(bands)
+    noise = noise_poles(bands) | failed_group_weakest(bands, decays, fs)
     while noise.any():                                  # the rest refitted without them: a group's poles move
         modes = modes.take(np.flatnonzero(~noise))
         lam = modes.eigenvalues
         bands = refine_in_bands(decays, fs, lam)
-        noise = noise_poles(bands)
+        noise = noise_poles(bands) | failed_group_weakest(bands, decays, fs)
     converged, kept = bands.converged, ~np.asarray(bands.merged, bool)
     held = np.where(converged, bands.eigenvalues, lam)[kept]
     amps = np.where(converged, bands.amplitudes, np.nan)[:, :, kept]     # NaN: refitted in its band with the seeds

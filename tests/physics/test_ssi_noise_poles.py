@@ -79,3 +79,18 @@ def test_a_pole_on_noise_beside_a_decay_holds_an_amplitude_chi_square_below_the_
             assert 0.3 < chi2[0] / (amplitude ** 2 * energy) < 1.0, (chi2, amplitude ** 2 * energy)
             assert chi2[1] < 20, chi2
             np.testing.assert_array_equal(noise_poles(bands), [False, True])
+
+
+def test_a_group_whose_band_fit_fails_is_refitted_without_its_weakest_pole():
+    """Noise 1e-4, seeds 4, 7 and 9: SSI-cov's model holds a pole beside a mode (21.28, 65.69, 19.85 and 68.56 Hz)
+    that its group's band fit draws out of the band or to no damping, so the group's fit fails and its raw poles
+    are no band fit's to judge. Refitted without its weakest pole (the least energy with the poles held): the three
+    modes within four Cramer-Rao bounds and no other (with the group's raw poles: four or five modes, the 21-Hz
+    mode 0.006 Hz and 20 % damping off on seed 4)."""
+    for seed in (4, 7, 9):
+        y, _, noise_std = impact_record(FS, N, FN, ZETA, SHAPE[None], [HIT_S], 1e-4, seed)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            f = identify_ssi(y, FS).estimate.natural_frequencies_hz
+        assert f.size == 3, (seed, f)
+        assert np.all(np.abs(f - FN) < 4 * _bound(SHAPE, noise_std)), (seed, f - FN)
