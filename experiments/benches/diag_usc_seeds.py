@@ -4,7 +4,7 @@ those ``era`` holds (within 2 %), and each clear peak seeded beside the model
 (:func:`~physics.identification.peak_seeds.band_rises`) and its fit on the decays cut there.
 
 The seeds are fitted here with the held modes (``era``'s estimate less its seeded modes) fixed at their bands' linear
-amplitudes (:func:`~physics.identification.band_refine.band_amplitudes`), where ``era`` passes its band fits'
+amplitudes (:func:`~physics.identification.band_amplitudes.band_amplitudes`), where ``era`` passes its band fits'
 amplitudes: a seed's numbers here can differ from ``era``'s by a few of its sigmas.
 
 Run: ``python -m experiments.benches.diag_usc_seeds [DIR] [--default-band]`` (about 20 s; the set is read as

@@ -23,13 +23,13 @@ from learn.monitor.coverage import series_coverage
 from learn.monitor.estimator_choice import FREQUENCY_ESTIMATORS, FrequencyChoice, choose_frequencies
 from learn.monitor.fft_beyond import fft_peaks_beyond
 from learn.monitor.tracking import (MIN_PRESENCE, MODE_LOST, MODE_MOVED, BeyondBands, ReferenceModes, beyond_bands,
-                                   identified_by, readings_text, reference_modes, refit_missing, track_modes)
+                                   identified_by, narrow_bands_hz, reference_modes, refit_missing, track_modes)
 from physics.errors import BeamDamageError, ConfigError
 from physics.io import finite_or_none
 from learn.monitor.workers import identify_files
 
 __all__ = ["BASELINE_OUTLIER", "EXTRAPOLATED", "EXTRAPOLATED_ALARMS", "FLAGGED_STATUSES", "MODE_LOST", "MODE_MOVED",
-           "STATUSES", "SeriesResult", "changed_text", "monitor_series", "what_changed"]
+           "STATUSES", "SeriesResult", "changed_text", "monitor_series", "readings_text", "what_changed"]
 
 
 @dataclass
@@ -238,6 +238,29 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
             # a mode beyond its band is no statistic of the environment: its status stands
             r["status"], r["alarm"] = beyond.status(i) or EXTRAPOLATED, False
     return res
+
+
+def readings_text(readings: list, ref: ReferenceModes) -> str:
+    """The flagged readings in words, e.g. ``mode 2 moved +20.8 % (193.6 Hz, beyond its band 139.3-184.3 Hz);
+    mode 3 lost (no pole within 372.3-492.3 Hz or beyond it within its reach; chance 0.0033 at the baseline's
+    share)``; a test flagged for its poles all lying beyond the bands (:attr:`BeyondBands.unplaced_flagged`) starts
+    with ``no mode in its band:``."""
+    bands = narrow_bands_hz(ref)
+    unplaced = any(d.get("unplaced") for d in readings)
+    parts = []
+    for d in readings:
+        if not d["flagged"]:
+            continue
+        lo, hi = bands[d["mode"] - 1]
+        if d["reading"] == "moved":
+            parts.append(f"mode {d['mode']} moved {d['change_pct']:+.1f} % ({d['frequency_hz']:.4g} Hz, beyond its "
+                         f"band {lo:.4g}-{hi:.4g} Hz)")
+        else:
+            odds = "" if unplaced else f"; chance {d['chance']:.2g} at the baseline's share"
+            parts.append(f"mode {d['mode']} lost (no pole within {lo:.4g}-{hi:.4g} Hz or beyond it within its "
+                         f"reach{odds})")
+    text = "; ".join(parts)
+    return f"no mode in its band: {text}" if unplaced and text else text
 
 
 def _detector_fields(det: Detection, charts: Charts | None, i: int, ok: bool) -> dict:

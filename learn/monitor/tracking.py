@@ -19,7 +19,7 @@ from physics.modal import mac
 __all__ = ["APART_MAC", "CLUSTER_GAP", "MAC_MIN", "MIN_COUNT", "MIN_PRESENCE", "MODE_LOST", "MODE_MOVED",
            "REACH_FACTOR", "SEARCH_MIN",
            "BeyondBands", "ReferenceModes", "admissible", "beyond_bands", "identified_by", "narrow_bands_hz",
-           "narrow_identifier", "reach_bands_hz", "readings_text", "reference_modes", "refit_missing",
+           "narrow_identifier", "reach_bands_hz", "reference_modes", "refit_missing",
            "search_bands_hz", "shape_accepts", "shapes_at", "track_modes"]
 
 #: Baseline poles closer than this (relative) in frequency fall into one cluster.
@@ -466,29 +466,6 @@ class BeyondBands:
                         "chance": float(self.chance[i, r]), "flagged": bool(self.flagged[i, r]),
                         "unplaced": unplaced})
         return out
-
-
-def readings_text(readings: list, ref: ReferenceModes) -> str:
-    """The flagged readings in words, e.g. ``mode 2 moved +20.8 % (193.6 Hz, beyond its band 139.3-184.3 Hz);
-    mode 3 lost (no pole within 372.3-492.3 Hz or beyond it within its reach; chance 0.0033 at the baseline's
-    share)``; a test flagged for its poles all lying beyond the bands (:attr:`BeyondBands.unplaced_flagged`) starts
-    with ``no mode in its band:``."""
-    bands = narrow_bands_hz(ref)
-    unplaced = any(d.get("unplaced") for d in readings)
-    parts = []
-    for d in readings:
-        if not d["flagged"]:
-            continue
-        lo, hi = bands[d["mode"] - 1]
-        if d["reading"] == "moved":
-            parts.append(f"mode {d['mode']} moved {d['change_pct']:+.1f} % ({d['frequency_hz']:.4g} Hz, beyond its "
-                         f"band {lo:.4g}-{hi:.4g} Hz)")
-        else:
-            odds = "" if unplaced else f"; chance {d['chance']:.2g} at the baseline's share"
-            parts.append(f"mode {d['mode']} lost (no pole within {lo:.4g}-{hi:.4g} Hz or beyond it within its "
-                         f"reach{odds})")
-    text = "; ".join(parts)
-    return f"no mode in its band: {text}" if unplaced and text else text
 
 
 def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_rate: float,

@@ -35,7 +35,8 @@ beside the band, or within it (a peak that is no one damped exponential: a compo
 mode whose frequency moves with its amplitude), leaves a misfit and keeps the narrower band. Modes held fixed
 (``fixed``: poles and amplitudes known, e.g. a model's modes while a further mode is refined beside them) are
 subtracted, by their closed-form transforms, from every decay's transform before any band is fitted, and are not
-refined: only the bands of the modes given are fitted (:func:`band_amplitudes` gives the amplitudes of fixed poles).
+refined: only the bands of the modes given are fitted (:mod:`physics.identification.band_amplitudes` gives the
+amplitudes of fixed poles).
 
 Two poles of one band closer than their half-power half-widths summed and than the main lobe of the longest
 decay's transform (:data:`RESOLVED_LINES` lines), or closer than the record's resolution whatever their widths
@@ -70,8 +71,8 @@ from physics.errors import ConvergenceError, ShapeError
 from physics.identification.damped_sinusoids import levenberg_marquardt, pole_statistics
 
 __all__ = ["BACKGROUND_ORDER", "BAND_LINES", "BAND_WIDTHS", "MERGE_FACTOR", "RESOLUTION_LINES", "RESOLVED_LINES",
-           "RESOLVED_WIDTHS", "SWEEPS", "WIDE_LINES", "BandFit", "band_amplitudes", "band_data", "mode_bands",
-           "modes_on_lines", "refine_in_bands"]
+           "RESOLVED_WIDTHS", "SWEEPS", "WIDE_LINES", "BandFit", "band_data", "mode_bands",
+           "decay_spectra", "modes_on_lines", "projected_band", "refine_in_bands"]
 
 #: A mode's band spans this many of its half-power half-widths either side of it ...
 BAND_WIDTHS = 6.0
@@ -274,7 +275,7 @@ def _columns(w, n, sigma, omega, fs, centre_hz, half_hz, k, order):
     return real, d_real
 
 
-def _projected_band(data, fs, sigma, omega, weights, band_hz, order):
+def projected_band(data, fs, sigma, omega, weights, band_hz, order):
     """Residuals, coefficients and Kaufman Jacobian blocks of every decay's band (as
     :func:`~physics.identification.damped_sinusoids.levenberg_marquardt` takes them)."""
     m = sigma.size
@@ -302,7 +303,7 @@ def _projected_band(data, fs, sigma, omega, weights, band_hz, order):
 def _fit_band(data, fs, band, lam, n_ch, order):
     """The variable-projection fit of poles ``lam`` in a band: ``(sigma, omega, cov, coef, weights, res)``, or None
     where the band holds too few lines or the fit fails (singular, or a pole left the band or lost its damping);
-    ``res``: the weighted residual of each decay holding the band, as :func:`_projected_band` gives it."""
+    ``res``: the weighted residual of each decay holding the band, as :func:`projected_band` gives it."""
     used = [d for d in data if d is not None]
     n_values = n_ch * sum(2 * d[0].size for d in used)
     n_params = 2 * lam.size + len(used) * n_ch * (2 * lam.size + 2 * (order + 1))
@@ -310,7 +311,7 @@ def _fit_band(data, fs, band, lam, n_ch, order):
         return None
 
     def project(sigma, omega, weights):
-        return _projected_band(data, fs, sigma, omega, weights, band, order)
+        return projected_band(data, fs, sigma, omega, weights, band, order)
 
     try:
         sigma, omega, cov, res, coef, weights, _ = levenberg_marquardt(
@@ -447,7 +448,7 @@ def _unresolved(lam, amps, lengths, fs, group, converged):
     return out
 
 
-def _spectra(decays, fs, fixed):
+def decay_spectra(decays, fs, fixed):
     """Each decay's transform (all its lines), less the closed-form transforms of the ``fixed`` modes (``(eigenvalues
     (m_f,), amplitudes (n_decays, n_channels, m_f))`` or None)."""
     spectra = [np.fft.rfft(y, axis=1) for y in decays]
@@ -462,53 +463,6 @@ def _spectra(decays, fs, fixed):
         n = y.shape[1]
         out.append(Y - modes_on_lines(np.exp(-2j * np.pi * np.arange(Y.shape[1]) / n), n, fs, lam_f, a))
     return out
-
-
-def band_amplitudes(decays, sampling_frequency_hz, eigenvalues, background_order=BACKGROUND_ORDER) -> np.ndarray:
-    """The amplitudes of poles held fixed: each group of close poles' linear least-squares fit (amplitudes and
-    background, the poles not moved) in its own band (:func:`mode_bands`), swept as :func:`refine_in_bands` sweeps
-    (from the second sweep on, each band's data less the other groups' transforms).
-
-    Parameters
-    ----------
-    decays : sequence of ndarray, each shape (n_channels, n_samples_d)
-        The decays, each from its own start, mean removed.
-    sampling_frequency_hz : float
-    eigenvalues : array_like, complex, shape (n_modes,)
-        ``-sigma + i omega`` (rad/s).
-    background_order : int
-
-    Returns
-    -------
-    ndarray, complex, shape (n_decays, n_channels, n_modes)
-        ``a`` of ``Re(a z^n)`` of each decay, channel and mode at the decay's first sample (0 where a decay holds
-        too few lines of the mode's band).
-    """
-    fs = float(sampling_frequency_hz)
-    lam = np.asarray(eigenvalues, complex)
-    decays = [np.asarray(y, dtype=np.float64) for y in decays]
-    n_ch = decays[0].shape[0]
-    lengths = [y.shape[1] for y in decays]
-    amps = np.zeros((len(decays), n_ch, lam.size), complex)
-    if lam.size == 0:
-        return amps
-    spectra = _spectra(decays, fs, None)
-    bands, group = mode_bands(lam, max(lengths) / fs, fs / 2)
-    for _ in range(SWEEPS):                             # from the second on, less the other groups' transforms
-        known = amps.copy()
-        for g in np.unique(group):
-            idx, others = np.flatnonzero(group == g), np.flatnonzero(group != g)
-            m = idx.size
-            data = [None if d is None else
-                    (d[0], d[1], d[2] - modes_on_lines(d[1], d[3], fs, lam[others], known[j][:, others])
-                     / np.sqrt(d[3]), d[3])
-                    for j, d in enumerate(band_data(spectra, lengths, fs, bands[idx[0]]))]
-            used = [j for j, d in enumerate(data) if d is not None]
-            _, coef, _ = _projected_band(data, fs, -lam[idx].real, lam[idx].imag, np.ones(n_ch), bands[idx[0]],
-                                         background_order)
-            for j, C in zip(used, coef):
-                amps[j][:, idx] = 2 * (C[0:2 * m:2] + 1j * C[1:2 * m:2]).T * np.sqrt(lengths[j])
-    return amps
 
 
 def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order=BACKGROUND_ORDER,
@@ -526,7 +480,8 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
     background_order : int
     fixed : (ndarray, ndarray), optional
         Modes held fixed: their poles (complex, shape (m_f,), rad/s) and amplitudes (complex, shape (n_decays,
-        n_channels, m_f), ``a`` of ``Re(a z^n)``, as :attr:`BandFit.amplitudes` or :func:`band_amplitudes` give
+        n_channels, m_f), ``a`` of ``Re(a z^n)``, as :attr:`BandFit.amplitudes` or
+        :func:`~physics.identification.band_amplitudes.band_amplitudes` give
         them). Their transforms are subtracted from every decay's; they are not refined, and only the bands of
         ``eigenvalues`` are fitted.
 
@@ -546,7 +501,7 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
     decays = [np.asarray(y, dtype=np.float64) for y in decays]
     n_ch = decays[0].shape[0]
     lengths = [y.shape[1] for y in decays]
-    spectra = _spectra(decays, fs, fixed)
+    spectra = decay_spectra(decays, fs, fixed)
     lam_fixed = np.zeros(0, complex) if fixed is None else np.asarray(fixed[0], complex).ravel()
     bands, group = mode_bands(lam0, max(lengths) / fs, fs / 2)
     lam = lam0.copy()

@@ -38,7 +38,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from physics.identification.band_refine import MERGE_FACTOR, band_amplitudes, mode_bands, refine_in_bands
+from physics.identification.band_amplitudes import band_amplitudes
+from physics.identification.band_refine import MERGE_FACTOR, mode_bands, refine_in_bands
 from physics.identification.fdd import ClearPeaks
 
 __all__ = ["JUMP_SAMPLES_PER_CORRELATION", "JUMP_SEARCH_LINES", "JUMP_SEARCH_STEPS", "JUMP_SIGMA_OCTAVES",
@@ -374,7 +375,7 @@ def refine_seeds(decays, sampling_frequency_hz, held_eigenvalues, peaks: ClearPe
         frequency.
     held_amplitudes : array_like, complex, shape (n_decays, n_channels, n_held), optional
         The held modes' amplitudes on ``decays``; a fixed mode's that are not given (default) or NaN are each group's
-        linear fit in its band (:func:`~physics.identification.band_refine.band_amplitudes`).
+        linear fit in its band (:func:`~physics.identification.band_amplitudes.band_amplitudes`).
 
     Returns
     -------

@@ -25,7 +25,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from physics.identification.band_refine import BandFit, band_amplitudes, refine_in_bands
+from physics.identification.band_amplitudes import band_amplitudes
+from physics.identification.band_refine import BandFit, refine_in_bands
 from physics.identification.decay_peaks import decay_peaks
 from physics.identification.decays import decay_spectrum, find_decays, free_response
 from physics.identification.fdd import height_db, unit_shapes
@@ -83,7 +84,7 @@ def failed_group_weakest(bands: BandFit, decays, sampling_frequency_hz) -> np.nd
     """Shape (n_modes,) of bool: in each group of two or more poles of ``bands`` whose band fit failed (a pole not
     converged nor merged), the weakest of its starting poles: the least energy (over the decays, shape (n_channels,
     n_samples_d) each, and the channels) of its amplitudes fitted with the poles held
-    (:func:`~physics.identification.band_refine.band_amplitudes`). Its band fit's misfit is no pole's to judge."""
+    (:func:`~physics.identification.band_amplitudes.band_amplitudes`). Its band fit's misfit is no pole's to judge."""
     failed = ~bands.converged & ~np.asarray(bands.merged, bool) & (bands.group >= 0)
     out = np.zeros(failed.size, bool)
     groups = [g for g in np.unique(bands.group[failed]) if np.count_nonzero(bands.group == g) > 1]

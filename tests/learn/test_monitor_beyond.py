@@ -11,10 +11,9 @@ from experiments.cli import main
 from experiments.cli.cmd_monitor import chart
 from learn.monitor import (IdentificationSettings, IdentifiedModes, SeriesInput, monitor_series, reference_modes,
                            track_modes)
-from learn.monitor.alarms import FLAGGED_STATUSES
+from learn.monitor.alarms import FLAGGED_STATUSES, readings_text
 from learn.monitor.events import group_events, lost_modes_change
-from learn.monitor.tracking import (MODE_LOST, MODE_MOVED, REACH_FACTOR, beyond_bands, reach_bands_hz,
-                                   readings_text)
+from learn.monitor.tracking import MODE_LOST, MODE_MOVED, REACH_FACTOR, beyond_bands, reach_bands_hz
 from modal_files import write_modal_series
 
 F0 = np.array([10.0, 31.0, 62.0])

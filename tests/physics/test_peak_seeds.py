@@ -6,7 +6,8 @@ import warnings
 import numpy as np
 from impact_records import impact_record, poles
 
-from physics.identification.band_refine import band_amplitudes, refine_in_bands
+from physics.identification.band_amplitudes import band_amplitudes
+from physics.identification.band_refine import refine_in_bands
 from physics.identification.decay_peaks import decay_peaks
 from physics.identification.fdd import ClearPeaks
 from physics.identification.fft_peak import identify_fft_peaks
