@@ -11,6 +11,7 @@ their start to their end; :func:`decay_spectrum` is the spectrum whose clear pea
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from statistics import NormalDist
 
 import numpy as np
 
@@ -49,8 +50,13 @@ FREE_DROP_NO_HIT_DB = 10.0
 #: part after it falls as the response returns to its level).
 NO_HIT_LOUDEST = 0.25
 #: A pre-trigger shorter than the least decay is measured against the decay after it (:attr:`Decays.lead_db`) when
-#: it is white noise: its lag-one correlation within this of zero (white noise's, from 24 samples: 0 +- 0.2).
+#: it is white noise: its lag-one correlation within this of zero (white noise's, from 24 samples: 0 +- 0.2) ...
 WHITE_LAG1 = 0.5
+#: ... and its correlations over lags 1 to ``min(WHITE_LAGS, m // 4)`` jointly white noise's (Ljung-Box statistic
+#: below its chi-square quantile ``1 - WHITE_P``): a stationary response dominated by a mode near a quarter of the
+#: sampling rate has a lag-one correlation near zero but swings at the mode's period (a 1234-Hz mode at 4341 Hz:
+#: lag-one -0.2, Ljung-Box 77 over 20 lags of 86 samples against a quantile of 45).
+WHITE_LAGS, WHITE_P = 20, 1e-3
 #: An oversampled record is searched for hits at its content's rate too: this many times its highest clear peak ...
 CONTENT_RATE = 2.5
 #: ... keeping at least this many predictor orders of samples.
@@ -174,10 +180,20 @@ def _decays_without_hit(x, a, b):
 def _white(seg):
     """Whether samples ``seg`` (shape (n_channels, n_samples)) are white noise, as a pre-trigger is: the lag-one
     correlation of their deviations from their mean, over the channels, within :data:`WHITE_LAG1` of zero (a
-    sampled response's is near one; a segment without variation, under one quantisation step, is white)."""
+    sampled response's is near one; a segment without variation, under one quantisation step, is white), and their
+    Ljung-Box statistic over :data:`WHITE_LAGS` lags below its chi-square quantile (Wilson-Hilferty) at
+    ``1 - WHITE_P``."""
     d = seg - seg.mean(axis=1, keepdims=True)
     energy = np.sum(d ** 2)
-    return bool(energy <= 0 or abs(np.sum(d[:, 1:] * d[:, :-1])) < WHITE_LAG1 * energy)
+    if energy <= 0:
+        return True
+    m = d.shape[1]
+    lags = np.arange(1, max(min(WHITE_LAGS, m // 4), 1) + 1)
+    r = np.array([np.sum(d[:, k:] * d[:, :-k]) for k in lags]) / energy
+    q = m * (m + 2) * np.sum(r ** 2 / (m - lags))
+    z, n = NormalDist().inv_cdf(1 - WHITE_P), lags.size
+    quantile = n * (1 - 2 / (9 * n) + z * np.sqrt(2 / (9 * n))) ** 3
+    return bool(abs(r[0]) < WHITE_LAG1 and q < quantile)
 
 
 def _rises(x, innovation, p):

@@ -69,6 +69,26 @@ def test_a_free_response_is_told_from_a_stationary_one():
     assert not ambient.free and ambient.text.startswith("not a free response")
 
 
+def test_a_short_lead_is_white_only_when_its_correlations_over_many_lags_are_white_noises():
+    """A pre-trigger as short as the predictor's order counts as white by its lag-one correlation and its
+    Ljung-Box statistic over 20 lags: white noise passes (about 999 in 1000), a stationary response dominated by a
+    mode near 0.28 of the sampling rate (lag-one correlation about -0.2, as cos(2 pi 0.284)) does not."""
+    from physics.identification.decays import _white
+
+    rng = np.random.default_rng(0)
+    white = [_white(rng.standard_normal((1, 86))) for _ in range(500)]
+    assert np.mean(white) > 0.99
+    r, theta = 0.98, 2 * np.pi * 0.284                  # an AR(2) resonance: a lightly damped mode under white noise
+    e = rng.standard_normal((200, 2086))
+    y = np.zeros_like(e)
+    for k in range(2, e.shape[1]):
+        y[:, k] = 2 * r * np.cos(theta) * y[:, k - 1] - r * r * y[:, k - 2] + e[:, k]
+    seg = y[:, -86:]
+    lag1 = np.array([np.corrcoef(s[1:], s[:-1])[0, 1] for s in seg])
+    assert abs(np.median(lag1)) < 0.5                   # the lag-one test alone takes it for white
+    assert np.mean([_white(s[None]) for s in seg]) < 0.05
+
+
 def test_era_identifies_the_frame_from_three_hits_with_its_shapes_and_one_sigma():
     res = _quiet(identify_era, _frame(1), FRAME_FS)
     e = res.estimate
