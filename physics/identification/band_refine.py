@@ -62,7 +62,6 @@ percentile 14-29, largest 52, a pole grown to 7.6 % damping whose band reached t
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -346,8 +345,7 @@ def _wider_bands(pole, band_hz, others, longest_s, nyquist_hz):
 class _BandTrial:
     """One band fit of one pole (:func:`_fit_band`): its pole, covariance, coefficients, channel weights and
     residual (each used decay's weighted residual, (2 L, n_channels), real parts of its ``L`` lines over imaginary),
-    the decays used (indices), their lines ``k`` and samples ``n``, the background's order and each pole's
-    amplitude chi-square (:func:`_amplitude_chi2`)."""
+    the decays used (indices), their lines ``k`` and samples ``n``, and the background's order."""
 
     sigma: np.ndarray
     omega: np.ndarray
@@ -359,7 +357,6 @@ class _BandTrial:
     lines: list
     lengths: list
     order: int
-    chi2: np.ndarray
 
     @property
     def unknowns(self) -> float:
@@ -381,18 +378,19 @@ class _BandTrial:
         return ss_in, sum(int(i.sum()) for i in inside), ss_out, sum(int((~i).sum()) for i in inside)
 
 
-def _amplitude_chi2(data, fs, band_hz, sigma, omega, coef, weights, order, mean_squares) -> np.ndarray:
-    """Each pole's amplitudes against their covariance, shape (m,): over the decays of ``data`` (as
-    :func:`_fit_band` took them) and the channels, ``c^T V^-1 c / s^2``, ``c`` the real and imaginary parts of the
-    pole's amplitude (``coef``, weighted by ``weights``), ``V`` their block of ``(Phi^T Phi)^-1`` (the pole's and the
-    other columns of the band's basis at the fitted poles ``sigma``, ``omega``) and ``s^2`` the channel's residual
-    mean square per value (``mean_squares``, the channels' units squared): the increase of the squared residual
-    were the pole's two columns left out and the rest refitted (the poles held), in noise variances."""
+def _amplitude_chi2(trial: _BandTrial, band_hz, fs) -> np.ndarray:
+    """Each pole's amplitudes against their covariance, shape (m,): over the decays the band fit ``trial`` used
+    (in ``band_hz``, Hz) and the channels, ``c^T V^-1 c / s^2``, ``c`` the real and imaginary parts of the pole's
+    amplitude (its coefficients, unweighted), ``V`` their block of ``(Phi^T Phi)^-1`` (the pole's and the other
+    columns of the band's basis at the fitted poles) and ``s^2`` the channel's residual mean square per value
+    (:meth:`_BandTrial.mean_squares`, the channels' units squared): the increase of the squared residual were the
+    pole's two columns left out and the rest refitted (the poles held), in noise variances."""
+    sigma, omega, weights, mean_squares = trial.sigma, trial.omega, trial.weights, trial.mean_squares()
     m = sigma.size
     centre, half = 0.5 * (band_hz[0] + band_hz[1]), max(0.5 * (band_hz[1] - band_hz[0]), np.finfo(float).tiny)
     out = np.zeros(m)
-    for (k, w, _, n), C in zip([d for d in data if d is not None], coef):
-        Phi, _ = _columns(w, n, sigma, omega, fs, centre, half, k, order)
+    for k, n, C in zip(trial.lines, trial.lengths, trial.coef):
+        Phi, _ = _columns(np.exp(-2j * np.pi * k / n), n, sigma, omega, fs, centre, half, k, trial.order)
         norm = np.maximum(np.linalg.norm(Phi, axis=0), np.finfo(float).tiny)
         G_inv = np.linalg.pinv((Phi.T @ Phi) / np.outer(norm, norm), hermitian=True) / np.outer(norm, norm)
         c = (C[:2 * m] / weights[None, :]).reshape(m, 2, -1)              # (m, 2, n_ch), the channels' units
@@ -541,14 +539,9 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
                                                            amps_known[j][:, others]) / np.sqrt(d[3]), d[3])
                         for j, d in enumerate(band_data(spectra, lengths, fs, band))]
                 fitted = _fit_band(data, fs, band, start, n_ch, background_order)
-                if fitted is None:
-                    return None
                 used = [j for j, d in enumerate(data) if d is not None]
-                trial = _BandTrial(*fitted, used, [data[j][0] for j in used], [lengths[j] for j in used],
-                                   background_order, np.zeros(0))
-                chi2 = _amplitude_chi2(data, fs, band, trial.sigma, trial.omega, trial.coef, trial.weights,
-                                       background_order, trial.mean_squares())
-                return dataclasses.replace(trial, chi2=chi2)
+                return None if fitted is None else _BandTrial(*fitted, used, [data[j][0] for j in used],
+                                                              [lengths[j] for j in used], background_order)
 
             best = fit_in(band, lam[idx])
             if best is None:
@@ -566,7 +559,7 @@ def refine_in_bands(decays, sampling_frequency_hz, eigenvalues, background_order
                 best.used
             n_values = n_ch * sum(2 * k.size for k in best.lines)
             _, _, f_std[idx], z_std[idx] = pole_statistics(sigma, omega, cov)
-            chi2[idx], dof[idx] = best.chi2, 2 * len(used) * n_ch
+            chi2[idx], dof[idx] = _amplitude_chi2(best, band, fs), 2 * len(used) * n_ch
             lam[idx] = -sigma + 1j * omega
             converged[idx] = True
             n_lines += n_values // (2 * n_ch)
