@@ -71,7 +71,7 @@ from physics.identification.damped_sinusoids import levenberg_marquardt, pole_st
 
 __all__ = ["BACKGROUND_ORDER", "BAND_LINES", "BAND_WIDTHS", "MERGE_FACTOR", "RESOLUTION_LINES", "RESOLVED_LINES",
            "RESOLVED_WIDTHS", "SWEEPS", "WIDE_LINES", "BandFit", "band_data", "mode_bands",
-           "decay_spectra", "modes_on_lines", "projected_band", "refine_in_bands"]
+           "decay_spectra", "mode_energies", "modes_on_lines", "projected_band", "refine_in_bands"]
 
 #: A mode's band spans this many of its half-power half-widths either side of it ...
 BAND_WIDTHS = 6.0
@@ -423,15 +423,23 @@ def _wider_fits_as_well(narrow: _BandTrial, wide: _BandTrial, band_hz, fs) -> bo
                 and stats.f.ppf(0.01, dof_out, dof_in) <= outside <= stats.f.ppf(0.99, dof_out, dof_in))
 
 
+def mode_energies(amplitudes, eigenvalues, lengths, fs) -> np.ndarray:
+    """Each mode's energy over the decays and channels, shape (n_modes,): ``sum |a|^2 sum_t |z|^(2 t)`` of its
+    amplitudes ``a`` (shape (n_decays, n_channels, n_modes), at each decay's first sample) over each decay's
+    ``lengths`` samples at ``fs`` Hz, ``z = exp(eigenvalue / fs)``."""
+    sigma = -np.asarray(eigenvalues, complex).real
+    n = np.asarray(lengths, float)[:, None]
+    return np.sum(np.abs(amplitudes) ** 2 * ((-np.expm1(-2 * sigma[None, :] * n / fs)) / -np.expm1(-2 * sigma / fs))
+                  [:, None, :], axis=(0, 1))
+
+
 def _unresolved(lam, amps, lengths, fs, group, converged):
     """The converged poles closer to a stronger converged pole of their group than :data:`RESOLVED_WIDTHS` times
     their half-power half-widths summed and than :data:`RESOLVED_LINES` lines of the longest decay, or than
     :data:`RESOLUTION_LINES` lines (energy: over the decays and channels): shape (n_modes,) of int, the stronger
     pole's index for each (-1: none)."""
     sigma, f = -lam.real, lam.imag / (2 * np.pi)
-    n = np.asarray(lengths, float)[:, None]
-    energy = np.sum(np.abs(amps) ** 2 * ((-np.expm1(-2 * sigma[None, :] * n / fs)) / -np.expm1(-2 * sigma / fs))
-                    [:, None, :], axis=(0, 1))
+    energy = mode_energies(amps, lam, lengths, fs)
     out = np.full(lam.size, -1)
     line = fs / max(lengths)                            # 1 / T of the longest decay (Hz)
     for j in np.argsort(-energy, kind="stable"):

@@ -26,7 +26,7 @@ from typing import NamedTuple
 import numpy as np
 
 from physics.identification.band_amplitudes import band_amplitudes
-from physics.identification.band_refine import BandFit, refine_in_bands
+from physics.identification.band_refine import BandFit, mode_energies, refine_in_bands
 from physics.identification.decay_peaks import decay_peaks
 from physics.identification.decays import decay_spectrum, find_decays, free_response
 from physics.identification.fdd import height_db, unit_shapes
@@ -93,11 +93,7 @@ def failed_group_weakest(bands: BandFit, decays, sampling_frequency_hz) -> np.nd
     idx = np.flatnonzero(np.isin(bands.group, groups))
     lam = bands.eigenvalues[idx]
     fs = float(sampling_frequency_hz)
-    amps = band_amplitudes(decays, fs, lam)                             # (n_decays, n_channels, m)
-    n = np.array([y.shape[1] for y in decays], float)[:, None]
-    sigma = -lam.real
-    energy = np.sum(np.abs(amps) ** 2 * (-np.expm1(-2 * sigma[None, :] * n / fs) / -np.expm1(-2 * sigma / fs))
-                    [:, None, :], axis=(0, 1))
+    energy = mode_energies(band_amplitudes(decays, fs, lam), lam, [y.shape[1] for y in decays], fs)
     for g in groups:
         mine = np.flatnonzero(bands.group[idx] == g)
         out[idx[mine[np.argmin(energy[mine])]]] = True
