@@ -450,10 +450,10 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
         held_rows = rows[np.isin(rows, b_idx)]
         if "residual" in names and held_rows.size:
             # a baseline test's set is one the baseline period lost (``seen``); held out, its index's evidence is
-            # against the other baseline tests, and so is the evidence its threshold carries (it lacks every mode
-            # of P: the others' count of each loss is one less, Laplace's (c - 1 + 1) / (n - 1 + 2))
-            cnt = base_miss.sum(axis=0)[P]
-            ev_held = float(-2.0 * np.sum(np.log(cnt / (len(b_idx) + 1.0))))
+            # against the other baseline tests, and so is the evidence its threshold carries (every such test
+            # lacks every mode of P: the same evidence without any one of them)
+            others = np.delete(X[b_idx], np.flatnonzero(b_idx == held_rows[0]), axis=0)
+            ev_held = float(missing_evidence(np.where(P, np.nan, 0.0)[None], others)[0])
             k = names.index("residual")
             R[held_rows, k] = values[held_rows, k] / (tp["residual"][0].value - ev + ev_held)
         patterns[", ".join(str(j + 1) for j in np.flatnonzero(P)) or "none"] = tp
