@@ -184,13 +184,15 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
     kinds = set(records.quantities)
     quantity = kinds.pop() if len(kinds) == 1 and kinds <= set(PEAK_EXPONENT) else None
 
-    def fit(name, signals, fallback=False):
+    def fit(name, signals, chosen=False):
         spec = METHODS[name]
         options = {k: {"max_order": max_order}[k] for k in spec.options}
         if mode_in_band and "mode_in_band" in signature(spec.fit).parameters:
             options["mode_in_band"] = True
-        if fallback and "refine_decays" in signature(spec.fit).parameters:
-            options["refine_decays"] = False        # SSI-cov's own poles where era found none (docs/identification.md)
+        if chosen and "refine_decays" in signature(spec.fit).parameters:
+            # the verdict is known: SSI-cov picked for a stationary record has no decays to refine on, and tried where
+            # era found no mode on a free one it keeps its own poles (docs/identification.md)
+            options["refine_decays"] = False
         if "quantity" in signature(spec.fit).parameters:          # the peak's conversion to f_n (fftpeak)
             options["quantity"] = quantity
         return spec.fit(signals, fs, band_hz, n_modes, where, **options)
@@ -214,13 +216,13 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
     why = (f"picked {picked}: response records without a force channel, {verdict.text}"
            + ("" if verdict.free else " (identified as a stationary response)"))
     try:
-        est, diagram = fit(picked, checked)
+        est, diagram = fit(picked, checked, chosen=True)
     except (ConvergenceError, ShapeError) as first:
         other = STATIONARY_METHOD if verdict.free else FREE_RESPONSE_METHOD
         if other == FREE_RESPONSE_METHOD and not verdict.decays.starts.size:
             raise _tried(first, f"{why}; {other} not tried: the record holds no decay") from None
         try:
-            est, diagram = fit(other, checked, fallback=True)
+            est, diagram = fit(other, checked, chosen=True)
         except (ConvergenceError, ShapeError):
             raise _tried(first, f"{why}; {other} found no mode either") from None
         why = f"{why}; {picked} found no mode ({first}), so {other}"
