@@ -13,10 +13,8 @@ from physics.errors import BeamDamageError, ConfigError, FileFormatError
 from physics.identification import (DEFAULT_OUTPUT_ONLY, METHODS, Identification, RecordsIdentification,
                                     holds_response_records, identify_file, identify_records,
                                     read_response_records, reconstruction_error_db, response_records)
-from physics.identification.decays import free_response
 from physics.identification.exponential_window import remove_window_decay, tau_from_end_value
-from physics.identification.output_only import FREE_RESPONSE_METHOD, SCALING, STATIONARY_METHOD, STATIONARY_METHODS
-from physics.identification.record_checks import check_records
+from physics.identification.output_only import FREE_RESPONSE_METHOD, SCALING, STATIONARY_METHOD
 from physics.identification.setups import MergedSetups, finite_mac, merge_setups
 from physics.identification.split_modes import split_pairs, split_text
 from physics.io import (FRF, TIME, MeasuredFRF, NodeGeometry, accepted, format_complex, measured_positions, read,
@@ -294,25 +292,11 @@ def _warn_duplicate_dofs(path, dofs) -> None:
                       "one of them", UserWarning, stacklevel=2)
 
 
-def _warn_if_free(records, method, band) -> None:
-    """Warn when ``method``, one of :data:`STATIONARY_METHODS` named by the user, is given a free response."""
-    where = str(records.metadata.get("source", "records"))
-    verdict = free_response(check_records(records.signals, records.sampling_frequency_hz, band, where))
-    if verdict.free:
-        effect = ("modes may be missed (the poles it keeps are refined in their bands of the decays, as era's are)"
-                  if method == "ssi" else "modes may be missed and damping overestimated")
-        warnings.warn(f"{where}: {verdict.text}; {method} assumes a stationary response: its spectra or "
-                      f"correlations averaged over the whole record dilute the decays, so {effect}; --method era or "
-                      "fftpeak read free decays", UserWarning, stacklevel=2)
-
-
 def _run_output_only(args, records, band) -> dict:
     method = args.method or DEFAULT_OUTPUT_ONLY
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         _warn_duplicate_dofs(args.file, records.dofs)
-        if method in STATIONARY_METHODS:
-            _warn_if_free(records, method, band)
         ident = identify_records(records, method, band, args.modes, args.max_order)
         _warn_split(args.file, ident.estimate)
         method = ident.estimate.method                # the method picked: every setup by the same

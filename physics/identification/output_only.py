@@ -161,6 +161,9 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         A mode is known to lie in the band (a reference mode re-identified in its own band), passed to a method
         whose fit takes it (SSI-cov: :func:`~physics.identification.ssi.identify_ssi`).
 
+    A method of :data:`STATIONARY_METHODS` named for a free response is warned of (its averaged spectra or
+    correlations dilute the decays); ``ssi`` then refines its poles in their bands of the decays.
+
     The channels' common quantity (``records.quantities``: displacement, velocity or acceleration; None when they
     differ) goes to a method whose fit takes it (``fftpeak``: the conversion of its spectral peak to the natural
     frequency, :func:`~physics.identification.fft_peak.natural_from_peak`).
@@ -184,15 +187,13 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
     kinds = set(records.quantities)
     quantity = kinds.pop() if len(kinds) == 1 and kinds <= set(PEAK_EXPONENT) else None
 
-    def fit(name, signals, chosen=False):
+    def fit(name, signals, refine_decays=None):
         spec = METHODS[name]
         options = {k: {"max_order": max_order}[k] for k in spec.options}
         if mode_in_band and "mode_in_band" in signature(spec.fit).parameters:
             options["mode_in_band"] = True
-        if chosen and "refine_decays" in signature(spec.fit).parameters:
-            # the verdict is known: SSI-cov picked for a stationary record has no decays to refine on, and tried where
-            # era found no mode on a free one it keeps its own poles (docs/identification.md)
-            options["refine_decays"] = False
+        if refine_decays is not None and "refine_decays" in signature(spec.fit).parameters:
+            options["refine_decays"] = refine_decays          # the verdict judged once, here
         if "quantity" in signature(spec.fit).parameters:          # the peak's conversion to f_n (fftpeak)
             options["quantity"] = quantity
         return spec.fit(signals, fs, band_hz, n_modes, where, **options)
@@ -210,19 +211,30 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         return RecordsIdentification(records, est, diagram, why, weights, checked.crop)
 
     if method != "auto":
-        return result(*fit(method, checked))
+        if method not in STATIONARY_METHODS:
+            return result(*fit(method, checked))
+        verdict = free_response(checked)
+        if verdict.free:
+            effect = ("modes may be missed (the poles it keeps are refined in their bands of the decays, as era's "
+                      "are)" if method == "ssi" else "modes may be missed and damping overestimated")
+            warnings.warn(f"{where}: {verdict.text}; {method} assumes a stationary response: its spectra or "
+                          f"correlations averaged over the whole record dilute the decays, so {effect}; --method "
+                          "era or fftpeak read free decays", UserWarning, stacklevel=2)
+        return result(*fit(method, checked, refine_decays=verdict.free))
     verdict = free_response(checked)
     picked = FREE_RESPONSE_METHOD if verdict.free else STATIONARY_METHOD
     why = (f"picked {picked}: response records without a force channel, {verdict.text}"
            + ("" if verdict.free else " (identified as a stationary response)"))
     try:
-        est, diagram = fit(picked, checked, chosen=True)
+        # SSI-cov picked for a stationary record has no decays to refine on; tried where era found no mode on a
+        # free one, it keeps its own poles (docs/identification.md)
+        est, diagram = fit(picked, checked, refine_decays=False)
     except (ConvergenceError, ShapeError) as first:
         other = STATIONARY_METHOD if verdict.free else FREE_RESPONSE_METHOD
         if other == FREE_RESPONSE_METHOD and not verdict.decays.starts.size:
             raise _tried(first, f"{why}; {other} not tried: the record holds no decay") from None
         try:
-            est, diagram = fit(other, checked, chosen=True)
+            est, diagram = fit(other, checked, refine_decays=False)
         except (ConvergenceError, ShapeError):
             raise _tried(first, f"{why}; {other} found no mode either") from None
         why = f"{why}; {picked} found no mode ({first}), so {other}"

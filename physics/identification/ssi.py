@@ -23,6 +23,7 @@ import numpy as np
 
 from physics.errors import ConvergenceError, ShapeError
 from physics.identification.band_refine import BandFit
+from physics.identification.decays import free_response
 from physics.identification.fdd import (
     CLEAR_PEAK_DB,
     ClearPeaks,
@@ -452,7 +453,7 @@ def _standard_error(seg: np.ndarray, n_seen: np.ndarray) -> np.ndarray:
 
 def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max_order=None, block_rows=None,
                  references=None, n_segments=8, max_damping=MAX_DAMPING, chunk_samples=8192,
-                 where="record", mode_in_band=False, refine_decays=True) -> SSIIdentification:
+                 where="record", mode_in_band=False, refine_decays=None) -> SSIIdentification:
     """SSI-cov identification of a multichannel response record (output-only), sized to the record's spectrum.
 
     The clear peaks of the record's singular-value spectrum (:func:`~physics.identification.fdd.clear_peaks`)
@@ -499,9 +500,10 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         (:func:`~physics.identification.poles.damping_resolution`), so that a lightly damped mode of a short
         record is stable. Without it, against the damping alone: a harmonic of the excitation, whose damping is
         zero within the noise, is then unstable and stays a clear peak without a mode.
-    refine_decays : bool
-        Refine the modes of a free response in their bands of its decays (module docstring); False keeps SSI-cov's
-        poles (``identify_records``' fallback where ``era`` found no mode).
+    refine_decays : bool, optional
+        Refine the modes in their bands of the record's decays (module docstring). None: when the record is a free
+        response (:func:`~physics.identification.decays.free_response`); True: the caller has judged it one; False:
+        SSI-cov's poles kept (``identify_records``' fallback where ``era`` found no mode).
 
     Returns
     -------
@@ -563,6 +565,8 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     f_std, z_std = _standard_error(f_seg, n_seen), _standard_error(z_seg, n_seen)
     cols = ModeColumns(eigenvalues_from_modal(fn, zeta), f_std, z_std, weak, shapes, f_seg, z_seg)
     bands, seeded = None, None
+    if refine_decays is None:
+        refine_decays = free_response(checked).free
     if refine_decays:
         bands, seeded, cols = refine_free_response(checked, cols, sv, band, n_modes, max_damping)
     lam, f_std, z_std, weak, shapes, f_seg, z_seg = cols

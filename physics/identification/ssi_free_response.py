@@ -28,7 +28,7 @@ import numpy as np
 from physics.identification.band_amplitudes import band_amplitudes
 from physics.identification.band_refine import BandFit, mode_energies, refine_in_bands
 from physics.identification.decay_peaks import decay_peaks
-from physics.identification.decays import decay_spectrum, find_decays, free_response
+from physics.identification.decays import decay_spectrum, find_decays
 from physics.identification.fdd import height_db, unit_shapes
 from physics.identification.peak_seeds import SeededModes, dominant_shapes, seed_unheld_peaks
 
@@ -102,15 +102,14 @@ def failed_group_weakest(bands: BandFit, decays, sampling_frequency_hz) -> np.nd
 
 def refine_free_response(checked, modes: ModeColumns, sv, band_hz, n_modes, max_damping) \
         -> tuple[BandFit | None, SeededModes | None, ModeColumns]:
-    """``(band fit, seeded modes, modes)`` of SSI-cov's ``modes`` of the checked record ``checked``: for a free
-    response, each pole refined in its band of the decays (each decay from its hit's onset, a hit adding energy
-    over a period of the lowest pole, as ``era`` finds them) where the fit converged inside ``band_hz`` (Hz), a pole
-    merged into a stronger one of its peak dropped, and the clear peaks no refined pole holds added as seeded modes
-    (their highest on the singular-value spectrum ``sv`` first, up to ``n_modes`` in all), sorted by frequency;
-    ``(None, None, modes)`` unchanged for a record that is no free response."""
+    """``(band fit, seeded modes, modes)`` of SSI-cov's ``modes`` of the checked record ``checked``, a free
+    response (:func:`~physics.identification.decays.free_response`): each pole refined in its band of the decays
+    (each decay from its hit's onset, a hit adding energy over a period of the lowest pole, as ``era`` finds them)
+    where the fit converged inside ``band_hz`` (Hz), a pole merged into a stronger one of its peak dropped, and the
+    clear peaks no refined pole holds added as seeded modes (their highest on the singular-value spectrum ``sv``
+    first, up to ``n_modes`` in all), sorted by frequency; ``(None, None, modes)`` unchanged for a record in which
+    no decay is found."""
     lam = modes.eigenvalues
-    if not free_response(checked).free:
-        return None, None, modes
     d = find_decays(checked, lowest_hz=float(np.min(np.abs(lam))) / (2 * np.pi))
     if not d.onsets.size:
         return None, None, modes
