@@ -11,8 +11,8 @@ import numpy as np
 
 from learn.densest_window import densest_window
 from learn.pairs.measured import refit_missing_modes
-from learn.monitor.identification import (IdentificationSettings, IdentifiedModes, cached_identification,
-                                          with_narrow_band_poles)
+from learn.monitor.identification import IdentificationSettings, cached_identification, with_narrow_band_poles
+from learn.monitor.one_mode import dominant_shape, one_mode_groups, picks, shapes_at
 from learn.pairs.noise_calibration import robust_std
 from physics.modal import mac
 
@@ -95,13 +95,6 @@ class ReferenceModes:
         return self.tolerance if self.frequency_tolerance is None else self.frequency_tolerance
 
 
-def shapes_at(t: IdentifiedModes, dofs: tuple):
-    """``t.shapes`` with rows in the order ``dofs`` (None without shapes or with fewer than 2 sensors)."""
-    if t.shapes is None or len(dofs) < 2 or set(t.dofs) != set(dofs):
-        return None
-    return t.shapes[[t.dofs.index(d) for d in dofs]]
-
-
 def reference_modes(tests: list) -> ReferenceModes:
     """Reference modes from the baseline tests (identified ones; None entries skipped).
 
@@ -116,8 +109,11 @@ def reference_modes(tests: list) -> ReferenceModes:
     more cores in a cluster are as many reference modes (each pole to the nearest); a cluster holding poles of
     half of the tests is one, centred on its core or else its median; a single core of a cluster held by fewer is
     one, its poles within ``CORE``: a mode found in a quarter of the tests among spurious poles is tracked as
-    itself. A mode's frequency is the median of each test's pole nearest
-    its centre; ``presence`` the share of the tests holding a pole in it.
+    itself. Neighbouring reference modes so found that are one mode are merged
+    (:func:`learn.monitor.one_mode.one_mode_groups`): a mode whose poles scatter across a gap the split falls in is
+    tracked as itself, not as two modes each found in part of the tests (the rule and its chances of a wrong merge
+    or split: there). A mode's frequency is the median of each test's pole nearest its centre; ``presence`` the
+    share of the tests holding a pole in it.
     """
     tests = [t for t in tests if t is not None]
     n = len(tests)
@@ -155,25 +151,17 @@ def reference_modes(tests: list) -> ReferenceModes:
             groups.append((idx[np.abs(logf[idx] - centres[0]) <= CORE], centres[0]))
     groups.sort(key=lambda g: g[1])
     dofs = tests[0].dofs if n else ()
+    zeta = np.concatenate([t.damping_ratios for t in tests])[order] if n else np.zeros(0)
+    groups = one_mode_groups(groups, logf, who, col, zeta, tests, dofs, n)
     freqs, stds, extremes, presence, shapes = [], [], [], [], []
     for members, centre in groups:
-        pick = {}
-        for j in members:
-            i = int(who[j])
-            if i not in pick or abs(logf[j] - centre) < abs(logf[pick[i]] - centre):
-                pick[i] = int(j)
+        pick = picks(members, centre, logf, who)
         v = logf[list(pick.values())]
         freqs.append(float(np.exp(np.median(v))))
         stds.append(robust_std(v))
         extremes.append(float(np.max(np.abs(v - np.median(v)))) * (1 + 1e-9))   # its own reading inside, roundoff
         presence.append(len(pick) / n)
-        rows = [shapes_at(tests[i], dofs) for i in pick]
-        if all(r is not None for r in rows):
-            S = np.stack([r[:, col[j]] for r, (i, j) in zip(rows, pick.items())], axis=1)   # (s, n_picked)
-            S = S / np.maximum(np.linalg.norm(S, axis=0), 1e-300)
-            shapes.append(np.linalg.svd(S, full_matrices=False)[0][:, 0])
-        else:
-            shapes.append(None)
+        shapes.append(dominant_shape(pick, col, tests, dofs))
     f = np.asarray(freqs, float)
     s = np.asarray(stds, float)
     tol = np.maximum(np.maximum(TOLERANCE_SIGMAS * s, MIN_TOLERANCE), np.asarray(extremes, float))
