@@ -43,7 +43,9 @@ Columns: per kind and group, the tests in which every true mode was found (``mon
 3 %); per true mode, the scatter over the baseline of the estimate less the test's true frequency (relative, %) of
 ``monitor`` (its chosen estimator) and of the FFT peak, and a Cramér-Rao-like reference (free decays: the damped
 sinusoids' bound per channel, combined as independent information, quantisation as white noise; ambient: the
-Lorentzian bound ``sqrt(zeta f / (2 pi T))``; FRFs: none); the share flagged (``intact``: false alarms; baseline:
+Lorentzian bound ``sqrt(zeta f / (2 pi T))``; FRFs: the modal sum's bound on the first baseline test's accelerance
+in the band, its noise 3 % of ``|H|`` plus 0.1 % of the peak per line, the poles, residues and two residuals
+unknown); the share flagged (``intact``: false alarms; baseline:
 held out) by ``monitor`` (statuses :data:`learn.monitor.alarms.FLAGGED_STATUSES`, its statuses counted beside) and
 the two plain tests. A damaged group where ``monitor`` flags a smaller share than a plain test is marked **LOSS**,
 and the ``intact`` row where ``monitor`` flags more of the healthy tests (the held-out baseline and ``intact``) than
@@ -150,6 +152,33 @@ def _crb_decay_rel(fs, n, t0, fn, zeta, amp, sd) -> np.ndarray:
             cov = np.linalg.pinv(J.T @ J / sd ** 2)
         info += 1.0 / np.maximum(np.diag(cov)[3::4], 1e-300)
     return np.sqrt(1.0 / info) / w
+
+
+def _crb_frf_rel(freq_hz, acc, fn_hz, zeta, noise: Noise) -> np.ndarray:
+    """Relative Cramér-Rao bound of each mode's natural frequency from one accelerance ``acc`` (n_lines,) on
+    ``freq_hz``: the Fisher information of complex Gaussian noise of variance ``(level |acc|)^2 + (floor
+    max |acc|)^2`` per line (:func:`~experiments.second_sim.response.measure`'s model) about the modal sum
+    ``-w^2 sum_j [R_j / (i w - lambda_j) + c.c.] - w^2 U + L`` (per mode ``f_n``, ``zeta`` and the complex residue;
+    the complex residuals ``U`` and ``L``), the residues and residuals those that fit ``acc`` best."""
+    w = 2 * np.pi * np.asarray(freq_hz, float)[:, None]
+    wn = 2 * np.pi * np.asarray(fn_hz, float)
+    zeta = np.asarray(zeta, float)
+    root = np.sqrt(1 - zeta ** 2)
+    lam = wn * (-zeta + 1j * root)
+    g, gc = -w ** 2 / (1j * w - lam), -w ** 2 / (1j * w - lam.conj())
+    one = np.ones_like(w)
+    linear = np.concatenate([g + gc, 1j * (g - gc), -w ** 2 * one, -1j * w ** 2 * one, one, 1j * one], axis=1)
+    coef = np.linalg.lstsq(np.concatenate([linear.real, linear.imag]), np.concatenate([acc.real, acc.imag]),
+                           rcond=None)[0]
+    m = wn.size
+    R = coef[:m] + 1j * coef[m:2 * m]
+    dg, dgc = g * R / (1j * w - lam), gc * R.conj() / (1j * w - lam.conj())     # d/d lambda of each term
+    dl_dwn, dl_dz = -zeta + 1j * root, wn * (-1 - 1j * zeta / root)
+    J = np.concatenate([2 * np.pi * (dg * dl_dwn + dgc * dl_dwn.conj()), dg * dl_dz + dgc * dl_dz.conj(), linear],
+                       axis=1)
+    var = (noise.level * np.abs(acc)) ** 2 + (noise.floor * np.abs(acc).max()) ** 2
+    info = 2 * np.real(J.conj().T @ (J / var[:, None]))
+    return np.sqrt(np.diag(np.linalg.inv(info))[:m]) / np.asarray(fn_hz, float)
 
 
 def hammer_series(seed: int, counts: dict) -> Series:
@@ -269,10 +298,13 @@ def frf_series(seed: int, counts: dict) -> Series:
         H = receptance(asm, md, Damping("modal", zeta), freq, dofs, ref)
         data.append(measure(-w2 * H, noise, rng) / -w2)                 # receptance; written as accelerance
         F.append(md.frequencies_hz[:5])
+        if i == 0:                                                      # the bound of the first baseline test
+            band = (freq >= 0.7 * f5[0]) & (freq <= 1.15 * f5[-1])
+            crb = _crb_frf_rel(freq[band], (-w2 * H)[0, band], F[0], np.array(zeta), noise)
     how = (f"L {L:.2f} m, h {1000 * h:.1f} mm, modes " + ", ".join(f"{f:.0f}" for f in f5)
            + f" Hz, lines of {df:g} Hz, payload at {payload_x / L:.2f} L, hammer at {hammer_x / L:.2f} L")
     return Series("frf", how, data, np.array(F), groups, counts["baseline"], (0.7 * f5[0], 1.15 * f5[-1]), 0.0,
-                  np.full(5, np.nan), freq_hz=freq,
+                  crb, freq_hz=freq,
                   extra={"geometry": [0.0, hammer_x, sensor_x], "resp": [3], "ref": 2})
 
 

@@ -80,8 +80,16 @@ CLEAR_PEAK_BANDWIDTHS = 3.0
 #: than a line shows no measurable bandwidth), whichever is wider ...
 CLEAR_PEAK_LINES = 3.0
 #: ... and never farther than this relative distance: a mode damped 0.33 % or more reaches this cap (3 bandwidths of
-#: ``2 zeta f``), one damped 0.05 % at 4 kHz with 1 Hz lines is explained only within 12 Hz (0.3 %).
+#: ``2 zeta f``), one damped 0.05 % at 4 kHz with 1 Hz lines is explained only within 12 Hz (0.3 %) ...
 CLEAR_PEAK_TOLERANCE = 0.02
+#: ... unless the cap is less than this many lines: a peak's top line lies up to half a line from its resonance (a
+#: line more where the noise lifts its neighbour), so a mode at 7.74 Hz on 1 Hz lines, its peak on the 8 Hz line,
+#: is explained within 1.5 Hz, not 0.16 Hz (2 %).
+CLEAR_PEAK_MIN_LINES = 1.5
+#: A clear peak's refit (:data:`CLEAR_PEAK_BANDS`) spans at least this many lines, the nearest to the peak: a low mode
+#: a few lines above the band's start has too few lines within a factor 1.25 for a model of order 4 (a first mode at
+#: 7.74 Hz on 1 Hz lines: 4), and 24 lines give orders up to 11.
+CLEAR_PEAK_REFIT_LINES = 24
 
 
 def prominent_peaks(db, min_prominence_db: float) -> np.ndarray:
@@ -104,12 +112,12 @@ def clear_peak_reach_hz(frequency_hz, magnitude, idx, tolerance: float = CLEAR_P
     """How far (Hz) from each peak ``idx`` a pole lies that explains it: :data:`CLEAR_PEAK_BANDWIDTHS` of the peak's
     half-power bandwidths (:func:`~physics.identification.half_power.half_power_bandwidth_hz`) or
     :data:`CLEAR_PEAK_LINES` frequency lines, whichever is wider, at most ``tolerance`` (relative) of the peak's
-    frequency, shape (n,)."""
+    frequency or :data:`CLEAR_PEAK_MIN_LINES` lines, whichever is wider, shape (n,)."""
     f = np.asarray(frequency_hz, float)
     idx = np.atleast_1d(np.asarray(idx, int))
     line = np.diff(f)[np.clip(idx, 0, f.size - 2)] if f.size > 1 else np.zeros(idx.size)
     reach = np.maximum(CLEAR_PEAK_BANDWIDTHS * half_power_bandwidth_hz(f, magnitude, idx), CLEAR_PEAK_LINES * line)
-    return np.minimum(reach, tolerance * f[idx])
+    return np.minimum(reach, np.maximum(tolerance * f[idx], CLEAR_PEAK_MIN_LINES * line))
 
 
 def _clear_peak_lines(f, mag) -> np.ndarray:
@@ -143,7 +151,8 @@ def octave_median_peaks(frequency_hz, magnitude, known_hz=(), tolerance: float =
     the median of the lines within a factor :data:`CLEAR_PEAK_WINDOW` (at least 5 lines) and
     :data:`CLEAR_PEAK_VALLEY_DB` above the valleys on either side, the band's outer 2 % left aside (a mode's skirt),
     with no frequency of ``known_hz`` within the peak's reach: :data:`CLEAR_PEAK_BANDWIDTHS` half-power bandwidths or
-    :data:`CLEAR_PEAK_LINES` lines, at most ``tolerance`` (relative) (:func:`clear_peak_reach_hz`)."""
+    :data:`CLEAR_PEAK_LINES` lines, at most ``tolerance`` (relative) or :data:`CLEAR_PEAK_MIN_LINES` lines
+    (:func:`clear_peak_reach_hz`)."""
     return octave_median_peaks_and_reach(frequency_hz, magnitude, known_hz, tolerance)[0]
 
 
@@ -237,26 +246,37 @@ def _with_peak_poles(f, h, rec, poles, max_order, margin, select, lscf_options):
     lines, at most :data:`CLEAR_PEAK_TOLERANCE`), the pole nearest to it (within that reach) of an LSCF fit of the
     band within a factor of the peak, the first of :data:`CLEAR_PEAK_BANDS` whose fit has one there: one model over
     a wide band can spend its order on the many modes above a low first mode and leave that mode out, or on a
-    stronger light mode 1 % from the peak and leave the peak's out.
+    stronger light mode 1 % from the peak and leave the peak's out. Each band holds at least the
+    :data:`CLEAR_PEAK_REFIT_LINES` lines nearest to the peak (a first mode a few lines above the band's start).
 
     The peak itself shows the mode, so its pole needs no stability over the whole range of orders: the cluster
     nearest the peak is taken from poles stable in frequency to :data:`CLEAR_PEAK_TOLERANCE` (the few lines around
     a low, well-damped mode under a noise floor move its pole by 1-2 % from one order to the next) over at least 3
-    orders (:func:`select_poles` with the peak as ``peaks_hz``)."""
+    orders (:func:`select_poles` with the peak as ``peaks_hz``), their dampings compared against at least the
+    damping the lines resolve (``duration_s`` ``1 / df`` of :func:`lscf`): a mode narrower than a line has a
+    damping the lines do not measure, which wanders from order to order."""
     mag = np.sqrt(np.mean(np.abs(h) ** 2, axis=(0, 1)))
     missed, reach = octave_median_peaks_and_reach(f, mag, poles.natural_frequencies_hz)
     found = [poles]
     n_o, n_i = rec.shape[0], rec.shape[1]
-    for fp, tol_hz in zip(missed, reach):
+    duration_s = 1.0 / float(np.median(np.diff(f))) if f.size > 1 else float("inf")
+    nearest = np.argsort(np.abs(f[None, :] - missed[:, None]), axis=1, kind="stable")[:, :CLEAR_PEAK_REFIT_LINES]
+    for fp, tol_hz, near_lines in zip(missed, reach, nearest):
+        tried = []
         for band in CLEAR_PEAK_BANDS:
             sel = (f >= fp / band) & (f <= fp * band)
+            sel[near_lines] = True
+            if any(np.array_equal(sel, t) for t in tried):
+                continue
+            tried.append(sel)
             order = min(max_order, _highest_order(sel.sum(), n_o, n_i))
             if order < 4:
                 break
             try:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore", RuntimeWarning)
-                    sub = select_poles(lscf(f[sel], rec[..., sel], max_order=order, margin=margin, **lscf_options),
+                    sub = select_poles(lscf(f[sel], rec[..., sel], max_order=order, margin=margin,
+                                        **{"duration_s": duration_s, **lscf_options}),
                                        **{**(select or {}), "min_status": 1, "freq_tol": CLEAR_PEAK_TOLERANCE,
                                           "peaks_hz": [fp], "peak_tol_hz": [tol_hz], "weak_min_count": 3})
             except BeamDamageError:
@@ -296,7 +316,7 @@ def _take(poles, idx):
 
 
 def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_tol=0.05, mpf_tol=0.98,
-         max_damping=MAX_DAMPING, margin=0.0, line_weight=None):
+         max_damping=MAX_DAMPING, margin=0.0, line_weight=None, duration_s=float("inf")):
     """Poly-reference least-squares complex frequency-domain poles (pLSCF).
 
     Right matrix-fraction model in the z-domain, ``H_o(w) = B_o(z) A(z)^-1`` with
@@ -330,6 +350,12 @@ def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_to
         to ``f_max (1+margin)``), and place the z-domain Nyquist frequency at
         ``f_max (1+margin)`` so that a mode just above the band does not alias. The
         skirts of such modes dominate the band edges of lightly damped structures.
+    line_weight : ndarray, shape (n_lines,), optional
+        Weight of each line's equation error.
+    duration_s : float
+        Length (s) of the record the lines resolve (``1 / df`` for lines ``df`` apart; infinite: unknown): a
+        damping change is judged against at least :func:`~physics.identification.poles.damping_resolution` of it,
+        by the stability status and by the selection's clusters.
 
     Returns
     -------
@@ -365,8 +391,8 @@ def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_to
     mpf = np.concatenate(mpfs) if mpfs else np.zeros((0, n_i), complex)
     fn = np.abs(lam) / (2 * np.pi)
     zeta = -lam.real / np.abs(lam)
-    status = stability_status(order, fn, zeta, mpf, freq_tol, damping_tol, mpf_tol)
-    return StabilisationDiagram(order, lam, fn, zeta, mpf, status, (float(f[0]), float(f[-1])))
+    status = stability_status(order, fn, zeta, mpf, freq_tol, damping_tol, mpf_tol, duration_s)
+    return StabilisationDiagram(order, lam, fn, zeta, mpf, status, (float(f[0]), float(f[-1])), duration_s)
 
 
 def _projected_normal_equations(f_hz, h, dt_s, n_cols, weight=None):

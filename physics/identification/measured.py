@@ -68,8 +68,8 @@ class Identification:
 
 def peaks_left_out(frf: MeasuredFRF, identified_hz, tolerance: float = CLEAR_PEAK_TOLERANCE) -> np.ndarray:
     """Frequencies (Hz) of plainly visible peaks of the FRFs' RMS magnitude with no identified mode within their
-    reach: a few of the peak's own half-power bandwidths or frequency lines, at most ``tolerance`` (relative)
-    (:func:`physics.identification.lscf.octave_median_peaks`,
+    reach: a few of the peak's own half-power bandwidths or frequency lines, at most ``tolerance`` (relative) or 1.5
+    lines (:func:`physics.identification.lscf.octave_median_peaks`,
     :func:`~physics.identification.lscf.clear_peak_reach_hz`)."""
     mag = np.sqrt(np.mean(np.abs(np.asarray(frf.frf)) ** 2, axis=(0, 1)))
     return octave_median_peaks(frf.frequency_hz, mag, identified_hz, tolerance)
