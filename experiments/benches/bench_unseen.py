@@ -71,6 +71,7 @@ from scipy import signal  # noqa: E402
 
 from experiments.benches.bench_precision import match_modes  # noqa: E402
 from experiments.benches.bench_real_series import fft_frequencies, mode_windows_hz, reference_fft_modes  # noqa: E402
+from experiments.benches.bounds import crb_decay_rel, crb_frf_rel  # noqa: E402
 from experiments.benches.harness import cli_json, parser, publish, table  # noqa: E402
 from experiments.benches.plain_tests import plain_p_values  # noqa: E402
 from experiments.second_sim.fem import Beam, PointMass, assemble, modes  # noqa: E402
@@ -133,54 +134,6 @@ def _decay(fs, n, fn, zeta, amp, t0):
     return amp @ (basis * on)
 
 
-def _crb_decay_rel(fs, n, t0, fn, zeta, amp, sd) -> np.ndarray:
-    """Relative Cramér-Rao bound of each mode from the channels' decays (one channel's bound each, combined as
-    independent information): the damped-sinusoid model's Fisher information (amplitude, phase, decay, frequency
-    per mode) on the samples after ``t0``."""
-    k = np.arange(int(np.ceil(t0 * fs)), n) / fs - t0
-    w = 2 * np.pi * fn * np.sqrt(1 - zeta ** 2)
-    s = zeta * 2 * np.pi * fn
-    info = np.zeros(fn.size)
-    for a in amp:                                       # one small Fisher matrix per channel
-        J = []
-        for j in range(fn.size):
-            e = np.exp(-s[j] * k)
-            c, si = e * np.cos(w[j] * k), e * np.sin(w[j] * k)
-            J += [a[j] * si, a[j] * c, -a[j] * k * si, a[j] * k * c]     # amplitude, phase, decay, frequency
-        J = np.array(J).T
-        with np.errstate(all="ignore"):
-            cov = np.linalg.pinv(J.T @ J / sd ** 2)
-        info += 1.0 / np.maximum(np.diag(cov)[3::4], 1e-300)
-    return np.sqrt(1.0 / info) / w
-
-
-def _crb_frf_rel(freq_hz, acc, fn_hz, zeta, noise: Noise) -> np.ndarray:
-    """Relative Cramér-Rao bound of each mode's natural frequency from one accelerance ``acc`` (n_lines,) on
-    ``freq_hz``: the Fisher information of complex Gaussian noise of variance ``(level |acc|)^2 + (floor
-    max |acc|)^2`` per line (:func:`~experiments.second_sim.response.measure`'s model) about the modal sum
-    ``-w^2 sum_j [R_j / (i w - lambda_j) + c.c.] - w^2 U + L`` (per mode ``f_n``, ``zeta`` and the complex residue;
-    the complex residuals ``U`` and ``L``), the residues and residuals those that fit ``acc`` best."""
-    w = 2 * np.pi * np.asarray(freq_hz, float)[:, None]
-    wn = 2 * np.pi * np.asarray(fn_hz, float)
-    zeta = np.asarray(zeta, float)
-    root = np.sqrt(1 - zeta ** 2)
-    lam = wn * (-zeta + 1j * root)
-    g, gc = -w ** 2 / (1j * w - lam), -w ** 2 / (1j * w - lam.conj())
-    one = np.ones_like(w)
-    linear = np.concatenate([g + gc, 1j * (g - gc), -w ** 2 * one, -1j * w ** 2 * one, one, 1j * one], axis=1)
-    coef = np.linalg.lstsq(np.concatenate([linear.real, linear.imag]), np.concatenate([acc.real, acc.imag]),
-                           rcond=None)[0]
-    m = wn.size
-    R = coef[:m] + 1j * coef[m:2 * m]
-    dg, dgc = g * R / (1j * w - lam), gc * R.conj() / (1j * w - lam.conj())     # d/d lambda of each term
-    dl_dwn, dl_dz = -zeta + 1j * root, wn * (-1 - 1j * zeta / root)
-    J = np.concatenate([2 * np.pi * (dg * dl_dwn + dgc * dl_dwn.conj()), dg * dl_dz + dgc * dl_dz.conj(), linear],
-                       axis=1)
-    var = (noise.level * np.abs(acc)) ** 2 + (noise.floor * np.abs(acc).max()) ** 2
-    info = 2 * np.real(J.conj().T @ (J / var[:, None]))
-    return np.sqrt(np.diag(np.linalg.inv(info))[:m]) / np.asarray(fn_hz, float)
-
-
 def hammer_series(seed: int, counts: dict) -> Series:
     """``hammer`` (module docstring)."""
     rng = np.random.default_rng([seed, 1])
@@ -210,7 +163,7 @@ def hammer_series(seed: int, counts: dict) -> Series:
         y = _decay(fs, n, F[i], zeta, gain[i] * amp, t0[i])
         data.append(y + noise * y.std() * rng.standard_normal(y.shape))
     clean = _decay(fs, n, fn, zeta, amp, 0.55)
-    crb = _crb_decay_rel(fs, n, 0.55, fn, zeta, amp, noise * clean.std())
+    crb = crb_decay_rel(fs, n, 0.55, fn, zeta, amp, noise * clean.std())
     how = (f"{n_ch} channels, modes " + ", ".join(f"{f:.1f}" for f in fn) + " Hz (damping "
            + ", ".join(f"{100 * z:.1f}" for z in zeta) + f" %), noise {100 * noise:.1f} %")
     return Series("hammer", how, data, F, groups, counts["baseline"], (2.0, 80.0), fs, crb)
@@ -247,7 +200,7 @@ def scope_series(seed: int, counts: dict, per_session: int = 10) -> Series:
     for i in range(nt):
         y = level * _decay(fs, n, F[i], zeta, gain[i] * amp, t0[i]) + 0.4 * rng.standard_normal(n)[None]
         data.append(np.clip(np.round(y), -128, 127) * scale)
-    crb = _crb_decay_rel(fs, n, 0.4, fn, zeta, level * amp, np.sqrt(0.4 ** 2 + 1 / 12))
+    crb = crb_decay_rel(fs, n, 0.4, fn, zeta, level * amp, np.sqrt(0.4 ** 2 + 1 / 12))
     clipped = sum(bool(np.any(np.abs(np.asarray(d) / scale) >= 127.5 - 1)) for d in data)
     how = (f"{fs:g} Hz, modes " + ", ".join(f"{f:.1f}" for f in fn) + " Hz (damping "
            + ", ".join(f"{100 * z:.2f}" for z in zeta) + f" %), peak {peak_levels:.0f} levels, {clipped} captures "
@@ -300,7 +253,7 @@ def frf_series(seed: int, counts: dict) -> Series:
         F.append(md.frequencies_hz[:5])
         if i == 0:                                                      # the bound of the first baseline test
             band = (freq >= 0.7 * f5[0]) & (freq <= 1.15 * f5[-1])
-            crb = _crb_frf_rel(freq[band], (-w2 * H)[0, band], F[0], np.array(zeta), noise)
+            crb = crb_frf_rel(freq[band], (-w2 * H)[0, band], F[0], np.array(zeta), noise)
     how = (f"L {L:.2f} m, h {1000 * h:.1f} mm, modes " + ", ".join(f"{f:.0f}" for f in f5)
            + f" Hz, lines of {df:g} Hz, payload at {payload_x / L:.2f} L, hammer at {hammer_x / L:.2f} L")
     return Series("frf", how, data, np.array(F), groups, counts["baseline"], (0.7 * f5[0], 1.15 * f5[-1]), 0.0,
