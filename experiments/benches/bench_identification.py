@@ -236,8 +236,11 @@ def method_errors(seeds=1, noise=0.01, damping="heavy"):
         sd = run_sdypy(frf, ours["peak"].natural_frequencies_hz)
         if sd is not None:
             results["sdypy-EMA lscf"] = (sd["frequency_hz"], sd["damping_ratio"], sd["shapes"])
-        for name, (fi, zi, sh) in results.items():
-            m = np.diag(mac(sh, psi)) if sh is not None and sh.shape == psi.shape else np.full(4, np.nan)
+        for name, (f_all, z_all, sh_all) in results.items():
+            k = _matched(f_all, fe)                     # a mode a method misses: NaN
+            fi, zi = np.where(k >= 0, np.asarray(f_all)[k], np.nan), np.where(k >= 0, np.asarray(z_all)[k], np.nan)
+            sh = None if sh_all is None or sh_all.shape[0] != psi.shape[0] else np.asarray(sh_all)[:, k]
+            m = np.where(k >= 0, np.diag(mac(sh, psi)), np.nan) if sh is not None else np.full(fe.size, np.nan)
             r = rows.setdefault(name, {"f": [], "z": [], "mac": [], "fi": [], "zi": []})
             r["f"].append(100 * (fi / fe - 1))
             r["z"].append(100 * (zi / ze - 1))
@@ -247,13 +250,28 @@ def method_errors(seeds=1, noise=0.01, damping="heavy"):
     out = {"exact_frequency_hz": fe.tolist(), "exact_damping_ratio": ze.tolist(), "seeds": seeds,
            "noise": noise, "damping": damping, "warnings": sorted(notes), "methods": {}}
     for name, r in rows.items():
-        out["methods"][name] = {
-            "frequency_error_pct_rms": np.sqrt(np.mean(np.square(r["f"]), axis=0)).tolist(),
-            "damping_error_pct_rms": np.sqrt(np.mean(np.square(r["z"]), axis=0)).tolist(),
-            "mac_mean": np.mean(r["mac"], axis=0).tolist(),
-            "frequency_hz_seed0": np.asarray(r["fi"][0]).tolist(),
-            "damping_ratio_seed0": np.asarray(r["zi"][0]).tolist()}
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)                # a mode missed in every seed: NaN
+            out["methods"][name] = {
+                "found": np.sum(np.isfinite(r["f"]), axis=0).tolist(),
+                "frequency_error_pct_rms": np.sqrt(np.nanmean(np.square(r["f"]), axis=0)).tolist(),
+                "damping_error_pct_rms": np.sqrt(np.nanmean(np.square(r["z"]), axis=0)).tolist(),
+                "mac_mean": np.nanmean(r["mac"], axis=0).tolist(),
+                "frequency_hz_seed0": np.asarray(r["fi"][0]).tolist(),
+                "damping_ratio_seed0": np.asarray(r["zi"][0]).tolist()}
     return out
+
+
+def _matched(frequencies_hz, exact_hz) -> np.ndarray:
+    """Each exact mode's index among ``frequencies_hz``: the nearest, within 5 % and with no other exact mode
+    nearer to it (-1: none)."""
+    f, exact = np.asarray(frequencies_hz, float), np.asarray(exact_hz, float)
+    if f.size == 0:
+        return np.full(exact.size, -1)
+    dist = np.abs(f[None, :] - exact[:, None])
+    j = np.argmin(dist, axis=1)
+    ok = (np.argmin(dist, axis=0)[j] == np.arange(exact.size)) & (np.abs(f[j] / exact - 1) <= 0.05)
+    return np.where(ok, j, -1)
 
 
 def format_table(out) -> str:
@@ -261,10 +279,11 @@ def format_table(out) -> str:
              f"0.5 Hz lines, {out['seeds']} seed(s); errors are RMS over seeds",
              "exact f (Hz):  " + "  ".join(f"{x:10.4f}" for x in out["exact_frequency_hz"]),
              "exact zeta:    " + "  ".join(f"{x:10.5f}" for x in out["exact_damping_ratio"]), "",
-             f"{'method':<16}{'mode':>5}{'df (%)':>11}{'dzeta (%)':>11}{'MAC':>10}{'f (Hz) s0':>12}{'zeta s0':>10}"]
+             f"{'method':<16}{'mode':>5}{'found':>7}{'df (%)':>11}{'dzeta (%)':>11}{'MAC':>10}{'f (Hz) s0':>12}"
+             f"{'zeta s0':>10}"]
     for name, m in out["methods"].items():
         for j in range(len(m["frequency_error_pct_rms"])):
-            lines.append(f"{name:<16}{j + 1:>5}{m['frequency_error_pct_rms'][j]:>11.4f}"
+            lines.append(f"{name:<16}{j + 1:>5}{m['found'][j]:>7}{m['frequency_error_pct_rms'][j]:>11.4f}"
                          f"{m['damping_error_pct_rms'][j]:>11.3f}{m['mac_mean'][j]:>10.6f}"
                          f"{m['frequency_hz_seed0'][j]:>12.4f}{m['damping_ratio_seed0'][j]:>10.5f}")
     lines += [f"warning: {w}" for w in out.get("warnings", [])]
