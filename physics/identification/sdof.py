@@ -329,6 +329,8 @@ def circle_fit(frequency_hz, frf, n_modes=None, peaks=None, drive=None, bandwidt
     zsd = np.empty_like(fn)
     A = np.empty((n_s, n_r, n_m), complex)
     edges = np.r_[0, (idx[1:] + idx[:-1]) // 2, f.size - 1]
+    line_hz = 0.5 * (f[np.minimum(idx + 1, f.size - 1)] - f[np.maximum(idx - 1, 0)])
+    unresolved = 2 * pk.damping_ratios * pk.natural_frequencies_hz < 2 * line_hz      # as peak picking judges it
     fitted = np.ones(n_m, bool)
     for m in range(n_m):
         fm, zm = pk.natural_frequencies_hz[m], pk.damping_ratios[m]
@@ -363,10 +365,15 @@ def circle_fit(frequency_hz, frf, n_modes=None, peaks=None, drive=None, bandwidt
     else:
         f_std, z_std = fsd[0, 0], zsd[0, 0]
     broad = ~(z_mode <= MAX_DAMPING)
+    unresolved, peak_hz = unresolved[fitted], pk.natural_frequencies_hz[fitted]
+    for which, why in ((broad & ~unresolved, "a bump of the noise, not a mode"),
+                       (broad & unresolved, "its half-power band spans fewer than 2 frequency lines, so no circle "
+                                            "follows it; use finer lines or the lscf method")):
+        if np.any(which):
+            warnings.warn("circle fit: the peak(s) at " + ", ".join(f"{x:.4g} Hz" for x in peak_hz[which])
+                          + f" left out: the circles give a damping ratio above {MAX_DAMPING:g}: {why}",
+                          stacklevel=2)
     if np.any(broad):
-        warnings.warn("circle fit: the peak(s) at " + ", ".join(f"{x:.4g} Hz" for x in f_mode[broad])
-                      + f" left out: the circles give a damping ratio above {MAX_DAMPING:g}, a bump of the noise, "
-                      "not a mode", stacklevel=2)
         f_mode, z_mode, f_std, z_std, A = (a[..., ~broad] for a in (f_mode, z_mode, f_std, z_std, A))
     wd = 2 * np.pi * f_mode * np.sqrt(1 - z_mode**2)
     residues = A / (2j * wd)

@@ -589,3 +589,5 @@ def test_method_errors_reports_a_mode_a_method_misses_as_not_found():
     assert circle["found"] == [0, 1, 1, 1] and np.isnan(circle["frequency_error_pct_rms"][0])
     assert max(circle["frequency_error_pct_rms"][1:]) < 0.01
     assert out["methods"]["lscf"]["found"] == [1, 1, 1, 1]
+    assert any(w.startswith("circle fit: the peak(s) at 19.98 Hz left out")
+               and "spans fewer than 2 frequency lines" in w for w in out["warnings"])
