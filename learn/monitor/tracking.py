@@ -13,6 +13,7 @@ from learn.densest_window import densest_window
 from learn.pairs.measured import refit_missing_modes
 from learn.monitor.identification import IdentificationSettings, cached_identification, with_narrow_band_poles
 from learn.monitor.one_mode import dominant_shape, one_mode_groups, picks, shapes_at
+from learn.monitor.two_modes import pair_cut, two_mode_groups
 from learn.pairs.noise_calibration import robust_std
 from physics.modal import mac
 
@@ -99,7 +100,8 @@ def reference_modes(tests: list) -> ReferenceModes:
     """Reference modes from the baseline tests (identified ones; None entries skipped).
 
     The baseline poles' ``ln f`` are pooled and split where consecutive ones lie more than :data:`CLUSTER_GAP`
-    apart (a cluster holding on average 1.5 poles per test or more is split again at its widest gap). In each
+    apart (a cluster holding on average 1.5 poles per test or more is split again where the most tests hold poles
+    on both sides, :func:`learn.monitor.two_modes.pair_cut`: each test's poles of two modes fall either side). In each
     cluster, the window ``+-CORE`` holding poles of the most tests (:func:`learn.densest_window.densest_window`;
     its centre then the median of the poles within :data:`CORE`, three fixed-point steps), then the same among the
     poles outside it, and so on, is a core while it holds poles of at
@@ -109,7 +111,9 @@ def reference_modes(tests: list) -> ReferenceModes:
     more cores in a cluster are as many reference modes (each pole to the nearest); a cluster holding poles of
     half of the tests is one, centred on its core or else its median; a single core of a cluster held by fewer is
     one, its poles within ``CORE``: a mode found in a quarter of the tests among spurious poles is tracked as
-    itself. Neighbouring reference modes so found that are one mode are merged
+    itself. A reference mode so found that is two modes is split in two
+    (:func:`learn.monitor.two_modes.two_mode_groups`: a fair share of the tests hold two poles of it, or its parts
+    either side of its widest gap differ by shape), then neighbouring ones that are one mode are merged
     (:func:`learn.monitor.one_mode.one_mode_groups`): a mode whose poles scatter across a gap the split falls in is
     tracked as itself, not as two modes each found in part of the tests (the rule and its chances of a wrong merge
     or split: there). A mode's frequency is the median of each test's pole nearest its centre; ``presence`` the
@@ -129,7 +133,7 @@ def reference_modes(tests: list) -> ReferenceModes:
         a, b = clusters.pop()
         tests_in = np.unique(who[a:b]).size
         if b - a >= 1.5 * tests_in and b - a > 1:
-            k = a + 1 + int(np.argmax(np.diff(logf[a:b])))
+            k = a + pair_cut(logf[a:b], who[a:b])
             clusters += [(a, k), (k, b)]
         else:
             done.append((a, b))
@@ -152,6 +156,7 @@ def reference_modes(tests: list) -> ReferenceModes:
     groups.sort(key=lambda g: g[1])
     dofs = tests[0].dofs if n else ()
     zeta = np.concatenate([t.damping_ratios for t in tests])[order] if n else np.zeros(0)
+    groups = two_mode_groups(groups, logf, who, col, tests, dofs, need, CORE, APART_MAC)
     groups = one_mode_groups(groups, logf, who, col, zeta, tests, dofs, n)
     freqs, stds, extremes, presence, shapes = [], [], [], [], []
     for members, centre in groups:
