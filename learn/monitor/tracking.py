@@ -100,8 +100,9 @@ def reference_modes(tests: list) -> ReferenceModes:
     """Reference modes from the baseline tests (identified ones; None entries skipped).
 
     The baseline poles' ``ln f`` are pooled and split where consecutive ones lie more than :data:`CLUSTER_GAP`
-    apart (a cluster holding on average 1.5 poles per test or more is split again where the most tests hold poles
-    on both sides, :func:`learn.monitor.two_modes.pair_cut`: each test's poles of two modes fall either side). In each
+    apart (a cluster holding on average 1.5 poles per test or more is split again at its widest gap, or where that
+    chips off a side held by fewer tests than a core needs, where the most tests hold poles on both sides,
+    :func:`learn.monitor.two_modes.pair_cut`: each test's poles of two modes fall either side). In each
     cluster, the window ``+-CORE`` holding poles of the most tests (:func:`learn.densest_window.densest_window`;
     its centre then the median of the poles within :data:`CORE`, three fixed-point steps), then the same among the
     poles outside it, and so on, is a core while it holds poles of at
@@ -129,11 +130,12 @@ def reference_modes(tests: list) -> ReferenceModes:
     cuts = [0, *(np.flatnonzero(np.diff(logf) > math.log1p(CLUSTER_GAP)) + 1), logf.size]
     clusters = [(a, b) for a, b in zip(cuts[:-1], cuts[1:]) if b > a]
     done = []
+    least = max(MIN_PRESENCE * n, min(MIN_COUNT, 0.5 * n))    # the tests a reference mode needs, background aside
     while clusters:
         a, b = clusters.pop()
         tests_in = np.unique(who[a:b]).size
         if b - a >= 1.5 * tests_in and b - a > 1:
-            k = a + pair_cut(logf[a:b], who[a:b])
+            k = a + pair_cut(logf[a:b], who[a:b], least)
             clusters += [(a, k), (k, b)]
         else:
             done.append((a, b))
@@ -141,7 +143,7 @@ def reference_modes(tests: list) -> ReferenceModes:
     sparse = sum(b - a for a, b in done if np.unique(who[a:b]).size < 0.5 * n)
     span = float(logf[-1] - logf[0]) if logf.size > 1 else 0.0
     background = sparse * 2 * CORE / span if span > 0 else 0.0     # poles of a window where no mode lies
-    need = max(MIN_PRESENCE * n, min(MIN_COUNT, 0.5 * n)) + background
+    need = least + background
     groups = []                                 # (members, centre) of each reference mode
     for a, b in done:
         idx = np.arange(a, b)

@@ -1,7 +1,7 @@
-"""Where baseline poles are two modes: the cut of a cluster that the most tests hold poles on both sides of
-(:func:`pair_cut`), and a candidate reference mode that many baseline tests hold two poles of, or whose parts
-either side of its widest gap differ by shape, split in two (:func:`two_mode_groups`), the reverse of
-:func:`learn.monitor.one_mode.one_mode_groups`."""
+"""Where baseline poles are two modes: the cut of a cluster at its widest gap or, where that chips a tail off, the
+cut that the most tests hold poles on both sides of (:func:`pair_cut`), and a candidate reference mode that many
+baseline tests hold two poles of, or whose parts either side of its widest gap differ by shape, split in two
+(:func:`two_mode_groups`), the reverse of :func:`learn.monitor.one_mode.one_mode_groups`."""
 
 from __future__ import annotations
 
@@ -13,13 +13,17 @@ from physics.modal import mac
 __all__ = ["pair_cut", "pairs_in", "two_mode_groups"]
 
 
-def pair_cut(logf, who) -> int:
+def pair_cut(logf, who, least: float) -> int:
     """Where a cluster of baseline poles that is several modes is cut in two: ``k``, the poles ``[:k]`` of sorted
-    ``logf`` (shape (p,), ``who`` their tests) below, the cut that the most tests hold poles on both sides of, among
-    those the widest gap between consecutive poles. A test holds one pole of each mode it finds: two modes' poles
-    are cut apart where each test's two poles separate, however much their scatters overlap, where the widest gap
-    may fall in a mode's sparse tail and chip it off, the rest of the two modes then one cluster; a few poles cut
-    off a mode's tail are held with a pole on the other side by those few tests only."""
+    ``logf`` (shape (p,), ``who`` their tests) below. At the widest gap between consecutive poles, unless a side
+    holds poles of fewer than ``least`` tests (fewer than a reference mode needs: a tail of a mode chipped off); then
+    the cut that the most tests hold poles on both sides of, among those the widest gap. A test holds one pole of
+    each mode it finds: two modes' poles lie either side of that cut however much their scatters overlap, where the
+    widest gap may fall in a mode's sparse tail, the rest of the two modes then one cluster and one core."""
+    gap = np.diff(logf)
+    k = 1 + int(np.argmax(gap))
+    if min(np.unique(who[:k]).size, np.unique(who[k:]).size) >= least:
+        return k
     j = np.arange(logf.size)
     _, t = np.unique(who, return_inverse=True)
     first = np.full(t.max() + 1, logf.size)
@@ -31,7 +35,7 @@ def pair_cut(logf, who) -> int:
     np.add.at(span, last + 1, -1)
     both = np.cumsum(span)[1:logf.size]             # tests with poles on both sides of cut k = 1 .. p - 1
     best = np.flatnonzero(both == both.max())
-    return 1 + int(best[np.argmax(np.diff(logf)[best])])
+    return 1 + int(best[np.argmax(gap[best])])
 
 
 def pairs_in(members, logf, who) -> np.ndarray:

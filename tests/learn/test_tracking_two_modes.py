@@ -44,9 +44,11 @@ def _below_1hz(ref):
 
 def test_pair_cut_falls_where_each_tests_two_poles_separate():
     """Two tests holding poles at 1.00 / 1.02 and 1.01 / 1.03 Hz and a third one pole at 1.20: the widest gap
-    (1.03 | 1.20 Hz) has no test on both sides; 1.01 | 1.02 has both of the pairs."""
-    logf = np.log([1.0, 1.01, 1.02, 1.03, 1.2])
-    assert pair_cut(logf, np.array([0, 1, 0, 1, 2])) == 2
+    (1.03 | 1.20 Hz) leaves one test above it; where a mode needs 2 tests that is a chipped tail, and the cut falls
+    at 1.01 | 1.02 Hz, which both pairs straddle; where one test makes a mode, at the widest gap."""
+    logf, who = np.log([1.0, 1.01, 1.02, 1.03, 1.2]), np.array([0, 1, 0, 1, 2])
+    assert pair_cut(logf, who, least=2) == 2
+    assert pair_cut(logf, who, least=1) == 4
 
 
 @pytest.mark.parametrize("others", [True, False])
