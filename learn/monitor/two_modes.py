@@ -16,10 +16,12 @@ __all__ = ["pair_cut", "pairs_in", "two_mode_groups"]
 def pair_cut(logf, who, least: float) -> int:
     """Where a cluster of baseline poles that is several modes is cut in two: ``k``, the poles ``[:k]`` of sorted
     ``logf`` (shape (p,), ``who`` their tests) below. At the widest gap between consecutive poles, unless a side
-    holds poles of fewer than ``least`` tests (fewer than a reference mode needs: a tail of a mode chipped off); then
-    the cut that the most tests hold poles on both sides of, among those the widest gap. A test holds one pole of
-    each mode it finds: two modes' poles lie either side of that cut however much their scatters overlap, where the
-    widest gap may fall in a mode's sparse tail, the rest of the two modes then one cluster and one core."""
+    holds poles of fewer than ``least`` tests (fewer than a reference mode needs: a tail of a mode chipped off) and
+    some cut has poles of at least ``least`` tests on both sides; then the cut that the most tests hold poles on both
+    sides of, among those the widest gap. A test holds one pole of each mode it finds: two modes' poles lie either
+    side of that cut however much their scatters overlap, where the widest gap may fall in a mode's sparse tail, the
+    rest of the two modes then one cluster and one core. A cut fewer tests straddle shows no two modes found
+    together (one mode among spurious poles)."""
     gap = np.diff(logf)
     k = 1 + int(np.argmax(gap))
     if min(np.unique(who[:k]).size, np.unique(who[k:]).size) >= least:
@@ -34,6 +36,8 @@ def pair_cut(logf, who, least: float) -> int:
     np.add.at(span, first + 1, 1)                   # cut k (between poles k - 1 and k) lies within (first, last]
     np.add.at(span, last + 1, -1)
     both = np.cumsum(span)[1:logf.size]             # tests with poles on both sides of cut k = 1 .. p - 1
+    if both.max() < least:                          # too few tests hold poles either side to show two modes
+        return k
     best = np.flatnonzero(both == both.max())
     return 1 + int(best[np.argmax(gap[best])])
 
@@ -56,7 +60,7 @@ def two_mode_groups(groups: list, logf, who, col, tests: list, dofs: tuple, need
                     apart_mac: float) -> list:
     """``groups`` ((members, centre) in frequency order, as :func:`learn.monitor.one_mode.one_mode_groups` takes
     them; ``col`` each pole's column in its test) with each that is two modes split in two, each part's centre the
-    median ``ln f`` of its poles.
+    median ``ln f`` of its poles (the others as they are).
 
     *Found together.* The baseline tests holding two poles of a group within ``window`` (``ln f``) of its centre
     (:func:`pairs_in`; a test counts only when it holds a pole of each other group whose centre lies within ``2
@@ -95,7 +99,10 @@ def two_mode_groups(groups: list, logf, who, col, tests: list, dofs: tuple, need
             shapes = [_shape(m, logf, who, col, tests, dofs) for m in close]
             parts = _apart_by_shape(members, logf, who, col, tests, dofs, need, apart_mac,
                                     [x for x in shapes if x is not None])
-        out += [(part, float(np.median(logf[part]))) for part in parts if part.size]
+        if len(parts) == 1:
+            out.append(groups[g])
+        else:
+            out += [(part, float(np.median(logf[part]))) for part in parts if part.size]
     return out
 
 

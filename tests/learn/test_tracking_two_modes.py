@@ -1,6 +1,7 @@
-"""Two modes whose baseline poles overlap are two reference modes (learn/monitor/two_modes.py): a cluster is cut
-where each test's two poles separate (``pair_cut``), and a candidate mode that a fair share of the tests hold two
-poles of is split (``two_mode_groups``); one mode's pole doubled now and then stays one mode."""
+"""Two modes whose baseline poles overlap are two reference modes (learn/monitor/two_modes.py): a cluster whose widest
+gap chips a tail off is cut where each test's two poles separate (``pair_cut``), and a candidate mode that a fair
+share of the tests hold two poles of is split (``two_mode_groups``); one mode's pole doubled now and then stays one
+mode."""
 
 import numpy as np
 import pytest
