@@ -21,6 +21,7 @@ import warnings
 
 import numpy as np
 
+from experiments.benches.bench_precision import matched_indices
 from experiments.benches.harness import emit_json, parser
 from physics.identification import METHODS, identify_frf, lsfd, reconstruction_error_db
 from physics.io import MeasuredFRF, atomic_write_text
@@ -237,7 +238,7 @@ def method_errors(seeds=1, noise=0.01, damping="heavy"):
         if sd is not None:
             results["sdypy-EMA lscf"] = (sd["frequency_hz"], sd["damping_ratio"], sd["shapes"])
         for name, (f_all, z_all, sh_all) in results.items():
-            k = _matched(f_all, fe)                     # a mode a method misses: NaN
+            k = matched_indices(f_all, fe, 0.05)        # a mode a method misses: NaN
             fi, zi = np.where(k >= 0, np.asarray(f_all)[k], np.nan), np.where(k >= 0, np.asarray(z_all)[k], np.nan)
             sh = None if sh_all is None or sh_all.shape[0] != psi.shape[0] else np.asarray(sh_all)[:, k]
             m = np.where(k >= 0, np.diag(mac(sh, psi)), np.nan) if sh is not None else np.full(fe.size, np.nan)
@@ -260,18 +261,6 @@ def method_errors(seeds=1, noise=0.01, damping="heavy"):
                 "frequency_hz_seed0": np.asarray(r["fi"][0]).tolist(),
                 "damping_ratio_seed0": np.asarray(r["zi"][0]).tolist()}
     return out
-
-
-def _matched(frequencies_hz, exact_hz) -> np.ndarray:
-    """Each exact mode's index among ``frequencies_hz``: the nearest, within 5 % and with no other exact mode
-    nearer to it (-1: none)."""
-    f, exact = np.asarray(frequencies_hz, float), np.asarray(exact_hz, float)
-    if f.size == 0:
-        return np.full(exact.size, -1)
-    dist = np.abs(f[None, :] - exact[:, None])
-    j = np.argmin(dist, axis=1)
-    ok = (np.argmin(dist, axis=0)[j] == np.arange(exact.size)) & (np.abs(f[j] / exact - 1) <= 0.05)
-    return np.where(ok, j, -1)
 
 
 def format_table(out) -> str:

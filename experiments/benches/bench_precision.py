@@ -68,7 +68,8 @@ from physics.io.timedata import TimeRecords
 from physics.time_records import estimate_from_records
 
 __all__ = ["AMBIENT", "DECAY", "Case", "ambient_records", "crb_ambient_hz", "crb_decay_hz", "decay_records",
-           "identify_modes", "main", "match_modes", "markdown", "record_methods", "run_case", "summarise"]
+           "identify_modes", "main", "match_modes", "matched_indices", "markdown", "record_methods", "run_case",
+           "summarise"]
 
 #: Cantilever eigenvalue parameters beta_m L of the first three bending modes.
 BETA_L = np.array([1.87510407, 4.69409113, 7.85475744])
@@ -245,14 +246,20 @@ def identify_modes(method: str, signals, fs, truth_hz):
 def match_modes(frequencies_hz, truth_hz):
     """Each truth mode's estimate among ``frequencies_hz``: the nearest, within :data:`MATCH` and with no other
     truth mode nearer to it (NaN: none)."""
+    f = np.append(np.asarray(frequencies_hz, float), np.nan)            # index -1: none
+    return f[matched_indices(f[:-1], truth_hz, MATCH)]
+
+
+def matched_indices(frequencies_hz, truth_hz, tolerance: float) -> np.ndarray:
+    """Each truth mode's index among ``frequencies_hz``: the nearest, within ``tolerance`` (relative) and with no
+    other truth mode nearer to it (-1: none)."""
     f, truth_hz = np.asarray(frequencies_hz, float), np.asarray(truth_hz, float)
     if f.size == 0:
-        return np.full(truth_hz.size, np.nan)
+        return np.full(truth_hz.size, -1)
     dist = np.abs(f[None, :] - truth_hz[:, None])
     j = np.argmin(dist, axis=1)
-    mutual = np.argmin(dist, axis=0)[j] == np.arange(truth_hz.size)
-    got = f[j]
-    return np.where(mutual & (np.abs(got / truth_hz - 1) <= MATCH), got, np.nan)
+    ok = (np.argmin(dist, axis=0)[j] == np.arange(truth_hz.size)) & (np.abs(f[j] / truth_hz - 1) <= tolerance)
+    return np.where(ok, j, -1)
 
 
 def run_case(case: Case, reps: int, seed: int, methods, records=None, progress=None) -> dict:
