@@ -210,10 +210,10 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
             est, diagram = unweighted_estimate(est, weights), unweighted_diagram(diagram, weights)
         return RecordsIdentification(records, est, diagram, why, weights, checked.crop)
 
+    if method != "auto" and method not in STATIONARY_METHODS:
+        return result(*fit(method, checked))
+    verdict = free_response(checked)
     if method != "auto":
-        if method not in STATIONARY_METHODS:
-            return result(*fit(method, checked))
-        verdict = free_response(checked)
         if verdict.free:
             effect = ("modes may be missed (the poles it keeps are refined in their bands of the decays, as era's "
                       "are)" if method == "ssi" else "modes may be missed and damping overestimated")
@@ -221,7 +221,6 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
                           f"correlations averaged over the whole record dilute the decays, so {effect}; --method "
                           "era or fftpeak read free decays", UserWarning, stacklevel=2)
         return result(*fit(method, checked, refine_decays=verdict.free))
-    verdict = free_response(checked)
     picked = FREE_RESPONSE_METHOD if verdict.free else STATIONARY_METHOD
     why = (f"picked {picked}: response records without a force channel, {verdict.text}"
            + ("" if verdict.free else " (identified as a stationary response)"))
