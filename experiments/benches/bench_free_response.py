@@ -7,9 +7,10 @@ pre-trigger (0 to 50 % of the record), several hits (a roving hammer, a double h
 offset and a slow drift, clipping at the hit, a sensor far from the hit (a weak first mode). Levels are of the
 ringing's peak (the record's peak but the pulse's, whose direct term the truncated modal sum makes a spike); the
 quantiser's range and the clipping, of the record's peak. Stationary controls: the same modes driven by white noise
-(each mode's impulse-invariant two-pole filter). ``identify``/``monitor`` use era for a record judged free, SSI-cov
-otherwise (:mod:`physics.identification.output_only`); a misjudged case is measured by the scatter of mode 1's
-frequency over seeds with era and with SSI-cov.
+(each mode's impulse-invariant two-pole filter), in steady state or started from rest with the record (a shaker
+switched on with the capture: quiet for its first tenths of a second). ``identify``/``monitor`` use era for a record
+judged free, SSI-cov otherwise (:mod:`physics.identification.output_only`); a misjudged case is measured by the
+scatter of mode 1's frequency over seeds with era and with SSI-cov.
 
 Run: ``python -m experiments.benches.bench_free_response [--seeds N] [--only NAME ...] [--real] [--loss]``
 """
@@ -60,6 +61,7 @@ class Family:
     clip: float = 0.0              # clipped at this fraction of the record's peak (0: not)
     weak_mode1: float = 1.0        # mode 1's amplitude factor (sensor far from the hit)
     stationary: bool = False       # white-noise driven instead of hit
+    from_rest: bool = False        # the white-noise forcing starts with the record (else in steady state)
     pulse_samples: float = 2.0     # the half-sine's duration (samples)
 
     @property
@@ -89,7 +91,7 @@ def _ambient(fam, rng):
     response (a two-pole filter of the mode's poles), shape (channels, n)."""
     from scipy import signal
 
-    warm = 4 * int(fam.fs_hz / (min(fam.zeta) * 2 * np.pi * min(fam.fn_hz)))
+    warm = 0 if fam.from_rest else 4 * int(fam.fs_hz / (min(fam.zeta) * 2 * np.pi * min(fam.fn_hz)))
     w = rng.standard_normal(fam.n + warm)
     q = np.zeros((len(fam.fn_hz), fam.n))
     for j, (f, z) in enumerate(zip(fam.fn_hz, fam.zeta)):
@@ -172,6 +174,12 @@ CASES = [
     replace(B, name="ambient, noise 0.3", stationary=True, hits=(), noise=0.3),
     replace(B, name="ambient, noise 1", stationary=True, hits=(), noise=1.0),
     replace(B, name="ambient, 4 ch, noise 1", stationary=True, hits=(), channels=4, noise=1.0),
+    replace(B, name="ambient started from rest", stationary=True, hits=(), from_rest=True),
+    replace(B, name="ambient from rest, 4 ch", stationary=True, hits=(), channels=4, from_rest=True),
+    replace(B, name="ambient from rest, light damping 0.5 %", stationary=True, hits=(), zeta=(0.005,) * 5,
+            from_rest=True),
+    replace(B, name="ambient from rest, 60 s at 1 kHz", stationary=True, hits=(), fs_hz=1000.0, n=60000,
+            from_rest=True),
 ]
 
 

@@ -78,9 +78,11 @@ class Decays:
         without a decay).
     lead_db : float
         Mean energy of the first decay after a hit over that of the samples before the first hit (dB; NaN
-        without a hit, or with fewer samples before it than the least decay unless they are white noise
-        (:func:`_white`) and at least the predictor's order: the noise of a short pre-trigger, which a stationary
-        response's few samples are not).
+        without a hit; with samples before it that are not white noise (:func:`_white`: the noise of a
+        pre-trigger, which a stationary response's samples are not), NaN when they are fewer than the least decay
+        or the decay is not loudest within its first :data:`NO_HIT_LOUDEST` (a stationary response started from
+        rest, quiet for its first tenths of a second, is loudest anywhere); white, at least the predictor's order
+        of them).
     onsets : ndarray of int, shape (n_decays,)
         First sample of each decay's free response: the first sample of its hit (0 for the decay under way when
         the record starts). The samples from it to ``starts`` hold the hit, and the first milliseconds of the
@@ -175,6 +177,12 @@ def _decays_without_hit(x, a, b):
     quarters = np.sum(seg.reshape(seg.shape[0], 4, k) ** 2, axis=(0, 2))
     drop = _quarter_drop_db(x, a, b)
     return bool(drop >= FREE_DROP_NO_HIT_DB or (drop >= FREE_DROP_DB and np.all(np.diff(quarters) < 0)))
+
+
+def _loudest_early(x, a, b):
+    """Whether samples ``a:b`` are loudest (summed square over the channels) within their first
+    :data:`NO_HIT_LOUDEST`, as a decay after a hit is; a stationary response is loudest anywhere."""
+    return bool(np.argmax(np.sum(x[:, a:b] ** 2, axis=0)) <= NO_HIT_LOUDEST * (b - a))
 
 
 def _white(seg):
@@ -325,7 +333,7 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
     lead_db = np.nan
     after = [(a, b) for a, b, _ in spans if a > head]
     quiet = bool(after) and head >= p and _white(x[:, :head])
-    if after and (head >= least or quiet):
+    if after and (quiet or (head >= least and _loudest_early(x, *after[0]))):
         seg = x[:, after[0][0]:after[0][1]]
         lead_db = float(10 * np.log10(max(np.mean(seg.var(axis=1)), np.finfo(float).tiny)
                                       / max(np.mean(x[:, :head].var(axis=1)), np.finfo(float).tiny)))
