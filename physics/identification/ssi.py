@@ -436,11 +436,21 @@ def _merge_sub_band(modes: list, found: list, peaks: ClearPeaks, lag_before_s: f
         same = [m for m in modes if np.argmin(np.abs(found_hz - m.frequency_hz)) == j
                 and (abs(m.frequency_hz - f) <= 0.01 * f
                      or np.any(np.abs(m.frequency_hz - peaks.frequency_hz[at]) <= tol_hz[at]))]
-        if same and (mode.provisional or not all(m.provisional for m in same)):
+        if same and (mode.provisional or not all(m.provisional for m in same)
+                     or not all(m.weakly_stable or _steadier(mode, m) for m in same)):
             continue
         merged = [m for m in merged if not any(m is s for s in same)]
         merged.append(mode)
     return merged
+
+
+def _steadier(mode: _PassMode, than: _PassMode) -> bool:
+    """Whether ``mode``'s frequency scatters less over the segments of its pass than ``than``'s over its own (its
+    standard error, :func:`_standard_error`; a mode without one, seen in fewer than two segments, is not
+    steadier, and any mode is steadier than one without)."""
+    se = [float(_standard_error(m.segment_frequencies_hz[:, None], np.sum(np.isfinite(m.segment_frequencies_hz))
+                                [None])[0]) for m in (mode, than)]
+    return not np.isfinite(se[1]) or (np.isfinite(se[0]) and se[0] < se[1])
 
 
 def _standard_error(seg: np.ndarray, n_seen: np.ndarray) -> np.ndarray:
@@ -582,8 +592,8 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     if missed.frequency_hz.size:
         warnings.warn(f"{where}: stable poles the selection left out: {missed.text(height_db(sv, missed.frequency_hz))}"
                       f"; stable over fewer model orders than the selection asks, and no clear peak of the spectrum "
-                      f"there ({CLEAR_PEAK_DB:g} dB above its floor or prominent over its noise): a mode to look for "
-                      "with --band around it, or noise", UserWarning, stacklevel=2)
+                      f"there ({CLEAR_PEAK_DB:g} dB above its floor or prominent over its noise) that no kept mode "
+                      "lies nearer: a mode to look for with --band around it, or noise", UserWarning, stacklevel=2)
     est = ModalEstimate(fn, zeta, lam, shapes, np.zeros((shapes.shape[0], 0, fn.size), complex), f_std, z_std,
                         modal_phase_collinearity(shapes), "ssi", False, weakly_stable=weak)
     return SSIIdentification(est, tuple(passes), peaks, peaks.frequency_hz[unexplained], f_seg, z_seg, bands,
