@@ -210,9 +210,21 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
             est, diagram = unweighted_estimate(est, weights), unweighted_diagram(diagram, weights)
         return RecordsIdentification(records, est, diagram, why, weights, checked.crop)
 
-    if method != "auto" and method not in STATIONARY_METHODS:
+    if method not in ("auto", FREE_RESPONSE_METHOD, *STATIONARY_METHODS):
         return result(*fit(method, checked))
     verdict = free_response(checked)
+    if method == FREE_RESPONSE_METHOD:
+        if verdict.free:
+            return result(*fit(method, checked))
+        hint = (f"{verdict.text}; {method} fits free decays (the response after each hit): on a stationary response "
+                f"the random ripple of its spectrum's peaks passes for modes; --method {STATIONARY_METHOD} reads a "
+                "stationary response")
+        try:
+            est, diagram = fit(method, checked)
+        except (ConvergenceError, ShapeError) as exc:
+            raise _tried(exc, hint) from None
+        warnings.warn(f"{where}: {hint}", UserWarning, stacklevel=2)
+        return result(est, diagram)
     if method != "auto":
         if verdict.free:
             effect = ("modes may be missed (the poles it keeps are refined in their bands of the decays, as era's "

@@ -108,6 +108,34 @@ def test_a_stationary_method_named_for_a_free_response_is_warned_of(capsys, tmp_
     assert "assumes a stationary response" not in err
 
 
+def test_era_named_for_a_stationary_response_is_warned_of(capsys, tmp_path):
+    """era on a record that is no free response: the warning (or, where era finds no mode, the refusal) names the
+    verdict and the stationary method; on the free response, none."""
+    from scipy import signal
+
+    rng = np.random.default_rng(5)
+    y = np.zeros((2, 8000))
+    for f, phi in ((25.0, (1.0, 0.6)), (60.0, (0.5, -0.8))):            # two modes driven by white noise
+        p = np.exp(2 * np.pi * f / FS_HZ * (-0.01 + 1j))
+        y += np.outer(phi, signal.lfilter([1.0], [1.0, -2 * p.real, abs(p) ** 2], rng.standard_normal(8000)))
+    path = _npz(tmp_path / "ambient.npz", y)
+    code, out, err = run_cli(capsys, ["identify", str(path), "--method", "era", "--band", "10", "100"])
+    warned = [line for line in err.splitlines() if "fits free decays" in line]
+    assert len(warned) == 1 and warned[0].startswith(f"beam-damage identify: warning: {path}: not a free response")
+    assert warned[0].endswith("; era fits free decays (the response after each hit): on a stationary response the "
+                              "random ripple of its spectrum's peaks passes for modes; --method ssi reads a "
+                              "stationary response")
+    noisy = _npz(tmp_path / "noisy.npz", y + 0.01 * y.std() * rng.standard_normal(y.shape))
+    code, out, err = run_cli(capsys, ["identify", str(noisy), "--method", "era", "--band", "10", "100"])
+    assert code == 2 and err.startswith(f"beam-damage identify: error: {noisy}: no refined pole of the free decays")
+    assert err.rstrip().endswith("; era fits free decays (the response after each hit): on a stationary response the "
+                                 "random ripple of its spectrum's peaks passes for modes; --method ssi reads a "
+                                 "stationary response)") and len(err.strip().splitlines()) == 1
+    hits = _npz(tmp_path / "hits.npz", _hits())
+    code, out, err = run_cli(capsys, ["identify", str(hits), "--method", "era", "--band", "10", "100"])
+    assert code == 0 and "fits free decays" not in err
+
+
 def _csv_rows(n=3000):
     y = _hits()[:, :n]
     return ["time_s,1:+Z,2:+Z"] + [f"{k / FS_HZ:.9g},{y[0, k]:.9g},{y[1, k]:.9g}" for k in range(n)]
