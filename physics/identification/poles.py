@@ -162,8 +162,7 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
        are dropped below ``min_count`` members (default: a third of the orders
        that hold any pole).
     4. A cluster left with fewer members but at least ``weak_min_count``, within ``peak_tol_hz`` of one of
-       ``peaks_hz`` (clear spectral peaks) that no cluster taken lies nearer, and ``freq_tol`` of no cluster
-       taken, is kept *weakly stable*.
+       ``peaks_hz`` (clear spectral peaks) and ``freq_tol`` of no cluster taken, is kept *weakly stable*.
     5. With ``n_modes``, the ``n_modes`` largest clusters are kept (weakly stable ones last).
 
     The clusters these rules leave are :func:`missed_clusters`.
@@ -222,8 +221,7 @@ def _selection(d: StabilisationDiagram, min_status, freq_tol, damping_tol, min_c
 
     def apart(mem, at_peak=False):
         f = np.median(d.natural_frequencies_hz[mem])
-        ok = (not at_peak or _unexplained_peak(peaks, tol, f, taken_hz)) and \
-            all(abs(f - g) > freq_tol * g for g in taken_hz)
+        ok = (not at_peak or np.any(np.abs(peaks - f) <= tol)) and all(abs(f - g) > freq_tol * g for g in taken_hz)
         if ok:
             taken_hz.append(f)
         return ok
@@ -231,15 +229,6 @@ def _selection(d: StabilisationDiagram, min_status, freq_tol, damping_tol, min_c
     weak = _take_clusters(clusters, weak_min_count, used, lambda m: apart(m, True)) if peaks.size else []
     left = _take_clusters(clusters, weak_min_count, used, apart)
     return chosen, weak, left, min_count
-
-
-def _unexplained_peak(peaks, tol, f, taken_hz) -> bool:
-    """Whether a clear peak lies within its tolerance of ``f`` (Hz) and nearer ``f`` than every cluster taken
-    (``taken_hz``): a peak a taken cluster lies nearer is that cluster's resonance, not a weakly stable pole's."""
-    near = np.abs(peaks - f) <= tol
-    if taken_hz:
-        near &= np.abs(peaks - f) < np.min(np.abs(peaks[:, None] - np.asarray(taken_hz)[None]), axis=1)
-    return bool(near.any())
 
 
 #: A cluster left out is named when stable over at least this share of the orders a cluster needs.

@@ -24,15 +24,8 @@ import numpy as np
 from physics.errors import ConvergenceError, ShapeError
 from physics.identification.band_refine import BandFit
 from physics.identification.decays import free_response
-from physics.identification.fdd import (
-    CLEAR_PEAK_DB,
-    ClearPeaks,
-    clear_peaks,
-    height_db,
-    singular_value_spectrum,
-    unexplained_peaks,
-    unit_shapes,
-)
+from physics.identification.fdd import (CLEAR_PEAK_DB, ClearPeaks, clear_peaks, height_db, singular_value_spectrum,
+                                       unexplained_peaks, unit_shapes)
 from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.peak_seeds import SeededModes
 from physics.identification.peak_warning import warn_unexplained_peaks
@@ -418,7 +411,8 @@ class _PassMode:
 def _merge_sub_band(modes: list, found: list, peaks: ClearPeaks, lag_before_s: float) -> list:
     """``modes`` (of the earlier passes) with the modes ``found`` by a sub-band pass merged in.
 
-    A found mode is taken at a clear peak no settled (not provisional) earlier mode explains, or as a new mode when
+    A found mode is taken at a clear peak no settled (not provisional) earlier mode explains (a weakly stable one,
+    at such a peak that it lies nearer than every earlier mode), or as a new mode when
     it is settled, no earlier pass's lags (longest ``lag_before_s``, s) spanned :data:`MIN_LAG_PERIODS` of its
     periods and no mode lies within 1 % of it. The earlier modes it is the nearest found mode of, within 1 % or at
     its peak, it replaces when they are all provisional and it is not; otherwise it is dropped."""
@@ -429,6 +423,9 @@ def _merge_sub_band(modes: list, found: list, peaks: ClearPeaks, lag_before_s: f
     for j, mode in enumerate(found):
         f = mode.frequency_hz
         at = wanted & (np.abs(peaks.frequency_hz - f) <= tol_hz)
+        if mode.weakly_stable and modes:            # a peak an earlier mode lies nearer is that mode's resonance
+            at &= np.abs(peaks.frequency_hz - f) < np.min(np.abs(peaks.frequency_hz[:, None]
+                                                                - np.array([m.frequency_hz for m in modes])), axis=1)
         new = not mode.provisional and lag_before_s * f < MIN_LAG_PERIODS \
             and all(abs(m.frequency_hz - f) > 0.01 * f for m in merged)
         if not (at.any() or new):
@@ -445,12 +442,11 @@ def _merge_sub_band(modes: list, found: list, peaks: ClearPeaks, lag_before_s: f
 
 
 def _steadier(mode: _PassMode, than: _PassMode) -> bool:
-    """Whether ``mode``'s frequency scatters less over the segments of its pass than ``than``'s over its own (its
-    standard error, :func:`_standard_error`; a mode without one, seen in fewer than two segments, is not
-    steadier, and any mode is steadier than one without)."""
-    se = [float(_standard_error(m.segment_frequencies_hz[:, None], np.sum(np.isfinite(m.segment_frequencies_hz))
-                                [None])[0]) for m in (mode, than)]
-    return not np.isfinite(se[1]) or (np.isfinite(se[0]) and se[0] < se[1])
+    """Whether ``mode``'s frequency has a smaller standard error over its pass's segments than ``than``'s
+    (:func:`_standard_error`; none, seen in fewer than two segments: never steadier, and beaten by any)."""
+    a, b = (_standard_error(m.segment_frequencies_hz[:, None], np.isfinite(m.segment_frequencies_hz).sum(keepdims=True))
+            [0] for m in (mode, than))
+    return not np.isfinite(b) or (np.isfinite(a) and a < b)
 
 
 def _standard_error(seg: np.ndarray, n_seen: np.ndarray) -> np.ndarray:
@@ -592,8 +588,8 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     if missed.frequency_hz.size:
         warnings.warn(f"{where}: stable poles the selection left out: {missed.text(height_db(sv, missed.frequency_hz))}"
                       f"; stable over fewer model orders than the selection asks, and no clear peak of the spectrum "
-                      f"there ({CLEAR_PEAK_DB:g} dB above its floor or prominent over its noise) that no kept mode "
-                      "lies nearer: a mode to look for with --band around it, or noise", UserWarning, stacklevel=2)
+                      f"there ({CLEAR_PEAK_DB:g} dB above its floor or prominent over its noise): a mode to look for "
+                      "with --band around it, or noise", UserWarning, stacklevel=2)
     est = ModalEstimate(fn, zeta, lam, shapes, np.zeros((shapes.shape[0], 0, fn.size), complex), f_std, z_std,
                         modal_phase_collinearity(shapes), "ssi", False, weakly_stable=weak)
     return SSIIdentification(est, tuple(passes), peaks, peaks.frequency_hz[unexplained], f_seg, z_seg, bands,

@@ -112,24 +112,6 @@ def test_a_short_cluster_at_a_clear_peak_is_kept_weakly_stable_and_dropped_witho
     assert select_poles(d, peaks_hz=[30.2], n_modes=1).weakly_stable.tolist() == [False]   # the steadiest first
 
 
-def test_a_short_cluster_is_not_kept_at_a_peak_a_stable_mode_lies_nearer():
-    """A split pole: a mode stable at 10.0 Hz, a short cluster at 10.3 Hz, one clear peak at 10.1 Hz between them
-    (its tolerance reaching both): the peak is the stable mode's resonance, and the short cluster is dropped."""
-    from physics.identification.poles import StabilisationDiagram, select_poles
-
-    order = np.concatenate([np.arange(1, 21), np.arange(15, 20)])
-    fn = np.concatenate([np.full(20, 10.0), np.full(5, 10.3)]) * (1 + 1e-4 * np.sin(np.arange(25)))
-    status = np.where(order > 1, 4, 0)
-    status[20] = 0
-    d = StabilisationDiagram(order, 2j * np.pi * fn, fn, np.full(25, 0.01), np.ones((25, 2), complex) / np.sqrt(2),
-                             status, (5.0, 40.0))
-    sel = select_poles(d, peaks_hz=[10.1], peak_tol_hz=[0.4])
-    np.testing.assert_allclose(sel.natural_frequencies_hz, [10.0], rtol=1e-3)
-    sel = select_poles(d, peaks_hz=[10.25], peak_tol_hz=[0.4])            # nearer the short cluster: its peak
-    np.testing.assert_allclose(sel.natural_frequencies_hz, [10.0, 10.3], rtol=1e-3)
-    assert sel.weakly_stable.tolist() == [False, True]
-
-
 def _direct_poles(U, s, n_out, order, fs, band_hz):
     """One order's poles the direct way: its own least squares and eigen-decomposition (no shared factorisation)."""
     O = U[:, :order] * np.sqrt(s[:order])
@@ -215,7 +197,8 @@ def test_a_free_decay_is_identified_near_the_cramer_rao_bound():
 def test_a_provisional_mode_is_replaced_by_the_sub_band_mode_only_when_that_one_is_steadier():
     """A mode whose whole-band lags spanned under two periods (provisional) against the sub-band pass's estimate of
     it: the one whose frequency scatters less over its segments is kept (the merge's standard error), and a weakly
-    stable provisional mode is replaced whatever the scatter."""
+    stable provisional mode is replaced whatever the scatter; a weakly stable sub-band pole is taken only at a peak
+    it lies nearer than every earlier mode (the split pole either side of mode 1 is not)."""
     from physics.identification.fdd import ClearPeaks
     from physics.identification.ssi import _merge_sub_band, _PassMode
 
@@ -237,3 +220,10 @@ def test_a_provisional_mode_is_replaced_by_the_sub_band_mode_only_when_that_one_
     weak = [mode(10.09, 0.02, True, weak=True), whole[1]]
     kept = _merge_sub_band(weak, [noisy_sub], peaks, lag_before_s=0.1)
     assert sorted(m.frequency_hz for m in kept) == [10.01, 64.4]
+    split = mode(10.31, 0.02, True, weak=True)          # the sub-band's weakly stable pole beside the kept mode
+    kept = _merge_sub_band(whole, [noisy_sub, split], peaks, lag_before_s=0.1)
+    assert [m.frequency_hz for m in kept] == [10.09, 64.4]
+    beside = ClearPeaks(np.array([100]), np.array([10.25]), np.array([20.0]), np.array([[90, 110]]),
+                        np.array([0.3]), np.array([True]))         # a peak it lies nearer: its own resonance
+    kept = _merge_sub_band(whole, [noisy_sub, split], beside, lag_before_s=0.1)
+    assert [m.frequency_hz for m in kept] == [10.09, 64.4, 10.31]
