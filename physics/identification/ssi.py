@@ -17,7 +17,7 @@ A free response is refined on its decays (:mod:`physics.identification.ssi_free_
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -409,34 +409,38 @@ class _PassMode:
 
 
 def _merge_sub_band(modes: list, found: list, peaks: ClearPeaks, lag_before_s: float) -> list:
-    """``modes`` (of the earlier passes) with the modes ``found`` by a sub-band pass merged in.
+    """``modes`` (of the earlier passes) with the modes ``found`` by a sub-band pass merged in (weakly stable last).
 
-    A found mode is taken at a clear peak no settled (not provisional) earlier mode explains (a weakly stable one,
-    at such a peak that it lies nearer than every earlier mode), or as a new mode when
-    it is settled, no earlier pass's lags (longest ``lag_before_s``, s) spanned :data:`MIN_LAG_PERIODS` of its
-    periods and no mode lies within 1 % of it. The earlier modes it is the nearest found mode of, within 1 % or at
-    its peak, it replaces when they are all provisional and it is not; otherwise it is dropped."""
+    A found mode is taken at a clear peak no settled (not provisional) mode explains (a weakly stable one, at such
+    a peak that it lies nearer than every earlier mode), or as a new mode when it is settled, no earlier pass's lags
+    (longest ``lag_before_s``, s) spanned :data:`MIN_LAG_PERIODS` of its periods and no mode lies within 1 % of it.
+    The earlier modes it is the nearest found mode of, within 1 % or at its peak, it replaces when they are all
+    provisional, it is not and it is steadier (:func:`_steadier`; a weakly stable earlier mode whatever); when it is
+    not steadier, they are settled as they are (no later pass looks for them again); otherwise it is dropped."""
     tol_hz = peaks.tolerance_hz
-    wanted = unexplained_peaks(peaks, [m.frequency_hz for m in modes if not m.provisional])
     found_hz = np.array([m.frequency_hz for m in found])
     merged = list(modes)
-    for j, mode in enumerate(found):
-        f = mode.frequency_hz
-        at = wanted & (np.abs(peaks.frequency_hz - f) <= tol_hz)
-        if mode.weakly_stable and modes:            # a peak an earlier mode lies nearer is that mode's resonance
+    for j in sorted(range(len(found)), key=lambda k: found[k].weakly_stable):
+        mode, f = found[j], found[j].frequency_hz
+        earlier = [m for m in merged if not any(m is x for x in found)]
+        at = unexplained_peaks(peaks, [m.frequency_hz for m in merged if not m.provisional]) \
+            & (np.abs(peaks.frequency_hz - f) <= tol_hz)
+        if mode.weakly_stable and earlier:          # a peak an earlier mode lies nearer is that mode's resonance
             at &= np.abs(peaks.frequency_hz - f) < np.min(np.abs(peaks.frequency_hz[:, None]
-                                                                - np.array([m.frequency_hz for m in modes])), axis=1)
+                                                                - np.array([m.frequency_hz for m in earlier])), axis=1)
         new = not mode.provisional and lag_before_s * f < MIN_LAG_PERIODS \
             and all(abs(m.frequency_hz - f) > 0.01 * f for m in merged)
         if not (at.any() or new):
             continue
-        same = [m for m in modes if np.argmin(np.abs(found_hz - m.frequency_hz)) == j
+        same = [m for m in earlier if np.argmin(np.abs(found_hz - m.frequency_hz)) == j
                 and (abs(m.frequency_hz - f) <= 0.01 * f
                      or np.any(np.abs(m.frequency_hz - peaks.frequency_hz[at]) <= tol_hz[at]))]
-        if same and (mode.provisional or not all(m.provisional for m in same)
-                     or not all(m.weakly_stable or _steadier(mode, m) for m in same)):
+        if same and (mode.provisional or not all(m.provisional for m in same)):
             continue
-        merged = [m for m in merged if not any(m is s for s in same)]
+        if same and not all(m.weakly_stable or _steadier(mode, m) for m in same):
+            merged = [replace(m, provisional=False) if any(m is x for x in same) else m for m in merged]
+            continue
+        merged = [m for m in merged if not any(m is x for x in same)]
         merged.append(mode)
     return merged
 

@@ -197,8 +197,9 @@ def test_a_free_decay_is_identified_near_the_cramer_rao_bound():
 def test_a_provisional_mode_is_replaced_by_the_sub_band_mode_only_when_that_one_is_steadier():
     """A mode whose whole-band lags spanned under two periods (provisional) against the sub-band pass's estimate of
     it: the one whose frequency scatters less over its segments is kept (the merge's standard error), and a weakly
-    stable provisional mode is replaced whatever the scatter; a weakly stable sub-band pole is taken only at a peak
-    it lies nearer than every earlier mode (the split pole either side of mode 1 is not)."""
+    stable provisional mode is replaced whatever the scatter; a provisional mode kept is settled, and a weakly
+    stable sub-band pole is taken only at a peak no settled mode explains and it lies nearer than every earlier
+    mode (the split pole beside mode 1 is not)."""
     from physics.identification.fdd import ClearPeaks
     from physics.identification.ssi import _merge_sub_band, _PassMode
 
@@ -221,9 +222,12 @@ def test_a_provisional_mode_is_replaced_by_the_sub_band_mode_only_when_that_one_
     kept = _merge_sub_band(weak, [noisy_sub], peaks, lag_before_s=0.1)
     assert sorted(m.frequency_hz for m in kept) == [10.01, 64.4]
     split = mode(10.31, 0.02, True, weak=True)          # the sub-band's weakly stable pole beside the kept mode
-    kept = _merge_sub_band(whole, [noisy_sub, split], peaks, lag_before_s=0.1)
-    assert [m.frequency_hz for m in kept] == [10.09, 64.4]
-    beside = ClearPeaks(np.array([100]), np.array([10.25]), np.array([20.0]), np.array([[90, 110]]),
-                        np.array([0.3]), np.array([True]))         # a peak it lies nearer: its own resonance
-    kept = _merge_sub_band(whole, [noisy_sub, split], beside, lag_before_s=0.1)
-    assert [m.frequency_hz for m in kept] == [10.09, 64.4, 10.31]
+    kept = _merge_sub_band(whole, [split, noisy_sub], peaks, lag_before_s=0.1)
+    assert [m.frequency_hz for m in kept] == [10.09, 64.4] and not kept[0].provisional    # settled: not sought again
+    kept = _merge_sub_band(whole, [split, steady_sub], peaks, lag_before_s=0.1)
+    assert sorted(m.frequency_hz for m in kept) == [10.1, 64.4]
+    lone = mode(10.0, 0.02, True, weak=True)            # no sub-band mode settles the peak: taken nearer it only
+    assert [m.frequency_hz for m in _merge_sub_band([whole[1]], [lone], peaks, 0.1)] == [64.4, 10.0]
+    far = [mode(10.3, 0.02, True, weak=True), mode(30.0, 0.02, False)]   # the peak lies nearer the earlier mode
+    kept = _merge_sub_band([mode(10.12, 0.02, True), whole[1]], far, peaks, 0.1)
+    assert [m.frequency_hz for m in kept] == [10.12, 64.4]
