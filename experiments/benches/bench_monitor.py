@@ -19,8 +19,10 @@ beyond the temperatures the baseline saw). Methods, each through the CLI:
   the series' damping ratios, as classify's warning asks) and ``train``, cached under ``--out``);
 * ``classify, N baselines``: the same with every test of the baseline period as ``--baseline`` (repeated; its
   ``--false-alarm-rate`` left at the default);
-* ``frequency shift``: the signed mean relative frequency shift of each test against the first test, alarmed
-  below the 1st percentile of the baseline period's shifts (a drop larger than 99 % of the baseline's).
+* ``frequency shift``: the signed mean relative frequency shift of each test against the first test (output-only:
+  each of the first test's modes read as the test's nearest within half the gap to its neighbours,
+  :func:`paired_frequencies`), alarmed below the 1st percentile of the baseline period's shifts (a drop larger than
+  99 % of the baseline's).
 
 ``monitor`` identifies each file once (its cache in ``--out``/monitor/KIND serves every size and both runs).
 Output-only records are identified by ``beam-damage identify REC.npz --band 5 400 --max-order 120`` into modal
@@ -55,7 +57,7 @@ from experiments.second_sim.series import SERIES_KINDS, SLIT_SIZES, SeriesConfig
 from experiments.benches.harness import cli_json, parser, publish  # noqa: E402
 from physics.io import atomic_write_bytes, atomic_write_text, figure_png, pyplot  # noqa: E402
 
-__all__ = ["main", "markdown", "score_series"]
+__all__ = ["main", "markdown", "paired_frequencies", "score_series"]
 
 METHODS = ("monitor (temperature)", "monitor", "monitor (temperature), identify's modes", "classify, 1 baseline",
            "classify, N baselines", "frequency shift")
@@ -144,10 +146,11 @@ def _frequencies(verdicts: list, modal_files: list | None, n_modes: int) -> np.n
     (output-only) or classify's identification (the first test's from its baseline entry)."""
     F = np.full((len(verdicts) + 1, n_modes), np.nan)
     if modal_files is not None:
-        for k, p in enumerate(modal_files):
-            if p is not None:
-                f = json.loads(Path(p).read_text())["natural_frequencies_hz"][:n_modes]
-                F[k, :len(f)] = f
+        found = [np.asarray(json.loads(Path(p).read_text())["natural_frequencies_hz"], float) if p is not None
+                 else np.zeros(0) for p in modal_files]
+        ref = found[0][:n_modes]
+        for k, f in enumerate(found):
+            F[k, :ref.size] = paired_frequencies(f, ref)
         return F
     for k, v in enumerate(verdicts, start=1):
         ident = v.get("identification") or {}
@@ -156,6 +159,22 @@ def _frequencies(verdicts: list, modal_files: list | None, n_modes: int) -> np.n
         if ident.get("measured_frequencies_hz"):
             F[k] = [np.nan if x is None else x for x in ident["measured_frequencies_hz"][:n_modes]]
     return F
+
+
+def paired_frequencies(f_hz: np.ndarray, ref_hz: np.ndarray) -> np.ndarray:
+    """Each reference mode's reading among one test's identified frequencies ``f_hz``: the nearest within half the
+    log gap to each neighbouring reference mode (the lowest and highest as far outwards as inwards; NaN where none
+    lies there), shape ``ref_hz.shape``; an extra pole (a mode split in two) then takes no other mode's place."""
+    f_hz, ref_hz = np.asarray(f_hz, float), np.asarray(ref_hz, float)
+    if not f_hz.size or not ref_hz.size:
+        return np.full(ref_hz.shape, np.nan)
+    mid = np.sqrt(ref_hz[1:] * ref_hz[:-1])
+    lo = np.r_[ref_hz[0] ** 2 / mid[0], mid] if mid.size else np.zeros(1)      # the outer modes: as far outwards
+    hi = np.r_[mid, ref_hz[-1] ** 2 / mid[-1]] if mid.size else np.full(1, np.inf)
+    d = np.abs(np.log(f_hz[None]) - np.log(ref_hz[:, None]))            # (modes, found)
+    d = np.where((f_hz[None] >= lo[:, None]) & (f_hz[None] < hi[:, None]), d, np.inf)
+    j = np.argmin(d, axis=1)
+    return np.where(np.isfinite(d[np.arange(ref_hz.size), j]), f_hz[j], np.nan)
 
 
 def frequency_shift(F: np.ndarray, n_baseline: int) -> tuple[np.ndarray, np.ndarray]:

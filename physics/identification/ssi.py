@@ -409,11 +409,13 @@ class _PassMode:
 
 
 def _merge_sub_band(modes: list, found: list, peaks: ClearPeaks, lag_before_s: float) -> list:
-    """``modes`` (of the earlier passes) with the modes ``found`` by a sub-band pass merged in (weakly stable last).
+    """``modes`` (of the earlier passes) with the sub-band pass's ``found`` merged in (weakly stable last).
 
-    A found mode is taken at a clear peak no settled (not provisional) mode explains (a weakly stable one, at such
-    a peak that it lies nearer than every earlier mode), or as a new mode when it is settled, no earlier pass's lags
-    (longest ``lag_before_s``, s) spanned :data:`MIN_LAG_PERIODS` of its periods and no mode lies within 1 % of it.
+    A found mode is taken at a clear peak no settled (not provisional) earlier mode explains (a weakly stable one,
+    at such a peak no found mode explains either and that it lies nearer than every earlier mode: two stable modes
+    at one unresolved peak are both kept), or as a new mode when it is settled, no earlier
+    pass's lags (longest ``lag_before_s``, s) spanned :data:`MIN_LAG_PERIODS` of its periods and no mode lies within
+    1 % of it.
     The earlier modes it is the nearest found mode of, within 1 % or at its peak, it replaces when they are all
     provisional, it is not and it is steadier (:func:`_steadier`; a weakly stable earlier mode whatever); when it is
     not steadier, they are settled as they are (no later pass looks for them again); otherwise it is dropped."""
@@ -423,8 +425,8 @@ def _merge_sub_band(modes: list, found: list, peaks: ClearPeaks, lag_before_s: f
     for j in sorted(range(len(found)), key=lambda k: found[k].weakly_stable):
         mode, f = found[j], found[j].frequency_hz
         earlier = [m for m in merged if not any(m is x for x in found)]
-        at = unexplained_peaks(peaks, [m.frequency_hz for m in merged if not m.provisional]) \
-            & (np.abs(peaks.frequency_hz - f) <= tol_hz)
+        settled = [m.frequency_hz for m in (merged if mode.weakly_stable else earlier) if not m.provisional]
+        at = unexplained_peaks(peaks, settled) & (np.abs(peaks.frequency_hz - f) <= tol_hz)
         if mode.weakly_stable and earlier:          # a peak an earlier mode lies nearer is that mode's resonance
             at &= np.abs(peaks.frequency_hz - f) < np.min(np.abs(peaks.frequency_hz[:, None]
                                                                 - np.array([m.frequency_hz for m in earlier])), axis=1)

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from experiments.benches.bench_monitor import frequency_shift, score_series
+from experiments.benches.bench_monitor import frequency_shift, paired_frequencies, score_series
 from experiments.benches.plain_tests import plain_alarms
 
 
@@ -30,6 +30,17 @@ def test_no_detection_gives_no_delay_and_the_frequency_shift_alarms_on_a_drop():
     drop, alarm = frequency_shift(F, 6)
     assert alarm[6:].all() and alarm[1:6].tolist() == [False, False, False, True, False]  # the baseline's largest
     np.testing.assert_allclose(drop[6], 0.5 * (0.01 + 1 / 60))
+
+
+def test_a_tests_frequencies_are_paired_to_the_first_tests_modes_not_by_position():
+    """A split mode 1 (two poles near 10 Hz) and a mode missing: each reference mode takes its nearest reading
+    within half the (log) gap to its neighbours, the extra pole none."""
+    ref = np.array([10.0, 64.0, 179.0, 350.0])
+    got = paired_frequencies([9.95, 10.08, 64.5, 178.0, 352.0], ref)
+    np.testing.assert_allclose(got, [9.95, 64.5, 178.0, 352.0])
+    got = paired_frequencies([10.1, 178.0, 900.0], ref)        # 900 Hz: beyond mode 4's slot (up to 472 Hz)
+    np.testing.assert_allclose(got, [10.1, np.nan, 178.0, np.nan])
+    assert np.isnan(paired_frequencies([], ref)).all()
 
 
 def test_the_plainest_tests_alarm_below_the_baselines_own_quantiles():
