@@ -413,10 +413,9 @@ def _merge_sub_band(modes: list, found: list, peaks: ClearPeaks, lag_before_s: f
 
     A found mode is taken at a clear peak no settled (not provisional) earlier mode explains (a weakly stable one,
     at such a peak no found mode explains either and that it lies nearer than every earlier mode: two stable modes
-    at one unresolved peak are both kept), or as a new mode when it is settled, no earlier
-    pass's lags (longest ``lag_before_s``, s) spanned :data:`MIN_LAG_PERIODS` of its periods and no mode lies within
-    1 % of it.
-    The earlier modes it is the nearest found mode of, within 1 % or at its peak, it replaces when they are all
+    at one unresolved peak are both kept), or as a new mode when it is settled, no earlier pass's lags (longest
+    ``lag_before_s``, s) spanned :data:`MIN_LAG_PERIODS` of its periods and no mode lies within 1 % of it. The
+    earlier modes it is the nearest found mode of, within 1 % or at its peak, it replaces when they are all
     provisional, it is not and it is steadier (:func:`_steadier`; a weakly stable earlier mode whatever); when it is
     not steadier, they are settled as they are (no later pass looks for them again); otherwise it is dropped."""
     tol_hz = peaks.tolerance_hz
@@ -448,8 +447,7 @@ def _merge_sub_band(modes: list, found: list, peaks: ClearPeaks, lag_before_s: f
 
 
 def _steadier(mode: _PassMode, than: _PassMode) -> bool:
-    """Whether ``mode``'s frequency has a smaller standard error over its pass's segments than ``than``'s
-    (:func:`_standard_error`; none, seen in fewer than two segments: never steadier, and beaten by any)."""
+    """Whether ``mode``'s frequency has a smaller :func:`_standard_error` than ``than``'s (NaN: no; any beats NaN)."""
     a, b = (_standard_error(m.segment_frequencies_hz[:, None], np.isfinite(m.segment_frequencies_hz).sum(keepdims=True))
             [0] for m in (mode, than))
     return not np.isfinite(b) or (np.isfinite(a) and a < b)
@@ -468,21 +466,21 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
                  where="record", mode_in_band=False, refine_decays=None) -> SSIIdentification:
     """SSI-cov identification of a multichannel response record (output-only), sized to the record's spectrum.
 
-    The clear peaks of the record's singular-value spectrum (:func:`~physics.identification.fdd.clear_peaks`)
-    size each pass: block rows covering :data:`BLOCK_ROW_PERIODS` periods of the lowest peak of the pass's band
-    (at most :data:`MAX_TOEPLITZ_ROWS` / channels), model orders up to :data:`ORDERS_PER_PEAK` per peak (at least
-    :data:`MIN_MAX_ORDER`). The first pass identifies the whole band; while a clear peak has no stable mode, a
-    lower sub-band (upper limit half the last, or :data:`SUB_BAND_PEAK_RATIO` times the highest such peak) is
-    decimated to and identified
-    again, keeping the modes at those peaks (:data:`MAX_PASSES` passes at most); a mode whose correlation lags
-    span fewer than :data:`MIN_LAG_PERIODS` of its periods is identified again so, and replaced by the sub-band's
-    estimate nearest it when that one is stable (two modes of a sub-band at one unresolved peak are both kept). A
-    sub-band's stable mode that no earlier pass's lags spanned :data:`MIN_LAG_PERIODS` periods of and no mode lies
-    within 1 % of is kept too, peak or none (a mode the whole band's model could not resolve). A cluster of poles
-    stable over fewer orders than the selection asks but at a clear peak is kept, flagged ``weakly_stable``. A clear
-    peak left without a mode is named in a warning, and so is a cluster of stable poles no pass kept
-    (:func:`~physics.identification.poles.missed_clusters`), with its height above the spectrum's floor. The modes
-    of a free response are then refined in their bands of its decays, as ``era``'s are (module docstring).
+    The clear peaks of the record's singular-value spectrum (:func:`~physics.identification.fdd.clear_peaks`) size
+    each pass: block rows covering :data:`BLOCK_ROW_PERIODS` periods of the lowest peak of the pass's band (at most
+    :data:`MAX_TOEPLITZ_ROWS` / channels), model orders up to :data:`ORDERS_PER_PEAK` per peak (at least
+    :data:`MIN_MAX_ORDER`). The first pass identifies the whole band; while a clear peak has no stable mode, a lower
+    sub-band (upper limit half the last, or :data:`SUB_BAND_PEAK_RATIO` times the highest such peak) is decimated to
+    and identified again, keeping the modes at those peaks (:data:`MAX_PASSES` passes at most); a mode whose
+    correlation lags span fewer than :data:`MIN_LAG_PERIODS` of its periods is identified again so, and replaced by
+    the sub-band's estimate nearest it when that one is stable and steadier over its segments, else settled as it is
+    (two modes of a sub-band at one unresolved peak are both kept). A sub-band's stable mode that no earlier pass's
+    lags spanned :data:`MIN_LAG_PERIODS` periods of and no mode lies within 1 % of is kept too, peak or none (a mode
+    the whole band's model could not resolve). A cluster of poles stable over fewer orders than the selection asks
+    but at a clear peak is kept, flagged ``weakly_stable``. A clear peak left without a mode is named in a warning,
+    and so is a cluster of stable poles no pass kept (:func:`~physics.identification.poles.missed_clusters`), with
+    its height above the spectrum's floor. The modes of a free response are then refined in their bands of its
+    decays, as ``era``'s are (module docstring).
 
     Parameters
     ----------
