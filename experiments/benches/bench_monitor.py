@@ -20,7 +20,7 @@ beyond the temperatures the baseline saw). Methods, each through the CLI:
 * ``classify, N baselines``: the same with every test of the baseline period as ``--baseline`` (repeated; its
   ``--false-alarm-rate`` left at the default);
 * ``frequency shift``: the signed mean relative frequency shift of each test against the first test (output-only:
-  each of the first test's modes read as the test's nearest within half the gap to its neighbours,
+  each of the first test's modes read as the test's nearest within half the smaller gap to its neighbours,
   :func:`paired_frequencies`), alarmed below the 1st percentile of the baseline period's shifts (a drop larger than
   99 % of the baseline's).
 
@@ -162,17 +162,18 @@ def _frequencies(verdicts: list, modal_files: list | None, n_modes: int) -> np.n
 
 
 def paired_frequencies(f_hz: np.ndarray, ref_hz: np.ndarray) -> np.ndarray:
-    """Each reference mode's reading among one test's identified frequencies ``f_hz``: the nearest within half the
-    log gap to each neighbouring reference mode (the lowest and highest as far outwards as inwards; NaN where none
-    lies there), shape ``ref_hz.shape``; an extra pole (a mode split in two) then takes no other mode's place."""
+    """Each reference mode's reading among one test's identified frequencies ``f_hz``: the nearest within the mode's
+    window (:func:`~experiments.benches.bench_real_series.mode_windows_hz`: half the smaller log gap to its
+    neighbours; NaN where none lies there), shape ``ref_hz.shape``; an extra pole (a mode split in two) then takes
+    no other mode's place."""
+    from experiments.benches.bench_real_series import mode_windows_hz
+
     f_hz, ref_hz = np.asarray(f_hz, float), np.asarray(ref_hz, float)
     if not f_hz.size or not ref_hz.size:
         return np.full(ref_hz.shape, np.nan)
-    mid = np.sqrt(ref_hz[1:] * ref_hz[:-1])
-    lo = np.r_[ref_hz[0] ** 2 / mid[0], mid] if mid.size else np.zeros(1)      # the outer modes: as far outwards
-    hi = np.r_[mid, ref_hz[-1] ** 2 / mid[-1]] if mid.size else np.full(1, np.inf)
+    w = mode_windows_hz(ref_hz, (0.0, np.inf))
     d = np.abs(np.log(f_hz[None]) - np.log(ref_hz[:, None]))            # (modes, found)
-    d = np.where((f_hz[None] >= lo[:, None]) & (f_hz[None] < hi[:, None]), d, np.inf)
+    d = np.where((f_hz[None] >= w[:, :1]) & (f_hz[None] <= w[:, 1:]), d, np.inf)
     j = np.argmin(d, axis=1)
     return np.where(np.isfinite(d[np.arange(ref_hz.size), j]), f_hz[j], np.nan)
 

@@ -34,11 +34,11 @@ def test_no_detection_gives_no_delay_and_the_frequency_shift_alarms_on_a_drop():
 
 def test_a_tests_frequencies_are_paired_to_the_first_tests_modes_not_by_position():
     """A split mode 1 (two poles near 10 Hz) and a mode missing: each reference mode takes its nearest reading
-    within half the (log) gap to its neighbours, the extra pole none."""
+    within half the smaller (log) gap to its neighbours, the extra pole none."""
     ref = np.array([10.0, 64.0, 179.0, 350.0])
     got = paired_frequencies([9.95, 10.08, 64.5, 178.0, 352.0], ref)
     np.testing.assert_allclose(got, [9.95, 64.5, 178.0, 352.0])
-    got = paired_frequencies([10.1, 178.0, 900.0], ref)        # 900 Hz: beyond mode 4's slot (up to 472 Hz)
+    got = paired_frequencies([10.1, 178.0, 900.0], ref)        # 900 Hz: beyond mode 4's window (up to 489 Hz)
     np.testing.assert_allclose(got, [10.1, np.nan, 178.0, np.nan])
     assert np.isnan(paired_frequencies([], ref)).all()
 
