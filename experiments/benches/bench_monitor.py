@@ -54,6 +54,7 @@ import numpy as np  # noqa: E402
 
 from experiments.cli import build_parser  # noqa: E402
 from experiments.second_sim.series import SERIES_KINDS, SLIT_SIZES, SeriesConfig, simulate_series, write_series  # noqa: E402
+from experiments.benches.bench_real_series import mode_windows_hz  # noqa: E402
 from experiments.benches.harness import cli_json, parser, publish  # noqa: E402
 from physics.io import atomic_write_bytes, atomic_write_text, figure_png, pyplot  # noqa: E402
 
@@ -166,8 +167,6 @@ def paired_frequencies(f_hz: np.ndarray, ref_hz: np.ndarray) -> np.ndarray:
     window (:func:`~experiments.benches.bench_real_series.mode_windows_hz`: half the smaller log gap to its
     neighbours; NaN where none lies there), shape ``ref_hz.shape``; an extra pole (a mode split in two) then takes
     no other mode's place."""
-    from experiments.benches.bench_real_series import mode_windows_hz
-
     f_hz, ref_hz = np.asarray(f_hz, float), np.asarray(ref_hz, float)
     if not f_hz.size or not ref_hz.size:
         return np.full(ref_hz.shape, np.nan)
