@@ -292,6 +292,7 @@ def _write(out_dir, out: dict, res) -> dict:
         out["lost_modes_change"]["text"] + ".",
         out["baseline_scatter"]["warning"] or _scatter_text(out["baseline_scatter"]),
         *((out["baseline_trend"]["warning"],) if out["baseline_trend"]["warning"] else ()),
+        *((nv["baseline_sessions"]["text"] + ".",) if nv.get("baseline_sessions") else ()),
         *_estimator_texts(nv)))
     modes = Table("Reference modes of the baseline period and their normal variation",
                   ("mode", "frequency (Hz)", "std (%)", "tracking tolerance (%)", "presence",

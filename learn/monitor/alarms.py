@@ -15,6 +15,7 @@ from learn.monitor.identification import IdentificationSettings, write_cache
 from learn.monitor.pole_confirmation import confirm_far_poles
 from learn.monitor.normal_models import DEFAULT_LATENT, NORMAL_MODELS
 from learn.monitor.series import SeriesInput, check_series
+from learn.monitor.sessions import baseline_sessions
 from learn.monitor.alarm_threshold import Threshold, minimum_baseline
 from learn.monitor.charts import CHARTS, Charts, run_charts
 from learn.monitor.statistics import (DEFAULT_STATISTICS, STATISTICS, Detection, covers_seasons, detect,
@@ -179,6 +180,7 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     det = detect(model, model.with_choices, X, Cq, b_idx, rest, false_alarm_rate, q, ("residual", *statistics),
                  held=held)
     thr = residual_threshold(det)
+    sessions = baseline_sessions(X[b_idx], need - 1)       # held out a session at a time (held_out_folds)
     if (why := season_warning(series.times, series.time_values, n_baseline, det.names if not q else ())):
         warnings.warn(why)
     novelty = det.values[:, det.names.index("residual")]
@@ -200,6 +202,7 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
               "reference_frequencies_hz": ref.frequencies_hz.tolist(), "tracking_tolerance": ref.tolerance.tolist(),
               "reference_presence": ref.presence.tolist(),
               "baseline_tests_used": int(b_idx.size), "baseline_outliers": outliers.to_dict(series.files),
+              "baseline_sessions": None if sessions is None else sessions.to_dict([series.files[i] for i in b_idx]),
               "frequency_estimators": None if choice is None else choice.to_dict(),
               "missing_entries": "imputed by their conditional mean given the test's other features under the "
                                  "baseline's Gaussian (regression: about the conditions' prediction)"}

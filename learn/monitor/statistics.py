@@ -40,15 +40,17 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from learn.monitor.alarm_threshold import TAIL_SHARE, Threshold, _folds, missing_evidence, threshold, training_size
+from learn.monitor.alarm_threshold import (TAIL_SHARE, Threshold, _folds, minimum_baseline, missing_evidence, threshold,
+                                           training_size)
 from learn.monitor.normal_models import PCARemoval, Regression, _impute
 from learn.monitor.per_mode import per_mode_index, per_mode_threshold, per_mode_z
+from learn.monitor.sessions import session_folds
 from learn.monitor.union_calibration import union_rates, value_at
 from physics.errors import ConfigError
 from datetime import datetime
 
 __all__ = ["COMBINATIONS", "DEFAULT_STATISTICS", "PATTERN_MIN", "SHARES", "SHIFT_SIDES", "STATISTICS", "Detection",
-           "detect", "environmental", "held_out_statistics", "covers_seasons", "family_rates",
+           "detect", "environmental", "held_out_folds", "held_out_statistics", "covers_seasons", "family_rates",
            "joint_rate", "joint_rates", "season_warning", "shift_weights", "sidak_rate", "statistics_of"]
 
 #: The detector's statistics (module docstring).
@@ -138,9 +140,27 @@ def shift_fraction(model, X, C=None) -> np.ndarray:
     return (_impute(X, centre, cov) - centre) @ w
 
 
+def held_out_folds(X, C=None) -> tuple:
+    """``(folds, n_train, n_environment)``: the held-out folds of the baseline ``X`` (n, p) (conditions ``C`` (n, q)),
+    the fewest tests a fold's model is fitted on, and the number of independent values of the environment among
+    them. A baseline of several sessions (:mod:`learn.monitor.sessions`, each leaving the others at least
+    :func:`~learn.monitor.alarm_threshold.minimum_baseline` less one tests) is held out a session at a time, and
+    its environment has one value per session (``n_environment`` the sessions a fold's model sees: the statistics
+    of the environment are judged by a law of as many values); otherwise the folds of
+    :func:`~learn.monitor.alarm_threshold.held_out_novelty` (leave-one-out up to
+    :data:`~learn.monitor.alarm_threshold.LOO_MAX` tests), each test a value."""
+    X = np.asarray(X, float)
+    q = 0 if C is None else np.asarray(C).reshape(len(X), -1).shape[1]
+    folds = session_folds(X, minimum_baseline(X.shape[1], q) - 1)
+    if folds is None:
+        return _folds(len(X)), training_size(len(X)), training_size(len(X))
+    return folds, len(X) - max(len(f) for f in folds), len(folds) - 1
+
+
 def held_out_statistics(make_model, X, C=None, pattern=None) -> dict:
     """:func:`statistics_of` of every baseline test by a model fitted on the other baseline tests (the folds of
-    :func:`~learn.monitor.alarm_threshold.held_out_novelty`), the residual index with its missing-mode evidence.
+    :func:`held_out_folds`: a session at a time when the baseline holds several, else leave-one-out), the residual
+    index with its missing-mode evidence.
 
     ``pattern`` (bool (p,)): the indices of a set of modes found instead, without the evidence: each baseline test
     whose missing modes lie within ``pattern`` (all of them when fewer than :data:`PATTERN_MIN` do) scored with the
@@ -153,7 +173,7 @@ def held_out_statistics(make_model, X, C=None, pattern=None) -> dict:
         rows = ~(~np.isfinite(X) & ~pattern).any(axis=1)
         if rows.sum() < PATTERN_MIN:
             rows[:] = True
-    for held in _folds(len(X)):
+    for held in held_out_folds(X, C)[0]:
         train = np.setdiff1d(np.arange(len(X)), held)
         held = held[rows[held]]
         if not held.size:
@@ -336,28 +356,34 @@ def _thresholds(model, held, names, each, n_train, n_conditions, missing=0, evid
     (:data:`SHIFT_SIDES` when None; a side with fewer than 2
     held-out tests: the two-sided threshold for both). ``missing``: modes dropped (the residual's degrees of
     freedom less by as many); ``evidence``: added to the residual's threshold (the missing-mode evidence of a set of
-    modes found that the baseline period holds often: a normal set)."""
+    modes found that the baseline period holds often: a normal set). ``n_train``: the tests each held-out model is
+    fitted on, or ``(tests, environment values)`` (:func:`held_out_folds`), the latter for the statistics of the
+    environment."""
     out = {}
+    n_tests, n_env = (n_train, n_train) if np.isscalar(n_train) else n_train
     for nm in names:
         hv, hvec = held[nm]
-        tail = TAIL_SHARE if environmental(model, nm) else 1.0
+        # the environment of a baseline of sessions: a law of as many values, fitted to all of them (a truncated
+        # tail of so few degrees of freedom is a power law, which holds no scale)
+        tail = TAIL_SHARE if environmental(model, nm) and n_env == n_tests else 1.0
+        n_fit = n_env if environmental(model, nm) else n_tests
         if nm == "residual":
-            t = threshold(hv, each[nm], max(model.dof_ - missing, 1), n_train, n_conditions, tail)
+            t = threshold(hv, each[nm], max(model.dof_ - missing, 1), n_fit, n_conditions, tail)
             out[nm] = [replace(t, value=t.value + evidence, law_value=t.law_value + evidence,
                                empirical_quantile=t.empirical_quantile + evidence)]
         elif nm == "environment":
-            out[nm] = [threshold(hv, each[nm], hvec.shape[1], n_train, n_conditions, tail)]
+            out[nm] = [threshold(hv, each[nm], hvec.shape[1], n_fit, n_conditions, tail)]
         elif nm == "mode":
-            out[nm] = [per_mode_threshold(hvec, each[nm], n_train, n_conditions, tail)]
+            out[nm] = [per_mode_threshold(hvec, each[nm], n_fit, n_conditions, tail)]
         else:
             z = hvec[:, 0][np.isfinite(hvec[:, 0])]
             sides = []
             for sign, part in zip((-1.0, 1.0), SHIFT_SIDES if split is None else split):
                 y = (sign * z)[sign * z > 0] ** 2
                 if y.size < 2:
-                    sides = [threshold(z**2, each[nm], 1, n_train, n_conditions, tail)] * 2
+                    sides = [threshold(z**2, each[nm], 1, n_fit, n_conditions, tail)] * 2
                     break
-                sides.append(threshold(y, each[nm] * part, 1, n_train, n_conditions, tail, y.size / z.size))
+                sides.append(threshold(y, each[nm] * part, 1, n_fit, n_conditions, tail, y.size / z.size))
             out[nm] = sides
     return out
 
@@ -421,7 +447,7 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
                 vec[rest] = now[nm][1]
             vectors[nm] = vec
     rates = family_rates(values[b_idx], rate, names, combination, shares) if names else np.zeros(0)
-    n_train = training_size(len(b_idx))
+    n_train = held_out_folds(X[b_idx], Cb)[1:]
     calibration = {"joint": "copula", "equal": "copula"}.get(combination, "")
     if combination == "joint" and len(names) > 1:
         union = _union_rates(model, held, names, rate, rates, n_train, n_conditions, shares, sides)

@@ -141,3 +141,27 @@ def test_an_alarm_gets_the_explanations_with_the_measured_scatter_and_the_networ
     np.testing.assert_allclose(sigma, res["normal_variation"]["per_mode_std"], rtol=1e-12)
     assert [h["name"] for h in v["hypotheses"]][0] != "intact"
     assert v["network"]["probability_damaged"] is not None and v["network_baselines"] == 18
+
+
+def test_a_baseline_of_sessions_is_named_and_a_later_session_like_them_is_no_alarm(tmp_path, capsys):
+    """Four baseline sessions of 10 tests (every mode moved alike per session), then a session beyond their range
+    and one with mode 3 moved 0.2 % within it: the sessions named in monitor.json and the report, the later session
+    no alarm, the change alarmed."""
+    rng = np.random.default_rng(7)
+    offsets = [0.002, 0.005, -0.001, -0.004, 0.009, 0.009]
+    files = []
+    for j, o in enumerate(offsets):
+        for k in range(10):
+            f = np.array([20.0, 130.0, 370.0]) * np.exp(o + 1e-5 * rng.standard_normal(3))
+            f[2] *= 1 - 0.002 * (j == 5)
+            path = tmp_path / f"test_{10 * j + k:03d}.json"
+            path.write_text(json.dumps({"natural_frequencies_hz": f.tolist()}))
+            files.append(str(path))
+    out = tmp_path / "mon"
+    code, res, err = run_json(capsys, ["monitor", *files, "--baseline-tests", "40", "--out", str(out), "--json"])
+    assert code == 0, err
+    sessions = res["normal_variation"]["baseline_sessions"]
+    assert sessions["sizes"] == [10] * 4 and sessions["first_tests"] == files[0:40:10]
+    status = [r["status"] for r in res["tests"]]
+    assert status[40:50] == ["no alarm"] * 10 and status[50:] == ["alarm"] * 10
+    assert "The baseline period holds 4 sessions of 10/10/10/10 tests" in (out / "report.md").read_text()
