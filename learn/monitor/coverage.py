@@ -206,7 +206,9 @@ def baseline_scatter(rows: list, has_times: bool = False) -> Scatter:
     indices of tests the model did not see, and both without the alarms: the same truncation at the threshold), and
     per mode the ratio of their root-mean-square z-scores (the baseline's in sample: smaller out of sample after a
     latent model's removed factors, information only); a warning naming the ratio when it exceeds
-    :data:`SCATTER_RATIO_WARN` (the baseline period saw less of the normal variation than the later tests show)."""
+    :data:`SCATTER_RATIO_WARN` (the baseline period saw less of the normal variation than the later tests show).
+    With fewer than :data:`MIN_LATER` later tests that look healthy, no ratio; a warning when at least half of the
+    later judged tests (and :data:`MIN_LATER`) lie beyond the baseline's conditions (``extrapolated``)."""
 
     def z(sel):
         Z = np.array([[np.nan if v is None else v for v in r["mode_z_scores"]] for r in sel], float)
@@ -218,7 +220,15 @@ def baseline_scatter(rows: list, has_times: bool = False) -> Scatter:
     tb = np.array([r["time_value"] for r in rows if r["baseline"]], float)
     spans = (float(np.ptp(tb)), float(np.ptp(t))) if has_times and tb.size else (None, None)
     if len(later) < MIN_LATER or len(base) < 2:
-        return Scatter(None, [], len(later), *spans, None)
+        judged = [r for r in rows if not r["baseline"] and r["status"] not in ("not identified", "not judged")]
+        beyond = sum(bool(r.get("extrapolated")) for r in judged)
+        warning = None
+        if len(judged) >= MIN_LATER and 2 * beyond >= len(judged):
+            warning = (f"{len(later)} of the {len(judged)} later tests look healthy and {beyond} lie beyond the "
+                       "baseline's conditions (extrapolated): the baseline period saw less of the normal variation "
+                       "than the later tests show (too short, or one session), or the structure changed from the "
+                       "first alarm on (docs/monitoring.md: choosing a baseline period)")
+        return Scatter(None, [], len(later), *spans, warning)
     ratio = float(np.sqrt(np.mean([r["novelty"] for r in later]) / np.mean([r["novelty"] for r in base])))
     zb, zl = z(base), z(later)
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -73,3 +73,20 @@ def test_a_new_session_like_the_baseline_ones_is_no_alarm_and_a_change_within_it
     monkeypatch.setattr(statistics, "session_folds", lambda X, min_training=0: None)
     assert _new_session_alarms(np.random.default_rng(3), 25) > 0.15
 
+
+def test_a_baseline_of_one_session_is_named_when_no_later_test_looks_healthy(tmp_path):
+    """Later sessions 0.3 % apart against a one-session baseline of 0.03 % scatter: every later test is flagged, so
+    there is no scatter ratio; the later tests beyond the baseline's conditions name the baseline too narrow."""
+    from experiments.benches.bench_monitor_sessions import session_series
+    from learn.monitor import IdentificationSettings, SeriesInput, monitor_series
+    from learn.monitor.coverage import baseline_scatter
+
+    files = session_series(tmp_path, 0.003, 0)
+    res = monitor_series(SeriesInput.from_files(files), 30, IdentificationSettings(), progress=False, chart="none")
+    assert not any(r["status"] == "no alarm" for r in res.rows[30:])
+    sc = baseline_scatter(res.rows)
+    assert sc.ratio is None and sc.warning.startswith("0 of the 90 later tests look healthy and 90 lie beyond")
+    within = [{**r, "extrapolated": r["baseline"] or k % 2 == 0} for k, r in enumerate(res.rows)]
+    assert baseline_scatter(within).warning.startswith("0 of the 90 later tests look healthy and 45 lie beyond")
+    within = [{**r, "extrapolated": r["baseline"] or k % 3 == 0} for k, r in enumerate(res.rows)]
+    assert baseline_scatter(within).warning is None                 # a third beyond: no warning
