@@ -34,7 +34,7 @@ CACHE_FORMAT = "beam-damage-monitor-cache/17"
 #: Format tag of a narrow-band re-identification's entry (:func:`cached_identification` with ``narrow_hz``), part of
 #: its key beside :data:`CACHE_FORMAT`: a change of the identification of a mode known to lie in its band (SSI-cov's
 #: ``mode_in_band``) changes it and re-identifies those entries alone.
-NARROW_FORMAT = 4
+NARROW_FORMAT = 9
 
 
 @dataclass(frozen=True)

@@ -10,8 +10,8 @@ from physics.errors import ConvergenceError
 from physics.modal import eigenvalues_from_modal
 
 __all__ = ["MAX_DAMPING", "MISSED_SHARE", "NO_STABLE_POLE", "STABILITY_CODES", "MissedModes", "SelectedPoles",
-           "StabilisationDiagram", "damping_resolution", "missed_clusters", "missed_modes", "select_poles",
-           "stability_status", "unresolved"]
+           "StabilisationDiagram", "damping_resolution", "missed_clusters", "missed_modes", "select_known_mode",
+           "select_poles", "stability_status", "steadiest_text", "unresolved"]
 
 #: Largest damping ratio of a physical pole (LSCF and SSI-cov poles, peaks of peak picking and the circle fit): a
 #: broader one is a computational pole or a bump of the noise floor.
@@ -200,6 +200,23 @@ def select_poles(diagram: StabilisationDiagram, n_modes=None, min_status=4, freq
     return _summarise_clusters(diagram, chosen, flags[:len(chosen)])
 
 
+def select_known_mode(diagram: StabilisationDiagram, peaks_hz=(), peak_tol_hz=None) -> SelectedPoles:
+    """:func:`select_poles` in a band known to hold a mode (a series' reference mode identified again in its own
+    band); where it finds no pole stable enough, the one cluster of poles steady in frequency and shape (status >=
+    3), seeded at any model order: a weak mode's damping wanders from one order to the next, and its pole splits at
+    the high orders (noise modelled), where :func:`select_poles` seeds, so that only the low orders hold it. Two or
+    more such clusters are no reading of the one mode (the band's noise modelled at several frequencies).
+
+    Raises :class:`ConvergenceError` when neither finds a pole, or the second finds several."""
+    try:
+        return select_poles(diagram, peaks_hz=peaks_hz, peak_tol_hz=peak_tol_hz)
+    except ConvergenceError:
+        sel = select_poles(diagram, min_status=3, seed_orders=1.0, peaks_hz=peaks_hz, peak_tol_hz=peak_tol_hz)
+    if sel.natural_frequencies_hz.size != 1:
+        raise ConvergenceError(NO_STABLE_POLE)
+    return sel
+
+
 def _selection(d: StabilisationDiagram, min_status, freq_tol, damping_tol, min_count, seed_orders, peaks_hz,
                peak_tol_hz, weak_min_count):
     """The rules of :func:`select_poles` (before ``n_modes``): the clusters chosen, those kept weakly stable and
@@ -354,3 +371,21 @@ def _summarise_clusters(d: StabilisationDiagram, chosen, weak) -> SelectedPoles:
     o = np.argsort(fn)
     lam = eigenvalues_from_modal(fn[o], zeta[o])
     return SelectedPoles(lam, fn[o], zeta[o], f_std[o], z_std[o], count[o], mpf[o], np.asarray(weak, bool)[o])
+
+
+def steadiest_text(diagram: StabilisationDiagram, n: int = 3) -> str:
+    """What a failed selection saw: the ``n`` frequencies whose poles kept their frequency and shape (status >= 3)
+    over the most model orders, and what to try; empty without such poles."""
+    d = diagram
+    ok = d.status >= 3
+    if not ok.any():
+        return ""
+    key = np.round(np.log(d.natural_frequencies_hz[ok]) / np.log1p(0.01)).astype(int)    # 1 % bins
+    bins, inverse = np.unique(key, return_inverse=True)
+    orders = np.array([np.unique(d.order[ok][inverse == b]).size for b in range(bins.size)])
+    top = np.argsort(-orders, kind="stable")[:n]
+    total = np.unique(d.order).size
+    seen = ", ".join(f"{np.median(d.natural_frequencies_hz[ok][inverse == b]):.4g} Hz ({orders[b]} of {total} "
+                     "orders)" for b in top)
+    return (f"; the steadiest poles (frequency and shape): {seen}; try --band around one of them, or --method fdd "
+            "(peaks of the spectra)")

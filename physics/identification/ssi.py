@@ -30,7 +30,8 @@ from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.peak_seeds import SeededModes
 from physics.identification.peak_warning import warn_unexplained_peaks
 from physics.identification.poles import (MAX_DAMPING, NO_STABLE_POLE, StabilisationDiagram, missed_clusters,
-                                         missed_modes, select_poles)
+                                         missed_modes, select_known_mode, select_poles,
+                                         steadiest_text)
 from physics.identification.record_checks import check_periods, check_records
 from physics.identification.ssi_free_response import ModeColumns, refine_free_response
 from physics.identification.subspace import poles_of_order, subspace_diagram
@@ -209,24 +210,6 @@ def _segment_modes(cor, block_rows, order, band_hz, fn, shapes, max_damping):
     return f_seg, z_seg
 
 
-def steadiest_text(diagram: StabilisationDiagram, n: int = 3) -> str:
-    """What a failed selection saw: the ``n`` frequencies whose poles kept their frequency and shape (status >= 3)
-    over the most model orders, and what to try; empty without such poles."""
-    d = diagram
-    ok = d.status >= 3
-    if not ok.any():
-        return ""
-    key = np.round(np.log(d.natural_frequencies_hz[ok]) / np.log1p(0.01)).astype(int)    # 1 % bins
-    bins, inverse = np.unique(key, return_inverse=True)
-    orders = np.array([np.unique(d.order[ok][inverse == b]).size for b in range(bins.size)])
-    top = np.argsort(-orders, kind="stable")[:n]
-    total = np.unique(d.order).size
-    seen = ", ".join(f"{np.median(d.natural_frequencies_hz[ok][inverse == b]):.4g} Hz ({orders[b]} of {total} "
-                     "orders)" for b in top)
-    return (f"; the steadiest poles (frequency and shape): {seen}; try --band around one of them, or --method fdd "
-            "(peaks of the spectra)")
-
-
 #: Periods of the lowest clear peak of a pass's band that its block rows cover (its correlation lags twice as many).
 BLOCK_ROW_PERIODS = 1
 #: Largest block Toeplitz dimension (block rows x channels) of a pass with automatic block rows: bounds the SVD.
@@ -339,8 +322,10 @@ def _pass_sizes(fs_dec, n_dec, lowest_hz, n_peaks, n_ch, n_ref, max_order, block
 
 
 def _ssi_pass(checked, band, peaks, tol_hz, max_order, block_rows, references, n_segments, max_damping,
-              chunk_samples, where, mode_in_band=False):
-    """One pass over ``band``: the pass and its selected modes (:class:`_PassMode`; none when no pole is stable)."""
+              chunk_samples, where, mode_in_band=False, known_mode=False):
+    """One pass over ``band``: the pass and its selected modes (:class:`_PassMode`; none when no pole is stable);
+    ``known_mode``: the band of a stationary record of several channels known to hold a mode
+    (:func:`~physics.identification.poles.select_known_mode`)."""
     fs = checked.sampling_frequency_hz
     n_ch = checked.signals.shape[0]
     n_ref = n_ch if references is None else len(references)
@@ -366,7 +351,8 @@ def _ssi_pass(checked, band, peaks, tol_hz, max_order, block_rows, references, n
     this = SSIPass(band, i, orders, diagram, cor)
     try:
         rescue = inside & peaks.above_floor             # a weakly stable pole is kept at a resonance's peak only
-        sel = select_poles(diagram, peaks_hz=peaks.frequency_hz[rescue], peak_tol_hz=tol_hz[rescue])
+        sel = (select_known_mode if known_mode else select_poles)(diagram, peaks_hz=peaks.frequency_hz[rescue],
+                                                                  peak_tol_hz=tol_hz[rescue])
     except ConvergenceError:
         return this, []
     shapes = unit_shapes(sel.participation.T)
@@ -505,11 +491,11 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     where : str
         Name of the record in error messages.
     mode_in_band : bool
-        A mode is known to lie in the band (a series' reference mode, re-identified in its own band): a damping
-        change is judged against at least the damping the record resolves
-        (:func:`~physics.identification.poles.damping_resolution`), so that a lightly damped mode of a short
-        record is stable. Without it, against the damping alone: a harmonic of the excitation, whose damping is
-        zero within the noise, is then unstable and stays a clear peak without a mode.
+        A mode is known to lie in the band (a series' reference mode identified again in its band): a damping change
+        is judged against at least the damping the record resolves (:func:`~.poles.damping_resolution`; else a
+        harmonic, zero damping within the noise, is unstable: a peak without a mode); in a record of several
+        channels that is no free response, where no pole is stable enough, those steady in frequency and shape
+        (:func:`~physics.identification.poles.select_known_mode`; one channel has no shape to be steady).
     refine_decays : bool, optional
         Refine the modes in their bands of the record's decays (module docstring). None: when the record is a free
         response (:func:`~physics.identification.decays.free_response`); True: the caller has judged it one; False:
@@ -534,10 +520,12 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     tol_hz = peaks.tolerance_hz
     passes, modes, missed = [], [], []
     hi, lag_before_s = band[1], 0.0
+    free = free_response(checked).free if refine_decays is None or mode_in_band else False
     for k in range(MAX_PASSES):
         try:
             this, found = _ssi_pass(checked, (band[0], hi), peaks, tol_hz, max_order, block_rows, references,
-                                    n_segments, max_damping, chunk_samples, where, mode_in_band)
+                                    n_segments, max_damping, chunk_samples, where, mode_in_band,
+                                    mode_in_band and not free and checked.signals.shape[0] > 1)
         except ShapeError:
             if not k:
                 raise
@@ -575,9 +563,7 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     f_std, z_std = _standard_error(f_seg, n_seen), _standard_error(z_seg, n_seen)
     cols = ModeColumns(eigenvalues_from_modal(fn, zeta), f_std, z_std, weak, shapes, f_seg, z_seg)
     bands, seeded = None, None
-    if refine_decays is None:
-        refine_decays = free_response(checked).free
-    if refine_decays:
+    if refine_decays if refine_decays is not None else free:
         bands, seeded, cols = refine_free_response(checked, cols, sv, band, n_modes, max_damping)
     lam, f_std, z_std, weak, shapes, f_seg, z_seg = cols
     if bands is not None:                               # refined: the poles' own frequencies and damping

@@ -69,7 +69,7 @@ def test_a_failed_selection_names_the_steadiest_poles_and_what_to_try():
     """Poles whose frequency and shape hold over orders (status 3) but whose damping does not: the error names
     them, most orders first, with the orders counted over the whole diagram."""
     from physics.identification.poles import StabilisationDiagram
-    from physics.identification.ssi import steadiest_text
+    from physics.identification.poles import steadiest_text
 
     order = np.array([1, 2, 3, 4, 5, 6, 4, 5, 6])
     fn = np.array([100.0, 100.2, 99.9, 100.1, 100.0, 100.3, 250.0, 250.5, 260.0])
