@@ -94,6 +94,8 @@ def baseline_sessions(X, min_training: int = 0) -> Sessions | None:
     D = (X[:, keep] - X[:, keep].mean(axis=0)) / sc[keep]
     s = D @ np.linalg.svd(D, full_matrices=False)[2][0]
     unit = np.sqrt(2.0) * _scatter(s[:, None])[0]
+    if not unit > 0:                         # most successive tests alike (readings on a grid of lines)
+        return None
     step = np.abs(np.diff(s)) / unit
     edges = [0, *(np.flatnonzero(step > JUMP_SIGMAS) + 1), n]
     k = 1

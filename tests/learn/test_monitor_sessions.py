@@ -34,7 +34,7 @@ def test_the_sessions_are_read_at_the_jumps_between_runs_of_tests():
     assert baseline_sessions(X) is None
 
 
-@pytest.mark.parametrize("case", ["noise", "drift", "outlier", "short run", "missing mode"])
+@pytest.mark.parametrize("case", ["noise", "drift", "outlier", "short run", "missing mode", "grid"])
 def test_one_session_is_read_where_no_run_of_tests_stands_apart(case):
     rng = np.random.default_rng(2)
     hits = 0
@@ -46,6 +46,8 @@ def test_one_session_is_read_where_no_run_of_tests_stands_apart(case):
             X[17] += 50e-4
         elif case == "short run":
             X[20:22] += 50e-4                             # two tests apart: shorter than a session
+        elif case == "grid":                              # readings on lines, most successive tests alike
+            X = np.log(np.round(np.exp(X) / 0.05) * 0.05)
         elif case == "missing mode":
             X[20:] += 50e-4                               # two sessions, read on the modes every test holds
             X[::3, 1] = np.nan
