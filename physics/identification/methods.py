@@ -88,9 +88,9 @@ def _fit_receptance(estimator, frf: MeasuredFRF, drive, n_modes):
     return est, synth, None, np.zeros(0)
 
 
-def _fit_ssi(signals, fs, band_hz, n_modes, where, max_order, mode_in_band=False, refine_decays=None):
+def _fit_ssi(signals, fs, band_hz, n_modes, where, max_order, mode_in_band=False, refine_decays=None, free=None):
     res = identify_ssi(signals, fs, band_hz, n_modes, max_order=max_order, where=where, mode_in_band=mode_in_band,
-                       refine_decays=refine_decays)
+                       refine_decays=refine_decays, free=free)
     return res.estimate, res.diagram
 
 

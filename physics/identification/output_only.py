@@ -187,13 +187,15 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
     kinds = set(records.quantities)
     quantity = kinds.pop() if len(kinds) == 1 and kinds <= set(PEAK_EXPONENT) else None
 
-    def fit(name, signals, refine_decays=None):
+    def fit(name, signals, refine_decays=None, free=None):
         spec = METHODS[name]
         options = {k: {"max_order": max_order}[k] for k in spec.options}
         if mode_in_band and "mode_in_band" in signature(spec.fit).parameters:
             options["mode_in_band"] = True
         if refine_decays is not None and "refine_decays" in signature(spec.fit).parameters:
             options["refine_decays"] = refine_decays          # the verdict judged once, here
+        if free is not None and "free" in signature(spec.fit).parameters:
+            options["free"] = free
         if "quantity" in signature(spec.fit).parameters:          # the peak's conversion to f_n (fftpeak)
             options["quantity"] = quantity
         return spec.fit(signals, fs, band_hz, n_modes, where, **options)
@@ -232,20 +234,20 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
             warnings.warn(f"{where}: {verdict.text}; {method} assumes a stationary response: its spectra or "
                           f"correlations averaged over the whole record dilute the decays, so {effect}; --method "
                           "era or fftpeak read free decays", UserWarning, stacklevel=2)
-        return result(*fit(method, checked, refine_decays=verdict.free))
+        return result(*fit(method, checked, refine_decays=verdict.free, free=verdict.free))
     picked = FREE_RESPONSE_METHOD if verdict.free else STATIONARY_METHOD
     why = (f"picked {picked}: response records without a force channel, {verdict.text}"
            + ("" if verdict.free else " (identified as a stationary response)"))
     try:
         # SSI-cov picked for a stationary record has no decays to refine on; tried where era found no mode on a
         # free one, it keeps its own poles (docs/identification.md)
-        est, diagram = fit(picked, checked, refine_decays=False)
+        est, diagram = fit(picked, checked, refine_decays=False, free=verdict.free)
     except (ConvergenceError, ShapeError) as first:
         other = STATIONARY_METHOD if verdict.free else FREE_RESPONSE_METHOD
         if other == FREE_RESPONSE_METHOD and not verdict.decays.starts.size:
             raise _tried(first, f"{why}; {other} not tried: the record holds no decay") from None
         try:
-            est, diagram = fit(other, checked, refine_decays=False)
+            est, diagram = fit(other, checked, refine_decays=False, free=verdict.free)
         except (ConvergenceError, ShapeError):
             raise _tried(first, f"{why}; {other} found no mode either") from None
         why = f"{why}; {picked} found no mode ({first}), so {other}"

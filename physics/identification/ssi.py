@@ -449,7 +449,7 @@ def _standard_error(seg: np.ndarray, n_seen: np.ndarray) -> np.ndarray:
 
 def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max_order=None, block_rows=None,
                  references=None, n_segments=8, max_damping=MAX_DAMPING, chunk_samples=8192,
-                 where="record", mode_in_band=False, refine_decays=None) -> SSIIdentification:
+                 where="record", mode_in_band=False, refine_decays=None, free=None) -> SSIIdentification:
     """SSI-cov identification of a multichannel response record (output-only), sized to the record's spectrum.
 
     The clear peaks of the record's singular-value spectrum (:func:`~physics.identification.fdd.clear_peaks`) size
@@ -500,6 +500,9 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
         Refine the modes in their bands of the record's decays (module docstring). None: when the record is a free
         response (:func:`~physics.identification.decays.free_response`); True: the caller has judged it one; False:
         SSI-cov's poles kept (``identify_records``' fallback where ``era`` found no mode).
+    free : bool, optional
+        The caller's :func:`~physics.identification.decays.free_response` verdict on the record (None: judged here
+        where ``refine_decays`` or ``mode_in_band`` needs it).
 
     Returns
     -------
@@ -520,12 +523,14 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     tol_hz = peaks.tolerance_hz
     passes, modes, missed = [], [], []
     hi, lag_before_s = band[1], 0.0
-    free = free_response(checked).free if refine_decays is None or mode_in_band else False
+    several = checked.signals.shape[0] > 1
+    if free is None and (refine_decays is None or (mode_in_band and several)):
+        free = free_response(checked).free
     for k in range(MAX_PASSES):
         try:
             this, found = _ssi_pass(checked, (band[0], hi), peaks, tol_hz, max_order, block_rows, references,
                                     n_segments, max_damping, chunk_samples, where, mode_in_band,
-                                    mode_in_band and not free and checked.signals.shape[0] > 1)
+                                    mode_in_band and several and not free)
         except ShapeError:
             if not k:
                 raise
