@@ -47,11 +47,6 @@ class Sessions:
     jump_sigmas: tuple
     explained: float
 
-    @property
-    def labels(self) -> np.ndarray:
-        """Each baseline test's session (0-based), (n,)."""
-        return np.repeat(np.arange(len(self.sizes)), self.sizes)
-
     def folds(self) -> list:
         """The baseline positions of each session, one array per session."""
         return [np.arange(s, s + k) for s, k in zip(self.starts, self.sizes)]

@@ -141,19 +141,19 @@ def shift_fraction(model, X, C=None) -> np.ndarray:
 
 
 def held_out_folds(X, C=None) -> tuple:
-    """``(folds, n_train, n_environment)``: the held-out folds of the baseline ``X`` (n, p) (conditions ``C`` (n, q)),
-    the fewest tests a fold's model is fitted on, and the number of independent values of the environment among
-    them. A baseline of several sessions (:mod:`learn.monitor.sessions`, each leaving the others at least
+    """``(folds, n_train, n_sessions)``: the held-out folds of the baseline ``X`` (n, p) (conditions ``C`` (n, q)),
+    the fewest tests a fold's model is fitted on, and the sessions a fold's model sees (None without sessions). A
+    baseline of several sessions (:mod:`learn.monitor.sessions`, each leaving the others at least
     :func:`~learn.monitor.alarm_threshold.minimum_baseline` less one tests) is held out a session at a time, and
-    its environment has one value per session (``n_environment`` the sessions a fold's model sees: the statistics
-    of the environment are judged by a law of as many values); otherwise the folds of
+    its environment has one value per session (the statistics of the environment are judged by a law of
+    ``n_sessions`` values); otherwise the folds of
     :func:`~learn.monitor.alarm_threshold.held_out_novelty` (leave-one-out up to
     :data:`~learn.monitor.alarm_threshold.LOO_MAX` tests), each test a value."""
     X = np.asarray(X, float)
     q = 0 if C is None else np.asarray(C).reshape(len(X), -1).shape[1]
     folds = session_folds(X, minimum_baseline(X.shape[1], q) - 1)
     if folds is None:
-        return _folds(len(X)), training_size(len(X)), training_size(len(X))
+        return _folds(len(X)), training_size(len(X)), None
     return folds, len(X) - max(len(f) for f in folds), len(folds) - 1
 
 
@@ -357,16 +357,17 @@ def _thresholds(model, held, names, each, n_train, n_conditions, missing=0, evid
     held-out tests: the two-sided threshold for both). ``missing``: modes dropped (the residual's degrees of
     freedom less by as many); ``evidence``: added to the residual's threshold (the missing-mode evidence of a set of
     modes found that the baseline period holds often: a normal set). ``n_train``: the tests each held-out model is
-    fitted on, or ``(tests, environment values)`` (:func:`held_out_folds`), the latter for the statistics of the
-    environment."""
+    fitted on, or ``(tests, sessions)`` (:func:`held_out_folds`; sessions None: each test a value of the
+    environment), the latter for the statistics of the environment."""
     out = {}
-    n_tests, n_env = (n_train, n_train) if np.isscalar(n_train) else n_train
+    n_tests, n_sessions = (n_train, None) if np.isscalar(n_train) else n_train
     for nm in names:
         hv, hvec = held[nm]
         # the environment of a baseline of sessions: a law of as many values, fitted to all of them (a truncated
         # tail of so few degrees of freedom is a power law, which holds no scale)
-        tail = TAIL_SHARE if environmental(model, nm) and n_env == n_tests else 1.0
-        n_fit = n_env if environmental(model, nm) else n_tests
+        sessions = environmental(model, nm) and n_sessions is not None
+        tail = TAIL_SHARE if environmental(model, nm) and not sessions else 1.0
+        n_fit = n_sessions if sessions else n_tests
         if nm == "residual":
             t = threshold(hv, each[nm], max(model.dof_ - missing, 1), n_fit, n_conditions, tail)
             out[nm] = [replace(t, value=t.value + evidence, law_value=t.law_value + evidence,
