@@ -21,17 +21,16 @@ class FFTBeyond:
     Attributes
     ----------
     chosen : ndarray bool (m,)       the modes whose frequency is the FFT peak
-    in_band : ndarray bool (n, m)    the record's FFT power has a local maximum in the mode's band (the chosen
-                                     estimator read the mode; :attr:`FrequencyChoice.fft_hz` finite)
-    lines_hz : ndarray (n, m, 2)     the highest local maximum's line (Hz, the padded grid's; where the peak lies) in
-                                     the window below and the window above the band within the reach
-                                     (:func:`beyond_windows_hz`); NaN where none, for a mode not chosen and for a test
-                                     that is not response records
+    in_band : ndarray bool (n, m)    the record's FFT power has a peak in the mode's band (the chosen estimator read
+                                     the mode; :attr:`FrequencyChoice.fft_hz` finite)
+    peaks_hz : ndarray (n, m, 2)     the FFT peak (Hz, the vertex, as in the band) in the window below and the window
+                                     above the band within the reach (:func:`beyond_windows_hz`); NaN where none, for
+                                     a mode not chosen and for a test that is not response records
     """
 
     chosen: np.ndarray
     in_band: np.ndarray
-    lines_hz: np.ndarray
+    peaks_hz: np.ndarray
 
 
 def beyond_windows_hz(ref: ReferenceModes) -> np.ndarray:
@@ -46,21 +45,21 @@ def beyond_windows_hz(ref: ReferenceModes) -> np.ndarray:
 def fft_peaks_beyond(tests: list, files: list, ref: ReferenceModes, chosen, fft_hz, cache_dir=None,
                      workers: int = 1) -> FFTBeyond | None:
     """The FFT peaks beyond the bands of the ``chosen`` modes (bool (m,)) of each response record: in each window of
-    :func:`beyond_windows_hz`, the highest local maximum of the record's zero-padded FFT power, the criterion of the
-    peak in the band (:func:`learn.monitor.identification.cached_fft_peaks`, cached in ``cache_dir``; over
-    ``workers`` processes), as its line: a real maximum of the spectrum, never the value at the band's edge of a
-    peak lying further out. ``fft_hz`` (n, m): the FFT peaks in the bands (NaN: none). None when no mode is
-    chosen."""
+    :func:`beyond_windows_hz`, the FFT peak read as in the band: the highest local maximum of the record's
+    zero-padded FFT power whose vertex lies in the window (:func:`learn.monitor.identification.cached_fft_peaks`,
+    cached in ``cache_dir``; over ``workers`` processes): a real maximum of the spectrum, never the value at the
+    window's edge of a peak lying further out, and never one whose peak lies in the band. ``fft_hz`` (n, m): the FFT
+    peaks in the bands (NaN: none). None when no mode is chosen."""
     chosen = np.asarray(chosen, bool)
     if not chosen.any():
         return None
     n, m = len(tests), chosen.size
-    lines = np.full((n, m, 2), np.nan)
+    peaks = np.full((n, m, 2), np.nan)
     windows = beyond_windows_hz(ref)[chosen]                               # (c, 2, 2)
     rows = [i for i, t in enumerate(tests) if t is not None and t.kind == "response records"]
     if rows:
-        found = fft_peaks_of_files([files[i] for i in rows], windows.reshape(-1, 2), cache_dir, workers, line=True)
+        found = fft_peaks_of_files([files[i] for i in rows], windows.reshape(-1, 2), cache_dir, workers)
         found = found.reshape(len(rows), -1, 2)
         empty = windows[:, :, 1] <= windows[:, :, 0]                       # a band wider than its reach
-        lines[np.ix_(rows, np.flatnonzero(chosen))] = np.where(empty[None], np.nan, found)
-    return FFTBeyond(chosen, np.isfinite(np.asarray(fft_hz, float)) & chosen[None], lines)
+        peaks[np.ix_(rows, np.flatnonzero(chosen))] = np.where(empty[None], np.nan, found)
+    return FFTBeyond(chosen, np.isfinite(np.asarray(fft_hz, float)) & chosen[None], peaks)

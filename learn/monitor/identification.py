@@ -25,9 +25,9 @@ from physics.io import (FRF, MODAL, TIME, atomic_write_text, finite_or_none, for
 from physics.io.inputs import check_input_file
 from physics.modal import modal_parameters, undamped_modes
 
-__all__ = ["CACHE_FORMAT", "NARROW_FORMAT", "Failure", "IdentificationSettings", "IdentifiedModes", "cached_fft_peaks",
-           "cached_identification", "file_key", "identification_settings", "identify_test", "read_test",
-           "record_problem", "with_narrow_band_poles", "write_cache"]
+__all__ = ["CACHE_FORMAT", "FFT_FORMAT", "NARROW_FORMAT", "Failure", "IdentificationSettings", "IdentifiedModes",
+           "cached_fft_peaks", "cached_identification", "file_key", "identification_settings", "identify_test",
+           "read_test", "record_problem", "with_narrow_band_poles", "write_cache"]
 
 #: Format tag of a cache entry (a change of the identification or of the entry's fields changes it).
 CACHE_FORMAT = "beam-damage-monitor-cache/17"
@@ -35,6 +35,9 @@ CACHE_FORMAT = "beam-damage-monitor-cache/17"
 #: its key beside :data:`CACHE_FORMAT`: a change of the identification of a mode known to lie in its band (SSI-cov's
 #: ``mode_in_band``) changes it and re-identifies those entries alone.
 NARROW_FORMAT = 9
+#: Format tag of an FFT-peaks entry (:func:`cached_fft_peaks`), part of its key beside :data:`CACHE_FORMAT`: a change
+#: of :func:`physics.identification.fft_peak.fft_peaks` changes it and reads those entries alone again.
+FFT_FORMAT = 2
 
 
 @dataclass(frozen=True)
@@ -351,22 +354,21 @@ def cached_identification(path, settings: IdentificationSettings, cache_dir=None
     return modes, error, False
 
 
-def cached_fft_peaks(path, bands_hz, cache_dir=None, line: bool = False) -> np.ndarray:
-    """Shape (m,): a response record's zero-padded FFT peak (Hz) in each of ``bands_hz`` ((m, 2), Hz), the highest
-    local maximum of its FFT power there (:func:`physics.identification.fft_peak.fft_peaks`, its window chosen by
-    the record): its fitted vertex, or with ``line`` the local maximum's line of the padded grid
-    (:attr:`~physics.identification.fft_peak.FFTPeaks.line_hz`, where the peak lies); NaN where none lies there, or
+def cached_fft_peaks(path, bands_hz, cache_dir=None) -> np.ndarray:
+    """Shape (m,): a response record's zero-padded FFT peak (Hz) in each of ``bands_hz`` ((m, 2), Hz), the fitted
+    vertex of the highest local maximum of its FFT power whose vertex lies there
+    (:func:`physics.identification.fft_peak.fft_peaks`, its window chosen by the record); NaN where none does, or
     for a record that is refused.
 
-    With ``cache_dir``, read from ``cache_dir/<key>.json`` (:func:`file_key` of the file, the bands and ``line``) or,
-    once computed, written there atomically.
+    With ``cache_dir``, read from ``cache_dir/<key>.json`` (:func:`file_key` of the file, the bands and
+    :data:`FFT_FORMAT`) or, once computed, written there atomically.
     """
     bands = np.asarray(bands_hz, float).reshape(-1, 2)
-    what = "fftpeak_line_bands_hz" if line else "fftpeak_bands_hz"
+    what = "fftpeak_bands_hz"
     entry = None
     try:
         if cache_dir:
-            entry = Path(cache_dir) / f"{file_key(path, None, {what: bands.tolist()})}.json"
+            entry = Path(cache_dir) / f"{file_key(path, None, {what: bands.tolist(), 'rule': FFT_FORMAT})}.json"
         if (d := _entry(entry)) is not None:
             return np.array([np.nan if v is None else v for v in d["fft_hz"]], float)
     except (OSError, ValueError, KeyError, TypeError):
@@ -375,7 +377,7 @@ def cached_fft_peaks(path, bands_hz, cache_dir=None, line: bool = False) -> np.n
         rec = read_response_records(path)
         peaks = fft_peaks(rec.signals, rec.sampling_frequency_hz, bands.mean(axis=1),
                           0.5 * (bands[:, 1] - bands[:, 0]), where=str(path))
-        out = peaks.line_hz if line else peaks.frequency_hz
+        out = peaks.frequency_hz
     except (BeamDamageError, OSError):
         out = np.full(bands.shape[0], np.nan)
     if entry is not None:

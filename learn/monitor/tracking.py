@@ -511,7 +511,7 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
             continue
         unplaced[i] = bool((cols[i] < 0).all())
         free = np.setdiff1d(np.arange(t.frequencies_hz.size), cols[i][cols[i] >= 0])
-        peaks = np.zeros((0, 2)) if fft is None else np.asarray(fft.lines_hz[i], float)          # (m, 2)
+        peaks = np.zeros((0, 2)) if fft is None else np.asarray(fft.peaks_hz[i], float)          # (m, 2)
         owner, _ = np.nonzero(np.isfinite(peaks))
         f = np.r_[t.frequencies_hz[free], peaks[np.isfinite(peaks)]]   # the free poles, then the FFT peaks
         if f.size == 0:

@@ -23,10 +23,10 @@ def _one(path, settings: IdentificationSettings, cache_dir):
     return modes, error, pending
 
 
-def _fft_one(path, bands_hz, cache_dir, line=False):
+def _fft_one(path, bands_hz, cache_dir):
     """:func:`~learn.monitor.identification.cached_fft_peaks` of one file, with one BLAS thread."""
     with threadpool_limits(1):
-        return cached_fft_peaks(path, bands_hz, cache_dir, line)
+        return cached_fft_peaks(path, bands_hz, cache_dir)
 
 
 def _over_files(fn, args: list, workers: int, progress: bool, desc: str) -> list:
@@ -58,10 +58,10 @@ def identify_files(files: list, settings: IdentificationSettings, cache_dir=None
     return [r[0] for r in results], [r[1] for r in results], [e for r in results for e in r[2]]
 
 
-def fft_peaks_of_files(files: list, bands_hz, cache_dir=None, workers: int = 1, line: bool = False) -> np.ndarray:
-    """Shape (n, m): each response record's FFT peak (Hz; with ``line`` its local maximum's line) in each of
+def fft_peaks_of_files(files: list, bands_hz, cache_dir=None, workers: int = 1) -> np.ndarray:
+    """Shape (n, m): each response record's FFT peak (Hz) in each of
     ``bands_hz`` ((m, 2), Hz), NaN where none (:func:`~learn.monitor.identification.cached_fft_peaks`, cached in
     ``cache_dir``), over ``workers`` processes."""
     bands = np.asarray(bands_hz, float).reshape(-1, 2)
-    out = _over_files(_fft_one, [(path, bands, cache_dir, line) for path in files], workers, False, "FFT peaks")
+    out = _over_files(_fft_one, [(path, bands, cache_dir) for path in files], workers, False, "FFT peaks")
     return np.array(out, float).reshape(len(files), bands.shape[0])

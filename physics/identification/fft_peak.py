@@ -33,9 +33,9 @@ The window (``window="auto"``):
 * **Hann** for a *stationary* record (ambient response): its -31 dB side lobes (against -13 dB) keep a strong
   mode's leakage from moving a weak neighbour's peak.
 
-The peaks are found either near given frequencies (the highest local maximum within a tolerance) or at the clear
-peaks (:func:`~physics.identification.fdd.clear_peaks`, the peaks every output-only method answers for) of the
-record's spectrum: for a free decay, the whole record's FFT power averaged over three lines
+The peaks are found either near given frequencies (the highest local maximum whose vertex lies within a tolerance)
+or at the clear peaks (:func:`~physics.identification.fdd.clear_peaks`, the peaks every output-only method answers
+for) of the record's spectrum: for a free decay, the whole record's FFT power averaged over three lines
 (:func:`~physics.identification.decays.decay_spectrum`; a peak 10 dB above its valleys and above the level a
 noise line passes by chance over the band is clear too, :func:`~physics.identification.decay_peaks.decay_peaks`);
 for a stationary record, the averaged singular-value spectrum FDD reads. Each is refined on the fine grid. A free
@@ -89,7 +89,7 @@ class FFTPeaks:
     Attributes
     ----------
     frequency_hz : ndarray, shape (n_peaks,)
-        Peak frequency (the parabola's vertex); NaN where no local maximum lies within the tolerance.
+        Peak frequency (the parabola's vertex); NaN where no local maximum's vertex lies within the tolerance.
     natural_frequencies_hz : ndarray, shape (n_peaks,)
         Where the damping ratio is finite, ``frequency_hz (1 - 2 zeta^2)^(-k / 2)`` for the recorded quantity's
         exponent ``k`` (:data:`PEAK_EXPONENT`), or ``frequency_hz / sqrt(1 - zeta^2)`` (the analytic decay's damped
@@ -105,8 +105,7 @@ class FFTPeaks:
     grid_hz : float
         Line spacing of the zero-padded FFT.
     line_hz : ndarray, shape (n_peaks,)
-        The local maximum's line of the zero-padded grid (Hz), where the peak lies before its vertex is fitted;
-        NaN where none lies within the tolerance.
+        The local maximum's line of the zero-padded grid (Hz) whose vertex is the peak; NaN where there is none.
     """
 
     frequency_hz: np.ndarray
@@ -208,9 +207,11 @@ def fft_peaks(signals, sampling_frequency_hz, frequencies_hz, tolerance_hz, wind
     frequencies_hz : array_like, shape (n_peaks,)
         Where to look.
     tolerance_hz : float or array_like, shape (n_peaks,)
-        Half-width of the window around each frequency in which the highest local maximum of the FFT power is
-        the peak (the highest, not the nearest: on a stationary record's unaveraged periodogram the nearest
-        maximum is often a ripple on the resonance's flank); none there: NaN.
+        Half-width of the window around each frequency: the peak is the highest local maximum of the FFT power
+        (the highest, not the nearest: on a stationary record's unaveraged periodogram the nearest maximum is often
+        a ripple on the resonance's flank) whose vertex lies in the window, so that the window holds the frequency
+        returned (a wide, skewed peak's highest line can lie a third of its half-width from its vertex: on either
+        side of the window's edge); none: NaN.
     window : {"auto", "none", "hann"}
     pad : int
         Zero-padding factor (FFT length: next power of two of ``pad x n_samples``).
@@ -231,15 +232,21 @@ def fft_peaks(signals, sampling_frequency_hz, frequencies_hz, tolerance_hz, wind
     tol = np.broadcast_to(np.asarray(tolerance_hz, dtype=np.float64), target.shape)
     logp = np.log(np.maximum(power, np.finfo(float).tiny))
     maxima = np.nonzero((logp[1:-1] > logp[:-2]) & (logp[1:-1] >= logp[2:]))[0] + 1
-    lo = np.searchsorted(f[maxima], target - tol, side="left")
-    hi = np.searchsorted(f[maxima], target + tol, side="right")
-    k = np.array([maxima[a + np.argmax(logp[maxima[a:b]])] if b > a else 1 for a, b in zip(lo, hi)], int)
-    found = hi > lo                                     # one slice per peak: the highest maximum in its window
-    hw = half_power_bandwidth_hz(f, power, k, ratio=2.0, one_side="nan") / 2
-    width = np.where(np.isfinite(hw), hw, WINDOW_HALF_WIDTH[window] * fs / y.shape[1])
-    half_span = np.maximum(1, np.floor(TOP_FRACTION * width / df)).astype(int)
-    fp = np.where(found, _vertex(logp, k, half_span) * df, np.nan)
-    zeta = hw / np.where(found, fp, np.nan)
+    lo = np.searchsorted(f[maxima], target - 2 * tol, side="left")
+    hi = np.searchsorted(f[maxima], target + 2 * tol, side="right")
+    lobe_hz = WINDOW_HALF_WIDTH[window] * fs / y.shape[1]
+    k, fp, hw = np.ones(target.size, int), np.full(target.size, np.nan), np.full(target.size, np.nan)
+    for j, (a, b) in enumerate(zip(lo, hi)):            # one window per peak: its highest maximum whose vertex
+        cand = maxima[a:b]                              # lies in it, among the maxima within twice the window
+        for c in cand[np.argsort(-logp[cand], kind="stable")]:
+            h = half_power_bandwidth_hz(f, power, [c], ratio=2.0, one_side="nan")[0] / 2
+            span = max(1, int(TOP_FRACTION * (h if np.isfinite(h) else lobe_hz) / df))
+            v = _vertex(logp, np.array([c]), np.array([span]))[0] * df
+            if abs(v - target[j]) <= tol[j]:
+                k[j], fp[j], hw[j] = c, v, h
+                break
+    found = np.isfinite(fp)
+    zeta = hw / fp
     zeta = np.where(hw >= MIN_WIDTH_LOBES * WINDOW_HALF_WIDTH[window] * fs / y.shape[1], zeta, np.nan)
     fn = natural_from_peak(fp, zeta, quantity)
     values = np.where(found[None, :], X[:, k], np.nan)

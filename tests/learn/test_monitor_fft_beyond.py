@@ -9,12 +9,10 @@ import learn.monitor.workers as workers
 from learn.monitor import IdentificationSettings, IdentifiedModes, SeriesInput, monitor_series
 from learn.monitor.estimator_choice import FFT_PEAK
 from learn.monitor.fft_beyond import beyond_windows_hz
-from learn.monitor.identification import cached_fft_peaks
+from learn.monitor.identification import FFT_FORMAT, cached_fft_peaks, file_key
 from learn.monitor.tracking import MODE_MOVED, TOLERANCE_SIGMAS, narrow_bands_hz, reach_bands_hz
 
 FS_HZ, N_SAMPLES, ZETA = 1000.0, 4000, 0.01
-#: The zero-padded FFT's line spacing: 8 x 4000 samples padded to 32768.
-GRID_HZ = FS_HZ / 32768
 N_BASELINE = 14
 
 
@@ -69,10 +67,11 @@ def _identified_as(tests, files, monkeypatch):
 
 def test_an_fft_peak_beyond_its_band_is_the_mode_moved_and_never_its_neighbours_peak(tmp_path, monkeypatch):
     """Mode 1 (band 95.6-104.4 Hz: 10 robust standard deviations of its identified baseline frequencies; reach
-    81.6-122.5 Hz: half the log gap to 150 Hz either side) read by its FFT
-    peak: at 84 Hz its peak lies below its band, at 118 Hz above it, with no local maximum of the FFT power in the
-    band; each reads ``mode moved`` at the peak (the padded grid's line, within 0.03 Hz of it), its change against
-    the reference frequency, flagged at chance 0 (the FFT peak read the mode in every baseline test). Where mode 1 is
+    81.6-122.5 Hz: half the log gap to 150 Hz either side) read by its FFT peak: at 84 Hz its peak lies below its
+    band, at 118 Hz above it, with no local maximum of the FFT power in the band; each reads ``mode moved`` at the
+    peak as the band's readings are read (the vertex, the FFT peak of the same record over a window around the peak;
+    within 0.1 Hz of the closed-form transform's peak, the 150-Hz mode's flank skewing it), its change against the
+    reference frequency, flagged at chance 0 (the FFT peak read the mode in every baseline test). Where mode 1 is
     gone, the band and the windows beyond it hold only the flank of the 150-Hz mode, rising to its edge: no reading
     takes the neighbour's peak or the flank's value at the reach's edge; the mode is lost (unflagged after 14 baseline
     tests). The intact test reads nothing beyond the bands, nor does any baseline test."""
@@ -99,15 +98,17 @@ def test_an_fft_peak_beyond_its_band_is_the_mode_moved_and_never_its_neighbours_
         (d,) = row["beyond_band"]
         assert d["mode"] == 1 and d["reading"] == "moved" and d["flagged"] and d["chance"] == 0.0
         peak = _dtft_peak_hz([(f1[i], 1.0), (150.0, 10.0)], f1[i] - 2, f1[i] + 2)
-        assert abs(peak - f1[i]) > 0.05 and d["frequency_hz"] == pytest.approx(peak, abs=GRID_HZ)
+        assert abs(peak - f1[i]) > 0.05 and d["frequency_hz"] == pytest.approx(peak, abs=0.1)
+        vertex = cached_fft_peaks(files[i], np.array([[f1[i] - 2, f1[i] + 2]]))[0]
+        assert d["frequency_hz"] == pytest.approx(vertex, rel=1e-12)
         assert d["change_pct"] == pytest.approx(100 * (d["frequency_hz"] / f_ref - 1), rel=1e-12)
-        assert d["change_pct"] == pytest.approx(100 * (peak / f_ref - 1), abs=100 * GRID_HZ / f_ref)
+        assert d["change_pct"] == pytest.approx(100 * (peak / f_ref - 1), abs=100 * 0.1 / f_ref)
         assert row["status"] == MODE_MOVED
         assert res.beyond.by_fft[i, 0] and res.beyond.moved_col[i, 0] == -1
     assert res.rows[N_BASELINE]["beyond_band"][0]["change_pct"] == pytest.approx(-16.0, abs=0.5)
     assert res.rows[N_BASELINE + 3]["beyond_band"][0]["change_pct"] == pytest.approx(18.0, abs=0.5)
     lo, hi = narrow_bands_hz(ref)[0]
-    assert res.rows[N_BASELINE]["beyond_band_text"] == (f"mode 1 moved -16.1 % (83.86 Hz, beyond its band {lo:.4g}-"
+    assert res.rows[N_BASELINE]["beyond_band_text"] == (f"mode 1 moved -16.1 % (83.85 Hz, beyond its band {lo:.4g}-"
                                                         f"{hi:.4g} Hz)")
     intact, gone = res.rows[N_BASELINE + 6], res.rows[N_BASELINE + 7]
     assert intact["beyond_band"] == [] and intact["frequencies_hz"][0] == res.frequency_choice.fft_hz[N_BASELINE + 6, 0]
@@ -129,17 +130,15 @@ def test_without_the_fft_choice_the_same_series_reads_the_identifications_poles_
     assert res.beyond.by_fft is not None and not res.beyond.by_fft.any()
 
 
-def test_the_peak_lines_are_cached_apart_from_the_vertices(tmp_path):
-    """``cached_fft_peaks(..., line=True)``: the local maximum's line of the padded grid (a multiple of its spacing,
-    within one line of the peak of the record's closed-form transform), kept in its own cache entry beside the
-    vertices'."""
+def test_the_fft_peaks_are_cached_under_their_rule(tmp_path):
+    """``cached_fft_peaks``: the vertices ``fft_peaks`` gives (within 0.1 Hz of the peaks of the record's closed-form
+    transform), kept under a key holding :data:`FFT_FORMAT`, read back unchanged; an entry under another rule's key
+    is not read."""
     files, _, f1 = _series(tmp_path)
     bands = np.array([[95.0, 105.0], [145.0, 155.0]])
     vertex = cached_fft_peaks(files[0], bands, tmp_path / "cache")
-    line = cached_fft_peaks(files[0], bands, tmp_path / "cache", line=True)
-    assert len(list((tmp_path / "cache").glob("*.json"))) == 2
-    np.testing.assert_allclose(line / GRID_HZ, np.round(line / GRID_HZ), atol=1e-9)
+    (entry,) = (tmp_path / "cache").glob("*.json")
     peaks = [_dtft_peak_hz([(f1[0], 1.0), (150.0, 10.0)], lo, hi) for lo, hi in bands]
-    np.testing.assert_allclose(line, peaks, atol=GRID_HZ)                # the grid's highest line at the peak
-    assert np.all(line != vertex) and np.all(np.abs(vertex - line) < 0.1)
-    np.testing.assert_array_equal(cached_fft_peaks(files[0], bands, tmp_path / "cache", line=True), line)
+    np.testing.assert_allclose(vertex, peaks, atol=0.1)
+    np.testing.assert_array_equal(cached_fft_peaks(files[0], bands, tmp_path / "cache"), vertex)
+    assert entry.name == f"{file_key(files[0], None, {'fftpeak_bands_hz': bands.tolist(), 'rule': FFT_FORMAT})}.json"
