@@ -22,7 +22,7 @@ Steps, one module each:
   analysis, a Gaussian mixture); each gives a squared Mahalanobis distance of a test's residual (the novelty index);
 * :mod:`~learn.monitor.alarm_threshold` -- every baseline test's index by a model that did not see it
   (leave-one-out or k-fold) and the threshold of a false-alarm rate from a scaled F distribution fitted to them;
-  :mod:`~learn.monitor.sessions` -- runs of baseline tests at one level (sessions), then held out a session at a
+  :mod:`~learn.sessions` -- runs of baseline tests at one level (sessions), then held out a session at a
   time, the environment judged as one value per session;
 * :mod:`~learn.monitor.baseline_outliers` -- a baseline test whose held-out index lies beyond the baseline's
   family-wise threshold (``rate / n``, the law fitted without it) named and left out of the baseline period;

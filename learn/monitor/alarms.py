@@ -15,7 +15,7 @@ from learn.monitor.identification import IdentificationSettings, write_cache
 from learn.monitor.pole_confirmation import confirm_far_poles
 from learn.monitor.normal_models import DEFAULT_LATENT, NORMAL_MODELS
 from learn.monitor.series import SeriesInput, check_series
-from learn.monitor.sessions import baseline_sessions
+from learn.sessions import baseline_sessions
 from learn.monitor.alarm_threshold import Threshold, minimum_baseline
 from learn.monitor.charts import CHARTS, Charts, run_charts
 from learn.monitor.statistics import (DEFAULT_STATISTICS, STATISTICS, Detection, covers_seasons, detect,

@@ -44,7 +44,7 @@ from learn.monitor.alarm_threshold import (TAIL_SHARE, Threshold, _folds, minimu
                                            training_size)
 from learn.monitor.normal_models import PCARemoval, Regression, _impute
 from learn.monitor.per_mode import per_mode_index, per_mode_threshold, per_mode_z
-from learn.monitor.sessions import session_folds
+from learn.sessions import session_folds
 from learn.monitor.union_calibration import union_rates, value_at
 from physics.errors import ConfigError
 from datetime import datetime
@@ -143,7 +143,7 @@ def shift_fraction(model, X, C=None) -> np.ndarray:
 def held_out_folds(X, C=None) -> tuple:
     """``(folds, n_train, n_sessions)``: the held-out folds of the baseline ``X`` (n, p) (conditions ``C`` (n, q)),
     the fewest tests a fold's model is fitted on, and the sessions a fold's model sees (None without sessions). A
-    baseline of several sessions (:mod:`learn.monitor.sessions`, each leaving the others at least
+    baseline of several sessions (:mod:`learn.sessions`, each leaving the others at least
     :func:`~learn.monitor.alarm_threshold.minimum_baseline` less one tests) is held out a session at a time, and
     its environment has one value per session (the statistics of the environment are judged by a law of
     ``n_sessions`` values); otherwise the folds of

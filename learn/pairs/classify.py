@@ -240,15 +240,15 @@ def _normal_variation(model: TrainedModel, inputs: PairInputs, warnings: list) -
 def _explanations(model: TrainedModel, inputs: PairInputs) -> list[dict]:
     """The third stage of :func:`classify_pairs`: the competing explanations of each pair (:data:`NO_EXPLANATION`
     without one): with the assumed noise, or with the normal variation measured on several baselines (each
-    frequency against the baselines' mean, std ``s sqrt(1 + 1/n)``; each shape entry against the reference
-    baseline's, std ``s sqrt(2)``)."""
+    frequency against the baselines' mean, with the standard deviation of a later test about it,
+    :meth:`learn.pairs.normal_variation.NormalVariation.prediction`: ``s sqrt(1 + 1/n)``, or that of a new session;
+    each shape entry against the reference baseline's, std ``s sqrt(2)``)."""
     out, nv = [NO_EXPLANATION] * (len(inputs.names) - 1), inputs.normal_variation
     known = [i for i in range(len(out)) if inputs.pair(i) is not None]
     pairs, noise = [inputs.pairs[i] for i in known], ()
     if nv is not None and pairs:
-        mean_hz, counts, shape = nv.frequency_mean_hz, nv.counts, nv.shape_std
-        noise = (np.where(counts >= 2, nv.frequency_std_rel * np.sqrt(1 + 1 / np.maximum(counts, 1)),
-                          FREQUENCY_CHANGE_STD),
+        mean_hz, spread, shape = nv.frequency_mean_hz, nv.prediction()[1], nv.shape_std
+        noise = (np.where(np.isfinite(spread), spread, FREQUENCY_CHANGE_STD),
                  SHAPE_CHANGE_STD if shape is None else np.where(np.isfinite(shape), shape * np.sqrt(2),
                                                                  SHAPE_CHANGE_STD))
         for k, p in enumerate(pairs):                  # the baseline's frequencies moved to the baselines' mean

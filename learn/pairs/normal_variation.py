@@ -20,6 +20,17 @@ where both run (so at most ``alpha`` together):
   from the same Gaussian population, ``T^2 (n - p) / (p (n - 1)) ~ F(p, n - p)``: the stronger test when the
   modes move together (temperature), since it sees a change break their common pattern.
 
+Baselines given in test order that fall into sessions (:func:`learn.sessions.baseline_sessions`: runs of at least
+three tests at one level of the frequencies, separated by jumps far beyond the scatter from one test to the next: a
+set-up re-mounted, a day's temperature) hold as many values of that level as sessions, not one per test. A later
+test, from a later session, is then judged about the mean of the sessions' levels with the variance of a new test of
+a new session, ``s_m^2 (1 + 1 / g) + s_w^2 (1 - h)`` (``s_m^2`` the variance of the ``g`` sessions' means, ``s_w^2``
+the pooled variance within them, ``h`` the mean of ``1 / n_i`` over the sessions' sizes: in expectation
+``sigma_b^2 (1 + 1 / g) + sigma_w^2 (1 + h / g)``), against Student's ``t`` with Satterthwaite's degrees of freedom
+(about ``g - 1`` where the sessions' levels differ most); Hotelling's test, whose covariance the sessions' levels would
+have to give, is not run. Treating ``N`` tests of ``g`` sessions as independent reads a new session's level against
+``t(N - 1)`` and the within-session scatter and alarms on most new sessions.
+
 Standard deviations never fall below :data:`FREQUENCY_STD_FLOOR` and :data:`SHAPE_STD_FLOOR` (the finest
 repeatability the training draws), so noise-free or identical baselines do not make every change significant.
 """
@@ -33,6 +44,7 @@ import numpy as np
 from learn.densest_window import densest_window
 from learn.explanations.shapes import real_shapes, sign_aligned
 from learn.pairs.measured import BASELINE_PAIR_BAND, RATIO_TOLERANCE, modal_pair
+from learn.sessions import Sessions, baseline_sessions
 from physics.errors import BeamDamageError
 
 __all__ = ["FREQUENCY_STD_FLOOR", "HOTELLING_MIN_EXTRA", "SHAPE_STD_FLOOR", "NormalVariation", "measure",
@@ -81,6 +93,8 @@ class NormalVariation:
     pairing_band : ndarray, shape (m,)       relative: :data:`learn.pairs.measured.BASELINE_PAIR_BAND` where the
                                              baselines hold the mode, :data:`learn.pairs.measured.RATIO_TOLERANCE`
                                              elsewhere (both narrowed to half the gap to the neighbours when paired)
+    sessions : Sessions or None              the baselines' sessions in the order given (module docstring); None for
+                                             one session
     """
 
     names: tuple
@@ -90,6 +104,7 @@ class NormalVariation:
     reference: int
     pairing_hz: np.ndarray | None = None
     pairing_band: np.ndarray | None = None
+    sessions: Sessions | None = None
 
     @property
     def targets(self) -> tuple:
@@ -108,9 +123,37 @@ class NormalVariation:
 
     @property
     def frequency_mean_hz(self) -> np.ndarray:
-        """Geometric mean of each mode's frequency over the baselines (Hz), NaN where none holds it."""
+        """Geometric mean of each mode's frequency over the baselines (Hz; with sessions, over the sessions'
+        levels), NaN where none holds it."""
         with np.errstate(invalid="ignore"):
-            return np.exp(_nanmean(self.log_frequency))
+            return np.exp(self.prediction()[0])
+
+    def prediction(self) -> tuple:
+        """A later test's ``ln f`` per model mode against the baselines: ``(location (m,), standard deviation of the
+        test about it (m,), degrees of freedom (m,))``; NaN where fewer than 2 baselines (with sessions: 2
+        sessions) hold the mode. One session: the mean, ``s sqrt(1 + 1 / n)`` and ``n - 1``; several: the mean of
+        the sessions' levels, the variance of a new test of a new session and Satterthwaite's degrees of freedom
+        (module docstring)."""
+        X = self.log_frequency
+        if self.sessions is None:
+            n = self.counts
+            std = self.frequency_std_rel * np.sqrt(1 + 1 / np.maximum(n, 1))
+            return _nanmean(X), std, np.where(n >= 2, n - 1.0, np.nan)
+        folds = self.sessions.folds()
+        levels = np.stack([_nanmean(X[f]) for f in folds])                       # (g, m)
+        sizes = np.stack([np.sum(np.isfinite(X[f]), axis=0) for f in folds])     # (g, m)
+        g = np.sum(sizes > 0, axis=0)
+        df_w = np.sum(np.maximum(sizes - 1, 0), axis=0)
+        ss_w = sum(np.nansum((X[f] - levels[j]) ** 2, axis=0) for j, f in enumerate(folds))
+        h = np.sum(np.where(sizes > 0, 1.0 / np.maximum(sizes, 1), 0.0), axis=0) / np.maximum(g, 1)
+        a = _nanstd(levels, 0.0) ** 2 * (1 + 1 / np.maximum(g, 1))
+        b = ss_w / np.maximum(df_w, 1) * (1 - h)
+        den = a**2 / np.maximum(g - 1, 1) + b**2 / np.maximum(df_w, 1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            dof = np.where(den > 0, (a + b) ** 2 / den, g - 1.0)
+        var = np.maximum(a + b, FREQUENCY_STD_FLOOR**2 * (1 + 1 / np.maximum(g, 1)))
+        ok = g >= 2
+        return _nanmean(levels), np.where(ok, np.sqrt(var), np.nan), np.where(ok, dof, np.nan)
 
     @property
     def frequency_std_rel(self) -> np.ndarray:
@@ -147,19 +190,19 @@ class NormalVariation:
         if not 0.0 < false_alarm_rate < 0.5:
             raise BeamDamageError(f"false-alarm rate must lie in (0, 0.5), got {false_alarm_rate}")
         x = np.asarray(log_frequency, float)
-        counts, std = self.counts, self.frequency_std_rel
-        use = np.flatnonzero(np.isfinite(x) & (counts >= 2))
+        mean, std, dof = self.prediction()
+        use = np.flatnonzero(np.isfinite(x) & np.isfinite(std))
         if use.size == 0:
-            raise BeamDamageError("no mode of the test is held by 2 or more baseline tests: the normal variation "
+            held = "sessions" if self.sessions is not None else "tests"
+            raise BeamDamageError(f"no mode of the test is held by 2 or more baseline {held}: the normal variation "
                                   "cannot be measured")
-        mean = _nanmean(self.log_frequency)
         d = x - mean
-        z = d / (std * np.sqrt(1 + 1 / np.maximum(counts, 1)))
-        dof = counts[use] - 1
+        z = d / std
+        dof = dof[use]
         full = self.log_frequency[:, use]
         complete = full[np.all(np.isfinite(full), axis=1)]
         n, p = complete.shape
-        share = 2 if n >= p + HOTELLING_MIN_EXTRA else 1          # each test at alpha / share
+        share = 2 if n >= p + HOTELLING_MIN_EXTRA and self.sessions is None else 1      # each test at alpha / share
         # the largest |z|: Bonferroni over the modes (p times the smallest two-sided p-value)
         tests = {"largest_z": (float(np.max(np.abs(z[use]))),
                                float(stats.t.isf(false_alarm_rate / (2 * use.size * share), int(np.median(dof)))),
@@ -190,7 +233,19 @@ class NormalVariation:
             return [float(scale * a) if np.isfinite(a) else None for a in v]
 
         shape = self.shape_std
+        sessions = None
+        if self.sessions is not None:
+            g, sizes = len(self.sessions.sizes), "/".join(map(str, self.sessions.sizes))
+            sessions = {"count": g, "sizes": list(self.sessions.sizes),
+                        "first_tests": [self.names[k] for k in self.sessions.starts],
+                        "jump_sigmas": [round(float(j), 1) for j in self.sessions.jump_sigmas],
+                        "text": f"the {self.n_baselines} baseline tests fall into {g} sessions of {sizes} tests (their "
+                                f"levels jump by {min(self.sessions.jump_sigmas):.0f}-"
+                                f"{max(self.sessions.jump_sigmas):.0f} times the scatter between successive tests): a "
+                                f"test is judged against the scatter of {g} sessions' levels, not of "
+                                f"{self.n_baselines} independent tests; more sessions sharpen it"}
         return {"n_baselines": self.n_baselines, "measured": True, "reference_baseline": self.names[self.reference],
+                "sessions": sessions,
                 "modes_counts": [int(c) for c in self.counts],
                 "frequency_mean_hz": listed(self.frequency_mean_hz),
                 "frequency_std_pct": listed(self.frequency_std_rel, 100),
@@ -206,7 +261,9 @@ def measure(baselines: list, beam, nominal_hz, names=None) -> NormalVariation:
     :data:`learn.pairs.measured.BASELINE_PAIR_BAND` (:attr:`NormalVariation.targets`, the pairing of every later test):
     a spurious pole that the wide nominal rule paired in a baseline lacking the mode leaves that baseline without
     it. The reference baseline is the one holding the most modes whose frequencies lie nearest the baselines'
-    medians (the sum of squared z-scores over the modes it holds).
+    medians (the sum of squared z-scores over the modes it holds). The baselines are taken in the order given, as
+    tests in time order: their sessions (:func:`learn.sessions.baseline_sessions` over the modes every baseline
+    holds) are :attr:`NormalVariation.sessions`.
     """
     names = tuple(names) if names else tuple(f"baseline {k + 1}" for k in range(len(baselines)))
     if len(baselines) < 2:
@@ -234,7 +291,7 @@ def measure(baselines: list, beam, nominal_hz, names=None) -> NormalVariation:
         u = np.stack([p[1] for p in per])                                  # (N, S, m)
         anchor = np.nan_to_num(u[ref])
         shapes = np.where(np.isfinite(u), sign_aligned(np.nan_to_num(u), anchor[None]), np.nan)
-    return NormalVariation(names, lnf, shapes, zeta, ref, target_hz, band)
+    return NormalVariation(names, lnf, shapes, zeta, ref, target_hz, band, baseline_sessions(lnf))
 
 
 def _baselines_mode_hz(poles: list, paired) -> float:

@@ -398,7 +398,8 @@ def normal_variation_text(nv: dict) -> str:
             f" frequency scatter {_span(nv['frequency_std_pct'], 1, ' %')} per mode"
             + (f", shapes {_span(nv['shape_std'])} per entry" if nv.get("shape_std") else "")
             + (f", damping {_span(nv['damping_std_pct'], 1, ' points')}"
-               if any(v is not None for v in nv["damping_std_pct"]) else ""))
+               if any(v is not None for v in nv["damping_std_pct"]) else "")
+            + (f"; {nv['sessions']['text']}" if nv.get("sessions") else ""))
     if "beyond" in nv:
         change = ", ".join(f"{c:+.3g} %" for c in nv["frequency_change_pct"] if c is not None)
         text += (f"; this test's frequencies change by {change} from the baselines' mean, "

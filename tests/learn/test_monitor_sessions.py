@@ -1,11 +1,11 @@
-"""Sessions within the baseline period (learn/monitor/sessions.py) and the detector held out a session at a time."""
+"""Sessions within the baseline period (learn/sessions.py) and the detector held out a session at a time."""
 
 import numpy as np
 import pytest
 
 import learn.monitor.statistics as statistics
 from learn.monitor.normal_models import PCARemoval
-from learn.monitor.sessions import JUMP_SIGMAS, baseline_sessions
+from learn.sessions import JUMP_SIGMAS, baseline_sessions
 from learn.monitor.statistics import detect, held_out_folds
 
 LOG_F = np.log([20.0, 130.0, 370.0])
