@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from learn.pairs.normal_variation import NormalVariation
+from learn.pairs.verdict import normal_variation_text
 from learn.sessions import baseline_sessions
 
 #: Sessions of this many tests; the sessions' levels scatter by SIGMA_B (common to the modes and each mode's own),
@@ -87,3 +88,15 @@ def test_the_summary_names_the_sessions_and_the_test_runs_no_hotelling():
     assert _nv(base, sessions=False).test(new)["tests"] == ["hotelling", "largest_z"]
     assert _nv(base, sessions=False).summary()["sessions"] is None
     assert nv.frequency_mean_hz == pytest.approx(np.exp(base.mean(axis=0)))
+
+
+def test_the_verdicts_text_says_the_baselines_sessions():
+    """The verdict's normal-variation line names the sessions and what they do to the test."""
+    rng = np.random.default_rng(2)
+    base, new = _sessions(rng, 3, [0.0, 2.0, -1.0])
+    nv = _nv(base)
+    text = normal_variation_text({**nv.summary(), **nv.test(new), "false_alarm_rate": 0.01})
+    assert text.startswith("Normal variation measured on 30 baseline tests (reference t0)")
+    assert ("; the 30 baseline tests fall into 3 sessions of 10/10/10 tests (their levels jump by" in text
+            and "a test is judged against the scatter of 3 sessions' levels, not of 30 independent tests" in text)
+    assert "; this test's frequencies change by" in text
