@@ -3,8 +3,9 @@ by jumps far beyond the scatter from one test to the next (a set-up re-mounted, 
 temperature). A baseline of ``k`` sessions holds ``k`` values of that variation, not one per test: held out one
 test at a time, each test's session-mates stay in the model and the statistics of the environment read every new
 session as beyond the baseline (of ``k`` sessions drawn alike, a new one lies beyond their range with probability
-``2 / (k + 1)``). The held-out statistics then leave out a whole session at a time
-(:func:`learn.monitor.statistics.held_out_statistics`).
+``2 / (k + 1)``). ``monitor``'s held-out statistics then leave out a whole session at a time
+(:func:`learn.monitor.statistics.held_out_statistics`), and ``classify`` with several baselines judges a test
+against the sessions' levels (:meth:`learn.pairs.normal_variation.NormalVariation.prediction`).
 
 :func:`baseline_sessions` reads them from the baseline's log frequencies in test order: each mode scaled by its
 scatter from one test to the next (``1.4826 MAD`` of the successive differences over ``sqrt 2``), the leading
