@@ -21,6 +21,7 @@ from learn.monitor.estimator_choice import FREQUENCY_ESTIMATORS
 from learn.monitor.events import group_events, identification_change, lost_modes_change
 from learn.monitor.verdicts import event_verdicts
 from physics.errors import BeamDamageError, ConfigError
+from physics.identification.output_only import DEFAULT_OUTPUT_ONLY, RECORDS_METHODS
 from physics.io import (FRF, MODAL, TIME, accepted, atomic_write_bytes, atomic_write_text, figure_png, pyplot,
                         to_jsonable)
 from datagen.store import package_version
@@ -70,6 +71,9 @@ def add_parser(sub):
     p.add_argument("--false-alarm-rate", type=float, default=0.01, metavar="RATE",
                    help="share of intact tests allowed to alarm (default %(default)s)")
     p.add_argument("--band", nargs=2, type=float, metavar=("F0", "F1"), help="identification band in Hz")
+    p.add_argument("--records-method", choices=RECORDS_METHODS, default=DEFAULT_OUTPUT_ONLY,
+                   help="response records: the output-only method of every test ('auto', default: per record, era "
+                        "for a free response, else ssi; 'ssi' for a series known to be ambient)")
     p.add_argument("--normal-model", choices=list(NORMAL_MODELS), default=None,
                    help="normal-variation model (default: regression with measured conditions, else "
                         f"{DEFAULT_LATENT}; docs/monitoring.md compares them)")
@@ -136,7 +140,7 @@ def run(args) -> dict:
         _, beam_x_m = _flagged("--beam", model.measured_beam, args.beam)
     elif args.beam:
         beam = _flagged("--beam", load_beam, args.beam)
-    settings = identification_settings(args.band, beam, model)
+    settings = replace(identification_settings(args.band, beam, model), records_method=args.records_method)
     cache = Path(args.out) / "cache" if args.out else None
     res = monitor_series(series, args.baseline_tests, settings, cache, args.false_alarm_rate, args.normal_model,
                          progress=not args.json, chart=args.chart, statistics=tuple(args.statistics),

@@ -43,18 +43,24 @@ FFT_FORMAT = 2
 @dataclass(frozen=True)
 class IdentificationSettings:
     """How every test of a series is identified: the band (Hz; None: the file's), the modes kept (None: all
-    found) and the highest model order of LSCF (FRFs) and of SSI-cov (response records: its state model spends
+    found), the highest model order of LSCF (FRFs) and of SSI-cov (response records: its state model spends
     states on the excitation's colour and the sensor noise; on the 60-s records of the independent monitoring series
-    a 10-Hz mode at the bottom of a 5-400 Hz band is found in half of the tests at order 40, in all at 80)."""
+    a 10-Hz mode at the bottom of a 5-400 Hz band is found in half of the tests at order 40, in all at 80), and the
+    method of response records (:data:`~physics.identification.output_only.RECORDS_METHODS`; ``"auto"``: per
+    record, ``era`` for a free response, else ``ssi``; a series known to be ambient, ``"ssi"``)."""
 
     band_hz: tuple | None = None
     n_modes: int | None = None
     max_order: int = 40
     records_max_order: int = 80
+    records_method: str = DEFAULT_OUTPUT_ONLY
 
     def to_dict(self) -> dict:
-        return {"band_hz": None if self.band_hz is None else [float(b) for b in self.band_hz],
-                "n_modes": self.n_modes, "max_order": self.max_order, "records_max_order": self.records_max_order}
+        """The settings (``records_method`` only where it is not ``"auto"``: the cache keys of the per-record
+        choice stay as they were)."""
+        out = {"band_hz": None if self.band_hz is None else [float(b) for b in self.band_hz],
+               "n_modes": self.n_modes, "max_order": self.max_order, "records_max_order": self.records_max_order}
+        return out if self.records_method == DEFAULT_OUTPUT_ONLY else {**out, "records_method": self.records_method}
 
 
 @dataclass(frozen=True)
@@ -248,10 +254,11 @@ def identify_test(path, settings: IdentificationSettings, narrow_hz=None, test=N
     n_modes = settings.n_modes if narrow_hz is None else None
     if kind == TIME:
         rec = data
-        with identification_failure(f"{path}: output-only identification ({DEFAULT_OUTPUT_ONLY}: era for a free "
-                                    "response, else ssi)"), warnings.catch_warnings():
+        how = (f"{DEFAULT_OUTPUT_ONLY}: era for a free response, else ssi" if settings.records_method ==
+               DEFAULT_OUTPUT_ONLY else f"{settings.records_method}, named for the series")
+        with identification_failure(f"{path}: output-only identification ({how})"), warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            ident = identify_records(rec, DEFAULT_OUTPUT_ONLY, band, n_modes, settings.records_max_order,
+            ident = identify_records(rec, settings.records_method, band, n_modes, settings.records_max_order,
                                      mode_in_band=narrow_hz is not None)
         fs, crop = rec.sampling_frequency_hz, ident.crop
         f, z, shapes = _modes_of(ident.estimate.eigenvalues, ident.estimate.shapes)

@@ -24,8 +24,8 @@ from physics.io.uff58 import UffFile
 from physics.identification.setups import MergedSetups, merge_setups   # the multi-setup merge
 import zipfile
 
-__all__ = ["DEFAULT_OUTPUT_ONLY", "FREE_RESPONSE_METHOD", "SCALING", "STATIONARY_METHOD", "STATIONARY_METHODS",
-           "MergedSetups", "RecordsIdentification", "holds_response_records",
+__all__ = ["DEFAULT_OUTPUT_ONLY", "FREE_RESPONSE_METHOD", "RECORDS_METHODS", "SCALING", "STATIONARY_METHOD",
+           "STATIONARY_METHODS", "MergedSetups", "RecordsIdentification", "holds_response_records",
            "identify_records", "merge_setups", "read_response_records", "response_records"]
 
 #: The method ``identify`` takes for a file of response records without a force channel: ``"auto"`` picks
@@ -35,6 +35,9 @@ DEFAULT_OUTPUT_ONLY = "auto"
 FREE_RESPONSE_METHOD, STATIONARY_METHOD = "era", "ssi"
 #: The output-only methods that assume a stationary response (warned of when named for a free response).
 STATIONARY_METHODS = tuple(name for name, spec in METHODS.items() if spec.stationary)
+#: What response records without a force can be identified by: ``"auto"`` and every method of :data:`METHODS` with
+#: ``data == "records"``.
+RECORDS_METHODS = (DEFAULT_OUTPUT_ONLY, *(name for name, spec in METHODS.items() if spec.data == "records"))
 #: What modal.json says of output-only shapes.
 SCALING = "unscaled (output-only: no force measured, so no modal mass)"
 
@@ -176,10 +179,9 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
     -------
     RecordsIdentification
     """
-    names = [n for n, spec in METHODS.items() if spec.data == "records"]
-    if method != "auto" and (method not in METHODS or METHODS[method].data != "records"):
+    if method not in RECORDS_METHODS:
         raise ConfigError(f"method {method!r}: response records without a force are identified output-only, by "
-                          f"{', '.join(names)} (or auto)")
+                          f"{', '.join(RECORDS_METHODS[1:])} (or {DEFAULT_OUTPUT_ONLY})")
     if band_hz is not None and not band_hz[0] < band_hz[1]:
         raise ConfigError(f"band_hz ({band_hz[0]}, {band_hz[1]}): the lower bound must be below the upper")
     where = str(records.metadata.get("source", "records"))
