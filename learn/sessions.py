@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["JUMP_SIGMAS", "MIN_SESSION", "Sessions", "baseline_sessions", "session_folds"]
+__all__ = ["JUMP_SIGMAS", "MIN_SESSION", "Sessions", "baseline_sessions"]
 
 #: A jump between two successive tests: this many of their scatter along the modes' common course.
 JUMP_SIGMAS = 6.0
@@ -110,9 +110,3 @@ def baseline_sessions(X, min_training: int = 0) -> Sessions | None:
     return Sessions(tuple(int(v) for v in edges[:-1]), tuple(int(v) for v in sizes),
                     tuple(float(v) for v in step[jumps - 1]), round(1.0 - within / float((s**2).sum()), 4))
 
-
-def session_folds(X, min_training: int = 0) -> list | None:
-    """The held-out folds of a baseline ``X`` of several sessions (:func:`baseline_sessions`), one per session;
-    None for a baseline of one session."""
-    found = baseline_sessions(X, min_training)
-    return None if found is None else found.folds()

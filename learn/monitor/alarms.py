@@ -15,11 +15,10 @@ from learn.monitor.identification import IdentificationSettings, write_cache
 from learn.monitor.pole_confirmation import confirm_far_poles
 from learn.monitor.normal_models import DEFAULT_LATENT, NORMAL_MODELS
 from learn.monitor.series import SeriesInput, check_series
-from learn.sessions import baseline_sessions
 from learn.monitor.alarm_threshold import Threshold, minimum_baseline
 from learn.monitor.charts import CHARTS, Charts, run_charts
 from learn.monitor.statistics import (DEFAULT_STATISTICS, STATISTICS, Detection, covers_seasons, detect,
-                                     environmental, residual_threshold, season_warning)
+                                     environmental, held_out_sessions, residual_threshold, season_warning)
 from learn.monitor.coverage import series_coverage
 from learn.monitor.estimator_choice import FREQUENCY_ESTIMATORS, FrequencyChoice, choose_frequencies
 from learn.monitor.fft_beyond import fft_peaks_beyond
@@ -180,7 +179,7 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     det = detect(model, model.with_choices, X, Cq, b_idx, rest, false_alarm_rate, q, ("residual", *statistics),
                  held=held)
     thr = residual_threshold(det)
-    sessions = baseline_sessions(X[b_idx], need - 1)       # held out a session at a time (held_out_folds)
+    sessions = held_out_sessions(X[b_idx], None if Cq is None else Cq[b_idx])      # held out a session at a time
     if (why := season_warning(series.times, series.time_values, n_baseline, det.names if not q else ())):
         warnings.warn(why)
     novelty = det.values[:, det.names.index("residual")]

@@ -44,14 +44,15 @@ from learn.monitor.alarm_threshold import (TAIL_SHARE, Threshold, _folds, minimu
                                            training_size)
 from learn.monitor.normal_models import PCARemoval, Regression, _impute
 from learn.monitor.per_mode import per_mode_index, per_mode_threshold, per_mode_z
-from learn.sessions import session_folds
+from learn.sessions import Sessions, baseline_sessions
 from learn.monitor.union_calibration import union_rates, value_at
 from physics.errors import ConfigError
 from datetime import datetime
 
 __all__ = ["COMBINATIONS", "DEFAULT_STATISTICS", "PATTERN_MIN", "SHARES", "SHIFT_SIDES", "STATISTICS", "Detection",
-           "detect", "environmental", "held_out_folds", "held_out_statistics", "covers_seasons", "family_rates",
-           "joint_rate", "joint_rates", "season_warning", "shift_weights", "sidak_rate", "statistics_of"]
+           "detect", "environmental", "held_out_folds", "held_out_sessions", "held_out_statistics", "covers_seasons",
+           "family_rates", "joint_rate", "joint_rates", "season_warning", "shift_weights", "sidak_rate",
+           "statistics_of"]
 
 #: The detector's statistics (module docstring).
 STATISTICS = ("residual", "environment", "shift", "mode")
@@ -140,21 +141,27 @@ def shift_fraction(model, X, C=None) -> np.ndarray:
     return (_impute(X, centre, cov) - centre) @ w
 
 
+def held_out_sessions(X, C=None) -> Sessions | None:
+    """The sessions of the baseline ``X`` (n, p) (conditions ``C`` (n, q)) that :func:`held_out_folds` holds out
+    (:func:`learn.sessions.baseline_sessions`, each leaving the others at least
+    :func:`~learn.monitor.alarm_threshold.minimum_baseline` less one tests), or None."""
+    X = np.asarray(X, float)
+    q = 0 if C is None else np.asarray(C).reshape(len(X), -1).shape[1]
+    return baseline_sessions(X, minimum_baseline(X.shape[1], q) - 1)
+
+
 def held_out_folds(X, C=None) -> tuple:
     """``(folds, n_train, n_sessions)``: the held-out folds of the baseline ``X`` (n, p) (conditions ``C`` (n, q)),
     the fewest tests a fold's model is fitted on, and the sessions a fold's model sees (None without sessions). A
-    baseline of several sessions (:mod:`learn.sessions`, each leaving the others at least
-    :func:`~learn.monitor.alarm_threshold.minimum_baseline` less one tests) is held out a session at a time, and
+    baseline of several sessions (:func:`held_out_sessions`) is held out a session at a time, and
     its environment has one value per session (the statistics of the environment are judged by a law of
     ``n_sessions`` values); otherwise the folds of
     :func:`~learn.monitor.alarm_threshold.held_out_novelty` (leave-one-out up to
     :data:`~learn.monitor.alarm_threshold.LOO_MAX` tests), each test a value."""
-    X = np.asarray(X, float)
-    q = 0 if C is None else np.asarray(C).reshape(len(X), -1).shape[1]
-    folds = session_folds(X, minimum_baseline(X.shape[1], q) - 1)
-    if folds is None:
+    sessions = held_out_sessions(X, C)
+    if sessions is None:
         return _folds(len(X)), training_size(len(X)), None
-    return folds, len(X) - max(len(f) for f in folds), len(folds) - 1
+    return sessions.folds(), len(X) - max(sessions.sizes), len(sessions.sizes) - 1
 
 
 def held_out_statistics(make_model, X, C=None, pattern=None) -> dict:

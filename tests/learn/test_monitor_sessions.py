@@ -75,7 +75,7 @@ def test_a_new_session_like_the_baseline_ones_is_no_alarm_and_a_change_within_it
     session at a time it alarms near the rate, and a change of one mode by 20 of the tests' scatter is seen."""
     assert _new_session_alarms(np.random.default_rng(3), 25) < 0.03
     assert _new_session_alarms(np.random.default_rng(4), 10, damage=20e-4) > 0.9
-    monkeypatch.setattr(statistics, "session_folds", lambda X, min_training=0: None)
+    monkeypatch.setattr(statistics, "held_out_sessions", lambda X, C=None: None)
     assert _new_session_alarms(np.random.default_rng(3), 25) > 0.15
 
 
