@@ -90,8 +90,6 @@ def value_at(t: Threshold, held, rate: float, side_share: float = 1.0) -> float:
     """The value of :func:`~learn.monitor.alarm_threshold.threshold` at another rate ``rate``, its law's scale kept:
     ``t`` the threshold of the held-out indices ``held`` (one side's, this share of the tests, with ``side_share``)
     at some rate; the scale of the law does not depend on the rate, so the level's search refits nothing."""
-    from scipy import stats  # scipy.stats: the F law, only where a family is calibrated
-
     s = np.asarray(held, float)
     s = s[np.isfinite(s)]
     if not s.size:
@@ -100,4 +98,4 @@ def value_at(t: Threshold, held, rate: float, side_share: float = 1.0) -> float:
     if t.scale == 0.0:
         return max(empirical, RESOLUTION * float(np.max(np.abs(s))), np.finfo(float).tiny)
     level = 1 - min(rate / max(side_share * (1.0 - t.zero_share), 1e-12), 0.5)
-    return max(float(t.scale * stats.f(t.dof_num, t.dof_den).ppf(level)), empirical)
+    return max(t.law_at(level), empirical)
