@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 from contextlib import nullcontext
+from dataclasses import replace
 from unittest import mock
 
 import numpy as np
@@ -67,18 +68,18 @@ def main(argv=None) -> int:
     p.add_argument("--plug-in", action="store_true", help="thresholds read at the fitted scale")
     a = p.parse_args(argv)
     rng = np.random.default_rng(a.seed)
-    total = None
-    plug = Threshold.law_at
-    with mock.patch.object(Threshold, "law_at", lambda t, level: plug(
-            Threshold(**{**t.__dict__, "scale_log_std": 0.0}), level)) if a.plug_in else nullcontext():
+    outs = []
+    integrated = Threshold.law_at
+    with mock.patch.object(Threshold, "law_at", lambda t, level: integrated(replace(t, scale_log_std=0.0), level)) \
+            if a.plug_in else nullcontext():
         for path in a.files:
             X = features(path, a.healthy)
             if a.gaussian:
                 done = np.isfinite(X).all(axis=1)
                 X = rng.multivariate_normal(X[done].mean(axis=0), np.cov(X[done].T), len(X))
-            out = resplit(X, a.baseline, a.splits, a.rate, rng)
-            total = list(out) if total is None else [t + o for t, o in zip(total[:4], out[:4])] + [out[4]]
-    beyond, expected, alarms, later, names = total
+            outs.append(resplit(X, a.baseline, a.splits, a.rate, rng))
+    beyond, expected, alarms, later = (sum(column) for column in list(zip(*outs))[:4])
+    names = outs[-1][4]
     print(f"{len(a.files)} series, {a.splits} splits each, {'Gaussian' if a.gaussian else 'measured'} features, "
           f"{'plug-in' if a.plug_in else 'integrated'} scale, rate {a.rate:g}")
     for nm, b, e in zip(names, beyond, expected):

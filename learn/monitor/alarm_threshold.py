@@ -257,4 +257,3 @@ def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: i
     law_value = t.law_at(1 - min(rate / max(side_share * positive_share, 1e-12), 0.5))
     value = max(law_value, empirical)
     return replace(t, value=value, law_value=law_value, held_out_rate=float(side_share * np.mean(s > value)))
-
