@@ -1,7 +1,7 @@
 """Benchmark: the detector's false alarms on later healthy tests, the healthy tests of monitored series re-split.
 
 Run: ``python -m experiments.benches.bench_resplit MONITOR_JSON ... [--healthy 60] [--baseline 40] [--splits 4]
-[--rate 0.01] [--gaussian] [--plug-in] [--seed 0]``
+[--rate 0.01] [--gaussian] [--plug-in] [--formula-dof] [--seed 0]``
 
 Each ``monitor.json`` (``beam-damage monitor --out DIR``; e.g. ``bench_unseen --kinds building``'s
 ``seedN/building/monitor``) gives its first ``--healthy`` tests' tracked frequencies. Each split draws ``--baseline``
@@ -11,7 +11,8 @@ rate of new healthy tests, which the held-out baseline tests cannot show (below 
 threshold is at least their largest held-out index). ``--gaussian``: each series' features drawn again from a
 Gaussian of their own mean and covariance (the same structure, Gaussian tails); ``--plug-in``: every threshold read
 at its fitted scale, the scale's uncertainty not integrated out
-(:meth:`learn.monitor.alarm_threshold.Threshold.law_at`).
+(:meth:`learn.monitor.alarm_threshold.Threshold.law_at`); ``--formula-dof``: every law's denominator degrees of
+freedom the formula's, none fitted to a heavy tail (:data:`learn.monitor.alarm_threshold.HEAVY_MIN` infinite).
 Prints, per statistic, the later tests beyond its threshold against its rate times their count, and the family's
 share.
 """
@@ -19,6 +20,7 @@ share.
 from __future__ import annotations
 
 import json
+import math
 from contextlib import nullcontext
 from dataclasses import replace
 from unittest import mock
@@ -66,12 +68,14 @@ def main(argv=None) -> int:
     p.add_argument("--rate", type=float, default=0.01)
     p.add_argument("--gaussian", action="store_true", help="Gaussian features of each series' mean and covariance")
     p.add_argument("--plug-in", action="store_true", help="thresholds read at the fitted scale")
+    p.add_argument("--formula-dof", action="store_true", help="no law's degrees of freedom fitted to a heavy tail")
     a = p.parse_args(argv)
     rng = np.random.default_rng(a.seed)
     outs = []
     integrated = Threshold.law_at
     with mock.patch.object(Threshold, "law_at", lambda t, level: integrated(replace(t, scale_log_std=0.0), level)) \
-            if a.plug_in else nullcontext():
+            if a.plug_in else nullcontext(), \
+            mock.patch("learn.monitor.alarm_threshold.HEAVY_MIN", math.inf) if a.formula_dof else nullcontext():
         for path in a.files:
             X = features(path, a.healthy)
             if a.gaussian:
@@ -81,7 +85,8 @@ def main(argv=None) -> int:
     beyond, expected, alarms, later = (sum(column) for column in list(zip(*outs))[:4])
     names = outs[-1][4]
     print(f"{len(a.files)} series, {a.splits} splits each, {'Gaussian' if a.gaussian else 'measured'} features, "
-          f"{'plug-in' if a.plug_in else 'integrated'} scale, rate {a.rate:g}")
+          f"{'plug-in' if a.plug_in else 'integrated'} scale, {'formula' if a.formula_dof else 'fitted'} degrees "
+          f"of freedom, rate {a.rate:g}")
     for nm, b, e in zip(names, beyond, expected):
         print(f"  {nm}: {int(b)} later tests beyond its threshold, {e:.1f} at its rate")
     print(f"  family: {alarms} of {later} later tests ({100 * alarms / later:.2f} %)")

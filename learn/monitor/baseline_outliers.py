@@ -236,7 +236,7 @@ def largest_outlier(held_out, rate: float, dof_num: int, n_conditions: int = 0, 
     n = finite.size
     i = int(finite[np.argmax(z[finite])])
     others = np.delete(z, i)
-    t = threshold(others, rate / n, dof_num, training_size(n), n_conditions)
+    t = threshold(others, rate / n, dof_num, training_size(n), n_conditions, heavy_tails=False)
     if t.scale <= 0:                                           # a point mass at zero: the empirical threshold
         return i, float(s[i]), float(t.value * w[i])
     m = int(np.sum(np.isfinite(others))) * (1.0 - t.zero_share)

@@ -61,19 +61,21 @@ def per_mode_index(Z) -> np.ndarray:
     return np.where(np.isfinite(sq), sq, 0.0)
 
 
-def per_mode_threshold(Z_held, rate: float, n_train: int, n_conditions: int = 0, tail_share: float = 1.0) -> Threshold:
+def per_mode_threshold(Z_held, rate: float, n_train: int, n_conditions: int = 0, tail_share: float = 1.0,
+                       heavy_tails: bool = True) -> Threshold:
     """The per-mode index's threshold at ``rate`` from the baseline's held-out ``Z_held`` (n, m) of
     :func:`per_mode_z`: the scaled ``F(1, n_train - 1 - n_conditions)`` law fitted to every finite held-out ``z^2``
     (:func:`~learn.monitor.alarm_threshold.threshold`) read at ``rate / m`` for the ``m`` modes judged (Bonferroni:
     a test of the normal variation exceeds it on any of them with probability at most ``rate``), and at least the
     held-out maxima's ``1 - rate`` quantile (plotting position). A mode no held-out test holds (dropped for a set of
     modes found) is not judged; ``tail_share``: as :func:`~learn.monitor.alarm_threshold.threshold`'s (the law
-    fitted to the largest squares, for a statistic of the environment itself)."""
+    fitted to the largest squares, for a statistic of the environment itself) and ``heavy_tails`` (the law's
+    denominator degrees of freedom fitted with its scale) as its."""
     Z = np.asarray(Z_held, float)
     Z = Z[:, np.isfinite(Z).any(axis=0)]
     Z = Z[np.isfinite(Z).any(axis=1)]
     m = max(Z.shape[1], 1)
-    t = threshold((Z[np.isfinite(Z)] ** 2), rate / m, 1, n_train, n_conditions, tail_share)
+    t = threshold((Z[np.isfinite(Z)] ** 2), rate / m, 1, n_train, n_conditions, tail_share, heavy_tails=heavy_tails)
     maxima = per_mode_index(Z)
     empirical = float(np.quantile(maxima, 1 - rate, method="weibull")) if maxima.size else t.empirical_quantile
     value = max(t.law_value, empirical)

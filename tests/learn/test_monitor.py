@@ -276,6 +276,25 @@ def test_pca_removes_the_factors_that_explain_95_percent_and_keeps_them_in_every
     assert np.median(held) < 3                    # the 2 remaining dimensions: noise only, F(2, 55) scaled ~ 2
 
 
+def test_a_heavier_tail_than_gaussian_residuals_is_fitted_by_the_laws_degrees_of_freedom():
+    """Held-out indices of ``2 F(1, 5)`` (identification errors' heavy tail) where the formula says ``F(1, 39)``: a
+    scale alone, fitted to the bulk, puts the 0.2 % threshold where new tests pass it 3.8 times as often (0.75 %);
+    with the denominator's degrees of freedom fitted too, 2.4 times (0.48 %). On indices of the formula's own law
+    the fit keeps the rate (0.19 %, the scale alone 0.25 %)."""
+    from scipy import stats
+
+    def exceeded(true_dof, heavy_tails):
+        law = stats.f(1, true_dof)
+        return np.mean([law.sf(threshold(2.0 * law.rvs(100, random_state=seed), 0.002, 1, 40,
+                                         heavy_tails=heavy_tails).value / 2.0) for seed in range(60)])
+
+    heavy, scale_alone = exceeded(5, True), exceeded(5, False)
+    assert heavy < 0.006 and heavy < 0.7 * scale_alone and scale_alone > 0.006
+    assert 0.0015 < exceeded(39, True) < 0.0022 < exceeded(39, False)
+    t = threshold(2.0 * stats.f(1, 5).rvs(100, random_state=0), 0.002, 1, 40)
+    assert 4.0 <= t.dof_den < 39 and threshold(np.ones(19) + np.arange(19), 0.002, 1, 40).dof_den == 39
+
+
 def test_a_mode_the_baseline_always_held_that_goes_missing_is_novel():
     """A change that moves a mode beyond its tracking tolerance leaves it missing: its features are filled from the
     others, and the missing mode itself adds 2 ln(n + 2) to the index."""
