@@ -134,10 +134,11 @@ class Threshold:
 
     ``value = max(law_value, empirical_quantile)``: ``law_value = scale * F.ppf(1 - rate; dof_num, dof_den)``,
     the held-out indices taken to follow ``scale * F(dof_num, dof_den)`` (the exact law of a held-out squared
-    Mahalanobis distance with Gaussian residuals, Hotelling's prediction region, up to the scale) with the scale
-    fitted to them (or to their largest share, the law truncated below) by maximum likelihood;
-    ``empirical_quantile`` the held-out indices' own ``1 - rate`` quantile at the plotting position ``k / (n + 1)``
-    (the ``k``-th smallest of ``n``, interpolated linearly between ranks; the largest beyond ``n / (n + 1)``).
+    Mahalanobis distance with Gaussian residuals, Hotelling's prediction region, up to the scale; ``dof_den`` the
+    formula's, or lower where :func:`threshold` fitted it to a heavier tail) with the scale fitted to them (or to
+    their largest share, the law truncated below) by maximum likelihood; ``empirical_quantile`` the held-out
+    indices' own ``1 - rate`` quantile at the plotting position ``k / (n + 1)`` (the ``k``-th smallest of ``n``,
+    interpolated linearly between ranks; the largest beyond ``n / (n + 1)``).
     ``zero_share``: the share of the held-out indices that are exact zeros (at most :data:`RESOLUTION` times the
     largest), a point mass the law is not fitted to; the law is fitted to the others and read at
     ``1 - rate / (1 - zero_share)``. With fewer than :data:`LAW_MIN` indices above zero the law is degenerate
