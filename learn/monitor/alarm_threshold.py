@@ -11,8 +11,9 @@ import numpy as np
 
 from learn.monitor.normal_models import PCARemoval, Regression
 
-__all__ = ["HEAVY_DOF_MIN", "HEAVY_GRID", "HEAVY_MIN", "LOO_MAX", "N_FOLDS", "Threshold", "held_out_novelty",
-           "held_out_pca", "held_out_regression", "minimum_baseline", "missing_evidence", "threshold", "training_size"]
+__all__ = ["BISECTIONS", "HEAVY_DOF_MIN", "HEAVY_GRID", "HEAVY_MIN", "LOO_MAX", "N_FOLDS", "Threshold", "f_scale",
+           "held_out_novelty", "held_out_pca", "held_out_regression", "minimum_baseline", "missing_evidence",
+           "threshold", "training_size"]
 
 #: Held-out indices by leave-one-out up to this many baseline tests, else by this many interleaved folds.
 LOO_MAX, N_FOLDS = 200, 20
@@ -32,6 +33,8 @@ LOG_SCALE_SPAN = 30.0
 #: ``HEAVY_DOF_MIN`` up to the formula's, geometrically spaced) when the scale is fitted to at least ``HEAVY_MIN``
 #: held-out indices: a heavier tail than Gaussian residuals give (:func:`threshold`'s ``heavy_tails``).
 HEAVY_DOF_MIN, HEAVY_GRID, HEAVY_MIN = 4.0, 8, 20
+#: Bisection steps of :func:`f_scale` over ``2 LOG_SCALE_SPAN`` e-folds (a relative precision below 1e-13).
+BISECTIONS = 50
 #: Step in the log scale of the second difference whose curvature is the fitted tail scale's information
 #: (:func:`threshold`: ``scale_log_std``, its inverse square root); Gauss-Hermite nodes of :meth:`Threshold.law_at`.
 SCALE_STEP, SCALE_NODES = 1e-3, 24
@@ -42,6 +45,24 @@ def minimum_baseline(n_features: int, n_conditions: int = 0) -> int:
     comes from a model fitted on the others, whose residual covariance then keeps at least 4 degrees of freedom
     beyond the features (the F distribution of the index has a finite variance)."""
     return n_features + n_conditions + 6
+
+
+def f_scale(Z, d1: float, d2) -> np.ndarray:
+    """The maximum-likelihood scale ``c`` of ``c F(d1, d2)`` fitted to each row of ``Z`` (..., m), all above zero:
+    the root of ``mean(u / (1 + u)) = d1 / (d1 + d2)``, ``u = d1 z / (d2 c)`` (the score of ``log c``), found by
+    bisection on ``log c`` (vectorised over the rows, ``d2`` a number or one per row; the likelihood of
+    :func:`threshold` with every index in its fit)."""
+    Z = np.asarray(Z, float)
+    d2 = np.asarray(d2, float)
+    target = d1 / (d1 + d2)
+    mid = np.log(np.median(Z, axis=-1))
+    lo, hi = mid - LOG_SCALE_SPAN, mid + LOG_SCALE_SPAN
+    for _ in range(BISECTIONS):
+        c = 0.5 * (lo + hi)
+        u = (d1 / d2)[..., None] * Z / np.exp(c)[..., None]
+        high = np.mean(u / (1.0 + u), axis=-1) > target           # the scale too small
+        lo, hi = np.where(high, c, lo), np.where(high, hi, c)
+    return np.exp(0.5 * (lo + hi))
 
 
 def _folds(n: int):
@@ -254,24 +275,21 @@ def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: i
     u = pos[-n_tail - 1] if n_tail < pos.size else 0.0                      # the tail: the indices above u
     tail = pos[pos.size - n_tail:]
 
-    def fit(law):
-        """``(nll, log scale, nll(log scale))`` of ``law`` scaled to the tail by maximum likelihood."""
-        def nll(log_c):
-            c = math.exp(log_c)
-            return (-np.sum(law.logpdf(tail / c)) + tail.size * log_c
-                    + (tail.size * law.logsf(u / c) if u > 0 else 0.0))
-
-        start = math.log(np.median(pos) / law.median())
-        r = optimize.minimize_scalar(nll, bounds=(start - LOG_SCALE_SPAN, start + LOG_SCALE_SPAN), method="bounded")
-        return float(r.fun), float(r.x), nll
-
-    best = fit(law)
     if heavy_tails and u == 0 and tail.size >= HEAVY_MIN and d2 > HEAVY_DOF_MIN:
-        for dof in np.geomspace(HEAVY_DOF_MIN, d2, HEAVY_GRID)[:-1]:     # the tail's heaviness: F(d1, dof)
-            trial = fit(stats.f(d1, dof))
-            if trial[0] < best[0]:
-                best, d2 = trial, float(dof)
-    _, log_c, nll = best
+        dofs = np.geomspace(HEAVY_DOF_MIN, d2, HEAVY_GRID)                # the tail's heaviness: F(d1, dof)
+        scales = f_scale(np.broadcast_to(tail, (dofs.size, tail.size)), d1, dofs)
+        profile = (-stats.f.logpdf(tail / scales[:, None], d1, dofs[:, None]).sum(axis=1)
+                   + tail.size * np.log(scales))
+        if np.argmin(profile) < dofs.size - 1:
+            d2 = float(dofs[np.argmin(profile)])
+            law = stats.f(d1, d2)
+
+    def nll(log_c):
+        c = math.exp(log_c)
+        return -np.sum(law.logpdf(tail / c)) + tail.size * log_c + (tail.size * law.logsf(u / c) if u > 0 else 0.0)
+
+    start = math.log(np.median(pos) / law.median())
+    log_c = optimize.minimize_scalar(nll, bounds=(start - LOG_SCALE_SPAN, start + LOG_SCALE_SPAN), method="bounded").x
     log_std = 0.0
     if u > 0:                                    # the tail's scale: an estimate from few indices
         h = SCALE_STEP

@@ -36,7 +36,7 @@ from functools import partial
 
 import numpy as np
 
-from learn.monitor.alarm_threshold import (LOG_SCALE_SPAN, LOO_MAX, held_out_pca, held_out_regression,
+from learn.monitor.alarm_threshold import (BISECTIONS, LOO_MAX, f_scale, held_out_pca, held_out_regression,
                                            missing_evidence, threshold, training_size)
 from learn.monitor.normal_models import PCARemoval, Regression
 
@@ -54,8 +54,6 @@ OUTLIER_SHARE = 0.25
 SIMULATIONS, SIMULATION_CHUNK, SIMULATION_SEED = 2000, 500, 0
 #: The critical ratio's simulated exceedance is below the rate with this confidence (:func:`simulated_critical_ratio`).
 SIMULATION_CONFIDENCE = 0.75
-#: Bisection steps of :func:`f_scale` over ``2 LOG_SCALE_SPAN`` e-folds (a relative precision below 1e-13).
-BISECTIONS = 50
 
 
 @dataclass(frozen=True)
@@ -135,23 +133,6 @@ def held_out_leverage(conditions) -> np.ndarray:
     A = np.c_[np.ones(len(conditions)), np.asarray(conditions, float).reshape(len(conditions), -1)]
     H = np.einsum("ij,jk,ik->i", A, np.linalg.pinv(A.T @ A), A)
     return H / np.maximum(1.0 - H, 1e-12)
-
-
-def f_scale(Z, d1: float, d2: float) -> np.ndarray:
-    """The maximum-likelihood scale ``c`` of ``c F(d1, d2)`` fitted to each row of ``Z`` (..., m), all above zero:
-    the root of ``mean(u / (1 + u)) = d1 / (d1 + d2)``, ``u = d1 z / (d2 c)`` (the score of ``log c``), found by
-    bisection on ``log c`` (vectorised over the rows; the likelihood of
-    :func:`~learn.monitor.alarm_threshold.threshold` with every index in its fit)."""
-    Z = np.asarray(Z, float)
-    target = d1 / (d1 + d2)
-    mid = np.log(np.median(Z, axis=-1))
-    lo, hi = mid - LOG_SCALE_SPAN, mid + LOG_SCALE_SPAN
-    for _ in range(BISECTIONS):
-        c = 0.5 * (lo + hi)
-        u = (d1 / d2) * Z / np.exp(c)[..., None]
-        high = np.mean(u / (1.0 + u), axis=-1) > target           # the scale too small
-        lo, hi = np.where(high, c, lo), np.where(high, hi, c)
-    return np.exp(0.5 * (lo + hi))
 
 
 def candidate_ratio(Z, d1: float, d2: float) -> tuple:
