@@ -261,7 +261,6 @@ def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: i
     s = s[np.isfinite(s)]
     d1 = max(int(dof_num), 1)
     d2 = max(int(n_train) - d1 - int(n_conditions), 1)
-    law = stats.f(d1, d2)
     resolution = RESOLUTION * float(np.max(np.abs(s))) if s.size else 0.0
     pos = np.sort(s[s > resolution])
     positive_share = pos.size / s.size if s.size else 0.0
@@ -275,23 +274,25 @@ def threshold(held_out, rate: float, dof_num: int, n_train: int, n_conditions: i
     u = pos[-n_tail - 1] if n_tail < pos.size else 0.0                      # the tail: the indices above u
     tail = pos[pos.size - n_tail:]
 
-    if heavy_tails and u == 0 and tail.size >= HEAVY_MIN and d2 > HEAVY_DOF_MIN:
-        dofs = np.geomspace(HEAVY_DOF_MIN, d2, HEAVY_GRID)                # the tail's heaviness: F(d1, dof)
+    if u == 0:                                   # every index: the score's root (f_scale), per degrees of freedom
+        heavy = heavy_tails and tail.size >= HEAVY_MIN and d2 > HEAVY_DOF_MIN
+        dofs = np.geomspace(HEAVY_DOF_MIN, d2, HEAVY_GRID) if heavy else np.array([float(d2)])
         scales = f_scale(np.broadcast_to(tail, (dofs.size, tail.size)), d1, dofs)
-        profile = (-stats.f.logpdf(tail / scales[:, None], d1, dofs[:, None]).sum(axis=1)
-                   + tail.size * np.log(scales))
-        if np.argmin(profile) < dofs.size - 1:
-            d2 = float(dofs[np.argmin(profile)])
-            law = stats.f(d1, d2)
+        best = int(np.argmin(-stats.f.logpdf(tail / scales[:, None], d1, dofs[:, None]).sum(axis=1)
+                             + tail.size * np.log(scales)))           # the tail's heaviness: F(d1, dof)
+        if best < dofs.size - 1:
+            d2 = float(dofs[best])
+        log_c, log_std = math.log(scales[best]), 0.0
+    else:                                        # the tail's scale: an estimate from few indices, its uncertainty
+        law = stats.f(d1, d2)
 
-    def nll(log_c):
-        c = math.exp(log_c)
-        return -np.sum(law.logpdf(tail / c)) + tail.size * log_c + (tail.size * law.logsf(u / c) if u > 0 else 0.0)
+        def nll(log_c):
+            c = math.exp(log_c)
+            return -np.sum(law.logpdf(tail / c)) + tail.size * log_c + tail.size * law.logsf(u / c)
 
-    start = math.log(np.median(pos) / law.median())
-    log_c = optimize.minimize_scalar(nll, bounds=(start - LOG_SCALE_SPAN, start + LOG_SCALE_SPAN), method="bounded").x
-    log_std = 0.0
-    if u > 0:                                    # the tail's scale: an estimate from few indices
+        start = math.log(np.median(pos) / law.median())
+        log_c = optimize.minimize_scalar(nll, bounds=(start - LOG_SCALE_SPAN, start + LOG_SCALE_SPAN),
+                                         method="bounded").x
         h = SCALE_STEP
         information = (nll(log_c + h) - 2 * nll(log_c) + nll(log_c - h)) / h**2
         log_std = 1.0 / math.sqrt(information) if information > 0 else 0.0

@@ -222,13 +222,12 @@ def largest_outlier(held_out, rate: float, dof_num: int, n_conditions: int = 0, 
         return i, float(s[i]), float(t.value * w[i])
     m = int(np.sum(np.isfinite(others))) * (1.0 - t.zero_share)
     d2 = 1.0 / (1.0 / t.dof_den + 1.0 / max(m * t.dof_num, 1.0))
-    if critical is not None and t.zero_share == 0:
-        scale = float(f_scale(others[np.isfinite(others)], t.dof_num, t.dof_den))
+    if critical is not None and t.zero_share == 0:         # t.scale: f_scale of the others
         if callable(critical):
             floor = float(stats.f.ppf(1.0 - rate, t.dof_num, d2))
-            critical = critical() if z[i] > scale * floor else floor
+            critical = critical() if z[i] > t.scale * floor else floor
         if critical is not None:
-            return i, float(s[i]), float(w[i] * scale * critical)
+            return i, float(s[i]), float(w[i] * t.scale * critical)
     level = 1.0 - min(rate / n / max(1.0 - t.zero_share, 1e-12), 0.5)
     return i, float(s[i]), float(w[i] * t.scale * stats.f.ppf(level, t.dof_num, d2))
 
