@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from datagen.cluster import connect
 from datagen.config import validate
 from datagen.lock import LOCK_NAME, LockedError, dataset_lock
 from datagen.pipeline import simulate_shard
@@ -139,34 +140,6 @@ def check_arguments(cfg: dict, n: int, seed: int, workers: int, root=None) -> No
                                   f"{existing} has {free / 1e9:.3g} GB free", parameter="n")
 
 
-#: Address schemes of Dask's communication layer (``scheme://host:port``).
-SCHEDULER_SCHEMES = ("tcp", "tls", "inproc", "ws", "wss", "ucx")
-
-
-def _connect(scheduler: str):
-    """A Dask client of ``scheduler`` (connected before anything is written), or a one-line error.
-
-    The address's form is checked before Dask is imported, so a malformed one is refused at once."""
-    host, _, port = scheduler.rpartition(":")
-    if "://" not in scheduler and host and port.isdigit():
-        scheduler = f"tcp://{scheduler}"                 # host:port, Dask's default scheme
-    scheme, sep, rest = scheduler.partition("://")
-    if not sep or scheme not in SCHEDULER_SCHEMES or not rest.strip():
-        raise BeamDamageError(f"scheduler {scheduler!r}: expected an address scheme://host:port with a scheme in "
-                              f"{', '.join(SCHEDULER_SCHEMES)}, such as tcp://host:8786", parameter="scheduler")
-    try:
-        from distributed import Client
-    except ImportError:
-        raise BeamDamageError("--scheduler needs the optional extra: pip install 'beam-damage[dask]'",
-                              parameter="scheduler") from None
-    try:
-        return Client(scheduler)
-    except (ValueError, TypeError, OSError, TimeoutError) as exc:
-        msg = " ".join(str(exc).split()) or type(exc).__name__
-        raise BeamDamageError(f"scheduler {scheduler!r}: {msg}; expected an address such as tcp://host:8786",
-                              parameter="scheduler") from None
-
-
 def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
     """Manifest of an existing compatible run (recovered: damaged shards are dropped for regeneration) or a new one."""
     root = Path(root)
@@ -269,7 +242,7 @@ def generate(root, cfg: dict, *, n: int, seed: int = 0, workers: int = 1, schedu
     cfg = validate(cfg)
     check_arguments(cfg, n, seed, workers, root)
     root = Path(root)
-    client = _connect(scheduler) if scheduler else None
+    client = connect(scheduler) if scheduler else None
     created = not root.exists()
     try:
         with _writer_lock(root):

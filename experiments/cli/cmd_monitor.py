@@ -24,6 +24,7 @@ from physics.errors import BeamDamageError, ConfigError
 from physics.identification.output_only import DEFAULT_OUTPUT_ONLY, RECORDS_METHODS
 from physics.io import (FRF, MODAL, TIME, accepted, atomic_write_bytes, atomic_write_text, figure_png, pyplot,
                         to_jsonable)
+from datagen.cluster import connect
 from datagen.store import package_version
 from learn.network.model_dir import load_model
 from physics.beam import load_beam
@@ -103,12 +104,17 @@ def add_parser(sub):
                         "status 'baseline outlier')")
     p.add_argument("--workers", type=int, default=1, metavar="N",
                    help="processes identifying the tests (default 1; the results do not depend on it)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="identify the tests on a Dask cluster, e.g. tcp://host:8786, instead of --workers (needs the "
+                        "'dask' extra; its workers read the tests and DIR/cache at the paths given here: a shared "
+                        "file system; the results do not depend on it)")
     p.add_argument("--out", metavar="DIR", help="outputs and the identification cache (default without --json: "
                                                 "out/monitor)")
     p.add_argument("--json", action="store_true",
                    help="print {" + ", ".join(f'"{k}": [...]' if k in ("tests", "events") else f'"{k}"'
                                               for k in JSON_KEYS) + '}, and "outputs" with --out')
-    p.set_defaults(func=run, flags={"n_baseline": "--baseline-tests", "workers": "--workers"})
+    p.set_defaults(func=run, flags={"n_baseline": "--baseline-tests", "workers": "--workers",
+                                    "scheduler": "--scheduler"})
 
 
 def _series(args) -> SeriesInput:
@@ -142,11 +148,16 @@ def run(args) -> dict:
         beam = _flagged("--beam", load_beam, args.beam)
     settings = replace(identification_settings(args.band, beam, model), records_method=args.records_method)
     cache = Path(args.out) / "cache" if args.out else None
-    res = monitor_series(series, args.baseline_tests, settings, cache, args.false_alarm_rate, args.normal_model,
-                         progress=not args.json, chart=args.chart, statistics=tuple(args.statistics),
-                         workers=args.workers, extrapolated_alarms=args.extrapolated_alarms,
-                         frequency_estimator=args.frequency_estimator,
-                         keep_baseline_outliers=args.keep_baseline_outliers)
+    client = connect(args.scheduler) if args.scheduler else None
+    try:
+        res = monitor_series(series, args.baseline_tests, settings, cache, args.false_alarm_rate, args.normal_model,
+                             progress=not args.json, chart=args.chart, statistics=tuple(args.statistics),
+                             workers=client or args.workers, extrapolated_alarms=args.extrapolated_alarms,
+                             frequency_estimator=args.frequency_estimator,
+                             keep_baseline_outliers=args.keep_baseline_outliers)
+    finally:
+        if client is not None:
+            client.close()
     out = judged(res, args.false_alarm_rate, model, beam_x_m)
     out.update(baseline_tests=args.baseline_tests, false_alarm_rate=args.false_alarm_rate, version=package_version(),
                detector=res.detection.to_dict(), charts=None if res.charts is None else res.charts.to_dict(),

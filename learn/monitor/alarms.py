@@ -84,7 +84,7 @@ class SeriesResult:
 
 def monitor_series(series: SeriesInput, n_baseline: int, settings: IdentificationSettings, cache_dir=None,
                    false_alarm_rate: float = 0.01, normal_model: str | None = None, progress: bool = True,
-                   chart: str = "ewma", statistics=DEFAULT_STATISTICS, workers: int = 1,
+                   chart: str = "ewma", statistics=DEFAULT_STATISTICS, workers=1,
                    extrapolated_alarms: str = "auto", frequency_estimator: str = "choose",
                    keep_baseline_outliers: bool = False) -> SeriesResult:
     """Monitor a series: identify every test (cached), track the baseline period's modes, learn the normal
@@ -94,16 +94,17 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     :data:`DEFAULT_LATENT`. A test alarms when any statistic of :mod:`learn.monitor.statistics` exceeds its
     threshold (``novelty`` and ``threshold`` of a row: the residual's); ``chart="ewma"`` adds the memory charts of
     :mod:`learn.monitor.charts` (``chart_alarm`` and ``onset`` of a row); ``statistics``: those combined (the
-    residual always). ``workers``: processes identifying the tests (:func:`learn.monitor.workers.identify_files`;
-    the result does not depend on it). ``extrapolated_alarms``: ``separate`` gives a later test beyond the
-    baseline's environment (:func:`learn.monitor.coverage.series_coverage`) alarmed only by the statistics of the
-    environment itself (:func:`learn.monitor.statistics.environmental`) the status :data:`EXTRAPOLATED` instead of
-    an alarm; ``alarm`` keeps it an alarm; ``auto`` (default) keeps them alarms when the baseline period is known
-    to cover the seasons (:func:`learn.monitor.statistics.covers_seasons`: dated tests, a baseline period of at
-    least :data:`~learn.monitor.statistics.SEASONS_DAYS` days), else separates them. ``frequency_estimator``:
-    ``choose`` (default) estimates each mode's frequency of response records by the more repeatable over the
-    baseline period of the identification and the record's FFT peak (:mod:`learn.monitor.estimator_choice`; the
-    choice in ``normal_variation["frequency_estimators"]``), ``identification`` always by the identification. Raises
+    residual always). ``workers``: processes identifying the tests, or a Dask client
+    (:func:`learn.monitor.workers.identify_files`; the result does not depend on it). ``extrapolated_alarms``:
+    ``separate`` gives a later test beyond the baseline's environment (:func:`learn.monitor.coverage.series_coverage`)
+    alarmed only by the statistics of the environment itself (:func:`learn.monitor.statistics.environmental`) the status
+    :data:`EXTRAPOLATED` instead of an alarm; ``alarm`` keeps it an alarm; ``auto`` (default) keeps them alarms when the
+    baseline period is known to cover the seasons (:func:`learn.monitor.statistics.covers_seasons`: dated tests, a
+    baseline period of at least :data:`~learn.monitor.statistics.SEASONS_DAYS` days), else separates them.
+    ``frequency_estimator``: ``choose`` (default) estimates each mode's frequency of response records by the more
+    repeatable over the baseline period of the identification and the record's FFT peak
+    (:mod:`learn.monitor.estimator_choice`; the choice in ``normal_variation["frequency_estimators"]``),
+    ``identification`` always by the identification. Raises
     :class:`BeamDamageError` on a baseline that cannot carry the model (too few tests: the message names the
     minimum; a baseline test of another kind, band or beam).
 
@@ -308,7 +309,7 @@ def _checked_request(series: SeriesInput, n_baseline: int, false_alarm_rate: flo
 
 
 def _identified(series: SeriesInput, n_baseline: int, settings: IdentificationSettings, cache_dir, progress: bool,
-                workers: int = 1):
+                workers=1):
     """``(tests, errors, pending cache entries, foreign)``: every test identified (or read from the cache), a test
     that does not belong to the baseline period's series None with the reason as its error (its index in the set
     ``foreign``)."""

@@ -161,7 +161,7 @@ class FrequencyChoice:
                 **({} if self.by_shape is None else {"by_shape": self.by_shape.tolist()}), "texts": self.texts()}
 
 
-def fft_peak_frequencies(tests: list, files: list, ref: ReferenceModes, cache_dir=None, workers: int = 1) -> np.ndarray:
+def fft_peak_frequencies(tests: list, files: list, ref: ReferenceModes, cache_dir=None, workers=1) -> np.ndarray:
     """``(n, m)``: each test's zero-padded FFT peak (Hz) in each reference mode's tracking band by frequency alone
     (:func:`learn.monitor.tracking.narrow_bands_hz`; a peak has no shape): the highest local maximum of the record's
     FFT power there (:func:`learn.monitor.identification.cached_fft_peaks`, kept in ``cache_dir`` beside the
@@ -219,7 +219,7 @@ def choose_estimators(F, G, baseline, reference_hz):
 
 
 def choose_frequencies(tests: list, files: list, ref: ReferenceModes, F, cols, baseline, cache_dir=None,
-                       workers: int = 1) -> FrequencyChoice | None:
+                       workers=1) -> FrequencyChoice | None:
     """Each reference mode's frequency by the more repeatable estimator over the baseline period (module docstring).
 
     ``tests``: each test's :class:`~learn.monitor.identification.IdentifiedModes` (None: not identified);

@@ -43,7 +43,7 @@ def beyond_windows_hz(ref: ReferenceModes) -> np.ndarray:
 
 
 def fft_peaks_beyond(tests: list, files: list, ref: ReferenceModes, chosen, fft_hz, cache_dir=None,
-                     workers: int = 1) -> FFTBeyond | None:
+                     workers=1) -> FFTBeyond | None:
     """The FFT peaks beyond the bands of the ``chosen`` modes (bool (m,)) of each response record: in each window of
     :func:`beyond_windows_hz`, the FFT peak read as in the band: the highest local maximum of the record's
     zero-padded FFT power whose vertex lies in the window (:func:`learn.monitor.identification.cached_fft_peaks`,
