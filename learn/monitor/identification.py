@@ -30,7 +30,7 @@ __all__ = ["CACHE_FORMAT", "FFT_FORMAT", "NARROW_FORMAT", "Failure", "Identifica
            "read_test", "record_problem", "with_narrow_band_poles", "write_cache"]
 
 #: Format tag of a cache entry (a change of the identification or of the entry's fields changes it).
-CACHE_FORMAT = "beam-damage-monitor-cache/17"
+CACHE_FORMAT = "beam-damage-monitor-cache/18"
 #: Format tag of a narrow-band re-identification's entry (:func:`cached_identification` with ``narrow_hz``), part of
 #: its key beside :data:`CACHE_FORMAT`: a change of the identification of a mode known to lie in its band (SSI-cov's
 #: ``mode_in_band``) changes it and re-identifies those entries alone.

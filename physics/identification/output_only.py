@@ -8,11 +8,13 @@ from dataclasses import dataclass
 from inspect import signature
 from pathlib import Path
 
+import numpy as np
+
 from physics.io.inputs import MAX_BYTES, check_input_file
 from physics.errors import ConfigError, ConvergenceError, FileFormatError, ShapeError
 from physics.identification.channel_weights import (ChannelWeights, noise_floor_weights, unweighted_diagram,
                                                     unweighted_estimate, weighted_record)
-from physics.identification.decays import free_response
+from physics.identification.decays import FREE_DROP_DB, falls_as_its_modes, free_response, least_fall_db
 from physics.identification.fft_peak import PEAK_EXPONENT
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate
@@ -149,7 +151,11 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         free response (:func:`~physics.identification.decays.free_response`: decays after hits),
         :data:`STATIONARY_METHOD` otherwise; when the picked method finds no mode, the other is tried, and
         :attr:`RecordsIdentification.method_choice` says so (SSI-cov tried so on a free response keeps its own
-        poles, unrefined in the decays' bands: ``identify_ssi(refine_decays=False)``).
+        poles, unrefined in the decays' bands: ``identify_ssi(refine_decays=False)``). A record free by its lead
+        alone (its decays falling less than :data:`~physics.identification.decays.FREE_DROP_DB`) is read by
+        :data:`STATIONARY_METHOD` first, and kept so when its decays fall more than that short of what the modes
+        found would (:func:`~physics.identification.decays.falls_as_its_modes`: a stationary response started
+        quiet, whose start leads like a hit's decay).
     band_hz : (float, float), optional
     n_modes : int, optional
     max_order : int, optional
@@ -240,6 +246,23 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
     picked = FREE_RESPONSE_METHOD if verdict.free else STATIONARY_METHOD
     why = (f"picked {picked}: response records without a force channel, {verdict.text}"
            + ("" if verdict.free else " (identified as a stationary response)"))
+    d = verdict.decays
+    if verdict.free and d.drop_db < FREE_DROP_DB:
+        # free by its lead alone: a stationary response started quiet leads its start as a hit's decay does; its
+        # modes, read as a stationary response's, tell whether its decays fall as theirs would
+        try:
+            est, diagram = fit(STATIONARY_METHOD, checked, refine_decays=False, free=False)
+        except (ConvergenceError, ShapeError):
+            pass
+        else:
+            if not falls_as_its_modes(d, est.natural_frequencies_hz, est.damping_ratios, fs):
+                k = int(np.argmin(est.damping_ratios * est.natural_frequencies_hz))
+                why = (f"picked {STATIONARY_METHOD}: response records without a force channel, {verdict.text}, "
+                       f"but the modes {STATIONARY_METHOD} finds in them would fall at least "
+                       f"{least_fall_db(d, est.natural_frequencies_hz, est.damping_ratios, fs):.0f} dB (the "
+                       f"slowest: {est.natural_frequencies_hz[k]:.4g} Hz, {100 * est.damping_ratios[k]:.2g} % "
+                       "damping): a stationary response started quiet (identified as a stationary response)")
+                return result(est, diagram, why)
     try:
         # SSI-cov picked for a stationary record has no decays to refine on; tried where era found no mode on a
         # free one, it keeps its own poles (docs/identification.md)
