@@ -26,36 +26,13 @@ def test_dask_local_cluster_identical_to_local(tmp_path):
 def test_cli_on_a_separately_started_cluster_identical_to_local(tmp_path):
     """`dask scheduler` and `dask worker` as a user starts them, `generate --scheduler tcp://...`."""
     import json
-    import shutil
-    import socket
-    import subprocess
-    import sys
-    import time
-    from pathlib import Path
 
+    from dask_cluster import separate_cluster
     from experiments.cli import main
 
-    dask_cli = shutil.which("dask", path=str(Path(sys.executable).parent))
-    if dask_cli is None:
-        pytest.skip("the dask command line is not installed")
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    address = f"tcp://127.0.0.1:{port}"
-    procs = [subprocess.Popen([dask_cli, "scheduler", "--host", "127.0.0.1", "--port", str(port),
-                               "--dashboard-address", ":0"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
-    try:
-        time.sleep(3)
-        procs.append(subprocess.Popen([dask_cli, "worker", address, "--nworkers", "2", "--nthreads", "1",
-                                       "--no-dashboard"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
-        with distributed.Client(address, timeout=60) as client:
-            client.wait_for_workers(2, timeout=60)
+    with separate_cluster(2) as address:
         args = ["generate", "--n", "40", "--seed", "8", "--json"]
         assert main([*args, "--out", str(tmp_path / "cluster"), "--scheduler", address]) == 0
         assert main([*args, "--out", str(tmp_path / "local"), "--workers", "1"]) == 0
-    finally:
-        for p in reversed(procs):
-            p.terminate()
-            p.wait(30)
     a, b = (json.loads((tmp_path / d / "manifest.json").read_text()) for d in ("cluster", "local"))
     assert a["shards"] and [e["checksums"] for e in a["shards"]] == [e["checksums"] for e in b["shards"]]  # bit for bit

@@ -1,5 +1,5 @@
 """`monitor --scheduler`: a series identified on a Dask cluster gives, byte for byte, what one local process gives;
-a worker that cannot read a test, a malformed address or no scheduler stop the run with one line (exit 2)."""
+a worker that cannot read a test, or a malformed address, stops the run with one line (exit 2)."""
 
 import json
 
@@ -42,13 +42,16 @@ def test_the_cluster_identifies_and_reads_fft_peaks_as_one_process_does(cluster,
 
 
 @pytest.mark.slow
-def test_monitor_on_a_cluster_writes_the_json_and_cache_of_one_process(tmp_path, capsys, cluster, records):
-    address, _ = cluster
+def test_monitor_on_a_separately_started_cluster_writes_the_json_and_cache_of_one_process(tmp_path, capsys, records):
+    """`dask scheduler` and `dask worker` as a user starts them, `monitor --scheduler tcp://...`."""
+    from dask_cluster import separate_cluster
+
     outs = {}
-    for how, flag in (("local", ["--workers", "1"]), ("dask", ["--scheduler", address])):
-        assert main(["monitor", *records, "--baseline-tests", "10", "--band", "5", "400", *flag,
-                     "--out", str(tmp_path / how), "--json"]) == 0
-        outs[how] = capsys.readouterr()[0].replace(str(tmp_path / how), "OUT")
+    with separate_cluster(2) as address:
+        for how, flag in (("local", ["--workers", "1"]), ("dask", ["--scheduler", address])):
+            assert main(["monitor", *records, "--baseline-tests", "10", "--band", "5", "400", *flag,
+                         "--out", str(tmp_path / how), "--json"]) == 0
+            outs[how] = capsys.readouterr()[0].replace(str(tmp_path / how), "OUT")
     assert outs["local"] == outs["dask"]
     res = json.loads(outs["dask"])
     assert len(res["tests"]) == 14 and res["counts"].get("not identified", 0) == 0
