@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 import os
 import time
+from contextlib import ExitStack
 from pathlib import Path
 
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
@@ -32,8 +33,6 @@ __all__ = ["main"]
 
 def _cluster(scheduler, workers: int):
     """A context giving a Dask client: of ``scheduler``, or of a local cluster of ``workers`` processes."""
-    from contextlib import ExitStack
-
     import distributed
 
     stack = ExitStack()
