@@ -12,7 +12,13 @@ switched on with the capture: quiet for its first tenths of a second). ``identif
 judged free, SSI-cov otherwise (:mod:`physics.identification.output_only`); a misjudged case is measured by the
 scatter of mode 1's frequency over seeds with era and with SSI-cov.
 
-Run: ``python -m experiments.benches.bench_free_response [--seeds N] [--only NAME ...] [--real] [--loss]``
+A record free by its lead alone (its decays falling less than 6 dB) is read by SSI-cov first and kept so when its
+decays fall more than 6 dB short of what SSI-cov's slowest mode would give (a stationary response started quiet);
+``--lead`` prints, for those records of each case (and of the independent simulator's ambient series with
+``--series-seeds``), their fall, SSI-cov's modes' least fall and the method ``auto`` uses.
+
+Run: ``python -m experiments.benches.bench_free_response [--seeds N] [--only NAME ...] [--real] [--loss] [--lead]
+[--series-seeds 0 1 2 3 4 5 --series-tests 40]``
 """
 
 from __future__ import annotations
@@ -27,13 +33,15 @@ import numpy as np
 
 from experiments.benches import bench_real_series as brs
 from experiments.benches.impact_records import ImpactCase, impact_records
+from physics.errors import ConvergenceError, ShapeError
 from physics.identification.channel_weights import noise_floor_weights, weighted_record
-from physics.identification.decays import free_response
+from physics.identification.decays import FREE_DROP_DB, free_response, least_fall_db
 from physics.identification.output_only import identify_records
 from physics.identification.record_checks import check_records
+from physics.identification.ssi import identify_ssi
 from physics.io.timedata import TimeRecords
 
-__all__ = ["Family", "CASES", "record", "verdict", "main"]
+__all__ = ["Family", "CASES", "lead_alone", "record", "verdict", "main"]
 
 #: A lab frame's modes (Hz) and damping ratios, and its four channels' mode shapes at the sensors.
 FRAME_FN_HZ = (5.3, 17.0, 31.0, 47.0, 59.0)
@@ -122,16 +130,51 @@ def record(fam: Family, seed: int) -> np.ndarray:
     return y
 
 
-def verdict(y, fs_hz) -> bool:
-    """``free_response``'s verdict as ``identify``/``monitor`` take it: on the channel-weighted checked record."""
+def _checked(y, fs_hz, band_hz=None):
+    """The record as ``identify``/``monitor`` take it: checked, and with several channels weighted."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        checked = check_records(y, fs_hz)
+        checked = check_records(y, fs_hz, band_hz)
         if y.shape[0] > 1:
             weights = noise_floor_weights(checked, "bench")
             if weights is not None:
                 checked = weighted_record(checked, weights)
-        return free_response(checked).free
+        return checked
+
+
+def verdict(y, fs_hz) -> bool:
+    """``free_response``'s verdict as ``identify``/``monitor`` take it: on the channel-weighted checked record."""
+    return free_response(_checked(y, fs_hz)).free
+
+
+def lead_alone(y, fs_hz, band_hz=None):
+    """For a record free by its lead alone: ``(its fall (dB), the least fall of the modes SSI-cov reads in it as a
+    stationary response (dB; NaN when it finds none), the method auto reads it with)``; None for any other record."""
+    checked = _checked(y, fs_hz, band_hz)
+    v = free_response(checked)
+    if not (v.free and v.decays.drop_db < FREE_DROP_DB):
+        return None
+    recs = TimeRecords(1 / fs_hz, y, tuple(f"{k + 1}:+X" for k in range(y.shape[0])), ("acceleration",) * y.shape[0],
+                       {"source": "bench"})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            est = identify_ssi(checked, fs_hz, band_hz, refine_decays=False, free=False).estimate
+            least = least_fall_db(v.decays, est.natural_frequencies_hz, est.damping_ratios, fs_hz)
+        except (ConvergenceError, ShapeError):             # SSI-cov finds no mode
+            least = np.nan
+        method = identify_records(recs, "auto", band_hz).estimate.method
+    return v.decays.drop_db, least, method
+
+
+def _lead_row(name, found) -> str:
+    found = [r for r in found if r is not None]
+    if not found:
+        return f"| {name} | 0 | | | |"
+    drop, least, method = (np.array(c) for c in zip(*found))
+    reads = ", ".join(f"{m} {int(np.sum(method == m))}" for m in sorted(set(method)))
+    return (f"| {name} | {len(found)} | {drop.min():.1f} to {drop.max():.1f} | {np.nanmin(least):.1f} to "
+            f"{np.nanmax(least):.1f} | {reads} |")
 
 
 B = Family("base: 1 ch, 1 hit, 2 % pre-trigger, noise 1e-2")
@@ -233,6 +276,11 @@ def main(argv=None) -> int:
     ap.add_argument("--only", nargs="*", default=None, help="case names containing any of these")
     ap.add_argument("--real", action="store_true", help="the real sets too")
     ap.add_argument("--loss", action="store_true", help="mode 1 scatter with era and SSI-cov of misjudged cases")
+    ap.add_argument("--lead", action="store_true", help="the records free by their lead alone: their fall, SSI-cov's "
+                                                          "least fall and the method auto uses")
+    ap.add_argument("--series-seeds", type=int, nargs="*", default=[],
+                    help="with --lead: the independent simulator's ambient series of these seeds too")
+    ap.add_argument("--series-tests", type=int, default=40, help="tests of each simulator series (default 40)")
     a = ap.parse_args(argv)
     print("| case | truth | free / stationary | method used | mode 1 std era / used (Hz) |")
     print("|---|---|---|---|---|")
@@ -250,6 +298,20 @@ def main(argv=None) -> int:
     if a.real:
         for name, k, m, truth in real_verdicts():
             print(f"| real: {name} | {truth} | {k} / {m - k} | | |", flush=True)
+    if a.lead:
+        print("\n| case | free by its lead alone | their fall (dB) | SSI-cov's modes' least fall (dB) | auto reads |")
+        print("|---|---|---|---|---|")
+        for fam in CASES:
+            if a.only and not any(o in fam.name for o in a.only):
+                continue
+            print(_lead_row(fam.name, [lead_alone(record(fam, s), fam.fs_hz) for s in range(a.seeds)]), flush=True)
+        from experiments.second_sim.series import SeriesConfig, simulate_series
+
+        for seed in a.series_seeds:
+            tests = simulate_series(SeriesConfig(n_tests=a.series_tests, kind="output-only", damage_day=None,
+                                                 seed=seed))
+            found = [lead_alone(t.record.signals, t.record.sampling_frequency_hz, (5.0, 400.0)) for t in tests]
+            print(_lead_row(f"simulator's ambient series, seed {seed} ({a.series_tests} tests)", found), flush=True)
     return 0
 
 
