@@ -33,6 +33,7 @@ import numpy as np
 
 from experiments.benches import bench_real_series as brs
 from experiments.benches.impact_records import ImpactCase, impact_records
+from experiments.second_sim.series import SeriesConfig, simulate_series
 from physics.errors import ConvergenceError, ShapeError
 from physics.identification.channel_weights import noise_floor_weights, weighted_record
 from physics.identification.decays import FREE_DROP_DB, free_response, least_fall_db
@@ -305,8 +306,6 @@ def main(argv=None) -> int:
             if a.only and not any(o in fam.name for o in a.only):
                 continue
             print(_lead_row(fam.name, [lead_alone(record(fam, s), fam.fs_hz) for s in range(a.seeds)]), flush=True)
-        from experiments.second_sim.series import SeriesConfig, simulate_series
-
         for seed in a.series_seeds:
             tests = simulate_series(SeriesConfig(n_tests=a.series_tests, kind="output-only", damage_day=None,
                                                  seed=seed))
