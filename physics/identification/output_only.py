@@ -256,11 +256,11 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
             pass
         else:
             if not falls_as_its_modes(d, est.natural_frequencies_hz, est.damping_ratios, fs):
-                k = int(np.argmin(est.damping_ratios * est.natural_frequencies_hz))
+                f, z = est.natural_frequencies_hz, est.damping_ratios
+                k = int(np.nanargmin(np.where((f > 0) & (z >= 0), z * f, np.nan)))     # least_fall_db's mode
                 why = (f"picked {STATIONARY_METHOD}: response records without a force channel, {verdict.text}, "
                        f"but the modes {STATIONARY_METHOD} finds in them would fall at least "
-                       f"{least_fall_db(d, est.natural_frequencies_hz, est.damping_ratios, fs):.0f} dB (the "
-                       f"slowest: {est.natural_frequencies_hz[k]:.4g} Hz, {100 * est.damping_ratios[k]:.2g} % "
+                       f"{least_fall_db(d, f, z, fs):.0f} dB (the slowest: {f[k]:.4g} Hz, {100 * z[k]:.2g} % "
                        "damping): a stationary response started quiet (identified as a stationary response)")
                 return result(est, diagram, why)
     try:
