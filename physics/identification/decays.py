@@ -18,8 +18,7 @@ import numpy as np
 from physics.identification.fdd import SingularValueSpectrum, running_floor, clear_peaks
 from physics.identification.record_checks import CheckedRecord
 
-__all__ = ["Decays", "FreeResponse", "adds_energy", "decay_spectrum", "find_decays", "free_response", "least_fall_db",
-           "falls_as_its_modes"]
+__all__ = ["Decays", "FreeResponse", "adds_energy", "decay_spectrum", "find_decays", "free_response", "least_fall_db"]
 
 #: Order of the linear predictor (per channel) whose innovations mark the hits.
 PREDICTOR_ORDER = 24
@@ -366,8 +365,10 @@ def least_fall_db(decays: Decays, frequencies_hz, damping_ratios, sampling_frequ
     sigma dt`` with ``sigma = zeta 2 pi f_n`` (1/s) and ``dt`` three quarters of a decay's length (s), the time
     between its quarters. A sum of decaying modes falls at least as fast as its slowest one; a noise floor reached
     within a decay makes it fall less, but then the decay leads its noise by :data:`FREE_LEAD_DB` only when it
-    falls more than :data:`FREE_DROP_DB` (its first quarter holds the decay's energy, its last the noise). NaN
-    without a mode or a decay."""
+    falls more than :data:`FREE_DROP_DB` (its first quarter holds the decay's energy, its last the noise). A
+    stationary response started quiet (a shaker switched on with the capture, or a simulation from rest) has a "hit"
+    where it starts to build up, louder than the samples before it, and a "decay" that never falls, where the modes
+    found in it, damped as they are, would have fallen tens of dB. NaN without a mode or a decay."""
     f = np.asarray(frequencies_hz, float)
     z = np.asarray(damping_ratios, float)
     ok = np.isfinite(f) & np.isfinite(z) & (f > 0) & (z >= 0)
@@ -377,16 +378,6 @@ def least_fall_db(decays: Decays, frequencies_hz, damping_ratios, sampling_frequ
     sigma = float(np.min(z[ok] * 2 * np.pi * f[ok]))
     dt = 0.75 * lengths / sampling_frequency_hz
     return float(np.average(20 * np.log10(np.e) * sigma * dt, weights=lengths))
-
-
-def falls_as_its_modes(decays: Decays, frequencies_hz, damping_ratios, sampling_frequency_hz: float) -> bool:
-    """Whether the decays fall as free decays of these modes can: their fall (:attr:`Decays.drop_db`) at most
-    :data:`FREE_DROP_DB` short of :func:`least_fall_db`. A stationary response started quiet (a shaker switched on
-    with the capture, or a simulation from rest) has a "hit" where it starts to build up, louder than the samples
-    before it, and a "decay" that never falls, where the modes found in it, damped as they are, would have fallen
-    tens of dB."""
-    least = least_fall_db(decays, frequencies_hz, damping_ratios, sampling_frequency_hz)
-    return not least - decays.drop_db > FREE_DROP_DB
 
 
 def decay_spectrum(checked: CheckedRecord) -> SingularValueSpectrum:

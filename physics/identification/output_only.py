@@ -14,7 +14,7 @@ from physics.io.inputs import MAX_BYTES, check_input_file
 from physics.errors import ConfigError, ConvergenceError, FileFormatError, ShapeError
 from physics.identification.channel_weights import (ChannelWeights, noise_floor_weights, unweighted_diagram,
                                                     unweighted_estimate, weighted_record)
-from physics.identification.decays import FREE_DROP_DB, falls_as_its_modes, free_response, least_fall_db
+from physics.identification.decays import FREE_DROP_DB, free_response, least_fall_db
 from physics.identification.fft_peak import PEAK_EXPONENT
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate
@@ -154,7 +154,7 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         poles, unrefined in the decays' bands: ``identify_ssi(refine_decays=False)``). A record free by its lead
         alone (its decays falling less than :data:`~physics.identification.decays.FREE_DROP_DB`) is read by
         :data:`STATIONARY_METHOD` first, and kept so when its decays fall more than that short of what the modes
-        found would (:func:`~physics.identification.decays.falls_as_its_modes`: a stationary response started
+        found would (:func:`~physics.identification.decays.least_fall_db`: a stationary response started
         quiet, whose start leads like a hit's decay).
     band_hz : (float, float), optional
     n_modes : int, optional
@@ -255,12 +255,13 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         except (ConvergenceError, ShapeError):
             pass
         else:
-            if not falls_as_its_modes(d, est.natural_frequencies_hz, est.damping_ratios, fs):
-                f, z = est.natural_frequencies_hz, est.damping_ratios
+            f, z = est.natural_frequencies_hz, est.damping_ratios
+            least = least_fall_db(d, f, z, fs)
+            if least - d.drop_db > FREE_DROP_DB:
                 k = int(np.nanargmin(np.where((f > 0) & (z >= 0), z * f, np.nan)))     # least_fall_db's mode
                 why = (f"picked {STATIONARY_METHOD}: response records without a force channel, {verdict.text}, "
                        f"but the modes {STATIONARY_METHOD} finds in them would fall at least "
-                       f"{least_fall_db(d, f, z, fs):.0f} dB (the slowest: {f[k]:.4g} Hz, {100 * z[k]:.2g} % "
+                       f"{least:.0f} dB (the slowest: {f[k]:.4g} Hz, {100 * z[k]:.2g} % "
                        "damping): a stationary response started quiet (identified as a stationary response)")
                 return result(est, diagram, why)
     try:
