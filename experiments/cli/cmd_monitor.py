@@ -152,8 +152,8 @@ def run(args) -> dict:
     try:
         res = monitor_series(series, args.baseline_tests, settings, cache, args.false_alarm_rate, args.normal_model,
                              progress=not args.json, chart=args.chart, statistics=tuple(args.statistics),
-                             workers=client or args.workers, extrapolated_alarms=args.extrapolated_alarms,
-                             frequency_estimator=args.frequency_estimator,
+                             workers=args.workers if client is None else client,
+                             extrapolated_alarms=args.extrapolated_alarms, frequency_estimator=args.frequency_estimator,
                              keep_baseline_outliers=args.keep_baseline_outliers)
     finally:
         if client is not None:

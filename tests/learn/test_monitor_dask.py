@@ -52,6 +52,10 @@ def test_monitor_on_a_separately_started_cluster_writes_the_json_and_cache_of_on
             assert main(["monitor", *records, "--baseline-tests", "10", "--band", "5", "400", *flag,
                          "--out", str(tmp_path / how), "--json"]) == 0
             outs[how] = capsys.readouterr()[0].replace(str(tmp_path / how), "OUT")
+        with distributed.Client(address) as client:                 # the cluster did the work
+            done = client.run_on_scheduler(lambda dask_scheduler: {k: tp.state_counts.get("memory", 0) for k, tp in
+                                                                   dask_scheduler.task_prefixes.items()})
+    assert done.get("on_worker", 0) >= 28                             # 14 identifications and 14 FFT-peak reads
     assert outs["local"] == outs["dask"]
     res = json.loads(outs["dask"])
     assert len(res["tests"]) == 14 and res["counts"].get("not identified", 0) == 0
