@@ -59,7 +59,9 @@ class Sessions:
                 f"(from {names}; the levels jump by {min(self.jump_sigmas):.0f}-{max(self.jump_sigmas):.0f} times "
                 f"the scatter between successive tests): held out a session at a time, its environment judged as "
                 f"{len(self.sizes)} values, so a later session is an alarm of the environment only far beyond "
-                f"them; more sessions in the baseline sharpen it")
+                f"them; more sessions in the baseline sharpen it"
+                + ("; the residual and the per-mode statistic held out one test at a time (a model of one session "
+                   "holds none of their variation)" if len(self.sizes) == 2 else ""))
         return {"count": len(self.sizes), "sizes": list(self.sizes), "first_tests": first,
                 "jump_sigmas": [round(float(j), 1) for j in self.jump_sigmas], "explained": self.explained,
                 "text": text}

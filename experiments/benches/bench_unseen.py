@@ -20,7 +20,7 @@ process), and the plain tests computed on the same records.
   mode above it stays in the record but is no true mode of the series). Sessions of 10 tests, each
   session's temperature moving every mode by a common factor of standard deviation 0.5 % (about 1 % between
   sessions); the baseline the first 4 sessions, intact the next 3, two damaged groups of 3 sessions each with one
-  mode down by 0.5-1.5 % and 1.5-3 %. CSV (``time_s`` and the channel, in volts), as a scope exports.
+  mode of the band down by 0.5-1.5 % and 1.5-3 %. CSV (``time_s`` and the channel, in volts), as a scope exports.
 * ``frf``: one accelerometer on an aluminium cantilever (:class:`experiments.second_sim.fem.Beam`, a root spring
   re-made +-3 % each test, temperature +-0.3 % on EI, a payload of 10 % of the beam's mass), hammer FRFs
   (accelerance, :func:`experiments.second_sim.response.measure`: 3 % noise, as H1 from a few averages) over its 5
@@ -178,7 +178,9 @@ def scope_series(seed: int, counts: dict, per_session: int = 10) -> Series:
     fn = rng.uniform(15.0, 40.0) * (BETA_L[:m] / BETA_L[0]) ** 2
     zeta = rng.uniform(0.002, 0.01, m)
     amp = np.array([1.0, 0.6, 0.4][:m])[None, :] * (fn[0] / fn)[None, :] ** 0.3
-    target = int(rng.integers(m))
+    hi = min(0.4 * fs, 1.3 * fn[-1])
+    keep = fn < hi                      # a mode above 0.4 fs stays in the record, beyond the band monitor is given
+    target = min(int(rng.integers(m)), int(keep.sum()) - 1)      # the damaged mode one of the band's
     d1, d2 = rng.uniform(0.005, 0.015), rng.uniform(0.015, 0.03)
     g1, g2 = f"mode {target + 1} -{100 * d1:.2f} %", f"mode {target + 1} -{100 * d2:.2f} %"
     ses = {k: max(1, round(v / per_session)) for k, v in counts.items()}
@@ -205,8 +207,6 @@ def scope_series(seed: int, counts: dict, per_session: int = 10) -> Series:
     how = (f"{fs:g} Hz, modes " + ", ".join(f"{f:.1f}" for f in fn) + " Hz (damping "
            + ", ".join(f"{100 * z:.2f}" for z in zeta) + f" %), peak {peak_levels:.0f} levels, {clipped} captures "
            f"at the range's extreme, sessions of {per_session}")
-    hi = min(0.4 * fs, 1.3 * fn[-1])
-    keep = fn < hi                      # a mode above 0.4 fs stays in the record, beyond the band monitor is given
     return Series("scope", how, data, F[:, keep], groups, ses["baseline"] * per_session, (0.5 * fn[0], hi), fs,
                   crb[keep], extra={"scale": scale})
 

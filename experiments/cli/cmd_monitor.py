@@ -16,7 +16,7 @@ from learn.monitor import (DEFAULT_LATENT, NORMAL_MODELS, SeriesInput, alarm_ver
 from learn.monitor.alarms import BASELINE_OUTLIER, EXTRAPOLATED, EXTRAPOLATED_ALARMS, MODE_LOST, MODE_MOVED, STATUSES
 from learn.monitor.baseline_trend import series_baseline_trend
 from learn.monitor.coverage import baseline_scatter, series_coverage
-from learn.monitor.statistics import covers_seasons
+from learn.monitor.seasons import covers_seasons
 from learn.monitor.estimator_choice import FREQUENCY_ESTIMATORS
 from learn.monitor.events import group_events, identification_change, lost_modes_change
 from learn.monitor.verdicts import event_verdicts

@@ -38,6 +38,8 @@ BISECTIONS = 50
 #: Step in the log scale of the second difference whose curvature is the fitted tail scale's information
 #: (:func:`threshold`: ``scale_log_std``, its inverse square root); Gauss-Hermite nodes of :meth:`Threshold.law_at`.
 SCALE_STEP, SCALE_NODES = 1e-3, 24
+#: The log of the largest float: a quantile beyond it is ``inf``.
+LOG_FLOAT_MAX = math.log(np.finfo(float).max)
 
 
 def minimum_baseline(n_features: int, n_conditions: int = 0) -> int:
@@ -184,7 +186,9 @@ class Threshold:
         """The law's ``level`` quantile, its fitted scale's uncertainty integrated out: the value ``v`` at which
         ``E[sf(v / (scale e^u))] = 1 - level`` over ``u ~ N(0, scale_log_std^2)`` (Gauss-Hermite nodes
         :data:`SCALE_NODES`); ``scale * ppf(level)`` for a scale known exactly (``scale_log_std = 0``). A plug-in
-        scale fitted to few indices is exceeded more often than the rate (its error enters the tail convexly)."""
+        scale fitted to few indices is exceeded more often than the rate (its error enters the tail convexly). A scale
+        so uncertain that the quantile lies beyond the floats (a law of two or three values) gives ``inf``: the
+        statistic cannot alarm."""
         from scipy import optimize, stats  # scipy: heavy, only where a threshold is read
 
         law = stats.f(self.dof_num, self.dof_den)
@@ -195,12 +199,16 @@ class Threshold:
         u, w = self.scale_log_std * x, w / w.sum()
 
         def excess(log_v):
-            return float(np.sum(w * law.sf(np.exp(log_v - u) / self.scale))) - (1.0 - level)
+            with np.errstate(over="ignore"):
+                return float(np.sum(w * law.sf(np.exp(log_v - u) / self.scale))) - (1.0 - level)
 
         span = 10.0 * self.scale_log_std + 5.0
         while excess(math.log(plug) + span) > 0 and span < 1e3:
             span *= 2
-        return math.exp(optimize.brentq(excess, math.log(plug) - span, math.log(plug) + span, xtol=1e-10))
+        if excess(math.log(plug) + span) > 0:
+            return math.inf
+        log_v = optimize.brentq(excess, math.log(plug) - span, math.log(plug) + span, xtol=1e-10)
+        return math.exp(log_v) if log_v < LOG_FLOAT_MAX else math.inf
 
     def to_dict(self) -> dict:
         return {"value": self.value, "false_alarm_rate": self.rate,

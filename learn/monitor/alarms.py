@@ -17,8 +17,9 @@ from learn.monitor.normal_models import DEFAULT_LATENT, NORMAL_MODELS
 from learn.monitor.series import SeriesInput, check_series
 from learn.monitor.alarm_threshold import Threshold, minimum_baseline
 from learn.monitor.charts import CHARTS, Charts, run_charts
-from learn.monitor.statistics import (DEFAULT_STATISTICS, STATISTICS, Detection, covers_seasons, detect,
-                                     environmental, held_out_sessions, residual_threshold, season_warning)
+from learn.monitor.seasons import covers_seasons, season_warning
+from learn.monitor.statistics import (DEFAULT_STATISTICS, STATISTICS, Detection, detect, environmental,
+                                     held_out_sessions, residual_threshold)
 from learn.monitor.coverage import series_coverage
 from learn.monitor.estimator_choice import FREQUENCY_ESTIMATORS, FrequencyChoice, choose_frequencies
 from learn.monitor.fft_beyond import fft_peaks_beyond

@@ -47,12 +47,10 @@ from learn.monitor.per_mode import per_mode_index, per_mode_threshold, per_mode_
 from learn.sessions import Sessions, baseline_sessions
 from learn.monitor.union_calibration import union_rates, value_at
 from physics.errors import ConfigError
-from datetime import datetime
 
 __all__ = ["COMBINATIONS", "DEFAULT_STATISTICS", "PATTERN_MIN", "SHARES", "SHIFT_SIDES", "STATISTICS", "Detection",
-           "detect", "environmental", "held_out_folds", "held_out_sessions", "held_out_statistics", "covers_seasons",
-           "family_rates", "joint_rate", "joint_rates", "season_warning", "shift_weights", "sidak_rate",
-           "statistics_of"]
+           "detect", "environmental", "family_rates", "held_out_folds", "held_out_sessions", "held_out_statistics",
+           "joint_rate", "joint_rates", "shift_weights", "sidak_rate", "statistics_of", "training_sizes"]
 
 #: The detector's statistics (module docstring).
 STATISTICS = ("residual", "environment", "shift", "mode")
@@ -150,24 +148,37 @@ def held_out_sessions(X, C=None) -> Sessions | None:
     return baseline_sessions(X, minimum_baseline(X.shape[1], q) - 1)
 
 
-def held_out_folds(X, C=None) -> tuple:
+def held_out_folds(X, C=None, environment: bool = True) -> tuple:
     """``(folds, n_train, n_sessions)``: the held-out folds of the baseline ``X`` (n, p) (conditions ``C`` (n, q)),
     the fewest tests a fold's model is fitted on, and the sessions a fold's model sees (None without sessions). A
     baseline of several sessions (:func:`held_out_sessions`) is held out a session at a time, and
     its environment has one value per session (the statistics of the environment are judged by a law of
     ``n_sessions`` values); otherwise the folds of
     :func:`~learn.monitor.alarm_threshold.held_out_novelty` (leave-one-out up to
-    :data:`~learn.monitor.alarm_threshold.LOO_MAX` tests), each test a value."""
+    :data:`~learn.monitor.alarm_threshold.LOO_MAX` tests), each test a value.
+
+    ``environment=False``: the folds of the statistics of a change of the modes' pattern (the residual, the per-mode
+    statistic). A model fitted on one session holds none of the sessions' variation among its components, so a
+    baseline of two sessions holds those statistics out one test at a time (the components then fitted on both
+    sessions); with three or more, a session at a time."""
     sessions = held_out_sessions(X, C)
-    if sessions is None:
+    if sessions is None or (not environment and len(sessions.sizes) < 3):
         return _folds(len(X)), training_size(len(X)), None
     return sessions.folds(), len(X) - max(sessions.sizes), len(sessions.sizes) - 1
 
 
+def training_sizes(X, C=None) -> tuple:
+    """``(n_tests, n_sessions, n_pattern)`` of the baseline ``X`` (conditions ``C``) for :func:`_thresholds`: the
+    fewest tests and the sessions a held-out model of the environment's statistics sees (:func:`held_out_folds`),
+    and the fewest tests one of the residual's and the per-mode statistic's sees."""
+    return (*held_out_folds(X, C)[1:], held_out_folds(X, C, environment=False)[1])
+
+
 def held_out_statistics(make_model, X, C=None, pattern=None) -> dict:
     """:func:`statistics_of` of every baseline test by a model fitted on the other baseline tests (the folds of
-    :func:`held_out_folds`: a session at a time when the baseline holds several, else leave-one-out), the residual
-    index with its missing-mode evidence.
+    :func:`held_out_folds`: a session at a time when the baseline holds several, else leave-one-out; the residual
+    and the per-mode statistic of a baseline of two sessions one test at a time), the residual index with its
+    missing-mode evidence.
 
     ``pattern`` (bool (p,)): the indices of a set of modes found instead, without the evidence: each baseline test
     whose missing modes lie within ``pattern`` (all of them when fewer than :data:`PATTERN_MIN` do) scored with the
@@ -180,26 +191,37 @@ def held_out_statistics(make_model, X, C=None, pattern=None) -> dict:
         rows = ~(~np.isfinite(X) & ~pattern).any(axis=1)
         if rows.sum() < PATTERN_MIN:
             rows[:] = True
-    for held in held_out_folds(X, C)[0]:
-        train = np.setdiff1d(np.arange(len(X)), held)
-        held = held[rows[held]]
-        if not held.size:
-            continue
-        model = make_model().fit(X[train], None if C is None else C[train])
-        Xh = X[held].copy()
-        if pattern is not None:
-            Xh[:, pattern] = np.nan
-        stats = statistics_of(model, Xh, None if C is None else C[held])
-        if pattern is None:
-            stats["residual"] = (stats["residual"][0] + missing_evidence(Xh, X[train]), stats["residual"][1])
-        for name, (value, vec) in stats.items():
-            if name not in out:
-                out[name] = (np.full(len(X), np.nan),
-                             None if vec is None else np.full((len(X), vec.shape[1]), np.nan))
-            out[name][0][held] = value
-            if vec is not None:
-                out[name][1][held] = vec
+    folds, _, seen = held_out_folds(X, C)
+    pattern_folds, _, pattern_seen = held_out_folds(X, C, environment=False)
+    runs = [(folds, None)] if seen == pattern_seen else [(folds, True), (pattern_folds, False)]
+    for fold_set, env in runs:
+        for held in fold_set:
+            _held_out_fold(make_model, X, C, held, rows, pattern, env, out)
     return out
+
+
+def _held_out_fold(make_model, X, C, held, rows, pattern, env, out) -> None:
+    """:func:`held_out_statistics` of one fold ``held`` into ``out``; ``env``: only the statistics of the environment
+    (True), only the others (False), or all (None)."""
+    train = np.setdiff1d(np.arange(len(X)), held)
+    held = held[rows[held]]
+    if not held.size:
+        return
+    model = make_model().fit(X[train], None if C is None else C[train])
+    Xh = X[held].copy()
+    if pattern is not None:
+        Xh[:, pattern] = np.nan
+    stats = statistics_of(model, Xh, None if C is None else C[held])
+    if pattern is None:
+        stats["residual"] = (stats["residual"][0] + missing_evidence(Xh, X[train]), stats["residual"][1])
+    for name, (value, vec) in stats.items():
+        if env is not None and environmental(model, name) != env:
+            continue
+        if name not in out:
+            out[name] = (np.full(len(X), np.nan), None if vec is None else np.full((len(X), vec.shape[1]), np.nan))
+        out[name][0][held] = value
+        if vec is not None:
+            out[name][1][held] = vec
 
 
 #: Fewest baseline tests whose missing modes lie within a test's that calibrate its pattern's thresholds on their
@@ -364,17 +386,17 @@ def _thresholds(model, held, names, each, n_train, n_conditions, missing=0, evid
     held-out tests: the two-sided threshold for both). ``missing``: modes dropped (the residual's degrees of
     freedom less by as many); ``evidence``: added to the residual's threshold (the missing-mode evidence of a set of
     modes found that the baseline period holds often: a normal set). ``n_train``: the tests each held-out model is
-    fitted on, or ``(tests, sessions)`` (:func:`held_out_folds`; sessions None: each test a value of the
-    environment), the latter for the statistics of the environment."""
+    fitted on, or ``(tests, sessions, pattern tests)`` (:func:`training_sizes`; sessions None: each test a value of
+    the environment), the first two for the statistics of the environment, the last for the others."""
     out = {}
-    n_tests, n_sessions = (n_train, None) if np.isscalar(n_train) else n_train
+    n_tests, n_sessions, n_pattern = (n_train, None, n_train) if np.isscalar(n_train) else n_train
     for nm in names:
         hv, hvec = held[nm]
         # the environment of a baseline of sessions: a law of as many values, fitted to all of them (a truncated
         # tail of so few degrees of freedom is a power law, which holds no scale)
         sessions = environmental(model, nm) and n_sessions is not None
         tail = TAIL_SHARE if environmental(model, nm) and not sessions else 1.0
-        n_fit = n_sessions if sessions else n_tests
+        n_fit = n_sessions if sessions else n_tests if environmental(model, nm) else n_pattern
         if nm == "residual":
             t = threshold(hv, each[nm], max(model.dof_ - missing, 1), n_fit, n_conditions, tail)
             out[nm] = [replace(t, value=t.value + evidence, law_value=t.law_value + evidence,
@@ -456,7 +478,7 @@ def detect(model, make_model, X, C, b_idx, rest, rate: float, n_conditions: int 
                 vec[rest] = now[nm][1]
             vectors[nm] = vec
     rates = family_rates(values[b_idx], rate, names, combination, shares) if names else np.zeros(0)
-    n_train = held_out_folds(X[b_idx], Cb)[1:]
+    n_train = training_sizes(X[b_idx], Cb)
     calibration = {"joint": "copula", "equal": "copula"}.get(combination, "")
     if combination == "joint" and len(names) > 1:
         union = _union_rates(model, held, names, rate, rates, n_train, n_conditions, shares, sides)
@@ -543,45 +565,6 @@ def environmental(model, name: str) -> bool:
     (:func:`~learn.monitor.alarm_threshold.threshold`'s ``tail_share``), rather than a residual about what the
     normal variation explains."""
     return name == "environment" or (name == "shift" and not isinstance(model, Regression))
-
-
-#: A baseline period of dated tests shorter than this (days) does not cover the seasons.
-SEASONS_DAYS = 330.0
-
-
-def season_warning(times, time_values, n_baseline: int, names) -> str | None:
-    """The warning for environmental statistics judged against a baseline period of dated tests (``times`` ISO
-    dates, ``time_values`` days) that spans less than :data:`SEASONS_DAYS` while later tests lie beyond it: the
-    seasons it did not see move the environmental scores and the shift about the baseline mean as a change would
-    (None otherwise)."""
-
-    env = [nm for nm in names if nm in ("environment", "shift")]
-    span = _baseline_span_days(times, time_values, n_baseline) if env else None
-    if span is None or span >= SEASONS_DAYS or time_values[-1] - time_values[0] <= span:
-        return None
-    return (f"the baseline period spans {span:.0f} days: the {' and '.join(env)} statistics judge the environment "
-            "against it, and the seasons it did not see move them as a change would (reported as 'change or unseen "
-            "conditions' beyond the baseline's environment); cover a year, give the conditions (--conditions) or "
-            "leave them out (--statistics residual)")
-
-
-def covers_seasons(times, time_values, n_baseline: int) -> bool:
-    """Whether the baseline period is known to cover the seasons: dated tests (``times`` ISO dates, ``time_values``
-    days) whose first ``n_baseline`` span at least :data:`SEASONS_DAYS`."""
-    span = _baseline_span_days(times, time_values, n_baseline)
-    return span is not None and span >= SEASONS_DAYS
-
-
-def _baseline_span_days(times, time_values, n_baseline: int) -> float | None:
-    """Days between the first and the last baseline test of a dated series (``times`` ISO dates, ``time_values``
-    days); None for a series without dates."""
-    if times is None or not len(times) or times[0] is None:
-        return None
-    try:
-        datetime.fromisoformat(str(times[0]).strip())
-    except ValueError:
-        return None
-    return float(time_values[n_baseline - 1] - time_values[0])
 
 
 def residual_threshold(det: Detection) -> Threshold:

@@ -135,6 +135,21 @@ def test_a_threshold_fitted_to_the_tail_gives_the_rate_with_its_scale_uncertaint
         rate * 40 / drop.size))
 
 
+def test_a_quantile_beyond_the_floats_is_an_infinite_threshold():
+    """A scale fitted to the tail of a side that holds two of a baseline's sessions' shifts: 2e-13 with a log
+    uncertainty of 663 e-folds (the fit of one detector draw of ``test_monitor_sessions``). Its quantile lies beyond
+    the floats, and the threshold is inf (the statistic cannot alarm), not an overflow; a modest uncertainty keeps
+    the finite quantile above the plug-in one."""
+    from scipy import stats
+
+    from learn.monitor.alarm_threshold import Threshold
+
+    wide = Threshold(0.0, 0.00085, 0.0, 2.1e-13, 1, 18.0, 1.15, 0.0, scale_log_std=663.0)
+    assert wide.law_at(1 - 0.00085) == math.inf
+    t = Threshold(0.0, 0.00085, 0.0, 1.0, 1, 18.0, 0.0, 0.0, scale_log_std=0.5)
+    assert stats.f(1, 18).ppf(1 - 0.00085) < t.law_at(1 - 0.00085) < math.inf
+
+
 def test_the_scaled_f_threshold_gives_the_rate_on_new_gaussian_tests():
     """Hotelling: a new test's squared Mahalanobis distance from n tests follows d(n+1)(n-1)/(n(n-d)) F(d, n-d)."""
     rng = np.random.default_rng(5)

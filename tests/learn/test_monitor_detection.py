@@ -187,7 +187,7 @@ def test_monitor_rows_carry_the_statistics_the_chart_and_the_onset(tmp_path):
 
 
 def test_environmental_statistics_on_a_baseline_shorter_than_the_seasons_are_warned_of():
-    from learn.monitor.statistics import season_warning
+    from learn.monitor.seasons import season_warning
 
     days = np.arange(400.0)
     dates = ["2026-01-01T10:00"] * 400                     # dated tests (only the first is parsed)

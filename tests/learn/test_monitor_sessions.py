@@ -95,3 +95,36 @@ def test_a_baseline_of_one_session_is_named_when_no_later_test_looks_healthy(tmp
     assert baseline_scatter(within).warning.startswith("0 of the 90 later tests look healthy and 45 lie beyond")
     within = [{**r, "extrapolated": r["baseline"] or k % 3 == 0} for k, r in enumerate(res.rows)]
     assert baseline_scatter(within).warning is None                 # a third beyond: no warning
+
+
+def _third_session_alarms(rng, n_draws, damage=0.0):
+    """Share of a later third session's tests alarmed against a baseline of two sessions (``damage``: mode 3 moved
+    in it), each session 10 tests."""
+    flagged = []
+    for _ in range(n_draws):
+        offsets = [0.0, rng.choice([-1, 1]) * rng.uniform(0.004, 0.008), 0.005 * rng.standard_normal()]
+        X = _sessions(rng, offsets)
+        X[20:, 2] += damage
+        model = PCARemoval().fit(X[:20])
+        det = detect(model, model.with_choices, X, None, np.arange(20), np.arange(20, 30), 0.01)
+        flagged.append(det.alarm[20:].mean())
+    return float(np.mean(flagged))
+
+
+def test_a_baseline_of_two_sessions_holds_the_pattern_statistics_out_one_test_at_a_time(monkeypatch):
+    """A model fitted on one session holds none of the sessions' variation among its components: held out a
+    session at a time, a baseline of two sessions gives the residual and the per-mode statistic thresholds beyond
+    any change. Held out one test at a time (the components fitted on both sessions) a later session like them is
+    no alarm and a change of one mode by 20 of the tests' scatter is seen; the environment is still judged as two
+    values."""
+    X = _sessions(np.random.default_rng(5), [0.0, 0.006])
+    folds, n_train, n_env = held_out_folds(X)
+    assert [f.tolist() for f in folds] == [list(range(10)), list(range(10, 20))] and (n_train, n_env) == (10, 1)
+    folds, n_train, n_env = held_out_folds(X, environment=False)
+    assert len(folds) == 20 and (n_train, n_env) == (19, None)
+    assert statistics.training_sizes(X) == (10, 1, 19)
+    assert _third_session_alarms(np.random.default_rng(6), 60) < 0.02
+    assert _third_session_alarms(np.random.default_rng(7), 10, damage=20e-4) > 0.9
+    every = held_out_folds
+    monkeypatch.setattr(statistics, "held_out_folds", lambda X, C=None, environment=True: every(X, C))
+    assert _third_session_alarms(np.random.default_rng(7), 10, damage=20e-4) < 0.1
