@@ -23,8 +23,9 @@ from learn.monitor.statistics import (DEFAULT_STATISTICS, STATISTICS, Detection,
 from learn.monitor.coverage import series_coverage
 from learn.monitor.estimator_choice import FREQUENCY_ESTIMATORS, FrequencyChoice, choose_frequencies
 from learn.monitor.fft_beyond import fft_peaks_beyond
-from learn.monitor.tracking import (MIN_PRESENCE, MODE_LOST, MODE_MOVED, BeyondBands, ReferenceModes, beyond_bands,
-                                   identified_by, narrow_bands_hz, reference_modes, refit_missing, track_modes)
+from learn.monitor.beyond_band import BeyondBands, beyond_bands
+from learn.monitor.tracking import (MIN_PRESENCE, MODE_LOST, MODE_MOVED, ReferenceModes, identified_by, narrow_bands_hz,
+                                   reference_modes, refit_missing, track_modes)
 from physics.errors import BeamDamageError, ConfigError
 from physics.io import finite_or_none
 from learn.monitor.workers import identify_files
@@ -43,7 +44,7 @@ class SeriesResult:
                                      ``threshold``, ``frequencies_hz``, ``mode_z_scores``, ``change_pct``,
                                      ``identified``, ``status`` (:data:`STATUSES`), ``error``, ``missing_modes``,
                                      ``beyond_band``: the modes missing from their bands read as moved or lost
-                                     (:meth:`learn.monitor.tracking.BeyondBands.readings`), ``beyond_band_text``,
+                                     (:meth:`learn.monitor.beyond_band.BeyondBands.readings`), ``beyond_band_text``,
                                      ``identified_by``: per mode the method that found its pole (or its
                                      frequency: ``fftpeak (the pole tracked: era)``), ``conditions``,
                                      ``record_crop``: response records clipped in their leading part identified
@@ -110,13 +111,13 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     minimum; a baseline test of another kind, band or beam).
 
     A reference mode missing from its band in a test with poles is looked for beyond it
-    (:func:`learn.monitor.tracking.beyond_bands`): moved (a pole no other mode claims within its reach; for a mode
+    (:func:`learn.monitor.beyond_band.beyond_bands`): moved (a pole no other mode claims within its reach; for a mode
     whose frequency is the FFT peak and which has none in its band, the FFT peak beyond it within its reach:
     :mod:`learn.monitor.fft_beyond`) or lost, each weighed by the baseline period's chance of that reading; a
     flagged one gives a test the detector did not alarm the status :data:`MODE_MOVED` or :data:`MODE_LOST`, counted
     beside the alarms; an alarm carries it in its row's ``beyond_band_text``. A test whose identification found
     poles, none in any reference mode's band, is always flagged so
-    (:attr:`learn.monitor.tracking.BeyondBands.unplaced`): ``not identified`` is only a test without poles.
+    (:attr:`learn.monitor.beyond_band.BeyondBands.unplaced`): ``not identified`` is only a test without poles.
 
     A baseline test whose held-out residual index lies beyond the baseline's family-wise threshold
     (:mod:`learn.monitor.baseline_outliers`) is left out of the baseline period: status
@@ -245,7 +246,8 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
 
 
 def readings_text(readings: list, ref: ReferenceModes) -> str:
-    """The flagged readings in words, e.g. ``mode 2 moved +20.8 % (193.6 Hz, beyond its band 139.3-184.3 Hz);
+    """The flagged readings in words, e.g. ``mode 2 moved +20.8 % (193.6 Hz, beyond its band 139.3-184.3 Hz; with a
+    run, e.g. ``; 2 tests in a row read so, chance 5.5e-05 at the baseline's share``);
     mode 3 lost (no pole within 372.3-492.3 Hz or beyond it within its reach; chance 0.0033 at the baseline's
     share)``; a test flagged for its poles all lying beyond the bands (:attr:`BeyondBands.unplaced_flagged`) starts
     with ``no mode in its band:``."""
@@ -257,8 +259,10 @@ def readings_text(readings: list, ref: ReferenceModes) -> str:
             continue
         lo, hi = bands[d["mode"] - 1]
         if d["reading"] == "moved":
+            run = (f"; {d['run_tests']} tests in a row read so, chance {d['run_chance']:.2g} at the baseline's share"
+                   if d.get("run_tests", 0) > 1 else "")
             parts.append(f"mode {d['mode']} moved {d['change_pct']:+.1f} % ({d['frequency_hz']:.4g} Hz, beyond its "
-                         f"band {lo:.4g}-{hi:.4g} Hz)")
+                         f"band {lo:.4g}-{hi:.4g} Hz{run})")
         else:
             odds = "" if unplaced else f"; chance {d['chance']:.2g} at the baseline's share"
             parts.append(f"mode {d['mode']} lost (no pole within {lo:.4g}-{hi:.4g} Hz or beyond it within its "
@@ -332,7 +336,7 @@ EXTRAPOLATED = "change or unseen conditions"
 #: whose modes could not be identified (a change may be why: counted beside the alarms); a test that cannot be
 #: judged against this baseline (another kind, band or beam; its conditions not measured); :data:`EXTRAPOLATED`;
 #: a test the detector did not alarm whose reference mode moved beyond its band (:data:`MODE_MOVED`) or was lost
-#: (:data:`MODE_LOST`) against the baseline period's odds (:func:`learn.monitor.tracking.beyond_bands`); a baseline
+#: (:data:`MODE_LOST`) against the baseline period's odds (:func:`learn.monitor.beyond_band.beyond_bands`); a baseline
 #: test left out of the baseline period as its outlier (:data:`BASELINE_OUTLIER`).
 STATUSES = ("alarm", "no alarm", "not identified", "not judged", EXTRAPOLATED, MODE_MOVED, MODE_LOST,
             BASELINE_OUTLIER)

@@ -1,6 +1,6 @@
 """The FFT peaks beyond the bands of the modes whose frequency is the record's FFT peak
 (:mod:`learn.monitor.estimator_choice`): where such a mode has no peak in its band, the peak beyond it within its
-reach is the mode moved (:func:`learn.monitor.tracking.beyond_bands` reads it as it reads a pole there)."""
+reach is the mode moved (:func:`learn.monitor.beyond_band.beyond_bands` reads it as it reads a pole there)."""
 
 from __future__ import annotations
 

@@ -18,10 +18,9 @@ from learn.pairs.noise_calibration import robust_std
 from physics.modal import mac
 
 __all__ = ["APART_MAC", "CLUSTER_GAP", "MAC_MIN", "MIN_COUNT", "MIN_PRESENCE", "MODE_LOST", "MODE_MOVED",
-           "REACH_FACTOR", "SEARCH_MIN",
-           "BeyondBands", "ReferenceModes", "admissible", "beyond_bands", "identified_by", "narrow_bands_hz",
-           "narrow_identifier", "reach_bands_hz", "reference_modes", "refit_missing",
-           "search_bands_hz", "shape_accepts", "shapes_at", "track_modes"]
+           "REACH_FACTOR", "SEARCH_MIN", "ReferenceModes", "admissible", "identified_by", "narrow_bands_hz",
+           "narrow_identifier", "reach_bands_hz", "reference_modes", "refit_missing", "search_bands_hz",
+           "shape_accepts", "shapes_at", "track_modes"]
 
 #: Baseline poles closer than this (relative) in frequency fall into one cluster.
 CLUSTER_GAP = 0.05
@@ -40,7 +39,8 @@ CORE = math.log1p(CLUSTER_GAP / 2)
 #: scatter of the mode (std) in log frequency, at least ``MIN_TOLERANCE`` (``CORE``, the window that gathered the
 #: mode's poles in the baseline) and the baseline's own reading of the mode furthest from it, never beyond
 #: ``NEIGHBOUR_SHARE`` of the log gap to the next reference mode. A pole further off is no reading of the mode in
-#: place but the mode moved (or a spurious pole): read beyond the band (:func:`beyond_bands`).
+#: place but the mode moved (or a spurious pole): read beyond the band
+#: (:func:`learn.monitor.beyond_band.beyond_bands`).
 TOLERANCE_SIGMAS, MIN_TOLERANCE, NEIGHBOUR_SHARE = 10.0, CORE, 0.45
 #: A reference mode is re-identified (:func:`refit_missing`, :mod:`learn.monitor.pole_confirmation`) over its search
 #: band, at least this wide in log frequency either way (never beyond ``NEIGHBOUR_SHARE`` of the log gap to the next
@@ -57,8 +57,8 @@ APART_MAC = 1 - MAC_MIN
 #: reference mode on each side (on the open side of the lowest and highest mode, half the gap on the other side),
 #: never beyond this factor in frequency (a lone mode: up to this factor either way).
 REACH_FACTOR = 2.0
-#: The statuses of a test whose reference mode moved beyond its band (:attr:`BeyondBands.flagged`), or was lost,
-#: against what the baseline period makes likely.
+#: The statuses of a test whose reference mode moved beyond its band, or was lost, against what the baseline period
+#: makes likely (:attr:`learn.monitor.beyond_band.BeyondBands.flagged`).
 MODE_MOVED, MODE_LOST = "mode moved", "mode lost"
 
 
@@ -368,11 +368,11 @@ def reach_bands_hz(ref: ReferenceModes, by_shape: bool = False) -> np.ndarray:
 
     ``by_shape``: with reference shapes, a neighbour told apart by shape (:data:`APART_MAC`) bounds no reach, as it
     bounds no tracking band (:func:`reference_modes`): a pole is the mode moved only when its MAC reaches
-    :data:`MAC_MIN` with the mode (:func:`beyond_bands`), which a pole of that neighbour does not, so the reach runs
-    to half the gap to the nearest neighbour not told apart (a side without one: open). A close pair's band passes
-    the neighbour (e.g. +-4 % for modes 1.7 % apart); the reach by frequency alone, half the gap, lies inside that
-    band and holds no pole beyond it. Without shapes the reach by frequency (a reading without a shape: an FFT
-    peak)."""
+    :data:`MAC_MIN` with the mode (:func:`learn.monitor.beyond_band.beyond_bands`), which a pole of that neighbour
+    does not, so the reach runs to half the gap to the nearest neighbour not told apart (a side without one: open).
+    A close pair's band passes the neighbour (e.g. +-4 % for modes 1.7 % apart); the reach by frequency alone, half
+    the gap, lies inside that band and holds no pole beyond it. Without shapes the reach by frequency (a reading
+    without a shape: an FFT peak)."""
     f = ref.frequencies_hz
     cap = math.log(REACH_FACTOR)
     m = f.size
@@ -388,199 +388,3 @@ def reach_bands_hz(ref: ReferenceModes, by_shape: bool = False) -> np.ndarray:
     hi = np.where(np.isfinite(above), above, below)
     half = np.minimum(0.5 * np.c_[lo, hi], cap)                         # no neighbour at all: the factor
     return f[:, None] * np.exp(half * [-1.0, 1.0])
-
-
-@dataclass(frozen=True)
-class BeyondBands:
-    """The reference modes missing from their bands, read against the baseline period.
-
-    Attributes
-    ----------
-    moved_hz : ndarray (n, m)      the pole that is the mode moved beyond its band (NaN elsewhere)
-    moved_col : ndarray int (n, m) its column in the test (-1 elsewhere)
-    lost : ndarray bool (n, m)     missing from its band with no pole within its reach, in a test with poles
-    chance : ndarray (n, m)        the baseline period's chance of that reading (NaN where neither), from ``u``
-                                   and ``w`` of its ``n`` tests (a baseline test's: of the other baseline tests):
-                                   ``u`` lacking the mode in its band (tests not identified included), ``w``
-                                   holding a pole no mode claims within its reach beyond its band; a lost mode
-                                   ``(u + 1) / (n + 2)`` (Laplace's rule, as the index's
-                                   :func:`learn.monitor.alarm_threshold.missing_evidence`); a moved mode
-                                   ``u / n * (w + 1) / (n + 2)``: the share lacking the mode times Laplace's chance
-                                   of a pole beyond its band (a mode the baseline found in every test gives 0)
-    flagged : ndarray bool (n, m)  ``chance <= false_alarm_rate / m`` (the rate shared among the modes), or any
-                                   reading of a test :attr:`unplaced` against the baseline's odds
-    missing_share, beyond_share : ndarray (m,)     ``u / n`` and ``w / n`` over the whole baseline period
-    n_baseline : int               baseline tests of the series
-    reach_hz : ndarray (m, 2)      :func:`reach_bands_hz` of a pole (``by_shape``)
-    unplaced : ndarray bool (n,)   a test with poles none of which lies in any reference mode's band (the
-                                   detector has no feature of it to judge)
-    unplaced_chance : ndarray (n,) the baseline period's chance of that (NaN elsewhere): ``v / n``, ``v`` of its
-                                   ``n`` tests (a baseline test's: of the other baseline tests) lacking every mode in
-                                   its band (tests not identified included); 0 when every baseline test held a mode
-    unplaced_flagged : ndarray bool (n,)   ``unplaced_chance <= false_alarm_rate``: every reading of the test flagged
-    by_fft : ndarray bool (n, m)   a moved mode read by its FFT peak beyond its band (an FFT-peak-read mode,
-                                   :mod:`learn.monitor.fft_beyond`; ``moved_col`` -1), its ``u`` and ``w`` the FFT
-                                   peak's: baseline tests without an FFT peak in the band, with one beyond it within
-                                   the reach
-    """
-
-    moved_hz: np.ndarray
-    moved_col: np.ndarray
-    lost: np.ndarray
-    chance: np.ndarray
-    flagged: np.ndarray
-    missing_share: np.ndarray
-    beyond_share: np.ndarray
-    reach_hz: np.ndarray
-    n_baseline: int = 0
-    unplaced: np.ndarray | None = None
-    unplaced_chance: np.ndarray | None = None
-    unplaced_flagged: np.ndarray | None = None
-    by_fft: np.ndarray | None = None
-
-    def status(self, i: int) -> str | None:
-        """:data:`MODE_MOVED` when a mode of test ``i`` moved beyond its band against the baseline's odds, else
-        :data:`MODE_LOST` when one was lost so, else None."""
-        if (self.flagged[i] & np.isfinite(self.moved_hz[i])).any():
-            return MODE_MOVED
-        return MODE_LOST if (self.flagged[i] & self.lost[i]).any() else None
-
-    def readings(self, i: int, ref: ReferenceModes) -> list:
-        """Test ``i``'s modes missing from their bands: per mode ``mode`` (1-based), ``reading`` (``moved`` or
-        ``lost``), ``frequency_hz`` and ``change_pct`` (against the reference frequency) of a moved one, ``chance``,
-        ``flagged`` and ``unplaced`` (the test's poles all lie beyond the bands, against the baseline's odds:
-        :attr:`unplaced_flagged`)."""
-        out = []
-        unplaced = bool(self.unplaced_flagged is not None and self.unplaced_flagged[i])
-        for r in np.flatnonzero(np.isfinite(self.moved_hz[i]) | self.lost[i]):
-            f = float(self.moved_hz[i, r])
-            moved = math.isfinite(f)
-            out.append({"mode": int(r) + 1, "reading": "moved" if moved else "lost",
-                        "frequency_hz": f if moved else None,
-                        "change_pct": 100 * (f / float(ref.frequencies_hz[r]) - 1) if moved else None,
-                        "chance": float(self.chance[i, r]), "flagged": bool(self.flagged[i, r]),
-                        "unplaced": unplaced})
-        return out
-
-
-def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_rate: float,
-                 fft=None) -> BeyondBands:
-    """The reference modes each test lacks in their bands, looked for beyond them and read against the baseline.
-
-    ``cols``: the poles' columns from :func:`track_modes` (-1: the mode missing from its band); ``baseline``:
-    indices of the baseline tests of the series (identified or not; a test of another kind, band or beam left
-    out). In a test with poles, each missing mode takes the pole nearest it within its reach
-    (:func:`reach_bands_hz` ``by_shape``; an FFT peak's by frequency) beyond its band that no reference mode claims
-    (with shapes of 2 or more sensors, MAC >= :data:`MAC_MIN`), one to one (``linear_sum_assignment`` of ``(ln(f /
-    f_ref) / reach)^2``): the mode moved, never a neighbour (a neighbour's band lies beyond the reach, or its shape
-    differs); a mode with no such pole is lost. Each reading
-    is weighed by the baseline period's chance of it (:class:`BeyondBands`) and flagged at or below
-    ``false_alarm_rate / m`` (the rate shared among the modes). A moved mode is positive evidence: one the baseline
-    found in every test is flagged; one the baseline lacked now and then only when the baseline was long enough to
-    make a pole beyond its band rare by Laplace's rule. A lost mode is an
-    absence only: by Laplace's rule a single one is flagged when the baseline held the mode in nearly all of at least
-    ``m / false_alarm_rate - 2`` tests (298 for 3 modes at 1 %; never one the baseline lacked in half its tests); on
-    a shorter baseline it adds its evidence to the novelty index (``missing_evidence`` of
-    :mod:`learn.monitor.alarm_threshold`) and is reported unflagged in the row.
-
-    A test with poles none of which lies in any reference mode's band (:attr:`BeyondBands.unplaced`) has no feature
-    the detector can judge, yet its identification found modes: each mode is read moved (the pole nearest it in
-    ``ln f`` within its reach, one to one) or lost as above, and when the baseline period's share of tests lacking
-    every mode in its band is at most ``false_alarm_rate`` (none of 12: every baseline test held a reference mode)
-    every reading is flagged, whatever the baseline's odds of each alone: such a test is a mode moved or lost, not a
-    test not identified. A baseline whose tests lacked every mode now and then (FFT peaks jumping between modes)
-    makes that reading ordinary: each mode is then weighed alone.
-    """
-    from scipy.optimize import linear_sum_assignment
-
-    n, m = len(tests), ref.frequencies_hz.size
-    cols = np.asarray(cols, int).reshape(n, m)
-    chosen = np.zeros(m, bool) if fft is None else np.asarray(fft.chosen, bool)
-    fft_miss = np.zeros((n, m), bool) if fft is None else chosen[None] & ~np.asarray(fft.in_band, bool)
-    moved_hz, moved_col = np.full((n, m), np.nan), np.full((n, m), -1)
-    by_fft = np.zeros((n, m), bool)                 # moved: the FFT peak beyond the band of an FFT-peak-read mode
-    lost = np.zeros((n, m), bool)
-    beyond = np.zeros((n, m), bool)                 # a pole no mode claims within the reach beyond the band
-    beyond_fft = np.zeros((n, m), bool)             # an FFT peak within the reach beyond the band
-    unplaced = np.zeros(n, bool)                    # poles, none in any band
-    ln_ref = np.log(ref.frequencies_hz)
-    reach = np.log(reach_bands_hz(ref)) - ln_ref[:, None]          # (m, 2): negative, positive (FFT peaks)
-    reach_pole = np.log(reach_bands_hz(ref, by_shape=True)) - ln_ref[:, None]     # poles: by shape too
-    for i, t in enumerate(tests):
-        if t is None or t.frequencies_hz.size == 0 or m == 0:
-            continue
-        unplaced[i] = bool((cols[i] < 0).all())
-        free = np.setdiff1d(np.arange(t.frequencies_hz.size), cols[i][cols[i] >= 0])
-        peaks = np.zeros((0, 2)) if fft is None else np.asarray(fft.peaks_hz[i], float)          # (m, 2)
-        owner, _ = np.nonzero(np.isfinite(peaks))
-        f = np.r_[t.frequencies_hz[free], peaks[np.isfinite(peaks)]]   # the free poles, then the FFT peaks
-        if f.size == 0:
-            lost[i] = cols[i] < 0
-            continue
-        is_fft = np.r_[np.zeros(free.size, bool), np.ones(owner.size, bool)]
-        d = np.log(f)[:, None] - ln_ref[None]                                       # (k, m)
-        r_k = np.where(is_fft[:, None, None], reach[None], reach_pole[None])                  # (k, m, 2)
-        side = np.where(d < 0, r_k[..., 0], r_k[..., 1])
-        ok = (np.abs(d) > ref.tolerance[None]) & (d / side <= 1.0)
-        S = shapes_at(t, ref.dofs) if ref.shapes is not None else None
-        if S is not None:
-            ok[:free.size] &= mac(S[:, free], ref.shapes) >= MAC_MIN
-        ok[free.size:] &= owner[:, None] == np.arange(m)[None]      # an FFT peak of its own mode's windows only
-        beyond[i] = ok[:free.size].any(axis=0)
-        beyond_fft[i] = ok[free.size:].any(axis=0)
-        # an FFT-peak-read mode without a peak in its band is read by its FFT peak beyond it, else as the
-        # identification reads it (a pole beyond the band where the identification lacks the mode in its band)
-        ok[:free.size] &= ((cols[i] < 0) & ~(fft_miss[i] & beyond_fft[i]))[None]
-        ok[free.size:] &= fft_miss[i][None]
-        miss = np.flatnonzero((cols[i] < 0) | fft_miss[i])
-        if miss.size:
-            cost = np.where(ok[:, miss], (d[:, miss] / side[:, miss]) ** 2, 1e9)
-            r, c = linear_sum_assignment(cost)
-            keep = ok[:, miss][r, c]
-            r, c = r[keep], miss[c[keep]]
-            moved_hz[i, c] = f[r]
-            by_fft[i, c] = is_fft[r]
-            pole = ~is_fft[r]
-            moved_col[i, c[pole]] = free[r[pole]]
-            lost[i] = cols[i] < 0
-            lost[i, c] = False
-    base = np.asarray(baseline, int)
-    lacking = np.array([[tests[i] is None or cols[i, r] < 0 for r in range(m)] for i in base], bool).reshape(-1, m)
-    lacking_fft = np.array([[tests[i] is None or fft_miss[i, r] for r in range(m)] for i in base],
-                           bool).reshape(-1, m)
-    nb = max(base.size, 1)
-    u, w = lacking.sum(axis=0).astype(float), beyond[base].sum(axis=0).astype(float)
-    q, s, n_q = _baseline_shares(lacking, beyond[base], base, n)
-    q_fft, s_fft, _ = _baseline_shares(lacking_fft, beyond_fft[base], base, n)
-    q, s = np.where(by_fft, q_fft, q), np.where(by_fft, s_fft, s)
-    moved = np.isfinite(moved_hz)
-    none = np.array([tests[i] is None or bool((cols[i] < 0).all()) for i in base], bool)
-    v = float(none.sum())
-    share = np.full(n, v / nb)
-    if base.size > 1:
-        share[base] = (v - none) / (base.size - 1)
-    unplaced_chance = np.where(unplaced, share, np.nan)
-    unplaced_flagged = unplaced & (share <= false_alarm_rate)
-    chance = np.where(moved, q * (s * n_q + 1) / (n_q + 2), np.where(lost, (q * n_q + 1) / (n_q + 2), np.nan))
-    with np.errstate(invalid="ignore"):
-        flagged = (moved | lost) & ((chance <= false_alarm_rate / max(m, 1)) | unplaced_flagged[:, None])
-    return BeyondBands(moved_hz, moved_col, lost, chance, flagged, u / nb, w / nb,
-                       reach_bands_hz(ref, by_shape=True), int(base.size), unplaced, unplaced_chance,
-                       unplaced_flagged, by_fft)
-
-
-def _baseline_shares(lacking, beyond, base, n: int):
-    """``(q, s, n_q)``: per test (n, m) the baseline period's share of tests lacking the mode in its band
-    (``lacking``, (b, m)) and holding a peak within its reach beyond it (``beyond``, (b, m)), each baseline test's
-    of the other baseline tests, and the tests they count (n, 1)."""
-    b, m = lacking.shape[0], lacking.shape[1]
-    nb = max(b, 1)
-    u, w = lacking.sum(axis=0).astype(float), beyond.sum(axis=0).astype(float)
-    q = np.broadcast_to(u / nb, (n, m)).copy()
-    s = np.broadcast_to(w / nb, (n, m)).copy()
-    n_q = np.full((n, 1), float(b))
-    if b > 1:                                       # a baseline test read against the other baseline tests
-        q[base] = (u[None] - lacking) / (b - 1)
-        s[base] = (w[None] - beyond) / (b - 1)
-        n_q[base] = b - 1
-    return q, s, n_q

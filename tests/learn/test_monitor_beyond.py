@@ -13,7 +13,8 @@ from learn.monitor import (IdentificationSettings, IdentifiedModes, SeriesInput,
                            track_modes)
 from learn.monitor.alarms import FLAGGED_STATUSES, readings_text
 from learn.monitor.events import group_events, lost_modes_change
-from learn.monitor.tracking import MODE_LOST, MODE_MOVED, REACH_FACTOR, beyond_bands, reach_bands_hz
+from learn.monitor.beyond_band import beyond_bands
+from learn.monitor.tracking import MODE_LOST, MODE_MOVED, REACH_FACTOR, reach_bands_hz
 from modal_files import write_modal_series
 
 F0 = np.array([10.0, 31.0, 62.0])
@@ -106,6 +107,26 @@ def test_a_moved_reading_the_baseline_makes_ordinary_is_not_flagged():
     tests = _baseline(drop=(1, range(0, 12, 2))) + [_modes([F0[0], 38.5, F0[2]])]
     ref, bb = _read(tests, 12)
     assert bb.chance[12, 1] == pytest.approx(0.5 / 14) and not bb.flagged[12, 1] and bb.status(12) is None
+
+
+def test_a_run_of_moved_readings_to_one_side_is_flagged_by_the_product_of_their_chances():
+    """Mode 2 lacking in half of 12 baseline tests: one pole beyond its band has chance 0.5 / 14 = 0.036, above
+    0.01 / 3; a second test in a row read moved to the same side gives 0.0013 and is flagged (a healthy structure
+    misreads tests independently: such a run ends at a test with probability 0.0013). A reading to the other
+    side, a test not identified or the mode back in its band start a new run."""
+    down = _modes([F0[0], 28.0, F0[2]])
+    up = _modes([F0[0], 35.0, F0[2]])
+    tests = _baseline(drop=(1, range(0, 12, 2))) + [down, down, down, up, None, down, _modes(F0), down, down]
+    ref, bb = _read(tests, 12)
+    c = 0.5 / 14
+    np.testing.assert_allclose(bb.chance[12:, 1], [c, c, c, c, np.nan, c, np.nan, c, c])
+    np.testing.assert_array_equal(bb.run_tests[12:, 1], [1, 2, 3, 1, 0, 1, 0, 1, 2])
+    np.testing.assert_allclose(bb.run_chance[12:, 1], [c, c**2, c**3, c, np.nan, c, np.nan, c, c**2])
+    np.testing.assert_array_equal(bb.flagged[12:, 1], [False, True, True, False, False, False, False, False, True])
+    assert [bb.status(i) for i in (12, 13, 15, 20)] == [None, MODE_MOVED, None, MODE_MOVED]
+    (d,) = bb.readings(13, ref)
+    assert d["run_tests"] == 2 and d["run_chance"] == pytest.approx(c**2)
+    assert "; 2 tests in a row read so, chance 0.0013 at the baseline's share" in readings_text([d], ref)
 
 
 def test_two_missing_modes_never_share_a_pole_and_a_pole_beyond_the_reach_is_no_mode():

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from learn.monitor import IdentificationSettings, IdentifiedModes, reference_modes, refit_missing, track_modes
-from learn.monitor.tracking import (CORE, SEARCH_MIN, TOLERANCE_SIGMAS, beyond_bands, narrow_bands_hz,
-                                    search_bands_hz)
+from learn.monitor.beyond_band import beyond_bands
+from learn.monitor.tracking import CORE, SEARCH_MIN, TOLERANCE_SIGMAS, narrow_bands_hz, search_bands_hz
 
 FS_HZ, N_SAMPLES, ZETA = 1000.0, 1500, 0.01
 SETTINGS = IdentificationSettings((50.0, 500.0))

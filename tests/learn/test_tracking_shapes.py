@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from learn.monitor import IdentifiedModes, reference_modes, track_modes
-from learn.monitor.tracking import (APART_MAC, CORE, MAC_MIN, MODE_MOVED, NEIGHBOUR_SHARE, admissible, beyond_bands,
-                                   narrow_bands_hz, reach_bands_hz)
+from learn.monitor.beyond_band import beyond_bands
+from learn.monitor.tracking import (APART_MAC, CORE, MAC_MIN, MODE_MOVED, NEIGHBOUR_SHARE, admissible, narrow_bands_hz,
+                                   reach_bands_hz)
 from physics.modal import mac
 
 F0 = np.array([100.0, 102.0])                   # 2 % apart: 45 % of the gap is 0.89 %
