@@ -61,7 +61,8 @@ class Sessions:
                 f"{len(self.sizes)} values, so a later session is an alarm of the environment only far beyond "
                 f"them; more sessions in the baseline sharpen it"
                 + ("; the residual and the per-mode statistic held out one test at a time (a model of one session "
-                   "holds none of their variation)" if len(self.sizes) == 2 else ""))
+                   "holds none of their variation), which takes later sessions to move the modes as these two differ: "
+                   "a later session that moves them in another pattern alarms" if len(self.sizes) == 2 else ""))
         return {"count": len(self.sizes), "sizes": list(self.sizes), "first_tests": first,
                 "jump_sigmas": [round(float(j), 1) for j in self.jump_sigmas], "explained": self.explained,
                 "text": text}

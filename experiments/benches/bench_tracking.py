@@ -2,7 +2,7 @@
 
 Run::
 
-    python -m experiments.benches.bench_tracking [--seeds 10] [--alarms]
+    python -m experiments.benches.bench_tracking [--seeds 10] [--alarms] [--runs]
 
 Five modes at 3.00, 3.49, 4.17, 6.30 and 7.50 Hz (2 % log-normal scatter per test), the first two found in 24 %
 and 40 % of the tests, the 4.17-Hz mode in 90 %, the others always, plus ``k`` spurious poles per test uniform in
@@ -12,7 +12,9 @@ tests of the same kind (mean per series), how many times the 4.17-Hz mode's slot
 reference mode's slot holds another mode's pole, or a spurious pole. Prints a Markdown table. ``--alarms``: the
 false-alarm rates (1 % targeted) of new tests holding or lacking a mode the baseline found in 24 %, 40 % or 100 %
 of its tests (Gaussian features), the residual's threshold pooled over the baseline tests and per set of modes
-found (the detector's).
+found (the detector's). ``--runs``: the later tests whose readings beyond the bands are flagged, each reading alone
+and with the runs of moved readings, with each mode's presence kept from test to test with probability 0, 0.8 and
+0.95 (200 baseline and 2000 later tests per seed).
 """
 
 from __future__ import annotations
@@ -25,9 +27,10 @@ from learn.monitor import NORMAL_MODELS, held_out_novelty, missing_evidence, thr
 from learn.monitor.alarm_threshold import training_size
 from learn.monitor.identification import IdentifiedModes
 from learn.monitor.statistics import detect
+from learn.monitor.beyond_band import beyond_bands
 from learn.monitor.tracking import reference_modes, track_modes
 
-__all__ = ["main", "rare_mode_alarms", "run", "series"]
+__all__ = ["main", "rare_mode_alarms", "run", "run_flags", "series"]
 
 MODES_HZ = np.array([3.0, 3.49, 4.17, 6.3, 7.5])
 PRESENCE = np.array([0.24, 0.40, 0.9, 1.0, 1.0])
@@ -35,13 +38,20 @@ PRESENCE = np.array([0.24, 0.40, 0.9, 1.0, 1.0])
 SCATTER = 0.02
 
 
-def series(n: int, k: int, seed: int):
-    """``(tests, labels)``: per test its poles and, per pole, the true mode (0-4) or -1 for a spurious one."""
+def series(n: int, k: int, seed: int, persistence: float = 0.0):
+    """``(tests, labels)``: per test its poles and, per pole, the true mode (0-4) or -1 for a spurious one.
+    ``persistence``: each mode's presence a two-state Markov chain that keeps its state with this probability, else
+    draws it anew (the shares :data:`PRESENCE` kept; 0: drawn independently per test)."""
     rng = np.random.default_rng(seed)
     tests, labels = [], []
+    keep = rng.random(MODES_HZ.size) < PRESENCE if persistence else None
     for _ in range(n):
         f = MODES_HZ * np.exp(SCATTER * rng.standard_normal(MODES_HZ.size))
-        keep = rng.random(MODES_HZ.size) < PRESENCE
+        if persistence:
+            u = rng.random(MODES_HZ.size)
+            keep = np.where(keep, u < persistence + (1 - persistence) * PRESENCE, u < (1 - persistence) * PRESENCE)
+        else:
+            keep = rng.random(MODES_HZ.size) < PRESENCE
         ff = np.r_[f[keep], np.exp(rng.uniform(np.log(2.0), np.log(8.0), k))]
         lab = np.r_[np.flatnonzero(keep), np.full(k, -1)]
         order = np.argsort(ff)
@@ -68,6 +78,22 @@ def run(n: int, k: int, seed: int) -> dict:
     out["other_mode"] = int(np.sum(ok & (held >= 0) & (held != mine)))
     out["spurious_held"] = int(np.sum(ok & (held == -1)))
     return out
+
+
+def run_flags(persistence: float, k: int, seeds: int = 3, n_baseline: int = 200, n_later: int = 2000) -> tuple:
+    """Share of the later tests whose readings beyond the bands are flagged (1 % over the modes), each reading alone
+    and with the runs of moved readings (:func:`learn.monitor.beyond_band.run_chances`), over ``seeds`` series."""
+    alone = with_runs = 0
+    for s in range(seeds):
+        tests, _ = series(n_baseline + n_later, k, s, persistence)
+        ref = reference_modes(tests[:n_baseline])
+        bb = beyond_bands(tests, ref, track_modes(tests, ref)[3], range(n_baseline), 0.01)
+        single = (np.isfinite(bb.moved_hz) | bb.lost) & (bb.chance <= 0.01 / ref.frequencies_hz.size)
+        if bb.unplaced_flagged is not None:
+            single |= bb.unplaced_flagged[:, None]
+        alone += int(single[n_baseline:].any(axis=1).sum())
+        with_runs += int(bb.flagged[n_baseline:].any(axis=1).sum())
+    return alone / (seeds * n_later), with_runs / (seeds * n_later)
 
 
 def rare_mode_alarms(share: float, model: str, reps: int = 5, seed: int = 0) -> tuple:
@@ -103,7 +129,19 @@ def main(argv=None) -> None:
     ap = parser(__file__, __doc__)
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--alarms", action="store_true", help="the false alarms of tests holding or lacking a rare mode")
+    ap.add_argument("--runs", action="store_true",
+                    help="later tests flagged beyond the bands, each reading alone and with runs of moved readings, "
+                         "with each mode's presence persisting over tests")
     args = ap.parse_args(argv)
+    if args.runs:
+        print("| presence kept from test to test | spurious poles per test | flagged, each reading alone | "
+              "with the runs of moved readings |")
+        print("| --- | --- | --- | --- |")
+        for persistence in (0.0, 0.8, 0.95):
+            for k in (1, 2, 4):
+                alone, runs = run_flags(persistence, k, args.seeds)
+                print(f"| {persistence:g} | {k} | {100 * alone:.2f} % | {100 * runs:.2f} % |")
+        return
     if args.alarms:
         print("| model | mode 1 found in | false alarms of tests holding it, pooled / per set of modes found | "
               "lacking it, pooled / per set | all, pooled / per set |")

@@ -258,9 +258,9 @@ def readings_text(readings: list, ref: ReferenceModes) -> str:
         if not d["flagged"]:
             continue
         lo, hi = bands[d["mode"] - 1]
+        run = (f"; {d['run_tests']} tests in a row read so, chance {d['run_chance']:.2g} at the baseline's share"
+               if d.get("run_tests", 0) > 1 else "")
         if d["reading"] == "moved":
-            run = (f"; {d['run_tests']} tests in a row read so, chance {d['run_chance']:.2g} at the baseline's share"
-                   if d.get("run_tests", 0) > 1 else "")
             parts.append(f"mode {d['mode']} moved {d['change_pct']:+.1f} % ({d['frequency_hz']:.4g} Hz, beyond its "
                          f"band {lo:.4g}-{hi:.4g} Hz{run})")
         else:

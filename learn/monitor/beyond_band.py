@@ -33,8 +33,9 @@ class BeyondBands:
                                    :func:`learn.monitor.alarm_threshold.missing_evidence`); a moved mode
                                    ``u / n * (w + 1) / (n + 2)``: the share lacking the mode times Laplace's chance
                                    of a pole beyond its band (a mode the baseline found in every test gives 0)
-    flagged : ndarray bool (n, m)  ``chance <= false_alarm_rate / m`` (the rate shared among the modes), or any
-                                   reading of a test :attr:`unplaced` against the baseline's odds
+    flagged : ndarray bool (n, m)  ``chance <= false_alarm_rate / m`` (the rate shared among the modes), or
+                                   ``run_chance`` so, or any reading of a test :attr:`unplaced` against the
+                                   baseline's odds
     missing_share, beyond_share : ndarray (m,)     ``u / n`` and ``w / n`` over the whole baseline period
     n_baseline : int               baseline tests of the series
     reach_hz : ndarray (m, 2)      :func:`reach_bands_hz` of a pole (``by_shape``)
@@ -48,6 +49,8 @@ class BeyondBands:
                                    :mod:`learn.monitor.fft_beyond`; ``moved_col`` -1), its ``u`` and ``w`` the FFT
                                    peak's: baseline tests without an FFT peak in the band, with one beyond it within
                                    the reach
+    run_chance, run_tests : ndarray (n, m)   :func:`run_chances`: the product of the chances of the run of tests,
+                                   ending at each, that read the mode moved and settled, and the run's length
     """
 
     moved_hz: np.ndarray
@@ -110,7 +113,9 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
     absence only: by Laplace's rule a single one is flagged when the baseline held the mode in nearly all of at least
     ``m / false_alarm_rate - 2`` tests (298 for 3 modes at 1 %; never one the baseline lacked in half its tests); on
     a shorter baseline it adds its evidence to the novelty index (``missing_evidence`` of
-    :mod:`learn.monitor.alarm_threshold`) and is reported unflagged in the row.
+    :mod:`learn.monitor.alarm_threshold`) and is reported unflagged in the row. A run of tests reading the mode
+    moved, settled at a new frequency (:func:`run_chances`), is weighed by the product of its chances, flagged
+    alike.
 
     A test with poles none of which lies in any reference mode's band (:attr:`BeyondBands.unplaced`) has no feature
     the detector can judge, yet its identification found modes: each mode is read moved (the pole nearest it in
@@ -190,8 +195,10 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
         share[base] = (v - none) / (base.size - 1)
     unplaced_chance = np.where(unplaced, share, np.nan)
     unplaced_flagged = unplaced & (share <= false_alarm_rate)
-    chance = np.where(moved, q * (s * n_q + 1) / (n_q + 2), np.where(lost, (q * n_q + 1) / (n_q + 2), np.nan))
-    run, run_tests = run_chances(chance, moved_hz, ref.frequencies_hz)
+    pole = (s * n_q + 1) / (n_q + 2)                # Laplace's chance of a pole beyond the band
+    chance = np.where(moved, q * pole, np.where(lost, (q * n_q + 1) / (n_q + 2), np.nan))
+    run, run_tests = run_chances(chance, np.broadcast_to(pole, chance.shape), moved_hz, ref.tolerance)
+    run = _runs_seen(run, run_tests, base, n_q)
     with np.errstate(invalid="ignore"):
         flagged = (moved | lost) & ((chance <= false_alarm_rate / max(m, 1)) | unplaced_flagged[:, None])
         flagged |= moved & (run <= false_alarm_rate / max(m, 1))
@@ -200,24 +207,51 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
                        unplaced_flagged, by_fft, run, run_tests)
 
 
-def run_chances(chance, moved_hz, frequencies_hz) -> tuple:
+def run_chances(chance, pole_chance, moved_hz, tolerance) -> tuple:
     """``(run_chance, run_tests)``, each (n, m): for a mode read moved beyond its band (``moved_hz`` finite, (n,
-    m); the reference ``frequencies_hz`` (m,)), the product of the ``chance`` (n, m) of every reading of the run of
-    consecutive tests, ending at it, in which the mode read moved to the same side, and the run's length (NaN and 0
-    elsewhere). Tests of a healthy structure miss-read independently: a run of ``k`` readings of chance ``c`` each
-    ends at a test with probability ``c^k``."""
+    m)), the chance of the run of consecutive tests, ending at it, that read the mode moved, each within
+    ``tolerance`` (m,; the band's half-width in ``ln f``) of the one before (a mode settled at a new frequency, as
+    a change leaves it and spurious poles scattered over the reach do not), and the run's length (NaN and 0
+    elsewhere). A test with the mode in its band, lost or not identified ends a run. The run's chance is its first
+    reading's ``chance`` (n, m) times the ``pole_chance`` (n, m) of each later one (a pole beyond the band where the
+    mode is lacking): a mode's absence from a record can persist over tests (a quiet spell), so it counts once,
+    and the poles of a healthy structure's tests lie beyond the band independently."""
     moved_hz = np.asarray(moved_hz, float)
     n, m = moved_hz.shape
     moved = np.isfinite(moved_hz)
-    side = np.sign(np.log(np.where(moved, moved_hz, 1.0) / np.asarray(frequencies_hz, float)[None]))
-    prev_side = np.vstack([np.zeros((1, m)), np.where(moved, side, 0.0)[:-1]])
-    start = moved & (prev_side != side)
+    ln_f = np.log(np.where(moved, moved_hz, 1.0))
+    step = np.vstack([np.full((1, m), np.inf), np.abs(np.diff(ln_f, axis=0))])
+    prev = np.vstack([np.zeros((1, m), bool), moved[:-1]])
+    start = moved & ~(prev & (step <= np.asarray(tolerance, float)[None]))
     idx = np.arange(n)[:, None] * np.ones((1, m), int)
+    cols = np.arange(m)[None] * np.ones((n, 1), int)
     first = np.maximum.accumulate(np.where(start, idx, 0), axis=0)
-    with np.errstate(divide="ignore"):
-        cum = np.vstack([np.zeros((1, m)), np.cumsum(np.where(moved, np.log(np.asarray(chance, float)), 0.0), axis=0)])
-    run = np.exp(cum[idx + 1, np.arange(m)] - cum[first, np.arange(m)])
+    tiny = np.finfo(float).tiny                     # a chance of 0 as the least float: the sums stay finite
+    c = np.where(moved, np.asarray(chance, float), 1.0)
+    logs = np.log(np.maximum(np.where(moved, np.asarray(pole_chance, float), 1.0), tiny))
+    cum = np.vstack([np.zeros((1, m)), np.cumsum(logs, axis=0)])
+    run = np.exp(np.log(np.maximum(c[first, cols], tiny)) + cum[idx + 1, cols] - cum[first + 1, cols])
+    run = np.where(c[first, cols] == 0.0, 0.0, run)
     return np.where(moved, run, np.nan), np.where(moved, idx - first + 1, 0)
+
+
+def _runs_seen(run, run_tests, base, n_q) -> np.ndarray:
+    """``run`` (n, m) where the baseline period held no run as long (each baseline test's of the other baseline
+    tests); elsewhere at least Laplace's chance of a run that long, ``(w_k + 1) / (n + 2)`` of the ``w_k`` baseline
+    tests ending one of ``k`` tests or more: a structure whose poles beyond the band persist over tests (a mode the
+    reference modes do not hold, a harmonic) is judged by its own runs, not by independent tests'."""
+    out = np.array(run, float)
+    base = np.asarray(base, int)
+    own = np.zeros(len(out), bool)
+    own[base] = True
+    for j in range(out.shape[1]):
+        k = run_tests[:, j]
+        seen = np.sort(run_tests[base, j])
+        w = seen.size - np.searchsorted(seen, k, side="left")          # baseline tests ending a run of >= k
+        w = w - (own & (k > 0))                                          # a baseline test: of the others
+        floor = (w + 1) / (n_q[:, 0] + 2)
+        out[:, j] = np.where((k > 0) & (w > 0), np.maximum(out[:, j], floor), out[:, j])
+    return out
 
 
 def _baseline_shares(lacking, beyond, base, n: int):

@@ -109,24 +109,34 @@ def test_a_moved_reading_the_baseline_makes_ordinary_is_not_flagged():
     assert bb.chance[12, 1] == pytest.approx(0.5 / 14) and not bb.flagged[12, 1] and bb.status(12) is None
 
 
-def test_a_run_of_moved_readings_to_one_side_is_flagged_by_the_product_of_their_chances():
-    """Mode 2 lacking in half of 12 baseline tests: one pole beyond its band has chance 0.5 / 14 = 0.036, above
-    0.01 / 3; a second test in a row read moved to the same side gives 0.0013 and is flagged (a healthy structure
-    misreads tests independently: such a run ends at a test with probability 0.0013). A reading to the other
-    side, a test not identified or the mode back in its band start a new run."""
+def test_a_run_of_moved_readings_settled_at_one_frequency_is_flagged_by_its_chance():
+    """Mode 2 lacking in half of 12 baseline tests: one pole beyond its band has chance 0.5 x 1/14 = 0.036 (the share
+    lacking it times Laplace's chance of a pole beyond its band), above 0.01 / 3. A second test in a row read moved
+    to the same frequency adds the pole's chance alone (the mode's absence may persist over tests, the poles of a
+    healthy structure's tests lie beyond the band independently): 0.036 / 14 = 0.0026, flagged. A reading to the
+    other side, a test not identified or the mode back in its band start a new run."""
     down = _modes([F0[0], 28.0, F0[2]])
     up = _modes([F0[0], 35.0, F0[2]])
     tests = _baseline(drop=(1, range(0, 12, 2))) + [down, down, down, up, None, down, _modes(F0), down, down]
     ref, bb = _read(tests, 12)
-    c = 0.5 / 14
+    c, p = 0.5 / 14, 1 / 14
     np.testing.assert_allclose(bb.chance[12:, 1], [c, c, c, c, np.nan, c, np.nan, c, c])
     np.testing.assert_array_equal(bb.run_tests[12:, 1], [1, 2, 3, 1, 0, 1, 0, 1, 2])
-    np.testing.assert_allclose(bb.run_chance[12:, 1], [c, c**2, c**3, c, np.nan, c, np.nan, c, c**2])
+    np.testing.assert_allclose(bb.run_chance[12:, 1], [c, c * p, c * p**2, c, np.nan, c, np.nan, c, c * p])
     np.testing.assert_array_equal(bb.flagged[12:, 1], [False, True, True, False, False, False, False, False, True])
     assert [bb.status(i) for i in (12, 13, 15, 20)] == [None, MODE_MOVED, None, MODE_MOVED]
     (d,) = bb.readings(13, ref)
-    assert d["run_tests"] == 2 and d["run_chance"] == pytest.approx(c**2)
-    assert "; 2 tests in a row read so, chance 0.0013 at the baseline's share" in readings_text([d], ref)
+    assert d["run_tests"] == 2 and d["run_chance"] == pytest.approx(c * p)
+    assert "; 2 tests in a row read so, chance 0.0026 at the baseline's share" in readings_text([d], ref)
+    # a run holds the mode settled: a reading further than the band's half-width from the one before starts a new
+    # run; a lost mode makes none (a mode's absence persists over quiet tests)
+    tol = ref.tolerance[1]
+    assert np.log(28.0 / 27.6) < tol < np.log(27.6 / 26.0)
+    tests = _baseline(drop=(1, range(0, 12, 2))) + [_modes([F0[0], f, F0[2]]) for f in (28.0, 27.6, 26.0)]
+    tests += [_modes([F0[0], F0[2]])] * 3 + [down, down]
+    ref, bb = _read(tests, 12)
+    np.testing.assert_array_equal(bb.run_tests[12:, 1], [1, 2, 1, 0, 0, 0, 1, 2])
+    assert bb.lost[15:18, 1].all() and not bb.flagged[15:18, 1].any()
 
 
 def test_two_missing_modes_never_share_a_pole_and_a_pole_beyond_the_reach_is_no_mode():
@@ -244,8 +254,10 @@ def test_a_test_whose_poles_all_lie_beyond_the_bands_is_moved_or_lost_and_flagge
     # a pole within no mode's reach: every mode lost, flagged
     assert reach_bands_hz(ref)[0, 0] > 3.0 and bb.lost[14].all() and bb.flagged[14].all()
     assert bb.status(14) == MODE_LOST
-    # mode 1 in its band: the same pole is weighed by the baseline's odds alone, not flagged
+    # mode 1 in its band: the same pole is weighed by the baseline's odds alone, not flagged (the test before lost
+    # mode 3: no run)
     assert not bb.unplaced[15] and bb.moved_hz[15, 2] == 47.0 and not bb.flagged[15].any() and bb.status(15) is None
+    assert bb.run_tests[15, 2] == 1
     assert not bb.unplaced[:12].any() and not bb.flagged[:12].any()
     # a baseline with 2 of 12 tests lacking every mode (a lone pole at 3 Hz) makes it ordinary: each mode alone
     odd = list(base)
