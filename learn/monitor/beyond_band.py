@@ -237,9 +237,10 @@ def run_chances(chance, pole_chance, moved_hz, tolerance) -> tuple:
 
 def _runs_seen(run, run_tests, base, n_q) -> np.ndarray:
     """``run`` (n, m) where the baseline period held no run as long (each baseline test's of the other baseline
-    tests); elsewhere at least Laplace's chance of a run that long, ``(w_k + 1) / (n + 2)`` of the ``w_k`` baseline
-    tests ending one of ``k`` tests or more: a structure whose poles beyond the band persist over tests (a mode the
-    reference modes do not hold, a harmonic) is judged by its own runs, not by independent tests'."""
+    tests) or the run is one reading; elsewhere at least Laplace's chance of a run that long, ``(w_k + 1) / (n +
+    2)`` of the ``w_k`` baseline tests ending one of ``k`` tests or more: a structure whose poles beyond the band
+    persist over tests (a mode the reference modes do not hold, a harmonic) is judged by its own runs, not by
+    independent tests'."""
     out = np.array(run, float)
     base = np.asarray(base, int)
     own = np.zeros(len(out), bool)
@@ -250,7 +251,7 @@ def _runs_seen(run, run_tests, base, n_q) -> np.ndarray:
         w = seen.size - np.searchsorted(seen, k, side="left")          # baseline tests ending a run of >= k
         w = w - (own & (k > 0))                                          # a baseline test: of the others
         floor = (w + 1) / (n_q[:, 0] + 2)
-        out[:, j] = np.where((k > 0) & (w > 0), np.maximum(out[:, j], floor), out[:, j])
+        out[:, j] = np.where((k > 1) & (w > 0), np.maximum(out[:, j], floor), out[:, j])
     return out
 
 

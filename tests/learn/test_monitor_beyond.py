@@ -139,6 +139,24 @@ def test_a_run_of_moved_readings_settled_at_one_frequency_is_flagged_by_its_chan
     assert bb.lost[15:18, 1].all() and not bb.flagged[15:18, 1].any()
 
 
+def test_a_run_as_long_as_one_the_baseline_ended_is_judged_by_the_baseline_s_runs():
+    """Mode 2 lacking in 7 of 20 baseline tests, two of them in a row holding a pole at 28 Hz (so 3/22 is Laplace's
+    chance of such a pole): the baseline ended one run of two, so a later run of two has chance at least 2/22
+    (Laplace's rule on the baseline's runs) instead of 7/20 x (3/22)^2 = 0.0065, and is not flagged; a run of
+    three, longer than any the baseline ended, is judged as independent tests: 7/20 x (3/22)^3 = 8.9e-4, flagged."""
+    down = _modes([F0[0], 28.0, F0[2]])
+    base = _baseline(20, drop=(1, [0, 2, 6, 8, 10]))
+    base[3] = _modes([F0[0], 28.2, F0[2]])
+    base[4] = _modes([F0[0], 28.1, F0[2]])
+    ref, bb = _read(base + [down, down, down], 20)
+    np.testing.assert_array_equal(bb.run_tests[:, 1], [0, 0, 0, 1, 2] + [0] * 15 + [1, 2, 3])
+    c, p = 7 / 20 * 3 / 22, 3 / 22
+    np.testing.assert_allclose(bb.run_chance[20:, 1], [c, 2 / 22, c * p * p])
+    np.testing.assert_array_equal(bb.flagged[20:, 1], [False, False, True])
+    # the baseline's own run, held out: none among the other baseline tests, so as independent tests
+    assert bb.run_chance[4, 1] == pytest.approx(6 / 19 * 2 / 21 * 2 / 21)
+
+
 def test_two_missing_modes_never_share_a_pole_and_a_pole_beyond_the_reach_is_no_mode():
     tests = _baseline() + [_modes([13.5, F0[2]]), _modes([F0[0], 45.0, F0[2]])]
     ref, bb = _read(tests, 12)
