@@ -100,22 +100,21 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
     """The reference modes each test lacks in their bands, looked for beyond them and read against the baseline.
 
     ``cols``: the poles' columns from :func:`track_modes` (-1: the mode missing from its band); ``baseline``:
-    indices of the baseline tests of the series (identified or not; a test of another kind, band or beam left
-    out). In a test with poles, each missing mode takes the pole nearest it within its reach
-    (:func:`reach_bands_hz` ``by_shape``; an FFT peak's by frequency) beyond its band that no reference mode claims
-    (with shapes of 2 or more sensors, MAC >= :data:`MAC_MIN`), one to one (``linear_sum_assignment`` of ``(ln(f /
-    f_ref) / reach)^2``): the mode moved, never a neighbour (a neighbour's band lies beyond the reach, or its shape
-    differs); a mode with no such pole is lost. Each reading
-    is weighed by the baseline period's chance of it (:class:`BeyondBands`) and flagged at or below
-    ``false_alarm_rate / m`` (the rate shared among the modes). A moved mode is positive evidence: one the baseline
-    found in every test is flagged; one the baseline lacked now and then only when the baseline was long enough to
-    make a pole beyond its band rare by Laplace's rule. A lost mode is an
-    absence only: by Laplace's rule a single one is flagged when the baseline held the mode in nearly all of at least
-    ``m / false_alarm_rate - 2`` tests (298 for 3 modes at 1 %; never one the baseline lacked in half its tests); on
-    a shorter baseline it adds its evidence to the novelty index (``missing_evidence`` of
-    :mod:`learn.monitor.alarm_threshold`) and is reported unflagged in the row. A run of tests reading the mode
-    moved, settled at a new frequency (:func:`run_chances`), is weighed by the product of its chances, flagged
-    alike.
+    indices of the baseline tests of the series (identified or not; a test of another kind, band or beam left out).
+    In a test with poles, each missing mode takes the pole nearest it within its reach (:func:`reach_bands_hz`
+    ``by_shape``; an FFT peak's by frequency, its open side the other side's half gap) beyond its band that no
+    reference mode claims (with shapes of 2 or more sensors, MAC >= :data:`MAC_MIN`), one to one
+    (``linear_sum_assignment`` of ``ln(f / f_ref)^2``): the mode moved, never a neighbour (a neighbour's band lies
+    beyond the reach, or its shape differs); a mode with no such pole is lost. Each reading is weighed by the
+    baseline period's chance of it (:class:`BeyondBands`) and flagged at or below ``false_alarm_rate / m`` (the rate
+    shared among the modes). A moved mode is positive evidence: one the baseline found in every test is flagged; one
+    the baseline lacked now and then only when the baseline was long enough to make a pole beyond its band rare by
+    Laplace's rule. A lost mode is an absence only: by Laplace's rule a single one is flagged when the baseline held
+    the mode in nearly all of at least ``m / false_alarm_rate - 2`` tests (298 for 3 modes at 1 %; never one the
+    baseline lacked in half its tests); on a shorter baseline it adds its evidence to the novelty index
+    (``missing_evidence`` of :mod:`learn.monitor.alarm_threshold`) and is reported unflagged in the row. A run of
+    tests reading the mode moved, settled at a new frequency (:func:`run_chances`), is weighed by the product of its
+    chances, flagged alike.
 
     A test with poles none of which lies in any reference mode's band (:attr:`BeyondBands.unplaced`) has no feature
     the detector can judge, yet its identification found modes: each mode is read moved (the pole nearest it in
@@ -138,7 +137,7 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
     beyond_fft = np.zeros((n, m), bool)             # an FFT peak within the reach beyond the band
     unplaced = np.zeros(n, bool)                    # poles, none in any band
     ln_ref = np.log(ref.frequencies_hz)
-    reach = np.log(reach_bands_hz(ref)) - ln_ref[:, None]          # (m, 2): negative, positive (FFT peaks)
+    reach = np.log(reach_bands_hz(ref, open_factor=False)) - ln_ref[:, None]     # (m, 2): -, + (FFT peaks)
     reach_pole = np.log(reach_bands_hz(ref, by_shape=True)) - ln_ref[:, None]     # poles: by shape too
     for i, t in enumerate(tests):
         if t is None or t.frequencies_hz.size == 0 or m == 0:
@@ -168,7 +167,7 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
         ok[free.size:] &= fft_miss[i][None]
         miss = np.flatnonzero((cols[i] < 0) | fft_miss[i])
         if miss.size:
-            cost = np.where(ok[:, miss], (d[:, miss] / side[:, miss]) ** 2, 1e9)
+            cost = np.where(ok[:, miss], d[:, miss] ** 2, 1e9)
             r, c = linear_sum_assignment(cost)
             keep = ok[:, miss][r, c]
             r, c = r[keep], miss[c[keep]]
@@ -197,8 +196,16 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
     unplaced_flagged = unplaced & (share <= false_alarm_rate)
     pole = (s * n_q + 1) / (n_q + 2)                # Laplace's chance of a pole beyond the band
     chance = np.where(moved, q * pole, np.where(lost, (q * n_q + 1) / (n_q + 2), np.nan))
-    run, run_tests = run_chances(chance, np.broadcast_to(pole, chance.shape), moved_hz, ref.tolerance)
-    run = _runs_seen(run, run_tests, base, n_q)
+    # runs only within half the gap to the neighbour mirrored on an open side: beyond it, where the open side's
+    # factor reaches, a mode the reference modes lack (present in spells the baseline barely sampled) would run
+    mirrored = np.log(reach_bands_hz(ref, by_shape=True, open_factor=False)) - ln_ref[:, None]
+    with np.errstate(invalid="ignore"):
+        d_moved = np.log(moved_hz) - ln_ref[None]
+        near = (d_moved >= mirrored[None, :, 0]) & (d_moved <= mirrored[None, :, 1])
+    run, run_tests = run_chances(chance, np.broadcast_to(pole, chance.shape), np.where(near, moved_hz, np.nan),
+                                 ref.tolerance)
+    run = np.where(moved & ~near, chance, _runs_seen(run, run_tests, base, n_q))
+    run_tests = np.where(moved & ~near, 1, run_tests)
     with np.errstate(invalid="ignore"):
         flagged = (moved | lost) & ((chance <= false_alarm_rate / max(m, 1)) | unplaced_flagged[:, None])
         flagged |= moved & (run <= false_alarm_rate / max(m, 1))

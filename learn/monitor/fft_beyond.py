@@ -38,7 +38,7 @@ def beyond_windows_hz(ref: ReferenceModes) -> np.ndarray:
     reach_hi]``) its tracking band by frequency alone (:func:`learn.monitor.tracking.narrow_bands_hz`) within its reach
     (:func:`learn.monitor.tracking.reach_bands_hz`), Hz. The reaches of two neighbouring modes meet half-way between
     them, so no two modes' windows overlap and neither reaches a neighbour's band."""
-    band, reach = narrow_bands_hz(ref, by_frequency=True), reach_bands_hz(ref)
+    band, reach = narrow_bands_hz(ref, by_frequency=True), reach_bands_hz(ref, open_factor=False)
     return np.stack([np.c_[reach[:, 0], band[:, 0]], np.c_[band[:, 1], reach[:, 1]]], axis=1)
 
 

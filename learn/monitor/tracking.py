@@ -54,8 +54,8 @@ MAC_MIN = 0.6
 #: mode's only when its MAC reaches :data:`MAC_MIN` with the mode and not with the neighbour (:func:`admissible`).
 APART_MAC = 1 - MAC_MIN
 #: A reference mode missing from its band is looked for beyond it up to half the log gap to the neighbouring
-#: reference mode on each side (on the open side of the lowest and highest mode, half the gap on the other side),
-#: never beyond this factor in frequency (a lone mode: up to this factor either way).
+#: reference mode on each side, never beyond this factor in frequency (the open side of the lowest and highest mode,
+#: and a lone mode's either side: up to this factor).
 REACH_FACTOR = 2.0
 #: The statuses of a test whose reference mode moved beyond its band, or was lost, against what the baseline period
 #: makes likely (:attr:`learn.monitor.beyond_band.BeyondBands.flagged`).
@@ -360,11 +360,13 @@ def identified_by(tests: list, cols) -> list:
     return [[None if t is None or c < 0 else t.identified_by(int(c)) for c in row] for t, row in zip(tests, cols)]
 
 
-def reach_bands_hz(ref: ReferenceModes, by_shape: bool = False) -> np.ndarray:
+def reach_bands_hz(ref: ReferenceModes, by_shape: bool = False, open_factor: bool = True) -> np.ndarray:
     """Each reference mode's reach (Hz), shape (m, 2): where a pole that no other mode claims is that mode moved
-    beyond its band: up to half the log gap to the neighbouring reference mode on each side (the open side of the
-    lowest and highest mode: half the gap on the other side), never beyond :data:`REACH_FACTOR` (a lone mode: that
-    factor either way). A neighbour's band (at most ``NEIGHBOUR_SHARE`` of the gap) never reaches into it.
+    beyond its band: up to half the log gap to the neighbouring reference mode on each side, never beyond
+    :data:`REACH_FACTOR` (the open side of the lowest and highest mode, where no neighbour's pole can lie, and a lone
+    mode's either side: that factor). A neighbour's band (at most ``NEIGHBOUR_SHARE`` of the gap) never reaches
+    into it. ``open_factor=False``: the open side mirrors the other side's half gap (an FFT peak's reach: the
+    highest local maximum of a window as wide as the factor is often a stronger mode's leakage).
 
     ``by_shape``: with reference shapes, a neighbour told apart by shape (:data:`APART_MAC`) bounds no reach, as it
     bounds no tracking band (:func:`reference_modes`): a pole is the mode moved only when its MAC reaches
@@ -384,7 +386,7 @@ def reach_bands_hz(ref: ReferenceModes, by_shape: bool = False) -> np.ndarray:
     np.fill_diagonal(bound, False)
     below = np.where(bound & (lnf[None] < lnf[:, None]), lnf[:, None] - lnf[None], np.inf).min(axis=1)
     above = np.where(bound & (lnf[None] > lnf[:, None]), lnf[None] - lnf[:, None], np.inf).min(axis=1)
-    lo = np.where(np.isfinite(below), below, above)                     # an open side: the other side's gap
-    hi = np.where(np.isfinite(above), above, below)
-    half = np.minimum(0.5 * np.c_[lo, hi], cap)                         # no neighbour at all: the factor
+    if not open_factor:                                                 # an open side: the other side's gap
+        below, above = np.where(np.isfinite(below), below, above), np.where(np.isfinite(above), above, below)
+    half = np.minimum(0.5 * np.c_[below, above], cap)                   # an open side: the factor
     return f[:, None] * np.exp(half * [-1.0, 1.0])

@@ -48,9 +48,9 @@ def test_the_reach_ends_at_half_the_log_gap_to_the_neighbours_and_at_the_factor(
     got = reach_bands_hz(ref)
     f = ref.frequencies_hz
     half = 0.5 * np.log(f[1:] / f[:-1])                  # 0.566 and 0.347, both below ln 2
-    np.testing.assert_allclose(got[0], f[0] * np.exp([-half[0], half[0]]))       # the open side: the other's gap
+    np.testing.assert_allclose(got[0], f[0] * np.array([1 / REACH_FACTOR, np.exp(half[0])]))   # the open side: 2
     np.testing.assert_allclose(got[1], f[1] * np.exp([-half[0], half[1]]))
-    np.testing.assert_allclose(got[2], f[2] * np.exp([-half[1], half[1]]))
+    np.testing.assert_allclose(got[2], f[2] * np.array([np.exp(-half[1]), REACH_FACTOR]))
     lone = reference_modes([_modes([F0[0] * (1 + 0.003 * k)]) for k in range(10)])
     np.testing.assert_allclose(reach_bands_hz(lone)[0], lone.frequencies_hz[0] * np.array([1 / REACH_FACTOR,
                                                                                           REACH_FACTOR]))
@@ -137,6 +137,15 @@ def test_a_run_of_moved_readings_settled_at_one_frequency_is_flagged_by_its_chan
     ref, bb = _read(tests, 12)
     np.testing.assert_array_equal(bb.run_tests[12:, 1], [1, 2, 1, 0, 0, 0, 1, 2])
     assert bb.lost[15:18, 1].all() and not bb.flagged[15:18, 1].any()
+    # below the lowest mode the reach runs to the factor 2, a run only to half the gap to mode 2 mirrored (5.67 Hz):
+    # beyond it a mode the reference modes lack would run
+    low = _modes([5.2, F0[1], F0[2]])
+    ref, bb = _read(_baseline(drop=(0, range(0, 12, 2))) + [low] * 3, 12)
+    assert reach_bands_hz(ref)[0, 0] < 5.2 < reach_bands_hz(ref, open_factor=False)[0, 0]
+    np.testing.assert_allclose(bb.moved_hz[12:, 0], 5.2)
+    np.testing.assert_array_equal(bb.run_tests[12:, 0], [1, 1, 1])
+    np.testing.assert_allclose(bb.run_chance[12:, 0], bb.chance[12:, 0])
+    assert not bb.flagged[12:, 0].any()
 
 
 def test_a_run_as_long_as_one_the_baseline_ended_is_judged_by_the_baseline_s_runs():

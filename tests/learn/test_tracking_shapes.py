@@ -115,11 +115,12 @@ def test_a_close_mode_moved_past_its_neighbour_is_read_moved_by_shape(refs):
     alone beyond its reach too (half the 2 % gap, 1 %), so it read as lost. Mode 1, told apart by shape, bounds no
     reach by shape: the reach is the open side's ``REACH_FACTOR``, and the pole is mode 2 moved -4 %, flagged (the
     baseline found mode 2 in every test). A pole of mode 1's shape there is no reading of mode 2; an FFT peak's reach
-    (no shape) stays half the gap."""
+    (no shape) stays half the gap towards the neighbour (the open sides: the factor)."""
     ref = refs["4"]
     f = ref.frequencies_hz
     half = 0.5 * math.log(f[1] / f[0])
-    np.testing.assert_allclose(reach_bands_hz(ref), np.outer(f, np.exp([-half, half])), rtol=1e-12)
+    np.testing.assert_allclose(reach_bands_hz(ref), [[f[0] / 2, f[0] * np.exp(half)], [f[1] * np.exp(-half), 2 * f[1]]],
+                               rtol=1e-12)
     np.testing.assert_allclose(reach_bands_hz(ref, by_shape=True), np.outer(f, [0.5, 2.0]), rtol=1e-12)
     moved, other = 102.0 * 0.96, 100.0 * 0.979
     tests = _baseline("4") + [_test([100.0, moved], PHI), _test([other, 100.0], PHI[:, [0, 0]])]
