@@ -1,6 +1,6 @@
 """A reference mode missing from its band, looked for beyond it and read against the baseline period: moved (a
 pole beyond the band within the mode's reach) or lost, each reading weighed by the baseline's chance of it, and a
-run of moved readings by the product of its chances."""
+run of moved readings, a mode settled at a new frequency, by the chance of the run."""
 
 from __future__ import annotations
 
@@ -49,8 +49,8 @@ class BeyondBands:
                                    :mod:`learn.monitor.fft_beyond`; ``moved_col`` -1), its ``u`` and ``w`` the FFT
                                    peak's: baseline tests without an FFT peak in the band, with one beyond it within
                                    the reach
-    run_chance, run_tests : ndarray (n, m)   :func:`run_chances`: the product of the chances of the run of tests,
-                                   ending at each, that read the mode moved and settled, and the run's length
+    run_chance, run_tests : ndarray (n, m)   :func:`run_chances`: the chance of the run of tests, ending at each,
+                                   that read the mode moved and settled, and the run's length
     """
 
     moved_hz: np.ndarray
@@ -113,8 +113,9 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
     the mode in nearly all of at least ``m / false_alarm_rate - 2`` tests (298 for 3 modes at 1 %; never one the
     baseline lacked in half its tests); on a shorter baseline it adds its evidence to the novelty index
     (``missing_evidence`` of :mod:`learn.monitor.alarm_threshold`) and is reported unflagged in the row. A run of
-    tests reading the mode moved, settled at a new frequency (:func:`run_chances`), is weighed by the product of its
-    chances, flagged alike.
+    tests reading the mode moved, settled at a new frequency within half the gap to its neighbours (mirrored on an
+    open side), is weighed by the run's chance (:func:`run_chances`, at least the baseline's own runs' share),
+    flagged alike.
 
     A test with poles none of which lies in any reference mode's band (:attr:`BeyondBands.unplaced`) has no feature
     the detector can judge, yet its identification found modes: each mode is read moved (the pole nearest it in
