@@ -328,28 +328,28 @@ def simulate(kind: str, seed: int, quick: bool = False) -> Series:
 # ---------------------------------------------------------------------------------------------------- files
 
 def write_tests(series: Series, folder: Path) -> list:
-    """Every test's file as a test system writes it (module docstring): the paths, in order."""
+    """Every test's file as a test system writes it (module docstring): the paths, in order. A file already there
+    is replaced when its bytes differ (a rerun after the simulator changed), else kept (the cache reads it)."""
     folder.mkdir(parents=True, exist_ok=True)
     files = []
     for k, d in enumerate(series.data):
+        suffix = {"frf": "uff", "scope": "csv"}.get(series.kind, "npz")
+        path = folder / f"test_{k:03d}.{suffix}"
+        tmp = folder / f".test_{k:03d}.tmp.{suffix}"
         if series.kind == "frf":
-            path = folder / f"test_{k:03d}.uff"
-            if not path.is_file():
-                g = series.extra["geometry"]
-                write_uff(path, series.freq_hz, d, g, series.extra["resp"], series.extra["ref"], kind="accelerance",
-                          description=f"bench_unseen frf test {k}")
+            g = series.extra["geometry"]
+            write_uff(tmp, series.freq_hz, d, g, series.extra["resp"], series.extra["ref"], kind="accelerance",
+                      description=f"bench_unseen frf test {k}")
         elif series.kind == "scope":
-            path = folder / f"test_{k:03d}.csv"
-            if not path.is_file():
-                t = np.arange(d.shape[1]) / series.sampling_frequency_hz
-                body = "\n".join(f"{a:.6f},{v:.7g}" for a, v in zip(t, d[0]))
-                atomic_write_text(path, "# quantity: acceleration\ntime_s,1:+Y\n" + body + "\n")
+            t = np.arange(d.shape[1]) / series.sampling_frequency_hz
+            body = "\n".join(f"{a:.6f},{v:.7g}" for a, v in zip(t, d[0]))
+            tmp.write_text("# quantity: acceleration\ntime_s,1:+Y\n" + body + "\n")
         else:
-            path = folder / f"test_{k:03d}.npz"
-            if not path.is_file():
-                tmp = folder / f".test_{k:03d}.tmp.npz"
-                np.savez(tmp, signals=d, sampling_frequency_hz=np.float64(series.sampling_frequency_hz))
-                os.replace(tmp, path)
+            np.savez(tmp, signals=d, sampling_frequency_hz=np.float64(series.sampling_frequency_hz))
+        if path.is_file() and path.read_bytes() == tmp.read_bytes():
+            tmp.unlink()
+        else:
+            os.replace(tmp, path)
         files.append(str(path))
     return files
 

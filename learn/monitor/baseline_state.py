@@ -16,7 +16,7 @@ from physics.io import atomic_write_text
 __all__ = ["STATE_FORMAT", "baseline_key", "held_out_cached"]
 
 #: Format tag of a saved baseline state (a change of the held-out procedure or of the models changes it).
-STATE_FORMAT = "beam-damage-monitor-baseline/5"
+STATE_FORMAT = "beam-damage-monitor-baseline/6"
 
 
 def baseline_key(model, Xb, Cb=None) -> str:

@@ -73,3 +73,20 @@ def test_a_scope_mode_above_the_band_is_no_true_mode_of_the_series():
     assert a.sampling_frequency_hz == 1250.0 and a.band_hz[1] == 500.0 and "579.8" in a.how
     assert a.truth_hz.shape == (40, 2) and a.crb_rel.shape == (2,)
     assert np.all(a.truth_hz < a.band_hz[1]) and np.all(a.truth_hz > a.band_hz[0])
+
+
+def test_a_rerun_replaces_a_test_file_whose_bytes_differ_and_keeps_the_others(tmp_path):
+    """A series written again into its folder: a file another simulator version left (other bytes) is replaced, an
+    identical one is left as it is (the identification cache reads it by its bytes)."""
+    import os
+
+    series = scope_series(0, {"baseline": 10, "intact": 10, "damaged": 10})
+    files = write_tests(series, tmp_path)
+    first = open(files[0], "rb").read()
+    with open(files[1], "a") as f:
+        f.write("0.0,0.0\n")
+    os.utime(files[0], (1.0, 1.0))
+    again = write_tests(series, tmp_path)
+    assert again == files and open(files[0], "rb").read() == first and os.stat(files[0]).st_mtime == 1.0
+    assert not open(files[1]).read().endswith("0.0,0.0\n")
+    assert not list(tmp_path.glob(".test_*"))
