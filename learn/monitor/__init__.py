@@ -13,7 +13,8 @@ Steps, one module each:
   (from its baseline scatter) by frequency (and MAC with 2 or more sensors), a mode the identification missed
   identified again over its search band (:func:`refit_missing`), a mode missing in a test NaN there;
   :mod:`~learn.monitor.pole_confirmation` -- a tracked pole far beyond its mode's baseline scatter checked by that
-  narrow band (a split mode read at the mode);
+  narrow band (a split mode read at the mode); :mod:`~learn.monitor.beyond_band` -- a mode missing from its band
+  read moved or lost beyond it, weighed by the baseline's chance of that reading and of a run of them;
 * :mod:`~learn.monitor.estimator_choice` -- each reference mode's frequency of response records by the more repeatable
   over the baseline period of the identification and the record's zero-padded FFT peak (the identification kept
   where its scatter over the baseline is the smaller);
@@ -30,6 +31,7 @@ Steps, one module each:
   signed common shift and, when chosen, the per-mode prediction interval (:mod:`~learn.monitor.per_mode`), each held
   out and thresholded, the false-alarm rate shared among them (``SHARES``) and calibrated on their joint held-out
   distribution (:func:`detect`; the level of the union of the held-out alarms: :mod:`~learn.monitor.union_calibration`);
+  :mod:`~learn.monitor.seasons` -- whether a dated baseline period covers the seasons;
 * :mod:`~learn.monitor.charts` -- memory: EWMA charts of the statistics with limits from the baseline's
   autocorrelation, and the onset of a change (:func:`run_charts`);
 * :mod:`~learn.monitor.alarms` -- :func:`monitor_series`, all of it on a series (:class:`SeriesResult` holds the
