@@ -101,8 +101,8 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
     ``separate`` gives a later test beyond the baseline's environment (:func:`learn.monitor.coverage.series_coverage`)
     alarmed only by the statistics of the environment itself (:func:`learn.monitor.statistics.environmental`) the status
     :data:`EXTRAPOLATED` instead of an alarm; ``alarm`` keeps it an alarm; ``auto`` (default) keeps them alarms when the
-    baseline period is known to cover the seasons (:func:`learn.monitor.statistics.covers_seasons`: dated tests, a
-    baseline period of at least :data:`~learn.monitor.statistics.SEASONS_DAYS` days), else separates them.
+    baseline period is known to cover the seasons (:func:`learn.monitor.seasons.covers_seasons`: dated tests, a
+    baseline period of at least :data:`~learn.monitor.seasons.SEASONS_DAYS` days), else separates them.
     ``frequency_estimator``: ``choose`` (default) estimates each mode's frequency of response records by the more
     repeatable over the baseline period of the identification and the record's FFT peak
     (:mod:`learn.monitor.estimator_choice`; the choice in ``normal_variation["frequency_estimators"]``),
@@ -246,11 +246,11 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
 
 
 def readings_text(readings: list, ref: ReferenceModes) -> str:
-    """The flagged readings in words, e.g. ``mode 2 moved +20.8 % (193.6 Hz, beyond its band 139.3-184.3 Hz; with a
-    run, e.g. ``; 2 tests in a row read so, chance 5.5e-05 at the baseline's share``);
+    """The flagged readings in words, e.g. ``mode 2 moved +20.8 % (193.6 Hz, beyond its band 139.3-184.3 Hz);
     mode 3 lost (no pole within 372.3-492.3 Hz or beyond it within its reach; chance 0.0033 at the baseline's
-    share)``; a test flagged for its poles all lying beyond the bands (:attr:`BeyondBands.unplaced_flagged`) starts
-    with ``no mode in its band:``."""
+    share)``; a moved mode flagged in a run adds ``; 2 tests in a row read so, chance 5.5e-05 at the baseline's
+    share`` inside its brackets; a test flagged for its poles all lying beyond the bands
+    (:attr:`BeyondBands.unplaced_flagged`) starts with ``no mode in its band:``."""
     bands = narrow_bands_hz(ref)
     unplaced = any(d.get("unplaced") for d in readings)
     parts = []
@@ -258,9 +258,9 @@ def readings_text(readings: list, ref: ReferenceModes) -> str:
         if not d["flagged"]:
             continue
         lo, hi = bands[d["mode"] - 1]
-        run = (f"; {d['run_tests']} tests in a row read so, chance {d['run_chance']:.2g} at the baseline's share"
-               if d.get("run_tests", 0) > 1 else "")
         if d["reading"] == "moved":
+            run = (f"; {d['run_tests']} tests in a row read so, chance {d['run_chance']:.2g} at the baseline's share"
+                   if d.get("run_tests", 0) > 1 else "")
             parts.append(f"mode {d['mode']} moved {d['change_pct']:+.1f} % ({d['frequency_hz']:.4g} Hz, beyond its "
                          f"band {lo:.4g}-{hi:.4g} Hz{run})")
         else:

@@ -203,10 +203,8 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
     with np.errstate(invalid="ignore"):
         d_moved = np.log(moved_hz) - ln_ref[None]
         near = (d_moved >= mirrored[None, :, 0]) & (d_moved <= mirrored[None, :, 1])
-    run, run_tests = run_chances(chance, np.broadcast_to(pole, chance.shape), np.where(near, moved_hz, np.nan),
-                                 ref.tolerance)
-    run = np.where(moved & ~near, chance, _runs_seen(run, run_tests, base, n_q))
-    run_tests = np.where(moved & ~near, 1, run_tests)
+    run, run_tests = run_chances(chance, np.broadcast_to(pole, chance.shape), moved_hz, ref.tolerance, near)
+    run = _runs_seen(run, run_tests, base, n_q)
     with np.errstate(invalid="ignore"):
         flagged = (moved | lost) & ((chance <= false_alarm_rate / max(m, 1)) | unplaced_flagged[:, None])
         flagged |= moved & (run <= false_alarm_rate / max(m, 1))
@@ -215,22 +213,24 @@ def beyond_bands(tests: list, ref: ReferenceModes, cols, baseline, false_alarm_r
                        unplaced_flagged, by_fft, run, run_tests)
 
 
-def run_chances(chance, pole_chance, moved_hz, tolerance) -> tuple:
+def run_chances(chance, pole_chance, moved_hz, tolerance, joins=None) -> tuple:
     """``(run_chance, run_tests)``, each (n, m): for a mode read moved beyond its band (``moved_hz`` finite, (n,
     m)), the chance of the run of consecutive tests, ending at it, that read the mode moved, each within
     ``tolerance`` (m,; the band's half-width in ``ln f``) of the one before (a mode settled at a new frequency, as
     a change leaves it and spurious poles scattered over the reach do not), and the run's length (NaN and 0
-    elsewhere). A test with the mode in its band, lost or not identified ends a run. The run's chance is its first
+    elsewhere). A test with the mode in its band, lost or not identified ends a run; a reading outside ``joins``
+    (bool (n, m); default every one) is a run of its own. The run's chance is its first
     reading's ``chance`` (n, m) times the ``pole_chance`` (n, m) of each later one (a pole beyond the band where the
     mode is lacking): a mode's absence from a record can persist over tests (a quiet spell), so it counts once,
     and the poles of a healthy structure's tests lie beyond the band independently."""
     moved_hz = np.asarray(moved_hz, float)
     n, m = moved_hz.shape
     moved = np.isfinite(moved_hz)
+    linked = moved & (True if joins is None else np.asarray(joins, bool))
     ln_f = np.log(np.where(moved, moved_hz, 1.0))
     step = np.vstack([np.full((1, m), np.inf), np.abs(np.diff(ln_f, axis=0))])
-    prev = np.vstack([np.zeros((1, m), bool), moved[:-1]])
-    start = moved & ~(prev & (step <= np.asarray(tolerance, float)[None]))
+    prev = np.vstack([np.zeros((1, m), bool), linked[:-1]])
+    start = moved & ~(linked & prev & (step <= np.asarray(tolerance, float)[None]))
     idx = np.arange(n)[:, None] * np.ones((1, m), int)
     cols = np.arange(m)[None] * np.ones((n, 1), int)
     first = np.maximum.accumulate(np.where(start, idx, 0), axis=0)
