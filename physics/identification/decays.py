@@ -18,7 +18,8 @@ import numpy as np
 from physics.identification.fdd import SingularValueSpectrum, running_floor, clear_peaks
 from physics.identification.record_checks import CheckedRecord
 
-__all__ = ["Decays", "FreeResponse", "adds_energy", "decay_spectrum", "find_decays", "free_response", "least_fall_db"]
+__all__ = ["Decays", "FreeResponse", "adds_energy", "decay_spectrum", "find_decays", "free_response", "least_fall_db",
+           "slowest_mode"]
 
 #: Order of the linear predictor (per channel) whose innovations mark the hits.
 PREDICTOR_ORDER = 24
@@ -369,15 +370,22 @@ def least_fall_db(decays: Decays, frequencies_hz, damping_ratios, sampling_frequ
     stationary response started quiet (a shaker switched on with the capture, or a simulation from rest) has a "hit"
     where it starts to build up, louder than the samples before it, and a "decay" that never falls, where the modes
     found in it, damped as they are, would have fallen tens of dB. NaN without a mode or a decay."""
+    k = slowest_mode(frequencies_hz, damping_ratios)
+    lengths = (decays.stops - decays.starts).astype(float)
+    if k is None or not lengths.size:
+        return np.nan
+    sigma = float(np.asarray(damping_ratios, float)[k] * 2 * np.pi * np.asarray(frequencies_hz, float)[k])
+    dt = 0.75 * lengths / sampling_frequency_hz
+    return float(np.average(20 * np.log10(np.e) * sigma * dt, weights=lengths))
+
+
+def slowest_mode(frequencies_hz, damping_ratios) -> int | None:
+    """Index of the mode whose free decay is slowest, the least ``zeta f_n`` among those with a finite positive
+    frequency and a finite damping ratio of at least 0; None without one."""
     f = np.asarray(frequencies_hz, float)
     z = np.asarray(damping_ratios, float)
     ok = np.isfinite(f) & np.isfinite(z) & (f > 0) & (z >= 0)
-    lengths = (decays.stops - decays.starts).astype(float)
-    if not ok.any() or not lengths.size:
-        return np.nan
-    sigma = float(np.min(z[ok] * 2 * np.pi * f[ok]))
-    dt = 0.75 * lengths / sampling_frequency_hz
-    return float(np.average(20 * np.log10(np.e) * sigma * dt, weights=lengths))
+    return int(np.argmin(np.where(ok, z * f, np.inf))) if ok.any() else None
 
 
 def decay_spectrum(checked: CheckedRecord) -> SingularValueSpectrum:

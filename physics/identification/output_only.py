@@ -8,13 +8,11 @@ from dataclasses import dataclass
 from inspect import signature
 from pathlib import Path
 
-import numpy as np
-
 from physics.io.inputs import MAX_BYTES, check_input_file
 from physics.errors import ConfigError, ConvergenceError, FileFormatError, ShapeError
 from physics.identification.channel_weights import (ChannelWeights, noise_floor_weights, unweighted_diagram,
                                                     unweighted_estimate, weighted_record)
-from physics.identification.decays import FREE_DROP_DB, free_response, least_fall_db
+from physics.identification.decays import FREE_DROP_DB, free_response, least_fall_db, slowest_mode
 from physics.identification.fft_peak import PEAK_EXPONENT
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate
@@ -258,7 +256,7 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
             f, z = est.natural_frequencies_hz, est.damping_ratios
             least = least_fall_db(d, f, z, fs)
             if least - d.drop_db > FREE_DROP_DB:
-                k = int(np.nanargmin(np.where((f > 0) & (z >= 0), z * f, np.nan)))     # least_fall_db's mode
+                k = slowest_mode(f, z)
                 why = (f"picked {STATIONARY_METHOD}: response records without a force channel, {verdict.text}, "
                        f"but the modes {STATIONARY_METHOD} finds in them would fall at least "
                        f"{least:.0f} dB (the slowest: {f[k]:.4g} Hz, {100 * z[k]:.2g} % "
