@@ -32,13 +32,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from physics.errors import FileFormatError, ShapeError
+from physics.errors import ConfigError, FileFormatError, ShapeError
 from physics.estimation import estimate_frf
 from physics.io.timedata import TimeRecords
 from physics.io.types import MeasuredFRF
 
 __all__ = ["ESTIMATORS", "EXCITATIONS", "LEVEL_SEGMENTS", "RESPONSE_END_LEVEL", "HitCheck", "TimeEstimate",
-           "check_hits", "estimate_from_records", "exponential_window", "force_window", "window_end_value"]
+           "check_hits", "estimate_from_records", "exponential_window", "force_window", "segment_window",
+           "window_end_value"]
 
 ESTIMATORS = ("h1", "h2", "hv")
 EXCITATIONS = ("random", "impact")
@@ -194,8 +195,9 @@ def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", 
         Random: number of overlapped segments; impact: number of equal blocks (one hit each).
     overlap : float in [0, 1)
         Random excitation only.
-    window : str
-        Random excitation only (any :func:`scipy.signal.get_window` name).
+    window : str or tuple
+        Random excitation only: a :func:`scipy.signal.get_window` name, or a name and its parameters
+        (``"kaiser,8.6"``; :func:`segment_window`).
     decay : float in (0, 1], optional
         Impact: value of the exponential window at the block end (1 = none); default: the weakest window that brings
         every response to :data:`RESPONSE_END_LEVEL` of its loudest by the block end (:func:`window_end_value`).
@@ -274,6 +276,29 @@ def _select_channels(records: TimeRecords, reference, src) -> tuple[int, list, s
     return ref, resp, kinds.pop()
 
 
+def segment_window(window):
+    """The :func:`scipy.signal.get_window` spec of ``window``: a name (``"hann"``), a name and its parameters
+    (``"kaiser,8.6"``, ``"tukey,0.25"``) or such a tuple; :class:`ConfigError` naming the expected form otherwise."""
+    from scipy.signal import get_window  # imported here: scipy.signal costs most of a second to import
+
+    spec = window
+    if isinstance(window, str) and "," in window:
+        name, *params = (w.strip() for w in window.split(","))
+        try:
+            spec = (name, *(float(v) for v in params))
+        except ValueError:
+            spec = None
+    try:
+        w = get_window(spec, 16) if spec is not None else None
+    except (ValueError, TypeError):
+        w = None
+    if w is None or not np.all(np.isfinite(w)):
+        raise ConfigError(f"window {window!r}: expected a scipy.signal window name (hann, hamming, blackman, "
+                          "flattop, boxcar, ...) or a name and its parameters separated by commas (kaiser,8.6; "
+                          "tukey,0.25)")
+    return spec
+
+
 def _random_spectra(records: TimeRecords, ref, resp, src, estimator, averages, overlap, window):
     """Welch spectra of random excitation: ``(estimate, n_averages, None, 0.0, description)``."""
     fs, x = records.sampling_frequency_hz, records.signals
@@ -284,7 +309,7 @@ def _random_spectra(records: TimeRecords, ref, resp, src, estimator, averages, o
     noverlap = int(round(overlap * nperseg))
     if nperseg < 16:
         raise ShapeError(f"{n} samples cannot give {averages} averages of at least 16 samples")
-    est = _estimate(src, x[ref], x[resp], fs, nperseg, noverlap, window=window)
+    est = _estimate(src, x[ref], x[resp], fs, nperseg, noverlap, window=segment_window(window))
     what = f"{estimator.upper()} of random excitation, {window} window, {est.n_averages} averages, " \
            f"{overlap:.0%} overlap, {fs / nperseg:.4g} Hz lines"
     return est, int(est.n_averages), None, 0.0, what

@@ -9,7 +9,7 @@ import numpy as np
 
 from physics.errors import ConfigError
 from physics.io import FRF, TIME, accepted, read, writable
-from physics.time_records import ESTIMATORS, EXCITATIONS, estimate_from_records
+from physics.time_records import ESTIMATORS, EXCITATIONS, estimate_from_records, segment_window
 
 __all__ = ["add_parser", "run"]
 
@@ -23,6 +23,7 @@ def run(args) -> dict:
         raise ConfigError(f"--decay {args.decay:g}: must be in (0, 1]")
     if args.fmax is not None and not args.fmax > 0:
         raise ConfigError(f"--fmax {args.fmax:g}: must be > 0")
+    segment_window(args.window)
     writer, ext = None, ""
     if args.out:
         ext = Path(args.out).suffix.lower()
@@ -81,7 +82,9 @@ def add_parser(sub):
     p.add_argument("--excitation", choices=EXCITATIONS, default="random", help="random (default) or impact")
     p.add_argument("--averages", type=int, default=8, help="segments (random) or impact blocks (default 8)")
     p.add_argument("--overlap", type=float, default=0.5, help="segment overlap for random excitation (default 0.5)")
-    p.add_argument("--window", default="hann", help="window of random-excitation segments (default hann)")
+    p.add_argument("--window", default="hann", help="window of random-excitation segments: a scipy.signal window "
+                                                    "name, or a name and its parameters, e.g. kaiser,8.6 "
+                                                    "(default hann)")
     p.add_argument("--decay", type=float, default=None,
                    help="impact: exponential window value at the block end (1 = none; default: the weakest window "
                         "that brings every response to 1 %% of its loudest by the block end, none where the "

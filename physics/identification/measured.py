@@ -12,7 +12,8 @@ from physics.identification.lscf import CLEAR_PEAK_PROMINENCE, CLEAR_PEAK_TOLERA
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate
 from physics.identification.poles import StabilisationDiagram
-from physics.io import FRF, MeasuredFRF, ModalData, format_of, prepare_measured, read_frf
+from physics.identification.output_only import holds_response_records
+from physics.io import FRF, TIME, MeasuredFRF, ModalData, format_of, prepare_measured, read, read_frf
 from physics.io.timedata import read_uff_time_records
 from physics.io.uff58 import UffFile, read_uff58
 from physics.time_records import estimate_from_records
@@ -164,14 +165,18 @@ def identify_file(path, method="lscf", band_hz=None, n_modes=None, max_order=40)
 
 
 def read_measured_frf(path) -> MeasuredFRF:
-    """FRFs of a file: read as FRFs, or estimated from the time records of a universal file without FRF records
-    (with a warning saying how); a universal file is parsed once."""
+    """FRFs of a file: read as FRFs, or estimated from time records of a force and responses (a universal file
+    without FRF records, an NPZ or CSV time series with a force channel; with a warning saying how); a universal
+    file is parsed once."""
     if format_of(path, FRF).name != "uff":
-        return read_frf(path)
-    uf = UffFile(path)
-    if 4 in uf.function_types or 1 not in uf.function_types:   # FRF records, or nothing to estimate from
-        return read_uff58(uf)
-    est = estimate_from_records(read_uff_time_records(uf))
+        if not (holds_response_records(path) and (rec := read(path, TIME)).forces):
+            return read_frf(path)                   # FRFs, or response records: refused naming what they hold
+        est = estimate_from_records(rec)
+    else:
+        uf = UffFile(path)
+        if 4 in uf.function_types or 1 not in uf.function_types:   # FRF records, or nothing to estimate from
+            return read_uff58(uf)
+        est = estimate_from_records(read_uff_time_records(uf))
     warnings.warn(f"{path}: holds time records, not FRFs: estimated {est.description} before identifying",
                   stacklevel=2)
     return est.frf

@@ -2,10 +2,11 @@
 
 NPZ keys: ``signals`` (n_channels, n_samples) real, ``sampling_frequency_hz`` (scalar), optional ``dofs``
 (``"NODE:+DIR"`` per channel; without it the channels are ``1:+Z, 2:+Z, ...`` and the metadata's ``dof_labels`` is
-``"by position"``) and ``quantity`` (``"displacement"``, ``"velocity"`` or ``"acceleration"``, SI
-units; default acceleration). CSV: a header ``time_s,<dof>,<dof>,...`` and one row per sample at a uniform time
-step (the sampling rate is read from the time column); an optional comment line ``# quantity: velocity`` sets the
-quantity.
+``"by position"``) and ``quantity`` (``"displacement"``, ``"velocity"``, ``"acceleration"`` or ``"force"``, SI
+units; one for every channel, or one per channel: a force channel makes the file force and responses, whose FRFs
+``estimate`` and ``identify`` estimate; default acceleration). CSV: a header ``time_s,<dof>,<dof>,...`` and one row
+per sample at a uniform time step (the sampling rate is read from the time column); an optional comment line
+``# quantity: velocity`` (or one per channel, ``# quantity: force, acceleration``) sets the quantities.
 """
 
 from __future__ import annotations
@@ -23,24 +24,32 @@ from physics.io.types import check_dof_labels
 
 __all__ = ["read_time_csv", "read_time_npz"]
 
-_QUANTITIES = ("displacement", "velocity", "acceleration")
+_QUANTITIES = ("displacement", "velocity", "acceleration", "force")
 
 
 def _records(path, signals, fs, dofs, quantity) -> TimeRecords:
+    """``quantity``: one name for every channel, or one per channel."""
     if signals.ndim != 2 or signals.shape[1] < 2 or not np.issubdtype(signals.dtype, np.number) \
             or np.iscomplexobj(signals):
         raise FileFormatError(f"{path}: field 'signals' must be a real (n_channels, n_samples) array of at least 2 "
                               f"samples, got {signals.dtype} of shape {signals.shape}")
     if not (np.isfinite(fs) and fs > 0):
         raise FileFormatError(f"{path}: field 'sampling_frequency_hz' must be a finite number > 0, got {fs:g}")
-    if quantity not in _QUANTITIES:
-        raise FileFormatError(f"{path}: field 'quantity' {quantity!r} must be one of {', '.join(_QUANTITIES)}")
+    quantities = [quantity] if isinstance(quantity, str) else list(quantity)
+    if len(quantities) not in (1, signals.shape[0]) or any(q not in _QUANTITIES for q in quantities):
+        raise FileFormatError(f"{path}: field 'quantity' {', '.join(quantities)!r} must be one of "
+                              f"{', '.join(_QUANTITIES)}, or "
+                              f"one of them per channel ({signals.shape[0]})")
+    if len(quantities) == 1 and signals.shape[0] > 1 and quantities[0] == "force":
+        raise FileFormatError(f"{path}: field 'quantity' 'force' for every channel: no response; give one quantity "
+                              "per channel, e.g. force, acceleration, ...")
     labels = {} if dofs is not None else {"dof_labels": "by position"}     # channels 1:+Z, 2:+Z, ... in order
     dofs = tuple(dofs) if dofs is not None else tuple(f"{k + 1}:+Z" for k in range(signals.shape[0]))
     if len(dofs) != signals.shape[0]:
         raise FileFormatError(f"{path}: field 'dofs' has {len(dofs)} labels for {signals.shape[0]} channels")
     check_dof_labels(dofs, f"{path}: field 'dofs'")
-    return TimeRecords(1.0 / fs, np.asarray(signals, dtype=np.float64), dofs, (quantity,) * len(dofs),
+    quantities = quantities * len(dofs) if len(quantities) == 1 else quantities
+    return TimeRecords(1.0 / fs, np.asarray(signals, dtype=np.float64), dofs, tuple(quantities),
                        {"source": str(path), "format": Path(path).suffix.lstrip("."), **labels})
 
 
@@ -56,7 +65,7 @@ def read_time_npz(path) -> TimeRecords:
     if rate.size != 1 or rate.dtype.kind not in "iuf":
         raise FileFormatError(f"{path}: field 'sampling_frequency_hz' must be one real number (Hz)")
     dofs = [str(d) for d in z["dofs"].reshape(-1)] if "dofs" in z else None
-    quantity = str(z["quantity"]) if "quantity" in z else "acceleration"
+    quantity = [str(q) for q in np.asarray(z["quantity"]).reshape(-1)] if "quantity" in z else ["acceleration"]
     signals = z["signals"]
     if signals.ndim == 2 and signals.shape[0] > signals.shape[1] >= 2:
         raise FileFormatError(f"{path}: field 'signals' of shape {signals.shape} holds more channels than samples; "
@@ -74,7 +83,7 @@ def read_time_csv(path) -> TimeRecords:
         s = line.strip()
         if s.startswith("#"):
             if s[1:].strip().lower().startswith("quantity:"):
-                quantity = s.split(":", 1)[1].strip().lower()
+                quantity = [q.strip() for q in s.split(":", 1)[1].strip().lower().split(",")]
             continue
         if s:
             body.append((lineno, s))

@@ -63,3 +63,22 @@ def test_real_time_records_without_force_give_one_line(capsys, command, tmp_path
     assert code == 2 and out == "" and err.count("\n") == 1
     assert "MPSTD_Set001" in err and "4 time records" in err and "no force channel" in err
     assert not (tmp_path / "x.uff").exists()
+
+
+@pytest.mark.parametrize("window", ["bogus", "kaiser", "kaiser,x"])
+def test_a_window_scipy_cannot_make_is_one_line_naming_the_form(capsys, impact_file, window, tmp_path):
+    path, *_ = impact_file
+    out_file = tmp_path / "frf.uff"
+    code, out, err = run_cli(capsys, ["estimate", str(path), "--window", window, "--out", str(out_file)])
+    assert code == 2 and out == "" and not out_file.exists()
+    assert err.count("\n") == 1 and f"window {window!r}" in err and "kaiser,8.6" in err
+
+
+def test_a_window_with_its_parameter_is_the_scipy_window():
+    from scipy.signal import get_window
+
+    from physics.time_records import segment_window
+
+    assert segment_window("kaiser,8.6") == ("kaiser", 8.6)
+    np.testing.assert_array_equal(get_window(segment_window("tukey, 0.25"), 64), get_window(("tukey", 0.25), 64))
+    assert segment_window("hann") == "hann"

@@ -354,3 +354,39 @@ def test_positive_directions_and_reciprocity_of_measured_frfs():
     p = md.with_positive_directions()
     assert p.dofs == ("2:+Y", "3:+Y", "4:+Y")
     np.testing.assert_array_equal(p.eigenvectors, md.eigenvectors * np.array([1, -1, 1])[:, None])
+
+
+def test_npz_and_csv_time_series_with_a_force_channel_are_estimated_as_the_universal_file(tmp_path):
+    from physics.identification import read_measured_frf
+    from physics.io import TIME, read
+    from physics.time_records import estimate_from_records
+
+    t = np.arange(4096) / 512.0
+    force = np.random.default_rng(3).standard_normal(t.size)
+    resp = np.convolve(force, np.exp(-t[:200] * 20), "same")
+    write_time_uff(tmp_path / "t.uff", t, [(1, force, 13), (2, resp, 12)])
+    expected = estimate_from_records(read(tmp_path / "t.uff", TIME)).frf
+    np.savez(tmp_path / "t.npz", signals=np.vstack([force, resp]), sampling_frequency_hz=512.0,
+             dofs=np.array(["1:+Z", "2:+Z"]), quantity=np.array(["force", "acceleration"]))
+    rows = "\n".join(",".join(repr(float(v)) for v in row) for row in zip(t, force, resp))
+    (tmp_path / "t.csv").write_text(f"# quantity: force, acceleration\ntime_s,1:+Z,2:+Z\n{rows}\n")
+    for name in ("t.npz", "t.csv"):
+        rec = read(tmp_path / name, TIME)
+        assert rec.forces == [0] and rec.quantities == ("force", "acceleration")
+        with pytest.warns(UserWarning, match="holds time records, not FRFs"):
+            got = read_measured_frf(tmp_path / name)
+        np.testing.assert_allclose(got.frf, expected.frf, rtol=1e-9, atol=1e-12 * np.abs(expected.frf).max())
+        assert got.response_dofs == ("2:+Z",) and got.reference_dofs == ("1:+Z",) and got.kind == expected.kind
+
+
+@pytest.mark.parametrize("quantity, message", [(["force", "force"], "'force' for every channel"),
+                                               (["force", "strain"], r"one of them per channel \(2\)"),
+                                               (["force", "acceleration", "velocity"], "one of them per channel")])
+def test_time_series_quantities_other_than_one_or_one_per_channel_are_refused(tmp_path, quantity, message):
+    from physics.errors import FileFormatError
+    from physics.io import TIME, read
+
+    q = quantity[0] if quantity == ["force", "force"] else np.array(quantity)
+    np.savez(tmp_path / "q.npz", signals=np.zeros((2, 64)), sampling_frequency_hz=100.0, quantity=q)
+    with pytest.raises(FileFormatError, match=message):
+        read(tmp_path / "q.npz", TIME)
