@@ -54,7 +54,7 @@ def _check_uff_complete(path: Path, raw: bytes) -> None:
     # a complete file ends with a closing delimiter preceded by data (binary 58b data run
     # straight into it); an opening delimiter alone at the end means a cut at a record start
     if not text.endswith(b"    -1") or text[:-6].rstrip().endswith(b"    -1"):
-        start = text.rfind(b"    -1\n")
+        start = max(text.rfind(b"    -1\n"), text.rfind(b"    -1\r\n"))     # LF or CRLF lines
         raise FileFormatError(f"{path}: truncated universal file: the last record (from byte "
                               f"{max(start, 0)}) has no closing '    -1' delimiter line")
 

@@ -1,5 +1,7 @@
 """Tests of measured-FRF I/O (UFF58 ASCII/binary, CSV, NPZ) and its validation."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -390,3 +392,13 @@ def test_time_series_quantities_other_than_one_or_one_per_channel_are_refused(tm
     np.savez(tmp_path / "q.npz", signals=np.zeros((2, 64)), sampling_frequency_hz=100.0, quantity=q)
     with pytest.raises(FileFormatError, match=message):
         read(tmp_path / "q.npz", TIME)
+
+
+def test_a_cut_crlf_binary_universal_file_names_the_byte_its_last_record_starts_at(tmp_path):
+    raw = (Path(__file__).resolve().parents[1] / "data" / "MPSTD_Set001_2024_10_08_10_27_07.uff").read_bytes()
+    cut = int(0.4 * len(raw))
+    start = raw[:cut].rfind(b"    -1\r\n    58b")           # the opening delimiter of the record cut
+    assert start > 0
+    (tmp_path / "cut.uff").write_bytes(raw[:cut])
+    with pytest.raises(FileFormatError, match=f"the last record \\(from byte {start}\\)"):
+        read_frf(tmp_path / "cut.uff")
