@@ -82,13 +82,18 @@ class RecordsIdentification:
 SNIFF_LINES, SNIFF_LINE_CHARS = 200, 1 << 16
 
 
+#: What each format :func:`holds_response_records` reads holds, in its refusals.
+_EXPECTED = {"npz": "an .npz of FRFs (frequency_hz, frf, response_dofs, reference_dofs) or of response time series "
+                    "(signals, sampling_frequency_hz)"}
+
+
 def holds_response_records(path) -> bool:
     """Whether a file holds time records rather than FRFs: a universal file with time records and no FRF, an
     ``.npz`` with a ``signals`` field, or a CSV whose header starts with ``time_s``."""
     if not Path(path).is_file():
         return False                                  # the FRF reader names what is missing
     fmt = format_of(path, FRF, TIME)
-    check_input_file(path, fmt.name if fmt.name in MAX_BYTES else "csv")
+    check_input_file(path, fmt.name if fmt.name in MAX_BYTES else "csv", what=_EXPECTED.get(fmt.name))
     if fmt.name == "uff":
         types = UffFile(path).function_types
         return 1 in types and 4 not in types
@@ -99,9 +104,7 @@ def holds_response_records(path) -> bool:
                 return "signals.npy" in zf.namelist()
         except (zipfile.BadZipFile, OSError, EOFError, ValueError) as exc:
             raise FileFormatError(f"{path}: not a readable .npz ({type(exc).__name__}: "
-                                  f"{' '.join(str(exc).split())[:150]}); expected an .npz of FRFs (frequency_hz, frf, "
-                                  "response_dofs, reference_dofs) or of response time series (signals, "
-                                  "sampling_frequency_hz)") from None
+                                  f"{' '.join(str(exc).split())[:150]}); expected {_EXPECTED['npz']}") from None
     if fmt.name == "csv":
         with open(path, encoding="utf-8-sig", errors="replace") as fh:
             lines = (fh.readline(SNIFF_LINE_CHARS) for _ in range(SNIFF_LINES))   # bounded: no newline in 2 GB

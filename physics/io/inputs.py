@@ -38,11 +38,12 @@ def check_input_file(path, kind: str, error=FileFormatError, what: str | None = 
     Raises
     ------
     error (default :class:`FileFormatError`)
-        One line naming the file: missing, not a regular file (directory, device, FIFO, socket), or larger than
-        the cap of its kind. ``what`` names the expected content (default: ``kind`` upper-cased).
+        One line naming the file: missing, not a regular file (directory, device, FIFO, socket), empty (but a
+        TOML file), or larger than the cap of its kind. ``what`` names the expected content (default: ``kind``
+        upper-cased).
     """
     path = Path(path)
-    expected = what or f"a {kind.upper()} file"
+    expected = what or f"{'an' if kind[0] in 'aefhilmnorsx' else 'a'} {kind.upper()} file"   # letters read so
     try:
         st = os.stat(path)
     except FileNotFoundError:
@@ -52,6 +53,8 @@ def check_input_file(path, kind: str, error=FileFormatError, what: str | None = 
     for test, name in _KINDS:
         if test(st.st_mode):
             raise error(f"{path}: is {name}, not a regular file; expected {expected}")
+    if st.st_size == 0 and kind != "toml":                # an empty TOML file is a config of defaults
+        raise error(f"{path}: file is empty; expected {expected}")
     cap = MAX_BYTES[kind]
     if st.st_size > cap:
         raise error(f"{path}: {st.st_size} bytes, more than the {cap} bytes ({cap / 2**20:g} MiB) a "

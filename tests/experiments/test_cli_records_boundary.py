@@ -41,7 +41,8 @@ def test_an_unreadable_npz_names_both_forms_identify_reads(capsys, tmp_path, con
     path.write_bytes(content)
     code, out, err = run_cli(capsys, ["identify", str(path), "--out", str(tmp_path / "id")])
     assert (code, out) == (2, "")
-    assert err.count("\n") == 1 and err.startswith(f"beam-damage identify: error: {path}: not a readable .npz (")
+    assert err.count("\n") == 1 and err.startswith(f"beam-damage identify: error: {path}: " + (
+        "file is empty; " if not content else "not a readable .npz ("))
     assert err.endswith("expected an .npz of FRFs (frequency_hz, frf, response_dofs, reference_dofs) or of response "
                         "time series (signals, sampling_frequency_hz)\n")
     assert not (tmp_path / "id").exists()
@@ -190,3 +191,12 @@ def test_one_mode_of_one_channel_is_said_in_the_singular(capsys, tmp_path):
     code, out, err = run_cli(capsys, ["identify", str(path)])
     assert code == 0, err
     assert f"{path}: 1 mode by era in 0-400 Hz from 1 channel x 2 s" in out
+
+
+@pytest.mark.parametrize("name", ["empty.json", "empty.csv", "empty.uff"])
+def test_an_empty_file_is_named_empty_whatever_its_extension(capsys, tmp_path, name):
+    path = tmp_path / name
+    path.write_bytes(b"")
+    code, out, err = run_cli(capsys, ["identify", str(path)])
+    assert (code, out) == (2, "") and err.count("\n") == 1
+    assert err.startswith(f"beam-damage identify: error: {path}: file is empty; expected ")
