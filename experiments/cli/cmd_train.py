@@ -15,7 +15,7 @@ def add_parser(sub):
                        description="Train the network on pairs (baseline, current) of one or more datasets written by "
                                    "'beam-damage generate --config training --n N --out DIR' (intact and damaged "
                                    "specimens, temperature and re-clamping between the test days), split by specimen "
-                                   "(85%% train incl. validation, 15%% test), calibrate its probabilities (a logit "
+                                   "(85 % train incl. validation, 15 % test), calibrate its probabilities (a logit "
                                    "scale and bias), score it and the classical methods on the "
                                    "test split and write a model directory (config.json, weights-*.npz, metrics.csv).")
     p.add_argument("--data", required=True, nargs="+", metavar="DIR",

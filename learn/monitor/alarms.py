@@ -306,9 +306,11 @@ def _checked_request(series: SeriesInput, n_baseline: int, false_alarm_rate: flo
         raise BeamDamageError(f"--baseline-tests {n_baseline}: at least {minimum_baseline(1, q)} baseline tests are "
                               f"needed even for one mode ({minimum_baseline(1, q)} = modes + conditions + 6)")
     if q and not np.all(np.isfinite(C[:n_baseline])):
-        bad = series.files[int(np.flatnonzero(~np.isfinite(C[:n_baseline]).all(axis=1))[0])]
-        raise BeamDamageError(f"conditions: baseline test {bad} lacks a measured condition ("
-                              f"{', '.join(series.condition_names)}); the regression needs them on every baseline "
+        i = int(np.flatnonzero(~np.isfinite(C[:n_baseline]).all(axis=1))[0])
+        lacking = [c for c, v in zip(series.condition_names, C[i]) if not np.isfinite(v)]
+        where = f"{series.where[i]}: " if series.where else "conditions: "
+        raise BeamDamageError(f"{where}baseline test {series.files[i]} lacks a measured condition ("
+                              f"{', '.join(lacking)}: empty or NaN); the regression needs them on every baseline "
                               "test")
     return normal_model, q
 
@@ -320,6 +322,10 @@ def _identified(series: SeriesInput, n_baseline: int, settings: IdentificationSe
     ``foreign``)."""
 
     tests, errors, pending = identify_files(series.files, settings, cache_dir, workers, progress)
+    if all(t is None for t in tests[:n_baseline]):
+        first = next((str(e) for e in errors[:n_baseline] if e), "")
+        raise BeamDamageError(f"none of the {n_baseline} baseline tests could be identified"
+                              + (f"; the first: {first}" if first else ""))
     foreign = set()
     for i, why in enumerate(check_series(tests, n_baseline, series.files)):
         if why:

@@ -29,6 +29,7 @@ class SeriesInput:
     time_values : ndarray (n,)    days since the first test for dates, the numbers as given, else 0..n-1
     conditions : ndarray (n, q) or None     measured conditions (NaN where not measured)
     condition_names : tuple of str
+    where : tuple of str          per test, where it is listed (``"series.csv line 4"``; empty: given as files)
     """
 
     files: list
@@ -36,6 +37,7 @@ class SeriesInput:
     time_values: np.ndarray
     conditions: np.ndarray | None = None
     condition_names: tuple = ()
+    where: tuple = ()
 
     @classmethod
     def from_files(cls, files) -> "SeriesInput":
@@ -71,9 +73,10 @@ def read_conditions(csv_path) -> SeriesInput:
         raise BeamDamageError(f"{csv_path}: column(s) {', '.join(missing)} missing; expected file,time"
                               f"[,condition...], got {','.join(map(str, head))}")
     names = tuple(c for c in head if c not in ("file", "time") and c)
-    files, times, values, conds, dates = [], [], [], [], set()
+    files, times, values, conds, dates, lines = [], [], [], [], set(), []
     for k, r in enumerate(rows, 2):
         where = f"{csv_path} line {k}"
+        lines.append(where)
         if None in r or not r["file"]:
             raise BeamDamageError(f"{where}: expected {len(head)} fields with a file name")
         f = Path(r["file"])
@@ -97,7 +100,8 @@ def read_conditions(csv_path) -> SeriesInput:
     if dates == {True}:
         t = t - t[0]
     C = np.asarray(conds, float)[order] if names else None
-    return SeriesInput([files[i] for i in order], [times[i] for i in order], t, C, names)
+    return SeriesInput([files[i] for i in order], [times[i] for i in order], t, C, names,
+                       tuple(lines[i] for i in order))
 
 
 def _layout(m: IdentifiedModes) -> dict:

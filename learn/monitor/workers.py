@@ -75,7 +75,8 @@ def _over_files(fn, args: list, workers, progress: bool, desc: str) -> list:
     from tqdm import tqdm
 
     results: list = [None] * len(args)
-    bar = tqdm(total=len(args), desc=desc, unit="test", disable=not progress, leave=False)
+    bar = tqdm(total=len(args), desc=desc, unit="test", disable=None if progress else True,
+               leave=False)                                     # None: only on a terminal
 
     def record(i, result):
         results[i] = result

@@ -370,7 +370,7 @@ class DamageClassifier:
         epochs = range(self.epochs)
         if self.verbose:
             from tqdm.auto import tqdm
-            epochs = tqdm(epochs, desc="train", unit="epoch")
+            epochs = tqdm(epochs, desc="train", unit="epoch", disable=None)     # None: only on a terminal
         for _ in epochs:
             self.model_.train()
             perm = torch.randperm(len(tr), generator=gen).to(self.device_)

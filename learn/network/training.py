@@ -170,7 +170,7 @@ def evaluate(model: TrainedModel, data, out_dir=None, *, extra_outputs=None, pro
     sens = model.sensitivity
     outs = []
     for r in tqdm([model.route] + [q for q in routes if q != model.route], desc="evaluate networks",
-                  disable=not progress):
+                  disable=None if progress else True):          # None: only on a terminal
         outs.append(network_output(model.networks[r], features(pairs, r), sens, f"network ({r})")[0])
     classical, _ = run_classical(pairs.eigenvalues, pairs.eigenvectors, sens, model.config["classical_thresholds"])
     outs += classical + list(extra_outputs or [])

@@ -165,3 +165,13 @@ def test_a_command_builds_only_its_own_parser_and_lists_every_command_with_its_h
     assert [a.help for a in sub._choices_actions] == [c.help for c in COMMANDS.values()]
     assert any(a.dest == "baseline" for a in sub.choices["classify"]._actions)
     assert [a.dest for a in sub.choices["train"]._actions] == ["help"]       # listed, not built
+
+
+def test_every_commands_help_prints_its_percent_signs_once():
+    """argparse %-formats help strings but not descriptions: a ``%%`` in a description prints doubled."""
+    from experiments.cli import COMMANDS, build_parser
+
+    for name in COMMANDS:
+        sub = next(a for a in build_parser([name, "--help"])._actions if a.dest == "command")
+        text = sub.choices[name].format_help()
+        assert "%%" not in text, name

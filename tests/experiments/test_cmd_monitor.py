@@ -165,3 +165,29 @@ def test_a_baseline_of_sessions_is_named_and_a_later_session_like_them_is_no_ala
     status = [r["status"] for r in res["tests"]]
     assert status[40:50] == ["no alarm"] * 10 and status[50:] == ["alarm"] * 10
     assert "The baseline period holds 4 sessions of 10/10/10/10 tests" in (out / "report.md").read_text()
+
+
+def test_a_baseline_condition_missing_names_the_csv_line_and_the_condition(tmp_path, capsys, modal_series):
+    csv_path, _, _ = modal_series
+    lines = csv_path.read_text().splitlines()
+    head, row = lines[0], lines[4].split(",")                   # line 5: the fourth test (time 3)
+    lines[4] = ",".join([*row[:2], "nan"])
+    bad = tmp_path / "c_nan.csv"
+    bad.write_text("\n".join(lines).replace("day0", str(csv_path.parent / "day0")) + "\n")
+    assert head == "file,time,temperature_c"
+    code, _, err = run_json(capsys, ["monitor", "--conditions", str(bad), "--baseline-tests", "20",
+                                     "--out", str(tmp_path / "m"), "--json"])
+    assert code == 2 and err.count("\n") == 1 and not (tmp_path / "m").exists()
+    assert f"{bad} line 5: baseline test " in err and "day003.json lacks a measured condition (temperature_c" in err
+
+
+def test_a_baseline_none_of_whose_tests_is_identified_says_why_the_first_is_not(tmp_path, capsys):
+    t = np.arange(2000) / 2000.0
+    for k in range(8):
+        np.savez(tmp_path / f"t{k}.npz", signals=np.vstack([np.sin(2 * np.pi * 50 * t) * np.exp(-t)] * 2),
+                 sampling_frequency_hz=2000.0)
+    code, _, err = run_json(capsys, ["monitor", *sorted(map(str, tmp_path.glob("t*.npz"))), "--baseline-tests", "7",
+                                     "--band", "1500", "2000", "--out", str(tmp_path / "m"), "--json"])
+    assert code == 2 and err.count("\n") == 1 and not (tmp_path / "m").exists()
+    assert "none of the 7 baseline tests could be identified; the first: " in err
+    assert "t0.npz: band up to 2000 Hz is above the Nyquist frequency 1000 Hz" in err
