@@ -32,6 +32,7 @@ from typing import NamedTuple
 
 from threadpoolctl import threadpool_limits
 
+from experiments.cli.args import check_out_dir, check_out_file
 from physics.errors import BeamDamageError
 from physics.io import to_jsonable
 
@@ -135,6 +136,16 @@ def build_parser(argv=None) -> argparse.ArgumentParser:
     return parser
 
 
+def _check_out(parser, args) -> None:
+    """Refuse a command's ``--out`` that cannot be written before it runs: a file (metavar ``FILE``) or else a
+    directory (:func:`experiments.cli.args.check_out_file`, :func:`~experiments.cli.args.check_out_dir`)."""
+    if not getattr(args, "out", None):
+        return
+    sub = next(a for a in parser._actions if a.dest == "command").choices[args.command]
+    out = next((a for a in sub._actions if a.dest == "out"), None)
+    (check_out_file if out is not None and out.metavar == "FILE" else check_out_dir)(args.out)
+
+
 def result_warnings(result) -> list[str]:
     """The ``"warnings"`` a command's result holds (a dict, or a list of dicts: one per input), in order."""
     items = result if isinstance(result, list) else [result]
@@ -150,6 +161,7 @@ def main(argv=None) -> int:
     try:
         with warnings.catch_warnings(record=True) as caught, threadpool_limits(1, user_api="blas"):
             warnings.simplefilter("default")
+            _check_out(parser, args)
             result = args.func(args)
     except BeamDamageError as exc:
         flag = getattr(args, "flags", {}).get(exc.parameter)

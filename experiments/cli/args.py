@@ -9,7 +9,7 @@ from physics import properties
 from physics.beam import Beam, load_beam
 from physics.errors import BeamDamageError
 
-__all__ = ["add_beam_argument", "beam_argument", "check_out_dir", "counted"]
+__all__ = ["add_beam_argument", "beam_argument", "check_out_dir", "check_out_file", "counted"]
 
 
 def beam_argument(spec: str) -> Beam:
@@ -35,6 +35,17 @@ def check_out_dir(path) -> None:
             if not q.is_dir():
                 raise BeamDamageError(f"--out {path}: {q} exists and is not a directory")
             return
+
+
+def check_out_file(path) -> None:
+    """Refuse an output file that cannot be written (a directory of that name, a parent that is a file), before any
+    long computation."""
+    p = Path(path)
+    if p.is_dir():
+        raise BeamDamageError(f"--out {path}: is a directory; expected a file name")
+    q = next((q for q in p.parents if q.exists()), None)
+    if q is not None and not q.is_dir():
+        raise BeamDamageError(f"--out {path}: {q} exists and is not a directory")
 
 
 def counted(n: int, noun: str) -> str:

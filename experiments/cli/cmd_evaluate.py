@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from experiments.cli.args import check_out_dir
 from learn.network.model_dir import load_model
 
 __all__ = ["add_parser", "run"]
@@ -25,8 +24,6 @@ def add_parser(sub):
 def run(args) -> dict:
     from learn.network.training import evaluate  # torch: the network
 
-    if args.out:
-        check_out_dir(args.out)
     res = evaluate(load_model(args.model), args.data, args.out, progress=True)
     if not args.json:
         cols = {"roc_auc": "ROC AUC", "accuracy": "accuracy", "false_alarm_rate": "false alarms",

@@ -107,8 +107,6 @@ def run(args) -> dict:
     if args.max_order is not None and not 1 <= args.max_order <= MAX_ORDER:
         raise ConfigError(f"--max-order {args.max_order}: must be between 1 and {MAX_ORDER} (the LSCF normal "
                           "equations grow with the square of the order)")
-    if args.out and Path(args.out).exists() and not Path(args.out).is_dir():
-        raise ConfigError(f"--out {args.out}: exists and is not a directory")
     window_flag = _check_window_options(args)
     band = tuple(args.band) if args.band else None
     if args.method is None or METHODS[args.method].data == "records":

@@ -137,8 +137,7 @@ def run(args) -> dict:
         raise ConfigError(f"--band {args.band[0]:g} {args.band[1]:g}: F0 and F1 must be finite with 0 <= F0 < F1")
     if not args.json and not args.out:
         args.out = "out/monitor"
-    if args.out:
-        check_out_dir(args.out)
+        check_out_dir(args.out)                             # the default (a given --out is checked before run)
     series = _series(args)
     model = beam = beam_x_m = None
     if args.model:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from experiments.cli.args import check_out_dir
 from physics.errors import BeamDamageError
 from datagen.store import read_manifest
 from learn.network.mode_count import require_test_modes
@@ -41,7 +40,6 @@ def run(args) -> dict:
         raise BeamDamageError(f"--seed must be >= 0, got {args.seed}")
     if args.threads < 1:
         raise BeamDamageError(f"--threads must be >= 1, got {args.threads}")
-    check_out_dir(args.out)
     for root in args.data:
         _check_test_modes(root)
     out = train(args.data, args.out, epochs=args.epochs, seed=args.seed, route=args.route, progress=True,

@@ -175,3 +175,21 @@ def test_every_commands_help_prints_its_percent_signs_once():
         sub = next(a for a in build_parser([name, "--help"])._actions if a.dest == "command")
         text = sub.choices[name].format_help()
         assert "%%" not in text, name
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["estimate", "x.uff", "--out", "{d}"], "--out {d}: is a directory; expected a file name"),
+    (["estimate", "x.uff", "--out", "{f}/frf.uff"], "--out {f}/frf.uff: {f} exists and is not a directory"),
+    (["identify", "x.uff", "--out", "{f}/sub"], "--out {f}/sub: {f} exists and is not a directory"),
+    (["generate", "--n", "5", "--out", "{f}"], "--out {f}: {f} exists and is not a directory")])
+def test_an_out_that_cannot_be_written_is_refused_before_the_command_runs(capsys, tmp_path, monkeypatch, argv,
+                                                                         message):
+    """Checked against the parser's ``--out`` (metavar FILE: a file, else a directory) before the input is read:
+    ``x.uff`` does not exist, and its error would come first."""
+    d, f = tmp_path / "adir.uff", tmp_path / "afile"
+    d.mkdir()
+    f.write_text("")
+    fill = {"d": str(d), "f": str(f)}
+    code, out, err = _run(capsys, *[a.format(**fill) for a in argv])
+    assert (code, out) == (2, "") and err.count("\n") == 1
+    assert err.endswith(message.format(**fill) + "\n")
