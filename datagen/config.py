@@ -501,4 +501,9 @@ def load_config(name_or_path=None, *, preset: str | None = None) -> dict:
     over = {} if name_or_path is None else _overrides(name_or_path)
     if preset is not None:
         over["preset"] = preset
-    return merge(over)
+    try:
+        return merge(over)
+    except ConfigError as exc:                      # a key of the user's file: the file is named
+        if name_or_path is None or str(name_or_path) in named_configs():
+            raise
+        raise ConfigError(f"{name_or_path}: {exc}", parameter=exc.parameter) from None

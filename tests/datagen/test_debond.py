@@ -228,3 +228,14 @@ def test_a_debond_shorter_than_its_hinge_changes_modes_1_to_4_as_a_slit_of_its_f
     np.testing.assert_allclose(100 * debond, [-15.08, -0.10, -4.49, -9.40], atol=0.006)
     np.testing.assert_allclose(100 * slit, [-15.08, -0.11, -4.49, -9.38], atol=0.006)
     assert np.max(np.abs(debond - slit) / (1 + slit)) < 2e-4
+
+
+def test_a_config_files_bad_key_names_the_file(tmp_path):
+    from datagen.config import load_config
+
+    path = tmp_path / "bad.toml"
+    path.write_text("[damage]\nbogus = 1\n")
+    with pytest.raises(ConfigError, match=f"^{path}: unknown config key 'damage.bogus'; expected one of"):
+        load_config(path)
+    with pytest.raises(ConfigError, match="^unknown config key 'bogus'"):      # no file: none named
+        merge({"bogus": 1})
