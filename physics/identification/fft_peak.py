@@ -48,11 +48,14 @@ the peak's line, unit norm.
 
 This is a frequency estimator, not a modal model: no poles, no residues, and on a stationary record the raw
 periodogram is not averaged (its peak scatters by a fraction of the half-power width however long the record).
+:func:`identify_fft_peaks` gives a stationary record's modes no damping (NaN) and their peak as the natural
+frequency: the raw periodogram's half-power width is one random line's, and that of the averaged spectrum is biased
+narrow by its ripple (0.54-0.76 of 1 % damping at 357 Hz, 60 s at 2 kHz; ``efdd`` and ``ssi`` give the damping).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -304,6 +307,9 @@ def identify_fft_peaks(signals, sampling_frequency_hz, band_hz=None, n_modes=Non
         else np.arange(peaks.lines.size)
     res = fft_peaks(checked if band_hz is None else checked.signals, checked.sampling_frequency_hz,
                     peaks.frequency_hz[keep], peaks.tolerance_hz[keep], window, pad, where, quantity)
+    if not decay:                       # a stationary record: no damping (module docstring)
+        res = replace(res, damping_ratios=np.full(res.frequency_hz.size, np.nan),
+                      natural_frequencies_hz=res.frequency_hz.copy())
     ok = np.isfinite(res.frequency_hz)
     _, first = np.unique(np.where(ok, res.frequency_hz, -1.0), return_index=True)
     ok &= np.isin(np.arange(ok.size), first)            # two clear peaks refined to one FFT peak: one mode
