@@ -366,7 +366,9 @@ def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_to
     if max_order < min_order or min_order < 1:
         raise ShapeError("lscf needs 1 <= min_order <= max_order")
     if max_order > _highest_order(N, n_o, n_i):
-        raise ShapeError(f"lscf: {N} lines x {n_o} responses are too few for model order {max_order}")
+        raise ShapeError(f"lscf: {N} lines x {n_o} responses are too few for model order {max_order} (at most "
+                         f"{_highest_order(N, n_o, n_i)}: a lower --max-order, a wider band or finer lines)",
+                         parameter="max_order")
     dt = 1.0 / (2.0 * f[-1] * (1.0 + margin))
     P = max_order + 1
     M, C = _projected_normal_equations(f, h, dt, P, None if line_weight is None else np.asarray(line_weight, float))
