@@ -292,7 +292,12 @@ def agreement(damaged: bool, net, cl, hypotheses, source: str) -> dict:
                              f"({best['probability']:.2f}"
                              + ("" if best.get("fits", True) else ", not fitting") + ")") if best else ""}
     parts = [said[k] for k in given]
-    if agree:
+    if agree and given and set(given.values()) != {bool(damaged)}:    # the verdict withdrawn by the baselines
+        agree = False
+        text = ("; ".join(parts)[:1].upper() + "; ".join(parts)[1:] + f", but the verdict is "
+                f"{'damaged' if damaged else 'no damage detected'}: the natural frequencies lie within the normal "
+                "variation the baseline tests measured.")
+    elif agree:
         text = "One story: " + "; ".join(parts) + "."
     else:
         text = (f"They disagree: {'; '.join(parts)}. The verdict ({'damaged' if damaged else 'undamaged'}) "
@@ -312,7 +317,15 @@ def verdict_text(res: dict, words: DamageWords = DamageWords()) -> str:
     modes = res["identification"].get("modes_classified") or []
     partial = bool(modes) and len(modes) < res["identification"].get("n_modes", 4)
     on = f" on modes {', '.join(map(str, modes))}" if partial else ""
-    if res["verdict_from"] == "network":
+    nv = res.get("normal_variation") or {}
+    answer = net if res["verdict_from"] == "network" else res["classical"]
+    if answer is not None and answer["damaged"] and not res["damaged"] and nv.get("beyond") is False:
+        source = "network" if res["verdict_from"] == "network" else res["classical"]["method"]
+        head = (f"Verdict ({source}{on}, against the normal variation of {nv['n_baselines']} baseline tests): no "
+                f"damage detected: the natural frequencies lie within it (p = {nv['p_value']:.2g}), though the "
+                f"{source} alone calls it damaged")
+        head += f" (probability {net['probability_damaged']:.1%})." if source == "network" else "."
+    elif res["verdict_from"] == "network":
         head = f"Verdict (network{on}): " + _network_sentence(net, words) + "."
     elif net is None:
         need = modes_text(res["identification"].get("modes_model", [1, 2, 3, 4]))

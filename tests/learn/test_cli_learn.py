@@ -628,6 +628,16 @@ def test_several_baselines_measure_the_normal_variation_and_decide_with_it(modal
     assert nv[2]["frequency_change_pct"][0] < -0.8 and nv[2]["p_value"] < 0.01 <= nv[0]["p_value"]
     assert isinstance(res[2]["frequency_change_std"], list) and len(res[2]["frequency_change_std"]) == 4
     assert res[2]["hypotheses"][0]["name"] != "intact"
+    # a damage the network calls within the measured variation is withdrawn: the headline says the verdict
+    withdrawn = {**res[2], "damaged": False, "verdict_from": "network", "warnings": [],
+                 "network": {**res[2]["network"], "damaged": True, "probability_damaged": 0.9},
+                 "normal_variation": {**nv[2], "beyond": False, "p_value": 0.5}}
+    from learn.network.model_dir import load_model
+
+    head = load_model(modal_model).verdict_text(withdrawn).splitlines()[0]
+    assert head == ("Verdict (network, against the normal variation of 10 baseline tests): no damage detected: the "
+                    "natural frequencies lie within it (p = 0.5), though the network alone calls it damaged "
+                    "(probability 90.0%).")
     # one baseline: the variation is assumed, said in the text
     assert main(["classify", "--model", str(modal_model), "--baseline", base[0], intact[0]]) == 0
     out = capsys.readouterr().out

@@ -171,6 +171,11 @@ def test_the_verdict_says_when_its_sources_disagree():
     b = agreement(True, net, {"damaged": True, "method": "DLAC"},
                   [{"name": "slit", "probability": 0.9, "fits": True}], "network")
     assert b["agree"] and b["text"].startswith("One story")
+    c = agreement(False, net, {"damaged": True, "method": "DLAC"},               # withdrawn by the baselines
+                  [{"name": "slit", "probability": 0.9, "fits": True}], "network")
+    assert not c["agree"] and not c["text"].startswith("One story")
+    assert c["text"].endswith("but the verdict is no damage detected: the natural frequencies lie within the normal "
+                              "variation the baseline tests measured.")
 
 
 def _model(damage: dict):
