@@ -228,7 +228,7 @@ def judged(res, false_alarm_rate: float, model=None, beam_x_m=None) -> dict:
     later = [r for r in rows if not r["baseline"]]
     counts = {s: sum(r["status"] == s for r in later) for s in STATUSES}
     counts.update(extrapolated=sum(r["extrapolated"] for r in later), events=len(events),
-                  changes=sum(e.change for e in events))
+                  changes=sum(e.change for e in events), chart_alarms=sum(bool(r.get("chart_alarm")) for r in later))
     first = res.first_alarm
     return {"tests": rows, "events": [e.to_dict() for e in events], "counts": counts,
             "identification_change": ident, "lost_modes_change": lost, "baseline_scatter": scatter.to_dict(),
@@ -245,8 +245,8 @@ def judged(res, false_alarm_rate: float, model=None, beam_x_m=None) -> dict:
             "n_not_judged": sum(r["status"] == "not judged" for r in rows)}
 
 
-CSV_COLUMNS = ("file", "time", "baseline", "status", "identified", "alarm", "alarmed_by", "extrapolated", "novelty",
-               "threshold", "shift_pct", "error")
+CSV_COLUMNS = ("file", "time", "baseline", "status", "identified", "alarm", "alarmed_by", "chart_alarm", "onset",
+               "extrapolated", "novelty", "threshold", "shift_pct", "error")
 
 
 def _csv_cell(value):
@@ -302,6 +302,7 @@ def _write(out_dir, out: dict, res) -> dict:
         f"alone); {cnt['extrapolated']} beyond the baseline's conditions (extrapolated). "
         f"{counted(cnt['events'], 'event')}, {cnt['changes']} of them changes"
         + (f"; the first alarm: {first['file']}{_when(first)}." if first else "."),
+        *((chart_text(out) + ".",) if out.get("charts") else ()),
         out["identification_change"]["text"] + ".",
         out["lost_modes_change"]["text"] + ".",
         out["baseline_scatter"]["warning"] or _scatter_text(out["baseline_scatter"]),
@@ -354,9 +355,9 @@ def chart(res):
     """The control chart (a matplotlib figure): each mode's frequency relative to its baseline median and the
     novelty index over the tests, with the threshold, the baseline period shaded, the alarms circled, the
     extrapolated tests boxed, the baseline outliers left out diamonded (their index by the model fitted without
-    them), the tests whose mode moved or was lost beyond its band marked (triangles up, down)
-    and the tests not identified crossed at the top edge of the index's panel; a mode moved beyond its band is
-    drawn at its moved frequency (hollow markers)."""
+    them), the tests whose mode moved or was lost beyond its band marked (triangles up, down), the memory chart's
+    alarms ticked at the bottom edge and the tests not identified crossed at the top edge of the index's panel; a
+    mode moved beyond its band is drawn at its moved frequency (hollow markers)."""
     plt = pyplot()
 
     t, xlabel = chart_axis(res.series.times, np.array([r["time_value"] for r in res.rows]))
@@ -388,6 +389,10 @@ def chart(res):
         if hit.any():                               # no alarm of the index: drawn at the top edge, counted
             a2.plot(t[hit], np.full(hit.sum(), 0.9), mark, color=color, ms=6, transform=a2.get_xaxis_transform(),
                     label=f"{status} beyond its band ({hit.sum()})")
+    memory = np.array([bool(r.get("chart_alarm")) for r in res.rows])
+    if memory.any():                                # the memory chart's alarms: a band along the bottom edge
+        a2.plot(t[memory], np.full(memory.sum(), 0.04), "|", color="tab:red", ms=10, mew=2,
+                transform=a2.get_xaxis_transform(), label=f"memory chart above its limit ({memory.sum()})")
     lost = np.array([r.get("status") == "not identified" for r in res.rows])
     if lost.any():                                  # no index: drawn at the top edge, counted in the legend
         a2.plot(t[lost], np.full(lost.sum(), 0.96), "x", color="tab:orange", ms=7, mew=1.5,
@@ -452,6 +457,20 @@ def _when(first: dict) -> str:
     return f" (test {first['index'] + 1}" + (f", time {first['time']})" if first["time"] is not None else ")")
 
 
+def chart_text(out: dict) -> str:
+    """The memory chart's alarms after the baseline period in words: how many, the first and the onset it dates
+    (``memory chart (EWMA): 4 later tests above its limit, the first t21.json, its change dated from t18.json``)."""
+    rows = out["tests"]
+    hit = [i for i, r in enumerate(rows) if not r["baseline"] and r.get("chart_alarm")]
+    if not hit:
+        return "memory chart (EWMA): no later test above its limit"
+    first, onset = rows[hit[0]], rows[hit[0]].get("onset")
+    dated = (f", its change dated from {rows[onset]['file']}{_when({**rows[onset], 'index': onset})}"
+             if onset is not None else "")
+    return (f"memory chart (EWMA): {counted(len(hit), 'later test')} above its limit, the first {first['file']}"
+            f"{_when({**first, 'index': hit[0]})}{dated}")
+
+
 def _print(out: dict, res) -> None:
     thr = out["threshold"]
     nv = res.normal_variation
@@ -471,6 +490,8 @@ def _print(out: dict, res) -> None:
           f"{cnt['no alarm']} without an alarm, {cnt['not judged']} not judged, {cnt[EXTRAPOLATED]} {EXTRAPOLATED}; "
           f"{cnt['extrapolated']} extrapolated"
           + (f"; first alarm {out['first_alarm']['file']}{_when(out['first_alarm'])}" if out["first_alarm"] else ""))
+    if out.get("charts"):
+        print(chart_text(out))
     print(out["identification_change"]["text"])
     print(out["lost_modes_change"]["text"])
     print(f"{counted(cnt['events'], 'event')}, {counted(cnt['changes'], 'change')}:")

@@ -49,6 +49,15 @@ def test_an_frf_series_is_identified_once_and_the_slit_alarmed(tmp_path, capsys,
     assert "data:image/png;base64," in (out / "report.html").read_text()
     rows = list(csv.DictReader(open(out / "monitor.csv")))
     assert len(rows) == 16 and rows[13]["alarm"] == "True"
+    memory = [r["chart_alarm"] == "True" for r in rows]
+    assert memory == [bool(r["chart_alarm"]) for r in res["tests"]]
+    assert res["counts"]["chart_alarms"] == sum(memory[12:])
+    from experiments.cli.cmd_monitor import chart_text
+
+    words = chart_text(res)
+    assert words in (out / "report.md").read_text()
+    assert words.startswith(f"memory chart (EWMA): {sum(memory[12:])} later test" if any(memory[12:]) else
+                            "memory chart (EWMA): no later test above its limit")
     entries = [json.loads(p.read_text()) for p in (out / "cache").glob("*.json")]
     # one entry per test, and one per narrow-band re-identification (the far-pole check of the damaged tests)
     assert sum(e["narrow_band_hz"] is None for e in entries) == 16
