@@ -188,6 +188,10 @@ def main(argv=None) -> int:
     messages = [str(w.message) for w in caught] + ([] if getattr(args, "json", False) else result_warnings(result))
     for message in dict.fromkeys(" ".join(m.split()) for m in messages):
         sys.stderr.write(one_line(f"beam-damage {args.command}: warning: {message}") + "\n")
+    if getattr(args, "json", False) and isinstance(result, dict) and caught:    # and in the JSON's "warnings"
+        said = list(result.get("warnings") or [])
+        result["warnings"] = said + [m for m in dict.fromkeys(" ".join(str(w.message).split()) for w in caught)
+                                     if m not in said]
     exit_code = int(result.pop("exit_code", 0)) if isinstance(result, dict) else 0
     if getattr(args, "json", False):
         try:

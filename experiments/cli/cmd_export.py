@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -45,8 +45,7 @@ def _sample_ids(text: str) -> list[int]:
         raise BeamDamageError("--samples names no sample")
     unique = list(dict.fromkeys(ids))
     if len(unique) < len(ids):
-        print(f"note: --samples names {len(ids) - len(unique)} id(s) more than once; each sample is written once",
-              file=sys.stderr)
+        warnings.warn(f"--samples names {len(ids) - len(unique)} id(s) more than once; each sample is written once")
     return unique
 
 

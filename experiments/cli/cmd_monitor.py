@@ -38,7 +38,7 @@ __all__ = ["JSON_KEYS", "add_parser", "chart", "chart_axis", "judged", "run", "t
 JSON_KEYS = ("tests", "events", "counts", "identification_change", "lost_modes_change", "baseline_scatter",
              "baseline_trend", "coverage", "normal_variation", "threshold", "first_alarm", "n_alarms_after_baseline",
              "n_not_identified", "n_not_judged", "baseline_tests", "false_alarm_rate", "version", "detector", "charts",
-             "config")
+             "config", "warnings")
 
 
 def add_parser(sub):
@@ -148,16 +148,21 @@ def run(args) -> dict:
     settings = replace(identification_settings(args.band, beam, model), records_method=args.records_method)
     cache = Path(args.out) / "cache" if args.out else None
     client = connect(args.scheduler) if args.scheduler else None
-    try:
-        res = monitor_series(series, args.baseline_tests, settings, cache, args.false_alarm_rate, args.normal_model,
-                             progress=not args.json, chart=args.chart, statistics=tuple(args.statistics),
-                             workers=args.workers if client is None else client,
-                             extrapolated_alarms=args.extrapolated_alarms, frequency_estimator=args.frequency_estimator,
-                             keep_baseline_outliers=args.keep_baseline_outliers)
-    finally:
-        if client is not None:
-            client.close()
-    out = judged(res, args.false_alarm_rate, model, beam_x_m)
+    with warnings.catch_warnings(record=True) as caught:    # kept in the result (and monitor.json), said once
+        warnings.simplefilter("always")
+        try:
+            res = monitor_series(series, args.baseline_tests, settings, cache, args.false_alarm_rate,
+                                 args.normal_model, progress=not args.json, chart=args.chart,
+                                 statistics=tuple(args.statistics), workers=args.workers if client is None else client,
+                                 extrapolated_alarms=args.extrapolated_alarms,
+                                 frequency_estimator=args.frequency_estimator,
+                                 keep_baseline_outliers=args.keep_baseline_outliers)
+        finally:
+            if client is not None:
+                client.close()
+        out = judged(res, args.false_alarm_rate, model, beam_x_m)
+    out["warnings"] = list(dict.fromkeys(" ".join(str(w.message).split()) for w in caught
+                                         if issubclass(w.category, UserWarning)))
     out.update(baseline_tests=args.baseline_tests, false_alarm_rate=args.false_alarm_rate, version=package_version(),
                detector=res.detection.to_dict(), charts=None if res.charts is None else res.charts.to_dict(),
                config={"identification": settings.to_dict(), "conditions": args.conditions,

@@ -65,7 +65,8 @@ def test_export_round_trips_through_the_readers(tmp_path, capsys):
     assert rc == 0
     out, err = capsys.readouterr()
     assert json.loads(out)["samples"] == [0, 5] and len(json.loads(out)["files"]) == 2 * 2
-    assert err == "note: --samples names 2 id(s) more than once; each sample is written once\n"
+    assert json.loads(out)["warnings"] == ["--samples names 2 id(s) more than once; each sample is written once"]
+    assert err == "beam-damage export: warning: --samples names 2 id(s) more than once; each sample is written once\n"
     assert sorted(p.name for p in (tmp_path / "dup").iterdir()) == [
         f"sample-{i:06d}_{s}_measured.npz" for i in (0, 5) for s in ("baseline", "current")]
 
