@@ -12,7 +12,8 @@ from :class:`physics.errors.BeamDamageError` (and ``OSError`` on user files)
 become one line on stderr and exit code 2; warnings raised while a command runs are dropped when it fails
 (the error line is the whole story) and otherwise printed on stderr after it, one line each
 (``beam-damage COMMAND: warning: ...``), with, in text mode, those its result lists under ``"warnings"`` (a
-command does not print them itself; with ``--json`` they stay in the JSON). Commands run with one BLAS thread:
+command does not print them itself; with ``--json`` they stay in the JSON, and those raised are added to a dict
+result's ``"warnings"``). Commands run with one BLAS thread:
 their matrices are small (at most a few hundred DOFs, batched), where more threads only add overhead and, on a
 shared machine, slow a command down many times; parallel work uses processes (``generate --workers``) or torch threads.
 """
