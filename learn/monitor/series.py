@@ -63,7 +63,7 @@ def read_conditions(csv_path) -> SeriesInput:
     """A series from a CSV file: columns ``file`` (relative to the CSV or absolute), ``time`` (an ISO date or a
     number) and any measured conditions (numbers, e.g. ``temperature_c``); rows sorted by time (stable)."""
     path = check_input_file(csv_path, "csv", BeamDamageError, "a CSV of file,time[,condition...]")
-    with open(path, newline="", encoding="utf-8") as fh:
+    with open(path, newline="", encoding="utf-8-sig") as fh:       # a spreadsheet's byte-order mark skipped
         rows = list(csv.DictReader(fh))
     if not rows:
         raise BeamDamageError(f"{csv_path}: no rows; expected a header file,time[,condition...] and one row per test")

@@ -200,3 +200,14 @@ def test_a_baseline_none_of_whose_tests_is_identified_says_why_the_first_is_not(
     assert code == 2 and err.count("\n") == 1 and not (tmp_path / "m").exists()
     assert "none of the 7 baseline tests could be identified; the first: " in err
     assert "t0.npz: band up to 2000 Hz is above the Nyquist frequency 1000 Hz" in err
+
+
+def test_a_conditions_csv_with_a_byte_order_mark_reads_as_without(tmp_path, modal_series):
+    from learn.monitor.series import read_conditions
+
+    csv_path, _, _ = modal_series
+    bom = tmp_path / "bom.csv"
+    bom.write_bytes(b"\xef\xbb\xbf" + csv_path.read_bytes().replace(b"day0", str(csv_path.parent / "day0").encode()))
+    a, b = read_conditions(bom), read_conditions(csv_path)
+    assert a.files == b.files and a.condition_names == ("temperature_c",)
+    np.testing.assert_array_equal(a.conditions, b.conditions)
