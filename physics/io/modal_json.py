@@ -86,6 +86,31 @@ def number_list(values, path, key):
     return arr
 
 
+def _check_beside_eigenvalues(obj: dict, lam: np.ndarray, source) -> None:
+    """Refuse ``natural_frequencies_hz`` or ``damping_ratios`` given beside the eigenvalues that are no finite
+    numbers, one per eigenvalue, or that disagree with them: a frequency more than 1 % from both ``|lambda| / 2 pi``
+    and the damped ``Im lambda / 2 pi`` (tools write either), a damping ratio more than 0.005 from ``-Re lambda /
+    |lambda|``: the file holds two different answers, and the eigenvalues would be read silently."""
+    w = np.abs(lam)
+    expected = {"natural_frequencies_hz": (w / (2 * np.pi), lam.imag / (2 * np.pi)),
+                "damping_ratios": (-lam.real / w,)}
+    for key, options in expected.items():
+        if key not in obj:
+            continue
+        v = number_list(obj[key], source, key)
+        if v.size != lam.size:
+            raise FileFormatError(f"{source}: field {key!r} has {v.size} entries for {lam.size} eigenvalues; "
+                                  "expected one per mode (or leave it out)")
+        off = np.min([np.abs(v - o) / (np.abs(o) if key == "natural_frequencies_hz" else 1.0) for o in options],
+                     axis=0)
+        bad = np.flatnonzero(off > (0.01 if key == "natural_frequencies_hz" else 0.005))
+        if bad.size:
+            k = int(bad[0])
+            raise FileFormatError(f"{source}: field {key!r} entry {k + 1} is {v[k]:.6g}, but eigenvalue {k + 1} "
+                                  f"({lam[k]:.6g}) gives {options[0][k]:.6g}; expected the same modes (or leave "
+                                  f"{key!r} out)")
+
+
 def modal_data_from_dict(obj: dict, source="modal data") -> ModalData:
     """Validate a modal-data mapping (see module docstring) into :class:`ModalData`."""
     if not isinstance(obj, dict):
@@ -103,6 +128,7 @@ def modal_data_from_dict(obj: dict, source="modal data") -> ModalData:
             k = int(np.nonzero(lam.imag <= 0)[0][0])
             raise FileFormatError(f"{source}: field 'eigenvalues' entry {k + 1} ({lam[k]:.6g}) is not in the upper "
                                   "half-plane; give the Im > 0 member of each conjugate pair")
+        _check_beside_eigenvalues(obj, lam, source)
 
     elif "natural_frequencies_hz" in obj:
         f = number_list(obj["natural_frequencies_hz"], source, "natural_frequencies_hz")

@@ -402,3 +402,21 @@ def test_a_cut_crlf_binary_universal_file_names_the_byte_its_last_record_starts_
     (tmp_path / "cut.uff").write_bytes(raw[:cut])
     with pytest.raises(FileFormatError, match=f"the last record \\(from byte {start}\\)"):
         read_frf(tmp_path / "cut.uff")
+
+
+def test_frequencies_and_damping_beside_the_eigenvalues_must_be_finite_and_the_same_modes():
+    from physics.io.modal_json import modal_data_from_dict
+
+    lam = np.array([-0.5 + 100j, -2.0 + 800j])
+    w = np.abs(lam)
+    good = {"eigenvalues": [str(z) for z in lam], "natural_frequencies_hz": list(w / (2 * np.pi)),
+            "damping_ratios": list(-lam.real / w)}
+    np.testing.assert_array_equal(modal_data_from_dict(good).eigenvalues, lam)
+    damped = {**good, "natural_frequencies_hz": list(lam.imag / (2 * np.pi))}     # tools write either
+    np.testing.assert_array_equal(modal_data_from_dict(damped).eigenvalues, lam)
+    for key, value, message in (("natural_frequencies_hz", [float("nan"), 127.3], "must hold finite numbers"),
+                                ("damping_ratios", [0.005], "has 1 entries for 2 eigenvalues"),
+                                ("natural_frequencies_hz", [20.0, 127.3], "entry 1 is 20, but eigenvalue 1"),
+                                ("damping_ratios", [0.005, 0.05], "entry 2 is 0.05, but eigenvalue 2")):
+        with pytest.raises(FileFormatError, match=message):
+            modal_data_from_dict({**good, key: value}, "m.json")
