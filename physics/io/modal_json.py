@@ -2,7 +2,7 @@
 
 One object with the keys of a beam state in the thesis fixture ``beams.json``::
 
-    {"natural_frequencies_hz": [f1, ...],            # optional if eigenvalues given
+    {"natural_frequencies_hz": [f1, ...],            # optional if eigenvalues given (then the same modes)
      "damping_ratios": [z1, ...],                    # optional (0 without: natural frequencies alone)
      "eigenvalues": ["-0.21962+135.31j", ...],       # complex strings, upper half-plane
      "eigenvectors": [["0.72+15.0j", ...], ...],     # rows = measured DOFs, cols = modes
