@@ -14,7 +14,7 @@ from learn.monitor.baseline_state import held_out_cached
 from learn.monitor.identification import IdentificationSettings, write_cache
 from learn.monitor.pole_confirmation import confirm_far_poles
 from learn.monitor.normal_models import DEFAULT_LATENT, NORMAL_MODELS
-from learn.monitor.series import SeriesInput, check_series
+from learn.monitor.series import SeriesInput, check_series, repeated_tests_warning
 from learn.monitor.alarm_threshold import Threshold, minimum_baseline
 from learn.monitor.charts import CHARTS, Charts, run_charts
 from learn.monitor.seasons import covers_seasons, season_warning
@@ -321,6 +321,8 @@ def _identified(series: SeriesInput, n_baseline: int, settings: IdentificationSe
     that does not belong to the baseline period's series None with the reason as its error (its index in the set
     ``foreign``)."""
 
+    if (why := repeated_tests_warning(series.files, n_baseline)):
+        warnings.warn(why)
     tests, errors, pending = identify_files(series.files, settings, cache_dir, workers, progress)
     if all(t is None for t in tests[:n_baseline]):
         first = next((str(e) for e in errors[:n_baseline] if e), "")

@@ -4,7 +4,9 @@ the series of the baseline period (one kind, band and beam)."""
 from __future__ import annotations
 
 import csv
+import hashlib
 import math
+import os
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
@@ -138,3 +140,49 @@ def check_series(tests: list, n_baseline: int, files: list) -> list:
             raise BeamDamageError(f"baseline test {why}")
         out.append(why)
     return out
+
+
+def repeated_tests(files: list) -> list:
+    """``[(i, j), ...]``: test ``j`` repeats the earlier test ``i``: the same file listed again, or a file of the
+    same bytes (files of equal size compared by their SHA-256). A file that cannot be read is left out (its test
+    is refused by the identification)."""
+    first, by_size, out = {}, {}, []
+    for j, f in enumerate(files):
+        real = os.path.realpath(f)
+        if real in first:
+            out.append((first[real], j))
+            continue
+        first[real] = j
+        try:
+            by_size.setdefault(os.stat(real).st_size, []).append(j)
+        except OSError:
+            continue
+    for group in (g for g in by_size.values() if len(g) > 1):
+        seen = {}
+        for j in group:
+            h = hashlib.sha256()
+            try:
+                with open(files[j], "rb") as fh:
+                    for block in iter(lambda: fh.read(1 << 20), b""):
+                        h.update(block)
+            except OSError:
+                continue
+            if h.digest() in seen:
+                out.append((seen[h.digest()], j))
+            else:
+                seen[h.digest()] = j
+    return sorted(out, key=lambda p: p[1])
+
+
+def repeated_tests_warning(files: list, n_baseline: int) -> str:
+    """A warning naming the tests that repeat an earlier one (:func:`repeated_tests`), empty when none does."""
+    pairs = repeated_tests(files)
+    if not pairs:
+        return ""
+    named = "; ".join(f"test {j + 1} ({files[j]}) " + (f"repeats test {i + 1} ({files[i]})" if files[i] != files[j]
+                                                          else f"is test {i + 1} listed again")
+                      for i, j in pairs[:3]) + ("; ..." if len(pairs) > 3 else "")
+    base = sum(j < n_baseline for _, j in pairs)
+    return (f"{len(pairs)} test(s) repeat an earlier one (the same file, or the same bytes): {named}; a repeated "
+            "test is no new test" + (f": {base} of them in the baseline period, where they understate the normal "
+                                     "variation" if base else ""))

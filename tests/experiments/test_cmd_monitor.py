@@ -2,6 +2,7 @@
 
 import csv
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -211,3 +212,20 @@ def test_a_conditions_csv_with_a_byte_order_mark_reads_as_without(tmp_path, moda
     a, b = read_conditions(bom), read_conditions(csv_path)
     assert a.files == b.files and a.condition_names == ("temperature_c",)
     np.testing.assert_array_equal(a.conditions, b.conditions)
+
+
+def test_a_repeated_test_is_named_in_a_warning(tmp_path, capsys, modal_series):
+    from learn.monitor.series import repeated_tests
+
+    _, files, _ = modal_series
+    files = [str(f) for f in files]
+    copy = tmp_path / "copy.json"
+    copy.write_bytes(Path(files[10]).read_bytes())
+    series = [*files[:25], files[3], str(copy)]
+    assert repeated_tests(series) == [(3, 25), (10, 26)]
+    assert repeated_tests(files) == []
+    code, res, err = run_json(capsys, ["monitor", *series, "--baseline-tests", "20", "--json"])
+    assert code == 0, err
+    assert res["warnings"][0] == (f"2 test(s) repeat an earlier one (the same file, or the same bytes): test 26 "
+                                  f"({files[3]}) is test 4 listed again; test 27 ({copy}) repeats test 11 "
+                                  f"({files[10]}); a repeated test is no new test")
