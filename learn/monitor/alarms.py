@@ -13,7 +13,7 @@ from learn.monitor.baseline_outliers import BASELINE_OUTLIER, exclude_baseline_o
 from learn.monitor.baseline_state import held_out_cached
 from learn.monitor.identification import IdentificationSettings, write_cache
 from learn.monitor.pole_confirmation import confirm_far_poles
-from learn.monitor.normal_models import DEFAULT_LATENT, NORMAL_MODELS
+from learn.monitor.normal_models import DEFAULT_LATENT, NORMAL_MODELS, PCARemoval
 from learn.monitor.series import SeriesInput, check_series, repeated_tests_warning
 from learn.monitor.alarm_threshold import Threshold, minimum_baseline
 from learn.monitor.charts import CHARTS, Charts, run_charts
@@ -176,6 +176,9 @@ def monitor_series(series: SeriesInput, n_baseline: int, settings: Identificatio
                                                              keep_baseline_outliers, Cq)
     if (why := outliers.warning(series.files)):
         warnings.warn(why)
+    if isinstance(model, PCARemoval) and model.k is not None and model.k_ < model.k:
+        warnings.warn(f"--normal-model {normal_model}: {m} tracked modes leave at most {model.k_} component(s) to "
+                      f"remove (one must remain): {model.k_} removed")
     out_idx = np.array(outliers.indices if outliers.excluded else [], int)
     rest = np.flatnonzero(ok)
     rest = rest[rest >= n_baseline]

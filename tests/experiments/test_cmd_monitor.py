@@ -229,3 +229,20 @@ def test_a_repeated_test_is_named_in_a_warning(tmp_path, capsys, modal_series):
     assert res["warnings"][0] == (f"2 test(s) repeat an earlier one (the same file, or the same bytes): test 26 "
                                   f"({files[3]}) is test 4 listed again; test 27 ({copy}) repeats test 11 "
                                   f"({files[10]}); a repeated test is no new test")
+
+
+def test_a_pca_asked_to_remove_more_components_than_the_modes_leave_says_so(tmp_path, capsys, modal_series):
+    from learn.monitor import SeriesInput, monitor_series
+    from learn.monitor.identification import IdentificationSettings
+
+    _, files, _ = modal_series
+    two = []
+    for f in files:                                             # the first two modes of each test
+        d = json.loads(Path(f).read_text())
+        two.append(tmp_path / Path(f).name)
+        two[-1].write_text(json.dumps({"eigenvalues": d["eigenvalues"][:2], "dofs": d["dofs"],
+                                       "eigenvectors": [row[:2] for row in d["eigenvectors"]]}))
+    with pytest.warns(UserWarning, match=r"--normal-model pca2: 2 tracked modes leave at most 1 component\(s\)"):
+        res = monitor_series(SeriesInput.from_files(two), 20, IdentificationSettings(), None, 0.01, "pca2",
+                             progress=False, chart="none")
+    assert res.normal_variation["factors_removed"] == 1
