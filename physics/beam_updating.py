@@ -8,6 +8,7 @@ eigenvalues (:func:`physics.updating.eigenvalue_errors`); ``beam-damage update``
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -70,7 +71,25 @@ def load_modal(modal_file, n_modes: int):
                               "FRF (force and response at one DOF)")
 
     ident = identify_file(modal_file, n_modes=n_modes)
+    _warn_modes_left_out(modal_file, ident, n_modes)
     return ident.modal_data, ident.frf
+
+
+def _warn_modes_left_out(modal_file, ident, n_modes: int) -> None:
+    """Warn when the FRFs hold modes beyond the ``n_modes`` the model pairs (``identify`` without a number of
+    modes finds more): they are left out of the update, by name."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            every = identify_file(modal_file).modal_data.natural_frequencies_hz
+    except BeamDamageError:
+        return
+    used = ident.modal_data.natural_frequencies_hz
+    left = [f for f in every if np.min(np.abs(used - f) / f) > 0.01]
+    if len(every) > n_modes and left:
+        warnings.warn(f"{modal_file}: {len(every)} modes identified in the FRFs' band, the model pairs {n_modes}: "
+                      f"{', '.join(f'{f:.4g}' for f in left)} Hz left out of the update (more elements, or a band "
+                      "that stops below them, would pair them)")
 
 
 def _refuse_unscaled(modal_file) -> None:

@@ -97,3 +97,23 @@ def test_frequencies_out_of_order_against_their_shapes_are_warned_of(tmp_path, c
     cap = capsys.readouterr()
     order = [w for w in json.loads(cap.out)["warnings"] if "ascending order" in w]
     assert len(order) == 1 and "(130, 20, 350, 650 Hz)" in order[0], order
+
+
+def test_modes_the_model_cannot_pair_are_named_as_left_out(tmp_path, monkeypatch):
+    """``update`` identifies as many modes as the model pairs; modes beyond them in the FRFs' band are named."""
+    from types import SimpleNamespace
+
+    from physics import beam_updating
+
+    def ident(f_hz):
+        return SimpleNamespace(modal_data=SimpleNamespace(natural_frequencies_hz=np.array(f_hz)))
+
+    monkeypatch.setattr(beam_updating, "identify_file", lambda path, n_modes=None: ident([10.2, 64.8, 179.0, 352.4]))
+    with pytest.warns(UserWarning, match=r"t.uff: 4 modes identified in the FRFs' band, the model pairs 3: 352.4 Hz "
+                                         "left out of the update"):
+        beam_updating._warn_modes_left_out("t.uff", ident([10.2, 64.8, 179.0]), 3)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        beam_updating._warn_modes_left_out("t.uff", ident([10.2, 64.8, 179.0, 352.4]), 4)
