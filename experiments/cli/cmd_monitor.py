@@ -509,8 +509,9 @@ def _print(out: dict, res) -> None:
             n = v["network"]
             against = (f"{v['network_baselines']} baseline tests" if v["network_baselines"] != 1
                        else v["network_baseline"])
-            print(f"    network ({v['representative']} against {against}): damaged {n['damaged']}, "
-                  f"P = {n['probability_damaged']}")
+            print(f"    network ({v['representative']} against {against}): "
+                  f"{'damaged' if n['damaged'] else 'no damage detected'} (probability of damage "
+                  f"{n['probability_damaged']:.1%})")
     if len(out["events"]) > 10:
         print(f"  ... {len(out['events']) - 10} more in monitor.json")
     for name, p in out.get("outputs", {}).items():
