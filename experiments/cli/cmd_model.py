@@ -38,10 +38,11 @@ def build(beam, elements: int | None, mass: str, method: str, bc: str | None = N
         idx = model.index(dofs)
         M = model.M[np.ix_(idx, idx)]
     w, _ = modal.undamped_modes(M, K)
+    w = w[SUPPORTS[bc].rigid_body_modes:]                          # a free beam's bounce and pitch left out
     closed = None
-    if bc == THESIS_SUPPORT and not b.effects:                    # eq. 4.5: the uniform cantilever
+    if not b.effects:                                   # eq. 4.5 and its kin: the uniform beam on ideal supports
         closed = properties.cantilever_frequencies_hz(
-            b.EI_Nm2, b.mass_per_length_kg_m, b.length_m, properties.cantilever_beta_l(min(len(dofs), 8)))
+            b.EI_Nm2, b.mass_per_length_kg_m, b.length_m, SUPPORTS[bc].beta_l(min(w.size, 8)))
     return {
         "beam": b.name, "effects": b.effects_dict(), "elements": elements, "mass": mass, "reduction": method,
         "bc": bc,
@@ -63,7 +64,8 @@ def run(args) -> dict:
         print("M (kg) =\n", out["M"], "\nK (N/m) =\n", out["K"])
         print("natural frequencies (Hz):", np.array2string(out["natural_frequencies_hz"][:8], precision=3))
         if out["closed_form_frequencies_hz"] is not None:
-            print("closed form, eq. 4.5 (Hz):", np.array2string(out["closed_form_frequencies_hz"], precision=3))
+            print(f"closed form{', eq. 4.5' if out['bc'] == THESIS_SUPPORT else ''}, the uniform beam (Hz):",
+                  np.array2string(out["closed_form_frequencies_hz"], precision=3))
     return out
 
 
