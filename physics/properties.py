@@ -23,7 +23,7 @@ from physics.supports import ENDS, THESIS_SUPPORT, support
 __all__ = ["BeamPreset", "CANTILEVER_BETA_L", "CURVATURE_FORMS", "PRESETS", "SECTION_KINDS", "SOLID_SECTIONS",
            "SolidSection", "StaticTest", "THESIS_BETA_L", "beam_preset", "cantilever_beta_l",
            "cantilever_curvature_squared", "cantilever_frequencies_hz", "clamped_pinned_beta_l", "curvature_squared",
-           "equivalent_ei", "free_free_beta_l", "layered_ei", "section_ei", "solid_section"]
+           "equivalent_ei", "free_free_beta_l", "layered_ei", "section_ei", "solid_section", "uniform_beta_l"]
 
 
 #: ``beta_l`` of a clamped-free beam as printed in the thesis (Chapter Four).
@@ -118,6 +118,16 @@ def free_free_beta_l(n_modes: int = 4) -> np.ndarray:
         if np.all(np.abs(step) <= 4 * np.finfo(float).eps * x):
             break
     return x
+
+
+def uniform_beta_l(bc: str, n_modes: int = 4) -> np.ndarray:
+    """``beta l`` of the first ``n_modes`` bending modes of a uniform Euler-Bernoulli beam on the ideal supports
+    ``bc`` (:data:`physics.supports.SUPPORTS`; ``f_n = (beta l_n)^2 / (2 pi L^2) sqrt(EI / m)``, eq. 4.5 for the
+    cantilever; a free beam's rigid bounce and pitch left out)."""
+    roots = {("clamped", "free"): cantilever_beta_l, ("free", "free"): free_free_beta_l,
+             ("clamped", "clamped"): free_free_beta_l, ("clamped", "pinned"): clamped_pinned_beta_l,
+             ("pinned", "pinned"): lambda n: np.pi * np.arange(1.0, n + 1)}
+    return roots[tuple(sorted(support(bc).ends))](n_modes)
 
 
 def clamped_pinned_beta_l(n_modes: int = 4) -> np.ndarray:

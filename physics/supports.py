@@ -97,18 +97,6 @@ class Support:
         """An end is clamped (its rotational spring is the clamp spring ``generate`` draws and re-clamps)."""
         return "clamped" in self.ends
 
-    def beta_l(self, n_modes: int) -> np.ndarray:
-        """``beta l`` of the first ``n_modes`` bending modes of a uniform Euler-Bernoulli beam on these ideal
-        supports (``f_n = (beta l_n)^2 / (2 pi L^2) sqrt(EI / m)``, eq. 4.5 for the cantilever; a free beam's rigid
-        bounce and pitch left out)."""
-        from physics import properties
-
-        roots = {("clamped", "free"): properties.cantilever_beta_l, ("free", "free"): properties.free_free_beta_l,
-                 ("clamped", "clamped"): properties.free_free_beta_l,
-                 ("clamped", "pinned"): properties.clamped_pinned_beta_l,
-                 ("pinned", "pinned"): lambda n: np.pi * np.arange(1.0, n + 1)}
-        return roots[tuple(sorted(self.ends))](n_modes)
-
     def end_dofs(self, n_nodes: int, end: str, direction: str) -> tuple[str, ...]:
         """Names of the DOFs ``direction`` (``"y"``, ``"rz"``) at the ends (node 1, node ``n_nodes``) of condition
         ``end``."""

@@ -42,7 +42,7 @@ def build(beam, elements: int | None, mass: str, method: str, bc: str | None = N
     closed = None
     if not b.effects:                                   # eq. 4.5 and its kin: the uniform beam on ideal supports
         closed = properties.cantilever_frequencies_hz(
-            b.EI_Nm2, b.mass_per_length_kg_m, b.length_m, SUPPORTS[bc].beta_l(min(w.size, 8)))
+            b.EI_Nm2, b.mass_per_length_kg_m, b.length_m, properties.uniform_beta_l(bc, min(w.size, 8)))
     return {
         "beam": b.name, "effects": b.effects_dict(), "elements": elements, "mass": mass, "reduction": method,
         "bc": bc,
