@@ -99,8 +99,8 @@ def _is_text(head: bytes) -> bool:
 FORMATS: dict[str, FileFormat] = {f.name: f for f in (
     FileFormat("uff", (".uff", ".unv", ".uf", ".58", ".58b"), ((FRF, read_uff58), (TIME, read_uff_time_records)),
                _starts_with(b"-1"), write_uff58,
-               "universal file: dataset 58 FRFs or time records (ASCII or binary 58b), with units (164) and "
-               "node geometry (15/2411)"),
+               "universal file: dataset 58 FRFs or time records (ASCII or binary 58b); units (164) and node "
+               "geometry (15/2411) read when present, FRFs written as dataset 58 records alone"),
     FileFormat("npz", (".npz",), ((FRF, read_frf_npz), (TIME, read_time_npz)), lambda head: head.startswith(b"PK"),
                write_frf_npz, "NumPy archive of plain arrays: frequency_hz, complex frf, DOF labels, or signals "
                               "and sampling_frequency_hz of response time series (never pickled)"),
