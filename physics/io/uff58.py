@@ -389,6 +389,18 @@ class UffFile:
         self.path = Path(path)
         self.uff, self.types = _open_uff(self.path)
 
+    def _first_unreadable(self, indices) -> str:
+        """``"; the first unreadable: record K (block B of the file)..."``: the first of ``indices`` pyuff cannot read
+        alone, named with its ID line; empty when each reads alone."""
+        for n, i in enumerate(indices):
+            try:
+                self.uff.read_sets(i)
+            except Exception as exc:
+                return (f"; the first unreadable: dataset 58 record {n + 1} (block {i + 1} of the file; "
+                        f"{_short(exc)}): a value that is no number (e.g. '****' of a field too narrow, or an "
+                        "unpadded NaN) or a record cut short")
+        return ""
+
     @cached_property
     def records58(self) -> list:
         """``[(index, set), ...]`` of the dataset 58 records (``index`` 0-based among all blocks)."""
@@ -398,7 +410,8 @@ class UffFile:
         try:
             sets = self.uff.read_sets(idx58)
         except Exception as exc:
-            raise FileFormatError(f"{self.path}: cannot read dataset 58 records ({_short(exc)})") from None
+            raise FileFormatError(f"{self.path}: cannot read dataset 58 records ({_short(exc)})"
+                                  + self._first_unreadable(idx58)) from None
         return list(zip(idx58, [sets] if isinstance(sets, dict) else sets))
 
     @property

@@ -420,3 +420,18 @@ def test_frequencies_and_damping_beside_the_eigenvalues_must_be_finite_and_the_s
                                 ("damping_ratios", [0.005, 0.05], "entry 2 is 0.05, but eigenvalue 2")):
         with pytest.raises(FileFormatError, match=message):
             modal_data_from_dict({**good, key: value}, "m.json")
+
+
+def test_a_value_no_number_names_the_unreadable_record(tmp_path):
+    f = np.linspace(1.0, 100.0, 50)
+    h = (1.0 + 0.5j) / (1.0 + 1j * f)
+    bad = h.copy()
+    bad[7] = 123.25
+    path = tmp_path / "stars.uff"
+    _write_pyuff(path, [_pyuff_record(f, h), _pyuff_record(f, bad, rsp=(3, 2))])
+    text = path.read_text()
+    assert text.count("1.23250000000e+02") == 1
+    path.write_text(text.replace("1.23250000000e+02", "*" * 17))
+    with pytest.raises(FileFormatError, match=r"stars.uff: cannot read dataset 58 records .*the first unreadable: "
+                                              r"dataset 58 record 2 \(block 2 of the file"):
+        read_frf(path)
