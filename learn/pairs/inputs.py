@@ -8,9 +8,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from learn.network.features import frf_features, frequency_features, map_frf_to_grid, modal_features, with_missing_modes
-from learn.pairs.measured import (IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows, identification_band_hz,
-                                  identify_band, identify_modes, modal_pair, pair_modes_by_frequency, pairing_bands,
-                                  refit_missing_modes)
+from learn.pairs.measured import (FREQUENCIES_ONLY, IDENTIFICATION, IDENTIFICATION_BAND_FACTOR, frf_rows,
+                                  identification_band_hz, identify_band, identify_modes, modal_pair,
+                                  pair_modes_by_frequency, pairing_bands, refit_missing_modes)
 from learn.network.model_dir import TrainedModel
 from learn.network.mode_count import mode_count_problem
 from learn.pairs.normal_variation import measure
@@ -171,6 +171,8 @@ def _modal_inputs(model: TrainedModel, inputs: list, names: list[str], sens):
         if model.route == "modal":
             raise
         return None, True, " ".join(str(exc).split())     # an FRF-route model classifies the FRFs without modes
+    ids = [replace(md, eigenvectors=None, dofs=()) if FREQUENCIES_ONLY in d.metadata else md     # one sensor
+           for d, md in zip(inputs, ids)]
     found = []
     for d, md in zip(inputs, ids):
         k = md.eigenvalues.size

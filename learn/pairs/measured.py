@@ -19,11 +19,11 @@ from physics.io import (MeasuredFRF, map_frf_dofs, map_measured_dofs, parse_dof,
 from physics.layout import MIN_VISIBLE, uniform_shapes
 from physics.modal import mac
 
-__all__ = ["BASELINE_PAIR_BAND", "IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "MIN_PAIR_MAC", "RATIO_TOLERANCE",
-           "ModalPair", "differences_from_model", "frf_rows", "identification_band_hz", "identify_band",
-           "identify_modes", "measured_test_differences", "modal_pair", "mode_checks", "nominal_ratio_range",
-           "on_model_dofs", "pair_modes_by_frequency", "pairing_bands", "prefer_shared_poles", "refit_missing_modes",
-           "unexcited_modes"]
+__all__ = ["BASELINE_PAIR_BAND", "FREQUENCIES_ONLY", "IDENTIFICATION", "IDENTIFICATION_BAND_FACTOR", "MIN_PAIR_MAC",
+           "RATIO_TOLERANCE", "ModalPair", "differences_from_model", "frf_rows", "identification_band_hz",
+           "identify_band", "identify_modes", "measured_test_differences", "modal_pair", "mode_checks",
+           "nominal_ratio_range", "on_model_dofs", "pair_modes_by_frequency", "pairing_bands", "prefer_shared_poles",
+           "refit_missing_modes", "unexcited_modes"]
 
 #: The identification ``classify`` runs on FRF files: LSCF poles and LSFD residues, the 4 lowest modes. The
 #: training data's modal noise (``measurement.modal_noise = "calibrated"``) is calibrated against this path
@@ -88,6 +88,10 @@ def on_model_dofs(data, beam: BeamSpec, beam_x_m=None, where: str = "measured da
                               "reciprocity (H_ij = H_ji, a roving-hammer test)")
         resp_map = replace(dof_map, dofs=data.response_dofs,
                            model_dofs=tuple(to_model.get(d, "") for d in data.response_dofs))
+        if len(data.response_dofs) == 1 and len(beam.dofs) > 1:     # one sensor: its natural frequencies alone
+            return replace(data, metadata={**data.metadata, FREQUENCIES_ONLY: (
+                f"{where}: one sensor ({data.response_dofs[0]}) for the model's {len(beam.dofs)}: read on its "
+                "natural frequencies alone")}), dof_map
         resp = resp_map.rows(beam.dofs, where)
         return replace(data, frf=data.frf[resp], response_dofs=tuple(beam.dofs),
                        reference_dofs=tuple(to_model.get(d) or d for d in data.reference_dofs)), dof_map
@@ -97,6 +101,11 @@ def on_model_dofs(data, beam: BeamSpec, beam_x_m=None, where: str = "measured da
     dof_map = map_measured_dofs(data.dofs, grid_x, grid, where=where, off_grid="ignore", **kw)
     rows = dof_map.rows(beam.dofs, where)
     return replace(data, eigenvectors=data.eigenvectors[rows], dofs=tuple(beam.dofs)), dof_map
+
+
+#: The metadata key of an FRF file :func:`on_model_dofs` reads on its natural frequencies alone (one sensor for a
+#: model of several): its identified modes carry no shapes, and the verdict is the frequency network's.
+FREQUENCIES_ONLY = "frequencies_only"
 
 
 @dataclass(frozen=True)

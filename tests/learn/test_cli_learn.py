@@ -183,6 +183,21 @@ def test_classify_frf_on_another_grid_is_accepted(tiny, frf_pair, capsys):
     assert json.loads(capsys.readouterr().out)["input_route"] == "measured"
 
 
+def test_classify_reads_a_one_sensor_frf_pair_on_its_frequencies_alone(tiny, frf_pair, capsys):
+    """One response of the model's four (the tip, driven as in training): the frequency network's verdict."""
+    from physics.io import read_frf, write_frf_npz
+
+    one = []
+    for s, p in enumerate(frf_pair):
+        f = read_frf(p)
+        one.append(str(tiny / f"one{s}.npz"))
+        write_frf_npz(one[-1], MeasuredFRF(f.frequency_hz, f.frf[3:4], f.response_dofs[3:4], f.reference_dofs))
+    assert main(["classify", "--model", str(tiny / "model"), "--baseline", *one, "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["input_route"] == "frequency" and res["network"] is not None
+    assert "natural frequencies without mode shapes: the verdict reads the frequencies alone" in res["warnings"]
+
+
 def test_classify_places_a_renumbered_shuffled_mm_uff_by_its_geometry(tiny, frf_pair, renumbered_uffs, capsys):
     """``renumbered_uffs``: the same verdict as the canonical files."""
     from systems import write_renumbered_uff
@@ -452,7 +467,9 @@ def test_a_missing_middle_mode_and_a_single_mode(tiny, capsys):
     base, cur = _modal_files(tiny, 0.5)
     obj = json.loads(open(cur).read())
     keep = [0, 1, 3]
-    obj["eigenvalues"] = [obj["eigenvalues"][k] for k in keep]
+    for key in ("eigenvalues", "natural_frequencies_hz", "damping_ratios"):
+        if key in obj:
+            obj[key] = [obj[key][k] for k in keep]
     obj["eigenvectors"] = [[row[k] for k in keep] for row in obj["eigenvectors"]]
     (tiny / "no3.json").write_text(json.dumps(obj))
     assert main(["classify", "--model", str(tiny / "model"), "--baseline", base, str(tiny / "no3.json"),
@@ -464,7 +481,10 @@ def test_a_missing_middle_mode_and_a_single_mode(tiny, capsys):
     assert (f"mode 3 not identified in {tiny / 'no3.json'} (it holds 3 modes): the network and the classical "
             "methods answer on modes 1, 2, 4") in res["warnings"]
     assert res["classical"]["damaged"] and res["classical"]["location_element"] == 1
-    obj["eigenvalues"], obj["eigenvectors"] = obj["eigenvalues"][:1], [row[:1] for row in obj["eigenvectors"]]
+    for key in ("eigenvalues", "natural_frequencies_hz", "damping_ratios"):
+        if key in obj:
+            obj[key] = obj[key][:1]
+    obj["eigenvectors"] = [row[:1] for row in obj["eigenvectors"]]
     (tiny / "one.json").write_text(json.dumps(obj))
     assert main(["classify", "--model", str(tiny / "model"), "--baseline", base, str(tiny / "one.json")]) == 2
     err = capsys.readouterr().err
