@@ -163,6 +163,8 @@ def run(args) -> dict:
         out = judged(res, args.false_alarm_rate, model, beam_x_m)
     out["warnings"] = list(dict.fromkeys(" ".join(str(w.message).split()) for w in caught
                                          if issubclass(w.category, UserWarning)))
+    for message in out["warnings"]:                         # on stderr too, --json or not (experiments.cli.main)
+        warnings.warn(message)
     out.update(baseline_tests=args.baseline_tests, false_alarm_rate=args.false_alarm_rate, version=package_version(),
                detector=res.detection.to_dict(), charts=None if res.charts is None else res.charts.to_dict(),
                config={"identification": settings.to_dict(), "conditions": args.conditions,
