@@ -369,8 +369,9 @@ def build_setup(cfg: dict) -> Setup:
     spring = bool(band)
     shear_file, rho_ratio, timoshenko = shear_parameters(truth, preset.thickness_m)
     shear_band = tuple(cfg["specimen"]["shear_flexibility"])
-    if not test.thesis and shear_file == 0:  # the band describes sandwich cores: a beam file states its own shear
-        shear_band = (0.0, 0.0)
+    sandwich = truth is None or truth.section == "sandwich"
+    if not (test.thesis and sandwich) and shear_file == 0:  # the band describes the thesis's soft core: another
+        shear_band = (0.0, 0.0)                             # beam (a solid section, another test) states its own
     if shear_file > 0:  # the file's shear flexibility is the centre of the specimen band (its width kept)
         half = (shear_band[1] - shear_band[0]) / 2
         shear_band = (max(shear_file - half, 0.0), shear_file + half)

@@ -256,3 +256,23 @@ def test_slits_in_a_solid_rectangle_cut_one_material_as_deep_as_the_section_allo
     assert setup.layout.face_thickness_m == pytest.approx(SOLID_LIGAMENT_FRACTION * 0.00475)
     inp = draw_batch(np.random.default_rng(0), 16, setup)
     assert inp.damage["ei_loss"].max() > 0.9 and np.all(inp.damage["depth_m"] < 0.95 * 0.00475)
+
+
+def test_the_sandwich_shear_band_is_the_thesis_beams_only():
+    """On the thesis's layout (clamped-free, sensors at the quarter points, driven at the first), the training
+    config's shear band (a soft core) is drawn for the preset and a sandwich beam file, not for a solid steel bar,
+    whose own shear flexibility (about 4e-5) the Euler-Bernoulli elements leave out."""
+    from datagen.config import load_config, merge
+    from datagen.setup import get_setup
+
+    training = load_config("training")
+    band = tuple(training["specimen"]["shear_flexibility"])
+    assert band[1] > 0
+    bar = {"name": "bar", "length_m": 0.38, "width_m": 0.0254, "thickness_m": 0.00475, "section": "rectangular",
+           "modulus_pa": 2e11, "density_kg_m3": 7850.0, "measured_x_m": [0.095, 0.19, 0.285, 0.38]}
+    sandwich = {"preset": "beam5", "name": "beam5-file"}
+    for beam, expected in ((None, band), (sandwich, band), (bar, (0.0, 0.0))):
+        cfg = merge({"measurement": {"lines": 64}} if beam is None else {"beam": beam, "measurement": {"lines": 64}},
+                    base=training)
+        setup = get_setup(cfg)
+        assert setup.test.thesis and setup.shear_band == expected, beam
