@@ -227,9 +227,7 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
     if method == FREE_RESPONSE_METHOD:
         if verdict.free:
             return result(*fit(method, checked))
-        hint = (f"{verdict.text}; {method} fits free decays (the response after each hit): on a stationary response "
-                f"the random ripple of its spectrum's peaks passes for modes; --method {STATIONARY_METHOD} reads a "
-                "stationary response")
+        hint = _not_free_hint(verdict, method)
         try:
             est, diagram = fit(method, checked)
         except (ConvergenceError, ShapeError) as exc:
@@ -278,4 +276,13 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         except (ConvergenceError, ShapeError):
             raise _tried(first, f"{why}; {other} found no mode either") from None
         why = f"{why}; {picked} found no mode ({first}), so {other}"
+        if other == FREE_RESPONSE_METHOD and not verdict.free:
+            warnings.warn(f"{where}: {_not_free_hint(verdict, other)}", UserWarning, stacklevel=2)
     return result(est, diagram, why)
+
+
+def _not_free_hint(verdict, method: str) -> str:
+    """Why ``method`` (a free decays' fit) on a record that is not a free response may read noise as modes."""
+    return (f"{verdict.text}; {method} fits free decays (the response after each hit): on a stationary response the "
+            f"random ripple of its spectrum's peaks passes for modes; --method {STATIONARY_METHOD} reads a "
+            "stationary response")

@@ -162,3 +162,15 @@ def test_identify_merges_setups_with_a_fixed_reference(capsys, tmp_path):
     assert np.all(np.diag(mac(phi[[2, 0, 1]], shapes)) > 0.999)
     code, out, err = run_cli(capsys, ["identify", str(tmp_path / "s1.npz"), "--setup", str(DATA / "nothing.npz")])
     assert code == 2 and err.count("\n") == 1
+
+
+def test_era_tried_on_a_stationary_record_after_ssi_found_nothing_warns_as_when_named(capsys, tmp_path):
+    """A stationary record where SSI-cov at the highest order given finds no stable mode: ERA is tried next, and its
+    modes carry the warning ``--method era`` gives on a record that is not a free response."""
+    y, fs, *_ = chain_record(seconds=120.0)
+    path = _npz(tmp_path / "ambient.npz", y, fs)
+    code, out, err = run_cli(capsys, ["identify", str(path), "--max-order", "2", "--json"])
+    assert code == 0, err
+    res = json.loads(out)
+    assert "ssi found no mode" in json.dumps(res) and "so era" in json.dumps(res)
+    assert any("era fits free decays" in w and "not a free response" in w for w in res["warnings"])
