@@ -105,6 +105,11 @@ def inspect_dataset(dataset_dir, out_dir=None) -> dict:
         _plot_frf_overlay(plt, ds, out)
     summary["figures"] = [str(out / f) for f in ("labels.png", "shift_vs_position.png", "frf_overlay.png")]
     summary["out"] = str(out)
+    if not summary["complete"]:
+        asked = ds.manifest.get("n_requested")
+        summary["warnings"] = [f"{dataset_dir}: incomplete: {summary['samples']} of "
+                               f"{asked if asked is not None else 'the'} samples asked (an interrupted generate; the "
+                               f"same command resumes it)"]
     atomic_write_text(out / "summary.json", json.dumps(summary, indent=1))
     return summary
 

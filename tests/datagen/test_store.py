@@ -67,6 +67,10 @@ def test_resume_after_interruption_is_byte_identical(reference, tmp_path):
     (tmp / "frf_updated.npy").write_bytes(b"\x93NUMPY partial")
     ds = Dataset(root)  # a reader only sees recorded, complete shards
     assert len(ds.shards) == 2 and len(ds.samples) == 14
+    from datagen.inspection import inspect_dataset
+
+    assert inspect_dataset(root, tmp_path / "inspect")["warnings"] == [
+        f"{root}: incomplete: 14 of 30 samples asked (an interrupted generate; the same command resumes it)"]
     m = generate(root, CFG, n=N, seed=11, workers=1, progress=False)
     assert m["complete"] and not tmp.exists()
     for name in ARRAYS:
