@@ -13,6 +13,7 @@ from physics.errors import BeamDamageError, ConfigError, FileFormatError
 from physics.identification import (DEFAULT_OUTPUT_ONLY, METHODS, Identification, RecordsIdentification,
                                     holds_response_records, identify_file, identify_records,
                                     read_response_records, reconstruction_error_db, response_records)
+from physics.identification.measured import DEFAULT_MAX_ORDER
 from physics.identification.exponential_window import remove_window_decay, tau_from_end_value
 from physics.identification.output_only import FREE_RESPONSE_METHOD, SCALING, STATIONARY_METHOD
 from physics.identification.setups import MergedSetups, finite_mac, merge_setups
@@ -26,7 +27,7 @@ __all__ = ["add_parser", "run"]
 
 
 #: Highest model order accepted, and LSCF's default.
-MAX_ORDER, LSCF_MAX_ORDER = 200, 40
+MAX_ORDER = 200
 
 
 def modes_list(e) -> list:
@@ -124,7 +125,7 @@ def run(args) -> dict:
         raise ConfigError(f"--setup: merges setups of response records (output-only); {args.file} holds FRFs")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        ident = identify_file(args.file, args.method or "lscf", band, args.modes, args.max_order or LSCF_MAX_ORDER)
+        ident = identify_file(args.file, args.method or "lscf", band, args.modes, args.max_order)
         _warn_split(args.file, ident.estimate)
         ident, window = _remove_window(args, ident, window_flag)
     out = result_dict(ident)
@@ -389,7 +390,8 @@ def add_parser(sub):
     p.add_argument("--band", nargs=2, type=float, metavar=("FMIN", "FMAX"), help="frequency band in Hz")
     p.add_argument("--modes", type=int, metavar="N", help="number of modes to keep (default: all found)")
     p.add_argument("--max-order", type=int, default=None,
-                   help=f"highest model order (default {LSCF_MAX_ORDER} for lscf; ssi and era size it to the "
+                   help=f"highest model order (default {DEFAULT_MAX_ORDER} for lscf, or the highest the band's lines "
+                        "carry where that is lower; ssi and era size it to the "
                         "clear peaks of the record's spectrum; used by "
                         f"{', '.join(m for m, spec in METHODS.items() if 'max_order' in spec.options)})")
     p.add_argument("--exp-window-tau", type=float, metavar="S",

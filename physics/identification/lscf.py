@@ -18,8 +18,8 @@ from physics.identification.modes import ModalEstimate, checked_frf, modal_estim
 from physics.identification.poles import (MAX_DAMPING, NO_STABLE_POLE, SelectedPoles, StabilisationDiagram,
                                           select_poles, stability_status)
 
-__all__ = ["LSCFIdentification", "clear_peak_reach_hz", "identify_lscf", "lscf", "octave_median_peaks",
-           "octave_median_peaks_and_reach", "prominent_peaks"]
+__all__ = ["LSCFIdentification", "clear_peak_reach_hz", "highest_order", "identify_lscf", "lscf",
+           "octave_median_peaks", "octave_median_peaks_and_reach", "prominent_peaks"]
 
 
 #: (frequency lines, dt, columns) -> (X, Q) of :func:`_lscf_basis`, the 4 most recent.
@@ -187,7 +187,7 @@ def kind_weight(frequency_hz, kind) -> np.ndarray:
     return w / w.max()
 
 
-def _highest_order(n_lines, n_outputs, n_inputs) -> int:
+def highest_order(n_lines, n_outputs, n_inputs) -> int:
     """Highest model order :func:`lscf` takes for ``n_lines`` lines of ``n_outputs`` x ``n_inputs`` FRFs: the one
     whose ``(order + 1) (n_inputs + 1)`` is at most ``n_lines n_outputs``."""
     return n_lines * n_outputs // (n_inputs + 1) - 1
@@ -219,7 +219,7 @@ def _with_refit_poles(f, rec, poles, max_order, margin, select, lscf_options, we
     mag = np.sqrt(np.mean(np.abs(rec) ** 2, axis=(0, 1)))
     found = [poles]
     for sel, w, hi in _refits(f, weight):
-        order = min(max_order, _highest_order(sel.sum(), n_o, n_i))
+        order = min(max_order, highest_order(sel.sum(), n_o, n_i))
         if order < 4:
             break
         try:
@@ -269,7 +269,7 @@ def _with_peak_poles(f, h, rec, poles, max_order, margin, select, lscf_options):
             if any(np.array_equal(sel, t) for t in tried):
                 continue
             tried.append(sel)
-            order = min(max_order, _highest_order(sel.sum(), n_o, n_i))
+            order = min(max_order, highest_order(sel.sum(), n_o, n_i))
             if order < 4:
                 break
             try:
@@ -365,9 +365,9 @@ def lscf(frequency_hz, frf, max_order=40, min_order=1, freq_tol=0.01, damping_to
     n_o, n_i, N = h.shape
     if max_order < min_order or min_order < 1:
         raise ShapeError("lscf needs 1 <= min_order <= max_order")
-    if max_order > _highest_order(N, n_o, n_i):
+    if max_order > highest_order(N, n_o, n_i):
         raise ShapeError(f"lscf: {N} lines x {n_o} responses are too few for model order {max_order} (at most "
-                         f"{_highest_order(N, n_o, n_i)}: a lower --max-order, a wider band or finer lines)",
+                         f"{highest_order(N, n_o, n_i)}: a lower --max-order, a wider band or finer lines)",
                          parameter="max_order")
     dt = 1.0 / (2.0 * f[-1] * (1.0 + margin))
     P = max_order + 1

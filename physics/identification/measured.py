@@ -7,8 +7,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from physics.errors import ConfigError, ConvergenceError
-from physics.identification.lscf import CLEAR_PEAK_PROMINENCE, CLEAR_PEAK_TOLERANCE, octave_median_peaks
+from physics.errors import ConfigError, ConvergenceError, ShapeError
+from physics.identification.lscf import (CLEAR_PEAK_PROMINENCE, CLEAR_PEAK_TOLERANCE, highest_order,
+                                         octave_median_peaks)
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate
 from physics.identification.poles import StabilisationDiagram
@@ -18,8 +19,11 @@ from physics.io.timedata import read_uff_time_records
 from physics.io.uff58 import UffFile, read_uff58
 from physics.time_records import estimate_from_records
 
-__all__ = ["Identification", "identify_file", "identify_frf", "identify_frfs", "read_measured_frf",
-           "reconstruction_error_db"]
+__all__ = ["DEFAULT_MAX_ORDER", "Identification", "identify_file", "identify_frf", "identify_frfs",
+           "read_measured_frf", "reconstruction_error_db"]
+
+#: The highest LSCF model order :func:`identify_frf` fits by default (fewer where the band's lines carry fewer).
+DEFAULT_MAX_ORDER = 40
 
 
 def reconstruction_error_db(measured, synthesised):
@@ -76,7 +80,7 @@ def peaks_left_out(frf: MeasuredFRF, identified_hz, tolerance: float = CLEAR_PEA
     return octave_median_peaks(frf.frequency_hz, mag, identified_hz, tolerance)
 
 
-def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, max_order=40) -> Identification:
+def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, max_order=None) -> Identification:
     """Identify modes of a :class:`~physics.io.MeasuredFRF` (band-limited, fitted in its own kind).
 
     The first driving point (a response DOF equal to a reference DOF) scales the
@@ -96,8 +100,9 @@ def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, ma
         ``(fmin, fmax)`` in Hz.
     n_modes : int, optional
         Modes to keep (default: all found).
-    max_order : int
-        Highest LSCF model order (methods with ``"max_order"`` in their options).
+    max_order : int, optional
+        Highest LSCF model order (methods with ``"max_order"`` in their options); default
+        :data:`DEFAULT_MAX_ORDER`, or the highest the band's lines carry where that is lower (a narrow band).
 
     Returns
     -------
@@ -122,6 +127,9 @@ def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, ma
     if drive is None:
         warnings.warn("no driving point (response DOF equal to a reference DOF): mode shapes are not "
                       "unit-modal-A scaled and cannot feed 'update' directly", stacklevel=2)
+    if max_order is None:
+        n_o, n_i, n_lines = frf.frf.shape
+        max_order = max(1, min(DEFAULT_MAX_ORDER, highest_order(n_lines, n_o, n_i)))
     options = {"max_order": max_order}
     est, synth, diagram, outside = spec.fit(frf, drive, n_modes, **{k: options[k] for k in spec.options})
     if n_modes is None:
@@ -135,7 +143,7 @@ def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, ma
     return Identification(frf, est, synth, diagram, label, outside)
 
 
-def identify_frfs(frfs, method="lscf", band_hz=None, n_modes=None, max_order=40) -> list[Identification]:
+def identify_frfs(frfs, method="lscf", band_hz=None, n_modes=None, max_order=None) -> list[Identification]:
     """:func:`identify_frf` on each of several :class:`~physics.io.MeasuredFRF` (same arguments for all).
 
     Files of one layout (the same frequency lines and band) share the LSCF basis and
@@ -148,7 +156,7 @@ def identify_frfs(frfs, method="lscf", band_hz=None, n_modes=None, max_order=40)
     return [identify_frf(frf, method, band_hz, n_modes, max_order) for frf in frfs]
 
 
-def identify_file(path, method="lscf", band_hz=None, n_modes=None, max_order=40) -> Identification:
+def identify_file(path, method="lscf", band_hz=None, n_modes=None, max_order=None) -> Identification:
     """:func:`identify_frf` on an FRF file (UFF 58, CSV or ``.npz``; see :func:`physics.io.read_frf`).
 
     A universal file of time records (force and responses, no FRF) is estimated
@@ -162,6 +170,8 @@ def identify_file(path, method="lscf", band_hz=None, n_modes=None, max_order=40)
         hint = (f"; FRFs estimated as {frf.metadata['estimated']}: for a hammer test, 'beam-damage estimate "
                 "--excitation impact' first" if "random excitation" in frf.metadata.get("estimated", "") else "")
         raise ConvergenceError(f"{path}: {exc}{hint}", parameter=exc.parameter) from None
+    except ShapeError as exc:                       # a band or an order the file's lines cannot carry
+        raise ShapeError(f"{path}: {exc}", parameter=exc.parameter) from None
 
 
 def read_measured_frf(path) -> MeasuredFRF:

@@ -163,3 +163,21 @@ def test_identify_json_reports_units_and_positions_from_the_file(capsys, tmp_pat
     res = json.loads(out)
     assert res["positions_m"] is None and "quarter points" in res["positions_source"]
     assert res["units"]["si"] == "m/N"
+
+
+def test_a_narrow_band_fits_the_highest_order_its_lines_carry(capsys, tmp_path):
+    """41 lines of one FRF carry LSCF order 19 at most: by default the order is capped there and the 50 Hz, 2 %
+    mode is found; --max-order 40 is refused naming the file and the highest order."""
+    f = np.arange(1, 801) * 0.25
+    w, wn = 2 * np.pi * f, 2 * np.pi * 50.0
+    h = 1.0 / (wn ** 2 - w ** 2 + 2j * 0.02 * wn * w)
+    path = tmp_path / "sdof.csv"
+    write_frf_csv(path, MeasuredFRF(f, h[None, None], ("1:+Z",), ("1:+Z",)))
+    code, out, err = run_cli(capsys, ["identify", str(path), "--band", "45", "55", "--json"])
+    assert code == 0, err
+    (mode,) = json.loads(out)["modes"]
+    assert mode["frequency_hz"] == pytest.approx(50.0, rel=1e-4)
+    assert mode["damping_ratio"] == pytest.approx(0.02, rel=1e-2)
+    code, out, err = run_cli(capsys, ["identify", str(path), "--band", "45", "55", "--max-order", "40"])
+    assert code == 2 and err.count("\n") == 1
+    assert f"{path}: lscf: 41 lines x 1 responses are too few for model order 40 (at most 19" in err
