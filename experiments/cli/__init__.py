@@ -24,6 +24,7 @@ import argparse
 import errno
 import importlib
 import json
+import os
 import signal
 import sys
 import threading
@@ -137,6 +138,12 @@ def build_parser(argv=None) -> argparse.ArgumentParser:
     return parser
 
 
+def _on_path(a: str, b: str) -> bool:
+    """Whether one of the paths ``a``, ``b`` lies on the other's (the same, or one a folder of the other)."""
+    pa, pb = os.path.abspath(a), os.path.abspath(b)
+    return pa == pb or pa.startswith(pb + os.sep) or pb.startswith(pa + os.sep)
+
+
 def _check_out(parser, args) -> None:
     """Refuse a command's ``--out`` that cannot be written before it runs: a file (metavar ``FILE``) or else a
     directory (:func:`experiments.cli.args.check_out_file`, :func:`~experiments.cli.args.check_out_dir`)."""
@@ -173,6 +180,9 @@ def main(argv=None) -> int:
         return 0
     except OSError as exc:
         where = f": {exc.filename}" if exc.filename else ""
+        out = getattr(args, "out", None)
+        if out and exc.filename and _on_path(str(exc.filename), str(out)):     # the output named by its flag
+            where += f" (--out {out}: cannot be written there)"
         kept = ("; nothing was half-written: files from before are as they were, and generate resumes from its "
                 "complete shards") if exc.errno in (errno.ENOSPC, errno.EDQUOT) else ""
         sys.stderr.write(one_line(f"beam-damage {args.command}: error: {exc.strerror or exc}{where}{kept}") + "\n")

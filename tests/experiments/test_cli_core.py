@@ -204,3 +204,16 @@ def test_an_out_that_cannot_be_written_is_refused_before_the_command_runs(capsys
     code, out, err = _run(capsys, *[a.format(**fill) for a in argv])
     assert (code, out) == (2, "") and err.count("\n") == 1
     assert err.endswith(message.format(**fill) + "\n")
+
+
+@pytest.mark.skipif(not Path("/proc/self").exists(), reason="needs /proc, where nothing can be created")
+def test_an_out_the_system_refuses_is_named_by_its_flag(capsys, tmp_path):
+    from physics.io import MeasuredFRF, write_frf_npz
+
+    f = np.arange(1, 801) * 0.25
+    w, wn = 2 * np.pi * f, 2 * np.pi * 50.0
+    write_frf_npz(tmp_path / "sdof.npz", MeasuredFRF(f, (1.0 / (wn ** 2 - w ** 2 + 2j * 0.02 * wn * w))[None, None],
+                                                     ("1:+Z",), ("1:+Z",)))
+    code, out, err = _run(capsys, "identify", str(tmp_path / "sdof.npz"), "--out", "/proc/beam-damage-test/id")
+    assert (code, out) == (2, "") and err.count("\n") == 1
+    assert err.endswith("(--out /proc/beam-damage-test/id: cannot be written there)\n")
