@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import warnings
 from dataclasses import replace
 from pathlib import Path
@@ -293,6 +294,10 @@ def _warn_duplicate_dofs(path, dofs) -> None:
 
 def _run_output_only(args, records, band) -> dict:
     method = args.method or DEFAULT_OUTPUT_ONLY
+    given = [os.path.realpath(f) for f in (args.file, *(getattr(args, "setup", None) or ()))]
+    repeated = next((f for k, f in enumerate((args.file, *(args.setup or ()))) if given[k] in given[:k]), None)
+    if repeated is not None:
+        raise ConfigError(f"--setup {repeated}: given twice; each setup is another record of the structure")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         _warn_duplicate_dofs(args.file, records.dofs)

@@ -93,3 +93,11 @@ def test_warnings_go_to_stderr_in_text_mode_and_into_the_json(capsys, setups, tm
     assert np.nanmin(np.array(res["reference_mac"], float)) > 0.99
     shapes = np.array([[complex(z) for z in m["shape"]] for m in res["modes"]]).T
     assert mac(PHI[[2, 0, 1]], shapes).diagonal().min() > 0.999
+
+
+def test_a_setup_given_twice_is_refused_naming_it(capsys, setups):
+    for argv in (["identify", setups["s1"], "--setup", setups["s1"]],
+                 ["identify", setups["s1"], "--setup", setups["s2"], "--setup", setups["s2"]]):
+        code, out, err = run_cli(capsys, argv)
+        assert (code, out) == (2, "") and err.count("\n") == 1
+        assert f"--setup {argv[-1]}: given twice" in err
