@@ -140,6 +140,13 @@ def check_arguments(cfg: dict, n: int, seed: int, workers: int, root=None) -> No
                                   f"{existing} has {free / 1e9:.3g} GB free", parameter="n")
 
 
+def _differing(a, b, where: str = "") -> list:
+    """The dotted keys at which two configs differ (``beam.length_m``, ``damage.kind``), in order."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        return [d for k in dict.fromkeys([*a, *b]) for d in _differing(a.get(k), b.get(k), f"{where}{k}.")]
+    return [] if a == b else [where.rstrip(".") or "the whole config"]
+
+
 def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
     """Manifest of an existing compatible run (recovered: damaged shards are dropped for regeneration) or a new one."""
     root = Path(root)
@@ -148,8 +155,10 @@ def open_or_create(root, cfg: dict, seed: int, n: int) -> dict:
         m = read_manifest(root, formats=(DATASET_FORMAT,))
         for key, want in (("config", cfg), ("seed", seed), ("n_requested", n)):
             if m.get(key) != want:
-                raise ConfigError(f"{root} holds a dataset generated with a different {key}; resume needs the "
-                                  f"same config, seed and --n (or choose a new --out)")
+                what = (f"config ({', '.join(_differing(m.get(key), want)[:3])})" if key == "config" else
+                        f"{'--seed' if key == 'seed' else '--n'} ({m.get(key)}, not {want})")
+                raise ConfigError(f"{root} holds a dataset generated with another {what}; resume needs the same "
+                                  "config, seed and --n (or choose a new --out)")
         m, damaged = recover(root, m)
         if damaged:
             print(f"{root}: {len(damaged)} damaged shard(s) {damaged} will be regenerated", file=sys.stderr)

@@ -96,8 +96,13 @@ def test_renamed_but_unrecorded_shard_is_adopted_or_redone(reference, tmp_path):
 def test_resume_refuses_other_config(reference, tmp_path):
     root = tmp_path / "ds"
     generate(root, CFG, n=N, seed=11, workers=1, progress=False, max_new_shards=1)
-    with pytest.raises(ConfigError, match="seed"):
+    with pytest.raises(ConfigError, match=r"another --seed \(11, not 12\)"):
         generate(root, CFG, n=N, seed=12, workers=1, progress=False)
+    with pytest.raises(ConfigError, match=r"another --n \(30, not 31\)"):
+        generate(root, CFG, n=N + 1, seed=11, workers=1, progress=False)
+    other = merge({"measurement": {"lines": 65}}, base=CFG)
+    with pytest.raises(ConfigError, match=r"another config \(measurement.lines\)"):
+        generate(root, other, n=N, seed=11, workers=1, progress=False)
 
 
 def test_seed_changes_data(reference, tmp_path):
