@@ -95,12 +95,11 @@ def run(args) -> dict:
                "counts": m.get("counts", {}), "checksums": m.get("checksums", {})}
     if not args.json:
         c = summary["counts"]
-        print(f"{args.out}: {c.get('samples', 0)} samples in {m['n_shards']} shards, "
-              f"{c.get('not_converged', 0)} flagged as not converged (kept); seed {m['seed']}, beam {summary['beam']}, "
-              f"config {summary['config']}")
         flagged = {k: v for k, v in c.get("status", {}).items() if k != "ok" and v}
-        if flagged:
-            print("  status: " + ", ".join(f"{v} {k}" for k, v in flagged.items()) + " (samples table column 'status')")
+        kept = (f"{sum(flagged.values())} flagged and kept ({', '.join(f'{v} {k}' for k, v in flagged.items())}: "
+                "the samples table's column 'status')" if flagged else "none flagged")
+        print(f"{args.out}: {c.get('samples', 0)} samples in {m['n_shards']} shards, {kept}; seed {m['seed']}, "
+              f"beam {summary['beam']}, config {summary['config']}")
     return summary
 
 
