@@ -142,11 +142,29 @@ def check_series(tests: list, n_baseline: int, files: list) -> list:
     return out
 
 
+def _digest(path, limit=None):
+    """SHA-256 of the file's first ``limit`` bytes (None: all), or None when it cannot be read."""
+    h = hashlib.sha256()
+    try:
+        with open(path, "rb") as fh:
+            left = limit
+            for block in iter(lambda: fh.read(1 << 20 if left is None else min(1 << 20, left)), b""):
+                h.update(block)
+                if left is not None:
+                    left -= len(block)
+                    if left <= 0:
+                        break
+    except OSError:
+        return None
+    return h.digest()
+
+
 def repeated_tests(files: list) -> list:
     """``[(i, j), ...]``: test ``j`` repeats the earlier test ``i``: the same file listed again, or a file of the
-    same bytes (files of equal size compared by their SHA-256). A file that cannot be read is left out (its test
-    is refused by the identification)."""
-    first, by_size, out = {}, {}, []
+    same bytes (files of equal size and equal first 64 KiB compared whole by their SHA-256: records of one shape,
+    all of a size, are read once in part). A file that cannot be read is left out (its test is refused by the
+    identification)."""
+    first, groups, out = {}, {}, []
     for j, f in enumerate(files):
         real = os.path.realpath(f)
         if real in first:
@@ -154,23 +172,18 @@ def repeated_tests(files: list) -> list:
             continue
         first[real] = j
         try:
-            by_size.setdefault(os.stat(real).st_size, []).append(j)
+            groups.setdefault(os.stat(real).st_size, []).append(j)
         except OSError:
             continue
-    for group in (g for g in by_size.values() if len(g) > 1):
-        seen = {}
-        for j in group:
-            h = hashlib.sha256()
-            try:
-                with open(files[j], "rb") as fh:
-                    for block in iter(lambda: fh.read(1 << 20), b""):
-                        h.update(block)
-            except OSError:
-                continue
-            if h.digest() in seen:
-                out.append((seen[h.digest()], j))
-            else:
-                seen[h.digest()] = j
+    for limit in (1 << 16, None):                   # the first 64 KiB, then the whole file
+        refined = {}
+        for key, group in groups.items():
+            if len(group) > 1:
+                for j in group:
+                    if (d := _digest(files[j], limit)) is not None:
+                        refined.setdefault((key, d), []).append(j)
+        groups = refined
+    out += [(g[0], j) for g in groups.values() for j in g[1:]]
     return sorted(out, key=lambda p: p[1])
 
 
