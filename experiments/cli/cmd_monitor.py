@@ -20,10 +20,11 @@ from learn.monitor.seasons import covers_seasons
 from learn.monitor.estimator_choice import FREQUENCY_ESTIMATORS
 from learn.monitor.events import group_events, identification_change, lost_modes_change
 from learn.monitor.verdicts import event_verdicts
+from learn.pairs.measured import on_model_dofs
 from physics.errors import BeamDamageError, ConfigError
 from physics.identification.output_only import DEFAULT_OUTPUT_ONLY, RECORDS_METHODS
-from physics.io import (FRF, MODAL, TIME, accepted, atomic_write_bytes, atomic_write_text, figure_png, pyplot,
-                        to_jsonable)
+from physics.io import (FRF, MODAL, TIME, accepted, atomic_write_bytes, atomic_write_text, figure_png, modal_or_frf,
+                        pyplot, read, to_jsonable)
 from datagen.cluster import connect
 from datagen.store import package_version
 from learn.network.model_dir import load_model
@@ -143,6 +144,7 @@ def run(args) -> dict:
     if args.model:
         model = _flagged("--model", load_model, args.model)
         _, beam_x_m = _flagged("--beam", model.measured_beam, args.beam)
+        _warn_other_beam(args.model, series.files[0], model, beam_x_m)
     elif args.beam:
         beam = _flagged("--beam", load_beam, args.beam)
     settings = replace(identification_settings(args.band, beam, model), records_method=args.records_method)
@@ -179,6 +181,27 @@ def run(args) -> dict:
     if not args.json:
         _print(out, res)
     return out
+
+
+def _warn_other_beam(model_dir, path, model, beam_x_m) -> None:
+    """Warn when the first test's FRFs or modes do not lie on the model's DOFs (its node geometry, or its DOF labels by
+    the model's convention, :func:`learn.pairs.measured.on_model_dofs`): the tests are of another beam, the band is
+    the model's, and no event gets explanations. Response records (shapes identified later) and a file that does not
+    read (its row says why) are left to the series."""
+    try:
+        kind = modal_or_frf(path)
+        data = read(path, kind) if kind in (MODAL, FRF) else None
+    except (BeamDamageError, OSError):
+        return
+    if data is None or (kind == FRF and not getattr(data, "response_dofs", None)):
+        return
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            on_model_dofs(data, model.beam, beam_x_m, str(path))
+    except BeamDamageError as exc:
+        warnings.warn(f"--model {model_dir}: the tests may be of another beam: {exc}; the identification band is "
+                      "the model's, and the events get no explanations")
 
 
 def _flagged(flag: str, load, value):

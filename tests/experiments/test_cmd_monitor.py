@@ -151,6 +151,19 @@ def test_an_alarm_gets_the_explanations_with_the_measured_scatter_and_the_networ
     np.testing.assert_allclose(sigma, res["normal_variation"]["per_mode_std"], rtol=1e-12)
     assert [h["name"] for h in v["hypotheses"]][0] != "intact"
     assert v["network"]["probability_damaged"] is not None and v["network_baselines"] == 18
+    assert not any("may be of another beam" in w for w in res["warnings"])
+    # tests measured at a DOF the model's beam does not have: said up front
+    _, files, _ = modal_series
+    other = []
+    for f in files[:20]:
+        d = json.loads(Path(f).read_text())
+        other.append(tmp_path / Path(f).name)
+        other[-1].write_text(json.dumps({**d, "dofs": [*d["dofs"][:3], "6:y"]}))
+    code, res, err = run_json(capsys, ["monitor", *map(str, other), "--baseline-tests", "18",
+                                       "--model", str(tmp_path / "model"), "--json"])
+    assert code == 0, err
+    assert any(w.startswith(f"--model {tmp_path / 'model'}: the tests may be of another beam: ") and
+               "no measured DOF at model DOF(s) 5:y" in w for w in res["warnings"])
 
 
 def test_a_baseline_of_sessions_is_named_and_a_later_session_like_them_is_no_alarm(tmp_path, capsys):
