@@ -542,6 +542,9 @@ def assemble_beam(length_m, EI_Nm2, mass_per_length_kg_m, n_elements, *, bc=THES
     for key in _in_order(eff, "assembled"):
         EFFECTS[effect_of(key)].apply(parts, eff[key])
     M, K, C, node_x, removed = parts.M, parts.K, parts.C, parts.node_x, parts.removed
-    keep = np.array([i for i, d in enumerate(names) if d not in removed])
+    keep = np.array([i for i, d in enumerate(names) if d not in removed], int)
+    if keep.size == 0:
+        raise BeamDamageError(f"n_elements {n_el} on a {bc} beam: its supports hold every DOF; at least 2 elements "
+                              "are needed", parameter="n_elements")
     sel = np.ix_(keep, keep)
     return fem.FEModel(M=M[sel], K=K[sel], C=C[sel], dofs=tuple(names[i] for i in keep), node_x=node_x)

@@ -13,7 +13,7 @@ from learn.pairs.classify import DEFAULT_FALSE_ALARM_RATE, KEYS, classify_pairs
 from learn.pairs.verdict import explanation_label, verdict_text
 from learn.pairs.measured import on_model_dofs, measured_test_differences
 from learn.network.model_dir import load_model
-from physics.errors import BeamDamageError
+from physics.errors import BeamDamageError, ConfigError
 from physics.frf import FRF_UNITS, receptance_modal
 from physics.io import (
     FRF,
@@ -58,8 +58,8 @@ def add_parser(sub):
                         "'base/*.uff', for several baseline tests: their scatter is the normal variation between "
                         "tests (measured instead of assumed) that a change must exceed")
     p.add_argument("--false-alarm-rate", type=float, default=DEFAULT_FALSE_ALARM_RATE, metavar="ALPHA",
-                   help="false-alarm rate of the test against the normal variation measured on several baselines "
-                        f"(default {DEFAULT_FALSE_ALARM_RATE})")
+                   help="false-alarm rate of the test against the normal variation measured on several baselines, "
+                        f"in (0, 0.5) (default {DEFAULT_FALSE_ALARM_RATE})")
     p.add_argument("measured", nargs="+", metavar="MEASURED", help="current state(s) (same kind as BASELINE)")
     p.add_argument("--beam", help="beam of the data: the model's preset name (default) or a beam file of the same "
                                   "length whose measured_x_m places measured DOFs of files without node geometry "
@@ -97,6 +97,8 @@ def identification_method(path) -> str | None:
 
 
 def run(args):
+    if not 0 < args.false_alarm_rate < 0.5:
+        raise ConfigError(f"--false-alarm-rate {args.false_alarm_rate:g}: expected a rate in (0, 0.5)")
     model = load_model(args.model)
     _, beam_x_m = model.measured_beam(args.beam, args.mass)
     baselines = baseline_files(args.baseline)

@@ -217,3 +217,16 @@ def test_an_out_the_system_refuses_is_named_by_its_flag(capsys, tmp_path):
     code, out, err = _run(capsys, "identify", str(tmp_path / "sdof.npz"), "--out", "/proc/beam-damage-test/id")
     assert (code, out) == (2, "") and err.count("\n") == 1
     assert err.endswith("(--out /proc/beam-damage-test/id: cannot be written there)\n")
+
+
+def test_a_beam_whose_supports_hold_every_dof_is_one_line(capsys):
+    code, out, err = _run(capsys, "model", "--elements", "1", "--bc", "clamped-clamped", "--json")
+    assert (code, out) == (2, "") and err.count("\n") == 1
+    assert "n_elements 1 on a clamped-clamped beam: its supports hold every DOF; at least 2 elements" in err
+
+
+@pytest.mark.parametrize("rate", ["0", "0.5", "1.5", "-0.1"])
+def test_classify_refuses_a_false_alarm_rate_outside_its_range_before_reading(capsys, tmp_path, rate):
+    code, out, err = _run(capsys, "classify", "--model", str(tmp_path / "none"), "--baseline", "b.json", "c.json",
+                          "--false-alarm-rate", rate)
+    assert (code, out) == (2, "") and err.endswith(f"--false-alarm-rate {float(rate):g}: expected a rate in (0, 0.5)\n")
