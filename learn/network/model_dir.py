@@ -181,8 +181,10 @@ def _weights(path: Path, route: str) -> tuple[dict, Path]:
             with np.load(io.BytesIO(w.read_bytes()), allow_pickle=False) as z:
                 return {k: z[k] for k in z.files}, w
         except Exception as exc:  # noqa: BLE001 - any unreadable archive is a bad file
-            why = " ".join(str(exc).split())[:160]
-            raise FileFormatError(f"{w}: not a weights file readable as NumPy arrays ({why})") from None
+            why = ("neither a zip archive nor an array file" if "allow_pickle" in str(exc)     # numpy's guess, not ours
+                   else " ".join(str(exc).split())[:160])
+            raise FileFormatError(f"{w}: not a weights file readable as NumPy arrays ({why}); 'beam-damage train' "
+                                  "writes it") from None
     w = path / f"weights-{route}.pt"
     try:
         import torch  # torch: an older directory's weights file

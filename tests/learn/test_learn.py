@@ -15,7 +15,7 @@ from learn.network.features import BeamSpec, curvatures, map_frf_to_grid, split_
 from learn.explanations.shapes import real_shapes
 from learn.explanations.sensitivity import beam_sensitivity
 from learn.network.model_dir import MODEL_FORMAT, TrainedModel, load_model, save_model
-from physics.errors import BeamDamageError
+from physics.errors import BeamDamageError, FileFormatError
 from physics.fem import beam_model
 from physics.modal import undamped_modes
 from physics.properties import beam_preset
@@ -180,6 +180,11 @@ def test_model_directory_round_trip_with_weights_only(tmp_path):
     meta["temperature"] = meta.pop("logit_scale")
     assert DamageClassifier.from_state(tensors, meta).logit_scale_ == est.logit_scale_
     assert json.loads((tmp_path / "config.json").read_text())["beam"]["mass_model"] == "iirs"
+    (tmp_path / "weights-modal.npz").write_text("not an archive")      # no advice to load it unsafely
+    with pytest.raises(FileFormatError, match=r"weights-modal.npz: not a weights file readable as NumPy arrays "
+                                              r"\(neither a zip archive nor an array file\)") as e:
+        load_model(tmp_path)
+    assert "pickle" not in str(e.value)
 
 
 def test_refusal_names_what_differs():
