@@ -32,8 +32,8 @@ def run(args) -> dict:
         print(f"{'method':<24}" + "".join(f"{c:>15}" for c in cols.values()))
         for r in res["rows"]:
             if r["subset"] == "all":
-                print(f"{r['method']:<24}" + "".join(f"{r[c]:>15.4f}" if r[c] is not None else f"{'-':>15}"
-                                                     for c in cols))
+                print(f"{r['method']:<24}" + "".join(f"{r[c]:>15.4f}" if r[c] is not None and r[c] == r[c]
+                                                     else f"{'-':>15}" for c in cols))      # None or NaN: a dash
         if args.out:
             print(f"table and figures in {args.out}")
     return res
