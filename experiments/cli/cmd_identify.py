@@ -18,6 +18,7 @@ from physics.identification.measured import DEFAULT_MAX_ORDER
 from physics.identification.exponential_window import remove_window_decay, tau_from_end_value
 from physics.identification.output_only import FREE_RESPONSE_METHOD, SCALING, STATIONARY_METHOD
 from physics.identification.setups import MergedSetups, finite_mac, merge_setups
+from physics.io.inputs import repeated_files
 from physics.identification.split_modes import split_pairs, split_text
 from physics.io import (FRF, TIME, MeasuredFRF, NodeGeometry, accepted, format_complex, measured_positions, read,
                         atomic_write_text, modal_data_to_dict)
@@ -294,10 +295,12 @@ def _warn_duplicate_dofs(path, dofs) -> None:
 
 def _run_output_only(args, records, band) -> dict:
     method = args.method or DEFAULT_OUTPUT_ONLY
-    given = [os.path.realpath(f) for f in (args.file, *(getattr(args, "setup", None) or ()))]
-    repeated = next((f for k, f in enumerate((args.file, *(args.setup or ()))) if given[k] in given[:k]), None)
-    if repeated is not None:
-        raise ConfigError(f"--setup {repeated}: given twice; each setup is another record of the structure")
+    files = [args.file, *(args.setup or ())]
+    if (pairs := repeated_files(files)):
+        i, j = pairs[0]
+        again = ("given twice" if os.path.realpath(files[i]) == os.path.realpath(files[j])
+                 else f"the same bytes as {files[i]}")
+        raise ConfigError(f"--setup {files[j]}: {again}; each setup is another record of the structure")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         _warn_duplicate_dofs(args.file, records.dofs)

@@ -189,11 +189,8 @@ def _warn_other_beam(model_dir, path, model, beam_x_m) -> None:
     the model's, and no event gets explanations. Response records (shapes identified later) and a file that does not
     read (its row says why) are left to the series."""
     try:
-        kind = modal_or_frf(path)
-        data = read(path, kind) if kind in (MODAL, FRF) else None
+        data = read(path, modal_or_frf(path))
     except (BeamDamageError, OSError):
-        return
-    if data is None or (kind == FRF and not getattr(data, "response_dofs", None)):
         return
     try:
         with warnings.catch_warnings():

@@ -4,9 +4,7 @@ the series of the baseline period (one kind, band and beam)."""
 from __future__ import annotations
 
 import csv
-import hashlib
 import math
-import os
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
@@ -15,7 +13,7 @@ import numpy as np
 
 from learn.monitor.identification import IdentifiedModes
 from physics.errors import BeamDamageError
-from physics.io.inputs import check_input_file
+from physics.io.inputs import check_input_file, repeated_files
 
 __all__ = ["SeriesInput", "check_series", "read_conditions"]
 
@@ -142,54 +140,10 @@ def check_series(tests: list, n_baseline: int, files: list) -> list:
     return out
 
 
-def _digest(path, limit=None):
-    """SHA-256 of the file's first ``limit`` bytes (None: all), or None when it cannot be read."""
-    h = hashlib.sha256()
-    try:
-        with open(path, "rb") as fh:
-            left = limit
-            for block in iter(lambda: fh.read(1 << 20 if left is None else min(1 << 20, left)), b""):
-                h.update(block)
-                if left is not None:
-                    left -= len(block)
-                    if left <= 0:
-                        break
-    except OSError:
-        return None
-    return h.digest()
-
-
-def repeated_tests(files: list) -> list:
-    """``[(i, j), ...]``: test ``j`` repeats the earlier test ``i``: the same file listed again, or a file of the
-    same bytes (files of equal size and equal first 64 KiB compared whole by their SHA-256: records of one shape,
-    all of a size, are read once in part). A file that cannot be read is left out (its test is refused by the
-    identification)."""
-    first, groups, out = {}, {}, []
-    for j, f in enumerate(files):
-        real = os.path.realpath(f)
-        if real in first:
-            out.append((first[real], j))
-            continue
-        first[real] = j
-        try:
-            groups.setdefault(os.stat(real).st_size, []).append(j)
-        except OSError:
-            continue
-    for limit in (1 << 16, None):                   # the first 64 KiB, then the whole file
-        refined = {}
-        for key, group in groups.items():
-            if len(group) > 1:
-                for j in group:
-                    if (d := _digest(files[j], limit)) is not None:
-                        refined.setdefault((key, d), []).append(j)
-        groups = refined
-    out += [(g[0], j) for g in groups.values() for j in g[1:]]
-    return sorted(out, key=lambda p: p[1])
-
-
 def repeated_tests_warning(files: list, n_baseline: int) -> str:
-    """A warning naming the tests that repeat an earlier one (:func:`repeated_tests`), empty when none does."""
-    pairs = repeated_tests(files)
+    """A warning naming the tests that repeat an earlier one (:func:`physics.io.inputs.repeated_files`), empty when
+    none does."""
+    pairs = repeated_files(files)
     if not pairs:
         return ""
     named = "; ".join(f"test {j + 1} ({files[j]}) " + (f"repeats test {i + 1} ({files[i]})" if files[i] != files[j]

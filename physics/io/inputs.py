@@ -9,13 +9,14 @@ file or CSV text is read whole and parsed into arrays a few times its size.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import stat
 from pathlib import Path
 
 from physics.errors import FileFormatError
 
-__all__ = ["MAX_BYTES", "check_input_file"]
+__all__ = ["MAX_BYTES", "check_input_file", "repeated_files"]
 
 #: Largest input file per kind (bytes).
 MAX_BYTES = {
@@ -60,3 +61,48 @@ def check_input_file(path, kind: str, error=FileFormatError, what: str | None = 
         raise error(f"{path}: {st.st_size} bytes, more than the {cap} bytes ({cap / 2**20:g} MiB) a "
                     f"{kind.upper()} input may hold; expected {expected}")
     return path
+
+
+def _digest(path, limit=None):
+    """SHA-256 of the file's first ``limit`` bytes (None: all), or None when it cannot be read."""
+    h = hashlib.sha256()
+    try:
+        with open(path, "rb") as fh:
+            left = limit
+            for block in iter(lambda: fh.read(1 << 20 if left is None else min(1 << 20, left)), b""):
+                h.update(block)
+                if left is not None:
+                    left -= len(block)
+                    if left <= 0:
+                        break
+    except OSError:
+        return None
+    return h.digest()
+
+
+def repeated_files(files: list) -> list:
+    """``[(i, j), ...]``: test ``j`` repeats the earlier test ``i``: the same file listed again, or a file of the
+    same bytes (files of equal size and equal first 64 KiB compared whole by their SHA-256: records of one shape,
+    all of a size, are read once in part). A file that cannot be read is left out (its test is refused by the
+    identification)."""
+    first, groups, out = {}, {}, []
+    for j, f in enumerate(files):
+        real = os.path.realpath(f)
+        if real in first:
+            out.append((first[real], j))
+            continue
+        first[real] = j
+        try:
+            groups.setdefault(os.stat(real).st_size, []).append(j)
+        except OSError:
+            continue
+    for limit in (1 << 16, None):                   # the first 64 KiB, then the whole file
+        refined = {}
+        for key, group in groups.items():
+            if len(group) > 1:
+                for j in group:
+                    if (d := _digest(files[j], limit)) is not None:
+                        refined.setdefault((key, d), []).append(j)
+        groups = refined
+    out += [(g[0], j) for g in groups.values() for j in g[1:]]
+    return sorted(out, key=lambda p: p[1])

@@ -390,8 +390,8 @@ class UffFile:
         self.uff, self.types = _open_uff(self.path)
 
     def _first_unreadable(self, indices) -> str:
-        """``"; the first unreadable: record K (block B of the file)..."``: the first of ``indices`` pyuff cannot read
-        alone, named with its ID line; empty when each reads alone."""
+        """``"; the first unreadable: dataset 58 record K (block B of the file; ...)"``: the first of ``indices``
+        pyuff cannot read alone; empty when each reads alone."""
         for n, i in enumerate(indices):
             try:
                 self.uff.read_sets(i)

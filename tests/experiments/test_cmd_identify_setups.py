@@ -1,6 +1,7 @@
 """``beam-damage identify FILE --setup FILE``: partial modes, references checked by MAC, warnings on stderr."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -101,3 +102,7 @@ def test_a_setup_given_twice_is_refused_naming_it(capsys, setups):
         code, out, err = run_cli(capsys, argv)
         assert (code, out) == (2, "") and err.count("\n") == 1
         assert f"--setup {argv[-1]}: given twice" in err
+    copy = setups["tmp"] / "s2-copy.npz"
+    copy.write_bytes(Path(setups["s2"]).read_bytes())
+    code, out, err = run_cli(capsys, ["identify", setups["s1"], "--setup", setups["s2"], "--setup", str(copy)])
+    assert (code, out) == (2, "") and f"--setup {copy}: the same bytes as {setups['s2']}" in err

@@ -228,19 +228,19 @@ def test_a_conditions_csv_with_a_byte_order_mark_reads_as_without(tmp_path, moda
 
 
 def test_a_repeated_test_is_named_in_a_warning(tmp_path, capsys, modal_series):
-    from learn.monitor.series import repeated_tests
+    from physics.io.inputs import repeated_files
 
     _, files, _ = modal_series
     files = [str(f) for f in files]
     copy = tmp_path / "copy.json"
     copy.write_bytes(Path(files[10]).read_bytes())
     series = [*files[:25], files[3], str(copy)]
-    assert repeated_tests(series) == [(3, 25), (10, 26)]
-    assert repeated_tests(files) == []
+    assert repeated_files(series) == [(3, 25), (10, 26)]
+    assert repeated_files(files) == []
     big = [tmp_path / f"big{k}.bin" for k in range(3)]     # equal in their first 64 KiB, the last differs after
     for k, b in enumerate(big):
         b.write_bytes(bytes(70_000) + (b"b" if k == 2 else b"a"))
-    assert repeated_tests([str(b) for b in big]) == [(0, 1)]
+    assert repeated_files([str(b) for b in big]) == [(0, 1)]
     code, res, err = run_json(capsys, ["monitor", *series, "--baseline-tests", "20", "--json"])
     assert code == 0, err
     assert res["warnings"][0] == (f"2 test(s) repeat an earlier one (the same file, or the same bytes): test 26 "
