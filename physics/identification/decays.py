@@ -290,9 +290,11 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
     channel, which a free response does not have) exceeds :data:`HIT_SIGMA` robust standard deviations, or a
     sharp rise of the record's energy (:data:`HIT_RISE`; an impulse on a displacement or strain record, or a
     release, shows only a small innovation) placed at the largest innovation near it; hits closer than the
-    predictor's order are one, and a hit that adds no energy (:func:`adds_energy`) is none. An oversampled record
-    is searched again for innovations at :data:`CONTENT_RATE` times its highest clear peak (block means,
-    :func:`_content_decimation`): its noise is white over the whole rate while the response to a hit, spread over
+    predictor's order are one, and a hit that adds no energy (:func:`adds_energy`) is none. A hit ends where its
+    response stops growing (its loudest sample); a hit whose end lies within the predictor's order of the next
+    one's start (a tip's force lasting many samples, its response growing through a rise) is one with it. An
+    oversampled record is searched again for innovations at :data:`CONTENT_RATE` times its highest clear peak (block
+    means, :func:`_content_decimation`): its noise is white over the whole rate while the response to a hit, spread over
     many samples, stands out only in the band of the modes (a scope's capture, hundreds of samples per period of
     its first mode). A hit found there alone starts after the block that shows it (never before the hit, at most
     two blocks after it). Not for rises: at that rate a stationary response's own energy rises fourfold within a
@@ -322,6 +324,8 @@ def find_decays(checked: CheckedRecord, min_samples=None, lowest_hz=None) -> Dec
         lasts = np.minimum(lasts, _loudest(x, firsts, lasts) + p // 4)
         keep = adds_energy(x, firsts, lasts, w)
         firsts, lasts = firsts[keep], lasts[keep]
+        one = np.flatnonzero(firsts[1:] - lasts[:-1] <= p)  # a response still growing at the next rise: one hit
+        firsts, lasts = np.delete(firsts, one + 1), np.delete(lasts, one)
     spans = [(int(last) + 1, int(nxt), int(first)) for first, last, nxt in zip(firsts, lasts, [*firsts[1:], n])]
     spans = [(a, b, o) for a, b, o in spans if b - a >= least]
     drop = [_quarter_drop_db(x, a, b) for a, b, _ in spans]

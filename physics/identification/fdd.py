@@ -240,22 +240,26 @@ def clear_peaks(sv: SingularValueSpectrum, band_hz=None, prominent_above_db=np.i
     """The clear peaks of the first singular value within ``band_hz`` (default the spectrum's band): local maxima
     :data:`CLEAR_PEAK_DB` above the floor (or, with ``prominent_above_db``, :data:`CLEAR_PEAK_DB` above the valleys
     either side and ``prominent_above_db`` above the floor) and :data:`PEAK_PROMINENCE_DB` above the valleys either
-    side, at or above :attr:`SingularValueSpectrum.lowest_hz`; on a Welch average (``sv.averages > 0``) also a local
-    maximum whose prominence passes :data:`PEAK_PROMINENCE_DB` and :func:`ripple_db` of the band's lines, at any
-    height over the floor (modes crowding within the floor's window raise it)."""
+    side, at or above :attr:`SingularValueSpectrum.lowest_hz` (its valleys read on the lines below that too: a mode
+    a few lines above it, in a short record, rises from a valley there); on a Welch average (``sv.averages > 0``)
+    also a local maximum whose prominence passes :data:`PEAK_PROMINENCE_DB` and :func:`ripple_db` of the band's
+    lines, at any height over the floor (modes crowding within the floor's window raise it)."""
     from scipy import signal  # scipy.fft/signal/ndimage: about 1 s to import, only output-only identification
 
     band = sv.band_hz if band_hz is None else band_hz
     f = sv.frequency_hz
-    idx = np.nonzero(np.isfinite(sv.floor) & (f >= max(band[0], sv.lowest_hz)) & (f <= band[1]))[0]
-    if idx.size < 3:
+    low = max(band[0], sv.lowest_hz)
+    idx = np.nonzero(np.isfinite(sv.floor) & (f >= band[0]) & (f > 0) & (f <= band[1]))[0]
+    if np.count_nonzero(f[idx] >= low) < 3:
         return ClearPeaks(np.zeros(0, int), np.zeros(0), np.zeros(0), np.zeros((0, 2), int), np.zeros(0),
                           np.zeros(0, bool))
     db = 10 * np.log10(np.maximum(sv.singular_values[idx, 0], np.finfo(float).tiny))
     over = db - 10 * np.log10(sv.floor[idx])
-    pk, props = signal.find_peaks(db, prominence=PEAK_PROMINENCE_DB)
-    prom = props["prominences"]
-    ripple = max(PEAK_PROMINENCE_DB, ripple_db(sv.averages, idx.size)) if sv.averages > 0 else np.inf
+    pk, props = signal.find_peaks(db, prominence=PEAK_PROMINENCE_DB)   # valleys below the lowest line too
+    inside = f[idx[pk]] >= low
+    pk, prom = pk[inside], props["prominences"][inside]
+    ripple = max(PEAK_PROMINENCE_DB, ripple_db(sv.averages, np.count_nonzero(f[idx] >= low))) if sv.averages > 0 \
+        else np.inf
     floor_clear = (over[pk] >= CLEAR_PEAK_DB) | ((prom >= CLEAR_PEAK_DB) & (over[pk] >= prominent_above_db))
     keep = floor_clear | (prom >= ripple)
     pk, floor_clear = pk[keep], floor_clear[keep]

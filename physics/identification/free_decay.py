@@ -48,7 +48,7 @@ from physics.identification.modes import ModalEstimate, modal_phase_collinearity
 from physics.identification.peak_seeds import SeededModes, dominant_shapes, seed_unheld_peaks
 from physics.identification.peak_warning import warn_unexplained_peaks
 from physics.identification.poles import MAX_DAMPING, StabilisationDiagram, select_poles
-from physics.identification.record_checks import CheckedRecord, check_periods, check_records
+from physics.identification.record_checks import CheckedRecord, check_periods, check_records, modes_with_periods
 from physics.identification.ssi import MIN_MAX_ORDER, ORDERS_PER_PEAK
 from physics.identification.subspace import subspace_diagram
 
@@ -375,8 +375,8 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
                                           -int(sel.count[idx[j]]) if j < idx.size else 0))
         sub = np.sort(np.array(rank[:n_modes], int))
     sub = sub[np.argsort(np.abs(lam[sub]), kind="stable")]     # the refinements may reorder poles
+    sub = sub[modes_with_periods(checked.duration_s, np.abs(lam[sub]) / (2 * np.pi), where)]
     wn = np.abs(lam[sub])
-    check_periods(checked.duration_s, wn[0] / (2 * np.pi), "the lowest mode", where)
     # shapes: the dominant direction of each mode's amplitudes over the decays
     shapes = unit_shapes(dominant_shapes(np.stack([amps[j] for j in sub], axis=2)))
     est = ModalEstimate(wn / (2 * np.pi), -lam[sub].real / wn, lam[sub], shapes,

@@ -4,16 +4,19 @@
 from __future__ import annotations
 
 import warnings
+import zipfile
 from dataclasses import dataclass
 from inspect import signature
 from pathlib import Path
+
+import numpy as np
 
 from physics.io.inputs import MAX_BYTES, check_input_file
 from physics.errors import ConfigError, ConvergenceError, FileFormatError, ShapeError
 from physics.identification.channel_weights import (ChannelWeights, noise_floor_weights, unweighted_diagram,
                                                     unweighted_estimate, weighted_record)
 from physics.identification.decays import FREE_DROP_DB, free_response, least_fall_db, slowest_mode
-from physics.identification.fft_peak import PEAK_EXPONENT
+from physics.identification.fft_peak import PEAK_EXPONENT, padded_spectrum
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate
 from physics.identification.poles import StabilisationDiagram
@@ -22,7 +25,6 @@ from physics.io import FRF, ModalData, TIME, format_of, read
 from physics.io.timedata import TimeRecords
 from physics.io.uff58 import UffFile
 from physics.identification.setups import MergedSetups, merge_setups   # the multi-setup merge
-import zipfile
 
 __all__ = ["DEFAULT_OUTPUT_ONLY", "FREE_RESPONSE_METHOD", "RECORDS_METHODS", "SCALING", "STATIONARY_METHOD",
            "STATIONARY_METHODS", "MergedSetups", "RecordsIdentification", "holds_response_records",
@@ -256,7 +258,7 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         else:
             f, z = est.natural_frequencies_hz, est.damping_ratios
             least = least_fall_db(d, f, z, fs)
-            if least - d.drop_db > FREE_DROP_DB:
+            if least - d.drop_db > FREE_DROP_DB and _holds_strongest_peak(checked, d, f):
                 k = slowest_mode(f, z)
                 why = (f"picked {STATIONARY_METHOD}: response records without a force channel, {verdict.text}, "
                        f"but the modes {STATIONARY_METHOD} finds in them would fall at least "
@@ -279,6 +281,24 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
         if other == FREE_RESPONSE_METHOD and not verdict.free:
             warnings.warn(f"{where}: {_not_free_hint(verdict, other)}", UserWarning, stacklevel=2)
     return result(est, diagram, why)
+
+
+def _holds_strongest_peak(checked, decays, frequencies_hz) -> bool:
+    """Whether a mode of ``frequencies_hz`` lies at the strongest peak of the longest decay's zero-padded FFT in the
+    band (within 2 % or two of its lines): the modes then speak for the decay's energy. A stationary method misses a
+    slow mode that a short record holds only a few dozen cycles of, and the decay, which falls as that mode does,
+    is no evidence of a stationary response."""
+    k = int(np.argmax(decays.stops - decays.starts))
+    a, b = int(decays.starts[k]), int(decays.stops[k])
+    y = np.asarray(checked.signals[:, a:b], float)
+    y = y - y.mean(axis=1, keepdims=True)
+    f, _, power, _ = padded_spectrum(y, checked.sampling_frequency_hz, window="none")
+    band = (f >= max(checked.band_hz[0], 2 * checked.sampling_frequency_hz / (b - a))) & (f <= checked.band_hz[1])
+    if not band.any() or not np.size(frequencies_hz):
+        return True
+    peak = f[band][int(np.argmax(power[band]))]
+    tolerance = max(0.02 * peak, 2 * checked.sampling_frequency_hz / (b - a))
+    return bool(np.any(np.abs(np.asarray(frequencies_hz, float) - peak) <= tolerance))
 
 
 def _not_free_hint(verdict, method: str) -> str:

@@ -272,7 +272,8 @@ class MissedModes:
     def text(self, heights_db=None) -> str:
         """``"1.23 Hz (12 of 40 orders, 7.1 dB above the floor), ..."`` (heights: one per mode, optional)."""
         h = [None] * self.frequency_hz.size if heights_db is None else heights_db
-        return ", ".join(f"{f:.4g} Hz ({c} of {n} orders" + ("" if x is None else f", {x:.3g} dB above the floor")
+        return ", ".join(f"{f:.4g} Hz ({c} of {n} orders"
+                         + ("" if x is None else f", {x if abs(x) >= 5e-3 else 0.0:.3g} dB above the floor")
                          + ")" for f, c, n, x in zip(self.frequency_hz, self.counts, self.n_orders, h))
 
 

@@ -17,6 +17,7 @@ record clipped later, or with too little left, is refused naming its longest cli
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -24,7 +25,7 @@ import numpy as np
 from physics.errors import ShapeError
 
 __all__ = ["CLIP_MIN_RUN", "CLIP_RUN_RATIO", "CROP_MIN_FRACTION", "MIN_PERIODS", "NEAR_EXTREME", "CheckedRecord",
-           "RecordCrop", "check_periods", "check_records"]
+           "RecordCrop", "check_periods", "check_records", "clipped_run_text", "modes_with_periods"]
 
 #: A channel is clipped when a run of consecutive samples at its highest (lowest) value is longer than this many
 #: times the longest run at any other value within :data:`NEAR_EXTREME` of the range from that extreme (and at
@@ -123,6 +124,22 @@ def check_periods(duration_s, frequency_hz, what, where="record"):
                          f"{MIN_PERIODS / duration_s:.3g} Hz cannot be identified from it")
 
 
+def modes_with_periods(duration_s, frequencies_hz, where="record") -> np.ndarray:
+    """Which modes (``frequencies_hz``, shape (m,)) a record of ``duration_s`` holds :data:`MIN_PERIODS` periods
+    of; the others are named in a warning (what the record would need), and a record that holds none of them is
+    refused as :func:`check_periods` refuses it."""
+    f = np.asarray(frequencies_hz, float)
+    keep = f * duration_s >= MIN_PERIODS
+    if not keep.any():
+        check_periods(duration_s, float(np.min(f)), "the lowest mode", where)
+    if not keep.all():
+        warnings.warn(f"{where}: {duration_s:.3g} s holds fewer than ten periods of "
+                      f"{', '.join(f'{x:.4g}' for x in f[~keep])} Hz, left out (modes below "
+                      f"{MIN_PERIODS / duration_s:.3g} Hz need a longer record: "
+                      f"{MIN_PERIODS / f[~keep].min():.3g} s for these)", UserWarning, stacklevel=3)
+    return keep
+
+
 def _band(band_hz, fs):
     """The band of interest (Hz): ``band_hz``, by default 0 to 0.4 of the sampling rate ``fs``."""
     return (0.0, 0.4 * fs) if band_hz is None else (float(band_hz[0]), float(band_hz[1]))
@@ -202,6 +219,19 @@ def check_records(signals, sampling_frequency_hz, band_hz=None, where="record", 
                          "unclipped records")
     crop = RecordCrop(first, tuple((k, a, a + r - 1) for k, a, r, *_ in runs), n, fs, max(ends.values()))
     return CheckedRecord(y[:, first:], fs, band, _kept_mean(y, first, step, extremes, where), crop)
+
+
+def clipped_run_text(signals, names, where="record", chunk_values=2**22) -> str | None:
+    """The longest clipped run of ``signals`` (shape (n_channels, n_samples), finite, no channel constant) in words,
+    naming its channel by ``names``, e.g. ``"2:+Z is clipped: samples 812-822 (11 in a row) are held at its highest
+    value 0.5, 5.5 times the longest run at any level near it (2)"``; None when no channel is clipped."""
+    y = np.asarray(signals, dtype=np.float64)
+    _, runs, _, _ = _scan(y, max(1, chunk_values // y.shape[0]), where)
+    if not runs:
+        return None
+    k, a, r, value, near, side = max(runs, key=lambda run: run[2])
+    return (f"{names[k]} is clipped: samples {a}-{a + r - 1} ({r} in a row) are held at its {side} value "
+            f"{value:.6g}, {r / near:.3g} times the longest run at any level near it ({near})")
 
 
 def _scan(y, step, where) -> tuple:

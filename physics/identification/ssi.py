@@ -32,7 +32,7 @@ from physics.identification.peak_warning import warn_unexplained_peaks
 from physics.identification.poles import (MAX_DAMPING, NO_STABLE_POLE, StabilisationDiagram, missed_clusters,
                                          missed_modes, select_known_mode, select_poles,
                                          steadiest_text)
-from physics.identification.record_checks import check_periods, check_records
+from physics.identification.record_checks import check_periods, check_records, modes_with_periods
 from physics.identification.ssi_free_response import ModeColumns, refine_free_response
 from physics.identification.subspace import poles_of_order, subspace_diagram
 from physics.modal import eigenvalues_from_modal
@@ -557,7 +557,8 @@ def identify_ssi(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     if n_modes is not None:
         modes = sorted(modes, key=lambda m: (m.weakly_stable, -m.count))[:n_modes]
     modes.sort(key=lambda m: m.frequency_hz)
-    check_periods(duration_s, modes[0].frequency_hz, "the lowest mode", where)
+    keep = modes_with_periods(duration_s, [m.frequency_hz for m in modes], where)
+    modes = [m for m, k in zip(modes, keep) if k]
     fn, zeta = np.array([m.frequency_hz for m in modes]), np.array([m.damping_ratio for m in modes])
     weak = np.array([m.weakly_stable for m in modes])
     shapes = np.array([m.shape for m in modes]).T

@@ -22,3 +22,15 @@ def test_close_peaks_tolerance_is_half_their_gap_and_one_does_not_explain_the_ot
     # a mode at 4000.2 Hz lies 35.8 Hz from 4036 Hz: within its 1 %, not within half the gap
     np.testing.assert_array_equal(unexplained_peaks(peaks, [4000.2]), [True, False, True])
     np.testing.assert_array_equal(unexplained_peaks(peaks, [4000.2, 4036.1]), [True, False, False])
+
+
+def test_a_peak_a_line_above_the_lowest_reads_its_valley_below_it():
+    """Lines 1 Hz apart, the lowest line a peak may sit on at 3 Hz (three lines): a mode at 4 Hz (1 Hz half-width)
+    over a low-frequency rise, its valley at 1 Hz, below that line. Its prominence is read against that valley (7.8
+    dB: a clear peak), not against the 3 Hz line on its own flank (3 dB, short of the 6 dB asked)."""
+    f = np.arange(0.0, 101.0)
+    s = 1.0 + 1e4 / (1 + (f - 4.0) ** 2) + 3e3 * np.exp(-1.5 * f)
+    sv = SingularValueSpectrum(f, s[:, None], np.ones((f.size, 1), complex), np.ones(f.size), (0.0, 100.0), 3.0)
+    np.testing.assert_allclose(clear_peaks(sv).frequency_hz, [4.0])
+    db = 10 * np.log10(s)
+    assert db[4] - db[3] < 6.0 < db[4] - db[1]

@@ -116,3 +116,36 @@ def test_a_decay_without_a_clear_peak_is_refused_naming_both_rules():
     level = float(re.search(r"nor 10 dB above its valleys and ([\d.]+) dB above its floor, in 0-200 Hz",
                             str(err.value)).group(1))
     assert noise_line_db(1590) + 0.3 < level < noise_line_db(1590, dof=1.0)
+
+
+def _tip_record(f0_hz, width, hits, seed):
+    """5 kHz, two modes (``f0_hz``, 3.1 ``f0_hz``), each hit ``(sample, gain)`` a half-sine force over ``width``
+    samples (a hammer tip), noise 1e-3 of the peak."""
+    fs, n = 5000.0, 8000
+    t = np.arange(n) / fs
+    h = sum(a * np.exp(-z * 2 * np.pi * f * t) * np.sin(2 * np.pi * f * np.sqrt(1 - z * z) * t)
+            for f, z, a in [(f0_hz, 0.01, 1.0), (3.1 * f0_hz, 0.02, 0.5)])
+    force = np.zeros(n)
+    for at, gain in hits:
+        force[at:at + width] += gain * np.sin(np.pi * (np.arange(width) + 0.5) / width)
+    x = np.convolve(force, h)[:n]
+    return check_records((x / np.abs(x).max() + 1e-3 * np.random.default_rng(seed).standard_normal(n))[None, :], fs)
+
+
+@pytest.mark.parametrize("f0_hz", [40.0, 120.0, 400.0])
+@pytest.mark.parametrize("width", [5, 8, 16])
+def test_a_hit_whose_force_lasts_many_samples_is_one_hit_with_its_onset(f0_hz, width):
+    """The response to a tip's force grows for its duration, and the energy's rise is seen in bursts: one hit, its
+    decay's onset within a few samples of the force's first (the samples from there hold the whole response)."""
+    d = find_decays(_tip_record(f0_hz, width, [(100, 1.0)], 0))
+    assert d.hits.size == 1 and d.starts.size == 1, d
+    assert 100 <= d.onsets[0] <= 106
+
+
+@pytest.mark.parametrize("f0_hz", [40.0, 120.0, 400.0])
+@pytest.mark.parametrize("width", [1, 8])
+def test_a_second_hit_after_the_response_peaked_is_a_hit_of_its_own(f0_hz, width):
+    """A hit twice as strong 400 samples after the first: two hits, the second's onset at its force."""
+    d = find_decays(_tip_record(f0_hz, width, [(100, 1.0), (500, 2.0)], 1))
+    assert d.hits.size == 2, d
+    assert 500 <= d.onsets[-1] <= 506

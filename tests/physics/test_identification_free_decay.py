@@ -155,6 +155,50 @@ def test_a_one_channel_8_bit_scope_capture_of_a_tap_is_identified_by_the_automat
     assert abs(e.natural_frequencies_hz[0] - 48.0) < 2 * e.frequency_std_hz[0] < 1e-3
 
 
+def _sine_decays(seed, bits=None, noise=0.01, n=2000):
+    """``n`` samples (1 s) at 2 kHz from 3 channels, a hit at 0.05 s, modes 12.3, 47.8 and 131.5 Hz (1, 1, 1.5 %)
+    of amplitudes 1, 0.6, 0.4 times a shape per channel; white noise ``noise`` times the record's std; quantised to
+    ``bits`` over each channel's range."""
+    fs, rng = 2000.0, np.random.default_rng(seed)
+    t = np.arange(n) / fs
+    tt = np.clip(t - 0.05, 0.0, None)
+    y = np.zeros((3, t.size))
+    for c in range(3):
+        for f, z, a in [(12.3, 0.01, 1.0), (47.8, 0.01, 0.6), (131.5, 0.015, 0.4)]:
+            w = 2 * np.pi * f
+            shape = a * (1 + 0.3 * c) * np.cos(np.pi * (c + 1) * f / 263.0 + 0.3)
+            y[c] += (t >= 0.05) * shape * np.exp(-z * w * tt) * np.sin(w * np.sqrt(1 - z * z) * tt)
+    y += noise * y.std() * rng.standard_normal(y.shape)
+    if bits:
+        low, high = y.min(axis=1, keepdims=True), y.max(axis=1, keepdims=True)
+        step = (high - low) / (2 ** bits - 1)
+        y = np.round((y - low) / step) * step + low
+    return y, fs
+
+
+@pytest.mark.parametrize(("seed", "bits"), [(1, 8), (10, None), (3, 8)])
+def test_a_short_decay_of_a_slow_mode_the_stationary_method_misses_is_read_as_a_free_response(seed, bits):
+    """The decay falls 5 dB over its 0.95 s, as its 12.3 Hz mode (1 %) does. SSI-cov misses that mode in some
+    draws (seeds 1 and 10); the modes it finds would fall 12 dB, so they alone read the record as a stationary
+    response started quiet. The decay's strongest FFT peak is the 12.3 Hz mode, which none of them holds: era is
+    kept and finds the three modes."""
+    y, fs = _sine_decays(seed, bits)
+    res = _quiet(identify_records, _records(y, fs))
+    assert res.method_choice.startswith("picked era: response records without a force channel, a free response")
+    f, fn = res.estimate.natural_frequencies_hz, np.array([12.3, 47.8, 131.5])
+    np.testing.assert_allclose(f[np.argmin(np.abs(f[:, None] - fn), axis=0)], fn, rtol=1e-3)
+
+
+def test_a_record_too_short_for_its_lowest_mode_gives_the_others_and_names_it():
+    """0.5 s holds 6 periods of 12.3 Hz and 24 and 66 of the other modes: those two are identified, the first named
+    with what it would need (0.813 s), where the whole record was refused."""
+    y, fs = _sine_decays(0, n=1000)
+    with pytest.warns(UserWarning, match=r"0.5 s holds fewer than ten periods of 12.3 Hz, left out \(modes below 20 "
+                                         r"Hz need a longer record: 0.813 s for these\)"):
+        res = identify_records(_records(y, fs))
+    np.testing.assert_allclose(res.estimate.natural_frequencies_hz, [47.8, 131.5], rtol=1e-3)
+
+
 def test_the_automatic_choice_picks_ssi_for_a_stationary_response():
     y, fs, fn, *_ = chain_record(seconds=120, seed=3)
     res = _quiet(identify_records, _records(y, fs), band_hz=(1, 60), max_order=30)

@@ -32,6 +32,7 @@ def test_clusters_too_short_for_the_selection_are_returned_as_missed():
     assert missed.n_orders.tolist() == [30] and missed.min_count.tolist() == [10]
     assert missed_clusters(d, share=0.3).counts.tolist() == [6, 3]
     assert missed.text([4.5]) == "20.01 Hz (6 of 30 orders, 4.5 dB above the floor)"
+    assert missed.text([-9.64e-16]) == "20.01 Hz (6 of 30 orders, 0 dB above the floor)"   # no rounding residue
     assert missed_modes([missed], sel.natural_frequencies_hz).frequency_hz.size == 1
     assert missed_modes([missed], [10.0, 20.0]).frequency_hz.size == 0        # a mode of another pass explains it
     # two passes seeing one cluster: named once, with the larger count
