@@ -28,18 +28,20 @@ coherence); this module prepares the records the way each test needs:
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from physics.errors import ConfigError, FileFormatError, ShapeError
 from physics.estimation import estimate_frf
+from physics.identification.record_checks import clipped_run_text
 from physics.io.timedata import TimeRecords
 from physics.io.types import MeasuredFRF
 
-__all__ = ["ESTIMATORS", "EXCITATIONS", "LEVEL_SEGMENTS", "RESPONSE_END_LEVEL", "HitCheck", "TimeEstimate",
-           "check_hits", "estimate_from_records", "exponential_window", "force_window", "segment_window",
-           "window_end_value"]
+__all__ = ["ESTIMATORS", "EXCITATIONS", "FORCE_DROP_DB", "HIT_OVER_NOISE", "LEVEL_SEGMENTS", "RESPONSE_END_LEVEL",
+           "HitCheck", "TimeEstimate", "check_hits", "count_hits", "estimate_from_records", "exponential_window",
+           "force_band_hz", "force_window", "segment_window", "window_end_value"]
 
 ESTIMATORS = ("h1", "h2", "hv")
 EXCITATIONS = ("random", "impact")
@@ -47,6 +49,10 @@ _KIND = {"displacement": "receptance", "velocity": "mobility", "acceleration": "
 #: Level (RMS, relative to its loudest) an impact block's response is brought to by the block's end: the default
 #: exponential window is the weakest that does so for every response (:func:`window_end_value`).
 RESPONSE_END_LEVEL = 0.01
+#: An impact test's force band: up to the first line above the force spectrum's peak where the force's power falls
+#: this far (dB) below it. Beyond it the force is the hammer tip's roll-off and its noise, and H1 the response's noise
+#: over it (:func:`force_band_hz`).
+FORCE_DROP_DB = 20.0
 #: A block's response level is its RMS (its mean removed) over each of this many equal segments: the last segment's
 #: against the loudest's.
 LEVEL_SEGMENTS = 20
@@ -91,6 +97,19 @@ class TimeEstimate:
     added_decay_rate_1_s: float
     description: str
     window_end_value: float = 1.0     # the exponential window's value at the block end (1: none)
+    force_band_hz: tuple | None = None  # impact: the lines the force excites (:func:`force_band_hz`)
+
+
+def force_band_hz(frequency_hz, force_power, drop_db=FORCE_DROP_DB) -> tuple:
+    """``(first line, last line)`` (Hz) of the band a hammer's force excites: from the lowest line up to the last
+    line before the force's power (shape (n_lines,), averaged over the blocks) first falls ``drop_db`` below its
+    largest, above that largest line. The band of interest should lie within it: a mode beyond it is driven by
+    the tip's roll-off, and H1 there divides the response's noise by a force that is not there (spurious poles)."""
+    f, g = np.asarray(frequency_hz, float), np.asarray(force_power, float)
+    top = int(np.argmax(g))
+    below = np.flatnonzero(g[top:] < g[top] * 10 ** (-drop_db / 10))
+    last = top + int(below[0]) - 1 if below.size else f.size - 1
+    return float(f[0]), float(f[max(last, top)])
 
 
 def force_window(n, pulse_end, margin):
@@ -152,7 +171,9 @@ def check_hits(force_blocks, response_blocks, dofs, double_hit=0.2, flat=3):
     below_after = (~above) & (idx > first[:, None])
     end = np.where(below_after.any(axis=1), np.argmax(below_after, axis=1), n)
     later = np.where(idx >= end[:, None] + 1, fb, 0.0)
-    doubles = tuple(int(b) for b in np.nonzero(later.max(axis=1) > double_hit * peak[:, 0])[0])
+    noise = 1.4826 * np.median(np.abs(fb - np.median(fb, axis=1, keepdims=True)), axis=1)
+    missed_mask = ~(peak[:, 0] > 0.05 * peak.max()) | ~(peak[:, 0] > HIT_OVER_NOISE * noise)
+    doubles = tuple(int(b) for b in np.nonzero((later.max(axis=1) > double_hit * peak[:, 0]) & ~missed_mask)[0])
     overloads = []
     allch = np.asarray(response_blocks, float)
     for c, dof in enumerate(dofs):
@@ -164,8 +185,19 @@ def check_hits(force_blocks, response_blocks, dofs, double_hit=0.2, flat=3):
         for k in range(flat):
             run &= at_top[:, k: n - flat + 1 + k]
         overloads += [(int(b), dof) for b in np.nonzero(run.any(axis=1))[0]]
-    missed = tuple(int(b) for b in np.nonzero(~(peak[:, 0] > 0.05 * peak.max()))[0])
+    missed = tuple(int(b) for b in np.nonzero(missed_mask)[0])
     return HitCheck(doubles, tuple(sorted(overloads)), int(np.max(end - first)), missed)
+
+
+#: A block holds a hit when its force peak is at least this many robust standard deviations of its force channel
+#: (the noise, which most of a block's samples hold) above the median: a block of noise alone peaks near 3.
+HIT_OVER_NOISE = 10.0
+
+
+def count_hits(force, double_hit=0.2) -> int:
+    """How many hits a force record (shape (n,)) holds: its rises above ``double_hit`` of its largest force."""
+    above = np.abs(np.asarray(force, float)) > double_hit * np.max(np.abs(force))
+    return int(np.count_nonzero(above[1:] & ~above[:-1]) + above[0])
 
 
 #: Smallest peak force (N) of a force channel: below it the force spectra underflow (no FRF can be formed).
@@ -218,9 +250,10 @@ def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", 
         raise ShapeError(f"averages {averages} must be an integer >= 1")
     if excitation == "random":
         est, n_avg, hits, added, what = _random_spectra(records, ref, resp, src, estimator, averages, overlap, window)
-        decay = 1.0
+        decay, band = 1.0, None
     else:
-        est, n_avg, hits, added, what, decay = _impact_spectra(records, ref, resp, src, estimator, averages, decay)
+        est, n_avg, hits, added, what, decay, band = _impact_spectra(records, ref, resp, src, estimator, averages,
+                                                                     decay)
     h = {"h1": est.h1, "h2": est.h2, "hv": est.hv}[estimator]
     if h is None:
         raise ShapeError("h2 needs exactly one force channel")
@@ -230,12 +263,16 @@ def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", 
     if keep.sum() < 2:
         raise ShapeError(f"fmax_hz {fmax_hz} keeps fewer than 2 lines")
     coh = est.coherence[:, :1, keep]
+    meta = {"source": src, "format": "uff58 time records", "estimated": what}
+    if band is not None:
+        band = (band[0], min(band[1], float(f[keep][-1])))
+        meta["force_band_hz"] = list(band)
     try:
         frf = MeasuredFRF(f[keep], h[..., keep], tuple(records.dofs[i] for i in resp), (records.dofs[ref],),
-                          kind=kind, metadata={"source": src, "format": "uff58 time records", "estimated": what})
+                          kind=kind, metadata=meta)
     except ShapeError as exc:
         raise FileFormatError(f"{src}: the estimated FRFs: {exc}") from None
-    return TimeEstimate(frf, coh, estimator, excitation, n_avg, hits, added, what, decay)
+    return TimeEstimate(frf, coh, estimator, excitation, n_avg, hits, added, what, decay, band)
 
 
 def _select_channels(records: TimeRecords, reference, src) -> tuple[int, list, str]:
@@ -309,6 +346,11 @@ def _random_spectra(records: TimeRecords, ref, resp, src, estimator, averages, o
     noverlap = int(round(overlap * nperseg))
     if nperseg < 16:
         raise ShapeError(f"{n} samples cannot give {averages} averages of at least 16 samples")
+    channels = [ref, *resp]
+    clipped = clipped_run_text(x[channels], [records.dofs[i] for i in channels], src)
+    if clipped is not None:
+        raise FileFormatError(f"{src}: {clipped}: a clipped channel's spectra hold the clipping's harmonics over the "
+                              "whole band, and every average holds them; record with a larger input range")
     est = _estimate(src, x[ref], x[resp], fs, nperseg, noverlap, window=segment_window(window))
     what = f"{estimator.upper()} of random excitation, {window} window, {est.n_averages} averages, " \
            f"{overlap:.0%} overlap, {fs / nperseg:.4g} Hz lines"
@@ -319,7 +361,8 @@ def _impact_spectra(records: TimeRecords, ref, resp, src, estimator, averages, d
     """Spectra of ``averages`` impact blocks, bad blocks left out, force and exponential windows applied (``decay``
     None: :func:`window_end_value` of the good blocks' responses).
 
-    Returns ``(estimate, n_good_blocks, HitCheck, added decay rate 1/s, description, window end value)``.
+    Returns ``(estimate, n_good_blocks, HitCheck, added decay rate 1/s, description, window end value, force band
+    (Hz))``.
     """
     fs, x = records.sampling_frequency_hz, records.signals
     n = x.shape[1]
@@ -329,11 +372,17 @@ def _impact_spectra(records: TimeRecords, ref, resp, src, estimator, averages, d
     blocks = x[:, : block * averages].reshape(x.shape[0], averages, block).transpose(1, 0, 2)
     hits = check_hits(blocks[:, ref], blocks, records.dofs)
     good = [b for b in range(averages) if b not in hits.bad_blocks]
+    n_hits = count_hits(x[ref])
     if not good:
         raise FileFormatError(f"{src}: every impact block has a double hit, an overload or no hit "
                               f"(double hits in blocks {list(hits.double_hits)}, overloads "
                               f"{[f'{d} in block {b}' for b, d in hits.overloads]}, no hit in blocks "
-                              f"{list(hits.missed)})")
+                              f"{list(hits.missed)}); the record holds {n_hits} hit{'s' * (n_hits != 1)}: "
+                              f"averages {n_hits} cuts one block per hit where they are evenly spaced")
+    if len(good) < averages and n_hits != averages:
+        warnings.warn(f"{src}: {averages - len(good)} of {averages} impact blocks left out (double hits, "
+                      f"overloads or no hit); the record holds {n_hits} hit{'s' * (n_hits != 1)}: averages {n_hits} "
+                      "cuts one block per hit where they are evenly spaced", UserWarning, stacklevel=3)
     chosen = decay is None
     if chosen:
         decay = window_end_value(blocks[good][:, resp])
@@ -344,6 +393,8 @@ def _impact_spectra(records: TimeRecords, ref, resp, src, estimator, averages, d
     f_t = (g[:, ref] * fw * ew).reshape(-1)
     r_t = (g[:, resp] * ew).transpose(1, 0, 2).reshape(len(resp), -1)
     est = _estimate(src, f_t, r_t, fs, block, 0, window="boxcar")
+    force_power = np.mean(np.abs(np.fft.rfft(g[:, ref] * fw * ew, axis=-1)) ** 2, axis=0)
+    band = force_band_hz(np.fft.rfftfreq(block, 1 / fs)[1:], force_power[1:])
     added = 0.0 if np.isinf(tau) else fs / tau
     why = f", the weakest bringing every response to {RESPONSE_END_LEVEL:g} of its loudest" if chosen else ""
     win = f"exponential window to {decay:g}{why}: adds {added:.4g} 1/s to every pole's decay rate" if added > 0 else \
@@ -351,4 +402,4 @@ def _impact_spectra(records: TimeRecords, ref, resp, src, estimator, averages, d
          else "no exponential window")
     what = f"{estimator.upper()} of {len(good)} impact blocks of {block} samples (force window, {win}), " \
            f"{fs / block:.4g} Hz lines"
-    return est, len(good), hits, added, what, float(decay)
+    return est, len(good), hits, added, what, float(decay), band

@@ -9,7 +9,7 @@ import numpy as np
 
 from physics.errors import ConfigError
 from physics.io import FRF, TIME, accepted, read, writable
-from physics.time_records import ESTIMATORS, EXCITATIONS, estimate_from_records, segment_window
+from physics.time_records import ESTIMATORS, EXCITATIONS, FORCE_DROP_DB, estimate_from_records, segment_window
 
 __all__ = ["add_parser", "run"]
 
@@ -45,7 +45,8 @@ def run(args) -> dict:
            "band_hz": [float(est.frf.frequency_hz[0]), float(est.frf.frequency_hz[-1])],
            "coherence_median": np.median(coh, axis=-1)[:, 0].tolist(),
            "added_decay_rate_1_s": est.added_decay_rate_1_s, "exp_window_tau_s": tau,
-           "exp_window_end_value": est.window_end_value}
+           "exp_window_end_value": est.window_end_value, "warnings": []}
+    out["force_band_hz"] = None if est.force_band_hz is None else list(est.force_band_hz)
     if est.hits is not None:
         out["double_hits"] = list(est.hits.double_hits)
         out["overloads"] = [{"block": b, "dof": d} for b, d in est.hits.overloads]
@@ -63,6 +64,11 @@ def run(args) -> dict:
             print(f"  exponential window tau {tau:.6g} s: " + (
                 "stored in the file; 'beam-damage identify' removes its decay from the modes" if ext == ".npz"
                 else f"'beam-damage identify --exp-window-tau {tau:.6g}' removes its decay from the modes"))
+        if est.force_band_hz is not None:
+            low, high = est.force_band_hz
+            print(f"  force band {low:.4g}-{high:.4g} Hz (the force within {FORCE_DROP_DB:g} dB of its peak): " + (
+                "stored in the file; 'beam-damage identify' stays in it" if ext == ".npz"
+                else f"'beam-damage identify --band {low:.4g} {high:.4g}' stays in it"))
         if args.out:
             print(f"wrote {args.out}")
     return out

@@ -15,7 +15,7 @@ from physics.identification import (DEFAULT_OUTPUT_ONLY, METHODS, Identification
                                     holds_response_records, identify_file, identify_records,
                                     read_response_records, reconstruction_error_db, response_records)
 from physics.identification.measured import DEFAULT_MAX_ORDER
-from physics.identification.exponential_window import remove_window_decay, tau_from_end_value
+from physics.identification.exponential_window import remove_window_decay, slower_than_window, tau_from_end_value
 from physics.identification.output_only import FREE_RESPONSE_METHOD, SCALING, STATIONARY_METHOD
 from physics.identification.setups import MergedSetups, finite_mac, merge_setups
 from physics.io.inputs import repeated_files
@@ -231,6 +231,16 @@ def _remove_window(args, ident: Identification, flag) -> tuple:
     if flag and stored is not None and not np.isclose(tau, stored, rtol=1e-6):
         warnings.warn(f"{args.file}: stores an exponential window of tau {stored:.6g} s; {flag} ({tau:.6g} s) is "
                       "removed instead", UserWarning, stacklevel=2)
+    slow = slower_than_window(est.eigenvalues, tau, est.damping_std)
+    if slow.any() and not slow.all():
+        modes = ", ".join(f"{f:.5g} Hz ({-lam.real:.3g} 1/s)" for f, lam in
+                          zip(est.natural_frequencies_hz[slow], est.eigenvalues[slow]))
+        warnings.warn(f"{args.file}: left out {modes}: they decay slower than the exponential window's "
+                      f"{1 / tau:.4g} 1/s makes every mode of the windowed FRFs decay, so they are poles the fit "
+                      "placed in the noise (or the window's tau is shorter than the one applied)", UserWarning,
+                      stacklevel=2)
+        est = est.take(~slow)
+        ident = replace(ident, estimate=est)
     fix = remove_window_decay(est.eigenvalues, tau, est.damping_std)
     if fix.at_zero.any():
         modes = ", ".join(f"{j + 1} ({est.natural_frequencies_hz[j]:.5g} Hz)" for j in np.nonzero(fix.at_zero)[0])

@@ -30,7 +30,7 @@ from physics.errors import ConfigError, ShapeError
 from physics.modal import eigenvalues_from_modal, modal_parameters
 
 __all__ = ["NOISE_SHARE", "NOISE_STDS", "WindowCorrection", "remove_window_decay", "remove_window_decay_modal",
-           "tau_from_end_value"]
+           "slower_than_window", "tau_from_end_value"]
 
 #: Share of the window's added decay rate ``1 / tau_s`` a corrected mode may fall below zero by and still be
 #: read as noise (set to zero damping, flagged) rather than refused.
@@ -134,7 +134,7 @@ def remove_window_decay(eigenvalues, tau_s, damping_std=None, noise_share=NOISE_
     rate = 1.0 / tau
     sigma = -lam.real - rate
     w_n = np.abs(lam)
-    allowance = np.maximum(noise_share * rate, noise_stds * np.where(np.isfinite(std), std, 0.0) * w_n)
+    allowance = _allowance(lam, rate, std, noise_share, noise_stds)
     bad = np.nonzero(sigma < -allowance)[0]
     if bad.size:
         j = bad[np.argmin(sigma[bad] + allowance[bad])]
@@ -150,6 +150,23 @@ def remove_window_decay(eigenvalues, tau_s, damping_std=None, noise_share=NOISE_
     corrected = np.where(at_zero, 0.0, -sigma) + 1j * lam.imag
     fn, zeta = modal_parameters(corrected)
     return WindowCorrection(corrected, fn, zeta, tau, rate, at_zero)
+
+
+def _allowance(lam, rate, std, noise_share, noise_stds):
+    """How far below zero (1/s) a corrected decay rate may fall and be read as noise (:func:`remove_window_decay`)."""
+    return np.maximum(noise_share * rate, noise_stds * np.where(np.isfinite(std), std, 0.0) * np.abs(lam))
+
+
+def slower_than_window(eigenvalues, tau_s, damping_std=None, noise_share=NOISE_SHARE,
+                       noise_stds=NOISE_STDS) -> np.ndarray:
+    """Which poles (shape (n_modes,)) decay slower than the window ``exp(-t / tau_s)`` alone makes every mode of
+    the windowed FRFs decay, beyond the noise allowance of :func:`remove_window_decay`: no mode of the structure,
+    were the window's ``tau_s`` right (a pole the fit placed in the noise)."""
+    lam = np.asarray(eigenvalues, dtype=complex)
+    std = np.full(lam.size, np.nan) if damping_std is None else np.broadcast_to(np.asarray(damping_std, float),
+                                                                                  lam.shape)
+    rate = 1.0 / float(tau_s)
+    return -lam.real - rate < -_allowance(lam, rate, std, noise_share, noise_stds)
 
 
 def remove_window_decay_modal(natural_frequencies_hz, damping_ratios, tau_s, damping_std=None,

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from physics.errors import ConfigError, ConvergenceError, ShapeError
+from physics.errors import ConfigError, ConvergenceError, FileFormatError, ShapeError
 from physics.identification.lscf import (CLEAR_PEAK_PROMINENCE, CLEAR_PEAK_TOLERANCE, highest_order,
                                          octave_median_peaks)
 from physics.identification.methods import METHODS
@@ -17,9 +17,9 @@ from physics.identification.output_only import holds_response_records
 from physics.io import FRF, TIME, MeasuredFRF, ModalData, format_of, prepare_measured, read, read_frf
 from physics.io.timedata import read_uff_time_records
 from physics.io.uff58 import UffFile, read_uff58
-from physics.time_records import estimate_from_records
+from physics import time_records                  # a module: time_records reads record_checks of this package
 
-__all__ = ["DEFAULT_MAX_ORDER", "Identification", "identify_file", "identify_frf", "identify_frfs",
+__all__ = ["DEFAULT_MAX_ORDER", "Identification", "force_band_top_hz", "identify_file", "identify_frf", "identify_frfs",
            "read_measured_frf", "reconstruction_error_db"]
 
 #: The highest LSCF model order :func:`identify_frf` fits by default (fewer where the band's lines carry fewer).
@@ -122,11 +122,18 @@ def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, ma
         if not fmin < fmax:
             raise ConfigError(f"band_hz ({fmin}, {fmax}): the lower bound must be below the upper")
         frf = frf.select_band(fmin, fmax)
+    elif (top := force_band_top_hz(frf)) is not None and top < frf.frequency_hz[-1]:
+        frf = frf.select_band(fmax_hz=top)
+        warnings.warn(f"{frf.metadata.get('source', 'FRFs')}: identified up to {top:.4g} Hz, the hammer's force band "
+                      f"(its force spectrum falls {time_records.FORCE_DROP_DB:g} dB below its peak there; above it H1 "
+                      "is the response's noise over a force that is not there); --band to read beyond it",
+                      stacklevel=2)
     drives = frf.driving_points
     drive = drives[0] if drives else None
     if drive is None:
         warnings.warn("no driving point (response DOF equal to a reference DOF): mode shapes are not "
-                      "unit-modal-A scaled and cannot feed 'update' directly", stacklevel=2)
+                      "unit-modal-A scaled, so FRFs synthesised from them have no absolute level ('update' scales "
+                      "each mode's shape against its own mass and is not affected)", stacklevel=2)
     if max_order is None:
         n_o, n_i, n_lines = frf.frf.shape
         max_order = max(1, min(DEFAULT_MAX_ORDER, highest_order(n_lines, n_o, n_i)))
@@ -141,6 +148,22 @@ def identify_frf(frf: MeasuredFRF, method="lscf", band_hz=None, n_modes=None, ma
                           f"{'it' if missed.size == 1 else 'them'} (--band) or raise the model order", stacklevel=2)
     label = frf.reference_dofs[drive[1]] if drive else None
     return Identification(frf, est, synth, diagram, label, outside)
+
+
+def force_band_top_hz(frf: MeasuredFRF) -> float | None:
+    """The top of the force band an impact estimate stored in the FRFs' metadata (``force_band_hz``, written by
+    :func:`physics.time_records.estimate_from_records`), or None without one."""
+    band = frf.metadata.get("force_band_hz")
+    if band is None:
+        return None
+    try:
+        low, high = (float(b) for b in band)
+    except (TypeError, ValueError):
+        low = high = np.nan
+    if not (np.isfinite(low) and np.isfinite(high) and 0 <= low < high):
+        raise FileFormatError(f"{frf.metadata.get('source', 'FRFs')}: metadata 'force_band_hz' must be two finite "
+                              f"frequencies (Hz) [low, high] with 0 <= low < high, got {band!r}")
+    return high
 
 
 def identify_frfs(frfs, method="lscf", band_hz=None, n_modes=None, max_order=None) -> list[Identification]:
@@ -181,12 +204,12 @@ def read_measured_frf(path) -> MeasuredFRF:
     if format_of(path, FRF).name != "uff":
         if not (holds_response_records(path) and (rec := read(path, TIME)).forces):
             return read_frf(path)                   # FRFs, or response records: refused naming what they hold
-        est = estimate_from_records(rec)
+        est = time_records.estimate_from_records(rec)
     else:
         uf = UffFile(path)
         if 4 in uf.function_types or 1 not in uf.function_types:   # FRF records, or nothing to estimate from
             return read_uff58(uf)
-        est = estimate_from_records(read_uff_time_records(uf))
+        est = time_records.estimate_from_records(read_uff_time_records(uf))
     warnings.warn(f"{path}: holds time records, not FRFs: estimated {est.description} before identifying",
                   stacklevel=2)
     return est.frf

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -117,6 +117,20 @@ class ModalEstimate:
     frequency_fit_std_hz: np.ndarray | None = None
     damping_fit_std: np.ndarray | None = None
     weakly_stable: np.ndarray | None = None
+
+    def take(self, keep) -> "ModalEstimate":
+        """The modes ``keep`` (indices or a boolean mask over the modes), in that order."""
+        idx = np.arange(self.natural_frequencies_hz.size)[keep]
+
+        def per_mode(a):
+            return None if a is None else a[..., idx]
+
+        return replace(self, natural_frequencies_hz=self.natural_frequencies_hz[idx],
+                       damping_ratios=self.damping_ratios[idx], eigenvalues=self.eigenvalues[idx],
+                       shapes=self.shapes[:, idx], residues=self.residues[..., idx],
+                       frequency_std_hz=self.frequency_std_hz[idx], damping_std=self.damping_std[idx],
+                       mpc=self.mpc[idx], frequency_fit_std_hz=per_mode(self.frequency_fit_std_hz),
+                       damping_fit_std=per_mode(self.damping_fit_std), weakly_stable=per_mode(self.weakly_stable))
 
 
 def modal_estimate(f_hz, zeta, residues, drive, method, f_std=None, z_std=None, lower=None, upper=None,

@@ -8,7 +8,8 @@ from physics.frf import receptance
 from physics.io.timedata import TimeRecords
 from physics.thesis import beam5_reduced_model
 from physics.identification.lscf import identify_lscf
-from physics.time_records import LEVEL_SEGMENTS, RESPONSE_END_LEVEL, estimate_from_records, window_end_value
+from physics.identification.measured import identify_frf
+from physics.time_records import LEVEL_SEGMENTS, RESPONSE_END_LEVEL, count_hits, estimate_from_records, window_end_value
 
 
 def _random_test(seed=0, n=2**17, fs=2048.0, force_noise=0.1, resp_noise=0.1):
@@ -175,3 +176,47 @@ def test_a_response_that_ends_in_its_block_gets_no_window_and_a_more_precise_fre
     ratio = freqs[0.01].std(ddof=1) / freqs[None].std(ddof=1)
     assert 1.3 < ratio < 2.2               # 1.74 over these 30 seeds (0.0022 against 0.0013 Hz; 60 seeds: 1.71)
     np.testing.assert_allclose(freqs[None], 100.0, atol=0.005)          # 4 standard deviations
+
+
+def test_an_impact_estimate_stores_the_band_its_force_excites_and_identify_stays_in_it():
+    """A 2 ms half-sine hit sampled at 2048 Hz: the power of its samples' DFT over the block's 1 Hz lines falls
+    20 dB below its peak (0 Hz) near 680 Hz (the continuous pulse's ``|cos(pi f T) / (1 - (2 f T)^2)|`` at 652 Hz).
+    The estimate stores that band; identifying the FRFs without a band stays in it, with a warning naming it."""
+    rec, _, _ = _impact_test()
+    fs, nb = 2048.0, 2048
+    t = np.arange(nb) / fs
+    power = np.abs(np.fft.rfft(np.where(t < 0.002, np.sin(np.pi * t / 0.002), 0.0))) ** 2
+    top_hz = np.fft.rfftfreq(nb, 1 / fs)[np.flatnonzero(power < 0.01 * power.max())[0] - 1]
+    est = estimate_from_records(rec, excitation="impact", averages=6, decay=0.01)
+    low, high = est.force_band_hz
+    assert low == est.frf.frequency_hz[0] and abs(high - top_hz) <= 2.0
+    assert est.frf.metadata["force_band_hz"] == [low, high]
+    with pytest.warns(UserWarning, match=f"identified up to {high:.4g} Hz, the hammer's force band"):
+        ident = identify_frf(est.frf)
+    assert ident.frf.frequency_hz[-1] <= high < est.frf.frequency_hz[-1]
+    assert np.min(np.abs(ident.estimate.natural_frequencies_hz - 50.0)) < 0.05
+
+
+def test_a_clipped_channel_of_a_random_test_is_refused_naming_its_run():
+    """A response clipped at 60 % of its peak: the run at the limit is named (its channel, samples and length), and
+    no FRF is estimated; the unclipped record estimates."""
+    rec, *_ = _random_test(n=2**14)
+    assert estimate_from_records(rec, averages=8).n_averages == 8
+    y = rec.signals.copy()
+    top = 0.6 * np.abs(y[2]).max()
+    y[2] = np.clip(y[2], -top, top)
+    clipped = TimeRecords(rec.time_step_s, y, rec.dofs, rec.quantities, rec.metadata)
+    with pytest.raises(FileFormatError, match=r"simulated random test: 3:\+Y is clipped: samples \d+-\d+ \(\d+ in a "
+                                              r"row\) are held at its (highest|lowest) value"):
+        estimate_from_records(clipped, averages=8)
+
+
+def test_blocks_of_noise_alone_are_no_hit_and_a_block_count_off_the_hits_is_named():
+    """Six 1-s blocks, one hit each (a second hit in block 2): cut into 12 blocks, the 6 halves after the hits hold
+    force noise alone, read as no hit (not as double hits); the estimate warns that the record holds 7 hits."""
+    rec, _, _ = _impact_test()
+    with pytest.warns(UserWarning, match=r"simulated impact test: 8 of 12 impact blocks left out \(double hits, "
+                                         r"overloads or no hit\); the record holds 7 hits"):
+        est = estimate_from_records(rec, excitation="impact", averages=12, decay=0.01)
+    assert est.hits.missed == (1, 3, 5, 7, 9, 11) and est.hits.double_hits == (4,)
+    assert count_hits(rec.signals[0]) == 7
