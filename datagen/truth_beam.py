@@ -48,11 +48,9 @@ only, not an added mass.
 
 from __future__ import annotations
 
-from dataclasses import fields
-
 import numpy as np
 
-from physics.beam import beam_from_dict
+from physics.beam import beam_from_dict, file_fields
 from physics.effects import (
     EFFECTS,
     dashpot_matrix,
@@ -89,9 +87,9 @@ def load_truth_beam(mapping: dict):
 def beam_mapping(beam) -> dict:
     """The beam-file mapping of a Beam (every field explicit, JSON/TOML-ready): what the manifest records."""
     out = {}
-    for f in fields(beam):
+    for f in file_fields():
         v = getattr(beam, f.name)
-        if v is None or f.name == "measured_x_given":  # measured_x_m is always explicit here
+        if v is None:                                   # measured_x_m is always explicit here
             continue
         if f.name == "effects":
             v = beam.effects_dict()

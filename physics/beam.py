@@ -67,10 +67,10 @@ from physics.io import DofMap, atomic_write_text, map_frf_dofs, map_measured_dof
 from physics.io.inputs import check_input_file
 from physics.properties import PRESETS, SECTION_KINDS, SOLID_SECTIONS, layered_ei, solid_section
 from physics.modal import state_matrix
-from physics.supports import THESIS_SUPPORT, Support, support
+from physics.supports import ENDS, THESIS_SUPPORT, Support, support
 
 __all__ = ["Beam", "MAX_MODEL_SPREAD", "PRESET_CORE_MODULUS_PA", "PRESET_FACE_THICKNESS_M", "beam_from_dict",
-           "beam_to_toml", "load_beam", "preset_beam", "write_beam"]
+           "beam_to_toml", "file_fields", "load_beam", "preset_beam", "write_beam"]
 
 
 #: Face-sheet thickness and core modulus of the presets (the datagen section layout).
@@ -126,6 +126,8 @@ class Beam:
         True when a beam file gave ``measured_x_m`` (then the commands place the
         measured DOFs of a file without node geometry there, not by the
         quarter-point convention).
+    source : str
+        The beam file read (empty for a preset or a beam built in code), for messages.
     """
 
     name: str
@@ -147,7 +149,8 @@ class Beam:
     drive_x_m: float | None = None
     band_hz: tuple | None = None
     zones_x_m: tuple | None = None
-    measured_x_given: bool = field(default=False, compare=False)
+    measured_x_given: bool = field(default=False, compare=False, metadata={"file_key": False})
+    source: str = field(default="", compare=False, metadata={"file_key": False})
 
     def __post_init__(self):
         if self.section is None:
@@ -186,6 +189,11 @@ class Beam:
         return replace(self, effects=dict(effects), **changes)
 
     @property
+    def where(self) -> str:
+        """The beam file (its key ``measured_x_m`` named), or the beam's name, for messages."""
+        return f"{self.source}: 'measured_x_m'" if self.source else f"beam {self.name!r}"
+
+    @property
     def masters(self) -> tuple[str, ...]:
         """DOF names of the measured translations when they sit on the nodes of the default mesh."""
         node_x = np.linspace(0.0, self.length_m, self.n_elements + 1)
@@ -193,8 +201,16 @@ class Beam:
         for x in self.measured_x_m:
             k = int(np.argmin(np.abs(node_x - x)))
             if abs(node_x[k] - x) > 1e-9 * self.length_m:
-                raise ConfigError(f"beam {self.name!r}: measured position {x} m is not a node of the "
-                                  f"{self.n_elements}-element mesh")
+                raise ConfigError(f"{self.where}: measured position {x} m is not a node of the "
+                                  f"{self.n_elements}-element mesh"
+                                  + ("" if self.measured_x_given else " (the quarter points, the default sensors)")
+                                  + ": give 'measured_x_m' on its nodes, or 'n_elements' that put nodes there")
+            end = 0 if k == 0 else 1 if k == self.n_elements else None
+            if end is not None and "y" in ENDS[self.support.ends[end]].held:
+                raise ConfigError(f"{self.where}: measured position {x:g} m is on the {self.bc} support at "
+                                  f"x = {node_x[k]:g} m, which holds the translation"
+                                  + ("" if self.measured_x_given else " (the quarter points, the default sensors)")
+                                  + ": give 'measured_x_m' off the supports")
             out.append(f"{k + 1}:y")
         return tuple(out)
 
@@ -250,6 +266,12 @@ class Beam:
         return {k: dict(v) for k, v in self.effects.items()}
 
 
+def file_fields() -> tuple:
+    """The fields of :class:`Beam` that are beam-file keys (not ``measured_x_given`` or ``source``, which say where
+    the values came from)."""
+    return tuple(f for f in fields(Beam) if f.metadata.get("file_key", True))
+
+
 def preset_beam(name: str) -> Beam:
     """A thesis specimen (Table 4.1, Chapter Four geometry) as a :class:`Beam` without effects."""
     if name not in PRESETS:
@@ -297,7 +319,7 @@ def beam_from_dict(obj: dict, source: str = "beam") -> Beam:
         vals["effects"] = {**vals.get("effects", {}), **eff}
     fx.check_supports(vals.get("effects", {}), vals.get("bc", THESIS_SUPPORT), source)
     _check_layout(vals, source)
-    beam = Beam(**vals)
+    beam = Beam(**vals, source=source)
     if beam.effects:
         _check_effects_keep_a_model(beam, source)
     return beam
@@ -312,7 +334,7 @@ def _preset_values(obj: dict, source: str) -> dict:
     b = preset_beam(obj["preset"]) if obj["preset"] in PRESETS else None
     if b is None:
         raise ConfigError(f"{source}: 'preset' = {obj['preset']!r} unknown; expected one of {sorted(PRESETS)}")
-    base = {f.name: getattr(b, f.name) for f in fields(Beam)}
+    base = {f.name: getattr(b, f.name) for f in file_fields()}
     base["effects"] = b.effects_dict()
     return base
 
@@ -524,9 +546,9 @@ def beam_to_toml(beam: Beam, comment: str = "") -> str:
     """TOML text of a beam (every key explicit; ``comment`` lines go first, prefixed by ``#``)."""
     lines = [f"# {c}" if c else "#" for c in comment.splitlines()] if comment else []
     lines.append("# beam-damage beam file (see docs/beam-file.md); SI units")
-    for f in fields(Beam):
+    for f in file_fields():
         v = getattr(beam, f.name)
-        if f.name in ("effects", "measured_x_given") or v is None:
+        if f.name == "effects" or v is None:
             continue
         lines.append(f"{f.name} = {_toml_value(v)}")
     for key, params in beam.effects.items():

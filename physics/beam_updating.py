@@ -9,7 +9,7 @@ eigenvalues (:func:`physics.updating.eigenvalue_errors`); ``beam-damage update``
 from __future__ import annotations
 
 import warnings
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -70,26 +70,14 @@ def load_modal(modal_file, n_modes: int):
                               "(no modal mass), so 'update' cannot mass-normalise them; measure a driving-point "
                               "FRF (force and response at one DOF)")
 
-    ident = identify_file(modal_file, n_modes=n_modes)
-    _warn_modes_left_out(modal_file, ident, n_modes)
+    ident = identify_file(modal_file)
+    f = ident.estimate.natural_frequencies_hz
+    if f.size > n_modes:
+        warnings.warn(f"{modal_file}: {f.size} modes identified in the FRFs' band, the model pairs the lowest "
+                      f"{n_modes}: {', '.join(f'{x:.4g}' for x in np.sort(f)[n_modes:])} Hz left out of the update "
+                      "(more elements, or a band that stops below them, would pair them)")
+        ident = replace(ident, estimate=ident.estimate.take(np.sort(np.argsort(f, kind="stable")[:n_modes])))
     return ident.modal_data, ident.frf
-
-
-def _warn_modes_left_out(modal_file, ident, n_modes: int) -> None:
-    """Warn when the FRFs hold modes beyond the ``n_modes`` the model pairs (``identify`` without a number of
-    modes finds more): they are left out of the update, by name."""
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            every = identify_file(modal_file).modal_data.natural_frequencies_hz
-    except BeamDamageError:
-        return
-    used = ident.modal_data.natural_frequencies_hz
-    left = [f for f in every if np.min(np.abs(used - f) / f) > 0.01]
-    if len(every) > n_modes and left:
-        warnings.warn(f"{modal_file}: {len(every)} modes identified in the FRFs' band, the model pairs {n_modes}: "
-                      f"{', '.join(f'{f:.4g}' for f in left)} Hz left out of the update (more elements, or a band "
-                      "that stops below them, would pair them)")
 
 
 def _refuse_unscaled(modal_file) -> None:
@@ -146,6 +134,26 @@ def updated_model_modes(M, C, K, paired_eigenvalues, where) -> tuple:
     return cm.natural_frequencies_hz, cm.damping_ratios, unstable_mode_warnings(cm.eigenvalues)
 
 
+#: A measured shape pairs the model's mode of its index when their MAC is at least this (as ``classify``'s pairs).
+MIN_SHAPE_MAC = 0.8
+
+
+def shape_pairing_warnings(model, masters, vectors, where) -> list[str]:
+    """Warnings for measured shapes (columns of ``vectors``, rows the ``masters``) that do not pair the analytical
+    model's mode of the same index (MAC below :data:`MIN_SHAPE_MAC`), naming the model's mode each resembles most.
+    Lancaster's construction reproduces any pairing of eigenvalues and shapes, so the eigenvalue check cannot see
+    a shape beside another mode's frequency (columns swapped in a file, or a mode missing and another in its
+    place); the model's shapes at the sensors can."""
+    _, phi = modal.undamped_modes(model.M, model.K)
+    m = vectors.shape[1]
+    pairing = modal.mac(vectors, phi[model.index(masters)][:, :m])
+    best = np.argmax(pairing, axis=1)
+    bad = [k for k in range(m) if pairing[k, k] < MIN_SHAPE_MAC]
+    return [f"{where}: measured mode {k + 1}'s shape does not pair the model's mode {k + 1} (MAC {pairing[k, k]:.2f} "
+            f"< {MIN_SHAPE_MAC:g}); it is most like the model's mode {best[k] + 1} (MAC {pairing[k, best[k]]:.2f}): "
+            "check that each frequency sits beside its own shape, and that no mode is missing" for k in bad]
+
+
 def update_beam(beam, modal_file, mass: str = "iirs", tol: float = 1e-10, max_iter: int = 500,
                 method: str = "pilkey", max_eigenvalue_error: float = updating.REFUSAL_TOL) -> BeamUpdate:
     """Identify ``C`` and update ``K`` of a beam (preset, beam file or :class:`Beam`) from a modal-data or FRF
@@ -191,7 +199,7 @@ def update_beam(beam, modal_file, mass: str = "iirs", tol: float = 1e-10, max_it
             f"in the model (relative eigenvalue error {errors[worst]:.3g} > {max_eigenvalue_error:g}); the "
             "eigenvectors are not a complete set of modes consistent with the mass (for real-valued shapes: only "
             "normal modes of proportional damping qualify)")
-    warnings = []
+    warnings = shape_pairing_warnings(model, b.masters, vectors, modal_file)
     f_meas = np.asarray(data.natural_frequencies_hz, float)
     if np.any(np.diff(f_meas) < 0):
         warnings.append(f"{modal_file}: the modes are not in ascending order of frequency "

@@ -10,6 +10,7 @@ from physics.io.inputs import check_input_file
 from physics.errors import FileFormatError, ShapeError
 from physics.io.atomic import atomic_write_text
 from physics.io.types import FRF_KINDS, UNNAMED_REFERENCE, MeasuredFRF, check_dof_labels, frf_matrix
+from physics.io.units import stated_units_factor
 
 __all__ = ["csv_values", "read_frf_csv", "write_frf_csv"]
 
@@ -62,8 +63,10 @@ def read_frf_csv(path, kind=None) -> MeasuredFRF:
     file_kind = kind or meta.get("kind", "receptance")
     if file_kind not in FRF_KINDS:
         raise FileFormatError(f"{path}: '# kind: {file_kind}' must be one of {', '.join(FRF_KINDS)}")
+    units = meta.get("units", "")
+    frf = frf * stated_units_factor(units, file_kind, f"{path}: '# units: {units}'")
     try:
-        return MeasuredFRF(f, frf, tuple(resp), tuple(refs), kind=file_kind, units=meta.get("units", ""),
+        return MeasuredFRF(f, frf, tuple(resp), tuple(refs), kind=file_kind,
                            metadata={"source": str(path), "format": "csv"})
     except ShapeError as exc:
         raise FileFormatError(f"{path}: {exc}") from None

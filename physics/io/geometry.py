@@ -24,9 +24,9 @@ import numpy as np
 from physics.errors import BeamDamageError, FileFormatError, ShapeError
 from physics.io.types import parse_dof
 
-__all__ = ["DofMap", "NodeGeometry", "QUARTER_POINT_CONVENTION", "dof_positions_text", "geometry_from_uff_sets",
-           "map_frf_dofs", "map_measured_dofs", "match_dofs_by_position", "measured_positions", "positions_along_beam",
-           "reference_position_m"]
+__all__ = ["DofMap", "NOT_TRANSVERSE", "NodeGeometry", "QUARTER_POINT_CONVENTION", "dof_positions_text",
+           "geometry_from_uff_sets", "map_frf_dofs", "map_measured_dofs", "match_dofs_by_position",
+           "measured_positions", "not_transverse", "positions_along_beam", "reference_position_m"]
 
 QUARTER_POINT_CONVENTION = ("no node geometry: the thesis convention holds, node N of a 4-element beam at "
                             "(N - 1) L / 4 (nodes 2..5 at the quarter points)")
@@ -265,6 +265,18 @@ def dof_positions_text(d: dict) -> str:
     return f"measured DOFs placed by the {d['source']} ({d['detail']}): {pairs}"
 
 
+#: Why a DOF is no transverse translation of the beam (:func:`not_transverse`).
+NOT_TRANSVERSE = "X is the beam's axis without node geometry; RX, RY, RZ are rotations"
+
+
+def not_transverse(dofs, along_x: bool = True) -> np.ndarray:
+    """Which DOF labels (shape (n,)) measure no transverse translation of the beam: a rotation (RX, RY, RZ), or
+    with ``along_x`` (the beam along X: no node geometry says otherwise) a translation along X. Y, Z and scalar
+    (``S``) labels are transverse; a label that is no ``NODE:DIR`` is refused by :func:`parse_dof`'s callers."""
+    codes = np.array([abs(parse_dof(d)[1]) for d in dofs], int)
+    return np.isin(codes, (4, 5, 6)) | ((codes == 1) & along_x)
+
+
 def map_measured_dofs(dofs, model_x_m, model_dofs, *, length_m: float, n_elements: int = 4, geometry=None,
                       geometry_format: str = "file", beam_x_m=None, tol_m=None,
                       where: str = "measured data", off_grid: str = "refuse") -> DofMap:
@@ -335,13 +347,24 @@ def map_measured_dofs(dofs, model_x_m, model_dofs, *, length_m: float, n_element
         detail = QUARTER_POINT_CONVENTION if n_elements == 4 else \
             f"no node geometry: node N of the {n_elements}-element beam at (N - 1) L / {n_elements}"
         x = (nodes - 1) * length_m / n_elements
+    across = not_transverse(dofs, along_x=geometry is None)
+    if across.any() and off_grid == "refuse":
+        raise ShapeError(f"{where}: measured DOF{'s' if across.sum() > 1 else ''} "
+                         f"{', '.join(d for d, a in zip(dofs, across) if a)} {'are' if across.sum() > 1 else 'is'} "
+                         f"no transverse translation ({NOT_TRANSVERSE}); the beam's measured DOFs are its transverse "
+                         "translations (Y or Z)")
+    idx = np.full(len(dofs), -1)
     try:
-        idx = match_dofs_by_position(x, model_x_m, tol_m, dofs, model_dofs, off_grid)
+        idx[~across] = match_dofs_by_position(x[~across], model_x_m, tol_m, [d for d, a in zip(dofs, across) if not a],
+                                              model_dofs, off_grid)
     except ShapeError as exc:
         raise ShapeError(f"{where}: {exc} (positions from the {source})") from None
-    if np.any(idx < 0):
-        detail += "; not at a model DOF, not used: " + ", ".join(f"{d} (x = {xk:.4g} m)" for d, xk, k
-                                                                 in zip(dofs, x, idx) if k < 0)
+    if np.any((idx < 0) & ~across):
+        detail += "; not at a model DOF, not used: " + ", ".join(f"{d} (x = {xk:.4g} m)" for d, xk, k, a
+                                                                 in zip(dofs, x, idx, across) if k < 0 and not a)
+    if across.any():
+        detail += (f"; no transverse translation ({NOT_TRANSVERSE}), not used: "
+                   + ", ".join(d for d, a in zip(dofs, across) if a))
     return DofMap(source, detail, dofs, x, tuple(str(model_dofs[k]) if k >= 0 else "" for k in idx))
 
 

@@ -13,7 +13,8 @@ import numpy as np
 from physics.io.inputs import check_input_file
 from physics.errors import FileFormatError, ShapeError
 from physics.io.atomic import atomic_write_bytes
-from physics.io.types import MeasuredFRF, check_dof_labels
+from physics.io.types import FRF_KINDS, MeasuredFRF, check_dof_labels
+from physics.io.units import stated_units_factor
 
 __all__ = ["read_frf_npz", "read_npz_arrays", "write_frf_npz"]
 
@@ -92,7 +93,7 @@ def read_frf_npz(path, kind=None) -> MeasuredFRF:
     frequencies real, the DOF labels 1-D lists of strings, the metadata a JSON object.
     ``kind`` applies to a file without a ``kind`` array (default receptance).
     """
-    arrays = read_npz_arrays(path, "an .npz of a MeasuredFRF")
+    arrays = read_npz_arrays(path, "an .npz of FRFs (frequency_hz, frf, ...) or of time series (signals, ...)")
     missing = [k for k in _NPZ_KEYS[:4] if k not in arrays]
     if missing and "signals" in arrays:
         raise FileFormatError(f"{path}: holds response time series (array 'signals'), not FRFs (arrays "
@@ -121,10 +122,12 @@ def read_frf_npz(path, kind=None) -> MeasuredFRF:
         raise FileFormatError(f"{path}: array 'metadata_json' is not valid JSON") from None
     if not isinstance(meta, dict):
         raise FileFormatError(f"{path}: array 'metadata_json' must hold a JSON object, got {type(meta).__name__}")
+    file_kind, units = str(arrays.get("kind", kind or "receptance")), str(arrays.get("units", ""))
+    factor = stated_units_factor(units, file_kind, f"{path}: array 'units' ({units!r})") if file_kind in FRF_KINDS \
+        else 1.0                                    # an unknown kind: MeasuredFRF names it
     try:
-        return MeasuredFRF(arrays["frequency_hz"], arrays["frf"],
+        return MeasuredFRF(arrays["frequency_hz"], arrays["frf"] * factor,
                            tuple(arrays["response_dofs"].tolist()), tuple(arrays["reference_dofs"].tolist()),
-                           kind=str(arrays.get("kind", kind or "receptance")), units=str(arrays.get("units", "")),
-                           metadata={**meta, "source": str(path), "format": "npz"})
+                           kind=file_kind, metadata={**meta, "source": str(path), "format": "npz"})
     except ShapeError as exc:
         raise FileFormatError(f"{path}: {exc}") from None

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from physics.errors import FileFormatError
 
 __all__ = ["FORCE_UNITS_N", "LENGTH_UNITS_M", "STANDARD_GRAVITY_M_S2", "UnitSystem", "frf_unit_factor",
-           "parse_force_unit", "parse_response_unit"]
+           "parse_force_unit", "parse_response_unit", "stated_units_factor"]
 
 STANDARD_GRAVITY_M_S2 = 9.80665
 #: Length units (in metres) accepted in labels.
@@ -114,3 +114,22 @@ def frf_unit_factor(ordinate_label, denominator_label, system: UnitSystem):
     else:
         found = "no unit labels and no dataset 164: SI assumed"
     return num_factor / den_factor, kind, found
+
+
+def stated_units_factor(units, kind: str, where: str) -> float:
+    """The factor taking FRFs of ``kind`` whose file states ``units`` (a CSV's ``# units:`` line, an NPZ's ``units``;
+    ``"mm/N"``, ``"g/N"``, ``"in/s/lbf"``) to SI; 1 for none stated. A unit this reader does not know, or one of
+    another kind (``g/N`` for a receptance), is refused naming ``where`` (the file and its field)."""
+    if _norm(units) in _EMPTY:
+        return 1.0
+    try:
+        factor, implied, _ = frf_unit_factor(units, "", UnitSystem())
+    except FileFormatError as exc:
+        raise FileFormatError(f"{where}: {exc}; expected a response unit over a force unit (m/N, mm/N, g/N, "
+                              "m/s/N, ...)") from None
+    if implied is None or "/" not in _norm(units):
+        raise FileFormatError(f"{where}: {str(units).strip()!r} is not a response unit over a force unit (m/N, "
+                              "mm/N, g/N, m/s/N, ...)")
+    if implied != kind:
+        raise FileFormatError(f"{where}: {str(units).strip()!r} is a unit of {implied}, but the FRFs are {kind}")
+    return factor

@@ -9,6 +9,7 @@ from experiments.cli import main
 from physics import modal, updating
 from physics.beam import load_beam
 from physics.io import format_complex, write_uff58
+from physics.io.npz import write_frf_npz
 from physics.thesis import simulated_beam5_test
 
 
@@ -19,11 +20,14 @@ def _beam5_mass():
 
 
 def _modal_file(path, zeta):
-    """Complex modes of (M, C, K) on beam 5's IIRS mass with proportional damping ratios ``zeta``."""
+    """Complex modes of (M, C, K) on beam 5's IIRS mass with proportional damping ratios ``zeta``, the shapes the
+    FE model's at the sensors made mass-orthonormal in their order (Gram-Schmidt: ``U^T M U = I``)."""
     M = _beam5_mass()
     w = 2 * np.pi * np.array([20.0, 130.0, 350.0, 650.0])
-    Q, _ = np.linalg.qr(np.arange(1.0, 17.0).reshape(4, 4) ** 0.5)
-    U = np.linalg.solve(np.linalg.cholesky(M).T, Q)  # U^T M U = I
+    b = load_beam("beam5")
+    model = b.fe_model()
+    P = modal.undamped_modes(model.M, model.K)[1][model.index(b.masters)][:, :4]
+    U = P @ np.linalg.inv(np.linalg.cholesky(P.T @ M @ P)).T
     K = M @ U @ np.diag(w**2) @ U.T @ M
     C = M @ U @ np.diag(2 * np.asarray(zeta) * w) @ U.T @ M
     cm = modal.complex_modes(M, C, K)
@@ -99,21 +103,63 @@ def test_frequencies_out_of_order_against_their_shapes_are_warned_of(tmp_path, c
     assert len(order) == 1 and "(130, 20, 350, 650 Hz)" in order[0], order
 
 
-def test_modes_the_model_cannot_pair_are_named_as_left_out(tmp_path, monkeypatch):
-    """``update`` identifies as many modes as the model pairs; modes beyond them in the FRFs' band are named."""
-    from types import SimpleNamespace
-
+def test_the_model_pairs_the_lowest_identified_modes_and_names_those_left_out(tmp_path):
+    """FRFs of beam 5 hold 4 modes; a model of 3 DOFs pairs the 3 lowest (their exact frequencies to 1e-4, their
+    shapes from the one fit of all 4), and the 4th is named as left out. (LSCF asked for 3 modes keeps those stable
+    over most orders, which on an accelerance or a fine band are the highest.)"""
     from physics import beam_updating
 
-    def ident(f_hz):
-        return SimpleNamespace(modal_data=SimpleNamespace(natural_frequencies_hz=np.array(f_hz)))
+    frf, modes = simulated_beam5_test(noise=0.0, seed=0, damping="heavy", df_hz=2.0)
+    path = tmp_path / "t.npz"
+    write_frf_npz(path, frf)
+    with pytest.warns(UserWarning, match=r"t.npz: 4 modes identified in the FRFs' band, the model pairs the lowest 3: "
+                                         r"6\d\d(\.\d)? Hz left out of the update"):
+        data, _ = beam_updating.load_modal(path, 3)
+    np.testing.assert_allclose(data.natural_frequencies_hz, modes.natural_frequencies_hz[:3], rtol=1e-4)
 
-    monkeypatch.setattr(beam_updating, "identify_file", lambda path, n_modes=None: ident([10.2, 64.8, 179.0, 352.4]))
-    with pytest.warns(UserWarning, match=r"t.uff: 4 modes identified in the FRFs' band, the model pairs 3: 352.4 Hz "
-                                         "left out of the update"):
-        beam_updating._warn_modes_left_out("t.uff", ident([10.2, 64.8, 179.0]), 3)
-    import warnings
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        beam_updating._warn_modes_left_out("t.uff", ident([10.2, 64.8, 179.0, 352.4]), 4)
+def test_shapes_beside_another_modes_frequency_are_named_by_their_mac_with_the_model(tmp_path, capsys):
+    """Table 4.5 updates without a shape warning; with its shape columns 1 and 2 swapped, Lancaster's construction
+    still reproduces the eigenvalues (the check passes), and the MAC with the model's modes names both columns."""
+    from pathlib import Path
+
+    import physics
+
+    table = Path(physics.__file__).parent / "data" / "thesis" / "beam5_table_4_5.json"
+    assert main(["update", "--modal", str(table), "--json"]) == 0
+    assert not [w for w in json.loads(capsys.readouterr().out)["warnings"] if "MAC" in w]
+    obj = json.loads(table.read_text())
+    for row in obj["eigenvectors"]:
+        row[0], row[1] = row[1], row[0]
+    swapped = tmp_path / "swapped.json"
+    swapped.write_text(json.dumps(obj))
+    assert main(["update", "--modal", str(swapped), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["eigenvalue_check"]["max_relative_error"] < 0.05
+    named = [w for w in out["warnings"] if "does not pair the model's mode" in w]
+    assert len(named) == 2
+    assert "measured mode 1's shape" in named[0] and "most like the model's mode 2" in named[0]
+    assert "measured mode 2's shape" in named[1] and "most like the model's mode 1" in named[1]
+
+
+def test_the_update_does_not_depend_on_each_modes_shape_scale(tmp_path, capsys):
+    """Each mode's shape is scaled against the trusted mass: Table 4.5 with its columns multiplied by complex
+    factors (shapes of no driving point, of another normalisation) gives the same K and C to the file's 5 digits."""
+    from pathlib import Path
+
+    import physics
+
+    table = Path(physics.__file__).parent / "data" / "thesis" / "beam5_table_4_5.json"
+    obj = json.loads(table.read_text())
+    V = np.array([[complex(z.replace(" ", "")) for z in row] for row in obj["eigenvectors"]])
+    V *= np.array([2.0 * np.exp(0.3j), 0.5 * np.exp(-1j), 3.0, 1j])
+    obj["eigenvectors"] = [[format_complex(z) for z in row] for row in V]
+    scaled = tmp_path / "scaled.json"
+    scaled.write_text(json.dumps(obj))
+    out = []
+    for path in (table, scaled):
+        assert main(["update", "--modal", str(path), "--json"]) == 0
+        out.append(json.loads(capsys.readouterr().out))
+    for key in ("K", "C"):
+        a, b = (np.array(o[key]) for o in out)
+        assert np.max(np.abs(a - b)) < 1e-5 * np.max(np.abs(a))

@@ -123,3 +123,53 @@ def test_discrepancy_maps_renumbered_shuffled_mm_file_by_geometry(capsys, files)
     code, out, err = _run(capsys, "discrepancy", "--measured", str(d / "offgrid.uff"), *DISCREPANCY)
     assert code == 2 and out == "" and err.count("\n") == 1
     assert "offgrid.uff" in err and "103:+Y at x = 0.4 m is not at a model DOF" in err
+
+
+def test_rotations_and_axial_translations_are_no_measured_dofs_of_the_beam(capsys, tmp_path):
+    """The same FRFs labelled as rotations (RZ) or, without node geometry, along the beam's axis (X) are refused in
+    one line naming them; as Z they are transverse and update as the Y file does. Told to leave such DOFs out
+    (``classify``'s pairs), the mapping names them as not used."""
+    from physics.io.geometry import map_measured_dofs
+    from physics.io.types import MeasuredFRF
+
+    frf, _ = simulated_beam5_test(noise=0.0, seed=11, df_hz=2.0, damping="heavy")
+    results = {}
+    for direction in ("+Y", "+Z", "+RZ", "+X"):
+        relabel = tuple(d.replace("+Y", direction) for d in frf.response_dofs)
+        ref = tuple(d.replace("+Y", direction) for d in frf.reference_dofs)
+        path = tmp_path / f"{direction[1:]}.uff"
+        write_uff58(path, MeasuredFRF(frf.frequency_hz, frf.frf, relabel, ref))
+        code, out, err = _run(capsys, "update", "--modal", str(path), "--json")
+        results[direction] = (code, out, err)
+    assert results["+Y"][0] == 0 and results["+Z"][0] == 0
+    assert json.loads(results["+Y"][1])["K"] == json.loads(results["+Z"][1])["K"]
+    for direction, named in (("+RZ", "2:+RZ, 3:+RZ, 4:+RZ, 5:+RZ"), ("+X", "2:+X, 3:+X, 4:+X, 5:+X")):
+        code, out, err = results[direction]
+        assert code == 2 and out == "" and len(err.strip().splitlines()) == 1
+        assert f"measured DOFs {named} are no transverse translation" in err
+    mapped = map_measured_dofs(["2:+Y", "2:+RZ", "3:+Y"], [0.0, 0.152375, 0.30475], ["1:y", "2:y", "3:y"],
+                               length_m=0.6095, off_grid="ignore")
+    assert mapped.model_dofs == ("2:y", "", "3:y") and mapped.detail.endswith("not used: 2:+RZ")
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ('bc = "pinned-pinned"\n', "'measured_x_m': measured position 0.6095 m is on the pinned-pinned support at "
+                              "x = 0.6095 m, which holds the translation (the quarter points, the default sensors): "
+                              "give 'measured_x_m' off the supports"),
+    ("measured_x_m = [0.1, 0.3, 0.45, 0.6095]\n", "'measured_x_m': measured position 0.1 m is not a node of the "
+                                                  "4-element mesh: give 'measured_x_m' on its nodes, or 'n_elements' "
+                                                  "that put nodes there"),
+])
+def test_sensors_on_a_support_or_off_the_nodes_are_refused_naming_the_beam_file(capsys, tmp_path, text, message):
+    beam = tmp_path / "b.toml"
+    beam.write_text('preset = "beam5"\n' + text)
+    code, out, err = _run(capsys, "update", "--beam", str(beam), "--modal", str(_thesis_table()))
+    assert code == 2 and out == "" and err.strip() == f"beam-damage update: error: {beam}: {message}"
+
+
+def _thesis_table():
+    from pathlib import Path
+
+    import physics
+
+    return Path(physics.__file__).parent / "data" / "thesis" / "beam5_table_4_5.json"

@@ -83,7 +83,8 @@ def test_record_problem_names_unusable_records_and_leaves_identification_failure
     assert record_problem(good) is None
     assert "not a readable .npz" in record_problem(cut) and str(cut) in record_problem(cut)
     assert "NaN" in record_problem(nan) and "constant" in record_problem(dead)
-    assert record_problem(tmp_path / "missing.npz").endswith("file not found; expected an .npz of a MeasuredFRF")
+    missing = "file not found; expected an .npz of FRFs (frequency_hz, frf, ...) or of time series (signals, ...)"
+    assert record_problem(tmp_path / "missing.npz").endswith(missing)
     assert record_problem(modal) is None                # modal data: an outside identification's failure counts
 
 

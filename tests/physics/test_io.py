@@ -435,3 +435,32 @@ def test_a_value_no_number_names_the_unreadable_record(tmp_path):
     with pytest.raises(FileFormatError, match=r"stars.uff: cannot read dataset 58 records .*the first unreadable: "
                                               r"dataset 58 record 2 \(block 2 of the file"):
         read_frf(path)
+
+
+def test_csv_and_npz_units_are_converted_to_si_and_a_unit_of_another_kind_is_refused(tmp_path, frf):
+    """The same accelerance written in g/N (CSV ``# units:``) and in mm/s^2/N (NPZ ``units``) reads as the SI one
+    (1 g = 9.80665 m/s^2); a receptance stated in g/N, or a unit this reader does not know, names the field."""
+    acc = frf.to_kind("accelerance")
+    path = tmp_path / "g.csv"
+    write_frf_csv(path, acc)
+    lines = path.read_text().splitlines()
+    assert lines[2] == "# units: m/s^2/N"
+    table = np.loadtxt(lines[4:], delimiter=",")
+    table[:, 1:] /= 9.80665
+    path.write_text("\n".join([*lines[:2], "# units: g/N", lines[3]]) + "\n"
+                    + "\n".join(",".join(f"{v:.17g}" for v in row) for row in table) + "\n")
+    back = read_frf(path)
+    np.testing.assert_allclose(back.frf, acc.frf, rtol=1e-14)
+    assert back.units == "m/s^2/N"
+    npz = tmp_path / "mm.npz"
+    np.savez(npz, frequency_hz=acc.frequency_hz, frf=acc.frf * 1e3, response_dofs=np.array(acc.response_dofs),
+             reference_dofs=np.array(acc.reference_dofs), kind=np.array("accelerance"), units=np.array("mm/s^2/N"))
+    np.testing.assert_allclose(read_frf(npz).frf, acc.frf, rtol=1e-14)
+    path.write_text(path.read_text().replace("# kind: accelerance", "# kind: receptance"))
+    with pytest.raises(FileFormatError, match=r"g.csv: '# units: g/N': 'g/N' is a unit of accelerance, but the FRFs "
+                                              "are receptance"):
+        read_frf(path)
+    np.savez(npz, frequency_hz=acc.frequency_hz, frf=acc.frf, response_dofs=np.array(acc.response_dofs),
+             reference_dofs=np.array(acc.reference_dofs), kind=np.array("accelerance"), units=np.array("furlong/N"))
+    with pytest.raises(FileFormatError, match=r"mm.npz: array 'units' \('furlong/N'\): unit label 'furlong'"):
+        read_frf(npz)
