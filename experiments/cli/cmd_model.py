@@ -37,7 +37,7 @@ def build(beam, elements: int | None, mass: str, method: str, bc: str | None = N
                                   "(guyan, irs or iirs) for the stiffness", parameter="mass")
         idx = model.index(dofs)
         M = model.M[np.ix_(idx, idx)]
-    w, _ = modal.undamped_modes(M, K)
+    w = modal.undamped_frequencies_rad_s(M, K)
     w = w[SUPPORTS[bc].rigid_body_modes:]                          # a free beam's bounce and pitch left out
     closed = None
     if not b.effects:                                   # eq. 4.5 and its kin: the uniform beam on ideal supports

@@ -94,3 +94,21 @@ def test_underdamped_modes_equal_complex_modes_when_all_are_underdamped():
     np.testing.assert_allclose(low.eigenvalues, full.eigenvalues[:, :3], rtol=1e-12)
     np.testing.assert_allclose(np.abs(modal.mac(low.eigenvectors[0], full.eigenvectors[0, :, :3]).diagonal()), 1,
                                atol=1e-10)
+
+
+def test_the_lowest_frequencies_of_a_fine_mesh_keep_their_precision():
+    """A cantilever of 600 Hermite elements: the direct problem's ``f_1`` errs by 3.5e-5 of the closed form
+    (eq. 4.5; ``eps w_max^2 / w_1^2``), the inverse one's, which :func:`undamped_frequencies_rad_s` takes at the low
+    end, by under 2e-6; the highest frequencies are the direct problem's, unchanged."""
+    from physics import properties
+    from physics.beam import load_beam
+
+    b = load_beam("beam5")
+    m = b.fe_model(600)
+    direct, _ = modal.undamped_modes(m.M, m.K)
+    both = modal.undamped_frequencies_rad_s(m.M, m.K)
+    closed = properties.cantilever_frequencies_hz(b.EI_Nm2, b.mass_per_length_kg_m, b.length_m,
+                                                  properties.uniform_beta_l("clamped-free", 4))
+    assert abs(direct[0] / (2 * np.pi) / closed[0] - 1) > 1e-5
+    np.testing.assert_allclose(both[:4] / (2 * np.pi), closed, rtol=2e-6)
+    np.testing.assert_array_equal(both[-10:], direct[-10:])
