@@ -560,6 +560,8 @@ def _command_arg_cases():
                                                  str(d / "e")], "--samples"),
         ("export", "--samples ','", lambda d: ["export", str(_ds_copy(d)), "--samples", ",", "--out", str(d / "e")],
          "--samples"),
+        ("export", "--samples 0,,1", lambda d: ["export", str(_ds_copy(d)), "--samples", "0,,1", "--out",
+                                                str(d / "e")], "--samples"),
         ("export", "--format bogus", lambda d: ["export", str(_ds_copy(d)), "--samples", "0", "--format", "bogus",
                                                 "--out", str(d / "e")], "invalid choice"),
         ("export", "--out inside a file", lambda d: ["export", str(_ds_copy(d)), "--samples", "0", "--out",

@@ -553,7 +553,7 @@ def main(argv=None) -> int:
     p.add_argument("--quick", action="store_true", help="a third to a half of the later tests")
     p.add_argument("--rate", type=float, default=0.01, help="false-alarm rate (default 0.01)")
     p.add_argument("--statistics", nargs="+", choices=STATISTICS, default=list(DEFAULT_STATISTICS),
-                   help="the detector's statistics (default: monitor's, residual environment shift)")
+                   help=f"the detector's statistics (default: monitor's, {' '.join(DEFAULT_STATISTICS)})")
     a = p.parse_args(argv)
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -196,7 +196,7 @@ def main(argv=None) -> int:
     finally:
         if threading.current_thread() is threading.main_thread():
             signal.signal(signal.SIGTERM, previous)
-    messages = [str(w.message) for w in caught] + ([] if getattr(args, "json", False) else result_warnings(result))
+    messages = [str(w.message) for w in caught] + result_warnings(result)      # on stderr with --json too
     for message in dict.fromkeys(" ".join(m.split()) for m in messages):
         sys.stderr.write(one_line(f"beam-damage {args.command}: warning: {message}") + "\n")
     if getattr(args, "json", False) and isinstance(result, dict) and caught:    # and in the JSON's "warnings"

@@ -96,6 +96,20 @@ def identification_method(path) -> str | None:
     return method if isinstance(method, str) else None
 
 
+def training_line_spacing_hz(model) -> float | None:
+    """The line spacing (Hz) of the model's training FRFs: its test's band (or the recorded band of a preset beam's
+    test, ``band_rad_s``) over its ``lines``; None when not recorded."""
+    measurement = model.recorded.measurement
+    lines = measurement.get("lines")
+    if model.beam.test is not None:
+        band_hz = model.beam.test.band_hz
+    elif "band_rad_s" in measurement:
+        band_hz = [w / (2 * np.pi) for w in measurement["band_rad_s"]]
+    else:
+        return None
+    return (band_hz[1] - band_hz[0]) / (int(lines) - 1) if lines else None
+
+
 def run(args):
     if not 0 < args.false_alarm_rate < 0.5:
         raise ConfigError(f"--false-alarm-rate {args.false_alarm_rate:g}: expected a rate in (0, 0.5)")
@@ -106,9 +120,7 @@ def run(args):
     files = [*baselines, *args.measured]
     raw = [read(f, modal_or_frf(f)) for f in files]                 # ModalData or MeasuredFRF
     methods = [identification_method(f) for f in files]
-    test = model.beam.test
-    lines = model.recorded.measurement.get("lines") if test is not None else None
-    df = (test.band_hz[1] - test.band_hz[0]) / (int(lines) - 1) if lines else None      # the training's lines
+    df = training_line_spacing_hz(model)
     mapped = [on_model_dofs(d, model.beam, beam_x_m, str(f)) for d, f in zip(raw, files)]
     differ = measured_test_differences(files, raw, mapped, model.beam, df)
     base = [m[0] for m in mapped[:nb]]

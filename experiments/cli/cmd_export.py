@@ -38,11 +38,9 @@ def add_parser(subparsers):
 
 def _sample_ids(text: str) -> list[int]:
     try:
-        ids = [int(t) for t in text.split(",") if t.strip()]
+        ids = [int(t) for t in text.split(",")]
     except ValueError:
         raise BeamDamageError(f"--samples must be comma-separated integers such as 0,17,299, got {text!r}") from None
-    if not ids:
-        raise BeamDamageError("--samples names no sample")
     unique = list(dict.fromkeys(ids))
     if len(unique) < len(ids):
         warnings.warn(f"--samples names {len(ids) - len(unique)} id(s) more than once; each sample is written once")
@@ -52,6 +50,32 @@ def _sample_ids(text: str) -> list[int]:
 def _uff_dof(name: str) -> str:
     node, d = name.split(":")
     return f"{node}:+{d.upper()}"
+
+
+def _labels(manifest: dict) -> tuple:
+    """``(response DOFs, (reference DOF,), metadata)`` of a dataset's FRFs as the readers place them: a sensor at a
+    quarter point takes the node of the 4-element convention (node ``N`` at ``(N - 1) L / 4``, which every reader
+    assumes without node geometry); one elsewhere keeps its truth-mesh node, and the positions go into the metadata's
+    node geometry (an NPZ keeps it; a CSV or universal file does not: a warning says so)."""
+    schema, layout = manifest["schema"], manifest.get("layout")
+    labels = [*schema["measured_dofs"], schema["frf_reference_dof"]]
+    if not layout:                                            # the thesis's test: the convention's nodes already
+        return tuple(_uff_dof(d) for d in labels[:-1]), (_uff_dof(labels[-1]),), {}
+    length = float(layout["length_m"])
+    x_of = dict(zip(sorted({int(d.split(":")[0]) for d in schema["measured_dofs"]}),
+                    sorted(float(x) for x in layout["measured_x_m"])))
+    x_of.setdefault(int(schema["frf_reference_dof"].split(":")[0]), float(layout["drive_x_m"]))
+    quarter = {n: 4 * x / length for n, x in x_of.items()}
+    on_grid = all(abs(q - round(q)) < 1e-9 for q in quarter.values())
+    node = {n: int(round(q)) + 1 if on_grid else n for n, q in quarter.items()}
+    out = [f"{node[int(d.split(':')[0])]}:+{d.split(':')[1].upper()}" for d in labels]
+    if not on_grid:
+        warnings.warn("the sensors do not all sit at the quarter points: the labels keep the dataset's truth-mesh "
+                      "nodes, and their positions are in the node geometry of an NPZ export only; for a CSV or a "
+                      "universal file give the beam file's measured_x_m to 'update' and 'discrepancy'")
+    geometry = {"geometry": {"nodes_m": {str(node[n]): [x, 0.0, 0.0] for n, x in x_of.items()},
+                             "source": "the dataset's sensor layout"}}
+    return tuple(out[:-1]), (out[-1],), geometry
 
 
 def run(args) -> dict:
@@ -67,9 +91,7 @@ def run(args) -> dict:
         raise BeamDamageError(f"{args.dir}: no sample(s) {missing}; the dataset holds ids {sid.min()}..{sid.max()}",
                               parameter="samples")
     rows = [pos[i] for i in ids]
-    schema = ds.manifest["schema"]
-    resp = tuple(_uff_dof(d) for d in schema["measured_dofs"])
-    ref = (_uff_dof(schema["frf_reference_dof"]),)
+    resp, ref, geometry = _labels(ds.manifest)
     f_hz = ds.omega_rad_s / (2 * np.pi)
     fmt = writable(FRF)[args.format]
     out = Path(args.out)
@@ -91,7 +113,7 @@ def run(args) -> dict:
                     data = MeasuredFRF(f_hz, H[j, s][:, None, :], resp, ref, kind="receptance",
                                        metadata={"id1": f"beam-damage sample {i} {state} {kind}",
                                                  "dataset": str(args.dir), "sample_id": i, "state": state,
-                                                 "frf": kind})
+                                                 "frf": kind, **geometry})
                     existed = path.exists()
                     fmt.writer(path, data)
                     written.append(str(path))

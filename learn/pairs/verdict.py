@@ -266,6 +266,10 @@ def _zone_text(a: dict) -> str:
 def _classical_sentence(c: dict, words: DamageWords) -> str:
     if not c["damaged"]:
         return f"{c['method']}: undamaged"
+    model = damage_model(words.kind)
+    if c["size"] < 0 and model.size_transform == "log":             # a kind of positive sizes only
+        return (f"{c['method']}: changed, the natural frequencies rise, which {model.label} does not do: a stiffness "
+                f"gained or a mass lost near x = {c['location_x_m']:.3g} m ({_zone_text(c)})")
     return f"{c['method']}: damaged, {words.what(c)} ({_zone_text(c)})"
 
 

@@ -196,3 +196,28 @@ def test_a_band_holding_fewer_modes_than_classify_needs_is_refused_up_front(tmp_
     assert rc == 2 and cap.out == "" and cap.err.count("\n") == 1 and not (tmp_path / "model").exists()
     assert "'band_hz' [5, 60] holds 1 mode(s) the sensors see (mode(s) 1 at 19.93 Hz); classify needs at least" \
         in cap.err
+
+
+def test_export_labels_quarter_point_sensors_by_the_convention_every_reader_places():
+    """A free-free bar's truth mesh numbers its quarter-point sensors 9, 17, 25, 33: they are written 2..5 (node N at
+    (N - 1) L / 4), the drive at 0.25 m node 2; sensors elsewhere keep their nodes, with a warning, and their
+    positions in the node geometry of the metadata."""
+    import warnings
+
+    from experiments.cli.cmd_export import _labels
+
+    schema = {"measured_dofs": ["9:y", "17:y", "25:y", "33:y"], "frf_reference_dof": "9:y"}
+    layout = {"length_m": 1.0, "measured_x_m": [0.25, 0.5, 0.75, 1.0], "drive_x_m": 0.25}
+    resp, ref, meta = _labels({"schema": schema, "layout": layout})
+    assert resp == ("2:+Y", "3:+Y", "4:+Y", "5:+Y") and ref == ("2:+Y",)
+    assert meta["geometry"]["nodes_m"] == {"2": [0.25, 0.0, 0.0], "3": [0.5, 0.0, 0.0], "4": [0.75, 0.0, 0.0],
+                                           "5": [1.0, 0.0, 0.0]}
+    schema = {"measured_dofs": ["5:y", "9:y", "13:y", "16:y"], "frf_reference_dof": "16:y"}
+    layout = {"length_m": 1.0, "measured_x_m": [0.25, 0.5, 0.75, 0.9375], "drive_x_m": 0.9375}
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        resp, ref, meta = _labels({"schema": schema, "layout": layout})
+    assert resp == ("5:+Y", "9:+Y", "13:+Y", "16:+Y") and ref == ("16:+Y",)
+    assert meta["geometry"]["nodes_m"]["16"] == [0.9375, 0.0, 0.0]
+    assert len(caught) == 1 and "do not all sit at the quarter points" in str(caught[0].message)
+    assert _labels({"schema": {"measured_dofs": ["2:y"], "frf_reference_dof": "5:y"}}) == (("2:+Y",), ("5:+Y",), {})

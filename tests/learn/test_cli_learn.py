@@ -578,7 +578,8 @@ def test_a_pair_far_outside_the_training_data_gets_finite_network_numbers_and_no
     half.write_text(json.dumps(obj))
     assert main(["classify", "--model", str(modal_model), "--baseline", str(src), str(half), "--json"]) == 0
     cap = capsys.readouterr()
-    assert "overflow" not in cap.err and "warning" not in cap.err, cap.err
+    outside = "beam-damage classify: warning: the pair lies outside the training data"
+    assert "overflow" not in cap.err and all(line.startswith(outside) for line in cap.err.splitlines()), cap.err
     res = json.loads(cap.out)
     assert res["verdict_from"] == "classical" and not res["in_distribution"]
     net = res["network"]
@@ -666,3 +667,19 @@ def test_several_baselines_measure_the_normal_variation_and_decide_with_it(modal
                  "--baseline", base[2], intact[0]]) == 0
     assert "Normal variation measured on 3 baseline tests" in capsys.readouterr().out
     assert main(["classify", "--model", str(modal_model), "--baseline", str(tmp_path / "none*.json"), intact[0]]) == 2
+
+
+def test_the_training_line_spacing_is_read_for_a_preset_beams_test_too():
+    """A model of a beam file's test: its band over its lines; a preset beam's (no test): the recorded band
+    (rad/s) over the lines; without lines, none (``classify`` then compares no spacing)."""
+    from types import SimpleNamespace
+
+    from experiments.cli.cmd_classify import training_line_spacing_hz
+
+    def model(test, **measurement):
+        return SimpleNamespace(beam=SimpleNamespace(test=test), recorded=SimpleNamespace(measurement=measurement))
+
+    assert training_line_spacing_hz(model(SimpleNamespace(band_hz=(10.0, 810.0)), lines=801)) == 1.0
+    preset = training_line_spacing_hz(model(None, band_rad_s=[1.0, 5000.0], lines=1024))
+    assert preset == pytest.approx(4999.0 / (2 * np.pi) / 1023)
+    assert training_line_spacing_hz(model(None, band_rad_s=[1.0, 5000.0])) is None

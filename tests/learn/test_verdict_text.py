@@ -101,3 +101,13 @@ def test_the_explanations_are_named_in_words():
     assert explanation_label("global_stiffness") == "a stiffness change of the whole beam"
     for name in (*DAMAGE_MODELS, *BASE_HYPOTHESES):
         assert "_" not in explanation_label(name)
+
+
+def test_a_rise_of_the_frequencies_is_no_slit_of_negative_size_in_the_classical_sentence():
+    """A classical method flags a rise as a change (a mass lost, a stiffness gained), its size signed negative: a
+    slit model says the frequencies rose, which a slit does not do; a mass-change model calls it a mass lost."""
+    cl = {"method": "DLAC", **_answer(True, -0.178)}
+    assert _classical_sentence(cl, DamageWords("slit")) == (
+        "DLAC: changed, the natural frequencies rise, which a slit does not do: a stiffness gained or a mass lost "
+        "near x = 0.3 m (zone 2 of 2, 0.2-0.6 m)")
+    assert _classical_sentence(cl, DamageWords("mass_change")).startswith("DLAC: damaged, a mass lost at x = 0.300 m")
