@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import glob
 import json
+import warnings
 from dataclasses import replace
 from pathlib import Path
 
@@ -19,6 +20,7 @@ from physics.io import (
     FRF,
     MODAL,
     MeasuredFRF,
+    ModalData,
     accepted,
     atomic_write_bytes,
     atomic_write_text,
@@ -119,6 +121,13 @@ def run(args):
     nb = len(baselines)
     files = [*baselines, *args.measured]
     raw = [read(f, modal_or_frf(f)) for f in files]                 # ModalData or MeasuredFRF
+    for f, d in zip(files, raw):
+        if isinstance(d, ModalData) and np.any(d.eigenvalues.real > 0):
+            k = np.flatnonzero(d.eigenvalues.real > 0)
+            warnings.warn(f"{f}: mode{'s' * (k.size > 1)} {', '.join(str(j + 1) for j in k)} "
+                          f"{'have' if k.size > 1 else 'has'} negative damping (an eigenvalue's real part > 0): a "
+                          "growing oscillation, or a poorly identified damping",
+                          UserWarning, stacklevel=2)
     methods = [identification_method(f) for f in files]
     df = training_line_spacing_hz(model)
     mapped = [on_model_dofs(d, model.beam, beam_x_m, str(f)) for d, f in zip(raw, files)]

@@ -22,8 +22,8 @@ def season_warning(times, time_values, n_baseline: int, names) -> str | None:
         return None
     return (f"the baseline period spans {span:.0f} days: the {' and '.join(env)} statistics judge the environment "
             "against it, and the seasons it did not see move them as a change would (reported as 'change or unseen "
-            "conditions' beyond the baseline's environment); cover a year, give the conditions (--conditions) or "
-            "leave them out (--statistics residual)")
+            "conditions' beyond the baseline's environment); cover a year, give the measured conditions (columns "
+            "such as temperature_c in --conditions) or leave them out (--statistics residual)")
 
 
 def covers_seasons(times, time_values, n_baseline: int) -> bool:

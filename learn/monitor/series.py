@@ -70,8 +70,10 @@ def read_conditions(csv_path) -> SeriesInput:
     head = list(rows[0].keys())
     missing = [c for c in ("file", "time") if c not in head]
     if missing:
+        sep = next((c for c in ";\t" if len(head) == 1 and c in str(head[0])), None)
         raise BeamDamageError(f"{csv_path}: column(s) {', '.join(missing)} missing; expected file,time"
-                              f"[,condition...], got {','.join(map(str, head))}")
+                              f"[,condition...], got {','.join(map(str, head))}"
+                              + (f" (columns must be separated by commas, not {sep!r})" if sep else ""))
     names = tuple(c for c in head if c not in ("file", "time") and c)
     files, times, values, conds, dates, lines = [], [], [], [], set(), []
     for k, r in enumerate(rows, 2):

@@ -125,7 +125,8 @@ def response_records(rec, path) -> TimeRecords:
     all channels."""
     resp = rec.responses
     if not resp:
-        raise FileFormatError(f"{path}: no response channel, only forces")
+        raise FileFormatError(f"{path}: no response channel" + (", only forces" if rec.dofs else
+                                                                ": 'signals' holds no channel"))
     quantities = sorted({rec.quantities[i] for i in resp})
     if len(quantities) > 1:
         raise FileFormatError(f"{path}: response channels of several quantities ({', '.join(quantities)}); "

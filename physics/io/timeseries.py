@@ -100,6 +100,9 @@ def read_time_csv(path) -> TimeRecords:
                               "least two rows")
     data = csv_values(path, body[1:], len(dofs) + 1)
     dt = np.diff(data[:, 0])
-    if not (np.all(dt > 0) and np.allclose(dt, dt[0], rtol=1e-6)):
-        raise FileFormatError(f"{path}: column 'time_s' must increase by one uniform step (the sampling rate)")
+    off = np.flatnonzero(~((dt > 0) & np.isclose(dt, dt[0], rtol=1e-6)))
+    if off.size:
+        raise FileFormatError(f"{path}: line {body[off[0] + 2][0]}: column 'time_s' must increase by one uniform "
+                              f"step (the sampling rate): {data[off[0] + 1, 0]:.9g} s after {data[off[0], 0]:.9g} s, "
+                              f"where the first step is {dt[0]:.6g} s")
     return _records(path, data[:, 1:].T.copy(), 1.0 / float(np.mean(dt)), dofs, quantity)

@@ -683,3 +683,19 @@ def test_the_training_line_spacing_is_read_for_a_preset_beams_test_too():
     preset = training_line_spacing_hz(model(None, band_rad_s=[1.0, 5000.0], lines=1024))
     assert preset == pytest.approx(4999.0 / (2 * np.pi) / 1023)
     assert training_line_spacing_hz(model(None, band_rad_s=[1.0, 5000.0])) is None
+
+
+def test_a_mode_of_negative_damping_is_named_in_a_warning(tiny, modal_model, capsys):
+    """Table 4.5 with mode 2's eigenvalue mirrored into the right half-plane (a negative damping ratio): classify
+    runs and names the mode; the table itself gives no such warning."""
+    from physics.io import format_complex, read_json
+
+    src = Path(__file__).resolve().parents[2] / "physics" / "data" / "thesis" / "beam5_table_4_5.json"
+    obj = read_json(src)
+    lam = complex(str(obj["eigenvalues"][1]).replace(" ", ""))
+    obj["eigenvalues"][1] = format_complex(complex(-lam.real, lam.imag))
+    neg = tiny / "negative.json"
+    neg.write_text(json.dumps(obj))
+    assert main(["classify", "--model", str(modal_model), "--baseline", str(src), str(neg), "--json"]) == 0
+    err = capsys.readouterr().err
+    assert f"warning: {neg}: mode 2 has negative damping" in err and f"{src}: mode" not in err

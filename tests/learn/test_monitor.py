@@ -323,3 +323,12 @@ def test_a_mode_the_baseline_always_held_that_goes_missing_is_novel():
     np.testing.assert_allclose(missing_evidence(gone, X), -2 * np.log(11 / 42) + 2 * np.log(42))
     held = held_out_novelty(lambda: PCARemoval(0), X)
     np.testing.assert_allclose(held[0] - PCARemoval(0).fit(X[1:]).novelty(X[:1])[0], -2 * np.log(10 / 41))
+
+
+def test_a_conditions_csv_of_semicolons_names_the_separator(tmp_path):
+    path = tmp_path / "c.csv"
+    path.write_text("file;time\na.npz;1\n")
+    with pytest.raises(BeamDamageError, match=r"c.csv: column\(s\) file, time missing; expected file,time"
+                                              r"\[,condition...\], got file;time \(columns must be separated by "
+                                              r"commas, not ';'\)"):
+        read_conditions(path)

@@ -464,3 +464,22 @@ def test_csv_and_npz_units_are_converted_to_si_and_a_unit_of_another_kind_is_ref
              reference_dofs=np.array(acc.reference_dofs), kind=np.array("accelerance"), units=np.array("furlong/N"))
     with pytest.raises(FileFormatError, match=r"mm.npz: array 'units' \('furlong/N'\): unit label 'furlong'"):
         read_frf(npz)
+
+
+def test_a_csv_time_series_off_its_step_names_the_line():
+    """A time series whose samples 5 and 6 are swapped (a double step, then a step back): the line of the first row
+    off the first step (line 7: two comment and header lines first) is named with both times."""
+    import tempfile
+
+    from physics.io import TIME, read
+
+    t = np.arange(10) * 0.001
+    t[[4, 5]] = t[[5, 4]]
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / "ts.csv"
+        rows = "".join(f"{float(x)!r},{k}\n" for k, x in enumerate(t))
+        path.write_text("# quantity: acceleration\ntime_s,2:+Y\n" + rows)
+        with pytest.raises(FileFormatError, match=r"ts.csv: line 7: column 'time_s' must increase by one uniform step "
+                                                  r"\(the sampling rate\): 0.005 s after 0.003 s, where the first step "
+                                                  r"is 0.001 s"):
+            read(path, TIME)
