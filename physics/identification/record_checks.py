@@ -130,7 +130,7 @@ def modes_with_periods(duration_s, frequencies_hz, where="record") -> np.ndarray
     refused as :func:`check_periods` refuses it."""
     f = np.asarray(frequencies_hz, float)
     keep = f * duration_s >= MIN_PERIODS
-    if not keep.any():
+    if f.size and not keep.any():
         check_periods(duration_s, float(np.min(f)), "the lowest mode", where)
     if not keep.all():
         warnings.warn(f"{where}: {duration_s:.3g} s holds fewer than ten periods of "
