@@ -17,7 +17,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["RatioTrend", "choice_texts", "ratio_trend", "trend_picks"]
+__all__ = ["MIN_PAIR_MAC", "RATIO_TOLERANCE", "RatioTrend", "choice_texts", "ratio_trend", "trend_picks"]
+
+#: Tolerance on the measured frequency ratios ``f_k / f_1`` against the model's nominal beam: wide enough for
+#: another stiffness, root or shear flexibility (shear lowers f4/f1 by about 10 %), narrow against a missing or
+#: spurious mode (which moves a ratio by a factor of 2.6 or more).
+RATIO_TOLERANCE = 0.35
+
+#: Least MAC between an identified shape and a nominal mode's shape at the sensors for the two to pair (two or
+#: more sensors): a slit or a support change leaves the MAC of a mode with its nominal shape above 0.9; a
+#: spurious pole (a mains line, a fixture's resonance) has a shape of its own.
+MIN_PAIR_MAC = 0.5
 
 
 @dataclass(frozen=True)

@@ -10,7 +10,7 @@ import numpy as np
 
 from learn.network.features import BeamSpec
 from learn.explanations.shapes import real_shapes
-from physics.ratio_trend import choice_texts, trend_picks
+from physics.ratio_trend import MIN_PAIR_MAC, RATIO_TOLERANCE, choice_texts, trend_picks
 from physics.errors import BeamDamageError
 from physics.identification import identify_frf
 from physics.identification.failures import identification_failure
@@ -34,22 +34,12 @@ IDENTIFICATION = {"method": "lscf", "n_modes": 4}
 IDENTIFICATION_BAND_FACTOR = 1.4
 
 
-#: Tolerance on the measured frequency ratios ``f_k / f_1`` against the model's nominal beam: wide enough for
-#: another stiffness, root or shear flexibility (shear lowers f4/f1 by about 10 %), narrow against a missing or
-#: spurious mode (which moves a ratio by a factor of 2.6 or more).
-RATIO_TOLERANCE = 0.35
-
 #: With several baseline tests, a test's pole pairs with a mode only within this relative distance of the
 #: baselines' median frequency of that mode (narrowed to half the log gap to its neighbours): the baselines measure
 #: the beam itself, so what remains is the normal variation (0.1-1 %) and the damage; a pole farther away is the
 #: mode moved or lost, never the mode (on a one-accelerometer cantilever a spurious pole 6 % above mode 5 otherwise
 #: took mode 5's place, a false alarm).
 BASELINE_PAIR_BAND = 0.05
-
-#: Least MAC between an identified shape and a nominal mode's shape at the sensors for the two to pair (two or
-#: more sensors): a slit or a support change leaves the MAC of a mode with its nominal shape above 0.9; a
-#: spurious pole (a mains line, a fixture's resonance) has a shape of its own.
-MIN_PAIR_MAC = 0.5
 
 
 def on_model_dofs(data, beam: BeamSpec, beam_x_m=None, where: str = "measured data"):

@@ -421,7 +421,9 @@ def _calibration_comment(beam: Beam, measured, res: DiscrepancyResult, meas: Mea
     """Header of the calibrated beam file: the command, the named effects, seed, noise and chi2/dof."""
     return (f"calibrated by 'beam-damage discrepancy --beam {beam.name} --measured {measured}'\n"
             f"named effects: {', '.join(res.named_effects) or 'none'}; seed {seed}; "
-            f"noise: frequency {np.max(np.asarray(noise.frequency)):.3g} (relative); chi2/dof "
+            f"noise: frequency {res.noise_scale * np.max(np.asarray(noise.frequency)):.3g} (relative"
+            + (f", the assumed {np.max(np.asarray(noise.frequency)):.3g} scaled by {res.noise_scale:.3g} to the data"
+               if res.noise_scale != 1.0 else "") + "); chi2/dof "
             f"{check['chi2_per_dof']:.3g} ({check['verdict']})"
             + ("\ndamping: Rayleigh least-squares fitted to the measured damping ratios"
                if meas.damping_ratios is not None else ""))

@@ -201,7 +201,8 @@ def _analyse(beam, meas, noise, candidates, max_effects, n_elements, n_starts, s
     ctx = dict(beam=beam, meas=meas, noise=noise, fixed=fixed, n_elements=n_elements, pairs=pairs,
                fit_mass=fit_mass, n_starts=n_starts, seed=seed, say=say)
     steps, named, positions, evidence, drops = [], [], {}, {}, {}
-    scale = (1.0, 0, "not estimated: the noise was given")
+    scale = (1.0, 0, "not estimated: the noise was given" if meas.frf is None else
+             "not estimated: an FRF's noise is never rescaled")
     while len(named) < max_effects:
         todo = _todo(names, named, fixed)
         if not todo:

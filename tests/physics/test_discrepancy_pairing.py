@@ -84,6 +84,36 @@ def test_a_noise_check_failed_by_orders_of_magnitude_names_the_worst_mode():
     assert "measured mode 2 (138.8 Hz) stays -0.10 % off" in dsc.failed_noise_check(freq, r, None)["stopped"]
 
 
+def test_a_block_failed_by_orders_of_magnitude_stops_however_well_the_others_fit():
+    """A tension no candidate models: the frequencies block's chi2/dof 306, the shapes' 0.108 bring the whole to 64
+    (under 100); the frequencies' failure stops, naming the block and the mode that stays off."""
+    r = SimpleNamespace(measured_hz=np.array([22.6, 118.9]), frequency_error_pct=np.array([-9.44, 0.3]),
+                        frf_band_error_db=None, mac=np.array([0.999, 0.998]))
+    chk = SimpleNamespace(chi2_per_dof=64.4, blocks={"frequencies": {"chi2_per_dof": 306.0},
+                                                     "mode shapes": {"chi2_per_dof": 0.108}})
+    stop = dsc.failed_noise_check(chk, r, None)
+    assert stop["stopped"].startswith("the calibrated model fails its own noise check by orders of magnitude (the "
+                                      "frequencies block's chi2/dof 306 > 100, 64.4 over every residual), no beam "
+                                      "file written; likely cause: measured mode 1 (22.6 Hz) stays -9.44 % off")
+    chk.blocks["frequencies"]["chi2_per_dof"] = 90.0
+    chk.chi2_per_dof = 20.0
+    assert dsc.failed_noise_check(chk, r, None) is None
+
+
+def test_a_mode_within_the_ratio_band_but_of_another_shape_is_named_by_its_mac(beam):
+    """Two sensors (0.2 and 0.4 m) whose shapes of mode 5 are the nominal mode 4's (MAC with the nominal mode 5
+    below 0.5): the frequency is 3 % off mode 5, and the stop names the MAC rule, not the 35 % band."""
+    f = np.array([22.2, 138.8, 386.3, 757.9, 1300.0])
+    nominal = dsc.predict(beam, dsc.Measurement(f, shapes=np.ones((2, 5)), shape_x_m=(0.2, 0.4)), 40)
+    shapes = np.array(nominal.shapes[:, :5])
+    shapes[:, 4] = shapes[:, 3]
+    meas = dsc.Measurement(f, shapes=shapes, shape_x_m=(0.2, 0.4))
+    p = dsc.pair_measured(meas, dsc.predict(beam, meas, 40), CLASSIFY_PAIRING, beam.band_hz)
+    assert p.model_index[4] == -1
+    assert re.search(r"measured mode at 1300 Hz pairs with no model mode \(nearest: model mode 5 at 1261 Hz, -3.0 %, "
+                     r"but the shapes' MAC [0-9.]+ is below the pairing rule's 0.5\)", p.unpaired[0]), p.unpaired[0]
+
+
 def test_one_sensor_separating_measurement_and_simulation(beam):
     """One measured position compares no shape: a one-row shape is held as none, the measurement that separates two
     models compares shapes at the quarter points, and a one-sensor simulation gives frequencies (shapes refused in
