@@ -108,8 +108,8 @@ def run(args) -> dict:
     if args.modes is not None and args.modes < 1:
         raise ConfigError(f"--modes {args.modes}: must be >= 1")
     if args.max_order is not None and not 1 <= args.max_order <= MAX_ORDER:
-        raise ConfigError(f"--max-order {args.max_order}: must be between 1 and {MAX_ORDER} (the LSCF normal "
-                          "equations grow with the square of the order)")
+        raise ConfigError(f"--max-order {args.max_order}: must be between 1 and {MAX_ORDER} (a fit's cost grows "
+                          "with the square of the order; an output-only model needs at least 2, a pair of poles)")
     window_flag = _check_window_options(args)
     band = tuple(args.band) if args.band else None
     if args.method is None or METHODS[args.method].data == "records":

@@ -304,6 +304,9 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
     p_max = max_order or max(MIN_MAX_ORDER, ORDERS_PER_PEAK * peaks_hz.size)
     p_max = 2 * (min(p_max, (rows - 1) * n_ch) // 2)
     if p_max < 2:
+        if max_order is not None and max_order < 2:
+            raise ShapeError(f"{where}: a model order of {max_order} holds no mode (a mode is a pair of poles): the "
+                             "highest model order must be at least 2")
         raise ShapeError(f"{where}: the decays are too short for a model of order 2 ({rows} block rows of "
                          f"{n_ch} channel(s))")
     record_peaks = decay_peaks(sv)                              # the peaks fftpeak reports a mode at

@@ -557,3 +557,11 @@ def test_the_simulators_ambient_record_started_from_rest_is_read_by_ssi():
     f = out.estimate.natural_frequencies_hz
     truth = np.array(t.truth["frequencies_hz"])
     np.testing.assert_allclose(f[np.argmin(np.abs(f[:, None] - truth), axis=0)], truth, rtol=5e-3)
+
+
+def test_a_model_order_below_two_is_refused_as_holding_no_mode():
+    """An order of 1 asked of era: refused as holding no mode (a mode is a pair of poles), not as decays too short."""
+    y, fs = _sine_decays(0)
+    with pytest.raises(ShapeError, match=r"a model order of 1 holds no mode \(a mode is a pair of poles\): the "
+                                         "highest model order must be at least 2"):
+        identify_era(y, fs, max_order=1)
