@@ -15,6 +15,7 @@ import numpy as np
 
 from physics import modal, updating
 from physics.beam import Beam, load_beam
+from physics.discrepancy import bending_modes
 from physics.errors import BeamDamageError, ConvergenceError, FileFormatError, OverdampedError
 from physics.identification import holds_response_records, identify_file
 from physics.io import MODAL, TIME, modal_or_frf, prepare_measured, read, read_json
@@ -138,15 +139,16 @@ def updated_model_modes(M, C, K, paired_eigenvalues, where) -> tuple:
 MIN_SHAPE_MAC = 0.8
 
 
-def shape_pairing_warnings(model, masters, vectors, where) -> list[str]:
-    """Warnings for measured shapes (columns of ``vectors``, rows the ``masters``) that do not pair the analytical
-    model's mode of the same index (MAC below :data:`MIN_SHAPE_MAC`), naming the model's mode each resembles most.
-    Lancaster's construction reproduces any pairing of eigenvalues and shapes, so the eigenvalue check cannot see
-    a shape beside another mode's frequency (columns swapped in a file, or a mode missing and another in its
-    place); the model's shapes at the sensors can."""
-    _, phi = modal.undamped_modes(model.M, model.K)
+def shape_pairing_warnings(beam: Beam, model, vectors, where) -> list[str]:
+    """Warnings for measured shapes (columns of ``vectors``, rows the beam's measured DOFs) that do not pair the
+    analytical ``model``'s bending mode of the same index (MAC below :data:`MIN_SHAPE_MAC`;
+    :func:`physics.discrepancy.bending_modes`: a free beam's rigid-body modes left out), naming the model's mode each
+    resembles most. Lancaster's construction reproduces any pairing of eigenvalues and shapes, so the eigenvalue
+    check cannot see a shape beside another mode's frequency (columns swapped in a file, or a mode missing and
+    another in its place); the model's shapes at the sensors can."""
     m = vectors.shape[1]
-    pairing = modal.mac(vectors, phi[model.index(masters)][:, :m])
+    _, phi = bending_modes(beam, model, m)
+    pairing = modal.mac(vectors, phi[model.index(beam.masters)])
     best = np.argmax(pairing, axis=1)
     bad = [k for k in range(m) if pairing[k, k] < MIN_SHAPE_MAC]
     return [f"{where}: measured mode {k + 1}'s shape does not pair the model's mode {k + 1} (MAC {pairing[k, k]:.2f} "
@@ -199,7 +201,7 @@ def update_beam(beam, modal_file, mass: str = "iirs", tol: float = 1e-10, max_it
             f"in the model (relative eigenvalue error {errors[worst]:.3g} > {max_eigenvalue_error:g}); the "
             "eigenvectors are not a complete set of modes consistent with the mass (for real-valued shapes: only "
             "normal modes of proportional damping qualify)")
-    warnings = shape_pairing_warnings(model, b.masters, vectors, modal_file)
+    warnings = shape_pairing_warnings(b, model, vectors, modal_file)
     f_meas = np.asarray(data.natural_frequencies_hz, float)
     if np.any(np.diff(f_meas) < 0):
         warnings.append(f"{modal_file}: the modes are not in ascending order of frequency "
