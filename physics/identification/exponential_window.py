@@ -129,12 +129,10 @@ def remove_window_decay(eigenvalues, tau_s, damping_std=None, noise_share=NOISE_
     lam = np.asarray(eigenvalues, dtype=complex)
     if lam.ndim != 1 or not np.all(np.isfinite(lam)):
         raise ShapeError(f"eigenvalues must be a finite 1-D array, got shape {lam.shape}")
-    std = np.full(lam.size, np.nan) if damping_std is None else np.broadcast_to(np.asarray(damping_std, float),
-                                                                                  lam.shape)
     rate = 1.0 / tau
     sigma = -lam.real - rate
     w_n = np.abs(lam)
-    allowance = _allowance(lam, rate, std, noise_share, noise_stds)
+    allowance = _allowance(lam, rate, damping_std, noise_share, noise_stds)
     bad = np.nonzero(sigma < -allowance)[0]
     if bad.size:
         j = bad[np.argmin(sigma[bad] + allowance[bad])]
@@ -152,8 +150,10 @@ def remove_window_decay(eigenvalues, tau_s, damping_std=None, noise_share=NOISE_
     return WindowCorrection(corrected, fn, zeta, tau, rate, at_zero)
 
 
-def _allowance(lam, rate, std, noise_share, noise_stds):
-    """How far below zero (1/s) a corrected decay rate may fall and be read as noise (:func:`remove_window_decay`)."""
+def _allowance(lam, rate, damping_std, noise_share, noise_stds):
+    """How far below zero (1/s) a corrected decay rate may fall and be read as noise (:func:`remove_window_decay`;
+    ``damping_std`` None or NaN: none of its own)."""
+    std = np.zeros(lam.shape) if damping_std is None else np.broadcast_to(np.asarray(damping_std, float), lam.shape)
     return np.maximum(noise_share * rate, noise_stds * np.where(np.isfinite(std), std, 0.0) * np.abs(lam))
 
 
@@ -163,10 +163,8 @@ def slower_than_window(eigenvalues, tau_s, damping_std=None, noise_share=NOISE_S
     the windowed FRFs decay, beyond the noise allowance of :func:`remove_window_decay`: no mode of the structure,
     were the window's ``tau_s`` right (a pole the fit placed in the noise)."""
     lam = np.asarray(eigenvalues, dtype=complex)
-    std = np.full(lam.size, np.nan) if damping_std is None else np.broadcast_to(np.asarray(damping_std, float),
-                                                                                  lam.shape)
     rate = 1.0 / float(tau_s)
-    return -lam.real - rate < -_allowance(lam, rate, std, noise_share, noise_stds)
+    return -lam.real - rate < -_allowance(lam, rate, damping_std, noise_share, noise_stds)
 
 
 def remove_window_decay_modal(natural_frequencies_hz, damping_ratios, tau_s, damping_std=None,
