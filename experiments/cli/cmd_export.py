@@ -68,7 +68,7 @@ def _labels(manifest: dict) -> tuple:
     quarter = {n: 4 * x / length for n, x in x_of.items()}
     on_grid = all(abs(q - round(q)) < 1e-9 for q in quarter.values())
     node = {n: int(round(q)) + 1 if on_grid else n for n, q in quarter.items()}
-    out = [f"{node[int(d.split(':')[0])]}:+{d.split(':')[1].upper()}" for d in labels]
+    out = [_uff_dof(f"{node[int(n)]}:{d}") for n, d in (label.split(":") for label in labels)]
     if not on_grid:
         warnings.warn("the sensors do not all sit at the quarter points: the labels keep the dataset's truth-mesh "
                       "nodes, and their positions are in the node geometry of an NPZ export only; for a CSV or a "
