@@ -29,7 +29,7 @@ coherence); this module prepares the records the way each test needs:
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -39,9 +39,10 @@ from physics.identification.record_checks import clipped_run_text
 from physics.io.timedata import TimeRecords
 from physics.io.types import MeasuredFRF
 
-__all__ = ["ESTIMATORS", "EXCITATIONS", "FORCE_DROP_DB", "HIT_OVER_NOISE", "LEVEL_SEGMENTS", "RESPONSE_END_LEVEL",
-           "HitCheck", "TimeEstimate", "check_hits", "count_hits", "estimate_from_records", "exponential_window",
-           "force_band_hz", "force_window", "segment_window", "window_end_value"]
+__all__ = ["ESTIMATORS", "EXCITATIONS", "FORCE_DROP_DB", "HIT_OVER_NOISE", "IMPULSIVE_SHARE", "LEVEL_SEGMENTS",
+           "PRETRIGGER", "RESPONSE_END_LEVEL", "HitCheck", "TimeEstimate", "check_hits", "count_hits",
+           "estimate_as_recorded", "estimate_from_records", "exponential_window", "force_band_hz", "force_window",
+           "hit_onsets", "segment_window", "window_end_value"]
 
 ESTIMATORS = ("h1", "h2", "hv")
 EXCITATIONS = ("random", "impact")
@@ -72,12 +73,15 @@ class HitCheck:
         Longest force pulse found (samples above 5 % of the block's peak).
     missed : tuple of int
         Blocks without a hit: force peak below 5 % of the largest block's.
+    pulse_ends : tuple of int
+        Each block's sample just after its first pulse (the first below 5 % of its peak after the pulse began).
     """
 
     double_hits: tuple
     overloads: tuple
     pulse_samples: int
     missed: tuple = ()
+    pulse_ends: tuple = ()
 
     @property
     def bad_blocks(self) -> set:
@@ -113,10 +117,9 @@ def force_band_hz(frequency_hz, force_power, drop_db=FORCE_DROP_DB) -> tuple:
 
 
 def force_window(n, pulse_end, margin):
-    """1 up to ``pulse_end + margin`` samples, then 0 (a rectangular force window), shape (n,)."""
-    w = np.zeros(n)
-    w[: min(n, pulse_end + margin)] = 1.0
-    return w
+    """1 up to ``pulse_end + margin`` samples, then 0 (a rectangular force window): shape (n,), or (k, n) for ``k``
+    pulse ends (one window per block)."""
+    return (np.arange(n) < np.asarray(pulse_end)[..., None] + margin).astype(float)
 
 
 def exponential_window(n, decay):
@@ -186,7 +189,8 @@ def check_hits(force_blocks, response_blocks, dofs, double_hit=0.2, flat=3):
             run &= at_top[:, k: n - flat + 1 + k]
         overloads += [(int(b), dof) for b in np.nonzero(run.any(axis=1))[0]]
     missed = tuple(int(b) for b in np.nonzero(missed_mask)[0])
-    return HitCheck(doubles, tuple(sorted(overloads)), int(np.max(end - first)), missed)
+    pulse = int(np.max((end - first)[~missed_mask])) if not missed_mask.all() else int(np.max(end - first))
+    return HitCheck(doubles, tuple(sorted(overloads)), pulse, missed, tuple(int(e) for e in end))
 
 
 #: A block holds a hit when its force peak is at least this many robust standard deviations of its force channel
@@ -198,6 +202,39 @@ def count_hits(force, double_hit=0.2) -> int:
     """How many hits a force record (shape (n,)) holds: its rises above ``double_hit`` of its largest force."""
     above = np.abs(np.asarray(force, float)) > double_hit * np.max(np.abs(force))
     return int(np.count_nonzero(above[1:] & ~above[:-1]) + above[0])
+
+
+#: A force channel is a train of hits (an impact test) when at most this share of its samples exceed the hits'
+#: threshold, ``double_hit`` of its largest force; a random or swept force exceeds it over a third of its samples or
+#: more.
+IMPULSIVE_SHARE = 0.05
+
+
+def hit_onsets(force, double_hit=0.2):
+    """Onsets (sample indices, shape (n_hits,)) of the hits of a force record (shape (n,)) that is a train of hits
+    (:data:`IMPULSIVE_SHARE`), its offset (the median: the force between hits) removed: each a rise above
+    ``double_hit`` of the largest force at least half the hits' median spacing after the previous one (a bounce
+    sooner belongs to its hit); None for any other force."""
+    f = np.asarray(force, float)
+    f = np.abs(f - np.median(f))
+    top = f.max(initial=0.0)
+    above = f > double_hit * top
+    if not top > 0 or np.mean(above) > IMPULSIVE_SHARE:
+        return None
+    rises = np.flatnonzero(above[1:] & ~above[:-1]) + 1
+    rises = np.r_[0, rises] if above[0] else rises
+    if not rises.size:
+        return None
+    spacing = np.median(np.diff(rises)) if rises.size > 1 else f.size
+    onsets = [int(rises[0])]
+    for r in rises[1:]:                 # one pass over the hits, a few dozen at most
+        if r - onsets[-1] >= spacing / 2:
+            onsets.append(int(r))
+    return np.array(onsets)
+
+
+#: An impact block cut at a hit begins this share of its length before the hit's onset (the pulse's rise).
+PRETRIGGER = 1 / 32
 
 
 #: Smallest peak force (N) of a force channel: below it the force spectra underflow (no FRF can be formed).
@@ -212,7 +249,7 @@ def _estimate(src, *args, **kw):
         raise FileFormatError(f"{src}: {exc}") from None
 
 
-def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", excitation="random", averages=8,
+def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", excitation="random", averages=None,
                           overlap=0.5, window="hann", decay=None, fmax_hz=None) -> TimeEstimate:
     """FRFs (response over the reference force) of time records.
 
@@ -223,8 +260,10 @@ def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", 
         DOF label of the force channel (the reference DOF); default: the only force.
     estimator : {"h1", "h2", "hv"}
     excitation : {"random", "impact"}
-    averages : int
-        Random: number of overlapped segments; impact: number of equal blocks (one hit each).
+    averages : int, optional
+        Random: number of overlapped segments (default 8). Impact: number of equal blocks, one hit each; default one
+        block per hit (:func:`hit_onsets`), each from :data:`PRETRIGGER` of its length before its hit and as long as
+        the shortest spacing of the hits (a single hit: to the record's end).
     overlap : float in [0, 1)
         Random excitation only.
     window : str or tuple
@@ -245,9 +284,19 @@ def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", 
     if excitation not in EXCITATIONS:
         raise ShapeError(f"excitation {excitation!r} must be one of {', '.join(EXCITATIONS)}")
     src = records.metadata.get("source", "time records")
+    bad = np.argwhere(~np.isfinite(records.signals))
+    if bad.size:
+        raise FileFormatError(f"{src}: channel {records.dofs[bad[0, 0]]} holds NaN or inf samples (sample "
+                              f"{bad[0, 1]}); expected finite values")
     ref, resp, kind = _select_channels(records, reference, src)
-    if not (isinstance(averages, (int, np.integer)) and averages >= 1):
+    if averages is None and excitation == "random":
+        averages = 8
+    if averages is not None and not (isinstance(averages, (int, np.integer)) and averages >= 1):
         raise ShapeError(f"averages {averages} must be an integer >= 1")
+    if excitation == "random" and (onsets := hit_onsets(records.signals[ref])) is not None:
+        warnings.warn(f"{src}: force channel {records.dofs[ref]} holds {onsets.size} hit{'s' * (onsets.size != 1)} "
+                      "and is near zero between them (an impact test), estimated as random excitation; excitation "
+                      "'impact' cuts one block per hit", UserWarning, stacklevel=2)
     if excitation == "random":
         est, n_avg, hits, added, what = _random_spectra(records, ref, resp, src, estimator, averages, overlap, window)
         decay, band = 1.0, None
@@ -267,12 +316,23 @@ def estimate_from_records(records: TimeRecords, reference=None, estimator="h1", 
     if band is not None:
         band = (band[0], min(band[1], float(f[keep][-1])))
         meta["force_band_hz"] = list(band)
+    if added > 0:       # read by 'identify', which removes the window's decay from the modes
+        meta["exponential_window"] = {"tau_s": 1.0 / added, "end_value": decay}
     try:
         frf = MeasuredFRF(f[keep], h[..., keep], tuple(records.dofs[i] for i in resp), (records.dofs[ref],),
                           kind=kind, metadata=meta)
     except ShapeError as exc:
         raise FileFormatError(f"{src}: the estimated FRFs: {exc}") from None
     return TimeEstimate(frf, coh, estimator, excitation, n_avg, hits, added, what, decay, band)
+
+
+def estimate_as_recorded(records: TimeRecords) -> TimeEstimate:
+    """FRFs of time records estimated as their test ran: an impact test (the only force a train of hits,
+    :func:`hit_onsets`) one block per hit, any other force as random excitation; H1 and the other defaults of
+    :func:`estimate_from_records`."""
+    forces = records.forces
+    impact = len(forces) == 1 and hit_onsets(records.signals[forces[0]]) is not None
+    return estimate_from_records(records, excitation="impact" if impact else "random")
 
 
 def _select_channels(records: TimeRecords, reference, src) -> tuple[int, list, str]:
@@ -345,7 +405,7 @@ def _random_spectra(records: TimeRecords, ref, resp, src, estimator, averages, o
     nperseg = int(n / (1 + (averages - 1) * (1 - overlap)))
     noverlap = int(round(overlap * nperseg))
     if nperseg < 16:
-        raise ShapeError(f"{n} samples cannot give {averages} averages of at least 16 samples")
+        raise ShapeError(f"{src}: {n} samples cannot give {averages} averages of at least 16 samples")
     channels = [ref, *resp]
     clipped = clipped_run_text(x[channels], [records.dofs[i] for i in channels], src)
     if clipped is not None:
@@ -357,38 +417,72 @@ def _random_spectra(records: TimeRecords, ref, resp, src, estimator, averages, o
     return est, int(est.n_averages), None, 0.0, what
 
 
+def _hit_blocks(records: TimeRecords, ref, src) -> tuple:
+    """``(blocks (n_blocks, n_channels, block), block samples, samples before each hit, hits beyond the record's end)``:
+    one block per hit (:func:`hit_onsets`), each from :data:`PRETRIGGER` of its length before its hit and as long as
+    the shortest spacing of the hits (a single hit: to the record's end); a hit whose block would run past the
+    record's end is left out."""
+    x, n = records.signals, records.signals.shape[1]
+    onsets = hit_onsets(x[ref])
+    if onsets is None:
+        f = np.abs(x[ref] - np.median(x[ref]))
+        share = np.mean(f > 0.2 * f.max())
+        raise FileFormatError(f"{src}: force channel {records.dofs[ref]} is no train of hits: {share:.0%} of its "
+                              f"samples lie above a fifth of its largest force (an impact test's hits: at most "
+                              f"{IMPULSIVE_SHARE:.0%}); estimate it as random excitation, or name --averages to cut "
+                              "equal blocks")
+    spacing = int(np.min(np.diff(onsets))) if onsets.size > 1 else n - int(onsets[0])
+    pre = min(int(onsets[0]), max(4, int(spacing * PRETRIGGER)))
+    block = spacing if onsets.size > 1 else n - int(onsets[0]) + pre
+    starts = onsets - pre
+    fits = starts + block <= n
+    if block < 16:
+        raise ShapeError(f"{src}: hits {spacing} samples apart cannot give impact blocks of at least 16 samples")
+    idx = starts[fits, None] + np.arange(block)
+    return x[:, idx].transpose(1, 0, 2), block, pre, int(np.count_nonzero(~fits))
+
+
 def _impact_spectra(records: TimeRecords, ref, resp, src, estimator, averages, decay):
-    """Spectra of ``averages`` impact blocks, bad blocks left out, force and exponential windows applied (``decay``
-    None: :func:`window_end_value` of the good blocks' responses).
+    """Spectra of the impact blocks (``averages`` equal blocks, or None: one per hit, :func:`_hit_blocks`), bad
+    blocks left out, force and exponential windows applied (``decay`` None: :func:`window_end_value` of the good
+    blocks' responses).
 
     Returns ``(estimate, n_good_blocks, HitCheck, added decay rate 1/s, description, window end value, force band
     (Hz))``.
     """
     fs, x = records.sampling_frequency_hz, records.signals
+    x = np.concatenate([x[:ref], x[ref:ref + 1] - np.median(x[ref]), x[ref + 1:]])   # the force's offset removed
+    records = replace(records, signals=x)
     n = x.shape[1]
-    block = n // averages
-    if block < 16:
-        raise ShapeError(f"{n} samples cannot give {averages} impact blocks of at least 16 samples")
-    blocks = x[:, : block * averages].reshape(x.shape[0], averages, block).transpose(1, 0, 2)
+    if averages is None:
+        blocks, block, pre, past = _hit_blocks(records, ref, src)
+        cut = f"one per hit from {pre} samples before it"
+    else:
+        block, past = n // averages, 0
+        if block < 16:
+            raise ShapeError(f"{src}: {n} samples cannot give {averages} impact blocks of at least 16 samples")
+        blocks = x[:, : block * averages].reshape(x.shape[0], averages, block).transpose(1, 0, 2)
+        cut = "equal"
+    n_blocks = blocks.shape[0]
     hits = check_hits(blocks[:, ref], blocks, records.dofs)
-    good = [b for b in range(averages) if b not in hits.bad_blocks]
-    n_hits = count_hits(x[ref])
+    good = [b for b in range(n_blocks) if b not in hits.bad_blocks]
+    why = (f"double hits in blocks {list(hits.double_hits)}, overloads "
+           f"{[f'{d} in block {b}' for b, d in hits.overloads] or 'none'}, no hit in blocks {list(hits.missed)}")
+    onsets = hit_onsets(x[ref])
+    advice = "" if averages is None or onsets is None else \
+        f"; the record holds {onsets.size} hit{'s' * (onsets.size != 1)}: without --averages one block is cut per hit"
     if not good:
-        raise FileFormatError(f"{src}: every impact block has a double hit, an overload or no hit "
-                              f"(double hits in blocks {list(hits.double_hits)}, overloads "
-                              f"{[f'{d} in block {b}' for b, d in hits.overloads]}, no hit in blocks "
-                              f"{list(hits.missed)}); the record holds {n_hits} hit{'s' * (n_hits != 1)}: "
-                              f"averages {n_hits} cuts one block per hit where they are evenly spaced")
-    if len(good) < averages and n_hits != averages:
-        warnings.warn(f"{src}: {averages - len(good)} of {averages} impact blocks left out (double hits, "
-                      f"overloads or no hit); the record holds {n_hits} hit{'s' * (n_hits != 1)}: averages {n_hits} "
-                      "cuts one block per hit where they are evenly spaced", UserWarning, stacklevel=3)
+        raise FileFormatError(f"{src}: every impact block has a double hit, an overload or no hit ({why}){advice}")
+    if len(good) < n_blocks or past:
+        end = f"; {past} hit{'s' * (past != 1)} too close to the record's end for a block" if past else ""
+        warnings.warn(f"{src}: {n_blocks - len(good)} of {n_blocks} impact blocks left out ({why}){end}{advice}",
+                      UserWarning, stacklevel=3)
     chosen = decay is None
     if chosen:
         decay = window_end_value(blocks[good][:, resp])
     ew, tau = exponential_window(block, decay)
-    fw = force_window(block, hits.pulse_samples + int(np.argmax(np.abs(blocks[0, ref]) > 0)),
-                      max(hits.pulse_samples, 4))
+    margin = max(hits.pulse_samples, 4)
+    fw = force_window(block, np.asarray(hits.pulse_ends)[good], margin)
     g = blocks[good]
     f_t = (g[:, ref] * fw * ew).reshape(-1)
     r_t = (g[:, resp] * ew).transpose(1, 0, 2).reshape(len(resp), -1)
@@ -400,6 +494,7 @@ def _impact_spectra(records: TimeRecords, ref, resp, src, estimator, averages, d
     win = f"exponential window to {decay:g}{why}: adds {added:.4g} 1/s to every pole's decay rate" if added > 0 else \
         (f"no exponential window: every response ends below {RESPONSE_END_LEVEL:g} of its loudest" if chosen
          else "no exponential window")
-    what = f"{estimator.upper()} of {len(good)} impact blocks of {block} samples (force window, {win}), " \
+    what = f"{estimator.upper()} of {len(good)} impact block{'s' * (len(good) != 1)} of {block} samples " \
+           f"({cut}; force window, {win}), " \
            f"{fs / block:.4g} Hz lines"
     return est, len(good), hits, added, what, float(decay), band

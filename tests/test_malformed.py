@@ -856,8 +856,12 @@ def _estimate_cases():
         ("estimate", "force of 1e300 N", lambda d: est(d, force=1e300), "magnitude"),
         ("estimate", "response of 1e300", lambda d: est(d, response=1e300), "magnitude"),
         ("estimate", "response of 1e-310", lambda d: est(d, response=1e-310), "t.uff"),
+        ("estimate", "impact: every hit clipped", lambda d: [
+            "estimate", str(_impact_uff(d / "i.uff")), "--excitation", "impact"],
+         "overloads ['1:+Z in block 0', '1:+Z in block 1', '1:+Z in block 2', '1:+Z in block 3']"),
         ("estimate", "impact: clipped hits, no hit in the other blocks", lambda d: [
-            "estimate", str(_impact_uff(d / "i.uff")), "--excitation", "impact"], "no hit in blocks [1, 3, 5, 7]"),
+            "estimate", str(_impact_uff(d / "i.uff")), "--excitation", "impact", "--averages", "8"],
+         "no hit in blocks [1, 3, 5, 7]"),
     ]
 
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -15,7 +14,7 @@ __all__ = ["add_parser", "run"]
 
 
 def run(args) -> dict:
-    if args.averages < 1:
+    if args.averages is not None and args.averages < 1:
         raise ConfigError(f"--averages {args.averages}: must be >= 1")
     if not 0 <= args.overlap < 1:
         raise ConfigError(f"--overlap {args.overlap:g}: must be in [0, 1)")
@@ -36,8 +35,6 @@ def run(args) -> dict:
                                 args.overlap, args.window, args.decay, args.fmax)
     coh = est.coherence
     tau = 1.0 / est.added_decay_rate_1_s if est.added_decay_rate_1_s > 0 else None
-    frf = est.frf if tau is None else replace(est.frf, metadata={
-        **est.frf.metadata, "exponential_window": {"tau_s": tau, "end_value": est.window_end_value}})
     out = {"file": str(args.file), "estimator": est.estimator, "excitation": est.excitation,
            "description": est.description, "n_averages": est.n_averages,
            "reference": est.frf.reference_dofs[0], "dofs": list(est.frf.response_dofs), "kind": est.frf.kind,
@@ -51,7 +48,7 @@ def run(args) -> dict:
         out["double_hits"] = list(est.hits.double_hits)
         out["overloads"] = [{"block": b, "dof": d} for b, d in est.hits.overloads]
     if args.out:
-        writer(args.out, frf)
+        writer(args.out, est.frf)
         out["outputs"] = {"frf": str(args.out)}
     if not args.json:
         print(f"{args.file}: {est.description}")
@@ -78,15 +75,17 @@ def add_parser(sub):
     p = sub.add_parser("estimate",
                        description="Read the time records (dataset 58, function type 1) of a force and "
                                    "responses and estimate FRFs. Random excitation: Welch averaging of overlapped "
-                                   "windowed segments. Impact tests: the record is cut into --averages blocks, "
-                                   "one hit each; force and exponential windows; blocks with a double hit or an "
-                                   "overload (clipping) are flagged and left out.")
+                                   "windowed segments. Impact tests: one block per hit, from just before it (or "
+                                   "--averages equal blocks); force and exponential windows; blocks with a double "
+                                   "hit or an overload (clipping) are flagged and left out.")
     p.add_argument("file", metavar="FILE", help=f"time records (force and responses): {accepted(TIME)}")
     p.add_argument("--reference", metavar="DOF", help="DOF of the force channel, e.g. 1:+Z (default: the only force)")
     p.add_argument("--estimator", choices=ESTIMATORS, default="h1", help="h1 (noise on responses, default), "
                                                                          "h2 (noise on the force), hv (both)")
     p.add_argument("--excitation", choices=EXCITATIONS, default="random", help="random (default) or impact")
-    p.add_argument("--averages", type=int, default=8, help="segments (random) or impact blocks (default 8)")
+    p.add_argument("--averages", type=int, default=None,
+                   help="segments (random, default 8) or equal impact blocks (default: one block per hit, from just "
+                        "before it, as long as the hits' shortest spacing)")
     p.add_argument("--overlap", type=float, default=0.5, help="segment overlap for random excitation (default 0.5)")
     p.add_argument("--window", default="hann", help="window of random-excitation segments: a scipy.signal window "
                                                     "name, or a name and its parameters, e.g. kaiser,8.6 "

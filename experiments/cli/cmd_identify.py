@@ -215,7 +215,7 @@ def _remove_window(args, ident: Identification, flag) -> tuple:
                       UserWarning, stacklevel=2)
         return ident, {"tau_s": None, "added_decay_rate_1_s": None, "source": "dataset 1858 (not removed: unit of "
                        "the damping factor undefined)", "file_windows": named, "identified": None, "at_zero": []}
-    if "time records" in frf.metadata.get("format", ""):
+    if "random excitation" in frf.metadata.get("estimated", ""):
         raise ConfigError(f"{flag}: {args.file} holds time records whose FRFs are estimated here with a Hann "
                           "window (random excitation), no exponential window; for an impact test estimate them "
                           "with 'beam-damage estimate --excitation impact --out FRF.npz' and identify that")

@@ -183,8 +183,8 @@ def identify_file(path, method="lscf", band_hz=None, n_modes=None, max_order=Non
     """:func:`identify_frf` on an FRF file (UFF 58, CSV or ``.npz``; see :func:`physics.io.read_frf`).
 
     A universal file of time records (force and responses, no FRF) is estimated
-    first (:func:`physics.time_records.estimate_from_records`, H1, random
-    excitation defaults), with a warning that says so.
+    first (:func:`physics.time_records.estimate_as_recorded`: H1, one block per hit
+    of an impact test, random excitation otherwise), with a warning that says how.
     """
     frf = read_measured_frf(path)
     try:
@@ -204,12 +204,12 @@ def read_measured_frf(path) -> MeasuredFRF:
     if format_of(path, FRF).name != "uff":
         if not (holds_response_records(path) and (rec := read(path, TIME)).forces):
             return read_frf(path)                   # FRFs, or response records: refused naming what they hold
-        est = time_records.estimate_from_records(rec)
+        est = time_records.estimate_as_recorded(rec)
     else:
         uf = UffFile(path)
         if 4 in uf.function_types or 1 not in uf.function_types:   # FRF records, or nothing to estimate from
             return read_uff58(uf)
-        est = time_records.estimate_from_records(read_uff_time_records(uf))
+        est = time_records.estimate_as_recorded(read_uff_time_records(uf))
     warnings.warn(f"{path}: holds time records, not FRFs: estimated {est.description} before identifying",
                   stacklevel=2)
     return est.frf

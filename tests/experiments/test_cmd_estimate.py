@@ -45,15 +45,35 @@ def test_estimate_impact_file_flags_hits_and_writes_frf(capsys, impact_file, tmp
     np.testing.assert_allclose(frf.frf[0, 0, band], scale / (m * s**2 + c * s + k), rtol=0.1)
 
 
-def test_identify_accepts_time_records_by_estimating_first_and_says_so(capsys, impact_file):
-    path, *_ = impact_file
+def test_identify_estimates_an_impact_record_one_block_per_hit_and_removes_the_window(capsys, impact_file):
+    path, rec, (m, c, k), scale = impact_file
     code, out, err = run_cli(capsys, ["identify", str(path), "--band", "20", "200", "--json"])
     assert code == 0, err
     res = json.loads(out)
-    assert any("holds time records, not FRFs: estimated H1" in w for w in res["warnings"])
-    # identify estimates with random-excitation defaults (Hann segments cut across the hits): coarse
-    # on impact data, yet the 50 Hz mode is found within 1 %; 'estimate --excitation impact' is the right tool
-    assert res["modes"][0]["frequency_hz"] == pytest.approx(50.0, rel=1e-2)
+    # the force is 7 hits in 6 s (one a double hit) and near zero between them: an impact test, estimated one block
+    # per hit (the double hit and the clipped block left out), not as random excitation cut across the hits
+    said = [w for w in res["warnings"] if "holds time records, not FRFs" in w]
+    assert said and "H1 of 4 impact blocks" in said[0], said
+    assert res["exponential_window"]["added_decay_rate_1_s"] > 0
+    wn = np.sqrt(k / m)
+    assert res["modes"][0]["frequency_hz"] == pytest.approx(wn / (2 * np.pi), rel=2e-4)
+    assert res["modes"][0]["damping_ratio"] == pytest.approx(c / (2 * m * wn), rel=0.05)
+
+
+def test_estimate_cuts_one_impact_block_per_hit_by_default(capsys, impact_file):
+    path, *_ = impact_file
+    code, out, err = run_cli(capsys, ["estimate", str(path), "--excitation", "impact", "--json"])
+    assert code == 0, err
+    res = json.loads(out)
+    # 6 hits 1 s apart and a bounce 0.3 s after the third: 6 blocks, the bounce's and the clipped one left out
+    assert res["double_hits"] == [2] and res["n_averages"] == 4 and "of 2048 samples" in res["description"]
+
+
+def test_estimate_warns_when_an_impact_record_is_estimated_as_random_excitation(capsys, impact_file):
+    path, *_ = impact_file
+    code, out, err = run_cli(capsys, ["estimate", str(path), "--json"])
+    assert code == 0, err
+    assert "holds 6 hits and is near zero between them" in err and "'impact' cuts one block per hit" in err
 
 
 @pytest.mark.parametrize("command", ["estimate"])   # identify runs them output-only (test_cmd_identify_output_only)
