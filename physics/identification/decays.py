@@ -18,8 +18,8 @@ import numpy as np
 from physics.identification.fdd import SingularValueSpectrum, running_floor, clear_peaks
 from physics.identification.record_checks import CheckedRecord
 
-__all__ = ["Decays", "FreeResponse", "adds_energy", "decay_spectrum", "find_decays", "free_response", "least_fall_db",
-           "slowest_mode"]
+__all__ = ["CHANCE_FALL_CAP_DB", "CHANCE_STDS", "Decays", "FreeResponse", "adds_energy", "chance_fall_db",
+           "decay_spectrum", "find_decays", "free_response", "least_fall_db", "slowest_mode"]
 
 #: Order of the linear predictor (per channel) whose innovations mark the hits.
 PREDICTOR_ORDER = 24
@@ -381,6 +381,34 @@ def least_fall_db(decays: Decays, frequencies_hz, damping_ratios, sampling_frequ
     sigma = float(np.asarray(damping_ratios, float)[k] * 2 * np.pi * np.asarray(frequencies_hz, float)[k])
     dt = 0.75 * lengths / sampling_frequency_hz
     return float(np.average(20 * np.log10(np.e) * sigma * dt, weights=lengths))
+
+
+#: A fall of a response's energy from its first to its last quarter within this many standard deviations of a
+#: stationary response's chance fall (:func:`chance_fall_db`) is no evidence of a free decay ...
+CHANCE_STDS = 3.0
+#: ... where that chance fall is at most this: quarters of at least two time constants ``1 / sigma`` of the slowest
+#: mode. Over shorter quarters a stationary response's fall scatters so widely that no fall tells it from a free
+#: decay's (the DROPBEAR beam's dwells of 0.6-1 s after each roller step, quarters of 0.3-1 time constant of its
+#: 25-34 Hz modes), and the fall's verdict stands.
+CHANCE_FALL_CAP_DB = CHANCE_STDS * 10 * np.log10(np.e) * np.sqrt(2.0 / 2.0)
+
+
+def chance_fall_db(decays: Decays, frequencies_hz, damping_ratios, sampling_frequency_hz: float) -> float:
+    """The fall (dB) of the decays' energy from their first to their last quarter that a stationary response of these
+    modes reaches by chance: :data:`CHANCE_STDS` standard deviations of its length-weighted mean, as
+    :attr:`Decays.drop_db`. A quarter's energy, the mean of ``x^2`` over ``D`` seconds of a mode decaying at
+    ``sigma`` (1/s; the slowest mode's, whose correlations last longest), scatters by ``1 / sqrt(sigma D)`` relative
+    (a Gaussian response, ``D >> 1 / sigma``), so the fall between two quarters by ``10 log10(e) sqrt(2 / (sigma
+    D))`` dB. NaN without a mode or a decay."""
+    k = slowest_mode(frequencies_hz, damping_ratios)
+    lengths = (decays.stops - decays.starts).astype(float)
+    if k is None or not lengths.size:
+        return np.nan
+    sigma = float(np.asarray(damping_ratios, float)[k] * 2 * np.pi * np.asarray(frequencies_hz, float)[k])
+    if not sigma > 0:
+        return np.inf
+    std = 10 * np.log10(np.e) * np.sqrt(2 / (sigma * 0.25 * lengths / sampling_frequency_hz))
+    return float(CHANCE_STDS * np.sqrt(np.sum((lengths * std) ** 2)) / lengths.sum())
 
 
 def slowest_mode(frequencies_hz, damping_ratios) -> int | None:

@@ -15,7 +15,8 @@ from physics.io.inputs import MAX_BYTES, check_input_file
 from physics.errors import ConfigError, ConvergenceError, FileFormatError, ShapeError
 from physics.identification.channel_weights import (ChannelWeights, noise_floor_weights, unweighted_diagram,
                                                     unweighted_estimate, weighted_record)
-from physics.identification.decays import FREE_DROP_DB, free_response, least_fall_db, slowest_mode
+from physics.identification.decays import (CHANCE_FALL_CAP_DB, FREE_DROP_DB, chance_fall_db, free_response,
+                                          least_fall_db, slowest_mode)
 from physics.identification.fft_peak import PEAK_EXPONENT, padded_spectrum
 from physics.identification.methods import METHODS
 from physics.identification.modes import ModalEstimate
@@ -249,22 +250,27 @@ def identify_records(records: TimeRecords, method=DEFAULT_OUTPUT_ONLY, band_hz=N
     why = (f"picked {picked}: response records without a force channel, {verdict.text}"
            + ("" if verdict.free else " (identified as a stationary response)"))
     d = verdict.decays
-    if verdict.free and d.drop_db < FREE_DROP_DB:
-        # free by its lead alone: a stationary response started quiet leads its start as a hit's decay does; its
-        # modes, read as a stationary response's, tell whether its decays fall as theirs would
+    if verdict.free and d.drop_db < max(FREE_DROP_DB, CHANCE_FALL_CAP_DB):
+        # free by its lead alone, or by a fall a stationary response may reach by chance: a stationary response
+        # started quiet leads its start as a hit's decay does; its modes, read as a stationary response's, tell
+        # whether its decays fall as theirs would, and how far they fall by chance
         try:
             est, diagram = fit(STATIONARY_METHOD, checked, refine_decays=False, free=False)
         except (ConvergenceError, ShapeError):
             pass
         else:
             f, z = est.natural_frequencies_hz, est.damping_ratios
-            least = least_fall_db(d, f, z, fs)
-            if least - d.drop_db > FREE_DROP_DB and _holds_strongest_peak(checked, d, f):
+            least, chance = least_fall_db(d, f, z, fs), chance_fall_db(d, f, z, fs)
+            if d.drop_db < max(FREE_DROP_DB, chance if chance <= CHANCE_FALL_CAP_DB else 0.0) \
+                    and least - d.drop_db > FREE_DROP_DB \
+                    and _holds_strongest_peak(checked, d, f):
                 k = slowest_mode(f, z)
+                what = ("a stationary response started quiet" if d.drop_db < FREE_DROP_DB else
+                        f"a stationary response, whose quarters' energies differ by up to {chance:.0f} dB by chance")
                 why = (f"picked {STATIONARY_METHOD}: response records without a force channel, {verdict.text}, "
                        f"but the modes {STATIONARY_METHOD} finds in them would fall at least "
                        f"{least:.0f} dB (the slowest: {f[k]:.4g} Hz, {100 * z[k]:.2g} % "
-                       "damping): a stationary response started quiet (identified as a stationary response)")
+                       f"damping): {what} (identified as a stationary response)")
                 return result(est, diagram, why)
     try:
         # SSI-cov picked for a stationary record has no decays to refine on; tried where era found no mode on a
