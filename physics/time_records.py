@@ -4,9 +4,10 @@ The spectral estimators are those of :mod:`physics.estimation` (H1, H2, Hv with
 coherence); this module prepares the records the way each test needs:
 
 * random excitation: overlapped segments with a Hann (or any scipy) window;
-* impact tests: the record is cut into ``averages`` equal blocks, each starting
-  with one hit. The force is kept over its pulse (force window: zero after the
-  pulse plus a short margin) and both channels get an exponential window
+* impact tests: the record is cut into one block per hit, each from just before
+  its hit (:func:`hit_onsets`, :data:`PRETRIGGER`) and as long as the hits'
+  shortest spacing, or into ``averages`` equal blocks. The force is kept over each
+  block's pulse (force window: zero after the pulse plus a short margin) and both channels get an exponential window
   ``exp(-t/tau)`` decaying to ``decay`` at the block end, so that responses that
   outlast the block do not leak. The exponential window adds ``1/tau`` (1/s) to
   every pole's decay rate: a mode's damping ratio is overestimated by
@@ -466,16 +467,17 @@ def _impact_spectra(records: TimeRecords, ref, resp, src, estimator, averages, d
     n_blocks = blocks.shape[0]
     hits = check_hits(blocks[:, ref], blocks, records.dofs)
     good = [b for b in range(n_blocks) if b not in hits.bad_blocks]
-    why = (f"double hits in blocks {list(hits.double_hits)}, overloads "
-           f"{[f'{d} in block {b}' for b, d in hits.overloads] or 'none'}, no hit in blocks {list(hits.missed)}")
+    left_out = (f"double hits in blocks {list(hits.double_hits)}, overloads "
+                f"{[f'{d} in block {b}' for b, d in hits.overloads] or 'none'}, no hit in blocks {list(hits.missed)}")
     onsets = hit_onsets(x[ref])
     advice = "" if averages is None or onsets is None else \
         f"; the record holds {onsets.size} hit{'s' * (onsets.size != 1)}: without --averages one block is cut per hit"
     if not good:
-        raise FileFormatError(f"{src}: every impact block has a double hit, an overload or no hit ({why}){advice}")
+        raise FileFormatError(f"{src}: every impact block has a double hit, an overload or no hit ({left_out})"
+                              f"{advice}")
     if len(good) < n_blocks or past:
         end = f"; {past} hit{'s' * (past != 1)} too close to the record's end for a block" if past else ""
-        warnings.warn(f"{src}: {n_blocks - len(good)} of {n_blocks} impact blocks left out ({why}){end}{advice}",
+        warnings.warn(f"{src}: {n_blocks - len(good)} of {n_blocks} impact blocks left out ({left_out}){end}{advice}",
                       UserWarning, stacklevel=3)
     chosen = decay is None
     if chosen:
