@@ -233,6 +233,20 @@ def _warn_merges(full, fs, bands: BandFit, live, band, hi, where):
                       "its loud start", stacklevel=3)
 
 
+def _within(lam, f_lo_hz, f_hi_hz, max_damping, where) -> np.ndarray:
+    """Mask (shape like ``lam``) of the refined poles still in the band and damped below ``max_damping``: a band fit
+    that carried a pole beyond either is no mode of the decays' band; those left out are named in a warning."""
+    f = np.abs(lam) / (2 * np.pi)
+    zeta = -lam.real / np.maximum(np.abs(lam), 1e-300)
+    keep = (f >= f_lo_hz) & (f <= f_hi_hz) & (zeta < max_damping)
+    if not keep.all():
+        out = ", ".join(f"{a:.5g} Hz ({100 * b:.3g} %)" for a, b in zip(f[~keep], zeta[~keep]))
+        warnings.warn(f"{where}: left out {out}: refined in their bands of the decays to beyond {f_lo_hz:g}-"
+                      f"{f_hi_hz:.4g} Hz or to a damping ratio of {max_damping:g} or more, no mode of the band",
+                      UserWarning, stacklevel=3)
+    return keep
+
+
 def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max_order=None, max_damping=MAX_DAMPING,
                  where="record") -> ERAIdentification:
     """Free-decay identification of a record of impact (or pluck) responses (see the module docstring).
@@ -378,6 +392,7 @@ def identify_era(signals, sampling_frequency_hz, band_hz=None, n_modes=None, max
                                           -int(sel.count[idx[j]]) if j < idx.size else 0))
         sub = np.sort(np.array(rank[:n_modes], int))
     sub = sub[np.argsort(np.abs(lam[sub]), kind="stable")]     # the refinements may reorder poles
+    sub = sub[_within(lam[sub], band[0], band[1], max_damping, where)]
     sub = sub[modes_with_periods(checked.duration_s, np.abs(lam[sub]) / (2 * np.pi), where)]
     wn = np.abs(lam[sub])
     # shapes: the dominant direction of each mode's amplitudes over the decays

@@ -594,3 +594,29 @@ def test_a_short_stationary_record_whose_energy_falls_by_chance_is_read_by_ssi()
         assert out.estimate.method == "ssi", out.method_choice
         assert "differ by up to" in out.method_choice and "identified as a stationary response" in out.method_choice
         assert abs(out.estimate.natural_frequencies_hz[0] - 8.0) < 0.08
+
+
+@pytest.mark.slow
+def test_a_pole_refined_beyond_the_band_or_overdamped_is_left_out_and_named():
+    """Eight hits 1 s apart after a 0.2-s pre-trigger on modes 15, 40 and 100 Hz at 1 % (accelerations of equal
+    displacement residues, FFT convolution, 2 % noise, seed 3): the response's spectrum is the FRF times the hits'
+    1-Hz comb, and one of `era`'s poles, refined in its band of the decays, ends at 235.65 Hz and 100 % damping,
+    beyond the 5-200 Hz band asked: it is no mode of the band, left out and named (about a minute: `era` refines
+    a dozen of the comb's lines too)."""
+    fs, n = 1024.0, 8192
+    rng = np.random.default_rng(3)
+    t = np.arange(8 * n) / fs
+    force = np.zeros(8 * n)
+    for k in range(8):
+        pulse = rng.uniform(90, 110) * np.sin(np.pi * (t - 0.2 - k) / 0.002)
+        force += np.where((t >= 0.2 + k) & (t < 0.202 + k), pulse, 0.0)
+    s = 2j * np.pi * np.fft.rfftfreq(8 * n, 1 / fs)
+    H = sum(s**2 / (s**2 + 2 * 0.01 * w * s + w**2) for w in 2 * np.pi * np.array([15.0, 40.0, 100.0]))
+    y = np.fft.irfft(H * np.fft.rfft(force), 8 * n)[:n]
+    y = y + 0.02 * y.std() * rng.standard_normal(n)
+    with pytest.warns(UserWarning, match=r"record: left out 235.65 Hz \(100 %\): refined in their bands of the decays "
+                                         r"to beyond 5-200 Hz or to a damping ratio of 0.2 or more"):
+        est = identify_era(y[None], fs, band_hz=(5.0, 200.0)).estimate
+    f = est.natural_frequencies_hz
+    assert np.all((f >= 5.0) & (f <= 200.0)) and np.all(est.damping_ratios < 0.2)
+    assert np.min(np.abs(f[:, None] - [15.0, 40.0, 100.0]), axis=0) == pytest.approx([0, 0, 0], abs=0.01)
