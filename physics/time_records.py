@@ -30,7 +30,7 @@ coherence); this module prepares the records the way each test needs:
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -211,22 +211,26 @@ def count_hits(force, double_hit=0.2) -> int:
 IMPULSIVE_SHARE = 0.05
 
 
+def _above(force, double_hit):
+    """The force's samples above ``double_hit`` of its largest deviation from its median (the force between hits):
+    boolean, shape (n,); all False for a force without one."""
+    f = np.abs(np.asarray(force, float) - np.median(force))
+    return f > double_hit * f.max(initial=0.0) if f.max(initial=0.0) > 0 else np.zeros(f.shape, bool)
+
+
 def hit_onsets(force, double_hit=0.2):
     """Onsets (sample indices, shape (n_hits,)) of the hits of a force record (shape (n,)) that is a train of hits
     (:data:`IMPULSIVE_SHARE`), its offset (the median: the force between hits) removed: each a rise above
     ``double_hit`` of the largest force at least half the hits' median spacing after the previous one (a bounce
     sooner belongs to its hit); None for any other force."""
-    f = np.asarray(force, float)
-    f = np.abs(f - np.median(f))
-    top = f.max(initial=0.0)
-    above = f > double_hit * top
-    if not top > 0 or np.mean(above) > IMPULSIVE_SHARE:
+    above = _above(force, double_hit)
+    if not above.any() or np.mean(above) > IMPULSIVE_SHARE:
         return None
     rises = np.flatnonzero(above[1:] & ~above[:-1]) + 1
     rises = np.r_[0, rises] if above[0] else rises
     if not rises.size:
         return None
-    spacing = np.median(np.diff(rises)) if rises.size > 1 else f.size
+    spacing = np.median(np.diff(rises)) if rises.size > 1 else above.size
     onsets = [int(rises[0])]
     for r in rises[1:]:                 # one pass over the hits, a few dozen at most
         if r - onsets[-1] >= spacing / 2:
@@ -418,20 +422,12 @@ def _random_spectra(records: TimeRecords, ref, resp, src, estimator, averages, o
     return est, int(est.n_averages), None, 0.0, what
 
 
-def _hit_blocks(records: TimeRecords, ref, src) -> tuple:
-    """``(blocks (n_blocks, n_channels, block), block samples, samples before each hit, hits beyond the record's end)``:
-    one block per hit (:func:`hit_onsets`), each from :data:`PRETRIGGER` of its length before its hit and as long as
-    the shortest spacing of the hits (a single hit: to the record's end); a hit whose block would run past the
-    record's end is left out."""
-    x, n = records.signals, records.signals.shape[1]
-    onsets = hit_onsets(x[ref])
-    if onsets is None:
-        f = np.abs(x[ref] - np.median(x[ref]))
-        share = np.mean(f > 0.2 * f.max())
-        raise FileFormatError(f"{src}: force channel {records.dofs[ref]} is no train of hits: {share:.0%} of its "
-                              f"samples lie above a fifth of its largest force (an impact test's hits: at most "
-                              f"{IMPULSIVE_SHARE:.0%}); estimate it as random excitation, or name --averages to cut "
-                              "equal blocks")
+def _hit_blocks(x, onsets, src) -> tuple:
+    """``(blocks (n_blocks, n_channels, block), block samples, samples before each hit, hits beyond the record's end)``
+    of the records ``x`` (n_channels, n): one block per hit of ``onsets`` (:func:`hit_onsets`), each from
+    :data:`PRETRIGGER` of its length before its hit and as long as the shortest spacing of the hits (a single hit: to
+    the record's end); a hit whose block would run past the record's end is left out."""
+    n = x.shape[1]
     spacing = int(np.min(np.diff(onsets))) if onsets.size > 1 else n - int(onsets[0])
     pre = min(int(onsets[0]), max(4, int(spacing * PRETRIGGER)))
     block = spacing if onsets.size > 1 else n - int(onsets[0]) + pre
@@ -451,12 +447,17 @@ def _impact_spectra(records: TimeRecords, ref, resp, src, estimator, averages, d
     Returns ``(estimate, n_good_blocks, HitCheck, added decay rate 1/s, description, window end value, force band
     (Hz))``.
     """
-    fs, x = records.sampling_frequency_hz, records.signals
-    x = np.concatenate([x[:ref], x[ref:ref + 1] - np.median(x[ref]), x[ref + 1:]])   # the force's offset removed
-    records = replace(records, signals=x)
+    fs, x = records.sampling_frequency_hz, records.signals.copy()
+    x[ref] -= np.median(x[ref])                         # the force's offset (the force between hits) removed
     n = x.shape[1]
+    onsets = hit_onsets(x[ref])
     if averages is None:
-        blocks, block, pre, past = _hit_blocks(records, ref, src)
+        if onsets is None:
+            raise FileFormatError(f"{src}: force channel {records.dofs[ref]} is no train of hits: "
+                                  f"{np.mean(_above(x[ref], 0.2)):.0%} of its samples lie above a fifth of its largest "
+                                  f"force (an impact test's hits: at most {IMPULSIVE_SHARE:.0%}); estimate it as "
+                                  "random excitation, or name --averages to cut equal blocks")
+        blocks, block, pre, past = _hit_blocks(x, onsets, src)
         cut = f"one per hit from {pre} samples before it"
     else:
         block, past = n // averages, 0
@@ -469,7 +470,6 @@ def _impact_spectra(records: TimeRecords, ref, resp, src, estimator, averages, d
     good = [b for b in range(n_blocks) if b not in hits.bad_blocks]
     left_out = (f"double hits in blocks {list(hits.double_hits)}, overloads "
                 f"{[f'{d} in block {b}' for b, d in hits.overloads] or 'none'}, no hit in blocks {list(hits.missed)}")
-    onsets = hit_onsets(x[ref])
     advice = "" if averages is None or onsets is None else \
         f"; the record holds {onsets.size} hit{'s' * (onsets.size != 1)}: without --averages one block is cut per hit"
     if not good:

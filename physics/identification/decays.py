@@ -364,6 +364,16 @@ def free_response(checked: CheckedRecord) -> FreeResponse:
     return FreeResponse(bool(free), decays)
 
 
+def _slowest_rate(decays: Decays, frequencies_hz, damping_ratios) -> tuple:
+    """``(the decays' lengths (samples, float), the slowest mode's decay rate zeta 2 pi f_n (1/s))``; the rate None
+    without a mode or a decay (:func:`slowest_mode`)."""
+    k = slowest_mode(frequencies_hz, damping_ratios)
+    lengths = (decays.stops - decays.starts).astype(float)
+    if k is None or not lengths.size:
+        return lengths, None
+    return lengths, float(np.asarray(damping_ratios, float)[k] * 2 * np.pi * np.asarray(frequencies_hz, float)[k])
+
+
 def least_fall_db(decays: Decays, frequencies_hz, damping_ratios, sampling_frequency_hz: float) -> float:
     """The least fall (dB) of the decays' energy from their first to their last quarter, weighted by their lengths
     as :attr:`Decays.drop_db`, were they free decays of these modes: the slowest-decaying mode's, ``20 log10(e)
@@ -374,11 +384,9 @@ def least_fall_db(decays: Decays, frequencies_hz, damping_ratios, sampling_frequ
     stationary response started quiet (a shaker switched on with the capture, or a simulation from rest) has a "hit"
     where it starts to build up, louder than the samples before it, and a "decay" that never falls, where the modes
     found in it, damped as they are, would have fallen tens of dB. NaN without a mode or a decay."""
-    k = slowest_mode(frequencies_hz, damping_ratios)
-    lengths = (decays.stops - decays.starts).astype(float)
-    if k is None or not lengths.size:
+    lengths, sigma = _slowest_rate(decays, frequencies_hz, damping_ratios)
+    if sigma is None:
         return np.nan
-    sigma = float(np.asarray(damping_ratios, float)[k] * 2 * np.pi * np.asarray(frequencies_hz, float)[k])
     dt = 0.75 * lengths / sampling_frequency_hz
     return float(np.average(20 * np.log10(np.e) * sigma * dt, weights=lengths))
 
@@ -400,11 +408,9 @@ def chance_fall_db(decays: Decays, frequencies_hz, damping_ratios, sampling_freq
     ``sigma`` (1/s; the slowest mode's, whose correlations last longest), scatters by ``1 / sqrt(sigma D)`` relative
     (a Gaussian response, ``D >> 1 / sigma``), so the fall between two quarters by ``10 log10(e) sqrt(2 / (sigma
     D))`` dB. NaN without a mode or a decay."""
-    k = slowest_mode(frequencies_hz, damping_ratios)
-    lengths = (decays.stops - decays.starts).astype(float)
-    if k is None or not lengths.size:
+    lengths, sigma = _slowest_rate(decays, frequencies_hz, damping_ratios)
+    if sigma is None:
         return np.nan
-    sigma = float(np.asarray(damping_ratios, float)[k] * 2 * np.pi * np.asarray(frequencies_hz, float)[k])
     if not sigma > 0:
         return np.inf
     std = 10 * np.log10(np.e) * np.sqrt(2 / (sigma * 0.25 * lengths / sampling_frequency_hz))
